@@ -1,0 +1,471 @@
+"""Reading and writing meshes and label files.
+
+Meshes: OFF (the Princeton benchmark's format) and the authors' ``.tri``
+text format are parsed here (vectorized with :func:`numpy.loadtxt`); PLY, OBJ
+and STL go through trimesh with ``process=False`` so the face order never
+changes. A trailing ``.gz``, ``.xz`` or ``.bz2`` is decompressed
+transparently. Labels: ``.seg`` files, one integer per face per line in face
+order, optionally preceded by ``#`` header lines.
+
+Every write is atomic: the data goes to a temporary file in the target
+directory, which is then renamed over the target, so an interrupted run never
+leaves a half-written file.
+"""
+
+from __future__ import annotations
+
+import bz2
+import gzip
+import io
+import lzma
+import os
+import tempfile
+from pathlib import Path
+from typing import Callable, Iterable
+
+import numpy as np
+
+from .errors import InvalidMeshError, MeshFormatError
+from .mesh import Mesh
+
+__all__ = ["read_mesh", "write_mesh", "read_labels", "write_labels", "write_colored_mesh",
+           "atomic_write", "MESH_FORMATS"]
+
+_COMPRESSIONS = {".gz": gzip.decompress, ".xz": lzma.decompress, ".bz2": bz2.decompress}
+_COMPRESSORS = {".gz": gzip.compress, ".xz": lzma.compress, ".bz2": bz2.compress}
+#: Mesh file formats understood by :func:`read_mesh` (before any compression suffix).
+MESH_FORMATS = ("off", "tri", "ply", "obj", "stl")
+
+
+def _split_suffix(path: Path) -> tuple[str, str | None]:
+    """Return (format, compression suffix or None) of a file name."""
+    suffixes = [s.lower() for s in path.suffixes]
+    comp = suffixes[-1] if suffixes and suffixes[-1] in _COMPRESSIONS else None
+    rest = suffixes[:-1] if comp else suffixes
+    fmt = rest[-1].lstrip(".") if rest else ""
+    return fmt, comp
+
+
+def _read_bytes(path: Path, comp: str | None) -> bytes:
+    data = path.read_bytes()
+    if comp is None:
+        return data
+    try:
+        return _COMPRESSIONS[comp](data)
+    except (OSError, EOFError, lzma.LZMAError, ValueError) as exc:
+        raise MeshFormatError(f"{path}: cannot decompress ({comp[1:]}): {exc}") from None
+
+
+def read_mesh(path, format: str | None = None) -> Mesh:
+    """Read a triangle mesh from a file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        ``.off``, ``.tri``, ``.ply``, ``.obj`` or ``.stl``, optionally
+        followed by ``.gz``, ``.xz`` or ``.bz2``.
+    format : str, optional
+        Force a format (one of :data:`MESH_FORMATS`) instead of the suffix.
+
+    Returns
+    -------
+    Mesh
+        Vertices ``(n, 3) float64`` and faces ``(m, 3) int64`` in file order
+        (STL: exactly coincident vertices are merged, since STL stores none
+        shared; the face order is kept).
+
+    Raises
+    ------
+    FileNotFoundError, PermissionError, IsADirectoryError
+        If the file cannot be opened.
+    MeshFormatError
+        If the format is unknown, or the file is truncated or malformed, or
+        has non-triangle faces.
+    InvalidMeshError
+        If the content is not a usable mesh (empty, NaN/inf coordinates,
+        indices out of range).
+    """
+    path = Path(path)
+    fmt, comp = _split_suffix(path)
+    if format is not None:
+        fmt = format.lower().lstrip(".")
+    if fmt not in MESH_FORMATS:
+        raise MeshFormatError(
+            f"{path}: unknown mesh format {('.' + fmt) if fmt else '(no suffix)'}; "
+            f"expected one of {', '.join('.' + f for f in MESH_FORMATS)} "
+            "(optionally .gz/.xz/.bz2)"
+        )
+    if not path.exists():
+        raise FileNotFoundError(f"{path}: no such file")
+    if path.is_dir():
+        raise IsADirectoryError(f"{path}: is a directory")
+    data = _read_bytes(path, comp)
+    if fmt == "off":
+        v, f = _parse_off(data, path)
+    elif fmt == "tri":
+        v, f = _parse_tri(data, path)
+    else:
+        v, f = _load_trimesh(data, fmt, path)
+    try:
+        return Mesh(v, f, name=path.name)
+    except InvalidMeshError as exc:
+        raise InvalidMeshError(f"{path}: {str(exc).removeprefix(path.name + ': ')}") from None
+
+
+# --------------------------------------------------------------------- text
+def _text_lines(data: bytes, path: Path) -> list[str]:
+    """Non-empty lines with comments (``#`` to end of line) removed."""
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise MeshFormatError(f"{path}: not a text file (binary data in a text format)") from None
+    if "#" in text:
+        text = "\n".join(line.split("#", 1)[0] for line in text.splitlines())
+    lines = text.split("\n")
+    return [ln for ln in (ln.strip() for ln in lines) if ln]
+
+
+def _loadtxt(lines: list[str], dtype, what: str, path: Path) -> np.ndarray:
+    try:
+        return np.loadtxt(lines, dtype=dtype, ndmin=2, comments=None)
+    except ValueError as exc:
+        msg = str(exc).split("; use `usecols`")[0]
+        raise MeshFormatError(f"{path}: malformed {what}: {msg}") from None
+
+
+def _count(token: str, what: str, path: Path) -> int:
+    try:
+        n = int(token)
+    except ValueError:
+        raise MeshFormatError(f"{path}: expected the {what} count, got {token!r}") from None
+    if n < 0:
+        raise MeshFormatError(f"{path}: negative {what} count {n}")
+    return n
+
+
+def _parse_off(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
+    lines = _text_lines(data, path)
+    if not lines:
+        raise MeshFormatError(f"{path}: empty file")
+    head = lines[0].split()
+    magic = head[0].upper()
+    if not magic.endswith("OFF"):
+        raise MeshFormatError(f"{path}: not an OFF file (first word is {head[0]!r}, expected 'OFF')")
+    counts = head[1:]
+    pos = 1
+    if not counts:
+        if len(lines) < 2:
+            raise MeshFormatError(f"{path}: truncated OFF file: no vertex/face counts")
+        counts = lines[1].split()
+        pos = 2
+    if len(counts) < 2:
+        raise MeshFormatError(f"{path}: OFF counts line must give vertex and face counts")
+    nv = _count(counts[0], "vertex", path)
+    nf = _count(counts[1], "face", path)
+    vlines = lines[pos:pos + nv]
+    flines = lines[pos + nv:pos + nv + nf]
+    if len(vlines) < nv:
+        raise MeshFormatError(f"{path}: truncated OFF file: expected {nv} vertices, found {len(vlines)}")
+    if len(flines) < nf:
+        raise MeshFormatError(f"{path}: truncated OFF file: expected {nf} faces, found {len(flines)}")
+    v = _loadtxt(vlines, np.float64, "vertex lines", path) if nv else np.zeros((0, 3))
+    if v.shape[1] < 3:
+        raise MeshFormatError(f"{path}: vertex lines need 3 coordinates, found {v.shape[1]}")
+    v = np.ascontiguousarray(v[:, :3])
+    if nf == 0:
+        raise InvalidMeshError(f"{path}: empty mesh: no faces")
+    f = _off_faces(flines, path)
+    return v, f
+
+
+def _off_faces(flines: list[str], path: Path) -> np.ndarray:
+    try:
+        f = np.loadtxt(flines, dtype=np.int64, ndmin=2, comments=None)
+    except ValueError:
+        f = None
+    if f is None or f.shape[1] < 4 or not (f[:, 0] == 3).all():
+        # error path only: find the first offending line
+        for i, line in enumerate(flines):
+            tok = line.split()
+            try:
+                n = int(tok[0])
+                idx = [int(t) for t in tok[1:1 + n]]
+            except ValueError:
+                raise MeshFormatError(f"{path}: malformed face line {i}: {line!r}") from None
+            if n != 3:
+                raise MeshFormatError(
+                    f"{path}: only triangle meshes are supported; face {i} has {n} vertices")
+            if len(idx) < 3:
+                raise MeshFormatError(f"{path}: face {i} lists fewer than 3 vertex indices: {line!r}")
+        # every line is a triangle but with varying trailing colour fields
+        return np.array([[int(t) for t in ln.split()[1:4]] for ln in flines], dtype=np.int64)
+    return np.ascontiguousarray(f[:, 1:4])
+
+
+def _parse_tri(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
+    lines = _text_lines(data, path)
+    if not lines:
+        raise MeshFormatError(f"{path}: empty file")
+    nv = _count(lines[0].split()[0], "vertex", path)
+    vlines = lines[1:1 + nv]
+    if len(vlines) < nv:
+        raise MeshFormatError(f"{path}: truncated .tri file: expected {nv} vertices, found {len(vlines)}")
+    if len(lines) < nv + 2:
+        raise MeshFormatError(f"{path}: truncated .tri file: no face count after the vertices")
+    nf = _count(lines[1 + nv].split()[0], "face", path)
+    flines = lines[2 + nv:2 + nv + nf]
+    if len(flines) < nf:
+        raise MeshFormatError(f"{path}: truncated .tri file: expected {nf} faces, found {len(flines)}")
+    v = _loadtxt(vlines, np.float64, "vertex lines", path) if nv else np.zeros((0, 3))
+    if v.shape[1] != 3:
+        raise MeshFormatError(f"{path}: vertex lines need 3 coordinates, found {v.shape[1]}")
+    if nf == 0:
+        raise InvalidMeshError(f"{path}: empty mesh: no faces")
+    f = _loadtxt(flines, np.int64, "face lines", path)
+    if f.shape[1] != 3:
+        raise MeshFormatError(
+            f"{path}: only triangle meshes are supported; face lines have {f.shape[1]} indices")
+    return v, f
+
+
+# ---------------------------------------------------------- via trimesh
+def _load_trimesh(data: bytes, fmt: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
+    import trimesh
+
+    kwargs = {"maintain_order": True} if fmt == "obj" else {}
+    try:
+        loaded = trimesh.load(io.BytesIO(data), file_type=fmt, process=False, validate=False,
+                              force="mesh", **kwargs)
+    except Exception as exc:  # trimesh raises many types for malformed input
+        raise MeshFormatError(f"{path}: cannot read {fmt.upper()}: {exc or type(exc).__name__}") from None
+    v = np.asarray(getattr(loaded, "vertices", np.zeros((0, 3))), dtype=np.float64)
+    f = np.asarray(getattr(loaded, "faces", np.zeros((0, 3))), dtype=np.int64)
+    if f.size == 0:
+        raise InvalidMeshError(f"{path}: empty mesh: no faces")
+    declared = _declared_faces(data, fmt)
+    if declared is not None and declared != f.shape[0]:
+        raise MeshFormatError(
+            f"{path}: only triangle meshes are supported; the file declares {declared} faces "
+            f"but they make {f.shape[0]} triangles (polygons were split)")
+    if fmt == "stl":  # STL stores no shared vertices: merge exact duplicates
+        v, inv = np.unique(v, axis=0, return_inverse=True)
+        f = inv.reshape(-1)[f]
+    return v, f
+
+
+def _declared_faces(data: bytes, fmt: str) -> int | None:
+    """Face count declared by a PLY header, or counted 'f' lines of an OBJ."""
+    if fmt == "ply":
+        end = data.find(b"end_header")
+        for line in data[:end].split(b"\n"):
+            parts = line.split()
+            if len(parts) == 3 and parts[0] == b"element" and parts[1] == b"face":
+                return int(parts[2])
+        return None
+    if fmt == "obj":
+        return data.count(b"\nf ") + int(data.startswith(b"f "))
+    return None
+
+
+# ------------------------------------------------------------------ writes
+def atomic_write(path, write: Callable[[io.BufferedWriter], None] | bytes) -> Path:
+    """Write a file atomically: a temporary file in the same folder, then rename.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Target file. Its folder must exist.
+    write : bytes or callable
+        The content, or a function writing it to a binary file object.
+        A ``.gz``/``.xz``/``.bz2`` suffix on ``path`` compresses the content.
+
+    Returns
+    -------
+    pathlib.Path
+        The target path.
+
+    Raises
+    ------
+    FileNotFoundError
+        If the folder does not exist.
+    """
+    path = Path(path)
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():
+        raise FileNotFoundError(f"{path}: folder {folder} does not exist")
+    comp = path.suffix.lower() if path.suffix.lower() in _COMPRESSORS else None
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            if comp is not None:
+                buf = io.BytesIO()
+                write(buf) if callable(write) else buf.write(write)
+                fh.write(_COMPRESSORS[comp](buf.getvalue()))
+            elif callable(write):
+                write(fh)
+            else:
+                fh.write(write)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        raise
+    return path
+
+
+def write_labels(path, labels, header: dict | Iterable[str] | None = None) -> Path:
+    """Write a ``.seg`` label file: one integer per face per line, face order.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    labels : (m,) int ndarray
+    header : dict or iterable of str, optional
+        Written first as ``# key: value`` (or ``# line``) lines; readers of
+        this package skip them. Leave it out for strict benchmark files.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    ValueError
+        If ``labels`` is not a 1-D integer array.
+    """
+    labels = np.asarray(labels)
+    if labels.ndim != 1 or not np.issubdtype(labels.dtype, np.integer):
+        raise ValueError(f"labels must be a 1-D integer array, got shape {labels.shape}, dtype {labels.dtype}")
+    head = ""
+    if header:
+        items = header.items() if isinstance(header, dict) else ((None, h) for h in header)
+        head = "".join(f"# {k}: {v}\n" if k is not None else f"# {v}\n" for k, v in items)
+    body = "\n".join(labels.astype(str).tolist())
+    return atomic_write(path, (head + body + ("\n" if labels.size else "")).encode("ascii"))
+
+
+def read_labels(path, n_faces: int | None = None) -> np.ndarray:
+    """Read a ``.seg`` label file (``#`` lines skipped; may be compressed).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    n_faces : int, optional
+        If given, the number of labels must equal it.
+
+    Returns
+    -------
+    labels : (m,) int64 ndarray
+        The labels as stored (not relabelled).
+
+    Raises
+    ------
+    FileNotFoundError
+        If the file does not exist.
+    MeshFormatError
+        If a line is not one integer, or the count differs from ``n_faces``.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"{path}: no such file")
+    _, comp = _split_suffix(path)
+    data = _read_bytes(path, comp)
+    lines = _text_lines(data, path)
+    if not lines:
+        labels = np.zeros(0, dtype=np.int64)
+    else:
+        try:
+            labels = np.loadtxt(lines, dtype=np.int64, ndmin=1, comments=None)
+        except ValueError as exc:
+            raise MeshFormatError(f"{path}: malformed label file: {str(exc).split('; use')[0]}") from None
+        if labels.ndim != 1:
+            raise MeshFormatError(f"{path}: malformed label file: expected one label per line")
+    if n_faces is not None and labels.shape[0] != n_faces:
+        raise MeshFormatError(f"{path}: has {labels.shape[0]} labels but the mesh has {n_faces} faces")
+    return labels
+
+
+def write_mesh(path, mesh, face_colors: np.ndarray | None = None) -> Path:
+    """Write a mesh: ``.off`` and ``.tri`` here, ``.ply``/``.obj``/``.stl`` via trimesh.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Optionally ending in ``.gz``/``.xz``/``.bz2``.
+    mesh : Mesh or (vertices, faces)
+    face_colors : (m, 3) or (m, 4) uint8 ndarray, optional
+        Per-face colours (PLY only).
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    MeshFormatError
+        If the format is unknown, or colours are asked of a format other
+        than PLY.
+    """
+    from .mesh import as_mesh
+
+    mesh = as_mesh(mesh)
+    path = Path(path)
+    fmt, _ = _split_suffix(path)
+    if fmt not in MESH_FORMATS:
+        raise MeshFormatError(f"{path}: unknown mesh format .{fmt}")
+    if face_colors is not None and fmt != "ply":
+        raise MeshFormatError(f"{path}: per-face colours need the .ply format")
+    v, f = mesh.vertices, mesh.faces
+    if fmt == "off":
+        head = f"OFF\n{len(v)} {len(f)} 0\n"
+        body = _rows(v, "%.17g") + _rows(np.c_[np.full(len(f), 3), f], "%d")
+        return atomic_write(path, (head + body).encode("ascii"))
+    if fmt == "tri":
+        body = f"{len(v)}\n" + _rows(v, "%.17g") + f"{len(f)}\n" + _rows(f, "%d")
+        return atomic_write(path, body.encode("ascii"))
+    import trimesh
+
+    tm = trimesh.Trimesh(vertices=v, faces=f, process=False, validate=False)
+    if face_colors is not None:
+        tm.visual.face_colors = face_colors
+    kwargs = {"encoding": "binary"} if fmt == "ply" else {}
+    return atomic_write(path, tm.export(file_type=fmt, **kwargs))
+
+
+def _rows(a: np.ndarray, fmt: str) -> str:
+    buf = io.StringIO()
+    np.savetxt(buf, a, fmt=fmt)
+    return buf.getvalue()
+
+
+def write_colored_mesh(path, mesh, labels) -> Path:
+    """Write a binary PLY with one colour per face, one colour per superfacet.
+
+    Adjacent superfacets always get clearly different colours (a greedy
+    colouring of the superfacet adjacency graph, see
+    :func:`superfacets.viz.superfacet_colors`). Opens in MeshLab or Blender.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Should end in ``.ply``.
+    mesh : Mesh or (vertices, faces)
+    labels : (m,) int ndarray
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    ValueError
+        If ``labels`` does not have one entry per face.
+    """
+    from .mesh import as_mesh
+    from .viz import face_colors
+
+    mesh = as_mesh(mesh)
+    return write_mesh(path, mesh, face_colors=face_colors(mesh, labels))
