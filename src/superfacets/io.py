@@ -432,7 +432,8 @@ def write_mesh(path, mesh, face_colors: np.ndarray | None = None) -> Path:
     if face_colors is not None:
         tm.visual.face_colors = face_colors
     kwargs = {"encoding": "binary"} if fmt == "ply" else {}
-    return atomic_write(path, tm.export(file_type=fmt, **kwargs))
+    data = tm.export(file_type=fmt, **kwargs)
+    return atomic_write(path, data.encode("utf-8") if isinstance(data, str) else data)
 
 
 def _rows(a: np.ndarray, fmt: str) -> str:

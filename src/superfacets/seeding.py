@@ -115,9 +115,10 @@ def flood_labels(mesh, csr_weights: np.ndarray, radius: float, window: float = 2
 def grid_labels(mesh, radius: float) -> np.ndarray:
     """Regular-grid initialization (paper section 3.1).
 
-    Each face centroid is integer-divided by ``2 r`` (after subtracting the
-    bounding-box minimum); faces in the same cell of the 3D grid start in the
-    same region. Cells are numbered in lexicographic order of their integer
+    Each face centroid is integer-divided by ``2 r`` after subtracting the
+    minimum corner of the bounding box of the (referenced) vertices, so the
+    grid moves with the mesh (translation invariance); faces in the same cell
+    of the 3D grid start in the same region. Cells are numbered in lexicographic order of their integer
     coordinates. O(m log m) (a sort stands in for the hash map).
 
     Parameters
@@ -131,8 +132,8 @@ def grid_labels(mesh, radius: float) -> np.ndarray:
     labels : (m,) int64 ndarray
         Region of each face, dense ``0..R-1``.
     """
-    c = mesh.centroids
-    cell = np.floor((c - c.min(axis=0)) / (2.0 * radius)).astype(np.int64)
+    origin = mesh.vertices[mesh.referenced_vertices].min(axis=0)
+    cell = np.floor((mesh.centroids - origin) / (2.0 * radius)).astype(np.int64)
     dims = cell.max(axis=0) + 1
     key = (cell[:, 0] * dims[1] + cell[:, 1]) * dims[2] + cell[:, 2]
     _, labels = np.unique(key, return_inverse=True)

@@ -1,0 +1,57 @@
+"""Shared fixtures: small synthetic meshes with known answers, and real data."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from superfacets import Mesh
+from superfacets.datasets.psb import default_archive, psb_root
+
+SHARED = default_archive().parent.parent
+MESHES = SHARED / "data" / "meshes"
+TABLE1 = ["bunny", "horse", "hand_olivier"]
+
+
+def grid_mesh(nx: int, ny: int, height=None, size=1.0) -> Mesh:
+    """A triangulated (nx x ny)-cell grid on [-size, size]^2, z = height(x, y)."""
+    xs = np.linspace(-size, size, nx + 1)
+    ys = np.linspace(-size, size, ny + 1)
+    X, Y = np.meshgrid(xs, ys, indexing="ij")
+    Z = np.zeros_like(X) if height is None else height(X, Y)
+    v = np.stack([X.ravel(), Y.ravel(), Z.ravel()], axis=1)
+    idx = np.arange((nx + 1) * (ny + 1)).reshape(nx + 1, ny + 1)
+    a, b = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel()
+    c, d = idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    f = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+    return Mesh(v, f)
+
+
+@pytest.fixture
+def valley() -> Mesh:
+    """A V-shaped valley z = |x| (normals up): a sharp concave crease along x = 0."""
+    return grid_mesh(60, 60, height=lambda x, y: np.abs(x))
+
+
+@pytest.fixture
+def sphere() -> Mesh:
+    s = trimesh.creation.icosphere(subdivisions=4)
+    return Mesh(s.vertices, s.faces)
+
+
+def need(path: Path) -> Path:
+    if not path.exists():
+        pytest.skip(f"{path} is missing (the shared data beside the repository)")
+    return path
+
+
+@pytest.fixture(scope="session")
+def psb() -> Path:
+    """The unpacked Princeton benchmark (unpacked once from ../shared)."""
+    try:
+        return psb_root()
+    except FileNotFoundError:
+        pytest.skip(f"{default_archive()} is missing (the shared data beside the repository)")

@@ -1,0 +1,114 @@
+import numpy as np
+import pytest
+
+from superfacets import Mesh, ParameterError, paper_weights, shlafman_weights
+from superfacets.graph import edge_weights
+
+
+def fold(z: float) -> Mesh:
+    """Two right triangles sharing the edge (0,0,0)-(0,1,0); the far vertex of the
+    second is at (1, 0.5, z). Normals up (+z) for the first face."""
+    v = np.array([[0, 0, 0], [0, 1, 0], [-1, 0.5, 0], [1, 0.5, z]], float)
+    f = np.array([[0, 1, 2], [1, 0, 3]])
+    return Mesh(v, f)
+
+
+def hand_weight(z, alpha, eta_convex, concave):
+    c0 = np.array([-1 / 3, 0.5, 0])
+    c1 = np.array([1 / 3, 0.5, z / 3])
+    mid = np.array([0, 0.5, 0])
+    geo = np.linalg.norm(c0 - mid) + np.linalg.norm(mid - c1)
+    theta = np.arctan2(abs(z), 1.0)  # angle between the two normals
+    eta = 1.0 if concave else eta_convex
+    ang = eta * 1.0 * theta / np.pi  # shared edge length 1
+    d = np.linalg.norm(np.array([1, 1, abs(z)]) - np.array([-1, 0, 0]))  # bbox diagonal
+    return (geo + alpha * ang) / d, geo, np.cos(theta)
+
+
+@pytest.mark.parametrize("z, concave", [(0.7, True), (-0.7, False)])
+def test_paper_weight_matches_hand_computation(z, concave):
+    m = fold(z)
+    assert m.graph.n_edges == 1
+    w = paper_weights(m, alpha=200, eta_convex=0.2)
+    expected, _, _ = hand_weight(z, 200, 0.2, concave)
+    assert w[0] == pytest.approx(expected, rel=1e-12)
+
+
+def test_concave_fold_costs_more_than_convex():
+    wc = paper_weights(fold(0.7), alpha=200)[0]
+    wx = paper_weights(fold(-0.7), alpha=200)[0]
+    assert wc > 2 * wx
+
+
+def test_flat_pair_weight_is_geodesic_only_and_alpha_free():
+    m = fold(0.0)
+    w0 = paper_weights(m, alpha=0)
+    w1 = paper_weights(m, alpha=1000)
+    np.testing.assert_allclose(w0, w1)
+    _, geo, _ = hand_weight(0.0, 0, 0.2, False)
+    assert w0[0] * m.diagonal == pytest.approx(geo)
+
+
+def test_shlafman_weight_matches_hand_computation():
+    z = 0.7
+    _, geo, cos = hand_weight(z, 0, 0.2, True)
+    w = shlafman_weights(fold(z), alpha=0.3)
+    assert w[0] == pytest.approx(0.7 * geo + 0.3 * (1 - cos**2), rel=1e-12)
+
+
+def test_weights_invariant_to_scale_and_translation(sphere):
+    w = paper_weights(sphere, alpha=200)
+    moved = Mesh(sphere.vertices * 37.5 + [3, -2, 8], sphere.faces)
+    np.testing.assert_allclose(paper_weights(moved, alpha=200), w, rtol=1e-9)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(alpha=-1), "alpha must be a finite number >= 0"),
+    (dict(alpha=np.nan), "alpha must be a finite number >= 0"),
+    (dict(eta_convex=-0.1), "eta_convex must be a finite number >= 0"),
+    (dict(alpha="x"), "alpha must be a number"),
+])
+def test_paper_weight_parameter_errors(kwargs, match):
+    with pytest.raises(ParameterError, match=match):
+        paper_weights(fold(0.5), **kwargs)
+
+
+def test_shlafman_alpha_range_and_unknown_weighting():
+    with pytest.raises(ParameterError, match=r"\[0, 1\]"):
+        shlafman_weights(fold(0.5), alpha=1.5)
+    with pytest.raises(ParameterError, match="weighting must be"):
+        edge_weights(fold(0.5), "cosine")
+
+
+def test_non_manifold_edge_joins_every_pair():
+    # three triangles on the edge (0,1) plus one ordinary neighbour
+    v = np.array([[0, 0, 0], [1, 0, 0], [0.5, 1, 0], [0.5, -1, 0], [0.5, 0, 1], [1.5, 1, 0]], float)
+    f = np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4], [1, 5, 2]])
+    g = Mesh(v, f).graph
+    pairs = {tuple(p) for p in g.pairs.tolist()}
+    assert pairs == {(0, 1), (0, 2), (1, 2), (0, 3)}
+    # CSR is symmetric and consistent with the pairs
+    for i, j in pairs:
+        assert j in g.indices[g.indptr[i]:g.indptr[i + 1]]
+        assert i in g.indices[g.indptr[j]:g.indptr[j + 1]]
+    assert g.indices.dtype == np.int32
+
+
+def test_duplicate_faces_degenerate_edges_and_boundary():
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], float)
+    # face 1 duplicates face 0; face 2 has a collapsed edge (2, 2)
+    f = np.array([[0, 1, 2], [0, 1, 2], [2, 2, 3], [1, 3, 2]])
+    g = Mesh(v, f).graph
+    pairs = {tuple(p) for p in g.pairs.tolist()}
+    assert (0, 1) in pairs and len([p for p in g.pairs.tolist() if p == [0, 1]]) == 1
+    assert all(i != j for i, j in pairs)
+    # boundary edges of a 2-triangle square: 4, each used by exactly one face
+    sq = Mesh(v, [[0, 1, 2], [1, 3, 2]]).graph
+    assert sq.boundary_edges.shape == (4, 2) and sq.n_edges == 1
+
+
+def test_closed_mesh_has_three_neighbours_per_face(sphere):
+    g = sphere.graph
+    assert (np.diff(g.indptr) == 3).all()
+    assert g.boundary_edges.shape[0] == 0
+    assert g.n_edges == sphere.n_faces * 3 // 2

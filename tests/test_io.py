@@ -1,0 +1,189 @@
+import bz2
+import gzip
+import lzma
+import os
+
+import numpy as np
+import pytest
+import trimesh
+
+from superfacets import (InvalidMeshError, Mesh, MeshFormatError, read_labels, read_mesh,
+                         write_colored_mesh, write_labels, write_mesh)
+from superfacets.io import atomic_write
+from superfacets.viz import superfacet_adjacency
+
+from conftest import MESHES, need
+
+
+@pytest.fixture
+def box():
+    b = trimesh.creation.box()
+    return Mesh(b.vertices, b.faces)
+
+
+@pytest.mark.parametrize("suffix", [".off", ".tri", ".ply", ".obj", ".stl",
+                                    ".off.gz", ".tri.xz", ".ply.bz2", ".obj.gz"])
+def test_round_trip_keeps_faces_in_order(tmp_path, box, suffix):
+    path = write_mesh(tmp_path / f"box{suffix}", box)
+    m = read_mesh(path)
+    assert m.n_faces == box.n_faces
+    # the same triangles, in the same order (vertex ids may be renumbered)
+    np.testing.assert_allclose(m.vertices[m.faces], box.vertices[box.faces], atol=1e-6)
+
+
+def test_stl_vertices_are_merged(tmp_path, box):
+    m = read_mesh(write_mesh(tmp_path / "box.stl", box))
+    assert m.n_vertices == 8
+    assert m.graph.n_edges == 18
+
+
+def test_off_with_comments_counts_on_header_and_colors(tmp_path):
+    p = tmp_path / "c.off"
+    p.write_text("OFF 4 2 0\n# a comment\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n"
+                 "3 0 1 2 255 0 0\n3 1 3 2 0 255 0\n")
+    m = read_mesh(p)
+    np.testing.assert_array_equal(m.faces, [[0, 1, 2], [1, 3, 2]])
+
+
+def test_tri_format_as_documented(tmp_path):
+    p = tmp_path / "t.tri"
+    p.write_text("3\n0 0 0\n1 0 0\n0 1 0\n1\n0 1 2\n")
+    m = read_mesh(p)
+    assert m.n_faces == 1 and m.n_vertices == 3
+
+
+@pytest.mark.parametrize("name, content, match", [
+    ("trunc.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n", "expected 2 faces, found 1"),
+    ("truncv.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n", "expected 4 vertices, found 2"),
+    ("bad.off", "OFF\n3 1 0\n0 0 0\n1 x 0\n0 1 0\n3 0 1 2\n", "malformed vertex lines"),
+    ("quad.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n", "face 0 has 4 vertices"),
+    ("range.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n", "out of range"),
+    ("nan.off", "OFF\n3 1 0\n0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n", "NaN or infinite"),
+    ("empty.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n", "empty mesh"),
+    ("nothing.off", "", "empty file"),
+    ("magic.off", "PLY\n3 1 0\n", "not an OFF file"),
+    ("counts.off", "OFF\nthree 1 0\n", "expected the vertex count"),
+    ("trunc.tri", "3\n0 0 0\n1 0 0\n0 1 0\n2\n0 1 2\n", "expected 2 faces, found 1"),
+    ("nofaces.tri", "3\n0 0 0\n1 0 0\n0 1 0\n", "no face count"),
+    ("quad.tri", "4\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n1\n0 1 2 3\n", "face lines have 4 indices"),
+    ("mesh.xyz", "1 2 3\n", "unknown mesh format .xyz"),
+    ("noext", "1 2 3\n", "unknown mesh format"),
+    ("broken.off.gz", "not gzip data", "cannot decompress"),
+])
+def test_malformed_files(tmp_path, name, content, match):
+    p = tmp_path / name
+    p.write_text(content)
+    with pytest.raises((MeshFormatError, InvalidMeshError), match=match) as info:
+        read_mesh(p)
+    assert str(p) in str(info.value) or p.name in str(info.value)
+
+
+def test_missing_file_and_directory(tmp_path):
+    with pytest.raises(FileNotFoundError, match="no such file"):
+        read_mesh(tmp_path / "none.off")
+    d = tmp_path / "dir.off"
+    d.mkdir()
+    with pytest.raises(IsADirectoryError):
+        read_mesh(d)
+
+
+def test_binary_data_in_text_format(tmp_path):
+    p = tmp_path / "bin.off"
+    p.write_bytes(b"OFF\n\xff\xfe\x00\x01")
+    with pytest.raises(MeshFormatError, match="not a text file"):
+        read_mesh(p)
+
+
+def test_ply_and_obj_quads_are_refused(tmp_path):
+    quad = trimesh.Trimesh([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [[0, 1, 2], [0, 2, 3]])
+    ply = tmp_path / "q.ply"
+    ply.write_bytes(b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\n"
+                    b"property float y\nproperty float z\nelement face 1\n"
+                    b"property list uchar int vertex_indices\nend_header\n"
+                    b"0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n")
+    with pytest.raises(MeshFormatError, match="only triangle meshes"):
+        read_mesh(ply)
+    obj = tmp_path / "q.obj"
+    obj.write_text("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n")
+    with pytest.raises(MeshFormatError, match="only triangle meshes"):
+        read_mesh(obj)
+    assert quad.faces.shape == (2, 3)
+
+
+def test_garbage_ply(tmp_path):
+    p = tmp_path / "g.ply"
+    p.write_bytes(b"this is not a ply file at all")
+    with pytest.raises((MeshFormatError, InvalidMeshError), match="g.ply"):
+        read_mesh(p)
+
+
+def test_labels_round_trip_with_header(tmp_path):
+    labels = np.array([3, 0, 2, 2, 1])
+    p = write_labels(tmp_path / "x.seg", labels, header={"alpha": 200, "iterations": 7})
+    text = p.read_text()
+    assert text.startswith("# alpha: 200\n# iterations: 7\n3\n0\n")
+    np.testing.assert_array_equal(read_labels(p, n_faces=5), labels)
+    plain = write_labels(tmp_path / "y.seg", labels)
+    assert plain.read_text() == "3\n0\n2\n2\n1\n"
+    gz = write_labels(tmp_path / "z.seg.gz", labels)
+    np.testing.assert_array_equal(read_labels(gz), labels)
+
+
+def test_label_file_errors(tmp_path):
+    p = tmp_path / "bad.seg"
+    p.write_text("1\n2\nx\n")
+    with pytest.raises(MeshFormatError, match="malformed label file"):
+        read_labels(p)
+    p.write_text("1\n2\n")
+    with pytest.raises(MeshFormatError, match="has 2 labels but the mesh has 3 faces"):
+        read_labels(p, n_faces=3)
+    with pytest.raises(FileNotFoundError):
+        read_labels(tmp_path / "none.seg")
+    with pytest.raises(ValueError, match="1-D integer"):
+        write_labels(tmp_path / "f.seg", np.array([0.5, 1.0]))
+
+
+def test_atomic_write_leaves_nothing_on_failure(tmp_path):
+    target = tmp_path / "out.seg"
+    target.write_text("old content\n")
+
+    def boom(fh):
+        fh.write(b"partial")
+        raise RuntimeError("interrupted")
+
+    with pytest.raises(RuntimeError):
+        atomic_write(target, boom)
+    assert target.read_text() == "old content\n"
+    assert os.listdir(tmp_path) == ["out.seg"]
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        atomic_write(tmp_path / "no" / "x.seg", b"1\n")
+
+
+def test_colored_mesh_adjacent_superfacets_differ(tmp_path, sphere):
+    from superfacets import superfacets
+
+    labels = superfacets(sphere, 40, alpha=0)
+    p = write_colored_mesh(tmp_path / "c.ply", sphere, labels)
+    tm = trimesh.load(p, process=False)
+    colors = np.asarray(tm.visual.face_colors)[:, :3]
+    assert len(tm.faces) == sphere.n_faces
+    # one colour per superfacet
+    for s in range(labels.max() + 1):
+        assert len(np.unique(colors[labels == s], axis=0)) == 1
+    rep = np.array([colors[np.flatnonzero(labels == s)[0]] for s in range(labels.max() + 1)])
+    for s, t in superfacet_adjacency(sphere, labels):
+        assert not np.array_equal(rep[s], rep[t])
+
+
+def test_compressed_inputs_match_plain(tmp_path, box):
+    plain = write_mesh(tmp_path / "b.off", box).read_bytes()
+    for ext, comp in ((".gz", gzip.compress), (".xz", lzma.compress), (".bz2", bz2.compress)):
+        p = tmp_path / f"b.off{ext}"
+        p.write_bytes(comp(plain))
+        np.testing.assert_array_equal(read_mesh(p).faces, box.faces)
+
+
+@pytest.mark.parametrize("name, faces", [("bunny", 69451), ("horse", 96966), ("hand_olivier", 105860)])
+def test_table1_meshes_load(name, faces):
+    m = read_mesh(need(MESHES / f"{name}.tri.xz"))
+    assert m.n_faces == faces

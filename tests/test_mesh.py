@@ -1,0 +1,73 @@
+import numpy as np
+import pytest
+import trimesh
+
+from superfacets import InvalidMeshError, Mesh, as_mesh
+
+V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+F = np.array([[0, 1, 2], [0, 3, 1]])
+
+
+def test_derived_geometry_known_values():
+    m = Mesh(V, F)
+    np.testing.assert_allclose(m.centroids[0], [1 / 3, 1 / 3, 0])
+    np.testing.assert_allclose(m.normals[0], [0, 0, 1])
+    np.testing.assert_allclose(m.normals[1], [0, 1, 0])  # (0,0,1) x (1,0,0)
+    np.testing.assert_allclose(m.areas, [0.5, 0.5])
+    assert m.area == pytest.approx(1.0)
+    assert m.diagonal == pytest.approx(np.sqrt(3))
+    assert m.n_faces == 2 and m.n_vertices == 4
+
+
+def test_degenerate_face_has_zero_normal_and_area():
+    v = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0]], float)
+    m = Mesh(v, [[0, 1, 2], [0, 1, 3]])
+    np.testing.assert_array_equal(m.normals[0], 0)
+    assert m.areas[0] == 0
+    assert np.isfinite(m.normals).all()
+
+
+def test_accepts_trimesh_and_pair_and_keeps_caller_arrays_writable():
+    tm = trimesh.creation.box()
+    m = as_mesh(tm)
+    assert m.n_faces == len(tm.faces)
+    v, f = V.copy(), F.copy()
+    m2 = as_mesh((v, f))
+    assert v.flags.writeable and f.flags.writeable
+    assert not m2.vertices.flags.writeable
+    assert as_mesh(m2) is m2
+
+
+def test_unreferenced_vertices_do_not_change_diagonal():
+    v = np.vstack([V, [[100.0, 100.0, 100.0]]])
+    assert Mesh(v, F).diagonal == pytest.approx(np.sqrt(3))
+
+
+@pytest.mark.parametrize("vertices, faces, match", [
+    (V, np.zeros((0, 3), int), "empty mesh"),
+    (V[:, :2], F, r"vertices must have shape \(n, 3\)"),
+    (V, np.array([[0, 1, 2, 3]]), "only triangle faces"),
+    (V, np.array([[0, 1, 4]]), "out of range"),
+    (V, np.array([[0, 1, -1]]), "out of range"),
+    (np.array([[0, 0, 0], [1, np.nan, 0], [0, 1, 0]]), np.array([[0, 1, 2]]), "NaN or infinite"),
+    (np.array([[0, 0, 0], [1, np.inf, 0], [0, 1, 0]]), np.array([[0, 1, 2]]), "NaN or infinite"),
+])
+def test_invalid_arrays(vertices, faces, match):
+    with pytest.raises(InvalidMeshError, match=match):
+        Mesh(vertices, faces)
+
+
+def test_float_faces_and_bad_types():
+    with pytest.raises(TypeError, match="integer"):
+        Mesh(V, F.astype(float))
+    with pytest.raises(TypeError, match="mesh must be"):
+        as_mesh("not a mesh")
+
+
+def test_check_usable():
+    v = np.zeros((3, 3))
+    with pytest.raises(InvalidMeshError, match="zero extent"):
+        Mesh(v, [[0, 1, 2]]).check_usable()
+    v = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0]], float)
+    with pytest.raises(InvalidMeshError, match="zero total area"):
+        Mesh(v, [[0, 1, 2]]).check_usable()

@@ -1,0 +1,73 @@
+import numpy as np
+import pytest
+
+from superfacets import Mesh, ParameterError
+from superfacets.connectivity import label_components
+from superfacets.graph import paper_weights
+from superfacets.seeding import farthest_point_centers, first_center, flood_labels, grid_labels
+
+from conftest import grid_mesh
+
+
+def strip(n: int) -> Mesh:
+    """n separate small triangles along the x axis, centroids at x = 0..n-1."""
+    v, f = [], []
+    for i in range(n):
+        v += [[i - 0.1, 0, 0], [i + 0.1, 0, 0], [i, 0.2, 0]]
+        f.append([3 * i, 3 * i + 1, 3 * i + 2])
+    return Mesh(np.array(v, float), np.array(f))
+
+
+def test_first_center_is_nearest_to_mesh_centroid():
+    m = strip(5)
+    assert first_center(m) == 2
+
+
+def test_farthest_point_known_order():
+    m = strip(9)  # first: middle (4); then an end (0, lowest index on ties); then 8; then 2 ...
+    c = farthest_point_centers(m, 4)
+    assert c.tolist() == [4, 0, 8, 2]
+    assert len(set(farthest_point_centers(m, 9).tolist())) == 9
+
+
+def test_farthest_point_matches_brute_force(sphere):
+    k = 25
+    c = farthest_point_centers(sphere, k)
+    x = sphere.centroids
+    chosen = [first_center(sphere)]
+    for _ in range(k - 1):
+        d = np.min(((x[:, None, :] - x[chosen][None]) ** 2).sum(-1), axis=1)
+        d[chosen] = -1
+        chosen.append(int(np.argmax(d)))
+    assert c.tolist() == chosen
+
+
+@pytest.mark.parametrize("k, match", [(0, ">= 1"), (10**6, "larger than the number of faces"),
+                                      (2.5, "integer"), (True, "integer")])
+def test_farthest_point_bad_k(sphere, k, match):
+    with pytest.raises(ParameterError, match=match):
+        farthest_point_centers(sphere, k)
+
+
+def test_grid_labels_known_cells():
+    m = grid_mesh(8, 8, size=1.0)  # [-1, 1]^2, cells of 2r = 0.5 -> 4 x 4 cells
+    labels = grid_labels(m, radius=0.25)
+    assert labels.max() + 1 == 16
+    cell = np.floor((m.centroids[:, :2] + 1) / 0.5).astype(int)
+    for s in range(16):
+        assert len(np.unique(cell[labels == s], axis=0)) == 1
+
+
+def test_flood_labels_cover_mesh_with_connected_regions_within_window(sphere):
+    w = paper_weights(sphere, alpha=200)[sphere.graph.dual_edge]
+    r = 0.2
+    labels = flood_labels(sphere, w, r, window=2.0)
+    assert labels.min() == 0 and (labels >= 0).all()
+    k = labels.max() + 1
+    assert 10 <= k <= 150  # ideal packing: 4 pi / (pi (2 r)^2) = 25 regions
+    # each region is connected and within 2r of its seed: diameter <= 4r
+    assert label_components(sphere.graph, labels).max() + 1 == k
+    for s in range(k):
+        pts = sphere.centroids[labels == s]
+        span = np.sqrt(((pts[:, None] - pts[None]) ** 2).sum(-1)).max()
+        assert span <= 4 * r + 1e-9

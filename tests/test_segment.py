@@ -1,0 +1,246 @@
+import numpy as np
+import pytest
+import trimesh
+from scipy.sparse import csr_array
+from scipy.sparse.csgraph import dijkstra
+
+from superfacets import (InvalidMeshError, Mesh, ParameterError, read_mesh, segment,
+                         superfacets)
+from superfacets import _kernels
+from superfacets.connectivity import label_components
+from superfacets.graph import paper_weights
+
+from conftest import MESHES, TABLE1, grid_mesh, need
+
+
+def check_invariants(mesh, labels):
+    assert labels.shape == (mesh.n_faces,) and labels.dtype == np.int64
+    k = int(labels.max()) + 1
+    assert labels.min() == 0 and np.unique(labels).size == k  # dense, every face labelled
+    assert label_components(mesh.graph, labels).max() + 1 == k  # each superfacet connected
+    areas = np.bincount(labels, weights=mesh.areas)
+    assert areas.sum() == pytest.approx(mesh.area)
+    return k
+
+
+def crease_fraction(mesh, labels):
+    """Fraction of the crease (x = 0) edge length lying on superfacet boundaries."""
+    g = mesh.graph
+    v = mesh.vertices
+    on_crease = (np.abs(v[g.edges[:, 0], 0]) < 1e-12) & (np.abs(v[g.edges[:, 1], 0]) < 1e-12)
+    cut = labels[g.pairs[:, 0]] != labels[g.pairs[:, 1]]
+    return cut[on_crease].mean()
+
+
+def test_sphere_invariants_and_count(sphere):
+    r = segment(sphere, 40)
+    assert check_invariants(sphere, r.labels) == r.n_segments == 40
+    assert r.centers.shape == (40,)
+    assert (r.labels[r.centers] == np.arange(40)).all()
+    assert r.n_iter >= 1 and set(r.timings) >= {"init", "iterations", "total"}
+
+
+def test_deterministic(sphere):
+    a = superfacets(sphere, 30, alpha=200)
+    b = superfacets(sphere, 30, alpha=200)
+    np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("init", ["farthest", "flood", "grid"])
+def test_invariant_to_uniform_scaling_and_translation(init):
+    rng = np.random.default_rng(0)
+    tm = trimesh.creation.icosphere(subdivisions=3)
+    v = tm.vertices * (1 + 0.3 * rng.random((len(tm.vertices), 1)))  # bumpy, no symmetry ties
+    base = Mesh(v, tm.faces)
+    kw = dict(n_segments=25) if init == "farthest" else dict(radius=0.15, n_segments=None)
+    a = superfacets(base, init=init, **kw)
+    # powers of two keep every floating-point operation exact
+    moved = Mesh(v * 8.0 + np.array([64.0, -32.0, 16.0]), tm.faces)
+    b = superfacets(moved, init=init, **kw)
+    np.testing.assert_array_equal(a, b)
+    # and a non-trivial scale gives the same segmentation up to rounding-level ties
+    c = superfacets(Mesh(v * 3.7 + 1.1, tm.faces), init=init, **kw)
+    assert (a == c).mean() > 0.99
+
+
+@pytest.mark.parametrize("init", ["farthest", "flood", "grid"])
+def test_each_initialization_gives_valid_superfacets(init, sphere):
+    kw = dict(n_segments=30) if init == "farthest" else dict(radius=0.12, n_segments=None)
+    r = segment(sphere, init=init, **kw)
+    check_invariants(sphere, r.labels)
+    assert r.params["init"] == init
+    assert 10 <= r.n_segments <= 120
+
+
+def test_crease_followed_with_high_alpha(valley):
+    low = crease_fraction(valley, superfacets(valley, 40, alpha=0))
+    high = crease_fraction(valley, superfacets(valley, 40, alpha=1000))
+    assert high > 0.85
+    assert high > low + 0.4
+
+
+def test_exact_assignment_is_nearest_center(sphere):
+    g = sphere.graph
+    rng = np.random.default_rng(1)
+    w = paper_weights(sphere, alpha=100) * (1 + 0.01 * rng.random(g.n_edges))  # no ties
+    cw = w[g.dual_edge]
+    m = sphere.n_faces
+    centers = np.empty(m, np.int64)
+    centers[:12] = rng.choice(m, 12, replace=False)
+    dist, label = np.empty(m), np.empty(m, np.int64)
+    cap = g.indices.size + m + 1
+    k = _kernels.classify_exact(g.indptr, g.indices, cw, centers, 12, dist, label,
+                                np.empty(cap), np.empty(cap, np.int64))
+    assert k == 12
+    d = dijkstra(g.to_csr(w), indices=centers[:12])
+    np.testing.assert_array_equal(label, np.argmin(d, axis=0))
+    np.testing.assert_allclose(dist, d.min(axis=0))
+
+
+def test_bounded_expansion_is_dijkstra_inside_the_window(sphere):
+    g = sphere.graph
+    w = paper_weights(sphere, alpha=200)
+    cw = w[g.dual_edge]
+    m = sphere.n_faces
+    c = np.ascontiguousarray(sphere.centroids)
+    src, radius = 17, 0.5
+    inside = ((c - c[src]) ** 2).sum(1) <= radius**2
+    # reference: Dijkstra on the subgraph induced by the window
+    keep = inside[g.pairs[:, 0]] & inside[g.pairs[:, 1]]
+    i, j = g.pairs[keep, 0], g.pairs[keep, 1]
+    a = csr_array((np.r_[w[keep], w[keep]], (np.r_[i, j], np.r_[j, i])), shape=(m, m))
+    ref = dijkstra(a, indices=src)
+    dist = np.full(m, np.inf)
+    label = np.full(m, -1, np.int64)
+    cap = g.indices.size + m + 1
+    _kernels.expand(g.indptr, g.indices, cw, c, src, 0, radius**2, dist, label, np.empty(m),
+                    np.full(m, -1, np.int64), 0, np.empty(cap), np.empty(cap, np.int64), False,
+                    np.empty(0, np.int32), np.empty(0), 0)
+    reached = label == 0
+    assert reached.sum() > 50
+    np.testing.assert_array_equal(reached, np.isfinite(ref))
+    np.testing.assert_allclose(dist[reached], ref[reached])
+
+
+def test_replayed_expansions_equal_reference_on_synthetic(valley, sphere):
+    for mesh in (valley, sphere):
+        for kw in (dict(alpha=0), dict(alpha=200), dict(alpha=1000, init="grid", radius=0.1,
+                                                           n_segments=None)):
+            a = segment(mesh, **{"n_segments": 30, **kw})
+            b = segment(mesh, **{"n_segments": 30, **kw}, _reference=True)
+            np.testing.assert_array_equal(a.labels, b.labels)
+            assert a.n_iter == b.n_iter
+
+
+@pytest.mark.parametrize("name", TABLE1)
+def test_replayed_expansions_equal_reference_on_real_meshes(name):
+    mesh = read_mesh(need(MESHES / f"{name}.tri.xz"))
+    a = segment(mesh, 150, max_iter=12)
+    b = segment(mesh, 150, max_iter=12, _reference=True)
+    np.testing.assert_array_equal(a.labels, b.labels)
+
+
+@pytest.mark.parametrize("name, faces", [("bunny", 69451), ("horse", 96966), ("hand_olivier", 105860)])
+def test_table1_meshes_invariants(name, faces):
+    mesh = read_mesh(need(MESHES / f"{name}.tri.xz"))
+    r = segment(mesh, 150, alpha=200)
+    assert mesh.n_faces == faces
+    k = check_invariants(mesh, r.labels)
+    assert 140 <= k <= 170
+
+
+def test_psb_every_mesh_invariants(psb):
+    files = sorted((psb / "off").glob("*.off"), key=lambda p: int(p.stem))
+    assert len(files) >= 1
+    for path in files:
+        mesh = read_mesh(path)
+        labels = superfacets(mesh, 150, alpha=200)
+        k = check_invariants(mesh, labels)
+        assert 140 <= k <= 170, path.name
+
+
+def test_components_each_get_superfacets():
+    a = trimesh.creation.icosphere(subdivisions=2)
+    b = trimesh.creation.icosphere(subdivisions=2)
+    v = np.vstack([a.vertices, b.vertices * 0.5 + [5, 0, 0]])
+    f = np.vstack([a.faces, b.faces + len(a.vertices)])
+    mesh = Mesh(v, f)
+    r = segment(mesh, 1)  # one center: the other sphere is re-seeded as orphans
+    assert r.n_segments == 2 and r.n_orphan_seeds >= 1
+    assert len(np.unique(r.labels[: len(a.faces)])) == 1
+    assert len(np.unique(r.labels[len(a.faces):])) == 1
+    labels = superfacets(mesh, 20)
+    check_invariants(mesh, labels)
+    assert not set(labels[: len(a.faces)]) & set(labels[len(a.faces):])
+
+
+def test_odd_but_valid_input():
+    tm = trimesh.creation.icosphere(subdivisions=3)
+    v = np.vstack([tm.vertices, [[9.0, 9.0, 9.0]]])  # unreferenced vertex
+    f = tm.faces.copy()
+    extra = [
+        f[0],                                  # duplicate face
+        [f[1, 0], f[1, 0], f[1, 1]],           # degenerate face (repeated vertex)
+        [f[2, 0], f[2, 1], len(tm.vertices) - 1],  # a fin on an edge: non-manifold edge
+    ]
+    mesh = Mesh(v, np.vstack([f, extra]))
+    assert mesh.areas[-2] == 0
+    r = segment(mesh, 30)
+    check_invariants(mesh, r.labels)
+    r2 = segment(mesh, 30, assignment="exact")
+    check_invariants(mesh, r2.labels)
+
+
+def test_exact_assignment_option(sphere):
+    r = segment(sphere, 30, assignment="exact")
+    check_invariants(sphere, r.labels)
+    assert r.params["assignment"] == "exact"
+
+
+def test_shlafman_weighting_runs(sphere):
+    r = segment(sphere, 30, weighting="shlafman", alpha=0.5)
+    check_invariants(sphere, r.labels)
+
+
+def test_without_connectivity_labels_stay_dense(valley):
+    labels = superfacets(valley, 60, alpha=1000, enforce_connectivity=False)
+    assert np.unique(labels).size == labels.max() + 1
+
+
+def test_max_iter_one_and_convergence_flag(sphere):
+    r = segment(sphere, 30, max_iter=1)
+    assert r.n_iter == 1 and not r.converged
+    r = segment(sphere, 30, max_iter=200)
+    assert r.converged == (r.n_iter < 200)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(n_segments=0), "n_segments must be >= 1"),
+    (dict(n_segments=10**7), "larger than the number of faces"),
+    (dict(n_segments=3.5), "must be an integer"),
+    (dict(n_segments=20, radius=0.1), "not both"),
+    (dict(radius=-0.1, n_segments=None), "radius must be a finite number > 0"),
+    (dict(alpha=-5.0), "alpha must be a finite number >= 0"),
+    (dict(alpha=float("nan")), "alpha must be a finite number >= 0"),
+    (dict(window=0), "window must be a finite number > 0"),
+    (dict(max_iter=0), "max_iter must be an integer >= 1"),
+    (dict(init="random"), "init must be one of"),
+    (dict(assignment="fast"), "assignment must be one of"),
+    (dict(weighting="shlafman", alpha=200.0), r"\[0, 1\]"),
+])
+def test_parameter_errors(sphere, kwargs, match):
+    with pytest.raises(ParameterError, match=match):
+        segment(sphere, **kwargs)
+
+
+def test_unusable_meshes():
+    with pytest.raises(InvalidMeshError, match="zero total area"):
+        superfacets((np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0]], float), [[0, 1, 2]]), 1)
+    with pytest.raises(InvalidMeshError, match="empty mesh"):
+        superfacets((np.zeros((3, 3)), np.zeros((0, 3), int)), 1)
+
+
+def test_k_equals_faces_gives_one_face_each():
+    mesh = grid_mesh(3, 3)
+    labels = superfacets(mesh, mesh.n_faces, alpha=0)
+    assert np.unique(labels).size == mesh.n_faces
