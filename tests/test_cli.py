@@ -1,0 +1,95 @@
+import numpy as np
+import pytest
+
+from superfacets import read_labels, read_mesh, write_mesh
+from superfacets.cli import main
+
+from conftest import MESHES, need
+
+
+@pytest.fixture
+def small_off(tmp_path, sphere):
+    return write_mesh(tmp_path / "sphere.off", sphere)
+
+
+def test_segment_writes_labels_colored_mesh_and_summary(tmp_path, small_off, capsys):
+    seg, ply = tmp_path / "out.seg", tmp_path / "out.ply"
+    assert main(["segment", str(small_off), "-k", "30", "--alpha", "200", "-o", str(seg),
+                 "--colored-mesh", str(ply)]) == 0
+    line = capsys.readouterr().out.strip()
+    assert line.startswith("sphere.off: 5120 faces, 30 superfacets,") and line.endswith(" s")
+    labels = read_labels(seg, n_faces=5120)
+    assert labels.max() + 1 == 30
+    assert not seg.read_text().startswith("#")
+    assert read_mesh(ply).n_faces == 5120
+
+
+def test_header_option(tmp_path, small_off, capsys):
+    seg = tmp_path / "h.seg"
+    assert main(["segment", str(small_off), "--radius", "0.1", "--init", "grid", "-o", str(seg),
+                 "--header", "-q"]) == 0
+    assert capsys.readouterr().out == ""
+    text = seg.read_text()
+    assert "# parameters:" in text and "init=grid" in text and "# iterations:" in text
+    assert read_labels(seg, n_faces=5120).shape == (5120,)
+
+
+@pytest.mark.parametrize("args, match", [
+    (["segment", "{missing}"], "no such file"),
+    (["segment", "{bad}"], "expected 2 faces, found 1"),
+    (["segment", "{off}", "-k", "0"], "n_segments must be >= 1"),
+    (["segment", "{off}", "-k", "999999"], "larger than the number of faces"),
+    (["segment", "{off}", "--alpha", "-1"], "alpha must be a finite number >= 0"),
+    (["segment", "{off}", "-o", "{nodir}"], "does not exist"),
+    (["segment", "{off}", "--colored-mesh", "{txt}"], "must end in .ply"),
+])
+def test_bad_input_one_line_exit_2_no_output(tmp_path, small_off, capsys, args, match):
+    bad = tmp_path / "bad.off"
+    bad.write_text("OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n")
+    names = dict(missing=str(tmp_path / "none.off"), bad=str(bad), off=str(small_off),
+                 nodir=str(tmp_path / "no" / "x.seg"), txt=str(tmp_path / "x.txt"))
+    out = tmp_path / "result.seg"
+    argv = [a.format(**names) for a in args] + (["-o", str(out)] if "-o" not in args else [])
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("superfacets: error: ")
+    assert match in err[0]
+    assert "Traceback" not in err[0]
+    assert not out.exists()
+
+
+def test_both_k_and_radius_is_a_usage_error(small_off, capsys):
+    with pytest.raises(SystemExit) as info:
+        main(["segment", str(small_off), "-k", "5", "--radius", "0.1"])
+    assert info.value.code == 2
+    assert "not allowed with" in capsys.readouterr().err
+
+
+def test_help_lists_every_option_with_default(capsys):
+    with pytest.raises(SystemExit):
+        main(["segment", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    for opt in ["-k", "--radius", "--alpha", "--eta-convex", "--init", "--window", "--max-iter",
+                "-o", "--header", "--colored-mesh", "--assignment", "--no-connectivity"]:
+        assert opt in text
+    assert "(default: 200)" in text and "(default: 0.2)" in text and "(default: 50)" in text
+
+
+def test_demo(tmp_path, capsys):
+    out = tmp_path / "demo"
+    assert main(["demo", "--output-dir", str(out), "--resolution", "40", "-k", "20"]) == 0
+    mesh = read_mesh(out / "creature.off")
+    labels = read_labels(out / "creature.seg", n_faces=mesh.n_faces)
+    assert labels.max() + 1 == 20
+    assert (out / "creature_superfacets.ply").exists()
+    assert "creature:" in capsys.readouterr().out
+
+
+def test_horse_as_in_the_issue(tmp_path, capsys):
+    horse = need(MESHES / "horse.tri.xz")
+    seg, ply = tmp_path / "horse.seg", tmp_path / "horse.ply"
+    assert main(["segment", str(horse), "-k", "150", "--alpha", "200", "-o", str(seg),
+                 "--colored-mesh", str(ply)]) == 0
+    labels = read_labels(seg, n_faces=96966)
+    assert 140 <= labels.max() + 1 <= 170
+    assert len(np.unique(labels)) == labels.max() + 1

@@ -1,0 +1,62 @@
+import numpy as np
+
+from superfacets import enforce_connectivity
+from superfacets.connectivity import label_components, relabel_dense
+
+from conftest import grid_mesh
+
+
+def cell_labels(mesh, fn):
+    c = mesh.centroids
+    return np.array([fn(x, y) for x, y in c[:, :2]], dtype=np.int64)
+
+
+def test_stray_piece_joins_neighbour_with_longest_boundary():
+    mesh = grid_mesh(12, 12)  # [-1, 1]^2
+    # left half label 0, right half label 1; an island of label 1 inside the left half,
+    # touching only label 0 -> it must become 0
+    labels = cell_labels(mesh, lambda x, y: 1 if x > 0 or (-0.6 < x < -0.3 and -0.2 < y < 0.2) else 0)
+    assert label_components(mesh.graph, labels).max() + 1 == 3
+    out = enforce_connectivity(mesh, labels)
+    expected = cell_labels(mesh, lambda x, y: 1 if x > 0 else 0)
+    np.testing.assert_array_equal(out, expected)
+
+
+def test_longest_shared_boundary_wins():
+    mesh = grid_mesh(12, 12)
+    # three labels: 0 left, 1 right-top, 2 right-bottom; a stray of label 0 sitting in
+    # the right part, mostly inside label 2 -> joins 2
+    def f(x, y):
+        if 0.3 < x < 0.8 and -0.5 < y < 0.05:
+            return 0
+        if x < 0:
+            return 0
+        return 1 if y > 0 else 2
+    labels = cell_labels(mesh, f)
+    out = enforce_connectivity(mesh, labels)
+    c = mesh.centroids
+    stray = (c[:, 0] > 0.3) & (c[:, 0] < 0.8) & (c[:, 1] > -0.5) & (c[:, 1] < 0.05)
+    bottom = (c[:, 0] > 0) & (c[:, 1] < 0) & ~stray
+    assert len(np.unique(out[stray])) == 1
+    assert out[stray][0] == out[bottom][0]
+    assert label_components(mesh.graph, out).max() + 1 == out.max() + 1 == 3
+
+
+def test_center_piece_keeps_label_even_if_smaller():
+    mesh = grid_mesh(10, 10)
+    labels = cell_labels(mesh, lambda x, y: 0 if x < -0.5 or x > 0.4 else 1)
+    # label 0 has two pieces: left (small) and right (larger); center in the left one
+    left_face = int(np.flatnonzero(mesh.centroids[:, 0] < -0.5)[0])
+    mid_face = int(np.flatnonzero(labels == 1)[0])
+    out = enforce_connectivity(mesh, labels, centers=np.array([left_face, mid_face]))
+    assert out[left_face] != out[mid_face]
+    right = mesh.centroids[:, 0] > 0.4
+    assert (out[right] == out[mid_face]).all()
+
+
+def test_already_connected_is_just_relabelled():
+    mesh = grid_mesh(6, 6)
+    labels = cell_labels(mesh, lambda x, y: 7 if x < 0 else 3)
+    out = enforce_connectivity(mesh, labels)
+    np.testing.assert_array_equal(out, relabel_dense(labels))
+    assert set(out.tolist()) == {0, 1}
