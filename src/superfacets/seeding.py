@@ -64,7 +64,7 @@ def farthest_point_centers(mesh, n_segments: int) -> np.ndarray:
     ParameterError
         If ``n_segments`` is not in ``1..m``.
     """
-    k = _check_k(n_segments, mesh.n_faces)
+    k = check_n_segments(n_segments, mesh.n_faces)
     out = np.empty(k, dtype=np.int64)
     _kernels.farthest_point(np.ascontiguousarray(mesh.centroids), k, first_center(mesh), out)
     return out
@@ -140,7 +140,14 @@ def grid_labels(mesh, radius: float) -> np.ndarray:
     return labels.astype(np.int64).ravel()
 
 
-def _check_k(n_segments, m: int) -> int:
+def check_n_segments(n_segments, m: int) -> int:
+    """Validate a number of superfacets against the number of faces ``m``.
+
+    Raises
+    ------
+    ParameterError
+        If ``n_segments`` is not an integer in ``1..m``.
+    """
     if isinstance(n_segments, (bool, np.bool_)) or not isinstance(n_segments, (int, np.integer)):
         raise ParameterError(f"n_segments must be an integer, got {n_segments!r}")
     k = int(n_segments)

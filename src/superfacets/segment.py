@@ -19,7 +19,8 @@ from .connectivity import relabel_dense
 from .errors import ParameterError
 from .graph import edge_weights
 from .mesh import as_mesh
-from .seeding import INITS, farthest_point_centers, flood_labels, grid_labels
+from .seeding import (INITS, check_n_segments, farthest_point_centers, flood_labels,
+                      grid_labels)
 
 __all__ = ["superfacets", "segment", "SegmentationResult", "ASSIGNMENTS"]
 
@@ -204,13 +205,7 @@ def _resolve(mesh, n_segments, radius, init, window, max_iter, assignment):
     else:
         if n_segments is None:
             n_segments = _DEFAULT_K
-        if isinstance(n_segments, (bool, np.bool_)) or not isinstance(n_segments, (int, np.integer)):
-            raise ParameterError(f"n_segments must be an integer, got {n_segments!r}")
-        k = int(n_segments)
-        if k < 1:
-            raise ParameterError(f"n_segments must be >= 1, got {k}")
-        if k > m:
-            raise ParameterError(f"n_segments ({k}) is larger than the number of faces ({m})")
+        k = check_n_segments(n_segments, m)
         r = math.sqrt(mesh.area / (k * math.pi))
     return k, r, init, window, int(max_iter)
 
