@@ -1,0 +1,118 @@
+import numpy as np
+import pytest
+
+from superfacets import Mesh, read_labels, read_mesh, superfacets
+from superfacets.metrics import (achievable_segmentation_accuracy, boundary_recall, compactness,
+                                 contingency, mean_over_ground_truths, undersegmentation_error)
+
+from conftest import grid_mesh
+
+
+@pytest.fixture
+def plane():
+    return grid_mesh(20, 20, size=1.0)  # [-1, 1]^2, area 4, 800 faces
+
+
+def by_x(mesh, cuts):
+    return np.searchsorted(np.asarray(cuts), mesh.centroids[:, 0]).astype(np.int64)
+
+
+def test_ue_zero_when_superfacets_nest_in_ground_truth(plane):
+    gt = by_x(plane, [0.0])
+    sf = by_x(plane, [-0.5, 0.0, 0.5])
+    assert undersegmentation_error(plane, sf, gt) == 0.0
+    assert achievable_segmentation_accuracy(plane, sf, gt) == pytest.approx(1.0)
+
+
+def test_ue_straddling_superfacet_contributes_expected_area(plane):
+    gt = by_x(plane, [0.0])          # two halves, area 2 each
+    sf = by_x(plane, [-0.5, 0.5])    # middle superfacet x in [-0.5, 0.5] (area 2) straddles
+    # middle superfacet: inside left half area 1, outside 1; same for right half:
+    # leaks 1 + 1 = 2 over total ground-truth area 4
+    assert undersegmentation_error(plane, sf, gt) == pytest.approx(0.5)
+    assert achievable_segmentation_accuracy(plane, sf, gt) == pytest.approx(3 / 4)
+
+
+def test_tau_keeps_a_small_sliver_out(plane):
+    gt = by_x(plane, [0.0])
+    # cut at x = 0.05: the left superfacet takes the 20 triangles of the column [0, 0.1]
+    # whose centroid is at x = 0.033 (area 0.1): 0.1 / 2.1 = 4.8% of it lies in the right half
+    sf = by_x(plane, [0.05])
+    # it counts for the left half (leaks 0.1), not for the right half (4.8% < tau = 5%)
+    assert undersegmentation_error(plane, sf, gt) == pytest.approx(0.1 / 4)
+    # with tau = 0 it also counts for the right half, leaking its 2.0 outside it
+    assert undersegmentation_error(plane, sf, gt, tau=0.0) == pytest.approx((0.1 + 2.0) / 4)
+
+
+def test_compactness_square_and_disk():
+    plane = grid_mesh(40, 40, size=1.0)
+    c = plane.centroids
+    square = ((np.abs(c[:, 0]) < 0.5) & (np.abs(c[:, 1]) < 0.5)).astype(np.int64)
+    # the square region has perimeter 4 * 1 and area 1 -> 4; the outer frame is 2 x 2 with a
+    # 1 x 1 hole: perimeter 8 + 4 = 12, area 3 -> 12 / sqrt(3)
+    assert compactness(plane, square) == pytest.approx((4 + 12 / np.sqrt(3)) / 2)
+    single = np.zeros(plane.n_faces, np.int64)
+    assert compactness(plane, single) == pytest.approx(4.0)  # the whole 2 x 2 square
+
+
+def test_compactness_of_disk_approaches_two_sqrt_pi():
+    import trimesh
+
+    disk = trimesh.creation.cylinder(radius=1.0, height=1e-3, sections=256)
+    top = disk.face_normals[:, 2] > 0.9
+    m = Mesh(disk.vertices, disk.faces[top])
+    assert compactness(m, np.zeros(m.n_faces, np.int64)) == pytest.approx(2 * np.sqrt(np.pi), rel=1e-3)
+
+
+def test_boundary_recall(plane):
+    gt = by_x(plane, [0.0])
+    assert boundary_recall(plane, gt, gt) == 1.0
+    far = by_x(plane, [0.5])
+    assert boundary_recall(plane, far, gt) == 0.0
+    near = by_x(plane, [0.1])  # one column of cells (0.1 wide) away: within one ring
+    assert boundary_recall(plane, near, gt, tolerance=0) == 0.0
+    assert boundary_recall(plane, near, gt, tolerance=1) == 1.0
+    assert boundary_recall(plane, gt, np.zeros(plane.n_faces, np.int64)) == 1.0
+
+
+def test_all_metrics_invariant_to_scaling(plane):
+    rng = np.random.default_rng(3)
+    gt = by_x(plane, [0.0, 0.4])
+    sf = rng.integers(0, 12, plane.n_faces)
+    big = Mesh(plane.vertices * 123.0 + 5, plane.faces)
+    for f in (undersegmentation_error, achievable_segmentation_accuracy, boundary_recall):
+        assert f(big, sf, gt) == pytest.approx(f(plane, sf, gt))
+    assert compactness(big, sf) == pytest.approx(compactness(plane, sf))
+
+
+def test_contingency_areas_add_up(plane):
+    rng = np.random.default_rng(0)
+    sf, gt = rng.integers(0, 9, plane.n_faces), rng.integers(0, 4, plane.n_faces)
+    t = contingency(plane, sf, gt)
+    assert t.area.sum() == pytest.approx(plane.area)
+    assert t.s_area.sum() == pytest.approx(plane.area) == t.g_area.sum()
+
+
+def test_mean_over_ground_truths_and_errors(plane):
+    gts = [by_x(plane, [0.0]), by_x(plane, [0.5])]
+    sf = by_x(plane, [0.0])
+    v = mean_over_ground_truths(boundary_recall, plane, sf, gts)
+    assert v == pytest.approx(0.5)
+    with pytest.raises(ValueError, match="no ground-truth"):
+        mean_over_ground_truths(boundary_recall, plane, sf, [])
+    with pytest.raises(ValueError, match="shape"):
+        undersegmentation_error(plane, sf[:-1], gts[0])
+
+
+def test_real_mesh_ranges(psb):
+    mesh = read_mesh(psb / "off" / "1.off")
+    gts = [read_labels(p, n_faces=mesh.n_faces) for p in sorted((psb / "seg" / "Benchmark" / "1").glob("*.seg"))]
+    labels = superfacets(mesh, 150, alpha=200)
+    ue = mean_over_ground_truths(undersegmentation_error, mesh, labels, gts)
+    asa = mean_over_ground_truths(achievable_segmentation_accuracy, mesh, labels, gts)
+    br = mean_over_ground_truths(boundary_recall, mesh, labels, gts)
+    assert 0 <= ue < 0.5 and 0.8 < asa <= 1 and 0.5 < br <= 1
+    assert 2 * np.sqrt(np.pi) * 0.9 < compactness(mesh, labels) < 20
+    # alpha = 0 ignores concavities: its undersegmentation error is higher
+    ue0 = mean_over_ground_truths(undersegmentation_error, mesh, superfacets(mesh, 150, alpha=0), gts)
+    assert ue0 > ue
