@@ -93,3 +93,22 @@ def test_horse_as_in_the_issue(tmp_path, capsys):
     labels = read_labels(seg, n_faces=96966)
     assert 140 <= labels.max() + 1 <= 170
     assert len(np.unique(labels)) == labels.max() + 1
+
+
+def test_evaluate_one_call(tmp_path, capsys):
+    from conftest import grid_mesh
+    from superfacets import write_labels
+
+    mesh = grid_mesh(20, 20)
+    off = write_mesh(tmp_path / "plane.off", mesh)
+    x = mesh.centroids[:, 0]
+    gt = write_labels(tmp_path / "gt.seg", (x > 0).astype(int))
+    sf = write_labels(tmp_path / "sf.seg", np.searchsorted([-0.5, 0.0, 0.5], x))
+    assert main(["evaluate", str(off), str(sf), str(gt), str(gt)]) == 0
+    out = capsys.readouterr().out
+    assert "4 superfacets, 2 ground truths" in out
+    assert "undersegmentation_error 0.0000" in out and "boundary_recall         1.0000" in out
+    bad = tmp_path / "short.seg"
+    bad.write_text("0\n1\n")
+    assert main(["evaluate", str(off), str(sf), str(bad)]) == 2
+    assert "short.seg: has 2 labels but the mesh has 800 faces" in capsys.readouterr().err

@@ -4,6 +4,7 @@ Sub-commands:
 
 - ``superfacets segment MESH ...``: superfacets of a mesh file, written as a
   ``.seg`` label file and/or a coloured PLY;
+- ``superfacets evaluate MESH LABELS.seg GT.seg...``: the metrics of a result;
 - ``superfacets demo``: the same on a built-in procedural mesh, no data needed.
 
 Bad input (missing, unreadable or malformed files, invalid parameters) ends
@@ -17,6 +18,8 @@ import argparse
 import sys
 import time
 from pathlib import Path
+
+import numpy as np
 
 __all__ = ["main"]
 
@@ -105,7 +108,42 @@ def _build_parser() -> argparse.ArgumentParser:
     d.add_argument("-k", "--n-segments", type=_positive_int, default=150, metavar="N",
                    help="number of superfacets (default: 150)")
     _add_method_options(d, with_size=False)
+    e = sub.add_parser(
+        "evaluate", help="metrics of a segmentation against ground truths",
+        description="Print the undersegmentation error (eq. 4), compactness (eq. 5), boundary "
+                    "recall and achievable segmentation accuracy of a label file, each averaged "
+                    "over the given ground-truth segmentations (area-weighted).")
+    e.add_argument("mesh", metavar="MESH", help="the mesh file")
+    e.add_argument("labels", metavar="LABELS.seg", help="superfacet labels, one per face")
+    e.add_argument("ground_truths", metavar="GT.seg", nargs="+",
+                   help="one or more ground-truth segmentations of the same mesh")
+    e.add_argument("--tau", type=_float, default=0.05,
+                   help="overlap tolerance of the undersegmentation error, a fraction of each "
+                        "superfacet's area (default: 0.05)")
     return parser
+
+
+def _cmd_evaluate(args) -> int:
+    from .errors import ParameterError
+    from .io import read_labels, read_mesh
+    from .metrics import (achievable_segmentation_accuracy, boundary_recall, compactness,
+                          mean_over_ground_truths, undersegmentation_error)
+
+    if not (0 <= args.tau < 1):
+        raise ParameterError(f"--tau must be in [0, 1), got {args.tau}")
+    mesh = read_mesh(args.mesh)
+    labels = read_labels(args.labels, n_faces=mesh.n_faces)
+    gts = [read_labels(p, n_faces=mesh.n_faces) for p in args.ground_truths]
+    ue = mean_over_ground_truths(undersegmentation_error, mesh, labels, gts, tau=args.tau)
+    br = mean_over_ground_truths(boundary_recall, mesh, labels, gts)
+    asa = mean_over_ground_truths(achievable_segmentation_accuracy, mesh, labels, gts)
+    print(f"{Path(args.mesh).name}: {mesh.n_faces} faces, {len(np.unique(labels))} superfacets, "
+          f"{len(gts)} ground truths")
+    print(f"undersegmentation_error {ue:.4f}  (lower is better)")
+    print(f"compactness             {compactness(mesh, labels):.4f}  (lower is better; disk 3.545)")
+    print(f"boundary_recall         {br:.4f}  (higher is better)")
+    print(f"achievable_accuracy     {asa:.4f}  (higher is better)")
+    return 0
 
 
 def _method_kwargs(args) -> dict:
@@ -217,6 +255,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.command == "segment":
             return _cmd_segment(args)
+        if args.command == "evaluate":
+            return _cmd_evaluate(args)
         return _cmd_demo(args)
     except (SuperfacetsError, OSError) as exc:
         msg = str(exc)
