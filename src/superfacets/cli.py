@@ -24,7 +24,7 @@ import numpy as np
 __all__ = ["main"]
 
 
-def _positive_int(text: str) -> int:
+def _int(text: str) -> int:
     try:
         v = int(text)
     except ValueError:
@@ -42,7 +42,7 @@ def _float(text: str) -> float:
 def _add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> None:
     if with_size:
         size = p.add_mutually_exclusive_group()
-        size.add_argument("-k", "--n-segments", type=_positive_int, default=None, metavar="N",
+        size.add_argument("-k", "--n-segments", type=_int, default=None, metavar="N",
                           help="number of superfacets k (default: 150 unless --radius is given)")
         size.add_argument("--radius", type=_float, default=None, metavar="R",
                           help="superfacet radius as a fraction of the bounding-box diagonal "
@@ -56,7 +56,7 @@ def _add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> N
                    help="initialization (default: farthest with -k, flood with --radius)")
     p.add_argument("--window", type=_float, default=2.0, metavar="W",
                    help="expansion window, a multiple of the radius (default: 2)")
-    p.add_argument("--max-iter", type=_positive_int, default=50, metavar="N",
+    p.add_argument("--max-iter", type=_int, default=50, metavar="N",
                    help="maximum number of iterations (default: 50)")
     p.add_argument("--weighting", choices=("paper", "shlafman"), default="paper",
                    help="edge weights: the paper's eqs. 1-3 or Shlafman's eq. 6 "
@@ -103,9 +103,9 @@ def _build_parser() -> argparse.ArgumentParser:
                     "its superfacets and write the mesh, the labels and a coloured PLY.")
     d.add_argument("--output-dir", default="demo-output", metavar="DIR",
                    help="folder for the outputs, created if needed (default: demo-output)")
-    d.add_argument("--resolution", type=_positive_int, default=100, metavar="N",
+    d.add_argument("--resolution", type=_int, default=100, metavar="N",
                    help="marching-cubes grid resolution of the shape (default: 100)")
-    d.add_argument("-k", "--n-segments", type=_positive_int, default=150, metavar="N",
+    d.add_argument("-k", "--n-segments", type=_int, default=150, metavar="N",
                    help="number of superfacets (default: 150)")
     _add_method_options(d, with_size=False)
     e = sub.add_parser(

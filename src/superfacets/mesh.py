@@ -79,30 +79,30 @@ class Mesh:
         return _readonly((v[f[:, 0]] + v[f[:, 1]] + v[f[:, 2]]) / 3.0)
 
     @cached_property
-    def _cross(self) -> np.ndarray:
+    def _areas_normals(self) -> tuple[np.ndarray, np.ndarray]:
         v = self.vertices
         f = self.faces
         v0 = v[f[:, 0]]
-        return np.cross(v[f[:, 1]] - v0, v[f[:, 2]] - v0)
+        cross = np.cross(v[f[:, 1]] - v0, v[f[:, 2]] - v0)
+        norm = np.linalg.norm(cross, axis=1)
+        normals = np.zeros_like(cross)
+        ok = norm > 0
+        normals[ok] = cross[ok] / norm[ok, None]
+        return _readonly(0.5 * norm), _readonly(normals)
 
-    @cached_property
+    @property
     def areas(self) -> np.ndarray:
         """(m,) float64: face areas (0 for degenerate faces)."""
-        return _readonly(0.5 * np.linalg.norm(self._cross, axis=1))
+        return self._areas_normals[0]
 
-    @cached_property
+    @property
     def normals(self) -> np.ndarray:
         """(m, 3) float64: unit face normals, right-hand rule on vertex order.
 
         Degenerate (zero-area) faces get the zero vector, so their dihedral
         angle with any neighbour is pi/2 and their edges count as convex.
         """
-        c = self._cross
-        norm = np.linalg.norm(c, axis=1)
-        out = np.zeros_like(c)
-        ok = norm > 0
-        out[ok] = c[ok] / norm[ok, None]
-        return _readonly(out)
+        return self._areas_normals[1]
 
     @cached_property
     def area(self) -> float:

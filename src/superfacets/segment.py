@@ -348,7 +348,6 @@ def segment(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | None =
                   eta_convex=float(eta_convex), window=window, init=init, max_iter=max_iter,
                   weighting=weighting, assignment=assignment,
                   enforce_connectivity=bool(enforce_connectivity), n_init_centers=n_init)
-    final.setflags(write=True)
     return SegmentationResult(labels=final, centers=final_centers, n_iter=n_iter,
                               converged=converged, radius=r, n_orphan_seeds=n_orphans,
                               timings=timings, params=params)
