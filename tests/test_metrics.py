@@ -3,7 +3,8 @@ import pytest
 
 from superfacets import Mesh, read_labels, read_mesh, superfacets
 from superfacets.metrics import (achievable_segmentation_accuracy, boundary_recall, compactness,
-                                 contingency, mean_over_ground_truths, undersegmentation_error)
+                                 contingency, evaluate, mean_over_ground_truths,
+                                 undersegmentation_error)
 
 from conftest import grid_mesh
 
@@ -93,6 +94,18 @@ def test_contingency_areas_add_up(plane):
     assert t.s_area.sum() == pytest.approx(plane.area) == t.g_area.sum()
 
 
+def test_tau_keeps_a_3_percent_sliver_out(plane):
+    gt = by_x(plane, [0.0])
+    sf = gt.copy()
+    # give the left superfacet 12 faces (area 0.06) of the right half: 0.06 / 2.06 = 2.9 %
+    right = np.flatnonzero(gt == 1)
+    sliver = right[np.lexsort((plane.centroids[right, 1], plane.centroids[right, 0]))[:12]]
+    sf[sliver] = 0
+    assert plane.areas[sliver].sum() == pytest.approx(0.06)
+    assert undersegmentation_error(plane, sf, gt) == pytest.approx(0.06 / 4)
+    assert undersegmentation_error(plane, sf, gt, tau=0.0) == pytest.approx((0.06 + 2.0) / 4)
+
+
 def test_mean_over_ground_truths_and_errors(plane):
     gts = [by_x(plane, [0.0]), by_x(plane, [0.5])]
     sf = by_x(plane, [0.0])
@@ -116,3 +129,23 @@ def test_real_mesh_ranges(psb):
     # alpha = 0 ignores concavities: its undersegmentation error is higher
     ue0 = mean_over_ground_truths(undersegmentation_error, mesh, superfacets(mesh, 150, alpha=0), gts)
     assert ue0 > ue
+
+    # evaluate() gives exactly the four metrics, each averaged over the ground truths
+    m = evaluate(mesh, labels, gts)
+    assert m == {"undersegmentation_error": pytest.approx(ue, abs=1e-12),
+                 "compactness": pytest.approx(compactness(mesh, labels), abs=1e-12),
+                 "boundary_recall": pytest.approx(br, abs=1e-12),
+                 "achievable_accuracy": pytest.approx(asa, abs=1e-12)}
+
+
+def test_evaluate_hand_worked(plane):
+    gts = [by_x(plane, [0.0]), by_x(plane, [-0.5, 0.0, 0.5])]
+    # the middle superfacet [-0.5, 0.5] straddles both halves and both middle quarters,
+    # leaking area 2 of 4 against each ground truth, and taking 1 of its 2 correctly
+    sf = by_x(plane, [-0.5, 0.5])
+    m = evaluate(plane, sf, gts)
+    assert m["undersegmentation_error"] == pytest.approx(0.5)
+    assert m["achievable_accuracy"] == pytest.approx(0.75)
+    assert m["compactness"] == pytest.approx(compactness(plane, sf))
+    with pytest.raises(ValueError, match="no ground-truth"):
+        evaluate(plane, sf, [])

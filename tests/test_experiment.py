@@ -1,0 +1,293 @@
+"""The experiment runner, the method registry, the report, and their command lines."""
+
+from __future__ import annotations
+
+import csv
+import os
+
+import numpy as np
+import pytest
+
+from superfacets import ParameterError, write_labels, write_mesh
+from superfacets.cli import main
+from superfacets.datasets.psb import list_meshes
+from superfacets.experiment import (METHODS, Config, MethodRun, Skipped, expand_grid,
+                                    read_results, register_method, run_experiment)
+from superfacets.report import load_results, markdown_summary, summary, write_report
+
+from conftest import grid_mesh
+
+
+def _valley(n, depth):
+    return grid_mesh(n, n, height=lambda x, y: depth * np.abs(x))
+
+
+@pytest.fixture
+def bench(tmp_path):
+    """A tiny benchmark folder: ids 1, 2 (Human) and 21 (Cup), two ground truths each."""
+    root = tmp_path / "psb"
+    (root / "off").mkdir(parents=True)
+    for mid, mesh in [(1, _valley(16, 1.0)), (2, _valley(20, 0.5)), (21, grid_mesh(14, 14))]:
+        write_mesh(root / "off" / f"{mid}.off", mesh)
+        seg = root / "seg" / "Benchmark" / str(mid)
+        seg.mkdir(parents=True)
+        x = mesh.centroids[:, 0]
+        write_labels(seg / f"{mid}_0.seg", (x > 0).astype(np.int64))
+        write_labels(seg / f"{mid}_1.seg", np.digitize(x, [-0.5, 0, 0.5]))
+    return root
+
+
+# module-level methods (the worker processes import them by reference)
+def by_x_method(mesh, n_segments, *, cache, seed, shift=0.0):
+    cache["calls"] = cache.get("calls", 0) + 1
+    x = mesh.centroids[:, 0] + shift
+    edges = np.linspace(x.min(), x.max(), n_segments + 1)[1:-1]
+    return MethodRun(np.digitize(x, edges), n_iter=cache["calls"], converged=True)
+
+
+def picky_method(mesh, n_segments, *, cache, seed, limit=500):
+    if mesh.n_faces > limit:
+        raise Skipped(f"{mesh.n_faces} faces > {limit}")
+    if n_segments == 7:
+        raise RuntimeError("seven is unlucky")
+    return MethodRun(np.zeros(mesh.n_faces, np.int64))
+
+
+def dying_method(mesh, n_segments, *, cache, seed):
+    os._exit(3)
+
+
+@pytest.fixture
+def registry():
+    saved = dict(METHODS)
+    register_method("by_x", by_x_method, defaults={"shift": 0.0}, sweep={"shift": (0.0,)})
+    register_method("picky", picky_method, defaults={"limit": 500})
+    register_method("dying", dying_method, defaults={})
+    yield
+    METHODS.clear()
+    METHODS.update(saved)
+
+
+def test_expand_grid_resolves_and_validates():
+    cfgs = expand_grid("superfacets", alpha=[0, 200], init="grid")
+    assert len(cfgs) == 2
+    assert cfgs[0].kwargs == {"alpha": 0.0, "eta_convex": 0.2, "init": "grid", "max_iter": 50,
+                              "window": 2.0}
+    assert isinstance(cfgs[1].kwargs["alpha"], float)
+    assert expand_grid("superfacets", alpha=[200, 200.0]) == expand_grid("superfacets", alpha=200)
+    with pytest.raises(ParameterError, match="no parameter 'beta'"):
+        expand_grid("superfacets", beta=[1])
+    with pytest.raises(ParameterError, match="unknown method 'nope'.*superfacets"):
+        expand_grid("nope")
+    with pytest.raises(ParameterError, match="max_iter must be int"):
+        expand_grid("superfacets", max_iter="many")
+
+
+def test_run_writes_one_row_per_combination_and_resumes(bench, tmp_path):
+    meshes = list_meshes(bench)
+    res = tmp_path / "r.csv"
+    cfgs = expand_grid("superfacets", alpha=[0, 200])
+    s = run_experiment(meshes, cfgs, res, [5, 10], workers=1, progress=False)
+    assert (s.ok, s.failed, s.skipped, s.done_before) == (12, 0, 0, 0)
+    rows = read_results(res)
+    assert len(rows) == 12
+    r = rows[0]
+    assert r["status"] == "ok" and r["category"] in ("Human", "Cup") and r["n_ground_truths"] == "2"
+    assert {row["superfacets"] for row in rows if row["n_segments"] == "5"} == {"5"}
+    for row in rows:
+        assert 0 <= float(row["undersegmentation_error"]) and 0 < float(row["boundary_recall"]) <= 1
+        assert 0 < float(row["achievable_accuracy"]) <= 1 and float(row["compactness"]) > 3.5
+    # a second run does nothing; a new k only adds its rows
+    s = run_experiment(meshes, cfgs, res, [5, 10], workers=1, progress=False)
+    assert (s.written, s.done_before) == (0, 12)
+    s = run_experiment(meshes, cfgs, res, [5, 10, 20], workers=1, progress=False)
+    assert (s.ok, s.done_before) == (6, 12)
+    assert len(read_results(res)) == 18
+
+
+def test_torn_last_line_is_repaired_and_rerun(bench, tmp_path):
+    meshes = list_meshes(bench)
+    res = tmp_path / "r.csv"
+    cfgs = expand_grid("superfacets", alpha=200)
+    run_experiment(meshes, cfgs, res, [5], workers=1, progress=False)
+    full = res.read_text()
+    res.write_text(full[: full.rstrip("\n").rfind("\n") + 1] + "21,21,Cup,39")  # hard kill
+    assert len(read_results(res)) == 2
+    s = run_experiment(meshes, cfgs, res, [5], workers=1, progress=False)
+    assert (s.ok, s.done_before) == (1, 2)
+    assert res.read_text().count("\n") == 4 and res.read_text().endswith("\n")
+
+
+def test_registry_plugs_in_failures_and_skips_are_recorded(bench, tmp_path, registry):
+    meshes = list_meshes(bench)
+    res = tmp_path / "r.csv"
+    cfgs = expand_grid("by_x") + expand_grid("picky")
+    s = run_experiment(meshes, cfgs, res, [4, 7], workers=1, progress=False)
+    rows = read_results(res)
+    assert len(rows) == 12 and s.written == 12
+    byx = [r for r in rows if r["method"] == "by_x"]
+    assert all(r["status"] == "ok" for r in byx)
+    # the cache is shared by the k values of one (mesh, setting): second call sees it
+    assert sorted({r["iterations"] for r in byx}) == ["1", "2"]
+    # faces 512 (16x16x2) and 800 (20x20x2) are over the limit: skipped; 392 faces: runs
+    picky = {(r["mesh"], r["n_segments"]): r for r in rows if r["method"] == "picky"}
+    assert picky[("1", "4")]["status"] == "skipped" and "512 faces" in picky[("1", "4")]["error"]
+    assert picky[("21", "4")]["status"] == "ok"
+    assert picky[("21", "7")]["status"] == "failed"
+    assert "RuntimeError: seven is unlucky" in picky[("21", "7")]["error"]
+    assert s.failed == 1 and s.skipped == 4
+    # failed rows are not retried by default, but are with retry_failed
+    assert run_experiment(meshes, cfgs, res, [4, 7], workers=1, progress=False).written == 0
+    s = run_experiment(meshes, cfgs, res, [4, 7], workers=1, progress=False, retry_failed=True)
+    assert s.failed == 1 and s.written == 1
+    df = load_results(res)  # the retried row replaces the old one
+    assert len(df) == 12
+
+
+def test_a_bad_mesh_does_not_stop_the_run(bench, tmp_path):
+    (bench / "seg" / "Benchmark" / "2" / "2_1.seg").write_text("0\n1\n")
+    res = tmp_path / "r.csv"
+    s = run_experiment(list_meshes(bench), expand_grid("superfacets"), res, [5, 1000],
+                       workers=1, progress=False)
+    rows = {(r["mesh"], r["n_segments"]): r for r in read_results(res)}
+    assert "2_1.seg" in rows[("2", "5")]["error"] and rows[("2", "5")]["status"] == "failed"
+    assert rows[("1", "5")]["status"] == "ok"
+    assert "n_segments" in rows[("21", "1000")]["error"]  # 392 faces < 1000
+    assert s.ok == 2 and s.failed == 4
+
+
+def test_interrupt_keeps_rows_and_rerun_continues(bench, tmp_path, registry, monkeypatch):
+    import superfacets.experiment as ex
+
+    meshes = list_meshes(bench)
+    res = tmp_path / "r.csv"
+    calls = {"n": 0}
+    real = ex._run_task
+
+    def flaky(task):
+        calls["n"] += 1
+        if calls["n"] == 3:
+            raise KeyboardInterrupt
+        return real(task)
+
+    monkeypatch.setattr(ex, "_run_task", flaky)
+    cfgs = expand_grid("by_x")
+    s = run_experiment(meshes, cfgs, res, [3, 6], workers=1, progress=False)
+    assert s.interrupted and s.ok == 4
+    monkeypatch.setattr(ex, "_run_task", real)
+    s = run_experiment(meshes, cfgs, res, [3, 6], workers=1, progress=False)
+    assert not s.interrupted and (s.ok, s.done_before) == (2, 4)
+
+
+def test_worker_processes_give_the_same_rows(bench, tmp_path, registry):
+    meshes = list_meshes(bench)
+    cfgs = expand_grid("superfacets", alpha=[0, 200]) + expand_grid("by_x")
+    one, two = tmp_path / "one.csv", tmp_path / "two.csv"
+    run_experiment(meshes, cfgs, one, [5, 8], workers=1, progress=False)
+    s = run_experiment(meshes, cfgs, two, [5, 8], workers=2, progress=False)
+    assert s.ok == 18
+
+    def table(p):
+        keep = ("mesh", "method", "alpha", "n_segments", "superfacets", "iterations",
+                "undersegmentation_error", "compactness", "boundary_recall", "achievable_accuracy")
+        return sorted(tuple(r[k] for k in keep) for r in read_results(p))
+
+    assert table(one) == table(two)
+
+
+def test_a_dying_worker_is_recorded_and_the_run_goes_on(bench, tmp_path, registry):
+    meshes = list_meshes(bench)
+    res = tmp_path / "r.csv"
+    cfgs = expand_grid("dying") + expand_grid("by_x")
+    s = run_experiment(meshes, cfgs, res, [4], workers=2, progress=False)
+    rows = read_results(res)
+    assert len(rows) == 6 and s.ok == 3 and s.failed == 3
+    assert all("worker process died" in r["error"] for r in rows if r["method"] == "dying")
+
+
+def test_run_rejects_bad_arguments(bench, tmp_path):
+    meshes = list_meshes(bench)
+    cfgs = expand_grid("superfacets")
+    with pytest.raises(ParameterError, match="no method"):
+        run_experiment(meshes, [], tmp_path / "r.csv")
+    with pytest.raises(ParameterError, match="n_segments"):
+        run_experiment(meshes, cfgs, tmp_path / "r.csv", [0])
+    with pytest.raises(ParameterError, match="workers"):
+        run_experiment(meshes, cfgs, tmp_path / "r.csv", [5], workers=0)
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        run_experiment(meshes, cfgs, tmp_path / "nowhere" / "r.csv", [5])
+    bad = tmp_path / "bad.csv"
+    bad.write_text("a,b\n1,2\n")
+    with pytest.raises(ValueError, match="not a superfacets results file"):
+        run_experiment(meshes, cfgs, bad, [5])
+
+
+def _write_rows(path, rows):
+    cols = ["mesh", "mesh_id", "category", "n_faces", "method", "n_segments", "alpha", "seed",
+            "status", "superfacets", "iterations", "converged", "seconds",
+            "undersegmentation_error", "compactness", "boundary_recall", "achievable_accuracy",
+            "n_ground_truths", "error"]
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, cols, restval="")
+        w.writeheader()
+        w.writerows(rows)
+
+
+def test_report_averages_categories_equally_and_keeps_last_row(tmp_path):
+    def row(mesh, cat, alpha, ue, status="ok"):
+        return dict(mesh=mesh, mesh_id=mesh, category=cat, method="superfacets",
+                    n_segments=50, alpha=alpha, seed=0, status=status, superfacets=50,
+                    iterations=3, converged="true", seconds=0.1, undersegmentation_error=ue,
+                    compactness=4.0, boundary_recall=0.5, achievable_accuracy=0.9,
+                    n_ground_truths=1)
+
+    res = tmp_path / "r.csv"
+    _write_rows(res, [row("1", "A", 0.0, 0.1), row("2", "A", 0.0, 0.3), row("3", "B", 0.0, 9.9),
+                      row("3", "B", 0.0, 0.5),  # retried: the last row counts
+                      row("1", "A", 200.0, 0.2), row("2", "A", 200.0, 0.2),
+                      row("3", "B", 200.0, 0.0, status="failed")])
+    df = load_results(res)
+    assert len(df) == 6
+    s = summary(df, "undersegmentation_error")
+    # categories weigh the same: (mean(0.1, 0.3) + 0.5) / 2, not mean(0.1, 0.3, 0.5)
+    assert s.loc["superfacets α=0", 50] == pytest.approx(0.35)
+    assert s.loc["superfacets α=200", 50] == pytest.approx(0.2)  # failed row left out
+    text = markdown_summary(df)
+    assert "| superfacets α=0 | 0.350 |" in text and "1 failed" in text
+
+
+def test_cli_experiment_report_and_evaluate(bench, tmp_path, capsys):
+    res = tmp_path / "r.csv"
+    assert main(["experiment", "--psb", str(bench), "-k", "4", "8", "--alpha", "0", "500",
+                 "-o", str(res), "-q", "-j", "1", "--categories", "human"]) == 0
+    out = capsys.readouterr().out
+    assert "8 rows written (8 ok, 0 failed, 0 skipped)" in out
+    assert main(["experiment", "--psb", str(bench), "-k", "4", "8", "--alpha", "0", "500",
+                 "-o", str(res), "-q", "-j", "1", "--ids", "1-2,21"]) == 0
+    assert "4 rows written (4 ok" in capsys.readouterr().out and len(read_results(res)) == 12
+    rep = tmp_path / "rep"
+    assert main(["report", str(res), "-o", str(rep)]) == 0
+    out = capsys.readouterr().out
+    assert "superfacets α=500" in out and "Cup" in out
+    from PIL import Image
+
+    for name in ("fig4", "fig4_extra", "per_category_undersegmentation_error",
+                 "per_category_compactness"):
+        assert (rep / f"{name}.svg").read_text().lstrip().startswith("<?xml")
+        img = np.asarray(Image.open(rep / f"{name}.png").convert("L"))
+        assert img.std() > 10  # lines and text, not blank
+    # errors: one line, exit 2
+    assert main(["experiment", "--psb", str(bench), "-o", str(res), "--ids", "x"]) == 2
+    assert main(["experiment", "--psb", str(bench), "-o", str(res), "--ids", "99"]) == 2
+    assert main(["experiment", "--psb", str(bench), "-o", str(res), "-m", "nope"]) == 2
+    assert main(["experiment", "--psb", str(tmp_path), "-o", str(res)]) == 2
+    assert main(["report", str(tmp_path / "missing.csv")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("superfacets: error:") == 5 and "unknown method 'nope'" in err
+    assert "no off/ inside" in err and "missing.csv" in err
+
+
+def test_cli_list_methods(capsys):
+    assert main(["experiment", "--list-methods"]) == 0
+    out = capsys.readouterr().out
+    assert "superfacets:" in out and "shlafman:" in out and "alpha in 0.0, 100.0" in out
