@@ -13,7 +13,8 @@ import colorsys
 
 import numpy as np
 
-__all__ = ["PALETTE", "superfacet_colors", "face_colors", "superfacet_adjacency"]
+__all__ = ["PALETTE", "superfacet_colors", "face_colors", "superfacet_adjacency",
+           "boundary_edges", "view_frame"]
 
 #: Base palette (RGB, uint8): well-separated, light enough to show shading.
 PALETTE = np.array([
@@ -113,3 +114,104 @@ def face_colors(mesh, labels: np.ndarray) -> np.ndarray:
 
     dense = relabel_dense(labels)
     return superfacet_colors(mesh, dense)[dense]
+
+
+def boundary_edges(mesh, labels: np.ndarray) -> np.ndarray:
+    """Mesh edges separating two superfacets (the lines drawn between them).
+
+    Parameters
+    ----------
+    mesh : Mesh
+    labels : (m,) int ndarray
+
+    Returns
+    -------
+    edges : (b, 2) int64 ndarray
+        Vertex index pairs, each edge once.
+    """
+    g = mesh.graph
+    labels = np.asarray(labels)
+    cut = labels[g.pairs[:, 0]] != labels[g.pairs[:, 1]]
+    e = np.sort(np.asarray(g.edges[cut], dtype=np.int64), axis=1)
+    return np.unique(e, axis=0) if e.size else e.reshape(0, 2)
+
+
+_VIEWS = {"front": (0, 0, 1), "back": (0, 0, -1), "left": (-1, 0, 0), "right": (1, 0, 0),
+          "top": (0, 1, 0), "bottom": (0, -1, 0)}
+
+
+_AXES = {"x": (1, 0, 0), "y": (0, 1, 0), "z": (0, 0, 1),
+         "-x": (-1, 0, 0), "-y": (0, -1, 0), "-z": (0, 0, -1)}
+
+
+def view_frame(mesh, view=None, elevation: float = 20.0,
+               up="y") -> tuple[np.ndarray, np.ndarray]:
+    """A camera direction and up vector that show a mesh well.
+
+    Automatic (``view=None``): look along the principal axis of least
+    area-weighted spread of the face centroids (so the widest silhouette
+    faces the camera), tilted up by ``elevation`` degrees. Up is the ``up``
+    axis made perpendicular to the view, or the principal axis of largest
+    spread when ``up`` is along the view.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    view : str or (3,) float, optional
+        ``'auto'``, ``'front'`` (+z), ``'back'``, ``'left'``, ``'right'``,
+        ``'top'`` (+y), ``'bottom'``, or a direction from the mesh to the camera.
+    elevation : float, default 20
+        Degrees of upward tilt of an automatic or named view.
+    up : {'y', 'z', 'x', '-y', '-z', '-x'} or (3,) float, default 'y'
+        The mesh's up direction (most benchmark meshes: +y).
+
+    Returns
+    -------
+    direction : (3,) float64 ndarray
+        Unit vector from the mesh center to the camera.
+    up : (3,) float64 ndarray
+        Unit up vector, perpendicular to ``direction``.
+
+    Raises
+    ------
+    ValueError
+        On an unknown view name or a zero/non-finite direction.
+    """
+    c = mesh.centroids
+    w = mesh.areas / max(mesh.area, 1e-300)
+    mean = w @ c
+    cov = (c - mean).T @ ((c - mean) * w[:, None])
+    evals, evecs = np.linalg.eigh(cov)
+    if isinstance(up, str):
+        if up not in _AXES:
+            raise ValueError(f"unknown up axis {up!r}; use one of {', '.join(_AXES)}")
+        up_axis = np.array(_AXES[up], dtype=float)
+    else:
+        up_axis = np.asarray(up, dtype=float).reshape(3)
+        if not np.all(np.isfinite(up_axis)) or np.linalg.norm(up_axis) == 0:
+            raise ValueError(f"up must be a non-zero finite 3-vector, got {up!r}")
+        up_axis = up_axis / np.linalg.norm(up_axis)
+    if view is None or (isinstance(view, str) and view == "auto"):
+        d = evecs[:, 0]  # the axis of least spread: the widest silhouette
+        # face the camera from the positive side of the dominant world axis of d
+        if d[np.argmax(np.abs(d))] < 0:
+            d = -d
+    elif isinstance(view, str):
+        if view not in _VIEWS:
+            raise ValueError(f"unknown view {view!r}; use auto, {', '.join(_VIEWS)} or x,y,z")
+        d = np.array(_VIEWS[view], dtype=float)
+    else:
+        d = np.asarray(view, dtype=float).reshape(3)
+        if not np.all(np.isfinite(d)) or np.linalg.norm(d) == 0:
+            raise ValueError(f"view direction must be a non-zero finite 3-vector, got {view!r}")
+        elevation = 0.0 if view is not None else elevation
+    d = d / np.linalg.norm(d)
+    up = up_axis.copy()
+    if abs(up @ d) > 0.95:  # looking along y: use the longest principal axis
+        up = evecs[:, 2] if abs(evecs[:, 2] @ d) < 0.95 else np.array([0.0, 0.0, -1.0])
+    up = up - (up @ d) * d
+    up /= np.linalg.norm(up)
+    if elevation:
+        t = np.radians(elevation)
+        d, up = np.cos(t) * d + np.sin(t) * up, np.cos(t) * up - np.sin(t) * d
+    return d / np.linalg.norm(d), up / np.linalg.norm(up)

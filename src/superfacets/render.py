@@ -1,0 +1,281 @@
+"""Pictures of segmented meshes: off-screen PNG, side-by-side panels, a viewer window.
+
+Rendering is done by PyVista (VTK). With no X display, VTK renders
+off-screen through EGL (Mesa's software renderer on a machine without a
+GPU), so no display server and no GPU are needed: Debian's ``libegl1`` and
+``libgl1-mesa-dri`` provide it (present on most systems; the Makefile's
+set-up does not need root for it when they are).
+
+Faces are coloured by superfacet (adjacent superfacets always in clearly
+different colours, :func:`superfacets.viz.superfacet_colors`), flat shaded,
+with the superfacet boundaries drawn as dark lines.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from .errors import ParameterError
+from .mesh import as_mesh
+
+__all__ = ["render", "render_panel", "show", "NoDisplayError"]
+
+
+class NoDisplayError(RuntimeError):
+    """An interactive window was asked for, but there is no display."""
+
+
+def _has_display() -> bool:
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
+def _pyvista(off_screen: bool):
+    if off_screen and not _has_display():
+        # skip VTK's attempt at an X connection (and its warning): go straight to EGL
+        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+    import pyvista as pv
+
+    return pv
+
+
+def _polydata(pv, mesh, labels):
+    from .viz import face_colors
+
+    m = mesh.n_faces
+    cells = np.empty((m, 4), dtype=np.int64)
+    cells[:, 0] = 3
+    cells[:, 1:] = mesh.faces
+    poly = pv.PolyData(np.asarray(mesh.vertices, dtype=np.float64), cells.ravel())
+    if labels is not None:
+        poly.cell_data["rgb"] = face_colors(mesh, labels)
+    return poly
+
+
+def _boundary_lines(pv, mesh, labels, lift: float):
+    from .viz import boundary_edges
+
+    e = boundary_edges(mesh, labels)
+    if e.shape[0] == 0:
+        return None
+    # lift the lines off the surface along the vertex normals so they are not z-fought
+    vn = np.zeros((mesh.n_vertices, 3))
+    fn = mesh.normals * mesh.areas[:, None]
+    for c in range(3):
+        np.add.at(vn, mesh.faces[:, c], fn)
+    vn /= np.maximum(np.linalg.norm(vn, axis=1, keepdims=True), 1e-300)
+    used, inv = np.unique(e.ravel(), return_inverse=True)
+    pts = mesh.vertices[used] + lift * vn[used]
+    lines = np.empty((e.shape[0], 3), dtype=np.int64)
+    lines[:, 0] = 2
+    lines[:, 1:] = inv.reshape(-1, 2)
+    return pv.PolyData(pts, lines=lines.ravel())
+
+
+def _check_labels(mesh, labels):
+    if labels is None:
+        return None
+    labels = np.asarray(labels)
+    if labels.shape != (mesh.n_faces,) or not np.issubdtype(labels.dtype, np.integer):
+        raise ParameterError(f"labels must be {mesh.n_faces} integers, one per face; got "
+                             f"shape {labels.shape}, dtype {labels.dtype}")
+    return labels
+
+
+def _add(plotter, pv, mesh, labels, *, boundaries: bool, line_width: float,
+         boundary_color, surface_color):
+    poly = _polydata(pv, mesh, labels)
+    if labels is None:
+        plotter.add_mesh(poly, color=surface_color, smooth_shading=False, lighting=True)
+    else:
+        plotter.add_mesh(poly, scalars="rgb", rgb=True, smooth_shading=False, lighting=True,
+                         show_scalar_bar=False)
+        if boundaries:
+            lines = _boundary_lines(pv, mesh, labels, lift=2e-4 * mesh.diagonal)
+            if lines is not None:
+                plotter.add_mesh(lines, color=boundary_color, line_width=line_width,
+                                 lighting=False)
+
+
+def _place_camera(plotter, mesh, view, zoom: float = 1.0, up="y"):
+    from .viz import view_frame
+
+    try:
+        d, up = view_frame(mesh, view, up=up)
+    except ValueError as exc:
+        raise ParameterError(str(exc)) from None
+    lo = mesh.vertices[mesh.referenced_vertices].min(axis=0)
+    hi = mesh.vertices[mesh.referenced_vertices].max(axis=0)
+    center = (lo + hi) / 2
+    dist = np.linalg.norm(hi - lo) * 1.6
+    plotter.camera_position = [tuple(center + dist * d), tuple(center), tuple(up)]
+    plotter.reset_camera()
+    plotter.camera.zoom(1.3 * zoom)  # reset_camera fits the bounding sphere: loose
+
+
+def _save_png(image: np.ndarray, out) -> Path:
+    from PIL import Image
+
+    from .io import atomic_write
+
+    out = Path(out)
+    buf = io.BytesIO()
+    Image.fromarray(image).save(buf, format="PNG")
+    return atomic_write(out, buf.getvalue())
+
+
+def _size(size) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in size)
+    except (TypeError, ValueError):
+        raise ParameterError(f"size must be (width, height), got {size!r}") from None
+    if not (16 <= w <= 8192 and 16 <= h <= 8192):
+        raise ParameterError(f"size must be between 16 and 8192 pixels, got {w}x{h}")
+    return w, h
+
+
+def render(mesh, labels=None, out=None, *, size=(1200, 900), view=None,
+           background="white", boundaries: bool = True, boundary_color="black",
+           line_width: float = 1.0, title: str | None = None, zoom: float = 1.0,
+           up="y") -> np.ndarray:
+    """Render a mesh off-screen, faces coloured by superfacet.
+
+    Parameters
+    ----------
+    mesh : Mesh, trimesh.Trimesh or (vertices, faces)
+    labels : (m,) int ndarray, optional
+        Superfacet of each face; without it the mesh is drawn in grey.
+    out : path, optional
+        Write the image here as PNG (atomically).
+    size : (int, int), default (1200, 900)
+        Width and height in pixels.
+    view : str or (3,) float, optional
+        See :func:`superfacets.viz.view_frame` (default automatic).
+    background : color, default 'white'
+        Any colour PyVista accepts (name, hex, RGB).
+    boundaries : bool, default True
+        Draw the superfacet boundaries as lines.
+    boundary_color : color, default 'black'
+    line_width : float, default 1
+        Boundary line width in pixels.
+    title : str, optional
+        Text drawn at the top.
+    zoom : float, default 1
+        Camera zoom factor (> 1 magnifies).
+    up : {'y', 'z', 'x', '-y', '-z', '-x'} or (3,) float, default 'y'
+        The mesh's up direction.
+
+    Returns
+    -------
+    image : (height, width, 3) uint8 ndarray
+
+    Raises
+    ------
+    ParameterError
+        On labels that are not one integer per face, a bad size or view.
+    """
+    mesh = as_mesh(mesh)
+    labels = _check_labels(mesh, labels)
+    w, h = _size(size)
+    pv = _pyvista(off_screen=True)
+    p = pv.Plotter(off_screen=True, window_size=(w, h))
+    try:
+        p.set_background(background)
+        _add(p, pv, mesh, labels, boundaries=boundaries, line_width=line_width,
+             boundary_color=boundary_color, surface_color="lightgrey")
+        _place_camera(p, mesh, view, zoom, up)
+        if title:
+            p.add_text(title, position="upper_edge", font_size=max(8, h // 60), color="black")
+        image = np.asarray(p.screenshot(return_img=True))[:, :, :3].copy()
+    finally:
+        p.close()
+    if out is not None:
+        _save_png(image, out)
+    return image
+
+
+def render_panel(items: Sequence[tuple], out=None, *, ncols: int | None = None,
+                 size=(600, 500), view=None, background="white", boundaries: bool = True,
+                 line_width: float = 1.0, zoom: float = 1.0, up="y") -> np.ndarray:
+    """Several renders side by side with titles, like the paper's Figs. 2, 3 and 8.
+
+    Parameters
+    ----------
+    items : sequence of (mesh, labels, title)
+        One panel each; ``labels`` may be None.
+    out : path, optional
+        Write the image here as PNG.
+    ncols : int, optional
+        Panels per row (default: all in one row, at most 4).
+    size : (int, int), default (600, 500)
+        Size of one panel in pixels.
+    view, background, boundaries, line_width, zoom, up
+        As in :func:`render` (every panel of the same mesh is seen from the
+        same camera).
+
+    Returns
+    -------
+    image : (H, W, 3) uint8 ndarray
+
+    Raises
+    ------
+    ParameterError
+        On an empty ``items`` or bad labels/size/view.
+    """
+    if not items:
+        raise ParameterError("no panel to render")
+    n = len(items)
+    ncols = min(n, 4) if ncols is None else max(1, min(int(ncols), n))
+    nrows = -(-n // ncols)
+    w, h = _size(size)
+    pv = _pyvista(off_screen=True)
+    p = pv.Plotter(off_screen=True, shape=(nrows, ncols), window_size=(w * ncols, h * nrows),
+                   border=False)
+    try:
+        p.set_background(background)
+        for i, (mesh, labels, title) in enumerate(items):
+            mesh = as_mesh(mesh)
+            labels = _check_labels(mesh, labels)
+            p.subplot(i // ncols, i % ncols)
+            _add(p, pv, mesh, labels, boundaries=boundaries, line_width=line_width,
+                 boundary_color="black", surface_color="lightgrey")
+            _place_camera(p, mesh, view, zoom, up)
+            if title:
+                p.add_text(title, position="upper_edge", font_size=max(8, h // 40),
+                           color="black")
+        image = np.asarray(p.screenshot(return_img=True))[:, :, :3].copy()
+    finally:
+        p.close()
+    if out is not None:
+        _save_png(image, out)
+    return image
+
+
+def show(mesh, labels=None, *, title: str | None = None, boundaries: bool = True,
+         view=None, up="y") -> None:  # pragma: no cover - needs a display
+    """Open an interactive window (rotate: drag, zoom: wheel, quit: q).
+
+    Raises
+    ------
+    NoDisplayError
+        If no display is available (``$DISPLAY``/``$WAYLAND_DISPLAY`` unset).
+    """
+    if not _has_display():
+        raise NoDisplayError("no display available ($DISPLAY is not set): use "
+                             "'superfacets render' for a PNG or 'superfacets html' for a page "
+                             "to open in a browser")
+    mesh = as_mesh(mesh)
+    labels = _check_labels(mesh, labels)
+    pv = _pyvista(off_screen=False)
+    p = pv.Plotter(title=title or "superfacets")
+    _add(p, pv, mesh, labels, boundaries=boundaries, line_width=1.0, boundary_color="black",
+         surface_color="lightgrey")
+    _place_camera(p, mesh, view, up=up)
+    if title:
+        p.add_text(title, position="upper_edge", font_size=12, color="black")
+    p.set_background("white")
+    p.show()

@@ -1,0 +1,187 @@
+"""Pictures: off-screen PNG, panels, the HTML page (checked in headless Chromium), the CLI."""
+
+from __future__ import annotations
+
+import base64
+import json
+import re
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from superfacets import Mesh, ParameterError, superfacets, write_labels, write_mesh
+from superfacets.cli import main
+from superfacets.html import html_page, write_html
+from superfacets.render import render, render_panel
+from superfacets.viz import PALETTE, boundary_edges, view_frame
+
+from conftest import grid_mesh
+
+
+def _foreground(img: np.ndarray, bg=(255, 255, 255)) -> np.ndarray:
+    return np.any(np.abs(img.astype(int) - np.array(bg)) > 30, axis=-1)
+
+
+def _palette_colours_seen(img: np.ndarray, min_pixels: int = 50) -> int:
+    """How many palette colours cover at least ``min_pixels`` pixels (shading allowed)."""
+    px = img.reshape(-1, 3).astype(float)
+    fg = px[_foreground(img).ravel()]
+    # compare chromaticity: shading scales a colour, so normalize by brightness
+    pal = PALETTE.astype(float)
+    pc = pal / np.maximum(pal.sum(1, keepdims=True), 1)
+    fc = fg / np.maximum(fg.sum(1, keepdims=True), 1)
+    d = np.linalg.norm(fc[:, None, :] - pc[None, :, :], axis=2)
+    best = d.argmin(1)[d.min(1) < 0.02]
+    return int((np.bincount(best, minlength=len(pal)) >= min_pixels).sum())
+
+
+def test_render_draws_several_superfacet_colours(sphere, tmp_path):
+    labels = superfacets(sphere, 12)
+    out = tmp_path / "s.png"
+    img = render(sphere, labels, out, size=(320, 240))
+    assert img.shape == (240, 320, 3) and img.dtype == np.uint8
+    saved = np.asarray(Image.open(out).convert("RGB"))
+    assert np.array_equal(saved, img)
+    fg = _foreground(img)
+    assert 0.1 < fg.mean() < 0.9  # the sphere fills part of the frame, not all
+    assert _palette_colours_seen(img) >= 4
+    # boundaries: some dark pixels inside the silhouette
+    dark = (img.astype(int).sum(-1) < 120) & fg
+    assert dark.sum() > 50
+    # without boundaries, no such lines
+    plain = render(sphere, labels, size=(320, 240), boundaries=False)
+    assert ((plain.astype(int).sum(-1) < 120) & _foreground(plain)).sum() < dark.sum() / 4
+    # grey when no labels
+    grey = render(sphere, None, size=(320, 240), background="black")
+    assert _foreground(grey, bg=(0, 0, 0)).mean() > 0.1 and _palette_colours_seen(grey) == 0
+
+
+def test_render_rejects_bad_input(sphere):
+    with pytest.raises(ParameterError, match="one per face"):
+        render(sphere, np.zeros(3, np.int64))
+    with pytest.raises(ParameterError, match="size"):
+        render(sphere, None, size=(5, 5))
+    with pytest.raises(ParameterError, match="unknown view"):
+        render(sphere, None, view="sideways")
+
+
+def test_panel_places_panels_side_by_side(sphere):
+    a, b = superfacets(sphere, 6), superfacets(sphere, 30)
+    img = render_panel([(sphere, a, "six"), (sphere, b, "thirty")], size=(200, 180))
+    assert img.shape == (180, 400, 3)
+    for half in (img[:, :200], img[:, 200:]):
+        assert _foreground(half).mean() > 0.1
+    with pytest.raises(ParameterError, match="no panel"):
+        render_panel([])
+
+
+def test_view_frame_looks_along_the_thinnest_axis():
+    slab = grid_mesh(10, 10)  # flat in z
+    d, up = view_frame(slab, elevation=0)
+    assert abs(d[2]) == pytest.approx(1.0) and up @ d == pytest.approx(0.0, abs=1e-12)
+    assert up[1] == pytest.approx(1.0)
+    d, up = view_frame(slab, "top", elevation=0)  # along the up axis: another up is chosen
+    assert d[1] == pytest.approx(1.0) and abs(up @ d) < 1e-12
+    d, up = view_frame(slab, (1, 1, 0), up="z")
+    assert np.allclose(d, np.array([1, 1, 0]) / np.sqrt(2)) and up[2] == pytest.approx(1.0)
+    with pytest.raises(ValueError, match="up axis"):
+        view_frame(slab, up="w")
+
+
+def test_boundary_edges_of_a_straight_cut():
+    m = grid_mesh(8, 6)
+    labels = (m.centroids[:, 0] > 0).astype(np.int64)
+    e = boundary_edges(m, labels)
+    assert e.shape == (6, 2)  # one grid edge per row along x = 0
+    assert np.allclose(m.vertices[e.ravel(), 0], 0.0)
+
+
+def _decode(page: str, name: str, dtype) -> np.ndarray:
+    blob = re.search(f'id="{name}">([^<]*)<', page).group(1)
+    return np.frombuffer(base64.b64decode(blob), dtype=dtype)
+
+
+def test_html_page_is_self_contained_and_holds_the_mesh(sphere):
+    labels = superfacets(sphere, 12)
+    page = html_page(sphere, labels, title="ball", info={"alpha": 200})
+    # nothing fetched from anywhere: no src/href attributes, no URLs
+    assert not re.search(r"\b(src|href)\s*=", page) and "http" not in page
+    meta = json.loads(re.search(r'id="meta">(.*?)</script>', page, re.S).group(1))
+    assert meta["name"] == "ball" and meta["faces"] == sphere.n_faces and meta["superfacets"] == 12
+    assert meta["info"] == {"alpha": "200"}
+    v = _decode(page, "vertices", "<f4").reshape(-1, 3)
+    f = _decode(page, "faces", "<u4").reshape(-1, 3)
+    c = _decode(page, "colors", np.uint8)
+    assert f.shape == sphere.faces.shape and c.shape == (sphere.n_faces,)
+    assert np.abs(v).max() <= 1.0 + 1e-6  # unit ball
+    # same geometry up to the centring and scaling
+    src = sphere.vertices[sphere.faces]
+    got = v[f]
+    scale = np.ptp(src) / np.ptp(got)
+    assert np.allclose((got - got.mean((0, 1))) * scale, src - src.mean((0, 1)), atol=1e-5)
+    # one colour per superfacet, adjacent superfacets different
+    pal = np.array(meta["palette"])[c]
+    per_sf = {int(s): {tuple(x) for x in pal[labels == s]} for s in range(12)}
+    assert all(len(v_) == 1 for v_ in per_sf.values())
+    g = sphere.graph.pairs
+    diff = labels[g[:, 0]] != labels[g[:, 1]]
+    assert np.all(np.any(pal[g[diff, 0]] != pal[g[diff, 1]], axis=1))
+    with pytest.raises(ParameterError, match="one per face"):
+        html_page(sphere, labels[:-1])
+
+
+def _chromium() -> str:
+    exe = shutil.which("chromium") or shutil.which("chromium-browser")
+    if exe is None:
+        pytest.skip("chromium not found: install Debian's 'chromium' package "
+                    "(.ci/run does: apt-get install chromium)")
+    return exe
+
+
+def test_html_page_draws_the_mesh_in_headless_chromium(sphere, tmp_path):
+    exe = _chromium()
+    labels = superfacets(sphere, 12)
+    page = write_html(tmp_path / "ball.html", sphere, labels, title="ball")
+    shot = tmp_path / "shot.png"
+    cmd = [exe, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+           "--disable-background-networking", "--disable-component-update", "--disable-sync",
+           f"--user-data-dir={tmp_path / 'profile'}", "--use-angle=swiftshader",
+           "--enable-unsafe-swiftshader", "--window-size=640,480",
+           "--virtual-time-budget=10000", f"--screenshot={shot}", page.as_uri()]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    assert shot.exists(), proc.stderr[-2000:]
+    img = np.asarray(Image.open(shot).convert("RGB"))
+    assert img.shape == (480, 640, 3)
+    centre = img[160:320, 240:400]
+    assert _foreground(centre).mean() > 0.9, "the mesh is not drawn"
+    assert _palette_colours_seen(img, min_pixels=30) >= 4
+
+
+def test_cli_render_panel_html_and_view(tmp_path, sphere, capsys, monkeypatch):
+    mesh = tmp_path / "ball.off"
+    write_mesh(mesh, sphere)
+    seg = tmp_path / "ball.seg"
+    write_labels(seg, superfacets(sphere, 10))
+    png = tmp_path / "a.png"
+    assert main(["render", str(mesh), str(seg), "-o", str(png), "--size", "300x200",
+                 "--view", "front"]) == 0
+    assert np.asarray(Image.open(png)).shape[:2] == (200, 300)
+    assert main(["render", str(mesh), "-o", str(png), "-k", "8", "--alpha", "0", "-q"]) == 0
+    assert _palette_colours_seen(np.asarray(Image.open(png).convert("RGB"))) >= 3
+    pan = tmp_path / "p.png"
+    assert main(["panel", str(mesh), "-o", str(pan), "--alpha", "0", "500", "-k", "6", "12",
+                 "--size", "160x120"]) == 0
+    assert np.asarray(Image.open(pan)).shape[:2] == (120, 640)  # 4 panels in one row
+    page = tmp_path / "b.html"
+    assert main(["html", str(mesh), "-o", str(page), "-k", "9"]) == 0
+    assert '"superfacets": 9' in page.read_text()
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    assert main(["view", str(mesh)]) == 2
+    assert main(["render", str(mesh), "-o", str(tmp_path / "x.jpg")]) == 2
+    assert main(["html", str(mesh), str(tmp_path / "missing.seg"), "-o", str(page)]) == 2
+    err = capsys.readouterr().err
+    assert "no display available" in err and "must end in .png" in err and "missing.seg" in err
