@@ -5,7 +5,7 @@ PYTHON ?= python3
 VENV := .venv
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test bench browser clean
+.PHONY: demo test bench browser pictures sweep clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -33,6 +33,21 @@ browser:
 
 bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/table1.py
+
+# The pictures in the README (docs/images), made by the command line.
+PSB_DIR ?= $(HOME)/.cache/superfacets/psb
+pictures: $(STAMP)
+	$(VENV)/bin/superfacets panel ../shared/data/meshes/horse.tri.xz --up z --alpha 0 200 1000 \
+	    -k 150 --size 640x520 -o docs/images/fig2_horse.png
+	$(VENV)/bin/python -c "from superfacets.datasets.psb import psb_root; psb_root()"
+	for id in 21 101 121 181 281 321; do \
+	  $(VENV)/bin/superfacets render $(PSB_DIR)/off/$$id.off -k 150 --size 480x400 \
+	      --title "PSB $$id" -o docs/images/psb_$$id.png; done
+
+# The evaluation sweep of the README (docs/results): about 15 minutes on 2 cores.
+sweep: $(STAMP)
+	$(VENV)/bin/superfacets experiment -o docs/results/psb_sweep.csv
+	$(VENV)/bin/superfacets report docs/results/psb_sweep.csv -o docs/results
 
 clean:
 	rm -rf $(VENV) demo-output build src/*.egg-info

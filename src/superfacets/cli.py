@@ -351,7 +351,7 @@ def _cmd_panel(args) -> int:
                 raise ParameterError(f"{args.mesh}: {method.name}: {exc}") from None
             n = len(np.unique(run.labels))
             title = (f"{method.name}, " if len(methods) > 1 else "") + (
-                f"α = {params['alpha']:g}, " if "alpha" in params else "") + f"k = {k} ({n})"
+                f"alpha = {params['alpha']:g}, " if "alpha" in params else "") + f"k = {k} ({n})"
             items.append((mesh, run.labels, title))
     if args.titles:
         if len(args.titles) != len(items):

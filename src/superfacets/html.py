@@ -182,20 +182,14 @@ _TEMPLATE = r"""<!DOCTYPE html>
   const C = meta.indexBytes === 1 ? new Uint8Array(bytes("colors")) : new Uint16Array(bytes("colors"));
   const E = new Uint32Array(bytes("edges"));
   const nf = meta.nFaces;
-  // flat shading: three vertices per face, each with the face normal and colour
-  const pos = new Float32Array(nf * 9), nor = new Float32Array(nf * 9), col = new Uint8Array(nf * 9);
+  // three vertices per face with the face's colour; the flat normal comes from screen-space
+  // derivatives in the fragment shader, so no normal buffer is needed
+  const pos = new Float32Array(nf * 9), col = new Uint8Array(nf * 9);
   for (let f = 0; f < nf; f++) {
-    const a = 3 * F[3 * f], b = 3 * F[3 * f + 1], c = 3 * F[3 * f + 2];
-    const ux = V[b] - V[a], uy = V[b + 1] - V[a + 1], uz = V[b + 2] - V[a + 2];
-    const vx = V[c] - V[a], vy = V[c + 1] - V[a + 1], vz = V[c + 2] - V[a + 2];
-    let nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
-    const l = Math.hypot(nx, ny, nz) || 1; nx /= l; ny /= l; nz /= l;
     const p = meta.palette[C[f]];
-    const idx = [a, b, c];
     for (let j = 0; j < 3; j++) {
-      const o = 9 * f + 3 * j;
-      pos[o] = V[idx[j]]; pos[o + 1] = V[idx[j] + 1]; pos[o + 2] = V[idx[j] + 2];
-      nor[o] = nx; nor[o + 1] = ny; nor[o + 2] = nz;
+      const a = 3 * F[3 * f + j], o = 9 * f + 3 * j;
+      pos[o] = V[a]; pos[o + 1] = V[a + 1]; pos[o + 2] = V[a + 2];
       col[o] = p[0]; col[o + 1] = p[1]; col[o + 2] = p[2];
     }
   }
@@ -214,16 +208,21 @@ _TEMPLATE = r"""<!DOCTYPE html>
     gl.attachShader(p, shader(gl.VERTEX_SHADER, vs)); gl.attachShader(p, shader(gl.FRAGMENT_SHADER, fs));
     gl.linkProgram(p); return p;
   }
+  if (!gl.getExtension("OES_standard_derivatives")) {
+    document.getElementById("error").textContent = "This browser's WebGL lacks OES_standard_derivatives."; return;
+  }
   const surf = program(
-    "attribute vec3 p; attribute vec3 n; attribute vec3 c; uniform mat4 mv, pr; varying vec3 vn, vc;" +
-    "void main() { vn = mat3(mv) * n; vc = c / 255.0; gl_Position = pr * mv * vec4(p, 1.0); }",
-    "precision mediump float; varying vec3 vn, vc;" +
-    "void main() { float d = abs(normalize(vn).z); gl_FragColor = vec4(vc * (0.35 + 0.65 * d), 1.0); }");
+    "attribute vec3 p; attribute vec3 c; uniform mat4 mv, pr; varying vec3 vp, vc;" +
+    "void main() { vec4 q = mv * vec4(p, 1.0); vp = q.xyz; vc = c / 255.0; gl_Position = pr * q; }",
+    "#extension GL_OES_standard_derivatives : enable\n" +
+    "precision highp float; varying vec3 vp, vc;" +
+    "void main() { vec3 n = normalize(cross(dFdx(vp), dFdy(vp)));" +
+    " float d = abs(dot(n, normalize(-vp))); gl_FragColor = vec4(vc * (0.35 + 0.65 * d), 1.0); }");
   const line = program(
     "attribute vec3 p; uniform mat4 mv, pr; void main() { gl_Position = pr * mv * vec4(p, 1.0); }",
     "precision mediump float; void main() { gl_FragColor = vec4(0.05, 0.05, 0.05, 1.0); }");
   function buffer(data) { const b = gl.createBuffer(); gl.bindBuffer(gl.ARRAY_BUFFER, b); gl.bufferData(gl.ARRAY_BUFFER, data, gl.STATIC_DRAW); return b; }
-  const bp = buffer(pos), bn = buffer(nor), bc = buffer(col), be = buffer(epos);
+  const bp = buffer(pos), bc = buffer(col), be = buffer(epos);
 
   // camera: rotation matrix R (column-major 3x3), distance, pan
   let R, dist, pan, showEdges = true;
@@ -253,10 +252,9 @@ _TEMPLATE = r"""<!DOCTYPE html>
     gl.useProgram(surf);
     gl.uniformMatrix4fv(gl.getUniformLocation(surf, "mv"), false, mv);
     gl.uniformMatrix4fv(gl.getUniformLocation(surf, "pr"), false, pr);
-    attrib(surf, "p", bp, 3, gl.FLOAT, false); attrib(surf, "n", bn, 3, gl.FLOAT, false);
+    attrib(surf, "p", bp, 3, gl.FLOAT, false);
     attrib(surf, "c", bc, 3, gl.UNSIGNED_BYTE, false);
     gl.drawArrays(gl.TRIANGLES, 0, nf * 3);
-    gl.disableVertexAttribArray(gl.getAttribLocation(surf, "n"));
     gl.disableVertexAttribArray(gl.getAttribLocation(surf, "c"));
     if (showEdges && E.length) {
       gl.useProgram(line);

@@ -101,20 +101,39 @@ def _add(plotter, pv, mesh, labels, *, boundaries: bool, line_width: float,
                                  lighting=False)
 
 
-def _place_camera(plotter, mesh, view, zoom: float = 1.0, up="y"):
+def _place_camera(plotter, mesh, view, zoom: float = 1.0, up="y", margin: float = 0.06,
+                  top_margin: float = 0.0):
+    """Orthographic camera from ``view_frame``, framing the mesh's silhouette tightly."""
     from .viz import view_frame
 
     try:
         d, up = view_frame(mesh, view, up=up)
     except ValueError as exc:
         raise ParameterError(str(exc)) from None
-    lo = mesh.vertices[mesh.referenced_vertices].min(axis=0)
-    hi = mesh.vertices[mesh.referenced_vertices].max(axis=0)
-    center = (lo + hi) / 2
-    dist = np.linalg.norm(hi - lo) * 1.6
+    v = mesh.vertices[mesh.referenced_vertices]
+    right = np.cross(up, d)
+    x, y = v @ right, v @ up
+    cx, cy = (x.min() + x.max()) / 2, (y.min() + y.max()) / 2
+    half_w, half_h = (x.max() - x.min()) / 2, (y.max() - y.min()) / 2
+    w, h = plotter.window_size if plotter.shape == (1, 1) else _subplot_size(plotter)
+    aspect = w / max(h, 1)
+    scale = max(half_h, half_w / aspect) * (1 + 2 * margin) / max(zoom, 1e-6)
+    scale /= max(1e-6, 1 - top_margin)
+    depth = v @ d
+    center = cx * right + cy * up + ((depth.min() + depth.max()) / 2) * d
+    # shift the frame down a little when a title takes the top
+    center = center + up * scale * top_margin
+    dist = mesh.diagonal * 2 + 1e-12
+    plotter.enable_parallel_projection()
     plotter.camera_position = [tuple(center + dist * d), tuple(center), tuple(up)]
-    plotter.reset_camera()
-    plotter.camera.zoom(1.3 * zoom)  # reset_camera fits the bounding sphere: loose
+    plotter.camera.parallel_scale = scale
+    plotter.reset_camera_clipping_range()
+
+
+def _subplot_size(plotter) -> tuple[int, int]:
+    w, h = plotter.window_size
+    rows, cols = plotter.shape
+    return w / cols, h / rows
 
 
 def _save_png(image: np.ndarray, out) -> Path:
@@ -187,7 +206,7 @@ def render(mesh, labels=None, out=None, *, size=(1200, 900), view=None,
         p.set_background(background)
         _add(p, pv, mesh, labels, boundaries=boundaries, line_width=line_width,
              boundary_color=boundary_color, surface_color="lightgrey")
-        _place_camera(p, mesh, view, zoom, up)
+        _place_camera(p, mesh, view, zoom, up, top_margin=0.08 if title else 0.0)
         if title:
             p.add_text(title, position="upper_edge", font_size=max(8, h // 60), color="black")
         image = np.asarray(p.screenshot(return_img=True))[:, :, :3].copy()
@@ -243,7 +262,7 @@ def render_panel(items: Sequence[tuple], out=None, *, ncols: int | None = None,
             p.subplot(i // ncols, i % ncols)
             _add(p, pv, mesh, labels, boundaries=boundaries, line_width=line_width,
                  boundary_color="black", surface_color="lightgrey")
-            _place_camera(p, mesh, view, zoom, up)
+            _place_camera(p, mesh, view, zoom, up, top_margin=0.1 if title else 0.0)
             if title:
                 p.add_text(title, position="upper_edge", font_size=max(8, h // 40),
                            color="black")
