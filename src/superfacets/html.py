@@ -226,7 +226,7 @@ _TEMPLATE = r"""<!DOCTYPE html>
 
   // camera: rotation matrix R (column-major 3x3), distance, pan
   let R, dist, pan, showEdges = true;
-  function reset() { R = meta.rotation.slice(); dist = 3.0; pan = [0, 0]; }
+  function reset() { R = meta.rotation.slice(); dist = 3.6; pan = [0, 0]; }
   function rotX(t) { const c = Math.cos(t), s = Math.sin(t); return [1, 0, 0, 0, c, s, 0, -s, c]; }
   function rotY(t) { const c = Math.cos(t), s = Math.sin(t); return [c, 0, -s, 0, 1, 0, s, 0, c]; }
   function mul3(a, b) {

@@ -223,10 +223,10 @@ def plot_per_category(df, metric: str = "undersegmentation_error"):
     cm = category_means(df, metric)
     cats = sorted(cm.index.get_level_values("category").unique())
     ncol = 5
-    nrow = -(-(len(cats) + 1) // ncol)
-    fig, axes = plt.subplots(nrow, ncol, figsize=(3.2 * ncol, 2.5 * nrow), sharex=True,
-                             squeeze=False)
+    nrow = -(-len(cats) // ncol)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(3.2 * ncol, 2.5 * nrow + 0.8), squeeze=False)
     order = [s for s in _series_order(df) if s in cm.index.get_level_values("series")]
+    ks = sorted(cm.columns)
     for ax, cat in zip(axes.flat, cats):
         for s in order:
             if (s, cat) in cm.index:
@@ -234,14 +234,16 @@ def plot_per_category(df, metric: str = "undersegmentation_error"):
                 ax.plot(row.index, row.values, label=s, markersize=3, **style[s])
         ax.set_title(cat, fontsize=10)
         ax.grid(True, alpha=0.3)
-        ax.tick_params(labelsize=8)
+        ax.set_xticks(ks)
+        ax.tick_params(labelsize=7)
     for ax in axes.flat[len(cats):]:
         ax.axis("off")
     handles, labels = axes.flat[0].get_legend_handles_labels()
-    axes.flat[-1].legend(handles, labels, loc="center", fontsize=8, frameon=False)
-    fig.supxlabel("number of superfacets asked (k)", fontsize=10)
+    fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 5), frameon=False,
+               fontsize=9)
+    fig.supxlabel("number of superfacets asked (k)", fontsize=10, y=0.04)
     fig.supylabel(METRIC_LABELS.get(metric, metric), fontsize=10)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.06 + 0.03 * ((len(labels) - 1) // 5), 1, 1))
     return fig
 
 
