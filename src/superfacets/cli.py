@@ -219,6 +219,14 @@ def _add_camera_options(p, size: str) -> None:
                        help="camera zoom factor, > 1 magnifies (default: 1)")
 
 
+def _add_mesh_and_labels(p, plain: bool = True) -> None:
+    p.add_argument("mesh", metavar="MESH", help="input mesh file")
+    p.add_argument("labels", metavar="LABELS.seg", nargs="?", default=None,
+                   help="superfacet labels, one per face (default: computed)")
+    if plain:
+        p.add_argument("--plain", action="store_true", help="draw the mesh without superfacets")
+
+
 def _add_picture_parsers(sub) -> None:
     seg_note = ("Without LABELS.seg the mesh is segmented first with the method options "
                 "below (default k = 150, alpha = 200); with --plain it is drawn grey.")
@@ -227,12 +235,9 @@ def _add_picture_parsers(sub) -> None:
         description="Render a mesh off-screen (no display or GPU needed) to a PNG: flat "
                     "shaded, faces coloured by superfacet (adjacent superfacets in clearly "
                     "different colours), boundaries as dark lines. " + seg_note)
-    r.add_argument("mesh", metavar="MESH", help="input mesh file")
-    r.add_argument("labels", metavar="LABELS.seg", nargs="?", default=None,
-                   help="superfacet labels, one per face (default: computed)")
+    _add_mesh_and_labels(r)
     r.add_argument("-o", "--output", metavar="OUT.png", required=True, help="PNG to write")
     r.add_argument("--title", default=None, help="text at the top (default: none)")
-    r.add_argument("--plain", action="store_true", help="draw the mesh without superfacets")
     _add_camera_options(r, "1200x900")
     _add_method_options(r)
 
@@ -263,10 +268,7 @@ def _add_picture_parsers(sub) -> None:
         description="Open a window to rotate (drag) and zoom (wheel) the coloured result "
                     "(PyVista). Needs a display; without one, use 'render' or 'html'. "
                     + seg_note)
-    v.add_argument("mesh", metavar="MESH", help="input mesh file")
-    v.add_argument("labels", metavar="LABELS.seg", nargs="?", default=None,
-                   help="superfacet labels, one per face (default: computed)")
-    v.add_argument("--plain", action="store_true", help="draw the mesh without superfacets")
+    _add_mesh_and_labels(v)
     _add_camera_options(v, "")
     _add_method_options(v)
 
@@ -275,12 +277,9 @@ def _add_picture_parsers(sub) -> None:
         description="Write one HTML file (no network needed to open it) showing the coloured "
                     "mesh interactively in a browser (WebGL), with its name, face count, "
                     "superfacet count and parameters. " + seg_note)
-    h.add_argument("mesh", metavar="MESH", help="input mesh file")
-    h.add_argument("labels", metavar="LABELS.seg", nargs="?", default=None,
-                   help="superfacet labels, one per face (default: computed)")
+    _add_mesh_and_labels(h)
     h.add_argument("-o", "--output", metavar="OUT.html", required=True, help="page to write")
     h.add_argument("--title", default=None, help="page title (default: the file name)")
-    h.add_argument("--plain", action="store_true", help="draw the mesh without superfacets")
     h.add_argument("--background", default="#ffffff", metavar="COLOR",
                    help="page background, a CSS colour (default: #ffffff)")
     _add_camera_options(h, "")

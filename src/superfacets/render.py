@@ -147,6 +147,17 @@ def _save_png(image: np.ndarray, out) -> Path:
     return atomic_write(out, buf.getvalue())
 
 
+def _finish(plotter, out) -> np.ndarray:
+    """Take the picture, close the plotter, write the PNG if asked."""
+    try:
+        image = np.asarray(plotter.screenshot(return_img=True))[:, :, :3].copy()
+    finally:
+        plotter.close()
+    if out is not None:
+        _save_png(image, out)
+    return image
+
+
 def _size(size) -> tuple[int, int]:
     try:
         w, h = (int(v) for v in size)
@@ -209,12 +220,10 @@ def render(mesh, labels=None, out=None, *, size=(1200, 900), view=None,
         _place_camera(p, mesh, view, zoom, up, top_margin=0.08 if title else 0.0)
         if title:
             p.add_text(title, position="upper_edge", font_size=max(8, h // 60), color="black")
-        image = np.asarray(p.screenshot(return_img=True))[:, :, :3].copy()
-    finally:
+    except BaseException:
         p.close()
-    if out is not None:
-        _save_png(image, out)
-    return image
+        raise
+    return _finish(p, out)
 
 
 def render_panel(items: Sequence[tuple], out=None, *, ncols: int | None = None,
@@ -266,12 +275,10 @@ def render_panel(items: Sequence[tuple], out=None, *, ncols: int | None = None,
             if title:
                 p.add_text(title, position="upper_edge", font_size=max(8, h // 40),
                            color="black")
-        image = np.asarray(p.screenshot(return_img=True))[:, :, :3].copy()
-    finally:
+    except BaseException:
         p.close()
-    if out is not None:
-        _save_png(image, out)
-    return image
+        raise
+    return _finish(p, out)
 
 
 def show(mesh, labels=None, *, title: str | None = None, boundaries: bool = True,

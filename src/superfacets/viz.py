@@ -25,6 +25,14 @@ PALETTE = np.array([
 ], dtype=np.uint8)
 
 
+def _across(mesh, labels):
+    """Labels on both sides of every face-graph edge, and which edges cross superfacets."""
+    pairs = mesh.graph.pairs
+    labels = np.asarray(labels)
+    a, b = labels[pairs[:, 0]], labels[pairs[:, 1]]
+    return a, b, a != b
+
+
 def superfacet_adjacency(mesh, labels: np.ndarray) -> np.ndarray:
     """Pairs of adjacent superfacets.
 
@@ -38,9 +46,7 @@ def superfacet_adjacency(mesh, labels: np.ndarray) -> np.ndarray:
     pairs : (p, 2) int64 ndarray
         Unique ``(s, t)``, ``s < t``, of superfacets sharing a mesh edge.
     """
-    pairs = mesh.graph.pairs
-    a, b = labels[pairs[:, 0]], labels[pairs[:, 1]]
-    cross = a != b
+    a, b, cross = _across(mesh, labels)
     lo, hi = np.minimum(a[cross], b[cross]), np.maximum(a[cross], b[cross])
     if lo.size == 0:
         return np.zeros((0, 2), dtype=np.int64)
@@ -129,10 +135,8 @@ def boundary_edges(mesh, labels: np.ndarray) -> np.ndarray:
     edges : (b, 2) int64 ndarray
         Vertex index pairs, each edge once.
     """
-    g = mesh.graph
-    labels = np.asarray(labels)
-    cut = labels[g.pairs[:, 0]] != labels[g.pairs[:, 1]]
-    e = np.sort(np.asarray(g.edges[cut], dtype=np.int64), axis=1)
+    cut = _across(mesh, labels)[2]
+    e = np.sort(np.asarray(mesh.graph.edges[cut], dtype=np.int64), axis=1)
     return np.unique(e, axis=0) if e.size else e.reshape(0, 2)
 
 
