@@ -244,3 +244,18 @@ def test_k_equals_faces_gives_one_face_each():
     mesh = grid_mesh(3, 3)
     labels = superfacets(mesh, mesh.n_faces, alpha=0)
     assert np.unique(labels).size == mesh.n_faces
+
+
+@pytest.mark.parametrize("mesh_id, max_iter", [(58, 30), (58, 31), (124, 30), (124, 33), (216, 30)])
+def test_cycle_jump_gives_the_labels_of_running_every_pass(psb, mesh_id, max_iter):
+    # these runs (k = 60, alpha = 1000) fall into a cycle of center sets of period 2, 4, 3:
+    # the optimized run classifies only until the cycle shows, then the state of the
+    # last pass; the reference runs all max_iter passes
+    mesh = read_mesh(psb / "off" / f"{mesh_id}.off")
+    a = segment(mesh, 60, alpha=1000, max_iter=max_iter)
+    b = segment(mesh, 60, alpha=1000, max_iter=max_iter, _reference=True)
+    assert a.timings["cycle_period"] >= 2 and a.timings["passes"] < max_iter
+    assert b.timings["passes"] == max_iter and b.timings["cycle_period"] == 0
+    np.testing.assert_array_equal(a.labels, b.labels)
+    np.testing.assert_array_equal(a.centers, b.centers)
+    assert (a.n_iter, a.converged, a.n_orphan_seeds) == (b.n_iter, b.converged, b.n_orphan_seeds)

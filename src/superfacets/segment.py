@@ -53,8 +53,11 @@ class SegmentationResult:
     timings : dict of str to float
         Seconds per stage: ``graph`` (face graph and per-face geometry,
         zero when already cached on the mesh), ``weights``, ``init``,
-        ``iterations``, ``connectivity``, ``total``; and ``expansions``, the
-        number of Dijkstra expansions run (not a time).
+        ``iterations``, ``connectivity``, ``total``; and, not times,
+        ``expansions`` (Dijkstra expansions run), ``passes``
+        (classifications actually run: fewer than ``n_iter`` when a cycle
+        was skipped) and ``cycle_period`` (0, or the period of the cycle of
+        center sets that was detected).
     params : dict
         The parameters of the run, resolved (``n_segments``, ``radius``,
         ``init``, ...).
@@ -238,6 +241,14 @@ def segment(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | None =
     of expanding every center every pass (``_reference=True``, used by the
     tests), at the cost of about ``12 * 2 * 4.4`` bytes per face for the
     recorded lists (each face lies in about 4.4 windows with ``window = 2``).
+
+    The ordered center list of a pass determines every later pass, so when
+    it repeats the list of an earlier pass the run is periodic (the
+    flip-flopping that keeps many runs from converging): the run then jumps
+    to the center list that pass ``max_iter`` would have, and classifies it
+    once. Labels, centers, ``n_iter`` and ``n_orphan_seeds`` are those of
+    running every pass (tested against ``_reference=True``, which does
+    neither optimization); ``timings['passes']`` counts the passes run.
     """
     t_start = time.perf_counter()
     mesh = as_mesh(mesh)
@@ -294,8 +305,32 @@ def segment(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | None =
         from tqdm import tqdm
 
         bar = tqdm(total=max_iter, desc="superfacets", unit="it", leave=False)
+    # The centers of a pass determine everything after it, so once the ordered
+    # center list of a pass repeats an earlier one the run is periodic: jump to the
+    # state of pass max_iter and classify it once (same labels as running every pass).
+    seen: dict[bytes, int] = {}
+    states: list[np.ndarray] = []
+    orphans_per_pass: list[int] = []
+    n_passes = 0
+    period = 0
     try:
         while True:
+            key = centers[:n_centers].tobytes()
+            if key in seen and not period and not _reference and n_iter < max_iter - 1:
+                j = seen[key]  # pass j (0-based) had the same centers as pass n_iter
+                period = n_iter - j
+                last = max_iter - 1
+                cyc = [j + ((t - j) % period) for t in range(n_iter, last)]
+                n_orphans += sum(orphans_per_pass[q] for q in cyc)
+                target = states[j + ((last - j) % period)]
+                n_centers = target.shape[0]
+                centers[:n_centers] = target
+                if bar is not None:
+                    bar.update(last - n_iter)
+                n_iter = last
+            elif not period:
+                seen[key] = n_iter
+                states.append(centers[:n_centers].copy())
             if inc is not None:
                 k_now, sid, n_exp = inc.classify(g.indptr, g.indices, csr_w, c, centers,
                                                  n_centers, window_r2, dist, label, local,
@@ -310,7 +345,9 @@ def segment(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | None =
                 k_now = _kernels.classify_exact(g.indptr, g.indices, csr_w, centers, n_centers,
                                                 dist, label, hkey, hval)
             n_iter += 1
+            n_passes += 1
             n_orphans += k_now - n_centers
+            orphans_per_pass.append(k_now - n_centers)
             used = centers[:k_now].copy()
             moved = np.empty(k_now, dtype=np.int64)
             _kernels.update_centers(label, k_now, areas, c, used, moved)
@@ -344,6 +381,8 @@ def segment(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | None =
     timings["total"] = time.perf_counter() - t_start
 
     timings["expansions"] = n_expanded
+    timings["passes"] = n_passes
+    timings["cycle_period"] = period
     params = dict(n_segments=k, radius=r / mesh.diagonal, alpha=float(alpha),
                   eta_convex=float(eta_convex), window=window, init=init, max_iter=max_iter,
                   weighting=weighting, assignment=assignment,
