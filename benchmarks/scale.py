@@ -1,0 +1,104 @@
+"""Scale benchmark: seconds per stage and peak memory from 69k to millions of faces.
+
+Usage: python benchmarks/scale.py [--max-faces 2e6] [-k 150] [--alpha 200]
+
+Rows: the Bunny at k = 50, 150, 500 and 2000 (cost should not grow with k),
+then hand_olivier and its subdivisions (``benchmarks/large_meshes.py`` makes
+and caches them: 0.42M, 1.7M, 6.8M, 27M faces) up to ``--max-faces``. Each
+row runs in a fresh process: read the file, segment, all timed; peak
+resident memory is the process's own, and bytes/face is reported both for
+the whole process and above the resident size right after import (Python,
+numpy, numba: about 110 MiB). The paper's Table 1 time of the mesh of
+comparable size (single-threaded C++, 3.2 GHz) is shown beside.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+# paper's Table 1 (k = 150, alpha = 200): faces -> (name, seconds)
+PAPER = [(69_451, "Bunny", 22), (105_860, "Hand", 39), (400_000, "Lion vase", 137),
+         (1_652_528, "Ramesses", 738), (7_219_045, "Dragon", 3_125)]
+
+
+def one(path: str, k: int, alpha: float) -> dict:
+    from superfacets import read_mesh, segment
+
+    rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    t = time.perf_counter()
+    mesh = read_mesh(path)
+    t_read = time.perf_counter() - t
+    r = segment(mesh, k, alpha=alpha)
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    return dict(faces=mesh.n_faces, superfacets=r.n_segments, n_iter=r.n_iter,
+                passes=r.timings["passes"], converged=r.converged, read=t_read,
+                graph=r.timings["graph"] + r.timings["weights"], init=r.timings["init"],
+                iterations=r.timings["iterations"], total=t_read + r.timings["total"],
+                expansions=r.timings["expansions"], rss0=rss0, peak=peak)
+
+
+def child(path: Path, k: int, alpha: float) -> dict:
+    cmd = [sys.executable, __file__, "--one", str(path), "-k", str(k), "--alpha", str(alpha)]
+    out = subprocess.run(cmd, check=True, capture_output=True, text=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def paper_time(faces: int):
+    for n, name, sec in PAPER:
+        if abs(faces - n) <= 0.15 * n:
+            return f"{sec:,} ({name})"
+    return ""
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("-k", type=int, default=150)
+    ap.add_argument("--alpha", type=float, default=200.0)
+    ap.add_argument("--max-faces", type=float, default=2e6)
+    ap.add_argument("--one", help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.one:
+        print(json.dumps(one(args.one, args.k, args.alpha)))
+        return 0
+    from large_meshes import make
+
+    from superfacets.datasets.psb import default_archive, default_cache
+
+    meshes = default_archive().parent / "meshes"
+    runs = [(f"bunny k={k}", meshes / "bunny.tri.xz", k) for k in (50, 150, 500, 2000)]
+    runs.append(("hand_olivier", meshes / "hand_olivier.tri.xz", args.k))
+    for level in (1, 2, 3, 4):
+        if 105_860 * 4 ** level > args.max_faces:
+            break
+        runs.append((f"hand x{4 ** level}", make("hand_olivier", level, default_cache() / "large"),
+                     args.k))
+    cols = ["mesh", "faces", "k", "superfacets", "iterations (passes)", "read s", "graph s",
+            "init s", "iterations s", "total s", "s/pass", "peak MiB", "B/face", "B/face above import",
+            "paper s"]
+    print(f"alpha = {args.alpha}; one fresh process per row; total = read + segment\n")
+    print("| " + " | ".join(cols) + " |")
+    print("|" + "---|" * len(cols))
+    for name, path, k in runs:
+        r = child(path, k, args.alpha)
+        cells = [name, f"{r['faces']:,}", k, r["superfacets"],
+                 f"{r['n_iter']}{'' if r['converged'] else ' (max)'} ({r['passes']})",
+                 *(f"{r[s]:.2f}" for s in ("read", "graph", "init", "iterations", "total")),
+                 f"{r['iterations'] / max(r['passes'], 1):.3f}", f"{r['peak'] / 2**20:,.0f}",
+                 f"{r['peak'] / r['faces']:,.0f}", f"{(r['peak'] - r['rss0']) / r['faces']:,.0f}",
+                 paper_time(r["faces"]) if k == 150 else ""]
+        print("| " + " | ".join(str(c) for c in cells) + " |", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
