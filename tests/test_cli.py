@@ -82,6 +82,10 @@ def test_demo(tmp_path, capsys):
     labels = read_labels(out / "creature.seg", n_faces=mesh.n_faces)
     assert labels.max() + 1 == 20
     assert (out / "creature_superfacets.ply").exists()
+    assert '"superfacets": 20' in (out / "creature.html").read_text()
+    from PIL import Image
+
+    assert Image.open(out / "creature.png").size == (1000, 750)
     assert "creature:" in capsys.readouterr().out
 
 

@@ -596,11 +596,25 @@ def _cmd_demo(args) -> int:
     write_mesh(out / "creature.off", mesh)
     write_labels(out / "creature.seg", result.labels, header=_header(mesh, result, "creature.off"))
     write_colored_mesh(out / "creature_superfacets.ply", mesh, result.labels)
+    from .html import write_html
+
+    write_html(out / "creature.html", mesh, result.labels, title="creature (demo)", up="z",
+               info={"k asked": args.n_segments, "alpha": args.alpha})
+    picture = ""
+    try:
+        from .render import render
+
+        render(mesh, result.labels, out / "creature.png", size=(1000, 750), up="z",
+               title=f"{result.n_segments} superfacets, alpha = {args.alpha:g}")
+        picture = f", {out / 'creature.png'} (picture)"
+    except Exception as exc:  # noqa: BLE001 - the picture is a bonus; say why it is missing
+        print(f"note: no picture rendered ({type(exc).__name__}: {exc})", file=sys.stderr)
     if not args.quiet:
         print(f"built the demo mesh in {t_shape:.2f} s")
         print(_summary("creature", mesh, result, elapsed))
         print(f"wrote {out / 'creature.off'} (mesh), {out / 'creature.seg'} (labels), "
-              f"{out / 'creature_superfacets.ply'} (open in MeshLab or Blender)")
+              f"{out / 'creature_superfacets.ply'} (open in MeshLab or Blender), "
+              f"{out / 'creature.html'} (open in a browser){picture}")
     return 0
 
 
