@@ -30,6 +30,26 @@ def grid_mesh(nx: int, ny: int, height=None, size=1.0) -> Mesh:
     return Mesh(v, f)
 
 
+def write_benchmark(tmp_path: Path) -> Path:
+    """A tiny benchmark folder: ids 1, 2 (Human) and 21 (Cup), two ground truths each."""
+    from superfacets import write_labels, write_mesh
+
+    def valley_mesh(n, depth):
+        return grid_mesh(n, n, height=lambda x, y: depth * np.abs(x))
+
+    root = tmp_path / "psb"
+    (root / "off").mkdir(parents=True)
+    for mid, mesh in [(1, valley_mesh(16, 1.0)), (2, valley_mesh(20, 0.5)),
+                      (21, grid_mesh(14, 14))]:
+        write_mesh(root / "off" / f"{mid}.off", mesh)
+        seg = root / "seg" / "Benchmark" / str(mid)
+        seg.mkdir(parents=True)
+        x = mesh.centroids[:, 0]
+        write_labels(seg / f"{mid}_0.seg", (x > 0).astype(np.int64))
+        write_labels(seg / f"{mid}_1.seg", np.digitize(x, [-0.5, 0, 0.5]))
+    return root
+
+
 @pytest.fixture
 def valley() -> Mesh:
     """A V-shaped valley z = |x| (normals up): a sharp concave crease along x = 0."""

@@ -15,7 +15,7 @@ from superfacets.experiment import (METHODS, Config, MethodRun, Skipped, expand_
                                     read_results, register_method, run_experiment)
 from superfacets.report import load_results, markdown_summary, summary, write_report
 
-from conftest import grid_mesh
+from conftest import grid_mesh, write_benchmark
 
 
 def _valley(n, depth):
@@ -25,16 +25,7 @@ def _valley(n, depth):
 @pytest.fixture
 def bench(tmp_path):
     """A tiny benchmark folder: ids 1, 2 (Human) and 21 (Cup), two ground truths each."""
-    root = tmp_path / "psb"
-    (root / "off").mkdir(parents=True)
-    for mid, mesh in [(1, _valley(16, 1.0)), (2, _valley(20, 0.5)), (21, grid_mesh(14, 14))]:
-        write_mesh(root / "off" / f"{mid}.off", mesh)
-        seg = root / "seg" / "Benchmark" / str(mid)
-        seg.mkdir(parents=True)
-        x = mesh.centroids[:, 0]
-        write_labels(seg / f"{mid}_0.seg", (x > 0).astype(np.int64))
-        write_labels(seg / f"{mid}_1.seg", np.digitize(x, [-0.5, 0, 0.5]))
-    return root
+    return write_benchmark(tmp_path)
 
 
 # module-level methods (the worker processes import them by reference)

@@ -5,7 +5,8 @@ Every error caused by bad input is a :class:`SuperfacetsError`, which is also a
 (and :class:`OSError`) into one clear line and a non-zero exit status.
 """
 
-__all__ = ["SuperfacetsError", "MeshFormatError", "InvalidMeshError", "ParameterError"]
+__all__ = ["SuperfacetsError", "MeshFormatError", "InvalidMeshError", "ParameterError",
+           "MemoryLimitError"]
 
 
 class SuperfacetsError(ValueError):
@@ -22,3 +23,20 @@ class InvalidMeshError(SuperfacetsError):
 
 class ParameterError(SuperfacetsError):
     """A parameter of a method is out of its valid range."""
+
+
+class MemoryLimitError(SuperfacetsError, MemoryError):
+    """A method would need more memory than its limit allows (raised before allocating).
+
+    Attributes
+    ----------
+    required : int
+        Estimated bytes needed.
+    limit : int
+        The limit in bytes.
+    """
+
+    def __init__(self, message: str, required: int = 0, limit: int = 0):
+        super().__init__(message)
+        self.required = int(required)
+        self.limit = int(limit)

@@ -14,7 +14,9 @@ Row columns (:func:`columns`): ``mesh``, ``mesh_id``, ``category``,
 ``n_faces``, ``method``, ``n_segments`` (asked), one column per method
 parameter (empty where a method does not have it), ``seed``, ``status``
 (``ok``, ``failed`` or ``skipped``), ``superfacets`` (produced), ``iterations``,
-``converged``, ``seconds`` (the method only, not reading or metrics), the
+``converged``, ``seconds`` (the method only, not reading or metrics, including
+work reused from an earlier ``n_segments``), ``peak_mib`` (peak resident memory
+above the start of the call, Linux only), the
 metrics of :data:`superfacets.metrics.METRICS` averaged over the mesh's
 ground truths, ``n_ground_truths`` and ``error``.
 """
@@ -67,11 +69,18 @@ class MethodRun:
     n_iter : int, optional
         Iterations run, where the method iterates.
     converged : bool, optional
+    reused_seconds : float, default 0
+        Seconds of work done by an earlier call and reused from ``cache``
+        (e.g. the embedding of normalized cuts). The runner adds them to the
+        row's ``seconds``, so ``seconds`` is the cost of one segmentation
+        from scratch, and takes the row's ``peak_mib`` as the largest of the
+        calls so far on that mesh and setting.
     """
 
     labels: np.ndarray
     n_iter: int | None = None
     converged: bool | None = None
+    reused_seconds: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -198,6 +207,33 @@ def _run_shlafman(mesh, n_segments, *, cache, seed, **params):
                             **params)
 
 
+def _run_ncuts(mesh, n_segments, *, cache, seed, components, memory_limit_gib, **params):
+    from .baselines.ncuts import ncut_embedding, normalized_cuts
+    from .errors import MemoryLimitError
+
+    emb = cache.get("ncut_embedding")
+    reused = 0.0
+    if emb is None or emb.n_components < min(n_segments, mesh.n_faces):
+        limit = int(memory_limit_gib * 2**30) if memory_limit_gib > 0 else None
+        try:
+            emb = ncut_embedding(mesh, max(components, n_segments), memory_limit=limit,
+                                 rng=seed, **params)
+        except MemoryLimitError as exc:
+            raise Skipped(str(exc)) from None
+        cache["ncut_embedding"] = emb
+    else:
+        reused = emb.total_seconds
+    return MethodRun(normalized_cuts(mesh, n_segments, embedding=emb, rng=seed),
+                     reused_seconds=reused)
+
+
+def _run_vsa(mesh, n_segments, *, cache, seed, **params):
+    from .baselines.vsa import variational_shape_approximation
+
+    r = variational_shape_approximation(mesh, n_segments, rng=seed, cache=cache, **params)
+    return MethodRun(r.labels, r.n_iter, r.converged)
+
+
 _SF_DEFAULTS = dict(alpha=200.0, eta_convex=0.2, init="farthest", window=2.0, max_iter=50)
 register_method(
     "superfacets", _run_superfacets, defaults=_SF_DEFAULTS,
@@ -207,6 +243,19 @@ register_method(
     "shlafman", _run_shlafman, defaults=dict(_SF_DEFAULTS, alpha=0.5),
     sweep={"alpha": (0.0, 0.25, 0.5, 0.75, 1.0)},
     description="the same k-means with Shlafman et al.'s weights (eq. 6), alpha in [0, 1]")
+register_method(
+    "ncuts", _run_ncuts,
+    defaults=dict(alpha=100.0, eta_convex=0.2, bandwidth=1.0, components=300,
+                  memory_limit_gib=0.0),
+    sweep={"alpha": (0.0, 100.0, 200.0)},
+    description="normalized cuts: dense all-pairs distances (same weights), Gaussian affinity, "
+                "k-way spectral cut (Shi-Malik / Yu-Shi); O(m^2) memory, refuses meshes over "
+                "memory_limit_gib (0: 40% of RAM)")
+register_method(
+    "vsa", _run_vsa, defaults=dict(metric="l21", init="random", max_iter=30, insert_iter=2),
+    sweep={"metric": ("l21", "l2"), "init": ("random", "incremental")},
+    description="Variational Shape Approximation (Cohen-Steiner et al. 2004): planar proxies, "
+                "L2,1 or L2 metric, random or incremental proxy initialization")
 
 
 # --- grid ------------------------------------------------------------------------------
@@ -270,7 +319,7 @@ def expand_grid(method: str, **values) -> list[Config]:
 # --- results file ------------------------------------------------------------------------
 
 _HEAD = ["mesh", "mesh_id", "category", "n_faces", "method", "n_segments"]
-_TAIL = ["seed", "status", "superfacets", "iterations", "converged", "seconds",
+_TAIL = ["seed", "status", "superfacets", "iterations", "converged", "seconds", "peak_mib",
          *METRICS, "n_ground_truths", "error"]
 
 
@@ -390,12 +439,19 @@ def _run_task(task: dict) -> list[dict]:
         return [dict(base, n_segments=k, status="failed", error=_error_text(exc))
                 for k in task["ks"]]
     cache: dict = {}
+    task_peak = 0.0
     for k in task["ks"]:
         row = dict(base, n_segments=k)
         try:
+            probe = PeakMemory()
             t0 = time.perf_counter()
             out = run(mesh, k, cache=cache, seed=task["seed"], **params)
-            row["seconds"] = round(time.perf_counter() - t0, 4)
+            seconds = time.perf_counter() - t0
+            peak = probe.peak_mib()
+            row["seconds"] = round(seconds + float(out.reused_seconds), 4)
+            if peak is not None:
+                task_peak = max(task_peak, peak)
+                row["peak_mib"] = round(task_peak if out.reused_seconds else peak, 1)
             labels = np.asarray(out.labels)
             if labels.shape != (mesh.n_faces,):
                 raise RuntimeError(f"method returned {labels.shape} labels for "
@@ -412,6 +468,42 @@ def _run_task(task: dict) -> list[dict]:
             row.update(status="failed", error=_error_text(exc), seconds=None)
         rows.append(row)
     return rows
+
+
+class PeakMemory:
+    """Peak resident memory of this process since creation, above its start.
+
+    Linux only: resets the kernel's high-water mark (``/proc/self/clear_refs``)
+    and reads ``VmHWM`` / ``VmRSS`` from ``/proc/self/status``. Elsewhere
+    :meth:`peak_mib` returns None.
+    """
+
+    def __init__(self) -> None:
+        self.start = None
+        try:
+            with open("/proc/self/clear_refs", "w") as f:
+                f.write("5")
+            self.start = self._read("VmRSS")
+        except OSError:
+            pass
+
+    @staticmethod
+    def _read(field: str) -> float | None:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith(field + ":"):
+                    return int(line.split()[1]) / 1024.0  # kB -> MiB
+        return None
+
+    def peak_mib(self) -> float | None:
+        """MiB of resident memory at the peak since creation, above the start."""
+        if self.start is None:
+            return None
+        try:
+            hwm = self._read("VmHWM")
+        except OSError:
+            return None
+        return None if hwm is None else max(0.0, hwm - self.start)
 
 
 def _init_worker() -> None:  # pragma: no cover - runs in the workers

@@ -1,0 +1,268 @@
+"""Baselines: normalized cuts and Variational Shape Approximation; the registry's call shape."""
+
+from __future__ import annotations
+
+import tracemalloc
+
+import numpy as np
+import pytest
+import trimesh
+
+from superfacets import Mesh, ParameterError, as_mesh
+from superfacets.baselines import (ncut_embedding, normalized_cuts,
+                                   variational_shape_approximation, vsa)
+from superfacets.baselines.ncuts import ncut_memory_estimate
+from superfacets.connectivity import label_components
+from superfacets.errors import MemoryLimitError
+from superfacets.experiment import METHODS, Skipped, expand_grid, read_results, run_experiment
+
+from conftest import grid_mesh, write_benchmark
+
+
+def _box(subdivisions=2, extents=(1.0, 1.0, 1.0)) -> Mesh:
+    m = trimesh.creation.box(extents=extents)
+    for _ in range(subdivisions):
+        m = m.subdivide()
+    return as_mesh(m)
+
+
+def _side(mesh) -> np.ndarray:
+    n = mesh.normals
+    ax = np.argmax(np.abs(n), axis=1)
+    return 2 * ax + (n[np.arange(mesh.n_faces), ax] > 0)
+
+
+def _dumbbell() -> Mesh:
+    """Two unit spheres (centres z = -1.1, +1.1) joined by a short neck of radius 0.15."""
+    z = np.linspace(-2.1, 2.1, 121)
+    r = np.maximum(np.sqrt(np.clip(1.0 - (np.abs(z) - 1.1) ** 2, 0, None)), 0.15)
+    r[0] = r[-1] = 0.0
+    profile = np.column_stack([r, z])
+    return as_mesh(trimesh.creation.revolve(profile, sections=48))
+
+
+@pytest.fixture
+def ball() -> Mesh:
+    """1280 faces: small enough for the dense eigen-solver path of normalized cuts."""
+    return as_mesh(trimesh.creation.icosphere(subdivisions=3))
+
+
+def _dense(labels, m):
+    assert labels.shape == (m,) and labels.dtype == np.int64
+    assert np.array_equal(np.unique(labels), np.arange(labels.max() + 1))
+
+
+# --- VSA ---------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("metric", ["l21", "l2"])
+@pytest.mark.parametrize("subdivisions", [1, 2, 3])
+def test_vsa_recovers_the_six_sides_of_a_box(metric, subdivisions):
+    box = _box(subdivisions, extents=(1.0, 2.0, 3.0))
+    for seed in range(3):
+        r = variational_shape_approximation(box, 6, metric=metric, init="incremental", rng=seed)
+        assert r.labels.max() + 1 == 6
+        side = _side(box)
+        # one region per side, exactly
+        table = np.zeros((6, 6), int)
+        np.add.at(table, (r.labels, side), 1)
+        assert (np.count_nonzero(table, axis=1) == 1).all()
+        assert (np.count_nonzero(table, axis=0) == 1).all()
+        assert r.distortion == pytest.approx(0.0, abs=1e-12)
+        assert r.converged
+        # proxies are the side planes: normals axis-aligned, points on the faces
+        assert np.allclose(np.abs(r.normals).max(axis=1), 1.0)
+
+
+def test_vsa_l2_fits_the_plane_of_least_variance_exactly():
+    # a bent sheet (V shape): the L2 proxy of one region is the least-squares plane of the
+    # surface, computed from the exact triangle covariance; compare with dense sampling
+    mesh = grid_mesh(12, 12, height=lambda x, y: 0.3 * np.abs(x) + 0.1 * y)
+    r = variational_shape_approximation(mesh, 1, metric="l2", init="random", rng=0)
+    rng = np.random.default_rng(1)
+    pts, wts = [], []
+    for f in mesh.faces:
+        a, b = rng.random((2, 400))
+        flip = a + b > 1
+        a[flip], b[flip] = 1 - a[flip], 1 - b[flip]
+        v = mesh.vertices[f]
+        pts.append(v[0] + a[:, None] * (v[1] - v[0]) + b[:, None] * (v[2] - v[0]))
+    pts = np.vstack(pts)
+    w = np.repeat(mesh.areas, 400)
+    mu = (w[:, None] * pts).sum(0) / w.sum()
+    cov = ((pts - mu).T * w) @ (pts - mu)
+    normal = np.linalg.eigh(cov)[1][:, 0]
+    assert np.allclose(r.points[0], mu, atol=1e-3)
+    assert abs(abs(r.normals[0] @ normal) - 1.0) < 1e-4
+    # distortion is the integral of the squared distance to that plane
+    d2 = ((pts - r.points[0]) @ r.normals[0]) ** 2
+    assert r.distortion == pytest.approx((w * d2).sum() / 400, rel=0.02)
+
+
+@pytest.mark.parametrize("init", ["random", "incremental"])
+@pytest.mark.parametrize("metric", ["l21", "l2"])
+def test_vsa_labels_dense_connected_and_deterministic(sphere, init, metric):
+    a = vsa(sphere, 24, metric=metric, init=init, rng=7)
+    b = vsa(sphere, 24, metric=metric, init=init, rng=7)
+    _dense(a, sphere.n_faces)
+    assert a.max() + 1 == 24
+    assert np.array_equal(a, b)
+    # flooding grows each region from its seed: face-connected
+    pieces = label_components(sphere.graph, a)
+    assert pieces.max() + 1 == 24
+
+
+def test_vsa_incremental_continues_from_the_cache(sphere):
+    cache: dict = {}
+    for k in (5, 12, 30):
+        cont = variational_shape_approximation(sphere, k, init="incremental", rng=3, cache=cache)
+        fresh = variational_shape_approximation(sphere, k, init="incremental", rng=3)
+        assert np.array_equal(cont.labels, fresh.labels)
+        assert cont.distortion == fresh.distortion
+    assert cache["vsa_incremental"]["n"] == 30
+
+
+def test_vsa_every_component_gets_a_region():
+    a = _box(1)
+    b = trimesh.Trimesh(a.vertices + [3.0, 0, 0], a.faces, process=False)
+    two = as_mesh(trimesh.util.concatenate([trimesh.Trimesh(a.vertices, a.faces, process=False),
+                                            b]))
+    for init in ("random", "incremental"):
+        labels = vsa(two, 1, init=init, rng=0)
+        assert labels.max() + 1 == 2
+        half = two.n_faces // 2
+        assert len(set(labels[:half])) == 1 and len(set(labels[half:])) == 1
+
+
+def test_vsa_rejects_bad_parameters(sphere):
+    with pytest.raises(ParameterError, match="metric"):
+        vsa(sphere, 5, metric="l1")
+    with pytest.raises(ParameterError, match="init"):
+        vsa(sphere, 5, init="farthest")
+    with pytest.raises(ParameterError, match="max_iter"):
+        vsa(sphere, 5, max_iter=0)
+    with pytest.raises(ParameterError, match="insert_iter"):
+        vsa(sphere, 5, insert_iter=-1)
+    with pytest.raises(ParameterError, match="larger than the number of faces"):
+        vsa(sphere, sphere.n_faces + 1)
+
+
+# --- normalized cuts ---------------------------------------------------------------------
+
+
+def test_ncuts_separates_two_spheres_joined_by_a_neck():
+    mesh = _dumbbell()
+    z = mesh.centroids[:, 2]
+    for alpha in (0.0, 100.0):
+        labels = normalized_cuts(mesh, 2, alpha=alpha, rng=0)
+        _dense(labels, mesh.n_faces)
+        assert labels.max() + 1 == 2
+        # the cut runs through the neck: every face of the two bulbs is on its own side
+        bulb = np.abs(z) > 0.8
+        top = labels[bulb & (z > 0)]
+        bottom = labels[bulb & (z < 0)]
+        assert len(set(top)) == 1 and len(set(bottom)) == 1 and top[0] != bottom[0]
+
+
+def test_ncuts_embedding_is_shared_by_every_k_and_deterministic(ball):
+    sphere = ball
+    emb = ncut_embedding(sphere, 30, alpha=100.0, rng=0)
+    assert emb.vectors.shape == (sphere.n_faces, 30)
+    assert np.all(np.diff(emb.eigenvalues) <= 1e-12)
+    assert emb.eigenvalues[0] == pytest.approx(1.0, abs=1e-8)  # connected: one eigenvalue 1
+    assert emb.sigma > 0 and emb.nnz >= sphere.n_faces
+    for k in (2, 10, 30):
+        a = normalized_cuts(sphere, k, embedding=emb, rng=5)
+        b = normalized_cuts(sphere, k, alpha=100.0, rng=5)  # its own embedding, k vectors
+        _dense(a, sphere.n_faces)
+        assert a.max() + 1 <= k
+        assert np.array_equal(a, normalized_cuts(sphere, k, embedding=emb, rng=5))
+        _dense(b, sphere.n_faces)
+    with pytest.raises(ParameterError, match="eigenvectors"):
+        normalized_cuts(sphere, 31, embedding=emb)
+    with pytest.raises(ParameterError, match="either"):
+        normalized_cuts(sphere, 5, embedding=emb, alpha=3.0)
+
+
+def test_ncuts_sparse_solver_agrees_with_the_dense_one():
+    mesh = as_mesh(trimesh.creation.icosphere(subdivisions=4))  # 5120 faces: ARPACK path
+    emb = ncut_embedding(mesh, 12, alpha=0.0, rng=0)
+    assert emb.eigenvalues[0] == pytest.approx(1.0, abs=1e-6)
+    # the relaxed indicators satisfy (D - W) y = (1 - lambda) D y; check via the row sums:
+    # the first generalized eigenvector of a connected graph is constant
+    y0 = emb.vectors[:, 0]
+    assert np.ptp(y0) < 1e-6 * np.abs(y0).max()
+
+
+def test_ncuts_memory_guard_refuses_before_allocating():
+    mesh = as_mesh(trimesh.creation.icosphere(subdivisions=5))  # 20480 faces: 1.6 GB matrix
+    need = ncut_memory_estimate(mesh.n_faces, 300)
+    assert need > 4 * mesh.n_faces ** 2
+    tracemalloc.start()
+    try:
+        with pytest.raises(MemoryLimitError, match=r"needs about 1\.\d GiB.*limit 0\.5 GiB") \
+                as err:
+            ncut_embedding(mesh, 300, memory_limit=2**29)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert peak < 50 * 2**20  # nothing near the matrix was allocated
+    assert err.value.required == need and err.value.limit == 2**29
+    assert isinstance(err.value, MemoryError)
+
+
+def test_ncuts_rejects_bad_parameters(ball):
+    sphere = ball
+    with pytest.raises(ParameterError, match="bandwidth"):
+        ncut_embedding(sphere, 5, bandwidth=0)
+    with pytest.raises(ParameterError, match="cutoff"):
+        ncut_embedding(sphere, 5, cutoff=1.0)
+    with pytest.raises(ParameterError, match="memory_limit"):
+        ncut_embedding(sphere, 5, memory_limit=0)
+    with pytest.raises(ParameterError, match="n_segments"):
+        normalized_cuts(sphere, 0)
+
+
+# --- the registry ------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", sorted(METHODS))
+def test_every_registered_method_has_one_call_shape(name):
+    sphere = as_mesh(trimesh.creation.icosphere(subdivisions=2))
+    method = METHODS[name]
+    for cfg in expand_grid(name, **{k: list(v) for k, v in method.sweep.items()}):
+        runs = [method.run(sphere, 12, cache={}, seed=4, **cfg.kwargs) for _ in range(2)]
+        _dense(runs[0].labels, sphere.n_faces)
+        assert np.array_equal(runs[0].labels, runs[1].labels), cfg.label()
+
+
+def test_runner_records_a_mesh_too_large_for_ncuts_as_skipped(tmp_path):
+    root = write_benchmark(tmp_path)
+    from superfacets.datasets.psb import list_meshes
+
+    meshes = list_meshes(root)
+    out = tmp_path / "r.csv"
+    cfgs = expand_grid("ncuts", alpha=[100.0], memory_limit_gib=[1e-4])
+    s = run_experiment(meshes, cfgs, out, [2, 4], workers=1, progress=False)
+    assert s.skipped == 2 * len(meshes) and s.ok == 0
+    rows = read_results(out)
+    assert all(r["status"] == "skipped" and "GiB" in r["error"] for r in rows)
+    s = run_experiment(meshes, expand_grid("ncuts", alpha=[100.0]), out, [2, 4], workers=1,
+                       progress=False)
+    rows = [r for r in read_results(out) if r["status"] == "ok"]
+    assert len(rows) == 2 * len(meshes)
+    # the second k reused the embedding: its seconds include it, so they are not smaller
+    # than the embedding's own share, and its peak memory is that of the first call
+    by_mesh = {}
+    for r in rows:
+        by_mesh.setdefault(r["mesh"], {})[int(r["n_segments"])] = r
+    for pair in by_mesh.values():
+        if pair[2]["peak_mib"]:
+            assert float(pair[4]["peak_mib"]) >= float(pair[2]["peak_mib"]) - 1e-9
+
+
+def test_skipped_is_the_runner_signal(ball):
+    sphere = ball
+    with pytest.raises(Skipped, match="GiB"):
+        METHODS["ncuts"].run(sphere, 4, cache={}, seed=0, alpha=0.0, eta_convex=0.2,
+                             bandwidth=1.0, components=10, memory_limit_gib=1e-6)
