@@ -10,7 +10,8 @@ a triangle mesh into compact patches whose borders follow concavities.
 """
 
 from .connectivity import enforce_connectivity
-from .errors import InvalidMeshError, MeshFormatError, ParameterError, SuperfacetsError
+from .errors import (InvalidMeshError, MemoryLimitError, MeshFormatError, ParameterError,
+                     SuperfacetsError)
 from .graph import FaceGraph, paper_weights, shlafman_weights
 from .io import read_labels, read_mesh, write_colored_mesh, write_labels, write_mesh
 from .mesh import Mesh, as_mesh
@@ -21,6 +22,7 @@ __version__ = "0.1.0"
 __all__ = [
     "FaceGraph",
     "InvalidMeshError",
+    "MemoryLimitError",
     "Mesh",
     "MeshFormatError",
     "ParameterError",
