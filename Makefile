@@ -5,7 +5,7 @@ PYTHON ?= python3
 VENV := .venv
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test bench browser pictures sweep clean
+.PHONY: demo test bench browser pictures sweep comparisons clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -48,6 +48,27 @@ pictures: $(STAMP)
 sweep: $(STAMP)
 	$(VENV)/bin/superfacets experiment -o docs/results/psb_sweep.csv
 	$(VENV)/bin/superfacets report docs/results/psb_sweep.csv -o docs/results
+
+# The paper's comparisons with its baselines (docs/results, README "Comparisons"):
+# normalized cuts on a stratified subset (the 2 meshes with fewest faces of each of the
+# 15 categories, ~45 min on 2 cores), Shlafman's weighting and VSA on all 300 meshes
+# (~25 min). Each experiment resumes where it stopped when run again.
+NCUTS_IDS := 1,9,33,37,52,58,73,74,92,98,111,114,124,125,142,143,185,200,203,214,236,237,257,260,293,298,324,337,367,372
+SF := $(VENV)/bin/superfacets
+comparisons: $(STAMP)
+	$(SF) experiment -o docs/results/ncuts_subset.csv -m superfacets -m ncuts --alpha 0 100 200 \
+	    --ids $(NCUTS_IDS)
+	$(SF) experiment -o docs/results/shlafman.csv -m shlafman
+	$(SF) experiment -o docs/results/vsa.csv -m vsa
+	$(SF) report docs/results/ncuts_subset.csv -o docs/results/fig4_fig5_ncuts
+	$(SF) report docs/results/psb_sweep.csv docs/results/shlafman.csv -o docs/results/fig6_shlafman \
+	    --series "superfacets α=0" --series "superfacets α=100" --series "superfacets α=200" \
+	    --series "superfacets α=1000" --series "shlafman α=0.25" --series "shlafman α=0.5" \
+	    --series "shlafman α=0.75" --series "shlafman α=1"
+	$(SF) report docs/results/psb_sweep.csv docs/results/vsa.csv -o docs/results/fig7_vsa \
+	    --series "superfacets α=200" --series "vsa init=random metric=l21" \
+	    --series "vsa init=random metric=l2" --series "vsa init=incremental metric=l21" \
+	    --series "vsa init=incremental metric=l2"
 
 clean:
 	rm -rf $(VENV) demo-output build src/*.egg-info

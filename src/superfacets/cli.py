@@ -172,7 +172,11 @@ def _build_parser() -> argparse.ArgumentParser:
         description="Draw the paper's Fig. 4 layout (undersegmentation error and compactness "
                     "against k, one curve per setting, mean over categories), the same per "
                     "category, and Markdown tables, from a file of 'superfacets experiment'.")
-    r.add_argument("results", metavar="RESULTS.csv", help="results file")
+    r.add_argument("results", metavar="RESULTS.csv", nargs="+",
+                   help="results file(s); rows of several files are pooled")
+    r.add_argument("--series", action="append", default=None, metavar="NAME",
+                   help="keep only this series, as named in the legend (e.g. "
+                        "'superfacets α=200'), repeatable")
     r.add_argument("-o", "--output-dir", default=None, metavar="DIR",
                    help="folder for the figures and summary.md (default: beside the results "
                         "file, named after it)")
@@ -487,9 +491,9 @@ def _cmd_experiment(args) -> int:
 def _cmd_report(args) -> int:
     from .report import write_report
 
-    res = Path(args.results)
-    out = Path(args.output_dir) if args.output_dir else res.with_name(res.stem + "_report")
-    files = write_report(res, out, k_focus=args.k_focus)
+    res = [Path(p) for p in args.results]
+    out = Path(args.output_dir) if args.output_dir else res[0].with_name(res[0].stem + "_report")
+    files = write_report(res, out, k_focus=args.k_focus, series=args.series)
     print((out / "summary.md").read_text())
     print(f"wrote {len(files)} files to {out}: " + ", ".join(f.name for f in files))
     return 0

@@ -673,6 +673,10 @@ def _run_pool(tasks: list[dict], workers: int, record) -> None:
 
     env = {v: "1" for v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
                             "NUMBA_NUM_THREADS")}
+    # glibc: arrays of 64 KiB and more get their own pages, returned to the system when
+    # freed, so each call's peak resident memory (peak_mib) is its own, not hidden by
+    # memory kept from an earlier call
+    env["MALLOC_MMAP_THRESHOLD_"] = "65536"
     saved = {v: os.environ.get(v) for v in env}
     os.environ.update(env)  # one thread per worker process; inherited at spawn
     ctx = mp.get_context("spawn")

@@ -105,23 +105,41 @@ def build_face_graph(faces: np.ndarray, n_vertices: int) -> FaceGraph:
     FaceGraph
     """
     m = faces.shape[0]
-    corner = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)  # (3m, 2), face = row // 3
-    a = np.minimum(corner[:, 0], corner[:, 1])
-    b = np.maximum(corner[:, 0], corner[:, 1])
-    valid = np.flatnonzero(a != b)  # collapsed edges join nothing
-    key = a[valid] * np.int64(n_vertices) + b[valid]
+    # 32-bit half-edge and vertex ids while they fit: the temporaries of the edge grouping
+    # are the memory peak of a whole run on large meshes
+    itype = np.int32 if max(int(n_vertices), 3 * m) < 2**31 - 1 else np.int64
+    a = np.empty(3 * m, dtype=itype)  # half-edge h = 3 * face + corner, corner c joins
+    b = np.empty(3 * m, dtype=itype)  # vertices (0, 1), (1, 2), (2, 0) of the face
+    for c, (u, v) in enumerate(((0, 1), (1, 2), (2, 0))):
+        np.minimum(faces[:, u], faces[:, v], out=a[c::3], casting="unsafe")
+        np.maximum(faces[:, u], faces[:, v], out=b[c::3], casting="unsafe")
+    valid = np.flatnonzero(a != b).astype(itype)  # collapsed edges join nothing
+    key = a[valid].astype(np.int64)
+    key *= np.int64(n_vertices)
+    key += b[valid]
     order = np.argsort(key, kind="stable")
     skey = key[order]
-    half = valid[order]  # half-edge ids (3 * face + corner), grouped by edge
+    del key
+    half = valid[order]  # half-edge ids, grouped by edge
+    del valid, order
     sface = half // 3
     n_half = skey.shape[0]
-    starts = np.flatnonzero(np.r_[True, skey[1:] != skey[:-1]]) if n_half else np.zeros(0, np.int64)
+    if n_half:
+        brk = np.empty(n_half, dtype=bool)
+        brk[0] = True
+        np.not_equal(skey[1:], skey[:-1], out=brk[1:])
+        starts = np.flatnonzero(brk)
+        del brk
+    else:
+        starts = np.zeros(0, np.int64)
+    del skey
     sizes = np.diff(np.r_[starts, n_half])
 
     # boundary edges: groups of size 1
     one = starts[sizes == 1]
     boundary_faces = sface[one].astype(np.int64)
     boundary_edges = np.stack([a[half[one]], b[half[one]]], axis=1).astype(np.int64)
+    del one
 
     # pairs within every group of size >= 2 (all pairs for non-manifold edges)
     pi, pj, pe = [], [], []
@@ -131,53 +149,85 @@ def build_face_graph(faces: np.ndarray, n_vertices: int) -> FaceGraph:
         pi.append(sface[st[:, None] + ii[None, :]].ravel())
         pj.append(sface[st[:, None] + jj[None, :]].ravel())
         pe.append(np.repeat(half[st], ii.size))
+    del starts, sizes, sface, half
     if pi:
         fi = np.concatenate(pi)
         fj = np.concatenate(pj)
         he = np.concatenate(pe)
     else:
-        fi = fj = he = np.zeros(0, np.int64)
+        fi = fj = he = np.zeros(0, itype)
+    del pi, pj, pe
     lo = np.minimum(fi, fj)
     hi = np.maximum(fi, fj)
+    del fi, fj
     keep = lo != hi  # a degenerate face sharing an edge with itself
-    lo, hi, he = lo[keep], hi[keep], he[keep]
+    if not keep.all():
+        lo, hi, he = lo[keep], hi[keep], he[keep]
+    del keep
     # one dual edge per face pair: the first in edge-key order (smallest vertex pair)
-    pkey = lo * np.int64(m) + hi
-    ekey = a[he] * np.int64(n_vertices) + b[he]
+    pkey = lo.astype(np.int64) * np.int64(m) + hi
+    ekey = a[he].astype(np.int64) * np.int64(n_vertices) + b[he]
     o = np.lexsort((ekey, pkey))
+    del ekey
     pkey, lo, hi, he = pkey[o], lo[o], hi[o], he[o]
+    del o
     first = np.r_[True, pkey[1:] != pkey[:-1]] if pkey.size else np.zeros(0, bool)
-    lo, hi, he = lo[first], hi[first], he[first]
+    del pkey
+    if not first.all():
+        lo, hi, he = lo[first], hi[first], he[first]
+    del first
     pairs = np.stack([lo, hi], axis=1).astype(np.int64)
     edges = np.stack([a[he], b[he]], axis=1).astype(np.int64)
+    del a, b, he
 
     # symmetric CSR, neighbours ascending within each row
     e = pairs.shape[0]
     rows = np.concatenate([lo, hi])
     cols = np.concatenate([hi, lo])
-    dual = np.concatenate([np.arange(e), np.arange(e)])
+    del lo, hi
     o = np.lexsort((cols, rows))
     indptr = np.zeros(m + 1, dtype=np.int64)
     np.cumsum(np.bincount(rows, minlength=m), out=indptr[1:])
+    del rows
+    indices = np.ascontiguousarray(cols[o], dtype=np.int32)
+    del cols
+    dual_edge = o.astype(np.int64)
+    dual_edge[dual_edge >= e] -= e  # entry t of [lo->hi, hi->lo] is dual edge t mod e
+    del o
     return FaceGraph(
         n_faces=m,
         pairs=pairs,
         edges=edges,
         indptr=indptr,
-        indices=np.ascontiguousarray(cols[o], dtype=np.int32),
-        dual_edge=np.ascontiguousarray(dual[o], dtype=np.int64),
+        indices=indices,
+        dual_edge=dual_edge,
         boundary_edges=boundary_edges,
         boundary_faces=boundary_faces,
     )
 
 
-def _edge_terms(mesh, graph: FaceGraph):
-    """Per dual edge: geodesic term, cos of dihedral angle, concavity, edge length."""
+_CHUNK = 1 << 18  # dual edges per chunk: bounds the temporaries of the weights
+
+
+def _chunked(graph: FaceGraph, weight) -> np.ndarray:
+    """``weight(sl)`` for consecutive slices of the dual edges, into one array."""
+    e = graph.n_edges
+    out = np.empty(e, dtype=np.float64)
+    for s in range(0, e, _CHUNK):
+        sl = slice(s, min(e, s + _CHUNK))
+        out[sl] = weight(sl)
+    return out
+
+
+def _edge_terms(mesh, graph: FaceGraph, sl: slice = slice(None)):
+    """Per dual edge (of slice ``sl``): geodesic term, cos of dihedral angle, concavity,
+    edge length."""
     v = mesh.vertices
     c = mesh.centroids
     n = mesh.normals
-    i, j = graph.pairs[:, 0], graph.pairs[:, 1]
-    pa, pb = v[graph.edges[:, 0]], v[graph.edges[:, 1]]
+    pairs, edges = graph.pairs[sl], graph.edges[sl]
+    i, j = pairs[:, 0], pairs[:, 1]
+    pa, pb = v[edges[:, 0]], v[edges[:, 1]]
     mid = 0.5 * (pa + pb)
     length = np.linalg.norm(pb - pa, axis=1)
     geo = np.linalg.norm(c[i] - mid, axis=1) + np.linalg.norm(mid - c[j], axis=1)
@@ -236,11 +286,15 @@ def paper_weights(mesh, graph: FaceGraph | None = None, *, alpha: float = 200.0,
     alpha = _check_nonneg("alpha", alpha)
     eta_convex = _check_nonneg("eta_convex", eta_convex)
     graph = mesh.graph if graph is None else graph
-    geo, cos, concave, length = _edge_terms(mesh, graph)
-    theta = np.arccos(cos)
-    eta = np.where(concave, 1.0, eta_convex)
-    ang = eta * length * theta / np.pi
-    return (geo + alpha * ang) / mesh.diagonal
+
+    def weight(sl):
+        geo, cos, concave, length = _edge_terms(mesh, graph, sl)
+        theta = np.arccos(cos)
+        eta = np.where(concave, 1.0, eta_convex)
+        ang = eta * length * theta / np.pi
+        return (geo + alpha * ang) / mesh.diagonal
+
+    return _chunked(graph, weight)
 
 
 def shlafman_weights(mesh, graph: FaceGraph | None = None, *, alpha: float = 0.5) -> np.ndarray:
@@ -273,8 +327,12 @@ def shlafman_weights(mesh, graph: FaceGraph | None = None, *, alpha: float = 0.5
     if a > 1:
         raise ParameterError(f"alpha of the Shlafman weighting must be in [0, 1], got {alpha!r}")
     graph = mesh.graph if graph is None else graph
-    geo, cos, _, _ = _edge_terms(mesh, graph)
-    return (1.0 - a) * geo + a * (1.0 - cos * cos)
+
+    def weight(sl):
+        geo, cos, _, _ = _edge_terms(mesh, graph, sl)
+        return (1.0 - a) * geo + a * (1.0 - cos * cos)
+
+    return _chunked(graph, weight)
 
 
 def edge_weights(mesh, weighting: str = "paper", *, alpha: float = 200.0,

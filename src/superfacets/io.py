@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import bz2
 import gzip
+import gc
 import io
 import lzma
 import os
@@ -238,8 +239,12 @@ def _load_trimesh(data: bytes, fmt: str, path: Path) -> tuple[np.ndarray, np.nda
                               force="mesh", **kwargs)
     except Exception as exc:  # trimesh raises many types for malformed input
         raise MeshFormatError(f"{path}: cannot read {fmt.upper()}: {exc or type(exc).__name__}") from None
-    v = np.asarray(getattr(loaded, "vertices", np.zeros((0, 3))), dtype=np.float64)
-    f = np.asarray(getattr(loaded, "faces", np.zeros((0, 3))), dtype=np.int64)
+    v = np.array(getattr(loaded, "vertices", np.zeros((0, 3))), dtype=np.float64)
+    f = np.array(getattr(loaded, "faces", np.zeros((0, 3))), dtype=np.int64)
+    # a trimesh object sits in reference cycles (its caches): free its arrays now rather
+    # than at some later garbage collection (hundreds of MiB on a large mesh)
+    del loaded
+    gc.collect()
     if f.size == 0:
         raise InvalidMeshError(f"{path}: empty mesh: no faces")
     declared = _declared_faces(data, fmt)

@@ -8,6 +8,8 @@
 - :func:`plot_curves`: the paper's Fig. 4 layout, metric against the number
   of superfacets, one curve per series, averaged over categories;
 - :func:`plot_per_category`: the same for one metric, one panel per category;
+- :func:`plot_cost`: the paper's Fig. 5 layout, seconds and peak memory
+  against the number of faces (log scales); :func:`cost_table`;
 - :func:`markdown_summary`: Markdown tables;
 - :func:`write_report`: all of the above into a folder (PNG and SVG).
 """
@@ -24,7 +26,7 @@ from .errors import ParameterError
 from .metrics import METRICS
 
 __all__ = ["load_results", "category_means", "summary", "plot_curves", "plot_per_category",
-           "markdown_summary", "write_report", "METRIC_LABELS"]
+           "plot_cost", "cost_table", "markdown_summary", "write_report", "METRIC_LABELS"]
 
 #: Axis labels of the metrics.
 METRIC_LABELS = {
@@ -39,13 +41,17 @@ _SHORT = {"undersegmentation_error": "UE", "compactness": "compactness",
 _GREEK = {"alpha": "α", "eta_convex": "η"}
 
 
-def load_results(path):
-    """Read a results file into a DataFrame.
+def load_results(path, series: Sequence[str] | None = None):
+    """Read a results file (or several) into a DataFrame.
 
     Parameters
     ----------
-    path : path
-        CSV written by :func:`superfacets.experiment.run_experiment`.
+    path : path or sequence of paths
+        CSV written by :func:`superfacets.experiment.run_experiment`; rows of
+        several files are pooled (later files win on repeated keys).
+    series : sequence of str, optional
+        Keep only these series (names as in the ``series`` column, e.g.
+        ``"superfacets α=200"``), in this order of appearance.
 
     Returns
     -------
@@ -60,12 +66,15 @@ def load_results(path):
     FileNotFoundError
     superfacets.MeshFormatError
         If it is not a results file.
+    ParameterError
+        If a name in ``series`` matches no series (the message lists them).
     """
     import pandas as pd
 
     from .experiment import METHODS, read_results
 
-    rows = read_results(path)
+    paths = [path] if isinstance(path, (str, Path)) else list(path)
+    rows = [r for p in paths for r in read_results(p)]
     df = pd.DataFrame(rows)
     if df.empty:
         return df.assign(series=pd.Series(dtype=str))
@@ -75,12 +84,19 @@ def load_results(path):
                           + tuple(r.get(p, "") for p in params[r["method"]]), axis=1)
     df = df.drop_duplicates("_key", keep="last").drop(columns="_key").reset_index(drop=True)
     for c in ["mesh_id", "n_faces", "n_segments", "superfacets", "iterations", "seconds",
-              "n_ground_truths", *METRICS]:
+              "peak_mib", "n_ground_truths", *METRICS]:
         if c in df:
             df[c] = pd.to_numeric(df[c], errors="coerce")
     if "converged" in df:
         df["converged"] = df["converged"].map({"true": True, "false": False})
     df["series"] = _series(df, params)
+    if series:
+        known = set(df["series"])
+        missing = [x for x in series if x not in known]
+        if missing:
+            raise ParameterError(f"no series {', '.join(map(repr, missing))}; present: "
+                                 f"{', '.join(map(repr, _series_order(df)))}")
+        df = df[df["series"].isin(series)].reset_index(drop=True)
     return df
 
 
@@ -247,6 +263,89 @@ def plot_per_category(df, metric: str = "undersegmentation_error"):
     return fig
 
 
+def _at_k(df, k_focus: int):
+    ok = _ok(df)
+    ks = sorted(ok["n_segments"].unique())
+    k = min(ks, key=lambda x: abs(x - k_focus))
+    return k, ok[ok["n_segments"] == k]
+
+
+def plot_cost(df, k_focus: int = 150):
+    """The paper's Fig. 5 layout: seconds (and peak memory) against faces, log scales.
+
+    One point per mesh and series at the ``n_segments`` nearest ``k_focus``;
+    ``seconds`` is the method's time for one segmentation from scratch (work
+    shared between values of ``k`` included). The memory panel is drawn when
+    the rows have ``peak_mib`` (resident memory above the start of the call),
+    with the ``4 m^2`` bytes of a dense float32 distance matrix for reference.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    k, at = _at_k(df, k_focus)
+    style = _style(df)
+    has_mem = "peak_mib" in at and at["peak_mib"].notna().any()
+    panels = [("seconds", "seconds per segmentation (log)")]
+    if has_mem:
+        panels.append(("peak_mib", "peak memory above start, MiB (log)"))
+    fig, axes = plt.subplots(1, len(panels), figsize=(5.4 * len(panels), 4.3), squeeze=False)
+    order = [s for s in _series_order(df) if s in set(at["series"])]
+    for ax, (col, label) in zip(axes[0], panels):
+        for name in order:
+            sub = at[(at["series"] == name) & at[col].notna() & (at[col] > 0)]
+            st = style[name]
+            ax.scatter(sub["n_faces"], sub[col], s=14, color=st["color"], marker=st["marker"],
+                       label=name, alpha=0.85)
+        if col == "peak_mib":
+            faces = np.geomspace(max(1, at["n_faces"].min()), at["n_faces"].max(), 50)
+            ax.plot(faces, 4 * faces**2 / 2**20, color="0.5", linestyle=":", linewidth=1,
+                    label="4 m² bytes (float32 distance matrix)")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("faces (log)")
+        ax.set_ylabel(label)
+        ax.grid(True, which="both", alpha=0.25)
+    handles, labels = [], []
+    for ax in axes[0]:
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            if lab not in labels:
+                handles.append(h)
+                labels.append(lab)
+    fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 4), frameon=False,
+               fontsize=9)
+    fig.suptitle(f"running time and memory against mesh size, k = {k}", fontsize=11)
+    fig.tight_layout(rect=(0, 0.07 + 0.04 * ((len(labels) - 1) // 4), 1, 0.97))
+    return fig
+
+
+def cost_table(df, k_focus: int = 150):
+    """Per series at ``k_focus``: median and largest seconds and peak MiB, meshes.
+
+    Returns
+    -------
+    pandas.DataFrame
+    """
+    import pandas as pd
+
+    k, at = _at_k(df, k_focus)
+    rows = {}
+    for name in [s for s in _series_order(df) if s in set(at["series"])]:
+        sub = at[at["series"] == name]
+        r = {"meshes": sub["mesh"].nunique(), "faces (median)": sub["n_faces"].median(),
+             "s (median)": sub["seconds"].median(), "s (max)": sub["seconds"].max()}
+        if "peak_mib" in sub and sub["peak_mib"].notna().any():
+            r["peak MiB (median)"] = sub["peak_mib"].median()
+            r["peak MiB (max)"] = sub["peak_mib"].max()
+        rows[name] = r
+    return k, pd.DataFrame.from_dict(rows, orient="index")
+
+
 def _cell(v, fmt: str) -> str:
     if isinstance(v, (float, np.floating)):
         return fmt.format(v) if np.isfinite(v) else ""
@@ -329,6 +428,12 @@ def markdown_summary(df, k_focus: int = 150) -> str:
                          if np.isfinite(per["undersegmentation_error"].loc[cat, s])}
     out.append(_md_table(pd.DataFrame.from_dict(cat_rows, orient="index")[order],
                          index_name="category") + "\n")
+    k, cost = cost_table(df, k_focus)
+    out.append(f"### Cost at k = {k} (seconds per segmentation from scratch)\n")
+    out.append(_md_table(cost, index_name="series",
+                         formats={"meshes": "{:.0f}", "faces (median)": "{:.0f}",
+                                  "peak MiB (median)": "{:.0f}", "peak MiB (max)": "{:.0f}"})
+               + "\n")
     failed = df[df["status"] != "ok"]
     if len(failed):
         out.append("### Rows not ok (first 20)\n")
@@ -346,38 +451,42 @@ def _save(fig, path: Path) -> Path:
     return atomic_write(path, buf.getvalue())
 
 
-def write_report(results, out_dir, *, k_focus: int = 150, prefix: str = "") -> list[Path]:
+def write_report(results, out_dir, *, k_focus: int = 150, prefix: str = "",
+                 series: Sequence[str] | None = None) -> list[Path]:
     """Write the figures (PNG and SVG) and ``summary.md`` of a results file.
 
     Parameters
     ----------
-    results : path
-        Results CSV.
+    results : path or sequence of paths
+        Results CSV(s), pooled (see :func:`load_results`).
     out_dir : path
         Folder, created if needed.
     k_focus : int, default 150
         See :func:`markdown_summary`.
     prefix : str, optional
         Prepended to every file name.
+    series : sequence of str, optional
+        Only these series (see :func:`load_results`).
 
     Returns
     -------
     list of pathlib.Path
         ``fig4.{png,svg}`` (UE and compactness), ``fig4_extra.{png,svg}``
         (boundary recall and achievable accuracy), ``per_category_<metric>.{png,svg}``
-        for UE and compactness, and ``summary.md``.
+        for UE and compactness, ``cost.{png,svg}`` (seconds and peak memory
+        against faces, the Fig. 5 layout) and ``summary.md``.
 
     Raises
     ------
     ParameterError
-        If the file has no successful row.
+        If the file has no successful row, or a series is unknown.
     """
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    df = load_results(results)
+    df = load_results(results, series=series)
     _ok(df)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -387,6 +496,7 @@ def write_report(results, out_dir, *, k_focus: int = 150, prefix: str = "") -> l
         "fig4_extra": plot_curves(df, ("boundary_recall", "achievable_accuracy")),
         "per_category_undersegmentation_error": plot_per_category(df, "undersegmentation_error"),
         "per_category_compactness": plot_per_category(df, "compactness"),
+        "cost": plot_cost(df, k_focus),
     }
     for name, fig in figs.items():
         for ext in ("png", "svg"):

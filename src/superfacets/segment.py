@@ -265,6 +265,7 @@ def segment(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | None =
     t = time.perf_counter()
     w = edge_weights(mesh, weighting, alpha=alpha, eta_convex=eta_convex)
     csr_w = np.ascontiguousarray(w[g.dual_edge], dtype=np.float64)
+    del w
     timings["weights"] = time.perf_counter() - t
 
     # buffers, allocated once per run
@@ -276,7 +277,7 @@ def segment(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | None =
     stamp = np.full(m, -1, dtype=np.int64)
     cap = g.indices.shape[0] + m + 1
     hkey = np.empty(cap)
-    hval = np.empty(cap, dtype=np.int64)
+    hval = np.empty(cap, dtype=np.int32 if m < 2**31 - 1 else np.int64)  # face ids
     centers = np.empty(m, dtype=np.int64)
     window_r2 = (window * r) ** 2
 
@@ -367,6 +368,7 @@ def segment(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | None =
         if bar is not None:
             bar.close()
     timings["iterations"] = time.perf_counter() - t
+    del inc, hkey, hval, local, stamp, dist, csr_w  # free the work buffers before the clean-up
 
     # labels of the last classification; drop superfacets left empty
     t = time.perf_counter()
