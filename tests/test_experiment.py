@@ -247,6 +247,42 @@ def test_report_averages_categories_equally_and_keeps_last_row(tmp_path):
     assert "| superfacets α=0 | 0.350 |" in text and "1 failed" in text
 
 
+def test_report_pools_files_filters_series_and_draws_cost(tmp_path):
+    def row(mesh, method, alpha, ue, faces, seconds, peak):
+        return dict(mesh=mesh, mesh_id=mesh, category="A", n_faces=faces, method=method,
+                    n_segments=150, alpha=alpha, seed=0, status="ok", superfacets=150,
+                    seconds=seconds, peak_mib=peak, undersegmentation_error=ue,
+                    compactness=5.0, boundary_recall=0.8, achievable_accuracy=0.9,
+                    n_ground_truths=1)
+
+    a, b = tmp_path / "a.csv", tmp_path / "b.csv"
+    cols = ["mesh", "mesh_id", "category", "n_faces", "method", "n_segments", "alpha", "seed",
+            "status", "superfacets", "seconds", "peak_mib", "undersegmentation_error",
+            "compactness", "boundary_recall", "achievable_accuracy", "n_ground_truths"]
+    for path, rows in [(a, [row("1", "superfacets", 0.0, 0.2, 1000, 0.01, 2.0),
+                            row("2", "superfacets", 0.0, 0.4, 4000, 0.04, 8.0),
+                            row("1", "superfacets", 200.0, 0.1, 1000, 0.01, 2.0)]),
+                       (b, [row("1", "ncuts", 100.0, 0.3, 1000, 5.0, 400.0),
+                            row("2", "ncuts", 100.0, 0.5, 4000, 80.0, 6000.0)])]:
+        with open(path, "w", newline="") as f:
+            w = csv.DictWriter(f, cols)
+            w.writeheader()
+            w.writerows(rows)
+    df = load_results([a, b], series=["superfacets α=0", "ncuts"])
+    assert set(df["series"]) == {"superfacets α=0", "ncuts"} and len(df) == 4
+    with pytest.raises(ParameterError, match="no series 'vsa'.*present: 'superfacets α=0'"):
+        load_results([a, b], series=["vsa"])
+    text = markdown_summary(df)
+    # cost table: medians per series at k = 150
+    assert "| ncuts | 2 | 2500 | 42.500 | 80.000 | 3200 | 6000 |" in text
+    files = write_report([a, b], tmp_path / "rep", series=["superfacets α=0", "ncuts"])
+    assert tmp_path / "rep" / "cost.png" in files
+    from PIL import Image
+
+    img = np.asarray(Image.open(tmp_path / "rep" / "cost.png").convert("L"))
+    assert img.std() > 10
+
+
 def test_cli_experiment_report_and_evaluate(bench, tmp_path, capsys):
     res = tmp_path / "r.csv"
     assert main(["experiment", "--psb", str(bench), "-k", "4", "8", "--alpha", "0", "500",

@@ -403,8 +403,9 @@ def markdown_summary(df, k_focus: int = 150) -> str:
             r[_SHORT[metric]] = (subok.groupby("category")[metric].mean().mean()
                                  if len(subok) else float("nan"))
         r["superfacets (mean)"] = subok["superfacets"].mean()
-        r["iterations (mean)"] = subok["iterations"].mean()
-        conv = subok["converged"].dropna()
+        r["iterations (mean)"] = (subok["iterations"].mean() if "iterations" in subok
+                                  else float("nan"))
+        conv = subok["converged"].dropna() if "converged" in subok else subok["mesh"][:0]
         r["converged"] = f"{conv.mean():.0%}" if len(conv) else ""
         r["s/mesh (mean)"] = subok["seconds"].mean()
         r["ok/failed/skipped"] = (f"{(sub['status'] == 'ok').sum()}/"
