@@ -69,6 +69,13 @@ comparisons: $(STAMP)
 	    --series "superfacets α=200" --series "vsa init=random metric=l21" \
 	    --series "vsa init=random metric=l2" --series "vsa init=incremental metric=l21" \
 	    --series "vsa init=incremental metric=l2"
+	$(SF) panel $(PSB_DIR)/off/1.off --up z $(FIG8) -o docs/images/fig8_vsa_human.png
+	$(SF) panel $(PSB_DIR)/off/321.off $(FIG8) -o docs/images/fig8_vsa_mech.png
+
+# The paper's Fig. 8: superfacets against the four VSA variants, k = 150.
+FIG8 = -m superfacets vsa -k 150 --param vsa.metric=l21,l2 --param vsa.init=random,incremental \
+	--size 300x340 --columns 5 --titles "superfacets, alpha 200" "VSA L2,1 random" \
+	"VSA L2 random" "VSA L2,1 incremental" "VSA L2 incremental"
 
 clean:
 	rm -rf $(VENV) demo-output build src/*.egg-info

@@ -176,6 +176,13 @@ def test_cli_render_panel_html_and_view(tmp_path, sphere, capsys, monkeypatch):
     assert main(["panel", str(mesh), "-o", str(pan), "--alpha", "0", "500", "-k", "6", "12",
                  "--size", "160x120"]) == 0
     assert np.asarray(Image.open(pan)).shape[:2] == (120, 640)  # 4 panels in one row
+    # method-scoped parameters: superfacets once, vsa for each metric (the paper's Fig. 8)
+    assert main(["panel", str(mesh), "-o", str(pan), "-m", "superfacets", "vsa", "-k", "6",
+                 "--param", "vsa.metric=l21,l2", "--size", "100x90"]) == 0
+    assert np.asarray(Image.open(pan)).shape[:2] == (90, 300)
+    assert "3 panels" in capsys.readouterr().out
+    assert main(["panel", str(mesh), "-o", str(pan), "-m", "vsa", "--param", "window=2"]) == 2
+    assert "no method given has window" in capsys.readouterr().err
     page = tmp_path / "b.html"
     assert main(["html", str(mesh), "-o", str(page), "-k", "9"]) == 0
     assert '"superfacets": 9' in page.read_text()

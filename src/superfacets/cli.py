@@ -259,6 +259,10 @@ def _add_picture_parsers(sub) -> None:
                     help="numbers of superfacets (default: 150)")
     pn.add_argument("--alpha", type=_float, nargs="+", default=None, metavar="A",
                     help="alpha values (default: each method's default)")
+    pn.add_argument("--param", action="append", default=[], metavar="NAME=V1,V2",
+                    help="values of another parameter, for the methods that have it "
+                         "(METHOD.NAME=... for one method only), repeatable "
+                         "(e.g. --param vsa.metric=l21,l2 --param vsa.init=random,incremental)")
     pn.add_argument("--labels", nargs="+", default=None, metavar="LABELS.seg",
                     help="draw these label files instead of computing")
     pn.add_argument("--titles", nargs="+", default=None, metavar="TEXT",
@@ -333,7 +337,7 @@ def _cmd_panel(args) -> int:
     from itertools import product as _product
 
     from .errors import ParameterError
-    from .experiment import get_method
+    from .experiment import expand_grid, get_method
     from .io import read_labels, read_mesh
     from .render import render_panel
 
@@ -345,17 +349,32 @@ def _cmd_panel(args) -> int:
             items.append((mesh, read_labels(p, n_faces=mesh.n_faces), Path(p).stem))
     else:
         methods = [get_method(m) for m in args.method]
-        for method, k, alpha in _product(methods, args.n_segments, args.alpha or [None]):
-            params = {} if alpha is None else {"alpha": alpha}
-            params = method.resolve(params)
-            try:
-                run = method.run(mesh, k, cache={}, seed=0, **params)
-            except (ValueError, RuntimeError) as exc:
-                raise ParameterError(f"{args.mesh}: {method.name}: {exc}") from None
-            n = len(np.unique(run.labels))
-            title = (f"{method.name}, " if len(methods) > 1 else "") + (
-                f"alpha = {params['alpha']:g}, " if "alpha" in params else "") + f"k = {k} ({n})"
-            items.append((mesh, run.labels, title))
+        extra = _param_values(args.param)
+        def applies(name: str, method) -> str | None:
+            scope, dot, pname = name.rpartition(".")
+            if dot and scope != method.name:
+                return None
+            return pname if pname in method.defaults else None
+
+        unused = [n for n in extra if not any(applies(n, m) for m in methods)]
+        if unused:
+            raise ParameterError(f"--param: no method given has {', '.join(sorted(unused))}")
+        for method in methods:
+            grid = {applies(n, method): v for n, v in extra.items() if applies(n, method)}
+            if args.alpha and "alpha" in method.defaults:
+                grid["alpha"] = args.alpha
+            for cfg, k in _product(expand_grid(method.name, **grid), args.n_segments):
+                params = cfg.kwargs
+                try:
+                    run = method.run(mesh, k, cache={}, seed=0, **params)
+                except (ValueError, RuntimeError) as exc:
+                    raise ParameterError(f"{args.mesh}: {method.name}: {exc}") from None
+                n = len(np.unique(run.labels))
+                shown = [f"{p} = {_fmt_value(params[p])}" for p in params if p in grid
+                         or (p == "alpha" and len(methods) == 1 and not args.alpha)]
+                title = ", ".join(([method.name] if len(methods) > 1 else []) + shown
+                                  + [f"k = {k} ({n})"])
+                items.append((mesh, run.labels, title))
     if args.titles:
         if len(args.titles) != len(items):
             raise ParameterError(f"--titles: {len(args.titles)} given for {len(items)} panels")
@@ -365,6 +384,10 @@ def _cmd_panel(args) -> int:
                  line_width=args.line_width, zoom=args.zoom)
     print(f"wrote {out}: {len(items)} panels")
     return 0
+
+
+def _fmt_value(v) -> str:
+    return f"{v:g}" if isinstance(v, float) else str(v)
 
 
 def _cmd_view(args) -> int:
@@ -445,6 +468,19 @@ def _select_meshes(args):
     return meshes
 
 
+def _param_values(items) -> dict[str, list[str]]:
+    """``NAME=V1,V2`` options as {name: [values]}."""
+    from .errors import ParameterError
+
+    extra: dict[str, list[str]] = {}
+    for item in items:
+        name, sep, vals = item.partition("=")
+        if not sep or not name.strip() or not vals.strip():
+            raise ParameterError(f"--param: expected NAME=V1,V2, got {item!r}")
+        extra[name.strip()] = [v.strip() for v in vals.split(",") if v.strip()]
+    return extra
+
+
 def _cmd_experiment(args) -> int:
     from .errors import ParameterError
     from .experiment import DEFAULT_N_SEGMENTS, METHODS, expand_grid, get_method, run_experiment
@@ -456,12 +492,7 @@ def _cmd_experiment(args) -> int:
             for k, v in m.sweep.items():
                 print(f"    default sweep: {k} in {', '.join(map(str, v))}")
         return 0
-    extra: dict[str, list[str]] = {}
-    for item in args.param:
-        name, sep, vals = item.partition("=")
-        if not sep or not name.strip() or not vals.strip():
-            raise ParameterError(f"--param: expected NAME=V1,V2, got {item!r}")
-        extra[name.strip()] = [v.strip() for v in vals.split(",") if v.strip()]
+    extra = _param_values(args.param)
     configs = []
     for name in args.method or ["superfacets"]:
         method = get_method(name)
