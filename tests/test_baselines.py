@@ -266,3 +266,25 @@ def test_skipped_is_the_runner_signal(ball):
     with pytest.raises(Skipped, match="GiB"):
         METHODS["ncuts"].run(sphere, 4, cache={}, seed=0, alpha=0.0, eta_convex=0.2,
                              bandwidth=1.0, components=10, memory_limit_gib=1e-6)
+
+
+def test_cli_baseline_writes_labels_and_refuses_too_large(tmp_path, capsys):
+    from superfacets import read_labels, write_mesh
+    from superfacets.cli import main
+
+    mesh = as_mesh(trimesh.creation.icosphere(subdivisions=3))
+    path = tmp_path / "ball.off"
+    write_mesh(path, mesh)
+    seg = tmp_path / "ball.seg"
+    assert main(["baseline", str(path), "-m", "vsa", "-k", "12", "--param", "metric=l2",
+                 "--param", "init=incremental", "-o", str(seg)]) == 0
+    out = capsys.readouterr().out
+    assert "vsa (metric=l2, init=incremental" in out and "12 segments" in out
+    labels = read_labels(seg, n_faces=mesh.n_faces)
+    assert np.array_equal(labels, vsa(mesh, 12, metric="l2", init="incremental", rng=0))
+    assert main(["baseline", str(path), "-m", "ncuts", "-k", "8", "-o", str(seg),
+                 "--param", "memory_limit_gib=0.001"]) == 2
+    err = capsys.readouterr().err
+    assert "needs about" in err and "limit 0.0 GiB" in err
+    assert main(["baseline", str(path), "-m", "vsa", "--param", "metric=l1,l2"]) == 2
+    assert "one value" in capsys.readouterr().err

@@ -104,6 +104,29 @@ def _build_parser() -> argparse.ArgumentParser:
     p.add_argument("--colored-mesh", metavar="OUT.ply", default=None,
                    help="write the mesh as a binary PLY with one colour per superfacet")
 
+    bl = sub.add_parser(
+        "baseline", help="segment a mesh file with a baseline (normalized cuts, VSA, ...)",
+        description="Segment a mesh file with any method of the registry (see 'superfacets "
+                    "experiment --list-methods'): the baselines of the paper's comparisons, "
+                    "normalized cuts ('ncuts', O(m^2) memory: meshes over its memory limit "
+                    "are refused before anything is allocated) and Variational Shape "
+                    "Approximation ('vsa'), or 'shlafman'. Writes a .seg label file and/or a "
+                    "coloured PLY, like 'segment'.")
+    bl.add_argument("mesh", metavar="MESH", help="input mesh file")
+    bl.add_argument("-m", "--method", required=True, metavar="NAME",
+                    help="registered method: ncuts, vsa, shlafman, superfacets")
+    bl.add_argument("-k", "--n-segments", type=_int, default=150, metavar="N",
+                    help="number of segments (default: 150)")
+    bl.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                    help="a method parameter, repeatable (e.g. metric=l2 init=incremental for "
+                         "vsa; alpha=100 memory_limit_gib=8 for ncuts)")
+    bl.add_argument("--seed", type=_int, default=0, help="seed of randomized methods (default 0)")
+    bl.add_argument("-o", "--output", metavar="OUT.seg", default=None,
+                    help="write the labels here (one per face per line)")
+    bl.add_argument("--colored-mesh", metavar="OUT.ply", default=None,
+                    help="write the mesh as a binary PLY with one colour per segment")
+    bl.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+
     d = sub.add_parser(
         "demo", help="segment a built-in procedural mesh (no data needed)",
         description="Build a procedural four-legged creature (about 21,000 faces), compute "
@@ -615,6 +638,43 @@ def _cmd_segment(args) -> int:
     return 0
 
 
+def _cmd_baseline(args) -> int:
+    from .errors import MemoryLimitError, ParameterError
+    from .experiment import Skipped, get_method
+    from .io import read_mesh, write_colored_mesh, write_labels
+
+    method = get_method(args.method)
+    given = _param_values(args.param)
+    many = [n for n, v in given.items() if len(v) != 1]
+    if many:
+        raise ParameterError(f"--param: give one value for {', '.join(many)}")
+    params = method.resolve({n: v[0] for n, v in given.items()})
+    seg_out = _check_output(args.output, (), "label file")
+    ply_out = _check_output(args.colored_mesh, (".ply",), "the coloured mesh")
+    mesh = read_mesh(args.mesh)
+    t0 = time.perf_counter()
+    try:
+        run = method.run(mesh, args.n_segments, cache={}, seed=args.seed, **params)
+    except Skipped as exc:
+        raise MemoryLimitError(f"{args.mesh}: {exc}") from None
+    except ParameterError as exc:
+        raise ParameterError(f"{args.mesh}: {exc}") from None
+    elapsed = time.perf_counter() - t0
+    labels = np.asarray(run.labels)
+    if seg_out is not None:
+        write_labels(seg_out, labels)
+    if ply_out is not None:
+        write_colored_mesh(ply_out, mesh, labels)
+    if not args.quiet:
+        shown = ", ".join(f"{k}={_fmt_value(v)}" for k, v in params.items())
+        iters = "" if run.n_iter is None else (
+            f", {run.n_iter} iterations" + ("" if run.converged is None else
+                                            " (converged)" if run.converged else " (max)"))
+        print(f"{Path(args.mesh).name}: {mesh.n_faces} faces, {method.name} ({shown}): "
+              f"{int(labels.max()) + 1} segments{iters}, {elapsed:.2f} s")
+    return 0
+
+
 def _cmd_demo(args) -> int:
     from .io import write_colored_mesh, write_labels, write_mesh
     from .segment import segment
@@ -680,7 +740,7 @@ def main(argv: list[str] | None = None) -> int:
             return _cmd_experiment(args)
         if args.command == "report":
             return _cmd_report(args)
-        if args.command in ("render", "panel", "view", "html"):
+        if args.command in ("render", "panel", "view", "html", "baseline"):
             return globals()[f"_cmd_{args.command}"](args)
         return _cmd_demo(args)
     except (SuperfacetsError, OSError, NoDisplayError) as exc:

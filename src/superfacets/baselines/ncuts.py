@@ -151,7 +151,8 @@ def _check_limit(what: str, required: int, limit: int, m: int) -> None:
         gib = 2.0**30
         raise MemoryLimitError(
             f"normalized cuts on {m} faces needs about {required / gib:.1f} GiB for the "
-            f"{what} (limit {limit / gib:.1f} GiB); raise memory_limit or use a smaller mesh",
+            f"{what} (limit {limit / gib:.1f} GiB); raise the limit (memory_limit; "
+            f"memory_limit_gib in the runner and the command line) or use a smaller mesh",
             required, limit)
 
 
