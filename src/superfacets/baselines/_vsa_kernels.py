@@ -30,6 +30,17 @@ def _error(f, p, metric, areas, normals, corners, X, N):
     return areas[f] / 6.0 * (d0 * d0 + d1 * d1 + d2 * d2 + d0 * d1 + d1 * d2 + d2 * d0)
 
 
+@njit(cache=True, inline="always")
+def _push_neighbours(f, p, n_proxies, indptr, indices, metric, areas, normals, corners, X, N,
+                     label, hkey, hval, size):
+    for j in range(indptr[f], indptr[f + 1]):
+        g = indices[j]
+        if label[g] < 0:
+            size = _push(hkey, hval, size, _error(g, p, metric, areas, normals, corners, X, N),
+                         g * n_proxies + p)
+    return size
+
+
 @njit(cache=True)
 def partition(indptr, indices, metric, areas, normals, corners, X, N, seeds, n_proxies,
               label, hkey, hval):
@@ -45,13 +56,8 @@ def partition(indptr, indices, metric, areas, normals, corners, X, N, seeds, n_p
         label[seeds[p]] = p
     size = 0
     for p in range(n_proxies):
-        s = seeds[p]
-        for j in range(indptr[s], indptr[s + 1]):
-            g = indices[j]
-            if label[g] < 0:
-                size = _push(hkey, hval, size,
-                             _error(g, p, metric, areas, normals, corners, X, N),
-                             g * n_proxies + p)
+        size = _push_neighbours(seeds[p], p, n_proxies, indptr, indices, metric, areas,
+                                normals, corners, X, N, label, hkey, hval, size)
     while size > 0:
         v = hval[0]
         size = _pop(hkey, hval, size)
@@ -60,12 +66,8 @@ def partition(indptr, indices, metric, areas, normals, corners, X, N, seeds, n_p
             continue
         p = v - f * n_proxies
         label[f] = p
-        for j in range(indptr[f], indptr[f + 1]):
-            g = indices[j]
-            if label[g] < 0:
-                size = _push(hkey, hval, size,
-                             _error(g, p, metric, areas, normals, corners, X, N),
-                             g * n_proxies + p)
+        size = _push_neighbours(f, p, n_proxies, indptr, indices, metric, areas, normals,
+                                corners, X, N, label, hkey, hval, size)
 
 
 @njit(cache=True)

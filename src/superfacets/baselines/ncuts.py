@@ -56,6 +56,7 @@ from ..errors import MemoryLimitError, ParameterError
 from ..graph import edge_weights
 from ..mesh import as_mesh
 from ..seeding import check_n_segments
+from ..segment import _positive
 
 __all__ = ["NcutEmbedding", "ncut_embedding", "normalized_cuts", "ncut_memory_estimate",
            "default_memory_limit"]
@@ -156,16 +157,6 @@ def _check_limit(what: str, required: int, limit: int, m: int) -> None:
             required, limit)
 
 
-def _positive_float(name: str, value) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ParameterError(f"{name} must be a number, got {value!r}") from None
-    if not (math.isfinite(x) and x > 0):
-        raise ParameterError(f"{name} must be a finite number > 0, got {value!r}")
-    return x
-
-
 def ncut_embedding(mesh, n_components: int = 300, *, alpha: float = 100.0,
                    eta_convex: float = 0.2, weighting: str = "paper", bandwidth: float = 1.0,
                    reference_segments: int = 150, cutoff: float = 1e-4,
@@ -227,7 +218,7 @@ def ncut_embedding(mesh, n_components: int = 300, *, alpha: float = 100.0,
     mesh.check_usable()
     m = mesh.n_faces
     c = min(check_n_segments(n_components, 2**62), m)
-    bandwidth = _positive_float("bandwidth", bandwidth)
+    bandwidth = _positive("bandwidth", bandwidth)
     k_ref = min(check_n_segments(reference_segments, 2**62), m)
     cutoff = float(cutoff)
     if not (0 <= cutoff < 1):
