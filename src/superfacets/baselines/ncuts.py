@@ -280,10 +280,11 @@ def ncut_embedding(mesh, n_components: int = 300, *, alpha: float = 100.0,
     del dist
     degree = np.add.reduceat(data, indptr[:-1]) if nnz else np.ones(m)
     isd = 1.0 / np.sqrt(degree)  # the diagonal is 1, so every degree is >= 1
-    rows = np.repeat(np.arange(m), counts)
-    data *= isd[rows]
-    data *= isd[indices]
-    del rows
+    for s in range(0, m, b):  # D^-1/2 W D^-1/2, a row block at a time (no nnz-sized index)
+        e = min(m, s + b)
+        lo, hi = indptr[s], indptr[e]
+        data[lo:hi] *= np.repeat(isd[s:e], counts[s:e])
+        data[lo:hi] *= isd[indices[lo:hi]]
     affinity = csr_array((data, indices, indptr), shape=(m, m))
     seconds["affinity"] = time.perf_counter() - t0
 
