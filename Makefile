@@ -51,8 +51,8 @@ sweep: $(STAMP)
 
 # The paper's comparisons with its baselines (docs/results, README "Comparisons"):
 # normalized cuts on a stratified subset (the 2 meshes with fewest faces of each of the
-# 15 categories, ~45 min on 2 cores), Shlafman's weighting and VSA on all 300 meshes
-# (~25 min). Each experiment resumes where it stopped when run again.
+# 15 categories, ~60 min on 2 cores), Shlafman's weighting (~20 min) and VSA (~40 min)
+# on all 300 meshes. Each experiment resumes where it stopped when run again.
 NCUTS_IDS := 1,9,33,37,52,58,73,74,92,98,111,114,124,125,142,143,185,200,203,214,236,237,257,260,293,298,324,337,367,372
 SF := $(VENV)/bin/superfacets
 comparisons: $(STAMP)
