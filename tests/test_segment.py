@@ -7,6 +7,7 @@ from scipy.sparse.csgraph import dijkstra
 from superfacets import (InvalidMeshError, Mesh, ParameterError, read_mesh, segment,
                          superfacets)
 from superfacets import _kernels
+from superfacets._workspace import Workspace, bucket_width
 from superfacets.connectivity import label_components
 from superfacets.graph import paper_weights
 
@@ -112,14 +113,14 @@ def test_bounded_expansion_is_dijkstra_inside_the_window(sphere):
     ref = dijkstra(a, indices=src)
     dist = np.full(m, np.inf)
     label = np.full(m, -1, np.int64)
-    cap = g.indices.size + m + 1
-    _kernels.expand(g.indptr, g.indices, cw, c, src, 0, radius**2, dist, label, np.empty(m),
-                    np.full(m, -1, np.int64), 0, np.empty(cap), np.empty(cap, np.int64), False,
-                    np.empty(0, np.int32), np.empty(0), 0)
+    ws = Workspace(m, *bucket_width(cw)[1:], g.indices.size + m + 1)
+    _kernels.expand(g.indptr, g.indices, cw, c, src, 0, radius**2, dist, label, ws.local,
+                    ws.stamp, 0, ws.queue, bucket_width(cw)[0], _kernels.MERGE, ws.vis,
+                    np.empty(0), 0, ws.vis.size)
     reached = label == 0
     assert reached.sum() > 50
     np.testing.assert_array_equal(reached, np.isfinite(ref))
-    np.testing.assert_allclose(dist[reached], ref[reached])
+    np.testing.assert_array_equal(dist[reached], ref[reached])  # the same sums, bit for bit
 
 
 def test_replayed_expansions_equal_reference_on_synthetic(valley, sphere):
@@ -138,6 +139,58 @@ def test_replayed_expansions_equal_reference_on_real_meshes(name):
     a = segment(mesh, 150, max_iter=12)
     b = segment(mesh, 150, max_iter=12, _reference=True)
     np.testing.assert_array_equal(a.labels, b.labels)
+
+
+@pytest.mark.parametrize("source, k, alpha, max_iter", [
+    ("bunny", 150, 200, 10), ("hand_olivier", 150, 200, 6), ("psb:58", 60, 1000, 30),
+    ("psb:124", 150, 200, 20), ("psb:216", 100, 0, 25)])
+def test_optimized_path_gives_the_labels_of_the_straightforward_one(
+        monkeypatch, psb, source, k, alpha, max_iter):
+    # the plain iteration (scipy Dijkstra per window, numpy center update, every pass run)
+    # against the package: bucket-queue expansions, replayed records, cycle skipping
+    # (psb:58 falls into a cycle), on one thread and on two
+    import straightforward
+    from superfacets import _workspace
+    from superfacets.connectivity import relabel_dense
+
+    mesh = read_mesh(psb / "off" / f"{source[4:]}.off" if source.startswith("psb:")
+                     else need(MESHES / f"{source}.tri.xz"))
+    ref, n_iter = straightforward.segment_labels(mesh, k, alpha=alpha, max_iter=max_iter)
+    monkeypatch.setattr(_workspace, "_PARALLEL_MIN_WORK", 0)  # threads on every pass
+    for n_threads in (1, 2):
+        r = segment(mesh, k, alpha=alpha, max_iter=max_iter, enforce_connectivity=False,
+                    n_threads=n_threads)
+        np.testing.assert_array_equal(r.labels, relabel_dense(ref))
+        assert r.n_iter == n_iter
+
+
+@pytest.mark.parametrize("n_threads", [1, 2, 3])
+def test_threads_and_buffer_growth_change_no_label(monkeypatch, n_threads):
+    # every expansion on threads (no minimum work), a heap of 4 entries and a record arena
+    # of a tenth of the faces: the heap regrows, the arena is compacted and regrown, an
+    # overflowing thread is redone; labels stay those of the straightforward loop
+    from superfacets import _workspace
+
+    mesh = read_mesh(need(MESHES / "bunny.tri.xz"))
+    ref = segment(mesh, 150, max_iter=15, _reference=True)
+    monkeypatch.setattr(_workspace, "_PARALLEL_MIN_WORK", 0)
+    monkeypatch.setattr(_workspace, "_QUEUE0", 4)
+    monkeypatch.setattr(_workspace, "_VISIT0", 8)
+    monkeypatch.setattr(_workspace, "_ARENA", 0.1)
+    grown = []
+    orig = _workspace.Replay._grow
+    monkeypatch.setattr(_workspace.Replay, "_grow", lambda self, x: (grown.append(x), orig(self, x)))
+    r = segment(mesh, 150, max_iter=15, n_threads=n_threads)
+    np.testing.assert_array_equal(r.labels, ref.labels)
+    np.testing.assert_array_equal(r.centers, ref.centers)
+    assert (r.n_iter, r.n_orphan_seeds) == (ref.n_iter, ref.n_orphan_seeds)
+    assert grown
+
+
+def test_n_threads_is_checked(sphere):
+    for bad in (0, -1, 1.5, True):
+        with pytest.raises(ParameterError, match="n_threads"):
+            segment(sphere, 10, n_threads=bad)
 
 
 @pytest.mark.parametrize("name, faces", [("bunny", 69451), ("horse", 96966), ("hand_olivier", 105860)])

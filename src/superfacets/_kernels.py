@@ -5,13 +5,15 @@ arrays; nothing here checks its input. The face graph is given as CSR arrays
 ``indptr`` (int64), ``indices`` (int32) and ``weights`` (float64, one per CSR
 entry). Buffers are allocated once per run by the caller:
 
-- ``local`` (m,) float64 and ``stamp`` (m,) int64: per-expansion tentative
+- ``local`` (m,) float64 and ``stamp`` (m,) int32: per-expansion tentative
   distances, valid only where ``stamp[f] == sid`` (the id of the current
   expansion), so no O(m) array is reset per center; ``stamp`` starts at -1
-  and each expansion of a run gets a fresh ``sid``;
-- ``hkey`` (float64) / ``hval`` (int64) of capacity ``len(indices) + m + 1``:
-  a binary min-heap with lazy deletion (a face is pushed again only on a
-  strict decrease of its tentative distance, which bounds the pushes).
+  and each expansion gets a fresh ``sid``;
+- ``queue``: the bucket queue of :func:`expand` (node pool and bucket heads,
+  sized to the frontier of one expansion, grown by the caller on demand);
+- ``hkey`` (float64) / ``hval`` (int32 or int64): a binary min-heap with lazy
+  deletion, for the multi-source search of :func:`classify_exact` (capacity
+  ``len(indices) + m + 1``: a face is pushed again only on a strict decrease).
 """
 
 import numpy as np
@@ -60,52 +62,93 @@ def _pop(hkey, hval, size):
     return size
 
 
-@njit(cache=True)
+#: ``mode`` of :func:`expand`: label faces that get a strictly lower distance
+MERGE = 0
+#: ``mode`` of :func:`expand`: enter and label only faces without a label
+UNLABELLED = 1
+#: ``mode`` of :func:`expand`: touch neither ``dist`` nor ``label``, only record
+RECORD = 2
+#: status returned when the visit/record arrays are full
+RECORD_FULL = -1
+#: status returned when the queue is full
+QUEUE_FULL = -2
+
+
+@njit(cache=True, nogil=True)
 def expand(indptr, indices, weights, centroids, src, lab, window_r2,
-           dist, label, local, stamp, sid, hkey, hval, only_unlabelled,
-           rec_face, rec_dist, pos):
-    """Bounded Dijkstra expansion from face ``src`` with label ``lab``.
+           dist, label, local, stamp, sid, queue, inv_width, mode,
+           vis_face, vis_dist, pos, lim):
+    """Bounded shortest-path expansion from face ``src`` with label ``lab``.
 
     Only faces whose centroid lies within ``sqrt(window_r2)`` of the centroid
-    of ``src`` are reached (labelled and expanded); the expansion is an exact
-    Dijkstra on the faces of that window connected to ``src`` through it.
-    A settled face takes ``lab`` and its distance when that distance is lower
-    than ``dist[f]`` (strictly: earlier expansions win ties). With
-    ``only_unlabelled`` the expansion neither enters nor labels faces that
-    already have a label (``label >= 0``) and ignores ``dist``.
+    of ``src`` are reached; the distances are those of Dijkstra's algorithm
+    on the faces of that window connected to ``src`` through it.
 
-    The traversal never reads ``dist``/``label`` (except with
-    ``only_unlabelled``), so the expansion of a center depends on its face
-    alone. Settled faces and their distances are appended to ``rec_face`` /
-    ``rec_dist`` from index ``pos`` (pass empty arrays to record nothing).
-    Returns the new ``pos``, or -1 if the record arrays are too small.
+    The search is label-correcting with a bucket queue (sequential
+    delta-stepping): a face waits in bucket ``floor(d * inv_width)`` of a
+    circular array and the lowest non-empty bucket is processed in any
+    order, a face being queued again whenever its distance strictly
+    decreases. The result is exact for any bucket width: each distance is the
+    minimum over the face's neighbours of ``d(neighbour) + w`` (the same
+    floating-point sums as Dijkstra's), whatever the order. With a width
+    below the typical edge weight almost no face is processed twice, and no
+    heap is needed (Dijkstra's binary heap cost three quarters of the time).
+    The circular array must have more than ``max(weights) * inv_width + 1``
+    buckets, all empty (-1) on entry; they are empty again on return.
+
+    Every face reached (inside the window, connected) is appended once to
+    ``vis_face`` from index ``pos`` (below ``lim``), and, if ``vis_dist`` is
+    not empty, its final distance to ``vis_dist``. Then, by ``mode``:
+    :data:`MERGE`: a reached face takes ``lab`` and its distance when that
+    distance is lower than ``dist[f]`` (strictly: earlier expansions win
+    ties); :data:`UNLABELLED`: the expansion neither enters nor counts
+    faces that already have a label (``label >= 0``) and labels the others
+    ``lab``, ignoring ``dist``; :data:`RECORD`: neither ``dist`` nor
+    ``label`` is read or written, so the expansion depends on its face alone.
+
+    ``local``/``stamp``: per-face scratch, valid where ``stamp == sid``.
+    ``queue = (qface, qdist, qnext, head)``: node pool and bucket heads.
+    Returns the new ``pos``, or :data:`RECORD_FULL` / :data:`QUEUE_FULL`
+    (the caller grows that array and starts over with a fresh ``sid``).
     """
+    qface, qdist, qnext, head = queue
+    qcap = qface.shape[0]
+    nb = head.shape[0]
+    bmask = nb - 1
     cx = centroids[src, 0]
     cy = centroids[src, 1]
     cz = centroids[src, 2]
+    only_unlabelled = mode == UNLABELLED
+    start = pos
+    if pos >= lim:
+        return RECORD_FULL
     stamp[src] = sid
     local[src] = 0.0
-    size = _push(hkey, hval, 0, 0.0, src)
-    record = rec_face.shape[0] > 0
-    cap = rec_face.shape[0]
-    while size > 0:
-        d = hkey[0]
-        f = hval[0]
-        size = _pop(hkey, hval, size)
+    vis_face[pos] = src
+    pos += 1
+    qface[0] = src
+    qdist[0] = 0.0
+    qnext[0] = -1
+    head[0] = 0
+    free = -1
+    bump = 1
+    live = 1
+    cur = 0
+    status = 0
+    while live > 0:
+        b = cur & bmask
+        while head[b] < 0:
+            cur += 1
+            b = cur & bmask
+        n = head[b]
+        head[b] = qnext[n]
+        f = qface[n]
+        d = qdist[n]
+        qnext[n] = free
+        free = n
+        live -= 1
         if d > local[f]:
-            continue  # stale heap entry
-        if record:
-            if pos < 0 or pos >= cap:
-                pos = -1
-            else:
-                rec_face[pos] = f
-                rec_dist[pos] = d
-                pos += 1
-        if only_unlabelled:
-            label[f] = lab
-        elif d < dist[f]:
-            dist[f] = d
-            label[f] = lab
+            continue  # stale: queued again since with a lower distance
         for e in range(indptr[f], indptr[f + 1]):
             g = indices[e]
             nd = d + weights[e]
@@ -117,122 +160,190 @@ def expand(indptr, indices, weights, centroids, src, lab, window_r2,
                 if dx * dx + dy * dy + dz * dz > window_r2 or (only_unlabelled and label[g] >= 0):
                     local[g] = -1.0  # outside this window: never entered
                     continue
-                local[g] = nd
-                size = _push(hkey, hval, size, nd, g)
-            elif nd < local[g]:  # local == -1 (outside) never passes
-                local[g] = nd
-                size = _push(hkey, hval, size, nd, g)
+                if pos >= lim:
+                    status = RECORD_FULL
+                    break
+                vis_face[pos] = g
+                pos += 1
+            elif not nd < local[g]:  # local == -1 (outside) never passes
+                continue
+            local[g] = nd
+            if free >= 0:
+                n = free
+                free = qnext[n]
+            elif bump < qcap:
+                n = bump
+                bump += 1
+            else:
+                status = QUEUE_FULL
+                break
+            i = np.int64(nd * inv_width)
+            if i < cur:
+                i = cur
+            b = i & bmask
+            qface[n] = g
+            qdist[n] = nd
+            qnext[n] = head[b]
+            head[b] = n
+            live += 1
+        if status != 0:
+            for b in range(nb):
+                head[b] = -1
+            return status
+    if vis_dist.shape[0] > 0:
+        for j in range(start, pos):
+            vis_dist[j] = local[vis_face[j]]
+    if mode == MERGE:
+        for j in range(start, pos):
+            f = vis_face[j]
+            d = local[f]
+            if d < dist[f]:
+                dist[f] = d
+                label[f] = lab
+    elif only_unlabelled:
+        for j in range(start, pos):
+            label[vis_face[j]] = lab
     return pos
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def classify_bounded(indptr, indices, weights, centroids, centers, n_centers, window_r2,
-                     dist, label, local, stamp, sid, hkey, hval):
+                     dist, label, local, stamp, sid, queue, inv_width, vis):
     """Classification step of the paper (section 3.1) with orphan re-seeding.
 
-    Runs :func:`expand` from ``centers[0:n_centers]`` in order (label = index
-    of the center), then, scanning faces in index order, seeds a new center
-    on each face still unlabelled (an orphan) and expands it, appending it to
-    ``centers``. Returns ``(K, next_sid)``: the number of centers now in use
-    and the next free expansion id.
+    The straightforward version: runs :func:`expand` from
+    ``centers[0:n_centers]`` in order (label = index of the center), then,
+    scanning faces in index order, seeds a new center on each face still
+    unlabelled (an orphan) and expands it, appending it to ``centers``.
+    Returns ``(K, next_sid)``: the number of centers now in use and the next
+    free expansion id; ``K`` is a negative status of :func:`expand` if
+    ``queue`` or the visit buffer ``vis`` was too small.
     """
     m = label.shape[0]
-    norec_f = np.empty(0, dtype=np.int32)
-    norec_d = np.empty(0, dtype=np.float64)
+    nod = np.empty(0)
+    lim = vis.shape[0]
     for f in range(m):
         dist[f] = _INF
         label[f] = -1
     for s in range(n_centers):
-        expand(indptr, indices, weights, centroids, centers[s], s, window_r2,
-               dist, label, local, stamp, sid, hkey, hval, False, norec_f, norec_d, 0)
+        st = expand(indptr, indices, weights, centroids, centers[s], s, window_r2,
+                    dist, label, local, stamp, sid, queue, inv_width, MERGE, vis, nod, 0, lim)
         sid += 1
+        if st < 0:
+            return st, sid
     k = n_centers
     for f in range(m):
         if label[f] < 0:
             centers[k] = f
-            expand(indptr, indices, weights, centroids, f, k, window_r2,
-                   dist, label, local, stamp, sid, hkey, hval, False, norec_f, norec_d, 0)
+            st = expand(indptr, indices, weights, centroids, f, k, window_r2,
+                        dist, label, local, stamp, sid, queue, inv_width, MERGE, vis, nod, 0,
+                        lim)
             sid += 1
+            if st < 0:
+                return st, sid
             k += 1
     return k, sid
 
 
-@njit(cache=True)
-def classify_incremental(indptr, indices, weights, centroids, centers, n_centers, window_r2,
-                         dist, label, local, stamp, sid, hkey, hval,
-                         prev_centers, prev_off, prev_face, prev_dist, slot,
-                         new_off, new_face, new_dist):
-    """:func:`classify_bounded` with the expansions of unmoved centers replayed.
+@njit(cache=True, nogil=True)
+def expand_many(indptr, indices, weights, centroids, srcs, window_r2, local, stamp, sid0,
+                queue, inv_width, rec_face, rec_dist, pos, lim, out_start, out_len):
+    """Record-only expansions (:data:`RECORD`) of the faces ``srcs``.
 
-    Gives exactly the labels and distances of :func:`classify_bounded`: each
-    center's expansion depends on its face only, so for a center whose face
-    was also a center in the previous pass (``prev_centers``, with its
-    settled faces in ``prev_face[prev_off[i]:prev_off[i + 1]]``) the recorded
-    faces are replayed through the same strict ``<`` update, in the same
-    center order; other centers (and orphans) are expanded anew. Every
-    center's list is written to ``new_off`` / ``new_face`` / ``new_dist``
-    for the next pass. ``slot`` is an (m,) int64 scratch array of -1, left
-    as it was found.
+    Expansion ``i`` gets id ``sid0 + i``; its settled faces and distances go
+    to ``rec_face`` / ``rec_dist`` from ``out_start[i] = pos`` onwards
+    (``out_len[i]`` entries), below ``lim``. Releases the GIL, so several
+    threads may run it at once on disjoint record ranges with their own
+    ``local``, ``stamp`` and queue. Returns the end position, or a negative
+    status of :func:`expand`.
+    """
+    nod = np.empty(0)
+    nol = np.empty(0, dtype=np.int64)
+    for i in range(srcs.shape[0]):
+        out_start[i] = pos
+        p = expand(indptr, indices, weights, centroids, srcs[i], 0, window_r2, nod, nol,
+                   local, stamp, sid0 + i, queue, inv_width, RECORD, rec_face, rec_dist, pos,
+                   lim)
+        if p < 0:
+            return p
+        out_len[i] = p - pos
+        pos = p
+    return pos
 
-    Returns ``(K, next_sid, n_expanded)``, or ``(-1, sid, 0)`` if the new
-    record arrays are too small (the caller grows them and calls again).
+
+@njit(cache=True, nogil=True)
+def merge_records(n_centers, seg_start, seg_len, rec_face, rec_dist, dist, label):
+    """Replay recorded expansions: the labelling of :func:`classify_bounded`.
+
+    Resets ``dist``/``label``, then for each center ``s < n_centers`` in
+    order, each recorded (face, distance) of its expansion
+    (``seg_len[s]`` entries from ``seg_start[s]``) takes label ``s`` when its
+    distance is strictly lower than the face's: the same updates, in the
+    same order, as expanding the centers one after the other.
     """
     m = label.shape[0]
     for f in range(m):
         dist[f] = _INF
         label[f] = -1
-    for i in range(prev_centers.shape[0]):
-        slot[prev_centers[i]] = i
-    pos = 0
-    n_expanded = 0
-    new_off[0] = 0
     for s in range(n_centers):
-        c = centers[s]
-        i = slot[c]
-        if i >= 0:
-            a = prev_off[i]
-            b = prev_off[i + 1]
-            if pos + (b - a) > new_face.shape[0]:
-                pos = -1
-                break
-            for e in range(a, b):
-                f = prev_face[e]
-                d = prev_dist[e]
-                new_face[pos] = f
-                new_dist[pos] = d
-                pos += 1
-                if d < dist[f]:
-                    dist[f] = d
-                    label[f] = s
-        else:
-            pos = expand(indptr, indices, weights, centroids, c, s, window_r2,
-                         dist, label, local, stamp, sid, hkey, hval, False,
-                         new_face, new_dist, pos)
-            sid += 1
-            n_expanded += 1
-            if pos < 0:
-                break
-        new_off[s + 1] = pos
-    for i in range(prev_centers.shape[0]):
-        slot[prev_centers[i]] = -1
-    if pos < 0:
-        return -1, sid, 0
+        a = seg_start[s]
+        for e in range(a, a + seg_len[s]):
+            f = rec_face[e]
+            d = rec_dist[e]
+            if d < dist[f]:
+                dist[f] = d
+                label[f] = s
+
+
+@njit(cache=True, nogil=True)
+def seed_orphans(indptr, indices, weights, centroids, centers, n_centers, window_r2,
+                 dist, label, local, stamp, sid, queue, inv_width, rec_face, rec_dist, pos,
+                 lim, seg_start, seg_len):
+    """Orphan re-seeding of :func:`classify_bounded`, recording the expansions.
+
+    Scanning faces in index order, seeds a center on each face still
+    unlabelled, expands it (:data:`MERGE`) and records it from ``pos`` like
+    :func:`expand_many` (``seg_start``/``seg_len`` indexed by center).
+    Returns ``(status, K, next_sid)``: ``status`` is the end position or a
+    negative status of :func:`expand`.
+    """
+    m = label.shape[0]
     k = n_centers
     for f in range(m):
         if label[f] < 0:
-            if k + 1 >= new_off.shape[0]:
-                return -1, sid, 0
             centers[k] = f
-            pos = expand(indptr, indices, weights, centroids, f, k, window_r2,
-                         dist, label, local, stamp, sid, hkey, hval, False,
-                         new_face, new_dist, pos)
+            seg_start[k] = pos
+            p = expand(indptr, indices, weights, centroids, f, k, window_r2, dist, label,
+                       local, stamp, sid, queue, inv_width, MERGE, rec_face, rec_dist, pos, lim)
             sid += 1
-            n_expanded += 1
-            if pos < 0:
-                return -1, sid, 0
+            if p < 0:
+                return p, k, sid
+            seg_len[k] = p - pos
+            pos = p
             k += 1
-            new_off[k] = pos
-    return k, sid, n_expanded
+    return pos, k, sid
+
+
+@njit(cache=True, nogil=True)
+def compact_records(seg_start, seg_len, rec_face, rec_dist):
+    """Move the given record segments to the front, in order of their start.
+
+    Segments must not overlap. Updates ``seg_start`` in place and returns the
+    end of the last one.
+    """
+    order = np.argsort(seg_start, kind="mergesort")
+    w = 0
+    for j in range(order.shape[0]):
+        i = order[j]
+        a = seg_start[i]
+        n = seg_len[i]
+        if a != w:
+            for e in range(n):  # w < a: a forward copy never overwrites unread data
+                rec_face[w + e] = rec_face[a + e]
+                rec_dist[w + e] = rec_dist[a + e]
+        seg_start[i] = w
+        w += n
+    return w
 
 
 @njit(cache=True)
@@ -374,28 +485,30 @@ def farthest_point(centroids, k, first, out):
         cur = nxt
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def flood(indptr, indices, weights, centroids, order, window_r2, label, local, stamp, sid,
-          hkey, hval):
+          queue, inv_width, vis):
     """Flood initialization (authors' implementation).
 
     Faces are visited in ``order`` (by Euclidean distance to the first seed);
     each face still unlabelled starts a new region, grown by a bounded
     expansion that claims only unlabelled faces. Returns ``(n_regions,
-    next_sid)``.
+    next_sid)``; ``n_regions`` is a negative status of :func:`expand` if
+    ``queue`` or the visit buffer ``vis`` was too small.
     """
     m = label.shape[0]
     for f in range(m):
         label[f] = -1
     dummy = np.empty(0)
-    norec_f = np.empty(0, dtype=np.int32)
-    norec_d = np.empty(0, dtype=np.float64)
     n = 0
     for i in range(order.shape[0]):
         f = order[i]
         if label[f] < 0:
-            expand(indptr, indices, weights, centroids, f, n, window_r2,
-                   dummy, label, local, stamp, sid, hkey, hval, True, norec_f, norec_d, 0)
-            n += 1
+            st = expand(indptr, indices, weights, centroids, f, n, window_r2, dummy, label,
+                        local, stamp, sid, queue, inv_width, UNLABELLED, vis, dummy, 0,
+                        vis.shape[0])
             sid += 1
+            if st < 0:
+                return st, sid
+            n += 1
     return n, sid

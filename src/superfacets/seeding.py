@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import _kernels
+from ._workspace import Workspace, bucket_width, with_room
 from .errors import ParameterError
 
 __all__ = ["first_center", "farthest_point_centers", "flood_labels", "grid_labels", "INITS"]
@@ -102,13 +103,11 @@ def flood_labels(mesh, csr_weights: np.ndarray, radius: float, window: float = 2
     order = np.argsort(((c - c[seed]) ** 2).sum(axis=1), kind="stable").astype(np.int64)
     m = mesh.n_faces
     labels = np.empty(m, dtype=np.int64)
-    local = np.empty(m)
-    stamp = np.full(m, -1, dtype=np.int64)
-    cap = g.indices.shape[0] + m + 1
-    hkey = np.empty(cap)
-    hval = np.empty(cap, dtype=np.int64)
-    _kernels.flood(g.indptr, g.indices, csr_weights, c, order, float((window * radius) ** 2),
-                   labels, local, stamp, 0, hkey, hval)
+    inv_width, n_buckets = bucket_width(csr_weights)
+    ws = Workspace(m, n_buckets, g.indices.shape[0] + m + 1)
+    with_room(ws, lambda ws: _kernels.flood(g.indptr, g.indices, csr_weights, c, order,
+                                            float((window * radius) ** 2), labels, ws.local,
+                                            ws.stamp, 0, ws.queue, inv_width, ws.vis))
     return labels
 
 

@@ -19,6 +19,7 @@ from .connectivity import relabel_dense
 from .errors import ParameterError
 from .graph import edge_weights
 from .mesh import as_mesh
+from ._workspace import Replay, Workspaces, with_room
 from .seeding import (INITS, check_n_segments, farthest_point_centers, flood_labels,
                       grid_labels)
 
@@ -82,7 +83,7 @@ def superfacets(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | No
                 alpha: float = 200.0, eta_convex: float = 0.2, window: float = 2.0,
                 init: str | None = None, max_iter: int = 50, weighting: str = "paper",
                 assignment: str = "bounded", enforce_connectivity: bool = True,
-                progress: bool = False) -> np.ndarray:
+                progress: bool = False, n_threads: int | None = None) -> np.ndarray:
     """Over-segment a triangle mesh into superfacets.
 
     The k-means-style method of Simari, Picciau and De Floriani (2014):
@@ -132,6 +133,10 @@ def superfacets(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | No
         share the longest boundary, so each superfacet is face-connected.
     progress : bool, default False
         Show a progress bar of the iterations on stderr.
+    n_threads : int, optional
+        Threads that expand centers at the same time (``>= 1``; default:
+        numba's thread count, ``NUMBA_NUM_THREADS``, normally the number of
+        cores). The labels do not depend on it.
 
     Returns
     -------
@@ -172,7 +177,19 @@ def superfacets(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | No
     return segment(mesh, n_segments, radius=radius, alpha=alpha, eta_convex=eta_convex,
                    window=window, init=init, max_iter=max_iter, weighting=weighting,
                    assignment=assignment, enforce_connectivity=enforce_connectivity,
-                   progress=progress).labels
+                   progress=progress, n_threads=n_threads).labels
+
+
+def _threads(n_threads) -> int:
+    """Resolve ``n_threads`` (None: numba's thread count, NUMBA_NUM_THREADS)."""
+    if n_threads is None:
+        import numba
+
+        return int(numba.config.NUMBA_NUM_THREADS)
+    if isinstance(n_threads, (bool, np.bool_)) or not isinstance(n_threads, (int, np.integer)) \
+            or n_threads < 1:
+        raise ParameterError(f"n_threads must be an integer >= 1, got {n_threads!r}")
+    return int(n_threads)
 
 
 def _positive(name: str, value) -> float:
@@ -217,7 +234,8 @@ def segment(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | None =
             alpha: float = 200.0, eta_convex: float = 0.2, window: float = 2.0,
             init: str | None = None, max_iter: int = 50, weighting: str = "paper",
             assignment: str = "bounded", enforce_connectivity: bool = True,
-            progress: bool = False, _reference: bool = False) -> SegmentationResult:
+            progress: bool = False, n_threads: int | None = None,
+            _reference: bool = False) -> SegmentationResult:
     """Superfacets with details: same parameters as :func:`superfacets`.
 
     Returns
@@ -239,8 +257,12 @@ def segment(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | None =
     expanded again: its recorded (face, distance) list is replayed through
     the same update, in the same center order. The labels are exactly those
     of expanding every center every pass (``_reference=True``, used by the
-    tests), at the cost of about ``12 * 2 * 4.4`` bytes per face for the
-    recorded lists (each face lies in about 4.4 windows with ``window = 2``).
+    tests), at the cost of about ``12 * 5`` bytes per face for the recorded
+    lists (each face lies in about 4.4 windows with ``window = 2``). The
+    centers that moved are expanded first, record only, on ``n_threads``
+    threads at once (an expansion reads neither the labels nor the other
+    expansions), then all records are replayed in center order, so the
+    result does not depend on the number of threads.
 
     The ordered center list of a pass determines every later pass, so when
     it repeats the list of an earlier pass the run is periodic (the
@@ -255,6 +277,7 @@ def segment(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | None =
     mesh.check_usable()
     k, r, init, window, max_iter = _resolve(mesh, n_segments, radius, init, window, max_iter,
                                             assignment)
+    n_threads = _threads(n_threads)
     m = mesh.n_faces
     timings: dict[str, float] = {}
 
@@ -273,11 +296,7 @@ def segment(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | None =
     areas = np.ascontiguousarray(mesh.areas)
     dist = np.empty(m)
     label = np.empty(m, dtype=np.int64)
-    local = np.empty(m)
-    stamp = np.full(m, -1, dtype=np.int64)
-    cap = g.indices.shape[0] + m + 1
-    hkey = np.empty(cap)
-    hval = np.empty(cap, dtype=np.int32 if m < 2**31 - 1 else np.int64)  # face ids
+    spaces = Workspaces(m, csr_w, n_threads)
     centers = np.empty(m, dtype=np.int64)
     window_r2 = (window * r) ** 2
 
@@ -295,8 +314,10 @@ def segment(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | None =
     n_init = n_centers
 
     t = time.perf_counter()
-    inc = _Replay(m) if (assignment == "bounded" and not _reference) else None
-    sid = 0
+    inc = Replay(m, spaces) if (assignment == "bounded" and not _reference) else None
+    if assignment == "exact":
+        hkey = np.empty(spaces.heap_bound)
+        hval = np.empty(spaces.heap_bound, dtype=np.int32 if m < 2**31 - 1 else np.int64)
     n_iter = 0
     n_expanded = 0
     converged = False
@@ -333,14 +354,15 @@ def segment(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | None =
                 seen[key] = n_iter
                 states.append(centers[:n_centers].copy())
             if inc is not None:
-                k_now, sid, n_exp = inc.classify(g.indptr, g.indices, csr_w, c, centers,
-                                                 n_centers, window_r2, dist, label, local,
-                                                 stamp, sid, hkey, hval)
+                k_now, n_exp = inc.classify(g.indptr, g.indices, csr_w, c, centers, n_centers,
+                                            window_r2, dist, label)
                 n_expanded += n_exp
             elif assignment == "bounded":
-                k_now, sid = _kernels.classify_bounded(g.indptr, g.indices, csr_w, c, centers,
-                                                       n_centers, window_r2, dist, label, local,
-                                                       stamp, sid, hkey, hval)
+                sid = spaces.reserve(m + n_centers)
+                k_now, next_sid = with_room(spaces.get(0), lambda ws: _kernels.classify_bounded(
+                    g.indptr, g.indices, csr_w, c, centers, n_centers, window_r2, dist, label,
+                    ws.local, ws.stamp, sid, ws.queue, spaces.inv_width, ws.vis))
+                spaces.release(next_sid)
                 n_expanded += k_now
             else:
                 k_now = _kernels.classify_exact(g.indptr, g.indices, csr_w, centers, n_centers,
@@ -365,10 +387,12 @@ def segment(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | None =
             n_centers = alive.shape[0]
             centers[:n_centers] = alive
     finally:
+        spaces.close()
         if bar is not None:
             bar.close()
     timings["iterations"] = time.perf_counter() - t
-    del inc, hkey, hval, local, stamp, dist, csr_w  # free the work buffers before the clean-up
+    del inc, spaces, dist, csr_w  # free the work buffers before the clean-up
+    hkey = hval = None
 
     # labels of the last classification; drop superfacets left empty
     t = time.perf_counter()
@@ -406,32 +430,3 @@ def _centers_of(labels: np.ndarray, old_centers: np.ndarray, areas, centroids) -
     first = np.unique(kept, return_index=True)[1]
     out[kept[first]] = old_centers[first]
     return out
-
-
-class _Replay:
-    """Two pools of recorded expansions (previous pass, current pass)."""
-
-    def __init__(self, m: int):
-        self.m = m
-        cap = 5 * m + 1024
-        self.prev_centers = np.empty(0, dtype=np.int64)
-        self.prev = self._pool(cap)
-        self.cur = self._pool(cap)
-        self.slot = np.full(m, -1, dtype=np.int64)
-
-    def _pool(self, cap: int):
-        off = np.zeros(self.m + 1, dtype=np.int64)
-        return off, np.empty(cap, dtype=np.int32), np.empty(cap, dtype=np.float64)
-
-    def classify(self, indptr, indices, w, c, centers, n_centers, window_r2, dist, label,
-                 local, stamp, sid, hkey, hval):
-        while True:
-            k, sid, n_exp = _kernels.classify_incremental(
-                indptr, indices, w, c, centers, n_centers, window_r2, dist, label, local,
-                stamp, sid, hkey, hval, self.prev_centers, *self.prev, self.slot, *self.cur)
-            if k >= 0:
-                break
-            self.cur = self._pool(int(self.cur[1].shape[0] * 1.5) + 1024)  # grow, retry
-        self.prev_centers = centers[:k].copy()
-        self.prev, self.cur = self.cur, self.prev
-        return k, sid, n_exp
