@@ -42,6 +42,35 @@ def test_farthest_point_matches_brute_force(sphere):
     assert c.tolist() == chosen
 
 
+@pytest.mark.parametrize("source", ["grid", "bunny", "noisy"])
+def test_blocked_farthest_point_equals_the_plain_loop(source):
+    # the grid has many exactly tied distances; the cell-skipping version must break
+    # them the same way (lowest face index) and skip only cells it cannot change
+    from superfacets import _kernels, read_mesh
+
+    from conftest import MESHES, need
+
+    if source == "grid":
+        mesh = grid_mesh(120, 90)
+    elif source == "bunny":
+        mesh = read_mesh(need(MESHES / "bunny.tri.xz"))
+    else:
+        rng = np.random.default_rng(3)
+        base = grid_mesh(100, 80)
+        mesh = Mesh(base.vertices + rng.normal(0, 1e-3, base.vertices.shape), base.faces)
+    c = np.ascontiguousarray(mesh.centroids)
+    for k in (1, 7, 150, 1000):
+        plain = np.empty(k, np.int64)
+        _kernels.farthest_point(c, k, first_center(mesh), plain)
+        for g in (1, 5, 40):
+            blocked = np.empty(k, np.int64)
+            _kernels.farthest_point_blocked(c, k, first_center(mesh), blocked,
+                                            *_kernels.spatial_blocks(c, g))
+            assert blocked.tolist() == plain.tolist()
+    assert mesh.n_faces >= 4096  # farthest_point_centers takes the blocked path
+    np.testing.assert_array_equal(farthest_point_centers(mesh, 150), plain[:150])
+
+
 @pytest.mark.parametrize("k, match", [(0, ">= 1"), (10**6, "larger than the number of faces"),
                                       (2.5, "integer"), (True, "integer")])
 def test_farthest_point_bad_k(sphere, k, match):

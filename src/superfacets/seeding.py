@@ -9,6 +9,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from . import _kernels
@@ -16,6 +18,8 @@ from ._workspace import Workspace, bucket_width, with_room
 from .errors import ParameterError
 
 __all__ = ["first_center", "farthest_point_centers", "flood_labels", "grid_labels", "INITS"]
+
+_BLOCKED_MIN_FACES = 4096
 
 #: Names accepted by ``init=``.
 INITS = ("farthest", "flood", "grid")
@@ -46,8 +50,11 @@ def farthest_point_centers(mesh, n_segments: int) -> np.ndarray:
 
     The first center is :func:`first_center`; each next one is the face whose
     centroid has the largest Euclidean distance to its nearest chosen center.
-    Runs in O(m k) time and O(m) memory (a running minimum), instead of the
-    paper's O(m k^2).
+    Runs in O(m k) time at worst and O(m) memory (a running minimum),
+    instead of the paper's O(m k^2); in practice close to O(m log k): the
+    faces are grouped in grid cells, and a new center visits only the cells
+    where it can be nearer than the earlier centers (exactly the same
+    centers, ties included, as the plain O(m k) loop; tested).
 
     Parameters
     ----------
@@ -67,7 +74,14 @@ def farthest_point_centers(mesh, n_segments: int) -> np.ndarray:
     """
     k = check_n_segments(n_segments, mesh.n_faces)
     out = np.empty(k, dtype=np.int64)
-    _kernels.farthest_point(np.ascontiguousarray(mesh.centroids), k, first_center(mesh), out)
+    c = np.ascontiguousarray(mesh.centroids)
+    m = c.shape[0]
+    if m < _BLOCKED_MIN_FACES:
+        _kernels.farthest_point(c, k, first_center(mesh), out)
+    else:  # same result; each new center visits only the grid cells it can change
+        g = int(min(1024, max(2, round(math.sqrt(m / 64)))))
+        _kernels.farthest_point_blocked(c, k, first_center(mesh), out,
+                                        *_kernels.spatial_blocks(c, g))
     return out
 
 
