@@ -112,3 +112,44 @@ def test_closed_mesh_has_three_neighbours_per_face(sphere):
     assert (np.diff(g.indptr) == 3).all()
     assert g.boundary_edges.shape[0] == 0
     assert g.n_edges == sphere.n_faces * 3 // 2
+
+
+def _soup(seed: int, n_faces: int, n_vertices: int) -> np.ndarray:
+    # random triangles over few vertices: non-manifold edges (many faces per edge),
+    # duplicate and flipped faces, collapsed edges, a high-valence vertex
+    rng = np.random.default_rng(seed)
+    f = rng.integers(0, n_vertices, size=(n_faces, 3))
+    f[: n_faces // 10, 0] = 0  # vertex 0 in a tenth of the faces
+    f[n_faces // 10: n_faces // 10 + 20] = f[:20][:, ::-1]  # flipped duplicates
+    return f
+
+
+@pytest.mark.parametrize("case", ["soup-small", "soup-dense", "bunny", "psb-285", "sphere"])
+def test_linear_time_graph_equals_the_sort_based_one(case, sphere, request):
+    import straightforward
+
+    from superfacets import _kernels, read_mesh
+
+    from conftest import MESHES, need
+
+    if case == "soup-small":
+        faces, n = _soup(0, 400, 60), 60
+    elif case == "soup-dense":
+        faces, n = _soup(1, 3000, 25), 25
+    elif case == "sphere":
+        faces, n = np.asarray(sphere.faces), sphere.n_vertices
+    else:
+        mesh = read_mesh(need(MESHES / "bunny.tri.xz") if case == "bunny"
+                         else request.getfixturevalue("psb") / "off" / "285.off")
+        faces, n = np.asarray(mesh.faces), mesh.n_vertices
+    ref = straightforward.face_graph_by_sorting(faces, n)
+    got = _kernels.face_graph(np.ascontiguousarray(faces, dtype=np.int64), n)
+    names = ["pairs", "edges", "indptr", "indices", "dual_edge", "boundary_edges",
+             "boundary_faces"]
+    for name, arr in zip(names, got):
+        expected = getattr(ref, name)
+        assert arr.dtype == expected.dtype, name
+        np.testing.assert_array_equal(arr, expected, err_msg=name)
+    if case.startswith("soup"):  # the soups do exercise non-manifold edges
+        assert np.bincount(np.r_[got[0][:, 0], got[0][:, 1]]).max() > 3
+

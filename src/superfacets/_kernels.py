@@ -20,6 +20,7 @@ import numpy as np
 from numba import njit
 
 _INF = np.inf
+_NONE = np.empty(0, dtype=np.int64)  # rebinding to it frees an array in a kernel
 
 
 @njit(cache=True, inline="always")
@@ -666,3 +667,192 @@ def flood(indptr, indices, weights, centroids, order, window_r2, label, local, s
                 return st, sid
             n += 1
     return n, sid
+
+
+
+
+@njit(cache=True)
+def _stable_sort(keys, vals, a, b):
+    """Stable sort of ``keys[a:b]``, carrying ``vals``, in place.
+
+    Insertion sort for the usual short ranges (the edges around one vertex,
+    the neighbours of one face); merge sort beyond 32 entries (a vertex of
+    very high valence).
+    """
+    if b - a > 32:
+        o = np.argsort(keys[a:b], kind="mergesort")
+        k = keys[a:b][o]
+        v = vals[a:b][o]
+        keys[a:b] = k
+        vals[a:b] = v
+        return
+    for i in range(a + 1, b):
+        k0 = keys[i]
+        v0 = vals[i]
+        j = i - 1
+        while j >= a and keys[j] > k0:
+            keys[j + 1] = keys[j]
+            vals[j + 1] = vals[j]
+            j -= 1
+        keys[j + 1] = k0
+        vals[j + 1] = v0
+
+
+@njit(cache=True)
+def _bucket(ids, n):
+    """Counting sort: ``(ptr, perm)``, ``perm[ptr[i]:ptr[i + 1]]`` the positions
+    ``j`` (ascending) where ``ids[j] == i``."""
+    ptr = np.zeros(n + 1, dtype=np.int64)
+    for j in range(ids.shape[0]):
+        ptr[ids[j] + 1] += 1
+    for i in range(n):
+        ptr[i + 1] += ptr[i]
+    fill = ptr[:-1].copy()
+    perm = np.empty(ids.shape[0], dtype=np.int64)
+    for j in range(ids.shape[0]):
+        perm[fill[ids[j]]] = j
+        fill[ids[j]] += 1
+    return ptr, perm
+
+
+@njit(cache=True, nogil=True)
+def face_graph(faces, n_vertices):
+    """Face graph of a triangle mesh in O(m) (see :mod:`superfacets.graph`).
+
+    Mesh edges are grouped by vertex pair ``(a, b)``, ``a < b`` (counting
+    sort on ``a``, then a stable sort on ``b`` around each vertex); every
+    pair of faces of a group is joined; a face pair sharing several edges
+    keeps the first (smallest) one; dual edges are ordered by face pair and
+    the symmetric CSR is filled row by row. Returns ``(pairs, edges, indptr,
+    indices, dual_edge, boundary_edges, boundary_faces)`` as documented in
+    :class:`superfacets.graph.FaceGraph`.
+    """
+    m = faces.shape[0]
+    # half-edges h = 3 f + corner (corners join vertices (0, 1), (1, 2), (2, 0));
+    # collapsed edges (both ends one vertex) join nothing
+    n_half = 0
+    for f in range(m):
+        for c in range(3):
+            if faces[f, c] != faces[f, (c + 1) % 3]:
+                n_half += 1
+    ha = np.empty(n_half, dtype=np.int64)
+    hb = np.empty(n_half, dtype=np.int64)
+    j = 0
+    for f in range(m):
+        for c in range(3):
+            u = faces[f, c]
+            v = faces[f, (c + 1) % 3]
+            if u != v:
+                ha[j] = min(u, v)
+                hb[j] = 3 * f + c  # for now: the half-edge id
+                j += 1
+    ptr, perm = _bucket(ha, n_vertices)
+    sa = ha[perm]
+    sh = hb[perm]  # half-edge ids, ascending around each vertex
+    ha = _NONE  # free it
+    hb = _NONE  # free it
+    perm = _NONE  # free it
+    sb = np.empty(n_half, dtype=np.int64)
+    for i in range(n_half):
+        f = sh[i] // 3
+        c = sh[i] % 3
+        sb[i] = max(faces[f, c], faces[f, (c + 1) % 3])
+    for v in range(n_vertices):
+        if ptr[v + 1] - ptr[v] > 1:
+            _stable_sort(sb, sh, ptr[v], ptr[v + 1])
+    ptr = _NONE  # free it
+    # groups of equal (a, b): boundary edges (one face) and candidate face pairs
+    n_bnd = 0
+    n_cand = 0
+    i = 0
+    while i < n_half:
+        e = i + 1
+        while e < n_half and sb[e] == sb[i] and sa[e] == sa[i]:
+            e += 1
+        if e - i == 1:
+            n_bnd += 1
+        else:
+            n_cand += (e - i) * (e - i - 1) // 2
+        i = e
+    boundary_edges = np.empty((n_bnd, 2), dtype=np.int64)
+    boundary_faces = np.empty(n_bnd, dtype=np.int64)
+    clo = np.empty(n_cand, dtype=np.int64)
+    chi = np.empty(n_cand, dtype=np.int64)
+    cg = np.empty(n_cand, dtype=np.int64)  # the group (its first position), in (a, b) order
+    nb = 0
+    nc = 0
+    i = 0
+    while i < n_half:
+        e = i + 1
+        while e < n_half and sb[e] == sb[i] and sa[e] == sa[i]:
+            e += 1
+        if e - i == 1:
+            boundary_edges[nb, 0] = sa[i]
+            boundary_edges[nb, 1] = sb[i]
+            boundary_faces[nb] = sh[i] // 3
+            nb += 1
+        else:
+            for x in range(i, e):
+                for y in range(x + 1, e):
+                    fx = sh[x] // 3
+                    fy = sh[y] // 3
+                    if fx != fy:  # not a degenerate face sharing an edge with itself
+                        clo[nc] = min(fx, fy)
+                        chi[nc] = max(fx, fy)
+                        cg[nc] = i
+                        nc += 1
+        i = e
+    # dual edges ordered by (lo, hi); per face pair the first group (smallest edge)
+    cptr, cperm = _bucket(clo[:nc], m)
+    khi = chi[cperm]
+    kg = cg[cperm]  # ascending within each lo (stable counting sort)
+    clo = _NONE  # free it
+    chi = _NONE  # free it
+    cg = _NONE  # free it
+    cperm = _NONE  # free it
+    n_e = 0
+    for f in range(m):
+        a = cptr[f]
+        b = cptr[f + 1]
+        if b - a > 1:
+            _stable_sort(khi, kg, a, b)
+        for t in range(a, b):
+            if t == a or khi[t] != khi[t - 1]:
+                n_e += 1
+    pairs = np.empty((n_e, 2), dtype=np.int64)
+    edges = np.empty((n_e, 2), dtype=np.int64)
+    indptr = np.zeros(m + 1, dtype=np.int64)
+    q = 0
+    for f in range(m):
+        for t in range(cptr[f], cptr[f + 1]):
+            if t == cptr[f] or khi[t] != khi[t - 1]:
+                pairs[q, 0] = f
+                pairs[q, 1] = khi[t]
+                edges[q, 0] = sa[kg[t]]
+                edges[q, 1] = sb[kg[t]]
+                indptr[f + 1] += 1
+                indptr[khi[t] + 1] += 1
+                q += 1
+    khi = _NONE  # free it
+    kg = _NONE  # free it
+    cptr = _NONE  # free it
+    sa = _NONE  # free it
+    sb = _NONE  # free it
+    sh = _NONE  # free it
+    # symmetric CSR, neighbours ascending within each row
+    for f in range(m):
+        indptr[f + 1] += indptr[f]
+    fill = indptr[:-1].copy()
+    cols = np.empty(2 * n_e, dtype=np.int64)
+    dual = np.empty(2 * n_e, dtype=np.int64)
+    for t in range(n_e):
+        for side in range(2):
+            row = pairs[t, side]
+            cols[fill[row]] = pairs[t, 1 - side]
+            dual[fill[row]] = t
+            fill[row] += 1
+    for f in range(m):
+        if indptr[f + 1] - indptr[f] > 1:
+            _stable_sort(cols, dual, indptr[f], indptr[f + 1])
+    indices = cols.astype(np.int32)
+    return pairs, edges, indptr, indices, dual, boundary_edges, boundary_faces
