@@ -246,17 +246,34 @@ def classify_bounded(indptr, indices, weights, centroids, centers, n_centers, wi
     return k, sid
 
 
+@njit(cache=True, inline="always")
+def _merge_segment(a, n, s, rec_face, rec_dist, dist, label):
+    """Faces of a record take label ``s`` where ``(d, s)`` is lexicographically
+    below their ``(dist, label)``: the center of lowest index wins ties, so
+    records may be merged in any order with the result of merging them in
+    center order with a strict ``<``."""
+    for e in range(a, a + n):
+        f = rec_face[e]
+        d = rec_dist[e]
+        if d < dist[f] or (d == dist[f] and s < label[f]):
+            dist[f] = d
+            label[f] = s
+
+
 @njit(cache=True, nogil=True)
-def expand_many(indptr, indices, weights, centroids, srcs, window_r2, local, stamp, sid0,
-                queue, inv_width, rec_face, rec_dist, pos, lim, out_start, out_len):
-    """Record-only expansions (:data:`RECORD`) of the faces ``srcs``.
+def expand_many(indptr, indices, weights, centroids, srcs, labs, window_r2, local, stamp,
+                sid0, queue, inv_width, rec_face, rec_dist, pos, lim, out_start, out_len,
+                dist, label):
+    """Record-only expansions (:data:`RECORD`) of the faces ``srcs``, each
+    merged right after (while in cache) into ``dist``/``label`` with label
+    ``labs[i]`` by the lexicographic rule of :func:`merge_some`.
 
     Expansion ``i`` gets id ``sid0 + i``; its settled faces and distances go
     to ``rec_face`` / ``rec_dist`` from ``out_start[i] = pos`` onwards
     (``out_len[i]`` entries), below ``lim``. Releases the GIL, so several
     threads may run it at once on disjoint record ranges with their own
-    ``local``, ``stamp`` and queue. Returns the end position, or a negative
-    status of :func:`expand`.
+    ``local``, ``stamp``, queue and ``dist``/``label``. Returns the end
+    position, or a negative status of :func:`expand`.
     """
     nod = np.empty(0)
     nol = np.empty(0, dtype=np.int64)
@@ -268,32 +285,45 @@ def expand_many(indptr, indices, weights, centroids, srcs, window_r2, local, sta
         if p < 0:
             return p
         out_len[i] = p - pos
+        _merge_segment(pos, p - pos, labs[i], rec_face, rec_dist, dist, label)
         pos = p
     return pos
 
 
 @njit(cache=True, nogil=True)
-def merge_records(n_centers, seg_start, seg_len, rec_face, rec_dist, dist, label):
-    """Replay recorded expansions: the labelling of :func:`classify_bounded`.
+def merge_some(labs, seg_start, seg_len, rec_face, rec_dist, dist, label):
+    """Merge the records of the centers ``labs`` into ``dist``/``label``.
 
-    Resets ``dist``/``label``, then for each center ``s < n_centers`` in
-    order, each recorded (face, distance) of its expansion
-    (``seg_len[s]`` entries from ``seg_start[s]``) takes label ``s`` when its
-    distance is strictly lower than the face's: the same updates, in the
-    same order, as expanding the centers one after the other.
+    Face ``f`` of the record of center ``s`` takes label ``s`` when ``(d, s)``
+    is lexicographically below ``(dist[f], label[f])``. Since the center of
+    lowest index wins ties, merging every record this way, in any order and
+    split over any number of ``dist``/``label`` pairs combined by
+    :func:`combine_merged`, gives the labelling of :func:`classify_bounded`
+    (centers in order, strict ``<``).
     """
-    m = label.shape[0]
-    for f in range(m):
+    for i in range(labs.shape[0]):
+        s = labs[i]
+        _merge_segment(seg_start[s], seg_len[s], s, rec_face, rec_dist, dist, label)
+
+
+@njit(cache=True, nogil=True)
+def reset_labels(dist, label):
+    """``dist = inf``, ``label = -1`` (records have finite distances, so the
+    label of an unreached face never takes part in a comparison)."""
+    for f in range(dist.shape[0]):
         dist[f] = _INF
         label[f] = -1
-    for s in range(n_centers):
-        a = seg_start[s]
-        for e in range(a, a + seg_len[s]):
-            f = rec_face[e]
-            d = rec_dist[e]
-            if d < dist[f]:
-                dist[f] = d
-                label[f] = s
+
+
+@njit(cache=True, nogil=True)
+def combine_merged(dist, label, dist2, label2, lo, hi):
+    """Faces ``lo <= f < hi`` keep the lexicographic minimum of ``(dist, label)``
+    and ``(dist2, label2)``."""
+    for f in range(lo, hi):
+        d = dist2[f]
+        if d < dist[f] or (d == dist[f] and label2[f] < label[f]):
+            dist[f] = d
+            label[f] = label2[f]
 
 
 @njit(cache=True, nogil=True)

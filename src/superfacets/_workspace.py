@@ -68,6 +68,13 @@ class Workspace:
         self.head = np.full(n_buckets, -1, dtype=np.int64)
         self._queue(min(_QUEUE0, max_nodes))
         self.vis = np.empty(min(_VISIT0, m), dtype=np.int32)
+        self._labels = None
+
+    def labels(self):
+        """This thread's own ``(dist, label)`` (float64, int32), made on first use."""
+        if self._labels is None:
+            self._labels = (np.empty(self.m), np.empty(self.m, dtype=np.int32))
+        return self._labels
 
     def _queue(self, cap: int) -> None:
         self.qface = np.empty(cap, dtype=np.int32)
@@ -165,8 +172,9 @@ class Replay:
     int32 and ``dist`` float64, one entry per settled face, ``start``/``len``
     per center). A center whose face was a center in the previous pass
     reuses its record; the others are expanded (record only, on up to
-    ``n_threads`` threads), then all records are replayed in center order
-    (:func:`~superfacets._kernels.merge_records`) and orphans are seeded. The
+    ``n_threads`` threads), all records are merged (each new one right after
+    its expansion, on its thread; :func:`~superfacets._kernels.merge_some`)
+    and orphans are seeded. The
     arena is compacted (records of centers that moved are dropped) when the
     free space at its end runs short, and grown when that is not enough.
     """
@@ -209,40 +217,31 @@ class Replay:
         cs = centers[:n_centers]
         idx = self.slot[cs]
         reuse = idx >= 0
-        start = np.zeros(n_centers, dtype=np.int64)
-        length = np.zeros(n_centers, dtype=np.int64)
-        start[reuse] = self.prev_start[idx[reuse]]
-        length[reuse] = self.prev_len[idx[reuse]]
+        seg_start = np.empty(self.m + 1, dtype=np.int64)  # per center (orphans appended)
+        seg_len = np.empty(self.m + 1, dtype=np.int64)
+        kept = np.flatnonzero(reuse)
         todo = np.flatnonzero(~reuse)
+        seg_start[kept] = self.prev_start[idx[kept]]
+        seg_len[kept] = self.prev_len[idx[kept]]
         if self.prev_len.shape[0]:
             expected = int(1.1 * todo.shape[0] * self.prev_len.mean())
         else:  # first pass: each face lies in about 4.4 windows
             expected = int(0.9 * self.face.shape[0])
-        kept = np.flatnonzero(reuse)
         # room for the new expansions, keeping only the records reused now
-        ks, kl = start[kept], length[kept]
-        self._make_room(expected + 4096, ks, kl)
-        start[kept] = ks
         while True:
-            st = self._expand(indptr, indices, w, c, cs[todo], window_r2, start, length, todo,
-                              expected)
+            ks = seg_start[kept]
+            self._make_room(expected + 4096, ks, seg_len[kept])
+            seg_start[kept] = ks
+            st = self._expand_and_merge(indptr, indices, w, c, cs, window_r2, seg_start,
+                                        seg_len, kept, todo, expected, dist, label)
             if st >= 0:
                 break
-            # a thread ran out of room: make more (at least twice what was expected) and redo
+            # a thread ran out of room: make more (at least twice what was expected), redo
             expected = 2 * max(expected, self.face.shape[0] - self.end)
-            ks, kl = start[kept], length[kept]
-            self._make_room(expected, ks, kl)
-            start[kept] = ks
         new_end = st
-        # replay in center order, then orphans (sequential: they depend on the labels)
-        seg_start = np.empty(self.m + 1, dtype=np.int64)
-        seg_len = np.empty(self.m + 1, dtype=np.int64)
-        seg_start[:n_centers] = start
-        seg_len[:n_centers] = length
+        # orphans (sequential: they depend on the labels)
         ws = spaces.get(0)
         while True:
-            _kernels.merge_records(n_centers, seg_start, seg_len, self.face, self.dist, dist,
-                                   label)
             sid = spaces.reserve(self.m - n_centers + 1)
             p, k, next_sid = _kernels.seed_orphans(
                 indptr, indices, w, c, centers, n_centers, window_r2, dist, label, ws.local,
@@ -251,11 +250,13 @@ class Replay:
             spaces.release(next_sid)
             if p >= 0:
                 break
+            # undo the orphans' labels: merge everything again, then retry with more room
             if p == _kernels.QUEUE_FULL:
                 ws.grow(p)
-            else:  # arena full: grow it, keeping this pass's records, and redo
+            else:
                 self.end = new_end
                 self._grow(self.face.shape[0] // 2)
+            self._merge_only(n_centers, seg_start, seg_len, dist, label)
         self.end = int(p)
         # this pass's records become the previous ones
         self.slot[self.prev_centers] = -1
@@ -265,37 +266,60 @@ class Replay:
         self.prev_len = seg_len[:k].copy()
         return k, int(todo.shape[0]) + (k - n_centers)
 
-    def _expand(self, indptr, indices, w, c, srcs, window_r2, start, length, todo, expected):
-        """Expand ``srcs`` into the free end of the arena; return the new end or < 0."""
+    def _merge_only(self, n_centers, seg_start, seg_len, dist, label) -> None:
+        _kernels.reset_labels(dist, label)
+        _kernels.merge_some(np.arange(n_centers), seg_start, seg_len, self.face, self.dist,
+                            dist, label)
+
+    def _expand_and_merge(self, indptr, indices, w, c, cs, window_r2, seg_start, seg_len,
+                          kept, todo, expected, dist, label):
+        """Expand the centers ``todo`` into the free end of the arena and merge
+        every record (those of ``kept`` and the new ones) into ``dist``/``label``.
+
+        Thread ``t`` expands an interleaved share of ``todo`` into its own part
+        of the arena and merges its new records, while they are in cache, and a
+        share of the reused ones into its own ``dist``/``label`` (thread 0: the
+        caller's); the shares are then combined face by face. Returns the new
+        end of the arena, or -1 if a thread ran out of room (nothing is kept).
+        """
         spaces = self.spaces
-        n = srcs.shape[0]
+        n = todo.shape[0]
         lo, hi = self.end, self.face.shape[0]
-        n_thr = min(spaces.n_threads, n)
-        if n_thr <= 1 or expected < _PARALLEL_MIN_WORK:
+        n_thr = spaces.n_threads
+        if n_thr <= 1 or expected + int(seg_len[kept].sum()) < _PARALLEL_MIN_WORK:
             n_thr = 1
-        parts = [np.arange(t, n, n_thr) for t in range(n_thr)]  # interleaved: balanced work
+        parts = [todo[t::n_thr] for t in range(n_thr)]  # interleaved: balanced work
+        # reused records: each to the thread with the least work so far
+        load = [len(p) * expected / max(n, 1) for p in parts]
+        share = [[] for _ in range(n_thr)]
+        for s, ln in zip(kept.tolist(), seg_len[kept].tolist()):
+            t = min(range(n_thr), key=load.__getitem__)
+            share[t].append(s)
+            load[t] += ln
         bounds = [lo + (hi - lo) * t // n_thr for t in range(n_thr + 1)]
         per = (n + n_thr - 1) // n_thr
         sid0 = spaces.reserve(n_thr * per)  # thread t uses sid0 + t * per + i
-        out_s = np.zeros(n, dtype=np.int64)
-        out_l = np.zeros(n, dtype=np.int64)
 
         def run(t):
             ws = spaces.get(t)
+            d_t, l_t = (dist, label) if t == 0 else ws.labels()
             part = parts[t]
-            srcs_t = np.ascontiguousarray(srcs[part])
+            srcs_t = np.ascontiguousarray(cs[part])
             os_t = np.empty(part.shape[0], dtype=np.int64)
             ol_t = np.empty(part.shape[0], dtype=np.int64)
             while True:
-                p = _kernels.expand_many(indptr, indices, w, c, srcs_t, window_r2, ws.local,
-                                         ws.stamp, sid0 + t * per, ws.queue, spaces.inv_width,
-                                         self.face, self.dist,
-                                         bounds[t], bounds[t + 1], os_t, ol_t)
+                _kernels.reset_labels(d_t, l_t)
+                _kernels.merge_some(np.array(share[t], dtype=np.int64), seg_start, seg_len,
+                                    self.face, self.dist, d_t, l_t)
+                p = _kernels.expand_many(indptr, indices, w, c, srcs_t, part, window_r2,
+                                         ws.local, ws.stamp, sid0 + t * per, ws.queue,
+                                         spaces.inv_width, self.face, self.dist, bounds[t],
+                                         bounds[t + 1], os_t, ol_t, d_t, l_t)
                 if p != _kernels.QUEUE_FULL:
                     break
                 ws.grow(p)
-            out_s[part] = os_t
-            out_l[part] = ol_t
+            seg_start[part] = os_t
+            seg_len[part] = ol_t
             return p
 
         if n_thr == 1:
@@ -305,6 +329,18 @@ class Replay:
             ends = [run(0)] + [f.result() for f in futs]
         if min(ends) < 0:
             return -1
+        if n_thr > 1:
+            cuts = [self.m * t // n_thr for t in range(n_thr + 1)]
+
+            def combine(t):
+                for u in range(1, n_thr):
+                    _kernels.combine_merged(dist, label, *spaces.get(u).labels(), cuts[t],
+                                            cuts[t + 1])
+
+            futs = [spaces.pool().submit(combine, t) for t in range(1, n_thr)]
+            combine(0)
+            for f in futs:
+                f.result()
         # close the gaps between the threads' ranges
         pos = ends[0]
         for t in range(1, n_thr):
@@ -312,9 +348,6 @@ class Replay:
             if a != pos:
                 self.face[pos:pos + b - a] = self.face[a:b]
                 self.dist[pos:pos + b - a] = self.dist[a:b]
-                sel = parts[t]
-                out_s[sel] -= a - pos
+                seg_start[parts[t]] -= a - pos
             pos += b - a
-        start[todo] = out_s
-        length[todo] = out_l
         return pos
