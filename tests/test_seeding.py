@@ -43,7 +43,7 @@ def test_farthest_point_matches_brute_force(sphere):
 
 
 @pytest.mark.parametrize("source", ["grid", "bunny", "noisy"])
-def test_blocked_farthest_point_equals_the_plain_loop(source):
+def test_blocked_farthest_point_equals_the_plain_loop(source, monkeypatch):
     # the grid has many exactly tied distances; the cell-skipping version must break
     # them the same way (lowest face index) and skip only cells it cannot change
     from superfacets import _kernels, read_mesh
@@ -67,8 +67,10 @@ def test_blocked_farthest_point_equals_the_plain_loop(source):
             _kernels.farthest_point_blocked(c, k, first_center(mesh), blocked,
                                             *_kernels.spatial_blocks(c, g))
             assert blocked.tolist() == plain.tolist()
-    assert mesh.n_faces >= 4096  # farthest_point_centers takes the blocked path
-    np.testing.assert_array_equal(farthest_point_centers(mesh, 150), plain[:150])
+    from superfacets import seeding
+
+    monkeypatch.setattr(seeding, "_BLOCKED_MIN_WORK", 0)  # the public function, blocked path
+    np.testing.assert_array_equal(farthest_point_centers(mesh, 1000), plain)
 
 
 @pytest.mark.parametrize("k, match", [(0, ">= 1"), (10**6, "larger than the number of faces"),

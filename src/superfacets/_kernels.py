@@ -20,10 +20,9 @@ import numpy as np
 from numba import njit
 
 _INF = np.inf
-_NONE = np.empty(0, dtype=np.int64)  # rebinding to it frees an array in a kernel
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _push(hkey, hval, size, key, val):
     i = size
     while i > 0:
@@ -38,7 +37,7 @@ def _push(hkey, hval, size, key, val):
     return size + 1
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _pop(hkey, hval, size):
     """Remove the root (read it before calling); return the new size."""
     size -= 1
@@ -75,7 +74,7 @@ RECORD_FULL = -1
 QUEUE_FULL = -2
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def expand(indptr, indices, weights, centroids, src, lab, window_r2,
            dist, label, local, stamp, sid, queue, inv_width, mode,
            vis_face, vis_dist, pos, lim):
@@ -207,7 +206,7 @@ def expand(indptr, indices, weights, centroids, src, lab, window_r2,
     return pos
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def classify_bounded(indptr, indices, weights, centroids, centers, n_centers, window_r2,
                      dist, label, local, stamp, sid, queue, inv_width, vis):
     """Classification step of the paper (section 3.1) with orphan re-seeding.
@@ -246,7 +245,7 @@ def classify_bounded(indptr, indices, weights, centroids, centers, n_centers, wi
     return k, sid
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _merge_segment(a, n, s, rec_face, rec_dist, dist, label):
     """Faces of a record take label ``s`` where ``(d, s)`` is lexicographically
     below their ``(dist, label)``: the center of lowest index wins ties, so
@@ -260,7 +259,7 @@ def _merge_segment(a, n, s, rec_face, rec_dist, dist, label):
             label[f] = s
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def expand_many(indptr, indices, weights, centroids, srcs, labs, window_r2, local, stamp,
                 sid0, queue, inv_width, rec_face, rec_dist, pos, lim, out_start, out_len,
                 dist, label):
@@ -276,7 +275,7 @@ def expand_many(indptr, indices, weights, centroids, srcs, labs, window_r2, loca
     position, or a negative status of :func:`expand`.
     """
     nod = np.empty(0)
-    nol = np.empty(0, dtype=np.int64)
+    nol = np.empty(0, dtype=np.int32)  # the type of the real labels: one compiled expand
     for i in range(srcs.shape[0]):
         out_start[i] = pos
         p = expand(indptr, indices, weights, centroids, srcs[i], 0, window_r2, nod, nol,
@@ -290,7 +289,7 @@ def expand_many(indptr, indices, weights, centroids, srcs, labs, window_r2, loca
     return pos
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def merge_some(labs, seg_start, seg_len, rec_face, rec_dist, dist, label):
     """Merge the records of the centers ``labs`` into ``dist``/``label``.
 
@@ -306,7 +305,7 @@ def merge_some(labs, seg_start, seg_len, rec_face, rec_dist, dist, label):
         _merge_segment(seg_start[s], seg_len[s], s, rec_face, rec_dist, dist, label)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def reset_labels(dist, label):
     """``dist = inf``, ``label = -1`` (records have finite distances, so the
     label of an unreached face never takes part in a comparison)."""
@@ -315,7 +314,7 @@ def reset_labels(dist, label):
         label[f] = -1
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def combine_merged(dist, label, dist2, label2, lo, hi):
     """Faces ``lo <= f < hi`` keep the lexicographic minimum of ``(dist, label)``
     and ``(dist2, label2)``."""
@@ -326,7 +325,7 @@ def combine_merged(dist, label, dist2, label2, lo, hi):
             label[f] = label2[f]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def seed_orphans(indptr, indices, weights, centroids, centers, n_centers, window_r2,
                  dist, label, local, stamp, sid, queue, inv_width, rec_face, rec_dist, pos,
                  lim, seg_start, seg_len):
@@ -355,14 +354,14 @@ def seed_orphans(indptr, indices, weights, centroids, centers, n_centers, window
     return pos, k, sid
 
 
-@njit(cache=True, nogil=True)
-def compact_records(seg_start, seg_len, rec_face, rec_dist):
+@njit(cache=True, error_model="numpy", nogil=True)
+def compact_records(order, seg_start, seg_len, rec_face, rec_dist):
     """Move the given record segments to the front, in order of their start.
 
-    Segments must not overlap. Updates ``seg_start`` in place and returns the
-    end of the last one.
+    ``order`` lists the segments by increasing start (``np.argsort`` of
+    ``seg_start``); segments must not overlap. Updates ``seg_start`` in place
+    and returns the end of the last one.
     """
-    order = np.argsort(seg_start, kind="mergesort")
     w = 0
     for j in range(order.shape[0]):
         i = order[j]
@@ -377,7 +376,7 @@ def compact_records(seg_start, seg_len, rec_face, rec_dist):
     return w
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _multi_source(indptr, indices, weights, dist, label, hkey, hval, size):
     while size > 0:
         d = hkey[0]
@@ -395,7 +394,7 @@ def _multi_source(indptr, indices, weights, dist, label, hkey, hval, size):
                 size = _push(hkey, hval, size, nd, g)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def classify_exact(indptr, indices, weights, centers, n_centers, dist, label, hkey, hval):
     """Exact nearest-center assignment: one multi-source Dijkstra, no bound.
 
@@ -428,7 +427,7 @@ def classify_exact(indptr, indices, weights, centers, n_centers, dist, label, hk
     return k
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def update_centers(label, k, areas, centroids, old_centers, new_centers):
     """Center update of the paper (section 3.1).
 
@@ -480,7 +479,7 @@ def update_centers(label, k, areas, centroids, old_centers, new_centers):
             new_centers[s] = f
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def farthest_point(centroids, k, first, out):
     """Iterative farthest point sampling in O(m k) with a running minimum.
 
@@ -516,7 +515,7 @@ def farthest_point(centroids, k, first, out):
         cur = nxt
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def spatial_blocks(centroids, cells_per_axis):
     """Group faces by the cell of a regular grid that holds their centroid.
 
@@ -600,7 +599,7 @@ def spatial_blocks(centroids, cells_per_axis):
     return order, bstart, bcenter, bradius
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def farthest_point_blocked(centroids, k, first, out, order, bstart, bcenter, bradius):
     """:func:`farthest_point`, skipping the blocks a new center cannot change.
 
@@ -670,7 +669,7 @@ def farthest_point_blocked(centroids, k, first, out, order, bstart, bcenter, bra
         cur = nxt
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def flood(indptr, indices, weights, centroids, order, window_r2, label, local, stamp, sid,
           queue, inv_width, vis):
     """Flood initialization (authors' implementation).
@@ -697,192 +696,3 @@ def flood(indptr, indices, weights, centroids, order, window_r2, label, local, s
                 return st, sid
             n += 1
     return n, sid
-
-
-
-
-@njit(cache=True)
-def _stable_sort(keys, vals, a, b):
-    """Stable sort of ``keys[a:b]``, carrying ``vals``, in place.
-
-    Insertion sort for the usual short ranges (the edges around one vertex,
-    the neighbours of one face); merge sort beyond 32 entries (a vertex of
-    very high valence).
-    """
-    if b - a > 32:
-        o = np.argsort(keys[a:b], kind="mergesort")
-        k = keys[a:b][o]
-        v = vals[a:b][o]
-        keys[a:b] = k
-        vals[a:b] = v
-        return
-    for i in range(a + 1, b):
-        k0 = keys[i]
-        v0 = vals[i]
-        j = i - 1
-        while j >= a and keys[j] > k0:
-            keys[j + 1] = keys[j]
-            vals[j + 1] = vals[j]
-            j -= 1
-        keys[j + 1] = k0
-        vals[j + 1] = v0
-
-
-@njit(cache=True)
-def _bucket(ids, n):
-    """Counting sort: ``(ptr, perm)``, ``perm[ptr[i]:ptr[i + 1]]`` the positions
-    ``j`` (ascending) where ``ids[j] == i``."""
-    ptr = np.zeros(n + 1, dtype=np.int64)
-    for j in range(ids.shape[0]):
-        ptr[ids[j] + 1] += 1
-    for i in range(n):
-        ptr[i + 1] += ptr[i]
-    fill = ptr[:-1].copy()
-    perm = np.empty(ids.shape[0], dtype=np.int64)
-    for j in range(ids.shape[0]):
-        perm[fill[ids[j]]] = j
-        fill[ids[j]] += 1
-    return ptr, perm
-
-
-@njit(cache=True, nogil=True)
-def face_graph(faces, n_vertices):
-    """Face graph of a triangle mesh in O(m) (see :mod:`superfacets.graph`).
-
-    Mesh edges are grouped by vertex pair ``(a, b)``, ``a < b`` (counting
-    sort on ``a``, then a stable sort on ``b`` around each vertex); every
-    pair of faces of a group is joined; a face pair sharing several edges
-    keeps the first (smallest) one; dual edges are ordered by face pair and
-    the symmetric CSR is filled row by row. Returns ``(pairs, edges, indptr,
-    indices, dual_edge, boundary_edges, boundary_faces)`` as documented in
-    :class:`superfacets.graph.FaceGraph`.
-    """
-    m = faces.shape[0]
-    # half-edges h = 3 f + corner (corners join vertices (0, 1), (1, 2), (2, 0));
-    # collapsed edges (both ends one vertex) join nothing
-    n_half = 0
-    for f in range(m):
-        for c in range(3):
-            if faces[f, c] != faces[f, (c + 1) % 3]:
-                n_half += 1
-    ha = np.empty(n_half, dtype=np.int64)
-    hb = np.empty(n_half, dtype=np.int64)
-    j = 0
-    for f in range(m):
-        for c in range(3):
-            u = faces[f, c]
-            v = faces[f, (c + 1) % 3]
-            if u != v:
-                ha[j] = min(u, v)
-                hb[j] = 3 * f + c  # for now: the half-edge id
-                j += 1
-    ptr, perm = _bucket(ha, n_vertices)
-    sa = ha[perm]
-    sh = hb[perm]  # half-edge ids, ascending around each vertex
-    ha = _NONE  # free it
-    hb = _NONE  # free it
-    perm = _NONE  # free it
-    sb = np.empty(n_half, dtype=np.int64)
-    for i in range(n_half):
-        f = sh[i] // 3
-        c = sh[i] % 3
-        sb[i] = max(faces[f, c], faces[f, (c + 1) % 3])
-    for v in range(n_vertices):
-        if ptr[v + 1] - ptr[v] > 1:
-            _stable_sort(sb, sh, ptr[v], ptr[v + 1])
-    ptr = _NONE  # free it
-    # groups of equal (a, b): boundary edges (one face) and candidate face pairs
-    n_bnd = 0
-    n_cand = 0
-    i = 0
-    while i < n_half:
-        e = i + 1
-        while e < n_half and sb[e] == sb[i] and sa[e] == sa[i]:
-            e += 1
-        if e - i == 1:
-            n_bnd += 1
-        else:
-            n_cand += (e - i) * (e - i - 1) // 2
-        i = e
-    boundary_edges = np.empty((n_bnd, 2), dtype=np.int64)
-    boundary_faces = np.empty(n_bnd, dtype=np.int64)
-    clo = np.empty(n_cand, dtype=np.int64)
-    chi = np.empty(n_cand, dtype=np.int64)
-    cg = np.empty(n_cand, dtype=np.int64)  # the group (its first position), in (a, b) order
-    nb = 0
-    nc = 0
-    i = 0
-    while i < n_half:
-        e = i + 1
-        while e < n_half and sb[e] == sb[i] and sa[e] == sa[i]:
-            e += 1
-        if e - i == 1:
-            boundary_edges[nb, 0] = sa[i]
-            boundary_edges[nb, 1] = sb[i]
-            boundary_faces[nb] = sh[i] // 3
-            nb += 1
-        else:
-            for x in range(i, e):
-                for y in range(x + 1, e):
-                    fx = sh[x] // 3
-                    fy = sh[y] // 3
-                    if fx != fy:  # not a degenerate face sharing an edge with itself
-                        clo[nc] = min(fx, fy)
-                        chi[nc] = max(fx, fy)
-                        cg[nc] = i
-                        nc += 1
-        i = e
-    # dual edges ordered by (lo, hi); per face pair the first group (smallest edge)
-    cptr, cperm = _bucket(clo[:nc], m)
-    khi = chi[cperm]
-    kg = cg[cperm]  # ascending within each lo (stable counting sort)
-    clo = _NONE  # free it
-    chi = _NONE  # free it
-    cg = _NONE  # free it
-    cperm = _NONE  # free it
-    n_e = 0
-    for f in range(m):
-        a = cptr[f]
-        b = cptr[f + 1]
-        if b - a > 1:
-            _stable_sort(khi, kg, a, b)
-        for t in range(a, b):
-            if t == a or khi[t] != khi[t - 1]:
-                n_e += 1
-    pairs = np.empty((n_e, 2), dtype=np.int64)
-    edges = np.empty((n_e, 2), dtype=np.int64)
-    indptr = np.zeros(m + 1, dtype=np.int64)
-    q = 0
-    for f in range(m):
-        for t in range(cptr[f], cptr[f + 1]):
-            if t == cptr[f] or khi[t] != khi[t - 1]:
-                pairs[q, 0] = f
-                pairs[q, 1] = khi[t]
-                edges[q, 0] = sa[kg[t]]
-                edges[q, 1] = sb[kg[t]]
-                indptr[f + 1] += 1
-                indptr[khi[t] + 1] += 1
-                q += 1
-    khi = _NONE  # free it
-    kg = _NONE  # free it
-    cptr = _NONE  # free it
-    sa = _NONE  # free it
-    sb = _NONE  # free it
-    sh = _NONE  # free it
-    # symmetric CSR, neighbours ascending within each row
-    for f in range(m):
-        indptr[f + 1] += indptr[f]
-    fill = indptr[:-1].copy()
-    cols = np.empty(2 * n_e, dtype=np.int64)
-    dual = np.empty(2 * n_e, dtype=np.int64)
-    for t in range(n_e):
-        for side in range(2):
-            row = pairs[t, side]
-            cols[fill[row]] = pairs[t, 1 - side]
-            dual[fill[row]] = t
-            fill[row] += 1
-    for f in range(m):
-        if indptr[f + 1] - indptr[f] > 1:
-            _stable_sort(cols, dual, indptr[f], indptr[f + 1])
-    indices = cols.astype(np.int32)
-    return pairs, edges, indptr, indices, dual, boundary_edges, boundary_faces

@@ -197,7 +197,8 @@ class Replay:
         (``start`` updated in place)."""
         if self.face.shape[0] - self.end >= need:
             return
-        self.end = int(_kernels.compact_records(start, length, self.face, self.dist))
+        self.end = int(_kernels.compact_records(np.argsort(start, kind="stable"), start,
+                                                 length, self.face, self.dist))
         if self.face.shape[0] - self.end >= need:
             return
         self._grow(int(0.25 * (self.end + need)) + need + 1024 - (self.face.shape[0] - self.end))

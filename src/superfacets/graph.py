@@ -93,10 +93,6 @@ class FaceGraph:
 def build_face_graph(faces: np.ndarray, n_vertices: int) -> FaceGraph:
     """Group mesh edges and build the face graph (see the module notes).
 
-    O(m) time and memory: counting sorts and per-vertex / per-face sorts of
-    a handful of entries, in one numba kernel
-    (:func:`superfacets._kernels.face_graph`).
-
     Parameters
     ----------
     faces : (m, 3) int64 ndarray
@@ -108,11 +104,96 @@ def build_face_graph(faces: np.ndarray, n_vertices: int) -> FaceGraph:
     -------
     FaceGraph
     """
-    from . import _kernels
-
     m = faces.shape[0]
-    pairs, edges, indptr, indices, dual_edge, boundary_edges, boundary_faces = \
-        _kernels.face_graph(np.ascontiguousarray(faces, dtype=np.int64), int(n_vertices))
+    # 32-bit half-edge and vertex ids while they fit: the temporaries of the edge grouping
+    # are the memory peak of a whole run on large meshes
+    itype = np.int32 if max(int(n_vertices), 3 * m) < 2**31 - 1 else np.int64
+    a = np.empty(3 * m, dtype=itype)  # half-edge h = 3 * face + corner, corner c joins
+    b = np.empty(3 * m, dtype=itype)  # vertices (0, 1), (1, 2), (2, 0) of the face
+    for c, (u, v) in enumerate(((0, 1), (1, 2), (2, 0))):
+        np.minimum(faces[:, u], faces[:, v], out=a[c::3], casting="unsafe")
+        np.maximum(faces[:, u], faces[:, v], out=b[c::3], casting="unsafe")
+    valid = np.flatnonzero(a != b).astype(itype)  # collapsed edges join nothing
+    key = a[valid].astype(np.int64)
+    key *= np.int64(n_vertices)
+    key += b[valid]
+    order = np.argsort(key, kind="stable")
+    skey = key[order]
+    del key
+    half = valid[order]  # half-edge ids, grouped by edge
+    del valid, order
+    sface = half // 3
+    n_half = skey.shape[0]
+    if n_half:
+        brk = np.empty(n_half, dtype=bool)
+        brk[0] = True
+        np.not_equal(skey[1:], skey[:-1], out=brk[1:])
+        starts = np.flatnonzero(brk)
+        del brk
+    else:
+        starts = np.zeros(0, np.int64)
+    del skey
+    sizes = np.diff(np.r_[starts, n_half])
+
+    # boundary edges: groups of size 1
+    one = starts[sizes == 1]
+    boundary_faces = sface[one].astype(np.int64)
+    boundary_edges = np.stack([a[half[one]], b[half[one]]], axis=1).astype(np.int64)
+    del one
+
+    # pairs within every group of size >= 2 (all pairs for non-manifold edges)
+    pi, pj, pe = [], [], []
+    for s in np.unique(sizes[sizes >= 2]):
+        st = starts[sizes == s]
+        ii, jj = np.triu_indices(int(s), 1)
+        pi.append(sface[st[:, None] + ii[None, :]].ravel())
+        pj.append(sface[st[:, None] + jj[None, :]].ravel())
+        pe.append(np.repeat(half[st], ii.size))
+    del starts, sizes, sface, half
+    if pi:
+        fi = np.concatenate(pi)
+        fj = np.concatenate(pj)
+        he = np.concatenate(pe)
+    else:
+        fi = fj = he = np.zeros(0, itype)
+    del pi, pj, pe
+    lo = np.minimum(fi, fj)
+    hi = np.maximum(fi, fj)
+    del fi, fj
+    keep = lo != hi  # a degenerate face sharing an edge with itself
+    if not keep.all():
+        lo, hi, he = lo[keep], hi[keep], he[keep]
+    del keep
+    # one dual edge per face pair: the first in edge-key order (smallest vertex pair)
+    pkey = lo.astype(np.int64) * np.int64(m) + hi
+    ekey = a[he].astype(np.int64) * np.int64(n_vertices) + b[he]
+    o = np.lexsort((ekey, pkey))
+    del ekey
+    pkey, lo, hi, he = pkey[o], lo[o], hi[o], he[o]
+    del o
+    first = np.r_[True, pkey[1:] != pkey[:-1]] if pkey.size else np.zeros(0, bool)
+    del pkey
+    if not first.all():
+        lo, hi, he = lo[first], hi[first], he[first]
+    del first
+    pairs = np.stack([lo, hi], axis=1).astype(np.int64)
+    edges = np.stack([a[he], b[he]], axis=1).astype(np.int64)
+    del a, b, he
+
+    # symmetric CSR, neighbours ascending within each row
+    e = pairs.shape[0]
+    rows = np.concatenate([lo, hi])
+    cols = np.concatenate([hi, lo])
+    del lo, hi
+    o = np.lexsort((cols, rows))
+    indptr = np.zeros(m + 1, dtype=np.int64)
+    np.cumsum(np.bincount(rows, minlength=m), out=indptr[1:])
+    del rows
+    indices = np.ascontiguousarray(cols[o], dtype=np.int32)
+    del cols
+    dual_edge = o.astype(np.int64)
+    dual_edge[dual_edge >= e] -= e  # entry t of [lo->hi, hi->lo] is dual edge t mod e
+    del o
     return FaceGraph(
         n_faces=m,
         pairs=pairs,

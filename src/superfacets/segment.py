@@ -295,7 +295,7 @@ def segment(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | None =
     c = np.ascontiguousarray(mesh.centroids)
     areas = np.ascontiguousarray(mesh.areas)
     dist = np.empty(m)
-    label = np.empty(m, dtype=np.int64)
+    label = np.empty(m, dtype=np.int32)  # one kernel specialization for all label arrays
     spaces = Workspaces(m, csr_w, n_threads)
     centers = np.empty(m, dtype=np.int64)
     window_r2 = (window * r) ** 2
@@ -308,7 +308,7 @@ def segment(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | None =
         init_labels = (flood_labels(mesh, csr_w, r, window) if init == "flood"
                        else grid_labels(mesh, r))
         n_centers = int(init_labels.max()) + 1
-        _kernels.update_centers(init_labels, n_centers, areas, c,
+        _kernels.update_centers(init_labels.astype(np.int32), n_centers, areas, c,
                                 np.full(n_centers, -1, dtype=np.int64), centers)
     timings["init"] = time.perf_counter() - t
     n_init = n_centers
@@ -423,7 +423,8 @@ def _centers_of(labels: np.ndarray, old_centers: np.ndarray, areas, centroids) -
     face nearest the area-weighted mean."""
     k = int(labels.max()) + 1
     nearest = np.empty(k, dtype=np.int64)
-    _kernels.update_centers(labels, k, areas, centroids, np.full(k, -1, dtype=np.int64), nearest)
+    _kernels.update_centers(labels.astype(np.int32), k, areas, centroids,
+                            np.full(k, -1, dtype=np.int64), nearest)
     out = nearest.copy()
     kept = labels[old_centers]
     # the first old center landing in a label wins
