@@ -316,3 +316,18 @@ def test_cycle_jump_gives_the_labels_of_running_every_pass(psb, mesh_id, max_ite
     np.testing.assert_array_equal(a.labels, b.labels)
     np.testing.assert_array_equal(a.centers, b.centers)
     assert (a.n_iter, a.converged, a.n_orphan_seeds) == (b.n_iter, b.converged, b.n_orphan_seeds)
+
+
+def test_import_warms_numba_up_in_the_background_unless_disabled():
+    import subprocess
+    import sys
+
+    code = ("import superfacets, superfacets._warmup as w; t = w._thread; "
+            "print(t is not None and (t.join(30) or not t.is_alive()))")
+    run = lambda env: subprocess.run([sys.executable, "-c", code], capture_output=True,
+                                     text=True, env=env, check=True).stdout.strip()
+    import os
+
+    env = {k: v for k, v in os.environ.items() if k != "SUPERFACETS_NO_WARMUP"}
+    assert run(env) == "True"  # started, and finishes
+    assert run({**env, "SUPERFACETS_NO_WARMUP": "1"}) == "False"

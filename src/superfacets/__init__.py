@@ -9,7 +9,11 @@ a triangle mesh into compact patches whose borders follow concavities.
 >>> labels = superfacets(mesh, n_segments=150, alpha=200)  # doctest: +SKIP
 """
 
-from .connectivity import enforce_connectivity
+from . import _warmup
+
+_warmup.start()  # numba's process start-up, overlapped with the imports below
+
+from .connectivity import enforce_connectivity  # noqa: E402
 from .errors import (InvalidMeshError, MemoryLimitError, MeshFormatError, ParameterError,
                      SuperfacetsError)
 from .graph import FaceGraph, paper_weights, shlafman_weights
