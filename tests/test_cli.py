@@ -24,6 +24,16 @@ def test_segment_writes_labels_colored_mesh_and_summary(tmp_path, small_off, cap
     assert read_mesh(ply).n_faces == 5120
 
 
+def test_threads_option_gives_the_same_labels(tmp_path, small_off):
+    outs = []
+    for n in ("1", "2"):
+        outs.append(tmp_path / f"t{n}.seg")
+        assert main(["segment", str(small_off), "-k", "40", "--threads", n, "-o",
+                     str(outs[-1]), "-q"]) == 0
+    assert outs[0].read_text() == outs[1].read_text()
+    assert main(["segment", str(small_off), "--threads", "0", "-q"]) == 2
+
+
 def test_header_option(tmp_path, small_off, capsys):
     seg = tmp_path / "h.seg"
     assert main(["segment", str(small_off), "--radius", "0.1", "--init", "grid", "-o", str(seg),

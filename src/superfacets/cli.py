@@ -74,6 +74,9 @@ def _add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> N
     p.add_argument("--no-connectivity", action="store_true",
                    help="keep superfacets split in several pieces (default: merge stray "
                         "pieces into the neighbour sharing the longest boundary)")
+    p.add_argument("--threads", type=_int, default=None, metavar="N",
+                   help="threads expanding centers at once (default: all cores; the labels "
+                        "do not depend on it)")
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
     p.add_argument("--progress", action="store_true", help="show a progress bar of the iterations")
 
@@ -577,7 +580,7 @@ def _method_kwargs(args) -> dict:
     return dict(alpha=args.alpha, eta_convex=args.eta_convex, window=args.window,
                 init=args.init, max_iter=args.max_iter, weighting=args.weighting,
                 assignment=args.assignment, enforce_connectivity=not args.no_connectivity,
-                progress=args.progress)
+                progress=args.progress, n_threads=args.threads)
 
 
 def _header(mesh, result, source: str) -> dict:
