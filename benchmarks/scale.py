@@ -11,8 +11,8 @@ the package (timed apart), read the file, segment, all timed; "total" is
 read + segment, and includes numba's start-up in a new process (its first
 call of a compiled kernel, about 0.2-0.3 s, lands in "init"). Peak resident
 memory is the process's own; bytes/face is reported both for the whole
-process and above the resident size right after import (Python, numpy,
-numba: about 110 MiB). The paper's Table 1 time of the mesh of comparable
+process and above the resident size right after import and numba's start-up
+(Python, numpy, scipy, numba: about 150 MiB). The paper's Table 1 time of the mesh of comparable
 size (single-threaded C++, 3.2 GHz) is shown beside.
 """
 
@@ -36,12 +36,25 @@ PAPER = [(69_451, "Bunny", 22), (105_860, "Hand", 39), (400_000, "Lion vase", 13
          (1_652_528, "Ramesses", 738), (7_219_045, "Dragon", 3_125)]
 
 
+def _current_rss() -> int:
+    """Resident memory now, bytes (Linux; else the peak so far)."""
+    try:
+        with open("/proc/self/statm") as f:
+            return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+    except OSError:
+        return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+
+
 def one(path: str, k: int, alpha: float, threads: int | None) -> dict:
     t = time.perf_counter()
     from superfacets import read_mesh, segment
 
     t_import = time.perf_counter() - t
-    rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    from superfacets import _warmup
+
+    if _warmup._thread is not None:  # numba started (it would start on the first call anyway)
+        _warmup._thread.join()
+    rss0 = _current_rss()
     t = time.perf_counter()
     mesh = read_mesh(path)
     t_read = time.perf_counter() - t

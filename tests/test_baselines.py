@@ -80,7 +80,7 @@ def test_vsa_l2_fits_the_plane_of_least_variance_exactly():
     mesh = grid_mesh(12, 12, height=lambda x, y: 0.3 * np.abs(x) + 0.1 * y)
     r = variational_shape_approximation(mesh, 1, metric="l2", init="random", rng=0)
     rng = np.random.default_rng(1)
-    pts, wts = [], []
+    pts = []
     for f in mesh.faces:
         a, b = rng.random((2, 400))
         flip = a + b > 1

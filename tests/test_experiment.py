@@ -8,10 +8,10 @@ import os
 import numpy as np
 import pytest
 
-from superfacets import ParameterError, write_labels, write_mesh
+from superfacets import ParameterError
 from superfacets.cli import main
 from superfacets.datasets.psb import list_meshes
-from superfacets.experiment import (METHODS, Config, MethodRun, Skipped, expand_grid,
+from superfacets.experiment import (METHODS, MethodRun, Skipped, expand_grid,
                                     read_results, register_method, run_experiment)
 from superfacets.report import load_results, markdown_summary, summary, write_report
 

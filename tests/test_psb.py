@@ -1,4 +1,3 @@
-import numpy as np
 import pytest
 
 from superfacets import MeshFormatError, write_mesh

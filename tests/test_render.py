@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from superfacets import Mesh, ParameterError, superfacets, write_labels, write_mesh
+from superfacets import ParameterError, superfacets, write_labels, write_mesh
 from superfacets.cli import main
 from superfacets.html import html_page, write_html
 from superfacets.render import render, render_panel

@@ -508,7 +508,6 @@ def _param_values(items) -> dict[str, list[str]]:
 
 
 def _cmd_experiment(args) -> int:
-    from .errors import ParameterError
     from .experiment import DEFAULT_N_SEGMENTS, METHODS, expand_grid, get_method, run_experiment
 
     if args.list_methods:

@@ -9,8 +9,6 @@
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from . import _kernels
@@ -79,7 +77,7 @@ def farthest_point_centers(mesh, n_segments: int) -> np.ndarray:
     if m * k < _BLOCKED_MIN_WORK:
         _kernels.farthest_point(c, k, first_center(mesh), out)
     else:  # same result; each new center visits only the grid cells it can change
-        g = int(min(1024, max(2, round(math.sqrt(m / 64)))))
+        g = max(2, round(m ** (1 / 3)))  # g^3 ~ m cells: the count array stays O(m)
         _kernels.farthest_point_blocked(c, k, first_center(mesh), out,
                                         *_kernels.spatial_blocks(c, g))
     return out

@@ -391,7 +391,7 @@ def segment(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | None =
         if bar is not None:
             bar.close()
     timings["iterations"] = time.perf_counter() - t
-    del inc, spaces, dist, csr_w  # free the work buffers before the clean-up
+    inc = spaces = dist = csr_w = None  # free the work buffers before the clean-up
     hkey = hval = None
 
     # labels of the last classification; drop superfacets left empty
