@@ -5,7 +5,7 @@ PYTHON ?= python3
 VENV := .venv
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test bench browser pictures sweep comparisons clean
+.PHONY: demo test bench scale browser pictures sweep comparisons clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -31,8 +31,14 @@ browser:
 	    echo "note: could not install chromium; the browser test will be skipped"; \
 	  else echo "note: chromium not found; the browser test will be skipped"; fi; }
 
+# Table 1 meshes, then the scale table up to 1.7M faces (about 2 minutes)
 bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/table1.py
+	$(VENV)/bin/python benchmarks/scale.py
+
+# The scale table up to 27M faces (makes the inputs once, ~1 GB in ~/.cache; ~15 minutes)
+scale: $(STAMP)
+	$(VENV)/bin/python benchmarks/scale.py --max-faces 3e7
 
 # The pictures in the README (docs/images), made by the command line.
 PSB_DIR ?= $(HOME)/.cache/superfacets/psb
