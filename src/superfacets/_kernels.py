@@ -479,6 +479,23 @@ def update_centers(label, k, areas, centroids, old_centers, new_centers):
             new_centers[s] = f
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _nearest_so_far(centroids, mind, f, cx, cy, cz):
+    """Lower ``mind[f]`` to the squared distance from the centroid of ``f`` to
+    ``(cx, cy, cz)`` if nearer; return it (negative: ``f`` is a center)."""
+    mf = mind[f]
+    if mf < 0.0:
+        return mf
+    dx = centroids[f, 0] - cx
+    dy = centroids[f, 1] - cy
+    dz = centroids[f, 2] - cz
+    d = dx * dx + dy * dy + dz * dz
+    if d < mf:
+        mind[f] = d
+        return d
+    return mf
+
+
 @njit(cache=True, error_model="numpy")
 def farthest_point(centroids, k, first, out):
     """Iterative farthest point sampling in O(m k) with a running minimum.
@@ -499,16 +516,9 @@ def farthest_point(centroids, k, first, out):
         best = -1.0
         nxt = -1
         for f in range(m):
-            mf = mind[f]
+            mf = _nearest_so_far(centroids, mind, f, cx, cy, cz)
             if mf < 0.0:
                 continue
-            dx = centroids[f, 0] - cx
-            dy = centroids[f, 1] - cy
-            dz = centroids[f, 2] - cz
-            d = dx * dx + dy * dy + dz * dz
-            if d < mf:
-                mf = d
-                mind[f] = d
             if mf > best:
                 best = mf
                 nxt = f
@@ -645,16 +655,9 @@ def farthest_point_blocked(centroids, k, first, out, order, bstart, bcenter, bra
             arg = m
             for j in range(bstart[b], bstart[b + 1]):
                 f = order[j]
-                mf = mind[f]
+                mf = _nearest_so_far(centroids, mind, f, cx, cy, cz)
                 if mf < 0.0:
                     continue
-                dx = centroids[f, 0] - cx
-                dy = centroids[f, 1] - cy
-                dz = centroids[f, 2] - cz
-                d = dx * dx + dy * dy + dz * dz
-                if d < mf:
-                    mf = d
-                    mind[f] = d
                 if mf > best or (mf == best and f < arg):
                     best = mf
                     arg = f
