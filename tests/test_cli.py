@@ -126,3 +126,12 @@ def test_evaluate_one_call(tmp_path, capsys):
     bad.write_text("0\n1\n")
     assert main(["evaluate", str(off), str(sf), str(bad)]) == 2
     assert "short.seg: has 2 labels but the mesh has 800 faces" in capsys.readouterr().err
+
+
+def test_progress_bar_names_the_stages_then_counts_passes(tmp_path, small_off, capsys):
+    assert main(["segment", str(small_off), "-k", "20", "--progress", "-q"]) == 0
+    err = capsys.readouterr().err
+    for stage in ("face graph", "weights", "init (farthest)", "superfacets"):
+        assert stage in err
+    assert main(["segment", str(small_off), "-k", "20", "-q"]) == 0  # small mesh: no bar
+    assert capsys.readouterr().err == ""

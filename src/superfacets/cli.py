@@ -78,7 +78,9 @@ def _add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> N
                    help="threads expanding centers at once (default: all cores; the labels "
                         "do not depend on it)")
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
-    p.add_argument("--progress", action="store_true", help="show a progress bar of the iterations")
+    p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                   help="progress bar of the stages and iterations on stderr (default: on for "
+                        "meshes of 500,000 faces or more when stderr is a terminal)")
 
 
 def _build_parser() -> argparse.ArgumentParser:
@@ -579,7 +581,7 @@ def _method_kwargs(args) -> dict:
     return dict(alpha=args.alpha, eta_convex=args.eta_convex, window=args.window,
                 init=args.init, max_iter=args.max_iter, weighting=args.weighting,
                 assignment=args.assignment, enforce_connectivity=not args.no_connectivity,
-                progress=args.progress, n_threads=args.threads)
+                progress=bool(args.progress), n_threads=args.threads)
 
 
 def _header(mesh, result, source: str) -> dict:
@@ -625,8 +627,11 @@ def _cmd_segment(args) -> int:
     ply_out = _check_output(args.colored_mesh, (".ply",), "the coloured mesh")
     t0 = time.perf_counter()
     mesh = read_mesh(args.mesh)
+    kwargs = _method_kwargs(args)
+    if args.progress is None:  # long runs show where they are
+        kwargs["progress"] = mesh.n_faces >= 500_000 and sys.stderr.isatty()
     try:
-        result = segment(mesh, args.n_segments, radius=args.radius, **_method_kwargs(args))
+        result = segment(mesh, args.n_segments, radius=args.radius, **kwargs)
     except SuperfacetsError as exc:
         raise type(exc)(f"{args.mesh}: {exc}") from None
     elapsed = time.perf_counter() - t0

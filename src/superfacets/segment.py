@@ -132,7 +132,8 @@ def superfacets(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | No
         Merge stray pieces of a superfacet into the neighbour with which they
         share the longest boundary, so each superfacet is face-connected.
     progress : bool, default False
-        Show a progress bar of the iterations on stderr.
+        Show a progress bar on stderr: the set-up stages by name (face graph,
+        weights, init), then the iterations.
     n_threads : int, optional
         Threads that expand centers at the same time (``>= 1``; default:
         numba's thread count, ``NUMBA_NUM_THREADS``, normally the number of
@@ -281,10 +282,17 @@ def segment(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | None =
     m = mesh.n_faces
     timings: dict[str, float] = {}
 
+    bar = None
+    if progress:  # one bar: the set-up stages by name, then the passes
+        from tqdm import tqdm
+
+        bar = tqdm(total=max_iter, desc="face graph", unit="it", leave=False)
     t = time.perf_counter()
     g = mesh.graph
     _ = mesh.centroids, mesh.normals, mesh.areas
     timings["graph"] = time.perf_counter() - t
+    if bar is not None:
+        bar.set_description("weights")
     t = time.perf_counter()
     w = edge_weights(mesh, weighting, alpha=alpha, eta_convex=eta_convex)
     csr_w = np.ascontiguousarray(w[g.dual_edge], dtype=np.float64)
@@ -300,6 +308,8 @@ def segment(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | None =
     centers = np.empty(m, dtype=np.int64)
     window_r2 = (window * r) ** 2
 
+    if bar is not None:
+        bar.set_description(f"init ({init})")
     t = time.perf_counter()
     if init == "farthest":
         n_centers = k
@@ -322,11 +332,8 @@ def segment(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | None =
     n_expanded = 0
     converged = False
     n_orphans = 0
-    bar = None
-    if progress:
-        from tqdm import tqdm
-
-        bar = tqdm(total=max_iter, desc="superfacets", unit="it", leave=False)
+    if bar is not None:
+        bar.set_description("superfacets")
     # The centers of a pass determine everything after it, so once the ordered
     # center list of a pass repeats an earlier one the run is periodic: jump to the
     # state of pass max_iter and classify it once (same labels as running every pass).
