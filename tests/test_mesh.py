@@ -71,3 +71,25 @@ def test_check_usable():
     v = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0]], float)
     with pytest.raises(InvalidMeshError, match="zero total area"):
         Mesh(v, [[0, 1, 2]]).check_usable()
+
+
+def test_one_pass_geometry_equals_the_numpy_expressions_bit_for_bit():
+    # random triangles (some degenerate: repeated or collinear vertices) of very
+    # different sizes; the kernel must repeat numpy's operations exactly
+    rng = np.random.default_rng(7)
+    v = rng.normal(size=(300, 3)) * rng.choice([1e-6, 1.0, 1e4], size=(300, 1))
+    v[250:] = v[:50] * 0.5 + v[50:100] * 0.5  # midpoints: collinear triangles
+    f = rng.integers(0, 300, size=(2000, 3))
+    f[:40, 2] = f[:40, 1]  # repeated vertex
+    f[40:80] = np.stack([np.arange(40), np.arange(250, 290), np.arange(50, 90)], axis=1)
+    mesh = Mesh(v, f)
+    v0, v1, v2 = v[f[:, 0]], v[f[:, 1]], v[f[:, 2]]
+    cross = np.cross(v1 - v0, v2 - v0)
+    norm = np.linalg.norm(cross, axis=1)
+    normals = np.zeros_like(cross)
+    ok = norm > 0
+    normals[ok] = cross[ok] / norm[ok, None]
+    np.testing.assert_array_equal(mesh.centroids, (v0 + v1 + v2) / 3.0)
+    np.testing.assert_array_equal(mesh.areas, 0.5 * norm)
+    np.testing.assert_array_equal(mesh.normals, normals)
+    assert (~ok).sum() >= 40 and not mesh.centroids.flags.writeable

@@ -72,36 +72,24 @@ class Mesh:
 
     # ------------------------------------------------------ derived geometry
     @cached_property
+    def _geometry(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        from . import _kernels  # one numba pass: no (m, 3) gathers and temporaries
+
+        m = self.n_faces
+        centroids, areas, normals = np.empty((m, 3)), np.empty(m), np.empty((m, 3))
+        _kernels.face_geometry(np.ascontiguousarray(self.vertices),
+                               np.ascontiguousarray(self.faces), centroids, areas, normals)
+        return _readonly(centroids), _readonly(areas), _readonly(normals)
+
+    @property
     def centroids(self) -> np.ndarray:
         """(m, 3) float64: mean of each face's three vertex positions."""
-        v = self.vertices
-        f = self.faces
-        return _readonly((v[f[:, 0]] + v[f[:, 1]] + v[f[:, 2]]) / 3.0)
-
-    @cached_property
-    def _areas_normals(self) -> tuple[np.ndarray, np.ndarray]:
-        v = self.vertices
-        f = self.faces
-        v0 = v[f[:, 0]]
-        a = v[f[:, 1]] - v0
-        b = v[f[:, 2]] - v0
-        del v0
-        # the cross product written out: numpy's np.cross, same operations, 7x faster
-        cross = np.empty_like(a)
-        cross[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
-        cross[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
-        cross[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-        del a, b
-        norm = np.linalg.norm(cross, axis=1)
-        ok = norm > 0
-        cross /= np.where(ok, norm, 1.0)[:, None]  # in place: becomes the unit normals
-        cross[~ok] = 0.0
-        return _readonly(0.5 * norm), _readonly(cross)
+        return self._geometry[0]
 
     @property
     def areas(self) -> np.ndarray:
         """(m,) float64: face areas (0 for degenerate faces)."""
-        return self._areas_normals[0]
+        return self._geometry[1]
 
     @property
     def normals(self) -> np.ndarray:
@@ -110,7 +98,7 @@ class Mesh:
         Degenerate (zero-area) faces get the zero vector, so their dihedral
         angle with any neighbour is pi/2 and their edges count as convex.
         """
-        return self._areas_normals[1]
+        return self._geometry[2]
 
     @cached_property
     def area(self) -> float:
