@@ -50,10 +50,10 @@ def one(path: str, k: int, alpha: float, threads: int | None) -> dict:
     from superfacets import read_mesh, segment
 
     t_import = time.perf_counter() - t
-    from superfacets import _warmup
+    from superfacets import warmup
 
-    if _warmup._thread is not None:  # numba started (it would start on the first call anyway)
-        _warmup._thread.join()
+    warmup.start()  # numba's start-up, as the command line does (else on the first call)
+    warmup.wait()
     rss0 = _current_rss()
     t = time.perf_counter()
     mesh = read_mesh(path)

@@ -16,8 +16,8 @@ import numpy as np
 from scipy.sparse import csr_array
 from scipy.sparse.csgraph import dijkstra
 
-from superfacets.graph import paper_weights
-from superfacets.seeding import farthest_point_centers
+from superfacets.weights import paper_weights
+from superfacets.initialization import farthest_point_centers
 
 
 def classify(a: csr_array, c: np.ndarray, centers: list, window_r2: float):

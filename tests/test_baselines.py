@@ -14,7 +14,8 @@ from superfacets.baselines import (ncut_embedding, normalized_cuts,
 from superfacets.baselines.ncuts import ncut_memory_estimate
 from superfacets.connectivity import label_components
 from superfacets.errors import MemoryLimitError
-from superfacets.experiment import METHODS, Skipped, expand_grid, read_results, run_experiment
+from superfacets.methods import METHODS, Skipped
+from superfacets.runner import expand_grid, read_results, run_experiment
 
 from conftest import grid_mesh, write_benchmark
 

@@ -47,7 +47,7 @@ def test_header_option(tmp_path, small_off, capsys):
 @pytest.mark.parametrize("args, match", [
     (["segment", "{missing}"], "no such file"),
     (["segment", "{bad}"], "expected 2 faces, found 1"),
-    (["segment", "{off}", "-k", "0"], "n_segments must be >= 1"),
+    (["segment", "{off}", "-k", "0"], "n_segments must be an integer >= 1"),
     (["segment", "{off}", "-k", "999999"], "larger than the number of faces"),
     (["segment", "{off}", "--alpha", "-1"], "alpha must be a finite number >= 0"),
     (["segment", "{off}", "-o", "{nodir}"], "does not exist"),

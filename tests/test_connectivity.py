@@ -1,7 +1,8 @@
 import numpy as np
 
 from superfacets import enforce_connectivity
-from superfacets.connectivity import label_components, relabel_dense
+from superfacets.connectivity import label_components
+from superfacets.labels import relabel_dense
 
 from conftest import grid_mesh
 

@@ -11,8 +11,8 @@ import pytest
 from superfacets import ParameterError
 from superfacets.cli import main
 from superfacets.datasets.psb import list_meshes
-from superfacets.experiment import (METHODS, MethodRun, Skipped, expand_grid,
-                                    read_results, register_method, run_experiment)
+from superfacets.methods import METHODS, MethodRun, Skipped, register_method
+from superfacets.runner import expand_grid, read_results, run_experiment
 from superfacets.report import load_results, markdown_summary, summary, write_report
 
 from conftest import grid_mesh, write_benchmark
@@ -84,7 +84,7 @@ def test_run_writes_one_row_per_combination_and_resumes(bench, tmp_path):
     assert len(rows) == 12
     r = rows[0]
     assert r["status"] == "ok" and r["category"] in ("Human", "Cup") and r["n_ground_truths"] == "2"
-    assert {row["superfacets"] for row in rows if row["n_segments"] == "5"} == {"5"}
+    assert {row["segments"] for row in rows if row["n_segments"] == "5"} == {"5"}
     for row in rows:
         assert 0 <= float(row["undersegmentation_error"]) and 0 < float(row["boundary_recall"]) <= 1
         assert 0 < float(row["achievable_accuracy"]) <= 1 and float(row["compactness"]) > 3.5
@@ -148,7 +148,7 @@ def test_a_bad_mesh_does_not_stop_the_run(bench, tmp_path):
 
 
 def test_interrupt_keeps_rows_and_rerun_continues(bench, tmp_path, registry, monkeypatch):
-    import superfacets.experiment as ex
+    import superfacets.runner.experiment as ex
 
     meshes = list_meshes(bench)
     res = tmp_path / "r.csv"
@@ -179,7 +179,7 @@ def test_worker_processes_give_the_same_rows(bench, tmp_path, registry):
     assert s.ok == 18
 
     def table(p):
-        keep = ("mesh", "method", "alpha", "n_segments", "superfacets", "iterations",
+        keep = ("mesh", "method", "alpha", "n_segments", "segments", "iterations",
                 "undersegmentation_error", "compactness", "boundary_recall", "achievable_accuracy")
         return sorted(tuple(r[k] for k in keep) for r in read_results(p))
 
@@ -215,7 +215,7 @@ def test_run_rejects_bad_arguments(bench, tmp_path):
 
 def _write_rows(path, rows):
     cols = ["mesh", "mesh_id", "category", "n_faces", "method", "n_segments", "alpha", "seed",
-            "status", "superfacets", "iterations", "converged", "seconds",
+            "status", "segments", "iterations", "converged", "seconds",
             "undersegmentation_error", "compactness", "boundary_recall", "achievable_accuracy",
             "n_ground_truths", "error"]
     with open(path, "w", newline="") as f:
@@ -227,7 +227,7 @@ def _write_rows(path, rows):
 def test_report_averages_categories_equally_and_keeps_last_row(tmp_path):
     def row(mesh, cat, alpha, ue, status="ok"):
         return dict(mesh=mesh, mesh_id=mesh, category=cat, method="superfacets",
-                    n_segments=50, alpha=alpha, seed=0, status=status, superfacets=50,
+                    n_segments=50, alpha=alpha, seed=0, status=status, segments=50,
                     iterations=3, converged="true", seconds=0.1, undersegmentation_error=ue,
                     compactness=4.0, boundary_recall=0.5, achievable_accuracy=0.9,
                     n_ground_truths=1)
@@ -250,14 +250,14 @@ def test_report_averages_categories_equally_and_keeps_last_row(tmp_path):
 def test_report_pools_files_filters_series_and_draws_cost(tmp_path):
     def row(mesh, method, alpha, ue, faces, seconds, peak):
         return dict(mesh=mesh, mesh_id=mesh, category="A", n_faces=faces, method=method,
-                    n_segments=150, alpha=alpha, seed=0, status="ok", superfacets=150,
+                    n_segments=150, alpha=alpha, seed=0, status="ok", segments=150,
                     seconds=seconds, peak_mib=peak, undersegmentation_error=ue,
                     compactness=5.0, boundary_recall=0.8, achievable_accuracy=0.9,
                     n_ground_truths=1)
 
     a, b = tmp_path / "a.csv", tmp_path / "b.csv"
     cols = ["mesh", "mesh_id", "category", "n_faces", "method", "n_segments", "alpha", "seed",
-            "status", "superfacets", "seconds", "peak_mib", "undersegmentation_error",
+            "status", "segments", "seconds", "peak_mib", "undersegmentation_error",
             "compactness", "boundary_recall", "achievable_accuracy", "n_ground_truths"]
     for path, rows in [(a, [row("1", "superfacets", 0.0, 0.2, 1000, 0.01, 2.0),
                             row("2", "superfacets", 0.0, 0.4, 4000, 0.04, 8.0),
@@ -318,3 +318,49 @@ def test_cli_list_methods(capsys):
     assert main(["experiment", "--list-methods"]) == 0
     out = capsys.readouterr().out
     assert "superfacets:" in out and "shlafman:" in out and "alpha in 0.0, 100.0" in out
+
+
+def test_param_syntax_applies_to_each_method_that_has_the_name():
+    from superfacets.methods import get_method
+    from superfacets.runner import method_grid, parse_params
+
+    sf, vsa = get_method("superfacets"), get_method("vsa")
+    given = method_grid([sf, vsa], parse_params(["max_iter=5,7", "vsa.metric=l2",
+                                                 "superfacets.alpha=0"]))
+    assert given == {"superfacets": {"max_iter": ["5", "7"], "alpha": ["0"]},
+                     "vsa": {"max_iter": ["5", "7"], "metric": ["l2"]}}
+    with pytest.raises(ParameterError, match=r"--param beta: no method given has it.*vsa: "
+                                             r"init, insert_iter, max_iter, metric"):
+        method_grid([sf, vsa], parse_params(["beta=1"]))
+    with pytest.raises(ParameterError, match="NAME=V1,V2"):
+        parse_params(["alpha"])
+
+
+def test_experiment_param_reaches_only_the_methods_that_have_it(bench, tmp_path):
+    res = tmp_path / "r.csv"
+    assert main(["experiment", "--psb", str(bench), "-o", str(res), "-m", "superfacets",
+                 "-m", "vsa", "-k", "4", "--ids", "21", "--param", "max_iter=3", "-j", "1",
+                 "-q"]) == 0
+    rows = read_results(res)
+    assert {(r["method"], r["max_iter"]) for r in rows} == {("superfacets", "3"), ("vsa", "3")}
+    assert main(["experiment", "--psb", str(bench), "-o", str(res), "--param", "bogus=1",
+                 "-q"]) == 2
+
+
+def test_results_written_with_the_old_superfacets_column_are_read(tmp_path):
+    old = tmp_path / "old.csv"
+    old.write_text("mesh,method,n_segments,seed,status,superfacets\n1,superfacets,50,0,ok,49\n")
+    (row,) = read_results(old)
+    assert row["segments"] == "49" and "superfacets" not in row
+
+
+def test_report_leaves_the_matplotlib_backend_alone(bench, tmp_path):
+    import matplotlib
+
+    res = tmp_path / "r.csv"
+    run_experiment(list_meshes(bench), expand_grid("superfacets"), res, [4, 6], workers=1,
+                   progress=False)
+    before = matplotlib.get_backend()
+    write_report(res, tmp_path / "rep")
+    assert matplotlib.get_backend() == before
+    assert (tmp_path / "rep" / "fig4.png").stat().st_size > 1000

@@ -10,7 +10,7 @@ import trimesh
 from superfacets import (InvalidMeshError, Mesh, MeshFormatError, read_labels, read_mesh,
                          write_colored_mesh, write_labels, write_mesh)
 from superfacets.io import atomic_write
-from superfacets.viz import superfacet_adjacency
+from superfacets.colors import superfacet_adjacency
 
 from conftest import MESHES, need
 
@@ -139,7 +139,7 @@ def test_label_file_errors(tmp_path):
         read_labels(p, n_faces=3)
     with pytest.raises(FileNotFoundError):
         read_labels(tmp_path / "none.seg")
-    with pytest.raises(ValueError, match="1-D integer"):
+    with pytest.raises(ValueError, match="1-D array of integers"):
         write_labels(tmp_path / "f.seg", np.array([0.5, 1.0]))
 
 

@@ -16,7 +16,8 @@ from superfacets import ParameterError, superfacets, write_labels, write_mesh
 from superfacets.cli import main
 from superfacets.html import html_page, write_html
 from superfacets.render import render, render_panel
-from superfacets.viz import PALETTE, boundary_edges, view_frame
+from superfacets.camera import view_frame
+from superfacets.colors import PALETTE, boundary_edges
 
 from conftest import grid_mesh
 
@@ -182,7 +183,7 @@ def test_cli_render_panel_html_and_view(tmp_path, sphere, capsys, monkeypatch):
     assert np.asarray(Image.open(pan)).shape[:2] == (90, 300)
     assert "3 panels" in capsys.readouterr().out
     assert main(["panel", str(mesh), "-o", str(pan), "-m", "vsa", "--param", "window=2"]) == 2
-    assert "no method given has window" in capsys.readouterr().err
+    assert "--param window: no method given has it" in capsys.readouterr().err
     page = tmp_path / "b.html"
     assert main(["html", str(mesh), "-o", str(page), "-k", "9"]) == 0
     assert '"superfacets": 9' in page.read_text()

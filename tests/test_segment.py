@@ -6,12 +6,20 @@ from scipy.sparse.csgraph import dijkstra
 
 from superfacets import (InvalidMeshError, Mesh, ParameterError, read_mesh, segment,
                          superfacets)
-from superfacets import _kernels
-from superfacets._workspace import Workspace, bucket_width
+from superfacets._kernels.exact import classify_exact
+from superfacets._kernels.expand import MERGE, expand
 from superfacets.connectivity import label_components
-from superfacets.graph import paper_weights
+from superfacets.expansion import Workspace, bucket_width
+from superfacets.params import resolve
+from superfacets.segment import pipeline
+from superfacets.weights import paper_weights
 
 from conftest import MESHES, TABLE1, grid_mesh, need
+
+
+def reference(mesh, n_segments, **kw):
+    """The plain run: every center expanded on every pass, no cycle jump."""
+    return pipeline(mesh, resolve(n_segments=n_segments, **kw), replay=False, jump_cycles=False)
 
 
 def check_invariants(mesh, labels):
@@ -90,8 +98,8 @@ def test_exact_assignment_is_nearest_center(sphere):
     centers[:12] = rng.choice(m, 12, replace=False)
     dist, label = np.empty(m), np.empty(m, np.int64)
     cap = g.indices.size + m + 1
-    k = _kernels.classify_exact(g.indptr, g.indices, cw, centers, 12, dist, label,
-                                np.empty(cap), np.empty(cap, np.int64))
+    k = classify_exact(g.indptr, g.indices, cw, centers, 12, dist, label,
+                       np.empty(cap), np.empty(cap, np.int64))
     assert k == 12
     d = dijkstra(g.to_csr(w), indices=centers[:12])
     np.testing.assert_array_equal(label, np.argmin(d, axis=0))
@@ -114,9 +122,8 @@ def test_bounded_expansion_is_dijkstra_inside_the_window(sphere):
     dist = np.full(m, np.inf)
     label = np.full(m, -1, np.int64)
     ws = Workspace(m, *bucket_width(cw)[1:], g.indices.size + m + 1)
-    _kernels.expand(g.indptr, g.indices, cw, c, src, 0, radius**2, dist, label, ws.local,
-                    ws.stamp, 0, ws.queue, bucket_width(cw)[0], _kernels.MERGE, ws.vis,
-                    np.empty(0), 0, ws.vis.size)
+    expand(g.indptr, g.indices, cw, c, src, 0, radius**2, dist, label, ws.local, ws.stamp, 0,
+           ws.queue, bucket_width(cw)[0], MERGE, ws.vis, np.empty(0), 0, ws.vis.size)
     reached = label == 0
     assert reached.sum() > 50
     np.testing.assert_array_equal(reached, np.isfinite(ref))
@@ -128,7 +135,7 @@ def test_replayed_expansions_equal_reference_on_synthetic(valley, sphere):
         for kw in (dict(alpha=0), dict(alpha=200), dict(alpha=1000, init="grid", radius=0.1,
                                                            n_segments=None)):
             a = segment(mesh, **{"n_segments": 30, **kw})
-            b = segment(mesh, **{"n_segments": 30, **kw}, _reference=True)
+            b = reference(mesh, **{"n_segments": 30, **kw})
             np.testing.assert_array_equal(a.labels, b.labels)
             assert a.n_iter == b.n_iter
 
@@ -137,7 +144,7 @@ def test_replayed_expansions_equal_reference_on_synthetic(valley, sphere):
 def test_replayed_expansions_equal_reference_on_real_meshes(name):
     mesh = read_mesh(need(MESHES / f"{name}.tri.xz"))
     a = segment(mesh, 150, max_iter=12)
-    b = segment(mesh, 150, max_iter=12, _reference=True)
+    b = reference(mesh, 150, max_iter=12)
     np.testing.assert_array_equal(a.labels, b.labels)
 
 
@@ -151,8 +158,8 @@ def test_optimized_path_gives_the_labels_of_the_straightforward_one(
     # (psb:58 falls into a cycle), on one thread and on two. On the flat regular grid many
     # distances tie exactly: the center of lowest index must win them, across threads too
     import straightforward
-    from superfacets import _workspace
-    from superfacets.connectivity import relabel_dense
+    from superfacets import classify
+    from superfacets.labels import relabel_dense
 
     if source == "grid":
         mesh = grid_mesh(70, 60)
@@ -160,7 +167,7 @@ def test_optimized_path_gives_the_labels_of_the_straightforward_one(
         mesh = read_mesh(psb / "off" / f"{source[4:]}.off" if source.startswith("psb:")
                          else need(MESHES / f"{source}.tri.xz"))
     ref, n_iter = straightforward.segment_labels(mesh, k, alpha=alpha, max_iter=max_iter)
-    monkeypatch.setattr(_workspace, "_PARALLEL_MIN_WORK", 0)  # threads on every pass
+    monkeypatch.setattr(classify, "_PARALLEL_MIN_WORK", 0)  # threads on every pass
     for n_threads in (1, 2):
         r = segment(mesh, k, alpha=alpha, max_iter=max_iter, enforce_connectivity=False,
                     n_threads=n_threads)
@@ -173,17 +180,18 @@ def test_threads_and_buffer_growth_change_no_label(monkeypatch, n_threads):
     # every expansion on threads (no minimum work), a heap of 4 entries and a record arena
     # of a tenth of the faces: the heap regrows, the arena is compacted and regrown, an
     # overflowing thread is redone; labels stay those of the straightforward loop
-    from superfacets import _workspace
+    from superfacets import classify, expansion
 
     mesh = read_mesh(need(MESHES / "bunny.tri.xz"))
-    ref = segment(mesh, 150, max_iter=15, _reference=True)
-    monkeypatch.setattr(_workspace, "_PARALLEL_MIN_WORK", 0)
-    monkeypatch.setattr(_workspace, "_QUEUE0", 4)
-    monkeypatch.setattr(_workspace, "_VISIT0", 8)
-    monkeypatch.setattr(_workspace, "_ARENA", 0.1)
+    ref = reference(mesh, 150, max_iter=15)
+    monkeypatch.setattr(classify, "_PARALLEL_MIN_WORK", 0)
+    monkeypatch.setattr(expansion, "_QUEUE0", 4)
+    monkeypatch.setattr(expansion, "_VISIT0", 8)
+    monkeypatch.setattr(classify, "_ARENA", 0.1)
     grown = []
-    orig = _workspace.Replay._grow
-    monkeypatch.setattr(_workspace.Replay, "_grow", lambda self, x: (grown.append(x), orig(self, x)))
+    orig = classify.BoundedReplay._grow
+    monkeypatch.setattr(classify.BoundedReplay, "_grow",
+                        lambda self, x: (grown.append(x), orig(self, x)))
     r = segment(mesh, 150, max_iter=15, n_threads=n_threads)
     np.testing.assert_array_equal(r.labels, ref.labels)
     np.testing.assert_array_equal(r.centers, ref.centers)
@@ -272,7 +280,7 @@ def test_max_iter_one_and_convergence_flag(sphere):
 
 
 @pytest.mark.parametrize("kwargs, match", [
-    (dict(n_segments=0), "n_segments must be >= 1"),
+    (dict(n_segments=0), "n_segments must be an integer >= 1"),
     (dict(n_segments=10**7), "larger than the number of faces"),
     (dict(n_segments=3.5), "must be an integer"),
     (dict(n_segments=20, radius=0.1), "not both"),
@@ -310,7 +318,7 @@ def test_cycle_jump_gives_the_labels_of_running_every_pass(psb, mesh_id, max_ite
     # last pass; the reference runs all max_iter passes
     mesh = read_mesh(psb / "off" / f"{mesh_id}.off")
     a = segment(mesh, 60, alpha=1000, max_iter=max_iter)
-    b = segment(mesh, 60, alpha=1000, max_iter=max_iter, _reference=True)
+    b = reference(mesh, 60, alpha=1000, max_iter=max_iter)
     assert a.timings["cycle_period"] >= 2 and a.timings["passes"] < max_iter
     assert b.timings["passes"] == max_iter and b.timings["cycle_period"] == 0
     np.testing.assert_array_equal(a.labels, b.labels)
@@ -318,16 +326,18 @@ def test_cycle_jump_gives_the_labels_of_running_every_pass(psb, mesh_id, max_ite
     assert (a.n_iter, a.converged, a.n_orphan_seeds) == (b.n_iter, b.converged, b.n_orphan_seeds)
 
 
-def test_import_warms_numba_up_in_the_background_unless_disabled():
+def test_import_does_no_work_and_warmup_starts_only_when_asked():
+    import os
     import subprocess
     import sys
 
-    code = ("import superfacets, superfacets._warmup as w; t = w._thread; "
+    code = ("import threading, superfacets, superfacets.warmup as w; "
+            "print(threading.active_count(), w._thread is None); w.start(); t = w._thread; "
             "print(t is not None and (t.join(30) or not t.is_alive()))")
     run = lambda env: subprocess.run([sys.executable, "-c", code], capture_output=True,
-                                     text=True, env=env, check=True).stdout.strip()
-    import os
-
+                                     text=True, env=env, check=True).stdout.split("\n")
     env = {k: v for k, v in os.environ.items() if k != "SUPERFACETS_NO_WARMUP"}
-    assert run(env) == "True"  # started, and finishes
-    assert run({**env, "SUPERFACETS_NO_WARMUP": "1"}) == "False"
+    out = run(env)
+    assert out[0] == "1 True"  # no thread started by the import
+    assert out[1] == "True"  # started when asked, and finishes
+    assert run({**env, "SUPERFACETS_NO_WARMUP": "1"})[1] == "False"

@@ -1,7 +1,7 @@
 """Connected superfacets: merge stray pieces into their neighbours.
 
-The bounded expansion can leave a superfacet in several face-connected
-pieces. :func:`enforce_connectivity` keeps one piece per superfacet (the one
+The bounded expansion can leave a superfacet in several connected pieces
+of the element graph. :func:`enforce_connectivity` keeps one piece per superfacet (the one
 holding its center, else the largest by area) and merges every other piece
 into the neighbouring region with which it shares the longest boundary, as
 scikit-image's ``slic(enforce_connectivity=True)`` does for superpixels.
@@ -13,31 +13,24 @@ import numpy as np
 from scipy.sparse import coo_array
 from scipy.sparse.csgraph import connected_components
 
-__all__ = ["enforce_connectivity", "relabel_dense", "label_components"]
+from .elements.graph import as_element_graph
+from .labels import check_labels, relabel_dense
 
-
-def relabel_dense(labels: np.ndarray) -> np.ndarray:
-    """Map labels to ``0..K-1`` keeping their relative order.
-
-    Parameters
-    ----------
-    labels : (m,) int ndarray
-
-    Returns
-    -------
-    (m,) int64 ndarray
-    """
-    _, inv = np.unique(labels, return_inverse=True)
-    return inv.astype(np.int64).ravel()
+__all__ = ["enforce_connectivity", "label_components"]
 
 
 def label_components(graph, labels: np.ndarray) -> np.ndarray:
-    """Face-connected pieces of every superfacet.
+    """Connected pieces of every superfacet.
 
     Parameters
     ----------
-    graph : FaceGraph
+    graph : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
     labels : (m,) int ndarray
+
+    Raises
+    ------
+    ParameterError
+        If ``labels`` is not one integer per element.
 
     Returns
     -------
@@ -45,24 +38,27 @@ def label_components(graph, labels: np.ndarray) -> np.ndarray:
         Piece id of each face; two faces share a piece id iff they have the
         same label and are connected through faces of that label.
     """
+    graph = as_element_graph(graph)
+    labels = check_labels(labels, graph.n_elements, per=graph.kind.rstrip("s"))
     i, j = graph.pairs[:, 0], graph.pairs[:, 1]
     same = labels[i] == labels[j]
-    m = graph.n_faces
+    m = graph.n_elements
     adj = coo_array((np.ones(int(same.sum()), dtype=np.int8), (i[same], j[same])), shape=(m, m))
     _, comp = connected_components(adj.tocsr(), directed=False)
     return comp.astype(np.int64)
 
 
-def enforce_connectivity(mesh, labels: np.ndarray, centers: np.ndarray | None = None) -> np.ndarray:
-    """Make every superfacet face-connected.
+def enforce_connectivity(graph, labels: np.ndarray, centers: np.ndarray | None = None) -> np.ndarray:
+    """Make every superfacet connected in the element graph.
 
     Parameters
     ----------
-    mesh : Mesh
-        Its face graph and areas are used; the boundary length between two
-        pieces is the total length of the mesh edges they share.
+    graph : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
+        Its adjacency, sizes and border lengths are used; the boundary length
+        between two pieces is the total length of the borders they share
+        (for a mesh: of the mesh edges).
     labels : (m,) int ndarray
-        Labels ``0..K-1``.
+        Labels ``0..K-1``, one per element.
     centers : (K,) int ndarray, optional
         Center face of each label; the piece holding it keeps the label.
         Without it (or for a label whose center lies elsewhere) the piece of
@@ -75,6 +71,11 @@ def enforce_connectivity(mesh, labels: np.ndarray, centers: np.ndarray | None = 
         connected piece of the face graph. Labels that keep their main piece
         keep their relative order.
 
+    Raises
+    ------
+    ParameterError
+        If ``labels`` is not one integer per element.
+
     Notes
     -----
     Stray pieces are merged smallest first; each goes to the adjacent piece
@@ -83,8 +84,8 @@ def enforce_connectivity(mesh, labels: np.ndarray, centers: np.ndarray | None = 
     by the method (expansions never leave a connected component of the
     mesh); if one does, it becomes a superfacet of its own.
     """
-    labels = np.asarray(labels, dtype=np.int64)
-    g = mesh.graph
+    g = as_element_graph(graph)
+    labels = check_labels(labels, g.n_elements, per=g.kind.rstrip("s"))
     piece = label_components(g, labels)
     n_pieces = int(piece.max()) + 1
     piece_label = np.empty(n_pieces, dtype=np.int64)
@@ -93,13 +94,13 @@ def enforce_connectivity(mesh, labels: np.ndarray, centers: np.ndarray | None = 
     if n_pieces == np.unique(labels).size:
         return relabel_dense(labels)
 
-    area = np.bincount(piece, weights=mesh.areas, minlength=n_pieces)
+    area = np.bincount(piece, weights=g.sizes, minlength=n_pieces)
     # main piece of each label: the one holding the center, else the largest
     main = np.full(k, -1, dtype=np.int64)
     if centers is not None:
         centers = np.asarray(centers, dtype=np.int64)[:k]
         s = np.arange(centers.size)
-        ok = (centers >= 0) & (centers < mesh.n_faces)
+        ok = (centers >= 0) & (centers < g.n_elements)
         ok[ok] = labels[centers[ok]] == s[ok]
         main[s[ok]] = piece[centers[ok]]
     order = np.lexsort((np.arange(n_pieces), -area))  # largest first, then lowest id
@@ -111,8 +112,7 @@ def enforce_connectivity(mesh, labels: np.ndarray, centers: np.ndarray | None = 
     is_main[main[main >= 0]] = True
 
     # boundary length between adjacent pieces
-    v = mesh.vertices
-    elen = np.linalg.norm(v[g.edges[:, 1]] - v[g.edges[:, 0]], axis=1)
+    elen = g.lengths
     pi, pj = piece[g.pairs[:, 0]], piece[g.pairs[:, 1]]
     cross = pi != pj
     a = np.concatenate([pi[cross], pj[cross]])

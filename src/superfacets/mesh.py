@@ -1,4 +1,4 @@
-"""Mesh validation and derived per-face geometry (SPEC section 1).
+"""Mesh validation and derived per-face geometry (``docs/method.md``, section 1).
 
 A :class:`Mesh` holds C-contiguous ``(n, 3) float64`` vertices and
 ``(m, 3) int64`` faces, validated once. Derived quantities (centroids, unit
@@ -73,11 +73,11 @@ class Mesh:
     # ------------------------------------------------------ derived geometry
     @cached_property
     def _geometry(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        from . import _kernels  # one numba pass: no (m, 3) gathers and temporaries
+        from ._kernels.geometry import face_geometry  # one pass: no (m, 3) temporaries
 
         m = self.n_faces
         centroids, areas, normals = np.empty((m, 3)), np.empty(m), np.empty((m, 3))
-        _kernels.face_geometry(np.ascontiguousarray(self.vertices),
+        face_geometry(np.ascontiguousarray(self.vertices),
                                np.ascontiguousarray(self.faces), centroids, areas, normals)
         return _readonly(centroids), _readonly(areas), _readonly(normals)
 
@@ -120,17 +120,19 @@ class Mesh:
         return _readonly(mask)
 
     @cached_property
-    def center(self) -> np.ndarray:
+    def centroid(self) -> np.ndarray:
         """(3,) float64: mean position of the referenced vertices (the "mesh
-        centroid" of the authors' implementation)."""
+        centroid" of the authors' implementation; the first center is the face
+        nearest to it)."""
         return self.vertices[self.referenced_vertices].mean(axis=0)
 
     @cached_property
     def graph(self):
-        """The :class:`~superfacets.graph.FaceGraph` of this mesh (cached)."""
-        from .graph import FaceGraph
+        """The face graph of this mesh, an :class:`~superfacets.elements.ElementGraph`
+        (built on first use, then cached)."""
+        from .elements.faces import face_graph
 
-        return FaceGraph.from_mesh(self)
+        return face_graph(self)
 
     def check_usable(self) -> None:
         """Raise :class:`InvalidMeshError` if the mesh cannot be segmented.

@@ -1,9 +1,11 @@
-"""Evaluation metrics of an over-segmentation (paper section 4, SPEC section 4).
+"""Evaluation metrics of an over-segmentation (paper section 4; ``docs/method.md``, section 4).
 
-Pure functions of (mesh, labels[, ground truth]). Areas are sums of face
-areas, so every metric is independent of the sampling density and invariant
-to uniform scaling. A shared, area-weighted contingency table
-(:func:`contingency`) makes the overlap-based metrics fast.
+Pure functions of (element graph, labels[, ground truth]); a mesh stands for
+its cached face graph. Areas are sums of element sizes (face areas) and
+lengths sums of the cached border lengths, so every metric is independent of
+the sampling density and invariant to uniform scaling. A shared, area-weighted
+contingency table (:func:`contingency`, like scikit-image's ``table=``) makes
+the overlap-based metrics fast.
 """
 
 from __future__ import annotations
@@ -13,7 +15,9 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from .mesh import as_mesh
+from .elements.graph import as_element_graph
+from .errors import ParameterError
+from .labels import check_labels
 
 __all__ = ["Contingency", "contingency", "undersegmentation_error", "compactness",
            "achievable_segmentation_accuracy", "boundary_recall", "mean_over_ground_truths",
@@ -48,21 +52,18 @@ class Contingency:
     g_area: np.ndarray
 
 
-def _labels(mesh, labels, what: str) -> np.ndarray:
-    labels = np.asarray(labels)
-    if labels.shape != (mesh.n_faces,) or not np.issubdtype(labels.dtype, np.integer):
-        raise ValueError(f"{what} must be an integer array of shape ({mesh.n_faces},), "
-                         f"got shape {labels.shape}, dtype {labels.dtype}")
-    _, dense = np.unique(labels, return_inverse=True)
+def _dense(g, labels, what: str) -> np.ndarray:
+    """One label per element, made dense ``0..K-1``."""
+    _, dense = np.unique(check_labels(labels, g.n_elements, what, per=g.kind.rstrip("s")), return_inverse=True)
     return dense.ravel().astype(np.int64)
 
 
-def contingency(mesh, labels, ground_truth) -> Contingency:
+def contingency(graph, labels, ground_truth) -> Contingency:
     """Area-weighted contingency table of superfacets against a ground truth.
 
     Parameters
     ----------
-    mesh : Mesh, trimesh.Trimesh or (vertices, faces)
+    graph : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
     labels : (m,) int ndarray
         Superfacet of each face (any integers; made dense internally).
     ground_truth : (m,) int ndarray
@@ -74,22 +75,22 @@ def contingency(mesh, labels, ground_truth) -> Contingency:
 
     Raises
     ------
-    ValueError
-        If either label array does not have one integer per face.
+    ParameterError
+        If either label array does not have one integer per element.
     """
-    mesh = as_mesh(mesh)
-    s = _labels(mesh, labels, "labels")
-    g = _labels(mesh, ground_truth, "ground_truth")
+    graph = as_element_graph(graph)
+    s = _dense(graph, labels, "labels")
+    g = _dense(graph, ground_truth, "ground_truth")
     n_g = int(g.max()) + 1
     key = s * n_g + g
     uniq, inv = np.unique(key, return_inverse=True)
-    area = np.bincount(inv.ravel(), weights=mesh.areas)
-    s_area = np.bincount(s, weights=mesh.areas)
-    g_area = np.bincount(g, weights=mesh.areas, minlength=n_g)
+    area = np.bincount(inv.ravel(), weights=graph.sizes)
+    s_area = np.bincount(s, weights=graph.sizes)
+    g_area = np.bincount(g, weights=graph.sizes, minlength=n_g)
     return Contingency(s=uniq // n_g, g=uniq % n_g, area=area, s_area=s_area, g_area=g_area)
 
 
-def undersegmentation_error(mesh, labels, ground_truth, *, tau: float = 0.05,
+def undersegmentation_error(graph, labels, ground_truth, *, tau: float = 0.05,
                             table: Contingency | None = None) -> float:
     """Undersegmentation error (paper eq. 4).
 
@@ -99,7 +100,7 @@ def undersegmentation_error(mesh, labels, ground_truth, *, tau: float = 0.05,
 
     Parameters
     ----------
-    mesh : Mesh, trimesh.Trimesh or (vertices, faces)
+    graph : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
     labels, ground_truth : (m,) int ndarray
     tau : float, default 0.05
         Overlap tolerance as a fraction of each superfacet's area.
@@ -116,13 +117,13 @@ def undersegmentation_error(mesh, labels, ground_truth, *, tau: float = 0.05,
     ----------
     Simari, Picciau, De Floriani, "Fast and Scalable Mesh Superfacets", 2014, eq. 4.
     """
-    t = table if table is not None else contingency(mesh, labels, ground_truth)
+    t = table if table is not None else contingency(graph, labels, ground_truth)
     sa = t.s_area[t.s]
     counted = t.area > tau * sa
     return float((sa[counted] - t.area[counted]).sum() / t.g_area.sum())
 
 
-def achievable_segmentation_accuracy(mesh, labels, ground_truth, *,
+def achievable_segmentation_accuracy(graph, labels, ground_truth, *,
                                      table: Contingency | None = None) -> float:
     """Achievable segmentation accuracy: ``sum_j max_i A(s_j ∩ g_i) / A``.
 
@@ -132,7 +133,7 @@ def achievable_segmentation_accuracy(mesh, labels, ground_truth, *,
 
     Parameters
     ----------
-    mesh : Mesh, trimesh.Trimesh or (vertices, faces)
+    graph : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
     labels, ground_truth : (m,) int ndarray
     table : Contingency, optional
 
@@ -140,18 +141,13 @@ def achievable_segmentation_accuracy(mesh, labels, ground_truth, *,
     -------
     float
     """
-    t = table if table is not None else contingency(mesh, labels, ground_truth)
+    t = table if table is not None else contingency(graph, labels, ground_truth)
     best = np.zeros(t.s_area.shape[0])
     np.maximum.at(best, t.s, t.area)
     return float(best.sum() / t.s_area.sum())
 
 
-def _edge_lengths(mesh, edges: np.ndarray) -> np.ndarray:
-    v = mesh.vertices
-    return np.linalg.norm(v[edges[:, 1]] - v[edges[:, 0]], axis=1)
-
-
-def compactness(mesh, labels) -> float:
+def compactness(graph, labels) -> float:
     """Compactness (paper eq. 5): mean over superfacets of perimeter / sqrt(area).
 
     The perimeter of a superfacet is the total length of the mesh edges on
@@ -161,7 +157,7 @@ def compactness(mesh, labels) -> float:
 
     Parameters
     ----------
-    mesh : Mesh, trimesh.Trimesh or (vertices, faces)
+    graph : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
     labels : (m,) int ndarray
 
     Returns
@@ -174,24 +170,22 @@ def compactness(mesh, labels) -> float:
     ----------
     Simari, Picciau, De Floriani, 2014, eq. 5.
     """
-    mesh = as_mesh(mesh)
-    s = _labels(mesh, labels, "labels")
-    g = mesh.graph
+    g = as_element_graph(graph)
+    s = _dense(g, labels, "labels")
     k = int(s.max()) + 1
     a, b = s[g.pairs[:, 0]], s[g.pairs[:, 1]]
     cut = a != b
-    length = _edge_lengths(mesh, g.edges)[cut]
+    length = g.lengths[cut]
     perim = np.zeros(k)
     perim += np.bincount(a[cut], weights=length, minlength=k)
     perim += np.bincount(b[cut], weights=length, minlength=k)
-    perim += np.bincount(s[g.boundary_faces], weights=_edge_lengths(mesh, g.boundary_edges),
-                         minlength=k)
-    area = np.bincount(s, weights=mesh.areas, minlength=k)
+    perim += np.bincount(s[g.boundary_elements], weights=g.boundary_lengths, minlength=k)
+    area = np.bincount(s, weights=g.sizes, minlength=k)
     ok = area > 0
     return float(np.mean(perim[ok] / np.sqrt(area[ok])))
 
 
-def boundary_recall(mesh, labels, ground_truth, *, tolerance: int = 1) -> float:
+def boundary_recall(graph, labels, ground_truth, *, tolerance: int = 1) -> float:
     """Fraction of the ground-truth boundary found by the superfacet boundaries.
 
     A ground-truth boundary edge (shared by two faces of different segments)
@@ -203,7 +197,7 @@ def boundary_recall(mesh, labels, ground_truth, *, tolerance: int = 1) -> float:
 
     Parameters
     ----------
-    mesh : Mesh, trimesh.Trimesh or (vertices, faces)
+    graph : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
     labels, ground_truth : (m,) int ndarray
     tolerance : int, default 1
         Face rings of slack (0: the edge's faces must touch a superfacet
@@ -214,17 +208,16 @@ def boundary_recall(mesh, labels, ground_truth, *, tolerance: int = 1) -> float:
     float
         1.0 if the ground truth has no boundary.
     """
-    mesh = as_mesh(mesh)
-    s = _labels(mesh, labels, "labels")
-    gt = _labels(mesh, ground_truth, "ground_truth")
-    return _recall(mesh, _near_boundary(mesh, s, tolerance), gt)
+    g = as_element_graph(graph)
+    s = _dense(g, labels, "labels")
+    gt = _dense(g, ground_truth, "ground_truth")
+    return _recall(g, _near_boundary(g, s, tolerance), gt)
 
 
-def _near_boundary(mesh, s: np.ndarray, tolerance: int) -> np.ndarray:
-    """(m,) bool: faces within ``tolerance`` rings of a face on a boundary of ``s``."""
-    g = mesh.graph
+def _near_boundary(g, s: np.ndarray, tolerance: int) -> np.ndarray:
+    """(m,) bool: elements within ``tolerance`` rings of one on a boundary of ``s``."""
     i, j = g.pairs[:, 0], g.pairs[:, 1]
-    near = np.zeros(mesh.n_faces, dtype=bool)
+    near = np.zeros(g.n_elements, dtype=bool)
     cut = s[i] != s[j]
     near[i[cut]] = True
     near[j[cut]] = True
@@ -236,26 +229,25 @@ def _near_boundary(mesh, s: np.ndarray, tolerance: int) -> np.ndarray:
     return near
 
 
-def _recall(mesh, near: np.ndarray, gt: np.ndarray) -> float:
-    g = mesh.graph
+def _recall(g, near: np.ndarray, gt: np.ndarray) -> float:
     i, j = g.pairs[:, 0], g.pairs[:, 1]
     gt_edge = gt[i] != gt[j]
     if not gt_edge.any():
         return 1.0
-    length = _edge_lengths(mesh, g.edges)[gt_edge]
+    length = g.lengths[gt_edge]
     hit = near[i[gt_edge]] | near[j[gt_edge]]
     return float(length[hit].sum() / length.sum())
 
 
-def mean_over_ground_truths(metric: Callable[..., float], mesh, labels,
+def mean_over_ground_truths(metric: Callable[..., float], graph, labels,
                             ground_truths: Sequence[np.ndarray], **kwargs) -> float:
     """Average a metric over the several human segmentations of one mesh.
 
     Parameters
     ----------
     metric : callable
-        ``metric(mesh, labels, ground_truth, **kwargs) -> float``.
-    mesh : Mesh
+        ``metric(graph, labels, ground_truth, **kwargs) -> float``.
+    graph : ElementGraph or Mesh
     labels : (m,) int ndarray
     ground_truths : sequence of (m,) int ndarray
     **kwargs
@@ -267,15 +259,15 @@ def mean_over_ground_truths(metric: Callable[..., float], mesh, labels,
 
     Raises
     ------
-    ValueError
+    ParameterError
         If ``ground_truths`` is empty.
     """
     if len(ground_truths) == 0:
-        raise ValueError("no ground-truth segmentation given")
-    return float(np.mean([metric(mesh, labels, gt, **kwargs) for gt in ground_truths]))
+        raise ParameterError("no ground-truth segmentation given")
+    return float(np.mean([metric(graph, labels, gt, **kwargs) for gt in ground_truths]))
 
 
-def evaluate(mesh, labels, ground_truths: Sequence[np.ndarray], *, tau: float = 0.05,
+def evaluate(graph, labels, ground_truths: Sequence[np.ndarray], *, tau: float = 0.05,
              tolerance: int = 1) -> dict:
     """Every metric of one segmentation, averaged over the ground truths.
 
@@ -286,7 +278,7 @@ def evaluate(mesh, labels, ground_truths: Sequence[np.ndarray], *, tau: float = 
 
     Parameters
     ----------
-    mesh : Mesh, trimesh.Trimesh or (vertices, faces)
+    graph : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
     labels : (m,) int ndarray
         Superfacet of each face.
     ground_truths : sequence of (m,) int ndarray
@@ -306,22 +298,22 @@ def evaluate(mesh, labels, ground_truths: Sequence[np.ndarray], *, tau: float = 
 
     Raises
     ------
-    ValueError
+    ParameterError
         If ``ground_truths`` is empty or a label array does not have one
-        integer per face.
+        integer per element.
     """
     if len(ground_truths) == 0:
-        raise ValueError("no ground-truth segmentation given")
-    mesh = as_mesh(mesh)
-    s = _labels(mesh, labels, "labels")
-    near = _near_boundary(mesh, s, tolerance)
+        raise ParameterError("no ground-truth segmentation given")
+    g = as_element_graph(graph)
+    s = _dense(g, labels, "labels")
+    near = _near_boundary(g, s, tolerance)
     ue, br, asa = [], [], []
     for gt in ground_truths:
-        t = contingency(mesh, s, gt)
-        ue.append(undersegmentation_error(mesh, s, gt, tau=tau, table=t))
-        asa.append(achievable_segmentation_accuracy(mesh, s, gt, table=t))
-        br.append(_recall(mesh, near, _labels(mesh, gt, "ground_truth")))
+        t = contingency(g, s, gt)
+        ue.append(undersegmentation_error(g, s, gt, tau=tau, table=t))
+        asa.append(achievable_segmentation_accuracy(g, s, gt, table=t))
+        br.append(_recall(g, near, _dense(g, gt, "ground_truth")))
     return {"undersegmentation_error": float(np.mean(ue)),
-            "compactness": compactness(mesh, s),
+            "compactness": compactness(g, s),
             "boundary_recall": float(np.mean(br)),
             "achievable_accuracy": float(np.mean(asa))}

@@ -7,7 +7,7 @@ GPU), so no display server and no GPU are needed: Debian's ``libegl1`` and
 set-up does not need root for it when they are).
 
 Faces are coloured by superfacet (adjacent superfacets always in clearly
-different colours, :func:`superfacets.viz.superfacet_colors`), flat shaded,
+different colours, :func:`superfacets.colors.superfacet_colors`), flat shaded,
 with the superfacet boundaries drawn as dark lines.
 """
 
@@ -20,22 +20,26 @@ from typing import Sequence
 
 import numpy as np
 
+from .camera import view_frame
+from .colors import boundary_edges, face_colors
 from .errors import ParameterError
+from .labels import check_labels
 from .mesh import as_mesh
 
-__all__ = ["render", "render_panel", "show", "NoDisplayError"]
+__all__ = ["render", "render_panel", "show", "has_display", "NoDisplayError"]
 
 
 class NoDisplayError(RuntimeError):
     """An interactive window was asked for, but there is no display."""
 
 
-def _has_display() -> bool:
+def has_display() -> bool:
+    """True when an X or Wayland display is available for a window."""
     return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
 
 
 def _pyvista(off_screen: bool):
-    if off_screen and not _has_display():
+    if off_screen and not has_display():
         # skip VTK's attempt at an X connection (and its warning): go straight to EGL
         os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
     import pyvista as pv
@@ -44,8 +48,6 @@ def _pyvista(off_screen: bool):
 
 
 def _polydata(pv, mesh, labels):
-    from .viz import face_colors
-
     m = mesh.n_faces
     cells = np.empty((m, 4), dtype=np.int64)
     cells[:, 0] = 3
@@ -57,8 +59,6 @@ def _polydata(pv, mesh, labels):
 
 
 def _boundary_lines(pv, mesh, labels, lift: float):
-    from .viz import boundary_edges
-
     e = boundary_edges(mesh, labels)
     if e.shape[0] == 0:
         return None
@@ -77,13 +77,7 @@ def _boundary_lines(pv, mesh, labels, lift: float):
 
 
 def _check_labels(mesh, labels):
-    if labels is None:
-        return None
-    labels = np.asarray(labels)
-    if labels.shape != (mesh.n_faces,) or not np.issubdtype(labels.dtype, np.integer):
-        raise ParameterError(f"labels must be {mesh.n_faces} integers, one per face; got "
-                             f"shape {labels.shape}, dtype {labels.dtype}")
-    return labels
+    return None if labels is None else check_labels(labels, mesh.n_faces, per="face")
 
 
 def _add(plotter, pv, mesh, labels, *, boundaries: bool, line_width: float,
@@ -104,12 +98,7 @@ def _add(plotter, pv, mesh, labels, *, boundaries: bool, line_width: float,
 def _place_camera(plotter, mesh, view, zoom: float = 1.0, up="y", margin: float = 0.06,
                   top_margin: float = 0.0):
     """Orthographic camera from ``view_frame``, framing the mesh's silhouette tightly."""
-    from .viz import view_frame
-
-    try:
-        d, up = view_frame(mesh, view, up=up)
-    except ValueError as exc:
-        raise ParameterError(str(exc)) from None
+    d, up = view_frame(mesh, view, up=up)
     v = mesh.vertices[mesh.referenced_vertices]
     right = np.cross(up, d)
     x, y = v @ right, v @ up
@@ -184,7 +173,7 @@ def render(mesh, labels=None, out=None, *, size=(1200, 900), view=None,
     size : (int, int), default (1200, 900)
         Width and height in pixels.
     view : str or (3,) float, optional
-        See :func:`superfacets.viz.view_frame` (default automatic).
+        See :func:`superfacets.camera.view_frame` (default automatic).
     background : color, default 'white'
         Any colour PyVista accepts (name, hex, RGB).
     boundaries : bool, default True
@@ -290,7 +279,7 @@ def show(mesh, labels=None, *, title: str | None = None, boundaries: bool = True
     NoDisplayError
         If no display is available (``$DISPLAY``/``$WAYLAND_DISPLAY`` unset).
     """
-    if not _has_display():
+    if not has_display():
         raise NoDisplayError("no display available ($DISPLAY is not set): use "
                              "'superfacets render' for a PNG or 'superfacets html' for a page "
                              "to open in a browser")

@@ -1,8 +1,18 @@
-"""The superfacet iteration (paper section 3, SPEC section 3).
+"""The superfacet method as one pipeline (paper section 3; ``docs/method.md``).
 
 ``superfacets(mesh, ...)`` returns one label per face; ``segment(mesh, ...)``
 takes the same arguments and returns a :class:`SegmentationResult` with the
 labels and the details (centers, iterations, convergence, time per stage).
+:func:`pipeline` is the method itself, step by step:
+
+1. parameters validated (:func:`superfacets.params.resolve`), before any work;
+2. element graph (the face graph of the mesh, cached on it);
+3. weights (paper eqs. 1-3, or Shlafman's eq. 6);
+4. initial centers (farthest point, flood or grid);
+5. passes of (classify, update) until no center moves or ``max_iter``
+   (:mod:`superfacets.passes`, with a strategy of :mod:`superfacets.classify`);
+6. empty superfacets dropped, stray pieces merged (connectivity);
+7. the result.
 """
 
 from __future__ import annotations
@@ -13,21 +23,19 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import _kernels
+from .classify import make_classifier
 from .connectivity import enforce_connectivity as _enforce_connectivity
-from .connectivity import relabel_dense
-from .errors import ParameterError
-from .graph import edge_weights
+from .expansion import Workspaces
+from .initialization import initial_centers
+from .labels import relabel_dense
 from .mesh import as_mesh
-from ._workspace import Replay, Workspaces, with_room
-from .seeding import (INITS, check_n_segments, farthest_point_centers, flood_labels,
-                      grid_labels)
+from .params import DEFAULTS, SegmentParams, check_n_segments, resolve
+from .passes import final_centers, iterate
+from .weights import csr_weights, edge_weights
 
-__all__ = ["superfacets", "segment", "SegmentationResult", "ASSIGNMENTS"]
+__all__ = ["superfacets", "segment", "pipeline", "SegmentationResult"]
 
-#: Names accepted by ``assignment=``.
-ASSIGNMENTS = ("bounded", "exact")
-_DEFAULT_K = 150
+_D = DEFAULTS
 
 
 @dataclass(frozen=True)
@@ -79,11 +87,13 @@ class SegmentationResult:
         return int(self.centers.shape[0])
 
 
-def superfacets(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | None = None,
-                alpha: float = 200.0, eta_convex: float = 0.2, window: float = 2.0,
-                init: str | None = None, max_iter: int = 50, weighting: str = "paper",
-                assignment: str = "bounded", enforce_connectivity: bool = True,
-                progress: bool = False, n_threads: int | None = None) -> np.ndarray:
+def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float | None = _D.radius,
+                alpha: float = _D.alpha, eta_convex: float = _D.eta_convex,
+                window: float = _D.window, init: str | None = _D.init,
+                max_iter: int = _D.max_iter, weighting: str = _D.weighting,
+                assignment: str = _D.assignment,
+                enforce_connectivity: bool = _D.enforce_connectivity,
+                progress: bool = _D.progress, n_threads: int | None = _D.n_threads) -> np.ndarray:
     """Over-segment a triangle mesh into superfacets.
 
     The k-means-style method of Simari, Picciau and De Floriani (2014):
@@ -156,6 +166,7 @@ def superfacets(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | No
     ParameterError
         If a parameter is out of range (``n_segments`` < 1 or > m, negative
         ``alpha``, both ``n_segments`` and ``radius``, unknown ``init``, ...).
+        Every parameter is checked before any work on the mesh.
 
     See Also
     --------
@@ -164,7 +175,8 @@ def superfacets(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | No
     References
     ----------
     .. [1] G. Simari, G. Picciau, L. De Floriani, "Fast and Scalable Mesh
-       Superfacets", Computer Graphics Forum 33(7) (Pacific Graphics), 2014.
+       Superfacets", Computer Graphics Forum 33(7) (Pacific Graphics), 2014;
+       section 3.1 (the iteration), eqs. 1-3 (weights). ``docs/method.md``.
 
     Examples
     --------
@@ -181,62 +193,13 @@ def superfacets(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | No
                    progress=progress, n_threads=n_threads).labels
 
 
-def _threads(n_threads) -> int:
-    """Resolve ``n_threads`` (None: numba's thread count, NUMBA_NUM_THREADS)."""
-    if n_threads is None:
-        import numba
-
-        return int(numba.config.NUMBA_NUM_THREADS)
-    if isinstance(n_threads, (bool, np.bool_)) or not isinstance(n_threads, (int, np.integer)) \
-            or n_threads < 1:
-        raise ParameterError(f"n_threads must be an integer >= 1, got {n_threads!r}")
-    return int(n_threads)
-
-
-def _positive(name: str, value) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ParameterError(f"{name} must be a number, got {value!r}") from None
-    if not (math.isfinite(x) and x > 0):
-        raise ParameterError(f"{name} must be a finite number > 0, got {value!r}")
-    return x
-
-
-def _resolve(mesh, n_segments, radius, init, window, max_iter, assignment):
-    """Validate the size parameters; return (k or None, r, init, window, max_iter)."""
-    if radius is not None and n_segments not in (None, _DEFAULT_K):
-        raise ParameterError("give either n_segments or radius, not both")
-    if init is None:
-        init = "farthest" if radius is None else "flood"
-    if init not in INITS:
-        raise ParameterError(f"init must be one of {', '.join(INITS)}; got {init!r}")
-    if assignment not in ASSIGNMENTS:
-        raise ParameterError(f"assignment must be one of {', '.join(ASSIGNMENTS)}; got {assignment!r}")
-    window = _positive("window", window)
-    if isinstance(max_iter, (bool, np.bool_)) or not isinstance(max_iter, (int, np.integer)) \
-            or max_iter < 1:
-        raise ParameterError(f"max_iter must be an integer >= 1, got {max_iter!r}")
-    m = mesh.n_faces
-    if radius is not None:
-        r = _positive("radius", radius) * mesh.diagonal
-        k = None
-        if init == "farthest":
-            k = int(min(m, max(1, round(mesh.area / (math.pi * r * r)))))
-    else:
-        if n_segments is None:
-            n_segments = _DEFAULT_K
-        k = check_n_segments(n_segments, m)
-        r = math.sqrt(mesh.area / (k * math.pi))
-    return k, r, init, window, int(max_iter)
-
-
-def segment(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | None = None,
-            alpha: float = 200.0, eta_convex: float = 0.2, window: float = 2.0,
-            init: str | None = None, max_iter: int = 50, weighting: str = "paper",
-            assignment: str = "bounded", enforce_connectivity: bool = True,
-            progress: bool = False, n_threads: int | None = None,
-            _reference: bool = False) -> SegmentationResult:
+def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | None = _D.radius,
+            alpha: float = _D.alpha, eta_convex: float = _D.eta_convex,
+            window: float = _D.window, init: str | None = _D.init,
+            max_iter: int = _D.max_iter, weighting: str = _D.weighting,
+            assignment: str = _D.assignment,
+            enforce_connectivity: bool = _D.enforce_connectivity,
+            progress: bool = _D.progress, n_threads: int | None = _D.n_threads) -> SegmentationResult:
     """Superfacets with details: same parameters as :func:`superfacets`.
 
     Returns
@@ -253,188 +216,143 @@ def segment(mesh, n_segments: int | None = _DEFAULT_K, *, radius: float | None =
 
     Notes
     -----
-    With ``assignment='bounded'`` the expansion of a center depends on its
-    face alone, so a center that did not move since the previous pass is not
-    expanded again: its recorded (face, distance) list is replayed through
-    the same update, in the same center order. The labels are exactly those
-    of expanding every center every pass (``_reference=True``, used by the
-    tests), at the cost of about ``12 * 5`` bytes per face for the recorded
-    lists (each face lies in about 4.4 windows with ``window = 2``). The
-    centers that moved are expanded first, record only, on ``n_threads``
-    threads at once (an expansion reads neither the labels nor the other
-    expansions), then all records are replayed in center order, so the
-    result does not depend on the number of threads.
+    With ``assignment='bounded'`` a center that did not move since the
+    previous pass is not expanded again: its recorded expansion is replayed
+    (:class:`~superfacets.classify.BoundedReplay`, about ``12 * 5`` bytes per
+    face), and a repeating cycle of center lists is jumped over
+    (:mod:`superfacets.passes`). Labels, centers, ``n_iter`` and
+    ``n_orphan_seeds`` are exactly those of expanding every center on every
+    pass (``pipeline(..., replay=False, jump_cycles=False)``, tested), for
+    any ``n_threads``; ``timings['passes']`` counts the passes run.
 
-    The ordered center list of a pass determines every later pass, so when
-    it repeats the list of an earlier pass the run is periodic (the
-    flip-flopping that keeps many runs from converging): the run then jumps
-    to the center list that pass ``max_iter`` would have, and classifies it
-    once. Labels, centers, ``n_iter`` and ``n_orphan_seeds`` are those of
-    running every pass (tested against ``_reference=True``, which does
-    neither optimization); ``timings['passes']`` counts the passes run.
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets import segment
+    >>> r = segment(trimesh.creation.icosphere(subdivisions=3), n_segments=20)
+    >>> r.n_segments, r.labels.dtype
+    (20, dtype('int64'))
+    """
+    params = resolve(n_segments=n_segments, radius=radius, alpha=alpha, eta_convex=eta_convex,
+                     window=window, init=init, max_iter=max_iter, weighting=weighting,
+                     assignment=assignment, enforce_connectivity=enforce_connectivity,
+                     progress=progress, n_threads=n_threads)
+    return pipeline(mesh, params)
+
+
+def superfacet_size(params: SegmentParams, area: float, diagonal: float,
+                    n_elements: int) -> tuple[int | None, float]:
+    """The number of centers ``k`` and the radius ``r`` (mesh units) of a run.
+
+    With ``n_segments``: ``r = sqrt(A / (k pi))`` (paper section 3.1). With
+    ``radius`` (a fraction of ``d``): ``r = radius * d``, and for the
+    farthest-point initialization ``k = round(A / (pi r^2))`` clamped to
+    ``1..n``; ``k`` is None for flood and grid.
+
+    Raises
+    ------
+    ParameterError
+        If ``n_segments`` exceeds the number of elements.
+    """
+    if params.radius is not None:
+        r = params.radius * diagonal
+        k = None
+        if params.init == "farthest":
+            k = int(min(n_elements, max(1, round(area / (math.pi * r * r)))))
+        return k, r
+    k = check_n_segments(params.n_segments, n_elements)
+    return k, math.sqrt(area / (k * math.pi))
+
+
+def pipeline(mesh, params: SegmentParams, *, replay: bool = True,
+             jump_cycles: bool = True) -> SegmentationResult:
+    """Run the method with validated parameters (see the module notes).
+
+    Parameters
+    ----------
+    mesh : Mesh, trimesh.Trimesh or (vertices, faces)
+    params : SegmentParams
+        From :func:`superfacets.params.resolve`.
+    replay : bool, default True
+        Replay the expansions of centers that did not move (bounded
+        assignment); False expands every center on every pass. Same labels.
+    jump_cycles : bool, default True
+        Jump over a repeating cycle of center lists. Same labels.
+
+    Returns
+    -------
+    SegmentationResult
     """
     t_start = time.perf_counter()
+    p = params
     mesh = as_mesh(mesh)
     mesh.check_usable()
-    k, r, init, window, max_iter = _resolve(mesh, n_segments, radius, init, window, max_iter,
-                                            assignment)
-    n_threads = _threads(n_threads)
-    m = mesh.n_faces
+    k, r = superfacet_size(p, mesh.area, mesh.diagonal, mesh.n_faces)
     timings: dict[str, float] = {}
-
     bar = None
-    if progress:  # one bar: the set-up stages by name, then the passes
+    if p.progress:  # one bar: the set-up stages by name, then the passes
         from tqdm import tqdm
 
-        bar = tqdm(total=max_iter, desc="face graph", unit="it", leave=False)
-    t = time.perf_counter()
-    g = mesh.graph
-    _ = mesh.centroids, mesh.normals, mesh.areas
-    timings["graph"] = time.perf_counter() - t
-    if bar is not None:
-        bar.set_description("weights")
-    t = time.perf_counter()
-    w = edge_weights(mesh, weighting, alpha=alpha, eta_convex=eta_convex)
-    csr_w = np.ascontiguousarray(w[g.dual_edge], dtype=np.float64)
-    del w
-    timings["weights"] = time.perf_counter() - t
-
-    # buffers, allocated once per run
-    c = np.ascontiguousarray(mesh.centroids)
-    areas = np.ascontiguousarray(mesh.areas)
-    dist = np.empty(m)
-    label = np.empty(m, dtype=np.int32)  # one kernel specialization for all label arrays
-    spaces = Workspaces(m, csr_w, n_threads)
-    centers = np.empty(m, dtype=np.int64)
-    window_r2 = (window * r) ** 2
-
-    if bar is not None:
-        bar.set_description(f"init ({init})")
-    t = time.perf_counter()
-    if init == "farthest":
-        n_centers = k
-        centers[:k] = farthest_point_centers(mesh, k)
-    else:
-        init_labels = (flood_labels(mesh, csr_w, r, window) if init == "flood"
-                       else grid_labels(mesh, r))
-        n_centers = int(init_labels.max()) + 1
-        _kernels.update_centers(init_labels.astype(np.int32), n_centers, areas, c,
-                                np.full(n_centers, -1, dtype=np.int64), centers)
-    timings["init"] = time.perf_counter() - t
-    n_init = n_centers
-
-    t = time.perf_counter()
-    inc = Replay(m, spaces) if (assignment == "bounded" and not _reference) else None
-    if assignment == "exact":
-        hkey = np.empty(spaces.heap_bound)
-        hval = np.empty(spaces.heap_bound, dtype=np.int32 if m < 2**31 - 1 else np.int64)
-    n_iter = 0
-    n_expanded = 0
-    converged = False
-    n_orphans = 0
-    if bar is not None:
-        bar.set_description("superfacets")
-    # The centers of a pass determine everything after it, so once the ordered
-    # center list of a pass repeats an earlier one the run is periodic: jump to the
-    # state of pass max_iter and classify it once (same labels as running every pass).
-    seen: dict[bytes, int] = {}
-    states: list[np.ndarray] = []
-    orphans_per_pass: list[int] = []
-    n_passes = 0
-    period = 0
+        bar = tqdm(total=p.max_iter, desc="face graph", unit="it", leave=False)
     try:
-        while True:
-            key = centers[:n_centers].tobytes()
-            if key in seen and not period and not _reference and n_iter < max_iter - 1:
-                j = seen[key]  # pass j (0-based) had the same centers as pass n_iter
-                period = n_iter - j
-                last = max_iter - 1
-                cyc = [j + ((t - j) % period) for t in range(n_iter, last)]
-                n_orphans += sum(orphans_per_pass[q] for q in cyc)
-                target = states[j + ((last - j) % period)]
-                n_centers = target.shape[0]
-                centers[:n_centers] = target
-                if bar is not None:
-                    bar.update(last - n_iter)
-                n_iter = last
-            elif not period:
-                seen[key] = n_iter
-                states.append(centers[:n_centers].copy())
-            if inc is not None:
-                k_now, n_exp = inc.classify(g.indptr, g.indices, csr_w, c, centers, n_centers,
-                                            window_r2, dist, label)
-                n_expanded += n_exp
-            elif assignment == "bounded":
-                sid = spaces.reserve(m + n_centers)
-                k_now, next_sid = with_room(spaces.get(0), lambda ws: _kernels.classify_bounded(
-                    g.indptr, g.indices, csr_w, c, centers, n_centers, window_r2, dist, label,
-                    ws.local, ws.stamp, sid, ws.queue, spaces.inv_width, ws.vis))
-                spaces.release(next_sid)
-                n_expanded += k_now
-            else:
-                k_now = _kernels.classify_exact(g.indptr, g.indices, csr_w, centers, n_centers,
-                                                dist, label, hkey, hval)
-            n_iter += 1
-            n_passes += 1
-            n_orphans += k_now - n_centers
-            orphans_per_pass.append(k_now - n_centers)
-            used = centers[:k_now].copy()
-            moved = np.empty(k_now, dtype=np.int64)
-            _kernels.update_centers(label, k_now, areas, c, used, moved)
-            n_moved = int((moved != used).sum())
-            if bar is not None:
-                bar.update(1)
-                bar.set_postfix(centers=k_now, moved=n_moved)
-            if k_now == n_centers and n_moved == 0:
-                converged = True
-                break
-            if n_iter >= max_iter:
-                break
-            alive = moved[moved >= 0]
-            n_centers = alive.shape[0]
-            centers[:n_centers] = alive
+        t = time.perf_counter()
+        graph = mesh.graph
+        timings["graph"] = time.perf_counter() - t
+
+        _stage(bar, "weights")
+        t = time.perf_counter()
+        w = csr_weights(graph, edge_weights(graph, p.weighting, alpha=p.alpha,
+                                            eta_convex=p.eta_convex))
+        timings["weights"] = time.perf_counter() - t
+
+        _stage(bar, f"init ({p.init})")
+        t = time.perf_counter()
+        window_r2 = (p.window * r) ** 2
+        spaces = Workspaces(graph.n_elements, w, p.n_threads)
+        init = initial_centers(p.init, graph, w, k, r, p.window)
+        timings["init"] = time.perf_counter() - t
+
+        _stage(bar, "superfacets")
+        t = time.perf_counter()
+        centers = np.empty(graph.n_elements, dtype=np.int64)
+        centers[:init.shape[0]] = init
+        sizes = np.ascontiguousarray(graph.sizes)
+        positions = np.ascontiguousarray(graph.positions)
+        try:
+            classifier = make_classifier(p.assignment, graph, w, window_r2, spaces,
+                                         replay=replay)
+            it = iterate(classifier, centers, init.shape[0], sizes, positions, p.max_iter,
+                         jump_cycles=jump_cycles, bar=bar)
+        finally:
+            spaces.close()
+        classifier = spaces = w = None  # free the work buffers before the clean-up
+        timings["iterations"] = time.perf_counter() - t
     finally:
-        spaces.close()
         if bar is not None:
             bar.close()
-    timings["iterations"] = time.perf_counter() - t
-    inc = spaces = dist = csr_w = None  # free the work buffers before the clean-up
-    hkey = hval = None
 
     # labels of the last classification; drop superfacets left empty
     t = time.perf_counter()
-    present = np.zeros(k_now, dtype=bool)
-    present[label] = True
-    final = relabel_dense(label)
-    final_centers = used[present]
-    if enforce_connectivity:
-        final = _enforce_connectivity(mesh, final, final_centers)
-    final_centers = _centers_of(final, final_centers, areas, c)
+    present = np.zeros(it.centers.shape[0], dtype=bool)
+    present[it.label] = True
+    labels = relabel_dense(it.label)
+    centers = it.centers[present]
+    if p.enforce_connectivity:
+        labels = _enforce_connectivity(graph, labels, centers)
+    centers = final_centers(labels, centers, sizes, positions)
     timings["connectivity"] = time.perf_counter() - t
     timings["total"] = time.perf_counter() - t_start
-
-    timings["expansions"] = n_expanded
-    timings["passes"] = n_passes
-    timings["cycle_period"] = period
-    params = dict(n_segments=k, radius=r / mesh.diagonal, alpha=float(alpha),
-                  eta_convex=float(eta_convex), window=window, init=init, max_iter=max_iter,
-                  weighting=weighting, assignment=assignment,
-                  enforce_connectivity=bool(enforce_connectivity), n_init_centers=n_init)
-    return SegmentationResult(labels=final, centers=final_centers, n_iter=n_iter,
-                              converged=converged, radius=r, n_orphan_seeds=n_orphans,
-                              timings=timings, params=params)
+    timings.update(expansions=it.expansions, passes=it.n_passes, cycle_period=it.cycle_period)
+    resolved = dict(n_segments=k, radius=r / mesh.diagonal, alpha=p.alpha,
+                    eta_convex=p.eta_convex, window=p.window, init=p.init,
+                    max_iter=p.max_iter, weighting=p.weighting, assignment=p.assignment,
+                    enforce_connectivity=p.enforce_connectivity, n_init_centers=init.shape[0])
+    return SegmentationResult(labels=labels, centers=centers, n_iter=it.n_iter,
+                              converged=it.converged, radius=r,
+                              n_orphan_seeds=it.n_orphan_seeds, timings=timings,
+                              params=resolved)
 
 
-def _centers_of(labels: np.ndarray, old_centers: np.ndarray, areas, centroids) -> np.ndarray:
-    """Center of each final label: an old center that kept its label, else the
-    face nearest the area-weighted mean."""
-    k = int(labels.max()) + 1
-    nearest = np.empty(k, dtype=np.int64)
-    _kernels.update_centers(labels.astype(np.int32), k, areas, centroids,
-                            np.full(k, -1, dtype=np.int64), nearest)
-    out = nearest.copy()
-    kept = labels[old_centers]
-    # the first old center landing in a label wins
-    first = np.unique(kept, return_index=True)[1]
-    out[kept[first]] = old_centers[first]
-    return out
+def _stage(bar, name: str) -> None:
+    if bar is not None:
+        bar.set_description(name)

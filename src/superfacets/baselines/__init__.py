@@ -1,7 +1,7 @@
 """Baselines the paper compares with (section 5): normalized cuts and VSA.
 
 Shlafman et al.'s weighting is not a separate method: it is the paper's
-k-means with :func:`superfacets.graph.shlafman_weights`
+k-means with :func:`superfacets.weights.shlafman_weights`
 (``superfacets(mesh, weighting="shlafman")``).
 """
 

@@ -9,7 +9,7 @@ the binary min-heap of ``superfacets._kernels`` (float64 keys, int64 values
 import numpy as np
 from numba import njit
 
-from .._kernels import _pop, _push
+from .._kernels.heap import pop, push
 
 
 @njit(cache=True, inline="always")
@@ -36,7 +36,7 @@ def _push_neighbours(f, p, n_proxies, indptr, indices, metric, areas, normals, c
     for j in range(indptr[f], indptr[f + 1]):
         g = indices[j]
         if label[g] < 0:
-            size = _push(hkey, hval, size, _error(g, p, metric, areas, normals, corners, X, N),
+            size = push(hkey, hval, size, _error(g, p, metric, areas, normals, corners, X, N),
                          g * n_proxies + p)
     return size
 
@@ -60,7 +60,7 @@ def partition(indptr, indices, metric, areas, normals, corners, X, N, seeds, n_p
                                 normals, corners, X, N, label, hkey, hval, size)
     while size > 0:
         v = hval[0]
-        size = _pop(hkey, hval, size)
+        size = pop(hkey, hval, size)
         f = v // n_proxies
         if label[f] >= 0:
             continue

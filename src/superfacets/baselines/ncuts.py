@@ -53,10 +53,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import MemoryLimitError, ParameterError
-from ..graph import edge_weights
 from ..mesh import as_mesh
-from ..seeding import check_n_segments
-from ..segment import _positive
+from ..params import check_n_segments, check_positive
+from ..weights import edge_weights
 
 __all__ = ["NcutEmbedding", "ncut_embedding", "normalized_cuts", "ncut_memory_estimate",
            "default_memory_limit"]
@@ -218,7 +217,7 @@ def ncut_embedding(mesh, n_components: int = 300, *, alpha: float = 100.0,
     mesh.check_usable()
     m = mesh.n_faces
     c = min(check_n_segments(n_components, 2**62), m)
-    bandwidth = _positive("bandwidth", bandwidth)
+    bandwidth = check_positive("bandwidth", bandwidth)
     k_ref = min(check_n_segments(reference_segments, 2**62), m)
     cutoff = float(cutoff)
     if not (0 <= cutoff < 1):
@@ -354,7 +353,7 @@ def normalized_cuts(mesh, n_segments: int = 150, *, embedding: NcutEmbedding | N
     """
     from sklearn.cluster._spectral import discretize
 
-    from ..connectivity import relabel_dense
+    from ..labels import relabel_dense
 
     mesh = as_mesh(mesh)
     k = check_n_segments(n_segments, mesh.n_faces)

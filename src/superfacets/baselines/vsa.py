@@ -37,7 +37,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..mesh import as_mesh
-from ..seeding import check_n_segments
+from ..params import check_n_segments
 
 __all__ = ["VSAResult", "variational_shape_approximation", "vsa", "METRICS", "INITS"]
 

@@ -1,60 +1,28 @@
-"""Reading and writing meshes and label files.
+"""Mesh files: reading (OFF, ``.tri``, PLY, OBJ, STL) and writing, coloured PLY.
 
-Meshes: OFF (the Princeton benchmark's format) and the authors' ``.tri``
-text format are parsed here (vectorized with :func:`numpy.loadtxt`); PLY, OBJ
-and STL go through trimesh with ``process=False`` so the face order never
-changes. A trailing ``.gz``, ``.xz`` or ``.bz2`` is decompressed
-transparently. Labels: ``.seg`` files, one integer per face per line in face
-order, optionally preceded by ``#`` header lines.
-
-Every write is atomic: the data goes to a temporary file in the target
-directory, which is then renamed over the target, so an interrupted run never
-leaves a half-written file.
+OFF (the Princeton benchmark's format) and the authors' ``.tri`` text format
+are parsed here (vectorized with :func:`numpy.loadtxt`); PLY, OBJ and STL go
+through trimesh with ``process=False`` so the face order never changes. A
+trailing ``.gz``, ``.xz`` or ``.bz2`` is decompressed transparently; every
+write is atomic (:func:`superfacets.io.files.atomic_write`).
 """
 
 from __future__ import annotations
 
-import bz2
-import gzip
 import gc
 import io
-import lzma
-import os
-import tempfile
 from pathlib import Path
-from typing import Callable, Iterable
 
 import numpy as np
 
-from .errors import InvalidMeshError, MeshFormatError
-from .mesh import Mesh
+from ..errors import InvalidMeshError, MeshFormatError
+from ..mesh import Mesh, as_mesh
+from .files import atomic_write, read_bytes, split_suffix, text_lines
 
-__all__ = ["read_mesh", "write_mesh", "read_labels", "write_labels", "write_colored_mesh",
-           "atomic_write", "MESH_FORMATS"]
+__all__ = ["read_mesh", "write_mesh", "write_colored_mesh", "MESH_FORMATS"]
 
-_COMPRESSIONS = {".gz": gzip.decompress, ".xz": lzma.decompress, ".bz2": bz2.decompress}
-_COMPRESSORS = {".gz": gzip.compress, ".xz": lzma.compress, ".bz2": bz2.compress}
 #: Mesh file formats understood by :func:`read_mesh` (before any compression suffix).
 MESH_FORMATS = ("off", "tri", "ply", "obj", "stl")
-
-
-def _split_suffix(path: Path) -> tuple[str, str | None]:
-    """Return (format, compression suffix or None) of a file name."""
-    suffixes = [s.lower() for s in path.suffixes]
-    comp = suffixes[-1] if suffixes and suffixes[-1] in _COMPRESSIONS else None
-    rest = suffixes[:-1] if comp else suffixes
-    fmt = rest[-1].lstrip(".") if rest else ""
-    return fmt, comp
-
-
-def _read_bytes(path: Path, comp: str | None) -> bytes:
-    data = path.read_bytes()
-    if comp is None:
-        return data
-    try:
-        return _COMPRESSIONS[comp](data)
-    except (OSError, EOFError, lzma.LZMAError, ValueError) as exc:
-        raise MeshFormatError(f"{path}: cannot decompress ({comp[1:]}): {exc}") from None
 
 
 def read_mesh(path, format: str | None = None) -> Mesh:
@@ -87,7 +55,7 @@ def read_mesh(path, format: str | None = None) -> Mesh:
         indices out of range).
     """
     path = Path(path)
-    fmt, comp = _split_suffix(path)
+    fmt, comp = split_suffix(path)
     if format is not None:
         fmt = format.lower().lstrip(".")
     if fmt not in MESH_FORMATS:
@@ -100,7 +68,7 @@ def read_mesh(path, format: str | None = None) -> Mesh:
         raise FileNotFoundError(f"{path}: no such file")
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a directory")
-    data = _read_bytes(path, comp)
+    data = read_bytes(path, comp)
     if fmt == "off":
         v, f = _parse_off(data, path)
     elif fmt == "tri":
@@ -114,18 +82,6 @@ def read_mesh(path, format: str | None = None) -> Mesh:
 
 
 # --------------------------------------------------------------------- text
-def _text_lines(data: bytes, path: Path) -> list[str]:
-    """Non-empty lines with comments (``#`` to end of line) removed."""
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError:
-        raise MeshFormatError(f"{path}: not a text file (binary data in a text format)") from None
-    if "#" in text:
-        text = "\n".join(line.split("#", 1)[0] for line in text.splitlines())
-    lines = text.split("\n")
-    return [ln for ln in (ln.strip() for ln in lines) if ln]
-
-
 def _loadtxt(lines: list[str], dtype, what: str, path: Path) -> np.ndarray:
     try:
         return np.loadtxt(lines, dtype=dtype, ndmin=2, comments=None)
@@ -145,7 +101,7 @@ def _count(token: str, what: str, path: Path) -> int:
 
 
 def _parse_off(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
-    lines = _text_lines(data, path)
+    lines = text_lines(data, path)
     if not lines:
         raise MeshFormatError(f"{path}: empty file")
     head = lines[0].split()
@@ -204,7 +160,7 @@ def _off_faces(flines: list[str], path: Path) -> np.ndarray:
 
 
 def _parse_tri(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
-    lines = _text_lines(data, path)
+    lines = text_lines(data, path)
     if not lines:
         raise MeshFormatError(f"{path}: empty file")
     nv = _count(lines[0].split()[0], "vertex", path)
@@ -285,126 +241,6 @@ def _declared_faces(data: bytes, fmt: str) -> int | None:
 
 
 # ------------------------------------------------------------------ writes
-def atomic_write(path, write: Callable[[io.BufferedWriter], None] | bytes) -> Path:
-    """Write a file atomically: a temporary file in the same folder, then rename.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        Target file. Its folder must exist.
-    write : bytes or callable
-        The content, or a function writing it to a binary file object.
-        A ``.gz``/``.xz``/``.bz2`` suffix on ``path`` compresses the content.
-
-    Returns
-    -------
-    pathlib.Path
-        The target path.
-
-    Raises
-    ------
-    FileNotFoundError
-        If the folder does not exist.
-    """
-    path = Path(path)
-    folder = path.parent if str(path.parent) else Path(".")
-    if not folder.is_dir():
-        raise FileNotFoundError(f"{path}: folder {folder} does not exist")
-    comp = path.suffix.lower() if path.suffix.lower() in _COMPRESSORS else None
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            if comp is not None:
-                buf = io.BytesIO()
-                write(buf) if callable(write) else buf.write(write)
-                fh.write(_COMPRESSORS[comp](buf.getvalue()))
-            elif callable(write):
-                write(fh)
-            else:
-                fh.write(write)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
-    return path
-
-
-def write_labels(path, labels, header: dict | Iterable[str] | None = None) -> Path:
-    """Write a ``.seg`` label file: one integer per face per line, face order.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-    labels : (m,) int ndarray
-    header : dict or iterable of str, optional
-        Written first as ``# key: value`` (or ``# line``) lines; readers of
-        this package skip them. Leave it out for strict benchmark files.
-
-    Returns
-    -------
-    pathlib.Path
-
-    Raises
-    ------
-    ValueError
-        If ``labels`` is not a 1-D integer array.
-    """
-    labels = np.asarray(labels)
-    if labels.ndim != 1 or not np.issubdtype(labels.dtype, np.integer):
-        raise ValueError(f"labels must be a 1-D integer array, got shape {labels.shape}, dtype {labels.dtype}")
-    head = ""
-    if header:
-        items = header.items() if isinstance(header, dict) else ((None, h) for h in header)
-        head = "".join(f"# {k}: {v}\n" if k is not None else f"# {v}\n" for k, v in items)
-    body = "\n".join(labels.astype(str).tolist())
-    return atomic_write(path, (head + body + ("\n" if labels.size else "")).encode("ascii"))
-
-
-def read_labels(path, n_faces: int | None = None) -> np.ndarray:
-    """Read a ``.seg`` label file (``#`` lines skipped; may be compressed).
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-    n_faces : int, optional
-        If given, the number of labels must equal it.
-
-    Returns
-    -------
-    labels : (m,) int64 ndarray
-        The labels as stored (not relabelled).
-
-    Raises
-    ------
-    FileNotFoundError
-        If the file does not exist.
-    MeshFormatError
-        If a line is not one integer, or the count differs from ``n_faces``.
-    """
-    path = Path(path)
-    if not path.exists():
-        raise FileNotFoundError(f"{path}: no such file")
-    _, comp = _split_suffix(path)
-    data = _read_bytes(path, comp)
-    lines = _text_lines(data, path)
-    if not lines:
-        labels = np.zeros(0, dtype=np.int64)
-    else:
-        try:
-            labels = np.loadtxt(lines, dtype=np.int64, ndmin=1, comments=None)
-        except ValueError as exc:
-            raise MeshFormatError(f"{path}: malformed label file: {str(exc).split('; use')[0]}") from None
-        if labels.ndim != 1:
-            raise MeshFormatError(f"{path}: malformed label file: expected one label per line")
-    if n_faces is not None and labels.shape[0] != n_faces:
-        raise MeshFormatError(f"{path}: has {labels.shape[0]} labels but the mesh has {n_faces} faces")
-    return labels
-
-
 def write_mesh(path, mesh, face_colors: np.ndarray | None = None) -> Path:
     """Write a mesh: ``.off`` and ``.tri`` here, ``.ply``/``.obj``/``.stl`` via trimesh.
 
@@ -426,11 +262,9 @@ def write_mesh(path, mesh, face_colors: np.ndarray | None = None) -> Path:
         If the format is unknown, or colours are asked of a format other
         than PLY.
     """
-    from .mesh import as_mesh
-
     mesh = as_mesh(mesh)
     path = Path(path)
-    fmt, _ = _split_suffix(path)
+    fmt, _ = split_suffix(path)
     if fmt not in MESH_FORMATS:
         raise MeshFormatError(f"{path}: unknown mesh format .{fmt}")
     if face_colors is not None and fmt != "ply":
@@ -464,7 +298,7 @@ def write_colored_mesh(path, mesh, labels) -> Path:
 
     Adjacent superfacets always get clearly different colours (a greedy
     colouring of the superfacet adjacency graph, see
-    :func:`superfacets.viz.superfacet_colors`). Opens in MeshLab or Blender.
+    :func:`superfacets.colors.superfacet_colors`). Opens in MeshLab or Blender.
 
     Parameters
     ----------
@@ -479,11 +313,10 @@ def write_colored_mesh(path, mesh, labels) -> Path:
 
     Raises
     ------
-    ValueError
-        If ``labels`` does not have one entry per face.
+    ParameterError
+        If ``labels`` is not one integer per face.
     """
-    from .mesh import as_mesh
-    from .viz import face_colors
+    from ..colors import face_colors
 
     mesh = as_mesh(mesh)
     return write_mesh(path, mesh, face_colors=face_colors(mesh, labels))

@@ -1,187 +1,142 @@
-"""Work buffers of the expansions, and the replayed classification.
+"""The classification step of the iteration: strategies behind one interface.
 
-Private. ``Workspaces`` holds, per thread, the per-expansion tentative
-distances (``local``, float64), their expansion stamps (``stamp``, int32), the
-bucket queue and a visit buffer, both grown on demand (the queue holds an
-expansion's frontier, a few hundred to a few thousand faces, not ``m``). ``Replay`` is the
-classification of :mod:`superfacets.segment` that re-expands only the centers
-that moved and replays the recorded expansions of the others, running the new
-expansions on several threads.
+A :class:`Classifier` labels every element with a center, given the centers
+of the pass (paper section 3.1, step 2); elements no center reached (orphans)
+seed new centers, appended to the center list. The strategies:
+
+- :class:`BoundedReplay` (``assignment='bounded'``, the default): the paper's
+  window-bounded expansion from each center, an element keeping the smallest
+  distance seen (the earlier center on ties). An expansion depends on its
+  center alone, so a center that did not move since the previous pass is not
+  expanded again: its recorded (element, distance) list is replayed. The
+  centers that moved are expanded on ``n_threads`` threads at once; records
+  are merged by the lexicographic (distance, center index) rule, so the
+  labels are exactly those of :class:`Bounded`, for any thread count.
+- :class:`Bounded`: the same classification written plainly (every center
+  expanded every pass, in order); the reference of the tests.
+- :class:`Exact` (``assignment='exact'``): one multi-source Dijkstra from all
+  centers, no window: every element goes to its nearest center.
+
+:func:`make_classifier` picks one by name.
 """
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
-
 import numpy as np
 
-from . import _kernels
+from ._kernels import expand as _k
+from ._kernels.exact import classify_exact
+from .expansion import Workspaces, with_room
+from .params import ASSIGNMENTS, check_choice
 
-_SID_LIMIT = 2**31 - 2  # stamps are int32
-_QUEUE0 = 1 << 14  # initial queue nodes
-_VISIT0 = 1 << 16  # initial visit buffer
-_ARENA = 5.0  # initial record arena, entries per face
-_PARALLEL_MIN_WORK = 200_000  # recorded faces per pass worth a second thread
-_MAX_BUCKETS = 1 << 16
+__all__ = ["Classifier", "BoundedReplay", "Bounded", "Exact", "make_classifier"]
 
-
-def bucket_width(weights: np.ndarray) -> tuple[float, int]:
-    """Bucket width of the expansion queue: ``(1 / width, number of buckets)``.
-
-    A quarter of the median edge weight (measured: 1.0 faces processed per
-    face reached, against 6.4 for a plain FIFO); wider if more than
-    ``2**16`` buckets would be needed to span the largest weight. Any width
-    gives the same distances (see :func:`superfacets._kernels.expand`).
-    """
-    if weights.shape[0] == 0:
-        return 1.0, 2
-    wmax = float(weights.max())
-    pos = weights[weights > 0]
-    width = 0.25 * float(np.median(pos)) if pos.shape[0] else 1.0
-    width = max(width, wmax / (_MAX_BUCKETS - 2))
-    if not (np.isfinite(width) and width > 0):
-        width = 1.0
-    nb = 2
-    while nb < wmax / width + 2:
-        nb *= 2
-    return 1.0 / width, nb
+_ARENA = 5.0  # initial record arena, entries per element
+_PARALLEL_MIN_WORK = 200_000  # recorded elements per pass worth a second thread
 
 
-class Workspace:
-    """``local``, ``stamp``, bucket queue and visit buffer of one thread.
+class Classifier:
+    """One classification per call of :meth:`classify`, on a fixed weighted graph.
 
     Parameters
     ----------
-    m : int
-        Number of faces.
-    n_buckets : int
-        Buckets of the queue (a power of two, from :func:`bucket_width`).
-    max_nodes : int
-        Bound on the queue nodes (``len(indices) + m + 1``).
-    """
-
-    def __init__(self, m: int, n_buckets: int, max_nodes: int):
-        self.m = m
-        self.local = np.empty(m)
-        self.stamp = np.full(m, -1, dtype=np.int32)
-        self.max_nodes = max_nodes
-        self.head = np.full(n_buckets, -1, dtype=np.int64)
-        self._queue(min(_QUEUE0, max_nodes))
-        self.vis = np.empty(min(_VISIT0, m), dtype=np.int32)
-        self._labels = None
-
-    def labels(self):
-        """This thread's own ``(dist, label)`` (float64, int32), made on first use."""
-        if self._labels is None:
-            self._labels = (np.empty(self.m), np.empty(self.m, dtype=np.int32))
-        return self._labels
-
-    def _queue(self, cap: int) -> None:
-        self.qface = np.empty(cap, dtype=np.int32)
-        self.qdist = np.empty(cap)
-        self.qnext = np.empty(cap, dtype=np.int32)
-        self.queue = (self.qface, self.qdist, self.qnext, self.head)
-
-    def grow(self, status: int) -> None:
-        """Quadruple the buffer a kernel ran out of (``status``) and reset the
-        stamps, so the interrupted expansion can be run again with its id.
-
-        ``RECORD_FULL`` grows the visit buffer (callers whose records go to an
-        arena of their own handle that status themselves).
-        """
-        self.stamp.fill(-1)
-        if status == _kernels.QUEUE_FULL:
-            cap = self.qface.shape[0]
-            if cap >= self.max_nodes:  # cannot happen: the bound holds every push
-                raise RuntimeError("expansion queue overflow beyond its bound")
-            self._queue(min(self.max_nodes, 4 * cap))
-        elif status == _kernels.RECORD_FULL:
-            self.vis = np.empty(min(self.m, 4 * self.vis.shape[0]), dtype=np.int32)
-        else:
-            raise ValueError(f"unknown status {status}")
-
-
-class Workspaces:
-    """One :class:`Workspace` per thread and the expansion-id counter.
-
-    Parameters
-    ----------
-    m : int
-        Number of faces.
+    graph : ElementGraph
     weights : (2 e,) float64 ndarray
-        Edge weight of each CSR entry (sets the bucket width, bounds the queue).
-    n_threads : int
-        Threads that may expand at once (``>= 1``); workspaces beyond the
-        first are allocated on first use.
+        Weight of each CSR entry of ``graph``.
+    window_r2 : float
+        Squared window radius ``(window * r)^2`` of the bounded expansions.
+    spaces : Workspaces
+        Work buffers and threads, shared with the initialization.
     """
 
-    def __init__(self, m: int, weights: np.ndarray, n_threads: int = 1):
-        self.m = m
-        self.heap_bound = weights.shape[0] + m + 1
-        self.inv_width, self.n_buckets = bucket_width(weights)
-        self.n_threads = max(1, int(n_threads))
-        self.ws = [Workspace(m, self.n_buckets, self.heap_bound)]
-        self.sid = 0
-        self._pool = None
+    def __init__(self, graph, weights: np.ndarray, window_r2: float, spaces: Workspaces):
+        self.m = graph.n_elements
+        self.indptr, self.indices = graph.indptr, graph.indices
+        self.c = np.ascontiguousarray(graph.positions)
+        self.w = weights
+        self.window_r2 = float(window_r2)
+        self.spaces = spaces
 
-    def get(self, t: int) -> Workspace:
-        while len(self.ws) <= t:
-            self.ws.append(Workspace(self.m, self.n_buckets, self.heap_bound))
-        return self.ws[t]
+    def classify(self, centers: np.ndarray, n_centers: int, dist: np.ndarray,
+                 label: np.ndarray) -> tuple[int, int]:
+        """Label every element (``label``, int32) and its distance (``dist``).
 
-    def reserve(self, n: int) -> int:
-        """Return the first of ``n`` fresh expansion ids (stamps reset on wrap)."""
-        if self.sid + n >= _SID_LIMIT:
-            for w in self.ws:
-                w.stamp.fill(-1)
-            self.sid = 0
-        sid = self.sid
-        self.sid += n
-        return sid
+        ``centers[:n_centers]`` are the centers (label ``s`` for
+        ``centers[s]``); orphan centers are appended to ``centers``.
 
-    def release(self, next_sid: int) -> None:
-        """Give back the reserved ids from ``next_sid`` on (unused by the kernel)."""
-        self.sid = int(next_sid)
-
-    def pool(self) -> ThreadPoolExecutor:
-        if self._pool is None:
-            self._pool = ThreadPoolExecutor(self.n_threads - 1, thread_name_prefix="superfacets")
-        return self._pool
-
-    def close(self) -> None:
-        if self._pool is not None:
-            self._pool.shutdown()
-            self._pool = None
+        Returns
+        -------
+        (K, n_expansions) : (int, int)
+            Centers now in use, and the expansions run.
+        """
+        raise NotImplementedError
 
 
-def with_room(ws: Workspace, call):
-    """Run ``call(ws)`` (a kernel returning a status first or alone) until the
-    queue and visit buffer of ``ws`` were large enough."""
-    while True:
-        out = call(ws)
-        st = out[0] if isinstance(out, tuple) else out
-        if st not in (_kernels.QUEUE_FULL, _kernels.RECORD_FULL):
-            return out
-        ws.grow(st)
+class Bounded(Classifier):
+    """The paper's bounded classification, every center expanded every pass."""
+
+    def classify(self, centers, n_centers, dist, label):
+        spaces = self.spaces
+        sid = spaces.reserve(self.m + n_centers)
+        k, next_sid = with_room(spaces.get(0), lambda ws: _k.classify_bounded(
+            self.indptr, self.indices, self.w, self.c, centers, n_centers, self.window_r2,
+            dist, label, ws.local, ws.stamp, sid, ws.queue, spaces.inv_width, ws.vis))
+        spaces.release(next_sid)
+        return k, k
 
 
-class Replay:
-    """The bounded classification with recorded expansions (see ``segment``).
+class Exact(Classifier):
+    """Exact nearest-center classification: one multi-source Dijkstra, no window."""
+
+    def __init__(self, graph, weights, window_r2, spaces):
+        super().__init__(graph, weights, window_r2, spaces)
+        self.hkey = np.empty(spaces.heap_bound)
+        self.hval = np.empty(spaces.heap_bound,
+                             dtype=np.int32 if self.m < 2**31 - 1 else np.int64)
+
+    def classify(self, centers, n_centers, dist, label):
+        k = classify_exact(self.indptr, self.indices, self.w, centers, n_centers, dist, label,
+                           self.hkey, self.hval)
+        return k, 0
+
+
+def make_classifier(assignment: str, graph, weights: np.ndarray, window_r2: float,
+                    spaces: Workspaces, *, replay: bool = True) -> Classifier:
+    """The classifier of ``assignment`` (``'bounded'`` or ``'exact'``).
+
+    ``replay=False`` gives the plain :class:`Bounded` instead of
+    :class:`BoundedReplay` (same labels, every center expanded every pass).
+
+    Raises
+    ------
+    ParameterError
+        On an unknown ``assignment``.
+    """
+    check_choice("assignment", assignment, ASSIGNMENTS)
+    if assignment == "exact":
+        return Exact(graph, weights, window_r2, spaces)
+    return (BoundedReplay if replay else Bounded)(graph, weights, window_r2, spaces)
+
+
+class BoundedReplay(Classifier):
+    """The paper's bounded classification, replaying the expansions of centers that did not move.
 
     The expansions of the previous pass are kept in one arena (``face``
-    int32 and ``dist`` float64, one entry per settled face, ``start``/``len``
-    per center). A center whose face was a center in the previous pass
-    reuses its record; the others are expanded (record only, on up to
-    ``n_threads`` threads), all records are merged (each new one right after
-    its expansion, on its thread; :func:`~superfacets._kernels.merge_some`)
-    and orphans are seeded. The
-    arena is compacted (records of centers that moved are dropped) when the
-    free space at its end runs short, and grown when that is not enough.
+    int32 and ``dist`` float64, one entry per settled element, ``start`` /
+    ``len`` per center). A center whose element was a center in the previous
+    pass reuses its record; the others are expanded (record only, on up to
+    ``n_threads`` threads). Every record is merged by the lexicographic
+    (distance, center index) rule, so the order of merging does not matter
+    (each new one right after its expansion, on its thread); then orphans are
+    seeded. The arena is compacted (records of centers that moved are
+    dropped) when the free space at its end runs short, and grown when that
+    is not enough. About ``12 * 5`` bytes per element (each element lies in
+    about 4.4 windows with ``window = 2``).
     """
 
-    def __init__(self, m: int, spaces: Workspaces):
-        self.m = m
-        self.spaces = spaces
+    def __init__(self, graph, weights: np.ndarray, window_r2: float, spaces: Workspaces):
+        super().__init__(graph, weights, window_r2, spaces)
+        m = self.m
         cap = int(_ARENA * m) + 1024
         self.face = np.empty(cap, dtype=np.int32)
         self.dist = np.empty(cap)
@@ -197,7 +152,7 @@ class Replay:
         (``start`` updated in place)."""
         if self.face.shape[0] - self.end >= need:
             return
-        self.end = int(_kernels.compact_records(np.argsort(start, kind="stable"), start,
+        self.end = int(_k.compact_records(np.argsort(start, kind="stable"), start,
                                                  length, self.face, self.dist))
         if self.face.shape[0] - self.end >= need:
             return
@@ -212,8 +167,8 @@ class Replay:
         dist[:self.end] = self.dist[:self.end]
         self.face, self.dist = face, dist
 
-    def classify(self, indptr, indices, w, c, centers, n_centers, window_r2, dist, label):
-        """Classify; return ``(K, n_expanded)`` like ``classify_bounded``."""
+    def classify(self, centers, n_centers, dist, label):
+        indptr, indices, w, c, window_r2 = self.indptr, self.indices, self.w, self.c, self.window_r2
         spaces = self.spaces
         cs = centers[:n_centers]
         idx = self.slot[cs]
@@ -244,7 +199,7 @@ class Replay:
         ws = spaces.get(0)
         while True:
             sid = spaces.reserve(self.m - n_centers + 1)
-            p, k, next_sid = _kernels.seed_orphans(
+            p, k, next_sid = _k.seed_orphans(
                 indptr, indices, w, c, centers, n_centers, window_r2, dist, label, ws.local,
                 ws.stamp, sid, ws.queue, spaces.inv_width, self.face, self.dist, new_end,
                 self.face.shape[0], seg_start, seg_len)
@@ -252,7 +207,7 @@ class Replay:
             if p >= 0:
                 break
             # undo the orphans' labels: merge everything again, then retry with more room
-            if p == _kernels.QUEUE_FULL:
+            if p == _k.QUEUE_FULL:
                 ws.grow(p)
             else:
                 self.end = new_end
@@ -268,8 +223,8 @@ class Replay:
         return k, int(todo.shape[0]) + (k - n_centers)
 
     def _merge_only(self, n_centers, seg_start, seg_len, dist, label) -> None:
-        _kernels.reset_labels(dist, label)
-        _kernels.merge_some(np.arange(n_centers), seg_start, seg_len, self.face, self.dist,
+        _k.reset_labels(dist, label)
+        _k.merge_some(np.arange(n_centers), seg_start, seg_len, self.face, self.dist,
                             dist, label)
 
     def _expand_and_merge(self, indptr, indices, w, c, cs, window_r2, seg_start, seg_len,
@@ -309,14 +264,14 @@ class Replay:
             os_t = np.empty(part.shape[0], dtype=np.int64)
             ol_t = np.empty(part.shape[0], dtype=np.int64)
             while True:
-                _kernels.reset_labels(d_t, l_t)
-                _kernels.merge_some(np.array(share[t], dtype=np.int64), seg_start, seg_len,
+                _k.reset_labels(d_t, l_t)
+                _k.merge_some(np.array(share[t], dtype=np.int64), seg_start, seg_len,
                                     self.face, self.dist, d_t, l_t)
-                p = _kernels.expand_many(indptr, indices, w, c, srcs_t, part, window_r2,
+                p = _k.expand_many(indptr, indices, w, c, srcs_t, part, window_r2,
                                          ws.local, ws.stamp, sid0 + t * per, ws.queue,
                                          spaces.inv_width, self.face, self.dist, bounds[t],
                                          bounds[t + 1], os_t, ol_t, d_t, l_t)
-                if p != _kernels.QUEUE_FULL:
+                if p != _k.QUEUE_FULL:
                     break
                 ws.grow(p)
             seg_start[part] = os_t
@@ -335,7 +290,7 @@ class Replay:
 
             def combine(t):
                 for u in range(1, n_thr):
-                    _kernels.combine_merged(dist, label, *spaces.get(u).labels(), cuts[t],
+                    _k.combine_merged(dist, label, *spaces.get(u).labels(), cuts[t],
                                             cuts[t + 1])
 
             futs = [spaces.pool().submit(combine, t) for t in range(1, n_thr)]

@@ -2,7 +2,8 @@ import numpy as np
 import pytest
 
 from superfacets import Mesh, ParameterError, paper_weights, shlafman_weights
-from superfacets.graph import build_face_graph, edge_weights
+from superfacets.elements import build_face_graph
+from superfacets.weights import edge_weights
 
 
 def fold(z: float) -> Mesh:
@@ -164,3 +165,33 @@ def test_graph_of_a_triangle_soup_matches_a_plain_construction(seed, n_faces, n_
             assert sorted(g.pairs[e].tolist()) == sorted([f, nb])
     if n_vertices < n_faces:
         assert np.diff(g.indptr).max() > 3  # non-manifold edges were exercised
+
+
+def test_face_graph_caches_the_terms_of_the_weights(sphere):
+    # the cached per-adjacency data equal the formulas of docs/method.md, sections 1-2
+    g = sphere.graph
+    assert g is sphere.graph and g.kind == "faces" and g.n_elements == sphere.n_faces
+    v, c, n = sphere.vertices, sphere.centroids, sphere.normals
+    i, j = g.pairs[:, 0], g.pairs[:, 1]
+    a, b = v[g.edges[:, 0]], v[g.edges[:, 1]]
+    mid = (a + b) / 2
+    np.testing.assert_allclose(g.lengths, np.linalg.norm(b - a, axis=1))
+    np.testing.assert_allclose(g.terms.geo, np.linalg.norm(c[i] - mid, axis=1)
+                               + np.linalg.norm(c[j] - mid, axis=1))
+    np.testing.assert_allclose(g.terms.cos, np.clip((n[i] * n[j]).sum(1), -1, 1))
+    assert not g.terms.concave.any()  # a sphere is convex everywhere
+    assert g.terms is g.terms  # computed once
+    assert g.area == pytest.approx(sphere.area)
+    np.testing.assert_allclose(g.centroid, sphere.vertices.mean(axis=0), atol=1e-12)
+
+
+def test_weights_and_metrics_take_the_graph_or_the_mesh(valley):
+    from superfacets import superfacets
+    from superfacets.metrics import compactness
+
+    g = valley.graph
+    np.testing.assert_array_equal(paper_weights(g, alpha=50), paper_weights(valley, alpha=50))
+    labels = superfacets(valley, 12)
+    assert compactness(g, labels) == compactness(valley, labels)
+    concave = g.terms.concave
+    assert concave.any() and (~concave).any()  # the valley's crease is concave, the rest flat

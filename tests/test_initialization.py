@@ -3,8 +3,8 @@ import pytest
 
 from superfacets import Mesh, ParameterError
 from superfacets.connectivity import label_components
-from superfacets.graph import paper_weights
-from superfacets.seeding import farthest_point_centers, first_center, flood_labels, grid_labels
+from superfacets.weights import paper_weights
+from superfacets.initialization import farthest_point_centers, first_center, flood_labels, grid_labels
 
 from conftest import grid_mesh
 
@@ -46,7 +46,9 @@ def test_farthest_point_matches_brute_force(sphere):
 def test_blocked_farthest_point_equals_the_plain_loop(source, monkeypatch):
     # the grid has many exactly tied distances; the cell-skipping version must break
     # them the same way (lowest face index) and skip only cells it cannot change
-    from superfacets import _kernels, read_mesh
+    from superfacets import read_mesh
+    from superfacets._kernels.farthest import (farthest_point, farthest_point_blocked,
+                                               spatial_blocks)
 
     from conftest import MESHES, need
 
@@ -61,15 +63,14 @@ def test_blocked_farthest_point_equals_the_plain_loop(source, monkeypatch):
     c = np.ascontiguousarray(mesh.centroids)
     for k in (1, 7, 150, 1000):
         plain = np.empty(k, np.int64)
-        _kernels.farthest_point(c, k, first_center(mesh), plain)
+        farthest_point(c, k, first_center(mesh), plain)
         for g in (1, 5, 40):
             blocked = np.empty(k, np.int64)
-            _kernels.farthest_point_blocked(c, k, first_center(mesh), blocked,
-                                            *_kernels.spatial_blocks(c, g))
+            farthest_point_blocked(c, k, first_center(mesh), blocked, *spatial_blocks(c, g))
             assert blocked.tolist() == plain.tolist()
-    from superfacets import seeding
+    from superfacets import initialization
 
-    monkeypatch.setattr(seeding, "_BLOCKED_MIN_WORK", 0)  # the public function, blocked path
+    monkeypatch.setattr(initialization, "_BLOCKED_MIN_WORK", 0)  # the public function, blocked path
     np.testing.assert_array_equal(farthest_point_centers(mesh, 1000), plain)
 
 

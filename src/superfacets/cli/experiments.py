@@ -1,0 +1,174 @@
+"""Commands over the benchmark: experiment (a grid of runs, resumable) and report."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from ..params import DEFAULT_N_SEGMENTS
+from .options import float_arg, int_arg
+
+__all__ = ["add_parsers"]
+
+
+def add_parsers(sub) -> None:
+    """Add ``experiment`` and ``report`` to the sub-parsers."""
+    x = sub.add_parser(
+        "experiment", help="run methods x parameters over the Princeton benchmark",
+        description="Run a grid of methods and parameters over the meshes of the Princeton "
+                    "Mesh Segmentation Benchmark, in parallel worker processes, appending one "
+                    "row per (mesh, method, parameters, k) with every metric to a CSV file. "
+                    "Rerunning with the same file continues where it stopped; a failure on "
+                    "one mesh is recorded and the run goes on. The defaults reproduce the "
+                    "paper's sweep (k in 50..300, alpha in 0, 100, 200, 500, 1000).")
+    x.add_argument("--psb", metavar="DIR", default=None,
+                   help="unpacked benchmark folder holding off/ and seg/ (default: unpacked "
+                        "once from ../shared/data/psb.tar.xz into ~/.cache/superfacets)")
+    x.add_argument("-o", "--results", metavar="FILE.csv", default="results.csv",
+                   help="results file, appended to (default: results.csv)")
+    x.add_argument("-m", "--method", action="append", default=None, metavar="NAME",
+                   help="method from the registry, repeatable (default: superfacets; "
+                        "see --list-methods)")
+    x.add_argument("-k", "--n-segments", type=int_arg, nargs="+", default=None, metavar="K",
+                   help="numbers of superfacets (default: "
+                        f"{' '.join(map(str, DEFAULT_N_SEGMENTS))})")
+    x.add_argument("--alpha", type=float_arg, nargs="+", default=None, metavar="A",
+                   help="alpha values, for the methods that have alpha (default: each "
+                        "method's sweep; superfacets: 0 100 200 500 1000)")
+    x.add_argument("--param", action="append", default=[], metavar="NAME=V1,V2",
+                   help="values of a method parameter, for each method that has it "
+                        "(METHOD.NAME=... for one method), repeatable (e.g. init=grid,flood)")
+    x.add_argument("--ids", default=None, metavar="LIST",
+                   help="mesh ids, e.g. 1-20,45 (default: all)")
+    x.add_argument("--categories", default=None, metavar="LIST",
+                   help="comma-separated categories, e.g. Human,Cup (default: all)")
+    x.add_argument("--per-category", type=int_arg, default=None, metavar="N",
+                   help="only the first N meshes (by id) of each category: a stratified subset")
+    x.add_argument("-j", "--workers", type=int_arg, default=None, metavar="N",
+                   help="worker processes (default: all cores)")
+    x.add_argument("--tau", type=float_arg, default=0.05,
+                   help="undersegmentation error tolerance (default: 0.05)")
+    x.add_argument("--seed", type=int_arg, default=0, help="seed given to randomized methods")
+    x.add_argument("--retry-failed", action="store_true",
+                   help="run again the rows recorded as failed")
+    x.add_argument("--list-methods", action="store_true",
+                   help="list the registered methods and their parameters, and exit")
+    x.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    x.set_defaults(func=cmd_experiment)
+
+    r = sub.add_parser(
+        "report", help="figures and tables from a results file",
+        description="Draw the paper's Fig. 4 layout (undersegmentation error and compactness "
+                    "against k, one curve per setting, mean over categories), the same per "
+                    "category, and Markdown tables, from a file of 'superfacets experiment'.")
+    r.add_argument("results", metavar="RESULTS.csv", nargs="+",
+                   help="results file(s); rows of several files are pooled")
+    r.add_argument("--series", action="append", default=None, metavar="NAME",
+                   help="keep only this series, as named in the legend (e.g. "
+                        "'superfacets α=200'), repeatable")
+    r.add_argument("-o", "--output-dir", default=None, metavar="DIR",
+                   help="folder for the figures and summary.md (default: beside the results "
+                        "file, named after it)")
+    r.add_argument("--k-focus", type=int_arg, default=150, metavar="K",
+                   help="k of the per-category and all-metrics tables (default: 150)")
+    r.set_defaults(func=cmd_report)
+
+
+def _id_list(text: str) -> set[int]:
+    from ..errors import ParameterError
+
+    out: set[int] = set()
+    for part in text.split(","):
+        part = part.strip()
+        try:
+            if "-" in part:
+                a, b = part.split("-", 1)
+                out |= set(range(int(a), int(b) + 1))
+            elif part:
+                out.add(int(part))
+        except ValueError:
+            raise ParameterError(f"--ids: expected ids or ranges like 1-20,45, got {part!r}") \
+                from None
+    return out
+
+
+def select_meshes(args):
+    """The benchmark meshes chosen by ``--psb``, ``--ids``, ``--categories``, ``--per-category``."""
+    from ..datasets.psb import list_meshes, psb_root
+    from ..errors import ParameterError
+
+    root = Path(args.psb) if args.psb else psb_root()
+    meshes = list_meshes(root)
+    if args.ids:
+        ids = _id_list(args.ids)
+        meshes = [m for m in meshes if m.id in ids]
+    if args.categories:
+        wanted = {c.strip().lower() for c in args.categories.split(",") if c.strip()}
+        known = {m.category.lower() for m in meshes}
+        unknown = wanted - known
+        if unknown:
+            raise ParameterError(f"--categories: unknown {', '.join(sorted(unknown))}; "
+                                 f"present: {', '.join(sorted(known))}")
+        meshes = [m for m in meshes if m.category.lower() in wanted]
+    if args.per_category is not None:
+        if args.per_category < 1:
+            raise ParameterError(f"--per-category must be >= 1, got {args.per_category}")
+        seen: dict[str, int] = {}
+        kept = []
+        for m in meshes:
+            if seen.get(m.category, 0) < args.per_category:
+                kept.append(m)
+                seen[m.category] = seen.get(m.category, 0) + 1
+        meshes = kept
+    if not meshes:
+        raise ParameterError(f"{root}: no mesh selected")
+    return meshes
+
+
+def cmd_experiment(args) -> int:
+    from ..methods import METHODS, get_method
+    from ..runner import expand_grid, method_grid, parse_params, run_experiment
+
+    if args.list_methods:
+        for name, m in sorted(METHODS.items()):
+            params = ", ".join(f"{k}={v}" for k, v in m.defaults.items())
+            print(f"{name}: {m.description}\n    parameters: {params}")
+            for k, v in m.sweep.items():
+                print(f"    default sweep: {k} in {', '.join(map(str, v))}")
+        return 0
+    methods = [get_method(name) for name in args.method or ["superfacets"]]
+    given = method_grid(methods, parse_params(args.param))
+    configs = []
+    for method in methods:
+        grid = {k: list(v) for k, v in method.sweep.items()}
+        if args.alpha is not None and "alpha" in method.defaults:
+            grid["alpha"] = args.alpha
+        grid.update(given[method.name])
+        configs += expand_grid(method.name, **grid)
+    meshes = select_meshes(args)
+    ks = args.n_segments or list(DEFAULT_N_SEGMENTS)
+    out = Path(args.results)
+    if not args.quiet:
+        print(f"{len(meshes)} meshes x {len(configs)} settings x {len(ks)} values of k "
+              f"-> {out}", file=sys.stderr)
+    s = run_experiment(meshes, configs, out, ks, workers=args.workers, tau=args.tau,
+                       seed=args.seed, retry_failed=args.retry_failed, progress=not args.quiet)
+    print(f"{s.written} rows written ({s.ok} ok, {s.failed} failed, {s.skipped} skipped), "
+          f"{s.done_before} already there, in {s.seconds:.1f} s -> {out}")
+    if s.interrupted:
+        print("interrupted: run the same command again to continue", file=sys.stderr)
+        return 130
+    if not args.quiet:
+        print(f"next: superfacets report {out}")
+    return 0
+
+
+def cmd_report(args) -> int:
+    from ..report import write_report
+
+    res = [Path(p) for p in args.results]
+    out = Path(args.output_dir) if args.output_dir else res[0].with_name(res[0].stem + "_report")
+    files = write_report(res, out, k_focus=args.k_focus, series=args.series)
+    print((out / "summary.md").read_text())
+    print(f"wrote {len(files)} files to {out}: " + ", ".join(f.name for f in files))
+    return 0

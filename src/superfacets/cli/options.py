@@ -1,0 +1,184 @@
+"""Options shared by several commands, and the helpers that read them.
+
+Defaults and choices come from :mod:`superfacets.params`, so the help texts
+and the API never disagree. Nothing here imports numba: building the parser
+(``--help``, argument errors) stays light.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ..params import ASSIGNMENTS, DEFAULTS, INITS, WEIGHTINGS
+
+__all__ = ["int_arg", "float_arg", "size_arg", "view_arg", "add_method_options",
+           "add_camera_options", "add_mesh_and_labels", "method_kwargs", "check_output",
+           "labels_for", "fmt_value"]
+
+_D = DEFAULTS
+
+
+def int_arg(text: str) -> int:
+    """argparse type: an integer."""
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+
+
+def float_arg(text: str) -> float:
+    """argparse type: a number."""
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+
+
+def size_arg(text: str) -> tuple[int, int]:
+    """argparse type: ``WIDTHxHEIGHT``."""
+    w, _, h = text.lower().partition("x")
+    try:
+        return int(w), int(h)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT, e.g. 1200x900, got {text!r}") \
+            from None
+
+
+def view_arg(text: str):
+    """argparse type: a view name or a direction ``x,y,z``."""
+    if "," in text:
+        try:
+            return tuple(float(t) for t in text.split(","))
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a name or x,y,z, got {text!r}") from None
+    return text
+
+
+def fmt_value(v) -> str:
+    """A parameter value for messages and titles (floats without trailing zeros)."""
+    return f"{v:g}" if isinstance(v, float) else str(v)
+
+
+def add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> None:
+    """The parameters of the method (``segment`` and the commands that segment)."""
+    if with_size:
+        size = p.add_mutually_exclusive_group()
+        size.add_argument("-k", "--n-segments", type=int_arg, default=None, metavar="N",
+                          help=f"number of superfacets k (default: {_D.n_segments} unless "
+                               "--radius is given)")
+        size.add_argument("--radius", type=float_arg, default=None, metavar="R",
+                          help="superfacet radius as a fraction of the bounding-box diagonal "
+                               "(instead of -k; default init then 'flood')")
+    p.add_argument("--alpha", type=float_arg, default=_D.alpha, metavar="A",
+                   help="weight of the concavity (angular) term, >= 0; 0 = most compact, "
+                        f"larger = follows concavities more (default: {_D.alpha:g})")
+    p.add_argument("--eta-convex", type=float_arg, default=_D.eta_convex, metavar="E",
+                   help="factor of the angular term on convex edges (concave: 1) "
+                        f"(default: {_D.eta_convex:g})")
+    p.add_argument("--init", choices=INITS, default=_D.init,
+                   help="initialization (default: farthest with -k, flood with --radius)")
+    p.add_argument("--window", type=float_arg, default=_D.window, metavar="W",
+                   help=f"expansion window, a multiple of the radius (default: {_D.window:g})")
+    p.add_argument("--max-iter", type=int_arg, default=_D.max_iter, metavar="N",
+                   help=f"maximum number of iterations (default: {_D.max_iter})")
+    p.add_argument("--weighting", choices=WEIGHTINGS, default=_D.weighting,
+                   help="edge weights: the paper's eqs. 1-3 or Shlafman's eq. 6 "
+                        f"(then --alpha in [0, 1]) (default: {_D.weighting})")
+    p.add_argument("--assignment", choices=ASSIGNMENTS, default=_D.assignment,
+                   help="bounded: the paper's window-bounded expansion per center; "
+                        "exact: nearest center by one multi-source Dijkstra "
+                        f"(default: {_D.assignment})")
+    p.add_argument("--no-connectivity", action="store_true",
+                   help="keep superfacets split in several pieces (default: merge stray "
+                        "pieces into the neighbour sharing the longest boundary)")
+    p.add_argument("--threads", type=int_arg, default=None, metavar="N",
+                   help="threads expanding centers at once (default: all cores; the labels "
+                        "do not depend on it)")
+    p.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
+    p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                   help="progress bar of the stages and iterations on stderr (default: on for "
+                        "meshes of 500,000 faces or more when stderr is a terminal)")
+
+
+def method_kwargs(args) -> dict:
+    """Keyword arguments of :func:`superfacets.segment` from the method options."""
+    return dict(alpha=args.alpha, eta_convex=args.eta_convex, window=args.window,
+                init=args.init, max_iter=args.max_iter, weighting=args.weighting,
+                assignment=args.assignment, enforce_connectivity=not args.no_connectivity,
+                progress=bool(args.progress), n_threads=args.threads)
+
+
+def add_camera_options(p, size: str) -> None:
+    """View, up axis and (for pictures) size, background, boundary lines and zoom."""
+    p.add_argument("--view", type=view_arg, default=None, metavar="V",
+                   help="camera: auto (default: along the mesh's thinnest axis), front, back, "
+                        "left, right, top, bottom, or a direction x,y,z from the mesh")
+    p.add_argument("--up", default="y", choices=("x", "y", "z", "-x", "-y", "-z"),
+                   help="the mesh's up axis (default: y, as the benchmark's meshes)")
+    if size:
+        p.add_argument("--size", type=size_arg, default=size_arg(size), metavar="WxH",
+                       help=f"image size in pixels (default: {size})")
+        p.add_argument("--background", default="white", metavar="COLOR",
+                       help="background colour: a name or #rrggbb (default: white)")
+        p.add_argument("--no-boundaries", action="store_true",
+                       help="do not draw the superfacet boundaries as dark lines")
+        p.add_argument("--line-width", type=float_arg, default=1.0, metavar="PX",
+                       help="boundary line width in pixels (default: 1)")
+        p.add_argument("--zoom", type=float_arg, default=1.0, metavar="Z",
+                       help="camera zoom factor, > 1 magnifies (default: 1)")
+
+
+def add_mesh_and_labels(p, plain: bool = True) -> None:
+    """``MESH [LABELS.seg]`` and ``--plain``."""
+    p.add_argument("mesh", metavar="MESH", help="input mesh file")
+    p.add_argument("labels", metavar="LABELS.seg", nargs="?", default=None,
+                   help="superfacet labels, one per face (default: computed)")
+    if plain:
+        p.add_argument("--plain", action="store_true", help="draw the mesh without superfacets")
+
+
+def check_output(path: str | None, suffixes: tuple[str, ...], what: str) -> Path | None:
+    """The output path, checked before any work: its folder exists, it is no folder,
+    and it ends in one of ``suffixes`` (when given).
+
+    Raises
+    ------
+    FileNotFoundError, IsADirectoryError, ParameterError
+    """
+    from ..errors import ParameterError
+
+    if path is None:
+        return None
+    out = Path(path)
+    parent = out.parent if str(out.parent) else Path(".")
+    if not parent.is_dir():
+        raise FileNotFoundError(f"{out}: output folder {parent} does not exist")
+    if out.is_dir():
+        raise IsADirectoryError(f"{out}: is a directory")
+    if suffixes and not any(out.name.lower().endswith(s) for s in suffixes):
+        raise ParameterError(f"{out}: {what} must end in {' or '.join(suffixes)}")
+    return out
+
+
+def labels_for(args, mesh):
+    """Labels from LABELS.seg, computed with the method options, or None (--plain);
+    and a dict describing them for titles and pages."""
+    from ..errors import SuperfacetsError
+    from ..io import read_labels
+    from ..segment import segment
+
+    if args.plain:
+        return None, {}
+    if args.labels:
+        return read_labels(args.labels, n_faces=mesh.n_faces), {"labels": Path(args.labels).name}
+    kw = method_kwargs(args)
+    kw["progress"] = False
+    try:
+        r = segment(mesh, args.n_segments, radius=args.radius, **kw)
+    except SuperfacetsError as exc:
+        raise type(exc)(f"{args.mesh}: {exc}") from None
+    info = {"k asked": r.params.get("n_segments"), "alpha": args.alpha,
+            "iterations": f"{r.n_iter} ({'converged' if r.converged else 'max-iter'})",
+            "seconds": f"{r.timings['total']:.2f}"}
+    return r.labels, info

@@ -1,0 +1,171 @@
+"""Commands that make pictures: render (PNG), panel (side by side), view (window), html."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .options import (add_camera_options, add_mesh_and_labels, add_method_options,
+                      check_output, float_arg, fmt_value, int_arg, labels_for)
+
+__all__ = ["add_parsers"]
+
+
+def add_parsers(sub) -> None:
+    """Add ``render``, ``panel``, ``view`` and ``html`` to the sub-parsers."""
+    seg_note = ("Without LABELS.seg the mesh is segmented first with the method options "
+                "below (default k = 150, alpha = 200); with --plain it is drawn grey.")
+    r = sub.add_parser(
+        "render", help="render a segmented mesh to a PNG, off-screen",
+        description="Render a mesh off-screen (no display or GPU needed) to a PNG: flat "
+                    "shaded, faces coloured by superfacet (adjacent superfacets in clearly "
+                    "different colours), boundaries as dark lines. " + seg_note)
+    add_mesh_and_labels(r)
+    r.add_argument("-o", "--output", metavar="OUT.png", required=True, help="PNG to write")
+    r.add_argument("--title", default=None, help="text at the top (default: none)")
+    add_camera_options(r, "1200x900")
+    add_method_options(r)
+    r.set_defaults(func=cmd_render)
+
+    pn = sub.add_parser(
+        "panel", help="render several settings side by side (the paper's Figs. 2, 3, 8)",
+        description="Render one mesh at several settings side by side, with titles: every "
+                    "combination of the given methods, -k values and --alpha values "
+                    "(e.g. --alpha 0 200 1000 -k 150 is the paper's Fig. 2), or the given "
+                    "label files (--labels).")
+    pn.add_argument("mesh", metavar="MESH", help="input mesh file")
+    pn.add_argument("-o", "--output", metavar="OUT.png", required=True, help="PNG to write")
+    pn.add_argument("-m", "--method", nargs="+", default=["superfacets"], metavar="NAME",
+                    help="registered methods (default: superfacets)")
+    pn.add_argument("-k", "--n-segments", type=int_arg, nargs="+", default=[150], metavar="K",
+                    help="numbers of superfacets (default: 150)")
+    pn.add_argument("--alpha", type=float_arg, nargs="+", default=None, metavar="A",
+                    help="alpha values (default: each method's default)")
+    pn.add_argument("--param", action="append", default=[], metavar="NAME=V1,V2",
+                    help="values of a method parameter, for each method that has it "
+                         "(METHOD.NAME=... for one method), repeatable "
+                         "(e.g. --param vsa.metric=l21,l2 --param vsa.init=random,incremental)")
+    pn.add_argument("--labels", nargs="+", default=None, metavar="LABELS.seg",
+                    help="draw these label files instead of computing")
+    pn.add_argument("--titles", nargs="+", default=None, metavar="TEXT",
+                    help="panel titles (default: the settings or file names)")
+    pn.add_argument("--columns", type=int_arg, default=None, metavar="N",
+                    help="panels per row (default: up to 4)")
+    add_camera_options(pn, "600x500")
+    pn.set_defaults(func=cmd_panel)
+
+    v = sub.add_parser(
+        "view", help="open an interactive 3D window",
+        description="Open a window to rotate (drag) and zoom (wheel) the coloured result "
+                    "(PyVista). Needs a display; without one, use 'render' or 'html'. "
+                    + seg_note)
+    add_mesh_and_labels(v)
+    add_camera_options(v, "")
+    add_method_options(v)
+    v.set_defaults(func=cmd_view)
+
+    h = sub.add_parser(
+        "html", help="write a self-contained interactive web page",
+        description="Write one HTML file (no network needed to open it) showing the coloured "
+                    "mesh interactively in a browser (WebGL), with its name, face count, "
+                    "superfacet count and parameters. " + seg_note)
+    add_mesh_and_labels(h)
+    h.add_argument("-o", "--output", metavar="OUT.html", required=True, help="page to write")
+    h.add_argument("--title", default=None, help="page title (default: the file name)")
+    h.add_argument("--background", default="#ffffff", metavar="COLOR",
+                   help="page background, a CSS colour (default: #ffffff)")
+    add_camera_options(h, "")
+    add_method_options(h)
+    h.set_defaults(func=cmd_html)
+
+
+def cmd_render(args) -> int:
+    from ..io import read_mesh
+    from ..render import render
+
+    out = check_output(args.output, (".png",), "the picture")
+    mesh = read_mesh(args.mesh)
+    labels, _ = labels_for(args, mesh)
+    t0 = time.perf_counter()
+    render(mesh, labels, out, size=args.size, view=args.view, up=args.up,
+           background=args.background, boundaries=not args.no_boundaries,
+           line_width=args.line_width, title=args.title, zoom=args.zoom)
+    if not args.quiet:
+        print(f"wrote {out} ({args.size[0]}x{args.size[1]}, {mesh.n_faces} faces, "
+              f"rendered in {time.perf_counter() - t0:.2f} s)")
+    return 0
+
+
+def cmd_panel(args) -> int:
+    from itertools import product as _product
+
+    from ..errors import ParameterError
+    from ..io import read_labels, read_mesh
+    from ..methods import get_method
+    from ..render import render_panel
+    from ..runner.grid import expand_grid, method_grid, parse_params
+
+    out = check_output(args.output, (".png",), "the picture")
+    mesh = read_mesh(args.mesh)
+    items = []
+    if args.labels:
+        for p in args.labels:
+            items.append((mesh, read_labels(p, n_faces=mesh.n_faces), Path(p).stem))
+    else:
+        methods = [get_method(m) for m in args.method]
+        given = method_grid(methods, parse_params(args.param))
+        for method in methods:
+            grid = dict(given[method.name])
+            if args.alpha and "alpha" in method.defaults:
+                grid["alpha"] = args.alpha
+            for cfg, k in _product(expand_grid(method.name, **grid), args.n_segments):
+                params = cfg.kwargs
+                try:
+                    run = method.run(mesh, k, cache={}, seed=0, **params)
+                except (ValueError, RuntimeError) as exc:
+                    raise ParameterError(f"{args.mesh}: {method.name}: {exc}") from None
+                n = len(np.unique(run.labels))
+                shown = [f"{p} = {fmt_value(params[p])}" for p in params if p in grid
+                         or (p == "alpha" and len(methods) == 1 and not args.alpha)]
+                title = ", ".join(([method.name] if len(methods) > 1 else []) + shown
+                                  + [f"k = {k} ({n})"])
+                items.append((mesh, run.labels, title))
+    if args.titles:
+        if len(args.titles) != len(items):
+            raise ParameterError(f"--titles: {len(args.titles)} given for {len(items)} panels")
+        items = [(m, lab, t) for (m, lab, _), t in zip(items, args.titles)]
+    render_panel(items, out, ncols=args.columns, size=args.size, view=args.view, up=args.up,
+                 background=args.background, boundaries=not args.no_boundaries,
+                 line_width=args.line_width, zoom=args.zoom)
+    print(f"wrote {out}: {len(items)} panels")
+    return 0
+
+
+def cmd_view(args) -> int:
+    from ..io import read_mesh
+    from ..render import NoDisplayError, has_display, show
+
+    if not has_display():  # say so before the (maybe long) segmentation
+        raise NoDisplayError("no display available ($DISPLAY is not set): use "
+                             "'superfacets render' for a PNG or 'superfacets html' for a page "
+                             "to open in a browser")
+    mesh = read_mesh(args.mesh)
+    labels, _ = labels_for(args, mesh)
+    show(mesh, labels, title=Path(args.mesh).name, view=args.view, up=args.up)  # pragma: no cover
+    return 0  # pragma: no cover
+
+
+def cmd_html(args) -> int:
+    from ..html import write_html
+    from ..io import read_mesh
+
+    out = check_output(args.output, (".html", ".htm"), "the page")
+    mesh = read_mesh(args.mesh)
+    labels, info = labels_for(args, mesh)
+    write_html(out, mesh, labels, title=args.title or Path(args.mesh).name, info=info,
+               background=args.background, view=args.view, up=args.up)
+    if not args.quiet:
+        print(f"wrote {out} ({out.stat().st_size / 1e6:.1f} MB): open it in a browser")
+    return 0

@@ -1,0 +1,230 @@
+"""Commands that segment one mesh or judge one result: segment, baseline, demo, evaluate."""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..params import DEFAULTS
+from .options import (add_method_options, check_output, float_arg, fmt_value, int_arg,
+                      method_kwargs)
+
+__all__ = ["add_parsers"]
+
+
+def add_parsers(sub) -> None:
+    """Add ``segment``, ``baseline``, ``demo`` and ``evaluate`` to the sub-parsers."""
+    p = sub.add_parser(
+        "segment", help="compute the superfacets of a mesh file",
+        description="Compute the superfacets of a mesh file (.off, .tri, .ply, .obj, .stl, "
+                    "optionally .gz/.xz/.bz2) and write them as a .seg label file "
+                    "(one label per face per line) and/or a coloured PLY.")
+    p.add_argument("mesh", metavar="MESH", help="input mesh file")
+    add_method_options(p)
+    p.add_argument("-o", "--output", metavar="OUT.seg", default=None,
+                   help="write the labels here (one per face per line; default: none)")
+    p.add_argument("--header", action="store_true",
+                   help="start the .seg file with '#' lines recording parameters, "
+                        "iterations and time (default: labels only, as the benchmark's files)")
+    p.add_argument("--colored-mesh", metavar="OUT.ply", default=None,
+                   help="write the mesh as a binary PLY with one colour per superfacet")
+    p.set_defaults(func=cmd_segment)
+
+    bl = sub.add_parser(
+        "baseline", help="segment a mesh file with a baseline (normalized cuts, VSA, ...)",
+        description="Segment a mesh file with any method of the registry (see 'superfacets "
+                    "experiment --list-methods'): the baselines of the paper's comparisons, "
+                    "normalized cuts ('ncuts', O(m^2) memory: meshes over its memory limit "
+                    "are refused before anything is allocated) and Variational Shape "
+                    "Approximation ('vsa'), or 'shlafman'. Writes a .seg label file and/or a "
+                    "coloured PLY, like 'segment'.")
+    bl.add_argument("mesh", metavar="MESH", help="input mesh file")
+    bl.add_argument("-m", "--method", required=True, metavar="NAME",
+                    help="registered method: ncuts, vsa, shlafman, superfacets")
+    bl.add_argument("-k", "--n-segments", type=int_arg, default=DEFAULTS.n_segments,
+                    metavar="N", help=f"number of segments (default: {DEFAULTS.n_segments})")
+    bl.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                    help="a method parameter, repeatable (e.g. metric=l2 init=incremental for "
+                         "vsa; alpha=100 memory_limit_gib=8 for ncuts)")
+    bl.add_argument("--seed", type=int_arg, default=0,
+                    help="seed of randomized methods (default 0)")
+    bl.add_argument("-o", "--output", metavar="OUT.seg", default=None,
+                    help="write the labels here (one per face per line)")
+    bl.add_argument("--colored-mesh", metavar="OUT.ply", default=None,
+                    help="write the mesh as a binary PLY with one colour per segment")
+    bl.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    bl.set_defaults(func=cmd_baseline)
+
+    d = sub.add_parser(
+        "demo", help="segment a built-in procedural mesh (no data needed)",
+        description="Build a procedural four-legged creature (about 21,000 faces), compute "
+                    "its superfacets and write the mesh, the labels and a coloured PLY.")
+    d.add_argument("--output-dir", default="demo-output", metavar="DIR",
+                   help="folder for the outputs, created if needed (default: demo-output)")
+    d.add_argument("--resolution", type=int_arg, default=100, metavar="N",
+                   help="marching-cubes grid resolution of the shape (default: 100)")
+    d.add_argument("-k", "--n-segments", type=int_arg, default=DEFAULTS.n_segments, metavar="N",
+                   help=f"number of superfacets (default: {DEFAULTS.n_segments})")
+    add_method_options(d, with_size=False)
+    d.set_defaults(func=cmd_demo)
+
+    e = sub.add_parser(
+        "evaluate", help="metrics of a segmentation against ground truths",
+        description="Print the undersegmentation error (eq. 4), compactness (eq. 5), boundary "
+                    "recall and achievable segmentation accuracy of a label file, each averaged "
+                    "over the given ground-truth segmentations (area-weighted).")
+    e.add_argument("mesh", metavar="MESH", help="the mesh file")
+    e.add_argument("labels", metavar="LABELS.seg", help="superfacet labels, one per face")
+    e.add_argument("ground_truths", metavar="GT.seg", nargs="+",
+                   help="one or more ground-truth segmentations of the same mesh")
+    e.add_argument("--tau", type=float_arg, default=0.05,
+                   help="overlap tolerance of the undersegmentation error, a fraction of each "
+                        "superfacet's area (default: 0.05)")
+    e.set_defaults(func=cmd_evaluate)
+
+
+def _header(mesh, result, source: str) -> dict:
+    p = result.params
+    return {
+        "superfacets": f"labels of {source}",
+        "faces": mesh.n_faces,
+        "superfacets_count": result.n_segments,
+        "parameters": " ".join(f"{k}={v}" for k, v in p.items()),
+        "iterations": f"{result.n_iter} ({'converged' if result.converged else 'max_iter reached'})",
+        "seconds": f"{result.timings['total']:.3f}",
+    }
+
+
+def _summary(name: str, mesh, result, seconds: float) -> str:
+    state = "converged" if result.converged else "stopped at max-iter"
+    return (f"{name}: {mesh.n_faces} faces, {result.n_segments} superfacets, "
+            f"{result.n_iter} iterations ({state}), {seconds:.2f} s")
+
+
+def cmd_segment(args) -> int:
+    from .. import warmup
+    from ..errors import SuperfacetsError
+    from ..io import read_mesh, write_colored_mesh, write_labels
+    from ..segment import segment
+
+    seg_out = check_output(args.output, (), "label file")
+    ply_out = check_output(args.colored_mesh, (".ply",), "the coloured mesh")
+    warmup.start()  # numba's start-up overlaps the read
+    t0 = time.perf_counter()
+    mesh = read_mesh(args.mesh)
+    kwargs = method_kwargs(args)
+    if args.progress is None:  # long runs show where they are
+        kwargs["progress"] = mesh.n_faces >= 500_000 and sys.stderr.isatty()
+    try:
+        result = segment(mesh, args.n_segments, radius=args.radius, **kwargs)
+    except SuperfacetsError as exc:
+        raise type(exc)(f"{args.mesh}: {exc}") from None
+    elapsed = time.perf_counter() - t0
+    if seg_out is not None:
+        write_labels(seg_out, result.labels,
+                     header=_header(mesh, result, Path(args.mesh).name) if args.header else None)
+    if ply_out is not None:
+        write_colored_mesh(ply_out, mesh, result.labels)
+    if not args.quiet:
+        print(_summary(Path(args.mesh).name, mesh, result, elapsed))
+    return 0
+
+
+def cmd_baseline(args) -> int:
+    from ..errors import MemoryLimitError, ParameterError
+    from ..io import read_mesh, write_colored_mesh, write_labels
+    from ..methods import Skipped, get_method
+    from ..runner.grid import method_grid, parse_params
+
+    method = get_method(args.method)
+    given = method_grid([method], parse_params(args.param))[method.name]
+    many = [n for n, v in given.items() if len(v) != 1]
+    if many:
+        raise ParameterError(f"--param: give one value for {', '.join(many)}")
+    params = method.resolve({n: v[0] for n, v in given.items()})
+    seg_out = check_output(args.output, (), "label file")
+    ply_out = check_output(args.colored_mesh, (".ply",), "the coloured mesh")
+    mesh = read_mesh(args.mesh)
+    t0 = time.perf_counter()
+    try:
+        run = method.run(mesh, args.n_segments, cache={}, seed=args.seed, **params)
+    except Skipped as exc:
+        raise MemoryLimitError(f"{args.mesh}: {exc}") from None
+    except ParameterError as exc:
+        raise ParameterError(f"{args.mesh}: {exc}") from None
+    elapsed = time.perf_counter() - t0
+    labels = np.asarray(run.labels)
+    if seg_out is not None:
+        write_labels(seg_out, labels)
+    if ply_out is not None:
+        write_colored_mesh(ply_out, mesh, labels)
+    if not args.quiet:
+        shown = ", ".join(f"{k}={fmt_value(v)}" for k, v in params.items())
+        iters = "" if run.n_iter is None else (
+            f", {run.n_iter} iterations" + ("" if run.converged is None else
+                                            " (converged)" if run.converged else " (max)"))
+        print(f"{Path(args.mesh).name}: {mesh.n_faces} faces, {method.name} ({shown}): "
+              f"{int(labels.max()) + 1} segments{iters}, {elapsed:.2f} s")
+    return 0
+
+
+def cmd_demo(args) -> int:
+    from .. import warmup
+    from ..html import write_html
+    from ..io import write_colored_mesh, write_labels, write_mesh
+    from ..segment import segment
+    from ..shapes import creature
+
+    warmup.start()
+    out = Path(args.output_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    mesh = creature(args.resolution)
+    t_shape = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    result = segment(mesh, args.n_segments, **method_kwargs(args))
+    elapsed = time.perf_counter() - t0
+    write_mesh(out / "creature.off", mesh)
+    write_labels(out / "creature.seg", result.labels, header=_header(mesh, result, "creature.off"))
+    write_colored_mesh(out / "creature_superfacets.ply", mesh, result.labels)
+    write_html(out / "creature.html", mesh, result.labels, title="creature (demo)", up="z",
+               info={"k asked": args.n_segments, "alpha": args.alpha})
+    picture = ""
+    try:
+        from ..render import render
+
+        render(mesh, result.labels, out / "creature.png", size=(1000, 750), up="z",
+               title=f"{result.n_segments} superfacets, alpha = {args.alpha:g}")
+        picture = f", {out / 'creature.png'} (picture)"
+    except Exception as exc:  # noqa: BLE001 - the picture is a bonus; say why it is missing
+        print(f"note: no picture rendered ({type(exc).__name__}: {exc})", file=sys.stderr)
+    if not args.quiet:
+        print(f"built the demo mesh in {t_shape:.2f} s")
+        print(_summary("creature", mesh, result, elapsed))
+        print(f"wrote {out / 'creature.off'} (mesh), {out / 'creature.seg'} (labels), "
+              f"{out / 'creature_superfacets.ply'} (open in MeshLab or Blender), "
+              f"{out / 'creature.html'} (open in a browser){picture}")
+    return 0
+
+
+def cmd_evaluate(args) -> int:
+    from ..errors import ParameterError
+    from ..io import read_labels, read_mesh
+    from ..metrics import evaluate
+
+    if not (0 <= args.tau < 1):
+        raise ParameterError(f"--tau must be in [0, 1), got {args.tau}")
+    mesh = read_mesh(args.mesh)
+    labels = read_labels(args.labels, n_faces=mesh.n_faces)
+    gts = [read_labels(p, n_faces=mesh.n_faces) for p in args.ground_truths]
+    m = evaluate(mesh, labels, gts, tau=args.tau)
+    print(f"{Path(args.mesh).name}: {mesh.n_faces} faces, {len(np.unique(labels))} superfacets, "
+          f"{len(gts)} ground truths")
+    print(f"undersegmentation_error {m['undersegmentation_error']:.4f}  (lower is better)")
+    print(f"compactness             {m['compactness']:.4f}  (lower is better; disk 3.545)")
+    print(f"boundary_recall         {m['boundary_recall']:.4f}  (higher is better)")
+    print(f"achievable_accuracy     {m['achievable_accuracy']:.4f}  (higher is better)")
+    return 0

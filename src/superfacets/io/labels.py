@@ -1,0 +1,88 @@
+"""Label files: ``.seg``, one integer per element per line, in element order.
+
+Optional ``#`` header lines come first; a ``.gz``/``.xz``/``.bz2`` suffix
+compresses. These are the Princeton benchmark's ground-truth files.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Iterable
+
+import numpy as np
+
+from ..errors import MeshFormatError
+from ..labels import check_labels
+from .files import atomic_write, read_bytes, split_suffix, text_lines
+
+__all__ = ["read_labels", "write_labels"]
+
+
+def write_labels(path, labels, header: dict | Iterable[str] | None = None) -> Path:
+    """Write a ``.seg`` label file: one integer per face per line, face order.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    labels : (m,) int ndarray
+    header : dict or iterable of str, optional
+        Written first as ``# key: value`` (or ``# line``) lines; readers of
+        this package skip them. Leave it out for strict benchmark files.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    ParameterError
+        If ``labels`` is not a 1-D integer array.
+    """
+    labels = check_labels(labels, None)
+    head = ""
+    if header:
+        items = header.items() if isinstance(header, dict) else ((None, h) for h in header)
+        head = "".join(f"# {k}: {v}\n" if k is not None else f"# {v}\n" for k, v in items)
+    body = "\n".join(labels.astype(str).tolist())
+    return atomic_write(path, (head + body + ("\n" if labels.size else "")).encode("ascii"))
+
+
+def read_labels(path, n_faces: int | None = None) -> np.ndarray:
+    """Read a ``.seg`` label file (``#`` lines skipped; may be compressed).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    n_faces : int, optional
+        If given, the number of labels must equal it.
+
+    Returns
+    -------
+    labels : (m,) int64 ndarray
+        The labels as stored (not relabelled).
+
+    Raises
+    ------
+    FileNotFoundError
+        If the file does not exist.
+    MeshFormatError
+        If a line is not one integer, or the count differs from ``n_faces``.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"{path}: no such file")
+    _, comp = split_suffix(path)
+    data = read_bytes(path, comp)
+    lines = text_lines(data, path)
+    if not lines:
+        labels = np.zeros(0, dtype=np.int64)
+    else:
+        try:
+            labels = np.loadtxt(lines, dtype=np.int64, ndmin=1, comments=None)
+        except ValueError as exc:
+            raise MeshFormatError(f"{path}: malformed label file: {str(exc).split('; use')[0]}") from None
+        if labels.ndim != 1:
+            raise MeshFormatError(f"{path}: malformed label file: expected one label per line")
+    if n_faces is not None and labels.shape[0] != n_faces:
+        raise MeshFormatError(f"{path}: has {labels.shape[0]} labels but the mesh has {n_faces} faces")
+    return labels

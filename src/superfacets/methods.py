@@ -1,0 +1,229 @@
+"""The method registry: superfacets and the baselines, one call shape.
+
+A *method* labels the elements of a mesh given a number of segments.
+Methods are looked up by name in one registry (:data:`METHODS`,
+:func:`register_method`), so new ones plug into ``superfacets experiment``,
+``baseline`` and ``panel`` without any change there. Each declares its
+parameters with their defaults (their types convert values given as text)
+and the values ``superfacets experiment`` sweeps by default.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from .errors import MemoryLimitError, ParameterError
+from .params import DEFAULT_ALPHAS, DEFAULTS, INITS, WEIGHTING_ALPHA
+from .segment import segment
+
+__all__ = ["Method", "MethodRun", "Skipped", "METHODS", "register_method", "get_method",
+           "parse_bool"]
+
+
+class Skipped(Exception):
+    """Raised by a method that declines a mesh (e.g. it would not fit in memory).
+
+    The runner records the row with status ``skipped`` and the message.
+    """
+
+
+@dataclass
+class MethodRun:
+    """What a method returns for one mesh and one number of segments.
+
+    Attributes
+    ----------
+    labels : (m,) int ndarray
+        One label per face.
+    n_iter : int, optional
+        Iterations run, where the method iterates.
+    converged : bool, optional
+    reused_seconds : float, default 0
+        Seconds of work done by an earlier call and reused from ``cache``
+        (e.g. the embedding of normalized cuts). The runner adds them to the
+        row's ``seconds``, so ``seconds`` is the cost of one segmentation
+        from scratch, and takes the row's ``peak_mib`` as the largest of the
+        calls so far on that mesh and setting.
+    """
+
+    labels: np.ndarray
+    n_iter: int | None = None
+    converged: bool | None = None
+    reused_seconds: float = 0.0
+
+
+@dataclass(frozen=True)
+class Method:
+    """A segmentation method in the registry.
+
+    Attributes
+    ----------
+    name : str
+    run : callable
+        ``run(mesh, n_segments, *, cache, seed, **params) -> MethodRun``.
+        ``cache`` is a dict shared by the calls for one mesh and one setting
+        of ``params`` over every ``n_segments`` (for work that does not depend
+        on it, e.g. a distance matrix); ``seed`` an int for methods that draw
+        random numbers. May raise :class:`Skipped`.
+    defaults : dict
+        Every parameter (besides ``n_segments``) and its default; a value
+        given to the runner is converted to the type of the default.
+    sweep : dict
+        Default values swept by ``superfacets experiment`` per parameter.
+    description : str
+    """
+
+    name: str
+    run: Callable[..., MethodRun]
+    defaults: dict
+    sweep: dict = field(default_factory=dict)
+    description: str = ""
+
+    def resolve(self, params: dict) -> dict:
+        """``defaults`` updated with ``params``, converted to the defaults' types.
+
+        Raises
+        ------
+        ParameterError
+            On an unknown parameter or a value of the wrong type.
+        """
+        out = dict(self.defaults)
+        for k, v in params.items():
+            if k not in self.defaults:
+                raise ParameterError(f"method {self.name!r} has no parameter {k!r} "
+                                     f"(it has: {', '.join(sorted(self.defaults)) or 'none'})")
+            kind = type(self.defaults[k])
+            try:
+                out[k] = kind(v) if kind is not bool or isinstance(v, bool) else parse_bool(v)
+            except (TypeError, ValueError):
+                raise ParameterError(f"method {self.name!r}: {k} must be "
+                                     f"{kind.__name__}, got {v!r}") from None
+        return out
+
+
+def parse_bool(v) -> bool:
+    t = str(v).strip().lower()
+    if t in ("1", "true", "yes"):
+        return True
+    if t in ("0", "false", "no"):
+        return False
+    raise ValueError(v)
+
+
+#: The registry: method name -> :class:`Method`.
+METHODS: dict[str, Method] = {}
+
+
+def register_method(name: str, run: Callable[..., MethodRun], *, defaults: dict,
+                    sweep: dict | None = None, description: str = "") -> Method:
+    """Add (or replace) a method in :data:`METHODS`.
+
+    Parameters
+    ----------
+    name : str
+        Registry key; letters, digits, ``_`` and ``-``.
+    run : callable
+        ``run(mesh, n_segments, *, cache, seed, **params) -> MethodRun``. It
+        is sent to the worker processes by reference, so it must be a
+        module-level function of an importable module (not a lambda).
+    defaults : dict
+        Parameter names and default values (int, float, str or bool).
+    sweep : dict, optional
+        Default sweep per parameter, e.g. ``{"alpha": (0, 200)}``.
+    description : str, optional
+
+    Returns
+    -------
+    Method
+    """
+    if not name or not all(c.isalnum() or c in "_-" for c in name):
+        raise ParameterError(f"invalid method name {name!r}")
+    clash = set(defaults) & {"n_segments", "seed", "cache"}
+    if clash:
+        raise ParameterError(f"parameter name(s) reserved by the runner: {sorted(clash)}")
+    m = Method(name, run, dict(defaults), dict(sweep or {}), description)
+    METHODS[name] = m
+    return m
+
+
+def get_method(name: str) -> Method:
+    """The registered method ``name``.
+
+    Raises
+    ------
+    ParameterError
+        Naming the registered methods, if there is none of that name.
+    """
+    try:
+        return METHODS[name]
+    except KeyError:
+        raise ParameterError(f"unknown method {name!r}; registered: "
+                             f"{', '.join(sorted(METHODS))}") from None
+
+
+# --- the built-in methods ------------------------------------------------------------
+
+
+def _run_superfacets(mesh, n_segments, *, cache, seed, weighting="paper", **params):
+
+    r = segment(mesh, n_segments, weighting=weighting, **params)
+    return MethodRun(r.labels, r.n_iter, r.converged)
+
+
+def _run_shlafman(mesh, n_segments, *, cache, seed, **params):
+    return _run_superfacets(mesh, n_segments, cache=cache, seed=seed, weighting="shlafman",
+                            **params)
+
+
+def _run_ncuts(mesh, n_segments, *, cache, seed, components, memory_limit_gib, **params):
+    from .baselines.ncuts import ncut_embedding, normalized_cuts
+
+    emb = cache.get("ncut_embedding")
+    reused = 0.0
+    if emb is None or emb.n_components < min(n_segments, mesh.n_faces):
+        limit = int(memory_limit_gib * 2**30) if memory_limit_gib > 0 else None
+        try:
+            emb = ncut_embedding(mesh, max(components, n_segments), memory_limit=limit,
+                                 rng=seed, **params)
+        except MemoryLimitError as exc:
+            raise Skipped(str(exc)) from None
+        cache["ncut_embedding"] = emb
+    else:
+        reused = emb.total_seconds
+    return MethodRun(normalized_cuts(mesh, n_segments, embedding=emb, rng=seed),
+                     reused_seconds=reused)
+
+
+def _run_vsa(mesh, n_segments, *, cache, seed, **params):
+    from .baselines.vsa import variational_shape_approximation
+
+    r = variational_shape_approximation(mesh, n_segments, rng=seed, cache=cache, **params)
+    return MethodRun(r.labels, r.n_iter, r.converged)
+
+
+_SF_DEFAULTS = dict(alpha=DEFAULTS.alpha, eta_convex=DEFAULTS.eta_convex, init=INITS[0],
+                    window=DEFAULTS.window, max_iter=DEFAULTS.max_iter)
+register_method(
+    "superfacets", _run_superfacets, defaults=_SF_DEFAULTS,
+    sweep={"alpha": DEFAULT_ALPHAS},
+    description="the paper's method: bounded Dijkstra k-means, weights of eqs. 1-3")
+register_method(
+    "shlafman", _run_shlafman, defaults=dict(_SF_DEFAULTS, alpha=WEIGHTING_ALPHA["shlafman"][0]),
+    sweep={"alpha": (0.0, 0.25, 0.5, 0.75, 1.0)},
+    description="the same k-means with Shlafman et al.'s weights (eq. 6), alpha in [0, 1]")
+register_method(
+    "ncuts", _run_ncuts,
+    defaults=dict(alpha=100.0, eta_convex=0.2, bandwidth=1.0, components=300,
+                  memory_limit_gib=0.0),
+    sweep={"alpha": (0.0, 100.0, 200.0)},
+    description="normalized cuts: dense all-pairs distances (same weights), Gaussian affinity, "
+                "k-way spectral cut (Shi-Malik / Yu-Shi); O(m^2) memory, refuses meshes over "
+                "memory_limit_gib (0: 40% of RAM)")
+register_method(
+    "vsa", _run_vsa, defaults=dict(metric="l21", init="random", max_iter=30, insert_iter=2),
+    sweep={"metric": ("l21", "l2"), "init": ("random", "incremental")},
+    description="Variational Shape Approximation (Cohen-Steiner et al. 2004): planar proxies, "
+                "L2,1 or L2 metric, random or incremental proxy initialization")

@@ -1,0 +1,223 @@
+"""Defaults, choices and validation of every parameter, defined once.
+
+The API (:func:`superfacets.superfacets`, :func:`superfacets.segment`), the
+command line, the method registry and the docs read the values here;
+:func:`resolve` checks every parameter of a segmentation before any work that
+grows with the mesh (the element graph is the memory peak of a run). The
+``check_*`` helpers are the package's only argument checks: each raises
+:class:`~superfacets.errors.ParameterError` (a ``ValueError``) naming the
+parameter and the bad value.
+
+See ``docs/method.md`` for what each parameter means in the method.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, replace
+
+import numpy as np
+
+from .errors import ParameterError
+
+__all__ = ["SegmentParams", "DEFAULTS", "INITS", "ASSIGNMENTS", "WEIGHTINGS",
+           "WEIGHTING_ALPHA", "DEFAULT_N_SEGMENTS", "DEFAULT_ALPHAS", "resolve", "check_int",
+           "check_number", "check_positive", "check_nonneg", "check_choice",
+           "check_n_segments", "check_threads", "check_bool"]
+
+#: Names accepted by ``init=``: iterative farthest point, flood, regular grid.
+INITS = ("farthest", "flood", "grid")
+#: Names accepted by ``assignment=``: the paper's window-bounded expansions, or
+#: the exact nearest center by one multi-source Dijkstra.
+ASSIGNMENTS = ("bounded", "exact")
+#: Names accepted by ``weighting=``: the paper's eqs. 1-3, Shlafman et al.'s eq. 6.
+WEIGHTINGS = ("paper", "shlafman")
+#: Default ``alpha`` of each weighting, and its valid range ``(low, high)``.
+WEIGHTING_ALPHA = {"paper": (200.0, (0.0, math.inf)), "shlafman": (0.5, (0.0, 1.0))}
+#: The paper's sweep (Fig. 4): numbers of superfacets and alphas.
+DEFAULT_N_SEGMENTS = (50, 100, 150, 200, 250, 300)
+DEFAULT_ALPHAS = (0.0, 100.0, 200.0, 500.0, 1000.0)
+
+
+@dataclass(frozen=True)
+class SegmentParams:
+    """Every parameter of one segmentation (see :func:`superfacets.superfacets`).
+
+    ``DEFAULTS`` holds the default of each; :func:`resolve` returns a
+    validated instance with ``init`` resolved.
+    """
+
+    n_segments: int | None = 150
+    radius: float | None = None
+    alpha: float = WEIGHTING_ALPHA["paper"][0]
+    eta_convex: float = 0.2
+    window: float = 2.0
+    init: str | None = None
+    max_iter: int = 50
+    weighting: str = "paper"
+    assignment: str = "bounded"
+    enforce_connectivity: bool = True
+    progress: bool = False
+    n_threads: int | None = None
+
+    def as_dict(self) -> dict:
+        """The parameters as a plain dict."""
+        return asdict(self)
+
+
+#: The default of every parameter.
+DEFAULTS = SegmentParams()
+
+
+def _is_int(value) -> bool:
+    return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+
+
+def check_int(name: str, value, lo: int | None = None, hi: int | None = None) -> int:
+    """``value`` as an int in ``[lo, hi]``; booleans and floats are refused.
+
+    Raises
+    ------
+    ParameterError
+    """
+    if not _is_int(value):
+        raise ParameterError(f"{name} must be an integer, got {value!r}")
+    v = int(value)
+    if lo is not None and v < lo:
+        raise ParameterError(f"{name} must be an integer >= {lo}, got {v}")
+    if hi is not None and v > hi:
+        raise ParameterError(f"{name} must be an integer <= {hi}, got {v}")
+    return v
+
+
+def check_number(name: str, value, lo: float = -math.inf, hi: float = math.inf, *,
+                 lo_open: bool = False) -> float:
+    """``value`` as a finite float in ``[lo, hi]`` (``(lo, hi]`` with ``lo_open``).
+
+    Raises
+    ------
+    ParameterError
+    """
+    if isinstance(value, (bool, np.bool_)):
+        raise ParameterError(f"{name} must be a number, got {value!r}")
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be a number, got {value!r}") from None
+    low = f"> {lo:g}" if lo_open else f">= {lo:g}"
+    rng = low if hi == math.inf else f"in {'(' if lo_open else '['}{lo:g}, {hi:g}]"
+    if not math.isfinite(x) or (x <= lo if lo_open else x < lo) or x > hi:
+        raise ParameterError(f"{name} must be a finite number {rng}, got {value!r}")
+    return x
+
+
+def check_positive(name: str, value) -> float:
+    """A finite number ``> 0``."""
+    return check_number(name, value, 0.0, lo_open=True)
+
+
+def check_nonneg(name: str, value) -> float:
+    """A finite number ``>= 0``."""
+    return check_number(name, value, 0.0)
+
+
+def check_bool(name: str, value) -> bool:
+    """``True`` or ``False`` (numpy booleans accepted)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ParameterError(f"{name} must be True or False, got {value!r}")
+    return bool(value)
+
+
+def check_choice(name: str, value, choices) -> str:
+    """One of ``choices``.
+
+    Raises
+    ------
+    ParameterError
+        Listing the choices.
+    """
+    if not isinstance(value, str) or value not in choices:
+        raise ParameterError(f"{name} must be one of {', '.join(choices)}; got {value!r}")
+    return value
+
+
+def check_n_segments(n_segments, m: int, kind: str = "faces") -> int:
+    """A number of segments ``k`` in ``1..m`` (``m`` the number of elements, of ``kind``).
+
+    Raises
+    ------
+    ParameterError
+        If ``n_segments`` is not an integer in ``1..m``.
+    """
+    k = check_int("n_segments", n_segments, lo=1)
+    if k > m:
+        raise ParameterError(f"n_segments ({k}) is larger than the number of {kind} ({m})")
+    return k
+
+
+def check_threads(n_threads) -> int:
+    """Resolve ``n_threads``: None gives numba's thread count (``NUMBA_NUM_THREADS``).
+
+    Raises
+    ------
+    ParameterError
+        If it is not an integer ``>= 1``.
+    """
+    if n_threads is None:
+        import numba
+
+        return int(numba.config.NUMBA_NUM_THREADS)
+    return check_int("n_threads", n_threads, lo=1)
+
+
+def resolve(**params) -> SegmentParams:
+    """Validate the parameters of a segmentation; return them with ``init`` resolved.
+
+    Every check that does not need the mesh is done here, before any
+    O(m) work. ``n_segments`` is checked against the number of elements later
+    (:func:`check_n_segments`).
+
+    Parameters
+    ----------
+    **params
+        Fields of :class:`SegmentParams`; the others take their default.
+
+    Returns
+    -------
+    SegmentParams
+
+    Raises
+    ------
+    ParameterError
+        On an unknown name or a value out of range; ``TypeError`` never.
+    """
+    unknown = set(params) - set(DEFAULTS.as_dict())
+    if unknown:
+        raise ParameterError(f"unknown parameter(s) {', '.join(sorted(unknown))}")
+    p = replace(DEFAULTS, **params)
+    if p.radius is not None and p.n_segments not in (None, DEFAULTS.n_segments):
+        raise ParameterError("give either n_segments or radius, not both")
+    n_segments = None if p.radius is not None else (
+        check_int("n_segments", DEFAULTS.n_segments if p.n_segments is None else p.n_segments,
+                  lo=1))
+    radius = None if p.radius is None else check_positive("radius", p.radius)
+    init = p.init if p.init is not None else ("farthest" if radius is None else "flood")
+    check_choice("init", init, INITS)
+    weighting = check_choice("weighting", p.weighting, WEIGHTINGS)
+    lo, hi = WEIGHTING_ALPHA[weighting][1]
+    if weighting == "paper":
+        alpha = check_nonneg("alpha", p.alpha)
+    else:
+        try:
+            alpha = check_number("alpha", p.alpha, lo, hi)
+        except ParameterError:
+            raise ParameterError(f"alpha of the Shlafman weighting must be in [0, 1], "
+                                 f"got {p.alpha!r}") from None
+    return SegmentParams(
+        n_segments=n_segments, radius=radius, alpha=alpha,
+        eta_convex=check_nonneg("eta_convex", p.eta_convex),
+        window=check_positive("window", p.window), init=init,
+        max_iter=check_int("max_iter", p.max_iter, lo=1), weighting=weighting,
+        assignment=check_choice("assignment", p.assignment, ASSIGNMENTS),
+        enforce_connectivity=check_bool("enforce_connectivity", p.enforce_connectivity),
+        progress=bool(p.progress), n_threads=check_threads(p.n_threads))

@@ -1,0 +1,356 @@
+"""Run an experiment: methods x parameters x benchmark meshes, evaluated, resumable.
+
+:func:`run_experiment` runs a grid of configurations (:mod:`.grid`) of
+registered methods (:mod:`superfacets.methods`) over benchmark meshes in
+worker processes and appends one tidy row per (mesh, method, parameters,
+``n_segments``) to a CSV file (:mod:`.results`) as results arrive; rerunning
+with the same file skips every row already there, so an interrupted run
+continues where it stopped. A failure on one mesh is recorded as a row with
+its error and does not stop the run; a worker that dies is replaced.
+"""
+
+from __future__ import annotations
+
+import csv
+import os
+import time
+import traceback
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass
+from functools import lru_cache
+from itertools import product
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..methods import Skipped, get_method
+from ..params import DEFAULT_N_SEGMENTS
+from .grid import Config
+from .results import columns, fmt_value, prepare_file, row_key
+
+__all__ = ["run_experiment", "ExperimentSummary", "PeakMemory"]
+
+
+@lru_cache(maxsize=2)
+def _load(path: str, seg_paths: tuple):
+    from ..datasets.psb import BenchmarkMesh
+
+    bm = BenchmarkMesh(0, "", Path(path), tuple(Path(p) for p in seg_paths))
+    mesh = bm.load()
+    return mesh, bm.ground_truths(mesh.n_faces)
+
+
+def _error_text(exc: BaseException) -> str:
+    text = f"{type(exc).__name__}: {exc}".replace("\n", " ").strip()
+    if not isinstance(exc, (ValueError, OSError, MemoryError, Skipped)):
+        # an unexpected error: say where it came from
+        tb = traceback.extract_tb(exc.__traceback__)
+        if tb:
+            text += f" (at {Path(tb[-1].filename).name}:{tb[-1].lineno})"
+    return text[:500]
+
+
+def _run_task(task: dict) -> list[dict]:
+    """Run one config over a list of n_segments on one mesh; one row each."""
+    from ..metrics import evaluate
+
+    base = dict(task["base"])
+    run = task["run"]
+    params = dict(task["params"])
+    rows = []
+    try:
+        mesh, gts = _load(task["path"], task["seg_paths"])
+        base["n_faces"] = mesh.n_faces
+    except Exception as exc:  # noqa: BLE001 - recorded, the run goes on
+        return [dict(base, n_segments=k, status="failed", error=_error_text(exc))
+                for k in task["ks"]]
+    cache: dict = {}
+    task_peak = 0.0
+    for k in task["ks"]:
+        row = dict(base, n_segments=k)
+        try:
+            probe = PeakMemory()
+            t0 = time.perf_counter()
+            out = run(mesh, k, cache=cache, seed=task["seed"], **params)
+            seconds = time.perf_counter() - t0
+            peak = probe.peak_mib()
+            row["seconds"] = round(seconds + float(out.reused_seconds), 4)
+            if peak is not None:
+                task_peak = max(task_peak, peak)
+                row["peak_mib"] = round(task_peak if out.reused_seconds else peak, 1)
+            labels = np.asarray(out.labels)
+            if labels.shape != (mesh.n_faces,):
+                raise RuntimeError(f"method returned {labels.shape} labels for "
+                                   f"{mesh.n_faces} faces")
+            row.update(status="ok", segments=int(np.unique(labels).size),
+                       iterations=out.n_iter, converged=out.converged,
+                       n_ground_truths=len(gts))
+            if gts:
+                row.update({m: round(v, 6) for m, v in
+                            evaluate(mesh, labels, gts, tau=task["tau"]).items()})
+        except Skipped as exc:
+            row.update(status="skipped", error=str(exc)[:500], seconds=None)
+        except Exception as exc:  # noqa: BLE001 - recorded, the run goes on
+            row.update(status="failed", error=_error_text(exc), seconds=None)
+        rows.append(row)
+    return rows
+
+
+class PeakMemory:
+    """Peak resident memory of this process since creation, above its start.
+
+    Linux only: resets the kernel's high-water mark (``/proc/self/clear_refs``)
+    and reads ``VmHWM`` / ``VmRSS`` from ``/proc/self/status``. Elsewhere
+    :meth:`peak_mib` returns None.
+    """
+
+    def __init__(self) -> None:
+        self.start = None
+        try:
+            with open("/proc/self/clear_refs", "w") as f:
+                f.write("5")
+            self.start = self._read("VmRSS")
+        except OSError:
+            pass
+
+    @staticmethod
+    def _read(field: str) -> float | None:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith(field + ":"):
+                    return int(line.split()[1]) / 1024.0  # kB -> MiB
+        return None
+
+    def peak_mib(self) -> float | None:
+        """MiB of resident memory at the peak since creation, above the start."""
+        if self.start is None:
+            return None
+        try:
+            hwm = self._read("VmHWM")
+        except OSError:
+            return None
+        return None if hwm is None else max(0.0, hwm - self.start)
+
+
+def _init_worker() -> None:  # pragma: no cover - runs in the workers
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent handles Ctrl-C
+
+
+@dataclass
+class ExperimentSummary:
+    """Counts of one :func:`run_experiment` call.
+
+    Attributes
+    ----------
+    path : pathlib.Path
+        The results file.
+    done_before : int
+        Rows found in the file and skipped.
+    ok, failed, skipped : int
+        Rows written by this call, by status.
+    seconds : float
+        Wall-clock time of this call.
+    interrupted : bool
+    """
+
+    path: Path
+    done_before: int = 0
+    ok: int = 0
+    failed: int = 0
+    skipped: int = 0
+    seconds: float = 0.0
+    interrupted: bool = False
+
+    @property
+    def written(self) -> int:
+        return self.ok + self.failed + self.skipped
+
+
+def _default_workers() -> int:
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
+                   n_segments: Sequence[int] = DEFAULT_N_SEGMENTS, *, workers: int | None = None,
+                   tau: float = 0.05, seed: int = 0, retry_failed: bool = False,
+                   progress: bool = True) -> ExperimentSummary:
+    """Run every config at every ``n_segments`` on every mesh, appending rows.
+
+    Parameters
+    ----------
+    meshes : sequence of BenchmarkMesh
+        Meshes with their ground truths (:func:`superfacets.datasets.psb.list_meshes`);
+        a mesh without ground truths gets rows without metrics.
+    configs : sequence of Config
+        From :func:`expand_grid`.
+    results : path
+        CSV file, created if missing, appended to otherwise. Rows already
+        there (same mesh, method, parameters, ``n_segments`` and ``seed``)
+        are not run again.
+    n_segments : sequence of int, default (50, 100, ..., 300)
+    workers : int, optional
+        Worker processes (default: all cores available). 1 runs in this
+        process.
+    tau : float, default 0.05
+        Overlap tolerance of the undersegmentation error.
+    seed : int, default 0
+        Passed to every method (for those that draw random numbers).
+    retry_failed : bool, default False
+        Run again the rows recorded as ``failed`` (the new row is appended;
+        :func:`superfacets.report.load_results` keeps the last one).
+    progress : bool, default True
+        Show a progress bar (rows) on stderr.
+
+    Returns
+    -------
+    ExperimentSummary
+
+    Raises
+    ------
+    ParameterError
+        On an empty grid, a bad ``n_segments``, ``workers`` or ``tau``.
+    """
+    if not configs:
+        raise ParameterError("no method configuration to run")
+    ks = sorted({int(k) for k in n_segments})
+    if not ks or ks[0] < 1:
+        raise ParameterError(f"n_segments must be positive integers, got {list(n_segments)}")
+    if not (0 <= tau < 1):
+        raise ParameterError(f"tau must be in [0, 1), got {tau}")
+    workers = _default_workers() if workers is None else int(workers)
+    if workers < 1:
+        raise ParameterError(f"workers must be >= 1, got {workers}")
+    path = Path(results)
+    if path.is_dir():
+        raise IsADirectoryError(f"{path}: is a directory")
+    if not path.parent.is_dir():
+        raise FileNotFoundError(f"{path}: folder {path.parent} does not exist")
+    cols, old = prepare_file(path, columns(configs))
+    done = {row_key(r) for r in old if not (retry_failed and r.get("status") == "failed")}
+
+    tasks = []
+    for bm, cfg in product(meshes, configs):
+        base = {"mesh": Path(bm.path).stem, "mesh_id": bm.id, "category": bm.category,
+                "method": cfg.method, "seed": seed, **{k: fmt_value(v) for k, v in cfg.params}}
+        method = get_method(cfg.method)
+        todo = [k for k in ks if row_key({**base, "n_segments": k}) not in done]
+        if todo:
+            tasks.append({"base": base, "run": method.run, "params": cfg.params,
+                          "path": str(bm.path), "seg_paths": tuple(str(p) for p in bm.seg_paths),
+                          "ks": todo, "seed": seed, "tau": tau})
+    summary = ExperimentSummary(path, done_before=len(done))
+    total = sum(len(t["ks"]) for t in tasks)
+    t0 = time.perf_counter()
+    bar = None
+    if progress and total:
+        from tqdm import tqdm
+
+        bar = tqdm(total=total, unit="row", desc="experiment", dynamic_ncols=True)
+
+    with open(path, "a", newline="") as f:
+        writer = csv.DictWriter(f, cols, restval="", extrasaction="ignore", lineterminator="\n")
+
+        def record(rows: list[dict]) -> None:
+            for r in rows:
+                writer.writerow({k: fmt_value(v) for k, v in r.items()})
+                setattr(summary, r["status"], getattr(summary, r["status"]) + 1)
+            f.flush()
+            if bar is not None:
+                bar.update(len(rows))
+                bar.set_postfix(failed=summary.failed, skipped=summary.skipped, refresh=False)
+
+        try:
+            if workers == 1 or len(tasks) <= 1:
+                for t in tasks:
+                    record(_run_task(t))
+            else:
+                _run_pool(tasks, workers, record)
+        except KeyboardInterrupt:
+            summary.interrupted = True
+        finally:
+            if bar is not None:
+                bar.close()
+    summary.seconds = time.perf_counter() - t0
+    return summary
+
+
+def _failed_rows(task: dict, error: str) -> list[dict]:
+    return [dict(task["base"], n_segments=k, status="failed", error=error) for k in task["ks"]]
+
+
+def _run_pool(tasks: list[dict], workers: int, record) -> None:
+    """Feed tasks to a process pool, a bounded number in flight; survive dead workers.
+
+    When a worker dies (killed, out of memory, a crash in native code) the
+    pool breaks and every task then in flight is suspect: each is run again
+    alone in a fresh one-worker pool, so only the task that kills its worker
+    on its own is recorded as failed.
+    """
+    import multiprocessing as mp
+
+    env = {v: "1" for v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
+                            "NUMBA_NUM_THREADS")}
+    # glibc: arrays of 64 KiB and more get their own pages, returned to the system when
+    # freed, so each call's peak resident memory (peak_mib) is its own, not hidden by
+    # memory kept from an earlier call
+    env["MALLOC_MMAP_THRESHOLD_"] = "65536"
+    saved = {v: os.environ.get(v) for v in env}
+    os.environ.update(env)  # one thread per worker process; inherited at spawn
+    ctx = mp.get_context("spawn")
+    queue = list(reversed(tasks))
+    suspects: list[dict] = []
+
+    def collect(fut, t) -> list[dict]:
+        try:
+            return fut.result()
+        except BrokenProcessPool:
+            raise
+        except Exception as exc:  # noqa: BLE001 - e.g. a method that cannot be pickled
+            return _failed_rows(t, _error_text(exc))
+
+    try:
+        while queue or suspects:
+            if suspects:
+                t = suspects.pop()
+                with ProcessPoolExecutor(1, mp_context=ctx, initializer=_init_worker) as pool:
+                    try:
+                        rows = collect(pool.submit(_run_task, t), t)
+                    except BrokenProcessPool:
+                        rows = _failed_rows(t, "worker process died (killed, e.g. out of "
+                                               "memory, or crashed)")
+                record(rows)
+                continue
+            with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init_worker) as pool:
+                running: dict = {}
+                try:
+                    while queue or running:
+                        while queue and len(running) < 2 * workers:
+                            t = queue.pop()
+                            running[pool.submit(_run_task, t)] = t
+                        finished, _ = wait(running, return_when=FIRST_COMPLETED)
+                        try:
+                            for fut in finished:
+                                rows = collect(fut, running[fut])
+                                del running[fut]
+                                record(rows)
+                        except BrokenProcessPool:
+                            suspects.extend(running.values())
+                            break
+                except KeyboardInterrupt:
+                    # drop what has not started; the tasks running finish (workers ignore SIGINT)
+                    pool.shutdown(wait=True, cancel_futures=True)
+                    raise
+    finally:
+        for v, old in saved.items():
+            if old is None:
+                os.environ.pop(v, None)
+            else:
+                os.environ[v] = old

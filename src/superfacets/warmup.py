@@ -1,0 +1,55 @@
+"""Start numba in the background while the package and the mesh load.
+
+A new Python process pays about 0.2-0.3 s the first time it calls any
+numba kernel (numba's own start-up, before the cached machine code loads).
+:func:`start` runs that first call (a trivial cached kernel) in a thread,
+while the caller goes on reading the mesh; much of the start-up runs outside
+the GIL (LLVM). Nothing starts at import: the command line calls it before
+reading its input, and a script may do the same. Set
+``SUPERFACETS_NO_WARMUP=1`` to turn it off.
+"""
+
+from __future__ import annotations
+
+import atexit
+import os
+import threading
+
+__all__ = ["start", "wait"]
+
+_thread: threading.Thread | None = None
+
+
+def _warm() -> None:
+    try:
+        import numpy as np
+
+        from ._kernels.expand import reset_labels
+
+        reset_labels(np.empty(1), np.empty(1, dtype=np.int32))
+    except Exception:  # never let the warm-up break an import; the real call will report
+        pass
+
+
+def start() -> None:
+    """Start numba's start-up in a background thread, once per process.
+
+    A no-op when already started or when ``SUPERFACETS_NO_WARMUP`` is set.
+
+    Examples
+    --------
+    >>> from superfacets import warmup
+    >>> warmup.start()   # then read the mesh; the first kernel call waits less
+    """
+    global _thread
+    if _thread is not None or os.environ.get("SUPERFACETS_NO_WARMUP"):
+        return
+    _thread = threading.Thread(target=_warm, name="superfacets-warmup", daemon=True)
+    _thread.start()
+    atexit.register(_thread.join, 10.0)  # never exit while it is inside LLVM
+
+
+def wait(timeout: float | None = None) -> None:
+    """Wait until a started warm-up has finished (no-op when none was started)."""
+    if _thread is not None:
+        _thread.join(timeout)

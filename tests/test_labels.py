@@ -1,0 +1,25 @@
+"""The one label-array check, and dense relabelling."""
+
+import numpy as np
+import pytest
+
+from superfacets import ParameterError
+from superfacets.labels import check_labels, relabel_dense
+
+
+def test_check_labels_accepts_one_integer_per_element():
+    out = check_labels(np.array([2, 0, 2], dtype=np.int16), 3)
+    assert out.dtype == np.int64 and out.tolist() == [2, 0, 2]
+    assert check_labels([1, 2], None).tolist() == [1, 2]
+
+
+@pytest.mark.parametrize("labels, n, match", [
+    ([0, 1], 3, "3 integers, one per face"), ([0.0, 1.0, 2.0], 3, "dtype float64"),
+    ([[0, 1, 2]], 3, r"shape \(1, 3\)"), (np.zeros((2, 2), int), None, "1-D array")])
+def test_check_labels_refuses_with_one_error_type(labels, n, match):
+    with pytest.raises(ParameterError, match=match):
+        check_labels(labels, n, per="face")
+
+
+def test_relabel_dense_keeps_order():
+    np.testing.assert_array_equal(relabel_dense(np.array([7, -1, 7, 3])), [2, 0, 2, 1])

@@ -1,0 +1,99 @@
+"""Defaults, choices and validation (superfacets.params): one place, checked before any work."""
+
+import math
+
+import numpy as np
+import pytest
+
+from superfacets import DEFAULTS, ParameterError, segment
+from superfacets.params import (ASSIGNMENTS, INITS, WEIGHTINGS, check_bool, check_choice,
+                                check_int, check_n_segments, check_nonneg, check_number,
+                                check_positive, check_threads, resolve)
+
+
+def test_defaults_are_the_api_and_cli_defaults():
+    import inspect
+
+    from superfacets import superfacets
+    from superfacets.cli import build_parser
+
+    sig = inspect.signature(superfacets).parameters
+    for name in ("alpha", "eta_convex", "window", "max_iter", "weighting", "assignment",
+                 "n_segments", "init", "enforce_connectivity"):
+        assert sig[name].default == getattr(DEFAULTS, name)
+    args = build_parser().parse_args(["segment", "m.off"])
+    for name in ("alpha", "eta_convex", "window", "max_iter", "weighting", "assignment", "init"):
+        assert getattr(args, name) == getattr(DEFAULTS, name)
+    choices = {a.dest: a.choices for a in build_parser()._subparsers._group_actions[0]
+               .choices["segment"]._actions}
+    assert tuple(choices["init"]) == INITS and tuple(choices["assignment"]) == ASSIGNMENTS
+    assert tuple(choices["weighting"]) == WEIGHTINGS
+
+
+def test_the_registry_reads_the_same_defaults():
+    from superfacets.methods import get_method
+
+    d = get_method("superfacets").defaults
+    assert (d["alpha"], d["eta_convex"], d["window"], d["max_iter"]) == (
+        DEFAULTS.alpha, DEFAULTS.eta_convex, DEFAULTS.window, DEFAULTS.max_iter)
+    assert get_method("shlafman").defaults["alpha"] == 0.5
+
+
+@pytest.mark.parametrize("value, ok", [(3, 3), (np.int32(4), 4), (True, None), (2.0, None),
+                                       ("3", None), (0, None), (11, None)])
+def test_check_int(value, ok):
+    if ok is None:
+        with pytest.raises(ParameterError, match="n must be an integer"):
+            check_int("n", value, lo=1, hi=10)
+    else:
+        assert check_int("n", value, lo=1, hi=10) == ok
+
+
+@pytest.mark.parametrize("value", [float("nan"), float("inf"), -1.0, "x", None, True])
+def test_check_nonneg_refuses(value):
+    with pytest.raises(ParameterError, match="x must be a"):
+        check_nonneg("x", value)
+
+
+def test_check_number_ranges():
+    assert check_nonneg("a", 0) == 0.0 and check_positive("a", "2.5") == 2.5
+    with pytest.raises(ParameterError, match=r"a must be a finite number > 0, got 0"):
+        check_positive("a", 0)
+    with pytest.raises(ParameterError, match=r"in \[0, 1\]"):
+        check_number("a", 1.5, 0, 1)
+    assert check_number("a", 1, 0, 1) == 1.0 and math.isfinite(check_number("a", -3))
+
+
+def test_check_choice_bool_threads_and_n_segments():
+    assert check_choice("init", "grid", INITS) == "grid"
+    with pytest.raises(ParameterError, match="init must be one of farthest, flood, grid"):
+        check_choice("init", "Grid", INITS)
+    assert check_bool("b", np.bool_(True)) is True
+    with pytest.raises(ParameterError, match="b must be True or False"):
+        check_bool("b", 1)
+    assert check_threads(3) == 3 and check_threads(None) >= 1
+    with pytest.raises(ParameterError, match="n_threads"):
+        check_threads(0)
+    assert check_n_segments(5, 5) == 5
+    with pytest.raises(ParameterError, match=r"larger than the number of points \(4\)"):
+        check_n_segments(5, 4, "points")
+
+
+def test_resolve_resolves_init_and_refuses_unknown_names():
+    assert resolve().init == "farthest" and resolve(radius=0.1).init == "flood"
+    assert resolve(radius=0.1, n_segments=None).n_segments is None
+    with pytest.raises(ParameterError, match="unknown parameter"):
+        resolve(alhpa=3)
+    with pytest.raises(ParameterError, match=r"Shlafman weighting must be in \[0, 1\]"):
+        resolve(weighting="shlafman", alpha=2)
+    with pytest.raises(ParameterError, match="enforce_connectivity must be True or False"):
+        resolve(enforce_connectivity="yes")
+
+
+def test_parameters_are_checked_before_the_mesh_is_touched():
+    # a mesh argument that would fail to load: the parameter error comes first
+    for kw, match in [(dict(alpha=-1), "alpha"), (dict(weighting="x"), "weighting"),
+                      (dict(eta_convex=float("nan")), "eta_convex"),
+                      (dict(init="random"), "init")]:
+        with pytest.raises(ParameterError, match=match):
+            segment(object(), 10, **kw)
