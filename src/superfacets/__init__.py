@@ -3,24 +3,49 @@
 An implementation of G. Simari, G. Picciau, L. De Floriani, "Fast and
 Scalable Mesh Superfacets", Computer Graphics Forum 33(7), 2014: over-segment
 a triangle mesh into compact patches whose borders follow concavities.
-Importing the package does no work beyond the imports.
+
+Importing the package does no work: each public name below is imported from
+its module on first use (so ``superfacets --help`` never loads numba).
 
 >>> from superfacets import read_mesh, superfacets      # doctest: +SKIP
 >>> mesh = read_mesh("horse.tri.xz")                    # doctest: +SKIP
 >>> labels = superfacets(mesh, n_segments=150, alpha=200)  # doctest: +SKIP
 """
 
-from .connectivity import enforce_connectivity
-from .elements import ElementGraph, face_graph
-from .errors import (InvalidMeshError, MemoryLimitError, MeshFormatError, ParameterError,
-                     SuperfacetsError)
-from .io import read_labels, read_mesh, write_colored_mesh, write_labels, write_mesh
-from .mesh import Mesh, as_mesh
-from .params import DEFAULTS, SegmentParams
-from .segment import SegmentationResult, segment, superfacets
-from .weights import edge_weights, paper_weights, shlafman_weights
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING
 
 __version__ = "0.1.0"
+
+#: Public name -> the module that defines it.
+_PUBLIC = {
+    "DEFAULTS": "params",
+    "SegmentParams": "params",
+    "ElementGraph": "elements",
+    "face_graph": "elements",
+    "InvalidMeshError": "errors",
+    "MemoryLimitError": "errors",
+    "MeshFormatError": "errors",
+    "ParameterError": "errors",
+    "SuperfacetsError": "errors",
+    "MissingExtraError": "errors",
+    "Mesh": "mesh",
+    "as_mesh": "mesh",
+    "read_mesh": "io",
+    "write_mesh": "io",
+    "read_labels": "io",
+    "write_labels": "io",
+    "write_colored_mesh": "io",
+    "segment": "segmentation",
+    "superfacets": "segmentation",
+    "SegmentationResult": "segmentation",
+    "enforce_connectivity": "connectivity",
+    "edge_weights": "weights",
+    "paper_weights": "weights",
+    "shlafman_weights": "weights",
+}
 
 __all__ = [
     "DEFAULTS",
@@ -29,6 +54,7 @@ __all__ = [
     "MemoryLimitError",
     "Mesh",
     "MeshFormatError",
+    "MissingExtraError",
     "ParameterError",
     "SegmentParams",
     "SegmentationResult",
@@ -47,3 +73,28 @@ __all__ = [
     "write_labels",
     "write_mesh",
 ]
+
+
+def __getattr__(name: str):
+    module = _PUBLIC.get(name)
+    if module is None:
+        raise AttributeError(f"module 'superfacets' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value  # the next access is a plain lookup
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_PUBLIC))
+
+
+if TYPE_CHECKING:  # the same names, for type checkers and IDEs
+    from .connectivity import enforce_connectivity
+    from .elements import ElementGraph, face_graph
+    from .errors import (InvalidMeshError, MemoryLimitError, MeshFormatError,
+                         MissingExtraError, ParameterError, SuperfacetsError)
+    from .io import read_labels, read_mesh, write_colored_mesh, write_labels, write_mesh
+    from .mesh import Mesh, as_mesh
+    from .params import DEFAULTS, SegmentParams
+    from .segmentation import SegmentationResult, segment, superfacets
+    from .weights import edge_weights, paper_weights, shlafman_weights

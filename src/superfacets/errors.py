@@ -6,7 +6,7 @@ Every error caused by bad input is a :class:`SuperfacetsError`, which is also a
 """
 
 __all__ = ["SuperfacetsError", "MeshFormatError", "InvalidMeshError", "ParameterError",
-           "MemoryLimitError"]
+           "MemoryLimitError", "MissingExtraError"]
 
 
 class SuperfacetsError(ValueError):
@@ -40,3 +40,10 @@ class MemoryLimitError(SuperfacetsError, MemoryError):
         super().__init__(message)
         self.required = int(required)
         self.limit = int(limit)
+
+
+class MissingExtraError(SuperfacetsError, ImportError):
+    """A feature needs an optional dependency (an *extra*) that is not installed.
+
+    The message names the ``pip install 'superfacets[EXTRA]'`` command to run.
+    """

@@ -17,7 +17,7 @@ import numpy as np
 
 from .errors import MemoryLimitError, ParameterError
 from .params import DEFAULT_ALPHAS, DEFAULTS, INITS, WEIGHTING_ALPHA
-from .segment import segment
+from .segmentation import segment
 
 __all__ = ["Method", "MethodRun", "Skipped", "METHODS", "register_method", "get_method",
            "parse_bool"]

@@ -23,6 +23,8 @@ import numpy as np
 from .camera import view_frame
 from .colors import boundary_edges, face_colors
 from .errors import ParameterError
+from .params import check_number
+from .extras import require
 from .labels import check_labels
 from .mesh import as_mesh
 
@@ -42,7 +44,7 @@ def _pyvista(off_screen: bool):
     if off_screen and not has_display():
         # skip VTK's attempt at an X connection (and its warning): go straight to EGL
         os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
-    import pyvista as pv
+    pv = require("pyvista", "drawing pictures")
 
     return pv
 
@@ -125,26 +127,36 @@ def _subplot_size(plotter) -> tuple[int, int]:
     return w / cols, h / rows
 
 
-def _save_png(image: np.ndarray, out) -> Path:
-    from PIL import Image
+def _save_png(image: np.ndarray, out, outputs=None) -> Path:
+    Image = require("PIL.Image", "writing PNG pictures")
 
-    from .io import atomic_write
+    from .io.files import save
 
-    out = Path(out)
     buf = io.BytesIO()
     Image.fromarray(image).save(buf, format="PNG")
-    return atomic_write(out, buf.getvalue())
+    return save(Path(out), buf.getvalue(), outputs)
 
 
-def _finish(plotter, out) -> np.ndarray:
+def _finish(plotter, out, outputs=None) -> np.ndarray:
     """Take the picture, close the plotter, write the PNG if asked."""
     try:
         image = np.asarray(plotter.screenshot(return_img=True))[:, :, :3].copy()
     finally:
         plotter.close()
     if out is not None:
-        _save_png(image, out)
+        _save_png(image, out, outputs)
     return image
+
+
+def _check_style(pv, background, boundary_color, line_width, zoom) -> None:
+    """Colours, line width and zoom, checked before anything is drawn."""
+    check_number("line_width", line_width, 0.0, 100.0, lo_open=True)
+    check_number("zoom", zoom, 1e-3, 1e3)
+    for name, color in (("background", background), ("boundary_color", boundary_color)):
+        try:
+            pv.Color(color)
+        except (ValueError, TypeError) as exc:
+            raise ParameterError(f"{name}: not a colour: {color!r} ({exc})") from None
 
 
 def _size(size) -> tuple[int, int]:
@@ -160,7 +172,7 @@ def _size(size) -> tuple[int, int]:
 def render(mesh, labels=None, out=None, *, size=(1200, 900), view=None,
            background="white", boundaries: bool = True, boundary_color="black",
            line_width: float = 1.0, title: str | None = None, zoom: float = 1.0,
-           up="y") -> np.ndarray:
+           up="y", outputs=None) -> np.ndarray:
     """Render a mesh off-screen, faces coloured by superfacet.
 
     Parameters
@@ -187,6 +199,8 @@ def render(mesh, labels=None, out=None, *, size=(1200, 900), view=None,
         Camera zoom factor (> 1 magnifies).
     up : {'y', 'z', 'x', '-y', '-z', '-x'} or (3,) float, default 'y'
         The mesh's up direction.
+    outputs : superfacets.io.files.Outputs, optional
+        Stage the PNG there (all or nothing with the others).
 
     Returns
     -------
@@ -195,12 +209,17 @@ def render(mesh, labels=None, out=None, *, size=(1200, 900), view=None,
     Raises
     ------
     ParameterError
-        On labels that are not one integer per face, a bad size or view.
+        On labels that are not one integer per face, a bad size, view, up
+        axis, colour, line width or zoom.
+    MissingExtraError
+        Without the ``render`` extra (pyvista, Pillow).
     """
     mesh = as_mesh(mesh)
     labels = _check_labels(mesh, labels)
     w, h = _size(size)
     pv = _pyvista(off_screen=True)
+    _check_style(pv, background, boundary_color, line_width, zoom)
+    view_frame(mesh, view, up=up)  # a bad view or up axis fails before any drawing
     p = pv.Plotter(off_screen=True, window_size=(w, h))
     try:
         p.set_background(background)
@@ -212,12 +231,13 @@ def render(mesh, labels=None, out=None, *, size=(1200, 900), view=None,
     except BaseException:
         p.close()
         raise
-    return _finish(p, out)
+    return _finish(p, out, outputs)
 
 
 def render_panel(items: Sequence[tuple], out=None, *, ncols: int | None = None,
                  size=(600, 500), view=None, background="white", boundaries: bool = True,
-                 line_width: float = 1.0, zoom: float = 1.0, up="y") -> np.ndarray:
+                 line_width: float = 1.0, zoom: float = 1.0, up="y",
+                 outputs=None) -> np.ndarray:
     """Several renders side by side with titles, like the paper's Figs. 2, 3 and 8.
 
     Parameters
@@ -250,6 +270,7 @@ def render_panel(items: Sequence[tuple], out=None, *, ncols: int | None = None,
     nrows = -(-n // ncols)
     w, h = _size(size)
     pv = _pyvista(off_screen=True)
+    _check_style(pv, background, "black", line_width, zoom)
     p = pv.Plotter(off_screen=True, shape=(nrows, ncols), window_size=(w * ncols, h * nrows),
                    border=False)
     try:
@@ -267,7 +288,7 @@ def render_panel(items: Sequence[tuple], out=None, *, ncols: int | None = None,
     except BaseException:
         p.close()
         raise
-    return _finish(p, out)
+    return _finish(p, out, outputs)
 
 
 def show(mesh, labels=None, *, title: str | None = None, boundaries: bool = True,

@@ -29,7 +29,10 @@ on the expansion, handed to a k-way normalized cut. We do exactly that:
    relaxed normalized-cut indicators (Shi and Malik, eq. 8), the same
    embedding scikit-learn's spectral clustering builds.
 4. **Discretization.** Yu and Shi's (2003) multiclass rounding of the first
-   ``k`` eigenvectors (scikit-learn's implementation).
+   ``k`` eigenvectors (:func:`discretize`, written from their paper; the
+   results in ``docs/results`` were made with scikit-learn's version of the
+   same algorithm, before it was replaced to avoid a private scikit-learn
+   function).
 
 Steps 1-3 are done once per mesh and weighting (:func:`ncut_embedding`);
 :func:`normalized_cuts` then labels the mesh for any ``k`` up to the number
@@ -57,7 +60,7 @@ from ..mesh import as_mesh
 from ..params import check_n_segments, check_positive
 from ..weights import edge_weights
 
-__all__ = ["NcutEmbedding", "ncut_embedding", "normalized_cuts", "ncut_memory_estimate",
+__all__ = ["discretize", "NcutEmbedding", "ncut_embedding", "normalized_cuts", "ncut_memory_estimate",
            "default_memory_limit"]
 
 #: Fraction of physical memory one normalized-cuts run may use by default.
@@ -351,8 +354,6 @@ def normalized_cuts(mesh, n_segments: int = 150, *, embedding: NcutEmbedding | N
     >>> labels.shape, int(labels.max()) + 1
     ((320,), 8)
     """
-    from sklearn.cluster._spectral import discretize
-
     from ..labels import relabel_dense
 
     mesh = as_mesh(mesh)
@@ -371,6 +372,65 @@ def normalized_cuts(mesh, n_segments: int = 150, *, embedding: NcutEmbedding | N
                              f"n_segments={k} needs {k}")
     if k == 1:
         return np.zeros(mesh.n_faces, dtype=np.int64)
-    labels = discretize(embedding.vectors[:, :k].copy(),
-                        random_state=int(gen.integers(2**31 - 1)))
-    return relabel_dense(labels)
+    return relabel_dense(discretize(embedding.vectors[:, :k], rng=gen))
+
+
+def discretize(vectors: np.ndarray, rng=None, max_iter: int = 50) -> np.ndarray:
+    """Discrete labels from a k-way spectral embedding (Yu and Shi 2003).
+
+    The rows of ``vectors`` are normalized to unit length; an orthonormal
+    rotation ``R`` and a partition are then found in turn: each row takes the
+    column of ``vectors R`` where it is largest, and ``R`` is the rotation that
+    best aligns the embedding with that partition (an orthogonal Procrustes
+    problem, solved by one SVD), until the objective stops improving. ``R``
+    starts from ``k`` rows as far from orthogonal to each other as possible,
+    the first drawn at random.
+
+    Parameters
+    ----------
+    vectors : (n, k) float ndarray
+        Eigenvectors of the normalized affinity, one row per element.
+    rng : None, int or numpy.random.Generator
+        Draws the first row of the initial rotation.
+    max_iter : int, default 50
+        Rotations at most.
+
+    Returns
+    -------
+    labels : (n,) int64 ndarray
+        In ``0..k-1`` (a class may stay empty).
+
+    References
+    ----------
+    S. X. Yu, J. Shi, "Multiclass spectral clustering", ICCV 2003, section 4.
+
+    Examples
+    --------
+    >>> v = np.repeat(np.eye(3), 4, axis=0) + 0.01
+    >>> discretize(v, rng=0).reshape(3, 4)[:, 0].size
+    3
+    """
+    gen = np.random.default_rng(rng)
+    x = np.asarray(vectors, dtype=np.float64)
+    n, k = x.shape
+    norm = np.linalg.norm(x, axis=1, keepdims=True)
+    x = x / np.where(norm > 0, norm, 1.0)
+    rot = np.empty((k, k))
+    rot[:, 0] = x[gen.integers(n)]
+    overlap = np.zeros(n)
+    for j in range(1, k):  # each next column: the row least aligned with those chosen
+        overlap += np.abs(x @ rot[:, j - 1])
+        rot[:, j] = x[np.argmin(overlap)]
+    best = -np.inf
+    labels = np.argmax(x @ rot, axis=1)
+    for _ in range(max_iter):
+        labels = np.argmax(x @ rot, axis=1)
+        onehot = np.zeros((n, k))
+        onehot[np.arange(n), labels] = 1.0
+        u, s, vt = np.linalg.svd(onehot.T @ x)
+        score = float(s.sum())  # the objective: trace of the aligned embedding
+        if score <= best * (1 + 1e-12):
+            break
+        best = score
+        rot = vt.T @ u.T
+    return labels.astype(np.int64)

@@ -37,7 +37,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..mesh import as_mesh
-from ..params import check_n_segments
+from ..params import check_int, check_n_segments
 
 __all__ = ["VSAResult", "variational_shape_approximation", "vsa", "METRICS", "INITS"]
 
@@ -77,13 +77,6 @@ class VSAResult:
     distortion: float
     n_iter: int
     converged: bool
-
-
-def _count(name: str, value, lo: int) -> int:
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) \
-            or value < lo:
-        raise ParameterError(f"{name} must be an integer >= {lo}, got {value!r}")
-    return int(value)
 
 
 class _State:
@@ -235,8 +228,8 @@ def variational_shape_approximation(mesh, n_segments: int = 150, *, metric: str 
         raise ParameterError(f"metric must be one of {', '.join(METRICS)}; got {metric!r}")
     if init not in INITS:
         raise ParameterError(f"init must be one of {', '.join(INITS)}; got {init!r}")
-    max_iter = _count("max_iter", max_iter, 1)
-    insert_iter = _count("insert_iter", insert_iter, 0)
+    max_iter = check_int("max_iter", max_iter, 1)
+    insert_iter = check_int("insert_iter", insert_iter, 0)
     gen = np.random.default_rng(rng)
     m = mesh.n_faces
 

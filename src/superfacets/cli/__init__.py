@@ -58,8 +58,12 @@ def main(argv: list[str] | None = None) -> int:
     from ..render import NoDisplayError
 
     args = build_parser().parse_args(argv)
+    restore = _terminate_cleanly()
     try:
         return args.func(args)
+    except BrokenPipeError:  # `superfacets ... | head`: the reader left; end quietly
+        _silence_stdout()
+        return 0
     except (SuperfacetsError, OSError, NoDisplayError) as exc:
         msg = str(exc)
         if isinstance(exc, OSError) and exc.filename and str(exc.filename) not in msg:
@@ -69,6 +73,45 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("superfacets: interrupted", file=sys.stderr)
         return 130
+    except _Terminated:
+        print("superfacets: terminated", file=sys.stderr)
+        return 143
+    finally:
+        restore()
+
+
+class _Terminated(BaseException):
+    """SIGTERM, raised in the main thread so that temporary files are removed."""
+
+
+def _terminate_cleanly():
+    """Turn SIGTERM into an exception (unwinding removes temporary files); return a
+    function that puts the previous handler back."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return lambda: None
+
+    def handler(signum, frame):
+        raise _Terminated()
+
+    try:
+        previous = signal.signal(signal.SIGTERM, handler)
+    except (ValueError, OSError):  # pragma: no cover - not settable here
+        return lambda: None
+    return lambda: signal.signal(signal.SIGTERM, previous)
+
+
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null so that the interpreter's final flush stays quiet."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):  # pragma: no cover
+        pass
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -22,8 +22,10 @@ def add_parsers(sub) -> None:
                     "one mesh is recorded and the run goes on. The defaults reproduce the "
                     "paper's sweep (k in 50..300, alpha in 0, 100, 200, 500, 1000).")
     x.add_argument("--psb", metavar="DIR", default=None,
-                   help="unpacked benchmark folder holding off/ and seg/ (default: unpacked "
-                        "once from ../shared/data/psb.tar.xz into ~/.cache/superfacets)")
+                   help="the benchmark: a folder holding off/ and seg/, or an archive of "
+                        "psb/off and psb/seg (default: $SUPERFACETS_PSB, else the copy "
+                        "unpacked in ~/.cache/superfacets, else, in a source checkout, "
+                        "../shared/data/psb.tar.xz)")
     x.add_argument("-o", "--results", metavar="FILE.csv", default="results.csv",
                    help="results file, appended to (default: results.csv)")
     x.add_argument("-m", "--method", action="append", default=None, metavar="NAME",
@@ -97,7 +99,7 @@ def select_meshes(args):
     from ..datasets.psb import list_meshes, psb_root
     from ..errors import ParameterError
 
-    root = Path(args.psb) if args.psb else psb_root()
+    root = psb_root(args.psb)
     meshes = list_meshes(root)
     if args.ids:
         ids = _id_list(args.ids)

@@ -138,9 +138,11 @@ def add_mesh_and_labels(p, plain: bool = True) -> None:
         p.add_argument("--plain", action="store_true", help="draw the mesh without superfacets")
 
 
-def check_output(path: str | None, suffixes: tuple[str, ...], what: str) -> Path | None:
+def check_output(path: str | None, suffixes: tuple[str, ...], what: str,
+                 stdout: bool = False) -> Path | None:
     """The output path, checked before any work: its folder exists, it is no folder,
-    and it ends in one of ``suffixes`` (when given).
+    and it ends in one of ``suffixes`` (when given). ``-`` (standard output) is
+    accepted where ``stdout`` is True. A link is checked where it points.
 
     Raises
     ------
@@ -150,6 +152,10 @@ def check_output(path: str | None, suffixes: tuple[str, ...], what: str) -> Path
 
     if path is None:
         return None
+    if path == "-":
+        if not stdout:
+            raise ParameterError(f"-: {what} cannot go to standard output; give a file name")
+        return Path("-")
     out = Path(path)
     parent = out.parent if str(out.parent) else Path(".")
     if not parent.is_dir():
@@ -166,7 +172,7 @@ def labels_for(args, mesh):
     and a dict describing them for titles and pages."""
     from ..errors import SuperfacetsError
     from ..io import read_labels
-    from ..segment import segment
+    from ..segmentation import segment
 
     if args.plain:
         return None, {}

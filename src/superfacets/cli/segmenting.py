@@ -25,7 +25,8 @@ def add_parsers(sub) -> None:
     p.add_argument("mesh", metavar="MESH", help="input mesh file")
     add_method_options(p)
     p.add_argument("-o", "--output", metavar="OUT.seg", default=None,
-                   help="write the labels here (one per face per line; default: none)")
+                   help="write the labels here, one per face per line ('-': standard "
+                        "output; default: none)")
     p.add_argument("--header", action="store_true",
                    help="start the .seg file with '#' lines recording parameters, "
                         "iterations and time (default: labels only, as the benchmark's files)")
@@ -108,14 +109,17 @@ def cmd_segment(args) -> int:
     from .. import warmup
     from ..errors import SuperfacetsError
     from ..io import read_mesh, write_colored_mesh, write_labels
-    from ..segment import segment
+    from ..io.files import Outputs
+    from ..params import resolve
+    from ..segmentation import segment
 
-    seg_out = check_output(args.output, (), "label file")
+    seg_out = check_output(args.output, (), "label file", stdout=True)
     ply_out = check_output(args.colored_mesh, (".ply",), "the coloured mesh")
+    kwargs = method_kwargs(args)
+    resolve(n_segments=args.n_segments, radius=args.radius, **kwargs)  # before the read
     warmup.start()  # numba's start-up overlaps the read
     t0 = time.perf_counter()
     mesh = read_mesh(args.mesh)
-    kwargs = method_kwargs(args)
     if args.progress is None:  # long runs show where they are
         kwargs["progress"] = mesh.n_faces >= 500_000 and sys.stderr.isatty()
     try:
@@ -123,19 +127,26 @@ def cmd_segment(args) -> int:
     except SuperfacetsError as exc:
         raise type(exc)(f"{args.mesh}: {exc}") from None
     elapsed = time.perf_counter() - t0
-    if seg_out is not None:
-        write_labels(seg_out, result.labels,
-                     header=_header(mesh, result, Path(args.mesh).name) if args.header else None)
-    if ply_out is not None:
-        write_colored_mesh(ply_out, mesh, result.labels)
+    with Outputs() as outputs:  # all or nothing
+        if seg_out is not None:
+            write_labels(seg_out, result.labels, outputs=outputs,
+                         header=_header(mesh, result, Path(args.mesh).name) if args.header
+                         else None)
+        if ply_out is not None:
+            write_colored_mesh(ply_out, mesh, result.labels, outputs=outputs)
+    report = sys.stderr if str(seg_out) == "-" else sys.stdout  # stdout holds the labels
     if not args.quiet:
-        print(_summary(Path(args.mesh).name, mesh, result, elapsed))
+        print(_summary(Path(args.mesh).name, mesh, result, elapsed), file=report)
+    if seg_out is None and ply_out is None and not args.quiet:
+        print("note: nothing was saved: add -o OUT.seg (or -o - for standard output) and/or "
+              "--colored-mesh OUT.ply", file=sys.stderr)
     return 0
 
 
 def cmd_baseline(args) -> int:
     from ..errors import MemoryLimitError, ParameterError
     from ..io import read_mesh, write_colored_mesh, write_labels
+    from ..io.files import Outputs
     from ..methods import Skipped, get_method
     from ..runner.grid import method_grid, parse_params
 
@@ -145,10 +156,13 @@ def cmd_baseline(args) -> int:
     if many:
         raise ParameterError(f"--param: give one value for {', '.join(many)}")
     params = method.resolve({n: v[0] for n, v in given.items()})
-    seg_out = check_output(args.output, (), "label file")
+    seg_out = check_output(args.output, (), "label file", stdout=True)
     ply_out = check_output(args.colored_mesh, (".ply",), "the coloured mesh")
     mesh = read_mesh(args.mesh)
     t0 = time.perf_counter()
+    if not args.quiet:
+        print(f"{Path(args.mesh).name}: {mesh.n_faces} faces, running {method.name}...",
+              file=sys.stderr, flush=True)
     try:
         run = method.run(mesh, args.n_segments, cache={}, seed=args.seed, **params)
     except Skipped as exc:
@@ -157,17 +171,19 @@ def cmd_baseline(args) -> int:
         raise ParameterError(f"{args.mesh}: {exc}") from None
     elapsed = time.perf_counter() - t0
     labels = np.asarray(run.labels)
-    if seg_out is not None:
-        write_labels(seg_out, labels)
-    if ply_out is not None:
-        write_colored_mesh(ply_out, mesh, labels)
+    with Outputs() as outputs:  # all or nothing
+        if seg_out is not None:
+            write_labels(seg_out, labels, outputs=outputs)
+        if ply_out is not None:
+            write_colored_mesh(ply_out, mesh, labels, outputs=outputs)
     if not args.quiet:
         shown = ", ".join(f"{k}={fmt_value(v)}" for k, v in params.items())
         iters = "" if run.n_iter is None else (
             f", {run.n_iter} iterations" + ("" if run.converged is None else
                                             " (converged)" if run.converged else " (max)"))
         print(f"{Path(args.mesh).name}: {mesh.n_faces} faces, {method.name} ({shown}): "
-              f"{int(labels.max()) + 1} segments{iters}, {elapsed:.2f} s")
+              f"{int(labels.max()) + 1} segments{iters}, {elapsed:.2f} s",
+              file=sys.stderr if str(seg_out) == "-" else sys.stdout)
     return 0
 
 
@@ -175,11 +191,17 @@ def cmd_demo(args) -> int:
     from .. import warmup
     from ..html import write_html
     from ..io import write_colored_mesh, write_labels, write_mesh
-    from ..segment import segment
+    from ..io.files import Outputs
+    from ..params import check_int, resolve
+    from ..segmentation import segment
     from ..shapes import creature
 
+    check_int("--resolution", args.resolution, lo=16, hi=300)
+    resolve(n_segments=args.n_segments, **method_kwargs(args))  # every option, before work
     warmup.start()
     out = Path(args.output_dir)
+    if out.exists() and not out.is_dir():
+        raise NotADirectoryError(f"{out}: exists and is not a folder")
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     mesh = creature(args.resolution)
@@ -187,20 +209,25 @@ def cmd_demo(args) -> int:
     t0 = time.perf_counter()
     result = segment(mesh, args.n_segments, **method_kwargs(args))
     elapsed = time.perf_counter() - t0
-    write_mesh(out / "creature.off", mesh)
-    write_labels(out / "creature.seg", result.labels, header=_header(mesh, result, "creature.off"))
-    write_colored_mesh(out / "creature_superfacets.ply", mesh, result.labels)
-    write_html(out / "creature.html", mesh, result.labels, title="creature (demo)", up="z",
-               info={"k asked": args.n_segments, "alpha": args.alpha})
     picture = ""
-    try:
-        from ..render import render
+    with Outputs() as outputs:  # all or nothing (the picture is a bonus)
+        write_mesh(out / "creature.off", mesh, outputs=outputs)
+        write_labels(out / "creature.seg", result.labels, outputs=outputs,
+                     header=_header(mesh, result, "creature.off"))
+        write_colored_mesh(out / "creature_superfacets.ply", mesh, result.labels,
+                           outputs=outputs)
+        write_html(out / "creature.html", mesh, result.labels, title="creature (demo)",
+                   up="z", info={"k asked": args.n_segments, "alpha": args.alpha},
+                   outputs=outputs)
+        try:
+            from ..render import render
 
-        render(mesh, result.labels, out / "creature.png", size=(1000, 750), up="z",
-               title=f"{result.n_segments} superfacets, alpha = {args.alpha:g}")
-        picture = f", {out / 'creature.png'} (picture)"
-    except Exception as exc:  # noqa: BLE001 - the picture is a bonus; say why it is missing
-        print(f"note: no picture rendered ({type(exc).__name__}: {exc})", file=sys.stderr)
+            render(mesh, result.labels, out / "creature.png", size=(1000, 750), up="z",
+                   title=f"{result.n_segments} superfacets, alpha = {args.alpha:g}",
+                   outputs=outputs)
+            picture = f", {out / 'creature.png'} (picture)"
+        except Exception as exc:  # noqa: BLE001 - the picture is a bonus; say why it is missing
+            print(f"note: no picture rendered ({type(exc).__name__}: {exc})", file=sys.stderr)
     if not args.quiet:
         print(f"built the demo mesh in {t_shape:.2f} s")
         print(_summary("creature", mesh, result, elapsed))

@@ -45,17 +45,45 @@ def default_cache() -> Path:
     return Path(os.environ.get("SUPERFACETS_CACHE", Path.home() / ".cache" / "superfacets"))
 
 
-def psb_root(archive=None, cache=None) -> Path:
-    """The unpacked benchmark folder (holding ``off/`` and ``seg/``).
+#: Where the benchmark is published, and what this package expects of it.
+NOT_FOUND_HELP = (
+    "the Princeton Mesh Segmentation Benchmark (Chen, Golovinskiy, Funkhouser, 2009: 380 "
+    "meshes with human segmentations) was not found. Its data is published at "
+    "https://segeval.cs.princeton.edu/ (MeshsegBenchmark-1.0.zip; its data/ folder is what "
+    "is needed). Give the folder with --psb DIR or SUPERFACETS_PSB=DIR; it must hold "
+    "off/<id>.off and seg/Benchmark/<id>/<id>_<j>.seg (a .tar.xz archive holding psb/off "
+    "and psb/seg is accepted too, and unpacked once into the cache)")
 
-    Unpacks ``archive`` into ``cache/psb`` the first time (about 5 s,
-    313 MB), through a temporary folder renamed at the end, so an
-    interrupted unpack is never mistaken for a complete one.
+
+def _is_root(folder: Path) -> bool:
+    return (folder / "off").is_dir() and (folder / "seg").is_dir()
+
+
+def _source_checkout_archive() -> Path | None:
+    """``../shared/data/psb.tar.xz`` beside a source checkout (None from a wheel)."""
+    if not ((_REPO / "pyproject.toml").is_file() and (_REPO / "src" / "superfacets").is_dir()):
+        return None
+    return default_archive()
+
+
+def psb_root(root=None, *, archive=None, cache=None) -> Path:
+    """The benchmark folder (holding ``off/`` and ``seg/``), found or unpacked.
+
+    Looked for, in order: ``root`` (e.g. ``--psb DIR``); ``$SUPERFACETS_PSB``;
+    the folder unpacked earlier into the cache; in a source checkout, the
+    archive ``../shared/data/psb.tar.xz`` beside the repository. An archive
+    (``root``, ``$SUPERFACETS_PSB`` or ``archive``, a tar file holding
+    ``psb/off`` and ``psb/seg``) is unpacked once into ``cache/psb`` (about
+    5 s, 313 MB; delete that folder to unpack another), through a temporary
+    folder renamed at the end, so an interrupted unpack is never mistaken for
+    a complete one.
 
     Parameters
     ----------
+    root : path, optional
+        A benchmark folder, or an archive.
     archive : path, optional
-        Default :func:`default_archive`.
+        An archive to unpack when no folder is found.
     cache : path, optional
         Default :func:`default_cache`.
 
@@ -66,20 +94,44 @@ def psb_root(archive=None, cache=None) -> Path:
     Raises
     ------
     FileNotFoundError
-        If the folder is not unpacked yet and the archive is missing.
+        Saying what the benchmark is, where it is published and which layout
+        is expected, when none of the places has it.
     """
     cache = Path(cache) if cache is not None else default_cache()
+    given = root if root is not None else os.environ.get("SUPERFACETS_PSB") or None
+    if given is not None:
+        given = Path(given)
+        if given.is_dir():
+            if _is_root(given):
+                return given
+            raise FileNotFoundError(f"{given}: no off/ inside, or no seg/ (not a benchmark "
+                                    f"folder): {NOT_FOUND_HELP}")
+        if not given.is_file():
+            raise FileNotFoundError(f"{given}: no such folder: {NOT_FOUND_HELP}")
+        archive = given
     target = cache / "psb"
-    if (target / "off").is_dir():
+    if _is_root(target):  # unpacked earlier (delete it to unpack another archive)
         return target
-    archive = Path(archive) if archive is not None else default_archive()
-    if not archive.exists():
-        raise FileNotFoundError(f"{archive}: Princeton benchmark archive not found")
+    archive = Path(archive) if archive is not None else _source_checkout_archive()
+    if archive is None or not archive.is_file():
+        where = f"{archive}: " if archive is not None else ""
+        raise FileNotFoundError(f"{where}{NOT_FOUND_HELP}")
+    return _unpack(archive, cache)
+
+
+def _unpack(archive: Path, cache: Path) -> Path:
+    target = cache / "psb"
     cache.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=".psb-", dir=cache))
     try:
-        with tarfile.open(archive, "r:xz") as tar:
-            tar.extractall(tmp, filter="data")
+        try:
+            with tarfile.open(archive, "r:*") as tar:
+                tar.extractall(tmp, filter="data")
+        except (tarfile.TarError, EOFError, OSError) as exc:
+            raise FileNotFoundError(f"{archive}: not a readable benchmark archive ({exc}): "
+                                    f"{NOT_FOUND_HELP}") from None
+        if not _is_root(tmp / "psb"):
+            raise FileNotFoundError(f"{archive}: holds no psb/off and psb/seg: {NOT_FOUND_HELP}")
         os.replace(tmp / "psb", target)
     finally:
         import shutil

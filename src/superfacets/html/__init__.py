@@ -89,7 +89,7 @@ def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None 
 
 
 def write_html(path, mesh, labels=None, *, title: str | None = None, info: dict | None = None,
-               background: str = "#ffffff", view=None, up="y") -> Path:
+               background: str = "#ffffff", view=None, up="y", outputs=None) -> Path:
     """Write a self-contained interactive HTML page of a (segmented) mesh.
 
     Parameters
@@ -107,6 +107,8 @@ def write_html(path, mesh, labels=None, *, title: str | None = None, info: dict 
         CSS colour of the page.
     view, up
         Initial camera, as in :func:`superfacets.camera.view_frame`.
+    outputs : superfacets.io.files.Outputs, optional
+        Stage the page there (all or nothing with the others).
 
     Returns
     -------
@@ -124,8 +126,8 @@ def write_html(path, mesh, labels=None, *, title: str | None = None, info: dict 
     Size is about 32 bytes of base64 per face (a 1M-face mesh gives a
     ~35 MB page); the browser builds flat-shaded triangles from it.
     """
-    from ..io import atomic_write
+    from ..io.files import save
 
     text = html_page(mesh, labels, title=title, info=info, background=background, view=view,
                      up=up)
-    return atomic_write(path, text.encode("utf-8"))
+    return save(path, text.encode("utf-8"), outputs)

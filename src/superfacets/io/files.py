@@ -3,7 +3,8 @@
 A trailing ``.gz``, ``.xz`` or ``.bz2`` is decompressed on reading and
 applied on writing. Every write is atomic: the data goes to a temporary file
 in the target folder, which is then renamed over the target, so an
-interrupted run never leaves a half-written file.
+interrupted run never leaves a half-written file; :class:`Outputs` does the
+same for several files at once, all or nothing.
 """
 
 from __future__ import annotations
@@ -19,7 +20,8 @@ from typing import Callable
 
 from ..errors import MeshFormatError
 
-__all__ = ["split_suffix", "read_bytes", "text_lines", "atomic_write", "COMPRESSIONS"]
+__all__ = ["split_suffix", "read_bytes", "text_lines", "atomic_write", "Outputs", "save",
+           "COMPRESSIONS"]
 
 #: Compression suffixes understood on reading and writing.
 COMPRESSIONS = {".gz": gzip.decompress, ".xz": lzma.decompress, ".bz2": bz2.decompress}
@@ -58,13 +60,129 @@ def text_lines(data: bytes, path: Path) -> list[str]:
     return [ln for ln in (ln.strip() for ln in lines) if ln]
 
 
+class Outputs:
+    """Several output files written all or nothing.
+
+    :meth:`write` puts each content in a temporary file beside its target;
+    :meth:`commit` (on leaving the ``with`` block without an error) renames
+    them all over their targets; on an error, an interruption (``Ctrl-C``;
+    the command line turns ``SIGTERM`` into the same) or :meth:`abort`, the
+    temporary files are removed and no target is touched.
+
+    Targets: ``-`` is standard output; a symbolic link is followed and the
+    file it points to is replaced (the link stays); an existing target that
+    is not a regular file (a device such as ``/dev/stdout``, a FIFO) is
+    written in place at commit, never replaced. A replaced file keeps its
+    permissions; a new one gets ``0o644``.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> with Outputs() as out:
+    ...     _ = out.write(d / "a.txt", b"one")
+    ...     _ = out.write(d / "b.txt", b"two")
+    >>> sorted(p.name for p in d.iterdir())
+    ['a.txt', 'b.txt']
+    """
+
+    def __init__(self) -> None:
+        self._temps: list[tuple[str, Path]] = []  # (temporary file, regular target)
+        self._direct: list[tuple[Path | None, bytes]] = []  # (special target or stdout, data)
+
+    def __enter__(self) -> "Outputs":
+        return self
+
+    def __exit__(self, kind, exc, tb) -> None:
+        if kind is None:
+            self.commit()
+        else:
+            self.abort()
+
+    def write(self, path, content: Callable[[io.BufferedWriter], None] | bytes) -> Path:
+        """Stage ``content`` (bytes, or a function writing to a binary file) for ``path``.
+
+        A ``.gz``/``.xz``/``.bz2`` suffix on ``path`` compresses the content.
+
+        Raises
+        ------
+        FileNotFoundError
+            If the target's folder does not exist.
+        IsADirectoryError
+            If the target is a folder.
+        """
+        path = Path(path)
+        if str(path) == "-":
+            self._direct.append((None, _render(content, None)))
+            return path
+        real = Path(os.path.realpath(path))
+        folder = real.parent
+        if not folder.is_dir():
+            raise FileNotFoundError(f"{path}: folder {path.parent} does not exist")
+        if real.is_dir():
+            raise IsADirectoryError(f"{path}: is a directory")
+        comp = path.suffix.lower() if path.suffix.lower() in _COMPRESSORS else None
+        if real.exists() and not real.is_file():  # a device or a FIFO: written in place
+            self._direct.append((real, _render(content, comp)))
+            return path
+        fd, tmp = tempfile.mkstemp(prefix=f".{real.name}.", suffix=".tmp", dir=folder)
+        self._temps.append((tmp, real))
+        with os.fdopen(fd, "wb") as fh:
+            if comp is None and callable(content):
+                content(fh)
+            else:
+                fh.write(_render(content, comp))
+        os.chmod(tmp, (os.stat(real).st_mode & 0o7777) if real.exists() else 0o644)
+        return path
+
+    def commit(self) -> None:
+        """Rename every staged file over its target; write the special targets."""
+        try:
+            for tmp, real in self._temps:
+                os.replace(tmp, real)
+            self._temps = []
+            for real, data in self._direct:
+                if real is None:
+                    import sys
+
+                    sys.stdout.flush()
+                    sys.stdout.buffer.write(data)
+                    sys.stdout.buffer.flush()
+                else:
+                    with open(real, "wb") as fh:
+                        fh.write(data)
+            self._direct = []
+        finally:
+            self.abort()
+
+    def abort(self) -> None:
+        """Remove the staged temporary files; touch no target."""
+        for tmp, _ in self._temps:
+            try:
+                os.unlink(tmp)
+            except FileNotFoundError:
+                pass
+        self._temps = []
+        self._direct = []
+
+
+def _render(content, comp: str | None) -> bytes:
+    if callable(content):
+        buf = io.BytesIO()
+        content(buf)
+        data = buf.getvalue()
+    else:
+        data = bytes(content)
+    return _COMPRESSORS[comp](data) if comp is not None else data
+
+
 def atomic_write(path, write: Callable[[io.BufferedWriter], None] | bytes) -> Path:
-    """Write a file atomically: a temporary file in the same folder, then rename.
+    """Write one file atomically (see :class:`Outputs`, which this uses alone).
 
     Parameters
     ----------
     path : str or os.PathLike
-        Target file. Its folder must exist.
+        Target file (``-``: standard output). Its folder must exist.
     write : bytes or callable
         The content, or a function writing it to a binary file object.
         A ``.gz``/``.xz``/``.bz2`` suffix on ``path`` compresses the content.
@@ -78,29 +196,13 @@ def atomic_write(path, write: Callable[[io.BufferedWriter], None] | bytes) -> Pa
     ------
     FileNotFoundError
         If the folder does not exist.
+    IsADirectoryError
+        If the target is a folder.
     """
-    path = Path(path)
-    folder = path.parent if str(path.parent) else Path(".")
-    if not folder.is_dir():
-        raise FileNotFoundError(f"{path}: folder {folder} does not exist")
-    comp = path.suffix.lower() if path.suffix.lower() in _COMPRESSORS else None
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            if comp is not None:
-                buf = io.BytesIO()
-                write(buf) if callable(write) else buf.write(write)
-                fh.write(_COMPRESSORS[comp](buf.getvalue()))
-            elif callable(write):
-                write(fh)
-            else:
-                fh.write(write)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
-    return path
+    with Outputs() as out:
+        return out.write(path, write)
+
+
+def save(path, content, outputs: Outputs | None = None) -> Path:
+    """Write ``content`` to ``path`` atomically, or stage it in ``outputs`` when given."""
+    return atomic_write(path, content) if outputs is None else outputs.write(path, content)

@@ -13,12 +13,13 @@ import numpy as np
 
 from ..errors import MeshFormatError
 from ..labels import check_labels
-from .files import atomic_write, read_bytes, split_suffix, text_lines
+from .files import Outputs, read_bytes, save, split_suffix, text_lines
 
 __all__ = ["read_labels", "write_labels"]
 
 
-def write_labels(path, labels, header: dict | Iterable[str] | None = None) -> Path:
+def write_labels(path, labels, header: dict | Iterable[str] | None = None, *,
+                 outputs: Outputs | None = None) -> Path:
     """Write a ``.seg`` label file: one integer per face per line, face order.
 
     Parameters
@@ -28,6 +29,9 @@ def write_labels(path, labels, header: dict | Iterable[str] | None = None) -> Pa
     header : dict or iterable of str, optional
         Written first as ``# key: value`` (or ``# line``) lines; readers of
         this package skip them. Leave it out for strict benchmark files.
+    outputs : Outputs, optional
+        Stage the file there (written with the others, all or nothing)
+        instead of writing it now. ``path`` ``-`` is standard output.
 
     Returns
     -------
@@ -44,7 +48,7 @@ def write_labels(path, labels, header: dict | Iterable[str] | None = None) -> Pa
         items = header.items() if isinstance(header, dict) else ((None, h) for h in header)
         head = "".join(f"# {k}: {v}\n" if k is not None else f"# {v}\n" for k, v in items)
     body = "\n".join(labels.astype(str).tolist())
-    return atomic_write(path, (head + body + ("\n" if labels.size else "")).encode("ascii"))
+    return save(path, (head + body + ("\n" if labels.size else "")).encode("ascii"), outputs)
 
 
 def read_labels(path, n_faces: int | None = None) -> np.ndarray:

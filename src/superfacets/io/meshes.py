@@ -17,7 +17,7 @@ import numpy as np
 
 from ..errors import InvalidMeshError, MeshFormatError
 from ..mesh import Mesh, as_mesh
-from .files import atomic_write, read_bytes, split_suffix, text_lines
+from .files import Outputs, read_bytes, save, split_suffix, text_lines
 
 __all__ = ["read_mesh", "write_mesh", "write_colored_mesh", "MESH_FORMATS"]
 
@@ -241,7 +241,8 @@ def _declared_faces(data: bytes, fmt: str) -> int | None:
 
 
 # ------------------------------------------------------------------ writes
-def write_mesh(path, mesh, face_colors: np.ndarray | None = None) -> Path:
+def write_mesh(path, mesh, face_colors: np.ndarray | None = None, *,
+               outputs: Outputs | None = None) -> Path:
     """Write a mesh: ``.off`` and ``.tri`` here, ``.ply``/``.obj``/``.stl`` via trimesh.
 
     Parameters
@@ -251,6 +252,8 @@ def write_mesh(path, mesh, face_colors: np.ndarray | None = None) -> Path:
     mesh : Mesh or (vertices, faces)
     face_colors : (m, 3) or (m, 4) uint8 ndarray, optional
         Per-face colours (PLY only).
+    outputs : Outputs, optional
+        Stage the file there (all or nothing with the others).
 
     Returns
     -------
@@ -273,10 +276,10 @@ def write_mesh(path, mesh, face_colors: np.ndarray | None = None) -> Path:
     if fmt == "off":
         head = f"OFF\n{len(v)} {len(f)} 0\n"
         body = _rows(v, "%.17g") + _rows(np.c_[np.full(len(f), 3), f], "%d")
-        return atomic_write(path, (head + body).encode("ascii"))
+        return save(path, (head + body).encode("ascii"), outputs)
     if fmt == "tri":
         body = f"{len(v)}\n" + _rows(v, "%.17g") + f"{len(f)}\n" + _rows(f, "%d")
-        return atomic_write(path, body.encode("ascii"))
+        return save(path, body.encode("ascii"), outputs)
     import trimesh
 
     tm = trimesh.Trimesh(vertices=v, faces=f, process=False, validate=False)
@@ -284,7 +287,7 @@ def write_mesh(path, mesh, face_colors: np.ndarray | None = None) -> Path:
         tm.visual.face_colors = face_colors
     kwargs = {"encoding": "binary"} if fmt == "ply" else {}
     data = tm.export(file_type=fmt, **kwargs)
-    return atomic_write(path, data.encode("utf-8") if isinstance(data, str) else data)
+    return save(path, data.encode("utf-8") if isinstance(data, str) else data, outputs)
 
 
 def _rows(a: np.ndarray, fmt: str) -> str:
@@ -293,7 +296,7 @@ def _rows(a: np.ndarray, fmt: str) -> str:
     return buf.getvalue()
 
 
-def write_colored_mesh(path, mesh, labels) -> Path:
+def write_colored_mesh(path, mesh, labels, *, outputs: Outputs | None = None) -> Path:
     """Write a binary PLY with one colour per face, one colour per superfacet.
 
     Adjacent superfacets always get clearly different colours (a greedy
@@ -319,4 +322,4 @@ def write_colored_mesh(path, mesh, labels) -> Path:
     from ..colors import face_colors
 
     mesh = as_mesh(mesh)
-    return write_mesh(path, mesh, face_colors=face_colors(mesh, labels))
+    return write_mesh(path, mesh, face_colors=face_colors(mesh, labels), outputs=outputs)

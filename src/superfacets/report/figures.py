@@ -16,6 +16,7 @@ from typing import Sequence
 
 import numpy as np
 
+from ..extras import require
 from .tables import (METRIC_LABELS, category_means, ok_rows, rows_at_k, series_order, summary)
 
 __all__ = ["plot_curves", "plot_per_category", "plot_cost"]
@@ -23,7 +24,7 @@ __all__ = ["plot_curves", "plot_per_category", "plot_cost"]
 
 def _style(df):
     """Colour per series, line style and marker per method."""
-    import matplotlib
+    matplotlib = require("matplotlib", "result figures")
 
     series = series_order(df)
     methods = list(dict.fromkeys(df["method"]))
@@ -40,7 +41,7 @@ def _style(df):
 def _subplots(nrows: int, ncols: int, figsize, squeeze: bool = False):
     """A figure and its axes, made without pyplot: no global state, no backend switch
     (a notebook's backend stays as it is)."""
-    from matplotlib.figure import Figure
+    Figure = require("matplotlib.figure", "result figures").Figure
 
     fig = Figure(figsize=figsize)
     return fig, fig.subplots(nrows, ncols, squeeze=squeeze)

@@ -11,7 +11,7 @@ from superfacets._kernels.expand import MERGE, expand
 from superfacets.connectivity import label_components
 from superfacets.expansion import Workspace, bucket_width
 from superfacets.params import resolve
-from superfacets.segment import pipeline
+from superfacets.segmentation import pipeline
 from superfacets.weights import paper_weights
 
 from conftest import MESHES, TABLE1, grid_mesh, need
