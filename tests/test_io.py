@@ -187,3 +187,90 @@ def test_compressed_inputs_match_plain(tmp_path, box):
 def test_table1_meshes_load(name, faces):
     m = read_mesh(need(MESHES / f"{name}.tri.xz"))
     assert m.n_faces == faces
+
+
+def test_obj_reader_follows_the_obj_rules(tmp_path):
+    # relative (negative) indices count back from the vertices defined so far; tabs separate;
+    # i/t/n keeps i; other statements are skipped; index 0 is an error
+    p = tmp_path / "m.obj"
+    p.write_text("# c\nv 0 0 0\nv\t1 0 0\nv 0 1 0\nvt 0 0\nf -3/1 -2/1 -1/1\no second\n"
+                 "v 0 0 1\nf\t1//1 2//1 -1//1\nusemtl x\nf 4 2 3\n")
+    m = read_mesh(p)
+    assert m.faces.tolist() == [[0, 1, 2], [0, 1, 3], [3, 1, 2]]
+    assert m.vertices.tolist()[3] == [0, 0, 1]
+    p.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n")
+    with pytest.raises(MeshFormatError, match="index 0"):
+        read_mesh(p)
+    p.write_text("v 0 0 0\nv 1 0 0\nf -1 -2 -3\nv 0 1 0\n")
+    with pytest.raises(MeshFormatError, match="out of range"):
+        read_mesh(p)
+
+
+def test_outputs_are_all_or_nothing_and_follow_links(tmp_path):
+    import os
+
+    from superfacets.io.files import Outputs
+
+    target = tmp_path / "real.seg"
+    target.write_text("old\n")
+    os.chmod(target, 0o600)
+    link = tmp_path / "link.seg"
+    link.symlink_to(target)
+    with Outputs() as out:
+        out.write(link, b"new\n")
+    assert link.is_symlink() and target.read_text() == "new\n"
+    assert (target.stat().st_mode & 0o777) == 0o600  # permissions kept
+
+    def boom(fh):
+        fh.write(b"partial")
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        with Outputs() as out:
+            out.write(tmp_path / "a.txt", b"a")
+            out.write(tmp_path / "b.txt", boom)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link.seg", "real.seg"]
+    with Outputs() as out:  # a character device is written in place, never replaced
+        out.write("/dev/null", b"x")
+    assert os.path.exists("/dev/null") and not os.path.isfile("/dev/null")
+
+
+def test_sigterm_removes_temporary_files(tmp_path):
+    import subprocess
+    import sys
+
+    code = f"""
+import os, signal, sys
+from superfacets.cli import _terminate_cleanly, _Terminated
+from superfacets.io.files import Outputs
+_terminate_cleanly()
+def content(fh):
+    fh.write(b"half")
+    os.kill(os.getpid(), signal.SIGTERM)
+    fh.write(b"never")
+try:
+    with Outputs() as out:
+        out.write({str(tmp_path / 'x.seg')!r}, content)
+except _Terminated:
+    sys.exit(143)
+"""
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert r.returncode == 143, r.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_labels_to_stdout_and_broken_pipe(tmp_path):
+    import subprocess
+    import sys
+
+    from conftest import grid_mesh
+
+    mesh = tmp_path / "g.off"
+    write_mesh(mesh, grid_mesh(20, 20))
+    r = subprocess.run([sys.executable, "-m", "superfacets", "segment", str(mesh), "-k", "10",
+                        "-o", "-"], capture_output=True, text=True)
+    assert r.returncode == 0 and len(r.stdout.split()) == 800  # the labels, one per face
+    assert "800 faces" in r.stderr  # the summary goes to stderr then
+    r = subprocess.run(f"{sys.executable} -m superfacets segment {mesh} -k 10 -o - | head -1",
+                       shell=True, capture_output=True, text=True)
+    assert r.stdout.strip().isdigit() and "Error" not in r.stderr and "Traceback" not in r.stderr

@@ -135,16 +135,39 @@ class Mesh:
         return face_graph(self)
 
     def check_usable(self) -> None:
-        """Raise :class:`InvalidMeshError` if the mesh cannot be segmented.
+        """Raise :class:`InvalidMeshError` if the mesh cannot be segmented or measured.
 
         Segmenting needs a positive bounding-box diagonal (weights are divided
-        by it) and a positive total area (the superfacet radius derives from it).
+        by it) and a positive total area (the superfacet radius derives from
+        it). The extent must also lie within ``1e-70 .. 1e70`` and coordinates
+        within ``1e300`` in magnitude: face areas and normals square and
+        square again the edge vectors, which would overflow or underflow
+        double precision beyond that (the mesh must then be rescaled).
         """
         where = f"{self.name}: " if self.name else ""
+        used = self.vertices[self.referenced_vertices]
+        with np.errstate(over="ignore", invalid="ignore"):
+            extent = float(np.max(used.max(axis=0) - used.min(axis=0)))
+            size = float(np.abs(used).max())
+        if not (np.isfinite(extent) and size <= _MAX_COORDINATE and extent <= _MAX_EXTENT):
+            raise InvalidMeshError(
+                f"{where}coordinates up to {size:.3g} spanning {extent:.3g}: the face geometry "
+                f"would overflow double precision; rescale the mesh (e.g. to unit size)")
+        if extent == 0:
+            raise InvalidMeshError(f"{where}mesh has zero extent (all vertices coincide)")
+        if extent < _MIN_EXTENT:
+            raise InvalidMeshError(
+                f"{where}the mesh spans only {extent:.3g}: face areas would underflow double "
+                f"precision; rescale the mesh (e.g. to unit size)")
         if not self.diagonal > 0:
             raise InvalidMeshError(f"{where}mesh has zero extent (all vertices coincide)")
         if not self.area > 0:
             raise InvalidMeshError(f"{where}mesh has zero total area (every face is degenerate)")
+
+
+_MAX_COORDINATE = 1e300  # sums of three coordinates stay finite
+_MAX_EXTENT = 1e70  # (edge length)^4 stays finite: areas and normals
+_MIN_EXTENT = 1e-70  # (edge length)^4 stays a normal number
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:

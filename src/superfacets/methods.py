@@ -74,6 +74,8 @@ class Method:
     sweep : dict
         Default values swept by ``superfacets experiment`` per parameter.
     description : str
+    progress : bool
+        True when ``run`` also takes ``progress=`` (a progress bar on stderr).
     """
 
     name: str
@@ -81,6 +83,7 @@ class Method:
     defaults: dict
     sweep: dict = field(default_factory=dict)
     description: str = ""
+    progress: bool = False
 
     def resolve(self, params: dict) -> dict:
         """``defaults`` updated with ``params``, converted to the defaults' types.
@@ -118,7 +121,8 @@ METHODS: dict[str, Method] = {}
 
 
 def register_method(name: str, run: Callable[..., MethodRun], *, defaults: dict,
-                    sweep: dict | None = None, description: str = "") -> Method:
+                    sweep: dict | None = None, description: str = "",
+                    progress: bool = False) -> Method:
     """Add (or replace) a method in :data:`METHODS`.
 
     Parameters
@@ -134,6 +138,8 @@ def register_method(name: str, run: Callable[..., MethodRun], *, defaults: dict,
     sweep : dict, optional
         Default sweep per parameter, e.g. ``{"alpha": (0, 200)}``.
     description : str, optional
+    progress : bool, default False
+        Whether ``run`` takes ``progress=`` (shown by ``superfacets baseline``).
 
     Returns
     -------
@@ -144,7 +150,7 @@ def register_method(name: str, run: Callable[..., MethodRun], *, defaults: dict,
     clash = set(defaults) & {"n_segments", "seed", "cache"}
     if clash:
         raise ParameterError(f"parameter name(s) reserved by the runner: {sorted(clash)}")
-    m = Method(name, run, dict(defaults), dict(sweep or {}), description)
+    m = Method(name, run, dict(defaults), dict(sweep or {}), description, progress)
     METHODS[name] = m
     return m
 
@@ -173,12 +179,13 @@ def _run_superfacets(mesh, n_segments, *, cache, seed, weighting="paper", **para
     return MethodRun(r.labels, r.n_iter, r.converged)
 
 
-def _run_shlafman(mesh, n_segments, *, cache, seed, **params):
+def _run_shlafman(mesh, n_segments, *, cache, seed, progress=False, **params):
     return _run_superfacets(mesh, n_segments, cache=cache, seed=seed, weighting="shlafman",
-                            **params)
+                            progress=progress, **params)
 
 
-def _run_ncuts(mesh, n_segments, *, cache, seed, components, memory_limit_gib, **params):
+def _run_ncuts(mesh, n_segments, *, cache, seed, components, memory_limit_gib, progress=False,
+               **params):
     from .baselines.ncuts import ncut_embedding, normalized_cuts
 
     emb = cache.get("ncut_embedding")
@@ -187,7 +194,7 @@ def _run_ncuts(mesh, n_segments, *, cache, seed, components, memory_limit_gib, *
         limit = int(memory_limit_gib * 2**30) if memory_limit_gib > 0 else None
         try:
             emb = ncut_embedding(mesh, max(components, n_segments), memory_limit=limit,
-                                 rng=seed, **params)
+                                 rng=seed, progress=progress, **params)
         except MemoryLimitError as exc:
             raise Skipped(str(exc)) from None
         cache["ncut_embedding"] = emb
@@ -209,11 +216,13 @@ _SF_DEFAULTS = dict(alpha=DEFAULTS.alpha, eta_convex=DEFAULTS.eta_convex, init=I
 register_method(
     "superfacets", _run_superfacets, defaults=_SF_DEFAULTS,
     sweep={"alpha": DEFAULT_ALPHAS},
-    description="the paper's method: bounded Dijkstra k-means, weights of eqs. 1-3")
+    description="the paper's method: bounded Dijkstra k-means, weights of eqs. 1-3",
+    progress=True)
 register_method(
     "shlafman", _run_shlafman, defaults=dict(_SF_DEFAULTS, alpha=WEIGHTING_ALPHA["shlafman"][0]),
     sweep={"alpha": (0.0, 0.25, 0.5, 0.75, 1.0)},
-    description="the same k-means with Shlafman et al.'s weights (eq. 6), alpha in [0, 1]")
+    description="the same k-means with Shlafman et al.'s weights (eq. 6), alpha in [0, 1]",
+    progress=True)
 register_method(
     "ncuts", _run_ncuts,
     defaults=dict(alpha=100.0, eta_convex=0.2, bandwidth=1.0, components=300,
@@ -221,7 +230,8 @@ register_method(
     sweep={"alpha": (0.0, 100.0, 200.0)},
     description="normalized cuts: dense all-pairs distances (same weights), Gaussian affinity, "
                 "k-way spectral cut (Shi-Malik / Yu-Shi); O(m^2) memory, refuses meshes over "
-                "memory_limit_gib (0: 40% of RAM)")
+                "memory_limit_gib (0: 40% of RAM)",
+    progress=True)
 register_method(
     "vsa", _run_vsa, defaults=dict(metric="l21", init="random", max_iter=30, insert_iter=2),
     sweep={"metric": ("l21", "l2"), "init": ("random", "incremental")},

@@ -16,7 +16,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from .elements.graph import as_element_graph
-from .errors import ParameterError
+from .errors import InvalidMeshError, ParameterError
 from .labels import check_labels
 
 __all__ = ["Contingency", "contingency", "undersegmentation_error", "compactness",
@@ -301,10 +301,15 @@ def evaluate(graph, labels, ground_truths: Sequence[np.ndarray], *, tau: float =
     ParameterError
         If ``ground_truths`` is empty or a label array does not have one
         integer per element.
+    InvalidMeshError
+        If the total area is zero.
     """
     if len(ground_truths) == 0:
         raise ParameterError("no ground-truth segmentation given")
     g = as_element_graph(graph)
+    if not g.area > 0:
+        raise InvalidMeshError("mesh has zero total area (every face is degenerate): the "
+                               "metrics are area-weighted")
     s = _dense(g, labels, "labels")
     near = _near_boundary(g, s, tolerance)
     ue, br, asa = [], [], []

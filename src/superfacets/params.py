@@ -23,7 +23,7 @@ from .errors import ParameterError
 __all__ = ["SegmentParams", "DEFAULTS", "INITS", "ASSIGNMENTS", "WEIGHTINGS",
            "WEIGHTING_ALPHA", "DEFAULT_N_SEGMENTS", "DEFAULT_ALPHAS", "resolve", "check_int",
            "check_number", "check_positive", "check_nonneg", "check_choice",
-           "check_n_segments", "check_threads", "check_bool"]
+           "check_n_segments", "check_threads", "check_bool", "max_threads"]
 
 #: Names accepted by ``init=``: iterative farthest point, flood, regular grid.
 INITS = ("farthest", "flood", "grid")
@@ -155,19 +155,27 @@ def check_n_segments(n_segments, m: int, kind: str = "faces") -> int:
     return k
 
 
+def max_threads() -> int:
+    """The most threads a run may use: 4 per core, at least 16 (each thread keeps
+    about 12 bytes per element of buffers)."""
+    import os
+
+    return max(16, 4 * (os.cpu_count() or 1))
+
+
 def check_threads(n_threads) -> int:
     """Resolve ``n_threads``: None gives numba's thread count (``NUMBA_NUM_THREADS``).
 
     Raises
     ------
     ParameterError
-        If it is not an integer ``>= 1``.
+        If it is not an integer in ``1..max_threads()``.
     """
     if n_threads is None:
         import numba
 
         return int(numba.config.NUMBA_NUM_THREADS)
-    return check_int("n_threads", n_threads, lo=1)
+    return check_int("n_threads", n_threads, lo=1, hi=max_threads())
 
 
 def resolve(**params) -> SegmentParams:

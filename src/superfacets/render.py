@@ -156,7 +156,8 @@ def _check_style(pv, background, boundary_color, line_width, zoom) -> None:
         try:
             pv.Color(color)
         except (ValueError, TypeError) as exc:
-            raise ParameterError(f"{name}: not a colour: {color!r} ({exc})") from None
+            raise ParameterError(f"{name}: not a colour: {color!r} (a colour name such as "
+                                 f"'white', or '#rrggbb')") from None
 
 
 def _size(size) -> tuple[int, int]:

@@ -160,11 +160,13 @@ def cmd_baseline(args) -> int:
     ply_out = check_output(args.colored_mesh, (".ply",), "the coloured mesh")
     mesh = read_mesh(args.mesh)
     t0 = time.perf_counter()
-    if not args.quiet:
+    show = not args.quiet and sys.stderr.isatty()
+    extra = {"progress": show} if method.progress else {}
+    if show and not method.progress:
         print(f"{Path(args.mesh).name}: {mesh.n_faces} faces, running {method.name}...",
               file=sys.stderr, flush=True)
     try:
-        run = method.run(mesh, args.n_segments, cache={}, seed=args.seed, **params)
+        run = method.run(mesh, args.n_segments, cache={}, seed=args.seed, **params, **extra)
     except Skipped as exc:
         raise MemoryLimitError(f"{args.mesh}: {exc}") from None
     except ParameterError as exc:
@@ -245,6 +247,7 @@ def cmd_evaluate(args) -> int:
     if not (0 <= args.tau < 1):
         raise ParameterError(f"--tau must be in [0, 1), got {args.tau}")
     mesh = read_mesh(args.mesh)
+    mesh.check_usable()  # area-weighted metrics need a measurable mesh
     labels = read_labels(args.labels, n_faces=mesh.n_faces)
     gts = [read_labels(p, n_faces=mesh.n_faces) for p in args.ground_truths]
     m = evaluate(mesh, labels, gts, tau=args.tau)

@@ -73,6 +73,8 @@ def read_mesh(path, format: str | None = None) -> Mesh:
         v, f = _parse_off(data, path)
     elif fmt == "tri":
         v, f = _parse_tri(data, path)
+    elif fmt == "obj":
+        v, f = _parse_obj(data, path)
     else:
         v, f = _load_trimesh(data, fmt, path)
     try:
@@ -85,7 +87,7 @@ def read_mesh(path, format: str | None = None) -> Mesh:
 def _loadtxt(lines: list[str], dtype, what: str, path: Path) -> np.ndarray:
     try:
         return np.loadtxt(lines, dtype=dtype, ndmin=2, comments=None)
-    except ValueError as exc:
+    except (ValueError, OverflowError) as exc:
         msg = str(exc).split("; use `usecols`")[0]
         raise MeshFormatError(f"{path}: malformed {what}: {msg}") from None
 
@@ -138,7 +140,7 @@ def _parse_off(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
 def _off_faces(flines: list[str], path: Path) -> np.ndarray:
     try:
         f = np.loadtxt(flines, dtype=np.int64, ndmin=2, comments=None)
-    except ValueError:
+    except (ValueError, OverflowError):
         f = None
     if f is None or f.shape[1] < 4 or not (f[:, 0] == 3).all():
         # error path only: find the first offending line
@@ -149,6 +151,9 @@ def _off_faces(flines: list[str], path: Path) -> np.ndarray:
                 idx = [int(t) for t in tok[1:1 + n]]
             except ValueError:
                 raise MeshFormatError(f"{path}: malformed face line {i}: {line!r}") from None
+            if any(abs(x) >= 2**62 for x in idx):
+                raise MeshFormatError(f"{path}: face {i} has a vertex index out of range: "
+                                      f"{line!r}")
             if n != 3:
                 raise MeshFormatError(
                     f"{path}: only triangle meshes are supported; face {i} has {n} vertices")
@@ -185,11 +190,69 @@ def _parse_tri(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
     return v, f
 
 
+def _parse_obj(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """Wavefront OBJ: ``v`` and ``f`` lines, in file order, every object of the file.
+
+    Indices are 1-based; a negative index counts back from the last vertex
+    defined before its face line (the OBJ rule); ``0`` is an error. In ``f``
+    lines, ``i/t/n`` keeps ``i``. Separators may be spaces or tabs. Other
+    statements (``vt``, ``vn``, ``g``, ``o``, ``usemtl``, ...) are skipped.
+    """
+    vrows: list[str] = []
+    frows: list[str] = []
+    before: list[int] = []  # vertices defined before each face line
+    for ln in text_lines(data, path):
+        key, *rest = ln.split(None, 1)  # spaces or tabs
+        rest = rest[0] if rest else ""
+        if key == "v":
+            vrows.append(rest)
+        elif key == "f":
+            frows.append(rest)
+            before.append(len(vrows))
+    if not frows:
+        raise InvalidMeshError(f"{path}: empty mesh: no faces")
+    try:
+        v = np.array([r.split()[:3] for r in vrows], dtype=np.float64).reshape(-1, 3)
+    except ValueError:
+        bad = next(i for i, r in enumerate(vrows) if not _floats3(r))
+        raise MeshFormatError(f"{path}: malformed vertex {bad}: 'v {vrows[bad]}' (3 "
+                              "coordinates expected)") from None
+    faces = np.empty((len(frows), 3), dtype=np.int64)
+    for i, (row, nv) in enumerate(zip(frows, before)):
+        tok = row.split()
+        if len(tok) != 3:
+            what = (f"{len(tok)} vertices (only triangle meshes are supported)" if len(tok) > 3
+                    else f"only {len(tok)} vertex indices")
+            raise MeshFormatError(f"{path}: face {i} has {what}: 'f {row}'")
+        for j, t in enumerate(tok):
+            try:
+                k = int(t.split("/", 1)[0])
+            except ValueError:
+                raise MeshFormatError(f"{path}: face {i}: malformed vertex index {t!r}") \
+                    from None
+            if k == 0:
+                raise MeshFormatError(f"{path}: face {i}: vertex index 0 (OBJ indices start "
+                                      "at 1)")
+            k = k - 1 if k > 0 else nv + k
+            if not 0 <= k < len(vrows):
+                raise MeshFormatError(f"{path}: face {i}: vertex index {t} out of range "
+                                      f"({nv} vertices defined before it, {len(vrows)} in all)")
+            faces[i, j] = k
+    return v, faces
+
+
+def _floats3(row: str) -> bool:
+    try:
+        return len([float(x) for x in row.split()[:3]]) == 3
+    except ValueError:
+        return False
+
+
 # ---------------------------------------------------------- via trimesh
 def _load_trimesh(data: bytes, fmt: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
     import trimesh
 
-    kwargs = {"maintain_order": True} if fmt == "obj" else {}
+    kwargs = {}
     try:
         if fmt == "ply":  # trimesh's PLY parser alone: building a Trimesh costs 40x more
             from trimesh.exchange.ply import load_ply
@@ -227,7 +290,7 @@ def _load_trimesh(data: bytes, fmt: str, path: Path) -> tuple[np.ndarray, np.nda
 
 
 def _declared_faces(data: bytes, fmt: str) -> int | None:
-    """Face count declared by a PLY header, or counted 'f' lines of an OBJ."""
+    """Face count declared by a PLY header."""
     if fmt == "ply":
         end = data.find(b"end_header")
         for line in data[:end].split(b"\n"):
@@ -235,8 +298,6 @@ def _declared_faces(data: bytes, fmt: str) -> int | None:
             if len(parts) == 3 and parts[0] == b"element" and parts[1] == b"face":
                 return int(parts[2])
         return None
-    if fmt == "obj":
-        return data.count(b"\nf ") + int(data.startswith(b"f "))
     return None
 
 

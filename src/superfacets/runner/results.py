@@ -87,7 +87,13 @@ def read_results(path) -> list[dict]:
     superfacets.MeshFormatError
         If the file has no header row with the runner's columns.
     """
-    text = Path(path).read_text()
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise MeshFormatError(f"{path}: not a superfacets results file (not UTF-8 text)") \
+            from None
+    if "\0" in text:
+        raise MeshFormatError(f"{path}: not a superfacets results file (binary data)")
     if text and not text.endswith("\n"):
         text = text[: text.rfind("\n") + 1]  # a row torn by a hard kill
     rows = list(csv.DictReader(io.StringIO(text)))
