@@ -99,7 +99,6 @@ RESULTS = (b"mesh,mesh_id,category,n_faces,method,n_segments,alpha,seed,status,s
 
 def cases() -> list[Case]:
     g = {"g.off": grid_off()}
-    seg = lambda *a, **k: ["segment", "{d}/m", "-k", "4", "-o", "{d}/o.seg", *a]
     out: list[Case] = []
 
     def mesh_case(name, fname, data, match="", expect="error", extra=()):

@@ -155,7 +155,7 @@ def _check_style(pv, background, boundary_color, line_width, zoom) -> None:
     for name, color in (("background", background), ("boundary_color", boundary_color)):
         try:
             pv.Color(color)
-        except (ValueError, TypeError) as exc:
+        except (ValueError, TypeError):
             raise ParameterError(f"{name}: not a colour: {color!r} (a colour name such as "
                                  f"'white', or '#rrggbb')") from None
 
