@@ -5,7 +5,7 @@ PYTHON ?= python3
 VENV := .venv
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test bench scale browser pictures sweep comparisons clean
+.PHONY: demo test bench scale browser pictures sweep comparisons check-wheel clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -30,6 +30,11 @@ browser:
 	      apt-get install -y -q --no-install-recommends chromium >/dev/null 2>&1)) || \
 	    echo "note: could not install chromium; the browser test will be skipped"; \
 	  else echo "note: chromium not found; the browser test will be skipped"; fi; }
+
+# A wheel installed with no extras, in a fresh environment: the core commands work, the
+# others name the extra to install; prints the environment's size (about 1 minute)
+check-wheel:
+	tools/check_wheel.sh
 
 # Table 1 meshes, then the scale table up to 1.7M faces (about 2 minutes)
 bench: $(STAMP)

@@ -6,7 +6,7 @@ Every error caused by bad input is a :class:`SuperfacetsError`, which is also a
 """
 
 __all__ = ["SuperfacetsError", "MeshFormatError", "InvalidMeshError", "ParameterError",
-           "MemoryLimitError", "MissingExtraError"]
+           "MemoryLimitError", "MissingExtraError", "NoDisplayError"]
 
 
 class SuperfacetsError(ValueError):
@@ -47,3 +47,7 @@ class MissingExtraError(SuperfacetsError, ImportError):
 
     The message names the ``pip install 'superfacets[EXTRA]'`` command to run.
     """
+
+
+class NoDisplayError(RuntimeError):
+    """An interactive window was asked for, but there is no display."""

@@ -22,17 +22,13 @@ import numpy as np
 
 from .camera import view_frame
 from .colors import boundary_edges, face_colors
-from .errors import ParameterError
+from .errors import NoDisplayError, ParameterError
 from .params import check_number
 from .extras import require
 from .labels import check_labels
 from .mesh import as_mesh
 
 __all__ = ["render", "render_panel", "show", "has_display", "NoDisplayError"]
-
-
-class NoDisplayError(RuntimeError):
-    """An interactive window was asked for, but there is no display."""
 
 
 def has_display() -> bool:

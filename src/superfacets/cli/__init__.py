@@ -54,8 +54,7 @@ def main(argv: list[str] | None = None) -> int:
     int
         Exit status: 0 on success, 2 on bad input, 130 when interrupted.
     """
-    from ..errors import SuperfacetsError
-    from ..render import NoDisplayError
+    from ..errors import NoDisplayError, SuperfacetsError
 
     args = build_parser().parse_args(argv)
     restore = _terminate_cleanly()

@@ -114,8 +114,9 @@ def add_camera_options(p, size: str) -> None:
     p.add_argument("--view", type=view_arg, default=None, metavar="V",
                    help="camera: auto (default: along the mesh's thinnest axis), front, back, "
                         "left, right, top, bottom, or a direction x,y,z from the mesh")
-    p.add_argument("--up", default="y", choices=("x", "y", "z", "-x", "-y", "-z"),
-                   help="the mesh's up axis (default: y, as the benchmark's meshes)")
+    p.add_argument("--up", default=None, choices=("x", "y", "z", "-x", "-y", "-z"),
+                   help="the mesh's up axis (default: y, as the benchmark's meshes; the "
+                        "picture commands say which they used)")
     if size:
         p.add_argument("--size", type=size_arg, default=size_arg(size), metavar="WxH",
                        help=f"image size in pixels (default: {size})")

@@ -89,11 +89,12 @@ def cmd_render(args) -> int:
     mesh = read_mesh(args.mesh)
     labels, _ = labels_for(args, mesh)
     t0 = time.perf_counter()
-    render(mesh, labels, out, size=args.size, view=args.view, up=args.up,
+    render(mesh, labels, out, size=args.size, view=args.view, up=args.up or "y",
            background=args.background, boundaries=not args.no_boundaries,
            line_width=args.line_width, title=args.title, zoom=args.zoom)
     if not args.quiet:
-        print(f"wrote {out} ({args.size[0]}x{args.size[1]}, {mesh.n_faces} faces, "
+        up = args.up or "y (the default: --up z for z-up meshes)"
+        print(f"wrote {out} ({args.size[0]}x{args.size[1]}, {mesh.n_faces} faces, up axis {up}, "
               f"rendered in {time.perf_counter() - t0:.2f} s)")
     return 0
 
@@ -136,10 +137,11 @@ def cmd_panel(args) -> int:
         if len(args.titles) != len(items):
             raise ParameterError(f"--titles: {len(args.titles)} given for {len(items)} panels")
         items = [(m, lab, t) for (m, lab, _), t in zip(items, args.titles)]
-    render_panel(items, out, ncols=args.columns, size=args.size, view=args.view, up=args.up,
+    render_panel(items, out, ncols=args.columns, size=args.size, view=args.view, up=args.up or "y",
                  background=args.background, boundaries=not args.no_boundaries,
                  line_width=args.line_width, zoom=args.zoom)
-    print(f"wrote {out}: {len(items)} panels")
+    print(f"wrote {out}: {len(items)} panels, up axis "
+          f"{args.up or 'y (the default: --up z for z-up meshes)'}")
     return 0
 
 
@@ -153,7 +155,7 @@ def cmd_view(args) -> int:
                              "to open in a browser")
     mesh = read_mesh(args.mesh)
     labels, _ = labels_for(args, mesh)
-    show(mesh, labels, title=Path(args.mesh).name, view=args.view, up=args.up)  # pragma: no cover
+    show(mesh, labels, title=Path(args.mesh).name, view=args.view, up=args.up or "y")  # pragma: no cover
     return 0  # pragma: no cover
 
 
@@ -165,7 +167,7 @@ def cmd_html(args) -> int:
     mesh = read_mesh(args.mesh)
     labels, info = labels_for(args, mesh)
     write_html(out, mesh, labels, title=args.title or Path(args.mesh).name, info=info,
-               background=args.background, view=args.view, up=args.up)
+               background=args.background, view=args.view, up=args.up or "y")
     if not args.quiet:
         print(f"wrote {out} ({out.stat().st_size / 1e6:.1f} MB): open it in a browser")
     return 0

@@ -107,6 +107,8 @@ def _summary(name: str, mesh, result, seconds: float) -> str:
 
 def cmd_segment(args) -> int:
     from .. import warmup
+
+    warmup.start()  # numba's start-up in a thread, while the rest is imported and read
     from ..errors import SuperfacetsError
     from ..io import read_mesh, write_colored_mesh, write_labels
     from ..io.files import Outputs
@@ -117,7 +119,6 @@ def cmd_segment(args) -> int:
     ply_out = check_output(args.colored_mesh, (".ply",), "the coloured mesh")
     kwargs = method_kwargs(args)
     resolve(n_segments=args.n_segments, radius=args.radius, **kwargs)  # before the read
-    warmup.start()  # numba's start-up overlaps the read
     t0 = time.perf_counter()
     mesh = read_mesh(args.mesh)
     if args.progress is None:  # long runs show where they are

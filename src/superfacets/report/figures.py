@@ -24,7 +24,7 @@ __all__ = ["plot_curves", "plot_per_category", "plot_cost"]
 
 def _style(df):
     """Colour per series, line style and marker per method."""
-    matplotlib = require("matplotlib", "result figures")
+    matplotlib = require("matplotlib", "making result figures")
 
     series = series_order(df)
     methods = list(dict.fromkeys(df["method"]))
@@ -41,7 +41,7 @@ def _style(df):
 def _subplots(nrows: int, ncols: int, figsize, squeeze: bool = False):
     """A figure and its axes, made without pyplot: no global state, no backend switch
     (a notebook's backend stays as it is)."""
-    Figure = require("matplotlib.figure", "result figures").Figure
+    Figure = require("matplotlib.figure", "making result figures").Figure
 
     fig = Figure(figsize=figsize)
     return fig, fig.subplots(nrows, ncols, squeeze=squeeze)

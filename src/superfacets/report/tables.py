@@ -64,7 +64,7 @@ def load_results(path, series: Sequence[str] | None = None):
     ParameterError
         If a name in ``series`` matches no series (the message lists them).
     """
-    pd = require("pandas", "result tables")
+    pd = require("pandas", "making result tables")
 
     from ..methods import METHODS
     from ..runner.results import read_results, row_key
@@ -181,7 +181,7 @@ def cost_table(df, k_focus: int = 150):
     -------
     pandas.DataFrame
     """
-    pd = require("pandas", "result tables")
+    pd = require("pandas", "making result tables")
 
     k, at = rows_at_k(df, k_focus)
     rows = {}
@@ -231,7 +231,7 @@ def markdown_summary(df, k_focus: int = 150) -> str:
         iterations, converged fraction, seconds per mesh and row counts by
         status; per category at ``k_focus``: UE and compactness per series.
     """
-    pd = require("pandas", "result tables")
+    pd = require("pandas", "making result tables")
 
     ok = ok_rows(df)
     out = [f"Results: {ok['mesh'].nunique()} meshes, {ok['category'].nunique()} categories, "

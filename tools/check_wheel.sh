@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Build a wheel, install it with no extras in a fresh virtual environment, and check that
+# the core commands work there and that the others name the extra to install.
+# Usage: tools/check_wheel.sh [MESH]   (prints the environment's size at the end)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+mesh=${1:-../shared/data/meshes/bunny.tri.xz}
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+python3 -m venv "$work/env"
+"$work/env/bin/python" -m pip install --quiet --upgrade pip
+"$work/env/bin/python" -m pip wheel --quiet --no-deps -w "$work/dist" .
+"$work/env/bin/python" -m pip install --quiet "$work"/dist/superfacets-*.whl
+sf="$work/env/bin/superfacets"
+cd "$work"
+"$sf" --version
+"$sf" segment "$OLDPWD/$mesh" -k 50 -o out.seg --colored-mesh out.ply
+"$sf" evaluate "$OLDPWD/$mesh" out.seg out.seg
+"$sf" html "$OLDPWD/$mesh" out.seg -o out.html -q
+test -s out.html
+"$sf" demo --output-dir demo -q || true
+ls demo
+if "$sf" render "$OLDPWD/$mesh" out.seg -o out.png 2> err.txt; then
+  echo "render worked without the render extra?"; exit 1
+fi
+grep -q "pip install 'superfacets\[render\]'" err.txt && cat err.txt
+echo "mesh,method,status" > r.csv
+"$sf" report r.csv -o rep 2> err.txt || true
+grep -q "pip install 'superfacets\[report\]'" err.txt && cat err.txt
+"$work/env/bin/python" -c "import superfacets, sys; print(sorted(m for m in ('pyvista', 'pandas', 'matplotlib', 'sklearn', 'skimage') if m in sys.modules))"
+du -sh "$work/env" | sed 's/^/core environment: /'
