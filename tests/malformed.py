@@ -187,8 +187,8 @@ def cases() -> list[Case]:
     mesh_case("obj-ok", "m.obj", grid_obj(), expect="ok")
     mesh_case("obj-relative-ok", "m.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\nv 0 0 1\n"
               b"f -4 -3 -1\nf -4 -1 -2\nf -3 -1 -2\n", expect="ok", extra=("-k", "2"))
-    mesh_case("obj-quads", "m.obj", b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n",
-              "triangle")
+    mesh_case("obj-quad-ok", "m.obj", b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n",
+              expect="ok", extra=("-k", "1"))
     # --- STL
     mesh_case("stl-empty", "m.stl", b"", "")
     mesh_case("stl-truncated-binary", "m.stl", b"\0" * 80 + struct.pack("<I", 10) + b"\0" * 60, "")
@@ -233,7 +233,7 @@ def cases() -> list[Case]:
     out.append(Case("segment-output-is-folder", {**g, "od/x": b""},
                     ["segment", "{d}/g.off", "-k", "4", "-o", "{d}/od"], match="directory"))
     out.append(Case("segment-colored-wrong-suffix", g,
-                    ["segment", "{d}/g.off", "-k", "4", "--colored-mesh", "{d}/c.obj"], match=".ply"))
+                    ["segment", "{d}/g.off", "-k", "4", "--colored-mesh", "{d}/c.stl"], match=".ply"))
     out.append(Case("segment-colored-to-stdout", g,
                     ["segment", "{d}/g.off", "-k", "4", "--colored-mesh", "-"], match="standard output"))
     out.append(Case("segment-both-outputs-ok", g,

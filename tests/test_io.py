@@ -56,7 +56,7 @@ def test_tri_format_as_documented(tmp_path):
     ("trunc.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n", "expected 2 faces, found 1"),
     ("truncv.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n", "expected 4 vertices, found 2"),
     ("bad.off", "OFF\n3 1 0\n0 0 0\n1 x 0\n0 1 0\n3 0 1 2\n", "malformed vertex lines"),
-    ("quad.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n", "face 0 has 4 vertices"),
+    ("line.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 1\n", "3 or more needed"),
     ("range.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n", "out of range"),
     ("nan.off", "OFF\n3 1 0\n0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n", "NaN or infinite"),
     ("empty.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n", "empty mesh"),
@@ -94,20 +94,17 @@ def test_binary_data_in_text_format(tmp_path):
         read_mesh(p)
 
 
-def test_ply_and_obj_quads_are_refused(tmp_path):
-    quad = trimesh.Trimesh([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [[0, 1, 2], [0, 2, 3]])
+def test_ply_and_obj_quads_are_read_as_quads(tmp_path):
     ply = tmp_path / "q.ply"
-    ply.write_bytes(b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\n"
-                    b"property float y\nproperty float z\nelement face 1\n"
+    ply.write_bytes(b"ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\n"
+                    b"property float y\nproperty float z\nelement face 2\n"
                     b"property list uchar int vertex_indices\nend_header\n"
-                    b"0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n")
-    with pytest.raises(MeshFormatError, match="only triangle meshes"):
-        read_mesh(ply)
+                    b"0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 0\n4 0 1 2 3\n3 1 4 2\n")
+    m = read_mesh(ply)  # mixed sizes: trimesh would split and reorder them
+    assert [p.tolist() for p in m.polygons()] == [[0, 1, 2, 3], [1, 4, 2]]
     obj = tmp_path / "q.obj"
     obj.write_text("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n")
-    with pytest.raises(MeshFormatError, match="only triangle meshes"):
-        read_mesh(obj)
-    assert quad.faces.shape == (2, 3)
+    assert read_mesh(obj).faces.tolist() == [[0, 1, 2, 3]]
 
 
 def test_garbage_ply(tmp_path):

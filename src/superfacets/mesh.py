@@ -1,7 +1,8 @@
 """Mesh validation and derived per-face geometry (``docs/method.md``, section 1).
 
 A :class:`Mesh` holds C-contiguous ``(n, 3) float64`` vertices and
-``(m, 3) int64`` faces, validated once. Derived quantities (centroids, unit
+``(m, k) int64`` faces (triangles: ``k = 3``; polygons of any size, each
+row padded with -1 after its vertices), validated once. Derived quantities (centroids, unit
 normals, areas, bounding-box diagonal, the face graph) are computed on first
 use and cached, so the method, the metrics and the baselines share them.
 """
@@ -20,18 +21,23 @@ __all__ = ["Mesh", "as_mesh"]
 
 @dataclass(frozen=True, eq=False)
 class Mesh:
-    """A validated triangle mesh with cached derived geometry.
+    """A validated triangle or polygon mesh with cached derived geometry.
 
     Parameters
     ----------
     vertices : (n, 3) float ndarray
         Vertex positions. Any units; every result of this package is invariant
         to uniform scaling.
-    faces : (m, 3) int ndarray
-        Vertex indices of each triangle, 0-based. The face order is kept: it
+    faces : (m, k) int ndarray, or a sequence of vertex index sequences
+        Vertex indices of each face, 0-based, in order around it: triangles
+        (``k = 3``), quads, or polygons of any sizes (a list of sequences, or
+        an array whose rows end with -1 padding). The face order is kept: it
         is the order of the labels.
     name : str, optional
         A name for messages and file headers (usually the file name).
+    objects : tuple of (str, int, int), optional
+        Named face ranges ``(name, start, stop)`` when the mesh joins several
+        objects (a scene), in face order.
 
     Raises
     ------
@@ -45,14 +51,33 @@ class Mesh:
     Notes
     -----
     Degenerate (zero-area) faces, duplicate faces, unreferenced vertices,
-    several connected components and non-manifold edges are valid input.
-    The arrays are stored as read-only views; the caller's arrays are never
-    modified.
+    several connected components and non-manifold edges are valid input;
+    so are non-planar and non-convex polygons (their area and normal come
+    from Newell's method). The arrays are stored as read-only views; the
+    caller's arrays are never modified.
+
+    Examples
+    --------
+    >>> quad = Mesh([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [[0, 1, 2, 3]])
+    >>> quad
+    Mesh(4 vertices, 1 faces: polygons of 4 vertices)
+    >>> float(quad.areas[0])
+    1.0
     """
 
     vertices: np.ndarray
     faces: np.ndarray
     name: str = field(default="")
+    objects: tuple = field(default=(), repr=False)
+
+    def __repr__(self) -> str:
+        sizes = self.face_sizes
+        lo, hi = int(sizes.min()), int(sizes.max())
+        kind = ("triangles" if hi == 3 else f"polygons of {lo} vertices" if lo == hi
+                else f"polygons of {lo} to {hi} vertices")
+        name = f", name={self.name!r}" if self.name else ""
+        objs = f", {len(self.objects)} objects" if len(self.objects) > 1 else ""
+        return f"Mesh({self.n_vertices} vertices, {self.n_faces} faces: {kind}{objs}{name})"
 
     def __post_init__(self) -> None:
         vertices, faces = _validate_arrays(self.vertices, self.faces, self.name)
@@ -71,24 +96,80 @@ class Mesh:
         return int(self.faces.shape[0])
 
     # ------------------------------------------------------ derived geometry
+    @property
+    def is_triangular(self) -> bool:
+        """True when every face is a triangle (``faces`` is then ``(m, 3)``)."""
+        return self.faces.shape[1] == 3
+
+    @cached_property
+    def face_sizes(self) -> np.ndarray:
+        """(m,) int64: number of vertices of each face (3 for triangles)."""
+        if self.is_triangular:
+            return _readonly(np.full(self.n_faces, 3, dtype=np.int64))
+        return _readonly((self.faces >= 0).sum(axis=1).astype(np.int64))
+
+    @cached_property
+    def offsets(self) -> np.ndarray:
+        """(m + 1,) int64: face ``f`` has the vertices ``corners[offsets[f]:offsets[f + 1]]``."""
+        out = np.zeros(self.n_faces + 1, dtype=np.int64)
+        np.cumsum(self.face_sizes, out=out[1:])
+        return _readonly(out)
+
+    @cached_property
+    def corners(self) -> np.ndarray:
+        """(c,) int64: the vertex indices of every face in order, face after face."""
+        if self.is_triangular:
+            return _readonly(self.faces.ravel())
+        return _readonly(self.faces[self.faces >= 0])
+
+    def triangulated(self) -> tuple[np.ndarray, np.ndarray]:
+        """The faces as triangles, for drawing and triangle-only formats.
+
+        Each polygon is split into the fan ``(v0, v_i, v_i+1)``; triangles stay.
+
+        Returns
+        -------
+        triangles : (t, 3) int64 ndarray
+        face_of_triangle : (t,) int64 ndarray
+            The face each triangle comes from (labels map with ``labels[face_of_triangle]``).
+        """
+        if self.is_triangular:
+            return np.asarray(self.faces), np.arange(self.n_faces, dtype=np.int64)
+        sizes = self.face_sizes
+        owner = np.repeat(np.arange(self.n_faces, dtype=np.int64), sizes - 2)
+        start = np.asarray(self.offsets)[:-1][owner]
+        first = np.arange(owner.size) - np.repeat(np.cumsum(sizes - 2) - (sizes - 2), sizes - 2)
+        c = np.asarray(self.corners)
+        tri = np.stack([c[start], c[start + first + 1], c[start + first + 2]], axis=1)
+        return tri, owner
+
+    def polygons(self) -> list[np.ndarray]:
+        """The faces as a list of vertex index arrays (one per face, any size)."""
+        return np.split(np.asarray(self.corners), self.offsets[1:-1])
+
     @cached_property
     def _geometry(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        from ._kernels.geometry import face_geometry  # one pass: no (m, 3) temporaries
+        from ._kernels.geometry import face_geometry, polygon_geometry
 
         m = self.n_faces
         centroids, areas, normals = np.empty((m, 3)), np.empty(m), np.empty((m, 3))
-        face_geometry(np.ascontiguousarray(self.vertices),
-                               np.ascontiguousarray(self.faces), centroids, areas, normals)
+        v = np.ascontiguousarray(self.vertices)
+        if self.is_triangular:  # one pass: no (m, 3) temporaries
+            face_geometry(v, np.ascontiguousarray(self.faces), centroids, areas, normals)
+        else:
+            polygon_geometry(v, np.ascontiguousarray(self.corners), np.asarray(self.offsets),
+                             centroids, areas, normals)
         return _readonly(centroids), _readonly(areas), _readonly(normals)
 
     @property
     def centroids(self) -> np.ndarray:
-        """(m, 3) float64: mean of each face's three vertex positions."""
+        """(m, 3) float64: face centroids (triangles: mean of the three vertex positions;
+        polygons: area-weighted centroid of their fan triangles)."""
         return self._geometry[0]
 
     @property
     def areas(self) -> np.ndarray:
-        """(m,) float64: face areas (0 for degenerate faces)."""
+        """(m,) float64: face areas (0 for degenerate faces; polygons: by Newell's method)."""
         return self._geometry[1]
 
     @property
@@ -116,7 +197,7 @@ class Mesh:
     def referenced_vertices(self) -> np.ndarray:
         """(n,) bool: True for vertices used by at least one face."""
         mask = np.zeros(self.n_vertices, dtype=bool)
-        mask[self.faces.ravel()] = True
+        mask[self.corners] = True
         return _readonly(mask)
 
     @cached_property
@@ -175,28 +256,60 @@ def _readonly(a: np.ndarray) -> np.ndarray:
     return a
 
 
+def _faces_array(faces, where: str) -> np.ndarray:
+    """Faces as an (m, k) int64 array, polygons of fewer than k vertices padded with -1."""
+    if isinstance(faces, np.ndarray) and faces.dtype != object:
+        f = faces
+    else:
+        try:
+            f = np.asarray(faces)
+        except (ValueError, TypeError):  # a ragged list of polygons
+            f = None
+        if f is None or f.dtype == object:
+            try:
+                rows = [np.asarray(r).ravel() for r in faces]
+            except TypeError:
+                raise InvalidMeshError(f"{where}faces must be an (m, k) array or a list of "
+                                       "vertex index sequences") from None
+            if not rows:
+                raise InvalidMeshError(f"{where}empty mesh: no faces")
+            for i, r in enumerate(rows):
+                if r.size and not np.issubdtype(r.dtype, np.integer):
+                    raise TypeError(f"{where}faces must hold integers, face {i} is {r.tolist()}")
+            width = max(r.size for r in rows)
+            f = np.full((len(rows), width), -1, dtype=np.int64)
+            for i, r in enumerate(rows):
+                if r.size < 3:
+                    raise InvalidMeshError(f"{where}face {i} has {r.size} vertices (at least 3 "
+                                           f"are needed): {r.tolist()}")
+                if (r < 0).any():
+                    raise InvalidMeshError(f"{where}face {i} has a negative vertex index: "
+                                           f"{r.tolist()}")
+                f[i, :r.size] = r
+            return f
+    if f.ndim != 2:
+        raise InvalidMeshError(f"{where}faces must have shape (m, k), got {f.shape}")
+    if f.shape[0] == 0:
+        raise InvalidMeshError(f"{where}empty mesh: no faces")
+    if f.shape[1] < 3:
+        raise InvalidMeshError(f"{where}faces need at least 3 vertices, got faces of shape "
+                               f"{f.shape}")
+    if not np.issubdtype(f.dtype, np.integer):
+        raise TypeError(f"{where}faces must be an integer array, got dtype {f.dtype}")
+    return f
+
+
 def _validate_arrays(vertices, faces, name: str = "") -> tuple[np.ndarray, np.ndarray]:
     where = f"{name}: " if name else ""
     try:
         v = np.asarray(vertices)
-        f = np.asarray(faces)
     except Exception as exc:  # ragged lists and the like
-        raise InvalidMeshError(f"{where}vertices/faces are not arrays: {exc}") from None
+        raise InvalidMeshError(f"{where}vertices are not an array: {exc}") from None
     if v.ndim != 2 or v.shape[1] != 3:
         raise InvalidMeshError(f"{where}vertices must have shape (n, 3), got {v.shape}")
-    if f.ndim != 2:
-        raise InvalidMeshError(f"{where}faces must have shape (m, 3), got {f.shape}")
-    if f.shape[0] == 0:
-        raise InvalidMeshError(f"{where}empty mesh: no faces")
-    if f.shape[1] != 3:
-        raise InvalidMeshError(
-            f"{where}only triangle faces are supported, got faces of shape {f.shape} "
-            f"({f.shape[1]} vertices per face)"
-        )
     if not np.issubdtype(v.dtype, np.number) or np.issubdtype(v.dtype, np.complexfloating):
         raise TypeError(f"{where}vertices must be a real numeric array, got dtype {v.dtype}")
-    if not np.issubdtype(f.dtype, np.integer):
-        raise TypeError(f"{where}faces must be an integer array, got dtype {f.dtype}")
+    f = _faces_array(faces, where)
     v = np.ascontiguousarray(v, dtype=np.float64)
     f = np.ascontiguousarray(f, dtype=np.int64)
     bad = ~np.isfinite(v).all(axis=1)
@@ -207,13 +320,26 @@ def _validate_arrays(vertices, faces, name: str = "") -> tuple[np.ndarray, np.nd
             f"(first: vertex {i} = {v[i].tolist()})"
         )
     n = v.shape[0]
-    lo, hi = int(f.min()), int(f.max())
+    padded = f.shape[1] > 3 and bool((f[:, 3:] < 0).any())
+    if padded:  # polygons of several sizes: -1 pads each row after its vertices
+        valid = f >= 0
+        sizes = valid.sum(axis=1)
+        if not (valid == (np.arange(f.shape[1]) < sizes[:, None])).all() or (sizes < 3).any():
+            i = int(np.flatnonzero((sizes < 3) | (valid != (np.arange(f.shape[1])
+                                                             < sizes[:, None])).any(axis=1))[0])
+            raise InvalidMeshError(f"{where}face {i} is not a polygon of 3 or more vertices "
+                                   f"(-1 may only pad the end of a row): {f[i].tolist()}")
+        out = f >= n
+        lo, hi = 0, int(f.max())
+    else:
+        lo, hi = int(f.min()), int(f.max())
+        out = (f < 0) | (f >= n)
     if lo < 0 or hi >= n:
-        badf = np.flatnonzero(((f < 0) | (f >= n)).any(axis=1))
+        badf = np.flatnonzero(out.any(axis=1))
         i = int(badf[0])
         raise InvalidMeshError(
             f"{where}{badf.size} faces have vertex indices out of range 0..{n - 1} "
-            f"(first: face {i} = {f[i].tolist()})"
+            f"(first: face {i} = {[x for x in f[i].tolist() if x >= 0 or not padded]})"
         )
     # read-only views: the caller's arrays stay writable and untouched
     v = v.view()
@@ -228,9 +354,11 @@ def as_mesh(mesh, name: str = "") -> Mesh:
 
     Parameters
     ----------
-    mesh : Mesh, trimesh.Trimesh or tuple of (vertices, faces)
-        ``vertices`` is ``(n, 3)`` float, ``faces`` is ``(m, 3)`` int.
-        A :class:`Mesh` is returned as is (its caches are reused).
+    mesh : Mesh, trimesh.Trimesh, trimesh.Scene, pyvista.PolyData, open3d TriangleMesh, or (vertices, faces)
+        ``vertices`` is ``(n, 3)`` float; ``faces`` an ``(m, k)`` int array
+        (triangles: ``k = 3``) or a list of vertex index sequences (polygons).
+        A :class:`Mesh` is returned as is (its caches are reused); a scene's
+        objects are joined (:mod:`superfacets.convert`).
     name : str, optional
         Name used in error messages.
 
@@ -243,15 +371,26 @@ def as_mesh(mesh, name: str = "") -> Mesh:
     TypeError
         If ``mesh`` is none of the accepted forms.
     InvalidMeshError
-        If the arrays are invalid (see :class:`Mesh`).
+        If the arrays are invalid (see :class:`Mesh`), a scene holds no mesh,
+        or a PolyData no polygon.
+
+    Examples
+    --------
+    >>> as_mesh(([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]]))
+    Mesh(3 vertices, 1 faces: triangles)
     """
     if isinstance(mesh, Mesh):
         return mesh
     if isinstance(mesh, (tuple, list)) and len(mesh) == 2:
         return Mesh(mesh[0], mesh[1], name=name)
+    from .convert import from_library
+
+    converted = from_library(mesh, name)
+    if converted is not None:
+        return converted
     if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):  # trimesh.Trimesh and alike
         return Mesh(np.asarray(mesh.vertices), np.asarray(mesh.faces), name=name)
     raise TypeError(
-        "mesh must be a superfacets.Mesh, a trimesh.Trimesh or a (vertices, faces) pair, "
-        f"got {type(mesh).__name__}"
+        "mesh must be a superfacets.Mesh, a trimesh.Trimesh or Scene, a pyvista.PolyData, an "
+        f"open3d TriangleMesh or a (vertices, faces) pair, got {type(mesh).__name__}"
     )

@@ -46,11 +46,15 @@ def _pyvista(off_screen: bool):
 
 
 def _polydata(pv, mesh, labels):
-    m = mesh.n_faces
-    cells = np.empty((m, 4), dtype=np.int64)
-    cells[:, 0] = 3
-    cells[:, 1:] = mesh.faces
-    poly = pv.PolyData(np.asarray(mesh.vertices, dtype=np.float64), cells.ravel())
+    """The mesh as PolyData cells (triangles or polygons), one colour per cell."""
+    sizes = mesh.face_sizes
+    cells = np.empty(mesh.n_faces + mesh.corners.shape[0], dtype=np.int64)
+    head = np.asarray(mesh.offsets)[:-1] + np.arange(mesh.n_faces)  # where each cell starts
+    cells[head] = sizes
+    body = np.ones(cells.shape[0], dtype=bool)
+    body[head] = False
+    cells[body] = mesh.corners
+    poly = pv.PolyData(np.asarray(mesh.vertices, dtype=np.float64), cells)
     if labels is not None:
         poly.cell_data["rgb"] = face_colors(mesh, labels)
     return poly
@@ -63,8 +67,7 @@ def _boundary_lines(pv, mesh, labels, lift: float):
     # lift the lines off the surface along the vertex normals so they are not z-fought
     vn = np.zeros((mesh.n_vertices, 3))
     fn = mesh.normals * mesh.areas[:, None]
-    for c in range(3):
-        np.add.at(vn, mesh.faces[:, c], fn)
+    np.add.at(vn, mesh.corners, np.repeat(fn, mesh.face_sizes, axis=0))
     vn /= np.maximum(np.linalg.norm(vn, axis=1, keepdims=True), 1e-300)
     used, inv = np.unique(e.ravel(), return_inverse=True)
     pts = mesh.vertices[used] + lift * vn[used]

@@ -40,3 +40,82 @@ def face_geometry(vertices, faces, centroids, areas, normals):
             normals[f, 0] = 0.0
             normals[f, 1] = 0.0
             normals[f, 2] = 0.0
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _edge(vertices, p, q, ox, oy, oz):
+    """The positions of vertices ``p`` and ``q`` relative to ``(ox, oy, oz)``."""
+    return (vertices[p, 0] - ox, vertices[p, 1] - oy, vertices[p, 2] - oz,
+            vertices[q, 0] - ox, vertices[q, 1] - oy, vertices[q, 2] - oz)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def polygon_geometry(vertices, corners, offsets, centroids, areas, normals):
+    """Centroids, areas and unit normals of polygons of any size, in one pass.
+
+    Polygon ``f`` has the vertices ``corners[offsets[f]:offsets[f + 1]]``, in
+    order. Normal and area by Newell's method (the sum over the edges ``i ->
+    j`` of ``(y_i - y_j)(z_i + z_j)``, and so on: exact for planar polygons,
+    convex or not, and the projected-area normal of non-planar ones), taken
+    around the polygon's first vertex for precision. Centroid: the mean of the
+    centroids of the fan triangles ``(v0, v_i, v_i+1)`` weighted by their
+    areas signed along the normal (right for non-convex polygons); the plain
+    vertex mean when that area vanishes. Zero normal for a degenerate polygon.
+    """
+    for f in range(offsets.shape[0] - 1):
+        a = offsets[f]
+        k = offsets[f + 1] - a
+        o = corners[a]
+        ox = vertices[o, 0]
+        oy = vertices[o, 1]
+        oz = vertices[o, 2]
+        nx = 0.0
+        ny = 0.0
+        nz = 0.0
+        for i in range(k):
+            px, py, pz, qx, qy, qz = _edge(vertices, corners[a + i], corners[a + (i + 1) % k],
+                                           ox, oy, oz)
+            nx += (py - qy) * (pz + qz)
+            ny += (pz - qz) * (px + qx)
+            nz += (px - qx) * (py + qy)
+        norm = np.sqrt(nx * nx + ny * ny + nz * nz)
+        areas[f] = 0.5 * norm
+        if norm > 0:
+            nx /= norm
+            ny /= norm
+            nz /= norm
+        else:
+            nx = 0.0
+            ny = 0.0
+            nz = 0.0
+        normals[f, 0] = nx
+        normals[f, 1] = ny
+        normals[f, 2] = nz
+        wsum = 0.0
+        cx = 0.0
+        cy = 0.0
+        cz = 0.0
+        for i in range(1, k - 1):
+            px, py, pz, qx, qy, qz = _edge(vertices, corners[a + i], corners[a + i + 1],
+                                           ox, oy, oz)
+            w = (py * qz - pz * qy) * nx + (pz * qx - px * qz) * ny + (px * qy - py * qx) * nz
+            wsum += w
+            cx += w * (px + qx)
+            cy += w * (py + qy)
+            cz += w * (pz + qz)
+        if wsum != 0.0 and norm > 0:
+            centroids[f, 0] = ox + cx / (3.0 * wsum)
+            centroids[f, 1] = oy + cy / (3.0 * wsum)
+            centroids[f, 2] = oz + cz / (3.0 * wsum)
+        else:
+            sx = 0.0
+            sy = 0.0
+            sz = 0.0
+            for i in range(k):
+                p = corners[a + i]
+                sx += vertices[p, 0]
+                sy += vertices[p, 1]
+                sz += vertices[p, 2]
+            centroids[f, 0] = sx / k
+            centroids[f, 1] = sy / k
+            centroids[f, 2] = sz / k

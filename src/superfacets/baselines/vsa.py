@@ -223,6 +223,9 @@ def variational_shape_approximation(mesh, n_segments: int = 150, *, metric: str 
     """
     mesh = as_mesh(mesh)
     mesh.check_usable()
+    if not mesh.is_triangular:
+        raise ParameterError("VSA fits planes to triangles: give a triangle mesh (its L2 "
+                             "metric integrates over triangles); superfacets take polygons")
     k = check_n_segments(n_segments, mesh.n_faces)
     if metric not in METRICS:
         raise ParameterError(f"metric must be one of {', '.join(METRICS)}; got {metric!r}")

@@ -20,8 +20,10 @@ def add_parsers(sub) -> None:
     p = sub.add_parser(
         "segment", help="compute the superfacets of a mesh file",
         description="Compute the superfacets of a mesh file (.off, .tri, .ply, .obj, .stl, "
-                    "optionally .gz/.xz/.bz2) and write them as a .seg label file "
-                    "(one label per face per line) and/or a coloured PLY.")
+                    ".glb, .gltf, optionally .gz/.xz/.bz2; triangles or polygons, one label "
+                    "per face in file order; the objects of a scene joined in order) and "
+                    "write them as a .seg label file (one label per face per line) and/or a "
+                    "coloured mesh.")
     p.add_argument("mesh", metavar="MESH", help="input mesh file")
     add_method_options(p)
     p.add_argument("-o", "--output", metavar="OUT.seg", default=None,
@@ -31,7 +33,15 @@ def add_parsers(sub) -> None:
                    help="start the .seg file with '#' lines recording parameters, "
                         "iterations and time (default: labels only, as the benchmark's files)")
     p.add_argument("--colored-mesh", metavar="OUT.ply", default=None,
-                   help="write the mesh as a binary PLY with one colour per superfacet")
+                   help="write the mesh coloured by superfacet: .ply (polygons kept, face "
+                        "colours and an int32 face property 'label'), .glb (for Blender, "
+                        "three.js, model viewers) or .obj (a material per colour, with .mtl)")
+    p.add_argument("--vertex-colors", action="store_true",
+                   help="PLY: colours per vertex (each face its own vertices) instead of per "
+                        "face, for tools that show only vertex colours")
+    p.add_argument("--per-object", action="store_true",
+                   help="segment each object of a scene on its own (-k shared out by area); "
+                        "labels stay unique over the scene")
     p.set_defaults(func=cmd_segment)
 
     bl = sub.add_parser(
@@ -99,9 +109,30 @@ def _header(mesh, result, source: str) -> dict:
     }
 
 
+def _object_lines(mesh) -> list[str]:
+    """``# object NAME: faces A-B`` lines of a scene (several objects), else none."""
+    if len(mesh.objects) < 2:
+        return []
+    return [f"object {name}: faces {a}-{b - 1}" for name, a, b in mesh.objects]
+
+
+class _Joined:
+    """The result of segmenting a scene object by object, for the messages and header."""
+
+    def __init__(self, labels, results):
+        self.labels = labels
+        self.n_segments = int(labels.max()) + 1
+        self.n_iter = max(r.n_iter for r in results)
+        self.converged = all(r.converged for r in results)
+        self.params = dict(results[0].params, per_object=True)
+        self.timings = {"total": sum(r.timings["total"] for r in results)}
+
+
 def _summary(name: str, mesh, result, seconds: float) -> str:
     state = "converged" if result.converged else "stopped at max-iter"
-    return (f"{name}: {mesh.n_faces} faces, {result.n_segments} superfacets, "
+    kind = "" if mesh.is_triangular else " (polygons)"
+    objs = f" in {len(mesh.objects)} objects" if len(mesh.objects) > 1 else ""
+    return (f"{name}: {mesh.n_faces} faces{kind}{objs}, {result.n_segments} superfacets, "
             f"{result.n_iter} iterations ({state}), {seconds:.2f} s")
 
 
@@ -111,12 +142,17 @@ def cmd_segment(args) -> int:
     warmup.start()  # numba's start-up in a thread, while the rest is imported and read
     from ..errors import SuperfacetsError
     from ..io import read_mesh, write_colored_mesh, write_labels
+    from ..errors import ParameterError
     from ..io.files import Outputs
     from ..params import resolve
-    from ..segmentation import segment
+    from ..segmentation import segment, segment_objects
 
     seg_out = check_output(args.output, (), "label file", stdout=True)
-    ply_out = check_output(args.colored_mesh, (".ply",), "the coloured mesh")
+    ply_out = check_output(args.colored_mesh, (".ply", ".glb", ".obj"), "the coloured mesh")
+    if args.vertex_colors and (ply_out is None or not ply_out.name.lower().endswith(".ply")):
+        raise ParameterError("--vertex-colors goes with --colored-mesh OUT.ply")
+    if args.per_object and args.radius is not None:
+        raise ParameterError("--per-object takes -k, not --radius")
     kwargs = method_kwargs(args)
     resolve(n_segments=args.n_segments, radius=args.radius, **kwargs)  # before the read
     t0 = time.perf_counter()
@@ -124,17 +160,24 @@ def cmd_segment(args) -> int:
     if args.progress is None:  # long runs show where they are
         kwargs["progress"] = mesh.n_faces >= 500_000 and sys.stderr.isatty()
     try:
-        result = segment(mesh, args.n_segments, radius=args.radius, **kwargs)
+        if args.per_object:
+            result = _Joined(*segment_objects(mesh, args.n_segments or DEFAULTS.n_segments,
+                                              **kwargs))
+        else:
+            result = segment(mesh, args.n_segments, radius=args.radius, **kwargs)
     except SuperfacetsError as exc:
         raise type(exc)(f"{args.mesh}: {exc}") from None
     elapsed = time.perf_counter() - t0
+    objects = _object_lines(mesh)
     with Outputs() as outputs:  # all or nothing
         if seg_out is not None:
-            write_labels(seg_out, result.labels, outputs=outputs,
-                         header=_header(mesh, result, Path(args.mesh).name) if args.header
-                         else None)
+            header = _header(mesh, result, Path(args.mesh).name) if args.header else None
+            if objects:  # a scene: say which faces are which object
+                header = [f"{k}: {v}" for k, v in (header or {}).items()] + objects
+            write_labels(seg_out, result.labels, outputs=outputs, header=header)
         if ply_out is not None:
-            write_colored_mesh(ply_out, mesh, result.labels, outputs=outputs)
+            write_colored_mesh(ply_out, mesh, result.labels, outputs=outputs,
+                               vertex_colors=args.vertex_colors)
     report = sys.stderr if str(seg_out) == "-" else sys.stdout  # stdout holds the labels
     if not args.quiet:
         print(_summary(Path(args.mesh).name, mesh, result, elapsed), file=report)

@@ -1,7 +1,8 @@
-"""The face graph (dual graph) of a triangle mesh (``docs/method.md``, sections 1-2).
+"""The face graph (dual graph) of a mesh (``docs/method.md``, sections 1-2).
 
-One element per face and one adjacency per pair of faces that share a mesh
-edge. Adjacency comes from our own grouping of the mesh edges by their
+One element per face (triangle or polygon) and one adjacency per pair of
+faces that share a mesh edge (an edge of a polygon joins two consecutive
+corners). Adjacency comes from our own grouping of the mesh edges by their
 (sorted) vertex pair, not from trimesh, because trimesh's ``face_adjacency``
 drops non-manifold edges:
 
@@ -54,10 +55,10 @@ class FaceAdjacency(NamedTuple):
 
 
 def face_graph(mesh) -> ElementGraph:
-    """The face graph of a triangle mesh, with its geometry.
+    """The face graph of a triangle or polygon mesh, with its geometry.
 
-    Elements are faces: position = centroid, size = area, normal = unit
-    face normal (:class:`~superfacets.mesh.Mesh`'s cached geometry, shared,
+    Elements are faces (triangles or polygons): position = centroid, size =
+    area, normal = unit face normal (:class:`~superfacets.mesh.Mesh`'s cached geometry, shared,
     not copied). Per adjacency: the length of the shared mesh edge, and the
     terms of the paper's weights (eqs. 1-3) from the edge midpoint ``m_ij``:
     ``geo = |c_i - m_ij| + |m_ij - c_j|``, the cosine of the dihedral angle
@@ -81,7 +82,8 @@ def face_graph(mesh) -> ElementGraph:
     >>> g.n_elements, g.n_edges
     (12, 18)
     """
-    topo = build_face_graph(mesh.faces, mesh.n_vertices)
+    topo = (build_face_graph(mesh.faces, mesh.n_vertices) if mesh.is_triangular else
+            build_face_graph(np.asarray(mesh.corners), mesh.n_vertices, np.asarray(mesh.offsets)))
     v = mesh.vertices
     c, n = mesh.centroids, mesh.normals
 
@@ -108,29 +110,52 @@ def face_graph(mesh) -> ElementGraph:
         edges=topo.edges, boundary_edges=topo.boundary_edges, terms_of=terms_of)
 
 
-def build_face_graph(faces: np.ndarray, n_vertices: int) -> FaceAdjacency:
+def build_face_graph(faces: np.ndarray, n_vertices: int, offsets: np.ndarray | None = None
+                     ) -> FaceAdjacency:
     """Group mesh edges and build the face graph (see the module notes).
 
     Parameters
     ----------
-    faces : (m, 3) int64 ndarray
-        Triangles, indices in ``[0, n_vertices)``.
+    faces : (m, 3) int64 ndarray, or (c,) int64 ndarray with ``offsets``
+        Triangles; or the corners of polygons of any sizes, face after face.
     n_vertices : int
         Number of vertices.
+    offsets : (m + 1,) int64 ndarray, optional
+        With polygons: face ``f`` has the corners ``faces[offsets[f]:offsets[f + 1]]``,
+        and its edges join consecutive corners, the last to the first.
 
     Returns
     -------
     FaceAdjacency
     """
-    m = faces.shape[0]
+    if offsets is None:  # triangles: half-edge h = 3 * face + corner
+        m = faces.shape[0]
+        n_half_edges = 3 * m
+    else:
+        m = offsets.shape[0] - 1
+        n_half_edges = faces.shape[0]
     # 32-bit half-edge and vertex ids while they fit: the temporaries of the edge grouping
     # are the memory peak of a whole run on large meshes
-    itype = np.int32 if max(int(n_vertices), 3 * m) < 2**31 - 1 else np.int64
-    a = np.empty(3 * m, dtype=itype)  # half-edge h = 3 * face + corner, corner c joins
-    b = np.empty(3 * m, dtype=itype)  # vertices (0, 1), (1, 2), (2, 0) of the face
-    for c, (u, v) in enumerate(((0, 1), (1, 2), (2, 0))):
-        np.minimum(faces[:, u], faces[:, v], out=a[c::3], casting="unsafe")
-        np.maximum(faces[:, u], faces[:, v], out=b[c::3], casting="unsafe")
+    itype = np.int32 if max(int(n_vertices), n_half_edges) < 2**31 - 1 else np.int64
+    a = np.empty(n_half_edges, dtype=itype)  # the two vertices of each half-edge, a <= b
+    b = np.empty(n_half_edges, dtype=itype)
+    if offsets is None:  # corner c joins vertices (0, 1), (1, 2), (2, 0) of the face
+        for c, (u, v) in enumerate(((0, 1), (1, 2), (2, 0))):
+            np.minimum(faces[:, u], faces[:, v], out=a[c::3], casting="unsafe")
+            np.maximum(faces[:, u], faces[:, v], out=b[c::3], casting="unsafe")
+
+        def face_of(h):
+            return h // 3
+    else:  # corner i of a polygon joins it to the next corner, the last to the first
+        nxt = np.roll(faces, -1)
+        nxt[offsets[1:] - 1] = faces[offsets[:-1]]
+        np.minimum(faces, nxt, out=a, casting="unsafe")
+        np.maximum(faces, nxt, out=b, casting="unsafe")
+        del nxt
+        owner = np.repeat(np.arange(m, dtype=itype), np.diff(offsets))
+
+        def face_of(h):
+            return owner[h]
     valid = np.flatnonzero(a != b).astype(itype)  # collapsed edges join nothing
     key = a[valid].astype(np.int64)
     key *= np.int64(n_vertices)
@@ -140,7 +165,7 @@ def build_face_graph(faces: np.ndarray, n_vertices: int) -> FaceAdjacency:
     del key
     half = valid[order]  # half-edge ids, grouped by edge
     del valid, order
-    sface = half // 3
+    sface = face_of(half)
     n_half = skey.shape[0]
     if n_half:
         brk = np.empty(n_half, dtype=bool)

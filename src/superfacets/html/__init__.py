@@ -60,8 +60,11 @@ def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None 
     if palette.shape[0] > 65535:  # pragma: no cover - greedy colouring uses ~12 colours
         raise ParameterError("too many distinct colours for the page")
     index_dtype = np.uint8 if palette.shape[0] <= 256 else np.uint16
+    # polygons drawn as the triangles of their fans, each in its polygon's colour
+    triangles, owner = mesh.triangulated()
+    face_index = face_index[owner]
     # used vertices only, centred and scaled to the unit ball (float32 keeps the precision)
-    used, faces = np.unique(mesh.faces, return_inverse=True)
+    used, faces = np.unique(triangles, return_inverse=True)
     faces = faces.reshape(-1, 3)
     v = mesh.vertices[used]
     center = (v.min(axis=0) + v.max(axis=0)) / 2
@@ -75,7 +78,7 @@ def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None 
     meta = {"name": name, "faces": m, "vertices": int(used.size), "superfacets": n_sf,
             "info": {str(k): str(v_) for k, v_ in (info or {}).items()},
             "palette": palette.astype(int).tolist(), "indexBytes": np.dtype(index_dtype).itemsize,
-            "nVertices": int(used.size), "nFaces": m, "nEdges": int(edges.shape[0]),
+            "nVertices": int(used.size), "nFaces": int(faces.shape[0]), "nEdges": int(edges.shape[0]),
             "background": background, "rotation": rot.T.ravel().round(6).tolist()}
     data = {"vertices": _b64(v), "faces": _b64(faces.astype("<u4")),
             "colors": _b64(face_index.astype(index_dtype)),

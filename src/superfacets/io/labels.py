@@ -52,7 +52,8 @@ def write_labels(path, labels, header: dict | Iterable[str] | None = None, *,
 
 
 def read_labels(path, n_faces: int | None = None) -> np.ndarray:
-    """Read a ``.seg`` label file (``#`` lines skipped; may be compressed).
+    """Read labels: a ``.seg`` file (``#`` lines skipped; may be compressed), or the
+    ``label`` face property of a coloured PLY written by this package.
 
     Parameters
     ----------
@@ -75,15 +76,23 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file")
-    _, comp = split_suffix(path)
+    fmt, comp = split_suffix(path)
     data = read_bytes(path, comp)
+    if fmt == "ply":
+        from .ply import read_ply_labels
+
+        labels = read_ply_labels(path, data)
+        if n_faces is not None and labels.shape[0] != n_faces:
+            raise MeshFormatError(f"{path}: has {labels.shape[0]} labels but the mesh has "
+                                  f"{n_faces} faces")
+        return labels
     lines = text_lines(data, path)
     if not lines:
         labels = np.zeros(0, dtype=np.int64)
     else:
         try:
             labels = np.loadtxt(lines, dtype=np.int64, ndmin=1, comments=None)
-        except ValueError as exc:
+        except (ValueError, OverflowError) as exc:
             raise MeshFormatError(f"{path}: malformed label file: {str(exc).split('; use')[0]}") from None
         if labels.ndim != 1:
             raise MeshFormatError(f"{path}: malformed label file: expected one label per line")

@@ -1,10 +1,10 @@
-"""Mesh files: reading (OFF, ``.tri``, PLY, OBJ, STL) and writing, coloured PLY.
+"""Reading mesh files: OFF, ``.tri``, PLY, OBJ, STL (triangles or polygons).
 
 OFF (the Princeton benchmark's format) and the authors' ``.tri`` text format
-are parsed here (vectorized with :func:`numpy.loadtxt`); PLY, OBJ and STL go
-through trimesh with ``process=False`` so the face order never changes. A
-trailing ``.gz``, ``.xz`` or ``.bz2`` is decompressed transparently; every
-write is atomic (:func:`superfacets.io.files.atomic_write`).
+and OBJ are parsed here (vectorized with :func:`numpy.loadtxt` where the faces
+are triangles); PLY and STL go through trimesh's parsers (PLY polygons through
+plyfile, since trimesh splits them), never changing the face order. A
+trailing ``.gz``, ``.xz`` or ``.bz2`` is decompressed transparently.
 """
 
 from __future__ import annotations
@@ -16,32 +16,35 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InvalidMeshError, MeshFormatError
-from ..mesh import Mesh, as_mesh
-from .files import Outputs, read_bytes, save, split_suffix, text_lines
+from ..mesh import Mesh
+from .files import read_bytes, split_suffix, text_lines
 
-__all__ = ["read_mesh", "write_mesh", "write_colored_mesh", "MESH_FORMATS"]
+__all__ = ["read_mesh", "MESH_FORMATS"]
 
 #: Mesh file formats understood by :func:`read_mesh` (before any compression suffix).
-MESH_FORMATS = ("off", "tri", "ply", "obj", "stl")
+MESH_FORMATS = ("off", "tri", "ply", "obj", "stl", "glb", "gltf")
 
 
 def read_mesh(path, format: str | None = None) -> Mesh:
-    """Read a triangle mesh from a file.
+    """Read a triangle or polygon mesh, or a scene, from a file.
 
     Parameters
     ----------
     path : str or os.PathLike
-        ``.off``, ``.tri``, ``.ply``, ``.obj`` or ``.stl``, optionally
-        followed by ``.gz``, ``.xz`` or ``.bz2``.
+        ``.off``, ``.tri``, ``.ply``, ``.obj``, ``.stl``, ``.glb`` or
+        ``.gltf``, optionally followed by ``.gz``, ``.xz`` or ``.bz2``.
     format : str, optional
         Force a format (one of :data:`MESH_FORMATS`) instead of the suffix.
 
     Returns
     -------
     Mesh
-        Vertices ``(n, 3) float64`` and faces ``(m, 3) int64`` in file order
-        (STL: exactly coincident vertices are merged, since STL stores none
-        shared; the face order is kept).
+        Vertices ``(n, 3) float64`` and faces in file order: ``(m, 3)`` for
+        triangles, polygons kept as polygons (OFF, OBJ, PLY). STL: exactly
+        coincident vertices are merged, since STL stores none shared. Several
+        objects (OBJ ``o`` statements, glTF/GLB scenes) are joined, their
+        face ranges in ``mesh.objects`` (:mod:`superfacets.convert` says in
+        which order).
 
     Raises
     ------
@@ -69,16 +72,19 @@ def read_mesh(path, format: str | None = None) -> Mesh:
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a directory")
     data = read_bytes(path, comp)
+    objects = ()
     if fmt == "off":
         v, f = _parse_off(data, path)
     elif fmt == "tri":
         v, f = _parse_tri(data, path)
     elif fmt == "obj":
-        v, f = _parse_obj(data, path)
+        v, f, objects = _parse_obj(data, path)
+    elif fmt in ("glb", "gltf"):
+        return _load_scene(path, fmt, comp, data)
     else:
         v, f = _load_trimesh(data, fmt, path)
     try:
-        return Mesh(v, f, name=path.name)
+        return Mesh(v, f, name=path.name, objects=objects)
     except InvalidMeshError as exc:
         raise InvalidMeshError(f"{path}: {str(exc).removeprefix(path.name + ': ')}") from None
 
@@ -137,31 +143,33 @@ def _parse_off(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
     return v, f
 
 
-def _off_faces(flines: list[str], path: Path) -> np.ndarray:
+def _off_faces(flines: list[str], path: Path):
+    """Face lines ``k i1 .. ik [colour...]``: an (m, 3) array for triangles (the fast
+    path), else a list of polygons."""
     try:
         f = np.loadtxt(flines, dtype=np.int64, ndmin=2, comments=None)
     except (ValueError, OverflowError):
         f = None
-    if f is None or f.shape[1] < 4 or not (f[:, 0] == 3).all():
-        # error path only: find the first offending line
-        for i, line in enumerate(flines):
-            tok = line.split()
-            try:
-                n = int(tok[0])
-                idx = [int(t) for t in tok[1:1 + n]]
-            except ValueError:
-                raise MeshFormatError(f"{path}: malformed face line {i}: {line!r}") from None
-            if any(abs(x) >= 2**62 for x in idx):
-                raise MeshFormatError(f"{path}: face {i} has a vertex index out of range: "
-                                      f"{line!r}")
-            if n != 3:
-                raise MeshFormatError(
-                    f"{path}: only triangle meshes are supported; face {i} has {n} vertices")
-            if len(idx) < 3:
-                raise MeshFormatError(f"{path}: face {i} lists fewer than 3 vertex indices: {line!r}")
-        # every line is a triangle but with varying trailing colour fields
-        return np.array([[int(t) for t in ln.split()[1:4]] for ln in flines], dtype=np.int64)
-    return np.ascontiguousarray(f[:, 1:4])
+    if f is not None and f.shape[1] >= 4 and (f[:, 0] == 3).all():
+        return np.ascontiguousarray(f[:, 1:4])
+    faces = []
+    for i, line in enumerate(flines):
+        tok = line.split()
+        try:
+            n = int(tok[0])
+            idx = [int(t) for t in tok[1:1 + n]]
+        except ValueError:
+            raise MeshFormatError(f"{path}: malformed face line {i}: {line!r}") from None
+        if n < 3 or len(idx) < n:
+            raise MeshFormatError(f"{path}: face {i} lists {min(n, len(idx))} vertex indices "
+                                  f"(3 or more needed): {line!r}")
+        if any(abs(x) >= 2**62 for x in idx):
+            raise MeshFormatError(f"{path}: face {i} has a vertex index out of range: "
+                                  f"{line!r}")
+        faces.append(idx)
+    if all(len(x) == 3 for x in faces):
+        return np.array(faces, dtype=np.int64).reshape(-1, 3)
+    return faces
 
 
 def _parse_tri(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -193,7 +201,8 @@ def _parse_tri(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
 def _parse_obj(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
     """Wavefront OBJ: ``v`` and ``f`` lines, in file order, every object of the file.
 
-    Indices are 1-based; a negative index counts back from the last vertex
+    Faces of any size are kept as polygons; ``o`` statements name objects
+    (returned as face ranges). Indices are 1-based; a negative index counts back from the last vertex
     defined before its face line (the OBJ rule); ``0`` is an error. In ``f``
     lines, ``i/t/n`` keeps ``i``. Separators may be spaces or tabs. Other
     statements (``vt``, ``vn``, ``g``, ``o``, ``usemtl``, ...) are skipped.
@@ -201,6 +210,7 @@ def _parse_obj(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
     vrows: list[str] = []
     frows: list[str] = []
     before: list[int] = []  # vertices defined before each face line
+    starts: list[tuple[str, int]] = []  # ("o" statements) object name, first face
     for ln in text_lines(data, path):
         key, *rest = ln.split(None, 1)  # spaces or tabs
         rest = rest[0] if rest else ""
@@ -209,6 +219,8 @@ def _parse_obj(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
         elif key == "f":
             frows.append(rest)
             before.append(len(vrows))
+        elif key == "o":
+            starts.append((rest.strip() or f"object{len(starts)}", len(frows)))
     if not frows:
         raise InvalidMeshError(f"{path}: empty mesh: no faces")
     try:
@@ -217,13 +229,13 @@ def _parse_obj(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
         bad = next(i for i, r in enumerate(vrows) if not _floats3(r))
         raise MeshFormatError(f"{path}: malformed vertex {bad}: 'v {vrows[bad]}' (3 "
                               "coordinates expected)") from None
-    faces = np.empty((len(frows), 3), dtype=np.int64)
+    faces: list[list[int]] = []
     for i, (row, nv) in enumerate(zip(frows, before)):
         tok = row.split()
-        if len(tok) != 3:
-            what = (f"{len(tok)} vertices (only triangle meshes are supported)" if len(tok) > 3
-                    else f"only {len(tok)} vertex indices")
-            raise MeshFormatError(f"{path}: face {i} has {what}: 'f {row}'")
+        if len(tok) < 3:
+            raise MeshFormatError(f"{path}: face {i} has only {len(tok)} vertex indices (3 or "
+                                  f"more needed): 'f {row}'")
+        face = [0] * len(tok)
         for j, t in enumerate(tok):
             try:
                 k = int(t.split("/", 1)[0])
@@ -237,8 +249,37 @@ def _parse_obj(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
             if not 0 <= k < len(vrows):
                 raise MeshFormatError(f"{path}: face {i}: vertex index {t} out of range "
                                       f"({nv} vertices defined before it, {len(vrows)} in all)")
-            faces[i, j] = k
-    return v, faces
+            face[j] = k
+        faces.append(face)
+    objects = []
+    if starts:  # faces before the first "o" form an unnamed object
+        bounds = ([("default", 0)] if starts[0][1] > 0 else []) + starts
+        ends = [b for _, b in bounds[1:]] + [len(faces)]
+        objects = [(nm, a, b) for (nm, a), b in zip(bounds, ends) if b > a]
+    if all(len(f) == 3 for f in faces):
+        faces = np.array(faces, dtype=np.int64).reshape(-1, 3)
+    return v, faces, tuple(objects)
+
+
+def _load_scene(path: Path, fmt: str, comp: str | None, data: bytes) -> Mesh:
+    """A glTF/GLB file through trimesh, its objects joined (:mod:`superfacets.convert`)."""
+    import trimesh
+
+    from ..convert import mesh_from_scene
+
+    try:
+        if comp is None:  # a .gltf may point to buffers beside it: load from the path
+            scene = trimesh.load(str(path), file_type=fmt, force="scene", process=False)
+        else:
+            scene = trimesh.load(io.BytesIO(data), file_type=fmt, force="scene",
+                                 process=False)
+    except Exception as exc:  # trimesh raises many types for malformed input
+        raise MeshFormatError(f"{path}: cannot read {fmt.upper()}: "
+                              f"{exc or type(exc).__name__}") from None
+    try:
+        return mesh_from_scene(scene, name=path.name)
+    except InvalidMeshError as exc:
+        raise InvalidMeshError(f"{path}: {str(exc).removeprefix(path.name + ': ')}") from None
 
 
 def _floats3(row: str) -> bool:
@@ -266,10 +307,10 @@ def _load_trimesh(data: bytes, fmt: str, path: Path) -> tuple[np.ndarray, np.nda
         v = np.array(np.zeros((0, 3)) if v is None else v, dtype=np.float64)
         f = np.array(np.zeros((0, 3)) if f is None else f, dtype=np.int64)
     except Exception as exc:  # trimesh raises many types for malformed input
+        if fmt == "ply" and data.startswith(b"ply"):  # e.g. polygons of mixed sizes
+            return _ply_polygons(data, path)
         raise MeshFormatError(f"{path}: cannot read {fmt.upper()}: {exc or type(exc).__name__}") from None
-    if f.size and (f.ndim != 2 or f.shape[1] != 3):
-        raise MeshFormatError(f"{path}: only triangle meshes are supported; faces have "
-                              f"{f.shape[1] if f.ndim == 2 else 'varying numbers of'} vertices")
+    polygons = f.size and (f.ndim != 2 or f.shape[1] != 3)
     if v.size and (v.ndim != 2 or v.shape[1] != 3):
         raise MeshFormatError(f"{path}: vertices must have 3 coordinates")
     # a trimesh object sits in reference cycles (its caches): free its arrays now rather
@@ -279,14 +320,41 @@ def _load_trimesh(data: bytes, fmt: str, path: Path) -> tuple[np.ndarray, np.nda
     if f.size == 0:
         raise InvalidMeshError(f"{path}: empty mesh: no faces")
     declared = _declared_faces(data, fmt)
-    if declared is not None and declared != f.shape[0]:
-        raise MeshFormatError(
-            f"{path}: only triangle meshes are supported; the file declares {declared} faces "
-            f"but they make {f.shape[0]} triangles (polygons were split)")
+    if fmt == "ply" and (polygons or (declared is not None and declared != f.shape[0])):
+        return _ply_polygons(data, path)  # trimesh split (and reordered) the polygons
+    if polygons:
+        raise MeshFormatError(f"{path}: faces of {fmt.upper()} must be triangles")
     if fmt == "stl":  # STL stores no shared vertices: merge exact duplicates
         v, inv = np.unique(v, axis=0, return_inverse=True)
         f = inv.reshape(-1)[f]
     return v, f
+
+
+def _ply_polygons(data: bytes, path: Path):
+    """A PLY of polygons, read with plyfile: faces of any size, in file order."""
+    from plyfile import PlyData, PlyParseError
+
+    end = data.find(b"end_header")
+    declared = sum(int(line.split()[2]) for line in data[:max(end, 0)].split(b"\n")
+                   if line.startswith(b"element ") and len(line.split()) == 3
+                   and line.split()[2].isdigit())
+    if declared > len(data):  # every element takes a byte at least: the counts are wrong
+        raise MeshFormatError(f"{path}: the header declares {declared} elements but the file "
+                              f"has {len(data)} bytes (truncated or malformed)")
+    try:
+        ply = PlyData.read(io.BytesIO(data))
+        vert = ply["vertex"]
+        v = np.stack([np.asarray(vert[c], dtype=np.float64) for c in "xyz"], axis=1)
+        face = ply["face"]
+        names = [p.name for p in face.properties]
+        key = "vertex_indices" if "vertex_indices" in names else "vertex_index"
+        rows = [np.asarray(r, dtype=np.int64) for r in face[key]]
+    except (PlyParseError, KeyError, ValueError, IndexError, TypeError, EOFError,
+            MemoryError) as exc:
+        raise MeshFormatError(f"{path}: cannot read PLY polygons: {exc}") from None
+    if not rows:
+        raise InvalidMeshError(f"{path}: empty mesh: no faces")
+    return v, rows
 
 
 def _declared_faces(data: bytes, fmt: str) -> int | None:
@@ -299,88 +367,3 @@ def _declared_faces(data: bytes, fmt: str) -> int | None:
                 return int(parts[2])
         return None
     return None
-
-
-# ------------------------------------------------------------------ writes
-def write_mesh(path, mesh, face_colors: np.ndarray | None = None, *,
-               outputs: Outputs | None = None) -> Path:
-    """Write a mesh: ``.off`` and ``.tri`` here, ``.ply``/``.obj``/``.stl`` via trimesh.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        Optionally ending in ``.gz``/``.xz``/``.bz2``.
-    mesh : Mesh or (vertices, faces)
-    face_colors : (m, 3) or (m, 4) uint8 ndarray, optional
-        Per-face colours (PLY only).
-    outputs : Outputs, optional
-        Stage the file there (all or nothing with the others).
-
-    Returns
-    -------
-    pathlib.Path
-
-    Raises
-    ------
-    MeshFormatError
-        If the format is unknown, or colours are asked of a format other
-        than PLY.
-    """
-    mesh = as_mesh(mesh)
-    path = Path(path)
-    fmt, _ = split_suffix(path)
-    if fmt not in MESH_FORMATS:
-        raise MeshFormatError(f"{path}: unknown mesh format .{fmt}")
-    if face_colors is not None and fmt != "ply":
-        raise MeshFormatError(f"{path}: per-face colours need the .ply format")
-    v, f = mesh.vertices, mesh.faces
-    if fmt == "off":
-        head = f"OFF\n{len(v)} {len(f)} 0\n"
-        body = _rows(v, "%.17g") + _rows(np.c_[np.full(len(f), 3), f], "%d")
-        return save(path, (head + body).encode("ascii"), outputs)
-    if fmt == "tri":
-        body = f"{len(v)}\n" + _rows(v, "%.17g") + f"{len(f)}\n" + _rows(f, "%d")
-        return save(path, body.encode("ascii"), outputs)
-    import trimesh
-
-    tm = trimesh.Trimesh(vertices=v, faces=f, process=False, validate=False)
-    if face_colors is not None:
-        tm.visual.face_colors = face_colors
-    kwargs = {"encoding": "binary"} if fmt == "ply" else {}
-    data = tm.export(file_type=fmt, **kwargs)
-    return save(path, data.encode("utf-8") if isinstance(data, str) else data, outputs)
-
-
-def _rows(a: np.ndarray, fmt: str) -> str:
-    buf = io.StringIO()
-    np.savetxt(buf, a, fmt=fmt)
-    return buf.getvalue()
-
-
-def write_colored_mesh(path, mesh, labels, *, outputs: Outputs | None = None) -> Path:
-    """Write a binary PLY with one colour per face, one colour per superfacet.
-
-    Adjacent superfacets always get clearly different colours (a greedy
-    colouring of the superfacet adjacency graph, see
-    :func:`superfacets.colors.superfacet_colors`). Opens in MeshLab or Blender.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        Should end in ``.ply``.
-    mesh : Mesh or (vertices, faces)
-    labels : (m,) int ndarray
-
-    Returns
-    -------
-    pathlib.Path
-
-    Raises
-    ------
-    ParameterError
-        If ``labels`` is not one integer per face.
-    """
-    from ..colors import face_colors
-
-    mesh = as_mesh(mesh)
-    return write_mesh(path, mesh, face_colors=face_colors(mesh, labels), outputs=outputs)

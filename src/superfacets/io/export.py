@@ -1,0 +1,228 @@
+"""Writing meshes, and coloured meshes that carry the segmentation.
+
+- :func:`write_mesh`: OFF, ``.tri`` (triangles), PLY, OBJ (polygons kept),
+  STL (triangles; polygons are fanned);
+- :func:`write_colored_mesh`: one colour per superfacet, adjacent ones always
+  different. PLY: polygons kept, face colours and an int32 face property
+  ``label`` (read back with :func:`superfacets.read_labels`); GLB (glTF
+  binary, for Blender, three.js and model viewers): triangles with per-vertex
+  colours, each face's vertices its own so colours stay per face; OBJ with a
+  material per colour (and its ``.mtl`` beside). ``vertex_colors=True`` gives
+  a PLY with per-vertex colours the same way, for viewers that show no face
+  colours.
+
+Every write is atomic, and a file with a companion (OBJ + MTL) is written all
+or nothing (:class:`superfacets.io.files.Outputs`).
+"""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import MeshFormatError
+from ..mesh import as_mesh
+from .files import Outputs, save, split_suffix
+from .meshes import MESH_FORMATS
+from .ply import ply_bytes
+
+__all__ = ["write_mesh", "write_colored_mesh", "COLORED_FORMATS"]
+
+#: Formats of :func:`write_colored_mesh`.
+COLORED_FORMATS = ("ply", "glb", "obj")
+
+
+def _rows(a: np.ndarray, fmt: str) -> str:
+    buf = io.StringIO()
+    np.savetxt(buf, a, fmt=fmt)
+    return buf.getvalue()
+
+
+def _off_face_lines(mesh) -> str:
+    """OFF face lines: ``k i1 .. ik`` per face."""
+    if mesh.is_triangular:
+        return _rows(np.c_[np.full(mesh.n_faces, 3), mesh.faces], "%d")
+    return "".join(f"{p.size} {' '.join(map(str, p.tolist()))}\n" for p in mesh.polygons())
+
+
+def write_mesh(path, mesh, face_colors: np.ndarray | None = None, *,
+               outputs: Outputs | None = None) -> Path:
+    """Write a mesh: OFF, ``.tri``, PLY, OBJ or STL (optionally ``.gz``/``.xz``/``.bz2``).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    mesh : Mesh, trimesh.Trimesh or (vertices, faces)
+        Triangles or polygons (polygons are kept, except in ``.tri`` which
+        refuses them and STL which fans them into triangles).
+    face_colors : (m, 3) or (m, 4) uint8 ndarray, optional
+        Per-face colours (PLY only).
+    outputs : Outputs, optional
+        Stage the file there (all or nothing with the others).
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    MeshFormatError
+        If the format is unknown, colours are asked of a format other than
+        PLY, or ``.tri`` is asked for polygons.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> p = os.path.join(tempfile.mkdtemp(), "quad.off")
+    >>> _ = write_mesh(p, ([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [[0, 1, 2, 3]]))
+    >>> open(p).read().splitlines()[-1]
+    '4 0 1 2 3'
+    """
+    mesh = as_mesh(mesh)
+    path = Path(path)
+    fmt, _ = split_suffix(path)
+    if fmt not in MESH_FORMATS:
+        raise MeshFormatError(f"{path}: unknown mesh format .{fmt}")
+    if face_colors is not None and fmt != "ply":
+        raise MeshFormatError(f"{path}: per-face colours need the .ply format")
+    v = mesh.vertices
+    if fmt == "off":
+        head = f"OFF\n{len(v)} {mesh.n_faces} 0\n"
+        return save(path, (head + _rows(v, "%.17g") + _off_face_lines(mesh)).encode("ascii"),
+                    outputs)
+    if fmt == "tri":
+        if not mesh.is_triangular:
+            raise MeshFormatError(f"{path}: the .tri format holds triangles only; write .off, "
+                                  ".ply or .obj for polygons")
+        body = f"{len(v)}\n" + _rows(v, "%.17g") + f"{mesh.n_faces}\n" + _rows(mesh.faces, "%d")
+        return save(path, body.encode("ascii"), outputs)
+    if fmt == "ply":
+        return save(path, ply_bytes(v, mesh.corners, mesh.offsets, face_colors=face_colors),
+                    outputs)
+    if fmt == "obj":
+        text = _rows(v, "v %.17g %.17g %.17g") + "".join(
+            f"f {' '.join(str(i + 1) for i in poly.tolist())}\n" for poly in mesh.polygons())
+        return save(path, text.encode("ascii"), outputs)
+    import trimesh  # STL: triangles
+
+    tri, _ = mesh.triangulated()
+    data = trimesh.Trimesh(vertices=v, faces=tri, process=False, validate=False).export(
+        file_type="stl")
+    return save(path, data, outputs)
+
+
+def write_colored_mesh(path, mesh, labels, *, vertex_colors: bool = False,
+                       outputs: Outputs | None = None) -> Path:
+    """Write a mesh coloured by superfacet, carrying the labels where the format can.
+
+    Adjacent superfacets always get clearly different colours (a greedy
+    colouring of the superfacet adjacency graph,
+    :func:`superfacets.colors.superfacet_colors`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        ``.ply`` (polygons kept, face colours and an int32 face property
+        ``label``; MeshLab, Blender, Open3D, trimesh), ``.glb`` (triangles,
+        colours per face through split vertices; Blender, three.js, viewers)
+        or ``.obj`` (a material per colour, in ``path`` with ``.mtl``).
+    mesh : Mesh, trimesh.Trimesh, pyvista.PolyData or (vertices, faces)
+    labels : (m,) int ndarray
+        One label per face.
+    vertex_colors : bool, default False
+        PLY only: per-vertex colours instead of per-face ones (each face gets
+        its own copy of its vertices, so the colours stay per face; the
+        ``label`` face property is kept).
+    outputs : Outputs, optional
+        Stage the file(s) there (all or nothing with the others).
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    ParameterError
+        If ``labels`` is not one integer per face.
+    MeshFormatError
+        On another format, or ``vertex_colors`` with one other than PLY.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> from superfacets import read_labels
+    >>> quads = ([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0], [2, 1, 0]],
+    ...          [[0, 1, 2, 3], [1, 4, 5, 2]])
+    >>> p = os.path.join(tempfile.mkdtemp(), "s.ply")
+    >>> _ = write_colored_mesh(p, quads, [0, 1])
+    >>> read_labels(p).tolist()
+    [0, 1]
+    """
+    from ..colors import face_colors
+    from ..labels import check_labels
+
+    mesh = as_mesh(mesh)
+    labels = check_labels(labels, mesh.n_faces, per="face")
+    path = Path(path)
+    fmt, comp = split_suffix(path)
+    if fmt not in COLORED_FORMATS:
+        raise MeshFormatError(f"{path}: a coloured mesh is written as "
+                              f"{', '.join('.' + f for f in COLORED_FORMATS)}")
+    if vertex_colors and fmt != "ply":
+        raise MeshFormatError(f"{path}: per-vertex colours are written as .ply (GLB always "
+                              "has them)")
+    colors = face_colors(mesh, labels)
+    if fmt == "ply":
+        if not vertex_colors:
+            data = ply_bytes(mesh.vertices, mesh.corners, mesh.offsets, face_colors=colors,
+                             labels=labels)
+        else:
+            corners = np.asarray(mesh.corners)
+            owner = np.repeat(np.arange(mesh.n_faces), mesh.face_sizes)
+            data = ply_bytes(mesh.vertices[corners], np.arange(corners.size), mesh.offsets,
+                             vertex_colors=colors[owner], labels=labels)
+        return save(path, data, outputs)
+    if fmt == "glb":
+        import trimesh
+
+        tri, owner = mesh.triangulated()
+        split = mesh.vertices[tri.ravel()]
+        tm = trimesh.Trimesh(vertices=split, faces=np.arange(split.shape[0]).reshape(-1, 3),
+                             process=False, validate=False)
+        rgba = np.c_[np.repeat(colors[owner], 3, axis=0), np.full(split.shape[0], 255)]
+        tm.visual = trimesh.visual.ColorVisuals(tm, vertex_colors=rgba.astype(np.uint8))
+        return save(path, tm.export(file_type="glb"), outputs)
+    # OBJ with a material per colour, switched in face order
+    mtl = path.name[:-len(comp)] if comp else path.name
+    mtl = Path(mtl).with_suffix(".mtl").name
+    palette, index = np.unique(colors, axis=0, return_inverse=True)
+    index = index.ravel()
+    lines = [f"# made by superfacets: {mesh.n_faces} faces, labels in the material names",
+             f"mtllib {mtl}", _rows(mesh.vertices, "v %.17g %.17g %.17g").rstrip("\n")]
+    current = -1
+    for f, poly in enumerate(mesh.polygons()):
+        if index[f] != current:
+            current = index[f]
+            lines.append(f"usemtl color{current}")
+        lines.append("f " + " ".join(str(i + 1) for i in poly.tolist()))
+    mat = "".join(f"newmtl color{i}\nKd {r / 255:.4f} {g / 255:.4f} {b / 255:.4f}\n"
+                  for i, (r, g, b) in enumerate(palette.tolist()))
+    with Outputs() if outputs is None else _Nested(outputs) as out:
+        out.write(path, ("\n".join(lines) + "\n").encode("ascii"))
+        out.write(path.with_name(mtl), mat.encode("ascii"))
+    return path
+
+
+class _Nested:
+    """An outer :class:`Outputs` used in a ``with`` block without committing it."""
+
+    def __init__(self, outputs: Outputs):
+        self.outputs = outputs
+
+    def __enter__(self) -> Outputs:
+        return self.outputs
+
+    def __exit__(self, *exc) -> None:
+        return None

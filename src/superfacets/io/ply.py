@@ -1,0 +1,122 @@
+"""Binary PLY writing (polygons kept as polygons, colours, a ``label`` per face) and
+reading the labels back.
+
+The coloured PLY this package writes carries, per face, its colour
+(``red``/``green``/``blue``, uchar) and its superfacet (``label``, int32), so
+the segmentation can be read back from the file (:func:`read_ply_labels`) and
+shown by MeshLab, Blender, Open3D or trimesh. Vertices are written as doubles
+(no precision lost).
+"""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import MeshFormatError
+
+__all__ = ["ply_bytes", "read_ply_labels"]
+
+
+def ply_bytes(vertices: np.ndarray, corners: np.ndarray, offsets: np.ndarray, *,
+              face_colors: np.ndarray | None = None, labels: np.ndarray | None = None,
+              vertex_colors: np.ndarray | None = None) -> bytes:
+    """A binary little-endian PLY of polygons (any sizes), in face order.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float ndarray
+    corners : (c,) int ndarray
+        Vertex indices of every face, face after face.
+    offsets : (m + 1,) int ndarray
+        Face ``f`` has ``corners[offsets[f]:offsets[f + 1]]``.
+    face_colors : (m, 3) uint8 ndarray, optional
+    labels : (m,) int ndarray, optional
+        Written as the int32 face property ``label``.
+    vertex_colors : (n, 3) uint8 ndarray, optional
+
+    Returns
+    -------
+    bytes
+    """
+    v = np.asarray(vertices, dtype="<f8")
+    n, m = v.shape[0], offsets.shape[0] - 1
+    sizes = np.diff(offsets)
+    count = "uchar" if sizes.max() <= 255 else "int"
+    head = ["ply", "format binary_little_endian 1.0", "comment made by superfacets",
+            f"element vertex {n}", "property double x", "property double y", "property double z"]
+    vfields = [("xyz", "<f8", (3,))]
+    if vertex_colors is not None:
+        head += ["property uchar red", "property uchar green", "property uchar blue"]
+        vfields.append(("rgb", "u1", (3,)))
+    head += [f"element face {m}", f"property list {count} int vertex_indices"]
+    extra = []
+    if face_colors is not None:
+        head += ["property uchar red", "property uchar green", "property uchar blue"]
+        extra.append(("rgb", "u1", (3,)))
+    if labels is not None:
+        head.append("property int label")
+        extra.append(("label", "<i4"))
+    head.append("end_header")
+    vrec = np.empty(n, dtype=vfields)
+    vrec["xyz"] = v
+    if vertex_colors is not None:
+        vrec["rgb"] = np.asarray(vertex_colors)[:, :3]
+    out = io.BytesIO()
+    out.write(("\n".join(head) + "\n").encode("ascii"))
+    out.write(vrec.tobytes())
+    # faces: one record layout per polygon size, scattered into face order
+    cdt = "u1" if count == "uchar" else "<i4"
+    length = np.empty(m, dtype=np.int64)
+    for k in np.unique(sizes):
+        length[sizes == k] = np.dtype([("k", cdt), ("i", "<i4", (int(k),)), *extra]).itemsize
+    start = np.zeros(m + 1, dtype=np.int64)
+    np.cumsum(length, out=start[1:])
+    buf = np.empty(int(start[-1]), dtype=np.uint8)
+    corners = np.asarray(corners)
+    for k in np.unique(sizes):
+        k = int(k)
+        sel = np.flatnonzero(sizes == k)
+        rec = np.empty(sel.size, dtype=[("k", cdt), ("i", "<i4", (k,)), *extra])
+        rec["k"] = k
+        rec["i"] = corners[offsets[sel][:, None] + np.arange(k)]
+        if face_colors is not None:
+            rec["rgb"] = np.asarray(face_colors)[sel, :3]
+        if labels is not None:
+            rec["label"] = np.asarray(labels)[sel]
+        size = rec.dtype.itemsize
+        buf[(start[sel][:, None] + np.arange(size)).ravel()] = rec.view(np.uint8).ravel()
+    out.write(buf.tobytes())
+    return out.getvalue()
+
+
+def read_ply_labels(path, data: bytes | None = None) -> np.ndarray:
+    """The ``label`` face property of a PLY (as written by ``--colored-mesh``).
+
+    Parameters
+    ----------
+    path : path
+    data : bytes, optional
+        The (decompressed) content, if already read.
+
+    Returns
+    -------
+    (m,) int64 ndarray
+
+    Raises
+    ------
+    MeshFormatError
+        If the file is not a PLY with faces holding a ``label`` property.
+    """
+    from plyfile import PlyData, PlyParseError
+
+    try:
+        ply = PlyData.read(io.BytesIO(Path(path).read_bytes() if data is None else data))
+        face = ply["face"]
+        if "label" not in [p.name for p in face.properties]:
+            raise MeshFormatError(f"{path}: the PLY's faces have no 'label' property")
+        return np.asarray(face["label"], dtype=np.int64)
+    except (PlyParseError, KeyError, ValueError, IndexError, TypeError, EOFError) as exc:
+        raise MeshFormatError(f"{path}: cannot read labels from this PLY: {exc}") from None
