@@ -93,6 +93,13 @@ def grid_seg(value=None, n=None) -> bytes:
     return ("\n".join(str(x) for x in lab) + "\n").encode()
 
 
+def _tetra_ply_labels() -> bytes:
+    from superfacets.io.ply import ply_bytes
+
+    v = np.eye(4, 3)
+    return ply_bytes(v, np.array([0, 2, 1, 0, 1, 3]), np.array([0, 3, 6]), labels=np.array([0, 1]))
+
+
 RESULTS = (b"mesh,mesh_id,category,n_faces,method,n_segments,alpha,seed,status,segments,"
            b"undersegmentation_error,compactness,boundary_recall,achievable_accuracy\n")
 
@@ -195,6 +202,36 @@ def cases() -> list[Case]:
     mesh_case("stl-ascii-malformed", "m.stl", b"solid x\n facet normal 0 0 1\n  outer loop\n"
               b"   vertex 0 0\n  endloop\n endfacet\nendsolid x\n", "")
     mesh_case("stl-ascii-ok", "m.stl", grid_stl_ascii(), expect="ok")
+    # --- polygons and scenes
+    quads = (b"OFF\n6 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 0\n2 1 0.5\n"
+             b"4 0 1 2 3\n4 1 4 5 2\n")
+    mesh_case("off-quads-ok", "m.off", quads, expect="ok", extra=("-k", "2"))
+    mesh_case("off-repeated-vertex-ok", "m.off", quads.replace(b"4 0 1 2 3", b"4 0 1 1 2"),
+              expect="ok", extra=("-k", "1"))
+    mesh_case("off-face-one-vertex", "m.off", quads.replace(b"4 0 1 2 3", b"1 0"), "3 or more")
+    mesh_case("off-polygon-out-of-range", "m.off", quads.replace(b"4 1 4 5 2", b"4 1 4 5 9"),
+              "out of range")
+    mesh_case("ply-mixed-polygons-ok", "m.ply",
+              b"ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\n"
+              b"property float z\nelement face 2\nproperty list uchar int vertex_indices\n"
+              b"end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 0\n4 0 1 2 3\n3 1 4 2\n",
+              expect="ok", extra=("-k", "2"))
+    mesh_case("glb-garbage", "m.glb", b"glTF" + bytes(range(200)), "")
+    mesh_case("gltf-not-json", "m.gltf", b"{ this is not json", "")
+    out.append(Case("segment-vertex-colors-not-ply", g, ["segment", "{d}/g.off", "-k", "4",
+                                                         "--vertex-colors", "--colored-mesh",
+                                                         "{d}/c.glb"], match="--vertex-colors"))
+    out.append(Case("segment-per-object-radius", g, ["segment", "{d}/g.off", "--per-object",
+                                                     "--radius", "0.1"], match="--per-object"))
+    out.append(Case("segment-glb-output-ok", g, ["segment", "{d}/g.off", "-k", "4",
+                                                 "--colored-mesh", "{d}/c.glb"], "ok",
+                    outputs=["c.glb"]))
+    out.append(Case("segment-obj-output-ok", g, ["segment", "{d}/g.off", "-k", "4",
+                                                 "--colored-mesh", "{d}/c.obj"], "ok",
+                    outputs=["c.obj", "c.mtl"]))
+    out.append(Case("evaluate-labels-from-ply-short", {**g, "gt.seg": grid_seg(),
+                                                       "l.ply": _tetra_ply_labels()},
+                    ["evaluate", "{d}/g.off", "{d}/l.ply", "{d}/gt.seg"], match="labels"))
     # --- compression and files
     good = grid_off()
     mesh_case("gz-corrupt", "m.off.gz", gzip.compress(good)[:20] + b"\0" * 30, "decompress")
