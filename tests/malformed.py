@@ -243,6 +243,14 @@ def cases() -> list[Case]:
     mesh_case("xz-garbage-inside", "m.off.xz", lzma.compress(b"\x00\xff" * 100), "")
     mesh_case("unknown-suffix", "m.abc", good, "unknown mesh format")
     mesh_case("no-suffix", "m", good, "unknown mesh format")
+    out.append(Case("experiment-workers-huge", {"psb/off/1.off": grid_off(),
+                                                "psb/seg/Benchmark/1/1_0.seg": grid_seg()},
+                    ["experiment", "-o", "{d}/r.csv", "-q", "--psb", "{d}/psb", "-j", "100000"],
+                    match="workers"))
+    out.append(Case("segment-output-is-input", g, ["segment", "{d}/g.off", "-o", "{d}/g.off"],
+                    match="overwrite"))
+    out.append(Case("html-overwrites-labels", {**g, "l.html": grid_seg()},
+                    ["html", "{d}/g.off", "{d}/l.html", "-o", "{d}/l.html"], match="overwrite"))
     out.append(Case("missing-mesh", {}, ["segment", "{d}/none.off", "-o", "{d}/o.seg"],
                     match="no such file"))
     out.append(Case("mesh-is-folder", {"dir.off/x": b""}, ["segment", "{d}/dir.off"],
@@ -256,7 +264,11 @@ def cases() -> list[Case]:
             ("window-zero", ["--window", "0"], "window"), ("max-iter-zero", ["--max-iter", "0"], "max_iter"),
             ("threads-zero", ["--threads", "0"], "n_threads"),
             ("threads-huge", ["--threads", "100000"], "n_threads"),
-            ("shlafman-alpha", ["--weighting", "shlafman", "--alpha", "5"], "[0, 1]")]:
+            ("shlafman-alpha", ["--weighting", "shlafman", "--alpha", "5"], "[0, 1]"),
+            ("alpha-huge", ["--alpha", "1e308"], "alpha"),
+            ("eta-huge", ["--eta-convex", "1e300"], "eta_convex"),
+            ("window-huge", ["--window", "1e308"], "window"),
+            ("colored-is-input", ["--colored-mesh", "{d}/g.off"], ".ply")]:
         out.append(Case(f"segment-{name}", g, ["segment", "{d}/g.off", *opts, "-o", "{d}/o.seg"],
                         match=match))
     out.append(Case("segment-radius-zero", g, ["segment", "{d}/g.off", "--radius", "0"],

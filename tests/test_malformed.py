@@ -46,3 +46,13 @@ def test_malformed_input(case, tmp_path, capsys):
         return
     assert len(lines) == 1 and lines[0].startswith("superfacets: error: "), err
     assert case.match in lines[0], lines[0]
+
+
+def test_a_pipe_or_device_is_refused_as_input(tmp_path, capsys):
+    import os
+
+    fifo = tmp_path / "m.off"
+    os.mkfifo(fifo)
+    assert main(["segment", str(fifo), "-o", str(tmp_path / "o.seg")]) == 2
+    assert "not a regular file" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.off"]

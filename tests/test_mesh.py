@@ -46,7 +46,7 @@ def test_unreferenced_vertices_do_not_change_diagonal():
 @pytest.mark.parametrize("vertices, faces, match", [
     (V, np.zeros((0, 3), int), "empty mesh"),
     (V[:, :2], F, r"vertices must have shape \(n, 3\)"),
-    (V, np.array([[0, 1, 2, 3]]), "only triangle faces"),
+    (V, np.array([[0, 1]]), "at least 3 vertices"),
     (V, np.array([[0, 1, 4]]), "out of range"),
     (V, np.array([[0, 1, -1]]), "out of range"),
     (np.array([[0, 0, 0], [1, np.nan, 0], [0, 1, 0]]), np.array([[0, 1, 2]]), "NaN or infinite"),

@@ -34,6 +34,11 @@ ASSIGNMENTS = ("bounded", "exact")
 WEIGHTINGS = ("paper", "shlafman")
 #: Default ``alpha`` of each weighting, and its valid range ``(low, high)``.
 WEIGHTING_ALPHA = {"paper": (200.0, (0.0, math.inf)), "shlafman": (0.5, (0.0, 1.0))}
+#: Largest alpha and eta_convex (beyond, the angular term alone decides anyway; infinite
+#: weights would stall the expansions) and largest window (beyond, every window holds
+#: the whole mesh).
+MAX_WEIGHT_FACTOR = 1e12
+MAX_WINDOW = 1e3
 #: The paper's sweep (Fig. 4): numbers of superfacets and alphas.
 DEFAULT_N_SEGMENTS = (50, 100, 150, 200, 250, 300)
 DEFAULT_ALPHAS = (0.0, 100.0, 200.0, 500.0, 1000.0)
@@ -214,7 +219,7 @@ def resolve(**params) -> SegmentParams:
     weighting = check_choice("weighting", p.weighting, WEIGHTINGS)
     lo, hi = WEIGHTING_ALPHA[weighting][1]
     if weighting == "paper":
-        alpha = check_nonneg("alpha", p.alpha)
+        alpha = check_number("alpha", p.alpha, 0.0, MAX_WEIGHT_FACTOR)
     else:
         try:
             alpha = check_number("alpha", p.alpha, lo, hi)
@@ -223,8 +228,8 @@ def resolve(**params) -> SegmentParams:
                                  f"got {p.alpha!r}") from None
     return SegmentParams(
         n_segments=n_segments, radius=radius, alpha=alpha,
-        eta_convex=check_nonneg("eta_convex", p.eta_convex),
-        window=check_positive("window", p.window), init=init,
+        eta_convex=check_number("eta_convex", p.eta_convex, 0.0, MAX_WEIGHT_FACTOR),
+        window=check_number("window", p.window, 0.0, MAX_WINDOW, lo_open=True), init=init,
         max_iter=check_int("max_iter", p.max_iter, lo=1), weighting=weighting,
         assignment=check_choice("assignment", p.assignment, ASSIGNMENTS),
         enforce_connectivity=check_bool("enforce_connectivity", p.enforce_connectivity),

@@ -11,7 +11,8 @@ import numpy as np
 
 from .elements.graph import ElementGraph, as_element_graph, chunked
 from .errors import ParameterError
-from .params import WEIGHTING_ALPHA, WEIGHTINGS, check_choice, check_nonneg
+from .params import (MAX_WEIGHT_FACTOR, WEIGHTING_ALPHA, WEIGHTINGS, check_choice,
+                     check_nonneg, check_number)
 
 __all__ = ["paper_weights", "shlafman_weights", "edge_weights", "csr_weights"]
 
@@ -37,9 +38,9 @@ def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = 0.2
     graph : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
         The element graph (of a mesh: its cached face graph).
     alpha : float, default 200
-        Weight of the angular term, ``>= 0``.
+        Weight of the angular term, in ``[0, 1e12]``.
     eta_convex : float, default 0.2
-        Factor ``eta`` of convex edges, ``>= 0``.
+        Factor ``eta`` of convex edges, in ``[0, 1e12]``.
 
     Returns
     -------
@@ -66,8 +67,8 @@ def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = 0.2
     >>> w.shape
     (18,)
     """
-    alpha = check_nonneg("alpha", alpha)
-    eta_convex = check_nonneg("eta_convex", eta_convex)
+    alpha = check_number("alpha", alpha, 0.0, MAX_WEIGHT_FACTOR)
+    eta_convex = check_number("eta_convex", eta_convex, 0.0, MAX_WEIGHT_FACTOR)
     g = as_element_graph(graph)
     t = g.terms
 

@@ -47,7 +47,7 @@ def add_parsers(sub) -> None:
     x.add_argument("--per-category", type=int_arg, default=None, metavar="N",
                    help="only the first N meshes (by id) of each category: a stratified subset")
     x.add_argument("-j", "--workers", type=int_arg, default=None, metavar="N",
-                   help="worker processes (default: all cores)")
+                   help="worker processes (default: all cores; at most 4 per core)")
     x.add_argument("--tau", type=float_arg, default=0.05,
                    help="undersegmentation error tolerance (default: 0.05)")
     x.add_argument("--seed", type=int_arg, default=0, help="seed given to randomized methods")

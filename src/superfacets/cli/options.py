@@ -140,10 +140,11 @@ def add_mesh_and_labels(p, plain: bool = True) -> None:
 
 
 def check_output(path: str | None, suffixes: tuple[str, ...], what: str,
-                 stdout: bool = False) -> Path | None:
+                 stdout: bool = False, inputs: tuple = ()) -> Path | None:
     """The output path, checked before any work: its folder exists, it is no folder,
     and it ends in one of ``suffixes`` (when given). ``-`` (standard output) is
-    accepted where ``stdout`` is True. A link is checked where it points.
+    accepted where ``stdout`` is True. A link is checked where it points. An
+    output that is one of ``inputs`` (the same file) is refused: nothing is lost.
 
     Raises
     ------
@@ -165,6 +166,11 @@ def check_output(path: str | None, suffixes: tuple[str, ...], what: str,
         raise IsADirectoryError(f"{out}: is a directory")
     if suffixes and not any(out.name.lower().endswith(s) for s in suffixes):
         raise ParameterError(f"{out}: {what} must end in {' or '.join(suffixes)}")
+    flat = [x for src in inputs for x in (src if isinstance(src, (list, tuple)) else [src])]
+    for src in flat:
+        if src and Path(src).exists() and out.exists() and out.samefile(src):
+            raise ParameterError(f"{out}: is an input of this command; writing {what} there "
+                                 "would overwrite it")
     return out
 
 

@@ -85,7 +85,8 @@ def cmd_render(args) -> int:
     from ..io import read_mesh
     from ..render import render
 
-    out = check_output(args.output, (".png",), "the picture")
+    out = check_output(args.output, (".png",), "the picture",
+                       inputs=(args.mesh, getattr(args, "labels", None)))
     mesh = read_mesh(args.mesh)
     labels, _ = labels_for(args, mesh)
     t0 = time.perf_counter()
@@ -108,7 +109,8 @@ def cmd_panel(args) -> int:
     from ..render import render_panel
     from ..runner.grid import expand_grid, method_grid, parse_params
 
-    out = check_output(args.output, (".png",), "the picture")
+    out = check_output(args.output, (".png",), "the picture",
+                       inputs=(args.mesh, getattr(args, "labels", None)))
     mesh = read_mesh(args.mesh)
     items = []
     if args.labels:
@@ -163,7 +165,8 @@ def cmd_html(args) -> int:
     from ..html import write_html
     from ..io import read_mesh
 
-    out = check_output(args.output, (".html", ".htm"), "the page")
+    out = check_output(args.output, (".html", ".htm"), "the page",
+                       inputs=(args.mesh, args.labels))
     mesh = read_mesh(args.mesh)
     labels, info = labels_for(args, mesh)
     write_html(out, mesh, labels, title=args.title or Path(args.mesh).name, info=info,

@@ -147,8 +147,11 @@ def cmd_segment(args) -> int:
     from ..params import resolve
     from ..segmentation import segment, segment_objects
 
-    seg_out = check_output(args.output, (), "label file", stdout=True)
-    ply_out = check_output(args.colored_mesh, (".ply", ".glb", ".obj"), "the coloured mesh")
+    seg_out = check_output(args.output, (), "label file", stdout=True, inputs=(args.mesh,))
+    ply_out = check_output(args.colored_mesh, (".ply", ".glb", ".obj"), "the coloured mesh",
+                           inputs=(args.mesh,))
+    if seg_out is not None and ply_out is not None and str(seg_out) == str(ply_out):
+        raise ParameterError(f"{seg_out}: the labels and the coloured mesh cannot both go there")
     if args.vertex_colors and (ply_out is None or not ply_out.name.lower().endswith(".ply")):
         raise ParameterError("--vertex-colors goes with --colored-mesh OUT.ply")
     if args.per_object and args.radius is not None:
@@ -200,8 +203,9 @@ def cmd_baseline(args) -> int:
     if many:
         raise ParameterError(f"--param: give one value for {', '.join(many)}")
     params = method.resolve({n: v[0] for n, v in given.items()})
-    seg_out = check_output(args.output, (), "label file", stdout=True)
-    ply_out = check_output(args.colored_mesh, (".ply",), "the coloured mesh")
+    seg_out = check_output(args.output, (), "label file", stdout=True, inputs=(args.mesh,))
+    ply_out = check_output(args.colored_mesh, (".ply", ".glb", ".obj"), "the coloured mesh",
+                           inputs=(args.mesh,))
     mesh = read_mesh(args.mesh)
     t0 = time.perf_counter()
     show = not args.quiet and sys.stderr.isatty()

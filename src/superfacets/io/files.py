@@ -38,7 +38,22 @@ def split_suffix(path: Path) -> tuple[str, str | None]:
 
 
 def read_bytes(path: Path, comp: str | None) -> bytes:
-    """The content of ``path``, decompressed when ``comp`` names a compression suffix."""
+    """The content of ``path``, decompressed when ``comp`` names a compression suffix.
+
+    Raises
+    ------
+    FileNotFoundError, IsADirectoryError
+        If there is no such file, or it is a folder.
+    MeshFormatError
+        If it is not a regular file (a device or FIFO, which could be endless),
+        or cannot be decompressed.
+    """
+    if not path.exists():
+        raise FileNotFoundError(f"{path}: no such file")
+    if path.is_dir():
+        raise IsADirectoryError(f"{path}: is a directory")
+    if not path.is_file():
+        raise MeshFormatError(f"{path}: not a regular file (a device or a pipe); give a file")
     data = path.read_bytes()
     if comp is None:
         return data

@@ -225,9 +225,10 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
         raise ParameterError(f"n_segments must be positive integers, got {list(n_segments)}")
     if not (0 <= tau < 1):
         raise ParameterError(f"tau must be in [0, 1), got {tau}")
-    workers = _default_workers() if workers is None else int(workers)
-    if workers < 1:
-        raise ParameterError(f"workers must be >= 1, got {workers}")
+    from ..params import check_int, max_threads
+
+    workers = _default_workers() if workers is None else check_int("workers", workers, lo=1,
+                                                                    hi=max_threads())
     path = Path(results)
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a directory")
