@@ -15,6 +15,7 @@ import io
 import lzma
 import os
 import tempfile
+import zlib
 from pathlib import Path
 from typing import Callable
 
@@ -59,7 +60,7 @@ def read_bytes(path: Path, comp: str | None) -> bytes:
         return data
     try:
         return COMPRESSIONS[comp](data)
-    except (OSError, EOFError, lzma.LZMAError, ValueError) as exc:
+    except (OSError, EOFError, lzma.LZMAError, ValueError, zlib.error, MemoryError) as exc:
         raise MeshFormatError(f"{path}: cannot decompress ({comp[1:]}): {exc}") from None
 
 

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import gc
 import io
+import logging
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -268,11 +270,12 @@ def _load_scene(path: Path, fmt: str, comp: str | None, data: bytes) -> Mesh:
     from ..convert import mesh_from_scene
 
     try:
-        if comp is None:  # a .gltf may point to buffers beside it: load from the path
-            scene = trimesh.load(str(path), file_type=fmt, force="scene", process=False)
-        else:
-            scene = trimesh.load(io.BytesIO(data), file_type=fmt, force="scene",
-                                 process=False)
+        with _quiet_trimesh():
+            if comp is None:  # a .gltf may point to buffers beside it: load from the path
+                scene = trimesh.load(str(path), file_type=fmt, force="scene", process=False)
+            else:
+                scene = trimesh.load(io.BytesIO(data), file_type=fmt, force="scene",
+                                     process=False)
     except Exception as exc:  # trimesh raises many types for malformed input
         raise MeshFormatError(f"{path}: cannot read {fmt.upper()}: "
                               f"{exc or type(exc).__name__}") from None
@@ -290,7 +293,25 @@ def _floats3(row: str) -> bool:
 
 
 # ---------------------------------------------------------- via trimesh
+@contextmanager
+def _quiet_trimesh():
+    """Keep trimesh's log (which prints tracebacks of what it could not parse) off stderr:
+    a malformed file is reported once, by our own error."""
+    log = logging.getLogger("trimesh")
+    level = log.level
+    log.setLevel(logging.CRITICAL + 1)
+    try:
+        yield
+    finally:
+        log.setLevel(level)
+
+
 def _load_trimesh(data: bytes, fmt: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
+    with _quiet_trimesh():
+        return _load_trimesh_quietly(data, fmt, path)
+
+
+def _load_trimesh_quietly(data: bytes, fmt: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
     import trimesh
 
     kwargs = {}
