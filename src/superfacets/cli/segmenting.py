@@ -71,12 +71,12 @@ def add_parsers(sub) -> None:
 
     d = sub.add_parser(
         "demo", help="segment a built-in procedural mesh (no data needed)",
-        description="Build a procedural four-legged creature (about 21,000 faces), compute "
+        description="Build a procedural four-legged creature (about 22,000 faces), compute "
                     "its superfacets and write the mesh, the labels and a coloured PLY.")
     d.add_argument("--output-dir", default="demo-output", metavar="DIR",
                    help="folder for the outputs, created if needed (default: demo-output)")
-    d.add_argument("--resolution", type=int_arg, default=100, metavar="N",
-                   help="marching-cubes grid resolution of the shape (default: 100)")
+    d.add_argument("--resolution", type=int_arg, default=58, metavar="N",
+                   help="grid samples along the shape's longest axis, 16..300 (default: 58)")
     d.add_argument("-k", "--n-segments", type=int_arg, default=DEFAULTS.n_segments, metavar="N",
                    help=f"number of superfacets (default: {DEFAULTS.n_segments})")
     add_method_options(d, with_size=False)
