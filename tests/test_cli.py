@@ -49,7 +49,7 @@ def test_header_option(tmp_path, small_off, capsys):
     (["segment", "{bad}"], "expected 2 faces, found 1"),
     (["segment", "{off}", "-k", "0"], "n_segments must be an integer >= 1"),
     (["segment", "{off}", "-k", "999999"], "larger than the number of faces"),
-    (["segment", "{off}", "--alpha", "-1"], "alpha must be a finite number >= 0"),
+    (["segment", "{off}", "--alpha", "-1"], "alpha must be a finite number in [0, 1e+12]"),
     (["segment", "{off}", "-o", "{nodir}"], "does not exist"),
     (["segment", "{off}", "--colored-mesh", "{txt}"], "must end in .ply"),
 ])

@@ -62,6 +62,7 @@ class SegmentParams:
     weighting: str = "paper"
     assignment: str = "bounded"
     enforce_connectivity: bool = True
+    tol: float = 0.0
     progress: bool = False
     n_threads: int | None = None
 
@@ -233,4 +234,5 @@ def resolve(**params) -> SegmentParams:
         max_iter=check_int("max_iter", p.max_iter, lo=1), weighting=weighting,
         assignment=check_choice("assignment", p.assignment, ASSIGNMENTS),
         enforce_connectivity=check_bool("enforce_connectivity", p.enforce_connectivity),
-        progress=bool(p.progress), n_threads=check_threads(p.n_threads))
+        tol=check_number("tol", p.tol, 0.0, 1.0), progress=bool(p.progress),
+        n_threads=check_threads(p.n_threads))

@@ -74,6 +74,11 @@ class Iteration:
         0, or the period of the cycle of center lists that was jumped.
     expansions : int
         Expansions run by the classifier.
+    changed : float
+        Fraction of the area whose superfacet the last classification changed
+        (-1 when not measured: ``tol = 0``, or the first pass).
+    stopped_by_tol : bool
+        True when the ``tol`` rule ended the run.
     """
 
     label: np.ndarray
@@ -84,11 +89,13 @@ class Iteration:
     n_passes: int
     cycle_period: int
     expansions: int
+    changed: float = -1.0
+    stopped_by_tol: bool = False
 
 
 def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
             positions: np.ndarray, max_iter: int, *, jump_cycles: bool = True,
-            bar=None) -> Iteration:
+            tol: float = 0.0, bar=None) -> Iteration:
     """Alternate classification and center update (paper section 3.1).
 
     Parameters
@@ -103,6 +110,10 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
         Passes at most (``>= 1``).
     jump_cycles : bool, default True
         Jump over a cycle of center lists (see the module notes); same result.
+    tol : float, default 0
+        Also stop when a classification changed the superfacet of at most this
+        fraction of the total size (area) against the previous one. 0: the
+        paper's rule alone (stop when no center moves), bit for bit.
     bar : tqdm, optional
         Progress bar advanced once per pass.
 
@@ -114,7 +125,10 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
     dist = np.empty(m)
     label = np.empty(m, dtype=np.int32)  # one kernel specialization for all label arrays
     n_iter = n_orphans = n_passes = n_expanded = period = 0
-    converged = False
+    converged = by_tol = False
+    changed = -1.0
+    prev = None  # with tol: the previous labels, in this pass's superfacet indices
+    total = float(sizes.sum()) if tol > 0 else 0.0
     seen: dict[bytes, int] = {}
     states: list[np.ndarray] = []
     orphans_per_pass: list[int] = []
@@ -131,6 +145,7 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
             if bar is not None:
                 bar.update(last - n_iter)
             n_iter = last
+            prev = None  # the state jumped: no previous pass to compare with
         elif not period:
             seen[key] = n_iter
             states.append(centers[:n_centers].copy())
@@ -141,6 +156,11 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
         n_orphans += k_now - n_centers
         orphans_per_pass.append(k_now - n_centers)
         used = centers[:k_now].copy()
+        if tol > 0 and prev is not None:
+            changed = float(sizes[label != prev].sum()) / total
+            if changed <= tol:
+                converged = by_tol = True
+                break
         moved = update_centers(label, k_now, sizes, positions, used)
         n_moved = int((moved != used).sum())
         if bar is not None:
@@ -151,12 +171,16 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
             break
         if n_iter >= max_iter:
             break
-        alive = moved[moved >= 0]
+        keep = moved >= 0
+        alive = moved[keep]
         n_centers = alive.shape[0]
         centers[:n_centers] = alive
+        if tol > 0:  # superfacet s is number remap[s] in the next pass (-1: it died)
+            remap = np.where(keep, np.cumsum(keep) - 1, -1).astype(np.int32)
+            prev = remap[label]
     return Iteration(label=label, centers=used, n_iter=n_iter, converged=converged,
                      n_orphan_seeds=n_orphans, n_passes=n_passes, cycle_period=period,
-                     expansions=n_expanded)
+                     expansions=n_expanded, changed=changed, stopped_by_tol=by_tol)
 
 
 def final_centers(labels: np.ndarray, old_centers: np.ndarray, sizes: np.ndarray,

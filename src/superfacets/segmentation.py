@@ -94,7 +94,8 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
                 max_iter: int = _D.max_iter, weighting: str = _D.weighting,
                 assignment: str = _D.assignment,
                 enforce_connectivity: bool = _D.enforce_connectivity,
-                progress: bool = _D.progress, n_threads: int | None = _D.n_threads) -> np.ndarray:
+                tol: float = _D.tol, progress: bool = _D.progress,
+                n_threads: int | None = _D.n_threads) -> np.ndarray:
     """Over-segment a triangle mesh into superfacets.
 
     The k-means-style method of Simari, Picciau and De Floriani (2014):
@@ -142,6 +143,11 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
     enforce_connectivity : bool, default True
         Merge stray pieces of a superfacet into the neighbour with which they
         share the longest boundary, so each superfacet is face-connected.
+    tol : float, default 0
+        Convergence tolerance in ``[0, 1]``: also stop once a classification
+        changes the superfacet of at most this fraction of the surface area
+        (as SLIC stops on its residual). 0 is the paper's rule (stop when no
+        center moves, else at ``max_iter``), bit for bit.
     progress : bool, default False
         Show a progress bar on stderr: the set-up stages by name (face graph,
         weights, init), then the iterations.
@@ -191,7 +197,7 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
     return segment(mesh, n_segments, radius=radius, alpha=alpha, eta_convex=eta_convex,
                    window=window, init=init, max_iter=max_iter, weighting=weighting,
                    assignment=assignment, enforce_connectivity=enforce_connectivity,
-                   progress=progress, n_threads=n_threads).labels
+                   tol=tol, progress=progress, n_threads=n_threads).labels
 
 
 def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | None = _D.radius,
@@ -199,8 +205,9 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | Non
             window: float = _D.window, init: str | None = _D.init,
             max_iter: int = _D.max_iter, weighting: str = _D.weighting,
             assignment: str = _D.assignment,
-            enforce_connectivity: bool = _D.enforce_connectivity,
-            progress: bool = _D.progress, n_threads: int | None = _D.n_threads) -> SegmentationResult:
+            enforce_connectivity: bool = _D.enforce_connectivity, tol: float = _D.tol,
+            progress: bool = _D.progress,
+            n_threads: int | None = _D.n_threads) -> SegmentationResult:
     """Superfacets with details: same parameters as :func:`superfacets`.
 
     Returns
@@ -237,7 +244,7 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | Non
     params = resolve(n_segments=n_segments, radius=radius, alpha=alpha, eta_convex=eta_convex,
                      window=window, init=init, max_iter=max_iter, weighting=weighting,
                      assignment=assignment, enforce_connectivity=enforce_connectivity,
-                     progress=progress, n_threads=n_threads)
+                     tol=tol, progress=progress, n_threads=n_threads)
     return pipeline(mesh, params)
 
 
@@ -323,7 +330,7 @@ def pipeline(mesh, params: SegmentParams, *, replay: bool = True,
             classifier = make_classifier(p.assignment, graph, w, window_r2, spaces,
                                          replay=replay)
             it = iterate(classifier, centers, init.shape[0], sizes, positions, p.max_iter,
-                         jump_cycles=jump_cycles, bar=bar)
+                         jump_cycles=jump_cycles, tol=p.tol, bar=bar)
         finally:
             spaces.close()
         classifier = spaces = w = None  # free the work buffers before the clean-up
@@ -343,11 +350,13 @@ def pipeline(mesh, params: SegmentParams, *, replay: bool = True,
     centers = final_centers(labels, centers, sizes, positions)
     timings["connectivity"] = time.perf_counter() - t
     timings["total"] = time.perf_counter() - t_start
-    timings.update(expansions=it.expansions, passes=it.n_passes, cycle_period=it.cycle_period)
+    timings.update(expansions=it.expansions, passes=it.n_passes, cycle_period=it.cycle_period,
+                   changed=it.changed, stopped_by_tol=it.stopped_by_tol)
     resolved = dict(n_segments=k, radius=r / mesh.diagonal, alpha=p.alpha,
                     eta_convex=p.eta_convex, window=p.window, init=p.init,
                     max_iter=p.max_iter, weighting=p.weighting, assignment=p.assignment,
-                    enforce_connectivity=p.enforce_connectivity, n_init_centers=init.shape[0])
+                    enforce_connectivity=p.enforce_connectivity, tol=p.tol,
+                    n_init_centers=init.shape[0])
     return SegmentationResult(labels=labels, centers=centers, n_iter=it.n_iter,
                               converged=it.converged, radius=r,
                               n_orphan_seeds=it.n_orphan_seeds, timings=timings,

@@ -89,6 +89,9 @@ def add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> No
                    help="bounded: the paper's window-bounded expansion per center; "
                         "exact: nearest center by one multi-source Dijkstra "
                         f"(default: {_D.assignment})")
+    p.add_argument("--tol", type=float_arg, default=_D.tol, metavar="T",
+                   help="also stop once a pass changes the superfacet of at most this fraction "
+                        "of the area (default: 0, the paper's rule: stop when no center moves)")
     p.add_argument("--no-connectivity", action="store_true",
                    help="keep superfacets split in several pieces (default: merge stray "
                         "pieces into the neighbour sharing the longest boundary)")
@@ -106,7 +109,7 @@ def method_kwargs(args) -> dict:
     return dict(alpha=args.alpha, eta_convex=args.eta_convex, window=args.window,
                 init=args.init, max_iter=args.max_iter, weighting=args.weighting,
                 assignment=args.assignment, enforce_connectivity=not args.no_connectivity,
-                progress=bool(args.progress), n_threads=args.threads)
+                tol=args.tol, progress=bool(args.progress), n_threads=args.threads)
 
 
 def add_camera_options(p, size: str) -> None:
