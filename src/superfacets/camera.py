@@ -17,6 +17,18 @@ AXES = {"x": (1, 0, 0), "y": (0, 1, 0), "z": (0, 0, 1),
         "-x": (-1, 0, 0), "-y": (0, -1, 0), "-z": (0, 0, -1)}
 
 
+def _direction(value, what: str) -> np.ndarray:
+    """``value`` as a unit 3-vector, or ParameterError naming ``what``."""
+    try:
+        v = np.asarray(value, dtype=float).reshape(3)
+    except (TypeError, ValueError):
+        v = np.zeros(3)
+    norm = np.linalg.norm(v) if np.all(np.isfinite(v)) else 0.0
+    if not norm > 0:
+        raise ParameterError(f"{what} must be a non-zero finite 3-vector, got {value!r}")
+    return v / norm
+
+
 def view_frame(mesh, view=None, elevation: float = 20.0,
                up="y") -> tuple[np.ndarray, np.ndarray]:
     """A camera direction and up vector that show a mesh well.
@@ -60,10 +72,7 @@ def view_frame(mesh, view=None, elevation: float = 20.0,
             raise ParameterError(f"unknown up axis {up!r}; use one of {', '.join(AXES)}")
         up_axis = np.array(AXES[up], dtype=float)
     else:
-        up_axis = np.asarray(up, dtype=float).reshape(3)
-        if not np.all(np.isfinite(up_axis)) or np.linalg.norm(up_axis) == 0:
-            raise ParameterError(f"up must be a non-zero finite 3-vector, got {up!r}")
-        up_axis = up_axis / np.linalg.norm(up_axis)
+        up_axis = _direction(up, "up")
     if view is None or (isinstance(view, str) and view == "auto"):
         d = evecs[:, 0]  # the axis of least spread: the widest silhouette
         # face the camera from the positive side of the dominant world axis of d
@@ -74,9 +83,7 @@ def view_frame(mesh, view=None, elevation: float = 20.0,
             raise ParameterError(f"unknown view {view!r}; use auto, {', '.join(VIEWS)} or x,y,z")
         d = np.array(VIEWS[view], dtype=float)
     else:
-        d = np.asarray(view, dtype=float).reshape(3)
-        if not np.all(np.isfinite(d)) or np.linalg.norm(d) == 0:
-            raise ParameterError(f"view direction must be a non-zero finite 3-vector, got {view!r}")
+        d = _direction(view, "view direction")
         elevation = 0.0 if view is not None else elevation
     d = d / np.linalg.norm(d)
     up = up_axis.copy()
