@@ -56,6 +56,25 @@ def run_child(name: str, args, env=None) -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
+def cli_times(args) -> list[float]:
+    """Wall-clock seconds of ``superfacets segment`` on the bunny, each a new process."""
+    out = []
+    for _ in range(max(3, args.repeat)):
+        t = time.perf_counter()
+        subprocess.run([sys.executable, "-m", "superfacets", "segment",
+                        str(MESHES / "bunny.tri.xz"), "-k", str(args.k), "--alpha",
+                        str(args.alpha), "-q"], check=True)
+        out.append(time.perf_counter() - t)
+    return out
+
+
+def help_time() -> float:
+    t = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "superfacets", "--help"], check=True,
+                   capture_output=True)
+    return time.perf_counter() - t
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("-k", type=int, default=150)
@@ -97,6 +116,10 @@ def main() -> int:
     print(f"\nimport of the package: {rows[-1]['import_s']:.2f} s; resident memory after import "
           f"{rows[-1]['baseline_rss'] / 2**20:.0f} MiB (Python, numpy, numba); 'total' is read + "
           "segment, in process, after import.")
+    cli = cli_times(args)
+    print(f"\nbunny from the command line in a new process (`superfacets segment bunny.tri.xz "
+          f"-k {args.k} -q`, wall clock, {len(cli)} runs): best {min(cli):.2f} s, median "
+          f"{sorted(cli)[len(cli) // 2]:.2f} s; `superfacets --help`: {help_time():.2f} s.")
     return 0
 
 
