@@ -61,3 +61,24 @@ def test_damaged_files_give_clear_errors(name, tmp_path):
                 read(path)
             except (SuperfacetsError, OSError):
                 pass
+
+
+@pytest.mark.parametrize("name", sorted(n for n in _seeds() if not n.startswith("l.")))
+def test_damaged_files_through_segment(name, tmp_path, capsys):
+    """The whole command on damaged files: exit 0 or 2, no traceback, nothing half-written."""
+    from superfacets.cli import main
+
+    rng = random.Random("cli" + name)
+    data = _seeds()[name]
+    path, out, ply = tmp_path / name, tmp_path / "o.seg", tmp_path / "o.ply"
+    for _ in range(8):
+        path.write_bytes(_damage(data, rng))
+        for p in (out, ply):
+            p.unlink(missing_ok=True)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            rc = main(["segment", str(path), "-k", str(rng.choice([1, 3, 10])), "-o", str(out),
+                       "--colored-mesh", str(ply)])
+        err = capsys.readouterr().err
+        assert rc in (0, 2) and "Traceback" not in err
+        assert (out.exists() and ply.exists()) == (rc == 0)
