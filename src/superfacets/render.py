@@ -21,7 +21,7 @@ from typing import Sequence
 import numpy as np
 
 from .camera import view_frame
-from .colors import boundary_edges, face_colors
+from .colors import boundary_edges
 from .errors import NoDisplayError, ParameterError
 from .params import check_number
 from .extras import require
@@ -47,17 +47,9 @@ def _pyvista(off_screen: bool):
 
 def _polydata(pv, mesh, labels):
     """The mesh as PolyData cells (triangles or polygons), one colour per cell."""
-    sizes = mesh.face_sizes
-    cells = np.empty(mesh.n_faces + mesh.corners.shape[0], dtype=np.int64)
-    head = np.asarray(mesh.offsets)[:-1] + np.arange(mesh.n_faces)  # where each cell starts
-    cells[head] = sizes
-    body = np.ones(cells.shape[0], dtype=bool)
-    body[head] = False
-    cells[body] = mesh.corners
-    poly = pv.PolyData(np.asarray(mesh.vertices, dtype=np.float64), cells)
-    if labels is not None:
-        poly.cell_data["rgb"] = face_colors(mesh, labels)
-    return poly
+    from .convert import to_pyvista
+
+    return to_pyvista(mesh, labels)
 
 
 def _boundary_lines(pv, mesh, labels, lift: float):

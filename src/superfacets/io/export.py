@@ -18,6 +18,7 @@ or nothing (:class:`superfacets.io.files.Outputs`).
 from __future__ import annotations
 
 import io
+from contextlib import nullcontext
 from pathlib import Path
 
 import numpy as np
@@ -209,20 +210,8 @@ def write_colored_mesh(path, mesh, labels, *, vertex_colors: bool = False,
         lines.append("f " + " ".join(str(i + 1) for i in poly.tolist()))
     mat = "".join(f"newmtl color{i}\nKd {r / 255:.4f} {g / 255:.4f} {b / 255:.4f}\n"
                   for i, (r, g, b) in enumerate(palette.tolist()))
-    with Outputs() if outputs is None else _Nested(outputs) as out:
+    with Outputs() if outputs is None else nullcontext(outputs) as out:
         out.write(path, ("\n".join(lines) + "\n").encode("ascii"))
         out.write(path.with_name(mtl), mat.encode("ascii"))
     return path
 
-
-class _Nested:
-    """An outer :class:`Outputs` used in a ``with`` block without committing it."""
-
-    def __init__(self, outputs: Outputs):
-        self.outputs = outputs
-
-    def __enter__(self) -> Outputs:
-        return self.outputs
-
-    def __exit__(self, *exc) -> None:
-        return None

@@ -82,12 +82,7 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
         from .ply import read_ply_labels
 
         labels = read_ply_labels(path, data)
-        if n_faces is not None and labels.shape[0] != n_faces:
-            raise MeshFormatError(f"{path}: has {labels.shape[0]} labels but the mesh has "
-                                  f"{n_faces} faces")
-        return labels
-    lines = text_lines(data, path)
-    if not lines:
+    elif not (lines := text_lines(data, path)):
         labels = np.zeros(0, dtype=np.int64)
     else:
         try:
