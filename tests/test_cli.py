@@ -125,7 +125,7 @@ def test_evaluate_one_call(tmp_path, capsys):
     bad = tmp_path / "short.seg"
     bad.write_text("0\n1\n")
     assert main(["evaluate", str(off), str(sf), str(bad)]) == 2
-    assert "short.seg: has 2 labels but the mesh has 800 faces" in capsys.readouterr().err
+    assert "short.seg: has 2 labels but the input has 800 elements" in capsys.readouterr().err
 
 
 def test_progress_bar_names_the_stages_then_counts_passes(tmp_path, small_off, capsys):

@@ -132,7 +132,7 @@ def test_label_file_errors(tmp_path):
     with pytest.raises(MeshFormatError, match="malformed label file"):
         read_labels(p)
     p.write_text("1\n2\n")
-    with pytest.raises(MeshFormatError, match="has 2 labels but the mesh has 3 faces"):
+    with pytest.raises(MeshFormatError, match="has 2 labels but the input has 3 elements"):
         read_labels(p, n_faces=3)
     with pytest.raises(FileNotFoundError):
         read_labels(tmp_path / "none.seg")

@@ -28,9 +28,11 @@ PALETTE = np.array([
 
 
 def _across(mesh, labels):
-    """Labels on both sides of every adjacency, and which adjacencies cross superfacets."""
-    pairs = mesh.graph.pairs
-    labels = check_labels(labels, mesh.n_faces, per="face")
+    """Labels on both sides of every adjacency, and which adjacencies cross superfacets.
+    ``mesh`` is a Mesh (its face graph) or any element graph."""
+    graph = mesh.graph if hasattr(mesh, "faces") else mesh
+    pairs = graph.pairs
+    labels = check_labels(labels, graph.n_elements, per=graph.element)
     a, b = labels[pairs[:, 0]], labels[pairs[:, 1]]
     return a, b, a != b
 
@@ -66,9 +68,10 @@ def superfacet_colors(mesh, labels: np.ndarray) -> np.ndarray:
 
     Parameters
     ----------
-    mesh : Mesh
+    mesh : Mesh or ElementGraph
+        A mesh (its face graph), or the element graph the labels belong to.
     labels : (m,) int ndarray
-        Dense labels ``0..K-1``.
+        Dense labels ``0..K-1``, one per element.
 
     Returns
     -------

@@ -39,7 +39,7 @@ def label_components(graph, labels: np.ndarray) -> np.ndarray:
         same label and are connected through faces of that label.
     """
     graph = as_element_graph(graph)
-    labels = check_labels(labels, graph.n_elements, per=graph.kind.rstrip("s"))
+    labels = check_labels(labels, graph.n_elements, per=graph.element)
     i, j = graph.pairs[:, 0], graph.pairs[:, 1]
     same = labels[i] == labels[j]
     m = graph.n_elements
@@ -85,7 +85,7 @@ def enforce_connectivity(graph, labels: np.ndarray, centers: np.ndarray | None =
     mesh); if one does, it becomes a superfacet of its own.
     """
     g = as_element_graph(graph)
-    labels = check_labels(labels, g.n_elements, per=g.kind.rstrip("s"))
+    labels = check_labels(labels, g.n_elements, per=g.element)
     piece = label_components(g, labels)
     n_pieces = int(piece.max()) + 1
     piece_label = np.empty(n_pieces, dtype=np.int64)

@@ -19,7 +19,8 @@ from .errors import MissingExtraError
 __all__ = ["require", "EXTRAS"]
 
 #: Module -> the extra that installs it.
-EXTRAS = {"pyvista": "render", "PIL": "render", "pandas": "report", "matplotlib": "report"}
+EXTRAS = {"pyvista": "render", "PIL": "render", "pandas": "report", "matplotlib": "report",
+          "pypcd4": "clouds", "laspy": "clouds", "pycut_pursuit": "gpl-baselines"}
 
 
 def require(module: str, feature: str):

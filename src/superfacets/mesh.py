@@ -215,6 +215,14 @@ class Mesh:
 
         return face_graph(self)
 
+    @cached_property
+    def vertex_elements(self):
+        """The vertex graph of this mesh and the element of each vertex, a
+        :class:`~superfacets.elements.vertices.VertexElements` (cached)."""
+        from .elements.vertices import vertex_graph
+
+        return vertex_graph(self)
+
     def check_usable(self) -> None:
         """Raise :class:`InvalidMeshError` if the mesh cannot be segmented or measured.
 

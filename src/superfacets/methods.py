@@ -16,7 +16,7 @@ from typing import Callable
 import numpy as np
 
 from .errors import MemoryLimitError, ParameterError
-from .params import DEFAULT_ALPHAS, DEFAULTS, INITS, WEIGHTING_ALPHA
+from .params import DEFAULT_ALPHAS, DEFAULTS, ELEMENTS, INITS, WEIGHTING_ALPHA
 from .segmentation import segment
 
 __all__ = ["Method", "MethodRun", "Skipped", "METHODS", "register_method", "get_method",
@@ -76,6 +76,10 @@ class Method:
     description : str
     progress : bool
         True when ``run`` also takes ``progress=`` (a progress bar on stderr).
+    elements : tuple of str
+        The element kinds it segments (``"faces"``, ``"vertices"``,
+        ``"points"``). A method with more than faces takes ``elements=`` and
+        is given a mesh (faces, vertices) or a point cloud (points).
     """
 
     name: str
@@ -84,6 +88,7 @@ class Method:
     sweep: dict = field(default_factory=dict)
     description: str = ""
     progress: bool = False
+    elements: tuple = ("faces",)
 
     def resolve(self, params: dict) -> dict:
         """``defaults`` updated with ``params``, converted to the defaults' types.
@@ -122,7 +127,7 @@ METHODS: dict[str, Method] = {}
 
 def register_method(name: str, run: Callable[..., MethodRun], *, defaults: dict,
                     sweep: dict | None = None, description: str = "",
-                    progress: bool = False) -> Method:
+                    progress: bool = False, elements: tuple = ("faces",)) -> Method:
     """Add (or replace) a method in :data:`METHODS`.
 
     Parameters
@@ -140,6 +145,8 @@ def register_method(name: str, run: Callable[..., MethodRun], *, defaults: dict,
     description : str, optional
     progress : bool, default False
         Whether ``run`` takes ``progress=`` (shown by ``superfacets baseline``).
+    elements : tuple of str, default ('faces',)
+        Element kinds the method segments (see :class:`Method`).
 
     Returns
     -------
@@ -150,7 +157,8 @@ def register_method(name: str, run: Callable[..., MethodRun], *, defaults: dict,
     clash = set(defaults) & {"n_segments", "seed", "cache"}
     if clash:
         raise ParameterError(f"parameter name(s) reserved by the runner: {sorted(clash)}")
-    m = Method(name, run, dict(defaults), dict(sweep or {}), description, progress)
+    m = Method(name, run, dict(defaults), dict(sweep or {}), description, progress,
+               tuple(elements))
     METHODS[name] = m
     return m
 
@@ -177,6 +185,15 @@ def _run_superfacets(mesh, n_segments, *, cache, seed, weighting="paper", **para
 
     r = segment(mesh, n_segments, weighting=weighting, **params)
     return MethodRun(r.labels, r.n_iter, r.converged)
+
+
+def _run_graph_segmentation(mesh, n_segments, *, cache, seed, elements="vertices", k_thresh,
+                            min_size):
+    from .baselines.graph_segmentation import graph_segmentation
+
+    return MethodRun(graph_segmentation(mesh, k_thresh if k_thresh > 0 else 0.01, min_size,
+                                        n_segments=n_segments if k_thresh <= 0 else None,
+                                        elements=elements))
 
 
 def _run_shlafman(mesh, n_segments, *, cache, seed, progress=False, **params):
@@ -216,8 +233,15 @@ _SF_DEFAULTS = dict(alpha=DEFAULTS.alpha, eta_convex=DEFAULTS.eta_convex, init=I
 register_method(
     "superfacets", _run_superfacets, defaults=_SF_DEFAULTS,
     sweep={"alpha": DEFAULT_ALPHAS},
-    description="the paper's method: bounded Dijkstra k-means, weights of eqs. 1-3",
-    progress=True)
+    description="the paper's method: bounded Dijkstra k-means, weights of eqs. 1-3 (faces; "
+                "on vertices and points their analogues)",
+    progress=True, elements=ELEMENTS)
+register_method(
+    "graph_segmentation", _run_graph_segmentation, defaults=dict(k_thresh=0.0, min_size=20),
+    description="Felzenszwalb-Huttenlocher graph segmentation with the ScanNet Segmentator's "
+                "weights (1 - n_i.n_j, squared on convex edges); k_thresh=0 searches the "
+                "threshold for n_segments, > 0 uses it (the Segmentator's default is 0.01)",
+    elements=ELEMENTS)
 register_method(
     "shlafman", _run_shlafman, defaults=dict(_SF_DEFAULTS, alpha=WEIGHTING_ALPHA["shlafman"][0]),
     sweep={"alpha": (0.0, 0.25, 0.5, 0.75, 1.0)},

@@ -10,7 +10,7 @@ the overlap-based metrics fast.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable, Sequence
 
 import numpy as np
@@ -54,7 +54,7 @@ class Contingency:
 
 def _dense(g, labels, what: str) -> np.ndarray:
     """One label per element, made dense ``0..K-1``."""
-    _, dense = np.unique(check_labels(labels, g.n_elements, what, per=g.kind.rstrip("s")), return_inverse=True)
+    _, dense = np.unique(check_labels(labels, g.n_elements, what, per=g.element), return_inverse=True)
     return dense.ravel().astype(np.int64)
 
 
@@ -239,6 +239,18 @@ def _recall(g, near: np.ndarray, gt: np.ndarray) -> float:
     return float(length[hit].sum() / length.sum())
 
 
+def _recall_elements(g, near: np.ndarray, gt: np.ndarray) -> float:
+    """Fraction of ground-truth boundary elements that are ``near`` a superfacet boundary."""
+    i, j = g.pairs[:, 0], g.pairs[:, 1]
+    cut = gt[i] != gt[j]
+    on = np.zeros(g.n_elements, dtype=bool)
+    on[i[cut]] = True
+    on[j[cut]] = True
+    if not on.any():
+        return 1.0
+    return float(near[on].sum() / on.sum())
+
+
 def mean_over_ground_truths(metric: Callable[..., float], graph, labels,
                             ground_truths: Sequence[np.ndarray], **kwargs) -> float:
     """Average a metric over the several human segmentations of one mesh.
@@ -268,7 +280,7 @@ def mean_over_ground_truths(metric: Callable[..., float], graph, labels,
 
 
 def evaluate(graph, labels, ground_truths: Sequence[np.ndarray], *, tau: float = 0.05,
-             tolerance: int = 1) -> dict:
+             tolerance: int = 1, equal_weight: bool = False) -> dict:
     """Every metric of one segmentation, averaged over the ground truths.
 
     Computes one contingency table per ground truth (shared by the
@@ -287,6 +299,14 @@ def evaluate(graph, labels, ground_truths: Sequence[np.ndarray], *, tau: float =
         Overlap tolerance of :func:`undersegmentation_error` (eq. 4).
     tolerance : int, default 1
         Face rings of slack of :func:`boundary_recall`.
+    equal_weight : bool, default False
+        Weigh every element alike instead of by its size (vertices and
+        points: the benchmark of superpoints): the undersegmentation error
+        and the achievable accuracy count elements, and the boundary recall
+        is the fraction of ground-truth boundary *elements* (those with a
+        neighbour in another segment) within ``tolerance`` rings of a
+        superfacet boundary. The compactness stays geometric (eq. 5 on the
+        graph's sizes and border lengths).
 
     Returns
     -------
@@ -312,12 +332,15 @@ def evaluate(graph, labels, ground_truths: Sequence[np.ndarray], *, tau: float =
                                "metrics are area-weighted")
     s = _dense(g, labels, "labels")
     near = _near_boundary(g, s, tolerance)
+    counted = replace(g, sizes=np.ones(g.n_elements)) if equal_weight else g
     ue, br, asa = [], [], []
     for gt in ground_truths:
-        t = contingency(g, s, gt)
-        ue.append(undersegmentation_error(g, s, gt, tau=tau, table=t))
-        asa.append(achievable_segmentation_accuracy(g, s, gt, table=t))
-        br.append(_recall(g, near, _dense(g, gt, "ground_truth")))
+        t = contingency(counted, s, gt)
+        ue.append(undersegmentation_error(counted, s, gt, tau=tau, table=t))
+        asa.append(achievable_segmentation_accuracy(counted, s, gt, table=t))
+        dense_gt = _dense(g, gt, "ground_truth")
+        br.append(_recall_elements(g, near, dense_gt) if equal_weight else
+                  _recall(g, near, dense_gt))
     return {"undersegmentation_error": float(np.mean(ue)),
             "compactness": compactness(g, s),
             "boundary_recall": float(np.mean(br)),

@@ -20,7 +20,7 @@ import numpy as np
 
 from .errors import ParameterError
 
-__all__ = ["SegmentParams", "DEFAULTS", "INITS", "ASSIGNMENTS", "WEIGHTINGS",
+__all__ = ["SegmentParams", "DEFAULTS", "INITS", "ASSIGNMENTS", "WEIGHTINGS", "ELEMENTS",
            "WEIGHTING_ALPHA", "DEFAULT_N_SEGMENTS", "DEFAULT_ALPHAS", "resolve", "check_int",
            "check_number", "check_positive", "check_nonneg", "check_choice",
            "check_n_segments", "check_threads", "check_bool", "max_threads"]
@@ -32,6 +32,10 @@ INITS = ("farthest", "flood", "grid")
 ASSIGNMENTS = ("bounded", "exact")
 #: Names accepted by ``weighting=``: the paper's eqs. 1-3, Shlafman et al.'s eq. 6.
 WEIGHTINGS = ("paper", "shlafman")
+#: Names accepted by ``elements=``: the faces of a mesh, its vertices, the points of a cloud.
+ELEMENTS = ("faces", "vertices", "points")
+#: Largest number of nearest neighbours of the point graph.
+MAX_NEIGHBORS = 100
 #: Default ``alpha`` of each weighting, and its valid range ``(low, high)``.
 WEIGHTING_ALPHA = {"paper": (200.0, (0.0, math.inf)), "shlafman": (0.5, (0.0, 1.0))}
 #: Largest alpha and eta_convex (beyond, the angular term alone decides anyway; infinite
@@ -65,6 +69,9 @@ class SegmentParams:
     tol: float = 0.0
     progress: bool = False
     n_threads: int | None = None
+    elements: str | None = None
+    n_neighbors: int = 10
+    neighbor_radius: float | None = None
 
     def as_dict(self) -> dict:
         """The parameters as a plain dict."""
@@ -235,4 +242,8 @@ def resolve(**params) -> SegmentParams:
         assignment=check_choice("assignment", p.assignment, ASSIGNMENTS),
         enforce_connectivity=check_bool("enforce_connectivity", p.enforce_connectivity),
         tol=check_number("tol", p.tol, 0.0, 1.0), progress=bool(p.progress),
-        n_threads=check_threads(p.n_threads))
+        n_threads=check_threads(p.n_threads),
+        elements=None if p.elements is None else check_choice("elements", p.elements, ELEMENTS),
+        n_neighbors=check_int("n_neighbors", p.n_neighbors, lo=1, hi=MAX_NEIGHBORS),
+        neighbor_radius=None if p.neighbor_radius is None else check_positive(
+            "neighbor_radius", p.neighbor_radius))

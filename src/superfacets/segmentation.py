@@ -29,12 +29,14 @@ from .connectivity import enforce_connectivity as _enforce_connectivity
 from .expansion import Workspaces
 from .initialization import initial_centers
 from .labels import relabel_dense
+from .elements.inputs import elements_of
 from .mesh import as_mesh
 from .params import DEFAULTS, SegmentParams, check_n_segments, resolve
 from .passes import final_centers, iterate
 from .weights import csr_weights, edge_weights
 
-__all__ = ["superfacets", "segment", "segment_objects", "pipeline", "SegmentationResult"]
+__all__ = ["superfacets", "superpoints", "segment", "segment_objects", "pipeline",
+           "SegmentationResult"]
 
 _D = DEFAULTS
 
@@ -95,8 +97,10 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
                 assignment: str = _D.assignment,
                 enforce_connectivity: bool = _D.enforce_connectivity,
                 tol: float = _D.tol, progress: bool = _D.progress,
-                n_threads: int | None = _D.n_threads) -> np.ndarray:
-    """Over-segment a triangle mesh into superfacets.
+                n_threads: int | None = _D.n_threads, elements: str | None = _D.elements,
+                n_neighbors: int = _D.n_neighbors,
+                neighbor_radius: float | None = _D.neighbor_radius) -> np.ndarray:
+    """Over-segment a mesh (its faces or vertices) or a point cloud into superfacets.
 
     The k-means-style method of Simari, Picciau and De Floriani (2014):
     initialize centers, then alternate a classification (bounded Dijkstra
@@ -105,10 +109,11 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
 
     Parameters
     ----------
-    mesh : Mesh, trimesh.Trimesh or tuple of ((n, 3) float, (m, 3) int) ndarray
-        Triangle mesh. Degenerate faces, duplicate faces, unreferenced
+    mesh : Mesh, trimesh.Trimesh or tuple of ((n, 3) float, (m, 3) int) ndarray, or a point cloud
+        Triangle or polygon mesh. Degenerate faces, duplicate faces, unreferenced
         vertices, non-manifold edges and several connected components are
-        accepted (each component gets its own superfacets).
+        accepted (each component gets its own superfacets). Or a point
+        cloud (see :func:`superpoints`).
     n_segments : int, default 150
         Desired number of superfacets ``k``, ``1 <= k <= m``. The radius is
         then ``r = sqrt(A / (k pi))`` (section 3.1). Ignored, and must be left
@@ -155,13 +160,24 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
         Threads that expand centers at the same time (``>= 1``; default:
         numba's thread count, ``NUMBA_NUM_THREADS``, normally the number of
         cores). The labels do not depend on it.
+    elements : {'faces', 'vertices', 'points'}, optional
+        What is segmented: the faces of a mesh (the paper; default for a
+        mesh), its vertices (one label per vertex, on the graph of mesh
+        edges; ``superfacets.elements.vertices``) or the points of a cloud
+        (the default, and the only choice, for a cloud;
+        ``superfacets.elements.points``).
+    n_neighbors : int, default 10
+        Points: nearest neighbours of each point in the point graph (1..100).
+    neighbor_radius : float, optional
+        Points: drop neighbours farther than this fraction of ``d``.
 
     Returns
     -------
     labels : (m,) int64 ndarray
-        Superfacet of each face, dense ``0..K-1``. ``K`` may differ from
+        Superfacet of each face (vertex, point), dense ``0..K-1``. ``K`` may differ from
         ``n_segments``: orphan faces seed extra superfacets; stray pieces and
-        centers left without faces reduce it.
+        centers left without faces reduce it. Vertices used by no face and
+        invalid points of a cloud get -1.
 
     Raises
     ------
@@ -197,7 +213,8 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
     return segment(mesh, n_segments, radius=radius, alpha=alpha, eta_convex=eta_convex,
                    window=window, init=init, max_iter=max_iter, weighting=weighting,
                    assignment=assignment, enforce_connectivity=enforce_connectivity,
-                   tol=tol, progress=progress, n_threads=n_threads).labels
+                   tol=tol, progress=progress, n_threads=n_threads, elements=elements,
+                   n_neighbors=n_neighbors, neighbor_radius=neighbor_radius).labels
 
 
 def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | None = _D.radius,
@@ -207,7 +224,9 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | Non
             assignment: str = _D.assignment,
             enforce_connectivity: bool = _D.enforce_connectivity, tol: float = _D.tol,
             progress: bool = _D.progress,
-            n_threads: int | None = _D.n_threads) -> SegmentationResult:
+            n_threads: int | None = _D.n_threads, elements: str | None = _D.elements,
+            n_neighbors: int = _D.n_neighbors,
+            neighbor_radius: float | None = _D.neighbor_radius) -> SegmentationResult:
     """Superfacets with details: same parameters as :func:`superfacets`.
 
     Returns
@@ -244,12 +263,94 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | Non
     params = resolve(n_segments=n_segments, radius=radius, alpha=alpha, eta_convex=eta_convex,
                      window=window, init=init, max_iter=max_iter, weighting=weighting,
                      assignment=assignment, enforce_connectivity=enforce_connectivity,
-                     tol=tol, progress=progress, n_threads=n_threads)
+                     tol=tol, progress=progress, n_threads=n_threads, elements=elements,
+                     n_neighbors=n_neighbors, neighbor_radius=neighbor_radius)
     return pipeline(mesh, params)
 
 
+def superpoints(points, n_segments: int | None = _D.n_segments, *, normals=None,
+                n_neighbors: int = _D.n_neighbors,
+                neighbor_radius: float | None = _D.neighbor_radius, viewpoint=None,
+                **options) -> np.ndarray:
+    """Over-segment a point cloud into superpoints: the paper's method on the point graph.
+
+    The point graph joins each point to its ``n_neighbors`` nearest (scipy's
+    KD-tree, symmetric); each point stands for the surface area of the
+    k-nearest-neighbour density estimate, so ``n_segments`` and ``radius``
+    mean what they mean on a mesh; normals are estimated (PCA) and oriented
+    consistently when not given; the weights are the paper's eqs. 1-3 with
+    the distance between points as the geodesic term (``docs/method.md``,
+    section "Vertices and points"). Every superpoint is connected in the
+    point graph; the result is deterministic.
+
+    Parameters
+    ----------
+    points : (N, 3) float ndarray, organized (H, W, 3) float ndarray, PointCloud,
+        trimesh.PointCloud or open3d.geometry.PointCloud
+        Coordinates, any units. An organized array may hold NaN points
+        (missing measurements): they get the label -1.
+    n_segments : int, default 150
+        Desired number of superpoints ``k``, ``1 <= k <=`` distinct valid points.
+    normals : (N, 3) float ndarray, optional
+        Consistently oriented normals; estimated when omitted.
+    n_neighbors : int, default 10
+        Nearest neighbours of each point (1..100).
+    neighbor_radius : float, optional
+        Drop neighbours farther than this fraction of the bounding-box diagonal.
+    viewpoint : (3,) float ndarray, optional
+        Sensor position: estimated normals face it.
+    **options
+        The other keyword arguments of :func:`superfacets` (``alpha``,
+        ``radius``, ``init``, ``tol``, ...).
+
+    Returns
+    -------
+    labels : (N,) or (H, W) int64 ndarray
+        Superpoint of each point, dense ``0..K-1`` in input order; -1 for
+        invalid points. Exact duplicate points share a label.
+
+    Raises
+    ------
+    InvalidCloudError
+        If the cloud is empty, has NaN/inf rows (unorganized input: the row
+        is named), all points coincide or lie on one line.
+    ParameterError
+        If ``n_segments`` exceeds the distinct valid points, or another
+        parameter is out of range (checked before any work).
+    TypeError
+        If ``points`` is not a point cloud.
+
+    References
+    ----------
+    Simari, Picciau, De Floriani, "Fast and Scalable Mesh Superfacets", 2014
+    (section 3.1, eqs. 1-3; point clouds named as future work, section 6).
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> xyz = rng.normal(size=(2000, 3))
+    >>> xyz /= np.linalg.norm(xyz, axis=1, keepdims=True)   # a sphere
+    >>> labels = superpoints(xyz, 20)
+    >>> labels.shape, int(labels.max()) + 1
+    ((2000,), 20)
+    """
+    from .cloud import PointCloud, as_cloud
+
+    if "elements" in options and options["elements"] not in (None, "points"):
+        raise ParameterError("superpoints segments points; use superfacets() for meshes")
+    options.pop("elements", None)
+    params = resolve(n_segments=n_segments, n_neighbors=n_neighbors,
+                     neighbor_radius=neighbor_radius, elements="points", **options)
+    cloud = as_cloud(points, normals)
+    if viewpoint is not None:
+        cloud = PointCloud(cloud.points, cloud.normals, name=cloud.name, viewpoint=viewpoint,
+                           allow_invalid=cloud.allow_invalid, shape=cloud.shape)
+    labels = pipeline(cloud, params).labels
+    return labels.reshape(cloud.shape) if cloud.shape is not None else labels
+
+
 def superfacet_size(params: SegmentParams, area: float, diagonal: float,
-                    n_elements: int) -> tuple[int | None, float]:
+                    n_elements: int, kind: str = "faces") -> tuple[int | None, float]:
     """The number of centers ``k`` and the radius ``r`` (mesh units) of a run.
 
     With ``n_segments``: ``r = sqrt(A / (k pi))`` (paper section 3.1). With
@@ -268,7 +369,7 @@ def superfacet_size(params: SegmentParams, area: float, diagonal: float,
         if params.init == "farthest":
             k = int(min(n_elements, max(1, round(area / (math.pi * r * r)))))
         return k, r
-    k = check_n_segments(params.n_segments, n_elements)
+    k = check_n_segments(params.n_segments, n_elements, kind)
     return k, math.sqrt(area / (k * math.pi))
 
 
@@ -293,19 +394,20 @@ def pipeline(mesh, params: SegmentParams, *, replay: bool = True,
     """
     t_start = time.perf_counter()
     p = params
-    mesh = as_mesh(mesh)
-    mesh.check_usable()
-    k, r = superfacet_size(p, mesh.area, mesh.diagonal, mesh.n_faces)
+    t = time.perf_counter()
+    source = elements_of(mesh, p.elements, n_neighbors=p.n_neighbors,
+                         neighbor_radius=p.neighbor_radius)
+    graph = source.graph
+    t_graph = time.perf_counter() - t
+    k, r = superfacet_size(p, graph.area, graph.diagonal, graph.n_elements, graph.kind)
     timings: dict[str, float] = {}
     bar = None
     if p.progress:  # one bar: the set-up stages by name, then the passes
         from tqdm import tqdm
 
-        bar = tqdm(total=p.max_iter, desc="face graph", unit="it", leave=False)
+        bar = tqdm(total=p.max_iter, desc=f"{graph.kind[:-1]} graph", unit="it", leave=False)
     try:
-        t = time.perf_counter()
-        graph = mesh.graph
-        timings["graph"] = time.perf_counter() - t
+        timings["graph"] = t_graph
 
         _stage(bar, "weights")
         t = time.perf_counter()
@@ -347,16 +449,19 @@ def pipeline(mesh, params: SegmentParams, *, replay: bool = True,
     centers = it.centers[present]
     if p.enforce_connectivity:
         labels = _enforce_connectivity(graph, labels, centers)
-    centers = final_centers(labels, centers, sizes, positions)
+    centers = source.first_rows(final_centers(labels, centers, sizes, positions))
+    labels = source.to_rows(labels)
     timings["connectivity"] = time.perf_counter() - t
     timings["total"] = time.perf_counter() - t_start
     timings.update(expansions=it.expansions, passes=it.n_passes, cycle_period=it.cycle_period,
                    changed=it.changed, stopped_by_tol=it.stopped_by_tol)
-    resolved = dict(n_segments=k, radius=r / mesh.diagonal, alpha=p.alpha,
+    resolved = dict(n_segments=k, radius=r / graph.diagonal, alpha=p.alpha,
                     eta_convex=p.eta_convex, window=p.window, init=p.init,
                     max_iter=p.max_iter, weighting=p.weighting, assignment=p.assignment,
                     enforce_connectivity=p.enforce_connectivity, tol=p.tol,
-                    n_init_centers=init.shape[0])
+                    n_init_centers=init.shape[0], elements=graph.kind)
+    if graph.kind == "points":
+        resolved.update(n_neighbors=p.n_neighbors, neighbor_radius=p.neighbor_radius)
     return SegmentationResult(labels=labels, centers=centers, n_iter=it.n_iter,
                               converged=it.converged, radius=r,
                               n_orphan_seeds=it.n_orphan_seeds, timings=timings,

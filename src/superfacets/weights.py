@@ -70,12 +70,12 @@ def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = 0.2
     alpha = check_number("alpha", alpha, 0.0, MAX_WEIGHT_FACTOR)
     eta_convex = check_number("eta_convex", eta_convex, 0.0, MAX_WEIGHT_FACTOR)
     g = as_element_graph(graph)
-    t = g.terms
+    t, span = g.terms, g.span
 
     def weight(sl):
         theta = np.arccos(t.cos[sl])
         eta = np.where(t.concave[sl], 1.0, eta_convex)
-        ang = eta * g.lengths[sl] * theta / np.pi
+        ang = eta * span[sl] * theta / np.pi
         return (t.geo[sl] + alpha * ang) / g.diagonal
 
     return chunked(g.n_edges, weight)

@@ -48,6 +48,14 @@ def add_parsers(sub) -> None:
                    help="only the first N meshes (by id) of each category: a stratified subset")
     x.add_argument("-j", "--workers", type=int_arg, default=None, metavar="N",
                    help="worker processes (default: all cores; at most 4 per core)")
+    x.add_argument("--elements", default="faces", metavar="LIST",
+                   help="element kinds, comma-separated: faces, vertices (ground truth: "
+                        "majority of the incident faces), points (--points sampled per mesh, "
+                        "ground truth of their face); vertices and points are evaluated "
+                        "with equal weight per element (default: faces)")
+    x.add_argument("--points", type=int_arg, default=20_000, metavar="N",
+                   help="points sampled per mesh (uniform by area, fixed seed) for "
+                        "--elements points (default: 20000)")
     x.add_argument("--tau", type=float_arg, default=0.05,
                    help="undersegmentation error tolerance (default: 0.05)")
     x.add_argument("--seed", type=int_arg, default=0, help="seed given to randomized methods")
@@ -153,8 +161,10 @@ def cmd_experiment(args) -> int:
     if not args.quiet:
         print(f"{len(meshes)} meshes x {len(configs)} settings x {len(ks)} values of k "
               f"-> {out}", file=sys.stderr)
+    kinds = [e.strip() for e in args.elements.split(",") if e.strip()]
     s = run_experiment(meshes, configs, out, ks, workers=args.workers, tau=args.tau,
-                       seed=args.seed, retry_failed=args.retry_failed, progress=not args.quiet)
+                       seed=args.seed, retry_failed=args.retry_failed, progress=not args.quiet,
+                       elements=kinds, n_points=args.points)
     print(f"{s.written} rows written ({s.ok} ok, {s.failed} failed, {s.skipped} skipped), "
           f"{s.done_before} already there, in {s.seconds:.1f} s -> {out}")
     if s.interrupted:

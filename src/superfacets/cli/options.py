@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..params import ASSIGNMENTS, DEFAULTS, INITS, WEIGHTINGS
+from ..params import ASSIGNMENTS, DEFAULTS, ELEMENTS, INITS, WEIGHTINGS
 
 __all__ = ["int_arg", "float_arg", "size_arg", "view_arg", "add_method_options",
            "add_camera_options", "add_mesh_and_labels", "method_kwargs", "check_output",
@@ -102,6 +102,26 @@ def add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> No
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                    help="progress bar of the stages and iterations on stderr (default: on for "
                         "meshes of 500,000 faces or more when stderr is a terminal)")
+
+
+def add_element_options(p: argparse.ArgumentParser) -> None:
+    """What is segmented: faces, vertices or points, and the point graph's neighbourhood."""
+    p.add_argument("--elements", choices=ELEMENTS, default=None,
+                   help="segment the faces of a mesh (the paper), its vertices (one label per "
+                        "vertex, like the ScanNet Segmentator) or the points of a cloud "
+                        "(default: points for a point cloud, faces for a mesh)")
+    p.add_argument("--neighbors", type=int_arg, default=_D.n_neighbors, metavar="N",
+                   help=f"point clouds: nearest neighbours of each point (default: "
+                        f"{_D.n_neighbors})")
+    p.add_argument("--neighbor-radius", type=float_arg, default=None, metavar="R",
+                   help="point clouds: drop neighbours farther than this fraction of the "
+                        "bounding-box diagonal (default: none)")
+
+
+def element_kwargs(args) -> dict:
+    """Keyword arguments of :func:`superfacets.segment` from :func:`add_element_options`."""
+    return dict(elements=args.elements, n_neighbors=args.neighbors,
+                neighbor_radius=args.neighbor_radius)
 
 
 def method_kwargs(args) -> dict:

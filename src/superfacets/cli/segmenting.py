@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from ..params import DEFAULTS
-from .options import (add_method_options, check_output, float_arg, fmt_value, int_arg,
-                      method_kwargs)
+from .options import (add_element_options, add_method_options, check_output, element_kwargs,
+                      float_arg, fmt_value, int_arg, method_kwargs)
 
 __all__ = ["add_parsers"]
 
@@ -18,17 +18,22 @@ __all__ = ["add_parsers"]
 def add_parsers(sub) -> None:
     """Add ``segment``, ``baseline``, ``demo`` and ``evaluate`` to the sub-parsers."""
     p = sub.add_parser(
-        "segment", help="compute the superfacets of a mesh file",
+        "segment", help="compute the superfacets of a mesh or a point cloud file",
         description="Compute the superfacets of a mesh file (.off, .tri, .ply, .obj, .stl, "
                     ".glb, .gltf, optionally .gz/.xz/.bz2; triangles or polygons, one label "
-                    "per face in file order; the objects of a scene joined in order) and "
-                    "write them as a .seg label file (one label per face per line) and/or a "
-                    "coloured mesh.")
-    p.add_argument("mesh", metavar="MESH", help="input mesh file")
+                    "per face in file order; the objects of a scene joined in order), or "
+                    "of its vertices (--elements vertices), or the superpoints of a point "
+                    "cloud (.ply without faces, .pcd, .xyz/.pts/.txt, .npy, .las/.laz; one "
+                    "label per point in file order, -1 for invalid points), and write them "
+                    "as a .seg label file (one label per line), a ScanNet-style .json "
+                    "(segIndices) and/or a coloured mesh or cloud.")
+    p.add_argument("mesh", metavar="INPUT", help="input mesh or point-cloud file")
     add_method_options(p)
+    add_element_options(p)
     p.add_argument("-o", "--output", metavar="OUT.seg", default=None,
-                   help="write the labels here, one per face per line ('-': standard "
-                        "output; default: none)")
+                   help="write the labels here: one per face, vertex or point per line, or "
+                        "{'segIndices': [...], 'params': ...} when it ends in .json "
+                        "('-': standard output; default: none)")
     p.add_argument("--header", action="store_true",
                    help="start the .seg file with '#' lines recording parameters, "
                         "iterations and time (default: labels only, as the benchmark's files)")
@@ -99,9 +104,11 @@ def add_parsers(sub) -> None:
 
 def _header(mesh, result, source: str) -> dict:
     p = result.params
+    kind = p.get("elements", "faces")
     return {
         "superfacets": f"labels of {source}",
-        "faces": mesh.n_faces,
+        kind: mesh.n_total if kind == "points" else
+        (mesh.n_vertices if kind == "vertices" else mesh.n_faces),
         "superfacets_count": result.n_segments,
         "parameters": " ".join(f"{k}={v}" for k, v in p.items()),
         "iterations": f"{result.n_iter} ({'converged' if result.converged else 'max_iter reached'})",
@@ -128,11 +135,19 @@ class _Joined:
         self.timings = {"total": sum(r.timings["total"] for r in results)}
 
 
-def _summary(name: str, mesh, result, seconds: float) -> str:
+def _summary(name: str, mesh, result, seconds: float, elements: str = "faces") -> str:
     state = "converged" if result.converged else "stopped at max-iter"
-    kind = "" if mesh.is_triangular else " (polygons)"
-    objs = f" in {len(mesh.objects)} objects" if len(mesh.objects) > 1 else ""
-    return (f"{name}: {mesh.n_faces} faces{kind}{objs}, {result.n_segments} superfacets, "
+    if elements == "points":
+        invalid = mesh.n_total - mesh.n_points
+        what = f"{mesh.n_total} points" + (f" ({invalid} invalid)" if invalid else "")
+        segs = "superpoints"
+    else:
+        kind = "" if mesh.is_triangular else " (polygons)"
+        objs = f" in {len(mesh.objects)} objects" if len(mesh.objects) > 1 else ""
+        what = (f"{mesh.n_faces} faces{kind}{objs}" if elements == "faces" else
+                f"{mesh.n_vertices} vertices ({mesh.n_faces} faces{kind})")
+        segs = "superfacets" if elements == "faces" else "superpoints"
+    return (f"{name}: {what}, {result.n_segments} {segs}, "
             f"{result.n_iter} iterations ({state}), {seconds:.2f} s")
 
 
@@ -141,8 +156,9 @@ def cmd_segment(args) -> int:
 
     warmup.start()  # numba's start-up in a thread, while the rest is imported and read
     from ..errors import SuperfacetsError
-    from ..io import read_mesh, write_colored_mesh, write_labels
+    from ..io import read_input, write_colored_mesh, write_labels, write_segindices
     from ..errors import ParameterError
+    from ..io.export import write_colored_elements
     from ..io.files import Outputs
     from ..params import resolve
     from ..segmentation import segment, segment_objects
@@ -156,34 +172,52 @@ def cmd_segment(args) -> int:
         raise ParameterError("--vertex-colors goes with --colored-mesh OUT.ply")
     if args.per_object and args.radius is not None:
         raise ParameterError("--per-object takes -k, not --radius")
-    kwargs = method_kwargs(args)
+    kwargs = dict(method_kwargs(args), **element_kwargs(args))
     resolve(n_segments=args.n_segments, radius=args.radius, **kwargs)  # before the read
     t0 = time.perf_counter()
-    mesh = read_mesh(args.mesh)
+    data = read_input(args.mesh)
+    cloud = not hasattr(data, "faces")
+    kind = "points" if cloud else (args.elements or "faces")
+    if kind != "faces":
+        if args.per_object:
+            raise ParameterError("--per-object segments the faces of a scene; not with "
+                                 f"{kind}")
+        if ply_out is not None and not ply_out.name.lower().endswith(".ply"):
+            raise ParameterError(f"{ply_out}: coloured {kind} are written as .ply")
+    size = data.n_total if cloud else data.n_faces
     if args.progress is None:  # long runs show where they are
-        kwargs["progress"] = mesh.n_faces >= 500_000 and sys.stderr.isatty()
+        kwargs["progress"] = size >= 500_000 and sys.stderr.isatty()
     try:
         if args.per_object:
-            result = _Joined(*segment_objects(mesh, args.n_segments or DEFAULTS.n_segments,
+            result = _Joined(*segment_objects(data, args.n_segments or DEFAULTS.n_segments,
                                               **kwargs))
         else:
-            result = segment(mesh, args.n_segments, radius=args.radius, **kwargs)
+            result = segment(data, args.n_segments, radius=args.radius, **kwargs)
     except SuperfacetsError as exc:
         raise type(exc)(f"{args.mesh}: {exc}") from None
     elapsed = time.perf_counter() - t0
-    objects = _object_lines(mesh)
+    objects = [] if cloud else _object_lines(data)
     with Outputs() as outputs:  # all or nothing
-        if seg_out is not None:
-            header = _header(mesh, result, Path(args.mesh).name) if args.header else None
+        if seg_out is not None and seg_out.name.lower().endswith(".json"):
+            write_segindices(seg_out, result.labels, result.params,
+                             scene_id=Path(args.mesh).name.split(".")[0], outputs=outputs)
+        elif seg_out is not None:
+            header = _header(data, result, Path(args.mesh).name) if args.header else None
             if objects:  # a scene: say which faces are which object
                 header = [f"{k}: {v}" for k, v in (header or {}).items()] + objects
             write_labels(seg_out, result.labels, outputs=outputs, header=header)
-        if ply_out is not None:
-            write_colored_mesh(ply_out, mesh, result.labels, outputs=outputs,
+        if ply_out is not None and kind == "faces":
+            write_colored_mesh(ply_out, data, result.labels, outputs=outputs,
                                vertex_colors=args.vertex_colors)
+        elif ply_out is not None:
+            from ..elements.inputs import elements_of
+
+            source = elements_of(data, kind, n_neighbors=args.neighbors,
+                                 neighbor_radius=args.neighbor_radius)  # cached: no new work
+            write_colored_elements(ply_out, source, result.labels, outputs=outputs)
     report = sys.stderr if str(seg_out) == "-" else sys.stdout  # stdout holds the labels
     if not args.quiet:
-        print(_summary(Path(args.mesh).name, mesh, result, elapsed), file=report)
+        print(_summary(Path(args.mesh).name, data, result, elapsed, kind), file=report)
     if seg_out is None and ply_out is None and not args.quiet:
         print("note: nothing was saved: add -o OUT.seg (or -o - for standard output) and/or "
               "--colored-mesh OUT.ply", file=sys.stderr)

@@ -22,7 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .graph import ElementGraph, chunked
+from .graph import ElementGraph, adjacency_csr, chunked
 
 __all__ = ["FaceAdjacency", "build_face_graph", "face_graph"]
 
@@ -223,20 +223,8 @@ def build_face_graph(faces: np.ndarray, n_vertices: int, offsets: np.ndarray | N
     edges = np.stack([a[he], b[he]], axis=1).astype(np.int64)
     del a, b, he
 
-    # symmetric CSR, neighbours ascending within each row
-    e = pairs.shape[0]
-    rows = np.concatenate([lo, hi])
-    cols = np.concatenate([hi, lo])
+    indptr, indices, dual_edge = adjacency_csr(lo, hi, m)
     del lo, hi
-    o = np.lexsort((cols, rows))
-    indptr = np.zeros(m + 1, dtype=np.int64)
-    np.cumsum(np.bincount(rows, minlength=m), out=indptr[1:])
-    del rows
-    indices = np.ascontiguousarray(cols[o], dtype=np.int32)
-    del cols
-    dual_edge = o.astype(np.int32 if 2 * e < 2**31 - 1 else np.int64)
-    dual_edge[dual_edge >= e] -= e  # entry t of [lo->hi, hi->lo] is dual edge t mod e
-    del o
     return FaceAdjacency(
         pairs=pairs,
         edges=edges,

@@ -8,7 +8,8 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
-__all__ = ["ElementGraph", "AdjacencyTerms", "as_element_graph", "CHUNK", "chunked"]
+__all__ = ["ElementGraph", "AdjacencyTerms", "as_element_graph", "adjacency_csr", "CHUNK",
+           "chunked"]
 
 #: Adjacencies per chunk when per-adjacency arrays are computed: bounds the
 #: temporaries (and fixes the slicing, so every result is the same bit for bit).
@@ -22,6 +23,39 @@ def chunked(n: int, compute: Callable[[slice], np.ndarray], dtype=np.float64) ->
         sl = slice(s, min(n, s + CHUNK))
         out[sl] = compute(sl)
     return out
+
+
+def adjacency_csr(lo: np.ndarray, hi: np.ndarray, n: int
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The symmetric CSR layout of ``e`` adjacent pairs ``(lo[t], hi[t])`` of ``n`` elements.
+
+    Parameters
+    ----------
+    lo, hi : (e,) int ndarray
+        The two elements of each adjacency (one entry per pair, no repeats).
+    n : int
+        Number of elements.
+
+    Returns
+    -------
+    indptr : (n + 1,) int64 ndarray
+    indices : (2 e,) int32 ndarray
+        Neighbours, ascending within each row.
+    dual_edge : (2 e,) int32 ndarray (int64 beyond 2**31 entries)
+        The pair ``t`` of each CSR entry.
+    """
+    e = lo.shape[0]
+    rows = np.concatenate([lo, hi])
+    cols = np.concatenate([hi, lo])
+    o = np.lexsort((cols, rows))
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(rows, minlength=n), out=indptr[1:])
+    del rows
+    indices = np.ascontiguousarray(cols[o], dtype=np.int32)
+    del cols
+    dual_edge = o.astype(np.int32 if 2 * e < 2**31 - 1 else np.int64)
+    dual_edge[dual_edge >= e] -= e  # entry t of [lo->hi, hi->lo] is pair t mod e
+    return indptr, indices, dual_edge
 
 
 class AdjacencyTerms(NamedTuple):
@@ -47,17 +81,20 @@ class AdjacencyTerms(NamedTuple):
 
 @dataclass(frozen=True, eq=False)
 class ElementGraph:
-    """Elements and their adjacency (for a triangle mesh: the face graph).
+    """Elements and their adjacency (faces: the face graph; vertices: the mesh edges;
+    points: the symmetric k-nearest-neighbour graph).
 
     Attributes
     ----------
     kind : str
-        What the elements are (``"faces"``).
+        What the elements are: ``"faces"``, ``"vertices"`` or ``"points"``.
     positions : (n, 3) float64 ndarray
-        Position of each element (faces: centroid).
+        Position of each element (faces: centroid; vertices, points: itself).
     sizes : (n,) float64 ndarray
-        Size of each element (faces: area), the weight of its position in a
-        superfacet's mean and of the metrics.
+        Size of each element, in squared mesh units: the surface area it
+        stands for (faces: area; vertices: a third of the incident triangles'
+        areas; points: the k-nearest-neighbour estimate), the weight of its
+        position in a superfacet's mean and of the metrics.
     normals : (n, 3) float64 ndarray
         Unit normal of each element (zero where undefined).
     centroid : (3,) float64 ndarray
@@ -79,7 +116,9 @@ class ElementGraph:
         Index into ``pairs`` of each CSR entry: per-adjacency arrays map onto
         CSR as ``values[graph.dual_edge]``.
     lengths : (e,) float64 ndarray
-        Length of the border each adjacent pair shares (faces: the mesh edge).
+        Length of the border each adjacent pair shares (faces: the mesh edge;
+        vertices: the dual edge of the barycentric cells; points: an estimate,
+        see :func:`~superfacets.elements.point_graph`).
     boundary_elements : (b,) int64 ndarray
         Element of each open border piece (faces: edge used by one face).
     boundary_lengths : (b,) float64 ndarray
@@ -88,6 +127,10 @@ class ElementGraph:
         Faces: the shared mesh edge ``(a, b)``, ``a < b``, of each adjacency.
     boundary_edges : (b, 2) int64 ndarray or None
         Faces: the open-boundary mesh edges, ``a < b``.
+    spans : (e,) float64 ndarray or None
+        The length that scales the angular term of the paper's weights (eq. 2)
+        when it differs from ``lengths`` (vertices, points: the distance
+        between the two elements); see :attr:`span`.
     """
 
     kind: str
@@ -106,7 +149,14 @@ class ElementGraph:
     boundary_lengths: np.ndarray
     edges: np.ndarray | None = None
     boundary_edges: np.ndarray | None = None
+    spans: np.ndarray | None = None
     terms_of: Callable[[slice], tuple] | None = field(default=None, repr=False)
+
+    @property
+    def element(self) -> str:
+        """The singular of ``kind``: ``"face"``, ``"vertex"`` or ``"point"``."""
+        return {"faces": "face", "vertices": "vertex", "points": "point"}.get(self.kind,
+                                                                               self.kind)
 
     @property
     def n_elements(self) -> int:
@@ -117,6 +167,12 @@ class ElementGraph:
     def n_edges(self) -> int:
         """Number of adjacent pairs ``e``."""
         return int(self.pairs.shape[0])
+
+    @property
+    def span(self) -> np.ndarray:
+        """(e,) float64: the length scaling the angular term of each adjacency (eq. 2):
+        ``spans``, or the border ``lengths`` (faces: the shared mesh edge)."""
+        return self.lengths if self.spans is None else self.spans
 
     @cached_property
     def area(self) -> float:

@@ -1,6 +1,7 @@
 """Reading and writing meshes and label files (see the modules for each family).
 
 - :mod:`.meshes`: :func:`read_mesh` (triangles or polygons, in file order);
+- :mod:`.clouds`: :func:`read_cloud` (PLY without faces, PCD, XYZ/PTS/TXT, NPY, LAS/LAZ);
 - :mod:`.export`: :func:`write_mesh`, :func:`write_colored_mesh` (PLY with labels, GLB, OBJ);
 - :mod:`.labels`: :func:`read_labels` (``.seg``, or a coloured PLY), :func:`write_labels`;
 - :mod:`.ply`: the binary PLY writer and the label reader;
@@ -8,9 +9,17 @@
 """
 
 from .files import atomic_write
-from .labels import read_labels, write_labels
+from .labels import read_labels, write_labels, write_segindices
 from .export import write_colored_mesh, write_mesh
 from .meshes import MESH_FORMATS, read_mesh
+from .clouds import CLOUD_FORMATS, is_cloud_file, read_cloud
+
+
+def read_input(path):
+    """A mesh (:func:`read_mesh`) or a point cloud (:func:`read_cloud`: a cloud format, or a
+    PLY without faces), by the file."""
+    return read_cloud(path) if is_cloud_file(path) else read_mesh(path)
 
 __all__ = ["read_mesh", "write_mesh", "read_labels", "write_labels", "write_colored_mesh",
-           "atomic_write", "MESH_FORMATS"]
+           "atomic_write", "MESH_FORMATS", "read_cloud", "read_input", "CLOUD_FORMATS",
+           "is_cloud_file", "write_segindices"]

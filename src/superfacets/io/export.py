@@ -29,7 +29,8 @@ from .files import Outputs, save, split_suffix
 from .meshes import MESH_FORMATS
 from .ply import ply_bytes
 
-__all__ = ["write_mesh", "write_colored_mesh", "COLORED_FORMATS"]
+__all__ = ["write_mesh", "write_colored_mesh", "write_colored_elements", "element_colors",
+           "COLORED_FORMATS"]
 
 #: Formats of :func:`write_colored_mesh`.
 COLORED_FORMATS = ("ply", "glb", "obj")
@@ -215,3 +216,75 @@ def write_colored_mesh(path, mesh, labels, *, vertex_colors: bool = False,
         out.write(path.with_name(mtl), mat.encode("ascii"))
     return path
 
+
+
+def element_colors(source, labels) -> np.ndarray:
+    """Per-row RGB colours of vertex or point labels (adjacent segments differ; rows
+    labelled -1 grey).
+
+    Parameters
+    ----------
+    source : ElementInput
+        From :func:`superfacets.elements.inputs.elements_of`.
+    labels : (N,) int ndarray
+        One label per input row (-1 where the row is not an element).
+
+    Returns
+    -------
+    (N, 3) uint8 ndarray
+    """
+    from ..colors import superfacet_colors
+    from ..labels import relabel_dense
+
+    g, index = source.graph, source.index
+    ok = index >= 0
+    per_element = np.zeros(g.n_elements, dtype=np.int64)
+    per_element[index[ok]] = labels[ok]
+    dense = relabel_dense(per_element)
+    palette = superfacet_colors(g, dense)
+    out = np.full((index.shape[0], 3), 128, dtype=np.uint8)
+    out[ok] = palette[dense[index[ok]]]
+    return out
+
+
+def write_colored_elements(path, source, labels, *, outputs: Outputs | None = None) -> Path:
+    """Write vertex or point labels as a coloured PLY.
+
+    Points: a PLY of the points (file order, invalid rows kept) with
+    ``red green blue`` and an int32 ``label`` per point. Vertices: the mesh
+    with per-vertex colours.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        ``.ply``.
+    source : ElementInput
+        The segmented input (``kind`` ``"points"`` or ``"vertices"``).
+    labels : (N,) int ndarray
+        One label per point or vertex.
+    outputs : Outputs, optional
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    MeshFormatError
+        If ``path`` does not end in ``.ply``.
+    """
+    from ..labels import check_labels
+    from .ply import points_ply_bytes
+
+    path = Path(path)
+    fmt, _ = split_suffix(path)
+    if fmt != "ply":
+        raise MeshFormatError(f"{path}: coloured {source.graph.kind} are written as .ply")
+    labels = check_labels(labels, source.n_rows, per=source.graph.element)
+    colors = element_colors(source, labels)
+    if source.graph.kind == "points":
+        data = points_ply_bytes(source.source.points, colors, labels)
+    else:
+        mesh = source.source
+        data = ply_bytes(mesh.vertices, mesh.corners, mesh.offsets, vertex_colors=colors)
+    return save(path, data, outputs)

@@ -15,7 +15,7 @@ from ..errors import MeshFormatError
 from ..labels import check_labels
 from .files import Outputs, read_bytes, save, split_suffix, text_lines
 
-__all__ = ["read_labels", "write_labels"]
+__all__ = ["read_labels", "write_labels", "write_segindices"]
 
 
 def write_labels(path, labels, header: dict | Iterable[str] | None = None, *,
@@ -51,9 +51,44 @@ def write_labels(path, labels, header: dict | Iterable[str] | None = None, *,
     return save(path, (head + body + ("\n" if labels.size else "")).encode("ascii"), outputs)
 
 
+def write_segindices(path, labels, params: dict | None = None, scene_id: str = "", *,
+                     outputs: Outputs | None = None) -> Path:
+    """Write labels as the ScanNet Segmentator's JSON: ``{"params", "sceneId", "segIndices"}``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        ``.json`` (``-``: standard output).
+    labels : (n,) int ndarray
+        One label per vertex or point (-1 for points that are not elements).
+    params : dict, optional
+        The run's parameters, stored under ``"params"``.
+    scene_id : str, optional
+        Stored as ``"sceneId"`` (the input's name without suffix).
+    outputs : Outputs, optional
+        Stage the file there (all or nothing).
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    ParameterError
+        If ``labels`` is not a 1-D integer array.
+    """
+    import json
+
+    labels = check_labels(labels, None)
+    clean = {k: (v.item() if hasattr(v, "item") else v) for k, v in (params or {}).items()}
+    doc = {"params": clean, "sceneId": scene_id, "segIndices": labels.tolist()}
+    return save(path, json.dumps(doc, separators=(",", ":")).encode("ascii") + b"\n", outputs)
+
+
 def read_labels(path, n_faces: int | None = None) -> np.ndarray:
-    """Read labels: a ``.seg`` file (``#`` lines skipped; may be compressed), or the
-    ``label`` face property of a coloured PLY written by this package.
+    """Read labels: a ``.seg`` file (``#`` lines skipped; may be compressed), the
+    ``label`` face property of a coloured PLY written by this package, or the
+    ``segIndices`` of a ScanNet-style ``.json``.
 
     Parameters
     ----------
@@ -82,6 +117,16 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
         from .ply import read_ply_labels
 
         labels = read_ply_labels(path, data)
+    elif fmt == "json":  # the ScanNet Segmentator's {"segIndices": [...]}
+        import json
+
+        try:
+            labels = np.asarray(json.loads(data)["segIndices"], dtype=np.int64)
+        except (ValueError, KeyError, TypeError, OverflowError) as exc:
+            raise MeshFormatError(f"{path}: not a segIndices JSON file ({type(exc).__name__}: "
+                                  f"{exc})") from None
+        if labels.ndim != 1:
+            raise MeshFormatError(f"{path}: segIndices must be a list of integers")
     elif not (lines := text_lines(data, path)):
         labels = np.zeros(0, dtype=np.int64)
     else:
@@ -92,5 +137,6 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
         if labels.ndim != 1:
             raise MeshFormatError(f"{path}: malformed label file: expected one label per line")
     if n_faces is not None and labels.shape[0] != n_faces:
-        raise MeshFormatError(f"{path}: has {labels.shape[0]} labels but the mesh has {n_faces} faces")
+        raise MeshFormatError(f"{path}: has {labels.shape[0]} labels but the input has "
+                              f"{n_faces} elements")
     return labels

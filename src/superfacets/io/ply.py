@@ -92,6 +92,19 @@ def ply_bytes(vertices: np.ndarray, corners: np.ndarray, offsets: np.ndarray, *,
     return out.getvalue()
 
 
+def points_ply_bytes(points: np.ndarray, colors: np.ndarray, labels: np.ndarray) -> bytes:
+    """A binary little-endian PLY of coloured points (no faces): ``x y z`` (double),
+    ``red green blue`` (uchar) and an int32 ``label`` per point, in point order."""
+    n = points.shape[0]
+    head = ["ply", "format binary_little_endian 1.0", "comment made by superfacets",
+            f"element vertex {n}", "property double x", "property double y", "property double z",
+            "property uchar red", "property uchar green", "property uchar blue",
+            "property int label", "end_header"]
+    rec = np.empty(n, dtype=[("xyz", "<f8", (3,)), ("rgb", "u1", (3,)), ("label", "<i4")])
+    rec["xyz"], rec["rgb"], rec["label"] = points, colors, labels
+    return ("\n".join(head) + "\n").encode("ascii") + rec.tobytes()
+
+
 def read_ply_labels(path, data: bytes | None = None) -> np.ndarray:
     """The ``label`` face property of a PLY (as written by ``--colored-mesh``).
 

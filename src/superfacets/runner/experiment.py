@@ -43,6 +43,41 @@ def _load(path: str, seg_paths: tuple):
     return mesh, bm.ground_truths(mesh.n_faces)
 
 
+@lru_cache(maxsize=2)
+def _prepared(path: str, seg_paths: tuple, elements: str, n_points: int, seed: int):
+    """The input of one element kind, its evaluation graph and ground truths per element.
+
+    Faces: the mesh and its ground truths. Vertices: the mesh, ground truth by
+    area-weighted majority of the incident faces. Points: ``n_points`` sampled
+    uniformly by area (fixed seed), each with its face's ground truth.
+    """
+    from ..cloud import PointCloud
+    from ..datasets.sampling import sample_points, vertex_ground_truth
+    from ..elements.inputs import elements_of
+
+    mesh, gts = _load(path, seg_paths)
+    if elements == "faces":
+        return mesh, mesh.graph, None, gts
+    if elements == "vertices":
+        obj = mesh
+        rows = [vertex_ground_truth(mesh, gt) for gt in gts]
+    else:
+        pts, faces = sample_points(mesh, n_points, seed)
+        obj = PointCloud(pts, name=Path(path).name)
+        rows = [gt[faces] for gt in gts]
+    source = elements_of(obj, elements)
+    to_el = _element_values(source)
+    return obj, source.graph, to_el, [to_el(r) for r in rows]
+
+
+def _element_values(source):
+    """Per-row values -> per-element values (the first row of each element)."""
+    idx = np.flatnonzero(source.index >= 0)
+    first = np.empty(source.graph.n_elements, dtype=np.int64)
+    first[source.index[idx][::-1]] = idx[::-1]
+    return lambda values: np.asarray(values)[first]
+
+
 def _error_text(exc: BaseException) -> str:
     text = f"{type(exc).__name__}: {exc}".replace("\n", " ").strip()
     if not isinstance(exc, (ValueError, OSError, MemoryError, Skipped)):
@@ -61,9 +96,16 @@ def _run_task(task: dict) -> list[dict]:
     run = task["run"]
     params = dict(task["params"])
     rows = []
+    kind = task.get("elements", "faces")
     try:
         mesh, gts = _load(task["path"], task["seg_paths"])
         base["n_faces"] = mesh.n_faces
+        data, graph, to_el, gts = _prepared(task["path"], task["seg_paths"], kind,
+                                            task.get("n_points", 0), task["seed"])
+        base["n_elements"] = graph.n_elements
+        n_rows = graph.n_elements if to_el is None else (
+            data.n_total if kind == "points" else data.n_vertices)
+        extra = {} if task.get("faces_only", True) else {"elements": kind}
     except Exception as exc:  # noqa: BLE001 - recorded, the run goes on
         return [dict(base, n_segments=k, status="failed", error=_error_text(exc))
                 for k in task["ks"]]
@@ -74,7 +116,7 @@ def _run_task(task: dict) -> list[dict]:
         try:
             probe = PeakMemory()
             t0 = time.perf_counter()
-            out = run(mesh, k, cache=cache, seed=task["seed"], **params)
+            out = run(data, k, cache=cache, seed=task["seed"], **params, **extra)
             seconds = time.perf_counter() - t0
             peak = probe.peak_mib()
             row["seconds"] = round(seconds + float(out.reused_seconds), 4)
@@ -82,15 +124,18 @@ def _run_task(task: dict) -> list[dict]:
                 task_peak = max(task_peak, peak)
                 row["peak_mib"] = round(task_peak if out.reused_seconds else peak, 1)
             labels = np.asarray(out.labels)
-            if labels.shape != (mesh.n_faces,):
+            if labels.shape != (n_rows,):
                 raise RuntimeError(f"method returned {labels.shape} labels for "
-                                   f"{mesh.n_faces} faces")
+                                   f"{n_rows} {kind}")
+            if to_el is not None:
+                labels = to_el(labels)
             row.update(status="ok", segments=int(np.unique(labels).size),
                        iterations=out.n_iter, converged=out.converged,
                        n_ground_truths=len(gts))
             if gts:
                 row.update({m: round(v, 6) for m, v in
-                            evaluate(mesh, labels, gts, tau=task["tau"]).items()})
+                            evaluate(graph, labels, gts, tau=task["tau"],
+                                     equal_weight=kind != "faces").items()})
         except Skipped as exc:
             row.update(status="skipped", error=str(exc)[:500], seconds=None)
         except Exception as exc:  # noqa: BLE001 - recorded, the run goes on
@@ -181,7 +226,8 @@ def _default_workers() -> int:
 def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
                    n_segments: Sequence[int] = DEFAULT_N_SEGMENTS, *, workers: int | None = None,
                    tau: float = 0.05, seed: int = 0, retry_failed: bool = False,
-                   progress: bool = True) -> ExperimentSummary:
+                   progress: bool = True, elements: Sequence[str] = ("faces",),
+                   n_points: int = 20_000) -> ExperimentSummary:
     """Run every config at every ``n_segments`` on every mesh, appending rows.
 
     Parameters
@@ -208,6 +254,14 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
         :func:`superfacets.report.load_results` keeps the last one).
     progress : bool, default True
         Show a progress bar (rows) on stderr.
+    elements : sequence of {'faces', 'vertices', 'points'}, default ('faces',)
+        Element kinds to run each method on (where it supports them).
+        Vertices: ground truth by area-weighted majority of the incident
+        faces; points: ``n_points`` sampled uniformly by area (seed ``seed``),
+        each with its face's ground truth; both evaluated with equal weight
+        per element (:func:`superfacets.metrics.evaluate`).
+    n_points : int, default 20000
+        Points sampled per mesh for ``'points'``.
 
     Returns
     -------
@@ -237,16 +291,28 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
     cols, old = prepare_file(path, columns(configs))
     done = {row_key(r) for r in old if not (retry_failed and r.get("status") == "failed")}
 
+    from ..params import ELEMENTS, check_choice
+
+    kinds = [check_choice("elements", e, ELEMENTS) for e in elements]
+    if not kinds:
+        raise ParameterError("no element kind to run")
+    n_points = check_int("n_points", n_points, lo=1)
     tasks = []
-    for bm, cfg in product(meshes, configs):
-        base = {"mesh": Path(bm.path).stem, "mesh_id": bm.id, "category": bm.category,
-                "method": cfg.method, "seed": seed, **{k: fmt_value(v) for k, v in cfg.params}}
+    for bm, cfg, kind in product(meshes, configs, kinds):
         method = get_method(cfg.method)
+        if kind not in method.elements:
+            continue
+        base = {"mesh": Path(bm.path).stem, "mesh_id": bm.id, "category": bm.category,
+                "method": cfg.method, "elements": kind, "seed": seed,
+                **{k: fmt_value(v) for k, v in cfg.params}}
         todo = [k for k in ks if row_key({**base, "n_segments": k}) not in done]
         if todo:
             tasks.append({"base": base, "run": method.run, "params": cfg.params,
                           "path": str(bm.path), "seg_paths": tuple(str(p) for p in bm.seg_paths),
-                          "ks": todo, "seed": seed, "tau": tau})
+                          "ks": todo, "seed": seed, "tau": tau, "elements": kind,
+                          "n_points": n_points, "faces_only": method.elements == ("faces",)})
+    if not any(k in get_method(c.method).elements for c in configs for k in kinds):
+        raise ParameterError(f"no method of the grid segments {', '.join(kinds)}")
     summary = ExperimentSummary(path, done_before=len(done))
     total = sum(len(t["ks"]) for t in tasks)
     t0 = time.perf_counter()

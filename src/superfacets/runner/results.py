@@ -1,7 +1,8 @@
 """The results file of experiments: its columns, a row's identity, reading and preparing it.
 
 Row columns (:func:`columns`): ``mesh``, ``mesh_id``, ``category``,
-``n_faces``, ``method``, ``n_segments`` (asked), one column per method
+``n_faces``, ``method``, ``elements`` (faces, vertices or points; empty in
+files from before: faces), ``n_elements``, ``n_segments`` (asked), one column per method
 parameter (empty where a method does not have it), ``seed``, ``status``
 (``ok``, ``failed`` or ``skipped``), ``segments`` (produced), ``iterations``,
 ``converged``, ``seconds`` (the method only, not reading or metrics, including
@@ -27,7 +28,8 @@ __all__ = ["columns", "row_key", "read_results", "prepare_file", "fmt_value", "K
 #: Columns naming a row, besides the method's parameters (see :func:`row_key`).
 KEY_COLUMNS = ("mesh", "method", "n_segments", "seed")
 
-_HEAD = ["mesh", "mesh_id", "category", "n_faces", "method", "n_segments"]
+_HEAD = ["mesh", "mesh_id", "category", "n_faces", "method", "elements", "n_elements",
+         "n_segments"]
 _TAIL = ["seed", "status", "segments", "iterations", "converged", "seconds", "peak_mib",
          *METRICS, "n_ground_truths", "error"]
 
@@ -67,6 +69,7 @@ def row_key(row: dict) -> tuple:
     method = METHODS.get(row["method"])
     names = sorted(method.defaults) if method is not None else []
     return (tuple(str(row.get(c, "")) for c in KEY_COLUMNS)
+            + (str(row.get("elements") or "faces"),)  # files from before: faces
             + tuple((n, str(row.get(n, ""))) for n in names))
 
 

@@ -1,0 +1,86 @@
+"""PCA normals of point neighbourhoods, in numba (private kernel of
+:mod:`superfacets.elements.points`).
+
+For each point: the covariance of its neighbourhood, its smallest eigenvalue
+by the closed form of a symmetric 3x3 matrix (the trigonometric solution of
+the characteristic cubic), and the eigenvector as the largest cross product of
+two rows of ``C - lambda I``.
+"""
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _smallest_eigenvector(a00, a01, a02, a11, a12, a22, out, i):
+    p1 = a01 * a01 + a02 * a02 + a12 * a12
+    q = (a00 + a11 + a22) / 3.0
+    p2 = (a00 - q) ** 2 + (a11 - q) ** 2 + (a22 - q) ** 2 + 2.0 * p1
+    if p2 <= 0.0:  # isotropic (or one point): no preferred direction
+        out[i, 0], out[i, 1], out[i, 2] = 0.0, 0.0, 1.0
+        return
+    p = math.sqrt(p2 / 6.0)
+    b00, b11, b22 = (a00 - q) / p, (a11 - q) / p, (a22 - q) / p
+    b01, b02, b12 = a01 / p, a02 / p, a12 / p
+    r = 0.5 * (b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02)
+               + b02 * (b01 * b12 - b11 * b02))
+    r = min(1.0, max(-1.0, r))
+    phi = math.acos(r) / 3.0
+    lam = q + 2.0 * p * math.cos(phi + 2.0 * math.pi / 3.0)  # the smallest eigenvalue
+    r0x, r0y, r0z = a00 - lam, a01, a02
+    r1x, r1y, r1z = a01, a11 - lam, a12
+    r2x, r2y, r2z = a02, a12, a22 - lam
+    c0x, c0y, c0z = r0y * r1z - r0z * r1y, r0z * r1x - r0x * r1z, r0x * r1y - r0y * r1x
+    c1x, c1y, c1z = r0y * r2z - r0z * r2y, r0z * r2x - r0x * r2z, r0x * r2y - r0y * r2x
+    c2x, c2y, c2z = r1y * r2z - r1z * r2y, r1z * r2x - r1x * r2z, r1x * r2y - r1y * r2x
+    d0 = c0x * c0x + c0y * c0y + c0z * c0z
+    d1 = c1x * c1x + c1y * c1y + c1z * c1z
+    d2 = c2x * c2x + c2y * c2y + c2z * c2z
+    if d0 >= d1 and d0 >= d2:
+        x, y, z, d = c0x, c0y, c0z, d0
+    elif d1 >= d2:
+        x, y, z, d = c1x, c1y, c1z, d1
+    else:
+        x, y, z, d = c2x, c2y, c2z, d2
+    if d <= 0.0:  # two smallest eigenvalues equal: a line-like neighbourhood
+        out[i, 0], out[i, 1], out[i, 2] = 0.0, 0.0, 1.0
+        return
+    s = 1.0 / math.sqrt(d)
+    out[i, 0], out[i, 1], out[i, 2] = x * s, y * s, z * s
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def pca_normals(points, neighbors, out):
+    """``out[i]``: unit normal of the points ``neighbors[i]`` (their least-variance axis)."""
+    n, k = neighbors.shape
+    for i in prange(n):
+        mx = my = mz = 0.0
+        for t in range(k):
+            j = neighbors[i, t]
+            mx += points[j, 0]
+            my += points[j, 1]
+            mz += points[j, 2]
+        mx /= k
+        my /= k
+        mz /= k
+        a00 = a01 = a02 = a11 = a12 = a22 = 0.0
+        for t in range(k):
+            j = neighbors[i, t]
+            x, y, z = points[j, 0] - mx, points[j, 1] - my, points[j, 2] - mz
+            a00 += x * x
+            a01 += x * y
+            a02 += x * z
+            a11 += y * y
+            a12 += y * z
+            a22 += z * z
+        scale = a00 + a11 + a22
+        if scale > 0.0:
+            a00 /= scale
+            a01 /= scale
+            a02 /= scale
+            a11 /= scale
+            a12 /= scale
+            a22 /= scale
+        _smallest_eigenvector(a00, a01, a02, a11, a12, a22, out, i)

@@ -1,0 +1,57 @@
+"""Consistent orientation of estimated normals: propagation along a minimum spanning tree.
+
+Hoppe et al.'s rule ("Surface reconstruction from unorganized points", 1992):
+grow a spanning tree over the neighbourhood graph that prefers the flattest
+steps (Prim's algorithm on the cost ``1 - |n_u . n_v|``) and flip each normal
+to agree with its parent's. Private kernel of :mod:`superfacets.elements.points`.
+"""
+
+import numpy as np
+from numba import njit
+
+from .heap import pop, push
+
+
+@njit(cache=True, error_model="numpy")
+def propagate_signs(indptr, indices, rows, normals, sign, component):
+    """Fill ``sign`` (+1/-1 per element) and ``component`` (ids from 0); return the
+    number of components. ``rows[t]`` is the row (source) of CSR entry ``t``."""
+    n = normals.shape[0]
+    done = np.zeros(n, dtype=np.bool_)
+    cap = indices.shape[0] + 1
+    hkey = np.empty(cap, dtype=np.float64)
+    hval = np.empty(cap, dtype=np.int64)
+    n_comp = 0
+    for s in range(n):
+        if done[s]:
+            continue
+        done[s] = True
+        sign[s] = 1
+        component[s] = n_comp
+        size = 0
+        for t in range(indptr[s], indptr[s + 1]):
+            w = indices[t]
+            if not done[w]:
+                d = normals[s, 0] * normals[w, 0] + normals[s, 1] * normals[w, 1] \
+                    + normals[s, 2] * normals[w, 2]
+                size = push(hkey, hval, size, 1.0 - abs(d), t)
+        while size > 0:
+            t = hval[0]
+            size = pop(hkey, hval, size)
+            v = indices[t]
+            if done[v]:
+                continue
+            u = rows[t]
+            done[v] = True
+            component[v] = n_comp
+            d = normals[u, 0] * normals[v, 0] + normals[u, 1] * normals[v, 1] \
+                + normals[u, 2] * normals[v, 2]
+            sign[v] = sign[u] if d >= 0 else -sign[u]
+            for t2 in range(indptr[v], indptr[v + 1]):
+                w = indices[t2]
+                if not done[w]:
+                    d = normals[v, 0] * normals[w, 0] + normals[v, 1] * normals[w, 1] \
+                        + normals[v, 2] * normals[w, 2]
+                    size = push(hkey, hval, size, 1.0 - abs(d), t2)
+        n_comp += 1
+    return n_comp

@@ -1,0 +1,230 @@
+"""Point clouds: validated points (and normals), with their cached point graph.
+
+A :class:`PointCloud` holds ``(N, 3) float64`` points in input order. Rows
+that are not finite are *invalid points* only where the input says so (an
+organized cloud, a PCD file: PCL marks missing measurements with NaN); they
+take no part in the method and get the label -1. Elsewhere a non-finite row is
+an error naming the row. Exact duplicate points are segmented as one element
+(they get the same label).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from .errors import InvalidMeshError
+from .mesh import _MAX_COORDINATE, _MAX_EXTENT, _MIN_EXTENT
+
+__all__ = ["PointCloud", "as_cloud", "InvalidCloudError"]
+
+
+class InvalidCloudError(InvalidMeshError):
+    """Point arrays are unusable: wrong shape, NaN/inf rows, empty, collinear."""
+
+
+def _readonly(a: np.ndarray) -> np.ndarray:
+    a.setflags(write=False)
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class PointCloud:
+    """A validated point cloud, optionally with normals.
+
+    Parameters
+    ----------
+    points : (N, 3) float ndarray
+        Point positions, any units.
+    normals : (N, 3) float ndarray, optional
+        Normals, trusted as consistently oriented (made unit). Leave them out
+        to have them estimated (PCA of each neighbourhood, then oriented).
+    name : str, optional
+        For messages.
+    viewpoint : (3,) float ndarray, optional
+        Sensor position (a PCD file's ``VIEWPOINT``): estimated normals are
+        turned towards it.
+    allow_invalid : bool, default False
+        Non-finite rows are invalid points (label -1) instead of an error.
+    shape : tuple of int, optional
+        ``(height, width)`` of an organized cloud (labels keep that layout
+        in :func:`superfacets.superpoints`).
+
+    Raises
+    ------
+    InvalidCloudError
+        If the arrays have the wrong shape, a row is NaN/inf (unless
+        ``allow_invalid``) or a normal is not finite or zero.
+    TypeError
+        If ``points`` is not numeric.
+
+    Examples
+    --------
+    >>> cloud = PointCloud(np.random.default_rng(0).random((100, 3)))
+    >>> cloud
+    PointCloud(100 points)
+    """
+
+    points: np.ndarray
+    normals: np.ndarray | None = None
+    name: str = ""
+    viewpoint: np.ndarray | None = None
+    allow_invalid: bool = False
+    shape: tuple | None = field(default=None, repr=False)
+
+    def __post_init__(self) -> None:
+        where = f"{self.name}: " if self.name else ""
+        p = _coordinates(self.points, "points", where)
+        finite = np.isfinite(p).all(axis=1)
+        if not finite.all() and not self.allow_invalid:
+            row = int(np.flatnonzero(~finite)[0])
+            raise InvalidCloudError(
+                f"{where}point {row} has a non-finite coordinate ({p[row].tolist()}); "
+                f"{int((~finite).sum())} such rows (only organized clouds and PCD files may "
+                "mark invalid points with NaN)")
+        object.__setattr__(self, "points", _readonly(p))
+        if self.normals is not None:
+            nrm = _coordinates(self.normals, "normals", where)
+            if nrm.shape != p.shape:
+                raise InvalidCloudError(f"{where}normals must have the shape of the points "
+                                        f"{p.shape}, got {nrm.shape}")
+            length = np.linalg.norm(nrm[finite], axis=1)
+            bad = ~(np.isfinite(length) & (length > 0))
+            if bad.any():
+                row = int(np.flatnonzero(finite)[np.flatnonzero(bad)[0]])
+                raise InvalidCloudError(f"{where}normal {row} is zero or not finite "
+                                        f"({nrm[row].tolist()}); leave normals out to have "
+                                        "them estimated")
+            nrm = nrm.copy()
+            nrm[finite] /= length[:, None]
+            object.__setattr__(self, "normals", _readonly(nrm))
+        if self.viewpoint is not None:
+            vp = np.asarray(self.viewpoint, dtype=np.float64).reshape(-1)
+            if vp.shape != (3,) or not np.isfinite(vp).all():
+                raise InvalidCloudError(f"{where}viewpoint must be 3 finite numbers, got "
+                                        f"{self.viewpoint!r}")
+            object.__setattr__(self, "viewpoint", vp)
+
+    def __repr__(self) -> str:
+        invalid = self.n_total - int(self.valid.sum())
+        extra = f", {invalid} invalid" if invalid else ""
+        extra += ", with normals" if self.normals is not None else ""
+        return f"PointCloud({self.n_total} points{extra})"
+
+    @property
+    def n_total(self) -> int:
+        """Number of rows ``N``, invalid ones included."""
+        return int(self.points.shape[0])
+
+    @cached_property
+    def valid(self) -> np.ndarray:
+        """(N,) bool: True for points with finite coordinates."""
+        return _readonly(np.isfinite(self.points).all(axis=1))
+
+    @cached_property
+    def n_points(self) -> int:
+        """Number of valid points."""
+        return int(self.valid.sum())
+
+    def check_usable(self) -> None:
+        """Raise :class:`InvalidCloudError` unless the cloud spans a surface.
+
+        Needs a valid point, a positive extent within ``1e-70 .. 1e70``
+        (coordinates within ``1e300``), and points that are not all on one
+        line (a line has no area, and no normal).
+        """
+        where = f"{self.name}: " if self.name else ""
+        p = self.points[self.valid]
+        if p.shape[0] == 0:
+            raise InvalidCloudError(f"{where}empty point cloud: no valid point")
+        with np.errstate(over="ignore", invalid="ignore"):
+            extent = float(np.max(p.max(axis=0) - p.min(axis=0)))
+            size = float(np.abs(p).max())
+        if not (np.isfinite(extent) and size <= _MAX_COORDINATE and extent <= _MAX_EXTENT):
+            raise InvalidCloudError(f"{where}coordinates up to {size:.3g} spanning "
+                                    f"{extent:.3g}: rescale the cloud (e.g. to unit size)")
+        if extent == 0:
+            raise InvalidCloudError(f"{where}all {p.shape[0]} points coincide: no surface "
+                                    "to segment")
+        if extent < _MIN_EXTENT:
+            raise InvalidCloudError(f"{where}the cloud spans only {extent:.3g}: rescale it "
+                                    "(e.g. to unit size)")
+        q = (p - p.mean(axis=0)) / extent
+        s = np.linalg.svd(q.T @ q, compute_uv=False)
+        if s[1] <= 1e-12 * s[0]:
+            raise InvalidCloudError(f"{where}all {p.shape[0]} points lie on one line: no "
+                                    "surface to segment")
+
+    @cached_property
+    def _graphs(self) -> dict:
+        return {}
+
+    def graph(self, n_neighbors: int = 10, neighbor_radius: float | None = None):
+        """The point graph (cached per neighbourhood), see
+        :func:`superfacets.elements.point_graph`.
+
+        Returns
+        -------
+        PointElements
+        """
+        key = (n_neighbors, neighbor_radius)
+        if key not in self._graphs:
+            from .elements.points import point_graph
+
+            self._graphs[key] = point_graph(self, n_neighbors, neighbor_radius)
+        return self._graphs[key]
+
+
+def _coordinates(a, what: str, where: str) -> np.ndarray:
+    arr = np.asarray(a)
+    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number)
+                                   or arr.dtype == bool):
+        raise TypeError(f"{where}{what} must be numeric, got dtype {arr.dtype}")
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise InvalidCloudError(f"{where}{what} must have shape (N, 3), got {arr.shape}")
+    return np.ascontiguousarray(arr, dtype=np.float64)
+
+
+def as_cloud(obj, normals=None, name: str = "") -> PointCloud:
+    """A :class:`PointCloud` from what a user has.
+
+    Parameters
+    ----------
+    obj : PointCloud, (N, 3) or organized (H, W, 3) float ndarray, trimesh.PointCloud, or
+        open3d.geometry.PointCloud
+        An organized array may hold NaN rows (invalid points, label -1).
+    normals : (N, 3) or (H, W, 3) float ndarray, optional
+        With an array: its normals (an Open3D cloud brings its own).
+    name : str, optional
+
+    Returns
+    -------
+    PointCloud
+
+    Raises
+    ------
+    TypeError
+        If ``obj`` is none of these.
+    InvalidCloudError
+        As :class:`PointCloud`.
+    """
+    if isinstance(obj, PointCloud):
+        return obj
+    kind = f"{type(obj).__module__}.{type(obj).__name__}"
+    if kind.startswith("trimesh.") and type(obj).__name__ == "PointCloud":
+        return PointCloud(np.asarray(obj.vertices), normals, name=name)
+    if kind.startswith("open3d.") and hasattr(obj, "points"):
+        nrm = np.asarray(obj.normals) if getattr(obj, "has_normals", lambda: False)() else None
+        return PointCloud(np.asarray(obj.points), nrm, name=name)
+    if isinstance(obj, (np.ndarray, list, tuple)):
+        arr = np.asarray(obj)
+        if arr.ndim == 3 and arr.shape[2] == 3:  # organized: rows of a sensor image
+            h, w = arr.shape[:2]
+            nrm = None if normals is None else np.asarray(normals).reshape(-1, 3)
+            return PointCloud(arr.reshape(-1, 3), nrm, name=name, allow_invalid=True,
+                              shape=(h, w))
+        return PointCloud(arr, normals, name=name)
+    raise TypeError(f"expected a point cloud ((N, 3) array, PointCloud, trimesh or Open3D "
+                    f"point cloud), got {type(obj).__name__}")

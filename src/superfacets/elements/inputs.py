@@ -1,0 +1,125 @@
+"""From what the user gives to the element graph the method runs on.
+
+:func:`elements_of` is the one place that decides what the elements of an
+input are: the faces of a mesh (the paper), its vertices, or the points of a
+cloud. It validates the input, builds (or takes from the input's cache) the
+graph, and keeps the map from elements back to the input's rows, so labels
+come back one per face, vertex or point, in input order.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from .graph import ElementGraph
+
+__all__ = ["ElementInput", "elements_of", "is_cloud"]
+
+
+class ElementInput(NamedTuple):
+    """An input ready for the method.
+
+    Attributes
+    ----------
+    graph : ElementGraph
+    index : (N,) int64 ndarray or None
+        Element of each input row (vertex or point), -1 for rows that are not
+        elements (vertices used by no face, invalid points); None when the
+        elements are the rows themselves (faces).
+    source : Mesh or PointCloud
+        The validated input.
+    """
+
+    graph: ElementGraph
+    index: np.ndarray | None
+    source: object
+
+    @property
+    def n_rows(self) -> int:
+        """Number of labels to return (faces, vertices or points of the input)."""
+        return self.graph.n_elements if self.index is None else int(self.index.shape[0])
+
+    def to_rows(self, labels: np.ndarray) -> np.ndarray:
+        """Per-element values -> per-row values (-1 for rows that are not elements)."""
+        if self.index is None:
+            return labels
+        out = np.full(self.index.shape[0], -1, dtype=labels.dtype)
+        ok = self.index >= 0
+        out[ok] = labels[self.index[ok]]
+        return out
+
+    def first_rows(self, elements: np.ndarray) -> np.ndarray:
+        """The first input row of each of ``elements`` (the row a center stands for)."""
+        if self.index is None:
+            return elements
+        rows = np.flatnonzero(self.index >= 0)
+        first = np.full(self.graph.n_elements, -1, dtype=np.int64)
+        first[self.index[rows][::-1]] = rows[::-1]
+        return first[elements]
+
+
+def is_cloud(obj) -> bool:
+    """Whether ``obj`` is a point cloud (a PointCloud, a bare (N, 3) or (H, W, 3) array,
+    a trimesh or Open3D point cloud) rather than a mesh."""
+    from ..cloud import PointCloud
+
+    if isinstance(obj, PointCloud):
+        return True
+    if isinstance(obj, np.ndarray):
+        return obj.ndim in (2, 3) and obj.shape[-1] == 3
+    mod = type(obj).__module__ or ""
+    return type(obj).__name__ == "PointCloud" and mod.split(".")[0] in ("trimesh", "open3d")
+
+
+def elements_of(obj, elements: str | None = None, *, n_neighbors: int = 10,
+                neighbor_radius: float | None = None) -> ElementInput:
+    """Validate an input and give its element graph.
+
+    Parameters
+    ----------
+    obj : Mesh, PointCloud, or what :func:`~superfacets.mesh.as_mesh` or
+        :func:`~superfacets.cloud.as_cloud` accept
+    elements : {'faces', 'vertices', 'points'}, optional
+        Default: ``'points'`` for a point cloud, else ``'faces'``.
+    n_neighbors, neighbor_radius
+        The point graph's neighbourhood (points only).
+
+    Returns
+    -------
+    ElementInput
+
+    Raises
+    ------
+    ParameterError
+        If ``elements`` does not fit the input (points of a mesh, faces of a cloud).
+    InvalidMeshError, InvalidCloudError, TypeError
+        As the input's validation.
+    """
+    from ..errors import ParameterError
+
+    cloud = is_cloud(obj)
+    if elements is None:
+        elements = "points" if cloud else "faces"
+    if elements == "points":
+        if not cloud:
+            raise ParameterError("elements='points' needs a point cloud (a mesh has faces "
+                                 "and vertices: elements='faces' or 'vertices')")
+        from ..cloud import as_cloud
+
+        c = as_cloud(obj)
+        c.check_usable()
+        g, index = c.graph(n_neighbors, neighbor_radius)
+        return ElementInput(g, index, c)
+    if cloud:
+        raise ParameterError(f"elements={elements!r} needs a mesh; a point cloud has "
+                             "elements='points'")
+    from ..mesh import as_mesh
+
+    mesh = as_mesh(obj)
+    mesh.check_usable()
+    if elements == "vertices":
+        g, index = mesh.vertex_elements
+        return ElementInput(g, index, mesh)
+    return ElementInput(mesh.graph, None, mesh)

@@ -1,0 +1,284 @@
+"""Reading point clouds: PLY without faces, PCD, XYZ/PTS/TXT columns, ``.npy``, LAS/LAZ.
+
+Points keep their file order (labels come back in that order). Readers:
+
+- PLY (a ``vertex`` element, no faces): plyfile; ``nx ny nz`` are read as normals;
+- PCD (ASCII, binary, binary_compressed): ``pypcd4`` (extra ``clouds``). NaN
+  points are PCL's mark of a missing measurement: they become invalid
+  points (label -1); an organized cloud (``HEIGHT > 1``) keeps its layout;
+  ``VIEWPOINT`` gives the sensor position that estimated normals face;
+- XYZ / PTS / TXT: whitespace- or comma-separated columns ``x y z`` first;
+  further columns are ignored unless a ``#``/``//`` header line names them
+  (``nx ny nz`` are then read as normals); a PTS file may start with the
+  point count;
+- NPY: an ``(N, 3)`` array, ``(N, 6)`` (points then normals) or organized
+  ``(H, W, 3)`` (NaN points invalid);
+- LAS / LAZ: ``laspy`` (extra ``clouds``; LAZ through its ``lazrs`` backend),
+  scaled coordinates.
+
+Elsewhere than PCD files and organized arrays a non-finite coordinate is an
+error naming its row.
+"""
+
+from __future__ import annotations
+
+import io
+import re
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import MeshFormatError
+from .files import read_bytes, split_suffix
+
+__all__ = ["read_cloud", "CLOUD_FORMATS", "is_cloud_file"]
+
+#: Point-cloud formats of :func:`read_cloud` (PLY files are clouds when they have no faces).
+CLOUD_FORMATS = ("pcd", "xyz", "pts", "txt", "npy", "las", "laz")
+
+
+def is_cloud_file(path) -> bool:
+    """Whether ``path`` holds a point cloud: a cloud format, or a PLY declaring no face."""
+    path = Path(path)
+    fmt, comp = split_suffix(path)
+    if fmt in CLOUD_FORMATS:
+        return True
+    if fmt != "ply" or not path.is_file():
+        return False
+    head = _ply_header(read_bytes(path, comp) if comp else path.open("rb").read(1 << 16))
+    faces = [int(p[2]) for p in (ln.split() for ln in head)
+             if len(p) == 3 and p[0] == b"element" and p[1] == b"face" and p[2].isdigit()]
+    return not faces or faces[0] == 0
+
+
+def _ply_header(data: bytes) -> list[bytes]:
+    end = data.find(b"end_header")
+    return data[:end if end >= 0 else 1 << 16].split(b"\n")
+
+
+def read_cloud(path, format: str | None = None):
+    """Read a point cloud from a file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        ``.ply`` (no faces), ``.pcd``, ``.xyz``, ``.pts``, ``.txt``, ``.npy``,
+        ``.las`` or ``.laz``; text formats and PLY may end in ``.gz``/``.xz``/``.bz2``.
+    format : str, optional
+        Force a format instead of the suffix.
+
+    Returns
+    -------
+    PointCloud
+        Points in file order (float64), normals when the file has them,
+        invalid points marked (PCD), the organized layout kept.
+
+    Raises
+    ------
+    FileNotFoundError, IsADirectoryError
+    MeshFormatError
+        If the file is malformed or truncated, or its columns are not understood.
+    InvalidCloudError
+        If a point has a non-finite coordinate (outside PCD files), or
+        normals are zero or not finite.
+    MissingExtraError
+        PCD and LAS/LAZ without the ``clouds`` extra.
+    """
+    from ..cloud import InvalidCloudError, PointCloud
+
+    path = Path(path)
+    fmt, comp = split_suffix(path)
+    if format is not None:
+        fmt = format.lower().lstrip(".")
+    if fmt not in CLOUD_FORMATS + ("ply",):
+        raise MeshFormatError(f"{path}: unknown point-cloud format "
+                              f"{('.' + fmt) if fmt else '(no suffix)'}; expected .ply or one of "
+                              f"{', '.join('.' + f for f in CLOUD_FORMATS)}")
+    kw: dict = {}
+    if fmt == "pcd":
+        if comp:
+            raise MeshFormatError(f"{path}: compressed PCD files are not supported; "
+                                  "decompress it first")
+        kw = _read_pcd(path)
+    elif fmt in ("las", "laz"):
+        kw = _read_las(path)
+    else:
+        data = read_bytes(path, comp)
+        if fmt == "ply":
+            kw = _read_ply(data, path)
+        elif fmt == "npy":
+            kw = _read_npy(data, path)
+        else:
+            kw = _read_columns(data, path)
+    if kw["points"].shape[0] == 0:
+        raise InvalidCloudError(f"{path}: empty point cloud: no point")
+    try:
+        return PointCloud(name=path.name, **kw)
+    except InvalidCloudError as exc:
+        raise InvalidCloudError(f"{path}: {str(exc).removeprefix(path.name + ': ')}") from None
+
+
+def _read_ply(data: bytes, path: Path) -> dict:
+    from plyfile import PlyData, PlyParseError
+
+    try:
+        ply = PlyData.read(io.BytesIO(data))
+        vert = ply["vertex"]
+        names = [p.name for p in vert.properties]
+        missing = [c for c in "xyz" if c not in names]
+        if missing:
+            raise MeshFormatError(f"{path}: the vertex element has no {', '.join(missing)} "
+                                  f"property (it has: {', '.join(names)})")
+        pts = np.stack([np.asarray(vert[c], dtype=np.float64) for c in "xyz"], axis=1)
+        nrm = None
+        if all(c in names for c in ("nx", "ny", "nz")):
+            nrm = np.stack([np.asarray(vert[c], dtype=np.float64) for c in ("nx", "ny", "nz")],
+                           axis=1)
+    except (PlyParseError, KeyError, ValueError, IndexError, TypeError, EOFError,
+            MemoryError) as exc:
+        if isinstance(exc, MeshFormatError):
+            raise
+        raise MeshFormatError(f"{path}: cannot read PLY points: {exc}") from None
+    return {"points": pts, "normals": nrm}
+
+
+def _read_pcd(path: Path) -> dict:
+    from ..extras import require
+
+    pypcd4 = require("pypcd4", "reading PCD files")
+    if not path.exists():
+        raise FileNotFoundError(f"{path}: no such file")
+    if path.is_dir():
+        raise IsADirectoryError(f"{path}: is a directory")
+    try:
+        pc = pypcd4.PointCloud.from_path(path)
+        fields = tuple(pc.fields)
+        missing = [c for c in "xyz" if c not in fields]
+        if missing:
+            raise MeshFormatError(f"{path}: PCD fields {' '.join(fields)} have no "
+                                  f"{', '.join(missing)}")
+        pts = np.asarray(pc.numpy(("x", "y", "z")), dtype=np.float64)
+        nrm = None
+        if all(c in fields for c in ("normal_x", "normal_y", "normal_z")):
+            nrm = np.asarray(pc.numpy(("normal_x", "normal_y", "normal_z")), dtype=np.float64)
+        meta = pc.metadata
+        height, width = int(meta.height), int(meta.width)
+        viewpoint = np.asarray(meta.viewpoint[:3], dtype=np.float64)
+    except MeshFormatError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - pypcd4/pydantic raise many types
+        msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise MeshFormatError(f"{path}: cannot read PCD: {msg}") from None
+    if pts.shape[0] != height * width:
+        raise MeshFormatError(f"{path}: PCD has {pts.shape[0]} points, the header says "
+                              f"{width} x {height}")
+    if nrm is not None:
+        bad = ~np.isfinite(nrm).all(axis=1) | (np.abs(nrm).sum(axis=1) == 0)
+        if bad.any():  # PCL leaves normals NaN where it could not estimate one
+            nrm = None
+    return {"points": pts, "normals": nrm, "allow_invalid": True, "viewpoint": viewpoint,
+            "shape": (height, width) if height > 1 else None}
+
+
+def _read_las(path: Path) -> dict:
+    from ..extras import require
+
+    laspy = require("laspy", "reading LAS/LAZ files")
+    if not path.exists():
+        raise FileNotFoundError(f"{path}: no such file")
+    if path.is_dir():
+        raise IsADirectoryError(f"{path}: is a directory")
+    try:
+        las = laspy.read(path)
+        pts = np.stack([np.asarray(las.x), np.asarray(las.y), np.asarray(las.z)], axis=1)
+    except Exception as exc:  # noqa: BLE001 - laspy raises many types
+        msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise MeshFormatError(f"{path}: cannot read {path.suffix.upper()[1:]}: {msg}") from None
+    return {"points": pts.astype(np.float64)}
+
+
+def _read_npy(data: bytes, path: Path) -> dict:
+    try:
+        arr = np.load(io.BytesIO(data), allow_pickle=False)
+    except Exception as exc:  # noqa: BLE001 - numpy raises many types on damaged files
+        raise MeshFormatError(f"{path}: cannot read NPY: {exc}") from None
+    if not isinstance(arr, np.ndarray) or arr.dtype.names is not None \
+            or not np.issubdtype(arr.dtype, np.number):
+        raise MeshFormatError(f"{path}: NPY must hold a numeric array, got dtype "
+                              f"{getattr(arr, 'dtype', type(arr).__name__)}")
+    if arr.ndim == 3 and arr.shape[2] == 3:
+        h, w = arr.shape[:2]
+        return {"points": arr.reshape(-1, 3).astype(np.float64), "allow_invalid": True,
+                "shape": (h, w)}
+    if arr.ndim == 2 and arr.shape[1] in (3, 6):
+        arr = arr.astype(np.float64)
+        return {"points": arr[:, :3], "normals": arr[:, 3:] if arr.shape[1] == 6 else None}
+    raise MeshFormatError(f"{path}: NPY array of shape {arr.shape}: expected (N, 3) points, "
+                          "(N, 6) points and normals, or organized (H, W, 3)")
+
+
+_HEADER = re.compile(r"^\s*(#|//)\s*")
+
+
+def _read_columns(data: bytes, path: Path) -> dict:
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise MeshFormatError(f"{path}: not a text file (binary data in a text format)") \
+            from None
+    lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
+    names = None
+    body = []
+    for ln in lines:
+        if _HEADER.match(ln):
+            if names is None and body == []:
+                words = [w.lower() for w in re.split(r"[\s,]+", _HEADER.sub("", ln).strip()) if w]
+                if words and not all(_is_number(w) for w in words):
+                    names = words
+            continue
+        body.append(ln)
+    if body and len(body[0].split()) == 1 and body[0].strip().isdigit():
+        declared = int(body[0])  # a PTS count line
+        body = body[1:]
+        if len(body) < declared:
+            raise MeshFormatError(f"{path}: truncated: the first line declares {declared} "
+                                  f"points, the file has {len(body)}")
+        body = body[:declared]
+    if not body:
+        return {"points": np.zeros((0, 3))}
+    rows = [re.split(r"[\s,;]+", b.strip()) for b in body]
+    width = len(rows[0])
+    for i, r in enumerate(rows):
+        if len(r) != width:
+            raise MeshFormatError(f"{path}: line {i + 1} of the points has {len(r)} columns, "
+                                  f"the first has {width}")
+    try:
+        arr = np.array(rows, dtype=np.float64)
+    except ValueError:
+        bad = next(i for i, r in enumerate(rows) if not all(_is_number(w) for w in r))
+        raise MeshFormatError(f"{path}: point line {bad + 1} is not numbers: "
+                              f"{body[bad].strip()[:80]!r}") from None
+    if names is not None:
+        if len(names) != width:
+            raise MeshFormatError(f"{path}: the header names {len(names)} columns "
+                                  f"({' '.join(names)}), the lines have {width}")
+        missing = [c for c in "xyz" if c not in names]
+        if missing:
+            raise MeshFormatError(f"{path}: unknown columns: the header {' '.join(names)} "
+                                  f"names no {', '.join(missing)} column")
+        pts = arr[:, [names.index(c) for c in "xyz"]]
+        nrm = None
+        if all(c in names for c in ("nx", "ny", "nz")):
+            nrm = arr[:, [names.index(c) for c in ("nx", "ny", "nz")]]
+        return {"points": pts, "normals": nrm}
+    if width < 3:
+        raise MeshFormatError(f"{path}: point lines need 3 columns (x y z), found {width}")
+    return {"points": arr[:, :3]}
+
+
+def _is_number(word: str) -> bool:
+    try:
+        float(word)
+        return True
+    except ValueError:
+        return False

@@ -1,0 +1,358 @@
+"""Superpoints: the method on mesh vertices and on point clouds, readers, CLI, baseline."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import trimesh
+from scipy.sparse.csgraph import connected_components
+
+from superfacets import Mesh, segment
+from superfacets.baselines.graph_segmentation import graph_segmentation
+from superfacets.cli import main
+from superfacets.cloud import InvalidCloudError, PointCloud
+from superfacets.datasets.sampling import sample_points, vertex_ground_truth
+from superfacets.elements.inputs import elements_of
+from superfacets.errors import MeshFormatError, ParameterError
+from superfacets.io import read_cloud, read_input, read_labels
+from superfacets.metrics import evaluate
+from superfacets.segmentation import superpoints
+
+from conftest import SHARED, grid_mesh, need
+
+
+def connected(graph, labels) -> bool:
+    """Every label is one connected piece of the element graph."""
+    i, j = graph.pairs[:, 0], graph.pairs[:, 1]
+    same = labels[i] == labels[j]
+    from scipy.sparse import coo_matrix
+
+    n = graph.n_elements
+    adj = coo_matrix((np.ones(same.sum()), (i[same], j[same])), shape=(n, n))
+    n_pieces, _ = connected_components(adj, directed=False)
+    return n_pieces == np.unique(labels).size
+
+
+def sphere_points(n=3000, seed=0):
+    x = np.random.default_rng(seed).normal(size=(n, 3))
+    return x / np.linalg.norm(x, axis=1, keepdims=True)
+
+
+# ------------------------------------------------------------------ vertex graph
+def test_vertex_graph_of_a_box_and_an_open_square():
+    box = trimesh.creation.box()
+    g = elements_of(Mesh(box.vertices, box.faces), "vertices").graph
+    assert (g.n_elements, g.n_edges) == (8, 18)
+    assert g.area == pytest.approx(6.0)
+    assert g.boundary_elements.size == 0
+    assert (np.einsum("ij,ij->i", g.normals, g.positions) > 0.5).all()  # outwards
+    assert (g.terms.concave == 0).all()  # a box is convex everywhere
+    sq = Mesh([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [[0, 1, 2], [0, 2, 3]])
+    g = elements_of(sq, "vertices").graph
+    assert g.boundary_lengths.sum() == pytest.approx(4.0)  # the perimeter, half per end
+    assert g.sizes.tolist() == pytest.approx([1 / 3, 1 / 6, 1 / 3, 1 / 6])
+    # the diagonal's dual edge: from its midpoint to both triangle centroids
+    diag = np.flatnonzero((g.pairs == [0, 2]).all(axis=1))[0]
+    assert g.lengths[diag] == pytest.approx(2 * np.sqrt(2) / 6)
+
+
+def test_vertex_mode_labels_every_vertex_and_marks_unused_ones(sphere):
+    v = np.vstack([sphere.vertices, [[5.0, 5.0, 5.0]]])  # one vertex used by no face
+    mesh = Mesh(v, sphere.faces)
+    r = segment(mesh, 40, elements="vertices")
+    assert r.labels.shape == (mesh.n_vertices,)
+    assert r.labels[-1] == -1 and (r.labels[:-1] >= 0).all()
+    assert np.unique(r.labels[:-1]).tolist() == list(range(r.n_segments))
+    g = mesh.vertex_elements.graph
+    assert connected(g, r.labels[:-1])
+    assert r.params["elements"] == "vertices"
+    assert np.array_equal(segment(mesh, 40, elements="vertices").labels, r.labels)
+    assert np.array_equal(segment(mesh, 40, elements="vertices", n_threads=1).labels, r.labels)
+
+
+def test_vertex_mode_follows_a_concave_crease(valley):
+    labels = segment(valley, 2, elements="vertices", alpha=1000).labels
+    x = valley.vertices[:, 0]
+    left, right = labels[x < -0.05], labels[x > 0.05]
+    assert np.unique(left).size == 1 and np.unique(right).size == 1
+    assert left[0] != right[0]
+    assert elements_of(valley, "vertices").graph.terms.concave.sum() > 0
+
+
+# ------------------------------------------------------------------- point graph
+def test_point_normals_are_estimated_and_turned_outwards_on_a_closed_surface():
+    pts = sphere_points()
+    g = elements_of(PointCloud(pts), "points").graph
+    outward = np.einsum("ij,ij->i", g.normals, g.positions)
+    assert (outward > 0.9).mean() > 0.99
+    assert (~g.terms.concave).mean() > 0.95  # a sphere bends convexly everywhere
+    # sizes add up to about the area of the unit sphere
+    assert g.area == pytest.approx(4 * np.pi, rel=0.25)
+
+
+def test_point_normals_face_the_viewpoint_and_a_valley_crease_is_concave(valley):
+    pts, _ = sample_points(valley, 6000, seed=1)
+    cloud = PointCloud(pts, viewpoint=[0.0, 0.0, 10.0])
+    g = elements_of(cloud, "points").graph
+    assert (g.normals[:, 2] > 0).all()
+    p = g.positions
+    across = np.sign(p[g.pairs[:, 0], 0]) != np.sign(p[g.pairs[:, 1], 0])
+    assert g.terms.concave[across].mean() > 0.9
+    labels = superpoints(pts, 2, viewpoint=[0.0, 0.0, 10.0], alpha=1000)
+    x = pts[:, 0]
+    assert np.unique(labels[x < -0.1]).size == 1 and np.unique(labels[x > 0.1]).size == 1
+    assert labels[x < -0.1][0] != labels[x > 0.1][0]
+
+
+def test_superpoints_are_dense_connected_and_deterministic():
+    pts = sphere_points(4000)
+    labels = superpoints(pts, 30)
+    assert labels.shape == (4000,) and labels.dtype == np.int64
+    assert np.unique(labels).tolist() == list(range(30))
+    g, index = elements_of(PointCloud(pts), "points")[:2]
+    per_element = np.empty(g.n_elements, np.int64)
+    per_element[index] = labels
+    assert connected(g, per_element)
+    assert np.array_equal(superpoints(pts, 30), labels)
+    assert np.array_equal(superpoints(pts, 30, n_threads=1), labels)
+    given = superpoints(pts, 30, normals=pts)  # exact outward normals
+    assert np.unique(given).size == 30
+
+
+def test_organized_cloud_keeps_its_layout_and_marks_invalid_points():
+    xs, ys = np.meshgrid(np.linspace(0, 1, 40), np.linspace(0, 1, 30))
+    grid = np.stack([xs, ys, 0.1 * np.sin(3 * xs)], axis=-1)
+    grid[5, 7] = np.nan
+    grid[10:12, :] = np.nan
+    labels = superpoints(grid, 12)
+    assert labels.shape == (30, 40)
+    invalid = ~np.isfinite(grid).all(axis=-1)
+    assert (labels[invalid] == -1).all() and (labels[~invalid] >= 0).all()
+    assert np.unique(labels[~invalid]).size == labels.max() + 1
+
+
+def test_duplicate_points_share_a_label():
+    pts = sphere_points(2000)
+    dup = np.vstack([pts, pts[:50]])
+    labels = superpoints(dup, 20)
+    assert np.array_equal(labels[2000:], labels[:50])
+
+
+@pytest.mark.parametrize("points, message", [
+    (np.zeros((0, 3)), "no valid point"),
+    (np.ones((10, 3)), "coincide"),
+    (np.c_[np.arange(10.0), 2 * np.arange(10.0), np.zeros(10)], "one line"),
+    (np.r_[np.random.default_rng(0).random((9, 3)), [[np.nan, 0, 0]]], "point 9 has a "
+                                                                         "non-finite"),
+    (np.r_[np.random.default_rng(0).random((9, 3)), [[np.inf, 0, 0]]], "point 9"),
+    (np.zeros((5, 2)), r"shape \(N, 3\)"),
+])
+def test_bad_clouds_are_refused_clearly(points, message):
+    with pytest.raises(InvalidCloudError, match=message):
+        superpoints(points, 1)
+
+
+def test_more_superpoints_than_points_and_bad_options_are_refused():
+    pts = sphere_points(50)
+    with pytest.raises(ParameterError, match="larger than the number of points"):
+        superpoints(pts, 51)
+    with pytest.raises(ParameterError, match="n_neighbors"):
+        superpoints(pts, 5, n_neighbors=0)
+    with pytest.raises(ParameterError, match="neighbor_radius"):
+        superpoints(pts, 5, neighbor_radius=-1.0)
+    with pytest.raises(ParameterError, match="needs a point cloud"):
+        segment(trimesh.creation.box(), 2, elements="points")
+    with pytest.raises(ParameterError, match="needs a mesh"):
+        segment(pts, 2, elements="faces")
+    with pytest.raises(TypeError, match="numeric"):
+        PointCloud(np.array([["a", "b", "c"]]))
+
+
+# ------------------------------------------------------------------------ readers
+def write_ply_points(path, pts, normals=None):
+    from plyfile import PlyData, PlyElement
+
+    fields = [("x", "f8"), ("y", "f8"), ("z", "f8")]
+    if normals is not None:
+        fields += [("nx", "f8"), ("ny", "f8"), ("nz", "f8")]
+    rec = np.empty(len(pts), dtype=fields)
+    rec["x"], rec["y"], rec["z"] = pts.T
+    if normals is not None:
+        rec["nx"], rec["ny"], rec["nz"] = normals.T
+    PlyData([PlyElement.describe(rec, "vertex")]).write(str(path))
+
+
+def test_readers_of_every_cloud_format(tmp_path):
+    pts = sphere_points(300)
+    write_ply_points(tmp_path / "a.ply", pts, pts)
+    c = read_input(tmp_path / "a.ply")
+    assert isinstance(c, PointCloud) and np.allclose(c.points, pts)
+    assert np.allclose(c.normals, pts)
+    (tmp_path / "b.xyz").write_text("\n".join(" ".join(map(repr, p)) + " 0.5"
+                                             for p in pts.tolist()))
+    assert np.allclose(read_cloud(tmp_path / "b.xyz").points, pts)
+    (tmp_path / "c.txt").write_text("# x y z nx ny nz\n" + "\n".join(
+        ",".join(map(repr, p + p)) for p in pts.tolist()))
+    c = read_cloud(tmp_path / "c.txt")
+    assert np.allclose(c.points, pts) and np.allclose(c.normals, pts)
+    (tmp_path / "d.pts").write_text(f"{len(pts)}\n" + "\n".join(
+        " ".join(map(repr, p)) + " 10 1 2 3" for p in pts.tolist()))
+    assert read_cloud(tmp_path / "d.pts").n_total == 300
+    np.save(tmp_path / "e.npy", np.c_[pts, pts])
+    assert read_cloud(tmp_path / "e.npy").normals is not None
+    np.save(tmp_path / "f.npy", pts.reshape(15, 20, 3))
+    assert read_cloud(tmp_path / "f.npy").shape == (15, 20)
+
+
+@pytest.mark.parametrize("encoding", ["ascii", "binary", "binary_compressed"])
+def test_pcd_files_with_invalid_points(tmp_path, encoding):
+    pypcd4 = pytest.importorskip("pypcd4")
+    pts = sphere_points(400).astype(np.float32)
+    pts[17] = np.nan
+    pc = pypcd4.PointCloud.from_xyz_points(pts)
+    pc.save(tmp_path / "s.pcd", encoding=pypcd4.Encoding(encoding))
+    c = read_cloud(tmp_path / "s.pcd")
+    assert c.n_total == 400 and c.n_points == 399 and not c.valid[17]
+    labels = segment(c, 10).labels
+    assert labels[17] == -1 and (np.delete(labels, 17) >= 0).all()
+
+
+def test_las_files(tmp_path):
+    laspy = pytest.importorskip("laspy")
+    pts = sphere_points(500) * 10
+    las = laspy.create(point_format=0, file_version="1.2")
+    las.header.scales = [0.001] * 3
+    las.x, las.y, las.z = pts.T
+    las.write(tmp_path / "s.las")
+    c = read_cloud(tmp_path / "s.las")
+    assert np.allclose(c.points, pts, atol=1e-3)
+
+
+@pytest.mark.parametrize("name, text, message", [
+    ("nan.xyz", "0 0 0\n1 0 0\nnan 1 0\n0 1 1\n", "point 2 has a non-finite"),
+    ("cols.xyz", "# a b c\n0 0 0\n1 0 0\n0 1 0\n", "unknown columns"),
+    ("ragged.xyz", "0 0 0\n1 0\n", "line 2 of the points has 2 columns"),
+    ("words.txt", "0 0 0\n1 zero 0\n", "point line 2 is not numbers"),
+    ("two.xyz", "0 0\n1 1\n", "need 3 columns"),
+    ("count.pts", "10\n0 0 0\n", "declares 10 points"),
+    ("empty.xyz", "", "no point"),
+])
+def test_malformed_cloud_files(tmp_path, name, text, message):
+    (tmp_path / name).write_text(text)
+    with pytest.raises((MeshFormatError, InvalidCloudError), match=message):
+        read_cloud(tmp_path / name)
+
+
+# ------------------------------------------------------------------------------ CLI
+def test_cli_segments_a_ply_of_points_one_label_per_point(tmp_path, capsys):
+    pts = sphere_points(2000)
+    write_ply_points(tmp_path / "c.ply", pts)
+    out = tmp_path / "c.seg"
+    assert main(["segment", str(tmp_path / "c.ply"), "-k", "25", "-o", str(out),
+                 "--colored-mesh", str(tmp_path / "col.ply")]) == 0
+    labels = read_labels(out)
+    assert labels.shape == (2000,) and labels.max() + 1 == 25
+    assert "2000 points, 25 superpoints" in capsys.readouterr().out
+    colored = read_cloud(tmp_path / "col.ply")
+    assert np.allclose(colored.points, pts)
+    assert np.array_equal(read_labels(tmp_path / "col.ply" if False else out), labels)
+
+
+def test_cli_vertex_mode_writes_seg_and_segindices_json(tmp_path, sphere):
+    from superfacets import write_mesh
+
+    write_mesh(tmp_path / "s.off", sphere)
+    assert main(["segment", str(tmp_path / "s.off"), "--elements", "vertices", "-k", "30",
+                 "-o", str(tmp_path / "s.json"), "-q"]) == 0
+    doc = json.loads((tmp_path / "s.json").read_text())
+    assert len(doc["segIndices"]) == sphere.n_vertices and doc["sceneId"] == "s"
+    assert doc["params"]["elements"] == "vertices" and doc["params"]["n_segments"] == 30
+    assert main(["segment", str(tmp_path / "s.off"), "--elements", "vertices", "-k", "30",
+                 "-o", str(tmp_path / "s.seg"), "-q"]) == 0
+    assert np.array_equal(read_labels(tmp_path / "s.seg"), doc["segIndices"])
+    assert np.array_equal(read_labels(tmp_path / "s.json"), doc["segIndices"])
+
+
+def test_cli_bad_cloud_input_writes_nothing(tmp_path, capsys):
+    (tmp_path / "bad.xyz").write_text("0 0 0\n1 0 0\n0 1 0\nnan 0 1\n")
+    out = tmp_path / "o.seg"
+    assert main(["segment", str(tmp_path / "bad.xyz"), "-k", "2", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "point 3 has a non-finite" in err and "Traceback" not in err
+    assert not out.exists()
+    pts = sphere_points(30)
+    np.save(tmp_path / "few.npy", pts)
+    assert main(["segment", str(tmp_path / "few.npy"), "-k", "31", "-o", str(out)]) == 2
+    assert "larger than the number of points" in capsys.readouterr().err
+    assert main(["segment", str(tmp_path / "few.npy"), "--elements", "faces", "-o",
+                 str(out)]) == 2
+    assert "needs a mesh" in capsys.readouterr().err and not out.exists()
+
+
+# ----------------------------------------------------------------- the baseline
+def test_graph_segmentation_splits_at_a_crease_and_keeps_flat_parts_whole(valley):
+    labels = graph_segmentation(valley)
+    x = valley.vertices[:, 0]
+    assert np.unique(labels[x < -0.05]).size == 1 and np.unique(labels[x > 0.05]).size == 1
+    assert labels[x < -0.05][0] != labels[x > 0.05][0]
+    assert np.unique(graph_segmentation(grid_mesh(20, 20))).size == 1
+    bumpy = trimesh.creation.icosphere(4)
+    bumpy.vertices *= 1 + 0.05 * np.random.default_rng(0).random((len(bumpy.vertices), 1))
+    counted = graph_segmentation(bumpy, n_segments=60)
+    assert abs(np.unique(counted).size - 60) <= 6
+    cloud = graph_segmentation(sphere_points(3000), n_segments=40)
+    assert cloud.shape == (3000,) and abs(np.unique(cloud).size - 40) <= 4
+    with pytest.raises(ParameterError, match="k_thresh"):
+        graph_segmentation(valley, k_thresh=0)
+
+
+# ------------------------------------------------------------ benchmark helpers
+def test_sampling_and_vertex_ground_truth():
+    mesh = grid_mesh(10, 10)
+    pts, faces = sample_points(mesh, 5000, seed=3)
+    assert np.array_equal(sample_points(mesh, 5000, seed=3)[0], pts)
+    # each point lies in its face's triangle (the bounding box of its corners)
+    tri = mesh.vertices[mesh.faces[faces]]
+    assert ((pts >= tri.min(axis=1) - 1e-12) & (pts <= tri.max(axis=1) + 1e-12)).all()
+    gt = (mesh.centroids[:, 0] > 0).astype(np.int64)
+    vgt = vertex_ground_truth(mesh, gt)
+    x = mesh.vertices[:, 0]
+    assert (vgt[x < -0.01] == 0).all() and (vgt[x > 0.01] == 1).all()
+
+
+def test_equal_weight_metrics_count_elements():
+    mesh = grid_mesh(8, 8)
+    g = elements_of(mesh, "vertices").graph
+    gt = (g.positions[:, 0] > 0).astype(np.int64)
+    perfect = evaluate(g, gt, [gt], equal_weight=True)
+    assert perfect["undersegmentation_error"] == 0 and perfect["boundary_recall"] == 1
+    one = evaluate(g, np.zeros(g.n_elements, np.int64), [gt], equal_weight=True)
+    # one segment over both halves leaks each half's complement: (n1 + n0) / n = 1
+    assert one["undersegmentation_error"] == pytest.approx(1.0)
+    assert one["boundary_recall"] == 0
+    quarter = (g.positions[:, 0] > 0.5).astype(np.int64)  # splits one half in two
+    q = evaluate(g, quarter, [gt], equal_weight=True)
+    # the superpoint x <= 0.5 holds all of half 0 and part of half 1: it leaks into both
+    left = quarter == 0
+    expect = ((left & (gt == 1)).sum() + (left & (gt == 0)).sum()) / g.n_elements
+    assert q["undersegmentation_error"] == pytest.approx(expect)
+
+
+# --------------------------------------------------------------------- real scans
+@pytest.mark.parametrize("name", ["table_scene_mug_stereo_textured",
+                                  "milk_cartoon_all_small_clorox"])
+def test_real_rgbd_scans(name):
+    pytest.importorskip("pypcd4")
+    path = need(SHARED / "data" / "clouds" / f"{name}.pcd")
+    cloud = read_cloud(path)
+    assert cloud.shape == (480, 640) and 0 < cloud.n_points < cloud.n_total
+    r = segment(cloud, 150)
+    assert r.labels.shape == (307200,)
+    assert (r.labels[~cloud.valid] == -1).all() and (r.labels[cloud.valid] >= 0).all()
+    g, index = cloud.graph()
+    per_element = np.empty(g.n_elements, np.int64)
+    per_element[index[cloud.valid]] = r.labels[cloud.valid]
+    assert connected(g, per_element)
+    assert 140 <= r.n_segments <= 200
