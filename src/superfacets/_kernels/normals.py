@@ -9,7 +9,6 @@ two rows of ``C - lambda I``.
 
 import math
 
-import numpy as np
 from numba import njit, prange
 
 

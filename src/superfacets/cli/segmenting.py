@@ -44,6 +44,11 @@ def add_parsers(sub) -> None:
     p.add_argument("--vertex-colors", action="store_true",
                    help="PLY: colours per vertex (each face its own vertices) instead of per "
                         "face, for tools that show only vertex colours")
+    p.add_argument("--picture", metavar="OUT.png", default=None,
+                   help="also render a picture (faces or points coloured by label; needs "
+                        "the render extra)")
+    p.add_argument("--html", metavar="OUT.html", default=None,
+                   help="also write an interactive page (open in a browser)")
     p.add_argument("--per-object", action="store_true",
                    help="segment each object of a scene on its own (-k shared out by area); "
                         "labels stay unique over the scene")
@@ -172,6 +177,11 @@ def cmd_segment(args) -> int:
         raise ParameterError("--vertex-colors goes with --colored-mesh OUT.ply")
     if args.per_object and args.radius is not None:
         raise ParameterError("--per-object takes -k, not --radius")
+    png_out = check_output(args.picture, (".png",), "the picture", inputs=(args.mesh,))
+    html_out = check_output(args.html, (".html", ".htm"), "the page", inputs=(args.mesh,))
+    named = [str(x) for x in (seg_out, ply_out, png_out, html_out) if x is not None]
+    if len(set(named)) < len(named):
+        raise ParameterError("two outputs go to the same file")
     kwargs = dict(method_kwargs(args), **element_kwargs(args))
     resolve(n_segments=args.n_segments, radius=args.radius, **kwargs)  # before the read
     t0 = time.perf_counter()
@@ -184,6 +194,9 @@ def cmd_segment(args) -> int:
                                  f"{kind}")
         if ply_out is not None and not ply_out.name.lower().endswith(".ply"):
             raise ParameterError(f"{ply_out}: coloured {kind} are written as .ply")
+        if kind == "vertices" and (png_out or html_out):
+            raise ParameterError("--picture and --html draw faces or points; for vertex "
+                                 "labels write --colored-mesh OUT.ply (vertex colours)")
     size = data.n_total if cloud else data.n_faces
     if args.progress is None:  # long runs show where they are
         kwargs["progress"] = size >= 500_000 and sys.stderr.isatty()
@@ -215,6 +228,17 @@ def cmd_segment(args) -> int:
             source = elements_of(data, kind, n_neighbors=args.neighbors,
                                  neighbor_radius=args.neighbor_radius)  # cached: no new work
             write_colored_elements(ply_out, source, result.labels, outputs=outputs)
+        title = f"{Path(args.mesh).name}: {result.n_segments} " + (
+            "superpoints" if kind != "faces" else "superfacets")
+        if html_out is not None:
+            from ..html import write_html
+
+            write_html(html_out, data, result.labels, title=title, outputs=outputs)
+        if png_out is not None:
+            from ..render import render, render_points
+
+            draw = render_points if kind == "points" else render
+            draw(data, result.labels, png_out, title=title, outputs=outputs)
     report = sys.stderr if str(seg_out) == "-" else sys.stdout  # stdout holds the labels
     if not args.quiet:
         print(_summary(Path(args.mesh).name, data, result, elapsed, kind), file=report)

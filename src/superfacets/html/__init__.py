@@ -43,6 +43,11 @@ def _b64(a: np.ndarray) -> str:
 def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None = None,
               background: str = "#ffffff", view=None, up="y") -> str:
     """The HTML text of the viewer page (see :func:`write_html`)."""
+    from ..elements.inputs import is_cloud
+
+    if is_cloud(mesh):
+        return _points_page(mesh, labels, title=title, info=info, background=background,
+                            view=view, up=up)
     mesh = as_mesh(mesh)
     m = mesh.n_faces
     if labels is not None:
@@ -86,6 +91,49 @@ def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None 
     blobs = "\n".join(f'<script type="application/octet-stream" id="{k}">{b}</script>'
                       for k, b in data.items())
     return (_template().replace("%TITLE%", _html.escape(f"{name} - superfacets"))
+            .replace("%BACKGROUND%", _html.escape(background))
+            .replace("%META%", json.dumps(meta).replace("</", "<\\/"))
+            .replace("%BLOBS%", blobs))
+
+
+def _points_page(cloud, labels, *, title, info, background, view, up) -> str:
+    """The viewer page of a point cloud: points coloured by superpoint (invalid ones left out)."""
+    from ..elements.inputs import elements_of
+    from ..io.export import element_colors
+    from ..render import _PointsFrame
+
+    source = elements_of(cloud, "points")
+    g, index = source.graph, source.index
+    if labels is not None:
+        labels = check_labels(labels, index.shape[0], per="point")
+        rows = np.flatnonzero(index >= 0)
+        rgb = np.empty((g.n_elements, 3), dtype=np.uint8)
+        rgb[index[rows]] = element_colors(source, labels)[rows]
+        n_sp = int(np.unique(labels[labels >= 0]).size)
+    else:
+        rgb = np.full((g.n_elements, 3), 180, dtype=np.uint8)
+        n_sp = 0
+    palette, color_index = np.unique(rgb, axis=0, return_inverse=True)
+    index_dtype = np.uint8 if palette.shape[0] <= 256 else np.uint16
+    v = g.positions
+    center = (v.min(axis=0) + v.max(axis=0)) / 2
+    scale = float(np.linalg.norm(v - center, axis=1).max()) or 1.0
+    v = ((v - center) / scale).astype("<f4")
+    d, upv = view_frame(_PointsFrame(g), view, up=up)
+    rot = np.stack([np.cross(upv, d), upv, d])
+    name = title or getattr(source.source, "name", "") or "point cloud"
+    spacing = float(np.sqrt(np.percentile(g.sizes, 90))) / scale
+    meta = {"name": name, "points": int(g.n_elements), "faces": 0, "superfacets": n_sp,
+            "info": {str(k): str(v_) for k, v_ in (info or {}).items()},
+            "palette": palette.astype(int).tolist(), "indexBytes": np.dtype(index_dtype).itemsize,
+            "nVertices": int(g.n_elements), "nFaces": 0, "nEdges": 0, "spacing": spacing,
+            "background": background, "rotation": rot.T.ravel().round(6).tolist()}
+    data = {"vertices": _b64(v), "faces": "", "colors": _b64(color_index.ravel()
+                                                                 .astype(index_dtype)),
+            "edges": ""}
+    blobs = "\n".join(f'<script type="application/octet-stream" id="{k}">{b}</script>'
+                      for k, b in data.items())
+    return (_template().replace("%TITLE%", _html.escape(f"{name} - superpoints"))
             .replace("%BACKGROUND%", _html.escape(background))
             .replace("%META%", json.dumps(meta).replace("</", "<\\/"))
             .replace("%BLOBS%", blobs))

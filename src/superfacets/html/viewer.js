@@ -8,9 +8,12 @@
     return out.buffer;
   }
   const info = document.getElementById("info");
+  const isPoints = meta.points !== undefined;
   let lines = ["<b>" + esc(meta.name) + "</b>",
-               meta.faces.toLocaleString("en") + " faces" +
-               (meta.superfacets ? ", " + meta.superfacets.toLocaleString("en") + " superfacets" : "")];
+               isPoints ? meta.points.toLocaleString("en") + " points" +
+                 (meta.superfacets ? ", " + meta.superfacets.toLocaleString("en") + " superpoints" : "")
+               : meta.faces.toLocaleString("en") + " faces" +
+                 (meta.superfacets ? ", " + meta.superfacets.toLocaleString("en") + " superfacets" : "")];
   for (const [k, v] of Object.entries(meta.info)) lines.push(esc(k) + ": " + esc(v));
   info.innerHTML = lines.join("<br>");
   function esc(t) { return String(t).replace(/[&<>"]/g, c => ({"&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;"}[c])); }
@@ -23,7 +26,7 @@
   const F = new Uint32Array(bytes("faces"));
   const C = meta.indexBytes === 1 ? new Uint8Array(bytes("colors")) : new Uint16Array(bytes("colors"));
   const E = new Uint32Array(bytes("edges"));
-  const nf = meta.nFaces;
+  const nf = meta.nFaces, np_ = isPoints ? meta.nVertices : 0;
   // three vertices per face with the face's colour; the flat normal comes from screen-space
   // derivatives in the fragment shader, so no normal buffer is needed
   const pos = new Float32Array(nf * 9), col = new Uint8Array(nf * 9);
@@ -34,6 +37,12 @@
       pos[o] = V[a]; pos[o + 1] = V[a + 1]; pos[o + 2] = V[a + 2];
       col[o] = p[0]; col[o + 1] = p[1]; col[o + 2] = p[2];
     }
+  }
+  // a point cloud: one coloured sprite per point
+  const ppos = isPoints ? V : new Float32Array(0), pcol = new Uint8Array(np_ * 3);
+  for (let i = 0; i < np_; i++) {
+    const p = meta.palette[C[i]];
+    pcol[3 * i] = p[0]; pcol[3 * i + 1] = p[1]; pcol[3 * i + 2] = p[2];
   }
   const epos = new Float32Array(E.length * 3);
   for (let i = 0; i < E.length; i++) {
@@ -63,8 +72,14 @@
   const line = program(
     "attribute vec3 p; uniform mat4 mv, pr; void main() { gl_Position = pr * mv * vec4(p, 1.0); }",
     "precision mediump float; void main() { gl_FragColor = vec4(0.05, 0.05, 0.05, 1.0); }");
+  const dots = program(
+    "attribute vec3 p; attribute vec3 c; uniform mat4 mv, pr; uniform float s; varying vec3 vc;" +
+    "void main() { vec4 q = mv * vec4(p, 1.0); vc = c / 255.0; gl_Position = pr * q;" +
+    " gl_PointSize = max(1.0, s / max(-q.z, 0.01)); }",
+    "precision mediump float; varying vec3 vc; void main() { gl_FragColor = vec4(vc, 1.0); }");
   function buffer(data) { const b = gl.createBuffer(); gl.bindBuffer(gl.ARRAY_BUFFER, b); gl.bufferData(gl.ARRAY_BUFFER, data, gl.STATIC_DRAW); return b; }
   const bp = buffer(pos), bc = buffer(col), be = buffer(epos);
+  const bpp = buffer(ppos), bpc = buffer(pcol);
 
   // camera: rotation matrix R (column-major 3x3), distance, pan
   let R, dist, pan, showEdges = true;
@@ -90,6 +105,18 @@
     const mv = [R[0], R[1], R[2], 0, R[3], R[4], R[5], 0, R[6], R[7], R[8], 0, pan[0], pan[1], -dist, 1];
     const fov = 0.6, near = 0.01, far = 100, asp = w / Math.max(h, 1), t = 1 / Math.tan(fov / 2);
     const pr = [t / asp, 0, 0, 0, 0, t, 0, 0, 0, 0, (far + near) / (near - far), -1, 0, 0, 2 * far * near / (near - far), 0];
+    if (isPoints) {
+      gl.useProgram(dots);
+      gl.uniformMatrix4fv(gl.getUniformLocation(dots, "mv"), false, mv);
+      gl.uniformMatrix4fv(gl.getUniformLocation(dots, "pr"), false, pr);
+      gl.uniform1f(gl.getUniformLocation(dots, "s"), 1.5 * meta.spacing * h / (2 * Math.tan(fov / 2)));
+      attrib(dots, "p", bpp, 3, gl.FLOAT, false);
+      attrib(dots, "c", bpc, 3, gl.UNSIGNED_BYTE, false);
+      gl.drawArrays(gl.POINTS, 0, np_);
+      gl.disableVertexAttribArray(gl.getAttribLocation(dots, "c"));
+      document.body.dataset.drawn = "1";
+      return;
+    }
     gl.enable(gl.POLYGON_OFFSET_FILL); gl.polygonOffset(1, 1);
     gl.useProgram(surf);
     gl.uniformMatrix4fv(gl.getUniformLocation(surf, "mv"), false, mv);
