@@ -194,3 +194,56 @@ def test_cli_render_panel_html_and_view(tmp_path, sphere, capsys, monkeypatch):
     assert main(["html", str(mesh), str(tmp_path / "missing.seg"), "-o", str(page)]) == 2
     err = capsys.readouterr().err
     assert "no display available" in err and "must end in .png" in err and "missing.seg" in err
+
+
+def _sphere_cloud(n=3000):
+    x = np.random.default_rng(0).normal(size=(n, 3))
+    return x / np.linalg.norm(x, axis=1, keepdims=True)
+
+
+def test_render_points_colours_a_cloud_by_superpoint(tmp_path):
+    from superfacets import superpoints
+    from superfacets.render import render_points
+
+    pts = _sphere_cloud()
+    labels = superpoints(pts, 12)
+    img = render_points(pts, labels, tmp_path / "c.png", size=(320, 240))
+    assert img.shape == (240, 320, 3) and (tmp_path / "c.png").exists()
+    assert _foreground(img[80:160, 120:200]).mean() > 0.9, "the points are not drawn"
+    assert _palette_colours_seen(img, min_pixels=30) >= 4
+    with pytest.raises(ParameterError, match="one per point"):
+        render_points(pts, labels[:-1])
+
+
+def test_html_page_draws_a_point_cloud_in_headless_chromium(tmp_path):
+    from superfacets import superpoints
+
+    pts = _sphere_cloud(20000)
+    labels = superpoints(pts, 15)
+    page = write_html(tmp_path / "cloud.html", pts, labels, title="cloud")
+    meta = json.loads(re.search(r'id="meta"[^>]*>(.*?)</script>', page.read_text(), re.S)
+                      .group(1))
+    assert meta["points"] == 20000 and meta["superfacets"] == 15 and meta["nFaces"] == 0
+    exe = _chromium()
+    shot = tmp_path / "shot.png"
+    cmd = [exe, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+           "--disable-background-networking", "--disable-component-update", "--disable-sync",
+           f"--user-data-dir={tmp_path / 'profile'}", "--use-angle=swiftshader",
+           "--enable-unsafe-swiftshader", "--window-size=640,480",
+           "--virtual-time-budget=10000", f"--screenshot={shot}", page.as_uri()]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    assert shot.exists(), proc.stderr[-2000:]
+    img = np.asarray(Image.open(shot).convert("RGB"))
+    assert _foreground(img[200:280, 280:360]).mean() > 0.5, "the points are not drawn"
+    assert _palette_colours_seen(img, min_pixels=30) >= 4
+
+
+def test_cli_segment_pictures_a_cloud(tmp_path):
+    pts = _sphere_cloud(2000)
+    np.save(tmp_path / "c.npy", pts)
+    png, page = tmp_path / "c.png", tmp_path / "c.html"
+    assert main(["segment", str(tmp_path / "c.npy"), "-k", "10", "--picture", str(png),
+                 "--html", str(page), "-q"]) == 0
+    assert _palette_colours_seen(np.asarray(Image.open(png).convert("RGB"))) >= 3
+    assert '"points": 2000' in page.read_text()
+    assert main(["segment", str(tmp_path / "c.npy"), "--picture", str(page)]) == 2

@@ -2,7 +2,8 @@
 
 An implementation of G. Simari, G. Picciau, L. De Floriani, "Fast and
 Scalable Mesh Superfacets", Computer Graphics Forum 33(7), 2014: over-segment
-a triangle mesh into compact patches whose borders follow concavities.
+a triangle mesh into compact patches whose borders follow concavities; and
+the same method on mesh vertices and point clouds (superpoints).
 
 Importing the package does no work: each public name below is imported from
 its module on first use (so ``superfacets --help`` never loads numba).
@@ -40,6 +41,13 @@ _PUBLIC = {
     "write_colored_mesh": "io",
     "segment": "segmentation",
     "superfacets": "segmentation",
+    "superpoints": "segmentation",
+    "PointCloud": "cloud",
+    "as_cloud": "cloud",
+    "InvalidCloudError": "cloud",
+    "read_cloud": "io",
+    "read_input": "io",
+    "write_segindices": "io",
     "SegmentationResult": "segmentation",
     "enforce_connectivity": "connectivity",
     "edge_weights": "weights",
@@ -50,28 +58,35 @@ _PUBLIC = {
 __all__ = [
     "DEFAULTS",
     "ElementGraph",
+    "InvalidCloudError",
     "InvalidMeshError",
     "MemoryLimitError",
     "Mesh",
     "MeshFormatError",
+    "PointCloud",
     "MissingExtraError",
     "ParameterError",
     "SegmentParams",
     "SegmentationResult",
     "SuperfacetsError",
+    "as_cloud",
     "as_mesh",
     "edge_weights",
     "enforce_connectivity",
     "face_graph",
     "paper_weights",
+    "read_cloud",
+    "read_input",
     "read_labels",
     "read_mesh",
     "segment",
     "shlafman_weights",
     "superfacets",
+    "superpoints",
     "write_colored_mesh",
     "write_labels",
     "write_mesh",
+    "write_segindices",
 ]
 
 
@@ -89,12 +104,14 @@ def __dir__():
 
 
 if TYPE_CHECKING:  # the same names, for type checkers and IDEs
+    from .cloud import InvalidCloudError, PointCloud, as_cloud
     from .connectivity import enforce_connectivity
     from .elements import ElementGraph, face_graph
     from .errors import (InvalidMeshError, MemoryLimitError, MeshFormatError,
                          MissingExtraError, ParameterError, SuperfacetsError)
-    from .io import read_labels, read_mesh, write_colored_mesh, write_labels, write_mesh
+    from .io import (read_cloud, read_input, read_labels, read_mesh, write_colored_mesh,
+                     write_labels, write_mesh, write_segindices)
     from .mesh import Mesh, as_mesh
     from .params import DEFAULTS, SegmentParams
-    from .segmentation import SegmentationResult, segment, superfacets
+    from .segmentation import SegmentationResult, segment, superfacets, superpoints
     from .weights import edge_weights, paper_weights, shlafman_weights
