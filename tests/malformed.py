@@ -28,6 +28,14 @@ class Case:
     outputs: list = field(default_factory=list)  # files an "ok" case must write
 
 
+def _npy(arr) -> bytes:
+    import io
+
+    buf = io.BytesIO()
+    np.save(buf, arr)
+    return buf.getvalue()
+
+
 def _tetra_off(extra: str = "") -> bytes:
     return (b"OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
             b"3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n" + extra.encode())
@@ -171,7 +179,28 @@ def cases() -> list[Case]:
               ply.replace(b"element vertex 121", b"element vertex 999999999999"), "")
     mesh_case("ply-points-only", "m.ply",
               b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-              b"property float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n", "no faces")
+              b"property float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n",
+              "larger than the number of points")  # a PLY of points is a cloud
+    # --- point clouds
+    mesh_case("xyz-nan-row", "c.xyz", b"0 0 0\n1 0 0\n0 1 0\nnan 1 1\n0 0 1\n",
+              "point 3 has a non-finite")
+    mesh_case("xyz-ragged", "c.xyz", b"0 0 0\n1 0\n", "columns")
+    mesh_case("xyz-words", "c.xyz", b"x y z\n0 0 0\n", "not numbers")
+    mesh_case("xyz-unknown-columns", "c.txt", b"# a b c\n0 0 0\n1 0 0\n0 1 0\n",
+              "unknown columns")
+    mesh_case("xyz-empty", "c.xyz", b"", "no point")
+    mesh_case("xyz-collinear", "c.xyz", b"0 0 0\n1 1 1\n2 2 2\n3 3 3\n4 4 4\n",
+              "one line", extra=("-k", "1"))
+    mesh_case("xyz-identical", "c.xyz", b"1 1 1\n1 1 1\n1 1 1\n", "coincide",
+              extra=("-k", "1"))
+    mesh_case("pts-short", "c.pts", b"9\n0 0 0\n1 0 0\n", "declares 9 points")
+    mesh_case("npy-garbage", "c.npy", b"\x93NUMPY garbage", "cannot read NPY")
+    mesh_case("npy-bad-shape", "c.npy", _npy(np.zeros((4, 4))), "expected (N, 3)")
+    mesh_case("pcd-garbage", "c.pcd", b"# .PCD v0.7\nVERSION 0.7\nFIELDS x y\n",
+              "PCD")
+    mesh_case("las-garbage", "c.las", b"LASF" + b"\0" * 50, "LAS")
+    mesh_case("xyz-ok", "c.xyz", b"".join(f"{x} {y} {x * y}\n".encode()
+                                          for x in range(6) for y in range(6)), expect="ok")
     mesh_case("ply-ascii-quads", "m.ply",
               b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
               b"property float z\nelement face 1\nproperty list uchar int vertex_indices\n"

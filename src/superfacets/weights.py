@@ -33,6 +33,11 @@ def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = 0.2
       ``n_i . (c_j - c_i) > 0`` (authors' implementation), ``i < j``;
     - ``w = (geo + alpha * ang) / d`` (eq. 3), ``d`` the bounding-box diagonal.
 
+    On mesh vertices and cloud points the graph's terms are the analogues
+    (``docs/method.md``, section 6): ``geo = |p_i - p_j|``, the angle of the
+    element normals, ``ang = eta * |p_i - p_j| * theta / pi`` (``graph.span``)
+    and the symmetric convexity test.
+
     Parameters
     ----------
     graph : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
