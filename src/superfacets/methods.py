@@ -187,7 +187,7 @@ def _run_superfacets(mesh, n_segments, *, cache, seed, weighting="paper", **para
     return MethodRun(r.labels, r.n_iter, r.converged)
 
 
-def _run_graph_segmentation(mesh, n_segments, *, cache, seed, elements="vertices", k_thresh,
+def _run_graph_segmentation(mesh, n_segments, *, cache, seed, elements="faces", k_thresh,
                             min_size):
     from .baselines.graph_segmentation import graph_segmentation
 

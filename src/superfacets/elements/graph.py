@@ -47,7 +47,10 @@ def adjacency_csr(lo: np.ndarray, hi: np.ndarray, n: int
     e = lo.shape[0]
     rows = np.concatenate([lo, hi])
     cols = np.concatenate([hi, lo])
-    o = np.lexsort((cols, rows))
+    key = rows.astype(np.int64) * np.int64(n)
+    key += cols
+    o = np.argsort(key)  # keys are distinct (pairs are): any sort gives the same order
+    del key
     indptr = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(np.bincount(rows, minlength=n), out=indptr[1:])
     del rows

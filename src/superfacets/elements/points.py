@@ -110,6 +110,18 @@ def orient_normals(points: np.ndarray, normals: np.ndarray, indptr: np.ndarray,
     return np.where(inward[comp][:, None], -oriented, oriented)
 
 
+def _distinct_rows(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct rows of ``p`` in lexicographic order, and the row of each input row
+    (as ``np.unique(p, axis=0, return_inverse=True)``, faster)."""
+    order = np.lexsort((p[:, 2], p[:, 1], p[:, 0]))
+    s = p[order]
+    new = np.ones(p.shape[0], dtype=bool)
+    new[1:] = np.any(s[1:] != s[:-1], axis=1)
+    inverse = np.empty(p.shape[0], dtype=np.int64)
+    inverse[order] = np.cumsum(new) - 1
+    return s[new], inverse
+
+
 def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
                 neighbor_radius: float | None = None) -> PointElements:
     """The point graph of a cloud (see the module notes).
@@ -138,9 +150,9 @@ def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
     from scipy.spatial import cKDTree
 
     valid = np.flatnonzero(cloud.valid)
-    pts, inverse = np.unique(cloud.points[valid], axis=0, return_inverse=True)
+    pts, inverse = _distinct_rows(cloud.points[valid])
     index = np.full(cloud.n_total, -1, dtype=np.int64)
-    index[valid] = inverse.ravel()
+    index[valid] = inverse
     n = pts.shape[0]
     k = int(min(n_neighbors, n - 1))
     lower, upper = pts.min(axis=0), pts.max(axis=0)
@@ -169,7 +181,7 @@ def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
 
     if cloud.normals is not None:
         first = np.full(n, -1, dtype=np.int64)
-        first[inverse.ravel()[::-1]] = valid[::-1]  # the first row of each distinct point
+        first[inverse[::-1]] = valid[::-1]  # the first row of each distinct point
         normals = np.ascontiguousarray(cloud.normals[first])
     else:
         normals = estimate_normals(pts, nbr)
