@@ -45,7 +45,12 @@ def is_cloud_file(path) -> bool:
         return True
     if fmt != "ply" or not path.is_file():
         return False
-    head = _ply_header(read_bytes(path, comp) if comp else path.open("rb").read(1 << 16))
+    if comp:
+        data = read_bytes(path, comp)
+    else:
+        with path.open("rb") as f:
+            data = f.read(1 << 16)
+    head = _ply_header(data)
     faces = [int(p[2]) for p in (ln.split() for ln in head)
              if len(p) == 3 and p[0] == b"element" and p[1] == b"face" and p[2].isdigit()]
     return not faces or faces[0] == 0
