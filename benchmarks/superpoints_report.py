@@ -72,7 +72,7 @@ def main() -> None:
     print(f"| point UE below graph segmentation in >= 13 of {len(ue)} categories | "
           f"{wins} of {len(ue)} | {'yes' if wins >= 13 else 'no'} |")
     print(f"| (vertices) UE below graph segmentation | {wins_v} of {len(ue)} categories | - |")
-    print(f"| cut pursuit | not run (pycut-pursuit cannot be imported with NumPy 2) | - |\n")
+    print("| cut pursuit | not run (pycut-pursuit cannot be imported with NumPy 2) | - |\n")
 
     out = Path(args.output_dir)
     out.mkdir(parents=True, exist_ok=True)
