@@ -143,10 +143,9 @@ def _chromium() -> str:
     return exe
 
 
-def test_html_page_draws_the_mesh_in_headless_chromium(sphere, tmp_path):
+def _screenshot(page, tmp_path) -> np.ndarray:
+    """A 640x480 screenshot of ``page`` in headless Chromium (skips without Chromium)."""
     exe = _chromium()
-    labels = superfacets(sphere, 12)
-    page = write_html(tmp_path / "ball.html", sphere, labels, title="ball")
     shot = tmp_path / "shot.png"
     cmd = [exe, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
            "--disable-background-networking", "--disable-component-update", "--disable-sync",
@@ -156,6 +155,13 @@ def test_html_page_draws_the_mesh_in_headless_chromium(sphere, tmp_path):
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
     assert shot.exists(), proc.stderr[-2000:]
     img = np.asarray(Image.open(shot).convert("RGB"))
+    return img
+
+
+def test_html_page_draws_the_mesh_in_headless_chromium(sphere, tmp_path):
+    labels = superfacets(sphere, 12)
+    page = write_html(tmp_path / "ball.html", sphere, labels, title="ball")
+    img = _screenshot(page, tmp_path)
     assert img.shape == (480, 640, 3)
     centre = img[160:320, 240:400]
     assert _foreground(centre).mean() > 0.9, "the mesh is not drawn"
@@ -224,16 +230,7 @@ def test_html_page_draws_a_point_cloud_in_headless_chromium(tmp_path):
     meta = json.loads(re.search(r'id="meta"[^>]*>(.*?)</script>', page.read_text(), re.S)
                       .group(1))
     assert meta["points"] == 20000 and meta["superfacets"] == 15 and meta["nFaces"] == 0
-    exe = _chromium()
-    shot = tmp_path / "shot.png"
-    cmd = [exe, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-           "--disable-background-networking", "--disable-component-update", "--disable-sync",
-           f"--user-data-dir={tmp_path / 'profile'}", "--use-angle=swiftshader",
-           "--enable-unsafe-swiftshader", "--window-size=640,480",
-           "--virtual-time-budget=10000", f"--screenshot={shot}", page.as_uri()]
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
-    assert shot.exists(), proc.stderr[-2000:]
-    img = np.asarray(Image.open(shot).convert("RGB"))
+    img = _screenshot(page, tmp_path)
     assert _foreground(img[200:280, 280:360]).mean() > 0.5, "the points are not drawn"
     assert _palette_colours_seen(img, min_pixels=30) >= 4
 

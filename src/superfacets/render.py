@@ -212,12 +212,20 @@ def render(mesh, labels=None, out=None, *, size=(1200, 900), view=None,
     pv = _pyvista(off_screen=True)
     _check_style(pv, background, boundary_color, line_width, zoom)
     view_frame(mesh, view, up=up)  # a bad view or up axis fails before any drawing
+    return _picture(pv, (w, h), background, mesh, view, zoom, up, title, out, outputs,
+                    lambda p: _add(p, pv, mesh, labels, boundaries=boundaries,
+                                   line_width=line_width, boundary_color=boundary_color,
+                                   surface_color="lightgrey"))
+
+
+def _picture(pv, size, background, frame, view, zoom, up, title, out, outputs, draw):
+    """One off-screen picture: background, ``draw(plotter)``, camera on ``frame``, title."""
+    w, h = size
     p = pv.Plotter(off_screen=True, window_size=(w, h))
     try:
         p.set_background(background)
-        _add(p, pv, mesh, labels, boundaries=boundaries, line_width=line_width,
-             boundary_color=boundary_color, surface_color="lightgrey")
-        _place_camera(p, mesh, view, zoom, up, top_margin=0.08 if title else 0.0)
+        draw(p)
+        _place_camera(p, frame, view, zoom, up, top_margin=0.08 if title else 0.0)
         if title:
             p.add_text(title, position="upper_edge", font_size=max(8, h // 60), color="black")
     except BaseException:
@@ -353,18 +361,11 @@ def render_points(cloud, labels=None, out=None, *, size=(1200, 900), view=None,
         Without the ``render`` extra.
     """
     from .elements.inputs import elements_of
-    from .io.export import element_colors
+    from .io.export import point_colors
 
     source = elements_of(cloud, "points")
-    g, index = source.graph, source.index
-    ok = index >= 0
-    if labels is None:
-        rgb = np.full((g.n_elements, 3), 180, dtype=np.uint8)
-    else:
-        labels = check_labels(labels, index.shape[0], per="point")
-        rows = np.flatnonzero(ok)
-        rgb = np.empty((g.n_elements, 3), dtype=np.uint8)
-        rgb[index[rows]] = element_colors(source, labels)[rows]
+    g = source.graph
+    rgb = point_colors(source, labels)
     w, h = _size(size)
     pv = _pyvista(off_screen=True)
     _check_style(pv, background, "black", 1.0, zoom)
@@ -373,17 +374,9 @@ def render_points(cloud, labels=None, out=None, *, size=(1200, 900), view=None,
     if point_size is None:  # about one point spacing on screen
         spacing = np.sqrt(np.percentile(g.sizes, 90))
         point_size = float(np.clip(1.6 * spacing / g.diagonal * max(w, h) * zoom, 1.0, 12.0))
-    p = pv.Plotter(off_screen=True, window_size=(w, h))
-    try:
-        p.set_background(background)
-        poly = pv.PolyData(np.ascontiguousarray(g.positions))
-        poly["rgb"] = rgb
-        p.add_mesh(poly, scalars="rgb", rgb=True, point_size=point_size,
-                   render_points_as_spheres=True, show_scalar_bar=False)
-        _place_camera(p, frame, view, zoom, up, top_margin=0.08 if title else 0.0)
-        if title:
-            p.add_text(title, position="upper_edge", font_size=max(8, h // 60), color="black")
-    except BaseException:
-        p.close()
-        raise
-    return _finish(p, out, outputs)
+    poly = pv.PolyData(np.ascontiguousarray(g.positions))
+    poly["rgb"] = rgb
+    return _picture(pv, (w, h), background, frame, view, zoom, up, title, out, outputs,
+                    lambda p: p.add_mesh(poly, scalars="rgb", rgb=True, point_size=point_size,
+                                         render_points_as_spheres=True,
+                                         show_scalar_bar=False))

@@ -99,20 +99,14 @@ def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None 
 def _points_page(cloud, labels, *, title, info, background, view, up) -> str:
     """The viewer page of a point cloud: points coloured by superpoint (invalid ones left out)."""
     from ..elements.inputs import elements_of
-    from ..io.export import element_colors
+    from ..io.export import point_colors
     from ..render import _PointsFrame
 
     source = elements_of(cloud, "points")
-    g, index = source.graph, source.index
-    if labels is not None:
-        labels = check_labels(labels, index.shape[0], per="point")
-        rows = np.flatnonzero(index >= 0)
-        rgb = np.empty((g.n_elements, 3), dtype=np.uint8)
-        rgb[index[rows]] = element_colors(source, labels)[rows]
-        n_sp = int(np.unique(labels[labels >= 0]).size)
-    else:
-        rgb = np.full((g.n_elements, 3), 180, dtype=np.uint8)
-        n_sp = 0
+    g = source.graph
+    rgb = point_colors(source, labels)
+    n_sp = 0 if labels is None else int(np.unique(np.asarray(labels)[np.asarray(labels) >= 0])
+                                        .size)
     palette, color_index = np.unique(rgb, axis=0, return_inverse=True)
     index_dtype = np.uint8 if palette.shape[0] <= 256 else np.uint16
     v = g.positions

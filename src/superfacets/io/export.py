@@ -30,6 +30,7 @@ from .meshes import MESH_FORMATS
 from .ply import ply_bytes
 
 __all__ = ["write_mesh", "write_colored_mesh", "write_colored_elements", "element_colors",
+           "point_colors",
            "COLORED_FORMATS"]
 
 #: Formats of :func:`write_colored_mesh`.
@@ -245,6 +246,37 @@ def element_colors(source, labels) -> np.ndarray:
     out = np.full((index.shape[0], 3), 128, dtype=np.uint8)
     out[ok] = palette[dense[index[ok]]]
     return out
+
+
+def point_colors(source, labels=None) -> np.ndarray:
+    """Per-element RGB colours of point labels (grey without labels), for pictures.
+
+    Parameters
+    ----------
+    source : ElementInput
+        A point cloud's elements.
+    labels : (N,) int ndarray, optional
+        One label per point of the input.
+
+    Returns
+    -------
+    (n_elements, 3) uint8 ndarray
+
+    Raises
+    ------
+    ParameterError
+        If ``labels`` is not one integer per point.
+    """
+    from ..labels import check_labels
+
+    g, index = source.graph, source.index
+    if labels is None:
+        return np.full((g.n_elements, 3), 180, dtype=np.uint8)
+    labels = check_labels(labels, index.shape[0], per="point")
+    rows = np.flatnonzero(index >= 0)
+    rgb = np.empty((g.n_elements, 3), dtype=np.uint8)
+    rgb[index[rows]] = element_colors(source, labels)[rows]
+    return rgb
 
 
 def write_colored_elements(path, source, labels, *, outputs: Outputs | None = None) -> Path:
