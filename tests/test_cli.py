@@ -135,3 +135,21 @@ def test_progress_bar_names_the_stages_then_counts_passes(tmp_path, small_off, c
         assert stage in err
     assert main(["segment", str(small_off), "-k", "20", "-q"]) == 0  # small mesh: no bar
     assert capsys.readouterr().err == ""
+
+
+def test_cleanup_option(tmp_path, small_off):
+    from superfacets import segment
+
+    out = {}
+    for flag in ("--cleanup", "--no-cleanup"):
+        out[flag] = tmp_path / f"{flag[2:]}.seg"
+        assert main(["segment", str(small_off), "-k", "30", flag, "-o", str(out[flag]),
+                     "--header", "-q"]) == 0
+    clean = read_labels(out["--cleanup"], n_faces=5120)
+    paper = read_labels(out["--no-cleanup"], n_faces=5120)
+    assert clean.max() == paper.max() == 29 and not np.array_equal(clean, paper)
+    mesh = read_mesh(small_off)
+    assert np.array_equal(paper, segment(mesh, 30, cleanup=False).labels)
+    assert np.array_equal(clean, segment(mesh, 30, cleanup=True).labels)
+    assert " cleanup=True " in out["--cleanup"].read_text().split("\n", 4)[3]  # the header
+    assert " cleanup=False " in out["--no-cleanup"].read_text().split("\n", 4)[3]

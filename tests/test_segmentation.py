@@ -170,7 +170,7 @@ def test_optimized_path_gives_the_labels_of_the_straightforward_one(
     monkeypatch.setattr(classify, "_PARALLEL_MIN_WORK", 0)  # threads on every pass
     for n_threads in (1, 2):
         r = segment(mesh, k, alpha=alpha, max_iter=max_iter, enforce_connectivity=False,
-                    n_threads=n_threads)
+                    n_threads=n_threads, cleanup=False)  # the paper's method, whatever the default
         np.testing.assert_array_equal(r.labels, relabel_dense(ref))
         assert r.n_iter == n_iter
 

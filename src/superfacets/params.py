@@ -66,6 +66,7 @@ class SegmentParams:
     weighting: str = "paper"
     assignment: str = "bounded"
     enforce_connectivity: bool = True
+    cleanup: bool = False
     tol: float = 0.0
     progress: bool = False
     n_threads: int | None = None
@@ -241,6 +242,7 @@ def resolve(**params) -> SegmentParams:
         max_iter=check_int("max_iter", p.max_iter, lo=1), weighting=weighting,
         assignment=check_choice("assignment", p.assignment, ASSIGNMENTS),
         enforce_connectivity=check_bool("enforce_connectivity", p.enforce_connectivity),
+        cleanup=check_bool("cleanup", p.cleanup),
         tol=check_number("tol", p.tol, 0.0, 1.0), progress=bool(p.progress),
         n_threads=check_threads(p.n_threads),
         elements=None if p.elements is None else check_choice("elements", p.elements, ELEMENTS),

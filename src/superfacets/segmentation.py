@@ -12,7 +12,8 @@ labels and the details (centers, iterations, convergence, time per stage).
 5. passes of (classify, update) until no center moves or ``max_iter``
    (:mod:`superfacets.passes`, with a strategy of :mod:`superfacets.classify`);
 6. empty superfacets dropped, stray pieces merged (connectivity);
-7. the result.
+7. with ``cleanup=True``, the boundaries re-placed (:mod:`superfacets.cleanup`);
+8. the result.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ import numpy as np
 
 from .classify import make_classifier
 from .errors import ParameterError
+from .cleanup import clean_boundaries
 from .connectivity import enforce_connectivity as _enforce_connectivity
 from .expansion import Workspaces
 from .initialization import initial_centers
@@ -65,7 +67,8 @@ class SegmentationResult:
     timings : dict of str to float
         Seconds per stage: ``graph`` (face graph and per-face geometry,
         zero when already cached on the mesh), ``weights``, ``init``,
-        ``iterations``, ``connectivity``, ``total``; and, not times,
+        ``iterations``, ``connectivity``, ``cleanup`` (with ``cleanup=True``),
+        ``total``; and, not times,
         ``expansions`` (Dijkstra expansions run), ``passes``
         (classifications actually run: fewer than ``n_iter`` when a cycle
         was skipped) and ``cycle_period`` (0, or the period of the cycle of
@@ -96,7 +99,7 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
                 max_iter: int = _D.max_iter, weighting: str = _D.weighting,
                 assignment: str = _D.assignment,
                 enforce_connectivity: bool = _D.enforce_connectivity,
-                tol: float = _D.tol, progress: bool = _D.progress,
+                cleanup: bool = _D.cleanup, tol: float = _D.tol, progress: bool = _D.progress,
                 n_threads: int | None = _D.n_threads, elements: str | None = _D.elements,
                 n_neighbors: int = _D.n_neighbors,
                 neighbor_radius: float | None = _D.neighbor_radius) -> np.ndarray:
@@ -148,6 +151,13 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
     enforce_connectivity : bool, default True
         Merge stray pieces of a superfacet into the neighbour with which they
         share the longest boundary, so each superfacet is face-connected.
+    cleanup : bool, default False
+        Boundary clean-up after the iteration
+        (:func:`superfacets.cleanup.clean_boundaries`): each boundary between
+        two superfacets is re-placed within half a radius by a minimum graph
+        cut that prefers short boundaries along creases; the number of
+        superfacets does not change and each stays connected. False gives the
+        paper's labels bit for bit (``docs/cleanup.md`` has the measurements).
     tol : float, default 0
         Convergence tolerance in ``[0, 1]``: also stop once a classification
         changes the superfacet of at most this fraction of the surface area
@@ -213,7 +223,7 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
     return segment(mesh, n_segments, radius=radius, alpha=alpha, eta_convex=eta_convex,
                    window=window, init=init, max_iter=max_iter, weighting=weighting,
                    assignment=assignment, enforce_connectivity=enforce_connectivity,
-                   tol=tol, progress=progress, n_threads=n_threads, elements=elements,
+                   cleanup=cleanup, tol=tol, progress=progress, n_threads=n_threads, elements=elements,
                    n_neighbors=n_neighbors, neighbor_radius=neighbor_radius).labels
 
 
@@ -222,7 +232,8 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | Non
             window: float = _D.window, init: str | None = _D.init,
             max_iter: int = _D.max_iter, weighting: str = _D.weighting,
             assignment: str = _D.assignment,
-            enforce_connectivity: bool = _D.enforce_connectivity, tol: float = _D.tol,
+            enforce_connectivity: bool = _D.enforce_connectivity,
+            cleanup: bool = _D.cleanup, tol: float = _D.tol,
             progress: bool = _D.progress,
             n_threads: int | None = _D.n_threads, elements: str | None = _D.elements,
             n_neighbors: int = _D.n_neighbors,
@@ -263,7 +274,7 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | Non
     params = resolve(n_segments=n_segments, radius=radius, alpha=alpha, eta_convex=eta_convex,
                      window=window, init=init, max_iter=max_iter, weighting=weighting,
                      assignment=assignment, enforce_connectivity=enforce_connectivity,
-                     tol=tol, progress=progress, n_threads=n_threads, elements=elements,
+                     cleanup=cleanup, tol=tol, progress=progress, n_threads=n_threads, elements=elements,
                      n_neighbors=n_neighbors, neighbor_radius=neighbor_radius)
     return pipeline(mesh, params)
 
@@ -447,18 +458,26 @@ def pipeline(mesh, params: SegmentParams, *, replay: bool = True,
     present[it.label] = True
     labels = relabel_dense(it.label)
     centers = it.centers[present]
-    if p.enforce_connectivity:
+    if p.enforce_connectivity and not p.cleanup:  # the clean-up ends with it
         labels = _enforce_connectivity(graph, labels, centers)
-    centers = source.first_rows(final_centers(labels, centers, sizes, positions))
-    labels = source.to_rows(labels)
+    centers = final_centers(labels, centers, sizes, positions)
     timings["connectivity"] = time.perf_counter() - t
+    if p.cleanup:
+        t = time.perf_counter()
+        labels = clean_boundaries(graph, labels, centers, radius=r, eta_convex=p.eta_convex,
+                                  alpha=p.alpha if p.weighting == "paper" else _D.alpha,
+                                  connectivity=p.enforce_connectivity, n_threads=p.n_threads)
+        centers = final_centers(labels, centers, sizes, positions)
+        timings["cleanup"] = time.perf_counter() - t
+    centers = source.first_rows(centers)
+    labels = source.to_rows(labels)
     timings["total"] = time.perf_counter() - t_start
     timings.update(expansions=it.expansions, passes=it.n_passes, cycle_period=it.cycle_period,
                    changed=it.changed, stopped_by_tol=it.stopped_by_tol)
     resolved = dict(n_segments=k, radius=r / graph.diagonal, alpha=p.alpha,
                     eta_convex=p.eta_convex, window=p.window, init=p.init,
                     max_iter=p.max_iter, weighting=p.weighting, assignment=p.assignment,
-                    enforce_connectivity=p.enforce_connectivity, tol=p.tol,
+                    enforce_connectivity=p.enforce_connectivity, cleanup=p.cleanup, tol=p.tol,
                     n_init_centers=init.shape[0], elements=graph.kind)
     if graph.kind == "points":
         resolved.update(n_neighbors=p.n_neighbors, neighbor_radius=p.neighbor_radius)

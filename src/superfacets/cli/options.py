@@ -95,6 +95,10 @@ def add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> No
     p.add_argument("--no-connectivity", action="store_true",
                    help="keep superfacets split in several pieces (default: merge stray "
                         "pieces into the neighbour sharing the longest boundary)")
+    p.add_argument("--cleanup", action=argparse.BooleanOptionalAction, default=_D.cleanup,
+                   help="boundary clean-up after the iteration: boundaries straightened and "
+                        "moved onto nearby creases, same superfacets (--no-cleanup: the paper's "
+                        f"labels bit for bit) (default: {'on' if _D.cleanup else 'off'})")
     p.add_argument("--threads", type=int_arg, default=None, metavar="N",
                    help="threads expanding centers at once (default: all cores; the labels "
                         "do not depend on it)")
@@ -129,7 +133,7 @@ def method_kwargs(args) -> dict:
     return dict(alpha=args.alpha, eta_convex=args.eta_convex, window=args.window,
                 init=args.init, max_iter=args.max_iter, weighting=args.weighting,
                 assignment=args.assignment, enforce_connectivity=not args.no_connectivity,
-                tol=args.tol, progress=bool(args.progress), n_threads=args.threads)
+                cleanup=args.cleanup, tol=args.tol, progress=bool(args.progress), n_threads=args.threads)
 
 
 def add_camera_options(p, size: str) -> None:

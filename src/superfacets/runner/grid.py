@@ -50,8 +50,8 @@ def expand_grid(method: str, **values) -> list[Config]:
 
     Examples
     --------
-    >>> [c.label() for c in expand_grid("superfacets", alpha=[0, 200])][:1]
-    ['superfacets alpha=0.0 eta_convex=0.2 init=farthest max_iter=50 tol=0.0 window=2.0']
+    >>> expand_grid("superfacets", alpha=[0, 200])[0].label()[:53]
+    'superfacets alpha=0.0 cleanup=false eta_convex=0.2 in'
     """
     m = get_method(method)
     names = sorted(values)

@@ -1,0 +1,130 @@
+"""Boundary clean-up: known answers on synthetic meshes, invariants on real ones."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from conftest import grid_mesh
+
+from superfacets import segment
+from superfacets.cleanup import clean_boundaries, cut_costs
+from superfacets.connectivity import label_components
+from superfacets.errors import ParameterError
+from superfacets.metrics import compactness
+
+
+def _cut_length(graph, labels) -> float:
+    i, j = graph.pairs[:, 0], graph.pairs[:, 1]
+    return float(graph.lengths[labels[i] != labels[j]].sum())
+
+
+def _cells(mesh, nx: int, ny: int):
+    """Column and row of the grid cell of each face of :func:`grid_mesh`."""
+    c = mesh.centroids
+    col = np.floor((c[:, 0] + 1) / 2 * nx).astype(int)
+    row = np.floor((c[:, 1] + 1) / 2 * ny).astype(int)
+    return col, row
+
+
+def test_boundary_two_rings_beside_a_concave_crease_ends_on_it():
+    # a folded plane z = 0.5 |x| (a concave valley along x = 0), cells 0.05 wide;
+    # the boundary starts two cells to the right of the crease
+    nx, ny = 40, 20
+    mesh = grid_mesh(nx, ny, height=lambda x, y: 0.5 * np.abs(x))
+    col, _ = _cells(mesh, nx, ny)
+    labels = (col >= nx // 2 + 2).astype(np.int64)
+    out = clean_boundaries(mesh.graph, labels, alpha=200)
+    assert np.array_equal(out, (col >= nx // 2).astype(np.int64))
+    # without a crease term the same boundary has no reason to jump onto the fold
+    flat = clean_boundaries(mesh.graph, labels, alpha=0)
+    assert not np.array_equal(flat, out)
+
+
+def test_stair_stepped_boundary_on_a_flat_grid_becomes_straight():
+    nx, ny = 40, 20
+    mesh = grid_mesh(nx, ny)
+    col, row = _cells(mesh, nx, ny)
+    labels = (col >= nx // 2 + (row % 2)).astype(np.int64)  # a zigzag, one cell deep
+    before = _cut_length(mesh.graph, labels)
+    assert before == pytest.approx(2.0 + (ny - 1) * 0.05)  # a jog between rows
+    out = clean_boundaries(mesh.graph, labels, alpha=200)
+    assert _cut_length(mesh.graph, out) == pytest.approx(2.0)  # one straight column edge line
+    per_row = [np.unique(col[(row == r) & (out == 1)]).min() for r in range(ny)]
+    assert len(set(per_row)) == 1
+
+
+def test_superfacets_are_never_lost_and_stay_connected():
+    # a one-face superfacet inside another lies wholly in a band: it keeps its center
+    nx = ny = 20
+    mesh = grid_mesh(nx, ny)
+    col, row = _cells(mesh, nx, ny)
+    labels = (col >= nx // 2).astype(np.int64)
+    tiny = int(np.flatnonzero((col == 5) & (row == 5))[0])
+    labels[tiny] = 2
+    centers = np.array([int(np.flatnonzero(col == 0)[0]), int(np.flatnonzero(col == nx - 1)[0]),
+                        tiny])
+    out = clean_boundaries(mesh.graph, labels, centers)
+    assert int(out.max()) + 1 == 3 and out[tiny] == 2
+    assert np.unique(label_components(mesh.graph, out)).size == 3
+
+
+def test_cut_costs_are_the_lengths_without_creases_and_cheaper_on_folds(valley):
+    g = valley.graph
+    assert np.allclose(cut_costs(g, alpha=0), g.lengths)
+    c = cut_costs(g, alpha=200)
+    fold = np.arccos(g.terms.cos) > 0.1
+    assert np.all(c[fold] < 0.5 * g.lengths[fold])
+    assert np.allclose(c[~fold & (np.arccos(g.terms.cos) < 1e-9)], g.lengths[~fold & (
+        np.arccos(g.terms.cos) < 1e-9)])
+    with pytest.raises(ParameterError, match="crease"):
+        cut_costs(g, crease=-1)
+
+
+def test_pipeline_cleanup_on_real_meshes(psb):
+    from superfacets.datasets.psb import list_meshes
+
+    meshes = list_meshes(psb)
+    by_cat = {}
+    for m in meshes:
+        by_cat.setdefault(m.category, m)
+    for bm in list(by_cat.values())[:5]:
+        mesh = bm.load()
+        paper = segment(mesh, 60)
+        clean = segment(mesh, 60, cleanup=True)
+        again = segment(mesh, 60, cleanup=True, n_threads=1)
+        assert np.array_equal(clean.labels, again.labels), bm.id  # deterministic, any threads
+        k = paper.n_segments
+        assert clean.n_segments == k and int(clean.labels.max()) + 1 == k, bm.id
+        assert np.array_equal(np.unique(clean.labels), np.arange(k)), bm.id  # dense
+        assert np.unique(label_components(mesh.graph, clean.labels)).size == k, bm.id
+        assert np.array_equal(clean.labels[clean.centers], np.arange(k)), bm.id
+        assert compactness(mesh.graph, clean.labels) < compactness(mesh.graph, paper.labels)
+        assert clean.params["cleanup"] is True and "cleanup" in clean.timings
+
+
+@pytest.mark.parametrize("elements", ["vertices", "points"])
+def test_cleanup_on_vertices_and_points(sphere, elements):
+    obj = sphere if elements == "vertices" else sphere.vertices
+    paper = segment(obj, 25, elements=elements)
+    clean = segment(obj, 25, elements=elements, cleanup=True)
+    assert clean.n_segments == paper.n_segments
+    assert clean.labels.shape == paper.labels.shape
+    assert not np.array_equal(clean.labels, paper.labels)
+
+
+def test_bad_arguments(sphere):
+    g = sphere.graph
+    labels = segment(sphere, 10).labels
+    with pytest.raises(ParameterError, match="centers"):
+        clean_boundaries(g, labels, np.zeros(10, dtype=np.int64))
+    with pytest.raises(ParameterError, match="smoothness"):
+        clean_boundaries(g, labels, smoothness=-1)
+    with pytest.raises(ParameterError, match="band"):
+        clean_boundaries(g, labels, band=0)
+    with pytest.raises(ParameterError, match="labels"):
+        clean_boundaries(g, labels[:-1])
+    with pytest.raises(ParameterError, match="cleanup"):
+        segment(sphere, 10, cleanup="yes")
+    # sweeps = 0 changes nothing
+    assert np.array_equal(clean_boundaries(g, labels, sweeps=0), labels)
