@@ -16,8 +16,9 @@ Candidates:
 - ``cut ...``: :func:`superfacets.cleanup.clean_boundaries` with the parameters shown
   (the package's defaults first);
 - ``oracle``: the same graph cut with the human boundaries made 100x cheaper
-  (the fraction of the humans who cut an edge). Not a method: the ceiling of
-  moving boundaries within their bands, whatever the cue.
+  (the fraction of the humans who cut an edge), with the default band and
+  with a wider band and more sweeps. Not a method: the ceiling of moving
+  boundaries within their bands, whatever the cue.
 """
 
 from __future__ import annotations
@@ -85,7 +86,8 @@ def main() -> None:
     for m in list_meshes(psb_root()):
         by_cat.setdefault(m.category, []).append(m)
     meshes = [m for ms in by_cat.values() for m in ms[:args.per_category]]
-    names = ["paper", "floor"] + [n for n, _ in CANDIDATES] + ["oracle"]
+    names = (["paper", "floor"] + [n for n, _ in CANDIDATES]
+             + ["oracle", "oracle, band 0.5 r, 3 sweeps"])
     scores = {n: [] for n in names}
     seconds = dict.fromkeys(names, 0.0)
     cats = []
@@ -120,6 +122,8 @@ def main() -> None:
         cl.cut_costs = lambda graph, **kw: real(graph, **kw) * (1 - 0.99 * human)
         try:
             run("oracle", lambda: clean_boundaries(g, r.labels, r.centers, alpha=args.alpha))
+            run("oracle, band 0.5 r, 3 sweeps", lambda: clean_boundaries(
+                g, r.labels, r.centers, alpha=args.alpha, band=0.5, sweeps=3))
         finally:
             cl.cut_costs = real
 

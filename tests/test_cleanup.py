@@ -128,3 +128,27 @@ def test_bad_arguments(sphere):
         segment(sphere, 10, cleanup="yes")
     # sweeps = 0 changes nothing
     assert np.array_equal(clean_boundaries(g, labels, sweeps=0), labels)
+
+
+def test_odd_inputs_and_extreme_counts():
+    import trimesh
+
+    from superfacets import Mesh
+
+    tm = trimesh.creation.icosphere(subdivisions=3)
+    v = np.vstack([tm.vertices, [[9.0, 9.0, 9.0]], tm.vertices * 0.3 + [4, 0, 0]])
+    f = tm.faces.copy()
+    extra = [f[0], [f[1, 0], f[1, 0], f[1, 1]], [f[2, 0], f[2, 1], len(tm.vertices)]]
+    # duplicate, degenerate and non-manifold faces; a second component
+    mesh = Mesh(v, np.vstack([f, extra, tm.faces + len(tm.vertices) + 1]))
+    for k in (1, 2, 30):
+        paper = segment(mesh, k)
+        clean = segment(mesh, k, cleanup=True)
+        assert clean.n_segments == paper.n_segments, k
+        assert np.unique(label_components(mesh.graph, clean.labels)).size == clean.n_segments
+    one_each = grid_mesh(3, 3)
+    r = segment(one_each, one_each.n_faces, alpha=0, cleanup=True)
+    assert np.unique(r.labels).size == one_each.n_faces
+    # without connectivity, the clean-up leaves the pieces it makes
+    r = segment(mesh, 30, cleanup=True, enforce_connectivity=False)
+    assert np.array_equal(np.unique(r.labels), np.arange(r.n_segments))
