@@ -16,8 +16,8 @@ Candidates:
 - ``cut ...``: :func:`superfacets.cleanup.clean_boundaries` with the parameters shown
   (the package's defaults first);
 - ``oracle``: the same graph cut with the human boundaries made 100x cheaper
-  (the fraction of the humans who cut an edge), with the default band and
-  with a wider band and more sweeps. Not a method: the ceiling of moving
+  (the fraction of the humans who cut an edge), with the default band, with
+  a wider band and more sweeps, and with the human cue alone (no crease term). Not a method: the ceiling of moving
   boundaries within their bands, whatever the cue.
 """
 
@@ -87,7 +87,8 @@ def main() -> None:
         by_cat.setdefault(m.category, []).append(m)
     meshes = [m for ms in by_cat.values() for m in ms[:args.per_category]]
     names = (["paper", "floor"] + [n for n, _ in CANDIDATES]
-             + ["oracle", "oracle, band 0.5 r, 3 sweeps"])
+             + ["oracle", "oracle, band 0.5 r, 3 sweeps",
+                "oracle without creases, band 0.5 r, 3 sweeps"])
     scores = {n: [] for n in names}
     seconds = dict.fromkeys(names, 0.0)
     cats = []
@@ -123,6 +124,9 @@ def main() -> None:
         try:
             run("oracle", lambda: clean_boundaries(g, r.labels, r.centers, alpha=args.alpha))
             run("oracle, band 0.5 r, 3 sweeps", lambda: clean_boundaries(
+                g, r.labels, r.centers, alpha=args.alpha, band=0.5, sweeps=3))
+            cl.cut_costs = lambda graph, **kw: graph.lengths * (1 - 0.99 * human)
+            run("oracle without creases, band 0.5 r, 3 sweeps", lambda: clean_boundaries(
                 g, r.labels, r.centers, alpha=args.alpha, band=0.5, sweeps=3))
         finally:
             cl.cut_costs = real
