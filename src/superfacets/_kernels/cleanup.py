@@ -76,6 +76,29 @@ def band_distances(indptr, indices, geo, length, labels, pinned, limit, dist, pa
                 size = push(hkey, hval, size, nd, g)
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _levels(n, first, nxt, head, cap, s, eps, level, queue):
+    """Breadth-first levels from ``s`` along arcs of residual capacity ``> eps``
+    (-1: unreachable)."""
+    for u in range(n):
+        level[u] = -1
+    level[s] = 0
+    qh = 0
+    qt = 1
+    queue[0] = s
+    while qh < qt:
+        u = queue[qh]
+        qh += 1
+        a = first[u]
+        while a != -1:
+            v = head[a]
+            if level[v] < 0 and cap[a] > eps:
+                level[v] = level[u] + 1
+                queue[qt] = v
+                qt += 1
+            a = nxt[a]
+
+
 @njit(cache=True, error_model="numpy")
 def _max_flow(n, first, nxt, head, cap, s, t, eps, level, it, queue, path):
     """Dinic's algorithm on arcs ``(head, cap)`` (arc ``a ^ 1`` reverses ``a``).
@@ -84,23 +107,7 @@ def _max_flow(n, first, nxt, head, cap, s, t, eps, level, it, queue, path):
     """
     flow = 0.0
     while True:
-        for u in range(n):
-            level[u] = -1
-        level[s] = 0
-        qh = 0
-        qt = 1
-        queue[0] = s
-        while qh < qt:
-            u = queue[qh]
-            qh += 1
-            a = first[u]
-            while a != -1:
-                v = head[a]
-                if level[v] < 0 and cap[a] > eps:
-                    level[v] = level[u] + 1
-                    queue[qt] = v
-                    qt += 1
-                a = nxt[a]
+        _levels(n, first, nxt, head, cap, s, eps, level, queue)
         if level[t] < 0:
             return flow
         for u in range(n):
@@ -231,25 +238,9 @@ def _solve_one(members, la, lb, pair_id, band_of, local, indptr, indices, cut_co
     eps = 1e-12 * total
     _max_flow(n_nodes, first, nxt, head, cap, s, t, eps, level, it, queue, path)
     # source side of the minimum cut: reachable from s in the residual graph
-    for u in range(n_nodes):
-        level[u] = -1
-    level[s] = 0
-    qh = 0
-    qt = 1
-    queue[0] = s
-    while qh < qt:
-        u = queue[qh]
-        qh += 1
-        a = first[u]
-        while a != -1:
-            v = head[a]
-            if level[v] < 0 and cap[a] > eps:
-                level[v] = 0
-                queue[qt] = v
-                qt += 1
-            a = nxt[a]
+    _levels(n_nodes, first, nxt, head, cap, s, eps, level, queue)
     for i in range(nb):
-        out[members[i]] = la if level[i] == 0 else lb
+        out[members[i]] = la if level[i] >= 0 else lb
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
