@@ -6,7 +6,7 @@ Every error caused by bad input is a :class:`SuperfacetsError`, which is also a
 """
 
 __all__ = ["SuperfacetsError", "MeshFormatError", "InvalidMeshError", "ParameterError",
-           "MemoryLimitError", "MissingExtraError", "NoDisplayError"]
+           "SchedulerError", "MemoryLimitError", "MissingExtraError", "NoDisplayError"]
 
 
 class SuperfacetsError(ValueError):
@@ -47,6 +47,10 @@ class MissingExtraError(SuperfacetsError, ImportError):
 
     The message names the ``pip install 'superfacets[EXTRA]'`` command to run.
     """
+
+
+class SchedulerError(SuperfacetsError):
+    """A Dask scheduler cannot be reached, or has no worker to run the tasks."""
 
 
 class NoDisplayError(RuntimeError):

@@ -5,6 +5,8 @@ needs numpy, scipy, numba, trimesh and tqdm. The rest comes with extras:
 
 - ``render``: pictures and the viewer window (pyvista, Pillow);
 - ``report``: result tables and figures (pandas, matplotlib);
+- ``distributed``: ``batch`` and ``experiment`` on several processes or machines
+  (dask.distributed; pyarrow for the Parquet manifest);
 - ``all``: every extra; ``test``: the test suite's needs.
 
 The baselines (normalized cuts, VSA) need only the core.
@@ -20,7 +22,8 @@ __all__ = ["require", "EXTRAS"]
 
 #: Module -> the extra that installs it.
 EXTRAS = {"pyvista": "render", "PIL": "render", "pandas": "report", "matplotlib": "report",
-          "pypcd4": "clouds", "laspy": "clouds", "pycut_pursuit": "gpl-baselines"}
+          "pypcd4": "clouds", "laspy": "clouds",
+          "distributed": "distributed", "dask": "distributed", "pyarrow": "distributed", "pycut_pursuit": "gpl-baselines"}
 
 
 def require(module: str, feature: str):

@@ -4,6 +4,8 @@
   label file and/or a coloured PLY), ``baseline`` (any registered method),
   ``demo`` (a built-in procedural mesh, no data needed) and ``evaluate``
   (the metrics of a result against ground truths);
+- :mod:`.batching`: ``batch`` (many files with the same options, resumable, a
+  manifest; on a local or a running Dask cluster);
 - :mod:`.experiments`: ``experiment`` (methods x parameters over the
   Princeton benchmark, resumable) and ``report`` (figures and tables);
 - :mod:`.pictures`: ``render`` (PNG, off-screen), ``panel`` (settings side by
@@ -26,7 +28,7 @@ __all__ = ["main", "build_parser"]
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every command (each sub-parser sets ``func``)."""
     from .. import __version__
-    from . import experiments, pictures, segmenting
+    from . import batching, experiments, pictures, segmenting
 
     parser = argparse.ArgumentParser(
         prog="superfacets",
@@ -36,6 +38,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
     segmenting.add_parsers(sub)
+    batching.add_parsers(sub)
     experiments.add_parsers(sub)
     pictures.add_parsers(sub)
     return parser

@@ -47,7 +47,11 @@ def add_parsers(sub) -> None:
     x.add_argument("--per-category", type=int_arg, default=None, metavar="N",
                    help="only the first N meshes (by id) of each category: a stratified subset")
     x.add_argument("-j", "--workers", type=int_arg, default=None, metavar="N",
-                   help="worker processes (default: all cores; at most 4 per core)")
+                   help="worker processes of a local Dask cluster (default: one per core; at "
+                        "most 4 per core; 1: in this process)")
+    x.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run on a running Dask cluster (tcp://host:8786) instead; its workers "
+                        "must see the benchmark's files (default: DASK_SCHEDULER_ADDRESS)")
     x.add_argument("--elements", default="faces", metavar="LIST",
                    help="element kinds, comma-separated: faces, vertices (ground truth: "
                         "majority of the incident faces), points (--points sampled per mesh, "
@@ -164,7 +168,7 @@ def cmd_experiment(args) -> int:
     kinds = [e.strip() for e in args.elements.split(",") if e.strip()]
     s = run_experiment(meshes, configs, out, ks, workers=args.workers, tau=args.tau,
                        seed=args.seed, retry_failed=args.retry_failed, progress=not args.quiet,
-                       elements=kinds, n_points=args.points)
+                       elements=kinds, n_points=args.points, scheduler=args.scheduler)
     print(f"{s.written} rows written ({s.ok} ok, {s.failed} failed, {s.skipped} skipped), "
           f"{s.done_before} already there, in {s.seconds:.1f} s -> {out}")
     if s.interrupted:

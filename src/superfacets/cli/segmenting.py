@@ -107,39 +107,6 @@ def add_parsers(sub) -> None:
     e.set_defaults(func=cmd_evaluate)
 
 
-def _header(mesh, result, source: str) -> dict:
-    p = result.params
-    kind = p.get("elements", "faces")
-    return {
-        "superfacets": f"labels of {source}",
-        kind: mesh.n_total if kind == "points" else
-        (mesh.n_vertices if kind == "vertices" else mesh.n_faces),
-        "superfacets_count": result.n_segments,
-        "parameters": " ".join(f"{k}={v}" for k, v in p.items()),
-        "iterations": f"{result.n_iter} ({'converged' if result.converged else 'max_iter reached'})",
-        "seconds": f"{result.timings['total']:.3f}",
-    }
-
-
-def _object_lines(mesh) -> list[str]:
-    """``# object NAME: faces A-B`` lines of a scene (several objects), else none."""
-    if len(mesh.objects) < 2:
-        return []
-    return [f"object {name}: faces {a}-{b - 1}" for name, a, b in mesh.objects]
-
-
-class _Joined:
-    """The result of segmenting a scene object by object, for the messages and header."""
-
-    def __init__(self, labels, results):
-        self.labels = labels
-        self.n_segments = int(labels.max()) + 1
-        self.n_iter = max(r.n_iter for r in results)
-        self.converged = all(r.converged for r in results)
-        self.params = dict(results[0].params, per_object=True)
-        self.timings = {"total": sum(r.timings["total"] for r in results)}
-
-
 def _summary(name: str, mesh, result, seconds: float, elements: str = "faces") -> str:
     state = "converged" if result.converged else "stopped at max-iter"
     if elements == "points":
@@ -161,10 +128,9 @@ def cmd_segment(args) -> int:
 
     warmup.start()  # numba's start-up in a thread, while the rest is imported and read
     from ..errors import SuperfacetsError
-    from ..io import read_input, write_colored_mesh, write_labels, write_segindices
+    from ..io import read_input
     from ..errors import ParameterError
-    from ..io.export import write_colored_elements
-    from ..io.files import Outputs
+    from ..io.results import JoinedResult, write_result
     from ..params import resolve
     from ..segmentation import segment, segment_objects
 
@@ -202,43 +168,17 @@ def cmd_segment(args) -> int:
         kwargs["progress"] = size >= 500_000 and sys.stderr.isatty()
     try:
         if args.per_object:
-            result = _Joined(*segment_objects(data, args.n_segments or DEFAULTS.n_segments,
+            result = JoinedResult(*segment_objects(data, args.n_segments or DEFAULTS.n_segments,
                                               **kwargs))
         else:
             result = segment(data, args.n_segments, radius=args.radius, **kwargs)
     except SuperfacetsError as exc:
         raise type(exc)(f"{args.mesh}: {exc}") from None
     elapsed = time.perf_counter() - t0
-    objects = [] if cloud else _object_lines(data)
-    with Outputs() as outputs:  # all or nothing
-        if seg_out is not None and seg_out.name.lower().endswith(".json"):
-            write_segindices(seg_out, result.labels, result.params,
-                             scene_id=Path(args.mesh).name.split(".")[0], outputs=outputs)
-        elif seg_out is not None:
-            header = _header(data, result, Path(args.mesh).name) if args.header else None
-            if objects:  # a scene: say which faces are which object
-                header = [f"{k}: {v}" for k, v in (header or {}).items()] + objects
-            write_labels(seg_out, result.labels, outputs=outputs, header=header)
-        if ply_out is not None and kind == "faces":
-            write_colored_mesh(ply_out, data, result.labels, outputs=outputs,
-                               vertex_colors=args.vertex_colors)
-        elif ply_out is not None:
-            from ..elements.inputs import elements_of
-
-            source = elements_of(data, kind, n_neighbors=args.neighbors,
-                                 neighbor_radius=args.neighbor_radius)  # cached: no new work
-            write_colored_elements(ply_out, source, result.labels, outputs=outputs)
-        title = f"{Path(args.mesh).name}: {result.n_segments} " + (
-            "superpoints" if kind != "faces" else "superfacets")
-        if html_out is not None:
-            from ..html import write_html
-
-            write_html(html_out, data, result.labels, title=title, outputs=outputs)
-        if png_out is not None:
-            from ..render import render, render_points
-
-            draw = render_points if kind == "points" else render
-            draw(data, result.labels, png_out, title=title, outputs=outputs)
+    write_result(data, result, kind, Path(args.mesh).name, labels=seg_out, header=args.header,
+                 colored=ply_out, vertex_colors=args.vertex_colors, picture=png_out,
+                 html=html_out, element_options=dict(n_neighbors=args.neighbors,
+                                                     neighbor_radius=args.neighbor_radius))
     report = sys.stderr if str(seg_out) == "-" else sys.stdout  # stdout holds the labels
     if not args.quiet:
         print(_summary(Path(args.mesh).name, data, result, elapsed, kind), file=report)
@@ -300,6 +240,7 @@ def cmd_demo(args) -> int:
     from ..html import write_html
     from ..io import write_colored_mesh, write_labels, write_mesh
     from ..io.files import Outputs
+    from ..io.results import result_header
     from ..params import check_int, resolve
     from ..segmentation import segment
     from ..shapes import creature
@@ -321,7 +262,7 @@ def cmd_demo(args) -> int:
     with Outputs() as outputs:  # all or nothing (the picture is a bonus)
         write_mesh(out / "creature.off", mesh, outputs=outputs)
         write_labels(out / "creature.seg", result.labels, outputs=outputs,
-                     header=_header(mesh, result, "creature.off"))
+                     header=result_header(mesh, result, "creature.off"))
         write_colored_mesh(out / "creature_superfacets.ply", mesh, result.labels,
                            outputs=outputs)
         write_html(out / "creature.html", mesh, result.labels, title="creature (demo)",

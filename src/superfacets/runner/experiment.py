@@ -2,21 +2,19 @@
 
 :func:`run_experiment` runs a grid of configurations (:mod:`.grid`) of
 registered methods (:mod:`superfacets.methods`) over benchmark meshes in
-worker processes and appends one tidy row per (mesh, method, parameters,
+worker processes (:class:`.engine.Engine`: a local Dask cluster, or a
+running one) and appends one tidy row per (mesh, method, parameters,
 ``n_segments``) to a CSV file (:mod:`.results`) as results arrive; rerunning
 with the same file skips every row already there, so an interrupted run
 continues where it stopped. A failure on one mesh is recorded as a row with
 its error and does not stop the run; a worker that dies is replaced.
+``superfacets batch`` (:mod:`.batch`) runs on the same engine.
 """
 
 from __future__ import annotations
 
 import csv
-import os
 import time
-import traceback
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from functools import lru_cache
 from itertools import product
@@ -28,6 +26,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..methods import Skipped, get_method
 from ..params import DEFAULT_N_SEGMENTS
+from .engine import Engine, default_workers, error_text
 from .grid import Config
 from .results import columns, fmt_value, prepare_file, row_key
 
@@ -78,16 +77,6 @@ def _element_values(source):
     return lambda values: np.asarray(values)[first]
 
 
-def _error_text(exc: BaseException) -> str:
-    text = f"{type(exc).__name__}: {exc}".replace("\n", " ").strip()
-    if not isinstance(exc, (ValueError, OSError, MemoryError, Skipped)):
-        # an unexpected error: say where it came from
-        tb = traceback.extract_tb(exc.__traceback__)
-        if tb:
-            text += f" (at {Path(tb[-1].filename).name}:{tb[-1].lineno})"
-    return text[:500]
-
-
 def _run_task(task: dict) -> list[dict]:
     """Run one config over a list of n_segments on one mesh; one row each."""
     from ..metrics import evaluate
@@ -107,7 +96,7 @@ def _run_task(task: dict) -> list[dict]:
             data.n_total if kind == "points" else data.n_vertices)
         extra = {} if task.get("faces_only", True) else {"elements": kind}
     except Exception as exc:  # noqa: BLE001 - recorded, the run goes on
-        return [dict(base, n_segments=k, status="failed", error=_error_text(exc))
+        return [dict(base, n_segments=k, status="failed", error=error_text(exc))
                 for k in task["ks"]]
     cache: dict = {}
     task_peak = 0.0
@@ -139,7 +128,7 @@ def _run_task(task: dict) -> list[dict]:
         except Skipped as exc:
             row.update(status="skipped", error=str(exc)[:500], seconds=None)
         except Exception as exc:  # noqa: BLE001 - recorded, the run goes on
-            row.update(status="failed", error=_error_text(exc), seconds=None)
+            row.update(status="failed", error=error_text(exc), seconds=None)
         rows.append(row)
     return rows
 
@@ -180,12 +169,6 @@ class PeakMemory:
         return None if hwm is None else max(0.0, hwm - self.start)
 
 
-def _init_worker() -> None:  # pragma: no cover - runs in the workers
-    import signal
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent handles Ctrl-C
-
-
 @dataclass
 class ExperimentSummary:
     """Counts of one :func:`run_experiment` call.
@@ -216,18 +199,11 @@ class ExperimentSummary:
         return self.ok + self.failed + self.skipped
 
 
-def _default_workers() -> int:
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # pragma: no cover - not Linux
-        return max(1, os.cpu_count() or 1)
-
-
 def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
                    n_segments: Sequence[int] = DEFAULT_N_SEGMENTS, *, workers: int | None = None,
                    tau: float = 0.05, seed: int = 0, retry_failed: bool = False,
                    progress: bool = True, elements: Sequence[str] = ("faces",),
-                   n_points: int = 20_000) -> ExperimentSummary:
+                   n_points: int = 20_000, scheduler: str | None = None) -> ExperimentSummary:
     """Run every config at every ``n_segments`` on every mesh, appending rows.
 
     Parameters
@@ -243,8 +219,11 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
         are not run again.
     n_segments : sequence of int, default (50, 100, ..., 300)
     workers : int, optional
-        Worker processes (default: all cores available). 1 runs in this
-        process.
+        Worker processes of a local Dask cluster (default: one per core; the
+        ``distributed`` extra); 1 runs in this process. A worker that dies
+        (killed, out of memory, a crash in native code) is replaced; its task
+        runs again elsewhere up to Dask's ``allowed-failures`` times, then
+        its rows are recorded as failed.
     tau : float, default 0.05
         Overlap tolerance of the undersegmentation error.
     seed : int, default 0
@@ -262,6 +241,10 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
         per element (:func:`superfacets.metrics.evaluate`).
     n_points : int, default 20000
         Points sampled per mesh for ``'points'``.
+    scheduler : str, optional
+        Address of a running Dask scheduler to run on instead (default:
+        ``DASK_SCHEDULER_ADDRESS`` where set); its workers must see the
+        benchmark's files.
 
     Returns
     -------
@@ -271,6 +254,8 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
     ------
     ParameterError
         On an empty grid, a bad ``n_segments``, ``workers`` or ``tau``.
+    MissingExtraError, SchedulerError
+        Dask needed and missing; a scheduler that cannot be reached.
     """
     if not configs:
         raise ParameterError("no method configuration to run")
@@ -281,7 +266,7 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
         raise ParameterError(f"tau must be in [0, 1), got {tau}")
     from ..params import check_int, max_threads
 
-    workers = _default_workers() if workers is None else check_int("workers", workers, lo=1,
+    workers = default_workers() if workers is None else check_int("workers", workers, lo=1,
                                                                     hi=max_threads())
     path = Path(results)
     if path.is_dir():
@@ -335,11 +320,9 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
                 bar.set_postfix(failed=summary.failed, skipped=summary.skipped, refresh=False)
 
         try:
-            if workers == 1 or len(tasks) <= 1:
-                for t in tasks:
-                    record(_run_task(t))
-            else:
-                _run_pool(tasks, workers, record)
+            with Engine(workers if len(tasks) > 1 else 1, scheduler) as engine:
+                for rows in engine.run(_run_task, tasks, _failed_rows):
+                    record(rows)
         except KeyboardInterrupt:
             summary.interrupted = True
         finally:
@@ -351,73 +334,3 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
 
 def _failed_rows(task: dict, error: str) -> list[dict]:
     return [dict(task["base"], n_segments=k, status="failed", error=error) for k in task["ks"]]
-
-
-def _run_pool(tasks: list[dict], workers: int, record) -> None:
-    """Feed tasks to a process pool, a bounded number in flight; survive dead workers.
-
-    When a worker dies (killed, out of memory, a crash in native code) the
-    pool breaks and every task then in flight is suspect: each is run again
-    alone in a fresh one-worker pool, so only the task that kills its worker
-    on its own is recorded as failed.
-    """
-    import multiprocessing as mp
-
-    env = {v: "1" for v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
-                            "NUMBA_NUM_THREADS")}
-    # glibc: arrays of 64 KiB and more get their own pages, returned to the system when
-    # freed, so each call's peak resident memory (peak_mib) is its own, not hidden by
-    # memory kept from an earlier call
-    env["MALLOC_MMAP_THRESHOLD_"] = "65536"
-    saved = {v: os.environ.get(v) for v in env}
-    os.environ.update(env)  # one thread per worker process; inherited at spawn
-    ctx = mp.get_context("spawn")
-    queue = list(reversed(tasks))
-    suspects: list[dict] = []
-
-    def collect(fut, t) -> list[dict]:
-        try:
-            return fut.result()
-        except BrokenProcessPool:
-            raise
-        except Exception as exc:  # noqa: BLE001 - e.g. a method that cannot be pickled
-            return _failed_rows(t, _error_text(exc))
-
-    try:
-        while queue or suspects:
-            if suspects:
-                t = suspects.pop()
-                with ProcessPoolExecutor(1, mp_context=ctx, initializer=_init_worker) as pool:
-                    try:
-                        rows = collect(pool.submit(_run_task, t), t)
-                    except BrokenProcessPool:
-                        rows = _failed_rows(t, "worker process died (killed, e.g. out of "
-                                               "memory, or crashed)")
-                record(rows)
-                continue
-            with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init_worker) as pool:
-                running: dict = {}
-                try:
-                    while queue or running:
-                        while queue and len(running) < 2 * workers:
-                            t = queue.pop()
-                            running[pool.submit(_run_task, t)] = t
-                        finished, _ = wait(running, return_when=FIRST_COMPLETED)
-                        try:
-                            for fut in finished:
-                                rows = collect(fut, running[fut])
-                                del running[fut]
-                                record(rows)
-                        except BrokenProcessPool:
-                            suspects.extend(running.values())
-                            break
-                except KeyboardInterrupt:
-                    # drop what has not started; the tasks running finish (workers ignore SIGINT)
-                    pool.shutdown(wait=True, cancel_futures=True)
-                    raise
-    finally:
-        for v, old in saved.items():
-            if old is None:
-                os.environ.pop(v, None)
-            else:
-                os.environ[v] = old

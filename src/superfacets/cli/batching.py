@@ -1,0 +1,103 @@
+"""``superfacets batch``: segment many files, resumable, on this machine or on Dask."""
+
+from __future__ import annotations
+
+import sys
+
+from .options import (add_element_options, add_method_options, element_kwargs, int_arg,
+                      method_kwargs)
+
+__all__ = ["add_parsers"]
+
+
+def add_parsers(sub) -> None:
+    """Add ``batch`` to the sub-parsers."""
+    b = sub.add_parser(
+        "batch", help="segment many mesh or point-cloud files (resumable; on Dask)",
+        description="Segment every INPUT with the same options as 'segment' and write, under "
+                    "OUTDIR, one label file per input (named after its path relative to the "
+                    "inputs' common folder) and a manifest (manifest.parquet, or manifest.csv "
+                    "without pyarrow) with one row per input: path, status (ok, failed, "
+                    "skipped), elements, segments, passes, seconds, peak memory, error. "
+                    "Running it again skips what is done. Runs on a local Dask cluster of one "
+                    "worker process per core (the 'distributed' extra), on a running cluster "
+                    "(--scheduler), or in this process (--workers 1). Exit status 0 when "
+                    "every input is ok, 1 when some failed, 2 on bad options.")
+    b.add_argument("inputs", metavar="INPUT", nargs="+",
+                   help="a file, a folder (searched recursively for every format 'segment' "
+                        "reads; .txt files only when named), a glob ('scans/**/*.ply', quoted) "
+                        "or @LIST.txt (one of these per line)")
+    b.add_argument("-o", "--output-dir", required=True, metavar="OUTDIR",
+                   help="output folder, created if missing")
+    add_method_options(b)
+    add_element_options(b)
+    for action in b._actions:  # one task per core already: one thread each by default
+        if action.dest == "threads":
+            action.default = 1
+            action.help = "threads of each segmentation (default: 1; the labels do not " \
+                          "depend on it)"
+    b.add_argument("--labels", choices=("seg", "json"), default="seg",
+                   help="label file per input: one label per line (.seg) or ScanNet's "
+                        "segIndices (.json) (default: seg)")
+    b.add_argument("--header", action="store_true",
+                   help="start each .seg file with '#' lines (parameters, passes, time)")
+    b.add_argument("--colored-mesh", choices=("ply", "glb", "obj"), default=None,
+                   help="also write each input coloured by superfacet (NAME_superfacets.EXT; "
+                        "vertices and points: ply)")
+    b.add_argument("--vertex-colors", action="store_true",
+                   help="PLY: colours per vertex instead of per face")
+    b.add_argument("--picture", action="store_true",
+                   help="also render NAME.png per input (faces or points; the render extra)")
+    b.add_argument("--html", action="store_true",
+                   help="also write NAME.html per input, an interactive page (faces or points)")
+    b.add_argument("--per-object", action="store_true",
+                   help="scenes: segment each object on its own (-k shared out by area)")
+    b.add_argument("-j", "--workers", type=int_arg, default=None, metavar="N",
+                   help="worker processes of the local Dask cluster (default: one per core; "
+                        "1: in this process, no Dask)")
+    b.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run on a running Dask cluster (tcp://host:8786); its workers read the "
+                        "inputs and write OUTDIR, so both must be on a shared filesystem "
+                        "(default: DASK_SCHEDULER_ADDRESS where set)")
+    b.add_argument("--memory-limit", default="auto", metavar="SIZE",
+                   help="memory of each local worker, e.g. 4GiB; a worker going over is "
+                        "restarted and its input fails after Dask's retries (default: auto, "
+                        "the machine's memory shared out)")
+    b.add_argument("--retry-failed", action="store_true",
+                   help="run again the inputs that failed in an earlier run")
+    b.set_defaults(func=cmd_batch)
+
+
+def cmd_batch(args) -> int:
+    from ..runner.batch import run_batch
+
+    if args.per_object and args.radius is not None:
+        from ..errors import ParameterError
+
+        raise ParameterError("--per-object takes -k, not --radius")
+    kwargs = dict(method_kwargs(args), **element_kwargs(args))
+    kwargs.pop("progress")
+    s = run_batch(args.inputs, args.output_dir, args.n_segments, radius=args.radius,
+                  labels=args.labels, header=args.header, colored_mesh=args.colored_mesh,
+                  vertex_colors=args.vertex_colors, picture=args.picture, html=args.html,
+                  per_object=args.per_object, workers=args.workers, scheduler=args.scheduler,
+                  memory_limit=args.memory_limit, retry_failed=args.retry_failed,
+                  progress=not args.quiet and args.progress is not False, **kwargs)
+    if not args.quiet:
+        ran = s.ok + s.failed
+        print(f"batch: {s.inputs} inputs: {s.ok} ok, {s.failed} failed, {s.done_before} already "
+              f"done" + (f", {s.inputs - ran - s.done_before} not run" if s.interrupted else "")
+              + (f"; {ran} run {s.engine} in {s.seconds:.1f} s" if ran else "")
+              + f" -> {s.manifest}")
+        for path, error in s.failures[:10]:
+            print(f"failed: {path}: {error}", file=sys.stderr)
+        if len(s.failures) > 10:
+            print(f"... and {len(s.failures) - 10} more failed (see the manifest)",
+                  file=sys.stderr)
+        if s.failed_before:
+            print(f"note: {s.failed_before} inputs failed in an earlier run; --retry-failed "
+                  "runs them again", file=sys.stderr)
+    if s.interrupted:
+        print("interrupted: run the same command again to continue", file=sys.stderr)
+        return 130
+    return 1 if s.failed or s.failed_before else 0

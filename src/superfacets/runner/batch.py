@@ -1,0 +1,709 @@
+"""Segment many files: ``superfacets batch``, resumable, on this machine or on Dask.
+
+:func:`run_batch` segments every input with the same options as
+``superfacets segment`` and writes, under one output folder:
+
+- per input, its labels (``.seg``, or ScanNet's ``.json``) and optionally a
+  coloured mesh or cloud, a picture and a page, each written atomically,
+  named after the input's path relative to the inputs' common folder (so
+  names cannot collide; see :func:`output_names`);
+- ``manifest.parquet`` (``manifest.csv`` where pyarrow is missing): one row
+  per input, with :data:`MANIFEST_COLUMNS`;
+- ``batch.json``: the options, so that a rerun with other options is refused
+  rather than mixing results.
+
+Each finished input is appended at once to a journal (``.manifest.jsonl``)
+that the manifest is made from, so a run interrupted at any point (Ctrl-C,
+``kill -9``, a power cut) loses nothing: a rerun skips every input done, runs
+the rest, and runs the failed ones again on request (``retry_failed``).
+The tasks go to :class:`~.engine.Engine` by path; a worker reads its input
+and writes its outputs itself, so the scheduler never holds meshes.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import glob
+import hashlib
+import json
+import os
+import time
+from dataclasses import dataclass, field
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Sequence
+
+from ..errors import ParameterError
+from .engine import Engine, error_text
+
+__all__ = ["run_batch", "collect_inputs", "output_names", "read_manifest", "BatchSummary",
+           "MANIFEST_COLUMNS", "segment_file"]
+
+#: Columns of the manifest, in order: the input's absolute path, its labels file (relative
+#: to the output folder), ok / failed / skipped, the elements labelled (faces, vertices,
+#: points) and how many, the superfacets made, the passes run and whether they converged,
+#: the seconds of the task (read, segment, write), its peak resident memory above the
+#: worker's start (MiB; Linux), the error's one line, and when it finished (UTC).
+MANIFEST_COLUMNS = ("input", "output", "status", "elements", "n_elements", "segments", "passes",
+                    "converged", "seconds", "peak_mib", "error", "finished")
+
+_TYPES = {"n_elements": "int64", "segments": "int64", "passes": "int64", "converged": "bool",
+          "seconds": "float64", "peak_mib": "float64"}
+_JOURNAL = ".manifest.jsonl"
+_OPTIONS = "batch.json"
+_LABEL_SUFFIX = {"seg": ".seg", "json": ".json"}
+
+
+def _readable_suffixes(explicit: bool) -> set[str]:
+    from ..io import CLOUD_FORMATS, MESH_FORMATS
+
+    # in folders, .txt is too often something else (a README) to be read as a cloud
+    return set(MESH_FORMATS) | set(CLOUD_FORMATS) - (set() if explicit else {"txt"})
+
+
+def _is_input(path: Path, explicit: bool) -> bool:
+    from ..io.files import split_suffix
+
+    fmt, _ = split_suffix(path)
+    return fmt in _readable_suffixes(explicit)
+
+
+def collect_inputs(specs: Sequence[str], exclude=None) -> list[Path]:
+    """The files named by ``specs``, absolute, each once, in order.
+
+    Parameters
+    ----------
+    specs : sequence of str
+        Files; folders (searched recursively for every format the readers
+        accept, hidden files and ``.txt`` left out); glob patterns (``**``
+        recurses); ``@list.txt`` (one of these per line, ``#`` comments).
+    exclude : path, optional
+        A folder whose files are never inputs (the output folder).
+
+    Returns
+    -------
+    list of pathlib.Path
+
+    Raises
+    ------
+    FileNotFoundError
+        When a spec matches nothing (a typo is not skipped silently).
+    ParameterError
+        When a folder holds no readable file.
+
+    Examples
+    --------
+    >>> collect_inputs(["/no/such/*.off"])
+    Traceback (most recent call last):
+    ...
+    FileNotFoundError: /no/such/*.off: no file matches
+    """
+    skip = Path(exclude).resolve() if exclude is not None else None
+    out: list[Path] = []
+    seen: set[Path] = set()
+
+    def keep(p: Path) -> None:
+        p = p.resolve()
+        if p in seen or (skip is not None and p.is_relative_to(skip)):
+            return
+        seen.add(p)
+        out.append(p)
+
+    def folder(d: Path) -> int:
+        n = 0
+        for root, dirs, files in os.walk(d, followlinks=True):
+            dirs[:] = sorted(x for x in dirs if not x.startswith("."))
+            for name in sorted(files):
+                if not name.startswith(".") and _is_input(Path(name), explicit=False):
+                    keep(Path(root) / name)
+                    n += 1
+        return n
+
+    def one(spec: str, depth: int = 0) -> None:
+        if spec.startswith("@") and depth == 0:
+            lst = Path(spec[1:])
+            if not lst.is_file():
+                raise FileNotFoundError(f"{lst}: no such list file")
+            for line in lst.read_text(errors="replace").splitlines():
+                line = line.strip()
+                if line and not line.startswith("#"):
+                    one(line, depth + 1)
+            return
+        p = Path(spec).expanduser()
+        if p.is_dir():
+            if folder(p) == 0:
+                raise ParameterError(f"{spec}: no mesh or point-cloud file in this folder")
+        elif p.is_file():
+            keep(p)
+        elif glob.has_magic(spec):
+            hits = sorted(glob.glob(str(p), recursive=True))
+            files = [Path(h) for h in hits if Path(h).is_file() and _is_input(Path(h), True)]
+            for h in hits:
+                if Path(h).is_dir():
+                    folder(Path(h))
+            for f in files:
+                keep(f)
+            if not hits:
+                raise FileNotFoundError(f"{spec}: no file matches")
+        else:
+            raise FileNotFoundError(f"{spec}: no such file or folder")
+
+    for s in specs:
+        one(str(s))
+    return out
+
+
+def _stem(path: Path) -> str:
+    """The file name without its format and compression suffixes (``bunny.tri.xz`` -> bunny)."""
+    from ..io.files import COMPRESSIONS
+
+    name = path.name
+    low = name.lower()
+    for comp in COMPRESSIONS:
+        if low.endswith(comp):
+            name, low = name[: -len(comp)], low[: -len(comp)]
+            break
+    base, dot, _ = name.rpartition(".")
+    return base if dot and base else name
+
+
+def output_names(inputs: Sequence[Path], reserved=()) -> dict[Path, str]:
+    """A name for each input's outputs, relative to the output folder, without suffix.
+
+    The input's path relative to the inputs' common folder, its format
+    suffix dropped (``psb/1.off`` -> ``psb/1``); inputs that would share a
+    name keep their whole file name (``x.off`` -> ``x.off``, ``x.ply`` ->
+    ``x.ply``); a name still taken (by one in ``reserved``, outputs of an
+    earlier run) gets ``~`` and 8 hex digits of the input path's hash.
+
+    Parameters
+    ----------
+    inputs : sequence of pathlib.Path
+        Absolute, distinct.
+    reserved : iterable of str
+        Names not to give.
+
+    Returns
+    -------
+    dict
+        Input -> name (``/`` separated).
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> names = output_names([Path("/d/a/x.off"), Path("/d/b/x.off"), Path("/d/b/x.ply")])
+    >>> sorted(names.values())
+    ['a/x', 'b/x.off', 'b/x.ply']
+    """
+    if not inputs:
+        return {}
+    root = Path(os.path.commonpath([str(p.parent) for p in inputs]))
+    rel = {p: p.relative_to(root) for p in inputs}
+    first = {p: (r.parent / _stem(r)).as_posix() for p, r in rel.items()}
+    count: dict[str, int] = {}
+    for n in first.values():
+        count[n] = count.get(n, 0) + 1
+    names = {p: (n if count[n] == 1 else rel[p].as_posix()) for p, n in first.items()}
+    taken = set(reserved)
+    out = {}
+    for p, n in names.items():
+        if n in taken:
+            n = f"{n}~{hashlib.sha1(str(p).encode()).hexdigest()[:8]}"
+        taken.add(n)
+        out[p] = n
+    return out
+
+
+def segment_file(task: dict) -> dict:
+    """Read, segment and write one input; its manifest row (never raises).
+
+    The worker function of :func:`run_batch` (a module-level function: Dask
+    workers import it by reference).
+
+    Parameters
+    ----------
+    task : dict
+        ``input`` (absolute path), ``outdir``, ``name``, ``options`` (keyword
+        arguments of :func:`superfacets.segment`), ``outputs`` (``labels``:
+        'seg' or 'json'; ``header``, ``colored`` suffix or None, ``picture``,
+        ``html``, ``vertex_colors``), ``per_object``.
+
+    Returns
+    -------
+    dict
+        A row with :data:`MANIFEST_COLUMNS`.
+    """
+    from .experiment import PeakMemory
+
+    outs = task["outputs"]
+    label_rel = task["name"] + _LABEL_SUFFIX[outs["labels"]]
+    row = dict.fromkeys(MANIFEST_COLUMNS)
+    row.update(input=task["input"], output=label_rel)
+    probe = PeakMemory()
+    t0 = time.perf_counter()
+    try:
+        row.update(_segment_and_write(task, label_rel))
+        row["status"] = "ok"
+    except Exception as exc:  # noqa: BLE001 - a failed row; the batch goes on
+        row.update(status="failed", error=error_text(exc))
+    except MemoryError as exc:  # pragma: no cover - depends on the machine
+        row.update(status="failed", error=error_text(exc))
+    row["seconds"] = round(time.perf_counter() - t0, 4)
+    peak = probe.peak_mib()
+    row["peak_mib"] = None if peak is None else round(peak, 1)
+    row["finished"] = datetime.now(timezone.utc).isoformat(timespec="seconds")
+    return row
+
+
+def _segment_and_write(task: dict, label_rel: str) -> dict:
+    from ..io import read_input
+    from ..io.results import JoinedResult, write_result
+    from ..segmentation import segment, segment_objects
+
+    outs = task["outputs"]
+    opts = dict(task["options"])
+    base = Path(task["outdir"]) / task["name"]
+    data = read_input(task["input"])
+    cloud = not hasattr(data, "faces")
+    kind = "points" if cloud else (opts.get("elements") or "faces")
+    if kind != "faces":
+        if task["per_object"]:
+            raise ParameterError(f"--per-object segments the faces of a scene; not {kind}")
+        if outs["colored"] not in (None, "ply"):
+            raise ParameterError(f"coloured {kind} are written as .ply")
+    if task["per_object"]:
+        opts.pop("radius", None)
+        k = opts.pop("n_segments", None)
+        result = JoinedResult(*segment_objects(data, *(() if k is None else (k,)), **opts))
+    else:
+        result = segment(data, **opts)
+    n = data.n_total if kind == "points" else (data.n_vertices if kind == "vertices"
+                                               else data.n_faces)
+    base.parent.mkdir(parents=True, exist_ok=True)
+    picture = base.with_name(base.name + ".png") if outs["picture"] and kind != "vertices" \
+        else None
+    html = base.with_name(base.name + ".html") if outs["html"] and kind != "vertices" else None
+    colored = None
+    if outs["colored"]:
+        colored = base.with_name(base.name + "_superfacets." + outs["colored"])
+    write_result(data, result, kind, Path(task["input"]).name,
+                 labels=Path(task["outdir"]) / label_rel, header=outs["header"],
+                 colored=colored, vertex_colors=outs["vertex_colors"], picture=picture,
+                 html=html, element_options={k: opts[k] for k in ("n_neighbors",
+                                                                  "neighbor_radius")
+                                             if k in opts})
+    return {"elements": kind, "n_elements": int(n), "segments": int(result.n_segments),
+            "passes": int(result.n_iter), "converged": bool(result.converged)}
+
+
+def _lost_row(task: dict, error: str) -> dict:
+    row = dict.fromkeys(MANIFEST_COLUMNS)
+    row.update(input=task["input"], output=task["name"] + _LABEL_SUFFIX[task["outputs"]["labels"]],
+               status="failed", error=error[:500],
+               finished=datetime.now(timezone.utc).isoformat(timespec="seconds"))
+    return row
+
+
+# --- the manifest -------------------------------------------------------------------------
+
+def _has_pyarrow() -> bool:
+    import importlib.util
+
+    return importlib.util.find_spec("pyarrow") is not None
+
+
+def _typed(row: dict) -> dict:
+    """A row with every column, values of the column's type (None where empty)."""
+    out = {}
+    for c in MANIFEST_COLUMNS:
+        v = row.get(c)
+        if v == "" or v is None:
+            v = None
+        elif _TYPES.get(c) == "int64":
+            v = int(float(v))
+        elif _TYPES.get(c) == "float64":
+            v = float(v)
+        elif _TYPES.get(c) == "bool":
+            v = v if isinstance(v, bool) else str(v).lower() == "true"
+        else:
+            v = str(v)
+        out[c] = v
+    return out
+
+
+def read_manifest(outdir) -> list[dict]:
+    """The rows of a batch's output folder: its manifest, updated by its journal.
+
+    Parameters
+    ----------
+    outdir : path
+
+    Returns
+    -------
+    list of dict
+        One per input (the last row written for it), :data:`MANIFEST_COLUMNS`
+        with typed values; empty when there is no manifest.
+
+    Raises
+    ------
+    MissingExtraError
+        When only ``manifest.parquet`` is there and pyarrow is not installed.
+    """
+    outdir = Path(outdir)
+    rows: dict[str, dict] = {}
+    pq_path, csv_path = outdir / "manifest.parquet", outdir / "manifest.csv"
+    if pq_path.exists():
+        from ..extras import require
+
+        pq = require("pyarrow.parquet", f"reading {pq_path}")
+        for r in pq.read_table(pq_path).to_pylist():
+            rows[r["input"]] = _typed(r)
+    elif csv_path.exists():
+        import csv
+
+        with open(csv_path, newline="") as f:
+            for r in csv.DictReader(f):
+                rows[r["input"]] = _typed(r)
+    journal = outdir / _JOURNAL
+    if journal.exists():
+        with open(journal, errors="replace") as f:
+            for line in f:
+                try:
+                    r = json.loads(line)
+                except ValueError:  # a line torn by a hard kill: that input runs again
+                    continue
+                if isinstance(r, dict) and r.get("input"):
+                    rows[r["input"]] = _typed(r)
+    return list(rows.values())
+
+
+def _write_manifest(outdir: Path, rows: list[dict]) -> Path:
+    """Write the manifest atomically: Parquet where pyarrow is, else CSV."""
+    from ..io.files import atomic_write
+
+    rows = [_typed(r) for r in rows]
+    if _has_pyarrow():
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        types = {"int64": pa.int64(), "float64": pa.float64(), "bool": pa.bool_()}
+        schema = pa.schema([(c, types.get(_TYPES.get(c), pa.string())) for c in MANIFEST_COLUMNS])
+        table = pa.Table.from_pylist(rows, schema=schema)
+        path = outdir / "manifest.parquet"
+        atomic_write(path, lambda f: pq.write_table(table, f))
+        stale = outdir / "manifest.csv"
+    else:
+        import csv
+        import io
+
+        buf = io.StringIO()
+        w = csv.DictWriter(buf, MANIFEST_COLUMNS, lineterminator="\n")
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: ("" if v is None else v) for k, v in r.items()})
+        path = outdir / "manifest.csv"
+        atomic_write(path, buf.getvalue().encode())
+        stale = outdir / "manifest.parquet"
+    if stale.exists():  # one manifest only: the other is older
+        stale.unlink()
+    return path
+
+
+# --- the run ------------------------------------------------------------------------------
+
+@dataclass
+class BatchSummary:
+    """Counts of one :func:`run_batch` call.
+
+    Attributes
+    ----------
+    manifest : pathlib.Path
+    inputs : int
+        Inputs matched.
+    done_before : int
+        Inputs already done (ok, or failed and not retried): not run again.
+    failed_before : int
+        Of those, the failed ones (``retry_failed`` runs them again).
+    ok, failed : int
+        Inputs run by this call, by outcome.
+    seconds : float
+    interrupted : bool
+    engine : str
+        Where the tasks ran.
+    failures : list of (str, str)
+        (input, error) of the inputs that failed in this call.
+    """
+
+    manifest: Path
+    inputs: int = 0
+    done_before: int = 0
+    failed_before: int = 0
+    ok: int = 0
+    failed: int = 0
+    seconds: float = 0.0
+    interrupted: bool = False
+    engine: str = ""
+    failures: list = field(default_factory=list)
+
+
+def _check_options(outdir: Path, options: dict) -> bool:
+    """True where ``batch.json`` records these options, False where there is none.
+
+    Raises
+    ------
+    ParameterError
+        The folder was made with other options (results are never mixed).
+    """
+    path = outdir / _OPTIONS
+    if not path.exists():
+        return False
+    try:
+        before = json.loads(path.read_text()).get("options", {})
+    except (ValueError, AttributeError, OSError):
+        raise ParameterError(f"{path}: unreadable; remove it, or use another output "
+                             "folder") from None
+    if before != options:
+        old, new = _flat(before), _flat(options)
+        diff = ", ".join(f"{k} {old.get(k)!r} -> {new.get(k)!r}"
+                         for k in sorted(set(old) | set(new)) if old.get(k) != new.get(k))
+        raise ParameterError(f"{outdir}: holds results made with other options ({diff}); "
+                             "use another output folder")
+    return True
+
+
+def _flat(d, prefix: str = "") -> dict:
+    """Nested options as ``{'outputs.labels': 'seg', ...}`` (segment options unprefixed)."""
+    out = {}
+    for k, v in (d.items() if isinstance(d, dict) else ()):
+        key = k if prefix in ("", "segment.") else prefix + k
+        if isinstance(v, dict):
+            out.update(_flat(v, key + "."))
+        else:
+            out[(prefix + k) if prefix not in ("", "segment.") else k] = v
+    return out
+
+
+def _record_options(outdir: Path, options: dict) -> None:
+    from .. import __version__
+    from ..io.files import atomic_write
+
+    atomic_write(outdir / _OPTIONS, json.dumps({"superfacets": __version__, "options": options},
+                                               indent=1, sort_keys=True).encode() + b"\n")
+
+
+class _Lock:
+    """An exclusive lock on the output folder (one batch writes it at a time)."""
+
+    def __init__(self, outdir: Path) -> None:
+        self.path = outdir / ".lock"
+        self.f = None
+
+    def __enter__(self):
+        import fcntl
+
+        self.f = open(self.path, "a")
+        try:
+            fcntl.flock(self.f, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            self.f.close()
+            raise ParameterError(f"{self.path.parent}: another batch is writing this folder") \
+                from None
+        return self
+
+    def __exit__(self, *exc):
+        self.f.close()
+
+
+def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
+              radius: float | None = None, labels: str = "seg", header: bool = False,
+              colored_mesh: str | None = None, vertex_colors: bool = False,
+              picture: bool = False, html: bool = False, per_object: bool = False,
+              workers: int | None = None, scheduler: str | None = None,
+              memory_limit="auto", retry_failed: bool = False, progress: bool = True,
+              n_threads: int = 1, **options) -> BatchSummary:
+    """Segment every input with the same options; resumable; on this machine or on Dask.
+
+    Parameters
+    ----------
+    inputs : sequence of str
+        Files, folders (recursively), globs, ``@list.txt`` (:func:`collect_inputs`).
+    outdir : path
+        Output folder, created if missing (its parent must exist).
+    n_segments, radius : optional
+        As :func:`superfacets.segment` (default k = 150).
+    labels : {'seg', 'json'}, default 'seg'
+        Label file of each input: one label per line, or ScanNet's ``segIndices``.
+    header : bool, default False
+        ``.seg`` files start with ``#`` lines (parameters, passes, time).
+    colored_mesh : {'ply', 'glb', 'obj'}, optional
+        Also write each input coloured by superfacet (vertices, points: ``ply``).
+    vertex_colors : bool, default False
+        PLY: colours per vertex.
+    picture, html : bool, default False
+        Also write a PNG (``render`` extra) / an interactive page per input
+        (faces and points).
+    per_object : bool, default False
+        Scenes: each object segmented on its own (k shared out by area).
+    workers : int, optional
+        Local worker processes (default: one per core); 1 runs in this process.
+    scheduler : str, optional
+        A running Dask scheduler's address (default: ``DASK_SCHEDULER_ADDRESS``).
+    memory_limit : default 'auto'
+        Per local worker (:class:`~.engine.Engine`).
+    retry_failed : bool, default False
+        Run again the inputs that failed before.
+    progress : bool, default True
+        A progress bar on stderr.
+    n_threads : int, default 1
+        Threads of each segmentation (one task per core already).
+    **options
+        The other keyword arguments of :func:`superfacets.segment` (``alpha``,
+        ``elements``, ``tol``, ``cleanup``, ...).
+
+    Returns
+    -------
+    BatchSummary
+
+    Raises
+    ------
+    ParameterError
+        Bad options, no input, an output folder made with other options or
+        in use by another batch (before any work).
+    FileNotFoundError, NotADirectoryError
+        An input that matches nothing; an output folder that is a file or
+        whose parent is missing.
+    MissingExtraError, SchedulerError
+        Dask or the render extra missing where needed; an unreachable scheduler.
+
+    Examples
+    --------
+    >>> s = run_batch(["meshes/"], "out", 150, workers=2)   # doctest: +SKIP
+    >>> s.ok, s.failed, s.manifest                          # doctest: +SKIP
+    (12, 0, PosixPath('out/manifest.parquet'))
+    """
+    from ..params import check_choice, check_int, resolve
+
+    outdir = Path(outdir)
+    if outdir.exists() and not outdir.is_dir():
+        raise NotADirectoryError(f"{outdir}: exists and is not a folder")
+    parent = outdir.parent if str(outdir.parent) else Path(".")
+    if not parent.is_dir():
+        raise FileNotFoundError(f"{outdir}: its folder {parent} does not exist")
+    check_choice("labels", labels, tuple(_LABEL_SUFFIX))
+    if colored_mesh is not None:
+        check_choice("colored_mesh", colored_mesh, ("ply", "glb", "obj"))
+    if per_object and radius is not None:
+        raise ParameterError("per_object takes n_segments, not radius")
+    if workers is not None:
+        check_int("workers", workers, lo=1)
+    n_threads = check_int("n_threads", n_threads, lo=1)
+    seg_opts = dict(options, n_segments=n_segments, radius=radius, n_threads=n_threads)
+    resolve(**seg_opts)  # every option checked before any work
+    if picture:
+        from ..extras import require
+
+        require("pyvista", "pictures (--picture)")
+    files = collect_inputs(inputs, exclude=outdir if outdir.exists() else None)
+    if not files:
+        raise ParameterError("no input to segment")
+    outputs = {"labels": labels, "header": bool(header), "colored": colored_mesh,
+               "picture": bool(picture), "html": bool(html), "vertex_colors": bool(vertex_colors)}
+    recorded = {"segment": _jsonable({k: v for k, v in seg_opts.items() if k != "n_threads"}),
+                "outputs": outputs, "per_object": bool(per_object)}
+    known = _check_options(outdir, recorded)  # before the engine starts: a quick refusal
+    work = bool(_todo(files, read_manifest(outdir) if known else [], retry_failed))
+    # the engine (a cluster to start or reach) only where there is work, before any is done
+    with (Engine(workers, scheduler, memory_limit=memory_limit) if work else
+          contextlib.nullcontext()) as engine:
+        outdir.mkdir(exist_ok=True)
+        with _Lock(outdir):
+            if not known and not _check_options(outdir, recorded):
+                _record_options(outdir, recorded)
+            return _run(files, outdir, seg_opts, outputs, per_object, engine, retry_failed,
+                        progress)
+
+
+def _done(row, retry_failed: bool) -> bool:
+    return row is not None and (row["status"] == "ok" or
+                                (row["status"] == "failed" and not retry_failed))
+
+
+def _todo(files: list, rows, retry_failed: bool) -> list:
+    """The inputs to run: those without an ok row (or a failed one, unless retried)."""
+    by_input = rows if isinstance(rows, dict) else {r["input"]: r for r in rows}
+    return [f for f in files if not _done(by_input.get(str(f)), retry_failed)]
+
+
+def _jsonable(d: dict) -> dict:
+    return {k: (v if isinstance(v, (int, float, str, bool, type(None))) else str(v))
+            for k, v in sorted(d.items())}
+
+
+def _run(files, outdir, seg_opts, outputs, per_object, engine, retry_failed,
+         progress) -> BatchSummary:
+    rows = {r["input"]: r for r in read_manifest(outdir)}  # again, under the lock
+    summary = BatchSummary(outdir / "manifest.parquet", inputs=len(files))
+    keys = {f: str(f) for f in files}
+    todo = _todo(files, rows, retry_failed)
+    if todo and engine is None:  # pragma: no cover - another batch changed the folder
+        raise ParameterError(f"{outdir}: changed by another batch meanwhile; run again")
+    summary.done_before = len(files) - len(todo)
+    summary.failed_before = sum(rows[keys[f]]["status"] == "failed" for f in files
+                                if f not in set(todo))
+    reserved = {r["output"].rsplit(".", 1)[0] for k, r in rows.items() if r.get("output")}
+    earlier = {f: rows[keys[f]]["output"].rsplit(".", 1)[0] for f in todo
+               if keys[f] in rows and rows[keys[f]].get("output")}
+    names = dict(earlier)
+    names.update(output_names([f for f in todo if f not in earlier], reserved))
+    tasks = [{"input": keys[f], "outdir": str(outdir.resolve()), "name": names[f],
+              "options": dict(seg_opts, progress=False), "outputs": outputs,
+              "per_object": per_object} for f in todo]
+    t0 = time.perf_counter()
+    journal_path = outdir / _JOURNAL
+    bar = None
+    finished: set[str] = set()
+    last_write = time.monotonic()
+    summary.engine = engine.describe() if engine is not None else ""
+    try:
+        with open(journal_path, "a") as journal:
+            if progress and tasks:
+                from tqdm import tqdm
+
+                bar = tqdm(total=len(tasks), unit="input", desc="batch", dynamic_ncols=True)
+            for row in (engine.run(segment_file, tasks, _lost_row) if tasks else ()):
+                journal.write(json.dumps(row) + "\n")
+                journal.flush()
+                rows[row["input"]] = row
+                finished.add(row["input"])
+                if row["status"] == "ok":
+                    summary.ok += 1
+                else:
+                    summary.failed += 1
+                    summary.failures.append((row["input"], row["error"]))
+                if bar is not None:
+                    bar.update(1)
+                    bar.set_postfix(failed=summary.failed, refresh=False)
+                if time.monotonic() - last_write > 30:  # a manifest to look at, now and then
+                    summary.manifest = _write_manifest(outdir, _ordered(rows, files))
+                    last_write = time.monotonic()
+    except KeyboardInterrupt:
+        summary.interrupted = True
+    finally:
+        if bar is not None:
+            bar.close()
+        for t in tasks:
+            if t["input"] not in finished and not _done(rows.get(t["input"]), retry_failed):
+                r = _lost_row(t, "not run: the batch stopped before it")
+                r["status"] = "skipped"
+                rows[t["input"]] = r
+        summary.manifest = _write_manifest(outdir, _ordered(rows, files))
+        journal_path.unlink(missing_ok=True)  # all in the manifest now
+    summary.seconds = time.perf_counter() - t0
+    return summary
+
+
+def _ordered(rows: dict, files: list) -> list[dict]:
+    """This run's inputs in order, then rows of earlier runs' other inputs."""
+    keys = [str(f) for f in files]
+    mine = set(keys)
+    return [rows[k] for k in keys if k in rows] + [r for k, r in rows.items() if k not in mine]

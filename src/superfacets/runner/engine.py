@@ -1,0 +1,281 @@
+"""The engine that runs independent tasks: in this process, or on Dask.
+
+One engine serves ``superfacets batch`` (:mod:`.batch`) and ``superfacets
+experiment`` (:mod:`.experiment`). A task is a small picklable dict naming its
+input by path (never an array), so the scheduler never holds meshes; its
+function returns a small result (a row or a list of rows) and writes any
+large output itself.
+
+- One worker and no scheduler: the tasks run one after the other in this
+  process (no Dask needed, no start-up cost).
+- Otherwise ``dask.distributed`` (the ``distributed`` extra): by default a
+  :class:`~distributed.LocalCluster` of single-threaded worker processes,
+  one per core; or an existing cluster given by its scheduler's address
+  (``scheduler=``, or Dask's ``DASK_SCHEDULER_ADDRESS``), whose workers
+  must see the same files (a shared filesystem) and have ``superfacets``
+  installed.
+
+A worker that dies (killed, out of memory, a crash in native code) is
+restarted by its nanny and its task is run again elsewhere, up to Dask's
+``distributed.scheduler.allowed-failures`` times; after that the task ends
+through ``on_lost`` (a failed row), never a lost run.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import traceback
+import uuid
+from pathlib import Path
+from typing import Callable, Iterable, Iterator
+
+__all__ = ["Engine", "default_workers", "error_text", "LOST_WORKER"]
+
+#: The error text of a task whose worker died each time it ran it.
+LOST_WORKER = "worker process died (killed, e.g. out of memory, or crashed)"
+
+#: Environment of local worker processes: one thread each (the engine runs one task per
+#: core), and glibc giving arrays of 64 KiB and more back to the system when freed, so
+#: each task's peak resident memory is its own, not hidden by memory kept from an earlier one.
+_WORKER_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
+               "NUMBA_NUM_THREADS": "1", "MALLOC_MMAP_THRESHOLD_": "65536",
+               "MALLOC_TRIM_THRESHOLD_": "65536"}
+
+
+def default_workers() -> int:
+    """The cores this process may run on (at least 1)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def _scheduler_from_config() -> str | None:
+    try:
+        import dask.config
+    except ImportError:
+        return os.environ.get("DASK_SCHEDULER_ADDRESS") or None
+    return dask.config.get("scheduler-address", None) or None
+
+
+def error_text(exc: BaseException) -> str:
+    """One line (at most 500 characters) saying what went wrong; where an
+    unexpected error came from."""
+    text = f"{type(exc).__name__}: {exc}".replace("\n", " ").strip()
+    if not isinstance(exc, (ValueError, OSError, MemoryError)) and \
+            type(exc).__name__ != "Skipped":
+        # an unexpected error: say where it came from
+        tb = traceback.extract_tb(exc.__traceback__)
+        if tb:
+            text += f" (at {Path(tb[-1].filename).name}:{tb[-1].lineno})"
+    return text[:500]
+
+
+class Engine:
+    """Run tasks in this process or on a Dask cluster; results as they complete.
+
+    Use as a context manager: entering starts (or connects to) the cluster,
+    so that a bad address or a missing extra is one clear error before any
+    work; leaving stops what was started.
+
+    Parameters
+    ----------
+    workers : int, optional
+        Local worker processes (default: one per core). ``1`` with no
+        scheduler runs the tasks in this process. Ignored with a scheduler.
+    scheduler : str, optional
+        Address of a running Dask scheduler (``tcp://host:8786``); default
+        Dask's ``scheduler-address`` setting (``DASK_SCHEDULER_ADDRESS``).
+    memory_limit : str or float, default 'auto'
+        Local workers: memory limit of each (Dask's syntax: ``'4GiB'``, bytes,
+        or ``'auto'`` = the machine's memory shared out); a worker passing 95 %
+        of it is restarted and its task counts as a failure.
+    connect_timeout : float, default 10
+        Seconds to reach the scheduler.
+    wait_workers : float, default 60
+        Seconds to wait for an external cluster to have a worker.
+
+    Raises
+    ------
+    MissingExtraError
+        On entering, where Dask is needed and ``distributed`` is not installed.
+    SchedulerError
+        On entering, where the scheduler cannot be reached or has no worker.
+
+    Examples
+    --------
+    >>> with Engine(workers=1) as engine:
+    ...     sorted(engine.run(abs, [-2, 1], on_lost=lambda t, e: None))
+    [1, 2]
+    """
+
+    def __init__(self, workers: int | None = None, scheduler: str | None = None, *,
+                 memory_limit="auto", connect_timeout: float = 10.0,
+                 wait_workers: float = 60.0) -> None:
+        self.scheduler = scheduler if scheduler else _scheduler_from_config()
+        self.workers = default_workers() if workers is None else int(workers)
+        self.memory_limit = memory_limit
+        self.connect_timeout = connect_timeout
+        self.wait_workers = wait_workers
+        self.client = None
+        self._cluster = None
+        self._saved_env: dict | None = None
+
+    @property
+    def local(self) -> bool:
+        """True where the tasks run in this process."""
+        return self.workers == 1 and not self.scheduler
+
+    def describe(self) -> str:
+        """A short line: where the tasks run."""
+        if self.local:
+            return "in this process"
+        if self.scheduler:
+            n = len(self.client.scheduler_info().get("workers", {})) if self.client else "?"
+            return f"on the Dask cluster at {self.scheduler} ({n} workers)"
+        return f"on a local Dask cluster of {self.workers} worker processes"
+
+    def __enter__(self) -> "Engine":
+        if self.local:
+            return self
+        from ..extras import require
+
+        require("distributed", "running on Dask (--workers > 1, --scheduler)")
+        import dask
+        from distributed import Client
+
+        from ..errors import SchedulerError
+
+        if self.scheduler:
+            try:
+                self.client = Client(self.scheduler, timeout=f"{self.connect_timeout}s",
+                                     set_as_default=False)
+            except (OSError, TimeoutError, ValueError) as exc:
+                raise SchedulerError(
+                    f"cannot reach the Dask scheduler at {self.scheduler} "
+                    f"({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})"
+                ) from None
+            try:
+                self.client.wait_for_workers(1, timeout=self.wait_workers)
+            except (TimeoutError, OSError):
+                self.client.close()
+                raise SchedulerError(f"the Dask scheduler at {self.scheduler} has no worker "
+                                     f"after {self.wait_workers:g} s; start some with "
+                                     f"'dask worker {self.scheduler}'") from None
+            return self
+        from distributed import LocalCluster
+
+        self._saved_env = {k: os.environ.get(k) for k in _WORKER_ENV}
+        env = dict(dask.config.get("distributed.nanny.pre-spawn-environ", {}), **_WORKER_ENV)
+        try:
+            with dask.config.set({"distributed.nanny.pre-spawn-environ": env,
+                                  "distributed.worker.daemon": True}):
+                self._cluster = LocalCluster(
+                    n_workers=self.workers, threads_per_worker=1, processes=True,
+                    dashboard_address=None, memory_limit=self.memory_limit,
+                    silence_logs=logging.CRITICAL)
+                self.client = Client(self._cluster, set_as_default=False)
+        except BaseException:
+            self.__exit__(None, None, None)
+            raise
+        return self
+
+    def __exit__(self, *exc) -> None:
+        # quiet shutdown: the nannies log closed connections as the cluster goes
+        logging.getLogger("distributed").setLevel(logging.CRITICAL)
+        try:
+            if self.client is not None:
+                self.client.close()
+            if self._cluster is not None:
+                self._cluster.close()
+        except Exception:  # noqa: BLE001 - nothing to keep; the results are written  # pragma: no cover
+            pass
+        finally:
+            self.client = self._cluster = None
+            if self._saved_env is not None:  # Dask sets these in this process to spawn
+                for k, v in self._saved_env.items():
+                    if v is None:
+                        os.environ.pop(k, None)
+                    else:
+                        os.environ[k] = v
+                self._saved_env = None
+
+    def run(self, fn: Callable, tasks: Iterable, on_lost: Callable) -> Iterator:
+        """Yield ``fn(task)`` for every task, in the order they complete.
+
+        Parameters
+        ----------
+        fn : callable
+            A module-level function (workers import it by reference); it
+            should catch its own errors and return them as its result.
+        tasks : iterable
+            Small picklable objects (paths and options, not arrays).
+        on_lost : callable
+            ``on_lost(task, error_text)`` makes the result of a task that
+            raised, or whose worker died each time it ran it.
+
+        Yields
+        ------
+        object
+            One result per task.
+        """
+        if self.local:
+            for t in tasks:
+                try:
+                    yield fn(t)
+                except Exception as exc:  # noqa: BLE001 - the run goes on
+                    yield on_lost(t, error_text(exc))
+            return
+        yield from self._run_dask(fn, list(tasks), on_lost)
+
+    def _run_dask(self, fn, tasks: list, on_lost) -> Iterator:
+        from distributed import as_completed
+
+        client = self.client
+        threads = sum(client.nthreads().values()) or 1
+        window = max(4, 2 * threads)  # a bounded number in flight: the scheduler holds few
+        tag = uuid.uuid4().hex[:8]
+        name = getattr(fn, "__name__", "task")
+        pending = list(reversed(list(enumerate(tasks))))
+        owner: dict = {}  # key -> (future, task) of the tasks in flight
+
+        def submit() -> None:
+            i, t = pending.pop()
+            fut = client.submit(fn, t, key=f"{name}-{tag}-{i}", pure=False)
+            owner[fut.key] = (fut, t)
+            done.add(fut)
+
+        done = as_completed([], loop=client.loop, with_results=False)
+        try:
+            for _ in range(min(window, len(pending))):
+                submit()
+            for fut in done:
+                t = owner.pop(fut.key)[1]
+                if fut.status == "finished":
+                    result = fut.result()
+                else:
+                    result = on_lost(t, _lost_text(fut))
+                fut.release()
+                if pending:
+                    submit()
+                yield result
+        finally:
+            if owner:  # interrupted: drop what has not finished
+                try:
+                    client.cancel([f for f, _ in owner.values()], force=True)
+                except Exception:  # noqa: BLE001 - the cluster is going anyway  # pragma: no cover
+                    pass
+
+
+def _lost_text(fut) -> str:
+    """The error text of a future that did not finish."""
+    try:
+        exc = fut.exception()
+    except Exception as e:  # noqa: BLE001 - cancelled, or the connection went
+        exc = e
+    kind = type(exc).__name__
+    if kind == "KilledWorker":
+        return LOST_WORKER
+    return f"{kind}: {exc}".replace("\n", " ")[:500]
+
