@@ -169,7 +169,11 @@ class Engine:
         self._saved_env = {k: os.environ.get(k) for k in _WORKER_ENV}
         env = dict(dask.config.get("distributed.nanny.pre-spawn-environ", {}), **_WORKER_ENV)
         try:
+            # worker-saturation 1: a worker holds only the task it runs, so when it dies no
+            # other task is blamed (crash isolation: only a task that kills its worker each
+            # time it runs fails)
             with dask.config.set({"distributed.nanny.pre-spawn-environ": env,
+                                  "distributed.scheduler.worker-saturation": 1.0,
                                   "distributed.worker.daemon": True}):
                 self._cluster = LocalCluster(
                     n_workers=self.workers, threads_per_worker=1, processes=True,

@@ -1,0 +1,320 @@
+"""``superfacets batch`` and its engine: inputs, names, manifest, resuming, Dask."""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from superfacets import Mesh, ParameterError, read_labels, read_mesh, segment, write_mesh
+from superfacets.cli import main
+from superfacets.runner import batch as bt
+from superfacets.runner.batch import collect_inputs, output_names, read_manifest, run_batch
+
+from conftest import grid_mesh
+
+KEEP = ("output", "status", "elements", "n_elements", "segments", "passes", "converged")
+
+
+def _blob(i: int) -> Mesh:
+    """A bumpy sphere, different for each i (a few thousand faces)."""
+    s = trimesh.creation.icosphere(subdivisions=3)
+    v = s.vertices * (1 + 0.15 * np.sin((i + 2) * s.vertices[:, :1]) *
+                      np.cos(3 * s.vertices[:, 1:2]))
+    return Mesh(v, s.faces)
+
+
+@pytest.fixture
+def corpus(tmp_path):
+    """A dozen small meshes in nested folders (two share a name), one malformed file,
+    a README that is not an input."""
+    root = tmp_path / "corpus"
+    for i in range(12):
+        sub = root / ("a" if i < 6 else "b") / ("deep" if i % 4 == 0 else "")
+        sub.mkdir(parents=True, exist_ok=True)
+        write_mesh(sub / f"m{i % 6}.off", _blob(i) if i % 3 else grid_mesh(12 + i, 10))
+    (root / "b" / "broken.off").write_text("OFF\n3 1 0\n0 0 0\n")
+    (root / "README.txt").write_text("not a point cloud\n")
+    return root
+
+
+def _table(rows) -> list:
+    return sorted(tuple(r[k] for k in KEEP) for r in rows)
+
+
+def _labels(out: Path) -> dict:
+    return {p.relative_to(out).as_posix(): p.read_text() for p in sorted(out.rglob("*.seg"))}
+
+
+def test_collect_inputs_folders_globs_lists_once_in_order(corpus, tmp_path):
+    files = collect_inputs([str(corpus)])
+    assert len(files) == 13 and all(f.is_absolute() for f in files)
+    assert not any(f.name == "README.txt" for f in files)  # .txt only when named
+    lst = tmp_path / "list.txt"
+    lst.write_text(f"# some meshes\n{corpus}/a/m1.off\n\n{corpus}/b/*.off\n{corpus}/a/m1.off\n")
+    got = collect_inputs([f"@{lst}", str(corpus / "a" / "m1.off")])
+    assert [f.relative_to(corpus).as_posix() for f in got] == [
+        "a/m1.off", "b/broken.off", "b/m0.off", "b/m1.off", "b/m3.off", "b/m4.off",
+        "b/m5.off"]  # listed order, each file once
+    assert len(collect_inputs([f"{corpus}/**/deep/*.off"])) == 3
+    assert len(collect_inputs([str(corpus)], exclude=corpus / "b")) == 6
+    with pytest.raises(FileNotFoundError, match="no file matches"):
+        collect_inputs([f"{corpus}/*.stl"])
+    with pytest.raises(FileNotFoundError, match="no such file or folder"):
+        collect_inputs([str(corpus / "nope.off")])
+    with pytest.raises(FileNotFoundError, match="no such list file"):
+        collect_inputs(["@" + str(tmp_path / "missing.txt")])
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(ParameterError, match="no mesh or point-cloud file"):
+        collect_inputs([str(tmp_path / "empty")])
+
+
+def test_output_names_never_collide():
+    p = [Path(x) for x in ("/d/a/x.off", "/d/b/x.off", "/d/b/x.ply", "/d/b/y.tri.xz")]
+    names = output_names(p)
+    assert names == {p[0]: "a/x", p[1]: "b/x.off", p[2]: "b/x.ply", p[3]: "b/y"}
+    again = output_names(p, reserved={"a/x", "b/y"})
+    assert again[p[1]] == "b/x.off" and again[p[0]].startswith("a/x~") \
+        and again[p[3]].startswith("b/y~") and len(set(again.values())) == 4
+    assert output_names([Path("/only/one.ply")]) == {Path("/only/one.ply"): "one"}
+
+
+def test_in_process_batch_equals_segment_and_resumes(corpus, tmp_path):
+    out = tmp_path / "out"
+    s = run_batch([str(corpus)], out, 20, workers=1, progress=False)
+    assert (s.inputs, s.ok, s.failed, s.done_before) == (13, 12, 1, 0)
+    rows = read_manifest(out)
+    assert len(rows) == 13 and (out / "manifest.parquet").exists()
+    assert not (out / ".manifest.jsonl").exists()
+    bad = [r for r in rows if r["status"] == "failed"]
+    assert len(bad) == 1 and bad[0]["input"].endswith("broken.off")
+    assert "\n" not in bad[0]["error"] and "broken.off" in bad[0]["error"]
+    for r in rows:
+        if r["status"] != "ok":
+            continue
+        ref = segment(read_mesh(r["input"]), 20)
+        got = read_labels(out / r["output"])
+        assert np.array_equal(got, ref.labels)
+        assert r["segments"] == ref.n_segments and r["passes"] == ref.n_iter
+        assert r["elements"] == "faces" and r["n_elements"] == len(got)
+        assert r["seconds"] > 0 and r["finished"]
+    names = {r["output"] for r in rows}
+    assert {"a/m1.seg", "b/m1.seg", "a/deep/m0.seg", "b/deep/m2.seg"} <= names
+    # a rerun does nothing; --retry-failed runs the failed one only
+    s = run_batch([str(corpus)], out, 20, workers=1, progress=False)
+    assert (s.ok, s.failed, s.done_before, s.failed_before) == (0, 0, 13, 1)
+    s = run_batch([str(corpus)], out, 20, workers=1, progress=False, retry_failed=True)
+    assert (s.ok, s.failed, s.done_before) == (0, 1, 12)
+    # other options are refused: results are never mixed
+    with pytest.raises(ParameterError, match="n_segments 20 -> 30"):
+        run_batch([str(corpus)], out, 30, workers=1, progress=False)
+
+
+def test_interrupted_and_hard_killed_runs_lose_nothing(corpus, tmp_path, monkeypatch):
+    out = tmp_path / "out"
+    real = bt.segment_file
+    calls = {"n": 0}
+
+    def flaky(task):
+        calls["n"] += 1
+        if calls["n"] == 5:
+            raise KeyboardInterrupt
+        return real(task)
+
+    monkeypatch.setattr(bt, "segment_file", flaky)
+    s = run_batch([str(corpus)], out, 10, workers=1, progress=False)
+    assert s.interrupted and s.ok + s.failed == 4
+    rows = read_manifest(out)
+    assert len(rows) == 13 and sum(r["status"] == "skipped" for r in rows) == 9
+    assert len(list(out.rglob("*.seg"))) == s.ok
+    assert not list(out.rglob("*.tmp*"))  # nothing torn
+    monkeypatch.setattr(bt, "segment_file", real)
+    # a hard kill: the journal holds a row and a torn line, the manifest is older
+    first = read_manifest(out)[0]
+    (out / "manifest.parquet").unlink()
+    (out / ".manifest.jsonl").write_text(json.dumps(first) + "\n" + '{"input": "/x", "sta')
+    s = run_batch([str(corpus)], out, 10, workers=1, progress=False)
+    assert s.done_before == 1 and s.ok + s.failed == 12 and not s.interrupted
+    assert sorted(r["status"] for r in read_manifest(out)).count("ok") == 12
+
+
+def test_csv_manifest_without_pyarrow(corpus, tmp_path, monkeypatch):
+    out = tmp_path / "out"
+    monkeypatch.setattr(bt, "_has_pyarrow", lambda: False)
+    run_batch([str(corpus / "a")], out, 8, workers=1, progress=False)
+    assert (out / "manifest.csv").exists() and not (out / "manifest.parquet").exists()
+    rows = read_manifest(out)
+    assert len(rows) == 6 and all(r["status"] == "ok" and r["converged"] in (True, False)
+                                  and isinstance(r["segments"], int) for r in rows)
+    monkeypatch.undo()  # pyarrow back: the next manifest is Parquet, the CSV goes
+    run_batch([str(corpus / "a")], out, 8, workers=1, progress=False)
+    assert (out / "manifest.parquet").exists() and not (out / "manifest.csv").exists()
+
+
+def test_every_element_kind_and_output(tmp_path):
+    src = tmp_path / "in"
+    src.mkdir()
+    write_mesh(src / "blob.ply", _blob(1))
+    pts = np.random.default_rng(0).normal(size=(600, 3))
+    np.savetxt(src / "cloud.xyz", pts)
+    out = tmp_path / "out"
+    s = run_batch([str(src)], out, 12, workers=1, progress=False, labels="json",
+                  colored_mesh="ply", html=True, elements=None)
+    assert s.ok == 2
+    rows = {Path(r["input"]).name: r for r in read_manifest(out)}
+    assert rows["cloud.xyz"]["elements"] == "points" and rows["cloud.xyz"]["n_elements"] == 600
+    assert rows["blob.ply"]["elements"] == "faces"
+    for name in ("blob", "cloud"):
+        seg = json.loads((out / f"{name}.json").read_text())["segIndices"]
+        assert len(seg) == rows[f"{name}.{'ply' if name == 'blob' else 'xyz'}"]["n_elements"]
+        assert (out / f"{name}_superfacets.ply").exists() and (out / f"{name}.html").exists()
+    v = tmp_path / "v"
+    s = run_batch([str(src / "blob.ply")], v, 12, workers=1, progress=False,
+                  elements="vertices")
+    r = read_manifest(v)[0]
+    assert r["elements"] == "vertices" and r["n_elements"] == _blob(1).n_vertices
+
+
+def test_local_cluster_of_two_equals_sequential(corpus, tmp_path):
+    one, two = tmp_path / "one", tmp_path / "two"
+    run_batch([str(corpus)], one, 20, workers=1, progress=False)
+    s = run_batch([str(corpus)], two, 20, workers=2, progress=False)
+    assert (s.ok, s.failed) == (12, 1) and "2 worker processes" in s.engine
+    assert _table(read_manifest(one)) == _table(read_manifest(two))
+    assert _labels(one) == _labels(two)
+    assert all(r["peak_mib"] is not None for r in read_manifest(two) if r["status"] == "ok")
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _dask(*args) -> subprocess.Popen:
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))  # the same superfacets
+    return subprocess.Popen([sys.executable, "-m", "dask", *args], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL, env=env)
+
+
+def test_external_scheduler_and_workers_give_the_same_manifest(corpus, tmp_path):
+    port = _free_port()
+    address = f"tcp://127.0.0.1:{port}"
+    procs = [_dask("scheduler", "--host", "127.0.0.1", "--port", str(port),
+                   "--no-dashboard")]
+    try:
+        procs += [_dask("worker", address, "--nthreads", "1", "--no-dashboard",
+                        "--host", "127.0.0.1") for _ in range(2)]
+        from distributed import Client
+
+        with Client(address, timeout="60s") as c:
+            c.wait_for_workers(2, timeout=120)
+        one, ext = tmp_path / "one", tmp_path / "ext"
+        run_batch([str(corpus)], one, 20, workers=1, progress=False)
+        assert main(["batch", str(corpus), "-o", str(ext), "-k", "20", "--scheduler",
+                     address, "-q"]) == 1  # one input failed: exit status 1
+        assert _table(read_manifest(one)) == _table(read_manifest(ext))
+        assert _labels(one) == _labels(ext)
+    finally:
+        for p in procs:
+            p.terminate()
+        for p in procs:
+            try:
+                p.wait(timeout=20)
+            except subprocess.TimeoutExpired:  # pragma: no cover
+                p.kill()
+
+
+def test_a_worker_killed_mid_run_loses_no_input(corpus, tmp_path):
+    import dask
+    from distributed import Client, LocalCluster
+
+    with dask.config.set({"distributed.scheduler.allowed-failures": 1}), \
+            LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None) as cluster, \
+            Client(cluster) as client:
+        out = tmp_path / "out"
+        journal = out / ".manifest.jsonl"
+        killed = []
+
+        def killer():  # a worker process dies as soon as the first input is done
+            deadline = time.monotonic() + 120
+            while time.monotonic() < deadline:
+                done = journal.read_text().count("\n") if journal.exists() else 0
+                if done >= 1:
+                    pid = next(iter(client.run(os.getpid).values()))
+                    os.kill(pid, 9)
+                    killed.append(done)
+                    return
+                time.sleep(0.01)
+
+        th = threading.Thread(target=killer)
+        th.start()
+        s = run_batch([str(corpus)], out, 20, scheduler=cluster.scheduler_address,
+                      progress=False)
+        th.join()
+        assert killed and killed[0] < 13  # killed mid-run
+        rows = read_manifest(out)
+        assert len(rows) == 13 and {r["status"] for r in rows} <= {"ok", "failed"}
+        assert s.ok + s.failed == 13
+        s = run_batch([str(corpus)], out, 20, scheduler=cluster.scheduler_address,
+                      progress=False, retry_failed=True)
+        assert sum(r["status"] == "ok" for r in read_manifest(out)) == 12
+    ref = tmp_path / "ref"
+    run_batch([str(corpus)], ref, 20, workers=1, progress=False)
+    assert _labels(ref) == _labels(out)
+
+
+def test_cli_batch_as_in_the_issue(corpus, tmp_path, capsys):
+    out = tmp_path / "OUT"
+    assert main(["batch", str(corpus / "a"), "-o", str(out), "--workers", "2", "-k", "15"]) == 0
+    text = capsys.readouterr().out
+    assert "6 ok, 0 failed" in text and (out / "manifest.parquet").exists()
+    assert len(list(out.rglob("*.seg"))) == 6
+    assert main(["batch", str(corpus / "a"), "-o", str(out), "--workers", "2", "-k", "15"]) == 0
+    assert "0 ok, 0 failed, 6 already done" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("args, match", [
+    (["-o", "{file}"], "exists and is not a folder"),
+    (["-o", "{tmp}/no/such/OUT"], "does not exist"),
+    (["{tmp}/nothing*.off", "-o", "{tmp}/o"], "no file matches"),
+    (["-o", "{tmp}/o", "--alpha", "-1"], "alpha"),
+    (["-o", "{tmp}/o", "--labels", "json", "--per-object", "--radius", "0.1"], "per-object"),
+])
+def test_cli_batch_bad_input_one_line_before_any_work(corpus, tmp_path, capsys, args, match):
+    f = tmp_path / "a_file"
+    f.write_text("x")
+    args = [a.format(file=f, tmp=tmp_path) for a in args]
+    if not args[0].endswith("*.off"):
+        args = [str(corpus)] + args
+    assert main(["batch", *args, "--workers", "1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("superfacets: error:") and match in err[0]
+    assert not (tmp_path / "o").exists()
+
+
+def test_cli_batch_unreachable_scheduler(corpus, tmp_path, capsys):
+    port = _free_port()  # nothing listens there
+    out = tmp_path / "o"
+    assert main(["batch", str(corpus), "-o", str(out), "--scheduler",
+                 f"tcp://127.0.0.1:{port}"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "cannot reach the Dask scheduler" in err[0]
+    assert not out.exists()
+
+
+def test_an_output_folder_in_use_is_refused(corpus, tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    with bt._Lock(out):
+        with pytest.raises(ParameterError, match="another batch"):
+            run_batch([str(corpus / "a")], out, 8, workers=1, progress=False)
