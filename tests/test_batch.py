@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from superfacets import Mesh, ParameterError, read_labels, read_mesh, segment, write_mesh
+from superfacets import MissingExtraError, Mesh, ParameterError, read_labels, read_mesh, segment, write_mesh
 from superfacets.cli import main
 from superfacets.runner import batch as bt
 from superfacets.runner.batch import collect_inputs, output_names, read_manifest, run_batch
@@ -158,6 +158,20 @@ def test_csv_manifest_without_pyarrow(corpus, tmp_path, monkeypatch):
     monkeypatch.undo()  # pyarrow back: the next manifest is Parquet, the CSV goes
     run_batch([str(corpus / "a")], out, 8, workers=1, progress=False)
     assert (out / "manifest.parquet").exists() and not (out / "manifest.csv").exists()
+
+
+def test_without_dask_the_default_runs_in_this_process(corpus, tmp_path, monkeypatch):
+    import superfacets.runner.engine as eng
+
+    monkeypatch.setattr(eng, "_have_dask", lambda: False)
+    s = run_batch([str(corpus / "a")], tmp_path / "out", 8, progress=False)
+    assert s.ok == 6 and "in this process" in s.engine and "distributed" in s.engine
+    import superfacets.extras as extras
+
+    monkeypatch.setattr(extras.importlib, "import_module",
+                        lambda name: (_ for _ in ()).throw(ImportError(name)))
+    with pytest.raises(MissingExtraError, match=r"superfacets\[distributed\]"):
+        run_batch([str(corpus / "a")], tmp_path / "out2", 8, workers=2, progress=False)
 
 
 def test_every_element_kind_and_output(tmp_path):

@@ -18,6 +18,8 @@ cd "$work"
 "$sf" evaluate "$OLDPWD/$mesh" out.seg out.seg
 "$sf" html "$OLDPWD/$mesh" out.seg -o out.html -q
 test -s out.html
+"$sf" batch "$OLDPWD/$mesh" -o batch-out -k 50 -q   # no Dask, no pyarrow: in process, CSV
+test -s batch-out/manifest.csv && head -2 batch-out/manifest.csv
 "$sf" demo --output-dir demo -q || true
 ls demo
 if "$sf" render "$OLDPWD/$mesh" out.seg -o out.png 2> err.txt; then
@@ -27,5 +29,5 @@ grep -q "pip install 'superfacets\[render\]'" err.txt && cat err.txt
 echo "mesh,method,status" > r.csv
 "$sf" report r.csv -o rep 2> err.txt || true
 grep -q "pip install 'superfacets\[report\]'" err.txt && cat err.txt
-"$work/env/bin/python" -c "import superfacets, sys; print(sorted(m for m in ('pyvista', 'pandas', 'matplotlib', 'sklearn', 'skimage') if m in sys.modules))"
+"$work/env/bin/python" -c "import superfacets, sys; print(sorted(m for m in ('pyvista', 'pandas', 'matplotlib', 'sklearn', 'skimage', 'dask', 'distributed', 'pyarrow') if m in sys.modules))"
 du -sh "$work/env" | sed 's/^/core environment: /'

@@ -169,6 +169,8 @@ def cmd_experiment(args) -> int:
     s = run_experiment(meshes, configs, out, ks, workers=args.workers, tau=args.tau,
                        seed=args.seed, retry_failed=args.retry_failed, progress=not args.quiet,
                        elements=kinds, n_points=args.points, scheduler=args.scheduler)
+    if s.note:
+        print(f"note: {s.note}", file=sys.stderr)
     print(f"{s.written} rows written ({s.ok} ok, {s.failed} failed, {s.skipped} skipped), "
           f"{s.done_before} already there, in {s.seconds:.1f} s -> {out}")
     if s.interrupted:

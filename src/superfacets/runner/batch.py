@@ -520,7 +520,7 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
               picture: bool = False, html: bool = False, per_object: bool = False,
               workers: int | None = None, scheduler: str | None = None,
               memory_limit="auto", retry_failed: bool = False, progress: bool = True,
-              n_threads: int = 1, **options) -> BatchSummary:
+              n_threads: int = 1, dask: bool | None = None, **options) -> BatchSummary:
     """Segment every input with the same options; resumable; on this machine or on Dask.
 
     Parameters
@@ -556,6 +556,9 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         A progress bar on stderr.
     n_threads : int, default 1
         Threads of each segmentation (one task per core already).
+    dask : bool, optional
+        True: a Dask cluster even for one worker (a worker process that dies
+        fails only its input); default: Dask unless ``workers=1``.
     **options
         The other keyword arguments of :func:`superfacets.segment` (``alpha``,
         ``elements``, ``tol``, ``cleanup``, ...).
@@ -613,7 +616,7 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
     known = _check_options(outdir, recorded)  # before the engine starts: a quick refusal
     work = bool(_todo(files, read_manifest(outdir) if known else [], retry_failed))
     # the engine (a cluster to start or reach) only where there is work, before any is done
-    with (Engine(workers, scheduler, memory_limit=memory_limit) if work else
+    with (Engine(workers, scheduler, memory_limit=memory_limit, dask=dask) if work else
           contextlib.nullcontext()) as engine:
         outdir.mkdir(exist_ok=True)
         with _Lock(outdir):
@@ -657,7 +660,7 @@ def _run(files, outdir, seg_opts, outputs, per_object, engine, retry_failed,
     names.update(output_names([f for f in todo if f not in earlier], reserved))
     tasks = [{"input": keys[f], "outdir": str(outdir.resolve()), "name": names[f],
               "options": dict(seg_opts, progress=False), "outputs": outputs,
-              "per_object": per_object} for f in todo]
+              "per_object": per_object} for f in _largest_first(todo)]
     t0 = time.perf_counter()
     journal_path = outdir / _JOURNAL
     bar = None
@@ -700,6 +703,18 @@ def _run(files, outdir, seg_opts, outputs, per_object, engine, retry_failed,
         journal_path.unlink(missing_ok=True)  # all in the manifest now
     summary.seconds = time.perf_counter() - t0
     return summary
+
+
+def _largest_first(files: list) -> list:
+    """The inputs by decreasing file size: the longest tasks start first, so that no worker
+    is left with a large input at the end while the others wait (the manifest keeps the
+    inputs' order)."""
+    def size(f) -> int:
+        try:
+            return f.stat().st_size
+        except OSError:
+            return 0
+    return sorted(files, key=size, reverse=True)
 
 
 def _ordered(rows: dict, files: list) -> list[dict]:

@@ -35,12 +35,14 @@ __all__ = ["Engine", "default_workers", "error_text", "LOST_WORKER"]
 #: The error text of a task whose worker died each time it ran it.
 LOST_WORKER = "worker process died (killed, e.g. out of memory, or crashed)"
 
-#: Environment of local worker processes: one thread each (the engine runs one task per
-#: core), and glibc giving arrays of 64 KiB and more back to the system when freed, so
-#: each task's peak resident memory is its own, not hidden by memory kept from an earlier one.
+#: Environment of local worker processes: one thread each (the engine runs one task per core).
 _WORKER_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
-               "NUMBA_NUM_THREADS": "1", "MALLOC_MMAP_THRESHOLD_": "65536",
-               "MALLOC_TRIM_THRESHOLD_": "65536"}
+               "NUMBA_NUM_THREADS": "1"}
+#: With ``exact_memory``: glibc gives arrays of 64 KiB and more back to the system when
+#: freed, so each task's peak resident memory is its own, not hidden by memory kept from an
+#: earlier task. It costs time (fresh pages for every array: about +15 % on the benchmark's
+#: meshes), so only the experiments, which report memory, ask for it.
+_EXACT_MEMORY_ENV = {"MALLOC_MMAP_THRESHOLD_": "65536", "MALLOC_TRIM_THRESHOLD_": "65536"}
 
 
 def default_workers() -> int:
@@ -49,6 +51,12 @@ def default_workers() -> int:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # pragma: no cover - not Linux
         return max(1, os.cpu_count() or 1)
+
+
+def _have_dask() -> bool:
+    import importlib.util
+
+    return importlib.util.find_spec("distributed") is not None
 
 
 def _scheduler_from_config() -> str | None:
@@ -82,8 +90,9 @@ class Engine:
     Parameters
     ----------
     workers : int, optional
-        Local worker processes (default: one per core). ``1`` with no
-        scheduler runs the tasks in this process. Ignored with a scheduler.
+        Local worker processes (default: one per core, or this process alone
+        where ``distributed`` is not installed: see :attr:`note`). ``1`` with
+        no scheduler runs the tasks in this process. Ignored with a scheduler.
     scheduler : str, optional
         Address of a running Dask scheduler (``tcp://host:8786``); default
         Dask's ``scheduler-address`` setting (``DASK_SCHEDULER_ADDRESS``).
@@ -95,6 +104,12 @@ class Engine:
         Seconds to reach the scheduler.
     wait_workers : float, default 60
         Seconds to wait for an external cluster to have a worker.
+    dask : bool, optional
+        True: a local Dask cluster even for one worker (crash isolation, or to
+        measure the engine's overhead); default: Dask unless one worker.
+    exact_memory : bool, default False
+        Local workers: each task's peak memory measured alone (glibc returns
+        freed arrays to the system at once), at some cost in time.
 
     Raises
     ------
@@ -112,12 +127,21 @@ class Engine:
 
     def __init__(self, workers: int | None = None, scheduler: str | None = None, *,
                  memory_limit="auto", connect_timeout: float = 10.0,
-                 wait_workers: float = 60.0) -> None:
+                 wait_workers: float = 60.0, dask: bool | None = None,
+                 exact_memory: bool = False) -> None:
         self.scheduler = scheduler if scheduler else _scheduler_from_config()
         self.workers = default_workers() if workers is None else int(workers)
+        #: a line for the user where the engine chose for them (no Dask: in this process)
+        self.note = ""
+        if workers is None and not self.scheduler and not dask and not _have_dask():
+            self.workers = 1
+            self.note = ("dask.distributed is not installed: running in this process; "
+                         "pip install 'superfacets[distributed]' for one worker per core")
         self.memory_limit = memory_limit
         self.connect_timeout = connect_timeout
         self.wait_workers = wait_workers
+        self.force_dask = bool(dask)
+        self.exact_memory = bool(exact_memory)
         self.client = None
         self._cluster = None
         self._saved_env: dict | None = None
@@ -125,16 +149,17 @@ class Engine:
     @property
     def local(self) -> bool:
         """True where the tasks run in this process."""
-        return self.workers == 1 and not self.scheduler
+        return self.workers == 1 and not self.scheduler and not self.force_dask
 
     def describe(self) -> str:
         """A short line: where the tasks run."""
         if self.local:
-            return "in this process"
+            return "in this process" + (f" ({self.note})" if self.note else "")
         if self.scheduler:
             n = len(self.client.scheduler_info().get("workers", {})) if self.client else "?"
             return f"on the Dask cluster at {self.scheduler} ({n} workers)"
-        return f"on a local Dask cluster of {self.workers} worker processes"
+        return f"on a local Dask cluster of {self.workers} worker process" + (
+            "es" if self.workers > 1 else "")
 
     def __enter__(self) -> "Engine":
         if self.local:
@@ -166,8 +191,13 @@ class Engine:
             return self
         from distributed import LocalCluster
 
-        self._saved_env = {k: os.environ.get(k) for k in _WORKER_ENV}
-        env = dict(dask.config.get("distributed.nanny.pre-spawn-environ", {}), **_WORKER_ENV)
+        mine = dict(_WORKER_ENV, **(_EXACT_MEMORY_ENV if self.exact_memory else {}))
+        self._saved_env = {k: os.environ.get(k) for k in (*mine, *_EXACT_MEMORY_ENV)}
+        env = dict(dask.config.get("distributed.nanny.pre-spawn-environ", {}), **mine)
+        if not self.exact_memory:  # glibc's own (dynamic) thresholds: the fastest
+            for k in _EXACT_MEMORY_ENV:
+                env.pop(k, None)
+                os.environ.pop(k, None)
         try:
             # worker-saturation 1: a worker holds only the task it runs, so when it dies no
             # other task is blamed (crash isolation: only a task that kills its worker each

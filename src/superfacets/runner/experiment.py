@@ -26,7 +26,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..methods import Skipped, get_method
 from ..params import DEFAULT_N_SEGMENTS
-from .engine import Engine, default_workers, error_text
+from .engine import Engine, error_text
 from .grid import Config
 from .results import columns, fmt_value, prepare_file, row_key
 
@@ -184,6 +184,8 @@ class ExperimentSummary:
     seconds : float
         Wall-clock time of this call.
     interrupted : bool
+    note : str
+        Where the engine chose for the user (no Dask installed: in this process).
     """
 
     path: Path
@@ -193,6 +195,7 @@ class ExperimentSummary:
     skipped: int = 0
     seconds: float = 0.0
     interrupted: bool = False
+    note: str = ""
 
     @property
     def written(self) -> int:
@@ -266,8 +269,8 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
         raise ParameterError(f"tau must be in [0, 1), got {tau}")
     from ..params import check_int, max_threads
 
-    workers = default_workers() if workers is None else check_int("workers", workers, lo=1,
-                                                                    hi=max_threads())
+    workers = None if workers is None else check_int("workers", workers, lo=1,
+                                                     hi=max_threads())
     path = Path(results)
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a directory")
@@ -298,6 +301,9 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
                           "n_points": n_points, "faces_only": method.elements == ("faces",)})
     if not any(k in get_method(c.method).elements for c in configs for k in kinds):
         raise ParameterError(f"no method of the grid segments {', '.join(kinds)}")
+    # the longest tasks first (the mesh's file size x its rows), so that no worker is left
+    # with a large mesh at the end while the others wait; a mesh's tasks stay together
+    tasks.sort(key=lambda t: _file_size(t["path"]) * len(t["ks"]), reverse=True)
     summary = ExperimentSummary(path, done_before=len(done))
     total = sum(len(t["ks"]) for t in tasks)
     t0 = time.perf_counter()
@@ -320,7 +326,9 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
                 bar.set_postfix(failed=summary.failed, skipped=summary.skipped, refresh=False)
 
         try:
-            with Engine(workers if len(tasks) > 1 else 1, scheduler) as engine:
+            with Engine(workers if len(tasks) > 1 else 1, scheduler,
+                        exact_memory=True) as engine:  # rows report peak memory
+                summary.note = engine.note
                 for rows in engine.run(_run_task, tasks, _failed_rows):
                     record(rows)
         except KeyboardInterrupt:
@@ -330,6 +338,13 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
                 bar.close()
     summary.seconds = time.perf_counter() - t0
     return summary
+
+
+def _file_size(path: str) -> int:
+    try:
+        return Path(path).stat().st_size
+    except OSError:
+        return 0
 
 
 def _failed_rows(task: dict, error: str) -> list[dict]:
