@@ -601,7 +601,7 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         check_int("workers", workers, lo=1)
     n_threads = check_int("n_threads", n_threads, lo=1)
     seg_opts = dict(options, n_segments=n_segments, radius=radius, n_threads=n_threads)
-    resolve(**seg_opts)  # every option checked before any work
+    resolved = resolve(**seg_opts).as_dict()  # every option checked before any work
     if picture:
         from ..extras import require
 
@@ -611,7 +611,8 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         raise ParameterError("no input to segment")
     outputs = {"labels": labels, "header": bool(header), "colored": colored_mesh,
                "picture": bool(picture), "html": bool(html), "vertex_colors": bool(vertex_colors)}
-    recorded = {"segment": _jsonable({k: v for k, v in seg_opts.items() if k != "n_threads"}),
+    recorded = {"segment": _jsonable({k: v for k, v in resolved.items()  # defaults filled
+                                      if k not in ("n_threads", "progress")}),
                 "outputs": outputs, "per_object": bool(per_object)}
     known = _check_options(outdir, recorded)  # before the engine starts: a quick refusal
     work = bool(_todo(files, read_manifest(outdir) if known else [], retry_failed))
