@@ -102,7 +102,8 @@ def compute(sources: dict[str, Path], progress: bool = False):
             mesh_name, mesh = name, read_mesh(sources[name])
         if progress:
             print(f"\r{i + 1}/{len(todo)} {name:<14}", end="", file=sys.stderr, flush=True)
-        yield run_key(name, kw), segment(mesh, **kw).labels
+        # tol = 0: the paper's stopping rule (the snapshot guards the paper's labels)
+        yield run_key(name, kw), segment(mesh, **{"tol": 0.0, **kw}).labels
     if progress:
         print(file=sys.stderr)
 

@@ -67,7 +67,7 @@ class SegmentParams:
     assignment: str = "bounded"
     enforce_connectivity: bool = True
     cleanup: bool = False
-    tol: float = 0.0
+    tol: float = 0.001
     progress: bool = False
     n_threads: int | None = None
     elements: str | None = None

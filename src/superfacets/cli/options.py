@@ -91,7 +91,8 @@ def add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> No
                         f"(default: {_D.assignment})")
     p.add_argument("--tol", type=float_arg, default=_D.tol, metavar="T",
                    help="also stop once a pass changes the superfacet of at most this fraction "
-                        "of the area (default: 0, the paper's rule: stop when no center moves)")
+                        f"of the area (default: {_D.tol:g}; 0: the paper's rule, bit for bit: "
+                        "stop when no center moves)")
     p.add_argument("--no-connectivity", action="store_true",
                    help="keep superfacets split in several pieces (default: merge stray "
                         "pieces into the neighbour sharing the longest boundary)")
