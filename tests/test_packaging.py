@@ -26,6 +26,11 @@ def test_import_and_help_load_neither_numba_nor_scipy():
     r = subprocess.run([sys.executable, "-m", "superfacets", "segment", "--help"],
                        capture_output=True, text=True)
     assert r.returncode == 0 and "--alpha" in r.stdout
+    # batch: an argument error or an input matching nothing loads neither numba nor Dask
+    mods = _modules_after("from superfacets.cli import main; "
+                          "assert main(['batch', '/no/such/*.off', '-o', '/tmp/x']) == 2; "
+                          "assert main(['batch', '.', '-o', '/tmp/x', '--alpha', '-1']) == 2")
+    assert not {"numba", "scipy", "trimesh", "dask", "distributed"} & mods
 
 
 def test_public_names_resolve_and_are_listed():

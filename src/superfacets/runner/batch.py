@@ -34,7 +34,7 @@ from pathlib import Path
 from typing import Sequence
 
 from ..errors import ParameterError
-from .engine import Engine, error_text
+from .engine import Engine, PeakMemory, error_text
 
 __all__ = ["run_batch", "collect_inputs", "output_names", "read_manifest", "BatchSummary",
            "MANIFEST_COLUMNS", "segment_file"]
@@ -233,8 +233,6 @@ def segment_file(task: dict) -> dict:
     dict
         A row with :data:`MANIFEST_COLUMNS`.
     """
-    from .experiment import PeakMemory
-
     outs = task["outputs"]
     label_rel = task["name"] + _LABEL_SUFFIX[outs["labels"]]
     row = dict.fromkeys(MANIFEST_COLUMNS)

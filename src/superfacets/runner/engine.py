@@ -30,7 +30,7 @@ import uuid
 from pathlib import Path
 from typing import Callable, Iterable, Iterator
 
-__all__ = ["Engine", "default_workers", "error_text", "LOST_WORKER"]
+__all__ = ["Engine", "PeakMemory", "default_workers", "error_text", "LOST_WORKER"]
 
 #: The error text of a task whose worker died each time it ran it.
 LOST_WORKER = "worker process died (killed, e.g. out of memory, or crashed)"
@@ -78,6 +78,42 @@ def error_text(exc: BaseException) -> str:
         if tb:
             text += f" (at {Path(tb[-1].filename).name}:{tb[-1].lineno})"
     return text[:500]
+
+
+class PeakMemory:
+    """Peak resident memory of this process since creation, above its start.
+
+    Linux only: resets the kernel's high-water mark (``/proc/self/clear_refs``)
+    and reads ``VmHWM`` / ``VmRSS`` from ``/proc/self/status``. Elsewhere
+    :meth:`peak_mib` returns None.
+    """
+
+    def __init__(self) -> None:
+        self.start = None
+        try:
+            with open("/proc/self/clear_refs", "w") as f:
+                f.write("5")
+            self.start = self._read("VmRSS")
+        except OSError:
+            pass
+
+    @staticmethod
+    def _read(field: str) -> float | None:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith(field + ":"):
+                    return int(line.split()[1]) / 1024.0  # kB -> MiB
+        return None
+
+    def peak_mib(self) -> float | None:
+        """MiB of resident memory at the peak since creation, above the start."""
+        if self.start is None:
+            return None
+        try:
+            hwm = self._read("VmHWM")
+        except OSError:
+            return None
+        return None if hwm is None else max(0.0, hwm - self.start)
 
 
 class Engine:

@@ -26,7 +26,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..methods import Skipped, get_method
 from ..params import DEFAULT_N_SEGMENTS
-from .engine import Engine, error_text
+from .engine import Engine, PeakMemory, error_text
 from .grid import Config
 from .results import columns, fmt_value, prepare_file, row_key
 
@@ -131,42 +131,6 @@ def _run_task(task: dict) -> list[dict]:
             row.update(status="failed", error=error_text(exc), seconds=None)
         rows.append(row)
     return rows
-
-
-class PeakMemory:
-    """Peak resident memory of this process since creation, above its start.
-
-    Linux only: resets the kernel's high-water mark (``/proc/self/clear_refs``)
-    and reads ``VmHWM`` / ``VmRSS`` from ``/proc/self/status``. Elsewhere
-    :meth:`peak_mib` returns None.
-    """
-
-    def __init__(self) -> None:
-        self.start = None
-        try:
-            with open("/proc/self/clear_refs", "w") as f:
-                f.write("5")
-            self.start = self._read("VmRSS")
-        except OSError:
-            pass
-
-    @staticmethod
-    def _read(field: str) -> float | None:
-        with open("/proc/self/status") as f:
-            for line in f:
-                if line.startswith(field + ":"):
-                    return int(line.split()[1]) / 1024.0  # kB -> MiB
-        return None
-
-    def peak_mib(self) -> float | None:
-        """MiB of resident memory at the peak since creation, above the start."""
-        if self.start is None:
-            return None
-        try:
-            hwm = self._read("VmHWM")
-        except OSError:
-            return None
-        return None if hwm is None else max(0.0, hwm - self.start)
 
 
 @dataclass
