@@ -13,7 +13,11 @@ call of a compiled kernel, about 0.2-0.3 s, lands in "init"). Peak resident
 memory is the process's own; bytes/face is reported both for the whole
 process and above the resident size right after import and numba's start-up
 (Python, numpy, scipy, numba: about 150 MiB). The paper's Table 1 time of the mesh of comparable
-size (single-threaded C++, 3.2 GHz) is shown beside.
+size (single-threaded C++, 3.2 GHz) is shown beside, and, measured in the same process
+after ours, the graph-segmentation baseline (Felzenszwalb-Huttenlocher with the ScanNet
+Segmentator's weights, on the same faces): its threshold searched until it gives k
+segments, and one run at the Segmentator's default threshold. First, the bunny from the
+command line in a new process (wall clock, 3 runs).
 """
 
 from __future__ import annotations
@@ -45,7 +49,7 @@ def _current_rss() -> int:
         return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 
 
-def one(path: str, k: int, alpha: float, threads: int | None) -> dict:
+def one(path: str, k: int, alpha: float, threads: int | None, baseline: bool = False) -> dict:
     t = time.perf_counter()
     from superfacets import read_mesh, segment
 
@@ -60,17 +64,45 @@ def one(path: str, k: int, alpha: float, threads: int | None) -> dict:
     t_read = time.perf_counter() - t
     r = segment(mesh, k, alpha=alpha, n_threads=threads)
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
-    return dict(faces=mesh.n_faces, superfacets=r.n_segments, n_iter=r.n_iter,
-                passes=r.timings["passes"], converged=r.converged, read=t_read,
-                graph=r.timings["graph"] + r.timings["weights"], init=r.timings["init"],
-                iterations=r.timings["iterations"], total=t_read + r.timings["total"],
-                expansions=r.timings["expansions"], rss0=rss0, peak=peak, import_s=t_import)
+    out = dict(faces=mesh.n_faces, superfacets=r.n_segments, n_iter=r.n_iter,
+               passes=r.timings["passes"], converged=r.converged, read=t_read,
+               graph=r.timings["graph"] + r.timings["weights"], init=r.timings["init"],
+               iterations=r.timings["iterations"], total=t_read + r.timings["total"],
+               expansions=r.timings["expansions"], rss0=rss0, peak=peak, import_s=t_import)
+    if baseline:  # the same faces, in the same process, after ours (its peak is not counted)
+        from superfacets.baselines.graph_segmentation import graph_segmentation
+
+        t = time.perf_counter()
+        labels = graph_segmentation(mesh, 0.01, 20, n_segments=k)  # threshold searched to k
+        out["gs_search"] = time.perf_counter() - t
+        out["gs_segments"] = int(labels.max()) + 1
+        t = time.perf_counter()
+        graph_segmentation(mesh, 0.01, 20)  # one run at the Segmentator's default threshold
+        out["gs_one"] = time.perf_counter() - t
+    return out
 
 
-def child(path: Path, k: int, alpha: float, threads: int | None, env=None) -> dict:
+def cli_seconds(path: Path, k: int, alpha: float, runs: int = 3) -> list[float]:
+    """Wall clock of ``superfacets segment PATH -k K`` in a new process, ``runs`` times."""
+    exe = Path(sys.executable).with_name("superfacets")
+    cmd = [str(exe) if exe.exists() else sys.executable, *([] if exe.exists() else
+           ["-m", "superfacets"]), "segment", str(path), "-k", str(k), "--alpha", str(alpha),
+           "-q"]
+    out = []
+    for _ in range(runs):
+        t = time.perf_counter()
+        subprocess.run(cmd, check=True, capture_output=True)
+        out.append(time.perf_counter() - t)
+    return out
+
+
+def child(path: Path, k: int, alpha: float, threads: int | None, env=None,
+          baseline: bool = False) -> dict:
     cmd = [sys.executable, __file__, "--one", str(path), "-k", str(k), "--alpha", str(alpha)]
     if threads:
         cmd += ["--threads", str(threads)]
+    if baseline:
+        cmd += ["--baseline"]
     out = subprocess.run(cmd, check=True, capture_output=True, text=True,
                          env=None if env is None else {**os.environ, **env})
     return json.loads(out.stdout.strip().splitlines()[-1])
@@ -90,10 +122,13 @@ def main() -> int:
     ap.add_argument("--max-faces", type=float, default=2e6)
     ap.add_argument("--threads", type=int, default=None,
                     help="threads of segment() (default: all cores)")
+    ap.add_argument("--no-baseline", action="store_true",
+                    help="skip the graph-segmentation baseline column")
     ap.add_argument("--one", help=argparse.SUPPRESS)
+    ap.add_argument("--baseline", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.one:
-        print(json.dumps(one(args.one, args.k, args.alpha, args.threads)))
+        print(json.dumps(one(args.one, args.k, args.alpha, args.threads, args.baseline)))
         return 0
     from large_meshes import make
 
@@ -110,9 +145,12 @@ def main() -> int:
                      args.k))
     cols = ["mesh", "faces", "k", "superfacets", "iterations (passes)", "import s", "read s",
             "graph s", "init s", "iterations s", "total s", "s/pass", "peak MiB", "B/face",
-            "B/face above import", "paper s"]
+            "B/face above import", "paper s", "graph segm. s (to k; one run)"]
     print(f"alpha = {args.alpha}; threads = {args.threads or 'all cores'}; one fresh process "
           "per row; total = read + segment\n")
+    cli = cli_seconds(meshes / "bunny.tri.xz", 150, args.alpha)
+    print(f"bunny k = 150 from the command line, new process (superfacets segment ... -q), "
+          f"3 runs: {', '.join(f'{x:.2f}' for x in cli)} s\n")
     print("| " + " | ".join(cols) + " |")
     print("|" + "---|" * len(cols))
     for name, path, k in runs:
@@ -120,14 +158,17 @@ def main() -> int:
             with tempfile.TemporaryDirectory() as empty:  # nothing cached: compile everything
                 r = child(path, k, args.alpha, args.threads, env={"NUMBA_CACHE_DIR": empty})
         else:
-            r = child(path, k, args.alpha, args.threads)
+            r = child(path, k, args.alpha, args.threads,
+                      baseline=not args.no_baseline and k == args.k)
         cells = [name, f"{r['faces']:,}", k, r["superfacets"],
                  f"{r['n_iter']}{'' if r['converged'] else ' (max)'} ({r['passes']})",
                  f"{r['import_s']:.2f}",
                  *(f"{r[s]:.2f}" for s in ("read", "graph", "init", "iterations", "total")),
                  f"{r['iterations'] / max(r['passes'], 1):.3f}", f"{r['peak'] / 2**20:,.0f}",
                  f"{r['peak'] / r['faces']:,.0f}", f"{(r['peak'] - r['rss0']) / r['faces']:,.0f}",
-                 paper_time(r["faces"]) if k == 150 and "cold" not in name else ""]
+                 paper_time(r["faces"]) if k == 150 and "cold" not in name else "",
+                 f"{r['gs_search']:.2f} ({r['gs_segments']}); {r['gs_one']:.2f}"
+                 if "gs_search" in r else ""]
         print("| " + " | ".join(str(c) for c in cells) + " |", flush=True)
     return 0
 
