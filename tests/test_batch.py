@@ -205,7 +205,8 @@ def test_local_cluster_of_two_equals_sequential(corpus, tmp_path):
     assert (s.ok, s.failed) == (12, 1) and "2 worker processes" in s.engine
     assert _table(read_manifest(one)) == _table(read_manifest(two))
     assert _labels(one) == _labels(two)
-    assert all(r["peak_mib"] is not None for r in read_manifest(two) if r["status"] == "ok")
+    # the worker's whole resident memory during the task (Python, numpy, numba: > 50 MiB)
+    assert all(r["peak_mib"] > 50 for r in read_manifest(two) if r["status"] == "ok")
 
 
 def _free_port() -> int:

@@ -42,8 +42,9 @@ __all__ = ["run_batch", "collect_inputs", "output_names", "read_manifest", "Batc
 #: Columns of the manifest, in order: the input's absolute path, its labels file (relative
 #: to the output folder), ok / failed / skipped, the elements labelled (faces, vertices,
 #: points) and how many, the superfacets made, the passes run and whether they converged,
-#: the seconds of the task (read, segment, write), its peak resident memory above the
-#: worker's start (MiB; Linux), the error's one line, and when it finished (UTC).
+#: the seconds of the task (read, segment, write), the worker process's peak resident memory
+#: during the task (MiB, Linux; what ``--memory-limit`` is compared with), the error's one
+#: line, and when it finished (UTC).
 MANIFEST_COLUMNS = ("input", "output", "status", "elements", "n_elements", "segments", "passes",
                     "converged", "seconds", "peak_mib", "error", "finished")
 
@@ -247,7 +248,7 @@ def segment_file(task: dict) -> dict:
     except MemoryError as exc:  # pragma: no cover - depends on the machine
         row.update(status="failed", error=error_text(exc))
     row["seconds"] = round(time.perf_counter() - t0, 4)
-    peak = probe.peak_mib()
+    peak = probe.peak_mib(above_start=False)
     row["peak_mib"] = None if peak is None else round(peak, 1)
     row["finished"] = datetime.now(timezone.utc).isoformat(timespec="seconds")
     return row

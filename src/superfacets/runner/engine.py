@@ -105,15 +105,18 @@ class PeakMemory:
                     return int(line.split()[1]) / 1024.0  # kB -> MiB
         return None
 
-    def peak_mib(self) -> float | None:
-        """MiB of resident memory at the peak since creation, above the start."""
+    def peak_mib(self, above_start: bool = True) -> float | None:
+        """MiB of resident memory at the peak since creation: above the start, or (with
+        ``above_start=False``) the whole process's (what a memory limit sees)."""
         if self.start is None:
             return None
         try:
             hwm = self._read("VmHWM")
         except OSError:
             return None
-        return None if hwm is None else max(0.0, hwm - self.start)
+        if hwm is None:
+            return None
+        return max(0.0, hwm - self.start) if above_start else hwm
 
 
 class Engine:
