@@ -31,6 +31,11 @@ def test_import_and_help_load_neither_numba_nor_scipy():
                           "assert main(['batch', '/no/such/*.off', '-o', '/tmp/x']) == 2; "
                           "assert main(['batch', '.', '-o', '/tmp/x', '--alpha', '-1']) == 2")
     assert not {"numba", "scipy", "trimesh", "dask", "distributed"} & mods
+    # segment: an option out of range, a missing input: no numba either (no warm-up started)
+    mods = _modules_after("from superfacets.cli import main; import superfacets.warmup as w; "
+                          "assert main(['segment', '/no/such.off', '--alpha', '-1']) == 2; "
+                          "assert main(['segment', '/no/such.off']) == 2; assert w._thread is None")
+    assert not {"numba", "scipy", "trimesh"} & mods
 
 
 def test_public_names_resolve_and_are_listed():

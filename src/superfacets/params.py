@@ -186,9 +186,19 @@ def check_threads(n_threads) -> int:
         If it is not an integer in ``1..max_threads()``.
     """
     if n_threads is None:
-        import numba
+        import os
+        import sys
 
-        return int(numba.config.NUMBA_NUM_THREADS)
+        if "numba" in sys.modules:
+            return int(sys.modules["numba"].config.NUMBA_NUM_THREADS)
+        # numba's own rule, without importing numba (checking arguments stays light)
+        try:
+            return max(1, int(os.environ["NUMBA_NUM_THREADS"]))
+        except (KeyError, ValueError):
+            try:
+                return max(1, len(os.sched_getaffinity(0)))
+            except AttributeError:  # pragma: no cover - not Linux
+                return max(1, os.cpu_count() or 1)
     return check_int("n_threads", n_threads, lo=1, hi=max_threads())
 
 

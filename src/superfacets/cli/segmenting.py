@@ -125,14 +125,10 @@ def _summary(name: str, mesh, result, seconds: float, elements: str = "faces") -
 
 def cmd_segment(args) -> int:
     from .. import warmup
-
-    warmup.start()  # numba's start-up in a thread, while the rest is imported and read
-    from ..errors import SuperfacetsError
+    from ..errors import ParameterError, SuperfacetsError
     from ..io import read_input
-    from ..errors import ParameterError
     from ..io.results import JoinedResult, write_result
     from ..params import resolve
-    from ..segmentation import segment, segment_objects
 
     seg_out = check_output(args.output, (), "label file", stdout=True, inputs=(args.mesh,))
     ply_out = check_output(args.colored_mesh, (".ply", ".glb", ".obj"), "the coloured mesh",
@@ -150,8 +146,12 @@ def cmd_segment(args) -> int:
         raise ParameterError("two outputs go to the same file")
     kwargs = dict(method_kwargs(args), **element_kwargs(args))
     resolve(n_segments=args.n_segments, radius=args.radius, **kwargs)  # before the read
+    if Path(args.mesh).is_file():  # no numba work for bad arguments or a missing input
+        warmup.start()  # numba's start-up in a thread, while the rest is imported and read
     t0 = time.perf_counter()
     data = read_input(args.mesh)
+    from ..segmentation import segment, segment_objects
+
     cloud = not hasattr(data, "faces")
     kind = "points" if cloud else (args.elements or "faces")
     if kind != "faces":
