@@ -165,6 +165,8 @@ def test_graph_of_a_triangle_soup_matches_a_plain_construction(seed, n_faces, n_
             assert sorted(g.pairs[e].tolist()) == sorted([f, nb])
     if n_vertices < n_faces:
         assert np.diff(g.indptr).max() > 3  # non-manifold edges were exercised
+    if seed == 1:  # buckets past the insertion sort's size: the merge-sort paths
+        assert np.diff(g.indptr).max() > 32 and (faces == 0).any(axis=1).sum() > 32
 
 
 def test_face_graph_caches_the_terms_of_the_weights(sphere):

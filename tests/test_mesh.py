@@ -93,3 +93,22 @@ def test_one_pass_geometry_equals_the_numpy_expressions_bit_for_bit():
     np.testing.assert_array_equal(mesh.areas, 0.5 * norm)
     np.testing.assert_array_equal(mesh.normals, normals)
     assert (~ok).sum() >= 40 and not mesh.centroids.flags.writeable
+
+
+def test_weight_terms_equal_the_numpy_expressions_bit_for_bit():
+    # the face graph's terms come from a kernel that must repeat numpy exactly
+    rng = np.random.default_rng(3)
+    v = rng.normal(size=(200, 3)) * rng.choice([1e-6, 1.0, 1e4], size=(200, 1))
+    f = rng.integers(0, 200, size=(3000, 3))  # random triangles: many shared edges
+    mesh = Mesh(v, f)
+    g = mesh.graph
+    c, n = mesh.centroids, mesh.normals
+    i, j = g.pairs[:, 0], g.pairs[:, 1]
+    mid = 0.5 * (v[g.edges[:, 0]] + v[g.edges[:, 1]])
+    geo = np.linalg.norm(c[i] - mid, axis=1) + np.linalg.norm(mid - c[j], axis=1)
+    cos = np.clip(np.einsum("ij,ij->i", n[i], n[j]), -1.0, 1.0)
+    concave = np.einsum("ij,ij->i", n[i], c[j] - c[i]) > 0
+    assert g.n_edges > 1000
+    np.testing.assert_array_equal(g.terms.geo, geo)
+    np.testing.assert_array_equal(g.terms.cos, cos)
+    np.testing.assert_array_equal(g.terms.concave, concave)

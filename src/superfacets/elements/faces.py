@@ -91,12 +91,15 @@ def face_graph(mesh) -> ElementGraph:
         return lambda sl: np.linalg.norm(v[edges[sl, 1]] - v[edges[sl, 0]], axis=1)
 
     def terms_of(sl: slice):
-        pairs, edges = topo.pairs[sl], topo.edges[sl]
-        i, j = pairs[:, 0], pairs[:, 1]
-        mid = 0.5 * (v[edges[:, 0]] + v[edges[:, 1]])
-        geo = np.linalg.norm(c[i] - mid, axis=1) + np.linalg.norm(mid - c[j], axis=1)
-        cos = np.clip(np.einsum("ij,ij->i", n[i], n[j]), -1.0, 1.0)
-        concave = np.einsum("ij,ij->i", n[i], c[j] - c[i]) > 0
+        # one pass of a kernel; the same operations as the numpy expressions
+        #   mid = 0.5 * (v[a] + v[b]); geo = |c_i - mid| + |mid - c_j|,
+        #   cos = clip(n_i . n_j, -1, 1), concave = n_i . (c_j - c_i) > 0
+        from .._kernels.geometry import face_terms
+
+        lo, hi = sl.indices(topo.pairs.shape[0])[:2]
+        geo, cos = np.empty(hi - lo), np.empty(hi - lo)
+        concave = np.empty(hi - lo, dtype=bool)
+        face_terms(v, c, n, topo.pairs, topo.edges, lo, hi, geo, cos, concave)
         return geo, cos, concave
 
     used = v[mesh.referenced_vertices]
@@ -128,6 +131,8 @@ def build_face_graph(faces: np.ndarray, n_vertices: int, offsets: np.ndarray | N
     -------
     FaceAdjacency
     """
+    from .._kernels.adjacency import first_of_each_pair, order_by_two_keys
+
     if offsets is None:  # triangles: half-edge h = 3 * face + corner
         m = faces.shape[0]
         n_half_edges = 3 * m
@@ -156,26 +161,23 @@ def build_face_graph(faces: np.ndarray, n_vertices: int, offsets: np.ndarray | N
 
         def face_of(h):
             return owner[h]
-    valid = np.flatnonzero(a != b).astype(itype)  # collapsed edges join nothing
-    key = a[valid].astype(np.int64)
-    key *= np.int64(n_vertices)
-    key += b[valid]
-    order = np.argsort(key, kind="stable")
-    skey = key[order]
-    del key
-    half = valid[order]  # half-edge ids, grouped by edge
-    del valid, order
+    # half-edges grouped by edge, in (a, b) order, collapsed edges (a == b) left out:
+    # a counting sort on a, then b within each vertex's few half-edges
+    half, _ = order_by_two_keys(a, b, int(n_vertices), a == b)
+    half = half.astype(itype)
     sface = face_of(half)
-    n_half = skey.shape[0]
+    n_half = half.shape[0]
     if n_half:
+        ha, hb = a[half], b[half]
         brk = np.empty(n_half, dtype=bool)
         brk[0] = True
-        np.not_equal(skey[1:], skey[:-1], out=brk[1:])
+        np.not_equal(ha[1:], ha[:-1], out=brk[1:])
+        brk[1:] |= hb[1:] != hb[:-1]
+        del ha, hb
         starts = np.flatnonzero(brk)
         del brk
     else:
         starts = np.zeros(0, np.int64)
-    del skey
     sizes = np.diff(np.r_[starts, n_half])
 
     # boundary edges: groups of size 1
@@ -208,16 +210,10 @@ def build_face_graph(faces: np.ndarray, n_vertices: int, offsets: np.ndarray | N
         lo, hi, he = lo[keep], hi[keep], he[keep]
     del keep
     # one dual edge per face pair: the first in edge-key order (smallest vertex pair)
-    pkey = lo.astype(np.int64) * np.int64(m) + hi
     ekey = a[he].astype(np.int64) * np.int64(n_vertices) + b[he]
-    o = np.lexsort((ekey, pkey))
+    first = first_of_each_pair(lo, hi, ekey, m)
     del ekey
-    pkey, lo, hi, he = pkey[o], lo[o], hi[o], he[o]
-    del o
-    first = np.r_[True, pkey[1:] != pkey[:-1]] if pkey.size else np.zeros(0, bool)
-    del pkey
-    if not first.all():
-        lo, hi, he = lo[first], hi[first], he[first]
+    lo, hi, he = lo[first], hi[first], he[first]
     del first
     pairs = np.stack([lo, hi], axis=1).astype(np.int64)
     edges = np.stack([a[he], b[he]], axis=1).astype(np.int64)

@@ -44,20 +44,12 @@ def adjacency_csr(lo: np.ndarray, hi: np.ndarray, n: int
     dual_edge : (2 e,) int32 ndarray (int64 beyond 2**31 entries)
         The pair ``t`` of each CSR entry.
     """
+    from .._kernels.adjacency import csr_of_pairs
+
     e = lo.shape[0]
-    rows = np.concatenate([lo, hi])
-    cols = np.concatenate([hi, lo])
-    key = rows.astype(np.int64) * np.int64(n)
-    key += cols
-    o = np.argsort(key)  # keys are distinct (pairs are): any sort gives the same order
-    del key
-    indptr = np.zeros(n + 1, dtype=np.int64)
-    np.cumsum(np.bincount(rows, minlength=n), out=indptr[1:])
-    del rows
-    indices = np.ascontiguousarray(cols[o], dtype=np.int32)
-    del cols
-    dual_edge = o.astype(np.int32 if 2 * e < 2**31 - 1 else np.int64)
-    dual_edge[dual_edge >= e] -= e  # entry t of [lo->hi, hi->lo] is pair t mod e
+    indices = np.empty(2 * e, dtype=np.int32)
+    dual_edge = np.empty(2 * e, dtype=np.int32 if 2 * e < 2**31 - 1 else np.int64)
+    indptr = csr_of_pairs(lo, hi, int(n), indices, dual_edge)
     return indptr, indices, dual_edge
 
 

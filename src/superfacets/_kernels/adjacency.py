@@ -1,0 +1,137 @@
+"""Linear-time sorts of the graph builds (private kernels of :mod:`superfacets.elements`).
+
+Each is a counting sort on a first key with small integer range (a vertex or
+an element index), then a sort of each bucket on the second key: insertion
+sort for the usual few entries, a stable merge sort for a large bucket (a
+vertex shared by thousands of faces). They give exactly the order a stable
+``np.argsort`` of the combined key gives, without sorting ``3 m`` 64-bit keys.
+"""
+
+import numpy as np
+from numba import njit
+
+_SMALL = 32  # buckets up to this size: insertion sort
+
+
+@njit(cache=True, error_model="numpy")
+def _sort_bucket(order, lo, hi, key2):
+    """Sort ``order[lo:hi]`` by ``key2[order[.]]``, stably."""
+    if hi - lo <= _SMALL:
+        for i in range(lo + 1, hi):
+            x = order[i]
+            kx = key2[x]
+            j = i - 1
+            while j >= lo and key2[order[j]] > kx:
+                order[j + 1] = order[j]
+                j -= 1
+            order[j + 1] = x
+    else:
+        part = order[lo:hi].copy()
+        o = np.argsort(key2[part], kind="mergesort")
+        for i in range(hi - lo):
+            order[lo + i] = part[o[i]]
+
+
+@njit(cache=True, error_model="numpy")
+def order_by_two_keys(key1, key2, n_key1, skip):
+    """Indices ``t`` (where ``skip[t]`` is False) ordered by ``(key1[t], key2[t], t)``.
+
+    ``key1`` in ``0..n_key1-1``. Same as a stable ``np.argsort`` of
+    ``key1 * K + key2`` over the kept entries.
+
+    Returns
+    -------
+    order : (n_kept,) int64 ndarray
+    starts : (n_key1 + 1,) int64 ndarray
+        Entries with ``key1 == v`` are ``order[starts[v]:starts[v + 1]]``.
+    """
+    n = key1.shape[0]
+    starts = np.zeros(n_key1 + 1, dtype=np.int64)
+    for t in range(n):
+        if not skip[t]:
+            starts[key1[t] + 1] += 1
+    for v in range(n_key1):
+        starts[v + 1] += starts[v]
+    order = np.empty(starts[n_key1], dtype=np.int64)
+    fill = starts[:n_key1].copy()
+    for t in range(n):
+        if not skip[t]:
+            k = key1[t]
+            order[fill[k]] = t
+            fill[k] += 1
+    for v in range(n_key1):
+        if starts[v + 1] - starts[v] > 1:
+            _sort_bucket(order, starts[v], starts[v + 1], key2)
+    return order, starts
+
+
+@njit(cache=True, error_model="numpy")
+def csr_of_pairs(lo, hi, n, indices, dual_edge):
+    """Symmetric CSR of the distinct pairs ``(lo[t], hi[t])``: fills ``indices``
+    (neighbours ascending per row) and ``dual_edge`` (the pair of each entry),
+    both of length ``2 e``; returns ``indptr``."""
+    e = lo.shape[0]
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    for t in range(e):
+        indptr[lo[t] + 1] += 1
+        indptr[hi[t] + 1] += 1
+    for v in range(n):
+        indptr[v + 1] += indptr[v]
+    fill = indptr[:n].copy()
+    for t in range(e):
+        a = lo[t]
+        b = hi[t]
+        p = fill[a]
+        indices[p] = b
+        dual_edge[p] = t
+        fill[a] = p + 1
+        p = fill[b]
+        indices[p] = a
+        dual_edge[p] = t
+        fill[b] = p + 1
+    for v in range(n):
+        s = indptr[v]
+        f = indptr[v + 1]
+        if f - s <= _SMALL:
+            for i in range(s + 1, f):
+                x = indices[i]
+                d = dual_edge[i]
+                j = i - 1
+                while j >= s and indices[j] > x:
+                    indices[j + 1] = indices[j]
+                    dual_edge[j + 1] = dual_edge[j]
+                    j -= 1
+                indices[j + 1] = x
+                dual_edge[j + 1] = d
+        else:
+            o = np.argsort(indices[s:f], kind="mergesort")
+            ind = indices[s:f].copy()
+            de = dual_edge[s:f].copy()
+            for i in range(f - s):
+                indices[s + i] = ind[o[i]]
+                dual_edge[s + i] = de[o[i]]
+    return indptr
+
+
+@njit(cache=True, error_model="numpy")
+def first_of_each_pair(lo, hi, ekey, n):
+    """One entry per distinct pair ``(lo[t], hi[t])``, ``lo`` in ``0..n-1``: the
+    one of smallest ``ekey`` (then smallest ``t``), in ``(lo, hi)`` order. The
+    same as a stable ``np.lexsort((ekey, lo * n + hi))`` keeping the first of each pair."""
+    order, _ = order_by_two_keys(lo, hi, n, np.zeros(lo.shape[0], dtype=np.bool_))
+    keep = np.empty(order.shape[0], dtype=np.int64)
+    nk = 0
+    i = 0
+    while i < order.shape[0]:
+        t = order[i]
+        best = t
+        j = i + 1
+        while j < order.shape[0] and lo[order[j]] == lo[t] and hi[order[j]] == hi[t]:
+            u = order[j]
+            if ekey[u] < ekey[best]:
+                best = u
+            j += 1
+        keep[nk] = best
+        nk += 1
+        i = j
+    return keep[:nk]
