@@ -61,3 +61,20 @@ def test_already_connected_is_just_relabelled():
     out = enforce_connectivity(mesh, labels)
     np.testing.assert_array_equal(out, relabel_dense(labels))
     assert set(out.tolist()) == {0, 1}
+
+
+def test_pieces_are_numbered_as_scipy_numbers_components(sphere):
+    # the kernel's pieces against scipy's connected components of the same-label subgraph
+    from scipy.sparse import coo_array
+    from scipy.sparse.csgraph import connected_components
+
+    g = sphere.graph
+    n = g.n_elements
+    i, j = g.pairs[:, 0], g.pairs[:, 1]
+    for labels in (np.random.default_rng(1).integers(0, 4, n), np.zeros(n, dtype=np.int64),
+                   (sphere.centroids[:, 0] > 0).astype(np.int64)):
+        same = labels[i] == labels[j]
+        adj = coo_array((np.ones(int(same.sum()), dtype=np.int8), (i[same], j[same])),
+                        shape=(n, n))
+        ref = connected_components(adj.tocsr(), directed=False)[1]
+        np.testing.assert_array_equal(label_components(g, labels), ref)

@@ -112,3 +112,5 @@ def test_weight_terms_equal_the_numpy_expressions_bit_for_bit():
     np.testing.assert_array_equal(g.terms.geo, geo)
     np.testing.assert_array_equal(g.terms.cos, cos)
     np.testing.assert_array_equal(g.terms.concave, concave)
+    np.testing.assert_array_equal(g.lengths, np.linalg.norm(v[g.edges[:, 1]] - v[g.edges[:, 0]],
+                                                            axis=1))

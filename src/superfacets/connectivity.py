@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.sparse import coo_array
-from scipy.sparse.csgraph import connected_components
 
 from .elements.graph import as_element_graph
 from .labels import check_labels, relabel_dense
@@ -40,12 +39,11 @@ def label_components(graph, labels: np.ndarray) -> np.ndarray:
     """
     graph = as_element_graph(graph)
     labels = check_labels(labels, graph.n_elements, per=graph.element)
-    i, j = graph.pairs[:, 0], graph.pairs[:, 1]
-    same = labels[i] == labels[j]
-    m = graph.n_elements
-    adj = coo_array((np.ones(int(same.sum()), dtype=np.int8), (i[same], j[same])), shape=(m, m))
-    _, comp = connected_components(adj.tocsr(), directed=False)
-    return comp.astype(np.int64)
+    from ._kernels.adjacency import same_label_components
+
+    # a depth-first search per piece over the graph's CSR, pieces numbered by their
+    # lowest element (as scipy's connected_components of the same-label subgraph)
+    return same_label_components(graph.indptr, graph.indices, np.ascontiguousarray(labels))
 
 
 def enforce_connectivity(graph, labels: np.ndarray, centers: np.ndarray | None = None) -> np.ndarray:

@@ -28,14 +28,18 @@ def bucket_width(weights: np.ndarray) -> tuple[float, int]:
     """Bucket width of the expansion queue: ``(1 / width, number of buckets)``.
 
     A quarter of the median edge weight (measured: 1.0 faces processed per
-    face reached, against 6.4 for a plain FIFO); wider if more than
+    face reached, against 6.4 for a plain FIFO; the median of a strided
+    sample of ``2**17`` weights on large graphs); wider if more than
     ``2**16`` buckets would be needed to span the largest weight. Any width
     gives the same distances (see the expansion kernel's notes).
     """
     if weights.shape[0] == 0:
         return 1.0, 2
     wmax = float(weights.max())
-    pos = weights[weights > 0]
+    # the median of an evenly strided sample of at most ~2**17 weights: any width gives
+    # the same distances, so an estimate does (a full median costs 0.35 s at 13M entries)
+    sample = weights[::max(1, weights.shape[0] >> 17)]
+    pos = sample[sample > 0]
     width = 0.25 * float(np.median(pos)) if pos.shape[0] else 1.0
     width = max(width, wmax / (_MAX_BUCKETS - 2))
     if not (np.isfinite(width) and width > 0):

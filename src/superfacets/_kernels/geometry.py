@@ -157,3 +157,16 @@ def face_terms(vertices, centroids, normals, pairs, edges, lo, hi, geo, cos, con
              + normals[i, 2] * (centroids[j, 2] - centroids[i, 2])) \
             + normals[i, 1] * (centroids[j, 1] - centroids[i, 1])
         concave[u] = s > 0
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def edge_lengths(vertices, edges, out):
+    """``out[t] = |v[edges[t, 1]] - v[edges[t, 0]]|``, as ``np.linalg.norm(axis=1)``
+    computes it: ``sqrt((x*x + y*y) + z*z)``."""
+    for t in range(edges.shape[0]):
+        a = edges[t, 0]
+        b = edges[t, 1]
+        x = vertices[b, 0] - vertices[a, 0]
+        y = vertices[b, 1] - vertices[a, 1]
+        z = vertices[b, 2] - vertices[a, 2]
+        out[t] = np.sqrt(x * x + y * y + z * z)

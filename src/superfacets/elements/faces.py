@@ -22,7 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .graph import ElementGraph, adjacency_csr, chunked
+from .graph import ElementGraph, adjacency_csr
 
 __all__ = ["FaceAdjacency", "build_face_graph", "face_graph"]
 
@@ -87,8 +87,12 @@ def face_graph(mesh) -> ElementGraph:
     v = mesh.vertices
     c, n = mesh.centroids, mesh.normals
 
-    def edge_length(edges):
-        return lambda sl: np.linalg.norm(v[edges[sl, 1]] - v[edges[sl, 0]], axis=1)
+    def edge_length(edges):  # |v_b - v_a| as np.linalg.norm(axis=1), in one kernel pass
+        from .._kernels.geometry import edge_lengths
+
+        out = np.empty(edges.shape[0])
+        edge_lengths(v, edges, out)
+        return out
 
     def terms_of(sl: slice):
         # one pass of a kernel; the same operations as the numpy expressions
@@ -107,9 +111,9 @@ def face_graph(mesh) -> ElementGraph:
         kind="faces", positions=c, sizes=mesh.areas, normals=n, centroid=mesh.centroid,
         lower=used.min(axis=0), diagonal=mesh.diagonal, pairs=topo.pairs,
         indptr=topo.indptr, indices=topo.indices, dual_edge=topo.dual_edge,
-        lengths=chunked(topo.pairs.shape[0], edge_length(topo.edges)),
+        lengths=edge_length(topo.edges),
         boundary_elements=topo.boundary_faces,
-        boundary_lengths=chunked(topo.boundary_faces.shape[0], edge_length(topo.boundary_edges)),
+        boundary_lengths=edge_length(topo.boundary_edges),
         edges=topo.edges, boundary_edges=topo.boundary_edges, terms_of=terms_of)
 
 
