@@ -1,6 +1,7 @@
 """Multi-million-face inputs made reproducibly from the real meshes, cached as binary PLY.
 
 Usage: python benchmarks/large_meshes.py [--levels 1 2 3 4] [--base hand_olivier]
+       python benchmarks/large_meshes.py --psb LEVEL [--per-category N]
 
 Each level is one midpoint subdivision (every triangle into four, trimesh)
 of the previous one followed by one step of Laplacian smoothing of the new
@@ -10,6 +11,13 @@ is not piecewise flat. From ``hand_olivier`` (105,860 faces): level 1 gives
 has 7.2M) and 4 gives 27M. Files go to
 ``$SUPERFACETS_CACHE/large/<base>_x<4^level>.ply`` (default
 ``~/.cache/superfacets``), outside the repository, and are reused.
+
+``--psb LEVEL`` makes the Princeton benchmark at a finer resolution: each
+mesh (the first ``--per-category`` of each category, or all) subdivided
+``LEVEL`` times the same way, with every human segmentation carried to the
+child faces, in ``<cache>/psb_x<4^LEVEL>/{off,seg}`` (a folder
+``superfacets experiment --psb`` takes). It judges what only acts on fine
+meshes (coarse-to-fine, ``center_tol``) against the ground truth.
 """
 
 from __future__ import annotations
@@ -60,13 +68,76 @@ def make(base: str, level: int, cache: Path) -> Path:
     return out
 
 
+def subdivide(mesh, level: int):
+    """``mesh`` subdivided ``level`` times (as :func:`make`); also the original
+    face of each new face."""
+    import trimesh
+
+    v, f = mesh.vertices, mesh.faces
+    parent = np.arange(f.shape[0])
+    for _ in range(level):
+        n_old = v.shape[0]
+        v, f2, index = trimesh.remesh.subdivide(v, f, return_index=True)
+        child_parent = np.empty(f2.shape[0], dtype=np.int64)
+        for old, new in index.items():
+            child_parent[new] = old
+        v = _smooth_new(np.asarray(v, dtype=np.float64), np.asarray(f2), n_old)
+        f = np.asarray(f2)
+        parent = parent[child_parent]
+    return v, f, parent
+
+
+def make_psb(level: int, per_category: int | None, cache: Path) -> Path:
+    """The benchmark subdivided ``level`` times, in ``cache/psb_x<4^level>``."""
+    from superfacets import read_mesh, write_mesh
+    from superfacets.datasets.psb import list_meshes
+    from superfacets.io.labels import read_labels
+
+    from superfacets import Mesh
+
+    out = cache / f"psb_x{4 ** level}"
+    meshes = list_meshes()
+    if per_category:
+        seen: dict[str, int] = {}
+        keep = []
+        for bm in sorted(meshes, key=lambda b: b.id):
+            if seen.get(bm.category, 0) < per_category:
+                seen[bm.category] = seen.get(bm.category, 0) + 1
+                keep.append(bm)
+        meshes = keep
+    for bm in meshes:
+        off = out / "off" / f"{bm.id}.off"
+        if off.exists():
+            continue
+        mesh = read_mesh(bm.path)
+        v, f, parent = subdivide(mesh, level)
+        segdir = out / "seg" / "Benchmark" / str(bm.id)
+        segdir.mkdir(parents=True, exist_ok=True)
+        for sp in bm.seg_paths:
+            gt = read_labels(sp, n_faces=mesh.n_faces)
+            np.savetxt(segdir / sp.name, gt[parent], fmt="%d")
+        off.parent.mkdir(parents=True, exist_ok=True)
+        tmp = off.with_suffix(".tmp.off")
+        write_mesh(tmp, Mesh(v, f.astype(np.int64)))
+        tmp.replace(off)
+        print(f"{off}: {f.shape[0]:,} faces", file=sys.stderr)
+    return out
+
+
 def main() -> int:
     from superfacets.datasets.psb import default_cache
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--levels", type=int, nargs="+", default=[1, 2, 3, 4])
     ap.add_argument("--base", default="hand_olivier")
+    ap.add_argument("--psb", type=int, metavar="LEVEL",
+                    help="make the benchmark subdivided LEVEL times instead")
+    ap.add_argument("--per-category", type=int, metavar="N",
+                    help="with --psb: only the first N meshes of each category")
     args = ap.parse_args()
+    if args.psb:
+        print(make_psb(args.psb, args.per_category, default_cache()))
+        return 0
     for level in args.levels:
         print(make(args.base, level, default_cache() / "large"))
     return 0

@@ -68,7 +68,10 @@ def one(path: str, k: int, alpha: float, threads: int | None, baseline: bool = F
                passes=r.timings["passes"], converged=r.converged, read=t_read,
                graph=r.timings["graph"] + r.timings["weights"], init=r.timings["init"],
                iterations=r.timings["iterations"], total=t_read + r.timings["total"],
-               expansions=r.timings["expansions"], rss0=rss0, peak=peak, import_s=t_import)
+               expansions=r.timings["expansions"], rss0=rss0, peak=peak, import_s=t_import,
+               coarse=r.timings.get("coarse", 0.0),
+               coarse_elements=r.timings.get("coarse_elements", 0),
+               coarse_passes=r.timings.get("coarse_passes", 0))
     if baseline:  # the same faces, in the same process, after ours (its peak is not counted)
         from superfacets.baselines.graph_segmentation import graph_segmentation
 
@@ -124,6 +127,11 @@ def main() -> int:
                     help="threads of segment() (default: all cores)")
     ap.add_argument("--no-baseline", action="store_true",
                     help="skip the graph-segmentation baseline column")
+    ap.add_argument("--rows", default="",
+                    help="only the rows whose name contains one of these comma-separated "
+                         "words (e.g. x64)")
+    ap.add_argument("--no-cli", action="store_true",
+                    help="skip the bunny from the command line")
     ap.add_argument("--one", help=argparse.SUPPRESS)
     ap.add_argument("--baseline", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
@@ -143,14 +151,19 @@ def main() -> int:
             break
         runs.append((f"hand x{4 ** level}", make("hand_olivier", level, default_cache() / "large"),
                      args.k))
-    cols = ["mesh", "faces", "k", "superfacets", "iterations (passes)", "import s", "read s",
-            "graph s", "init s", "iterations s", "total s", "s/pass", "peak MiB", "B/face",
+    if args.rows:
+        words = [w for w in args.rows.split(",") if w]
+        runs = [r for r in runs if any(w in r[0] for w in words)]
+    cols = ["mesh", "faces", "k", "superfacets", "iterations (passes)",
+            "coarse: clusters, passes, s", "import s", "read s",
+            "graph s", "init s (coarse incl.)", "iterations s", "total s", "s/pass", "peak MiB", "B/face",
             "B/face above import", "paper s", "graph segm. s (to k; one run)"]
     print(f"alpha = {args.alpha}; threads = {args.threads or 'all cores'}; one fresh process "
           "per row; total = read + segment\n")
-    cli = cli_seconds(meshes / "bunny.tri.xz", 150, args.alpha)
-    print(f"bunny k = 150 from the command line, new process (superfacets segment ... -q), "
-          f"3 runs: {', '.join(f'{x:.2f}' for x in cli)} s\n")
+    if not args.no_cli:
+        cli = cli_seconds(meshes / "bunny.tri.xz", 150, args.alpha)
+        print(f"bunny k = 150 from the command line, new process (superfacets segment ... -q), "
+              f"3 runs: {', '.join(f'{x:.2f}' for x in cli)} s\n")
     print("| " + " | ".join(cols) + " |")
     print("|" + "---|" * len(cols))
     for name, path, k in runs:
@@ -162,6 +175,8 @@ def main() -> int:
                       baseline=not args.no_baseline and k == args.k)
         cells = [name, f"{r['faces']:,}", k, r["superfacets"],
                  f"{r['n_iter']}{'' if r['converged'] else ' (max)'} ({r['passes']})",
+                 f"{r['coarse_elements']:,}, {r['coarse_passes']}, {r['coarse']:.2f}"
+                 if r["coarse_elements"] else "",
                  f"{r['import_s']:.2f}",
                  *(f"{r[s]:.2f}" for s in ("read", "graph", "init", "iterations", "total")),
                  f"{r['iterations'] / max(r['passes'], 1):.3f}", f"{r['peak'] / 2**20:,.0f}",

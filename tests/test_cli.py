@@ -41,6 +41,7 @@ def test_header_option(tmp_path, small_off, capsys):
     assert capsys.readouterr().out == ""
     text = seg.read_text()
     assert "# parameters:" in text and "init=grid" in text and "# iterations:" in text
+    assert "center_tol=0.05" in text and "coarsen=1" in text  # the resolved tolerances
     assert read_labels(seg, n_faces=5120).shape == (5120,)
 
 
@@ -52,6 +53,8 @@ def test_header_option(tmp_path, small_off, capsys):
     (["segment", "{off}", "--alpha", "-1"], "alpha must be a finite number in [0, 1e+12]"),
     (["segment", "{off}", "-o", "{nodir}"], "does not exist"),
     (["segment", "{off}", "--colored-mesh", "{txt}"], "must end in .ply"),
+    (["segment", "{off}", "--center-tol", "1.5"], "center_tol must be a finite number in [0, 1]"),
+    (["segment", "{off}", "--coarsen", "0"], "coarsen must be an integer >= 1"),
 ])
 def test_bad_input_one_line_exit_2_no_output(tmp_path, small_off, capsys, args, match):
     bad = tmp_path / "bad.off"
@@ -80,7 +83,8 @@ def test_help_lists_every_option_with_default(capsys):
         main(["segment", "--help"])
     text = " ".join(capsys.readouterr().out.split())
     for opt in ["-k", "--radius", "--alpha", "--eta-convex", "--init", "--window", "--max-iter",
-                "-o", "--header", "--colored-mesh", "--assignment", "--no-connectivity"]:
+                "-o", "--header", "--colored-mesh", "--assignment", "--no-connectivity",
+                "--tol", "--center-tol", "--coarsen"]:
         assert opt in text
     assert "(default: 200)" in text and "(default: 0.2)" in text and "(default: 50)" in text
 

@@ -181,9 +181,15 @@ def get_method(name: str) -> Method:
 # --- the built-in methods ------------------------------------------------------------
 
 
-def _run_superfacets(mesh, n_segments, *, cache, seed, weighting="paper", **params):
+def _auto(value, kind):
+    """A registry value of ``center_tol`` / ``coarsen``: ``"auto"`` is None."""
+    return None if value in (None, "auto") else kind(value)
 
-    r = segment(mesh, n_segments, weighting=weighting, **params)
+
+def _run_superfacets(mesh, n_segments, *, cache, seed, weighting="paper", center_tol="auto",
+                     coarsen="auto", **params):
+    r = segment(mesh, n_segments, weighting=weighting, center_tol=_auto(center_tol, float),
+                coarsen=_auto(coarsen, int), **params)
     return MethodRun(r.labels, r.n_iter, r.converged)
 
 
@@ -230,7 +236,7 @@ def _run_vsa(mesh, n_segments, *, cache, seed, **params):
 
 _SF_DEFAULTS = dict(alpha=DEFAULTS.alpha, eta_convex=DEFAULTS.eta_convex, init=INITS[0],
                     window=DEFAULTS.window, max_iter=DEFAULTS.max_iter, tol=DEFAULTS.tol,
-                    cleanup=DEFAULTS.cleanup)
+                    center_tol="auto", coarsen="auto", cleanup=DEFAULTS.cleanup)
 register_method(
     "superfacets", _run_superfacets, defaults=_SF_DEFAULTS,
     sweep={"alpha": DEFAULT_ALPHAS},

@@ -21,7 +21,8 @@ import numpy as np
 from .errors import ParameterError
 
 __all__ = ["SegmentParams", "DEFAULTS", "INITS", "ASSIGNMENTS", "WEIGHTINGS", "ELEMENTS",
-           "WEIGHTING_ALPHA", "DEFAULT_N_SEGMENTS", "DEFAULT_ALPHAS", "resolve", "check_int",
+           "WEIGHTING_ALPHA", "DEFAULT_CENTER_TOL", "COARSE_MIN_PER_SEGMENT",
+           "COARSE_PER_SEGMENT", "DEFAULT_N_SEGMENTS", "DEFAULT_ALPHAS", "resolve", "check_int",
            "check_number", "check_positive", "check_nonneg", "check_choice",
            "check_n_segments", "check_threads", "check_bool", "max_threads"]
 
@@ -46,6 +47,13 @@ MAX_WINDOW = 1e3
 #: The paper's sweep (Fig. 4): numbers of superfacets and alphas.
 DEFAULT_N_SEGMENTS = (50, 100, 150, 200, 250, 300)
 DEFAULT_ALPHAS = (0.0, 100.0, 200.0, 500.0, 1000.0)
+#: ``center_tol`` when ``tol > 0`` and none is given (fraction of the superfacet radius).
+DEFAULT_CENTER_TOL = 0.05
+#: Automatic coarse-to-fine (``coarsen=None``, ``tol > 0``) runs where a superfacet holds
+#: at least this many elements ...
+COARSE_MIN_PER_SEGMENT = 4000
+#: ... and leaves about this many clusters per superfacet.
+COARSE_PER_SEGMENT = 1000
 
 
 @dataclass(frozen=True)
@@ -68,6 +76,8 @@ class SegmentParams:
     enforce_connectivity: bool = True
     cleanup: bool = False
     tol: float = 0.001
+    center_tol: float | None = None
+    coarsen: int | None = None
     progress: bool = False
     n_threads: int | None = None
     elements: str | None = None
@@ -253,7 +263,11 @@ def resolve(**params) -> SegmentParams:
         assignment=check_choice("assignment", p.assignment, ASSIGNMENTS),
         enforce_connectivity=check_bool("enforce_connectivity", p.enforce_connectivity),
         cleanup=check_bool("cleanup", p.cleanup),
-        tol=check_number("tol", p.tol, 0.0, 1.0), progress=bool(p.progress),
+        tol=check_number("tol", p.tol, 0.0, 1.0),
+        center_tol=None if p.center_tol is None else check_number("center_tol", p.center_tol,
+                                                                  0.0, 1.0),
+        coarsen=None if p.coarsen is None else check_int("coarsen", p.coarsen, lo=1),
+        progress=bool(p.progress),
         n_threads=check_threads(p.n_threads),
         elements=None if p.elements is None else check_choice("elements", p.elements, ELEMENTS),
         n_neighbors=check_int("n_neighbors", p.n_neighbors, lo=1, hi=MAX_NEIGHBORS),

@@ -95,7 +95,7 @@ class Iteration:
 
 def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
             positions: np.ndarray, max_iter: int, *, jump_cycles: bool = True,
-            tol: float = 0.0, bar=None) -> Iteration:
+            tol: float = 0.0, min_move: float = 0.0, bar=None) -> Iteration:
     """Alternate classification and center update (paper section 3.1).
 
     Parameters
@@ -162,6 +162,8 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
                 converged = by_tol = True
                 break
         moved = update_centers(label, k_now, sizes, positions, used)
+        if min_move > 0:
+            hold_small_moves(moved, used, positions, min_move)
         n_moved = int((moved != used).sum())
         if bar is not None:
             bar.update(1)
@@ -181,6 +183,20 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
     return Iteration(label=label, centers=used, n_iter=n_iter, converged=converged,
                      n_orphan_seeds=n_orphans, n_passes=n_passes, cycle_period=period,
                      expansions=n_expanded, changed=changed, stopped_by_tol=by_tol)
+
+
+def hold_small_moves(new: np.ndarray, old: np.ndarray, positions: np.ndarray,
+                     min_move: float) -> int:
+    """Keep in place (``new[s] = old[s]``) each center the update moved by
+    less than ``min_move`` (mesh units, between element positions); return
+    how many were kept."""
+    s = np.flatnonzero((new != old) & (new >= 0) & (old >= 0))
+    if s.shape[0] == 0:
+        return 0
+    step = positions[new[s]] - positions[old[s]]
+    small = s[np.einsum("ij,ij->i", step, step) < min_move * min_move]
+    new[small] = old[small]
+    return int(small.shape[0])
 
 
 def final_centers(labels: np.ndarray, old_centers: np.ndarray, sizes: np.ndarray,

@@ -29,10 +29,10 @@ from .errors import ParameterError
 from .cleanup import clean_boundaries
 from .connectivity import enforce_connectivity as _enforce_connectivity
 from .expansion import Workspaces
-from .initialization import initial_centers
 from .labels import relabel_dense
 from .elements.inputs import elements_of
 from .mesh import as_mesh
+from .multilevel import start_centers
 from .params import DEFAULTS, SegmentParams, check_n_segments, resolve
 from .passes import final_centers, iterate
 from .weights import csr_weights, edge_weights
@@ -99,7 +99,9 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
                 max_iter: int = _D.max_iter, weighting: str = _D.weighting,
                 assignment: str = _D.assignment,
                 enforce_connectivity: bool = _D.enforce_connectivity,
-                cleanup: bool = _D.cleanup, tol: float = _D.tol, progress: bool = _D.progress,
+                cleanup: bool = _D.cleanup, tol: float = _D.tol,
+                center_tol: float | None = _D.center_tol, coarsen: int | None = _D.coarsen,
+                progress: bool = _D.progress,
                 n_threads: int | None = _D.n_threads, elements: str | None = _D.elements,
                 n_neighbors: int = _D.n_neighbors,
                 neighbor_radius: float | None = _D.neighbor_radius) -> np.ndarray:
@@ -165,7 +167,20 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
         center moves, else at ``max_iter``), bit for bit. The default stops
         about a quarter of the passes earlier with undersegmentation error and
         compactness within 0.05 % of ``tol=0`` on the 300 benchmark meshes
-        (``docs/benchmarks.md``).
+        (``docs/benchmarks.md``). ``tol=0`` also turns ``center_tol`` and
+        ``coarsen`` off unless they are given.
+    center_tol : float, optional
+        In ``[0, 1]``: a center that the update would move by less than
+        ``center_tol * r`` (``r`` the superfacet radius) stays where it is.
+        Default: 0.05 when ``tol > 0``, else 0 (within 0.25 % of ``tol=0``
+        on the 300 benchmark meshes, ``docs/benchmarks.md``).
+    coarsen : int, optional
+        Coarse-to-fine (``superfacets.multilevel``): first run on clusters of
+        about ``coarsen`` elements (Voronoi cells in the weighted graph), then
+        on every element from the centers found there; capped at ``n / (8
+        k)``; 1 turns it off. Default: when ``tol > 0`` and a superfacet holds
+        at least 4,000 elements, what leaves about 1,000 clusters per
+        superfacet (6.8M faces at ``k=150``: 45), else off.
     progress : bool, default False
         Show a progress bar on stderr: the set-up stages by name (face graph,
         weights, init), then the iterations.
@@ -226,7 +241,8 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
     return segment(mesh, n_segments, radius=radius, alpha=alpha, eta_convex=eta_convex,
                    window=window, init=init, max_iter=max_iter, weighting=weighting,
                    assignment=assignment, enforce_connectivity=enforce_connectivity,
-                   cleanup=cleanup, tol=tol, progress=progress, n_threads=n_threads, elements=elements,
+                   cleanup=cleanup, tol=tol, center_tol=center_tol, coarsen=coarsen,
+                   progress=progress, n_threads=n_threads, elements=elements,
                    n_neighbors=n_neighbors, neighbor_radius=neighbor_radius).labels
 
 
@@ -237,6 +253,7 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | Non
             assignment: str = _D.assignment,
             enforce_connectivity: bool = _D.enforce_connectivity,
             cleanup: bool = _D.cleanup, tol: float = _D.tol,
+            center_tol: float | None = _D.center_tol, coarsen: int | None = _D.coarsen,
             progress: bool = _D.progress,
             n_threads: int | None = _D.n_threads, elements: str | None = _D.elements,
             n_neighbors: int = _D.n_neighbors,
@@ -277,7 +294,8 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | Non
     params = resolve(n_segments=n_segments, radius=radius, alpha=alpha, eta_convex=eta_convex,
                      window=window, init=init, max_iter=max_iter, weighting=weighting,
                      assignment=assignment, enforce_connectivity=enforce_connectivity,
-                     cleanup=cleanup, tol=tol, progress=progress, n_threads=n_threads, elements=elements,
+                     cleanup=cleanup, tol=tol, center_tol=center_tol, coarsen=coarsen,
+                   progress=progress, n_threads=n_threads, elements=elements,
                      n_neighbors=n_neighbors, neighbor_radius=neighbor_radius)
     return pipeline(mesh, params)
 
@@ -425,15 +443,16 @@ def pipeline(mesh, params: SegmentParams, *, replay: bool = True,
 
         _stage(bar, "weights")
         t = time.perf_counter()
-        w = csr_weights(graph, edge_weights(graph, p.weighting, alpha=p.alpha,
-                                            eta_convex=p.eta_convex))
+        w_pairs = edge_weights(graph, p.weighting, alpha=p.alpha, eta_convex=p.eta_convex)
+        w = csr_weights(graph, w_pairs)
         timings["weights"] = time.perf_counter() - t
 
-        _stage(bar, f"init ({p.init})")
-        t = time.perf_counter()
         window_r2 = (p.window * r) ** 2
+        t = time.perf_counter()
+        init, center_tol, ratio = start_centers(graph, w_pairs, w, p, k, r, timings,
+                                                lambda name: _stage(bar, name))
+        del w_pairs
         spaces = Workspaces(graph.n_elements, w, p.n_threads)
-        init = initial_centers(p.init, graph, w, k, r, p.window)
         timings["init"] = time.perf_counter() - t
 
         _stage(bar, "superfacets")
@@ -446,7 +465,7 @@ def pipeline(mesh, params: SegmentParams, *, replay: bool = True,
             classifier = make_classifier(p.assignment, graph, w, window_r2, spaces,
                                          replay=replay)
             it = iterate(classifier, centers, init.shape[0], sizes, positions, p.max_iter,
-                         jump_cycles=jump_cycles, tol=p.tol, bar=bar)
+                         jump_cycles=jump_cycles, tol=p.tol, min_move=center_tol * r, bar=bar)
         finally:
             spaces.close()
         classifier = spaces = w = None  # free the work buffers before the clean-up
@@ -481,6 +500,7 @@ def pipeline(mesh, params: SegmentParams, *, replay: bool = True,
                     eta_convex=p.eta_convex, window=p.window, init=p.init,
                     max_iter=p.max_iter, weighting=p.weighting, assignment=p.assignment,
                     enforce_connectivity=p.enforce_connectivity, cleanup=p.cleanup, tol=p.tol,
+                    center_tol=center_tol, coarsen=ratio,
                     n_init_centers=init.shape[0], elements=graph.kind)
     if graph.kind == "points":
         resolved.update(n_neighbors=p.n_neighbors, neighbor_radius=p.neighbor_radius)

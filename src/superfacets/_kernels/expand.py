@@ -33,6 +33,44 @@ RECORD_FULL = -1
 QUEUE_FULL = -2
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def queue_pop(qface, qdist, qnext, head, bmask, cur, free):
+    """Take a node from the lowest non-empty bucket at or after ``cur``; it
+    joins the free list. Returns ``(face, distance, node, cur)``."""
+    b = cur & bmask
+    while head[b] < 0:
+        cur += 1
+        b = cur & bmask
+    n = head[b]
+    head[b] = qnext[n]
+    qnext[n] = free
+    return qface[n], qdist[n], n, cur
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def queue_node(qnext, free, bump, qcap):
+    """A node for a push: from the free list, else the next unused one.
+    Returns ``(node, free, bump)``; node -1 when the pool is full."""
+    if free >= 0:
+        return free, qnext[free], bump
+    if bump < qcap:
+        return bump, free, bump + 1
+    return -1, free, bump
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def queue_push(qface, qdist, qnext, head, bmask, n, g, nd, inv_width, cur):
+    """Put node ``n`` (face ``g`` at distance ``nd``) in its bucket (never below ``cur``)."""
+    i = np.int64(nd * inv_width)
+    if i < cur:
+        i = cur
+    b = i & bmask
+    qface[n] = g
+    qdist[n] = nd
+    qnext[n] = head[b]
+    head[b] = n
+
+
 @njit(cache=True, error_model="numpy", nogil=True)
 def expand(indptr, indices, weights, centroids, src, lab, window_r2,
            dist, label, local, stamp, sid, queue, inv_width, mode,
@@ -95,16 +133,7 @@ def expand(indptr, indices, weights, centroids, src, lab, window_r2,
     cur = 0
     status = 0
     while live > 0:
-        b = cur & bmask
-        while head[b] < 0:
-            cur += 1
-            b = cur & bmask
-        n = head[b]
-        head[b] = qnext[n]
-        f = qface[n]
-        d = qdist[n]
-        qnext[n] = free
-        free = n
+        f, d, free, cur = queue_pop(qface, qdist, qnext, head, bmask, cur, free)
         live -= 1
         if d > local[f]:
             continue  # stale: queued again since with a lower distance
@@ -127,23 +156,11 @@ def expand(indptr, indices, weights, centroids, src, lab, window_r2,
             elif not nd < local[g]:  # local == -1 (outside) never passes
                 continue
             local[g] = nd
-            if free >= 0:
-                n = free
-                free = qnext[n]
-            elif bump < qcap:
-                n = bump
-                bump += 1
-            else:
+            n, free, bump = queue_node(qnext, free, bump, qcap)
+            if n < 0:
                 status = QUEUE_FULL
                 break
-            i = np.int64(nd * inv_width)
-            if i < cur:
-                i = cur
-            b = i & bmask
-            qface[n] = g
-            qdist[n] = nd
-            qnext[n] = head[b]
-            head[b] = n
+            queue_push(qface, qdist, qnext, head, bmask, n, g, nd, inv_width, cur)
             live += 1
         if status != 0:
             for b in range(nb):

@@ -10,7 +10,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..params import ASSIGNMENTS, DEFAULTS, ELEMENTS, INITS, WEIGHTINGS
+from ..params import (ASSIGNMENTS, COARSE_MIN_PER_SEGMENT, COARSE_PER_SEGMENT, DEFAULTS,
+                      ELEMENTS, INITS, WEIGHTINGS)
+from ..params import DEFAULT_CENTER_TOL as _D_CENTER_TOL
 
 __all__ = ["int_arg", "float_arg", "size_arg", "view_arg", "add_method_options",
            "add_camera_options", "add_mesh_and_labels", "method_kwargs", "check_output",
@@ -92,7 +94,17 @@ def add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> No
     p.add_argument("--tol", type=float_arg, default=_D.tol, metavar="T",
                    help="also stop once a pass changes the superfacet of at most this fraction "
                         f"of the area (default: {_D.tol:g}; 0: the paper's rule, bit for bit: "
-                        "stop when no center moves)")
+                        "stop when no center moves, and --center-tol 0 --coarsen 1 unless "
+                        "given)")
+    p.add_argument("--center-tol", type=float_arg, default=None, metavar="F",
+                   help="a center the update would move by less than this fraction of the "
+                        f"superfacet radius stays where it is (default: {_D_CENTER_TOL:g}, "
+                        "0 with --tol 0)")
+    p.add_argument("--coarsen", type=int_arg, default=None, metavar="N",
+                   help="coarse-to-fine: first solve on clusters of about N elements, then "
+                        "refine on all of them; 1: off (default: on where a superfacet holds "
+                        f"at least {COARSE_MIN_PER_SEGMENT:,} elements, leaving about "
+                        f"{COARSE_PER_SEGMENT:,} clusters per superfacet; off with --tol 0)")
     p.add_argument("--no-connectivity", action="store_true",
                    help="keep superfacets split in several pieces (default: merge stray "
                         "pieces into the neighbour sharing the longest boundary)")
@@ -134,7 +146,8 @@ def method_kwargs(args) -> dict:
     return dict(alpha=args.alpha, eta_convex=args.eta_convex, window=args.window,
                 init=args.init, max_iter=args.max_iter, weighting=args.weighting,
                 assignment=args.assignment, enforce_connectivity=not args.no_connectivity,
-                cleanup=args.cleanup, tol=args.tol, progress=bool(args.progress), n_threads=args.threads)
+                cleanup=args.cleanup, tol=args.tol, center_tol=args.center_tol,
+                coarsen=args.coarsen, progress=bool(args.progress), n_threads=args.threads)
 
 
 def add_camera_options(p, size: str) -> None:

@@ -1,0 +1,109 @@
+"""Voronoi cells of seeds in the weighted element graph (private kernel of
+:mod:`superfacets.multilevel`): one multi-source shortest-path search with the
+bucket queue of :func:`.expand.expand`."""
+
+import numpy as np
+from numba import njit
+
+from .expand import QUEUE_FULL, queue_node, queue_pop, queue_push
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def nearest_seed(indptr, indices, weights, seeds, first, dist, label, queue, inv_width):
+    """Label every element with its nearest seed (index into ``seeds``) and
+    that distance, by a label-correcting multi-source search from
+    ``seeds[first:]``.
+
+    ``dist``/``label`` must hold ``inf``/-1, except where an earlier call
+    from ``seeds[:first]`` (in other connected components) already labelled.
+
+    The distances are exact (those of Dijkstra's algorithm, see
+    :func:`.expand.expand`); on ties an element keeps the seed that reached
+    it first, which depends on the order of the search only (deterministic).
+    Elements no seed reaches keep ``label = -1``, ``dist = inf``.
+    ``queue = (qface, qdist, qnext, head)`` as in :func:`.expand.expand`.
+    Returns 0, or :data:`.expand.QUEUE_FULL` (grow ``queue`` and call again).
+    """
+    qface, qdist, qnext, head = queue
+    qcap = qface.shape[0]
+    nb = head.shape[0]
+    bmask = nb - 1
+    live = 0
+    bump = 0
+    free = -1
+    for s in range(first, seeds.shape[0]):
+        f = seeds[s]
+        if dist[f] == 0.0:
+            continue
+        n, free, bump = queue_node(qnext, free, bump, qcap)
+        if n < 0:
+            for b in range(nb):
+                head[b] = -1
+            return QUEUE_FULL
+        dist[f] = 0.0
+        label[f] = s
+        queue_push(qface, qdist, qnext, head, bmask, n, f, 0.0, inv_width, 0)
+        live += 1
+    cur = 0
+    while live > 0:
+        f, d, free, cur = queue_pop(qface, qdist, qnext, head, bmask, cur, free)
+        live -= 1
+        if d > dist[f]:
+            continue  # stale
+        lf = label[f]
+        for e in range(indptr[f], indptr[f + 1]):
+            g = indices[e]
+            nd = d + weights[e]
+            if not nd < dist[g]:
+                continue
+            dist[g] = nd
+            label[g] = lf
+            n, free, bump = queue_node(qnext, free, bump, qcap)
+            if n < 0:
+                for b in range(nb):
+                    head[b] = -1
+                return QUEUE_FULL
+            queue_push(qface, qdist, qnext, head, bmask, n, g, nd, inv_width, cur)
+            live += 1
+    return 0
+
+
+@njit(cache=True, error_model="numpy")
+def first_in_cells(positions, lo, h, dims, cap):
+    """The lowest-index element of each occupied cell of pitch ``h`` from ``lo``
+    (``dims`` cells per axis, their product below ``2**62``), in no order.
+
+    An open-addressing hash table of ``cap`` slots (a power of two); returns
+    an empty array when more than half of them would fill (call again with a
+    larger ``cap``).
+    """
+    keys = np.full(cap, -1, dtype=np.int64)
+    first = np.empty(cap, dtype=np.int64)
+    mask = np.uint64(cap - 1)
+    mult = np.uint64(11400714819323198485)  # Fibonacci hashing
+    count = 0
+    for t in range(positions.shape[0]):
+        cx = np.int64(np.floor((positions[t, 0] - lo[0]) / h))
+        cy = np.int64(np.floor((positions[t, 1] - lo[1]) / h))
+        cz = np.int64(np.floor((positions[t, 2] - lo[2]) / h))
+        k = (cx * dims[1] + cy) * dims[2] + cz
+        s = ((np.uint64(k) * mult) >> np.uint64(20)) & mask
+        while True:
+            i = np.int64(s)
+            if keys[i] == k:
+                break
+            if keys[i] < 0:
+                keys[i] = k
+                first[i] = t
+                count += 1
+                if 2 * count > cap:
+                    return np.empty(0, dtype=np.int64)
+                break
+            s = (s + np.uint64(1)) & mask
+    out = np.empty(count, dtype=np.int64)
+    j = 0
+    for i in range(cap):
+        if keys[i] >= 0:
+            out[j] = first[i]
+            j += 1
+    return out

@@ -1,0 +1,180 @@
+"""Coarse-to-fine (multilevel.py) and the center tolerance: known answers and invariants."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+from scipy.sparse.csgraph import connected_components, dijkstra
+
+from superfacets import Mesh, segment
+from superfacets.errors import ParameterError
+from superfacets.multilevel import coarse_ratio, coarsen, grid_seeds, voronoi_cells
+from superfacets.passes import hold_small_moves
+from superfacets.segmentation import pipeline
+from superfacets.params import resolve
+from superfacets.weights import csr_weights, paper_weights
+
+from conftest import grid_mesh
+from test_segmentation import check_invariants
+
+
+def _sphere(subdivisions=4, radius=1.0, shift=0.0):
+    s = trimesh.creation.icosphere(subdivisions=subdivisions, radius=radius)
+    return s.vertices + shift, s.faces
+
+
+def _weighted(mesh):
+    g = mesh.graph
+    w = paper_weights(g)
+    return g, w, csr_weights(g, w)
+
+
+def test_voronoi_cells_are_exact_nearest_seeds_and_connected(sphere):
+    g, w, wc = _weighted(sphere)
+    seeds = grid_seeds(g.positions, g.area, 60)
+    seeds2, cluster, dist = voronoi_cells(g, wc, seeds)
+    np.testing.assert_array_equal(seeds2, seeds)  # one component: no seed added
+    assert np.all(cluster >= 0) and np.all(np.isfinite(dist))
+    # distances: exactly those of Dijkstra from the nearest seed (scipy)
+    d = dijkstra(g.to_csr(w), indices=seeds, min_only=True)
+    np.testing.assert_allclose(dist, d, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(dist[seeds], 0.0)
+    # each cell is connected in the face graph (a shortest-path tree)
+    csr = g.to_csr()
+    for c in range(seeds.shape[0]):
+        idx = np.flatnonzero(cluster == c)
+        assert connected_components(csr[idx][:, idx], directed=False)[0] == 1
+
+
+def test_components_without_a_seed_get_their_own():
+    # two concentric spheres: every grid cell's first face lies on the outer one
+    va, fa = _sphere(3, 1.0)
+    vb, fb = _sphere(3, 0.98)
+    mesh = Mesh(np.vstack([va, vb]), np.vstack([fa, fb + va.shape[0]]))
+    g, w, wc = _weighted(mesh)
+    seeds = grid_seeds(g.positions, g.area, 20)
+    assert np.all(seeds < fa.shape[0])  # the inner sphere got no seed from the grid
+    seeds2, cluster, dist = voronoi_cells(g, wc, seeds)
+    assert seeds2.shape[0] > seeds.shape[0] and np.all(cluster >= 0)
+    inner = cluster[fa.shape[0]:]
+    assert np.all(inner >= seeds.shape[0])  # inner faces only in the added cells
+    assert np.all(cluster[:fa.shape[0]] < seeds.shape[0])
+
+
+def test_coarse_graph_weights_follow_the_fine_distances(sphere):
+    g, w, wc = _weighted(sphere)
+    co = coarsen(g, w, wc, 16)
+    cg = co.graph
+    assert 0.3 * g.n_elements / 16 < cg.n_elements < 3 * g.n_elements / 16
+    np.testing.assert_allclose(cg.area, g.area)
+    assert cg.kind == "faces" and cg.indptr[-1] == co.weights.shape[0]
+    # two clusters are adjacent iff some of their faces are
+    a, b = co.cluster[g.pairs[:, 0]], co.cluster[g.pairs[:, 1]]
+    fine_pairs = {(min(x, y), max(x, y)) for x, y in zip(a.tolist(), b.tolist()) if x != y}
+    assert fine_pairs == set(map(tuple, cg.pairs.tolist()))
+    # a coarse edge is a path between the two seeds: never shorter than their distance
+    d = dijkstra(g.to_csr(w), indices=co.seeds[cg.pairs[:50, 0]])
+    direct = d[np.arange(50), co.seeds[cg.pairs[:50, 1]]]
+    pair_w = np.empty(cg.n_edges)
+    pair_w[cg.dual_edge] = co.weights
+    assert np.all(pair_w[:50] >= direct - 1e-12)
+    assert np.all(pair_w[:50] <= 3 * direct + 1e-9)  # and not much longer (no detours)
+
+
+def test_coarse_ratio_rule():
+    assert coarse_ratio(100_000, 150) == 1  # ~670 faces per superfacet: no coarsening
+    assert coarse_ratio(1_693_760, 150) == 11
+    assert coarse_ratio(6_775_040, 150) == 45
+
+
+def test_hold_small_moves_known_answer():
+    pos = np.array([[0, 0, 0], [0.1, 0, 0], [1, 0, 0], [2, 0, 0]], float)
+    old = np.array([0, 2, 3, 1], dtype=np.int64)
+    new = np.array([1, 3, 3, -1], dtype=np.int64)
+    assert hold_small_moves(new, old, pos, 0.5) == 1
+    np.testing.assert_array_equal(new, [0, 3, 3, -1])  # 0 -> 1 moved 0.1: held
+
+
+def test_coarse_to_fine_puts_the_boundary_on_the_crease(valley):
+    # a V valley: two flat halves meeting at a concave crease along x = 0
+    fine = grid_mesh(120, 60, height=lambda x, y: np.abs(x))
+    for mesh in (valley, fine):
+        r = segment(mesh, 2, coarsen=8)
+        assert r.timings["coarse_elements"] < mesh.n_faces / 4
+        check_invariants(mesh, r.labels)
+        side = mesh.centroids[:, 0] > 0
+        # each superfacet is one side of the crease
+        assert all(np.unique(r.labels[side == s]).size == 1 for s in (False, True))
+        assert r.labels[side][0] != r.labels[~side][0]
+
+
+def test_coarse_to_fine_invariants_and_determinism():
+    s = trimesh.creation.icosphere(subdivisions=5)  # 20,480 faces
+    mesh = Mesh(s.vertices * [1, 1, 0.6], s.faces)
+    a = segment(mesh, 4)  # 5,120 faces per superfacet: coarse-to-fine by default
+    assert a.params["coarsen"] == 5 and a.timings["coarse_elements"] < mesh.n_faces / 2
+    assert a.params["center_tol"] == 0.05
+    check_invariants(mesh, a.labels)
+    assert a.n_segments == 4
+    b = segment(mesh, 4, n_threads=1)
+    np.testing.assert_array_equal(a.labels, b.labels)
+    assert a.converged  # the refinement on every face settled
+    plain = segment(mesh, 4, coarsen=1)
+    assert "coarse_elements" not in plain.timings and plain.params["coarsen"] == 1
+
+
+def test_tol_zero_turns_coarse_to_fine_and_center_tol_off():
+    s = trimesh.creation.icosphere(subdivisions=5)
+    mesh = Mesh(s.vertices * [1, 1, 0.6], s.faces)
+    paper = segment(mesh, 4, tol=0)
+    assert paper.params["coarsen"] == 1 and paper.params["center_tol"] == 0.0
+    assert "coarse_elements" not in paper.timings
+    plain = pipeline(mesh, resolve(n_segments=4, tol=0), replay=False, jump_cycles=False)
+    np.testing.assert_array_equal(paper.labels, plain.labels)
+    # given explicitly, they apply even with tol = 0
+    forced = segment(mesh, 4, tol=0, coarsen=4, center_tol=0.1)
+    assert forced.params["coarsen"] == 4 and "coarse_elements" in forced.timings
+
+
+@pytest.mark.parametrize("kw, match", [(dict(center_tol=-0.1), "center_tol"),
+                                       (dict(center_tol=2.0), "center_tol"),
+                                       (dict(coarsen=0), "coarsen"),
+                                       (dict(coarsen=2.5), "coarsen")])
+def test_bad_values_are_refused(kw, match):
+    with pytest.raises(ParameterError, match=match):
+        segment(grid_mesh(4, 4), 2, **kw)
+
+
+def test_coarsen_is_capped_to_keep_clusters_per_superfacet():
+    mesh = grid_mesh(40, 40)  # 3,200 faces
+    r = segment(mesh, 3, coarsen=10_000)  # capped at 3,200 // (8 * 3) = 133 faces per cluster
+    assert r.params["coarsen"] == 133 and r.n_segments == 3
+    check_invariants(mesh, r.labels)
+    r = segment(mesh, 500, coarsen=10)  # 6 faces per superfacet: no room for clusters
+    assert r.params["coarsen"] == 1 and "coarse_elements" not in r.timings
+
+
+def test_too_few_clusters_for_k_falls_back(sphere):
+    from superfacets.multilevel import coarse_centers
+
+    g, w, wc = _weighted(sphere)
+    kw = dict(init="farthest", window=2.0, assignment="bounded", max_iter=50, tol=0.001,
+              min_move=0.0, n_threads=1)
+    r = np.sqrt(g.area / (30 * np.pi))
+    centers, info = coarse_centers(g, w, wc, 100, k=30, radius=r, **kw)  # ~60 clusters
+    assert centers is None and info["coarse_elements"] < 4 * 30
+    centers, info = coarse_centers(g, w, wc, 10, k=30, radius=r, **kw)  # ~500 clusters
+    assert centers.shape[0] >= 30 and np.unique(centers).size == centers.shape[0]
+    assert info["coarse_passes"] >= 1
+
+
+def test_grid_seeds_known_answer():
+    # a 20 x 20 lattice of unit spacing (area 400): pitch sqrt(400 / 100) = 2 puts one
+    # seed in each 2 x 2 block, the block's lowest index
+    xy = np.stack(np.meshgrid(np.arange(20.0), np.arange(20.0), indexing="ij"), -1).reshape(-1, 2)
+    pos = np.c_[xy, np.zeros(400)]
+    seeds = grid_seeds(pos, 400.0, 100)
+    assert seeds.shape == (100,) and np.all(np.diff(seeds) > 0)
+    assert np.all(pos[seeds, :2] % 2 == 0)
+    assert grid_seeds(pos, 400.0, 400).shape == (400,)  # as many seeds as elements: all
