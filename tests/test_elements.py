@@ -197,3 +197,13 @@ def test_weights_and_metrics_take_the_graph_or_the_mesh(valley):
     assert compactness(g, labels) == compactness(valley, labels)
     concave = g.terms.concave
     assert concave.any() and (~concave).any()  # the valley's crease is concave, the rest flat
+
+
+def test_released_terms_come_back_the_same(sphere):
+    from superfacets import segment
+
+    g = sphere.graph
+    geo = g.terms.geo.copy()
+    segment(sphere, 10)  # the pipeline releases them once the weights are made
+    assert "terms" not in g.__dict__
+    np.testing.assert_array_equal(g.terms.geo, geo)

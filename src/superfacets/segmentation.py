@@ -445,6 +445,8 @@ def pipeline(mesh, params: SegmentParams, *, replay: bool = True,
         t = time.perf_counter()
         w_pairs = edge_weights(graph, p.weighting, alpha=p.alpha, eta_convex=p.eta_convex)
         w = csr_weights(graph, w_pairs)
+        if not p.cleanup:
+            graph.release_terms()  # not needed again by this run; 17 B per adjacency
         timings["weights"] = time.perf_counter() - t
 
         window_r2 = (p.window * r) ** 2

@@ -185,6 +185,12 @@ class ElementGraph:
             geo[sl], cos[sl], concave[sl] = self.terms_of(sl)
         return AdjacencyTerms(geo, cos, concave)
 
+    def release_terms(self) -> None:
+        """Forget the cached :attr:`terms` (about 17 bytes per adjacency); they are
+        computed again, the same, on next use. The pipeline calls it once the
+        weights are made, so the terms do not stay in memory during the passes."""
+        self.__dict__.pop("terms", None)
+
     def to_csr(self, weights: np.ndarray | None = None):
         """The adjacency as a symmetric ``scipy.sparse.csr_array``.
 
