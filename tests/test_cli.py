@@ -157,3 +157,9 @@ def test_cleanup_option(tmp_path, small_off):
     assert np.array_equal(clean, segment(mesh, 30, cleanup=True).labels)
     assert " cleanup=True " in out["--cleanup"].read_text().split("\n", 4)[3]  # the header
     assert " cleanup=False " in out["--no-cleanup"].read_text().split("\n", 4)[3]
+
+
+def test_summary_names_the_coarse_run(small_off, capsys):
+    assert main(["segment", str(small_off), "-k", "2", "--coarsen", "16"]) == 0
+    out = capsys.readouterr().out
+    assert "clusters (coarse-to-fine)" in out and "5120 faces, 2 superfacets" in out

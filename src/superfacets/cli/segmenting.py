@@ -119,8 +119,11 @@ def _summary(name: str, mesh, result, seconds: float, elements: str = "faces") -
         what = (f"{mesh.n_faces} faces{kind}{objs}" if elements == "faces" else
                 f"{mesh.n_vertices} vertices ({mesh.n_faces} faces{kind})")
         segs = "superfacets" if elements == "faces" else "superpoints"
+    t = getattr(result, "timings", None) or {}
+    coarse = (f", after {t['coarse_passes']} on {t['coarse_elements']:,} clusters "
+              f"(coarse-to-fine)" if t.get("coarse_elements") and "coarse_passes" in t else "")
     return (f"{name}: {what}, {result.n_segments} {segs}, "
-            f"{result.n_iter} iterations ({state}), {seconds:.2f} s")
+            f"{result.n_iter} iterations ({state}){coarse}, {seconds:.2f} s")
 
 
 def cmd_segment(args) -> int:
