@@ -178,3 +178,15 @@ def test_grid_seeds_known_answer():
     assert seeds.shape == (100,) and np.all(np.diff(seeds) > 0)
     assert np.all(pos[seeds, :2] % 2 == 0)
     assert grid_seeds(pos, 400.0, 400).shape == (400,)  # as many seeds as elements: all
+
+
+def test_clusters_without_any_neighbour():
+    # 40 separate triangles: every cluster is a component of its own, no coarse edge
+    t = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float)
+    v = np.concatenate([t + [3.0 * i, 0, 0] for i in range(40)])
+    mesh = Mesh(v, np.arange(120).reshape(40, 3))
+    g, w, wc = _weighted(mesh)
+    co = coarsen(g, w, wc, 2)
+    assert co.graph.n_edges == 0 and co.graph.n_elements == 40
+    r = segment(mesh, 4, coarsen=2)  # capped to 1 (40 faces, 4 superfacets): plain run
+    check_invariants(mesh, r.labels)

@@ -206,7 +206,7 @@ def coarsen(graph: ElementGraph, weights: np.ndarray, csr_w: np.ndarray,
     key = lo * np.int64(n_c) + hi
     o = np.argsort(key, kind="stable")
     key = key[o]
-    first = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
+    first = np.flatnonzero(np.r_[True, key[1:] != key[:-1]]) if key.shape[0] else key
     w_c = np.minimum.reduceat(via[o], first)
     len_c = np.add.reduceat(span[o], first)
     pairs = np.stack([lo[o][first], hi[o][first]], axis=1)
