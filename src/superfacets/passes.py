@@ -21,7 +21,7 @@ import numpy as np
 
 from ._kernels.update import update_centers as _update_kernel
 
-__all__ = ["Iteration", "iterate", "update_centers", "final_centers"]
+__all__ = ["Iteration", "iterate", "update_centers", "hold_small_moves", "final_centers"]
 
 
 def update_centers(label: np.ndarray, k: int, sizes: np.ndarray, positions: np.ndarray,
@@ -114,6 +114,11 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
         Also stop when a classification changed the superfacet of at most this
         fraction of the total size (area) against the previous one. 0: the
         paper's rule alone (stop when no center moves), bit for bit.
+    min_move : float, default 0
+        A center that the update would move by less than this (mesh units,
+        between element positions; ``center_tol * r``) stays where it is
+        (:func:`hold_small_moves`); the run has converged when no center moves
+        further. 0: every move counts (the paper).
     bar : tqdm, optional
         Progress bar advanced once per pass.
 
