@@ -24,7 +24,7 @@ __all__ = ["SegmentParams", "DEFAULTS", "INITS", "ASSIGNMENTS", "WEIGHTINGS", "E
            "WEIGHTING_ALPHA", "DEFAULT_CENTER_TOL", "COARSE_MIN_PER_SEGMENT",
            "COARSE_PER_SEGMENT", "DEFAULT_N_SEGMENTS", "DEFAULT_ALPHAS", "resolve", "check_int",
            "check_number", "check_positive", "check_nonneg", "check_choice",
-           "check_n_segments", "check_threads", "check_bool", "max_threads"]
+           "check_n_segments", "check_threads", "check_bool", "max_threads", "superfacet_size"]
 
 #: Names accepted by ``init=``: iterative farthest point, flood, regular grid.
 INITS = ("farthest", "flood", "grid")
@@ -273,3 +273,27 @@ def resolve(**params) -> SegmentParams:
         n_neighbors=check_int("n_neighbors", p.n_neighbors, lo=1, hi=MAX_NEIGHBORS),
         neighbor_radius=None if p.neighbor_radius is None else check_positive(
             "neighbor_radius", p.neighbor_radius))
+
+
+def superfacet_size(params: SegmentParams, area: float, diagonal: float,
+                    n_elements: int, kind: str = "faces") -> tuple[int | None, float]:
+    """The number of centers ``k`` and the radius ``r`` (mesh units) of a run.
+
+    With ``n_segments``: ``r = sqrt(A / (k pi))`` (paper section 3.1). With
+    ``radius`` (a fraction of ``d``): ``r = radius * d``, and for the
+    farthest-point initialization ``k = round(A / (pi r^2))`` clamped to
+    ``1..n``; ``k`` is None for flood and grid.
+
+    Raises
+    ------
+    ParameterError
+        If ``n_segments`` exceeds the number of elements.
+    """
+    if params.radius is not None:
+        r = params.radius * diagonal
+        k = None
+        if params.init == "farthest":
+            k = int(min(n_elements, max(1, round(area / (math.pi * r * r)))))
+        return k, r
+    k = check_n_segments(params.n_segments, n_elements, kind)
+    return k, math.sqrt(area / (k * math.pi))

@@ -18,7 +18,6 @@ labels and the details (centers, iterations, convergence, time per stage).
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field
 
@@ -33,7 +32,7 @@ from .labels import relabel_dense
 from .elements.inputs import elements_of
 from .mesh import as_mesh
 from .multilevel import start_centers
-from .params import DEFAULTS, SegmentParams, check_n_segments, resolve
+from .params import DEFAULTS, SegmentParams, resolve, superfacet_size
 from .passes import final_centers, iterate
 from .weights import csr_weights, edge_weights
 
@@ -379,30 +378,6 @@ def superpoints(points, n_segments: int | None = _D.n_segments, *, normals=None,
                            allow_invalid=cloud.allow_invalid, shape=cloud.shape)
     labels = pipeline(cloud, params).labels
     return labels.reshape(cloud.shape) if cloud.shape is not None else labels
-
-
-def superfacet_size(params: SegmentParams, area: float, diagonal: float,
-                    n_elements: int, kind: str = "faces") -> tuple[int | None, float]:
-    """The number of centers ``k`` and the radius ``r`` (mesh units) of a run.
-
-    With ``n_segments``: ``r = sqrt(A / (k pi))`` (paper section 3.1). With
-    ``radius`` (a fraction of ``d``): ``r = radius * d``, and for the
-    farthest-point initialization ``k = round(A / (pi r^2))`` clamped to
-    ``1..n``; ``k`` is None for flood and grid.
-
-    Raises
-    ------
-    ParameterError
-        If ``n_segments`` exceeds the number of elements.
-    """
-    if params.radius is not None:
-        r = params.radius * diagonal
-        k = None
-        if params.init == "farthest":
-            k = int(min(n_elements, max(1, round(area / (math.pi * r * r)))))
-        return k, r
-    k = check_n_segments(params.n_segments, n_elements, kind)
-    return k, math.sqrt(area / (k * math.pi))
 
 
 def pipeline(mesh, params: SegmentParams, *, replay: bool = True,
