@@ -103,6 +103,8 @@ def test_weight_terms_equal_the_numpy_expressions_bit_for_bit():
     mesh = Mesh(v, f)
     g = mesh.graph
     c, n = mesh.centroids, mesh.normals
+    # 32-bit face and vertex ids while they fit (the graph's memory on large meshes)
+    assert g.pairs.dtype == np.int32 and g.edges.dtype == np.int32
     i, j = g.pairs[:, 0], g.pairs[:, 1]
     mid = 0.5 * (v[g.edges[:, 0]] + v[g.edges[:, 1]])
     geo = np.linalg.norm(c[i] - mid, axis=1) + np.linalg.norm(mid - c[j], axis=1)

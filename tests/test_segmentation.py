@@ -179,8 +179,9 @@ def test_optimized_path_gives_the_labels_of_the_straightforward_one(
 @pytest.mark.parametrize("n_threads", [1, 2, 3])
 def test_threads_and_buffer_growth_change_no_label(monkeypatch, n_threads):
     # every expansion on threads (no minimum work), a heap of 4 entries and a record arena
-    # of a tenth of the faces: the heap regrows, the arena is compacted and regrown, an
-    # overflowing thread is redone; labels stay those of the straightforward loop
+    # of a tenth of the faces in a reservation of a fifth: the heap regrows, the arena is
+    # compacted, its room raised within the reservation and then copied into a larger one,
+    # an overflowing thread is redone; labels stay those of the straightforward loop
     from superfacets import classify, expansion
 
     mesh = read_mesh(need(MESHES / "bunny.tri.xz"))
@@ -189,15 +190,21 @@ def test_threads_and_buffer_growth_change_no_label(monkeypatch, n_threads):
     monkeypatch.setattr(expansion, "_QUEUE0", 4)
     monkeypatch.setattr(expansion, "_VISIT0", 8)
     monkeypatch.setattr(classify, "_ARENA", 0.1)
-    grown = []
+    monkeypatch.setattr(classify, "_RESERVE", 0.2)
+    grown = []  # (arena allocation before, after) of each raise of the room
     orig = classify.BoundedReplay._grow
-    monkeypatch.setattr(classify.BoundedReplay, "_grow",
-                        lambda self, x: (grown.append(x), orig(self, x)))
+
+    def grow(self, x):
+        before = self.face.shape[0]
+        orig(self, x)
+        grown.append((before, self.face.shape[0]))
+
+    monkeypatch.setattr(classify.BoundedReplay, "_grow", grow)
     r = segment(mesh, 150, max_iter=15, n_threads=n_threads)
     np.testing.assert_array_equal(r.labels, ref.labels)
     np.testing.assert_array_equal(r.centers, ref.centers)
     assert (r.n_iter, r.n_orphan_seeds) == (ref.n_iter, ref.n_orphan_seeds)
-    assert grown
+    assert any(a == b for a, b in grown) and any(b > a for a, b in grown)
 
 
 def test_n_threads_is_checked(sphere):

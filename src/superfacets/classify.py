@@ -31,7 +31,9 @@ from .params import ASSIGNMENTS, check_choice
 
 __all__ = ["Classifier", "BoundedReplay", "Bounded", "Exact", "make_classifier"]
 
-_ARENA = 5.0  # initial record arena, entries per element
+_ARENA = 5.0  # initial room of the record arena, entries per element
+_RESERVE = 8.0  # arena allocated up front, entries per element (untouched pages cost nothing)
+_SLACK = 0.05  # room added beyond the need when the arena's room is raised
 _PARALLEL_MIN_WORK = 200_000  # recorded elements per pass worth a second thread
 
 
@@ -129,15 +131,18 @@ class BoundedReplay(Classifier):
     (distance, center index) rule, so the order of merging does not matter
     (each new one right after its expansion, on its thread); then orphans are
     seeded. The arena is compacted (records of centers that moved are
-    dropped) when the free space at its end runs short, and grown when that
-    is not enough. About ``12 * 5`` bytes per element (each element lies in
-    about 4.4 windows with ``window = 2``).
+    dropped) when the free space at its end runs short, and its room raised
+    when that is not enough: within an allocation of ``8 n`` entries made up
+    front, whose pages cost memory only once written, so raising the room
+    copies nothing. About ``12 * 5`` bytes per element are written (each
+    element lies in about 4.4 windows with ``window = 2``).
     """
 
     def __init__(self, graph, weights: np.ndarray, window_r2: float, spaces: Workspaces):
         super().__init__(graph, weights, window_r2, spaces)
         m = self.m
-        cap = int(_ARENA * m) + 1024
+        self.limit = int(_ARENA * m) + 1024  # room in use: records lie in [0, limit)
+        cap = int(_RESERVE * m) + 1024
         self.face = np.empty(cap, dtype=np.int32)
         self.dist = np.empty(cap)
         self.end = 0
@@ -149,18 +154,27 @@ class BoundedReplay(Classifier):
     # -- arena -------------------------------------------------------------
     def _make_room(self, need: int, start: np.ndarray, length: np.ndarray) -> None:
         """Free ``need`` entries at the end, keeping the segments ``start``/``length``
-        (``start`` updated in place)."""
-        if self.face.shape[0] - self.end >= need:
+        (``start`` updated in place).
+
+        Dropped records are compacted away before the room is raised, so the
+        part of the arena ever written (its resident memory) stays within a
+        few percent of the largest set of records one pass needs.
+        """
+        if self.limit - self.end >= need:
             return
         self.end = int(_k.compact_records(np.argsort(start, kind="stable"), start,
                                                  length, self.face, self.dist))
-        if self.face.shape[0] - self.end >= need:
+        if self.limit - self.end >= need:
             return
-        self._grow(int(0.25 * (self.end + need)) + need + 1024 - (self.face.shape[0] - self.end))
+        self._grow(need - (self.limit - self.end) + int(_SLACK * (self.end + need)) + 1024)
 
     def _grow(self, extra: int) -> None:
-        """Enlarge the arena by ``extra`` entries, keeping ``[0, end)``."""
-        cap = self.face.shape[0] + max(int(extra), 1024)
+        """Raise the room by ``extra`` entries, keeping ``[0, end)``: within the
+        reserved arena for free, else into a larger one (copied)."""
+        self.limit += max(int(extra), 1024)
+        if self.limit <= self.face.shape[0]:
+            return
+        cap = max(self.limit, int(1.5 * self.face.shape[0]))
         face = np.empty(cap, dtype=np.int32)
         dist = np.empty(cap)
         face[:self.end] = self.face[:self.end]
@@ -182,7 +196,7 @@ class BoundedReplay(Classifier):
         if self.prev_len.shape[0]:
             expected = int(1.1 * todo.shape[0] * self.prev_len.mean())
         else:  # first pass: each face lies in about 4.4 windows
-            expected = int(0.9 * self.face.shape[0])
+            expected = int(0.9 * self.limit)
         # room for the new expansions, keeping only the records reused now
         while True:
             ks = seg_start[kept]
@@ -193,7 +207,7 @@ class BoundedReplay(Classifier):
             if st >= 0:
                 break
             # a thread ran out of room: make more (at least twice what was expected), redo
-            expected = 2 * max(expected, self.face.shape[0] - self.end)
+            expected = 2 * max(expected, self.limit - self.end)
         new_end = st
         # orphans (sequential: they depend on the labels)
         ws = spaces.get(0)
@@ -202,7 +216,7 @@ class BoundedReplay(Classifier):
             p, k, next_sid = _k.seed_orphans(
                 indptr, indices, w, c, centers, n_centers, window_r2, dist, label, ws.local,
                 ws.stamp, sid, ws.queue, spaces.inv_width, self.face, self.dist, new_end,
-                self.face.shape[0], seg_start, seg_len)
+                self.limit, seg_start, seg_len)
             spaces.release(next_sid)
             if p >= 0:
                 break
@@ -211,7 +225,7 @@ class BoundedReplay(Classifier):
                 ws.grow(p)
             else:
                 self.end = new_end
-                self._grow(self.face.shape[0] // 2)
+                self._grow(self.limit // 2)
             self._merge_only(n_centers, seg_start, seg_len, dist, label)
         self.end = int(p)
         # this pass's records become the previous ones
@@ -240,7 +254,7 @@ class BoundedReplay(Classifier):
         """
         spaces = self.spaces
         n = todo.shape[0]
-        lo, hi = self.end, self.face.shape[0]
+        lo, hi = self.end, self.limit
         n_thr = spaces.n_threads
         if n_thr <= 1 or expected + int(seg_len[kept].sum()) < _PARALLEL_MIN_WORK:
             n_thr = 1

@@ -32,9 +32,9 @@ class FaceAdjacency(NamedTuple):
 
     Attributes
     ----------
-    pairs : (e, 2) int64 ndarray
+    pairs : (e, 2) int32 ndarray (int64 from 2**31 faces on)
         The two faces ``(i, j)``, ``i < j``, of each adjacency, sorted.
-    edges : (e, 2) int64 ndarray
+    edges : (e, 2) int32 ndarray (int64 from 2**31 vertices or half-edges on)
         The shared mesh edge ``(a, b)``, ``a < b``, of each adjacency.
     indptr : (m + 1,) int64 ndarray
     indices : (2 e,) int32 ndarray
@@ -219,8 +219,9 @@ def build_face_graph(faces: np.ndarray, n_vertices: int, offsets: np.ndarray | N
     del ekey
     lo, hi, he = lo[first], hi[first], he[first]
     del first
-    pairs = np.stack([lo, hi], axis=1).astype(np.int64)
-    edges = np.stack([a[he], b[he]], axis=1).astype(np.int64)
+    # 32-bit while the ids fit (24 bytes per face less, kept for the whole run)
+    pairs = np.stack([lo, hi], axis=1).astype(np.int32 if m < 2**31 - 1 else np.int64)
+    edges = np.stack([a[he], b[he]], axis=1)
     del a, b, he
 
     indptr, indices, dual_edge = adjacency_csr(lo, hi, m)

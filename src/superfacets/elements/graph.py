@@ -101,8 +101,9 @@ class ElementGraph:
         grid initialization).
     diagonal : float
         Length of the bounding-box diagonal ``d``.
-    pairs : (e, 2) int64 ndarray
-        The two elements ``(i, j)``, ``i < j``, of each adjacency, sorted.
+    pairs : (e, 2) int ndarray
+        The two elements ``(i, j)``, ``i < j``, of each adjacency, sorted
+        (faces: int32 while face ids fit, int64 beyond).
     indptr : (n + 1,) int64 ndarray
         CSR row pointers: neighbours of ``f`` are ``indices[indptr[f]:indptr[f + 1]]``.
     indices : (2 e,) int32 ndarray
@@ -118,8 +119,9 @@ class ElementGraph:
         Element of each open border piece (faces: edge used by one face).
     boundary_lengths : (b,) float64 ndarray
         Length of each open border piece.
-    edges : (e, 2) int64 ndarray or None
-        Faces: the shared mesh edge ``(a, b)``, ``a < b``, of each adjacency.
+    edges : (e, 2) int ndarray or None
+        Faces: the shared mesh edge ``(a, b)``, ``a < b``, of each adjacency
+        (int32 while vertex ids fit, int64 beyond).
     boundary_edges : (b, 2) int64 ndarray or None
         Faces: the open-boundary mesh edges, ``a < b``.
     spans : (e,) float64 ndarray or None
