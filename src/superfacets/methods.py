@@ -236,7 +236,8 @@ def _run_vsa(mesh, n_segments, *, cache, seed, **params):
 
 _SF_DEFAULTS = dict(alpha=DEFAULTS.alpha, eta_convex=DEFAULTS.eta_convex, init=INITS[0],
                     window=DEFAULTS.window, max_iter=DEFAULTS.max_iter, tol=DEFAULTS.tol,
-                    center_tol="auto", coarsen="auto", cleanup=DEFAULTS.cleanup)
+                    center_tol="auto", coarsen="auto", cleanup=DEFAULTS.cleanup,
+                    split_merge=DEFAULTS.split_merge)
 register_method(
     "superfacets", _run_superfacets, defaults=_SF_DEFAULTS,
     sweep={"alpha": DEFAULT_ALPHAS},

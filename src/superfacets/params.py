@@ -75,6 +75,7 @@ class SegmentParams:
     assignment: str = "bounded"
     enforce_connectivity: bool = True
     cleanup: bool = False
+    split_merge: bool = False
     tol: float = 0.001
     center_tol: float | None = None
     coarsen: int | None = None
@@ -263,6 +264,7 @@ def resolve(**params) -> SegmentParams:
         assignment=check_choice("assignment", p.assignment, ASSIGNMENTS),
         enforce_connectivity=check_bool("enforce_connectivity", p.enforce_connectivity),
         cleanup=check_bool("cleanup", p.cleanup),
+        split_merge=check_bool("split_merge", p.split_merge),
         tol=check_number("tol", p.tol, 0.0, 1.0),
         center_tol=None if p.center_tol is None else check_number("center_tol", p.center_tol,
                                                                   0.0, 1.0),

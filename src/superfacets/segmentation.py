@@ -12,6 +12,8 @@ labels and the details (centers, iterations, convergence, time per stage).
 5. passes of (classify, update) until no center moves or ``max_iter``
    (:mod:`superfacets.passes`, with a strategy of :mod:`superfacets.classify`);
 6. empty superfacets dropped, stray pieces merged (connectivity);
+   with ``split_merge=True``, rounds of K-preserving swaps, each followed by
+   the passes again (:mod:`superfacets.splitmerge`);
 7. with ``cleanup=True``, the boundaries re-placed (:mod:`superfacets.cleanup`);
 8. the result.
 """
@@ -98,8 +100,8 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
                 max_iter: int = _D.max_iter, weighting: str = _D.weighting,
                 assignment: str = _D.assignment,
                 enforce_connectivity: bool = _D.enforce_connectivity,
-                cleanup: bool = _D.cleanup, tol: float = _D.tol,
-                center_tol: float | None = _D.center_tol, coarsen: int | None = _D.coarsen,
+                cleanup: bool = _D.cleanup, split_merge: bool = _D.split_merge,
+                tol: float = _D.tol, center_tol: float | None = _D.center_tol, coarsen: int | None = _D.coarsen,
                 progress: bool = _D.progress,
                 n_threads: int | None = _D.n_threads, elements: str | None = _D.elements,
                 n_neighbors: int = _D.n_neighbors,
@@ -159,6 +161,14 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
         cut that prefers short boundaries along creases; the number of
         superfacets does not change and each stays connected. False gives the
         paper's labels bit for bit (``docs/cleanup.md`` has the measurements).
+    split_merge : bool, default False
+        After the iteration, up to 3 rounds of K-preserving swaps
+        (:mod:`superfacets.splitmerge`): a superfacet that straddles a crease
+        (a high energy ``sum(size * d ** 4)`` in the paper's distance) is
+        split in two while two neighbours elsewhere are merged, then the
+        iteration runs again from the new centers. Same number of
+        superfacets; False gives the paper's labels bit for bit
+        (``docs/cleanup.md`` has the measurements).
     tol : float, default 0.001
         Convergence tolerance in ``[0, 1]``: also stop once a classification
         changes the superfacet of at most this fraction of the surface area
@@ -240,7 +250,8 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
     return segment(mesh, n_segments, radius=radius, alpha=alpha, eta_convex=eta_convex,
                    window=window, init=init, max_iter=max_iter, weighting=weighting,
                    assignment=assignment, enforce_connectivity=enforce_connectivity,
-                   cleanup=cleanup, tol=tol, center_tol=center_tol, coarsen=coarsen,
+                   cleanup=cleanup, split_merge=split_merge, tol=tol, center_tol=center_tol,
+                   coarsen=coarsen,
                    progress=progress, n_threads=n_threads, elements=elements,
                    n_neighbors=n_neighbors, neighbor_radius=neighbor_radius).labels
 
@@ -251,8 +262,8 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | Non
             max_iter: int = _D.max_iter, weighting: str = _D.weighting,
             assignment: str = _D.assignment,
             enforce_connectivity: bool = _D.enforce_connectivity,
-            cleanup: bool = _D.cleanup, tol: float = _D.tol,
-            center_tol: float | None = _D.center_tol, coarsen: int | None = _D.coarsen,
+            cleanup: bool = _D.cleanup, split_merge: bool = _D.split_merge,
+            tol: float = _D.tol, center_tol: float | None = _D.center_tol, coarsen: int | None = _D.coarsen,
             progress: bool = _D.progress,
             n_threads: int | None = _D.n_threads, elements: str | None = _D.elements,
             n_neighbors: int = _D.n_neighbors,
@@ -293,7 +304,8 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | Non
     params = resolve(n_segments=n_segments, radius=radius, alpha=alpha, eta_convex=eta_convex,
                      window=window, init=init, max_iter=max_iter, weighting=weighting,
                      assignment=assignment, enforce_connectivity=enforce_connectivity,
-                     cleanup=cleanup, tol=tol, center_tol=center_tol, coarsen=coarsen,
+                     cleanup=cleanup, split_merge=split_merge, tol=tol,
+                     center_tol=center_tol, coarsen=coarsen,
                    progress=progress, n_threads=n_threads, elements=elements,
                      n_neighbors=n_neighbors, neighbor_radius=neighbor_radius)
     return pipeline(mesh, params)
@@ -443,6 +455,14 @@ def pipeline(mesh, params: SegmentParams, *, replay: bool = True,
                                          replay=replay)
             it = iterate(classifier, centers, init.shape[0], sizes, positions, p.max_iter,
                          jump_cycles=jump_cycles, tol=p.tol, min_move=center_tol * r, bar=bar)
+            if p.split_merge:
+                from .splitmerge import swap_and_iterate
+
+                _stage(bar, "split and merge")
+                it, timings["swaps"] = swap_and_iterate(
+                    it, graph, w, classifier, centers, sizes, positions, p.max_iter,
+                    window_r2=window_r2, jump_cycles=jump_cycles, tol=p.tol,
+                    min_move=center_tol * r)
         finally:
             spaces.close()
         classifier = spaces = w = None  # free the work buffers before the clean-up
@@ -476,7 +496,8 @@ def pipeline(mesh, params: SegmentParams, *, replay: bool = True,
     resolved = dict(n_segments=k, radius=r / graph.diagonal, alpha=p.alpha,
                     eta_convex=p.eta_convex, window=p.window, init=p.init,
                     max_iter=p.max_iter, weighting=p.weighting, assignment=p.assignment,
-                    enforce_connectivity=p.enforce_connectivity, cleanup=p.cleanup, tol=p.tol,
+                    enforce_connectivity=p.enforce_connectivity, cleanup=p.cleanup,
+                    split_merge=p.split_merge, tol=p.tol,
                     center_tol=center_tol, coarsen=ratio,
                     n_init_centers=init.shape[0], elements=graph.kind)
     if graph.kind == "points":

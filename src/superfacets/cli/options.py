@@ -112,6 +112,12 @@ def add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> No
                    help="boundary clean-up after the iteration: boundaries straightened and "
                         "moved onto nearby creases, same superfacets (--no-cleanup: the paper's "
                         f"labels bit for bit) (default: {'on' if _D.cleanup else 'off'})")
+    p.add_argument("--split-merge", action=argparse.BooleanOptionalAction,
+                   default=_D.split_merge,
+                   help="after the iteration, split superfacets that straddle a crease and "
+                        "merge as many pairs of neighbours elsewhere, then iterate again; same "
+                        "number of superfacets (--no-split-merge: the paper's labels bit for "
+                        f"bit) (default: {'on' if _D.split_merge else 'off'})")
     p.add_argument("--threads", type=int_arg, default=None, metavar="N",
                    help="threads expanding centers at once (default: all cores; the labels "
                         "do not depend on it)")
@@ -146,7 +152,7 @@ def method_kwargs(args) -> dict:
     return dict(alpha=args.alpha, eta_convex=args.eta_convex, window=args.window,
                 init=args.init, max_iter=args.max_iter, weighting=args.weighting,
                 assignment=args.assignment, enforce_connectivity=not args.no_connectivity,
-                cleanup=args.cleanup, tol=args.tol, center_tol=args.center_tol,
+                cleanup=args.cleanup, split_merge=args.split_merge, tol=args.tol, center_tol=args.center_tol,
                 coarsen=args.coarsen, progress=bool(args.progress), n_threads=args.threads)
 
 

@@ -1,0 +1,199 @@
+"""Split and merge candidates of the K-preserving swaps (private kernels).
+
+Every distance here is the face-graph distance of the paper's weights,
+restricted to the elements of one superfacet (or of two, for a merge); the
+energy of a set of elements around a center is ``sum(size * d ** power)``.
+``members[bounds[s]:bounds[s + 1]]`` are the elements of superfacet ``s``.
+``dist`` / ``stamp`` are per-element work arrays (``stamp[f] == sid``: ``dist[f]``
+is set in the current search), ``hkey`` / ``hval`` a heap of capacity
+``len(indices) + 1`` (:mod:`.heap`; a search pushes an element again only on a
+strict decrease, so never more than once per CSR entry).
+"""
+
+import numpy as np
+from numba import njit
+
+from .heap import pop, push
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _search(indptr, indices, w, label, la, lb, src, dist, stamp, sid, hkey, hval):
+    """Dijkstra from ``src`` over the elements labelled ``la`` or ``lb``."""
+    dist[src] = 0.0
+    stamp[src] = sid
+    size = push(hkey, hval, 0, 0.0, src)
+    while size > 0:
+        d = hkey[0]
+        f = hval[0]
+        size = pop(hkey, hval, size)
+        if d > dist[f]:
+            continue
+        for e in range(indptr[f], indptr[f + 1]):
+            g = indices[e]
+            lg = label[g]
+            if lg != la and lg != lb:
+                continue
+            nd = d + w[e]
+            if stamp[g] != sid or nd < dist[g]:
+                dist[g] = nd
+                stamp[g] = sid
+                size = push(hkey, hval, size, nd, g)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _nearest_mean(elems, n, sizes, positions):
+    """The element of ``elems[:n]`` nearest their size-weighted mean (first on ties)."""
+    tot = 0.0
+    mx = my = mz = 0.0
+    for i in range(n):
+        f = elems[i]
+        a = sizes[f]
+        tot += a
+        mx += a * positions[f, 0]
+        my += a * positions[f, 1]
+        mz += a * positions[f, 2]
+    if tot > 0:
+        mx /= tot
+        my /= tot
+        mz /= tot
+    else:  # zero-size elements: the plain mean
+        mx = my = mz = 0.0
+        for i in range(n):
+            f = elems[i]
+            mx += positions[f, 0] / n
+            my += positions[f, 1] / n
+            mz += positions[f, 2] / n
+    best = elems[0]
+    bd = np.inf
+    for i in range(n):
+        f = elems[i]
+        dx = positions[f, 0] - mx
+        dy = positions[f, 1] - my
+        dz = positions[f, 2] - mz
+        q = dx * dx + dy * dy + dz * dz
+        if q < bd:
+            bd = q
+            best = f
+    return best
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _energy(elems, n, sizes, dist, stamp, sid, power):
+    """``sum(size * d ** power)`` over ``elems[:n]``, and the farthest element
+    (an element the search did not reach counts as the farthest reached)."""
+    e = 0.0
+    far = elems[0]
+    fd = -1.0
+    for i in range(n):
+        f = elems[i]
+        if stamp[f] == sid:
+            d = dist[f]
+            e += sizes[f] * d ** power
+            if d > fd:
+                fd = d
+                far = f
+    for i in range(n):  # unreached (a piece cut off): as far as the farthest
+        f = elems[i]
+        if stamp[f] != sid:
+            e += sizes[f] * fd ** power
+    return e, far
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def split_candidates(indptr, indices, w, label, members, bounds, sizes, positions, power,
+                     lloyd, energy, split_energy, second, dist, dist2, stamp, stamp2, sid,
+                     hkey, hval, work):
+    """Energy of each superfacet around the element nearest its mean, and of
+    its best split in two (2-means with ``lloyd`` re-centerings, seeded by
+    the farthest element and the one farthest from it).
+
+    Writes ``energy[s]``, ``split_energy[s]`` (``inf``: no split) and
+    ``second[f] = True`` for the elements of the split's second part.
+    Returns the next free search id.
+    """
+    k = bounds.shape[0] - 1
+    for s in range(k):
+        lo = bounds[s]
+        n = bounds[s + 1] - lo
+        elems = members[lo:lo + n]
+        split_energy[s] = np.inf
+        c = _nearest_mean(elems, n, sizes, positions)
+        _search(indptr, indices, w, label, s, s, c, dist, stamp, sid, hkey, hval)
+        energy[s], p = _energy(elems, n, sizes, dist, stamp, sid, power)
+        sid += 1
+        if n < 4:
+            continue
+        _search(indptr, indices, w, label, s, s, p, dist, stamp, sid, hkey, hval)
+        _, q = _energy(elems, n, sizes, dist, stamp, sid, power)
+        if q == p:
+            sid += 1
+            continue
+        ok = True
+        for it in range(lloyd + 1):
+            if it > 0:  # re-center each part on the element nearest its mean
+                na = nb = 0
+                for i in range(n):
+                    f = elems[i]
+                    if second[f]:
+                        work[n - 1 - nb] = f
+                        nb += 1
+                    else:
+                        work[na] = f
+                        na += 1
+                p = _nearest_mean(work[:na], na, sizes, positions)
+                q = _nearest_mean(work[n - nb:n], nb, sizes, positions)
+            _search(indptr, indices, w, label, s, s, p, dist, stamp, sid, hkey, hval)
+            _search(indptr, indices, w, label, s, s, q, dist2, stamp2, sid, hkey, hval)
+            na = nb = 0
+            e = 0.0
+            for i in range(n):  # each element to the nearer seed (the first on ties)
+                f = elems[i]
+                dp = dist[f] if stamp[f] == sid else np.inf
+                dq = dist2[f] if stamp2[f] == sid else np.inf
+                second[f] = dq < dp
+                if dq < dp:
+                    nb += 1
+                    e += sizes[f] * dq ** power
+                else:
+                    na += 1
+                    e += sizes[f] * dp ** power if dp < np.inf else 0.0
+            sid += 1
+            if na == 0 or nb == 0:
+                ok = False
+                break
+        if ok:
+            split_energy[s] = e
+        else:
+            for i in range(n):
+                second[elems[i]] = False
+    return sid
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def merge_energies(indptr, indices, w, label, members, bounds, sizes, positions, power,
+                   pair_a, pair_b, out, reach, dist, stamp, sid, hkey, hval, work):
+    """Energy of the union of superfacets ``pair_a[t]`` and ``pair_b[t]``
+    around the element nearest its mean, into ``out[t]``, and the largest
+    squared distance (in space) of its elements from that element, into
+    ``reach[t]``. Returns the next free search id."""
+    for t in range(pair_a.shape[0]):
+        a = pair_a[t]
+        b = pair_b[t]
+        n = 0
+        for s in (a, b):
+            for i in range(bounds[s], bounds[s + 1]):
+                work[n] = members[i]
+                n += 1
+        c = _nearest_mean(work, n, sizes, positions)
+        _search(indptr, indices, w, label, a, b, c, dist, stamp, sid, hkey, hval)
+        out[t], _ = _energy(work, n, sizes, dist, stamp, sid, power)
+        far = 0.0
+        for i in range(n):
+            f = work[i]
+            dx = positions[f, 0] - positions[c, 0]
+            dy = positions[f, 1] - positions[c, 1]
+            dz = positions[f, 2] - positions[c, 2]
+            far = max(far, dx * dx + dy * dy + dz * dz)
+        reach[t] = far
+        sid += 1
+    return sid

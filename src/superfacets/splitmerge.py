@@ -1,0 +1,197 @@
+"""Split-and-merge swaps: move superfacets off the creases they straddle, keeping K.
+
+The paper's iteration converges to a local optimum in which some
+superfacets straddle a concave crease while two neighbours elsewhere cover
+one smooth patch between them. A *swap* splits the first in two and merges
+the other two, so the number of superfacets stays the same; the iteration
+then runs again from the new centers. Swaps are chosen by an energy of the
+paper's own distances (``docs/method.md``, section 3.1): for a superfacet
+``S`` with center ``c`` (the element nearest its size-weighted mean),
+
+    E(S) = sum over f in S of size_f * d_S(c, f) ** power,
+
+with ``d_S`` the face-graph distance of the paper's weights (eqs. 1-3)
+restricted to ``S``. A crossing of a concave crease is long in that distance
+(alpha), so a superfacet straddling one has a high energy, and a high
+``power`` (4: between the k-means energy, 2, and the farthest element alone)
+makes the far side count most. The split of ``S`` is a 2-means of its
+elements in ``d_S`` (seeds: the farthest element and the one farthest from
+it; three re-centerings); its *gain* is ``E(S) - E(S_1) - E(S_2)``. The *loss*
+of merging two adjacent superfacets is ``E(S u T) - E(S) - E(T)``. Swaps are
+taken greedily, the largest gain with the smallest loss, while the gain
+exceeds the loss and no superfacet is in two swaps, at most
+``max_fraction * K`` a round.
+
+Not in the paper: the paper names no post-processing, and its authors call a
+clean-up "a priority next step". Judged in ``docs/cleanup.md``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._kernels.splitmerge import merge_energies, split_candidates
+
+__all__ = ["swap_round", "POWER", "LLOYD", "MAX_FRACTION", "ROUNDS"]
+
+#: Exponent of the distances in the energy.
+POWER = 4.0
+#: Re-centerings of the 2-means of a split.
+LLOYD = 3
+#: Swaps per round at most, as a fraction of the superfacets.
+MAX_FRACTION = 0.3
+#: Rounds of (swaps, then the iteration again) at most.
+ROUNDS = 3
+
+
+def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: float = np.inf,
+               power: float = POWER, lloyd: int = LLOYD, max_fraction: float = MAX_FRACTION
+               ) -> tuple[np.ndarray, int]:
+    """One round of K-preserving swaps (see the module notes).
+
+    Parameters
+    ----------
+    graph : ElementGraph
+    weights : (2 e,) float64 ndarray
+        Weight of each CSR entry of ``graph`` (the paper's, eqs. 1-3).
+    labels : (n,) int ndarray
+        Dense labels ``0..K-1``.
+    window_r2 : float, default inf
+        Squared window radius ``(window * r) ** 2`` of the classification:
+        two superfacets merge only if every element of the union lies within
+        it of the union's center (a larger union would leave elements that
+        no window reaches, seeding new superfacets in the passes that follow).
+    power : float, default 4
+        Exponent of the distances in the energy (``> 0``).
+    lloyd : int, default 3
+        Re-centerings of each split's 2-means.
+    max_fraction : float, default 0.3
+        Swaps at most, as a fraction of ``K``.
+
+    Returns
+    -------
+    labels : (n,) int32 ndarray
+        The labels after the swaps, ``0..K-1``, every label still used (a
+        split's second part takes the label of the superfacet merged away).
+    n_swaps : int
+
+    Examples
+    --------
+    >>> import numpy as np, trimesh
+    >>> from superfacets import Mesh, segment
+    >>> from superfacets.weights import csr_weights, edge_weights
+    >>> m = Mesh(*(lambda t: (t.vertices, t.faces))(trimesh.creation.icosphere(3)))
+    >>> r = segment(m, 20)
+    >>> w = csr_weights(m.graph, edge_weights(m.graph, "paper", alpha=200, eta_convex=0.2))
+    >>> new, n = swap_round(m.graph, w, r.labels)
+    >>> int(new.max()) + 1 == int(r.labels.max()) + 1
+    True
+    """
+    g = graph
+    n = g.n_elements
+    lab = np.ascontiguousarray(labels, dtype=np.int32)
+    k = int(lab.max()) + 1
+    members = np.argsort(lab, kind="stable").astype(np.int64)
+    bounds = np.searchsorted(lab[members], np.arange(k + 1)).astype(np.int64)
+    sizes = np.ascontiguousarray(g.sizes, dtype=np.float64)
+    positions = np.ascontiguousarray(g.positions, dtype=np.float64)
+    dist, dist2 = np.empty(n), np.empty(n)
+    stamp = np.full(n, -1, dtype=np.int64)
+    stamp2 = np.full(n, -1, dtype=np.int64)
+    hkey = np.empty(g.indices.shape[0] + 1)
+    hval = np.empty(g.indices.shape[0] + 1, dtype=np.int64)
+    work = np.empty(n, dtype=np.int64)
+    energy, split_energy = np.empty(k), np.empty(k)
+    second = np.zeros(n, dtype=np.bool_)
+    sid = split_candidates(g.indptr, g.indices, weights, lab, members, bounds, sizes,
+                           positions, float(power), int(lloyd), energy, split_energy, second,
+                           dist, dist2, stamp, stamp2, 0, hkey, hval, work)
+    gain = energy - split_energy  # -inf: no split
+    # adjacent superfacets: each pair once, a < b
+    a, b = lab[g.pairs[:, 0]], lab[g.pairs[:, 1]]
+    cross = a != b
+    key = np.unique(np.minimum(a[cross], b[cross]).astype(np.int64) * k
+                    + np.maximum(a[cross], b[cross]))
+    pa, pb = key // k, key % k
+    union, reach = np.empty(key.shape[0]), np.empty(key.shape[0])
+    merge_energies(g.indptr, g.indices, weights, lab, members, bounds, sizes, positions,
+                   float(power), pa, pb, union, reach, dist, stamp, sid, hkey, hval, work)
+    loss = np.where(reach <= window_r2, union - energy[pa] - energy[pb], np.inf)
+
+    # greedy: the largest gains with the smallest losses, each superfacet in one swap
+    splits = np.lexsort((np.arange(k), -gain))  # by gain descending, then index
+    splits = splits[gain[splits] > 0][:max(1, int(max_fraction * k))]
+    merges = np.lexsort((pb, pa, loss))
+    used = np.zeros(k, dtype=bool)
+    remap = np.arange(k, dtype=np.int32)
+    split_to = np.full(k, -1, dtype=np.int32)
+    j = 0
+    n_swaps = 0
+    for s in splits.tolist():
+        if used[s]:
+            continue
+        while j < merges.shape[0] and (used[pa[merges[j]]] or used[pb[merges[j]]]
+                                       or s in (pa[merges[j]], pb[merges[j]])):
+            j += 1
+        if j >= merges.shape[0] or loss[merges[j]] >= gain[s]:
+            break
+        u, v = int(pa[merges[j]]), int(pb[merges[j]])
+        j += 1
+        remap[v] = u  # v merges into u; its label goes to the second part of s
+        split_to[s] = v
+        used[[s, u, v]] = True
+        n_swaps += 1
+    out = remap[lab]
+    moved = second & (split_to[lab] >= 0)
+    out[moved] = split_to[lab[moved]]
+    return out, n_swaps
+
+
+def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.ndarray,
+                     sizes: np.ndarray, positions: np.ndarray, max_iter: int, *,
+                     rounds: int = ROUNDS, window_r2: float = np.inf, min_move: float = 0.0,
+                     **iterate_kw):
+    """Up to ``rounds`` rounds of (:func:`swap_round`, then the passes again from
+    the new centers), after the iteration ``it`` (an
+    :class:`~superfacets.passes.Iteration`); stops at a round without a swap.
+
+    The new centers are the paper's update of the swapped labels (the
+    element nearest each superfacet's mean; a center that would move by less
+    than ``min_move`` stays, so the expansions of untouched superfacets are
+    replayed). ``centers`` is the work array of :func:`~superfacets.passes.iterate`;
+    ``iterate_kw`` goes to it.
+
+    Returns
+    -------
+    it : Iteration
+        The last iteration, with ``n_iter``, ``n_passes`` and ``expansions``
+        summed over every run.
+    n_swaps : int
+        Swaps made over all rounds.
+    """
+    from dataclasses import replace
+
+    from .labels import relabel_dense
+    from .passes import hold_small_moves, iterate, update_centers
+
+    n_swaps = 0
+    n_iter, n_passes, expansions = it.n_iter, it.n_passes, it.expansions
+    for _ in range(rounds):
+        present = np.zeros(it.centers.shape[0], dtype=bool)
+        present[it.label] = True
+        old = it.centers[present]
+        new, n = swap_round(graph, weights, relabel_dense(it.label), window_r2=window_r2)
+        if n == 0:
+            break
+        n_swaps += n
+        moved = update_centers(new, old.shape[0], sizes, positions, old)
+        if min_move > 0:
+            hold_small_moves(moved, old, positions, min_move)
+        moved = moved[moved >= 0]
+        centers[:moved.shape[0]] = moved
+        it = iterate(classifier, centers, moved.shape[0], sizes, positions, max_iter,
+                     min_move=min_move, **iterate_kw)
+        n_iter += it.n_iter
+        n_passes += it.n_passes
+        expansions += it.expansions
+    return replace(it, n_iter=n_iter, n_passes=n_passes, expansions=expansions), n_swaps

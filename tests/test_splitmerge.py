@@ -1,0 +1,103 @@
+"""Split-and-merge swaps: a known answer on a folded plane, invariants on real meshes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from conftest import MESHES, grid_mesh, need
+
+from superfacets import Mesh, read_mesh, segment
+from superfacets.connectivity import label_components
+from superfacets.errors import ParameterError
+from superfacets.splitmerge import swap_round
+from superfacets.weights import csr_weights, edge_weights
+
+
+def _valley():
+    """A strip 2 x 0.5 of square cells 0.05 wide, folded along x = 0 into a
+    concave valley z = 0.5 |x|; and the column of each face's cell."""
+    nx, ny = 40, 10
+    m = grid_mesh(nx, ny, height=lambda x, y: 0.5 * np.abs(x))
+    v = m.vertices * [1.0, 0.25, 1.0]  # y in [-0.25, 0.25]: square cells
+    mesh = Mesh(v, m.faces)
+    col = np.floor((mesh.centroids[:, 0] + 1) / 2 * nx).astype(int)
+    return mesh, col
+
+
+def _weights(mesh, alpha=200.0):
+    g = mesh.graph
+    return csr_weights(g, edge_weights(g, "paper", alpha=alpha, eta_convex=0.2))
+
+
+def test_a_superfacet_straddling_a_crease_is_split_on_it_and_two_flat_ones_merge():
+    mesh, col = _valley()
+    x = mesh.centroids[:, 0]
+    # 0 straddles the crease (|x| < 0.25); 1, 2, 3 are strips 0.25 wide on the right
+    # slope, 4 the whole left slope beyond the crease's superfacet
+    labels = np.select([np.abs(x) < 0.25, x < 0, x < 0.5, x < 0.75], [0, 4, 1, 2], 3)
+    out, n = swap_round(mesh.graph, _weights(mesh), labels)
+    assert n == 1
+    assert np.unique(out).size == 5  # the number of superfacets is kept
+    on_left = (np.abs(x) < 0.25) & (x < 0)
+    on_right = (np.abs(x) < 0.25) & (x > 0)
+    # the straddling superfacet is cut exactly on the crease
+    assert np.unique(out[on_left]).size == 1 and np.unique(out[on_right]).size == 1
+    assert out[on_left][0] != out[on_right][0]
+    # two neighbouring strips of the flat slope became one; the left slope is untouched
+    merged = [(a, b) for a, b in ((1, 2), (2, 3)) if out[labels == a][0] == out[labels == b][0]]
+    assert len(merged) == 1
+    assert np.unique(out[labels == 4]).size == 1 and out[labels == 4][0] == 4
+    assert np.unique(label_components(mesh.graph, out)).size == 5  # each one connected
+
+
+def test_the_crease_decides_which_superfacet_is_split():
+    # alpha = 0: the fold is invisible to the distance; the square on it is as round
+    # as any and is kept, the largest superfacet (the left slope) is split instead
+    mesh, col = _valley()
+    x = mesh.centroids[:, 0]
+    labels = np.select([np.abs(x) < 0.25, x < 0, x < 0.5, x < 0.75], [0, 4, 1, 2], 3)
+    out, n = swap_round(mesh.graph, _weights(mesh, alpha=0.0), labels)
+    assert n == 1
+    assert np.unique(out[labels == 0]).size == 1
+    assert np.unique(out[labels == 4]).size == 2
+
+
+def test_the_window_forbids_merging_beyond_its_reach():
+    mesh, col = _valley()
+    x = mesh.centroids[:, 0]
+    labels = np.select([np.abs(x) < 0.25, x < 0, x < 0.5, x < 0.75], [0, 4, 1, 2], 3)
+    # every union of two strips spans 0.5 x 0.5: from its center, its corners lie
+    # ~0.35 away; a window of 0.2 allows no merge, hence no swap
+    out, n = swap_round(mesh.graph, _weights(mesh), labels, window_r2=0.2 ** 2)
+    assert n == 0
+
+
+def test_split_merge_invariants_on_a_real_mesh():
+    mesh = read_mesh(need(MESHES / "bunny.tri.xz"))
+    paper = segment(mesh, 150)
+    r = segment(mesh, 150, split_merge=True)
+    assert r.timings["swaps"] > 0
+    assert r.params["split_merge"] is True
+    k = r.n_segments
+    assert np.array_equal(np.unique(r.labels), np.arange(k))  # dense
+    assert abs(k - paper.n_segments) <= 2  # the swaps keep K; orphans may add one
+    comps = label_components(mesh.graph, r.labels)
+    assert np.unique(comps).size == k  # every superfacet connected
+    again = segment(mesh, 150, split_merge=True, n_threads=1)
+    np.testing.assert_array_equal(again.labels, r.labels)  # deterministic, any threads
+    assert not np.array_equal(r.labels, paper.labels)
+
+
+def test_split_merge_off_is_the_paper():
+    mesh = grid_mesh(30, 30, height=lambda x, y: 0.3 * np.abs(x))
+    a = segment(mesh, 12, split_merge=False)
+    b = segment(mesh, 12)
+    np.testing.assert_array_equal(a.labels, b.labels)
+    assert "swaps" not in a.timings
+
+
+@pytest.mark.parametrize("bad", ["yes", 1, None])
+def test_split_merge_is_checked(bad):
+    with pytest.raises(ParameterError, match="split_merge"):
+        segment(grid_mesh(4, 4), 2, split_merge=bad)
