@@ -154,6 +154,9 @@ def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.nda
     """Up to ``rounds`` rounds of (:func:`swap_round`, then the passes again from
     the new centers), after the iteration ``it`` (an
     :class:`~superfacets.passes.Iteration`); stops at a round without a swap.
+    A round whose passes end with more superfacets than before it (elements
+    no window reached seed new ones) is undone, and the rounds stop: the
+    number of superfacets never changes.
 
     The new centers are the paper's update of the swapped labels (the
     element nearest each superfacet's mean; a center that would move by less
@@ -174,24 +177,31 @@ def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.nda
     from .labels import relabel_dense
     from .passes import hold_small_moves, iterate, update_centers
 
+    def used(it) -> np.ndarray:
+        present = np.zeros(it.centers.shape[0], dtype=bool)
+        present[it.label] = True
+        return present
+
     n_swaps = 0
     n_iter, n_passes, expansions = it.n_iter, it.n_passes, it.expansions
     for _ in range(rounds):
-        present = np.zeros(it.centers.shape[0], dtype=bool)
-        present[it.label] = True
+        present = used(it)
         old = it.centers[present]
         new, n = swap_round(graph, weights, relabel_dense(it.label), window_r2=window_r2)
         if n == 0:
             break
-        n_swaps += n
         moved = update_centers(new, old.shape[0], sizes, positions, old)
         if min_move > 0:
             hold_small_moves(moved, old, positions, min_move)
         moved = moved[moved >= 0]
         centers[:moved.shape[0]] = moved
-        it = iterate(classifier, centers, moved.shape[0], sizes, positions, max_iter,
-                     min_move=min_move, **iterate_kw)
-        n_iter += it.n_iter
-        n_passes += it.n_passes
-        expansions += it.expansions
+        after = iterate(classifier, centers, moved.shape[0], sizes, positions, max_iter,
+                        min_move=min_move, **iterate_kw)
+        n_iter += after.n_iter
+        n_passes += after.n_passes
+        expansions += after.expansions
+        if used(after).sum() > present.sum():
+            break  # orphans seeded new superfacets: keep the labels before this round
+        it = after
+        n_swaps += n
     return replace(it, n_iter=n_iter, n_passes=n_passes, expansions=expansions), n_swaps
