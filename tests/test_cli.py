@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from superfacets import read_labels, read_mesh, write_mesh
+from superfacets import read_labels, read_mesh, segment, write_mesh
 from superfacets.cli import main
 
 from conftest import MESHES, need
@@ -142,7 +142,6 @@ def test_progress_bar_names_the_stages_then_counts_passes(tmp_path, small_off, c
 
 
 def test_cleanup_option(tmp_path, small_off):
-    from superfacets import segment
 
     out = {}
     for flag in ("--cleanup", "--no-cleanup"):
@@ -163,3 +162,14 @@ def test_summary_names_the_coarse_run(small_off, capsys):
     assert main(["segment", str(small_off), "-k", "2", "--coarsen", "16"]) == 0
     out = capsys.readouterr().out
     assert "clusters (coarse-to-fine)" in out and "5120 faces, 2 superfacets" in out
+
+
+def test_split_merge_flag_runs_the_swaps_and_names_them(small_off, tmp_path, capsys):
+    out = tmp_path / "sm.seg"
+    assert main(["segment", str(small_off), "-k", "30", "--split-merge", "-o", str(out),
+                 "--header"]) == 0
+    said = capsys.readouterr().out
+    r = segment(read_mesh(small_off), 30, split_merge=True)
+    assert f", {r.timings['swaps']} split-and-merge swaps, " in said
+    assert np.array_equal(read_labels(out, n_faces=5120), r.labels)
+    assert " split_merge=True " in out.read_text().split("\n", 4)[3]  # the header

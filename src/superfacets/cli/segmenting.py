@@ -122,8 +122,9 @@ def _summary(name: str, mesh, result, seconds: float, elements: str = "faces") -
     t = getattr(result, "timings", None) or {}
     coarse = (f", after {t['coarse_passes']} on {t['coarse_elements']:,} clusters "
               f"(coarse-to-fine)" if t.get("coarse_elements") and "coarse_passes" in t else "")
+    swaps = f", {t['swaps']} split-and-merge swaps" if "swaps" in t else ""
     return (f"{name}: {what}, {result.n_segments} {segs}, "
-            f"{result.n_iter} iterations ({state}){coarse}, {seconds:.2f} s")
+            f"{result.n_iter} iterations ({state}){coarse}{swaps}, {seconds:.2f} s")
 
 
 def cmd_segment(args) -> int:
