@@ -142,7 +142,6 @@ def test_progress_bar_names_the_stages_then_counts_passes(tmp_path, small_off, c
 
 
 def test_cleanup_option(tmp_path, small_off):
-
     out = {}
     for flag in ("--cleanup", "--no-cleanup"):
         out[flag] = tmp_path / f"{flag[2:]}.seg"
