@@ -14,6 +14,7 @@ from superfacets.datasets.psb import list_meshes
 from superfacets.methods import METHODS, MethodRun, Skipped, register_method
 from superfacets.runner import expand_grid, read_results, run_experiment
 from superfacets.report import load_results, markdown_summary, summary, write_report
+from superfacets.report.tables import series_order
 
 from conftest import grid_mesh, write_benchmark
 
@@ -249,6 +250,32 @@ def test_report_averages_categories_equally_and_keeps_last_row(tmp_path):
     assert s.loc["superfacets α=200", 50] == pytest.approx(0.2)  # failed row left out
     text = markdown_summary(df)
     assert "| superfacets α=0 | 0.350 |" in text and "1 failed" in text
+
+
+def test_report_orders_series_whose_values_mix_numbers_and_words(tmp_path):
+    # two files where a parameter was a number in one and "auto" in the other: the
+    # series sort numbers first (they once raised a TypeError comparing float and str)
+    def row(mesh, ctol, ue):
+        return dict(mesh=mesh, mesh_id=mesh, category="A", n_faces=100, method="superfacets",
+                    n_segments=50, alpha=200.0, center_tol=ctol, seed=0, status="ok",
+                    segments=50, iterations=3, converged="true", seconds=0.1,
+                    undersegmentation_error=ue, compactness=4.0, boundary_recall=0.5,
+                    achievable_accuracy=0.9, n_ground_truths=1)
+
+    res = tmp_path / "r.csv"
+    cols = ["mesh", "mesh_id", "category", "n_faces", "method", "n_segments", "alpha",
+            "center_tol",
+            "seed", "status", "segments", "iterations", "converged", "seconds",
+            "undersegmentation_error", "compactness", "boundary_recall",
+            "achievable_accuracy", "n_ground_truths"]
+    with open(res, "w", newline="") as f:
+        w = csv.DictWriter(f, cols)
+        w.writeheader()
+        w.writerows([row("1", "auto", 0.1), row("1", "0.05", 0.2), row("1", "0", 0.3)])
+    df = load_results(res)
+    assert series_order(df) == ["superfacets center_tol=0", "superfacets center_tol=0.05",
+                                "superfacets center_tol=auto"]
+    assert "center_tol=auto" in markdown_summary(df)
 
 
 def test_report_pools_files_filters_series_and_draws_cost(tmp_path):

@@ -125,7 +125,8 @@ def series_order(df) -> list[str]:
 def _natural(s: str):
     import re
 
-    return [float(t) if re.fullmatch(r"-?\d+(\.\d+)?", t) else t
+    # numbers before words at the same place, so mixed values ("auto", 0.05) still sort
+    return [(0, float(t), "") if re.fullmatch(r"-?\d+(\.\d+)?", t) else (1, 0.0, t)
             for t in re.split(r"=| ", s)]
 
 
