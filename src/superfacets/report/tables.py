@@ -67,11 +67,16 @@ def load_results(path, series: Sequence[str] | None = None):
     pd = require("pandas", "making result tables")
 
     from ..methods import METHODS
-    from ..runner.results import read_results, row_key
+    from ..runner.results import PARAMS_BEFORE, read_results, row_key
 
     paths = [path] if isinstance(path, (str, Path)) else list(path)
     last = {row_key(r): r for p in paths for r in read_results(p)}  # a retried row: the last
-    df = pd.DataFrame(list(last.values()))
+
+    def filled(r: dict) -> dict:  # rows of files from before a parameter: the value they ran with
+        names = METHODS[r["method"]].defaults if r["method"] in METHODS else {}
+        return {**{n: v for n, v in PARAMS_BEFORE.items() if n in names}, **r}
+
+    df = pd.DataFrame([filled(r) for r in last.values()])
     if df.empty:
         return df.assign(series=pd.Series(dtype=str))
     params = {m: sorted(METHODS[m].defaults) if m in METHODS else [] for m in df["method"].unique()}

@@ -59,7 +59,7 @@ def fmt_value(v) -> str:
 
 
 #: Parameters added after results files were written, and the value those rows ran with.
-_BEFORE = {"tol": "0.0", "cleanup": "false", "split_merge": "false"}
+PARAMS_BEFORE = {"tol": "0.0", "cleanup": "false", "split_merge": "false"}
 
 
 def row_key(row: dict) -> tuple:
@@ -74,7 +74,7 @@ def row_key(row: dict) -> tuple:
     names = sorted(method.defaults) if method is not None else []
     return (tuple(str(row.get(c, "")) for c in KEY_COLUMNS)
             + (str(row.get("elements") or "faces"),)  # files from before: faces
-            + tuple((n, str(row.get(n, _BEFORE.get(n, "")))) for n in names))
+            + tuple((n, str(row.get(n, PARAMS_BEFORE.get(n, "")))) for n in names))
 
 
 def read_results(path) -> list[dict]:
