@@ -101,3 +101,26 @@ def test_split_merge_off_is_the_paper():
 def test_split_merge_is_checked(bad):
     with pytest.raises(ParameterError, match="split_merge"):
         segment(grid_mesh(4, 4), 2, split_merge=bad)
+
+
+def test_a_round_that_changes_the_number_of_superfacets_is_undone(monkeypatch):
+    # passes that empty a superfacet (as zero-weight edges of degenerate faces can):
+    # the round is undone, the labels are those before it, no swap is counted
+    from dataclasses import replace
+
+    from superfacets import passes
+
+    mesh = read_mesh(need(MESHES / "bunny.tri.xz"))
+    paper = segment(mesh, 150)
+    real = passes.iterate
+
+    def emptying(*args, **kwargs):
+        it = real(*args, **kwargs)
+        label = it.label.copy()
+        label[label == 0] = 1  # superfacet 0 is left empty
+        return replace(it, label=label)
+
+    monkeypatch.setattr(passes, "iterate", emptying)
+    r = segment(mesh, 150, split_merge=True)
+    assert r.timings["swaps"] == 0
+    np.testing.assert_array_equal(r.labels, paper.labels)

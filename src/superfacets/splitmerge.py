@@ -154,9 +154,9 @@ def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.nda
     """Up to ``rounds`` rounds of (:func:`swap_round`, then the passes again from
     the new centers), after the iteration ``it`` (an
     :class:`~superfacets.passes.Iteration`); stops at a round without a swap.
-    A round whose passes end with more superfacets than before it (elements
-    no window reached seed new ones) is undone, and the rounds stop: the
-    number of superfacets never changes.
+    A round whose passes end with another number of superfacets than before
+    it (elements no window reached seed new ones, or a superfacet is left
+    empty) is undone, and the rounds stop: the number never changes.
 
     The new centers are the paper's update of the swapped labels (the
     element nearest each superfacet's mean; a center that would move by less
@@ -200,8 +200,8 @@ def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.nda
         n_iter += after.n_iter
         n_passes += after.n_passes
         expansions += after.expansions
-        if used(after).sum() > present.sum():
-            break  # orphans seeded new superfacets: keep the labels before this round
+        if used(after).sum() != present.sum():
+            break  # an orphan seeded a superfacet or one was emptied: keep the labels before
         it = after
         n_swaps += n
     return replace(it, n_iter=n_iter, n_passes=n_passes, expansions=expansions), n_swaps
