@@ -77,10 +77,11 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
 
     Examples
     --------
-    >>> import numpy as np, trimesh
+    >>> import trimesh
     >>> from superfacets import Mesh, segment
     >>> from superfacets.weights import csr_weights, edge_weights
-    >>> m = Mesh(*(lambda t: (t.vertices, t.faces))(trimesh.creation.icosphere(3)))
+    >>> sphere = trimesh.creation.icosphere(subdivisions=3)
+    >>> m = Mesh(sphere.vertices, sphere.faces)
     >>> r = segment(m, 20)
     >>> w = csr_weights(m.graph, edge_weights(m.graph, "paper", alpha=200, eta_convex=0.2))
     >>> new, n = swap_round(m.graph, w, r.labels)
