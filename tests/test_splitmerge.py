@@ -87,6 +87,12 @@ def test_split_merge_invariants_on_a_real_mesh():
     again = segment(mesh, 150, split_merge=True, n_threads=1)
     np.testing.assert_array_equal(again.labels, r.labels)  # deterministic, any threads
     assert not np.array_equal(r.labels, paper.labels)
+    # the candidates evaluated on 1 or 3 threads: the same swaps
+    w = _weights(mesh)
+    one, n1 = swap_round(mesh.graph, w, paper.labels, n_threads=1)
+    three, n3 = swap_round(mesh.graph, w, paper.labels, n_threads=3)
+    assert n1 == n3 > 0
+    np.testing.assert_array_equal(one, three)
 
 
 def test_split_merge_off_is_the_paper():

@@ -461,7 +461,7 @@ def pipeline(mesh, params: SegmentParams, *, replay: bool = True,
                 it, timings["swaps"] = swap_and_iterate(
                     it, graph, w, classifier, centers, sizes, positions, p.max_iter,
                     window_r2=window_r2, jump_cycles=jump_cycles, tol=p.tol,
-                    min_move=center_tol * r)
+                    min_move=center_tol * r, n_threads=spaces.n_threads)
         finally:
             spaces.close()
         classifier = spaces = w = None  # free the work buffers before the clean-up

@@ -44,9 +44,23 @@ MAX_FRACTION = 0.3
 ROUNDS = 3
 
 
+def _on_threads(run, n: int) -> None:
+    """``run(t)`` for ``t < n``, on ``n`` threads (the kernels release the GIL)."""
+    if n == 1:
+        run(0)
+        return
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(n - 1, thread_name_prefix="superfacets-swaps") as pool:
+        futs = [pool.submit(run, t) for t in range(1, n)]
+        run(0)
+        for f in futs:
+            f.result()
+
+
 def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: float = np.inf,
-               power: float = POWER, lloyd: int = LLOYD, max_fraction: float = MAX_FRACTION
-               ) -> tuple[np.ndarray, int]:
+               power: float = POWER, lloyd: int = LLOYD, max_fraction: float = MAX_FRACTION,
+               n_threads: int = 1) -> tuple[np.ndarray, int]:
     """One round of K-preserving swaps (see the module notes).
 
     Parameters
@@ -67,6 +81,9 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
         Re-centerings of each split's 2-means.
     max_fraction : float, default 0.3
         Swaps at most, as a fraction of ``K``.
+    n_threads : int, default 1
+        Threads evaluating the splits and merges (each candidate on its own:
+        the same result for any number).
 
     Returns
     -------
@@ -96,17 +113,25 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
     bounds = np.searchsorted(lab[members], np.arange(k + 1)).astype(np.int64)
     sizes = np.ascontiguousarray(g.sizes, dtype=np.float64)
     positions = np.ascontiguousarray(g.positions, dtype=np.float64)
+    # heap room: the CSR entries of the two superfacets with the most of them, plus one
+    entries = np.sort(np.bincount(lab, weights=np.diff(g.indptr), minlength=k))
+    heap = int(entries[-2:].sum()) + 1
+    n_thr = max(1, min(int(n_threads), k))
+    space = [(np.empty(heap), np.empty(heap, dtype=np.int64), np.empty(n, dtype=np.int64))
+             for _ in range(n_thr)]
     dist, dist2 = np.empty(n), np.empty(n)
     stamp = np.full(n, -1, dtype=np.int64)
     stamp2 = np.full(n, -1, dtype=np.int64)
-    hkey = np.empty(g.indices.shape[0] + 1)
-    hval = np.empty(g.indices.shape[0] + 1, dtype=np.int64)
-    work = np.empty(n, dtype=np.int64)
     energy, split_energy = np.empty(k), np.empty(k)
     second = np.zeros(n, dtype=np.bool_)
-    sid = split_candidates(g.indptr, g.indices, weights, lab, members, bounds, sizes,
-                           positions, float(power), int(lloyd), energy, split_energy, second,
-                           dist, dist2, stamp, stamp2, 0, hkey, hval, work)
+    sids = 1 << 40  # search ids of call t: from t * sids on (stamps are int64)
+
+    def split_part(t):  # superfacets t, t + n_thr, ...: disjoint elements, shared arrays
+        split_candidates(g.indptr, g.indices, weights, lab, members, bounds, sizes,
+                         positions, float(power), int(lloyd), energy, split_energy, second,
+                         dist, dist2, stamp, stamp2, t * sids, *space[t], t, n_thr)
+
+    _on_threads(split_part, n_thr)
     gain = energy - split_energy  # -inf: no split
     # adjacent superfacets: each pair once, a < b
     a, b = lab[g.pairs[:, 0]], lab[g.pairs[:, 1]]
@@ -115,8 +140,16 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
                     + np.maximum(a[cross], b[cross]))
     pa, pb = key // k, key % k
     union, reach = np.empty(key.shape[0]), np.empty(key.shape[0])
-    merge_energies(g.indptr, g.indices, weights, lab, members, bounds, sizes, positions,
-                   float(power), pa, pb, union, reach, dist, stamp, sid, hkey, hval, work)
+    # unions overlap: each thread its own distances (the first reuses the split's)
+    own = [(dist, stamp)] + [(np.empty(n), np.full(n, -1, dtype=np.int64))
+                             for _ in range(1, n_thr)]
+
+    def merge_part(t):
+        merge_energies(g.indptr, g.indices, weights, lab, members, bounds, sizes, positions,
+                       float(power), pa, pb, union, reach, *own[t], (n_thr + t) * sids,
+                       *space[t], t, n_thr)
+
+    _on_threads(merge_part, n_thr)
     loss = np.where(reach <= window_r2, union - energy[pa] - energy[pb], np.inf)
 
     # greedy: the largest gains with the smallest losses, each superfacet in one swap
@@ -151,7 +184,7 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
 def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.ndarray,
                      sizes: np.ndarray, positions: np.ndarray, max_iter: int, *,
                      rounds: int = ROUNDS, window_r2: float = np.inf, min_move: float = 0.0,
-                     **iterate_kw):
+                     n_threads: int = 1, **iterate_kw):
     """Up to ``rounds`` rounds of (:func:`swap_round`, then the passes again from
     the new centers), after the iteration ``it`` (an
     :class:`~superfacets.passes.Iteration`); stops at a round without a swap.
@@ -188,7 +221,8 @@ def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.nda
     for _ in range(rounds):
         present = used(it)
         old = it.centers[present]
-        new, n = swap_round(graph, weights, relabel_dense(it.label), window_r2=window_r2)
+        new, n = swap_round(graph, weights, relabel_dense(it.label), window_r2=window_r2,
+                            n_threads=n_threads)
         if n == 0:
             break
         moved = update_centers(new, old.shape[0], sizes, positions, old)

@@ -5,9 +5,9 @@ restricted to the elements of one superfacet (or of two, for a merge); the
 energy of a set of elements around a center is ``sum(size * d ** power)``.
 ``members[bounds[s]:bounds[s + 1]]`` are the elements of superfacet ``s``.
 ``dist`` / ``stamp`` are per-element work arrays (``stamp[f] == sid``: ``dist[f]``
-is set in the current search), ``hkey`` / ``hval`` a heap of capacity
-``len(indices) + 1`` (:mod:`.heap`; a search pushes an element again only on a
-strict decrease, so never more than once per CSR entry).
+is set in the current search), ``hkey`` / ``hval`` a heap (:mod:`.heap`) with
+room for one push per CSR entry of the elements searched, plus one (a search
+pushes an element again only on a strict decrease).
 """
 
 import numpy as np
@@ -102,17 +102,21 @@ def _energy(elems, n, sizes, dist, stamp, sid, power):
 @njit(cache=True, error_model="numpy", nogil=True)
 def split_candidates(indptr, indices, w, label, members, bounds, sizes, positions, power,
                      lloyd, energy, split_energy, second, dist, dist2, stamp, stamp2, sid,
-                     hkey, hval, work):
-    """Energy of each superfacet around the element nearest its mean, and of
-    its best split in two (2-means with ``lloyd`` re-centerings, seeded by
-    the farthest element and the one farthest from it).
+                     hkey, hval, work, first, step):
+    """Energy of each superfacet ``first, first + step, ...`` around the
+    element nearest its mean, and of its best split in two (2-means with
+    ``lloyd`` re-centerings, seeded by the farthest element and the one
+    farthest from it).
 
     Writes ``energy[s]``, ``split_energy[s]`` (``inf``: no split) and
     ``second[f] = True`` for the elements of the split's second part.
-    Returns the next free search id.
+    Returns the next free search id. A search touches only the elements of
+    its superfacet, so calls on disjoint sets of superfacets may share
+    ``dist``, ``stamp`` and ``second`` (with search ids of their own) and run
+    at once; ``hkey``, ``hval`` and ``work`` are per call.
     """
     k = bounds.shape[0] - 1
-    for s in range(k):
+    for s in range(first, k, step):
         lo = bounds[s]
         n = bounds[s + 1] - lo
         elems = members[lo:lo + n]
@@ -171,12 +175,14 @@ def split_candidates(indptr, indices, w, label, members, bounds, sizes, position
 
 @njit(cache=True, error_model="numpy", nogil=True)
 def merge_energies(indptr, indices, w, label, members, bounds, sizes, positions, power,
-                   pair_a, pair_b, out, reach, dist, stamp, sid, hkey, hval, work):
+                   pair_a, pair_b, out, reach, dist, stamp, sid, hkey, hval, work, first, step):
     """Energy of the union of superfacets ``pair_a[t]`` and ``pair_b[t]``
     around the element nearest its mean, into ``out[t]``, and the largest
     squared distance (in space) of its elements from that element, into
-    ``reach[t]``. Returns the next free search id."""
-    for t in range(pair_a.shape[0]):
+    ``reach[t]``, for ``t = first, first + step, ...``. Returns the next free
+    search id. Unions overlap: concurrent calls need their own ``dist`` and
+    ``stamp``."""
+    for t in range(first, pair_a.shape[0], step):
         a = pair_a[t]
         b = pair_b[t]
         n = 0
