@@ -14,7 +14,7 @@ cut by Dinic's max-flow, whose source side keeps the first label.
 import numpy as np
 from numba import njit
 
-from .heap import pop, push
+from .heap import pop_min, push
 
 _INF = np.inf
 
@@ -59,9 +59,7 @@ def band_distances(indptr, indices, geo, length, labels, pinned, limit, dist, pa
             partner[f] = best
             size = push(hkey, hval, size, 0.0, f)
     while size > 0:
-        d = hkey[0]
-        f = hval[0]
-        size = pop(hkey, hval, size)
+        d, f, size = pop_min(hkey, hval, size)
         if d > dist[f]:
             continue
         lf = labels[f]

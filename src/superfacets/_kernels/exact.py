@@ -8,7 +8,7 @@ only on a strict decrease).
 import numpy as np
 from numba import njit
 
-from .heap import pop, push
+from .heap import pop_min, push
 
 _INF = np.inf
 
@@ -16,9 +16,7 @@ _INF = np.inf
 @njit(cache=True, error_model="numpy")
 def _multi_source(indptr, indices, weights, dist, label, hkey, hval, size):
     while size > 0:
-        d = hkey[0]
-        f = hval[0]
-        size = pop(hkey, hval, size)
+        d, f, size = pop_min(hkey, hval, size)
         if d > dist[f]:
             continue
         lf = label[f]

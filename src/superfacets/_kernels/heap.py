@@ -3,7 +3,8 @@
 Private kernels, shared by the exact classification (:mod:`.exact`) and the
 VSA baseline's flooding. ``hkey`` (float64) and ``hval`` (int) are the heap
 arrays, ``size`` the number of entries; both functions return the new size.
-The caller sizes the arrays for every push it can make.
+The caller sizes the arrays for every push it can make. :func:`pop_min`
+removes and returns the root (the loop head of every Dijkstra here).
 """
 
 from numba import njit
@@ -47,3 +48,11 @@ def pop(hkey, hval, size):
     hkey[i] = key
     hval[i] = val
     return size
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def pop_min(hkey, hval, size):
+    """Remove the root; return ``(key, value, new size)``."""
+    key = hkey[0]
+    val = hval[0]
+    return key, val, pop(hkey, hval, size)

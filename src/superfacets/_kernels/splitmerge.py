@@ -13,7 +13,7 @@ pushes an element again only on a strict decrease).
 import numpy as np
 from numba import njit
 
-from .heap import pop, push
+from .heap import pop_min, push
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -23,9 +23,7 @@ def _search(indptr, indices, w, label, la, lb, src, dist, stamp, sid, hkey, hval
     stamp[src] = sid
     size = push(hkey, hval, 0, 0.0, src)
     while size > 0:
-        d = hkey[0]
-        f = hval[0]
-        size = pop(hkey, hval, size)
+        d, f, size = pop_min(hkey, hval, size)
         if d > dist[f]:
             continue
         for e in range(indptr[f], indptr[f + 1]):
