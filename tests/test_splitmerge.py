@@ -95,6 +95,33 @@ def test_split_merge_invariants_on_a_real_mesh():
     np.testing.assert_array_equal(one, three)
 
 
+@pytest.mark.parametrize("k", [40, 150, 300])
+def test_pruned_candidates_give_the_swaps_of_the_full_evaluation(k, monkeypatch):
+    # the lazy splits and abandoned merge searches decide exactly what evaluating
+    # every candidate decides, while evaluating a fraction of the splits
+    from superfacets import splitmerge
+
+    mesh = read_mesh(need(MESHES / "bunny.tri.xz"))
+    labels = segment(mesh, k).labels
+    w = _weights(mesh)
+    full, n_full = swap_round(mesh.graph, w, labels, pruned=False)
+    evaluated = []
+    real = splitmerge.split_candidates
+
+    def counting(*args):
+        which, first, step = args[10], args[-2], args[-1]
+        evaluated.extend(which[first::step].tolist())
+        return real(*args)
+
+    monkeypatch.setattr(splitmerge, "split_candidates", counting)
+    for threads in (1, 2):
+        evaluated.clear()
+        out, n = swap_round(mesh.graph, w, labels, n_threads=threads)
+        assert n == n_full
+        np.testing.assert_array_equal(out, full)
+        assert len(evaluated) == len(set(evaluated)) < 0.6 * k  # each once, most never
+
+
 def test_split_merge_off_is_the_paper():
     mesh = grid_mesh(30, 30, height=lambda x, y: 0.3 * np.abs(x))
     a = segment(mesh, 12, split_merge=False)

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._kernels.splitmerge import merge_energies, split_candidates
+from ._kernels.splitmerge import energies, merge_energies, split_candidates
 
 __all__ = ["swap_round", "POWER", "LLOYD", "MAX_FRACTION", "ROUNDS"]
 
@@ -44,23 +44,32 @@ MAX_FRACTION = 0.3
 ROUNDS = 3
 
 
-def _on_threads(run, n: int) -> None:
-    """``run(t)`` for ``t < n``, on ``n`` threads (the kernels release the GIL)."""
-    if n == 1:
-        run(0)
-        return
-    from concurrent.futures import ThreadPoolExecutor
+class _Threads:
+    """``run(fn, n)``: ``fn(t)`` for ``t < n`` on ``n`` threads (the kernels release
+    the GIL), one pool for all the calls of a round."""
 
-    with ThreadPoolExecutor(n - 1, thread_name_prefix="superfacets-swaps") as pool:
-        futs = [pool.submit(run, t) for t in range(1, n)]
-        run(0)
+    def __init__(self, n: int):
+        self.n = n
+        self.pool = None
+        if n > 1:
+            from concurrent.futures import ThreadPoolExecutor
+
+            self.pool = ThreadPoolExecutor(n - 1, thread_name_prefix="superfacets-swaps")
+
+    def run(self, fn) -> None:
+        futs = [self.pool.submit(fn, t) for t in range(1, self.n)] if self.pool else []
+        fn(0)
         for f in futs:
             f.result()
+
+    def close(self) -> None:
+        if self.pool is not None:
+            self.pool.shutdown()
 
 
 def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: float = np.inf,
                power: float = POWER, lloyd: int = LLOYD, max_fraction: float = MAX_FRACTION,
-               n_threads: int = 1) -> tuple[np.ndarray, int]:
+               n_threads: int = 1, pruned: bool = True) -> tuple[np.ndarray, int]:
     """One round of K-preserving swaps (see the module notes).
 
     Parameters
@@ -84,6 +93,13 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
     n_threads : int, default 1
         Threads evaluating the splits and merges (each candidate on its own:
         the same result for any number).
+    pruned : bool, default True
+        Evaluate only the candidates that can decide a swap (the same swaps):
+        a split's gain is at most its superfacet's energy, so splits are
+        evaluated lazily, the highest energies first, only until the greedy
+        choice is decided; a merge's search is abandoned once its energy
+        exceeds the largest gain of any split. ``False`` evaluates every
+        candidate in full (the reference the tests compare with).
 
     Returns
     -------
@@ -122,63 +138,125 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
     dist, dist2 = np.empty(n), np.empty(n)
     stamp = np.full(n, -1, dtype=np.int64)
     stamp2 = np.full(n, -1, dtype=np.int64)
-    energy, split_energy = np.empty(k), np.empty(k)
+    energy, far, split_energy = np.empty(k), np.empty(k, dtype=np.int64), np.full(k, np.inf)
     second = np.zeros(n, dtype=np.bool_)
-    sids = 1 << 40  # search ids of call t: from t * sids on (stamps are int64)
+    calls = iter(range(1, 1 << 22))  # search ids of a kernel call: from call * 2**40 on
+    args = (g.indptr, g.indices, weights, lab, members, bounds, sizes, positions, float(power))
+    threads = _Threads(n_thr)
+    try:
+        def energy_part(t, base):  # superfacets t, t + n_thr, ...: shared arrays
+            energies(*args, energy, far, dist, stamp, base, *space[t][:2], t, n_thr)
 
-    def split_part(t):  # superfacets t, t + n_thr, ...: disjoint elements, shared arrays
-        split_candidates(g.indptr, g.indices, weights, lab, members, bounds, sizes,
-                         positions, float(power), int(lloyd), energy, split_energy, second,
-                         dist, dist2, stamp, stamp2, t * sids, *space[t], t, n_thr)
+        bases = [next(calls) << 40 for _ in range(n_thr)]
+        threads.run(lambda t: energy_part(t, bases[t]))
 
-    _on_threads(split_part, n_thr)
-    gain = energy - split_energy  # -inf: no split
-    # adjacent superfacets: each pair once, a < b
-    a, b = lab[g.pairs[:, 0]], lab[g.pairs[:, 1]]
-    cross = a != b
-    key = np.unique(np.minimum(a[cross], b[cross]).astype(np.int64) * k
-                    + np.maximum(a[cross], b[cross]))
-    pa, pb = key // k, key % k
-    union, reach = np.empty(key.shape[0]), np.empty(key.shape[0])
-    # unions overlap: each thread its own distances (the first reuses the split's)
-    own = [(dist, stamp)] + [(np.empty(n), np.full(n, -1, dtype=np.int64))
-                             for _ in range(1, n_thr)]
+        def evaluate(which):  # the splits of superfacets ``which``
+            which = np.asarray(which, dtype=np.int64)
+            b = [next(calls) << 40 for _ in range(n_thr)]
+            threads.run(lambda t: split_candidates(
+                *args, int(lloyd), which, far, split_energy, second, dist, dist2, stamp,
+                stamp2, b[t], *space[t], t, n_thr))
 
-    def merge_part(t):
-        merge_energies(g.indptr, g.indices, weights, lab, members, bounds, sizes, positions,
-                       float(power), pa, pb, union, reach, *own[t], (n_thr + t) * sids,
-                       *space[t], t, n_thr)
+        splits = _SplitOrder(energy, split_energy, evaluate, 8 * n_thr, pruned)
+        limit = max(1, int(max_fraction * k))
+        best = splits.peek()
+        if best is None:  # no split lowers the energy: no swap
+            return lab.copy(), 0
+        # adjacent superfacets: each pair once, a < b
+        a, b = lab[g.pairs[:, 0]], lab[g.pairs[:, 1]]
+        cross = a != b
+        key = np.unique(np.minimum(a[cross], b[cross]).astype(np.int64) * k
+                        + np.maximum(a[cross], b[cross]))
+        pa, pb = key // k, key % k
+        union = np.empty(key.shape[0])
+        most = best[1] if pruned else np.inf
+        # unions overlap: each thread its own distances (the first reuses the split's)
+        own = [(dist, stamp)] + [(np.empty(n), np.full(n, -1, dtype=np.int64))
+                                 for _ in range(1, n_thr)]
+        mb = [next(calls) << 40 for _ in range(n_thr)]
+        threads.run(lambda t: merge_energies(
+            *args, pa, pb, energy, float(window_r2), float(most), union, *own[t], mb[t],
+            *space[t], t, n_thr))
+        loss = union - energy[pa] - energy[pb]  # inf: not allowed, or beyond any gain
 
-    _on_threads(merge_part, n_thr)
-    loss = np.where(reach <= window_r2, union - energy[pa] - energy[pb], np.inf)
-
-    # greedy: the largest gains with the smallest losses, each superfacet in one swap
-    splits = np.lexsort((np.arange(k), -gain))  # by gain descending, then index
-    splits = splits[gain[splits] > 0][:max(1, int(max_fraction * k))]
-    merges = np.lexsort((pb, pa, loss))
-    used = np.zeros(k, dtype=bool)
-    remap = np.arange(k, dtype=np.int32)
-    split_to = np.full(k, -1, dtype=np.int32)
-    j = 0
-    n_swaps = 0
-    for s in splits.tolist():
-        if used[s]:
-            continue
-        while j < merges.shape[0] and (used[pa[merges[j]]] or used[pb[merges[j]]]
-                                       or s in (pa[merges[j]], pb[merges[j]])):
+        # greedy: the largest gains with the smallest losses, each superfacet in one swap
+        merges = np.lexsort((pb, pa, loss))
+        used = np.zeros(k, dtype=bool)
+        remap = np.arange(k, dtype=np.int32)
+        split_to = np.full(k, -1, dtype=np.int32)
+        j = 0
+        n_swaps = 0
+        for _ in range(limit):
+            nxt = splits.pop()
+            if nxt is None:
+                break
+            s, gain = nxt
+            if used[s]:
+                continue
+            while j < merges.shape[0] and (used[pa[merges[j]]] or used[pb[merges[j]]]
+                                           or s in (pa[merges[j]], pb[merges[j]])):
+                j += 1
+            if j >= merges.shape[0] or loss[merges[j]] >= gain:
+                break
+            u, v = int(pa[merges[j]]), int(pb[merges[j]])
             j += 1
-        if j >= merges.shape[0] or loss[merges[j]] >= gain[s]:
-            break
-        u, v = int(pa[merges[j]]), int(pb[merges[j]])
-        j += 1
-        remap[v] = u  # v merges into u; its label goes to the second part of s
-        split_to[s] = v
-        used[[s, u, v]] = True
-        n_swaps += 1
+            remap[v] = u  # v merges into u; its label goes to the second part of s
+            split_to[s] = v
+            used[[s, u, v]] = True
+            n_swaps += 1
+    finally:
+        threads.close()
     out = remap[lab]
     moved = second & (split_to[lab] >= 0)
     out[moved] = split_to[lab[moved]]
     return out, n_swaps
+
+
+class _SplitOrder:
+    """The superfacets with a positive split gain, by gain descending (then
+    index), each split evaluated only when it may come next: a superfacet's
+    energy bounds its gain (the parts' energies are >= 0), so while an
+    unevaluated bound leads the queue, the ``batch`` leading bounds are
+    evaluated (``evaluate(which)`` fills ``split_energy``). ``pruned=False``
+    evaluates all at once."""
+
+    def __init__(self, energy, split_energy, evaluate, batch: int, pruned: bool):
+        import heapq
+
+        self.heapq, self.energy, self.split_energy = heapq, energy, split_energy
+        self.evaluate, self.batch = evaluate, batch
+        k = energy.shape[0]
+        if pruned:
+            self.queue = [(-float(energy[s]), s, False) for s in range(k)]
+        else:
+            evaluate(np.arange(k))
+            self.queue = [(-self._gain(s), s, True) for s in range(k)]
+        heapq.heapify(self.queue)
+
+    def _gain(self, s: int) -> float:
+        return float(self.energy[s] - self.split_energy[s])
+
+    def peek(self):
+        """``(s, gain)`` of the next split, or None when no gain is left."""
+        q, hq = self.queue, self.heapq
+        while q and not q[0][2]:
+            if -q[0][0] <= 0:  # bounds <= 0: no gain left
+                return None
+            top = [hq.heappop(q) for _ in range(min(self.batch, len(q)))]
+            todo = [s for _, s, exact in top if not exact]
+            self.evaluate(todo)
+            for item in top:
+                hq.heappush(q, item if item[2] else (-self._gain(item[1]), item[1], True))
+        if not q or -q[0][0] <= 0:
+            return None
+        return q[0][1], -q[0][0]
+
+    def pop(self):
+        """Remove and return :meth:`peek`."""
+        nxt = self.peek()
+        if nxt is not None:
+            self.heapq.heappop(self.queue)
+        return nxt
 
 
 def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.ndarray,

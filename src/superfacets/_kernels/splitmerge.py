@@ -98,33 +98,83 @@ def _energy(elems, n, sizes, dist, stamp, sid, power):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def split_candidates(indptr, indices, w, label, members, bounds, sizes, positions, power,
-                     lloyd, energy, split_energy, second, dist, dist2, stamp, stamp2, sid,
-                     hkey, hval, work, first, step):
-    """Energy of each superfacet ``first, first + step, ...`` around the
-    element nearest its mean, and of its best split in two (2-means with
-    ``lloyd`` re-centerings, seeded by the farthest element and the one
-    farthest from it).
+def _search_below(indptr, indices, w, label, la, lb, src, dist, stamp, sid, hkey, hval,
+                  sizes, power, area, limit):
+    """:func:`_search`, abandoned (returning False) as soon as the energy of the
+    elements it spans is sure to reach ``limit``: the elements settled so far
+    at their distances, the others (``area`` in all) at least at the distance
+    being settled."""
+    dist[src] = 0.0
+    stamp[src] = sid
+    size = push(hkey, hval, 0, 0.0, src)
+    settled = 0.0
+    rest = area
+    while size > 0:
+        d, f, size = pop_min(hkey, hval, size)
+        if d > dist[f]:
+            continue
+        dp = d ** power
+        settled += sizes[f] * dp
+        rest -= sizes[f]
+        if settled + max(rest, 0.0) * dp >= limit:
+            return False
+        for e in range(indptr[f], indptr[f + 1]):
+            g = indices[e]
+            lg = label[g]
+            if lg != la and lg != lb:
+                continue
+            nd = d + w[e]
+            if stamp[g] != sid or nd < dist[g]:
+                dist[g] = nd
+                stamp[g] = sid
+                size = push(hkey, hval, size, nd, g)
+    return True
 
-    Writes ``energy[s]``, ``split_energy[s]`` (``inf``: no split) and
-    ``second[f] = True`` for the elements of the split's second part.
-    Returns the next free search id. A search touches only the elements of
-    its superfacet, so calls on disjoint sets of superfacets may share
-    ``dist``, ``stamp`` and ``second`` (with search ids of their own) and run
-    at once; ``hkey``, ``hval`` and ``work`` are per call.
-    """
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def energies(indptr, indices, w, label, members, bounds, sizes, positions, power, energy,
+             far, dist, stamp, sid, hkey, hval, first, step):
+    """Energy of each superfacet ``first, first + step, ...`` around the element
+    nearest its mean, into ``energy[s]``, and its farthest element, into
+    ``far[s]``. Returns the next free search id; calls on disjoint superfacets
+    may share ``dist`` and ``stamp`` (with search ids of their own)."""
     k = bounds.shape[0] - 1
     for s in range(first, k, step):
         lo = bounds[s]
         n = bounds[s + 1] - lo
         elems = members[lo:lo + n]
-        split_energy[s] = np.inf
         c = _nearest_mean(elems, n, sizes, positions)
         _search(indptr, indices, w, label, s, s, c, dist, stamp, sid, hkey, hval)
-        energy[s], p = _energy(elems, n, sizes, dist, stamp, sid, power)
+        energy[s], far[s] = _energy(elems, n, sizes, dist, stamp, sid, power)
         sid += 1
+    return sid
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def split_candidates(indptr, indices, w, label, members, bounds, sizes, positions, power,
+                     lloyd, which, far, split_energy, second, dist, dist2, stamp, stamp2, sid,
+                     hkey, hval, work, first, step):
+    """Energy of the best split in two of each superfacet ``s = which[first],
+    which[first + step], ...``: a 2-means with ``lloyd`` re-centerings, seeded
+    by its farthest element ``far[s]`` (from :func:`energies`) and the
+    element farthest from that.
+
+    Writes ``split_energy[s]`` (``inf``: no split) and ``second[f] = True``
+    for the elements of the split's second part. Returns the next free search
+    id. A search touches only the elements of its superfacet, so calls on
+    disjoint sets of superfacets may share ``dist``, ``stamp`` and ``second``
+    (with search ids of their own) and run at once; ``hkey``, ``hval`` and
+    ``work`` are per call.
+    """
+    for t in range(first, which.shape[0], step):
+        s = which[t]
+        lo = bounds[s]
+        n = bounds[s + 1] - lo
+        elems = members[lo:lo + n]
+        split_energy[s] = np.inf
         if n < 4:
             continue
+        p = far[s]
         _search(indptr, indices, w, label, s, s, p, dist, stamp, sid, hkey, hval)
         _, q = _energy(elems, n, sizes, dist, stamp, sid, power)
         if q == p:
@@ -173,24 +223,28 @@ def split_candidates(indptr, indices, w, label, members, bounds, sizes, position
 
 @njit(cache=True, error_model="numpy", nogil=True)
 def merge_energies(indptr, indices, w, label, members, bounds, sizes, positions, power,
-                   pair_a, pair_b, out, reach, dist, stamp, sid, hkey, hval, work, first, step):
-    """Energy of the union of superfacets ``pair_a[t]`` and ``pair_b[t]``
-    around the element nearest its mean, into ``out[t]``, and the largest
-    squared distance (in space) of its elements from that element, into
-    ``reach[t]``, for ``t = first, first + step, ...``. Returns the next free
-    search id. Unions overlap: concurrent calls need their own ``dist`` and
-    ``stamp``."""
+                   pair_a, pair_b, energy, window_r2, most, out, dist, stamp, sid, hkey, hval,
+                   work, first, step):
+    """Energy of the union of superfacets ``a = pair_a[t]`` and ``b = pair_b[t]``
+    around the element nearest its mean, into ``out[t]``, for ``t = first,
+    first + step, ...``; ``inf`` where some element of the union lies farther
+    (in space) than ``sqrt(window_r2)`` from that element, or where the union's
+    energy exceeds ``energy[a] + energy[b] + most`` (its search is then
+    abandoned: a merge that costs more than ``most`` is never taken). Returns
+    the next free search id. Unions overlap: concurrent calls need their own
+    ``dist`` and ``stamp``."""
+    slack = 1.0 + 1e-9  # abandon only beyond rounding
     for t in range(first, pair_a.shape[0], step):
         a = pair_a[t]
         b = pair_b[t]
         n = 0
+        area = 0.0
         for s in (a, b):
             for i in range(bounds[s], bounds[s + 1]):
                 work[n] = members[i]
+                area += sizes[members[i]]
                 n += 1
         c = _nearest_mean(work, n, sizes, positions)
-        _search(indptr, indices, w, label, a, b, c, dist, stamp, sid, hkey, hval)
-        out[t], _ = _energy(work, n, sizes, dist, stamp, sid, power)
         far = 0.0
         for i in range(n):
             f = work[i]
@@ -198,6 +252,11 @@ def merge_energies(indptr, indices, w, label, members, bounds, sizes, positions,
             dy = positions[f, 1] - positions[c, 1]
             dz = positions[f, 2] - positions[c, 2]
             far = max(far, dx * dx + dy * dy + dz * dz)
-        reach[t] = far
+        out[t] = np.inf
+        if far <= window_r2:
+            limit = (energy[a] + energy[b] + most) * slack
+            if _search_below(indptr, indices, w, label, a, b, c, dist, stamp, sid, hkey, hval,
+                             sizes, power, area, limit):
+                out[t], _ = _energy(work, n, sizes, dist, stamp, sid, power)
         sid += 1
     return sid
