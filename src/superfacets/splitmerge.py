@@ -22,6 +22,13 @@ taken greedily, the largest gain with the smallest loss, while the gain
 exceeds the loss and no superfacet is in two swaps, at most
 ``max_fraction * K`` a round.
 
+Only the candidates that can decide a swap are evaluated in full, with the
+same swaps as evaluating all: a split's gain is at most its superfacet's
+energy, so the 2-means run lazily, highest energy first, until the greedy
+choice is decided; a merge's search stops as soon as the union's energy
+exceeds the largest gain (that merge can never be taken), and a union that
+leaves the window is never searched.
+
 Not in the paper: the paper names no post-processing, and its authors call a
 clean-up "a priority next step". Judged in ``docs/cleanup.md``.
 """
