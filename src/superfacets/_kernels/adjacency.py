@@ -114,6 +114,71 @@ def csr_of_pairs(lo, hi, n, indices, dual_edge):
 
 
 @njit(cache=True, error_model="numpy")
+def group_pairs(half, face, a, b):
+    """The edges of sorted half-edges and the face pairs that share them.
+
+    ``half`` holds half-edge ids ordered by their vertices ``(a[h], b[h])``,
+    ``face[i]`` the face of ``half[i]``. A run of equal ``(a, b)`` is one
+    edge: of one half-edge, an open boundary; of ``s >= 2``, each of the
+    ``s (s - 1) / 2`` pairs of its faces (``i < j`` within the run; a face
+    paired with itself left out) is a face pair across that edge.
+
+    Returns
+    -------
+    boundary : (b,) int64 ndarray
+        Index into ``half`` of each open-boundary edge, in order.
+    lo, hi : (p,) ndarrays of ``face``'s dtype
+        The two faces of each pair, ``lo < hi``, runs in order, then ``(i, j)``.
+    he : (p,) ndarray of ``half``'s dtype
+        The first half-edge of the run of each pair.
+    """
+    n = half.shape[0]
+    n_bound = 0
+    n_pairs = 0
+    i = 0
+    while i < n:  # count
+        h = half[i]
+        j = i + 1
+        while j < n and a[half[j]] == a[h] and b[half[j]] == b[h]:
+            j += 1
+        s = j - i
+        if s == 1:
+            n_bound += 1
+        else:
+            n_pairs += s * (s - 1) // 2
+        i = j
+    boundary = np.empty(n_bound, dtype=np.int64)
+    lo = np.empty(n_pairs, dtype=face.dtype)
+    hi = np.empty(n_pairs, dtype=face.dtype)
+    he = np.empty(n_pairs, dtype=half.dtype)
+    nb = 0
+    p = 0
+    i = 0
+    while i < n:  # fill
+        h = half[i]
+        j = i + 1
+        while j < n and a[half[j]] == a[h] and b[half[j]] == b[h]:
+            j += 1
+        if j - i == 1:
+            boundary[nb] = i
+            nb += 1
+        else:
+            for x in range(i, j):
+                for y in range(x + 1, j):
+                    f = face[x]
+                    g = face[y]
+                    if f != g:
+                        lo[p] = min(f, g)
+                        hi[p] = max(f, g)
+                        he[p] = h
+                        p += 1
+        i = j
+    if p < n_pairs:
+        return boundary, lo[:p].copy(), hi[:p].copy(), he[:p].copy()
+    return boundary, lo, hi, he
+
+
+@njit(cache=True, error_model="numpy")
 def first_of_each_pair(lo, hi, ekey, n):
     """One entry per distinct pair ``(lo[t], hi[t])``, ``lo`` in ``0..n-1``: the
     one of smallest ``ekey`` (then smallest ``t``), in ``(lo, hi)`` order. The

@@ -135,7 +135,7 @@ def build_face_graph(faces: np.ndarray, n_vertices: int, offsets: np.ndarray | N
     -------
     FaceAdjacency
     """
-    from .._kernels.adjacency import first_of_each_pair, order_by_two_keys
+    from .._kernels.adjacency import first_of_each_pair, group_pairs, order_by_two_keys
 
     if offsets is None:  # triangles: half-edge h = 3 * face + corner
         m = faces.shape[0]
@@ -170,49 +170,12 @@ def build_face_graph(faces: np.ndarray, n_vertices: int, offsets: np.ndarray | N
     half, _ = order_by_two_keys(a, b, int(n_vertices), a == b)
     half = half.astype(itype)
     sface = face_of(half)
-    n_half = half.shape[0]
-    if n_half:
-        ha, hb = a[half], b[half]
-        brk = np.empty(n_half, dtype=bool)
-        brk[0] = True
-        np.not_equal(ha[1:], ha[:-1], out=brk[1:])
-        brk[1:] |= hb[1:] != hb[:-1]
-        del ha, hb
-        starts = np.flatnonzero(brk)
-        del brk
-    else:
-        starts = np.zeros(0, np.int64)
-    sizes = np.diff(np.r_[starts, n_half])
-
-    # boundary edges: groups of size 1
-    one = starts[sizes == 1]
+    # edges (runs of equal (a, b)): open boundaries, and the face pairs across each,
+    # all pairs for non-manifold edges, a degenerate face paired with itself left out
+    one, lo, hi, he = group_pairs(half, sface, a, b)
     boundary_faces = sface[one].astype(np.int64)
     boundary_edges = np.stack([a[half[one]], b[half[one]]], axis=1).astype(np.int64)
-    del one
-
-    # pairs within every group of size >= 2 (all pairs for non-manifold edges)
-    pi, pj, pe = [], [], []
-    for s in np.unique(sizes[sizes >= 2]):
-        st = starts[sizes == s]
-        ii, jj = np.triu_indices(int(s), 1)
-        pi.append(sface[st[:, None] + ii[None, :]].ravel())
-        pj.append(sface[st[:, None] + jj[None, :]].ravel())
-        pe.append(np.repeat(half[st], ii.size))
-    del starts, sizes, sface, half
-    if pi:
-        fi = np.concatenate(pi)
-        fj = np.concatenate(pj)
-        he = np.concatenate(pe)
-    else:
-        fi = fj = he = np.zeros(0, itype)
-    del pi, pj, pe
-    lo = np.minimum(fi, fj)
-    hi = np.maximum(fi, fj)
-    del fi, fj
-    keep = lo != hi  # a degenerate face sharing an edge with itself
-    if not keep.all():
-        lo, hi, he = lo[keep], hi[keep], he[keep]
-    del keep
+    del one, sface, half
     # one dual edge per face pair: the first in edge-key order (smallest vertex pair)
     ekey = a[he].astype(np.int64) * np.int64(n_vertices) + b[he]
     first = first_of_each_pair(lo, hi, ekey, m)
