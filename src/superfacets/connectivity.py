@@ -89,8 +89,10 @@ def enforce_connectivity(graph, labels: np.ndarray, centers: np.ndarray | None =
     piece_label = np.empty(n_pieces, dtype=np.int64)
     piece_label[piece] = labels
     k = int(labels.max()) + 1
-    if n_pieces == np.unique(labels).size:
-        return relabel_dense(labels)
+    dense = relabel_dense(labels)
+    if n_pieces == int(dense.max()) + 1:  # one piece per label
+        return dense
+    del dense
 
     area = np.bincount(piece, weights=g.sizes, minlength=n_pieces)
     # main piece of each label: the one holding the center, else the largest
