@@ -30,7 +30,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ._kernels.voronoi import first_in_cells, nearest_seed
+from ._kernels.voronoi import crossing_pairs, first_in_cells, nearest_seed
 from .elements.graph import ElementGraph, adjacency_csr
 from .expansion import bucket_width
 from .params import COARSE_MIN_PER_SEGMENT, COARSE_PER_SEGMENT, DEFAULT_CENTER_TOL
@@ -195,14 +195,8 @@ def coarsen(graph: ElementGraph, weights: np.ndarray, csr_w: np.ndarray,
     nor /= np.where(norm > 0, norm, 1.0)[:, None]
 
     # coarse adjacency: the fine pairs whose elements lie in different clusters
-    i, j = graph.pairs[:, 0], graph.pairs[:, 1]
-    a, b = cluster[i], cluster[j]
-    cross = np.flatnonzero(a != b)
-    a, b = a[cross], b[cross]
-    via = dist[i[cross]] + weights[cross] + dist[j[cross]]
-    span = graph.lengths[cross]
-    lo, hi = np.minimum(a, b), np.maximum(a, b)
-    del a, b, dist
+    lo, hi, via, span = crossing_pairs(graph.pairs, cluster, dist, weights, graph.lengths)
+    del dist
     key = lo * np.int64(n_c) + hi
     o = np.argsort(key, kind="stable")
     key = key[o]

@@ -107,3 +107,33 @@ def first_in_cells(positions, lo, h, dims, cap):
             out[j] = first[i]
             j += 1
     return out
+
+
+@njit(cache=True, error_model="numpy")
+def crossing_pairs(pairs, cluster, dist, weights, lengths):
+    """The adjacencies ``t`` whose two elements lie in different clusters, in
+    order: their clusters ``lo < hi`` (int64), the length of the path between
+    the two seeds through that adjacency, ``dist[i] + weights[t] + dist[j]``,
+    and ``lengths[t]``."""
+    e = pairs.shape[0]
+    n = 0
+    for t in range(e):
+        if cluster[pairs[t, 0]] != cluster[pairs[t, 1]]:
+            n += 1
+    lo = np.empty(n, dtype=np.int64)
+    hi = np.empty(n, dtype=np.int64)
+    via = np.empty(n)
+    span = np.empty(n)
+    p = 0
+    for t in range(e):
+        i = pairs[t, 0]
+        j = pairs[t, 1]
+        a = cluster[i]
+        b = cluster[j]
+        if a != b:
+            lo[p] = min(a, b)
+            hi[p] = max(a, b)
+            via[p] = dist[i] + weights[t] + dist[j]
+            span[p] = lengths[t]
+            p += 1
+    return lo, hi, via, span
