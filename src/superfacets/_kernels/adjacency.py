@@ -129,40 +129,51 @@ def group_pairs(half, face, a, b):
         Index into ``half`` of each open-boundary edge, in order.
     lo, hi : (p,) ndarrays of ``face``'s dtype
         The two faces of each pair, ``lo < hi``, runs in order, then ``(i, j)``.
-    he : (p,) ndarray of ``half``'s dtype
-        The first half-edge of the run of each pair.
+    ea, eb : (p,) ndarrays of ``a``'s dtype
+        The vertices ``(a, b)`` of the edge of each pair.
     """
     n = half.shape[0]
+    new = np.empty(n + 1, dtype=np.bool_)  # half[i] starts a run (and a sentinel)
+    new[n] = True
     n_bound = 0
     n_pairs = 0
-    i = 0
-    while i < n:  # count
+    run = 0
+    for i in range(n):  # one read of each half-edge's vertices: mark runs, count
         h = half[i]
-        j = i + 1
-        while j < n and a[half[j]] == a[h] and b[half[j]] == b[h]:
-            j += 1
-        s = j - i
-        if s == 1:
+        if i == 0 or a[h] != a[half[i - 1]] or b[h] != b[half[i - 1]]:
+            new[i] = True
+            if i > 0:
+                if run == 1:
+                    n_bound += 1
+                else:
+                    n_pairs += run * (run - 1) // 2
+            run = 1
+        else:
+            new[i] = False
+            run += 1
+    if n:
+        if run == 1:
             n_bound += 1
         else:
-            n_pairs += s * (s - 1) // 2
-        i = j
+            n_pairs += run * (run - 1) // 2
     boundary = np.empty(n_bound, dtype=np.int64)
     lo = np.empty(n_pairs, dtype=face.dtype)
     hi = np.empty(n_pairs, dtype=face.dtype)
-    he = np.empty(n_pairs, dtype=half.dtype)
+    ea = np.empty(n_pairs, dtype=a.dtype)
+    eb = np.empty(n_pairs, dtype=a.dtype)
     nb = 0
     p = 0
     i = 0
     while i < n:  # fill
-        h = half[i]
         j = i + 1
-        while j < n and a[half[j]] == a[h] and b[half[j]] == b[h]:
+        while not new[j]:
             j += 1
         if j - i == 1:
             boundary[nb] = i
             nb += 1
         else:
+            va = a[half[i]]
+            vb = b[half[i]]
             for x in range(i, j):
                 for y in range(x + 1, j):
                     f = face[x]
@@ -170,19 +181,21 @@ def group_pairs(half, face, a, b):
                     if f != g:
                         lo[p] = min(f, g)
                         hi[p] = max(f, g)
-                        he[p] = h
+                        ea[p] = va
+                        eb[p] = vb
                         p += 1
         i = j
     if p < n_pairs:
-        return boundary, lo[:p].copy(), hi[:p].copy(), he[:p].copy()
-    return boundary, lo, hi, he
+        return boundary, lo[:p].copy(), hi[:p].copy(), ea[:p].copy(), eb[:p].copy()
+    return boundary, lo, hi, ea, eb
 
 
 @njit(cache=True, error_model="numpy")
-def first_of_each_pair(lo, hi, ekey, n):
+def first_of_each_pair(lo, hi, ka, kb, n):
     """One entry per distinct pair ``(lo[t], hi[t])``, ``lo`` in ``0..n-1``: the
-    one of smallest ``ekey`` (then smallest ``t``), in ``(lo, hi)`` order. The
-    same as a stable ``np.lexsort((ekey, lo * n + hi))`` keeping the first of each pair."""
+    one of smallest ``(ka[t], kb[t])`` (then smallest ``t``), in ``(lo, hi)``
+    order. The same as a stable ``np.lexsort((kb, ka, lo * n + hi))`` keeping
+    the first of each pair."""
     order, _ = order_by_two_keys(lo, hi, n, np.zeros(lo.shape[0], dtype=np.bool_))
     keep = np.empty(order.shape[0], dtype=np.int64)
     nk = 0
@@ -193,7 +206,7 @@ def first_of_each_pair(lo, hi, ekey, n):
         j = i + 1
         while j < order.shape[0] and lo[order[j]] == lo[t] and hi[order[j]] == hi[t]:
             u = order[j]
-            if ekey[u] < ekey[best]:
+            if ka[u] < ka[best] or (ka[u] == ka[best] and kb[u] < kb[best]):
                 best = u
             j += 1
         keep[nk] = best

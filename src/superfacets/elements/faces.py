@@ -172,20 +172,17 @@ def build_face_graph(faces: np.ndarray, n_vertices: int, offsets: np.ndarray | N
     sface = face_of(half)
     # edges (runs of equal (a, b)): open boundaries, and the face pairs across each,
     # all pairs for non-manifold edges, a degenerate face paired with itself left out
-    one, lo, hi, he = group_pairs(half, sface, a, b)
+    one, lo, hi, ea, eb = group_pairs(half, sface, a, b)
     boundary_faces = sface[one].astype(np.int64)
     boundary_edges = np.stack([a[half[one]], b[half[one]]], axis=1).astype(np.int64)
-    del one, sface, half
-    # one dual edge per face pair: the first in edge-key order (smallest vertex pair)
-    ekey = a[he].astype(np.int64) * np.int64(n_vertices) + b[he]
-    first = first_of_each_pair(lo, hi, ekey, m)
-    del ekey
-    lo, hi, he = lo[first], hi[first], he[first]
-    del first
+    del one, sface, half, a, b
+    # one dual edge per face pair: the first in edge order (smallest vertex pair)
+    first = first_of_each_pair(lo, hi, ea, eb, m)
+    lo, hi = lo[first], hi[first]
     # 32-bit while the ids fit (24 bytes per face less, kept for the whole run)
     pairs = np.stack([lo, hi], axis=1).astype(np.int32 if m < 2**31 - 1 else np.int64)
-    edges = np.stack([a[he], b[he]], axis=1)
-    del a, b, he
+    edges = np.stack([ea[first], eb[first]], axis=1)
+    del ea, eb, first
 
     indptr, indices, dual_edge = adjacency_csr(lo, hi, m)
     del lo, hi
