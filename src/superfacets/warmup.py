@@ -24,8 +24,7 @@ def _warm() -> None:
     try:
         import numpy as np
 
-        from ._kernels.adjacency import (csr_of_pairs, first_of_each_pair, group_pairs,
-                                         order_by_two_keys)
+        from ._kernels.adjacency import csr_of_face_pairs, group_pairs, order_by_two_keys
         from ._kernels.expand import reset_labels
 
         reset_labels(np.empty(1), np.empty(1, dtype=np.int32))
@@ -33,8 +32,8 @@ def _warm() -> None:
         one = np.zeros(1, dtype=np.int32)
         order_by_two_keys(one, one, 1, np.ones(1, dtype=bool))
         group_pairs(np.zeros(1, dtype=np.int32), one, one, one)
-        first_of_each_pair(one, one, one, one, 1)
-        csr_of_pairs(one, one + 1, 2, np.empty(2, dtype=np.int32), np.empty(2, dtype=np.int32))
+        csr_of_face_pairs(one, one + 1, one, one, 2, np.empty(2, dtype=np.int32),
+                          np.empty(2, dtype=np.int32))
     except Exception:  # never let the warm-up break an import; the real call will report
         pass
 

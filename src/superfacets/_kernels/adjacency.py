@@ -191,28 +191,98 @@ def group_pairs(half, face, a, b):
 
 
 @njit(cache=True, error_model="numpy")
-def first_of_each_pair(lo, hi, ka, kb, n):
-    """One entry per distinct pair ``(lo[t], hi[t])``, ``lo`` in ``0..n-1``: the
-    one of smallest ``(ka[t], kb[t])`` (then smallest ``t``), in ``(lo, hi)``
-    order. The same as a stable ``np.lexsort((kb, ka, lo * n + hi))`` keeping
-    the first of each pair."""
-    order, _ = order_by_two_keys(lo, hi, n, np.zeros(lo.shape[0], dtype=np.bool_))
-    keep = np.empty(order.shape[0], dtype=np.int64)
-    nk = 0
-    i = 0
-    while i < order.shape[0]:
-        t = order[i]
-        best = t
-        j = i + 1
-        while j < order.shape[0] and lo[order[j]] == lo[t] and hi[order[j]] == hi[t]:
-            u = order[j]
-            if ka[u] < ka[best] or (ka[u] == ka[best] and kb[u] < kb[best]):
-                best = u
-            j += 1
-        keep[nk] = best
-        nk += 1
-        i = j
-    return keep[:nk]
+def csr_of_face_pairs(lo, hi, ka, kb, n, indices, dual_edge):
+    """The distinct pairs among ``(lo[t], hi[t])`` (``lo < hi < n``, repeats
+    allowed) and their symmetric CSR, in one counting sort.
+
+    Of a pair listed several times, the entry of smallest ``(ka[t], kb[t])``
+    (then smallest ``t``) is kept. ``indices`` and ``dual_edge`` have room
+    for ``2 len(lo)`` entries; the first ``2 e`` are filled (neighbours
+    ascending per row, and the pair of each entry).
+
+    Returns
+    -------
+    indptr : (n + 1,) int64 ndarray
+    keep : (e,) int64 ndarray
+        The entry ``t`` kept for each distinct pair, in ``(lo, hi)`` order
+        (as a stable ``np.lexsort((kb, ka, lo * n + hi))`` keeping the first
+        of each pair).
+    """
+    p = lo.shape[0]
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    for t in range(p):
+        indptr[lo[t] + 1] += 1
+        indptr[hi[t] + 1] += 1
+    for v in range(n):
+        indptr[v + 1] += indptr[v]
+    fill = indptr[:n].copy()
+    for t in range(p):  # each row in t order
+        a = lo[t]
+        b = hi[t]
+        q = fill[a]
+        indices[q] = b
+        dual_edge[q] = t
+        fill[a] = q + 1
+        q = fill[b]
+        indices[q] = a
+        dual_edge[q] = t
+        fill[b] = q + 1
+    # rows by neighbour, stably; then one entry per neighbour (the best t), compacted
+    out = 0
+    for v in range(n):
+        s = indptr[v]
+        f = indptr[v + 1]
+        if f - s <= _SMALL:
+            for i in range(s + 1, f):
+                x = indices[i]
+                d = dual_edge[i]
+                j = i - 1
+                while j >= s and indices[j] > x:
+                    indices[j + 1] = indices[j]
+                    dual_edge[j + 1] = dual_edge[j]
+                    j -= 1
+                indices[j + 1] = x
+                dual_edge[j + 1] = d
+        else:
+            o = np.argsort(indices[s:f], kind="mergesort")
+            ind = indices[s:f].copy()
+            de = dual_edge[s:f].copy()
+            for i in range(f - s):
+                indices[s + i] = ind[o[i]]
+                dual_edge[s + i] = de[o[i]]
+        indptr[v] = out
+        i = s
+        while i < f:
+            g = indices[i]
+            best = dual_edge[i]
+            j = i + 1
+            while j < f and indices[j] == g:
+                u = dual_edge[j]
+                if ka[u] < ka[best] or (ka[u] == ka[best] and kb[u] < kb[best]):
+                    best = u
+                j += 1
+            indices[out] = g
+            dual_edge[out] = best
+            out += 1
+            i = j
+    indptr[n] = out
+    # pair ids in (lo, hi) order: row v's neighbours above v; the mirror entries of
+    # a row (neighbours below it) come first and ascending, in the order ids are given
+    e = out // 2
+    keep = np.empty(e, dtype=np.int64)
+    mirror = indptr[:n].copy()
+    nid = 0
+    for v in range(n):
+        for i in range(indptr[v], indptr[v + 1]):
+            g = indices[i]
+            if g > v:
+                keep[nid] = dual_edge[i]
+                dual_edge[i] = nid
+                q = mirror[g]
+                dual_edge[q] = nid
+                mirror[g] = q + 1
+                nid += 1
+    return indptr, keep
 
 
 @njit(cache=True, error_model="numpy")

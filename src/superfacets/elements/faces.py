@@ -22,7 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .graph import ElementGraph, adjacency_csr
+from .graph import ElementGraph
 
 __all__ = ["FaceAdjacency", "build_face_graph", "face_graph"]
 
@@ -135,7 +135,7 @@ def build_face_graph(faces: np.ndarray, n_vertices: int, offsets: np.ndarray | N
     -------
     FaceAdjacency
     """
-    from .._kernels.adjacency import first_of_each_pair, group_pairs, order_by_two_keys
+    from .._kernels.adjacency import csr_of_face_pairs, group_pairs, order_by_two_keys
 
     if offsets is None:  # triangles: half-edge h = 3 * face + corner
         m = faces.shape[0]
@@ -176,16 +176,21 @@ def build_face_graph(faces: np.ndarray, n_vertices: int, offsets: np.ndarray | N
     boundary_faces = sface[one].astype(np.int64)
     boundary_edges = np.stack([a[half[one]], b[half[one]]], axis=1).astype(np.int64)
     del one, sface, half, a, b
-    # one dual edge per face pair: the first in edge order (smallest vertex pair)
-    first = first_of_each_pair(lo, hi, ea, eb, m)
-    lo, hi = lo[first], hi[first]
+    # one dual edge per face pair: the first in edge order (smallest vertex pair);
+    # pairs in (lo, hi) order and their CSR, in one counting sort
+    n_max = 2 * lo.shape[0]
+    indices = np.empty(n_max, dtype=np.int32)
+    dual_edge = np.empty(n_max, dtype=np.int32 if n_max < 2**31 - 1 else np.int64)
+    indptr, first = csr_of_face_pairs(lo, hi, ea, eb, m, indices, dual_edge)
+    n_csr = 2 * first.shape[0]
+    if n_csr < n_max:  # repeated pairs dropped: shrink to fit
+        indices = indices[:n_csr].copy()
+        dual_edge = dual_edge[:n_csr].astype(np.int32 if n_csr < 2**31 - 1 else np.int64)
     # 32-bit while the ids fit (24 bytes per face less, kept for the whole run)
-    pairs = np.stack([lo, hi], axis=1).astype(np.int32 if m < 2**31 - 1 else np.int64)
+    pairs = np.stack([lo[first], hi[first]], axis=1).astype(
+        np.int32 if m < 2**31 - 1 else np.int64)
     edges = np.stack([ea[first], eb[first]], axis=1)
-    del ea, eb, first
-
-    indptr, indices, dual_edge = adjacency_csr(lo, hi, m)
-    del lo, hi
+    del lo, hi, ea, eb, first
     return FaceAdjacency(
         pairs=pairs,
         edges=edges,
