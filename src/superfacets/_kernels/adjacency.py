@@ -65,6 +65,29 @@ def order_by_two_keys(key1, key2, n_key1, skip):
     return order, starts
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _sort_row(indices, dual_edge, s, f):
+    """Sort the CSR row ``indices[s:f]`` (with its ``dual_edge``) by neighbour, stably."""
+    if f - s <= _SMALL:
+        for i in range(s + 1, f):
+            x = indices[i]
+            d = dual_edge[i]
+            j = i - 1
+            while j >= s and indices[j] > x:
+                indices[j + 1] = indices[j]
+                dual_edge[j + 1] = dual_edge[j]
+                j -= 1
+            indices[j + 1] = x
+            dual_edge[j + 1] = d
+    else:
+        o = np.argsort(indices[s:f], kind="mergesort")
+        ind = indices[s:f].copy()
+        de = dual_edge[s:f].copy()
+        for i in range(f - s):
+            indices[s + i] = ind[o[i]]
+            dual_edge[s + i] = de[o[i]]
+
+
 @njit(cache=True, error_model="numpy")
 def csr_of_pairs(lo, hi, n, indices, dual_edge):
     """Symmetric CSR of the distinct pairs ``(lo[t], hi[t])``: fills ``indices``
@@ -90,26 +113,7 @@ def csr_of_pairs(lo, hi, n, indices, dual_edge):
         dual_edge[p] = t
         fill[b] = p + 1
     for v in range(n):
-        s = indptr[v]
-        f = indptr[v + 1]
-        if f - s <= _SMALL:
-            for i in range(s + 1, f):
-                x = indices[i]
-                d = dual_edge[i]
-                j = i - 1
-                while j >= s and indices[j] > x:
-                    indices[j + 1] = indices[j]
-                    dual_edge[j + 1] = dual_edge[j]
-                    j -= 1
-                indices[j + 1] = x
-                dual_edge[j + 1] = d
-        else:
-            o = np.argsort(indices[s:f], kind="mergesort")
-            ind = indices[s:f].copy()
-            de = dual_edge[s:f].copy()
-            for i in range(f - s):
-                indices[s + i] = ind[o[i]]
-                dual_edge[s + i] = de[o[i]]
+        _sort_row(indices, dual_edge, indptr[v], indptr[v + 1])
     return indptr
 
 
@@ -232,24 +236,7 @@ def csr_of_face_pairs(lo, hi, ka, kb, n, indices, dual_edge):
     for v in range(n):
         s = indptr[v]
         f = indptr[v + 1]
-        if f - s <= _SMALL:
-            for i in range(s + 1, f):
-                x = indices[i]
-                d = dual_edge[i]
-                j = i - 1
-                while j >= s and indices[j] > x:
-                    indices[j + 1] = indices[j]
-                    dual_edge[j + 1] = dual_edge[j]
-                    j -= 1
-                indices[j + 1] = x
-                dual_edge[j + 1] = d
-        else:
-            o = np.argsort(indices[s:f], kind="mergesort")
-            ind = indices[s:f].copy()
-            de = dual_edge[s:f].copy()
-            for i in range(f - s):
-                indices[s + i] = ind[o[i]]
-                dual_edge[s + i] = de[o[i]]
+        _sort_row(indices, dual_edge, s, f)
         indptr[v] = out
         i = s
         while i < f:
