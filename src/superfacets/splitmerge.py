@@ -52,8 +52,8 @@ ROUNDS = 3
 
 
 class _Threads:
-    """``run(fn, n)``: ``fn(t)`` for ``t < n`` on ``n`` threads (the kernels release
-    the GIL), one pool for all the calls of a round."""
+    """``run(fn)`` calls ``fn(t)`` for ``t < n`` on ``n`` threads (the kernels
+    release the GIL), with one pool for all the calls of a round."""
 
     def __init__(self, n: int):
         self.n = n
@@ -151,11 +151,10 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
     args = (g.indptr, g.indices, weights, lab, members, bounds, sizes, positions, float(power))
     threads = _Threads(n_thr)
     try:
-        def energy_part(t, base):  # superfacets t, t + n_thr, ...: shared arrays
-            energies(*args, energy, far, dist, stamp, base, *space[t][:2], t, n_thr)
-
+        # energies of superfacets t, t + n_thr, ... on thread t: disjoint, shared arrays
         bases = [next(calls) << 40 for _ in range(n_thr)]
-        threads.run(lambda t: energy_part(t, bases[t]))
+        threads.run(lambda t: energies(*args, energy, far, dist, stamp, bases[t],
+                                       *space[t][:2], t, n_thr))
 
         def evaluate(which):  # the splits of superfacets ``which``
             which = np.asarray(which, dtype=np.int64)
