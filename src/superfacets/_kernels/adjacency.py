@@ -90,9 +90,10 @@ def _sort_row(indices, dual_edge, s, f):
 
 @njit(cache=True, error_model="numpy")
 def csr_of_pairs(lo, hi, n, indices, dual_edge):
-    """Symmetric CSR of the distinct pairs ``(lo[t], hi[t])``: fills ``indices``
-    (neighbours ascending per row) and ``dual_edge`` (the pair of each entry),
-    both of length ``2 e``; returns ``indptr``."""
+    """Symmetric CSR of the pairs ``(lo[t], hi[t])``: fills ``indices``
+    (neighbours ascending per row; a pair listed twice appears twice, in ``t``
+    order) and ``dual_edge`` (the pair of each entry), both of length ``2 e``;
+    returns ``indptr``."""
     e = lo.shape[0]
     indptr = np.zeros(n + 1, dtype=np.int64)
     for t in range(e):
@@ -212,31 +213,13 @@ def csr_of_face_pairs(lo, hi, ka, kb, n, indices, dual_edge):
         (as a stable ``np.lexsort((kb, ka, lo * n + hi))`` keeping the first
         of each pair).
     """
-    p = lo.shape[0]
-    indptr = np.zeros(n + 1, dtype=np.int64)
-    for t in range(p):
-        indptr[lo[t] + 1] += 1
-        indptr[hi[t] + 1] += 1
-    for v in range(n):
-        indptr[v + 1] += indptr[v]
-    fill = indptr[:n].copy()
-    for t in range(p):  # each row in t order
-        a = lo[t]
-        b = hi[t]
-        q = fill[a]
-        indices[q] = b
-        dual_edge[q] = t
-        fill[a] = q + 1
-        q = fill[b]
-        indices[q] = a
-        dual_edge[q] = t
-        fill[b] = q + 1
-    # rows by neighbour, stably; then one entry per neighbour (the best t), compacted
+    # every listed pair in both rows, rows by neighbour, stably (repeats adjacent, in t
+    # order); then one entry per neighbour (the best t), compacted
+    indptr = csr_of_pairs(lo, hi, n, indices, dual_edge)
     out = 0
     for v in range(n):
         s = indptr[v]
         f = indptr[v + 1]
-        _sort_row(indices, dual_edge, s, f)
         indptr[v] = out
         i = s
         while i < f:

@@ -16,6 +16,23 @@ from numba import njit
 from .heap import pop_min, push
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _relax(indptr, indices, w, label, la, lb, f, d, dist, stamp, sid, hkey, hval, size):
+    """Relax the edges of ``f`` (settled at ``d``) toward elements labelled ``la`` or
+    ``lb``; return the heap's new size."""
+    for e in range(indptr[f], indptr[f + 1]):
+        g = indices[e]
+        lg = label[g]
+        if lg != la and lg != lb:
+            continue
+        nd = d + w[e]
+        if stamp[g] != sid or nd < dist[g]:
+            dist[g] = nd
+            stamp[g] = sid
+            size = push(hkey, hval, size, nd, g)
+    return size
+
+
 @njit(cache=True, error_model="numpy", nogil=True)
 def _search(indptr, indices, w, label, la, lb, src, dist, stamp, sid, hkey, hval):
     """Dijkstra from ``src`` over the elements labelled ``la`` or ``lb``."""
@@ -26,16 +43,8 @@ def _search(indptr, indices, w, label, la, lb, src, dist, stamp, sid, hkey, hval
         d, f, size = pop_min(hkey, hval, size)
         if d > dist[f]:
             continue
-        for e in range(indptr[f], indptr[f + 1]):
-            g = indices[e]
-            lg = label[g]
-            if lg != la and lg != lb:
-                continue
-            nd = d + w[e]
-            if stamp[g] != sid or nd < dist[g]:
-                dist[g] = nd
-                stamp[g] = sid
-                size = push(hkey, hval, size, nd, g)
+        size = _relax(indptr, indices, w, label, la, lb, f, d, dist, stamp, sid, hkey, hval,
+                      size)
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -118,16 +127,8 @@ def _search_below(indptr, indices, w, label, la, lb, src, dist, stamp, sid, hkey
         rest -= sizes[f]
         if settled + max(rest, 0.0) * dp >= limit:
             return False
-        for e in range(indptr[f], indptr[f + 1]):
-            g = indices[e]
-            lg = label[g]
-            if lg != la and lg != lb:
-                continue
-            nd = d + w[e]
-            if stamp[g] != sid or nd < dist[g]:
-                dist[g] = nd
-                stamp[g] = sid
-                size = push(hkey, hval, size, nd, g)
+        size = _relax(indptr, indices, w, label, la, lb, f, d, dist, stamp, sid, hkey, hval,
+                      size)
     return True
 
 
