@@ -78,3 +78,20 @@ def test_pieces_are_numbered_as_scipy_numbers_components(sphere):
                         shape=(n, n))
         ref = connected_components(adj.tocsr(), directed=False)[1]
         np.testing.assert_array_equal(label_components(g, labels), ref)
+
+
+def test_summed_csr_equals_scipy_coo_to_csr():
+    from scipy.sparse import coo_array
+
+    from superfacets.connectivity import _summed_csr
+
+    rng = np.random.default_rng(5)
+    for n in (1, 7, 300):
+        rows = rng.integers(0, n, 900)
+        cols = rng.integers(0, n, 900)  # many duplicates
+        vals = rng.random(900)
+        indptr, indices, data = _summed_csr(rows, cols, vals, n)
+        ref = coo_array((vals, (rows, cols)), shape=(n, n)).tocsr()
+        ref.sort_indices()
+        assert np.array_equal(indptr, ref.indptr) and np.array_equal(indices, ref.indices)
+        np.testing.assert_allclose(data, ref.data, rtol=1e-12)

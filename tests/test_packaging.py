@@ -38,6 +38,15 @@ def test_import_and_help_load_neither_numba_nor_scipy():
     assert not {"numba", "scipy", "trimesh"} & mods
 
 
+def test_a_plain_segment_loads_no_scipy_sparse():
+    """The paper's run (with its connectivity step) needs no scipy.sparse, about 0.15 s
+    of a new process; numba itself imports scipy.linalg, so scipy is not asserted."""
+    mods = _modules_after(
+        "import superfacets; from superfacets.shapes import creature; "
+        "m = creature(24); r = superfacets.segment(m, 30); assert len(r.labels) == len(m.faces)")
+    assert "numba" in mods and "scipy.sparse" not in mods
+
+
 def test_public_names_resolve_and_are_listed():
     for name in superfacets.__all__:
         assert getattr(superfacets, name) is not None

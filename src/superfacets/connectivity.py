@@ -10,7 +10,6 @@ scikit-image's ``slic(enforce_connectivity=True)`` does for superpixels.
 from __future__ import annotations
 
 import numpy as np
-from scipy.sparse import coo_array
 
 from .elements.graph import as_element_graph
 from .labels import check_labels, relabel_dense
@@ -44,6 +43,18 @@ def label_components(graph, labels: np.ndarray) -> np.ndarray:
     # a depth-first search per piece over the graph's CSR, pieces numbered by their
     # lowest element (as scipy's connected_components of the same-label subgraph)
     return same_label_components(graph.indptr, graph.indices, np.ascontiguousarray(labels))
+
+
+def _summed_csr(rows: np.ndarray, cols: np.ndarray, vals: np.ndarray,
+                n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The ``n x n`` sparse matrix of the entries ``(rows, cols, vals)``, duplicates
+    summed, as CSR arrays with sorted columns (scipy's ``coo_array(...).tocsr()``
+    without importing scipy.sparse, about 0.15 s of a new process)."""
+    key, inv = np.unique(rows * np.int64(n) + cols, return_inverse=True)
+    data = np.bincount(inv.ravel(), weights=vals, minlength=key.shape[0])
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(key // n, minlength=n), out=indptr[1:])
+    return indptr, key % n, data
 
 
 def enforce_connectivity(graph, labels: np.ndarray, centers: np.ndarray | None = None) -> np.ndarray:
@@ -118,8 +129,7 @@ def enforce_connectivity(graph, labels: np.ndarray, centers: np.ndarray | None =
     a = np.concatenate([pi[cross], pj[cross]])
     b = np.concatenate([pj[cross], pi[cross]])
     w = np.concatenate([elen[cross], elen[cross]])
-    nb = coo_array((w, (a, b)), shape=(n_pieces, n_pieces)).tocsr()  # sums duplicates
-    nb.sort_indices()
+    nb_indptr, nb_indices, nb_data = _summed_csr(a, b, w, n_pieces)
 
     parent = np.arange(n_pieces)
 
@@ -135,8 +145,8 @@ def enforce_connectivity(graph, labels: np.ndarray, centers: np.ndarray | None =
     strays = strays[np.lexsort((strays, area[strays]))]  # smallest first
     for p in strays:
         rp = find(p)
-        cols = nb.indices[nb.indptr[p]:nb.indptr[p + 1]]
-        vals = nb.data[nb.indptr[p]:nb.indptr[p + 1]]
+        cols = nb_indices[nb_indptr[p]:nb_indptr[p + 1]]
+        vals = nb_data[nb_indptr[p]:nb_indptr[p + 1]]
         if cols.size == 0:
             continue
         # total boundary per neighbouring region (after earlier merges)
