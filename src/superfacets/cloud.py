@@ -16,7 +16,7 @@ from functools import cached_property
 import numpy as np
 
 from .errors import InvalidMeshError
-from .mesh import _MAX_COORDINATE, _MAX_EXTENT, _MIN_EXTENT
+from .mesh import _MAX_COORDINATE, _MAX_EXTENT, _MIN_EXTENT, column_bounds
 
 __all__ = ["PointCloud", "as_cloud", "InvalidCloudError"]
 
@@ -140,8 +140,9 @@ class PointCloud:
         if p.shape[0] == 0:
             raise InvalidCloudError(f"{where}empty point cloud: no valid point")
         with np.errstate(over="ignore", invalid="ignore"):
-            extent = float(np.max(p.max(axis=0) - p.min(axis=0)))
-            size = float(np.abs(p).max())
+            lo, hi = column_bounds(p)
+            extent = float(np.max(hi - lo))
+            size = float(max(np.abs(lo).max(), np.abs(hi).max()))
         if not (np.isfinite(extent) and size <= _MAX_COORDINATE and extent <= _MAX_EXTENT):
             raise InvalidCloudError(f"{where}coordinates up to {size:.3g} spanning "
                                     f"{extent:.3g}: rescale the cloud (e.g. to unit size)")

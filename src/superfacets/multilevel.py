@@ -33,6 +33,7 @@ import numpy as np
 from ._kernels.voronoi import crossing_pairs, first_in_cells, nearest_seed
 from .elements.graph import ElementGraph, adjacency_csr
 from .expansion import bucket_width
+from .mesh import column_bounds
 from .params import COARSE_MIN_PER_SEGMENT, COARSE_PER_SEGMENT, DEFAULT_CENTER_TOL
 
 _MIN_CLUSTERS = 4  # clusters per superfacet below which the coarse run is not done
@@ -97,8 +98,8 @@ def grid_seeds(positions: np.ndarray, area: float, n_target: int) -> np.ndarray:
     if n_target >= n or area <= 0:
         return np.arange(n, dtype=np.int64)
     h = math.sqrt(area / max(n_target, 1))
-    lo = positions.min(axis=0)
-    dims = np.floor((positions.max(axis=0) - lo) / h).astype(np.int64) + 1
+    lo, hi = column_bounds(positions)
+    dims = np.floor((hi - lo) / h).astype(np.int64) + 1
     if int(dims[0]) * int(dims[1]) * int(dims[2]) < 2**62:
         cap = 1 << max(10, int(4 * n_target + 1).bit_length())
         while True:  # a hash table of cells, grown until at most half full

@@ -106,10 +106,9 @@ def face_graph(mesh) -> ElementGraph:
         face_terms(v, c, n, topo.pairs, topo.edges, lo, hi, geo, cos, concave)
         return geo, cos, concave
 
-    used = v[mesh.referenced_vertices]
     return ElementGraph(
         kind="faces", positions=c, sizes=mesh.areas, normals=n, centroid=mesh.centroid,
-        lower=used.min(axis=0), diagonal=mesh.diagonal, pairs=topo.pairs,
+        lower=mesh._bounds[0].copy(), diagonal=mesh.diagonal, pairs=topo.pairs,
         indptr=topo.indptr, indices=topo.indices, dual_edge=topo.dual_edge,
         lengths=edge_length(topo.edges),
         boundary_elements=topo.boundary_faces,

@@ -30,6 +30,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..mesh import column_bounds
 from .graph import ElementGraph, adjacency_csr
 from .vertices import symmetric_terms
 
@@ -155,7 +156,7 @@ def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
     index[valid] = inverse
     n = pts.shape[0]
     k = int(min(n_neighbors, n - 1))
-    lower, upper = pts.min(axis=0), pts.max(axis=0)
+    lower, upper = column_bounds(pts)
     diagonal = float(np.linalg.norm(upper - lower))
     tree = cKDTree(pts)
     dist, nbr = tree.query(pts, k=k + 1, workers=-1)  # column 0: the point itself

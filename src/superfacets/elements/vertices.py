@@ -32,6 +32,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..mesh import column_bounds
 from .graph import ElementGraph, adjacency_csr, chunked
 
 __all__ = ["vertex_graph", "VertexElements", "symmetric_terms"]
@@ -141,7 +142,7 @@ def vertex_graph(mesh) -> VertexElements:
     spans = chunked(pairs.shape[0], lambda sl: np.linalg.norm(pos[lo[sl]] - pos[hi[sl]], axis=1))
     graph = ElementGraph(
         kind="vertices", positions=pos, sizes=area, normals=normal, centroid=mesh.centroid,
-        lower=pos.min(axis=0), diagonal=mesh.diagonal, pairs=pairs, indptr=indptr,
+        lower=column_bounds(pos)[0], diagonal=mesh.diagonal, pairs=pairs, indptr=indptr,
         indices=indices, dual_edge=dual_edge, lengths=lengths,
         boundary_elements=np.concatenate([lo[open_], hi[open_]]),
         boundary_lengths=np.concatenate([half_len, half_len]), spans=spans,
