@@ -41,7 +41,7 @@ def order_by_two_keys(key1, key2, n_key1, skip):
 
     Returns
     -------
-    order : (n_kept,) int64 ndarray
+    order : (n_kept,) ndarray of ``key1``'s dtype (which must hold ``len(key1)``)
     starts : (n_key1 + 1,) int64 ndarray
         Entries with ``key1 == v`` are ``order[starts[v]:starts[v + 1]]``.
     """
@@ -52,7 +52,7 @@ def order_by_two_keys(key1, key2, n_key1, skip):
             starts[key1[t] + 1] += 1
     for v in range(n_key1):
         starts[v + 1] += starts[v]
-    order = np.empty(starts[n_key1], dtype=np.int64)
+    order = np.empty(starts[n_key1], dtype=key1.dtype)  # indices below n: key1's width
     fill = starts[:n_key1].copy()
     for t in range(n):
         if not skip[t]:
@@ -119,11 +119,27 @@ def csr_of_pairs(lo, hi, n, indices, dual_edge):
 
 
 @njit(cache=True, error_model="numpy")
-def group_pairs(half, face, a, b):
+def triangle_half_edges(faces, a, b, skip):
+    """The half-edges of triangles: half-edge ``3 f + c`` joins corners ``(0, 1)``,
+    ``(1, 2)``, ``(2, 0)`` of face ``f`` for ``c = 0, 1, 2``; ``a`` / ``b`` get its
+    lower / higher vertex (in their dtype), ``skip`` whether they coincide."""
+    for f in range(faces.shape[0]):
+        for c in range(3):
+            u = faces[f, c]
+            v = faces[f, 0 if c == 2 else c + 1]
+            h = 3 * f + c
+            a[h] = min(u, v)
+            b[h] = max(u, v)
+            skip[h] = u == v
+
+
+@njit(cache=True, error_model="numpy")
+def group_pairs(half, owner, a, b):
     """The edges of sorted half-edges and the face pairs that share them.
 
-    ``half`` holds half-edge ids ordered by their vertices ``(a[h], b[h])``,
-    ``face[i]`` the face of ``half[i]``. A run of equal ``(a, b)`` is one
+    ``half`` holds half-edge ids ordered by their vertices ``(a[h], b[h])``;
+    the face of half-edge ``h`` is ``owner[h]``, or ``h // 3`` (triangles)
+    when ``owner`` is empty. A run of equal ``(a, b)`` is one
     edge: of one half-edge, an open boundary; of ``s >= 2``, each of the
     ``s (s - 1) / 2`` pairs of its faces (``i < j`` within the run; a face
     paired with itself left out) is a face pair across that edge.
@@ -132,7 +148,7 @@ def group_pairs(half, face, a, b):
     -------
     boundary : (b,) int64 ndarray
         Index into ``half`` of each open-boundary edge, in order.
-    lo, hi : (p,) ndarrays of ``face``'s dtype
+    lo, hi : (p,) ndarrays of ``half``'s dtype
         The two faces of each pair, ``lo < hi``, runs in order, then ``(i, j)``.
     ea, eb : (p,) ndarrays of ``a``'s dtype
         The vertices ``(a, b)`` of the edge of each pair.
@@ -162,8 +178,9 @@ def group_pairs(half, face, a, b):
         else:
             n_pairs += run * (run - 1) // 2
     boundary = np.empty(n_bound, dtype=np.int64)
-    lo = np.empty(n_pairs, dtype=face.dtype)
-    hi = np.empty(n_pairs, dtype=face.dtype)
+    lo = np.empty(n_pairs, dtype=half.dtype)
+    hi = np.empty(n_pairs, dtype=half.dtype)
+    tri = owner.shape[0] == 0
     ea = np.empty(n_pairs, dtype=a.dtype)
     eb = np.empty(n_pairs, dtype=a.dtype)
     nb = 0
@@ -181,8 +198,8 @@ def group_pairs(half, face, a, b):
             vb = b[half[i]]
             for x in range(i, j):
                 for y in range(x + 1, j):
-                    f = face[x]
-                    g = face[y]
+                    f = half[x] // 3 if tri else owner[half[x]]
+                    g = half[y] // 3 if tri else owner[half[y]]
                     if f != g:
                         lo[p] = min(f, g)
                         hi[p] = max(f, g)

@@ -134,7 +134,8 @@ def build_face_graph(faces: np.ndarray, n_vertices: int, offsets: np.ndarray | N
     -------
     FaceAdjacency
     """
-    from .._kernels.adjacency import csr_of_face_pairs, group_pairs, order_by_two_keys
+    from .._kernels.adjacency import (csr_of_face_pairs, group_pairs, order_by_two_keys,
+                                      triangle_half_edges)
 
     if offsets is None:  # triangles: half-edge h = 3 * face + corner
         m = faces.shape[0]
@@ -148,33 +149,28 @@ def build_face_graph(faces: np.ndarray, n_vertices: int, offsets: np.ndarray | N
     a = np.empty(n_half_edges, dtype=itype)  # the two vertices of each half-edge, a <= b
     b = np.empty(n_half_edges, dtype=itype)
     if offsets is None:  # corner c joins vertices (0, 1), (1, 2), (2, 0) of the face
-        for c, (u, v) in enumerate(((0, 1), (1, 2), (2, 0))):
-            np.minimum(faces[:, u], faces[:, v], out=a[c::3], casting="unsafe")
-            np.maximum(faces[:, u], faces[:, v], out=b[c::3], casting="unsafe")
-
-        def face_of(h):
-            return h // 3
+        collapsed = np.empty(n_half_edges, dtype=bool)
+        triangle_half_edges(faces, a, b, collapsed)
+        owner = np.empty(0, dtype=itype)  # the face of h is h // 3
     else:  # corner i of a polygon joins it to the next corner, the last to the first
         nxt = np.roll(faces, -1)
         nxt[offsets[1:] - 1] = faces[offsets[:-1]]
         np.minimum(faces, nxt, out=a, casting="unsafe")
         np.maximum(faces, nxt, out=b, casting="unsafe")
         del nxt
+        collapsed = a == b
         owner = np.repeat(np.arange(m, dtype=itype), np.diff(offsets))
-
-        def face_of(h):
-            return owner[h]
     # half-edges grouped by edge, in (a, b) order, collapsed edges (a == b) left out:
     # a counting sort on a, then b within each vertex's few half-edges
-    half, _ = order_by_two_keys(a, b, int(n_vertices), a == b)
-    half = half.astype(itype)
-    sface = face_of(half)
+    half, _ = order_by_two_keys(a, b, int(n_vertices), collapsed)
+    del collapsed
     # edges (runs of equal (a, b)): open boundaries, and the face pairs across each,
     # all pairs for non-manifold edges, a degenerate face paired with itself left out
-    one, lo, hi, ea, eb = group_pairs(half, sface, a, b)
-    boundary_faces = sface[one].astype(np.int64)
-    boundary_edges = np.stack([a[half[one]], b[half[one]]], axis=1).astype(np.int64)
-    del one, sface, half, a, b
+    one, lo, hi, ea, eb = group_pairs(half, owner, a, b)
+    h_one = half[one]
+    boundary_faces = (h_one // 3 if offsets is None else owner[h_one]).astype(np.int64)
+    boundary_edges = np.stack([a[h_one], b[h_one]], axis=1).astype(np.int64)
+    del one, h_one, half, a, b, owner
     # one dual edge per face pair: the first in edge order (smallest vertex pair);
     # pairs in (lo, hi) order and their CSR, in one counting sort
     n_max = 2 * lo.shape[0]
@@ -186,9 +182,12 @@ def build_face_graph(faces: np.ndarray, n_vertices: int, offsets: np.ndarray | N
         indices = indices[:n_csr].copy()
         dual_edge = dual_edge[:n_csr].astype(np.int32 if n_csr < 2**31 - 1 else np.int64)
     # 32-bit while the ids fit (24 bytes per face less, kept for the whole run)
-    pairs = np.stack([lo[first], hi[first]], axis=1).astype(
-        np.int32 if m < 2**31 - 1 else np.int64)
-    edges = np.stack([ea[first], eb[first]], axis=1)
+    pairs = np.empty((first.shape[0], 2), dtype=np.int32 if m < 2**31 - 1 else np.int64)
+    pairs[:, 0] = lo[first]
+    pairs[:, 1] = hi[first]
+    edges = np.empty((first.shape[0], 2), dtype=ea.dtype)
+    edges[:, 0] = ea[first]
+    edges[:, 1] = eb[first]
     del lo, hi, ea, eb, first
     return FaceAdjacency(
         pairs=pairs,
