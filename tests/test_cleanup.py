@@ -152,3 +152,48 @@ def test_odd_inputs_and_extreme_counts():
     # without connectivity, the clean-up leaves the pieces it makes
     r = segment(mesh, 30, cleanup=True, enforce_connectivity=False)
     assert np.array_equal(np.unique(r.labels), np.arange(r.n_segments))
+
+
+def _arcs(n, caps):
+    """Linked arc lists (first, nxt, head, cap) of the arcs ``caps[(u, v)]``; an arc
+    and its reverse are ``a``, ``a ^ 1``."""
+    first = np.full(n, -1, dtype=np.int64)
+    nxt, head, cap = [], [], []
+    for (u, v), (c_uv, c_vu) in caps.items():
+        for tail, tip, c in ((u, v, c_uv), (v, u, c_vu)):
+            head.append(tip)
+            cap.append(float(c))
+            nxt.append(first[tail])
+            first[tail] = len(head) - 1
+    return (first, np.array(nxt, dtype=np.int64), np.array(head, dtype=np.int64),
+            np.array(cap, dtype=np.float64))
+
+
+def test_min_cut_is_the_smallest_minimum_source_side_by_brute_force():
+    from itertools import product
+
+    from superfacets._kernels.cleanup import min_cut
+
+    rng = np.random.default_rng(3)
+    for trial in range(200):
+        n = int(rng.integers(1, 9))
+        caps = {}
+        for u in range(n):
+            for v in range(u + 1, n):
+                if rng.random() < 0.5:  # integer capacities: sums are exact, ties real
+                    caps[(u, v)] = (int(rng.integers(0, 4)), int(rng.integers(0, 4)))
+        tr = rng.integers(-3, 4, n).astype(np.float64)
+        first, nxt, head, cap = _arcs(n, caps)
+        side = np.zeros(n, dtype=bool)
+        min_cut(first, nxt, head, cap, tr.copy(), 0.0, side)
+        best, smallest = np.inf, None
+        for bits in product((False, True), repeat=n):
+            s = np.array(bits)
+            value = (tr[~s & (tr > 0)].sum() - tr[s & (tr < 0)].sum()
+                     + sum(c_uv * (s[u] and not s[v]) + c_vu * (s[v] and not s[u])
+                           for (u, v), (c_uv, c_vu) in caps.items()))
+            if value < best:
+                best, smallest = value, s.copy()
+            elif value == best:
+                smallest &= s  # the minimum cuts' source sides are closed under intersection
+        assert np.array_equal(side, smallest), trial

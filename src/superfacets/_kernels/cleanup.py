@@ -8,7 +8,8 @@ nearest boundary faces: the element then belongs to the band of that pair of
 superfacets. Bands of different pairs are disjoint, so ``solve_bands`` cuts
 each one on its own (on several threads; the result does not depend on the
 order or the thread count): a two-label graph cut, solved exactly as a minimum s-t
-cut by Dinic's max-flow, whose source side keeps the first label.
+cut by Boykov and Kolmogorov's max-flow (:func:`min_cut`), whose source side
+keeps the first label.
 """
 
 import numpy as np
@@ -74,81 +75,180 @@ def band_distances(indptr, indices, geo, length, labels, pinned, limit, dist, pa
                 size = push(hkey, hval, size, nd, g)
 
 
+_NONE = -1  # parent of a free node
+_TERMINAL = -2  # parent of a node joined straight to its terminal
+_ORPHAN = -3
+
+
 @njit(cache=True, error_model="numpy", inline="always")
-def _levels(n, first, nxt, head, cap, s, eps, level, queue):
-    """Breadth-first levels from ``s`` along arcs of residual capacity ``> eps``
-    (-1: unreachable)."""
-    for u in range(n):
-        level[u] = -1
-    level[s] = 0
-    qh = 0
-    qt = 1
-    queue[0] = s
-    while qh < qt:
-        u = queue[qh]
-        qh += 1
-        a = first[u]
-        while a != -1:
-            v = head[a]
-            if level[v] < 0 and cap[a] > eps:
-                level[v] = level[u] + 1
-                queue[qt] = v
-                qt += 1
-            a = nxt[a]
+def _rooted(parent, head, j):
+    """True when the tree path from ``j`` reaches a terminal (no orphan on it)."""
+    while True:
+        p = parent[j]
+        if p == _TERMINAL:
+            return True
+        if p < 0:
+            return False
+        j = head[p]
 
 
 @njit(cache=True, error_model="numpy")
-def _max_flow(n, first, nxt, head, cap, s, t, eps, level, it, queue, path):
-    """Dinic's algorithm on arcs ``(head, cap)`` (arc ``a ^ 1`` reverses ``a``).
+def min_cut(first, nxt, head, cap, tr, eps, source_side):
+    """Minimum s-t cut by Boykov and Kolmogorov's max-flow (IEEE PAMI 26(9), 2004).
 
-    Leaves the residual capacities in ``cap``; returns the flow value.
+    Nodes ``0..n-1``; arc ``a`` runs to ``head[a]`` with residual capacity
+    ``cap[a]``, arc ``a ^ 1`` is its reverse; node ``u``'s arcs are
+    ``first[u]``, ``nxt[first[u]]``, ... (-1 ends). ``tr[u] > 0`` is a
+    capacity from the source to ``u``, ``tr[u] < 0`` one from ``u`` to the sink.
+    Capacities at most ``eps`` count as saturated. Two search trees grow from
+    the terminals; each path found between them is augmented, and the nodes
+    cut off from their tree adopt a new parent or become free.
+
+    ``cap`` and ``tr`` are left residual. ``source_side[u]`` is set to True
+    for the nodes still reachable from the source (through capacities above
+    ``eps``): the source side of the minimum cut with the fewest nodes, the
+    same for any maximum flow.
     """
-    flow = 0.0
-    while True:
-        _levels(n, first, nxt, head, cap, s, eps, level, queue)
-        if level[t] < 0:
-            return flow
-        for u in range(n):
-            it[u] = first[u]
-        while True:  # blocking flow: depth-first paths in the level graph
-            depth = 0
-            u = s
-            found = False
-            while True:
-                if u == t:
-                    found = True
+    n = tr.shape[0]
+    parent = np.empty(n, dtype=np.int64)
+    sink = np.zeros(n, dtype=np.bool_)
+    queued = np.zeros(n, dtype=np.bool_)
+    active = np.empty(n, dtype=np.int64)  # circular FIFO of active nodes
+    orphans = np.empty(n, dtype=np.int64)
+    qh = 0
+    qn = 0
+    for u in range(n):
+        if tr[u] > eps or -tr[u] > eps:
+            parent[u] = _TERMINAL
+            sink[u] = tr[u] < 0.0
+            active[(qh + qn) % n] = u
+            queued[u] = True
+            qn += 1
+        else:
+            parent[u] = _NONE
+    while qn > 0:
+        i = active[qh]
+        if parent[i] == _NONE:  # freed since it was queued
+            qh = (qh + 1) % n
+            qn -= 1
+            queued[i] = False
+            continue
+        # grow the tree of i by one arc, or find an arc to the other tree
+        mid = -1
+        a = first[i]
+        while a != -1:
+            j = head[a]
+            if not sink[i]:
+                if cap[a] > eps:
+                    if parent[j] == _NONE:
+                        parent[j] = a ^ 1
+                        sink[j] = False
+                        if not queued[j]:
+                            active[(qh + qn) % n] = j
+                            queued[j] = True
+                            qn += 1
+                    elif sink[j]:
+                        mid = a
+                        break
+            elif cap[a ^ 1] > eps:
+                if parent[j] == _NONE:
+                    parent[j] = a ^ 1
+                    sink[j] = True
+                    if not queued[j]:
+                        active[(qh + qn) % n] = j
+                        queued[j] = True
+                        qn += 1
+                elif not sink[j]:
+                    mid = a ^ 1
                     break
-                a = it[u]
-                moved = False
-                while a != -1:
-                    v = head[a]
-                    if cap[a] > eps and level[v] == level[u] + 1:
-                        path[depth] = a
-                        depth += 1
-                        u = v
-                        moved = True
-                        break
-                    a = nxt[a]
-                    it[u] = a
-                if not moved:
-                    if u == s:
-                        break
-                    level[u] = -1  # dead end
-                    depth -= 1
-                    a = path[depth]
-                    u = head[a ^ 1]
-                    it[u] = nxt[it[u]]
-            if not found:
-                break
-            push_ = _INF
-            for i in range(depth):
-                if cap[path[i]] < push_:
-                    push_ = cap[path[i]]
-            for i in range(depth):
-                a = path[i]
-                cap[a] -= push_
-                cap[a ^ 1] += push_
-            flow += push_
+            a = nxt[a]
+        if mid == -1:  # i has no arc left to grow along: done with it
+            qh = (qh + 1) % n
+            qn -= 1
+            queued[i] = False
+            continue
+        # augment the path source .. x -> y .. sink through arc mid = x -> y
+        b = cap[mid]
+        u = head[mid ^ 1]
+        while parent[u] != _TERMINAL:
+            pa = parent[u]
+            b = min(b, cap[pa ^ 1])
+            u = head[pa]
+        b = min(b, tr[u])
+        u = head[mid]
+        while parent[u] != _TERMINAL:
+            pa = parent[u]
+            b = min(b, cap[pa])
+            u = head[pa]
+        b = min(b, -tr[u])
+        cap[mid] -= b
+        cap[mid ^ 1] += b
+        n_orphans = 0
+        u = head[mid ^ 1]
+        while parent[u] != _TERMINAL:
+            pa = parent[u]
+            cap[pa] += b
+            cap[pa ^ 1] -= b
+            if not cap[pa ^ 1] > eps:
+                parent[u] = _ORPHAN
+                orphans[n_orphans] = u
+                n_orphans += 1
+            u = head[pa]
+        tr[u] -= b
+        if not tr[u] > eps:
+            parent[u] = _ORPHAN
+            orphans[n_orphans] = u
+            n_orphans += 1
+        u = head[mid]
+        while parent[u] != _TERMINAL:
+            pa = parent[u]
+            cap[pa ^ 1] += b
+            cap[pa] -= b
+            if not cap[pa] > eps:
+                parent[u] = _ORPHAN
+                orphans[n_orphans] = u
+                n_orphans += 1
+            u = head[pa]
+        tr[u] += b
+        if not -tr[u] > eps:
+            parent[u] = _ORPHAN
+            orphans[n_orphans] = u
+            n_orphans += 1
+        # adoption: each orphan takes a neighbour of its tree still rooted, else is freed
+        k = 0
+        while k < n_orphans:
+            o = orphans[k]
+            k += 1
+            side = sink[o]
+            new = -1
+            a = first[o]
+            while a != -1:
+                j = head[a]
+                if sink[j] == side and parent[j] != _NONE and (
+                        cap[a] > eps if side else cap[a ^ 1] > eps) and _rooted(parent, head, j):
+                    new = a
+                    break
+                a = nxt[a]
+            if new != -1:
+                parent[o] = new
+                continue
+            a = first[o]
+            while a != -1:
+                j = head[a]
+                if sink[j] == side and parent[j] != _NONE:
+                    if (cap[a] > eps if side else cap[a ^ 1] > eps) and not queued[j]:
+                        active[(qh + qn) % n] = j
+                        queued[j] = True
+                        qn += 1
+                    pj = parent[j]
+                    if pj >= 0 and head[pj] == o:
+                        parent[j] = _ORPHAN
+                        orphans[n_orphans] = j  # each node is orphaned at most once at a time
+                        n_orphans += 1
+                a = nxt[a]
+            parent[o] = _NONE
+    for u in range(n):
+        source_side[u] = parent[u] != _NONE and not sink[u]
 
 
 @njit(cache=True, error_model="numpy")
@@ -158,11 +258,8 @@ def _solve_one(members, la, lb, pair_id, band_of, local, indptr, indices, cut_co
     nb = members.shape[0]
     for i in range(nb):
         local[members[i]] = i
-    s = nb
-    t = nb + 1
-    n_nodes = nb + 2
-    # arcs: two per t-link, two per band-internal adjacency
-    n_arcs = 4 * nb
+    # two arcs per band-internal adjacency; the terminal capacities in tr
+    n_arcs = 0
     for i in range(nb):
         f = members[i]
         for e in range(indptr[f], indptr[f + 1]):
@@ -172,7 +269,8 @@ def _solve_one(members, la, lb, pair_id, band_of, local, indptr, indices, cut_co
     head = np.empty(n_arcs, dtype=np.int64)
     cap = np.empty(n_arcs, dtype=np.float64)
     nxt = np.empty(n_arcs, dtype=np.int64)
-    first = np.full(n_nodes, -1, dtype=np.int64)
+    first = np.full(nb, -1, dtype=np.int64)
+    tr = np.empty(nb, dtype=np.float64)
     na = 0
     total = 0.0
     for i in range(nb):
@@ -211,34 +309,12 @@ def _solve_one(members, la, lb, pair_id, band_of, local, indptr, indices, cut_co
         cost_a -= m
         cost_b -= m
         total += cost_a + cost_b
-        # s -> f (cut when f takes lb: pays cost_b), f -> t (cut when f keeps la)
-        head[na] = i
-        cap[na] = cost_b
-        nxt[na] = first[s]
-        first[s] = na
-        head[na + 1] = s
-        cap[na + 1] = 0.0
-        nxt[na + 1] = first[i]
-        first[i] = na + 1
-        head[na + 2] = t
-        cap[na + 2] = cost_a
-        nxt[na + 2] = first[i]
-        first[i] = na + 2
-        head[na + 3] = i
-        cap[na + 3] = 0.0
-        nxt[na + 3] = first[t]
-        first[t] = na + 3
-        na += 4
-    level = np.empty(n_nodes, dtype=np.int64)
-    it = np.empty(n_nodes, dtype=np.int64)
-    queue = np.empty(n_nodes, dtype=np.int64)
-    path = np.empty(n_nodes, dtype=np.int64)
-    eps = 1e-12 * total
-    _max_flow(n_nodes, first, nxt, head, cap, s, t, eps, level, it, queue, path)
-    # source side of the minimum cut: reachable from s in the residual graph
-    _levels(n_nodes, first, nxt, head, cap, s, eps, level, queue)
+        # source -> f (cut when f takes lb: pays cost_b), f -> sink (cut when f keeps la)
+        tr[i] = cost_b if cost_b > 0.0 else -cost_a
+    side = np.empty(nb, dtype=np.bool_)
+    min_cut(first, nxt, head, cap, tr, 1e-12 * total, side)
     for i in range(nb):
-        out[members[i]] = la if level[i] >= 0 else lb
+        out[members[i]] = la if side[i] else lb
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
