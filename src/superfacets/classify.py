@@ -259,13 +259,15 @@ class BoundedReplay(Classifier):
         if n_thr <= 1 or expected + int(seg_len[kept].sum()) < _PARALLEL_MIN_WORK:
             n_thr = 1
         parts = [todo[t::n_thr] for t in range(n_thr)]  # interleaved: balanced work
-        # reused records: each to the thread with the least work so far
-        load = [len(p) * expected / max(n, 1) for p in parts]
-        share = [[] for _ in range(n_thr)]
-        for s, ln in zip(kept.tolist(), seg_len[kept].tolist()):
-            t = min(range(n_thr), key=load.__getitem__)
-            share[t].append(s)
-            load[t] += ln
+        if n_thr == 1:
+            share = [kept]
+        else:  # reused records: each to the thread with the least work so far
+            load = [len(p) * expected / max(n, 1) for p in parts]
+            share = [[] for _ in range(n_thr)]
+            for s, ln in zip(kept.tolist(), seg_len[kept].tolist()):
+                t = min(range(n_thr), key=load.__getitem__)
+                share[t].append(s)
+                load[t] += ln
         bounds = [lo + (hi - lo) * t // n_thr for t in range(n_thr + 1)]
         per = (n + n_thr - 1) // n_thr
         sid0 = spaces.reserve(n_thr * per)  # thread t uses sid0 + t * per + i
@@ -279,7 +281,7 @@ class BoundedReplay(Classifier):
             ol_t = np.empty(part.shape[0], dtype=np.int64)
             while True:
                 _k.reset_labels(d_t, l_t)
-                _k.merge_some(np.array(share[t], dtype=np.int64), seg_start, seg_len,
+                _k.merge_some(np.asarray(share[t], dtype=np.int64), seg_start, seg_len,
                                     self.face, self.dist, d_t, l_t)
                 p = _k.expand_many(indptr, indices, w, c, srcs_t, part, window_r2,
                                          ws.local, ws.stamp, sid0 + t * per, ws.queue,
