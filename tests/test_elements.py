@@ -207,3 +207,25 @@ def test_released_terms_come_back_the_same(sphere):
     segment(sphere, 10)  # the pipeline releases them once the weights are made
     assert "terms" not in g.__dict__
     np.testing.assert_array_equal(g.terms.geo, geo)
+
+
+def test_graph_and_geometry_on_threads_equal_one_thread(monkeypatch):
+    # ranges of half-edges and faces on three threads: the cuts move to edge starts,
+    # so non-manifold runs, duplicates and collapsed edges come out as from one call
+    from superfacets import _threads
+
+    rng = np.random.default_rng(1)
+    faces = rng.integers(0, 25, size=(3000, 3))
+    faces[:300, 0] = 0
+    vertices = rng.random((25, 3))
+    one = build_face_graph(faces, 25)
+    geo_one = Mesh(vertices, faces)._geometry
+    monkeypatch.setattr(_threads, "MIN_PER_THREAD", 100)
+    monkeypatch.setattr(_threads, "default_threads", lambda: 3)
+    assert len(_threads.split(9000)) == 4
+    three = build_face_graph(faces, 25)
+    for name in one._fields:
+        a, b = getattr(one, name), getattr(three, name)
+        assert a.dtype == b.dtype and np.array_equal(a, b), name
+    for a, b in zip(geo_one, Mesh(vertices, faces)._geometry):
+        assert np.array_equal(a, b)

@@ -154,8 +154,12 @@ class Mesh:
         m = self.n_faces
         centroids, areas, normals = np.empty((m, 3)), np.empty(m), np.empty((m, 3))
         v = np.ascontiguousarray(self.vertices)
-        if self.is_triangular:  # one pass: no (m, 3) temporaries
-            face_geometry(v, np.ascontiguousarray(self.faces), centroids, areas, normals)
+        if self.is_triangular:  # one pass: no (m, 3) temporaries; ranges of faces on threads
+            from ._threads import run_ranges, split
+
+            f = np.ascontiguousarray(self.faces)
+            run_ranges(lambda a, b: face_geometry(v, f[a:b], centroids[a:b], areas[a:b],
+                                                  normals[a:b]), split(m))
         else:
             polygon_geometry(v, np.ascontiguousarray(self.corners), np.asarray(self.offsets),
                              centroids, areas, normals)

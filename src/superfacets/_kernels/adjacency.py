@@ -133,7 +133,7 @@ def triangle_half_edges(faces, a, b, skip):
             skip[h] = u == v
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def group_pairs(half, owner, a, b):
     """The edges of sorted half-edges and the face pairs that share them.
 

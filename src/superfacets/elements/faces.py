@@ -116,6 +116,24 @@ def face_graph(mesh) -> ElementGraph:
         edges=topo.edges, boundary_edges=topo.boundary_edges, terms_of=terms_of)
 
 
+def _group_pairs_on_threads(group_pairs, half, owner, a, b):
+    """``group_pairs`` over ranges of ``half`` cut at edge starts, on threads: each
+    range holds whole edges, so the concatenated results are those of one call."""
+    from .._threads import run_ranges, split
+
+    bounds = split(half.shape[0])
+    for i in range(1, len(bounds) - 1):  # move each cut forward to the start of an edge
+        j = bounds[i]
+        while j < half.shape[0] and a[half[j]] == a[half[j - 1]] and b[half[j]] == b[half[j - 1]]:
+            j += 1
+        bounds[i] = max(j, bounds[i - 1])
+    parts = run_ranges(lambda i, j: group_pairs(half[i:j], owner, a, b), bounds)
+    if len(parts) == 1:
+        return parts[0]
+    one = np.concatenate([p[0] + i for p, i in zip(parts, bounds)])
+    return (one, *(np.concatenate([p[k] for p in parts]) for k in range(1, 5)))
+
+
 def build_face_graph(faces: np.ndarray, n_vertices: int, offsets: np.ndarray | None = None
                      ) -> FaceAdjacency:
     """Group mesh edges and build the face graph (see the module notes).
@@ -166,7 +184,7 @@ def build_face_graph(faces: np.ndarray, n_vertices: int, offsets: np.ndarray | N
     del collapsed
     # edges (runs of equal (a, b)): open boundaries, and the face pairs across each,
     # all pairs for non-manifold edges, a degenerate face paired with itself left out
-    one, lo, hi, ea, eb = group_pairs(half, owner, a, b)
+    one, lo, hi, ea, eb = _group_pairs_on_threads(group_pairs, half, owner, a, b)
     h_one = half[one]
     boundary_faces = (h_one // 3 if offsets is None else owner[h_one]).astype(np.int64)
     boundary_edges = np.stack([a[h_one], b[h_one]], axis=1).astype(np.int64)

@@ -178,13 +178,20 @@ class ElementGraph:
 
     @cached_property
     def terms(self) -> AdjacencyTerms:
-        """The :class:`AdjacencyTerms` of every adjacency, computed once (in chunks)."""
+        """The :class:`AdjacencyTerms` of every adjacency, computed once (in chunks,
+        ranges of chunks on threads)."""
+        from .._threads import run_ranges, split
+
         e = self.n_edges
         geo, cos = np.empty(e), np.empty(e)
         concave = np.empty(e, dtype=bool)
-        for s in range(0, e, CHUNK):
-            sl = slice(s, min(e, s + CHUNK))
-            geo[sl], cos[sl], concave[sl] = self.terms_of(sl)
+
+        def chunks(c0: int, c1: int) -> None:
+            for s in range(c0 * CHUNK, min(e, c1 * CHUNK), CHUNK):
+                sl = slice(s, min(e, s + CHUNK))
+                geo[sl], cos[sl], concave[sl] = self.terms_of(sl)
+
+        run_ranges(chunks, split(-(-e // CHUNK), min_per_thread=1))
         return AdjacencyTerms(geo, cos, concave)
 
     def release_terms(self) -> None:
