@@ -24,15 +24,18 @@ def _warm() -> None:
     try:
         import numpy as np
 
-        from ._kernels.adjacency import (csr_of_face_pairs, group_pairs, order_by_two_keys,
-                                         triangle_half_edges)
+        from ._kernels.adjacency import (count_keys, csr_of_face_pairs, group_pairs,
+                                         scatter_keys, sort_buckets, triangle_half_edges)
         from ._kernels.expand import reset_labels
 
         reset_labels(np.empty(1), np.empty(1, dtype=np.int32))
         # the graph build's kernels, with the argument types of a triangle mesh's
         one = np.zeros(1, dtype=np.int32)
         triangle_half_edges(np.zeros((0, 3), dtype=np.int64), one, one, np.ones(1, dtype=bool))
-        order_by_two_keys(one, one, 1, np.ones(1, dtype=bool))
+        none = np.ones(1, dtype=bool)
+        count_keys(one, none, 0, 1, np.zeros(1, dtype=np.int64))
+        scatter_keys(one, none, 0, 1, np.zeros(1, dtype=np.int64), one.copy())
+        sort_buckets(one, np.zeros(2, dtype=np.int64), one, 0, 1)
         group_pairs(np.zeros(1, dtype=np.int32), np.empty(0, dtype=np.int32), one, one)
         csr_of_face_pairs(one, one + 1, one, one, 2, np.empty(2, dtype=np.int32),
                           np.empty(2, dtype=np.int32))

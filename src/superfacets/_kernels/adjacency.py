@@ -32,37 +32,33 @@ def _sort_bucket(order, lo, hi, key2):
             order[lo + i] = part[o[i]]
 
 
-@njit(cache=True, error_model="numpy")
-def order_by_two_keys(key1, key2, n_key1, skip):
-    """Indices ``t`` (where ``skip[t]`` is False) ordered by ``(key1[t], key2[t], t)``.
-
-    ``key1`` in ``0..n_key1-1``. Same as a stable ``np.argsort`` of
-    ``key1 * K + key2`` over the kept entries.
-
-    Returns
-    -------
-    order : (n_kept,) ndarray of ``key1``'s dtype (which must hold ``len(key1)``)
-    starts : (n_key1 + 1,) int64 ndarray
-        Entries with ``key1 == v`` are ``order[starts[v]:starts[v + 1]]``.
-    """
-    n = key1.shape[0]
-    starts = np.zeros(n_key1 + 1, dtype=np.int64)
-    for t in range(n):
+@njit(cache=True, error_model="numpy", nogil=True)
+def count_keys(key1, skip, lo, hi, counts):
+    """``counts[v] +=`` the number of ``t`` in ``lo..hi-1`` with ``key1[t] == v``
+    and not ``skip[t]`` (the first pass of a counting sort on ``key1``)."""
+    for t in range(lo, hi):
         if not skip[t]:
-            starts[key1[t] + 1] += 1
-    for v in range(n_key1):
-        starts[v + 1] += starts[v]
-    order = np.empty(starts[n_key1], dtype=key1.dtype)  # indices below n: key1's width
-    fill = starts[:n_key1].copy()
-    for t in range(n):
+            counts[key1[t]] += 1
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def scatter_keys(key1, skip, lo, hi, fill, order):
+    """Put each kept ``t`` in ``lo..hi-1`` at ``order[fill[key1[t]]]``, advancing
+    ``fill`` (the second pass of a stable counting sort)."""
+    for t in range(lo, hi):
         if not skip[t]:
             k = key1[t]
             order[fill[k]] = t
             fill[k] += 1
-    for v in range(n_key1):
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def sort_buckets(order, starts, key2, v0, v1):
+    """Sort each bucket ``order[starts[v]:starts[v + 1]]``, ``v0 <= v < v1``, by
+    ``key2``, stably."""
+    for v in range(v0, v1):
         if starts[v + 1] - starts[v] > 1:
             _sort_bucket(order, starts[v], starts[v + 1], key2)
-    return order, starts
 
 
 @njit(cache=True, error_model="numpy", inline="always")

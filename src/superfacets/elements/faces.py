@@ -116,6 +116,40 @@ def face_graph(mesh) -> ElementGraph:
         edges=topo.edges, boundary_edges=topo.boundary_edges, terms_of=terms_of)
 
 
+def order_by_two_keys(key1: np.ndarray, key2: np.ndarray, n_key1: int,
+                      skip: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Indices ``t`` (where ``skip[t]`` is False) ordered by ``(key1[t], key2[t], t)``.
+
+    ``key1`` in ``0..n_key1-1``. The same as a stable ``np.argsort`` of
+    ``key1 * K + key2`` over the kept entries: a stable counting sort on
+    ``key1`` (ranges of ``t`` counted and scattered on threads, each range
+    after the ones before it), then each bucket sorted on ``key2`` (ranges of
+    buckets on threads), so the order is the same for any number of threads.
+
+    Returns
+    -------
+    order : (n_kept,) ndarray of ``key1``'s dtype (which must hold ``len(key1)``)
+    starts : (n_key1 + 1,) int64 ndarray
+        Entries with ``key1 == v`` are ``order[starts[v]:starts[v + 1]]``.
+    """
+    from .._kernels.adjacency import count_keys, scatter_keys, sort_buckets
+    from .._threads import run_ranges, split
+
+    bounds = split(key1.shape[0])
+    part = {a: i for i, a in enumerate(bounds[:-1])}
+    counts = np.zeros((len(bounds) - 1, n_key1), dtype=np.int64)
+    run_ranges(lambda a, b: count_keys(key1, skip, a, b, counts[part[a]]), bounds)
+    starts = np.zeros(n_key1 + 1, dtype=np.int64)
+    np.cumsum(counts.sum(axis=0), out=starts[1:])
+    fill = starts[:-1].copy()
+    for i in range(counts.shape[0]):  # range i starts after ranges 0..i-1 in every bucket
+        fill, counts[i] = fill + counts[i], fill
+    order = np.empty(int(starts[-1]), dtype=key1.dtype)  # indices below n: key1's width
+    run_ranges(lambda a, b: scatter_keys(key1, skip, a, b, counts[part[a]], order), bounds)
+    run_ranges(lambda v0, v1: sort_buckets(order, starts, key2, v0, v1), split(n_key1))
+    return order, starts
+
+
 def _group_pairs_on_threads(group_pairs, half, owner, a, b):
     """``group_pairs`` over ranges of ``half`` cut at edge starts, on threads: each
     range holds whole edges, so the concatenated results are those of one call."""
@@ -152,8 +186,7 @@ def build_face_graph(faces: np.ndarray, n_vertices: int, offsets: np.ndarray | N
     -------
     FaceAdjacency
     """
-    from .._kernels.adjacency import (csr_of_face_pairs, group_pairs, order_by_two_keys,
-                                      triangle_half_edges)
+    from .._kernels.adjacency import csr_of_face_pairs, group_pairs, triangle_half_edges
 
     if offsets is None:  # triangles: half-edge h = 3 * face + corner
         m = faces.shape[0]
