@@ -367,3 +367,23 @@ def test_tol_zero_is_the_paper_rule_and_tol_stops_early(psb):
     np.testing.assert_array_equal(early.labels, plain.labels)
     with pytest.raises(ParameterError, match="tol"):
         segment(mesh, 60, tol=-0.1)
+
+
+def test_n_threads_also_bounds_the_graph_build(monkeypatch):
+    # a fresh mesh's face graph is built inside the run: with n_threads=1 every
+    # range-splitting step runs one range, with 2 some run two; same labels
+    from superfacets import Mesh, _threads, segment
+    from superfacets.shapes import creature
+
+    shape = creature(24)
+    monkeypatch.setattr(_threads, "MIN_PER_THREAD", 50)
+    seen = []
+    run = _threads.run_ranges
+    monkeypatch.setattr(_threads, "run_ranges",
+                        lambda fn, bounds: seen.append(len(bounds) - 1) or run(fn, bounds))
+    one = segment(Mesh(shape.vertices, shape.faces), 40, n_threads=1).labels
+    assert seen and max(seen) == 1
+    seen.clear()
+    two = segment(Mesh(shape.vertices, shape.faces), 40, n_threads=2).labels
+    assert max(seen) == 2
+    assert np.array_equal(one, two)

@@ -7,16 +7,35 @@ their outputs, so the results are the same for any number of threads.
 from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
+from contextvars import ContextVar
 
 #: Below this many items a range is not worth a second thread.
 MIN_PER_THREAD = 100_000
 
+_limit: ContextVar[int | None] = ContextVar("superfacets_threads", default=None)
+
 
 def default_threads() -> int:
-    """The package's default thread count (numba's, as ``n_threads=None``)."""
+    """The thread count of the run in progress (:func:`using`), else the package's
+    default (numba's, as ``n_threads=None``)."""
+    n = _limit.get()
+    if n is not None:
+        return n
     from .params import check_threads
 
     return check_threads(None)
+
+
+@contextmanager
+def using(n_threads: int):
+    """Within the block, :func:`split` makes at most ``n_threads`` ranges (the
+    pipeline's ``n_threads`` also bounds the graph build it triggers)."""
+    token = _limit.set(max(1, int(n_threads)))
+    try:
+        yield
+    finally:
+        _limit.reset(token)
 
 
 def split(n: int, n_threads: int | None = None, min_per_thread: int | None = None

@@ -193,9 +193,10 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
         Show a progress bar on stderr: the set-up stages by name (face graph,
         weights, init), then the iterations.
     n_threads : int, optional
-        Threads that expand centers at the same time (``>= 1``; default:
-        numba's thread count, ``NUMBA_NUM_THREADS``, normally the number of
-        cores). The labels do not depend on it.
+        Threads of the run (``>= 1``; default: numba's thread count,
+        ``NUMBA_NUM_THREADS``, normally the number of cores): the graph build
+        and the weights' terms it triggers, the expansions, the split-and-merge
+        searches and the clean-up's cuts. The labels do not depend on it.
     elements : {'faces', 'vertices', 'points'}, optional
         What is segmented: the faces of a mesh (the paper; default for a
         mesh), its vertices (one label per vertex, on the graph of mesh
@@ -410,6 +411,14 @@ def pipeline(mesh, params: SegmentParams, *, replay: bool = True,
     -------
     SegmentationResult
     """
+    from ._threads import using
+
+    with using(params.n_threads):  # also the graph build and terms this run triggers
+        return _pipeline(mesh, params, replay=replay, jump_cycles=jump_cycles)
+
+
+def _pipeline(mesh, params: SegmentParams, *, replay: bool, jump_cycles: bool
+              ) -> SegmentationResult:
     t_start = time.perf_counter()
     p = params
     t = time.perf_counter()
