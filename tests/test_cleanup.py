@@ -197,3 +197,11 @@ def test_min_cut_is_the_smallest_minimum_source_side_by_brute_force():
             elif value == best:
                 smallest &= s  # the minimum cuts' source sides are closed under intersection
         assert np.array_equal(side, smallest), trial
+
+
+def test_progress_bar_names_the_cleanup_stage(capsys):
+    mesh = grid_mesh(30, 30, height=lambda x, y: 0.5 * np.abs(x))
+    labels = segment(mesh, 12, cleanup=True, progress=True).labels
+    err = capsys.readouterr().err
+    assert "superfacets" in err and "clean-up" in err
+    assert labels.max() + 1 == 12

@@ -475,9 +475,12 @@ def _pipeline(mesh, params: SegmentParams, *, replay: bool, jump_cycles: bool
             spaces.close()
         classifier = spaces = w = None  # free the work buffers before the clean-up
         timings["iterations"] = time.perf_counter() - t
-    finally:
+    except BaseException:
         if bar is not None:
             bar.close()
+        raise
+    if bar is not None and not p.cleanup:
+        bar.close()
 
     # labels of the last classification; drop superfacets left empty
     t = time.perf_counter()
@@ -490,10 +493,15 @@ def _pipeline(mesh, params: SegmentParams, *, replay: bool, jump_cycles: bool
     centers = final_centers(labels, centers, sizes, positions)
     timings["connectivity"] = time.perf_counter() - t
     if p.cleanup:
+        _stage(bar, "clean-up")
         t = time.perf_counter()
-        labels = clean_boundaries(graph, labels, centers, radius=r, eta_convex=p.eta_convex,
-                                  alpha=p.alpha if p.weighting == "paper" else _D.alpha,
-                                  connectivity=p.enforce_connectivity, n_threads=p.n_threads)
+        try:
+            labels = clean_boundaries(graph, labels, centers, radius=r, eta_convex=p.eta_convex,
+                                      alpha=p.alpha if p.weighting == "paper" else _D.alpha,
+                                      connectivity=p.enforce_connectivity, n_threads=p.n_threads)
+        finally:
+            if bar is not None:
+                bar.close()
         centers = final_centers(labels, centers, sizes, positions)
         timings["cleanup"] = time.perf_counter() - t
     centers = source.first_rows(centers)
