@@ -119,8 +119,9 @@ def add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> No
                         "number of superfacets (--no-split-merge: the paper's labels bit for "
                         f"bit) (default: {'on' if _D.split_merge else 'off'})")
     p.add_argument("--threads", type=int_arg, default=None, metavar="N",
-                   help="threads expanding centers at once (default: all cores; the labels "
-                        "do not depend on it)")
+                   help="threads of the run: graph build, expansions, split-and-merge "
+                        "searches, clean-up cuts (default: all cores; the labels do not "
+                        "depend on it)")
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                    help="progress bar of the stages and iterations on stderr (default: on for "
