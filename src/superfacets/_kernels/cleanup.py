@@ -134,32 +134,22 @@ def min_cut(first, nxt, head, cap, tr, eps, source_side):
             queued[i] = False
             continue
         # grow the tree of i by one arc, or find an arc to the other tree
+        # (the source tree grows along residual i -> j, the sink tree along j -> i)
         mid = -1
+        side = sink[i]
         a = first[i]
         while a != -1:
             j = head[a]
-            if not sink[i]:
-                if cap[a] > eps:
-                    if parent[j] == _NONE:
-                        parent[j] = a ^ 1
-                        sink[j] = False
-                        if not queued[j]:
-                            active[(qh + qn) % n] = j
-                            queued[j] = True
-                            qn += 1
-                    elif sink[j]:
-                        mid = a
-                        break
-            elif cap[a ^ 1] > eps:
+            if (cap[a ^ 1] if side else cap[a]) > eps:
                 if parent[j] == _NONE:
                     parent[j] = a ^ 1
-                    sink[j] = True
+                    sink[j] = side
                     if not queued[j]:
                         active[(qh + qn) % n] = j
                         queued[j] = True
                         qn += 1
-                elif not sink[j]:
-                    mid = a ^ 1
+                elif sink[j] != side:
+                    mid = a ^ 1 if side else a
                     break
             a = nxt[a]
         if mid == -1:  # i has no arc left to grow along: done with it
