@@ -122,12 +122,52 @@ def test_bounded_expansion_is_dijkstra_inside_the_window(sphere):
     dist = np.full(m, np.inf)
     label = np.full(m, -1, np.int64)
     ws = Workspace(m, *bucket_width(cw)[1:], g.indices.size + m + 1)
-    expand(g.indptr, g.indices, cw, c, src, 0, radius**2, dist, label, ws.local, ws.stamp, 0,
+    expand(g.indptr, g.indices, cw, c, src, 0, radius**2, dist, label, ws.local,
            ws.queue, bucket_width(cw)[0], MERGE, ws.vis, np.empty(0), 0, ws.vis.size)
+    assert np.isposinf(ws.local).all()  # the scratch is left as it was found
     reached = label == 0
     assert reached.sum() > 50
     np.testing.assert_array_equal(reached, np.isfinite(ref))
     np.testing.assert_array_equal(dist[reached], ref[reached])  # the same sums, bit for bit
+
+
+def test_interrupted_expansion_leaves_its_scratch_clean(sphere):
+    """An expansion stopped by a full record or queue puts ``inf`` back in
+    ``local``, so the caller can grow the buffer and run it again."""
+    from superfacets._kernels.expand import QUEUE_FULL, RECORD_FULL
+
+    g = sphere.graph
+    cw = paper_weights(sphere, alpha=200)[g.dual_edge]
+    m = sphere.n_faces
+    c = np.ascontiguousarray(sphere.centroids)
+    inv_width, nb = bucket_width(cw)
+    full = Workspace(m, nb, g.indices.size + m + 1)
+    dist, label = np.full(m, np.inf), np.full(m, -1, np.int64)
+    n = expand(g.indptr, g.indices, cw, c, 17, 0, 1.0, dist, label, full.local, full.queue,
+               inv_width, MERGE, full.vis, np.empty(0), 0, full.vis.size)
+    assert n > 40
+    small = Workspace(m, nb, g.indices.size + m + 1)
+    small._queue(4)
+    for ws, lim, status in ((full, 20, RECORD_FULL), (small, small.vis.size, QUEUE_FULL)):
+        d2, l2 = np.full(m, np.inf), np.full(m, -1, np.int64)
+        st = expand(g.indptr, g.indices, cw, c, 17, 0, 1.0, d2, l2, ws.local, ws.queue,
+                    inv_width, MERGE, ws.vis, np.empty(0), 0, lim)
+        assert st == status
+        assert np.isposinf(ws.local).all()
+        assert (ws.head == -1).all()
+        assert (l2 == -1).all()  # nothing was merged
+    # grown, the same expansion gives the uninterrupted result
+    small.grow(QUEUE_FULL)
+    while True:
+        d2, l2 = np.full(m, np.inf), np.full(m, -1, np.int64)
+        st = expand(g.indptr, g.indices, cw, c, 17, 0, 1.0, d2, l2, small.local, small.queue,
+                    inv_width, MERGE, small.vis, np.empty(0), 0, small.vis.size)
+        if st != QUEUE_FULL:
+            break
+        small.grow(st)
+    assert st == n
+    np.testing.assert_array_equal(d2, dist)
+    np.testing.assert_array_equal(l2, label)
 
 
 def test_replayed_expansions_equal_reference_on_synthetic(valley, sphere):

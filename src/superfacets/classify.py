@@ -79,11 +79,9 @@ class Bounded(Classifier):
 
     def classify(self, centers, n_centers, dist, label):
         spaces = self.spaces
-        sid = spaces.reserve(self.m + n_centers)
-        k, next_sid = with_room(spaces.get(0), lambda ws: _k.classify_bounded(
+        k = with_room(spaces.get(0), lambda ws: _k.classify_bounded(
             self.indptr, self.indices, self.w, self.c, centers, n_centers, self.window_r2,
-            dist, label, ws.local, ws.stamp, sid, ws.queue, spaces.inv_width, ws.vis))
-        spaces.release(next_sid)
+            dist, label, ws.local, ws.queue, spaces.inv_width, ws.vis))
         return k, k
 
 
@@ -212,12 +210,10 @@ class BoundedReplay(Classifier):
         # orphans (sequential: they depend on the labels)
         ws = spaces.get(0)
         while True:
-            sid = spaces.reserve(self.m - n_centers + 1)
-            p, k, next_sid = _k.seed_orphans(
+            p, k = _k.seed_orphans(
                 indptr, indices, w, c, centers, n_centers, window_r2, dist, label, ws.local,
-                ws.stamp, sid, ws.queue, spaces.inv_width, self.face, self.dist, new_end,
-                self.limit, seg_start, seg_len)
-            spaces.release(next_sid)
+                ws.queue, spaces.inv_width, self.face, self.dist, new_end, self.limit,
+                seg_start, seg_len)
             if p >= 0:
                 break
             # undo the orphans' labels: merge everything again, then retry with more room
@@ -269,8 +265,6 @@ class BoundedReplay(Classifier):
                 share[t].append(s)
                 load[t] += ln
         bounds = [lo + (hi - lo) * t // n_thr for t in range(n_thr + 1)]
-        per = (n + n_thr - 1) // n_thr
-        sid0 = spaces.reserve(n_thr * per)  # thread t uses sid0 + t * per + i
 
         def run(t):
             ws = spaces.get(t)
@@ -284,9 +278,9 @@ class BoundedReplay(Classifier):
                 _k.merge_some(np.asarray(share[t], dtype=np.int64), seg_start, seg_len,
                                     self.face, self.dist, d_t, l_t)
                 p = _k.expand_many(indptr, indices, w, c, srcs_t, part, window_r2,
-                                         ws.local, ws.stamp, sid0 + t * per, ws.queue,
-                                         spaces.inv_width, self.face, self.dist, bounds[t],
-                                         bounds[t + 1], os_t, ol_t, d_t, l_t)
+                                         ws.local, ws.queue, spaces.inv_width, self.face,
+                                         self.dist, bounds[t], bounds[t + 1], os_t, ol_t,
+                                         d_t, l_t)
                 if p != _k.QUEUE_FULL:
                     break
                 ws.grow(p)

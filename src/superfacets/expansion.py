@@ -1,10 +1,10 @@
 """Work buffers of the bounded expansions (used by the classification and the flood).
 
 :class:`Workspaces` holds, per thread, the per-expansion tentative distances
-(``local``, float64), their expansion stamps (``stamp``, int32), the bucket
-queue and a visit buffer, both grown on demand (the queue holds one
-expansion's frontier, a few hundred to a few thousand elements, not ``n``),
-and hands out expansion ids. :func:`with_room` reruns a kernel until its
+(``local``, float64, ``inf`` between expansions: each expansion puts back
+the values it changed), the bucket queue and a visit buffer, both grown on
+demand (the queue holds one expansion's frontier, a few hundred to a few
+thousand elements, not ``n``). :func:`with_room` reruns a kernel until its
 buffers were large enough.
 """
 
@@ -18,7 +18,6 @@ from ._kernels.expand import QUEUE_FULL, RECORD_FULL
 
 __all__ = ["Workspace", "Workspaces", "bucket_width", "with_room"]
 
-_SID_LIMIT = 2**31 - 2  # stamps are int32
 _QUEUE0 = 1 << 14  # initial queue nodes
 _VISIT0 = 1 << 16  # initial visit buffer
 _MAX_BUCKETS = 1 << 16
@@ -51,7 +50,7 @@ def bucket_width(weights: np.ndarray) -> tuple[float, int]:
 
 
 class Workspace:
-    """``local``, ``stamp``, bucket queue and visit buffer of one thread.
+    """``local``, bucket queue and visit buffer of one thread.
 
     Parameters
     ----------
@@ -65,8 +64,7 @@ class Workspace:
 
     def __init__(self, m: int, n_buckets: int, max_nodes: int):
         self.m = m
-        self.local = np.empty(m)
-        self.stamp = np.full(m, -1, dtype=np.int32)
+        self.local = np.full(m, np.inf)  # inf between expansions (4 B/element less than an id)
         self.max_nodes = max_nodes
         self.head = np.full(n_buckets, -1, dtype=np.int64)
         self._queue(min(_QUEUE0, max_nodes))
@@ -86,13 +84,12 @@ class Workspace:
         self.queue = (self.qface, self.qdist, self.qnext, self.head)
 
     def grow(self, status: int) -> None:
-        """Quadruple the buffer a kernel ran out of (``status``) and reset the
-        stamps, so the interrupted expansion can be run again with its id.
+        """Quadruple the buffer a kernel ran out of (``status``), so the
+        interrupted expansion can be run again (it left ``local`` all ``inf``).
 
         ``RECORD_FULL`` grows the visit buffer (callers whose records go to an
         arena of their own handle that status themselves).
         """
-        self.stamp.fill(-1)
         if status == QUEUE_FULL:
             cap = self.qface.shape[0]
             if cap >= self.max_nodes:  # cannot happen: the bound holds every push
@@ -105,7 +102,7 @@ class Workspace:
 
 
 class Workspaces:
-    """One :class:`Workspace` per thread and the expansion-id counter.
+    """One :class:`Workspace` per thread and the threads' pool.
 
     Parameters
     ----------
@@ -124,27 +121,12 @@ class Workspaces:
         self.inv_width, self.n_buckets = bucket_width(weights)
         self.n_threads = max(1, int(n_threads))
         self.ws = [Workspace(m, self.n_buckets, self.heap_bound)]
-        self.sid = 0
         self._pool = None
 
     def get(self, t: int) -> Workspace:
         while len(self.ws) <= t:
             self.ws.append(Workspace(self.m, self.n_buckets, self.heap_bound))
         return self.ws[t]
-
-    def reserve(self, n: int) -> int:
-        """Return the first of ``n`` fresh expansion ids (stamps reset on wrap)."""
-        if self.sid + n >= _SID_LIMIT:
-            for w in self.ws:
-                w.stamp.fill(-1)
-            self.sid = 0
-        sid = self.sid
-        self.sid += n
-        return sid
-
-    def release(self, next_sid: int) -> None:
-        """Give back the reserved ids from ``next_sid`` on (unused by the kernel)."""
-        self.sid = int(next_sid)
 
     def pool(self) -> ThreadPoolExecutor:
         if self._pool is None:

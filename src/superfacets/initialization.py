@@ -129,8 +129,8 @@ def flood_labels(graph, csr_weights: np.ndarray, radius: float, window: float = 
     inv_width, n_buckets = bucket_width(csr_weights)
     ws = Workspace(m, n_buckets, g.indices.shape[0] + m + 1)
     with_room(ws, lambda ws: flood(g.indptr, g.indices, csr_weights, c, order,
-                                   float((window * radius) ** 2), labels, ws.local, ws.stamp,
-                                   0, ws.queue, inv_width, ws.vis))
+                                   float((window * radius) ** 2), labels, ws.local,
+                                   ws.queue, inv_width, ws.vis))
     return labels
 
 

@@ -5,10 +5,10 @@ for the flood). The element graph is given as CSR arrays ``indptr`` (int64),
 ``indices`` (int32) and ``weights`` (float64, one per CSR entry). Buffers are
 allocated once per run by the caller (:mod:`superfacets.expansion`):
 
-- ``local`` (n,) float64 and ``stamp`` (n,) int32: per-expansion tentative
-  distances, valid only where ``stamp[f] == sid`` (the id of the current
-  expansion), so no O(n) array is reset per center; ``stamp`` starts at -1
-  and each expansion gets a fresh ``sid``;
+- ``local`` (n,) float64: per-expansion tentative distances, ``inf`` on
+  every element between expansions (each expansion puts back ``inf`` on the
+  elements it reached, which it lists anyway, so no O(n) array is reset per
+  center and no per-element expansion id is kept);
 - ``queue``: the bucket queue of :func:`expand` (node pool and bucket heads,
   sized to the frontier of one expansion, grown by the caller on demand).
 
@@ -73,8 +73,7 @@ def queue_push(qface, qdist, qnext, head, bmask, n, g, nd, inv_width, cur):
 
 @njit(cache=True, error_model="numpy", nogil=True)
 def expand(indptr, indices, weights, centroids, src, lab, window_r2,
-           dist, label, local, stamp, sid, queue, inv_width, mode,
-           vis_face, vis_dist, pos, lim):
+           dist, label, local, queue, inv_width, mode, vis_face, vis_dist, pos, lim):
     """Bounded shortest-path expansion from face ``src`` with label ``lab``.
 
     Only faces whose centroid lies within ``sqrt(window_r2)`` of the centroid
@@ -103,10 +102,13 @@ def expand(indptr, indices, weights, centroids, src, lab, window_r2,
     ``lab``, ignoring ``dist``; :data:`RECORD`: neither ``dist`` nor
     ``label`` is read or written, so the expansion depends on its face alone.
 
-    ``local``/``stamp``: per-face scratch, valid where ``stamp == sid``.
+    ``local``: per-face scratch, ``inf`` everywhere on entry and again on
+    return (a face is first reached when its ``local`` is ``inf``; a face
+    outside the window, or labelled in ``UNLABELLED`` mode, is tested again
+    each time it is reached and never entered).
     ``queue = (qface, qdist, qnext, head)``: node pool and bucket heads.
     Returns the new ``pos``, or :data:`RECORD_FULL` / :data:`QUEUE_FULL`
-    (the caller grows that array and starts over with a fresh ``sid``).
+    (the caller grows that array and starts over).
     """
     qface, qdist, qnext, head = queue
     qcap = qface.shape[0]
@@ -119,7 +121,6 @@ def expand(indptr, indices, weights, centroids, src, lab, window_r2,
     start = pos
     if pos >= lim:
         return RECORD_FULL
-    stamp[src] = sid
     local[src] = 0.0
     vis_face[pos] = src
     pos += 1
@@ -140,20 +141,19 @@ def expand(indptr, indices, weights, centroids, src, lab, window_r2,
         for e in range(indptr[f], indptr[f + 1]):
             g = indices[e]
             nd = d + weights[e]
-            if stamp[g] != sid:
-                stamp[g] = sid
+            lg = local[g]
+            if lg == _INF:  # not reached yet by this expansion
                 dx = centroids[g, 0] - cx
                 dy = centroids[g, 1] - cy
                 dz = centroids[g, 2] - cz
                 if dx * dx + dy * dy + dz * dz > window_r2 or (only_unlabelled and label[g] >= 0):
-                    local[g] = -1.0  # outside this window: never entered
-                    continue
+                    continue  # outside this window: never entered
                 if pos >= lim:
                     status = RECORD_FULL
                     break
                 vis_face[pos] = g
                 pos += 1
-            elif not nd < local[g]:  # local == -1 (outside) never passes
+            elif not nd < lg:
                 continue
             local[g] = nd
             n, free, bump = queue_node(qnext, free, bump, qcap)
@@ -165,6 +165,8 @@ def expand(indptr, indices, weights, centroids, src, lab, window_r2,
         if status != 0:
             for b in range(nb):
                 head[b] = -1
+            for j in range(start, pos):
+                local[vis_face[j]] = _INF
             return status
     if vis_dist.shape[0] > 0:
         for j in range(start, pos):
@@ -179,21 +181,22 @@ def expand(indptr, indices, weights, centroids, src, lab, window_r2,
     elif only_unlabelled:
         for j in range(start, pos):
             label[vis_face[j]] = lab
+    for j in range(start, pos):
+        local[vis_face[j]] = _INF
     return pos
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
 def classify_bounded(indptr, indices, weights, centroids, centers, n_centers, window_r2,
-                     dist, label, local, stamp, sid, queue, inv_width, vis):
+                     dist, label, local, queue, inv_width, vis):
     """Classification step of the paper (section 3.1) with orphan re-seeding.
 
     The straightforward version: runs :func:`expand` from
     ``centers[0:n_centers]`` in order (label = index of the center), then,
     scanning faces in index order, seeds a new center on each face still
     unlabelled (an orphan) and expands it, appending it to ``centers``.
-    Returns ``(K, next_sid)``: the number of centers now in use and the next
-    free expansion id; ``K`` is a negative status of :func:`expand` if
-    ``queue`` or the visit buffer ``vis`` was too small.
+    Returns ``K``, the number of centers now in use, or a negative status of
+    :func:`expand` if ``queue`` or the visit buffer ``vis`` was too small.
     """
     m = label.shape[0]
     nod = np.empty(0)
@@ -203,22 +206,19 @@ def classify_bounded(indptr, indices, weights, centroids, centers, n_centers, wi
         label[f] = -1
     for s in range(n_centers):
         st = expand(indptr, indices, weights, centroids, centers[s], s, window_r2,
-                    dist, label, local, stamp, sid, queue, inv_width, MERGE, vis, nod, 0, lim)
-        sid += 1
+                    dist, label, local, queue, inv_width, MERGE, vis, nod, 0, lim)
         if st < 0:
-            return st, sid
+            return st
     k = n_centers
     for f in range(m):
         if label[f] < 0:
             centers[k] = f
             st = expand(indptr, indices, weights, centroids, f, k, window_r2,
-                        dist, label, local, stamp, sid, queue, inv_width, MERGE, vis, nod, 0,
-                        lim)
-            sid += 1
+                        dist, label, local, queue, inv_width, MERGE, vis, nod, 0, lim)
             if st < 0:
-                return st, sid
+                return st
             k += 1
-    return k, sid
+    return k
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -236,18 +236,16 @@ def _merge_segment(a, n, s, rec_face, rec_dist, dist, label):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def expand_many(indptr, indices, weights, centroids, srcs, labs, window_r2, local, stamp,
-                sid0, queue, inv_width, rec_face, rec_dist, pos, lim, out_start, out_len,
-                dist, label):
+def expand_many(indptr, indices, weights, centroids, srcs, labs, window_r2, local, queue,
+                inv_width, rec_face, rec_dist, pos, lim, out_start, out_len, dist, label):
     """Record-only expansions (:data:`RECORD`) of the faces ``srcs``, each
     merged right after (while in cache) into ``dist``/``label`` with label
     ``labs[i]`` by the lexicographic rule of :func:`merge_some`.
 
-    Expansion ``i`` gets id ``sid0 + i``; its settled faces and distances go
-    to ``rec_face`` / ``rec_dist`` from ``out_start[i] = pos`` onwards
+    The settled faces and distances of expansion ``i`` go to ``rec_face`` / ``rec_dist`` from ``out_start[i] = pos`` onwards
     (``out_len[i]`` entries), below ``lim``. Releases the GIL, so several
     threads may run it at once on disjoint record ranges with their own
-    ``local``, ``stamp``, queue and ``dist``/``label``. Returns the end
+    ``local``, queue and ``dist``/``label``. Returns the end
     position, or a negative status of :func:`expand`.
     """
     nod = np.empty(0)
@@ -255,8 +253,7 @@ def expand_many(indptr, indices, weights, centroids, srcs, labs, window_r2, loca
     for i in range(srcs.shape[0]):
         out_start[i] = pos
         p = expand(indptr, indices, weights, centroids, srcs[i], 0, window_r2, nod, nol,
-                   local, stamp, sid0 + i, queue, inv_width, RECORD, rec_face, rec_dist, pos,
-                   lim)
+                   local, queue, inv_width, RECORD, rec_face, rec_dist, pos, lim)
         if p < 0:
             return p
         out_len[i] = p - pos
@@ -303,15 +300,15 @@ def combine_merged(dist, label, dist2, label2, lo, hi):
 
 @njit(cache=True, error_model="numpy", nogil=True)
 def seed_orphans(indptr, indices, weights, centroids, centers, n_centers, window_r2,
-                 dist, label, local, stamp, sid, queue, inv_width, rec_face, rec_dist, pos,
-                 lim, seg_start, seg_len):
+                 dist, label, local, queue, inv_width, rec_face, rec_dist, pos, lim,
+                 seg_start, seg_len):
     """Orphan re-seeding of :func:`classify_bounded`, recording the expansions.
 
     Scanning faces in index order, seeds a center on each face still
     unlabelled, expands it (:data:`MERGE`) and records it from ``pos`` like
     :func:`expand_many` (``seg_start``/``seg_len`` indexed by center).
-    Returns ``(status, K, next_sid)``: ``status`` is the end position or a
-    negative status of :func:`expand`.
+    Returns ``(status, K)``: ``status`` is the end position or a negative
+    status of :func:`expand`.
     """
     m = label.shape[0]
     k = n_centers
@@ -320,14 +317,13 @@ def seed_orphans(indptr, indices, weights, centroids, centers, n_centers, window
             centers[k] = f
             seg_start[k] = pos
             p = expand(indptr, indices, weights, centroids, f, k, window_r2, dist, label,
-                       local, stamp, sid, queue, inv_width, MERGE, rec_face, rec_dist, pos, lim)
-            sid += 1
+                       local, queue, inv_width, MERGE, rec_face, rec_dist, pos, lim)
             if p < 0:
-                return p, k, sid
+                return p, k
             seg_len[k] = p - pos
             pos = p
             k += 1
-    return pos, k, sid
+    return pos, k
 
 
 @njit(cache=True, error_model="numpy", nogil=True)

@@ -7,15 +7,15 @@ from .expand import UNLABELLED, expand
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def flood(indptr, indices, weights, centroids, order, window_r2, label, local, stamp, sid,
-          queue, inv_width, vis):
+def flood(indptr, indices, weights, centroids, order, window_r2, label, local, queue,
+          inv_width, vis):
     """Flood initialization (authors' implementation).
 
     Faces are visited in ``order`` (by Euclidean distance to the first seed);
     each face still unlabelled starts a new region, grown by a bounded
-    expansion that claims only unlabelled faces. Returns ``(n_regions,
-    next_sid)``; ``n_regions`` is a negative status of :func:`expand` if
-    ``queue`` or the visit buffer ``vis`` was too small.
+    expansion that claims only unlabelled faces. Returns the number of
+    regions, or a negative status of :func:`expand` if ``queue`` or the
+    visit buffer ``vis`` was too small.
     """
     m = label.shape[0]
     for f in range(m):
@@ -26,10 +26,8 @@ def flood(indptr, indices, weights, centroids, order, window_r2, label, local, s
         f = order[i]
         if label[f] < 0:
             st = expand(indptr, indices, weights, centroids, f, n, window_r2, dummy, label,
-                        local, stamp, sid, queue, inv_width, UNLABELLED, vis, dummy, 0,
-                        vis.shape[0])
-            sid += 1
+                        local, queue, inv_width, UNLABELLED, vis, dummy, 0, vis.shape[0])
             if st < 0:
-                return st, sid
+                return st
             n += 1
-    return n, sid
+    return n
