@@ -209,6 +209,82 @@ def test_released_terms_come_back_the_same(sphere):
     np.testing.assert_array_equal(g.terms.geo, geo)
 
 
+def _released_fields_come_back(g, mesh=None):
+    names = ("normals", "pairs", "dual_edge", "lengths")
+    before = {k: getattr(g, k).copy() for k in names}
+    terms = g.terms
+    g.release()
+    g.release_terms()
+    gone = [k for k in names if k not in g.__dict__]
+    if mesh is not None:  # the mesh forgets its copy of the normals too
+        assert mesh.__dict__["_geometry"][2] is None
+    assert g.terms.geo.tolist() == terms.geo.tolist()  # rebuilt on the way, the same
+    assert np.array_equal(g.terms.concave, terms.concave)
+    for k, v in before.items():
+        assert getattr(g, k).dtype == v.dtype, k
+        np.testing.assert_array_equal(getattr(g, k), v, err_msg=k)
+    if mesh is not None:
+        assert g.normals is mesh.normals  # shared again, not two copies
+    return gone
+
+
+def _polygon_grid(nx: int, ny: int) -> Mesh:
+    """Quads on a bent grid, the last row's split into triangles (rows padded with -1)."""
+    x, y = np.meshgrid(np.arange(nx + 1.0), np.arange(ny + 1.0), indexing="ij")
+    v = np.stack([x.ravel(), y.ravel(), 0.1 * (x * y).ravel()], axis=1)
+    at = lambda i, j: i * (ny + 1) + j  # noqa: E731
+    faces = []
+    for i in range(nx):
+        for j in range(ny):
+            q = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)]
+            faces += [q[:3] + [-1], [q[0], q[2], q[3], -1]] if j == ny - 1 else [q]
+    return Mesh(v, np.array(faces))
+
+
+def test_face_graph_releases_what_the_passes_do_not_read_and_rebuilds_it(sphere):
+    for mesh in (sphere, _polygon_grid(5, 4)):  # triangles; quads and triangles
+        g = mesh.graph
+        assert _released_fields_come_back(g, mesh) == ["normals", "pairs", "dual_edge",
+                                                       "lengths"]
+
+
+def test_vertex_and_point_graphs_release_their_pairs(sphere):
+    from superfacets.elements.inputs import elements_of
+
+    for kind in ("vertices", "points"):
+        g = elements_of(sphere if kind == "vertices" else sphere.vertices, kind).graph
+        assert _released_fields_come_back(g) == ["pairs", "dual_edge"]
+
+
+def test_face_graph_rebuilds_its_normals_after_its_mesh_is_gone(sphere):
+    import gc
+
+    from superfacets.elements import as_element_graph
+
+    g = as_element_graph((sphere.vertices, sphere.faces))  # its Mesh is dropped
+    gc.collect()
+    assert g.rebuild["normals"].mesh() is None
+    _released_fields_come_back(g)
+
+
+def test_runs_that_release_the_graph_give_the_same_labels(valley, monkeypatch):
+    # the passes run without the released fields; what reads them after
+    # (connectivity, clean-up, split and merge) finds them rebuilt, the same
+    from superfacets import Mesh, segment, segmentation
+
+    def run(release_min, **kw):
+        monkeypatch.setattr(segmentation, "_RELEASE_MIN", release_min)
+        mesh = Mesh(valley.vertices, valley.faces)
+        r = segment(mesh, 12, **kw)
+        return r.labels, "pairs" in mesh.graph.__dict__
+
+    for kw in ({}, {"cleanup": True, "split_merge": True}):
+        kept, held = run(1 << 60, **kw)
+        released, _ = run(0, **kw)
+        assert held
+        np.testing.assert_array_equal(released, kept)
+
+
 def test_graph_and_geometry_on_threads_equal_one_thread(monkeypatch):
     # ranges of half-edges and faces on three threads: the cuts move to edge starts,
     # so non-manifold runs, duplicates and collapsed edges come out as from one call

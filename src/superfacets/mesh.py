@@ -148,7 +148,18 @@ class Mesh:
         return np.split(np.asarray(self.corners), self.offsets[1:-1])
 
     @cached_property
-    def _geometry(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _geometry(self) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        return self._compute_geometry()
+
+    def _release_normals(self) -> None:
+        """Forget the cached normals (24 bytes per face; the face graph's
+        :meth:`~superfacets.elements.ElementGraph.release`); they are computed
+        again, the same, on next use."""
+        geometry = self.__dict__.get("_geometry")
+        if geometry is not None:
+            self.__dict__["_geometry"] = (geometry[0], geometry[1], None)
+
+    def _compute_geometry(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         from ._kernels.geometry import face_geometry, polygon_geometry
 
         m = self.n_faces
@@ -183,7 +194,11 @@ class Mesh:
         Degenerate (zero-area) faces get the zero vector, so their dihedral
         angle with any neighbour is pi/2 and their edges count as convex.
         """
-        return self._geometry[2]
+        geometry = self._geometry
+        if geometry[2] is None:  # released: computed again (the same kernel, the same values)
+            geometry = (geometry[0], geometry[1], self._compute_geometry()[2])
+            self.__dict__["_geometry"] = geometry
+        return geometry[2]
 
     @cached_property
     def area(self) -> float:

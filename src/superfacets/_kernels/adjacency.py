@@ -249,23 +249,37 @@ def csr_of_face_pairs(lo, hi, ka, kb, n, indices, dual_edge):
             out += 1
             i = j
     indptr[n] = out
-    # pair ids in (lo, hi) order: row v's neighbours above v; the mirror entries of
-    # a row (neighbours below it) come first and ascending, in the order ids are given
-    e = out // 2
-    keep = np.empty(e, dtype=np.int64)
+    keep = np.empty(out // 2, dtype=np.int64)
+    number_pairs(indptr, indices, n, dual_edge, keep, np.empty((0, 2), dtype=np.int64))
+    return indptr, keep
+
+
+@njit(cache=True, error_model="numpy")
+def number_pairs(indptr, indices, n, dual_edge, keep, pairs):
+    """Number the pairs of a symmetric CSR (rows ascending) in ``(lo, hi)`` order.
+
+    Pair ``t`` is the ``t``-th entry ``(v, g)``, ``g > v``, in CSR order; both
+    of its entries get ``dual_edge = t``. The mirror entries of a row (its
+    neighbours below it) come first and ascending, in the order ids are given.
+    If ``keep`` is not empty, ``keep[t]`` receives the value ``dual_edge`` had
+    at the entry ``(v, g)``; if ``pairs`` is not empty, ``pairs[t] = (v, g)``.
+    """
     mirror = indptr[:n].copy()
     nid = 0
     for v in range(n):
         for i in range(indptr[v], indptr[v + 1]):
             g = indices[i]
             if g > v:
-                keep[nid] = dual_edge[i]
+                if keep.shape[0]:
+                    keep[nid] = dual_edge[i]
+                if pairs.shape[0]:
+                    pairs[nid, 0] = v
+                    pairs[nid, 1] = g
                 dual_edge[i] = nid
                 q = mirror[g]
                 dual_edge[q] = nid
                 mirror[g] = q + 1
                 nid += 1
-    return indptr, keep
 
 
 @njit(cache=True, error_model="numpy")

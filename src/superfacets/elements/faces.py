@@ -18,11 +18,13 @@ drops non-manifold edges:
 
 from __future__ import annotations
 
+import weakref
+from functools import partial
 from typing import NamedTuple
 
 import numpy as np
 
-from .graph import ElementGraph
+from .graph import ElementGraph, pairs_from_csr
 
 __all__ = ["FaceAdjacency", "build_face_graph", "face_graph"]
 
@@ -85,7 +87,6 @@ def face_graph(mesh) -> ElementGraph:
     topo = (build_face_graph(mesh.faces, mesh.n_vertices) if mesh.is_triangular else
             build_face_graph(np.asarray(mesh.corners), mesh.n_vertices, np.asarray(mesh.offsets)))
     v = mesh.vertices
-    c, n = mesh.centroids, mesh.normals
 
     def edge_length(edges):  # |v_b - v_a| as np.linalg.norm(axis=1), in one kernel pass
         from .._kernels.geometry import edge_lengths
@@ -94,26 +95,56 @@ def face_graph(mesh) -> ElementGraph:
         edge_lengths(v, edges, out)
         return out
 
-    def terms_of(sl: slice):
+    def terms_of(g: ElementGraph, sl: slice):
         # one pass of a kernel; the same operations as the numpy expressions
         #   mid = 0.5 * (v[a] + v[b]); geo = |c_i - mid| + |mid - c_j|,
         #   cos = clip(n_i . n_j, -1, 1), concave = n_i . (c_j - c_i) > 0
         from .._kernels.geometry import face_terms
 
-        lo, hi = sl.indices(topo.pairs.shape[0])[:2]
+        pairs = g.pairs
+        lo, hi = sl.indices(pairs.shape[0])[:2]
         geo, cos = np.empty(hi - lo), np.empty(hi - lo)
         concave = np.empty(hi - lo, dtype=bool)
-        face_terms(v, c, n, topo.pairs, topo.edges, lo, hi, geo, cos, concave)
+        face_terms(v, g.positions, g.normals, pairs, g.edges, lo, hi, geo, cos, concave)
         return geo, cos, concave
 
+    csr_pairs = partial(pairs_from_csr, pair_dtype=topo.pairs.dtype)
     return ElementGraph(
-        kind="faces", positions=c, sizes=mesh.areas, normals=n, centroid=mesh.centroid,
-        lower=mesh._bounds[0].copy(), diagonal=mesh.diagonal, pairs=topo.pairs,
-        indptr=topo.indptr, indices=topo.indices, dual_edge=topo.dual_edge,
+        kind="faces", positions=mesh.centroids, sizes=mesh.areas, normals=mesh.normals,
+        centroid=mesh.centroid, lower=mesh._bounds[0].copy(), diagonal=mesh.diagonal,
+        pairs=topo.pairs, indptr=topo.indptr, indices=topo.indices, dual_edge=topo.dual_edge,
         lengths=edge_length(topo.edges),
         boundary_elements=topo.boundary_faces,
         boundary_lengths=edge_length(topo.boundary_edges),
-        edges=topo.edges, boundary_edges=topo.boundary_edges, terms_of=terms_of)
+        edges=topo.edges, boundary_edges=topo.boundary_edges, terms_of=terms_of,
+        rebuild={"normals": _MeshNormals(mesh), "pairs": csr_pairs, "dual_edge": csr_pairs,
+                 "lengths": lambda g: {"lengths": edge_length(g.edges)}})
+
+
+class _MeshNormals:
+    """``rebuild["normals"]`` of a face graph: the normals its mesh caches.
+
+    The mesh is held by a weak reference (it holds the graph); once it is
+    gone, a new :class:`~superfacets.mesh.Mesh` of the same arrays computes
+    them, the same. :meth:`release` makes the mesh forget its copy too.
+    """
+
+    def __init__(self, mesh):
+        self.mesh = weakref.ref(mesh)
+        self.vertices, self.faces = mesh.vertices, mesh.faces
+
+    def __call__(self, graph: ElementGraph) -> dict[str, np.ndarray]:
+        from ..mesh import Mesh
+
+        mesh = self.mesh()
+        if mesh is None:
+            mesh = Mesh(self.vertices, self.faces)
+        return {"normals": mesh.normals}
+
+    def release(self) -> None:
+        mesh = self.mesh()
+        if mesh is not None:
+            mesh._release_normals()
 
 
 def order_by_two_keys(key1: np.ndarray, key2: np.ndarray, n_key1: int,

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Callable, NamedTuple
+from typing import Callable, Mapping, NamedTuple
 
 import numpy as np
 
 __all__ = ["ElementGraph", "AdjacencyTerms", "as_element_graph", "adjacency_csr", "CHUNK",
-           "chunked"]
+           "chunked", "pairs_from_csr"]
 
 #: Adjacencies per chunk when per-adjacency arrays are computed: bounds the
 #: temporaries (and fixes the slicing, so every result is the same bit for bit).
@@ -51,6 +51,57 @@ def adjacency_csr(lo: np.ndarray, hi: np.ndarray, n: int
     dual_edge = np.empty(2 * e, dtype=np.int32 if 2 * e < 2**31 - 1 else np.int64)
     indptr = csr_of_pairs(lo, hi, int(n), indices, dual_edge)
     return indptr, indices, dual_edge
+
+
+def pairs_from_csr(graph: "ElementGraph", pair_dtype=np.int32) -> dict[str, np.ndarray]:
+    """``pairs`` and ``dual_edge`` computed again from the CSR layout.
+
+    The graphs of :mod:`superfacets.elements` list their pairs in ``(lo, hi)``
+    order, which is the order of the CSR entries ``(v, g)``, ``g > v``; so the
+    two arrays follow from ``indptr`` and ``indices`` alone, the same as built.
+
+    Parameters
+    ----------
+    graph : ElementGraph
+    pair_dtype : numpy dtype, default int32
+        The dtype of ``pairs`` as built (int64 from ``2**31`` elements on).
+
+    Returns
+    -------
+    dict
+        ``{"pairs": (e, 2) ndarray, "dual_edge": (2 e,) int32 or int64 ndarray}``.
+    """
+    from .._kernels.adjacency import number_pairs
+
+    n_csr = graph.indices.shape[0]
+    pairs = np.empty((n_csr // 2, 2), dtype=pair_dtype)
+    dual_edge = np.empty(n_csr, dtype=np.int32 if n_csr < 2**31 - 1 else np.int64)
+    number_pairs(graph.indptr, graph.indices, graph.n_elements, dual_edge,
+                 np.empty(0, dtype=np.int64), pairs)
+    return {"pairs": pairs, "dual_edge": dual_edge}
+
+
+class _Rebuilt:
+    """A field of :class:`ElementGraph` that :meth:`ElementGraph.release` may forget:
+    on next use it is computed again, the same, by ``graph.rebuild[name](graph)``
+    (a dict of one or more fields, each stored if absent)."""
+
+    def __set_name__(self, owner, name: str) -> None:
+        self.name = name
+
+    def __get__(self, graph, owner=None):
+        if graph is None:  # class access: the dataclass field has no default
+            raise AttributeError(self.name)
+        d = graph.__dict__
+        try:
+            return d[self.name]
+        except KeyError:
+            for name, value in graph.rebuild[self.name](graph).items():
+                d.setdefault(name, value)
+            return d[self.name]
+
+    def __set__(self, graph, value) -> None:  # the dataclass's __init__ only (frozen)
+        graph.__dict__[self.name] = value
 
 
 class AdjacencyTerms(NamedTuple):
@@ -128,26 +179,36 @@ class ElementGraph:
         The length that scales the angular term of the paper's weights (eq. 2)
         when it differs from ``lengths`` (vertices, points: the distance
         between the two elements); see :attr:`span`.
+    terms_of : callable or None
+        ``terms_of(graph, sl) -> (geo, cos, concave)`` for a slice of the
+        pairs: the :class:`AdjacencyTerms` of those adjacencies.
+    rebuild : mapping of str to callable
+        For the fields :meth:`release` may forget (``normals``, ``pairs``,
+        ``dual_edge``, ``lengths``): ``rebuild[name](graph)`` computes that
+        field again, the same, as a dict of fields. A field without an entry
+        is never released.
     """
 
     kind: str
     positions: np.ndarray
     sizes: np.ndarray
-    normals: np.ndarray
+    normals: np.ndarray = _Rebuilt()
     centroid: np.ndarray
     lower: np.ndarray
     diagonal: float
-    pairs: np.ndarray
+    pairs: np.ndarray = _Rebuilt()
     indptr: np.ndarray
     indices: np.ndarray
-    dual_edge: np.ndarray
-    lengths: np.ndarray
+    dual_edge: np.ndarray = _Rebuilt()
+    lengths: np.ndarray = _Rebuilt()
     boundary_elements: np.ndarray
     boundary_lengths: np.ndarray
     edges: np.ndarray | None = None
     boundary_edges: np.ndarray | None = None
     spans: np.ndarray | None = None
-    terms_of: Callable[[slice], tuple] | None = field(default=None, repr=False)
+    terms_of: Callable[["ElementGraph", slice], tuple] | None = field(default=None, repr=False)
+    rebuild: Mapping[str, Callable[["ElementGraph"], dict]] = field(default_factory=dict,
+                                                                    repr=False)
 
     @property
     def element(self) -> str:
@@ -185,11 +246,12 @@ class ElementGraph:
         e = self.n_edges
         geo, cos = np.empty(e), np.empty(e)
         concave = np.empty(e, dtype=bool)
+        self.normals, self.pairs  # noqa: B018 (rebuilt here if released, not on the threads)
 
         def chunks(c0: int, c1: int) -> None:
             for s in range(c0 * CHUNK, min(e, c1 * CHUNK), CHUNK):
                 sl = slice(s, min(e, s + CHUNK))
-                geo[sl], cos[sl], concave[sl] = self.terms_of(sl)
+                geo[sl], cos[sl], concave[sl] = self.terms_of(self, sl)
 
         run_ranges(chunks, split(-(-e // CHUNK), min_per_thread=1))
         return AdjacencyTerms(geo, cos, concave)
@@ -199,6 +261,20 @@ class ElementGraph:
         computed again, the same, on next use. The pipeline calls it once the
         weights are made, so the terms do not stay in memory during the passes."""
         self.__dict__.pop("terms", None)
+
+    def release(self) -> None:
+        """Forget the fields that have a :attr:`rebuild` entry (faces: the
+        normals, pairs, dual-edge map and border lengths, about 60 bytes per
+        face, with the mesh's cached normals); each is computed again, the
+        same, on next use. The pipeline calls it before the passes, which
+        read only the CSR layout, the positions and the sizes, so that the
+        passes' peak memory does not hold them.
+        """
+        for name, make in self.rebuild.items():
+            self.__dict__.pop(name, None)
+            forget = getattr(make, "release", None)
+            if forget is not None:
+                forget()
 
     def to_csr(self, weights: np.ndarray | None = None):
         """The adjacency as a symmetric ``scipy.sparse.csr_array``.

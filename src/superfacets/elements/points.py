@@ -32,7 +32,7 @@ import numpy as np
 
 from ..mesh import column_bounds
 from .graph import ElementGraph, adjacency_csr
-from .vertices import symmetric_terms
+from .vertices import _REBUILD_PAIRS, symmetric_terms
 
 __all__ = ["point_graph", "PointElements", "estimate_normals", "orient_normals"]
 
@@ -190,12 +190,11 @@ def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
     degree = np.diff(indptr).astype(np.float64)
     share = 2.0 * np.sqrt(np.pi * area) / np.maximum(degree, 1.0)
     lengths = 0.5 * (share[lo] + share[hi])
-    terms = symmetric_terms(pts, normals, pairs)
     spans = np.linalg.norm(pts[lo] - pts[hi], axis=1)
     graph = ElementGraph(
         kind="points", positions=pts, sizes=area, normals=normals,
         centroid=pts.mean(axis=0), lower=lower, diagonal=diagonal, pairs=pairs,
         indptr=indptr, indices=indices, dual_edge=dual_edge, lengths=lengths,
         boundary_elements=np.zeros(0, np.int64), boundary_lengths=np.zeros(0),
-        spans=spans, terms_of=terms)
+        spans=spans, terms_of=symmetric_terms, rebuild=_REBUILD_PAIRS)
     return PointElements(graph, index)

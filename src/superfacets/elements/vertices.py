@@ -28,14 +28,19 @@ neighbour); :class:`VertexElements` maps the elements back to the vertices.
 
 from __future__ import annotations
 
+from functools import partial
 from typing import NamedTuple
 
 import numpy as np
 
 from ..mesh import column_bounds
-from .graph import ElementGraph, adjacency_csr, chunked
+from .graph import ElementGraph, adjacency_csr, chunked, pairs_from_csr
 
 __all__ = ["vertex_graph", "VertexElements", "symmetric_terms"]
+
+#: ``ElementGraph.rebuild`` of the vertex and point graphs: their pairs (int64) follow
+#: from the CSR layout; the other fields are kept.
+_REBUILD_PAIRS = dict.fromkeys(("pairs", "dual_edge"), partial(pairs_from_csr, pair_dtype=np.int64))
 
 
 class VertexElements(NamedTuple):
@@ -53,22 +58,20 @@ class VertexElements(NamedTuple):
     index: np.ndarray
 
 
-def symmetric_terms(positions: np.ndarray, normals: np.ndarray, pairs: np.ndarray):
-    """The weight terms of elements that are points with normals (vertices, cloud points).
+def symmetric_terms(graph: ElementGraph, sl: slice):
+    """The weight terms of elements that are points with normals (vertices, cloud points),
+    for the slice ``sl`` of ``graph.pairs`` (``terms_of`` of those graphs).
 
-    Returns ``terms_of(sl) -> (geo, cos, concave)`` for slices of ``pairs``:
-    ``geo = |p_i - p_j|``, ``cos = n_i . n_j`` (clipped), ``concave =
-    (n_i - n_j) . (p_i - p_j) < 0``.
+    Returns ``(geo, cos, concave)``: ``geo = |p_i - p_j|``, ``cos = n_i . n_j``
+    (clipped), ``concave = (n_i - n_j) . (p_i - p_j) < 0``.
     """
-    def terms_of(sl: slice):
-        i, j = pairs[sl, 0], pairs[sl, 1]
-        d = positions[i] - positions[j]
-        geo = np.linalg.norm(d, axis=1)
-        cos = np.clip(np.einsum("ij,ij->i", normals[i], normals[j]), -1.0, 1.0)
-        concave = np.einsum("ij,ij->i", normals[i] - normals[j], d) < 0
-        return geo, cos, concave
-
-    return terms_of
+    positions, normals = graph.positions, graph.normals
+    i, j = graph.pairs[sl, 0], graph.pairs[sl, 1]
+    d = positions[i] - positions[j]
+    geo = np.linalg.norm(d, axis=1)
+    cos = np.clip(np.einsum("ij,ij->i", normals[i], normals[j]), -1.0, 1.0)
+    concave = np.einsum("ij,ij->i", normals[i] - normals[j], d) < 0
+    return geo, cos, concave
 
 
 def vertex_graph(mesh) -> VertexElements:
@@ -146,5 +149,5 @@ def vertex_graph(mesh) -> VertexElements:
         indices=indices, dual_edge=dual_edge, lengths=lengths,
         boundary_elements=np.concatenate([lo[open_], hi[open_]]),
         boundary_lengths=np.concatenate([half_len, half_len]), spans=spans,
-        terms_of=symmetric_terms(pos, normal, pairs))
+        terms_of=symmetric_terms, rebuild=_REBUILD_PAIRS)
     return VertexElements(graph, index)
