@@ -46,6 +46,8 @@ def test_malformed_input(case, tmp_path, capsys):
         return
     assert len(lines) == 1 and lines[0].startswith("superfacets: error: "), err
     assert case.match in lines[0], lines[0]
+    for name in case.files:  # the input is named once, not once per layer
+        assert lines[0].count(f"{name}: ") <= 1, lines[0]
 
 
 def test_a_pipe_or_device_is_refused_as_input(tmp_path, capsys):

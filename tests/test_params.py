@@ -79,6 +79,22 @@ def test_check_choice_bool_threads_and_n_segments():
         check_n_segments(5, 4, "points")
 
 
+def test_thread_count_while_numba_is_half_imported(monkeypatch):
+    # the warm-up thread may be importing numba while a run checks its arguments:
+    # a module without its config yet must not break the check
+    import sys
+    import types
+
+    half = types.ModuleType("numba")  # as sys.modules holds it mid-import
+    monkeypatch.setitem(sys.modules, "numba", half)
+    monkeypatch.setenv("NUMBA_NUM_THREADS", "3")
+    assert check_threads(None) == 3
+    half.config = types.SimpleNamespace()  # config module present, not yet filled
+    assert check_threads(None) == 3
+    half.config.NUMBA_NUM_THREADS = 5
+    assert check_threads(None) == 5
+
+
 def test_resolve_resolves_init_and_refuses_unknown_names():
     assert resolve().init == "farthest" and resolve(radius=0.1).init == "flood"
     assert resolve(radius=0.1, n_segments=None).n_segments is None

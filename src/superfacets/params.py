@@ -200,8 +200,12 @@ def check_threads(n_threads) -> int:
         import os
         import sys
 
-        if "numba" in sys.modules:
-            return int(sys.modules["numba"].config.NUMBA_NUM_THREADS)
+        # numba's setting once numba is imported; while another thread (the
+        # warm-up) is still importing it, its config may not be there yet
+        config = getattr(sys.modules.get("numba"), "config", None)
+        value = getattr(config, "NUMBA_NUM_THREADS", None)
+        if value is not None:
+            return int(value)
         # numba's own rule, without importing numba (checking arguments stays light)
         try:
             return max(1, int(os.environ["NUMBA_NUM_THREADS"]))

@@ -222,6 +222,15 @@ def check_output(path: str | None, suffixes: tuple[str, ...], what: str,
     return out
 
 
+def named_after(path, exc: Exception) -> Exception:
+    """``exc`` with its message led by the input's name, once (an error about the
+    mesh may already start with it)."""
+    message = str(exc)
+    if any(message.startswith(f"{name}: ") for name in (str(path), Path(path).name)):
+        return exc
+    return type(exc)(f"{path}: {message}")
+
+
 def labels_for(args, mesh):
     """Labels from LABELS.seg, computed with the method options, or None (--plain);
     and a dict describing them for titles and pages."""
@@ -238,7 +247,7 @@ def labels_for(args, mesh):
     try:
         r = segment(mesh, args.n_segments, radius=args.radius, **kw)
     except SuperfacetsError as exc:
-        raise type(exc)(f"{args.mesh}: {exc}") from None
+        raise named_after(args.mesh, exc) from None
     info = {"k asked": r.params.get("n_segments"), "alpha": args.alpha,
             "iterations": f"{r.n_iter} ({'converged' if r.converged else 'max-iter'})",
             "seconds": f"{r.timings['total']:.2f}"}

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..params import DEFAULTS
 from .options import (add_element_options, add_method_options, check_output, element_kwargs,
-                      float_arg, fmt_value, int_arg, method_kwargs)
+                      float_arg, fmt_value, int_arg, method_kwargs, named_after)
 
 __all__ = ["add_parsers"]
 
@@ -177,7 +177,7 @@ def cmd_segment(args) -> int:
         else:
             result = segment(data, args.n_segments, radius=args.radius, **kwargs)
     except SuperfacetsError as exc:
-        raise type(exc)(f"{args.mesh}: {exc}") from None
+        raise named_after(args.mesh, exc) from None
     elapsed = time.perf_counter() - t0
     write_result(data, result, kind, Path(args.mesh).name, labels=seg_out, header=args.header,
                  colored=ply_out, vertex_colors=args.vertex_colors, picture=png_out,
