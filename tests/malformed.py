@@ -171,7 +171,7 @@ def cases() -> list[Case]:
     mesh_case("tri-ok", "m.tri", grid_tri(), expect="ok")
     # --- PLY
     ply = grid_ply_binary()
-    mesh_case("ply-empty", "m.ply", b"", "")
+    mesh_case("ply-empty", "m.ply", b"", "empty file")
     mesh_case("ply-header-only", "m.ply", ply[:ply.index(b"end_header") + 11], "")
     mesh_case("ply-truncated-body", "m.ply", ply[:len(ply) // 2], "")
     mesh_case("ply-garbage", "m.ply", b"ply\nformat nonsense 1.0\nend_header\n", "")
@@ -188,7 +188,7 @@ def cases() -> list[Case]:
     mesh_case("xyz-words", "c.xyz", b"x y z\n0 0 0\n", "not numbers")
     mesh_case("xyz-unknown-columns", "c.txt", b"# a b c\n0 0 0\n1 0 0\n0 1 0\n",
               "unknown columns")
-    mesh_case("xyz-empty", "c.xyz", b"", "no point")
+    mesh_case("xyz-empty", "c.xyz", b"", "empty file")
     mesh_case("xyz-collinear", "c.xyz", b"0 0 0\n1 1 1\n2 2 2\n3 3 3\n4 4 4\n",
               "one line", extra=("-k", "1"))
     mesh_case("xyz-identical", "c.xyz", b"1 1 1\n1 1 1\n1 1 1\n", "coincide",
@@ -207,7 +207,7 @@ def cases() -> list[Case]:
               b"end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n", "")
     mesh_case("ply-ok", "m.ply", ply, expect="ok")
     # --- OBJ
-    mesh_case("obj-empty", "m.obj", b"", "no faces")
+    mesh_case("obj-empty", "m.obj", b"", "empty file")
     mesh_case("obj-index-zero", "m.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", "0")
     mesh_case("obj-index-out-of-range", "m.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n", "range")
     mesh_case("obj-negative-too-far", "m.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n", "range")
@@ -226,7 +226,7 @@ def cases() -> list[Case]:
     mesh_case("obj-quad-ok", "m.obj", b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n",
               expect="ok", extra=("-k", "1"))
     # --- STL
-    mesh_case("stl-empty", "m.stl", b"", "")
+    mesh_case("stl-empty", "m.stl", b"", "empty file")
     mesh_case("stl-truncated-binary", "m.stl", b"\0" * 80 + struct.pack("<I", 10) + b"\0" * 60, "")
     mesh_case("stl-ascii-malformed", "m.stl", b"solid x\n facet normal 0 0 1\n  outer loop\n"
               b"   vertex 0 0\n  endloop\n endfacet\nendsolid x\n", "")

@@ -237,7 +237,7 @@ def test_las_files(tmp_path):
     ("words.txt", "0 0 0\n1 zero 0\n", "point line 2 is not numbers"),
     ("two.xyz", "0 0\n1 1\n", "need 3 columns"),
     ("count.pts", "10\n0 0 0\n", "declares 10 points"),
-    ("empty.xyz", "", "no point"),
+    ("empty.xyz", "", "empty file"),
 ])
 def test_malformed_cloud_files(tmp_path, name, text, message):
     (tmp_path / name).write_text(text)

@@ -50,6 +50,8 @@ def is_cloud_file(path) -> bool:
     else:
         with path.open("rb") as f:
             data = f.read(1 << 16)
+    if not data:  # an empty file: read_mesh says so
+        return False
     head = _ply_header(data)
     faces = [int(p[2]) for p in (ln.split() for ln in head)
              if len(p) == 3 and p[0] == b"element" and p[1] == b"face" and p[2].isdigit()]

@@ -38,7 +38,7 @@ def split_suffix(path: Path) -> tuple[str, str | None]:
     return fmt, comp
 
 
-def read_bytes(path: Path, comp: str | None) -> bytes:
+def read_bytes(path: Path, comp: str | None, what: str = "file") -> bytes:
     """The content of ``path``, decompressed when ``comp`` names a compression suffix.
 
     Raises
@@ -47,7 +47,7 @@ def read_bytes(path: Path, comp: str | None) -> bytes:
         If there is no such file, or it is a folder.
     MeshFormatError
         If it is not a regular file (a device or FIFO, which could be endless),
-        or cannot be decompressed.
+        cannot be decompressed, or is empty ("empty {what}").
     """
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file")
@@ -56,12 +56,14 @@ def read_bytes(path: Path, comp: str | None) -> bytes:
     if not path.is_file():
         raise MeshFormatError(f"{path}: not a regular file (a device or a pipe); give a file")
     data = path.read_bytes()
-    if comp is None:
-        return data
-    try:
-        return COMPRESSIONS[comp](data)
-    except (OSError, EOFError, lzma.LZMAError, ValueError, zlib.error, MemoryError) as exc:
-        raise MeshFormatError(f"{path}: cannot decompress ({comp[1:]}): {exc}") from None
+    if comp is not None:
+        try:
+            data = COMPRESSIONS[comp](data)
+        except (OSError, EOFError, lzma.LZMAError, ValueError, zlib.error, MemoryError) as exc:
+            raise MeshFormatError(f"{path}: cannot decompress ({comp[1:]}): {exc}") from None
+    if not data:
+        raise MeshFormatError(f"{path}: empty {what}")
+    return data
 
 
 def text_lines(data: bytes, path: Path) -> list[str]:

@@ -112,7 +112,7 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file")
     fmt, comp = split_suffix(path)
-    data = read_bytes(path, comp)
+    data = read_bytes(path, comp, "file of labels")
     if fmt == "ply":
         from .ply import read_ply_labels
 
