@@ -116,3 +116,18 @@ def test_weight_terms_equal_the_numpy_expressions_bit_for_bit():
     np.testing.assert_array_equal(g.terms.concave, concave)
     np.testing.assert_array_equal(g.lengths, np.linalg.norm(v[g.edges[:, 1]] - v[g.edges[:, 0]],
                                                             axis=1))
+
+
+def test_a_mesh_with_its_caches_pickles_and_segments_the_same(sphere):
+    # the face graph holds functions; a mesh sent to another process (a pool, Dask)
+    # carries its arrays and names only, and gives the same results there
+    import pickle
+
+    from superfacets import segment
+
+    before = segment(sphere, 12).labels  # graph, geometry and weights cached now
+    copy = pickle.loads(pickle.dumps(sphere))
+    assert "graph" not in copy.__dict__ and copy.name == sphere.name
+    assert not copy.vertices.flags.writeable and not copy.faces.flags.writeable
+    np.testing.assert_array_equal(copy.faces, sphere.faces)
+    np.testing.assert_array_equal(segment(copy, 12).labels, before)

@@ -84,6 +84,16 @@ class Mesh:
         object.__setattr__(self, "vertices", vertices)
         object.__setattr__(self, "faces", faces)
 
+    def __getstate__(self) -> dict:
+        # the arrays and names only: the cached geometry and graphs are computed again
+        # where the mesh is unpickled (the face graph holds functions, which pickle cannot)
+        return {name: self.__dict__[name] for name in ("vertices", "faces", "name", "objects")}
+
+    def __setstate__(self, state: dict) -> None:
+        for name in ("vertices", "faces"):
+            state[name].setflags(write=False)
+        self.__dict__.update(state)
+
     # ----------------------------------------------------------------- sizes
     @property
     def n_vertices(self) -> int:
