@@ -50,14 +50,12 @@ def main() -> int:
     args = ap.parse_args()
 
     from superfacets import read_mesh, segment, write_labels
-    from superfacets.datasets.psb import list_meshes, psb_root
+    from superfacets.datasets.psb import first_per_category, list_meshes, psb_root
     from superfacets.runner.batch import read_manifest, run_batch
 
     meshes = list_meshes(psb_root())
     if args.per_category:
-        seen: dict = {}
-        meshes = [m for m in meshes if seen.setdefault(m.category, []).append(m) is None
-                  and len(seen[m.category]) <= args.per_category]
+        meshes = first_per_category(meshes, args.per_category)
     files = [str(m.path) for m in meshes]
     n = len(files)
     tmp = Path(tempfile.mkdtemp(prefix="sf-batch-bench-"))

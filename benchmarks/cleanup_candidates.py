@@ -73,7 +73,7 @@ def main() -> None:
     from superfacets import segment
     from superfacets.cleanup import clean_boundaries, cut_costs
     from superfacets.connectivity import enforce_connectivity
-    from superfacets.datasets.psb import list_meshes, psb_root
+    from superfacets.datasets.psb import first_per_category, list_meshes, psb_root
     from superfacets.metrics import evaluate
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -82,10 +82,7 @@ def main() -> None:
     ap.add_argument("--alpha", type=float, default=200.0)
     args = ap.parse_args()
 
-    by_cat: dict[str, list] = {}
-    for m in list_meshes(psb_root()):
-        by_cat.setdefault(m.category, []).append(m)
-    meshes = [m for ms in by_cat.values() for m in ms[:args.per_category]]
+    meshes = first_per_category(list_meshes(psb_root()), args.per_category)
     names = (["paper", "floor"] + [n for n, _ in CANDIDATES]
              + ["oracle", "oracle, band 0.5 r, 3 sweeps",
                 "oracle without creases, band 0.5 r, 3 sweeps"])

@@ -54,7 +54,7 @@ def smoothed_concavity(graph, radius: float, scale: float) -> np.ndarray:
 def main() -> None:
     import superfacets.cleanup as cl
     from superfacets import segment
-    from superfacets.datasets.psb import list_meshes, psb_root
+    from superfacets.datasets.psb import first_per_category, list_meshes, psb_root
     from superfacets.metrics import evaluate
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -63,10 +63,7 @@ def main() -> None:
     ap.add_argument("--alpha", type=float, default=200.0)
     args = ap.parse_args()
 
-    by_cat: dict[str, list] = {}
-    for m in list_meshes(psb_root()):
-        by_cat.setdefault(m.category, []).append(m)
-    meshes = [m for ms in by_cat.values() for m in ms[:args.per_category]]
+    meshes = first_per_category(list_meshes(psb_root()), args.per_category)
     names = ["paper", "clean-up (defaults)"] + [f"concavity, beta {b:g}, scale {s:g} r"
                                                 for b, s in VARIANTS]
     scores: dict[str, list] = {n: [] for n in names}

@@ -80,7 +80,7 @@ def ending(r) -> str:
 
 
 def main() -> None:
-    from superfacets.datasets.psb import list_meshes, psb_root
+    from superfacets.datasets.psb import first_per_category, list_meshes, psb_root
     from superfacets.metrics import evaluate
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -89,10 +89,7 @@ def main() -> None:
     ap.add_argument("--per-category", type=int, default=20)
     args = ap.parse_args()
 
-    by_cat: dict[str, list] = {}
-    for m in list_meshes(psb_root()):
-        by_cat.setdefault(m.category, []).append(m)
-    meshes = [m for ms in by_cat.values() for m in ms[:args.per_category]]
+    meshes = first_per_category(list_meshes(psb_root()), args.per_category)
     settings = {"paper's rule": dict(tol=0.0, center_tol=0.0), "defaults": {}}
     keys = ["undersegmentation_error", "compactness", "boundary_recall"]
     print(f"{len(meshes)} meshes, k = {args.k}, alpha = {args.alpha:g}\n")

@@ -90,7 +90,7 @@ def subdivide(mesh, level: int):
 def make_psb(level: int, per_category: int | None, cache: Path) -> Path:
     """The benchmark subdivided ``level`` times, in ``cache/psb_x<4^level>``."""
     from superfacets import read_mesh, write_mesh
-    from superfacets.datasets.psb import list_meshes
+    from superfacets.datasets.psb import first_per_category, list_meshes
     from superfacets.io.labels import read_labels
 
     from superfacets import Mesh
@@ -98,13 +98,7 @@ def make_psb(level: int, per_category: int | None, cache: Path) -> Path:
     out = cache / f"psb_x{4 ** level}"
     meshes = list_meshes()
     if per_category:
-        seen: dict[str, int] = {}
-        keep = []
-        for bm in sorted(meshes, key=lambda b: b.id):
-            if seen.get(bm.category, 0) < per_category:
-                seen[bm.category] = seen.get(bm.category, 0) + 1
-                keep.append(bm)
-        meshes = keep
+        meshes = first_per_category(meshes, per_category)  # list_meshes: sorted by id
     for bm in meshes:
         off = out / "off" / f"{bm.id}.off"
         if off.exists():

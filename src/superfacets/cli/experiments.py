@@ -108,7 +108,7 @@ def _id_list(text: str) -> set[int]:
 
 def select_meshes(args):
     """The benchmark meshes chosen by ``--psb``, ``--ids``, ``--categories``, ``--per-category``."""
-    from ..datasets.psb import list_meshes, psb_root
+    from ..datasets.psb import first_per_category, list_meshes, psb_root
     from ..errors import ParameterError
 
     root = psb_root(args.psb)
@@ -127,13 +127,7 @@ def select_meshes(args):
     if args.per_category is not None:
         if args.per_category < 1:
             raise ParameterError(f"--per-category must be >= 1, got {args.per_category}")
-        seen: dict[str, int] = {}
-        kept = []
-        for m in meshes:
-            if seen.get(m.category, 0) < args.per_category:
-                kept.append(m)
-                seen[m.category] = seen.get(m.category, 0) + 1
-        meshes = kept
+        meshes = first_per_category(meshes, args.per_category)
     if not meshes:
         raise ParameterError(f"{root}: no mesh selected")
     return meshes

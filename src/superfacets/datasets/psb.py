@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["default_archive", "default_cache", "psb_root", "category", "CATEGORIES",
+           "first_per_category",
            "BenchmarkMesh", "list_meshes"]
 
 #: Benchmark categories, 20 consecutive ids each (1-20 Human, 21-40 Cup, ...);
@@ -218,3 +219,33 @@ def list_meshes(root=None) -> list[BenchmarkMesh]:
                       key=_seg_index)
         out.append(BenchmarkMesh(id=mid, category=category(mid), path=path, seg_paths=tuple(segs)))
     return sorted(out, key=lambda b: b.id)
+
+
+def first_per_category(meshes: list, n: int) -> list:
+    """The first ``n`` meshes of each category, in the given order.
+
+    Parameters
+    ----------
+    meshes : list of BenchmarkMesh
+        Usually :func:`list_meshes` (sorted by id).
+    n : int
+        Meshes kept per category (``>= 1``).
+
+    Returns
+    -------
+    list of BenchmarkMesh
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as M
+    >>> ms = [M(id=i, category=c) for i, c in enumerate("aabba")]
+    >>> [m.id for m in first_per_category(ms, 1)]
+    [0, 2]
+    """
+    seen: dict[str, int] = {}
+    kept = []
+    for m in meshes:
+        if seen.get(m.category, 0) < n:
+            kept.append(m)
+            seen[m.category] = seen.get(m.category, 0) + 1
+    return kept
