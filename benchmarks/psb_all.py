@@ -21,6 +21,7 @@ import numpy as np
 from superfacets import read_mesh, segment  # noqa: E402
 from superfacets.connectivity import label_components  # noqa: E402
 from superfacets.datasets.psb import category, psb_root  # noqa: E402
+from superfacets.elements import face_graph
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -41,7 +42,7 @@ def main() -> int:
         lab = r.labels
         k = int(lab.max()) + 1
         ok = (lab.shape == (mesh.n_faces,) and lab.min() == 0 and np.unique(lab).size == k
-              and int(label_components(mesh.graph, lab).max()) + 1 == k)
+              and int(label_components(face_graph(mesh), lab).max()) + 1 == k)
         if not ok:
             failures.append(path.name)
         rows[category(int(path.stem))].append((mesh.n_faces, k, r.n_iter, r.converged, sec))

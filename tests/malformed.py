@@ -347,6 +347,21 @@ def cases() -> list[Case]:
                     ["evaluate", "{d}/h.off", "{d}/l.seg", "{d}/gt.seg"], match="rescale"))
     out.append(Case("evaluate-ok", {**g, "l.seg": grid_seg(), "gt.seg": grid_seg(0)},
                     ev("l.seg", "gt.seg"), "ok"))
+    # --- coordinates no command can handle: each command refuses them in one line
+    huge = {"h.off": _tetra_off().replace(b"1 0 0\n", b"1e300 0 0\n", 1)
+            .replace(b"0 1 0\n", b"0 -1e300 0\n", 1)}
+    flat = {"h.off": b"OFF\n3 1 0\n0 0 0\n1 0 0\n2 0 0\n3 0 1 2\n"}
+    for what, files, match in [("huge-coordinates", huge, "rescale"),
+                               ("zero-area", flat, "zero total area")]:
+        for argv in (["render", "{d}/h.off", "--plain", "-o", "{d}/o.png"],
+                     ["render", "{d}/h.off", "-o", "{d}/o.png"],
+                     ["html", "{d}/h.off", "--plain", "-o", "{d}/o.html"],
+                     ["panel", "{d}/h.off", "-k", "2", "-o", "{d}/o.png"],
+                     ["view", "{d}/h.off", "--plain"],
+                     ["baseline", "{d}/h.off", "-m", "vsa", "-k", "2", "-o", "{d}/o.seg"],
+                     ["segment", "{d}/h.off", "-k", "2", "--picture", "{d}/o.png"]):
+            out.append(Case(f"{argv[0]}-{what}{'-plain' if '--plain' in argv else ''}", files,
+                            argv, match=match if argv[0] != "view" else ""))
     # --- pictures (options are checked before anything is drawn)
     for name, opts, match in [
             ("zoom-zero", ["--zoom", "0"], "zoom"), ("zoom-nan", ["--zoom", "nan"], "zoom"),

@@ -18,6 +18,7 @@ from scipy.sparse.csgraph import dijkstra
 
 from superfacets.weights import paper_weights
 from superfacets.initialization import farthest_point_centers
+from superfacets.elements import face_graph
 
 
 def classify(a: csr_array, c: np.ndarray, centers: list, window_r2: float):
@@ -65,7 +66,7 @@ def update(label: np.ndarray, k: int, areas: np.ndarray, c: np.ndarray, old: lis
 def segment_labels(mesh, k: int, *, alpha: float = 200.0, eta_convex: float = 0.2,
                    window: float = 2.0, max_iter: int = 50):
     """Labels of the last classification (not made dense) and the number of passes."""
-    g = mesh.graph
+    g = face_graph(mesh)
     w = paper_weights(mesh, alpha=alpha, eta_convex=eta_convex)
     assert (w > 0).all()  # scipy's csgraph would drop explicit zero weights
     m = mesh.n_faces

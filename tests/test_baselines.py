@@ -18,6 +18,7 @@ from superfacets.methods import METHODS, Skipped
 from superfacets.runner import expand_grid, read_results, run_experiment
 
 from conftest import grid_mesh, write_benchmark
+from superfacets.elements import face_graph
 
 
 def _box(subdivisions=2, extents=(1.0, 1.0, 1.0)) -> Mesh:
@@ -109,7 +110,7 @@ def test_vsa_labels_dense_connected_and_deterministic(sphere, init, metric):
     assert a.max() + 1 == 24
     assert np.array_equal(a, b)
     # flooding grows each region from its seed: face-connected
-    pieces = label_components(sphere.graph, a)
+    pieces = label_components(face_graph(sphere), a)
     assert pieces.max() + 1 == 24
 
 

@@ -18,6 +18,7 @@ import trimesh
 from superfacets import MissingExtraError, Mesh, ParameterError, read_labels, read_mesh, segment, write_mesh
 from superfacets.cli import main
 from superfacets.runner import batch as bt
+from superfacets.runner import manifest
 from superfacets.runner.batch import collect_inputs, output_names, read_manifest, run_batch
 
 from conftest import grid_mesh
@@ -149,7 +150,7 @@ def test_interrupted_and_hard_killed_runs_lose_nothing(corpus, tmp_path, monkeyp
 
 def test_csv_manifest_without_pyarrow(corpus, tmp_path, monkeypatch):
     out = tmp_path / "out"
-    monkeypatch.setattr(bt, "_has_pyarrow", lambda: False)
+    monkeypatch.setattr(manifest, "_has_pyarrow", lambda: False)
     run_batch([str(corpus / "a")], out, 8, workers=1, progress=False)
     assert (out / "manifest.csv").exists() and not (out / "manifest.parquet").exists()
     rows = read_manifest(out)

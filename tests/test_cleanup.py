@@ -12,6 +12,7 @@ from superfacets.cleanup import clean_boundaries, cut_costs
 from superfacets.connectivity import label_components
 from superfacets.errors import ParameterError
 from superfacets.metrics import compactness
+from superfacets.elements import face_graph
 
 
 def _cut_length(graph, labels) -> float:
@@ -34,10 +35,10 @@ def test_boundary_two_rings_beside_a_concave_crease_ends_on_it():
     mesh = grid_mesh(nx, ny, height=lambda x, y: 0.5 * np.abs(x))
     col, _ = _cells(mesh, nx, ny)
     labels = (col >= nx // 2 + 2).astype(np.int64)
-    out = clean_boundaries(mesh.graph, labels, alpha=200)
+    out = clean_boundaries(face_graph(mesh), labels, alpha=200)
     assert np.array_equal(out, (col >= nx // 2).astype(np.int64))
     # without a crease term the same boundary has no reason to jump onto the fold
-    flat = clean_boundaries(mesh.graph, labels, alpha=0)
+    flat = clean_boundaries(face_graph(mesh), labels, alpha=0)
     assert not np.array_equal(flat, out)
 
 
@@ -46,10 +47,10 @@ def test_stair_stepped_boundary_on_a_flat_grid_becomes_straight():
     mesh = grid_mesh(nx, ny)
     col, row = _cells(mesh, nx, ny)
     labels = (col >= nx // 2 + (row % 2)).astype(np.int64)  # a zigzag, one cell deep
-    before = _cut_length(mesh.graph, labels)
+    before = _cut_length(face_graph(mesh), labels)
     assert before == pytest.approx(2.0 + (ny - 1) * 0.05)  # a jog between rows
-    out = clean_boundaries(mesh.graph, labels, alpha=200)
-    assert _cut_length(mesh.graph, out) == pytest.approx(2.0)  # one straight column edge line
+    out = clean_boundaries(face_graph(mesh), labels, alpha=200)
+    assert _cut_length(face_graph(mesh), out) == pytest.approx(2.0)  # one straight column edge line
     per_row = [np.unique(col[(row == r) & (out == 1)]).min() for r in range(ny)]
     assert len(set(per_row)) == 1
 
@@ -64,13 +65,13 @@ def test_superfacets_are_never_lost_and_stay_connected():
     labels[tiny] = 2
     centers = np.array([int(np.flatnonzero(col == 0)[0]), int(np.flatnonzero(col == nx - 1)[0]),
                         tiny])
-    out = clean_boundaries(mesh.graph, labels, centers)
+    out = clean_boundaries(face_graph(mesh), labels, centers)
     assert int(out.max()) + 1 == 3 and out[tiny] == 2
-    assert np.unique(label_components(mesh.graph, out)).size == 3
+    assert np.unique(label_components(face_graph(mesh), out)).size == 3
 
 
 def test_cut_costs_are_the_lengths_without_creases_and_cheaper_on_folds(valley):
-    g = valley.graph
+    g = face_graph(valley)
     assert np.allclose(cut_costs(g, alpha=0), g.lengths)
     c = cut_costs(g, alpha=200)
     fold = np.arccos(g.terms.cos) > 0.1
@@ -97,9 +98,9 @@ def test_pipeline_cleanup_on_real_meshes(psb):
         k = paper.n_segments
         assert clean.n_segments == k and int(clean.labels.max()) + 1 == k, bm.id
         assert np.array_equal(np.unique(clean.labels), np.arange(k)), bm.id  # dense
-        assert np.unique(label_components(mesh.graph, clean.labels)).size == k, bm.id
+        assert np.unique(label_components(face_graph(mesh), clean.labels)).size == k, bm.id
         assert np.array_equal(clean.labels[clean.centers], np.arange(k)), bm.id
-        assert compactness(mesh.graph, clean.labels) < compactness(mesh.graph, paper.labels)
+        assert compactness(face_graph(mesh), clean.labels) < compactness(face_graph(mesh), paper.labels)
         assert clean.params["cleanup"] is True and "cleanup" in clean.timings
 
 
@@ -114,7 +115,7 @@ def test_cleanup_on_vertices_and_points(sphere, elements):
 
 
 def test_bad_arguments(sphere):
-    g = sphere.graph
+    g = face_graph(sphere)
     labels = segment(sphere, 10).labels
     with pytest.raises(ParameterError, match="centers"):
         clean_boundaries(g, labels, np.zeros(10, dtype=np.int64))
@@ -145,7 +146,7 @@ def test_odd_inputs_and_extreme_counts():
         paper = segment(mesh, k)
         clean = segment(mesh, k, cleanup=True)
         assert clean.n_segments == paper.n_segments, k
-        assert np.unique(label_components(mesh.graph, clean.labels)).size == clean.n_segments
+        assert np.unique(label_components(face_graph(mesh), clean.labels)).size == clean.n_segments
     one_each = grid_mesh(3, 3)
     r = segment(one_each, one_each.n_faces, alpha=0, cleanup=True)
     assert np.unique(r.labels).size == one_each.n_faces

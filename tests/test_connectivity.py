@@ -5,6 +5,7 @@ from superfacets.connectivity import label_components
 from superfacets.labels import relabel_dense
 
 from conftest import grid_mesh
+from superfacets.elements import face_graph
 
 
 def cell_labels(mesh, fn):
@@ -17,7 +18,7 @@ def test_stray_piece_joins_neighbour_with_longest_boundary():
     # left half label 0, right half label 1; an island of label 1 inside the left half,
     # touching only label 0 -> it must become 0
     labels = cell_labels(mesh, lambda x, y: 1 if x > 0 or (-0.6 < x < -0.3 and -0.2 < y < 0.2) else 0)
-    assert label_components(mesh.graph, labels).max() + 1 == 3
+    assert label_components(face_graph(mesh), labels).max() + 1 == 3
     out = enforce_connectivity(mesh, labels)
     expected = cell_labels(mesh, lambda x, y: 1 if x > 0 else 0)
     np.testing.assert_array_equal(out, expected)
@@ -40,7 +41,7 @@ def test_longest_shared_boundary_wins():
     bottom = (c[:, 0] > 0) & (c[:, 1] < 0) & ~stray
     assert len(np.unique(out[stray])) == 1
     assert out[stray][0] == out[bottom][0]
-    assert label_components(mesh.graph, out).max() + 1 == out.max() + 1 == 3
+    assert label_components(face_graph(mesh), out).max() + 1 == out.max() + 1 == 3
 
 
 def test_center_piece_keeps_label_even_if_smaller():
@@ -68,7 +69,7 @@ def test_pieces_are_numbered_as_scipy_numbers_components(sphere):
     from scipy.sparse import coo_array
     from scipy.sparse.csgraph import connected_components
 
-    g = sphere.graph
+    g = face_graph(sphere)
     n = g.n_elements
     i, j = g.pairs[:, 0], g.pairs[:, 1]
     for labels in (np.random.default_rng(1).integers(0, 4, n), np.zeros(n, dtype=np.int64),

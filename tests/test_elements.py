@@ -4,6 +4,7 @@ import pytest
 from superfacets import Mesh, ParameterError, paper_weights, shlafman_weights
 from superfacets.elements import build_face_graph
 from superfacets.weights import edge_weights
+from superfacets.elements import face_graph
 
 
 def fold(z: float) -> Mesh:
@@ -29,7 +30,7 @@ def hand_weight(z, alpha, eta_convex, concave):
 @pytest.mark.parametrize("z, concave", [(0.7, True), (-0.7, False)])
 def test_paper_weight_matches_hand_computation(z, concave):
     m = fold(z)
-    assert m.graph.n_edges == 1
+    assert face_graph(m).n_edges == 1
     w = paper_weights(m, alpha=200, eta_convex=0.2)
     expected, _, _ = hand_weight(z, 200, 0.2, concave)
     assert w[0] == pytest.approx(expected, rel=1e-12)
@@ -85,7 +86,7 @@ def test_non_manifold_edge_joins_every_pair():
     # three triangles on the edge (0,1) plus one ordinary neighbour
     v = np.array([[0, 0, 0], [1, 0, 0], [0.5, 1, 0], [0.5, -1, 0], [0.5, 0, 1], [1.5, 1, 0]], float)
     f = np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4], [1, 5, 2]])
-    g = Mesh(v, f).graph
+    g = face_graph(Mesh(v, f))
     pairs = {tuple(p) for p in g.pairs.tolist()}
     assert pairs == {(0, 1), (0, 2), (1, 2), (0, 3)}
     # CSR is symmetric and consistent with the pairs
@@ -99,17 +100,17 @@ def test_duplicate_faces_degenerate_edges_and_boundary():
     v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], float)
     # face 1 duplicates face 0; face 2 has a collapsed edge (2, 2)
     f = np.array([[0, 1, 2], [0, 1, 2], [2, 2, 3], [1, 3, 2]])
-    g = Mesh(v, f).graph
+    g = face_graph(Mesh(v, f))
     pairs = {tuple(p) for p in g.pairs.tolist()}
     assert (0, 1) in pairs and len([p for p in g.pairs.tolist() if p == [0, 1]]) == 1
     assert all(i != j for i, j in pairs)
     # boundary edges of a 2-triangle square: 4, each used by exactly one face
-    sq = Mesh(v, [[0, 1, 2], [1, 3, 2]]).graph
+    sq = face_graph(Mesh(v, [[0, 1, 2], [1, 3, 2]]))
     assert sq.boundary_edges.shape == (4, 2) and sq.n_edges == 1
 
 
 def test_closed_mesh_has_three_neighbours_per_face(sphere):
-    g = sphere.graph
+    g = face_graph(sphere)
     assert (np.diff(g.indptr) == 3).all()
     assert g.boundary_edges.shape[0] == 0
     assert g.n_edges == sphere.n_faces * 3 // 2
@@ -171,8 +172,8 @@ def test_graph_of_a_triangle_soup_matches_a_plain_construction(seed, n_faces, n_
 
 def test_face_graph_caches_the_terms_of_the_weights(sphere):
     # the cached per-adjacency data equal the formulas of docs/method.md, sections 1-2
-    g = sphere.graph
-    assert g is sphere.graph and g.kind == "faces" and g.n_elements == sphere.n_faces
+    g = face_graph(sphere)
+    assert g is face_graph(sphere) and g.kind == "faces" and g.n_elements == sphere.n_faces
     v, c, n = sphere.vertices, sphere.centroids, sphere.normals
     i, j = g.pairs[:, 0], g.pairs[:, 1]
     a, b = v[g.edges[:, 0]], v[g.edges[:, 1]]
@@ -191,7 +192,7 @@ def test_weights_and_metrics_take_the_graph_or_the_mesh(valley):
     from superfacets import superfacets
     from superfacets.metrics import compactness
 
-    g = valley.graph
+    g = face_graph(valley)
     np.testing.assert_array_equal(paper_weights(g, alpha=50), paper_weights(valley, alpha=50))
     labels = superfacets(valley, 12)
     assert compactness(g, labels) == compactness(valley, labels)
@@ -202,7 +203,7 @@ def test_weights_and_metrics_take_the_graph_or_the_mesh(valley):
 def test_released_terms_come_back_the_same(sphere):
     from superfacets import segment
 
-    g = sphere.graph
+    g = face_graph(sphere)
     geo = g.terms.geo.copy()
     segment(sphere, 10)  # the pipeline releases them once the weights are made
     assert "terms" not in g.__dict__
@@ -243,7 +244,7 @@ def _polygon_grid(nx: int, ny: int) -> Mesh:
 
 def test_face_graph_releases_what_the_passes_do_not_read_and_rebuilds_it(sphere):
     for mesh in (sphere, _polygon_grid(5, 4)):  # triangles; quads and triangles
-        g = mesh.graph
+        g = face_graph(mesh)
         assert _released_fields_come_back(g, mesh) == ["normals", "pairs", "dual_edge",
                                                        "lengths"]
 
@@ -270,13 +271,13 @@ def test_face_graph_rebuilds_its_normals_after_its_mesh_is_gone(sphere):
 def test_runs_that_release_the_graph_give_the_same_labels(valley, monkeypatch):
     # the passes run without the released fields; what reads them after
     # (connectivity, clean-up, split and merge) finds them rebuilt, the same
-    from superfacets import Mesh, segment, segmentation
+    from superfacets import Mesh, pipeline, segment
 
     def run(release_min, **kw):
-        monkeypatch.setattr(segmentation, "_RELEASE_MIN", release_min)
+        monkeypatch.setattr(pipeline, "_RELEASE_MIN", release_min)
         mesh = Mesh(valley.vertices, valley.faces)
         r = segment(mesh, 12, **kw)
-        return r.labels, "pairs" in mesh.graph.__dict__
+        return r.labels, "pairs" in face_graph(mesh).__dict__
 
     for kw in ({}, {"cleanup": True, "split_merge": True}):
         kept, held = run(1 << 60, **kw)

@@ -7,6 +7,7 @@ from superfacets.weights import paper_weights
 from superfacets.initialization import farthest_point_centers, first_center, flood_labels, grid_labels
 
 from conftest import grid_mesh
+from superfacets.elements import face_graph
 
 
 def strip(n: int) -> Mesh:
@@ -91,14 +92,14 @@ def test_grid_labels_known_cells():
 
 
 def test_flood_labels_cover_mesh_with_connected_regions_within_window(sphere):
-    w = paper_weights(sphere, alpha=200)[sphere.graph.dual_edge]
+    w = paper_weights(sphere, alpha=200)[face_graph(sphere).dual_edge]
     r = 0.2
     labels = flood_labels(sphere, w, r, window=2.0)
     assert labels.min() == 0 and (labels >= 0).all()
     k = labels.max() + 1
     assert 10 <= k <= 150  # ideal packing: 4 pi / (pi (2 r)^2) = 25 regions
     # each region is connected and within 2r of its seed: diameter <= 4r
-    assert label_components(sphere.graph, labels).max() + 1 == k
+    assert label_components(face_graph(sphere), labels).max() + 1 == k
     for s in range(k):
         pts = sphere.centroids[labels == s]
         span = np.sqrt(((pts[:, None] - pts[None]) ** 2).sum(-1)).max()

@@ -13,6 +13,7 @@ from superfacets.io import atomic_write
 from superfacets.colors import superfacet_adjacency
 
 from conftest import MESHES, need
+from superfacets.elements import face_graph
 
 
 @pytest.fixture
@@ -34,7 +35,7 @@ def test_round_trip_keeps_faces_in_order(tmp_path, box, suffix):
 def test_stl_vertices_are_merged(tmp_path, box):
     m = read_mesh(write_mesh(tmp_path / "box.stl", box))
     assert m.n_vertices == 8
-    assert m.graph.n_edges == 18
+    assert face_graph(m).n_edges == 18
 
 
 def test_off_with_comments_counts_on_header_and_colors(tmp_path):

@@ -3,6 +3,7 @@ import pytest
 import trimesh
 
 from superfacets import InvalidMeshError, Mesh, as_mesh
+from superfacets.elements import face_graph
 
 V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
 F = np.array([[0, 1, 2], [0, 3, 1]])
@@ -101,7 +102,7 @@ def test_weight_terms_equal_the_numpy_expressions_bit_for_bit():
     v = rng.normal(size=(200, 3)) * rng.choice([1e-6, 1.0, 1e4], size=(200, 1))
     f = rng.integers(0, 200, size=(3000, 3))  # random triangles: many shared edges
     mesh = Mesh(v, f)
-    g = mesh.graph
+    g = face_graph(mesh)
     c, n = mesh.centroids, mesh.normals
     # 32-bit face and vertex ids while they fit (the graph's memory on large meshes)
     assert g.pairs.dtype == np.int32 and g.edges.dtype == np.int32

@@ -17,6 +17,7 @@ from superfacets.weights import csr_weights, paper_weights
 
 from conftest import grid_mesh
 from test_segmentation import check_invariants
+from superfacets.elements import face_graph
 
 
 def _sphere(subdivisions=4, radius=1.0, shift=0.0):
@@ -25,7 +26,7 @@ def _sphere(subdivisions=4, radius=1.0, shift=0.0):
 
 
 def _weighted(mesh):
-    g = mesh.graph
+    g = face_graph(mesh)
     w = paper_weights(g)
     return g, w, csr_weights(g, w)
 

@@ -10,6 +10,7 @@ import pytest
 
 import superfacets
 from superfacets import MissingExtraError
+from superfacets.elements import face_graph
 
 
 def _modules_after(code: str) -> set:
@@ -120,12 +121,12 @@ def test_contour_is_watertight_and_faces_outwards():
     g = np.mgrid[-1:1:31j, -1:1:31j, -1:1:31j]
     v, f = contour(np.sqrt((g ** 2).sum(0)) - 0.7, (-1, -1, -1), 2 / 30)
     mesh = Mesh(v, f)
-    graph = mesh.graph
+    graph = face_graph(mesh)
     assert graph.boundary_elements.size == 0  # every edge shared by two faces
     assert np.allclose(np.linalg.norm(v, axis=1), 0.7, atol=0.01)
     assert (np.einsum("ij,ij->i", mesh.normals, mesh.centroids) > 0).mean() > 0.99
     c = creature(40)
-    assert c.graph.boundary_elements.size == 0 and c.n_faces > 5000
+    assert face_graph(c).boundary_elements.size == 0 and c.n_faces > 5000
 
 
 @pytest.mark.parametrize("call, kind", [

@@ -12,6 +12,7 @@ from superfacets.cli import main
 from superfacets.connectivity import label_components
 
 from conftest import MESHES, need
+from superfacets.elements import face_graph
 
 
 def voxel_surface(filled: np.ndarray, size: float = 1.0) -> Mesh:
@@ -48,7 +49,7 @@ def l_prism() -> Mesh:
 
 
 def test_voxel_quads_make_a_closed_outward_surface(l_prism):
-    g = l_prism.graph
+    g = face_graph(l_prism)
     assert l_prism.faces.shape[1] == 4 and g.boundary_elements.size == 0
     vol = np.einsum("ij,ij->i", l_prism.centroids, l_prism.normals) @ l_prism.areas / 3
     assert vol == pytest.approx(2 * 2 * 1 - 1 * 1 * 1)  # the L's volume: normals outwards
@@ -57,7 +58,7 @@ def test_voxel_quads_make_a_closed_outward_surface(l_prism):
 
 
 def test_concave_edge_of_a_quad_prism_is_a_boundary_at_high_alpha(l_prism):
-    g = l_prism.graph
+    g = face_graph(l_prism)
     crease = g.terms.concave
     for alpha, expect_cut in ((1000, True),):
         labels = superfacets(l_prism, 6, alpha=alpha)
@@ -76,7 +77,7 @@ def test_triangulated_copy_gives_similar_superfacets(l_prism):
     ca, cb = compactness(l_prism, a), compactness(copy, b)
     assert abs(ca - cb) / ca < 0.25
     # the crease is cut in both; on the shared (quad) edges the boundaries mostly agree
-    gq, gt = l_prism.graph, copy.graph
+    gq, gt = face_graph(l_prism), face_graph(copy)
     for g, lab in ((gq, a), (gt, b)):
         assert (lab[g.pairs[g.terms.concave, 0]] != lab[g.pairs[g.terms.concave, 1]]).all()
 
@@ -93,7 +94,7 @@ def test_polygon_geometry_newell_and_area_weighted_centroid():
     assert saddle.normals[0][2] > 0.95
     mixed = Mesh([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0]], [[0, 1, 2, 3], [1, 4, 2]])
     assert mixed.face_sizes.tolist() == [4, 3] and mixed.faces.shape == (2, 4)
-    assert mixed.graph.n_edges == 1 and mixed.graph.lengths[0] == pytest.approx(1.0)
+    assert face_graph(mixed).n_edges == 1 and face_graph(mixed).lengths[0] == pytest.approx(1.0)
     assert repr(mixed) == "Mesh(5 vertices, 2 faces: polygons of 3 to 4 vertices)"
 
 
@@ -154,7 +155,7 @@ def test_cli_on_the_real_quad_mesh(tmp_path):
 def test_library_types_give_the_same_labels():
     pv = pytest.importorskip("pyvista")
     from superfacets import as_mesh
-    from superfacets.convert import to_pyvista, to_trimesh
+    from superfacets.io import to_pyvista, to_trimesh
 
     plane = pv.Plane(i_resolution=24, j_resolution=20).rotate_x(20, inplace=False)
     m = as_mesh(plane)

@@ -20,6 +20,7 @@ from superfacets.camera import view_frame
 from superfacets.colors import PALETTE, boundary_edges
 
 from conftest import grid_mesh
+from superfacets.elements import face_graph
 
 
 def _foreground(img: np.ndarray, bg=(255, 255, 255)) -> np.ndarray:
@@ -128,7 +129,7 @@ def test_html_page_is_self_contained_and_holds_the_mesh(sphere):
     pal = np.array(meta["palette"])[c]
     per_sf = {int(s): {tuple(x) for x in pal[labels == s]} for s in range(12)}
     assert all(len(v_) == 1 for v_ in per_sf.values())
-    g = sphere.graph.pairs
+    g = face_graph(sphere).pairs
     diff = labels[g[:, 0]] != labels[g[:, 1]]
     assert np.all(np.any(pal[g[diff, 0]] != pal[g[diff, 1]], axis=1))
     with pytest.raises(ParameterError, match="one per face"):

@@ -15,6 +15,7 @@ from superfacets.segmentation import pipeline
 from superfacets.weights import paper_weights
 
 from conftest import MESHES, TABLE1, grid_mesh, need
+from superfacets.elements import face_graph
 
 
 def reference(mesh, n_segments, **kw):
@@ -26,7 +27,7 @@ def check_invariants(mesh, labels):
     assert labels.shape == (mesh.n_faces,) and labels.dtype == np.int64
     k = int(labels.max()) + 1
     assert labels.min() == 0 and np.unique(labels).size == k  # dense, every face labelled
-    assert label_components(mesh.graph, labels).max() + 1 == k  # each superfacet connected
+    assert label_components(face_graph(mesh), labels).max() + 1 == k  # each superfacet connected
     areas = np.bincount(labels, weights=mesh.areas)
     assert areas.sum() == pytest.approx(mesh.area)
     return k
@@ -34,7 +35,7 @@ def check_invariants(mesh, labels):
 
 def crease_fraction(mesh, labels):
     """Fraction of the crease (x = 0) edge length lying on superfacet boundaries."""
-    g = mesh.graph
+    g = face_graph(mesh)
     v = mesh.vertices
     on_crease = (np.abs(v[g.edges[:, 0], 0]) < 1e-12) & (np.abs(v[g.edges[:, 1], 0]) < 1e-12)
     cut = labels[g.pairs[:, 0]] != labels[g.pairs[:, 1]]
@@ -89,7 +90,7 @@ def test_crease_followed_with_high_alpha(valley):
 
 
 def test_exact_assignment_is_nearest_center(sphere):
-    g = sphere.graph
+    g = face_graph(sphere)
     rng = np.random.default_rng(1)
     w = paper_weights(sphere, alpha=100) * (1 + 0.01 * rng.random(g.n_edges))  # no ties
     cw = w[g.dual_edge]
@@ -107,7 +108,7 @@ def test_exact_assignment_is_nearest_center(sphere):
 
 
 def test_bounded_expansion_is_dijkstra_inside_the_window(sphere):
-    g = sphere.graph
+    g = face_graph(sphere)
     w = paper_weights(sphere, alpha=200)
     cw = w[g.dual_edge]
     m = sphere.n_faces
@@ -136,7 +137,7 @@ def test_interrupted_expansion_leaves_its_scratch_clean(sphere):
     ``local``, so the caller can grow the buffer and run it again."""
     from superfacets._kernels.expand import QUEUE_FULL, RECORD_FULL
 
-    g = sphere.graph
+    g = face_graph(sphere)
     cw = paper_weights(sphere, alpha=200)[g.dual_edge]
     m = sphere.n_faces
     c = np.ascontiguousarray(sphere.centroids)

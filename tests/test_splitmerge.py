@@ -12,6 +12,7 @@ from superfacets.connectivity import label_components
 from superfacets.errors import ParameterError
 from superfacets.splitmerge import swap_round
 from superfacets.weights import csr_weights, edge_weights
+from superfacets.elements import face_graph
 
 
 def _valley():
@@ -26,7 +27,7 @@ def _valley():
 
 
 def _weights(mesh, alpha=200.0):
-    g = mesh.graph
+    g = face_graph(mesh)
     return csr_weights(g, edge_weights(g, "paper", alpha=alpha, eta_convex=0.2))
 
 
@@ -36,7 +37,7 @@ def test_a_superfacet_straddling_a_crease_is_split_on_it_and_two_flat_ones_merge
     # 0 straddles the crease (|x| < 0.25); 1, 2, 3 are strips 0.25 wide on the right
     # slope, 4 the whole left slope beyond the crease's superfacet
     labels = np.select([np.abs(x) < 0.25, x < 0, x < 0.5, x < 0.75], [0, 4, 1, 2], 3)
-    out, n = swap_round(mesh.graph, _weights(mesh), labels)
+    out, n = swap_round(face_graph(mesh), _weights(mesh), labels)
     assert n == 1
     assert np.unique(out).size == 5  # the number of superfacets is kept
     on_left = (np.abs(x) < 0.25) & (x < 0)
@@ -48,7 +49,7 @@ def test_a_superfacet_straddling_a_crease_is_split_on_it_and_two_flat_ones_merge
     merged = [(a, b) for a, b in ((1, 2), (2, 3)) if out[labels == a][0] == out[labels == b][0]]
     assert len(merged) == 1
     assert np.unique(out[labels == 4]).size == 1 and out[labels == 4][0] == 4
-    assert np.unique(label_components(mesh.graph, out)).size == 5  # each one connected
+    assert np.unique(label_components(face_graph(mesh), out)).size == 5  # each one connected
 
 
 def test_the_crease_decides_which_superfacet_is_split():
@@ -57,7 +58,7 @@ def test_the_crease_decides_which_superfacet_is_split():
     mesh, col = _valley()
     x = mesh.centroids[:, 0]
     labels = np.select([np.abs(x) < 0.25, x < 0, x < 0.5, x < 0.75], [0, 4, 1, 2], 3)
-    out, n = swap_round(mesh.graph, _weights(mesh, alpha=0.0), labels)
+    out, n = swap_round(face_graph(mesh), _weights(mesh, alpha=0.0), labels)
     assert n == 1
     assert np.unique(out[labels == 0]).size == 1
     assert np.unique(out[labels == 4]).size == 2
@@ -69,7 +70,7 @@ def test_the_window_forbids_merging_beyond_its_reach():
     labels = np.select([np.abs(x) < 0.25, x < 0, x < 0.5, x < 0.75], [0, 4, 1, 2], 3)
     # every union of two strips spans 0.5 x 0.5: from its center, its corners lie
     # ~0.35 away; a window of 0.2 allows no merge, hence no swap
-    out, n = swap_round(mesh.graph, _weights(mesh), labels, window_r2=0.2 ** 2)
+    out, n = swap_round(face_graph(mesh), _weights(mesh), labels, window_r2=0.2 ** 2)
     assert n == 0
 
 
@@ -82,15 +83,15 @@ def test_split_merge_invariants_on_a_real_mesh():
     k = r.n_segments
     assert np.array_equal(np.unique(r.labels), np.arange(k))  # dense
     assert k == paper.n_segments  # the swaps keep K, and a round that adds one is undone
-    comps = label_components(mesh.graph, r.labels)
+    comps = label_components(face_graph(mesh), r.labels)
     assert np.unique(comps).size == k  # every superfacet connected
     again = segment(mesh, 150, split_merge=True, n_threads=1)
     np.testing.assert_array_equal(again.labels, r.labels)  # deterministic, any threads
     assert not np.array_equal(r.labels, paper.labels)
     # the candidates evaluated on 1 or 3 threads: the same swaps
     w = _weights(mesh)
-    one, n1 = swap_round(mesh.graph, w, paper.labels, n_threads=1)
-    three, n3 = swap_round(mesh.graph, w, paper.labels, n_threads=3)
+    one, n1 = swap_round(face_graph(mesh), w, paper.labels, n_threads=1)
+    three, n3 = swap_round(face_graph(mesh), w, paper.labels, n_threads=3)
     assert n1 == n3 > 0
     np.testing.assert_array_equal(one, three)
 
@@ -104,7 +105,7 @@ def test_pruned_candidates_give_the_swaps_of_the_full_evaluation(k, monkeypatch)
     mesh = read_mesh(need(MESHES / "bunny.tri.xz"))
     labels = segment(mesh, k).labels
     w = _weights(mesh)
-    full, n_full = swap_round(mesh.graph, w, labels, pruned=False)
+    full, n_full = swap_round(face_graph(mesh), w, labels, pruned=False)
     evaluated = []
     real = splitmerge.split_candidates
 
@@ -116,7 +117,7 @@ def test_pruned_candidates_give_the_swaps_of_the_full_evaluation(k, monkeypatch)
     monkeypatch.setattr(splitmerge, "split_candidates", counting)
     for threads in (1, 2):
         evaluated.clear()
-        out, n = swap_round(mesh.graph, w, labels, n_threads=threads)
+        out, n = swap_round(face_graph(mesh), w, labels, n_threads=threads)
         assert n == n_full
         np.testing.assert_array_equal(out, full)
         assert len(evaluated) == len(set(evaluated)) < 0.6 * k  # each once, most never

@@ -15,6 +15,8 @@ from superfacets.cli import main
 from superfacets.cloud import InvalidCloudError, PointCloud
 from superfacets.datasets.sampling import sample_points, vertex_ground_truth
 from superfacets.elements.inputs import elements_of
+from superfacets.elements.points import point_graph
+from superfacets.elements.vertices import vertex_graph
 from superfacets.errors import MeshFormatError, ParameterError
 from superfacets.io import read_cloud, read_input, read_labels
 from superfacets.metrics import evaluate
@@ -65,7 +67,7 @@ def test_vertex_mode_labels_every_vertex_and_marks_unused_ones(sphere):
     assert r.labels.shape == (mesh.n_vertices,)
     assert r.labels[-1] == -1 and (r.labels[:-1] >= 0).all()
     assert np.unique(r.labels[:-1]).tolist() == list(range(r.n_segments))
-    g = mesh.vertex_elements.graph
+    g = vertex_graph(mesh).graph
     assert connected(g, r.labels[:-1])
     assert r.params["elements"] == "vertices"
     assert np.array_equal(segment(mesh, 40, elements="vertices").labels, r.labels)
@@ -351,7 +353,7 @@ def test_real_rgbd_scans(name):
     r = segment(cloud, 150)
     assert r.labels.shape == (307200,)
     assert (r.labels[~cloud.valid] == -1).all() and (r.labels[cloud.valid] >= 0).all()
-    g, index = cloud.graph()
+    g, index = point_graph(cloud)
     per_element = np.empty(g.n_elements, np.int64)
     per_element[index[cloud.valid]] = r.labels[cloud.valid]
     assert connected(g, per_element)

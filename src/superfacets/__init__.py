@@ -18,7 +18,7 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING
 
-__version__ = "0.1.0"
+from ._version import __version__
 
 #: Public name -> the module that defines it.
 _PUBLIC = {
@@ -33,7 +33,7 @@ _PUBLIC = {
     "SuperfacetsError": "errors",
     "MissingExtraError": "errors",
     "Mesh": "mesh",
-    "as_mesh": "mesh",
+    "as_mesh": "convert",
     "read_mesh": "io",
     "write_mesh": "io",
     "read_labels": "io",
@@ -111,7 +111,8 @@ if TYPE_CHECKING:  # the same names, for type checkers and IDEs
                          MissingExtraError, ParameterError, SuperfacetsError)
     from .io import (read_cloud, read_input, read_labels, read_mesh, write_colored_mesh,
                      write_labels, write_mesh, write_segindices)
-    from .mesh import Mesh, as_mesh
+    from .convert import as_mesh
+    from .mesh import Mesh
     from .params import DEFAULTS, SegmentParams
     from .segmentation import SegmentationResult, segment, superfacets, superpoints
     from .weights import edge_weights, paper_weights, shlafman_weights

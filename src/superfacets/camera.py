@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import ParameterError
+from .errors import InvalidMeshError, ParameterError
 
 __all__ = ["view_frame", "AXES", "VIEWS"]
 
@@ -61,11 +61,19 @@ def view_frame(mesh, view=None, elevation: float = 20.0,
     ------
     ParameterError
         On an unknown view name or a zero/non-finite direction.
+    InvalidMeshError
+        If the mesh's coordinates are too large to measure its spread.
     """
     c = mesh.centroids
-    w = mesh.areas / max(mesh.area, 1e-300)
-    mean = w @ c
-    cov = (c - mean).T @ ((c - mean) * w[:, None])
+    with np.errstate(over="ignore", invalid="ignore"):
+        w = mesh.areas / max(mesh.area, 1e-300)
+        mean = w @ c
+        cov = (c - mean).T @ ((c - mean) * w[:, None])
+    if not np.isfinite(cov).all():  # coordinates whose squares overflow
+        name = getattr(mesh, "name", "")
+        raise InvalidMeshError(f"{name + ': ' if name else ''}coordinates too large to place "
+                               "a camera (their squares overflow double precision); rescale "
+                               "the mesh (e.g. to unit size)")
     evals, evecs = np.linalg.eigh(cov)
     if isinstance(up, str):
         if up not in AXES:

@@ -26,7 +26,8 @@ import math
 
 import numpy as np
 
-from .elements.graph import as_element_graph, chunked
+from .elements.graph import chunked
+from .elements.inputs import as_element_graph
 from .labels import check_labels, relabel_dense
 from .params import check_int, check_nonneg, check_number, check_positive, check_threads
 
@@ -77,8 +78,9 @@ def cut_costs(graph, *, alpha: float = 200.0, eta_convex: float = 0.2,
     Examples
     --------
     >>> import trimesh
-    >>> from superfacets.mesh import as_mesh
-    >>> g = as_mesh(trimesh.creation.box()).graph
+    >>> from superfacets.convert import as_mesh
+    >>> from superfacets.elements import face_graph
+    >>> g = face_graph(as_mesh(trimesh.creation.box()))
     >>> bool(np.allclose(cut_costs(g, alpha=0), g.lengths))   # no crease: the lengths
     True
     >>> bool((cut_costs(g) < g.lengths).any())                # the box's folds are cheaper

@@ -1,4 +1,4 @@
-"""Point clouds: validated points (and normals), with their cached point graph.
+"""Point clouds: validated points (and normals).
 
 A :class:`PointCloud` holds ``(N, 3) float64`` points in input order. Rows
 that are not finite are *invalid points* only where the input says so (an
@@ -107,6 +107,11 @@ class PointCloud:
                                         f"{self.viewpoint!r}")
             object.__setattr__(self, "viewpoint", vp)
 
+    def __getstate__(self) -> dict:
+        # the fields only: the point graphs kept with the cloud hold functions (which
+        # pickle cannot) and are built again where the cloud is unpickled
+        return {f: self.__dict__[f] for f in self.__dataclass_fields__}
+
     def __repr__(self) -> str:
         invalid = self.n_total - int(self.valid.sum())
         extra = f", {invalid} invalid" if invalid else ""
@@ -157,25 +162,6 @@ class PointCloud:
         if s[1] <= 1e-12 * s[0]:
             raise InvalidCloudError(f"{where}all {p.shape[0]} points lie on one line: no "
                                     "surface to segment")
-
-    @cached_property
-    def _graphs(self) -> dict:
-        return {}
-
-    def graph(self, n_neighbors: int = 10, neighbor_radius: float | None = None):
-        """The point graph (cached per neighbourhood), see
-        :func:`superfacets.elements.point_graph`.
-
-        Returns
-        -------
-        PointElements
-        """
-        key = (n_neighbors, neighbor_radius)
-        if key not in self._graphs:
-            from .elements.points import point_graph
-
-            self._graphs[key] = point_graph(self, n_neighbors, neighbor_radius)
-        return self._graphs[key]
 
 
 def _coordinates(a, what: str, where: str) -> np.ndarray:

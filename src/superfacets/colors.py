@@ -27,10 +27,19 @@ PALETTE = np.array([
 ], dtype=np.uint8)
 
 
+def _graph(mesh):
+    """The face graph of a Mesh, or the element graph given."""
+    if hasattr(mesh, "faces"):
+        from .elements.faces import face_graph
+
+        return face_graph(mesh)
+    return mesh
+
+
 def _across(mesh, labels):
     """Labels on both sides of every adjacency, and which adjacencies cross superfacets.
     ``mesh`` is a Mesh (its face graph) or any element graph."""
-    graph = mesh.graph if hasattr(mesh, "faces") else mesh
+    graph = _graph(mesh)
     pairs = graph.pairs
     labels = check_labels(labels, graph.n_elements, per=graph.element)
     a, b = labels[pairs[:, 0]], labels[pairs[:, 1]]
@@ -136,5 +145,5 @@ def boundary_edges(mesh, labels: np.ndarray) -> np.ndarray:
         Vertex index pairs, each edge once.
     """
     cut = _across(mesh, labels)[2]
-    e = np.sort(np.asarray(mesh.graph.edges[cut], dtype=np.int64), axis=1)
+    e = np.sort(np.asarray(_graph(mesh).edges[cut], dtype=np.int64), axis=1)
     return np.unique(e, axis=0) if e.size else e.reshape(0, 2)

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .elements.graph import as_element_graph
+from .elements.inputs import as_element_graph
 from .labels import check_labels, relabel_dense
 
 __all__ = ["enforce_connectivity", "label_components"]

@@ -1,10 +1,11 @@
-"""Meshes from and to the libraries people use: trimesh, PyVista, Open3D.
+"""Meshes from what people have: arrays, trimesh, PyVista, Open3D objects.
 
-:func:`superfacets.mesh.as_mesh` accepts each library's mesh type through the
-functions here; none of the libraries is imported unless such an object is
-given (Open3D is never a dependency). :func:`to_trimesh` and
-:func:`to_pyvista` return the library's object with the labels as face (cell)
-data and the superfacet colours set.
+:func:`as_mesh` is the one place that turns an input into a validated
+:class:`~superfacets.mesh.Mesh`; it accepts each library's mesh type through
+the functions here. None of the libraries is imported unless such an object
+is given (Open3D is never a dependency). The other direction (a result as a
+trimesh or PyVista object, labels and colours set) is
+:func:`superfacets.io.export.to_trimesh` and :func:`~superfacets.io.export.to_pyvista`.
 
 Scenes (several objects, e.g. a glTF/GLB file or a ``trimesh.Scene``) are
 joined into one mesh: the objects in the order of the scene's geometry nodes
@@ -18,8 +19,54 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import InvalidMeshError
+from .mesh import Mesh
 
-__all__ = ["from_library", "mesh_from_scene", "to_trimesh", "to_pyvista"]
+__all__ = ["as_mesh", "from_library", "mesh_from_scene"]
+
+
+def as_mesh(mesh, name: str = "") -> Mesh:
+    """Turn a mesh given in any accepted form into a validated :class:`Mesh`.
+
+    Parameters
+    ----------
+    mesh : Mesh, trimesh.Trimesh, trimesh.Scene, pyvista.PolyData, open3d TriangleMesh, or (vertices, faces)
+        ``vertices`` is ``(n, 3)`` float; ``faces`` an ``(m, k)`` int array
+        (triangles: ``k = 3``) or a list of vertex index sequences (polygons).
+        A :class:`Mesh` is returned as is (its caches are reused); a scene's
+        objects are joined (:func:`mesh_from_scene`).
+    name : str, optional
+        Name used in error messages.
+
+    Returns
+    -------
+    Mesh
+
+    Raises
+    ------
+    TypeError
+        If ``mesh`` is none of the accepted forms.
+    InvalidMeshError
+        If the arrays are invalid (see :class:`Mesh`), a scene holds no mesh,
+        or a PolyData no polygon.
+
+    Examples
+    --------
+    >>> as_mesh(([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]]))
+    Mesh(3 vertices, 1 faces: triangles)
+    """
+    if isinstance(mesh, Mesh):
+        return mesh
+    if isinstance(mesh, (tuple, list)) and len(mesh) == 2:
+        return Mesh(mesh[0], mesh[1], name=name)
+    converted = from_library(mesh, name)
+    if converted is not None:
+        return converted
+    if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):  # trimesh.Trimesh and alike
+        return Mesh(np.asarray(mesh.vertices), np.asarray(mesh.faces), name=name)
+    raise TypeError(
+        "mesh must be a superfacets.Mesh, a trimesh.Trimesh or Scene, a pyvista.PolyData, an "
+        f"open3d TriangleMesh or a (vertices, faces) pair, got {type(mesh).__name__}"
+    )
 
 
 def _module(obj) -> str:
@@ -36,8 +83,6 @@ def from_library(obj, name: str = ""):
         On a scene without geometry, a PolyData without polygons, an Open3D
         object without triangles.
     """
-    from .mesh import Mesh
-
     mod = _module(obj)
     if mod == "trimesh" and type(obj).__name__ == "Scene":
         return mesh_from_scene(obj, name)
@@ -81,8 +126,6 @@ def mesh_from_scene(scene, name: str = ""):
     InvalidMeshError
         If the scene holds no triangle mesh.
     """
-    from .mesh import Mesh
-
     vs, fs, objects, base, start = [], [], [], 0, 0
     for node in scene.graph.nodes_geometry:
         transform, key = scene.graph[node]
@@ -100,83 +143,3 @@ def mesh_from_scene(scene, name: str = ""):
     if not fs:
         raise InvalidMeshError(f"{name or 'scene'}: the scene holds no mesh with faces")
     return Mesh(np.concatenate(vs), np.concatenate(fs), name=name, objects=tuple(objects))
-
-
-def _labelled(mesh, labels):
-    from .colors import face_colors
-    from .labels import check_labels
-
-    labels = check_labels(labels, mesh.n_faces, per="face")
-    return labels, face_colors(mesh, labels)
-
-
-def to_trimesh(mesh, labels=None):
-    """A ``trimesh.Trimesh`` of the mesh, with the labels and colours per face.
-
-    Polygons are split into the triangles of their fans (trimesh holds
-    triangles); ``face_attributes['label']`` and the face colours follow, and
-    ``metadata['face_of_triangle']`` maps each triangle to its polygon.
-
-    Parameters
-    ----------
-    mesh : Mesh, trimesh.Trimesh, pyvista.PolyData or (vertices, faces)
-    labels : (m,) int ndarray, optional
-
-    Returns
-    -------
-    trimesh.Trimesh
-
-    Examples
-    --------
-    >>> import trimesh
-    >>> box = trimesh.creation.box()
-    >>> t = to_trimesh(box, list(range(12)))
-    >>> t.face_attributes["label"][:3].tolist()
-    [0, 1, 2]
-    """
-    import trimesh
-
-    from .mesh import as_mesh
-
-    mesh = as_mesh(mesh)
-    tri, owner = mesh.triangulated()
-    out = trimesh.Trimesh(vertices=np.array(mesh.vertices), faces=np.array(tri), process=False,
-                          validate=False)
-    out.metadata["face_of_triangle"] = owner
-    if labels is not None:
-        labels, colors = _labelled(mesh, labels)
-        out.face_attributes["label"] = labels[owner]
-        out.visual.face_colors = colors[owner]
-    return out
-
-
-def to_pyvista(mesh, labels=None):
-    """A ``pyvista.PolyData`` of the mesh (polygons kept), labels and colours per cell.
-
-    Parameters
-    ----------
-    mesh : Mesh, trimesh.Trimesh, pyvista.PolyData or (vertices, faces)
-    labels : (m,) int ndarray, optional
-        Stored as ``cell_data['label']``, colours as ``cell_data['rgb']``.
-
-    Returns
-    -------
-    pyvista.PolyData
-
-    Raises
-    ------
-    MissingExtraError
-        Without the ``render`` extra.
-    """
-    from .extras import require
-    from .mesh import as_mesh
-
-    pv = require("pyvista", "to_pyvista")
-    mesh = as_mesh(mesh)
-    cells = np.insert(np.asarray(mesh.corners), np.asarray(mesh.offsets)[:-1], mesh.face_sizes)
-    poly = pv.PolyData(np.array(mesh.vertices), cells)
-    if labels is not None:
-        labels, colors = _labelled(mesh, labels)
-        poly.cell_data["label"] = labels
-        poly.cell_data["rgb"] = colors
-    return poly

@@ -16,7 +16,7 @@ import numpy as np
 
 from ._kernels.farthest import farthest_point, farthest_point_blocked, spatial_blocks
 from ._kernels.flood import flood
-from .elements.graph import as_element_graph
+from .elements.inputs import as_element_graph
 from .expansion import Workspace, bucket_width, with_room
 from .params import INITS, check_choice, check_n_segments
 from .passes import update_centers

@@ -3,8 +3,11 @@
 A :class:`Mesh` holds C-contiguous ``(n, 3) float64`` vertices and
 ``(m, k) int64`` faces (triangles: ``k = 3``; polygons of any size, each
 row padded with -1 after its vertices), validated once. Derived quantities (centroids, unit
-normals, areas, bounding-box diagonal, the face graph) are computed on first
-use and cached, so the method, the metrics and the baselines share them.
+normals, areas, bounding-box diagonal) are computed on first use and cached, so
+the method, the metrics and the baselines share them. The mesh knows nothing of
+graphs: :func:`superfacets.elements.face_graph` builds the face graph and keeps
+it with the mesh (one build per mesh), and :func:`superfacets.convert.as_mesh`
+turns the libraries' objects into a :class:`Mesh`.
 """
 
 from __future__ import annotations
@@ -16,7 +19,7 @@ import numpy as np
 
 from .errors import InvalidMeshError
 
-__all__ = ["Mesh", "as_mesh"]
+__all__ = ["Mesh", "column_bounds"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -248,22 +251,6 @@ class Mesh:
         nearest to it)."""
         return self._used_vertices().mean(axis=0)
 
-    @cached_property
-    def graph(self):
-        """The face graph of this mesh, an :class:`~superfacets.elements.ElementGraph`
-        (built on first use, then cached)."""
-        from .elements.faces import face_graph
-
-        return face_graph(self)
-
-    @cached_property
-    def vertex_elements(self):
-        """The vertex graph of this mesh and the element of each vertex, a
-        :class:`~superfacets.elements.vertices.VertexElements` (cached)."""
-        from .elements.vertices import vertex_graph
-
-        return vertex_graph(self)
-
     def check_usable(self) -> None:
         """Raise :class:`InvalidMeshError` if the mesh cannot be segmented or measured.
 
@@ -405,50 +392,3 @@ def _validate_arrays(vertices, faces, name: str = "") -> tuple[np.ndarray, np.nd
     v.setflags(write=False)
     f.setflags(write=False)
     return v, f
-
-
-def as_mesh(mesh, name: str = "") -> Mesh:
-    """Turn a mesh given in any accepted form into a validated :class:`Mesh`.
-
-    Parameters
-    ----------
-    mesh : Mesh, trimesh.Trimesh, trimesh.Scene, pyvista.PolyData, open3d TriangleMesh, or (vertices, faces)
-        ``vertices`` is ``(n, 3)`` float; ``faces`` an ``(m, k)`` int array
-        (triangles: ``k = 3``) or a list of vertex index sequences (polygons).
-        A :class:`Mesh` is returned as is (its caches are reused); a scene's
-        objects are joined (:mod:`superfacets.convert`).
-    name : str, optional
-        Name used in error messages.
-
-    Returns
-    -------
-    Mesh
-
-    Raises
-    ------
-    TypeError
-        If ``mesh`` is none of the accepted forms.
-    InvalidMeshError
-        If the arrays are invalid (see :class:`Mesh`), a scene holds no mesh,
-        or a PolyData no polygon.
-
-    Examples
-    --------
-    >>> as_mesh(([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]]))
-    Mesh(3 vertices, 1 faces: triangles)
-    """
-    if isinstance(mesh, Mesh):
-        return mesh
-    if isinstance(mesh, (tuple, list)) and len(mesh) == 2:
-        return Mesh(mesh[0], mesh[1], name=name)
-    from .convert import from_library
-
-    converted = from_library(mesh, name)
-    if converted is not None:
-        return converted
-    if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):  # trimesh.Trimesh and alike
-        return Mesh(np.asarray(mesh.vertices), np.asarray(mesh.faces), name=name)
-    raise TypeError(
-        "mesh must be a superfacets.Mesh, a trimesh.Trimesh or Scene, a pyvista.PolyData, an "
-        f"open3d TriangleMesh or a (vertices, faces) pair, got {type(mesh).__name__}"
-    )

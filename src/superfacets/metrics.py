@@ -15,7 +15,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from .elements.graph import as_element_graph
+from .elements.inputs import as_element_graph
 from .errors import InvalidMeshError, ParameterError
 from .labels import check_labels
 

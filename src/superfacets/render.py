@@ -26,7 +26,7 @@ from .errors import NoDisplayError, ParameterError
 from .params import check_number
 from .extras import require
 from .labels import check_labels
-from .mesh import as_mesh
+from .convert import as_mesh
 
 __all__ = ["render", "render_points", "render_panel", "show", "has_display", "NoDisplayError"]
 
@@ -47,7 +47,7 @@ def _pyvista(off_screen: bool):
 
 def _polydata(pv, mesh, labels):
     """The mesh as PolyData cells (triangles or polygons), one colour per cell."""
-    from .convert import to_pyvista
+    from .io.export import to_pyvista
 
     return to_pyvista(mesh, labels)
 

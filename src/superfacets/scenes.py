@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .errors import ParameterError
-from .mesh import as_mesh
+from .convert import as_mesh
 from .params import DEFAULTS as _D
 
 if TYPE_CHECKING:
@@ -27,7 +27,7 @@ def segment_objects(mesh, n_segments: int = _D.n_segments, **options
 
     Parameters
     ----------
-    mesh : Mesh or any form :func:`superfacets.mesh.as_mesh` accepts
+    mesh : Mesh or any form :func:`superfacets.convert.as_mesh` accepts
         With ``mesh.objects`` (a scene); a mesh without is one object.
     n_segments : int, default 150
         Superfacets in all (more when there are more objects than that).

@@ -123,8 +123,10 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
     >>> sphere = trimesh.creation.icosphere(subdivisions=3)
     >>> m = Mesh(sphere.vertices, sphere.faces)
     >>> r = segment(m, 20)
-    >>> w = csr_weights(m.graph, edge_weights(m.graph, "paper", alpha=200, eta_convex=0.2))
-    >>> new, n = swap_round(m.graph, w, r.labels)
+    >>> from superfacets.elements import face_graph
+    >>> g = face_graph(m)
+    >>> w = csr_weights(g, edge_weights(g, "paper", alpha=200, eta_convex=0.2))
+    >>> new, n = swap_round(g, w, r.labels)
     >>> int(new.max()) + 1 == int(r.labels.max()) + 1
     True
     """

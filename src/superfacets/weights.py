@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .elements.graph import ElementGraph, as_element_graph, chunked
+from .elements.graph import ElementGraph, chunked
+from .elements.inputs import as_element_graph
 from .errors import ParameterError
 from .params import (MAX_WEIGHT_FACTOR, WEIGHTING_ALPHA, WEIGHTINGS, check_choice,
                      check_nonneg, check_number)

@@ -56,7 +56,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import MemoryLimitError, ParameterError
-from ..mesh import as_mesh
+from ..convert import as_mesh
+from ..elements.faces import face_graph
 from ..params import check_n_segments, check_positive
 from ..weights import edge_weights
 
@@ -236,7 +237,8 @@ def ncut_embedding(mesh, n_components: int = 300, *, alpha: float = 100.0,
     seconds = {}
     t0 = time.perf_counter()
     w = edge_weights(mesh, weighting, alpha=alpha, eta_convex=eta_convex)
-    graph = csr_array((w[mesh.graph.dual_edge], mesh.graph.indices, mesh.graph.indptr),
+    g = face_graph(mesh)
+    graph = csr_array((w[g.dual_edge], g.indices, g.indptr),
                       shape=(m, m))
     dist = np.empty((m, m), dtype=np.float32)
     kth = np.empty(m, dtype=np.float64)

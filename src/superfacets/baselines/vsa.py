@@ -36,7 +36,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ParameterError
-from ..mesh import as_mesh
+from ..convert import as_mesh
+from ..elements.faces import face_graph
 from ..params import check_int, check_n_segments
 
 __all__ = ["VSAResult", "variational_shape_approximation", "vsa", "METRICS", "INITS"]
@@ -83,7 +84,7 @@ class _State:
     """Arrays of one VSA run; proxies grow in place up to ``capacity``."""
 
     def __init__(self, mesh, metric: int, capacity: int):
-        g = mesh.graph
+        g = face_graph(mesh)
         self.m = mesh.n_faces
         self.indptr = np.ascontiguousarray(g.indptr, dtype=np.int64)
         self.indices = np.ascontiguousarray(g.indices, dtype=np.int32)
@@ -158,7 +159,7 @@ def _component_seeds(mesh, chosen: np.ndarray) -> list[int]:
     """First face of every face-connected component holding no chosen face."""
     from scipy.sparse.csgraph import connected_components
 
-    n_comp, comp = connected_components(mesh.graph.to_csr(), directed=False)
+    n_comp, comp = connected_components(face_graph(mesh).to_csr(), directed=False)
     if n_comp == 1:
         return []
     have = np.zeros(n_comp, dtype=bool)

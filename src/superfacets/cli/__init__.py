@@ -27,7 +27,7 @@ __all__ = ["main", "build_parser"]
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every command (each sub-parser sets ``func``)."""
-    from .. import __version__
+    from .._version import __version__
     from . import batching, experiments, pictures, segmenting
 
     parser = argparse.ArgumentParser(

@@ -231,6 +231,31 @@ def named_after(path, exc: Exception) -> Exception:
     return type(exc)(f"{path}: {message}")
 
 
+def read_usable(path, *, clouds: bool = False):
+    """Read the input of a command and refuse, in one line, what no command can handle.
+
+    Every command that reads a mesh (or, with ``clouds``, a mesh or a point
+    cloud) comes through here, so that an input with coordinates that would
+    overflow, a zero extent or a zero area is refused the same way by each
+    (:meth:`superfacets.mesh.Mesh.check_usable`), before any picture, metric
+    or segmentation is attempted.
+
+    Raises
+    ------
+    SuperfacetsError, OSError
+        Named after ``path``.
+    """
+    from ..errors import SuperfacetsError
+    from ..io import read_input, read_mesh
+
+    data = read_input(path) if clouds else read_mesh(path)
+    try:
+        data.check_usable()
+    except SuperfacetsError as exc:
+        raise named_after(path, exc) from None
+    return data
+
+
 def labels_for(args, mesh):
     """Labels from LABELS.seg, computed with the method options, or None (--plain);
     and a dict describing them for titles and pages."""

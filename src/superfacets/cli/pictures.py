@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from .options import (add_camera_options, add_mesh_and_labels, add_method_options,
-                      check_output, float_arg, fmt_value, int_arg, labels_for)
+                      check_output, float_arg, fmt_value, int_arg, labels_for, read_usable)
 
 __all__ = ["add_parsers"]
 
@@ -82,12 +82,11 @@ def add_parsers(sub) -> None:
 
 
 def cmd_render(args) -> int:
-    from ..io import read_mesh
     from ..render import render
 
     out = check_output(args.output, (".png",), "the picture",
                        inputs=(args.mesh, getattr(args, "labels", None)))
-    mesh = read_mesh(args.mesh)
+    mesh = read_usable(args.mesh)
     labels, _ = labels_for(args, mesh)
     t0 = time.perf_counter()
     render(mesh, labels, out, size=args.size, view=args.view, up=args.up or "y",
@@ -104,14 +103,14 @@ def cmd_panel(args) -> int:
     from itertools import product as _product
 
     from ..errors import ParameterError
-    from ..io import read_labels, read_mesh
+    from ..io import read_labels
     from ..methods import get_method
     from ..render import render_panel
     from ..runner.grid import expand_grid, method_grid, parse_params
 
     out = check_output(args.output, (".png",), "the picture",
                        inputs=(args.mesh, getattr(args, "labels", None)))
-    mesh = read_mesh(args.mesh)
+    mesh = read_usable(args.mesh)
     items = []
     if args.labels:
         for p in args.labels:
@@ -148,14 +147,13 @@ def cmd_panel(args) -> int:
 
 
 def cmd_view(args) -> int:
-    from ..io import read_mesh
     from ..render import NoDisplayError, has_display, show
 
     if not has_display():  # say so before the (maybe long) segmentation
         raise NoDisplayError("no display available ($DISPLAY is not set): use "
                              "'superfacets render' for a PNG or 'superfacets html' for a page "
                              "to open in a browser")
-    mesh = read_mesh(args.mesh)
+    mesh = read_usable(args.mesh)
     labels, _ = labels_for(args, mesh)
     show(mesh, labels, title=Path(args.mesh).name, view=args.view, up=args.up or "y")  # pragma: no cover
     return 0  # pragma: no cover
@@ -163,11 +161,10 @@ def cmd_view(args) -> int:
 
 def cmd_html(args) -> int:
     from ..html import write_html
-    from ..io import read_mesh
 
     out = check_output(args.output, (".html", ".htm"), "the page",
                        inputs=(args.mesh, args.labels))
-    mesh = read_mesh(args.mesh)
+    mesh = read_usable(args.mesh)
     labels, info = labels_for(args, mesh)
     write_html(out, mesh, labels, title=args.title or Path(args.mesh).name, info=info,
                background=args.background, view=args.view, up=args.up or "y")

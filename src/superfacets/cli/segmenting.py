@@ -10,7 +10,7 @@ import numpy as np
 
 from ..params import DEFAULTS
 from .options import (add_element_options, add_method_options, check_output, element_kwargs,
-                      float_arg, fmt_value, int_arg, method_kwargs, named_after)
+                      float_arg, fmt_value, int_arg, method_kwargs, named_after, read_usable)
 
 __all__ = ["add_parsers"]
 
@@ -130,8 +130,7 @@ def _summary(name: str, mesh, result, seconds: float, elements: str = "faces") -
 def cmd_segment(args) -> int:
     from .. import warmup
     from ..errors import ParameterError, SuperfacetsError
-    from ..io import read_input
-    from ..io.results import JoinedResult, write_result
+    from ..outputs import JoinedResult, write_result
     from ..params import resolve
 
     seg_out = check_output(args.output, (), "label file", stdout=True, inputs=(args.mesh,))
@@ -153,8 +152,9 @@ def cmd_segment(args) -> int:
     if Path(args.mesh).is_file():  # no numba work for bad arguments or a missing input
         warmup.start()  # numba's start-up in a thread, while the rest is imported and read
     t0 = time.perf_counter()
-    data = read_input(args.mesh)
-    from ..segmentation import segment, segment_objects
+    data = read_usable(args.mesh, clouds=True)
+    from ..scenes import segment_objects
+    from ..segmentation import segment
 
     cloud = not hasattr(data, "faces")
     kind = "points" if cloud else (args.elements or "faces")
@@ -194,7 +194,7 @@ def cmd_segment(args) -> int:
 
 def cmd_baseline(args) -> int:
     from ..errors import MemoryLimitError, ParameterError
-    from ..io import read_mesh, write_colored_mesh, write_labels
+    from ..io import write_colored_mesh, write_labels
     from ..io.files import Outputs
     from ..methods import Skipped, get_method
     from ..runner.grid import method_grid, parse_params
@@ -208,7 +208,7 @@ def cmd_baseline(args) -> int:
     seg_out = check_output(args.output, (), "label file", stdout=True, inputs=(args.mesh,))
     ply_out = check_output(args.colored_mesh, (".ply", ".glb", ".obj"), "the coloured mesh",
                            inputs=(args.mesh,))
-    mesh = read_mesh(args.mesh)
+    mesh = read_usable(args.mesh)
     t0 = time.perf_counter()
     show = not args.quiet and sys.stderr.isatty()
     extra = {"progress": show} if method.progress else {}
@@ -244,7 +244,7 @@ def cmd_demo(args) -> int:
     from ..html import write_html
     from ..io import write_colored_mesh, write_labels, write_mesh
     from ..io.files import Outputs
-    from ..io.results import result_header
+    from ..outputs import result_header
     from ..params import check_int, resolve
     from ..segmentation import segment
     from ..shapes import creature
@@ -292,13 +292,12 @@ def cmd_demo(args) -> int:
 
 def cmd_evaluate(args) -> int:
     from ..errors import ParameterError
-    from ..io import read_labels, read_mesh
+    from ..io import read_labels
     from ..metrics import evaluate
 
     if not (0 <= args.tau < 1):
         raise ParameterError(f"--tau must be in [0, 1), got {args.tau}")
-    mesh = read_mesh(args.mesh)
-    mesh.check_usable()  # area-weighted metrics need a measurable mesh
+    mesh = read_usable(args.mesh)  # area-weighted metrics need a measurable mesh
     labels = read_labels(args.labels, n_faces=mesh.n_faces)
     gts = [read_labels(p, n_faces=mesh.n_faces) for p in args.ground_truths]
     m = evaluate(mesh, labels, gts, tau=args.tau)

@@ -24,7 +24,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .graph import ElementGraph, pairs_from_csr
+from .graph import ElementGraph, cached_on, pairs_from_csr
 
 __all__ = ["FaceAdjacency", "build_face_graph", "face_graph"]
 
@@ -66,6 +66,10 @@ def face_graph(mesh) -> ElementGraph:
     ``geo = |c_i - m_ij| + |m_ij - c_j|``, the cosine of the dihedral angle
     and the concavity ``n_i . (c_j - c_i) > 0``.
 
+    The graph is built on the first call and kept with the mesh: later calls
+    on the same :class:`~superfacets.mesh.Mesh` (segmenting it again with
+    other parameters, the metrics, the pictures) return the same object.
+
     Parameters
     ----------
     mesh : Mesh
@@ -84,6 +88,10 @@ def face_graph(mesh) -> ElementGraph:
     >>> g.n_elements, g.n_edges
     (12, 18)
     """
+    return cached_on(mesh, "_face_graph", lambda: _build_face_graph_of(mesh))
+
+
+def _build_face_graph_of(mesh) -> ElementGraph:
     topo = (build_face_graph(mesh.faces, mesh.n_vertices) if mesh.is_triangular else
             build_face_graph(np.asarray(mesh.corners), mesh.n_vertices, np.asarray(mesh.offsets)))
     v = mesh.vertices

@@ -291,24 +291,17 @@ class ElementGraph:
         return csr_array((data, self.indices, self.indptr), shape=(n, n))
 
 
-def as_element_graph(obj) -> ElementGraph:
-    """The element graph of ``obj``: itself, or the face graph of a mesh.
+def cached_on(owner, key: str, build: Callable[[], object]):
+    """``build()``, computed once and kept with ``owner`` (a mesh or a cloud) under ``key``.
 
-    Parameters
-    ----------
-    obj : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
-
-    Returns
-    -------
-    ElementGraph
-
-    Raises
-    ------
-    TypeError, InvalidMeshError
-        As :func:`superfacets.mesh.as_mesh`.
+    The element graphs belong to this package, not to the inputs they are built
+    from: a :class:`~superfacets.mesh.Mesh` or :class:`~superfacets.cloud.PointCloud`
+    only lends its attribute dictionary, so it never imports a builder. Its
+    arrays are read-only, so a kept graph never goes stale; a pickled input
+    leaves its graphs behind (they hold functions) and builds them again.
     """
-    if isinstance(obj, ElementGraph):
-        return obj
-    from ..mesh import as_mesh
-
-    return as_mesh(obj).graph
+    store = owner.__dict__
+    value = store.get(key)
+    if value is None:
+        value = store[key] = build()
+    return value

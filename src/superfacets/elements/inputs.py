@@ -15,7 +15,7 @@ import numpy as np
 
 from .graph import ElementGraph
 
-__all__ = ["ElementInput", "elements_of", "is_cloud"]
+__all__ = ["ElementInput", "as_element_graph", "elements_of", "is_cloud"]
 
 
 class ElementInput(NamedTuple):
@@ -79,7 +79,7 @@ def elements_of(obj, elements: str | None = None, *, n_neighbors: int = 10,
 
     Parameters
     ----------
-    obj : Mesh, PointCloud, or what :func:`~superfacets.mesh.as_mesh` or
+    obj : Mesh, PointCloud, or what :func:`~superfacets.convert.as_mesh` or
         :func:`~superfacets.cloud.as_cloud` accept
     elements : {'faces', 'vertices', 'points'}, optional
         Default: ``'points'`` for a point cloud, else ``'faces'``.
@@ -110,16 +110,46 @@ def elements_of(obj, elements: str | None = None, *, n_neighbors: int = 10,
 
         c = as_cloud(obj)
         c.check_usable()
-        g, index = c.graph(n_neighbors, neighbor_radius)
+        from .points import point_graph
+
+        g, index = point_graph(c, n_neighbors, neighbor_radius)
         return ElementInput(g, index, c)
     if cloud:
         raise ParameterError(f"elements={elements!r} needs a mesh; a point cloud has "
                              "elements='points'")
-    from ..mesh import as_mesh
+    from ..convert import as_mesh
 
     mesh = as_mesh(obj)
     mesh.check_usable()
     if elements == "vertices":
-        g, index = mesh.vertex_elements
+        from .vertices import vertex_graph
+
+        g, index = vertex_graph(mesh)
         return ElementInput(g, index, mesh)
-    return ElementInput(mesh.graph, None, mesh)
+    from .faces import face_graph
+
+    return ElementInput(face_graph(mesh), None, mesh)
+
+
+def as_element_graph(obj) -> ElementGraph:
+    """The element graph of ``obj``: itself, or the face graph of a mesh.
+
+    Parameters
+    ----------
+    obj : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
+
+    Returns
+    -------
+    ElementGraph
+
+    Raises
+    ------
+    TypeError, InvalidMeshError
+        As :func:`superfacets.convert.as_mesh`.
+    """
+    if isinstance(obj, ElementGraph):
+        return obj
+    from ..convert import as_mesh
+    from .faces import face_graph
+
+    return face_graph(as_mesh(obj))

@@ -31,7 +31,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..mesh import column_bounds
-from .graph import ElementGraph, adjacency_csr
+from .graph import ElementGraph, adjacency_csr, cached_on
 from .vertices import _REBUILD_PAIRS, symmetric_terms
 
 __all__ = ["point_graph", "PointElements", "estimate_normals", "orient_normals"]
@@ -127,6 +127,10 @@ def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
                 neighbor_radius: float | None = None) -> PointElements:
     """The point graph of a cloud (see the module notes).
 
+    Built on the first call for each neighbourhood and kept with the cloud
+    (later calls with the same ``n_neighbors`` and ``neighbor_radius`` return
+    the same object).
+
     Parameters
     ----------
     cloud : PointCloud
@@ -148,6 +152,15 @@ def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
     >>> g.n_elements, round(float(np.abs(g.normals[:, 2]).min()), 6)
     (100, 1.0)
     """
+    graphs = cached_on(cloud, "_point_graphs", dict)
+    key = (n_neighbors, neighbor_radius)
+    if key not in graphs:
+        graphs[key] = _build_point_graph_of(cloud, n_neighbors, neighbor_radius)
+    return graphs[key]
+
+
+def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
+                          ) -> PointElements:
     from scipy.spatial import cKDTree
 
     valid = np.flatnonzero(cloud.valid)

@@ -34,7 +34,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..mesh import column_bounds
-from .graph import ElementGraph, adjacency_csr, chunked, pairs_from_csr
+from .graph import ElementGraph, adjacency_csr, cached_on, chunked, pairs_from_csr
 
 __all__ = ["vertex_graph", "VertexElements", "symmetric_terms"]
 
@@ -77,6 +77,9 @@ def symmetric_terms(graph: ElementGraph, sl: slice):
 def vertex_graph(mesh) -> VertexElements:
     """The vertex graph of a triangle or polygon mesh (see the module notes).
 
+    Built on the first call and kept with the mesh (later calls return the
+    same object).
+
     Parameters
     ----------
     mesh : Mesh
@@ -95,6 +98,10 @@ def vertex_graph(mesh) -> VertexElements:
     >>> g.n_elements, g.n_edges, round(g.area, 6)
     (8, 18, 6.0)
     """
+    return cached_on(mesh, "_vertex_graph", lambda: _build_vertex_graph_of(mesh))
+
+
+def _build_vertex_graph_of(mesh) -> VertexElements:
     v = mesh.vertices
     n_v = mesh.n_vertices
     if mesh.is_triangular:

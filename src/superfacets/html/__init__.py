@@ -25,7 +25,7 @@ from ..camera import view_frame
 from ..colors import boundary_edges, superfacet_colors
 from ..errors import ParameterError
 from ..labels import check_labels, relabel_dense
-from ..mesh import as_mesh
+from ..convert import as_mesh
 
 __all__ = ["write_html", "html_page"]
 

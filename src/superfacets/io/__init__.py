@@ -2,7 +2,8 @@
 
 - :mod:`.meshes`: :func:`read_mesh` (triangles or polygons, in file order);
 - :mod:`.clouds`: :func:`read_cloud` (PLY without faces, PCD, XYZ/PTS/TXT, NPY, LAS/LAZ);
-- :mod:`.export`: :func:`write_mesh`, :func:`write_colored_mesh` (PLY with labels, GLB, OBJ);
+- :mod:`.export`: :func:`write_mesh`, :func:`write_colored_mesh` (PLY with labels, GLB, OBJ),
+  :func:`to_trimesh` and :func:`to_pyvista` (a result as the libraries' objects);
 - :mod:`.labels`: :func:`read_labels` (``.seg``, or a coloured PLY), :func:`write_labels`;
 - :mod:`.ply`: the binary PLY writer and the label reader;
 - :mod:`.files`: compression by suffix, :func:`atomic_write` and all-or-nothing outputs.
@@ -10,7 +11,7 @@
 
 from .files import atomic_write
 from .labels import read_labels, write_labels, write_segindices
-from .export import write_colored_mesh, write_mesh
+from .export import to_pyvista, to_trimesh, write_colored_mesh, write_mesh
 from .meshes import MESH_FORMATS, read_mesh
 from .clouds import CLOUD_FORMATS, is_cloud_file, read_cloud
 
@@ -22,4 +23,4 @@ def read_input(path):
 
 __all__ = ["read_mesh", "write_mesh", "read_labels", "write_labels", "write_colored_mesh",
            "atomic_write", "MESH_FORMATS", "read_cloud", "read_input", "CLOUD_FORMATS",
-           "is_cloud_file", "write_segindices"]
+           "is_cloud_file", "write_segindices", "to_trimesh", "to_pyvista"]

@@ -13,6 +13,10 @@
 
 Every write is atomic, and a file with a companion (OBJ + MTL) is written all
 or nothing (:class:`superfacets.io.files.Outputs`).
+
+The same result also goes to the libraries' objects: :func:`to_trimesh` and
+:func:`to_pyvista` return them with the labels as face (cell) data and the
+superfacet colours set.
 """
 
 from __future__ import annotations
@@ -24,14 +28,13 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MeshFormatError
-from ..mesh import as_mesh
+from ..convert import as_mesh
 from .files import Outputs, save, split_suffix
 from .meshes import MESH_FORMATS
 from .ply import ply_bytes
 
 __all__ = ["write_mesh", "write_colored_mesh", "write_colored_elements", "element_colors",
-           "point_colors",
-           "COLORED_FORMATS"]
+           "point_colors", "to_trimesh", "to_pyvista", "COLORED_FORMATS"]
 
 #: Formats of :func:`write_colored_mesh`.
 COLORED_FORMATS = ("ply", "glb", "obj")
@@ -320,3 +323,81 @@ def write_colored_elements(path, source, labels, *, outputs: Outputs | None = No
         mesh = source.source
         data = ply_bytes(mesh.vertices, mesh.corners, mesh.offsets, vertex_colors=colors)
     return save(path, data, outputs)
+
+
+def _labelled(mesh, labels):
+    from ..colors import face_colors
+    from ..labels import check_labels
+
+    labels = check_labels(labels, mesh.n_faces, per="face")
+    return labels, face_colors(mesh, labels)
+
+
+def to_trimesh(mesh, labels=None):
+    """A ``trimesh.Trimesh`` of the mesh, with the labels and colours per face.
+
+    Polygons are split into the triangles of their fans (trimesh holds
+    triangles); ``face_attributes['label']`` and the face colours follow, and
+    ``metadata['face_of_triangle']`` maps each triangle to its polygon.
+
+    Parameters
+    ----------
+    mesh : Mesh, trimesh.Trimesh, pyvista.PolyData or (vertices, faces)
+    labels : (m,) int ndarray, optional
+
+    Returns
+    -------
+    trimesh.Trimesh
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> box = trimesh.creation.box()
+    >>> t = to_trimesh(box, list(range(12)))
+    >>> t.face_attributes["label"][:3].tolist()
+    [0, 1, 2]
+    """
+    import trimesh
+
+
+    mesh = as_mesh(mesh)
+    tri, owner = mesh.triangulated()
+    out = trimesh.Trimesh(vertices=np.array(mesh.vertices), faces=np.array(tri), process=False,
+                          validate=False)
+    out.metadata["face_of_triangle"] = owner
+    if labels is not None:
+        labels, colors = _labelled(mesh, labels)
+        out.face_attributes["label"] = labels[owner]
+        out.visual.face_colors = colors[owner]
+    return out
+
+
+def to_pyvista(mesh, labels=None):
+    """A ``pyvista.PolyData`` of the mesh (polygons kept), labels and colours per cell.
+
+    Parameters
+    ----------
+    mesh : Mesh, trimesh.Trimesh, pyvista.PolyData or (vertices, faces)
+    labels : (m,) int ndarray, optional
+        Stored as ``cell_data['label']``, colours as ``cell_data['rgb']``.
+
+    Returns
+    -------
+    pyvista.PolyData
+
+    Raises
+    ------
+    MissingExtraError
+        Without the ``render`` extra.
+    """
+    from ..extras import require
+
+    pv = require("pyvista", "to_pyvista")
+    mesh = as_mesh(mesh)
+    cells = np.insert(np.asarray(mesh.corners), np.asarray(mesh.offsets)[:-1], mesh.face_sizes)
+    poly = pv.PolyData(np.array(mesh.vertices), cells)
+    if labels is not None:
+        labels, colors = _labelled(mesh, labels)
+        poly.cell_data["label"] = labels
+        poly.cell_data["rgb"] = colors
+    return poly

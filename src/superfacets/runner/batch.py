@@ -8,7 +8,7 @@
   named after the input's path relative to the inputs' common folder (so
   names cannot collide; :mod:`.inputs` finds the inputs and names them);
 - ``manifest.parquet`` (``manifest.csv`` where pyarrow is missing): one row
-  per input, with :data:`MANIFEST_COLUMNS`;
+  per input, with :data:`~.manifest.MANIFEST_COLUMNS` (:mod:`.manifest`);
 - ``batch.json``: the options, so that a rerun with other options is refused
   rather than mixing results.
 
@@ -33,22 +33,11 @@ from typing import Sequence
 from ..errors import ParameterError
 from .engine import Engine, PeakMemory, error_text
 from .inputs import collect_inputs, output_names
+from .manifest import JOURNAL, MANIFEST_COLUMNS, read_manifest, write_manifest
 
 __all__ = ["run_batch", "collect_inputs", "output_names", "read_manifest", "BatchSummary",
            "MANIFEST_COLUMNS", "segment_file"]
 
-#: Columns of the manifest, in order: the input's absolute path, its labels file (relative
-#: to the output folder), ok / failed / skipped, the elements labelled (faces, vertices,
-#: points) and how many, the superfacets made, the passes run and whether they converged,
-#: the seconds of the task (read, segment, write), the worker process's peak resident memory
-#: during the task (MiB, Linux; what ``--memory-limit`` is compared with), the error's one
-#: line, and when it finished (UTC).
-MANIFEST_COLUMNS = ("input", "output", "status", "elements", "n_elements", "segments", "passes",
-                    "converged", "seconds", "peak_mib", "error", "finished")
-
-_TYPES = {"n_elements": "int64", "segments": "int64", "passes": "int64", "converged": "bool",
-          "seconds": "float64", "peak_mib": "float64"}
-_JOURNAL = ".manifest.jsonl"
 _OPTIONS = "batch.json"
 _LABEL_SUFFIX = {"seg": ".seg", "json": ".json"}
 
@@ -94,8 +83,9 @@ def segment_file(task: dict) -> dict:
 
 def _segment_and_write(task: dict, label_rel: str) -> dict:
     from ..io import read_input
-    from ..io.results import JoinedResult, write_result
-    from ..segmentation import segment, segment_objects
+    from ..outputs import JoinedResult, write_result
+    from ..scenes import segment_objects
+    from ..segmentation import segment
 
     outs = task["outputs"]
     opts = dict(task["options"])
@@ -139,111 +129,6 @@ def _lost_row(task: dict, error: str) -> dict:
                status="failed", error=error[:500],
                finished=datetime.now(timezone.utc).isoformat(timespec="seconds"))
     return row
-
-
-# --- the manifest -------------------------------------------------------------------------
-
-def _has_pyarrow() -> bool:
-    import importlib.util
-
-    return importlib.util.find_spec("pyarrow") is not None
-
-
-def _typed(row: dict) -> dict:
-    """A row with every column, values of the column's type (None where empty)."""
-    out = {}
-    for c in MANIFEST_COLUMNS:
-        v = row.get(c)
-        if v == "" or v is None:
-            v = None
-        elif _TYPES.get(c) == "int64":
-            v = int(float(v))
-        elif _TYPES.get(c) == "float64":
-            v = float(v)
-        elif _TYPES.get(c) == "bool":
-            v = v if isinstance(v, bool) else str(v).lower() == "true"
-        else:
-            v = str(v)
-        out[c] = v
-    return out
-
-
-def read_manifest(outdir) -> list[dict]:
-    """The rows of a batch's output folder: its manifest, updated by its journal.
-
-    Parameters
-    ----------
-    outdir : path
-
-    Returns
-    -------
-    list of dict
-        One per input (the last row written for it), :data:`MANIFEST_COLUMNS`
-        with typed values; empty when there is no manifest.
-
-    Raises
-    ------
-    MissingExtraError
-        When only ``manifest.parquet`` is there and pyarrow is not installed.
-    """
-    outdir = Path(outdir)
-    rows: dict[str, dict] = {}
-    pq_path, csv_path = outdir / "manifest.parquet", outdir / "manifest.csv"
-    if pq_path.exists():
-        from ..extras import require
-
-        pq = require("pyarrow.parquet", f"reading {pq_path}")
-        for r in pq.read_table(pq_path).to_pylist():
-            rows[r["input"]] = _typed(r)
-    elif csv_path.exists():
-        import csv
-
-        with open(csv_path, newline="") as f:
-            for r in csv.DictReader(f):
-                rows[r["input"]] = _typed(r)
-    journal = outdir / _JOURNAL
-    if journal.exists():
-        with open(journal, errors="replace") as f:
-            for line in f:
-                try:
-                    r = json.loads(line)
-                except ValueError:  # a line torn by a hard kill: that input runs again
-                    continue
-                if isinstance(r, dict) and r.get("input"):
-                    rows[r["input"]] = _typed(r)
-    return list(rows.values())
-
-
-def _write_manifest(outdir: Path, rows: list[dict]) -> Path:
-    """Write the manifest atomically: Parquet where pyarrow is, else CSV."""
-    from ..io.files import atomic_write
-
-    rows = [_typed(r) for r in rows]
-    if _has_pyarrow():
-        import pyarrow as pa
-        import pyarrow.parquet as pq
-
-        types = {"int64": pa.int64(), "float64": pa.float64(), "bool": pa.bool_()}
-        schema = pa.schema([(c, types.get(_TYPES.get(c), pa.string())) for c in MANIFEST_COLUMNS])
-        table = pa.Table.from_pylist(rows, schema=schema)
-        path = outdir / "manifest.parquet"
-        atomic_write(path, lambda f: pq.write_table(table, f))
-        stale = outdir / "manifest.csv"
-    else:
-        import csv
-        import io
-
-        buf = io.StringIO()
-        w = csv.DictWriter(buf, MANIFEST_COLUMNS, lineterminator="\n")
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: ("" if v is None else v) for k, v in r.items()})
-        path = outdir / "manifest.csv"
-        atomic_write(path, buf.getvalue().encode())
-        stale = outdir / "manifest.parquet"
-    if stale.exists():  # one manifest only: the other is older
-        stale.unlink()
-    return path
 
 
 # --- the run ------------------------------------------------------------------------------
@@ -321,7 +206,7 @@ def _flat(d, prefix: str = "") -> dict:
 
 
 def _record_options(outdir: Path, options: dict) -> None:
-    from .. import __version__
+    from .._version import __version__
     from ..io.files import atomic_write
 
     atomic_write(outdir / _OPTIONS, json.dumps({"superfacets": __version__, "options": options},
@@ -500,7 +385,7 @@ def _run(files, outdir, seg_opts, outputs, per_object, engine, retry_failed,
               "options": dict(seg_opts, progress=False), "outputs": outputs,
               "per_object": per_object} for f in _largest_first(todo)]
     t0 = time.perf_counter()
-    journal_path = outdir / _JOURNAL
+    journal_path = outdir / JOURNAL
     bar = None
     finished: set[str] = set()
     last_write = time.monotonic()
@@ -525,7 +410,7 @@ def _run(files, outdir, seg_opts, outputs, per_object, engine, retry_failed,
                     bar.update(1)
                     bar.set_postfix(failed=summary.failed, refresh=False)
                 if time.monotonic() - last_write > 30:  # a manifest to look at, now and then
-                    summary.manifest = _write_manifest(outdir, _ordered(rows, files))
+                    summary.manifest = write_manifest(outdir, _ordered(rows, files))
                     last_write = time.monotonic()
     except KeyboardInterrupt:
         summary.interrupted = True
@@ -537,7 +422,7 @@ def _run(files, outdir, seg_opts, outputs, per_object, engine, retry_failed,
                 r = _lost_row(t, "not run: the batch stopped before it")
                 r["status"] = "skipped"
                 rows[t["input"]] = r
-        summary.manifest = _write_manifest(outdir, _ordered(rows, files))
+        summary.manifest = write_manifest(outdir, _ordered(rows, files))
         journal_path.unlink(missing_ok=True)  # all in the manifest now
     summary.seconds = time.perf_counter() - t0
     return summary

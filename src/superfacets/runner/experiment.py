@@ -56,7 +56,9 @@ def _prepared(path: str, seg_paths: tuple, elements: str, n_points: int, seed: i
 
     mesh, gts = _load(path, seg_paths)
     if elements == "faces":
-        return mesh, mesh.graph, None, gts
+        from ..elements import face_graph
+
+        return mesh, face_graph(mesh), None, gts
     if elements == "vertices":
         obj = mesh
         rows = [vertex_ground_truth(mesh, gt) for gt in gts]

@@ -1,21 +1,21 @@
 """The files of one segmentation: labels, coloured mesh or cloud, picture, page.
 
 :func:`write_result` is what ``superfacets segment`` and ``superfacets
-batch`` write for one input, all or nothing (:class:`~.files.Outputs`).
+batch`` write for one input, all or nothing (:class:`~superfacets.io.files.Outputs`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .files import Outputs
+from .io.files import Outputs
 
 __all__ = ["write_result", "result_header", "JoinedResult"]
 
 
 class JoinedResult:
     """The result of segmenting a scene object by object
-    (:func:`superfacets.segmentation.segment_objects`), for messages and headers.
+    (:func:`superfacets.scenes.segment_objects`), for messages and headers.
 
     Parameters
     ----------
@@ -102,8 +102,8 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
     OSError, MissingExtraError
         Nothing is written then.
     """
-    from .export import write_colored_elements, write_colored_mesh
-    from .labels import write_labels, write_segindices
+    from .io.export import write_colored_elements, write_colored_mesh
+    from .io.labels import write_labels, write_segindices
 
     with Outputs() as outputs:
         if labels is not None and str(labels).lower().endswith(".json"):
@@ -119,18 +119,18 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
             write_colored_mesh(colored, data, result.labels, outputs=outputs,
                                vertex_colors=vertex_colors)
         elif colored is not None:
-            from ..elements.inputs import elements_of
+            from .elements.inputs import elements_of
 
             source_el = elements_of(data, kind, **(element_options or {}))  # cached
             write_colored_elements(colored, source_el, result.labels, outputs=outputs)
         title = f"{source}: {result.n_segments} " + (
             "superpoints" if kind != "faces" else "superfacets")
         if html is not None:
-            from ..html import write_html
+            from .html import write_html
 
             write_html(html, data, result.labels, title=title, outputs=outputs)
         if picture is not None:
-            from ..render import render, render_points
+            from .render import render, render_points
 
             draw = render_points if kind == "points" else render
             draw(data, result.labels, picture, title=title, outputs=outputs)

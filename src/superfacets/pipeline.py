@@ -1,0 +1,235 @@
+"""One run of the superfacet method, step by step (paper section 3; ``docs/method.md``).
+
+:func:`pipeline` takes validated parameters (:func:`superfacets.params.resolve`;
+the public functions of :mod:`superfacets.segmentation` call it) and returns a
+:class:`SegmentationResult`:
+
+1. parameters validated (:func:`superfacets.params.resolve`), before any work;
+2. element graph (the face graph of the mesh, cached on it);
+3. weights (paper eqs. 1-3, or Shlafman's eq. 6);
+4. initial centers (farthest point, flood or grid);
+5. passes of (classify, update) until no center moves or ``max_iter``
+   (:mod:`superfacets.passes`, with a strategy of :mod:`superfacets.classify`);
+6. empty superfacets dropped, stray pieces merged (connectivity);
+   with ``split_merge=True``, rounds of K-preserving swaps, each followed by
+   the passes again (:mod:`superfacets.splitmerge`);
+7. with ``cleanup=True``, the boundaries re-placed (:mod:`superfacets.cleanup`);
+8. the result.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .classify import make_classifier
+from .cleanup import clean_boundaries
+from .connectivity import enforce_connectivity as _enforce_connectivity
+from .expansion import Workspaces
+from .labels import relabel_dense
+from .elements.inputs import elements_of
+from .multilevel import start_centers
+from .params import DEFAULTS, SegmentParams, superfacet_size
+from .passes import final_centers, iterate
+from .weights import csr_weights, edge_weights
+
+__all__ = ["pipeline", "SegmentationResult"]
+
+_D = DEFAULTS
+
+#: Elements from which a run makes its graph forget, during the passes, the arrays
+#: they do not read (:meth:`ElementGraph.release`: about 60 bytes per face of the
+#: peak). Below it, rebuilding them after costs more than the memory is worth.
+_RELEASE_MIN = 1 << 18
+
+
+@dataclass(frozen=True)
+class SegmentationResult:
+    """Labels and details of one run of :func:`segment`.
+
+    Attributes
+    ----------
+    labels : (m,) int64 ndarray
+        Superfacet of each face, dense ``0..K-1``.
+    centers : (K,) int64 ndarray
+        Center face of each superfacet (the center of the last
+        classification; for a superfacet that lost it to the connectivity
+        step, its face nearest the area-weighted mean of its centroids).
+    n_iter : int
+        Number of classification passes run.
+    converged : bool
+        True if the last center update moved no center (else ``max_iter``
+        stopped the run).
+    radius : float
+        Superfacet radius ``r`` used, in mesh units.
+    n_orphan_seeds : int
+        Centers created on orphan faces over the whole run.
+    timings : dict of str to float
+        Seconds per stage: ``graph`` (face graph and per-face geometry,
+        zero when already cached on the mesh), ``weights``, ``init``,
+        ``iterations``, ``connectivity``, ``cleanup`` (with ``cleanup=True``),
+        ``total``; and, not times,
+        ``expansions`` (Dijkstra expansions run), ``passes``
+        (classifications actually run: fewer than ``n_iter`` when a cycle
+        was skipped) and ``cycle_period`` (0, or the period of the cycle of
+        center sets that was detected).
+    params : dict
+        The parameters of the run, resolved (``n_segments``, ``radius``,
+        ``init``, ...).
+    """
+
+    labels: np.ndarray
+    centers: np.ndarray
+    n_iter: int
+    converged: bool
+    radius: float
+    n_orphan_seeds: int
+    timings: dict = field(default_factory=dict)
+    params: dict = field(default_factory=dict)
+
+    @property
+    def n_segments(self) -> int:
+        """Number of superfacets ``K`` produced."""
+        return int(self.centers.shape[0])
+
+
+def pipeline(mesh, params: SegmentParams, *, replay: bool = True,
+             jump_cycles: bool = True) -> SegmentationResult:
+    """Run the method with validated parameters (see the module notes).
+
+    Parameters
+    ----------
+    mesh : Mesh, trimesh.Trimesh or (vertices, faces)
+    params : SegmentParams
+        From :func:`superfacets.params.resolve`.
+    replay : bool, default True
+        Replay the expansions of centers that did not move (bounded
+        assignment); False expands every center on every pass. Same labels.
+    jump_cycles : bool, default True
+        Jump over a repeating cycle of center lists. Same labels.
+
+    Returns
+    -------
+    SegmentationResult
+    """
+    from ._threads import using
+
+    with using(params.n_threads):  # also the graph build and terms this run triggers
+        return _pipeline(mesh, params, replay=replay, jump_cycles=jump_cycles)
+
+
+def _pipeline(mesh, params: SegmentParams, *, replay: bool, jump_cycles: bool
+              ) -> SegmentationResult:
+    t_start = time.perf_counter()
+    p = params
+    t = time.perf_counter()
+    source = elements_of(mesh, p.elements, n_neighbors=p.n_neighbors,
+                         neighbor_radius=p.neighbor_radius)
+    graph = source.graph
+    t_graph = time.perf_counter() - t
+    k, r = superfacet_size(p, graph.area, graph.diagonal, graph.n_elements, graph.kind)
+    timings: dict[str, float] = {}
+    bar = None
+    if p.progress:  # one bar: the set-up stages by name, then the passes
+        from tqdm import tqdm
+
+        bar = tqdm(total=p.max_iter, desc=f"{graph.kind[:-1]} graph", unit="it", leave=False)
+    try:
+        timings["graph"] = t_graph
+
+        _stage(bar, "weights")
+        t = time.perf_counter()
+        w_pairs = edge_weights(graph, p.weighting, alpha=p.alpha, eta_convex=p.eta_convex)
+        w = csr_weights(graph, w_pairs)
+        if not p.cleanup:
+            graph.release_terms()  # not needed again by this run; 17 B per adjacency
+        timings["weights"] = time.perf_counter() - t
+
+        window_r2 = (p.window * r) ** 2
+        t = time.perf_counter()
+        init, center_tol, ratio = start_centers(graph, w_pairs, w, p, k, r, timings,
+                                                lambda name: _stage(bar, name))
+        del w_pairs
+        if graph.n_elements >= _RELEASE_MIN:  # what the passes do not read, rebuilt after
+            graph.release()
+        spaces = Workspaces(graph.n_elements, w, p.n_threads)
+        timings["init"] = time.perf_counter() - t
+
+        _stage(bar, "superfacets")
+        t = time.perf_counter()
+        centers = np.empty(graph.n_elements, dtype=np.int64)
+        centers[:init.shape[0]] = init
+        sizes = np.ascontiguousarray(graph.sizes)
+        positions = np.ascontiguousarray(graph.positions)
+        try:
+            classifier = make_classifier(p.assignment, graph, w, window_r2, spaces,
+                                         replay=replay)
+            it = iterate(classifier, centers, init.shape[0], sizes, positions, p.max_iter,
+                         jump_cycles=jump_cycles, tol=p.tol, min_move=center_tol * r, bar=bar)
+            if p.split_merge:
+                from .splitmerge import swap_and_iterate
+
+                _stage(bar, "split and merge")
+                it, timings["swaps"] = swap_and_iterate(
+                    it, graph, w, classifier, centers, sizes, positions, p.max_iter,
+                    window_r2=window_r2, jump_cycles=jump_cycles, tol=p.tol,
+                    min_move=center_tol * r, n_threads=spaces.n_threads)
+        finally:
+            spaces.close()
+        classifier = spaces = w = None  # free the work buffers before the clean-up
+        timings["iterations"] = time.perf_counter() - t
+    except BaseException:
+        if bar is not None:
+            bar.close()
+        raise
+    if bar is not None and not p.cleanup:
+        bar.close()
+
+    # labels of the last classification; drop superfacets left empty
+    t = time.perf_counter()
+    present = np.zeros(it.centers.shape[0], dtype=bool)
+    present[it.label] = True
+    labels = relabel_dense(it.label)
+    centers = it.centers[present]
+    if p.enforce_connectivity and not p.cleanup:  # the clean-up ends with it
+        labels = _enforce_connectivity(graph, labels, centers)
+    centers = final_centers(labels, centers, sizes, positions)
+    timings["connectivity"] = time.perf_counter() - t
+    if p.cleanup:
+        _stage(bar, "clean-up")
+        t = time.perf_counter()
+        try:
+            labels = clean_boundaries(graph, labels, centers, radius=r, eta_convex=p.eta_convex,
+                                      alpha=p.alpha if p.weighting == "paper" else _D.alpha,
+                                      connectivity=p.enforce_connectivity, n_threads=p.n_threads)
+        finally:
+            if bar is not None:
+                bar.close()
+        centers = final_centers(labels, centers, sizes, positions)
+        timings["cleanup"] = time.perf_counter() - t
+    centers = source.first_rows(centers)
+    labels = source.to_rows(labels)
+    timings["total"] = time.perf_counter() - t_start
+    timings.update(expansions=it.expansions, passes=it.n_passes, cycle_period=it.cycle_period,
+                   changed=it.changed, stopped_by_tol=it.stopped_by_tol)
+    resolved = dict(n_segments=k, radius=r / graph.diagonal, alpha=p.alpha,
+                    eta_convex=p.eta_convex, window=p.window, init=p.init,
+                    max_iter=p.max_iter, weighting=p.weighting, assignment=p.assignment,
+                    enforce_connectivity=p.enforce_connectivity, cleanup=p.cleanup,
+                    split_merge=p.split_merge, tol=p.tol,
+                    center_tol=center_tol, coarsen=ratio,
+                    n_init_centers=init.shape[0], elements=graph.kind)
+    if graph.kind == "points":
+        resolved.update(n_neighbors=p.n_neighbors, neighbor_radius=p.neighbor_radius)
+    return SegmentationResult(labels=labels, centers=centers, n_iter=it.n_iter,
+                              converged=it.converged, radius=r,
+                              n_orphan_seeds=it.n_orphan_seeds, timings=timings,
+                              params=resolved)
+
+
+def _stage(bar, name: str) -> None:
+    if bar is not None:
+        bar.set_description(name)
+
