@@ -437,3 +437,26 @@ def cases() -> list[Case]:
     out.append(Case("baseline-ok", g, ["baseline", "{d}/g.off", "-m", "vsa", "-k", "4", "-o",
                                        "{d}/o.seg", "-q"], "ok", outputs=["o.seg"]))
     return out
+
+
+@dataclass
+class Interrupt:
+    """A command interrupted by Ctrl-C (SIGINT to its whole process group, as a terminal
+    sends it) at each of ``delays`` seconds after its start."""
+    name: str
+    argv: list  # "{d}" is the case's folder, "{big}" a 180,000-face mesh in it
+    delays: tuple
+    outputs: list  # files that must be whole or absent
+
+
+def interrupts() -> list[Interrupt]:
+    return [
+        # the imports, the reading, the face graph, the passes, the writing (from 0.3 s:
+        # before, the interpreter itself is starting)
+        Interrupt("segment", ["segment", "{big}", "-k", "100", "-o", "{d}/o.seg",
+                              "--colored-mesh", "{d}/o.ply"],
+                  (0.3, 0.6, 1.0, 1.8, 2.6), ["o.seg", "o.ply"]),
+        # Dask workers in the same process group: they must stay silent
+        Interrupt("batch", ["batch", "{big}", "{d}/more", "-o", "{d}/out", "-k", "50",
+                            "-j", "2"], (1.5, 4.0), []),
+    ]

@@ -331,6 +331,38 @@ def test_cli_batch_unreachable_scheduler(corpus, tmp_path, capsys):
 def test_an_output_folder_in_use_is_refused(corpus, tmp_path):
     out = tmp_path / "out"
     out.mkdir()
-    with bt._Lock(out):
+    with manifest.FolderLock(out):
         with pytest.raises(ParameterError, match="another batch"):
             run_batch([str(corpus / "a")], out, 8, workers=1, progress=False)
+
+
+def test_no_lock_file_is_left_and_a_stale_one_is_reused(corpus, tmp_path):
+    out = tmp_path / "out"
+    run_batch([str(corpus / "a")], out, 8, workers=1, progress=False)
+    assert not (out / ".lock").exists()
+    (out / ".lock").write_text("")  # left by a killed run: no one holds it
+    s = run_batch([str(corpus / "a")], out, 8, workers=1, progress=False)
+    assert s.done_before == 6 and not (out / ".lock").exists()
+
+
+def test_the_bar_goes_to_a_terminal_only(corpus, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["batch", str(corpus / "a"), "-o", str(out), "-k", "8", "-j", "1"]) == 0
+    err = capsys.readouterr().err
+    assert "batch:" not in err and "input/s" not in err  # stderr is no terminal here
+    assert main(["batch", str(corpus / "a"), "-o", str(tmp_path / "o2"), "-k", "8", "-j", "1",
+                 "--progress"]) == 0
+    assert "input" in capsys.readouterr().err  # asked for: shown
+
+
+def test_vertex_labels_get_pictures_with_the_up_axis(corpus, tmp_path):
+    pytest.importorskip("pyvista")
+    out = tmp_path / "out"
+    s = run_batch([str(corpus / "a" / "m1.off")], out, 8, workers=1, progress=False,
+                  elements="vertices", picture=True, html=True, up="z", view="front")
+    assert s.ok == 1
+    assert (out / "m1.png").is_file() and (out / "m1.html").is_file()
+    assert json.loads((out / "batch.json").read_text())["options"]["outputs"]["up"] == "z"
+    with pytest.raises(ParameterError, match="unknown view"):
+        run_batch([str(corpus / "a")], tmp_path / "o3", 8, workers=1, progress=False,
+                  picture=True, view="sideways")

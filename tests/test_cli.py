@@ -16,8 +16,9 @@ def test_segment_writes_labels_colored_mesh_and_summary(tmp_path, small_off, cap
     seg, ply = tmp_path / "out.seg", tmp_path / "out.ply"
     assert main(["segment", str(small_off), "-k", "30", "--alpha", "200", "-o", str(seg),
                  "--colored-mesh", str(ply)]) == 0
-    line = capsys.readouterr().out.strip()
+    line, wrote = capsys.readouterr().out.strip().splitlines()
     assert line.startswith("sphere.off: 5120 faces, 30 superfacets,") and line.endswith(" s")
+    assert wrote == f"wrote {seg} (labels), {ply} (coloured mesh)"
     labels = read_labels(seg, n_faces=5120)
     assert labels.max() + 1 == 30
     assert not seg.read_text().startswith("#")
@@ -172,3 +173,137 @@ def test_split_merge_flag_runs_the_swaps_and_names_them(small_off, tmp_path, cap
     assert f", {r.timings['swaps']} split-and-merge swaps, " in said
     assert np.array_equal(read_labels(out, n_faces=5120), r.labels)
     assert " split_merge=True " in out.read_text().split("\n", 4)[3]  # the header
+
+
+# --- the first hour of a new user (issue 34) -----------------------------------------------
+
+def test_segment_lists_the_files_it_wrote_and_the_picture_axis(tmp_path, small_off, capsys):
+    pytest.importorskip("pyvista")
+    seg, png = tmp_path / "s.seg", tmp_path / "s.png"
+    assert main(["segment", str(small_off), "-k", "20", "-o", str(seg), "--picture",
+                 str(png)]) == 0
+    out, err = capsys.readouterr()
+    assert f"wrote {seg} (labels), {png} (picture, up axis y: give --up z" in out
+    assert "nothing was saved" not in out + err
+    assert main(["segment", str(small_off), "-k", "20", "--picture", str(png), "--up", "z"]) == 0
+    out, err = capsys.readouterr()
+    assert f"wrote {png} (picture, up axis z)" in out and "nothing was saved" not in err
+    assert main(["segment", str(small_off), "-k", "20"]) == 0
+    assert "nothing was saved" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("name, option", [("x.ply", "--colored-mesh"), ("x.obj", "--colored-mesh"),
+                                          ("x.png", "--picture"), ("x.html", "--html"),
+                                          ("x.off", None), ("x.pcd", None)])
+def test_labels_to_a_mesh_or_picture_name_are_refused(tmp_path, small_off, capsys, name,
+                                                      option):
+    assert main(["segment", str(small_off), "-k", "20", "-o", str(tmp_path / name)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("superfacets: error: ") and "-o writes the labels as text" in err
+    assert (f"use {option} {name}" in err) if option else "use --" not in err
+    assert list(tmp_path.iterdir()) == [small_off]
+
+
+def test_labels_to_text_names_are_written(tmp_path, small_off):
+    for name in ("x.seg", "x.txt", "x.labels", "x.json"):
+        assert main(["segment", str(small_off), "-k", "20", "-q", "-o", str(tmp_path / name)]) == 0
+        assert (tmp_path / name).is_file()
+
+
+def test_a_folder_points_to_batch(tmp_path, capsys):
+    assert main(["segment", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert "is a directory" in err and f"superfacets batch {tmp_path} -o OUTDIR" in err
+
+
+@pytest.mark.parametrize("typo, hint", [("--k", "did you mean -k?"),
+                                        ("--n_segments", "did you mean --n-segments"),
+                                        ("--colored_mesh", "did you mean --colored-mesh?")])
+def test_a_misspelt_option_is_named(small_off, capsys, typo, hint):
+    with pytest.raises(SystemExit) as info:
+        main(["segment", str(small_off), typo, "10"])
+    assert info.value.code == 2
+    assert hint in capsys.readouterr().err
+
+
+def test_more_superfacets_than_k_says_why(tmp_path, capsys):
+    import trimesh
+
+    from superfacets import Mesh
+
+    parts = []
+    for i in range(12):  # twelve separate balls in a row, of very different sizes
+        s = trimesh.creation.icosphere(2, radius=0.1 + 0.08 * i)
+        s.apply_translation([4.0 * i, 0, 0])
+        parts.append(s)
+    joined = trimesh.util.concatenate(parts)
+    off = write_mesh(tmp_path / "balls.off", Mesh(joined.vertices, joined.faces))
+    assert main(["segment", str(off), "-k", "8", "-q", "-o", str(tmp_path / "a.seg")]) == 0
+    assert capsys.readouterr().err == ""  # quiet: nothing
+    assert main(["segment", str(off), "-k", "8", "-o", str(tmp_path / "a.seg")]) == 0
+    err = capsys.readouterr().err
+    assert "12 superfacets for -k 8: the input has 12 separate pieces" in err
+    assert "12 is the fewest this input can have" in err
+    labels = read_labels(tmp_path / "a.seg")
+    assert labels.max() + 1 == 12
+    assert main(["segment", str(off), "-k", "20", "-o", str(tmp_path / "b.seg")]) == 0
+    err = capsys.readouterr().err
+    n = read_labels(tmp_path / "b.seg").max() + 1
+    if n > 20:  # pieces with no center became superfacets of their own: said, with a k
+        assert f"{n} superfacets for -k 20: the input has 12 separate pieces" in err
+        assert "about -k" in err
+    else:
+        assert "note:" not in err
+
+
+def test_the_first_run_says_that_it_compiles(tmp_path, monkeypatch):
+    import io
+
+    from superfacets import warmup
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    assert not warmup.cache_is_cold()  # the suite has run kernels: numba's cache is there
+    term = Terminal()
+    assert warmup.say_if_cold(term) is False and term.getvalue() == ""
+    monkeypatch.setattr(warmup, "cache_is_cold", lambda: True)
+    assert warmup.say_if_cold(io.StringIO()) is False  # a pipe or a log: nothing
+    assert warmup.say_if_cold(term) is True and "compiling the numba kernels once" in \
+        term.getvalue()
+
+
+def test_a_cold_cache_is_seen(tmp_path, monkeypatch):
+    from pathlib import Path
+
+    from superfacets import warmup
+
+    here = Path(warmup.__file__).resolve().parent / "_kernels" / "__pycache__"
+    monkeypatch.setattr(Path, "home", lambda: tmp_path)
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))
+    real_glob = Path.glob
+    monkeypatch.setattr(Path, "glob", lambda self, pattern: iter(()) if self == here
+                        else real_glob(self, pattern))
+    assert warmup.cache_is_cold()
+    (tmp_path / "numba" / "x").mkdir(parents=True)
+    (tmp_path / "numba" / "x" / "expand.reset_labels-1.py311.nbi").write_bytes(b"")
+    assert not warmup.cache_is_cold()
+
+
+def test_interrupt_helpers():
+    from superfacets import cli
+
+    try:
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt:
+            raise SystemError("returned a result with an exception set")
+    except SystemError as exc:
+        assert cli._interrupted(exc)
+    assert not cli._interrupted(SystemError("other"))
+    code = compile("f = sys._getframe()", "<frozen importlib._bootstrap>", "exec")
+    ns = {"sys": __import__("sys")}
+    exec(code, ns)
+    assert cli._in_machinery(ns["f"])
+    assert not cli._in_machinery(__import__("sys")._getframe())

@@ -58,3 +58,57 @@ def test_a_pipe_or_device_is_refused_as_input(tmp_path, capsys):
     assert main(["segment", str(fifo), "-o", str(tmp_path / "o.seg")]) == 2
     assert "not a regular file" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m.off"]
+
+
+@pytest.mark.parametrize("case", malformed.interrupts(), ids=lambda c: c.name)
+def test_ctrl_c_at_any_moment_is_one_line_and_exit_130(case, tmp_path):
+    # never a traceback (numba's, a Dask worker's), never a hang, never a half-written file
+    import os
+    import shutil
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    import numpy as np
+
+    from superfacets import read_labels, write_mesh
+
+    from conftest import grid_mesh
+
+    big = write_mesh(tmp_path / "big.off",
+                     grid_mesh(300, 300, height=lambda x, y: 0.2 * np.sin(6 * x) * y))
+    (tmp_path / "more").mkdir()
+    for i in range(4):
+        write_mesh(tmp_path / "more" / f"m{i}.off", grid_mesh(60 + 10 * i, 60))
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    codes = []
+    for delay in case.delays:
+        argv = [a.replace("{d}", str(tmp_path)).replace("{big}", str(big)) for a in case.argv]
+        for o in case.outputs:
+            (tmp_path / o).unlink(missing_ok=True)
+        shutil.rmtree(tmp_path / "out", ignore_errors=True)  # a batch starts afresh
+        proc = subprocess.Popen([sys.executable, "-m", "superfacets", *argv],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env,
+                                text=True, start_new_session=True)
+        time.sleep(delay)
+        try:
+            os.killpg(proc.pid, signal.SIGINT)
+        except ProcessLookupError:  # it had ended
+            pass
+        out, err = proc.communicate(timeout=180)
+        lines = [ln for ln in err.splitlines() if ln.strip() and "input/s" not in ln]
+        assert "Traceback" not in err and "Exception ignored" not in err, err
+        if proc.returncode == 130:  # one line (a batch adds what to do next)
+            assert len(lines) == 1 and lines[0].startswith("superfacets: interrupted"), err
+            for o in case.outputs:
+                assert not (tmp_path / o).exists(), o
+        else:  # it had finished (or was ending: killed by the signal itself, as any program
+            # whose handlers are gone); its outputs are whole
+            assert proc.returncode in (0, -signal.SIGINT), err
+            if "o.seg" in case.outputs and (proc.returncode == 0 or (tmp_path / "o.seg").exists()):
+                assert read_labels(tmp_path / "o.seg").shape == (2 * 300 * 300,)
+        codes.append(proc.returncode)
+        left = [p.name for p in tmp_path.iterdir() if p.name.startswith(".")]
+        assert left == [], left
+    assert codes.count(130) >= max(1, len(case.delays) - 2), codes

@@ -245,3 +245,51 @@ def test_cli_segment_pictures_a_cloud(tmp_path):
     assert _palette_colours_seen(np.asarray(Image.open(png).convert("RGB"))) >= 3
     assert '"points": 2000' in page.read_text()
     assert main(["segment", str(tmp_path / "c.npy"), "--picture", str(page)]) == 2
+
+
+def test_vertex_regions_cut_each_triangle_at_its_corners(sphere):
+    from superfacets.elements.vertices import vertex_graph
+    from superfacets.render import vertex_regions
+
+    labels = np.arange(sphere.n_vertices) % 7
+    regions, lab = vertex_regions(sphere, labels)
+    assert regions.n_faces == 3 * sphere.n_faces and regions.is_triangular is False
+    assert regions.area == pytest.approx(sphere.area)
+    # each vertex's regions hold the area its vertex element stands for
+    g, index = vertex_graph(sphere)
+    owner = np.concatenate([sphere.faces[:, i] for i in range(3)])
+    per_vertex = np.bincount(owner, weights=regions.areas, minlength=sphere.n_vertices)
+    np.testing.assert_allclose(per_vertex, g.sizes[index], rtol=1e-9)
+    np.testing.assert_array_equal(lab, labels[owner])
+    # midpoints are shared: the regions of one mesh form one closed surface
+    assert face_graph(regions).boundary_elements.size == 0
+    with pytest.raises(ParameterError, match="vertex"):
+        vertex_regions(sphere, labels[:-1])
+
+
+def test_vertex_labels_render_like_superfacets(sphere, tmp_path):
+    pytest.importorskip("pyvista")
+    from superfacets import segment
+
+    r = segment(sphere, 12, elements="vertices")
+    img = render(sphere, r.labels, tmp_path / "v.png", size=(300, 240), elements="vertices")
+    assert _palette_colours_seen(img) >= 5
+    with pytest.raises(ParameterError, match="elements"):
+        render(sphere, r.labels, elements="points")
+    page = html_page(sphere, r.labels, elements="vertices")
+    assert '"superfacets": 12' in page
+
+
+def test_render_and_html_read_vertex_label_files(sphere, tmp_path, capsys):
+    pytest.importorskip("pyvista")
+    from superfacets import segment
+
+    off = write_mesh(tmp_path / "s.off", sphere)
+    seg = write_labels(tmp_path / "v.seg", segment(sphere, 12, elements="vertices").labels)
+    assert main(["render", str(off), str(seg), "-o", str(tmp_path / "v.png"), "--size",
+                 "200x160"]) == 0
+    assert main(["html", str(off), str(seg), "-o", str(tmp_path / "v.html")]) == 0
+    short = write_labels(tmp_path / "short.seg", np.zeros(5, dtype=int))
+    assert main(["render", str(off), str(short), "-o", str(tmp_path / "x.png")]) == 2
+    assert "one label per face or per vertex" in capsys.readouterr().err
+    assert not (tmp_path / "x.png").exists()

@@ -20,7 +20,7 @@ LAYERS = (
     # foundations: no knowledge of meshes
     ("superfacets._version", "superfacets.errors", "superfacets.params", "superfacets.labels",
      "superfacets.extras", "superfacets._threads", "superfacets._kernels",
-     "superfacets.camera", "superfacets.warmup"),
+     "superfacets.camera", "superfacets.warmup", "superfacets.interrupts"),
     # inputs: validated meshes and clouds, read from files or the libraries' objects
     ("superfacets.mesh", "superfacets.cloud", "superfacets.convert", "superfacets.shapes",
      "superfacets.io.files", "superfacets.io.ply", "superfacets.io.labels",

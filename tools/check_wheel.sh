@@ -2,9 +2,12 @@
 # Build a wheel, install it with no extras in a fresh virtual environment, and check that
 # the core commands work there and that the others name the extra to install.
 # Usage: tools/check_wheel.sh [MESH]   (prints the environment's size at the end)
+# MESH: default the bunny of ../shared beside the repository, else the demo's mesh.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-mesh=${1:-../shared/data/meshes/bunny.tri.xz}
+if [ -n "${1:-}" ]; then mesh=$(realpath "$1")
+elif [ -f ../shared/data/meshes/bunny.tri.xz ]; then mesh=$(realpath ../shared/data/meshes/bunny.tri.xz)
+else mesh=""; fi
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 python3 -m venv "$work/env"
@@ -14,15 +17,16 @@ python3 -m venv "$work/env"
 sf="$work/env/bin/superfacets"
 cd "$work"
 "$sf" --version
-"$sf" segment "$OLDPWD/$mesh" -k 50 -o out.seg --colored-mesh out.ply
-"$sf" evaluate "$OLDPWD/$mesh" out.seg out.seg
-"$sf" html "$OLDPWD/$mesh" out.seg -o out.html -q
-test -s out.html
-"$sf" batch "$OLDPWD/$mesh" -o batch-out -k 50 -q   # no Dask, no pyarrow: in process, CSV
-test -s batch-out/manifest.csv && head -2 batch-out/manifest.csv
-"$sf" demo --output-dir demo -q || true
+"$sf" demo --output-dir demo -q   # without the render extra: no picture, said
 ls demo
-if "$sf" render "$OLDPWD/$mesh" out.seg -o out.png 2> err.txt; then
+mesh=${mesh:-$work/demo/creature.off}
+"$sf" segment "$mesh" -k 50 -o out.seg --colored-mesh out.ply
+"$sf" evaluate "$mesh" out.seg out.seg
+"$sf" html "$mesh" out.seg -o out.html -q
+test -s out.html
+"$sf" batch "$mesh" -o batch-out -k 50 -q   # no Dask, no pyarrow: in process, CSV
+test -s batch-out/manifest.csv && head -2 batch-out/manifest.csv
+if "$sf" render "$mesh" out.seg -o out.png 2> err.txt; then
   echo "render worked without the render extra?"; exit 1
 fi
 grep -q "pip install 'superfacets\[render\]'" err.txt && cat err.txt

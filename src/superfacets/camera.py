@@ -6,7 +6,7 @@ import numpy as np
 
 from .errors import InvalidMeshError, ParameterError
 
-__all__ = ["view_frame", "AXES", "VIEWS"]
+__all__ = ["view_frame", "check_camera", "AXES", "VIEWS"]
 
 #: Named views: direction from the mesh to the camera.
 VIEWS = {"front": (0, 0, 1), "back": (0, 0, -1), "left": (-1, 0, 0), "right": (1, 0, 0),
@@ -27,6 +27,35 @@ def _direction(value, what: str) -> np.ndarray:
     if not norm > 0:
         raise ParameterError(f"{what} must be a non-zero finite 3-vector, got {value!r}")
     return v / norm
+
+
+def check_camera(view=None, up="y") -> None:
+    """Check a view and an up axis before any mesh is read (the same rules as
+    :func:`view_frame`).
+
+    Raises
+    ------
+    ParameterError
+        On an unknown view name or up axis, or a zero/non-finite direction.
+
+    Examples
+    --------
+    >>> check_camera("front", "z")
+    >>> check_camera("sideways")
+    Traceback (most recent call last):
+    ...
+    superfacets.errors.ParameterError: unknown view 'sideways'; use auto, front, back, left, right, top, bottom or x,y,z
+    """
+    if isinstance(up, str):
+        if up not in AXES:
+            raise ParameterError(f"unknown up axis {up!r}; use one of {', '.join(AXES)}")
+    else:
+        _direction(up, "up")
+    if isinstance(view, str):
+        if view != "auto" and view not in VIEWS:
+            raise ParameterError(f"unknown view {view!r}; use auto, {', '.join(VIEWS)} or x,y,z")
+    elif view is not None:
+        _direction(view, "view direction")
 
 
 def view_frame(mesh, view=None, elevation: float = 20.0,

@@ -68,7 +68,7 @@ def result_header(data, result, source: str) -> dict:
 
 def write_result(data, result, kind: str, source: str, *, labels=None, header: bool = False,
                  colored=None, vertex_colors: bool = False, picture=None, html=None,
-                 element_options: dict | None = None) -> None:
+                 element_options: dict | None = None, up="y", view=None) -> None:
     """Write the files of one segmentation, all or nothing.
 
     Parameters
@@ -96,6 +96,8 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
     element_options : dict, optional
         ``n_neighbors`` and ``neighbor_radius`` of the point graph (to find the
         cached elements again).
+    up, view
+        The picture's and the page's camera (:func:`superfacets.camera.view_frame`).
 
     Raises
     ------
@@ -125,13 +127,16 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
             write_colored_elements(colored, source_el, result.labels, outputs=outputs)
         title = f"{source}: {result.n_segments} " + (
             "superpoints" if kind != "faces" else "superfacets")
+        drawn = {} if kind == "points" else {"elements": kind}  # faces or vertices
         if html is not None:
             from .html import write_html
 
-            write_html(html, data, result.labels, title=title, outputs=outputs)
+            write_html(html, data, result.labels, title=title, outputs=outputs, up=up,
+                       view=view, **drawn)
         if picture is not None:
             from .render import render, render_points
 
             draw = render_points if kind == "points" else render
-            draw(data, result.labels, picture, title=title, outputs=outputs)
+            draw(data, result.labels, picture, title=title, outputs=outputs, up=up, view=view,
+                 **drawn)
 

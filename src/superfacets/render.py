@@ -73,6 +73,60 @@ def _check_labels(mesh, labels):
     return None if labels is None else check_labels(labels, mesh.n_faces, per="face")
 
 
+def vertex_regions(mesh, labels) -> tuple:
+    """What a picture of per-vertex labels draws: each face cut into one region per corner.
+
+    Each triangle (polygons: the triangles of their fans) is cut, through its
+    centroid and the midpoints of its edges, into three quads, one at each
+    corner, which take the label of that corner's vertex. A vertex's regions
+    together are the barycentric area it stands for (the size of a vertex
+    element, a third of each incident triangle), so superpoints of vertices are
+    drawn as patches with crisp borders, like superfacets.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    labels : (n,) int ndarray
+        Label of each vertex (-1 for vertices used by no face).
+
+    Returns
+    -------
+    regions : Mesh
+        ``3 t`` quads, ``t`` the triangles of ``mesh.triangulated()``.
+    region_labels : (3 t,) int64 ndarray
+
+    Raises
+    ------
+    ParameterError
+        If ``labels`` is not one integer per vertex.
+
+    Examples
+    --------
+    >>> from superfacets import Mesh
+    >>> regions, lab = vertex_regions(Mesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]]),
+    ...                               [7, 8, 9])
+    >>> regions.n_faces, lab.tolist(), round(float(regions.area), 6)
+    (3, [7, 8, 9], 0.5)
+    """
+    from .mesh import Mesh
+
+    labels = check_labels(labels, mesh.n_vertices, per="vertex")
+    tri, _ = mesh.triangulated()
+    tri = np.asarray(tri)
+    t, n = tri.shape[0], mesh.n_vertices
+    v = np.asarray(mesh.vertices)
+    half = np.stack([tri, np.roll(tri, -1, axis=1)], axis=2).reshape(-1, 2)  # (a, b) per corner
+    edges, edge_of = np.unique(np.sort(half, axis=1), axis=0, return_inverse=True)
+    edge_of = edge_of.reshape(t, 3)  # edge (corner i, corner i+1) of each triangle
+    points = np.concatenate([v, 0.5 * (v[edges[:, 0]] + v[edges[:, 1]]), v[tri].mean(axis=1)])
+    mid = n + edge_of
+    center = n + edges.shape[0] + np.arange(t)
+    quads = np.concatenate([np.stack([tri[:, i], mid[:, i], center, mid[:, (i + 2) % 3]], 1)
+                            for i in range(3)])
+    return Mesh(points, quads, name=mesh.name), np.concatenate([labels[tri[:, i]]
+                                                                for i in range(3)])
+
+
 def _add(plotter, pv, mesh, labels, *, boundaries: bool, line_width: float,
          boundary_color, surface_color):
     poly = _polydata(pv, mesh, labels)
@@ -164,14 +218,16 @@ def _size(size) -> tuple[int, int]:
 def render(mesh, labels=None, out=None, *, size=(1200, 900), view=None,
            background="white", boundaries: bool = True, boundary_color="black",
            line_width: float = 1.0, title: str | None = None, zoom: float = 1.0,
-           up="y", outputs=None) -> np.ndarray:
+           up="y", outputs=None, elements: str = "faces") -> np.ndarray:
     """Render a mesh off-screen, faces coloured by superfacet.
 
     Parameters
     ----------
     mesh : Mesh, trimesh.Trimesh or (vertices, faces)
     labels : (m,) int ndarray, optional
-        Superfacet of each face; without it the mesh is drawn in grey.
+        Superfacet of each face (with ``elements='vertices'``: ``(n,)``, the
+        superpoint of each vertex, drawn by :func:`vertex_regions`); without it
+        the mesh is drawn in grey.
     out : path, optional
         Write the image here as PNG (atomically).
     size : (int, int), default (1200, 900)
@@ -193,6 +249,8 @@ def render(mesh, labels=None, out=None, *, size=(1200, 900), view=None,
         The mesh's up direction.
     outputs : superfacets.io.files.Outputs, optional
         Stage the PNG there (all or nothing with the others).
+    elements : {'faces', 'vertices'}, default 'faces'
+        What ``labels`` label.
 
     Returns
     -------
@@ -201,13 +259,13 @@ def render(mesh, labels=None, out=None, *, size=(1200, 900), view=None,
     Raises
     ------
     ParameterError
-        On labels that are not one integer per face, a bad size, view, up
-        axis, colour, line width or zoom.
+        On labels that are not one integer per face (vertex), a bad size, view,
+        up axis, colour, line width or zoom.
     MissingExtraError
         Without the ``render`` extra (pyvista, Pillow).
     """
     mesh = as_mesh(mesh)
-    labels = _check_labels(mesh, labels)
+    mesh, labels = faces_to_draw(mesh, labels, elements)
     w, h = _size(size)
     pv = _pyvista(off_screen=True)
     _check_style(pv, background, boundary_color, line_width, zoom)
@@ -216,6 +274,16 @@ def render(mesh, labels=None, out=None, *, size=(1200, 900), view=None,
                     lambda p: _add(p, pv, mesh, labels, boundaries=boundaries,
                                    line_width=line_width, boundary_color=boundary_color,
                                    surface_color="lightgrey"))
+
+
+def faces_to_draw(mesh, labels, elements: str):
+    """The mesh and per-face labels a picture draws for labels of ``elements``."""
+    from .params import check_choice
+
+    check_choice("elements", elements, ("faces", "vertices"))
+    if elements == "vertices" and labels is not None:
+        return vertex_regions(mesh, labels)
+    return mesh, _check_labels(mesh, labels)
 
 
 def _picture(pv, size, background, frame, view, zoom, up, title, out, outputs, draw):

@@ -13,9 +13,11 @@ from __future__ import annotations
 
 import atexit
 import os
+import sys
 import threading
+from pathlib import Path
 
-__all__ = ["start", "wait"]
+__all__ = ["start", "wait", "cache_is_cold", "say_if_cold"]
 
 _thread: threading.Thread | None = None
 
@@ -65,3 +67,31 @@ def wait(timeout: float | None = None) -> None:
     """Wait until a started warm-up has finished (no-op when none was started)."""
     if _thread is not None:
         _thread.join(timeout)
+
+
+def cache_is_cold() -> bool:
+    """Whether numba has no machine code of this package's kernels cached yet.
+
+    numba keeps it (``cache=True``) in ``__pycache__`` beside the kernels'
+    sources, or, where that is not writable, under ``NUMBA_CACHE_DIR`` or the
+    user's cache folder; the index files of the expansion kernels stand for all.
+    """
+    kernels = Path(__file__).resolve().parent / "_kernels"
+    if any((kernels / "__pycache__").glob("expand.*.nbi")):
+        return False
+    for root in (os.environ.get("NUMBA_CACHE_DIR"), Path.home() / ".cache" / "numba"):
+        if root and Path(root).is_dir() and any(Path(root).rglob("expand.*.nbi")):
+            return False
+    return True
+
+
+def say_if_cold(stream=None) -> bool:
+    """On a terminal, say once (the first run after installing) that numba compiles the
+    kernels now, so that a silent first run is not taken for a hang; return whether it
+    said so."""
+    stream = sys.stderr if stream is None else stream
+    if not (getattr(stream, "isatty", lambda: False)() and cache_is_cold()):
+        return False
+    print("note: first run after installing: compiling the numba kernels once (about 10-40 s "
+          "on 2 cores); later runs reuse them", file=stream, flush=True)
+    return True

@@ -30,7 +30,7 @@ def build_parser() -> argparse.ArgumentParser:
     from .._version import __version__
     from . import batching, experiments, pictures, segmenting
 
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="superfacets",
         description="Over-segment triangle meshes into superfacets (Simari, Picciau, "
                     "De Floriani, 'Fast and Scalable Mesh Superfacets', 2014).")
@@ -42,6 +42,41 @@ def build_parser() -> argparse.ArgumentParser:
     experiments.add_parsers(sub)
     pictures.add_parsers(sub)
     return parser
+
+
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose 'unrecognized arguments' error names the nearest
+    options (``--k`` -> ``-k``, ``--n_segments`` -> ``--n-segments``)."""
+
+    def error(self, message: str):
+        if message.startswith("unrecognized arguments:"):
+            message += _did_you_mean(self, message.split(":", 1)[1].split())
+        super().error(message)
+
+
+def _did_you_mean(parser: argparse.ArgumentParser, unknown: list[str]) -> str:
+    import difflib
+
+    options = set()
+    stack = [parser]
+    argv = getattr(parser, "argv", None) or []
+    while stack:
+        p = stack.pop()
+        for action in p._actions:
+            options.update(action.option_strings)
+            if isinstance(action, argparse._SubParsersAction):  # the command given, or all
+                chosen = [action.choices[a] for a in argv if a in action.choices][:1]
+                stack.extend(chosen or action.choices.values())
+    hints = []
+    for token in unknown:
+        if not token.startswith("-"):
+            continue
+        name = token.split("=", 1)[0]
+        near = difflib.get_close_matches(name.replace("_", "-"), sorted(options), n=2,
+                                         cutoff=0.6)
+        if near:
+            hints.append(f"{name}: did you mean {' or '.join(near)}?")
+    return ("; " + "; ".join(hints)) if hints else ""
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -59,10 +94,17 @@ def main(argv: list[str] | None = None) -> int:
     """
     from ..errors import NoDisplayError, SuperfacetsError
 
-    args = build_parser().parse_args(argv)
-    restore = _terminate_cleanly()
+    restore = _terminate_cleanly()  # first: Ctrl-C during the imports too
     try:
+        parser = build_parser()
+        parser.argv = list(sys.argv[1:] if argv is None else argv)  # for its error hints
+        args = parser.parse_args(argv)
         return args.func(args)
+    except SystemError as exc:  # numba's dispatcher around a KeyboardInterrupt
+        if not _interrupted(exc):
+            raise
+        print("superfacets: interrupted", file=sys.stderr)
+        return 130
     except BrokenPipeError:  # `superfacets ... | head`: the reader left; end quietly
         _silence_stdout()
         return 0
@@ -80,29 +122,135 @@ def main(argv: list[str] | None = None) -> int:
         return 143
     finally:
         restore()
+        if argv is None:  # the program itself: its work is done, a late Ctrl-C is moot
+            _quiet_exit()
 
 
 class _Terminated(BaseException):
     """SIGTERM, raised in the main thread so that temporary files are removed."""
 
 
+def _interrupted(exc: BaseException) -> bool:
+    """Whether ``exc`` is, or was raised while handling, a KeyboardInterrupt."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False
+
+
+#: Code that an exception must not cut through anywhere in the stack: Python's import
+#: machinery (an interrupted module lock leaves the process hung) and numba's dispatcher
+#: and compiler (they turn it into a SystemError with a long traceback).
+_NEVER_IN = ("<frozen importlib", "/numba/", "/llvmlite/")
+#: Code that juggles locks: an exception at the wrong line keeps a lock taken (a thread
+#: pool's workers then wait for it forever); only its blocking waits are safe to cut.
+_LOCKS_IN = ("/threading.py", "/concurrent/futures/", "/queue.py", "/multiprocessing/")
+
+
+def _blocking_waits() -> set:
+    """(code, line) of the blocking calls of threading's waits: a Condition's wait on
+    its waiter lock, a thread's join."""
+    import inspect
+    import threading
+
+    out = set()
+    for fn in (threading.Condition.wait, threading.Thread._wait_for_tstate_lock):
+        lines, start = inspect.getsourcelines(fn)
+        out.update((fn.__code__, start + i) for i, text in enumerate(lines)
+                   if "waiter.acquire(" in text or "lock.acquire(" in text)
+    return out
+
+
+def _in_machinery(frame, waits=None) -> bool:
+    """Whether a KeyboardInterrupt raised in ``frame`` (the main thread's, at a signal)
+    could hang the process or turn into a traceback."""
+    inner = frame
+    while frame is not None:
+        if any(m in frame.f_code.co_filename for m in _NEVER_IN):
+            return True
+        frame = frame.f_back
+    if inner is not None and any(m in inner.f_code.co_filename for m in _LOCKS_IN):
+        waits = _blocking_waits() if waits is None else waits
+        return (inner.f_code, inner.f_lineno) not in waits
+    return False
+
+
 def _terminate_cleanly():
-    """Turn SIGTERM into an exception (unwinding removes temporary files); return a
-    function that puts the previous handler back."""
+    """Turn SIGTERM and Ctrl-C into exceptions that unwind the run (temporary files are
+    removed); return a function that puts the previous handlers back.
+
+    Ctrl-C's KeyboardInterrupt is raised only outside the import machinery and numba
+    (where it hangs the process or becomes a long SystemError) and again every 0.2 s
+    until the run unwinds: code that swallows it (a reader's ``except BaseException``, a
+    finalizer) does not keep the run going. Nothing interrupts the unwinding itself.
+    """
+    import os
     import signal
     import threading
 
+    from .. import interrupts
+
     if threading.current_thread() is not threading.main_thread():
         return lambda: None
+    interrupts.reset()
+    done = threading.Event()
+    waits = _blocking_waits()
 
-    def handler(signum, frame):
+    def on_term(signum, frame):
         raise _Terminated()
 
+    def repeat() -> None:  # the same Ctrl-C until the run has unwound
+        while not done.wait(0.2):
+            os.kill(os.getpid(), signal.SIGINT)
+
+    state = {"repeater": None}
+
+    def on_int(signum, frame):
+        if done.is_set() or interrupts.was_caught() or _interrupted(sys.exc_info()[1]):
+            return  # unwinding, or stopping in order, already: let the clean-up finish
+        if state["repeater"] is None:
+            state["repeater"] = threading.Thread(target=repeat, daemon=True,
+                                                 name="superfacets-interrupt")
+            state["repeater"].start()
+        if _in_machinery(frame, waits):
+            return  # the repeater comes back in 0.2 s
+        raise KeyboardInterrupt
+
+    def unraisable(event) -> None:
+        # a KeyboardInterrupt raised in a finalizer cannot unwind the run: say nothing
+        # (the repeater interrupts again where it can)
+        if not _interrupted(event.exc_value):
+            previous_hook(event)
+
     try:
-        previous = signal.signal(signal.SIGTERM, handler)
+        previous = signal.signal(signal.SIGTERM, on_term)
+        previous_int = signal.signal(signal.SIGINT, on_int)
     except (ValueError, OSError):  # pragma: no cover - not settable here
         return lambda: None
-    return lambda: signal.signal(signal.SIGTERM, previous)
+    previous_hook, sys.unraisablehook = sys.unraisablehook, unraisable
+
+    def restore():
+        done.set()
+        if state["repeater"] is not None:  # no Ctrl-C of ours after the handlers go back
+            state["repeater"].join()
+        signal.signal(signal.SIGTERM, previous)
+        signal.signal(signal.SIGINT, previous_int)
+        sys.unraisablehook = previous_hook
+
+    return restore
+
+
+def _quiet_exit() -> None:
+    """Ignore Ctrl-C while the interpreter exits (Dask's and numba's exit handlers would
+    otherwise print a KeyboardInterrupt traceback after the run's last line)."""
+    import signal
+    import threading
+
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _silence_stdout() -> None:

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import sys
 
-from .options import (add_element_options, add_method_options, element_kwargs, int_arg,
+from .options import (add_camera_options, add_element_options, add_method_options,
+                      element_kwargs, int_arg,
                       method_kwargs)
 
 __all__ = ["add_parsers"]
@@ -47,9 +48,10 @@ def add_parsers(sub) -> None:
     b.add_argument("--vertex-colors", action="store_true",
                    help="PLY: colours per vertex instead of per face")
     b.add_argument("--picture", action="store_true",
-                   help="also render NAME.png per input (faces or points; the render extra)")
+                   help="also render NAME.png per input (the render extra)")
     b.add_argument("--html", action="store_true",
-                   help="also write NAME.html per input, an interactive page (faces or points)")
+                   help="also write NAME.html per input, an interactive page")
+    add_camera_options(b, "")  # --view, --up of --picture and --html
     b.add_argument("--per-object", action="store_true",
                    help="scenes: segment each object on its own (-k shared out by area)")
     b.add_argument("-j", "--workers", type=int_arg, default=None, metavar="N",
@@ -80,9 +82,11 @@ def cmd_batch(args) -> int:
     s = run_batch(args.inputs, args.output_dir, args.n_segments, radius=args.radius,
                   labels=args.labels, header=args.header, colored_mesh=args.colored_mesh,
                   vertex_colors=args.vertex_colors, picture=args.picture, html=args.html,
+                  up=args.up or "y", view=args.view,
                   per_object=args.per_object, workers=args.workers, scheduler=args.scheduler,
                   memory_limit=args.memory_limit, retry_failed=args.retry_failed,
-                  progress=not args.quiet and args.progress is not False, **kwargs)
+                  progress=not args.quiet and (sys.stderr.isatty() if args.progress is None
+                                               else args.progress), **kwargs)
     if not args.quiet:
         ran = s.ok + s.failed
         print(f"batch: {s.inputs} inputs: {s.ok} ok, {s.failed} failed, {s.done_before} already "
@@ -98,6 +102,7 @@ def cmd_batch(args) -> int:
             print(f"note: {s.failed_before} inputs failed in an earlier run; --retry-failed "
                   "runs them again", file=sys.stderr)
     if s.interrupted:
-        print("interrupted: run the same command again to continue", file=sys.stderr)
+        print("superfacets: interrupted: run the same command again to continue",
+              file=sys.stderr)
         return 130
     return 1 if s.failed or s.failed_before else 0

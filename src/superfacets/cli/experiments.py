@@ -161,14 +161,16 @@ def cmd_experiment(args) -> int:
               f"-> {out}", file=sys.stderr)
     kinds = [e.strip() for e in args.elements.split(",") if e.strip()]
     s = run_experiment(meshes, configs, out, ks, workers=args.workers, tau=args.tau,
-                       seed=args.seed, retry_failed=args.retry_failed, progress=not args.quiet,
+                       seed=args.seed, retry_failed=args.retry_failed,
+                       progress=not args.quiet and sys.stderr.isatty(),
                        elements=kinds, n_points=args.points, scheduler=args.scheduler)
     if s.note:
         print(f"note: {s.note}", file=sys.stderr)
     print(f"{s.written} rows written ({s.ok} ok, {s.failed} failed, {s.skipped} skipped), "
           f"{s.done_before} already there, in {s.seconds:.1f} s -> {out}")
     if s.interrupted:
-        print("interrupted: run the same command again to continue", file=sys.stderr)
+        print("superfacets: interrupted: run the same command again to continue",
+              file=sys.stderr)
         return 130
     if not args.quiet:
         print(f"next: superfacets report {out}")

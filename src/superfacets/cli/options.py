@@ -222,6 +222,31 @@ def check_output(path: str | None, suffixes: tuple[str, ...], what: str,
     return out
 
 
+def check_labels_output(path: str | None, source: str) -> Path | None:
+    """``-o``: a label file (``.seg`` or any text name, ``.json`` for segIndices, ``-``).
+
+    A name that says mesh, cloud, picture or page (``x.ply``, ``x.png``, ...) is
+    refused: ``-o`` writes text labels there, which no viewer would open; the
+    message names the option that writes such a file.
+    """
+    from ..errors import ParameterError
+    from ..io import CLOUD_FORMATS, MESH_FORMATS
+    from ..io.files import split_suffix
+
+    out = check_output(path, (), "label file", stdout=True, inputs=(source,))
+    if out is None or str(out) == "-":
+        return out
+    fmt = split_suffix(out)[0]
+    option = {"png": "--picture", "html": "--html", "htm": "--html"}.get(
+        fmt, "--colored-mesh" if fmt in ("ply", "glb", "obj") else None)
+    if fmt != "txt" and (fmt in MESH_FORMATS or fmt in CLOUD_FORMATS or option):
+        raise ParameterError(
+            f"{out}: -o writes the labels as text (one per line; .json for segIndices), not a "
+            f".{fmt} file" + (f"; for that use {option} {out.name}" if option else "")
+            + "; name the labels e.g. " + out.name.split(".")[0] + ".seg")
+    return out
+
+
 def named_after(path, exc: Exception) -> Exception:
     """``exc`` with its message led by the input's name, once (an error about the
     mesh may already start with it)."""
@@ -258,15 +283,24 @@ def read_usable(path, *, clouds: bool = False):
 
 def labels_for(args, mesh):
     """Labels from LABELS.seg, computed with the method options, or None (--plain);
-    and a dict describing them for titles and pages."""
-    from ..errors import SuperfacetsError
+    a dict describing them for titles and pages; and what they label: ``'faces'``, or
+    ``'vertices'`` for a file of one label per vertex (``segment --elements vertices``)."""
+    from ..errors import MeshFormatError, SuperfacetsError
     from ..io import read_labels
     from ..segmentation import segment
 
     if args.plain:
-        return None, {}
+        return None, {}, "faces"
     if args.labels:
-        return read_labels(args.labels, n_faces=mesh.n_faces), {"labels": Path(args.labels).name}
+        labels = read_labels(args.labels)
+        info = {"labels": Path(args.labels).name}
+        if labels.shape[0] == mesh.n_faces:
+            return labels, info, "faces"
+        if labels.shape[0] == mesh.n_vertices:
+            return labels, info, "vertices"
+        raise MeshFormatError(f"{args.labels}: {labels.shape[0]} labels, but {args.mesh} has "
+                              f"{mesh.n_faces} faces and {mesh.n_vertices} vertices (one "
+                              "label per face or per vertex is needed)")
     kw = method_kwargs(args)
     kw["progress"] = False
     try:
@@ -276,4 +310,4 @@ def labels_for(args, mesh):
     info = {"k asked": r.params.get("n_segments"), "alpha": args.alpha,
             "iterations": f"{r.n_iter} ({'converged' if r.converged else 'max-iter'})",
             "seconds": f"{r.timings['total']:.2f}"}
-    return r.labels, info
+    return r.labels, info, "faces"

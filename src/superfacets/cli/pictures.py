@@ -87,11 +87,11 @@ def cmd_render(args) -> int:
     out = check_output(args.output, (".png",), "the picture",
                        inputs=(args.mesh, getattr(args, "labels", None)))
     mesh = read_usable(args.mesh)
-    labels, _ = labels_for(args, mesh)
+    labels, _, elements = labels_for(args, mesh)
     t0 = time.perf_counter()
     render(mesh, labels, out, size=args.size, view=args.view, up=args.up or "y",
            background=args.background, boundaries=not args.no_boundaries,
-           line_width=args.line_width, title=args.title, zoom=args.zoom)
+           line_width=args.line_width, title=args.title, zoom=args.zoom, elements=elements)
     if not args.quiet:
         up = args.up or "y (the default: --up z for z-up meshes)"
         print(f"wrote {out} ({args.size[0]}x{args.size[1]}, {mesh.n_faces} faces, up axis {up}, "
@@ -154,7 +154,11 @@ def cmd_view(args) -> int:
                              "'superfacets render' for a PNG or 'superfacets html' for a page "
                              "to open in a browser")
     mesh = read_usable(args.mesh)
-    labels, _ = labels_for(args, mesh)
+    labels, _, elements = labels_for(args, mesh)
+    if elements == "vertices":
+        from ..render import faces_to_draw
+
+        mesh, labels = faces_to_draw(mesh, labels, elements)
     show(mesh, labels, title=Path(args.mesh).name, view=args.view, up=args.up or "y")  # pragma: no cover
     return 0  # pragma: no cover
 
@@ -165,9 +169,10 @@ def cmd_html(args) -> int:
     out = check_output(args.output, (".html", ".htm"), "the page",
                        inputs=(args.mesh, args.labels))
     mesh = read_usable(args.mesh)
-    labels, info = labels_for(args, mesh)
+    labels, info, elements = labels_for(args, mesh)
     write_html(out, mesh, labels, title=args.title or Path(args.mesh).name, info=info,
-               background=args.background, view=args.view, up=args.up or "y")
+               background=args.background, view=args.view, up=args.up or "y",
+               elements=elements)
     if not args.quiet:
         print(f"wrote {out} ({out.stat().st_size / 1e6:.1f} MB): open it in a browser")
     return 0

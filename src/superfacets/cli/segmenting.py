@@ -9,8 +9,10 @@ from pathlib import Path
 import numpy as np
 
 from ..params import DEFAULTS
-from .options import (add_element_options, add_method_options, check_output, element_kwargs,
-                      float_arg, fmt_value, int_arg, method_kwargs, named_after, read_usable)
+from .options import (add_camera_options, add_element_options, add_method_options,
+                      check_labels_output,
+                      check_output, element_kwargs, float_arg, fmt_value, int_arg,
+                      method_kwargs, named_after, read_usable)
 
 __all__ = ["add_parsers"]
 
@@ -52,6 +54,7 @@ def add_parsers(sub) -> None:
     p.add_argument("--per-object", action="store_true",
                    help="segment each object of a scene on its own (-k shared out by area); "
                         "labels stay unique over the scene")
+    add_camera_options(p, "")  # --view, --up of --picture and --html
     p.set_defaults(func=cmd_segment)
 
     bl = sub.add_parser(
@@ -133,7 +136,10 @@ def cmd_segment(args) -> int:
     from ..outputs import JoinedResult, write_result
     from ..params import resolve
 
-    seg_out = check_output(args.output, (), "label file", stdout=True, inputs=(args.mesh,))
+    if Path(args.mesh).is_dir():
+        raise IsADirectoryError(f"{args.mesh}: is a directory; to segment every mesh or cloud "
+                                f"in it: superfacets batch {args.mesh} -o OUTDIR")
+    seg_out = check_labels_output(args.output, args.mesh)
     ply_out = check_output(args.colored_mesh, (".ply", ".glb", ".obj"), "the coloured mesh",
                            inputs=(args.mesh,))
     if seg_out is not None and ply_out is not None and str(seg_out) == str(ply_out):
@@ -150,6 +156,8 @@ def cmd_segment(args) -> int:
     kwargs = dict(method_kwargs(args), **element_kwargs(args))
     resolve(n_segments=args.n_segments, radius=args.radius, **kwargs)  # before the read
     if Path(args.mesh).is_file():  # no numba work for bad arguments or a missing input
+        if not args.quiet:
+            warmup.say_if_cold()
         warmup.start()  # numba's start-up in a thread, while the rest is imported and read
     t0 = time.perf_counter()
     data = read_usable(args.mesh, clouds=True)
@@ -164,9 +172,6 @@ def cmd_segment(args) -> int:
                                  f"{kind}")
         if ply_out is not None and not ply_out.name.lower().endswith(".ply"):
             raise ParameterError(f"{ply_out}: coloured {kind} are written as .ply")
-        if kind == "vertices" and (png_out or html_out):
-            raise ParameterError("--picture and --html draw faces or points; for vertex "
-                                 "labels write --colored-mesh OUT.ply (vertex colours)")
     size = data.n_total if cloud else data.n_faces
     if args.progress is None:  # long runs show where they are
         kwargs["progress"] = size >= 500_000 and sys.stderr.isatty()
@@ -182,14 +187,61 @@ def cmd_segment(args) -> int:
     write_result(data, result, kind, Path(args.mesh).name, labels=seg_out, header=args.header,
                  colored=ply_out, vertex_colors=args.vertex_colors, picture=png_out,
                  html=html_out, element_options=dict(n_neighbors=args.neighbors,
-                                                     neighbor_radius=args.neighbor_radius))
+                                                     neighbor_radius=args.neighbor_radius),
+                 up=args.up or "y", view=args.view)
     report = sys.stderr if str(seg_out) == "-" else sys.stdout  # stdout holds the labels
     if not args.quiet:
         print(_summary(Path(args.mesh).name, data, result, elapsed, kind), file=report)
-    if seg_out is None and ply_out is None and not args.quiet:
-        print("note: nothing was saved: add -o OUT.seg (or -o - for standard output) and/or "
-              "--colored-mesh OUT.ply", file=sys.stderr)
+    if not args.quiet:
+        _say_what_was_written(seg_out, ply_out, png_out, html_out, report, args.up)
+        note = _count_note(args, data, result, kind)
+        if note:
+            print(f"note: {note}", file=sys.stderr)
     return 0
+
+
+def _say_what_was_written(seg_out, ply_out, png_out, html_out, report, up) -> None:
+    axis = f"up axis {up}" if up else "up axis y: give --up z for a z-up mesh"
+    written = [f"{path} ({what})" for path, what in
+               ((seg_out, "labels"), (ply_out, "coloured mesh"), (png_out, f"picture, {axis}"),
+                (html_out, "page: open it in a browser"))
+               if path is not None and str(path) != "-"]
+    if written:
+        print("wrote " + ", ".join(written), file=report)
+    elif seg_out is None:
+        print("note: nothing was saved: add -o OUT.seg (or -o - for standard output), "
+              "--colored-mesh OUT.ply, --picture OUT.png or --html OUT.html", file=sys.stderr)
+
+
+def _count_note(args, data, result, kind: str) -> str | None:
+    """Why a run asked for k made more superfacets: pieces of the input that no center
+    reached (a region cannot cross from one piece to another), and how to keep k."""
+    asked = args.n_segments or DEFAULTS.n_segments
+    extra = getattr(result, "n_orphan_seeds", 0)
+    if args.radius is not None or args.per_object or result.n_segments <= asked or not extra:
+        return None
+    from ..elements.inputs import elements_of
+    from scipy.sparse.csgraph import connected_components
+
+    graph = elements_of(data, kind, n_neighbors=args.neighbors,
+                        neighbor_radius=args.neighbor_radius).graph  # kept with the input
+    pieces = connected_components(graph.to_csr(), directed=False)[0]
+    what = {"faces": "superfacets", "vertices": "superpoints", "points": "superpoints"}[kind]
+    if pieces <= 1:
+        return (f"{result.n_segments} {what} for -k {asked}: {extra} regions that no center "
+                f"reached within its window became {what} of their own; a larger --window "
+                "keeps closer to k")
+    if pieces >= asked:
+        return (f"{result.n_segments} {what} for -k {asked}: the input has {pieces} separate "
+                f"pieces and a region cannot cross from one piece to another, so each piece "
+                f"is at least one of them ({pieces} is the fewest this input can have)")
+    fewer = max(pieces, asked - (result.n_segments - asked))
+    hint = (" or --per-object to share k among the file's objects" if kind == "faces"
+            and len(getattr(data, "objects", ())) > 1 else "")
+    return (f"{result.n_segments} {what} for -k {asked}: the input has {pieces} separate "
+            f"pieces, and the {extra} regions that no center reached (a region cannot cross "
+            f"from one piece to another) became {what} of their own; ask for fewer "
+            f"(about -k {fewer}){hint} to end near {asked}")
 
 
 def cmd_baseline(args) -> int:
@@ -205,7 +257,7 @@ def cmd_baseline(args) -> int:
     if many:
         raise ParameterError(f"--param: give one value for {', '.join(many)}")
     params = method.resolve({n: v[0] for n, v in given.items()})
-    seg_out = check_output(args.output, (), "label file", stdout=True, inputs=(args.mesh,))
+    seg_out = check_labels_output(args.output, args.mesh)
     ply_out = check_output(args.colored_mesh, (".ply", ".glb", ".obj"), "the coloured mesh",
                            inputs=(args.mesh,))
     mesh = read_usable(args.mesh)
@@ -251,6 +303,8 @@ def cmd_demo(args) -> int:
 
     check_int("--resolution", args.resolution, lo=16, hi=300)
     resolve(n_segments=args.n_segments, **method_kwargs(args))  # every option, before work
+    if not args.quiet:
+        warmup.say_if_cold()
     warmup.start()
     out = Path(args.output_dir)
     if out.exists() and not out.is_dir():

@@ -41,7 +41,7 @@ def _b64(a: np.ndarray) -> str:
 
 
 def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None = None,
-              background: str = "#ffffff", view=None, up="y") -> str:
+              background: str = "#ffffff", view=None, up="y", elements: str = "faces") -> str:
     """The HTML text of the viewer page (see :func:`write_html`)."""
     from ..elements.inputs import is_cloud
 
@@ -49,6 +49,10 @@ def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None 
         return _points_page(mesh, labels, title=title, info=info, background=background,
                             view=view, up=up)
     mesh = as_mesh(mesh)
+    if elements != "faces":
+        from ..render import faces_to_draw
+
+        mesh, labels = faces_to_draw(mesh, labels, elements)
     m = mesh.n_faces
     if labels is not None:
         dense = relabel_dense(check_labels(labels, m, per="face"))
@@ -134,7 +138,8 @@ def _points_page(cloud, labels, *, title, info, background, view, up) -> str:
 
 
 def write_html(path, mesh, labels=None, *, title: str | None = None, info: dict | None = None,
-               background: str = "#ffffff", view=None, up="y", outputs=None) -> Path:
+               background: str = "#ffffff", view=None, up="y", outputs=None,
+               elements: str = "faces") -> Path:
     """Write a self-contained interactive HTML page of a (segmented) mesh.
 
     Parameters
@@ -154,6 +159,9 @@ def write_html(path, mesh, labels=None, *, title: str | None = None, info: dict 
         Initial camera, as in :func:`superfacets.camera.view_frame`.
     outputs : superfacets.io.files.Outputs, optional
         Stage the page there (all or nothing with the others).
+    elements : {'faces', 'vertices'}, default 'faces'
+        What ``labels`` label (vertices: drawn as in
+        :func:`superfacets.render.vertex_regions`).
 
     Returns
     -------
@@ -174,5 +182,5 @@ def write_html(path, mesh, labels=None, *, title: str | None = None, info: dict 
     from ..io.files import save
 
     text = html_page(mesh, labels, title=title, info=info, background=background, view=view,
-                     up=up)
+                     up=up, elements=elements)
     return save(path, text.encode("utf-8"), outputs)

@@ -30,15 +30,16 @@ from datetime import datetime, timezone
 from pathlib import Path
 from typing import Sequence
 
+from .. import interrupts
 from ..errors import ParameterError
 from .engine import Engine, PeakMemory, error_text
 from .inputs import collect_inputs, output_names
-from .manifest import JOURNAL, MANIFEST_COLUMNS, read_manifest, write_manifest
+from .manifest import (JOURNAL, MANIFEST_COLUMNS, FolderLock, check_options, read_manifest,
+                       record_options, write_manifest)
 
 __all__ = ["run_batch", "collect_inputs", "output_names", "read_manifest", "BatchSummary",
            "MANIFEST_COLUMNS", "segment_file"]
 
-_OPTIONS = "batch.json"
 _LABEL_SUFFIX = {"seg": ".seg", "json": ".json"}
 
 
@@ -107,9 +108,8 @@ def _segment_and_write(task: dict, label_rel: str) -> dict:
     n = data.n_total if kind == "points" else (data.n_vertices if kind == "vertices"
                                                else data.n_faces)
     base.parent.mkdir(parents=True, exist_ok=True)
-    picture = base.with_name(base.name + ".png") if outs["picture"] and kind != "vertices" \
-        else None
-    html = base.with_name(base.name + ".html") if outs["html"] and kind != "vertices" else None
+    picture = base.with_name(base.name + ".png") if outs["picture"] else None
+    html = base.with_name(base.name + ".html") if outs["html"] else None
     colored = None
     if outs["colored"]:
         colored = base.with_name(base.name + "_superfacets." + outs["colored"])
@@ -118,7 +118,8 @@ def _segment_and_write(task: dict, label_rel: str) -> dict:
                  colored=colored, vertex_colors=outs["vertex_colors"], picture=picture,
                  html=html, element_options={k: opts[k] for k in ("n_neighbors",
                                                                   "neighbor_radius")
-                                             if k in opts})
+                                             if k in opts},
+                 up=outs.get("up", "y"), view=outs.get("view"))
     return {"elements": kind, "n_elements": int(n), "segments": int(result.n_segments),
             "passes": int(result.n_iter), "converged": bool(result.converged)}
 
@@ -168,78 +169,11 @@ class BatchSummary:
     failures: list = field(default_factory=list)
 
 
-def _check_options(outdir: Path, options: dict) -> bool:
-    """True where ``batch.json`` records these options, False where there is none.
-
-    Raises
-    ------
-    ParameterError
-        The folder was made with other options (results are never mixed).
-    """
-    path = outdir / _OPTIONS
-    if not path.exists():
-        return False
-    try:
-        before = json.loads(path.read_text()).get("options", {})
-    except (ValueError, AttributeError, OSError):
-        raise ParameterError(f"{path}: unreadable; remove it, or use another output "
-                             "folder") from None
-    if before != options:
-        old, new = _flat(before), _flat(options)
-        diff = ", ".join(f"{k} {old.get(k)!r} -> {new.get(k)!r}"
-                         for k in sorted(set(old) | set(new)) if old.get(k) != new.get(k))
-        raise ParameterError(f"{outdir}: holds results made with other options ({diff}); "
-                             "use another output folder")
-    return True
-
-
-def _flat(d, prefix: str = "") -> dict:
-    """Nested options as ``{'outputs.labels': 'seg', ...}`` (segment options unprefixed)."""
-    out = {}
-    for k, v in (d.items() if isinstance(d, dict) else ()):
-        key = k if prefix in ("", "segment.") else prefix + k
-        if isinstance(v, dict):
-            out.update(_flat(v, key + "."))
-        else:
-            out[(prefix + k) if prefix not in ("", "segment.") else k] = v
-    return out
-
-
-def _record_options(outdir: Path, options: dict) -> None:
-    from .._version import __version__
-    from ..io.files import atomic_write
-
-    atomic_write(outdir / _OPTIONS, json.dumps({"superfacets": __version__, "options": options},
-                                               indent=1, sort_keys=True).encode() + b"\n")
-
-
-class _Lock:
-    """An exclusive lock on the output folder (one batch writes it at a time)."""
-
-    def __init__(self, outdir: Path) -> None:
-        self.path = outdir / ".lock"
-        self.f = None
-
-    def __enter__(self):
-        import fcntl
-
-        self.f = open(self.path, "a")
-        try:
-            fcntl.flock(self.f, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            self.f.close()
-            raise ParameterError(f"{self.path.parent}: another batch is writing this folder") \
-                from None
-        return self
-
-    def __exit__(self, *exc):
-        self.f.close()
-
-
 def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
               radius: float | None = None, labels: str = "seg", header: bool = False,
               colored_mesh: str | None = None, vertex_colors: bool = False,
-              picture: bool = False, html: bool = False, per_object: bool = False,
+              picture: bool = False, html: bool = False, up="y", view=None,
+              per_object: bool = False,
               workers: int | None = None, scheduler: str | None = None,
               memory_limit="auto", retry_failed: bool = False, progress: bool = True,
               n_threads: int = 1, dask: bool | None = None, **options) -> BatchSummary:
@@ -263,7 +197,10 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         PLY: colours per vertex.
     picture, html : bool, default False
         Also write a PNG (``render`` extra) / an interactive page per input
-        (faces and points).
+        (faces, vertices or points).
+    up, view : optional
+        The pictures' and pages' camera (:func:`superfacets.camera.view_frame`;
+        default: up is +y, the view automatic).
     per_object : bool, default False
         Scenes: each object segmented on its own (k shared out by area).
     workers : int, optional
@@ -324,6 +261,10 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
     n_threads = check_int("n_threads", n_threads, lo=1)
     seg_opts = dict(options, n_segments=n_segments, radius=radius, n_threads=n_threads)
     resolved = resolve(**seg_opts).as_dict()  # every option checked before any work
+    if picture or html:
+        from ..camera import check_camera
+
+        check_camera(view, up)
     if picture:
         from ..extras import require
 
@@ -333,18 +274,20 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         raise ParameterError("no input to segment")
     outputs = {"labels": labels, "header": bool(header), "colored": colored_mesh,
                "picture": bool(picture), "html": bool(html), "vertex_colors": bool(vertex_colors)}
+    if picture or html:  # recorded only where drawn (folders of earlier runs resume)
+        outputs.update(up=up, view=list(view) if isinstance(view, (tuple, list)) else view)
     recorded = {"segment": _jsonable({k: v for k, v in resolved.items()  # defaults filled
                                       if k not in ("n_threads", "progress")}),
                 "outputs": outputs, "per_object": bool(per_object)}
-    known = _check_options(outdir, recorded)  # before the engine starts: a quick refusal
+    known = check_options(outdir, recorded)  # before the engine starts: a quick refusal
     work = bool(_todo(files, read_manifest(outdir) if known else [], retry_failed))
     # the engine (a cluster to start or reach) only where there is work, before any is done
     with (Engine(workers, scheduler, memory_limit=memory_limit, dask=dask) if work else
           contextlib.nullcontext()) as engine:
         outdir.mkdir(exist_ok=True)
-        with _Lock(outdir):
-            if not known and not _check_options(outdir, recorded):
-                _record_options(outdir, recorded)
+        with FolderLock(outdir):
+            if not known and not check_options(outdir, recorded):
+                record_options(outdir, recorded)
             return _run(files, outdir, seg_opts, outputs, per_object, engine, retry_failed,
                         progress)
 
@@ -413,6 +356,7 @@ def _run(files, outdir, seg_opts, outputs, per_object, engine, retry_failed,
                     summary.manifest = write_manifest(outdir, _ordered(rows, files))
                     last_write = time.monotonic()
     except KeyboardInterrupt:
+        interrupts.caught()  # stopping in order: the manifest is written below
         summary.interrupted = True
     finally:
         if bar is not None:

@@ -23,6 +23,8 @@ through ``on_lost`` (a failed row), never a lost run.
 
 from __future__ import annotations
 
+import contextlib
+
 import logging
 import os
 import traceback
@@ -65,6 +67,33 @@ def _scheduler_from_config() -> str | None:
     except ImportError:
         return os.environ.get("DASK_SCHEDULER_ADDRESS") or None
     return dask.config.get("scheduler-address", None) or None
+
+
+@contextlib.contextmanager
+def _sigint_held():
+    """Keep Ctrl-C (SIGINT) from the worker processes started meanwhile, not from us.
+
+    SIGINT is blocked in this thread while the cluster starts: the threads it starts
+    (Dask's event loop, which starts the workers) and the worker processes (a new process
+    inherits the signal mask) keep it blocked, so a Ctrl-C in the terminal, which reaches
+    every process of the group, interrupts this process alone; it then closes the
+    cluster, and the workers with it, without a traceback from each. A Ctrl-C meanwhile
+    waits and comes once this thread unblocks it. multiprocessing's resource tracker is
+    started first: starting it unblocks SIGINT in the thread that starts it.
+    """
+    import signal
+    import threading
+    from multiprocessing import resource_tracker
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    resource_tracker.ensure_running()
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
 
 
 def error_text(exc: BaseException) -> str:
@@ -244,10 +273,11 @@ class Engine:
             with dask.config.set({"distributed.nanny.pre-spawn-environ": env,
                                   "distributed.scheduler.worker-saturation": 1.0,
                                   "distributed.worker.daemon": True}):
-                self._cluster = LocalCluster(
-                    n_workers=self.workers, threads_per_worker=1, processes=True,
-                    dashboard_address=None, memory_limit=self.memory_limit,
-                    silence_logs=logging.CRITICAL)
+                with _sigint_held():  # the workers ignore Ctrl-C: it is ours alone
+                    self._cluster = LocalCluster(
+                        n_workers=self.workers, threads_per_worker=1, processes=True,
+                        dashboard_address=None, memory_limit=self.memory_limit,
+                        silence_logs=logging.CRITICAL)
                 self.client = Client(self._cluster, set_as_default=False)
         except BaseException:
             self.__exit__(None, None, None)

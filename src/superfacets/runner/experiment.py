@@ -298,6 +298,9 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
                 for rows in engine.run(_run_task, tasks, _failed_rows):
                     record(rows)
         except KeyboardInterrupt:
+            from .. import interrupts
+
+            interrupts.caught()  # stopping in order: the rows so far are kept
             summary.interrupted = True
         finally:
             if bar is not None:

@@ -1,4 +1,8 @@
-"""The manifest of a batch: one typed row per input, rebuilt from a journal.
+"""The records of a batch's output folder: its options, its lock, the journal, the manifest.
+
+``batch.json`` holds the options a folder was made with (:func:`record_options`;
+:func:`check_options` refuses a rerun with others, so results are never mixed),
+``.lock`` is there while a batch writes the folder (:class:`FolderLock`).
 
 Each finished input is appended at once to the journal (``.manifest.jsonl``
 in the output folder) by :func:`~superfacets.runner.batch.run_batch`;
@@ -13,7 +17,10 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-__all__ = ["MANIFEST_COLUMNS", "JOURNAL", "read_manifest", "write_manifest"]
+from ..errors import ParameterError
+
+__all__ = ["MANIFEST_COLUMNS", "JOURNAL", "OPTIONS", "read_manifest", "write_manifest",
+           "check_options", "record_options", "FolderLock"]
 
 #: Columns of the manifest, in order: the input's absolute path, its labels file (relative
 #: to the output folder), ok / failed / skipped, the elements labelled (faces, vertices,
@@ -27,6 +34,7 @@ MANIFEST_COLUMNS = ("input", "output", "status", "elements", "n_elements", "segm
 _TYPES = {"n_elements": "int64", "segments": "int64", "passes": "int64", "converged": "bool",
           "seconds": "float64", "peak_mib": "float64"}
 JOURNAL = ".manifest.jsonl"
+OPTIONS = "batch.json"
 
 
 def _has_pyarrow() -> bool:
@@ -130,3 +138,87 @@ def write_manifest(outdir: Path, rows: list[dict]) -> Path:
     if stale.exists():  # one manifest only: the other is older
         stale.unlink()
     return path
+
+
+def check_options(outdir: Path, options: dict) -> bool:
+    """True where ``batch.json`` records these options, False where there is none.
+
+    Raises
+    ------
+    ParameterError
+        The folder was made with other options (results are never mixed).
+    """
+    path = outdir / OPTIONS
+    if not path.exists():
+        return False
+    try:
+        before = json.loads(path.read_text()).get("options", {})
+    except (ValueError, AttributeError, OSError):
+        raise ParameterError(f"{path}: unreadable; remove it, or use another output "
+                             "folder") from None
+    if before != options:
+        old, new = _flat(before), _flat(options)
+        diff = ", ".join(f"{k} {old.get(k)!r} -> {new.get(k)!r}"
+                         for k in sorted(set(old) | set(new)) if old.get(k) != new.get(k))
+        raise ParameterError(f"{outdir}: holds results made with other options ({diff}); "
+                             "use another output folder")
+    return True
+
+
+def _flat(d, prefix: str = "") -> dict:
+    """Nested options as ``{'outputs.labels': 'seg', ...}`` (segment options unprefixed)."""
+    out = {}
+    for k, v in (d.items() if isinstance(d, dict) else ()):
+        key = k if prefix in ("", "segment.") else prefix + k
+        if isinstance(v, dict):
+            out.update(_flat(v, key + "."))
+        else:
+            out[(prefix + k) if prefix not in ("", "segment.") else k] = v
+    return out
+
+
+def record_options(outdir: Path, options: dict) -> None:
+    from .._version import __version__
+    from ..io.files import atomic_write
+
+    atomic_write(outdir / OPTIONS, json.dumps({"superfacets": __version__, "options": options},
+                                               indent=1, sort_keys=True).encode() + b"\n")
+
+
+class FolderLock:
+    """An exclusive lock on the output folder (one batch writes it at a time).
+
+    The lock file ``.lock`` is there only while a batch runs: it is removed
+    before the lock is let go, and a batch that locked a file already removed
+    (another batch just finished) locks the new one instead.
+    """
+
+    def __init__(self, outdir: Path) -> None:
+        self.path = outdir / ".lock"
+        self.f = None
+
+    def __enter__(self):
+        import fcntl
+        import os
+
+        while True:
+            self.f = open(self.path, "a")
+            try:
+                fcntl.flock(self.f, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                self.f.close()
+                raise ParameterError(f"{self.path.parent}: another batch is writing this "
+                                     "folder") from None
+            try:
+                if os.stat(self.path).st_ino == os.fstat(self.f.fileno()).st_ino:
+                    return self
+            except FileNotFoundError:
+                pass
+            self.f.close()  # removed by the batch that held it: lock the new file
+
+    def __exit__(self, *exc):
+        try:
+            self.path.unlink()
+        except OSError:  # pragma: no cover - a read-only folder keeps it
+            pass
+        self.f.close()
