@@ -211,8 +211,7 @@ def test_optimized_path_gives_the_labels_of_the_straightforward_one(
     monkeypatch.setattr(classify, "_PARALLEL_MIN_WORK", 0)  # threads on every pass
     for n_threads in (1, 2):
         r = segment(mesh, k, alpha=alpha, max_iter=max_iter, enforce_connectivity=False,
-                    n_threads=n_threads, cleanup=False, tol=0)  # the paper's method, whatever
-        # the defaults
+                    n_threads=n_threads, paper=True)  # the paper's method, whatever the defaults
         np.testing.assert_array_equal(r.labels, relabel_dense(ref))
         assert r.n_iter == n_iter
 
@@ -428,3 +427,40 @@ def test_n_threads_also_bounds_the_graph_build(monkeypatch):
     two = segment(Mesh(shape.vertices, shape.faces), 40, n_threads=2).labels
     assert max(seen) == 2
     assert np.array_equal(one, two)
+
+
+def test_paper_switch_gives_the_straightforward_papers_labels(sphere, valley):
+    # paper=True: the method as published, bit for bit, whatever the package's defaults
+    import straightforward
+
+    from superfacets.labels import relabel_dense
+
+    for mesh, k in ((sphere, 40), (valley, 12)):
+        ref, _ = straightforward.segment_labels(mesh, k, alpha=200.0, max_iter=50)
+        got = segment(mesh, k, paper=True, enforce_connectivity=False)
+        np.testing.assert_array_equal(got.labels, relabel_dense(ref))
+        assert got.params["tol"] == 0.0 and got.params["cleanup"] is False
+        assert got.params["split_merge"] is False
+
+
+@pytest.mark.parametrize("option", [dict(cleanup=True), dict(split_merge=True), dict(tol=0.01),
+                                    dict(center_tol=0.1), dict(coarsen=50)])
+def test_paper_switch_refuses_what_the_paper_does_not_do(sphere, option):
+    from superfacets import ParameterError
+
+    with pytest.raises(ParameterError, match="paper=True is the paper's method"):
+        segment(sphere, 20, paper=True, **option)
+
+
+def test_fast_split_merge_schedule_keeps_k_connected_and_is_deterministic(sphere):
+    from superfacets.connectivity import label_components
+    from superfacets.elements import face_graph
+
+    one = segment(sphere, 30, split_merge=True, cleanup=True, n_threads=1)
+    two = segment(sphere, 30, split_merge=True, cleanup=True, n_threads=2)
+    np.testing.assert_array_equal(one.labels, two.labels)
+    assert one.n_segments == 30
+    assert label_components(face_graph(sphere), one.labels).max() + 1 == 30
+    # the early schedule: fewer passes than iterating to convergence before the swaps
+    slow = segment(sphere, 30, split_merge=True, cleanup=True, tol=0.0)
+    assert one.timings["passes"] <= slow.timings["passes"]

@@ -84,6 +84,7 @@ class SegmentParams:
     elements: str | None = None
     n_neighbors: int = 10
     neighbor_radius: float | None = None
+    paper: bool = False
 
     def as_dict(self) -> dict:
         """The parameters as a plain dict."""
@@ -242,6 +243,15 @@ def resolve(**params) -> SegmentParams:
     if unknown:
         raise ParameterError(f"unknown parameter(s) {', '.join(sorted(unknown))}")
     p = replace(DEFAULTS, **params)
+    if check_bool("paper", p.paper):  # the paper's method as published, bit for bit
+        extra = [name for name, on in (("cleanup", p.cleanup), ("split_merge", p.split_merge),
+                                       ("tol", p.tol not in (0, DEFAULTS.tol)),
+                                       ("center_tol", p.center_tol is not None),
+                                       ("coarsen", p.coarsen not in (None, 1))) if on]
+        if extra:
+            raise ParameterError(f"paper=True is the paper's method as published; it does not "
+                                 f"go with {', '.join(extra)}")
+        p = replace(p, tol=0.0)
     if p.radius is not None and p.n_segments not in (None, DEFAULTS.n_segments):
         raise ParameterError("give either n_segments or radius, not both")
     n_segments = None if p.radius is not None else (
@@ -278,7 +288,8 @@ def resolve(**params) -> SegmentParams:
         elements=None if p.elements is None else check_choice("elements", p.elements, ELEMENTS),
         n_neighbors=check_int("n_neighbors", p.n_neighbors, lo=1, hi=MAX_NEIGHBORS),
         neighbor_radius=None if p.neighbor_radius is None else check_positive(
-            "neighbor_radius", p.neighbor_radius))
+            "neighbor_radius", p.neighbor_radius),
+        paper=bool(p.paper))
 
 
 def superfacet_size(params: SegmentParams, area: float, diagonal: float,

@@ -12,7 +12,9 @@ the public functions of :mod:`superfacets.segmentation` call it) and returns a
    (:mod:`superfacets.passes`, with a strategy of :mod:`superfacets.classify`);
 6. empty superfacets dropped, stray pieces merged (connectivity);
    with ``split_merge=True``, rounds of K-preserving swaps, each followed by
-   the passes again (:mod:`superfacets.splitmerge`);
+   the passes again (:mod:`superfacets.splitmerge`; with ``tol > 0`` the swaps
+   come once a pass changes at most ``START_TOL`` of the area, one round, and at
+   most ``PASSES_AFTER`` passes follow);
 7. with ``cleanup=True``, the boundaries re-placed (:mod:`superfacets.cleanup`);
 8. the result.
 """
@@ -166,16 +168,22 @@ def _pipeline(mesh, params: SegmentParams, *, replay: bool, jump_cycles: bool
         try:
             classifier = make_classifier(p.assignment, graph, w, window_r2, spaces,
                                          replay=replay)
+            fast = p.split_merge and p.tol > 0  # swaps early, few passes after them
+            if fast:
+                from .splitmerge import FAST_ROUNDS, PASSES_AFTER, START_TOL
             it = iterate(classifier, centers, init.shape[0], sizes, positions, p.max_iter,
-                         jump_cycles=jump_cycles, tol=p.tol, min_move=center_tol * r, bar=bar)
+                         jump_cycles=jump_cycles, tol=max(p.tol, START_TOL) if fast else p.tol,
+                         min_move=center_tol * r, bar=bar)
             if p.split_merge:
-                from .splitmerge import swap_and_iterate
+                from .splitmerge import ROUNDS, swap_and_iterate
 
                 _stage(bar, "split and merge")
                 it, timings["swaps"] = swap_and_iterate(
                     it, graph, w, classifier, centers, sizes, positions, p.max_iter,
                     window_r2=window_r2, jump_cycles=jump_cycles, tol=p.tol,
-                    min_move=center_tol * r, n_threads=spaces.n_threads)
+                    min_move=center_tol * r, n_threads=spaces.n_threads,
+                    rounds=FAST_ROUNDS if fast else ROUNDS,
+                    passes_after=PASSES_AFTER if fast else None)
         finally:
             spaces.close()
         classifier = spaces = w = None  # free the work buffers before the clean-up

@@ -32,7 +32,8 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
                 progress: bool = _D.progress,
                 n_threads: int | None = _D.n_threads, elements: str | None = _D.elements,
                 n_neighbors: int = _D.n_neighbors,
-                neighbor_radius: float | None = _D.neighbor_radius) -> np.ndarray:
+                neighbor_radius: float | None = _D.neighbor_radius,
+                paper: bool = _D.paper) -> np.ndarray:
     """Over-segment a mesh (its faces or vertices) or a point cloud into superfacets.
 
     The k-means-style method of Simari, Picciau and De Floriani (2014):
@@ -96,6 +97,13 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
         iteration runs again from the new centers. Same number of
         superfacets; False gives the paper's labels bit for bit
         (``docs/cleanup.md`` has the measurements).
+    paper : bool, default False
+        The paper's method as published (Simari, Picciau, De Floriani 2014,
+        section 3): its stopping rule (``tol=0``, no center tolerance, no
+        coarse-to-fine), no clean-up, no split-and-merge; its labels bit for
+        bit (tested against a straightforward implementation of the paper).
+        Raises :class:`~superfacets.errors.ParameterError` with any of
+        ``cleanup``, ``split_merge``, ``tol``, ``center_tol`` or ``coarsen``.
     tol : float, default 0.001
         Convergence tolerance in ``[0, 1]``: also stop once a classification
         changes the superfacet of at most this fraction of the surface area
@@ -181,7 +189,8 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
                    cleanup=cleanup, split_merge=split_merge, tol=tol, center_tol=center_tol,
                    coarsen=coarsen,
                    progress=progress, n_threads=n_threads, elements=elements,
-                   n_neighbors=n_neighbors, neighbor_radius=neighbor_radius).labels
+                   n_neighbors=n_neighbors, neighbor_radius=neighbor_radius,
+                   paper=paper).labels
 
 
 def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | None = _D.radius,
@@ -195,7 +204,8 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | Non
             progress: bool = _D.progress,
             n_threads: int | None = _D.n_threads, elements: str | None = _D.elements,
             n_neighbors: int = _D.n_neighbors,
-            neighbor_radius: float | None = _D.neighbor_radius) -> SegmentationResult:
+            neighbor_radius: float | None = _D.neighbor_radius,
+            paper: bool = _D.paper) -> SegmentationResult:
     """Superfacets with details: same parameters as :func:`superfacets`.
 
     Returns
@@ -235,7 +245,7 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | Non
                      cleanup=cleanup, split_merge=split_merge, tol=tol,
                      center_tol=center_tol, coarsen=coarsen,
                    progress=progress, n_threads=n_threads, elements=elements,
-                     n_neighbors=n_neighbors, neighbor_radius=neighbor_radius)
+                     n_neighbors=n_neighbors, neighbor_radius=neighbor_radius, paper=paper)
     return pipeline(mesh, params)
 
 

@@ -118,6 +118,9 @@ def add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> No
                         "merge as many pairs of neighbours elsewhere, then iterate again; same "
                         "number of superfacets (--no-split-merge: the paper's labels bit for "
                         f"bit) (default: {'on' if _D.split_merge else 'off'})")
+    p.add_argument("--paper", action="store_true",
+                   help="the paper's method as published, its labels bit for bit: its "
+                        "stopping rule (--tol 0), no clean-up, no split-and-merge")
     p.add_argument("--threads", type=int_arg, default=None, metavar="N",
                    help="threads of the run: graph build, expansions, split-and-merge "
                         "searches, clean-up cuts (default: all cores; the labels do not "
@@ -154,7 +157,8 @@ def method_kwargs(args) -> dict:
                 init=args.init, max_iter=args.max_iter, weighting=args.weighting,
                 assignment=args.assignment, enforce_connectivity=not args.no_connectivity,
                 cleanup=args.cleanup, split_merge=args.split_merge, tol=args.tol, center_tol=args.center_tol,
-                coarsen=args.coarsen, progress=bool(args.progress), n_threads=args.threads)
+                coarsen=args.coarsen, progress=bool(args.progress), n_threads=args.threads,
+                paper=args.paper)
 
 
 def add_camera_options(p, size: str) -> None:
