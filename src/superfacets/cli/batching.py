@@ -93,6 +93,9 @@ def cmd_batch(args) -> int:
               f"done" + (f", {s.inputs - ran - s.done_before} not run" if s.interrupted else "")
               + (f"; {ran} run {s.engine} in {s.seconds:.1f} s" if ran else "")
               + f" -> {s.manifest}")
+        if args.picture or args.html:
+            print("pictures and pages drawn with up axis " + (
+                args.up or "y (the default: --up z for z-up meshes)"))
         for path, error in s.failures[:10]:
             print(f"failed: {path}: {error}", file=sys.stderr)
         if len(s.failures) > 10:
