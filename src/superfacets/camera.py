@@ -93,6 +93,7 @@ def view_frame(mesh, view=None, elevation: float = 20.0,
     InvalidMeshError
         If the mesh's coordinates are too large to measure its spread.
     """
+    check_camera(view, up)
     c = mesh.centroids
     with np.errstate(over="ignore", invalid="ignore"):
         w = mesh.areas / max(mesh.area, 1e-300)
@@ -104,20 +105,13 @@ def view_frame(mesh, view=None, elevation: float = 20.0,
                                "a camera (their squares overflow double precision); rescale "
                                "the mesh (e.g. to unit size)")
     evals, evecs = np.linalg.eigh(cov)
-    if isinstance(up, str):
-        if up not in AXES:
-            raise ParameterError(f"unknown up axis {up!r}; use one of {', '.join(AXES)}")
-        up_axis = np.array(AXES[up], dtype=float)
-    else:
-        up_axis = _direction(up, "up")
+    up_axis = np.array(AXES[up], dtype=float) if isinstance(up, str) else _direction(up, "up")
     if view is None or (isinstance(view, str) and view == "auto"):
         d = evecs[:, 0]  # the axis of least spread: the widest silhouette
         # face the camera from the positive side of the dominant world axis of d
         if d[np.argmax(np.abs(d))] < 0:
             d = -d
     elif isinstance(view, str):
-        if view not in VIEWS:
-            raise ParameterError(f"unknown view {view!r}; use auto, {', '.join(VIEWS)} or x,y,z")
         d = np.array(VIEWS[view], dtype=float)
     else:
         d = _direction(view, "view direction")
