@@ -102,8 +102,10 @@ def compute(sources: dict[str, Path], progress: bool = False):
             mesh_name, mesh = name, read_mesh(sources[name])
         if progress:
             print(f"\r{i + 1}/{len(todo)} {name:<14}", end="", file=sys.stderr, flush=True)
-        # tol = 0: the paper's stopping rule (the snapshot guards the paper's labels)
-        yield run_key(name, kw), segment(mesh, **{"tol": 0.0, **kw}).labels
+        # the paper's method: its stopping rule (tol = 0), no clean-up, no split-and-merge
+        # (the snapshot guards the paper's labels; the default adds both on faces)
+        yield run_key(name, kw), segment(mesh, **{"tol": 0.0, "cleanup": False,
+                                                   "split_merge": False, **kw}).labels
     if progress:
         print(file=sys.stderr)
 

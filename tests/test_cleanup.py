@@ -91,9 +91,9 @@ def test_pipeline_cleanup_on_real_meshes(psb):
         by_cat.setdefault(m.category, m)
     for bm in list(by_cat.values())[:5]:
         mesh = bm.load()
-        paper = segment(mesh, 60)
-        clean = segment(mesh, 60, cleanup=True)
-        again = segment(mesh, 60, cleanup=True, n_threads=1)
+        paper = segment(mesh, 60, paper=True)
+        clean = segment(mesh, 60, cleanup=True, split_merge=False, tol=0)
+        again = segment(mesh, 60, cleanup=True, split_merge=False, tol=0, n_threads=1)
         assert np.array_equal(clean.labels, again.labels), bm.id  # deterministic, any threads
         k = paper.n_segments
         assert clean.n_segments == k and int(clean.labels.max()) + 1 == k, bm.id

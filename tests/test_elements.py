@@ -205,7 +205,7 @@ def test_released_terms_come_back_the_same(sphere):
 
     g = face_graph(sphere)
     geo = g.terms.geo.copy()
-    segment(sphere, 10)  # the pipeline releases them once the weights are made
+    segment(sphere, 10, paper=True)  # without the clean-up, released once the weights are made
     assert "terms" not in g.__dict__
     np.testing.assert_array_equal(g.terms.geo, geo)
 

@@ -365,8 +365,8 @@ def test_cycle_jump_gives_the_labels_of_running_every_pass(psb, mesh_id, max_ite
     # the optimized run classifies only until the cycle shows, then the state of the
     # last pass; the reference runs all max_iter passes
     mesh = read_mesh(psb / "off" / f"{mesh_id}.off")
-    a = segment(mesh, 60, alpha=1000, max_iter=max_iter, tol=0)  # the paper's rule: cycles
-    b = reference(mesh, 60, alpha=1000, max_iter=max_iter, tol=0)
+    a = segment(mesh, 60, alpha=1000, max_iter=max_iter, paper=True)  # the paper's rule: cycles
+    b = reference(mesh, 60, alpha=1000, max_iter=max_iter, paper=True)
     assert a.timings["cycle_period"] >= 2 and a.timings["passes"] < max_iter
     assert b.timings["passes"] == max_iter and b.timings["cycle_period"] == 0
     np.testing.assert_array_equal(a.labels, b.labels)
@@ -393,17 +393,18 @@ def test_import_does_no_work_and_warmup_starts_only_when_asked():
 
 def test_tol_zero_is_the_paper_rule_and_tol_stops_early(psb):
     mesh = read_mesh(psb / "off" / "124.off")  # falls into a cycle at alpha 1000
-    same = segment(mesh, 60, alpha=1000, max_iter=40, tol=0.0)
-    base = reference(mesh, 60, alpha=1000, max_iter=40, tol=0.0)  # every pass, no jump
+    same = segment(mesh, 60, alpha=1000, max_iter=40, paper=True)
+    base = reference(mesh, 60, alpha=1000, max_iter=40, paper=True)  # every pass, no jump
     np.testing.assert_array_equal(base.labels, same.labels)
     assert same.timings["changed"] == -1.0 and not same.timings["stopped_by_tol"]
-    default = segment(mesh, 60, alpha=1000, max_iter=40)  # tol = 0.001
+    paper_passes = dict(cleanup=False, split_merge=False)  # the passes alone, tol aside
+    default = segment(mesh, 60, alpha=1000, max_iter=40, **paper_passes)  # tol = 0.001
     assert default.params["tol"] == 0.001 and default.n_iter <= same.n_iter
-    early = segment(mesh, 60, alpha=1000, max_iter=40, tol=0.01)
+    early = segment(mesh, 60, alpha=1000, max_iter=40, tol=0.01, **paper_passes)
     assert early.timings["stopped_by_tol"] and early.converged
     assert early.n_iter < base.n_iter and 0 <= early.timings["changed"] <= 0.01
     # the rule against the plain loop: the labels of the pass where the change fell below tol
-    plain = reference(mesh, 60, alpha=1000, max_iter=early.n_iter, tol=0.01)
+    plain = reference(mesh, 60, alpha=1000, max_iter=early.n_iter, tol=0.01, **paper_passes)
     np.testing.assert_array_equal(early.labels, plain.labels)
     with pytest.raises(ParameterError, match="tol"):
         segment(mesh, 60, tol=-0.1)

@@ -76,8 +76,8 @@ def test_the_window_forbids_merging_beyond_its_reach():
 
 def test_split_merge_invariants_on_a_real_mesh():
     mesh = read_mesh(need(MESHES / "bunny.tri.xz"))
-    paper = segment(mesh, 150)
-    r = segment(mesh, 150, split_merge=True)
+    paper = segment(mesh, 150, split_merge=False, cleanup=False)
+    r = segment(mesh, 150, split_merge=True, cleanup=False)
     assert r.timings["swaps"] > 0
     assert r.params["split_merge"] is True
     k = r.n_segments
@@ -85,7 +85,7 @@ def test_split_merge_invariants_on_a_real_mesh():
     assert k == paper.n_segments  # the swaps keep K, and a round that adds one is undone
     comps = label_components(face_graph(mesh), r.labels)
     assert np.unique(comps).size == k  # every superfacet connected
-    again = segment(mesh, 150, split_merge=True, n_threads=1)
+    again = segment(mesh, 150, split_merge=True, cleanup=False, n_threads=1)
     np.testing.assert_array_equal(again.labels, r.labels)  # deterministic, any threads
     assert not np.array_equal(r.labels, paper.labels)
     # the candidates evaluated on 1 or 3 threads: the same swaps
@@ -125,13 +125,33 @@ def test_pruned_candidates_give_the_swaps_of_the_full_evaluation(k, monkeypatch)
 
 def test_split_merge_off_is_the_paper():
     mesh = grid_mesh(30, 30, height=lambda x, y: 0.3 * np.abs(x))
-    a = segment(mesh, 12, split_merge=False)
-    b = segment(mesh, 12)
+    a = segment(mesh, 12, split_merge=False, cleanup=False, tol=0)
+    b = segment(mesh, 12, paper=True)
     np.testing.assert_array_equal(a.labels, b.labels)
     assert "swaps" not in a.timings
 
 
-@pytest.mark.parametrize("bad", ["yes", 1, None])
+def test_both_are_on_by_default_for_faces_only():
+    mesh = grid_mesh(30, 30, height=lambda x, y: 0.3 * np.abs(x))
+    on = segment(mesh, 12)
+    assert on.params["split_merge"] is True and on.params["cleanup"] is True
+    assert "swaps" in on.timings and "cleanup" in on.timings
+    both = segment(mesh, 12, split_merge=True, cleanup=True)
+    np.testing.assert_array_equal(on.labels, both.labels)
+    paper = segment(mesh, 12, paper=True)
+    assert paper.params["split_merge"] is False and paper.params["cleanup"] is False
+    for elements in ("vertices",):  # not measured better there: the paper's method
+        v = segment(mesh, 12, elements=elements)
+        assert v.params["split_merge"] is False and v.params["cleanup"] is False
+    shl = segment(mesh, 12, weighting="shlafman", alpha=0.5)
+    assert shl.params["split_merge"] is False and shl.params["cleanup"] is False
+    with pytest.raises(ParameterError, match="cleanup"):
+        segment(mesh, 12, paper=True, cleanup=True)
+    np.testing.assert_array_equal(segment(mesh, 12, paper=True, cleanup=False).labels,
+                                  paper.labels)
+
+
+@pytest.mark.parametrize("bad", ["yes", 1])
 def test_split_merge_is_checked(bad):
     with pytest.raises(ParameterError, match="split_merge"):
         segment(grid_mesh(4, 4), 2, split_merge=bad)
@@ -145,7 +165,7 @@ def test_a_round_that_changes_the_number_of_superfacets_is_undone(monkeypatch):
     from superfacets import passes
 
     mesh = read_mesh(need(MESHES / "bunny.tri.xz"))
-    paper = segment(mesh, 150, tol=0)  # the passes to convergence before the swaps
+    paper = segment(mesh, 150, paper=True)  # the passes to convergence before the swaps
     real = passes.iterate
 
     def emptying(*args, **kwargs):
@@ -155,7 +175,7 @@ def test_a_round_that_changes_the_number_of_superfacets_is_undone(monkeypatch):
         return replace(it, label=label)
 
     monkeypatch.setattr(passes, "iterate", emptying)
-    r = segment(mesh, 150, split_merge=True, tol=0)
+    r = segment(mesh, 150, split_merge=True, cleanup=False, tol=0)
     assert r.timings["swaps"] == 0
     np.testing.assert_array_equal(r.labels, paper.labels)
     fast = segment(mesh, 150, split_merge=True)  # early swaps: undone the same way

@@ -33,7 +33,7 @@ from .expansion import Workspaces
 from .labels import relabel_dense
 from .elements.inputs import elements_of
 from .multilevel import start_centers
-from .params import DEFAULTS, SegmentParams, superfacet_size
+from .params import DEFAULTS, SegmentParams, better_method, superfacet_size
 from .passes import final_centers, iterate
 from .weights import csr_weights, edge_weights
 
@@ -62,8 +62,10 @@ class SegmentationResult:
     n_iter : int
         Number of classification passes run.
     converged : bool
-        True if the last center update moved no center (else ``max_iter``
-        stopped the run).
+        True if the run stopped by its rule: the last center update moved no
+        center, a pass changed at most ``tol`` of the area, or the passes
+        after the split-and-merge swaps were done; False if ``max_iter``
+        stopped it.
     radius : float
         Superfacet radius ``r`` used, in mesh units.
     n_orphan_seeds : int
@@ -90,11 +92,105 @@ class SegmentationResult:
     n_orphan_seeds: int
     timings: dict = field(default_factory=dict)
     params: dict = field(default_factory=dict)
+    #: The input's element graph and the label of each element (not of each row),
+    #: for :meth:`graph` and :meth:`hierarchy`.
+    elements: object = field(default=None, repr=False, compare=False)
+    element_labels: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     @property
     def n_segments(self) -> int:
         """Number of superfacets ``K`` produced."""
         return int(self.centers.shape[0])
+
+    def graph(self, features=None):
+        """The superfacet (superpoint) adjacency graph of this result.
+
+        Parameters
+        ----------
+        features : (N, d) float ndarray, optional
+            One feature per input row (face, vertex or point, e.g. RGB
+            colour); ``feature`` of the graph is its area-weighted mean per
+            superfacet (rows that are not elements are left out).
+
+        Returns
+        -------
+        SuperfacetGraph
+            ``edge_index`` (2, E), ``border_length``, ``mean_angle``,
+            ``concave``, ``area``, ``centroid``, ``normal``, ``feature``;
+            ``to_scipy()``, ``to_networkx()``, ``save(path)``
+            (:mod:`superfacets.adjacency`).
+
+        Raises
+        ------
+        ParameterError
+            If ``features`` does not have one finite row per input row.
+
+        Examples
+        --------
+        >>> import trimesh
+        >>> from superfacets import segment
+        >>> r = segment(trimesh.creation.icosphere(subdivisions=3), 12)
+        >>> g = r.graph()
+        >>> g.n_segments, g.edge_index.shape[0], bool((g.border_length > 0).all())
+        (12, 2, True)
+        """
+        from .adjacency import superfacet_graph
+
+        src = self._source()
+        return superfacet_graph(src.graph, self.element_labels, _per_element(src, features))
+
+    def hierarchy(self, levels, *, beta: float = 0.0, features=None):
+        """Nested coarser levels of these superfacets, each segment connected
+        (:func:`superfacets.hierarchy.hierarchy`, with this run's ``alpha`` and
+        ``eta_convex``).
+
+        Parameters
+        ----------
+        levels : int or sequence of int
+            Numbers of segments of the levels, each at most ``K``.
+        beta : float, default 0
+            Weight of the feature difference (needs ``features``).
+        features : (N, d) float ndarray, optional
+            One feature per input row, as :meth:`graph`.
+
+        Returns
+        -------
+        Hierarchy
+            ``.parents[i]``: the parent of each segment of the level below;
+            ``.labels(i, result.labels)``: one label per input row at level ``i``.
+
+        Raises
+        ------
+        ParameterError
+            If a level is out of range.
+        """
+        from .hierarchy import hierarchy
+
+        return hierarchy(self.graph(features), levels, alpha=self.params.get("alpha", 200.0),
+                         eta_convex=self.params.get("eta_convex", 0.2), beta=beta)
+
+    def _source(self):
+        if self.elements is None or self.element_labels is None:
+            from .errors import ParameterError
+
+            raise ParameterError("this result holds no element graph (made by hand?): use "
+                                 "superfacets.adjacency.superfacet_graph(graph, labels)")
+        return self.elements
+
+
+def _per_element(src, features):
+    """Per-row features of an input -> per-element features (the first row of each)."""
+    if features is None:
+        return None
+    from .errors import ParameterError
+
+    f = np.asarray(features, dtype=np.float64)
+    f = f.reshape(-1, 1) if f.ndim == 1 else f
+    if f.ndim != 2 or f.shape[0] != src.n_rows:
+        raise ParameterError(f"features must have one row per input row ({src.n_rows}), "
+                             f"got shape {np.shape(features)}")
+    rows = src.first_rows(np.arange(src.graph.n_elements))
+    return f[rows]
 
 
 def pipeline(mesh, params: SegmentParams, *, replay: bool = True,
@@ -132,6 +228,7 @@ def _pipeline(mesh, params: SegmentParams, *, replay: bool, jump_cycles: bool
     graph = source.graph
     t_graph = time.perf_counter() - t
     k, r = superfacet_size(p, graph.area, graph.diagonal, graph.n_elements, graph.kind)
+    cleanup, split_merge = better_method(p, graph.kind)
     timings: dict[str, float] = {}
     bar = None
     if p.progress:  # one bar: the set-up stages by name, then the passes
@@ -145,7 +242,7 @@ def _pipeline(mesh, params: SegmentParams, *, replay: bool, jump_cycles: bool
         t = time.perf_counter()
         w_pairs = edge_weights(graph, p.weighting, alpha=p.alpha, eta_convex=p.eta_convex)
         w = csr_weights(graph, w_pairs)
-        if not p.cleanup:
+        if not cleanup:
             graph.release_terms()  # not needed again by this run; 17 B per adjacency
         timings["weights"] = time.perf_counter() - t
 
@@ -168,13 +265,13 @@ def _pipeline(mesh, params: SegmentParams, *, replay: bool, jump_cycles: bool
         try:
             classifier = make_classifier(p.assignment, graph, w, window_r2, spaces,
                                          replay=replay)
-            fast = p.split_merge and p.tol > 0  # swaps early, few passes after them
+            fast = split_merge and p.tol > 0  # swaps early, few passes after them
             if fast:
                 from .splitmerge import FAST_ROUNDS, PASSES_AFTER, START_TOL
             it = iterate(classifier, centers, init.shape[0], sizes, positions, p.max_iter,
                          jump_cycles=jump_cycles, tol=max(p.tol, START_TOL) if fast else p.tol,
                          min_move=center_tol * r, bar=bar)
-            if p.split_merge:
+            if split_merge:
                 from .splitmerge import ROUNDS, swap_and_iterate
 
                 _stage(bar, "split and merge")
@@ -192,7 +289,7 @@ def _pipeline(mesh, params: SegmentParams, *, replay: bool, jump_cycles: bool
         if bar is not None:
             bar.close()
         raise
-    if bar is not None and not p.cleanup:
+    if bar is not None and not cleanup:
         bar.close()
 
     # labels of the last classification; drop superfacets left empty
@@ -201,11 +298,11 @@ def _pipeline(mesh, params: SegmentParams, *, replay: bool, jump_cycles: bool
     present[it.label] = True
     labels = relabel_dense(it.label)
     centers = it.centers[present]
-    if p.enforce_connectivity and not p.cleanup:  # the clean-up ends with it
+    if p.enforce_connectivity and not cleanup:  # the clean-up ends with it
         labels = _enforce_connectivity(graph, labels, centers)
     centers = final_centers(labels, centers, sizes, positions)
     timings["connectivity"] = time.perf_counter() - t
-    if p.cleanup:
+    if cleanup:
         _stage(bar, "clean-up")
         t = time.perf_counter()
         try:
@@ -218,6 +315,7 @@ def _pipeline(mesh, params: SegmentParams, *, replay: bool, jump_cycles: bool
         centers = final_centers(labels, centers, sizes, positions)
         timings["cleanup"] = time.perf_counter() - t
     centers = source.first_rows(centers)
+    element_labels = labels
     labels = source.to_rows(labels)
     timings["total"] = time.perf_counter() - t_start
     timings.update(expansions=it.expansions, passes=it.n_passes, cycle_period=it.cycle_period,
@@ -225,8 +323,8 @@ def _pipeline(mesh, params: SegmentParams, *, replay: bool, jump_cycles: bool
     resolved = dict(n_segments=k, radius=r / graph.diagonal, alpha=p.alpha,
                     eta_convex=p.eta_convex, window=p.window, init=p.init,
                     max_iter=p.max_iter, weighting=p.weighting, assignment=p.assignment,
-                    enforce_connectivity=p.enforce_connectivity, cleanup=p.cleanup,
-                    split_merge=p.split_merge, tol=p.tol,
+                    enforce_connectivity=p.enforce_connectivity, cleanup=cleanup,
+                    split_merge=split_merge, tol=p.tol,
                     center_tol=center_tol, coarsen=ratio,
                     n_init_centers=init.shape[0], elements=graph.kind)
     if graph.kind == "points":
@@ -234,7 +332,8 @@ def _pipeline(mesh, params: SegmentParams, *, replay: bool, jump_cycles: bool
     return SegmentationResult(labels=labels, centers=centers, n_iter=it.n_iter,
                               converged=it.converged, radius=r,
                               n_orphan_seeds=it.n_orphan_seeds, timings=timings,
-                              params=resolved)
+                              params=resolved, elements=source,
+                              element_labels=element_labels)
 
 
 def _stage(bar, name: str) -> None:

@@ -64,7 +64,7 @@ FAST_ROUNDS = 1
 #: for 1.05 times the paper's time (0.98 with 2 passes after, UE -6.1 %, compactness
 #: -15.0 %), where swapping after converged passes (up to three rounds, each iterated to
 #: convergence) took 1.4-2.7 times (docs/cleanup.md, "Split-and-merge at the paper's speed").
-PASSES_AFTER = 3
+PASSES_AFTER = 2
 
 
 class _Threads:
@@ -299,7 +299,8 @@ def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.nda
     than ``min_move`` stays, so the expansions of untouched superfacets are
     replayed). ``centers`` is the work array of :func:`~superfacets.passes.iterate`;
     ``iterate_kw`` goes to it. ``passes_after`` bounds the passes after each
-    round (default: ``max_iter``).
+    round (default: ``max_iter``); passes stopped by that bound count as
+    converged (the schedule's end, not ``max_iter``).
 
     Returns
     -------
@@ -333,9 +334,11 @@ def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.nda
             hold_small_moves(moved, old, positions, min_move)
         moved = moved[moved >= 0]
         centers[:moved.shape[0]] = moved
-        after = iterate(classifier, centers, moved.shape[0], sizes, positions,
-                        max_iter if passes_after is None else min(max_iter, passes_after),
+        bound = max_iter if passes_after is None else min(max_iter, passes_after)
+        after = iterate(classifier, centers, moved.shape[0], sizes, positions, bound,
                         min_move=min_move, **iterate_kw)
+        if bound < max_iter and after.n_iter >= bound:  # the schedule's end, not max_iter
+            after = replace(after, converged=True)
         n_iter += after.n_iter
         n_passes += after.n_passes
         expansions += after.expansions

@@ -1,0 +1,216 @@
+"""A nested hierarchy of superfacets: adjacent superfacets merged, cheapest first.
+
+Starting from the superfacet graph (:mod:`superfacets.adjacency`), two
+adjacent nodes ``A`` and ``B`` are merged greedily, the cheapest pair first,
+until each requested number of segments is reached. The cost of a merge is
+Ward's (the rise of the area-weighted squared spread of the centroids, what
+compactness measures) scaled as the paper's weights scale a crossing:
+
+``cost(A, B) = a_A a_B / (a_A + a_B) * |c_A - c_B|^2 * (1 + alpha * s_AB / pi)
+* (1 + beta * |f_A - f_B|)``
+
+with ``a`` the areas, ``c`` the centroids, ``f`` the mean features and
+``s_AB`` the border's mean angle times its mean ``eta`` (1 on the concave
+share of the border, ``eta_convex`` on the rest; paper eqs. 2-3): merging
+across a concave crease costs what crossing it costs the superfacets. Merges
+only join adjacent nodes, so every segment of every level is connected when
+the superfacets are (the method's default), and the levels are nested.
+
+Not in the paper (superpoint hierarchies are what graph networks on scans
+use, e.g. Superpoint Transformer's partition); ``docs/superpoints.md``.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import ParameterError
+from .params import check_int, check_nonneg
+
+__all__ = ["Hierarchy", "hierarchy"]
+
+
+@dataclass(frozen=True)
+class Hierarchy:
+    """Nested levels of segments over ``K`` superfacets.
+
+    Attributes
+    ----------
+    levels : tuple of int
+        Number of segments of each level, decreasing.
+    parents : tuple of (n_i,) int64 ndarrays
+        ``parents[0][s]``: the segment of level 0 holding superfacet ``s``;
+        ``parents[i][t]``: the segment of level ``i`` holding segment ``t``
+        of level ``i - 1``. Segments of each level are numbered ``0..n-1``
+        in the order of their lowest superfacet.
+    """
+
+    levels: tuple
+    parents: tuple
+
+    def of_superfacets(self, level: int) -> np.ndarray:
+        """``(K,)`` int64: the segment of level ``level`` of each superfacet."""
+        level = check_int("level", level, lo=0, hi=len(self.levels) - 1)
+        out = self.parents[0]
+        for i in range(1, level + 1):
+            out = self.parents[i][out]
+        return out
+
+    def labels(self, level: int, labels: np.ndarray) -> np.ndarray:
+        """Per-element (or per-row) labels of one level, from the superfacet labels
+        ``labels`` (``-1`` rows, such as invalid points, stay ``-1``)."""
+        lab = np.asarray(labels)
+        top = self.of_superfacets(level)
+        return np.where(lab >= 0, top[np.maximum(lab, 0)], -1)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """``levels`` and ``parent_<i>`` arrays, for ``np.savez``."""
+        out = {"levels": np.asarray(self.levels, dtype=np.int64)}
+        out.update({f"parent_{i}": p for i, p in enumerate(self.parents)})
+        return out
+
+
+def hierarchy(graph, levels, *, alpha: float = 200.0, eta_convex: float = 0.2,
+              beta: float = 0.0) -> Hierarchy:
+    """Merge adjacent superfacets, cheapest first, into nested levels (module notes).
+
+    Parameters
+    ----------
+    graph : SuperfacetGraph
+        Of the superfacets to merge (:func:`superfacets.adjacency.superfacet_graph`).
+    levels : int or sequence of int
+        Numbers of segments wanted, each in ``[c, K]`` with ``c`` the number of
+        connected pieces of the graph; sorted decreasing, repeats dropped.
+    alpha, eta_convex : float
+        The crease factor, as the method's weights (eqs. 2-3), ``>= 0``.
+    beta : float, default 0
+        Weight of the feature difference (``graph.feature``), ``>= 0``.
+
+    Returns
+    -------
+    Hierarchy
+
+    Raises
+    ------
+    ParameterError
+        If a level is out of range (the message gives the range), or a
+        factor is negative.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets import segment
+    >>> r = segment(trimesh.creation.icosphere(subdivisions=4), 40)
+    >>> h = r.hierarchy([20, 5])
+    >>> h.levels, [int(p.max()) + 1 for p in h.parents]
+    ((20, 5), [20, 5])
+    """
+    alpha = check_nonneg("alpha", alpha)
+    eta_convex = check_nonneg("eta_convex", eta_convex)
+    beta = check_nonneg("beta", beta)
+    k = graph.n_segments
+    wanted = [levels] if np.isscalar(levels) else list(levels)
+    if not wanted:
+        raise ParameterError("levels must name at least one number of segments")
+    wanted = sorted({check_int("levels", v, lo=1) for v in wanted}, reverse=True)
+    pieces = _pieces(graph)
+    if wanted[0] > k or wanted[-1] < pieces:
+        raise ParameterError(f"levels must lie in [{pieces}, {k}]: {k} superfacets in "
+                             f"{pieces} connected piece(s), and segments stay connected; "
+                             f"got {', '.join(map(str, wanted))}")
+    if beta > 0 and graph.feature is None:
+        raise ParameterError("beta > 0 needs the superfacets' features (graph.feature)")
+
+    area = graph.area.astype(np.float64).copy()
+    wsum = graph.centroid * area[:, None]  # area-weighted sums, merged by addition
+    fsum = None if graph.feature is None else graph.feature * area[:, None]
+    nbr: list[dict[int, list[float]]] = [dict() for _ in range(k)]
+    for t in range(graph.n_edges):
+        a, b = int(graph.edge_index[0, t]), int(graph.edge_index[1, t])
+        ln = float(graph.border_length[t])
+        stats = [ln, ln * float(graph.mean_angle[t]), ln * float(graph.concave[t])]
+        nbr[a][b] = stats
+        nbr[b][a] = list(stats)
+    version = np.zeros(k, dtype=np.int64)
+    owner = np.arange(k)  # union-find: the surviving node of each merged one
+
+    def find(s: int) -> int:
+        while owner[s] != s:
+            owner[s] = owner[owner[s]]
+            s = owner[s]
+        return s
+
+    def cost(a: int, b: int) -> float:
+        ln, ang, conc = nbr[a][b]
+        if ln > 0:
+            theta, share = ang / ln, conc / ln
+        else:
+            theta, share = 0.0, 0.0
+        s = theta * (share + eta_convex * (1.0 - share))
+        aa, ab = area[a], area[b]
+        tot = aa + ab
+        d2 = float(np.sum((wsum[a] / max(aa, 1e-300) - wsum[b] / max(ab, 1e-300)) ** 2))
+        c = (aa * ab / tot if tot > 0 else 0.0) * d2 * (1.0 + alpha * s / math.pi)
+        if beta > 0:
+            df = fsum[a] / max(aa, 1e-300) - fsum[b] / max(ab, 1e-300)
+            c *= 1.0 + beta * float(np.sqrt(np.sum(df * df)))
+        return c
+
+    heap = [(cost(a, b), a, b, 0, 0) for a in range(k) for b in nbr[a] if a < b]
+    heapq.heapify(heap)
+    parents = []
+    live = k
+    prev = np.arange(k)  # the level-before's segment of each superfacet
+    targets = [v for v in wanted]
+    while targets:
+        if live == targets[0]:
+            roots = np.array([find(s) for s in range(k)])
+            _, top = np.unique(roots, return_inverse=True)  # numbered by lowest superfacet
+            # each segment of the previous level lies in one segment of this one
+            parent = np.zeros(int(prev.max()) + 1, dtype=np.int64)
+            parent[prev] = top
+            parents.append(parent)
+            prev = top
+            targets.pop(0)
+            continue
+        c, a, b, va, vb = heapq.heappop(heap)
+        if owner[a] != a or owner[b] != b or version[a] != va or version[b] != vb:
+            continue  # stale: one of them merged or changed since
+        # merge b into a
+        owner[b] = a
+        area[a] += area[b]
+        wsum[a] += wsum[b]
+        if fsum is not None:
+            fsum[a] += fsum[b]
+        del nbr[a][b]
+        del nbr[b][a]
+        for c_, stats in nbr[b].items():
+            del nbr[c_][b]
+            if c_ in nbr[a]:
+                merged = [x + y for x, y in zip(nbr[a][c_], stats)]
+            else:
+                merged = list(stats)
+            nbr[a][c_] = merged
+            nbr[c_][a] = list(merged)
+        nbr[b] = {}
+        version[a] += 1
+        for c_ in nbr[a]:
+            lo, hi = (a, c_) if a < c_ else (c_, a)
+            heapq.heappush(heap, (cost(lo, hi), lo, hi, int(version[lo]), int(version[hi])))
+        live -= 1
+    return Hierarchy(levels=tuple(wanted), parents=tuple(parents))
+
+
+def _pieces(graph) -> int:
+    """Connected pieces of the superfacet graph."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    k = graph.n_segments
+    a, b = graph.edge_index
+    adj = coo_matrix((np.ones(a.shape[0], dtype=np.int8), (a, b)), shape=(k, k))
+    return int(connected_components(adj, directed=False)[0]) if k else 0

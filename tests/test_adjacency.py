@@ -1,0 +1,142 @@
+"""The superfacet graph and the hierarchy: known answers on synthetic inputs, invariants."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from superfacets import segment
+from superfacets.adjacency import superfacet_graph
+from superfacets.connectivity import label_components
+from superfacets.convert import as_mesh
+from superfacets.elements import face_graph
+from superfacets.errors import ParameterError
+from superfacets.hierarchy import hierarchy
+from conftest import grid_mesh
+
+
+def test_box_sides_known_answer():
+    box = as_mesh(trimesh.creation.box(extents=(1.0, 2.0, 3.0)))
+    g = face_graph(box)
+    sides = np.argmax(np.abs(box.normals), axis=1) * 2 + (box.normals.sum(axis=1) > 0)
+    labels = np.unique(sides, return_inverse=True)[1]
+    sg = superfacet_graph(g, labels)
+    assert (sg.n_segments, sg.n_edges) == (6, 12)
+    assert (sg.edge_index[0] < sg.edge_index[1]).all()
+    np.testing.assert_allclose(sg.mean_angle, np.pi / 2)  # every box edge is a right angle
+    np.testing.assert_allclose(sg.concave, 0.0)  # all convex
+    np.testing.assert_allclose(sg.area.sum(), 2 * (2 + 3 + 6))
+    # the border of two sides is the box edge they share: 1, 2 or 3 long
+    assert sorted(np.round(sg.border_length, 9).tolist()) == [1.0] * 4 + [2.0] * 4 + [3.0] * 4
+    for s in range(6):  # centroids are the face centers, normals the axes
+        assert np.isclose(np.abs(sg.normal[s]).max(), 1.0)
+        assert np.isclose(np.abs(sg.centroid[s]).max(), np.abs(sg.centroid[s] @ sg.normal[s]))
+    m = sg.to_scipy()
+    assert (m != m.T).nnz == 0 and m.nnz == 24
+    assert m[sg.edge_index[0, 0], sg.edge_index[1, 0]] == sg.border_length[0]
+
+
+def test_concave_border_and_features():
+    # a V-shaped valley: two flanks meeting in a concave crease along x = 0
+    mesh = grid_mesh(20, 10, height=lambda x, y: 0.5 * np.abs(x))
+    x = mesh.centroids[:, 0]
+    labels = (x > 0).astype(np.int64)
+    feat = np.c_[labels * 1.0, np.ones(mesh.n_faces)]
+    sg = superfacet_graph(face_graph(mesh), labels, feat)
+    assert sg.n_edges == 1
+    assert sg.concave[0] == pytest.approx(1.0)
+    assert sg.mean_angle[0] == pytest.approx(2 * np.arctan(0.5), rel=1e-6)
+    np.testing.assert_allclose(sg.feature, [[0, 1], [1, 1]])
+    with pytest.raises(ParameterError, match="features"):
+        superfacet_graph(face_graph(mesh), labels, feat[:-1])
+    with pytest.raises(ParameterError, match="every value"):
+        superfacet_graph(face_graph(mesh), labels * 2)
+
+
+def test_result_graph_and_networkx(tmp_path):
+    nx = pytest.importorskip("networkx")
+    mesh = as_mesh(trimesh.creation.icosphere(subdivisions=4))
+    r = segment(mesh, 30)
+    sg = r.graph()
+    assert sg.n_segments == r.n_segments
+    np.testing.assert_allclose(sg.area.sum(), mesh.area)
+    # each adjacency of the face graph across two labels is in the graph, and only those
+    g = face_graph(mesh)
+    a, b = r.labels[g.pairs[:, 0]], r.labels[g.pairs[:, 1]]
+    cross = {(min(p, q), max(p, q)) for p, q in zip(a, b) if p != q}
+    assert cross == set(map(tuple, sg.edge_index.T.tolist()))
+    G = sg.to_networkx()
+    assert G.number_of_nodes() == 30 and G.number_of_edges() == sg.n_edges
+    assert nx.is_connected(G)
+    sg.save(tmp_path / "g.npz")
+    with np.load(tmp_path / "g.npz") as z:
+        np.testing.assert_array_equal(z["edge_index"], sg.edge_index)
+
+
+def test_hierarchy_is_nested_connected_and_follows_creases():
+    # two flat plates joined by a sharp concave crease: the coarsest level of two
+    # segments splits at the crease, not across it
+    mesh = grid_mesh(40, 20, height=lambda x, y: 1.0 * np.abs(x))
+    r = segment(mesh, 24)
+    h = r.hierarchy([12, 6, 2])
+    assert h.levels == (12, 6, 2)
+    g = face_graph(mesh)
+    previous = r.labels
+    for i, n in enumerate(h.levels):
+        lab = h.labels(i, r.labels)
+        assert int(lab.max()) + 1 == n and np.unique(lab).size == n
+        assert np.unique(label_components(g, lab)).size == n  # each segment connected
+        # nested: every segment of the level below lies in one segment of this one
+        pairs = np.unique(np.c_[previous, lab], axis=0)
+        assert np.unique(pairs[:, 0]).size == pairs.shape[0]
+        previous = lab
+    top = h.labels(2, r.labels)
+    x = mesh.centroids[:, 0]
+    assert np.unique(top[x < -0.05]).size == 1 and np.unique(top[x > 0.05]).size == 1
+    assert top[x < -0.05][0] != top[x > 0.05][0]
+
+
+def test_hierarchy_levels_are_checked():
+    mesh = grid_mesh(10, 10)
+    r = segment(mesh, 8)
+    k = r.n_segments
+    with pytest.raises(ParameterError, match=rf"levels must lie in \[1, {k}\]"):
+        r.hierarchy([k + 1])
+    with pytest.raises(ParameterError, match="levels"):
+        r.hierarchy([])
+    with pytest.raises(ParameterError, match="levels"):
+        r.hierarchy([0])
+    with pytest.raises(ParameterError, match="beta"):
+        hierarchy(r.graph(), [2], beta=1.0)
+    assert r.hierarchy(k).parents[0].tolist() == list(range(k))  # K itself: the identity
+
+
+def test_hierarchy_of_two_pieces_stops_at_two():
+    a = trimesh.creation.icosphere(subdivisions=3)
+    b = a.copy()
+    b.apply_translation([5, 0, 0])
+    both = as_mesh(trimesh.util.concatenate([a, b]))
+    r = segment(both, 20)
+    h = r.hierarchy([2])
+    top = h.labels(0, r.labels)
+    half = both.n_faces // 2
+    assert np.unique(top[:half]).size == 1 and np.unique(top[half:]).size == 1
+    with pytest.raises(ParameterError, match="2 connected piece"):
+        r.hierarchy([1])
+
+
+def test_superpoint_graph_of_a_cloud_keeps_rows():
+    rng = np.random.default_rng(0)
+    pts = rng.random((3000, 3)) * [1, 1, 0.01]
+    pts[5] = np.nan
+    from superfacets.cloud import PointCloud
+
+    cloud = PointCloud(pts, allow_invalid=True)
+    r = segment(cloud, 10)
+    assert r.labels[5] == -1
+    sg = r.graph(features=np.c_[pts[:, :1]])  # a NaN row that is not an element is skipped
+    assert sg.n_segments == r.n_segments and sg.feature.shape == (r.n_segments, 1)
+    h = r.hierarchy([3])
+    top = h.labels(0, r.labels)
+    assert top[5] == -1 and set(np.unique(top[top >= 0])) == {0, 1, 2}
