@@ -140,3 +140,30 @@ def test_superpoint_graph_of_a_cloud_keeps_rows():
     h = r.hierarchy([3])
     top = h.labels(0, r.labels)
     assert top[5] == -1 and set(np.unique(top[top >= 0])) == {0, 1, 2}
+
+
+def test_cli_writes_the_graph_and_the_levels(tmp_path, capsys):
+    from superfacets.cli import main
+    from superfacets.io import write_mesh
+
+    mesh = grid_mesh(30, 30, height=lambda x, y: np.abs(x))
+    path = tmp_path / "v.off"
+    write_mesh(path, mesh)
+    out = tmp_path / "g.npz"
+    assert main(["segment", str(path), "-k", "20", "--graph", str(out), "--levels", "8,3",
+                 "-o", str(tmp_path / "v.seg")]) == 0
+    assert "g.npz (superfacet graph)" in capsys.readouterr().out
+    with np.load(out) as z:
+        k = int(z["labels"].max()) + 1
+        assert z["edge_index"].shape[0] == 2 and z["area"].shape == (k,)
+        assert z["levels"].tolist() == [8, 3]
+        assert z["parent_0"].shape == (k,) and z["parent_1"].shape == (8,)
+        np.testing.assert_array_equal(z["labels_1"], z["parent_1"][z["parent_0"]][z["labels"]])
+    # a level beyond K: one clear error, nothing written
+    bad = tmp_path / "bad.npz"
+    assert main(["segment", str(path), "-k", "20", "--graph", str(bad), "--levels", "500",
+                 "-o", str(tmp_path / "bad.seg")]) == 2
+    assert "levels must lie in" in capsys.readouterr().err
+    assert not bad.exists() and not (tmp_path / "bad.seg").exists()
+    assert main(["segment", str(path), "--levels", "5"]) == 2
+    assert "--levels goes with --graph" in capsys.readouterr().err

@@ -232,9 +232,14 @@ def test_ncuts_rejects_bad_parameters(ball):
 def test_every_registered_method_has_one_call_shape(name):
     sphere = as_mesh(trimesh.creation.icosphere(subdivisions=2))
     method = METHODS[name]
+    if name == "cut_pursuit":
+        pytest.importorskip("cut_pursuit_py", reason="the baselines extra")
+    faces = "faces" in method.elements
+    extra = {} if faces else {"elements": "vertices"}  # a method of vertices and points
     for cfg in expand_grid(name, **{k: list(v) for k, v in method.sweep.items()}):
-        runs = [method.run(sphere, 12, cache={}, seed=4, **cfg.kwargs) for _ in range(2)]
-        _dense(runs[0].labels, sphere.n_faces)
+        runs = [method.run(sphere, 12, cache={}, seed=4, **cfg.kwargs, **extra)
+                for _ in range(2)]
+        _dense(runs[0].labels, sphere.n_faces if faces else sphere.n_vertices)
         assert np.array_equal(runs[0].labels, runs[1].labels), cfg.label()
 
 
@@ -290,3 +295,43 @@ def test_cli_baseline_writes_labels_and_refuses_too_large(tmp_path, capsys):
     assert "needs about" in err and "limit 0.0 GiB" in err
     assert main(["baseline", str(path), "-m", "vsa", "--param", "metric=l1,l2"]) == 2
     assert "one value" in capsys.readouterr().err
+
+
+# --- cut pursuit ---------------------------------------------------------------------------
+
+
+def test_cut_pursuit_features_and_known_answers():
+    pytest.importorskip("cut_pursuit_py", reason="the baselines extra")
+    from superfacets.baselines.cut_pursuit import cut_pursuit, dimensionality_features
+    from superfacets.cloud import PointCloud
+    from superfacets.elements.points import point_graph
+
+    rng = np.random.default_rng(0)
+    # a plane and a line: planarity ~1 on the plane, linearity ~1 on the line
+    plane = np.c_[rng.random((3000, 2)), np.zeros(3000)]
+    line = np.c_[np.linspace(2, 3, 500), np.full(500, 0.5), np.full(500, 0.5)]
+    cloud = PointCloud(np.r_[plane, line + rng.normal(0, 1e-4, (500, 3))])
+    g = point_graph(cloud).graph
+    f = dimensionality_features(g)
+    on_plane = g.positions[:, 0] < 1.5
+    np.testing.assert_allclose(f[:, :3].sum(axis=1), 1.0)  # the three shares of l1
+    assert f[on_plane, 2].max() < 1e-9 and np.median(f[on_plane, 1]) > 0.3  # flat: no scatter
+    assert np.median(f[~on_plane, 0]) > 0.9  # the line
+    assert np.median(f[on_plane, 3]) < 0.1  # a horizontal plane: not vertical
+    # a fold: a horizontal and a vertical square meeting along an edge
+    h = np.c_[rng.random((3000, 2)), np.zeros(3000)]
+    v = np.c_[rng.random(3000), np.zeros(3000), rng.random(3000)]
+    cloud = PointCloud(np.r_[h, v])
+    labels = cut_pursuit(cloud, 40)  # the count asked for, found by bisection
+    assert abs(int(labels.max()) + 1 - 40) <= 4
+    np.testing.assert_array_equal(labels, cut_pursuit(cloud, 40))  # deterministic
+    flat = np.arange(6000) < 3000
+    k = int(labels.max()) + 1
+    a, b = np.bincount(labels, flat, k), np.bincount(labels, ~flat, k)
+    assert np.minimum(a, b).sum() < 0.03 * 6000  # superpoints keep to one side of the fold
+    # the regularisation takes effect (the package ignores its own argument)
+    few = int(cut_pursuit(cloud, reg_strength=1.0).max()) + 1
+    many = int(cut_pursuit(cloud, reg_strength=1e-3).max()) + 1
+    assert few < many
+    with pytest.raises(ParameterError, match="elements"):
+        cut_pursuit(cloud, 10, elements="faces")

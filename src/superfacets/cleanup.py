@@ -47,7 +47,8 @@ SWEEPS = 1
 
 
 def cut_costs(graph, *, alpha: float = 200.0, eta_convex: float = 0.2,
-              crease: float = CREASE) -> np.ndarray:
+              crease: float = CREASE, features: np.ndarray | None = None,
+              beta: float = 0.0) -> np.ndarray:
     """Cost of a superfacet boundary along each adjacency: its length, less on creases.
 
     ``c_ij = |e_ij| / (1 + crease * alpha * eta * theta / pi)``, with
@@ -66,6 +67,12 @@ def cut_costs(graph, *, alpha: float = 200.0, eta_convex: float = 0.2,
         The method's (``>= 0``).
     crease : float, default 0.1
         ``>= 0``; 0 weighs every boundary by its length alone.
+    features : (n, d) float ndarray, optional
+    beta : float, default 0
+        The feature term of the weights (:func:`~superfacets.weights.paper_weights`):
+        with ``beta > 0`` a feature jump ``||f_i - f_j||`` lowers the cost as
+        the crease does, ``c_ij = |e_ij| / (1 + crease * (alpha * eta * theta
+        / pi + beta * ||f_i - f_j||))``.
 
     Returns
     -------
@@ -92,13 +99,23 @@ def cut_costs(graph, *, alpha: float = 200.0, eta_convex: float = 0.2,
     alpha = check_nonneg("alpha", alpha)
     eta_convex = check_nonneg("eta_convex", eta_convex)
     crease = check_nonneg("crease", crease)
+    beta = check_nonneg("beta", beta)
     g = as_element_graph(graph)
     t = g.terms
     factor = crease * alpha / np.pi
+    f = None
+    if beta > 0:
+        from .weights import check_features
+
+        f = check_features(features, g)
 
     def cost(sl):
         eta = np.where(t.concave[sl], 1.0, eta_convex)
-        return g.lengths[sl] / (1.0 + factor * eta * np.arccos(t.cos[sl]))
+        if f is None:
+            return g.lengths[sl] / (1.0 + factor * eta * np.arccos(t.cos[sl]))
+        jump = np.linalg.norm(f[g.pairs[sl, 0]] - f[g.pairs[sl, 1]], axis=1)
+        return g.lengths[sl] / (1.0 + factor * eta * np.arccos(t.cos[sl])
+                                + crease * beta * jump)
 
     return chunked(g.n_edges, cost)
 
@@ -107,7 +124,8 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = 200.0,
                      eta_convex: float = 0.2, radius: float | None = None,
                      crease: float = CREASE, smoothness: float = SMOOTHNESS,
                      band: float = BAND, sweeps: int = SWEEPS,
-                     connectivity: bool = True, n_threads: int | None = None) -> np.ndarray:
+                     connectivity: bool = True, n_threads: int | None = None,
+                     features: np.ndarray | None = None, beta: float = 0.0) -> np.ndarray:
     """Straighten superfacet boundaries and move them onto nearby creases.
 
     For every pair of adjacent superfacets, the elements within ``band * r``
@@ -149,6 +167,8 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = 200.0,
     n_threads : int, optional
         Threads cutting bands at once (default: as :func:`superfacets.segment`);
         the labels do not depend on it.
+    features, beta
+        The feature term (:func:`cut_costs`); ``beta = 0`` (default) ignores features.
 
     Returns
     -------
@@ -215,7 +235,8 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = 200.0,
 
     de = g.dual_edge
     cut_csr = np.ascontiguousarray(
-        cut_costs(g, alpha=alpha, eta_convex=eta_convex, crease=crease)[de] * r)
+        cut_costs(g, alpha=alpha, eta_convex=eta_convex, crease=crease, features=features,
+                  beta=beta)[de] * r)
     geo_csr = np.ascontiguousarray(g.terms.geo[de])
     len_csr = np.ascontiguousarray(g.lengths[de])
     dist = np.empty(n)

@@ -51,12 +51,17 @@ class PointCloud:
     shape : tuple of int, optional
         ``(height, width)`` of an organized cloud (labels keep that layout
         in :func:`superfacets.superpoints`).
+    colors : (N, 3) float ndarray, optional
+        RGB colour of each point in ``[0, 1]`` (the readers scale 8- and
+        16-bit colours): what ``beta > 0`` of :func:`superfacets.segment`
+        uses when no ``features`` are given.
 
     Raises
     ------
     InvalidCloudError
         If the arrays have the wrong shape, a row is NaN/inf (unless
-        ``allow_invalid``) or a normal is not finite or zero.
+        ``allow_invalid``), a normal is not finite or zero, or a colour of a
+        valid point is not finite or outside ``[0, 1]``.
     TypeError
         If ``points`` is not numeric.
 
@@ -73,6 +78,7 @@ class PointCloud:
     viewpoint: np.ndarray | None = None
     allow_invalid: bool = False
     shape: tuple | None = field(default=None, repr=False)
+    colors: np.ndarray | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         where = f"{self.name}: " if self.name else ""
@@ -100,6 +106,18 @@ class PointCloud:
             nrm = nrm.copy()
             nrm[finite] /= length[:, None]
             object.__setattr__(self, "normals", _readonly(nrm))
+        if self.colors is not None:
+            col = _coordinates(self.colors, "colors", where)
+            if col.shape != p.shape:
+                raise InvalidCloudError(f"{where}colors must have the shape of the points "
+                                        f"{p.shape}, got {col.shape}")
+            bad = ~(np.isfinite(col[finite]).all(axis=1)
+                    & (col[finite] >= 0).all(axis=1) & (col[finite] <= 1).all(axis=1))
+            if bad.any():
+                row = int(np.flatnonzero(finite)[np.flatnonzero(bad)[0]])
+                raise InvalidCloudError(f"{where}colour {row} is not in [0, 1] "
+                                        f"({col[row].tolist()}); scale 8-bit colours by 1/255")
+            object.__setattr__(self, "colors", _readonly(col))
         if self.viewpoint is not None:
             vp = np.asarray(self.viewpoint, dtype=np.float64).reshape(-1)
             if vp.shape != (3,) or not np.isfinite(vp).all():
@@ -116,6 +134,7 @@ class PointCloud:
         invalid = self.n_total - int(self.valid.sum())
         extra = f", {invalid} invalid" if invalid else ""
         extra += ", with normals" if self.normals is not None else ""
+        extra += ", with colours" if self.colors is not None else ""
         return f"PointCloud({self.n_total} points{extra})"
 
     @property

@@ -23,7 +23,8 @@ __all__ = ["require", "EXTRAS"]
 #: Module -> the extra that installs it.
 EXTRAS = {"pyvista": "render", "PIL": "render", "pandas": "report", "matplotlib": "report",
           "pypcd4": "clouds", "laspy": "clouds",
-          "distributed": "distributed", "dask": "distributed", "pyarrow": "distributed", "pycut_pursuit": "gpl-baselines"}
+          "distributed": "distributed", "dask": "distributed", "pyarrow": "distributed",
+          "networkx": "graph", "cut_pursuit_py": "baselines"}
 
 
 def require(module: str, feature: str):

@@ -204,6 +204,14 @@ def _run_graph_segmentation(mesh, n_segments, *, cache, seed, elements="faces", 
                                         elements=elements))
 
 
+def _run_cut_pursuit(mesh, n_segments, *, cache, seed, elements="points", reg_strength):
+    from .baselines.cut_pursuit import cut_pursuit
+
+    return MethodRun(cut_pursuit(mesh, n_segments if reg_strength <= 0 else None,
+                                 reg_strength=reg_strength if reg_strength > 0 else 0.1,
+                                 elements=elements))
+
+
 def _run_shlafman(mesh, n_segments, *, cache, seed, progress=False, **params):
     return _run_superfacets(mesh, n_segments, cache=cache, seed=seed, weighting="shlafman",
                             progress=progress, **params)
@@ -252,6 +260,12 @@ register_method(
                 "weights (1 - n_i.n_j, squared on convex edges); k_thresh=0 searches the "
                 "threshold for n_segments, > 0 uses it (the Segmentator's default is 0.01)",
     elements=ELEMENTS)
+register_method(
+    "cut_pursuit", _run_cut_pursuit, defaults=dict(reg_strength=0.0),
+    description="l0 cut pursuit of dimensionality features on the same point graph "
+                "(Superpoint Graph's partition; the cut-pursuit-py package, baselines extra); "
+                "reg_strength=0 searches it for n_segments",
+    elements=("vertices", "points"))
 register_method(
     "shlafman", _run_shlafman, defaults=dict(_SF_DEFAULTS, alpha=WEIGHTING_ALPHA["shlafman"][0]),
     sweep={"alpha": (0.0, 0.25, 0.5, 0.75, 1.0)},

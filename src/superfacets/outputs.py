@@ -68,7 +68,8 @@ def result_header(data, result, source: str) -> dict:
 
 def write_result(data, result, kind: str, source: str, *, labels=None, header: bool = False,
                  colored=None, vertex_colors: bool = False, picture=None, html=None,
-                 element_options: dict | None = None, up="y", view=None) -> None:
+                 element_options: dict | None = None, up="y", view=None, graph=None,
+                 levels=None) -> None:
     """Write the files of one segmentation, all or nothing.
 
     Parameters
@@ -98,16 +99,36 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
         cached elements again).
     up, view
         The picture's and the page's camera (:func:`superfacets.camera.view_frame`).
+    graph : path, optional
+        ``.npz`` of the superfacet graph (:meth:`SegmentationResult.graph`: the
+        input's colours as ``feature`` if it has any) and ``labels``; with
+        ``levels``, also the hierarchy (``levels``, ``parent_<i>``) and the
+        per-row labels of each level (``labels_<i>``).
+    levels : sequence of int, optional
+        Numbers of segments of the hierarchy's levels.
 
     Raises
     ------
     OSError, MissingExtraError
         Nothing is written then.
+    ParameterError
+        If a level is out of range (before anything is written).
     """
     from .io.export import write_colored_elements, write_colored_mesh
     from .io.labels import write_labels, write_segindices
 
+    arrays = None
+    if graph is not None:
+        sg = result.graph()
+        arrays = {**sg.arrays(), "labels": result.labels}
+        if levels:
+            h = result.hierarchy(levels)
+            arrays.update(h.arrays())
+            for i in range(len(h.levels)):
+                arrays[f"labels_{i}"] = h.labels(i, result.labels)
     with Outputs() as outputs:
+        if arrays is not None:
+            outputs.write(graph, lambda fh: np.savez_compressed(fh, **arrays))
         if labels is not None and str(labels).lower().endswith(".json"):
             write_segindices(labels, result.labels, result.params,
                              scene_id=source.split(".")[0], outputs=outputs)

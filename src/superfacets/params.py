@@ -100,6 +100,7 @@ class SegmentParams:
     n_neighbors: int = 10
     neighbor_radius: float | None = None
     paper: bool = False
+    beta: float = 0.0
 
     def as_dict(self) -> dict:
         """The parameters as a plain dict."""
@@ -262,7 +263,8 @@ def resolve(**params) -> SegmentParams:
         extra = [name for name, on in (("cleanup", p.cleanup), ("split_merge", p.split_merge),
                                        ("tol", p.tol not in (0, DEFAULTS.tol)),
                                        ("center_tol", p.center_tol is not None),
-                                       ("coarsen", p.coarsen not in (None, 1))) if on]
+                                       ("coarsen", p.coarsen not in (None, 1)),
+                                       ("beta", p.beta not in (0, 0.0))) if on]
         if extra:
             raise ParameterError(f"paper=True is the paper's method as published; it does not "
                                  f"go with {', '.join(extra)}")
@@ -304,7 +306,14 @@ def resolve(**params) -> SegmentParams:
         n_neighbors=check_int("n_neighbors", p.n_neighbors, lo=1, hi=MAX_NEIGHBORS),
         neighbor_radius=None if p.neighbor_radius is None else check_positive(
             "neighbor_radius", p.neighbor_radius),
-        paper=bool(p.paper))
+        paper=bool(p.paper), beta=_beta(p.beta, weighting))
+
+
+def _beta(beta, weighting: str) -> float:
+    b = check_number("beta", beta, 0.0, MAX_WEIGHT_FACTOR)
+    if b > 0 and weighting != "paper":
+        raise ParameterError("beta (the feature term) goes with weighting='paper' only")
+    return b
 
 
 def superfacet_size(params: SegmentParams, area: float, diagonal: float,

@@ -110,7 +110,8 @@ class SegmentationResult:
         features : (N, d) float ndarray, optional
             One feature per input row (face, vertex or point, e.g. RGB
             colour); ``feature`` of the graph is its area-weighted mean per
-            superfacet (rows that are not elements are left out).
+            superfacet (rows that are not elements are left out). Default:
+            the input's colours if it has any (a cloud read with RGB), else none.
 
         Returns
         -------
@@ -137,6 +138,8 @@ class SegmentationResult:
         from .adjacency import superfacet_graph
 
         src = self._source()
+        if features is None:
+            features = getattr(src.source, "colors", None)
         return superfacet_graph(src.graph, self.element_labels, _per_element(src, features))
 
     def hierarchy(self, levels, *, beta: float = 0.0, features=None):
@@ -178,6 +181,20 @@ class SegmentationResult:
         return self.elements
 
 
+def _features_of(src, features):
+    """The per-element features of a run with ``beta > 0``: ``features`` (one row per
+    input row), else the input's colours."""
+    if features is None:
+        features = getattr(src.source, "colors", None)
+        if features is None:
+            from .errors import ParameterError
+
+            raise ParameterError("beta > 0 needs features: pass features=(one row per "
+                                 f"{src.graph.element}), or an input with colours (PLY, PCD "
+                                 "or LAS points with RGB)")
+    return _per_element(src, features)
+
+
 def _per_element(src, features):
     """Per-row features of an input -> per-element features (the first row of each)."""
     if features is None:
@@ -193,7 +210,7 @@ def _per_element(src, features):
     return f[rows]
 
 
-def pipeline(mesh, params: SegmentParams, *, replay: bool = True,
+def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
              jump_cycles: bool = True) -> SegmentationResult:
     """Run the method with validated parameters (see the module notes).
 
@@ -202,6 +219,9 @@ def pipeline(mesh, params: SegmentParams, *, replay: bool = True,
     mesh : Mesh, trimesh.Trimesh or (vertices, faces)
     params : SegmentParams
         From :func:`superfacets.params.resolve`.
+    features : (N, d) float ndarray, optional
+        One feature per input row, for ``params.beta > 0`` (default: the
+        input's colours, if it has any).
     replay : bool, default True
         Replay the expansions of centers that did not move (bounded
         assignment); False expands every center on every pass. Same labels.
@@ -215,10 +235,10 @@ def pipeline(mesh, params: SegmentParams, *, replay: bool = True,
     from ._threads import using
 
     with using(params.n_threads):  # also the graph build and terms this run triggers
-        return _pipeline(mesh, params, replay=replay, jump_cycles=jump_cycles)
+        return _pipeline(mesh, params, features, replay=replay, jump_cycles=jump_cycles)
 
 
-def _pipeline(mesh, params: SegmentParams, *, replay: bool, jump_cycles: bool
+def _pipeline(mesh, params: SegmentParams, features, *, replay: bool, jump_cycles: bool
               ) -> SegmentationResult:
     t_start = time.perf_counter()
     p = params
@@ -229,6 +249,7 @@ def _pipeline(mesh, params: SegmentParams, *, replay: bool, jump_cycles: bool
     t_graph = time.perf_counter() - t
     k, r = superfacet_size(p, graph.area, graph.diagonal, graph.n_elements, graph.kind)
     cleanup, split_merge = better_method(p, graph.kind)
+    feats = _features_of(source, features) if p.beta > 0 else None
     timings: dict[str, float] = {}
     bar = None
     if p.progress:  # one bar: the set-up stages by name, then the passes
@@ -240,7 +261,8 @@ def _pipeline(mesh, params: SegmentParams, *, replay: bool, jump_cycles: bool
 
         _stage(bar, "weights")
         t = time.perf_counter()
-        w_pairs = edge_weights(graph, p.weighting, alpha=p.alpha, eta_convex=p.eta_convex)
+        w_pairs = edge_weights(graph, p.weighting, alpha=p.alpha, eta_convex=p.eta_convex,
+                               features=feats, beta=p.beta)
         w = csr_weights(graph, w_pairs)
         if not cleanup:
             graph.release_terms()  # not needed again by this run; 17 B per adjacency
@@ -308,7 +330,8 @@ def _pipeline(mesh, params: SegmentParams, *, replay: bool, jump_cycles: bool
         try:
             labels = clean_boundaries(graph, labels, centers, radius=r, eta_convex=p.eta_convex,
                                       alpha=p.alpha if p.weighting == "paper" else _D.alpha,
-                                      connectivity=p.enforce_connectivity, n_threads=p.n_threads)
+                                      connectivity=p.enforce_connectivity, n_threads=p.n_threads,
+                                      features=feats, beta=p.beta)
         finally:
             if bar is not None:
                 bar.close()
@@ -326,7 +349,7 @@ def _pipeline(mesh, params: SegmentParams, *, replay: bool, jump_cycles: bool
                     enforce_connectivity=p.enforce_connectivity, cleanup=cleanup,
                     split_merge=split_merge, tol=p.tol,
                     center_tol=center_tol, coarsen=ratio,
-                    n_init_centers=init.shape[0], elements=graph.kind)
+                    n_init_centers=init.shape[0], elements=graph.kind, beta=p.beta)
     if graph.kind == "points":
         resolved.update(n_neighbors=p.n_neighbors, neighbor_radius=p.neighbor_radius)
     return SegmentationResult(labels=labels, centers=centers, n_iter=it.n_iter,

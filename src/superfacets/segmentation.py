@@ -33,7 +33,8 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
                 n_threads: int | None = _D.n_threads, elements: str | None = _D.elements,
                 n_neighbors: int = _D.n_neighbors,
                 neighbor_radius: float | None = _D.neighbor_radius,
-                paper: bool = _D.paper) -> np.ndarray:
+                paper: bool = _D.paper, beta: float = _D.beta,
+                features=None) -> np.ndarray:
     """Over-segment a mesh (its faces or vertices) or a point cloud into superfacets.
 
     The k-means-style method of Simari, Picciau and De Floriani (2014):
@@ -109,8 +110,20 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
         coarse-to-fine), no clean-up, no split-and-merge; its labels bit for
         bit (tested against a straightforward implementation of the paper).
         Raises :class:`~superfacets.errors.ParameterError` with
-        ``cleanup=True``, ``split_merge=True``, ``tol``, ``center_tol`` or
-        ``coarsen``.
+        ``cleanup=True``, ``split_merge=True``, ``tol``, ``center_tol``,
+        ``coarsen`` or ``beta``.
+    beta : float, default 0
+        Weight of the feature term (not in the paper): ``beta *
+        |e_ij| * ||f_i - f_j||`` joins eq. 3's numerator, so crossing a
+        colour (feature) edge costs as crossing a crease does; the clean-up
+        prefers such edges for boundaries likewise. With RGB in ``[0, 1]`` and
+        ``beta = alpha``, a colour jump of 0.5 costs what a concave right-angle
+        crease costs. 0 gives the weights of the paper bit for bit
+        (``docs/method.md``, "Features").
+    features : (N, d) float ndarray, optional
+        One feature per input row (face, vertex or point), for ``beta > 0``.
+        Default: the input's colours (a point cloud read from PLY, PCD or LAS
+        with RGB, or ``PointCloud(colors=...)``).
     tol : float, default 0.001
         Convergence tolerance in ``[0, 1]``: also stop once a classification
         changes the superfacet of at most this fraction of the surface area
@@ -198,7 +211,7 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
                    coarsen=coarsen,
                    progress=progress, n_threads=n_threads, elements=elements,
                    n_neighbors=n_neighbors, neighbor_radius=neighbor_radius,
-                   paper=paper).labels
+                   paper=paper, beta=beta, features=features).labels
 
 
 def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | None = _D.radius,
@@ -213,7 +226,8 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | Non
             n_threads: int | None = _D.n_threads, elements: str | None = _D.elements,
             n_neighbors: int = _D.n_neighbors,
             neighbor_radius: float | None = _D.neighbor_radius,
-            paper: bool = _D.paper) -> SegmentationResult:
+            paper: bool = _D.paper, beta: float = _D.beta,
+            features=None) -> SegmentationResult:
     """Superfacets with details: same parameters as :func:`superfacets`.
 
     Returns
@@ -253,8 +267,9 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | Non
                      cleanup=cleanup, split_merge=split_merge, tol=tol,
                      center_tol=center_tol, coarsen=coarsen,
                    progress=progress, n_threads=n_threads, elements=elements,
-                     n_neighbors=n_neighbors, neighbor_radius=neighbor_radius, paper=paper)
-    return pipeline(mesh, params)
+                     n_neighbors=n_neighbors, neighbor_radius=neighbor_radius, paper=paper,
+                     beta=beta)
+    return pipeline(mesh, params, features=features)
 
 
 def superpoints(points, n_segments: int | None = _D.n_segments, *, normals=None,

@@ -15,13 +15,14 @@ from .errors import ParameterError
 from .params import (MAX_WEIGHT_FACTOR, WEIGHTING_ALPHA, WEIGHTINGS, check_choice,
                      check_nonneg, check_number)
 
-__all__ = ["paper_weights", "shlafman_weights", "edge_weights", "csr_weights"]
+__all__ = ["paper_weights", "shlafman_weights", "edge_weights", "csr_weights", "check_features"]
 
 _PAPER_ALPHA = WEIGHTING_ALPHA["paper"][0]
 _SHLAFMAN_ALPHA = WEIGHTING_ALPHA["shlafman"][0]
 
 
-def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = 0.2) -> np.ndarray:
+def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = 0.2,
+                  features: np.ndarray | None = None, beta: float = 0.0) -> np.ndarray:
     """Weights of the paper (Simari, Picciau, De Floriani 2014, eqs. 1-3).
 
     For adjacent faces ``f_i, f_j`` with centroids ``c_i, c_j``, unit normals
@@ -32,7 +33,11 @@ def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = 0.2
     - ``ang = eta * |e_ij| * theta / pi`` (eq. 2), with ``eta = 1`` on concave
       edges and ``eta_convex`` on convex ones; an edge is concave when
       ``n_i . (c_j - c_i) > 0`` (authors' implementation), ``i < j``;
-    - ``w = (geo + alpha * ang) / d`` (eq. 3), ``d`` the bounding-box diagonal.
+    - ``w = (geo + alpha * ang) / d`` (eq. 3), ``d`` the bounding-box diagonal;
+    - with ``beta > 0``, a feature term in the same form as ``ang`` (not in the
+      paper): ``w = (geo + alpha * ang + beta * |e_ij| * ||f_i - f_j||) / d``,
+      ``f`` one feature per element (e.g. RGB in ``[0, 1]``): crossing a colour
+      edge costs as crossing a crease does (``docs/method.md``, "Features").
 
     On mesh vertices and cloud points the graph's terms are the analogues
     (``docs/method.md``, section 6): ``geo = |p_i - p_j|``, the angle of the
@@ -47,6 +52,11 @@ def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = 0.2
         Weight of the angular term, in ``[0, 1e12]``.
     eta_convex : float, default 0.2
         Factor ``eta`` of convex edges, in ``[0, 1e12]``.
+    features : (n, d) float ndarray, optional
+        One finite feature row per element (needed when ``beta > 0``).
+    beta : float, default 0
+        Weight of the feature term, in ``[0, 1e12]``; 0 gives the paper's
+        weights bit for bit.
 
     Returns
     -------
@@ -58,7 +68,8 @@ def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = 0.2
     Raises
     ------
     ParameterError
-        If ``alpha`` or ``eta_convex`` is negative, NaN or infinite.
+        If ``alpha``, ``eta_convex`` or ``beta`` is negative, NaN or infinite,
+        or ``beta > 0`` without one finite feature row per element.
 
     References
     ----------
@@ -75,16 +86,46 @@ def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = 0.2
     """
     alpha = check_number("alpha", alpha, 0.0, MAX_WEIGHT_FACTOR)
     eta_convex = check_number("eta_convex", eta_convex, 0.0, MAX_WEIGHT_FACTOR)
+    beta = check_number("beta", beta, 0.0, MAX_WEIGHT_FACTOR)
     g = as_element_graph(graph)
     t, span = g.terms, g.span
+    f = check_features(features, g) if beta > 0 else None
 
     def weight(sl):
         theta = np.arccos(t.cos[sl])
         eta = np.where(t.concave[sl], 1.0, eta_convex)
         ang = eta * span[sl] * theta / np.pi
-        return (t.geo[sl] + alpha * ang) / g.diagonal
+        if f is None:
+            return (t.geo[sl] + alpha * ang) / g.diagonal
+        jump = np.linalg.norm(f[g.pairs[sl, 0]] - f[g.pairs[sl, 1]], axis=1)
+        return (t.geo[sl] + alpha * ang + beta * span[sl] * jump) / g.diagonal
 
     return chunked(g.n_edges, weight)
+
+
+def check_features(features, graph: ElementGraph) -> np.ndarray:
+    """``features`` as a finite ``(n, d)`` float64 array, one row per element.
+
+    Raises
+    ------
+    ParameterError
+        If it is missing, of another length, or not finite.
+    """
+    if features is None:
+        raise ParameterError("beta > 0 needs features: one row per element (e.g. RGB "
+                             "colours in [0, 1]), or an input with colours")
+    f = np.asarray(features)
+    if f.dtype == object or not np.issubdtype(f.dtype, np.number):
+        raise ParameterError(f"features must be numeric, got dtype {f.dtype}")
+    f = f.astype(np.float64).reshape(f.shape[0], -1) if f.ndim >= 1 else f
+    if f.ndim != 2 or f.shape[0] != graph.n_elements:
+        raise ParameterError(f"features must have one row per {graph.element} "
+                             f"({graph.n_elements}), got shape {np.shape(features)}")
+    if not np.isfinite(f).all():
+        row = int(np.flatnonzero(~np.isfinite(f).all(axis=1))[0])
+        raise ParameterError(f"features of {graph.element} {row} are not finite "
+                             f"({f[row].tolist()})")
+    return f
 
 
 def shlafman_weights(graph, *, alpha: float = _SHLAFMAN_ALPHA) -> np.ndarray:
@@ -126,7 +167,8 @@ def shlafman_weights(graph, *, alpha: float = _SHLAFMAN_ALPHA) -> np.ndarray:
 
 
 def edge_weights(graph, weighting: str = "paper", *, alpha: float = _PAPER_ALPHA,
-                 eta_convex: float = 0.2) -> np.ndarray:
+                 eta_convex: float = 0.2, features: np.ndarray | None = None,
+                 beta: float = 0.0) -> np.ndarray:
     """:func:`paper_weights` or :func:`shlafman_weights` by name.
 
     Parameters
@@ -135,6 +177,8 @@ def edge_weights(graph, weighting: str = "paper", *, alpha: float = _PAPER_ALPHA
     weighting : {'paper', 'shlafman'}, default 'paper'
     alpha, eta_convex : float
         As the chosen function (``eta_convex`` is ignored by ``'shlafman'``).
+    features, beta
+        The feature term of :func:`paper_weights` (``'paper'`` only).
 
     Returns
     -------
@@ -147,7 +191,10 @@ def edge_weights(graph, weighting: str = "paper", *, alpha: float = _PAPER_ALPHA
     """
     check_choice("weighting", weighting, WEIGHTINGS)
     if weighting == "paper":
-        return paper_weights(graph, alpha=alpha, eta_convex=eta_convex)
+        return paper_weights(graph, alpha=alpha, eta_convex=eta_convex, features=features,
+                             beta=beta)
+    if beta:
+        raise ParameterError("beta (the feature term) goes with weighting='paper' only")
     return shlafman_weights(graph, alpha=alpha)
 
 

@@ -150,6 +150,16 @@ def farthest_point_blocked(centroids, k, first, out, order, bstart, bcenter, bra
     """
     m = centroids.shape[0]
     nb = bstart.shape[0] - 1
+    # positions and running minima in block order: a block's faces are contiguous in
+    # memory (the same arithmetic, in the same order: the same output)
+    pos = np.empty((m, 3))
+    slot = np.empty(m, dtype=np.int64)  # place of each face in block order
+    for j in range(m):
+        f = order[j]
+        slot[f] = j
+        pos[j, 0] = centroids[f, 0]
+        pos[j, 1] = centroids[f, 1]
+        pos[j, 2] = centroids[f, 2]
     mind = np.full(m, _INF)
     bmax = np.full(nb, _INF)
     barg = np.empty(nb, dtype=np.int64)
@@ -164,7 +174,7 @@ def farthest_point_blocked(centroids, k, first, out, order, bstart, bcenter, bra
     cur = first
     for t in range(k):
         out[t] = cur
-        mind[cur] = -1.0
+        mind[slot[cur]] = -1.0
         cx = centroids[cur, 0]
         cy = centroids[cur, 1]
         cz = centroids[cur, 2]
@@ -181,10 +191,10 @@ def farthest_point_blocked(centroids, k, first, out, order, bstart, bcenter, bra
             best = -1.0
             arg = m
             for j in range(bstart[b], bstart[b + 1]):
-                f = order[j]
-                mf = _nearest_so_far(centroids, mind, f, cx, cy, cz)
+                mf = _nearest_so_far(pos, mind, j, cx, cy, cz)
                 if mf < 0.0:
                     continue
+                f = order[j]
                 if mf > best or (mf == best and f < arg):
                     best = mf
                     arg = f

@@ -83,3 +83,48 @@ def pca_normals(points, neighbors, out):
             a12 /= scale
             a22 /= scale
         _smallest_eigenvector(a00, a01, a02, a11, a12, a22, out, i)
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def csr_covariances(indptr, indices, points, out):
+    """``out[i]``: the 3x3 covariance of point ``i`` and its CSR neighbours."""
+    n = indptr.shape[0] - 1
+    for i in prange(n):
+        m = indptr[i + 1] - indptr[i] + 1
+        mx = points[i, 0]
+        my = points[i, 1]
+        mz = points[i, 2]
+        for e in range(indptr[i], indptr[i + 1]):
+            j = indices[e]
+            mx += points[j, 0]
+            my += points[j, 1]
+            mz += points[j, 2]
+        mx /= m
+        my /= m
+        mz /= m
+        dx = points[i, 0] - mx
+        dy = points[i, 1] - my
+        dz = points[i, 2] - mz
+        c00 = dx * dx
+        c01 = dx * dy
+        c02 = dx * dz
+        c11 = dy * dy
+        c12 = dy * dz
+        c22 = dz * dz
+        for e in range(indptr[i], indptr[i + 1]):
+            j = indices[e]
+            dx = points[j, 0] - mx
+            dy = points[j, 1] - my
+            dz = points[j, 2] - mz
+            c00 += dx * dx
+            c01 += dx * dy
+            c02 += dx * dz
+            c11 += dy * dy
+            c12 += dy * dz
+            c22 += dz * dz
+        out[i, 0, 0] = c00 / m
+        out[i, 0, 1] = out[i, 1, 0] = c01 / m
+        out[i, 0, 2] = out[i, 2, 0] = c02 / m
+        out[i, 1, 1] = c11 / m
+        out[i, 1, 2] = out[i, 2, 1] = c12 / m
+        out[i, 2, 2] = c22 / m

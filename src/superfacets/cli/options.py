@@ -116,6 +116,10 @@ def add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> No
                    help="split superfacets that straddle a crease and merge as many pairs of "
                         "neighbours elsewhere, then iterate again; same number of superfacets "
                         "(default: on for faces, off for vertices and points)")
+    p.add_argument("--beta", type=float_arg, default=_D.beta, metavar="B",
+                   help="weight of the colour term: crossing a colour edge costs as crossing "
+                        "a crease does (the input's RGB: PLY, PCD or LAS points); 0: off "
+                        f"(default: {_D.beta:g})")
     p.add_argument("--paper", action="store_true",
                    help="the paper's method as published, its labels bit for bit: its "
                         "stopping rule (--tol 0), no clean-up, no split-and-merge (the "
@@ -158,7 +162,7 @@ def method_kwargs(args) -> dict:
                 assignment=args.assignment, enforce_connectivity=not args.no_connectivity,
                 cleanup=args.cleanup, split_merge=args.split_merge, tol=args.tol, center_tol=args.center_tol,
                 coarsen=args.coarsen, progress=bool(args.progress), n_threads=args.threads,
-                paper=args.paper)
+                paper=args.paper, beta=args.beta)
 
 
 def add_camera_options(p, size: str) -> None:

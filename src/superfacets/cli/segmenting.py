@@ -51,6 +51,14 @@ def add_parsers(sub) -> None:
                         "the render extra)")
     p.add_argument("--html", metavar="OUT.html", default=None,
                    help="also write an interactive page (open in a browser)")
+    p.add_argument("--graph", metavar="OUT.npz", default=None,
+                   help="write the superfacet (superpoint) adjacency graph: edge_index, "
+                        "border_length, mean_angle, concave, area, centroid, normal, feature "
+                        "(mean colour), labels (numpy .npz)")
+    p.add_argument("--levels", type=_levels_arg, default=None, metavar="N1,N2,...",
+                   help="with --graph: also a nested hierarchy of coarser levels of N1, "
+                        "N2, ... segments, each connected (parent_<i> and labels_<i> in the "
+                        ".npz)")
     p.add_argument("--per-object", action="store_true",
                    help="segment each object of a scene on its own (-k shared out by area); "
                         "labels stay unique over the scene")
@@ -150,7 +158,13 @@ def cmd_segment(args) -> int:
         raise ParameterError("--per-object takes -k, not --radius")
     png_out = check_output(args.picture, (".png",), "the picture", inputs=(args.mesh,))
     html_out = check_output(args.html, (".html", ".htm"), "the page", inputs=(args.mesh,))
-    named = [str(x) for x in (seg_out, ply_out, png_out, html_out) if x is not None]
+    graph_out = check_output(args.graph, (".npz",), "the graph", inputs=(args.mesh,))
+    if args.levels and graph_out is None:
+        raise ParameterError("--levels goes with --graph OUT.npz (the hierarchy is written there)")
+    if graph_out is not None and args.per_object:
+        raise ParameterError("--graph is of one segmentation; not with --per-object")
+    named = [str(x) for x in (seg_out, ply_out, png_out, html_out, graph_out)
+             if x is not None]
     if len(set(named)) < len(named):
         raise ParameterError("two outputs go to the same file")
     kwargs = dict(method_kwargs(args), **element_kwargs(args))
@@ -188,23 +202,38 @@ def cmd_segment(args) -> int:
                  colored=ply_out, vertex_colors=args.vertex_colors, picture=png_out,
                  html=html_out, element_options=dict(n_neighbors=args.neighbors,
                                                      neighbor_radius=args.neighbor_radius),
-                 up=args.up or "y", view=args.view)
+                 up=args.up or "y", view=args.view, graph=graph_out, levels=args.levels)
     report = sys.stderr if str(seg_out) == "-" else sys.stdout  # stdout holds the labels
     if not args.quiet:
         print(_summary(Path(args.mesh).name, data, result, elapsed, kind), file=report)
     if not args.quiet:
-        _say_what_was_written(seg_out, ply_out, png_out, html_out, report, args.up)
+        _say_what_was_written(seg_out, ply_out, png_out, html_out, report, args.up,
+                              graph_out)
         note = _count_note(args, data, result, kind)
         if note:
             print(f"note: {note}", file=sys.stderr)
     return 0
 
 
-def _say_what_was_written(seg_out, ply_out, png_out, html_out, report, up) -> None:
+def _levels_arg(text: str) -> list[int]:
+    """``--levels 50,20``: positive integers."""
+    import argparse
+
+    try:
+        out = [int(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        out = []
+    if not out or min(out) < 1:
+        raise argparse.ArgumentTypeError(f"expected positive integers N1,N2,..., got {text!r}")
+    return out
+
+
+def _say_what_was_written(seg_out, ply_out, png_out, html_out, report, up,
+                          graph_out=None) -> None:
     axis = f"up axis {up}" if up else "up axis y: give --up z for a z-up mesh"
     written = [f"{path} ({what})" for path, what in
                ((seg_out, "labels"), (ply_out, "coloured mesh"), (png_out, f"picture, {axis}"),
-                (html_out, "page: open it in a browser"))
+                (html_out, "page: open it in a browser"), (graph_out, "superfacet graph"))
                if path is not None and str(path) != "-"]
     if written:
         print("wrote " + ", ".join(written), file=report)
@@ -239,7 +268,8 @@ def _count_note(args, data, result, kind: str) -> str | None:
     hint = (" or --per-object to share k among the file's objects" if kind == "faces"
             and len(getattr(data, "objects", ())) > 1 else "")
     return (f"{result.n_segments} {what} for -k {asked}: the input has {pieces} separate "
-            f"pieces, and the {extra} regions that no center reached (a region cannot cross "
+            f"pieces, and the {extra} " + ("region" if extra == 1 else "regions") +
+            " that no center reached (a region cannot cross "
             f"from one piece to another) became {what} of their own; ask for fewer "
             f"(about -k {fewer}){hint} to end near {asked}")
 

@@ -141,12 +141,39 @@ def _read_ply(data: bytes, path: Path) -> dict:
         if all(c in names for c in ("nx", "ny", "nz")):
             nrm = np.stack([np.asarray(vert[c], dtype=np.float64) for c in ("nx", "ny", "nz")],
                            axis=1)
+        col = None
+        for rgb in (("red", "green", "blue"), ("r", "g", "b"),
+                    ("diffuse_red", "diffuse_green", "diffuse_blue")):
+            if all(c in names for c in rgb):
+                col = unit_colors(np.stack([np.asarray(vert[c]) for c in rgb], axis=1))
+                break
     except (PlyParseError, KeyError, ValueError, IndexError, TypeError, EOFError,
             MemoryError) as exc:
         if isinstance(exc, MeshFormatError):
             raise
         raise MeshFormatError(f"{path}: cannot read PLY points: {exc}") from None
-    return {"points": pts, "normals": nrm}
+    return {"points": pts, "normals": nrm, "colors": col}
+
+
+def unit_colors(rgb: np.ndarray) -> np.ndarray:
+    """RGB of a file in ``[0, 1]``: 8-bit integers / 255, 16-bit / 65535 (LAS: by
+    their largest value, as some writers store 8 bits in 16), floats as they are
+    (clipped to ``[0, 1]``, NaN kept: invalid points)."""
+    a = np.asarray(rgb)
+    if np.issubdtype(a.dtype, np.integer):
+        top = 255.0 if a.dtype.itemsize == 1 or (a.size and int(a.max()) <= 255) else 65535.0
+        return a.astype(np.float64) / top
+    a = a.astype(np.float64)
+    if a.size and np.nanmax(a) > 1.0:  # floats holding 0..255
+        a = a / 255.0
+    return np.clip(a, 0.0, 1.0)
+
+
+def _packed_rgb(values: np.ndarray) -> np.ndarray:
+    """PCL's packed ``rgb``/``rgba`` field (a float32 or uint32 holding 0x00RRGGBB)."""
+    v = np.ascontiguousarray(values)
+    u = v.view(np.uint32) if v.dtype.itemsize == 4 else v.astype(np.uint32)
+    return np.stack([(u >> 16) & 255, (u >> 8) & 255, u & 255], axis=1).astype(np.uint8)
 
 
 def _read_pcd(path: Path) -> dict:
@@ -168,6 +195,11 @@ def _read_pcd(path: Path) -> dict:
         nrm = None
         if all(c in fields for c in ("normal_x", "normal_y", "normal_z")):
             nrm = np.asarray(pc.numpy(("normal_x", "normal_y", "normal_z")), dtype=np.float64)
+        col = None
+        for packed in ("rgb", "rgba"):
+            if packed in fields:
+                col = unit_colors(_packed_rgb(pc.pc_data[packed]))
+                break
         meta = pc.metadata
         height, width = int(meta.height), int(meta.width)
         viewpoint = np.asarray(meta.viewpoint[:3], dtype=np.float64)
@@ -183,7 +215,8 @@ def _read_pcd(path: Path) -> dict:
         bad = ~np.isfinite(nrm).all(axis=1) | (np.abs(nrm).sum(axis=1) == 0)
         if bad.any():  # PCL leaves normals NaN where it could not estimate one
             nrm = None
-    return {"points": pts, "normals": nrm, "allow_invalid": True, "viewpoint": viewpoint,
+    return {"points": pts, "normals": nrm, "colors": col, "allow_invalid": True,
+            "viewpoint": viewpoint,
             "shape": (height, width) if height > 1 else None}
 
 
@@ -198,10 +231,14 @@ def _read_las(path: Path) -> dict:
     try:
         las = laspy.read(path)
         pts = np.stack([np.asarray(las.x), np.asarray(las.y), np.asarray(las.z)], axis=1)
+        dims = set(las.point_format.dimension_names)
+        col = (unit_colors(np.stack([np.asarray(las[c]) for c in ("red", "green", "blue")],
+                                    axis=1))
+               if {"red", "green", "blue"} <= dims else None)
     except Exception as exc:  # noqa: BLE001 - laspy raises many types
         msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise MeshFormatError(f"{path}: cannot read {path.suffix.upper()[1:]}: {msg}") from None
-    return {"points": pts.astype(np.float64)}
+    return {"points": pts.astype(np.float64), "colors": col}
 
 
 def _read_npy(data: bytes, path: Path) -> dict:
