@@ -53,6 +53,9 @@ _PUBLIC = {
     "edge_weights": "weights",
     "paper_weights": "weights",
     "shlafman_weights": "weights",
+    "TetMesh": "volume",
+    "read_volume": "io",
+    "write_volume_labels": "io",
 }
 
 __all__ = [
@@ -69,6 +72,7 @@ __all__ = [
     "SegmentParams",
     "SegmentationResult",
     "SuperfacetsError",
+    "TetMesh",
     "as_cloud",
     "as_mesh",
     "edge_weights",
@@ -79,6 +83,7 @@ __all__ = [
     "read_input",
     "read_labels",
     "read_mesh",
+    "read_volume",
     "segment",
     "shlafman_weights",
     "superfacets",
@@ -87,6 +92,7 @@ __all__ = [
     "write_labels",
     "write_mesh",
     "write_segindices",
+    "write_volume_labels",
 ]
 
 
@@ -109,8 +115,10 @@ if TYPE_CHECKING:  # the same names, for type checkers and IDEs
     from .elements import ElementGraph, face_graph
     from .errors import (InvalidMeshError, MemoryLimitError, MeshFormatError,
                          MissingExtraError, ParameterError, SuperfacetsError)
-    from .io import (read_cloud, read_input, read_labels, read_mesh, write_colored_mesh,
-                     write_labels, write_mesh, write_segindices)
+    from .io import (read_cloud, read_input, read_labels, read_mesh, read_volume,
+                     write_colored_mesh, write_labels, write_mesh, write_segindices,
+                     write_volume_labels)
+    from .volume import TetMesh
     from .convert import as_mesh
     from .mesh import Mesh
     from .params import DEFAULTS, SegmentParams

@@ -16,18 +16,13 @@ from functools import cached_property
 import numpy as np
 
 from .errors import InvalidMeshError
-from .mesh import _MAX_COORDINATE, _MAX_EXTENT, _MIN_EXTENT, column_bounds
+from .mesh import _MAX_COORDINATE, _MAX_EXTENT, _MIN_EXTENT, _readonly, column_bounds
 
 __all__ = ["PointCloud", "as_cloud", "InvalidCloudError"]
 
 
 class InvalidCloudError(InvalidMeshError):
     """Point arrays are unusable: wrong shape, NaN/inf rows, empty, collinear."""
-
-
-def _readonly(a: np.ndarray) -> np.ndarray:
-    a.setflags(write=False)
-    return a
 
 
 @dataclass(frozen=True, eq=False)

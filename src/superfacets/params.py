@@ -302,7 +302,8 @@ def resolve(**params) -> SegmentParams:
         coarsen=None if p.coarsen is None else check_int("coarsen", p.coarsen, lo=1),
         progress=bool(p.progress),
         n_threads=check_threads(p.n_threads),
-        elements=None if p.elements is None else check_choice("elements", p.elements, ELEMENTS),
+        elements=None if p.elements is None else check_choice("elements", p.elements,
+                                                              ELEMENTS + ("cells",)),
         n_neighbors=check_int("n_neighbors", p.n_neighbors, lo=1, hi=MAX_NEIGHBORS),
         neighbor_radius=None if p.neighbor_radius is None else check_positive(
             "neighbor_radius", p.neighbor_radius),
@@ -320,7 +321,8 @@ def superfacet_size(params: SegmentParams, area: float, diagonal: float,
                     n_elements: int, kind: str = "faces") -> tuple[int | None, float]:
     """The number of centers ``k`` and the radius ``r`` (mesh units) of a run.
 
-    With ``n_segments``: ``r = sqrt(A / (k pi))`` (paper section 3.1). With
+    With ``n_segments``: ``r = sqrt(A / (k pi))`` (paper section 3.1); on
+    tetrahedra (``kind = "cells"``, ``A`` a volume) ``r = (3 A / (4 pi k))^(1/3)``. With
     ``radius`` (a fraction of ``d``): ``r = radius * d``, and for the
     farthest-point initialization ``k = round(A / (pi r^2))`` clamped to
     ``1..n``; ``k`` is None for flood and grid.
@@ -330,11 +332,15 @@ def superfacet_size(params: SegmentParams, area: float, diagonal: float,
     ParameterError
         If ``n_segments`` exceeds the number of elements.
     """
+    cells = kind == "cells"  # ``area`` is a volume: r of a ball of volume V / k
     if params.radius is not None:
         r = params.radius * diagonal
         k = None
         if params.init == "farthest":
-            k = int(min(n_elements, max(1, round(area / (math.pi * r * r)))))
+            each = 4.0 / 3.0 * math.pi * r ** 3 if cells else math.pi * r * r
+            k = int(min(n_elements, max(1, round(area / each))))
         return k, r
     k = check_n_segments(params.n_segments, n_elements, kind)
+    if cells:
+        return k, (3.0 * area / (4.0 * math.pi * k)) ** (1.0 / 3.0)
     return k, math.sqrt(area / (k * math.pi))

@@ -186,12 +186,15 @@ def _features_of(src, features):
     input row), else the input's colours."""
     if features is None:
         features = getattr(src.source, "colors", None)
+        materials = getattr(src.source, "materials", None)
+        if features is None and materials is not None:  # a volume's regions, one-hot
+            features = (materials[:, None] == np.unique(materials)[None, :]).astype(float)
         if features is None:
             from .errors import ParameterError
 
             raise ParameterError("beta > 0 needs features: pass features=(one row per "
                                  f"{src.graph.element}), or an input with colours (PLY, PCD "
-                                 "or LAS points with RGB)")
+                                 "or LAS points with RGB) or materials (a tetrahedral mesh)")
     return _per_element(src, features)
 
 

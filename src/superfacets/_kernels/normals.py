@@ -50,30 +50,41 @@ def _smallest_eigenvector(a00, a01, a02, a11, a12, a22, out, i):
     out[i, 0], out[i, 1], out[i, 2] = x * s, y * s, z * s
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _scatter(points, idx):
+    """The scatter matrix (sums of centred outer products) of the points ``idx``:
+    ``(a00, a01, a02, a11, a12, a22)``; zeros for no point."""
+    k = idx.shape[0]
+    if k == 0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    mx = my = mz = 0.0
+    for t in range(k):
+        j = idx[t]
+        mx += points[j, 0]
+        my += points[j, 1]
+        mz += points[j, 2]
+    mx /= k
+    my /= k
+    mz /= k
+    a00 = a01 = a02 = a11 = a12 = a22 = 0.0
+    for t in range(k):
+        j = idx[t]
+        x, y, z = points[j, 0] - mx, points[j, 1] - my, points[j, 2] - mz
+        a00 += x * x
+        a01 += x * y
+        a02 += x * z
+        a11 += y * y
+        a12 += y * z
+        a22 += z * z
+    return a00, a01, a02, a11, a12, a22
+
+
 @njit(cache=True, error_model="numpy", parallel=True)
 def pca_normals(points, neighbors, out):
     """``out[i]``: unit normal of the points ``neighbors[i]`` (their least-variance axis)."""
-    n, k = neighbors.shape
+    n = neighbors.shape[0]
     for i in prange(n):
-        mx = my = mz = 0.0
-        for t in range(k):
-            j = neighbors[i, t]
-            mx += points[j, 0]
-            my += points[j, 1]
-            mz += points[j, 2]
-        mx /= k
-        my /= k
-        mz /= k
-        a00 = a01 = a02 = a11 = a12 = a22 = 0.0
-        for t in range(k):
-            j = neighbors[i, t]
-            x, y, z = points[j, 0] - mx, points[j, 1] - my, points[j, 2] - mz
-            a00 += x * x
-            a01 += x * y
-            a02 += x * z
-            a11 += y * y
-            a12 += y * z
-            a22 += z * z
+        a00, a01, a02, a11, a12, a22 = _scatter(points, neighbors[i])
         scale = a00 + a11 + a22
         if scale > 0.0:
             a00 /= scale
@@ -87,44 +98,15 @@ def pca_normals(points, neighbors, out):
 
 @njit(cache=True, error_model="numpy", parallel=True)
 def csr_covariances(indptr, indices, points, out):
-    """``out[i]``: the 3x3 covariance of point ``i`` and its CSR neighbours."""
+    """``out[i]``: the 3x3 covariance of the CSR neighbours of point ``i`` (zeros for none)."""
     n = indptr.shape[0] - 1
     for i in prange(n):
-        m = indptr[i + 1] - indptr[i] + 1
-        mx = points[i, 0]
-        my = points[i, 1]
-        mz = points[i, 2]
-        for e in range(indptr[i], indptr[i + 1]):
-            j = indices[e]
-            mx += points[j, 0]
-            my += points[j, 1]
-            mz += points[j, 2]
-        mx /= m
-        my /= m
-        mz /= m
-        dx = points[i, 0] - mx
-        dy = points[i, 1] - my
-        dz = points[i, 2] - mz
-        c00 = dx * dx
-        c01 = dx * dy
-        c02 = dx * dz
-        c11 = dy * dy
-        c12 = dy * dz
-        c22 = dz * dz
-        for e in range(indptr[i], indptr[i + 1]):
-            j = indices[e]
-            dx = points[j, 0] - mx
-            dy = points[j, 1] - my
-            dz = points[j, 2] - mz
-            c00 += dx * dx
-            c01 += dx * dy
-            c02 += dx * dz
-            c11 += dy * dy
-            c12 += dy * dz
-            c22 += dz * dz
-        out[i, 0, 0] = c00 / m
-        out[i, 0, 1] = out[i, 1, 0] = c01 / m
-        out[i, 0, 2] = out[i, 2, 0] = c02 / m
-        out[i, 1, 1] = c11 / m
-        out[i, 1, 2] = out[i, 2, 1] = c12 / m
-        out[i, 2, 2] = c22 / m
+        idx = indices[indptr[i]:indptr[i + 1]]
+        m = max(idx.shape[0], 1)
+        a00, a01, a02, a11, a12, a22 = _scatter(points, idx)
+        out[i, 0, 0] = a00 / m
+        out[i, 0, 1] = out[i, 1, 0] = a01 / m
+        out[i, 0, 2] = out[i, 2, 0] = a02 / m
+        out[i, 1, 1] = a11 / m
+        out[i, 1, 2] = out[i, 2, 1] = a12 / m
+        out[i, 2, 2] = a22 / m

@@ -11,7 +11,7 @@ its superpoints being the connected pieces of constant ``g``. Here, as in
 the Superpoint Graph's partition step:
 
 - features: the four dimensionality features of each point's neighbourhood
-  (its neighbours in the graph and itself), from the eigenvalues
+  (its neighbours in the graph), from the eigenvalues
   ``l1 >= l2 >= l3`` of their covariance: linearity ``(l1 - l2) / l1``,
   planarity ``(l2 - l3) / l1``, scattering ``l3 / l1`` and verticality (the
   ``up`` component of the eigenvalue-weighted sum of the absolute
@@ -55,7 +55,7 @@ def dimensionality_features(graph, up: int = 2) -> np.ndarray:
     Parameters
     ----------
     graph : ElementGraph
-        Its CSR neighbours (and the element itself) form each neighbourhood.
+        Its CSR neighbours form each neighbourhood.
     up : {0, 1, 2}, default 2
         The vertical axis of verticality.
 

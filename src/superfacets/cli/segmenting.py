@@ -29,7 +29,7 @@ def add_parsers(sub) -> None:
                     "label per point in file order, -1 for invalid points), and write them "
                     "as a .seg label file (one label per line), a ScanNet-style .json "
                     "(segIndices) and/or a coloured mesh or cloud.")
-    p.add_argument("mesh", metavar="INPUT", help="input mesh or point-cloud file")
+    p.add_argument("mesh", metavar="INPUT", help="input mesh, point-cloud or tetrahedral-mesh file (.msh, .vtk, .vtu, .mesh)")
     add_method_options(p)
     add_element_options(p)
     p.add_argument("-o", "--output", metavar="OUT.seg", default=None,
@@ -147,6 +147,12 @@ def cmd_segment(args) -> int:
     if Path(args.mesh).is_dir():
         raise IsADirectoryError(f"{args.mesh}: is a directory; to segment every mesh or cloud "
                                 f"in it: superfacets batch {args.mesh} -o OUTDIR")
+    from ..io.volumes import VOLUME_FORMATS
+
+    if Path(args.mesh).suffix.lower().lstrip(".") in VOLUME_FORMATS:
+        from .volumes import segment_volume
+
+        return segment_volume(args)
     seg_out = check_labels_output(args.output, args.mesh)
     ply_out = check_output(args.colored_mesh, (".ply", ".glb", ".obj"), "the coloured mesh",
                            inputs=(args.mesh,))

@@ -213,7 +213,8 @@ class ElementGraph:
     @property
     def element(self) -> str:
         """The singular of ``kind``: ``"face"``, ``"vertex"`` or ``"point"``."""
-        return {"faces": "face", "vertices": "vertex", "points": "point"}.get(self.kind,
+        return {"faces": "face", "vertices": "vertex", "points": "point",
+                "cells": "cell"}.get(self.kind,
                                                                                self.kind)
 
     @property

@@ -81,8 +81,9 @@ def elements_of(obj, elements: str | None = None, *, n_neighbors: int = 10,
     ----------
     obj : Mesh, PointCloud, or what :func:`~superfacets.convert.as_mesh` or
         :func:`~superfacets.cloud.as_cloud` accept
-    elements : {'faces', 'vertices', 'points'}, optional
-        Default: ``'points'`` for a point cloud, else ``'faces'``.
+    elements : {'faces', 'vertices', 'points', 'cells'}, optional
+        Default: ``'points'`` for a point cloud, ``'cells'`` for a
+        :class:`~superfacets.volume.TetMesh` (its tetrahedra), else ``'faces'``.
     n_neighbors, neighbor_radius
         The point graph's neighbourhood (points only).
 
@@ -98,7 +99,18 @@ def elements_of(obj, elements: str | None = None, *, n_neighbors: int = 10,
         As the input's validation.
     """
     from ..errors import ParameterError
+    from ..volume import TetMesh
 
+    if isinstance(obj, TetMesh):  # its tetrahedra
+        if elements not in (None, "cells"):
+            raise ParameterError(f"a tetrahedral mesh has elements='cells', not {elements!r}")
+        obj.check_usable()
+        from .cells import cell_graph
+
+        return ElementInput(cell_graph(obj), None, obj)
+    if elements == "cells":
+        raise ParameterError("elements='cells' needs a tetrahedral mesh "
+                             "(superfacets.read_volume)")
     cloud = is_cloud(obj)
     if elements is None:
         elements = "points" if cloud else "faces"

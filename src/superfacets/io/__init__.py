@@ -4,6 +4,7 @@
 - :mod:`.clouds`: :func:`read_cloud` (PLY without faces, PCD, XYZ/PTS/TXT, NPY, LAS/LAZ);
 - :mod:`.export`: :func:`write_mesh`, :func:`write_colored_mesh` (PLY with labels, GLB, OBJ),
   :func:`to_trimesh` and :func:`to_pyvista` (a result as the libraries' objects);
+- :mod:`.volumes`: :func:`read_volume`, :func:`write_volume_labels` (tetrahedra, meshio);
 - :mod:`.labels`: :func:`read_labels` (``.seg``, or a coloured PLY), :func:`write_labels`;
 - :mod:`.ply`: the binary PLY writer and the label reader;
 - :mod:`.files`: compression by suffix, :func:`atomic_write` and all-or-nothing outputs.
@@ -14,6 +15,7 @@ from .labels import read_labels, write_labels, write_segindices
 from .export import to_pyvista, to_trimesh, write_colored_mesh, write_mesh
 from .meshes import MESH_FORMATS, read_mesh
 from .clouds import CLOUD_FORMATS, is_cloud_file, read_cloud
+from .volumes import VOLUME_FORMATS, read_volume, write_volume_labels
 
 
 def read_input(path):
@@ -23,4 +25,5 @@ def read_input(path):
 
 __all__ = ["read_mesh", "write_mesh", "read_labels", "write_labels", "write_colored_mesh",
            "atomic_write", "MESH_FORMATS", "read_cloud", "read_input", "CLOUD_FORMATS",
-           "is_cloud_file", "write_segindices", "to_trimesh", "to_pyvista"]
+           "is_cloud_file", "write_segindices", "to_trimesh", "to_pyvista", "read_volume",
+           "write_volume_labels", "VOLUME_FORMATS"]

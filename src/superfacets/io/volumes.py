@@ -1,0 +1,126 @@
+"""Tetrahedral meshes in and labels out, through meshio (the ``volumes`` extra).
+
+Read: Gmsh ``.msh``, VTK ``.vtk``/``.vtu``, MEDIT ``.mesh`` (and the other
+volume formats meshio reads), the ``tetra`` cells in file order; other cell
+kinds (the surface triangles Gmsh writes beside, lines, points) are left out.
+The first integer cell data of the tetrahedra (Gmsh's ``gmsh:physical``,
+MEDIT's ``medit:ref``, else any) become the materials. Write: the mesh with
+the labels as cell data ``superfacet`` (one per tetrahedron, -1 nowhere),
+atomically.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import MeshFormatError
+
+__all__ = ["read_volume", "write_volume_labels", "VOLUME_FORMATS"]
+
+#: Suffixes read as tetrahedral meshes (by ``segment`` and :func:`read_volume`).
+VOLUME_FORMATS = ("msh", "vtk", "vtu", "mesh")
+_PREFERRED = ("gmsh:physical", "medit:ref", "CellEntityIds", "material", "materials")
+
+
+def read_volume(path):
+    """Read the tetrahedra of a volume mesh file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    TetMesh
+        Vertices and tetrahedra in file order, the materials when the file
+        has integer cell data on its tetrahedra.
+
+    Raises
+    ------
+    FileNotFoundError, IsADirectoryError
+    MeshFormatError
+        If meshio cannot read it, or it holds no tetrahedron.
+    InvalidMeshError
+        As :class:`~superfacets.volume.TetMesh`.
+    MissingExtraError
+        Without meshio (``pip install 'superfacets[volumes]'``).
+    """
+    from ..extras import require
+    from ..volume import TetMesh
+
+    meshio = require("meshio", "reading tetrahedral meshes")
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"{path}: no such file")
+    if path.is_dir():
+        raise IsADirectoryError(f"{path}: is a directory")
+    import contextlib
+    import io
+
+    said = io.StringIO()
+    try:  # meshio prints its complaints, and exits on a file no reader takes
+        with contextlib.redirect_stdout(said), contextlib.redirect_stderr(said):
+            m = meshio.read(path)
+    except (Exception, SystemExit) as exc:  # noqa: BLE001 - meshio raises many types
+        msg = (str(exc).strip() if not isinstance(exc, SystemExit) else "") or \
+            " ".join(said.getvalue().split()) or type(exc).__name__
+        raise MeshFormatError(f"{path}: cannot read it as a volume mesh: "
+                              f"{msg.splitlines()[0][:300]}") from None
+    blocks = [i for i, c in enumerate(m.cells) if c.type == "tetra"]
+    if not blocks:
+        kinds = ", ".join(sorted({c.type for c in m.cells})) or "none"
+        raise MeshFormatError(f"{path}: no tetrahedra (cells: {kinds}); superfacets segments "
+                              "tetrahedral meshes (or surfaces: superfacets segment MESH)")
+    tets = np.concatenate([m.cells[i].data for i in blocks])
+    materials = None
+    names = [n for n in _PREFERRED if n in m.cell_data] + [n for n in m.cell_data
+                                                            if n not in _PREFERRED]
+    for name in names:
+        data = [np.asarray(m.cell_data[name][i]).reshape(-1) for i in blocks]
+        if all(np.issubdtype(d.dtype, np.integer) for d in data):
+            materials = np.concatenate(data)
+            break
+    return TetMesh(np.asarray(m.points, dtype=np.float64)[:, :3] if m.points.shape[1] >= 3
+                   else m.points, tets, materials=materials, name=path.name)
+
+
+def write_volume_labels(path, mesh, labels, *, outputs=None) -> Path:
+    """Write a tetrahedral mesh with one label per tetrahedron as cell data ``superfacet``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Any volume format meshio writes (``.vtu`` for ParaView, ``.msh``, ...).
+    mesh : TetMesh
+    labels : (m,) int ndarray
+    outputs : Outputs, optional
+        Write as part of an all-or-nothing group.
+
+    Raises
+    ------
+    ParameterError
+        If the labels are not one per tetrahedron.
+    MissingExtraError
+        Without meshio.
+    """
+    import tempfile
+
+    from ..extras import require
+    from ..labels import check_labels
+    from .files import atomic_write
+
+    meshio = require("meshio", "writing tetrahedral meshes")
+    lab = np.asarray(check_labels(labels, mesh.n_tets, per="tetrahedron"), dtype=np.int64)
+    path = Path(path)
+    cell_data = {"superfacet": [lab]}
+    if mesh.materials is not None:
+        cell_data["material"] = [mesh.materials]
+    out = meshio.Mesh(np.asarray(mesh.vertices), [("tetra", np.asarray(mesh.tets))],
+                      cell_data=cell_data)
+    with tempfile.TemporaryDirectory() as tmp:  # meshio writes by name: write, then move
+        t = Path(tmp) / path.name
+        out.write(t)
+        data = t.read_bytes()
+    return outputs.write(path, data) if outputs is not None else atomic_write(path, data)
