@@ -74,6 +74,12 @@ def test_expand_grid_resolves_and_validates():
         expand_grid("nope")
     with pytest.raises(ParameterError, match="max_iter must be int"):
         expand_grid("superfacets", max_iter="many")
+    # "auto" parameters: auto or a value of their kind, refused up front otherwise
+    assert expand_grid("superfacets", cleanup="false")[0].kwargs["cleanup"] == "false"
+    with pytest.raises(ParameterError, match="cleanup must be auto or bool"):
+        expand_grid("superfacets", cleanup="maybe")
+    with pytest.raises(ParameterError, match="coarsen must be auto or int"):
+        expand_grid("superfacets", coarsen="fine")
 
 
 def test_run_writes_one_row_per_combination_and_resumes(bench, tmp_path):

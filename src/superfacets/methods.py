@@ -104,6 +104,17 @@ class Method:
                 raise ParameterError(f"method {self.name!r} has no parameter {k!r} "
                                      f"(it has: {', '.join(sorted(self.defaults)) or 'none'})")
             kind = type(self.defaults[k])
+            if self.defaults[k] == "auto" and k in _AUTO:  # "auto", or a value of its kind
+                text = str(v).strip().lower()
+                try:
+                    if text != "auto":
+                        _AUTO[k](v)
+                except (TypeError, ValueError):
+                    raise ParameterError(f"method {self.name!r}: {k} must be auto or "
+                                         f"{_AUTO[k].__name__.replace('parse_', '')}, "
+                                         f"got {v!r}") from None
+                out[k] = text if text == "auto" else str(v).strip()
+                continue
             try:
                 out[k] = kind(v) if kind is not bool or isinstance(v, bool) else parse_bool(v)
             except (TypeError, ValueError):
@@ -120,6 +131,9 @@ def parse_bool(v) -> bool:
         return False
     raise ValueError(v)
 
+
+#: Parameters whose default is ``"auto"``, and the kind of their other values.
+_AUTO = {"center_tol": float, "coarsen": int, "cleanup": parse_bool, "split_merge": parse_bool}
 
 #: The registry: method name -> :class:`Method`.
 METHODS: dict[str, Method] = {}
