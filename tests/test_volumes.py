@@ -136,3 +136,9 @@ def test_cli_segments_a_volume(tmp_path, capsys):
     assert "not available for tetrahedral meshes" in capsys.readouterr().err
     assert main(["segment", str(tmp_path / "c.vtu"), "--beta", "5"]) == 2
     assert "materials" in capsys.readouterr().err
+    assert main(["segment", str(tmp_path / "c.vtu"), "--elements", "points"]) == 2
+    assert "segmented by its tetrahedra" in capsys.readouterr().err
+    (tmp_path / "bad.msh").write_text("garbage\n")
+    assert main(["segment", str(tmp_path / "bad.msh"), "-o", str(tmp_path / "b.seg")]) == 2
+    assert "cannot read it as a volume mesh" in capsys.readouterr().err
+    assert not (tmp_path / "b.seg").exists()

@@ -24,6 +24,9 @@ def segment_volume(args) -> int:
                         ("--vertex-colors", args.vertex_colors)):
         if given:
             raise ParameterError(f"{flag} is not available for tetrahedral meshes")
+    if getattr(args, "elements", None) not in (None, "cells"):
+        raise ParameterError(f"--elements {args.elements}: a tetrahedral mesh is segmented by "
+                             "its tetrahedra")
     seg_out = check_labels_output(args.output, args.mesh)
     vol_out = check_output(args.colored_mesh, (".vtu", ".vtk", ".msh", ".mesh"),
                            "the labelled volume", inputs=(args.mesh,))
