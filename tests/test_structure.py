@@ -23,7 +23,7 @@ LAYERS = (
      "superfacets.camera", "superfacets.warmup", "superfacets.interrupts"),
     # inputs: validated meshes and clouds, read from files or the libraries' objects
     ("superfacets.mesh", "superfacets.cloud", "superfacets.volume", "superfacets.convert",
-     "superfacets.shapes", "superfacets.io.volumes",
+     "superfacets.shapes", "superfacets.io.volumes", "superfacets.io.regions",
      "superfacets.io.files", "superfacets.io.ply", "superfacets.io.labels",
      "superfacets.io.meshes", "superfacets.io.clouds"),
     # element graphs of the inputs
@@ -35,7 +35,8 @@ LAYERS = (
      "superfacets.metrics", "superfacets.colors", "superfacets.adjacency",
      "superfacets.hierarchy"),
     # the method, one run
-    ("superfacets.pipeline", "superfacets.segmentation", "superfacets.scenes"),
+    ("superfacets.pipeline", "superfacets.segmentation", "superfacets.scenes",
+     "superfacets.tiling"),
     # every method alike
     ("superfacets.baselines", "superfacets.methods"),
     # what is made of results: files, pictures, pages, experiments, batches

@@ -56,6 +56,8 @@ _PUBLIC = {
     "TetMesh": "volume",
     "read_volume": "io",
     "write_volume_labels": "io",
+    "segment_tiled": "runner.tiles",
+    "TiledResult": "runner.tiles",
 }
 
 __all__ = [
@@ -73,6 +75,7 @@ __all__ = [
     "SegmentationResult",
     "SuperfacetsError",
     "TetMesh",
+    "TiledResult",
     "as_cloud",
     "as_mesh",
     "edge_weights",
@@ -85,6 +88,7 @@ __all__ = [
     "read_mesh",
     "read_volume",
     "segment",
+    "segment_tiled",
     "shlafman_weights",
     "superfacets",
     "superpoints",
@@ -119,6 +123,7 @@ if TYPE_CHECKING:  # the same names, for type checkers and IDEs
                      write_colored_mesh, write_labels, write_mesh, write_segindices,
                      write_volume_labels)
     from .volume import TetMesh
+    from .runner.tiles import TiledResult, segment_tiled
     from .convert import as_mesh
     from .mesh import Mesh
     from .params import DEFAULTS, SegmentParams

@@ -214,7 +214,7 @@ def _per_element(src, features):
 
 
 def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
-             jump_cycles: bool = True) -> SegmentationResult:
+             jump_cycles: bool = True, n_centers: int | None = None) -> SegmentationResult:
     """Run the method with validated parameters (see the module notes).
 
     Parameters
@@ -230,6 +230,9 @@ def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
         assignment); False expands every center on every pass. Same labels.
     jump_cycles : bool, default True
         Jump over a repeating cycle of center lists. Same labels.
+    n_centers : int, optional
+        Initial centers instead of the number ``radius`` gives (a tile of a
+        tiled run: :mod:`superfacets.tiling`); ``r`` stays the radius's.
 
     Returns
     -------
@@ -238,11 +241,12 @@ def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
     from ._threads import using
 
     with using(params.n_threads):  # also the graph build and terms this run triggers
-        return _pipeline(mesh, params, features, replay=replay, jump_cycles=jump_cycles)
+        return _pipeline(mesh, params, features, replay=replay, jump_cycles=jump_cycles,
+                         n_centers=n_centers)
 
 
-def _pipeline(mesh, params: SegmentParams, features, *, replay: bool, jump_cycles: bool
-              ) -> SegmentationResult:
+def _pipeline(mesh, params: SegmentParams, features, *, replay: bool, jump_cycles: bool,
+              n_centers: int | None = None) -> SegmentationResult:
     t_start = time.perf_counter()
     p = params
     t = time.perf_counter()
@@ -251,6 +255,8 @@ def _pipeline(mesh, params: SegmentParams, features, *, replay: bool, jump_cycle
     graph = source.graph
     t_graph = time.perf_counter() - t
     k, r = superfacet_size(p, graph.area, graph.diagonal, graph.n_elements, graph.kind)
+    if n_centers is not None:
+        k = int(min(max(n_centers, 1), graph.n_elements))
     cleanup, split_merge = better_method(p, graph.kind)
     feats = _features_of(source, features) if p.beta > 0 else None
     timings: dict[str, float] = {}

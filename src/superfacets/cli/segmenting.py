@@ -63,6 +63,9 @@ def add_parsers(sub) -> None:
                    help="segment each object of a scene on its own (-k shared out by area); "
                         "labels stay unique over the scene")
     add_camera_options(p, "")  # --view, --up of --picture and --html
+    from .tiles import add_tile_options
+
+    add_tile_options(p)
     p.set_defaults(func=cmd_segment)
 
     bl = sub.add_parser(
@@ -150,9 +153,20 @@ def cmd_segment(args) -> int:
     from ..io.volumes import VOLUME_FORMATS
 
     if Path(args.mesh).suffix.lower().lstrip(".") in VOLUME_FORMATS:
+        if args.tiles is not None:
+            raise ParameterError("--tiles takes triangle meshes and point clouds, not "
+                                 "tetrahedral meshes")
         from .volumes import segment_volume
 
         return segment_volume(args)
+    if args.tiles is not None:
+        from .tiles import segment_tiles
+
+        return segment_tiles(args)
+    for flag, given in (("--halo", args.halo), ("--workers", args.workers),
+                        ("--scheduler", args.scheduler)):
+        if given is not None:
+            raise ParameterError(f"{flag} goes with --tiles")
     seg_out = check_labels_output(args.output, args.mesh)
     ply_out = check_output(args.colored_mesh, (".ply", ".glb", ".obj"), "the coloured mesh",
                            inputs=(args.mesh,))

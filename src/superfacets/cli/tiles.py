@@ -1,0 +1,92 @@
+"""``segment INPUT --tiles N``: one large input tile by tile, on Dask or in this process."""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+from .options import check_labels_output, element_kwargs, method_kwargs, named_after
+
+
+def tiles_arg(text: str):
+    """``N`` (tiles, the most cubic grid) or ``NX,NY,NZ``."""
+    import argparse
+
+    parts = text.split(",")
+    try:
+        vals = [int(p) for p in parts]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected N or NX,NY,NZ (integers), got {text!r}") \
+            from None
+    if len(vals) not in (1, 3) or min(vals) < 1:
+        raise argparse.ArgumentTypeError(f"expected N or NX,NY,NZ (integers >= 1), got {text!r}")
+    return vals[0] if len(vals) == 1 else tuple(vals)
+
+
+def add_tile_options(p) -> None:
+    """``--tiles``, ``--halo``, ``-j/--workers``, ``--scheduler`` of ``segment``."""
+    g = p.add_argument_group("tiles (one input larger than a machine)")
+    g.add_argument("--tiles", type=tiles_arg, default=None, metavar="N|NX,NY,NZ",
+                   help="cut the input into N spatial tiles with halos, one task each, "
+                        "stitched so that no superfacet is cut by a tile border; binary PLY, "
+                        "LAS/LAZ and .npy are read in chunks by each task (labels only: "
+                        "-o OUT.seg / .json)")
+    g.add_argument("--halo", type=float, default=None, metavar="H",
+                   help="with --tiles: halo width in units of window * r (>= 1; default 3)")
+    g.add_argument("-j", "--workers", type=int, default=None, metavar="N",
+                   help="with --tiles: local Dask worker processes (default one per core; "
+                        "1: in this process)")
+    g.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="with --tiles: run on a running Dask cluster (tcp://host:8786); its "
+                        "workers must read INPUT by the same path")
+
+
+def segment_tiles(args) -> int:
+    """``segment --tiles``: labels of a large input, written as ``-o`` says."""
+    from ..errors import ParameterError, SuperfacetsError
+    from ..io.files import Outputs
+    from ..io.labels import write_labels, write_segindices
+    from ..runner.tiles import segment_tiled
+
+    for flag, given in (("--colored-mesh", args.colored_mesh), ("--picture", args.picture),
+                        ("--html", args.html), ("--graph", args.graph),
+                        ("--per-object", args.per_object)):
+        if given:
+            raise ParameterError(f"{flag} needs the whole input in one process; not with "
+                                 "--tiles (write -o OUT.seg, then view a part)")
+    if getattr(args, "elements", None) == "vertices":
+        raise ParameterError("--tiles segments faces or points, not vertices")
+    if args.workers is not None and args.workers < 1:
+        raise ParameterError(f"--workers must be >= 1, got {args.workers}")
+    seg_out = check_labels_output(args.output, args.mesh)
+    kwargs = dict(method_kwargs(args), **element_kwargs(args))
+    kwargs.pop("progress", None)
+    t0 = time.perf_counter()
+    try:
+        result = segment_tiled(args.mesh, args.n_segments, radius=args.radius, tiles=args.tiles,
+                               halo=args.halo, workers=args.workers, scheduler=args.scheduler,
+                               progress=not args.quiet and sys.stderr.isatty(), **kwargs)
+    except SuperfacetsError as exc:
+        raise named_after(args.mesh, exc) from None
+    elapsed = time.perf_counter() - t0
+    with Outputs() as outputs:
+        if seg_out is not None:
+            if str(seg_out).lower().endswith(".json"):
+                write_segindices(seg_out, result.labels, result.params, outputs=outputs)
+            else:
+                write_labels(seg_out, result.labels, outputs=outputs)
+    report = sys.stderr if str(seg_out) == "-" else sys.stdout
+    if not args.quiet:
+        kind = result.params["elements"]
+        peak = max((t.get("centers_peak_mib") or 0 for t in result.tiles), default=0)
+        print(f"{Path(args.mesh).name}: {result.labels.size} {kind}, {result.n_segments} "
+              f"superfacets in {len(result.tiles)} tiles "
+              f"({'x'.join(map(str, result.grid))}), {elapsed:.2f} s; largest tile "
+              f"{max(t['rows'] for t in result.tiles)} {kind} with its halo, peak "
+              f"{peak:.0f} MiB; {result.disagreements} border disagreements", file=report)
+        if seg_out is not None and str(seg_out) != "-":
+            print(f"wrote {seg_out} (labels, one per {kind[:-1]})", file=report)
+        elif seg_out is None:
+            print("note: nothing was saved: add -o OUT.seg", file=sys.stderr)
+    return 0

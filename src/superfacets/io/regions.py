@@ -1,0 +1,380 @@
+"""One box of a large input at a time: streamed reading for tiled runs.
+
+A :class:`RegionReader` holds a file's name and layout, never its data: it
+is small and picklable, so it travels to Dask workers, and each worker reads
+only the elements of its tile (:meth:`RegionReader.read_box`). Every read
+goes through the file in chunks of :data:`CHUNK` rows, so no process holds
+more than one chunk beyond the box it keeps.
+
+Streamed formats:
+
+- binary PLY triangle meshes (faces read through a fixed-size record: a
+  face with other than 3 corners is an error naming it), the vertex
+  positions memory-mapped;
+- binary PLY point clouds (a ``vertex`` element without faces; colours
+  ``red green blue`` kept), memory-mapped;
+- LAS / LAZ point clouds (``laspy``'s chunk iterator; extra ``clouds``);
+- ``.npy`` arrays of points ``(N, 3)``, memory-mapped.
+
+Anything else (OBJ, OFF, ASCII PLY, PCD, arrays in memory) is read once by
+:meth:`RegionReader.spill` and written to ``.npy`` files in a work folder,
+which the workers then memory-map: that input must fit one machine.
+
+The element of a face is its centroid, of a point the point; a box keeps
+the elements whose position lies in it (bounds included). Non-finite
+points lie in no box (their label stays -1).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import MeshFormatError
+
+__all__ = ["RegionReader", "Survey", "CHUNK", "STREAMED"]
+
+#: Rows read at once.
+CHUNK = 1 << 20
+#: Suffixes read in chunks without holding the file.
+STREAMED = ("ply", "las", "laz", "npy")
+
+
+@dataclass(frozen=True)
+class Survey:
+    """What one pass over the input tells: bounds, total size, element count."""
+
+    lo: np.ndarray
+    hi: np.ndarray
+    #: total area of the faces (the number of points for a cloud)
+    size: float
+    n_elements: int
+
+
+@dataclass(frozen=True)
+class RegionReader:
+    """A large mesh or point cloud, read one axis-aligned box at a time.
+
+    Use :meth:`open` (a file) or :meth:`spill` (anything the package reads,
+    written to ``.npy`` files first).
+
+    Attributes
+    ----------
+    path : str
+        The file read (for spilled inputs, the folder of ``.npy`` files).
+    kind : {'faces', 'points'}
+    layout : str
+        ``'ply-mesh'``, ``'ply-points'``, ``'las'``, ``'npy-points'`` or ``'npy-mesh'``.
+    n_rows : int
+        Faces or points in the file (the length of the labels).
+    """
+
+    path: str
+    kind: str
+    layout: str
+    n_rows: int
+    chunk: int = CHUNK
+
+    # ------------------------------------------------------------------ opening
+    @classmethod
+    def open(cls, path, *, chunk: int = CHUNK) -> "RegionReader":
+        """A reader of a streamed file (:data:`STREAMED`).
+
+        Raises
+        ------
+        FileNotFoundError
+            If there is no such file.
+        MeshFormatError
+            If the file is not a streamed format, or its header is damaged.
+        """
+        p = Path(path)
+        if not p.is_file():
+            raise FileNotFoundError(f"{p}: no such file")
+        suffix = p.suffix.lower().lstrip(".")
+        if suffix == "ply":
+            ply = _ply(p)  # memory-mapped: the header is read, not the data
+            names = [e.name for e in ply.elements]
+            if "face" in names and ply["face"].count > 0:
+                return cls(str(p), "faces", "ply-mesh", int(ply["face"].count), chunk)
+            return cls(str(p), "points", "ply-points", int(ply["vertex"].count), chunk)
+        if suffix in ("las", "laz"):
+            from ..extras import require
+
+            laspy = require("laspy", "reading LAS/LAZ files")
+            try:
+                with laspy.open(p) as f:
+                    n = int(f.header.point_count)
+            except Exception as exc:  # noqa: BLE001 - laspy raises many types
+                raise MeshFormatError(f"{p}: cannot read {suffix.upper()}: {_first(exc)}") from None
+            return cls(str(p), "points", "las", n, chunk)
+        if suffix == "npy":
+            arr = _npy(p)
+            if arr.ndim != 2 or arr.shape[1] != 3:
+                raise MeshFormatError(f"{p}: a tiled run reads NPY points of shape (N, 3), "
+                                      f"got {arr.shape}")
+            return cls(str(p), "points", "npy-points", int(arr.shape[0]), chunk)
+        raise MeshFormatError(f"{p}: .{suffix} is not read in chunks (streamed: "
+                              f"{', '.join('.' + s for s in STREAMED)}); use RegionReader.spill")
+
+    @classmethod
+    def spill(cls, source, folder, *, chunk: int = CHUNK) -> "RegionReader":
+        """Write a mesh or cloud the package can read (a path or an object) to
+        ``.npy`` files in ``folder`` and read those.
+
+        Raises
+        ------
+        MeshFormatError, InvalidMeshError
+            As the readers do; also for a polygon mesh (tiles take triangles).
+        """
+        from ..cloud import PointCloud, as_cloud
+        from ..convert import as_mesh
+
+        obj = source
+        if isinstance(source, (str, Path)):
+            from .clouds import is_cloud_file, read_cloud
+            from .meshes import read_mesh
+
+            obj = read_cloud(source) if is_cloud_file(source) else read_mesh(source)
+        cloud = isinstance(obj, PointCloud) or type(obj).__name__ == "PointCloud" or (
+            isinstance(obj, np.ndarray) and obj.ndim in (2, 3) and obj.shape[-1] == 3)
+        obj = as_cloud(obj) if cloud else as_mesh(obj)
+        folder = Path(folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        if isinstance(obj, PointCloud):
+            pts = np.where(obj.valid[:, None], obj.points, np.nan)
+            np.save(folder / "points.npy", np.ascontiguousarray(pts, dtype=np.float64))
+            for name, a in (("colors", obj.colors), ("normals", obj.normals)):
+                if a is not None:
+                    np.save(folder / f"{name}.npy", np.ascontiguousarray(a, dtype=np.float64))
+            return cls(str(folder), "points", "npy-points", int(pts.shape[0]), chunk)
+        faces = obj.faces
+        if faces.ndim != 2 or faces.shape[1] != 3:
+            raise MeshFormatError(f"{obj.name or 'mesh'}: a tiled run takes triangle meshes "
+                                  "or point clouds (this mesh has polygons)")
+        np.save(folder / "vertices.npy", np.ascontiguousarray(obj.vertices, dtype=np.float64))
+        np.save(folder / "faces.npy", np.ascontiguousarray(faces, dtype=np.int64))
+        return cls(str(folder), "faces", "npy-mesh", int(faces.shape[0]), chunk)
+
+    # ------------------------------------------------------------------ reading
+    def chunks(self):
+        """Yield ``(start, positions (c, 3) float64, sizes (c,) float64, extra)`` per chunk:
+        face centroids and areas (``extra``: the faces' vertex indices and the vertex
+        array), or points and ones (``extra``: their colours and normals, each None when absent)."""
+        if self.kind == "faces":
+            verts, faces = self._mesh_arrays()
+            n_v = verts.shape[0]
+            for s in range(0, self.n_rows, self.chunk):
+                tri = faces(s, min(s + self.chunk, self.n_rows))
+                if tri.size and (tri.min() < 0 or tri.max() >= n_v):
+                    bad = s + int(np.flatnonzero(((tri < 0) | (tri >= n_v)).any(1))[0])
+                    raise MeshFormatError(f"{self.path}: face {bad} has a vertex index out "
+                                          f"of range 0..{n_v - 1}")
+                p = verts[tri]  # (c, 3, 3)
+                area = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+                yield s, p.mean(axis=1), area, (tri, verts)
+            return
+        for s, pts, extra in self._point_chunks():
+            yield s, pts, np.ones(pts.shape[0]), extra
+
+    def survey(self) -> Survey:
+        """Bounds of the finite element positions, total size and count (one pass).
+
+        Raises
+        ------
+        MeshFormatError
+            If no element has a finite position, or a face index is out of range.
+        """
+        lo = np.full(3, np.inf)
+        hi = np.full(3, -np.inf)
+        size = 0.0
+        n = 0
+        for _, pos, sz, _ in self.chunks():
+            ok = np.isfinite(pos).all(axis=1)
+            if ok.any():
+                lo = np.minimum(lo, pos[ok].min(axis=0))
+                hi = np.maximum(hi, pos[ok].max(axis=0))
+                size += float(sz[ok].sum())
+                n += int(ok.sum())
+        if n == 0:
+            raise MeshFormatError(f"{self.path}: no {self.kind[:-1]} with a finite position")
+        return Survey(lo, hi, size, n)
+
+    def read_box(self, lo, hi, name: str = ""):
+        """The elements whose position lies in ``[lo, hi]``, as an input of their own.
+
+        Returns
+        -------
+        rows : (c,) int64 ndarray
+            Their rows in the file, increasing.
+        positions : (c, 3) float64 ndarray
+            Their positions (face centroids, points).
+        input : Mesh or PointCloud or None
+            The faces (with the vertices they use) or the points (with their
+            colours), in that order; None where the box holds no element.
+        """
+        from ..cloud import PointCloud
+        from ..mesh import Mesh
+
+        lo = np.asarray(lo, dtype=np.float64)
+        hi = np.asarray(hi, dtype=np.float64)
+        rows, keep, where = [], [], []
+        verts = None
+        for s, pos, _, extra in self.chunks():
+            inside = np.flatnonzero(((pos >= lo) & (pos <= hi)).all(axis=1))
+            rows.append(inside + s)
+            where.append(pos[inside])
+            if self.kind == "faces":
+                tri, verts = extra
+                keep.append(tri[inside])
+            else:
+                keep.append((pos[inside],) + tuple(None if a is None else a[inside]
+                                                   for a in extra))
+        rows = np.concatenate(rows).astype(np.int64) if rows else np.empty(0, dtype=np.int64)
+        where = np.concatenate(where) if where else np.empty((0, 3))
+        if rows.size == 0:
+            return rows, where, None
+        if self.kind == "faces":
+            tri = np.concatenate(keep)
+            used, local = np.unique(tri, return_inverse=True)
+            return rows, where, Mesh(np.asarray(verts[used], dtype=np.float64),
+                              local.reshape(tri.shape), name=name)
+        pts, col, nrm = (None if keep[0][i] is None else np.concatenate([k[i] for k in keep])
+                         for i in range(3))
+        return rows, where, PointCloud(pts, nrm, name=name, colors=col)
+
+    # ------------------------------------------------------------------ layouts
+    def _mesh_arrays(self):
+        """(vertex positions (n, 3), faces(start, stop) -> (c, 3) int64)."""
+        if self.layout == "npy-mesh":
+            folder = Path(self.path)
+            verts = np.load(folder / "vertices.npy", mmap_mode="r")
+            faces = np.load(folder / "faces.npy", mmap_mode="r")
+            return verts, lambda a, b: np.asarray(faces[a:b], dtype=np.int64)
+        ply = _ply(Path(self.path))
+        v = ply["vertex"].data
+        verts = _VertexView(v)
+        face = ply["face"]
+        prop = face.properties[0]
+        data = face.data
+        if not isinstance(data, np.memmap) or len(face.properties) != 1:
+            raise MeshFormatError(f"{self.path}: a tiled run reads binary PLY faces with one "
+                                  "list property (vertex_indices); use RegionReader.spill")
+        order = ply.byte_order if ply.byte_order in "<>" else "="
+        rec = np.dtype([("n", order + prop.len_dtype), ("v", order + prop.val_dtype, (3,))])
+        raw = np.memmap(self.path, dtype=rec, mode="r", offset=data.offset, shape=(face.count,))
+
+        def faces(a, b):
+            block = raw[a:b]
+            wrong = np.flatnonzero(block["n"] != 3)
+            if wrong.size:
+                raise MeshFormatError(f"{self.path}: face {a + int(wrong[0])} has "
+                                      f"{int(block['n'][wrong[0]])} corners: a tiled run reads "
+                                      "triangles (use RegionReader.spill for polygons)")
+            return np.asarray(block["v"], dtype=np.int64)
+
+        return verts, faces
+
+    def _point_chunks(self):
+        if self.layout == "las":
+            import laspy
+
+            from .clouds import unit_colors
+
+            with laspy.open(self.path) as f:
+                dims = set(f.header.point_format.dimension_names)
+                rgb = {"red", "green", "blue"} <= dims
+                s = 0
+                for pts in f.chunk_iterator(self.chunk):
+                    xyz = np.stack([np.asarray(pts.x), np.asarray(pts.y), np.asarray(pts.z)],
+                                   axis=1).astype(np.float64)
+                    col = (unit_colors(np.stack([np.asarray(pts[c]) for c in ("red", "green",
+                                                                                "blue")], 1))
+                           if rgb else None)
+                    yield s, xyz, (col, None)
+                    s += xyz.shape[0]
+            return
+        if self.layout == "npy-points":
+            p = Path(self.path)
+            folder = p if p.is_dir() else None
+            pts = np.load(folder / "points.npy" if folder else p, mmap_mode="r")
+            more = [np.load(folder / f"{n}.npy", mmap_mode="r")
+                    if folder and (folder / f"{n}.npy").exists() else None
+                    for n in ("colors", "normals")]
+            for s in range(0, self.n_rows, self.chunk):
+                e = min(s + self.chunk, self.n_rows)
+                yield s, np.asarray(pts[s:e], dtype=np.float64), tuple(
+                    None if a is None else np.asarray(a[s:e], dtype=np.float64) for a in more)
+            return
+        from .clouds import unit_colors
+
+        v = _ply(Path(self.path))["vertex"].data
+        names = v.dtype.names
+        rgb = next((c for c in (("red", "green", "blue"), ("r", "g", "b")) if set(c) <= set(names)),
+                   None)
+        nrm = ("nx", "ny", "nz") if {"nx", "ny", "nz"} <= set(names) else None
+        for s in range(0, self.n_rows, self.chunk):
+            block = v[s:s + self.chunk]
+            xyz, n = (None if c is None else np.stack(
+                [np.asarray(block[a], dtype=np.float64) for a in c], axis=1)
+                for c in ("xyz", nrm))
+            yield s, xyz, (None if rgb is None else unit_colors(
+                np.stack([np.asarray(block[c]) for c in rgb], axis=1)), n)
+
+
+class _VertexView:
+    """Vertex positions of a memory-mapped PLY vertex element, indexed like an (n, 3) array."""
+
+    def __init__(self, data) -> None:
+        self.data = data
+        self.shape = (data.shape[0], 3)
+
+    def __getitem__(self, idx) -> np.ndarray:
+        flat = np.asarray(idx).ravel()
+        out = np.stack([np.asarray(self.data[c][flat], dtype=np.float64) for c in "xyz"], axis=1)
+        return out.reshape(np.shape(idx) + (3,))
+
+
+def _ply(path: Path):
+    from plyfile import PlyData, PlyParseError
+
+    try:
+        with path.open("rb") as f:
+            head = f.read(1 << 12)
+        if b"format ascii" in head.split(b"end_header")[0]:
+            raise MeshFormatError(f"{path}: an ASCII PLY is not read in chunks; use "
+                                  "RegionReader.spill (it must fit one machine)")
+        ply = PlyData.read(str(path), mmap=True,
+                           known_list_len={"face": {"vertex_indices": 3, "vertex_index": 3}})
+    except MeshFormatError:
+        raise
+    except (PlyParseError, ValueError, KeyError, IndexError, TypeError, EOFError,
+            OSError) as exc:
+        if "unexpected list length" in str(exc):  # plyfile's check of the face sizes
+            raise MeshFormatError(f"{path}: a tiled run reads triangles, and a face is not "
+                                  f"one ({_first(exc)}); use RegionReader.spill for "
+                                  "polygons") from None
+        raise MeshFormatError(f"{path}: cannot read PLY: {_first(exc)}") from None
+    if "vertex" not in [e.name for e in ply.elements]:
+        raise MeshFormatError(f"{path}: the PLY has no vertex element")
+    names = ply["vertex"].data.dtype.names or ()
+    missing = [c for c in "xyz" if c not in names]
+    if missing:
+        raise MeshFormatError(f"{path}: the vertex element has no {', '.join(missing)} property")
+    return ply
+
+
+def _npy(path: Path) -> np.ndarray:
+    try:
+        arr = np.load(path, mmap_mode="r", allow_pickle=False)
+    except Exception as exc:  # noqa: BLE001 - numpy raises many types on damaged files
+        raise MeshFormatError(f"{path}: cannot read NPY: {_first(exc)}") from None
+    if not np.issubdtype(arr.dtype, np.number):
+        raise MeshFormatError(f"{path}: NPY must hold numbers, got {arr.dtype}")
+    return arr
+
+
+def _first(exc: BaseException) -> str:
+    text = str(exc).strip()
+    return text.splitlines()[0] if text else type(exc).__name__

@@ -1,0 +1,290 @@
+"""Tiled runs of one input (superfacets.tiling, superfacets.runner.tiles, superfacets.io.regions):
+known answers on synthetic inputs, invariants on several tiles, streamed reading, errors."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import trimesh
+
+from superfacets import Mesh, ParameterError, segment
+from superfacets.connectivity import label_components
+from superfacets.elements.faces import face_graph
+from superfacets.errors import MeshFormatError
+from superfacets.io.regions import RegionReader
+from superfacets.params import resolve
+from superfacets.runner.tiles import segment_tiled, trim_centers
+from superfacets.tiling import tile_box, tile_grid, tile_labels, tile_of
+
+
+def _bumpy(subdivisions: int = 5) -> Mesh:
+    """A sphere with folds (creases, concave and convex), about 20k faces."""
+    m = trimesh.creation.icosphere(subdivisions=subdivisions)
+    v = m.vertices
+    v = v * (1 + 0.15 * np.sin(4 * v[:, :1]) * np.cos(3 * v[:, 1:2]))
+    return Mesh(v, m.faces)
+
+
+def _write_ply_mesh(path, vertices, faces, counts=None):
+    v = np.array([tuple(x) for x in vertices], dtype=[("x", "f4"), ("y", "f4"), ("z", "f4")])
+    if counts is None:
+        f = np.empty(len(faces), dtype=[("vertex_indices", "i4", (3,))])
+        f["vertex_indices"] = faces
+    else:  # faces of other sizes
+        f = np.empty(len(faces), dtype=[("vertex_indices", object)])
+        f["vertex_indices"] = [np.asarray(x, dtype=np.int32) for x in faces]
+    from plyfile import PlyData, PlyElement
+
+    PlyData([PlyElement.describe(v, "vertex"), PlyElement.describe(f, "face")]).write(str(path))
+
+
+# ---------------------------------------------------------------- the grid
+def test_tile_grid_is_the_most_cubic_split():
+    assert [e.size - 1 for e in tile_grid([0, 0, 0], [4, 2, 1], 8)] == [4, 2, 1]
+    assert [e.size - 1 for e in tile_grid([0, 0, 0], [1, 1, 1], (2, 3, 1))] == [2, 3, 1]
+    flat = tile_grid([0, 0, 0], [6, 3, 0], 4)  # no split along a zero extent
+    assert flat[2].size == 2 and (flat[0].size - 1) * (flat[1].size - 1) == 4
+
+
+@pytest.mark.parametrize("bad", [0, -2, 2.5, True, (1, 2), (1, 0, 1), "4"])
+def test_tile_grid_refuses_bad_counts(bad):
+    with pytest.raises(ParameterError, match="tiles must"):
+        tile_grid([0, 0, 0], [1, 1, 1], bad)
+
+
+def test_every_position_has_one_tile_and_boxes_hold_them():
+    rng = np.random.default_rng(0)
+    pts = rng.random((5000, 3)) * [3, 2, 1]
+    edges = tile_grid(pts.min(0), pts.max(0), 6)
+    t = tile_of(pts, edges)
+    assert t.min() >= 0 and t.max() < 6 and np.bincount(t).min() > 0
+    for k in range(6):
+        lo, hi = tile_box(edges, k)
+        inside = ((pts >= lo) & (pts <= hi)).all(1)
+        assert inside[t == k].all()
+    assert tile_of(np.array([[np.nan, 0, 0]]), edges)[0] == -1
+
+
+def test_trim_keeps_k_and_drops_the_most_crowded():
+    pos = np.array([[0, 0, 0], [10, 0, 0], [20, 0, 0], [20.1, 0, 0], [30, 0, 0.]])
+    keep = trim_centers(pos, 4)
+    assert keep.sum() == 4 and not keep[3] and keep[2]
+    assert trim_centers(pos, 9).all()
+
+
+# ---------------------------------------------------------------- streamed reading
+def test_ply_mesh_box_is_the_faces_whose_centroid_lies_in_it(tmp_path):
+    mesh = _bumpy(3)
+    path = tmp_path / "m.ply"
+    _write_ply_mesh(path, mesh.vertices, mesh.faces)
+    reader = RegionReader.open(path, chunk=97)  # many chunks
+    assert (reader.kind, reader.n_rows) == ("faces", mesh.n_faces)
+    v32 = np.asarray(mesh.vertices, dtype=np.float32).astype(np.float64)
+    cent = v32[np.asarray(mesh.faces)].mean(axis=1)
+    lo, hi = np.array([-0.3, -2, -2]), np.array([0.5, 2, 0.2])
+    rows, pos, part = reader.read_box(lo, hi)
+    want = np.flatnonzero(((cent >= lo) & (cent <= hi)).all(1))
+    np.testing.assert_array_equal(rows, want)
+    np.testing.assert_allclose(pos, cent[want])
+    np.testing.assert_allclose(np.asarray(part.vertices)[np.asarray(part.faces)],
+                               v32[np.asarray(mesh.faces)[want]])
+    s = reader.survey()
+    assert s.n_elements == mesh.n_faces
+    assert math.isclose(s.size, float(face_graph(Mesh(v32, mesh.faces)).area), rel_tol=1e-9)
+
+
+def test_points_from_ply_npy_and_las_read_by_box(tmp_path):
+    rng = np.random.default_rng(1)
+    pts = rng.random((3000, 3))
+    rgb = (rng.random((3000, 3)) * 255).astype(np.uint8)
+    from plyfile import PlyData, PlyElement
+
+    v = np.empty(3000, dtype=[("x", "f8"), ("y", "f8"), ("z", "f8"), ("red", "u1"),
+                              ("green", "u1"), ("blue", "u1")])
+    for i, c in enumerate("xyz"):
+        v[c] = pts[:, i]
+    for i, c in enumerate(("red", "green", "blue")):
+        v[c] = rgb[:, i]
+    PlyData([PlyElement.describe(v, "vertex")]).write(str(tmp_path / "p.ply"))
+    with_nan = pts.copy()
+    with_nan[5] = np.nan
+    np.save(tmp_path / "p.npy", with_nan)
+    laspy = pytest.importorskip("laspy")
+    las = laspy.create(point_format=2)
+    las.header.scales = [1e-4] * 3
+    las.x, las.y, las.z = pts[:, 0], pts[:, 1], pts[:, 2]
+    las.red, las.green, las.blue = (rgb.astype(np.uint16) * 257).T
+    las.write(tmp_path / "p.las")
+    lo, hi = np.array([0.2, 0.1, 0.0]), np.array([0.7, 0.9, 0.5])
+    want = np.flatnonzero(((pts >= lo) & (pts <= hi)).all(1))
+    for name in ("p.ply", "p.npy", "p.las"):
+        reader = RegionReader.open(tmp_path / name, chunk=500)
+        assert reader.kind == "points" and reader.n_rows == 3000
+        rows, pos, cloud = reader.read_box(lo, hi)
+        near = np.abs(pts[rows] - pos).max() < 1e-3  # LAS: scaled integers
+        expect = want[want != 5] if name == "p.npy" else want  # row 5: NaN in the .npy
+        assert near and set(rows) ^ set(expect) <= set(np.flatnonzero(
+            (np.abs(pts - lo) < 1e-3).any(1) | (np.abs(pts - hi) < 1e-3).any(1)))
+        if name != "p.npy":
+            np.testing.assert_allclose(cloud.colors, rgb[rows] / 255.0, atol=1e-6)
+    assert 5 not in RegionReader.open(tmp_path / "p.npy").read_box([-9] * 3, [9] * 3)[0]
+
+
+def test_streamed_reading_errors_are_clear(tmp_path):
+    with pytest.raises(FileNotFoundError, match="no such file"):
+        RegionReader.open(tmp_path / "missing.ply")
+    (tmp_path / "a.off").write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")
+    with pytest.raises(MeshFormatError, match="not read in chunks"):
+        RegionReader.open(tmp_path / "a.off")
+    trimesh.creation.box().export(tmp_path / "ascii.ply", encoding="ascii")
+    with pytest.raises(MeshFormatError, match="ASCII PLY"):
+        RegionReader.open(tmp_path / "ascii.ply")
+    _write_ply_mesh(tmp_path / "quad.ply", np.eye(4, 3), [[0, 1, 2], [0, 1, 2, 3]], counts=True)
+    with pytest.raises(MeshFormatError, match="reads triangles.*row 1"):
+        RegionReader.open(tmp_path / "quad.ply").survey()
+    good = tmp_path / "m.ply"
+    _write_ply_mesh(good, *(lambda m: (m.vertices, m.faces))(trimesh.creation.icosphere(2)))
+    (tmp_path / "cut.ply").write_bytes(good.read_bytes()[:-100])
+    with pytest.raises(MeshFormatError, match="cannot read PLY"):
+        RegionReader.open(tmp_path / "cut.ply")
+    np.save(tmp_path / "flat.npy", np.zeros((4, 2)))
+    with pytest.raises(MeshFormatError, match=r"shape \(N, 3\)"):
+        RegionReader.open(tmp_path / "flat.npy")
+
+
+# ---------------------------------------------------------------- the method
+def test_core_classification_is_the_whole_inputs_from_the_same_centers():
+    """Known answer: with a halo of 2 window * r, each tile labels its core as one run over
+    the whole input does from the same centers (paper's classification, no post-step)."""
+    mesh = _bumpy(4)
+    p = resolve(n_segments=60, paper=True, enforce_connectivity=False)
+    g = face_graph(mesh)
+    r = math.sqrt(g.area / (60 * math.pi))
+    centers = np.sort(segment(mesh, 60, paper=True).centers)
+    whole = tile_labels(mesh, centers, p, r, g.diagonal)
+    edges = tile_grid(g.positions.min(0), g.positions.max(0), 4)
+    tiles = tile_of(g.positions, edges)
+    seen = 0
+    for t in range(4):
+        lo, hi = tile_box(edges, t, 2 * p.window * r)
+        rows = np.flatnonzero(((g.positions >= lo) & (g.positions <= hi)).all(1))
+        used, local = np.unique(np.asarray(mesh.faces)[rows], return_inverse=True)
+        part = Mesh(np.asarray(mesh.vertices)[used], local.reshape(-1, 3))
+        at = np.searchsorted(rows, centers)
+        ok = (at < rows.size) & (rows[np.minimum(at, rows.size - 1)] == centers)
+        named = tile_labels(part, at[ok], p, r, g.diagonal)
+        core = tiles[rows] == t
+        np.testing.assert_array_equal(rows[named[core]], whole[rows[core]])
+        seen += core.sum()
+    assert seen == mesh.n_faces
+
+
+@pytest.mark.parametrize("extra", [dict(paper=True), {}], ids=["paper", "default"])
+def test_one_tile_gives_the_single_runs_partition(extra):
+    mesh = _bumpy(4)
+    single = segment(mesh, 50, **extra)
+    tiled = segment_tiled(mesh, 50, tiles=1, **extra)
+    assert tiled.n_segments == single.n_segments == 50
+    pairs = np.unique(single.labels * 1000 + tiled.labels)
+    assert pairs.size == 50  # the same partition, labels aside
+
+
+@pytest.mark.parametrize("extra", [dict(paper=True), {}], ids=["paper", "default"])
+def test_several_tiles_stitch_without_cutting_a_superfacet(extra):
+    mesh = _bumpy(5)
+    res = segment_tiled(mesh, 150, tiles=8, **extra)
+    labels = res.labels
+    assert labels.shape == (mesh.n_faces,) and labels.min() == 0
+    assert np.unique(labels).size == res.n_segments == labels.max() + 1
+    assert 140 <= res.n_segments <= 150
+    # every superfacet one connected piece of the face graph: none cut by a tile border
+    pieces = label_components(face_graph(mesh), labels)
+    assert np.unique(pieces).size == res.n_segments
+    g = face_graph(mesh)
+    crossing = np.unique(labels[tile_of(g.positions, tile_grid(g.positions.min(0),
+                                                                   g.positions.max(0), 8)) == 0])
+    assert np.isin(crossing, labels[tile_of(g.positions, tile_grid(
+        g.positions.min(0), g.positions.max(0), 8)) != 0]).any()  # some do cross a border
+    assert res.centers.shape == (res.n_segments,)
+    np.testing.assert_array_equal(labels[res.centers], np.arange(res.n_segments))
+    assert len(res.tiles) == 8 and sum(t["core"] for t in res.tiles) == mesh.n_faces
+    if extra:
+        assert res.disagreements == 0  # the paper's classification: exact from halo 2
+
+
+def test_tiled_points_with_invalid_rows(tmp_path):
+    mesh = trimesh.creation.icosphere(4)
+    pts, _ = trimesh.sample.sample_surface_even(mesh, 6000, seed=0)
+    pts = np.asarray(pts, dtype=np.float64)
+    pts[[3, 77]] = np.nan
+    np.save(tmp_path / "c.npy", pts)
+    res = segment_tiled(tmp_path / "c.npy", 40, tiles=4)
+    assert res.labels[3] == res.labels[77] == -1
+    ok = res.labels >= 0
+    assert ok.sum() == pts.shape[0] - 2 and res.labels[ok].max() + 1 == res.n_segments
+    assert 35 <= res.n_segments <= 40 and res.params["elements"] == "points"
+
+
+def test_dask_workers_give_the_same_labels(tmp_path):
+    pytest.importorskip("distributed")
+    mesh = _bumpy(4)
+    path = tmp_path / "m.ply"
+    _write_ply_mesh(path, mesh.vertices, mesh.faces)
+    here = segment_tiled(path, 60, tiles=4, workers=1)
+    there = segment_tiled(path, 60, tiles=4, workers=2)
+    np.testing.assert_array_equal(here.labels, there.labels)
+
+
+def test_bad_options_are_refused_before_any_work(tmp_path):
+    mesh = _bumpy(2)
+    with pytest.raises(ParameterError, match="halo must be"):
+        segment_tiled(mesh, 10, halo=0.5)
+    with pytest.raises(ParameterError, match="features"):
+        segment_tiled(mesh, 10, features=np.zeros((mesh.n_faces, 3)))
+    with pytest.raises(ParameterError, match="faces or points"):
+        segment_tiled(mesh, 10, elements="vertices")
+    with pytest.raises(ParameterError, match="more than the input"):
+        segment_tiled(mesh, mesh.n_faces + 1)
+    with pytest.raises(ParameterError, match="unknown parameter"):
+        segment_tiled(mesh, 10, colour=1)
+
+
+def test_a_failing_tile_names_itself(tmp_path):
+    path = tmp_path / "quad.ply"
+    _write_ply_mesh(path, np.eye(4, 3), [[0, 1, 2], [0, 1, 2, 3]], counts=True)
+    with pytest.raises(MeshFormatError, match="reads triangles"):
+        segment_tiled(path, 1, tiles=2)
+    np.save(tmp_path / "flat.npy", np.zeros((5, 3)))
+    with pytest.raises(ParameterError, match="zero extent"):
+        segment_tiled(tmp_path / "flat.npy", 1, tiles=2)
+
+
+def test_tiny_tiles_of_one_point_each():
+    pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.]])
+    res = segment_tiled(pts, None, radius=0.3, tiles=(2, 2, 1), n_neighbors=2)
+    np.testing.assert_array_equal(np.sort(res.labels), [0, 1, 2])
+    with pytest.raises(ParameterError, match="too few or too sparse"):
+        segment_tiled(pts, 2, tiles=(2, 2, 1), n_neighbors=2)
+
+
+def test_cli_tiles_writes_labels_and_refuses_whole_input_outputs(tmp_path):
+    mesh = _bumpy(3)
+    path = tmp_path / "m.ply"
+    _write_ply_mesh(path, mesh.vertices, mesh.faces)
+    run = [sys.executable, "-m", "superfacets", "segment", str(path), "-k", "30"]
+    out = subprocess.run(run + ["--tiles", "2,1,1", "-j", "1", "-o", str(tmp_path / "m.seg")],
+                         capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert "2 tiles (2x1x1)" in out.stdout
+    labels = np.loadtxt(tmp_path / "m.seg", dtype=int)
+    assert labels.shape == (mesh.n_faces,) and np.unique(labels).size == labels.max() + 1
+    bad = subprocess.run(run + ["--tiles", "2", "--colored-mesh", str(tmp_path / "c.ply")],
+                         capture_output=True, text=True)
+    assert bad.returncode != 0 and "not with --tiles" in bad.stderr
+    assert not (tmp_path / "c.ply").exists()
+    bad = subprocess.run(run + ["--halo", "2"], capture_output=True, text=True)
+    assert bad.returncode != 0 and "--halo goes with --tiles" in bad.stderr
