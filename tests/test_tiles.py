@@ -187,7 +187,7 @@ def test_core_classification_is_the_whole_inputs_from_the_same_centers():
 def test_one_tile_gives_the_single_runs_partition(extra):
     mesh = _bumpy(4)
     single = segment(mesh, 50, **extra)
-    tiled = segment_tiled(mesh, 50, tiles=1, **extra)
+    tiled = segment_tiled(mesh, 50, tiles=1, refine=0, **extra)
     assert tiled.n_segments == single.n_segments == 50
     pairs = np.unique(single.labels * 1000 + tiled.labels)
     assert pairs.size == 50  # the same partition, labels aside
@@ -243,6 +243,8 @@ def test_bad_options_are_refused_before_any_work(tmp_path):
     mesh = _bumpy(2)
     with pytest.raises(ParameterError, match="halo must be"):
         segment_tiled(mesh, 10, halo=0.5)
+    with pytest.raises(ParameterError, match="refine must be"):
+        segment_tiled(mesh, 10, refine=-1)
     with pytest.raises(ParameterError, match="features"):
         segment_tiled(mesh, 10, features=np.zeros((mesh.n_faces, 3)))
     with pytest.raises(ParameterError, match="faces or points"):

@@ -33,7 +33,7 @@ from .expansion import Workspaces
 from .labels import relabel_dense
 from .elements.inputs import elements_of
 from .multilevel import start_centers
-from .params import DEFAULTS, SegmentParams, better_method, superfacet_size
+from .params import DEFAULT_CENTER_TOL, DEFAULTS, SegmentParams, better_method, superfacet_size
 from .passes import final_centers, iterate
 from .weights import csr_weights, edge_weights
 
@@ -214,7 +214,8 @@ def _per_element(src, features):
 
 
 def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
-             jump_cycles: bool = True, n_centers: int | None = None) -> SegmentationResult:
+             jump_cycles: bool = True, n_centers: int | None = None,
+             initial: np.ndarray | None = None) -> SegmentationResult:
     """Run the method with validated parameters (see the module notes).
 
     Parameters
@@ -233,6 +234,9 @@ def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
     n_centers : int, optional
         Initial centers instead of the number ``radius`` gives (a tile of a
         tiled run: :mod:`superfacets.tiling`); ``r`` stays the radius's.
+    initial : (c,) int ndarray, optional
+        Elements to start the passes from, instead of the initialization
+        (a tile starting from the whole run's centers).
 
     Returns
     -------
@@ -242,11 +246,11 @@ def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
 
     with using(params.n_threads):  # also the graph build and terms this run triggers
         return _pipeline(mesh, params, features, replay=replay, jump_cycles=jump_cycles,
-                         n_centers=n_centers)
+                         n_centers=n_centers, initial=initial)
 
 
 def _pipeline(mesh, params: SegmentParams, features, *, replay: bool, jump_cycles: bool,
-              n_centers: int | None = None) -> SegmentationResult:
+              n_centers: int | None = None, initial=None) -> SegmentationResult:
     t_start = time.perf_counter()
     p = params
     t = time.perf_counter()
@@ -279,8 +283,13 @@ def _pipeline(mesh, params: SegmentParams, features, *, replay: bool, jump_cycle
 
         window_r2 = (p.window * r) ** 2
         t = time.perf_counter()
-        init, center_tol, ratio = start_centers(graph, w_pairs, w, p, k, r, timings,
-                                                lambda name: _stage(bar, name))
+        if initial is None:
+            init, center_tol, ratio = start_centers(graph, w_pairs, w, p, k, r, timings,
+                                                    lambda name: _stage(bar, name))
+        else:
+            init, ratio = np.asarray(initial, dtype=np.int64), 1
+            center_tol = p.center_tol if p.center_tol is not None else (
+                DEFAULT_CENTER_TOL if p.tol > 0 else 0.0)
         del w_pairs
         if graph.n_elements >= _RELEASE_MIN:  # what the passes do not read, rebuilt after
             graph.release()

@@ -12,6 +12,9 @@ one task per tile (:mod:`superfacets.runner.tiles` sends them to Dask):
    halo gives the centers near a tile border the neighbours they would have
    had in one run. Together the tiles' kept centers are the run's centers,
    each named by its row in the input.
+   Then (:func:`tile_refine`, ``refine`` rounds) each tile runs the passes
+   again from the gathered centers within reach, so that the centers near a
+   border settle beside their true neighbours, not beside the halo's edge.
 2. **labels** (:func:`tile_labels`): each tile classifies its elements from
    all the centers within reach (one pass of the paper's bounded expansions,
    centers in one global order), then makes superfacets connected and, with
@@ -49,7 +52,8 @@ from .params import DEFAULTS, SegmentParams, better_method
 from .pipeline import _features_of, pipeline
 from .weights import csr_weights, edge_weights
 
-__all__ = ["tile_grid", "tile_of", "tile_box", "tile_centers", "tile_labels", "HALO",
+__all__ = ["tile_grid", "tile_of", "tile_box", "tile_centers", "tile_refine", "tile_labels",
+           "HALO",
            "point_areas"]
 
 #: Default halo, in units of ``window * r``. 3 rather than 2: the classification of
@@ -217,6 +221,29 @@ def tile_centers(inp, core: np.ndarray, params: SegmentParams, r: float, diagona
     result = pipeline(inp, p, features=features, n_centers=n)
     rows = np.asarray(result.centers, dtype=np.int64)
     return rows[core[rows]], result
+
+
+def tile_refine(inp, core: np.ndarray, center_rows: np.ndarray, params: SegmentParams,
+                r: float, diagonal: float, features=None) -> np.ndarray:
+    """Phase 1b: the method's passes on one tile from the run's centers within reach;
+    the rows of the centers that end in the core.
+
+    The centers near a tile border came from two tiles' runs, each beside an
+    artificial boundary (its halo's edge); from the gathered centers, every
+    tile sees the true neighbours of its border centers, and the passes
+    (and swaps, with the default method) settle them again.
+    """
+    if _diagonal(inp) <= 0 or len(center_rows) == 0:
+        return np.flatnonzero(core & _valid_rows(inp))[:1]
+    p = _tile_params(params, r, diagonal, _diagonal(inp))
+    src = elements_of(inp, p.elements, n_neighbors=p.n_neighbors,
+                      neighbor_radius=p.neighbor_radius)
+    elem = src.to_rows(np.arange(src.graph.n_elements))[np.asarray(center_rows, np.int64)]
+    elem = elem[elem >= 0]
+    _, first = np.unique(elem, return_index=True)
+    result = pipeline(inp, p, features=features, initial=elem[np.sort(first)])
+    rows = np.asarray(result.centers, dtype=np.int64)
+    return rows[core[rows]]
 
 
 def _core_share(inp, core: np.ndarray, p: SegmentParams, r: float) -> int:

@@ -164,7 +164,7 @@ def cmd_segment(args) -> int:
 
         return segment_tiles(args)
     for flag, given in (("--halo", args.halo), ("--workers", args.workers),
-                        ("--scheduler", args.scheduler)):
+                        ("--scheduler", args.scheduler), ("--refine", args.refine)):
         if given is not None:
             raise ParameterError(f"{flag} goes with --tiles")
     seg_out = check_labels_output(args.output, args.mesh)

@@ -34,6 +34,9 @@ def add_tile_options(p) -> None:
                         "-o OUT.seg / .json)")
     g.add_argument("--halo", type=float, default=None, metavar="H",
                    help="with --tiles: halo width in units of window * r (>= 1; default 3)")
+    g.add_argument("--refine", type=int, default=None, metavar="N",
+                   help="with --tiles: rounds of passes again on every tile from the gathered "
+                        "centers (default 1; 0 is faster, and farther from one run)")
     g.add_argument("-j", "--workers", type=int, default=None, metavar="N",
                    help="with --tiles: local Dask worker processes (default one per core; "
                         "1: in this process)")
@@ -66,6 +69,7 @@ def segment_tiles(args) -> int:
     try:
         result = segment_tiled(args.mesh, args.n_segments, radius=args.radius, tiles=args.tiles,
                                halo=args.halo, workers=args.workers, scheduler=args.scheduler,
+                               refine=1 if args.refine is None else args.refine,
                                progress=not args.quiet and sys.stderr.isatty(), **kwargs)
     except SuperfacetsError as exc:
         raise named_after(args.mesh, exc) from None

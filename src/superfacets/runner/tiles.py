@@ -11,6 +11,8 @@ no process holds the whole input. The phases (:mod:`superfacets.tiling`):
    point cloud asked for ``n_segments``, one task per tile sums the points'
    areas (the radius needs the total);
 1. per tile, the method on the tile and its halo: the centers of its core;
+   then (``refine`` rounds) per tile, the method's passes again from all the
+   centers within reach: the centers of its core;
 2. per tile, labels from all the centers, kept for the core.
 
 Labels are named by their center's row, so a superfacet crossing tile
@@ -65,7 +67,8 @@ class TiledResult:
         core, and with the halo), ``centers`` (in its core), ``seconds`` and
         ``peak_mib`` of each phase.
     timings : dict of str to float
-        Seconds: ``survey``, ``areas``, ``centers``, ``labels``, ``stitch``, ``total``.
+        Seconds: ``survey``, ``areas``, ``centers``, ``refine``, ``labels``, ``stitch``,
+        ``total``.
     params : dict
         The run's parameters, resolved.
     """
@@ -94,7 +97,8 @@ def tile_task(task: dict) -> dict:
     'labels' the ``centers`` (rows) within reach and ``ring`` (a width).
     Returns a dict; an error is returned as ``error`` (text), never raised.
     """
-    from ..tiling import point_areas, tile_box, tile_centers, tile_labels, tile_of
+    from ..tiling import (point_areas, tile_box, tile_centers, tile_labels, tile_of,
+                          tile_refine)
 
     probe = PeakMemory()
     t0 = time.perf_counter()
@@ -118,6 +122,10 @@ def tile_task(task: dict) -> dict:
             at = np.searchsorted(rows, want)
             ok = at < rows.size
             ok[ok] = rows[at[ok]] == want[ok]
+            if task["phase"] == "refine":
+                found = tile_refine(inp, core, at[ok], p, r, d)
+                out.update(centers=rows[found], positions=pos[found])
+                return out
             named = tile_labels(inp, at[ok], p, r, d)
             gid = np.where(named >= 0, rows[np.maximum(named, 0)], -1)
             lo_c, hi_c = tile_box(task["edges"], task["tile"])
@@ -137,7 +145,7 @@ def tile_task(task: dict) -> dict:
 def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
                   halo: float | None = None, workers: int | None = 1,
                   scheduler: str | None = None, memory_limit="auto", workdir=None,
-                  progress: bool = False, **options) -> TiledResult:
+                  progress: bool = False, refine: int = 1, **options) -> TiledResult:
     """Segment one large input tile by tile, on Dask or in this process.
 
     Parameters
@@ -170,6 +178,11 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
         (default: a temporary folder, removed at the end).
     progress : bool, default False
         A progress bar per phase.
+    refine : int, default 1
+        Rounds in which every tile runs the method's passes again from the
+        gathered centers within reach (so the centers near a border settle
+        with their true neighbours), ``>= 0``. On 15 benchmark meshes in 8
+        tiles, UE against one run: +5.8 % with 0, +1.2 % with 1 (docs/tiles.md).
     **options
         Keyword arguments of :func:`superfacets.segment` (``alpha``,
         ``window``, ``cleanup``, ``paper``, ``beta``, ``n_neighbors``, ...).
@@ -206,6 +219,8 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
         raise ParameterError(f"a tiled run segments faces or points, not {params.elements!r}")
     halo = HALO if halo is None else halo
     halo_distance(halo, params.window, 1.0)  # validated before any work
+    if isinstance(refine, bool) or not isinstance(refine, (int, np.integer)) or refine < 0:
+        raise ParameterError(f"refine must be an integer >= 0, got {refine!r}")
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
     spill = (tempfile.TemporaryDirectory(prefix="superfacets-tiles-") if workdir is None
@@ -261,6 +276,18 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
                 lo, hi = tile_box(edges, t, margin)
                 inside = ((pos >= lo) & (pos <= hi)).all(axis=1)
                 return dict(centers=rows[inside], ring=params.window * r)
+
+            for _ in range(refine):
+                t = time.perf_counter()
+                again = [o for o in run("refine", margin, reach) if o["core"]]
+                timings["refine"] = timings.get("refine", 0.0) + time.perf_counter() - t
+                rows = np.concatenate([o["centers"] for o in again])
+                pos = np.concatenate([o["positions"] for o in again])
+                order = np.argsort(rows, kind="stable")
+                rows, pos = rows[order], pos[order]
+                if params.radius is None and params.init == "farthest":
+                    keep = trim_centers(pos, params.n_segments)
+                    rows, pos = rows[keep], pos[keep]
 
             t = time.perf_counter()
             done = [o for o in run("labels", margin, reach) if o["core"]]

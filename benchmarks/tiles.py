@@ -1,0 +1,201 @@
+"""Tiled runs against one run: quality, border stitching, time and memory per worker.
+
+Usage: python benchmarks/tiles.py [--mesh-id 281] [--subdivide 2 3] [--points 1000000]
+       [-k 2000] [--tiles 8] [--workers 2] [--halo 3]
+       python benchmarks/tiles.py --compare [-k 600] [--tiles 8] [--halo 3] [--paper]
+
+``--compare``: the first benchmark mesh of each category, subdivided once,
+segmented once and tiled (in process), the mean undersegmentation error of
+each, the superfacets cut by a border and the disagreements (docs/tiles.md).
+
+Inputs with ground truth, larger than the benchmark's: a benchmark mesh
+(``../shared/data/psb.tar.xz``) subdivided ``s`` times (each triangle into 4,
+its ground-truth label kept), written as a binary PLY; and points sampled on
+it (``.npy``), labelled by their face. Each input is segmented
+
+- once, in a new process (``superfacets.segment``, the default method),
+- tiled (``superfacets.segment_tiled``) from the file, read in chunks by each
+  task, on a local Dask cluster of ``--workers`` processes,
+
+and the table gives the undersegmentation error of each against the ground
+truth, the superfacets cut by a tile border (labels that are not one
+connected piece of the whole input's graph; the stitching's promise is 0),
+the border disagreements, wall time and peak resident memory (the single
+run's process; the largest of the tiles' tasks).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+_SINGLE = r"""
+import json, resource, sys, time
+import numpy as np
+from superfacets import segment
+from superfacets.io.regions import RegionReader
+src, k, out = sys.argv[1], int(sys.argv[2]), sys.argv[3]
+if src.endswith(".npy"):
+    data = np.load(src)
+else:
+    r = RegionReader.open(src)
+    _, _, data = r.read_box([-np.inf] * 3, [np.inf] * 3)
+t = time.perf_counter()
+res = segment(data, k)
+sec = time.perf_counter() - t
+np.save(out, res.labels)
+print(json.dumps(dict(seconds=sec, peak_mib=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+                      n_segments=res.n_segments)))
+"""
+
+
+def _subdivided(mesh_id: int, s: int, folder: Path):
+    import trimesh
+
+    from superfacets.datasets.psb import list_meshes
+    from superfacets.io import read_labels, read_mesh
+
+    b = next(m for m in list_meshes() if m.id == mesh_id)
+    m = read_mesh(b.path)
+    v, f = np.asarray(m.vertices), np.asarray(m.faces)
+    gt = read_labels(b.seg_paths[0], f.shape[0])
+    for _ in range(s):
+        v, f = trimesh.remesh.subdivide(v, f)  # face i -> faces 4i .. 4i + 3
+        gt = np.repeat(gt, 4)
+    path = folder / f"psb{mesh_id}_s{s}.ply"
+    from plyfile import PlyData, PlyElement
+
+    vert = np.empty(v.shape[0], dtype=[("x", "f8"), ("y", "f8"), ("z", "f8")])
+    vert["x"], vert["y"], vert["z"] = v.T
+    face = np.empty(f.shape[0], dtype=[("vertex_indices", "i4", (3,))])
+    face["vertex_indices"] = f
+    PlyData([PlyElement.describe(vert, "vertex"), PlyElement.describe(face, "face")]).write(
+        str(path))
+    return path, v, f, gt
+
+
+def _graph(data):
+    from superfacets.elements.inputs import elements_of
+
+    return elements_of(data)
+
+
+def _row(name, n, data, gt, path, k, a, folder):
+    from superfacets.connectivity import label_components
+    from superfacets.metrics import undersegmentation_error
+    from superfacets.runner.tiles import segment_tiled
+
+    out = folder / "single.npy"
+    t = time.perf_counter()
+    p = subprocess.run([sys.executable, "-c", _SINGLE, str(path), str(k), str(out)],
+                       capture_output=True, text=True, check=True)
+    single = json.loads(p.stdout.strip().splitlines()[-1])
+    single["wall"] = time.perf_counter() - t
+    s_labels = np.load(out)
+    t = time.perf_counter()
+    tiled = segment_tiled(path, k, tiles=a.tiles, workers=a.workers, halo=a.halo)
+    wall = time.perf_counter() - t
+    src = _graph(data)
+    g = src.graph
+    el = src.index if src.index is not None else None
+
+    def per_element(labels):
+        if el is None:
+            return labels
+        first = src.first_rows(np.arange(g.n_elements))
+        return labels[first]
+
+    def ue(labels):
+        return undersegmentation_error(g, per_element(labels), per_element(gt))
+
+    pieces = label_components(g, per_element(tiled.labels))
+    cut = int(np.unique(pieces).size - np.unique(per_element(tiled.labels)).size)
+    peak = max(t[f"{ph}_peak_mib"] or 0 for t in tiled.tiles for ph in ("centers", "labels"))
+    ue_s, ue_t = ue(s_labels), ue(tiled.labels)
+    print(f"| {name} | {n:,} | {k} | {'x'.join(map(str, tiled.grid))} | "
+          f"{single['n_segments']} / {tiled.n_segments} | {ue_s:.4f} / {ue_t:.4f} "
+          f"({100 * (ue_t / ue_s - 1):+.1f} %) | {cut} | {tiled.disagreements} | "
+          f"{single['wall']:.1f} / {wall:.1f} | {single['peak_mib']:.0f} / {peak:.0f} |",
+          flush=True)
+
+
+def compare(a) -> None:
+    import trimesh
+
+    from superfacets import Mesh, segment
+    from superfacets.connectivity import label_components
+    from superfacets.datasets.psb import first_per_category, list_meshes
+    from superfacets.elements.faces import face_graph
+    from superfacets.io import read_labels, read_mesh
+    from superfacets.metrics import undersegmentation_error
+    from superfacets.runner.tiles import segment_tiled
+
+    extra = dict(paper=True) if a.paper else {}
+    ue_s, ue_t, cut, dis = [], [], 0, 0
+    for b in first_per_category(list_meshes(), 1):
+        m = read_mesh(b.path)
+        v, f = trimesh.remesh.subdivide(np.asarray(m.vertices), np.asarray(m.faces))
+        gt = np.repeat(read_labels(b.seg_paths[0], m.n_faces), 4)
+        mesh = Mesh(v, f)
+        g = face_graph(mesh)
+        s = segment(mesh, a.k, **extra)
+        t = segment_tiled(mesh, a.k, tiles=a.tiles, halo=a.halo, refine=a.refine or 0, **extra)
+        ue_s.append(undersegmentation_error(g, s.labels, gt))
+        ue_t.append(undersegmentation_error(g, t.labels, gt))
+        cut += int(np.unique(label_components(g, t.labels)).size - t.n_segments)
+        dis += t.disagreements
+        print(f"| {b.id} | {f.shape[0]:,} | {s.n_segments} / {t.n_segments} | "
+              f"{ue_s[-1]:.4f} / {ue_t[-1]:.4f} |", flush=True)
+    one, tiled = float(np.mean(ue_s)), float(np.mean(ue_t))
+    print(f"{'paper' if a.paper else 'default'}, k = {a.k}, {a.tiles} tiles, halo {a.halo:g}: "
+          f"UE {one:.4f} -> {tiled:.4f} ({100 * (tiled / one - 1):+.1f} %), cut {cut}, "
+          f"disagreements {dis}")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--mesh-id", type=int, default=281)
+    ap.add_argument("--subdivide", type=int, nargs="+", default=[2, 3])
+    ap.add_argument("--points", type=int, nargs="*", default=[1_000_000])
+    ap.add_argument("-k", type=int, default=2000)
+    ap.add_argument("--tiles", type=int, default=8)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--halo", type=float, default=3.0)
+    ap.add_argument("--compare", action="store_true")
+    ap.add_argument("--paper", action="store_true")
+    ap.add_argument("--refine", type=int, default=None)
+    a = ap.parse_args()
+    if a.compare:
+        return compare(a)
+    from superfacets import Mesh
+    from superfacets.datasets.sampling import sample_points
+
+    print(f"machine: {os.cpu_count()} cores; single run in a new process (1 thread per "
+          f"core, default method); tiled: {a.workers} Dask workers, halo {a.halo:g}")
+    print("| input | elements | k | tiles | superfacets (one / tiled) | UE (one / tiled) | "
+          "cut by a border | disagreements | seconds (one / tiled) | peak MiB (one / "
+          "largest task) |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    with tempfile.TemporaryDirectory(prefix="sf-tiles-bench-") as tmp:
+        folder = Path(tmp)
+        for s in a.subdivide:
+            path, v, f, gt = _subdivided(a.mesh_id, s, folder)
+            mesh = Mesh(v, f)
+            _row(f"PSB {a.mesh_id} subdivided {s}x", f.shape[0], mesh, gt, path, a.k, a, folder)
+            for n in (a.points if s == a.subdivide[-1] else []):
+                pts, face = sample_points(mesh, n, seed=0)
+                pp = folder / f"points{n}.npy"
+                np.save(pp, pts)
+                _row(f"points on it", n, pts, gt[face], pp, a.k, a, folder)
+
+
+if __name__ == "__main__":
+    main()
