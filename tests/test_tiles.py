@@ -245,6 +245,8 @@ def test_bad_options_are_refused_before_any_work(tmp_path):
         segment_tiled(mesh, 10, halo=0.5)
     with pytest.raises(ParameterError, match="refine must be"):
         segment_tiled(mesh, 10, refine=-1)
+    with pytest.raises(ParameterError, match="workers must be"):
+        segment_tiled(mesh, 10, workers=0)
     with pytest.raises(ParameterError, match="features"):
         segment_tiled(mesh, 10, features=np.zeros((mesh.n_faces, 3)))
     with pytest.raises(ParameterError, match="faces or points"):

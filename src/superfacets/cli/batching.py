@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import sys
 
-from .options import (add_camera_options, add_element_options, add_method_options,
+from .options import (add_camera_options, add_element_options, add_engine_options,
+                      add_method_options,
                       element_kwargs, int_arg,
                       method_kwargs)
 
@@ -54,13 +55,8 @@ def add_parsers(sub) -> None:
     add_camera_options(b, "")  # --view, --up of --picture and --html
     b.add_argument("--per-object", action="store_true",
                    help="scenes: segment each object on its own (-k shared out by area)")
-    b.add_argument("-j", "--workers", type=int_arg, default=None, metavar="N",
-                   help="worker processes of the local Dask cluster (default: one per core; "
-                        "1: in this process, no Dask)")
-    b.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="run on a running Dask cluster (tcp://host:8786); its workers read the "
-                        "inputs and write OUTDIR, so both must be on a shared filesystem "
-                        "(default: DASK_SCHEDULER_ADDRESS where set)")
+    add_engine_options(b, sees="its workers read the inputs and write OUTDIR, so both "
+                                "must be on a shared filesystem")
     b.add_argument("--memory-limit", default="auto", metavar="SIZE",
                    help="memory of each local worker, e.g. 4GiB; a worker going over is "
                         "restarted and its input fails after Dask's retries (default: auto, "

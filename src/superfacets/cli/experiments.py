@@ -6,7 +6,7 @@ import sys
 from pathlib import Path
 
 from ..params import DEFAULT_N_SEGMENTS
-from .options import float_arg, int_arg
+from .options import add_engine_options, float_arg, int_arg
 
 __all__ = ["add_parsers"]
 
@@ -46,12 +46,8 @@ def add_parsers(sub) -> None:
                    help="comma-separated categories, e.g. Human,Cup (default: all)")
     x.add_argument("--per-category", type=int_arg, default=None, metavar="N",
                    help="only the first N meshes (by id) of each category: a stratified subset")
-    x.add_argument("-j", "--workers", type=int_arg, default=None, metavar="N",
-                   help="worker processes of a local Dask cluster (default: one per core; at "
-                        "most 4 per core; 1: in this process)")
-    x.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="run on a running Dask cluster (tcp://host:8786) instead; its workers "
-                        "must see the benchmark's files (default: DASK_SCHEDULER_ADDRESS)")
+    add_engine_options(x, sees="its workers must see the benchmark's files",
+                       note="; at most 4 per core")
     x.add_argument("--elements", default="faces", metavar="LIST",
                    help="element kinds, comma-separated: faces, vertices (ground truth: "
                         "majority of the incident faces), points (--points sampled per mesh, "

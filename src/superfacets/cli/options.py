@@ -165,6 +165,17 @@ def method_kwargs(args) -> dict:
                 paper=args.paper, beta=args.beta)
 
 
+def add_engine_options(p, *, sees: str, note: str = "", prefix: str = "") -> None:
+    """``-j/--workers`` and ``--scheduler``: where the tasks of ``batch``, ``experiment``
+    and ``segment --tiles`` run (:class:`superfacets.runner.engine.Engine`)."""
+    p.add_argument("-j", "--workers", type=int_arg, default=None, metavar="N",
+                   help=f"{prefix}worker processes of a local Dask cluster (default: one per "
+                        f"core{note}; 1: in this process)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help=f"{prefix}run on a running Dask cluster (tcp://host:8786); {sees} "
+                        "(default: DASK_SCHEDULER_ADDRESS where set)")
+
+
 def add_camera_options(p, size: str) -> None:
     """View, up axis and (for pictures) size, background, boundary lines and zoom."""
     p.add_argument("--view", type=view_arg, default=None, metavar="V",

@@ -6,7 +6,8 @@ import sys
 import time
 from pathlib import Path
 
-from .options import check_labels_output, element_kwargs, method_kwargs, named_after
+from .options import (add_engine_options, check_labels_output, element_kwargs, method_kwargs,
+                      named_after)
 
 
 def tiles_arg(text: str):
@@ -37,12 +38,8 @@ def add_tile_options(p) -> None:
     g.add_argument("--refine", type=int, default=None, metavar="N",
                    help="with --tiles: rounds of passes again on every tile from the gathered "
                         "centers (default 1; 0 is faster, and farther from one run)")
-    g.add_argument("-j", "--workers", type=int, default=None, metavar="N",
-                   help="with --tiles: local Dask worker processes (default one per core; "
-                        "1: in this process)")
-    g.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="with --tiles: run on a running Dask cluster (tcp://host:8786); its "
-                        "workers must read INPUT by the same path")
+    add_engine_options(g, sees="its workers must read INPUT by the same path",
+                       prefix="with --tiles: ")
 
 
 def segment_tiles(args) -> int:
@@ -60,8 +57,6 @@ def segment_tiles(args) -> int:
                                  "--tiles (write -o OUT.seg, then view a part)")
     if getattr(args, "elements", None) == "vertices":
         raise ParameterError("--tiles segments faces or points, not vertices")
-    if args.workers is not None and args.workers < 1:
-        raise ParameterError(f"--workers must be >= 1, got {args.workers}")
     seg_out = check_labels_output(args.output, args.mesh)
     kwargs = dict(method_kwargs(args), **element_kwargs(args))
     kwargs.pop("progress", None)

@@ -37,7 +37,7 @@ from ..errors import MeshFormatError
 __all__ = ["RegionReader", "Survey", "CHUNK", "STREAMED"]
 
 #: Rows read at once.
-CHUNK = 1 << 20
+CHUNK = 1 << 18
 #: Suffixes read in chunks without holding the file.
 STREAMED = ("ply", "las", "laz", "npy")
 

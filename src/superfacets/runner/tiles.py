@@ -219,8 +219,10 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
         raise ParameterError(f"a tiled run segments faces or points, not {params.elements!r}")
     halo = HALO if halo is None else halo
     halo_distance(halo, params.window, 1.0)  # validated before any work
-    if isinstance(refine, bool) or not isinstance(refine, (int, np.integer)) or refine < 0:
-        raise ParameterError(f"refine must be an integer >= 0, got {refine!r}")
+    for name, v, low in (("refine", refine, 0), ("workers", workers, 1)):
+        if v is not None and (isinstance(v, bool) or not isinstance(v, (int, np.integer))
+                              or v < low):
+            raise ParameterError(f"{name} must be an integer >= {low}, got {v!r}")
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
     spill = (tempfile.TemporaryDirectory(prefix="superfacets-tiles-") if workdir is None
@@ -262,13 +264,7 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
             t = time.perf_counter()
             found = [o for o in run("centers", margin) if o["core"]]
             timings["centers"] = time.perf_counter() - t
-            rows = np.concatenate([o["centers"] for o in found])
-            pos = np.concatenate([o["positions"] for o in found])
-            order = np.argsort(rows, kind="stable")
-            rows, pos = rows[order], pos[order]
-            if params.radius is None and params.init == "farthest":
-                keep = trim_centers(pos, params.n_segments)
-                rows, pos = rows[keep], pos[keep]
+            rows, pos = _gathered(found, params)
 
             def reach(t):
                 from ..tiling import tile_box
@@ -281,13 +277,7 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
                 t = time.perf_counter()
                 again = [o for o in run("refine", margin, reach) if o["core"]]
                 timings["refine"] = timings.get("refine", 0.0) + time.perf_counter() - t
-                rows = np.concatenate([o["centers"] for o in again])
-                pos = np.concatenate([o["positions"] for o in again])
-                order = np.argsort(rows, kind="stable")
-                rows, pos = rows[order], pos[order]
-                if params.radius is None and params.init == "farthest":
-                    keep = trim_centers(pos, params.n_segments)
-                    rows, pos = rows[keep], pos[keep]
+                rows, pos = _gathered(again, params)
 
             t = time.perf_counter()
             done = [o for o in run("labels", margin, reach) if o["core"]]
@@ -315,6 +305,18 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
                        halo=margin, disagreements=disagreements,
                        tiles=[stats[k] for k in sorted(stats)], timings=timings,
                        params=resolved)
+
+
+def _gathered(outs: list, params) -> tuple[np.ndarray, np.ndarray]:
+    """The tiles' centers (rows, positions) in row order, trimmed to ``n_segments``."""
+    rows = np.concatenate([o["centers"] for o in outs])
+    pos = np.concatenate([o["positions"] for o in outs])
+    order = np.argsort(rows, kind="stable")
+    rows, pos = rows[order], pos[order]
+    if params.radius is None and params.init == "farthest":
+        keep = trim_centers(pos, params.n_segments)
+        rows, pos = rows[keep], pos[keep]
+    return rows, pos
 
 
 def trim_centers(positions: np.ndarray, k: int) -> np.ndarray:
