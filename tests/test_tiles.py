@@ -292,3 +292,14 @@ def test_cli_tiles_writes_labels_and_refuses_whole_input_outputs(tmp_path):
     assert not (tmp_path / "c.ply").exists()
     bad = subprocess.run(run + ["--halo", "2"], capture_output=True, text=True)
     assert bad.returncode != 0 and "--halo goes with --tiles" in bad.stderr
+
+
+def test_a_scans_viewpoint_reaches_every_tile(tmp_path):
+    from superfacets import PointCloud
+
+    rng = np.random.default_rng(2)
+    cloud = PointCloud(rng.random((500, 3)), viewpoint=np.array([0.5, 0.5, 5.0]))
+    reader = RegionReader.spill(cloud, tmp_path)
+    assert reader.viewpoint == (0.5, 0.5, 5.0)
+    _, _, part = reader.read_box([0, 0, 0], [0.5, 0.5, 1])
+    np.testing.assert_array_equal(part.viewpoint, [0.5, 0.5, 5.0])

@@ -79,8 +79,9 @@ def segment_tiles(args) -> int:
     if not args.quiet:
         kind = result.params["elements"]
         peak = max((t.get("centers_peak_mib") or 0 for t in result.tiles), default=0)
+        what = "superpoints" if kind == "points" else "superfacets"
         print(f"{Path(args.mesh).name}: {result.labels.size} {kind}, {result.n_segments} "
-              f"superfacets in {len(result.tiles)} tiles "
+              f"{what} in {len(result.tiles)} tiles "
               f"({'x'.join(map(str, result.grid))}), {elapsed:.2f} s; largest tile "
               f"{max(t['rows'] for t in result.tiles)} {kind} with its halo, peak "
               f"{peak:.0f} MiB; {result.disagreements} border disagreements", file=report)

@@ -76,6 +76,9 @@ class RegionReader:
     layout: str
     n_rows: int
     chunk: int = CHUNK
+    #: sensor position of a scan (a PCD's ``VIEWPOINT``): every tile turns its estimated
+    #: normals towards it, so tiles orient them alike
+    viewpoint: tuple | None = None
 
     # ------------------------------------------------------------------ opening
     @classmethod
@@ -148,7 +151,8 @@ class RegionReader:
             for name, a in (("colors", obj.colors), ("normals", obj.normals)):
                 if a is not None:
                     np.save(folder / f"{name}.npy", np.ascontiguousarray(a, dtype=np.float64))
-            return cls(str(folder), "points", "npy-points", int(pts.shape[0]), chunk)
+            vp = None if obj.viewpoint is None else tuple(float(x) for x in obj.viewpoint)
+            return cls(str(folder), "points", "npy-points", int(pts.shape[0]), chunk, vp)
         faces = obj.faces
         if faces.ndim != 2 or faces.shape[1] != 3:
             raise MeshFormatError(f"{obj.name or 'mesh'}: a tiled run takes triangle meshes "
@@ -242,7 +246,8 @@ class RegionReader:
                               local.reshape(tri.shape), name=name)
         pts, col, nrm = (None if keep[0][i] is None else np.concatenate([k[i] for k in keep])
                          for i in range(3))
-        return rows, where, PointCloud(pts, nrm, name=name, colors=col)
+        vp = None if self.viewpoint is None else np.asarray(self.viewpoint)
+        return rows, where, PointCloud(pts, nrm, name=name, colors=col, viewpoint=vp)
 
     # ------------------------------------------------------------------ layouts
     def _mesh_arrays(self):
