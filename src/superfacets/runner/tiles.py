@@ -114,8 +114,7 @@ def tile_task(task: dict) -> dict:
         if task["phase"] == "areas":
             out["area"] = point_areas(pos, core, p.n_neighbors) if core.any() else 0.0
         elif task["phase"] == "centers":
-            found, run = tile_centers(inp, core, p, r, d)
-            out["n_run"] = 1 if run is None else run.n_segments
+            found, _ = tile_centers(inp, core, p, r, d)
             out.update(centers=rows[found], positions=pos[found])
         else:
             want = np.asarray(task["centers"], dtype=np.int64)
