@@ -53,7 +53,7 @@ from .pipeline import _features_of, pipeline
 from .weights import csr_weights, edge_weights
 
 __all__ = ["tile_grid", "tile_of", "tile_box", "tile_centers", "tile_refine", "tile_labels",
-           "HALO",
+           "tile_connect", "HALO",
            "point_areas"]
 
 #: Default halo, in units of ``window * r``. 3 rather than 2: the classification of
@@ -335,6 +335,90 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
     name = src.first_rows(kept)  # each superfacet named by its center's row
     out = src.to_rows(labels)
     return np.where(out >= 0, name[np.maximum(out, 0)], -1).astype(np.int64)
+
+
+def tile_connect(inp, labels: np.ndarray, owned: np.ndarray, owned_rows: np.ndarray,
+                 params: SegmentParams) -> np.ndarray | None:
+    """Phase 3 (only after border disagreements): make this tile's superfacets connected.
+
+    Two tiles that label a border element differently can leave a superfacet
+    in pieces once their cores are stitched. A superfacet whose center lies in
+    this tile's core lies well inside its halo, so its pieces are found here
+    as in the whole input; each piece but the one holding the center (else
+    the largest) joins the adjacent superfacet with which it shares the
+    longest border (as :func:`~superfacets.connectivity.enforce_connectivity`;
+    a piece touching only other stray pieces waits for them).
+
+    Parameters
+    ----------
+    inp : Mesh or PointCloud
+        The tile with its halo.
+    labels : (n_rows,) int64 ndarray
+        The stitched labels of its rows (names: the centers' rows in the
+        input; -1 for an invalid point).
+    owned : (c,) int64 ndarray
+        The names of the superfacets whose center lies in the core.
+    owned_rows : (c,) int64 ndarray
+        The row of ``inp`` holding each one's center.
+    params : SegmentParams
+
+    Returns
+    -------
+    (n_rows,) int64 ndarray or None
+        The labels with the stray pieces of owned superfacets renamed; None
+        when there is none (the usual case).
+    """
+    from .connectivity import label_components
+
+    src = elements_of(inp, params.elements, n_neighbors=params.n_neighbors,
+                      neighbor_radius=params.neighbor_radius)
+    g = src.graph
+    m = g.n_elements
+    name = np.asarray(labels, dtype=np.int64)[src.first_rows(np.arange(m))]
+    names, dense = np.unique(name, return_inverse=True)
+    piece = label_components(g, dense)
+    n_pieces = int(piece.max()) + 1
+    piece_name = np.empty(n_pieces, dtype=np.int64)
+    piece_name[piece] = name
+    if n_pieces == names.size or not owned.size:
+        return None
+    area = np.bincount(piece, weights=g.sizes, minlength=n_pieces)
+    mine = np.isin(piece_name, owned)
+    stray = mine.copy()
+    main = {}
+    at = src.to_rows(np.arange(m))[np.asarray(owned_rows, dtype=np.int64)]
+    for nm, e in zip(owned.tolist(), at.tolist()):
+        if e >= 0 and name[e] == nm:
+            main[nm] = int(piece[e])
+    for p in np.lexsort((np.arange(n_pieces), -area)).tolist():  # else the largest
+        if mine[p]:
+            main.setdefault(int(piece_name[p]), p)
+    stray[list(main.values())] = False
+    if not stray.any():
+        return None
+    pi, pj = piece[g.pairs[:, 0]], piece[g.pairs[:, 1]]
+    cross = (pi != pj) & (stray[pi] | stray[pj])
+    a = np.concatenate([pi[cross], pj[cross]])
+    b = np.concatenate([pj[cross], pi[cross]])
+    length = np.concatenate([g.lengths[cross], g.lengths[cross]])
+    final = piece_name.copy()
+    waiting = [int(p) for p in np.flatnonzero(stray)[np.argsort(area[stray], kind="stable")]]
+    while waiting:
+        left = []
+        for p in waiting:
+            nb, w = b[a == p], length[a == p]
+            ok = ~stray[nb]
+            if not ok.any():
+                left.append(p)
+                continue
+            border = np.bincount(nb[ok], weights=w[ok], minlength=n_pieces)
+            final[p] = final[int(np.argmax(border))]
+            stray[p] = False
+        if len(left) == len(waiting):  # isolated: keeps its name
+            break
+        waiting = left
+    out = src.to_rows(final[piece])
+    return np.where(out >= 0, out, -1).astype(np.int64)
 
 
 def halo_distance(halo: float, window: float, r: float) -> float:

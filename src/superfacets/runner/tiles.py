@@ -62,13 +62,18 @@ class TiledResult:
         whose label in that tile's run differs from the one their own tile
         gave them: 0 means every superfacet reaching a border was seen whole,
         the same way, from both sides.
+    repaired : int
+        Elements relabelled by the connectivity pass that runs after
+        stitching when ``disagreements > 0`` (a superfacet left in pieces by
+        two tiles' different borders: each stray piece joins its neighbour,
+        :func:`~superfacets.tiling.tile_connect`).
     tiles : list of dict
         Per tile with work: ``tile``, ``core`` and ``rows`` (elements in the
         core, and with the halo), ``centers`` (in its core), ``seconds`` and
         ``peak_mib`` of each phase.
     timings : dict of str to float
         Seconds: ``survey``, ``areas``, ``centers``, ``refine``, ``labels``, ``stitch``,
-        ``total``.
+        ``connect`` (only with disagreements), ``total``.
     params : dict
         The run's parameters, resolved.
     """
@@ -79,6 +84,7 @@ class TiledResult:
     grid: tuple
     halo: float
     disagreements: int
+    repaired: int = 0
     tiles: list = field(default_factory=list)
     timings: dict = field(default_factory=dict)
     params: dict = field(default_factory=dict)
@@ -97,8 +103,8 @@ def tile_task(task: dict) -> dict:
     'labels' the ``centers`` (rows) within reach and ``ring`` (a width).
     Returns a dict; an error is returned as ``error`` (text), never raised.
     """
-    from ..tiling import (point_areas, tile_box, tile_centers, tile_labels, tile_of,
-                          tile_refine)
+    from ..tiling import (point_areas, tile_box, tile_centers, tile_connect, tile_labels,
+                          tile_of, tile_refine)
 
     probe = PeakMemory()
     t0 = time.perf_counter()
@@ -113,6 +119,13 @@ def tile_task(task: dict) -> dict:
         p, r, d = task["params"], task["r"], task["diagonal"]
         if task["phase"] == "areas":
             out["area"] = point_areas(pos, core, p.n_neighbors) if core.any() else 0.0
+        elif task["phase"] == "connect":
+            given = np.asarray(task["labels"], dtype=np.int64)
+            owned = np.intersect1d(given[given >= 0], rows[core])
+            fixed = tile_connect(inp, given, owned, np.searchsorted(rows, owned), p)
+            moved = np.zeros(0, dtype=bool) if fixed is None else fixed != given
+            out.update(moved_rows=rows[moved] if moved.size else rows[:0],
+                       moved_labels=fixed[moved] if moved.size else rows[:0])
         elif task["phase"] == "centers":
             found, _ = tile_centers(inp, core, p, r, d)
             out.update(centers=rows[found], positions=pos[found])
@@ -130,7 +143,7 @@ def tile_task(task: dict) -> dict:
             lo_c, hi_c = tile_box(task["edges"], task["tile"])
             near = ~core & ((pos >= lo_c - task["ring"]) & (pos <= hi_c + task["ring"])).all(1)
             out.update(core_rows=rows[core], core_labels=gid[core], ring_rows=rows[near],
-                       ring_labels=gid[near])
+                       ring_labels=gid[near], box_rows=rows)
     except Exception as exc:  # noqa: BLE001 - reported by the driver, with the tile
         out["error"] = error_text(exc)
     except MemoryError as exc:  # pragma: no cover - depends on the machine
@@ -281,15 +294,28 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
             t = time.perf_counter()
             done = [o for o in run("labels", margin, reach) if o["core"]]
             timings["labels"] = time.perf_counter() - t
+            t = time.perf_counter()
+            labels = np.full(reader.n_rows, -1, dtype=np.int64)
+            for o in done:
+                labels[o["core_rows"]] = o["core_labels"]
+            disagreements = sum(int((labels[o["ring_rows"]] != o["ring_labels"]).sum())
+                                for o in done)
+            timings["stitch"] = time.perf_counter() - t
+            repaired = 0
+            if disagreements:  # two tiles saw a border differently: pieces are possible
+                t = time.perf_counter()
+                box = {o["tile"]: o.pop("box_rows") for o in done}
+                fixes = run("connect", margin, lambda t: dict(labels=labels[box.get(t, [])]))
+                for o in fixes:
+                    if o.get("moved_rows") is not None and o["moved_rows"].size:
+                        labels[o["moved_rows"]] = o["moved_labels"]
+                        repaired += int(o["moved_rows"].size)
+                timings["connect"] = time.perf_counter() - t
     t = time.perf_counter()
-    labels = np.full(reader.n_rows, -1, dtype=np.int64)
-    for o in done:
-        labels[o["core_rows"]] = o["core_labels"]
-    disagreements = sum(int((labels[o["ring_rows"]] != o["ring_labels"]).sum()) for o in done)
     valid = labels >= 0
     names, dense = np.unique(labels[valid], return_inverse=True)
     labels[valid] = dense
-    timings["stitch"] = time.perf_counter() - t
+    timings["stitch"] += time.perf_counter() - t
     timings["total"] = time.perf_counter() - t_start
     stats = {o["tile"]: dict(tile=o["tile"], core=o["core"], rows=o["rows"]) for o in found}
     for phase, outs in (("centers", found), ("labels", done)):
@@ -301,7 +327,7 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
     resolved = dict(params.as_dict(), n_segments=int(names.size), radius=r / diagonal,
                     tiles=grid, halo=float(halo), elements=reader.kind)
     return TiledResult(labels=labels, centers=names.astype(np.int64), radius=r, grid=grid,
-                       halo=margin, disagreements=disagreements,
+                       halo=margin, disagreements=disagreements, repaired=repaired,
                        tiles=[stats[k] for k in sorted(stats)], timings=timings,
                        params=resolved)
 
