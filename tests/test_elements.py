@@ -306,3 +306,25 @@ def test_graph_and_geometry_on_threads_equal_one_thread(monkeypatch):
         assert a.dtype == b.dtype and np.array_equal(a, b), name
     for a, b in zip(geo_one, Mesh(vertices, faces)._geometry):
         assert np.array_equal(a, b)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_knn_layout_is_the_csr_of_the_distinct_symmetric_pairs(seed):
+    """Known answer: the point graph's kernel gives the layout of the sorted distinct
+    pairs (i, j), j listed by i or i by j, as adjacency_csr builds it."""
+    from superfacets._kernels.adjacency import knn_csr
+    from superfacets.elements.graph import adjacency_csr
+
+    rng = np.random.default_rng(seed)
+    n, k = 300, 6
+    nbr = np.stack([rng.choice(np.r_[:i, i + 1:n], k, replace=False) for i in range(n)])
+    keep = rng.random((n, k)) < 0.8
+    indptr = np.empty(n + 1, dtype=np.int64)
+    indices, dual_edge, pairs = knn_csr(nbr, keep, indptr)
+    src = np.repeat(np.arange(n), k).reshape(n, k)[keep]
+    key = np.unique(np.minimum(src, nbr[keep]) * n + np.maximum(src, nbr[keep]))
+    np.testing.assert_array_equal(pairs, np.c_[key // n, key % n])
+    want = adjacency_csr(key // n, key % n, n)
+    for got, ref in zip((indptr, indices, dual_edge), want):
+        np.testing.assert_array_equal(got, ref)
+    assert indices.dtype == np.int32 and dual_edge.dtype == np.int32

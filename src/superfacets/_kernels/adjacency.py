@@ -310,3 +310,81 @@ def same_label_components(indptr, indices, labels):
                     top += 1
         c += 1
     return comp
+
+
+@njit(cache=True, error_model="numpy")
+def knn_csr(nbr, keep, indptr):
+    """The symmetric graph of k-nearest-neighbour lists: ``i ~ j`` when ``j`` is in
+    ``nbr[i]`` (where ``keep``) or ``i`` in ``nbr[j]``. Fills ``indptr`` (n + 1);
+    returns ``indices`` (int32, ascending per row), ``dual_edge`` (int32: the pair of
+    each entry) and ``pairs`` (e, 2) int64, listed in ``(lo, hi)`` order: the layout
+    :func:`csr_of_pairs` gives from the sorted distinct pairs."""
+    n, k = nbr.shape
+    count = np.zeros(n + 1, dtype=np.int64)
+    for i in range(n):
+        for c in range(k):
+            if keep[i, c]:
+                count[i + 1] += 1
+                count[nbr[i, c] + 1] += 1
+    for i in range(n):
+        count[i + 1] += count[i]
+    raw = np.empty(count[n], dtype=np.int32)
+    fill = count[:n].copy()
+    for i in range(n):
+        for c in range(k):
+            if keep[i, c]:
+                j = nbr[i, c]
+                raw[fill[i]] = j
+                fill[i] += 1
+                raw[fill[j]] = i
+                fill[j] += 1
+    indptr[0] = 0
+    for i in range(n):  # sort each row, drop repeats, in place
+        s, f = count[i], count[i + 1]
+        for a in range(s + 1, f):
+            x = raw[a]
+            b = a - 1
+            while b >= s and raw[b] > x:
+                raw[b + 1] = raw[b]
+                b -= 1
+            raw[b + 1] = x
+        m = 0
+        for a in range(s, f):
+            if m == 0 or raw[s + m - 1] != raw[a]:
+                raw[s + m] = raw[a]
+                m += 1
+        indptr[i + 1] = indptr[i] + m
+    indices = np.empty(indptr[n], dtype=np.int32)
+    first = np.empty(n + 1, dtype=np.int64)  # the pair id of each row's first entry > row
+    above = np.empty(n, dtype=np.int64)  # the position of that entry in the row
+    e = 0
+    for i in range(n):
+        s = count[i]
+        d = indptr[i + 1] - indptr[i]
+        indices[indptr[i]:indptr[i + 1]] = raw[s:s + d]
+        a = indptr[i]
+        while a < indptr[i + 1] and indices[a] < i:
+            a += 1
+        above[i] = a
+        first[i] = e
+        e += indptr[i + 1] - a
+    pairs = np.empty((e, 2), dtype=np.int64)
+    dual_edge = np.empty(indptr[n], dtype=np.int32)
+    for i in range(n):
+        for a in range(indptr[i], indptr[i + 1]):
+            j = indices[a]
+            if j > i:
+                t = first[i] + a - above[i]
+                pairs[t, 0] = i
+                pairs[t, 1] = j
+            else:  # the pair (j, i): i's place among row j's entries above j
+                lo_, hi_ = above[j], indptr[j + 1]
+                while lo_ < hi_:
+                    mid = (lo_ + hi_) >> 1
+                    if indices[mid] < i:
+                        lo_ = mid + 1
+                    else:
+                        hi_ = mid
+                t = first[j] + lo_ - above[j]
+            dual_edge[a] = t
+    return indices, dual_edge, pairs

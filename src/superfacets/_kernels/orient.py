@@ -18,6 +18,8 @@ def propagate_signs(indptr, indices, rows, normals, sign, component):
     number of components. ``rows[t]`` is the row (source) of CSR entry ``t``."""
     n = normals.shape[0]
     done = np.zeros(n, dtype=np.bool_)
+    best = np.full(n, np.inf)  # the lowest key pushed for each element: a larger one
+    # would only be popped after it, and skipped
     cap = indices.shape[0] + 1
     hkey = np.empty(cap, dtype=np.float64)
     hval = np.empty(cap, dtype=np.int64)
@@ -34,7 +36,10 @@ def propagate_signs(indptr, indices, rows, normals, sign, component):
             if not done[w]:
                 d = normals[s, 0] * normals[w, 0] + normals[s, 1] * normals[w, 1] \
                     + normals[s, 2] * normals[w, 2]
-                size = push(hkey, hval, size, 1.0 - abs(d), t)
+                key = 1.0 - abs(d)
+                if key < best[w]:
+                    best[w] = key
+                    size = push(hkey, hval, size, key, t)
         while size > 0:
             t = hval[0]
             size = pop(hkey, hval, size)
@@ -52,6 +57,9 @@ def propagate_signs(indptr, indices, rows, normals, sign, component):
                 if not done[w]:
                     d = normals[v, 0] * normals[w, 0] + normals[v, 1] * normals[w, 1] \
                         + normals[v, 2] * normals[w, 2]
-                    size = push(hkey, hval, size, 1.0 - abs(d), t2)
+                    key = 1.0 - abs(d)
+                    if key < best[w]:
+                        best[w] = key
+                        size = push(hkey, hval, size, key, t2)
         n_comp += 1
     return n_comp

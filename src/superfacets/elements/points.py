@@ -117,7 +117,13 @@ def orient_normals(points: np.ndarray, normals: np.ndarray, indptr: np.ndarray,
 def _distinct_rows(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The distinct rows of ``p`` in lexicographic order, and the row of each input row
     (as ``np.unique(p, axis=0, return_inverse=True)``, faster)."""
-    order = np.lexsort((p[:, 2], p[:, 1], p[:, 0]))
+    order = np.argsort(p[:, 0], kind="stable")  # by x; then the runs of equal x by y, z
+    x = p[order, 0]
+    run = np.cumsum(np.r_[True, x[1:] != x[:-1]]) - 1
+    tied = np.flatnonzero(np.bincount(run)[run] > 1)
+    if tied.size:  # (np.lexsort of all rows, stable: the same order; 0.8 s less for 1M)
+        rows = order[tied]
+        order[tied] = rows[np.lexsort((p[rows, 2], p[rows, 1], run[tied]))]
     s = p[order]
     new = np.ones(p.shape[0], dtype=bool)
     new[1:] = np.any(s[1:] != s[:-1], axis=1)
@@ -225,19 +231,24 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
     if not positive.all():  # cannot happen with distinct points; keep sizes > 0 anyway
         area[~positive] = area[positive].min() if positive.any() else 1.0
 
-    cand = nbr[:, 1:]
+    cand = np.ascontiguousarray(nbr[:, 1:])
     keep = np.ones(cand.shape, dtype=bool)
     if neighbor_radius is not None:
         keep = dist[:, 1:] <= neighbor_radius * diagonal
-    src = np.repeat(np.arange(n), k).reshape(n, k)[keep]
-    dst = cand[keep]
-    lo, hi = np.minimum(src, dst), np.maximum(src, dst)
-    key = lo.astype(np.int64) * n + hi
-    key.sort()
-    key = key[np.r_[True, key[1:] != key[:-1]]] if key.size else key
-    lo, hi = key // n, key % n
-    pairs = np.stack([lo, hi], axis=1)
-    indptr, indices, dual_edge = adjacency_csr(lo, hi, n)
+    if 2 * cand.size < 2**31 - 1:  # the kernel's int32 layout
+        from .._kernels.adjacency import knn_csr
+
+        indptr = np.empty(n + 1, dtype=np.int64)
+        indices, dual_edge, pairs = knn_csr(cand, keep, indptr)  # i ~ j if either lists the other
+        lo, hi = pairs[:, 0], pairs[:, 1]
+    else:  # the distinct pairs, sorted
+        src = np.repeat(np.arange(n), k).reshape(n, k)[keep]
+        dst = cand[keep]
+        key = np.minimum(src, dst) * np.int64(n) + np.maximum(src, dst)
+        key = np.unique(key)
+        lo, hi = key // n, key % n
+        pairs = np.stack([lo, hi], axis=1)
+        indptr, indices, dual_edge = adjacency_csr(lo, hi, n)
 
     if cloud.normals is not None:
         first = np.full(n, -1, dtype=np.int64)
