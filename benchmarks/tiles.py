@@ -3,10 +3,13 @@
 Usage: python benchmarks/tiles.py [--mesh-id 281] [--subdivide 2 3] [--points 1000000]
        [-k 2000] [--tiles 8] [--workers 2] [--halo 3]
        python benchmarks/tiles.py --compare [-k 600] [--tiles 8] [--halo 3] [--paper]
+       [--times 1] [--refine 1]
 
-``--compare``: the first benchmark mesh of each category, subdivided once,
-segmented once and tiled (in process), the mean undersegmentation error of
-each, the superfacets cut by a border and the disagreements (docs/tiles.md).
+``--compare``: the first benchmark mesh of each category, subdivided ``--times``
+times (default once), segmented once and tiled (in process), the mean
+undersegmentation error of each, the superfacets cut by a border and the
+disagreements (docs/tiles.md). ``--refine``: the tiles' refine rounds
+(default: ``segment_tiled``'s).
 
 Inputs with ground truth, larger than the benchmark's: a benchmark mesh
 (``../shared/data/psb.tar.xz``) subdivided ``s`` times (each triangle into 4,
@@ -142,12 +145,16 @@ def compare(a) -> None:
     ue_s, ue_t, cut, dis = [], [], 0, 0
     for b in first_per_category(list_meshes(), 1):
         m = read_mesh(b.path)
-        v, f = trimesh.remesh.subdivide(np.asarray(m.vertices), np.asarray(m.faces))
-        gt = np.repeat(read_labels(b.seg_paths[0], m.n_faces), 4)
+        v, f = np.asarray(m.vertices), np.asarray(m.faces)
+        gt = read_labels(b.seg_paths[0], m.n_faces)
+        for _ in range(a.times):
+            v, f = trimesh.remesh.subdivide(v, f)  # face i -> faces 4i .. 4i + 3
+            gt = np.repeat(gt, 4)
         mesh = Mesh(v, f)
         g = face_graph(mesh)
         s = segment(mesh, a.k, **extra)
-        t = segment_tiled(mesh, a.k, tiles=a.tiles, halo=a.halo, refine=a.refine or 0, **extra)
+        more = {} if a.refine is None else dict(refine=a.refine)
+        t = segment_tiled(mesh, a.k, tiles=a.tiles, halo=a.halo, **more, **extra)
         ue_s.append(undersegmentation_error(g, s.labels, gt))
         ue_t.append(undersegmentation_error(g, t.labels, gt))
         cut += int(np.unique(label_components(g, t.labels)).size - t.n_segments)
@@ -155,7 +162,8 @@ def compare(a) -> None:
         print(f"| {b.id} | {f.shape[0]:,} | {s.n_segments} / {t.n_segments} | "
               f"{ue_s[-1]:.4f} / {ue_t[-1]:.4f} |", flush=True)
     one, tiled = float(np.mean(ue_s)), float(np.mean(ue_t))
-    print(f"{'paper' if a.paper else 'default'}, k = {a.k}, {a.tiles} tiles, halo {a.halo:g}: "
+    print(f"{'paper' if a.paper else 'default'}, subdivided {a.times}x, k = {a.k}, "
+          f"{a.tiles} tiles, halo {a.halo:g}, refine {a.refine if a.refine is not None else 1}: "
           f"UE {one:.4f} -> {tiled:.4f} ({100 * (tiled / one - 1):+.1f} %), cut {cut}, "
           f"disagreements {dis}")
 
@@ -172,6 +180,7 @@ def main() -> None:
     ap.add_argument("--compare", action="store_true")
     ap.add_argument("--paper", action="store_true")
     ap.add_argument("--refine", type=int, default=None)
+    ap.add_argument("--times", type=int, default=1, help="--compare: subdivisions per mesh")
     a = ap.parse_args()
     if a.compare:
         return compare(a)

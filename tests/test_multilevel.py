@@ -87,6 +87,13 @@ def test_coarse_ratio_rule():
     assert coarse_ratio(100_000, 150) == 1  # ~670 faces per superfacet: no coarsening
     assert coarse_ratio(1_693_760, 150) == 11
     assert coarse_ratio(6_775_040, 150) == 45
+    # points: from 1,000 per superpoint, about 400 clusters each, at most n_neighbors // 2
+    assert coarse_ratio(999_000, 1000, "points") == 1
+    assert coarse_ratio(1_000_000, 1000, "points") == 2
+    assert coarse_ratio(1_000_000, 500, "points") == 5
+    assert coarse_ratio(10_000_000, 500, "points") == 5
+    assert coarse_ratio(10_000_000, 500, "points", n_neighbors=16) == 8
+    assert coarse_ratio(1_000_000, 500, "vertices") == 1  # vertices: the faces' rule
 
 
 def test_hold_small_moves_known_answer():

@@ -34,7 +34,8 @@ from ._kernels.voronoi import crossing_pairs, first_in_cells, nearest_seed
 from .elements.graph import ElementGraph, adjacency_csr
 from .expansion import bucket_width
 from .mesh import column_bounds
-from .params import COARSE_MIN_PER_SEGMENT, COARSE_PER_SEGMENT, DEFAULT_CENTER_TOL
+from .params import (COARSE_MIN_PER_SEGMENT, COARSE_MIN_PER_SEGMENT_POINTS, COARSE_PER_SEGMENT,
+                     COARSE_PER_SEGMENT_POINTS, DEFAULT_CENTER_TOL)
 
 _MIN_CLUSTERS = 4  # clusters per superfacet below which the coarse run is not done
 _MAX_RATIO_DIV = 8  # coarsen is capped at n / (8 k): clusters per superfacet
@@ -65,11 +66,17 @@ class Coarsening(NamedTuple):
     seeds: np.ndarray
 
 
-def coarse_ratio(n_elements: int, k: int) -> int:
+def coarse_ratio(n_elements: int, k: int, kind: str = "faces", n_neighbors: int = 10) -> int:
     """Elements per cluster for ``k`` superfacets on ``n_elements``: 1 (no
     coarsening) below :data:`COARSE_MIN_PER_SEGMENT` elements per superfacet,
-    else what leaves about :data:`COARSE_PER_SEGMENT` per superfacet."""
+    else what leaves about :data:`COARSE_PER_SEGMENT` per superfacet. Points
+    (``kind='points'``): from :data:`COARSE_MIN_PER_SEGMENT_POINTS`, leaving
+    about :data:`COARSE_PER_SEGMENT_POINTS`, at most ``n_neighbors // 2``."""
     per = n_elements / max(k, 1)
+    if kind == "points":
+        if per < COARSE_MIN_PER_SEGMENT_POINTS:
+            return 1
+        return max(1, min(int(per // COARSE_PER_SEGMENT_POINTS), n_neighbors // 2))
     if per < COARSE_MIN_PER_SEGMENT:
         return 1
     return int(per // COARSE_PER_SEGMENT)
@@ -294,7 +301,7 @@ def start_centers(graph: ElementGraph, weights: np.ndarray, csr_w: np.ndarray, p
         DEFAULT_CENTER_TOL if p.tol > 0 else 0.0)
     k_est = k if k is not None else max(1, round(graph.area / (math.pi * radius ** 2)))
     ratio = p.coarsen if p.coarsen is not None else (
-        coarse_ratio(graph.n_elements, k_est) if p.tol > 0 else 1)
+        coarse_ratio(graph.n_elements, k_est, graph.kind, p.n_neighbors) if p.tol > 0 else 1)
     ratio = max(1, min(ratio, graph.n_elements // (_MAX_RATIO_DIV * k_est)))
     if ratio > 1:
         t = time.perf_counter()

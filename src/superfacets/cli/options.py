@@ -10,7 +10,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..params import (ASSIGNMENTS, COARSE_MIN_PER_SEGMENT, COARSE_PER_SEGMENT, DEFAULTS,
+from ..params import (ASSIGNMENTS, COARSE_MIN_PER_SEGMENT, COARSE_MIN_PER_SEGMENT_POINTS,
+                      COARSE_PER_SEGMENT, DEFAULTS,
                       ELEMENTS, INITS, WEIGHTINGS)
 from ..params import DEFAULT_CENTER_TOL as _D_CENTER_TOL
 
@@ -104,7 +105,9 @@ def add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> No
                    help="coarse-to-fine: first solve on clusters of about N elements, then "
                         "refine on all of them; 1: off (default: on where a superfacet holds "
                         f"at least {COARSE_MIN_PER_SEGMENT:,} elements, leaving about "
-                        f"{COARSE_PER_SEGMENT:,} clusters per superfacet; off with --tol 0)")
+                        f"{COARSE_PER_SEGMENT:,} clusters per superfacet; for points from "
+                        f"{COARSE_MIN_PER_SEGMENT_POINTS:,} points per superpoint, clusters of at "
+                        "most n_neighbors / 2 points; off with --tol 0)")
     p.add_argument("--no-connectivity", action="store_true",
                    help="keep superfacets split in several pieces (default: merge stray "
                         "pieces into the neighbour sharing the longest boundary)")
