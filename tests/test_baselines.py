@@ -229,15 +229,21 @@ def test_ncuts_rejects_bad_parameters(ball):
 
 
 @pytest.mark.parametrize("name", sorted(METHODS))
-def test_every_registered_method_has_one_call_shape(name):
+def test_every_registered_method_has_one_call_shape(name, monkeypatch):
     sphere = as_mesh(trimesh.creation.icosphere(subdivisions=2))
     method = METHODS[name]
     if name == "cut_pursuit":
         pytest.importorskip("cut_pursuit_py", reason="the baselines extra")
     faces = "faces" in method.elements
     extra = {} if faces else {"elements": "vertices"}  # a method of vertices and points
+    obj = sphere
+    if name == "vccs":  # points only, through an external module: a stand-in
+        import sys
+
+        monkeypatch.setitem(sys.modules, "vccs_supervoxel", _grid_vccs())
+        obj, extra = np.asarray(sphere.vertices), {"elements": "points"}
     for cfg in expand_grid(name, **{k: list(v) for k, v in method.sweep.items()}):
-        runs = [method.run(sphere, 12, cache={}, seed=4, **cfg.kwargs, **extra)
+        runs = [method.run(obj, 12, cache={}, seed=4, **cfg.kwargs, **extra)
                 for _ in range(2)]
         _dense(runs[0].labels, sphere.n_faces if faces else sphere.n_vertices)
         assert np.array_equal(runs[0].labels, runs[1].labels), cfg.label()
@@ -335,3 +341,58 @@ def test_cut_pursuit_features_and_known_answers():
     assert few < many
     with pytest.raises(ParameterError, match="elements"):
         cut_pursuit(cloud, 10, elements="faces")
+
+
+# --- VCCS (an external module) -------------------------------------------------------------
+
+
+def _grid_vccs():
+    """A stand-in for the external ``vccs_supervoxel``: one label per cube of the seed
+    resolution, -1 for the points of cubes holding fewer than 3 (as the port leaves
+    small voxels unlabelled)."""
+    import types
+
+    def segment_vccs(data, seed, voxel, spatial, normal):
+        assert data.shape[1] == 9 and voxel > 0 and spatial >= 0 and normal >= 0
+        cell = np.floor(data[:, :3] / seed).astype(np.int64)
+        _, lab, count = np.unique(cell, axis=0, return_inverse=True, return_counts=True)
+        lab = lab.ravel()
+        lab = np.where(count[lab] >= 3, lab, -1)
+        return np.c_[data, lab.astype(np.float64)]
+
+    return types.SimpleNamespace(segment_vccs=segment_vccs)
+
+
+def test_vccs_without_its_module_says_where_it_comes_from(monkeypatch):
+    import sys
+
+    from superfacets.baselines.vccs import vccs
+    from superfacets.errors import MissingExtraError
+
+    monkeypatch.setitem(sys.modules, "vccs_supervoxel", None)  # import fails
+    with pytest.raises(MissingExtraError, match="py_vccs"):
+        vccs(np.random.default_rng(0).random((50, 3)), 5)
+
+
+def test_vccs_search_and_labels_for_every_point(monkeypatch):
+    import sys
+
+    from superfacets.baselines.vccs import vccs
+
+    monkeypatch.setitem(sys.modules, "vccs_supervoxel", _grid_vccs())
+    rng = np.random.default_rng(1)
+    pts = np.c_[rng.random((4000, 2)), np.zeros(4000)]
+    pts[7] = np.nan
+    from superfacets.cloud import PointCloud
+
+    pts = PointCloud(pts, allow_invalid=True)
+    labels = vccs(pts, 25)  # seed resolution found by bisection
+    assert labels[7] == -1 and (np.delete(labels, 7) >= 0).all()
+    assert abs(int(labels.max()) + 1 - 25) <= 0.3 * 25
+    assert np.unique(labels[labels >= 0]).size == labels.max() + 1  # dense
+    one = vccs(pts, seed_resolution=2.0)  # a seed cell larger than the cloud: one label
+    assert set(np.unique(one).tolist()) == {-1, 0}
+    with pytest.raises(ParameterError):
+        vccs(pts, 10, spatial_importance=-1)
+    run = METHODS["vccs"]
+    assert run.elements == ("points",)

@@ -226,6 +226,13 @@ def _run_cut_pursuit(mesh, n_segments, *, cache, seed, elements="points", reg_st
                                  elements=elements))
 
 
+def _run_vccs(mesh, n_segments, *, cache, seed, elements="points", seed_resolution):
+    from .baselines.vccs import vccs
+
+    return MethodRun(vccs(mesh, n_segments if seed_resolution <= 0 else None,
+                          seed_resolution=seed_resolution if seed_resolution > 0 else 0.1))
+
+
 def _run_shlafman(mesh, n_segments, *, cache, seed, progress=False, **params):
     return _run_superfacets(mesh, n_segments, cache=cache, seed=seed, weighting="shlafman",
                             progress=progress, **params)
@@ -280,6 +287,12 @@ register_method(
                 "(Superpoint Graph's partition; the cut-pursuit-py package, baselines extra); "
                 "reg_strength=0 searches it for n_segments",
     elements=("vertices", "points"))
+register_method(
+    "vccs", _run_vccs, defaults=dict(seed_resolution=0.0),
+    description="VCCS supervoxels (PCL's SupervoxelClustering) through the external module "
+                "vccs_supervoxel, built from a public header-only port (not on the package "
+                "index); seed_resolution=0 searches it for n_segments",
+    elements=("points",))
 register_method(
     "shlafman", _run_shlafman, defaults=dict(_SF_DEFAULTS, alpha=WEIGHTING_ALPHA["shlafman"][0]),
     sweep={"alpha": (0.0, 0.25, 0.5, 0.75, 1.0)},
