@@ -175,19 +175,7 @@ def cut_pursuit(obj, n_segments: int | None = None, *, reg_strength: float = 0.1
         labels = run(check_positive("reg_strength", reg_strength))
     else:
         n_segments = check_int("n_segments", n_segments, lo=1, hi=g.n_elements)
-        a, b = -8.0, 2.0  # log10 of reg_strength; the count falls as it grows
-        best = None
-        for _ in range(16):
-            mid = 0.5 * (a + b)
-            lab = run(10.0 ** mid)
-            count = int(lab.max()) + 1
-            if best is None or abs(count - n_segments) < abs(best[0] - n_segments):
-                best = (count, lab)
-            if count == n_segments or abs(count - n_segments) <= 0.02 * n_segments:
-                break
-            if count > n_segments:
-                a = mid
-            else:
-                b = mid
-        labels = best[1]
+        from ._count import search_count
+
+        labels = search_count(run, n_segments, -8.0, 2.0, 16)  # log10 of reg_strength
     return source.to_rows(labels)

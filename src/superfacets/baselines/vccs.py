@@ -125,19 +125,8 @@ def vccs(obj, n_segments: int | None = None, *, seed_resolution: float = 0.1,
         labels = run(check_positive("seed_resolution", seed_resolution) * diagonal)
     else:
         n_segments = check_int("n_segments", n_segments, lo=1, hi=g.n_elements)
-        a, b = np.log10(voxel), np.log10(diagonal)  # seeds from one voxel to the whole box
-        best = None
-        for _ in range(20):
-            mid = 0.5 * (a + b)
-            lab = run(10.0 ** mid)
-            count = int(lab.max()) + 1
-            if best is None or abs(count - n_segments) < abs(best[0] - n_segments):
-                best = (count, lab)
-            if abs(count - n_segments) <= 0.02 * n_segments:
-                break
-            if count > n_segments:
-                a = mid
-            else:
-                b = mid
-        labels = best[1]
+        from ._count import search_count
+
+        # seeds from one voxel apart to the whole box apart
+        labels = search_count(run, n_segments, np.log10(voxel), np.log10(diagonal), 20)
     return source.to_rows(labels)
