@@ -134,6 +134,92 @@ def test_points_from_ply_npy_and_las_read_by_box(tmp_path):
     assert 5 not in RegionReader.open(tmp_path / "p.npy").read_box([-9] * 3, [9] * 3)[0]
 
 
+def _same_box(a, b):
+    for x, y in zip(a[:2], b[:2]):
+        np.testing.assert_array_equal(x, y)
+    if a[2] is None or b[2] is None:
+        assert a[2] is None and b[2] is None
+    elif isinstance(a[2], Mesh):
+        np.testing.assert_array_equal(a[2].vertices, b[2].vertices)
+        np.testing.assert_array_equal(a[2].faces, b[2].faces)
+    else:
+        for n in ("points", "colors", "normals"):
+            x, y = getattr(a[2], n), getattr(b[2], n)
+            assert (x is None) == (y is None)
+            if x is not None:
+                np.testing.assert_array_equal(x, y)
+
+
+@pytest.mark.parametrize("kind", ["ply-mesh", "npy-points", "spilled-cloud"])
+def test_buckets_read_every_box_as_the_file_does(tmp_path, kind):
+    """One pass sorts the input into tiles; any box (across tiles, on their edges, empty)
+    then reads the same rows, positions and input as a pass over the file."""
+    rng = np.random.default_rng(4)
+    if kind == "ply-mesh":
+        mesh = _bumpy(3)
+        _write_ply_mesh(tmp_path / "m.ply", mesh.vertices, mesh.faces)
+        reader = RegionReader.open(tmp_path / "m.ply", chunk=333)
+    elif kind == "npy-points":
+        pts = np.round(rng.random((4000, 3)), 2)  # many positions exactly on tile edges
+        pts[7] = np.nan
+        np.save(tmp_path / "p.npy", pts)
+        reader = RegionReader.open(tmp_path / "p.npy", chunk=333)
+    else:
+        from superfacets import PointCloud
+
+        pts = rng.random((3000, 3))
+        nrm = rng.normal(size=(3000, 3))
+        cloud = PointCloud(pts, nrm / np.linalg.norm(nrm, axis=1, keepdims=True),
+                           colors=rng.random((3000, 3)), viewpoint=np.array([0, 0, 5.0]))
+        reader = RegionReader.spill(cloud, tmp_path / "spill", chunk=333)
+    s = reader.survey()
+    edges = tile_grid(s.lo, s.hi, (3, 2, 2))
+    buckets = reader.bucket(edges, tmp_path / "b")
+    assert buckets.counts.sum() == s.n_elements and (buckets.counts > 0).sum() >= 10
+    assert sorted(p.name for p in (tmp_path / "b").iterdir()) == sorted(
+        f"tile-{t}.bin" for t in np.flatnonzero(buckets.counts))
+    boxes = [(s.lo, s.hi), (s.lo - 1, s.lo - 0.5)]  # everything; nothing
+    for t in (0, 5, 11):
+        boxes.append(tile_box(edges, t))  # exactly a tile: its edges included
+        boxes.append(tile_box(edges, t, 0.13))  # with a halo into its neighbours
+    boxes += [tuple(np.sort(rng.uniform(s.lo, s.hi, (2, 3)), axis=0)) for _ in range(5)]
+    for lo, hi in boxes:
+        _same_box(buckets.read_box(lo, hi, name="b"), reader.read_box(lo, hi, name="b"))
+    again = reader.bucket(edges, tmp_path / "b")  # a second bucketing replaces the first
+    np.testing.assert_array_equal(again.counts, buckets.counts)
+    _same_box(again.read_box(s.lo, s.hi), reader.read_box(s.lo, s.hi))
+    if kind == "spilled-cloud":
+        np.testing.assert_array_equal(buckets.read_box(s.lo, s.hi)[2].viewpoint, [0, 0, 5.0])
+
+
+def test_a_tiled_run_reads_the_file_twice_and_gives_the_same_labels(tmp_path, monkeypatch):
+    """After the survey and the bucketing no task reads the file; the labels are those of
+    tasks that each read the file (the path a remote scheduler without workdir takes)."""
+    mesh = _bumpy(4)
+    path = tmp_path / "m.ply"
+    _write_ply_mesh(path, mesh.vertices, mesh.faces)
+    passes = []
+    chunks = RegionReader.chunks
+
+    def counted(self):
+        passes.append(1)
+        yield from chunks(self)
+
+    monkeypatch.setattr(RegionReader, "chunks", counted)
+    res = segment_tiled(path, 60, tiles=8, halo=1, workdir=tmp_path / "work")
+    assert len(passes) == 2 and res.timings["bucket"] > 0
+    assert len(list((tmp_path / "work" / "buckets").glob("tile-*.bin"))) == 8
+    # halo 1 leaves pieces: the connect phase ran on the stitched labels read from a file
+    assert res.disagreements > 0 and res.repaired > 0
+    assert (tmp_path / "work" / "stitched.npy").exists()
+    passes.clear()
+    monkeypatch.setattr(RegionReader, "bucket", lambda self, *a, **k: self)
+    each = segment_tiled(path, 60, tiles=8, halo=1)
+    assert len(passes) > 8 * 3  # every task of every phase read the file
+    np.testing.assert_array_equal(res.labels, each.labels)
+    assert res.repaired == each.repaired and res.disagreements == each.disagreements
+
+
 def test_streamed_reading_errors_are_clear(tmp_path):
     with pytest.raises(FileNotFoundError, match="no such file"):
         RegionReader.open(tmp_path / "missing.ply")
@@ -280,18 +366,22 @@ def test_cli_tiles_writes_labels_and_refuses_whole_input_outputs(tmp_path):
     path = tmp_path / "m.ply"
     _write_ply_mesh(path, mesh.vertices, mesh.faces)
     run = [sys.executable, "-m", "superfacets", "segment", str(path), "-k", "30"]
-    out = subprocess.run(run + ["--tiles", "2,1,1", "-j", "1", "-o", str(tmp_path / "m.seg")],
+    out = subprocess.run(run + ["--tiles", "2,1,1", "-j", "1", "-o", str(tmp_path / "m.seg"),
+                                "--workdir", str(tmp_path / "work")],
                          capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     assert "2 tiles (2x1x1)" in out.stdout
     labels = np.loadtxt(tmp_path / "m.seg", dtype=int)
     assert labels.shape == (mesh.n_faces,) and np.unique(labels).size == labels.max() + 1
+    assert len(list((tmp_path / "work" / "buckets").glob("tile-*.bin"))) == 2
     bad = subprocess.run(run + ["--tiles", "2", "--colored-mesh", str(tmp_path / "c.ply")],
                          capture_output=True, text=True)
     assert bad.returncode != 0 and "not with --tiles" in bad.stderr
     assert not (tmp_path / "c.ply").exists()
     bad = subprocess.run(run + ["--halo", "2"], capture_output=True, text=True)
     assert bad.returncode != 0 and "--halo goes with --tiles" in bad.stderr
+    bad = subprocess.run(run + ["--workdir", str(tmp_path)], capture_output=True, text=True)
+    assert bad.returncode != 0 and "--workdir goes with --tiles" in bad.stderr
 
 
 def test_a_scans_viewpoint_reaches_every_tile(tmp_path):

@@ -164,7 +164,8 @@ def cmd_segment(args) -> int:
 
         return segment_tiles(args)
     for flag, given in (("--halo", args.halo), ("--workers", args.workers),
-                        ("--scheduler", args.scheduler), ("--refine", args.refine)):
+                        ("--scheduler", args.scheduler), ("--refine", args.refine),
+                        ("--workdir", args.workdir)):
         if given is not None:
             raise ParameterError(f"{flag} goes with --tiles")
     seg_out = check_labels_output(args.output, args.mesh)

@@ -31,13 +31,17 @@ def add_tile_options(p) -> None:
     g.add_argument("--tiles", type=tiles_arg, default=None, metavar="N|NX,NY,NZ",
                    help="cut the input into N spatial tiles with halos, one task each, "
                         "stitched so that no superfacet is cut by a tile border; binary PLY, "
-                        "LAS/LAZ and .npy are read in chunks by each task (labels only: "
-                        "-o OUT.seg / .json)")
+                        "LAS/LAZ and .npy are read in chunks, twice, and sorted into a file "
+                        "per tile (labels only: -o OUT.seg / .json)")
     g.add_argument("--halo", type=float, default=None, metavar="H",
                    help="with --tiles: halo width in units of window * r (>= 1; default 3)")
     g.add_argument("--refine", type=int, default=None, metavar="N",
                    help="with --tiles: rounds of passes again on every tile from the gathered "
                         "centers (default 1; 0 is faster, and farther from one run)")
+    g.add_argument("--workdir", default=None, metavar="DIR",
+                   help="with --tiles: folder for the work files (the input sorted by tile, "
+                        "about its size; default a temporary folder, removed at the end); with "
+                        "--scheduler, one every worker reaches, or each task reads INPUT whole")
     add_engine_options(g, sees="its workers must read INPUT by the same path",
                        prefix="with --tiles: ")
 
@@ -65,6 +69,7 @@ def segment_tiles(args) -> int:
         result = segment_tiled(args.mesh, args.n_segments, radius=args.radius, tiles=args.tiles,
                                halo=args.halo, workers=args.workers, scheduler=args.scheduler,
                                refine=1 if args.refine is None else args.refine,
+                               workdir=args.workdir,
                                progress=not args.quiet and sys.stderr.isatty(), **kwargs)
     except SuperfacetsError as exc:
         raise named_after(args.mesh, exc) from None

@@ -7,13 +7,19 @@ scheduler). A task gets the file's name and its box, never data: it reads
 its tile and halo itself (:class:`superfacets.io.regions.RegionReader`), so
 no process holds the whole input. The phases (:mod:`superfacets.tiling`):
 
-0. a survey of the file in chunks (bounds, total area) in this process; for a
-   point cloud asked for ``n_segments``, one task per tile sums the points'
-   areas (the radius needs the total);
+0. a survey of the file in chunks (bounds, total area) in this process, and
+   a second pass that sorts its elements into one file per tile in the work
+   folder (:meth:`~superfacets.io.regions.RegionReader.bucket`): from then on
+   a task reads the tiles its box overlaps; for a point cloud asked for
+   ``n_segments``, one task per tile sums the points' areas (the radius
+   needs the total);
 1. per tile, the method on the tile and its halo: the centers of its core;
    then (``refine`` rounds) per tile, the method's passes again from all the
    centers within reach: the centers of its core;
-2. per tile, labels from all the centers, kept for the core.
+2. per tile, labels from all the centers, kept for the core;
+3. only where two tiles saw a border differently: per tile, the stitched
+   labels of its box (read from a file in the work folder) made connected
+   (:func:`~superfacets.tiling.tile_connect`).
 
 Labels are named by their center's row, so a superfacet crossing tile
 borders has one label on every side; they are made dense at the end. Only
@@ -72,8 +78,9 @@ class TiledResult:
         core, and with the halo), ``centers`` (in its core), ``seconds`` and
         ``peak_mib`` of each phase.
     timings : dict of str to float
-        Seconds: ``survey``, ``areas``, ``centers``, ``refine``, ``labels``, ``stitch``,
-        ``connect`` (only with disagreements), ``total``.
+        Seconds: ``survey``, ``bucket`` (sorting the input into tiles), ``areas``,
+        ``centers``, ``refine``, ``labels``, ``stitch``, ``connect`` (only with
+        disagreements), ``total``.
     params : dict
         The run's parameters, resolved.
     """
@@ -120,7 +127,10 @@ def tile_task(task: dict) -> dict:
         if task["phase"] == "areas":
             out["area"] = point_areas(pos, core, p.n_neighbors) if core.any() else 0.0
         elif task["phase"] == "connect":
-            given = np.asarray(task["labels"], dtype=np.int64)
+            given = task["labels"]
+            if isinstance(given, str):  # the stitched labels, in a file every worker reads
+                given = np.load(given, mmap_mode="r")[rows]
+            given = np.asarray(given, dtype=np.int64)
             owned = np.intersect1d(given[given >= 0], rows[core])
             fixed = tile_connect(inp, given, owned, np.searchsorted(rows, owned), p)
             moved = np.zeros(0, dtype=bool) if fixed is None else fixed != given
@@ -143,7 +153,9 @@ def tile_task(task: dict) -> dict:
             lo_c, hi_c = tile_box(task["edges"], task["tile"])
             near = ~core & ((pos >= lo_c - task["ring"]) & (pos <= hi_c + task["ring"])).all(1)
             out.update(core_rows=rows[core], core_labels=gid[core], ring_rows=rows[near],
-                       ring_labels=gid[near], box_rows=rows)
+                       ring_labels=gid[near])
+            if task.get("box_rows", True):  # for the connect phase, unless read from a file
+                out["box_rows"] = rows
     except Exception as exc:  # noqa: BLE001 - reported by the driver, with the tile
         out["error"] = error_text(exc)
     except MemoryError as exc:  # pragma: no cover - depends on the machine
@@ -186,8 +198,12 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
     memory_limit : str or float, default 'auto'
         Memory limit of each local worker (Dask's syntax).
     workdir : str or os.PathLike, optional
-        Folder for the ``.npy`` copy of an input that is not streamed
-        (default: a temporary folder, removed at the end).
+        Folder for the work files: the input sorted into one file per tile
+        (the file is read twice in all, then each task reads the tiles its
+        box overlaps), the ``.npy`` copy of an input that is not streamed,
+        the stitched labels. Default: a temporary folder, removed at the
+        end. With ``scheduler`` give a folder every worker reaches, or each
+        task reads the whole file for its box.
     progress : bool, default False
         A progress bar per phase.
     refine : int, default 1
@@ -253,6 +269,14 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
         diagonal = float(np.linalg.norm(survey.hi - survey.lo))
         if diagonal <= 0:
             raise ParameterError("the input has zero extent: nothing to tile")
+        # one more pass sorts the elements into a file per tile, so that a task reads the
+        # tiles its box overlaps, not the whole file; without a folder the workers share
+        # (a remote scheduler and no workdir) every task reads the file
+        shared = scheduler is None or workdir is not None
+        if shared and n_tiles > 1:
+            t = time.perf_counter()
+            reader = reader.bucket(edges, Path(tmp) / "buckets", progress=progress)
+            timings["bucket"] = time.perf_counter() - t
         with Engine(workers=workers, scheduler=scheduler, memory_limit=memory_limit) as engine:
             def run(phase, margin, extra=lambda t: {}):
                 tasks = [dict(phase=phase, reader=reader, edges=edges, tile=t, margin=margin,
@@ -283,7 +307,7 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
 
                 lo, hi = tile_box(edges, t, margin)
                 inside = ((pos >= lo) & (pos <= hi)).all(axis=1)
-                return dict(centers=rows[inside], ring=params.window * r)
+                return dict(centers=rows[inside], ring=params.window * r, box_rows=not shared)
 
             for _ in range(refine):
                 t = time.perf_counter()
@@ -304,8 +328,13 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
             repaired = 0
             if disagreements:  # two tiles saw a border differently: pieces are possible
                 t = time.perf_counter()
-                box = {o["tile"]: o.pop("box_rows") for o in done}
-                fixes = run("connect", margin, lambda t: dict(labels=labels[box.get(t, [])]))
+                if shared:  # the tasks read their boxes' labels from one file
+                    np.save(Path(tmp) / "stitched.npy", labels)
+                    fixes = run("connect", margin,
+                                lambda t: dict(labels=str(Path(tmp) / "stitched.npy")))
+                else:
+                    box = {o["tile"]: o.pop("box_rows") for o in done}
+                    fixes = run("connect", margin, lambda t: dict(labels=labels[box.get(t, [])]))
                 for o in fixes:
                     if o.get("moved_rows") is not None and o["moved_rows"].size:
                         labels[o["moved_rows"]] = o["moved_labels"]
