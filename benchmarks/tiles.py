@@ -1,7 +1,7 @@
 """Tiled runs against one run: quality, border stitching, time and memory per worker.
 
 Usage: python benchmarks/tiles.py [--mesh-id 281] [--subdivide 2 3] [--points 1000000]
-       [-k 2000] [--tiles 8] [--workers 2] [--halo 3]
+       [-k 2000] [--tiles 8] [--workers 2] [--halo 3] [--no-mesh] [--tiled-only]
        python benchmarks/tiles.py --compare [-k 600] [--tiles 8] [--halo 3] [--paper]
        [--times 1] [--refine 1]
 
@@ -25,6 +25,14 @@ truth, the superfacets cut by a tile border (labels that are not one
 connected piece of the whole input's graph; the stitching's promise is 0),
 the border disagreements, wall time and peak resident memory (the single
 run's process; the largest of the tiles' tasks).
+
+``--no-mesh``: only the point rows. ``--tiled-only``: no single run (for a
+cloud larger than this machine holds): the UE counts each point once (as
+``superfacets experiment --elements points``), and "cut by a border" is
+checked tile by tile, without the whole graph: each tile's box, grown by
+``1.5 window r``, is read and its point graph built; every superpoint whose
+center lies in the tile's core must lie in the box and be one connected piece
+of that graph (the box's graph is the whole cloud's away from the box edge).
 """
 
 from __future__ import annotations
@@ -123,11 +131,84 @@ def _row(name, n, data, gt, path, k, a, folder):
     cut = int(np.unique(pieces).size - np.unique(per_element(tiled.labels)).size)
     peak = max(t[f"{ph}_peak_mib"] or 0 for t in tiled.tiles for ph in ("centers", "labels"))
     ue_s, ue_t = ue(s_labels), ue(tiled.labels)
+    if isinstance(data, np.ndarray):  # points: also the experiment's measure
+        print(f"  each point counted once: UE {_equal_weight_ue(s_labels, gt):.4f} / "
+              f"{_equal_weight_ue(tiled.labels, gt):.4f}", flush=True)
     print(f"| {name} | {n:,} | {k} | {'x'.join(map(str, tiled.grid))} | "
           f"{single['n_segments']} / {tiled.n_segments} | {ue_s:.4f} / {ue_t:.4f} "
           f"({100 * (ue_t / ue_s - 1):+.1f} %) | {cut} | {tiled.disagreements} | "
           f"{single['wall']:.1f} / {wall:.1f} | {single['peak_mib']:.0f} / {peak:.0f} |",
           flush=True)
+
+
+def _equal_weight_ue(labels, gt, tau=0.05) -> float:
+    """Paper eq. 4 with every element counted once (points)."""
+    ok = labels >= 0
+    s, g = labels[ok], gt[ok]
+    _, s = np.unique(s, return_inverse=True)
+    n_g = int(g.max()) + 1
+    key, count = np.unique(s.astype(np.int64) * n_g + g, return_counts=True)
+    s_size = np.bincount(s)
+    sa = s_size[key // n_g]
+    counted = count > tau * sa
+    return float((sa[counted] - count[counted]).sum() / s.size)
+
+
+def _cut_per_tile(path: Path, res, n_neighbors: int) -> tuple[int, int]:
+    """(superpoints in pieces, superpoints not inside their tile's checked box)."""
+    from superfacets.connectivity import label_components
+    from superfacets.elements.inputs import elements_of
+    from superfacets.io.regions import RegionReader
+    from superfacets.tiling import tile_box, tile_grid, tile_of
+
+    reader = RegionReader.open(path)
+    survey = reader.survey()
+    edges = tile_grid(survey.lo, survey.hi, res.grid)
+    pts = np.load(path, mmap_mode="r")
+    center_tile = tile_of(np.asarray(pts[res.centers], dtype=np.float64), edges)
+    size = np.bincount(res.labels[res.labels >= 0], minlength=res.n_segments)
+    margin = 1.5 * res.params["window"] * res.radius
+    cut = outside = 0
+    with tempfile.TemporaryDirectory(prefix="sf-cut-") as tmp:
+        buckets = reader.bucket(edges, tmp)
+        for t in range(int(np.prod(res.grid))):
+            mine = np.flatnonzero(center_tile == t)
+            if not mine.size:
+                continue
+            lo, hi = tile_box(edges, t, margin)
+            rows, _, cloud = buckets.read_box(lo, hi)
+            src = elements_of(cloud, "points", n_neighbors=n_neighbors)
+            first = src.first_rows(np.arange(src.graph.n_elements))
+            lab = res.labels[rows]
+            pieces = label_components(src.graph, lab[first])
+            el = lab[first]
+            seen = np.bincount(lab[lab >= 0], minlength=res.n_segments)
+            outside += int((seen[mine] < size[mine]).sum())
+            n_pieces = np.zeros(res.n_segments, dtype=np.int64)
+            pairs = np.unique(np.c_[el, pieces], axis=0)
+            np.add.at(n_pieces, pairs[:, 0], 1)
+            cut += int((n_pieces[mine] > 1).sum())
+            print(f"  tile {t}: {rows.size:,} points checked, {mine.size} superpoints, "
+                  f"{int((n_pieces[mine] > 1).sum())} in pieces", flush=True)
+    return cut, outside
+
+
+def _row_tiled_only(name, n, gt, path, k, a) -> None:
+    from superfacets.runner.tiles import segment_tiled
+
+    t = time.perf_counter()
+    res = segment_tiled(path, k, tiles=a.tiles, workers=a.workers, halo=a.halo, progress=True)
+    wall = time.perf_counter() - t
+    peak = max(t[f"{ph}_peak_mib"] or 0 for t in res.tiles for ph in ("centers", "labels"))
+    ue = _equal_weight_ue(res.labels, gt)
+    print(f"tiled: {wall:.1f} s, phases {json.dumps({k: round(v, 1) for k, v in res.timings.items()})}",
+          flush=True)
+    t = time.perf_counter()
+    cut, outside = _cut_per_tile(path, res, res.params["n_neighbors"])
+    print(f"cut check: {time.perf_counter() - t:.1f} s", flush=True)
+    print(f"| {name} | {n:,} | {k} | {'x'.join(map(str, res.grid))} | {res.n_segments} | "
+          f"{ue:.4f} | {cut} ({outside} not inside the checked box) | {res.disagreements} | "
+          f"{wall:.1f} | {peak:.0f} |", flush=True)
 
 
 def compare(a) -> None:
@@ -181,6 +262,9 @@ def main() -> None:
     ap.add_argument("--paper", action="store_true")
     ap.add_argument("--refine", type=int, default=None)
     ap.add_argument("--times", type=int, default=1, help="--compare: subdivisions per mesh")
+    ap.add_argument("--no-mesh", action="store_true", help="only the point rows")
+    ap.add_argument("--tiled-only", action="store_true",
+                    help="points only, no single run (equal-weight UE, cut checked per tile)")
     a = ap.parse_args()
     if a.compare:
         return compare(a)
@@ -189,21 +273,34 @@ def main() -> None:
 
     print(f"machine: {os.cpu_count()} cores; single run in a new process (1 thread per "
           f"core, default method); tiled: {a.workers} Dask workers, halo {a.halo:g}")
-    print("| input | elements | k | tiles | superfacets (one / tiled) | UE (one / tiled) | "
-          "cut by a border | disagreements | seconds (one / tiled) | peak MiB (one / "
-          "largest task) |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    if a.tiled_only:
+        print("| input | elements | k | tiles | superpoints | UE (each point once) | "
+              "cut by a border | disagreements | seconds | peak MiB (largest task) |")
+        print("|---|---|---|---|---|---|---|---|---|---|")
+    else:
+        print("| input | elements | k | tiles | superfacets (one / tiled) | UE (one / tiled) | "
+              "cut by a border | disagreements | seconds (one / tiled) | peak MiB (one / "
+              "largest task) |")
+        print("|---|---|---|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory(prefix="sf-tiles-bench-") as tmp:
         folder = Path(tmp)
         for s in a.subdivide:
             path, v, f, gt = _subdivided(a.mesh_id, s, folder)
             mesh = Mesh(v, f)
-            _row(f"PSB {a.mesh_id} subdivided {s}x", f.shape[0], mesh, gt, path, a.k, a, folder)
+            if not (a.no_mesh or a.tiled_only):
+                _row(f"PSB {a.mesh_id} subdivided {s}x", f.shape[0], mesh, gt, path, a.k, a,
+                     folder)
             for n in (a.points if s == a.subdivide[-1] else []):
                 pts, face = sample_points(mesh, n, seed=0)
                 pp = folder / f"points{n}.npy"
                 np.save(pp, pts)
-                _row(f"points on it", n, pts, gt[face], pp, a.k, a, folder)
+                label = gt[face]
+                del pts, face
+                if a.tiled_only:
+                    _row_tiled_only(f"points on PSB {a.mesh_id} subdivided {s}x", n, label,
+                                    pp, a.k, a)
+                else:
+                    _row(f"points on it", n, np.load(pp), label, pp, a.k, a, folder)
 
 
 if __name__ == "__main__":
