@@ -170,3 +170,49 @@ def edge_lengths(vertices, edges, out):
         y = vertices[b, 1] - vertices[a, 1]
         z = vertices[b, 2] - vertices[a, 2]
         out[t] = np.sqrt(x * x + y * y + z * z)
+
+
+@njit(cache=True, inline="always")
+def _spread21(x):
+    """The low 21 bits of ``x`` moved to every third bit (bit b -> bit 3b)."""
+    x &= np.uint64(0x1FFFFF)
+    x = (x | (x << np.uint64(32))) & np.uint64(0x1F00000000FFFF)
+    x = (x | (x << np.uint64(16))) & np.uint64(0x1F0000FF0000FF)
+    x = (x | (x << np.uint64(8))) & np.uint64(0x100F00F00F00F00F)
+    x = (x | (x << np.uint64(4))) & np.uint64(0x10C30C30C30C30C3)
+    x = (x | (x << np.uint64(2))) & np.uint64(0x1249249249249249)
+    return x
+
+
+@njit(cache=True, nogil=True)
+def float_morton_keys(bits, keys):
+    """Z-order keys of float64 positions that depend on each position alone.
+
+    Each coordinate's bits, mapped so that unsigned order is numeric order
+    (``-0.0`` as ``0.0``), are interleaved x, y, z from the top: ``keys[i, 0]``
+    holds the top 21 bits of each (sign, exponent, 9 mantissa bits), ``keys[i, 1]``
+    the next 21, ``keys[i, 2]`` the next 21. Sorting by the three keys lists
+    the points along a Z-order curve within each power-of-two cell, the same
+    relative order for any subset of them. ``bits`` is the (n, 3) float64
+    array viewed as uint64; writes ``keys`` ((n, 3) uint64).
+    """
+    top = np.uint64(1) << np.uint64(63)
+    for i in range(bits.shape[0]):
+        o0 = np.uint64(0)
+        o1 = np.uint64(0)
+        o2 = np.uint64(0)
+        for a in range(3):
+            b = bits[i, a]
+            if b == top:  # -0.0: as 0.0
+                b = np.uint64(0)
+            b = ~b if b & top else b | top
+            if a == 0:
+                o0 = b
+            elif a == 1:
+                o1 = b
+            else:
+                o2 = b
+        for w in range(3):
+            s = np.uint64(43 - 21 * w)
+            keys[i, w] = (_spread21(o0 >> s) << np.uint64(2)) | (
+                _spread21(o1 >> s) << np.uint64(1)) | _spread21(o2 >> s)

@@ -6,9 +6,11 @@ weights for adjacent elements". Here each point is an element:
 - adjacency: ``i ~ j`` when either is among the other's ``n_neighbors``
   nearest (scipy's KD-tree), optionally only within ``neighbor_radius``
   (a fraction of the bounding-box diagonal ``d``); points at exactly the
-  ``n_neighbors``-th distance (quantized scans) go to the lowest index, i.e.
-  the lexicographic order of positions, so a box of a cloud gets the whole
-  cloud's neighbours away from its edge (:mod:`superfacets.tiling`);
+  ``n_neighbors``-th distance (quantized scans) go to the lowest index;
+  the points are indexed along a Z-order curve that depends on the positions
+  alone, so a box of a cloud lists its points in the whole cloud's order and
+  gets the whole cloud's neighbours away from its edge
+  (:mod:`superfacets.tiling`);
 - size: the area the point stands for, ``a_i = pi rho_i^2 / K`` with
   ``rho_i`` the distance to its ``K``-th neighbour (the k-nearest-neighbour
   density estimate on a surface), so the sizes add up to about the surface
@@ -115,15 +117,24 @@ def orient_normals(points: np.ndarray, normals: np.ndarray, indptr: np.ndarray,
 
 
 def _distinct_rows(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The distinct rows of ``p`` in lexicographic order, and the row of each input row
-    (as ``np.unique(p, axis=0, return_inverse=True)``, faster)."""
-    order = np.argsort(p[:, 0], kind="stable")  # by x; then the runs of equal x by y, z
-    x = p[order, 0]
-    run = np.cumsum(np.r_[True, x[1:] != x[:-1]]) - 1
+    """The distinct rows of ``p`` in Z-order, and the row of each input row.
+
+    The order is a fixed function of the positions (:func:`_spatial_keys`):
+    any subset of a cloud (a tile's box) lists its points in the same
+    relative order as the whole cloud, and neighbours in space are mostly
+    near in the list, so the graph's kernels read memory in order (1M points:
+    the method 13.7 -> 9.4 s against the lexicographic order).
+    """
+    p = np.ascontiguousarray(p, dtype=np.float64)
+    keys, window = _spatial_keys(p)
+    order = np.argsort(window)
+    w = window[order]
+    run = np.cumsum(np.r_[True, w[1:] != w[:-1]]) - 1
     tied = np.flatnonzero(np.bincount(run)[run] > 1)
-    if tied.size:  # (np.lexsort of all rows, stable: the same order; 0.8 s less for 1M)
+    if tied.size:  # equal in the window: by all the keys, then the coordinates
         rows = order[tied]
-        order[tied] = rows[np.lexsort((p[rows, 2], p[rows, 1], run[tied]))]
+        order[tied] = rows[np.lexsort((p[rows, 2], p[rows, 1], p[rows, 0], keys[rows, 2],
+                                       keys[rows, 1], keys[rows, 0], run[tied]))]
     s = p[order]
     new = np.ones(p.shape[0], dtype=bool)
     new[1:] = np.any(s[1:] != s[:-1], axis=1)
@@ -132,36 +143,54 @@ def _distinct_rows(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return s[new], inverse
 
 
-def _break_ties(tree, order: np.ndarray, pts: np.ndarray, dist: np.ndarray, nbr: np.ndarray,
-                 k: int) -> None:
+def _spatial_keys(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Z-order keys of positions that depend on each position alone.
+
+    ``keys`` ((n, 3) uint64): the bits of x, y and z (mapped so that unsigned
+    order is numeric order) interleaved from the top, 63 per word
+    (:func:`~superfacets._kernels.geometry.float_morton_keys`); the points
+    sorted by them run along a Z-order curve within each power-of-two cell.
+    ``window`` ((n,) uint64): the 64 bits of that string after the leading bits
+    that all the points share. Bits every point shares do not change the
+    order, so sorting by ``window``, then by the keys where it ties, gives
+    the same relative order in any subset of the points.
+    """
+    from .._kernels.geometry import float_morton_keys
+
+    n = p.shape[0]
+    keys = np.empty((n, 3), dtype=np.uint64)
+    float_morton_keys(p.view(np.uint64), keys)
+    shared = 0  # leading bits equal in every point, of the 189
+    for w in range(3):
+        vary = int(np.bitwise_or.reduce(keys[:, w] ^ keys[0, w])) if n else 0
+        if vary:
+            shared += 63 - vary.bit_length()
+            break
+        shared += 63
+    j, o = divmod(min(shared, 188), 63)
+    head = keys[:, j] & np.uint64((1 << (63 - o)) - 1)
+    window = head << np.uint64(o + 1)
+    if j < 2:
+        window |= keys[:, j + 1] >> np.uint64(62 - o)
+    return keys, window
+
+
+def _break_ties(tree, pts: np.ndarray, dist: np.ndarray, nbr: np.ndarray, k: int) -> None:
     """Where the k-th and the next neighbour are equally far (quantized scans), keep the
     tied neighbours of lowest index, in place: the KD-tree's own choice depends on the
-    whole cloud, the lowest index (lexicographic position) does not, so a tile of a
-    cloud (:mod:`superfacets.tiling`) gets the whole cloud's graph inside its halo."""
+    whole cloud, the lowest index (the position's place in :func:`_distinct_rows`'
+    order) does not, so a tile of a cloud (:mod:`superfacets.tiling`) gets the whole
+    cloud's graph inside its halo."""
     tied = np.flatnonzero(dist[:, k] == dist[:, k + 1])
     if not tied.size:
         return
     reach = tree.query_ball_point(pts[tied], dist[tied, k] * (1 + 1e-9), workers=-1)
     for row, i, found in zip(tied.tolist(), tied, reach):
-        cand = np.sort(order[np.asarray(found, dtype=np.int64)])
+        cand = np.sort(np.asarray(found, dtype=np.int64))
         d = np.sqrt(((pts[cand] - pts[i]) ** 2).sum(axis=1))
         pick = cand[np.argsort(d, kind="stable")[:k + 1]]  # ties: the lower index first
         nbr[row, :k + 1] = pick
         dist[row, :k + 1] = np.sqrt(((pts[pick] - pts[i]) ** 2).sum(axis=1))
-
-
-def _morton_order(p: np.ndarray, lower: np.ndarray, upper: np.ndarray,
-                  bits: int = 10) -> np.ndarray:
-    """The permutation that lists ``p`` along a Z-order curve of ``2**bits`` cells a side."""
-    span = float(np.max(upper - lower))
-    scale = (2**bits - 1) / span if span > 0 else 0.0
-    q = np.clip((p - lower) * scale, 0, 2**bits - 1).astype(np.uint64)
-    code = np.zeros(p.shape[0], dtype=np.uint64)
-    one = np.uint64(1)
-    for b in range(bits):
-        for a in range(3):
-            code |= ((q[:, a] >> np.uint64(b)) & one) << np.uint64(3 * b + a)
-    return np.argsort(code, kind="stable")
 
 
 def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
@@ -212,19 +241,14 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
     k = int(min(n_neighbors, n - 1))
     lower, upper = column_bounds(pts)
     diagonal = float(np.linalg.norm(upper - lower))
-    # the tree built and queried in Morton (Z-order) order: neighbouring queries walk the
-    # same nodes, 1.6 s instead of 2.7 s for 1M points; the same neighbours, mapped back
-    order = _morton_order(pts, lower, upper)
-    tree = cKDTree(pts[order])
+    # the points are in Z-order (_distinct_rows): neighbouring queries walk the same nodes
+    tree = cKDTree(pts)
     # column 0: the point itself; one column more to see ties at the k-th distance
     extra = 1 if k + 1 < n else 0
-    dist, nbr = tree.query(pts[order], k=k + 1 + extra, workers=-1)
+    dist, nbr = tree.query(pts, k=k + 1 + extra, workers=-1)
     dist, nbr = dist.reshape(n, -1), nbr.reshape(n, -1)
-    rank = np.empty(n, dtype=np.int64)
-    rank[order] = np.arange(n)
-    dist, nbr = dist[rank], order[nbr[rank]]
     if extra:
-        _break_ties(tree, order, pts, dist, nbr, k)
+        _break_ties(tree, pts, dist, nbr, k)
         dist, nbr = dist[:, :k + 1], nbr[:, :k + 1]
     area = np.pi * dist[:, -1] ** 2 / k
     positive = area > 0
