@@ -13,10 +13,11 @@ from .heap import pop, push
 
 
 @njit(cache=True, error_model="numpy")
-def propagate_signs(indptr, indices, rows, normals, sign, component):
+def propagate_signs(indptr, indices, normals, sign, component):
     """Fill ``sign`` (+1/-1 per element) and ``component`` (ids from 0); return the
-    number of components. ``rows[t]`` is the row (source) of CSR entry ``t``."""
+    number of components."""
     n = normals.shape[0]
+    rows = np.empty(indices.shape[0], dtype=np.int32)  # the source of each pushed entry
     done = np.zeros(n, dtype=np.bool_)
     best = np.full(n, np.inf)  # the lowest key pushed for each element: a larger one
     # would only be popped after it, and skipped
@@ -39,6 +40,7 @@ def propagate_signs(indptr, indices, rows, normals, sign, component):
                 key = 1.0 - abs(d)
                 if key < best[w]:
                     best[w] = key
+                    rows[t] = s
                     size = push(hkey, hval, size, key, t)
         while size > 0:
             t = hval[0]
@@ -60,6 +62,38 @@ def propagate_signs(indptr, indices, rows, normals, sign, component):
                     key = 1.0 - abs(d)
                     if key < best[w]:
                         best[w] = key
+                        rows[t2] = v
                         size = push(hkey, hval, size, key, t2)
         n_comp += 1
     return n_comp
+
+
+@njit(cache=True, error_model="numpy")
+def turn_outwards(points, normals, sign, component, n_comp, out):
+    """``out``: each normal times its sign, turned over in every component whose
+    oriented normals point inwards on the whole (``sum n . (p - mean) < 0``, the mean
+    of the component's points); sums in element order."""
+    n = points.shape[0]
+    count = np.zeros(n_comp)
+    mean = np.zeros((n_comp, 3))
+    for i in range(n):
+        c = component[i]
+        count[c] += 1.0
+        for a in range(3):
+            mean[c, a] += points[i, a]
+    for c in range(n_comp):
+        for a in range(3):
+            mean[c, a] /= count[c]
+    total = np.zeros(n_comp)
+    for i in range(n):
+        c = component[i]
+        s = float(sign[i])
+        total[c] += (normals[i, 0] * s * (points[i, 0] - mean[c, 0])
+                     + normals[i, 1] * s * (points[i, 1] - mean[c, 1])) \
+            + normals[i, 2] * s * (points[i, 2] - mean[c, 2])
+    for i in range(n):
+        s = float(sign[i])
+        if total[component[i]] < 0:
+            s = -s
+        for a in range(3):
+            out[i, a] = normals[i, a] * s

@@ -102,20 +102,15 @@ def orient_normals(points: np.ndarray, normals: np.ndarray, indptr: np.ndarray,
     if viewpoint is not None:
         flip = np.einsum("ij,ij->i", normals, viewpoint[None, :] - points) < 0
         return np.where(flip[:, None], -normals, normals)
-    from .._kernels.orient import propagate_signs
+    from .._kernels.orient import propagate_signs, turn_outwards
 
     n = points.shape[0]
-    rows = np.repeat(np.arange(n, dtype=np.int32), np.diff(indptr))
     sign = np.empty(n, dtype=np.int8)
     comp = np.empty(n, dtype=np.int64)
-    n_comp = propagate_signs(indptr, indices, rows, normals, sign, comp)
-    oriented = normals * sign[:, None]
-    count = np.bincount(comp, minlength=n_comp)
-    mean = np.stack([np.bincount(comp, weights=points[:, c], minlength=n_comp)
-                     for c in range(3)], axis=1) / count[:, None]
-    out = np.einsum("ij,ij->i", oriented, points - mean[comp])
-    inward = np.bincount(comp, weights=out, minlength=n_comp) < 0
-    return np.where(inward[comp][:, None], -oriented, oriented)
+    n_comp = propagate_signs(indptr, indices, normals, sign, comp)
+    out = np.empty_like(normals)
+    turn_outwards(points, normals, sign, comp, n_comp, out)
+    return out
 
 
 def _distinct_rows(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
