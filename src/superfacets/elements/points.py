@@ -123,15 +123,25 @@ def _distinct_rows(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     the method 13.7 -> 9.4 s against the lexicographic order).
     """
     p = np.ascontiguousarray(p, dtype=np.float64)
-    keys, window = _spatial_keys(p)
+    keys, shared = _spatial_keys(p)
+    window = _key_bits(keys, shared)
     order = np.argsort(window)
     w = window[order]
     run = np.cumsum(np.r_[True, w[1:] != w[:-1]]) - 1
     tied = np.flatnonzero(np.bincount(run)[run] > 1)
-    if tied.size:  # equal in the window: by all the keys, then the coordinates
+    if tied.size:  # equal in the window: by the next 64 bits
         rows = order[tied]
-        order[tied] = rows[np.lexsort((p[rows, 2], p[rows, 1], p[rows, 0], keys[rows, 2],
-                                       keys[rows, 1], keys[rows, 0], run[tied]))]
+        nxt = _key_bits(keys[rows], shared + 64)
+        by = np.lexsort((nxt, run[tied]))
+        order[tied] = rows[by]
+        nxt, r = nxt[by], run[tied]
+        run2 = np.cumsum(np.r_[True, (nxt[1:] != nxt[:-1]) | (r[1:] != r[:-1])]) - 1
+        still = np.flatnonzero(np.bincount(run2)[run2] > 1)
+        if still.size:  # equal in 128 bits: by all the keys, then the coordinates
+            at = tied[still]
+            rows = order[at]
+            order[at] = rows[np.lexsort((p[rows, 2], p[rows, 1], p[rows, 0], keys[rows, 2],
+                                         keys[rows, 1], keys[rows, 0], run2[still]))]
     s = p[order]
     new = np.ones(p.shape[0], dtype=bool)
     new[1:] = (s[1:, 0] != s[:-1, 0]) | (s[1:, 1] != s[:-1, 1]) | (s[1:, 2] != s[:-1, 2])
@@ -140,36 +150,43 @@ def _distinct_rows(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return s[new], inverse
 
 
-def _spatial_keys(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _spatial_keys(p: np.ndarray) -> tuple[np.ndarray, int]:
     """Z-order keys of positions that depend on each position alone.
 
     ``keys`` ((n, 3) uint64): the bits of x, y and z (mapped so that unsigned
-    order is numeric order) interleaved from the top, 63 per word
-    (:func:`~superfacets._kernels.geometry.float_morton_keys`); the points
-    sorted by them run along a Z-order curve within each power-of-two cell.
-    ``window`` ((n,) uint64): the 64 bits of that string after the leading bits
-    that all the points share. Bits every point shares do not change the
-    order, so sorting by ``window``, then by the keys where it ties, gives
-    the same relative order in any subset of the points.
+    order is numeric order) interleaved from the top, 63 per word, a string
+    of 189 bits (:func:`~superfacets._kernels.geometry.float_morton_keys`);
+    the points sorted by it run along a Z-order curve within each
+    power-of-two cell. ``shared``: the leading bits of that string that all
+    the points share. Bits every point shares do not change the order, so
+    sorting by the string from ``shared`` on (:func:`_key_bits`) gives the same
+    relative order in any subset of the points.
     """
     from .._kernels.geometry import float_morton_keys
 
     n = p.shape[0]
     keys = np.empty((n, 3), dtype=np.uint64)
     float_morton_keys(p.view(np.uint64), keys)
-    shared = 0  # leading bits equal in every point, of the 189
+    shared = 0
     for w in range(3):
         vary = int(np.bitwise_or.reduce(keys[:, w] ^ keys[0, w])) if n else 0
         if vary:
             shared += 63 - vary.bit_length()
             break
         shared += 63
-    j, o = divmod(min(shared, 188), 63)
-    head = keys[:, j] & np.uint64((1 << (63 - o)) - 1)
-    window = head << np.uint64(o + 1)
+    return keys, shared
+
+
+def _key_bits(keys: np.ndarray, start: int) -> np.ndarray:
+    """Bits ``start .. start + 63`` of each row's 189-bit key string (zeros past its end),
+    as one uint64 (the first bit the highest)."""
+    if start >= 189:
+        return np.zeros(keys.shape[0], dtype=np.uint64)
+    j, o = divmod(start, 63)
+    out = (keys[:, j] & np.uint64((1 << (63 - o)) - 1)) << np.uint64(o + 1)
     if j < 2:
-        window |= keys[:, j + 1] >> np.uint64(62 - o)
-    return keys, window
+        out |= keys[:, j + 1] >> np.uint64(62 - o)
+    return out
 
 
 def _break_ties(tree, pts: np.ndarray, dist: np.ndarray, nbr: np.ndarray, k: int) -> None:
