@@ -120,7 +120,7 @@ def _distinct_rows(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     any subset of a cloud (a tile's box) lists its points in the same
     relative order as the whole cloud, and neighbours in space are mostly
     near in the list, so the graph's kernels read memory in order (1M points:
-    the method 13.7 -> 9.4 s against the lexicographic order).
+    the method 13.7 -> 8.5 s against the lexicographic order).
     """
     p = np.ascontiguousarray(p, dtype=np.float64)
     keys, shared = _spatial_keys(p)
