@@ -159,6 +159,7 @@ def _cut_per_tile(path: Path, res, n_neighbors: int) -> tuple[int, int]:
     from superfacets.connectivity import label_components
     from superfacets.elements.inputs import elements_of
     from superfacets.io.regions import RegionReader
+    from superfacets.runner.buckets import bucket
     from superfacets.tiling import tile_box, tile_grid, tile_of
 
     reader = RegionReader.open(path)
@@ -170,7 +171,7 @@ def _cut_per_tile(path: Path, res, n_neighbors: int) -> tuple[int, int]:
     margin = 1.5 * res.params["window"] * res.radius
     cut = outside = 0
     with tempfile.TemporaryDirectory(prefix="sf-cut-") as tmp:
-        buckets = reader.bucket(edges, tmp)
+        buckets = bucket(reader, edges, tmp)
         for t in range(int(np.prod(res.grid))):
             mine = np.flatnonzero(center_tile == t)
             if not mine.size:

@@ -17,6 +17,8 @@ from superfacets.elements.faces import face_graph
 from superfacets.errors import MeshFormatError
 from superfacets.io.regions import RegionReader
 from superfacets.params import resolve
+from superfacets.runner import buckets as buckets_module
+from superfacets.runner.buckets import bucket
 from superfacets.runner.tiles import segment_tiled, trim_centers
 from superfacets.tiling import tile_box, tile_grid, tile_labels, tile_of
 
@@ -174,7 +176,7 @@ def test_buckets_read_every_box_as_the_file_does(tmp_path, kind):
         reader = RegionReader.spill(cloud, tmp_path / "spill", chunk=333)
     s = reader.survey()
     edges = tile_grid(s.lo, s.hi, (3, 2, 2))
-    buckets = reader.bucket(edges, tmp_path / "b")
+    buckets = bucket(reader, edges, tmp_path / "b")
     assert buckets.counts.sum() == s.n_elements and (buckets.counts > 0).sum() >= 10
     assert sorted(p.name for p in (tmp_path / "b").iterdir()) == sorted(
         f"tile-{t}.bin" for t in np.flatnonzero(buckets.counts))
@@ -185,7 +187,7 @@ def test_buckets_read_every_box_as_the_file_does(tmp_path, kind):
     boxes += [tuple(np.sort(rng.uniform(s.lo, s.hi, (2, 3)), axis=0)) for _ in range(5)]
     for lo, hi in boxes:
         _same_box(buckets.read_box(lo, hi, name="b"), reader.read_box(lo, hi, name="b"))
-    again = reader.bucket(edges, tmp_path / "b")  # a second bucketing replaces the first
+    again = bucket(reader, edges, tmp_path / "b")  # a second bucketing replaces the first
     np.testing.assert_array_equal(again.counts, buckets.counts)
     _same_box(again.read_box(s.lo, s.hi), reader.read_box(s.lo, s.hi))
     if kind == "spilled-cloud":
@@ -213,7 +215,7 @@ def test_a_tiled_run_reads_the_file_twice_and_gives_the_same_labels(tmp_path, mo
     assert res.disagreements > 0 and res.repaired > 0
     assert (tmp_path / "work" / "stitched.npy").exists()
     passes.clear()
-    monkeypatch.setattr(RegionReader, "bucket", lambda self, *a, **k: self)
+    monkeypatch.setattr(buckets_module, "bucket", lambda reader, *a, **k: reader)
     each = segment_tiled(path, 60, tiles=8, halo=1)
     assert len(passes) > 8 * 3  # every task of every phase read the file
     np.testing.assert_array_equal(res.labels, each.labels)

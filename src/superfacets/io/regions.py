@@ -26,8 +26,8 @@ points lie in no box (their label stays -1).
 
 A tiled run reads the file twice in all: once for its bounds
 (:meth:`RegionReader.survey`) and once to sort its elements into one file
-per tile (:meth:`RegionReader.bucket`, a :class:`TileBuckets`); every box is
-then read from the buckets of the tiles it overlaps, not from the whole file.
+per tile (:func:`superfacets.runner.buckets.bucket`); every box is then read
+from the files of the tiles it overlaps, not from the whole file.
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ import numpy as np
 
 from ..errors import MeshFormatError
 
-__all__ = ["RegionReader", "TileBuckets", "Survey", "CHUNK", "STREAMED"]
+__all__ = ["RegionReader", "Survey", "CHUNK", "STREAMED", "point_cloud_of"]
 
 #: Rows read at once.
 CHUNK = 1 << 18
@@ -250,91 +250,7 @@ class RegionReader:
                                      local.reshape(tri.shape), name=name)
         pts, col, nrm = (None if keep[0][i] is None else np.concatenate([k[i] for k in keep])
                          for i in range(3))
-        return rows, where, _cloud(pts, col, nrm, self.viewpoint, name)
-
-    def bucket(self, edges, folder, *, progress: bool = False) -> "TileBuckets":
-        """Sort the elements into one file per tile of a grid, in one pass.
-
-        Each tile's file (``tile-T.bin`` in ``folder``) holds the elements whose
-        position lies in that tile (:func:`superfacets.tiling.tile_of`) in
-        file order, with what a box of them needs: the row and position, the
-        colour and normal of a point, the vertex indices and corner positions
-        of a face. A box is then read from the tiles it overlaps
-        (:meth:`TileBuckets.read_box`), the same elements, in the same order,
-        as :meth:`read_box` gives.
-
-        Parameters
-        ----------
-        edges : list of 3 float ndarray
-            The grid (:func:`superfacets.tiling.tile_grid`).
-        folder : str or os.PathLike
-            Where the files go (every worker must reach it by that path);
-            files of an earlier bucketing there are replaced.
-        progress : bool, default False
-            A progress bar over the rows.
-
-        Returns
-        -------
-        TileBuckets
-
-        Raises
-        ------
-        MeshFormatError
-            As :meth:`survey`.
-        OSError
-            If ``folder`` cannot be written.
-        """
-        from ..tiling import tile_of
-
-        folder = Path(folder)
-        folder.mkdir(parents=True, exist_ok=True)
-        n_tiles = int(np.prod([e.size - 1 for e in edges]))
-        for old in folder.glob("tile-*.bin"):
-            old.unlink()
-        lo = np.full((n_tiles, 3), np.inf)
-        hi = np.full((n_tiles, 3), -np.inf)
-        counts = np.zeros(n_tiles, dtype=np.int64)
-        dtype = None
-        bar = None
-        if progress:
-            from tqdm import tqdm
-
-            bar = tqdm(total=self.n_rows, desc="tiles: bucket", unit="row", leave=False)
-        try:
-            for s, pos, _, extra in self.chunks():
-                if self.kind == "faces":
-                    tri, verts = extra
-                    fields = dict(tri=tri, corners=verts[tri])
-                else:
-                    fields = {n: a for n, a in zip(("colors", "normals"), extra) if a is not None}
-                if dtype is None:
-                    dtype = np.dtype([("row", "<i8"), ("pos", "<f8", (3,))] + [
-                        (n, "<i8" if n == "tri" else "<f8", a.shape[1:])
-                        for n, a in fields.items()])
-                rec = np.empty(pos.shape[0], dtype=dtype)
-                rec["row"] = np.arange(s, s + pos.shape[0])
-                rec["pos"] = pos
-                for n, a in fields.items():
-                    rec[n] = a
-                tile = tile_of(pos, edges)
-                order = np.argsort(tile, kind="stable")
-                bounds = np.searchsorted(tile[order], np.arange(-1, n_tiles + 1))
-                for t in np.flatnonzero(np.diff(bounds[1:])):
-                    block = rec[order[bounds[t + 1]:bounds[t + 2]]]
-                    with open(folder / f"tile-{t}.bin", "ab") as f:
-                        block.tofile(f)
-                    counts[t] += block.size
-                    lo[t] = np.minimum(lo[t], block["pos"].min(axis=0))
-                    hi[t] = np.maximum(hi[t], block["pos"].max(axis=0))
-                if bar is not None:
-                    bar.update(pos.shape[0])
-        finally:
-            if bar is not None:
-                bar.close()
-        if dtype is None:  # no rows: nothing is ever read
-            dtype = np.dtype([("row", "<i8"), ("pos", "<f8", (3,))])
-        return TileBuckets(str(folder), self.kind, self.n_rows, dtype, lo, hi, counts,
-                           self.viewpoint, self.path)
+        return rows, where, point_cloud_of(pts, col, nrm, self.viewpoint, name)
 
     # ------------------------------------------------------------------ layouts
     def _mesh_arrays(self):
@@ -415,77 +331,8 @@ class RegionReader:
                 np.stack([np.asarray(block[c]) for c in rgb], axis=1)), n)
 
 
-@dataclass(frozen=True)
-class TileBuckets:
-    """A large input sorted into one file per tile (:meth:`RegionReader.bucket`).
-
-    Small and picklable like :class:`RegionReader`, and read the same way
-    (:meth:`read_box`), but a box costs the tiles it overlaps instead of a
-    pass over the whole file.
-
-    Attributes
-    ----------
-    folder : str
-        Where the tiles' files are.
-    kind : {'faces', 'points'}
-    n_rows : int
-        Faces or points in the file.
-    dtype : numpy.dtype
-        The record of one element.
-    lo, hi : (T, 3) float64 ndarray
-        Bounds of each tile's element positions (inf, -inf where empty).
-    counts : (T,) int64 ndarray
-        Elements in each tile.
-    viewpoint : tuple or None
-        Sensor position of a scan, as :class:`RegionReader`.
-    source : str
-        The file they came from (for messages).
-    """
-
-    folder: str
-    kind: str
-    n_rows: int
-    dtype: np.dtype
-    lo: np.ndarray
-    hi: np.ndarray
-    counts: np.ndarray
-    viewpoint: tuple | None = None
-    source: str = ""
-
-    def read_box(self, lo, hi, name: str = ""):
-        """The elements whose position lies in ``[lo, hi]``: the same rows, positions
-        and input as :meth:`RegionReader.read_box` gives."""
-        from ..mesh import Mesh
-
-        lo = np.asarray(lo, dtype=np.float64)
-        hi = np.asarray(hi, dtype=np.float64)
-        parts = []
-        near = (self.counts > 0) & (self.lo <= hi).all(axis=1) & (self.hi >= lo).all(axis=1)
-        for t in np.flatnonzero(near):
-            rec = np.memmap(Path(self.folder) / f"tile-{t}.bin", dtype=self.dtype, mode="r",
-                            shape=(int(self.counts[t]),))
-            pos = rec["pos"]
-            parts.append(np.array(rec[np.flatnonzero(((pos >= lo) & (pos <= hi)).all(axis=1))]))
-            del rec
-        rec = np.concatenate(parts) if parts else np.empty(0, dtype=self.dtype)
-        rec = rec[np.argsort(rec["row"], kind="stable")]
-        rows = np.ascontiguousarray(rec["row"])
-        where = np.ascontiguousarray(rec["pos"])
-        if rows.size == 0:
-            return rows, where, None
-        if self.kind == "faces":
-            tri = rec["tri"]
-            used, first, local = np.unique(tri, return_index=True, return_inverse=True)
-            verts = rec["corners"].reshape(-1, 3)[first]
-            return rows, where, Mesh(np.ascontiguousarray(verts), local.reshape(tri.shape),
-                                     name=name)
-        names = self.dtype.names
-        col, nrm = (np.ascontiguousarray(rec[n]) if n in names else None
-                    for n in ("colors", "normals"))
-        return rows, where, _cloud(where.copy(), col, nrm, self.viewpoint, name)
-
-
-def _cloud(pts, colors, normals, viewpoint, name):
+def point_cloud_of(pts, colors, normals, viewpoint, name: str = ""):
+    """A :class:`~superfacets.cloud.PointCloud` of a box's points (``viewpoint`` a tuple or None)."""
     from ..cloud import PointCloud
 
     vp = None if viewpoint is None else np.asarray(viewpoint)

@@ -9,7 +9,7 @@ no process holds the whole input. The phases (:mod:`superfacets.tiling`):
 
 0. a survey of the file in chunks (bounds, total area) in this process, and
    a second pass that sorts its elements into one file per tile in the work
-   folder (:meth:`~superfacets.io.regions.RegionReader.bucket`): from then on
+   folder (:func:`~superfacets.runner.buckets.bucket`): from then on
    a task reads the tiles its box overlaps; for a point cloud asked for
    ``n_segments``, one task per tile sums the points' areas (the radius
    needs the total);
@@ -238,6 +238,7 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
     ((5120,), 40, 2)
     """
     from ..io.regions import STREAMED, RegionReader
+    from .buckets import bucket
     from ..tiling import HALO, halo_distance, tile_grid
 
     if "features" in options:
@@ -275,7 +276,7 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
         shared = scheduler is None or workdir is not None
         if shared and n_tiles > 1:
             t = time.perf_counter()
-            reader = reader.bucket(edges, Path(tmp) / "buckets", progress=progress)
+            reader = bucket(reader, edges, Path(tmp) / "buckets", progress=progress)
             timings["bucket"] = time.perf_counter() - t
         with Engine(workers=workers, scheduler=scheduler, memory_limit=memory_limit) as engine:
             def run(phase, margin, extra=lambda t: {}):
