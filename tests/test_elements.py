@@ -333,12 +333,12 @@ def test_knn_layout_is_the_csr_of_the_distinct_symmetric_pairs(seed):
 def test_points_are_indexed_along_a_z_order_curve():
     """Known answer: points of one power-of-two cell ([1, 2) here) are listed along the
     Z-order curve of their coordinates' bits, x the major bit."""
-    from superfacets.elements.points import _distinct_rows
+    from superfacets.elements.points import distinct_points
 
     i, j = np.meshgrid(np.arange(4), np.arange(4), indexing="ij")
     p = np.c_[1 + i.ravel() / 4, 1 + j.ravel() / 4, np.ones(16)]
     rng = np.random.default_rng(0)
-    s, inverse = _distinct_rows(p[rng.permutation(16)])
+    s, inverse = distinct_points(p[rng.permutation(16)])
     got = [(int((x - 1) * 4), int((y - 1) * 4)) for x, y, _ in s]
     assert got == [(0, 0), (0, 1), (1, 0), (1, 1), (0, 2), (0, 3), (1, 2), (1, 3),
                    (2, 0), (2, 1), (3, 0), (3, 1), (2, 2), (2, 3), (3, 2), (3, 3)]
@@ -349,7 +349,7 @@ def test_distinct_points_of_a_box_keep_the_whole_clouds_order(seed):
     """Invariant: the order of the distinct points depends on the positions alone, so a
     box of a cloud (a tile) lists its points in the whole cloud's relative order; each
     input row maps to its own position; -0.0 and 0.0 are one point."""
-    from superfacets.elements.points import _distinct_rows
+    from superfacets.elements.points import distinct_points
 
     rng = np.random.default_rng(seed)
     p = rng.normal(size=(5000, 3)) * rng.choice([1e-3, 1.0, 50.0], size=(5000, 1))
@@ -357,11 +357,11 @@ def test_distinct_points_of_a_box_keep_the_whole_clouds_order(seed):
     p[200:300] = p[rng.integers(0, 5000, 100)]
     p[300] = [-0.0, 0.0, 0.0]
     p[301] = [0.0, -0.0, 0.0]
-    s, inverse = _distinct_rows(p)
+    s, inverse = distinct_points(p)
     np.testing.assert_array_equal(s[inverse], p)
     assert s.shape[0] == np.unique(p, axis=0).shape[0] == np.unique(s, axis=0).shape[0]
     for lo, hi in (([-0.5, -2, -1], [3, 0.7, 9]), ([-1e9] * 3, [0, 0, 1e9]), ([0] * 3, [1] * 3)):
         box = ((p >= lo) & (p <= hi)).all(axis=1)
-        sub, _ = _distinct_rows(p[box])
+        sub, _ = distinct_points(p[box])
         inside = ((s >= lo) & (s <= hi)).all(axis=1)
         np.testing.assert_array_equal(sub, s[inside])

@@ -150,14 +150,17 @@ def point_areas(points: np.ndarray, core: np.ndarray, n_neighbors: int) -> float
     ``points``); duplicate points count once."""
     from scipy.spatial import cKDTree
 
-    pts, first = np.unique(points, axis=0, return_index=True)
-    is_core = core[first]
+    from .elements.points import distinct_points
+
+    pts, inverse = distinct_points(points)  # duplicates share a position, so a core
+    is_core = np.zeros(pts.shape[0], dtype=bool)
+    is_core[inverse[core]] = True
     if not is_core.any():
         return 0.0
     k = int(min(n_neighbors, pts.shape[0] - 1))
     if k < 1:
         return 0.0
-    dist, _ = cKDTree(pts).query(pts[is_core], k=k + 1)
+    dist, _ = cKDTree(pts).query(pts[is_core], k=k + 1, workers=-1)
     return float((np.pi * dist[:, -1] ** 2 / k).sum())
 
 

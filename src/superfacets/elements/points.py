@@ -39,7 +39,8 @@ from ..mesh import column_bounds
 from .graph import ElementGraph, adjacency_csr, cached_on
 from .vertices import _REBUILD_PAIRS, symmetric_terms
 
-__all__ = ["point_graph", "PointElements", "estimate_normals", "orient_normals"]
+__all__ = ["point_graph", "PointElements", "estimate_normals", "orient_normals",
+           "distinct_points"]
 
 #: Default number of nearest neighbours of the point graph.
 DEFAULT_NEIGHBORS = 10
@@ -113,14 +114,32 @@ def orient_normals(points: np.ndarray, normals: np.ndarray, indptr: np.ndarray,
     return out
 
 
-def _distinct_rows(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The distinct rows of ``p`` in Z-order, and the row of each input row.
+def distinct_points(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct positions of a cloud in Z-order, and the one of each input row.
 
     The order is a fixed function of the positions (:func:`_spatial_keys`):
     any subset of a cloud (a tile's box) lists its points in the same
     relative order as the whole cloud, and neighbours in space are mostly
     near in the list, so the graph's kernels read memory in order (1M points:
     the method 13.7 -> 8.5 s against the lexicographic order).
+
+    Parameters
+    ----------
+    p : (n, 3) float ndarray
+        Finite positions.
+
+    Returns
+    -------
+    points : (m, 3) float64 ndarray
+        The distinct positions (``-0.0`` and ``0.0`` are one), ``m <= n``.
+    inverse : (n,) int64 ndarray
+        Index into ``points`` of each row: ``points[inverse]`` equals ``p``.
+
+    Examples
+    --------
+    >>> pts, inv = distinct_points(np.array([[1.5, 1, 1], [1.0, 1, 1], [1.5, 1, 1]]))
+    >>> pts.tolist(), inv.tolist()
+    ([[1.0, 1.0, 1.0], [1.5, 1.0, 1.0]], [1, 0, 1])
     """
     p = np.ascontiguousarray(p, dtype=np.float64)
     keys, shared = _spatial_keys(p)
@@ -192,7 +211,7 @@ def _key_bits(keys: np.ndarray, start: int) -> np.ndarray:
 def _break_ties(tree, pts: np.ndarray, dist: np.ndarray, nbr: np.ndarray, k: int) -> None:
     """Where the k-th and the next neighbour are equally far (quantized scans), keep the
     tied neighbours of lowest index, in place: the KD-tree's own choice depends on the
-    whole cloud, the lowest index (the position's place in :func:`_distinct_rows`'
+    whole cloud, the lowest index (the position's place in :func:`distinct_points`'
     order) does not, so a tile of a cloud (:mod:`superfacets.tiling`) gets the whole
     cloud's graph inside its halo."""
     tied = np.flatnonzero(dist[:, k] == dist[:, k + 1])
@@ -248,14 +267,14 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
     from scipy.spatial import cKDTree
 
     valid = np.flatnonzero(cloud.valid)
-    pts, inverse = _distinct_rows(cloud.points[valid])
+    pts, inverse = distinct_points(cloud.points[valid])
     index = np.full(cloud.n_total, -1, dtype=np.int64)
     index[valid] = inverse
     n = pts.shape[0]
     k = int(min(n_neighbors, n - 1))
     lower, upper = column_bounds(pts)
     diagonal = float(np.linalg.norm(upper - lower))
-    # the points are in Z-order (_distinct_rows): neighbouring queries walk the same nodes
+    # the points are in Z-order (distinct_points): neighbouring queries walk the same nodes
     tree = cKDTree(pts)
     # column 0: the point itself; one column more to see ties at the k-th distance
     extra = 1 if k + 1 < n else 0
