@@ -134,7 +134,7 @@ def _row(name, n, data, gt, path, k, a, folder):
     if isinstance(data, np.ndarray):  # points: also the experiment's measure
         print(f"  each point counted once: UE {_equal_weight_ue(s_labels, gt):.4f} / "
               f"{_equal_weight_ue(tiled.labels, gt):.4f}", flush=True)
-    print(f"| {name} | {n:,} | {k} | {'x'.join(map(str, tiled.grid))} | "
+    print(f"| {name} | {n:,} | {k} | {tiled.layout.describe()} | "
           f"{single['n_segments']} / {tiled.n_segments} | {ue_s:.4f} / {ue_t:.4f} "
           f"({100 * (ue_t / ue_s - 1):+.1f} %) | {cut} | {tiled.disagreements} | "
           f"{single['wall']:.1f} / {wall:.1f} | {single['peak_mib']:.0f} / {peak:.0f} |",
@@ -160,11 +160,10 @@ def _cut_per_tile(path: Path, res, n_neighbors: int) -> tuple[int, int]:
     from superfacets.elements.inputs import elements_of
     from superfacets.io.regions import RegionReader
     from superfacets.runner.buckets import bucket
-    from superfacets.tiling import tile_box, tile_grid, tile_of
+    from superfacets.tile_layout import tile_box, tile_of
 
     reader = RegionReader.open(path)
-    survey = reader.survey()
-    edges = tile_grid(survey.lo, survey.hi, res.grid)
+    edges = res.layout
     pts = np.load(path, mmap_mode="r")
     center_tile = tile_of(np.asarray(pts[res.centers], dtype=np.float64), edges)
     size = np.bincount(res.labels[res.labels >= 0], minlength=res.n_segments)
@@ -172,7 +171,7 @@ def _cut_per_tile(path: Path, res, n_neighbors: int) -> tuple[int, int]:
     cut = outside = 0
     with tempfile.TemporaryDirectory(prefix="sf-cut-") as tmp:
         buckets = bucket(reader, edges, tmp)
-        for t in range(int(np.prod(res.grid))):
+        for t in range(edges.n_tiles):
             mine = np.flatnonzero(center_tile == t)
             if not mine.size:
                 continue
@@ -207,7 +206,7 @@ def _row_tiled_only(name, n, gt, path, k, a) -> None:
     t = time.perf_counter()
     cut, outside = _cut_per_tile(path, res, res.params["n_neighbors"])
     print(f"cut check: {time.perf_counter() - t:.1f} s", flush=True)
-    print(f"| {name} | {n:,} | {k} | {'x'.join(map(str, res.grid))} | {res.n_segments} | "
+    print(f"| {name} | {n:,} | {k} | {res.layout.describe()} | {res.n_segments} | "
           f"{ue:.4f} | {cut} ({outside} not inside the checked box) | {res.disagreements} | "
           f"{wall:.1f} | {peak:.0f} |", flush=True)
 
@@ -251,12 +250,15 @@ def compare(a) -> None:
 
 
 def main() -> None:
+    from superfacets.cli.tiles import tiles_arg
+
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--mesh-id", type=int, default=281)
     ap.add_argument("--subdivide", type=int, nargs="+", default=[2, 3])
     ap.add_argument("--points", type=int, nargs="*", default=[1_000_000])
     ap.add_argument("-k", type=int, default=2000)
-    ap.add_argument("--tiles", type=int, default=8)
+    ap.add_argument("--tiles", type=tiles_arg, default=8,
+                    help="N balanced tiles, or NX,NY,NZ: a regular grid")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--halo", type=float, default=3.0)
     ap.add_argument("--compare", action="store_true")

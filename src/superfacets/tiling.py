@@ -1,6 +1,7 @@
-"""One input cut into spatial tiles: the tile grid and the work of one tile.
+"""One input cut into spatial tiles: the work of one tile.
 
-An input too large for one process is cut into a grid of axis-aligned tiles;
+An input too large for one process is cut into axis-aligned tiles
+(:mod:`superfacets.tile_layout`: balanced boxes, or a regular grid);
 each element belongs to the *core* of the tile holding its position, and a
 tile is read with a *halo*: every element within ``halo * window * r`` of its
 core box (:mod:`superfacets.io.regions`). The run then has two phases, each
@@ -35,7 +36,6 @@ label differs from the label their own tile gave them (``disagreements``).
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import replace
 
@@ -52,7 +52,7 @@ from .params import DEFAULTS, SegmentParams, better_method
 from .pipeline import _features_of, pipeline
 from .weights import csr_weights, edge_weights
 
-__all__ = ["tile_grid", "tile_of", "tile_box", "tile_centers", "tile_refine", "tile_labels",
+__all__ = ["tile_centers", "tile_refine", "tile_labels",
            "tile_connect", "HALO",
            "point_areas"]
 
@@ -61,87 +61,6 @@ __all__ = ["tile_grid", "tile_of", "tile_box", "tile_centers", "tile_refine", "t
 #: (elements labelled differently by two tiles: 1,562 -> 41 over 15 benchmark meshes
 #: at k = 600 in 8 tiles; UE +9.8 % -> +5.8 % against one run; docs/tiles.md).
 HALO = 3.0
-
-
-def tile_grid(lo, hi, tiles) -> list[np.ndarray]:
-    """The edges of a grid of tiles over the box ``[lo, hi]``.
-
-    Parameters
-    ----------
-    lo, hi : (3,) float ndarray
-        Bounds of the input's element positions.
-    tiles : int or sequence of 3 int
-        Number of tiles (split into the most cubic grid of that many) or the
-        tiles along x, y and z.
-
-    Returns
-    -------
-    list of 3 float ndarray
-        Edges along each axis (``n_axis + 1`` each).
-
-    Raises
-    ------
-    ParameterError
-        If ``tiles`` is not a positive integer or three of them.
-
-    Examples
-    --------
-    >>> [e.size - 1 for e in tile_grid([0, 0, 0], [4, 2, 0], 8)]
-    [4, 2, 1]
-    """
-    lo = np.asarray(lo, dtype=np.float64)
-    hi = np.asarray(hi, dtype=np.float64)
-    ext = np.maximum(hi - lo, 0.0)
-    if np.ndim(tiles) == 0:
-        n = _positive_int(tiles)
-        best = None
-        for a, b in itertools.product(range(1, n + 1), repeat=2):
-            if n % (a * b):
-                continue
-            counts = np.array([a, b, n // (a * b)])
-            if (counts[ext <= 0] > 1).any():
-                continue
-            side = ext / counts
-            side = side[ext > 0]
-            score = (side.max() / side.min()) if side.size else 1.0
-            if best is None or score < best[0] - 1e-12:
-                best = (score, counts)
-        if best is None:  # a flat input: a prime count along one axis
-            counts = np.where(ext == ext.max(), 1, 1)
-            counts[int(np.argmax(ext))] = n
-        else:
-            counts = best[1]
-    else:
-        counts = np.array([_positive_int(t) for t in tiles]) if len(tiles) == 3 else None
-        if counts is None:
-            raise ParameterError(f"tiles must be an integer or three integers, got {tiles!r}")
-    return [np.linspace(lo[i], hi[i], int(counts[i]) + 1) for i in range(3)]
-
-
-def _positive_int(v) -> int:
-    if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)) or v < 1:
-        raise ParameterError(f"tiles must be positive integers, got {v!r}")
-    return int(v)
-
-
-def tile_of(positions: np.ndarray, edges) -> np.ndarray:
-    """The tile (flat index, x fastest) of each position; -1 for a non-finite one."""
-    idx = []
-    for i, e in enumerate(edges):
-        j = np.searchsorted(e, positions[:, i], side="right") - 1
-        idx.append(np.clip(j, 0, e.size - 2))
-    n = [e.size - 1 for e in edges]
-    flat = idx[0] + n[0] * (idx[1] + n[1] * idx[2])
-    return np.where(np.isfinite(positions).all(axis=1), flat, -1).astype(np.int64)
-
-
-def tile_box(edges, t: int, margin: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """The core box of tile ``t``, grown by ``margin`` on every side."""
-    n = [e.size - 1 for e in edges]
-    ijk = (t % n[0], (t // n[0]) % n[1], t // (n[0] * n[1]))
-    lo = np.array([edges[a][ijk[a]] for a in range(3)]) - margin
-    hi = np.array([edges[a][ijk[a] + 1] for a in range(3)]) + margin
-    return lo, hi
 
 
 def point_areas(points: np.ndarray, core: np.ndarray, n_neighbors: int) -> float:

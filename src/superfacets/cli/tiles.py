@@ -11,7 +11,7 @@ from .options import (add_engine_options, check_labels_output, element_kwargs, m
 
 
 def tiles_arg(text: str):
-    """``N`` (tiles, the most cubic grid) or ``NX,NY,NZ``."""
+    """``N`` (balanced tiles) or ``NX,NY,NZ`` (a regular grid)."""
     import argparse
 
     parts = text.split(",")
@@ -30,7 +30,9 @@ def add_tile_options(p) -> None:
     g = p.add_argument_group("tiles (one input larger than a machine)")
     g.add_argument("--tiles", type=tiles_arg, default=None, metavar="N|NX,NY,NZ",
                    help="cut the input into N spatial tiles with halos, one task each, "
-                        "stitched so that no superfacet is cut by a tile border; binary PLY, "
+                        "stitched so that no superfacet is cut by a tile border (N: boxes "
+                        "holding about equal numbers of elements; NX,NY,NZ: a regular grid of "
+                        "equal boxes); binary PLY, "
                         "LAS/LAZ and .npy are read in chunks, twice, and sorted into a file "
                         "per tile (labels only: -o OUT.seg / .json)")
     g.add_argument("--halo", type=float, default=None, metavar="H",
@@ -87,7 +89,7 @@ def segment_tiles(args) -> int:
         what = "superpoints" if kind == "points" else "superfacets"
         print(f"{Path(args.mesh).name}: {result.labels.size} {kind}, {result.n_segments} "
               f"{what} in {len(result.tiles)} tiles "
-              f"({'x'.join(map(str, result.grid))}), {elapsed:.2f} s; largest tile "
+              f"({result.layout.describe()}), {elapsed:.2f} s; largest tile "
               f"{max(t['rows'] for t in result.tiles)} {kind} with its halo, peak "
               f"{peak:.0f} MiB; {result.disagreements} border disagreements", file=report)
         if seg_out is not None and str(seg_out) != "-":

@@ -39,12 +39,14 @@ import numpy as np
 
 from ..errors import MeshFormatError
 
-__all__ = ["RegionReader", "Survey", "CHUNK", "STREAMED", "point_cloud_of"]
+__all__ = ["RegionReader", "Survey", "CHUNK", "STREAMED", "SAMPLE", "point_cloud_of"]
 
 #: Rows read at once.
 CHUNK = 1 << 18
 #: Suffixes read in chunks without holding the file.
 STREAMED = ("ply", "las", "laz", "npy")
+#: Positions kept by a survey, at most (every ``ceil(n_rows / SAMPLE)``-th row): 24 MiB.
+SAMPLE = 1 << 20
 
 
 @dataclass(frozen=True)
@@ -56,6 +58,9 @@ class Survey:
     #: total area of the faces (the number of points for a cloud)
     size: float
     n_elements: int
+    #: (s, 3) float64: the finite positions of every ``ceil(n_rows / SAMPLE)``-th row,
+    #: for balanced tiles (:func:`superfacets.tile_layout.balanced_tiles`)
+    sample: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -188,7 +193,8 @@ class RegionReader:
             yield s, pts, np.ones(pts.shape[0]), extra
 
     def survey(self) -> Survey:
-        """Bounds of the finite element positions, total size and count (one pass).
+        """Bounds of the finite element positions, total size and count, and an even
+        sample of the positions (at most :data:`SAMPLE`), in one pass.
 
         Raises
         ------
@@ -199,16 +205,20 @@ class RegionReader:
         hi = np.full(3, -np.inf)
         size = 0.0
         n = 0
-        for _, pos, sz, _ in self.chunks():
+        stride = max(1, -(-self.n_rows // SAMPLE))
+        kept = []
+        for start, pos, sz, _ in self.chunks():
             ok = np.isfinite(pos).all(axis=1)
             if ok.any():
                 lo = np.minimum(lo, pos[ok].min(axis=0))
                 hi = np.maximum(hi, pos[ok].max(axis=0))
                 size += float(sz[ok].sum())
                 n += int(ok.sum())
+                every = pos[(-start) % stride::stride]
+                kept.append(every[np.isfinite(every).all(axis=1)])
         if n == 0:
             raise MeshFormatError(f"{self.path}: no {self.kind[:-1]} with a finite position")
-        return Survey(lo, hi, size, n)
+        return Survey(lo, hi, size, n, np.concatenate(kept).astype(np.float64))
 
     def read_box(self, lo, hi, name: str = ""):
         """The elements whose position lies in ``[lo, hi]``, as an input of their own.

@@ -2,7 +2,7 @@
 
 :func:`bucket` reads a :class:`~superfacets.io.regions.RegionReader`'s file
 once, in chunks, and writes each element to the file of the tile that holds
-it (:func:`superfacets.tiling.tile_of`); the :class:`TileBuckets` it returns
+it (:meth:`superfacets.tile_layout.Tiles.of`); the :class:`TileBuckets` it returns
 reads a box as the reader does, from the files of the tiles the box
 overlaps. So a tiled run (:mod:`superfacets.runner.tiles`) reads the input
 file twice in all (its survey, this sorting), not once per task.
@@ -20,11 +20,11 @@ from ..io.regions import point_cloud_of
 __all__ = ["bucket", "TileBuckets"]
 
 
-def bucket(reader, edges, folder, *, progress: bool = False) -> TileBuckets:
-    """Sort the elements into one file per tile of a grid, in one pass.
+def bucket(reader, tiles, folder, *, progress: bool = False) -> TileBuckets:
+    """Sort the elements into one file per tile, in one pass.
 
     Each tile's file (``tile-T.bin`` in ``folder``) holds the elements whose
-    position lies in that tile (:func:`superfacets.tiling.tile_of`) in
+    position lies in that tile (:meth:`superfacets.tile_layout.Tiles.of`) in
     file order, with what a box of them needs: the row and position, the
     colour and normal of a point, the vertex indices and corner positions
     of a face. A box is then read from the tiles it overlaps
@@ -35,8 +35,8 @@ def bucket(reader, edges, folder, *, progress: bool = False) -> TileBuckets:
     ----------
     reader : RegionReader
         The input, read in chunks.
-    edges : list of 3 float ndarray
-        The grid (:func:`superfacets.tiling.tile_grid`).
+    tiles : Tiles
+        The tiles (:mod:`superfacets.tile_layout`).
     folder : str or os.PathLike
         Where the files go (every worker must reach it by that path);
         files of an earlier bucketing there are replaced.
@@ -54,11 +54,9 @@ def bucket(reader, edges, folder, *, progress: bool = False) -> TileBuckets:
     OSError
         If ``folder`` cannot be written.
     """
-    from ..tiling import tile_of
-
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    n_tiles = int(np.prod([e.size - 1 for e in edges]))
+    n_tiles = tiles.n_tiles
     for old in folder.glob("tile-*.bin"):
         old.unlink()
     lo = np.full((n_tiles, 3), np.inf)
@@ -86,7 +84,7 @@ def bucket(reader, edges, folder, *, progress: bool = False) -> TileBuckets:
             rec["pos"] = pos
             for n, a in fields.items():
                 rec[n] = a
-            tile = tile_of(pos, edges)
+            tile = tiles.of(pos)
             order = np.argsort(tile, kind="stable")
             bounds = np.searchsorted(tile[order], np.arange(-1, n_tiles + 1))
             for t in np.flatnonzero(np.diff(bounds[1:])):

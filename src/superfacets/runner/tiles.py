@@ -1,7 +1,7 @@
 """One input larger than a machine: tiles with halos on Dask, stitched by center.
 
 :func:`segment_tiled` cuts the input into a grid of tiles
-(:func:`superfacets.tiling.tile_grid`) and runs each tile as a task on
+(:mod:`superfacets.tile_layout`: balanced boxes, or a regular grid) and runs each tile as a task on
 :class:`~.engine.Engine` (this process, a local Dask cluster or a running
 scheduler). A task gets the file's name and its box, never data: it reads
 its tile and halo itself (:class:`superfacets.io.regions.RegionReader`), so
@@ -59,8 +59,12 @@ class TiledResult:
         Row of each superfacet's center.
     radius : float
         The superfacet radius ``r`` of the whole input (its units).
-    grid : tuple of 3 int
-        Tiles along x, y and z.
+    grid : tuple of int
+        Tiles along x, y and z for a regular grid (``tiles=(nx, ny, nz)``);
+        ``(N,)`` for ``N`` balanced tiles.
+    layout : Tiles
+        The tiles' core boxes (:class:`~superfacets.tile_layout.Tiles`:
+        ``layout.of(positions)``, ``layout.box(t)``).
     halo : float
         Width of each tile's halo, in the input's units.
     disagreements : int
@@ -95,6 +99,7 @@ class TiledResult:
     tiles: list = field(default_factory=list)
     timings: dict = field(default_factory=dict)
     params: dict = field(default_factory=dict)
+    layout: object = field(default=None, repr=False)
 
     @property
     def n_segments(self) -> int:
@@ -106,20 +111,20 @@ def tile_task(task: dict) -> dict:
     """One tile's work (a module-level function: Dask workers import it by reference).
 
     ``task`` holds ``phase`` ('areas', 'centers' or 'labels'), ``reader``,
-    ``edges``, ``tile``, ``margin``, ``params``, ``r``, ``diagonal``, and for
+    ``layout`` (:class:`~superfacets.tile_layout.Tiles`), ``tile``, ``margin``, ``params``, ``r``, ``diagonal``, and for
     'labels' the ``centers`` (rows) within reach and ``ring`` (a width).
     Returns a dict; an error is returned as ``error`` (text), never raised.
     """
-    from ..tiling import (point_areas, tile_box, tile_centers, tile_connect, tile_labels,
-                          tile_of, tile_refine)
+    from ..tiling import point_areas, tile_centers, tile_connect, tile_labels, tile_refine
 
     probe = PeakMemory()
     t0 = time.perf_counter()
     out = {"tile": task["tile"], "phase": task["phase"]}
     try:
-        lo, hi = tile_box(task["edges"], task["tile"], task["margin"])
+        layout = task["layout"]
+        lo, hi = layout.box(task["tile"], task["margin"])
         rows, pos, inp = task["reader"].read_box(lo, hi, name=f"tile {task['tile']}")
-        core = tile_of(pos, task["edges"]) == task["tile"]
+        core = layout.of(pos) == task["tile"]
         out.update(rows=int(rows.size), core=int(core.sum()))
         if not core.any():  # no element of its own: nothing to do
             return out
@@ -150,7 +155,7 @@ def tile_task(task: dict) -> dict:
                 return out
             named = tile_labels(inp, at[ok], p, r, d)
             gid = np.where(named >= 0, rows[np.maximum(named, 0)], -1)
-            lo_c, hi_c = tile_box(task["edges"], task["tile"])
+            lo_c, hi_c = layout.box(task["tile"])
             near = ~core & ((pos >= lo_c - task["ring"]) & (pos <= hi_c + task["ring"])).all(1)
             out.update(core_rows=rows[core], core_labels=gid[core], ring_rows=rows[near],
                        ring_labels=gid[near])
@@ -183,7 +188,10 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
         Superfacets over the whole input (``r = sqrt(A / (k pi))``, paper
         section 3.1); or None with ``radius``.
     tiles : int or sequence of 3 int, default 4
-        Tiles (the most cubic grid of that many), or tiles along x, y, z.
+        Number of balanced tiles (boxes split at the quantiles of the
+        positions, so that each holds about ``n / tiles`` elements, however
+        uneven the input: :func:`~superfacets.tile_layout.balanced_tiles`),
+        or three integers: a regular grid of equal boxes, tiles along x, y, z.
     halo : float, optional
         Halo width in units of ``window * r``, ``>= 1``; default 3. From 2
         each core element's classification is that of a single run from the
@@ -234,12 +242,13 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
     >>> import trimesh
     >>> m = trimesh.creation.icosphere(subdivisions=4)
     >>> r = segment_tiled((m.vertices, m.faces), 40, tiles=2)
-    >>> r.labels.shape, r.n_segments, int(np.prod(r.grid))
+    >>> r.labels.shape, r.n_segments, r.layout.n_tiles
     ((5120,), 40, 2)
     """
     from ..io.regions import STREAMED, RegionReader
     from .buckets import bucket
-    from ..tiling import HALO, halo_distance, tile_grid
+    from ..tile_layout import balanced_tiles, tile_grid
+    from ..tiling import HALO, halo_distance
 
     if "features" in options:
         raise ParameterError("a tiled run reads colours from the file; features= is not taken")
@@ -264,9 +273,12 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
             reader = RegionReader.spill(source, tmp)
         survey = reader.survey()
         timings["survey"] = time.perf_counter() - t
-        edges = tile_grid(survey.lo, survey.hi, tiles)
-        grid = tuple(e.size - 1 for e in edges)
-        n_tiles = int(np.prod(grid))
+        if np.ndim(tiles) == 0:
+            layout = balanced_tiles(survey.sample, survey.lo, survey.hi, tiles)
+        else:
+            layout = tile_grid(survey.lo, survey.hi, tiles)
+        grid = layout.shape or (layout.n_tiles,)
+        n_tiles = layout.n_tiles
         diagonal = float(np.linalg.norm(survey.hi - survey.lo))
         if diagonal <= 0:
             raise ParameterError("the input has zero extent: nothing to tile")
@@ -276,11 +288,11 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
         shared = scheduler is None or workdir is not None
         if shared and n_tiles > 1:
             t = time.perf_counter()
-            reader = bucket(reader, edges, Path(tmp) / "buckets", progress=progress)
+            reader = bucket(reader, layout, Path(tmp) / "buckets", progress=progress)
             timings["bucket"] = time.perf_counter() - t
         with Engine(workers=workers, scheduler=scheduler, memory_limit=memory_limit) as engine:
             def run(phase, margin, extra=lambda t: {}):
-                tasks = [dict(phase=phase, reader=reader, edges=edges, tile=t, margin=margin,
+                tasks = [dict(phase=phase, reader=reader, layout=layout, tile=t, margin=margin,
                               params=params, r=r, diagonal=diagonal, **extra(t))
                          for t in range(n_tiles)]
                 return _gather(engine, tasks, phase, progress)
@@ -288,7 +300,7 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
             r = math.nan
             if reader.kind == "points" and params.radius is None:
                 t = time.perf_counter()
-                side = min(float(np.diff(e).min()) for e in edges if e[-1] > e[0])
+                side = layout.min_side()
                 area = sum(o.get("area", 0.0) for o in run("areas", 0.25 * side))
                 if area <= 0:
                     raise ParameterError("the points are too few or too sparse to size "
@@ -304,9 +316,7 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
             rows, pos = _gathered(found, params)
 
             def reach(t):
-                from ..tiling import tile_box
-
-                lo, hi = tile_box(edges, t, margin)
+                lo, hi = layout.box(t, margin)
                 inside = ((pos >= lo) & (pos <= hi)).all(axis=1)
                 return dict(centers=rows[inside], ring=params.window * r, box_rows=not shared)
 
@@ -357,7 +367,7 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
     resolved = dict(params.as_dict(), n_segments=int(names.size), radius=r / diagonal,
                     tiles=grid, halo=float(halo), elements=reader.kind)
     return TiledResult(labels=labels, centers=names.astype(np.int64), radius=r, grid=grid,
-                       halo=margin, disagreements=disagreements, repaired=repaired,
+                       layout=layout, halo=margin, disagreements=disagreements, repaired=repaired,
                        tiles=[stats[k] for k in sorted(stats)], timings=timings,
                        params=resolved)
 
