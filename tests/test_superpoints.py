@@ -94,6 +94,40 @@ def test_point_normals_are_estimated_and_turned_outwards_on_a_closed_surface():
     assert g.area == pytest.approx(4 * np.pi, rel=0.25)
 
 
+def test_a_piece_cut_from_a_closed_surface_orients_like_a_reference():
+    """The inner half of a torus is concave seen from its own mean: turned "outwards" from
+    it, every normal points into the solid. Oriented like a sample of the whole torus
+    (``orient_like``), every one points out, as in the whole cloud (what tiles rely on)."""
+    from scipy.spatial import cKDTree
+
+    big, small = 1.0, 0.4
+    torus = trimesh.creation.torus(major_radius=big, minor_radius=small, major_sections=64,
+                                   minor_sections=32)
+    pts, _ = trimesh.sample.sample_surface_even(torus, 20000, seed=1)
+    rho = np.hypot(pts[:, 0], pts[:, 1])
+    axis = np.c_[pts[:, :2] / rho[:, None] * big, np.zeros(len(pts))]
+    out = (pts - axis) / np.linalg.norm(pts - axis, axis=1, keepdims=True)  # true normals
+
+    def outward(cloud, which):
+        g = point_graph(cloud).graph
+        _, j = cKDTree(pts[which]).query(g.positions)
+        return (np.einsum("ij,ij->i", g.normals, out[which][j]) > 0).mean()
+
+    everything = np.ones(len(pts), dtype=bool)
+    whole = point_graph(PointCloud(pts)).graph
+    assert outward(PointCloud(pts), everything) == 1.0
+    inner = rho < big
+    assert outward(PointCloud(pts[inner]), inner) == 0.0  # its own mean turns it inwards
+    reference = (np.array(whole.positions[::7]), np.array(whole.normals[::7]))
+    assert outward(PointCloud(pts[inner], orient_like=reference), inner) == 1.0
+    # a viewpoint wins over the reference: every normal faces it
+    g = point_graph(PointCloud(pts[inner], viewpoint=[0.0, 0.0, -5.0],
+                               orient_like=reference)).graph
+    assert (np.einsum("ij,ij->i", g.normals, [0.0, 0.0, -5.0] - g.positions) >= 0).all()
+    with pytest.raises(InvalidCloudError, match="orient_like"):
+        PointCloud(pts, orient_like=(pts, pts[:10]))
+
+
 def test_point_normals_face_the_viewpoint_and_a_valley_crease_is_concave(valley):
     pts, _ = sample_points(valley, 6000, seed=1)
     cloud = PointCloud(pts, viewpoint=[0.0, 0.0, 10.0])

@@ -19,9 +19,9 @@ from superfacets.io.regions import RegionReader
 from superfacets.params import resolve
 from superfacets.runner import buckets as buckets_module
 from superfacets.runner.buckets import bucket
-from superfacets.runner.tiles import segment_tiled, trim_centers
+from superfacets.runner.tiles import segment_tiled
 from superfacets.tile_layout import balanced_tiles, tile_box, tile_grid, tile_of
-from superfacets.tiling import tile_labels
+from superfacets.tiling import tile_labels, trim_centers
 
 
 def _bumpy(subdivisions: int = 5) -> Mesh:

@@ -50,6 +50,14 @@ class PointCloud:
         RGB colour of each point in ``[0, 1]`` (the readers scale 8- and
         16-bit colours): what ``beta > 0`` of :func:`superfacets.segment`
         uses when no ``features`` are given.
+    orient_like : tuple of two (R, 3) float ndarray, optional
+        ``(positions, normals)``: consistently oriented normals at some
+        positions (a coarser sample of the same surface). Estimated normals
+        are then turned, each connected piece of the point graph as a whole,
+        to agree with the nearest of them (a vote of the piece) instead of
+        outwards from the piece's mean; a tiled run gives every tile the
+        orientation of one sample of the whole input this way. Ignored with
+        ``normals`` or ``viewpoint``.
 
     Raises
     ------
@@ -74,6 +82,7 @@ class PointCloud:
     allow_invalid: bool = False
     shape: tuple | None = field(default=None, repr=False)
     colors: np.ndarray | None = field(default=None, repr=False)
+    orient_like: tuple | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         where = f"{self.name}: " if self.name else ""
@@ -119,6 +128,13 @@ class PointCloud:
                 raise InvalidCloudError(f"{where}viewpoint must be 3 finite numbers, got "
                                         f"{self.viewpoint!r}")
             object.__setattr__(self, "viewpoint", vp)
+        if self.orient_like is not None:
+            ref = tuple(np.asarray(a, dtype=np.float64) for a in self.orient_like)
+            if (len(ref) != 2 or ref[0].ndim != 2 or ref[0].shape[1:] != (3,)
+                    or ref[1].shape != ref[0].shape or not all(np.isfinite(a).all() for a in ref)):
+                raise InvalidCloudError(f"{where}orient_like must be (positions, normals), "
+                                        "two finite (R, 3) arrays")
+            object.__setattr__(self, "orient_like", ref)
 
     def __getstate__(self) -> dict:
         # the fields only: the point graphs kept with the cloud hold functions (which

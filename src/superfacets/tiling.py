@@ -53,7 +53,7 @@ from .pipeline import _features_of, pipeline
 from .weights import csr_weights, edge_weights
 
 __all__ = ["tile_centers", "tile_refine", "tile_labels",
-           "tile_connect", "HALO",
+           "tile_connect", "orientation_reference", "trim_centers", "HALO",
            "point_areas"]
 
 #: Default halo, in units of ``window * r``. 3 rather than 2: the classification of
@@ -166,6 +166,71 @@ def tile_refine(inp, core: np.ndarray, center_rows: np.ndarray, params: SegmentP
     result = pipeline(inp, p, features=features, initial=elem[np.sort(first)])
     rows = np.asarray(result.centers, dtype=np.int64)
     return rows[core[rows]]
+
+
+def orientation_reference(sample: np.ndarray, n_neighbors: int) -> tuple:
+    """Oriented normals of an even sample of a cloud's points, for its tiles.
+
+    Points that carry no normals and no sensor position get PCA normals,
+    oriented by propagation and turned outwards per connected piece
+    (:mod:`superfacets.elements.points`). A tile sees a piece cut by its
+    halo, whose own mean can turn it the other way than the whole cloud
+    does (50M points in 16 tiles: 0.13 % of the points labelled differently
+    by two tiles). So the sample the survey keeps (every ``ceil(n / 2^20)``-th
+    point) is oriented once, here, as one run would, and every tile turns
+    each of its pieces to agree with it (``PointCloud(orient_like=...)``).
+
+    Returns
+    -------
+    (positions (R, 3), normals (R, 3)) : tuple of float64 ndarray
+        Empty arrays when the sample is too small for a point graph.
+    """
+    from .cloud import PointCloud
+    from .elements.points import point_graph
+
+    pts = np.asarray(sample, dtype=np.float64)
+    if np.unique(pts, axis=0).shape[0] < 3:
+        return np.zeros((0, 3)), np.zeros((0, 3))
+    g = point_graph(PointCloud(pts), n_neighbors).graph
+    return np.array(g.positions), np.array(g.normals)
+
+
+def trim_centers(positions: np.ndarray, k: int) -> np.ndarray:
+    """Which of the tiles' centers to keep so that at most ``k`` remain.
+
+    Each tile's core holds its share of ``k`` centers when the passes start,
+    but the passes move centers across tile borders, where two tiles' runs
+    can each keep one: the gathered count runs 0-10 % over ``k`` (measured on
+    benchmark meshes). The most crowded go, one at a time: the center whose
+    nearest other center is closest (the later row on a tie), until ``k``
+    remain.
+
+    Returns
+    -------
+    (c,) bool ndarray
+    """
+    from scipy.spatial import cKDTree
+
+    keep = np.ones(positions.shape[0], dtype=bool)
+    while keep.sum() > k:
+        idx = np.flatnonzero(keep)
+        d, j = cKDTree(positions[idx]).query(positions[idx], 2)
+        d, j = d[:, 1], j[:, 1]
+        excess = int(keep.sum()) - k
+        # a pair counts once: drop the later of each closest pair, closest pairs first
+        order = np.lexsort((-idx, d))
+        gone = np.zeros(idx.size, dtype=bool)
+        for a in order:
+            if excess == 0:
+                break
+            if gone[a] or gone[j[a]]:
+                continue
+            gone[max(a, j[a])] = True
+            excess -= 1
+            if d[a] > d[order[0]] * 4:  # the rest after the neighbours are recomputed
+                break
+        keep[idx[gone]] = False
+    return keep
 
 
 def _core_share(inp, core: np.ndarray, p: SegmentParams, r: float) -> int:

@@ -86,7 +86,8 @@ def estimate_normals(points: np.ndarray, neighbors: np.ndarray) -> np.ndarray:
 
 
 def orient_normals(points: np.ndarray, normals: np.ndarray, indptr: np.ndarray,
-                   indices: np.ndarray, viewpoint: np.ndarray | None = None) -> np.ndarray:
+                   indices: np.ndarray, viewpoint: np.ndarray | None = None,
+                   reference: tuple | None = None) -> np.ndarray:
     """Flip normals to a consistent orientation (see the module notes).
 
     Parameters
@@ -95,6 +96,11 @@ def orient_normals(points: np.ndarray, normals: np.ndarray, indptr: np.ndarray,
     indptr, indices : CSR arrays of the neighbourhood graph
     viewpoint : (3,) float64 ndarray, optional
         Turn every normal towards it instead.
+    reference : tuple of two (R, 3) float64 ndarray, optional
+        ``(positions, normals)`` oriented elsewhere (a sample of the same
+        surface): after the propagation, each connected piece is turned to
+        agree with the nearest reference normals, summed over the piece
+        (``sum s_i n_i . m_near(i) >= 0``), instead of outwards from its mean.
 
     Returns
     -------
@@ -111,6 +117,13 @@ def orient_normals(points: np.ndarray, normals: np.ndarray, indptr: np.ndarray,
     n_comp = propagate_signs(indptr, indices, normals, sign, comp)
     out = np.empty_like(normals)
     turn_outwards(points, normals, sign, comp, n_comp, out)
+    if reference is not None and reference[0].shape[0] and n:
+        from scipy.spatial import cKDTree
+
+        _, near = cKDTree(reference[0]).query(points, k=1, workers=-1)
+        agree = np.einsum("ij,ij->i", out, reference[1][near])
+        flip = np.bincount(comp, weights=agree, minlength=n_comp) < 0
+        out[flip[comp]] *= -1.0
     return out
 
 
@@ -313,7 +326,8 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
         normals = np.ascontiguousarray(cloud.normals[first])
     else:
         normals = estimate_normals(pts, nbr)
-        normals = orient_normals(pts, normals, indptr, indices, cloud.viewpoint)
+        normals = orient_normals(pts, normals, indptr, indices, cloud.viewpoint,
+                                 getattr(cloud, "orient_like", None))
     degree = np.diff(indptr).astype(np.float64)
     share = 2.0 * np.sqrt(np.pi * area) / np.maximum(degree, 1.0)
     lengths = 0.5 * (share[lo] + share[hi])

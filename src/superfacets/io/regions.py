@@ -61,6 +61,8 @@ class Survey:
     #: (s, 3) float64: the finite positions of every ``ceil(n_rows / SAMPLE)``-th row,
     #: for balanced tiles (:func:`superfacets.tile_layout.balanced_tiles`)
     sample: np.ndarray | None = None
+    #: the points carry normals (a point cloud's file has them)
+    normals: bool = False
 
 
 @dataclass(frozen=True)
@@ -207,7 +209,9 @@ class RegionReader:
         n = 0
         stride = max(1, -(-self.n_rows // SAMPLE))
         kept = []
-        for start, pos, sz, _ in self.chunks():
+        normals = False
+        for start, pos, sz, extra in self.chunks():
+            normals = normals or (self.kind == "points" and extra[1] is not None)
             ok = np.isfinite(pos).all(axis=1)
             if ok.any():
                 lo = np.minimum(lo, pos[ok].min(axis=0))
@@ -218,7 +222,7 @@ class RegionReader:
                 kept.append(every[np.isfinite(every).all(axis=1)])
         if n == 0:
             raise MeshFormatError(f"{self.path}: no {self.kind[:-1]} with a finite position")
-        return Survey(lo, hi, size, n, np.concatenate(kept).astype(np.float64))
+        return Survey(lo, hi, size, n, np.concatenate(kept).astype(np.float64), normals)
 
     def read_box(self, lo, hi, name: str = ""):
         """The elements whose position lies in ``[lo, hi]``, as an input of their own.

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+from dataclasses import replace
 import tempfile
 import time
 from dataclasses import dataclass, field
@@ -124,6 +125,8 @@ def tile_task(task: dict) -> dict:
         layout = task["layout"]
         lo, hi = layout.box(task["tile"], task["margin"])
         rows, pos, inp = task["reader"].read_box(lo, hi, name=f"tile {task['tile']}")
+        if task.get("orient_like") is not None:  # every tile orients like one sample
+            inp = replace(inp, orient_like=task["orient_like"])
         core = layout.of(pos) == task["tile"]
         out.update(rows=int(rows.size), core=int(core.sum()))
         if not core.any():  # no element of its own: nothing to do
@@ -248,7 +251,7 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
     from ..io.regions import STREAMED, RegionReader
     from .buckets import bucket
     from ..tile_layout import balanced_tiles, tile_grid
-    from ..tiling import HALO, halo_distance
+    from ..tiling import HALO, halo_distance, orientation_reference
 
     if "features" in options:
         raise ParameterError("a tiled run reads colours from the file; features= is not taken")
@@ -290,11 +293,20 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
             t = time.perf_counter()
             reader = bucket(reader, layout, Path(tmp) / "buckets", progress=progress)
             timings["bucket"] = time.perf_counter() - t
+        reference = None
+        if reader.kind == "points" and not survey.normals and reader.viewpoint is None:
+            t = time.perf_counter()
+            reference = orientation_reference(survey.sample, params.n_neighbors)
+            timings["orientation"] = time.perf_counter() - t
         with Engine(workers=workers, scheduler=scheduler, memory_limit=memory_limit) as engine:
             def run(phase, margin, extra=lambda t: {}):
                 tasks = [dict(phase=phase, reader=reader, layout=layout, tile=t, margin=margin,
                               params=params, r=r, diagonal=diagonal, **extra(t))
                          for t in range(n_tiles)]
+                if reference is not None and phase != "areas":
+                    for task in tasks:
+                        task["orient_like"] = _within(reference, *layout.box(
+                            task["tile"], 1.5 * margin))
                 return _gather(engine, tasks, phase, progress)
 
             r = math.nan
@@ -372,6 +384,12 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
                        params=resolved)
 
 
+def _within(reference: tuple, lo: np.ndarray, hi: np.ndarray) -> tuple:
+    pos, nrm = reference
+    inside = ((pos >= lo) & (pos <= hi)).all(axis=1)
+    return pos[inside], nrm[inside]
+
+
 def _gathered(outs: list, params) -> tuple[np.ndarray, np.ndarray]:
     """The tiles' centers (rows, positions) in row order, trimmed to ``n_segments``."""
     rows = np.concatenate([o["centers"] for o in outs])
@@ -379,47 +397,11 @@ def _gathered(outs: list, params) -> tuple[np.ndarray, np.ndarray]:
     order = np.argsort(rows, kind="stable")
     rows, pos = rows[order], pos[order]
     if params.radius is None and params.init == "farthest":
+        from ..tiling import trim_centers
+
         keep = trim_centers(pos, params.n_segments)
         rows, pos = rows[keep], pos[keep]
     return rows, pos
-
-
-def trim_centers(positions: np.ndarray, k: int) -> np.ndarray:
-    """Which of the tiles' centers to keep so that at most ``k`` remain.
-
-    Each tile's core holds its share of ``k`` centers when the passes start,
-    but the passes move centers across tile borders, where two tiles' runs
-    can each keep one: the gathered count runs 0-10 % over ``k`` (measured on
-    benchmark meshes). The most crowded go, one at a time: the center whose
-    nearest other center is closest (the later row on a tie), until ``k``
-    remain.
-
-    Returns
-    -------
-    (c,) bool ndarray
-    """
-    from scipy.spatial import cKDTree
-
-    keep = np.ones(positions.shape[0], dtype=bool)
-    while keep.sum() > k:
-        idx = np.flatnonzero(keep)
-        d, j = cKDTree(positions[idx]).query(positions[idx], 2)
-        d, j = d[:, 1], j[:, 1]
-        excess = int(keep.sum()) - k
-        # a pair counts once: drop the later of each closest pair, closest pairs first
-        order = np.lexsort((-idx, d))
-        gone = np.zeros(idx.size, dtype=bool)
-        for a in order:
-            if excess == 0:
-                break
-            if gone[a] or gone[j[a]]:
-                continue
-            gone[max(a, j[a])] = True
-            excess -= 1
-            if d[a] > d[order[0]] * 4:  # the rest after the neighbours are recomputed
-                break
-        keep[idx[gone]] = False
-    return keep
 
 
 def _radius(params, area: float, diagonal: float, n: int) -> float:
