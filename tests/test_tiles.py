@@ -12,6 +12,7 @@ import pytest
 import trimesh
 
 from superfacets import Mesh, ParameterError, segment
+from superfacets.cloud import PointCloud
 from superfacets.connectivity import label_components
 from superfacets.elements.faces import face_graph
 from superfacets.errors import MeshFormatError
@@ -369,6 +370,41 @@ def test_several_tiles_stitch_without_cutting_a_superfacet(extra, tiles):
         assert res.disagreements <= 0.001 * mesh.n_faces
         if res.layout.shape:
             assert res.disagreements == 0
+
+
+def test_every_tile_orients_points_like_the_whole_cloud(tmp_path):
+    """Points with no normals and no viewpoint: each tile's pieces are turned like the
+    oriented sample the survey keeps, so a tile holding the inside of a torus's ring
+    (concave seen from its own mean) gets the whole cloud's normals, not their opposite."""
+    from scipy.spatial import cKDTree
+
+    from superfacets.elements.points import point_graph
+    from superfacets.tiling import orientation_reference
+
+    torus = trimesh.creation.torus(major_radius=1.0, minor_radius=0.4, major_sections=64,
+                                   minor_sections=32)
+    pts, _ = trimesh.sample.sample_surface_even(torus, 20000, seed=2)
+    np.save(tmp_path / "t.npy", np.asarray(pts, dtype=np.float64))
+    reader = RegionReader.open(tmp_path / "t.npy")
+    s = reader.survey()
+    assert not s.normals and reader.viewpoint is None
+    whole = point_graph(PointCloud(pts)).graph
+    reference = orientation_reference(s.sample, 10)
+    layout = tile_grid(s.lo, s.hi, (3, 3, 1))  # the middle tile (+0.3): the ring's inner side
+    agree = {}
+    for use in (False, True):
+        for t in range(layout.n_tiles):
+            lo, hi = layout.box(t, 0.3)
+            _, pos, cloud = reader.read_box(lo, hi)
+            if use:
+                inside = ((reference[0] >= lo - 0.1) & (reference[0] <= hi + 0.1)).all(1)
+                cloud = PointCloud(cloud.points, orient_like=(reference[0][inside],
+                                                              reference[1][inside]))
+            g = point_graph(cloud).graph
+            _, j = cKDTree(whole.positions).query(g.positions)
+            agree[use, t] = (np.einsum("ij,ij->i", g.normals, whole.normals[j]) > 0).mean()
+    assert agree[False, 4] < 0.01  # turned outwards from its own mean: all inverted
+    assert min(agree[True, t] for t in range(9)) > 0.99
 
 
 def test_tiled_points_with_invalid_rows(tmp_path):

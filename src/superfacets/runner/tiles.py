@@ -83,7 +83,9 @@ class TiledResult:
         core, and with the halo), ``centers`` (in its core), ``seconds`` and
         ``peak_mib`` of each phase.
     timings : dict of str to float
-        Seconds: ``survey``, ``bucket`` (sorting the input into tiles), ``areas``,
+        Seconds: ``survey``, ``bucket`` (sorting the input into tiles),
+        ``orientation`` (points without normals or viewpoint: the survey's
+        sample oriented once, :func:`~superfacets.tiling.orientation_reference`), ``areas``,
         ``centers``, ``refine``, ``labels``, ``stitch``, ``connect`` (only with
         disagreements), ``total``.
     params : dict
@@ -125,8 +127,12 @@ def tile_task(task: dict) -> dict:
         layout = task["layout"]
         lo, hi = layout.box(task["tile"], task["margin"])
         rows, pos, inp = task["reader"].read_box(lo, hi, name=f"tile {task['tile']}")
-        if task.get("orient_like") is not None:  # every tile orients like one sample
-            inp = replace(inp, orient_like=task["orient_like"])
+        ref = task.get("orient_like")
+        if ref is not None:  # every tile orients like one sample (a file, or its part)
+            if isinstance(ref, str):
+                ref = _within(np.load(ref, mmap_mode="r"), *layout.box(task["tile"],
+                                                                        1.5 * task["margin"]))
+            inp = replace(inp, orient_like=(ref[:, :3], ref[:, 3:]))
         core = layout.of(pos) == task["tile"]
         out.update(rows=int(rows.size), core=int(core.sum()))
         if not core.any():  # no element of its own: nothing to do
@@ -296,7 +302,10 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
         reference = None
         if reader.kind == "points" and not survey.normals and reader.viewpoint is None:
             t = time.perf_counter()
-            reference = orientation_reference(survey.sample, params.n_neighbors)
+            reference = np.hstack(orientation_reference(survey.sample, params.n_neighbors))
+            if shared:  # read by the tasks from the work folder, not shipped with each
+                np.save(Path(tmp) / "orientation.npy", reference)
+                reference = str(Path(tmp) / "orientation.npy")
             timings["orientation"] = time.perf_counter() - t
         with Engine(workers=workers, scheduler=scheduler, memory_limit=memory_limit) as engine:
             def run(phase, margin, extra=lambda t: {}):
@@ -305,8 +314,8 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
                          for t in range(n_tiles)]
                 if reference is not None and phase != "areas":
                     for task in tasks:
-                        task["orient_like"] = _within(reference, *layout.box(
-                            task["tile"], 1.5 * margin))
+                        task["orient_like"] = reference if isinstance(reference, str) else \
+                            _within(reference, *layout.box(task["tile"], 1.5 * margin))
                 return _gather(engine, tasks, phase, progress)
 
             r = math.nan
@@ -384,10 +393,10 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
                        params=resolved)
 
 
-def _within(reference: tuple, lo: np.ndarray, hi: np.ndarray) -> tuple:
-    pos, nrm = reference
-    inside = ((pos >= lo) & (pos <= hi)).all(axis=1)
-    return pos[inside], nrm[inside]
+def _within(reference: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """The rows (position, normal) of ``reference`` (R, 6) whose position lies in the box."""
+    inside = ((reference[:, :3] >= lo) & (reference[:, :3] <= hi)).all(axis=1)
+    return np.asarray(reference[inside], dtype=np.float64)
 
 
 def _gathered(outs: list, params) -> tuple[np.ndarray, np.ndarray]:
