@@ -106,9 +106,14 @@ def test_balanced_tiles_of_degenerate_samples():
 
 
 @pytest.mark.parametrize("bad", [0, -2, 2.5, True, (1, 2), (1, 0, 1), "4"])
-def test_tile_grid_refuses_bad_counts(bad):
+def test_tile_grid_refuses_bad_counts(bad, tmp_path, monkeypatch):
     with pytest.raises(ParameterError, match="tiles must"):
         tile_grid([0, 0, 0], [1, 1, 1], bad)
+    # a tiled run refuses them before it reads the file
+    np.save(tmp_path / "p.npy", np.random.default_rng(0).random((50, 3)))
+    monkeypatch.setattr(RegionReader, "survey", lambda self: pytest.fail("file read"))
+    with pytest.raises(ParameterError, match="tiles must"):
+        segment_tiled(tmp_path / "p.npy", 5, tiles=bad)
 
 
 @pytest.mark.parametrize("layout", [tile_grid, balanced_tiles])

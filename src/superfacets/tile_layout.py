@@ -33,7 +33,7 @@ import numpy as np
 
 from .errors import ParameterError
 
-__all__ = ["Tiles", "tile_grid", "balanced_tiles", "tile_of", "tile_box"]
+__all__ = ["Tiles", "tile_grid", "balanced_tiles", "tile_of", "tile_box", "check_tiles"]
 
 
 @dataclass(frozen=True)
@@ -255,6 +255,23 @@ def tile_box(tiles: Tiles, t: int, margin: float = 0.0) -> tuple[np.ndarray, np.
     return tiles.box(t, margin)
 
 
+def check_tiles(tiles) -> None:
+    """Refuse a ``tiles`` that is neither a positive integer nor three of them.
+
+    Raises
+    ------
+    ParameterError
+        Naming the bad value.
+    """
+    if np.ndim(tiles) == 0:
+        _positive_int(tiles)
+    elif len(tiles) != 3:
+        raise ParameterError(f"tiles must be an integer or three integers, got {tiles!r}")
+    else:
+        for t in tiles:
+            _positive_int(t)
+
+
 def _grid_counts(ext: np.ndarray, tiles) -> np.ndarray:
     if np.ndim(tiles) == 0:
         n = _positive_int(tiles)
@@ -275,9 +292,8 @@ def _grid_counts(ext: np.ndarray, tiles) -> np.ndarray:
             counts[int(np.argmax(ext))] = n
             return counts
         return best[1]
-    if len(tiles) != 3:
-        raise ParameterError(f"tiles must be an integer or three integers, got {tiles!r}")
-    return np.array([_positive_int(t) for t in tiles])
+    check_tiles(tiles)
+    return np.array([int(t) for t in tiles])
 
 
 def _positive_int(v) -> int:

@@ -1,7 +1,7 @@
 """One input larger than a machine: tiles with halos on Dask, stitched by center.
 
-:func:`segment_tiled` cuts the input into a grid of tiles
-(:mod:`superfacets.tile_layout`: balanced boxes, or a regular grid) and runs each tile as a task on
+:func:`segment_tiled` cuts the input into tiles (:mod:`superfacets.tile_layout`:
+balanced boxes, or a regular grid) and runs each tile as a task on
 :class:`~.engine.Engine` (this process, a local Dask cluster or a running
 scheduler). A task gets the file's name and its box, never data: it reads
 its tile and halo itself (:class:`superfacets.io.regions.RegionReader`), so
@@ -30,10 +30,9 @@ from __future__ import annotations
 
 import contextlib
 import math
-from dataclasses import replace
 import tempfile
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -114,8 +113,10 @@ def tile_task(task: dict) -> dict:
     """One tile's work (a module-level function: Dask workers import it by reference).
 
     ``task`` holds ``phase`` ('areas', 'centers' or 'labels'), ``reader``,
-    ``layout`` (:class:`~superfacets.tile_layout.Tiles`), ``tile``, ``margin``, ``params``, ``r``, ``diagonal``, and for
-    'labels' the ``centers`` (rows) within reach and ``ring`` (a width).
+    ``layout`` (:class:`~superfacets.tile_layout.Tiles`), ``tile``, ``margin``,
+    ``params``, ``r``, ``diagonal``, ``orient_like`` (optional: the oriented
+    sample, or its file), and for 'labels' the ``centers`` (rows) within reach
+    and ``ring`` (a width).
     Returns a dict; an error is returned as ``error`` (text), never raised.
     """
     from ..tiling import point_areas, tile_centers, tile_connect, tile_labels, tile_refine
@@ -256,7 +257,7 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
     """
     from ..io.regions import STREAMED, RegionReader
     from .buckets import bucket
-    from ..tile_layout import balanced_tiles, tile_grid
+    from ..tile_layout import balanced_tiles, check_tiles, tile_grid
     from ..tiling import HALO, halo_distance, orientation_reference
 
     if "features" in options:
@@ -264,6 +265,7 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
     params = resolve(n_segments=n_segments, **options)
     if params.elements not in (None, "faces", "points"):
         raise ParameterError(f"a tiled run segments faces or points, not {params.elements!r}")
+    check_tiles(tiles)  # before any pass over the file
     halo = HALO if halo is None else halo
     halo_distance(halo, params.window, 1.0)  # validated before any work
     for name, v, low in (("refine", refine, 0), ("workers", workers, 1)):
