@@ -1,7 +1,7 @@
 """The better method against the paper's, at the paper's speed: quality and time, in one run.
 
 Usage: python benchmarks/paper_speed.py [-k 150] [--per-category 0] [--threads 1]
-       [--settings paper,better]
+       [--settings paper,better] [--elements faces|vertices|points] [--points 20000]
 
 Settings: ``paper`` (``paper=True``: the method as published), ``better``
 (``split_merge=True, cleanup=True``: early swaps, one round, a few passes, the
@@ -12,6 +12,12 @@ first run), in this process, ``--threads`` threads each. Prints the means over
 meshes (undersegmentation error, compactness, boundary recall), the segment
 seconds summed, per-mesh wins, a table per category and how many runs kept the
 first setting's number of superfacets. ``--per-category 0``: all meshes.
+
+``--elements vertices`` / ``points``: the mesh's vertices (ground truth: the
+majority of the incident faces) or ``--points`` points sampled by area (fixed
+seed, each with its face's ground truth), as ``superfacets experiment`` builds
+them; each run gets a fresh mesh or cloud (its graph built in the timed run),
+and the metrics count every element once.
 """
 
 from __future__ import annotations
@@ -29,8 +35,10 @@ SETTINGS = {
 
 
 def main() -> None:
-    from superfacets import Mesh, segment
+    from superfacets import Mesh, PointCloud, segment
     from superfacets.datasets.psb import first_per_category, list_meshes
+    from superfacets.datasets.sampling import sample_points, vertex_ground_truth
+    from superfacets.elements.inputs import elements_of
     from superfacets.io import read_mesh
     from superfacets.metrics import evaluate
 
@@ -40,6 +48,8 @@ def main() -> None:
     ap.add_argument("--per-category", type=int, default=0)
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--settings", default="paper,better")
+    ap.add_argument("--elements", choices=("faces", "vertices", "points"), default="faces")
+    ap.add_argument("--points", type=int, default=20_000)
     args = ap.parse_args()
     names = args.settings.split(",")
     meshes = list_meshes()
@@ -51,17 +61,33 @@ def main() -> None:
         mesh = read_mesh(bm.path)
         gts = bm.ground_truths(mesh.n_faces)
         cats.append(bm.category)
+        kind = args.elements
+        if kind == "faces":
+            graph, first = mesh, None
+        else:
+            if kind == "vertices":
+                gts = [vertex_ground_truth(mesh, g) for g in gts]
+                fresh_input = lambda: Mesh(mesh.vertices, mesh.faces)  # noqa: E731
+            else:
+                pts, face = sample_points(mesh, args.points, seed=0)
+                gts = [g[face] for g in gts]
+                fresh_input = lambda: PointCloud(pts)  # noqa: E731
+            src = elements_of(fresh_input(), kind)
+            graph = src.graph
+            first = src.first_rows(np.arange(graph.n_elements))
+            gts = [g[first] for g in gts]
         for n in (names if bm.id % 2 else names[::-1]):
-            fresh = Mesh(mesh.vertices, mesh.faces)
+            fresh = Mesh(mesh.vertices, mesh.faces) if kind == "faces" else fresh_input()
             t = time.perf_counter()
             r = segment(fresh, args.k, alpha=args.alpha, n_threads=args.threads,
-                        **SETTINGS[n])
+                        **({} if kind == "faces" else {"elements": kind}), **SETTINGS[n])
             sec = time.perf_counter() - t
-            m = evaluate(mesh, r.labels, gts)
+            labels = r.labels if first is None else np.asarray(r.labels)[first]
+            m = evaluate(graph, labels, gts, equal_weight=kind != "faces")
             res[n].append((m["undersegmentation_error"], m["compactness"],
                            m["boundary_recall"], sec, r.n_segments))
     base = np.array(res[names[0]])
-    print(f"{len(meshes)} meshes, k = {args.k}, alpha = {args.alpha:g}, "
+    print(f"{len(meshes)} meshes ({args.elements}), k = {args.k}, alpha = {args.alpha:g}, "
           f"{args.threads} thread(s), in process")
     print()
     print("| setting | UE | compactness | boundary recall | seconds (sum) | time | UE lower "
