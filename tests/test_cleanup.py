@@ -107,11 +107,46 @@ def test_pipeline_cleanup_on_real_meshes(psb):
 @pytest.mark.parametrize("elements", ["vertices", "points"])
 def test_cleanup_on_vertices_and_points(sphere, elements):
     obj = sphere if elements == "vertices" else sphere.vertices
-    paper = segment(obj, 25, elements=elements)
-    clean = segment(obj, 25, elements=elements, cleanup=True)
+    paper = segment(obj, 25, elements=elements, paper=True)
+    clean = segment(obj, 25, elements=elements, cleanup=True, split_merge=False)
     assert clean.n_segments == paper.n_segments
     assert clean.labels.shape == paper.labels.shape
     assert not np.array_equal(clean.labels, paper.labels)
+    # the default: both options on vertices (paper weighting), the paper's method on points
+    default = segment(obj, 25, elements=elements)
+    on = elements == "vertices"
+    assert default.params["cleanup"] is on and default.params["split_merge"] is on
+    same = segment(obj, 25, elements=elements, cleanup=on, split_merge=on)
+    assert np.array_equal(default.labels, same.labels)
+    off = segment(obj, 25, elements=elements, weighting="shlafman", alpha=0.5)
+    assert off.params["cleanup"] is False and off.params["split_merge"] is False
+
+
+def test_crease_weight_per_element_kind():
+    from superfacets.cleanup import CREASE, CREASE_SMOOTH_NORMALS, crease_for
+
+    assert crease_for("faces") == CREASE == 0.1
+    assert crease_for("vertices") == crease_for("points") == CREASE_SMOOTH_NORMALS == 1.0
+
+
+def test_point_boundary_two_spacings_beside_a_concave_crease_ends_on_it():
+    # points on the folded plane z = 0.5 |x| (a valley along x = 0), spacing 0.05;
+    # the boundary starts two columns right of the crease and ends on it, except in
+    # the first and last rows, whose one-sided neighbourhoods keep the old corner
+    from superfacets.cloud import PointCloud
+    from superfacets.elements.points import point_graph
+
+    nx, ny = 40, 20
+    x, y = np.meshgrid((np.arange(nx) + 0.5) / nx * 2 - 1, (np.arange(ny) + 0.5) / ny * 2 - 1,
+                       indexing="ij")
+    g = point_graph(PointCloud(np.c_[x.ravel(), y.ravel(), 0.5 * np.abs(x.ravel())])).graph
+    col = np.floor((g.positions[:, 0] + 1) / 2 * nx).astype(int)
+    inner = np.abs(g.positions[:, 1]) < 0.9
+    labels = (col >= nx // 2 + 2).astype(np.int64)
+    out = clean_boundaries(g, labels, alpha=200)  # the points' crease weight
+    assert np.array_equal(out[inner], (col[inner] >= nx // 2).astype(np.int64))
+    flat = clean_boundaries(g, labels, alpha=0)  # no crease term: nothing to move it
+    assert np.array_equal(flat, labels)
 
 
 def test_bad_arguments(sphere):

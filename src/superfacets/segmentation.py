@@ -89,8 +89,10 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
         two superfacets is re-placed within a third of a radius by a minimum
         graph cut that prefers short boundaries along creases; the number of
         superfacets does not change and each stays connected. Default: on
-        for faces with the paper's weighting, off for vertices and points
-        (not measured better there). Not in the paper (``docs/cleanup.md``).
+        for faces and vertices with the paper's weighting; off for points
+        (not better on undersegmentation error there), with
+        ``weighting='shlafman'`` and with ``paper=True``. Not in the paper
+        (``docs/cleanup.md``).
     split_merge : bool, optional
         K-preserving swaps (:mod:`superfacets.splitmerge`): a superfacet
         that straddles a crease (a high energy ``sum(size * d ** 4)`` in the

@@ -113,12 +113,13 @@ def add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> No
                         "pieces into the neighbour sharing the longest boundary)")
     p.add_argument("--cleanup", action=argparse.BooleanOptionalAction, default=None,
                    help="boundary clean-up after the iteration: boundaries straightened and "
-                        "moved onto nearby creases, same superfacets (default: on for faces, "
-                        "off for vertices and points)")
+                        "moved onto nearby creases, same superfacets (default: on for faces "
+                        "and vertices, off for points, --paper and --weighting shlafman)")
     p.add_argument("--split-merge", action=argparse.BooleanOptionalAction, default=None,
                    help="split superfacets that straddle a crease and merge as many pairs of "
                         "neighbours elsewhere, then iterate again; same number of superfacets "
-                        "(default: on for faces, off for vertices and points)")
+                        "(default: on for faces and vertices, off for points, --paper and "
+                        "--weighting shlafman)")
     p.add_argument("--beta", type=float_arg, default=_D.beta, metavar="B",
                    help="weight of the colour term: crossing a colour edge costs as crossing "
                         "a crease does (the input's RGB: PLY, PCD or LAS points); 0: off "
