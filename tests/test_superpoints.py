@@ -94,6 +94,58 @@ def test_point_normals_are_estimated_and_turned_outwards_on_a_closed_surface():
     assert g.area == pytest.approx(4 * np.pi, rel=0.25)
 
 
+def test_orientation_follows_prims_tree_with_ties_broken_by_csr_entry():
+    """The sign propagation is Prim's tree on ``1 - |n_u . n_v|`` with ties broken by the
+    CSR entry: the same signs and components as a plain heap of every edge, on normals
+    quantized so that many keys tie, in two components."""
+    import heapq
+
+    from scipy.sparse import coo_array
+
+    from superfacets._kernels.orient import propagate_signs
+
+    rng = np.random.default_rng(3)
+    n = 400
+    normals = np.round(rng.normal(size=(n, 3)), 0)
+    normals[(normals == 0).all(axis=1)] = [0.0, 0.0, 1.0]
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    half = n // 2  # two pieces: no edge between the halves
+    i = np.r_[rng.integers(0, half, 1200), rng.integers(half, n, 1200)]
+    j = np.r_[rng.integers(0, half, 1200), rng.integers(half, n, 1200)]
+    keep = i != j
+    a = coo_array((np.ones(keep.sum()), (i[keep], j[keep])), shape=(n, n)).tocsr()
+    a = (a + a.T).tocsr()
+    a.sort_indices()
+    indptr, indices = a.indptr.astype(np.int64), a.indices.astype(np.int64)
+
+    sign, comp = np.empty(n, dtype=np.int8), np.empty(n, dtype=np.int64)
+    n_comp = propagate_signs(indptr, indices, normals, sign, comp)
+
+    ref_sign, ref_comp = np.zeros(n, dtype=np.int8), np.full(n, -1)
+    c = 0
+    for s in range(n):
+        if ref_comp[s] >= 0:
+            continue
+        ref_sign[s], ref_comp[s] = 1, c
+        heap = []
+        v = s
+        while True:
+            for t in range(indptr[v], indptr[v + 1]):
+                if ref_comp[indices[t]] < 0:
+                    heapq.heappush(heap, (1.0 - abs(normals[v] @ normals[indices[t]]), t, v))
+            while heap and ref_comp[indices[heap[0][1]]] >= 0:
+                heapq.heappop(heap)
+            if not heap:
+                break
+            _, t, u = heapq.heappop(heap)
+            v = indices[t]
+            ref_comp[v] = c
+            ref_sign[v] = ref_sign[u] if normals[u] @ normals[v] >= 0 else -ref_sign[u]
+        c += 1
+    assert n_comp == c >= 2
+    assert np.array_equal(comp, ref_comp) and np.array_equal(sign, ref_sign)
+
+
 def test_a_piece_cut_from_a_closed_surface_orients_like_a_reference():
     """The inner half of a torus is concave seen from its own mean: turned "outwards" from
     it, every normal points into the solid. Oriented like a sample of the whole torus

@@ -9,61 +9,104 @@ to agree with its parent's. Private kernel of :mod:`superfacets.elements.points`
 import numpy as np
 from numba import njit
 
-from .heap import pop, push
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _before(k1, t1, k2, t2):
+    """Strict order of heap entries: by key, ties by CSR entry."""
+    return k1 < k2 or (k1 == k2 and t1 < t2)
 
 
 @njit(cache=True, error_model="numpy")
 def propagate_signs(indptr, indices, normals, sign, component):
     """Fill ``sign`` (+1/-1 per element) and ``component`` (ids from 0); return the
-    number of components."""
+    number of components.
+
+    Prim's algorithm with an indexed 4-ary heap of the frontier (one entry per
+    element, its best key lowered in place), ordered by ``(key, CSR entry)``:
+    the tree is the one a strict ``(key, entry)`` order defines, whatever the
+    heap's layout. (A heap of pushed edges with lazy deletion held up to
+    380,000 entries and made 3.7M pops on 1M points; this one pops each
+    element once: 1.3 s -> 0.45 s there, the same signs.)
+    """
     n = normals.shape[0]
-    rows = np.empty(indices.shape[0], dtype=np.int32)  # the source of each pushed entry
     done = np.zeros(n, dtype=np.bool_)
-    best = np.full(n, np.inf)  # the lowest key pushed for each element: a larger one
-    # would only be popped after it, and skipped
-    cap = indices.shape[0] + 1
-    hkey = np.empty(cap, dtype=np.float64)
-    hval = np.empty(cap, dtype=np.int64)
+    at = np.full(n, -1, dtype=np.int64)  # place of each element in the heap, -1: none
+    source = np.empty(n, dtype=np.int64)  # the tree neighbour of its best key
+    hkey = np.empty(n)
+    hent = np.empty(n, dtype=np.int64)  # CSR entry of the key (the tie rule)
+    hel = np.empty(n, dtype=np.int64)  # element
     n_comp = 0
     for s in range(n):
         if done[s]:
             continue
+        size = 0
+        v = s
         done[s] = True
         sign[s] = 1
         component[s] = n_comp
-        size = 0
-        for t in range(indptr[s], indptr[s + 1]):
-            w = indices[t]
-            if not done[w]:
-                d = normals[s, 0] * normals[w, 0] + normals[s, 1] * normals[w, 1] \
-                    + normals[s, 2] * normals[w, 2]
+        while True:
+            for t in range(indptr[v], indptr[v + 1]):
+                w = indices[t]
+                if done[w]:
+                    continue
+                d = normals[v, 0] * normals[w, 0] + normals[v, 1] * normals[w, 1] \
+                    + normals[v, 2] * normals[w, 2]
                 key = 1.0 - abs(d)
-                if key < best[w]:
-                    best[w] = key
-                    rows[t] = s
-                    size = push(hkey, hval, size, key, t)
-        while size > 0:
-            t = hval[0]
-            size = pop(hkey, hval, size)
-            v = indices[t]
-            if done[v]:
-                continue
-            u = rows[t]
+                i = at[w]
+                if i < 0:
+                    i = size
+                    size += 1
+                elif not _before(key, t, hkey[i], hent[i]):
+                    continue
+                source[w] = v
+                while i > 0:  # sift up
+                    p = (i - 1) >> 2
+                    if _before(hkey[p], hent[p], key, t):
+                        break
+                    hkey[i] = hkey[p]
+                    hent[i] = hent[p]
+                    hel[i] = hel[p]
+                    at[hel[i]] = i
+                    i = p
+                hkey[i] = key
+                hent[i] = t
+                hel[i] = w
+                at[w] = i
+            if size == 0:
+                break
+            v = hel[0]
+            at[v] = -1
+            size -= 1
+            if size > 0:  # the last entry sifts down from the root
+                key = hkey[size]
+                t = hent[size]
+                x = hel[size]
+                i = 0
+                while True:
+                    c = 4 * i + 1
+                    if c >= size:
+                        break
+                    m = c
+                    for c2 in range(c + 1, min(c + 4, size)):
+                        if _before(hkey[c2], hent[c2], hkey[m], hent[m]):
+                            m = c2
+                    if not _before(hkey[m], hent[m], key, t):
+                        break
+                    hkey[i] = hkey[m]
+                    hent[i] = hent[m]
+                    hel[i] = hel[m]
+                    at[hel[i]] = i
+                    i = m
+                hkey[i] = key
+                hent[i] = t
+                hel[i] = x
+                at[x] = i
+            u = source[v]
             done[v] = True
             component[v] = n_comp
             d = normals[u, 0] * normals[v, 0] + normals[u, 1] * normals[v, 1] \
                 + normals[u, 2] * normals[v, 2]
             sign[v] = sign[u] if d >= 0 else -sign[u]
-            for t2 in range(indptr[v], indptr[v + 1]):
-                w = indices[t2]
-                if not done[w]:
-                    d = normals[v, 0] * normals[w, 0] + normals[v, 1] * normals[w, 1] \
-                        + normals[v, 2] * normals[w, 2]
-                    key = 1.0 - abs(d)
-                    if key < best[w]:
-                        best[w] = key
-                        rows[t2] = v
-                        size = push(hkey, hval, size, key, t2)
         n_comp += 1
     return n_comp
 
