@@ -200,6 +200,33 @@ def test_weights_and_metrics_take_the_graph_or_the_mesh(valley):
     assert concave.any() and (~concave).any()  # the valley's crease is concave, the rest flat
 
 
+def test_vertex_and_point_terms_equal_the_numpy_expressions_bit_for_bit(valley):
+    """The one-pass kernel of the vertex and point terms does the numpy expressions'
+    floating-point operations in their order (docs/method.md, sections 1-2)."""
+    import trimesh
+
+    from superfacets.cloud import PointCloud
+    from superfacets.elements.points import point_graph
+    from superfacets.elements.vertices import vertex_graph
+
+    rng = np.random.default_rng(0)
+    bumpy = trimesh.creation.icosphere(subdivisions=4)
+    bumpy.vertices *= 1 + 0.1 * rng.random((len(bumpy.vertices), 1))
+    pts = trimesh.sample.sample_surface(bumpy, 3000, seed=2)[0]
+    graphs = [vertex_graph(valley).graph, vertex_graph(Mesh(bumpy.vertices, bumpy.faces)).graph,
+              point_graph(PointCloud(pts)).graph]
+    for g in graphs:
+        p, n = g.positions, g.normals
+        i, j = g.pairs[:, 0], g.pairs[:, 1]
+        d = p[i] - p[j]
+        np.testing.assert_array_equal(g.terms.geo, np.linalg.norm(d, axis=1))
+        np.testing.assert_array_equal(
+            g.terms.cos, np.clip(np.einsum("ij,ij->i", n[i], n[j]), -1.0, 1.0))
+        np.testing.assert_array_equal(g.terms.concave,
+                                      np.einsum("ij,ij->i", n[i] - n[j], d) < 0)
+    assert graphs[0].terms.concave.any() and graphs[2].terms.concave.any()
+
+
 def test_released_terms_come_back_the_same(sphere):
     from superfacets import segment
 

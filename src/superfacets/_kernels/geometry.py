@@ -160,6 +160,34 @@ def face_terms(vertices, centroids, normals, pairs, edges, lo, hi, geo, cos, con
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
+def point_terms(positions, normals, pairs, lo, hi, geo, cos, concave):
+    """The terms of the paper's weights for pairs ``lo:hi`` of elements that are points
+    with normals (mesh vertices, cloud points), in one pass.
+
+    The same floating-point operations, in the same order, as the numpy
+    expressions ``d = p_i - p_j``, ``geo = np.linalg.norm(d, axis=1)``
+    (``sqrt((x*x + y*y) + z*z)``), ``cos = clip(einsum(n_i, n_j), -1, 1)`` and
+    ``concave = einsum(n_i - n_j, d) < 0``, the three terms of each ``einsum``
+    summed as ``(x + z) + y`` (as :func:`face_terms`). Writes from index 0.
+    (Tested bit for bit against the numpy expressions.)
+    """
+    for t in range(lo, hi):
+        i = pairs[t, 0]
+        j = pairs[t, 1]
+        dx = positions[i, 0] - positions[j, 0]
+        dy = positions[i, 1] - positions[j, 1]
+        dz = positions[i, 2] - positions[j, 2]
+        u = t - lo
+        geo[u] = np.sqrt(dx * dx + dy * dy + dz * dz)
+        c = (normals[i, 0] * normals[j, 0] + normals[i, 2] * normals[j, 2]) \
+            + normals[i, 1] * normals[j, 1]
+        cos[u] = min(max(c, -1.0), 1.0)
+        s = ((normals[i, 0] - normals[j, 0]) * dx + (normals[i, 2] - normals[j, 2]) * dz) \
+            + (normals[i, 1] - normals[j, 1]) * dy
+        concave[u] = s < 0
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
 def edge_lengths(vertices, edges, out):
     """``out[t] = |v[edges[t, 1]] - v[edges[t, 0]]|``, as ``np.linalg.norm(axis=1)``
     computes it: ``sqrt((x*x + y*y) + z*z)``."""

@@ -65,12 +65,12 @@ def symmetric_terms(graph: ElementGraph, sl: slice):
     Returns ``(geo, cos, concave)``: ``geo = |p_i - p_j|``, ``cos = n_i . n_j``
     (clipped), ``concave = (n_i - n_j) . (p_i - p_j) < 0``.
     """
-    positions, normals = graph.positions, graph.normals
-    i, j = graph.pairs[sl, 0], graph.pairs[sl, 1]
-    d = positions[i] - positions[j]
-    geo = np.linalg.norm(d, axis=1)
-    cos = np.clip(np.einsum("ij,ij->i", normals[i], normals[j]), -1.0, 1.0)
-    concave = np.einsum("ij,ij->i", normals[i] - normals[j], d) < 0
+    from .._kernels.geometry import point_terms
+
+    lo, hi = sl.indices(graph.pairs.shape[0])[:2]
+    geo, cos = np.empty(hi - lo), np.empty(hi - lo)
+    concave = np.empty(hi - lo, dtype=bool)
+    point_terms(graph.positions, graph.normals, graph.pairs, lo, hi, geo, cos, concave)
     return geo, cos, concave
 
 
