@@ -8,7 +8,7 @@ vertex shared by thousands of faces). They give exactly the order a stable
 """
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 _SMALL = 32  # buckets up to this size: insertion sort
 
@@ -312,7 +312,7 @@ def same_label_components(indptr, indices, labels):
     return comp
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", parallel=True)
 def knn_csr(nbr, keep, indptr):
     """The symmetric graph of k-nearest-neighbour lists: ``i ~ j`` when ``j`` is in
     ``nbr[i]`` (where ``keep``) or ``i`` in ``nbr[j]``. Fills ``indptr`` (n + 1);
@@ -338,8 +338,8 @@ def knn_csr(nbr, keep, indptr):
                 fill[i] += 1
                 raw[fill[j]] = i
                 fill[j] += 1
-    indptr[0] = 0
-    for i in range(n):  # sort each row, drop repeats, in place
+    kept = np.empty(n, dtype=np.int64)
+    for i in prange(n):  # sort each row, drop repeats, in place (rows apart: in parallel)
         s, f = count[i], count[i + 1]
         for a in range(s + 1, f):
             x = raw[a]
@@ -353,12 +353,14 @@ def knn_csr(nbr, keep, indptr):
             if m == 0 or raw[s + m - 1] != raw[a]:
                 raw[s + m] = raw[a]
                 m += 1
-        indptr[i + 1] = indptr[i] + m
+        kept[i] = m
+    indptr[0] = 0
+    for i in range(n):
+        indptr[i + 1] = indptr[i] + kept[i]
     indices = np.empty(indptr[n], dtype=np.int32)
     first = np.empty(n + 1, dtype=np.int64)  # the pair id of each row's first entry > row
     above = np.empty(n, dtype=np.int64)  # the position of that entry in the row
-    e = 0
-    for i in range(n):
+    for i in prange(n):
         s = count[i]
         d = indptr[i + 1] - indptr[i]
         indices[indptr[i]:indptr[i + 1]] = raw[s:s + d]
@@ -366,11 +368,13 @@ def knn_csr(nbr, keep, indptr):
         while a < indptr[i + 1] and indices[a] < i:
             a += 1
         above[i] = a
+    e = 0
+    for i in range(n):
         first[i] = e
-        e += indptr[i + 1] - a
+        e += indptr[i + 1] - above[i]
     pairs = np.empty((e, 2), dtype=np.int64)
     dual_edge = np.empty(indptr[n], dtype=np.int32)
-    for i in range(n):
+    for i in prange(n):
         for a in range(indptr[i], indptr[i + 1]):
             j = indices[a]
             if j > i:
