@@ -244,3 +244,41 @@ def float_morton_keys(bits, keys):
             s = np.uint64(43 - 21 * w)
             keys[i, w] = (_spread21(o0 >> s) << np.uint64(2)) | (
                 _spread21(o1 >> s) << np.uint64(1)) | _spread21(o2 >> s)
+
+
+@njit(cache=True, nogil=True)
+def runs_of_equal(w, run, tied):
+    """Over sorted keys ``w``: ``run[i]`` the index of the run of equal keys that
+    holds ``i`` (from 0); returns the number of elements in runs longer than one,
+    listed in ``tied`` (ascending), as ``np.flatnonzero(np.bincount(run)[run] > 1)``."""
+    n = w.shape[0]
+    r = -1
+    m = 0
+    for i in range(n):
+        if i == 0 or w[i] != w[i - 1]:
+            r += 1
+        run[i] = r
+        if (i > 0 and w[i] == w[i - 1]) or (i + 1 < n and w[i] == w[i + 1]):
+            tied[m] = i
+            m += 1
+    return m
+
+
+@njit(cache=True, nogil=True)
+def distinct_in_order(p, order, out, inverse):
+    """The rows of ``p`` taken in ``order``, each run of equal positions once, into
+    ``out`` (from 0); ``inverse[order[i]]`` the place in ``out`` of row ``order[i]``.
+    Returns the number of distinct positions. (``-0.0 == 0.0``, as numpy compares.)"""
+    m = 0
+    prev = -1
+    for i in range(order.shape[0]):
+        row = order[i]
+        if prev < 0 or p[row, 0] != p[prev, 0] or p[row, 1] != p[prev, 1] \
+                or p[row, 2] != p[prev, 2]:
+            out[m, 0] = p[row, 0]
+            out[m, 1] = p[row, 1]
+            out[m, 2] = p[row, 2]
+            m += 1
+        inverse[row] = m - 1
+        prev = row
+    return m

@@ -154,13 +154,15 @@ def distinct_points(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     >>> pts.tolist(), inv.tolist()
     ([[1.0, 1.0, 1.0], [1.5, 1.0, 1.0]], [1, 0, 1])
     """
+    from .._kernels.geometry import distinct_in_order, runs_of_equal
+
     p = np.ascontiguousarray(p, dtype=np.float64)
     keys, shared = _spatial_keys(p)
     window = _key_bits(keys, shared)
     order = np.argsort(window)
-    w = window[order]
-    run = np.cumsum(np.r_[True, w[1:] != w[:-1]]) - 1
-    tied = np.flatnonzero(np.bincount(run)[run] > 1)
+    run = np.empty(p.shape[0], dtype=np.int64)
+    tied = np.empty(p.shape[0], dtype=np.int64)
+    tied = tied[:runs_of_equal(window[order], run, tied)]
     if tied.size:  # equal in the window: by the next 64 bits
         rows = order[tied]
         nxt = _key_bits(keys[rows], shared + 64)
@@ -174,12 +176,10 @@ def distinct_points(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             rows = order[at]
             order[at] = rows[np.lexsort((p[rows, 2], p[rows, 1], p[rows, 0], keys[rows, 2],
                                          keys[rows, 1], keys[rows, 0], run2[still]))]
-    s = p[order]
-    new = np.ones(p.shape[0], dtype=bool)
-    new[1:] = (s[1:, 0] != s[:-1, 0]) | (s[1:, 1] != s[:-1, 1]) | (s[1:, 2] != s[:-1, 2])
+    out = np.empty_like(p)
     inverse = np.empty(p.shape[0], dtype=np.int64)
-    inverse[order] = np.cumsum(new) - 1
-    return s[new], inverse
+    m = distinct_in_order(p, order, out, inverse)
+    return out[:m].copy() if m < p.shape[0] else out, inverse
 
 
 def _spatial_keys(p: np.ndarray) -> tuple[np.ndarray, int]:
