@@ -83,6 +83,34 @@ def test_coarse_graph_weights_follow_the_fine_distances(sphere):
     assert np.all(pair_w[:50] <= 3 * direct + 1e-9)  # and not much longer (no detours)
 
 
+def test_coarse_pairs_equal_a_stable_sort_and_reduceat():
+    """The cluster adjacency kernel: each cluster pair once, in (lo, hi) order, the
+    minimum path and the border lengths summed as numpy sums them (pairs joined by 1
+    to several hundred adjacencies, so numpy's pairwise blocks are all exercised)."""
+    from superfacets._kernels.voronoi import coarse_pairs
+
+    rng = np.random.default_rng(1)
+    for n, n_c, e in ((3000, 2000, 9000), (3000, 10, 20000), (50, 1, 400), (10, 3, 1)):
+        pairs = np.sort(rng.integers(0, n, (e, 2)), axis=1)
+        cluster = rng.integers(0, n_c, n)
+        dist, w = rng.random(n), rng.random(e)
+        lengths = rng.random(e) * 10 ** rng.uniform(-3, 3, e)
+        out, via, length = coarse_pairs(pairs, cluster, dist, w, lengths, n_c)
+        a, b = cluster[pairs[:, 0]], cluster[pairs[:, 1]]
+        cross = a != b
+        lo, hi = np.minimum(a, b)[cross], np.maximum(a, b)[cross]
+        o = np.argsort(lo * n_c + hi, kind="stable")
+        key = (lo * n_c + hi)[o]
+        first = np.flatnonzero(np.r_[True, key[1:] != key[:-1]]) if key.size else key
+        path = (dist[pairs[:, 0]] + w + dist[pairs[:, 1]])[cross][o]
+        np.testing.assert_array_equal(out, np.c_[lo[o][first], hi[o][first]].reshape(-1, 2))
+        if key.size:
+            np.testing.assert_array_equal(via, np.minimum.reduceat(path, first))
+            np.testing.assert_array_equal(length, np.add.reduceat(lengths[cross][o], first))
+        if n_c == 10:
+            assert np.diff(np.r_[first, key.size]).max() > 128  # numpy's recursive split
+
+
 def test_coarse_ratio_rule():
     assert coarse_ratio(100_000, 150) == 1  # ~670 faces per superfacet: no coarsening
     assert coarse_ratio(1_693_760, 150) == 11

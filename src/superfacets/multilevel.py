@@ -30,7 +30,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ._kernels.voronoi import crossing_pairs, first_in_cells, nearest_seed
+from ._kernels.voronoi import coarse_pairs, first_in_cells, nearest_seed
 from .elements.graph import ElementGraph, adjacency_csr
 from .expansion import bucket_width
 from .mesh import column_bounds
@@ -203,16 +203,9 @@ def coarsen(graph: ElementGraph, weights: np.ndarray, csr_w: np.ndarray,
     nor /= np.where(norm > 0, norm, 1.0)[:, None]
 
     # coarse adjacency: the fine pairs whose elements lie in different clusters
-    lo, hi, via, span = crossing_pairs(graph.pairs, cluster, dist, weights, graph.lengths)
+    # (the shortest seed-to-seed path through one, the summed border lengths)
+    pairs, w_c, len_c = coarse_pairs(graph.pairs, cluster, dist, weights, graph.lengths, n_c)
     del dist
-    key = lo * np.int64(n_c) + hi
-    o = np.argsort(key, kind="stable")
-    key = key[o]
-    first = np.flatnonzero(np.r_[True, key[1:] != key[:-1]]) if key.shape[0] else key
-    w_c = np.minimum.reduceat(via[o], first)
-    len_c = np.add.reduceat(span[o], first)
-    pairs = np.stack([lo[o][first], hi[o][first]], axis=1)
-    del key, o, lo, hi, via, span
     indptr, indices, dual_edge = adjacency_csr(pairs[:, 0], pairs[:, 1], n_c)
     coarse = ElementGraph(
         kind=graph.kind, positions=pos, sizes=tot, normals=nor, centroid=graph.centroid,

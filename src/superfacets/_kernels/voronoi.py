@@ -110,30 +110,114 @@ def first_in_cells(positions, lo, h, dims, cap):
 
 
 @njit(cache=True, error_model="numpy")
-def crossing_pairs(pairs, cluster, dist, weights, lengths):
-    """The adjacencies ``t`` whose two elements lie in different clusters, in
-    order: their clusters ``lo < hi`` (int64), the length of the path between
-    the two seeds through that adjacency, ``dist[i] + weights[t] + dist[j]``,
-    and ``lengths[t]``."""
+def _pairwise_sum(a, s, n):
+    """``a[s:s + n]`` summed as numpy sums a contiguous float64 array (pairwise, blocks
+    of 8 accumulators, at most 128 elements per leaf), so that results match
+    ``np.add.reduce``/``reduceat`` to the bit."""
+    if n < 8:
+        res = 0.0
+        for i in range(n):
+            res += a[s + i]
+        return res
+    if n <= 128:
+        r0, r1, r2, r3 = a[s], a[s + 1], a[s + 2], a[s + 3]
+        r4, r5, r6, r7 = a[s + 4], a[s + 5], a[s + 6], a[s + 7]
+        i = 8
+        while i < n - (n % 8):
+            r0 += a[s + i]
+            r1 += a[s + i + 1]
+            r2 += a[s + i + 2]
+            r3 += a[s + i + 3]
+            r4 += a[s + i + 4]
+            r5 += a[s + i + 5]
+            r6 += a[s + i + 6]
+            r7 += a[s + i + 7]
+            i += 8
+        res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+        while i < n:
+            res += a[s + i]
+            i += 1
+        return res
+    n2 = n // 2
+    n2 -= n2 % 8
+    return _pairwise_sum(a, s, n2) + _pairwise_sum(a, s + n2, n - n2)
+
+
+@njit(cache=True, error_model="numpy")
+def coarse_pairs(pairs, cluster, dist, weights, lengths, n_c):
+    """The adjacency of clusters: every pair of clusters ``lo < hi`` that some
+    adjacency ``t`` joins, in ``(lo, hi)`` order, with the shortest path between
+    their seeds through such an adjacency (the minimum of ``dist[i] + weights[t]
+    + dist[j]``) and the summed ``lengths[t]``, added in adjacency order as
+    numpy's ``reduceat`` adds them (the same as a stable sort of the crossing
+    adjacencies by ``(lo, hi)``, then ``np.minimum.reduceat`` and
+    ``np.add.reduceat``). Returns ``(pairs (m, 2) int64, via (m,), length (m,))``."""
     e = pairs.shape[0]
-    n = 0
+    start = np.zeros(n_c + 1, dtype=np.int64)
     for t in range(e):
-        if cluster[pairs[t, 0]] != cluster[pairs[t, 1]]:
-            n += 1
-    lo = np.empty(n, dtype=np.int64)
-    hi = np.empty(n, dtype=np.int64)
-    via = np.empty(n)
-    span = np.empty(n)
-    p = 0
-    for t in range(e):
+        a = cluster[pairs[t, 0]]
+        b = cluster[pairs[t, 1]]
+        if a != b:
+            start[min(a, b) + 1] += 1
+    for c in range(n_c):
+        start[c + 1] += start[c]
+    total = start[n_c]
+    hi = np.empty(total, dtype=np.int64)
+    via = np.empty(total)
+    span = np.empty(total)
+    fill = start[:n_c].copy()
+    for t in range(e):  # bucket by lo, adjacency order kept within each bucket
         i = pairs[t, 0]
         j = pairs[t, 1]
         a = cluster[i]
         b = cluster[j]
         if a != b:
-            lo[p] = min(a, b)
+            p = fill[min(a, b)]
+            fill[min(a, b)] += 1
             hi[p] = max(a, b)
             via[p] = dist[i] + weights[t] + dist[j]
             span[p] = lengths[t]
-            p += 1
-    return lo, hi, via, span
+    m = 0
+    for c in range(n_c):  # each bucket sorted by hi, stable (insertion, or merge sort)
+        s, f = start[c], start[c + 1]
+        if f - s > 32:
+            o = np.argsort(hi[s:f], kind="mergesort") + s
+            hi[s:f] = hi[o]
+            via[s:f] = via[o]
+            span[s:f] = span[o]
+        else:
+            for x in range(s + 1, f):
+                h, v, w = hi[x], via[x], span[x]
+                y = x - 1
+                while y >= s and hi[y] > h:
+                    hi[y + 1] = hi[y]
+                    via[y + 1] = via[y]
+                    span[y + 1] = span[y]
+                    y -= 1
+                hi[y + 1] = h
+                via[y + 1] = v
+                span[y + 1] = w
+        for x in range(s, f):
+            if x == s or hi[x] != hi[x - 1]:
+                m += 1
+    out = np.empty((m, 2), dtype=np.int64)
+    w_c = np.empty(m)
+    len_c = np.empty(m)
+    q = 0
+    for c in range(n_c):
+        x = start[c]
+        f = start[c + 1]
+        while x < f:
+            y = x + 1
+            low = via[x]
+            while y < f and hi[y] == hi[x]:
+                if via[y] < low:
+                    low = via[y]
+                y += 1
+            out[q, 0] = c
+            out[q, 1] = hi[x]
+            w_c[q] = low
+            len_c[q] = span[x] + _pairwise_sum(span, x + 1, y - x - 1) if y - x > 1 else span[x]
+            q += 1
+            x = y
+    return out, w_c, len_c
