@@ -227,6 +227,24 @@ def test_vertex_and_point_terms_equal_the_numpy_expressions_bit_for_bit(valley):
     assert graphs[0].terms.concave.any() and graphs[2].terms.concave.any()
 
 
+def test_terms_of_a_slice_are_not_kept_and_equal_the_cached_ones(sphere):
+    """The weights read the terms chunk by chunk: without the cache nothing is kept,
+    and the values are those of the whole-graph terms, so the weights are the same."""
+    from superfacets.elements.vertices import vertex_graph
+
+    for g in (face_graph(sphere), vertex_graph(sphere).graph):
+        g.release_terms()
+        sl = slice(5, 40)
+        part = g.terms_in(sl)
+        w = paper_weights(g, alpha=100)
+        assert "terms" not in g.__dict__  # computed per chunk, not cached
+        whole = g.terms
+        for a, b in zip(part, whole):
+            np.testing.assert_array_equal(a, b[sl])
+        np.testing.assert_array_equal(paper_weights(g, alpha=100), w)  # from the cache now
+        np.testing.assert_array_equal(g.terms_in(sl).geo, whole.geo[sl])
+
+
 def test_released_terms_come_back_the_same(sphere):
     from superfacets import segment
 

@@ -274,6 +274,8 @@ def _pipeline(mesh, params: SegmentParams, features, *, replay: bool, jump_cycle
 
         _stage(bar, "weights")
         t = time.perf_counter()
+        if cleanup:
+            graph.terms  # noqa: B018 (kept for the clean-up; else computed chunk by chunk)
         w_pairs = edge_weights(graph, p.weighting, alpha=p.alpha, eta_convex=p.eta_convex,
                                features=feats, beta=p.beta)
         w = csr_weights(graph, w_pairs)

@@ -88,17 +88,18 @@ def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = 0.2
     eta_convex = check_number("eta_convex", eta_convex, 0.0, MAX_WEIGHT_FACTOR)
     beta = check_number("beta", beta, 0.0, MAX_WEIGHT_FACTOR)
     g = as_element_graph(graph)
-    t, span = g.terms, g.span
+    span = g.span
     f = check_features(features, g) if beta > 0 else None
 
     def weight(sl):
-        theta = np.arccos(t.cos[sl])
-        eta = np.where(t.concave[sl], 1.0, eta_convex)
+        t = g.terms_in(sl)
+        theta = np.arccos(t.cos)
+        eta = np.where(t.concave, 1.0, eta_convex)
         ang = eta * span[sl] * theta / np.pi
         if f is None:
-            return (t.geo[sl] + alpha * ang) / g.diagonal
+            return (t.geo + alpha * ang) / g.diagonal
         jump = np.linalg.norm(f[g.pairs[sl, 0]] - f[g.pairs[sl, 1]], axis=1)
-        return (t.geo[sl] + alpha * ang + beta * span[sl] * jump) / g.diagonal
+        return (t.geo + alpha * ang + beta * span[sl] * jump) / g.diagonal
 
     return chunked(g.n_edges, weight)
 
@@ -162,8 +163,12 @@ def shlafman_weights(graph, *, alpha: float = _SHLAFMAN_ALPHA) -> np.ndarray:
     if a > 1:
         raise ParameterError(f"alpha of the Shlafman weighting must be in [0, 1], got {alpha!r}")
     g = as_element_graph(graph)
-    t = g.terms
-    return chunked(g.n_edges, lambda sl: (1.0 - a) * t.geo[sl] + a * (1.0 - t.cos[sl] * t.cos[sl]))
+
+    def weight(sl):
+        t = g.terms_in(sl)
+        return (1.0 - a) * t.geo + a * (1.0 - t.cos * t.cos)
+
+    return chunked(g.n_edges, weight)
 
 
 def edge_weights(graph, weighting: str = "paper", *, alpha: float = _PAPER_ALPHA,

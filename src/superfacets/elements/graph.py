@@ -257,6 +257,17 @@ class ElementGraph:
         run_ranges(chunks, split(-(-e // CHUNK), min_per_thread=1))
         return AdjacencyTerms(geo, cos, concave)
 
+    def terms_in(self, sl: slice) -> AdjacencyTerms:
+        """The :class:`AdjacencyTerms` of the adjacencies ``sl``: slices of :attr:`terms`
+        once those are computed, else computed for ``sl`` alone and not kept (the
+        weights need each term once: a run without the clean-up never holds all
+        of them, 17 B per adjacency). The same values either way."""
+        t = self.__dict__.get("terms")
+        if t is None and self.terms_of is not None:
+            return AdjacencyTerms(*self.terms_of(self, sl))
+        t = self.terms
+        return AdjacencyTerms(t.geo[sl], t.cos[sl], t.concave[sl])
+
     def release_terms(self) -> None:
         """Forget the cached :attr:`terms` (about 17 bytes per adjacency); they are
         computed again, the same, on next use. The pipeline calls it once the

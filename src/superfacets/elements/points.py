@@ -296,6 +296,7 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
     if extra:
         _break_ties(tree, pts, dist, nbr, k)
         dist, nbr = dist[:, :k + 1], nbr[:, :k + 1]
+    del tree  # (its copy of the points and its nodes, before the layout's peak)
     area = np.pi * dist[:, -1] ** 2 / k
     positive = area > 0
     if not positive.all():  # cannot happen with distinct points; keep sizes > 0 anyway
@@ -305,6 +306,7 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
     keep = np.ones(cand.shape, dtype=bool)
     if neighbor_radius is not None:
         keep = dist[:, 1:] <= neighbor_radius * diagonal
+    del dist
     if 2 * cand.size < 2**31 - 1:  # the kernel's int32 layout
         from .._kernels.adjacency import knn_csr
 
