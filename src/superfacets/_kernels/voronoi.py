@@ -110,48 +110,13 @@ def first_in_cells(positions, lo, h, dims, cap):
 
 
 @njit(cache=True, error_model="numpy")
-def _pairwise_sum(a, s, n):
-    """``a[s:s + n]`` summed as numpy sums a contiguous float64 array (pairwise, blocks
-    of 8 accumulators, at most 128 elements per leaf), so that results match
-    ``np.add.reduce``/``reduceat`` to the bit."""
-    if n < 8:
-        res = 0.0
-        for i in range(n):
-            res += a[s + i]
-        return res
-    if n <= 128:
-        r0, r1, r2, r3 = a[s], a[s + 1], a[s + 2], a[s + 3]
-        r4, r5, r6, r7 = a[s + 4], a[s + 5], a[s + 6], a[s + 7]
-        i = 8
-        while i < n - (n % 8):
-            r0 += a[s + i]
-            r1 += a[s + i + 1]
-            r2 += a[s + i + 2]
-            r3 += a[s + i + 3]
-            r4 += a[s + i + 4]
-            r5 += a[s + i + 5]
-            r6 += a[s + i + 6]
-            r7 += a[s + i + 7]
-            i += 8
-        res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-        while i < n:
-            res += a[s + i]
-            i += 1
-        return res
-    n2 = n // 2
-    n2 -= n2 % 8
-    return _pairwise_sum(a, s, n2) + _pairwise_sum(a, s + n2, n - n2)
-
-
-@njit(cache=True, error_model="numpy")
 def coarse_pairs(pairs, cluster, dist, weights, lengths, n_c):
     """The adjacency of clusters: every pair of clusters ``lo < hi`` that some
     adjacency ``t`` joins, in ``(lo, hi)`` order, with the shortest path between
     their seeds through such an adjacency (the minimum of ``dist[i] + weights[t]
-    + dist[j]``) and the summed ``lengths[t]``, added in adjacency order as
-    numpy's ``reduceat`` adds them (the same as a stable sort of the crossing
-    adjacencies by ``(lo, hi)``, then ``np.minimum.reduceat`` and
-    ``np.add.reduceat``). Returns ``(pairs (m, 2) int64, via (m,), length (m,))``."""
+    + dist[j]``) and the summed ``lengths[t]`` (added in adjacency order). The
+    crossing adjacencies are bucketed by ``lo`` (no sort of all of them), each
+    bucket sorted by ``hi``. Returns ``(pairs (m, 2) int64, via (m,), length (m,))``."""
     e = pairs.shape[0]
     start = np.zeros(n_c + 1, dtype=np.int64)
     for t in range(e):
@@ -217,7 +182,10 @@ def coarse_pairs(pairs, cluster, dist, weights, lengths, n_c):
             out[q, 0] = c
             out[q, 1] = hi[x]
             w_c[q] = low
-            len_c[q] = span[x] + _pairwise_sum(span, x + 1, y - x - 1) if y - x > 1 else span[x]
+            total = 0.0
+            for z in range(x, y):
+                total += span[z]
+            len_c[q] = total
             q += 1
             x = y
     return out, w_c, len_c
