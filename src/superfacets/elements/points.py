@@ -19,7 +19,8 @@ weights for adjacent elements". Here each point is an element:
   its ``K`` neighbours (smallest eigenvector of their covariance), then
   oriented consistently: towards the sensor when the viewpoint is known,
   else by propagation along a minimum spanning tree of flat steps (Hoppe et
-  al. 1992) with each connected piece turned outwards (away from its mean).
+  al. 1992; Prim's tree, ties broken by the order of the adjacency lists)
+  with each connected piece turned outwards (away from its mean).
   PCA's arbitrary signs therefore never reach the convexity test;
 - weight terms as on mesh vertices: geodesic term ``|p_i - p_j|``, the angle
   of the normals scaled by that distance, concave when
