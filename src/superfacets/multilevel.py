@@ -26,7 +26,7 @@ give the measurements behind the defaults.
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import Callable, NamedTuple
 
 import numpy as np
 
@@ -171,8 +171,9 @@ def coarsen(graph: ElementGraph, weights: np.ndarray, csr_w: np.ndarray,
     Parameters
     ----------
     graph : ElementGraph
-    weights : (e,) float64 ndarray
-        Weight of each adjacency (``graph.pairs`` order), ``>= 0``.
+    weights : (e,) float64 ndarray or None
+        Weight of each adjacency (``graph.pairs`` order), ``>= 0``; None: read
+        from ``csr_w`` (the same values; the caller need not hold both).
     csr_w : (2 e,) float64 ndarray
         The same weights per CSR entry.
     ratio : int
@@ -183,6 +184,9 @@ def coarsen(graph: ElementGraph, weights: np.ndarray, csr_w: np.ndarray,
     Coarsening
     """
     n = graph.n_elements
+    if weights is None:
+        weights = np.empty(graph.n_edges)
+        weights[graph.dual_edge] = csr_w
     positions = np.ascontiguousarray(graph.positions)
     sizes = graph.sizes
     seeds = grid_seeds(positions, graph.area, max(1, n // ratio))
@@ -216,10 +220,10 @@ def coarsen(graph: ElementGraph, weights: np.ndarray, csr_w: np.ndarray,
                       cluster=cluster, seeds=seeds)
 
 
-def coarse_centers(graph: ElementGraph, weights: np.ndarray, csr_w: np.ndarray, ratio: int, *,
-                   init: str, k: int | None, radius: float, window: float, assignment: str,
-                   max_iter: int, tol: float, min_move: float, n_threads: int
-                   ) -> tuple[np.ndarray, dict]:
+def coarse_centers(graph: ElementGraph, weights: np.ndarray | None, csr_w: np.ndarray,
+                   ratio: int, *, init: str, k: int | None, radius: float, window: float,
+                   assignment: str, max_iter: int, tol: float, min_move: float, n_threads: int,
+                   on_coarsened: Callable[[], None] | None = None) -> tuple[np.ndarray, dict]:
     """Run the method on the graph coarsened by ``ratio``; return fine centers.
 
     The coarse run is the method itself (same initialization, window,
@@ -236,6 +240,10 @@ def coarse_centers(graph: ElementGraph, weights: np.ndarray, csr_w: np.ndarray, 
         surface): the caller runs on every element alone.
     info : dict
         ``coarse_elements``, ``coarse_passes``, ``coarse_iterations``.
+
+    ``weights`` may be None (:func:`coarsen`); ``on_coarsened()`` is called once the
+    clusters are made, before the coarse run (the pipeline frees there what only
+    the coarsening read).
     """
     from .classify import make_classifier
     from .expansion import Workspaces
@@ -243,6 +251,9 @@ def coarse_centers(graph: ElementGraph, weights: np.ndarray, csr_w: np.ndarray, 
     from .passes import iterate, update_centers
 
     co = coarsen(graph, weights, csr_w, ratio)
+    del weights
+    if on_coarsened is not None:
+        on_coarsened()
     cg = co.graph
     if k is not None and cg.n_elements < _MIN_CLUSTERS * k:
         return None, dict(coarse_elements=cg.n_elements)  # too few clusters for k superfacets
@@ -268,8 +279,9 @@ def coarse_centers(graph: ElementGraph, weights: np.ndarray, csr_w: np.ndarray, 
     return centers, info
 
 
-def start_centers(graph: ElementGraph, weights: np.ndarray, csr_w: np.ndarray, params, k,
-                  radius: float, timings: dict, stage=lambda name: None):
+def start_centers(graph: ElementGraph, weights: np.ndarray | None, csr_w: np.ndarray, params,
+                  k, radius: float, timings: dict, stage=lambda name: None,
+                  on_coarsened: Callable[[], None] | None = None):
     """The centers the passes on every element start from, and the tolerances used.
 
     Resolves ``center_tol`` (default 0.05 when ``tol > 0``) and ``coarsen``
@@ -277,6 +289,7 @@ def start_centers(graph: ElementGraph, weights: np.ndarray, csr_w: np.ndarray, p
     then runs :func:`coarse_centers`, or the plain initialization when
     coarse-to-fine is off or finds too few clusters. Coarse-run details go
     to ``timings`` (``coarse`` seconds, ``coarse_elements``, ``coarse_passes``).
+    ``weights`` and ``on_coarsened`` as in :func:`coarse_centers`.
 
     Returns
     -------
@@ -302,7 +315,7 @@ def start_centers(graph: ElementGraph, weights: np.ndarray, csr_w: np.ndarray, p
         init, info = coarse_centers(
             graph, weights, csr_w, ratio, init=p.init, k=k, radius=radius, window=p.window,
             assignment=p.assignment, max_iter=p.max_iter, tol=p.tol,
-            min_move=center_tol * radius, n_threads=p.n_threads)
+            min_move=center_tol * radius, n_threads=p.n_threads, on_coarsened=on_coarsened)
         if init is not None:
             timings.update(info, coarse=time.perf_counter() - t)
             return init, center_tol, ratio

@@ -279,6 +279,7 @@ def _pipeline(mesh, params: SegmentParams, features, *, replay: bool, jump_cycle
         w_pairs = edge_weights(graph, p.weighting, alpha=p.alpha, eta_convex=p.eta_convex,
                                features=feats, beta=p.beta)
         w = csr_weights(graph, w_pairs)
+        del w_pairs  # the coarsening reads the same values from ``w``
         if not cleanup:
             graph.release_terms()  # not needed again by this run; 17 B per adjacency
         timings["weights"] = time.perf_counter() - t
@@ -286,14 +287,16 @@ def _pipeline(mesh, params: SegmentParams, features, *, replay: bool, jump_cycle
         window_r2 = (p.window * r) ** 2
         t = time.perf_counter()
         if initial is None:
-            init, center_tol, ratio = start_centers(graph, w_pairs, w, p, k, r, timings,
-                                                    lambda name: _stage(bar, name))
+            # what the passes do not read (rebuilt after them), freed from the coarse run on
+            release = graph.release if graph.n_elements >= _RELEASE_MIN else None
+            init, center_tol, ratio = start_centers(graph, None, w, p, k, r, timings,
+                                                    lambda name: _stage(bar, name),
+                                                    on_coarsened=release)
         else:
             init, ratio = np.asarray(initial, dtype=np.int64), 1
             center_tol = p.center_tol if p.center_tol is not None else (
                 DEFAULT_CENTER_TOL if p.tol > 0 else 0.0)
-        del w_pairs
-        if graph.n_elements >= _RELEASE_MIN:  # what the passes do not read, rebuilt after
+        if graph.n_elements >= _RELEASE_MIN:  # (again where no coarse run released them)
             graph.release()
         spaces = Workspaces(graph.n_elements, w, p.n_threads)
         timings["init"] = time.perf_counter() - t
