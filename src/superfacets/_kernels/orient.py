@@ -16,6 +16,15 @@ def _before(k1, t1, k2, t2):
     return k1 < k2 or (k1 == k2 and t1 < t2)
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _put(hkey, hent, hel, at, i, key, t, el):
+    """Entry ``(key, t)`` of element ``el`` at heap place ``i``."""
+    hkey[i] = key
+    hent[i] = t
+    hel[i] = el
+    at[el] = i
+
+
 @njit(cache=True, error_model="numpy")
 def propagate_signs(indptr, indices, normals, sign, component):
     """Fill ``sign`` (+1/-1 per element) and ``component`` (ids from 0); return the
@@ -63,15 +72,9 @@ def propagate_signs(indptr, indices, normals, sign, component):
                     p = (i - 1) >> 2
                     if _before(hkey[p], hent[p], key, t):
                         break
-                    hkey[i] = hkey[p]
-                    hent[i] = hent[p]
-                    hel[i] = hel[p]
-                    at[hel[i]] = i
+                    _put(hkey, hent, hel, at, i, hkey[p], hent[p], hel[p])
                     i = p
-                hkey[i] = key
-                hent[i] = t
-                hel[i] = w
-                at[w] = i
+                _put(hkey, hent, hel, at, i, key, t, w)
             if size == 0:
                 break
             v = hel[0]
@@ -92,15 +95,9 @@ def propagate_signs(indptr, indices, normals, sign, component):
                             m = c2
                     if not _before(hkey[m], hent[m], key, t):
                         break
-                    hkey[i] = hkey[m]
-                    hent[i] = hent[m]
-                    hel[i] = hel[m]
-                    at[hel[i]] = i
+                    _put(hkey, hent, hel, at, i, hkey[m], hent[m], hel[m])
                     i = m
-                hkey[i] = key
-                hent[i] = t
-                hel[i] = x
-                at[x] = i
+                _put(hkey, hent, hel, at, i, key, t, x)
             u = source[v]
             done[v] = True
             component[v] = n_comp
