@@ -149,3 +149,42 @@ def test_evaluate_hand_worked(plane):
     assert m["compactness"] == pytest.approx(compactness(plane, sf))
     with pytest.raises(ValueError, match="no ground-truth"):
         evaluate(plane, sf, [])
+
+
+def test_evaluate_ignores_unlabelled_elements(plane):
+    # three strips: x < -0.5 is unlabelled (-1), then two labelled halves of the rest
+    gt = by_x(plane, [-0.5, 0.25]) - 1           # -1 | 0 | 1
+    # superfacet 0 covers the unlabelled strip and the labelled strip [-0.5, 0.25]:
+    # its labelled part lies in one class, so nothing leaks
+    sf = by_x(plane, [0.25])
+    m = evaluate(plane, sf, [gt], ignore_label=-1)
+    assert m["undersegmentation_error"] == 0.0
+    assert m["achievable_accuracy"] == pytest.approx(1.0)
+    assert m["boundary_recall"] == pytest.approx(1.0)  # the -1|0 border is no boundary
+    # without ignoring, the unlabelled strip is a class that superfacet 0 straddles
+    plain = evaluate(plane, sf, [gt])
+    assert plain["undersegmentation_error"] > 0.2
+    assert plain["boundary_recall"] < 1.0
+    # a superfacet straddling two labelled classes, measured on the labelled area (3)
+    sf2 = by_x(plane, [-0.5, 0.5])                # [-1,-0.5) | [-0.5,0.5) | [0.5,1]
+    m2 = evaluate(plane, sf2, [gt], ignore_label=-1)
+    # middle superfacet (area 2, all labelled): 1.5 in class 0, 0.5 in class 1; both
+    # overlaps exceed tau, so it leaks 0.5 + 1.5 = 2 over labelled area 3
+    assert m2["undersegmentation_error"] == pytest.approx(2 / 3)
+    assert m2["achievable_accuracy"] == pytest.approx((1.5 + 1.0) / 3)
+    with pytest.raises(ValueError, match="unlabelled"):
+        evaluate(plane, sf, [np.full(plane.n_faces, -1)], ignore_label=-1)
+
+
+def test_evaluate_ignore_label_equal_weight_counts_labelled_elements(plane):
+    gt = by_x(plane, [-0.5, 0.25]) - 1
+    sf = by_x(plane, [0.0])
+    a = evaluate(plane, sf, [gt], ignore_label=-1, equal_weight=True)
+    b = evaluate(plane, sf, [gt], ignore_label=-1)
+    # a uniform grid: every face has the same area, so counting equals weighing
+    assert a["undersegmentation_error"] == pytest.approx(b["undersegmentation_error"])
+    assert a["achievable_accuracy"] == pytest.approx(b["achievable_accuracy"])
+    # the superfacet border at x = 0 is 2.5 cells from the only labelled boundary (0.25)
+    assert a["boundary_recall"] == 0.0
+    assert evaluate(plane, by_x(plane, [0.25]), [gt], ignore_label=-1,
+                    equal_weight=True)["boundary_recall"] == 1.0

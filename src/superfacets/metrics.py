@@ -231,9 +231,11 @@ def _near_boundary(g, s: np.ndarray, tolerance: int) -> np.ndarray:
     return near
 
 
-def _recall(g, near: np.ndarray, gt: np.ndarray) -> float:
+def _recall(g, near: np.ndarray, gt: np.ndarray, labelled: np.ndarray | None = None) -> float:
     i, j = g.pairs[:, 0], g.pairs[:, 1]
     gt_edge = gt[i] != gt[j]
+    if labelled is not None:
+        gt_edge &= labelled[i] & labelled[j]
     if not gt_edge.any():
         return 1.0
     length = g.lengths[gt_edge]
@@ -241,10 +243,14 @@ def _recall(g, near: np.ndarray, gt: np.ndarray) -> float:
     return float(length[hit].sum() / length.sum())
 
 
-def _recall_elements(g, near: np.ndarray, gt: np.ndarray) -> float:
-    """Fraction of ground-truth boundary elements that are ``near`` a superfacet boundary."""
+def _recall_elements(g, near: np.ndarray, gt: np.ndarray,
+                     labelled: np.ndarray | None = None) -> float:
+    """Fraction of ground-truth boundary elements that are ``near`` a superfacet boundary
+    (adjacencies with an unlabelled end, where ``labelled`` is given, are no boundary)."""
     i, j = g.pairs[:, 0], g.pairs[:, 1]
     cut = gt[i] != gt[j]
+    if labelled is not None:
+        cut &= labelled[i] & labelled[j]
     on = np.zeros(g.n_elements, dtype=bool)
     on[i[cut]] = True
     on[j[cut]] = True
@@ -282,7 +288,8 @@ def mean_over_ground_truths(metric: Callable[..., float], graph, labels,
 
 
 def evaluate(graph, labels, ground_truths: Sequence[np.ndarray], *, tau: float = 0.05,
-             tolerance: int = 1, equal_weight: bool = False) -> dict:
+             tolerance: int = 1, equal_weight: bool = False,
+             ignore_label: int | None = None) -> dict:
     """Every metric of one segmentation, averaged over the ground truths.
 
     Computes one contingency table per ground truth (shared by the
@@ -309,6 +316,13 @@ def evaluate(graph, labels, ground_truths: Sequence[np.ndarray], *, tau: float =
         neighbour in another segment) within ``tolerance`` rings of a
         superfacet boundary. The compactness stays geometric (eq. 5 on the
         graph's sizes and border lengths).
+    ignore_label : int, optional
+        A ground-truth value meaning *unlabelled* (a scan's points that no
+        annotator labelled, e.g. SemanticKITTI's class 0): those elements
+        weigh nothing in the undersegmentation error and the achievable
+        accuracy, and neither they nor their adjacencies count as ground-truth
+        boundary. The superfacets themselves are left whole (their labelled
+        part is what is measured). The compactness is unaffected.
 
     Returns
     -------
@@ -337,12 +351,21 @@ def evaluate(graph, labels, ground_truths: Sequence[np.ndarray], *, tau: float =
     counted = replace(g, sizes=np.ones(g.n_elements)) if equal_weight else g
     ue, br, asa = [], [], []
     for gt in ground_truths:
-        t = contingency(counted, s, gt)
-        ue.append(undersegmentation_error(counted, s, gt, tau=tau, table=t))
-        asa.append(achievable_segmentation_accuracy(counted, s, gt, table=t))
+        this = counted
+        labelled = None
+        if ignore_label is not None:
+            labelled = check_labels(gt, g.n_elements, "ground_truth", per=g.element) \
+                != ignore_label
+            if not labelled.any():
+                raise ParameterError(f"every element of a ground truth is unlabelled "
+                                     f"(ignore_label={ignore_label})")
+            this = replace(counted, sizes=np.where(labelled, counted.sizes, 0.0))
+        t = contingency(this, s, gt)
+        ue.append(undersegmentation_error(this, s, gt, tau=tau, table=t))
+        asa.append(achievable_segmentation_accuracy(this, s, gt, table=t))
         dense_gt = _dense(g, gt, "ground_truth")
-        br.append(_recall_elements(g, near, dense_gt) if equal_weight else
-                  _recall(g, near, dense_gt))
+        br.append(_recall_elements(g, near, dense_gt, labelled) if equal_weight else
+                  _recall(g, near, dense_gt, labelled))
     return {"undersegmentation_error": float(np.mean(ue)),
             "compactness": compactness(g, s),
             "boundary_recall": float(np.mean(br)),

@@ -1,1 +1,1 @@
-"""Readers of public data sets (the Princeton segmentation benchmark)."""
+"""Readers of public data sets (the Princeton segmentation benchmark, labelled real scans)."""

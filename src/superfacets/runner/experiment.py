@@ -73,9 +73,7 @@ def _prepared(path: str, seg_paths: tuple, elements: str, n_points: int, seed: i
 
 def _element_values(source):
     """Per-row values -> per-element values (the first row of each element)."""
-    idx = np.flatnonzero(source.index >= 0)
-    first = np.empty(source.graph.n_elements, dtype=np.int64)
-    first[source.index[idx][::-1]] = idx[::-1]
+    first = source.first_rows(np.arange(source.graph.n_elements))
     return lambda values: np.asarray(values)[first]
 
 

@@ -1,0 +1,127 @@
+"""Superpoints on labelled real scans, against the tools scan users run, at equal counts.
+
+Usage: python benchmarks/real_scans.py [--scans NAME ...] [-k 250 1000 4000]
+       [--methods superfacets graph_segmentation cut_pursuit vccs] [--beta 0 50]
+       [--csv results.csv] [--download]
+
+Each scan of ``superfacets.datasets.scans.SCANS`` found in the cache
+(``$SUPERFACETS_SCANS``, default ``~/.cache/superfacets/scans``; ``--download``
+fetches the missing ones, a few MB each) is segmented by every method at
+each k, on the same point graph (10 nearest neighbours), and measured
+against its per-point classes (unlabelled points left out; each point
+weighs the same): undersegmentation error (eq. 4, lower is better),
+boundary recall and achievable accuracy (higher is better), the number of
+superpoints and the seconds (in process, one after the other, this
+machine's threads).
+
+Methods (the registry's, so ``superfacets experiment`` runs the same code):
+
+- ``superfacets``: this package's default on points; with ``--beta B`` also
+  the colour term (scans with RGB only);
+- ``graph_segmentation``: the ScanNet Segmentator's method, its threshold
+  searched for k;
+- ``cut_pursuit``: Superpoint Graph's partition (``cut-pursuit-py``, the
+  ``baselines`` extra), its regularisation searched for k; skipped if not
+  installed;
+- ``vccs``: PCL's supervoxels through the external ``vccs_supervoxel``
+  module (docs/superpoints.md says how to build it), its seed resolution
+  searched for k; skipped if it is not importable.
+
+Prints a Markdown table per scan; ``--csv`` also writes every row.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import importlib.util
+import sys
+import time
+
+import numpy as np
+
+METHODS = ("superfacets", "graph_segmentation", "cut_pursuit", "vccs")
+COLUMNS = ("scan", "points", "method", "beta", "k", "segments", "undersegmentation_error",
+           "boundary_recall", "achievable_accuracy", "seconds")
+
+
+def available(method: str) -> bool:
+    if method == "cut_pursuit":
+        return importlib.util.find_spec("cp_kmpp") is not None or \
+            importlib.util.find_spec("cut_pursuit_py") is not None
+    if method == "vccs":
+        return importlib.util.find_spec("vccs_supervoxel") is not None
+    return True
+
+
+def run(scan, method: str, k: int, beta: float) -> dict:
+    from superfacets import segment
+    from superfacets.datasets.scans import evaluate_scan
+    from superfacets.methods import get_method
+
+    t0 = time.perf_counter()
+    if method == "superfacets":  # the registry's run, with the colour weight
+        labels = segment(scan.cloud, k, beta=beta).labels
+    else:
+        m = get_method(method)
+        labels = m.run(scan.cloud, k, cache={}, seed=0, elements="points",
+                       **m.resolve({})).labels
+    seconds = time.perf_counter() - t0
+    row = evaluate_scan(scan, np.asarray(labels))
+    row.update(seconds=seconds)
+    return row
+
+
+def main() -> None:
+    from superfacets.datasets.scans import SCANS, fetch_scan, load_scan, scan_files
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scans", nargs="+", default=list(SCANS), choices=list(SCANS))
+    ap.add_argument("-k", type=int, nargs="+", default=[250, 1000, 4000])
+    ap.add_argument("--methods", nargs="+", default=list(METHODS), choices=METHODS)
+    ap.add_argument("--beta", type=float, nargs="+", default=[0.0, 50.0],
+                    help="colour weights of superfacets (non-zero only on scans with RGB)")
+    ap.add_argument("--csv", help="also write every row to this CSV file")
+    ap.add_argument("--download", action="store_true", help="fetch missing scans first")
+    a = ap.parse_args()
+
+    rows = []
+    for name in a.scans:
+        if a.download:
+            fetch_scan(name)
+        missing = [p for p in scan_files(name) if not p.is_file()]
+        if missing:
+            print(f"skipped {name}: {missing[0]} is missing (--download fetches it)",
+                  file=sys.stderr)
+            continue
+        scan = load_scan(name)
+        n = int(scan.cloud.n_total)
+        coloured = scan.cloud.colors is not None
+        print(f"\n### {name}: {n:,} points, {scan.source.kind}"
+              f"{', RGB' if coloured else ''}\n")
+        print("| k | method | UE | boundary recall | achievable accuracy | superpoints | s |")
+        print("|---|---|---|---|---|---|---|")
+        for k in a.k:
+            for method in a.methods:
+                if not available(method):
+                    print(f"| {k} | {method} | not installed | | | | |")
+                    continue
+                betas = [b for b in a.beta if b == 0 or coloured] \
+                    if method == "superfacets" else [0.0]
+                for beta in betas:
+                    r = run(scan, method, k, beta)
+                    label = method + (f" beta={beta:g}" if beta else "")
+                    print(f"| {k} | {label} | {r['undersegmentation_error']:.4f} | "
+                          f"{r['boundary_recall']:.4f} | {r['achievable_accuracy']:.4f} | "
+                          f"{r['segments']} | {r['seconds']:.1f} |", flush=True)
+                    rows.append(dict(scan=name, points=n, method=method, beta=beta, k=k,
+                                     **{c: r[c] for c in COLUMNS[5:]}))
+    if a.csv:
+        with open(a.csv, "w", newline="") as fh:
+            w = csv.DictWriter(fh, fieldnames=COLUMNS)
+            w.writeheader()
+            w.writerows(rows)
+
+
+if __name__ == "__main__":
+    main()

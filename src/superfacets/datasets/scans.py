@@ -1,0 +1,323 @@
+"""Labelled real scans: public LiDAR point clouds with per-point ground truth.
+
+Superpoints are judged on real scans (noise, uneven density, occlusion) by
+the same metrics as on meshes, against each point's annotated class. The
+scans listed in :data:`SCANS` are small public files from the test and demo
+data of well-known open-source projects, pinned to one commit and checked by
+SHA-256. They are never part of this repository: :func:`fetch_scan`
+downloads them once into a cache folder (``$SUPERFACETS_SCANS``, by default
+``~/.cache/superfacets/scans``), and :func:`load_scan` reads them from there.
+
+Ground truth is the annotated class of each point (semantic labels, the
+usual ground truth of superpoint benchmarks on scans: S3DIS, SemanticKITTI,
+DALES). Points that no annotator labelled carry :data:`UNLABELLED` and are
+left out of the metrics (``evaluate(..., ignore_label=UNLABELLED)``).
+
+Examples
+--------
+>>> from superfacets.datasets.scans import load_scan  # doctest: +SKIP
+>>> scan = load_scan("semantickitti-000700")          # doctest: +SKIP
+>>> scan.cloud.n_total, scan.ground_truth.shape       # doctest: +SKIP
+(85962, (85962,))
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import urllib.request
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import MeshFormatError, ParameterError
+
+__all__ = ["Scan", "ScanSource", "SCANS", "UNLABELLED", "scan_cache", "scan_files",
+           "fetch_scan", "load_scan", "missing_help", "evaluate_scan"]
+
+#: The ground-truth value of a point that no annotator labelled.
+UNLABELLED = -1
+
+
+@dataclass(frozen=True)
+class ScanSource:
+    """One labelled scan: where its files come from and how its labels are read.
+
+    Attributes
+    ----------
+    name : str
+        Key in :data:`SCANS`.
+    kind : str
+        The sensor and scene, for tables (``"mobile LiDAR, street"``).
+    files : tuple of (str, str, str)
+        ``(file name in the cache, URL, SHA-256)`` of each file.
+    labels : str
+        How the ground truth is read: ``"semantickitti"`` (a second ``.npy``
+        of the 19 training classes, 0 unlabelled) or ``"las"`` (the LAS
+        ``classification`` field, ASPRS codes; 0, "never classified", is
+        unlabelled).
+    credit : str
+        Who made the data and under which licence.
+    """
+
+    name: str
+    kind: str
+    files: tuple
+    labels: str
+    credit: str
+
+
+def _github(repo: str, commit: str, path: str) -> str:
+    return f"https://raw.githubusercontent.com/{repo}/{commit}/{path}"
+
+
+_O3D = ("isl-org/Open3D-ML", "0cbfde63a7eb5821f73118bbe0cf20ca353bb974")
+_PDAL = ("PDAL/PDAL", "ccf0ab7046072f68cab78734e90d0d3149f3af10")
+
+
+def _kitti(frame: str, points_sha: str, labels_sha: str) -> ScanSource:
+    base = "examples/demo_data/SemanticKITTI"
+    return ScanSource(
+        f"semantickitti-{frame}", "mobile LiDAR (Velodyne HDL-64E), street",
+        ((f"semantickitti_{frame}_points.npy", _github(*_O3D, f"{base}/points/{frame}.npy"),
+          points_sha),
+         (f"semantickitti_{frame}_labels.npy", _github(*_O3D, f"{base}/labels/{frame}.npy"),
+          labels_sha)),
+        "semantickitti",
+        "SemanticKITTI (Behley et al., ICCV 2019; CC BY-NC-SA 4.0), sequence 08 frame "
+        f"{frame} as shipped in Open3D-ML's demo data (19 classes, 0 unlabelled)")
+
+
+#: The labelled scans, by name.
+SCANS: dict[str, ScanSource] = {s.name: s for s in (
+    _kitti("000700", "b973b11a6eb4d0bab3e25b2cff811bab8184194e49e8bdfef6a51646c0368fb4",
+           "bf17c72c6b148fb2820b9446faa6e9b96926c6f495c1ea8bcdbb2d05f9edbe62"),
+    _kitti("000750", "b2c1ea24de6301a87615a821e75fc82d2fc551798b3525fc2ab1f258e0b2cb7f",
+           "bfed4664e59cd49b2b25092579bdea2b81a22a43045bfdc24feac40e5ce5c347"),
+    ScanSource(
+        "lidarhd-rgb", "airborne LiDAR with RGB, town edge",
+        (("lidarhd_rgb.laz", _github(*_PDAL, "test/data/laz/las_with_several_extra_byte_bloc.laz"),
+          "4acb579c77e2b8eb07136d55857481122d87991490aa7c875893341005e043e7"),),
+        "las",
+        "an IGN LiDAR HD tile crop (France, Licence Ouverte 2.0) coloured from ortho-imagery, "
+        "from PDAL's test data: ASPRS classes ground, low/medium/high vegetation, building, "
+        "unclassified and 65"),
+    ScanSource(
+        "autzen-rgb", "airborne LiDAR with RGB, suburb",
+        (("autzen_trim.las", _github(*_PDAL, "test/data/las/autzen_trim.las"),
+          "3d351885f3aa03d5ac92358037ba0b850ea4f56f644ffcc56d57cd5d830aaf75"),),
+        "las",
+        "the Autzen Stadium survey (Oregon; public) trimmed, from PDAL's test data: ASPRS "
+        "classes ground and unclassified (everything above ground)"),
+)}
+
+
+@dataclass
+class Scan:
+    """A labelled scan read from the cache.
+
+    Attributes
+    ----------
+    name : str
+    cloud : PointCloud
+        The points in file order (colours where the file has them).
+    ground_truth : (N,) int64 ndarray
+        One class per point, in file order; :data:`UNLABELLED` (-1) where no
+        annotator labelled the point.
+    source : ScanSource
+    """
+
+    name: str
+    cloud: object
+    ground_truth: np.ndarray
+    source: ScanSource
+
+
+def scan_cache() -> Path:
+    """``$SUPERFACETS_SCANS``, by default ``~/.cache/superfacets/scans``."""
+    default = Path(os.environ.get("SUPERFACETS_CACHE",
+                                  Path.home() / ".cache" / "superfacets")) / "scans"
+    return Path(os.environ.get("SUPERFACETS_SCANS", default))
+
+
+def _source(name: str) -> ScanSource:
+    try:
+        return SCANS[name]
+    except KeyError:
+        raise ParameterError(f"unknown scan {name!r}; known: {', '.join(SCANS)}") from None
+
+
+def scan_files(name: str, cache=None) -> list[Path]:
+    """The paths the files of scan ``name`` have in the cache (present or not)."""
+    folder = Path(cache) if cache is not None else scan_cache()
+    return [folder / f for f, _, _ in _source(name).files]
+
+
+def missing_help(name: str, cache=None) -> str:
+    """What to do when scan ``name`` is not in the cache: the files and where they come from."""
+    src = _source(name)
+    folder = Path(cache) if cache is not None else scan_cache()
+    lines = [f"scan {name!r} is not in {folder}: run fetch_scan({name!r}) (network needed) or "
+             "put these files there (SUPERFACETS_SCANS=DIR to use another folder):"]
+    lines += [f"  {f}  <- {url}  (sha256 {sha[:12]}...)" for f, url, sha in src.files]
+    return "\n".join(lines)
+
+
+def _sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def fetch_scan(name: str, cache=None, *, timeout: float = 60.0) -> list[Path]:
+    """Download the files of scan ``name`` into the cache (those not already there).
+
+    Each file is checked against its SHA-256 and only then moved into place,
+    so an interrupted or corrupted download leaves no file behind.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`SCANS`.
+    cache : path, optional
+        Default :func:`scan_cache`.
+    timeout : float, default 60
+        Seconds per request.
+
+    Returns
+    -------
+    list of Path
+        The scan's files in the cache.
+
+    Raises
+    ------
+    ParameterError
+        On an unknown name.
+    FileNotFoundError
+        When a download fails or its checksum differs (nothing is kept).
+    """
+    src = _source(name)
+    folder = Path(cache) if cache is not None else scan_cache()
+    folder.mkdir(parents=True, exist_ok=True)
+    out = []
+    for fname, url, sha in src.files:
+        path = folder / fname
+        if not (path.is_file() and _sha256(path) == sha):
+            tmp = path.with_name(f".{fname}.{os.getpid()}.part")
+            try:
+                with urllib.request.urlopen(url, timeout=timeout) as resp, open(tmp, "wb") as fh:
+                    while block := resp.read(1 << 20):
+                        fh.write(block)
+                got = _sha256(tmp)
+                if got != sha:
+                    raise FileNotFoundError(f"{url}: checksum {got[:12]}... differs from the "
+                                     f"expected {sha[:12]}...; nothing kept")
+                os.replace(tmp, path)
+            except FileNotFoundError:
+                raise
+            except OSError as exc:
+                raise FileNotFoundError(f"could not download {url}: {exc}") from None
+            finally:
+                tmp.unlink(missing_ok=True)
+        out.append(path)
+    return out
+
+
+def load_scan(name: str, cache=None, *, download: bool = False) -> Scan:
+    """Read labelled scan ``name`` from the cache.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`SCANS`.
+    cache : path, optional
+        Default :func:`scan_cache`.
+    download : bool, default False
+        Fetch missing files first (:func:`fetch_scan`).
+
+    Returns
+    -------
+    Scan
+
+    Raises
+    ------
+    ParameterError
+        On an unknown name.
+    FileNotFoundError
+        When a file is missing (the message lists the files and their
+        sources).
+    MeshFormatError
+        When the labels do not match the points, or a file is malformed.
+    """
+    from ..io import read_cloud
+
+    src = _source(name)
+    paths = scan_files(name, cache)
+    if download:
+        paths = fetch_scan(name, cache)
+    missing = [p for p in paths if not p.is_file()]
+    if missing:
+        raise FileNotFoundError(missing_help(name, cache))
+    if src.labels == "semantickitti":
+        cloud = read_cloud(paths[0])
+        gt = np.load(paths[1], allow_pickle=False).reshape(-1).astype(np.int64)
+        gt[gt == 0] = UNLABELLED
+    elif src.labels == "las":
+        from ..extras import require
+
+        laspy = require("laspy", "reading LAS/LAZ files")
+        cloud = read_cloud(paths[0])
+        with laspy.open(paths[0]) as fh:
+            gt = np.asarray(fh.read().classification, dtype=np.int64)
+        gt[gt == 0] = UNLABELLED
+    else:  # pragma: no cover - the registry above is the only source
+        raise ParameterError(f"scan {name!r}: unknown label kind {src.labels!r}")
+    if gt.shape[0] != cloud.n_total:
+        raise MeshFormatError(f"scan {name!r}: {gt.shape[0]} labels for {cloud.n_total} points")
+    return Scan(name, cloud, gt, src)
+
+
+def evaluate_scan(scan: Scan, labels, *, tau: float = 0.05, tolerance: int = 1) -> dict:
+    """The metrics of one labelling of a scan, against its ground truth.
+
+    Measured on the scan's point graph (the one the methods segment: 10
+    nearest neighbours, duplicate points merged, each point graph element
+    taking the class of its first row), each point weighing the same
+    (``evaluate(..., equal_weight=True)``), unlabelled points left out
+    (``ignore_label=UNLABELLED``).
+
+    Parameters
+    ----------
+    scan : Scan
+    labels : (N,) int ndarray
+        One label per point of the file (-1 for invalid points), as
+        :func:`superfacets.segment` and the baselines return them.
+    tau, tolerance
+        As in :func:`superfacets.metrics.evaluate`.
+
+    Returns
+    -------
+    dict
+        ``undersegmentation_error``, ``boundary_recall``,
+        ``achievable_accuracy`` and ``compactness`` (an estimate on points),
+        and ``segments`` (distinct labels among the valid points).
+
+    Raises
+    ------
+    ParameterError
+        If ``labels`` does not have one integer per point.
+    """
+    from ..elements.inputs import elements_of
+    from ..labels import check_labels
+    from ..metrics import evaluate
+
+    source = elements_of(scan.cloud, "points")
+    rows = source.first_rows(np.arange(source.graph.n_elements))
+    lab = check_labels(labels, scan.cloud.n_total, "labels", per="point")[rows]
+    out = evaluate(source.graph, lab, [scan.ground_truth[rows]], tau=tau, tolerance=tolerance,
+                   equal_weight=True, ignore_label=UNLABELLED)
+    out["segments"] = int(np.unique(lab).size)
+    return out
