@@ -17,7 +17,8 @@ machine's threads).
 Methods (the registry's, so ``superfacets experiment`` runs the same code):
 
 - ``superfacets``: this package's default on points; with ``--beta B`` also
-  the colour term (scans with RGB only);
+  the colour term (scans with RGB only); with ``--split-merge`` also
+  split-and-merge (off by default on points);
 - ``graph_segmentation``: the ScanNet Segmentator's method, its threshold
   searched for k;
 - ``cut_pursuit``: Superpoint Graph's partition (``cut-pursuit-py``, the
@@ -54,14 +55,14 @@ def available(method: str) -> bool:
     return True
 
 
-def run(scan, method: str, k: int, beta: float) -> dict:
+def run(scan, method: str, k: int, beta: float, options: dict | None = None) -> dict:
     from superfacets import segment
     from superfacets.datasets.scans import evaluate_scan
     from superfacets.methods import get_method
 
     t0 = time.perf_counter()
     if method == "superfacets":  # the registry's run, with the colour weight
-        labels = segment(scan.cloud, k, beta=beta).labels
+        labels = segment(scan.cloud, k, beta=beta, **(options or {})).labels
     else:
         m = get_method(method)
         labels = m.run(scan.cloud, k, cache={}, seed=0, elements="points",
@@ -81,6 +82,8 @@ def main() -> None:
     ap.add_argument("--methods", nargs="+", default=list(METHODS), choices=METHODS)
     ap.add_argument("--beta", type=float, nargs="+", default=[0.0, 50.0],
                     help="colour weights of superfacets (non-zero only on scans with RGB)")
+    ap.add_argument("--split-merge", action="store_true",
+                    help="also superfacets with split-and-merge (off by default on points)")
     ap.add_argument("--csv", help="also write every row to this CSV file")
     ap.add_argument("--download", action="store_true", help="fetch missing scans first")
     a = ap.parse_args()
@@ -108,13 +111,17 @@ def main() -> None:
                     continue
                 betas = [b for b in a.beta if b == 0 or coloured] \
                     if method == "superfacets" else [0.0]
-                for beta in betas:
-                    r = run(scan, method, k, beta)
-                    label = method + (f" beta={beta:g}" if beta else "")
+                variants = [(b, {}) for b in betas]
+                if method == "superfacets" and a.split_merge:
+                    variants += [(b, {"split_merge": True}) for b in betas]
+                for beta, options in variants:
+                    r = run(scan, method, k, beta, options)
+                    label = method + (f" beta={beta:g}" if beta else "") + \
+                        (" split-and-merge" if options else "")
                     print(f"| {k} | {label} | {r['undersegmentation_error']:.4f} | "
                           f"{r['boundary_recall']:.4f} | {r['achievable_accuracy']:.4f} | "
                           f"{r['segments']} | {r['seconds']:.1f} |", flush=True)
-                    rows.append(dict(scan=name, points=n, method=method, beta=beta, k=k,
+                    rows.append(dict(scan=name, points=n, method=label, beta=beta, k=k,
                                      **{c: r[c] for c in COLUMNS[5:]}))
     if a.csv:
         with open(a.csv, "w", newline="") as fh:

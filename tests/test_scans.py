@@ -54,6 +54,7 @@ def test_semantickitti_labels_read_with_unlabelled_marked(tmp_path):
     np.testing.assert_array_equal(s.ground_truth[:50], UNLABELLED)
     np.testing.assert_array_equal(s.ground_truth[50:], cls[50:])
     assert s.ground_truth.dtype == np.int64
+    np.testing.assert_array_equal(s.cloud.viewpoint, [0, 0, 0])  # the sensor's frame
 
 
 def test_las_classification_read_in_file_order(tmp_path, monkeypatch):
@@ -68,8 +69,8 @@ def test_las_classification_read_in_file_order(tmp_path, monkeypatch):
     las.classification = cls
     las.red = np.full(len(cls), 65535, np.uint16)
     las.green = las.blue = np.zeros(len(cls), np.uint16)
-    las.write(tmp_path / "autzen_trim.las")
-    s = load_scan("autzen-rgb", tmp_path)
+    las.write(tmp_path / "lidarhd_rgb.laz")
+    s = load_scan("lidarhd-rgb", tmp_path)
     expect = cls.astype(np.int64)
     expect[expect == 0] = UNLABELLED
     np.testing.assert_array_equal(s.ground_truth, expect)

@@ -54,7 +54,8 @@ class ScanSource:
         ``(file name in the cache, URL, SHA-256)`` of each file.
     labels : str
         How the ground truth is read: ``"semantickitti"`` (a second ``.npy``
-        of the 19 training classes, 0 unlabelled) or ``"las"`` (the LAS
+        of the 19 training classes, 0 unlabelled; the frame is in the
+        sensor's coordinates, so the cloud's ``viewpoint`` is the origin) or ``"las"`` (the LAS
         ``classification`` field, ASPRS codes; 0, "never classified", is
         unlabelled).
     credit : str
@@ -96,20 +97,14 @@ SCANS: dict[str, ScanSource] = {s.name: s for s in (
     _kitti("000750", "b2c1ea24de6301a87615a821e75fc82d2fc551798b3525fc2ab1f258e0b2cb7f",
            "bfed4664e59cd49b2b25092579bdea2b81a22a43045bfdc24feac40e5ce5c347"),
     ScanSource(
-        "lidarhd-rgb", "airborne LiDAR with RGB, town edge",
+        "lidarhd-rgb", "airborne LiDAR (RIEGL) with RGB",
         (("lidarhd_rgb.laz", _github(*_PDAL, "test/data/laz/las_with_several_extra_byte_bloc.laz"),
           "4acb579c77e2b8eb07136d55857481122d87991490aa7c875893341005e043e7"),),
         "las",
-        "an IGN LiDAR HD tile crop (France, Licence Ouverte 2.0) coloured from ortho-imagery, "
-        "from PDAL's test data: ASPRS classes ground, low/medium/high vegetation, building, "
-        "unclassified and 65"),
-    ScanSource(
-        "autzen-rgb", "airborne LiDAR with RGB, suburb",
-        (("autzen_trim.las", _github(*_PDAL, "test/data/las/autzen_trim.las"),
-          "3d351885f3aa03d5ac92358037ba0b850ea4f56f644ffcc56d57cd5d830aaf75"),),
-        "las",
-        "the Autzen Stadium survey (Oregon; public) trimmed, from PDAL's test data: ASPRS "
-        "classes ground and unclassified (everything above ground)"),
+        "a crop of an airborne survey of France (Lambert-93 coordinates, RIEGL scanner, "
+        "classified with TerraScan in the IGN LiDAR HD scheme, coloured), from PDAL's test "
+        "data: ASPRS classes ground, low/medium/high vegetation, building, unclassified, "
+        "and 65 (IGN's artefacts)"),
 )}
 
 
@@ -141,6 +136,10 @@ def scan_cache() -> Path:
     return Path(os.environ.get("SUPERFACETS_SCANS", default))
 
 
+def _folder(cache) -> Path:
+    return Path(cache) if cache is not None else scan_cache()
+
+
 def _source(name: str) -> ScanSource:
     try:
         return SCANS[name]
@@ -150,14 +149,14 @@ def _source(name: str) -> ScanSource:
 
 def scan_files(name: str, cache=None) -> list[Path]:
     """The paths the files of scan ``name`` have in the cache (present or not)."""
-    folder = Path(cache) if cache is not None else scan_cache()
+    folder = _folder(cache)
     return [folder / f for f, _, _ in _source(name).files]
 
 
 def missing_help(name: str, cache=None) -> str:
     """What to do when scan ``name`` is not in the cache: the files and where they come from."""
     src = _source(name)
-    folder = Path(cache) if cache is not None else scan_cache()
+    folder = _folder(cache)
     lines = [f"scan {name!r} is not in {folder}: run fetch_scan({name!r}) (network needed) or "
              "put these files there (SUPERFACETS_SCANS=DIR to use another folder):"]
     lines += [f"  {f}  <- {url}  (sha256 {sha[:12]}...)" for f, url, sha in src.files]
@@ -200,7 +199,7 @@ def fetch_scan(name: str, cache=None, *, timeout: float = 60.0) -> list[Path]:
         When a download fails or its checksum differs (nothing is kept).
     """
     src = _source(name)
-    folder = Path(cache) if cache is not None else scan_cache()
+    folder = _folder(cache)
     folder.mkdir(parents=True, exist_ok=True)
     out = []
     for fname, url, sha in src.files:
@@ -262,7 +261,10 @@ def load_scan(name: str, cache=None, *, download: bool = False) -> Scan:
     if missing:
         raise FileNotFoundError(missing_help(name, cache))
     if src.labels == "semantickitti":
-        cloud = read_cloud(paths[0])
+        from dataclasses import replace
+
+        # a Velodyne frame is in the sensor's coordinates: the sensor is at the origin
+        cloud = replace(read_cloud(paths[0]), viewpoint=np.zeros(3))
         gt = np.load(paths[1], allow_pickle=False).reshape(-1).astype(np.int64)
         gt[gt == 0] = UNLABELLED
     elif src.labels == "las":
