@@ -180,6 +180,82 @@ def test_a_piece_cut_from_a_closed_surface_orients_like_a_reference():
         PointCloud(pts, orient_like=(pts, pts[:10]))
 
 
+def _terrain_with_a_block(seed=4):
+    """A shallow valley ``z = 0.1 r^2`` around (2, 2) on [0, 4]^2 with a 1 x 1 x 0.5
+    block standing in its middle (top and four walls), points about 0.04 apart: an
+    airborne scan's scene in miniature. Returns the points and each one's part
+    (0 ground, 1 top, 2 wall)."""
+    rng = np.random.default_rng(seed)
+    xy = rng.uniform(0, 4, (10000, 2))
+    xy = xy[~((np.abs(xy[:, 0] - 2) < 0.5) & (np.abs(xy[:, 1] - 2) < 0.5))]
+    ground = np.c_[xy, 0.1 * ((xy - 2) ** 2).sum(axis=1)]
+    top = np.c_[rng.uniform(1.5, 2.5, (625, 2)), np.full(625, 0.5)]
+    walls = []
+    for axis in (0, 1):
+        for side in (1.5, 2.5):
+            w = np.c_[rng.uniform(1.5, 2.5, 320), rng.uniform(0.05, 0.5, 320)]
+            p = np.empty((320, 3))
+            p[:, axis], p[:, 1 - axis], p[:, 2] = side, w[:, 0], w[:, 1]
+            walls.append(p)
+    pts = np.vstack([ground, top, *walls])
+    return pts, np.repeat([0, 1, 2], [len(ground), len(top), 4 * 320])
+
+
+def test_an_open_surface_seen_from_above_orients_up_and_its_foot_is_concave():
+    """Turned "outwards" from its own mean, a valley's normals point down (into the
+    ground), and the foot of a block standing in it reads as convex. With ``up`` (what
+    LAS files carry) every piece agrees with the sky: the ground's normals point up and
+    the foot is concave."""
+    pts, part = _terrain_with_a_block()
+
+    def graph(cloud):
+        g, index = elements_of(cloud, "points")[:2]
+        kind = np.empty(g.n_elements, np.int64)
+        kind[index] = part
+        return g, kind
+
+    g, kind = graph(PointCloud(pts))
+    assert (g.normals[kind == 0, 2] < 0).mean() > 0.99  # the defect `up` removes
+    a, b = g.pairs[:, 0], g.pairs[:, 1]
+    foot = ((kind[a] == 0) & (kind[b] == 2)) | ((kind[a] == 2) & (kind[b] == 0))
+    assert foot.sum() > 20 and g.terms.concave[foot].mean() < 0.2
+    g, kind = graph(PointCloud(pts, up=[0, 0, 2.0]))
+    assert (g.normals[kind == 0, 2] > 0).mean() > 0.99
+    assert g.terms.concave[foot].mean() > 0.8
+    # a viewpoint wins over up
+    g, kind = graph(PointCloud(pts, up=[0, 0, 1], viewpoint=[2.0, 2.0, -10.0]))
+    assert (g.normals[kind == 0, 2] < 0).all()
+    assert np.allclose(PointCloud(pts, up=[0, 0, 2.0]).up, [0, 0, 1])
+    for bad in ([0, 0, 0], [0, np.nan, 1], [1, 2]):
+        with pytest.raises(InvalidCloudError, match="up must be"):
+            PointCloud(pts, up=bad)
+
+
+def test_a_las_scan_is_oriented_up(tmp_path):
+    laspy = pytest.importorskip("laspy")
+    from superfacets.io.regions import RegionReader
+    from superfacets.tiling import orientation_reference
+
+    pts, part = _terrain_with_a_block()
+    header = laspy.LasHeader(point_format=1, version="1.2")
+    header.scales = [0.0001] * 3
+    las = laspy.LasData(header)
+    las.x, las.y, las.z = pts[:, 0], pts[:, 1], pts[:, 2]
+    las.write(tmp_path / "terrain.las")
+    cloud = read_cloud(tmp_path / "terrain.las")
+    np.testing.assert_array_equal(cloud.up, [0, 0, 1])
+    g, index = elements_of(cloud, "points")[:2]
+    assert (g.normals[index[part == 0], 2] > 0).mean() > 0.99
+    # tiled runs: the streamed reader and a spilled copy keep it, and the survey's
+    # orientation sample (which every tile follows) is turned up with it
+    assert RegionReader.open(tmp_path / "terrain.las").up == (0.0, 0.0, 1.0)
+    assert RegionReader.spill(cloud, tmp_path / "spill").up == (0.0, 0.0, 1.0)
+    low = pts[part == 0]
+    for up, sign in (((0.0, 0.0, 1.0), 1), (None, -1)):
+        positions, normals = orientation_reference(low, 10, up=up)
+        assert (sign * normals[:, 2] > 0).mean() > 0.99
+
+
 def test_point_normals_face_the_viewpoint_and_a_valley_crease_is_concave(valley):
     pts, _ = sample_points(valley, 6000, seed=1)
     cloud = PointCloud(pts, viewpoint=[0.0, 0.0, 10.0])

@@ -58,6 +58,17 @@ class PointCloud:
         outwards from the piece's mean; a tiled run gives every tile the
         orientation of one sample of the whole input this way. Ignored with
         ``normals`` or ``viewpoint``.
+    up : (3,) float ndarray, optional
+        The side the surface was seen from, on the whole, for a scan of an
+        open surface (a terrain, a street) whose sensor position is not
+        known: estimated normals are turned, each connected piece of the
+        point graph as a whole, so that they agree with this direction by a
+        vote (``sum n_i . up >= 0``) instead of outwards from the piece's
+        mean, which a nearly flat piece decides by its small bumps (a
+        terrain's normals then point down, and its concave edges read as
+        convex). The LAS/LAZ reader sets ``(0, 0, 1)`` (LAS z is elevation:
+        such scans are seen from above or from the side). Made unit.
+        Ignored with ``normals``, ``viewpoint`` or ``orient_like``.
 
     Raises
     ------
@@ -83,6 +94,7 @@ class PointCloud:
     shape: tuple | None = field(default=None, repr=False)
     colors: np.ndarray | None = field(default=None, repr=False)
     orient_like: tuple | None = field(default=None, repr=False)
+    up: np.ndarray | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         where = f"{self.name}: " if self.name else ""
@@ -135,6 +147,13 @@ class PointCloud:
                 raise InvalidCloudError(f"{where}orient_like must be (positions, normals), "
                                         "two finite (R, 3) arrays")
             object.__setattr__(self, "orient_like", ref)
+        if self.up is not None:
+            up = np.asarray(self.up, dtype=np.float64).reshape(-1)
+            length = float(np.linalg.norm(up)) if up.shape == (3,) else 0.0
+            if not (np.isfinite(up).all() and length > 0):
+                raise InvalidCloudError(f"{where}up must be 3 finite numbers, not all zero, "
+                                        f"got {self.up!r}")
+            object.__setattr__(self, "up", up / length)
 
     def __getstate__(self) -> dict:
         # the fields only: the point graphs kept with the cloud hold functions (which

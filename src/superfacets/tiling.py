@@ -168,7 +168,7 @@ def tile_refine(inp, core: np.ndarray, center_rows: np.ndarray, params: SegmentP
     return rows[core[rows]]
 
 
-def orientation_reference(sample: np.ndarray, n_neighbors: int) -> tuple:
+def orientation_reference(sample: np.ndarray, n_neighbors: int, up=None) -> tuple:
     """Oriented normals of an even sample of a cloud's points, for its tiles.
 
     Points that carry no normals and no sensor position get PCA normals,
@@ -179,6 +179,8 @@ def orientation_reference(sample: np.ndarray, n_neighbors: int) -> tuple:
     by two tiles). So the sample the survey keeps (every ``ceil(n / 2^20)``-th
     point) is oriented once, here, as one run would, and every tile turns
     each of its pieces to agree with it (``PointCloud(orient_like=...)``).
+    ``up`` (the input's ``PointCloud.up``; LAS files: z) turns the sample's
+    pieces to agree with that direction instead of outwards.
 
     Returns
     -------
@@ -191,7 +193,7 @@ def orientation_reference(sample: np.ndarray, n_neighbors: int) -> tuple:
     pts = np.asarray(sample, dtype=np.float64)
     if np.unique(pts, axis=0).shape[0] < 3:
         return np.zeros((0, 3)), np.zeros((0, 3))
-    g = point_graph(PointCloud(pts), n_neighbors).graph
+    g = point_graph(PointCloud(pts, up=up), n_neighbors).graph
     return np.array(g.positions), np.array(g.normals)
 
 

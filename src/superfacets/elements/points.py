@@ -20,7 +20,9 @@ weights for adjacent elements". Here each point is an element:
   oriented consistently: towards the sensor when the viewpoint is known,
   else by propagation along a minimum spanning tree of flat steps (Hoppe et
   al. 1992; Prim's tree, ties broken by the order of the adjacency lists)
-  with each connected piece turned outwards (away from its mean).
+  with each connected piece turned outwards (away from its mean), or, for
+  an open surface seen from a known side (``PointCloud.up``: LAS files,
+  z up), turned to agree with that direction.
   PCA's arbitrary signs therefore never reach the convexity test;
 - weight terms as on mesh vertices: geodesic term ``|p_i - p_j|``, the angle
   of the normals scaled by that distance, concave when
@@ -88,7 +90,8 @@ def estimate_normals(points: np.ndarray, neighbors: np.ndarray) -> np.ndarray:
 
 def orient_normals(points: np.ndarray, normals: np.ndarray, indptr: np.ndarray,
                    indices: np.ndarray, viewpoint: np.ndarray | None = None,
-                   reference: tuple | None = None) -> np.ndarray:
+                   reference: tuple | None = None, up: np.ndarray | None = None
+                   ) -> np.ndarray:
     """Flip normals to a consistent orientation (see the module notes).
 
     Parameters
@@ -102,6 +105,11 @@ def orient_normals(points: np.ndarray, normals: np.ndarray, indptr: np.ndarray,
         surface): after the propagation, each connected piece is turned to
         agree with the nearest reference normals, summed over the piece
         (``sum s_i n_i . m_near(i) >= 0``), instead of outwards from its mean.
+    up : (3,) float64 ndarray, optional
+        Without ``reference``: after the propagation, each connected piece is
+        turned to agree with this direction (``sum s_i n_i . up >= 0``),
+        instead of outwards from its mean (an open surface seen from that
+        side: a terrain from above).
 
     Returns
     -------
@@ -118,11 +126,15 @@ def orient_normals(points: np.ndarray, normals: np.ndarray, indptr: np.ndarray,
     n_comp = propagate_signs(indptr, indices, normals, sign, comp)
     out = np.empty_like(normals)
     turn_outwards(points, normals, sign, comp, n_comp, out)
+    agree = None
     if reference is not None and reference[0].shape[0] and n:
         from scipy.spatial import cKDTree
 
         _, near = cKDTree(reference[0]).query(points, k=1, workers=-1)
         agree = np.einsum("ij,ij->i", out, reference[1][near])
+    elif up is not None and n:
+        agree = out @ np.asarray(up, dtype=np.float64)
+    if agree is not None:
         flip = np.bincount(comp, weights=agree, minlength=n_comp) < 0
         out[flip[comp]] *= -1.0
     return out
@@ -330,7 +342,8 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
     else:
         normals = estimate_normals(pts, nbr)
         normals = orient_normals(pts, normals, indptr, indices, cloud.viewpoint,
-                                 getattr(cloud, "orient_like", None))
+                                 getattr(cloud, "orient_like", None),
+                                 getattr(cloud, "up", None))
     degree = np.diff(indptr).astype(np.float64)
     share = 2.0 * np.sqrt(np.pi * area) / np.maximum(degree, 1.0)
     lengths = 0.5 * (share[lo] + share[hi])

@@ -238,7 +238,9 @@ def _read_las(path: Path) -> dict:
     except Exception as exc:  # noqa: BLE001 - laspy raises many types
         msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise MeshFormatError(f"{path}: cannot read {path.suffix.upper()[1:]}: {msg}") from None
-    return {"points": pts.astype(np.float64), "colors": col}
+    # LAS z is elevation: an airborne, mobile or terrestrial scan sees its surfaces from
+    # above or from the side, so estimated normals are turned upwards piece by piece
+    return {"points": pts.astype(np.float64), "colors": col, "up": np.array([0.0, 0.0, 1.0])}
 
 
 def _read_npy(data: bytes, path: Path) -> dict:

@@ -91,6 +91,9 @@ class RegionReader:
     #: sensor position of a scan (a PCD's ``VIEWPOINT``): every tile turns its estimated
     #: normals towards it, so tiles orient them alike
     viewpoint: tuple | None = None
+    #: the side an open surface was seen from (LAS: z up, ``PointCloud.up``): the survey's
+    #: orientation sample is turned to agree with it, and the tiles with the sample
+    up: tuple | None = None
 
     # ------------------------------------------------------------------ opening
     @classmethod
@@ -123,7 +126,7 @@ class RegionReader:
                     n = int(f.header.point_count)
             except Exception as exc:  # noqa: BLE001 - laspy raises many types
                 raise MeshFormatError(f"{p}: cannot read {suffix.upper()}: {_first(exc)}") from None
-            return cls(str(p), "points", "las", n, chunk)
+            return cls(str(p), "points", "las", n, chunk, up=(0.0, 0.0, 1.0))
         if suffix == "npy":
             arr = _npy(p)
             if arr.ndim != 2 or arr.shape[1] != 3:
@@ -164,7 +167,9 @@ class RegionReader:
                 if a is not None:
                     np.save(folder / f"{name}.npy", np.ascontiguousarray(a, dtype=np.float64))
             vp = None if obj.viewpoint is None else tuple(float(x) for x in obj.viewpoint)
-            return cls(str(folder), "points", "npy-points", int(pts.shape[0]), chunk, vp)
+            up = getattr(obj, "up", None)
+            return cls(str(folder), "points", "npy-points", int(pts.shape[0]), chunk, vp,
+                       None if up is None else tuple(float(x) for x in up))
         faces = obj.faces
         if faces.ndim != 2 or faces.shape[1] != 3:
             raise MeshFormatError(f"{obj.name or 'mesh'}: a tiled run takes triangle meshes "

@@ -297,6 +297,7 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
         # tiles its box overlaps, not the whole file; without a folder the workers share
         # (a remote scheduler and no workdir) every task reads the file
         shared = scheduler is None or workdir is not None
+        up = getattr(reader, "up", None)  # (the buckets keep the viewpoint, not this)
         if shared and n_tiles > 1:
             t = time.perf_counter()
             reader = bucket(reader, layout, Path(tmp) / "buckets", progress=progress)
@@ -304,7 +305,8 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
         reference = None
         if reader.kind == "points" and not survey.normals and reader.viewpoint is None:
             t = time.perf_counter()
-            reference = np.hstack(orientation_reference(survey.sample, params.n_neighbors))
+            reference = np.hstack(orientation_reference(survey.sample, params.n_neighbors,
+                                                        up))
             if shared:  # read by the tasks from the work folder, not shipped with each
                 np.save(Path(tmp) / "orientation.npy", reference)
                 reference = str(Path(tmp) / "orientation.npy")
