@@ -455,6 +455,43 @@ def test_cli_bad_cloud_input_writes_nothing(tmp_path, capsys):
     assert "needs a mesh" in capsys.readouterr().err and not out.exists()
 
 
+def test_cli_orients_a_scan_by_viewpoint_or_side(tmp_path, capsys):
+    """``--seen-from z`` on an open terrain gives the labels of ``PointCloud(up=z)``, and
+    ``--viewpoint`` those of ``PointCloud(viewpoint=...)``; bad values and ``--tiles`` are
+    refused in one line, writing nothing."""
+    pts, _ = _terrain_with_a_block()
+    np.save(tmp_path / "t.npy", pts)
+    out = tmp_path / "t.seg"
+    for flags, cloud in ((["--seen-from", "z"], PointCloud(pts, up=[0, 0, 1])),
+                         (["--viewpoint", "2,2,30"], PointCloud(pts, viewpoint=[2, 2, 30])),
+                         ([], PointCloud(pts))):
+        assert main(["segment", str(tmp_path / "t.npy"), "-k", "12", "-o", str(out), "-q",
+                     *flags]) == 0
+        np.testing.assert_array_equal(read_labels(out), segment(cloud, 12).labels)
+    for flags, msg in ((["--viewpoint", "1,2"], "expected x,y,z"),
+                       (["--seen-from", "up"], "invalid choice"),
+                       (["--tiles", "2", "--seen-from", "z"], "--seen-from is not taken")):
+        out.unlink(missing_ok=True)
+        code = None
+        try:
+            code = main(["segment", str(tmp_path / "t.npy"), "-k", "12", "-o", str(out),
+                         *flags])
+        except SystemExit as exc:  # argparse
+            code = exc.code
+        assert code == 2 and not out.exists()
+        err = capsys.readouterr().err
+        assert msg in err and "Traceback" not in err
+
+
+def test_superpoints_viewpoint_keeps_the_clouds_colours():
+    pts = sphere_points(3000)
+    colors = (pts[:, :1] > 0) * np.array([[1.0, 0.0, 0.0]]) + 0.0
+    cloud = PointCloud(pts, colors=colors)
+    with_vp = superpoints(cloud, 20, viewpoint=[0, 0, 0], beta=200)
+    direct = segment(PointCloud(pts, colors=colors, viewpoint=[0, 0, 0]), 20, beta=200).labels
+    np.testing.assert_array_equal(with_vp, direct)
+
+
 # ----------------------------------------------------------------- the baseline
 def test_graph_segmentation_splits_at_a_crease_and_keeps_flat_parts_whole(valley):
     labels = graph_segmentation(valley)

@@ -340,7 +340,9 @@ def superpoints(points, n_segments: int | None = _D.n_segments, *, normals=None,
     >>> labels.shape, int(labels.max()) + 1
     ((2000,), 20)
     """
-    from .cloud import PointCloud, as_cloud
+    from dataclasses import replace
+
+    from .cloud import as_cloud
 
     if "elements" in options and options["elements"] not in (None, "points"):
         raise ParameterError("superpoints segments points; use superfacets() for meshes")
@@ -348,8 +350,7 @@ def superpoints(points, n_segments: int | None = _D.n_segments, *, normals=None,
     params = resolve(n_segments=n_segments, n_neighbors=n_neighbors,
                      neighbor_radius=neighbor_radius, elements="points", **options)
     cloud = as_cloud(points, normals)
-    if viewpoint is not None:
-        cloud = PointCloud(cloud.points, cloud.normals, name=cloud.name, viewpoint=viewpoint,
-                           allow_invalid=cloud.allow_invalid, shape=cloud.shape)
+    if viewpoint is not None:  # the cloud's other fields (colours, up, ...) kept
+        cloud = replace(cloud, viewpoint=viewpoint)
     labels = pipeline(cloud, params).labels
     return labels.reshape(cloud.shape) if cloud.shape is not None else labels

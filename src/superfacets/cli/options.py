@@ -17,7 +17,7 @@ from ..params import DEFAULT_CENTER_TOL as _D_CENTER_TOL
 
 __all__ = ["int_arg", "float_arg", "size_arg", "view_arg", "add_method_options",
            "add_camera_options", "add_mesh_and_labels", "method_kwargs", "check_output",
-           "labels_for", "fmt_value"]
+           "labels_for", "fmt_value", "add_scan_options", "scan_cloud", "point_arg"]
 
 _D = DEFAULTS
 
@@ -56,6 +56,48 @@ def view_arg(text: str):
         except ValueError:
             raise argparse.ArgumentTypeError(f"expected a name or x,y,z, got {text!r}") from None
     return text
+
+
+def point_arg(text: str) -> tuple:
+    """argparse type: three numbers ``x,y,z``."""
+    try:
+        out = tuple(float(t) for t in text.split(","))
+    except ValueError:
+        out = ()
+    if len(out) != 3:
+        raise argparse.ArgumentTypeError(f"expected x,y,z (three numbers), got {text!r}")
+    return out
+
+
+#: ``--seen-from`` axis names and their directions.
+AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0),
+        "-x": (-1.0, 0.0, 0.0), "-y": (0.0, -1.0, 0.0), "-z": (0.0, 0.0, -1.0)}
+
+
+def add_scan_options(p: argparse.ArgumentParser) -> None:
+    """How the estimated normals of a point cloud are oriented (scans)."""
+    p.add_argument("--viewpoint", type=point_arg, default=None, metavar="X,Y,Z",
+                   help="point clouds: the sensor's position; estimated normals face it "
+                        "(default: a PCD's VIEWPOINT, else none)")
+    p.add_argument("--seen-from", choices=tuple(AXES), default=None, metavar="AXIS",
+                   help="point clouds of open surfaces (terrain, streets) without a "
+                        "viewpoint: the side they were scanned from (x, y, z, -x, -y, -z); "
+                        "each piece's normals are turned to agree with it (default: z for "
+                        ".las/.laz, else outwards from each piece's mean)")
+
+
+def scan_cloud(data, args):
+    """``data`` with :func:`add_scan_options` applied (a point cloud; else unchanged)."""
+    from dataclasses import replace
+
+    changes = {}
+    if getattr(args, "viewpoint", None) is not None:
+        changes["viewpoint"] = args.viewpoint
+    if getattr(args, "seen_from", None) is not None:
+        changes["up"] = AXES[args.seen_from]
+    if not changes or hasattr(data, "faces"):
+        return data
+    return replace(data, **changes)
 
 
 def fmt_value(v) -> str:

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..params import DEFAULTS
 from .options import (add_camera_options, add_element_options, add_method_options,
+                      add_scan_options, scan_cloud,
                       check_labels_output,
                       check_output, element_kwargs, float_arg, fmt_value, int_arg,
                       method_kwargs, named_after, read_usable)
@@ -32,6 +33,7 @@ def add_parsers(sub) -> None:
     p.add_argument("mesh", metavar="INPUT", help="input mesh, point-cloud or tetrahedral-mesh file (.msh, .vtk, .vtu, .mesh)")
     add_method_options(p)
     add_element_options(p)
+    add_scan_options(p)
     p.add_argument("-o", "--output", metavar="OUT.seg", default=None,
                    help="write the labels here: one per face, vertex or point per line, or "
                         "{'segIndices': [...], 'params': ...} when it ends in .json "
@@ -195,7 +197,7 @@ def cmd_segment(args) -> int:
             warmup.say_if_cold()
         warmup.start()  # numba's start-up in a thread, while the rest is imported and read
     t0 = time.perf_counter()
-    data = read_usable(args.mesh, clouds=True)
+    data = scan_cloud(read_usable(args.mesh, clouds=True), args)
     from ..scenes import segment_objects
     from ..segmentation import segment
 

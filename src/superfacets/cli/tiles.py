@@ -61,6 +61,12 @@ def segment_tiles(args) -> int:
         if given:
             raise ParameterError(f"{flag} needs the whole input in one process; not with "
                                  "--tiles (write -o OUT.seg, then view a part)")
+    for flag, given in (("--viewpoint", getattr(args, "viewpoint", None)),
+                        ("--seen-from", getattr(args, "seen_from", None))):
+        if given is not None:
+            raise ParameterError(f"{flag} is not taken by --tiles (a PCD's VIEWPOINT and a "
+                                 "LAS file's z are); in Python, give segment_tiled a "
+                                 "PointCloud(viewpoint=..., up=...)")
     if getattr(args, "elements", None) == "vertices":
         raise ParameterError("--tiles segments faces or points, not vertices")
     seg_out = check_labels_output(args.output, args.mesh)
