@@ -91,7 +91,11 @@ def main() -> None:
     rows = []
     for name in a.scans:
         if a.download:
-            fetch_scan(name)
+            try:
+                fetch_scan(name)
+            except FileNotFoundError as exc:
+                print(f"skipped {name}: {exc}", file=sys.stderr)
+                continue
         missing = [p for p in scan_files(name) if not p.is_file()]
         if missing:
             print(f"skipped {name}: {missing[0]} is missing (--download fetches it)",

@@ -133,6 +133,38 @@ def test_evaluate_one_call(tmp_path, capsys):
     assert "short.seg: has 2 labels but the input has 800 elements" in capsys.readouterr().err
 
 
+def test_evaluate_points_and_vertices_with_unlabelled_rows(tmp_path, capsys):
+    """A labelled scan: one label per point in file order; ``--ignore-label`` leaves the
+    unlabelled points out. A mesh's vertex labels with ``--elements vertices``."""
+    from conftest import grid_mesh
+    from superfacets import write_labels
+
+    rng = np.random.default_rng(0)
+    xy = rng.random((3000, 2))
+    np.save(tmp_path / "scan.npy", np.c_[xy, np.zeros(3000)])
+    truth = (xy[:, 0] > 0.5).astype(int)
+    truth[xy[:, 0] < 0.1] = -1  # unlabelled strip
+    gt = write_labels(tmp_path / "gt.seg", truth)
+    # superpoints: the strip and the left half together, the right half alone
+    sp = write_labels(tmp_path / "sp.seg", (xy[:, 0] > 0.5).astype(int))
+    assert main(["evaluate", str(tmp_path / "scan.npy"), str(sp), str(gt),
+                 "--ignore-label", "-1"]) == 0
+    out = capsys.readouterr().out
+    assert "3000 points, 2 superpoints, 1 ground truths" in out
+    assert "undersegmentation_error 0.0000" in out and "achievable_accuracy     1.0000" in out
+    assert main(["evaluate", str(tmp_path / "scan.npy"), str(sp), str(gt)]) == 0
+    assert "undersegmentation_error 0.0000" not in capsys.readouterr().out  # -1 is a class
+    mesh = grid_mesh(10, 10)
+    off = write_mesh(tmp_path / "plane.off", mesh)
+    vx = write_labels(tmp_path / "v.seg", (mesh.vertices[:, 0] > 0).astype(int))
+    assert main(["evaluate", str(off), str(vx), str(vx), "--elements", "vertices"]) == 0
+    out = capsys.readouterr().out
+    assert "121 vertices, 2 superpoints" in out and "boundary_recall         1.0000" in out
+    assert main(["evaluate", str(tmp_path / "scan.npy"), str(sp), str(gt), "--elements",
+                 "vertices"]) == 2
+    assert "point cloud" in capsys.readouterr().err
+
+
 def test_progress_bar_names_the_stages_then_counts_passes(tmp_path, small_off, capsys):
     assert main(["segment", str(small_off), "-k", "20", "--progress", "-q"]) == 0
     err = capsys.readouterr().err

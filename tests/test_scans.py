@@ -92,6 +92,9 @@ def test_unknown_scan_and_mismatched_labels(tmp_path):
     np.save(tmp_path / "semantickitti_000700_labels.npy", np.ones((7, 1), np.int32))
     with pytest.raises(MeshFormatError, match="7 labels"):
         load_scan("semantickitti-000700", tmp_path)
+    (tmp_path / "semantickitti_000700_labels.npy").write_bytes(b"\x93NUMPY broken")
+    with pytest.raises(MeshFormatError, match="cannot read the labels"):
+        load_scan("semantickitti-000700", tmp_path)
 
 
 def _file_source(monkeypatch, tmp_path, content: bytes, sha: str) -> str:

@@ -21,7 +21,7 @@ from .labels import check_labels
 
 __all__ = ["Contingency", "contingency", "undersegmentation_error", "compactness",
            "achievable_segmentation_accuracy", "boundary_recall", "mean_over_ground_truths",
-           "evaluate", "METRICS"]
+           "evaluate", "evaluate_rows", "METRICS"]
 
 #: The names of the metrics :func:`evaluate` returns, and whether lower is better.
 METRICS = {"undersegmentation_error": True, "compactness": True,
@@ -370,3 +370,68 @@ def evaluate(graph, labels, ground_truths: Sequence[np.ndarray], *, tau: float =
             "compactness": compactness(g, s),
             "boundary_recall": float(np.mean(br)),
             "achievable_accuracy": float(np.mean(asa))}
+
+
+def evaluate_rows(obj, labels, ground_truths: Sequence[np.ndarray], *,
+                  elements: str | None = None, n_neighbors: int = 10, tau: float = 0.05,
+                  tolerance: int = 1, ignore_label: int | None = None) -> dict:
+    """The metrics of labels given per input row: a mesh's faces or vertices, a cloud's points.
+
+    What :func:`superfacets.segment` returns and label files hold is one
+    label per face, per vertex or per point of the file (-1 for invalid
+    points and unused vertices); this builds the element graph the method
+    segments (:func:`superfacets.elements.inputs.elements_of`), takes each
+    element's value from its first row, and calls :func:`evaluate`, area
+    weighted on faces and with every element weighing the same on vertices
+    and points (the superpoint benchmark's convention).
+
+    Parameters
+    ----------
+    obj : Mesh, PointCloud or what :func:`superfacets.segment` accepts
+    labels : (N,) int ndarray
+        One label per row (faces, vertices or points).
+    ground_truths : sequence of (N,) int ndarray
+        One class or segment per row; ``ignore_label`` marks unlabelled rows.
+    elements : {'faces', 'vertices', 'points'}, optional
+        Default: points for a cloud, faces for a mesh.
+    n_neighbors : int, default 10
+        The point graph's neighbours (points only).
+    tau, tolerance, ignore_label
+        As in :func:`evaluate`.
+
+    Returns
+    -------
+    dict
+        :func:`evaluate`'s metrics and ``segments`` (distinct labels among
+        the elements).
+
+    Raises
+    ------
+    ParameterError
+        If an array does not have one integer per row, or no ground truth
+        is given.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from superfacets import PointCloud, segment
+    >>> xy = np.random.default_rng(0).random((2000, 2))
+    >>> cloud = PointCloud(np.c_[xy, np.zeros(2000)])
+    >>> truth = (xy[:, 0] > 0.5).astype(int)
+    >>> m = evaluate_rows(cloud, segment(cloud, 20).labels, [truth])
+    >>> 0 <= m["undersegmentation_error"] < 0.5, m["segments"]
+    (True, 20)
+    """
+    from .elements.inputs import elements_of
+
+    source = elements_of(obj, elements, n_neighbors=n_neighbors)
+    g = source.graph
+    rows = source.first_rows(np.arange(g.n_elements))
+    n = source.n_rows
+    what = {"faces": "face", "vertices": "vertex", "points": "point"}.get(g.kind, "element")
+    lab = check_labels(labels, n, "labels", per=what)[rows]
+    gts = [check_labels(gt, n, "ground_truth", per=what)[rows] for gt in ground_truths]
+    out = evaluate(g, lab, gts, tau=tau, tolerance=tolerance,
+                   equal_weight=g.kind != "faces", ignore_label=ignore_label)
+    out["segments"] = int(np.unique(lab).size)
+    return out

@@ -265,7 +265,11 @@ def load_scan(name: str, cache=None, *, download: bool = False) -> Scan:
 
         # a Velodyne frame is in the sensor's coordinates: the sensor is at the origin
         cloud = replace(read_cloud(paths[0]), viewpoint=np.zeros(3))
-        gt = np.load(paths[1], allow_pickle=False).reshape(-1).astype(np.int64)
+        try:
+            gt = np.load(paths[1], allow_pickle=False).reshape(-1).astype(np.int64)
+        except (ValueError, OSError, EOFError) as exc:
+            raise MeshFormatError(f"{paths[1]}: cannot read the labels ({exc}); delete it "
+                                  f"and fetch_scan({name!r}) again") from None
         gt[gt == 0] = UNLABELLED
     elif src.labels == "las":
         from ..extras import require
@@ -312,14 +316,7 @@ def evaluate_scan(scan: Scan, labels, *, tau: float = 0.05, tolerance: int = 1) 
     ParameterError
         If ``labels`` does not have one integer per point.
     """
-    from ..elements.inputs import elements_of
-    from ..labels import check_labels
-    from ..metrics import evaluate
+    from ..metrics import evaluate_rows
 
-    source = elements_of(scan.cloud, "points")
-    rows = source.first_rows(np.arange(source.graph.n_elements))
-    lab = check_labels(labels, scan.cloud.n_total, "labels", per="point")[rows]
-    out = evaluate(source.graph, lab, [scan.ground_truth[rows]], tau=tau, tolerance=tolerance,
-                   equal_weight=True, ignore_label=UNLABELLED)
-    out["segments"] = int(np.unique(lab).size)
-    return out
+    return evaluate_rows(scan.cloud, labels, [scan.ground_truth], elements="points", tau=tau,
+                         tolerance=tolerance, ignore_label=UNLABELLED)
