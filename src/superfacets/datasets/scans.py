@@ -55,9 +55,9 @@ class ScanSource:
     labels : str
         How the ground truth is read: ``"semantickitti"`` (a second ``.npy``
         of the 19 training classes, 0 unlabelled; the frame is in the
-        sensor's coordinates, so the cloud's ``viewpoint`` is the origin) or ``"las"`` (the LAS
-        ``classification`` field, ASPRS codes; 0, "never classified", is
-        unlabelled).
+        sensor's coordinates, so the cloud's ``viewpoint`` is the origin)
+        or ``"las"`` (the LAS ``classification`` field, ASPRS codes; 0,
+        "never classified", is unlabelled).
     credit : str
         Who made the data and under which licence.
     """
