@@ -165,6 +165,51 @@ def test_evaluate_points_and_vertices_with_unlabelled_rows(tmp_path, capsys):
     assert "point cloud" in capsys.readouterr().err
 
 
+def test_evaluate_reads_a_ground_truth_field_of_the_input(tmp_path, capsys):
+    """A LAS file's classification and a PLY's vertex label as the ground truth; a missing
+    field or none at all is one clear error."""
+    laspy = pytest.importorskip("laspy")
+    from plyfile import PlyData, PlyElement
+
+    from superfacets import write_labels
+    from superfacets.io.labels import read_field
+
+    rng = np.random.default_rng(1)
+    xy = rng.random((2000, 2))
+    classes = np.where(xy[:, 0] > 0.5, 6, 2).astype(np.uint8)  # building | ground
+    classes[:100] = 0  # never classified
+    header = laspy.LasHeader(point_format=1, version="1.2")
+    header.scales = [0.0001] * 3
+    las = laspy.LasData(header)
+    las.x, las.y, las.z = xy[:, 0], xy[:, 1], np.zeros(2000)
+    las.classification = classes
+    las.write(tmp_path / "scan.las")
+    np.testing.assert_array_equal(read_field(tmp_path / "scan.las", "classification"), classes)
+    sp = write_labels(tmp_path / "sp.seg", (xy[:, 0] > 0.5).astype(int))
+    assert main(["evaluate", str(tmp_path / "scan.las"), str(sp), "--ground-truth-field",
+                 "classification", "--ignore-label", "0"]) == 0
+    out = capsys.readouterr().out
+    assert "2000 points, 2 superpoints, 1 ground truths" in out
+    assert "undersegmentation_error 0.0000" in out
+    vertex = np.empty(2000, dtype=[("x", "f4"), ("y", "f4"), ("z", "f4"), ("label", "i4")])
+    vertex["x"], vertex["y"], vertex["z"] = xy[:, 0], xy[:, 1], 0
+    vertex["label"] = classes
+    PlyData([PlyElement.describe(vertex, "vertex")]).write(str(tmp_path / "scan.ply"))
+    np.testing.assert_array_equal(read_field(tmp_path / "scan.ply", "label"), classes)
+    assert main(["evaluate", str(tmp_path / "scan.ply"), str(sp), "--ground-truth-field",
+                 "label", "--ignore-label", "0"]) == 0
+    assert "undersegmentation_error 0.0000" in capsys.readouterr().out
+    for args, msg in ((["--ground-truth-field", "klass"], "no field 'klass'; it has: "),
+                      ([], "give a ground truth")):
+        assert main(["evaluate", str(tmp_path / "scan.las"), str(sp), *args]) == 2
+        err = capsys.readouterr().err
+        assert msg in err and "Traceback" not in err
+    np.save(tmp_path / "scan.npy", np.c_[xy, np.zeros(2000)])
+    assert main(["evaluate", str(tmp_path / "scan.npy"), str(sp), "--ground-truth-field",
+                 "label"]) == 2
+    assert "carry per-point fields" in capsys.readouterr().err
+
+
 def test_progress_bar_names_the_stages_then_counts_passes(tmp_path, small_off, capsys):
     assert main(["segment", str(small_off), "-k", "20", "--progress", "-q"]) == 0
     err = capsys.readouterr().err

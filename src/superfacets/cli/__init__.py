@@ -2,8 +2,9 @@
 
 - :mod:`.segmenting`: ``segment`` (superfacets of a mesh file, as a ``.seg``
   label file and/or a coloured PLY), ``baseline`` (any registered method),
-  ``demo`` (a built-in procedural mesh, no data needed) and ``evaluate``
-  (the metrics of a result against ground truths);
+  ``demo`` (a built-in procedural mesh, no data needed);
+- :mod:`.evaluating`: ``evaluate`` (the metrics of a result against ground
+  truths: faces, vertices or a labelled scan's points);
 - :mod:`.batching`: ``batch`` (many files with the same options, resumable, a
   manifest; on a local or a running Dask cluster);
 - :mod:`.experiments`: ``experiment`` (methods x parameters over the
@@ -28,7 +29,7 @@ __all__ = ["main", "build_parser"]
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every command (each sub-parser sets ``func``)."""
     from .._version import __version__
-    from . import batching, experiments, pictures, segmenting
+    from . import batching, evaluating, experiments, pictures, segmenting
 
     parser = _Parser(
         prog="superfacets",
@@ -38,6 +39,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
     segmenting.add_parsers(sub)
+    evaluating.add_parsers(sub)
     batching.add_parsers(sub)
     experiments.add_parsers(sub)
     pictures.add_parsers(sub)

@@ -12,7 +12,7 @@ from ..params import DEFAULTS
 from .options import (add_camera_options, add_element_options, add_method_options,
                       add_scan_options, scan_cloud,
                       check_labels_output,
-                      check_output, element_kwargs, float_arg, fmt_value, int_arg,
+                      check_output, element_kwargs, fmt_value, int_arg,
                       method_kwargs, named_after, read_usable)
 
 __all__ = ["add_parsers"]
@@ -107,32 +107,6 @@ def add_parsers(sub) -> None:
                    help=f"number of superfacets (default: {DEFAULTS.n_segments})")
     add_method_options(d, with_size=False)
     d.set_defaults(func=cmd_demo)
-
-    e = sub.add_parser(
-        "evaluate", help="metrics of a segmentation against ground truths",
-        description="Print the undersegmentation error (eq. 4), compactness (eq. 5), boundary "
-                    "recall and achievable segmentation accuracy of a label file, each averaged "
-                    "over the given ground-truth segmentations: area-weighted on the faces of "
-                    "a mesh; each element counted once on its vertices (--elements vertices) "
-                    "or the points of a cloud (a labelled scan).")
-    e.add_argument("mesh", metavar="INPUT", help="the mesh or point-cloud file")
-    e.add_argument("labels", metavar="LABELS.seg",
-                   help="labels, one per face (vertex, point) in file order")
-    e.add_argument("ground_truths", metavar="GT.seg", nargs="+",
-                   help="one or more ground truths of the same input, one per face (vertex, "
-                        "point)")
-    e.add_argument("--tau", type=float_arg, default=0.05,
-                   help="overlap tolerance of the undersegmentation error, a fraction of each "
-                        "superfacet's area (default: 0.05)")
-    e.add_argument("--elements", choices=("faces", "vertices"), default=None,
-                   help="what a mesh's labels are of (default: faces; a cloud's are of points)")
-    e.add_argument("--neighbors", type=int_arg, default=DEFAULTS.n_neighbors, metavar="N",
-                   help="point clouds: nearest neighbours of the graph the metrics are "
-                        f"measured on (default: {DEFAULTS.n_neighbors})")
-    e.add_argument("--ignore-label", type=int_arg, default=None, metavar="L",
-                   help="a ground-truth value meaning unlabelled (e.g. -1, or 0 for "
-                        "SemanticKITTI): those elements are left out of the metrics")
-    e.set_defaults(func=cmd_evaluate)
 
 
 def _summary(name: str, mesh, result, seconds: float, elements: str = "faces") -> str:
@@ -406,35 +380,4 @@ def cmd_demo(args) -> int:
         print(f"wrote {out / 'creature.off'} (mesh), {out / 'creature.seg'} (labels), "
               f"{out / 'creature_superfacets.ply'} (open in MeshLab or Blender), "
               f"{out / 'creature.html'} (open in a browser){picture}")
-    return 0
-
-
-def cmd_evaluate(args) -> int:
-    from ..errors import ParameterError
-    from ..io import read_labels
-    from ..metrics import evaluate_rows
-
-    if not (0 <= args.tau < 1):
-        raise ParameterError(f"--tau must be in [0, 1), got {args.tau}")
-    data = read_usable(args.mesh, clouds=True)  # area-weighted metrics need a measurable mesh
-    cloud = not hasattr(data, "faces")
-    if cloud and args.elements not in (None, "points"):
-        raise ParameterError(f"{args.mesh} is a point cloud: its labels are of points, not "
-                             f"{args.elements}")
-    kind = "points" if cloud else (args.elements or "faces")
-    n = {"faces": getattr(data, "n_faces", 0), "vertices": getattr(data, "n_vertices", 0),
-         "points": getattr(data, "n_total", 0)}[kind]
-    labels = read_labels(args.labels, n_faces=n)
-    gts = [read_labels(p, n_faces=n) for p in args.ground_truths]
-    m = evaluate_rows(data, labels, gts, elements=kind, n_neighbors=args.neighbors,
-                      tau=args.tau, ignore_label=args.ignore_label)
-    segs = "superfacets" if kind == "faces" else "superpoints"
-    print(f"{Path(args.mesh).name}: {n} {kind}, {m['segments']} {segs}, "
-          f"{len(gts)} ground truths")
-    print(f"undersegmentation_error {m['undersegmentation_error']:.4f}  (lower is better)")
-    estimate = "; estimated on points" if kind == "points" else ""
-    print(f"compactness             {m['compactness']:.4f}  (lower is better; disk 3.545"
-          f"{estimate})")
-    print(f"boundary_recall         {m['boundary_recall']:.4f}  (higher is better)")
-    print(f"achievable_accuracy     {m['achievable_accuracy']:.4f}  (higher is better)")
     return 0

@@ -15,7 +15,7 @@ from ..errors import MeshFormatError
 from ..labels import check_labels
 from .files import Outputs, read_bytes, save, split_suffix, text_lines
 
-__all__ = ["read_labels", "write_labels", "write_segindices"]
+__all__ = ["read_labels", "write_labels", "write_segindices", "read_field"]
 
 
 def write_labels(path, labels, header: dict | Iterable[str] | None = None, *,
@@ -140,3 +140,70 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
         raise MeshFormatError(f"{path}: has {labels.shape[0]} labels but the input has "
                               f"{n_faces} elements")
     return labels
+
+
+def read_field(path, name: str) -> np.ndarray:
+    """One integer per point (vertex) from a field of the input file itself.
+
+    A labelled scan often carries its ground truth beside the coordinates:
+    the ``classification`` of a LAS/LAZ file (ASPRS classes), the ``label``
+    property of a PLY's vertices (ScanNet's ``*_vh_clean_2.labels.ply``).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A ``.las``/``.laz`` or ``.ply`` file (optionally compressed PLY).
+    name : str
+        The LAS dimension or the PLY vertex property.
+
+    Returns
+    -------
+    (N,) int64 ndarray
+        In file order: one per point of a cloud, one per vertex of a mesh.
+
+    Raises
+    ------
+    FileNotFoundError
+        If the file does not exist.
+    MeshFormatError
+        If the file has no such field (the message lists its fields), the
+        field is not integer, or the format carries no fields.
+
+    Examples
+    --------
+    >>> classes = read_field("scan.las", "classification")  # doctest: +SKIP
+    """
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"{path}: no such file")
+    fmt, comp = split_suffix(path)
+    if fmt in ("las", "laz"):
+        from ..extras import require
+
+        laspy = require("laspy", "reading LAS/LAZ files")
+        try:
+            las = laspy.read(path)
+            names = list(las.point_format.dimension_names)
+            values = np.asarray(las[name]) if name in names else None
+        except Exception as exc:  # noqa: BLE001 - laspy raises many types
+            raise MeshFormatError(f"{path}: cannot read {fmt.upper()}: {exc}") from None
+    elif fmt == "ply":
+        import io
+
+        from plyfile import PlyData
+
+        try:
+            vertex = PlyData.read(io.BytesIO(read_bytes(path, comp, "PLY file")))["vertex"]
+            names = [p.name for p in vertex.properties]
+            values = np.asarray(vertex[name]) if name in names else None
+        except (KeyError, ValueError, IndexError, EOFError) as exc:
+            raise MeshFormatError(f"{path}: cannot read PLY vertices: {exc}") from None
+    else:
+        raise MeshFormatError(f"{path}: only LAS/LAZ and PLY files carry per-point fields; "
+                              "give the ground truth as a .seg file")
+    if values is None:
+        raise MeshFormatError(f"{path}: no field {name!r}; it has: {', '.join(names)}")
+    if not (np.issubdtype(values.dtype, np.integer) or np.issubdtype(values.dtype, np.bool_)):
+        if not (np.isfinite(values).all() and (values == np.round(values)).all()):
+            raise MeshFormatError(f"{path}: field {name!r} is not integer ({values.dtype})")
+    return values.astype(np.int64)
