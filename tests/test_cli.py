@@ -208,6 +208,10 @@ def test_evaluate_reads_a_ground_truth_field_of_the_input(tmp_path, capsys):
     assert main(["evaluate", str(tmp_path / "scan.npy"), str(sp), "--ground-truth-field",
                  "label"]) == 2
     assert "carry per-point fields" in capsys.readouterr().err
+    (tmp_path / "cut.ply").write_text("ply\nformat ascii 1.0\nelement vertex 3\n"
+                                      "property float x\nend_header\n1\n2\n")
+    with pytest.raises(ValueError, match="cannot read PLY vertices"):
+        read_field(tmp_path / "cut.ply", "label")
 
 
 def test_progress_bar_names_the_stages_then_counts_passes(tmp_path, small_off, capsys):

@@ -190,13 +190,13 @@ def read_field(path, name: str) -> np.ndarray:
     elif fmt == "ply":
         import io
 
-        from plyfile import PlyData
+        from plyfile import PlyData, PlyParseError
 
         try:
             vertex = PlyData.read(io.BytesIO(read_bytes(path, comp, "PLY file")))["vertex"]
             names = [p.name for p in vertex.properties]
             values = np.asarray(vertex[name]) if name in names else None
-        except (KeyError, ValueError, IndexError, EOFError) as exc:
+        except (PlyParseError, KeyError, ValueError, IndexError, EOFError) as exc:
             raise MeshFormatError(f"{path}: cannot read PLY vertices: {exc}") from None
     else:
         raise MeshFormatError(f"{path}: only LAS/LAZ and PLY files carry per-point fields; "
