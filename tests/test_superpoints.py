@@ -468,9 +468,20 @@ def test_cli_orients_a_scan_by_viewpoint_or_side(tmp_path, capsys):
         assert main(["segment", str(tmp_path / "t.npy"), "-k", "12", "-o", str(out), "-q",
                      *flags]) == 0
         np.testing.assert_array_equal(read_labels(out), segment(cloud, 12).labels)
+    # tiled: the same orientation reaches every tile (a streamed .npy; 2 tiles)
+    for flags, cloud in ((["--seen-from", "z"], PointCloud(pts, up=[0, 0, 1])),
+                         (["--viewpoint", "2,2,30"], PointCloud(pts, viewpoint=[2, 2, 30]))):
+        assert main(["segment", str(tmp_path / "t.npy"), "-k", "12", "-o", str(out), "-q",
+                     "--tiles", "2", *flags]) == 0
+        from superfacets.runner.tiles import segment_tiled
+
+        np.testing.assert_array_equal(read_labels(out), segment_tiled(cloud, 12, tiles=2).labels)
+        assert (read_labels(out) != segment_tiled(PointCloud(pts), 12, tiles=2).labels).any()
+    from superfacets import write_mesh
+
+    write_mesh(tmp_path / "m.off", Mesh(*_grid_xy()))
     for flags, msg in ((["--viewpoint", "1,2"], "expected x,y,z"),
-                       (["--seen-from", "up"], "invalid choice"),
-                       (["--tiles", "2", "--seen-from", "z"], "--seen-from is not taken")):
+                       (["--seen-from", "up"], "invalid choice")):
         out.unlink(missing_ok=True)
         code = None
         try:
@@ -481,6 +492,19 @@ def test_cli_orients_a_scan_by_viewpoint_or_side(tmp_path, capsys):
         assert code == 2 and not out.exists()
         err = capsys.readouterr().err
         assert msg in err and "Traceback" not in err
+    for tiles in ([], ["--tiles", "2"]):
+        assert main(["segment", str(tmp_path / "m.off"), "-k", "4", "-o", str(out),
+                     "--seen-from", "z", *tiles]) == 2
+        assert "orient point clouds" in capsys.readouterr().err and not out.exists()
+
+
+def _grid_xy():
+    """A flat 10 x 10 grid mesh: (vertices, triangles)."""
+    x, y = np.meshgrid(np.arange(11.0), np.arange(11.0))
+    v = np.c_[x.ravel(), y.ravel(), np.zeros(121)]
+    i = np.arange(121).reshape(11, 11)
+    a, b, c, d = i[:-1, :-1].ravel(), i[:-1, 1:].ravel(), i[1:, 1:].ravel(), i[1:, :-1].ravel()
+    return v, np.r_[np.c_[a, b, c], np.c_[a, c, d]]
 
 
 def test_superpoints_viewpoint_keeps_the_clouds_colours():

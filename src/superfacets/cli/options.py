@@ -87,7 +87,8 @@ def add_scan_options(p: argparse.ArgumentParser) -> None:
 
 
 def scan_cloud(data, args):
-    """``data`` with :func:`add_scan_options` applied (a point cloud; else unchanged)."""
+    """``data`` with :func:`add_scan_options` applied (a point cloud; a mesh given either
+    option is refused)."""
     from dataclasses import replace
 
     changes = {}
@@ -95,8 +96,13 @@ def scan_cloud(data, args):
         changes["viewpoint"] = args.viewpoint
     if getattr(args, "seen_from", None) is not None:
         changes["up"] = AXES[args.seen_from]
-    if not changes or hasattr(data, "faces"):
+    if not changes:
         return data
+    if hasattr(data, "faces"):
+        from ..errors import ParameterError
+
+        raise ParameterError("--viewpoint and --seen-from orient point clouds; the input is "
+                             "a mesh")
     return replace(data, **changes)
 
 

@@ -61,12 +61,6 @@ def segment_tiles(args) -> int:
         if given:
             raise ParameterError(f"{flag} needs the whole input in one process; not with "
                                  "--tiles (write -o OUT.seg, then view a part)")
-    for flag, given in (("--viewpoint", getattr(args, "viewpoint", None)),
-                        ("--seen-from", getattr(args, "seen_from", None))):
-        if given is not None:
-            raise ParameterError(f"{flag} is not taken by --tiles (a PCD's VIEWPOINT and a "
-                                 "LAS file's z are); in Python, give segment_tiled a "
-                                 "PointCloud(viewpoint=..., up=...)")
     if getattr(args, "elements", None) == "vertices":
         raise ParameterError("--tiles segments faces or points, not vertices")
     seg_out = check_labels_output(args.output, args.mesh)
@@ -74,7 +68,7 @@ def segment_tiles(args) -> int:
     kwargs.pop("progress", None)
     t0 = time.perf_counter()
     try:
-        result = segment_tiled(args.mesh, args.n_segments, radius=args.radius, tiles=args.tiles,
+        result = segment_tiled(_source(args), args.n_segments, radius=args.radius, tiles=args.tiles,
                                halo=args.halo, workers=args.workers, scheduler=args.scheduler,
                                refine=1 if args.refine is None else args.refine,
                                workdir=args.workdir,
@@ -103,3 +97,28 @@ def segment_tiles(args) -> int:
         elif seg_out is None:
             print("note: nothing was saved: add -o OUT.seg", file=sys.stderr)
     return 0
+
+
+def _source(args):
+    """The input of a tiled run: its path, or with ``--viewpoint``/``--seen-from`` its
+    streamed reader (or, for a file that is not streamed, the cloud) carrying them."""
+    if getattr(args, "viewpoint", None) is None and getattr(args, "seen_from", None) is None:
+        return args.mesh
+    from dataclasses import replace
+
+    from ..errors import ParameterError
+    from ..io.regions import STREAMED, RegionReader
+    from .options import AXES, read_usable, scan_cloud
+
+    if Path(args.mesh).suffix.lower().lstrip(".") not in STREAMED:
+        return scan_cloud(read_usable(args.mesh, clouds=True), args)
+    reader = RegionReader.open(args.mesh)
+    if reader.kind != "points":
+        raise ParameterError("--viewpoint and --seen-from orient point clouds; the input is "
+                             "a mesh")
+    changes = {}
+    if args.viewpoint is not None:
+        changes["viewpoint"] = tuple(args.viewpoint)
+    if args.seen_from is not None:
+        changes["up"] = AXES[args.seen_from]
+    return replace(reader, **changes)

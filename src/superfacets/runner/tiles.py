@@ -189,9 +189,9 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
 
     Parameters
     ----------
-    source : str or os.PathLike, Mesh, PointCloud or array
-        A binary PLY (triangle mesh or points), LAS/LAZ or ``.npy`` file is
-        read in chunks by each task (:mod:`superfacets.io.regions`); anything
+    source : str or os.PathLike, RegionReader, Mesh, PointCloud or array
+        A binary PLY (triangle mesh or points), LAS/LAZ or ``.npy`` file (or
+        its ``RegionReader``) is read in chunks by each task; anything
         else is read here once and written to ``.npy`` files in ``workdir``
         (it must then fit this machine). Triangle meshes and point clouds.
     n_segments : int, default 150
@@ -278,7 +278,9 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
              else contextlib.nullcontext(str(workdir)))
     with spill as tmp:
         t = time.perf_counter()
-        if isinstance(source, (str, Path)) and Path(source).suffix.lower().lstrip(".") in STREAMED:
+        if isinstance(source, RegionReader):  # opened by the caller (its viewpoint, up)
+            reader = source
+        elif isinstance(source, (str, Path)) and Path(source).suffix.lower().lstrip(".") in STREAMED:
             reader = RegionReader.open(source)
         else:
             reader = RegionReader.spill(source, tmp)
