@@ -1,6 +1,6 @@
 """Superpoints on labelled real scans, against the tools scan users run, at equal counts.
 
-Usage: python benchmarks/real_scans.py [--scans NAME ...] [-k 250 1000 4000]
+Usage: python benchmarks/real_scans.py [--scans NAME ...] [-k 300 1000 3000]
        [--methods superfacets graph_segmentation cut_pursuit vccs] [--beta 0 50]
        [--neighbors 10] [--split-merge] [--csv results.csv] [--download]
 
@@ -89,7 +89,7 @@ def main() -> None:
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scans", nargs="+", default=list(SCANS), choices=list(SCANS))
-    ap.add_argument("-k", type=int, nargs="+", default=[250, 1000, 4000])
+    ap.add_argument("-k", type=int, nargs="+", default=[300, 1000, 3000])
     ap.add_argument("--methods", nargs="+", default=list(METHODS), choices=METHODS)
     ap.add_argument("--beta", type=float, nargs="+", default=[0.0, 50.0],
                     help="colour weights of superfacets (non-zero only on scans with RGB)")
