@@ -17,7 +17,8 @@ from ..params import DEFAULT_CENTER_TOL as _D_CENTER_TOL
 
 __all__ = ["int_arg", "float_arg", "size_arg", "view_arg", "add_method_options",
            "add_camera_options", "add_mesh_and_labels", "method_kwargs", "check_output",
-           "labels_for", "fmt_value", "add_scan_options", "scan_cloud", "point_arg"]
+           "labels_for", "fmt_value", "add_scan_options", "scan_cloud", "scan_fields",
+           "point_arg"]
 
 _D = DEFAULTS
 
@@ -86,16 +87,22 @@ def add_scan_options(p: argparse.ArgumentParser) -> None:
                         ".las/.laz, else outwards from each piece's mean)")
 
 
+def scan_fields(args) -> dict:
+    """The cloud fields :func:`add_scan_options` set: ``viewpoint`` and ``up`` (tuples)."""
+    out = {}
+    if getattr(args, "viewpoint", None) is not None:
+        out["viewpoint"] = tuple(args.viewpoint)
+    if getattr(args, "seen_from", None) is not None:
+        out["up"] = AXES[args.seen_from]
+    return out
+
+
 def scan_cloud(data, args):
     """``data`` with :func:`add_scan_options` applied (a point cloud; a mesh given either
     option is refused)."""
     from dataclasses import replace
 
-    changes = {}
-    if getattr(args, "viewpoint", None) is not None:
-        changes["viewpoint"] = args.viewpoint
-    if getattr(args, "seen_from", None) is not None:
-        changes["up"] = AXES[args.seen_from]
+    changes = scan_fields(args)
     if not changes:
         return data
     if hasattr(data, "faces"):

@@ -19,7 +19,7 @@ __all__ = ["add_parsers"]
 
 
 def add_parsers(sub) -> None:
-    """Add ``segment``, ``baseline``, ``demo`` and ``evaluate`` to the sub-parsers."""
+    """Add ``segment``, ``baseline`` and ``demo`` to the sub-parsers."""
     p = sub.add_parser(
         "segment", help="compute the superfacets of a mesh or a point cloud file",
         description="Compute the superfacets of a mesh file (.off, .tri, .ply, .obj, .stl, "

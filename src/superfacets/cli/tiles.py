@@ -102,13 +102,15 @@ def segment_tiles(args) -> int:
 def _source(args):
     """The input of a tiled run: its path, or with ``--viewpoint``/``--seen-from`` its
     streamed reader (or, for a file that is not streamed, the cloud) carrying them."""
-    if getattr(args, "viewpoint", None) is None and getattr(args, "seen_from", None) is None:
+    from .options import read_usable, scan_cloud, scan_fields
+
+    changes = scan_fields(args)
+    if not changes:
         return args.mesh
     from dataclasses import replace
 
     from ..errors import ParameterError
     from ..io.regions import STREAMED, RegionReader
-    from .options import AXES, read_usable, scan_cloud
 
     if Path(args.mesh).suffix.lower().lstrip(".") not in STREAMED:
         return scan_cloud(read_usable(args.mesh, clouds=True), args)
@@ -116,9 +118,4 @@ def _source(args):
     if reader.kind != "points":
         raise ParameterError("--viewpoint and --seen-from orient point clouds; the input is "
                              "a mesh")
-    changes = {}
-    if args.viewpoint is not None:
-        changes["viewpoint"] = tuple(args.viewpoint)
-    if args.seen_from is not None:
-        changes["up"] = AXES[args.seen_from]
     return replace(reader, **changes)
