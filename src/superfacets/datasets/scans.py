@@ -13,6 +13,13 @@ usual ground truth of superpoint benchmarks on scans: S3DIS, SemanticKITTI,
 DALES). Points that no annotator labelled carry :data:`UNLABELLED` and are
 left out of the metrics (``evaluate(..., ignore_label=UNLABELLED)``).
 
+Orientation: every scan here has z up, so its clouds carry ``up = (0, 0, 1)``
+(each connected piece's normals turned up by a vote, as a LAS file's). The
+two SemanticKITTI frames are not both in their sensor's coordinates: frame
+000700 has no point within 25 m of the origin, and the run of its scan lines
+puts its sensor about 99 m from it (frame 000750's sensor is near the
+origin), so no viewpoint is assumed.
+
 Examples
 --------
 >>> from superfacets.datasets.scans import load_scan  # doctest: +SKIP
@@ -54,8 +61,8 @@ class ScanSource:
         ``(file name in the cache, URL, SHA-256)`` of each file.
     labels : str
         How the ground truth is read: ``"semantickitti"`` (a second ``.npy``
-        of the 19 training classes, 0 unlabelled; the frame is in the
-        sensor's coordinates, so the cloud's ``viewpoint`` is the origin)
+        of the 19 training classes, 0 unlabelled; the cloud is seen from
+        above, ``up = (0, 0, 1)``: see the module notes)
         or ``"las"`` (the LAS ``classification`` field, ASPRS codes; 0,
         "never classified", is unlabelled).
     credit : str
@@ -263,8 +270,8 @@ def load_scan(name: str, cache=None, *, download: bool = False) -> Scan:
     if src.labels == "semantickitti":
         from dataclasses import replace
 
-        # a Velodyne frame is in the sensor's coordinates: the sensor is at the origin
-        cloud = replace(read_cloud(paths[0]), viewpoint=np.zeros(3))
+        # z is up, but the sensor is not always at the origin (module notes): seen from above
+        cloud = replace(read_cloud(paths[0]), up=np.array([0.0, 0.0, 1.0]))
         try:
             gt = np.load(paths[1], allow_pickle=False).reshape(-1).astype(np.int64)
         except (ValueError, OSError, EOFError) as exc:
