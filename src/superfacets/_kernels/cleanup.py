@@ -110,13 +110,22 @@ def min_cut(first, nxt, head, cap, tr, eps, source_side):
     same for any maximum flow.
     """
     n = tr.shape[0]
-    parent = np.empty(n, dtype=np.int64)
-    sink = np.zeros(n, dtype=np.bool_)
-    queued = np.zeros(n, dtype=np.bool_)
-    active = np.empty(n, dtype=np.int64)  # circular FIFO of active nodes
-    orphans = np.empty(n, dtype=np.int64)
+    _min_cut_in(first, nxt, head, cap, tr, eps, source_side, n, np.empty(n, dtype=np.int64),
+                np.empty(n, dtype=np.bool_), np.empty(n, dtype=np.bool_),
+                np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64))
+
+
+@njit(cache=True, error_model="numpy")
+def _min_cut_in(first, nxt, head, cap, tr, eps, source_side, n, parent, sink, queued, active,
+                orphans):
+    """:func:`min_cut` of nodes ``0..n-1`` with the work arrays given (length at least
+    ``n`` each: tree parents, tree sides, queue flags, the circular FIFO of active
+    nodes, the orphans), so that many small cuts allocate nothing."""
     qh = 0
     qn = 0
+    for u in range(n):
+        sink[u] = False
+        queued[u] = False
     for u in range(n):
         if tr[u] > eps or -tr[u] > eps:
             parent[u] = _TERMINAL
@@ -243,24 +252,15 @@ def min_cut(first, nxt, head, cap, tr, eps, source_side):
 
 @njit(cache=True, error_model="numpy")
 def _solve_one(members, la, lb, pair_id, band_of, local, indptr, indices, cut_cost,
-               labels, sizes, positions, means, smooth, out):
-    """Minimum cut of one band between labels ``la`` (source) and ``lb`` (sink)."""
+               labels, sizes, positions, means, smooth, out, head, cap, nxt, first, tr, side,
+               work_i, work_b, work_q, work_a, work_o):
+    """Minimum cut of one band between labels ``la`` (source) and ``lb`` (sink), in the
+    work arrays given (arcs: ``head``, ``cap``, ``nxt``; nodes: the others)."""
     nb = members.shape[0]
     for i in range(nb):
         local[members[i]] = i
+        first[i] = -1
     # two arcs per band-internal adjacency; the terminal capacities in tr
-    n_arcs = 0
-    for i in range(nb):
-        f = members[i]
-        for e in range(indptr[f], indptr[f + 1]):
-            g = indices[e]
-            if band_of[g] == pair_id and g > f:
-                n_arcs += 2
-    head = np.empty(n_arcs, dtype=np.int64)
-    cap = np.empty(n_arcs, dtype=np.float64)
-    nxt = np.empty(n_arcs, dtype=np.int64)
-    first = np.full(nb, -1, dtype=np.int64)
-    tr = np.empty(nb, dtype=np.float64)
     na = 0
     total = 0.0
     for i in range(nb):
@@ -301,8 +301,8 @@ def _solve_one(members, la, lb, pair_id, band_of, local, indptr, indices, cut_co
         total += cost_a + cost_b
         # source -> f (cut when f takes lb: pays cost_b), f -> sink (cut when f keeps la)
         tr[i] = cost_b if cost_b > 0.0 else -cost_a
-    side = np.empty(nb, dtype=np.bool_)
-    min_cut(first, nxt, head, cap, tr, 1e-12 * total, side)
+    _min_cut_in(first, nxt, head, cap, tr, 1e-12 * total, side, nb, work_i, work_b, work_q,
+                work_a, work_o)
     for i in range(nb):
         out[members[i]] = la if side[i] else lb
 
@@ -314,10 +314,33 @@ def solve_bands(p0, p1, order, starts, pair_a, pair_b, band_of, indptr, indices,
 
     ``out`` (a copy of ``labels``) receives the new label of every band
     element. Bands are disjoint: calls on disjoint ranges may run at once
-    (the GIL is released) and give the same result in any order.
+    (the GIL is released) and give the same result in any order. One set of
+    work arrays serves every band of the call, sized for the largest.
     """
     local = np.empty(labels.shape[0], dtype=np.int64)
+    most_nodes = 1
+    most_arcs = 1
+    for p in range(p0, p1):
+        nodes = starts[p + 1] - starts[p]
+        arcs = 0  # at most the CSR entries of the band's elements
+        for t in range(starts[p], starts[p + 1]):
+            f = order[t]
+            arcs += indptr[f + 1] - indptr[f]
+        most_nodes = max(most_nodes, nodes)
+        most_arcs = max(most_arcs, arcs)
+    head = np.empty(most_arcs, dtype=np.int64)
+    cap = np.empty(most_arcs, dtype=np.float64)
+    nxt = np.empty(most_arcs, dtype=np.int64)
+    first = np.empty(most_nodes, dtype=np.int64)
+    tr = np.empty(most_nodes, dtype=np.float64)
+    side = np.empty(most_nodes, dtype=np.bool_)
+    work_i = np.empty(most_nodes, dtype=np.int64)
+    work_b = np.empty(most_nodes, dtype=np.bool_)
+    work_q = np.empty(most_nodes, dtype=np.bool_)
+    work_a = np.empty(most_nodes, dtype=np.int64)
+    work_o = np.empty(most_nodes, dtype=np.int64)
     for p in range(p0, p1):
         members = order[starts[p]:starts[p + 1]]
         _solve_one(members, pair_a[p], pair_b[p], p, band_of, local, indptr, indices,
-                   cut_cost, labels, sizes, positions, means, smooth, out)
+                   cut_cost, labels, sizes, positions, means, smooth, out, head, cap, nxt,
+                   first, tr, side, work_i, work_b, work_q, work_a, work_o)
