@@ -3,13 +3,15 @@
 Usage: python benchmarks/tiles.py [--mesh-id 281] [--subdivide 2 3] [--points 1000000]
        [-k 2000] [--tiles 8] [--workers 2] [--halo 3] [--no-mesh] [--tiled-only]
        python benchmarks/tiles.py --compare [-k 600] [--tiles 8] [--halo 3] [--paper]
-       [--times 1] [--refine 1]
+       [--times 1] [--refine 1] [--compare-points N]
 
 ``--compare``: the first benchmark mesh of each category, subdivided ``--times``
 times (default once), segmented once and tiled (in process), the mean
 undersegmentation error of each, the superfacets cut by a border and the
 disagreements (docs/tiles.md). ``--refine``: the tiles' refine rounds
-(default: ``segment_tiled``'s).
+(default: ``segment_tiled``'s). ``--compare-points N``: ``N`` points sampled
+on each mesh (seed 0, each with its face's class) instead of the subdivided
+faces, the UE on the whole cloud's point graph.
 
 Inputs with ground truth, larger than the benchmark's: a benchmark mesh
 (``../shared/data/psb.tar.xz``) subdivided ``s`` times (each triangle into 4,
@@ -228,22 +230,39 @@ def compare(a) -> None:
         m = read_mesh(b.path)
         v, f = np.asarray(m.vertices), np.asarray(m.faces)
         gt = read_labels(b.seg_paths[0], m.n_faces)
-        for _ in range(a.times):
-            v, f = trimesh.remesh.subdivide(v, f)  # face i -> faces 4i .. 4i + 3
-            gt = np.repeat(gt, 4)
-        mesh = Mesh(v, f)
-        g = face_graph(mesh)
-        s = segment(mesh, a.k, **extra)
+        if a.compare_points:  # a cloud sampled on the mesh, each point with its face's class
+            from superfacets import PointCloud
+            from superfacets.datasets.sampling import sample_points
+            from superfacets.elements.inputs import elements_of
+
+            pts, face = sample_points(m, a.compare_points, seed=0)
+            data = PointCloud(pts)
+            src = elements_of(data, "points")
+            g = src.graph
+            first = src.first_rows(np.arange(g.n_elements))  # each element's first row
+            gt, n_el = gt[face][first], pts.shape[0]
+        else:
+            for _ in range(a.times):
+                v, f = trimesh.remesh.subdivide(v, f)  # face i -> faces 4i .. 4i + 3
+                gt = np.repeat(gt, 4)
+            data = Mesh(v, f)
+            g, first, n_el = face_graph(data), None, f.shape[0]
+        s = segment(data, a.k, **extra)
         more = {} if a.refine is None else dict(refine=a.refine)
-        t = segment_tiled(mesh, a.k, tiles=a.tiles, halo=a.halo, **more, **extra)
-        ue_s.append(undersegmentation_error(g, s.labels, gt))
-        ue_t.append(undersegmentation_error(g, t.labels, gt))
-        cut += int(np.unique(label_components(g, t.labels)).size - t.n_segments)
+        t = segment_tiled(data, a.k, tiles=a.tiles, halo=a.halo, **more, **extra)
+        one_l, tiled_l = np.asarray(s.labels), np.asarray(t.labels)
+        if first is not None:
+            one_l, tiled_l = one_l[first], tiled_l[first]
+        ue_s.append(undersegmentation_error(g, one_l, gt))
+        ue_t.append(undersegmentation_error(g, tiled_l, gt))
+        cut += int(np.unique(label_components(g, tiled_l)).size - np.unique(tiled_l).size)
         dis += t.disagreements
-        print(f"| {b.id} | {f.shape[0]:,} | {s.n_segments} / {t.n_segments} | "
+        print(f"| {b.id} | {n_el:,} | {s.n_segments} / {t.n_segments} | "
               f"{ue_s[-1]:.4f} / {ue_t[-1]:.4f} |", flush=True)
     one, tiled = float(np.mean(ue_s)), float(np.mean(ue_t))
-    print(f"{'paper' if a.paper else 'default'}, subdivided {a.times}x, k = {a.k}, "
+    what = (f"{a.compare_points:,} points per mesh" if a.compare_points
+            else f"subdivided {a.times}x")
+    print(f"{'paper' if a.paper else 'default'}, {what}, k = {a.k}, "
           f"{a.tiles} tiles, halo {a.halo:g}, refine {a.refine if a.refine is not None else 1}: "
           f"UE {one:.4f} -> {tiled:.4f} ({100 * (tiled / one - 1):+.1f} %), cut {cut}, "
           f"disagreements {dis}")
@@ -265,6 +284,8 @@ def main() -> None:
     ap.add_argument("--paper", action="store_true")
     ap.add_argument("--refine", type=int, default=None)
     ap.add_argument("--times", type=int, default=1, help="--compare: subdivisions per mesh")
+    ap.add_argument("--compare-points", type=int, default=0, metavar="N",
+                    help="--compare: N points sampled on each mesh instead of its faces")
     ap.add_argument("--no-mesh", action="store_true", help="only the point rows")
     ap.add_argument("--tiled-only", action="store_true",
                     help="points only, no single run (equal-weight UE, cut checked per tile)")
