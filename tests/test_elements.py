@@ -364,10 +364,16 @@ def test_knn_layout_is_the_csr_of_the_distinct_symmetric_pairs(seed):
     n, k = 300, 6
     nbr = np.stack([rng.choice(np.r_[:i, i + 1:n], k, replace=False) for i in range(n)])
     keep = rng.random((n, k)) < 0.8
+    # longer lists for some rows (the point graph's widened neighbourhoods)
+    rows = np.sort(rng.choice(n, 40, replace=False))
+    more = np.stack([rng.choice(np.r_[:i, i + 1:n], 2 * k, replace=False) for i in rows])
+    more_keep = rng.random(more.shape) < 0.9
     indptr = np.empty(n + 1, dtype=np.int64)
-    indices, dual_edge, pairs = knn_csr(nbr, keep, indptr)
-    src = np.repeat(np.arange(n), k).reshape(n, k)[keep]
-    key = np.unique(np.minimum(src, nbr[keep]) * n + np.maximum(src, nbr[keep]))
+    indices, dual_edge, pairs = knn_csr(nbr, keep, indptr, rows, more, more_keep)
+    src = np.r_[np.repeat(np.arange(n), k).reshape(n, k)[keep],
+                np.repeat(rows, 2 * k).reshape(-1, 2 * k)[more_keep]]
+    dst = np.r_[nbr[keep], more[more_keep]]
+    key = np.unique(np.minimum(src, dst) * n + np.maximum(src, dst))
     np.testing.assert_array_equal(pairs, np.c_[key // n, key % n])
     want = adjacency_csr(key // n, key % n, n)
     for got, ref in zip((indptr, indices, dual_edge), want):
@@ -410,3 +416,71 @@ def test_distinct_points_of_a_box_keep_the_whole_clouds_order(seed):
         sub, _ = distinct_points(p[box])
         inside = ((s >= lo) & (s <= hi)).all(axis=1)
         np.testing.assert_array_equal(sub, s[inside])
+
+
+def _scan_lines(n_lines=6, radius=5.0, step=0.05, gap=0.4):
+    """Points on concentric rings (a LiDAR's scan lines far from it): ``step`` apart
+    along a ring, ``gap`` across."""
+    rings = []
+    for j in range(n_lines):
+        r = radius + j * gap
+        t = np.arange(int(2 * np.pi * r / step)) * step / r
+        rings.append(np.c_[r * np.cos(t), r * np.sin(t), np.zeros(t.size)])
+    return np.concatenate(rings)
+
+
+def test_points_on_scan_lines_reach_the_next_line(monkeypatch):
+    """Known answer: 10 neighbours of a point on such a ring all lie on its own ring (5
+    steps of 0.05 on each side), so the plain k-nearest-neighbour graph is one piece per
+    ring; a neighbourhood that is a line is widened to 2 k, which reaches the next ring
+    (0.4 away; 10 steps on each side reach 0.5): one piece."""
+    from scipy.sparse.csgraph import connected_components
+
+    from superfacets.cloud import PointCloud
+    from superfacets.elements import points as P
+
+    pts = _scan_lines()
+    monkeypatch.setattr(P, "WIDEN", 1)  # the plain graph
+    plain = P.point_graph(PointCloud(pts), 10).graph
+    monkeypatch.undo()
+    wide = P.point_graph(PointCloud(pts), 10).graph
+    assert connected_components(plain.to_csr(), directed=False)[0] == 6
+    assert connected_components(wide.to_csr(), directed=False)[0] == 1
+    # every adjacency of the plain graph is kept; the new ones join neighbouring lines
+    old = set(map(tuple, plain.pairs.tolist()))
+    new = set(map(tuple, wide.pairs.tolist()))
+    assert old < new
+    across = np.array(sorted(new - old))
+    radial = np.linalg.norm(wide.positions[:, :2], axis=1)  # (the graph's own order)
+    dr = np.abs(radial[across[:, 0]] - radial[across[:, 1]])
+    assert np.all(dr < 0.4 + 1e-6) and np.any(dr > 0.39)  # to the next ring, no farther
+    np.testing.assert_array_equal(wide.sizes, plain.sizes)  # sizes: the k-th distance
+
+
+def test_a_surface_graph_is_not_widened(monkeypatch):
+    """Points spread over a surface have no line-like neighbourhood: the graph is the
+    plain k-nearest-neighbour graph, to the bit."""
+    from superfacets.cloud import PointCloud
+    from superfacets.elements import points as P
+
+    rng = np.random.default_rng(3)
+    uv = rng.random((3000, 2))
+    pts = np.c_[uv, 0.1 * np.sin(3 * uv[:, 0])]
+    wide = P.point_graph(PointCloud(pts), 10).graph
+    monkeypatch.setattr(P, "WIDEN", 1)
+    plain = P.point_graph(PointCloud(pts), 10).graph
+    for name in ("indptr", "indices", "pairs", "lengths", "normals", "sizes"):
+        np.testing.assert_array_equal(getattr(wide, name), getattr(plain, name))
+
+
+def test_linearity_of_a_line_a_plane_and_a_ball():
+    from superfacets._kernels.normals import pca_linearity
+
+    rng = np.random.default_rng(0)
+    line = np.c_[np.arange(11.0), np.zeros(11), np.zeros(11)]
+    plane = np.c_[rng.random((11, 2)), np.zeros(11)]
+    ball = rng.normal(size=(11, 3))
+    for pts, lo, hi in ((line, 0.999, 1.0), (plane, 0.0, 0.9), (ball, 0.0, 0.9)):
+        out = np.empty(1)
+        pca_linearity(pts, np.arange(11)[None, :], out)
+        assert lo <= out[0] <= hi

@@ -313,12 +313,14 @@ def same_label_components(indptr, indices, labels):
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
-def knn_csr(nbr, keep, indptr):
+def knn_csr(nbr, keep, indptr, rows, more, more_keep):
     """The symmetric graph of k-nearest-neighbour lists: ``i ~ j`` when ``j`` is in
-    ``nbr[i]`` (where ``keep``) or ``i`` in ``nbr[j]``. Fills ``indptr`` (n + 1);
-    returns ``indices`` (int32, ascending per row), ``dual_edge`` (int32: the pair of
-    each entry) and ``pairs`` (e, 2) int64, listed in ``(lo, hi)`` order: the layout
-    :func:`csr_of_pairs` gives from the sorted distinct pairs."""
+    ``nbr[i]`` (where ``keep``) or ``i`` in ``nbr[j]``, and likewise for the longer
+    lists ``more[t]`` (where ``more_keep``) of the points ``rows[t]`` (none: ``rows``
+    of length 0). Fills ``indptr`` (n + 1); returns ``indices`` (int32, ascending per
+    row), ``dual_edge`` (int32: the pair of each entry) and ``pairs`` (e, 2) int64,
+    listed in ``(lo, hi)`` order: the layout :func:`csr_of_pairs` gives from the
+    sorted distinct pairs."""
     n, k = nbr.shape
     count = np.zeros(n + 1, dtype=np.int64)
     for i in range(n):
@@ -326,6 +328,11 @@ def knn_csr(nbr, keep, indptr):
             if keep[i, c]:
                 count[i + 1] += 1
                 count[nbr[i, c] + 1] += 1
+    for t in range(rows.shape[0]):
+        for c in range(more.shape[1]):
+            if more_keep[t, c]:
+                count[rows[t] + 1] += 1
+                count[more[t, c] + 1] += 1
     for i in range(n):
         count[i + 1] += count[i]
     raw = np.empty(count[n], dtype=np.int32)
@@ -334,6 +341,15 @@ def knn_csr(nbr, keep, indptr):
         for c in range(k):
             if keep[i, c]:
                 j = nbr[i, c]
+                raw[fill[i]] = j
+                fill[i] += 1
+                raw[fill[j]] = i
+                fill[j] += 1
+    for t in range(rows.shape[0]):
+        i = rows[t]
+        for c in range(more.shape[1]):
+            if more_keep[t, c]:
+                j = more[t, c]
                 raw[fill[i]] = j
                 fill[i] += 1
                 raw[fill[j]] = i

@@ -79,9 +79,33 @@ def _scatter(points, idx):
     return a00, a01, a02, a11, a12, a22
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _linearity(a00, a01, a02, a11, a12, a22):
+    """``(l1 - l2) / l1`` of the eigenvalues ``l1 >= l2 >= l3`` of a symmetric 3x3
+    matrix (the same trigonometric solution): 1 for points on a line, near 0 for a
+    round patch of a surface; 0 for no spread at all."""
+    p1 = a01 * a01 + a02 * a02 + a12 * a12
+    q = (a00 + a11 + a22) / 3.0
+    p2 = (a00 - q) ** 2 + (a11 - q) ** 2 + (a22 - q) ** 2 + 2.0 * p1
+    if p2 <= 0.0 or q <= 0.0:  # isotropic, or one point
+        return 0.0
+    p = math.sqrt(p2 / 6.0)
+    b00, b11, b22 = (a00 - q) / p, (a11 - q) / p, (a22 - q) / p
+    b01, b02, b12 = a01 / p, a02 / p, a12 / p
+    r = 0.5 * (b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02)
+               + b02 * (b01 * b12 - b11 * b02))
+    r = min(1.0, max(-1.0, r))
+    phi = math.acos(r) / 3.0
+    l1 = q + 2.0 * p * math.cos(phi)
+    l3 = q + 2.0 * p * math.cos(phi + 2.0 * math.pi / 3.0)
+    l2 = 3.0 * q - l1 - l3
+    return (l1 - l2) / l1 if l1 > 0.0 else 0.0
+
+
 @njit(cache=True, error_model="numpy", parallel=True)
-def pca_normals(points, neighbors, out):
-    """``out[i]``: unit normal of the points ``neighbors[i]`` (their least-variance axis)."""
+def pca_normals(points, neighbors, out, linearity):
+    """``out[i]``: unit normal of the points ``neighbors[i]`` (their least-variance axis);
+    ``linearity[i]``: how much that neighbourhood is a line (:func:`_linearity`)."""
     n = neighbors.shape[0]
     for i in prange(n):
         a00, a01, a02, a11, a12, a22 = _scatter(points, neighbors[i])
@@ -94,6 +118,22 @@ def pca_normals(points, neighbors, out):
             a12 /= scale
             a22 /= scale
         _smallest_eigenvector(a00, a01, a02, a11, a12, a22, out, i)
+        linearity[i] = _linearity(a00, a01, a02, a11, a12, a22)
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def pca_linearity(points, neighbors, linearity):
+    """``linearity[i]`` of the points ``neighbors[i]`` alone (:func:`pca_normals`' second
+    output, for clouds whose normals are given)."""
+    n = neighbors.shape[0]
+    for i in prange(n):
+        a00, a01, a02, a11, a12, a22 = _scatter(points, neighbors[i])
+        scale = a00 + a11 + a22
+        if scale > 0.0:
+            linearity[i] = _linearity(a00 / scale, a01 / scale, a02 / scale, a11 / scale,
+                                      a12 / scale, a22 / scale)
+        else:
+            linearity[i] = 0.0
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
