@@ -13,20 +13,30 @@ from numba import njit, prange
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _smallest_eigenvector(a00, a01, a02, a11, a12, a22, out, i):
+def _spectrum(a00, a01, a02, a11, a12, a22):
+    """``(q, p, phi)`` of the trigonometric solution: the eigenvalues of the symmetric
+    matrix are ``q + 2 p cos(phi + 2 pi j / 3)``, ``j = 0`` the largest, ``j = 1`` the
+    smallest; ``p = 0`` when it is isotropic (all three equal)."""
     p1 = a01 * a01 + a02 * a02 + a12 * a12
     q = (a00 + a11 + a22) / 3.0
     p2 = (a00 - q) ** 2 + (a11 - q) ** 2 + (a22 - q) ** 2 + 2.0 * p1
-    if p2 <= 0.0:  # isotropic (or one point): no preferred direction
-        out[i, 0], out[i, 1], out[i, 2] = 0.0, 0.0, 1.0
-        return
+    if p2 <= 0.0:
+        return q, 0.0, 0.0
     p = math.sqrt(p2 / 6.0)
     b00, b11, b22 = (a00 - q) / p, (a11 - q) / p, (a22 - q) / p
     b01, b02, b12 = a01 / p, a02 / p, a12 / p
     r = 0.5 * (b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02)
                + b02 * (b01 * b12 - b11 * b02))
     r = min(1.0, max(-1.0, r))
-    phi = math.acos(r) / 3.0
+    return q, p, math.acos(r) / 3.0
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _smallest_eigenvector(a00, a01, a02, a11, a12, a22, out, i):
+    q, p, phi = _spectrum(a00, a01, a02, a11, a12, a22)
+    if p <= 0.0:  # isotropic (or one point): no preferred direction
+        out[i, 0], out[i, 1], out[i, 2] = 0.0, 0.0, 1.0
+        return
     lam = q + 2.0 * p * math.cos(phi + 2.0 * math.pi / 3.0)  # the smallest eigenvalue
     r0x, r0y, r0z = a00 - lam, a01, a02
     r1x, r1y, r1z = a01, a11 - lam, a12
@@ -84,18 +94,9 @@ def _linearity(a00, a01, a02, a11, a12, a22):
     """``(l1 - l2) / l1`` of the eigenvalues ``l1 >= l2 >= l3`` of a symmetric 3x3
     matrix (the same trigonometric solution): 1 for points on a line, near 0 for a
     round patch of a surface; 0 for no spread at all."""
-    p1 = a01 * a01 + a02 * a02 + a12 * a12
-    q = (a00 + a11 + a22) / 3.0
-    p2 = (a00 - q) ** 2 + (a11 - q) ** 2 + (a22 - q) ** 2 + 2.0 * p1
-    if p2 <= 0.0 or q <= 0.0:  # isotropic, or one point
+    q, p, phi = _spectrum(a00, a01, a02, a11, a12, a22)
+    if p <= 0.0 or q <= 0.0:  # isotropic, or one point
         return 0.0
-    p = math.sqrt(p2 / 6.0)
-    b00, b11, b22 = (a00 - q) / p, (a11 - q) / p, (a22 - q) / p
-    b01, b02, b12 = a01 / p, a02 / p, a12 / p
-    r = 0.5 * (b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02)
-               + b02 * (b01 * b12 - b11 * b02))
-    r = min(1.0, max(-1.0, r))
-    phi = math.acos(r) / 3.0
     l1 = q + 2.0 * p * math.cos(phi)
     l3 = q + 2.0 * p * math.cos(phi + 2.0 * math.pi / 3.0)
     l2 = 3.0 * q - l1 - l3
