@@ -484,3 +484,20 @@ def test_linearity_of_a_line_a_plane_and_a_ball():
         out = np.empty(1)
         pca_linearity(pts, np.arange(11)[None, :], out)
         assert lo <= out[0] <= hi
+
+
+def test_superpoints_on_scan_lines_are_the_same_for_any_thread_count():
+    """The widened rows go through the same kernels: labels equal on 1 and 2 threads, one
+    label per point; the count asked for (the plain graph, one piece per ring, gives 64
+    superpoints for 12, each on one ring), superpoints spanning several rings."""
+    from superfacets import PointCloud, segment
+
+    pts = _scan_lines()
+    one = segment(PointCloud(pts), 12, n_threads=1)
+    two = segment(PointCloud(pts), 12, n_threads=2)
+    np.testing.assert_array_equal(one.labels, two.labels)
+    assert one.labels.shape == (pts.shape[0],) and one.labels.min() >= 0
+    assert one.n_segments == 12
+    ring = np.rint((np.linalg.norm(pts[:, :2], axis=1) - 5.0) / 0.4).astype(int)
+    rings_per_label = [np.unique(ring[one.labels == s]).size for s in range(one.n_segments)]
+    assert max(rings_per_label) > 1
