@@ -17,8 +17,8 @@ machine's threads).
 Methods (the registry's, so ``superfacets experiment`` runs the same code):
 
 - ``superfacets``: this package's default on points, its requested count
-  lowered where the scan's separate pieces add superpoints, so that it
-  returns at most k (``_equal_count``); with ``--beta B`` also
+  lowered where orphans add superpoints, so that it returns at most k
+  (``_equal_count``); with ``--beta B`` also
   the colour term (scans with RGB only); with ``--split-merge`` also
   split-and-merge (off by default on points);
 - ``graph_segmentation``: the ScanNet Segmentator's method, its threshold
@@ -90,9 +90,10 @@ def run(scan, method: str, k: int, beta: float, options: dict | None = None,
 def _equal_count(run_k, k: int, tries: int = 4):
     """Labels with at most ``k`` superpoints, as near ``k`` as ``tries`` runs get.
 
-    A scan's point graph has several connected pieces (and corners no window
-    reaches), each seeding a superpoint of its own, so ``segment(cloud, k)``
-    can return more than ``k`` (345 for k = 300 on a sweep). The baselines'
+    Every connected piece of a scan's point graph gets a center within the
+    ``k``, but elements no window reaches still seed superpoints of their own,
+    so ``segment(cloud, k)`` can return more than ``k`` (311 for k = 300 on a
+    sweep). The baselines'
     parameters are searched for ``k``; this lowers the requested count by the
     excess until the result has at most ``k``, so every method is compared at
     (about) the same count, the search included in the seconds.

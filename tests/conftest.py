@@ -30,6 +30,19 @@ def grid_mesh(nx: int, ny: int, height=None, size=1.0) -> Mesh:
     return Mesh(v, f)
 
 
+def slab_and_beads() -> tuple[Mesh, int, int]:
+    """A thin slab (768 faces) and two beads (80 faces each) just above its middle, each
+    a separate piece: the paper's farthest points miss the beads up to 10 centers."""
+    slab = trimesh.creation.box(extents=(2, 2, 0.01)).subdivide().subdivide().subdivide()
+    bead = trimesh.creation.icosphere(subdivisions=1)
+    v, f, nv = [slab.vertices], [slab.faces], len(slab.vertices)
+    for at in ([0.3, 0.2, 0.1], [-0.4, 0.1, 0.1]):
+        v.append(bead.vertices * 0.03 + at)
+        f.append(bead.faces + nv)
+        nv += len(bead.vertices)
+    return Mesh(np.vstack(v), np.vstack(f)), len(slab.faces), len(bead.faces)
+
+
 def write_benchmark(tmp_path: Path) -> Path:
     """A tiny benchmark folder: ids 1, 2 (Human) and 21 (Cup), two ground truths each."""
     from superfacets import write_labels, write_mesh

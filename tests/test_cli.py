@@ -330,11 +330,23 @@ def test_more_superfacets_than_k_says_why(tmp_path, capsys):
     assert main(["segment", str(off), "-k", "20", "-o", str(tmp_path / "b.seg")]) == 0
     err = capsys.readouterr().err
     n = read_labels(tmp_path / "b.seg").max() + 1
-    if n > 20:  # pieces with no center became superfacets of their own: said, with a k
+    if n > 20:  # regions with no center became superfacets of their own: said, with a k
         assert f"{n} superfacets for -k 20: the input has 12 separate pieces" in err
         assert "about -k" in err
     else:
         assert "note:" not in err
+    # the paper's farthest points miss two beads above a slab: each becomes a
+    # superfacet of its own beyond the 10 asked, said; by default 10 are 10
+    from conftest import slab_and_beads
+
+    beads = write_mesh(tmp_path / "beads.off", slab_and_beads()[0])
+    assert main(["segment", str(beads), "-k", "10", "--paper", "-o", str(tmp_path / "c.seg")]) == 0
+    err = capsys.readouterr().err
+    assert read_labels(tmp_path / "c.seg").max() + 1 == 12
+    assert "12 superfacets for -k 10: the input has 3 separate pieces" in err
+    assert "a region cannot cross from one piece to another" in err and "about -k 8" in err
+    assert main(["segment", str(beads), "-k", "10", "-o", str(tmp_path / "d.seg")]) == 0
+    assert read_labels(tmp_path / "d.seg").max() + 1 == 10 and "note:" not in capsys.readouterr().err
 
 
 def test_the_first_run_says_that_it_compiles(tmp_path, monkeypatch):

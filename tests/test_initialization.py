@@ -6,7 +6,7 @@ from superfacets.connectivity import label_components
 from superfacets.weights import paper_weights
 from superfacets.initialization import farthest_point_centers, first_center, flood_labels, grid_labels
 
-from conftest import grid_mesh
+from conftest import grid_mesh, slab_and_beads
 from superfacets.elements import face_graph
 
 
@@ -104,3 +104,30 @@ def test_flood_labels_cover_mesh_with_connected_regions_within_window(sphere):
         pts = sphere.centroids[labels == s]
         span = np.sqrt(((pts[:, None] - pts[None]) ** 2).sum(-1)).max()
         assert span <= 4 * r + 1e-9
+
+
+def test_every_piece_gets_a_center_within_the_count(sphere):
+    from superfacets.initialization import piece_seeds
+
+    # connected: the paper's centers exactly
+    np.testing.assert_array_equal(farthest_point_centers(sphere, 40, every_piece=True),
+                                  farthest_point_centers(sphere, 40))
+    m, n, nb = slab_and_beads()
+    seeds = piece_seeds(m)
+    assert seeds[0] == first_center(m) and seeds[0] < n <= seeds[1] < n + nb <= seeds[2]
+    # the paper's farthest points miss both beads (near the slab's middle) up to 10
+    # centers; with every_piece: the paper's first k - 2, then a seed in each bead
+    for k in (4, 10):
+        paper = farthest_point_centers(m, k)
+        assert (paper >= n).sum() == 0
+        c = farthest_point_centers(m, k, every_piece=True)
+        assert c.tolist() == paper[:k - 2].tolist() + seeds[1:].tolist()
+    # at 40 the farthest points reach one bead: the first 39 and one seed, in the other
+    paper = farthest_point_centers(m, 40)
+    hit = paper[paper >= n]
+    assert len(hit) == 1
+    c = farthest_point_centers(m, 40, every_piece=True)
+    assert c[:39].tolist() == paper[:39].tolist() and hit[0] in c[:39]
+    assert c[39] == seeds[1 if hit[0] >= n + nb else 2]
+    # more pieces than centers: one each
+    assert farthest_point_centers(m, 2, every_piece=True).tolist() == seeds.tolist()

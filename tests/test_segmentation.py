@@ -278,13 +278,53 @@ def test_components_each_get_superfacets():
     v = np.vstack([a.vertices, b.vertices * 0.5 + [5, 0, 0]])
     f = np.vstack([a.faces, b.faces + len(a.vertices)])
     mesh = Mesh(v, f)
-    r = segment(mesh, 1)  # one center: the other sphere is re-seeded as orphans
-    assert r.n_segments == 2 and r.n_orphan_seeds >= 1
-    assert len(np.unique(r.labels[: len(a.faces)])) == 1
-    assert len(np.unique(r.labels[len(a.faces):])) == 1
+    # the paper's one center: the other sphere is re-seeded by its orphans; by default
+    # every piece has a center from the start (more pieces than asked: one each)
+    for r, orphans in ((segment(mesh, 1, paper=True), 1), (segment(mesh, 1), 0)):
+        assert r.n_segments == 2 and (r.n_orphan_seeds >= 1) == bool(orphans)
+        assert len(np.unique(r.labels[: len(a.faces)])) == 1
+        assert len(np.unique(r.labels[len(a.faces):])) == 1
     labels = superfacets(mesh, 20)
     check_invariants(mesh, labels)
     assert not set(labels[: len(a.faces)]) & set(labels[len(a.faces):])
+
+
+@pytest.mark.parametrize("elements", ["faces", "vertices"])
+def test_separate_pieces_keep_the_count_asked(elements):
+    # two beads above a slab, missed by the paper's farthest points: the paper seeds
+    # each from its orphans, 2 more than asked; by default each bead has a center
+    # within the count (the paper's first k - 2 and one per bead): k asked are k
+    from conftest import slab_and_beads
+
+    mesh, n, n_bead = slab_and_beads()
+    for k in (10, 20):
+        paper = segment(mesh, k, paper=True, elements=elements)
+        default = segment(mesh, k, elements=elements)
+        assert (paper.n_segments, paper.n_orphan_seeds) == (k + 2, 2)
+        assert (default.n_segments, default.n_orphan_seeds) == (k, 0)
+        if elements == "faces":
+            for r in (paper, default):
+                beads = r.labels[n:].reshape(2, n_bead)
+                assert all(len(set(b)) == 1 for b in beads)       # a bead is one superfacet
+                assert not set(beads[:, 0]) & set(r.labels[:n])   # of its own
+    # more pieces than asked: one superfacet each, as the paper's orphans give
+    assert segment(mesh, 2, elements=elements).n_segments == 3
+
+
+def test_separate_pieces_of_a_cloud_keep_the_count_asked():
+    from superfacets import PointCloud
+
+    rng = np.random.default_rng(0)
+    plane = np.c_[rng.uniform(0, 1, (4000, 2)), np.zeros(4000)]
+    blobs = [rng.normal(0, 0.005, (40, 3)) + [0.2 * i + 0.1, 1.05, 0.0] for i in range(5)]
+    cloud = PointCloud(np.vstack([plane] + blobs))
+    paper = segment(cloud, 30, paper=True)  # blobs its farthest points missed: extra
+    assert paper.n_segments > 30 and paper.n_orphan_seeds == paper.n_segments - 30
+    r = segment(cloud, 30)
+    assert r.params["n_init_centers"] == 30 and r.n_segments < paper.n_segments
+    blob_labels = [set(r.labels[4000 + 40 * i:4040 + 40 * i]) for i in range(5)]
+    assert all(len(b) == 1 for b in blob_labels)              # a blob is one superpoint
+    assert not set().union(*blob_labels) & set(r.labels[:4000])  # of its own
 
 
 def test_odd_but_valid_input():

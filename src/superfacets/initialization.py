@@ -21,8 +21,8 @@ from .expansion import Workspace, bucket_width, with_room
 from .params import INITS, check_choice, check_n_segments
 from .passes import update_centers
 
-__all__ = ["first_center", "farthest_point_centers", "flood_labels", "grid_labels",
-           "initial_centers", "INITS"]
+__all__ = ["first_center", "piece_seeds", "farthest_point_centers", "flood_labels",
+           "grid_labels", "initial_centers", "INITS"]
 
 _BLOCKED_MIN_WORK = 50_000_000  # elements x centers above which cells pay (< 0.1 s below)
 
@@ -48,12 +48,71 @@ def first_center(graph) -> int:
     return int(np.argmin(d2))
 
 
-def farthest_point_centers(graph, n_segments: int) -> np.ndarray:
+def _pieces(g) -> tuple[np.ndarray, int]:
+    """Connected piece of every element (numbered by lowest element) and their number."""
+    from ._kernels.adjacency import same_label_components
+
+    n = g.n_elements
+    piece = same_label_components(g.indptr, g.indices, np.zeros(n, dtype=np.int64))
+    return piece, (int(piece.max()) + 1 if n else 0)
+
+
+def piece_seeds(graph, pieces: tuple[np.ndarray, int] | None = None) -> np.ndarray:
+    """One seed in every connected piece of the element graph.
+
+    The first is :func:`first_center` (the paper's first center); then, for
+    every other piece in the order of its lowest element, the element of that
+    piece nearest the mean position of its elements (ties: the lowest index).
+    O(n + e).
+
+    Parameters
+    ----------
+    graph : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
+    pieces : (piece, n_pieces), optional
+        The graph's connected pieces, if known.
+
+    Returns
+    -------
+    seeds : (P,) int64 ndarray
+        ``P`` the number of pieces (1 for a connected graph: ``[first_center]``).
+
+    Examples
+    --------
+    >>> import numpy as np, trimesh
+    >>> a, b = trimesh.creation.icosphere(1), trimesh.creation.icosphere(1)
+    >>> both = np.r_[a.vertices, b.vertices + 5], np.r_[a.faces, b.faces + len(a.vertices)]
+    >>> len(piece_seeds(both))
+    2
+    """
+    g = as_element_graph(graph)
+    first = first_center(g)
+    n = g.n_elements
+    piece, n_pieces = pieces if pieces is not None else _pieces(g)
+    if n_pieces <= 1:
+        return np.array([first], dtype=np.int64)
+    pos = np.asarray(g.positions, dtype=np.float64)
+    count = np.bincount(piece, minlength=n_pieces).astype(np.float64)
+    mean = np.stack([np.bincount(piece, weights=pos[:, t], minlength=n_pieces)
+                     for t in range(3)], axis=1) / count[:, None]
+    d2 = ((pos - mean[piece]) ** 2).sum(axis=1)
+    order = np.lexsort((np.arange(n), d2, piece))  # by piece, then distance, then index
+    nearest = order[np.searchsorted(piece[order], np.arange(n_pieces))]
+    return np.r_[first, np.delete(nearest, piece[first])].astype(np.int64)
+
+
+def farthest_point_centers(graph, n_segments: int, *, every_piece: bool = False) -> np.ndarray:
     """Iterative farthest-point initialization (paper section 3.1).
 
     The first center is :func:`first_center`; each next one is the element
     whose position has the largest Euclidean distance to its nearest chosen
-    center. Runs in O(n k) time at worst and O(n) memory (a running minimum),
+    center. With ``every_piece`` (beyond the paper), every connected piece
+    of the graph gets a center within the ``k``: the paper's first ``L``
+    centers, ``L`` the largest for which they and one seed
+    (:func:`piece_seeds`) in each piece they missed make at most ``k``, then
+    those seeds. A piece the farthest points missed would otherwise seed a
+    superfacet from its orphans during the passes, beyond the count asked
+    for. A graph of more pieces than ``n_segments`` gets one center per
+    piece. Runs in O(n k) time at worst and O(n) memory (a running minimum),
     instead of the paper's O(n k^2); in practice close to O(n log k): the
     elements are grouped in grid cells, and a new center visits only the
     cells where it can be nearer than the earlier centers (exactly the same
@@ -64,11 +123,14 @@ def farthest_point_centers(graph, n_segments: int) -> np.ndarray:
     graph : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
     n_segments : int
         Number of centers ``k``, ``1 <= k <= n``.
+    every_piece : bool, default False
+        Give every connected piece a center (the paper: False).
 
     Returns
     -------
-    centers : (k,) int64 ndarray
-        Distinct element indices, in the order they were chosen.
+    centers : (K,) int64 ndarray
+        Distinct element indices, in the order they were chosen; ``K = k``,
+        or the number of pieces if ``every_piece`` and that is larger.
 
     Raises
     ------
@@ -92,7 +154,20 @@ def farthest_point_centers(graph, n_segments: int) -> np.ndarray:
     else:  # same result; each new center visits only the grid cells it can change
         cells = max(2, round(m ** (1 / 3)))  # cells^3 ~ m: the count array stays O(m)
         farthest_point_blocked(c, k, first_center(g), out, *spatial_blocks(c, cells))
-    return out
+    piece, n_pieces = _pieces(g) if every_piece else (None, 1)
+    if n_pieces <= 1:
+        return out
+    # the longest run of farthest points that, with one seed in each piece it
+    # missed, makes at most k centers (the samples are incremental: a prefix of
+    # the k is the run for fewer); the centers in all after t + 1 of them:
+    new_piece = np.zeros(k, dtype=np.int64)
+    new_piece[np.unique(piece[out], return_index=True)[1]] = 1
+    used = np.arange(1, k + 1) + n_pieces - np.cumsum(new_piece)  # non-decreasing
+    keep = max(1, int(np.searchsorted(used, k, side="right")))
+    seeds = piece_seeds(g, (piece, n_pieces))
+    missed = np.ones(n_pieces, dtype=bool)
+    missed[piece[out[:keep]]] = False
+    return np.r_[out[:keep], seeds[missed[piece[seeds]]]].astype(np.int64)
 
 
 def flood_labels(graph, csr_weights: np.ndarray, radius: float, window: float = 2.0) -> np.ndarray:
@@ -163,7 +238,7 @@ def grid_labels(graph, radius: float) -> np.ndarray:
 
 
 def initial_centers(init: str, graph, csr_weights: np.ndarray, k: int | None, radius: float,
-                    window: float) -> np.ndarray:
+                    window: float, every_piece: bool = False) -> np.ndarray:
     """The initial centers of ``init``: ``k`` farthest points, or the element
     nearest the area-weighted mean of each flood or grid region.
 
@@ -178,6 +253,9 @@ def initial_centers(init: str, graph, csr_weights: np.ndarray, k: int | None, ra
         Superfacet radius in mesh units (``'flood'``, ``'grid'``).
     window : float
         Expansion multiple (``'flood'``).
+    every_piece : bool, default False
+        ``'farthest'``: seed every connected piece first
+        (:func:`farthest_point_centers`).
 
     Returns
     -------
@@ -190,7 +268,7 @@ def initial_centers(init: str, graph, csr_weights: np.ndarray, k: int | None, ra
     """
     check_choice("init", init, INITS)
     if init == "farthest":
-        return farthest_point_centers(graph, k)
+        return farthest_point_centers(graph, k, every_piece=every_piece)
     labels = (flood_labels(graph, csr_weights, radius, window) if init == "flood"
               else grid_labels(graph, radius))
     n = int(labels.max()) + 1

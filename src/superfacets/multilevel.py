@@ -223,6 +223,7 @@ def coarsen(graph: ElementGraph, weights: np.ndarray, csr_w: np.ndarray,
 def coarse_centers(graph: ElementGraph, weights: np.ndarray | None, csr_w: np.ndarray,
                    ratio: int, *, init: str, k: int | None, radius: float, window: float,
                    assignment: str, max_iter: int, tol: float, min_move: float, n_threads: int,
+                   every_piece: bool = False,
                    on_coarsened: Callable[[], None] | None = None) -> tuple[np.ndarray, dict]:
     """Run the method on the graph coarsened by ``ratio``; return fine centers.
 
@@ -230,7 +231,9 @@ def coarse_centers(graph: ElementGraph, weights: np.ndarray | None, csr_w: np.nd
     assignment, ``tol`` and ``min_move``) on the clusters of :func:`coarsen`;
     its labels are carried to the fine elements, and the center of each
     superfacet is the fine element nearest its size-weighted mean (the center
-    update of paper section 3.1, step 3, on the fine elements).
+    update of paper section 3.1, step 3, on the fine elements). ``every_piece``
+    as in :func:`superfacets.initialization.initial_centers` (clusters never
+    span two pieces, so the coarse graph has the same pieces).
 
     Returns
     -------
@@ -260,7 +263,7 @@ def coarse_centers(graph: ElementGraph, weights: np.ndarray | None, csr_w: np.nd
     spaces = Workspaces(cg.n_elements, co.weights, n_threads)
     try:
         start = initial_centers(init, cg, co.weights, None if k is None else
-                                min(k, cg.n_elements), radius, window)
+                                min(k, cg.n_elements), radius, window, every_piece)
         work = np.empty(cg.n_elements, dtype=np.int64)
         work[:start.shape[0]] = start
         classifier = make_classifier(assignment, cg, co.weights, (window * radius) ** 2, spaces)
@@ -289,7 +292,9 @@ def start_centers(graph: ElementGraph, weights: np.ndarray | None, csr_w: np.nda
     then runs :func:`coarse_centers`, or the plain initialization when
     coarse-to-fine is off or finds too few clusters. Coarse-run details go
     to ``timings`` (``coarse`` seconds, ``coarse_elements``, ``coarse_passes``).
-    ``weights`` and ``on_coarsened`` as in :func:`coarse_centers`.
+    ``weights`` and ``on_coarsened`` as in :func:`coarse_centers`. Unless
+    ``params.paper``, the farthest points seed every connected piece first
+    (:func:`superfacets.initialization.farthest_point_centers`).
 
     Returns
     -------
@@ -315,9 +320,11 @@ def start_centers(graph: ElementGraph, weights: np.ndarray | None, csr_w: np.nda
         init, info = coarse_centers(
             graph, weights, csr_w, ratio, init=p.init, k=k, radius=radius, window=p.window,
             assignment=p.assignment, max_iter=p.max_iter, tol=p.tol,
-            min_move=center_tol * radius, n_threads=p.n_threads, on_coarsened=on_coarsened)
+            min_move=center_tol * radius, n_threads=p.n_threads,
+            every_piece=not p.paper, on_coarsened=on_coarsened)
         if init is not None:
             timings.update(info, coarse=time.perf_counter() - t)
             return init, center_tol, ratio
     stage(f"init ({p.init})")
-    return initial_centers(p.init, graph, csr_w, k, radius, p.window), center_tol, 1
+    return (initial_centers(p.init, graph, csr_w, k, radius, p.window, not p.paper),
+            center_tol, 1)

@@ -171,9 +171,12 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
     -------
     labels : (m,) int64 ndarray
         Superfacet of each face (vertex, point), dense ``0..K-1``. ``K`` may differ from
-        ``n_segments``: orphan faces seed extra superfacets; stray pieces and
-        centers left without faces reduce it. Vertices used by no face and
-        invalid points of a cloud get -1.
+        ``n_segments``: faces no center reached within its window seed extra
+        superfacets, and centers left without faces reduce it. Every
+        separate piece of the graph gets a center from the start (more
+        pieces than ``n_segments``: one superfacet each); with ``paper=True``
+        a piece the farthest points missed seeds one from its orphans, beyond
+        the count. Vertices used by no face and invalid points of a cloud get -1.
 
     Raises
     ------

@@ -255,7 +255,7 @@ def _core_share(inp, core: np.ndarray, p: SegmentParams, r: float) -> int:
     each = 4.0 / 3.0 * math.pi * r ** 3 if g.kind == "cells" else math.pi * r * r
     want = max(1, round(float(g.sizes[in_core].sum()) / each))
     budget = int(min(g.n_elements, max(2 * round(g.area / each), want) + 16))
-    hits = np.cumsum(in_core[farthest_point_centers(g, budget)])
+    hits = np.cumsum(in_core[farthest_point_centers(g, budget, every_piece=not p.paper)])
     return int(min(np.searchsorted(hits, want) + 1, budget))
 
 
