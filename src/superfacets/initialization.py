@@ -254,7 +254,7 @@ def initial_centers(init: str, graph, csr_weights: np.ndarray, k: int | None, ra
     window : float
         Expansion multiple (``'flood'``).
     every_piece : bool, default False
-        ``'farthest'``: seed every connected piece first
+        ``'farthest'``: give every connected piece a center within ``k``
         (:func:`farthest_point_centers`).
 
     Returns
