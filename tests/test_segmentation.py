@@ -6,10 +6,10 @@ from scipy.sparse.csgraph import dijkstra
 
 from superfacets import (InvalidMeshError, Mesh, ParameterError, read_mesh, segment,
                          superfacets)
-from superfacets._kernels.exact import classify_exact
+from superfacets.classify import Exact
 from superfacets._kernels.expand import MERGE, expand
 from superfacets.connectivity import label_components
-from superfacets.expansion import Workspace, bucket_width
+from superfacets.expansion import Workspace, Workspaces, bucket_width
 from superfacets.params import resolve
 from superfacets.segmentation import pipeline
 from superfacets.weights import paper_weights
@@ -89,6 +89,13 @@ def test_crease_followed_with_high_alpha(valley):
     assert high > low + 0.4
 
 
+def _exact(g, cw, centers, k):
+    m = g.n_elements
+    dist, label = np.empty(m), np.empty(m, np.int32)
+    n = Exact(g, cw, np.inf, Workspaces(m, cw, 1)).classify(centers, k, dist, label)[0]
+    return n, dist, label
+
+
 def test_exact_assignment_is_nearest_center(sphere):
     g = face_graph(sphere)
     rng = np.random.default_rng(1)
@@ -97,14 +104,36 @@ def test_exact_assignment_is_nearest_center(sphere):
     m = sphere.n_faces
     centers = np.empty(m, np.int64)
     centers[:12] = rng.choice(m, 12, replace=False)
-    dist, label = np.empty(m), np.empty(m, np.int64)
-    cap = g.indices.size + m + 1
-    k = classify_exact(g.indptr, g.indices, cw, centers, 12, dist, label,
-                       np.empty(cap), np.empty(cap, np.int64))
+    k, dist, label = _exact(g, cw, centers, 12)
     assert k == 12
     d = dijkstra(g.to_csr(w), indices=centers[:12])
     np.testing.assert_array_equal(label, np.argmin(d, axis=0))
     np.testing.assert_allclose(dist, d.min(axis=0))
+
+
+@pytest.mark.parametrize("kind", ["faces", "vertices"])
+def test_exact_assignment_ties_go_to_the_first_center(kind):
+    # weights in eighths: every path sum is exact, so equal distances are real ties (a
+    # grid has many); an element goes to the first listed center at the least distance,
+    # however the search orders its work, and a repeated center stays empty
+    from superfacets.elements.inputs import elements_of
+
+    g = elements_of(grid_mesh(12, 12), kind).graph
+    rng = np.random.default_rng(3)
+    w = rng.integers(1, 5, g.n_edges) / 8.0
+    m = g.n_elements
+    ties = 0
+    for _ in range(5):
+        centers = np.empty(m + 1, np.int64)
+        centers[:9] = rng.choice(m, 9, replace=False)
+        centers[9] = centers[2]  # a repeat: label 9 stays empty
+        k, dist, label = _exact(g, w[g.dual_edge], centers, 10)
+        d = dijkstra(g.to_csr(w), indices=centers[:10])
+        np.testing.assert_array_equal(dist, d.min(axis=0))
+        np.testing.assert_array_equal(label, np.argmin(d, axis=0))  # the first on ties
+        assert k == 10 and 9 not in label
+        ties += int(((d[:9] == d.min(axis=0)).sum(axis=0) > 1).sum())
+    assert ties > 20
 
 
 def test_bounded_expansion_is_dijkstra_inside_the_window(sphere):
@@ -348,6 +377,21 @@ def test_exact_assignment_option(sphere):
     r = segment(sphere, 30, assignment="exact")
     check_invariants(sphere, r.labels)
     assert r.params["assignment"] == "exact"
+
+
+def test_default_assignment_is_exact_on_vertices_only():
+    # the default's exact classification reaches every vertex of a connected mesh (no
+    # window to miss one), so it seeds no orphan and returns the count asked; faces and
+    # the paper's method keep the windows
+    mesh = grid_mesh(40, 40, height=lambda x, y: 0.15 * np.sin(6 * x) * np.cos(5 * y))
+    paper = segment(mesh, 60, elements="vertices", paper=True)
+    default = segment(mesh, 60, elements="vertices")
+    assert paper.params["assignment"] == "bounded"
+    assert default.params["assignment"] == "exact"
+    assert segment(mesh, 60).params["assignment"] == "bounded"
+    assert segment(mesh, 60, elements="vertices", assignment="bounded").params[
+        "assignment"] == "bounded"
+    assert default.n_segments == 60 and default.n_orphan_seeds == 0
 
 
 def test_shlafman_weighting_runs(sphere):

@@ -4,8 +4,8 @@ A :class:`Classifier` labels every element with a center, given the centers
 of the pass (paper section 3.1, step 2); elements no center reached (orphans)
 seed new centers, appended to the center list. The strategies:
 
-- :class:`BoundedReplay` (``assignment='bounded'``, the default): the paper's
-  window-bounded expansion from each center, an element keeping the smallest
+- :class:`BoundedReplay` (``assignment='bounded'``, the default on faces and
+  points): the paper's window-bounded expansion from each center, an element keeping the smallest
   distance seen (the earlier center on ties). An expansion depends on its
   center alone, so a center that did not move since the previous pass is not
   expanded again: its recorded (element, distance) list is replayed. The
@@ -14,8 +14,9 @@ seed new centers, appended to the center list. The strategies:
   labels are exactly those of :class:`Bounded`, for any thread count.
 - :class:`Bounded`: the same classification written plainly (every center
   expanded every pass, in order); the reference of the tests.
-- :class:`Exact` (``assignment='exact'``): one multi-source Dijkstra from all
-  centers, no window: every element goes to its nearest center.
+- :class:`Exact` (``assignment='exact'``, the default on vertices): one
+  multi-source search from all centers, no window: every element goes to its
+  nearest center (ties: the center listed first).
 
 :func:`make_classifier` picks one by name.
 """
@@ -86,18 +87,34 @@ class Bounded(Classifier):
 
 
 class Exact(Classifier):
-    """Exact nearest-center classification: one multi-source Dijkstra, no window."""
+    """Exact nearest-center classification: one multi-source search, no window.
+
+    Every element goes to the center at the smallest distance along the
+    graph; ties go to the center listed first, whatever order the search
+    settles elements in (``(distance, center)`` pairs compared
+    lexicographically). The search uses the bucket queue of the bounded
+    expansions, its node pool grown when a search runs out.
+    """
 
     def __init__(self, graph, weights, window_r2, spaces):
         super().__init__(graph, weights, window_r2, spaces)
-        self.hkey = np.empty(spaces.heap_bound)
-        self.hval = np.empty(spaces.heap_bound,
-                             dtype=np.int32 if self.m < 2**31 - 1 else np.int64)
+        self.inv_width = spaces.inv_width
+        self.head = np.full(spaces.n_buckets, -1, dtype=np.int64)
+        self._pool(self.indices.shape[0] + 2 * self.m + 1)  # a node per push, as a rule
+
+    def _pool(self, cap: int) -> None:
+        itype = np.int32 if self.m < 2**31 - 1 else np.int64
+        self.queue = (np.empty(cap, dtype=itype), np.empty(cap),
+                      np.empty(cap, dtype=np.int64), self.head)
+        self.qlab = np.empty(cap, dtype=itype)
 
     def classify(self, centers, n_centers, dist, label):
-        k = classify_exact(self.indptr, self.indices, self.w, centers, n_centers, dist, label,
-                           self.hkey, self.hval)
-        return k, 0
+        while True:
+            k = classify_exact(self.indptr, self.indices, self.w, centers, n_centers, dist,
+                               label, self.queue, self.qlab, self.inv_width)
+            if k >= 0:
+                return k, 0
+            self._pool(2 * self.queue[0].shape[0])
 
 
 def make_classifier(assignment: str, graph, weights: np.ndarray, window_r2: float,

@@ -22,7 +22,7 @@ the public functions of :mod:`superfacets.segmentation` call it) and returns a
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -33,7 +33,8 @@ from .expansion import Workspaces
 from .labels import relabel_dense
 from .elements.inputs import elements_of
 from .multilevel import start_centers
-from .params import DEFAULT_CENTER_TOL, DEFAULTS, SegmentParams, better_method, superfacet_size
+from .params import (DEFAULT_CENTER_TOL, DEFAULTS, SegmentParams, assignment_of, better_method,
+                     superfacet_size)
 from .passes import final_centers, iterate
 from .weights import csr_weights, edge_weights
 
@@ -262,6 +263,7 @@ def _pipeline(mesh, params: SegmentParams, features, *, replay: bool, jump_cycle
     if n_centers is not None:
         k = int(min(max(n_centers, 1), graph.n_elements))
     cleanup, split_merge = better_method(p, graph.kind)
+    p = replace(p, assignment=assignment_of(p, graph.kind))
     feats = _features_of(source, features) if p.beta > 0 else None
     timings: dict[str, float] = {}
     bar = None

@@ -25,7 +25,7 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
                 alpha: float = _D.alpha, eta_convex: float = _D.eta_convex,
                 window: float = _D.window, init: str | None = _D.init,
                 max_iter: int = _D.max_iter, weighting: str = _D.weighting,
-                assignment: str = _D.assignment,
+                assignment: str | None = _D.assignment,
                 enforce_connectivity: bool = _D.enforce_connectivity,
                 cleanup: bool | None = _D.cleanup, split_merge: bool | None = _D.split_merge,
                 tol: float = _D.tol, center_tol: float | None = _D.center_tol, coarsen: int | None = _D.coarsen,
@@ -73,13 +73,16 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
         Maximum number of classification passes (``>= 1``).
     weighting : {'paper', 'shlafman'}, default 'paper'
         Edge weights: the paper's eqs. 1-3 or Shlafman et al.'s eq. 6.
-    assignment : {'bounded', 'exact'}, default 'bounded'
+    assignment : {'bounded', 'exact'}, optional
         ``'bounded'``: the paper's classification, one window-bounded
         Dijkstra per center, a face keeping the smallest distance seen.
-        ``'exact'``: one multi-source Dijkstra from all centers, no window, so
-        every face goes to its nearest center along the face graph (the
-        bounded version differs only where the shortest path to the nearest
-        center leaves that center's window, and may leave orphans).
+        ``'exact'``: one multi-source search from all centers, no window, so
+        every element goes to its nearest center along the graph (ties: the
+        center listed first; the bounded version differs only where the
+        shortest path to the nearest center leaves that center's window, and
+        may leave orphans). Default (None): ``'exact'`` on vertices (with the
+        paper's weighting, unless ``paper``), ``'bounded'`` otherwise
+        (:func:`~superfacets.params.assignment_of`; ``docs/cleanup.md``).
     enforce_connectivity : bool, default True
         Merge stray pieces of a superfacet into the neighbour with which they
         share the longest boundary, so each superfacet is face-connected.
@@ -223,7 +226,7 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | Non
             alpha: float = _D.alpha, eta_convex: float = _D.eta_convex,
             window: float = _D.window, init: str | None = _D.init,
             max_iter: int = _D.max_iter, weighting: str = _D.weighting,
-            assignment: str = _D.assignment,
+            assignment: str | None = _D.assignment,
             enforce_connectivity: bool = _D.enforce_connectivity,
             cleanup: bool | None = _D.cleanup, split_merge: bool | None = _D.split_merge,
             tol: float = _D.tol, center_tol: float | None = _D.center_tol, coarsen: int | None = _D.coarsen,

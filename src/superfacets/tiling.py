@@ -48,7 +48,7 @@ from .elements.inputs import elements_of
 from .errors import ParameterError
 from .expansion import Workspaces
 from .labels import relabel_dense
-from .params import DEFAULTS, SegmentParams, better_method
+from .params import DEFAULTS, SegmentParams, assignment_of, better_method
 from .pipeline import _features_of, pipeline
 from .weights import csr_weights, edge_weights
 
@@ -305,8 +305,8 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
     label = np.empty(m, dtype=np.int32)
     spaces = Workspaces(m, w, p.n_threads)
     try:
-        classifier = make_classifier(p.assignment, graph, w, (p.window * r) ** 2, spaces,
-                                     replay=False)
+        classifier = make_classifier(assignment_of(p, graph.kind), graph, w,
+                                     (p.window * r) ** 2, spaces, replay=False)
         k, _ = classifier.classify(centers, elem.size, dist, label)
     finally:
         spaces.close()

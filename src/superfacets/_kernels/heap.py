@@ -1,6 +1,7 @@
 """A binary min-heap of (float key, int value) with lazy deletion, in numba.
 
-Private kernels, shared by the exact classification (:mod:`.exact`) and the
+Private kernels, shared by the searches of the split-and-merge swaps
+(:mod:`.splitmerge`), the clean-up's band distances (:mod:`.cleanup`) and the
 VSA baseline's flooding. ``hkey`` (float64) and ``hval`` (int) are the heap
 arrays, ``size`` the number of entries; both functions return the new size.
 The caller sizes the arrays for every push it can make. :func:`pop_min`

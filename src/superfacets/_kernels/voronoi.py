@@ -5,14 +5,14 @@ bucket queue of :func:`.expand.expand`."""
 import numpy as np
 from numba import njit
 
-from .expand import QUEUE_FULL, queue_node, queue_pop, queue_push
+from .exact import search_buckets
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
 def nearest_seed(indptr, indices, weights, seeds, first, dist, label, queue, inv_width):
     """Label every element with its nearest seed (index into ``seeds``) and
     that distance, by a label-correcting multi-source search from
-    ``seeds[first:]``.
+    ``seeds[first:]`` (:func:`.exact.search_buckets`).
 
     ``dist``/``label`` must hold ``inf``/-1, except where an earlier call
     from ``seeds[:first]`` (in other connected components) already labelled.
@@ -24,48 +24,19 @@ def nearest_seed(indptr, indices, weights, seeds, first, dist, label, queue, inv
     ``queue = (qface, qdist, qnext, head)`` as in :func:`.expand.expand`.
     Returns 0, or :data:`.expand.QUEUE_FULL` (grow ``queue`` and call again).
     """
-    qface, qdist, qnext, head = queue
-    qcap = qface.shape[0]
-    nb = head.shape[0]
-    bmask = nb - 1
-    live = 0
-    bump = 0
-    free = -1
+    todo = np.empty(seeds.shape[0] - first, dtype=np.int64)
+    n = 0
     for s in range(first, seeds.shape[0]):
         f = seeds[s]
         if dist[f] == 0.0:
             continue
-        n, free, bump = queue_node(qnext, free, bump, qcap)
-        if n < 0:
-            for b in range(nb):
-                head[b] = -1
-            return QUEUE_FULL
         dist[f] = 0.0
         label[f] = s
-        queue_push(qface, qdist, qnext, head, bmask, n, f, 0.0, inv_width, 0)
-        live += 1
-    cur = 0
-    while live > 0:
-        f, d, free, cur = queue_pop(qface, qdist, qnext, head, bmask, cur, free)
-        live -= 1
-        if d > dist[f]:
-            continue  # stale
-        lf = label[f]
-        for e in range(indptr[f], indptr[f + 1]):
-            g = indices[e]
-            nd = d + weights[e]
-            if not nd < dist[g]:
-                continue
-            dist[g] = nd
-            label[g] = lf
-            n, free, bump = queue_node(qnext, free, bump, qcap)
-            if n < 0:
-                for b in range(nb):
-                    head[b] = -1
-                return QUEUE_FULL
-            queue_push(qface, qdist, qnext, head, bmask, n, g, nd, inv_width, cur)
-            live += 1
-    return 0
+        todo[n] = f
+        n += 1
+    qlab = np.empty(queue[0].shape[0], dtype=np.int64)
+    return search_buckets(indptr, indices, weights, dist, label, todo[:n], queue, qlab,
+                          inv_width, False)
 
 
 @njit(cache=True, error_model="numpy")

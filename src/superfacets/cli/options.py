@@ -145,8 +145,9 @@ def add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> No
                         f"(then --alpha in [0, 1]) (default: {_D.weighting})")
     p.add_argument("--assignment", choices=ASSIGNMENTS, default=_D.assignment,
                    help="bounded: the paper's window-bounded expansion per center; "
-                        "exact: nearest center by one multi-source Dijkstra "
-                        f"(default: {_D.assignment})")
+                        "exact: nearest center by one multi-source search "
+                        "(default: exact on vertices, bounded on faces and points; "
+                        "--paper: bounded)")
     p.add_argument("--tol", type=float_arg, default=_D.tol, metavar="T",
                    help="also stop once a pass changes the superfacet of at most this fraction "
                         f"of the area (default: {_D.tol:g}; 0: the paper's rule: stop when no "
