@@ -170,6 +170,64 @@ def test_graph_of_a_triangle_soup_matches_a_plain_construction(seed, n_faces, n_
         assert np.diff(g.indptr).max() > 32 and (faces == 0).any(axis=1).sum() > 32
 
 
+def _vertex_graph_by_numpy(mesh):
+    """The vertex graph's arrays by plain numpy (np.unique of the edge keys, np.bincount
+    over the corners): the construction the one-pass kernels replace."""
+    corners, offsets = np.asarray(mesh.corners), np.asarray(mesh.offsets)
+    sizes = np.diff(offsets)
+    nxt = np.roll(corners, -1)
+    nxt[offsets[1:] - 1] = corners[offsets[:-1]]
+    owner = np.repeat(np.arange(mesh.n_faces), sizes)
+    used = np.flatnonzero(mesh.referenced_vertices)
+    index = np.full(mesh.n_vertices, -1)
+    index[used] = np.arange(used.shape[0])
+    n, ci, pos = used.shape[0], index[corners], mesh.vertices[used]
+    area = np.bincount(ci, weights=np.repeat(mesh.areas / sizes, sizes), minlength=n)
+    fn = mesh.normals * mesh.areas[:, None]
+    normal = np.stack([np.bincount(ci, weights=fn[owner, c], minlength=n) for c in range(3)],
+                      axis=1)
+    norm = np.linalg.norm(normal, axis=1)
+    normal[norm > 0] /= norm[norm > 0, None]
+    normal[~(norm > 0)] = 0.0
+    a, b = np.minimum(ci, index[nxt]), np.maximum(ci, index[nxt])
+    keep = a != b
+    a, b, own = a[keep], b[keep], owner[keep]
+    uniq, inv, count = np.unique(a * n + b, return_inverse=True, return_counts=True)
+    lo, hi = uniq // n, uniq % n
+    dual = np.linalg.norm(mesh.centroids[own] - 0.5 * (pos[a] + pos[b]), axis=1)
+    return dict(sizes=area, normals=normal, pairs=np.stack([lo, hi], axis=1),
+                lengths=np.bincount(inv.ravel(), weights=dual, minlength=uniq.shape[0]),
+                spans=np.linalg.norm(pos[lo] - pos[hi], axis=1), open=count == 1)
+
+
+@pytest.mark.parametrize("seed, polygons", [(0, False), (1, False), (2, True)])
+def test_vertex_graph_equals_the_numpy_construction_bit_for_bit(seed, polygons):
+    # triangle (or polygon) soups over few vertices: non-manifold edges, flipped and
+    # repeated faces, collapsed edges, unused vertices, a vertex on more than 32 edges
+    from superfacets.elements.vertices import vertex_graph
+
+    rng = np.random.default_rng(seed)
+    n_vertices, n_faces = 80, 600
+    size = 5 if polygons else 3
+    faces = rng.integers(0, n_vertices - 5, size=(n_faces, size))
+    faces[:60, 0] = 0  # a high-valence vertex: a bucket past the insertion sort
+    faces[60:80] = faces[:20][:, ::-1]
+    if polygons:
+        faces[::3, 3:] = -1  # triangles among pentagons and quads
+        faces[1::3, 4] = -1
+    mesh = Mesh(rng.normal(size=(n_vertices, 3)), faces)
+    g = vertex_graph(mesh).graph
+    ref = _vertex_graph_by_numpy(mesh)
+    for name in ("sizes", "normals", "pairs", "lengths", "spans"):
+        np.testing.assert_array_equal(getattr(g, name), ref[name], err_msg=name)
+    assert g.pairs.dtype == ref["pairs"].dtype and g.n_elements == n_vertices - 5
+    lo, hi = ref["pairs"][ref["open"], 0], ref["pairs"][ref["open"], 1]
+    np.testing.assert_array_equal(g.boundary_elements, np.concatenate([lo, hi]))
+    half = 0.5 * ref["spans"][ref["open"]]
+    np.testing.assert_array_equal(g.boundary_lengths, np.concatenate([half, half]))
+    assert np.diff(g.indptr).max() > 32 and ref["open"].any() and not ref["open"].all()
+
+
 def test_face_graph_caches_the_terms_of_the_weights(sphere):
     # the cached per-adjacency data equal the formulas of docs/method.md, sections 1-2
     g = face_graph(sphere)

@@ -282,3 +282,48 @@ def distinct_in_order(p, order, out, inverse):
         inverse[row] = m - 1
         prev = row
     return m
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def vertex_cells(corners, offsets, index, areas, normals, area, normal):
+    """Barycentric area and unit area-weighted normal of every vertex element.
+
+    Face ``f`` (corners ``corners[offsets[f]:offsets[f + 1]]``, element of a
+    corner ``index[corners[c]]``) gives ``areas[f] / s`` to each of its ``s``
+    corners and ``normals[f] * areas[f]`` to each corner's normal; sums in
+    corner order (as ``np.bincount`` over the corners), then each normal made
+    unit, ``sqrt((x*x + y*y) + z*z)`` as ``np.linalg.norm(axis=1)``, zero where
+    that is not positive. ``area`` and ``normal`` are zeroed here.
+    """
+    n = area.shape[0]
+    for i in range(n):
+        area[i] = 0.0
+        normal[i, 0] = 0.0
+        normal[i, 1] = 0.0
+        normal[i, 2] = 0.0
+    for f in range(offsets.shape[0] - 1):
+        s = offsets[f]
+        e = offsets[f + 1]
+        share = areas[f] / (e - s)
+        fx = normals[f, 0] * areas[f]
+        fy = normals[f, 1] * areas[f]
+        fz = normals[f, 2] * areas[f]
+        for c in range(s, e):
+            i = index[corners[c]]
+            area[i] += share
+            normal[i, 0] += fx
+            normal[i, 1] += fy
+            normal[i, 2] += fz
+    for i in range(n):
+        x = normal[i, 0]
+        y = normal[i, 1]
+        z = normal[i, 2]
+        norm = np.sqrt(x * x + y * y + z * z)
+        if norm > 0:
+            normal[i, 0] = x / norm
+            normal[i, 1] = y / norm
+            normal[i, 2] = z / norm
+        else:
+            normal[i, 0] = 0.0
+            normal[i, 1] = 0.0
+            normal[i, 2] = 0.0

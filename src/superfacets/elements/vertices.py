@@ -34,7 +34,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..mesh import column_bounds
-from .graph import ElementGraph, adjacency_csr, cached_on, chunked, pairs_from_csr
+from .graph import ElementGraph, adjacency_csr, cached_on, pairs_from_csr
 
 __all__ = ["vertex_graph", "VertexElements", "symmetric_terms"]
 
@@ -102,54 +102,29 @@ def vertex_graph(mesh) -> VertexElements:
 
 
 def _build_vertex_graph_of(mesh) -> VertexElements:
-    v = mesh.vertices
+    from .._kernels.adjacency import mesh_edges
+    from .._kernels.geometry import vertex_cells
+
     n_v = mesh.n_vertices
-    if mesh.is_triangular:
-        corners = np.asarray(mesh.faces).ravel()
-        nxt = np.asarray(mesh.faces)[:, [1, 2, 0]].ravel()
-        owner = np.repeat(np.arange(mesh.n_faces), 3)
-        share = np.repeat(mesh.areas / 3.0, 3)
-    else:
-        corners = np.asarray(mesh.corners)
-        offsets = np.asarray(mesh.offsets)
-        nxt = np.roll(corners, -1)
-        nxt[offsets[1:] - 1] = corners[offsets[:-1]]
-        sizes = np.diff(offsets)
-        owner = np.repeat(np.arange(mesh.n_faces), sizes)
-        share = np.repeat(mesh.areas / sizes, sizes)
+    corners = np.asarray(mesh.corners)
+    offsets = np.asarray(mesh.offsets)
     index = np.full(n_v, -1, dtype=np.int64)
     used = np.flatnonzero(mesh.referenced_vertices)
     index[used] = np.arange(used.shape[0])
     n = used.shape[0]
+    pos = mesh.vertices[used]
 
-    # per element: barycentric area and area-weighted normal
-    ci = index[corners]
-    area = np.bincount(ci, weights=share, minlength=n)
-    fn = mesh.normals * mesh.areas[:, None]
-    normal = np.stack([np.bincount(ci, weights=fn[owner, c], minlength=n) for c in range(3)],
-                      axis=1)
-    norm = np.linalg.norm(normal, axis=1)
-    ok = norm > 0
-    normal[ok] /= norm[ok, None]
-    normal[~ok] = 0.0
+    # per element: barycentric area and unit area-weighted normal
+    area = np.empty(n)
+    normal = np.empty((n, 3))
+    vertex_cells(corners, offsets, index, mesh.areas, mesh.normals, area, normal)
 
-    # mesh edges (element ids, a < b), grouped; the dual length summed over their faces
-    a, b = np.minimum(ci, index[nxt]), np.maximum(ci, index[nxt])
-    keep = a != b
-    a, b, half_owner = a[keep], b[keep], owner[keep]
-    key = a * np.int64(n) + b
-    uniq, inv, count = np.unique(key, return_inverse=True, return_counts=True)
-    inv = inv.ravel()
-    lo, hi = uniq // n, uniq % n
-    pos = v[used]
-    mid = 0.5 * (pos[a] + pos[b])
-    dual = np.linalg.norm(mesh.centroids[half_owner] - mid, axis=1)
-    lengths = np.bincount(inv, weights=dual, minlength=uniq.shape[0])
+    # mesh edges (element ids, lo < hi), once each; the dual length summed over their faces
+    lo, hi, lengths, spans, uses = mesh_edges(corners, offsets, index, n, pos, mesh.centroids)
     pairs = np.stack([lo, hi], axis=1)
     indptr, indices, dual_edge = adjacency_csr(lo, hi, n)
-    open_ = count == 1  # an open-boundary edge: half of it to each end
-    half_len = 0.5 * np.linalg.norm(pos[lo[open_]] - pos[hi[open_]], axis=1)
-    spans = chunked(pairs.shape[0], lambda sl: np.linalg.norm(pos[lo[sl]] - pos[hi[sl]], axis=1))
+    open_ = uses == 1  # an open-boundary edge: half of it to each end
+    half_len = 0.5 * spans[open_]
     graph = ElementGraph(
         kind="vertices", positions=pos, sizes=area, normals=normal, centroid=mesh.centroid,
         lower=column_bounds(pos)[0], diagonal=mesh.diagonal, pairs=pairs, indptr=indptr,
