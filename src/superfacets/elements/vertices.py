@@ -102,8 +102,7 @@ def vertex_graph(mesh) -> VertexElements:
 
 
 def _build_vertex_graph_of(mesh) -> VertexElements:
-    from .._kernels.adjacency import mesh_edges
-    from .._kernels.geometry import vertex_cells
+    from .._kernels.vertices import mesh_edges, vertex_cells
 
     n_v = mesh.n_vertices
     corners = np.asarray(mesh.corners)
