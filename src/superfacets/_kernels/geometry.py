@@ -30,16 +30,23 @@ def face_geometry(vertices, faces, centroids, areas, normals):
         c0 = a1 * b2 - a2 * b1
         c1 = a2 * b0 - a0 * b2
         c2 = a0 * b1 - a1 * b0
-        norm = np.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
-        areas[f] = 0.5 * norm
-        if norm > 0:
-            normals[f, 0] = c0 / norm
-            normals[f, 1] = c1 / norm
-            normals[f, 2] = c2 / norm
-        else:
-            normals[f, 0] = 0.0
-            normals[f, 1] = 0.0
-            normals[f, 2] = 0.0
+        areas[f] = 0.5 * store_unit(normals, f, c0, c1, c2)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def store_unit(out, i, x, y, z):
+    """``out[i] = (x, y, z) / norm``, zero where the norm is not positive; returns the
+    norm, ``sqrt((x*x + y*y) + z*z)`` as ``np.linalg.norm(axis=1)``."""
+    norm = np.sqrt(x * x + y * y + z * z)
+    if norm > 0:
+        out[i, 0] = x / norm
+        out[i, 1] = y / norm
+        out[i, 2] = z / norm
+    else:
+        out[i, 0] = 0.0
+        out[i, 1] = 0.0
+        out[i, 2] = 0.0
+    return norm
 
 
 @njit(cache=True, error_model="numpy", inline="always")

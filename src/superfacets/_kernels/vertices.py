@@ -13,6 +13,7 @@ import numpy as np
 from numba import njit
 
 from .adjacency import count_keys, scatter_keys, sort_buckets
+from .geometry import store_unit
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -46,18 +47,7 @@ def vertex_cells(corners, offsets, index, areas, normals, area, normal):
             normal[i, 1] += fy
             normal[i, 2] += fz
     for i in range(n):
-        x = normal[i, 0]
-        y = normal[i, 1]
-        z = normal[i, 2]
-        norm = np.sqrt(x * x + y * y + z * z)
-        if norm > 0:
-            normal[i, 0] = x / norm
-            normal[i, 1] = y / norm
-            normal[i, 2] = z / norm
-        else:
-            normal[i, 0] = 0.0
-            normal[i, 1] = 0.0
-            normal[i, 2] = 0.0
+        store_unit(normal, i, normal[i, 0], normal[i, 1], normal[i, 2])
 
 
 @njit(cache=True, error_model="numpy")
