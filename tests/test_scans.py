@@ -31,7 +31,7 @@ def _write_kitti(folder, frame="000700", unlabelled=50):
 def test_registry_pins_every_file():
     assert len(SCANS) >= 3
     for name, src in SCANS.items():
-        assert src.name == name and src.labels in ("semantickitti", "las")
+        assert src.name == name and src.labels in ("semantickitti", "las", "scannet")
         for fname, url, sha in src.files:
             assert url.startswith("https://") and "/" not in fname
             assert len(sha) == 64 and int(sha, 16) >= 0
@@ -76,6 +76,47 @@ def test_las_classification_read_in_file_order(tmp_path, monkeypatch):
     expect[expect == 0] = UNLABELLED
     np.testing.assert_array_equal(s.ground_truth, expect)
     assert s.cloud.colors is not None and s.cloud.colors[0, 0] == pytest.approx(1.0)
+
+
+def _write_scannet(folder, scene="scene0000_00"):
+    pts, cls = _plane_points(20)
+    rgb = np.where(cls[:, None] == 1, [255, 0, 0], [0, 128, 255]).astype(np.float32)
+    cls = cls.astype(np.uint32)
+    cls[::9] = 0  # unannotated
+    np.save(folder / f"scannet_{scene}_points.npy", np.c_[pts, rgb].astype(np.float32))
+    np.save(folder / f"scannet_{scene}_labels.npy", cls)
+    return pts, cls
+
+
+def test_scannet_rows_read_with_colours_classes_and_unannotated(tmp_path):
+    pts, cls = _write_scannet(tmp_path)
+    s = load_scan("scannet-scene0000_00", tmp_path)
+    assert s.cloud.n_total == pts.shape[0]
+    np.testing.assert_allclose(s.cloud.points, pts.astype(np.float64))
+    expect = cls.astype(np.int64)
+    expect[expect == 0] = UNLABELLED
+    np.testing.assert_array_equal(s.ground_truth, expect)
+    first = int(np.flatnonzero(cls == 2)[0])
+    np.testing.assert_allclose(s.cloud.colors[0], [1, 0, 0])
+    np.testing.assert_allclose(s.cloud.colors[first], [0, 128 / 255, 1])
+    np.testing.assert_array_equal(s.cloud.up, [0, 0, 1])  # the floor's normals into the room
+    # an L of two planes, coloured by plane: the metrics see the fold
+    m = evaluate_scan(s, np.where(pts[:, 2] == 0, 0, 1))
+    assert m["undersegmentation_error"] == 0.0 and m["boundary_recall"] == pytest.approx(1.0)
+
+
+def test_scannet_files_of_the_wrong_shape_are_one_clear_error(tmp_path):
+    _write_scannet(tmp_path)
+    np.save(tmp_path / "scannet_scene0000_00_points.npy", np.zeros((5, 3), np.float32))
+    with pytest.raises(MeshFormatError, match="x y z r g b"):
+        load_scan("scannet-scene0000_00", tmp_path)
+    (tmp_path / "scannet_scene0000_00_points.npy").write_bytes(b"not an npy")
+    with pytest.raises(MeshFormatError, match="cannot read the points"):
+        load_scan("scannet-scene0000_00", tmp_path)
+    _write_scannet(tmp_path)
+    np.save(tmp_path / "scannet_scene0000_00_labels.npy", np.ones(3, np.uint32))
+    with pytest.raises(MeshFormatError, match="3 labels"):
+        load_scan("scannet-scene0000_00", tmp_path)
 
 
 def test_missing_scan_names_its_files_and_sources(tmp_path):

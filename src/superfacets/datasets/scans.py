@@ -1,4 +1,4 @@
-"""Labelled real scans: public LiDAR point clouds with per-point ground truth.
+"""Labelled real scans: public LiDAR and RGB-D point clouds with per-point ground truth.
 
 Superpoints are judged on real scans (noise, uneven density, occlusion) by
 the same metrics as on meshes, against each point's annotated class. The
@@ -9,12 +9,15 @@ downloads them once into a cache folder (``$SUPERFACETS_SCANS``, by default
 ``~/.cache/superfacets/scans``), and :func:`load_scan` reads them from there.
 
 Ground truth is the annotated class of each point (semantic labels, the
-usual ground truth of superpoint benchmarks on scans: S3DIS, SemanticKITTI,
-DALES). Points that no annotator labelled carry :data:`UNLABELLED` and are
+usual ground truth of superpoint benchmarks on scans: S3DIS, ScanNet,
+SemanticKITTI, DALES). Points that no annotator labelled carry :data:`UNLABELLED` and are
 left out of the metrics (``evaluate(..., ignore_label=UNLABELLED)``).
 
 Orientation: every scan here has z up, so its clouds carry ``up = (0, 0, 1)``
-(each connected piece's normals turned up by a vote, as a LAS file's). The
+(each connected piece's normals turned up by a vote, as a LAS file's; in the
+ScanNet rooms that turns the floor's normals up, into the room, and the
+walls' with them, so a room's corners read as concave, as seen from where
+it was scanned). The
 two SemanticKITTI frames are not both in their sensor's coordinates: frame
 000700 has no point within 25 m of the origin, and the run of its scan lines
 puts its sensor about 99 m from it (frame 000750's sensor is near the
@@ -64,7 +67,9 @@ class ScanSource:
         of the 19 training classes, 0 unlabelled; the cloud is seen from
         above, ``up = (0, 0, 1)``: see the module notes)
         or ``"las"`` (the LAS ``classification`` field, ASPRS codes; 0,
-        "never classified", is unlabelled).
+        "never classified", is unlabelled) or ``"scannet"`` (an ``.npy`` of
+        ``x y z r g b`` rows, colours 0-255, and an ``.npy`` of NYU40 class
+        ids, 0 unannotated; seen from above).
     credit : str
         Who made the data and under which licence.
     """
@@ -82,6 +87,7 @@ def _github(repo: str, commit: str, path: str) -> str:
 
 _O3D = ("isl-org/Open3D-ML", "0cbfde63a7eb5821f73118bbe0cf20ca353bb974")
 _PDAL = ("PDAL/PDAL", "ccf0ab7046072f68cab78734e90d0d3149f3af10")
+_MMDET3D = ("open-mmlab/mmdetection3d", "9e39d469eb37054d469b8979ae5ac031a48017fc")
 
 
 def _kitti(frame: str, points_sha: str, labels_sha: str) -> ScanSource:
@@ -95,6 +101,20 @@ def _kitti(frame: str, points_sha: str, labels_sha: str) -> ScanSource:
         "semantickitti",
         "SemanticKITTI (Behley et al., ICCV 2019; CC BY-NC-SA 4.0), sequence 08 frame "
         f"{frame} as shipped in Open3D-ML's demo data (19 classes, 0 unlabelled)")
+
+
+def _scannet(scene: str, points_sha: str, labels_sha: str) -> ScanSource:
+    base = "tests/data/scannet/scannet_train_instance_data"
+    return ScanSource(
+        f"scannet-{scene}", "indoor RGB-D reconstruction (Structure sensor), a room",
+        ((f"scannet_{scene}_points.npy", _github(*_MMDET3D, f"{base}/{scene}_vert_all.npy"),
+          points_sha),
+         (f"scannet_{scene}_labels.npy", _github(*_MMDET3D, f"{base}/{scene}_sem_label_all.npy"),
+          labels_sha)),
+        "scannet",
+        f"ScanNet (Dai et al., CVPR 2017; ScanNet terms of use, non-commercial research), "
+        f"{scene}: every vertex of the room's reconstruction, axis-aligned, with its colour "
+        "and NYU40 class (0 unannotated), as shipped in MMDetection3D's test data")
 
 
 #: The labelled scans, by name.
@@ -112,6 +132,10 @@ SCANS: dict[str, ScanSource] = {s.name: s for s in (
         "classified with TerraScan in the IGN LiDAR HD scheme, coloured), from PDAL's test "
         "data: ASPRS classes ground, low/medium/high vegetation, building, unclassified, "
         "and 65 (IGN's artefacts)"),
+    _scannet("scene0000_00", "c73b979bbff0bb2cc93cf6d57aea10234c807d246df16c6ecc40e8fbd896ac00",
+             "7b5bf6e35fd5007618dc22748f50991208635be3aec9783ffd3f0f93761e2f68"),
+    _scannet("scene0000_01", "1c0aee74f2c94ecd67d5726831120335c44fa201b60c6822689439f5fa9b6d01",
+             "1eeccfd9d3bd6ea431ffe4d79c9a0bbef8ce7e36a2ed1d4fceebc7451e6071c1"),
 )}
 
 
@@ -272,11 +296,19 @@ def load_scan(name: str, cache=None, *, download: bool = False) -> Scan:
 
         # z is up, but the sensor is not always at the origin (module notes): seen from above
         cloud = replace(read_cloud(paths[0]), up=np.array([0.0, 0.0, 1.0]))
-        try:
-            gt = np.load(paths[1], allow_pickle=False).reshape(-1).astype(np.int64)
-        except (ValueError, OSError, EOFError) as exc:
-            raise MeshFormatError(f"{paths[1]}: cannot read the labels ({exc}); delete it "
-                                  f"and fetch_scan({name!r}) again") from None
+        gt = _npy(paths[1], name, "labels").reshape(-1).astype(np.int64)
+        gt[gt == 0] = UNLABELLED
+    elif src.labels == "scannet":
+        from ..cloud import PointCloud
+
+        rows = _npy(paths[0], name, "points")
+        if rows.ndim != 2 or rows.shape[1] != 6:
+            raise MeshFormatError(f"{paths[0]}: expected rows of x y z r g b, got an array of "
+                                  f"shape {rows.shape}")
+        rows = rows.astype(np.float64)
+        cloud = PointCloud(rows[:, :3], name=name, colors=np.clip(rows[:, 3:] / 255.0, 0, 1),
+                           up=np.array([0.0, 0.0, 1.0]))
+        gt = _npy(paths[1], name, "labels").reshape(-1).astype(np.int64)
         gt[gt == 0] = UNLABELLED
     elif src.labels == "las":
         from ..extras import require
@@ -291,6 +323,15 @@ def load_scan(name: str, cache=None, *, download: bool = False) -> Scan:
     if gt.shape[0] != cloud.n_total:
         raise MeshFormatError(f"scan {name!r}: {gt.shape[0]} labels for {cloud.n_total} points")
     return Scan(name, cloud, gt, src)
+
+
+def _npy(path: Path, name: str, what: str) -> np.ndarray:
+    """An ``.npy`` file of the cache, or one clear error naming it."""
+    try:
+        return np.load(path, allow_pickle=False)
+    except (ValueError, OSError, EOFError) as exc:
+        raise MeshFormatError(f"{path}: cannot read the {what} ({exc}); delete it "
+                              f"and fetch_scan({name!r}) again") from None
 
 
 def evaluate_scan(scan: Scan, labels, *, tau: float = 0.05, tolerance: int = 1) -> dict:
