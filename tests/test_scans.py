@@ -85,6 +85,10 @@ def _write_scannet(folder, scene="scene0000_00"):
     cls[::9] = 0  # unannotated
     np.save(folder / f"scannet_{scene}_points.npy", np.c_[pts, rgb].astype(np.float32))
     np.save(folder / f"scannet_{scene}_labels.npy", cls)
+    # instances: plane 1 is one object, plane 2 two (split along y), unannotated as the classes
+    inst = np.where(cls == 1, 1, 2 + (pts[:, 1] > 0.5)).astype(np.uint32)
+    inst[cls == 0] = 0
+    np.save(folder / f"scannet_{scene}_instances.npy", inst)
     return pts, cls
 
 
@@ -101,8 +105,18 @@ def test_scannet_rows_read_with_colours_classes_and_unannotated(tmp_path):
     np.testing.assert_allclose(s.cloud.colors[first], [0, 128 / 255, 1])
     np.testing.assert_array_equal(s.cloud.up, [0, 0, 1])  # the floor's normals into the room
     # an L of two planes, coloured by plane: the metrics see the fold
-    m = evaluate_scan(s, np.where(pts[:, 2] == 0, 0, 1))
+    by_plane = np.where(pts[:, 2] == 0, 0, 1)
+    m = evaluate_scan(s, by_plane)
     assert m["undersegmentation_error"] == 0.0 and m["boundary_recall"] == pytest.approx(1.0)
+    # against the instances the second plane's two objects leak into each other
+    assert s.instances is not None and (s.instances[cls == 0] == UNLABELLED).all()
+    leak = evaluate_scan(s, by_plane, against="instances")
+    assert leak["undersegmentation_error"] > 0.5 and leak["boundary_recall"] < 0.9
+    by_object = by_plane + (by_plane == 1) * (pts[:, 1] > 0.5)
+    m = evaluate_scan(s, by_object, against="instances")
+    assert m["undersegmentation_error"] == 0.0 and m["boundary_recall"] == pytest.approx(1.0)
+    with pytest.raises(ParameterError, match="'classes' or 'instances'"):
+        evaluate_scan(s, by_plane, against="objects")
 
 
 def test_scannet_files_of_the_wrong_shape_are_one_clear_error(tmp_path):
@@ -116,6 +130,10 @@ def test_scannet_files_of_the_wrong_shape_are_one_clear_error(tmp_path):
     _write_scannet(tmp_path)
     np.save(tmp_path / "scannet_scene0000_00_labels.npy", np.ones(3, np.uint32))
     with pytest.raises(MeshFormatError, match="3 labels"):
+        load_scan("scannet-scene0000_00", tmp_path)
+    _write_scannet(tmp_path)
+    np.save(tmp_path / "scannet_scene0000_00_instances.npy", np.ones(4, np.uint32))
+    with pytest.raises(MeshFormatError, match="4 instance labels"):
         load_scan("scannet-scene0000_00", tmp_path)
 
 
@@ -187,6 +205,9 @@ def test_evaluate_scan_known_answers(tmp_path):
     assert one["boundary_recall"] == 0.0
     with pytest.raises(ParameterError):
         evaluate_scan(s, np.zeros(5, np.int64))
+    assert s.instances is None
+    with pytest.raises(ParameterError, match="no instance labels"):
+        evaluate_scan(s, truth, against="instances")
 
 
 def test_unlabelled_points_do_not_count(tmp_path):
@@ -224,3 +245,8 @@ def test_real_scan_segments_and_measures(name):
     assert m["segments"] == k >= 200
     assert 0 <= m["undersegmentation_error"] and 0 < m["achievable_accuracy"] <= 1
     assert 0 < m["boundary_recall"] <= 1
+    if s.instances is not None:  # the rooms: objects are finer than classes, so more leaks
+        assert s.instances.shape == s.ground_truth.shape
+        assert ((s.instances == UNLABELLED) == (s.ground_truth == UNLABELLED)).all()
+        obj = evaluate_scan(s, labels, against="instances")
+        assert obj["undersegmentation_error"] >= m["undersegmentation_error"]

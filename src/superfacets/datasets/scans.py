@@ -68,8 +68,9 @@ class ScanSource:
         above, ``up = (0, 0, 1)``: see the module notes)
         or ``"las"`` (the LAS ``classification`` field, ASPRS codes; 0,
         "never classified", is unlabelled) or ``"scannet"`` (an ``.npy`` of
-        ``x y z r g b`` rows, colours 0-255, and an ``.npy`` of NYU40 class
-        ids, 0 unannotated; seen from above).
+        ``x y z r g b`` rows, colours 0-255, an ``.npy`` of NYU40 class
+        ids and one of object instance ids, 0 unannotated in both; seen from
+        above).
     credit : str
         Who made the data and under which licence.
     """
@@ -103,18 +104,21 @@ def _kitti(frame: str, points_sha: str, labels_sha: str) -> ScanSource:
         f"{frame} as shipped in Open3D-ML's demo data (19 classes, 0 unlabelled)")
 
 
-def _scannet(scene: str, points_sha: str, labels_sha: str) -> ScanSource:
+def _scannet(scene: str, points_sha: str, labels_sha: str, instances_sha: str) -> ScanSource:
     base = "tests/data/scannet/scannet_train_instance_data"
     return ScanSource(
         f"scannet-{scene}", "indoor RGB-D reconstruction (Structure sensor), a room",
         ((f"scannet_{scene}_points.npy", _github(*_MMDET3D, f"{base}/{scene}_vert_all.npy"),
           points_sha),
          (f"scannet_{scene}_labels.npy", _github(*_MMDET3D, f"{base}/{scene}_sem_label_all.npy"),
-          labels_sha)),
+          labels_sha),
+         (f"scannet_{scene}_instances.npy",
+          _github(*_MMDET3D, f"{base}/{scene}_ins_label_all.npy"), instances_sha)),
         "scannet",
         f"ScanNet (Dai et al., CVPR 2017; ScanNet terms of use, non-commercial research), "
         f"{scene}: every vertex of the room's reconstruction, axis-aligned, with its colour "
-        "and NYU40 class (0 unannotated), as shipped in MMDetection3D's test data")
+        "NYU40 class and object instance (0 unannotated), as shipped in MMDetection3D's "
+        "test data")
 
 
 #: The labelled scans, by name.
@@ -133,9 +137,11 @@ SCANS: dict[str, ScanSource] = {s.name: s for s in (
         "data: ASPRS classes ground, low/medium/high vegetation, building, unclassified, "
         "and 65 (IGN's artefacts)"),
     _scannet("scene0000_00", "c73b979bbff0bb2cc93cf6d57aea10234c807d246df16c6ecc40e8fbd896ac00",
-             "7b5bf6e35fd5007618dc22748f50991208635be3aec9783ffd3f0f93761e2f68"),
+             "7b5bf6e35fd5007618dc22748f50991208635be3aec9783ffd3f0f93761e2f68",
+             "5ef2f8b2622c3512a19902807294216130f6332872cf3db121f6d5815cd0a8c4"),
     _scannet("scene0000_01", "1c0aee74f2c94ecd67d5726831120335c44fa201b60c6822689439f5fa9b6d01",
-             "1eeccfd9d3bd6ea431ffe4d79c9a0bbef8ce7e36a2ed1d4fceebc7451e6071c1"),
+             "1eeccfd9d3bd6ea431ffe4d79c9a0bbef8ce7e36a2ed1d4fceebc7451e6071c1",
+             "152df03e56a93b9523779e6af9b365520f1d930b356c1107881e451daa2ce0bd"),
 )}
 
 
@@ -152,12 +158,17 @@ class Scan:
         One class per point, in file order; :data:`UNLABELLED` (-1) where no
         annotator labelled the point.
     source : ScanSource
+    instances : (N,) int64 ndarray or None
+        The object instance of each point, where the scan has them (the
+        ScanNet rooms: two chairs of one class are two instances);
+        :data:`UNLABELLED` where unannotated.
     """
 
     name: str
     cloud: object
     ground_truth: np.ndarray
     source: ScanSource
+    instances: np.ndarray | None = None
 
 
 def scan_cache() -> Path:
@@ -291,6 +302,7 @@ def load_scan(name: str, cache=None, *, download: bool = False) -> Scan:
     missing = [p for p in paths if not p.is_file()]
     if missing:
         raise FileNotFoundError(missing_help(name, cache))
+    instances = None
     if src.labels == "semantickitti":
         from dataclasses import replace
 
@@ -310,6 +322,11 @@ def load_scan(name: str, cache=None, *, download: bool = False) -> Scan:
                            up=np.array([0.0, 0.0, 1.0]))
         gt = _npy(paths[1], name, "labels").reshape(-1).astype(np.int64)
         gt[gt == 0] = UNLABELLED
+        instances = _npy(paths[2], name, "instances").reshape(-1).astype(np.int64)
+        instances[instances == 0] = UNLABELLED
+        if instances.shape[0] != cloud.n_total:
+            raise MeshFormatError(f"scan {name!r}: {instances.shape[0]} instance labels for "
+                                  f"{cloud.n_total} points")
     elif src.labels == "las":
         from ..extras import require
 
@@ -322,7 +339,7 @@ def load_scan(name: str, cache=None, *, download: bool = False) -> Scan:
         raise ParameterError(f"scan {name!r}: unknown label kind {src.labels!r}")
     if gt.shape[0] != cloud.n_total:
         raise MeshFormatError(f"scan {name!r}: {gt.shape[0]} labels for {cloud.n_total} points")
-    return Scan(name, cloud, gt, src)
+    return Scan(name, cloud, gt, src, instances)
 
 
 def _npy(path: Path, name: str, what: str) -> np.ndarray:
@@ -334,7 +351,8 @@ def _npy(path: Path, name: str, what: str) -> np.ndarray:
                               f"and fetch_scan({name!r}) again") from None
 
 
-def evaluate_scan(scan: Scan, labels, *, tau: float = 0.05, tolerance: int = 1) -> dict:
+def evaluate_scan(scan: Scan, labels, *, tau: float = 0.05, tolerance: int = 1,
+                  against: str = "classes") -> dict:
     """The metrics of one labelling of a scan, against its ground truth.
 
     Measured on the scan's point graph (the one the methods segment: 10
@@ -351,6 +369,9 @@ def evaluate_scan(scan: Scan, labels, *, tau: float = 0.05, tolerance: int = 1) 
         :func:`superfacets.segment` and the baselines return them.
     tau, tolerance
         As in :func:`superfacets.metrics.evaluate`.
+    against : {"classes", "instances"}, default "classes"
+        The ground truth: the annotated classes (``scan.ground_truth``) or
+        the object instances (``scan.instances``, where the scan has them).
 
     Returns
     -------
@@ -362,9 +383,19 @@ def evaluate_scan(scan: Scan, labels, *, tau: float = 0.05, tolerance: int = 1) 
     Raises
     ------
     ParameterError
-        If ``labels`` does not have one integer per point.
+        If ``labels`` does not have one integer per point, or ``against``
+        names a ground truth the scan does not have.
     """
     from ..metrics import evaluate_rows
 
-    return evaluate_rows(scan.cloud, labels, [scan.ground_truth], elements="points", tau=tau,
+    if against == "classes":
+        truth = scan.ground_truth
+    elif against == "instances" and scan.instances is not None:
+        truth = scan.instances
+    elif against == "instances":
+        raise ParameterError(f"scan {scan.name!r} has no instance labels (only the ScanNet "
+                             "rooms do); use against='classes'")
+    else:
+        raise ParameterError(f"against must be 'classes' or 'instances', not {against!r}")
+    return evaluate_rows(scan.cloud, labels, [truth], elements="points", tau=tau,
                          tolerance=tolerance, ignore_label=UNLABELLED)
