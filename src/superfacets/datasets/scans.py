@@ -308,8 +308,7 @@ def load_scan(name: str, cache=None, *, download: bool = False) -> Scan:
 
         # z is up, but the sensor is not always at the origin (module notes): seen from above
         cloud = replace(read_cloud(paths[0]), up=np.array([0.0, 0.0, 1.0]))
-        gt = _npy(paths[1], name, "labels").reshape(-1).astype(np.int64)
-        gt[gt == 0] = UNLABELLED
+        gt = _ids(paths[1], name, "labels")
     elif src.labels == "scannet":
         from ..cloud import PointCloud
 
@@ -320,10 +319,8 @@ def load_scan(name: str, cache=None, *, download: bool = False) -> Scan:
         rows = rows.astype(np.float64)
         cloud = PointCloud(rows[:, :3], name=name, colors=np.clip(rows[:, 3:] / 255.0, 0, 1),
                            up=np.array([0.0, 0.0, 1.0]))
-        gt = _npy(paths[1], name, "labels").reshape(-1).astype(np.int64)
-        gt[gt == 0] = UNLABELLED
-        instances = _npy(paths[2], name, "instances").reshape(-1).astype(np.int64)
-        instances[instances == 0] = UNLABELLED
+        gt = _ids(paths[1], name, "labels")
+        instances = _ids(paths[2], name, "instances")
         if instances.shape[0] != cloud.n_total:
             raise MeshFormatError(f"scan {name!r}: {instances.shape[0]} instance labels for "
                                   f"{cloud.n_total} points")
@@ -349,6 +346,13 @@ def _npy(path: Path, name: str, what: str) -> np.ndarray:
     except (ValueError, OSError, EOFError) as exc:
         raise MeshFormatError(f"{path}: cannot read the {what} ({exc}); delete it "
                               f"and fetch_scan({name!r}) again") from None
+
+
+def _ids(path: Path, name: str, what: str) -> np.ndarray:
+    """Per-point ids from an ``.npy`` file, int64, 0 (unannotated) as :data:`UNLABELLED`."""
+    ids = _npy(path, name, what).reshape(-1).astype(np.int64)
+    ids[ids == 0] = UNLABELLED
+    return ids
 
 
 def evaluate_scan(scan: Scan, labels, *, tau: float = 0.05, tolerance: int = 1,
