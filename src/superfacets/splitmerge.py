@@ -150,8 +150,7 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
     n = g.n_elements
     lab = np.ascontiguousarray(labels, dtype=np.int32)
     k = int(lab.max()) + 1
-    members = np.argsort(lab, kind="stable").astype(np.int64)
-    bounds = np.searchsorted(lab[members], np.arange(k + 1)).astype(np.int64)
+    members, bounds = _members(lab, k)
     sizes = np.ascontiguousarray(g.sizes, dtype=np.float64)
     positions = np.ascontiguousarray(g.positions, dtype=np.float64)
     # heap room: the CSR entries of the two superfacets with the most of them, plus one
@@ -234,6 +233,22 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
     moved = second & (split_to[lab] >= 0)
     out[moved] = split_to[lab[moved]]
     return out, n_swaps
+
+
+def _members(lab: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """The elements of each superfacet, ascending: ``members[bounds[s]:bounds[s + 1]]``
+    (a stable counting sort of ``lab``, the order of ``np.argsort(lab, kind="stable")``)."""
+    from ._kernels.adjacency import count_keys, scatter_keys
+
+    n = lab.shape[0]
+    keep = np.zeros(n, dtype=np.bool_)  # nothing skipped
+    counts = np.zeros(k, dtype=np.int64)
+    count_keys(lab, keep, 0, n, counts)
+    bounds = np.zeros(k + 1, dtype=np.int64)
+    np.cumsum(counts, out=bounds[1:])
+    members = np.empty(n, dtype=np.int64)
+    scatter_keys(lab, keep, 0, n, bounds[:-1].copy(), members)
+    return members, bounds
 
 
 class _SplitOrder:
