@@ -181,3 +181,16 @@ def test_a_round_that_changes_the_number_of_superfacets_is_undone(monkeypatch):
     np.testing.assert_array_equal(r.labels, paper.labels)
     fast = segment(mesh, 150, split_merge=True)  # early swaps: undone the same way
     assert fast.timings["swaps"] == 0 and fast.n_segments == 150
+
+
+def test_members_are_the_stable_sort_of_the_labels():
+    from superfacets.splitmerge import _members
+
+    rng = np.random.default_rng(5)
+    for n, k in ((1, 1), (7, 3), (5000, 40)):
+        lab = rng.integers(0, k, n).astype(np.int32)
+        lab[:k] = np.arange(k)
+        members, bounds = _members(lab, k)
+        order = np.argsort(lab, kind="stable")
+        np.testing.assert_array_equal(members, order)
+        np.testing.assert_array_equal(bounds, np.searchsorted(lab[order], np.arange(k + 1)))
