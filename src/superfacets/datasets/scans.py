@@ -91,32 +91,36 @@ _PDAL = ("PDAL/PDAL", "ccf0ab7046072f68cab78734e90d0d3149f3af10")
 _MMDET3D = ("open-mmlab/mmdetection3d", "9e39d469eb37054d469b8979ae5ac031a48017fc")
 
 
+def _pinned(repo: tuple, prefix: str, files) -> tuple:
+    """``(cache name, URL, SHA-256)`` of each ``(suffix, path in repo, sha)``: the cache
+    name is ``{prefix}_{suffix}.npy``."""
+    return tuple((f"{prefix}_{suffix}.npy", _github(*repo, path), sha)
+                 for suffix, path, sha in files)
+
+
 def _kitti(frame: str, points_sha: str, labels_sha: str) -> ScanSource:
     base = "examples/demo_data/SemanticKITTI"
     return ScanSource(
         f"semantickitti-{frame}", "mobile LiDAR (Velodyne HDL-64E), street",
-        ((f"semantickitti_{frame}_points.npy", _github(*_O3D, f"{base}/points/{frame}.npy"),
-          points_sha),
-         (f"semantickitti_{frame}_labels.npy", _github(*_O3D, f"{base}/labels/{frame}.npy"),
-          labels_sha)),
+        _pinned(_O3D, f"semantickitti_{frame}",
+                (("points", f"{base}/points/{frame}.npy", points_sha),
+                 ("labels", f"{base}/labels/{frame}.npy", labels_sha))),
         "semantickitti",
         "SemanticKITTI (Behley et al., ICCV 2019; CC BY-NC-SA 4.0), sequence 08 frame "
         f"{frame} as shipped in Open3D-ML's demo data (19 classes, 0 unlabelled)")
 
 
 def _scannet(scene: str, points_sha: str, labels_sha: str, instances_sha: str) -> ScanSource:
-    base = "tests/data/scannet/scannet_train_instance_data"
+    base = f"tests/data/scannet/scannet_train_instance_data/{scene}"
     return ScanSource(
         f"scannet-{scene}", "indoor RGB-D reconstruction (Structure sensor), a room",
-        ((f"scannet_{scene}_points.npy", _github(*_MMDET3D, f"{base}/{scene}_vert_all.npy"),
-          points_sha),
-         (f"scannet_{scene}_labels.npy", _github(*_MMDET3D, f"{base}/{scene}_sem_label_all.npy"),
-          labels_sha),
-         (f"scannet_{scene}_instances.npy",
-          _github(*_MMDET3D, f"{base}/{scene}_ins_label_all.npy"), instances_sha)),
+        _pinned(_MMDET3D, f"scannet_{scene}",
+                (("points", f"{base}_vert_all.npy", points_sha),
+                 ("labels", f"{base}_sem_label_all.npy", labels_sha),
+                 ("instances", f"{base}_ins_label_all.npy", instances_sha))),
         "scannet",
         f"ScanNet (Dai et al., CVPR 2017; ScanNet terms of use, non-commercial research), "
-        f"{scene}: every vertex of the room's reconstruction, axis-aligned, with its colour "
+        f"{scene}: every vertex of the room's reconstruction, axis-aligned, with its colour, "
         "NYU40 class and object instance (0 unannotated), as shipped in MMDetection3D's "
         "test data")
 
