@@ -194,3 +194,114 @@ def test_members_are_the_stable_sort_of_the_labels():
         order = np.argsort(lab, kind="stable")
         np.testing.assert_array_equal(members, order)
         np.testing.assert_array_equal(bounds, np.searchsorted(lab[order], np.arange(k + 1)))
+
+
+def _ridge():
+    """The valley's strip folded the other way: a convex ridge z = -0.5 |x|."""
+    nx, ny = 40, 10
+    m = grid_mesh(nx, ny, height=lambda x, y: -0.5 * np.abs(x))
+    return Mesh(m.vertices * [1.0, 0.25, 1.0], m.faces)
+
+
+def test_convex_folds_count_less_in_the_swap_energies_on_faces():
+    # with the run's weights the superfacet over the convex ridge is split on it; with
+    # the convex angular term removed (concave creases alone) the ridge is as flat as the
+    # slopes: that square is kept and the largest superfacet is split instead
+    from superfacets.splitmerge import swap_eta_convex_for
+    from superfacets.weights import convex_scaled
+
+    mesh = _ridge()
+    g = face_graph(mesh)
+    x = mesh.centroids[:, 0]
+    labels = np.select([np.abs(x) < 0.25, x < 0, x < 0.5, x < 0.75], [0, 4, 1, 2], 3)
+    w = _weights(mesh)
+    out, n = swap_round(g, w, labels)
+    assert n == 1
+    assert np.unique(out[(np.abs(x) < 0.25) & (x < 0)]).size == 1
+    assert out[(np.abs(x) < 0.25) & (x < 0)][0] != out[(np.abs(x) < 0.25) & (x > 0)][0]
+    assert swap_eta_convex_for("faces") == 0.5 and swap_eta_convex_for("vertices") == 1.0
+    concave_only = convex_scaled(g, w, alpha=200.0, eta_convex=0.2, factor=0.0)
+    out, n = swap_round(g, concave_only, labels)
+    assert n == 1
+    assert np.unique(out[labels == 0]).size == 1
+    assert np.unique(out[labels == 4]).size == 2
+    # on the valley the concave crease still counts: the straddling square is split
+    mesh, _ = _valley()
+    g = face_graph(mesh)
+    x = mesh.centroids[:, 0]
+    labels = np.select([np.abs(x) < 0.25, x < 0, x < 0.5, x < 0.75], [0, 4, 1, 2], 3)
+    w = convex_scaled(g, _weights(mesh), alpha=200.0, eta_convex=0.2, factor=0.0)
+    out, _ = swap_round(g, w, labels)
+    assert out[(np.abs(x) < 0.25) & (x < 0)][0] != out[(np.abs(x) < 0.25) & (x > 0)][0]
+
+
+def test_convex_scaled_weights_are_the_paper_weights_with_a_smaller_eta_convex():
+    from superfacets.weights import convex_scaled, paper_weights, shlafman_weights
+
+    mesh = read_mesh(need(MESHES / "bunny.tri.xz"))  # concave and convex edges
+    g = face_graph(mesh)
+    assert g.terms.concave.any() and (~g.terms.concave).any()
+    w = csr_weights(g, paper_weights(g, alpha=200.0, eta_convex=0.2))
+    for factor in (0.0, 0.5):
+        want = csr_weights(g, paper_weights(g, alpha=200.0, eta_convex=0.2 * factor))
+        got = convex_scaled(g, w, alpha=200.0, eta_convex=0.2, factor=factor)
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-12 * want.max())
+        assert (got >= 0).all()
+    assert convex_scaled(g, w, alpha=200.0, eta_convex=0.2, factor=1.0) is w
+    s = csr_weights(g, shlafman_weights(g, alpha=0.5))
+    assert convex_scaled(g, s, alpha=0.5, eta_convex=0.2, factor=0.0,
+                         weighting="shlafman") is s
+
+
+def test_the_run_swaps_with_the_weights_of_its_kind(monkeypatch):
+    # faces: the convex angular term halved; vertices: the run's own weights
+    from superfacets import splitmerge
+    from superfacets.weights import convex_scaled
+
+    seen = []
+    real = splitmerge.swap_round
+
+    def spy(graph, weights, labels, **kw):
+        seen.append((graph, weights.copy()))
+        return real(graph, weights, labels, **kw)
+
+    monkeypatch.setattr(splitmerge, "swap_round", spy)
+    mesh = grid_mesh(30, 30, height=lambda x, y: 0.3 * np.abs(x) - 0.3 * np.abs(y))
+    segment(mesh, 12)
+    g, got = seen[-1]
+    assert g.kind == "faces"
+    w = csr_weights(g, edge_weights(g, "paper", alpha=200.0, eta_convex=0.2))
+    np.testing.assert_array_equal(got, convex_scaled(g, w, alpha=200.0, eta_convex=0.2,
+                                                     factor=0.5))
+    assert (got < w).any()  # the ridge along y = 0 is convex
+    segment(mesh, 12, elements="vertices")
+    g, got = seen[-1]
+    assert g.kind == "vertices"
+    np.testing.assert_array_equal(
+        got, csr_weights(g, edge_weights(g, "paper", alpha=200.0, eta_convex=0.2)))
+
+
+def test_the_passes_after_the_swaps_hold_small_center_moves_on_faces(monkeypatch):
+    # a center moving by less than 4 x center_tol x r after the swaps stays (faces);
+    # on vertices (the exact classification) by less than center_tol x r, as before them
+    from superfacets import passes
+    from superfacets.splitmerge import hold_after_for
+
+    holds = []
+    real = passes.iterate
+
+    def spy(*args, min_move=0.0, **kw):
+        holds.append(min_move)
+        return real(*args, min_move=min_move, **kw)
+
+    monkeypatch.setattr(passes, "iterate", spy)  # the passes after the swaps only
+    mesh = read_mesh(need(MESHES / "bunny.tri.xz"))
+    r = segment(mesh, 100)
+    assert hold_after_for("faces") == 4.0 and hold_after_for("vertices") == 1.0
+    assert r.timings["swaps"] > 0 and len(holds) == 1
+    assert holds[-1] == pytest.approx(4.0 * 0.05 * r.radius)
+    r = segment(mesh, 100, elements="vertices")
+    assert r.timings["swaps"] > 0 and len(holds) == 2
+    assert holds[-1] == pytest.approx(0.05 * r.radius)
+    r = segment(mesh, 100, center_tol=0.0)  # no hold asked: none after the swaps either
+    assert r.timings["swaps"] > 0 and holds[-1] == 0.0

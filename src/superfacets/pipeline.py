@@ -282,6 +282,13 @@ def _pipeline(mesh, params: SegmentParams, features, *, replay: bool, jump_cycle
                                features=feats, beta=p.beta)
         w = csr_weights(graph, w_pairs)
         del w_pairs  # the coarsening reads the same values from ``w``
+        swap_w = None
+        if split_merge:  # the swap energies' weights (on faces: concave creases alone)
+            from .splitmerge import swap_eta_convex_for
+            from .weights import convex_scaled
+
+            swap_w = convex_scaled(graph, w, alpha=p.alpha, eta_convex=p.eta_convex,
+                                   factor=swap_eta_convex_for(graph.kind), weighting=p.weighting)
         if not cleanup:
             graph.release_terms()  # not needed again by this run; 17 B per adjacency
         timings["weights"] = time.perf_counter() - t
@@ -319,7 +326,7 @@ def _pipeline(mesh, params: SegmentParams, features, *, replay: bool, jump_cycle
                          jump_cycles=jump_cycles, tol=max(p.tol, START_TOL) if fast else p.tol,
                          min_move=center_tol * r, bar=bar)
             if split_merge:
-                from .splitmerge import ROUNDS, swap_and_iterate
+                from .splitmerge import ROUNDS, hold_after_for, swap_and_iterate
 
                 _stage(bar, "split and merge")
                 it, timings["swaps"] = swap_and_iterate(
@@ -327,10 +334,11 @@ def _pipeline(mesh, params: SegmentParams, features, *, replay: bool, jump_cycle
                     window_r2=window_r2, jump_cycles=jump_cycles, tol=p.tol,
                     min_move=center_tol * r, n_threads=spaces.n_threads,
                     rounds=FAST_ROUNDS if fast else ROUNDS,
-                    passes_after=PASSES_AFTER if fast else None)
+                    passes_after=PASSES_AFTER if fast else None, swap_weights=swap_w,
+                    hold_after=hold_after_for(graph.kind) if fast else 1.0)
         finally:
             spaces.close()
-        classifier = spaces = w = None  # free the work buffers before the clean-up
+        classifier = spaces = w = swap_w = None  # free the work buffers before the clean-up
         timings["iterations"] = time.perf_counter() - t
     except BaseException:
         if bar is not None:

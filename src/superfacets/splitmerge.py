@@ -39,8 +39,10 @@ import numpy as np
 
 from ._kernels.splitmerge import energies, merge_energies, split_candidates
 
-__all__ = ["swap_round", "swap_and_iterate", "POWER", "LLOYD", "MAX_FRACTION", "ROUNDS",
-           "START_TOL", "FAST_ROUNDS", "PASSES_AFTER"]
+__all__ = ["swap_round", "swap_and_iterate", "POWER", "LLOYD",
+           "MAX_FRACTION", "ROUNDS", "START_TOL", "FAST_ROUNDS", "PASSES_AFTER",
+           "SWAP_ETA_CONVEX_FACES", "HOLD_AFTER_FACES", "swap_eta_convex_for",
+           "hold_after_for"]
 
 #: Exponent of the distances in the energy.
 POWER = 4.0
@@ -65,6 +67,19 @@ FAST_ROUNDS = 1
 #: -15.0 %), where swapping after converged passes (up to three rounds, each iterated to
 #: convergence) took 1.4-2.7 times (docs/cleanup.md, "Split-and-merge at the paper's speed").
 PASSES_AFTER = 2
+#: Factor of ``eta_convex`` in the weights of the swap energies on faces: 0.5 counts a
+#: convex fold half as much as the passes do, so a superfacet wrapped round a thin convex
+#: tube (a glasses frame of few faces around) no longer reads as straddling a crease,
+#: while a cup's rim still does. On the 300 benchmark meshes, k = 50 ... 300: UE 1.2-2.6
+#: points further below the paper's, compactness 0.4-0.6 points; 0 (concave creases
+#: alone, the minima rule) gains more UE but raises Cup's by 11 % at k = 50
+#: (docs/cleanup.md, "Swap energies"). On vertices (neighbourhood-averaged normals) 0
+#: raised the UE: they keep the run's weights (1).
+SWAP_ETA_CONVEX_FACES = 0.5
+#: On faces, the passes after the swaps keep in place a center that moves by less than
+#: this many times ``center_tol * r`` (its window's expansion is replayed, not run again):
+#: about 4 % of a run's time, the same quality (docs/cleanup.md, "Swap energies").
+HOLD_AFTER_FACES = 4.0
 
 
 class _Threads:
@@ -235,6 +250,31 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
     return out, n_swaps
 
 
+def swap_eta_convex_for(kind: str) -> float:
+    """The factor of ``eta_convex`` in the swap energies on elements ``kind``:
+    :data:`SWAP_ETA_CONVEX_FACES` on faces, 1 (the run's weights) elsewhere.
+
+    Examples
+    --------
+    >>> swap_eta_convex_for("faces"), swap_eta_convex_for("vertices")
+    (0.5, 1.0)
+    """
+    return SWAP_ETA_CONVEX_FACES if kind == "faces" else 1.0
+
+
+def hold_after_for(kind: str) -> float:
+    """How many times ``center_tol * r`` a center must move, in the passes after the
+    swaps, to be expanded again: :data:`HOLD_AFTER_FACES` on faces, 1 elsewhere
+    (the exact classification of vertices expands every center anyway).
+
+    Examples
+    --------
+    >>> hold_after_for("faces"), hold_after_for("points")
+    (4.0, 1.0)
+    """
+    return HOLD_AFTER_FACES if kind == "faces" else 1.0
+
+
 def _members(lab: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
     """The elements of each superfacet, ascending: ``members[bounds[s]:bounds[s + 1]]``
     (a stable counting sort of ``lab``, the order of ``np.argsort(lab, kind="stable")``)."""
@@ -301,7 +341,9 @@ class _SplitOrder:
 def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.ndarray,
                      sizes: np.ndarray, positions: np.ndarray, max_iter: int, *,
                      rounds: int = ROUNDS, window_r2: float = np.inf, min_move: float = 0.0,
-                     n_threads: int = 1, passes_after: int | None = None, **iterate_kw):
+                     n_threads: int = 1, passes_after: int | None = None,
+                     swap_weights: np.ndarray | None = None, hold_after: float = 1.0,
+                     **iterate_kw):
     """Up to ``rounds`` rounds of (:func:`swap_round`, then the passes again from
     the new centers), after the iteration ``it`` (an
     :class:`~superfacets.passes.Iteration`); stops at a round without a swap.
@@ -315,7 +357,11 @@ def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.nda
     replayed). ``centers`` is the work array of :func:`~superfacets.passes.iterate`;
     ``iterate_kw`` goes to it. ``passes_after`` bounds the passes after each
     round (default: ``max_iter``); passes stopped by that bound count as
-    converged (the schedule's end, not ``max_iter``).
+    converged (the schedule's end, not ``max_iter``). ``swap_weights`` are
+    the weights of the swap energies (default: ``weights``, those of the
+    passes; the pipeline gives :func:`~superfacets.weights.convex_scaled`
+    with :func:`swap_eta_convex_for`). In the passes after
+    a round a center moving by less than ``hold_after * min_move`` stays.
 
     Returns
     -------
@@ -340,7 +386,8 @@ def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.nda
     for _ in range(rounds):
         present = used(it)
         old = it.centers[present]
-        new, n = swap_round(graph, weights, relabel_dense(it.label), window_r2=window_r2,
+        new, n = swap_round(graph, weights if swap_weights is None else swap_weights,
+                            relabel_dense(it.label), window_r2=window_r2,
                             n_threads=n_threads)
         if n == 0:
             break
@@ -351,7 +398,7 @@ def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.nda
         centers[:moved.shape[0]] = moved
         bound = max_iter if passes_after is None else min(max_iter, passes_after)
         after = iterate(classifier, centers, moved.shape[0], sizes, positions, bound,
-                        min_move=min_move, **iterate_kw)
+                        min_move=min_move * hold_after, **iterate_kw)
         if bound < max_iter and after.n_iter >= bound:  # the schedule's end, not max_iter
             after = replace(after, converged=True)
         n_iter += after.n_iter

@@ -15,7 +15,8 @@ from .errors import ParameterError
 from .params import (MAX_WEIGHT_FACTOR, WEIGHTING_ALPHA, WEIGHTINGS, check_choice,
                      check_nonneg, check_number)
 
-__all__ = ["paper_weights", "shlafman_weights", "edge_weights", "csr_weights", "check_features"]
+__all__ = ["paper_weights", "shlafman_weights", "edge_weights", "csr_weights", "check_features",
+           "convex_scaled"]
 
 _PAPER_ALPHA = WEIGHTING_ALPHA["paper"][0]
 _SHLAFMAN_ALPHA = WEIGHTING_ALPHA["shlafman"][0]
@@ -102,6 +103,64 @@ def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = 0.2
         return (t.geo + alpha * ang + beta * span[sl] * jump) / g.diagonal
 
     return chunked(g.n_edges, weight)
+
+
+def convex_scaled(graph, weights: np.ndarray, *, alpha: float, eta_convex: float,
+                  factor: float, weighting: str = "paper") -> np.ndarray:
+    """The paper's weights (eqs. 1-3) with the angular term of convex edges
+    scaled by ``factor`` (0: removed), from the run's CSR weights.
+
+    The swap energies of split-and-merge (:mod:`superfacets.splitmerge`) use
+    them on faces with ``factor = 0``: concave creases alone count (the minima
+    rule: parts meet at concavities).
+
+    Parameters
+    ----------
+    graph : ElementGraph
+    weights : (2 e,) float64 ndarray
+        The run's weights, one per CSR entry of ``graph``
+        (:func:`csr_weights` of :func:`paper_weights`, any ``beta``).
+    alpha, eta_convex : float
+        The parameters ``weights`` were made with.
+    factor : float
+        The new ``eta_convex`` as a fraction of the old, in ``[0, 1]``.
+    weighting : str, default 'paper'
+        Other weightings (Shlafman's has no convex/concave distinction) are
+        returned unchanged.
+
+    Returns
+    -------
+    (2 e,) float64 ndarray
+        ``weights`` less ``(1 - factor) * alpha * eta_convex * |e| * theta / (pi d)``
+        on convex edges (concave ones, and the feature term, as they were); ``weights``
+        itself where nothing changes.
+
+    References
+    ----------
+    Simari, Picciau, De Floriani, "Fast and Scalable Mesh Superfacets", 2014,
+    eqs. 1-3; Hoffman and Richards, "Parts of recognition", 1984 (the minima
+    rule); ``docs/cleanup.md``, "Swap energies".
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.convert import as_mesh
+    >>> from superfacets.elements import face_graph
+    >>> g = face_graph(as_mesh(trimesh.creation.box()))   # every fold convex
+    >>> w = csr_weights(g, paper_weights(g))
+    >>> bool(np.allclose(convex_scaled(g, w, alpha=200, eta_convex=0.2, factor=0.0),
+    ...                  csr_weights(g, paper_weights(g, eta_convex=0.0))))
+    True
+    """
+    g = graph
+    scale = alpha * eta_convex * (1.0 - float(factor))
+    if weighting != "paper" or scale == 0.0:
+        return weights
+    terms = g.terms
+    convex = np.flatnonzero(~terms.concave)
+    delta = np.zeros(g.n_edges)
+    delta[convex] = (scale / (np.pi * g.diagonal)) * g.span[convex] * np.arccos(terms.cos[convex])
+    return np.maximum(weights - delta[g.dual_edge], 0.0)
 
 
 def check_features(features, graph: ElementGraph) -> np.ndarray:
