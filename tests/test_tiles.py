@@ -259,7 +259,7 @@ def test_buckets_read_every_box_as_the_file_does(tmp_path, kind):
 def test_a_tiled_run_reads_the_file_twice_and_gives_the_same_labels(tmp_path, monkeypatch):
     """After the survey and the bucketing no task reads the file; the labels are those of
     tasks that each read the file (the path a remote scheduler without workdir takes)."""
-    mesh = _bumpy(4)
+    mesh = _bumpy(5)  # (at k = 40 a halo of 1 leaves 72 pieces to repair)
     path = tmp_path / "m.ply"
     _write_ply_mesh(path, mesh.vertices, mesh.faces)
     passes = []
@@ -270,7 +270,7 @@ def test_a_tiled_run_reads_the_file_twice_and_gives_the_same_labels(tmp_path, mo
         yield from chunks(self)
 
     monkeypatch.setattr(RegionReader, "chunks", counted)
-    res = segment_tiled(path, 60, tiles=(2, 2, 2), halo=1, workdir=tmp_path / "work")
+    res = segment_tiled(path, 40, tiles=(2, 2, 2), halo=1, workdir=tmp_path / "work")
     assert len(passes) == 2 and res.timings["bucket"] > 0
     assert len(list((tmp_path / "work" / "buckets").glob("tile-*.bin"))) == 8
     # halo 1 leaves pieces: the connect phase ran on the stitched labels read from a file
@@ -278,7 +278,7 @@ def test_a_tiled_run_reads_the_file_twice_and_gives_the_same_labels(tmp_path, mo
     assert (tmp_path / "work" / "stitched.npy").exists()
     passes.clear()
     monkeypatch.setattr(buckets_module, "bucket", lambda reader, *a, **k: reader)
-    each = segment_tiled(path, 60, tiles=(2, 2, 2), halo=1)
+    each = segment_tiled(path, 40, tiles=(2, 2, 2), halo=1)
     assert len(passes) > 8 * 3  # every task of every phase read the file
     np.testing.assert_array_equal(res.labels, each.labels)
     assert res.repaired == each.repaired and res.disagreements == each.disagreements
@@ -576,8 +576,8 @@ def test_a_quantized_scan_in_tiles_has_no_cut_superpoint():
 def test_the_connect_pass_repairs_pieces_left_by_a_thin_halo():
     """A halo of one expansion's reach makes tiles disagree at their borders; the pass
     after stitching leaves every superfacet in one piece."""
-    mesh = _bumpy(4)
-    res = segment_tiled(mesh, 60, tiles=(2, 2, 2), halo=1)
+    mesh = _bumpy(5)  # how many pieces a thin halo leaves depends on the method: 72 here
+    res = segment_tiled(mesh, 40, tiles=(2, 2, 2), halo=1)
     assert res.disagreements > 0 and res.repaired > 0 and "connect" in res.timings
     pieces = label_components(face_graph(mesh), res.labels)
     assert np.unique(pieces).size == res.n_segments
