@@ -283,7 +283,7 @@ def _pipeline(mesh, params: SegmentParams, features, *, replay: bool, jump_cycle
         w = csr_weights(graph, w_pairs)
         del w_pairs  # the coarsening reads the same values from ``w``
         swap_w = None
-        if split_merge:  # the swap energies' weights (on faces: concave creases alone)
+        if split_merge:  # the swap energies' weights (on faces: convex folds count half)
             from .splitmerge import swap_eta_convex_for
             from .weights import convex_scaled
 
