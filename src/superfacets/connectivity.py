@@ -93,6 +93,8 @@ def enforce_connectivity(graph, labels: np.ndarray, centers: np.ndarray | None =
     by the method (expansions never leave a connected component of the
     mesh); if one does, it becomes a superfacet of its own.
     """
+    from ._kernels.connectivity import merge_strays
+
     g = as_element_graph(graph)
     labels = check_labels(labels, g.n_elements, per=g.element)
     piece = label_components(g, labels)
@@ -115,50 +117,27 @@ def enforce_connectivity(graph, labels: np.ndarray, centers: np.ndarray | None =
         ok[ok] = labels[centers[ok]] == s[ok]
         main[s[ok]] = piece[centers[ok]]
     order = np.lexsort((np.arange(n_pieces), -area))  # largest first, then lowest id
-    for p in order:
-        lab = piece_label[p]
-        if main[lab] < 0:
-            main[lab] = p
+    present, first = np.unique(piece_label[order], return_index=True)
+    free = main[present] < 0  # no center's piece: the first in that order
+    main[present[free]] = order[first[free]]
     is_main = np.zeros(n_pieces, dtype=bool)
     is_main[main[main >= 0]] = True
 
-    # boundary length between adjacent pieces
+    # boundary length between a stray and each adjacent piece (the rows of the strays
+    # alone, entries in the order of the whole matrix's: the same sums)
+    strays = np.flatnonzero(~is_main)
     elen = g.lengths
     pi, pj = piece[g.pairs[:, 0]], piece[g.pairs[:, 1]]
     cross = pi != pj
-    a = np.concatenate([pi[cross], pj[cross]])
-    b = np.concatenate([pj[cross], pi[cross]])
-    w = np.concatenate([elen[cross], elen[cross]])
+    m1 = cross & ~is_main[pi]
+    m2 = cross & ~is_main[pj]
+    a = np.concatenate([pi[m1], pj[m2]])
+    b = np.concatenate([pj[m1], pi[m2]])
+    w = np.concatenate([elen[m1], elen[m2]])
     nb_indptr, nb_indices, nb_data = _summed_csr(a, b, w, n_pieces)
 
-    parent = np.arange(n_pieces)
-
-    def find(x: int) -> int:
-        root = x
-        while parent[root] != root:
-            root = parent[root]
-        while parent[x] != root:
-            parent[x], x = root, parent[x]
-        return root
-
-    strays = np.flatnonzero(~is_main)
     strays = strays[np.lexsort((strays, area[strays]))]  # smallest first
-    for p in strays:
-        rp = find(p)
-        cols = nb_indices[nb_indptr[p]:nb_indptr[p + 1]]
-        vals = nb_data[nb_indptr[p]:nb_indptr[p + 1]]
-        if cols.size == 0:
-            continue
-        # total boundary per neighbouring region (after earlier merges)
-        roots = np.array([find(int(q)) for q in cols])
-        keep = roots != rp
-        if not keep.any():
-            continue
-        uroots, inv = np.unique(roots[keep], return_inverse=True)
-        tot = np.bincount(inv, weights=vals[keep])
-        target = int(uroots[int(np.argmax(tot))])
-        parent[rp] = target
-    root = np.array([find(int(q)) for q in range(n_pieces)])
+    root = merge_strays(strays, nb_indptr, nb_indices, nb_data, n_pieces)
     # final label of a root: its label if it is a main piece, else a new one
     final = np.where(is_main[root], piece_label[root], k + root)
     return relabel_dense(final[piece])

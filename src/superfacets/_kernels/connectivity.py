@@ -1,0 +1,60 @@
+"""The stray-piece merge of :func:`superfacets.connectivity.enforce_connectivity`
+(private kernel: a union-find over the pieces' adjacency)."""
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _find(parent, x):
+    root = x
+    while parent[root] != root:
+        root = parent[root]
+    while parent[x] != root:  # path compression
+        nxt = parent[x]
+        parent[x] = root
+        x = nxt
+    return root
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def merge_strays(strays, nb_indptr, nb_indices, nb_data, n_pieces):
+    """The piece each piece ends in: every stray (in the order given) joins the
+    region (pieces merged so far) with which it shares the longest boundary,
+    ``nb_data`` summed per region in the order of the stray's row of the
+    pieces' adjacency ``nb_*`` (as ``np.bincount`` sums), ties to the lowest
+    region id; a stray with no other neighbouring region stays. Returns the
+    root (``(n_pieces,)`` int64) of each piece."""
+    parent = np.arange(n_pieces)
+    total = np.zeros(n_pieces)
+    seen = np.zeros(n_pieces, dtype=np.bool_)
+    touched = np.empty(n_pieces, dtype=np.int64)
+    for i in range(strays.shape[0]):
+        p = strays[i]
+        rp = _find(parent, p)
+        m = 0
+        for e in range(nb_indptr[p], nb_indptr[p + 1]):
+            q = _find(parent, nb_indices[e])
+            if q == rp:
+                continue
+            if not seen[q]:
+                seen[q] = True
+                touched[m] = q
+                m += 1
+            total[q] += nb_data[e]
+        if m == 0:
+            continue
+        target = -1
+        best = 0.0
+        for j in range(m):
+            q = touched[j]
+            if target < 0 or total[q] > best or (total[q] == best and q < target):
+                target = q
+                best = total[q]
+            total[q] = 0.0
+            seen[q] = False
+        parent[rp] = target
+    root = np.empty(n_pieces, dtype=np.int64)
+    for q in range(n_pieces):
+        root[q] = _find(parent, q)
+    return root
