@@ -293,11 +293,17 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = 200.0,
     pinned[centers] = True
 
     de = g.dual_edge
-    cut_csr = np.ascontiguousarray(
-        cut_costs(g, alpha=alpha, eta_convex=eta_convex, crease=crease, features=features,
-                  beta=beta)[de] * r)
-    geo_csr = np.ascontiguousarray(g.terms.geo[de])
-    len_csr = np.ascontiguousarray(g.lengths[de])
+    crease = check_nonneg("crease", crease)
+    if check_nonneg("beta", beta) > 0:
+        cut_csr = np.ascontiguousarray(
+            cut_costs(g, alpha=alpha, eta_convex=eta_convex, crease=crease, features=features,
+                      beta=beta)[de] * r)
+    else:  # the same values, per CSR entry in one pass
+        from ._kernels.terms import cut_costs_csr
+
+        t = g.terms
+        cut_csr = cut_costs_csr(de, t.concave, t.cos, g.lengths, crease * alpha / np.pi,
+                                eta_convex, r)
     dist = np.empty(n)
     partner = np.empty(n, dtype=np.int64)
     heap = g.indices.shape[0] + n + 1
@@ -310,8 +316,8 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = 200.0,
         means = np.empty((k, 3))
         for c in range(3):
             means[:, c] = np.bincount(labels, weights=sizes * positions[:, c], minlength=k) / area
-        band_distances(g.indptr, g.indices, geo_csr, len_csr, labels, pinned, band * r,
-                       dist, partner, hkey, hval)
+        band_distances(g.indptr, g.indices, de, g.terms.geo, g.lengths, labels, pinned,
+                       band * r, dist, partner, hkey, hval)
         members = np.flatnonzero(partner >= 0)
         if dirty is not None:  # later sweeps: only bands of superfacets that changed
             members = members[dirty[labels[members]] | dirty[partner[members]]]

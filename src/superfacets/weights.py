@@ -156,11 +156,11 @@ def convex_scaled(graph, weights: np.ndarray, *, alpha: float, eta_convex: float
     scale = alpha * eta_convex * (1.0 - float(factor))
     if weighting != "paper" or scale == 0.0:
         return weights
-    terms = g.terms
-    convex = np.flatnonzero(~terms.concave)
-    delta = np.zeros(g.n_edges)
-    delta[convex] = (scale / (np.pi * g.diagonal)) * g.span[convex] * np.arccos(terms.cos[convex])
-    return np.maximum(weights - delta[g.dual_edge], 0.0)
+    from ._kernels.terms import convex_scaled_csr
+
+    t = g.terms
+    return convex_scaled_csr(np.ascontiguousarray(weights, dtype=np.float64), g.dual_edge,
+                             t.concave, t.cos, g.span, scale / (np.pi * g.diagonal))
 
 
 def check_features(features, graph: ElementGraph) -> np.ndarray:

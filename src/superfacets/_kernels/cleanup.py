@@ -21,13 +21,14 @@ _INF = np.inf
 
 
 @njit(cache=True, error_model="numpy")
-def band_distances(indptr, indices, geo, length, labels, pinned, limit, dist, partner,
-                   hkey, hval):
+def band_distances(indptr, indices, dual_edge, geo, length, labels, pinned, limit, dist,
+                   partner, hkey, hval):
     """Distance of every element from its superfacet's boundary, below ``limit``.
 
     Seeds: elements with a neighbour of another label (distance 0; partner:
     the neighbouring label sharing the longest border, ties to the lowest).
-    The distance grows by ``geo`` (per CSR entry) along entries that join two
+    The distance grows by ``geo`` (per adjacency ``dual_edge[e]`` of CSR entry
+    ``e``, as ``length``) along entries that join two
     elements of the same label. ``pinned`` elements are never in a band.
     Elements farther than ``limit`` (or pinned) keep ``dist = inf`` and
     ``partner = -1``.
@@ -51,7 +52,7 @@ def band_distances(indptr, indices, geo, length, labels, pinned, limit, dist, pa
             tot = 0.0
             for e2 in range(indptr[f], indptr[f + 1]):
                 if labels[indices[e2]] == lg:
-                    tot += length[e2]
+                    tot += length[dual_edge[e2]]
             if tot > best_len or (tot == best_len and lg < best):
                 best_len = tot
                 best = lg
@@ -68,7 +69,7 @@ def band_distances(indptr, indices, geo, length, labels, pinned, limit, dist, pa
             g = indices[e]
             if labels[g] != lf or pinned[g]:
                 continue
-            nd = d + geo[e]
+            nd = d + geo[dual_edge[e]]
             if nd < limit and nd < dist[g]:
                 dist[g] = nd
                 partner[g] = partner[f]

@@ -1,0 +1,34 @@
+"""Per-CSR-entry values from the per-adjacency terms of an element graph (private
+kernels of :mod:`superfacets.weights` and :mod:`superfacets.cleanup`): one pass
+over the CSR entries instead of numpy temporaries per adjacency and a gather."""
+
+import math
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def convex_scaled_csr(weights, dual_edge, concave, cos, span, coef):
+    """``weights[e] - coef * span * arccos(cos)`` (at least 0) on the entries of
+    convex adjacencies, ``weights[e]`` on concave ones (adjacency ``dual_edge[e]``)."""
+    out = np.empty(weights.shape[0])
+    for e in range(weights.shape[0]):
+        d = dual_edge[e]
+        if concave[d]:
+            out[e] = weights[e]
+        else:
+            out[e] = max(weights[e] - coef * span[d] * math.acos(cos[d]), 0.0)
+    return out
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def cut_costs_csr(dual_edge, concave, cos, lengths, factor, eta_convex, scale):
+    """``scale * lengths / (1 + factor * eta * arccos(cos))`` per CSR entry,
+    ``eta`` 1 on concave adjacencies and ``eta_convex`` on convex ones."""
+    out = np.empty(dual_edge.shape[0])
+    for e in range(dual_edge.shape[0]):
+        d = dual_edge[e]
+        eta = 1.0 if concave[d] else eta_convex
+        out[e] = lengths[d] / (1.0 + factor * eta * math.acos(cos[d])) * scale
+    return out
