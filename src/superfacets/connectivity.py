@@ -93,7 +93,7 @@ def enforce_connectivity(graph, labels: np.ndarray, centers: np.ndarray | None =
     by the method (expansions never leave a connected component of the
     mesh); if one does, it becomes a superfacet of its own.
     """
-    from ._kernels.connectivity import merge_strays
+    from ._kernels.connectivity import merge_strays, stray_borders
 
     g = as_element_graph(graph)
     labels = check_labels(labels, g.n_elements, per=g.element)
@@ -125,17 +125,10 @@ def enforce_connectivity(graph, labels: np.ndarray, centers: np.ndarray | None =
 
     # boundary length between a stray and each adjacent piece (the rows of the strays
     # alone, entries in the order of the whole matrix's: the same sums)
-    strays = np.flatnonzero(~is_main)
-    elen = g.lengths
-    pi, pj = piece[g.pairs[:, 0]], piece[g.pairs[:, 1]]
-    cross = pi != pj
-    m1 = cross & ~is_main[pi]
-    m2 = cross & ~is_main[pj]
-    a = np.concatenate([pi[m1], pj[m2]])
-    b = np.concatenate([pj[m1], pi[m2]])
-    w = np.concatenate([elen[m1], elen[m2]])
-    nb_indptr, nb_indices, nb_data = _summed_csr(a, b, w, n_pieces)
+    nb_indptr, nb_indices, nb_data = _summed_csr(
+        *stray_borders(g.pairs, piece, is_main, g.lengths), n_pieces)
 
+    strays = np.flatnonzero(~is_main)
     strays = strays[np.lexsort((strays, area[strays]))]  # smallest first
     root = merge_strays(strays, nb_indptr, nb_indices, nb_data, n_pieces)
     # final label of a root: its label if it is a main piece, else a new one

@@ -58,3 +58,28 @@ def merge_strays(strays, nb_indptr, nb_indices, nb_data, n_pieces):
     for q in range(n_pieces):
         root[q] = _find(parent, q)
     return root
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def stray_borders(pairs, piece, is_main, lengths):
+    """The entries ``(a, b, length)`` of the pieces' adjacency whose row ``a`` is a
+    stray piece: first ``(piece[i], piece[j])`` over adjacencies ``(i, j)`` in
+    order, then ``(piece[j], piece[i])`` (the order of the whole matrix's entries)."""
+    m = 0
+    for e in range(pairs.shape[0]):
+        p, q = piece[pairs[e, 0]], piece[pairs[e, 1]]
+        if p != q:
+            m += (not is_main[p]) + (not is_main[q])
+    a = np.empty(m, dtype=np.int64)
+    b = np.empty(m, dtype=np.int64)
+    w = np.empty(m)
+    t = 0
+    for side in range(2):
+        for e in range(pairs.shape[0]):
+            p, q = piece[pairs[e, side]], piece[pairs[e, 1 - side]]
+            if p != q and not is_main[p]:
+                a[t] = p
+                b[t] = q
+                w[t] = lengths[e]
+                t += 1
+    return a, b, w
