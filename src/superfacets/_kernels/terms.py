@@ -12,13 +12,13 @@ from numba import njit
 def convex_scaled_csr(weights, dual_edge, concave, cos, span, coef):
     """``weights[e] - coef * span * arccos(cos)`` (at least 0) on the entries of
     convex adjacencies, ``weights[e]`` on concave ones (adjacency ``dual_edge[e]``)."""
+    delta = np.empty(cos.shape[0])  # one arccos per adjacency
+    for d in range(cos.shape[0]):
+        delta[d] = 0.0 if concave[d] else coef * span[d] * math.acos(cos[d])
     out = np.empty(weights.shape[0])
     for e in range(weights.shape[0]):
         d = dual_edge[e]
-        if concave[d]:
-            out[e] = weights[e]
-        else:
-            out[e] = max(weights[e] - coef * span[d] * math.acos(cos[d]), 0.0)
+        out[e] = weights[e] if concave[d] else max(weights[e] - delta[d], 0.0)
     return out
 
 
@@ -26,9 +26,11 @@ def convex_scaled_csr(weights, dual_edge, concave, cos, span, coef):
 def cut_costs_csr(dual_edge, concave, cos, lengths, factor, eta_convex, scale):
     """``scale * lengths / (1 + factor * eta * arccos(cos))`` per CSR entry,
     ``eta`` 1 on concave adjacencies and ``eta_convex`` on convex ones."""
+    cost = np.empty(cos.shape[0])  # one arccos per adjacency
+    for d in range(cos.shape[0]):
+        eta = 1.0 if concave[d] else eta_convex
+        cost[d] = lengths[d] / (1.0 + factor * eta * math.acos(cos[d])) * scale
     out = np.empty(dual_edge.shape[0])
     for e in range(dual_edge.shape[0]):
-        d = dual_edge[e]
-        eta = 1.0 if concave[d] else eta_convex
-        out[e] = lengths[d] / (1.0 + factor * eta * math.acos(cos[d])) * scale
+        out[e] = cost[dual_edge[e]]
     return out
