@@ -305,3 +305,28 @@ def test_the_passes_after_the_swaps_hold_small_center_moves_on_faces(monkeypatch
     assert holds[-1] == pytest.approx(0.05 * r.radius)
     r = segment(mesh, 100, center_tol=0.0)  # no hold asked: none after the swaps either
     assert r.timings["swaps"] > 0 and holds[-1] == 0.0
+
+
+def test_one_pass_follows_the_swaps_on_faces_two_on_vertices(monkeypatch):
+    # the bound on the passes after the swaps each kind gets, and the runs keep to it
+    from superfacets import passes
+    from superfacets.splitmerge import passes_after_for
+
+    runs = []
+    real = passes.iterate
+
+    def spy(*args, **kw):
+        out = real(*args, **kw)
+        runs.append((args[5], out.n_passes))  # (bound, passes run)
+        return out
+
+    monkeypatch.setattr(passes, "iterate", spy)  # the passes after the swaps only
+    mesh = read_mesh(need(MESHES / "bunny.tri.xz"))
+    assert passes_after_for("faces") == 1 and passes_after_for("vertices") == 2
+    r = segment(mesh, 100)
+    assert r.timings["swaps"] > 0 and runs[-1][0] == 1 and runs[-1][1] == 1
+    assert r.converged  # the schedule's end, not max_iter
+    r = segment(mesh, 100, elements="vertices")
+    assert r.timings["swaps"] > 0 and runs[-1][0] == 2 and 1 <= runs[-1][1] <= 2
+    r = segment(mesh, 100, tol=0)  # the paper's rule: the passes after run to convergence
+    assert all(bound == 50 for bound, _ in runs[2:])

@@ -14,7 +14,7 @@ the public functions of :mod:`superfacets.segmentation` call it) and returns a
    with ``split_merge=True``, rounds of K-preserving swaps, each followed by
    the passes again (:mod:`superfacets.splitmerge`; with ``tol > 0`` the swaps
    come once a pass changes at most ``START_TOL`` of the area, one round, and at
-   most ``PASSES_AFTER`` passes follow);
+   most ``passes_after_for(kind)`` passes follow);
 7. with ``cleanup=True``, the boundaries re-placed (:mod:`superfacets.cleanup`);
 8. the result.
 """
@@ -321,7 +321,7 @@ def _pipeline(mesh, params: SegmentParams, features, *, replay: bool, jump_cycle
                                          replay=replay)
             fast = split_merge and p.tol > 0  # swaps early, few passes after them
             if fast:
-                from .splitmerge import FAST_ROUNDS, PASSES_AFTER, START_TOL
+                from .splitmerge import FAST_ROUNDS, START_TOL, passes_after_for
             it = iterate(classifier, centers, init.shape[0], sizes, positions, p.max_iter,
                          jump_cycles=jump_cycles, tol=max(p.tol, START_TOL) if fast else p.tol,
                          min_move=center_tol * r, bar=bar)
@@ -334,7 +334,8 @@ def _pipeline(mesh, params: SegmentParams, features, *, replay: bool, jump_cycle
                     window_r2=window_r2, jump_cycles=jump_cycles, tol=p.tol,
                     min_move=center_tol * r, n_threads=spaces.n_threads,
                     rounds=FAST_ROUNDS if fast else ROUNDS,
-                    passes_after=PASSES_AFTER if fast else None, swap_weights=swap_w,
+                    passes_after=passes_after_for(graph.kind) if fast else None,
+                    swap_weights=swap_w,
                     hold_after=hold_after_for(graph.kind) if fast else 1.0)
         finally:
             spaces.close()

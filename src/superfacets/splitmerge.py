@@ -41,8 +41,8 @@ from ._kernels.splitmerge import energies, merge_energies, split_candidates
 
 __all__ = ["swap_round", "swap_and_iterate", "POWER", "LLOYD",
            "MAX_FRACTION", "ROUNDS", "START_TOL", "FAST_ROUNDS", "PASSES_AFTER",
-           "SWAP_ETA_CONVEX_FACES", "HOLD_AFTER_FACES", "swap_eta_convex_for",
-           "hold_after_for"]
+           "SWAP_ETA_CONVEX_FACES", "HOLD_AFTER_FACES", "PASSES_AFTER_FACES",
+           "swap_eta_convex_for", "hold_after_for", "passes_after_for"]
 
 #: Exponent of the distances in the energy.
 POWER = 4.0
@@ -66,7 +66,14 @@ FAST_ROUNDS = 1
 #: for 1.05 times the paper's time (0.98 with 2 passes after, UE -6.1 %, compactness
 #: -15.0 %), where swapping after converged passes (up to three rounds, each iterated to
 #: convergence) took 1.4-2.7 times (docs/cleanup.md, "Split-and-merge at the paper's speed").
+#: Vertices keep 2: one pass raised their UE (45 meshes, k = 150: -5.4 % against the
+#: paper instead of -6.4 %).
 PASSES_AFTER = 2
+#: The same on faces: 1. With the swap energies of :data:`SWAP_ETA_CONVEX_FACES` the
+#: second pass no longer pays: on the 300 meshes, k = 50 ... 300, UE within 0.4 points of
+#: two passes', compactness the same to 0.1 point, about 5 % of a run's time
+#: (docs/cleanup.md, "One pass after the swaps").
+PASSES_AFTER_FACES = 1
 #: Factor of ``eta_convex`` in the weights of the swap energies on faces: 0.5 counts a
 #: convex fold half as much as the passes do, so a superfacet wrapped round a thin convex
 #: tube (a glasses frame of few faces around) no longer reads as straddling a crease,
@@ -260,6 +267,18 @@ def swap_eta_convex_for(kind: str) -> float:
     (0.5, 1.0)
     """
     return SWAP_ETA_CONVEX_FACES if kind == "faces" else 1.0
+
+
+def passes_after_for(kind: str) -> int:
+    """Most passes after the swaps (with ``tol > 0``) on elements ``kind``:
+    :data:`PASSES_AFTER_FACES` on faces, :data:`PASSES_AFTER` elsewhere.
+
+    Examples
+    --------
+    >>> passes_after_for("faces"), passes_after_for("vertices")
+    (1, 2)
+    """
+    return PASSES_AFTER_FACES if kind == "faces" else PASSES_AFTER
 
 
 def hold_after_for(kind: str) -> float:
