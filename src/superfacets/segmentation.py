@@ -102,13 +102,13 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
         paper's distance) is split in two while two neighbours elsewhere are
         merged, then the iteration runs again from the new centers. With
         ``tol > 0`` one round comes once a pass changes at most 20 % of the
-        area, and at most 2 passes follow; with ``tol = 0`` up to 3 rounds,
-        each iterated to convergence. Same number of superfacets. Default
-        as ``cleanup``. Both on (the default on faces) against the paper on
-        the 300 benchmark meshes at ``k = 150``: undersegmentation error
-        -6.1 %, compactness -15.0 %, boundary recall 0.806 (paper 0.802),
-        every category better, for 0.98 of its time (``docs/cleanup.md``,
-        "The default").
+        area, and at most 1 pass follows on faces (2 on vertices and
+        points); with ``tol = 0`` up to 3 rounds, each iterated to
+        convergence. Same number of superfacets. Default as ``cleanup``.
+        Both on (the default on faces) against the paper on the 300
+        benchmark meshes at ``k = 150``: undersegmentation error -7.8 %,
+        compactness -15.5 %, boundary recall 0.805 (paper 0.802), for 0.92
+        of its time (``docs/cleanup.md``, "One pass after the swaps").
     paper : bool, default False
         The paper's method as published (Simari, Picciau, De Floriani 2014,
         section 3): its stopping rule (``tol=0``, no center tolerance, no
