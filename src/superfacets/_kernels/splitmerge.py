@@ -17,6 +17,17 @@ from .heap import pop_min, push
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def _pow(d, power):
+    """``d ** power``, by two multiplications for the default ``power = 4`` (libm's
+    pow costs about 16 ns a call, most of an energy's time; the two differ in the
+    last bit on about half the values)."""
+    if power == 4.0:
+        q = d * d
+        return q * q
+    return d ** power
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def _relax(indptr, indices, w, label, la, lb, f, d, dist, stamp, sid, hkey, hval, size):
     """Relax the edges of ``f`` (settled at ``d``) toward elements labelled ``la`` or
     ``lb``; return the heap's new size."""
@@ -95,14 +106,14 @@ def _energy(elems, n, sizes, dist, stamp, sid, power):
         f = elems[i]
         if stamp[f] == sid:
             d = dist[f]
-            e += sizes[f] * d ** power
+            e += sizes[f] * _pow(d, power)
             if d > fd:
                 fd = d
                 far = f
     for i in range(n):  # unreached (a piece cut off): as far as the farthest
         f = elems[i]
         if stamp[f] != sid:
-            e += sizes[f] * fd ** power
+            e += sizes[f] * _pow(fd, power)
     return e, far
 
 
@@ -122,7 +133,7 @@ def _search_below(indptr, indices, w, label, la, lb, src, dist, stamp, sid, hkey
         d, f, size = pop_min(hkey, hval, size)
         if d > dist[f]:
             continue
-        dp = d ** power
+        dp = _pow(d, power)
         settled += sizes[f] * dp
         rest -= sizes[f]
         if settled + max(rest, 0.0) * dp >= limit:
@@ -206,10 +217,10 @@ def split_candidates(indptr, indices, w, label, members, bounds, sizes, position
                 second[f] = dq < dp
                 if dq < dp:
                     nb += 1
-                    e += sizes[f] * dq ** power
+                    e += sizes[f] * _pow(dq, power)
                 else:
                     na += 1
-                    e += sizes[f] * dp ** power if dp < np.inf else 0.0
+                    e += sizes[f] * _pow(dp, power) if dp < np.inf else 0.0
             sid += 1
             if na == 0 or nb == 0:
                 ok = False
