@@ -193,6 +193,7 @@ def split_candidates(indptr, indices, w, label, members, bounds, sizes, position
             sid += 1
             continue
         ok = True
+        last_p = last_q = -1
         for it in range(lloyd + 1):
             if it > 0:  # re-center each part on the element nearest its mean
                 na = nb = 0
@@ -206,6 +207,9 @@ def split_candidates(indptr, indices, w, label, members, bounds, sizes, position
                         na += 1
                 p = _nearest_mean(work[:na], na, sizes, positions)
                 q = _nearest_mean(work[n - nb:n], nb, sizes, positions)
+                if p == last_p and q == last_q:  # converged: the same parts again
+                    break
+            last_p, last_q = p, q
             _search(indptr, indices, w, label, s, s, p, dist, stamp, sid, hkey, hval)
             _search(indptr, indices, w, label, s, s, q, dist2, stamp2, sid, hkey, hval)
             na = nb = 0
