@@ -107,7 +107,7 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
         convergence. Same number of superfacets. Default as ``cleanup``.
         Both on (the default on faces) against the paper on the 300
         benchmark meshes at ``k = 150``: undersegmentation error -7.8 %,
-        compactness -15.5 %, boundary recall 0.805 (paper 0.802), for 0.92
+        compactness -15.5 %, boundary recall 0.805 (paper 0.802), for 0.88
         of its time (``docs/cleanup.md``, "One pass after the swaps").
     paper : bool, default False
         The paper's method as published (Simari, Picciau, De Floriani 2014,
