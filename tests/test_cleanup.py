@@ -260,3 +260,16 @@ def test_progress_bar_names_the_cleanup_stage(capsys):
     err = capsys.readouterr().err
     assert "superfacets" in err and "clean-up" in err
     assert labels.max() + 1 == 12
+
+
+def test_the_clean_up_does_not_depend_on_how_the_superfacets_are_numbered():
+    # ties go by the centers' order, not the labels': a permutation of the labels (a
+    # tiled run numbers superfacets by their centers' rows) gives the permuted result
+    mesh = grid_mesh(20, 20)  # flat and regular: ties everywhere
+    r = segment(mesh, 20, cleanup=False)
+    clean = clean_boundaries(mesh, r.labels, r.centers)
+    perm = np.random.default_rng(0).permutation(r.n_segments)
+    inverse = np.argsort(perm)
+    again = clean_boundaries(mesh, perm[r.labels], r.centers[inverse])
+    np.testing.assert_array_equal(again, perm[clean])
+    assert not np.array_equal(clean, r.labels)  # the clean-up moved something

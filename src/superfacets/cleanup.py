@@ -288,7 +288,14 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = 200.0,
             or not np.array_equal(labels[centers], np.arange(k))):
         raise ParameterError(f"centers must hold one element of each of the {k} superfacets, "
                              "in label order")
-    centers = centers.astype(np.int64)
+    # ties (a band's partner, a cut's side) go by label: number the superfacets by
+    # their centers, so that the result depends on the partition and the centers alone
+    # (a tiled run numbers them otherwise), and give the caller's numbers back at the end
+    order = np.argsort(centers, kind="stable").astype(np.int64)
+    rank = np.empty(k, dtype=np.int64)
+    rank[order] = np.arange(k)
+    labels = rank[labels]
+    centers = centers[order].astype(np.int64)
     pinned = np.zeros(n, dtype=np.bool_)
     pinned[centers] = True
 
@@ -344,7 +351,10 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = 200.0,
         dirty[labels[moved]] = True
         dirty[out[moved]] = True
         labels = out
-    return enforce_connectivity(g, labels, centers) if connectivity else labels
+    if connectivity:  # every superfacet keeps its center's piece: the same numbers
+        labels = enforce_connectivity(g, labels, centers)
+    # (a piece with no neighbour becomes a superfacet of its own, numbered from k on)
+    return np.where(labels < k, order[np.minimum(labels, k - 1)], labels)
 
 
 def _run_chunks(kernel, starts: np.ndarray, n_threads: int, args: tuple) -> None:
