@@ -6,7 +6,8 @@ from numba import njit
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _find(parent, x):
+def find(parent, x):
+    """The root of ``x`` in the union-find forest ``parent``, compressing its path."""
     root = x
     while parent[root] != root:
         root = parent[root]
@@ -31,10 +32,10 @@ def merge_strays(strays, nb_indptr, nb_indices, nb_data, n_pieces):
     touched = np.empty(n_pieces, dtype=np.int64)
     for i in range(strays.shape[0]):
         p = strays[i]
-        rp = _find(parent, p)
+        rp = find(parent, p)
         m = 0
         for e in range(nb_indptr[p], nb_indptr[p + 1]):
-            q = _find(parent, nb_indices[e])
+            q = find(parent, nb_indices[e])
             if q == rp:
                 continue
             if not seen[q]:
@@ -56,7 +57,7 @@ def merge_strays(strays, nb_indptr, nb_indices, nb_data, n_pieces):
         parent[rp] = target
     root = np.empty(n_pieces, dtype=np.int64)
     for q in range(n_pieces):
-        root[q] = _find(parent, q)
+        root[q] = find(parent, q)
     return root
 
 

@@ -8,17 +8,7 @@ order (sorted by weight), then small components merged along the same order.
 import numpy as np
 from numba import njit
 
-
-@njit(cache=True, inline="always")
-def _find(parent, x):
-    root = x
-    while parent[root] != root:
-        root = parent[root]
-    while parent[x] != root:  # path compression
-        nxt = parent[x]
-        parent[x] = root
-        x = nxt
-    return root
+from .connectivity import find as _find
 
 
 @njit(cache=True, inline="always")
