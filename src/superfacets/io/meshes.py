@@ -338,10 +338,10 @@ def _load_trimesh_quietly(data: bytes, fmt: str, path: Path) -> tuple[np.ndarray
     # than at some later garbage collection (hundreds of MiB on a large mesh)
     del loaded
     gc.collect()
-    if f.size == 0:
-        raise InvalidMeshError(f"{path}: empty mesh: no faces")
     declared = _declared_faces(data, fmt)
-    if fmt == "ply" and (polygons or (declared is not None and declared != f.shape[0])):
+    if f.size == 0 and not (fmt == "ply" and declared):
+        raise InvalidMeshError(f"{path}: empty mesh: no faces")
+    if fmt == "ply" and (polygons or (declared is not None and declared != len(f))):
         return _ply_polygons(data, path)  # trimesh split (and reordered) the polygons
     if polygons:
         raise MeshFormatError(f"{path}: faces of {fmt.upper()} must be triangles")
