@@ -130,15 +130,15 @@ def test_crease_weight_per_element_kind():
 
 
 def test_data_term_weight_per_element_kind():
-    # faces weigh roundness more (1.0) than vertices and points (0.3); the default is
+    # faces weigh roundness more (0.7) than vertices and points (0.3); the default is
     # the kind's, and it matters: a heavier data term leaves rounder superfacets
     from superfacets.cleanup import SMOOTHNESS, SMOOTHNESS_FACES, smoothness_for
     from superfacets.elements.inputs import elements_of
 
-    assert smoothness_for("faces") == SMOOTHNESS_FACES == 1.0
+    assert smoothness_for("faces") == SMOOTHNESS_FACES == 0.7
     assert smoothness_for("vertices") == smoothness_for("points") == SMOOTHNESS == 0.3
     mesh = grid_mesh(30, 30, height=lambda x, y: 0.2 * np.sin(3 * x) * np.cos(2 * y))
-    for kind, value, other in (("faces", 1.0, 0.3), ("vertices", 0.3, 1.0)):
+    for kind, value, other in (("faces", 0.7, 0.3), ("vertices", 0.3, 1.0)):
         g = elements_of(mesh, kind).graph
         labels = segment(mesh, 20, elements=kind, paper=True).element_labels
         default = clean_boundaries(g, labels, alpha=200)

@@ -96,6 +96,29 @@ def test_split_merge_invariants_on_a_real_mesh():
     np.testing.assert_array_equal(one, three)
 
 
+def test_a_swap_needs_a_split_that_removes_an_average_superfacets_energy():
+    mesh, col = _valley()
+    x = mesh.centroids[:, 0]
+    labels = np.select([np.abs(x) < 0.25, x < 0, x < 0.5, x < 0.75], [0, 4, 1, 2], 3)
+    g, w = face_graph(mesh), _weights(mesh)
+    # the crease's superfacet holds most of the energy: its split is taken at the
+    # default (1) and at 2; a gain is at most its superfacet's energy, which is below
+    # the total (K = 5 times the mean), so min_gain = 5 allows no swap
+    assert [swap_round(g, w, labels, min_gain=m)[1] for m in (0.0, 1.0, 2.0, 5.0)] == [
+        1, 1, 1, 0]
+    np.testing.assert_array_equal(swap_round(g, w, labels)[0],
+                                  swap_round(g, w, labels, min_gain=1.0)[0])
+
+
+def test_a_higher_min_gain_takes_fewer_swaps_on_a_real_mesh():
+    mesh = read_mesh(need(MESHES / "bunny.tri.xz"))
+    labels = segment(mesh, 300, split_merge=False, cleanup=False).labels
+    g, w = face_graph(mesh), _weights(mesh)
+    counts = [swap_round(g, w, labels, min_gain=m)[1] for m in (0.0, 1.0, 2.0, 4.0, 300.0)]
+    assert counts == sorted(counts, reverse=True)  # the swaps of a higher bound: a prefix
+    assert counts[0] > counts[2] > 0 and counts[-1] == 0
+
+
 @pytest.mark.parametrize("k", [40, 150, 300])
 def test_pruned_candidates_give_the_swaps_of_the_full_evaluation(k, monkeypatch):
     # the lazy splits and abandoned merge searches decide exactly what evaluating

@@ -48,11 +48,14 @@ CREASE = 0.1
 CREASE_SMOOTH_NORMALS = 1.0
 #: Weight of the compactness (data) term against the boundary length.
 SMOOTHNESS = 0.3
-#: The same on faces: 1.0 since the swap energies weigh convex folds less (their
-#: merges across convex folds cost compactness that the data term wins back: on 45
-#: benchmark meshes at k = 150, compactness -15.0 % against the paper with 1.0, -14.4 %
-#: with 0.3, the UE the same; docs/cleanup.md, "Swap energies").
-SMOOTHNESS_FACES = 1.0
+#: The same on faces: higher than elsewhere since the swap energies weigh convex folds
+#: less (their merges across convex folds cost compactness that the data term wins
+#: back: on 45 benchmark meshes at k = 150, compactness -15.0 % against the paper with
+#: 1.0, -14.4 % with 0.3, the UE the same; docs/cleanup.md, "Swap energies"); 0.7 since
+#: the swaps need a gain of a mean superfacet's energy (:data:`~superfacets.splitmerge.MIN_GAIN`),
+#: which gives compactness back: boundary recall above the paper's at every k, where
+#: 1.0 left it below at k = 100 (docs/cleanup.md, "The smallest swaps").
+SMOOTHNESS_FACES = 0.7
 #: Half-width of the band along each boundary, as a fraction of the radius ``r``.
 BAND = 0.3
 #: The same on vertices: 0.2 keeps the undersegmentation error and compactness of 0.3
@@ -82,7 +85,7 @@ def smoothness_for(kind: str) -> float:
     Examples
     --------
     >>> smoothness_for("faces"), smoothness_for("vertices")
-    (1.0, 0.3)
+    (0.7, 0.3)
     """
     return SMOOTHNESS_FACES if kind == "faces" else SMOOTHNESS
 
@@ -212,7 +215,7 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = 200.0,
     smoothness : float, optional
         Weight of the data term (squared distance to the superfacet's mean
         position, in units of ``r^2``) against the boundary length, ``>= 0``;
-        default :func:`smoothness_for` the graph's kind (1.0 on faces, 0.3 elsewhere).
+        default :func:`smoothness_for` the graph's kind (0.7 on faces, 0.3 elsewhere).
     band : float, optional
         Half-width of each band, a fraction of ``r`` (``> 0``): no boundary
         moves farther; default :func:`band_for` the graph's kind (0.3, 0.2 on
