@@ -19,8 +19,8 @@ elements in ``d_S`` (seeds: the farthest element and the one farthest from
 it; three re-centerings); its *gain* is ``E(S) - E(S_1) - E(S_2)``. The *loss*
 of merging two adjacent superfacets is ``E(S u T) - E(S) - E(T)``. Swaps are
 taken greedily, the largest gain with the smallest loss, while the gain
-exceeds the loss and no superfacet is in two swaps, at most
-``max_fraction * K`` a round.
+exceeds the loss and ``min_gain`` times the mean energy of a superfacet, and
+no superfacet is in two swaps, at most ``max_fraction * K`` a round.
 
 Only the candidates that can decide a swap are evaluated in full, with the
 same swaps as evaluating all: a split's gain is at most its superfacet's
@@ -93,8 +93,8 @@ HOLD_AFTER_FACES = 4.0
 #: region (a cup's body: the most swaps per K of any category, with the smallest gains).
 #: On the 300 benchmark meshes, k = 50 ... 300 (with the clean-up's smoothness 0.7 on
 #: faces): every category lower than the paper on UE and compactness at every k (Cup
-#: was above at k <= 150), compactness 0.1-0.3 points lower than with 0, UE within
-#: 0.8 points, and fewer swaps to run (docs/cleanup.md, "The smallest swaps").
+#: was above at k <= 150), compactness 0.1-0.4 points lower than with 0, UE within
+#: 0.9 points, and fewer swaps to run (docs/cleanup.md, "The smallest swaps").
 MIN_GAIN = 1.0
 
 
