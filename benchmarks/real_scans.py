@@ -2,7 +2,7 @@
 
 Usage: python benchmarks/real_scans.py [--scans NAME ...] [-k 300 1000 3000]
        [--methods superfacets graph_segmentation cut_pursuit vccs] [--beta 0 50]
-       [--neighbors 10] [--split-merge] [--csv results.csv] [--download]
+       [--neighbors 10] [--split-merge] [--min-points 3] [--csv results.csv] [--download]
 
 Each scan of ``superfacets.datasets.scans.SCANS`` found in the cache
 (``$SUPERFACETS_SCANS``, default ``~/.cache/superfacets/scans``; ``--download``
@@ -10,8 +10,11 @@ fetches the missing ones, a few MB each) is segmented by every method at
 each k, on the same point graph (10 nearest neighbours), and measured
 against its per-point classes (unlabelled points left out; each point
 weighs the same): undersegmentation error (eq. 4, lower is better),
-boundary recall and achievable accuracy (higher is better), the number of
-superpoints and the seconds (in process, one after the other, this
+boundary recall, boundary precision (the share of a method's own boundary
+points near a true boundary: recall alone rewards long boundaries) and
+achievable accuracy (higher is better), the number of superpoints, their
+median size in points and the share of single-point superpoints, and the
+seconds (in process, one after the other, this
 machine's threads); on scans with object instances (the ScanNet rooms)
 also UE and recall against those.
 
@@ -21,7 +24,10 @@ Methods (the registry's, so ``superfacets experiment`` runs the same code):
   lowered where orphans add superpoints, so that it returns at most k
   (``_equal_count``); with ``--beta B`` also
   the colour term (scans with RGB only); with ``--split-merge`` also
-  split-and-merge (off by default on points);
+  split-and-merge (off by default on points); with ``--min-points N`` also
+  its superpoints of fewer than N points merged into a neighbour
+  (``enforce_connectivity(..., min_elements=N)``), the request raised until
+  the count is reached;
 - ``graph_segmentation``: the ScanNet Segmentator's method, its threshold
   searched for k;
 - ``cut_pursuit``: Superpoint Graph's partition (``cut-pursuit-py``, the
@@ -46,7 +52,8 @@ import numpy as np
 
 METHODS = ("superfacets", "graph_segmentation", "cut_pursuit", "vccs")
 COLUMNS = ("scan", "points", "method", "beta", "k", "segments", "undersegmentation_error",
-           "boundary_recall", "achievable_accuracy", "seconds", "instances_undersegmentation_error",
+           "boundary_recall", "boundary_precision", "achievable_accuracy", "median_points",
+           "single_points", "seconds", "instances_undersegmentation_error",
            "instances_boundary_recall")
 
 
@@ -67,9 +74,21 @@ def run(scan, method: str, k: int, beta: float, options: dict | None = None,
 
     t0 = time.perf_counter()
     if method == "superfacets":  # the registry's run, with the colour weight
-        labels = _equal_count(lambda req: segment(scan.cloud, req, beta=beta,
-                                                  n_neighbors=neighbors,
-                                                  **(options or {})).labels, k)
+        options = dict(options or {})
+        min_points = options.pop("min_points", 1)
+
+        def superpoints(req):
+            r = segment(scan.cloud, req, beta=beta, n_neighbors=neighbors, **options)
+            if min_points <= 1:
+                return r.labels
+            from superfacets.connectivity import enforce_connectivity
+
+            centers = r.elements.index[r.centers]  # rows -> elements
+            small = enforce_connectivity(r.elements.graph, r.element_labels, centers,
+                                         min_elements=min_points)
+            return r.elements.to_rows(small)
+
+        labels = _equal_count(superpoints, k)
     elif method == "graph_segmentation":  # as the registry runs them, with the neighbours
         from superfacets.baselines.graph_segmentation import graph_segmentation
 
@@ -84,8 +103,12 @@ def run(scan, method: str, k: int, beta: float, options: dict | None = None,
 
         labels = vccs(scan.cloud, k, n_neighbors=neighbors)
     seconds = time.perf_counter() - t0
-    row = evaluate_scan(scan, np.asarray(labels))  # always on the 10-neighbour graph
-    row.update(seconds=seconds)
+    labels = np.asarray(labels)
+    row = evaluate_scan(scan, labels)  # always on the 10-neighbour graph
+    sizes = np.bincount(labels[labels >= 0])
+    sizes = sizes[sizes > 0]
+    row.update(seconds=seconds, median_points=float(np.median(sizes)),
+               single_points=float(np.mean(sizes == 1)))
     if scan.instances is not None:  # the same labels against the object instances
         obj = evaluate_scan(scan, np.asarray(labels), against="instances")
         row.update(instances_undersegmentation_error=obj["undersegmentation_error"],
@@ -112,7 +135,9 @@ def _equal_count(run_k, k: int, tries: int = 4):
             best = (count, labels)
         if count == k or req <= 1:
             break
-        req = max(1, req - (count - k)) if count > k else req + max(1, (k - count) // 2)
+        # too many: lower by the excess; too few (superpoints merged away): scale up
+        req = max(1, req - (count - k)) if count > k else \
+            req + max(1, round((k - count) * req / max(count, 1)))
     return labels if best is None else best[1]
 
 
@@ -130,6 +155,9 @@ def main() -> None:
                          "on the 10-neighbour graph)")
     ap.add_argument("--split-merge", action="store_true",
                     help="also superfacets with split-and-merge (off by default on points)")
+    ap.add_argument("--min-points", type=int, default=0,
+                    help="also superfacets with superpoints of fewer points merged into a "
+                         "neighbour (enforce_connectivity's min_elements), the count searched")
     ap.add_argument("--csv", help="also write every row to this CSV file")
     ap.add_argument("--download", action="store_true", help="fetch missing scans first")
     a = ap.parse_args()
@@ -153,13 +181,14 @@ def main() -> None:
         print(f"\n### {name}: {n:,} points, {scan.source.kind}"
               f"{', RGB' if coloured else ''}\n")
         objects = scan.instances is not None
-        print("| k | method | UE | boundary recall | achievable accuracy | superpoints | s |"
+        print("| k | method | UE | boundary recall | boundary precision | achievable accuracy "
+              "| superpoints | median points | single points | s |"
               + (" UE, instances | recall, instances |" if objects else ""))
-        print("|---|---|---|---|---|---|---|" + ("---|---|" if objects else ""))
+        print("|---|---|---|---|---|---|---|---|---|---|" + ("---|---|" if objects else ""))
         for k in a.k:
             for method in a.methods:
                 if not available(method):
-                    print(f"| {k} | {method} | not installed | | | | |"
+                    print(f"| {k} | {method} | not installed | | | | | | | |"
                           + (" | |" if objects else ""))
                     continue
                 betas = [b for b in a.beta if b == 0 or coloured] \
@@ -167,13 +196,19 @@ def main() -> None:
                 variants = [(b, {}) for b in betas]
                 if method == "superfacets" and a.split_merge:
                     variants += [(b, {"split_merge": True}) for b in betas]
+                if method == "superfacets" and a.min_points > 1:
+                    variants += [(0.0, {"min_points": a.min_points})]
                 for beta, options in variants:
                     r = run(scan, method, k, beta, options, a.neighbors)
                     label = method + (f" beta={beta:g}" if beta else "") + \
-                        (" split-and-merge" if options else "")
+                        (" split-and-merge" if options.get("split_merge") else "") + \
+                        (f" min {options['min_points']} points" if "min_points" in options
+                         else "")
                     print(f"| {k} | {label} | {r['undersegmentation_error']:.4f} | "
-                          f"{r['boundary_recall']:.4f} | {r['achievable_accuracy']:.4f} | "
-                          f"{r['segments']} | {r['seconds']:.1f} |"
+                          f"{r['boundary_recall']:.4f} | {r['boundary_precision']:.4f} | "
+                          f"{r['achievable_accuracy']:.4f} | {r['segments']} | "
+                          f"{r['median_points']:g} | {r['single_points']:.1%} | "
+                          f"{r['seconds']:.1f} |"
                           + (f" {r['instances_undersegmentation_error']:.4f} | "
                              f"{r['instances_boundary_recall']:.4f} |" if objects else ""),
                           flush=True)

@@ -1,4 +1,5 @@
 import numpy as np
+import pytest
 
 from superfacets import enforce_connectivity
 from superfacets.connectivity import label_components
@@ -96,3 +97,41 @@ def test_summed_csr_equals_scipy_coo_to_csr():
         ref.sort_indices()
         assert np.array_equal(indptr, ref.indptr) and np.array_equal(indices, ref.indices)
         np.testing.assert_allclose(data, ref.data, rtol=1e-12)
+
+
+def test_min_elements_merges_tiny_superfacets_into_their_neighbours():
+    mesh = grid_mesh(12, 12)  # 288 faces, [-1, 1]^2
+    halves = cell_labels(mesh, lambda x, y: 1 if x > 0 else 0)
+    labels = halves.copy()
+    # two connected superfacets of one and of two faces inside the left half
+    g = face_graph(mesh)
+    ring = lambda f: g.indices[g.indptr[f]:g.indptr[f + 1]]  # noqa: E731
+    inner = np.flatnonzero((np.abs(mesh.centroids[:, :2]) < 0.8).all(axis=1) & (halves == 0))
+    one = int(inner[0])
+    nbr = int(ring(one)[0])
+    labels[one] = 2
+    a = int(inner[-1])
+    pair = np.array([a, int(ring(a)[0])])
+    assert halves[pair[1]] == 0 and not set(pair) & {one, *ring(one)}
+    labels[pair] = 3
+    centers = np.array([0, int(np.flatnonzero(halves == 1)[0]), one, int(pair[0])])
+    # min_elements = 1 (the default): only connectivity, all four kept
+    np.testing.assert_array_equal(enforce_connectivity(mesh, labels, centers), labels)
+    # 2: the single face joins the half around it, the pair stays
+    two = enforce_connectivity(mesh, labels, centers, min_elements=2)
+    assert np.unique(two).size == 3 and two[one] == two[nbr] and two[pair[0]] == two[pair[1]]
+    # 3: both merge away, the halves are back
+    np.testing.assert_array_equal(enforce_connectivity(mesh, labels, centers, min_elements=3),
+                                  halves)
+
+
+def test_min_elements_keeps_a_tiny_superfacet_with_no_neighbour():
+    # two separate pieces: a 288-face grid and one triangle far away
+    mesh = grid_mesh(12, 12)
+    v = np.vstack([mesh.vertices, [[5, 5, 0], [6, 5, 0], [5, 6, 0]]])
+    f = np.vstack([mesh.faces, [[len(mesh.vertices) + i for i in range(3)]]])
+    labels = np.r_[np.zeros(mesh.n_faces, np.int64), 1]
+    out = enforce_connectivity((v, f), labels, min_elements=5)
+    np.testing.assert_array_equal(out, labels)
+    with pytest.raises(ValueError, match="min_elements"):
+        enforce_connectivity((v, f), labels, min_elements=0)

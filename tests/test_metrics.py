@@ -2,7 +2,8 @@ import numpy as np
 import pytest
 
 from superfacets import Mesh, read_labels, read_mesh, superfacets
-from superfacets.metrics import (achievable_segmentation_accuracy, boundary_recall, compactness,
+from superfacets.metrics import (achievable_segmentation_accuracy, boundary_precision,
+                                 boundary_recall, compactness,
                                  contingency, evaluate, mean_over_ground_truths,
                                  undersegmentation_error)
 
@@ -74,6 +75,33 @@ def test_boundary_recall(plane):
     assert boundary_recall(plane, near, gt, tolerance=0) == 0.0
     assert boundary_recall(plane, near, gt, tolerance=1) == 1.0
     assert boundary_recall(plane, gt, np.zeros(plane.n_faces, np.int64)) == 1.0
+
+
+def test_boundary_precision(plane):
+    gt = by_x(plane, [0.0])
+    assert boundary_precision(plane, gt, gt) == 1.0
+    # two borders of equal length, one on the ground truth's, one 5 cells away
+    two = by_x(plane, [0.0, 0.5])
+    assert boundary_precision(plane, two, gt) == pytest.approx(0.5)
+    assert boundary_recall(plane, two, gt) == 1.0  # the extra border costs no recall
+    near = by_x(plane, [0.1])  # one column away: within one ring
+    assert boundary_precision(plane, near, gt, tolerance=0) == 0.0
+    assert boundary_precision(plane, near, gt, tolerance=1) == 1.0
+    assert boundary_precision(plane, np.zeros(plane.n_faces, np.int64), gt) == 1.0  # no border
+
+
+def test_boundary_precision_is_recall_with_the_roles_swapped(psb):
+    mesh = read_mesh(psb / "off" / "1.off")
+    gt = read_labels(psb / "seg" / "Benchmark" / "1" / "1_0.seg", n_faces=mesh.n_faces)
+    labels = superfacets(mesh, 150, alpha=200)
+    for tol in (0, 1, 2):
+        p = boundary_precision(mesh, labels, gt, tolerance=tol)
+        assert p == pytest.approx(boundary_recall(mesh, gt, labels, tolerance=tol), abs=1e-12)
+        assert 0.0 < p < 1.0
+    # 150 superfacets draw far more border than the few parts: precision below recall
+    assert boundary_precision(mesh, labels, gt) < boundary_recall(mesh, labels, gt)
+    m = evaluate(mesh, labels, [gt], precision=True)
+    assert m["boundary_precision"] == pytest.approx(boundary_precision(mesh, labels, gt))
 
 
 def test_all_metrics_invariant_to_scaling(plane):
@@ -188,3 +216,16 @@ def test_evaluate_ignore_label_equal_weight_counts_labelled_elements(plane):
     assert a["boundary_recall"] == 0.0
     assert evaluate(plane, by_x(plane, [0.25]), [gt], ignore_label=-1,
                     equal_weight=True)["boundary_recall"] == 1.0
+    # precision by elements: the border at x = 0 is near no labelled boundary (the -1|0
+    # strip edge at -0.5 is none); a border on the -1|0 edge and one on the labelled
+    # boundary: only the latter is judged (the former has an unlabelled side)
+    assert evaluate(plane, sf, [gt], ignore_label=-1, equal_weight=True,
+                    precision=True)["boundary_precision"] == 0.0
+    p = evaluate(plane, by_x(plane, [-0.5, 0.25]), [gt], ignore_label=-1, equal_weight=True,
+                 precision=True)
+    assert p["boundary_precision"] == 1.0 and p["boundary_recall"] == 1.0
+    p2 = evaluate(plane, by_x(plane, [0.25, 0.75]), [gt], ignore_label=-1, equal_weight=True,
+                  precision=True)
+    # two borders of 20 cells each side: the 40 elements along x = 0.25 are on the
+    # truth's boundary, the 40 along x = 0.75 are 4 cells from it
+    assert p2["boundary_precision"] == pytest.approx(0.5)

@@ -32,7 +32,8 @@ LAYERS = (
     ("superfacets.weights", "superfacets.expansion", "superfacets.classify",
      "superfacets.passes", "superfacets.initialization", "superfacets.multilevel",
      "superfacets.connectivity", "superfacets.cleanup", "superfacets.splitmerge",
-     "superfacets.metrics", "superfacets.colors", "superfacets.adjacency",
+     "superfacets.boundaries", "superfacets.metrics", "superfacets.colors",
+     "superfacets.adjacency",
      "superfacets.hierarchy"),
     # the method, one run
     ("superfacets.pipeline", "superfacets.segmentation", "superfacets.scenes",

@@ -5,6 +5,11 @@ of the element graph. :func:`enforce_connectivity` keeps one piece per superface
 holding its center, else the largest by area) and merges every other piece
 into the neighbouring region with which it shares the longest boundary, as
 scikit-image's ``slic(enforce_connectivity=True)`` does for superpixels.
+With ``min_elements``, a superfacet of fewer elements goes the same way (as
+scikit-image's ``min_size_factor``): on a LiDAR sweep, centers land on
+stray points whose costly edges (long, with noisy normals) keep their
+superpoints at one or two points (``docs/superpoints.md``, "Superpoints of
+one point").
 """
 
 from __future__ import annotations
@@ -57,8 +62,9 @@ def _summed_csr(rows: np.ndarray, cols: np.ndarray, vals: np.ndarray,
     return indptr, key % n, data
 
 
-def enforce_connectivity(graph, labels: np.ndarray, centers: np.ndarray | None = None) -> np.ndarray:
-    """Make every superfacet connected in the element graph.
+def enforce_connectivity(graph, labels: np.ndarray, centers: np.ndarray | None = None, *,
+                         min_elements: int = 1) -> np.ndarray:
+    """Make every superfacet connected in the element graph (and, optionally, not tiny).
 
     Parameters
     ----------
@@ -72,6 +78,11 @@ def enforce_connectivity(graph, labels: np.ndarray, centers: np.ndarray | None =
         Center face of each label; the piece holding it keeps the label.
         Without it (or for a label whose center lies elsewhere) the piece of
         largest area keeps it.
+    min_elements : int, default 1
+        A superfacet whose kept piece holds fewer elements is merged as a
+        stray too (into the neighbour with the longest shared border), unless
+        it has no neighbour (a connected component of the graph of its own).
+        1 merges none.
 
     Returns
     -------
@@ -83,7 +94,22 @@ def enforce_connectivity(graph, labels: np.ndarray, centers: np.ndarray | None =
     Raises
     ------
     ParameterError
-        If ``labels`` is not one integer per element.
+        If ``labels`` is not one integer per element, or ``min_elements < 1``.
+
+    Examples
+    --------
+    A strip of 8 triangles, each adjacent to the next:
+
+    >>> import numpy as np
+    >>> v = np.c_[np.r_[0:5, 0:5], np.repeat([0, 1], 5), np.zeros(10)].astype(float)
+    >>> f = np.concatenate([[[i, i + 1, i + 5], [i + 1, i + 6, i + 5]] for i in range(4)])
+    >>> labels = np.array([0, 0, 0, 1, 0, 2, 2, 2])  # 0 in two pieces, 1 a single face
+    >>> enforce_connectivity((v, f), labels, np.array([0, 3, 6]))
+    array([0, 0, 0, 1, 2, 2, 2, 2])
+    >>> enforce_connectivity((v, f), labels, np.array([0, 3, 6]), min_elements=2)
+    array([0, 0, 0, 0, 1, 1, 1, 1])
+
+    (Face 4 shares a diagonal with face 5 and a shorter edge with face 3.)
 
     Notes
     -----
@@ -94,16 +120,19 @@ def enforce_connectivity(graph, labels: np.ndarray, centers: np.ndarray | None =
     mesh); if one does, it becomes a superfacet of its own.
     """
     from ._kernels.connectivity import merge_strays, stray_borders
+    from .params import check_int
 
     g = as_element_graph(graph)
     labels = check_labels(labels, g.n_elements, per=g.element)
+    min_elements = check_int("min_elements", min_elements, lo=1)
     piece = label_components(g, labels)
     n_pieces = int(piece.max()) + 1
     piece_label = np.empty(n_pieces, dtype=np.int64)
     piece_label[piece] = labels
     k = int(labels.max()) + 1
     dense = relabel_dense(labels)
-    if n_pieces == int(dense.max()) + 1:  # one piece per label
+    count = np.bincount(piece, minlength=n_pieces)
+    if n_pieces == int(dense.max()) + 1 and count.min() >= min_elements:  # nothing to merge
         return dense
     del dense
 
@@ -122,6 +151,7 @@ def enforce_connectivity(graph, labels: np.ndarray, centers: np.ndarray | None =
     main[present[free]] = order[first[free]]
     is_main = np.zeros(n_pieces, dtype=bool)
     is_main[main[main >= 0]] = True
+    is_main &= count >= min_elements  # a tiny superfacet merges like a stray
 
     # boundary length between a stray and each adjacent piece (the rows of the strays
     # alone, entries in the order of the whole matrix's: the same sums)

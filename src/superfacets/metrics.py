@@ -15,12 +15,15 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from .boundaries import (boundary_precision, boundary_recall, near_boundary,
+                         precision_elements, precision_lengths, recall_elements, recall_lengths)
 from .elements.inputs import as_element_graph
 from .errors import InvalidMeshError, ParameterError
 from .labels import check_labels
 
 __all__ = ["Contingency", "contingency", "undersegmentation_error", "compactness",
-           "achievable_segmentation_accuracy", "boundary_recall", "mean_over_ground_truths",
+           "achievable_segmentation_accuracy", "boundary_recall", "boundary_precision",
+           "mean_over_ground_truths",
            "evaluate", "evaluate_rows", "METRICS"]
 
 #: The names of the metrics :func:`evaluate` returns, and whether lower is better.
@@ -187,77 +190,6 @@ def compactness(graph, labels) -> float:
     return float(np.mean(perim[ok] / area[ok] ** power))
 
 
-def boundary_recall(graph, labels, ground_truth, *, tolerance: int = 1) -> float:
-    """Fraction of the ground-truth boundary found by the superfacet boundaries.
-
-    A ground-truth boundary edge (shared by two faces of different segments)
-    counts as recalled when one of its two faces lies within ``tolerance``
-    face rings of a face touching a superfacet boundary; the result is the
-    recalled length over the total length. In ``[0, 1]``, higher is better;
-    1 when the boundaries coincide. A standard superpixel measure, beyond the
-    paper.
-
-    Parameters
-    ----------
-    graph : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
-    labels, ground_truth : (m,) int ndarray
-    tolerance : int, default 1
-        Face rings of slack (0: the edge's faces must touch a superfacet
-        boundary themselves).
-
-    Returns
-    -------
-    float
-        1.0 if the ground truth has no boundary.
-    """
-    g = as_element_graph(graph)
-    s = _dense(g, labels, "labels")
-    gt = _dense(g, ground_truth, "ground_truth")
-    return _recall(g, _near_boundary(g, s, tolerance), gt)
-
-
-def _near_boundary(g, s: np.ndarray, tolerance: int) -> np.ndarray:
-    """(m,) bool: elements within ``tolerance`` rings of one on a boundary of ``s``."""
-    i, j = g.pairs[:, 0], g.pairs[:, 1]
-    near = np.zeros(g.n_elements, dtype=bool)
-    cut = s[i] != s[j]
-    near[i[cut]] = True
-    near[j[cut]] = True
-    for _ in range(int(tolerance)):
-        grow = near.copy()
-        grow[j[near[i]]] = True
-        grow[i[near[j]]] = True
-        near = grow
-    return near
-
-
-def _recall(g, near: np.ndarray, gt: np.ndarray, labelled: np.ndarray | None = None) -> float:
-    i, j = g.pairs[:, 0], g.pairs[:, 1]
-    gt_edge = gt[i] != gt[j]
-    if labelled is not None:
-        gt_edge &= labelled[i] & labelled[j]
-    if not gt_edge.any():
-        return 1.0
-    length = g.lengths[gt_edge]
-    hit = near[i[gt_edge]] | near[j[gt_edge]]
-    return float(length[hit].sum() / length.sum())
-
-
-def _recall_elements(g, near: np.ndarray, gt: np.ndarray,
-                     labelled: np.ndarray | None = None) -> float:
-    """Fraction of ground-truth boundary elements that are ``near`` a superfacet boundary
-    (adjacencies with an unlabelled end, where ``labelled`` is given, are no boundary)."""
-    i, j = g.pairs[:, 0], g.pairs[:, 1]
-    cut = gt[i] != gt[j]
-    if labelled is not None:
-        cut &= labelled[i] & labelled[j]
-    on = np.zeros(g.n_elements, dtype=bool)
-    on[i[cut]] = True
-    on[j[cut]] = True
-    if not on.any():
-        return 1.0
-    return float(near[on].sum() / on.sum())
-
 
 def mean_over_ground_truths(metric: Callable[..., float], graph, labels,
                             ground_truths: Sequence[np.ndarray], **kwargs) -> float:
@@ -289,7 +221,7 @@ def mean_over_ground_truths(metric: Callable[..., float], graph, labels,
 
 def evaluate(graph, labels, ground_truths: Sequence[np.ndarray], *, tau: float = 0.05,
              tolerance: int = 1, equal_weight: bool = False,
-             ignore_label: int | None = None) -> dict:
+             ignore_label: int | None = None, precision: bool = False) -> dict:
     """Every metric of one segmentation, averaged over the ground truths.
 
     Computes one contingency table per ground truth (shared by the
@@ -323,6 +255,11 @@ def evaluate(graph, labels, ground_truths: Sequence[np.ndarray], *, tau: float =
         accuracy, and neither they nor their adjacencies count as ground-truth
         boundary. The superfacets themselves are left whole (their labelled
         part is what is measured). The compactness is unaffected.
+    precision : bool, default False
+        Also return ``boundary_precision``
+        (:func:`~superfacets.boundaries.boundary_precision`, by elements with
+        ``equal_weight``, adjacencies with an unlabelled end left out): the
+        counterpart of the recall, which alone rewards long boundaries.
 
     Returns
     -------
@@ -330,7 +267,8 @@ def evaluate(graph, labels, ground_truths: Sequence[np.ndarray], *, tau: float =
         ``undersegmentation_error`` (eq. 4, lower is better), ``compactness``
         (eq. 5, lower is better; independent of the ground truths),
         ``boundary_recall`` and ``achievable_accuracy`` (higher is better);
-        the keys of :data:`METRICS`.
+        the keys of :data:`METRICS`, and ``boundary_precision`` (higher is
+        better) with ``precision``.
 
     Raises
     ------
@@ -347,9 +285,9 @@ def evaluate(graph, labels, ground_truths: Sequence[np.ndarray], *, tau: float =
         raise InvalidMeshError("mesh has zero total area (every face is degenerate): the "
                                "metrics are area-weighted")
     s = _dense(g, labels, "labels")
-    near = _near_boundary(g, s, tolerance)
+    near = near_boundary(g, s, tolerance)
     counted = replace(g, sizes=np.ones(g.n_elements)) if equal_weight else g
-    ue, br, asa = [], [], []
+    ue, br, asa, bp = [], [], [], []
     for gt in ground_truths:
         this = counted
         labelled = None
@@ -364,17 +302,25 @@ def evaluate(graph, labels, ground_truths: Sequence[np.ndarray], *, tau: float =
         ue.append(undersegmentation_error(this, s, gt, tau=tau, table=t))
         asa.append(achievable_segmentation_accuracy(this, s, gt, table=t))
         dense_gt = _dense(g, gt, "ground_truth")
-        br.append(_recall_elements(g, near, dense_gt, labelled) if equal_weight else
-                  _recall(g, near, dense_gt, labelled))
-    return {"undersegmentation_error": float(np.mean(ue)),
-            "compactness": compactness(g, s),
-            "boundary_recall": float(np.mean(br)),
-            "achievable_accuracy": float(np.mean(asa))}
+        br.append(recall_elements(g, near, dense_gt, labelled) if equal_weight else
+                  recall_lengths(g, near, dense_gt, labelled))
+        if precision:
+            near_truth = near_boundary(g, dense_gt, tolerance, labelled)
+            bp.append(precision_elements(g, near_truth, s, labelled) if equal_weight else
+                      precision_lengths(g, near_truth, s, labelled))
+    out = {"undersegmentation_error": float(np.mean(ue)),
+           "compactness": compactness(g, s),
+           "boundary_recall": float(np.mean(br)),
+           "achievable_accuracy": float(np.mean(asa))}
+    if precision:
+        out["boundary_precision"] = float(np.mean(bp))
+    return out
 
 
 def evaluate_rows(obj, labels, ground_truths: Sequence[np.ndarray], *,
                   elements: str | None = None, n_neighbors: int = 10, tau: float = 0.05,
-                  tolerance: int = 1, ignore_label: int | None = None) -> dict:
+                  tolerance: int = 1, ignore_label: int | None = None,
+                  precision: bool = False) -> dict:
     """The metrics of labels given per input row: a mesh's faces or vertices, a cloud's points.
 
     What :func:`superfacets.segment` returns and label files hold is one
@@ -396,7 +342,7 @@ def evaluate_rows(obj, labels, ground_truths: Sequence[np.ndarray], *,
         Default: points for a cloud, faces for a mesh.
     n_neighbors : int, default 10
         The point graph's neighbours (points only).
-    tau, tolerance, ignore_label
+    tau, tolerance, ignore_label, precision
         As in :func:`evaluate`.
 
     Returns
@@ -431,7 +377,7 @@ def evaluate_rows(obj, labels, ground_truths: Sequence[np.ndarray], *,
     what = {"faces": "face", "vertices": "vertex", "points": "point"}.get(g.kind, "element")
     lab = check_labels(labels, n, "labels", per=what)[rows]
     gts = [check_labels(gt, n, "ground_truth", per=what)[rows] for gt in ground_truths]
-    out = evaluate(g, lab, gts, tau=tau, tolerance=tolerance,
+    out = evaluate(g, lab, gts, tau=tau, tolerance=tolerance, precision=precision,
                    equal_weight=g.kind != "faces", ignore_label=ignore_label)
     out["segments"] = int(np.unique(lab).size)
     return out

@@ -384,7 +384,7 @@ def evaluate_scan(scan: Scan, labels, *, tau: float = 0.05, tolerance: int = 1,
     Returns
     -------
     dict
-        ``undersegmentation_error``, ``boundary_recall``,
+        ``undersegmentation_error``, ``boundary_recall``, ``boundary_precision``,
         ``achievable_accuracy`` and ``compactness`` (an estimate on points),
         and ``segments`` (distinct labels among the valid points).
 
@@ -406,4 +406,4 @@ def evaluate_scan(scan: Scan, labels, *, tau: float = 0.05, tolerance: int = 1,
     else:
         raise ParameterError(f"against must be 'classes' or 'instances', not {against!r}")
     return evaluate_rows(scan.cloud, labels, [truth], elements="points", tau=tau,
-                         tolerance=tolerance, ignore_label=UNLABELLED)
+                         tolerance=tolerance, ignore_label=UNLABELLED, precision=True)
