@@ -24,7 +24,7 @@ from .elements.inputs import as_element_graph
 from .labels import check_labels, relabel_dense
 
 __all__ = ["boundary_recall", "boundary_precision", "near_boundary", "recall_lengths",
-           "recall_elements", "precision_lengths", "precision_elements"]
+           "recall_elements"]
 
 
 def _per_element(g, labels, what: str) -> np.ndarray:
@@ -81,6 +81,9 @@ def near_boundary(g, s: np.ndarray, tolerance: int,
 
 
 def recall_lengths(g, near: np.ndarray, gt: np.ndarray, labelled: np.ndarray | None = None) -> float:
+    """Length share of the boundary of ``gt`` with an end ``near`` (adjacencies with an
+    unlabelled end, where ``labelled`` is given, are no boundary). With the roles swapped
+    (``near`` the truth's, ``gt`` the superfacets) it is the precision."""
     i, j = g.pairs[:, 0], g.pairs[:, 1]
     gt_edge = gt[i] != gt[j]
     if labelled is not None:
@@ -94,8 +97,9 @@ def recall_lengths(g, near: np.ndarray, gt: np.ndarray, labelled: np.ndarray | N
 
 def recall_elements(g, near: np.ndarray, gt: np.ndarray,
                      labelled: np.ndarray | None = None) -> float:
-    """Fraction of ground-truth boundary elements that are ``near`` a superfacet boundary
-    (adjacencies with an unlabelled end, where ``labelled`` is given, are no boundary)."""
+    """Fraction of the elements on a boundary of ``gt`` that are ``near`` (adjacencies
+    with an unlabelled end, where ``labelled`` is given, are no boundary). With the roles
+    swapped it is the precision by elements."""
     i, j = g.pairs[:, 0], g.pairs[:, 1]
     cut = gt[i] != gt[j]
     if labelled is not None:
@@ -153,36 +157,4 @@ def boundary_precision(graph, labels, ground_truth, *, tolerance: int = 1) -> fl
     g = as_element_graph(graph)
     s = _per_element(g, labels, "labels")
     gt = _per_element(g, ground_truth, "ground_truth")
-    return precision_lengths(g, near_boundary(g, gt, tolerance), s)
-
-
-def precision_lengths(g, near_truth: np.ndarray, s: np.ndarray,
-                      labelled: np.ndarray | None = None) -> float:
-    """Length share of the boundary of ``s`` with an end ``near_truth`` (adjacencies
-    with an unlabelled end, where ``labelled`` is given, are left out)."""
-    i, j = g.pairs[:, 0], g.pairs[:, 1]
-    cut = s[i] != s[j]
-    if labelled is not None:
-        cut &= labelled[i] & labelled[j]
-    if not cut.any():
-        return 1.0
-    length = g.lengths[cut]
-    hit = near_truth[i[cut]] | near_truth[j[cut]]
-    return float(length[hit].sum() / length.sum())
-
-
-def precision_elements(g, near_truth: np.ndarray, s: np.ndarray,
-                       labelled: np.ndarray | None = None) -> float:
-    """Share of the elements on a boundary of ``s`` that are ``near_truth`` (unlabelled
-    elements and adjacencies with an unlabelled end, where ``labelled`` is given, are
-    left out)."""
-    i, j = g.pairs[:, 0], g.pairs[:, 1]
-    cut = s[i] != s[j]
-    if labelled is not None:
-        cut &= labelled[i] & labelled[j]
-    on = np.zeros(g.n_elements, dtype=bool)
-    on[i[cut]] = True
-    on[j[cut]] = True
-    if not on.any():
-        return 1.0
-    return float(near_truth[on].sum() / on.sum())
+    return recall_lengths(g, near_boundary(g, gt, tolerance), s)  # roles swapped
