@@ -127,6 +127,8 @@ def test_evaluate_one_call(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "4 superfacets, 2 ground truths" in out
     assert "undersegmentation_error 0.0000" in out and "boundary_recall         1.0000" in out
+    # three borders of equal length, one of them the true one
+    assert "boundary_precision      0.3333" in out
     bad = tmp_path / "short.seg"
     bad.write_text("0\n1\n")
     assert main(["evaluate", str(off), str(sf), str(bad)]) == 2
@@ -152,6 +154,7 @@ def test_evaluate_points_and_vertices_with_unlabelled_rows(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "3000 points, 2 superpoints, 1 ground truths" in out
     assert "undersegmentation_error 0.0000" in out and "achievable_accuracy     1.0000" in out
+    assert "boundary_precision      1.0000" in out  # its one border is the true one
     assert main(["evaluate", str(tmp_path / "scan.npy"), str(sp), str(gt)]) == 0
     assert "undersegmentation_error 0.0000" not in capsys.readouterr().out  # -1 is a class
     mesh = grid_mesh(10, 10)

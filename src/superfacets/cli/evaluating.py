@@ -21,7 +21,8 @@ def add_parsers(sub) -> None:
     e = sub.add_parser(
         "evaluate", help="metrics of a segmentation against ground truths",
         description="Print the undersegmentation error (eq. 4), compactness (eq. 5), boundary "
-                    "recall and achievable segmentation accuracy of a label file, each averaged "
+                    "recall and precision and achievable segmentation accuracy of a label file, "
+                    "each averaged "
                     "over the given ground-truth segmentations: area-weighted on the faces of "
                     "a mesh; each element counted once on its vertices (--elements vertices) "
                     "or the points of a cloud (a labelled scan).")
@@ -77,7 +78,7 @@ def cmd_evaluate(args) -> int:
     if not gts:
         raise ParameterError("give a ground truth: GT.seg files or --ground-truth-field NAME")
     m = evaluate_rows(data, labels, gts, elements=kind, n_neighbors=args.neighbors,
-                      tau=args.tau, ignore_label=args.ignore_label)
+                      tau=args.tau, ignore_label=args.ignore_label, precision=True)
     segs = "superfacets" if kind == "faces" else "superpoints"
     print(f"{Path(args.mesh).name}: {n} {kind}, {m['segments']} {segs}, "
           f"{len(gts)} ground truths")
@@ -86,5 +87,7 @@ def cmd_evaluate(args) -> int:
     print(f"compactness             {m['compactness']:.4f}  (lower is better; disk 3.545"
           f"{estimate})")
     print(f"boundary_recall         {m['boundary_recall']:.4f}  (higher is better)")
+    print(f"boundary_precision      {m['boundary_precision']:.4f}  (higher is better; read "
+          "with the recall)")
     print(f"achievable_accuracy     {m['achievable_accuracy']:.4f}  (higher is better)")
     return 0
