@@ -135,3 +135,72 @@ def test_min_elements_keeps_a_tiny_superfacet_with_no_neighbour():
     np.testing.assert_array_equal(out, labels)
     with pytest.raises(ValueError, match="min_elements"):
         enforce_connectivity((v, f), labels, min_elements=0)
+
+
+def sparse_strip_cloud():
+    """A dense unit square of points and, beside it, a strip of 60 points spaced
+    about 0.35 apart: the strip's superpoints hold one or two points each (the
+    far range of a LiDAR sweep, in small)."""
+    rng = np.random.default_rng(0)
+    dense = np.c_[rng.random((5000, 2)), np.zeros(5000)]
+    strip = np.c_[5 + 20 * rng.random((60, 1)), rng.random((60, 1)), np.zeros(60)]
+    return np.r_[dense, strip]
+
+
+def test_segment_min_elements_merges_small_superpoints_at_the_end():
+    from superfacets import segment
+    from superfacets.passes import final_centers
+
+    xyz = sparse_strip_cloud()
+    plain = segment(xyz, 200)
+    small = np.bincount(plain.labels) < 3
+    assert small.sum() > 40  # the premise: the strip's superpoints are tiny
+    merged = segment(xyz, 200, min_elements=3)
+    sizes = np.bincount(merged.labels)
+    assert sizes.min() >= 3
+    assert np.unique(merged.labels).tolist() == list(range(merged.n_segments))
+    assert merged.n_segments < plain.n_segments == 200
+    # exactly the default run's labels with the merge applied after it
+    g = plain.elements.graph
+    centers = plain.elements.index[plain.centers]
+    expected = enforce_connectivity(g, plain.element_labels, centers, min_elements=3)
+    np.testing.assert_array_equal(merged.element_labels, expected)
+    np.testing.assert_array_equal(
+        merged.centers, plain.elements.first_rows(
+            final_centers(expected, centers, g.sizes, g.positions)))
+    assert merged.params["min_elements"] == 3 and plain.params["min_elements"] == 1
+    # a superpoint of 3 points or more keeps its points together (others join it)
+    big = ~small[plain.labels]
+    pairs = np.unique(np.c_[plain.labels[big], merged.labels[big]], axis=0)
+    assert np.unique(pairs[:, 0]).size == pairs.shape[0] == np.unique(pairs[:, 1]).size
+
+
+@pytest.mark.parametrize("options, message", [
+    (dict(min_elements=0), "min_elements must be an integer >= 1"),
+    (dict(min_elements=3, enforce_connectivity=False), "enforce_connectivity=True"),
+    (dict(min_elements=3, paper=True), "does not go with min_elements"),
+])
+def test_segment_min_elements_bad_settings_are_refused(options, message):
+    from superfacets import segment
+    from superfacets.errors import ParameterError
+
+    with pytest.raises(ParameterError, match=message):
+        segment(sparse_strip_cloud(), 20, **options)
+
+
+def test_cli_min_elements(tmp_path, capsys):
+    from superfacets.cli import main
+    from superfacets.io import read_labels
+
+    np.save(tmp_path / "strip.npy", sparse_strip_cloud())
+    out = tmp_path / "strip.seg"
+    assert main(["segment", str(tmp_path / "strip.npy"), "-k", "200", "--min-elements", "3",
+                 "-o", str(out)]) == 0
+    labels = read_labels(out)
+    assert labels.shape == (5060,) and np.bincount(labels).min() >= 3
+    assert labels.max() + 1 < 200
+    capsys.readouterr()
+    assert main(["segment", str(tmp_path / "strip.npy"), "-k", "20", "--min-elements", "3",
+                 "--tiles", "2", "-o", str(tmp_path / "t.seg")]) == 2
+    assert "not available in a tiled run" in capsys.readouterr().err
+    assert not (tmp_path / "t.seg").exists()

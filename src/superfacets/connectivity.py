@@ -6,10 +6,9 @@ holding its center, else the largest by area) and merges every other piece
 into the neighbouring region with which it shares the longest boundary, as
 scikit-image's ``slic(enforce_connectivity=True)`` does for superpixels.
 With ``min_elements``, a superfacet of fewer elements goes the same way (as
-scikit-image's ``min_size_factor``): on a LiDAR sweep, centers land on
-stray points whose costly edges (long, with noisy normals) keep their
-superpoints at one or two points (``docs/superpoints.md``, "Superpoints of
-one point").
+scikit-image's ``min_size_factor``; ``segment(..., min_elements=N)`` applies
+it after a run): on a LiDAR sweep the sparse far range gets superpoints of
+one or two points (``docs/superpoints.md``, "Superpoints of one point").
 """
 
 from __future__ import annotations

@@ -139,6 +139,7 @@ class SegmentParams:
     neighbor_radius: float | None = None
     paper: bool = False
     beta: float = 0.0
+    min_elements: int = 1
 
     def as_dict(self) -> dict:
         """The parameters as a plain dict."""
@@ -302,11 +303,16 @@ def resolve(**params) -> SegmentParams:
                                        ("tol", p.tol not in (0, DEFAULTS.tol)),
                                        ("center_tol", p.center_tol is not None),
                                        ("coarsen", p.coarsen not in (None, 1)),
-                                       ("beta", p.beta not in (0, 0.0))) if on]
+                                       ("beta", p.beta not in (0, 0.0)),
+                                       ("min_elements", p.min_elements != 1)) if on]
         if extra:
             raise ParameterError(f"paper=True is the paper's method as published; it does not "
                                  f"go with {', '.join(extra)}")
         p = replace(p, tol=0.0)
+    min_elements = check_int("min_elements", p.min_elements, lo=1)
+    if min_elements > 1 and not check_bool("enforce_connectivity", p.enforce_connectivity):
+        raise ParameterError("min_elements merges small superfacets as the connectivity step "
+                             "merges stray pieces; it goes with enforce_connectivity=True")
     if p.radius is not None and p.n_segments not in (None, DEFAULTS.n_segments):
         raise ParameterError("give either n_segments or radius, not both")
     n_segments = None if p.radius is not None else (
@@ -346,7 +352,7 @@ def resolve(**params) -> SegmentParams:
         n_neighbors=check_int("n_neighbors", p.n_neighbors, lo=1, hi=MAX_NEIGHBORS),
         neighbor_radius=None if p.neighbor_radius is None else check_positive(
             "neighbor_radius", p.neighbor_radius),
-        paper=bool(p.paper), beta=_beta(p.beta, weighting))
+        paper=bool(p.paper), beta=_beta(p.beta, weighting), min_elements=min_elements)
 
 
 def _beta(beta, weighting: str) -> float:

@@ -16,7 +16,8 @@ the public functions of :mod:`superfacets.segmentation` call it) and returns a
    come once a pass changes at most ``START_TOL`` of the area, one round, and at
    most ``passes_after_for(kind)`` passes follow);
 7. with ``cleanup=True``, the boundaries re-placed (:mod:`superfacets.cleanup`);
-8. the result.
+8. with ``min_elements > 1``, superfacets of fewer elements merged into a neighbour;
+9. the result.
 """
 
 from __future__ import annotations
@@ -371,6 +372,11 @@ def _pipeline(mesh, params: SegmentParams, features, *, replay: bool, jump_cycle
                 bar.close()
         centers = final_centers(labels, centers, sizes, positions)
         timings["cleanup"] = time.perf_counter() - t
+    if p.min_elements > 1:  # small superfacets merged as stray pieces are (not the paper)
+        t = time.perf_counter()
+        labels = _enforce_connectivity(graph, labels, centers, min_elements=p.min_elements)
+        centers = final_centers(labels, centers, sizes, positions)
+        timings["connectivity"] += time.perf_counter() - t
     centers = source.first_rows(centers)
     element_labels = labels
     labels = source.to_rows(labels)
@@ -383,7 +389,8 @@ def _pipeline(mesh, params: SegmentParams, features, *, replay: bool, jump_cycle
                     enforce_connectivity=p.enforce_connectivity, cleanup=cleanup,
                     split_merge=split_merge, tol=p.tol,
                     center_tol=center_tol, coarsen=ratio,
-                    n_init_centers=init.shape[0], elements=graph.kind, beta=p.beta)
+                    n_init_centers=init.shape[0], elements=graph.kind, beta=p.beta,
+                    min_elements=p.min_elements)
     if graph.kind == "points":
         resolved.update(n_neighbors=p.n_neighbors, neighbor_radius=p.neighbor_radius)
     return SegmentationResult(labels=labels, centers=centers, n_iter=it.n_iter,

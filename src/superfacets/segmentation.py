@@ -34,7 +34,7 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
                 n_neighbors: int = _D.n_neighbors,
                 neighbor_radius: float | None = _D.neighbor_radius,
                 paper: bool = _D.paper, beta: float = _D.beta,
-                features=None) -> np.ndarray:
+                features=None, min_elements: int = _D.min_elements) -> np.ndarray:
     """Over-segment a mesh (its faces or vertices) or a point cloud into superfacets.
 
     The k-means-style method of Simari, Picciau and De Floriani (2014):
@@ -116,7 +116,7 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
         bit (tested against a straightforward implementation of the paper).
         Raises :class:`~superfacets.errors.ParameterError` with
         ``cleanup=True``, ``split_merge=True``, ``tol``, ``center_tol``,
-        ``coarsen`` or ``beta``.
+        ``coarsen``, ``beta`` or ``min_elements``.
     beta : float, default 0
         Weight of the feature term (not in the paper): ``beta *
         |e_ij| * ||f_i - f_j||`` joins eq. 3's numerator, so crossing a
@@ -129,6 +129,16 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
         One feature per input row (face, vertex or point), for ``beta > 0``.
         Default: the input's colours (a point cloud read from PLY, PCD or LAS
         with RGB, or ``PointCloud(colors=...)``).
+    min_elements : int, default 1
+        Smallest superfacet, in elements (not in the paper; as the ScanNet
+        Segmentator's ``segMinVerts`` and scikit-image's ``min_size_factor``):
+        at the end, a superfacet of fewer elements is merged into the
+        neighbour it shares the longest border with
+        (:func:`~superfacets.connectivity.enforce_connectivity`), so ``K``
+        falls by the number merged. On a LiDAR sweep, whose sparse far range
+        holds superpoints of one or two points, 3 merges 6-16 % of them at
+        ``n_segments`` = 300-3,000 (``docs/superpoints.md``, "Superpoints
+        of one point"). 1 merges none; needs ``enforce_connectivity``.
     tol : float, default 0.001
         Convergence tolerance in ``[0, 1]``: also stop once a classification
         changes the superfacet of at most this fraction of the surface area
@@ -219,7 +229,8 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
                    coarsen=coarsen,
                    progress=progress, n_threads=n_threads, elements=elements,
                    n_neighbors=n_neighbors, neighbor_radius=neighbor_radius,
-                   paper=paper, beta=beta, features=features).labels
+                   paper=paper, beta=beta, features=features,
+                   min_elements=min_elements).labels
 
 
 def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | None = _D.radius,
@@ -235,7 +246,7 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | Non
             n_neighbors: int = _D.n_neighbors,
             neighbor_radius: float | None = _D.neighbor_radius,
             paper: bool = _D.paper, beta: float = _D.beta,
-            features=None) -> SegmentationResult:
+            features=None, min_elements: int = _D.min_elements) -> SegmentationResult:
     """Superfacets with details: same parameters as :func:`superfacets`.
 
     Returns
@@ -276,7 +287,7 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | Non
                      center_tol=center_tol, coarsen=coarsen,
                    progress=progress, n_threads=n_threads, elements=elements,
                      n_neighbors=n_neighbors, neighbor_radius=neighbor_radius, paper=paper,
-                     beta=beta)
+                     beta=beta, min_elements=min_elements)
     return pipeline(mesh, params, features=features)
 
 

@@ -180,6 +180,10 @@ def add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> No
                    help="weight of the colour term: crossing a colour edge costs as crossing "
                         "a crease does (the input's RGB: PLY, PCD or LAS points); 0: off "
                         f"(default: {_D.beta:g})")
+    p.add_argument("--min-elements", type=int_arg, default=_D.min_elements, metavar="N",
+                   help="merge superfacets (superpoints) of fewer than N faces (vertices, "
+                        "points) into a neighbour at the end; the count falls by those "
+                        f"merged (default: {_D.min_elements}, none)")
     p.add_argument("--paper", action="store_true",
                    help="the paper's method as published, its labels bit for bit: its "
                         "stopping rule (--tol 0), no clean-up, no split-and-merge (the "
@@ -222,7 +226,7 @@ def method_kwargs(args) -> dict:
                 assignment=args.assignment, enforce_connectivity=not args.no_connectivity,
                 cleanup=args.cleanup, split_merge=args.split_merge, tol=args.tol, center_tol=args.center_tol,
                 coarsen=args.coarsen, progress=bool(args.progress), n_threads=args.threads,
-                paper=args.paper, beta=args.beta)
+                paper=args.paper, beta=args.beta, min_elements=args.min_elements)
 
 
 def add_engine_options(p, *, sees: str, note: str = "", prefix: str = "") -> None:

@@ -265,6 +265,9 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
     params = resolve(n_segments=n_segments, **options)
     if params.elements not in (None, "faces", "points"):
         raise ParameterError(f"a tiled run segments faces or points, not {params.elements!r}")
+    if params.min_elements > 1:  # the merge needs the whole graph, which no tile holds
+        raise ParameterError("min_elements is not available in a tiled run (where the "
+                             "input fits in memory: enforce_connectivity(..., min_elements=N))")
     check_tiles(tiles)  # before any pass over the file
     halo = HALO if halo is None else halo
     halo_distance(halo, params.window, 1.0)  # validated before any work
