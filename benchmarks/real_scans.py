@@ -26,7 +26,7 @@ Methods (the registry's, so ``superfacets experiment`` runs the same code):
   the colour term (scans with RGB only); with ``--split-merge`` also
   split-and-merge (off by default on points); with ``--min-points N`` also
   its superpoints of fewer than N points merged into a neighbour
-  (``enforce_connectivity(..., min_elements=N)``), the request raised until
+  (``segment(..., min_elements=N)``), the request raised until
   the count is reached;
 - ``graph_segmentation``: the ScanNet Segmentator's method, its threshold
   searched for k;
@@ -75,18 +75,10 @@ def run(scan, method: str, k: int, beta: float, options: dict | None = None,
     t0 = time.perf_counter()
     if method == "superfacets":  # the registry's run, with the colour weight
         options = dict(options or {})
-        min_points = options.pop("min_points", 1)
+        options["min_elements"] = options.pop("min_points", 1)
 
         def superpoints(req):
-            r = segment(scan.cloud, req, beta=beta, n_neighbors=neighbors, **options)
-            if min_points <= 1:
-                return r.labels
-            from superfacets.connectivity import enforce_connectivity
-
-            centers = r.elements.index[r.centers]  # rows -> elements
-            small = enforce_connectivity(r.elements.graph, r.element_labels, centers,
-                                         min_elements=min_points)
-            return r.elements.to_rows(small)
+            return segment(scan.cloud, req, beta=beta, n_neighbors=neighbors, **options).labels
 
         labels = _equal_count(superpoints, k)
     elif method == "graph_segmentation":  # as the registry runs them, with the neighbours
@@ -157,7 +149,7 @@ def main() -> None:
                     help="also superfacets with split-and-merge (off by default on points)")
     ap.add_argument("--min-points", type=int, default=0,
                     help="also superfacets with superpoints of fewer points merged into a "
-                         "neighbour (enforce_connectivity's min_elements), the count searched")
+                         "neighbour (segment's min_elements), the count searched")
     ap.add_argument("--csv", help="also write every row to this CSV file")
     ap.add_argument("--download", action="store_true", help="fetch missing scans first")
     a = ap.parse_args()
