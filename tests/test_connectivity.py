@@ -194,12 +194,15 @@ def test_cli_min_elements(tmp_path, capsys):
 
     np.save(tmp_path / "strip.npy", sparse_strip_cloud())
     out = tmp_path / "strip.seg"
+    assert main(["segment", str(tmp_path / "strip.npy"), "-k", "200", "-o", str(out)]) == 0
+    hint = capsys.readouterr().out  # the default names the tiny superpoints and the option
+    assert "200 superpoints" in hint and "of 1 or 2 points (--min-elements 3 merges them)" in hint
     assert main(["segment", str(tmp_path / "strip.npy"), "-k", "200", "--min-elements", "3",
                  "-o", str(out)]) == 0
     labels = read_labels(out)
     assert labels.shape == (5060,) and np.bincount(labels).min() >= 3
     assert labels.max() + 1 < 200
-    capsys.readouterr()
+    assert "--min-elements" not in capsys.readouterr().out
     assert main(["segment", str(tmp_path / "strip.npy"), "-k", "20", "--min-elements", "3",
                  "--tiles", "2", "-o", str(tmp_path / "t.seg")]) == 2
     assert "not available in a tiled run" in capsys.readouterr().err

@@ -126,7 +126,21 @@ def _summary(name: str, mesh, result, seconds: float, elements: str = "faces") -
               f"(coarse-to-fine)" if t.get("coarse_elements") and "coarse_passes" in t else "")
     swaps = f", {t['swaps']} split-and-merge swaps" if "swaps" in t else ""
     return (f"{name}: {what}, {result.n_segments} {segs}, "
-            f"{result.n_iter} iterations ({state}){coarse}{swaps}, {seconds:.2f} s")
+            f"{result.n_iter} iterations ({state}){coarse}{swaps}, {seconds:.2f} s"
+            f"{_tiny_hint(result) if elements == 'points' else ''}")
+
+
+def _tiny_hint(result) -> str:
+    """``'; N of them of 1 or 2 points ...'`` where at least 1 % of the superpoints are
+    that small (a LiDAR sweep's sparse far range) and ``min_elements`` was not given."""
+    labels = getattr(result, "element_labels", None)
+    if labels is None or (getattr(result, "params", None) or {}).get("min_elements", 1) > 1:
+        return ""
+    n = int((np.bincount(labels) < 3).sum())
+    if n == 0 or n < 0.01 * result.n_segments:
+        return ""
+    return f"; {n} of them of 1 or 2 points (--min-elements 3 merges them)"
+
 
 
 def cmd_segment(args) -> int:
