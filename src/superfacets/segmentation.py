@@ -136,7 +136,7 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
         neighbour it shares the longest border with
         (:func:`~superfacets.connectivity.enforce_connectivity`), so ``K``
         falls by the number merged. On a LiDAR sweep, whose sparse far range
-        holds superpoints of one or two points, 3 merges 5-16 % of all at
+        holds superpoints of one or two points, 3 merges 5-16 % of the superpoints at
         ``n_segments`` = 300-3,000 (``docs/superpoints.md``, "Superpoints
         of one point"). 1 merges none; needs ``enforce_connectivity``.
     tol : float, default 0.001
