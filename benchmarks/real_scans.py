@@ -2,7 +2,8 @@
 
 Usage: python benchmarks/real_scans.py [--scans NAME ...] [-k 300 1000 3000]
        [--methods superfacets graph_segmentation cut_pursuit vccs] [--beta 0 50]
-       [--neighbors 10] [--split-merge] [--min-points 3] [--csv results.csv] [--download]
+       [--neighbors 10] [--split-merge] [--min-points 3] [--content] [--csv results.csv]
+       [--download]
 
 Each scan of ``superfacets.datasets.scans.SCANS`` found in the cache
 (``$SUPERFACETS_SCANS``, default ``~/.cache/superfacets/scans``; ``--download``
@@ -150,6 +151,9 @@ def main() -> None:
     ap.add_argument("--min-points", type=int, default=0,
                     help="also superfacets with superpoints of fewer points merged into a "
                          "neighbour (segment's min_elements), the count searched")
+    ap.add_argument("--content", action="store_true",
+                    help="also superfacets with content-sensitive sizes (density=0.5, "
+                         "roughness=1)")
     ap.add_argument("--csv", help="also write every row to this CSV file")
     ap.add_argument("--download", action="store_true", help="fetch missing scans first")
     a = ap.parse_args()
@@ -188,12 +192,15 @@ def main() -> None:
                 variants = [(b, {}) for b in betas]
                 if method == "superfacets" and a.split_merge:
                     variants += [(b, {"split_merge": True}) for b in betas]
+                if method == "superfacets" and a.content:
+                    variants += [(0.0, {"density": 0.5, "roughness": 1.0})]
                 if method == "superfacets" and a.min_points > 1:
                     variants += [(0.0, {"min_points": a.min_points})]
                 for beta, options in variants:
                     r = run(scan, method, k, beta, options, a.neighbors)
                     label = method + (f" beta={beta:g}" if beta else "") + \
                         (" split-and-merge" if options.get("split_merge") else "") + \
+                        (" content" if "density" in options else "") + \
                         (f" min {options['min_points']} points" if "min_points" in options
                          else "")
                     print(f"| {k} | {label} | {r['undersegmentation_error']:.4f} | "

@@ -33,7 +33,7 @@ LAYERS = (
      "superfacets.passes", "superfacets.initialization", "superfacets.multilevel",
      "superfacets.connectivity", "superfacets.cleanup", "superfacets.splitmerge",
      "superfacets.boundaries", "superfacets.metrics", "superfacets.colors",
-     "superfacets.adjacency",
+     "superfacets.adjacency", "superfacets.adaptive",
      "superfacets.hierarchy"),
     # the method, one run
     ("superfacets.pipeline", "superfacets.segmentation", "superfacets.scenes",

@@ -105,7 +105,10 @@ def farthest_point_centers(graph, n_segments: int, *, every_piece: bool = False)
 
     The first center is :func:`first_center`; each next one is the element
     whose position has the largest Euclidean distance to its nearest chosen
-    center. With ``every_piece`` (beyond the paper), every connected piece
+    center (with ``graph.scale2``, a content-sensitive run of
+    :mod:`superfacets.adaptive`, that distance times ``sqrt(scale2)`` of the
+    element: centers closer together where it is large). With ``every_piece``
+    (beyond the paper), every connected piece
     of the graph gets a center within the ``k``: the paper's first ``L``
     centers, ``L`` the largest for which they and one seed
     (:func:`piece_seeds`) in each piece they missed make at most ``k``, then
@@ -149,11 +152,18 @@ def farthest_point_centers(graph, n_segments: int, *, every_piece: bool = False)
     out = np.empty(k, dtype=np.int64)
     c = np.ascontiguousarray(g.positions)
     m = c.shape[0]
+    scale2 = g.scale2  # content-sensitive runs (superfacets.adaptive); None: the paper's
     if m * k < _BLOCKED_MIN_WORK:
-        farthest_point(c, k, first_center(g), out)
+        farthest_point(c, k, first_center(g), out, scale2)
     else:  # same result; each new center visits only the grid cells it can change
         cells = max(2, round(m ** (1 / 3)))  # cells^3 ~ m: the count array stays O(m)
-        farthest_point_blocked(c, k, first_center(g), out, *spatial_blocks(c, cells))
+        order, bstart, bcenter, bradius = spatial_blocks(c, cells)
+        if scale2 is None:
+            farthest_point_blocked(c, k, first_center(g), out, order, bstart, bcenter, bradius)
+        else:
+            s2 = np.ascontiguousarray(scale2[order])
+            farthest_point_blocked(c, k, first_center(g), out, order, bstart, bcenter, bradius,
+                                   s2, np.maximum.reduceat(s2, bstart[:-1]))
     piece, n_pieces = _pieces(g) if every_piece else (None, 1)
     if n_pieces <= 1:
         return out

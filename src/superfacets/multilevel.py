@@ -201,6 +201,10 @@ def coarsen(graph: ElementGraph, weights: np.ndarray, csr_w: np.ndarray,
     for a in range(3):
         pos[:, a] = np.bincount(cluster, weights=sizes * positions[:, a], minlength=n_c) / safe
         nor[:, a] = np.bincount(cluster, weights=sizes * graph.normals[:, a], minlength=n_c)
+    scale2 = None  # content-sensitive runs: the clusters' size-weighted mean scale
+    if graph.scale2 is not None:
+        scale2 = np.bincount(cluster, weights=sizes * graph.scale2, minlength=n_c) / safe
+        scale2[tot <= 0] = graph.scale2[seeds[tot <= 0]]
     empty = tot <= 0  # zero-size clusters: the seed's own position
     pos[empty] = positions[seeds[empty]]
     norm = np.linalg.norm(nor, axis=1)
@@ -215,7 +219,8 @@ def coarsen(graph: ElementGraph, weights: np.ndarray, csr_w: np.ndarray,
         kind=graph.kind, positions=pos, sizes=tot, normals=nor, centroid=graph.centroid,
         lower=graph.lower, diagonal=graph.diagonal, pairs=pairs, indptr=indptr,
         indices=indices, dual_edge=dual_edge, lengths=len_c,
-        boundary_elements=np.empty(0, dtype=np.int64), boundary_lengths=np.empty(0))
+        boundary_elements=np.empty(0, dtype=np.int64), boundary_lengths=np.empty(0),
+        scale2=scale2)
     return Coarsening(graph=coarse, weights=np.ascontiguousarray(w_c[dual_edge]),
                       cluster=cluster, seeds=seeds)
 

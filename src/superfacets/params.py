@@ -71,8 +71,9 @@ def better_method(params: "SegmentParams", kind: str) -> tuple[bool, bool]:
 
 def assignment_of(params: "SegmentParams", kind: str) -> str:
     """The classification of a run on elements ``kind``: as given, else (None)
-    ``'exact'`` on vertices with the paper's weighting (unless ``paper``), the
-    paper's ``'bounded'`` everywhere else.
+    ``'exact'`` on vertices with the paper's weighting (unless ``paper``) and in
+    content-sensitive runs (``density`` or ``roughness``), the paper's
+    ``'bounded'`` everywhere else.
 
     On vertices the exact nearest-center search (one multi-source search per
     pass, every element settled once, where the bounded windows settle each
@@ -80,7 +81,9 @@ def assignment_of(params: "SegmentParams", kind: str) -> str:
     few passes, for about a third of their time; that is what brings the
     better method to the paper's time there. On faces the windows' bound on a
     superfacet's extent keeps them more compact (``docs/cleanup.md``, "The
-    default on vertices, at the paper's speed").
+    default on vertices, at the paper's speed"). Content-sensitive superfacets
+    differ in extent by design, which one window radius does not fit: the
+    elements no window reaches would seed superfacets beyond the count.
 
     Examples
     --------
@@ -90,7 +93,7 @@ def assignment_of(params: "SegmentParams", kind: str) -> str:
     if params.assignment is not None:
         return params.assignment
     auto = kind == "vertices" and params.weighting == "paper" and not params.paper
-    return "exact" if auto else "bounded"
+    return "exact" if auto or params.density > 0 or params.roughness > 0 else "bounded"
 
 
 #: ``center_tol`` when ``tol > 0`` and none is given (fraction of the superfacet radius).
@@ -140,6 +143,8 @@ class SegmentParams:
     paper: bool = False
     beta: float = 0.0
     min_elements: int = 1
+    density: float = 0.0
+    roughness: float = 0.0
 
     def as_dict(self) -> dict:
         """The parameters as a plain dict."""
@@ -304,7 +309,9 @@ def resolve(**params) -> SegmentParams:
                                        ("center_tol", p.center_tol is not None),
                                        ("coarsen", p.coarsen not in (None, 1)),
                                        ("beta", p.beta not in (0, 0.0)),
-                                       ("min_elements", p.min_elements != 1)) if on]
+                                       ("min_elements", p.min_elements != 1),
+                                       ("density", p.density not in (0, 0.0)),
+                                       ("roughness", p.roughness not in (0, 0.0))) if on]
         if extra:
             raise ParameterError(f"paper=True is the paper's method as published; it does not "
                                  f"go with {', '.join(extra)}")
@@ -352,7 +359,9 @@ def resolve(**params) -> SegmentParams:
         n_neighbors=check_int("n_neighbors", p.n_neighbors, lo=1, hi=MAX_NEIGHBORS),
         neighbor_radius=None if p.neighbor_radius is None else check_positive(
             "neighbor_radius", p.neighbor_radius),
-        paper=bool(p.paper), beta=_beta(p.beta, weighting), min_elements=min_elements)
+        paper=bool(p.paper), beta=_beta(p.beta, weighting), min_elements=min_elements,
+        density=check_number("density", p.density, 0.0, 1.0),
+        roughness=check_number("roughness", p.roughness, 0.0, MAX_WEIGHT_FACTOR))
 
 
 def _beta(beta, weighting: str) -> float:

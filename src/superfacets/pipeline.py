@@ -5,7 +5,8 @@ the public functions of :mod:`superfacets.segmentation` call it) and returns a
 :class:`SegmentationResult`:
 
 1. parameters validated (:func:`superfacets.params.resolve`), before any work;
-2. element graph (the face graph of the mesh, cached on it);
+2. element graph (the face graph of the mesh, cached on it); with ``density`` or
+   ``roughness``, its sizes stretched (:mod:`superfacets.adaptive`);
 3. weights (paper eqs. 1-3, or Shlafman's eq. 6);
 4. initial centers (farthest point, flood or grid);
 5. passes of (classify, update) until no center moves or ``max_iter``
@@ -27,6 +28,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from .adaptive import adapted_graph
 from .classify import make_classifier
 from .cleanup import clean_boundaries
 from .connectivity import enforce_connectivity as _enforce_connectivity
@@ -259,6 +261,8 @@ def _pipeline(mesh, params: SegmentParams, features, *, replay: bool, jump_cycle
     source = elements_of(mesh, p.elements, n_neighbors=p.n_neighbors,
                          neighbor_radius=p.neighbor_radius)
     graph = source.graph
+    if p.density > 0 or p.roughness > 0:  # content-sensitive sizes (not in the paper)
+        graph = adapted_graph(graph, p.density, p.roughness)
     t_graph = time.perf_counter() - t
     k, r = superfacet_size(p, graph.area, graph.diagonal, graph.n_elements, graph.kind)
     if n_centers is not None:
@@ -390,7 +394,7 @@ def _pipeline(mesh, params: SegmentParams, features, *, replay: bool, jump_cycle
                     split_merge=split_merge, tol=p.tol,
                     center_tol=center_tol, coarsen=ratio,
                     n_init_centers=init.shape[0], elements=graph.kind, beta=p.beta,
-                    min_elements=p.min_elements)
+                    min_elements=p.min_elements, density=p.density, roughness=p.roughness)
     if graph.kind == "points":
         resolved.update(n_neighbors=p.n_neighbors, neighbor_radius=p.neighbor_radius)
     return SegmentationResult(labels=labels, centers=centers, n_iter=it.n_iter,

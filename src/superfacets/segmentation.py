@@ -34,7 +34,8 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
                 n_neighbors: int = _D.n_neighbors,
                 neighbor_radius: float | None = _D.neighbor_radius,
                 paper: bool = _D.paper, beta: float = _D.beta,
-                features=None, min_elements: int = _D.min_elements) -> np.ndarray:
+                features=None, min_elements: int = _D.min_elements,
+                density: float = _D.density, roughness: float = _D.roughness) -> np.ndarray:
     """Over-segment a mesh (its faces or vertices) or a point cloud into superfacets.
 
     The k-means-style method of Simari, Picciau and De Floriani (2014):
@@ -116,7 +117,7 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
         bit (tested against a straightforward implementation of the paper).
         Raises :class:`~superfacets.errors.ParameterError` with
         ``cleanup=True``, ``split_merge=True``, ``tol``, ``center_tol``,
-        ``coarsen``, ``beta`` or ``min_elements``.
+        ``coarsen``, ``beta``, ``min_elements``, ``density`` or ``roughness``.
     beta : float, default 0
         Weight of the feature term (not in the paper): ``beta *
         |e_ij| * ||f_i - f_j||`` joins eq. 3's numerator, so crossing a
@@ -139,6 +140,21 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
         holds superpoints of one or two points, 3 merges 5-16 % of the superpoints at
         ``n_segments`` = 300-3,000 (``docs/superpoints.md``, "Superpoints
         of one point"). 1 merges none; needs ``enforce_connectivity``.
+    density : float, default 0
+        Content-sensitive sizes (not in the paper; :mod:`superfacets.adaptive`):
+        exponent ``q`` in ``[0, 1]`` by which superfacets follow the density of
+        the elements: 0 gives superfacets of equal area (the paper), 1 of equal
+        numbers of elements (points), between them ``a_i^(1-q)`` times the
+        median size's ``q``-th power as each element's size; the first centers
+        are placed by farthest points with distances stretched to match.
+    roughness : float, default 0
+        Content-sensitive sizes (not in the paper): each element's length
+        scale multiplied by ``1 + roughness * rho``, ``rho`` the mean angle in
+        radians between neighbouring normals there (smoothed), so rough places
+        (vegetation, clutter, folds) get more, smaller superfacets. On real
+        scans ``density=0.5, roughness=1`` lowered the undersegmentation error
+        by 6-34 % in all 15 settings measured (``docs/superpoints.md``,
+        "Content-sensitive superpoints").
     tol : float, default 0.001
         Convergence tolerance in ``[0, 1]``: also stop once a classification
         changes the superfacet of at most this fraction of the surface area
@@ -230,7 +246,7 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
                    progress=progress, n_threads=n_threads, elements=elements,
                    n_neighbors=n_neighbors, neighbor_radius=neighbor_radius,
                    paper=paper, beta=beta, features=features,
-                   min_elements=min_elements).labels
+                   min_elements=min_elements, density=density, roughness=roughness).labels
 
 
 def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | None = _D.radius,
@@ -246,7 +262,8 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | Non
             n_neighbors: int = _D.n_neighbors,
             neighbor_radius: float | None = _D.neighbor_radius,
             paper: bool = _D.paper, beta: float = _D.beta,
-            features=None, min_elements: int = _D.min_elements) -> SegmentationResult:
+            features=None, min_elements: int = _D.min_elements,
+                density: float = _D.density, roughness: float = _D.roughness) -> SegmentationResult:
     """Superfacets with details: same parameters as :func:`superfacets`.
 
     Returns
@@ -287,7 +304,8 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | Non
                      center_tol=center_tol, coarsen=coarsen,
                    progress=progress, n_threads=n_threads, elements=elements,
                      n_neighbors=n_neighbors, neighbor_radius=neighbor_radius, paper=paper,
-                     beta=beta, min_elements=min_elements)
+                     beta=beta, min_elements=min_elements, density=density,
+                     roughness=roughness)
     return pipeline(mesh, params, features=features)
 
 

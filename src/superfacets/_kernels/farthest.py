@@ -7,9 +7,10 @@ _INF = np.inf
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _nearest_so_far(centroids, mind, f, cx, cy, cz):
+def _nearest_so_far(centroids, mind, f, cx, cy, cz, scale2):
     """Lower ``mind[f]`` to the squared distance from the centroid of ``f`` to
-    ``(cx, cy, cz)`` if nearer; return it (negative: ``f`` is a center)."""
+    ``(cx, cy, cz)`` (times ``scale2[f]`` unless it is None) if nearer; return
+    it (negative: ``f`` is a center)."""
     mf = mind[f]
     if mf < 0.0:
         return mf
@@ -17,6 +18,8 @@ def _nearest_so_far(centroids, mind, f, cx, cy, cz):
     dy = centroids[f, 1] - cy
     dz = centroids[f, 2] - cz
     d = dx * dx + dy * dy + dz * dz
+    if scale2 is not None:
+        d *= scale2[f]
     if d < mf:
         mind[f] = d
         return d
@@ -24,12 +27,13 @@ def _nearest_so_far(centroids, mind, f, cx, cy, cz):
 
 
 @njit(cache=True, error_model="numpy")
-def farthest_point(centroids, k, first, out):
+def farthest_point(centroids, k, first, out, scale2=None):
     """Iterative farthest point sampling in O(m k) with a running minimum.
 
     ``out[0] = first``; each next entry is the face whose centroid has the
     largest Euclidean distance to its nearest chosen center (ties: lowest
-    index). A chosen face is never chosen again.
+    index), that distance multiplied by ``sqrt(scale2[f])`` when ``scale2``
+    is given (content-sensitive sampling). A chosen face is never chosen again.
     """
     m = centroids.shape[0]
     mind = np.full(m, _INF)
@@ -43,7 +47,7 @@ def farthest_point(centroids, k, first, out):
         best = -1.0
         nxt = -1
         for f in range(m):
-            mf = _nearest_so_far(centroids, mind, f, cx, cy, cz)
+            mf = _nearest_so_far(centroids, mind, f, cx, cy, cz, scale2)
             if mf < 0.0:
                 continue
             if mf > best:
@@ -137,8 +141,12 @@ def spatial_blocks(centroids, cells_per_axis):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def farthest_point_blocked(centroids, k, first, out, order, bstart, bcenter, bradius):
+def farthest_point_blocked(centroids, k, first, out, order, bstart, bcenter, bradius,
+                           scale2=None, bscale2=None):
     """:func:`farthest_point`, skipping the blocks a new center cannot change.
+
+    ``scale2`` (optional) is :func:`farthest_point`'s, listed in block order
+    (``scale2[order]``), and ``bscale2`` its largest value in each block.
 
     Same output, ties included. Each face keeps the squared distance to its
     nearest chosen center; each block of :func:`spatial_blocks` keeps the
@@ -163,6 +171,7 @@ def farthest_point_blocked(centroids, k, first, out, order, bstart, bcenter, bra
     mind = np.full(m, _INF)
     bmax = np.full(nb, _INF)
     barg = np.empty(nb, dtype=np.int64)
+
     home = np.empty(m, dtype=np.int64)  # block of each face
     for b in range(nb):
         barg[b] = m
@@ -186,12 +195,15 @@ def farthest_point_blocked(centroids, k, first, out, order, bstart, bcenter, bra
                 dz = bcenter[b, 2] - cz
                 dc = np.sqrt(dx * dx + dy * dy + dz * dz)
                 lb = dc - bradius[b] - 1e-9 * (dc + bradius[b])
-                if lb > 0.0 and lb * lb >= bmax[b]:
+                lb2 = lb * lb
+                if scale2 is not None:
+                    lb2 *= bscale2[b]
+                if lb > 0.0 and lb2 >= bmax[b]:
                     continue  # every face is at least as near to an earlier center
             best = -1.0
             arg = m
             for j in range(bstart[b], bstart[b + 1]):
-                mf = _nearest_so_far(pos, mind, j, cx, cy, cz)
+                mf = _nearest_so_far(pos, mind, j, cx, cy, cz, scale2)
                 if mf < 0.0:
                     continue
                 f = order[j]

@@ -184,6 +184,14 @@ def add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> No
                    help="merge superfacets (superpoints) of fewer than N faces (vertices, "
                         "points) into a neighbour at the end; the count falls by those "
                         f"merged (default: {_D.min_elements}, none)")
+    p.add_argument("--density", type=float_arg, default=_D.density, metavar="Q",
+                   help="content-sensitive sizes: 0 superfacets of equal area (the paper), "
+                        "1 of equal numbers of elements; 0.5 suits LiDAR and RGB-D scans "
+                        f"(default: {_D.density:g})")
+    p.add_argument("--roughness", type=float_arg, default=_D.roughness, metavar="C",
+                   help="content-sensitive sizes: smaller superfacets where neighbouring "
+                        "normals turn (C per radian of mean angle); 1 suits scans "
+                        f"(default: {_D.roughness:g})")
     p.add_argument("--paper", action="store_true",
                    help="the paper's method as published, its labels bit for bit: its "
                         "stopping rule (--tol 0), no clean-up, no split-and-merge (the "
@@ -226,7 +234,8 @@ def method_kwargs(args) -> dict:
                 assignment=args.assignment, enforce_connectivity=not args.no_connectivity,
                 cleanup=args.cleanup, split_merge=args.split_merge, tol=args.tol, center_tol=args.center_tol,
                 coarsen=args.coarsen, progress=bool(args.progress), n_threads=args.threads,
-                paper=args.paper, beta=args.beta, min_elements=args.min_elements)
+                paper=args.paper, beta=args.beta, min_elements=args.min_elements,
+                density=args.density, roughness=args.roughness)
 
 
 def add_engine_options(p, *, sees: str, note: str = "", prefix: str = "") -> None:

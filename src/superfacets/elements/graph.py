@@ -179,6 +179,10 @@ class ElementGraph:
         The length that scales the angular term of the paper's weights (eq. 2)
         when it differs from ``lengths`` (vertices, points: the distance
         between the two elements); see :attr:`span`.
+    scale2 : (n,) float64 ndarray or None
+        Content-sensitive runs (:mod:`superfacets.adaptive`): the squared scale of
+        each element, by which the farthest-point centers multiply squared
+        distances; None: 1.
     terms_of : callable or None
         ``terms_of(graph, sl) -> (geo, cos, concave)`` for a slice of the
         pairs: the :class:`AdjacencyTerms` of those adjacencies.
@@ -206,6 +210,7 @@ class ElementGraph:
     edges: np.ndarray | None = None
     boundary_edges: np.ndarray | None = None
     spans: np.ndarray | None = None
+    scale2: np.ndarray | None = None
     terms_of: Callable[["ElementGraph", slice], tuple] | None = field(default=None, repr=False)
     rebuild: Mapping[str, Callable[["ElementGraph"], dict]] = field(default_factory=dict,
                                                                     repr=False)

@@ -265,9 +265,10 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
     params = resolve(n_segments=n_segments, **options)
     if params.elements not in (None, "faces", "points"):
         raise ParameterError(f"a tiled run segments faces or points, not {params.elements!r}")
-    if params.min_elements > 1:  # the merge needs the whole graph, which no tile holds
-        raise ParameterError("min_elements is not available in a tiled run (where the "
-                             "input fits in memory: enforce_connectivity(..., min_elements=N))")
+    whole = [n for n in ("min_elements", "density", "roughness") if getattr(params, n) != getattr(_D, n)]
+    if whole:  # the merge, the median size, the roughness: the whole graph, which no tile holds
+        raise ParameterError(f"{' and '.join(whole)}: not available in a tiled run (where the "
+                             "input fits in memory, segment() takes it)")
     check_tiles(tiles)  # before any pass over the file
     halo = HALO if halo is None else halo
     halo_distance(halo, params.window, 1.0)  # validated before any work
@@ -416,9 +417,8 @@ def _gathered(outs: list, params) -> tuple[np.ndarray, np.ndarray]:
     rows, pos = rows[order], pos[order]
     if params.radius is None and params.init == "farthest":
         from ..tiling import trim_centers
-
         keep = trim_centers(pos, params.n_segments)
-        rows, pos = rows[keep], pos[keep]
+        return rows[keep], pos[keep]
     return rows, pos
 
 
