@@ -268,7 +268,8 @@ def _run_vsa(mesh, n_segments, *, cache, seed, **params):
 _SF_DEFAULTS = dict(alpha=DEFAULTS.alpha, eta_convex=DEFAULTS.eta_convex, init=INITS[0],
                     window=DEFAULTS.window, max_iter=DEFAULTS.max_iter, tol=DEFAULTS.tol,
                     center_tol="auto", coarsen="auto", cleanup="auto",
-                    split_merge="auto", paper=DEFAULTS.paper)
+                    split_merge="auto", paper=DEFAULTS.paper, density=DEFAULTS.density,
+                    roughness=DEFAULTS.roughness)
 register_method(
     "superfacets", _run_superfacets, defaults=_SF_DEFAULTS,
     sweep={"alpha": DEFAULT_ALPHAS},
