@@ -196,7 +196,8 @@ def test_cli_min_elements(tmp_path, capsys):
     out = tmp_path / "strip.seg"
     assert main(["segment", str(tmp_path / "strip.npy"), "-k", "200", "-o", str(out)]) == 0
     hint = capsys.readouterr().out  # the default names the tiny superpoints and the option
-    assert "200 superpoints" in hint and "of 1 or 2 points (--min-elements 3 merges them)" in hint
+    assert "200 superpoints" in hint and ("of 1 or 2 points (--min-elements 3 merges them; "
+                                          "--density 0.5 sizes superpoints") in hint
     assert main(["segment", str(tmp_path / "strip.npy"), "-k", "200", "--min-elements", "3",
                  "-o", str(out)]) == 0
     labels = read_labels(out)

@@ -132,14 +132,17 @@ def _summary(name: str, mesh, result, seconds: float, elements: str = "faces") -
 
 def _tiny_hint(result) -> str:
     """``'; N of them of 1 or 2 points ...'`` where at least 1 % of the superpoints are
-    that small (a LiDAR sweep's sparse far range) and ``min_elements`` was not given."""
+    that small (a LiDAR sweep's sparse far range) and ``min_elements`` was not given;
+    it names the option that merges them and, unless given, ``--density``."""
     labels = getattr(result, "element_labels", None)
     if labels is None or (getattr(result, "params", None) or {}).get("min_elements", 1) > 1:
         return ""
     n = int((np.bincount(labels) < 3).sum())
     if n == 0 or n < 0.01 * result.n_segments:
         return ""
-    return f"; {n} of them of 1 or 2 points (--min-elements 3 merges them)"
+    density = "" if (result.params or {}).get("density", 0) > 0 else \
+        "; --density 0.5 sizes superpoints by the points' density"
+    return f"; {n} of them of 1 or 2 points (--min-elements 3 merges them{density})"
 
 
 
