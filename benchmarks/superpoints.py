@@ -1,6 +1,6 @@
 """Speed of superpoints: vertices, a million points, the real RGB-D scans.
 
-Usage: python benchmarks/superpoints.py [--repeat 3] [--million 1000000]
+Usage: python benchmarks/superpoints.py [--repeat 3] [--million 1000000] [--content]
 
 Rows (the fastest of ``--repeat`` runs; each row in a fresh process, so peak
 memory is its own):
@@ -10,7 +10,8 @@ memory is its own):
   segMinVerts = 20) in the same process, each from a freshly read mesh (the
   vertex graph included);
 - ``--million`` points sampled uniformly on the horse, k = 500, end to end
-  in process (point graph, normals, the method);
+  in process (point graph, normals, the method); with ``--content`` also the
+  same with content-sensitive sizes (``density=0.5, roughness=1``);
 - each real scan of ``../shared/data/clouds``: the command line
   ``superfacets segment SCAN.pcd -k 150 -o OUT.seg`` in a new process
   (start-up and reading included), and in process.
@@ -59,7 +60,7 @@ def row_bunny(repeat: int) -> dict:
                 peak_mib=_peak_mib(), **best)
 
 
-def row_million(n: int, repeat: int) -> dict:
+def row_million(n: int, repeat: int, content: bool = False) -> dict:
     from superfacets import read_mesh, superpoints
     from superfacets.datasets.sampling import sample_points
 
@@ -67,10 +68,11 @@ def row_million(n: int, repeat: int) -> dict:
     best = None
     for _ in range(repeat):
         t = time.perf_counter()
-        labels = superpoints(pts, 500)
+        labels = superpoints(pts, 500, **(dict(density=0.5, roughness=1.0) if content else {}))
         s = time.perf_counter() - t
         best = s if best is None else min(best, s)
-    return dict(row=f"{n:,} points (horse)", elements=n, segments=int(labels.max()) + 1,
+    return dict(row=f"{n:,} points (horse)" + (", content" if content else ""), elements=n,
+                segments=int(labels.max()) + 1,
                 superfacets_s=best, peak_mib=_peak_mib())
 
 
@@ -98,8 +100,8 @@ def child(args) -> None:
     kind, _, arg = args.one.partition(":")
     if kind == "bunny":
         out = row_bunny(args.repeat)
-    elif kind == "million":
-        out = row_million(int(arg), args.repeat)
+    elif kind in ("million", "content"):
+        out = row_million(int(arg), args.repeat, kind == "content")
     else:
         out = row_scan(Path(arg), args.repeat)
     print(json.dumps(out))
@@ -109,11 +111,14 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--million", type=int, default=1_000_000)
+    ap.add_argument("--content", action="store_true",
+                    help="also the million points with density=0.5, roughness=1")
     ap.add_argument("--one", default=None, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.one:
         return child(args)
     jobs = ["bunny", f"million:{args.million}"]
+    jobs += [f"content:{args.million}"] if args.content else []
     jobs += [f"scan:{p}" for p in sorted((SHARED / "clouds").glob("*.pcd"))]
     rows = []
     for job in jobs:
