@@ -108,7 +108,7 @@ def content_scale(graph: ElementGraph, density: float = 0.0, roughness: float = 
     >>> from superfacets.cloud import PointCloud
     >>> from superfacets.elements.points import point_graph
     >>> x = np.r_[np.linspace(0, 1, 50), np.linspace(2, 6, 50)]   # dense, then sparse
-    >>> g = point_graph(PointCloud(np.c_[x, np.zeros((100, 2))] + [0, 0, 0]), 4).graph
+    >>> g = point_graph(PointCloud(np.c_[x, np.zeros((100, 2))]), 4).graph
     >>> s = content_scale(g, density=1.0)
     >>> bool(s[g.positions[:, 0] < 1].mean() > s[g.positions[:, 0] > 2].mean())
     True

@@ -171,7 +171,6 @@ def farthest_point_blocked(centroids, k, first, out, order, bstart, bcenter, bra
     mind = np.full(m, _INF)
     bmax = np.full(nb, _INF)
     barg = np.empty(nb, dtype=np.int64)
-
     home = np.empty(m, dtype=np.int64)  # block of each face
     for b in range(nb):
         barg[b] = m
