@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from superfacets import segment
-from superfacets.adaptive import adapted_graph, content_scale, roughness_of
+from superfacets.adaptive import adapted_graph, content_scale, roughness_of, window_factors
 from superfacets.cloud import PointCloud
 from superfacets.elements.points import point_graph
 from superfacets.errors import ParameterError
@@ -90,6 +90,29 @@ def test_density_puts_the_superpoints_where_the_points_are():
     assert superpoints_on_left(count.labels, pts, 40) >= 30
     sizes = np.bincount(count.labels)
     assert sizes.max() < 3 * np.median(sizes)  # about equal point counts
+
+
+def test_bounded_windows_follow_the_scale():
+    """With the paper's windows each center's window is scaled by its superpoint's
+    extent, so the count asked comes back, placed by density (with one window for
+    all, points no window reached seeded 17 superpoints beyond it: 57 for 40)."""
+    pts = two_density_plane()
+    r = segment(PointCloud(pts), 40, density=1.0, assignment="bounded")
+    assert r.params["assignment"] == "bounded" and r.n_segments == 40
+    assert superpoints_on_left(r.labels, pts, 40) >= 30
+
+
+def test_window_factors_are_the_smoothed_inverse_squared_scale():
+    g = point_graph(PointCloud(two_density_plane()), 8).graph
+    assert window_factors(g).shape == (0,)
+    a = adapted_graph(g, 1.0, 0.0)
+    assert np.allclose(window_factors(a, rounds=0), 1.0 / a.scale2)
+    w = window_factors(a)
+    left = g.positions[:, 0] < 0.45
+    right = g.positions[:, 0] > 0.55
+    # equal point counts: the sparse half's superpoints span sqrt(8) times as far
+    assert 5 < np.median(w[right]) / np.median(w[left]) < 11
+    assert w[left].std() < (1.0 / a.scale2[left]).std()  # smoothed
 
 
 def test_roughness_puts_more_superpoints_on_the_rough_half():

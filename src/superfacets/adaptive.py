@@ -22,7 +22,9 @@ The run then uses the stretched sizes ``a_i s_i^d`` everywhere it reads a size
 (``r``, the center update, the swaps and the clean-up) and places its first
 centers by farthest points with each element's distance multiplied by ``s_i``
 (:func:`superfacets.initialization.farthest_point_centers` reads
-``ElementGraph.scale2 = s^2``). Both 0 (the default) change nothing.
+``ElementGraph.scale2 = s^2``); the paper's bounded classification, where a
+run asks for it (``assignment='bounded'``), gives each center a window of
+``2 r / s`` (:func:`window_factors`). Both 0 (the default) change nothing.
 ``docs/superpoints.md``, "Content-sensitive superpoints", has the measurements.
 """
 
@@ -34,10 +36,13 @@ import numpy as np
 
 from .elements.graph import ElementGraph
 
-__all__ = ["roughness_of", "content_scale", "adapted_graph"]
+__all__ = ["roughness_of", "content_scale", "adapted_graph", "window_factors"]
 
 #: Rounds of neighbour averaging of the roughness.
 SMOOTH_ROUNDS = 2
+
+#: Rounds of neighbour averaging of the window factors (:func:`window_factors`).
+WINDOW_ROUNDS = 4
 
 
 def _neighbour_mean(graph: ElementGraph, x: np.ndarray) -> np.ndarray:
@@ -139,3 +144,38 @@ def adapted_graph(graph: ElementGraph, density: float, roughness: float) -> Elem
     d = 3 if graph.kind == "cells" else 2
     return replace(graph, sizes=np.ascontiguousarray(graph.sizes * s ** d),
                    scale2=np.ascontiguousarray(s * s))
+
+
+def window_factors(graph: ElementGraph, rounds: int = WINDOW_ROUNDS) -> np.ndarray:
+    """Factor of each element's squared classification window: ``1 / s^2``,
+    averaged ``rounds`` times with the neighbours' values; empty without
+    ``graph.scale2`` (the paper's run: one window for all).
+
+    A stretched superfacet of stretched area ``pi r^2`` spans about ``r / s``
+    on the surface, so a center on element ``i`` expands within ``window * r
+    / s_i`` (:class:`superfacets.classify.Classifier`). The sizes of single
+    points are noisy (a point a quarter of its neighbours' size would get half
+    their window), and elements no window reaches seed superfacets beyond the
+    count: on a plane of 6,000 + 750 points at ``density=1``, ``k = 40``, the
+    windows of the points' own factors returned 51 superpoints, averaged
+    twice 41, four times 40.
+
+    Returns
+    -------
+    (n,) float64 ndarray, or (0,) float64 ndarray
+        Unitless, > 0.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.elements.inputs import as_element_graph
+    >>> g = as_element_graph(trimesh.creation.box())
+    >>> window_factors(g).shape, window_factors(adapted_graph(g, 0.0, 1.0)).round(4)[:2]   # 1 / (1 + pi / 3)^2
+    ((0,), array([0.2386, 0.2386]))
+    """
+    if graph.scale2 is None:
+        return np.empty(0)
+    w = 1.0 / graph.scale2
+    for _ in range(rounds):
+        w = _neighbour_mean(graph, w)
+    return np.ascontiguousarray(w)

@@ -27,6 +27,7 @@ import numpy as np
 
 from ._kernels import expand as _k
 from ._kernels.exact import classify_exact
+from .adaptive import window_factors
 from .expansion import Workspaces, with_room
 from .params import ASSIGNMENTS, check_choice
 
@@ -47,7 +48,9 @@ class Classifier:
     weights : (2 e,) float64 ndarray
         Weight of each CSR entry of ``graph``.
     window_r2 : float
-        Squared window radius ``(window * r)^2`` of the bounded expansions.
+        Squared window radius ``(window * r)^2`` of the bounded expansions
+        (times :func:`superfacets.adaptive.window_factors` of the center's
+        element where ``graph.scale2`` is set: content-sensitive runs).
     spaces : Workspaces
         Work buffers and threads, shared with the initialization.
     """
@@ -58,6 +61,8 @@ class Classifier:
         self.c = np.ascontiguousarray(graph.positions)
         self.w = weights
         self.window_r2 = float(window_r2)
+        # content-sensitive runs: a center's window scaled as its superfacet's extent
+        self.wscale = window_factors(graph)
         self.spaces = spaces
 
     def classify(self, centers: np.ndarray, n_centers: int, dist: np.ndarray,
@@ -82,7 +87,7 @@ class Bounded(Classifier):
         spaces = self.spaces
         k = with_room(spaces.get(0), lambda ws: _k.classify_bounded(
             self.indptr, self.indices, self.w, self.c, centers, n_centers, self.window_r2,
-            dist, label, ws.local, ws.queue, spaces.inv_width, ws.vis))
+            dist, label, ws.local, ws.queue, spaces.inv_width, ws.vis, self.wscale))
         return k, k
 
 
@@ -230,7 +235,7 @@ class BoundedReplay(Classifier):
             p, k = _k.seed_orphans(
                 indptr, indices, w, c, centers, n_centers, window_r2, dist, label, ws.local,
                 ws.queue, spaces.inv_width, self.face, self.dist, new_end, self.limit,
-                seg_start, seg_len)
+                seg_start, seg_len, self.wscale)
             if p >= 0:
                 break
             # undo the orphans' labels: merge everything again, then retry with more room
@@ -297,7 +302,7 @@ class BoundedReplay(Classifier):
                 p = _k.expand_many(indptr, indices, w, c, srcs_t, part, window_r2,
                                          ws.local, ws.queue, spaces.inv_width, self.face,
                                          self.dist, bounds[t], bounds[t + 1], os_t, ol_t,
-                                         d_t, l_t)
+                                         d_t, l_t, self.wscale)
                 if p != _k.QUEUE_FULL:
                     break
                 ws.grow(p)

@@ -71,6 +71,16 @@ def queue_push(qface, qdist, qnext, head, bmask, n, g, nd, inv_width, cur):
     head[b] = n
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def window_of(window_r2, wscale, f):
+    """The squared window of an expansion from face ``f``: ``window_r2``, times
+    ``wscale[f]`` where ``wscale`` is not empty (content-sensitive runs: a
+    center's window scaled by ``1 / s^2`` of its element, :mod:`superfacets.adaptive`)."""
+    if wscale.shape[0] > 0:
+        return window_r2 * wscale[f]
+    return window_r2
+
+
 @njit(cache=True, error_model="numpy", nogil=True)
 def expand(indptr, indices, weights, centroids, src, lab, window_r2,
            dist, label, local, queue, inv_width, mode, vis_face, vis_dist, pos, lim):
@@ -188,7 +198,7 @@ def expand(indptr, indices, weights, centroids, src, lab, window_r2,
 
 @njit(cache=True, error_model="numpy", nogil=True)
 def classify_bounded(indptr, indices, weights, centroids, centers, n_centers, window_r2,
-                     dist, label, local, queue, inv_width, vis):
+                     dist, label, local, queue, inv_width, vis, wscale):
     """Classification step of the paper (section 3.1) with orphan re-seeding.
 
     The straightforward version: runs :func:`expand` from
@@ -197,6 +207,7 @@ def classify_bounded(indptr, indices, weights, centroids, centers, n_centers, wi
     unlabelled (an orphan) and expands it, appending it to ``centers``.
     Returns ``K``, the number of centers now in use, or a negative status of
     :func:`expand` if ``queue`` or the visit buffer ``vis`` was too small.
+    ``wscale``: per-face window factors (:func:`window_of`), or empty.
     """
     m = label.shape[0]
     nod = np.empty(0)
@@ -205,7 +216,8 @@ def classify_bounded(indptr, indices, weights, centroids, centers, n_centers, wi
         dist[f] = _INF
         label[f] = -1
     for s in range(n_centers):
-        st = expand(indptr, indices, weights, centroids, centers[s], s, window_r2,
+        st = expand(indptr, indices, weights, centroids, centers[s], s,
+                    window_of(window_r2, wscale, centers[s]),
                     dist, label, local, queue, inv_width, MERGE, vis, nod, 0, lim)
         if st < 0:
             return st
@@ -213,7 +225,7 @@ def classify_bounded(indptr, indices, weights, centroids, centers, n_centers, wi
     for f in range(m):
         if label[f] < 0:
             centers[k] = f
-            st = expand(indptr, indices, weights, centroids, f, k, window_r2,
+            st = expand(indptr, indices, weights, centroids, f, k, window_of(window_r2, wscale, f),
                         dist, label, local, queue, inv_width, MERGE, vis, nod, 0, lim)
             if st < 0:
                 return st
@@ -237,7 +249,8 @@ def _merge_segment(a, n, s, rec_face, rec_dist, dist, label):
 
 @njit(cache=True, error_model="numpy", nogil=True)
 def expand_many(indptr, indices, weights, centroids, srcs, labs, window_r2, local, queue,
-                inv_width, rec_face, rec_dist, pos, lim, out_start, out_len, dist, label):
+                inv_width, rec_face, rec_dist, pos, lim, out_start, out_len, dist, label,
+                wscale):
     """Record-only expansions (:data:`RECORD`) of the faces ``srcs``, each
     merged right after (while in cache) into ``dist``/``label`` with label
     ``labs[i]`` by the lexicographic rule of :func:`merge_some`.
@@ -245,14 +258,16 @@ def expand_many(indptr, indices, weights, centroids, srcs, labs, window_r2, loca
     The settled faces and distances of expansion ``i`` go to ``rec_face`` / ``rec_dist`` from ``out_start[i] = pos`` onwards
     (``out_len[i]`` entries), below ``lim``. Releases the GIL, so several
     threads may run it at once on disjoint record ranges with their own
-    ``local``, queue and ``dist``/``label``. Returns the end
+    ``local``, queue and ``dist``/``label``. ``wscale``: per-face window
+    factors (:func:`window_of`), or empty. Returns the end
     position, or a negative status of :func:`expand`.
     """
     nod = np.empty(0)
     nol = np.empty(0, dtype=np.int32)  # the type of the real labels: one compiled expand
     for i in range(srcs.shape[0]):
         out_start[i] = pos
-        p = expand(indptr, indices, weights, centroids, srcs[i], 0, window_r2, nod, nol,
+        p = expand(indptr, indices, weights, centroids, srcs[i], 0,
+                   window_of(window_r2, wscale, srcs[i]), nod, nol,
                    local, queue, inv_width, RECORD, rec_face, rec_dist, pos, lim)
         if p < 0:
             return p
@@ -301,7 +316,7 @@ def combine_merged(dist, label, dist2, label2, lo, hi):
 @njit(cache=True, error_model="numpy", nogil=True)
 def seed_orphans(indptr, indices, weights, centroids, centers, n_centers, window_r2,
                  dist, label, local, queue, inv_width, rec_face, rec_dist, pos, lim,
-                 seg_start, seg_len):
+                 seg_start, seg_len, wscale):
     """Orphan re-seeding of :func:`classify_bounded`, recording the expansions.
 
     Scanning faces in index order, seeds a center on each face still
@@ -316,8 +331,8 @@ def seed_orphans(indptr, indices, weights, centroids, centers, n_centers, window
         if label[f] < 0:
             centers[k] = f
             seg_start[k] = pos
-            p = expand(indptr, indices, weights, centroids, f, k, window_r2, dist, label,
-                       local, queue, inv_width, MERGE, rec_face, rec_dist, pos, lim)
+            p = expand(indptr, indices, weights, centroids, f, k, window_of(window_r2, wscale, f),
+                       dist, label, local, queue, inv_width, MERGE, rec_face, rec_dist, pos, lim)
             if p < 0:
                 return p, k
             seg_len[k] = p - pos
