@@ -136,6 +136,59 @@ def test_exact_assignment_ties_go_to_the_first_center(kind):
     assert ties > 20
 
 
+def test_exact_assignment_updated_pass_by_pass_equals_a_fresh_search(monkeypatch):
+    # one classifier over a sequence of center lists (moves, a center dropped, a
+    # repeat, the order shuffled, a piece left without a center): each pass updates
+    # the previous one's cells and must give the fresh search's labels, distances
+    # and orphan centers bit for bit; weights in eighths make the ties real
+    import superfacets.classify as classify_module
+    from superfacets.elements.inputs import elements_of
+
+    updated = []
+
+    def counted(*args):
+        out = reclassify(*args)
+        updated.append(out >= 0)
+        return out
+
+    reclassify = classify_module.reclassify_exact
+    monkeypatch.setattr(classify_module, "reclassify_exact", counted)
+    grid = grid_mesh(16, 16)
+    two = Mesh(np.r_[grid.vertices, grid.vertices + [100.0, 0, 0]],
+               np.r_[grid.faces, grid.faces + grid.n_vertices])
+    g = elements_of(two, "vertices").graph
+    m = g.n_elements
+    rng = np.random.default_rng(5)
+    cw = (rng.integers(1, 5, g.n_edges) / 8.0)[g.dual_edge]
+    reused = Exact(g, cw, np.inf, Workspaces(m, cw, 1))
+    centers = np.empty(m + 8, np.int64)
+    n = 12
+    centers[:n] = rng.choice(m, n, replace=False)
+    for step in range(120):
+        fresh_centers = centers.copy()
+        k0, d0, l0 = _exact(g, cw, fresh_centers, n)
+        dist, label = np.empty(m), np.empty(m, np.int32)
+        k = reused.classify(centers, n, dist, label)[0]
+        assert k == k0 and np.array_equal(centers[:k], fresh_centers[:k])
+        np.testing.assert_array_equal(label, l0)
+        np.testing.assert_array_equal(dist, d0)
+        cs = centers[:k].copy()
+        moved = rng.choice(k, min(k, int(rng.integers(1, 4))), replace=False)
+        cs[moved] = rng.choice(m, moved.shape[0])
+        change = step % 10
+        if change == 1 and k > 3:
+            cs = np.delete(cs, int(rng.integers(k)))
+        elif change == 2:
+            cs[int(rng.integers(k))] = cs[int(rng.integers(k))]
+        elif change == 3:
+            rng.shuffle(cs)
+        elif change == 4:  # every center on the first grid: the second becomes an orphan
+            cs = cs[cs < m // 2] if (cs < m // 2).any() else cs
+        n = cs.shape[0]
+        centers[:n] = cs
+    assert sum(updated) > 80  # most passes took the update, not the fresh search
+
+
 def test_bounded_expansion_is_dijkstra_inside_the_window(sphere):
     g = face_graph(sphere)
     w = paper_weights(sphere, alpha=200)

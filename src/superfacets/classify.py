@@ -16,7 +16,8 @@ seed new centers, appended to the center list. The strategies:
   expanded every pass, in order); the reference of the tests.
 - :class:`Exact` (``assignment='exact'``, the default on vertices): one
   multi-source search from all centers, no window: every element goes to its
-  nearest center (ties: the center listed first).
+  nearest center (ties: the center listed first); after the first pass, the
+  cells of the centers that did not move are kept and the rest searched again.
 
 :func:`make_classifier` picks one by name.
 """
@@ -26,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._kernels import expand as _k
-from ._kernels.exact import classify_exact
+from ._kernels.exact import NOT_INCREMENTAL, classify_exact, reclassify_exact
 from .adaptive import window_factors
 from .expansion import Workspaces, with_room
 from .params import ASSIGNMENTS, check_choice
@@ -98,7 +99,11 @@ class Exact(Classifier):
     graph; ties go to the center listed first, whatever order the search
     settles elements in (``(distance, center)`` pairs compared
     lexicographically). The search uses the bucket queue of the bounded
-    expansions, its node pool grown when a search runs out.
+    expansions, its node pool grown when a search runs out. From the second
+    pass on, only the cells of the centers that moved are searched again
+    (:func:`~superfacets._kernels.exact.reclassify_exact`: the same labels and
+    distances as a fresh search, bit for bit); late passes, where a few
+    centers move, cost a fraction of the first.
     """
 
     def __init__(self, graph, weights, window_r2, spaces):
@@ -106,6 +111,11 @@ class Exact(Classifier):
         self.inv_width = spaces.inv_width
         self.head = np.full(spaces.n_buckets, -1, dtype=np.int64)
         self._pool(self.indices.shape[0] + 2 * self.m + 1)  # a node per push, as a rule
+        # the previous pass's result and centers, updated in place by the next pass
+        self.prev = None
+        self.dist = self.label = None
+        self.first = np.full(self.m, -1, dtype=np.int32 if self.m < 2**31 - 1 else np.int64)
+        self.mark = np.zeros(self.m, dtype=np.bool_)
 
     def _pool(self, cap: int) -> None:
         itype = np.int32 if self.m < 2**31 - 1 else np.int64
@@ -114,12 +124,25 @@ class Exact(Classifier):
         self.qlab = np.empty(cap, dtype=itype)
 
     def classify(self, centers, n_centers, dist, label):
-        while True:
-            k = classify_exact(self.indptr, self.indices, self.w, centers, n_centers, dist,
-                               label, self.queue, self.qlab, self.inv_width)
-            if k >= 0:
-                return k, 0
-            self._pool(2 * self.queue[0].shape[0])
+        if self.label is None or self.label.dtype != label.dtype:
+            self.dist, self.label, self.prev = np.empty(self.m), np.empty_like(label), None
+        k = NOT_INCREMENTAL
+        if self.prev is not None:  # only the cells of the centers that moved are searched again
+            k = reclassify_exact(self.indptr, self.indices, self.w, centers, n_centers,
+                                 self.dist, self.label, self.queue, self.qlab, self.inv_width,
+                                 self.prev, self.first, self.mark)
+            if k == _k.QUEUE_FULL:  # the previous result is spoilt: from scratch, more room
+                self._pool(2 * self.queue[0].shape[0])
+                k = NOT_INCREMENTAL
+        while k < 0:
+            k = classify_exact(self.indptr, self.indices, self.w, centers, n_centers, self.dist,
+                               self.label, self.queue, self.qlab, self.inv_width)
+            if k < 0:
+                self._pool(2 * self.queue[0].shape[0])
+        self.prev = centers[:k].copy()
+        dist[:] = self.dist
+        label[:] = self.label
+        return k, 0
 
 
 def make_classifier(assignment: str, graph, weights: np.ndarray, window_r2: float,

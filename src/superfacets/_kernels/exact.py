@@ -112,6 +112,16 @@ def classify_exact(indptr, indices, weights, centers, n_centers, dist, label, qu
     if search_buckets(indptr, indices, weights, dist, label, seeds[:ns], queue, qlab,
                       inv_width, True) != 0:
         return QUEUE_FULL
+    return _seed_orphans(indptr, indices, weights, centers, n_centers, dist, label, queue, qlab,
+                         inv_width)
+
+
+@njit(cache=True, error_model="numpy")
+def _seed_orphans(indptr, indices, weights, centers, n_centers, dist, label, queue, qlab,
+                  inv_width):
+    """Each element still unlabelled, in index order, becomes a center appended to
+    ``centers`` and spreads its label over its connected piece. Returns ``K``."""
+    m = label.shape[0]
     k = n_centers
     one = np.empty(1, dtype=np.int64)
     for f in range(m):
@@ -125,3 +135,105 @@ def classify_exact(indptr, indices, weights, centers, n_centers, dist, label, qu
                 return QUEUE_FULL
             k += 1
     return k
+
+
+#: :func:`reclassify_exact` found the previous labels unusable: classify from scratch.
+NOT_INCREMENTAL = -100
+
+
+@njit(cache=True, error_model="numpy")
+def reclassify_exact(indptr, indices, weights, centers, n_centers, dist, label, queue, qlab,
+                     inv_width, prev, first, border_mark):
+    """:func:`classify_exact` of ``centers[:n_centers]``, updated from the previous
+    pass's result instead of searched again from scratch: the same labels and
+    distances, bit for bit.
+
+    ``dist``/``label`` hold the result of :func:`classify_exact` (or of this
+    function) for the centers ``prev`` (orphans included). A center of ``prev``
+    whose element is again a center keeps its cell: its elements keep their
+    distance, under the center's new index. The other elements (those of
+    centers that moved or left) are cleared and reached again by one search
+    seeded with the moved centers (distance 0) and with the kept elements
+    bordering the cleared ones (their distances): each kept element's pair is
+    already the least over the kept centers, so the search's least fixed point
+    is the one the search from scratch reaches. Ties keep their rule when the
+    kept centers keep their order; else (or with labels out of range) this
+    returns :data:`NOT_INCREMENTAL` having changed nothing. ``first`` (int64,
+    one per element) and ``border_mark`` (bool) are scratch: all -1 / False on
+    entry and again on return. Returns ``K`` or :data:`.expand.QUEUE_FULL`.
+    """
+    m = label.shape[0]
+    for s in range(n_centers):
+        c = centers[s]
+        if first[c] < 0:
+            first[c] = s
+    kp = prev.shape[0]
+    remap = np.empty(kp, dtype=np.int64)
+    last = -1
+    usable = True
+    for j in range(kp):
+        i = first[prev[j]]
+        remap[j] = i
+        if i >= 0:
+            if i <= last:
+                usable = False  # the kept centers changed order: ties could go otherwise
+            last = i
+    if usable:
+        for f in range(m):
+            lab = label[f]
+            if lab < 0 or lab >= kp:
+                usable = False
+                break
+    if not usable:
+        for s in range(n_centers):
+            first[centers[s]] = -1
+        return NOT_INCREMENTAL
+    n_clear = 0
+    for f in range(m):
+        i = remap[label[f]]
+        if i < 0:
+            dist[f] = _INF
+            label[f] = -1
+            n_clear += 1
+        else:
+            label[f] = i
+    seeds = np.empty(n_centers, dtype=np.int64)
+    ns = 0
+    for s in range(n_centers):
+        c = centers[s]
+        if first[c] == s and (label[c] < 0 or dist[c] > 0.0 or label[c] > s):
+            dist[c] = 0.0
+            label[c] = s
+            seeds[ns] = c
+            ns += 1
+    for s in range(n_centers):
+        first[centers[s]] = -1
+    # kept elements next to cleared ones, in increasing distance
+    border = np.empty(min(n_clear * 8 + 16, m), dtype=np.int64)
+    nb = 0
+    for f in range(m):
+        if label[f] >= 0:
+            continue
+        for e in range(indptr[f], indptr[f + 1]):
+            g = indices[e]
+            if label[g] >= 0 and not border_mark[g]:
+                border_mark[g] = True
+                if nb == border.shape[0]:
+                    grown = np.empty(2 * nb + 16, dtype=np.int64)
+                    grown[:nb] = border[:nb]
+                    border = grown
+                border[nb] = g
+                nb += 1
+    for t in range(nb):
+        border_mark[border[t]] = False
+    border = border[:nb]
+    order = np.argsort(dist[border], kind="mergesort")
+    all_seeds = np.empty(ns + nb, dtype=np.int64)
+    all_seeds[:ns] = seeds[:ns]
+    for t in range(nb):
+        all_seeds[ns + t] = border[order[t]]
+    if search_buckets(indptr, indices, weights, dist, label, all_seeds, queue, qlab,
+                      inv_width, True) != 0:
+        return QUEUE_FULL
+    return _seed_orphans(indptr, indices, weights, centers, n_centers, dist, label, queue, qlab,
+                         inv_width)
