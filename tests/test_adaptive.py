@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from superfacets import segment
-from superfacets.adaptive import adapted_graph, content_scale, roughness_of, window_factors
+from superfacets.adaptive import (AUTO_DENSITY, AUTO_SPREAD, adapted_graph, content_scale,
+                                  density_for, roughness_of, size_spread, window_factors)
 from superfacets.cloud import PointCloud
 from superfacets.elements.points import point_graph
 from superfacets.errors import ParameterError
@@ -81,7 +82,7 @@ def superpoints_on_left(labels, pts, k):
 
 def test_density_puts_the_superpoints_where_the_points_are():
     pts = two_density_plane()
-    area = segment(PointCloud(pts), 40)
+    area = segment(PointCloud(pts), 40, density=0)
     count = segment(PointCloud(pts), 40, density=1.0)
     assert area.n_segments == 40 and count.n_segments == 40
     assert count.params["density"] == 1.0 and count.params["assignment"] == "exact"
@@ -90,6 +91,31 @@ def test_density_puts_the_superpoints_where_the_points_are():
     assert superpoints_on_left(count.labels, pts, 40) >= 30
     sizes = np.bincount(count.labels)
     assert sizes.max() < 3 * np.median(sizes)  # about equal point counts
+
+
+def test_automatic_density_follows_uneven_clouds_only():
+    # the default (density=None) sizes superpoints by density where a cloud's density
+    # is uneven (the plane's halves differ 8-fold), not on an even cloud, a mesh or
+    # the paper's method; the value used is in the result's parameters
+    import trimesh
+
+    pts = two_density_plane()
+    auto = segment(PointCloud(pts), 40)
+    assert auto.params["density"] == AUTO_DENSITY == 0.5
+    np.testing.assert_array_equal(auto.labels,
+                                  segment(PointCloud(pts), 40, density=0.5).labels)
+    assert superpoints_on_left(auto.labels, pts, 40) >= 28
+    assert segment(PointCloud(pts), 40, paper=True).params["density"] == 0.0
+    g = point_graph(PointCloud(pts), 10).graph
+    assert size_spread(g) > AUTO_SPREAD and density_for(g) == 0.5 and density_for(g, True) == 0
+    even = bumpy_plane()
+    assert size_spread(point_graph(PointCloud(even), 10).graph) < 0.5
+    assert segment(PointCloud(even), 40).params["density"] == 0.0
+    sphere = trimesh.creation.icosphere(3)
+    big = sphere.vertices[:, 2] > 0.5  # faces of very different sizes: still equal areas
+    mesh = trimesh.Trimesh(sphere.vertices, sphere.faces).subdivide(
+        np.flatnonzero(big[sphere.faces].all(axis=1)))
+    assert segment((mesh.vertices, mesh.faces), 20).params["density"] == 0.0
 
 
 def test_bounded_windows_follow_the_scale():
@@ -154,3 +180,17 @@ def test_cli_density_and_roughness(tmp_path, capsys):
                  "--tiles", "2", "-o", str(tmp_path / "t.seg")]) == 2
     assert "density: not available in a tiled run" in capsys.readouterr().err
     assert not (tmp_path / "bad.seg").exists() and not (tmp_path / "t.seg").exists()
+    # auto (the default) and 0 as asked; a tiled run takes the default (tiles: 0)
+    for flag, q in ((["--density", "auto"], 0.5), ([], 0.5), (["--density", "0"], 0.0)):
+        out = tmp_path / f"auto{len(flag)}{q}.seg"
+        assert main(["segment", str(tmp_path / "plane.npy"), "-k", "40", *flag,
+                     "-o", str(out)]) == 0
+        expected = segment(PointCloud(two_density_plane()), 40, density=q).labels
+        assert np.array_equal(read_labels(out), expected)
+    assert main(["segment", str(tmp_path / "plane.npy"), "-k", "20", "--tiles", "2",
+                 "-o", str(tmp_path / "t.seg")]) == 0
+    with pytest.raises(SystemExit) as stop:  # argparse: usage and one line, exit 2
+        main(["segment", str(tmp_path / "plane.npy"), "-k", "20", "--density", "high",
+              "-o", str(tmp_path / "bad.seg")])
+    assert stop.value.code == 2
+    assert "expected a number, got 'high'" in capsys.readouterr().err

@@ -196,16 +196,18 @@ def get_method(name: str) -> Method:
 
 
 def _auto(value, kind):
-    """A registry value of ``center_tol``, ``coarsen``, ``cleanup`` or ``split_merge``:
-    ``"auto"`` is None."""
+    """A registry value of ``center_tol``, ``coarsen``, ``cleanup``, ``split_merge``
+    or ``density``: ``"auto"`` is None."""
     return None if value in (None, "auto") else kind(value)
 
 
 def _run_superfacets(mesh, n_segments, *, cache, seed, weighting="paper", center_tol="auto",
-                     coarsen="auto", cleanup="auto", split_merge="auto", **params):
+                     coarsen="auto", cleanup="auto", split_merge="auto", density="auto",
+                     **params):
     r = segment(mesh, n_segments, weighting=weighting, center_tol=_auto(center_tol, float),
                 coarsen=_auto(coarsen, int), cleanup=_auto(cleanup, parse_bool),
-                split_merge=_auto(split_merge, parse_bool), **params)
+                split_merge=_auto(split_merge, parse_bool), density=_auto(density, float),
+                **params)
     return MethodRun(r.labels, r.n_iter, r.converged)
 
 
@@ -268,7 +270,7 @@ def _run_vsa(mesh, n_segments, *, cache, seed, **params):
 _SF_DEFAULTS = dict(alpha=DEFAULTS.alpha, eta_convex=DEFAULTS.eta_convex, init=INITS[0],
                     window=DEFAULTS.window, max_iter=DEFAULTS.max_iter, tol=DEFAULTS.tol,
                     center_tol="auto", coarsen="auto", cleanup="auto",
-                    split_merge="auto", paper=DEFAULTS.paper, density=DEFAULTS.density,
+                    split_merge="auto", paper=DEFAULTS.paper, density="auto",
                     roughness=DEFAULTS.roughness)
 register_method(
     "superfacets", _run_superfacets, defaults=_SF_DEFAULTS,

@@ -95,7 +95,8 @@ def assignment_of(params: "SegmentParams", kind: str) -> str:
     if params.assignment is not None:
         return params.assignment
     auto = kind == "vertices" and params.weighting == "paper" and not params.paper
-    return "exact" if auto or params.density > 0 or params.roughness > 0 else "bounded"
+    content = (params.density or 0.0) > 0 or params.roughness > 0
+    return "exact" if auto or content else "bounded"
 
 
 #: ``center_tol`` when ``tol > 0`` and none is given (fraction of the superfacet radius).
@@ -145,7 +146,7 @@ class SegmentParams:
     paper: bool = False
     beta: float = 0.0
     min_elements: int = 1
-    density: float = 0.0
+    density: float | None = None
     roughness: float = 0.0
 
     def as_dict(self) -> dict:
@@ -312,7 +313,7 @@ def resolve(**params) -> SegmentParams:
                                        ("coarsen", p.coarsen not in (None, 1)),
                                        ("beta", p.beta not in (0, 0.0)),
                                        ("min_elements", p.min_elements != 1),
-                                       ("density", p.density not in (0, 0.0)),
+                                       ("density", p.density not in (None, 0, 0.0)),
                                        ("roughness", p.roughness not in (0, 0.0))) if on]
         if extra:
             raise ParameterError(f"paper=True is the paper's method as published; it does not "
@@ -362,7 +363,7 @@ def resolve(**params) -> SegmentParams:
         neighbor_radius=None if p.neighbor_radius is None else check_positive(
             "neighbor_radius", p.neighbor_radius),
         paper=bool(p.paper), beta=_beta(p.beta, weighting), min_elements=min_elements,
-        density=check_number("density", p.density, 0.0, 1.0),
+        density=None if p.density is None else check_number("density", p.density, 0.0, 1.0),
         roughness=check_number("roughness", p.roughness, 0.0, MAX_WEIGHT_FACTOR))
 
 

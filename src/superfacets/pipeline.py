@@ -28,7 +28,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .adaptive import adapted_graph
+from .adaptive import adapted_graph, density_for
 from .classify import make_classifier
 from .cleanup import clean_boundaries
 from .connectivity import enforce_connectivity as _enforce_connectivity
@@ -261,6 +261,8 @@ def _pipeline(mesh, params: SegmentParams, features, *, replay: bool, jump_cycle
     source = elements_of(mesh, p.elements, n_neighbors=p.n_neighbors,
                          neighbor_radius=p.neighbor_radius)
     graph = source.graph
+    if p.density is None:  # automatic: superpoints follow a scan's uneven density
+        p = replace(p, density=density_for(graph, p.paper))
     if p.density > 0 or p.roughness > 0:  # content-sensitive sizes (not in the paper)
         graph = adapted_graph(graph, p.density, p.roughness)
     t_graph = time.perf_counter() - t

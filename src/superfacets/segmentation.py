@@ -35,7 +35,8 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
                 neighbor_radius: float | None = _D.neighbor_radius,
                 paper: bool = _D.paper, beta: float = _D.beta,
                 features=None, min_elements: int = _D.min_elements,
-                density: float = _D.density, roughness: float = _D.roughness) -> np.ndarray:
+                density: float | None = _D.density,
+                roughness: float = _D.roughness) -> np.ndarray:
     """Over-segment a mesh (its faces or vertices) or a point cloud into superfacets.
 
     The k-means-style method of Simari, Picciau and De Floriani (2014):
@@ -140,13 +141,18 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
         holds superpoints of one or two points, 3 merges 5-16 % of the superpoints at
         ``n_segments`` = 300-3,000 (``docs/superpoints.md``, "Superpoints
         of one point"). 1 merges none; needs ``enforce_connectivity``.
-    density : float, default 0
+    density : float or None, default None
         Content-sensitive sizes (not in the paper; :mod:`superfacets.adaptive`):
         exponent ``q`` in ``[0, 1]`` by which superfacets follow the density of
         the elements: 0 gives superfacets of equal area (the paper), 1 of equal
         numbers of elements (points), between them ``a_i^(1-q)`` times the
         median size's ``q``-th power as each element's size; the first centers
         are placed by farthest points with distances stretched to match.
+        None: 0.5 on a point cloud whose density is uneven (the log of its
+        point sizes spreads beyond 0.7: LiDAR sweeps, RGB-D frames), 0 on even
+        clouds (every cloud sampled from the benchmark), meshes and with
+        ``paper=True`` (:func:`superfacets.adaptive.density_for`); the value
+        used is in ``result.params``.
     roughness : float, default 0
         Content-sensitive sizes (not in the paper): each element's length
         scale multiplied by ``1 + roughness * rho``, ``rho`` the mean angle in
@@ -263,7 +269,8 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | Non
             neighbor_radius: float | None = _D.neighbor_radius,
             paper: bool = _D.paper, beta: float = _D.beta,
             features=None, min_elements: int = _D.min_elements,
-                density: float = _D.density, roughness: float = _D.roughness) -> SegmentationResult:
+                density: float | None = _D.density,
+                roughness: float = _D.roughness) -> SegmentationResult:
     """Superfacets with details: same parameters as :func:`superfacets`.
 
     Returns

@@ -54,7 +54,7 @@ from .weights import csr_weights, edge_weights
 
 __all__ = ["tile_centers", "tile_refine", "tile_labels",
            "tile_connect", "orientation_reference", "trim_centers", "HALO",
-           "point_areas"]
+           "point_areas", "check_tileable"]
 
 #: Default halo, in units of ``window * r``. 3 rather than 2: the classification of
 #: the core is exact from 2, and the clean-up near a border nearly so from 3
@@ -102,11 +102,30 @@ def _diagonal(inp) -> float:
     return float(inp.diagonal)
 
 
+def check_tileable(params: SegmentParams) -> None:
+    """Refuse the options that read the whole graph, which no tile holds: the merge of
+    small superfacets (``min_elements``), content-sensitive sizes (``density``: the
+    median size; ``roughness``). ``density=None`` (automatic) is 0 in a tiled run.
+
+    Raises
+    ------
+    ParameterError
+        Naming the options, with one line on what to do instead.
+    """
+    whole = [n for n in ("min_elements", "density", "roughness")
+             if getattr(params, n) not in (None, 0, getattr(DEFAULTS, n))]
+    if whole:
+        raise ParameterError(f"{' and '.join(whole)}: not available in a tiled run (where the "
+                             "input fits in memory, segment() takes it)")
+
+
 def _tile_params(params: SegmentParams, r: float, diagonal: float, tile_diagonal: float
                  ) -> SegmentParams:
     """The run's parameters for one tile: the whole input's radius ``r``."""
     nr = params.neighbor_radius
+    # no automatic density: a tile's spread of sizes is not the whole input's
     return replace(params, n_segments=None, radius=r / tile_diagonal, progress=False,
+                   density=0.0 if params.density is None else params.density,
                    neighbor_radius=None if nr is None else nr * diagonal / tile_diagonal)
 
 

@@ -39,6 +39,11 @@ def float_arg(text: str) -> float:
         raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
 
 
+def auto_float_arg(text: str) -> float | None:
+    """argparse type: a number, or ``auto`` (None: the method decides)."""
+    return None if text.strip().lower() == "auto" else float_arg(text)
+
+
 def size_arg(text: str) -> tuple[int, int]:
     """argparse type: ``WIDTHxHEIGHT``."""
     w, _, h = text.lower().partition("x")
@@ -184,10 +189,10 @@ def add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> No
                    help="merge superfacets (superpoints) of fewer than N faces (vertices, "
                         "points) into a neighbour at the end; the count falls by those "
                         f"merged (default: {_D.min_elements}, none)")
-    p.add_argument("--density", type=float_arg, default=_D.density, metavar="Q",
+    p.add_argument("--density", type=auto_float_arg, default=_D.density, metavar="Q",
                    help="content-sensitive sizes: 0 superfacets of equal area (the paper), "
-                        "1 of equal numbers of elements; 0.5 suits LiDAR and RGB-D scans "
-                        f"(default: {_D.density:g})")
+                        "1 of equal numbers of elements; auto: 0.5 on point clouds of uneven "
+                        "density (LiDAR sweeps, RGB-D frames), else 0 (default: auto)")
     p.add_argument("--roughness", type=float_arg, default=_D.roughness, metavar="C",
                    help="content-sensitive sizes: smaller superfacets where neighbouring "
                         "normals turn (C per radian of mean angle); 1 suits scans "

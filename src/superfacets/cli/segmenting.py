@@ -140,7 +140,7 @@ def _tiny_hint(result) -> str:
     n = int((np.bincount(labels) < 3).sum())
     if n == 0 or n < 0.01 * result.n_segments:
         return ""
-    density = "" if (result.params or {}).get("density", 0) > 0 else \
+    density = "" if ((result.params or {}).get("density") or 0) > 0 else \
         "; --density 0.5 sizes superpoints by the points' density"
     return f"; {n} of them of 1 or 2 points (--min-elements 3 merges them{density})"
 

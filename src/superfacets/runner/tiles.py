@@ -258,17 +258,14 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
     from ..io.regions import STREAMED, RegionReader
     from .buckets import bucket
     from ..tile_layout import balanced_tiles, check_tiles, tile_grid
-    from ..tiling import HALO, halo_distance, orientation_reference
+    from ..tiling import HALO, check_tileable, halo_distance, orientation_reference
 
     if "features" in options:
         raise ParameterError("a tiled run reads colours from the file; features= is not taken")
     params = resolve(n_segments=n_segments, **options)
     if params.elements not in (None, "faces", "points"):
         raise ParameterError(f"a tiled run segments faces or points, not {params.elements!r}")
-    whole = [n for n in ("min_elements", "density", "roughness") if getattr(params, n) != getattr(_D, n)]
-    if whole:  # the merge, the median size, the roughness: the whole graph, which no tile holds
-        raise ParameterError(f"{' and '.join(whole)}: not available in a tiled run (where the "
-                             "input fits in memory, segment() takes it)")
+    check_tileable(params)
     check_tiles(tiles)  # before any pass over the file
     halo = HALO if halo is None else halo
     halo_distance(halo, params.window, 1.0)  # validated before any work
