@@ -21,7 +21,8 @@ also UE and recall against those.
 
 Methods (the registry's, so ``superfacets experiment`` runs the same code):
 
-- ``superfacets``: this package's default on points, its requested count
+- ``superfacets``: this package's default on points (its automatic
+  ``density``: 0.5 on the sweeps, 0 on the airborne tile and the rooms), its requested count
   lowered where orphans add superpoints, so that it returns at most k
   (``_equal_count``); with ``--beta B`` also
   the colour term (scans with RGB only); with ``--split-merge`` also
