@@ -152,10 +152,12 @@ def test_segment_min_elements_merges_small_superpoints_at_the_end():
     from superfacets.passes import final_centers
 
     xyz = sparse_strip_cloud()
-    plain = segment(xyz, 200)
+    plain = segment(xyz, 200, density=0)  # equal areas (the automatic density: fewer tiny)
     small = np.bincount(plain.labels) < 3
     assert small.sum() > 40  # the premise: the strip's superpoints are tiny
-    merged = segment(xyz, 200, min_elements=3)
+    auto = segment(xyz, 200)
+    assert auto.params["density"] == 0.5 and (np.bincount(auto.labels) < 3).sum() < small.sum()
+    merged = segment(xyz, 200, min_elements=3, density=0)
     sizes = np.bincount(merged.labels)
     assert sizes.min() >= 3
     assert np.unique(merged.labels).tolist() == list(range(merged.n_segments))
@@ -194,10 +196,14 @@ def test_cli_min_elements(tmp_path, capsys):
 
     np.save(tmp_path / "strip.npy", sparse_strip_cloud())
     out = tmp_path / "strip.seg"
-    assert main(["segment", str(tmp_path / "strip.npy"), "-k", "200", "-o", str(out)]) == 0
-    hint = capsys.readouterr().out  # the default names the tiny superpoints and the option
+    assert main(["segment", str(tmp_path / "strip.npy"), "-k", "200", "--density", "0",
+                 "-o", str(out)]) == 0
+    hint = capsys.readouterr().out  # equal areas: names the tiny superpoints and the options
     assert "200 superpoints" in hint and ("of 1 or 2 points (--min-elements 3 merges them; "
                                           "--density 0.5 sizes superpoints") in hint
+    assert main(["segment", str(tmp_path / "strip.npy"), "-k", "200", "-o", str(out)]) == 0
+    hint = capsys.readouterr().out  # the automatic density is on: only --min-elements
+    assert "(--min-elements 3 merges them)" in hint
     assert main(["segment", str(tmp_path / "strip.npy"), "-k", "200", "--min-elements", "3",
                  "-o", str(out)]) == 0
     labels = read_labels(out)
