@@ -187,6 +187,9 @@ def test_cli_density_and_roughness(tmp_path, capsys):
                      "-o", str(out)]) == 0
         expected = segment(PointCloud(two_density_plane()), 40, density=q).labels
         assert np.array_equal(read_labels(out), expected)
+        said = capsys.readouterr().out  # the summary says when the automatic density acted
+        assert ("40 superpoints sized by the points' uneven density (auto; --density 0: "
+                "equal areas)" in said) == (flag != ["--density", "0"])
     assert main(["segment", str(tmp_path / "plane.npy"), "-k", "20", "--tiles", "2",
                  "-o", str(tmp_path / "t.seg")]) == 0
     with pytest.raises(SystemExit) as stop:  # argparse: usage and one line, exit 2

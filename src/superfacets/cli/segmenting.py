@@ -109,12 +109,15 @@ def add_parsers(sub) -> None:
     d.set_defaults(func=cmd_demo)
 
 
-def _summary(name: str, mesh, result, seconds: float, elements: str = "faces") -> str:
+def _summary(name: str, mesh, result, seconds: float, elements: str = "faces",
+             density_given: bool = True) -> str:
     state = "converged" if result.converged else "stopped at max-iter"
     if elements == "points":
         invalid = mesh.n_total - mesh.n_points
         what = f"{mesh.n_total} points" + (f" ({invalid} invalid)" if invalid else "")
         segs = "superpoints"
+        if not density_given and ((getattr(result, "params", None) or {}).get("density") or 0):
+            segs += " sized by the points' uneven density (auto; --density 0: equal areas)"
     else:
         kind = "" if mesh.is_triangular else " (polygons)"
         objs = f" in {len(mesh.objects)} objects" if len(mesh.objects) > 1 else ""
@@ -231,7 +234,8 @@ def cmd_segment(args) -> int:
                  up=args.up or "y", view=args.view, graph=graph_out, levels=args.levels)
     report = sys.stderr if str(seg_out) == "-" else sys.stdout  # stdout holds the labels
     if not args.quiet:
-        print(_summary(Path(args.mesh).name, data, result, elapsed, kind), file=report)
+        print(_summary(Path(args.mesh).name, data, result, elapsed, kind,
+                       getattr(args, "density", None) is not None), file=report)
     if not args.quiet:
         _say_what_was_written(seg_out, ply_out, png_out, html_out, report, args.up,
                               graph_out)
