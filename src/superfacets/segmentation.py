@@ -82,9 +82,14 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
         every element goes to its nearest center along the graph (ties: the
         center listed first; the bounded version differs only where the
         shortest path to the nearest center leaves that center's window, and
-        may leave orphans). Default (None): ``'exact'`` on vertices (with the
-        paper's weighting, unless ``paper``), ``'bounded'`` otherwise
-        (:func:`~superfacets.params.assignment_of`; ``docs/cleanup.md``).
+        may leave orphans; after the first pass it searches again only the
+        cells of the centers that moved, with the same result). Default
+        (None): ``'exact'`` on vertices (with the paper's weighting, unless
+        ``paper``) and in content-sensitive runs (``density`` or
+        ``roughness`` above 0, the automatic density included), ``'bounded'``
+        otherwise (:func:`~superfacets.params.assignment_of`;
+        ``docs/cleanup.md``). In content-sensitive runs the bounded windows
+        are scaled per center (:func:`superfacets.adaptive.window_factors`).
     enforce_connectivity : bool, default True
         Merge stray pieces of a superfacet into the neighbour with which they
         share the longest boundary, so each superfacet is face-connected.
@@ -329,7 +334,10 @@ def superpoints(points, n_segments: int | None = _D.n_segments, *, normals=None,
     consistently when not given; the weights are the paper's eqs. 1-3 with
     the distance between points as the geodesic term (``docs/method.md``,
     section "Vertices and points"). Every superpoint is connected in the
-    point graph; the result is deterministic.
+    point graph; the result is deterministic. Where the points' density is
+    uneven (a LiDAR sweep, an RGB-D frame: the log of the point sizes spreads
+    beyond 0.7), superpoints follow it by default (``density=None``: 0.5 there,
+    0 on even clouds; pass ``density=0`` for the paper's equal areas).
 
     Parameters
     ----------
