@@ -20,7 +20,7 @@ LAYERS = (
     # foundations: no knowledge of meshes
     ("superfacets._version", "superfacets.errors", "superfacets.params", "superfacets.labels",
      "superfacets.extras", "superfacets._threads", "superfacets._kernels",
-     "superfacets.camera", "superfacets.warmup", "superfacets.interrupts"),
+     "superfacets.camera", "superfacets.warmup", "superfacets.interrupts", "superfacets.rgb"),
     # inputs: validated meshes and clouds, read from files or the libraries' objects
     ("superfacets.mesh", "superfacets.cloud", "superfacets.volume", "superfacets.convert",
      "superfacets.shapes", "superfacets.io.volumes", "superfacets.io.regions",

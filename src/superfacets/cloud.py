@@ -17,6 +17,7 @@ import numpy as np
 
 from .errors import InvalidMeshError
 from .mesh import _MAX_COORDINATE, _MAX_EXTENT, _MIN_EXTENT, _readonly, column_bounds
+from .rgb import check_colors
 
 __all__ = ["PointCloud", "as_cloud", "InvalidCloudError"]
 
@@ -123,16 +124,8 @@ class PointCloud:
             nrm[finite] /= length[:, None]
             object.__setattr__(self, "normals", _readonly(nrm))
         if self.colors is not None:
-            col = _coordinates(self.colors, "colors", where)
-            if col.shape != p.shape:
-                raise InvalidCloudError(f"{where}colors must have the shape of the points "
-                                        f"{p.shape}, got {col.shape}")
-            bad = ~(np.isfinite(col[finite]).all(axis=1)
-                    & (col[finite] >= 0).all(axis=1) & (col[finite] <= 1).all(axis=1))
-            if bad.any():
-                row = int(np.flatnonzero(finite)[np.flatnonzero(bad)[0]])
-                raise InvalidCloudError(f"{where}colour {row} is not in [0, 1] "
-                                        f"({col[row].tolist()}); scale 8-bit colours by 1/255")
+            col = check_colors(self.colors, p.shape[0], "colour", where, InvalidCloudError,
+                               valid=finite)
             object.__setattr__(self, "colors", _readonly(col))
         if self.viewpoint is not None:
             vp = np.asarray(self.viewpoint, dtype=np.float64).reshape(-1)

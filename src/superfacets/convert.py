@@ -21,7 +21,7 @@ import numpy as np
 from .errors import InvalidMeshError
 from .mesh import Mesh
 
-__all__ = ["as_mesh", "from_library", "mesh_from_scene"]
+__all__ = ["as_mesh", "from_library", "mesh_from_scene", "trimesh_colors"]
 
 
 def as_mesh(mesh, name: str = "") -> Mesh:
@@ -62,7 +62,8 @@ def as_mesh(mesh, name: str = "") -> Mesh:
     if converted is not None:
         return converted
     if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):  # trimesh.Trimesh and alike
-        return Mesh(np.asarray(mesh.vertices), np.asarray(mesh.faces), name=name)
+        return Mesh(np.asarray(mesh.vertices), np.asarray(mesh.faces), name=name,
+                    **trimesh_colors(mesh))
     raise TypeError(
         "mesh must be a superfacets.Mesh, a trimesh.Trimesh or Scene, a pyvista.PolyData, an "
         f"open3d TriangleMesh or a (vertices, faces) pair, got {type(mesh).__name__}"
@@ -96,10 +97,27 @@ def from_library(obj, name: str = ""):
             tri = np.asarray(obj.triangles, dtype=np.int64)
             if tri.size == 0:
                 raise InvalidMeshError(f"{name or 'open3d mesh'}: no triangles")
-            return Mesh(np.asarray(obj.vertices, dtype=np.float64), tri, name=name)
+            vc = np.asarray(getattr(obj, "vertex_colors", ()), dtype=np.float64)
+            colors = vc if vc.size else None  # Open3D: an empty vector without colours
+            return Mesh(np.asarray(obj.vertices, dtype=np.float64), tri, name=name,
+                        colors=colors)
         raise InvalidMeshError(f"{type(obj).__name__}: an Open3D point cloud or other "
                                "geometry, not a triangle mesh")
     return None
+
+
+def trimesh_colors(obj) -> dict:
+    """``colors`` / ``face_colors`` of a ``trimesh.Trimesh`` whose visual holds vertex or
+    face colours (not a texture, not trimesh's default grey), in ``[0, 1]``; {} else."""
+    from .rgb import unit_colors
+
+    visual = getattr(obj, "visual", None)
+    kind = getattr(visual, "kind", None)
+    if kind == "vertex":
+        return {"colors": unit_colors(np.asarray(visual.vertex_colors)[:, :3])}
+    if kind == "face":
+        return {"face_colors": unit_colors(np.asarray(visual.face_colors)[:, :3])}
+    return {}
 
 
 def _split_cells(cells: np.ndarray):
@@ -127,6 +145,7 @@ def mesh_from_scene(scene, name: str = ""):
         If the scene holds no triangle mesh.
     """
     vs, fs, objects, base, start = [], [], [], 0, 0
+    cols: dict[str, list] = {"colors": [], "face_colors": []}
     for node in scene.graph.nodes_geometry:
         transform, key = scene.graph[node]
         geom = scene.geometry[key]
@@ -137,9 +156,14 @@ def mesh_from_scene(scene, name: str = ""):
         v = v @ np.asarray(transform)[:3, :3].T + np.asarray(transform)[:3, 3]
         vs.append(v)
         fs.append(np.asarray(faces, dtype=np.int64) + base)
+        for key, a in trimesh_colors(geom).items():
+            cols[key].append(a)
         objects.append((str(node), start, start + len(faces)))
         base += v.shape[0]
         start += len(faces)
     if not fs:
         raise InvalidMeshError(f"{name or 'scene'}: the scene holds no mesh with faces")
-    return Mesh(np.concatenate(vs), np.concatenate(fs), name=name, objects=tuple(objects))
+    # colours where every object has them (of the same kind)
+    colors = {key: np.concatenate(a) for key, a in cols.items() if a and len(a) == len(fs)}
+    return Mesh(np.concatenate(vs), np.concatenate(fs), name=name, objects=tuple(objects),
+                **colors)

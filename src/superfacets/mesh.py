@@ -18,6 +18,7 @@ from functools import cached_property
 import numpy as np
 
 from .errors import InvalidMeshError
+from .rgb import check_colors, face_means, vertex_means
 
 __all__ = ["Mesh", "column_bounds"]
 
@@ -41,13 +42,19 @@ class Mesh:
     objects : tuple of (str, int, int), optional
         Named face ranges ``(name, start, stop)`` when the mesh joins several
         objects (a scene), in face order.
+    colors : (n, 3) float ndarray, optional
+        RGB of each vertex in ``[0, 1]`` (the readers scale 8-bit colours).
+    face_colors : (m, 3) float ndarray, optional
+        RGB of each face in ``[0, 1]``. Either or both: what ``beta > 0`` of
+        :func:`superfacets.segment` reads when no ``features`` are given
+        (:meth:`element_colors`).
 
     Raises
     ------
     InvalidMeshError
         If the arrays have the wrong shape, the mesh has no face, a face index
-        is out of range, a coordinate is NaN or infinite, or the mesh has zero
-        extent or zero total area.
+        is out of range, a coordinate is NaN or infinite, a colour is outside
+        ``[0, 1]``, or the mesh has zero extent or zero total area.
     TypeError
         If ``faces`` is not an integer array.
 
@@ -72,6 +79,8 @@ class Mesh:
     faces: np.ndarray
     name: str = field(default="")
     objects: tuple = field(default=(), repr=False)
+    colors: np.ndarray | None = field(default=None, repr=False)
+    face_colors: np.ndarray | None = field(default=None, repr=False)
 
     def __repr__(self) -> str:
         sizes = self.face_sizes
@@ -86,15 +95,25 @@ class Mesh:
         vertices, faces = _validate_arrays(self.vertices, self.faces, self.name)
         object.__setattr__(self, "vertices", vertices)
         object.__setattr__(self, "faces", faces)
+        where = f"{self.name}: " if self.name else ""
+        for attr, n, what in (("colors", vertices.shape[0], "colour"),
+                              ("face_colors", faces.shape[0], "face colour")):
+            if getattr(self, attr) is not None:
+                col = check_colors(getattr(self, attr), n, what, where, InvalidMeshError)
+                object.__setattr__(self, attr, _readonly(col))
 
     def __getstate__(self) -> dict:
         # the arrays and names only: the cached geometry and graphs are computed again
         # where the mesh is unpickled (the face graph holds functions, which pickle cannot)
-        return {name: self.__dict__[name] for name in ("vertices", "faces", "name", "objects")}
+        return {name: self.__dict__[name] for name in ("vertices", "faces", "name", "objects",
+                                                        "colors", "face_colors")}
 
     def __setstate__(self, state: dict) -> None:
-        for name in ("vertices", "faces"):
-            state[name].setflags(write=False)
+        state.setdefault("colors", None)
+        state.setdefault("face_colors", None)
+        for name in ("vertices", "faces", "colors", "face_colors"):
+            if state[name] is not None:
+                state[name].setflags(write=False)
         self.__dict__.update(state)
 
     # ----------------------------------------------------------------- sizes
@@ -155,6 +174,32 @@ class Mesh:
         c = np.asarray(self.corners)
         tri = np.stack([c[start], c[start + first + 1], c[start + first + 2]], axis=1)
         return tri, owner
+
+    def element_colors(self, elements: str = "faces") -> np.ndarray | None:
+        """(m, 3) or (n, 3) float64: the RGB of each face or vertex, None without colours.
+
+        A face without a colour of its own takes the mean of its vertices'; a
+        vertex without one, the mean of its faces' (:mod:`superfacets.rgb`).
+
+        Parameters
+        ----------
+        elements : {'faces', 'vertices'}
+
+        Examples
+        --------
+        >>> m = Mesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]],
+        ...          colors=[[1, 0, 0], [0, 1, 0], [0, 0, 1]])
+        >>> m.element_colors("faces").round(3).tolist()
+        [[0.333, 0.333, 0.333]]
+        """
+        own, other = ((self.face_colors, self.colors) if elements == "faces"
+                      else (self.colors, self.face_colors))
+        if own is not None or other is None:
+            return own
+        if elements == "faces":
+            return face_means(other, np.asarray(self.corners), np.asarray(self.offsets))
+        return vertex_means(other, np.asarray(self.corners), np.asarray(self.offsets),
+                            self.n_vertices)
 
     def polygons(self) -> list[np.ndarray]:
         """The faces as a list of vertex index arrays (one per face, any size)."""

@@ -143,7 +143,7 @@ class SegmentationResult:
 
         src = self._source()
         if features is None:
-            features = getattr(src.source, "colors", None)
+            features = src.colors()
         return superfacet_graph(src.graph, self.element_labels, _per_element(src, features))
 
     def hierarchy(self, levels, *, beta: float = 0.0, features=None):
@@ -189,7 +189,7 @@ def _features_of(src, features):
     """The per-element features of a run with ``beta > 0``: ``features`` (one row per
     input row), else the input's colours."""
     if features is None:
-        features = getattr(src.source, "colors", None)
+        features = src.colors()
         materials = getattr(src.source, "materials", None)
         if features is None and materials is not None:  # a volume's regions, one-hot
             features = (materials[:, None] == np.unique(materials)[None, :]).astype(float)
@@ -198,7 +198,8 @@ def _features_of(src, features):
 
             raise ParameterError("beta > 0 needs features: pass features=(one row per "
                                  f"{src.graph.element}), or an input with colours (PLY, PCD "
-                                 "or LAS points with RGB) or materials (a tetrahedral mesh)")
+                                 "or LAS points with RGB, a mesh with vertex or face colours) "
+                                 "or materials (a tetrahedral mesh)")
     return _per_element(src, features)
 
 

@@ -76,7 +76,9 @@ def segment_objects(mesh, n_segments: int = _D.n_segments, **options
     labels = np.empty(mesh.n_faces, dtype=np.int64)
     results, base = [], 0
     for (name, a, b), k_i in zip(objects, ks.tolist()):
-        part = Mesh(mesh.vertices, mesh.faces[a:b], name=f"{mesh.name or 'mesh'}:{name}")
+        part = Mesh(mesh.vertices, mesh.faces[a:b], name=f"{mesh.name or 'mesh'}:{name}",
+                    colors=mesh.colors,
+                    face_colors=None if mesh.face_colors is None else mesh.face_colors[a:b])
         try:
             r = segment(part, k_i, **options)
         except SuperfacetsError as exc:

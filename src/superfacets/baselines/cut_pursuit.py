@@ -153,7 +153,7 @@ def cut_pursuit(obj, n_segments: int | None = None, *, reg_strength: float = 0.1
         pos = np.asarray(g.positions, dtype=np.float64)
         feats = np.c_[feats, spatial * (pos - pos.mean(axis=0)) / g.diagonal]
     if colors is None:
-        colors = getattr(source.source, "colors", None)
+        colors = source.colors()
     if colors is not None:
         rows = source.first_rows(np.arange(g.n_elements))
         feats = np.c_[feats, np.asarray(colors, dtype=np.float64)[rows]]

@@ -50,6 +50,13 @@ class ElementInput(NamedTuple):
         out[ok] = labels[self.index[ok]]
         return out
 
+    def colors(self) -> np.ndarray | None:
+        """(N, 3) float64: the RGB of each input row (face, vertex or point) in ``[0, 1]``,
+        None where the input has no colours (:meth:`superfacets.mesh.Mesh.element_colors`)."""
+        if hasattr(self.source, "element_colors"):
+            return self.source.element_colors("faces" if self.index is None else "vertices")
+        return getattr(self.source, "colors", None)
+
     def first_rows(self, elements: np.ndarray) -> np.ndarray:
         """The first input row of each of ``elements`` (the row a center stands for)."""
         if self.index is None:

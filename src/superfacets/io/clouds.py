@@ -29,7 +29,9 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MeshFormatError
+from ..rgb import unit_colors
 from .files import read_bytes, split_suffix
+from .ply import ply_colors
 
 __all__ = ["read_cloud", "CLOUD_FORMATS", "is_cloud_file"]
 
@@ -141,32 +143,13 @@ def _read_ply(data: bytes, path: Path) -> dict:
         if all(c in names for c in ("nx", "ny", "nz")):
             nrm = np.stack([np.asarray(vert[c], dtype=np.float64) for c in ("nx", "ny", "nz")],
                            axis=1)
-        col = None
-        for rgb in (("red", "green", "blue"), ("r", "g", "b"),
-                    ("diffuse_red", "diffuse_green", "diffuse_blue")):
-            if all(c in names for c in rgb):
-                col = unit_colors(np.stack([np.asarray(vert[c]) for c in rgb], axis=1))
-                break
+        col = ply_colors(vert)
     except (PlyParseError, KeyError, ValueError, IndexError, TypeError, EOFError,
             MemoryError) as exc:
         if isinstance(exc, MeshFormatError):
             raise
         raise MeshFormatError(f"{path}: cannot read PLY points: {exc}") from None
     return {"points": pts, "normals": nrm, "colors": col}
-
-
-def unit_colors(rgb: np.ndarray) -> np.ndarray:
-    """RGB of a file in ``[0, 1]``: 8-bit integers / 255, 16-bit / 65535 (LAS: by
-    their largest value, as some writers store 8 bits in 16), floats as they are
-    (clipped to ``[0, 1]``, NaN kept: invalid points)."""
-    a = np.asarray(rgb)
-    if np.issubdtype(a.dtype, np.integer):
-        top = 255.0 if a.dtype.itemsize == 1 or (a.size and int(a.max()) <= 255) else 65535.0
-        return a.astype(np.float64) / top
-    a = a.astype(np.float64)
-    if a.size and np.nanmax(a) > 1.0:  # floats holding 0..255
-        a = a / 255.0
-    return np.clip(a, 0.0, 1.0)
 
 
 def _packed_rgb(values: np.ndarray) -> np.ndarray:

@@ -46,7 +46,10 @@ def read_mesh(path, format: str | None = None) -> Mesh:
         coincident vertices are merged, since STL stores none shared. Several
         objects (OBJ ``o`` statements, glTF/GLB scenes) are joined, their
         face ranges in ``mesh.objects`` (:mod:`superfacets.convert` says in
-        which order).
+        which order). Colours, where the file has them, in ``mesh.colors``
+        (per vertex: PLY ``red green blue``, COFF, OBJ ``v x y z r g b``,
+        glTF vertex colours) and ``mesh.face_colors`` (PLY faces' ``red
+        green blue``), scaled to ``[0, 1]``.
 
     Raises
     ------
@@ -74,19 +77,20 @@ def read_mesh(path, format: str | None = None) -> Mesh:
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a directory")
     data = read_bytes(path, comp)
-    objects = ()
+    objects, colors, face_colors = (), None, None
     if fmt == "off":
-        v, f = _parse_off(data, path)
+        v, f, colors = _parse_off(data, path)
     elif fmt == "tri":
         v, f = _parse_tri(data, path)
     elif fmt == "obj":
-        v, f, objects = _parse_obj(data, path)
+        v, f, objects, colors = _parse_obj(data, path)
     elif fmt in ("glb", "gltf"):
         return _load_scene(path, fmt, comp, data)
     else:
-        v, f = _load_trimesh(data, fmt, path)
+        v, f, colors, face_colors = _load_trimesh(data, fmt, path)
     try:
-        return Mesh(v, f, name=path.name, objects=objects)
+        return Mesh(v, f, name=path.name, objects=objects, colors=colors,
+                    face_colors=face_colors)
     except InvalidMeshError as exc:
         raise InvalidMeshError(f"{path}: {str(exc).removeprefix(path.name + ': ')}") from None
 
@@ -110,7 +114,8 @@ def _count(token: str, what: str, path: Path) -> int:
     return n
 
 
-def _parse_off(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
+def _parse_off(data: bytes, path: Path):
+    """OFF: vertices, faces, and the vertices' colours of a COFF file (or None)."""
     lines = text_lines(data, path)
     if not lines:
         raise MeshFormatError(f"{path}: empty file")
@@ -138,11 +143,26 @@ def _parse_off(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
     v = _loadtxt(vlines, np.float64, "vertex lines", path) if nv else np.zeros((0, 3))
     if v.shape[1] < 3:
         raise MeshFormatError(f"{path}: vertex lines need 3 coordinates, found {v.shape[1]}")
+    colors = None
+    prefix = magic[:-3]
+    if "C" in prefix:  # [ST][C][N]OFF: x y z [nx ny nz] [r g b [a]]
+        at = 3 + 3 * ("N" in prefix)
+        if v.shape[1] < at + 3:
+            raise MeshFormatError(f"{path}: {magic} vertex lines need {at + 3} numbers (the "
+                                  f"colour after the coordinates), found {v.shape[1]}")
+        colors = _unit(v[:, at:at + 3])
     v = np.ascontiguousarray(v[:, :3])
     if nf == 0:
         raise InvalidMeshError(f"{path}: empty mesh: no faces")
     f = _off_faces(flines, path)
-    return v, f
+    return v, f, colors
+
+
+def _unit(rgb: np.ndarray) -> np.ndarray:
+    """Text colours (floats in [0, 1], or 0..255) in [0, 1]."""
+    from ..rgb import unit_colors
+
+    return unit_colors(rgb)
 
 
 def _off_faces(flines: list[str], path: Path):
@@ -206,7 +226,8 @@ def _parse_obj(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
     Faces of any size are kept as polygons; ``o`` statements name objects
     (returned as face ranges). Indices are 1-based; a negative index counts back from the last vertex
     defined before its face line (the OBJ rule); ``0`` is an error. In ``f``
-    lines, ``i/t/n`` keeps ``i``. Separators may be spaces or tabs. Other
+    lines, ``i/t/n`` keeps ``i``. ``v x y z r g b`` lines give vertex colours
+    (where every ``v`` line has them). Separators may be spaces or tabs. Other
     statements (``vt``, ``vn``, ``g``, ``o``, ``usemtl``, ...) are skipped.
     """
     vrows: list[str] = []
@@ -225,12 +246,21 @@ def _parse_obj(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
             starts.append((rest.strip() or f"object{len(starts)}", len(frows)))
     if not frows:
         raise InvalidMeshError(f"{path}: empty mesh: no faces")
+    rows = [r.split() for r in vrows]
     try:
-        v = np.array([r.split()[:3] for r in vrows], dtype=np.float64).reshape(-1, 3)
+        v = np.array([r[:3] for r in rows], dtype=np.float64).reshape(-1, 3)
     except ValueError:
         bad = next(i for i, r in enumerate(vrows) if not _floats3(r))
         raise MeshFormatError(f"{path}: malformed vertex {bad}: 'v {vrows[bad]}' (3 "
                               "coordinates expected)") from None
+    colors = None
+    if rows and all(len(r) >= 6 for r in rows):  # v x y z r g b (MeshLab, Open3D)
+        try:
+            colors = _unit(np.array([r[3:6] for r in rows], dtype=np.float64))
+        except ValueError:
+            bad = next(i for i, r in enumerate(rows) if not _floats3(" ".join(r[3:6])))
+            raise MeshFormatError(f"{path}: malformed vertex colour {bad}: 'v {vrows[bad]}' "
+                                  "(x y z r g b expected)") from None
     faces: list[list[int]] = []
     for i, (row, nv) in enumerate(zip(frows, before)):
         tok = row.split()
@@ -260,7 +290,7 @@ def _parse_obj(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
         objects = [(nm, a, b) for (nm, a), b in zip(bounds, ends) if b > a]
     if all(len(f) == 3 for f in faces):
         faces = np.array(faces, dtype=np.int64).reshape(-1, 3)
-    return v, faces, tuple(objects)
+    return v, faces, tuple(objects), colors
 
 
 def _load_scene(path: Path, fmt: str, comp: str | None, data: bytes) -> Mesh:
@@ -306,21 +336,24 @@ def _quiet_trimesh():
         log.setLevel(level)
 
 
-def _load_trimesh(data: bytes, fmt: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
+def _load_trimesh(data: bytes, fmt: str, path: Path):
+    """PLY or STL: vertices, faces, vertex colours, face colours (None where absent)."""
     with _quiet_trimesh():
         return _load_trimesh_quietly(data, fmt, path)
 
 
-def _load_trimesh_quietly(data: bytes, fmt: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
+def _load_trimesh_quietly(data: bytes, fmt: str, path: Path):
     import trimesh
 
     kwargs = {}
+    colors = [None, None]
     try:
         if fmt == "ply":  # trimesh's PLY parser alone: building a Trimesh costs 40x more
             from trimesh.exchange.ply import load_ply
 
             loaded = load_ply(io.BytesIO(data))
             v, f = loaded.get("vertices"), loaded.get("faces")
+            colors = [_rgb(loaded.get(key)) for key in ("vertex_colors", "face_colors")]
         else:
             loaded = trimesh.load(io.BytesIO(data), file_type=fmt, process=False,
                                   validate=False, force="mesh", **kwargs)
@@ -348,12 +381,23 @@ def _load_trimesh_quietly(data: bytes, fmt: str, path: Path) -> tuple[np.ndarray
     if fmt == "stl":  # STL stores no shared vertices: merge exact duplicates
         v, inv = np.unique(v, axis=0, return_inverse=True)
         f = inv.reshape(-1)[f]
-    return v, f
+    return v, f, colors[0], colors[1]
+
+
+def _rgb(values) -> np.ndarray | None:
+    """trimesh's RGBA colours (uint8, or floats) as RGB in [0, 1]."""
+    if values is None:
+        return None
+    a = np.asarray(values)
+    return _unit(a[:, :3]) if a.ndim == 2 and a.shape[1] >= 3 else None
 
 
 def _ply_polygons(data: bytes, path: Path):
-    """A PLY of polygons, read with plyfile: faces of any size, in file order."""
+    """A PLY of polygons, read with plyfile: faces of any size, in file order, and the
+    colours of the vertices and the faces."""
     from plyfile import PlyData, PlyParseError
+
+    from .ply import ply_colors
 
     end = data.find(b"end_header")
     declared = sum(int(line.split()[2]) for line in data[:max(end, 0)].split(b"\n")
@@ -370,12 +414,13 @@ def _ply_polygons(data: bytes, path: Path):
         names = [p.name for p in face.properties]
         key = "vertex_indices" if "vertex_indices" in names else "vertex_index"
         rows = [np.asarray(r, dtype=np.int64) for r in face[key]]
+        colors = ply_colors(vert), ply_colors(face)
     except (PlyParseError, KeyError, ValueError, IndexError, TypeError, EOFError,
             MemoryError) as exc:
         raise MeshFormatError(f"{path}: cannot read PLY polygons: {exc}") from None
     if not rows:
         raise InvalidMeshError(f"{path}: empty mesh: no faces")
-    return v, rows
+    return v, rows, colors[0], colors[1]
 
 
 def _declared_faces(data: bytes, fmt: str) -> int | None:

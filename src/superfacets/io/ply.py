@@ -17,7 +17,25 @@ import numpy as np
 
 from ..errors import MeshFormatError
 
-__all__ = ["ply_bytes", "read_ply_labels"]
+__all__ = ["ply_bytes", "read_ply_labels", "ply_colors"]
+
+#: Colour properties of a PLY element, tried in this order.
+COLOR_PROPERTIES = (("red", "green", "blue"), ("r", "g", "b"),
+                    ("diffuse_red", "diffuse_green", "diffuse_blue"))
+
+
+
+def ply_colors(element) -> np.ndarray | None:
+    """(N, 3) float64 in ``[0, 1]``: the RGB of a ``plyfile`` element (vertex or face),
+    None where it has none (:data:`COLOR_PROPERTIES`; scaled by
+    :func:`~superfacets.rgb.unit_colors`)."""
+    from ..rgb import unit_colors
+
+    names = [p.name for p in element.properties]
+    for rgb in COLOR_PROPERTIES:
+        if all(c in names for c in rgb):
+            return unit_colors(np.stack([np.asarray(element[c]) for c in rgb], axis=1))
+    return None
 
 
 def ply_bytes(vertices: np.ndarray, corners: np.ndarray, offsets: np.ndarray, *,

@@ -307,7 +307,7 @@ class RegionReader:
         if self.layout == "las":
             import laspy
 
-            from .clouds import unit_colors
+            from ..rgb import unit_colors
 
             with laspy.open(self.path) as f:
                 dims = set(f.header.point_format.dimension_names)
@@ -334,7 +334,7 @@ class RegionReader:
                 yield s, np.asarray(pts[s:e], dtype=np.float64), tuple(
                     None if a is None else np.asarray(a[s:e], dtype=np.float64) for a in more)
             return
-        from .clouds import unit_colors
+        from ..rgb import unit_colors
 
         v = _ply(Path(self.path))["vertex"].data
         names = v.dtype.names

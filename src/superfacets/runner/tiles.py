@@ -285,6 +285,7 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
             reader = RegionReader.open(source)
         else:
             reader = RegionReader.spill(source, tmp)
+        check_tileable(params, reader.kind)
         survey = reader.survey()
         timings["survey"] = time.perf_counter() - t
         if np.ndim(tiles) == 0:
