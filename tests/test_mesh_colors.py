@@ -214,3 +214,25 @@ def test_a_tiled_mesh_run_refuses_beta_in_one_line():
     with pytest.raises(ParameterError, match="carries the colours of points, not of a mesh"):
         segment_tiled(mesh, 8, tiles=2, beta=300)
     assert segment_tiled(mesh, 8, tiles=2).labels.shape == (mesh.n_faces,)
+
+
+def test_library_point_clouds_keep_their_colours():
+    from superfacets.cloud import as_cloud
+
+    xyz = np.random.default_rng(3).random((50, 3))
+    rgba = np.tile(np.array([255, 0, 51, 255], np.uint8), (50, 1))
+    c = as_cloud(trimesh.PointCloud(xyz, colors=rgba))
+    np.testing.assert_allclose(c.colors, np.tile([1.0, 0.0, 0.2], (50, 1)))
+    assert as_cloud(trimesh.PointCloud(xyz)).colors is None
+
+    class FakeOpen3dCloud:  # open3d.geometry.PointCloud's attributes
+        __module__ = "open3d.cpu.pybind.geometry"
+        points = xyz
+        colors = np.tile(BLUE, (50, 1))
+
+        def has_normals(self):
+            return False
+
+    np.testing.assert_allclose(as_cloud(FakeOpen3dCloud()).colors, np.tile(BLUE, (50, 1)))
+    FakeOpen3dCloud.colors = np.zeros((0, 3))
+    assert as_cloud(FakeOpen3dCloud()).colors is None

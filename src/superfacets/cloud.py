@@ -17,7 +17,7 @@ import numpy as np
 
 from .errors import InvalidMeshError
 from .mesh import _MAX_COORDINATE, _MAX_EXTENT, _MIN_EXTENT, _readonly, column_bounds
-from .rgb import check_colors
+from .rgb import check_colors, unit_colors
 
 __all__ = ["PointCloud", "as_cloud", "InvalidCloudError"]
 
@@ -206,6 +206,13 @@ class PointCloud:
                                     "surface to segment")
 
 
+def _library_colors(values) -> np.ndarray | None:
+    """A trimesh (RGBA, 8-bit) or Open3D (RGB in [0, 1]) cloud's colours, None when it
+    has none (an empty array)."""
+    a = np.asarray(values)
+    return unit_colors(a[:, :3]) if a.ndim == 2 and a.shape[0] and a.shape[1] >= 3 else None
+
+
 def _coordinates(a, what: str, where: str) -> np.ndarray:
     arr = np.asarray(a)
     if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number)
@@ -243,10 +250,12 @@ def as_cloud(obj, normals=None, name: str = "") -> PointCloud:
         return obj
     kind = f"{type(obj).__module__}.{type(obj).__name__}"
     if kind.startswith("trimesh.") and type(obj).__name__ == "PointCloud":
-        return PointCloud(np.asarray(obj.vertices), normals, name=name)
+        return PointCloud(np.asarray(obj.vertices), normals, name=name,
+                          colors=_library_colors(getattr(obj, "colors", ())))
     if kind.startswith("open3d.") and hasattr(obj, "points"):
         nrm = np.asarray(obj.normals) if getattr(obj, "has_normals", lambda: False)() else None
-        return PointCloud(np.asarray(obj.points), nrm, name=name)
+        return PointCloud(np.asarray(obj.points), nrm, name=name,
+                          colors=_library_colors(getattr(obj, "colors", ())))
     if isinstance(obj, (np.ndarray, list, tuple)):
         arr = np.asarray(obj)
         if arr.ndim == 3 and arr.shape[2] == 3:  # organized: rows of a sensor image
