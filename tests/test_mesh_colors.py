@@ -236,3 +236,18 @@ def test_library_point_clouds_keep_their_colours():
     np.testing.assert_allclose(as_cloud(FakeOpen3dCloud()).colors, np.tile(BLUE, (50, 1)))
     FakeOpen3dCloud.colors = np.zeros((0, 3))
     assert as_cloud(FakeOpen3dCloud()).colors is None
+
+
+def test_pyvista_colour_arrays_are_read():
+    pv = pytest.importorskip("pyvista")
+    from superfacets.convert import as_mesh
+
+    sphere = pv.Sphere()
+    rgb = np.random.default_rng(4).integers(0, 256, (sphere.n_points, 3)).astype(np.uint8)
+    sphere.point_data["RGB"] = rgb
+    m = as_mesh(sphere)
+    np.testing.assert_allclose(m.colors, rgb / 255.0)
+    assert m.face_colors is None
+    sphere.cell_data["colors"] = np.tile(BLUE, (sphere.n_cells, 1))
+    np.testing.assert_allclose(as_mesh(sphere).face_colors, np.tile(BLUE, (sphere.n_cells, 1)))
+    assert as_mesh(pv.Sphere()).colors is None  # its normals are no colours

@@ -91,7 +91,9 @@ def from_library(obj, name: str = ""):
         if np.asarray(obj.faces).size == 0:
             raise InvalidMeshError(f"{name or 'PolyData'}: no polygons (points or lines only)")
         cells = np.asarray(obj.faces, dtype=np.int64)
-        return Mesh(np.asarray(obj.points, dtype=np.float64), _split_cells(cells), name=name)
+        return Mesh(np.asarray(obj.points, dtype=np.float64), _split_cells(cells), name=name,
+                    colors=_pyvista_colors(getattr(obj, "point_data", None)),
+                    face_colors=_pyvista_colors(getattr(obj, "cell_data", None)))
     if mod == "open3d":
         if hasattr(obj, "triangles"):
             tri = np.asarray(obj.triangles, dtype=np.int64)
@@ -118,6 +120,23 @@ def trimesh_colors(obj) -> dict:
     if kind == "face":
         return {"face_colors": unit_colors(np.asarray(visual.face_colors)[:, :3])}
     return {}
+
+
+#: Names of a PyVista array read as colours (any case): PyVista's PLY reader names
+#: vertex colours ``RGB``.
+PYVISTA_COLORS = ("rgb", "rgba", "colors", "colours")
+
+
+def _pyvista_colors(data) -> np.ndarray | None:
+    """The first array of ``point_data`` / ``cell_data`` named as colours (:data:
+    `PYVISTA_COLORS`), of 3 or 4 columns, as RGB in ``[0, 1]``; None without one."""
+    from .rgb import unit_colors
+
+    for key in ([] if data is None else list(data.keys())):
+        a = np.asarray(data[key])
+        if str(key).lower() in PYVISTA_COLORS and a.ndim == 2 and a.shape[1] in (3, 4):
+            return unit_colors(a[:, :3])
+    return None
 
 
 def _split_cells(cells: np.ndarray):
