@@ -207,13 +207,27 @@ def test_cli_reads_a_coloured_mesh_for_beta(tmp_path):
     assert "vertex or face colours" in run.stderr
 
 
-def test_a_tiled_mesh_run_refuses_beta_in_one_line():
+def test_tiled_mesh_runs_read_the_colours(tmp_path):
     from superfacets.runner.tiles import segment_tiled
 
-    mesh, _ = _two_colour_grid(24)
-    with pytest.raises(ParameterError, match="carries the colours of points, not of a mesh"):
-        segment_tiled(mesh, 8, tiles=2, beta=300)
-    assert segment_tiled(mesh, 8, tiles=2).labels.shape == (mesh.n_faces,)
+    mesh, _ = _two_colour_grid(60)
+    blue = mesh.element_colors("faces")[:, 2]
+    pure = (blue == 0) | (blue == 1)
+    side = blue[pure] == 1
+    blind = segment_tiled(mesh, 16, tiles=2)
+    seeing = segment_tiled(mesh, 16, tiles=2, beta=400)  # spilled: the faces' colours
+    assert _mixed(seeing.labels[pure], side) < 0.2 * _mixed(blind.labels[pure], side)
+    # a binary PLY read in chunks: each face the mean of its vertices' 8-bit colours
+    tm = trimesh.Trimesh(mesh.vertices, mesh.faces, process=False)
+    tm.visual.vertex_colors = np.c_[np.round(mesh.colors * 255),
+                                    np.full(mesh.n_vertices, 255)].astype(np.uint8)
+    tm.export(tmp_path / "g.ply")  # binary, positions in float32
+    streamed = segment_tiled(tmp_path / "g.ply", 16, tiles=2, beta=400)
+    spilled = segment_tiled(read_mesh(tmp_path / "g.ply"), 16, tiles=2, beta=400)
+    np.testing.assert_array_equal(streamed.labels, spilled.labels)
+    assert _mixed(streamed.labels[pure], side) < 0.2 * _mixed(blind.labels[pure], side)
+    with pytest.raises(ParameterError, match="beta > 0 needs colours, and this input has none"):
+        segment_tiled(Mesh(mesh.vertices, mesh.faces), 16, tiles=2, beta=400)
 
 
 def test_library_point_clouds_keep_their_colours():

@@ -102,11 +102,11 @@ def _diagonal(inp) -> float:
     return float(inp.diagonal)
 
 
-def check_tileable(params: SegmentParams, kind: str | None = None) -> None:
+def check_tileable(params: SegmentParams, colors: bool = True) -> None:
     """Refuse the options that read the whole graph, which no tile holds: the merge of
     small superfacets (``min_elements``), content-sensitive sizes (``density``: the
-    median size; ``roughness``). ``density=None`` (automatic) is 0 in a tiled run. With
-    ``kind='faces'``, also ``beta``: tiles carry a point's colour, not a mesh's.
+    median size; ``roughness``). ``density=None`` (automatic) is 0 in a tiled run. Also
+    ``beta > 0`` on an input without ``colors`` (the survey's).
 
     Raises
     ------
@@ -118,9 +118,9 @@ def check_tileable(params: SegmentParams, kind: str | None = None) -> None:
     if whole:
         raise ParameterError(f"{' and '.join(whole)}: not available in a tiled run (where the "
                              "input fits in memory, segment() takes it)")
-    if kind == "faces" and params.beta > 0:
-        raise ParameterError("beta: a tiled run carries the colours of points, not of a mesh "
-                             "(where the mesh fits in memory, segment() takes it)")
+    if params.beta > 0 and not colors:
+        raise ParameterError("beta > 0 needs colours, and this input has none (a tiled run "
+                             "reads the colours of the file, not features=)")
 
 
 def _tile_params(params: SegmentParams, r: float, diagonal: float, tile_diagonal: float

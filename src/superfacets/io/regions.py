@@ -63,6 +63,8 @@ class Survey:
     sample: np.ndarray | None = None
     #: the points carry normals (a point cloud's file has them)
     normals: bool = False
+    #: the elements carry colours (a point's, a face's own or its vertices' mean)
+    colors: bool = False
 
 
 @dataclass(frozen=True)
@@ -176,15 +178,18 @@ class RegionReader:
                                   "or point clouds (this mesh has polygons)")
         np.save(folder / "vertices.npy", np.ascontiguousarray(obj.vertices, dtype=np.float64))
         np.save(folder / "faces.npy", np.ascontiguousarray(faces, dtype=np.int64))
+        if obj.element_colors("faces") is not None:
+            np.save(folder / "face_colors.npy", obj.element_colors("faces"))
         return cls(str(folder), "faces", "npy-mesh", int(faces.shape[0]), chunk)
 
     # ------------------------------------------------------------------ reading
     def chunks(self):
         """Yield ``(start, positions (c, 3) float64, sizes (c,) float64, extra)`` per chunk:
-        face centroids and areas (``extra``: the faces' vertex indices and the vertex
-        array), or points and ones (``extra``: their colours and normals, each None when absent)."""
+        face centroids and areas (``extra``: the faces' vertex indices, the vertex array
+        and the faces' colours, None when absent), or points and ones (``extra``: their
+        colours and normals, each None when absent)."""
         if self.kind == "faces":
-            verts, faces = self._mesh_arrays()
+            verts, faces, colors = self._mesh_arrays()
             n_v = verts.shape[0]
             for s in range(0, self.n_rows, self.chunk):
                 tri = faces(s, min(s + self.chunk, self.n_rows))
@@ -194,7 +199,7 @@ class RegionReader:
                                           f"of range 0..{n_v - 1}")
                 p = verts[tri]  # (c, 3, 3)
                 area = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
-                yield s, p.mean(axis=1), area, (tri, verts)
+                yield s, p.mean(axis=1), area, (tri, verts, colors(s, s + tri.shape[0], tri))
             return
         for s, pts, extra in self._point_chunks():
             yield s, pts, np.ones(pts.shape[0]), extra
@@ -214,9 +219,10 @@ class RegionReader:
         n = 0
         stride = max(1, -(-self.n_rows // SAMPLE))
         kept = []
-        normals = False
+        normals = colors = False
         for start, pos, sz, extra in self.chunks():
             normals = normals or (self.kind == "points" and extra[1] is not None)
+            colors = colors or extra[-1 if self.kind == "faces" else 0] is not None
             ok = np.isfinite(pos).all(axis=1)
             if ok.any():
                 lo = np.minimum(lo, pos[ok].min(axis=0))
@@ -227,7 +233,7 @@ class RegionReader:
                 kept.append(every[np.isfinite(every).all(axis=1)])
         if n == 0:
             raise MeshFormatError(f"{self.path}: no {self.kind[:-1]} with a finite position")
-        return Survey(lo, hi, size, n, np.concatenate(kept).astype(np.float64), normals)
+        return Survey(lo, hi, size, n, np.concatenate(kept).astype(np.float64), normals, colors)
 
     def read_box(self, lo, hi, name: str = ""):
         """The elements whose position lies in ``[lo, hi]``, as an input of their own.
@@ -253,8 +259,8 @@ class RegionReader:
             rows.append(inside + s)
             where.append(pos[inside])
             if self.kind == "faces":
-                tri, verts = extra
-                keep.append(tri[inside])
+                tri, verts, col = extra
+                keep.append((tri[inside], None if col is None else col[inside]))
             else:
                 keep.append((pos[inside],) + tuple(None if a is None else a[inside]
                                                    for a in extra))
@@ -263,25 +269,33 @@ class RegionReader:
         if rows.size == 0:
             return rows, where, None
         if self.kind == "faces":
-            tri = np.concatenate(keep)
+            tri = np.concatenate([k[0] for k in keep])
+            col = None if keep[0][1] is None else np.concatenate([k[1] for k in keep])
             used, local = np.unique(tri, return_inverse=True)
             return rows, where, Mesh(np.asarray(verts[used], dtype=np.float64),
-                                     local.reshape(tri.shape), name=name)
+                                     local.reshape(tri.shape), name=name, face_colors=col)
         pts, col, nrm = (None if keep[0][i] is None else np.concatenate([k[i] for k in keep])
                          for i in range(3))
         return rows, where, point_cloud_of(pts, col, nrm, self.viewpoint, name)
 
     # ------------------------------------------------------------------ layouts
     def _mesh_arrays(self):
-        """(vertex positions (n, 3), faces(start, stop) -> (c, 3) int64)."""
+        """(vertex positions (n, 3), faces(start, stop) -> (c, 3) int64, colors(start, stop,
+        tri) -> the faces' colours (c, 3) float64 in [0, 1] or None)."""
         if self.layout == "npy-mesh":
             folder = Path(self.path)
             verts = np.load(folder / "vertices.npy", mmap_mode="r")
             faces = np.load(folder / "faces.npy", mmap_mode="r")
-            return verts, lambda a, b: np.asarray(faces[a:b], dtype=np.int64)
+            fcol = (np.load(folder / "face_colors.npy", mmap_mode="r")
+                    if (folder / "face_colors.npy").exists() else None)
+            return (verts, lambda a, b: np.asarray(faces[a:b], dtype=np.int64),
+                    lambda a, b, tri: None if fcol is None else np.asarray(fcol[a:b]))
         ply = _ply(Path(self.path))
         v = ply["vertex"].data
         verts = _VertexView(v)
+        rgb = next((c for c in (("red", "green", "blue"), ("r", "g", "b"))
+                    if set(c) <= set(v.dtype.names)), None)
+        vcol = None if rgb is None else _VertexView(v, rgb)
         face = ply["face"]
         prop = face.properties[0]
         data = face.data
@@ -301,7 +315,9 @@ class RegionReader:
                                       "triangles (use RegionReader.spill for polygons)")
             return np.asarray(block["v"], dtype=np.int64)
 
-        return verts, faces
+        # a face's colour: the mean of its vertices' (a tiled run reads binary PLY faces
+        # with their vertex indices alone)
+        return verts, faces, lambda a, b, tri: None if vcol is None else vcol[tri].mean(axis=1)
 
     def _point_chunks(self):
         if self.layout == "las":
@@ -359,15 +375,23 @@ def point_cloud_of(pts, colors, normals, viewpoint, name: str = ""):
 
 
 class _VertexView:
-    """Vertex positions of a memory-mapped PLY vertex element, indexed like an (n, 3) array."""
+    """Three properties of a memory-mapped PLY vertex element (the position; or the colour,
+    scaled to [0, 1] by its type: 8-bit / 255, 16-bit / 65535, floats clipped), indexed
+    like an (n, 3) float64 array."""
 
-    def __init__(self, data) -> None:
-        self.data = data
+    def __init__(self, data, fields=tuple("xyz")) -> None:
+        self.data, self.fields = data, fields
         self.shape = (data.shape[0], 3)
+        kind = data.dtype[fields[0]]
+        self.scale = (None if fields == tuple("xyz") or kind.kind == "f"
+                      else 255.0 if kind.itemsize == 1 else 65535.0)
 
     def __getitem__(self, idx) -> np.ndarray:
         flat = np.asarray(idx).ravel()
-        out = np.stack([np.asarray(self.data[c][flat], dtype=np.float64) for c in "xyz"], axis=1)
+        out = np.stack([np.asarray(self.data[c][flat], dtype=np.float64) for c in self.fields],
+                       axis=1)
+        if self.fields != tuple("xyz"):
+            out = out / self.scale if self.scale else np.clip(out, 0.0, 1.0)
         return out.reshape(np.shape(idx) + (3,))
 
 

@@ -71,8 +71,10 @@ def bucket(reader, tiles, folder, *, progress: bool = False) -> TileBuckets:
     try:
         for s, pos, _, extra in reader.chunks():
             if reader.kind == "faces":
-                tri, verts = extra
+                tri, verts, col = extra
                 fields = dict(tri=tri, corners=verts[tri])
+                if col is not None:
+                    fields["colors"] = col
             else:
                 fields = {n: a for n, a in zip(("colors", "normals"), extra) if a is not None}
             if dtype is None:
@@ -168,7 +170,8 @@ class TileBuckets:
             used, first, local = np.unique(tri, return_index=True, return_inverse=True)
             verts = rec["corners"].reshape(-1, 3)[first]
             return rows, where, Mesh(np.ascontiguousarray(verts), local.reshape(tri.shape),
-                                     name=name)
+                                     name=name, face_colors=np.ascontiguousarray(rec["colors"])
+                                     if "colors" in self.dtype.names else None)
         names = self.dtype.names
         col, nrm = (np.ascontiguousarray(rec[n]) if n in names else None
                     for n in ("colors", "normals"))

@@ -285,8 +285,8 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
             reader = RegionReader.open(source)
         else:
             reader = RegionReader.spill(source, tmp)
-        check_tileable(params, reader.kind)
         survey = reader.survey()
+        check_tileable(params, survey.colors)
         timings["survey"] = time.perf_counter() - t
         if np.ndim(tiles) == 0:
             layout = balanced_tiles(survey.sample, survey.lo, survey.hi, tiles)
