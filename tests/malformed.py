@@ -210,6 +210,21 @@ def cases() -> list[Case]:
               b"property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
               b"end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n", "")
     mesh_case("ply-ok", "m.ply", ply, expect="ok")
+    # --- colours of a mesh (COFF, PLY, OBJ)
+    mesh_case("coff-no-colour", "m.off", b"COFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+              "need 6 numbers")
+    mesh_case("coff-text-colour", "m.off",
+              b"COFF\n3 1 0\n0 0 0 9 0 x 1\n1 0 0 0 9 0 1\n0 1 0 0 0 9 1\n3 0 1 2\n",
+              "malformed")
+    mesh_case("ply-nan-colour", "m.ply", b"ply\nformat ascii 1.0\nelement vertex 3\n"
+              b"property float x\nproperty float y\nproperty float z\nproperty float red\n"
+              b"property float green\nproperty float blue\nelement face 1\n"
+              b"property list uchar int vertex_indices\nend_header\n0 0 0 0.5 0 0\n"
+              b"1 0 0 nan 0 0\n0 1 0 0 0 1\n3 0 1 2\n", "colour 1 is not finite")
+    mesh_case("obj-text-colour", "m.obj", b"v 0 0 0 1 0 0\nv 1 0 0 red 1 0\nv 0 1 0 0 0 1\n"
+              b"f 1 2 3\n", "malformed vertex colour 1")
+    mesh_case("beta-without-colours", "m.off", _tetra_off(), "vertex or face colours",
+              extra=("--beta", "5"))
     # --- OBJ
     mesh_case("obj-empty", "m.obj", b"", "empty file")
     mesh_case("obj-index-zero", "m.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", "0")

@@ -60,7 +60,7 @@ def test_bad_colours_are_refused_with_the_row():
     v, f = [[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]]
     with pytest.raises(InvalidMeshError, match=r"m.ply: colour 1 is not in \[0, 1\]"):
         Mesh(v, f, name="m.ply", colors=[[0, 0, 0], [255, 0, 0], [0, 0, 0]])
-    with pytest.raises(InvalidMeshError, match=r"face colour 0 is not in \[0, 1\]"):
+    with pytest.raises(InvalidMeshError, match=r"face colour 0 is not finite"):
         Mesh(v, f, face_colors=[[np.nan, 0, 0]])
     with pytest.raises(InvalidMeshError, match=r"colours must have shape \(3, 3\)"):
         Mesh(v, f, colors=[[0, 0, 0]])

@@ -72,7 +72,8 @@ def check_colors(colors, n: int, what: str, where: str, error: type,
         If ``colors`` is not numeric.
     error
         On another shape, or a colour outside ``[0, 1]`` or not finite (naming
-        the first such row).
+        the first such row; a file's broken colours stop its reading, as its
+        broken coordinates do).
 
     Examples
     --------
@@ -90,6 +91,8 @@ def check_colors(colors, n: int, what: str, where: str, error: type,
     if bad.any():
         row = int(np.flatnonzero(bad)[0] if valid is None
                   else np.flatnonzero(valid)[np.flatnonzero(bad)[0]])
+        if not np.isfinite(col[row]).all():
+            raise error(f"{where}{what} {row} is not finite ({col[row].tolist()})")
         raise error(f"{where}{what} {row} is not in [0, 1] ({col[row].tolist()}); scale "
                     "8-bit colours by 1/255")
     return col
