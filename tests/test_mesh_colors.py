@@ -265,3 +265,36 @@ def test_pyvista_colour_arrays_are_read():
     sphere.cell_data["colors"] = np.tile(BLUE, (sphere.n_cells, 1))
     np.testing.assert_allclose(as_mesh(sphere).face_colors, np.tile(BLUE, (sphere.n_cells, 1)))
     assert as_mesh(pv.Sphere()).colors is None  # its normals are no colours
+
+
+def test_a_tiled_run_scales_a_files_colours_alike_in_every_chunk(tmp_path):
+    # 16-bit colours whose first chunk is dark (no value above 255): read alone, that chunk
+    # would pass for 8-bit; the survey decides one divisor for the whole file
+    from dataclasses import replace
+
+    from plyfile import PlyData, PlyElement
+
+    from superfacets.io.regions import RegionReader
+
+    n = 300
+    v = np.zeros(n, dtype=[("x", "f4"), ("y", "f4"), ("z", "f4"), ("red", "u2"),
+                           ("green", "u2"), ("blue", "u2")])
+    rng = np.random.default_rng(5)
+    v["x"], v["y"] = rng.random(n), rng.random(n)
+    raw = np.where(np.arange(n)[:, None] < 100, rng.integers(0, 256, (n, 3)),
+                   rng.integers(0, 65536, (n, 3))).astype(np.uint16)
+    v["red"], v["green"], v["blue"] = raw.T
+    PlyData([PlyElement.describe(v, "vertex")]).write(str(tmp_path / "p.ply"))
+    reader = RegionReader.open(tmp_path / "p.ply", chunk=100)
+    survey = reader.survey()
+    assert survey.colors and survey.color_top == 65535.0
+
+    def colours(r):
+        return np.concatenate([extra[0] for _, _, _, extra in r.chunks()])
+
+    np.testing.assert_allclose(colours(replace(reader, color_top=survey.color_top)),
+                               raw / 65535.0)
+    np.testing.assert_allclose(colours(reader)[:100], raw[:100] / 255.0)  # chunk by chunk
+    from superfacets.io import read_cloud
+
+    np.testing.assert_allclose(read_cloud(tmp_path / "p.ply").colors, raw / 65535.0)

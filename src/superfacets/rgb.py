@@ -13,10 +13,10 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["unit_colors", "check_colors", "face_means", "vertex_means"]
+__all__ = ["unit_colors", "color_top", "check_colors", "face_means", "vertex_means"]
 
 
-def unit_colors(rgb: np.ndarray) -> np.ndarray:
+def unit_colors(rgb: np.ndarray, top: float | None = None) -> np.ndarray:
     """RGB of a file in ``[0, 1]``.
 
     8-bit integers are divided by 255, 16-bit ones by 65535 (or by 255 where
@@ -27,6 +27,10 @@ def unit_colors(rgb: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     rgb : (N, 3) int or float ndarray
+    top : float, optional
+        The divisor of integer colours, decided for a whole file (:func:`color_top`)
+        when ``rgb`` is a part of it: a dark part of a 16-bit file must not be
+        read as 8-bit.
 
     Returns
     -------
@@ -39,12 +43,26 @@ def unit_colors(rgb: np.ndarray) -> np.ndarray:
     """
     a = np.asarray(rgb)
     if np.issubdtype(a.dtype, np.integer):
-        top = 255.0 if a.dtype.itemsize == 1 or (a.size and int(a.max()) <= 255) else 65535.0
-        return a.astype(np.float64) / top
+        if top is None:
+            top = color_top(a.dtype.itemsize, int(a.max()) if a.size else 0)
+        return np.clip(a.astype(np.float64) / top, 0.0, 1.0)
     a = a.astype(np.float64)
     if a.size and np.nanmax(a) > 1.0:  # floats holding 0..255
         a = a / 255.0
     return np.clip(a, 0.0, 1.0)
+
+
+def color_top(itemsize: int, largest: int) -> float:
+    """The divisor of integer colours of ``itemsize`` bytes whose largest value is
+    ``largest``: 255 for 8 bits, and for 16 bits that hold no value above 255; else
+    65535.
+
+    Examples
+    --------
+    >>> color_top(1, 200), color_top(2, 200), color_top(2, 4000)
+    (255.0, 255.0, 65535.0)
+    """
+    return 255.0 if itemsize == 1 or largest <= 255 else 65535.0
 
 
 def check_colors(colors, n: int, what: str, where: str, error: type,

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..errors import MeshFormatError
 
-__all__ = ["ply_bytes", "read_ply_labels", "ply_colors"]
+__all__ = ["ply_bytes", "read_ply_labels", "ply_colors", "VertexView"]
 
 #: Colour properties of a PLY element, tried in this order.
 COLOR_PROPERTIES = (("red", "green", "blue"), ("r", "g", "b"),
@@ -151,3 +151,24 @@ def read_ply_labels(path, data: bytes | None = None) -> np.ndarray:
         return np.asarray(face["label"], dtype=np.int64)
     except (PlyParseError, KeyError, ValueError, IndexError, TypeError, EOFError) as exc:
         raise MeshFormatError(f"{path}: cannot read labels from this PLY: {exc}") from None
+
+
+class VertexView:
+    """Three properties of a memory-mapped PLY vertex element (the position; or the colour,
+    scaled to [0, 1] by its type: 8-bit / 255, 16-bit / 65535, floats clipped), indexed
+    like an (n, 3) float64 array."""
+
+    def __init__(self, data, fields=tuple("xyz")) -> None:
+        self.data, self.fields = data, fields
+        self.shape = (data.shape[0], 3)
+        kind = data.dtype[fields[0]]
+        self.scale = (None if fields == tuple("xyz") or kind.kind == "f"
+                      else 255.0 if kind.itemsize == 1 else 65535.0)
+
+    def __getitem__(self, idx) -> np.ndarray:
+        flat = np.asarray(idx).ravel()
+        out = np.stack([np.asarray(self.data[c][flat], dtype=np.float64) for c in self.fields],
+                       axis=1)
+        if self.fields != tuple("xyz"):
+            out = out / self.scale if self.scale else np.clip(out, 0.0, 1.0)
+        return out.reshape(np.shape(idx) + (3,))

@@ -38,6 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MeshFormatError
+from .ply import VertexView
 
 __all__ = ["RegionReader", "Survey", "CHUNK", "STREAMED", "SAMPLE", "point_cloud_of"]
 
@@ -65,6 +66,8 @@ class Survey:
     normals: bool = False
     #: the elements carry colours (a point's, a face's own or its vertices' mean)
     colors: bool = False
+    #: the divisor of the points' integer colours over the whole file (None: not integers)
+    color_top: float | None = None
 
 
 @dataclass(frozen=True)
@@ -96,6 +99,9 @@ class RegionReader:
     #: the side an open surface was seen from (LAS: z up, ``PointCloud.up``): the survey's
     #: orientation sample is turned to agree with it, and the tiles with the sample
     up: tuple | None = None
+    #: the divisor of the file's integer point colours, decided by the survey for the
+    #: whole file (:func:`superfacets.rgb.color_top`); None: each chunk's own
+    color_top: float | None = None
 
     # ------------------------------------------------------------------ opening
     @classmethod
@@ -183,7 +189,7 @@ class RegionReader:
         return cls(str(folder), "faces", "npy-mesh", int(faces.shape[0]), chunk)
 
     # ------------------------------------------------------------------ reading
-    def chunks(self):
+    def chunks(self, stats: dict | None = None):
         """Yield ``(start, positions (c, 3) float64, sizes (c,) float64, extra)`` per chunk:
         face centroids and areas (``extra``: the faces' vertex indices, the vertex array
         and the faces' colours, None when absent), or points and ones (``extra``: their
@@ -201,7 +207,7 @@ class RegionReader:
                 area = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
                 yield s, p.mean(axis=1), area, (tri, verts, colors(s, s + tri.shape[0], tri))
             return
-        for s, pts, extra in self._point_chunks():
+        for s, pts, extra in self._point_chunks(stats):
             yield s, pts, np.ones(pts.shape[0]), extra
 
     def survey(self) -> Survey:
@@ -220,7 +226,8 @@ class RegionReader:
         stride = max(1, -(-self.n_rows // SAMPLE))
         kept = []
         normals = colors = False
-        for start, pos, sz, extra in self.chunks():
+        stats: dict = {}
+        for start, pos, sz, extra in self.chunks(stats):
             normals = normals or (self.kind == "points" and extra[1] is not None)
             colors = colors or extra[-1 if self.kind == "faces" else 0] is not None
             ok = np.isfinite(pos).all(axis=1)
@@ -233,7 +240,11 @@ class RegionReader:
                 kept.append(every[np.isfinite(every).all(axis=1)])
         if n == 0:
             raise MeshFormatError(f"{self.path}: no {self.kind[:-1]} with a finite position")
-        return Survey(lo, hi, size, n, np.concatenate(kept).astype(np.float64), normals, colors)
+        from ..rgb import color_top
+
+        top = color_top(stats["itemsize"], stats["largest"]) if stats else None
+        return Survey(lo, hi, size, n, np.concatenate(kept).astype(np.float64), normals, colors,
+                      top)
 
     def read_box(self, lo, hi, name: str = ""):
         """The elements whose position lies in ``[lo, hi]``, as an input of their own.
@@ -292,10 +303,10 @@ class RegionReader:
                     lambda a, b, tri: None if fcol is None else np.asarray(fcol[a:b]))
         ply = _ply(Path(self.path))
         v = ply["vertex"].data
-        verts = _VertexView(v)
+        verts = VertexView(v)
         rgb = next((c for c in (("red", "green", "blue"), ("r", "g", "b"))
                     if set(c) <= set(v.dtype.names)), None)
-        vcol = None if rgb is None else _VertexView(v, rgb)
+        vcol = None if rgb is None else VertexView(v, rgb)
         face = ply["face"]
         prop = face.properties[0]
         data = face.data
@@ -319,11 +330,19 @@ class RegionReader:
         # with their vertex indices alone)
         return verts, faces, lambda a, b, tri: None if vcol is None else vcol[tri].mean(axis=1)
 
-    def _point_chunks(self):
+    def _colors(self, raw: np.ndarray, stats: dict | None) -> np.ndarray:
+        """A chunk's colours in [0, 1]: integers divided by the file's :attr:`color_top`
+        where the survey decided it (``stats`` collects what it needs)."""
+        from ..rgb import unit_colors
+
+        if stats is not None and np.issubdtype(raw.dtype, np.integer) and raw.size:
+            stats["itemsize"] = raw.dtype.itemsize
+            stats["largest"] = max(stats.get("largest", 0), int(raw.max()))
+        return unit_colors(raw, self.color_top)
+
+    def _point_chunks(self, stats: dict | None = None):
         if self.layout == "las":
             import laspy
-
-            from ..rgb import unit_colors
 
             with laspy.open(self.path) as f:
                 dims = set(f.header.point_format.dimension_names)
@@ -332,8 +351,8 @@ class RegionReader:
                 for pts in f.chunk_iterator(self.chunk):
                     xyz = np.stack([np.asarray(pts.x), np.asarray(pts.y), np.asarray(pts.z)],
                                    axis=1).astype(np.float64)
-                    col = (unit_colors(np.stack([np.asarray(pts[c]) for c in ("red", "green",
-                                                                                "blue")], 1))
+                    col = (self._colors(np.stack([np.asarray(pts[c]) for c in
+                                                  ("red", "green", "blue")], 1), stats)
                            if rgb else None)
                     yield s, xyz, (col, None)
                     s += xyz.shape[0]
@@ -350,8 +369,6 @@ class RegionReader:
                 yield s, np.asarray(pts[s:e], dtype=np.float64), tuple(
                     None if a is None else np.asarray(a[s:e], dtype=np.float64) for a in more)
             return
-        from ..rgb import unit_colors
-
         v = _ply(Path(self.path))["vertex"].data
         names = v.dtype.names
         rgb = next((c for c in (("red", "green", "blue"), ("r", "g", "b")) if set(c) <= set(names)),
@@ -362,8 +379,8 @@ class RegionReader:
             xyz, n = (None if c is None else np.stack(
                 [np.asarray(block[a], dtype=np.float64) for a in c], axis=1)
                 for c in ("xyz", nrm))
-            yield s, xyz, (None if rgb is None else unit_colors(
-                np.stack([np.asarray(block[c]) for c in rgb], axis=1)), n)
+            yield s, xyz, (None if rgb is None else self._colors(
+                np.stack([np.asarray(block[c]) for c in rgb], axis=1), stats), n)
 
 
 def point_cloud_of(pts, colors, normals, viewpoint, name: str = ""):
@@ -372,27 +389,6 @@ def point_cloud_of(pts, colors, normals, viewpoint, name: str = ""):
 
     vp = None if viewpoint is None else np.asarray(viewpoint)
     return PointCloud(pts, normals, name=name, colors=colors, viewpoint=vp)
-
-
-class _VertexView:
-    """Three properties of a memory-mapped PLY vertex element (the position; or the colour,
-    scaled to [0, 1] by its type: 8-bit / 255, 16-bit / 65535, floats clipped), indexed
-    like an (n, 3) float64 array."""
-
-    def __init__(self, data, fields=tuple("xyz")) -> None:
-        self.data, self.fields = data, fields
-        self.shape = (data.shape[0], 3)
-        kind = data.dtype[fields[0]]
-        self.scale = (None if fields == tuple("xyz") or kind.kind == "f"
-                      else 255.0 if kind.itemsize == 1 else 65535.0)
-
-    def __getitem__(self, idx) -> np.ndarray:
-        flat = np.asarray(idx).ravel()
-        out = np.stack([np.asarray(self.data[c][flat], dtype=np.float64) for c in self.fields],
-                       axis=1)
-        if self.fields != tuple("xyz"):
-            out = out / self.scale if self.scale else np.clip(out, 0.0, 1.0)
-        return out.reshape(np.shape(idx) + (3,))
 
 
 def _ply(path: Path):

@@ -287,6 +287,8 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
             reader = RegionReader.spill(source, tmp)
         survey = reader.survey()
         check_tileable(params, survey.colors)
+        if survey.color_top is not None:  # one divisor for the whole file's colours
+            reader = replace(reader, color_top=survey.color_top)
         timings["survey"] = time.perf_counter() - t
         if np.ndim(tiles) == 0:
             layout = balanced_tiles(survey.sample, survey.lo, survey.hi, tiles)
