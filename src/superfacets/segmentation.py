@@ -274,8 +274,8 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | Non
             neighbor_radius: float | None = _D.neighbor_radius,
             paper: bool = _D.paper, beta: float = _D.beta,
             features=None, min_elements: int = _D.min_elements,
-                density: float | None = _D.density,
-                roughness: float = _D.roughness) -> SegmentationResult:
+            density: float | None = _D.density,
+            roughness: float = _D.roughness) -> SegmentationResult:
     """Superfacets with details: same parameters as :func:`superfacets`.
 
     Returns
