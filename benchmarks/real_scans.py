@@ -56,7 +56,8 @@ METHODS = ("superfacets", "graph_segmentation", "cut_pursuit", "vccs")
 COLUMNS = ("scan", "points", "method", "beta", "k", "segments", "undersegmentation_error",
            "boundary_recall", "boundary_precision", "achievable_accuracy", "median_points",
            "single_points", "seconds", "instances_undersegmentation_error",
-           "instances_boundary_recall")
+           "instances_boundary_recall", "left_out_undersegmentation_error",
+           "left_out_boundary_recall")
 
 
 def available(method: str) -> bool:
@@ -69,8 +70,9 @@ def available(method: str) -> bool:
 
 
 def run(scan, method: str, k: int, beta: float, options: dict | None = None,
-        neighbors: int = 10) -> dict:
-    """One method on one scan at ``k``: the metrics and the seconds (its search included)."""
+        neighbors: int = 10, leave_out: tuple = ()) -> dict:
+    """One method on one scan at ``k``: the metrics and the seconds (its search included);
+    with ``leave_out`` classes, also UE and recall with their points unlabelled."""
     from superfacets import segment
     from superfacets.datasets.scans import evaluate_scan
 
@@ -103,6 +105,14 @@ def run(scan, method: str, k: int, beta: float, options: dict | None = None,
     sizes = sizes[sizes > 0]
     row.update(seconds=seconds, median_points=float(np.median(sizes)),
                single_points=float(np.mean(sizes == 1)))
+    if leave_out:  # the same labels, those classes' points left out as unlabelled
+        from dataclasses import replace
+
+        gt = np.asarray(scan.ground_truth)
+        kept = evaluate_scan(replace(scan, ground_truth=np.where(np.isin(gt, leave_out), -1,
+                                                                 gt)), labels)
+        row.update(left_out_undersegmentation_error=kept["undersegmentation_error"],
+                   left_out_boundary_recall=kept["boundary_recall"])
     if scan.instances is not None:  # the same labels against the object instances
         obj = evaluate_scan(scan, np.asarray(labels), against="instances")
         row.update(instances_undersegmentation_error=obj["undersegmentation_error"],
@@ -155,6 +165,9 @@ def main() -> None:
     ap.add_argument("--content", action="store_true",
                     help="also superfacets with content-sensitive sizes (density=0.5, "
                          "roughness=1)")
+    ap.add_argument("--leave-out", type=int, nargs="+", default=[], metavar="CLASS",
+                    help="also UE and recall with these classes' points unlabelled (e.g. 1: "
+                         "ASPRS 'unclassified', scattered points on the airborne tile)")
     ap.add_argument("--csv", help="also write every row to this CSV file")
     ap.add_argument("--download", action="store_true", help="fetch missing scans first")
     a = ap.parse_args()
@@ -180,8 +193,10 @@ def main() -> None:
         objects = scan.instances is not None
         print("| k | method | UE | boundary recall | boundary precision | achievable accuracy "
               "| superpoints | median points | single points | s |"
-              + (" UE, instances | recall, instances |" if objects else ""))
-        print("|---|---|---|---|---|---|---|---|---|---|" + ("---|---|" if objects else ""))
+              + (" UE, instances | recall, instances |" if objects else "")
+              + (" UE, classes left out | recall, classes left out |" if a.leave_out else ""))
+        print("|---|---|---|---|---|---|---|---|---|---|" + ("---|---|" if objects else "")
+              + ("---|---|" if a.leave_out else ""))
         for k in a.k:
             for method in a.methods:
                 if not available(method):
@@ -198,7 +213,7 @@ def main() -> None:
                 if method == "superfacets" and a.min_points > 1:
                     variants += [(0.0, {"min_points": a.min_points})]
                 for beta, options in variants:
-                    r = run(scan, method, k, beta, options, a.neighbors)
+                    r = run(scan, method, k, beta, options, a.neighbors, tuple(a.leave_out))
                     label = method + (f" beta={beta:g}" if beta else "") + \
                         (" split-and-merge" if options.get("split_merge") else "") + \
                         (" content" if "density" in options else "") + \
@@ -210,7 +225,9 @@ def main() -> None:
                           f"{r['median_points']:g} | {r['single_points']:.1%} | "
                           f"{r['seconds']:.1f} |"
                           + (f" {r['instances_undersegmentation_error']:.4f} | "
-                             f"{r['instances_boundary_recall']:.4f} |" if objects else ""),
+                             f"{r['instances_boundary_recall']:.4f} |" if objects else "")
+                          + (f" {r['left_out_undersegmentation_error']:.4f} | "
+                             f"{r['left_out_boundary_recall']:.4f} |" if a.leave_out else ""),
                           flush=True)
                     rows.append(dict(scan=name, points=n, method=label, beta=beta, k=k,
                                      **{c: r.get(c, "") for c in COLUMNS[5:]}))
