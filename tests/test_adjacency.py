@@ -167,3 +167,60 @@ def test_cli_writes_the_graph_and_the_levels(tmp_path, capsys):
     assert not bad.exists() and not (tmp_path / "bad.seg").exists()
     assert main(["segment", str(path), "--levels", "5"]) == 2
     assert "--levels goes with --graph" in capsys.readouterr().err
+    # the planarity cost: the API's levels
+    flat = tmp_path / "flat.npz"
+    assert main(["segment", str(path), "-k", "20", "--graph", str(flat), "--levels", "8,3",
+                 "--level-cost", "planarity", "-o", str(tmp_path / "f.seg")]) == 0
+    r = segment(mesh, 20)
+    with np.load(flat) as z:
+        np.testing.assert_array_equal(z["labels"], r.labels)
+        np.testing.assert_array_equal(z["labels_0"], r.hierarchy([8, 3], cost="planarity")
+                                      .labels(0, r.labels))
+
+
+def test_scatter_is_the_area_weighted_spread_about_the_centroid():
+    mesh = grid_mesh(12, 12, height=lambda x, y: 0.3 * x * y)
+    g = face_graph(mesh)
+    labels = (mesh.centroids[:, 0] > 0).astype(np.int64)
+    sg = superfacet_graph(g, labels)
+    for s in range(2):
+        m = labels == s
+        d = mesh.centroids[m] - sg.centroid[s]
+        want = (mesh.areas[m, None, None] * d[:, :, None] * d[:, None, :]).sum(axis=0)
+        np.testing.assert_allclose(sg.scatter[s], want, rtol=1e-10, atol=1e-14)
+    box = as_mesh(trimesh.creation.box())  # flat sides: no spread off their planes
+    sides = np.unique(np.round(box.normals, 6), axis=0, return_inverse=True)[1].ravel()
+    flat = superfacet_graph(face_graph(box), sides)
+    assert np.abs(np.linalg.eigvalsh(flat.scatter)[:, 0]).max() < 1e-12
+
+
+def test_planarity_levels_merge_the_flat_floor_first():
+    # a floor with a bump in the middle: Ward's cost keeps segments of even size, so most
+    # lie on the floor; the planarity cost merges the floor first and keeps the bump's
+    mesh = grid_mesh(60, 60, height=lambda x, y: 0.5 * np.exp(-(x ** 2 + y ** 2) / 0.04))
+    r = segment(mesh, 80)
+    floor = mesh.centroids[:, 2] < 1e-4
+    flat = r.hierarchy([12], cost="planarity").labels(0, r.labels)
+    even = r.hierarchy([12]).labels(0, r.labels)
+    assert np.unique(flat).size == np.unique(even).size == 12
+    assert np.unique(flat[floor]).size <= 2 < 6 <= np.unique(even[floor]).size
+    assert np.unique(flat[~floor]).size >= 10
+    assert np.unique(label_components(face_graph(mesh), flat)).size == 12  # each connected
+    with pytest.raises(ParameterError, match="cost must be 'ward' or 'planarity'"):
+        r.hierarchy([12], cost="plane")
+
+
+def test_closed_form_plane_distance_is_numpys_smallest_eigenvalue():
+    from superfacets.hierarchy import _plane
+
+    rng = np.random.default_rng(0)
+    for i in range(500):
+        a = rng.normal(size=(3, 3))
+        m = a @ a.T * rng.uniform(1e-3, 1e3)
+        if i % 3 == 0:  # nearly flat: one direction 10^6 times thinner
+            m[2] *= 1e-6
+            m[:, 2] *= 1e-6
+        want = max(np.linalg.eigvalsh(m)[0], 0.0)
+        got = _plane([m[0, 0], m[1, 1], m[2, 2], m[0, 1], m[0, 2], m[1, 2]])
+        assert abs(got - want) <= 1e-12 * np.abs(m).max()
+    assert _plane([2.0, 2.0, 2.0, 0.0, 0.0, 0.0]) == 2.0  # a multiple of the identity

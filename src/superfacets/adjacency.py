@@ -12,7 +12,7 @@ hand it to those libraries; :meth:`SuperfacetGraph.save` writes it to ``.npz``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -51,6 +51,10 @@ class SuperfacetGraph:
         Area-weighted mean normal, made unit (zero where the normals cancel).
     feature : (K, d) float64 ndarray or None
         Area-weighted mean of the per-element features given, if any.
+    scatter : (K, 3, 3) float64 ndarray or None
+        Area-weighted scatter of the element positions about the centroid,
+        ``sum_i a_i (p_i - c)(p_i - c)^T`` (mesh units^4); its smallest
+        eigenvalue is the area-weighted squared distance to the best plane.
     """
 
     edge_index: np.ndarray
@@ -61,6 +65,7 @@ class SuperfacetGraph:
     centroid: np.ndarray
     normal: np.ndarray
     feature: np.ndarray | None = None
+    scatter: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def n_segments(self) -> int:
@@ -223,6 +228,10 @@ def superfacet_graph(graph, labels, features=None) -> SuperfacetGraph:
                                      minlength=e) / n_cross)[zero]
     edge_index = np.stack([key // k, key % k]).astype(np.int64) if k else np.zeros((2, 0),
                                                                                    np.int64)
+    d = pos - centroid[lab]
+    scatter = np.stack([np.stack([np.bincount(lab, weights=area_w * d[:, i] * d[:, j],
+                                              minlength=k) for j in range(3)], axis=1)
+                        for i in range(3)], axis=1)
     return SuperfacetGraph(edge_index=edge_index, border_length=border, mean_angle=mean_angle,
                            concave=concave, area=area, centroid=centroid, normal=normal,
-                           feature=feature)
+                           feature=feature, scatter=scatter)

@@ -16,6 +16,15 @@ across a concave crease costs what crossing it costs the superfacets. Merges
 only join adjacent nodes, so every segment of every level is connected when
 the superfacets are (the method's default), and the levels are nested.
 
+With ``cost='planarity'`` the cost is instead the rise of the area-weighted
+squared distance to each segment's best plane (the smallest eigenvalue of
+its scatter, ``SuperfacetGraph.scatter``), times the feature factor: flat
+neighbours merge first whatever their size, so a level spends its segments
+where the surface bends (objects, vegetation, edges) and leaves floors,
+walls and ground in large pieces, as graph-based partitions do. Run on
+superpoints several times more than the level wants, it gives content-adaptive
+superpoints (``docs/superpoints.md``, "Content-adaptive levels").
+
 Not in the paper (superpoint hierarchies are what graph networks on scans
 use, e.g. Superpoint Transformer's partition); ``docs/superpoints.md``.
 """
@@ -75,7 +84,7 @@ class Hierarchy:
 
 
 def hierarchy(graph, levels, *, alpha: float = 200.0, eta_convex: float = 0.2,
-              beta: float = 0.0) -> Hierarchy:
+              beta: float = 0.0, cost: str = "ward") -> Hierarchy:
     """Merge adjacent superfacets, cheapest first, into nested levels (module notes).
 
     Parameters
@@ -89,6 +98,10 @@ def hierarchy(graph, levels, *, alpha: float = 200.0, eta_convex: float = 0.2,
         The crease factor, as the method's weights (eqs. 2-3), ``>= 0``.
     beta : float, default 0
         Weight of the feature difference (``graph.feature``), ``>= 0``.
+    cost : {'ward', 'planarity'}, default 'ward'
+        Ward's cost with the crease factor (compact segments), or the rise of
+        the distance to the best plane (flat regions merged first; needs
+        ``graph.scatter``; ``alpha`` and ``eta_convex`` unused).
 
     Returns
     -------
@@ -112,6 +125,11 @@ def hierarchy(graph, levels, *, alpha: float = 200.0, eta_convex: float = 0.2,
     alpha = check_nonneg("alpha", alpha)
     eta_convex = check_nonneg("eta_convex", eta_convex)
     beta = check_nonneg("beta", beta)
+    if cost not in ("ward", "planarity"):
+        raise ParameterError(f"cost must be 'ward' or 'planarity', got {cost!r}")
+    if cost == "planarity" and graph.scatter is None:
+        raise ParameterError("cost='planarity' needs the superfacets' scatter "
+                             "(superfacets.adjacency.superfacet_graph gives it)")
     k = graph.n_segments
     wanted = [levels] if np.isscalar(levels) else list(levels)
     if not wanted:
@@ -128,6 +146,10 @@ def hierarchy(graph, levels, *, alpha: float = 200.0, eta_convex: float = 0.2,
     area = graph.area.astype(np.float64).copy()
     wsum = graph.centroid * area[:, None]  # area-weighted sums, merged by addition
     fsum = None if graph.feature is None else graph.feature * area[:, None]
+    # the scatters as 6 floats (xx, yy, zz, xy, xz, yz), merged in plain floats
+    scatter = None if cost == "ward" else [
+        [float(m[0, 0]), float(m[1, 1]), float(m[2, 2]), float(m[0, 1]), float(m[0, 2]),
+         float(m[1, 2])] for m in np.asarray(graph.scatter, dtype=np.float64)]
     nbr: list[dict[int, list[float]]] = [dict() for _ in range(k)]
     for t in range(graph.n_edges):
         a, b = int(graph.edge_index[0, t]), int(graph.edge_index[1, t])
@@ -144,7 +166,26 @@ def hierarchy(graph, levels, *, alpha: float = 200.0, eta_convex: float = 0.2,
             s = owner[s]
         return s
 
-    def cost(a: int, b: int) -> float:
+    def merged_scatter(a: int, b: int) -> list[float]:
+        aa, ab = float(area[a]), float(area[b])
+        ca, cb = wsum[a] / max(aa, 1e-300), wsum[b] / max(ab, 1e-300)
+        x, y, z = (float(ca[0] - cb[0]), float(ca[1] - cb[1]), float(ca[2] - cb[2]))
+        w = aa * ab / max(aa + ab, 1e-300)
+        sa, sb = scatter[a], scatter[b]
+        return [sa[0] + sb[0] + w * x * x, sa[1] + sb[1] + w * y * y, sa[2] + sb[2] + w * z * z,
+                sa[3] + sb[3] + w * x * y, sa[4] + sb[4] + w * x * z, sa[5] + sb[5] + w * y * z]
+
+    def merge_cost(a: int, b: int) -> float:
+        if scatter is not None:
+            c = max(_plane(merged_scatter(a, b)) - _plane(scatter[a]) - _plane(scatter[b]), 0.0)
+        else:
+            c = ward(a, b)
+        if beta > 0:
+            df = fsum[a] / max(area[a], 1e-300) - fsum[b] / max(area[b], 1e-300)
+            c *= 1.0 + beta * float(np.sqrt(np.sum(df * df)))
+        return c
+
+    def ward(a: int, b: int) -> float:
         ln, ang, conc = nbr[a][b]
         if ln > 0:
             theta, share = ang / ln, conc / ln
@@ -154,13 +195,9 @@ def hierarchy(graph, levels, *, alpha: float = 200.0, eta_convex: float = 0.2,
         aa, ab = area[a], area[b]
         tot = aa + ab
         d2 = float(np.sum((wsum[a] / max(aa, 1e-300) - wsum[b] / max(ab, 1e-300)) ** 2))
-        c = (aa * ab / tot if tot > 0 else 0.0) * d2 * (1.0 + alpha * s / math.pi)
-        if beta > 0:
-            df = fsum[a] / max(aa, 1e-300) - fsum[b] / max(ab, 1e-300)
-            c *= 1.0 + beta * float(np.sqrt(np.sum(df * df)))
-        return c
+        return (aa * ab / tot if tot > 0 else 0.0) * d2 * (1.0 + alpha * s / math.pi)
 
-    heap = [(cost(a, b), a, b, 0, 0) for a in range(k) for b in nbr[a] if a < b]
+    heap = [(merge_cost(a, b), a, b, 0, 0) for a in range(k) for b in nbr[a] if a < b]
     heapq.heapify(heap)
     parents = []
     live = k
@@ -182,6 +219,8 @@ def hierarchy(graph, levels, *, alpha: float = 200.0, eta_convex: float = 0.2,
             continue  # stale: one of them merged or changed since
         # merge b into a
         owner[b] = a
+        if scatter is not None:  # before the sums change
+            scatter[a] = merged_scatter(a, b)
         area[a] += area[b]
         wsum[a] += wsum[b]
         if fsum is not None:
@@ -200,9 +239,28 @@ def hierarchy(graph, levels, *, alpha: float = 200.0, eta_convex: float = 0.2,
         version[a] += 1
         for c_ in nbr[a]:
             lo, hi = (a, c_) if a < c_ else (c_, a)
-            heapq.heappush(heap, (cost(lo, hi), lo, hi, int(version[lo]), int(version[hi])))
+            heapq.heappush(heap, (merge_cost(lo, hi), lo, hi, int(version[lo]),
+                                  int(version[hi])))
         live -= 1
     return Hierarchy(levels=tuple(wanted), parents=tuple(parents))
+
+
+def _plane(m: list[float]) -> float:
+    """The smallest eigenvalue of the symmetric 3 x 3 matrix ``(xx, yy, zz, xy, xz, yz)``
+    (the area-weighted squared distance to the best plane of a scatter), in closed form
+    (the trigonometric solution of the characteristic cubic), >= 0."""
+    xx, yy, zz, xy, xz, yz = m
+    off = xy * xy + xz * xz + yz * yz
+    q = (xx + yy + zz) / 3.0
+    p2 = (xx - q) ** 2 + (yy - q) ** 2 + (zz - q) ** 2 + 2.0 * off
+    if p2 <= 1e-300:
+        return max(q, 0.0)
+    p = math.sqrt(p2 / 6.0)
+    a, b, c = (xx - q) / p, (yy - q) / p, (zz - q) / p
+    d, e, f = xy / p, xz / p, yz / p
+    r = 0.5 * (a * (b * c - f * f) - d * (d * c - f * e) + e * (d * f - b * e))
+    phi = math.acos(min(1.0, max(-1.0, r))) / 3.0
+    return max(q + 2.0 * p * math.cos(phi + 2.0 * math.pi / 3.0), 0.0)
 
 
 def _pieces(graph) -> int:

@@ -69,7 +69,7 @@ def result_header(data, result, source: str) -> dict:
 def write_result(data, result, kind: str, source: str, *, labels=None, header: bool = False,
                  colored=None, vertex_colors: bool = False, picture=None, html=None,
                  element_options: dict | None = None, up="y", view=None, graph=None,
-                 levels=None) -> None:
+                 levels=None, level_cost: str = "ward") -> None:
     """Write the files of one segmentation, all or nothing.
 
     Parameters
@@ -106,6 +106,8 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
         per-row labels of each level (``labels_<i>``).
     levels : sequence of int, optional
         Numbers of segments of the hierarchy's levels.
+    level_cost : {'ward', 'planarity'}, default 'ward'
+        The hierarchy's merge cost (:func:`superfacets.hierarchy.hierarchy`).
 
     Raises
     ------
@@ -122,7 +124,7 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
         sg = result.graph()
         arrays = {**sg.arrays(), "labels": result.labels}
         if levels:
-            h = result.hierarchy(levels)
+            h = result.hierarchy(levels, cost=level_cost)
             arrays.update(h.arrays())
             for i in range(len(h.levels)):
                 arrays[f"labels_{i}"] = h.labels(i, result.labels)

@@ -146,7 +146,7 @@ class SegmentationResult:
             features = src.colors()
         return superfacet_graph(src.graph, self.element_labels, _per_element(src, features))
 
-    def hierarchy(self, levels, *, beta: float = 0.0, features=None):
+    def hierarchy(self, levels, *, beta: float = 0.0, features=None, cost: str = "ward"):
         """Nested coarser levels of these superfacets, each segment connected
         (:func:`superfacets.hierarchy.hierarchy`, with this run's ``alpha`` and
         ``eta_convex``).
@@ -159,6 +159,9 @@ class SegmentationResult:
             Weight of the feature difference (needs ``features``).
         features : (N, d) float ndarray, optional
             One feature per input row, as :meth:`graph`.
+        cost : {'ward', 'planarity'}, default 'ward'
+            Compact segments, or flat regions merged first
+            (:func:`superfacets.hierarchy.hierarchy`).
 
         Returns
         -------
@@ -174,7 +177,7 @@ class SegmentationResult:
         from .hierarchy import hierarchy
 
         return hierarchy(self.graph(features), levels, alpha=self.params.get("alpha", 200.0),
-                         eta_convex=self.params.get("eta_convex", 0.2), beta=beta)
+                         eta_convex=self.params.get("eta_convex", 0.2), beta=beta, cost=cost)
 
     def _source(self):
         if self.elements is None or self.element_labels is None:

@@ -61,6 +61,10 @@ def add_parsers(sub) -> None:
                    help="with --graph: also a nested hierarchy of coarser levels of N1, "
                         "N2, ... segments, each connected (parent_<i> and labels_<i> in the "
                         ".npz)")
+    p.add_argument("--level-cost", choices=("ward", "planarity"), default="ward",
+                   help="the levels' merge cost: ward (compact segments, the default) or "
+                        "planarity (flat regions merged first: with -k several times the "
+                        "level, content-adaptive superpoints)")
     p.add_argument("--per-object", action="store_true",
                    help="segment each object of a scene on its own (-k shared out by area); "
                         "labels stay unique over the scene")
@@ -231,7 +235,8 @@ def cmd_segment(args) -> int:
                  colored=ply_out, vertex_colors=args.vertex_colors, picture=png_out,
                  html=html_out, element_options=dict(n_neighbors=args.neighbors,
                                                      neighbor_radius=args.neighbor_radius),
-                 up=args.up or "y", view=args.view, graph=graph_out, levels=args.levels)
+                 up=args.up or "y", view=args.view, graph=graph_out, levels=args.levels,
+                 level_cost=args.level_cost)
     report = sys.stderr if str(seg_out) == "-" else sys.stdout  # stdout holds the labels
     if not args.quiet:
         print(_summary(Path(args.mesh).name, data, result, elapsed, kind,
