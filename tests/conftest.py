@@ -88,3 +88,12 @@ def psb() -> Path:
         return psb_root()
     except FileNotFoundError:
         pytest.skip(f"{default_archive()} is missing (the shared data beside the repository)")
+
+
+def minority(labels, side) -> int:
+    """Elements in a segment whose side (a bool per element) is that segment's minority:
+    0 when every segment lies on one side of a border."""
+    k = int(labels.max()) + 1
+    a = np.bincount(labels, weights=side, minlength=k)
+    b = np.bincount(labels, weights=~side, minlength=k)
+    return int(np.minimum(a, b).sum())

@@ -11,7 +11,7 @@ from superfacets.elements import face_graph
 from superfacets.errors import ParameterError
 from superfacets.io import read_cloud
 from superfacets.weights import paper_weights
-from conftest import SHARED, grid_mesh, need
+from conftest import SHARED, grid_mesh, minority, need
 
 
 def _halves(n=20000, cut=0.37, seed=0):
@@ -20,14 +20,6 @@ def _halves(n=20000, cut=0.37, seed=0):
     left = xy[:, 0] <= cut
     col = np.where(left[:, None], [0.1, 0.1, 0.9], [0.9, 0.1, 0.1])
     return np.c_[xy, np.zeros(n)], col, left
-
-
-def _mixed(labels, left):
-    """Points in a superpoint whose colour is the minority of that superpoint."""
-    k = int(labels.max()) + 1
-    a = np.bincount(labels, weights=left, minlength=k)
-    b = np.bincount(labels, weights=~left, minlength=k)
-    return int(np.minimum(a, b).sum())
 
 
 def test_beta_zero_is_the_paper_bit_for_bit():
@@ -51,8 +43,8 @@ def test_colour_edge_on_a_flat_cloud_becomes_a_border():
     cloud = PointCloud(pts, colors=col)
     blind = segment(cloud, 20)
     seeing = segment(cloud, 20, beta=200)
-    assert _mixed(blind.labels, left) > 200  # the paper's weights cut across it
-    assert _mixed(seeing.labels, left) == 0  # every superpoint one colour
+    assert minority(blind.labels, left) > 200  # the paper's weights cut across it
+    assert minority(seeing.labels, left) == 0  # every superpoint one colour
     assert seeing.params["beta"] == 200
     # features given explicitly are the same as the cloud's colours
     same = segment(PointCloud(pts), 20, beta=200, features=col)
@@ -67,7 +59,7 @@ def test_colour_edge_on_faces_with_the_default_clean_up():
     blind = segment(mesh, 16)
     seeing = segment(mesh, 16, beta=400, features=col)
     assert seeing.params["cleanup"] and seeing.params["split_merge"]
-    assert _mixed(seeing.labels, left) < 0.2 * _mixed(blind.labels, left)
+    assert minority(seeing.labels, left) < 0.2 * minority(blind.labels, left)
 
 
 def test_feature_errors():

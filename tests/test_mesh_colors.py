@@ -15,7 +15,7 @@ from superfacets import Mesh, segment
 from superfacets.errors import InvalidMeshError, MeshFormatError, ParameterError
 from superfacets.io import read_mesh
 from superfacets.scenes import segment_objects
-from conftest import grid_mesh
+from conftest import grid_mesh, minority
 
 BLUE, RED = [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]
 
@@ -25,14 +25,6 @@ def _two_colour_grid(n=48, cut=0.37):
     mesh = grid_mesh(n, n)
     left = mesh.vertices[:, 0] <= cut
     return Mesh(mesh.vertices, mesh.faces, colors=np.where(left[:, None], BLUE, RED)), left
-
-
-def _mixed(labels, left):
-    """Elements in a segment whose side is that segment's minority."""
-    k = int(labels.max()) + 1
-    a = np.bincount(labels, weights=left, minlength=k)
-    b = np.bincount(labels, weights=~left, minlength=k)
-    return int(np.minimum(a, b).sum())
 
 
 def test_vertex_and_face_colours_carry_to_the_other_elements():
@@ -160,8 +152,8 @@ def test_a_colour_edge_on_a_flat_mesh_becomes_a_border(elements):
     side = blue[pure] == 1
     blind = segment(mesh, 16, elements=elements)
     seeing = segment(mesh, 16, elements=elements, beta=400)
-    assert _mixed(blind.labels[pure], side) > 20
-    assert _mixed(seeing.labels[pure], side) < 0.2 * _mixed(blind.labels[pure], side)
+    assert minority(blind.labels[pure], side) > 20
+    assert minority(seeing.labels[pure], side) < 0.2 * minority(blind.labels[pure], side)
     # the same as passing the colours as features
     given = segment(Mesh(mesh.vertices, mesh.faces), 16, elements=elements, beta=400,
                     features=mesh.element_colors(elements))
@@ -216,7 +208,7 @@ def test_tiled_mesh_runs_read_the_colours(tmp_path):
     side = blue[pure] == 1
     blind = segment_tiled(mesh, 16, tiles=2)
     seeing = segment_tiled(mesh, 16, tiles=2, beta=400)  # spilled: the faces' colours
-    assert _mixed(seeing.labels[pure], side) < 0.2 * _mixed(blind.labels[pure], side)
+    assert minority(seeing.labels[pure], side) < 0.2 * minority(blind.labels[pure], side)
     # a binary PLY read in chunks: each face the mean of its vertices' 8-bit colours
     tm = trimesh.Trimesh(mesh.vertices, mesh.faces, process=False)
     tm.visual.vertex_colors = np.c_[np.round(mesh.colors * 255),
@@ -225,7 +217,7 @@ def test_tiled_mesh_runs_read_the_colours(tmp_path):
     streamed = segment_tiled(tmp_path / "g.ply", 16, tiles=2, beta=400)
     spilled = segment_tiled(read_mesh(tmp_path / "g.ply"), 16, tiles=2, beta=400)
     np.testing.assert_array_equal(streamed.labels, spilled.labels)
-    assert _mixed(streamed.labels[pure], side) < 0.2 * _mixed(blind.labels[pure], side)
+    assert minority(streamed.labels[pure], side) < 0.2 * minority(blind.labels[pure], side)
     with pytest.raises(ParameterError, match="beta > 0 needs colours, and this input has none"):
         segment_tiled(Mesh(mesh.vertices, mesh.faces), 16, tiles=2, beta=400)
 
