@@ -224,3 +224,28 @@ def test_closed_form_plane_distance_is_numpys_smallest_eigenvalue():
         got = _plane([m[0, 0], m[1, 1], m[2, 2], m[0, 1], m[0, 2], m[1, 2]])
         assert abs(got - want) <= 1e-12 * np.abs(m).max()
     assert _plane([2.0, 2.0, 2.0, 0.0, 0.0, 0.0]) == 2.0  # a multiple of the identity
+
+
+def test_adaptive_superpoints_spend_the_count_off_the_floor():
+    from superfacets import adaptive_superpoints
+
+    # a floor with a bump, sampled as points: the level keeps the floor in few pieces
+    mesh = grid_mesh(60, 60, height=lambda x, y: 0.5 * np.exp(-(x ** 2 + y ** 2) / 0.04))
+    pts = mesh.centroids
+    floor = pts[:, 2] < 1e-4
+    plain = segment(pts, 12).labels
+    labels = adaptive_superpoints(pts, 12, start=8)
+    assert labels.shape == (pts.shape[0],) and np.unique(labels).size == 12
+    assert np.unique(labels[floor]).size <= 2 < np.unique(plain[floor]).size
+    # the same as the two steps, and start=1 is the method's own superpoints
+    r = segment(pts, 96)
+    np.testing.assert_array_equal(labels, r.hierarchy([12], cost="planarity")
+                                  .labels(0, r.labels))
+    np.testing.assert_array_equal(adaptive_superpoints(pts, 12, start=1), plain)
+    # more than the elements: it starts from all of them
+    small = grid_mesh(4, 4)
+    assert np.unique(adaptive_superpoints(small, 5)).size == 5
+    with pytest.raises(ParameterError, match="start"):
+        adaptive_superpoints(pts, 12, start=0)
+    with pytest.raises(ParameterError, match="n_segments"):
+        adaptive_superpoints(small, 100)

@@ -37,7 +37,7 @@ LAYERS = (
      "superfacets.hierarchy"),
     # the method, one run
     ("superfacets.pipeline", "superfacets.segmentation", "superfacets.scenes",
-     "superfacets.tiling", "superfacets.tile_layout"),
+     "superfacets.tiling", "superfacets.tile_layout", "superfacets.levels"),
     # every method alike
     ("superfacets.baselines", "superfacets.methods"),
     # what is made of results: files, pictures, pages, experiments, batches

@@ -42,6 +42,7 @@ _PUBLIC = {
     "segment": "segmentation",
     "superfacets": "segmentation",
     "superpoints": "segmentation",
+    "adaptive_superpoints": "levels",
     "PointCloud": "cloud",
     "as_cloud": "cloud",
     "InvalidCloudError": "cloud",
@@ -76,6 +77,7 @@ __all__ = [
     "SuperfacetsError",
     "TetMesh",
     "TiledResult",
+    "adaptive_superpoints",
     "as_cloud",
     "as_mesh",
     "edge_weights",
@@ -128,4 +130,5 @@ if TYPE_CHECKING:  # the same names, for type checkers and IDEs
     from .mesh import Mesh
     from .params import DEFAULTS, SegmentParams
     from .segmentation import SegmentationResult, segment, superfacets, superpoints
+    from .levels import adaptive_superpoints
     from .weights import edge_weights, paper_weights, shlafman_weights
