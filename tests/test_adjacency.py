@@ -249,3 +249,25 @@ def test_adaptive_superpoints_spend_the_count_off_the_floor():
         adaptive_superpoints(pts, 12, start=0)
     with pytest.raises(ParameterError, match="n_segments"):
         adaptive_superpoints(small, 100)
+
+
+def test_cli_adaptive_writes_the_levels_labels(tmp_path, capsys):
+    from superfacets.cli import main
+    from superfacets.io import write_mesh
+    from superfacets.levels import adaptive_segment
+
+    mesh = grid_mesh(40, 40, height=lambda x, y: 0.5 * np.exp(-(x ** 2 + y ** 2) / 0.04))
+    path = tmp_path / "b.off"
+    write_mesh(path, mesh)
+    assert main(["segment", str(path), "-k", "10", "--adaptive", "6", "-o",
+                 str(tmp_path / "b.seg")]) == 0
+    want = adaptive_segment(mesh, 10, start=6)
+    np.testing.assert_array_equal(np.loadtxt(tmp_path / "b.seg", dtype=np.int64), want.labels)
+    assert (want.labels[want.centers] == np.arange(10)).all()  # each center in its segment
+    assert want.graph().n_segments == 10 and want.params["start"] == 6
+    for bad, message in ((["--adaptive", "0"], "at least 1"),
+                         (["--adaptive", "--per-object"], "--adaptive takes -k")):
+        assert main(["segment", str(path), "-k", "10", *bad, "-o",
+                     str(tmp_path / "x.seg")]) == 2
+        assert message in capsys.readouterr().err
+    assert not (tmp_path / "x.seg").exists()

@@ -12,11 +12,13 @@ on labelled scans in ``docs/superpoints.md``, "Content-adaptive levels".
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from .params import check_int
 
-__all__ = ["adaptive_superpoints", "START"]
+__all__ = ["adaptive_superpoints", "adaptive_segment", "START"]
 
 #: Superpoints segmented per superpoint wanted (docs/superpoints.md: from 3 to 20 times,
 #: the more the lower the undersegmentation error; 10 times the superpoints take about
@@ -67,13 +69,31 @@ def adaptive_superpoints(obj, n_segments: int, *, start: int = START, **options)
     >>> int(labels.max()) + 1
     6
     """
+    return np.asarray(adaptive_segment(obj, n_segments, start=start, **options).labels)
+
+
+def adaptive_segment(obj, n_segments: int, *, start: int = START, **options):
+    """:func:`adaptive_superpoints` with details: a
+    :class:`~superfacets.pipeline.SegmentationResult` of the level.
+
+    Its ``centers`` are, for each segment, the center of its lowest-numbered
+    superpoint of the first run; ``n_iter``, ``converged``, ``timings`` and
+    ``params`` are the first run's (``params['n_segments']`` the level's,
+    ``params['start']`` the factor); its :meth:`graph` and :meth:`hierarchy`
+    are of the level's segments.
+
+    Raises
+    ------
+    ParameterError
+        As :func:`adaptive_superpoints`.
+    """
     from .errors import ParameterError
     from .segmentation import segment
 
     k = check_int("n_segments", n_segments, lo=1)
     start = check_int("start", start, lo=1)
     if start == 1:
-        return np.asarray(segment(obj, k, **options).labels)
+        return segment(obj, k, **options)
     try:
         result = segment(obj, k * start, **options)
     except ParameterError as exc:  # more than the elements: start from every element
@@ -81,8 +101,14 @@ def adaptive_superpoints(obj, n_segments: int, *, start: int = START, **options)
             raise
         result = segment(obj, max(k, _elements(obj, options)), **options)
     beta = float(result.params.get("beta") or 0.0)
-    return np.asarray(result.hierarchy([k], cost="planarity", beta=beta)
-                      .labels(0, result.labels))
+    level = result.hierarchy([k], cost="planarity", beta=beta)
+    top = level.of_superfacets(0)  # the level's segment of each superpoint
+    first = np.full(k, -1, dtype=np.int64)
+    first[top[::-1]] = np.arange(top.size - 1, -1, -1)  # its lowest-numbered superpoint
+    return replace(result, labels=level.labels(0, result.labels),
+                   centers=np.asarray(result.centers)[first],
+                   element_labels=level.labels(0, result.element_labels),
+                   params={**result.params, "n_segments": k, "start": start})
 
 
 def _elements(obj, options: dict) -> int:

@@ -61,6 +61,11 @@ def add_parsers(sub) -> None:
                    help="with --graph: also a nested hierarchy of coarser levels of N1, "
                         "N2, ... segments, each connected (parent_<i> and labels_<i> in the "
                         ".npz)")
+    p.add_argument("--adaptive", nargs="?", const=10, default=None, type=int_arg,
+                   metavar="START",
+                   help="content-adaptive superpoints: segment START (default 10) times -k, "
+                        "then keep the level of -k that merges the flattest neighbours first "
+                        "(rooms, aerial tiles; not LiDAR sweeps)")
     p.add_argument("--level-cost", choices=("ward", "planarity"), default="ward",
                    help="the levels' merge cost: ward (compact segments, the default) or "
                         "planarity (flat regions merged first: with -k several times the "
@@ -172,6 +177,8 @@ def cmd_segment(args) -> int:
 
         return segment_volume(args)
     if args.tiles is not None:
+        if args.adaptive is not None:
+            raise ParameterError("--adaptive merges levels of the whole input; not with --tiles")
         from .tiles import segment_tiles
 
         return segment_tiles(args)
@@ -189,6 +196,11 @@ def cmd_segment(args) -> int:
         raise ParameterError("--vertex-colors goes with --colored-mesh OUT.ply")
     if args.per_object and args.radius is not None:
         raise ParameterError("--per-object takes -k, not --radius")
+    if args.adaptive is not None and args.adaptive < 1:
+        raise ParameterError(f"--adaptive must be at least 1, got {args.adaptive}")
+    if args.adaptive is not None and (args.per_object or args.radius is not None):
+        raise ParameterError("--adaptive takes -k, on one segmentation (not --radius or "
+                             "--per-object)")
     png_out = check_output(args.picture, (".png",), "the picture", inputs=(args.mesh,))
     html_out = check_output(args.html, (".html", ".htm"), "the page", inputs=(args.mesh,))
     graph_out = check_output(args.graph, (".npz",), "the graph", inputs=(args.mesh,))
@@ -226,6 +238,11 @@ def cmd_segment(args) -> int:
         if args.per_object:
             result = JoinedResult(*segment_objects(data, args.n_segments or DEFAULTS.n_segments,
                                               **kwargs))
+        elif args.adaptive is not None:
+            from ..levels import adaptive_segment
+
+            result = adaptive_segment(data, args.n_segments or DEFAULTS.n_segments,
+                                      start=args.adaptive, **kwargs)
         else:
             result = segment(data, args.n_segments, radius=args.radius, **kwargs)
     except SuperfacetsError as exc:
