@@ -266,7 +266,8 @@ def test_cli_adaptive_writes_the_levels_labels(tmp_path, capsys):
     assert (want.labels[want.centers] == np.arange(10)).all()  # each center in its segment
     assert want.graph().n_segments == 10 and want.params["start"] == 6
     for bad, message in ((["--adaptive", "0"], "at least 1"),
-                         (["--adaptive", "--per-object"], "--adaptive takes -k")):
+                         (["--adaptive", "--per-object"], "--adaptive takes -k"),
+                         (["--adaptive", "--tiles", "2"], "not with --tiles")):
         assert main(["segment", str(path), "-k", "10", *bad, "-o",
                      str(tmp_path / "x.seg")]) == 2
         assert message in capsys.readouterr().err
