@@ -84,7 +84,13 @@ def run(scan, method: str, k: int, beta: float, options: dict | None = None,
         def superpoints(req):
             return segment(scan.cloud, req, beta=beta, n_neighbors=neighbors, **options).labels
 
-        labels = _equal_count(superpoints, k)
+        if options.pop("adaptive", False):  # the planarity level: exactly k segments
+            from superfacets import adaptive_superpoints
+
+            labels = adaptive_superpoints(scan.cloud, k, beta=beta, n_neighbors=neighbors,
+                                          **options)
+        else:
+            labels = _equal_count(superpoints, k)
     elif method == "graph_segmentation":  # as the registry runs them, with the neighbours
         from superfacets.baselines.graph_segmentation import graph_segmentation
 
@@ -168,6 +174,8 @@ def main() -> None:
     ap.add_argument("--leave-out", type=int, nargs="+", default=[], metavar="CLASS",
                     help="also UE and recall with these classes' points unlabelled (e.g. 1: "
                          "ASPRS 'unclassified', scattered points on the airborne tile)")
+    ap.add_argument("--adaptive", action="store_true",
+                    help="also superfacets' content-adaptive superpoints (adaptive_superpoints)")
     ap.add_argument("--csv", help="also write every row to this CSV file")
     ap.add_argument("--download", action="store_true", help="fetch missing scans first")
     a = ap.parse_args()
@@ -210,6 +218,8 @@ def main() -> None:
                     variants += [(b, {"split_merge": True}) for b in betas]
                 if method == "superfacets" and a.content:
                     variants += [(0.0, {"density": 0.5, "roughness": 1.0})]
+                if method == "superfacets" and a.adaptive:
+                    variants += [(0.0, {"adaptive": True})]
                 if method == "superfacets" and a.min_points > 1:
                     variants += [(0.0, {"min_points": a.min_points})]
                 for beta, options in variants:
@@ -217,6 +227,7 @@ def main() -> None:
                     label = method + (f" beta={beta:g}" if beta else "") + \
                         (" split-and-merge" if options.get("split_merge") else "") + \
                         (" content" if "density" in options else "") + \
+                        (" adaptive" if options.get("adaptive") else "") + \
                         (f" min {options['min_points']} points" if "min_points" in options
                          else "")
                     print(f"| {k} | {label} | {r['undersegmentation_error']:.4f} | "
