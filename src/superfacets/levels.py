@@ -6,7 +6,9 @@ tile wants its count spent where the surface holds something, its floors,
 walls and ground left in large pieces. :func:`adaptive_superpoints`
 segments ``start`` times the superpoints wanted with :func:`superfacets.segment`
 and keeps the level of ``n_segments`` of their hierarchy with the planarity
-cost (:func:`superfacets.hierarchy.hierarchy`, ``cost='planarity'``). Measured
+cost (:func:`superfacets.hierarchy.hierarchy`, ``cost='planarity'``; on a
+point cloud each point weighs one, and on a scan of uneven density the
+segments' extent also costs, ``compactness``). Measured
 on labelled scans in ``docs/superpoints.md``, "Content-adaptive levels".
 """
 
@@ -16,7 +18,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .params import check_int
+from .params import check_int, check_nonneg
 
 __all__ = ["adaptive_superpoints", "adaptive_segment", "START"]
 
@@ -26,7 +28,8 @@ __all__ = ["adaptive_superpoints", "adaptive_segment", "START"]
 START = 10
 
 
-def adaptive_superpoints(obj, n_segments: int, *, start: int = START, **options) -> np.ndarray:
+def adaptive_superpoints(obj, n_segments: int, *, start: int = START,
+                         compactness: float | None = None, **options) -> np.ndarray:
     """Superpoints (or superfacets) sized by what the surface holds: flat regions merged.
 
     Parameters
@@ -39,6 +42,11 @@ def adaptive_superpoints(obj, n_segments: int, *, start: int = START, **options)
     start : int, default 10
         Segment ``start * n_segments`` first (``>= 1``; capped at the input's
         elements); 1 returns the method's own superpoints.
+    compactness : float, optional
+        Weight of the segments' extent in the merge cost (``>= 0``;
+        :func:`superfacets.hierarchy.hierarchy`). Default: 0.01 on a scan of
+        uneven density (a LiDAR sweep), else 0
+        (:func:`~superfacets.hierarchy.level_compactness`).
     **options
         The other keyword arguments of :func:`superfacets.segment` (``beta``
         also weighs the colour difference of a merge).
@@ -69,10 +77,12 @@ def adaptive_superpoints(obj, n_segments: int, *, start: int = START, **options)
     >>> int(labels.max()) + 1
     6
     """
-    return np.asarray(adaptive_segment(obj, n_segments, start=start, **options).labels)
+    return np.asarray(adaptive_segment(obj, n_segments, start=start, compactness=compactness,
+                                       **options).labels)
 
 
-def adaptive_segment(obj, n_segments: int, *, start: int = START, **options):
+def adaptive_segment(obj, n_segments: int, *, start: int = START,
+                     compactness: float | None = None, **options):
     """:func:`adaptive_superpoints` with details: a
     :class:`~superfacets.pipeline.SegmentationResult` of the level.
 
@@ -92,6 +102,8 @@ def adaptive_segment(obj, n_segments: int, *, start: int = START, **options):
 
     k = check_int("n_segments", n_segments, lo=1)
     start = check_int("start", start, lo=1)
+    if compactness is not None:
+        check_nonneg("compactness", compactness)
     if start == 1:
         return segment(obj, k, **options)
     try:
@@ -101,7 +113,7 @@ def adaptive_segment(obj, n_segments: int, *, start: int = START, **options):
             raise
         result = segment(obj, max(k, _elements(obj, options)), **options)
     beta = float(result.params.get("beta") or 0.0)
-    level = result.hierarchy([k], cost="planarity", beta=beta)
+    level = result.hierarchy([k], cost="planarity", beta=beta, compactness=compactness)
     top = level.of_superfacets(0)  # the level's segment of each superpoint
     first = np.full(k, -1, dtype=np.int64)
     first[top[::-1]] = np.arange(top.size - 1, -1, -1)  # its lowest-numbered superpoint

@@ -69,7 +69,8 @@ def result_header(data, result, source: str) -> dict:
 def write_result(data, result, kind: str, source: str, *, labels=None, header: bool = False,
                  colored=None, vertex_colors: bool = False, picture=None, html=None,
                  element_options: dict | None = None, up="y", view=None, graph=None,
-                 levels=None, level_cost: str = "ward") -> None:
+                 levels=None, level_cost: str = "ward",
+                 level_compactness: float | None = None) -> None:
     """Write the files of one segmentation, all or nothing.
 
     Parameters
@@ -108,6 +109,9 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
         Numbers of segments of the hierarchy's levels.
     level_cost : {'ward', 'planarity'}, default 'ward'
         The hierarchy's merge cost (:func:`superfacets.hierarchy.hierarchy`).
+    level_compactness : float, optional
+        Its ``compactness`` with ``'planarity'`` (default: left to the method,
+        :meth:`SegmentationResult.hierarchy`).
 
     Raises
     ------
@@ -124,7 +128,7 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
         sg = result.graph()
         arrays = {**sg.arrays(), "labels": result.labels}
         if levels:
-            h = result.hierarchy(levels, cost=level_cost)
+            h = result.hierarchy(levels, cost=level_cost, compactness=level_compactness)
             arrays.update(h.arrays())
             for i in range(len(h.levels)):
                 arrays[f"labels_{i}"] = h.labels(i, result.labels)

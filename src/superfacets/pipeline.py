@@ -146,7 +146,8 @@ class SegmentationResult:
             features = src.colors()
         return superfacet_graph(src.graph, self.element_labels, _per_element(src, features))
 
-    def hierarchy(self, levels, *, beta: float = 0.0, features=None, cost: str = "ward"):
+    def hierarchy(self, levels, *, beta: float = 0.0, features=None, cost: str = "ward",
+                  compactness: float | None = None):
         """Nested coarser levels of these superfacets, each segment connected
         (:func:`superfacets.hierarchy.hierarchy`, with this run's ``alpha`` and
         ``eta_convex``).
@@ -161,7 +162,13 @@ class SegmentationResult:
             One feature per input row, as :meth:`graph`.
         cost : {'ward', 'planarity'}, default 'ward'
             Compact segments, or flat regions merged first
-            (:func:`superfacets.hierarchy.hierarchy`).
+            (:func:`superfacets.hierarchy.hierarchy`; on a point cloud each point
+            weighs one, :func:`~superfacets.hierarchy.planarity_graph`).
+        compactness : float, optional
+            With ``cost='planarity'``, the weight of the segments' extent
+            (:func:`superfacets.hierarchy.hierarchy`). Default: left to the
+            method, :func:`~superfacets.hierarchy.level_compactness` (0.01 on
+            a scan of uneven density, else 0).
 
         Returns
         -------
@@ -174,10 +181,19 @@ class SegmentationResult:
         ParameterError
             If a level is out of range.
         """
-        from .hierarchy import hierarchy
+        from .hierarchy import hierarchy, level_compactness, planarity_graph
 
-        return hierarchy(self.graph(features), levels, alpha=self.params.get("alpha", 200.0),
-                         eta_convex=self.params.get("eta_convex", 0.2), beta=beta, cost=cost)
+        if cost == "planarity":
+            src = self._source()
+            graph = planarity_graph(src.graph, self.element_labels, _per_element(
+                src, src.colors() if features is None else features))
+            if compactness is None:
+                compactness = level_compactness(src.graph)
+        else:
+            graph = self.graph(features)
+        return hierarchy(graph, levels, alpha=self.params.get("alpha", 200.0),
+                         eta_convex=self.params.get("eta_convex", 0.2), beta=beta, cost=cost,
+                         compactness=compactness or 0.0)
 
     def _source(self):
         if self.elements is None or self.element_labels is None:

@@ -70,6 +70,9 @@ def add_parsers(sub) -> None:
                    help="the levels' merge cost: ward (compact segments, the default) or "
                         "planarity (flat regions merged first: with -k several times the "
                         "level, content-adaptive superpoints)")
+    p.add_argument("--level-compactness", type=float, default=None, metavar="C",
+                   help="planarity levels and --adaptive: weight of the segments' extent "
+                        "(default: 0.01 on a scan of uneven density, else 0)")
     p.add_argument("--per-object", action="store_true",
                    help="segment each object of a scene on its own (-k shared out by area); "
                         "labels stay unique over the scene")
@@ -196,6 +199,11 @@ def cmd_segment(args) -> int:
         raise ParameterError("--vertex-colors goes with --colored-mesh OUT.ply")
     if args.per_object and args.radius is not None:
         raise ParameterError("--per-object takes -k, not --radius")
+    if args.level_compactness is not None and (
+            args.level_compactness < 0 or (args.adaptive is None and (
+                not args.levels or args.level_cost != "planarity"))):
+        raise ParameterError("--level-compactness takes a number >= 0, with --adaptive or "
+                             f"--levels and --level-cost planarity, got {args.level_compactness}")
     if args.adaptive is not None and args.adaptive < 1:
         raise ParameterError(f"--adaptive must be at least 1, got {args.adaptive}")
     if args.adaptive is not None and (args.per_object or args.radius is not None):
@@ -242,7 +250,8 @@ def cmd_segment(args) -> int:
             from ..levels import adaptive_segment
 
             result = adaptive_segment(data, args.n_segments or DEFAULTS.n_segments,
-                                      start=args.adaptive, **kwargs)
+                                      start=args.adaptive,
+                                      compactness=args.level_compactness, **kwargs)
         else:
             result = segment(data, args.n_segments, radius=args.radius, **kwargs)
     except SuperfacetsError as exc:
@@ -253,7 +262,7 @@ def cmd_segment(args) -> int:
                  html=html_out, element_options=dict(n_neighbors=args.neighbors,
                                                      neighbor_radius=args.neighbor_radius),
                  up=args.up or "y", view=args.view, graph=graph_out, levels=args.levels,
-                 level_cost=args.level_cost)
+                 level_cost=args.level_cost, level_compactness=args.level_compactness)
     report = sys.stderr if str(seg_out) == "-" else sys.stdout  # stdout holds the labels
     if not args.quiet:
         print(_summary(Path(args.mesh).name, data, result, elapsed, kind,
