@@ -211,7 +211,7 @@ def test_planarity_levels_merge_the_flat_floor_first():
 
 
 def test_closed_form_plane_distance_is_numpys_smallest_eigenvalue():
-    from superfacets.hierarchy import _plane
+    from superfacets._kernels.hierarchy import _plane
 
     rng = np.random.default_rng(0)
     for i in range(500):
@@ -221,9 +221,9 @@ def test_closed_form_plane_distance_is_numpys_smallest_eigenvalue():
             m[2] *= 1e-6
             m[:, 2] *= 1e-6
         want = max(np.linalg.eigvalsh(m)[0], 0.0)
-        got = _plane([m[0, 0], m[1, 1], m[2, 2], m[0, 1], m[0, 2], m[1, 2]])
+        got = _plane(m[0, 0], m[1, 1], m[2, 2], m[0, 1], m[0, 2], m[1, 2])
         assert abs(got - want) <= 1e-12 * np.abs(m).max()
-    assert _plane([2.0, 2.0, 2.0, 0.0, 0.0, 0.0]) == 2.0  # a multiple of the identity
+    assert _plane(2.0, 2.0, 2.0, 0.0, 0.0, 0.0) == 2.0  # a multiple of the identity
 
 
 def test_adaptive_superpoints_spend_the_count_off_the_floor():

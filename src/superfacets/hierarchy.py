@@ -31,8 +31,6 @@ use, e.g. Superpoint Transformer's partition); ``docs/superpoints.md``.
 
 from __future__ import annotations
 
-import heapq
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -163,110 +161,33 @@ def hierarchy(graph, levels, *, alpha: float = 200.0, eta_convex: float = 0.2,
     if beta > 0 and graph.feature is None:
         raise ParameterError("beta > 0 needs the superfacets' features (graph.feature)")
 
-    area = graph.area.astype(np.float64).copy()
-    wsum = graph.centroid * area[:, None]  # area-weighted sums, merged by addition
-    fsum = None if graph.feature is None else graph.feature * area[:, None]
-    # the scatters as 6 floats (xx, yy, zz, xy, xz, yz), merged in plain floats
-    scatter = None if cost == "ward" else [
-        [float(m[0, 0]), float(m[1, 1]), float(m[2, 2]), float(m[0, 1]), float(m[0, 2]),
-         float(m[1, 2])] for m in np.asarray(graph.scatter, dtype=np.float64)]
-    nbr: list[dict[int, list[float]]] = [dict() for _ in range(k)]
-    for t in range(graph.n_edges):
-        a, b = int(graph.edge_index[0, t]), int(graph.edge_index[1, t])
-        ln = float(graph.border_length[t])
-        stats = [ln, ln * float(graph.mean_angle[t]), ln * float(graph.concave[t])]
-        nbr[a][b] = stats
-        nbr[b][a] = list(stats)
-    version = np.zeros(k, dtype=np.int64)
-    owner = np.arange(k)  # union-find: the surviving node of each merged one
+    from ._kernels.hierarchy import merge_levels
 
-    def find(s: int) -> int:
-        while owner[s] != s:
-            owner[s] = owner[owner[s]]
-            s = owner[s]
-        return s
-
-    def merged_scatter(a: int, b: int) -> list[float]:
-        aa, ab = float(area[a]), float(area[b])
-        ca, cb = wsum[a] / max(aa, 1e-300), wsum[b] / max(ab, 1e-300)
-        x, y, z = (float(ca[0] - cb[0]), float(ca[1] - cb[1]), float(ca[2] - cb[2]))
-        w = aa * ab / max(aa + ab, 1e-300)
-        sa, sb = scatter[a], scatter[b]
-        return [sa[0] + sb[0] + w * x * x, sa[1] + sb[1] + w * y * y, sa[2] + sb[2] + w * z * z,
-                sa[3] + sb[3] + w * x * y, sa[4] + sb[4] + w * x * z, sa[5] + sb[5] + w * y * z]
-
-    def merge_cost(a: int, b: int) -> float:
-        if scatter is not None:
-            c = max(_plane(merged_scatter(a, b)) - _plane(scatter[a]) - _plane(scatter[b]), 0.0)
-            if compactness > 0:
-                c += compactness * spread(a, b)
-        else:
-            c = ward(a, b)
-        if beta > 0:
-            df = fsum[a] / max(area[a], 1e-300) - fsum[b] / max(area[b], 1e-300)
-            c *= 1.0 + beta * float(np.sqrt(np.sum(df * df)))
-        return c
-
-    def spread(a: int, b: int) -> float:  # Ward's: the rise of the weighted centroid spread
-        aa, ab = area[a], area[b]
-        tot = aa + ab
-        d2 = float(np.sum((wsum[a] / max(aa, 1e-300) - wsum[b] / max(ab, 1e-300)) ** 2))
-        return aa * ab / tot * d2 if tot > 0 else 0.0
-
-    def ward(a: int, b: int) -> float:
-        ln, ang, conc = nbr[a][b]
-        if ln > 0:
-            theta, share = ang / ln, conc / ln
-        else:
-            theta, share = 0.0, 0.0
-        s = theta * (share + eta_convex * (1.0 - share))
-        return spread(a, b) * (1.0 + alpha * s / math.pi)
-
-    heap = [(merge_cost(a, b), a, b, 0, 0) for a in range(k) for b in nbr[a] if a < b]
-    heapq.heapify(heap)
+    area = np.array(graph.area, dtype=np.float64)
+    wsum = np.ascontiguousarray(graph.centroid * area[:, None], dtype=np.float64)
+    fsum = (np.zeros((k, 0)) if graph.feature is None else
+            np.ascontiguousarray(graph.feature * area[:, None], dtype=np.float64))
+    scatter = np.zeros((k, 6))
+    if cost == "planarity":  # the scatters as (xx, yy, zz, xy, xz, yz)
+        m = np.asarray(graph.scatter, dtype=np.float64)
+        scatter = np.ascontiguousarray(np.stack([m[:, 0, 0], m[:, 1, 1], m[:, 2, 2], m[:, 0, 1],
+                                                 m[:, 0, 2], m[:, 1, 2]], axis=1))
+    ln = np.asarray(graph.border_length, dtype=np.float64)
+    stats = np.ascontiguousarray(np.stack([ln, ln * graph.mean_angle, ln * graph.concave],
+                                          axis=1), dtype=np.float64).reshape(-1, 3)
+    edges = np.asarray(graph.edge_index, dtype=np.int64).reshape(2, -1)
+    roots = merge_levels(k, np.ascontiguousarray(edges[0]), np.ascontiguousarray(edges[1]),
+                         stats, area, wsum, fsum, scatter, cost == "planarity", alpha,
+                         eta_convex, beta if graph.feature is not None else 0.0, compactness,
+                         np.asarray(wanted, dtype=np.int64))
     parents = []
-    live = k
     prev = np.arange(k)  # the level-before's segment of each superfacet
-    targets = [v for v in wanted]
-    while targets:
-        if live == targets[0]:
-            roots = np.array([find(s) for s in range(k)])
-            _, top = np.unique(roots, return_inverse=True)  # numbered by lowest superfacet
-            # each segment of the previous level lies in one segment of this one
-            parent = np.zeros(int(prev.max()) + 1, dtype=np.int64)
-            parent[prev] = top
-            parents.append(parent)
-            prev = top
-            targets.pop(0)
-            continue
-        c, a, b, va, vb = heapq.heappop(heap)
-        if owner[a] != a or owner[b] != b or version[a] != va or version[b] != vb:
-            continue  # stale: one of them merged or changed since
-        # merge b into a
-        owner[b] = a
-        if scatter is not None:  # before the sums change
-            scatter[a] = merged_scatter(a, b)
-        area[a] += area[b]
-        wsum[a] += wsum[b]
-        if fsum is not None:
-            fsum[a] += fsum[b]
-        del nbr[a][b]
-        del nbr[b][a]
-        for c_, stats in nbr[b].items():
-            del nbr[c_][b]
-            if c_ in nbr[a]:
-                merged = [x + y for x, y in zip(nbr[a][c_], stats)]
-            else:
-                merged = list(stats)
-            nbr[a][c_] = merged
-            nbr[c_][a] = list(merged)
-        nbr[b] = {}
-        version[a] += 1
-        for c_ in nbr[a]:
-            lo, hi = (a, c_) if a < c_ else (c_, a)
-            heapq.heappush(heap, (merge_cost(lo, hi), lo, hi, int(version[lo]),
-                                  int(version[hi])))
-        live -= 1
+    for level in roots:
+        _, top = np.unique(level, return_inverse=True)  # numbered by lowest superfacet
+        parent = np.zeros(int(prev.max()) + 1, dtype=np.int64)
+        parent[prev] = top  # each segment of the previous level lies in one of this one
+        parents.append(parent)
+        prev = top
     return Hierarchy(levels=tuple(wanted), parents=tuple(parents))
 
 
@@ -317,24 +238,6 @@ def level_compactness(graph) -> float:
     from .adaptive import density_for
 
     return AUTO_COMPACTNESS if density_for(graph) > 0 else 0.0
-
-
-def _plane(m: list[float]) -> float:
-    """The smallest eigenvalue of the symmetric 3 x 3 matrix ``(xx, yy, zz, xy, xz, yz)``
-    (the area-weighted squared distance to the best plane of a scatter), in closed form
-    (the trigonometric solution of the characteristic cubic), >= 0."""
-    xx, yy, zz, xy, xz, yz = m
-    off = xy * xy + xz * xz + yz * yz
-    q = (xx + yy + zz) / 3.0
-    p2 = (xx - q) ** 2 + (yy - q) ** 2 + (zz - q) ** 2 + 2.0 * off
-    if p2 <= 1e-300:
-        return max(q, 0.0)
-    p = math.sqrt(p2 / 6.0)
-    a, b, c = (xx - q) / p, (yy - q) / p, (zz - q) / p
-    d, e, f = xy / p, xz / p, yz / p
-    r = 0.5 * (a * (b * c - f * f) - d * (d * c - f * e) + e * (d * f - b * e))
-    phi = math.acos(min(1.0, max(-1.0, r))) / 3.0
-    return max(q + 2.0 * p * math.cos(phi + 2.0 * math.pi / 3.0), 0.0)
 
 
 def _pieces(graph) -> int:

@@ -8,5 +8,6 @@ expansions, record merging) by :mod:`superfacets.classify` and its buffers
 touches it); ``exact`` by :mod:`superfacets.classify`; ``update`` by
 :mod:`superfacets.passes`; ``farthest`` and ``flood`` by
 :mod:`superfacets.initialization`; ``geometry`` by :mod:`superfacets.mesh`;
-``heap`` by ``exact`` and the VSA baseline's kernels.
+``heap`` by ``exact`` and the VSA baseline's kernels; ``hierarchy`` (the
+greedy merges of the levels) by :mod:`superfacets.hierarchy`.
 """
