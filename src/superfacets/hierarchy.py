@@ -23,7 +23,14 @@ neighbours merge first whatever their size, so a level spends its segments
 where the surface bends (objects, vegetation, edges) and leaves floors,
 walls and ground in large pieces, as graph-based partitions do. Run on
 superpoints several times more than the level wants, it gives content-adaptive
-superpoints (``docs/superpoints.md``, "Content-adaptive levels").
+superpoints (``docs/superpoints.md``, "Content-adaptive levels"). On a point
+cloud each point weighs one there (:func:`planarity_graph`: the points'
+least-squares planes), and ``compactness`` adds Ward's term, so that large
+flat pieces also pay for their extent (:func:`level_compactness`: on scans of
+uneven density).
+
+The merging runs in numba (:mod:`superfacets._kernels.hierarchy`): about
+0.1 s for 10,000 superpoints.
 
 Not in the paper (superpoint hierarchies are what graph networks on scans
 use, e.g. Superpoint Transformer's partition); ``docs/superpoints.md``.
