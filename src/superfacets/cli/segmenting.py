@@ -65,7 +65,7 @@ def add_parsers(sub) -> None:
                    metavar="START",
                    help="content-adaptive superpoints: segment START (default 10) times -k, "
                         "then keep the level of -k that merges the flattest neighbours first "
-                        "(rooms, aerial tiles; not LiDAR sweeps)")
+                        "(rooms, aerial tiles; on LiDAR sweeps at small -k only)")
     p.add_argument("--level-cost", choices=("ward", "planarity"), default="ward",
                    help="the levels' merge cost: ward (compact segments, the default) or "
                         "planarity (flat regions merged first: with -k several times the "
