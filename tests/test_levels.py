@@ -139,3 +139,18 @@ def test_adaptive_and_cli_take_the_compactness(tmp_path, capsys):
                      str(tmp_path / "x.seg")]) == 2
         assert "--level-compactness takes a number >= 0" in capsys.readouterr().err
     assert not (tmp_path / "x.seg").exists() and not (tmp_path / "g.npz").exists()
+
+
+def test_the_registry_runs_the_adaptive_level():
+    from superfacets import adaptive_superpoints
+    from superfacets.methods import get_method
+
+    method = get_method("adaptive")
+    pts = _bumpy_cloud(2000)
+    cfg = dict(method.defaults, start=5, compactness="0.05")
+    run = method.run(pts, 12, cache={}, seed=0, elements="points", **cfg)
+    np.testing.assert_array_equal(run.labels,
+                                  adaptive_superpoints(pts, 12, start=5, compactness=0.05))
+    auto = method.run(pts, 12, cache={}, seed=0, elements="points", **method.defaults)
+    np.testing.assert_array_equal(auto.labels, adaptive_superpoints(pts, 12))
+    assert method.defaults["start"] == 10 and "points" in method.elements

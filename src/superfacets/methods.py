@@ -196,18 +196,29 @@ def get_method(name: str) -> Method:
 
 
 def _auto(value, kind):
-    """A registry value of ``center_tol``, ``coarsen``, ``cleanup``, ``split_merge``
-    or ``density``: ``"auto"`` is None."""
+    """A registry value of ``center_tol``, ``coarsen``, ``cleanup``, ``split_merge``,
+    ``density`` or ``compactness``: ``"auto"`` is None."""
     return None if value in (None, "auto") else kind(value)
 
 
-def _run_superfacets(mesh, n_segments, *, cache, seed, weighting="paper", center_tol="auto",
-                     coarsen="auto", cleanup="auto", split_merge="auto", density="auto",
-                     **params):
-    r = segment(mesh, n_segments, weighting=weighting, center_tol=_auto(center_tol, float),
-                coarsen=_auto(coarsen, int), cleanup=_auto(cleanup, parse_bool),
-                split_merge=_auto(split_merge, parse_bool), density=_auto(density, float),
-                **params)
+def _segment_options(center_tol="auto", coarsen="auto", cleanup="auto", split_merge="auto",
+                     density="auto", **params) -> dict:
+    """The keyword arguments of :func:`superfacets.segment` from registry values."""
+    return dict(center_tol=_auto(center_tol, float), coarsen=_auto(coarsen, int),
+                cleanup=_auto(cleanup, parse_bool), split_merge=_auto(split_merge, parse_bool),
+                density=_auto(density, float), **params)
+
+
+def _run_superfacets(mesh, n_segments, *, cache, seed, weighting="paper", **params):
+    r = segment(mesh, n_segments, weighting=weighting, **_segment_options(**params))
+    return MethodRun(r.labels, r.n_iter, r.converged)
+
+
+def _run_adaptive(mesh, n_segments, *, cache, seed, start, compactness="auto", **params):
+    from .levels import adaptive_segment
+
+    r = adaptive_segment(mesh, n_segments, start=start, compactness=_auto(compactness, float),
+                         **_segment_options(**params))
     return MethodRun(r.labels, r.n_iter, r.converged)
 
 
@@ -277,6 +288,13 @@ register_method(
     sweep={"alpha": DEFAULT_ALPHAS},
     description="the paper's method: bounded Dijkstra k-means, weights of eqs. 1-3 (faces; "
                 "on vertices and points their analogues)",
+    progress=True, elements=ELEMENTS)
+register_method(
+    "adaptive", _run_adaptive, defaults=dict(_SF_DEFAULTS, start=10, compactness="auto"),
+    description="content-adaptive superpoints: the method's start x n_segments superpoints, "
+                "then the level of n_segments that merges the flattest neighbours first "
+                "(superfacets.adaptive_superpoints; compactness=auto: 0.01 on scans of uneven "
+                "density)",
     progress=True, elements=ELEMENTS)
 register_method(
     "graph_segmentation", _run_graph_segmentation, defaults=dict(k_thresh=0.0, min_size=20),
