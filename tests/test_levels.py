@@ -147,10 +147,15 @@ def test_the_registry_runs_the_adaptive_level():
 
     method = get_method("adaptive")
     pts = _bumpy_cloud(2000)
-    cfg = dict(method.defaults, start=5, compactness="0.05")
+    cfg = dict(method.defaults, start=5, level_compactness="0.05")
     run = method.run(pts, 12, cache={}, seed=0, elements="points", **cfg)
     np.testing.assert_array_equal(run.labels,
                                   adaptive_superpoints(pts, 12, start=5, compactness=0.05))
     auto = method.run(pts, 12, cache={}, seed=0, elements="points", **method.defaults)
     np.testing.assert_array_equal(auto.labels, adaptive_superpoints(pts, 12))
     assert method.defaults["start"] == 10 and "points" in method.elements
+    # a parameter may not take a metric's column of the results file
+    from superfacets.methods import register_method
+
+    with pytest.raises(ParameterError, match="reserved by the runner"):
+        register_method("x", method.run, defaults={"compactness": 0.1})

@@ -168,9 +168,12 @@ def register_method(name: str, run: Callable[..., MethodRun], *, defaults: dict,
     """
     if not name or not all(c.isalnum() or c in "_-" for c in name):
         raise ParameterError(f"invalid method name {name!r}")
-    clash = set(defaults) & {"n_segments", "seed", "cache"}
-    if clash:
-        raise ParameterError(f"parameter name(s) reserved by the runner: {sorted(clash)}")
+    from .metrics import METRICS
+
+    clash = set(defaults) & ({"n_segments", "seed", "cache"} | set(METRICS))
+    if clash:  # the results file has one column of each name
+        raise ParameterError(f"parameter name(s) reserved by the runner (its arguments and "
+                             f"the metrics' columns): {sorted(clash)}")
     m = Method(name, run, dict(defaults), dict(sweep or {}), description, progress,
                tuple(elements))
     METHODS[name] = m
@@ -197,7 +200,7 @@ def get_method(name: str) -> Method:
 
 def _auto(value, kind):
     """A registry value of ``center_tol``, ``coarsen``, ``cleanup``, ``split_merge``,
-    ``density`` or ``compactness``: ``"auto"`` is None."""
+    ``density`` or ``level_compactness``: ``"auto"`` is None."""
     return None if value in (None, "auto") else kind(value)
 
 
@@ -214,10 +217,12 @@ def _run_superfacets(mesh, n_segments, *, cache, seed, weighting="paper", **para
     return MethodRun(r.labels, r.n_iter, r.converged)
 
 
-def _run_adaptive(mesh, n_segments, *, cache, seed, start, compactness="auto", **params):
+def _run_adaptive(mesh, n_segments, *, cache, seed, start, level_compactness="auto",
+                  **params):
     from .levels import adaptive_segment
 
-    r = adaptive_segment(mesh, n_segments, start=start, compactness=_auto(compactness, float),
+    r = adaptive_segment(mesh, n_segments, start=start,
+                         compactness=_auto(level_compactness, float),
                          **_segment_options(**params))
     return MethodRun(r.labels, r.n_iter, r.converged)
 
@@ -290,11 +295,12 @@ register_method(
                 "on vertices and points their analogues)",
     progress=True, elements=ELEMENTS)
 register_method(
-    "adaptive", _run_adaptive, defaults=dict(_SF_DEFAULTS, start=10, compactness="auto"),
+    "adaptive", _run_adaptive,
+    defaults=dict(_SF_DEFAULTS, start=10, level_compactness="auto"),
     description="content-adaptive superpoints: the method's start x n_segments superpoints, "
                 "then the level of n_segments that merges the flattest neighbours first "
-                "(superfacets.adaptive_superpoints; compactness=auto: 0.01 on scans of uneven "
-                "density)",
+                "(superfacets.adaptive_superpoints; level_compactness=auto: 0.01 on scans of "
+                "uneven density)",
     progress=True, elements=ELEMENTS)
 register_method(
     "graph_segmentation", _run_graph_segmentation, defaults=dict(k_thresh=0.0, min_size=20),
