@@ -159,3 +159,34 @@ def test_the_registry_runs_the_adaptive_level():
 
     with pytest.raises(ParameterError, match="reserved by the runner"):
         register_method("x", method.run, defaults={"compactness": 0.1})
+
+
+def test_batch_writes_content_adaptive_superpoints(tmp_path, capsys):
+    from superfacets import adaptive_superpoints
+    from superfacets.cli import main
+    from superfacets.runner.batch import run_batch
+
+    corpus = tmp_path / "in"
+    corpus.mkdir()
+    clouds = {name: _bumpy_cloud(1500, seed) for seed, name in enumerate(("a", "b"))}
+    for name, pts in clouds.items():
+        np.savetxt(corpus / f"{name}.xyz", pts)
+    out = tmp_path / "out"
+    s = run_batch([str(corpus)], out, 10, adaptive=4, level_compactness=0.05, workers=1,
+                  progress=False)
+    assert s.ok == 2
+    for name, pts in clouds.items():
+        np.testing.assert_array_equal(np.loadtxt(out / f"{name}.seg", dtype=np.int64),
+                                      adaptive_superpoints(pts, 10, start=4, compactness=0.05))
+    with pytest.raises(ParameterError, match=r"adaptive.start 4 -> 5"):  # never mixed
+        run_batch([str(corpus)], out, 10, adaptive=5, workers=1, progress=False)
+    with pytest.raises(ParameterError, match="adaptive takes n_segments"):
+        run_batch([str(corpus)], tmp_path / "o2", 10, adaptive=4, per_object=True, workers=1)
+    with pytest.raises(ParameterError, match="level_compactness goes with adaptive"):
+        run_batch([str(corpus)], tmp_path / "o2", 10, level_compactness=0.1, workers=1)
+    # the command line: the same labels
+    assert main(["batch", str(corpus), "-o", str(tmp_path / "o3"), "-k", "10", "--adaptive",
+                 "4", "--level-compactness", "0.05", "--workers", "1", "-q"]) == 0
+    np.testing.assert_array_equal(np.loadtxt(tmp_path / "o3" / "a.seg", dtype=np.int64),
+                                  np.loadtxt(out / "a.seg", dtype=np.int64))
+    assert not (tmp_path / "o2").exists()

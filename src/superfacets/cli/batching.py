@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import sys
 
-from .options import (add_camera_options, add_element_options, add_engine_options,
-                      add_method_options,
+from .options import (add_adaptive_options, add_camera_options, add_element_options,
+                      add_engine_options, add_method_options,
                       element_kwargs, int_arg,
                       method_kwargs)
 
@@ -57,6 +57,7 @@ def add_parsers(sub) -> None:
                    help="scenes: segment each object on its own (-k shared out by area)")
     add_engine_options(b, sees="its workers read the inputs and write OUTDIR, so both "
                                 "must be on a shared filesystem")
+    add_adaptive_options(b, levels=False)
     b.add_argument("--memory-limit", default="auto", metavar="SIZE",
                    help="memory of each local worker, e.g. 4GiB; a worker going over is "
                         "restarted and its input fails after Dask's retries (default: auto, "
@@ -79,7 +80,9 @@ def cmd_batch(args) -> int:
                   labels=args.labels, header=args.header, colored_mesh=args.colored_mesh,
                   vertex_colors=args.vertex_colors, picture=args.picture, html=args.html,
                   up=args.up or "y", view=args.view,
-                  per_object=args.per_object, workers=args.workers, scheduler=args.scheduler,
+                  per_object=args.per_object, adaptive=args.adaptive,
+                  level_compactness=args.level_compactness,
+                  workers=args.workers, scheduler=args.scheduler,
                   memory_limit=args.memory_limit, retry_failed=args.retry_failed,
                   progress=not args.quiet and (sys.stderr.isatty() if args.progress is None
                                                else args.progress), **kwargs)

@@ -212,6 +212,19 @@ def add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> No
                         "meshes of 500,000 faces or more when stderr is a terminal)")
 
 
+def add_adaptive_options(p: argparse.ArgumentParser, levels: bool = True) -> None:
+    """``--adaptive [START]`` and ``--level-compactness C`` (of ``segment`` and ``batch``)."""
+    p.add_argument("--adaptive", nargs="?", const=10, default=None, type=int_arg,
+                   metavar="START",
+                   help="content-adaptive superpoints: segment START (default 10) times -k, "
+                        "then keep the level of -k that merges the flattest neighbours first "
+                        "(rooms, aerial tiles; on LiDAR sweeps at small -k only)")
+    p.add_argument("--level-compactness", type=float, default=None, metavar="C",
+                   help=("planarity levels and " if levels else "") + "--adaptive: weight of "
+                        "the segments' extent (default: 0.01 on a scan of uneven density, "
+                        "else 0)")
+
+
 def add_element_options(p: argparse.ArgumentParser) -> None:
     """What is segmented: faces, vertices or points, and the point graph's neighbourhood."""
     p.add_argument("--elements", choices=ELEMENTS, default=None,

@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from ..params import DEFAULTS
-from .options import (add_camera_options, add_element_options, add_method_options,
+from .options import (add_adaptive_options, add_camera_options, add_element_options,
+                      add_method_options,
                       add_scan_options, scan_cloud,
                       check_labels_output,
                       check_output, element_kwargs, fmt_value, int_arg,
@@ -61,18 +62,11 @@ def add_parsers(sub) -> None:
                    help="with --graph: also a nested hierarchy of coarser levels of N1, "
                         "N2, ... segments, each connected (parent_<i> and labels_<i> in the "
                         ".npz)")
-    p.add_argument("--adaptive", nargs="?", const=10, default=None, type=int_arg,
-                   metavar="START",
-                   help="content-adaptive superpoints: segment START (default 10) times -k, "
-                        "then keep the level of -k that merges the flattest neighbours first "
-                        "(rooms, aerial tiles; on LiDAR sweeps at small -k only)")
+    add_adaptive_options(p)
     p.add_argument("--level-cost", choices=("ward", "planarity"), default="ward",
                    help="the levels' merge cost: ward (compact segments, the default) or "
                         "planarity (flat regions merged first: with -k several times the "
                         "level, content-adaptive superpoints)")
-    p.add_argument("--level-compactness", type=float, default=None, metavar="C",
-                   help="planarity levels and --adaptive: weight of the segments' extent "
-                        "(default: 0.01 on a scan of uneven density, else 0)")
     p.add_argument("--per-object", action="store_true",
                    help="segment each object of a scene on its own (-k shared out by area); "
                         "labels stay unique over the scene")

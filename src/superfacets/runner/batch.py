@@ -103,6 +103,14 @@ def _segment_and_write(task: dict, label_rel: str) -> dict:
         opts.pop("radius", None)
         k = opts.pop("n_segments", None)
         result = JoinedResult(*segment_objects(data, *(() if k is None else (k,)), **opts))
+    elif task.get("adaptive"):
+        from ..levels import adaptive_segment
+        from ..params import DEFAULTS
+
+        opts.pop("radius", None)
+        k = opts.pop("n_segments", None) or DEFAULTS.n_segments
+        result = adaptive_segment(data, k, start=task["adaptive"]["start"],
+                                  compactness=task["adaptive"]["compactness"], **opts)
     else:
         result = segment(data, **opts)
     n = data.n_total if kind == "points" else (data.n_vertices if kind == "vertices"
@@ -173,7 +181,8 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
               radius: float | None = None, labels: str = "seg", header: bool = False,
               colored_mesh: str | None = None, vertex_colors: bool = False,
               picture: bool = False, html: bool = False, up="y", view=None,
-              per_object: bool = False,
+              per_object: bool = False, adaptive: int | None = None,
+              level_compactness: float | None = None,
               workers: int | None = None, scheduler: str | None = None,
               memory_limit="auto", retry_failed: bool = False, progress: bool = True,
               n_threads: int = 1, dask: bool | None = None, **options) -> BatchSummary:
@@ -203,6 +212,12 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         default: up is +y, the view automatic).
     per_object : bool, default False
         Scenes: each object segmented on its own (k shared out by area).
+    adaptive : int, optional
+        Content-adaptive superpoints (:func:`superfacets.adaptive_superpoints`)
+        with this ``start`` (``>= 1``; with ``n_segments``, not ``radius`` or
+        ``per_object``).
+    level_compactness : float, optional
+        Their ``compactness`` (default: left to the method).
     workers : int, optional
         Local worker processes (default: one per core); 1 runs in this process.
     scheduler : str, optional
@@ -243,7 +258,7 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
     >>> s.ok, s.failed, s.manifest                          # doctest: +SKIP
     (12, 0, PosixPath('out/manifest.parquet'))
     """
-    from ..params import check_choice, check_int, resolve
+    from ..params import check_choice, check_int, check_nonneg, resolve
 
     outdir = Path(outdir)
     if outdir.exists() and not outdir.is_dir():
@@ -256,6 +271,15 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         check_choice("colored_mesh", colored_mesh, ("ply", "glb", "obj"))
     if per_object and radius is not None:
         raise ParameterError("per_object takes n_segments, not radius")
+    if adaptive is not None:
+        adaptive = check_int("adaptive", adaptive, lo=1)
+        if per_object or radius is not None:
+            raise ParameterError("adaptive takes n_segments, on one segmentation (not radius "
+                                 "or per_object)")
+    if level_compactness is not None:
+        if adaptive is None:
+            raise ParameterError("level_compactness goes with adaptive")
+        level_compactness = check_nonneg("level_compactness", level_compactness)
     if workers is not None:
         check_int("workers", workers, lo=1)
     n_threads = check_int("n_threads", n_threads, lo=1)
@@ -279,6 +303,10 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
     recorded = {"segment": _jsonable({k: v for k, v in resolved.items()  # defaults filled
                                       if k not in ("n_threads", "progress")}),
                 "outputs": outputs, "per_object": bool(per_object)}
+    level = None
+    if adaptive is not None:  # recorded only where on (folders of earlier runs resume)
+        level = {"start": adaptive, "compactness": level_compactness}
+        recorded["adaptive"] = level
     known = check_options(outdir, recorded)  # before the engine starts: a quick refusal
     work = bool(_todo(files, read_manifest(outdir) if known else [], retry_failed))
     # the engine (a cluster to start or reach) only where there is work, before any is done
@@ -288,8 +316,8 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         with FolderLock(outdir):
             if not known and not check_options(outdir, recorded):
                 record_options(outdir, recorded)
-            return _run(files, outdir, seg_opts, outputs, per_object, engine, retry_failed,
-                        progress)
+            return _run(files, outdir, seg_opts, outputs, per_object, level, engine,
+                        retry_failed, progress)
 
 
 def _done(row, retry_failed: bool) -> bool:
@@ -308,7 +336,7 @@ def _jsonable(d: dict) -> dict:
             for k, v in sorted(d.items())}
 
 
-def _run(files, outdir, seg_opts, outputs, per_object, engine, retry_failed,
+def _run(files, outdir, seg_opts, outputs, per_object, level, engine, retry_failed,
          progress) -> BatchSummary:
     rows = {r["input"]: r for r in read_manifest(outdir)}  # again, under the lock
     summary = BatchSummary(outdir / "manifest.parquet", inputs=len(files))
@@ -326,7 +354,7 @@ def _run(files, outdir, seg_opts, outputs, per_object, engine, retry_failed,
     names.update(output_names([f for f in todo if f not in earlier], reserved))
     tasks = [{"input": keys[f], "outdir": str(outdir.resolve()), "name": names[f],
               "options": dict(seg_opts, progress=False), "outputs": outputs,
-              "per_object": per_object} for f in _largest_first(todo)]
+              "per_object": per_object, "adaptive": level} for f in _largest_first(todo)]
     t0 = time.perf_counter()
     journal_path = outdir / JOURNAL
     bar = None
