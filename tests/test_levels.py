@@ -190,3 +190,12 @@ def test_batch_writes_content_adaptive_superpoints(tmp_path, capsys):
     np.testing.assert_array_equal(np.loadtxt(tmp_path / "o3" / "a.seg", dtype=np.int64),
                                   np.loadtxt(out / "a.seg", dtype=np.int64))
     assert not (tmp_path / "o2").exists()
+
+
+@pytest.mark.parametrize("module", ["superfacets.hierarchy", "superfacets.levels"])
+def test_the_examples_in_the_docstrings_run(module):
+    import doctest
+    import importlib
+
+    result = doctest.testmod(importlib.import_module(module), optionflags=doctest.ELLIPSIS)
+    assert result.attempted > 0 and result.failed == 0

@@ -239,9 +239,35 @@ def planarity_graph(graph, labels, features=None):
 
 
 def level_compactness(graph) -> float:
-    """``compactness`` of a planarity level left to the method: :data:`AUTO_COMPACTNESS`
-    on a point cloud whose sizes spread as a scan's whose density falls with the
-    range (:func:`superfacets.adaptive.density_for`), 0 elsewhere."""
+    """``compactness`` of a planarity level left to the method.
+
+    :data:`AUTO_COMPACTNESS` on a point cloud whose point sizes spread like
+    those of a scan whose density falls with the range (the cue of the
+    automatic ``density``, :func:`superfacets.adaptive.density_for`), 0
+    elsewhere (meshes, clouds of even density).
+
+    Parameters
+    ----------
+    graph : ElementGraph
+        The run's element graph (``result.elements.graph``).
+
+    Returns
+    -------
+    float
+        ``AUTO_COMPACTNESS`` (0.01) or 0.0.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from superfacets.cloud import PointCloud
+    >>> from superfacets.elements.points import point_graph
+    >>> rng = np.random.default_rng(0)
+    >>> even = rng.random((4000, 2))
+    >>> uneven = np.r_[even * [0.5, 1], rng.random((300, 2)) * [0.5, 1] + [0.5, 0]]
+    >>> [level_compactness(point_graph(PointCloud(np.c_[xy, np.zeros(len(xy))])).graph)
+    ...  for xy in (even, uneven)]
+    [0.0, 0.01]
+    """
     from .adaptive import density_for
 
     return AUTO_COMPACTNESS if density_for(graph) > 0 else 0.0
