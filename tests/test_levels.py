@@ -131,6 +131,9 @@ def test_adaptive_and_cli_take_the_compactness(tmp_path, capsys):
     assert main(["segment", str(path), "-k", "12", "--adaptive", "5", "--level-compactness",
                  "0.05", "-o", str(tmp_path / "c.seg")]) == 0
     np.testing.assert_array_equal(np.loadtxt(tmp_path / "c.seg", dtype=np.int64), want)
+    said = capsys.readouterr().out
+    assert "12 content-adaptive superpoints (merged from 5 times as many)" in said
+    assert "--min-elements" not in said  # the start's hints do not apply to the level
     for bad in (["--level-compactness", "0.1"],
                 ["--adaptive", "--level-compactness", "-1"],
                 ["--graph", str(tmp_path / "g.npz"), "--levels", "5",

@@ -130,13 +130,16 @@ def _summary(name: str, mesh, result, seconds: float, elements: str = "faces",
         what = (f"{mesh.n_faces} faces{kind}{objs}" if elements == "faces" else
                 f"{mesh.n_vertices} vertices ({mesh.n_faces} faces{kind})")
         segs = "superfacets" if elements == "faces" else "superpoints"
+    start = (getattr(result, "params", None) or {}).get("start")
+    if start:  # --adaptive: the iterations and the hints are of the start's segmentation
+        segs = f"content-adaptive {segs} (merged from {start} times as many)"
     t = getattr(result, "timings", None) or {}
     coarse = (f", after {t['coarse_passes']} on {t['coarse_elements']:,} clusters "
               f"(coarse-to-fine)" if t.get("coarse_elements") and "coarse_passes" in t else "")
     swaps = f", {t['swaps']} split-and-merge swaps" if "swaps" in t else ""
     return (f"{name}: {what}, {result.n_segments} {segs}, "
             f"{result.n_iter} iterations ({state}){coarse}{swaps}, {seconds:.2f} s"
-            f"{_tiny_hint(result) if elements == 'points' else ''}")
+            f"{_tiny_hint(result) if elements == 'points' and not start else ''}")
 
 
 def _tiny_hint(result) -> str:
