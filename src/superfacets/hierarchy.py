@@ -258,15 +258,16 @@ def level_compactness(graph) -> float:
 
     Examples
     --------
-    >>> import numpy as np
+    >>> import numpy as np, trimesh
+    >>> from superfacets import segment
     >>> from superfacets.cloud import PointCloud
     >>> from superfacets.elements.points import point_graph
-    >>> rng = np.random.default_rng(0)
-    >>> even = rng.random((4000, 2))
-    >>> uneven = np.r_[even * [0.5, 1], rng.random((300, 2)) * [0.5, 1] + [0.5, 0]]
-    >>> [level_compactness(point_graph(PointCloud(np.c_[xy, np.zeros(len(xy))])).graph)
-    ...  for xy in (even, uneven)]
-    [0.0, 0.01]
+    >>> level_compactness(segment(trimesh.creation.icosphere(), 10).elements.graph)  # faces
+    0.0
+    >>> rng = np.random.default_rng(1)   # a dense square, a sparse one beside it
+    >>> xy = np.r_[rng.random((3000, 2)), rng.random((200, 2)) + [1.0, 0.0]]
+    >>> level_compactness(point_graph(PointCloud(np.c_[xy, np.zeros(3200)])).graph)
+    0.01
     """
     from .adaptive import density_for
 
