@@ -2,8 +2,8 @@
 
 Usage: python benchmarks/real_scans.py [--scans NAME ...] [-k 300 1000 3000]
        [--methods superfacets graph_segmentation cut_pursuit vccs] [--beta 0 50]
-       [--neighbors 10] [--split-merge] [--min-points 3] [--content] [--csv results.csv]
-       [--download]
+       [--neighbors 10] [--split-merge] [--min-points 3] [--content] [--adaptive]
+       [--leave-out CLASS ...] [--csv results.csv] [--download]
 
 Each scan of ``superfacets.datasets.scans.SCANS`` found in the cache
 (``$SUPERFACETS_SCANS``, default ``~/.cache/superfacets/scans``; ``--download``
@@ -29,7 +29,8 @@ Methods (the registry's, so ``superfacets experiment`` runs the same code):
   split-and-merge (off by default on points); with ``--min-points N`` also
   its superpoints of fewer than N points merged into a neighbour
   (``segment(..., min_elements=N)``), the request raised until
-  the count is reached;
+  the count is reached; with ``--adaptive`` also the content-adaptive
+  superpoints (``adaptive_superpoints``: exactly k);
 - ``graph_segmentation``: the ScanNet Segmentator's method, its threshold
   searched for k;
 - ``cut_pursuit``: Superpoint Graph's partition (``cut-pursuit-py``, the
