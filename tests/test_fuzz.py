@@ -82,3 +82,110 @@ def test_damaged_files_through_segment(name, tmp_path, capsys):
         err = capsys.readouterr().err
         assert rc in (0, 2) and "Traceback" not in err
         assert (out.exists() and ply.exists()) == (rc == 0)
+
+
+def _cloud_seeds() -> dict:
+    """Small valid point clouds of every cloud format (LAS/LAZ where laspy and lazrs are)."""
+    rng = np.random.default_rng(3)
+    pts = rng.random((300, 3))
+    rgb = (rng.random((300, 3)) * 255).astype(np.uint8)
+    text = "".join(f"{x:.4f} {y:.4f} {z:.4f}\n" for x, y, z in pts).encode()
+    pcd = ("# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+           f"WIDTH 300\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 300\nDATA binary\n").encode()
+    seeds = {"c.xyz": text, "c.pts": b"300\n" + text, "c.npy": malformed._npy(pts),
+             "c.pcd": pcd + pts.astype("<f4").tobytes(),
+             "c.ply": trimesh.PointCloud(pts, colors=rgb).export(file_type="ply")}
+    for name, las in _las_files(pts, rgb).items():
+        seeds[name] = las
+    return seeds
+
+
+def _las_files(pts, rgb) -> dict:
+    import io
+
+    try:
+        import laspy
+    except ImportError:
+        return {}
+    header = laspy.LasHeader(point_format=3, version="1.2")
+    header.scales = [0.001] * 3
+    las = laspy.LasData(header)
+    las.x, las.y, las.z = pts.T
+    las.red, las.green, las.blue = rgb.T.astype(np.uint16) * 256
+    out = {}
+    for name, compress in (("c.las", False), ("c.laz", True)):
+        buf = io.BytesIO()
+        try:
+            las.write(buf, do_compress=compress)
+        except Exception:  # noqa: BLE001 - no LAZ backend
+            continue
+        out[name] = buf.getvalue()
+    return out
+
+
+@pytest.mark.parametrize("name", sorted(_cloud_seeds()))
+def test_damaged_point_clouds_give_clear_errors(name, tmp_path):
+    from superfacets import read_cloud
+
+    rng = random.Random("cloud" + name)
+    data = _cloud_seeds()[name]
+    path = tmp_path / name
+    for _ in range(40):
+        path.write_bytes(_damage(data, rng))
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            try:
+                read_cloud(path)
+            except (SuperfacetsError, OSError):
+                pass
+
+
+_READ_ALL_WAYS = """
+import sys
+from superfacets.errors import SuperfacetsError
+from superfacets.io.clouds import read_cloud
+from superfacets.io.labels import read_field
+from superfacets.io.regions import RegionReader
+for read in (read_cloud, lambda p: read_field(p, "classification"), RegionReader.open):
+    try:
+        read(sys.argv[1])
+        print("read")
+    except SuperfacetsError as exc:
+        print("error:", exc)
+"""
+
+
+@pytest.mark.parametrize("damage", ["count", "offset", "truncated"])
+def test_laz_with_a_damaged_chunk_table_is_refused_not_aborted(damage, tmp_path):
+    """lazrs aborts the whole process (no Python exception) when a LAZ file's chunk table
+    declares more chunks than it can allocate: every reader refuses such a file first."""
+    import struct
+    import subprocess
+    import sys
+
+    rng = np.random.default_rng(0)
+    laz = _las_files(rng.random((300, 3)), np.zeros((300, 3), np.uint8)).get("c.laz")
+    if laz is None:
+        pytest.skip("no LAZ backend (laspy with lazrs) installed")
+    data = bytearray(laz)
+    start = struct.unpack_from("<I", data, 96)[0]
+    table = struct.unpack_from("<q", data, start)[0]
+    if damage == "count":  # about 68 GB of table entries
+        struct.pack_into("<I", data, table + 4, 0xFFFFFFF0)
+    elif damage == "offset":
+        struct.pack_into("<q", data, start, len(data) + 1000)
+    else:
+        data = data[:table + 2]
+    path = tmp_path / "c.laz"
+    path.write_bytes(bytes(data))
+    run = subprocess.run([sys.executable, "-c", _READ_ALL_WAYS, str(path)],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-2000:]
+    lines = run.stdout.splitlines()
+    assert len(lines) == 3 and all(ln.startswith("error:") for ln in lines), lines
+    assert all("damaged LAZ file" in ln for ln in lines), lines
+    # the file as written reads
+    path.write_bytes(laz)
+    run = subprocess.run([sys.executable, "-c", _READ_ALL_WAYS, str(path)],
+                         capture_output=True, text=True, timeout=300)
+    assert run.stdout.splitlines()[:1] == ["read"], run.stdout + run.stderr[-2000:]

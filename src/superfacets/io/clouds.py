@@ -23,7 +23,9 @@ error naming its row.
 from __future__ import annotations
 
 import io
+import os
 import re
+import struct
 from pathlib import Path
 
 import numpy as np
@@ -33,7 +35,7 @@ from ..rgb import unit_colors
 from .files import read_bytes, split_suffix
 from .ply import ply_colors
 
-__all__ = ["read_cloud", "CLOUD_FORMATS", "is_cloud_file"]
+__all__ = ["read_cloud", "CLOUD_FORMATS", "is_cloud_file", "check_laz"]
 
 #: Point-cloud formats of :func:`read_cloud` (PLY files are clouds when they have no faces).
 CLOUD_FORMATS = ("pcd", "xyz", "pts", "txt", "npy", "las", "laz")
@@ -138,11 +140,12 @@ def _read_ply(data: bytes, path: Path) -> dict:
         if missing:
             raise MeshFormatError(f"{path}: the vertex element has no {', '.join(missing)} "
                                   f"property (it has: {', '.join(names)})")
-        pts = np.stack([np.asarray(vert[c], dtype=np.float64) for c in "xyz"], axis=1)
-        nrm = None
-        if all(c in names for c in ("nx", "ny", "nz")):
-            nrm = np.stack([np.asarray(vert[c], dtype=np.float64) for c in ("nx", "ny", "nz")],
-                           axis=1)
+        with np.errstate(invalid="ignore"):  # a signalling NaN: the rows check names it
+            pts = np.stack([np.asarray(vert[c], dtype=np.float64) for c in "xyz"], axis=1)
+            nrm = None
+            if all(c in names for c in ("nx", "ny", "nz")):
+                nrm = np.stack([np.asarray(vert[c], dtype=np.float64)
+                                for c in ("nx", "ny", "nz")], axis=1)
         col = ply_colors(vert)
     except (PlyParseError, KeyError, ValueError, IndexError, TypeError, EOFError,
             MemoryError) as exc:
@@ -211,6 +214,7 @@ def _read_las(path: Path) -> dict:
         raise FileNotFoundError(f"{path}: no such file")
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a directory")
+    check_laz(path)
     try:
         las = laspy.read(path)
         pts = np.stack([np.asarray(las.x), np.asarray(las.y), np.asarray(las.z)], axis=1)
@@ -224,6 +228,65 @@ def _read_las(path: Path) -> dict:
     # LAS z is elevation: an airborne, mobile or terrestrial scan sees its surfaces from
     # above or from the side, so estimated normals are turned upwards piece by piece
     return {"points": pts.astype(np.float64), "colors": col, "up": np.array([0.0, 0.0, 1.0])}
+
+
+#: The smallest point record of any LAS point format (format 0), in bytes: each chunk
+#: of a LAZ file begins with one point stored raw, so a chunk takes at least this much.
+_SMALLEST_RECORD = 20
+
+
+def check_laz(path) -> None:
+    """Refuse a LAZ file whose chunk table cannot be right, before ``lazrs`` reads it.
+
+    LAZ data is compressed in chunks listed in a table near the end of the
+    file. ``lazrs`` allocates that table from the count it declares, and a
+    count it cannot allocate (a damaged or truncated file) aborts the whole
+    process, where Python would raise ``MemoryError``. Each chunk begins with
+    one point stored raw, so a count larger than the point data can hold is
+    refused here with a clear error. Files that are not compressed LAS (or
+    are too short to be LAS at all) pass, and laspy says what is wrong.
+
+    Parameters
+    ----------
+    path : str or Path
+        A ``.las`` or ``.laz`` file (LAZ is told by the point format's
+        compression bits, not by the suffix).
+
+    Raises
+    ------
+    MeshFormatError
+        If the chunk table's position lies outside the file, or it declares
+        more chunks than the points can fill.
+
+    Examples
+    --------
+    >>> check_laz("missing.laz")
+    Traceback (most recent call last):
+    ...
+    FileNotFoundError: [Errno 2] No such file or directory: 'missing.laz'
+    """
+    with open(path, "rb") as f:
+        head = f.read(107)
+        if len(head) < 107 or head[:4] != b"LASF" or not head[104] & 0xC0:
+            return
+        size = os.fstat(f.fileno()).st_size
+        start = struct.unpack_from("<I", head, 96)[0]  # the offset to the point data
+        f.seek(start)
+        raw = f.read(8)
+        table = struct.unpack("<q", raw)[0] if len(raw) == 8 else -2
+        if table == -1 and size >= 8:  # written as a stream: the offset is at the very end
+            f.seek(size - 8)
+            table = struct.unpack("<q", f.read(8))[0]
+        if not start + 8 <= table <= size - 8:
+            raise MeshFormatError(f"{path}: damaged LAZ file: its chunk table should start "
+                                  f"at byte {table}, outside its {size} bytes (truncated?)")
+        f.seek(table)
+        count = struct.unpack("<4xI", f.read(8))[0]
+    most = (table - start - 8) // _SMALLEST_RECORD + 1
+    if count > most:
+        raise MeshFormatError(f"{path}: damaged LAZ file: its chunk table declares {count} "
+                              f"chunks, more than its {table - start - 8} bytes of points "
+                              f"can hold ({most} at most)")
 
 
 def _read_npy(data: bytes, path: Path) -> dict:

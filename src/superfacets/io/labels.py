@@ -180,7 +180,10 @@ def read_field(path, name: str) -> np.ndarray:
     if fmt in ("las", "laz"):
         from ..extras import require
 
+        from .clouds import check_laz
+
         laspy = require("laspy", "reading LAS/LAZ files")
+        check_laz(path)
         try:
             las = laspy.read(path)
             names = list(las.point_format.dimension_names)

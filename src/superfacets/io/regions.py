@@ -128,7 +128,10 @@ class RegionReader:
         if suffix in ("las", "laz"):
             from ..extras import require
 
+            from .clouds import check_laz
+
             laspy = require("laspy", "reading LAS/LAZ files")
+            check_laz(p)
             try:
                 with laspy.open(p) as f:
                     n = int(f.header.point_count)
