@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from superfacets import Mesh, ParameterError, paper_weights, shlafman_weights
+from superfacets import Mesh, ParameterError, paper_weights, segment, shlafman_weights
 from superfacets.elements import build_face_graph
 from superfacets.weights import edge_weights
 from superfacets.elements import face_graph
@@ -437,6 +437,55 @@ def test_knn_layout_is_the_csr_of_the_distinct_symmetric_pairs(seed):
     for got, ref in zip((indptr, indices, dual_edge), want):
         np.testing.assert_array_equal(got, ref)
     assert indices.dtype == np.int32 and dual_edge.dtype == np.int32
+
+
+def test_a_point_listed_as_its_own_neighbour_is_no_edge():
+    """The kernel once left a pair slot unwritten (garbage indices) for a self entry."""
+    from superfacets._kernels.adjacency import knn_csr
+
+    rng = np.random.default_rng(2)
+    n, k = 50, 4
+    nbr = np.stack([rng.choice(np.r_[:i, i + 1:n], k, replace=False) for i in range(n)])
+    keep = np.ones((n, k), dtype=bool)
+    rows, more = np.array([3, 7]), np.stack([np.arange(8), np.arange(8) + 1])
+    empty = (np.zeros(0, dtype=np.int64), np.zeros((0, 1), dtype=np.int64),
+             np.zeros((0, 1), dtype=bool))
+    want = [knn_csr(nbr, keep, np.empty(n + 1, dtype=np.int64), *empty)]
+    selfish = nbr.copy()
+    selfish[[5, 9], 2] = [5, 9]  # two points list themselves instead of a neighbour
+    keep2 = keep.copy()
+    keep2[[5, 9], 2] = True
+    indptr = np.empty(n + 1, dtype=np.int64)
+    indices, dual, pairs = knn_csr(selfish, keep2, indptr, rows, more,
+                                   np.ones(more.shape, dtype=bool))
+    assert (pairs[:, 0] < pairs[:, 1]).all() and pairs.max() < n
+    assert not any(i in indices[indptr[i]:indptr[i + 1]] for i in range(n))
+    ok = keep.copy()
+    ok[[5, 9], 2] = False  # the same graph as leaving those entries out
+    ref = knn_csr(nbr, ok, np.empty(n + 1, dtype=np.int64), rows, more,
+                  np.ones(more.shape, dtype=bool))
+    np.testing.assert_array_equal(pairs, ref[2])
+    np.testing.assert_array_equal(indices, ref[0])
+    assert want[0][2].shape[0] > 0
+
+
+def test_points_closer_than_the_squared_distance_can_hold_are_two_points():
+    """Two distinct points 4e-312 apart are at distance 0 for the KD-tree, which may
+    list the other first: each is still its own first neighbour, and no point is its
+    own neighbour in the graph (the graph held uninitialized pairs before)."""
+    from superfacets.cloud import PointCloud
+    from superfacets.elements.points import point_graph
+
+    pts = np.random.default_rng(0).random((400, 3))
+    pts[274] = [3.98616432e-312, 0, 0]
+    pts[275] = [0, 0, 0]
+    g = point_graph(PointCloud(pts)).graph
+    assert g.n_elements == 400
+    assert (g.pairs[:, 0] < g.pairs[:, 1]).all() and g.pairs.max() < 400
+    rows = np.repeat(np.arange(g.n_elements), np.diff(g.indptr))
+    assert not (rows == g.indices).any()
+    labels = segment(pts, 5).labels
+    assert labels.min() == 0 and labels.max() == 4
 
 
 def test_points_are_indexed_along_a_z_order_curve():

@@ -320,17 +320,17 @@ def knn_csr(nbr, keep, indptr, rows, more, more_keep):
     of length 0). Fills ``indptr`` (n + 1); returns ``indices`` (int32, ascending per
     row), ``dual_edge`` (int32: the pair of each entry) and ``pairs`` (e, 2) int64,
     listed in ``(lo, hi)`` order: the layout :func:`csr_of_pairs` gives from the
-    sorted distinct pairs."""
+    sorted distinct pairs. A point listed as its own neighbour is no edge."""
     n, k = nbr.shape
     count = np.zeros(n + 1, dtype=np.int64)
     for i in range(n):
         for c in range(k):
-            if keep[i, c]:
+            if keep[i, c] and nbr[i, c] != i:
                 count[i + 1] += 1
                 count[nbr[i, c] + 1] += 1
     for t in range(rows.shape[0]):
         for c in range(more.shape[1]):
-            if more_keep[t, c]:
+            if more_keep[t, c] and more[t, c] != rows[t]:
                 count[rows[t] + 1] += 1
                 count[more[t, c] + 1] += 1
     for i in range(n):
@@ -339,7 +339,7 @@ def knn_csr(nbr, keep, indptr, rows, more, more_keep):
     fill = count[:n].copy()
     for i in range(n):
         for c in range(k):
-            if keep[i, c]:
+            if keep[i, c] and nbr[i, c] != i:
                 j = nbr[i, c]
                 raw[fill[i]] = j
                 fill[i] += 1
@@ -348,7 +348,7 @@ def knn_csr(nbr, keep, indptr, rows, more, more_keep):
     for t in range(rows.shape[0]):
         i = rows[t]
         for c in range(more.shape[1]):
-            if more_keep[t, c]:
+            if more_keep[t, c] and more[t, c] != i:
                 j = more[t, c]
                 raw[fill[i]] = j
                 fill[i] += 1

@@ -42,7 +42,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..mesh import column_bounds
+from ..bounds import column_bounds
 from .graph import ElementGraph, adjacency_csr, cached_on
 from .vertices import _REBUILD_PAIRS, symmetric_terms
 
@@ -276,17 +276,35 @@ def _break_ties(tree, pts: np.ndarray, dist: np.ndarray, nbr: np.ndarray, k: int
         dist[row, :k + 1] = np.sqrt(((pts[pick] - q[row]) ** 2).sum(axis=1))
 
 
-def _query(tree, pts: np.ndarray, queries: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
-    """The ``k + 1`` nearest points of each query (itself first, for a point of the
-    cloud), ties at the k-th distance to the lowest index (:func:`_break_ties`)."""
+def _query(tree, pts: np.ndarray, queries: np.ndarray, k: int,
+           own: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The ``k + 1`` nearest points of each query, itself first (``own``: the queries'
+    indices among the points, default every point in order), ties at the k-th distance
+    to the lowest index (:func:`_break_ties`)."""
     m = queries.shape[0]
     extra = 1 if k + 1 < pts.shape[0] else 0  # one column more to see ties
     dist, nbr = tree.query(queries, k=k + 1 + extra, workers=-1)
     dist, nbr = dist.reshape(m, -1), nbr.reshape(m, -1)
     if extra:
         _break_ties(tree, pts, dist, nbr, k, queries)
+    _itself_first(nbr, np.arange(m) if own is None else own)
+    if extra:
         dist, nbr = dist[:, :k + 1], nbr[:, :k + 1]
     return dist, nbr
+
+
+def _itself_first(nbr: np.ndarray, own: np.ndarray) -> None:
+    """Put each query's own index in column 0, in place, the others shifted right.
+
+    A point is its own nearest at distance 0, but distinct points closer than about
+    1e-154 are at distance 0 too (the squared distance underflows), and the tree may
+    list such a twin first; as a neighbour of itself a point would then be an edge of
+    its own. (Their distances are all 0: only the indices move.)"""
+    for r in np.flatnonzero(nbr[:, 0] != own).tolist():
+        at = np.flatnonzero(nbr[r] == own[r])
+        end = int(at[0]) if at.size else nbr.shape[1] - 1  # not listed: drop the last
+        nbr[r, 1:end + 1] = nbr[r, :end].copy()
+        nbr[r, 0] = own[r]
 
 
 def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
@@ -364,7 +382,7 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
     more = np.zeros((0, 1), dtype=np.int64)
     more_keep = np.zeros((0, 1), dtype=bool)
     if wide.size:
-        more_d, more = _query(tree, pts, pts[wide], k_wide)
+        more_d, more = _query(tree, pts, pts[wide], k_wide, wide)
         more, more_d = more[:, 1:], more_d[:, 1:]
         more_keep = np.ones(more.shape, dtype=bool) if neighbor_radius is None else (
             more_d <= neighbor_radius * diagonal)
@@ -387,6 +405,7 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
         src = np.concatenate([np.repeat(np.arange(n), k).reshape(n, k)[keep],
                               np.repeat(wide, more.shape[1]).reshape(more.shape)[more_keep]])
         dst = np.concatenate([cand[keep], more[more_keep]])
+        src, dst = src[src != dst], dst[src != dst]  # (no point is its own neighbour)
         key = np.minimum(src, dst) * np.int64(n) + np.maximum(src, dst)
         key = np.unique(key)
         lo, hi = key // n, key % n
