@@ -22,8 +22,8 @@ LAYERS = (
      "superfacets.extras", "superfacets._threads", "superfacets._kernels",
      "superfacets.camera", "superfacets.warmup", "superfacets.interrupts", "superfacets.rgb"),
     # inputs: validated meshes and clouds, read from files or the libraries' objects
-    ("superfacets.mesh", "superfacets.cloud", "superfacets.volume", "superfacets.convert",
-     "superfacets.shapes", "superfacets.io.volumes", "superfacets.io.regions",
+    ("superfacets.bounds", "superfacets.mesh", "superfacets.cloud", "superfacets.volume",
+     "superfacets.convert", "superfacets.shapes", "superfacets.io.volumes", "superfacets.io.regions",
      "superfacets.io.files", "superfacets.io.ply", "superfacets.io.labels",
      "superfacets.io.meshes", "superfacets.io.clouds"),
     # element graphs of the inputs

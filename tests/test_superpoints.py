@@ -312,6 +312,11 @@ def test_duplicate_points_share_a_label():
                                                                          "non-finite"),
     (np.r_[np.random.default_rng(0).random((9, 3)), [[np.inf, 0, 0]]], "point 9"),
     (np.zeros((5, 2)), r"shape \(N, 3\)"),
+    # a scanner's stray point far enough away that the rest look like one line beside it
+    (np.r_[np.random.default_rng(0).random((40, 3)), [[0, 3e12, 0]]],
+     r"1 of 41 points lies over 10000 times farther .*row 40 at 3e\+12.*remove such stray"),
+    (np.r_[[[0, 3e12, 0]], np.arange(20.0)[:, None] * [1, 1, 1], [[0, -3e12, 0]]],
+     "all 22 points lie on one line"),  # the rest is a line too: the plain message
 ])
 def test_bad_clouds_are_refused_clearly(points, message):
     with pytest.raises(InvalidCloudError, match=message):

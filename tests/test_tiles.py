@@ -463,6 +463,54 @@ def test_a_failing_tile_names_itself(tmp_path):
         segment_tiled(tmp_path / "flat.npy", 1, tiles=2)
 
 
+def test_damaged_and_unusable_inputs_of_a_tiled_run_get_clear_errors(tmp_path):
+    """The errors of the whole-input run, from the survey and the chunked readers."""
+    from superfacets import InvalidMeshError
+
+    pts = np.random.default_rng(0).random((300, 3))
+    huge = pts.copy()
+    huge[7] = 1e200  # beyond what areas and normals can square in double precision
+    np.save(tmp_path / "huge.npy", huge)
+    with pytest.raises(InvalidMeshError, match="huge.npy: coordinates up to 1e.200.*rescale "
+                                               "the cloud"):
+        segment_tiled(tmp_path / "huge.npy", 5, tiles=2)
+    laspy = pytest.importorskip("laspy")
+    header = laspy.LasHeader(point_format=1, version="1.2")
+    header.scales = [0.001] * 3
+    las = laspy.LasData(header)
+    las.x, las.y, las.z = pts.T
+    las.write(tmp_path / "whole.las")
+    (tmp_path / "cut.las").write_bytes((tmp_path / "whole.las").read_bytes()[:-30])
+    with pytest.raises(MeshFormatError, match="cut.las: cannot read the points after row 0 "
+                                              r"\(damaged or truncated file\?\)"):
+        segment_tiled(tmp_path / "cut.las", 5, tiles=2)
+    from superfacets import read_cloud
+
+    with pytest.raises(MeshFormatError, match=r"damaged or truncated file\?"):
+        read_cloud(tmp_path / "cut.las")
+
+
+def test_a_tiled_run_on_dask_starts_quietly_beside_another_cluster(tmp_path, recwarn):
+    """Dask's scheduler serves HTTP routes on port 8787 by default, and warned when
+    another run held it; the engine's scheduler takes a free local port."""
+    import socket
+
+    pytest.importorskip("distributed")
+    held = socket.socket()
+    try:
+        held.bind(("127.0.0.1", 8787))
+        held.listen(1)
+    except OSError:
+        pass  # already held by something else: the case to test all the same
+    try:
+        pts = np.random.default_rng(1).random((2000, 3)) * [1, 1, 0.1]
+        res = segment_tiled(pts, 20, tiles=2, workers=2)
+    finally:
+        held.close()
+    assert res.n_segments == 20
+    assert not [w for w in recwarn if "already in use" in str(w.message)]
+
+
 def test_tiny_tiles_of_one_point_each():
     pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.]])
     res = segment_tiled(pts, None, radius=0.3, tiles=(2, 2, 1), n_neighbors=2)
@@ -492,6 +540,21 @@ def test_cli_tiles_writes_labels_and_refuses_whole_input_outputs(tmp_path):
     assert bad.returncode != 0 and "--halo goes with --tiles" in bad.stderr
     bad = subprocess.run(run + ["--workdir", str(tmp_path)], capture_output=True, text=True)
     assert bad.returncode != 0 and "--workdir goes with --tiles" in bad.stderr
+
+
+def test_the_cli_says_when_tiles_give_fewer_superpoints_than_asked(tmp_path, capsys):
+    """Each tile's core takes its share of the centers, so a few hundred points in two
+    tiles may end with fewer superpoints than asked: the summary says so."""
+    from superfacets.cli import main
+
+    np.save(tmp_path / "c.npy", np.random.default_rng(0).random((400, 3)))
+    assert main(["segment", str(tmp_path / "c.npy"), "-k", "6", "--tiles", "2",
+                 "-o", str(tmp_path / "c.seg")]) == 0
+    got = int(np.loadtxt(tmp_path / "c.seg").max()) + 1
+    line = capsys.readouterr().out.splitlines()[0]
+    assert f", {got} superpoints" in line
+    assert ("(6 asked: tiles this small hold fewer centers" in line) == (got < 6)
+    assert got <= 6
 
 
 def test_a_scans_viewpoint_reaches_every_tile(tmp_path):

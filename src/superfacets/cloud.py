@@ -15,15 +15,12 @@ from functools import cached_property
 
 import numpy as np
 
-from .errors import InvalidMeshError
-from .mesh import _MAX_COORDINATE, _MAX_EXTENT, _MIN_EXTENT, _readonly, column_bounds
+from .errors import InvalidCloudError
+from .bounds import check_extent, column_bounds
+from .mesh import _readonly
 from .rgb import check_colors, unit_colors
 
 __all__ = ["PointCloud", "as_cloud", "InvalidCloudError"]
-
-
-class InvalidCloudError(InvalidMeshError):
-    """Point arrays are unusable: wrong shape, NaN/inf rows, empty, collinear."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -186,24 +183,42 @@ class PointCloud:
         p = self.points[self.valid]
         if p.shape[0] == 0:
             raise InvalidCloudError(f"{where}empty point cloud: no valid point")
-        with np.errstate(over="ignore", invalid="ignore"):
-            lo, hi = column_bounds(p)
-            extent = float(np.max(hi - lo))
-            size = float(max(np.abs(lo).max(), np.abs(hi).max()))
-        if not (np.isfinite(extent) and size <= _MAX_COORDINATE and extent <= _MAX_EXTENT):
-            raise InvalidCloudError(f"{where}coordinates up to {size:.3g} spanning "
-                                    f"{extent:.3g}: rescale the cloud (e.g. to unit size)")
+        extent = check_extent(*column_bounds(p), where, "cloud")
         if extent == 0:
             raise InvalidCloudError(f"{where}all {p.shape[0]} points coincide: no surface "
                                     "to segment")
-        if extent < _MIN_EXTENT:
-            raise InvalidCloudError(f"{where}the cloud spans only {extent:.3g}: rescale it "
-                                    "(e.g. to unit size)")
-        q = (p - p.mean(axis=0)) / extent
-        s = np.linalg.svd(q.T @ q, compute_uv=False)
-        if s[1] <= 1e-12 * s[0]:
-            raise InvalidCloudError(f"{where}all {p.shape[0]} points lie on one line: no "
-                                    "surface to segment")
+        if _on_a_line(p, extent):
+            raise InvalidCloudError(f"{where}{_line_cause(p, np.flatnonzero(self.valid))}")
+
+
+def _on_a_line(p: np.ndarray, extent: float) -> bool:
+    """Whether the points' scatter has no second direction, to double precision."""
+    q = (p - p.mean(axis=0)) / extent
+    s = np.linalg.svd(q.T @ q, compute_uv=False)
+    return bool(s[1] <= 1e-12 * s[0])
+
+
+#: A point this many times farther from the others' median than nine in ten of them is
+#: named as a stray point when the cloud, with it, looks like a line.
+_STRAY = 1e4
+
+
+def _line_cause(p: np.ndarray, rows: np.ndarray) -> str:
+    """The message for points that look like one line: a line, or a few stray points so
+    far away that the rest look like one beside them (a scanner's error)."""
+    d = np.linalg.norm(p - np.median(p, axis=0), axis=1)
+    spread = float(np.quantile(d, 0.9))
+    far = d > _STRAY * spread
+    rest = p[~far]
+    if spread > 0 and far.any() and rest.shape[0] >= 3 and \
+            not _on_a_line(rest, float(np.ptp(rest, axis=0).max())):
+        i = int(np.argmax(d))
+        verb = "lies" if far.sum() == 1 else "lie"
+        return (f"{int(far.sum())} of {p.shape[0]} points {verb} over {_STRAY:.0f} times "
+                f"farther from the others than nine in ten of them (row {int(rows[i])} at "
+                f"{d[i]:.3g} from their median, against {spread:.3g}), so the rest look like "
+                "one line: remove such stray points")
+    return f"all {p.shape[0]} points lie on one line: no surface to segment"
 
 
 def _library_colors(values) -> np.ndarray | None:

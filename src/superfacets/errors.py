@@ -5,7 +5,8 @@ Every error caused by bad input is a :class:`SuperfacetsError`, which is also a
 (and :class:`OSError`) into one clear line and a non-zero exit status.
 """
 
-__all__ = ["SuperfacetsError", "MeshFormatError", "InvalidMeshError", "ParameterError",
+__all__ = ["SuperfacetsError", "MeshFormatError", "InvalidMeshError", "InvalidCloudError",
+           "ParameterError",
            "SchedulerError", "MemoryLimitError", "MissingExtraError", "NoDisplayError"]
 
 
@@ -19,6 +20,10 @@ class MeshFormatError(SuperfacetsError):
 
 class InvalidMeshError(SuperfacetsError):
     """Mesh arrays are unusable: wrong shape, NaN/inf, indices out of range, empty."""
+
+
+class InvalidCloudError(InvalidMeshError):
+    """Point arrays are unusable: wrong shape, NaN/inf rows, empty, collinear."""
 
 
 class ParameterError(SuperfacetsError):

@@ -17,10 +17,11 @@ from functools import cached_property
 
 import numpy as np
 
+from .bounds import check_extent, column_bounds
 from .errors import InvalidMeshError
 from .rgb import check_colors, face_means, vertex_means
 
-__all__ = ["Mesh", "column_bounds"]
+__all__ = ["Mesh"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -307,38 +308,13 @@ class Mesh:
         double precision beyond that (the mesh must then be rescaled).
         """
         where = f"{self.name}: " if self.name else ""
-        lo, hi = self._bounds
-        with np.errstate(over="ignore", invalid="ignore"):
-            extent = float(np.max(hi - lo))
-            size = float(max(np.abs(lo).max(), np.abs(hi).max()))
-        if not (np.isfinite(extent) and size <= _MAX_COORDINATE and extent <= _MAX_EXTENT):
-            raise InvalidMeshError(
-                f"{where}coordinates up to {size:.3g} spanning {extent:.3g}: the face geometry "
-                f"would overflow double precision; rescale the mesh (e.g. to unit size)")
+        extent = check_extent(*self._bounds, where, "mesh")
         if extent == 0:
             raise InvalidMeshError(f"{where}mesh has zero extent (all vertices coincide)")
-        if extent < _MIN_EXTENT:
-            raise InvalidMeshError(
-                f"{where}the mesh spans only {extent:.3g}: face areas would underflow double "
-                f"precision; rescale the mesh (e.g. to unit size)")
         if not self.diagonal > 0:
             raise InvalidMeshError(f"{where}mesh has zero extent (all vertices coincide)")
         if not self.area > 0:
             raise InvalidMeshError(f"{where}mesh has zero total area (every face is degenerate)")
-
-
-_MAX_COORDINATE = 1e300  # sums of three coordinates stay finite
-_MAX_EXTENT = 1e70  # (edge length)^4 stays finite: areas and normals
-_MIN_EXTENT = 1e-70  # (edge length)^4 stays a normal number
-
-
-def column_bounds(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Lowest and highest value of each column of an ``(n, d)`` array, as
-    ``a.min(axis=0), a.max(axis=0)`` (the same values: min and max are exact),
-    column by column: a strided 1-D reduction is several times faster than an
-    ``axis=0`` one over short rows (0.06 s against 0.24 s for 3.4M rows)."""
-    return (np.array([a[:, j].min() for j in range(a.shape[1])], dtype=a.dtype),
-            np.array([a[:, j].max() for j in range(a.shape[1])], dtype=a.dtype))
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:

@@ -33,7 +33,7 @@ import numpy as np
 from ._kernels.voronoi import coarse_pairs, first_in_cells, nearest_seed
 from .elements.graph import ElementGraph, adjacency_csr
 from .expansion import bucket_width
-from .mesh import column_bounds
+from .bounds import column_bounds
 from .params import (COARSE_MIN_PER_SEGMENT, COARSE_MIN_PER_SEGMENT_POINTS, COARSE_PER_SEGMENT,
                      COARSE_PER_SEGMENT_POINTS, DEFAULT_CENTER_TOL)
 

@@ -94,7 +94,7 @@ def _valid_rows(inp) -> np.ndarray:
 def _diagonal(inp) -> float:
     """The bounding-box diagonal of a tile's elements, as its element graph has it."""
     from .cloud import PointCloud
-    from .mesh import column_bounds
+    from .bounds import column_bounds
 
     if isinstance(inp, PointCloud):
         lo, hi = column_bounds(inp.points[inp.valid])

@@ -87,8 +87,12 @@ def segment_tiles(args) -> int:
         kind = result.params["elements"]
         peak = max((t.get("centers_peak_mib") or 0 for t in result.tiles), default=0)
         what = "superpoints" if kind == "points" else "superfacets"
+        k = args.n_segments
+        asked = ("" if k is None or result.n_segments == k else
+                 f" ({k} asked: tiles this small hold fewer centers; see docs/tiles.md)"
+                 if result.n_segments < k else f" ({k} asked)")
         print(f"{Path(args.mesh).name}: {result.labels.size} {kind}, {result.n_segments} "
-              f"{what} in {len(result.tiles)} tiles "
+              f"{what}{asked} in {len(result.tiles)} tiles "
               f"({result.layout.describe()}), {elapsed:.2f} s; largest tile "
               f"{max(t['rows'] for t in result.tiles)} {kind} with its halo, peak "
               f"{peak:.0f} MiB; {result.disagreements} border disagreements", file=report)

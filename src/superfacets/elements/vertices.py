@@ -33,7 +33,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..mesh import column_bounds
+from ..bounds import column_bounds
 from .graph import ElementGraph, adjacency_csr, cached_on, pairs_from_csr
 
 __all__ = ["vertex_graph", "VertexElements", "symmetric_terms"]

@@ -224,7 +224,8 @@ def _read_las(path: Path) -> dict:
                if {"red", "green", "blue"} <= dims else None)
     except Exception as exc:  # noqa: BLE001 - laspy raises many types
         msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise MeshFormatError(f"{path}: cannot read {path.suffix.upper()[1:]}: {msg}") from None
+        raise MeshFormatError(f"{path}: cannot read {path.suffix.upper()[1:]} (damaged or "
+                              f"truncated file?): {msg}") from None
     # LAS z is elevation: an airborne, mobile or terrestrial scan sees its surfaces from
     # above or from the side, so estimated normals are turned upwards piece by piece
     return {"points": pts.astype(np.float64), "colors": col, "up": np.array([0.0, 0.0, 1.0])}

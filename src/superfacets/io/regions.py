@@ -345,20 +345,7 @@ class RegionReader:
 
     def _point_chunks(self, stats: dict | None = None):
         if self.layout == "las":
-            import laspy
-
-            with laspy.open(self.path) as f:
-                dims = set(f.header.point_format.dimension_names)
-                rgb = {"red", "green", "blue"} <= dims
-                s = 0
-                for pts in f.chunk_iterator(self.chunk):
-                    xyz = np.stack([np.asarray(pts.x), np.asarray(pts.y), np.asarray(pts.z)],
-                                   axis=1).astype(np.float64)
-                    col = (self._colors(np.stack([np.asarray(pts[c]) for c in
-                                                  ("red", "green", "blue")], 1), stats)
-                           if rgb else None)
-                    yield s, xyz, (col, None)
-                    s += xyz.shape[0]
+            yield from self._las_chunks(stats)
             return
         if self.layout == "npy-points":
             p = Path(self.path)
@@ -384,6 +371,30 @@ class RegionReader:
                 for c in ("xyz", nrm))
             yield s, xyz, (None if rgb is None else self._colors(
                 np.stack([np.asarray(block[c]) for c in rgb], axis=1), stats), n)
+
+
+    def _las_chunks(self, stats: dict | None):
+        import laspy
+
+        s = 0
+        try:
+            with laspy.open(self.path) as f:
+                dims = set(f.header.point_format.dimension_names)
+                rgb = {"red", "green", "blue"} <= dims
+                for pts in f.chunk_iterator(self.chunk):
+                    xyz = np.stack([np.asarray(pts.x), np.asarray(pts.y), np.asarray(pts.z)],
+                                   axis=1).astype(np.float64)
+                    col = (self._colors(np.stack([np.asarray(pts[c]) for c in
+                                                  ("red", "green", "blue")], 1), stats)
+                           if rgb else None)
+                    yield s, xyz, (col, None)
+                    s += xyz.shape[0]
+        except Exception as exc:  # noqa: BLE001 - laspy and lazrs raise many types
+            raise MeshFormatError(f"{self.path}: cannot read the points after row {s} "
+                                  f"(damaged or truncated file?): {_first(exc)}") from None
+        if s != self.n_rows:
+            raise MeshFormatError(f"{self.path}: the header declares {self.n_rows} points, "
+                                  f"the file holds {s} (truncated?)")
 
 
 def point_cloud_of(pts, colors, normals, viewpoint, name: str = ""):

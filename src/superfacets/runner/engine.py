@@ -277,7 +277,10 @@ class Engine:
                     self._cluster = LocalCluster(
                         n_workers=self.workers, threads_per_worker=1, processes=True,
                         dashboard_address=None, memory_limit=self.memory_limit,
-                        silence_logs=logging.CRITICAL)
+                        silence_logs=logging.CRITICAL,
+                        # the scheduler's HTTP routes (no dashboard) on a free local port:
+                        # its default, 8787, taken by another run, printed Dask's warning
+                        scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
                 self.client = Client(self._cluster, set_as_default=False)
         except BaseException:
             self.__exit__(None, None, None)

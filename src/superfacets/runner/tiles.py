@@ -38,12 +38,11 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ParameterError, SuperfacetsError
+from ..bounds import check_extent
 from ..params import DEFAULTS, resolve
 from .engine import Engine, PeakMemory, error_text
 
 __all__ = ["segment_tiled", "TiledResult", "tile_task"]
-
-_D = DEFAULTS
 
 
 @dataclass(frozen=True)
@@ -181,7 +180,7 @@ def tile_task(task: dict) -> dict:
     return out
 
 
-def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
+def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles=4,
                   halo: float | None = None, workers: int | None = 1,
                   scheduler: str | None = None, memory_limit="auto", workdir=None,
                   progress: bool = False, refine: int = 1, **options) -> TiledResult:
@@ -296,9 +295,10 @@ def segment_tiled(source, n_segments: int | None = _D.n_segments, *, tiles=4,
             layout = tile_grid(survey.lo, survey.hi, tiles)
         grid = layout.shape or (layout.n_tiles,)
         n_tiles = layout.n_tiles
-        diagonal = float(np.linalg.norm(survey.hi - survey.lo))
-        if diagonal <= 0:
+        if check_extent(survey.lo, survey.hi, f"{reader.path}: ",
+                        "cloud" if reader.kind == "points" else "mesh") == 0:
             raise ParameterError("the input has zero extent: nothing to tile")
+        diagonal = float(np.linalg.norm(survey.hi - survey.lo))
         # one more pass sorts the elements into a file per tile, so that a task reads the
         # tiles its box overlaps, not the whole file; without a folder the workers share
         # (a remote scheduler and no workdir) every task reads the file
