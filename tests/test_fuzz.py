@@ -47,13 +47,10 @@ def _damage(data: bytes, rng: random.Random) -> bytes:
     return bytes(b)
 
 
-@pytest.mark.parametrize("name", sorted(_seeds()))
-def test_damaged_files_give_clear_errors(name, tmp_path):
-    rng = random.Random(name)
-    data = _seeds()[name]
-    read = read_labels if name.startswith("l.") else read_mesh
-    path = tmp_path / name
-    for _ in range(40):
+def _read_damaged(read, data: bytes, path, rng: random.Random, times: int = 40) -> None:
+    """Read ``times`` damaged copies of ``data``: the package's errors or OSError only,
+    and no warning."""
+    for _ in range(times):
         path.write_bytes(_damage(data, rng))
         with warnings.catch_warnings():
             warnings.simplefilter("error")
@@ -61,6 +58,12 @@ def test_damaged_files_give_clear_errors(name, tmp_path):
                 read(path)
             except (SuperfacetsError, OSError):
                 pass
+
+
+@pytest.mark.parametrize("name", sorted(_seeds()))
+def test_damaged_files_give_clear_errors(name, tmp_path):
+    read = read_labels if name.startswith("l.") else read_mesh
+    _read_damaged(read, _seeds()[name], tmp_path / name, random.Random(name))
 
 
 @pytest.mark.parametrize("name", sorted(n for n in _seeds() if not n.startswith("l.")))
@@ -127,17 +130,8 @@ def _las_files(pts, rgb) -> dict:
 def test_damaged_point_clouds_give_clear_errors(name, tmp_path):
     from superfacets import read_cloud
 
-    rng = random.Random("cloud" + name)
-    data = _cloud_seeds()[name]
-    path = tmp_path / name
-    for _ in range(40):
-        path.write_bytes(_damage(data, rng))
-        with warnings.catch_warnings():
-            warnings.simplefilter("error")
-            try:
-                read_cloud(path)
-            except (SuperfacetsError, OSError):
-                pass
+    _read_damaged(read_cloud, _cloud_seeds()[name], tmp_path / name,
+                  random.Random("cloud" + name))
 
 
 _READ_ALL_WAYS = """
