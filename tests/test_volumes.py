@@ -41,6 +41,15 @@ def test_tetmesh_validation():
     flat = TetMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], [[0, 1, 2, 3]])
     with pytest.raises(InvalidMeshError, match="flat"):
         segment(flat, 1)
+    # areas and volumes of such tetrahedra overflow: refused as meshes and clouds are
+    huge = TetMesh(np.array(v) * 1e100, [[0, 1, 2, 3]], name="huge.msh")
+    with pytest.raises(InvalidMeshError, match="huge.msh: coordinates up to 1e.100.*rescale"):
+        segment(huge, 1)
+    tiny = TetMesh(np.array(v) * 1e-80, [[0, 1, 2, 3]])
+    with pytest.raises(InvalidMeshError, match="spans only 1e-80"):
+        segment(tiny, 1)
+    far = TetMesh(np.r_[v, [[1e100, 0, 0]]], [[0, 1, 2, 3]])  # an unused vertex: no matter
+    assert segment(far, 1).n_segments == 1
 
 
 def test_cell_graph_known_answer():

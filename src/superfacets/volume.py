@@ -13,6 +13,7 @@ from functools import cached_property
 
 import numpy as np
 
+from .bounds import check_extent, column_bounds
 from .errors import InvalidMeshError
 from .mesh import _readonly
 
@@ -125,9 +126,11 @@ class TetMesh:
         return float(self.volumes.sum())
 
     def check_usable(self) -> None:
-        """Raise :class:`InvalidMeshError` unless the tetrahedra enclose a volume."""
+        """Raise :class:`InvalidMeshError` unless the tetrahedra enclose a volume whose
+        geometry fits double precision (:func:`superfacets.bounds.check_extent`)."""
+        where = f"{self.name}: " if self.name else ""
+        check_extent(*column_bounds(self.vertices[np.unique(self.tets)]), where)
         if not self.volume > 0:
-            where = f"{self.name}: " if self.name else ""
             raise InvalidMeshError(f"{where}every tetrahedron is flat: no volume to segment")
 
     def boundary(self, keep: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
