@@ -113,3 +113,14 @@ def test_parameters_are_checked_before_the_mesh_is_touched():
                       (dict(init="random"), "init")]:
         with pytest.raises(ParameterError, match=match):
             segment(object(), 10, **kw)
+
+
+@pytest.mark.parametrize("init", ["flood", "farthest"])
+def test_a_radius_whose_area_underflows_is_refused(init):
+    """r^2 of a subnormal radius is 0: a clear error, not a division by zero later."""
+    import trimesh
+
+    mesh = trimesh.creation.icosphere(2)
+    with pytest.raises(ParameterError, match="too small: a superfacet's area would be 0"):
+        segment(mesh, None, radius=1e-320, init=init)
+    assert segment(mesh, None, radius=1e-100, init=init).n_segments >= 1  # tiny but fine

@@ -387,14 +387,19 @@ def superfacet_size(params: SegmentParams, area: float, diagonal: float,
     Raises
     ------
     ParameterError
-        If ``n_segments`` exceeds the number of elements.
+        If ``n_segments`` exceeds the number of elements, or ``radius`` is so
+        small that a superfacet's area (volume) is 0 in double precision.
     """
     cells = kind == "cells"  # ``area`` is a volume: r of a ball of volume V / k
     if params.radius is not None:
         r = params.radius * diagonal
+        each = 4.0 / 3.0 * math.pi * r ** 3 if cells else math.pi * r * r
+        if not each > 0:
+            raise ParameterError(f"radius {params.radius:g} of the diagonal ({r:.3g} in the "
+                                 "input's units) is too small: a superfacet's "
+                                 f"{'volume' if cells else 'area'} would be 0")
         k = None
         if params.init == "farthest":
-            each = 4.0 / 3.0 * math.pi * r ** 3 if cells else math.pi * r * r
             k = int(min(n_elements, max(1, round(area / each))))
         return k, r
     k = check_n_segments(params.n_segments, n_elements, kind)
