@@ -107,6 +107,9 @@ def test_hierarchy_levels_are_checked():
         r.hierarchy([])
     with pytest.raises(ParameterError, match="levels"):
         r.hierarchy([0])
+    with pytest.raises(ParameterError, match="levels must be a number of segments or a "
+                                             "sequence of them, got None"):
+        r.hierarchy(None)
     with pytest.raises(ParameterError, match="beta"):
         hierarchy(r.graph(), [2], beta=1.0)
     assert r.hierarchy(k).parents[0].tolist() == list(range(k))  # K itself: the identity

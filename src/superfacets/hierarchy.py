@@ -156,7 +156,11 @@ def hierarchy(graph, levels, *, alpha: float = 200.0, eta_convex: float = 0.2,
         raise ParameterError("cost='planarity' needs the superfacets' scatter "
                              "(superfacets.adjacency.superfacet_graph gives it)")
     k = graph.n_segments
-    wanted = [levels] if np.isscalar(levels) else list(levels)
+    try:
+        wanted = [levels] if np.isscalar(levels) else list(levels)
+    except TypeError:
+        raise ParameterError("levels must be a number of segments or a sequence of them, "
+                             f"got {levels!r}") from None
     if not wanted:
         raise ParameterError("levels must name at least one number of segments")
     wanted = sorted({check_int("levels", v, lo=1) for v in wanted}, reverse=True)
