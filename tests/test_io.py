@@ -272,3 +272,18 @@ def test_labels_to_stdout_and_broken_pipe(tmp_path):
     r = subprocess.run(f"{sys.executable} -m superfacets segment {mesh} -k 10 -o - | head -1",
                        shell=True, capture_output=True, text=True)
     assert r.stdout.strip().isdigit() and "Error" not in r.stderr and "Traceback" not in r.stderr
+
+
+def test_a_full_device_as_output_is_named_in_the_error(tmp_path, capsys):
+    """A device is written in place (it cannot be staged); its error names it."""
+    from pathlib import Path
+
+    from superfacets.cli import main
+
+    if not Path("/dev/full").exists():
+        pytest.skip("no /dev/full on this system")
+    mesh = tmp_path / "m.off"
+    mesh.write_text("OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n")
+    assert main(["segment", str(mesh), "-k", "1", "-o", "/dev/full"]) == 2
+    err = capsys.readouterr().err
+    assert "/dev/full" in err and "No space left" in err and "Traceback" not in err

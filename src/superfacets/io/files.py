@@ -167,8 +167,11 @@ class Outputs:
                     sys.stdout.buffer.write(data)
                     sys.stdout.buffer.flush()
                 else:
-                    with open(real, "wb") as fh:
-                        fh.write(data)
+                    try:
+                        with open(real, "wb") as fh:
+                            fh.write(data)
+                    except OSError as exc:  # a write's error names no file: name it
+                        raise OSError(exc.errno, exc.strerror, str(real)) from None
             self._direct = []
         finally:
             self.abort()
