@@ -426,7 +426,9 @@ def cases() -> list[Case]:
     for name, data, match in [("not-utf8", b"\xff\xfe\x00garbage\xff\n", ""),
                               ("not-results", b"a,b\n1,2\n", "not a superfacets results file"),
                               ("empty", b"", "no rows"), ("header-only", RESULTS, "no rows"),
-                              ("binary", bytes(range(256)), "")]:
+                              ("binary", bytes(range(256)), ""),
+                              ("k-infinite", RESULTS + b"a,1,Ant,10,superfacets,inf,200,0,ok,5,"
+                                             b"0.1,5.0,0.8,0.9\n", "n_segments = inf")]:
         out.append(Case(f"report-{name}", {"r.csv": data},
                         ["report", "{d}/r.csv", "-o", "{d}/rep"], match=match))
     out.append(Case("report-missing", {}, ["report", "{d}/none.csv"], match="none.csv"))

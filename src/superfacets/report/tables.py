@@ -15,7 +15,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ..errors import ParameterError
+from ..errors import MeshFormatError, ParameterError
 from ..extras import require
 from ..metrics import METRICS
 
@@ -84,6 +84,12 @@ def load_results(path, series: Sequence[str] | None = None):
               "peak_mib", "n_ground_truths", *METRICS]:
         if c in df:
             df[c] = pd.to_numeric(df[c], errors="coerce")
+            inf = df.index[df[c].abs() == float("inf")]
+            if len(inf):  # no run records an infinity: a damaged file
+                i = inf[0]
+                raise MeshFormatError(f"{', '.join(map(str, paths))}: the row of mesh "
+                                      f"{df.at[i, 'mesh']!r} has {c} = {df.at[i, c]}, which "
+                                      "no run records: a damaged results file?")
     if "converged" in df:
         df["converged"] = df["converged"].map({"true": True, "false": False})
     df["series"] = _series(df, params)
