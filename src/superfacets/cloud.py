@@ -15,8 +15,8 @@ from functools import cached_property
 
 import numpy as np
 
-from .errors import InvalidCloudError
 from .bounds import check_extent, column_bounds
+from .errors import InvalidCloudError
 from .mesh import _readonly
 from .rgb import check_colors, unit_colors
 

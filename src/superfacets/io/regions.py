@@ -372,7 +372,6 @@ class RegionReader:
             yield s, xyz, (None if rgb is None else self._colors(
                 np.stack([np.asarray(block[c]) for c in rgb], axis=1), stats), n)
 
-
     def _las_chunks(self, stats: dict | None):
         import laspy
 
