@@ -19,6 +19,7 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "superfacets"
 LAYERS = (
     # foundations: no knowledge of meshes
     ("superfacets._version", "superfacets.errors", "superfacets.params", "superfacets.labels",
+     "superfacets.elements.kinds",
      "superfacets.extras", "superfacets._threads", "superfacets._kernels",
      "superfacets.camera", "superfacets.warmup", "superfacets.interrupts", "superfacets.rgb"),
     # inputs: validated meshes and clouds, read from files or the libraries' objects

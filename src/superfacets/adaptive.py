@@ -35,6 +35,7 @@ from dataclasses import replace
 import numpy as np
 
 from .elements.graph import ElementGraph
+from .elements.kinds import kind_of
 
 __all__ = ["roughness_of", "content_scale", "adapted_graph", "window_factors", "density_for",
            "size_spread", "AUTO_DENSITY", "AUTO_SPREAD"]
@@ -132,7 +133,7 @@ def content_scale(graph: ElementGraph, density: float = 0.0, roughness: float = 
     s = np.ones(graph.n_elements)
     if density > 0:
         a = np.asarray(graph.sizes, dtype=np.float64)
-        d = 3.0 if graph.kind == "cells" else 2.0
+        d = float(kind_of(graph.kind).dim)
         positive = a > 0
         med = float(np.median(a[positive])) if positive.any() else 1.0
         s *= (med / np.where(positive, a, med)) ** (density / d)
@@ -152,7 +153,7 @@ def adapted_graph(graph: ElementGraph, density: float, roughness: float) -> Elem
     ElementGraph
     """
     s = content_scale(graph, density, roughness)
-    d = 3 if graph.kind == "cells" else 2
+    d = kind_of(graph.kind).dim
     return replace(graph, sizes=np.ascontiguousarray(graph.sizes * s ** d),
                    scale2=np.ascontiguousarray(s * s))
 
@@ -227,6 +228,6 @@ def density_for(graph: ElementGraph, paper: bool = False) -> float:
     ...  for xy in (even, uneven)]
     [0.0, 0.5]
     """
-    if paper or graph.kind != "points":
+    if paper or not kind_of(graph.kind).auto_density:
         return 0.0
     return AUTO_DENSITY if size_spread(graph) > AUTO_SPREAD else 0.0

@@ -28,6 +28,7 @@ import numpy as np
 
 from .elements.graph import chunked
 from .elements.inputs import as_element_graph
+from .elements.kinds import kind_of
 from .labels import check_labels, relabel_dense
 from .params import check_int, check_nonneg, check_number, check_positive, check_threads
 
@@ -35,33 +36,18 @@ __all__ = ["clean_boundaries", "cut_costs", "crease_for", "band_for", "smoothnes
            "CREASE", "CREASE_SMOOTH_NORMALS", "SMOOTHNESS", "SMOOTHNESS_FACES", "BAND",
            "BAND_VERTICES", "SWEEPS"]
 
-#: Weight of creases in the cut cost, as a fraction of ``alpha`` (:func:`cut_costs`).
-#: 0.1 (0.2 before): after the early split-and-merge, compactness -15.1 % instead of
-#: -14.9 % against the paper, boundary recall still above it (60 benchmark meshes, k = 150;
-#: docs/cleanup.md).
-CREASE = 0.1
-#: The same weight on vertices and points, whose normals are neighbourhood averages (a
-#: vertex's incident faces, a point's PCA neighbourhood): a crease's angle is spread over
-#: a few adjacencies, each carrying part of it, so the cut cost needs a larger factor to
-#: find it. 1.0 against 0.1, 0.3, 3 and 10 on 90 benchmark meshes (6 per category, k = 50,
-#: 150, 300): the lowest undersegmentation error on both kinds (docs/cleanup.md).
-CREASE_SMOOTH_NORMALS = 1.0
-#: Weight of the compactness (data) term against the boundary length.
-SMOOTHNESS = 0.3
-#: The same on faces: higher than elsewhere since the swap energies weigh convex folds
-#: less (their merges across convex folds cost compactness that the data term wins
-#: back: on 45 benchmark meshes at k = 150, compactness -15.0 % against the paper with
-#: 1.0, -14.4 % with 0.3, the UE the same; docs/cleanup.md, "Swap energies"); 0.7 since
-#: the swaps need a gain of a mean superfacet's energy (:data:`~superfacets.splitmerge.MIN_GAIN`),
-#: which gives compactness back: boundary recall above the paper's at every k, where
-#: 1.0 left it below at k = 100 (docs/cleanup.md, "The smallest swaps").
-SMOOTHNESS_FACES = 0.7
-#: Half-width of the band along each boundary, as a fraction of the radius ``r``.
-BAND = 0.3
-#: The same on vertices: 0.2 keeps the undersegmentation error and compactness of 0.3
-#: there (the vertex graph's boundaries move less far: the default's exact classification
-#: places them) for a third less of the clean-up's time (docs/cleanup.md).
-BAND_VERTICES = 0.2
+#: The clean-up's weights on faces and elsewhere, from the table of kinds
+#: (:mod:`superfacets.elements.kinds`, where each value's measurement is noted):
+#: the crease weight in the cut cost, a fraction of ``alpha`` (:func:`cut_costs`) ...
+CREASE = kind_of("faces").crease
+#: ... the same on vertices and points, whose normals are neighbourhood averages ...
+CREASE_SMOOTH_NORMALS = kind_of("vertices").crease
+#: ... the weight of the compactness (data) term against the boundary length ...
+SMOOTHNESS = kind_of("vertices").smoothness
+SMOOTHNESS_FACES = kind_of("faces").smoothness
+#: ... and the half-width of the band along each boundary, a fraction of the radius ``r``.
+BAND = kind_of("faces").band
+BAND_VERTICES = kind_of("vertices").band
 #: Most sweeps (bands recomputed, every band cut).
 SWEEPS = 1
 
@@ -75,7 +61,7 @@ def crease_for(kind: str) -> float:
     >>> crease_for("faces"), crease_for("points")
     (0.1, 1.0)
     """
-    return CREASE if kind == "faces" else CREASE_SMOOTH_NORMALS
+    return kind_of(kind).crease
 
 
 def smoothness_for(kind: str) -> float:
@@ -87,7 +73,7 @@ def smoothness_for(kind: str) -> float:
     >>> smoothness_for("faces"), smoothness_for("vertices")
     (0.7, 0.3)
     """
-    return SMOOTHNESS_FACES if kind == "faces" else SMOOTHNESS
+    return kind_of(kind).smoothness
 
 
 def band_for(kind: str) -> float:
@@ -99,7 +85,7 @@ def band_for(kind: str) -> float:
     >>> band_for("faces"), band_for("vertices")
     (0.3, 0.2)
     """
-    return BAND_VERTICES if kind == "vertices" else BAND
+    return kind_of(kind).band
 
 
 def cut_costs(graph, *, alpha: float = 200.0, eta_convex: float = 0.2,

@@ -237,7 +237,9 @@ def planarity_graph(graph, labels, features=None):
 
     from .adjacency import superfacet_graph
 
-    if graph.kind == "points":
+    from .elements.kinds import kind_of
+
+    if kind_of(graph.kind).unit_sizes_in_levels:
         graph = replace(graph, sizes=np.ones(graph.n_elements))
     return superfacet_graph(graph, labels, features)
 

@@ -18,6 +18,7 @@ import numpy as np
 from .boundaries import (boundary_precision, boundary_recall, near_boundary,
                          recall_elements, recall_lengths)
 from .elements.inputs import as_element_graph
+from .elements.kinds import kind_of
 from .errors import InvalidMeshError, ParameterError
 from .labels import check_labels
 
@@ -186,7 +187,8 @@ def compactness(graph, labels) -> float:
     perim += np.bincount(s[g.boundary_elements], weights=g.boundary_lengths, minlength=k)
     area = np.bincount(s, weights=g.sizes, minlength=k)
     ok = area > 0
-    power = 2.0 / 3.0 if g.kind == "cells" else 0.5  # a volume: area / volume^(2/3)
+    dim = kind_of(g.kind).dim  # a volume: area / volume^(2/3)
+    power = 2.0 / 3.0 if dim == 3 else 0.5
     return float(np.mean(perim[ok] / area[ok] ** power))
 
 
@@ -375,10 +377,10 @@ def evaluate_rows(obj, labels, ground_truths: Sequence[np.ndarray], *,
     g = source.graph
     rows = source.first_rows(np.arange(g.n_elements))
     n = source.n_rows
-    what = {"faces": "face", "vertices": "vertex", "points": "point"}.get(g.kind, "element")
+    what = g.element
     lab = check_labels(labels, n, "labels", per=what)[rows]
     gts = [check_labels(gt, n, "ground_truth", per=what)[rows] for gt in ground_truths]
     out = evaluate(g, lab, gts, tau=tau, tolerance=tolerance, precision=precision,
-                   equal_weight=g.kind != "faces", ignore_label=ignore_label)
+                   equal_weight=kind_of(g.kind).equal_weight, ignore_label=ignore_label)
     out["segments"] = int(np.unique(lab).size)
     return out

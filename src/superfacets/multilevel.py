@@ -34,8 +34,8 @@ from ._kernels.voronoi import coarse_pairs, first_in_cells, nearest_seed
 from .elements.graph import ElementGraph, adjacency_csr
 from .expansion import bucket_width
 from .bounds import column_bounds
-from .params import (COARSE_MIN_PER_SEGMENT, COARSE_MIN_PER_SEGMENT_POINTS, COARSE_PER_SEGMENT,
-                     COARSE_PER_SEGMENT_POINTS, DEFAULT_CENTER_TOL)
+from .elements.kinds import kind_of
+from .params import DEFAULT_CENTER_TOL, superfacet_measure
 
 _MIN_CLUSTERS = 4  # clusters per superfacet below which the coarse run is not done
 _MAX_RATIO_DIV = 8  # coarsen is capped at n / (8 k): clusters per superfacet
@@ -72,14 +72,12 @@ def coarse_ratio(n_elements: int, k: int, kind: str = "faces", n_neighbors: int 
     else what leaves about :data:`COARSE_PER_SEGMENT` per superfacet. Points
     (``kind='points'``): from :data:`COARSE_MIN_PER_SEGMENT_POINTS`, leaving
     about :data:`COARSE_PER_SEGMENT_POINTS`, at most ``n_neighbors // 2``."""
+    profile = kind_of(kind)
     per = n_elements / max(k, 1)
-    if kind == "points":
-        if per < COARSE_MIN_PER_SEGMENT_POINTS:
-            return 1
-        return max(1, min(int(per // COARSE_PER_SEGMENT_POINTS), n_neighbors // 2))
-    if per < COARSE_MIN_PER_SEGMENT:
+    if per < profile.coarse_min_per_segment:
         return 1
-    return int(per // COARSE_PER_SEGMENT)
+    ratio = int(per // profile.coarse_per_segment)
+    return max(1, min(ratio, n_neighbors // 2)) if profile.coarse_neighbor_cap else ratio
 
 
 def grid_seeds(positions: np.ndarray, area: float, n_target: int) -> np.ndarray:
@@ -315,7 +313,12 @@ def start_centers(graph: ElementGraph, weights: np.ndarray | None, csr_w: np.nda
     p = params
     center_tol = p.center_tol if p.center_tol is not None else (
         DEFAULT_CENTER_TOL if p.tol > 0 else 0.0)
-    k_est = k if k is not None else max(1, round(graph.area / (math.pi * radius ** 2)))
+    if k is not None:
+        k_est = k
+    else:  # a disc's area on surfaces, a ball's volume on cells (paper section 3.1)
+        dim = kind_of(graph.kind).dim
+        each = math.pi * radius ** 2 if dim == 2 else superfacet_measure(radius, dim)
+        k_est = max(1, round(graph.area / each))
     ratio = p.coarsen if p.coarsen is not None else (
         coarse_ratio(graph.n_elements, k_est, graph.kind, p.n_neighbors) if p.tol > 0 else 1)
     ratio = max(1, min(ratio, graph.n_elements // (_MAX_RATIO_DIV * k_est)))

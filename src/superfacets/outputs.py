@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .elements.kinds import kind_of
 from .io.files import Outputs
 
 __all__ = ["write_result", "result_header", "JoinedResult"]
@@ -57,8 +58,7 @@ def result_header(data, result, source: str) -> dict:
     kind = p.get("elements", "faces")
     return {
         "superfacets": f"labels of {source}",
-        kind: data.n_total if kind == "points" else
-        (data.n_vertices if kind == "vertices" else data.n_faces),
+        kind: kind_of(kind).n_rows(data),
         "superfacets_count": result.n_segments,
         "parameters": " ".join(f"{k}={v}" for k, v in p.items()),
         "iterations": f"{result.n_iter} ({'converged' if result.converged else 'max_iter reached'})",
@@ -140,11 +140,11 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
                              scene_id=source.split(".")[0], outputs=outputs)
         elif labels is not None:
             head = result_header(data, result, source) if header else None
-            objects = [] if kind == "points" else _object_lines(data)
+            objects = [] if kind_of(kind).cloud else _object_lines(data)
             if objects:  # a scene: say which faces are which object
                 head = [f"{k}: {v}" for k, v in (head or {}).items()] + objects
             write_labels(labels, result.labels, outputs=outputs, header=head)
-        if colored is not None and kind == "faces":
+        if colored is not None and kind_of(kind).objects:
             write_colored_mesh(colored, data, result.labels, outputs=outputs,
                                vertex_colors=vertex_colors)
         elif colored is not None:
@@ -152,9 +152,8 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
 
             source_el = elements_of(data, kind, **(element_options or {}))  # cached
             write_colored_elements(colored, source_el, result.labels, outputs=outputs)
-        title = f"{source}: {result.n_segments} " + (
-            "superpoints" if kind != "faces" else "superfacets")
-        drawn = {} if kind == "points" else {"elements": kind}  # faces or vertices
+        title = f"{source}: {result.n_segments} {kind_of(kind).segment_word}"
+        drawn = {} if kind_of(kind).cloud else {"elements": kind}  # faces or vertices
         if html is not None:
             from .html import write_html
 
@@ -163,7 +162,7 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
         if picture is not None:
             from .render import render, render_points
 
-            draw = render_points if kind == "points" else render
+            draw = render_points if kind_of(kind).cloud else render
             draw(data, result.labels, picture, title=title, outputs=outputs, up=up, view=view,
                  **drawn)
 

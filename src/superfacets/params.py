@@ -18,6 +18,7 @@ from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
+from .elements.kinds import KINDS, kind_of
 from .errors import ParameterError
 
 __all__ = ["SegmentParams", "DEFAULTS", "INITS", "ASSIGNMENTS", "WEIGHTINGS", "ELEMENTS",
@@ -26,7 +27,7 @@ __all__ = ["SegmentParams", "DEFAULTS", "INITS", "ASSIGNMENTS", "WEIGHTINGS", "E
            "COARSE_PER_SEGMENT", "DEFAULT_N_SEGMENTS", "DEFAULT_ALPHAS", "resolve", "check_int",
            "check_number", "check_positive", "check_nonneg", "check_choice",
            "check_n_segments", "check_threads", "check_bool", "max_threads", "superfacet_size",
-           "better_method", "assignment_of"]
+           "better_method", "assignment_of", "superfacet_measure"]
 
 #: Names accepted by ``init=``: iterative farthest point, flood, regular grid.
 INITS = ("farthest", "flood", "grid")
@@ -64,7 +65,7 @@ def better_method(params: "SegmentParams", kind: str) -> tuple[bool, bool]:
     but not the undersegmentation error at k = 150 (+0.3 %), so points keep
     the paper's method unless asked (``docs/cleanup.md``, "Vertices and points").
     """
-    auto = kind in ("faces", "vertices") and params.weighting == "paper" and not params.paper
+    auto = kind_of(kind).better_method and params.weighting == "paper" and not params.paper
     return (auto if params.cleanup is None else bool(params.cleanup),
             auto if params.split_merge is None else bool(params.split_merge))
 
@@ -94,25 +95,23 @@ def assignment_of(params: "SegmentParams", kind: str) -> str:
     """
     if params.assignment is not None:
         return params.assignment
-    auto = kind == "vertices" and params.weighting == "paper" and not params.paper
+    auto = kind_of(kind).exact_assignment and params.weighting == "paper" and not params.paper
     content = (params.density or 0.0) > 0 or params.roughness > 0
     return "exact" if auto or content else "bounded"
 
 
 #: ``center_tol`` when ``tol > 0`` and none is given (fraction of the superfacet radius).
 DEFAULT_CENTER_TOL = 0.05
-#: Automatic coarse-to-fine (``coarsen=None``, ``tol > 0``) runs where a superfacet holds
-#: at least this many elements ...
-COARSE_MIN_PER_SEGMENT = 4000
-#: ... and leaves about this many clusters per superfacet.
-COARSE_PER_SEGMENT = 1000
-#: Point clouds: from this many points per superpoint, clusters leaving about
-#: ``COARSE_PER_SEGMENT_POINTS`` per superpoint, of at most ``n_neighbors // 2`` points
-#: (a cluster no wider than the neighbourhood that estimates a normal). On 15
-#: benchmark meshes sampled with 200,000 points (docs/superpoints.md): clusters of 5
-#: keep UE (k = 50: +0.5 %, k = 100: -2.2 %) and take 42 % off the time.
-COARSE_MIN_PER_SEGMENT_POINTS = 1000
-COARSE_PER_SEGMENT_POINTS = 400
+#: Automatic coarse-to-fine (``coarsen=None``, ``tol > 0``): the faces' (and vertices')
+#: thresholds and the points', from the table of kinds (:mod:`superfacets.elements.kinds`:
+#: ``coarse_min_per_segment``, ``coarse_per_segment``). On points, clusters of at most
+#: ``n_neighbors // 2`` (15 benchmark meshes sampled with 200,000 points: clusters of 5
+#: keep UE, k = 50: +0.5 %, k = 100: -2.2 %, and take 42 % off the time;
+#: docs/superpoints.md).
+COARSE_MIN_PER_SEGMENT = kind_of("faces").coarse_min_per_segment
+COARSE_PER_SEGMENT = kind_of("faces").coarse_per_segment
+COARSE_MIN_PER_SEGMENT_POINTS = kind_of("points").coarse_min_per_segment
+COARSE_PER_SEGMENT_POINTS = kind_of("points").coarse_per_segment
 
 
 @dataclass(frozen=True)
@@ -358,7 +357,7 @@ def resolve(**params) -> SegmentParams:
         progress=bool(p.progress),
         n_threads=check_threads(p.n_threads),
         elements=None if p.elements is None else check_choice("elements", p.elements,
-                                                              ELEMENTS + ("cells",)),
+                                                              tuple(KINDS)),
         n_neighbors=check_int("n_neighbors", p.n_neighbors, lo=1, hi=MAX_NEIGHBORS),
         neighbor_radius=None if p.neighbor_radius is None else check_positive(
             "neighbor_radius", p.neighbor_radius),
@@ -390,19 +389,32 @@ def superfacet_size(params: SegmentParams, area: float, diagonal: float,
         If ``n_segments`` exceeds the number of elements, or ``radius`` is so
         small that a superfacet's area (volume) is 0 in double precision.
     """
-    cells = kind == "cells"  # ``area`` is a volume: r of a ball of volume V / k
+    profile = kind_of(kind)  # ``area`` is a volume on cells: r of a ball of volume V / k
     if params.radius is not None:
         r = params.radius * diagonal
-        each = 4.0 / 3.0 * math.pi * r ** 3 if cells else math.pi * r * r
+        each = superfacet_measure(r, profile.dim)
         if not each > 0:
             raise ParameterError(f"radius {params.radius:g} of the diagonal ({r:.3g} in the "
                                  "input's units) is too small: a superfacet's "
-                                 f"{'volume' if cells else 'area'} would be 0")
+                                 f"{profile.size_word} would be 0")
         k = None
         if params.init == "farthest":
             k = int(min(n_elements, max(1, round(area / each))))
         return k, r
-    k = check_n_segments(params.n_segments, n_elements, kind)
-    if cells:
+    k = check_n_segments(params.n_segments, n_elements, profile.name)
+    if profile.dim == 3:
         return k, (3.0 * area / (4.0 * math.pi * k)) ** (1.0 / 3.0)
     return k, math.sqrt(area / (k * math.pi))
+
+
+def superfacet_measure(r: float, dim: int = 2) -> float:
+    """The size of one superfacet of radius ``r``: a disc's area ``pi r^2`` (paper
+    section 3.1) on surfaces (``dim = 2``), a ball's volume ``4/3 pi r^3`` on
+    tetrahedra (``dim = 3``).
+
+    Examples
+    --------
+    >>> round(superfacet_measure(1.0), 4), round(superfacet_measure(1.0, 3), 4)
+    (3.1416, 4.1888)
+    """
+    return 4.0 / 3.0 * math.pi * r ** 3 if dim == 3 else math.pi * r * r

@@ -35,6 +35,7 @@ from .connectivity import enforce_connectivity as _enforce_connectivity
 from .expansion import Workspaces
 from .labels import relabel_dense
 from .elements.inputs import elements_of
+from .elements.kinds import kind_of
 from .multilevel import start_centers
 from .params import (DEFAULT_CENTER_TOL, DEFAULTS, SegmentParams, assignment_of, better_method,
                      superfacet_size)
@@ -417,7 +418,7 @@ def _pipeline(mesh, params: SegmentParams, features, *, replay: bool, jump_cycle
                     center_tol=center_tol, coarsen=ratio,
                     n_init_centers=init.shape[0], elements=graph.kind, beta=p.beta,
                     min_elements=p.min_elements, density=p.density, roughness=p.roughness)
-    if graph.kind == "points":
+    if kind_of(graph.kind).neighborhood:
         resolved.update(n_neighbors=p.n_neighbors, neighbor_radius=p.neighbor_radius)
     return SegmentationResult(labels=labels, centers=centers, n_iter=it.n_iter,
                               converged=it.converged, radius=r,

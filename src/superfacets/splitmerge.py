@@ -38,6 +38,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._kernels.splitmerge import energies, merge_energies, split_candidates
+from .elements.kinds import kind_of
 
 __all__ = ["swap_round", "swap_and_iterate", "POWER", "LLOYD",
            "MAX_FRACTION", "MIN_GAIN", "ROUNDS", "START_TOL", "FAST_ROUNDS", "PASSES_AFTER",
@@ -68,12 +69,12 @@ FAST_ROUNDS = 1
 #: convergence) took 1.4-2.7 times (docs/cleanup.md, "Split-and-merge at the paper's speed").
 #: Vertices keep 2: one pass raised their UE (45 meshes, k = 150: -5.4 % against the
 #: paper instead of -6.4 %).
-PASSES_AFTER = 2
+PASSES_AFTER = kind_of("vertices").passes_after  # values: the table of kinds
 #: The same on faces: 1. With the swap energies of :data:`SWAP_ETA_CONVEX_FACES` the
 #: second pass no longer pays: on the 300 meshes, k = 50 ... 300, UE within 0.4 points of
 #: two passes', compactness the same to 0.1 point, about 5 % of a run's time
 #: (docs/cleanup.md, "One pass after the swaps").
-PASSES_AFTER_FACES = 1
+PASSES_AFTER_FACES = kind_of("faces").passes_after
 #: Factor of ``eta_convex`` in the weights of the swap energies on faces: 0.5 counts a
 #: convex fold half as much as the passes do, so a superfacet wrapped round a thin convex
 #: tube (a glasses frame of few faces around) no longer reads as straddling a crease,
@@ -82,11 +83,11 @@ PASSES_AFTER_FACES = 1
 #: alone, the minima rule) gains more UE but raises Cup's by 11 % at k = 50
 #: (docs/cleanup.md, "Swap energies"). On vertices (neighbourhood-averaged normals) 0
 #: raised the UE: they keep the run's weights (1).
-SWAP_ETA_CONVEX_FACES = 0.5
+SWAP_ETA_CONVEX_FACES = kind_of("faces").swap_eta_convex
 #: On faces, the passes after the swaps keep in place a center that moves by less than
 #: this many times ``center_tol * r`` (its window's expansion is replayed, not run again):
 #: about 4 % of a run's time, the same quality (docs/cleanup.md, "Swap energies").
-HOLD_AFTER_FACES = 4.0
+HOLD_AFTER_FACES = kind_of("faces").hold_after
 #: A swap is taken only if its split lowers the energy by at least this many times the
 #: mean energy of a superfacet (the total over K): a split that removes less than an
 #: average superfacet holds fixes no crease, and its swap mostly reshuffles a smooth
@@ -279,7 +280,7 @@ def swap_eta_convex_for(kind: str) -> float:
     >>> swap_eta_convex_for("faces"), swap_eta_convex_for("vertices")
     (0.5, 1.0)
     """
-    return SWAP_ETA_CONVEX_FACES if kind == "faces" else 1.0
+    return kind_of(kind).swap_eta_convex
 
 
 def passes_after_for(kind: str) -> int:
@@ -291,7 +292,7 @@ def passes_after_for(kind: str) -> int:
     >>> passes_after_for("faces"), passes_after_for("vertices")
     (1, 2)
     """
-    return PASSES_AFTER_FACES if kind == "faces" else PASSES_AFTER
+    return kind_of(kind).passes_after
 
 
 def hold_after_for(kind: str) -> float:
@@ -304,7 +305,7 @@ def hold_after_for(kind: str) -> float:
     >>> hold_after_for("faces"), hold_after_for("points")
     (4.0, 1.0)
     """
-    return HOLD_AFTER_FACES if kind == "faces" else 1.0
+    return kind_of(kind).hold_after
 
 
 def _members(lab: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:

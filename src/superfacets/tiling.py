@@ -48,7 +48,8 @@ from .elements.inputs import elements_of
 from .errors import ParameterError
 from .expansion import Workspaces
 from .labels import relabel_dense
-from .params import DEFAULTS, SegmentParams, assignment_of, better_method
+from .elements.kinds import kind_of
+from .params import DEFAULTS, SegmentParams, assignment_of, better_method, superfacet_measure
 from .pipeline import _features_of, pipeline
 from .weights import csr_weights, edge_weights
 
@@ -275,7 +276,7 @@ def _core_share(inp, core: np.ndarray, p: SegmentParams, r: float) -> int:
     of_row = src.to_rows(np.arange(g.n_elements))
     in_core = np.zeros(g.n_elements, dtype=bool)
     in_core[of_row[core & (of_row >= 0)]] = True
-    each = 4.0 / 3.0 * math.pi * r ** 3 if g.kind == "cells" else math.pi * r * r
+    each = superfacet_measure(r, kind_of(g.kind).dim)
     want = max(1, round(float(g.sizes[in_core].sum()) / each))
     budget = int(min(g.n_elements, max(2 * round(g.area / each), want) + 16))
     hits = np.cumsum(in_core[farthest_point_centers(g, budget, every_piece=not p.paper)])

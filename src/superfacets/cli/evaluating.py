@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..elements.kinds import kind_of
 from ..params import DEFAULTS
 from .options import float_arg, int_arg, read_usable
 
@@ -79,11 +80,11 @@ def cmd_evaluate(args) -> int:
         raise ParameterError("give a ground truth: GT.seg files or --ground-truth-field NAME")
     m = evaluate_rows(data, labels, gts, elements=kind, n_neighbors=args.neighbors,
                       tau=args.tau, ignore_label=args.ignore_label, precision=True)
-    segs = "superfacets" if kind == "faces" else "superpoints"
+    segs = kind_of(kind).segment_word
     print(f"{Path(args.mesh).name}: {n} {kind}, {m['segments']} {segs}, "
           f"{len(gts)} ground truths")
     print(f"undersegmentation_error {m['undersegmentation_error']:.4f}  (lower is better)")
-    estimate = "; estimated on points" if kind == "points" else ""
+    estimate = "; estimated on points" if kind_of(kind).cloud else ""
     print(f"compactness             {m['compactness']:.4f}  (lower is better; disk 3.545"
           f"{estimate})")
     print(f"boundary_recall         {m['boundary_recall']:.4f}  (higher is better)")

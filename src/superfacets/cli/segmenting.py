@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..elements.kinds import kind_of
 from ..params import DEFAULTS
 from .options import (add_adaptive_options, add_camera_options, add_element_options,
                       add_method_options,
@@ -129,7 +130,7 @@ def _summary(name: str, mesh, result, seconds: float, elements: str = "faces",
         objs = f" in {len(mesh.objects)} objects" if len(mesh.objects) > 1 else ""
         what = (f"{mesh.n_faces} faces{kind}{objs}" if elements == "faces" else
                 f"{mesh.n_vertices} vertices ({mesh.n_faces} faces{kind})")
-        segs = "superfacets" if elements == "faces" else "superpoints"
+        segs = kind_of(elements).segment_word
     start = (getattr(result, "params", None) or {}).get("start")
     if start:  # --adaptive: the iterations and the hints are of the start's segmentation
         segs = f"content-adaptive {segs} (merged from {start} times as many)"
@@ -230,7 +231,7 @@ def cmd_segment(args) -> int:
 
     cloud = not hasattr(data, "faces")
     kind = "points" if cloud else (args.elements or "faces")
-    if kind != "faces":
+    if not kind_of(kind).objects:
         if args.per_object:
             raise ParameterError("--per-object segments the faces of a scene; not with "
                                  f"{kind}")
@@ -326,7 +327,7 @@ def _count_note(args, data, result, kind: str) -> str | None:
                 f"reached within its window became {what} of their own; a larger --window "
                 "keeps closer to k")
     fewer = max(pieces, asked - (result.n_segments - asked))
-    hint = (" or --per-object to share k among the file's objects" if kind == "faces"
+    hint = (" or --per-object to share k among the file's objects" if kind_of(kind).objects
             and len(getattr(data, "objects", ())) > 1 else "")
     why = ("a region cannot cross from one piece to another" if getattr(args, "paper", False)
            else "each piece has a center, but a center drawn near another piece can leave "

@@ -6,6 +6,7 @@ import sys
 import time
 from pathlib import Path
 
+from ..elements.kinds import kind_of
 from .options import (add_engine_options, check_labels_output, element_kwargs, method_kwargs,
                       named_after)
 
@@ -86,7 +87,7 @@ def segment_tiles(args) -> int:
     if not args.quiet:
         kind = result.params["elements"]
         peak = max((t.get("centers_peak_mib") or 0 for t in result.tiles), default=0)
-        what = "superpoints" if kind == "points" else "superfacets"
+        what = kind_of(kind).segment_word
         k = args.n_segments
         asked = ("" if k is None or result.n_segments == k else
                  f" ({k} asked: tiles this small hold fewer centers; see docs/tiles.md)"

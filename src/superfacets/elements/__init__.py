@@ -10,11 +10,25 @@ face graph (dual graph) of a triangle or polygon mesh,
 :func:`~superfacets.elements.points.point_graph` the k-nearest-neighbour graph of
 a point cloud. Each keeps what it builds with its input (one build per mesh or
 cloud, and per neighbourhood): the inputs know nothing of graphs.
+
+The rules that differ by kind are in one table, :mod:`superfacets.elements.kinds`
+(read before any graph is built: importing it imports no builder).
 """
 
-from .faces import build_face_graph, face_graph
-from .graph import AdjacencyTerms, ElementGraph
-from .inputs import as_element_graph
+import importlib
 
 __all__ = ["ElementGraph", "AdjacencyTerms", "as_element_graph", "face_graph",
            "build_face_graph"]
+
+_WHERE = {"ElementGraph": "graph", "AdjacencyTerms": "graph", "as_element_graph": "inputs",
+          "face_graph": "faces", "build_face_graph": "faces"}
+
+
+def __getattr__(name):  # lazy: ``elements.kinds`` is read before numba is imported
+    if name in _WHERE:
+        return getattr(importlib.import_module(f"{__name__}.{_WHERE[name]}"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(list(globals()) + __all__)

@@ -218,9 +218,9 @@ class ElementGraph:
     @property
     def element(self) -> str:
         """The singular of ``kind``: ``"face"``, ``"vertex"`` or ``"point"``."""
-        return {"faces": "face", "vertices": "vertex", "points": "point",
-                "cells": "cell"}.get(self.kind,
-                                                                               self.kind)
+        from .kinds import KINDS
+
+        return KINDS[self.kind].singular if self.kind in KINDS else self.kind
 
     @property
     def n_elements(self) -> int:

@@ -9,13 +9,14 @@ come back one per face, vertex or point, in input order.
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Callable, NamedTuple
 
 import numpy as np
 
 from .graph import ElementGraph
 
-__all__ = ["ElementInput", "as_element_graph", "elements_of", "is_cloud"]
+__all__ = ["ElementInput", "Builder", "BUILDERS", "as_element_graph", "elements_of",
+           "is_cloud", "kind_for", "register_builder"]
 
 
 class ElementInput(NamedTuple):
@@ -80,17 +81,172 @@ def is_cloud(obj) -> bool:
     return type(obj).__name__ == "PointCloud" and mod.split(".")[0] in ("trimesh", "open3d")
 
 
+class Builder(NamedTuple):
+    """How the element graph of one kind is built (a row of :data:`BUILDERS`).
+
+    Attributes
+    ----------
+    accepts : callable
+        ``accepts(obj) -> bool``: whether ``obj`` is an input of this kind's
+        family (a mesh, a point cloud, a tetrahedral mesh).
+    default : bool
+        This kind is the default for the inputs it accepts.
+    build : callable
+        ``build(obj, n_neighbors, neighbor_radius) -> ElementInput``: validate the
+        input and build (or take from its cache) the graph.
+    needs : str
+        What the kind needs, for the error when the input does not fit.
+    """
+
+    accepts: Callable[[object], bool]
+    default: bool
+    build: Callable[..., ElementInput]
+    needs: str
+
+
+def _is_volume(obj) -> bool:
+    from ..volume import TetMesh
+
+    return isinstance(obj, TetMesh)
+
+
+def _is_mesh(obj) -> bool:
+    return not is_cloud(obj) and not _is_volume(obj)
+
+
+def _cells(obj, n_neighbors, neighbor_radius) -> ElementInput:
+    obj.check_usable()
+    from .cells import cell_graph
+
+    return ElementInput(cell_graph(obj), None, obj)
+
+
+def _points(obj, n_neighbors, neighbor_radius) -> ElementInput:
+    from ..cloud import as_cloud
+    from .points import point_graph
+
+    c = as_cloud(obj)
+    c.check_usable()
+    g, index = point_graph(c, n_neighbors, neighbor_radius)
+    return ElementInput(g, index, c)
+
+
+def _usable_mesh(obj):
+    from ..convert import as_mesh
+
+    mesh = as_mesh(obj)
+    mesh.check_usable()
+    return mesh
+
+
+def _vertices(obj, n_neighbors, neighbor_radius) -> ElementInput:
+    from .vertices import vertex_graph
+
+    mesh = _usable_mesh(obj)
+    g, index = vertex_graph(mesh)
+    return ElementInput(g, index, mesh)
+
+
+def _faces(obj, n_neighbors, neighbor_radius) -> ElementInput:
+    from .faces import face_graph
+
+    mesh = _usable_mesh(obj)
+    return ElementInput(face_graph(mesh), None, mesh)
+
+
+#: The element-graph builder of each kind (the kinds' rules are in
+#: :data:`superfacets.elements.kinds.KINDS`); the first kind marked ``default`` that
+#: accepts an input is its default.
+BUILDERS: dict[str, Builder] = {
+    "cells": Builder(_is_volume, True, _cells,
+                     "a tetrahedral mesh (superfacets.read_volume)"),
+    "points": Builder(is_cloud, True, _points,
+                      "a point cloud (a mesh has faces and vertices: elements='faces' "
+                      "or 'vertices')"),
+    "faces": Builder(_is_mesh, True, _faces, "a mesh; a point cloud has elements='points'"),
+    "vertices": Builder(_is_mesh, False, _vertices,
+                        "a mesh; a point cloud has elements='points'"),
+}
+
+
+def register_builder(kind: str, builder: Builder) -> None:
+    """Add (or replace) the builder of a kind of element.
+
+    The kind must have a row in :data:`superfacets.elements.kinds.KINDS`.
+
+    Parameters
+    ----------
+    kind : str
+    builder : Builder
+
+    Raises
+    ------
+    ValueError
+        If ``kind`` has no row in the table of kinds.
+
+    Examples
+    --------
+    >>> register_builder("faces", BUILDERS["faces"])  # as it is
+    """
+    from .kinds import kind_of
+
+    kind_of(kind)
+    BUILDERS[kind] = builder
+
+
+def kind_for(obj, elements: str | None = None) -> str:
+    """The kind of element a run on ``obj`` segments: ``elements`` if given and
+    ``obj`` fits it, else the input's default kind.
+
+    Parameters
+    ----------
+    obj : Mesh, PointCloud, TetMesh, or what they are made from
+    elements : str, optional
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    ParameterError
+        If ``elements`` is unknown or does not fit the input.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> kind_for(trimesh.creation.box()), kind_for(np.zeros((5, 3)))
+    ('faces', 'points')
+    """
+    from ..errors import ParameterError
+
+    if elements is None:
+        for kind, b in BUILDERS.items():
+            if b.default and b.accepts(obj):
+                return kind
+        raise ParameterError(f"no kind of element accepts a {type(obj).__name__}")
+    builder = BUILDERS.get(elements)
+    if builder is None:
+        raise ParameterError(f"elements must be one of {', '.join(BUILDERS)}; got {elements!r}")
+    if not builder.accepts(obj):
+        if elements == "cells" or not _is_volume(obj):
+            raise ParameterError(f"elements={elements!r} needs {builder.needs}")
+        raise ParameterError(f"a tetrahedral mesh has elements='cells', not {elements!r}")
+    return elements
+
+
 def elements_of(obj, elements: str | None = None, *, n_neighbors: int = 10,
                 neighbor_radius: float | None = None) -> ElementInput:
     """Validate an input and give its element graph.
 
     Parameters
     ----------
-    obj : Mesh, PointCloud, or what :func:`~superfacets.convert.as_mesh` or
+    obj : Mesh, PointCloud, TetMesh, or what :func:`~superfacets.convert.as_mesh` or
         :func:`~superfacets.cloud.as_cloud` accept
     elements : {'faces', 'vertices', 'points', 'cells'}, optional
         Default: ``'points'`` for a point cloud, ``'cells'`` for a
-        :class:`~superfacets.volume.TetMesh` (its tetrahedra), else ``'faces'``.
+        :class:`~superfacets.volume.TetMesh` (its tetrahedra), else ``'faces'``
+        (:func:`kind_for`; the builders: :data:`BUILDERS`).
     n_neighbors, neighbor_radius
         The point graph's neighbourhood (points only).
 
@@ -104,50 +260,16 @@ def elements_of(obj, elements: str | None = None, *, n_neighbors: int = 10,
         If ``elements`` does not fit the input (points of a mesh, faces of a cloud).
     InvalidMeshError, InvalidCloudError, TypeError
         As the input's validation.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> src = elements_of(trimesh.creation.box(), "vertices")
+    >>> src.graph.kind, src.graph.n_elements, src.n_rows
+    ('vertices', 8, 8)
     """
-    from ..errors import ParameterError
-    from ..volume import TetMesh
-
-    if isinstance(obj, TetMesh):  # its tetrahedra
-        if elements not in (None, "cells"):
-            raise ParameterError(f"a tetrahedral mesh has elements='cells', not {elements!r}")
-        obj.check_usable()
-        from .cells import cell_graph
-
-        return ElementInput(cell_graph(obj), None, obj)
-    if elements == "cells":
-        raise ParameterError("elements='cells' needs a tetrahedral mesh "
-                             "(superfacets.read_volume)")
-    cloud = is_cloud(obj)
-    if elements is None:
-        elements = "points" if cloud else "faces"
-    if elements == "points":
-        if not cloud:
-            raise ParameterError("elements='points' needs a point cloud (a mesh has faces "
-                                 "and vertices: elements='faces' or 'vertices')")
-        from ..cloud import as_cloud
-
-        c = as_cloud(obj)
-        c.check_usable()
-        from .points import point_graph
-
-        g, index = point_graph(c, n_neighbors, neighbor_radius)
-        return ElementInput(g, index, c)
-    if cloud:
-        raise ParameterError(f"elements={elements!r} needs a mesh; a point cloud has "
-                             "elements='points'")
-    from ..convert import as_mesh
-
-    mesh = as_mesh(obj)
-    mesh.check_usable()
-    if elements == "vertices":
-        from .vertices import vertex_graph
-
-        g, index = vertex_graph(mesh)
-        return ElementInput(g, index, mesh)
-    from .faces import face_graph
-
-    return ElementInput(face_graph(mesh), None, mesh)
+    kind = kind_for(obj, elements)
+    return BUILDERS[kind].build(obj, n_neighbors, neighbor_radius)
 
 
 def as_element_graph(obj) -> ElementGraph:

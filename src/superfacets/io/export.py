@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..elements.kinds import kind_of
 from ..errors import MeshFormatError
 from ..convert import as_mesh
 from .files import Outputs, save, split_suffix
@@ -317,7 +318,7 @@ def write_colored_elements(path, source, labels, *, outputs: Outputs | None = No
         raise MeshFormatError(f"{path}: coloured {source.graph.kind} are written as .ply")
     labels = check_labels(labels, source.n_rows, per=source.graph.element)
     colors = element_colors(source, labels)
-    if source.graph.kind == "points":
+    if kind_of(source.graph.kind).cloud:
         data = points_ply_bytes(source.source.points, colors, labels)
     else:
         mesh = source.source

@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import Sequence
 
 from .. import interrupts
+from ..elements.kinds import kind_of
 from ..errors import ParameterError
 from .engine import Engine, PeakMemory, error_text
 from .inputs import collect_inputs, output_names
@@ -94,7 +95,7 @@ def _segment_and_write(task: dict, label_rel: str) -> dict:
     data = read_input(task["input"])
     cloud = not hasattr(data, "faces")
     kind = "points" if cloud else (opts.get("elements") or "faces")
-    if kind != "faces":
+    if not kind_of(kind).objects:
         if task["per_object"]:
             raise ParameterError(f"--per-object segments the faces of a scene; not {kind}")
         if outs["colored"] not in (None, "ply"):
@@ -113,8 +114,7 @@ def _segment_and_write(task: dict, label_rel: str) -> dict:
                                   compactness=task["adaptive"]["compactness"], **opts)
     else:
         result = segment(data, **opts)
-    n = data.n_total if kind == "points" else (data.n_vertices if kind == "vertices"
-                                               else data.n_faces)
+    n = kind_of(kind).n_rows(data)
     base.parent.mkdir(parents=True, exist_ok=True)
     picture = base.with_name(base.name + ".png") if outs["picture"] else None
     html = base.with_name(base.name + ".html") if outs["html"] else None

@@ -23,6 +23,7 @@ from typing import Sequence
 
 import numpy as np
 
+from ..elements.kinds import kind_of
 from ..errors import ParameterError
 from ..methods import Skipped, get_method
 from ..params import DEFAULT_N_SEGMENTS
@@ -93,7 +94,7 @@ def _run_task(task: dict) -> list[dict]:
                                             task.get("n_points", 0), task["seed"])
         base["n_elements"] = graph.n_elements
         n_rows = graph.n_elements if to_el is None else (
-            data.n_total if kind == "points" else data.n_vertices)
+            kind_of(kind).n_rows(data))
         extra = {} if task.get("faces_only", True) else {"elements": kind}
     except Exception as exc:  # noqa: BLE001 - recorded, the run goes on
         return [dict(base, n_segments=k, status="failed", error=error_text(exc))
@@ -124,7 +125,7 @@ def _run_task(task: dict) -> list[dict]:
             if gts:
                 row.update({m: round(v, 6) for m, v in
                             evaluate(graph, labels, gts, tau=task["tau"],
-                                     equal_weight=kind != "faces").items()})
+                                     equal_weight=kind_of(kind).equal_weight).items()})
         except Skipped as exc:
             row.update(status="skipped", error=str(exc)[:500], seconds=None)
         except Exception as exc:  # noqa: BLE001 - recorded, the run goes on

@@ -1,0 +1,198 @@
+"""One table of element kinds: every rule of the method that differs by kind.
+
+The method is written once for every kind of element (faces of a triangle or
+polygon mesh, mesh vertices, points of a cloud, tetrahedral cells). What
+differs between them is either how the element graph is built (the builders
+of :mod:`superfacets.elements`, registered by kind in
+:mod:`superfacets.elements.inputs`) or a rule held here, in one frozen
+:class:`ElementKind` per kind. No other module branches on a kind's name
+(``tests/test_kinds.py`` fails when one does), so adding a kind is one
+builder and one row of :data:`KINDS`.
+
+This module imports nothing of the package: the parameter checks
+(:mod:`superfacets.params`) read it before any graph exists.
+
+Examples
+--------
+>>> kind_of("faces").crease, kind_of("points").crease
+(0.1, 1.0)
+>>> kind_of("cells").dim, kind_of("vertices").singular
+(3, 'vertex')
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["ElementKind", "KINDS", "kind_of"]
+
+
+@dataclass(frozen=True)
+class ElementKind:
+    """The rules of the method on one kind of element.
+
+    Attributes
+    ----------
+    name : str
+        ``"faces"``, ``"vertices"``, ``"points"`` or ``"cells"`` (the graph's ``kind``).
+    singular : str
+        One element, in messages: ``"face"``, ``"vertex"``, ...
+    dim : int
+        Dimension of an element's size: 2 (an area, surfaces) or 3 (a volume,
+        tetrahedra). The superfacet radius is that of a disc (``A = k pi r^2``,
+        paper section 3.1) or of a ball (``V = k 4/3 pi r^3``); the compactness
+        metric divides by ``size^((dim - 1) / dim)``; content-sensitive sizes
+        scale by ``s^dim``.
+    better_method : bool
+        Clean-up and split-and-merge on by default (``cleanup=None``,
+        ``split_merge=None``) with the paper's weighting. Faces: both beat the
+        paper at every k from 50 to 300 at its speed; vertices: UE -4 to -8 %,
+        compactness -5 to -7 %; points: compactness -18 to -25 % but not the UE
+        (+0.3 % at k = 150); cells: not measured (``docs/cleanup.md``).
+    exact_assignment : bool
+        The exact nearest-center classification by default (``assignment=None``)
+        with the paper's weighting: vertices, where it gives the windows' quality
+        for a third of their time (``docs/cleanup.md``).
+    crease : float
+        Weight of creases in the clean-up's cut cost, a fraction of ``alpha``
+        (:func:`superfacets.cleanup.cut_costs`). Faces 0.1; vertices, points and
+        cells 1.0: their normals are neighbourhood averages, a crease's angle is
+        spread over a few adjacencies (lowest UE of 0.1, 0.3, 1, 3, 10 on 90
+        benchmark meshes, ``docs/cleanup.md``).
+    smoothness : float
+        Weight of the clean-up's data (compactness) term against the boundary
+        length: 0.7 on faces, whose swap energies weigh convex folds less, else 0.3.
+    band : float
+        Half-width of the clean-up's band along each boundary, a fraction of
+        ``r``: 0.2 on vertices (the same quality as 0.3 for a third less time),
+        else 0.3.
+    swap_eta_convex : float
+        Factor of ``eta_convex`` in the split-and-merge swap energies: 0.5 on
+        faces (convex folds count half), else 1.
+    passes_after : int
+        Most passes after the swaps (with ``tol > 0``): 1 on faces, else 2.
+    hold_after : float
+        How many times ``center_tol * r`` a center must move, in the passes after
+        the swaps, to be expanded again: 4 on faces, else 1.
+    coarse_min_per_segment : int
+        Automatic coarse-to-fine runs where a superfacet holds at least this
+        many elements (:func:`superfacets.multilevel.coarse_ratio`) ...
+    coarse_per_segment : int
+        ... and leaves about this many clusters per superfacet.
+    coarse_neighbor_cap : bool
+        Clusters of at most ``n_neighbors // 2`` elements (points: no wider than
+        the neighbourhood that estimates a normal).
+    equal_weight : bool
+        The metrics weigh every element alike (vertices, points, cells) rather
+        than by its size (faces: by area, as the benchmark's ground truth).
+    auto_density : bool
+        ``density=None`` looks at the spread of the element sizes
+        (:func:`superfacets.adaptive.density_for`): points, whose density may be
+        uneven (LiDAR sweeps, RGB-D frames); 0 on the other kinds.
+    unit_sizes_in_levels : bool
+        In planarity levels (:func:`superfacets.hierarchy.planarity_graph`) each
+        element weighs one (points: their size estimates are noisy).
+    neighborhood : bool
+        The graph is built from a neighbourhood search (``n_neighbors``,
+        ``neighbor_radius`` apply and are recorded in the result's parameters).
+    cloud : bool
+        The elements are the points of a cloud: written as a point PLY, drawn
+        as points, with no faces and no scene objects.
+    rows : str
+        The input's attribute that counts the labels of a run (one per face, per
+        vertex, per point of the cloud including invalid ones, per tetrahedron).
+    segment_word : str
+        What the segments are called in summaries: superfacets (faces), else
+        superpoints.
+    objects : bool
+        The elements are what a scene's objects are made of (faces): a run may
+        share ``k`` among the objects (``--per-object``), the objects are named
+        in label files, and a coloured copy may be written in any mesh format
+        (the other kinds: a coloured PLY).
+    """
+
+    name: str
+    singular: str
+    dim: int = 2
+    better_method: bool = False
+    exact_assignment: bool = False
+    crease: float = 1.0
+    smoothness: float = 0.3
+    band: float = 0.3
+    swap_eta_convex: float = 1.0
+    passes_after: int = 2
+    hold_after: float = 1.0
+    coarse_min_per_segment: int = 4000
+    coarse_per_segment: int = 1000
+    coarse_neighbor_cap: bool = False
+    equal_weight: bool = True
+    auto_density: bool = False
+    unit_sizes_in_levels: bool = False
+    neighborhood: bool = False
+    cloud: bool = False
+    rows: str = "n_faces"
+    segment_word: str = "superpoints"
+    objects: bool = False
+
+    def n_rows(self, data) -> int:
+        """Number of labels a run on ``data`` (a mesh, cloud or tetrahedral mesh) returns.
+
+        Examples
+        --------
+        >>> import trimesh
+        >>> from superfacets.convert import as_mesh
+        >>> m = as_mesh(trimesh.creation.box())
+        >>> kind_of("faces").n_rows(m), kind_of("vertices").n_rows(m)
+        (12, 8)
+        """
+        return int(getattr(data, self.rows))
+
+    @property
+    def size_word(self) -> str:
+        """``"area"`` or ``"volume"``: what an element's size is."""
+        return "volume" if self.dim == 3 else "area"
+
+
+#: The kinds of element, by name (the rows of the table).
+KINDS = {k.name: k for k in (
+    ElementKind("faces", "face", better_method=True, crease=0.1, smoothness=0.7,
+                swap_eta_convex=0.5, passes_after=1, hold_after=4.0, equal_weight=False,
+                segment_word="superfacets", objects=True),
+    ElementKind("vertices", "vertex", better_method=True, exact_assignment=True, band=0.2,
+                rows="n_vertices"),
+    ElementKind("points", "point", coarse_min_per_segment=1000, coarse_per_segment=400,
+                coarse_neighbor_cap=True, auto_density=True, unit_sizes_in_levels=True,
+                neighborhood=True, cloud=True, rows="n_total"),
+    ElementKind("cells", "cell", dim=3, rows="n_tets"),
+)}
+
+
+def kind_of(name) -> ElementKind:
+    """The :class:`ElementKind` named ``name`` (or ``name`` itself if it is one).
+
+    Parameters
+    ----------
+    name : str or ElementKind
+        ``"faces"``, ``"vertices"``, ``"points"`` or ``"cells"``.
+
+    Returns
+    -------
+    ElementKind
+
+    Raises
+    ------
+    ValueError
+        For an unknown kind, listing the known ones.
+
+    Examples
+    --------
+    >>> kind_of("vertices").band
+    0.2
+    """
+    if isinstance(name, ElementKind):
+        return name
+    try:
+        return KINDS[name]
+    except (KeyError, TypeError):
+        raise ValueError(f"unknown kind of element {name!r}; known: "
+                         f"{', '.join(KINDS)}") from None

@@ -1,0 +1,150 @@
+"""One table of element kinds (superfacets.elements.kinds): every rule that differs by kind
+is read from it, no module branches on a kind's name, and a new kind is one builder and
+one row."""
+
+from __future__ import annotations
+
+import ast
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from superfacets import segment
+from superfacets.elements import kinds
+from superfacets.elements.inputs import BUILDERS, Builder, elements_of, kind_for
+from superfacets.elements.kinds import KINDS, kind_of
+from superfacets.errors import ParameterError
+
+SRC = Path(__file__).resolve().parents[1] / "src" / "superfacets"
+
+#: Where a kind's name may be compared, and why: the table itself and the builders
+#: (which decide what the elements of an input are); code that reads and writes files,
+#: whose ``kind`` is the layout of a file (faces with their vertices, or points); the
+#: command line's wording; a mesh's own per-face and per-vertex arrays and the pictures
+#: that draw either; the benchmark's per-face ground truth carried to each kind.
+ALLOWED = {
+    "elements/": "the table and the builders",
+    "io/": "file layouts",
+    "cli/": "the command line's wording",
+    "runner/tiles.py": "tile files: faces with their vertices, or points",
+    "runner/buckets.py": "tile files: faces with their vertices, or points",
+    "mesh.py": "a mesh's per-face and per-vertex colours",
+    "render.py": "pictures of a mesh's faces or its vertices",
+    "html/": "pages of a mesh's faces or its vertices",
+    "runner/experiment.py": "the benchmark's per-face ground truth carried to each kind",
+}
+
+
+def _is_kind_literal(node) -> bool:
+    if isinstance(node, ast.Constant):
+        return node.value in KINDS
+    if isinstance(node, (ast.Tuple, ast.List, ast.Set)):
+        return bool(node.elts) and all(_is_kind_literal(e) for e in node.elts)
+    return False
+
+
+def _branches(path: Path) -> list[str]:
+    out = []
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Compare) and any(
+                _is_kind_literal(x) for x in [node.left, *node.comparators]):
+            out.append(f"{path.relative_to(SRC)}:{node.lineno}")
+        if isinstance(node, ast.Dict) and len(node.keys) > 1 and all(
+                k is not None and _is_kind_literal(k) for k in node.keys):
+            out.append(f"{path.relative_to(SRC)}:{node.lineno} (a dict by kind)")
+    return out
+
+
+def test_no_module_branches_on_a_kind_name_outside_the_table():
+    found = []
+    for path in sorted(SRC.rglob("*.py")):
+        rel = path.relative_to(SRC).as_posix()
+        if rel.startswith(tuple(ALLOWED)):
+            continue
+        found += _branches(path)
+    assert not found, "rules by kind belong in superfacets.elements.kinds:\n" + "\n".join(found)
+
+
+def test_the_scan_finds_a_branch():
+    tree = "def f(g):\n    return 0.1 if g.kind == 'faces' else 1.0\n"
+    path = SRC / "_probe_for_the_test.py"
+    try:
+        path.write_text(tree)
+        assert _branches(path) == ["_probe_for_the_test.py:2"]
+    finally:
+        path.unlink()
+
+
+def test_every_kind_has_a_builder_and_a_row():
+    assert set(BUILDERS) == set(KINDS) == {"faces", "vertices", "points", "cells"}
+    assert all(getattr(k, "singular") and k.dim in (2, 3) for k in KINDS.values())
+
+
+def test_the_rules_read_the_table():
+    from superfacets.cleanup import band_for, crease_for, smoothness_for
+    from superfacets.multilevel import coarse_ratio
+    from superfacets.params import DEFAULTS, assignment_of, better_method
+    from superfacets.splitmerge import hold_after_for, passes_after_for, swap_eta_convex_for
+
+    for name, k in KINDS.items():
+        assert (crease_for(name), smoothness_for(name), band_for(name)) == (
+            k.crease, k.smoothness, k.band)
+        assert (swap_eta_convex_for(name), passes_after_for(name), hold_after_for(name)) == (
+            k.swap_eta_convex, k.passes_after, k.hold_after)
+        assert better_method(DEFAULTS, name) == (k.better_method, k.better_method)
+        assert (assignment_of(DEFAULTS, name) == "exact") == k.exact_assignment
+        per = k.coarse_min_per_segment
+        assert coarse_ratio(per * 10 - 10, 10, name) == 1
+        assert coarse_ratio(per * 10, 10, name) > 1 or k.coarse_neighbor_cap
+    assert [n for n, k in KINDS.items() if k.better_method] == ["faces", "vertices"]
+
+
+def test_the_superfacet_size_of_a_volume_is_a_ball():
+    """Tetrahedra: r of a ball of volume V / k, in the run and in the coarse-to-fine
+    estimate of k from a radius (which used a disc's area)."""
+    from superfacets.params import resolve, superfacet_measure, superfacet_size
+
+    k, r = superfacet_size(resolve(n_segments=10), 1.0, 2.0, 1000, "cells")
+    assert superfacet_measure(r, 3) == pytest.approx(0.1)
+    k, r = superfacet_size(resolve(radius=0.25, init="farthest"), 1.0, 2.0, 1000, "cells")
+    assert (k, r) == (round(1.0 / superfacet_measure(0.5, 3)), 0.5)
+
+
+def test_kind_for_and_its_errors():
+    box = trimesh.creation.box()
+    assert kind_for(box) == "faces" and kind_for(box, "vertices") == "vertices"
+    assert kind_for(np.random.default_rng(0).random((20, 3))) == "points"
+    with pytest.raises(ParameterError, match="elements='points' needs a point cloud"):
+        kind_for(box, "points")
+    with pytest.raises(ParameterError, match="elements='faces' needs a mesh"):
+        kind_for(np.zeros((5, 3)), "faces")
+    with pytest.raises(ParameterError, match="elements='cells' needs a tetrahedral mesh"):
+        kind_for(box, "cells")
+    with pytest.raises(ParameterError, match="elements must be one of"):
+        kind_for(box, "edges")
+    with pytest.raises(ValueError, match="unknown kind of element 'edges'"):
+        kind_of("edges")
+
+
+def test_a_new_kind_is_one_builder_and_one_row(monkeypatch):
+    """A kind made of a row and a builder runs the whole method: here the faces again
+    under another name, with the vertices' rules (exact classification, band 0.2)."""
+    row = replace(KINDS["vertices"], name="facets", singular="facet", rows="n_faces")
+    monkeypatch.setitem(KINDS, "facets", row)
+
+    def build(obj, n_neighbors, neighbor_radius):
+        src = BUILDERS["faces"].build(obj, n_neighbors, neighbor_radius)
+        return src._replace(graph=replace(src.graph, kind="facets"))
+
+    monkeypatch.setitem(BUILDERS, "facets", Builder(BUILDERS["faces"].accepts, False, build,
+                                                    "a mesh"))
+    mesh = trimesh.creation.icosphere(subdivisions=3)
+    src = elements_of(mesh, "facets")
+    assert src.graph.kind == "facets" and src.graph.element == "facet"
+    r = segment(src.source, 12, elements="facets")
+    assert r.params["elements"] == "facets" and r.params["assignment"] == "exact"
+    assert r.n_segments == 12 and r.labels.shape == (1280,)
+    assert kinds.kind_of("facets").n_rows(src.source) == 1280
