@@ -169,7 +169,7 @@ def _cut_per_tile(path: Path, res, n_neighbors: int) -> tuple[int, int]:
     pts = np.load(path, mmap_mode="r")
     center_tile = tile_of(np.asarray(pts[res.centers], dtype=np.float64), edges)
     size = np.bincount(res.labels[res.labels >= 0], minlength=res.n_segments)
-    margin = 1.5 * res.params["window"] * res.radius
+    margin = 1.5 * res.params["window"] * res.mesh_radius
     cut = outside = 0
     with tempfile.TemporaryDirectory(prefix="sf-cut-") as tmp:
         buckets = bucket(reader, edges, tmp)

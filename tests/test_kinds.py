@@ -135,12 +135,14 @@ def test_a_new_kind_is_one_builder_and_one_row(monkeypatch):
     row = replace(KINDS["vertices"], name="facets", singular="facet", rows="n_faces")
     monkeypatch.setitem(KINDS, "facets", row)
 
-    def build(obj, n_neighbors, neighbor_radius):
-        src = BUILDERS["faces"].build(obj, n_neighbors, neighbor_radius)
+    faces = BUILDERS["faces"]
+
+    def build(mesh, n_neighbors, neighbor_radius):
+        src = faces.build(mesh, n_neighbors, neighbor_radius)
         return src._replace(graph=replace(src.graph, kind="facets"))
 
-    monkeypatch.setitem(BUILDERS, "facets", Builder(BUILDERS["faces"].accepts, False, build,
-                                                    "a mesh"))
+    monkeypatch.setitem(BUILDERS, "facets", Builder(faces.accepts, False, faces.prepare,
+                                                    faces.count, build, "a mesh"))
     mesh = trimesh.creation.icosphere(subdivisions=3)
     src = elements_of(mesh, "facets")
     assert src.graph.kind == "facets" and src.graph.element == "facet"

@@ -1,5 +1,5 @@
 """Content-adaptive levels: the planarity cost on points (each point weighs one) and its
-``compactness`` term, known answers against brute force and the automatic choice."""
+``extent_weight`` term, known answers against brute force and the automatic choice."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import pytest
 from superfacets import segment
 from superfacets.adjacency import superfacet_graph
 from superfacets.errors import ParameterError
-from superfacets.hierarchy import (AUTO_COMPACTNESS, hierarchy, level_compactness,
+from superfacets.hierarchy import (AUTO_EXTENT_WEIGHT, hierarchy, level_extent_weight,
                                    planarity_graph)
 from conftest import grid_mesh
 
@@ -60,7 +60,7 @@ def test_merges_are_the_cheapest_pairs_by_brute_force(compactness):
     p = pts[r.elements.first_rows(np.arange(lab.size))]
     edges = planarity_graph(r.elements.graph, lab).edge_index.T
     levels = list(range(29, 19, -1))
-    h = r.hierarchy(levels, cost="planarity", compactness=compactness)
+    h = r.hierarchy(levels, cost="planarity", extent_weight=compactness)
     group = np.arange(30)
     for i, level in enumerate(levels):
         best, pair = np.inf, None
@@ -78,7 +78,7 @@ def test_merges_are_the_cheapest_pairs_by_brute_force(compactness):
         assert np.unique(np.c_[got, group], axis=0).shape[0] == level == np.unique(got).size
 
 
-def test_compactness_keeps_flat_segments_compact():
+def test_the_extent_weight_keeps_flat_segments_compact():
     # a flat square: every plane rise is zero, so without the term the merges follow
     # rounding noise; with it they are Ward's, whatever its weight
     rng = np.random.default_rng(1)
@@ -89,58 +89,58 @@ def test_compactness_keeps_flat_segments_compact():
         return sum(((pts[labels == s] - pts[labels == s].mean(axis=0)) ** 2).sum()
                    for s in np.unique(labels))
 
-    loose = r.hierarchy([8], cost="planarity", compactness=0).labels(0, r.labels)
-    tight = r.hierarchy([8], cost="planarity", compactness=0.01).labels(0, r.labels)
-    heavy = r.hierarchy([8], cost="planarity", compactness=10).labels(0, r.labels)
+    loose = r.hierarchy([8], cost="planarity", extent_weight=0).labels(0, r.labels)
+    tight = r.hierarchy([8], cost="planarity", extent_weight=0.01).labels(0, r.labels)
+    heavy = r.hierarchy([8], cost="planarity", extent_weight=10).labels(0, r.labels)
     np.testing.assert_array_equal(tight, heavy)
     assert spread(tight) < 0.8 * spread(loose)
 
 
-def test_compactness_is_left_to_the_method_by_the_scans_density():
+def test_the_extent_weight_is_left_to_the_method_by_the_scans_density():
     even = _bumpy_cloud(2000)
     rng = np.random.default_rng(2)
     far = np.c_[rng.random((400, 2)) * [1, 3] + [1.2, 0], np.zeros(400)]  # sparse, beside
     uneven = np.r_[even, far]
     re, ru = segment(even, 40), segment(uneven, 40)
-    assert level_compactness(re.elements.graph) == 0.0
-    assert level_compactness(ru.elements.graph) == AUTO_COMPACTNESS
+    assert level_extent_weight(re.elements.graph) == 0.0
+    assert level_extent_weight(ru.elements.graph) == AUTO_EXTENT_WEIGHT
     np.testing.assert_array_equal(ru.hierarchy([10], cost="planarity").parents[0],
                                   ru.hierarchy([10], cost="planarity",
-                                               compactness=AUTO_COMPACTNESS).parents[0])
-    assert level_compactness(segment(grid_mesh(30, 30), 10).elements.graph) == 0.0  # faces
-    with pytest.raises(ParameterError, match="compactness is a term of cost='planarity'"):
-        re.hierarchy([10], compactness=0.1)
-    with pytest.raises(ParameterError, match="compactness"):
+                                               extent_weight=AUTO_EXTENT_WEIGHT).parents[0])
+    assert level_extent_weight(segment(grid_mesh(30, 30), 10).elements.graph) == 0.0  # faces
+    with pytest.raises(ParameterError, match="extent_weight is a term of cost='planarity'"):
+        re.hierarchy([10], extent_weight=0.1)
+    with pytest.raises(ParameterError, match="extent_weight"):
         hierarchy(planarity_graph(re.elements.graph, re.element_labels), [10],
-                  cost="planarity", compactness=-1)
+                  cost="planarity", extent_weight=-1)
 
 
-def test_adaptive_and_cli_take_the_compactness(tmp_path, capsys):
+def test_adaptive_and_cli_take_the_extent_weight(tmp_path, capsys):
     from superfacets import adaptive_superpoints
     from superfacets.cli import main
 
     pts = _bumpy_cloud(2000)
     r = segment(pts, 60)
-    want = r.hierarchy([12], cost="planarity", compactness=0.05).labels(0, r.labels)
-    np.testing.assert_array_equal(adaptive_superpoints(pts, 12, start=5, compactness=0.05),
+    want = r.hierarchy([12], cost="planarity", extent_weight=0.05).labels(0, r.labels)
+    np.testing.assert_array_equal(adaptive_superpoints(pts, 12, start=5, extent_weight=0.05),
                                   want)
-    with pytest.raises(ParameterError, match="compactness"):
-        adaptive_superpoints(pts, 12, compactness=-0.1)
+    with pytest.raises(ParameterError, match="extent_weight"):
+        adaptive_superpoints(pts, 12, extent_weight=-0.1)
     path = tmp_path / "c.xyz"
     np.savetxt(path, pts)
-    assert main(["segment", str(path), "-k", "12", "--adaptive", "5", "--level-compactness",
+    assert main(["segment", str(path), "-k", "12", "--adaptive", "5", "--extent-weight",
                  "0.05", "-o", str(tmp_path / "c.seg")]) == 0
     np.testing.assert_array_equal(np.loadtxt(tmp_path / "c.seg", dtype=np.int64), want)
     said = capsys.readouterr().out
     assert "12 content-adaptive superpoints (merged from 5 times as many)" in said
     assert "--min-elements" not in said  # the start's hints do not apply to the level
-    for bad in (["--level-compactness", "0.1"],
-                ["--adaptive", "--level-compactness", "-1"],
+    for bad in (["--extent-weight", "0.1"],
+                ["--adaptive", "--extent-weight", "-1"],
                 ["--graph", str(tmp_path / "g.npz"), "--levels", "5",
-                 "--level-compactness", "0.1"]):
+                 "--extent-weight", "0.1"]):
         assert main(["segment", str(path), "-k", "12", *bad, "-o",
                      str(tmp_path / "x.seg")]) == 2
-        assert "--level-compactness takes a number >= 0" in capsys.readouterr().err
+        assert "--extent-weight takes a number >= 0" in capsys.readouterr().err
     assert not (tmp_path / "x.seg").exists() and not (tmp_path / "g.npz").exists()
 
 
@@ -150,10 +150,10 @@ def test_the_registry_runs_the_adaptive_level():
 
     method = get_method("adaptive")
     pts = _bumpy_cloud(2000)
-    cfg = dict(method.defaults, start=5, level_compactness="0.05")
+    cfg = dict(method.defaults, start=5, extent_weight="0.05")
     run = method.run(pts, 12, cache={}, seed=0, elements="points", **cfg)
     np.testing.assert_array_equal(run.labels,
-                                  adaptive_superpoints(pts, 12, start=5, compactness=0.05))
+                                  adaptive_superpoints(pts, 12, start=5, extent_weight=0.05))
     auto = method.run(pts, 12, cache={}, seed=0, elements="points", **method.defaults)
     np.testing.assert_array_equal(auto.labels, adaptive_superpoints(pts, 12))
     assert method.defaults["start"] == 10 and "points" in method.elements
@@ -175,21 +175,21 @@ def test_batch_writes_content_adaptive_superpoints(tmp_path, capsys):
     for name, pts in clouds.items():
         np.savetxt(corpus / f"{name}.xyz", pts)
     out = tmp_path / "out"
-    s = run_batch([str(corpus)], out, 10, adaptive=4, level_compactness=0.05, workers=1,
+    s = run_batch([str(corpus)], out, 10, adaptive=4, extent_weight=0.05, workers=1,
                   progress=False)
     assert s.ok == 2
     for name, pts in clouds.items():
         np.testing.assert_array_equal(np.loadtxt(out / f"{name}.seg", dtype=np.int64),
-                                      adaptive_superpoints(pts, 10, start=4, compactness=0.05))
+                                      adaptive_superpoints(pts, 10, start=4, extent_weight=0.05))
     with pytest.raises(ParameterError, match=r"adaptive.start 4 -> 5"):  # never mixed
         run_batch([str(corpus)], out, 10, adaptive=5, workers=1, progress=False)
     with pytest.raises(ParameterError, match="adaptive takes n_segments"):
         run_batch([str(corpus)], tmp_path / "o2", 10, adaptive=4, per_object=True, workers=1)
-    with pytest.raises(ParameterError, match="level_compactness goes with adaptive"):
-        run_batch([str(corpus)], tmp_path / "o2", 10, level_compactness=0.1, workers=1)
+    with pytest.raises(ParameterError, match="extent_weight goes with adaptive"):
+        run_batch([str(corpus)], tmp_path / "o2", 10, extent_weight=0.1, workers=1)
     # the command line: the same labels
     assert main(["batch", str(corpus), "-o", str(tmp_path / "o3"), "-k", "10", "--adaptive",
-                 "4", "--level-compactness", "0.05", "--workers", "1", "-q"]) == 0
+                 "4", "--extent-weight", "0.05", "--workers", "1", "-q"]) == 0
     np.testing.assert_array_equal(np.loadtxt(tmp_path / "o3" / "a.seg", dtype=np.int64),
                                   np.loadtxt(out / "a.seg", dtype=np.int64))
     assert not (tmp_path / "o2").exists()
@@ -202,3 +202,27 @@ def test_the_examples_in_the_docstrings_run(module):
 
     result = doctest.testmod(importlib.import_module(module), optionflags=doctest.ELLIPSIS)
     assert result.attempted > 0 and result.failed == 0
+
+
+def test_the_old_names_still_work_for_one_release_with_a_warning():
+    """``compactness=`` (hierarchy, adaptive levels), ``level_compactness`` (function,
+    batch keyword, ``--level-compactness``) and ``result.radius`` are deprecated aliases."""
+    from superfacets.hierarchy import AUTO_COMPACTNESS, level_compactness
+    from superfacets.cli import build_parser
+
+    r = segment(grid_mesh(20, 20), 30)
+    with pytest.warns(DeprecationWarning, match="compactness= is now extent_weight="):
+        old = r.hierarchy([5], cost="planarity", compactness=0.2).parents
+    new = r.hierarchy([5], cost="planarity", extent_weight=0.2).parents
+    assert all((a == b).all() for a, b in zip(old, new))
+    with pytest.raises(ParameterError, match="not both extent_weight and compactness"):
+        with pytest.warns(DeprecationWarning):
+            r.hierarchy([5], cost="planarity", compactness=0.2, extent_weight=0.1)
+    with pytest.warns(DeprecationWarning, match="level_extent_weight"):
+        assert level_compactness(r.elements.graph) == 0.0
+    assert AUTO_COMPACTNESS == AUTO_EXTENT_WEIGHT
+    with pytest.warns(DeprecationWarning, match="mesh_radius"):
+        assert r.radius == r.mesh_radius > 0
+    args = build_parser().parse_args(["segment", "m.off", "--adaptive", "--level-compactness",
+                                      "0.2"])
+    assert args.extent_weight == 0.2

@@ -124,3 +124,107 @@ def test_a_radius_whose_area_underflows_is_refused(init):
     with pytest.raises(ParameterError, match="too small: a superfacet's area would be 0"):
         segment(mesh, None, radius=1e-320, init=init)
     assert segment(mesh, None, radius=1e-100, init=init).n_segments >= 1  # tiny but fine
+
+
+# --- each parameter declared once (superfacets.params.PARAMETERS) ---------------------
+
+def test_the_declarations_are_the_fields_and_the_signatures():
+    import inspect
+
+    from superfacets import superfacets
+    from superfacets.params import PARAMETERS, SegmentParams
+    from superfacets.segmentation import segment as seg
+
+    names = [p.name for p in PARAMETERS]
+    assert len(set(names)) == len(names) == 25
+    assert list(SegmentParams.__dataclass_fields__) == names
+    assert [getattr(DEFAULTS, n) for n in names] == [p.default for p in PARAMETERS]
+    for f in (superfacets, seg):
+        sig = inspect.signature(f).parameters
+        assert list(sig) == ["mesh"] + names + ["features"]
+        assert all(sig[p.name].default == p.default for p in PARAMETERS)
+
+
+def _doc_parameters(doc: str) -> dict[str, str]:
+    """name -> its type line, from a numpydoc Parameters section."""
+    import re
+
+    section = doc.split("Parameters\n    ----------\n")[1].split("\n    Returns\n")[0]
+    return {m.group(1): m.group(2) for m in re.finditer(r"^    (\w+) : (.*)$", section, re.M)}
+
+
+def test_the_docstring_documents_every_declared_parameter_with_its_default():
+    from superfacets import superfacets
+    from superfacets.params import PARAMETERS
+
+    doc = _doc_parameters(superfacets.__doc__)
+    missing = [p.name for p in PARAMETERS if p.name not in doc]
+    assert not missing, f"not in superfacets' Parameters: {missing}"
+    for p in PARAMETERS:
+        said = doc[p.name].split("default ")
+        if len(said) > 1:  # "alpha : float, default 200": the declared default
+            value = said[1].strip()
+            assert value in (repr(p.default), f"{p.default:g}" if isinstance(
+                p.default, float) else str(p.default), str(p.default)), (p.name, value)
+        else:  # optional or None: the method decides
+            assert p.default in (None, False, 0.0) or p.name == "n_segments", p.name
+
+
+def test_every_declared_option_of_the_command_line_has_the_declared_default_and_choices():
+    from superfacets.cli import build_parser
+    from superfacets.params import PARAMETERS
+
+    sub = build_parser()._subparsers._group_actions[0].choices["segment"]
+    actions = {s: a for a in sub._actions for s in a.option_strings}
+    # the command line's own defaults, and why: -k and --radius exclude each other (None
+    # is "150 unless --radius"); --no-connectivity is the negation; --progress is on
+    # for large meshes at a terminal; --threads None is all cores, as the API's None
+    own = {"n_segments": None, "enforce_connectivity": False, "progress": None}
+    for p in PARAMETERS:
+        assert p.cli in actions, f"{p.name}: no option {p.cli}"
+        a = actions[p.cli]
+        assert a.default == own.get(p.name, p.default), (p.name, a.default, p.default)
+        if a.choices is not None:
+            from superfacets.params import KINDS
+
+            check = [c for c in list(INITS) + list(ASSIGNMENTS) + list(WEIGHTINGS) +
+                     list(KINDS)]
+            assert set(a.choices) <= set(check)
+            with pytest.raises(ParameterError):
+                p.check("not-a-choice")
+
+
+def test_the_registry_uses_the_declared_defaults():
+    from superfacets.methods import get_method
+    from superfacets.params import PARAMETER
+
+    d = get_method("superfacets").defaults
+    for name, value in d.items():
+        if name in PARAMETER:
+            declared = PARAMETER[name].default
+            want = "auto" if declared is None else declared
+            if name == "init":
+                want = INITS[0]  # the registry's runs give n_segments: farthest
+            assert value == want, (name, value, declared)
+
+
+def test_n_segments_above_the_elements_is_refused_before_the_graph(monkeypatch):
+    """segment(icosphere, 10**7) is refused from the mesh's counts: no graph built."""
+    import trimesh
+
+    import superfacets.elements.faces as faces
+    import superfacets.elements.vertices as vertices
+
+    def no_graph(*args, **kwargs):
+        raise AssertionError("the element graph was built")
+
+    monkeypatch.setattr(faces, "face_graph", no_graph)
+    monkeypatch.setattr(vertices, "vertex_graph", no_graph)
+    mesh = trimesh.creation.icosphere(subdivisions=2)
+    with pytest.raises(ParameterError, match=r"n_segments \(10000000\) is larger than the "
+                                             r"number of faces \(320\)"):
+        segment(mesh, 10**7)
+    with pytest.raises(ParameterError, match=r"larger than the number of vertices \(162\)"):
+        segment(mesh, 163, elements="vertices")
+    with pytest.raises(ParameterError, match=r"larger than the number of points \(50\)"):
+        segment(np.random.default_rng(0).random((50, 3)), 51)

@@ -322,10 +322,10 @@ def test_the_passes_after_the_swaps_hold_small_center_moves_on_faces(monkeypatch
     r = segment(mesh, 100)
     assert hold_after_for("faces") == 4.0 and hold_after_for("vertices") == 1.0
     assert r.timings["swaps"] > 0 and len(holds) == 1
-    assert holds[-1] == pytest.approx(4.0 * 0.05 * r.radius)
+    assert holds[-1] == pytest.approx(4.0 * 0.05 * r.mesh_radius)
     r = segment(mesh, 100, elements="vertices")
     assert r.timings["swaps"] > 0 and len(holds) == 2
-    assert holds[-1] == pytest.approx(0.05 * r.radius)
+    assert holds[-1] == pytest.approx(0.05 * r.mesh_radius)
     r = segment(mesh, 100, center_tol=0.0)  # no hold asked: none after the swaps either
     assert r.timings["swaps"] > 0 and holds[-1] == 0.0
 

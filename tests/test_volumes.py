@@ -76,7 +76,7 @@ def test_volumes_segmented_connected_and_measured():
     assert r.params["elements"] == "cells" and r.labels.shape == (t.n_tets,)
     assert abs(k - 20) <= 2 and np.unique(r.labels).size == k
     assert np.unique(label_components(g, r.labels)).size == k  # each one connected
-    assert r.radius == pytest.approx((3 * 1.0 / (4 * np.pi * 20)) ** (1 / 3))
+    assert r.mesh_radius == pytest.approx((3 * 1.0 / (4 * np.pi * 20)) ** (1 / 3))
     assert not r.params["cleanup"] and not r.params["split_merge"]  # surfaces only
     # compactness area / volume^(2/3): the whole cube is 6 (area 6, volume 1)
     assert compactness(g, np.zeros(t.n_tets, int)) == pytest.approx(6.0)

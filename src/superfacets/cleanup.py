@@ -30,7 +30,7 @@ from .elements.graph import chunked
 from .elements.inputs import as_element_graph
 from .elements.kinds import kind_of
 from .labels import check_labels, relabel_dense
-from .params import check_int, check_nonneg, check_number, check_positive, check_threads
+from .params import DEFAULTS, check_int, check_nonneg, check_number, check_positive, check_threads
 
 __all__ = ["clean_boundaries", "cut_costs", "crease_for", "band_for", "smoothness_for",
            "CREASE", "CREASE_SMOOTH_NORMALS", "SMOOTHNESS", "SMOOTHNESS_FACES", "BAND",
@@ -88,7 +88,7 @@ def band_for(kind: str) -> float:
     return kind_of(kind).band
 
 
-def cut_costs(graph, *, alpha: float = 200.0, eta_convex: float = 0.2,
+def cut_costs(graph, *, alpha: float = DEFAULTS.alpha, eta_convex: float = DEFAULTS.eta_convex,
               crease: float = CREASE, features: np.ndarray | None = None,
               beta: float = 0.0) -> np.ndarray:
     """Cost of a superfacet boundary along each adjacency: its length, less on creases.
@@ -162,8 +162,8 @@ def cut_costs(graph, *, alpha: float = 200.0, eta_convex: float = 0.2,
     return chunked(g.n_edges, cost)
 
 
-def clean_boundaries(graph, labels, centers=None, *, alpha: float = 200.0,
-                     eta_convex: float = 0.2, radius: float | None = None,
+def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alpha,
+                     eta_convex: float = DEFAULTS.eta_convex, radius: float | None = None,
                      crease: float | None = None, smoothness: float | None = None,
                      band: float | None = None, sweeps: int = SWEEPS,
                      connectivity: bool = True, n_threads: int | None = None,

@@ -25,8 +25,8 @@ walls and ground in large pieces, as graph-based partitions do. Run on
 superpoints several times more than the level wants, it gives content-adaptive
 superpoints (``docs/superpoints.md``, "Content-adaptive levels"). On a point
 cloud each point weighs one there (:func:`planarity_graph`: the points'
-least-squares planes), and ``compactness`` adds Ward's term, so that large
-flat pieces also pay for their extent (:func:`level_compactness`: on scans of
+least-squares planes), and ``extent_weight`` adds Ward's term, so that large
+flat pieces also pay for their extent (:func:`level_extent_weight`: on scans of
 uneven density).
 
 The merging runs in numba (:mod:`superfacets._kernels.hierarchy`): about
@@ -43,19 +43,21 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import ParameterError
-from .params import check_int, check_nonneg
+from .params import DEFAULTS, check_int, check_nonneg, renamed
 
-__all__ = ["Hierarchy", "hierarchy", "planarity_graph", "level_compactness",
-           "AUTO_COMPACTNESS"]
+__all__ = ["Hierarchy", "hierarchy", "planarity_graph", "level_extent_weight",
+           "AUTO_EXTENT_WEIGHT", "level_compactness", "AUTO_COMPACTNESS"]
 
-#: ``compactness`` of a planarity level on a point cloud of uneven density (the
+#: ``extent_weight`` of a planarity level on a point cloud of uneven density (the
 #: clouds that get the automatic ``density``: LiDAR sweeps): there, with each
 #: point weighing one, sparse far-range points fit a plane for little, and the
 #: level merged the far range across its classes; 0.01 lowered its undersegmentation
 #: error at 300-3,000 superpoints on two sweeps (0.88 -> 0.68 at 300 on frame
 #: 000700) where it raised it on the rooms and the airborne tile, of even
 #: density (``docs/superpoints.md``, "Content-adaptive levels").
-AUTO_COMPACTNESS = 0.01
+AUTO_EXTENT_WEIGHT = 0.01
+#: The old name of :data:`AUTO_EXTENT_WEIGHT` (one release).
+AUTO_COMPACTNESS = AUTO_EXTENT_WEIGHT
 
 
 @dataclass(frozen=True)
@@ -98,8 +100,10 @@ class Hierarchy:
         return out
 
 
-def hierarchy(graph, levels, *, alpha: float = 200.0, eta_convex: float = 0.2,
-              beta: float = 0.0, cost: str = "ward", compactness: float = 0.0) -> Hierarchy:
+def hierarchy(graph, levels, *, alpha: float = DEFAULTS.alpha,
+              eta_convex: float = DEFAULTS.eta_convex,
+              beta: float = 0.0, cost: str = "ward", extent_weight: float = 0.0,
+              compactness: float | None = None) -> Hierarchy:
     """Merge adjacent superfacets, cheapest first, into nested levels (module notes).
 
     Parameters
@@ -117,12 +121,14 @@ def hierarchy(graph, levels, *, alpha: float = 200.0, eta_convex: float = 0.2,
         Ward's cost with the crease factor (compact segments), or the rise of
         the distance to the best plane (flat regions merged first; needs
         ``graph.scatter``; ``alpha`` and ``eta_convex`` unused).
-    compactness : float, default 0
+    extent_weight : float, default 0
         With ``cost='planarity'``: Ward's term (the rise of the weighted spread
         of the centroids, without the crease factor) times this, added to the
         plane's rise, so large flat pieces also pay for their extent: 0 merges
         any coplanar neighbours for nothing; ``>= 0``, dimensionless (both
         terms are weights times squared lengths).
+    compactness : float, optional
+        The old name of ``extent_weight`` (deprecated; one release).
 
     Returns
     -------
@@ -132,7 +138,7 @@ def hierarchy(graph, levels, *, alpha: float = 200.0, eta_convex: float = 0.2,
     ------
     ParameterError
         If a level is out of range (the message gives the range), a factor
-        is negative, or ``compactness`` is given with Ward's cost.
+        is negative, or ``extent_weight`` is given with Ward's cost.
 
     Examples
     --------
@@ -146,11 +152,12 @@ def hierarchy(graph, levels, *, alpha: float = 200.0, eta_convex: float = 0.2,
     alpha = check_nonneg("alpha", alpha)
     eta_convex = check_nonneg("eta_convex", eta_convex)
     beta = check_nonneg("beta", beta)
-    compactness = check_nonneg("compactness", compactness)
+    extent_weight = check_nonneg("extent_weight", renamed(extent_weight, compactness,
+                                                          "extent_weight", "compactness", 0.0))
     if cost not in ("ward", "planarity"):
         raise ParameterError(f"cost must be 'ward' or 'planarity', got {cost!r}")
-    if compactness > 0 and cost != "planarity":
-        raise ParameterError("compactness is a term of cost='planarity' (Ward's cost is "
+    if extent_weight > 0 and cost != "planarity":
+        raise ParameterError("extent_weight is a term of cost='planarity' (Ward's cost is "
                              f"compact already), got it with cost={cost!r}")
     if cost == "planarity" and graph.scatter is None:
         raise ParameterError("cost='planarity' needs the superfacets' scatter "
@@ -189,7 +196,7 @@ def hierarchy(graph, levels, *, alpha: float = 200.0, eta_convex: float = 0.2,
     edges = np.asarray(graph.edge_index, dtype=np.int64).reshape(2, -1)
     roots = merge_levels(k, np.ascontiguousarray(edges[0]), np.ascontiguousarray(edges[1]),
                          stats, area, wsum, fsum, scatter, cost == "planarity", alpha,
-                         eta_convex, beta if graph.feature is not None else 0.0, compactness,
+                         eta_convex, beta if graph.feature is not None else 0.0, extent_weight,
                          np.asarray(wanted, dtype=np.int64))
     parents = []
     prev = np.arange(k)  # the level-before's segment of each superfacet
@@ -244,10 +251,10 @@ def planarity_graph(graph, labels, features=None):
     return superfacet_graph(graph, labels, features)
 
 
-def level_compactness(graph) -> float:
-    """``compactness`` of a planarity level left to the method.
+def level_extent_weight(graph) -> float:
+    """``extent_weight`` of a planarity level left to the method.
 
-    :data:`AUTO_COMPACTNESS` on a point cloud whose point sizes spread like
+    :data:`AUTO_EXTENT_WEIGHT` on a point cloud whose point sizes spread like
     those of a scan whose density falls with the range (the cue of the
     automatic ``density``, :func:`superfacets.adaptive.density_for`), 0
     elsewhere (meshes, clouds of even density).
@@ -260,7 +267,7 @@ def level_compactness(graph) -> float:
     Returns
     -------
     float
-        ``AUTO_COMPACTNESS`` (0.01) or 0.0.
+        ``AUTO_EXTENT_WEIGHT`` (0.01) or 0.0.
 
     Examples
     --------
@@ -268,16 +275,35 @@ def level_compactness(graph) -> float:
     >>> from superfacets import segment
     >>> from superfacets.cloud import PointCloud
     >>> from superfacets.elements.points import point_graph
-    >>> level_compactness(segment(trimesh.creation.icosphere(), 10).elements.graph)  # faces
+    >>> level_extent_weight(segment(trimesh.creation.icosphere(), 10).elements.graph)  # faces
     0.0
     >>> rng = np.random.default_rng(1)   # a dense square, a sparse one beside it
     >>> xy = np.r_[rng.random((3000, 2)), rng.random((200, 2)) + [1.0, 0.0]]
-    >>> level_compactness(point_graph(PointCloud(np.c_[xy, np.zeros(3200)])).graph)
+    >>> level_extent_weight(point_graph(PointCloud(np.c_[xy, np.zeros(3200)])).graph)
     0.01
     """
     from .adaptive import density_for
 
-    return AUTO_COMPACTNESS if density_for(graph) > 0 else 0.0
+    return AUTO_EXTENT_WEIGHT if density_for(graph) > 0 else 0.0
+
+
+def level_compactness(graph) -> float:
+    """The old name of :func:`level_extent_weight` (deprecated; one release).
+
+    Examples
+    --------
+    >>> import warnings, trimesh
+    >>> from superfacets import segment
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore")
+    ...     level_compactness(segment(trimesh.creation.icosphere(), 10).elements.graph)
+    0.0
+    """
+    import warnings
+
+    warnings.warn("level_compactness is now level_extent_weight (the old name goes in the "
+                  "next release)", DeprecationWarning, stacklevel=2)
+    return level_extent_weight(graph)
 
 
 def _pieces(graph) -> int:

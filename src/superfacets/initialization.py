@@ -18,7 +18,7 @@ from ._kernels.farthest import farthest_point, farthest_point_blocked, spatial_b
 from ._kernels.flood import flood
 from .elements.inputs import as_element_graph
 from .expansion import Workspace, bucket_width, with_room
-from .params import INITS, check_choice, check_n_segments
+from .params import DEFAULTS, INITS, check_choice, check_n_segments
 from .passes import update_centers
 
 __all__ = ["first_center", "piece_seeds", "farthest_point_centers", "flood_labels",
@@ -180,7 +180,7 @@ def farthest_point_centers(graph, n_segments: int, *, every_piece: bool = False)
     return np.r_[out[:keep], seeds[missed[piece[seeds]]]].astype(np.int64)
 
 
-def flood_labels(graph, csr_weights: np.ndarray, radius: float, window: float = 2.0) -> np.ndarray:
+def flood_labels(graph, csr_weights: np.ndarray, radius: float, window: float = DEFAULTS.window) -> np.ndarray:
     """Flood initialization (paper section 3.1; authors' implementation).
 
     Elements are ordered by Euclidean distance to the first seed,

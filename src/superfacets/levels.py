@@ -18,7 +18,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .params import check_int, check_nonneg
+from .params import check_int, check_nonneg, renamed
 
 __all__ = ["adaptive_superpoints", "adaptive_segment", "START"]
 
@@ -29,7 +29,8 @@ START = 10
 
 
 def adaptive_superpoints(obj, n_segments: int, *, start: int = START,
-                         compactness: float | None = None, **options) -> np.ndarray:
+                         extent_weight: float | None = None, compactness: float | None = None,
+                         **options) -> np.ndarray:
     """Superpoints (or superfacets) sized by what the surface holds: flat regions merged.
 
     Parameters
@@ -42,11 +43,13 @@ def adaptive_superpoints(obj, n_segments: int, *, start: int = START,
     start : int, default 10
         Segment ``start * n_segments`` first (``>= 1``; capped at the input's
         elements); 1 returns the method's own superpoints.
-    compactness : float, optional
+    extent_weight : float, optional
         Weight of the segments' extent in the merge cost (``>= 0``;
         :func:`superfacets.hierarchy.hierarchy`). Default: 0.01 on a scan of
         uneven density (a LiDAR sweep), else 0
-        (:func:`~superfacets.hierarchy.level_compactness`).
+        (:func:`~superfacets.hierarchy.level_extent_weight`).
+    compactness : float, optional
+        The old name of ``extent_weight`` (deprecated; one release).
     **options
         The other keyword arguments of :func:`superfacets.segment` (``beta``
         also weighs the colour difference of a merge).
@@ -77,12 +80,13 @@ def adaptive_superpoints(obj, n_segments: int, *, start: int = START,
     >>> int(labels.max()) + 1
     6
     """
-    return np.asarray(adaptive_segment(obj, n_segments, start=start, compactness=compactness,
-                                       **options).labels)
+    return np.asarray(adaptive_segment(obj, n_segments, start=start, extent_weight=extent_weight,
+                                       compactness=compactness, **options).labels)
 
 
 def adaptive_segment(obj, n_segments: int, *, start: int = START,
-                     compactness: float | None = None, **options):
+                     extent_weight: float | None = None, compactness: float | None = None,
+                     **options):
     """:func:`adaptive_superpoints` with details: a
     :class:`~superfacets.pipeline.SegmentationResult` of the level.
 
@@ -102,8 +106,9 @@ def adaptive_segment(obj, n_segments: int, *, start: int = START,
 
     k = check_int("n_segments", n_segments, lo=1)
     start = check_int("start", start, lo=1)
-    if compactness is not None:
-        check_nonneg("compactness", compactness)
+    extent_weight = renamed(extent_weight, compactness, "extent_weight", "compactness")
+    if extent_weight is not None:
+        check_nonneg("extent_weight", extent_weight)
     if start == 1:
         return segment(obj, k, **options)
     try:
@@ -113,7 +118,7 @@ def adaptive_segment(obj, n_segments: int, *, start: int = START,
             raise
         result = segment(obj, max(k, _elements(obj, options)), **options)
     beta = float(result.params.get("beta") or 0.0)
-    level = result.hierarchy([k], cost="planarity", beta=beta, compactness=compactness)
+    level = result.hierarchy([k], cost="planarity", beta=beta, extent_weight=extent_weight)
     top = level.of_superfacets(0)  # the level's segment of each superpoint
     first = np.full(k, -1, dtype=np.int64)
     first[top[::-1]] = np.arange(top.size - 1, -1, -1)  # its lowest-numbered superpoint

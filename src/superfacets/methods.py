@@ -200,7 +200,7 @@ def get_method(name: str) -> Method:
 
 def _auto(value, kind):
     """A registry value of ``center_tol``, ``coarsen``, ``cleanup``, ``split_merge``,
-    ``density`` or ``level_compactness``: ``"auto"`` is None."""
+    ``density`` or ``extent_weight``: ``"auto"`` is None."""
     return None if value in (None, "auto") else kind(value)
 
 
@@ -217,12 +217,12 @@ def _run_superfacets(mesh, n_segments, *, cache, seed, weighting="paper", **para
     return MethodRun(r.labels, r.n_iter, r.converged)
 
 
-def _run_adaptive(mesh, n_segments, *, cache, seed, start, level_compactness="auto",
+def _run_adaptive(mesh, n_segments, *, cache, seed, start, extent_weight="auto",
                   **params):
     from .levels import adaptive_segment
 
     r = adaptive_segment(mesh, n_segments, start=start,
-                         compactness=_auto(level_compactness, float),
+                         extent_weight=_auto(extent_weight, float),
                          **_segment_options(**params))
     return MethodRun(r.labels, r.n_iter, r.converged)
 
@@ -296,10 +296,10 @@ register_method(
     progress=True, elements=ELEMENTS)
 register_method(
     "adaptive", _run_adaptive,
-    defaults=dict(_SF_DEFAULTS, start=10, level_compactness="auto"),
+    defaults=dict(_SF_DEFAULTS, start=10, extent_weight="auto"),
     description="content-adaptive superpoints: the method's start x n_segments superpoints, "
                 "then the level of n_segments that merges the flattest neighbours first "
-                "(superfacets.adaptive_superpoints; level_compactness=auto: 0.01 on scans of "
+                "(superfacets.adaptive_superpoints; extent_weight=auto: 0.01 on scans of "
                 "uneven density)",
     progress=True, elements=ELEMENTS)
 register_method(

@@ -20,6 +20,7 @@ from .boundaries import (boundary_precision, boundary_recall, near_boundary,
 from .elements.inputs import as_element_graph
 from .elements.kinds import kind_of
 from .errors import InvalidMeshError, ParameterError
+from .params import DEFAULTS
 from .labels import check_labels
 
 __all__ = ["Contingency", "contingency", "undersegmentation_error", "compactness",
@@ -321,7 +322,7 @@ def evaluate(graph, labels, ground_truths: Sequence[np.ndarray], *, tau: float =
 
 
 def evaluate_rows(obj, labels, ground_truths: Sequence[np.ndarray], *,
-                  elements: str | None = None, n_neighbors: int = 10, tau: float = 0.05,
+                  elements: str | None = None, n_neighbors: int = DEFAULTS.n_neighbors, tau: float = 0.05,
                   tolerance: int = 1, ignore_label: int | None = None,
                   precision: bool = False) -> dict:
     """The metrics of labels given per input row: a mesh's faces or vertices, a cloud's points.

@@ -35,12 +35,13 @@ from .elements.graph import ElementGraph, adjacency_csr
 from .expansion import bucket_width
 from .bounds import column_bounds
 from .elements.kinds import kind_of
-from .params import DEFAULT_CENTER_TOL, superfacet_measure
+from .params import superfacet_measure
 
 _MIN_CLUSTERS = 4  # clusters per superfacet below which the coarse run is not done
 _MAX_RATIO_DIV = 8  # coarsen is capped at n / (8 k): clusters per superfacet
 
-__all__ = ["Coarsening", "coarsen", "coarse_centers", "coarse_ratio", "grid_seeds",
+__all__ = ["Coarsening", "coarsen", "coarse_centers", "coarse_ratio", "coarsening_for",
+           "grid_seeds",
            "start_centers", "voronoi_cells"]
 
 
@@ -285,34 +286,28 @@ def coarse_centers(graph: ElementGraph, weights: np.ndarray | None, csr_w: np.nd
     return centers, info
 
 
-def start_centers(graph: ElementGraph, weights: np.ndarray | None, csr_w: np.ndarray, params,
-                  k, radius: float, timings: dict, stage=lambda name: None,
-                  on_coarsened: Callable[[], None] | None = None):
-    """The centers the passes on every element start from, and the tolerances used.
-
-    Resolves ``center_tol`` (default 0.05 when ``tol > 0``) and ``coarsen``
-    (default :func:`coarse_ratio` when ``tol > 0``; capped at ``n / (8 k)``),
-    then runs :func:`coarse_centers`, or the plain initialization when
-    coarse-to-fine is off or finds too few clusters. Coarse-run details go
-    to ``timings`` (``coarse`` seconds, ``coarse_elements``, ``coarse_passes``).
-    ``weights`` and ``on_coarsened`` as in :func:`coarse_centers`. Unless
-    ``params.paper``, the farthest points seed every connected piece first
-    (:func:`superfacets.initialization.farthest_point_centers`).
+def coarsening_for(graph: ElementGraph, params, k: int | None, radius: float) -> int:
+    """The coarsening of a run (an automatic rule): ``params.coarsen`` if given,
+    else :func:`coarse_ratio` of the graph's kind when ``tol > 0`` (1 otherwise);
+    capped at ``n / (8 k)`` (``k`` estimated from the radius when None: the area of
+    a disc, or the volume of a ball on cells).
 
     Returns
     -------
-    centers : (K,) int64 ndarray
-    center_tol : float
-    ratio : int
-        The coarsening used (1: none).
+    int
+        Elements per cluster; 1: no coarse run.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.elements import face_graph
+    >>> from superfacets.convert import as_mesh
+    >>> from superfacets.params import resolve
+    >>> g = face_graph(as_mesh(trimesh.creation.icosphere(subdivisions=2)))
+    >>> coarsening_for(g, resolve(n_segments=10), 10, 0.3)
+    1
     """
-    import time
-
-    from .initialization import initial_centers
-
     p = params
-    center_tol = p.center_tol if p.center_tol is not None else (
-        DEFAULT_CENTER_TOL if p.tol > 0 else 0.0)
     if k is not None:
         k_est = k
     else:  # a disc's area on surfaces, a ball's volume on cells (paper section 3.1)
@@ -321,7 +316,33 @@ def start_centers(graph: ElementGraph, weights: np.ndarray | None, csr_w: np.nda
         k_est = max(1, round(graph.area / each))
     ratio = p.coarsen if p.coarsen is not None else (
         coarse_ratio(graph.n_elements, k_est, graph.kind, p.n_neighbors) if p.tol > 0 else 1)
-    ratio = max(1, min(ratio, graph.n_elements // (_MAX_RATIO_DIV * k_est)))
+    return max(1, min(ratio, graph.n_elements // (_MAX_RATIO_DIV * k_est)))
+
+
+def start_centers(graph: ElementGraph, weights: np.ndarray | None, csr_w: np.ndarray, params,
+                  k, radius: float, ratio: int, center_tol: float, timings: dict,
+                  stage=lambda name: None, on_coarsened: Callable[[], None] | None = None):
+    """The centers the passes on every element start from.
+
+    Runs :func:`coarse_centers` with ``ratio`` elements per cluster
+    (:func:`coarsening_for`), or the plain initialization when ``ratio`` is 1 or
+    the coarse run finds too few clusters. Coarse-run details go to ``timings``
+    (``coarse`` seconds, ``coarse_elements``, ``coarse_passes``). ``weights`` and
+    ``on_coarsened`` as in :func:`coarse_centers`. Unless ``params.paper``, the
+    farthest points seed every connected piece first
+    (:func:`superfacets.initialization.farthest_point_centers`).
+
+    Returns
+    -------
+    centers : (K,) int64 ndarray
+    ratio : int
+        The coarsening used (1: none).
+    """
+    import time
+
+    from .initialization import initial_centers
+
+    p = params
     if ratio > 1:
         t = time.perf_counter()
         stage(f"coarse ({ratio}:1)")
@@ -332,7 +353,6 @@ def start_centers(graph: ElementGraph, weights: np.ndarray | None, csr_w: np.nda
             every_piece=not p.paper, on_coarsened=on_coarsened)
         if init is not None:
             timings.update(info, coarse=time.perf_counter() - t)
-            return init, center_tol, ratio
+            return init, ratio
     stage(f"init ({p.init})")
-    return (initial_centers(p.init, graph, csr_w, k, radius, p.window, not p.paper),
-            center_tol, 1)
+    return initial_centers(p.init, graph, csr_w, k, radius, p.window, not p.paper), 1

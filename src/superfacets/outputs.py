@@ -70,7 +70,7 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
                  colored=None, vertex_colors: bool = False, picture=None, html=None,
                  element_options: dict | None = None, up="y", view=None, graph=None,
                  levels=None, level_cost: str = "ward",
-                 level_compactness: float | None = None) -> None:
+                 extent_weight: float | None = None) -> None:
     """Write the files of one segmentation, all or nothing.
 
     Parameters
@@ -109,8 +109,8 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
         Numbers of segments of the hierarchy's levels.
     level_cost : {'ward', 'planarity'}, default 'ward'
         The hierarchy's merge cost (:func:`superfacets.hierarchy.hierarchy`).
-    level_compactness : float, optional
-        Its ``compactness`` with ``'planarity'`` (default: left to the method,
+    extent_weight : float, optional
+        Its ``extent_weight`` with ``'planarity'`` (default: left to the method,
         :meth:`SegmentationResult.hierarchy`).
 
     Raises
@@ -128,7 +128,7 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
         sg = result.graph()
         arrays = {**sg.arrays(), "labels": result.labels}
         if levels:
-            h = result.hierarchy(levels, cost=level_cost, compactness=level_compactness)
+            h = result.hierarchy(levels, cost=level_cost, extent_weight=extent_weight)
             arrays.update(h.arrays())
             for i in range(len(h.levels)):
                 arrays[f"labels_{i}"] = h.labels(i, result.labels)

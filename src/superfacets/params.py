@@ -14,20 +14,21 @@ See ``docs/method.md`` for what each parameter means in the method.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass, field, make_dataclass, replace
+from typing import Callable
 
 import numpy as np
 
 from .elements.kinds import KINDS, kind_of
 from .errors import ParameterError
 
-__all__ = ["SegmentParams", "DEFAULTS", "INITS", "ASSIGNMENTS", "WEIGHTINGS", "ELEMENTS",
+__all__ = ["SegmentParams", "DEFAULTS", "Parameter", "PARAMETERS", "PARAMETER", "ALL_KINDS", "INITS", "ASSIGNMENTS", "WEIGHTINGS", "ELEMENTS",
            "WEIGHTING_ALPHA", "DEFAULT_CENTER_TOL", "COARSE_MIN_PER_SEGMENT",
            "COARSE_MIN_PER_SEGMENT_POINTS", "COARSE_PER_SEGMENT_POINTS",
            "COARSE_PER_SEGMENT", "DEFAULT_N_SEGMENTS", "DEFAULT_ALPHAS", "resolve", "check_int",
            "check_number", "check_positive", "check_nonneg", "check_choice",
            "check_n_segments", "check_threads", "check_bool", "max_threads", "superfacet_size",
-           "better_method", "assignment_of", "superfacet_measure"]
+           "better_method", "assignment_of", "superfacet_measure", "renamed"]
 
 #: Names accepted by ``init=``: iterative farthest point, flood, regular grid.
 INITS = ("farthest", "flood", "grid")
@@ -114,49 +115,6 @@ COARSE_MIN_PER_SEGMENT_POINTS = kind_of("points").coarse_min_per_segment
 COARSE_PER_SEGMENT_POINTS = kind_of("points").coarse_per_segment
 
 
-@dataclass(frozen=True)
-class SegmentParams:
-    """Every parameter of one segmentation (see :func:`superfacets.superfacets`).
-
-    ``DEFAULTS`` holds the default of each; :func:`resolve` returns a
-    validated instance with ``init`` resolved.
-    """
-
-    n_segments: int | None = 150
-    radius: float | None = None
-    alpha: float = WEIGHTING_ALPHA["paper"][0]
-    eta_convex: float = 0.2
-    window: float = 2.0
-    init: str | None = None
-    max_iter: int = 50
-    weighting: str = "paper"
-    assignment: str | None = None
-    enforce_connectivity: bool = True
-    cleanup: bool | None = None
-    split_merge: bool | None = None
-    tol: float = 0.001
-    center_tol: float | None = None
-    coarsen: int | None = None
-    progress: bool = False
-    n_threads: int | None = None
-    elements: str | None = None
-    n_neighbors: int = 10
-    neighbor_radius: float | None = None
-    paper: bool = False
-    beta: float = 0.0
-    min_elements: int = 1
-    density: float | None = None
-    roughness: float = 0.0
-
-    def as_dict(self) -> dict:
-        """The parameters as a plain dict."""
-        return asdict(self)
-
-
-#: The default of every parameter.
-DEFAULTS = SegmentParams()
-
-
 def _is_int(value) -> bool:
     return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
 
@@ -229,6 +187,33 @@ def check_choice(name: str, value, choices) -> str:
     return value
 
 
+def renamed(new_value, old_value, new: str, old: str, default=None):
+    """The value of a keyword renamed ``old`` -> ``new``, kept for one release.
+
+    Returns ``old_value`` (with a :class:`DeprecationWarning`) when the old name
+    was given, else ``new_value``.
+
+    Raises
+    ------
+    ParameterError
+        If both names were given.
+
+    Examples
+    --------
+    >>> renamed(0.5, None, "extent_weight", "compactness")
+    0.5
+    """
+    if old_value is None:
+        return new_value
+    import warnings
+
+    warnings.warn(f"{old}= is now {new}= (the old name goes in the next release)",
+                  DeprecationWarning, stacklevel=3)
+    if new_value is not None and new_value != default:
+        raise ParameterError(f"give {new}, not both {new} and {old}")
+    return old_value
+
+
 def check_n_segments(n_segments, m: int, kind: str = "faces") -> int:
     """A number of segments ``k`` in ``1..m`` (``m`` the number of elements, of ``kind``).
 
@@ -280,12 +265,164 @@ def check_threads(n_threads) -> int:
     return check_int("n_threads", n_threads, lo=1, hi=max_threads())
 
 
+ALL_KINDS = ("faces", "vertices", "points", "cells")
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """The declaration of one parameter of the method: the one place that says it.
+
+    :class:`SegmentParams` (its fields and defaults), :func:`resolve` (its check),
+    the command line's options, the method registry and the Parameters section of
+    :func:`superfacets.superfacets` come from :data:`PARAMETERS` or are tested
+    against it (``tests/test_params.py``).
+
+    Attributes
+    ----------
+    name : str
+        The keyword of :func:`superfacets.segment` (and the field of
+        :class:`SegmentParams`).
+    default : object
+        Its default; ``None`` where the method decides (an automatic rule,
+        resolved once per run by :func:`superfacets.pipeline.resolve_rules`).
+    type : str
+        The type, as the docstrings write it (``'int'``, ``'float'``, ``'bool'``,
+        ``'str'``; ``' or None'`` where None is accepted).
+    doc : str
+        One line: what it is, its range and unit.
+    check : callable or None
+        ``check(value) -> value``: the validated value (raises
+        :class:`~superfacets.errors.ParameterError`); None where the check needs
+        another parameter (done by :func:`resolve`).
+    kinds : tuple of str
+        The kinds of element it applies to.
+    cli : str or None
+        The command line's option (``segment``), or None.
+    auto : bool
+        None is resolved by ``check`` itself (``n_threads``: numba's thread count).
+    """
+
+    name: str
+    default: object
+    type: str
+    doc: str
+    check: Callable[[object], object] | None = field(default=None, repr=False, compare=False)
+    kinds: tuple = ALL_KINDS
+    cli: str | None = None
+    auto: bool = False
+
+    @property
+    def optional(self) -> bool:
+        """Whether None is accepted (the method then decides)."""
+        return self.type.endswith("or None")
+
+
+def _declare() -> tuple[Parameter, ...]:
+    P, num, integer, flag = Parameter, check_number, check_int, check_bool
+    big = MAX_WEIGHT_FACTOR
+    return (
+        P("n_segments", 150, "int or None", "number of superfacets k, 1 <= k <= elements "
+          "(paper section 3.1); None with radius", None, cli="--n-segments"),
+        P("radius", None, "float or None", "superfacet radius, a fraction of the bounding-box "
+          "diagonal, > 0 (instead of n_segments)",
+          lambda v: check_positive("radius", v), cli="--radius"),
+        P("alpha", WEIGHTING_ALPHA["paper"][0], "float", "weight of the angular (concavity) "
+          "term, eq. 3, >= 0; in [0, 1] with weighting='shlafman' (eq. 6)", None, cli="--alpha"),
+        P("eta_convex", 0.2, "float", "factor of the angular term on convex edges, eq. 2, >= 0",
+          lambda v: num("eta_convex", v, 0.0, big), cli="--eta-convex"),
+        P("window", 2.0, "float", "expansion window, a multiple of the radius, > 0 "
+          "(section 3.1)", lambda v: num("window", v, 0.0, MAX_WINDOW, lo_open=True),
+          cli="--window"),
+        P("init", None, "str or None", "initialization: " + ", ".join(INITS) + " (default "
+          "farthest with n_segments, flood with radius)",
+          lambda v: check_choice("init", v, INITS), cli="--init"),
+        P("max_iter", 50, "int", "most classification passes, >= 1",
+          lambda v: integer("max_iter", v, lo=1), cli="--max-iter"),
+        P("weighting", "paper", "str", "edge weights: paper (eqs. 1-3) or shlafman (eq. 6)",
+          lambda v: check_choice("weighting", v, WEIGHTINGS), cli="--weighting"),
+        P("assignment", None, "str or None", "classification: bounded (the paper's windows) "
+          "or exact (nearest center); None: by kind and content",
+          lambda v: check_choice("assignment", v, ASSIGNMENTS), cli="--assignment"),
+        P("enforce_connectivity", True, "bool", "merge stray pieces so each superfacet is "
+          "connected", lambda v: flag("enforce_connectivity", v), cli="--no-connectivity"),
+        P("cleanup", None, "bool or None", "boundary clean-up after the iteration; None: by "
+          "kind", lambda v: flag("cleanup", v), cli="--cleanup"),
+        P("split_merge", None, "bool or None", "K-preserving split-and-merge swaps; None: by "
+          "kind", lambda v: flag("split_merge", v), cli="--split-merge"),
+        P("tol", 0.001, "float", "stop once a pass changes at most this fraction of the area, "
+          "in [0, 1]; 0: the paper's rule", lambda v: num("tol", v, 0.0, 1.0), cli="--tol"),
+        P("center_tol", None, "float or None", "a center moving less than this fraction of "
+          "the radius stays, in [0, 1]; None: 0.05 with tol > 0, else 0",
+          lambda v: num("center_tol", v, 0.0, 1.0), cli="--center-tol"),
+        P("coarsen", None, "int or None", "coarse-to-fine: elements per cluster, >= 1 (1: "
+          "off); None: by size and kind", lambda v: integer("coarsen", v, lo=1),
+          cli="--coarsen"),
+        P("progress", False, "bool", "a progress bar on stderr", bool, cli="--progress"),
+        P("n_threads", None, "int or None", "threads of the run, 1..max_threads(); None: "
+          "numba's thread count", check_threads, cli="--threads", auto=True),
+        P("elements", None, "str or None", "what is segmented: " + ", ".join(ALL_KINDS) +
+          "; None: the input's default", lambda v: check_choice("elements", v, tuple(KINDS)),
+          cli="--elements"),
+        P("n_neighbors", 10, "int", "nearest neighbours of each point in the point graph, "
+          f"1..{MAX_NEIGHBORS}", lambda v: integer("n_neighbors", v, lo=1, hi=MAX_NEIGHBORS),
+          ("points",), cli="--neighbors"),
+        P("neighbor_radius", None, "float or None", "drop neighbours farther than this "
+          "fraction of the diagonal, > 0", lambda v: check_positive("neighbor_radius", v),
+          ("points",), cli="--neighbor-radius"),
+        P("paper", False, "bool", "the paper's method as published, its labels bit for bit",
+          bool, cli="--paper"),
+        P("beta", 0.0, "float", "weight of the feature (colour) term, >= 0; paper weighting "
+          "only", None, cli="--beta"),
+        P("min_elements", 1, "int", "smallest superfacet in elements, >= 1; smaller ones "
+          "merged at the end", lambda v: integer("min_elements", v, lo=1),
+          cli="--min-elements"),
+        P("density", None, "float or None", "content-sensitive sizes: exponent q in [0, 1] "
+          "(0 equal areas, 1 equal counts); None: by kind and density",
+          lambda v: num("density", v, 0.0, 1.0), cli="--density"),
+        P("roughness", 0.0, "float", "content-sensitive sizes: smaller superfacets where "
+          "normals turn, >= 0", lambda v: num("roughness", v, 0.0, big), cli="--roughness"),
+    )
+
+
+#: Every parameter of the method, declared once (:class:`Parameter`), in the order of
+#: :func:`superfacets.superfacets`'s signature.
+PARAMETERS: tuple[Parameter, ...] = _declare()
+#: The declarations by name.
+PARAMETER = {p.name: p for p in PARAMETERS}
+
+
+def _as_dict(self) -> dict:
+    """The parameters as a plain dict."""
+    return asdict(self)
+
+
+#: Every parameter of one segmentation, a frozen dataclass whose fields and defaults are
+#: :data:`PARAMETERS` (see :func:`superfacets.superfacets`). ``DEFAULTS`` holds the
+#: default of each; :func:`resolve` returns a validated instance with ``init`` resolved.
+SegmentParams = make_dataclass(
+    "SegmentParams", [(p.name, object, field(default=p.default)) for p in PARAMETERS],
+    frozen=True, namespace={"as_dict": _as_dict, "__module__": __name__, "__doc__": (
+        "Every parameter of one segmentation (see :func:`superfacets.superfacets`); its "
+        "fields are declared in :data:`superfacets.params.PARAMETERS`.\n\n"
+        "``DEFAULTS`` holds the default of each; :func:`superfacets.params.resolve` returns "
+        "a validated instance with ``init`` resolved.\n\n"
+        "Attributes\n----------\n" + "".join(
+            f"{p.name} : {p.type}, default {p.default!r}\n    {p.doc}.\n" for p in PARAMETERS)
+        + "\nExamples\n--------\n>>> DEFAULTS.alpha, DEFAULTS.n_segments\n(200.0, 150)\n")})
+
+#: The default of every parameter.
+DEFAULTS = SegmentParams()
+
+
 def resolve(**params) -> SegmentParams:
     """Validate the parameters of a segmentation; return them with ``init`` resolved.
 
-    Every check that does not need the mesh is done here, before any
-    O(m) work. ``n_segments`` is checked against the number of elements later
-    (:func:`check_n_segments`).
+    Every check that does not need the input is done here, before any O(m) work:
+    each parameter's own (:data:`PARAMETERS`), then those between parameters
+    (``paper`` and what it excludes, ``n_segments`` or ``radius``, ``alpha`` and
+    ``beta`` by ``weighting``, ``min_elements`` and ``enforce_connectivity``).
+    ``n_segments`` is checked against the number of elements when the input is
+    known, before its graph is built (:func:`superfacets.elements.inputs.elements_of`).
 
     Parameters
     ----------
@@ -300,8 +437,17 @@ def resolve(**params) -> SegmentParams:
     ------
     ParameterError
         On an unknown name or a value out of range; ``TypeError`` never.
+
+    Examples
+    --------
+    >>> resolve(radius=0.05).init, resolve().init
+    ('flood', 'farthest')
+    >>> resolve(alpha=-1)
+    Traceback (most recent call last):
+    ...
+    superfacets.errors.ParameterError: alpha must be a finite number in [0, 1e+12], got -1
     """
-    unknown = set(params) - set(DEFAULTS.as_dict())
+    unknown = set(params) - set(PARAMETER)
     if unknown:
         raise ParameterError(f"unknown parameter(s) {', '.join(sorted(unknown))}")
     p = replace(DEFAULTS, **params)
@@ -340,30 +486,18 @@ def resolve(**params) -> SegmentParams:
         except ParameterError:
             raise ParameterError(f"alpha of the Shlafman weighting must be in [0, 1], "
                                  f"got {p.alpha!r}") from None
-    return SegmentParams(
-        n_segments=n_segments, radius=radius, alpha=alpha,
-        eta_convex=check_number("eta_convex", p.eta_convex, 0.0, MAX_WEIGHT_FACTOR),
-        window=check_number("window", p.window, 0.0, MAX_WINDOW, lo_open=True), init=init,
-        max_iter=check_int("max_iter", p.max_iter, lo=1), weighting=weighting,
-        assignment=None if p.assignment is None else check_choice("assignment", p.assignment,
-                                                                  ASSIGNMENTS),
-        enforce_connectivity=check_bool("enforce_connectivity", p.enforce_connectivity),
-        cleanup=None if p.cleanup is None else check_bool("cleanup", p.cleanup),
-        split_merge=None if p.split_merge is None else check_bool("split_merge", p.split_merge),
-        tol=check_number("tol", p.tol, 0.0, 1.0),
-        center_tol=None if p.center_tol is None else check_number("center_tol", p.center_tol,
-                                                                  0.0, 1.0),
-        coarsen=None if p.coarsen is None else check_int("coarsen", p.coarsen, lo=1),
-        progress=bool(p.progress),
-        n_threads=check_threads(p.n_threads),
-        elements=None if p.elements is None else check_choice("elements", p.elements,
-                                                              tuple(KINDS)),
-        n_neighbors=check_int("n_neighbors", p.n_neighbors, lo=1, hi=MAX_NEIGHBORS),
-        neighbor_radius=None if p.neighbor_radius is None else check_positive(
-            "neighbor_radius", p.neighbor_radius),
-        paper=bool(p.paper), beta=_beta(p.beta, weighting), min_elements=min_elements,
-        density=None if p.density is None else check_number("density", p.density, 0.0, 1.0),
-        roughness=check_number("roughness", p.roughness, 0.0, MAX_WEIGHT_FACTOR))
+    done = dict(n_segments=n_segments, radius=radius, alpha=alpha, init=init,
+                weighting=weighting, beta=_beta(p.beta, weighting), min_elements=min_elements)
+    out = {}
+    for decl in PARAMETERS:  # each parameter's own check, in the signature's order
+        value = getattr(p, decl.name)
+        if decl.name in done:
+            out[decl.name] = done[decl.name]
+        elif value is None and decl.optional and not decl.auto:
+            out[decl.name] = None
+        else:
+            out[decl.name] = decl.check(value)
+    return SegmentParams(**out)
 
 
 def _beta(beta, weighting: str) -> float:

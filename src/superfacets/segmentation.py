@@ -10,10 +10,12 @@ validates its parameters before any work and runs :func:`pipeline`
 
 from __future__ import annotations
 
+import inspect
+
 import numpy as np
 
 from .errors import ParameterError
-from .params import DEFAULTS, resolve
+from .params import DEFAULTS, PARAMETERS, resolve
 from .pipeline import SegmentationResult, pipeline
 
 __all__ = ["superfacets", "superpoints", "segment", "pipeline", "SegmentationResult"]
@@ -21,22 +23,8 @@ __all__ = ["superfacets", "superpoints", "segment", "pipeline", "SegmentationRes
 _D = DEFAULTS
 
 
-def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float | None = _D.radius,
-                alpha: float = _D.alpha, eta_convex: float = _D.eta_convex,
-                window: float = _D.window, init: str | None = _D.init,
-                max_iter: int = _D.max_iter, weighting: str = _D.weighting,
-                assignment: str | None = _D.assignment,
-                enforce_connectivity: bool = _D.enforce_connectivity,
-                cleanup: bool | None = _D.cleanup, split_merge: bool | None = _D.split_merge,
-                tol: float = _D.tol, center_tol: float | None = _D.center_tol, coarsen: int | None = _D.coarsen,
-                progress: bool = _D.progress,
-                n_threads: int | None = _D.n_threads, elements: str | None = _D.elements,
-                n_neighbors: int = _D.n_neighbors,
-                neighbor_radius: float | None = _D.neighbor_radius,
-                paper: bool = _D.paper, beta: float = _D.beta,
-                features=None, min_elements: int = _D.min_elements,
-                density: float | None = _D.density,
-                roughness: float = _D.roughness) -> np.ndarray:
+def superfacets(mesh, n_segments: int | None = _D.n_segments, *, features=None,
+                **params) -> np.ndarray:
     """Over-segment a mesh (its faces or vertices) or a point cloud into superfacets.
 
     The k-means-style method of Simari, Picciau and De Floriani (2014):
@@ -249,33 +237,11 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, radius: float |
     >>> labels.shape, int(labels.max()) + 1
     ((1280,), 20)
     """
-    return segment(mesh, n_segments, radius=radius, alpha=alpha, eta_convex=eta_convex,
-                   window=window, init=init, max_iter=max_iter, weighting=weighting,
-                   assignment=assignment, enforce_connectivity=enforce_connectivity,
-                   cleanup=cleanup, split_merge=split_merge, tol=tol, center_tol=center_tol,
-                   coarsen=coarsen,
-                   progress=progress, n_threads=n_threads, elements=elements,
-                   n_neighbors=n_neighbors, neighbor_radius=neighbor_radius,
-                   paper=paper, beta=beta, features=features,
-                   min_elements=min_elements, density=density, roughness=roughness).labels
+    return segment(mesh, n_segments, features=features, **params).labels
 
 
-def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | None = _D.radius,
-            alpha: float = _D.alpha, eta_convex: float = _D.eta_convex,
-            window: float = _D.window, init: str | None = _D.init,
-            max_iter: int = _D.max_iter, weighting: str = _D.weighting,
-            assignment: str | None = _D.assignment,
-            enforce_connectivity: bool = _D.enforce_connectivity,
-            cleanup: bool | None = _D.cleanup, split_merge: bool | None = _D.split_merge,
-            tol: float = _D.tol, center_tol: float | None = _D.center_tol, coarsen: int | None = _D.coarsen,
-            progress: bool = _D.progress,
-            n_threads: int | None = _D.n_threads, elements: str | None = _D.elements,
-            n_neighbors: int = _D.n_neighbors,
-            neighbor_radius: float | None = _D.neighbor_radius,
-            paper: bool = _D.paper, beta: float = _D.beta,
-            features=None, min_elements: int = _D.min_elements,
-            density: float | None = _D.density,
-            roughness: float = _D.roughness) -> SegmentationResult:
+def segment(mesh, n_segments: int | None = _D.n_segments, *, features=None,
+            **params) -> SegmentationResult:
     """Superfacets with details: same parameters as :func:`superfacets`.
 
     Returns
@@ -309,16 +275,24 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, radius: float | Non
     >>> r.n_segments, r.labels.dtype
     (20, dtype('int64'))
     """
-    params = resolve(n_segments=n_segments, radius=radius, alpha=alpha, eta_convex=eta_convex,
-                     window=window, init=init, max_iter=max_iter, weighting=weighting,
-                     assignment=assignment, enforce_connectivity=enforce_connectivity,
-                     cleanup=cleanup, split_merge=split_merge, tol=tol,
-                     center_tol=center_tol, coarsen=coarsen,
-                   progress=progress, n_threads=n_threads, elements=elements,
-                     n_neighbors=n_neighbors, neighbor_radius=neighbor_radius, paper=paper,
-                     beta=beta, min_elements=min_elements, density=density,
-                     roughness=roughness)
-    return pipeline(mesh, params, features=features)
+    return pipeline(mesh, resolve(n_segments=n_segments, **params), features=features)
+
+
+def _signature(returns) -> inspect.Signature:
+    """``(mesh, n_segments=150, *, <every other parameter>, features=None)``: the
+    keywords of :data:`superfacets.params.PARAMETERS` with their defaults."""
+    P = inspect.Parameter
+    out = [P("mesh", P.POSITIONAL_OR_KEYWORD),
+           P("n_segments", P.POSITIONAL_OR_KEYWORD, default=_D.n_segments)]
+    out += [P(d.name, P.KEYWORD_ONLY, default=d.default) for d in PARAMETERS
+            if d.name != "n_segments"]
+    out.append(P("features", P.KEYWORD_ONLY, default=None))
+    return inspect.Signature(out, return_annotation=returns)
+
+
+# the signature ``help()``, IDEs and the API reference show: one keyword per declaration
+superfacets.__signature__ = _signature(np.ndarray)
+segment.__signature__ = _signature(SegmentationResult)
 
 
 def superpoints(points, n_segments: int | None = _D.n_segments, *, normals=None,

@@ -42,16 +42,12 @@ from dataclasses import replace
 import numpy as np
 
 from .classify import make_classifier
-from .cleanup import clean_boundaries
-from .connectivity import enforce_connectivity
 from .elements.inputs import elements_of
+from .elements.kinds import kind_of
 from .errors import ParameterError
 from .expansion import Workspaces
-from .labels import relabel_dense
-from .elements.kinds import kind_of
-from .params import DEFAULTS, SegmentParams, assignment_of, better_method, superfacet_measure
-from .pipeline import _features_of, pipeline
-from .weights import csr_weights, edge_weights
+from .params import DEFAULTS, SegmentParams, superfacet_measure
+from .pipeline import build_graph, clean_up, features_of, finish, pipeline, resolve_rules, weigh
 
 __all__ = ["tile_centers", "tile_refine", "tile_labels",
            "tile_connect", "orientation_reference", "trim_centers", "HALO",
@@ -309,14 +305,12 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
     if d <= 0:  # one position: the first center within reach, else the first row
         name = int(center_rows[0]) if len(center_rows) else int(np.flatnonzero(valid)[0])
         return np.where(valid, name, -1).astype(np.int64)
-    p = _tile_params(params, r, diagonal, d)
-    src = elements_of(inp, p.elements, n_neighbors=p.n_neighbors,
-                      neighbor_radius=p.neighbor_radius)
-    graph = src.graph
-    cleanup, _ = better_method(p, graph.kind)
-    feats = _features_of(src, features) if p.beta > 0 else None
-    w = csr_weights(graph, edge_weights(graph, p.weighting, alpha=p.alpha,
-                                        eta_convex=p.eta_convex, features=feats, beta=p.beta))
+    # the whole run's stages (superfacets.pipeline) with one classification from the
+    # fixed centers in place of the initialization and the passes
+    src, graph, p = build_graph(inp, _tile_params(params, r, diagonal, d))
+    rules = resolve_rules(graph, p, r=r)
+    feats = features_of(src, features) if p.beta > 0 else None
+    w, _ = weigh(graph, replace(rules, split_merge=False), feats)
     m = graph.n_elements
     of_row = src.to_rows(np.arange(m))
     elem = of_row[np.asarray(center_rows, dtype=np.int64)]
@@ -329,22 +323,14 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
     label = np.empty(m, dtype=np.int32)
     spaces = Workspaces(m, w, p.n_threads)
     try:
-        classifier = make_classifier(assignment_of(p, graph.kind), graph, w,
-                                     (p.window * r) ** 2, spaces, replay=False)
+        classifier = make_classifier(rules.params.assignment, graph, w, rules.window_r2,
+                                     spaces, replay=False)
         k, _ = classifier.classify(centers, elem.size, dist, label)
     finally:
         spaces.close()
-    present = np.zeros(k, dtype=bool)
-    present[label] = True
-    labels = relabel_dense(label)
-    kept = centers[:k][present]
-    if p.enforce_connectivity and not cleanup:
-        labels = enforce_connectivity(graph, labels, kept)
-    if cleanup:
-        labels = clean_boundaries(graph, labels, kept, radius=r, eta_convex=p.eta_convex,
-                                  alpha=p.alpha if p.weighting == "paper" else DEFAULTS.alpha,
-                                  connectivity=p.enforce_connectivity, n_threads=p.n_threads,
-                                  features=feats, beta=p.beta)
+    labels, kept = finish(graph, label, centers[:k], rules)
+    if rules.cleanup:
+        labels = clean_up(graph, labels, kept, rules, feats)
     name = src.first_rows(kept)  # each superfacet named by its center's row
     out = src.to_rows(labels)
     return np.where(out >= 0, name[np.maximum(out, 0)], -1).astype(np.int64)

@@ -12,17 +12,17 @@ import numpy as np
 from .elements.graph import ElementGraph, chunked
 from .elements.inputs import as_element_graph
 from .errors import ParameterError
-from .params import (MAX_WEIGHT_FACTOR, WEIGHTING_ALPHA, WEIGHTINGS, check_choice,
+from .params import (DEFAULTS, MAX_WEIGHT_FACTOR, WEIGHTING_ALPHA, WEIGHTINGS, check_choice,
                      check_nonneg, check_number)
 
 __all__ = ["paper_weights", "shlafman_weights", "edge_weights", "csr_weights", "check_features",
            "convex_scaled"]
 
-_PAPER_ALPHA = WEIGHTING_ALPHA["paper"][0]
+_PAPER_ALPHA = DEFAULTS.alpha
 _SHLAFMAN_ALPHA = WEIGHTING_ALPHA["shlafman"][0]
 
 
-def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = 0.2,
+def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = DEFAULTS.eta_convex,
                   features: np.ndarray | None = None, beta: float = 0.0) -> np.ndarray:
     """Weights of the paper (Simari, Picciau, De Floriani 2014, eqs. 1-3).
 
@@ -231,7 +231,7 @@ def shlafman_weights(graph, *, alpha: float = _SHLAFMAN_ALPHA) -> np.ndarray:
 
 
 def edge_weights(graph, weighting: str = "paper", *, alpha: float = _PAPER_ALPHA,
-                 eta_convex: float = 0.2, features: np.ndarray | None = None,
+                 eta_convex: float = DEFAULTS.eta_convex, features: np.ndarray | None = None,
                  beta: float = 0.0) -> np.ndarray:
     """:func:`paper_weights` or :func:`shlafman_weights` by name.
 

@@ -44,7 +44,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..params import check_choice, check_int, check_nonneg
+from ..params import DEFAULTS, check_choice, check_int, check_nonneg
 
 __all__ = ["cut_pursuit", "dimensionality_features"]
 
@@ -87,7 +87,7 @@ def dimensionality_features(graph, up: int = 2) -> np.ndarray:
 def cut_pursuit(obj, n_segments: int | None = None, *, reg_strength: float = 0.1,
                 elements: str | None = None, colors=None, up: int = 2,
                 spatial: float = 1.0,
-                n_neighbors: int = 10, neighbor_radius: float | None = None) -> np.ndarray:
+                n_neighbors: int = DEFAULTS.n_neighbors, neighbor_radius: float | None = None) -> np.ndarray:
     """Superpoints by l0 cut pursuit of dimensionality features (module notes).
 
     Parameters

@@ -31,7 +31,7 @@ import math
 
 import numpy as np
 
-from ..params import check_int, check_positive
+from ..params import DEFAULTS, check_int, check_positive
 
 __all__ = ["graph_segmentation", "segmentator_weights"]
 
@@ -57,7 +57,7 @@ def segmentator_weights(graph) -> np.ndarray:
 
 def graph_segmentation(obj, k_thresh: float = 0.01, min_size: int = 20, *,
                        n_segments: int | None = None, elements: str | None = None,
-                       n_neighbors: int = 10, neighbor_radius: float | None = None
+                       n_neighbors: int = DEFAULTS.n_neighbors, neighbor_radius: float | None = None
                        ) -> np.ndarray:
     """Felzenszwalb-Huttenlocher segmentation with the ScanNet Segmentator's weights.
 

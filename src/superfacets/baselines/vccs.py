@@ -31,7 +31,7 @@ import importlib
 import numpy as np
 
 from ..errors import MissingExtraError
-from ..params import check_int, check_nonneg, check_positive
+from ..params import DEFAULTS, check_int, check_nonneg, check_positive
 
 __all__ = ["vccs"]
 
@@ -51,7 +51,7 @@ def _module():
 
 def vccs(obj, n_segments: int | None = None, *, seed_resolution: float = 0.1,
          voxel_resolution: float | None = None, spatial_importance: float = 1.0,
-         normal_importance: float = 1.0, n_neighbors: int = 10) -> np.ndarray:
+         normal_importance: float = 1.0, n_neighbors: int = DEFAULTS.n_neighbors) -> np.ndarray:
     """VCCS supervoxels of a point cloud (module notes).
 
     Parameters

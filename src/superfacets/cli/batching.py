@@ -81,7 +81,7 @@ def cmd_batch(args) -> int:
                   vertex_colors=args.vertex_colors, picture=args.picture, html=args.html,
                   up=args.up or "y", view=args.view,
                   per_object=args.per_object, adaptive=args.adaptive,
-                  level_compactness=args.level_compactness,
+                  extent_weight=args.extent_weight,
                   workers=args.workers, scheduler=args.scheduler,
                   memory_limit=args.memory_limit, retry_failed=args.retry_failed,
                   progress=not args.quiet and (sys.stderr.isatty() if args.progress is None

@@ -197,11 +197,11 @@ def cmd_segment(args) -> int:
         raise ParameterError("--vertex-colors goes with --colored-mesh OUT.ply")
     if args.per_object and args.radius is not None:
         raise ParameterError("--per-object takes -k, not --radius")
-    if args.level_compactness is not None and (
-            args.level_compactness < 0 or (args.adaptive is None and (
+    if args.extent_weight is not None and (
+            args.extent_weight < 0 or (args.adaptive is None and (
                 not args.levels or args.level_cost != "planarity"))):
-        raise ParameterError("--level-compactness takes a number >= 0, with --adaptive or "
-                             f"--levels and --level-cost planarity, got {args.level_compactness}")
+        raise ParameterError("--extent-weight takes a number >= 0, with --adaptive or "
+                             f"--levels and --level-cost planarity, got {args.extent_weight}")
     if args.adaptive is not None and args.adaptive < 1:
         raise ParameterError(f"--adaptive must be at least 1, got {args.adaptive}")
     if args.adaptive is not None and (args.per_object or args.radius is not None):
@@ -249,7 +249,7 @@ def cmd_segment(args) -> int:
 
             result = adaptive_segment(data, args.n_segments or DEFAULTS.n_segments,
                                       start=args.adaptive,
-                                      compactness=args.level_compactness, **kwargs)
+                                      extent_weight=args.extent_weight, **kwargs)
         else:
             result = segment(data, args.n_segments, radius=args.radius, **kwargs)
     except SuperfacetsError as exc:
@@ -260,7 +260,7 @@ def cmd_segment(args) -> int:
                  html=html_out, element_options=dict(n_neighbors=args.neighbors,
                                                      neighbor_radius=args.neighbor_radius),
                  up=args.up or "y", view=args.view, graph=graph_out, levels=args.levels,
-                 level_cost=args.level_cost, level_compactness=args.level_compactness)
+                 level_cost=args.level_cost, extent_weight=args.extent_weight)
     report = sys.stderr if str(seg_out) == "-" else sys.stdout  # stdout holds the labels
     if not args.quiet:
         print(_summary(Path(args.mesh).name, data, result, elapsed, kind,

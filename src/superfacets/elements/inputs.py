@@ -13,7 +13,10 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
+from ..params import DEFAULTS
 from .graph import ElementGraph
+
+_N_NEIGHBORS = DEFAULTS.n_neighbors
 
 __all__ = ["ElementInput", "Builder", "BUILDERS", "as_element_graph", "elements_of",
            "is_cloud", "kind_for", "register_builder"]
@@ -91,15 +94,23 @@ class Builder(NamedTuple):
         family (a mesh, a point cloud, a tetrahedral mesh).
     default : bool
         This kind is the default for the inputs it accepts.
+    prepare : callable
+        ``prepare(obj) -> input``: the validated input (a ``Mesh``, ``PointCloud``
+        or ``TetMesh``), before any graph.
+    count : callable
+        ``count(input) -> int``: the number of elements, or a bound on it from
+        above, without the graph (``n_segments`` is checked against it first).
     build : callable
-        ``build(obj, n_neighbors, neighbor_radius) -> ElementInput``: validate the
-        input and build (or take from its cache) the graph.
+        ``build(input, n_neighbors, neighbor_radius) -> ElementInput``: build (or
+        take from the input's cache) the graph.
     needs : str
         What the kind needs, for the error when the input does not fit.
     """
 
     accepts: Callable[[object], bool]
     default: bool
+    prepare: Callable[[object], object]
+    count: Callable[[object], int]
     build: Callable[..., ElementInput]
     needs: str
 
@@ -114,58 +125,67 @@ def _is_mesh(obj) -> bool:
     return not is_cloud(obj) and not _is_volume(obj)
 
 
-def _cells(obj, n_neighbors, neighbor_radius) -> ElementInput:
+def _usable(obj):
     obj.check_usable()
-    from .cells import cell_graph
-
-    return ElementInput(cell_graph(obj), None, obj)
+    return obj
 
 
-def _points(obj, n_neighbors, neighbor_radius) -> ElementInput:
+def _usable_cloud(obj):
     from ..cloud import as_cloud
-    from .points import point_graph
 
-    c = as_cloud(obj)
-    c.check_usable()
-    g, index = point_graph(c, n_neighbors, neighbor_radius)
-    return ElementInput(g, index, c)
+    return _usable(as_cloud(obj))
 
 
 def _usable_mesh(obj):
     from ..convert import as_mesh
 
-    mesh = as_mesh(obj)
-    mesh.check_usable()
-    return mesh
+    return _usable(as_mesh(obj))
 
 
-def _vertices(obj, n_neighbors, neighbor_radius) -> ElementInput:
+def _cells(volume, n_neighbors, neighbor_radius) -> ElementInput:
+    from .cells import cell_graph
+
+    return ElementInput(cell_graph(volume), None, volume)
+
+
+def _points(cloud, n_neighbors, neighbor_radius) -> ElementInput:
+    from .points import point_graph
+
+    g, index = point_graph(cloud, n_neighbors, neighbor_radius)
+    return ElementInput(g, index, cloud)
+
+
+def _vertices(mesh, n_neighbors, neighbor_radius) -> ElementInput:
     from .vertices import vertex_graph
 
-    mesh = _usable_mesh(obj)
     g, index = vertex_graph(mesh)
     return ElementInput(g, index, mesh)
 
 
-def _faces(obj, n_neighbors, neighbor_radius) -> ElementInput:
+def _faces(mesh, n_neighbors, neighbor_radius) -> ElementInput:
     from .faces import face_graph
 
-    mesh = _usable_mesh(obj)
     return ElementInput(face_graph(mesh), None, mesh)
 
+
+def _used_vertices(mesh) -> int:
+    return int(np.count_nonzero(np.bincount(np.asarray(mesh.corners).ravel(),
+                                            minlength=mesh.n_vertices)))
+
+
+_MESH = "a mesh; a point cloud has elements='points'"
 
 #: The element-graph builder of each kind (the kinds' rules are in
 #: :data:`superfacets.elements.kinds.KINDS`); the first kind marked ``default`` that
 #: accepts an input is its default.
 BUILDERS: dict[str, Builder] = {
-    "cells": Builder(_is_volume, True, _cells,
+    "cells": Builder(_is_volume, True, _usable, lambda v: v.n_tets, _cells,
                      "a tetrahedral mesh (superfacets.read_volume)"),
-    "points": Builder(is_cloud, True, _points,
+    "points": Builder(is_cloud, True, _usable_cloud, lambda c: c.n_points, _points,
                       "a point cloud (a mesh has faces and vertices: elements='faces' "
                       "or 'vertices')"),
-    "faces": Builder(_is_mesh, True, _faces, "a mesh; a point cloud has elements='points'"),
-    "vertices": Builder(_is_mesh, False, _vertices,
-                        "a mesh; a point cloud has elements='points'"),
+    "faces": Builder(_is_mesh, True, _usable_mesh, lambda m: m.n_faces, _faces, _MESH),
+    "vertices": Builder(_is_mesh, False, _usable_mesh, _used_vertices, _vertices, _MESH),
 }
 
 
@@ -235,8 +255,9 @@ def kind_for(obj, elements: str | None = None) -> str:
     return elements
 
 
-def elements_of(obj, elements: str | None = None, *, n_neighbors: int = 10,
-                neighbor_radius: float | None = None) -> ElementInput:
+def elements_of(obj, elements: str | None = None, *, n_neighbors: int = _N_NEIGHBORS,
+                neighbor_radius: float | None = None,
+                n_segments: int | None = None) -> ElementInput:
     """Validate an input and give its element graph.
 
     Parameters
@@ -249,6 +270,9 @@ def elements_of(obj, elements: str | None = None, *, n_neighbors: int = 10,
         (:func:`kind_for`; the builders: :data:`BUILDERS`).
     n_neighbors, neighbor_radius
         The point graph's neighbourhood (points only).
+    n_segments : int, optional
+        Checked against the number of elements (or a bound on it known from the
+        input, :attr:`Builder.count`) before the graph is built.
 
     Returns
     -------
@@ -257,7 +281,8 @@ def elements_of(obj, elements: str | None = None, *, n_neighbors: int = 10,
     Raises
     ------
     ParameterError
-        If ``elements`` does not fit the input (points of a mesh, faces of a cloud).
+        If ``elements`` does not fit the input (points of a mesh, faces of a cloud), or
+        ``n_segments`` exceeds the elements.
     InvalidMeshError, InvalidCloudError, TypeError
         As the input's validation.
 
@@ -268,8 +293,14 @@ def elements_of(obj, elements: str | None = None, *, n_neighbors: int = 10,
     >>> src.graph.kind, src.graph.n_elements, src.n_rows
     ('vertices', 8, 8)
     """
+    from ..params import check_n_segments
+
     kind = kind_for(obj, elements)
-    return BUILDERS[kind].build(obj, n_neighbors, neighbor_radius)
+    builder = BUILDERS[kind]
+    data = builder.prepare(obj)
+    if n_segments is not None:  # before the graph, the memory peak of a run
+        check_n_segments(n_segments, builder.count(data), kind)
+    return builder.build(data, n_neighbors, neighbor_radius)
 
 
 def as_element_graph(obj) -> ElementGraph:

@@ -111,7 +111,7 @@ def _segment_and_write(task: dict, label_rel: str) -> dict:
         opts.pop("radius", None)
         k = opts.pop("n_segments", None) or DEFAULTS.n_segments
         result = adaptive_segment(data, k, start=task["adaptive"]["start"],
-                                  compactness=task["adaptive"]["compactness"], **opts)
+                                  extent_weight=task["adaptive"]["compactness"], **opts)
     else:
         result = segment(data, **opts)
     n = kind_of(kind).n_rows(data)
@@ -182,7 +182,7 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
               colored_mesh: str | None = None, vertex_colors: bool = False,
               picture: bool = False, html: bool = False, up="y", view=None,
               per_object: bool = False, adaptive: int | None = None,
-              level_compactness: float | None = None,
+              extent_weight: float | None = None, level_compactness: float | None = None,
               workers: int | None = None, scheduler: str | None = None,
               memory_limit="auto", retry_failed: bool = False, progress: bool = True,
               n_threads: int = 1, dask: bool | None = None, **options) -> BatchSummary:
@@ -216,8 +216,10 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         Content-adaptive superpoints (:func:`superfacets.adaptive_superpoints`)
         with this ``start`` (``>= 1``; with ``n_segments``, not ``radius`` or
         ``per_object``).
+    extent_weight : float, optional
+        Their ``extent_weight`` (default: left to the method).
     level_compactness : float, optional
-        Their ``compactness`` (default: left to the method).
+        The old name of ``extent_weight`` (deprecated; one release).
     workers : int, optional
         Local worker processes (default: one per core); 1 runs in this process.
     scheduler : str, optional
@@ -276,10 +278,14 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         if per_object or radius is not None:
             raise ParameterError("adaptive takes n_segments, on one segmentation (not radius "
                                  "or per_object)")
-    if level_compactness is not None:
+    from ..params import renamed
+
+    extent_weight = renamed(extent_weight, level_compactness, "extent_weight",
+                            "level_compactness")
+    if extent_weight is not None:
         if adaptive is None:
-            raise ParameterError("level_compactness goes with adaptive")
-        level_compactness = check_nonneg("level_compactness", level_compactness)
+            raise ParameterError("extent_weight goes with adaptive")
+        extent_weight = check_nonneg("extent_weight", extent_weight)
     if workers is not None:
         check_int("workers", workers, lo=1)
     n_threads = check_int("n_threads", n_threads, lo=1)
@@ -305,7 +311,7 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
                 "outputs": outputs, "per_object": bool(per_object)}
     level = None
     if adaptive is not None:  # recorded only where on (folders of earlier runs resume)
-        level = {"start": adaptive, "compactness": level_compactness}
+        level = {"start": adaptive, "compactness": extent_weight}  # the key folders hold
         recorded["adaptive"] = level
     known = check_options(outdir, recorded)  # before the engine starts: a quick refusal
     work = bool(_todo(files, read_manifest(outdir) if known else [], retry_failed))

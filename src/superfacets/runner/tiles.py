@@ -56,8 +56,9 @@ class TiledResult:
         dense ``0..K-1``; -1 for an invalid point.
     centers : (K,) int64 ndarray
         Row of each superfacet's center.
-    radius : float
-        The superfacet radius ``r`` of the whole input (its units).
+    mesh_radius : float
+        The superfacet radius ``r`` of the whole input (its units; ``radius`` is
+        its old name, deprecated).
     grid : tuple of int
         Tiles along x, y and z for a regular grid (``tiles=(nx, ny, nz)``);
         ``(N,)`` for ``N`` balanced tiles.
@@ -92,7 +93,7 @@ class TiledResult:
 
     labels: np.ndarray
     centers: np.ndarray
-    radius: float
+    mesh_radius: float
     grid: tuple
     halo: float
     disagreements: int
@@ -106,6 +107,15 @@ class TiledResult:
     def n_segments(self) -> int:
         """Number of superfacets ``K``."""
         return int(self.centers.shape[0])
+
+    @property
+    def radius(self) -> float:
+        """The old name of :attr:`mesh_radius` (deprecated; one release)."""
+        import warnings
+
+        warnings.warn("result.radius is now result.mesh_radius (the old name goes in the "
+                      "next release)", DeprecationWarning, stacklevel=2)
+        return self.mesh_radius
 
 
 def tile_task(task: dict) -> dict:
@@ -397,7 +407,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                 stats[o["tile"]]["centers"] = int(o["centers"].size)
     resolved = dict(params.as_dict(), n_segments=int(names.size), radius=r / diagonal,
                     tiles=grid, halo=float(halo), elements=reader.kind)
-    return TiledResult(labels=labels, centers=names.astype(np.int64), radius=r, grid=grid,
+    return TiledResult(labels=labels, centers=names.astype(np.int64), mesh_radius=r, grid=grid,
                        layout=layout, halo=margin, disagreements=disagreements, repaired=repaired,
                        tiles=[stats[k] for k in sorted(stats)], timings=timings,
                        params=resolved)
