@@ -228,3 +228,19 @@ def test_n_segments_above_the_elements_is_refused_before_the_graph(monkeypatch):
         segment(mesh, 163, elements="vertices")
     with pytest.raises(ParameterError, match=r"larger than the number of points \(50\)"):
         segment(np.random.default_rng(0).random((50, 3)), 51)
+
+
+def test_features_are_checked_before_the_graph(monkeypatch):
+    import trimesh
+
+    import superfacets.elements.faces as faces
+
+    def no_graph(*args, **kwargs):
+        raise AssertionError("the element graph was built")
+
+    monkeypatch.setattr(faces, "face_graph", no_graph)
+    mesh = trimesh.creation.icosphere(subdivisions=2)
+    with pytest.raises(ParameterError, match=r"one row per input row \(320\), got shape"):
+        segment(mesh, 10, beta=1.0, features=np.zeros((5, 3)))
+    with pytest.raises(ParameterError, match="beta > 0 needs features"):
+        segment(mesh, 10, beta=1.0)

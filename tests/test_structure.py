@@ -18,7 +18,8 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "superfacets"
 #: one. A module's layer is that of the longest prefix listed here.
 LAYERS = (
     # foundations: no knowledge of meshes
-    ("superfacets._version", "superfacets.errors", "superfacets.params", "superfacets.labels",
+    ("superfacets._version", "superfacets.errors", "superfacets.checks", "superfacets.params",
+     "superfacets.labels",
      "superfacets.elements.kinds",
      "superfacets.extras", "superfacets._threads", "superfacets._kernels",
      "superfacets.camera", "superfacets.warmup", "superfacets.interrupts", "superfacets.rgb"),
@@ -37,7 +38,7 @@ LAYERS = (
      "superfacets.adjacency", "superfacets.adaptive",
      "superfacets.hierarchy"),
     # the method, one run
-    ("superfacets.pipeline", "superfacets.segmentation", "superfacets.scenes",
+    ("superfacets.result", "superfacets.stages", "superfacets.pipeline", "superfacets.segmentation", "superfacets.scenes",
      "superfacets.tiling", "superfacets.tile_layout", "superfacets.levels"),
     # every method alike
     ("superfacets.baselines", "superfacets.methods"),

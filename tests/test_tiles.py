@@ -447,7 +447,7 @@ def test_bad_options_are_refused_before_any_work(tmp_path):
         segment_tiled(mesh, 10, features=np.zeros((mesh.n_faces, 3)))
     with pytest.raises(ParameterError, match="faces or points"):
         segment_tiled(mesh, 10, elements="vertices")
-    with pytest.raises(ParameterError, match="more than the input"):
+    with pytest.raises(ParameterError, match="larger than the number of"):
         segment_tiled(mesh, mesh.n_faces + 1)
     with pytest.raises(ParameterError, match="unknown parameter"):
         segment_tiled(mesh, 10, colour=1)

@@ -17,9 +17,10 @@ import math
 from dataclasses import asdict, dataclass, field, make_dataclass, replace
 from typing import Callable
 
-import numpy as np
 
 from .elements.kinds import KINDS, kind_of
+from .checks import (check_bool, check_choice, check_int, check_n_segments, check_nonneg,
+                     check_number, check_positive, check_threads, max_threads, renamed)
 from .errors import ParameterError
 
 __all__ = ["SegmentParams", "DEFAULTS", "Parameter", "PARAMETERS", "PARAMETER", "ALL_KINDS", "INITS", "ASSIGNMENTS", "WEIGHTINGS", "ELEMENTS",
@@ -113,156 +114,6 @@ COARSE_MIN_PER_SEGMENT = kind_of("faces").coarse_min_per_segment
 COARSE_PER_SEGMENT = kind_of("faces").coarse_per_segment
 COARSE_MIN_PER_SEGMENT_POINTS = kind_of("points").coarse_min_per_segment
 COARSE_PER_SEGMENT_POINTS = kind_of("points").coarse_per_segment
-
-
-def _is_int(value) -> bool:
-    return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
-
-
-def check_int(name: str, value, lo: int | None = None, hi: int | None = None) -> int:
-    """``value`` as an int in ``[lo, hi]``; booleans and floats are refused.
-
-    Raises
-    ------
-    ParameterError
-    """
-    if not _is_int(value):
-        raise ParameterError(f"{name} must be an integer, got {value!r}")
-    v = int(value)
-    if lo is not None and v < lo:
-        raise ParameterError(f"{name} must be an integer >= {lo}, got {v}")
-    if hi is not None and v > hi:
-        raise ParameterError(f"{name} must be an integer <= {hi}, got {v}")
-    return v
-
-
-def check_number(name: str, value, lo: float = -math.inf, hi: float = math.inf, *,
-                 lo_open: bool = False) -> float:
-    """``value`` as a finite float in ``[lo, hi]`` (``(lo, hi]`` with ``lo_open``).
-
-    Raises
-    ------
-    ParameterError
-    """
-    if isinstance(value, (bool, np.bool_)):
-        raise ParameterError(f"{name} must be a number, got {value!r}")
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ParameterError(f"{name} must be a number, got {value!r}") from None
-    low = f"> {lo:g}" if lo_open else f">= {lo:g}"
-    rng = low if hi == math.inf else f"in {'(' if lo_open else '['}{lo:g}, {hi:g}]"
-    if not math.isfinite(x) or (x <= lo if lo_open else x < lo) or x > hi:
-        raise ParameterError(f"{name} must be a finite number {rng}, got {value!r}")
-    return x
-
-
-def check_positive(name: str, value) -> float:
-    """A finite number ``> 0``."""
-    return check_number(name, value, 0.0, lo_open=True)
-
-
-def check_nonneg(name: str, value) -> float:
-    """A finite number ``>= 0``."""
-    return check_number(name, value, 0.0)
-
-
-def check_bool(name: str, value) -> bool:
-    """``True`` or ``False`` (numpy booleans accepted)."""
-    if not isinstance(value, (bool, np.bool_)):
-        raise ParameterError(f"{name} must be True or False, got {value!r}")
-    return bool(value)
-
-
-def check_choice(name: str, value, choices) -> str:
-    """One of ``choices``.
-
-    Raises
-    ------
-    ParameterError
-        Listing the choices.
-    """
-    if not isinstance(value, str) or value not in choices:
-        raise ParameterError(f"{name} must be one of {', '.join(choices)}; got {value!r}")
-    return value
-
-
-def renamed(new_value, old_value, new: str, old: str, default=None):
-    """The value of a keyword renamed ``old`` -> ``new``, kept for one release.
-
-    Returns ``old_value`` (with a :class:`DeprecationWarning`) when the old name
-    was given, else ``new_value``.
-
-    Raises
-    ------
-    ParameterError
-        If both names were given.
-
-    Examples
-    --------
-    >>> renamed(0.5, None, "extent_weight", "compactness")
-    0.5
-    """
-    if old_value is None:
-        return new_value
-    import warnings
-
-    warnings.warn(f"{old}= is now {new}= (the old name goes in the next release)",
-                  DeprecationWarning, stacklevel=3)
-    if new_value is not None and new_value != default:
-        raise ParameterError(f"give {new}, not both {new} and {old}")
-    return old_value
-
-
-def check_n_segments(n_segments, m: int, kind: str = "faces") -> int:
-    """A number of segments ``k`` in ``1..m`` (``m`` the number of elements, of ``kind``).
-
-    Raises
-    ------
-    ParameterError
-        If ``n_segments`` is not an integer in ``1..m``.
-    """
-    k = check_int("n_segments", n_segments, lo=1)
-    if k > m:
-        raise ParameterError(f"n_segments ({k}) is larger than the number of {kind} ({m})")
-    return k
-
-
-def max_threads() -> int:
-    """The most threads a run may use: 4 per core, at least 16 (each thread keeps
-    about 12 bytes per element of buffers)."""
-    import os
-
-    return max(16, 4 * (os.cpu_count() or 1))
-
-
-def check_threads(n_threads) -> int:
-    """Resolve ``n_threads``: None gives numba's thread count (``NUMBA_NUM_THREADS``).
-
-    Raises
-    ------
-    ParameterError
-        If it is not an integer in ``1..max_threads()``.
-    """
-    if n_threads is None:
-        import os
-        import sys
-
-        # numba's setting once numba is imported; while another thread (the
-        # warm-up) is still importing it, its config may not be there yet
-        config = getattr(sys.modules.get("numba"), "config", None)
-        value = getattr(config, "NUMBA_NUM_THREADS", None)
-        if value is not None:
-            return int(value)
-        # numba's own rule, without importing numba (checking arguments stays light)
-        try:
-            return max(1, int(os.environ["NUMBA_NUM_THREADS"]))
-        except (KeyError, ValueError):
-            try:
-                return max(1, len(os.sched_getaffinity(0)))
-            except AttributeError:  # pragma: no cover - not Linux
-                return max(1, os.cpu_count() or 1)
-    return check_int("n_threads", n_threads, lo=1, hi=max_threads())
 
 
 ALL_KINDS = ("faces", "vertices", "points", "cells")

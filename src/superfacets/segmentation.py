@@ -16,7 +16,8 @@ import numpy as np
 
 from .errors import ParameterError
 from .params import DEFAULTS, PARAMETERS, resolve
-from .pipeline import SegmentationResult, pipeline
+from .pipeline import pipeline
+from .result import SegmentationResult
 
 __all__ = ["superfacets", "superpoints", "segment", "pipeline", "SegmentationResult"]
 

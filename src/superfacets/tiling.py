@@ -47,7 +47,9 @@ from .elements.kinds import kind_of
 from .errors import ParameterError
 from .expansion import Workspaces
 from .params import DEFAULTS, SegmentParams, superfacet_measure
-from .pipeline import build_graph, clean_up, features_of, finish, pipeline, resolve_rules, weigh
+from .elements.inputs import features_of
+from .pipeline import pipeline
+from .stages import build_graph, clean_up, finish, resolve_rules, weigh
 
 __all__ = ["tile_centers", "tile_refine", "tile_labels",
            "tile_connect", "orientation_reference", "trim_centers", "HALO",
@@ -307,7 +309,7 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
         return np.where(valid, name, -1).astype(np.int64)
     # the whole run's stages (superfacets.pipeline) with one classification from the
     # fixed centers in place of the initialization and the passes
-    src, graph, p = build_graph(inp, _tile_params(params, r, diagonal, d))
+    src, graph, p = build_graph(inp, _tile_params(params, r, diagonal, d), features)
     rules = resolve_rules(graph, p, r=r)
     feats = features_of(src, features) if p.beta > 0 else None
     w, _ = weigh(graph, replace(rules, split_merge=False), feats)

@@ -19,7 +19,7 @@ from .graph import ElementGraph
 _N_NEIGHBORS = DEFAULTS.n_neighbors
 
 __all__ = ["ElementInput", "Builder", "BUILDERS", "as_element_graph", "elements_of",
-           "is_cloud", "kind_for", "register_builder"]
+           "is_cloud", "kind_for", "prepared", "register_builder", "features_of", "per_element"]
 
 
 class ElementInput(NamedTuple):
@@ -293,6 +293,37 @@ def elements_of(obj, elements: str | None = None, *, n_neighbors: int = _N_NEIGH
     >>> src.graph.kind, src.graph.n_elements, src.n_rows
     ('vertices', 8, 8)
     """
+    kind, data = prepared(obj, elements, n_segments=n_segments)
+    return BUILDERS[kind].build(data, n_neighbors, neighbor_radius)
+
+
+def prepared(obj, elements: str | None = None, *, n_segments: int | None = None):
+    """The kind of element and the validated input, before any graph.
+
+    Parameters
+    ----------
+    obj, elements
+        As :func:`elements_of`.
+    n_segments : int, optional
+        Checked against the input's elements (:attr:`Builder.count`).
+
+    Returns
+    -------
+    kind : str
+    data : Mesh, PointCloud or TetMesh
+
+    Raises
+    ------
+    ParameterError, InvalidMeshError, InvalidCloudError, TypeError
+        As :func:`elements_of`.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> kind, mesh = prepared(trimesh.creation.box(), n_segments=12)
+    >>> kind, mesh.n_faces
+    ('faces', 12)
+    """
     from ..params import check_n_segments
 
     kind = kind_for(obj, elements)
@@ -300,7 +331,7 @@ def elements_of(obj, elements: str | None = None, *, n_neighbors: int = _N_NEIGH
     data = builder.prepare(obj)
     if n_segments is not None:  # before the graph, the memory peak of a run
         check_n_segments(n_segments, builder.count(data), kind)
-    return builder.build(data, n_neighbors, neighbor_radius)
+    return kind, data
 
 
 def as_element_graph(obj) -> ElementGraph:
@@ -325,3 +356,52 @@ def as_element_graph(obj) -> ElementGraph:
     from .faces import face_graph
 
     return face_graph(as_mesh(obj))
+
+
+def features_of(src, features):
+    """The per-element features of a run with ``beta > 0``: ``features`` (one row per
+    input row), else the input's colours (or a tetrahedral mesh's materials, one-hot).
+
+    Parameters
+    ----------
+    src : ElementInput
+    features : (N, d) float ndarray or None
+
+    Returns
+    -------
+    (n, d) float64 ndarray
+        One row per element.
+
+    Raises
+    ------
+    ParameterError
+        Without features and without colours, or with one row per input row missing.
+    """
+    if features is None:
+        features = src.colors()
+        materials = getattr(src.source, "materials", None)
+        if features is None and materials is not None:  # a volume's regions, one-hot
+            features = (materials[:, None] == np.unique(materials)[None, :]).astype(float)
+        if features is None:
+            from ..errors import ParameterError
+
+            raise ParameterError("beta > 0 needs features: pass features=(one row per "
+                                 f"{src.graph.element}), or an input with colours (PLY, PCD "
+                                 "or LAS points with RGB, a mesh with vertex or face colours) "
+                                 "or materials (a tetrahedral mesh)")
+    return per_element(src, features)
+
+
+def per_element(src, features):
+    """Per-row features of an input -> per-element features (the first row of each)."""
+    if features is None:
+        return None
+    from ..errors import ParameterError
+
+    f = np.asarray(features, dtype=np.float64)
+    f = f.reshape(-1, 1) if f.ndim == 1 else f
+    if f.ndim != 2 or f.shape[0] != src.n_rows:
+        raise ParameterError(f"features must have one row per input row ({src.n_rows}), "
+                             f"got shape {np.shape(features)}")
+    rows = src.first_rows(np.arange(src.graph.n_elements))
+    return f[rows]

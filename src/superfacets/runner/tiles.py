@@ -39,7 +39,8 @@ import numpy as np
 
 from ..errors import ParameterError, SuperfacetsError
 from ..bounds import check_extent
-from ..params import DEFAULTS, resolve
+from ..params import DEFAULTS, resolve, superfacet_size
+from ..result import deprecated_radius
 from .engine import Engine, PeakMemory, error_text
 
 __all__ = ["segment_tiled", "TiledResult", "tile_task"]
@@ -108,14 +109,8 @@ class TiledResult:
         """Number of superfacets ``K``."""
         return int(self.centers.shape[0])
 
-    @property
-    def radius(self) -> float:
-        """The old name of :attr:`mesh_radius` (deprecated; one release)."""
-        import warnings
-
-        warnings.warn("result.radius is now result.mesh_radius (the old name goes in the "
-                      "next release)", DeprecationWarning, stacklevel=2)
-        return self.mesh_radius
+    #: The old name of :attr:`mesh_radius` (deprecated; one release).
+    radius = property(lambda self: deprecated_radius(self))
 
 
 def tile_task(task: dict) -> dict:
@@ -349,7 +344,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                 timings["areas"] = time.perf_counter() - t
             else:
                 area = survey.size
-            r = _radius(params, area, diagonal, survey.n_elements)
+            r = superfacet_size(params, area, diagonal, survey.n_elements, reader.kind)[1]
             margin = halo_distance(halo, params.window, r)
             t = time.perf_counter()
             found = [o for o in run("centers", margin) if o["core"]]
@@ -430,15 +425,6 @@ def _gathered(outs: list, params) -> tuple[np.ndarray, np.ndarray]:
         keep = trim_centers(pos, params.n_segments)
         return rows[keep], pos[keep]
     return rows, pos
-
-
-def _radius(params, area: float, diagonal: float, n: int) -> float:
-    if params.radius is not None:
-        return params.radius * diagonal
-    k = params.n_segments
-    if k > n:
-        raise ParameterError(f"n_segments={k} is more than the input's {n} elements")
-    return math.sqrt(area / (k * math.pi))
 
 
 def _gather(engine: Engine, tasks: list, phase: str, progress: bool) -> list:
