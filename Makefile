@@ -5,7 +5,7 @@ PYTHON ?= python3
 VENV := .venv
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test bench scale browser pictures sweep comparisons check-wheel clean
+.PHONY: demo test lint docs bench scale browser pictures sweep comparisons check-wheel clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -16,8 +16,22 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(VENV)/bin/superfacets demo --output-dir demo-output
 
-test: $(STAMP) browser
+test: $(STAMP) browser lint
 	$(VENV)/bin/python -m pytest -q
+
+# ruff (pyproject.toml [tool.ruff]): the sources, tests, benchmarks and tools
+lint: $(STAMP)
+	$(VENV)/bin/ruff check src tests benchmarks tools docs/examples docs/conf.py docs/_cli.py
+
+# The documentation site (Sphinx: user guide, API reference, gallery executed at build
+# time) into docs/_build/html, warnings as errors (about 2 minutes).
+DOCS_STAMP := $(VENV)/.docs-installed
+$(DOCS_STAMP): $(STAMP)
+	$(VENV)/bin/python -m pip install --quiet -e ".[test,docs]"
+	touch $(DOCS_STAMP)
+
+docs: $(DOCS_STAMP)
+	$(VENV)/bin/python -m sphinx -W --keep-going -b html -q docs docs/_build/html
 
 # The HTML page is tested in headless Chromium (Debian's package). Installed here
 # when missing and possible (root with apt-get); otherwise that one test is skipped.
@@ -89,4 +103,4 @@ FIG8 = -m superfacets vsa -k 150 --param vsa.metric=l21,l2 --param vsa.init=rand
 	"VSA L2 random" "VSA L2,1 incremental" "VSA L2 incremental"
 
 clean:
-	rm -rf $(VENV) demo-output build src/*.egg-info
+	rm -rf $(VENV) demo-output build src/*.egg-info docs/_build docs/auto_examples

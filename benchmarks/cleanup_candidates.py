@@ -17,7 +17,8 @@ Candidates:
   (the package's defaults first);
 - ``oracle``: the same graph cut with the human boundaries made 100x cheaper
   (the fraction of the humans who cut an edge), with the default band, with
-  a wider band and more sweeps, and with the human cue alone (no crease term). Not a method: the ceiling of moving
+  a wider band and more sweeps, and with the human cue alone (no crease term). Not a
+  method: the ceiling of moving
   boundaries within their bands, whatever the cue.
 """
 
@@ -27,6 +28,7 @@ import argparse
 import time
 
 import numpy as np
+
 from superfacets.elements import face_graph
 
 CANDIDATES = [

@@ -26,6 +26,7 @@ import argparse
 import time
 
 import numpy as np
+
 from superfacets.elements import face_graph
 
 VARIANTS = [(beta, scale) for scale in (0.1, 0.25) for beta in (0.3, 1.0, 3.0)]

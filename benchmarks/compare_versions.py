@@ -76,8 +76,8 @@ def main(argv=None) -> None:
         peak_a = max(r["peak_mib"] for r in got["after"])
         same = len({r["labels"] for r in got["before"] + got["after"]}) == 1
         rows.append((case, b["seconds"], a["seconds"], peak_b, peak_a, same))
-    print(f"| case | before (s) | after (s) | after/before | peak before (MiB) | "
-          f"peak after (MiB) | same labels |")
+    print("| case | before (s) | after (s) | after/before | peak before (MiB) | "
+          "peak after (MiB) | same labels |")
     print("|---|---|---|---|---|---|---|")
     for case, tb, ta, pb, pa, same in rows:
         print(f"| {case} | {tb:.3f} | {ta:.3f} | {ta / tb:.2f} | {pb:.0f} | {pa:.0f} | "

@@ -89,11 +89,9 @@ def subdivide(mesh, level: int):
 
 def make_psb(level: int, per_category: int | None, cache: Path) -> Path:
     """The benchmark subdivided ``level`` times, in ``cache/psb_x<4^level>``."""
-    from superfacets import read_mesh, write_mesh
+    from superfacets import Mesh, read_mesh, write_mesh
     from superfacets.datasets.psb import first_per_category, list_meshes
     from superfacets.io.labels import read_labels
-
-    from superfacets import Mesh
 
     out = cache / f"psb_x{4 ** level}"
     meshes = list_meshes()

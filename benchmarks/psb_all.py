@@ -23,6 +23,7 @@ from superfacets.connectivity import label_components  # noqa: E402
 from superfacets.datasets.psb import category, psb_root  # noqa: E402
 from superfacets.elements import face_graph
 
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("psb", nargs="?", default=None)

@@ -37,7 +37,7 @@ Methods (the registry's, so ``superfacets experiment`` runs the same code):
   ``baselines`` extra), its regularisation searched for k; skipped if not
   installed;
 - ``vccs``: PCL's supervoxels through the external ``vccs_supervoxel``
-  module (docs/superpoints.md says how to build it), its seed resolution
+  module (docs/notes/superpoints.md says how to build it), its seed resolution
   searched for k; skipped if it is not importable.
 
 Prints a Markdown table per scan; ``--csv`` also writes every row.

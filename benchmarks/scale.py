@@ -156,7 +156,8 @@ def main() -> int:
         runs = [r for r in runs if any(w in r[0] for w in words)]
     cols = ["mesh", "faces", "k", "superfacets", "iterations (passes)",
             "coarse: clusters, passes, s", "import s", "read s",
-            "graph s", "init s (coarse incl.)", "iterations s", "total s", "s/pass", "peak MiB", "B/face",
+            "graph s", "init s (coarse incl.)", "iterations s", "total s", "s/pass", "peak MiB",
+            "B/face",
             "B/face above import", "paper s", "graph segm. s (to k; one run)"]
     print(f"alpha = {args.alpha}; threads = {args.threads or 'all cores'}; one fresh process "
           "per row; total = read + segment\n")

@@ -87,7 +87,8 @@ def main() -> int:
         return 0
     missing = [n for n in PAPER if not (MESHES / f"{n}.tri.xz").exists()]
     if missing:
-        print(f"missing: {', '.join(str(MESHES / f'{n}.tri.xz') for n in missing)}", file=sys.stderr)
+        print(f"missing: {', '.join(str(MESHES / f'{n}.tri.xz') for n in missing)}",
+              file=sys.stderr)
         return 1
     rows = []
     with tempfile.TemporaryDirectory() as cache:

@@ -8,7 +8,7 @@ Usage: python benchmarks/tiles.py [--mesh-id 281] [--subdivide 2 3] [--points 10
 ``--compare``: the first benchmark mesh of each category, subdivided ``--times``
 times (default once), segmented once and tiled (in process), the mean
 undersegmentation error of each, the superfacets cut by a border and the
-disagreements (docs/tiles.md). ``--refine``: the tiles' refine rounds
+disagreements (docs/notes/tiles.md). ``--refine``: the tiles' refine rounds
 (default: ``segment_tiled``'s). ``--compare-points N``: ``N`` points sampled
 on each mesh (seed 0, each with its face's class) instead of the subdivided
 faces, the UE on the whole cloud's point graph.
@@ -65,7 +65,8 @@ t = time.perf_counter()
 res = segment(data, k)
 sec = time.perf_counter() - t
 np.save(out, res.labels)
-print(json.dumps(dict(seconds=sec, peak_mib=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+print(json.dumps(dict(seconds=sec, peak_mib=peak,
                       n_segments=res.n_segments)))
 """
 
@@ -203,7 +204,8 @@ def _row_tiled_only(name, n, gt, path, k, a) -> None:
     wall = time.perf_counter() - t
     peak = max(t[f"{ph}_peak_mib"] or 0 for t in res.tiles for ph in ("centers", "labels"))
     ue = _equal_weight_ue(res.labels, gt)
-    print(f"tiled: {wall:.1f} s, phases {json.dumps({k: round(v, 1) for k, v in res.timings.items()})}",
+    phases = json.dumps({k: round(v, 1) for k, v in res.timings.items()})
+    print(f"tiled: {wall:.1f} s, phases {phases}",
           flush=True)
     t = time.perf_counter()
     cut, outside = _cut_per_tile(path, res, res.params["n_neighbors"])
@@ -324,7 +326,7 @@ def main() -> None:
                     _row_tiled_only(f"points on PSB {a.mesh_id} subdivided {s}x", n, label,
                                     pp, a.k, a)
                 else:
-                    _row(f"points on it", n, np.load(pp), label, pp, a.k, a, folder)
+                    _row("points on it", n, np.load(pp), label, pp, a.k, a, folder)
 
 
 if __name__ == "__main__":

@@ -130,11 +130,13 @@ def cases() -> list[Case]:
     mesh_case("off-truncated-vertices", "m.off", b"OFF\n4 1 0\n0 0 0\n1 0 0\n", "truncated")
     mesh_case("off-truncated-faces", "m.off", b"OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
               "truncated")
-    mesh_case("off-two-coordinates", "m.off", b"OFF\n3 1 0\n0 0\n1 0\n0 1\n3 0 1 2\n", "coordinates")
+    mesh_case("off-two-coordinates", "m.off", b"OFF\n3 1 0\n0 0\n1 0\n0 1\n3 0 1 2\n",
+              "coordinates")
     mesh_case("off-text-coordinate", "m.off", b"OFF\n3 1 0\n0 0 x\n1 0 0\n0 1 0\n3 0 1 2\n",
               "malformed")
     mesh_case("off-nan", "m.off", _tetra_off().replace(b"1 0 0\n", b"nan 0 0\n", 1), "NaN")
-    mesh_case("off-inf", "m.off", _tetra_off().replace(b"1 0 0\n", b"inf 0 0\n", 1), "NaN or infinite")
+    mesh_case("off-inf", "m.off", _tetra_off().replace(b"1 0 0\n", b"inf 0 0\n", 1),
+              "NaN or infinite")
     mesh_case("off-index-out-of-range", "m.off", _tetra_off().replace(b"3 1 2 3", b"3 1 2 9"),
               "out of range")
     mesh_case("off-index-negative", "m.off", _tetra_off().replace(b"3 1 2 3", b"3 1 2 -1"),
@@ -146,13 +148,17 @@ def cases() -> list[Case]:
     mesh_case("off-face-count-mismatch", "m.off", _tetra_off().replace(b"3 1 2 3", b"3 1 2"), "")
     mesh_case("off-no-faces", "m.off", b"OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n", "no faces")
     mesh_case("off-binary-junk", "m.off", bytes(range(256)) * 4, "")
-    mesh_case("off-zero-extent", "m.off", b"OFF\n3 1 0\n1 1 1\n1 1 1\n1 1 1\n3 0 1 2\n", "zero extent")
-    mesh_case("off-zero-area", "m.off", b"OFF\n3 1 0\n0 0 0\n1 0 0\n2 0 0\n3 0 1 2\n", "zero total area")
+    mesh_case("off-zero-extent", "m.off", b"OFF\n3 1 0\n1 1 1\n1 1 1\n1 1 1\n3 0 1 2\n",
+              "zero extent")
+    mesh_case("off-zero-area", "m.off", b"OFF\n3 1 0\n0 0 0\n1 0 0\n2 0 0\n3 0 1 2\n",
+              "zero total area")
     mesh_case("off-huge-coordinates", "m.off",
-              _tetra_off().replace(b"1 0 0\n", b"1e300 0 0\n", 1).replace(b"0 1 0\n", b"0 -1e300 0\n", 1),
+              _tetra_off().replace(b"1 0 0\n", b"1e300 0 0\n", 1).replace(b"0 1 0\n",
+                                                                          b"0 -1e300 0\n", 1),
               "rescale")
     mesh_case("off-tiny-coordinates", "m.off",
-              b"OFF\n4 4 0\n0 0 0\n1e-200 0 0\n0 1e-200 0\n0 0 1e-200\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n",
+              b"OFF\n4 4 0\n0 0 0\n1e-200 0 0\n0 1e-200 0\n0 0 1e-200\n"
+              b"3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n",
               "rescale")
     mesh_case("off-k-too-large", "m.off", _tetra_off(), "larger than the number of faces",
               extra=("-k", "9"))
@@ -306,10 +312,12 @@ def cases() -> list[Case]:
     # --- segment options
     for name, opts, match in [
             ("k-zero", ["-k", "0"], "n_segments"), ("k-negative", ["-k", "-5"], "n_segments"),
-            ("alpha-negative", ["--alpha", "-1"], "alpha"), ("alpha-nan", ["--alpha", "nan"], "alpha"),
+            ("alpha-negative", ["--alpha", "-1"], "alpha"), ("alpha-nan", ["--alpha", "nan"],
+                                                             "alpha"),
             ("alpha-inf", ["--alpha", "inf"], "alpha"),
             ("eta-negative", ["--eta-convex", "-1"], "eta_convex"),
-            ("window-zero", ["--window", "0"], "window"), ("max-iter-zero", ["--max-iter", "0"], "max_iter"),
+            ("window-zero", ["--window", "0"], "window"), ("max-iter-zero", ["--max-iter", "0"],
+                                                           "max_iter"),
             ("threads-zero", ["--threads", "0"], "n_threads"),
             ("threads-huge", ["--threads", "100000"], "n_threads"),
             ("shlafman-alpha", ["--weighting", "shlafman", "--alpha", "5"], "[0, 1]"),
@@ -322,17 +330,21 @@ def cases() -> list[Case]:
     out.append(Case("segment-radius-zero", g, ["segment", "{d}/g.off", "--radius", "0"],
                     match="radius"))
     for name, opts in [("k-text", ["-k", "abc"]), ("radius-and-k", ["-k", "3", "--radius", "0.1"]),
-                       ("init-bogus", ["--init", "bogus"]), ("weighting-bogus", ["--weighting", "x"]),
+                       ("init-bogus", ["--init", "bogus"]), ("weighting-bogus", ["--weighting",
+                                                                                 "x"]),
                        ("unknown-option", ["--bogus"]), ("alpha-text", ["--alpha", "x"])]:
         out.append(Case(f"segment-{name}", g, ["segment", "{d}/g.off", *opts], "usage"))
     out.append(Case("segment-output-folder-missing", g,
-                    ["segment", "{d}/g.off", "-k", "4", "-o", "{d}/no/o.seg"], match="does not exist"))
+                    ["segment", "{d}/g.off", "-k", "4", "-o", "{d}/no/o.seg"],
+                    match="does not exist"))
     out.append(Case("segment-output-is-folder", {**g, "od/x": b""},
                     ["segment", "{d}/g.off", "-k", "4", "-o", "{d}/od"], match="directory"))
     out.append(Case("segment-colored-wrong-suffix", g,
-                    ["segment", "{d}/g.off", "-k", "4", "--colored-mesh", "{d}/c.stl"], match=".ply"))
+                    ["segment", "{d}/g.off", "-k", "4", "--colored-mesh", "{d}/c.stl"],
+                    match=".ply"))
     out.append(Case("segment-colored-to-stdout", g,
-                    ["segment", "{d}/g.off", "-k", "4", "--colored-mesh", "-"], match="standard output"))
+                    ["segment", "{d}/g.off", "-k", "4", "--colored-mesh", "-"],
+                    match="standard output"))
     out.append(Case("segment-both-outputs-ok", g,
                     ["segment", "{d}/g.off", "-k", "4", "-o", "{d}/o.seg", "--colored-mesh",
                      "{d}/c.ply"], "ok", outputs=["o.seg", "c.ply"]))
@@ -340,10 +352,12 @@ def cases() -> list[Case]:
                     ["segment", "{d}/g.off", "-k", "4", "-o", "{d}/o.seg", "--colored-mesh",
                      "{d}/missing/c.ply"], match="does not exist"))
     # --- evaluate and label files
-    ev = lambda lab, *gts: ["evaluate", "{d}/g.off", "{d}/" + lab, *["{d}/" + x for x in gts]]
+    def ev(lab, *gts):
+        return ["evaluate", "{d}/g.off", "{d}/" + lab, *["{d}/" + x for x in gts]]
     for name, data, match in [
             ("seg-short", grid_seg(n=10), "labels"), ("seg-long", grid_seg(n=500), "labels"),
-            ("seg-text", b"a\nb\n", "malformed"), ("seg-float", grid_seg().replace(b"\n", b".5\n"), ""),
+            ("seg-text", b"a\nb\n", "malformed"), ("seg-float", grid_seg().replace(b"\n", b".5\n"),
+                                                   ""),
             ("seg-empty", b"", "labels"), ("seg-binary", bytes(range(256)), ""),
             ("seg-two-columns", b"1 2\n3 4\n", ""),
             ("seg-gz-corrupt", None, "decompress")]:
@@ -386,8 +400,10 @@ def cases() -> list[Case]:
             ("zoom-zero", ["--zoom", "0"], "zoom"), ("zoom-nan", ["--zoom", "nan"], "zoom"),
             ("line-width-negative", ["--line-width", "-1"], "line_width"),
             ("background-bogus", ["--background", "notacolour"], "colour"),
-            ("size-zero", ["--size", "0x0"], "size"), ("view-bogus", ["--view", "sideways"], "view"),
-            ("view-zero", ["--view", "0,0,0"], "view"), ("wrong-suffix", ["-o", "{d}/p.jpg"], ".png"),
+            ("size-zero", ["--size", "0x0"], "size"), ("view-bogus", ["--view", "sideways"],
+                                                       "view"),
+            ("view-zero", ["--view", "0,0,0"], "view"), ("wrong-suffix", ["-o", "{d}/p.jpg"],
+                                                         ".png"),
             ("labels-short", ["{d}/l.seg"], "labels")]:
         argv = ["render", "{d}/g.off", *([] if name == "wrong-suffix" else ["-o", "{d}/p.png"]),
                 *opts]

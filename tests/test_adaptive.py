@@ -4,8 +4,16 @@ import numpy as np
 import pytest
 
 from superfacets import segment
-from superfacets.adaptive import (AUTO_DENSITY, AUTO_SPREAD, adapted_graph, content_scale,
-                                  density_for, roughness_of, size_spread, window_factors)
+from superfacets.adaptive import (
+    AUTO_DENSITY,
+    AUTO_SPREAD,
+    adapted_graph,
+    content_scale,
+    density_for,
+    roughness_of,
+    size_spread,
+    window_factors,
+)
 from superfacets.cloud import PointCloud
 from superfacets.elements.points import point_graph
 from superfacets.errors import ParameterError
@@ -54,8 +62,7 @@ def test_roughness_is_zero_on_a_plane_and_the_crease_angle_on_a_box():
 
 
 def test_weighted_farthest_points_blocked_equal_plain():
-    from superfacets._kernels.farthest import (farthest_point, farthest_point_blocked,
-                                               spatial_blocks)
+    from superfacets._kernels.farthest import farthest_point, farthest_point_blocked, spatial_blocks
 
     rng = np.random.default_rng(3)
     c = rng.random((3000, 3))

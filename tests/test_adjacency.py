@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
+from conftest import grid_mesh
 
 from superfacets import segment
 from superfacets.adjacency import superfacet_graph
@@ -13,7 +14,6 @@ from superfacets.convert import as_mesh
 from superfacets.elements import face_graph
 from superfacets.errors import ParameterError
 from superfacets.hierarchy import hierarchy
-from conftest import grid_mesh
 
 
 def test_box_sides_known_answer():

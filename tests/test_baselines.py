@@ -7,18 +7,21 @@ import tracemalloc
 import numpy as np
 import pytest
 import trimesh
+from conftest import grid_mesh, write_benchmark
 
 from superfacets import Mesh, ParameterError, as_mesh
-from superfacets.baselines import (ncut_embedding, normalized_cuts,
-                                   variational_shape_approximation, vsa)
+from superfacets.baselines import (
+    ncut_embedding,
+    normalized_cuts,
+    variational_shape_approximation,
+    vsa,
+)
 from superfacets.baselines.ncuts import ncut_memory_estimate
 from superfacets.connectivity import label_components
+from superfacets.elements import face_graph
 from superfacets.errors import MemoryLimitError
 from superfacets.methods import METHODS, Skipped
 from superfacets.runner import expand_grid, read_results, run_experiment
-
-from conftest import grid_mesh, write_benchmark
-from superfacets.elements import face_graph
 
 
 def _box(subdivisions=2, extents=(1.0, 1.0, 1.0)) -> Mesh:

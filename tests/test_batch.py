@@ -14,14 +14,21 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
+from conftest import grid_mesh
 
-from superfacets import MissingExtraError, Mesh, ParameterError, read_labels, read_mesh, segment, write_mesh
+from superfacets import (
+    Mesh,
+    MissingExtraError,
+    ParameterError,
+    read_labels,
+    read_mesh,
+    segment,
+    write_mesh,
+)
 from superfacets.cli import main
 from superfacets.runner import batch as bt
 from superfacets.runner import manifest
 from superfacets.runner.batch import collect_inputs, output_names, read_manifest, run_batch
-
-from conftest import grid_mesh
 
 KEEP = ("output", "status", "elements", "n_elements", "segments", "passes", "converged")
 

@@ -4,15 +4,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from conftest import grid_mesh
 
 from superfacets import segment
 from superfacets.cleanup import clean_boundaries, cut_costs
 from superfacets.connectivity import label_components
+from superfacets.elements import face_graph
 from superfacets.errors import ParameterError
 from superfacets.metrics import compactness
-from superfacets.elements import face_graph
 
 
 def _cut_length(graph, labels) -> float:
@@ -100,7 +99,8 @@ def test_pipeline_cleanup_on_real_meshes(psb):
         assert np.array_equal(np.unique(clean.labels), np.arange(k)), bm.id  # dense
         assert np.unique(label_components(face_graph(mesh), clean.labels)).size == k, bm.id
         assert np.array_equal(clean.labels[clean.centers], np.arange(k)), bm.id
-        assert compactness(face_graph(mesh), clean.labels) < compactness(face_graph(mesh), paper.labels)
+        assert compactness(face_graph(mesh), clean.labels) < compactness(face_graph(mesh),
+                                                                         paper.labels)
         assert clean.params["cleanup"] is True and "cleanup" in clean.timings
 
 

@@ -1,10 +1,9 @@
 import numpy as np
 import pytest
+from conftest import MESHES, need
 
 from superfacets import read_labels, read_mesh, segment, write_mesh
 from superfacets.cli import main
-
-from conftest import MESHES, need
 
 
 @pytest.fixture
@@ -116,6 +115,7 @@ def test_horse_as_in_the_issue(tmp_path, capsys):
 
 def test_evaluate_one_call(tmp_path, capsys):
     from conftest import grid_mesh
+
     from superfacets import write_labels
 
     mesh = grid_mesh(20, 20)
@@ -139,6 +139,7 @@ def test_evaluate_points_and_vertices_with_unlabelled_rows(tmp_path, capsys):
     """A labelled scan: one label per point in file order; ``--ignore-label`` leaves the
     unlabelled points out. A mesh's vertex labels with ``--elements vertices``."""
     from conftest import grid_mesh
+
     from superfacets import write_labels
 
     rng = np.random.default_rng(0)
@@ -349,7 +350,8 @@ def test_more_superfacets_than_k_says_why(tmp_path, capsys):
     assert "12 superfacets for -k 10: the input has 3 separate pieces" in err
     assert "a region cannot cross from one piece to another" in err and "about -k 8" in err
     assert main(["segment", str(beads), "-k", "10", "-o", str(tmp_path / "d.seg")]) == 0
-    assert read_labels(tmp_path / "d.seg").max() + 1 == 10 and "note:" not in capsys.readouterr().err
+    assert read_labels(tmp_path / "d.seg").max() + 1 == 10
+    assert "note:" not in capsys.readouterr().err
 
 
 def test_the_first_run_says_that_it_compiles(tmp_path, monkeypatch):

@@ -1,12 +1,11 @@
 import numpy as np
 import pytest
+from conftest import grid_mesh
 
 from superfacets import enforce_connectivity
 from superfacets.connectivity import label_components
-from superfacets.labels import relabel_dense
-
-from conftest import grid_mesh
 from superfacets.elements import face_graph
+from superfacets.labels import relabel_dense
 
 
 def cell_labels(mesh, fn):
@@ -18,7 +17,8 @@ def test_stray_piece_joins_neighbour_with_longest_boundary():
     mesh = grid_mesh(12, 12)  # [-1, 1]^2
     # left half label 0, right half label 1; an island of label 1 inside the left half,
     # touching only label 0 -> it must become 0
-    labels = cell_labels(mesh, lambda x, y: 1 if x > 0 or (-0.6 < x < -0.3 and -0.2 < y < 0.2) else 0)
+    labels = cell_labels(mesh, lambda x,
+                         y: 1 if x > 0 or (-0.6 < x < -0.3 and -0.2 < y < 0.2) else 0)
     assert label_components(face_graph(mesh), labels).max() + 1 == 3
     out = enforce_connectivity(mesh, labels)
     expected = cell_labels(mesh, lambda x, y: 1 if x > 0 else 0)

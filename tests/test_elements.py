@@ -2,9 +2,8 @@ import numpy as np
 import pytest
 
 from superfacets import Mesh, ParameterError, paper_weights, segment, shlafman_weights
-from superfacets.elements import build_face_graph
+from superfacets.elements import build_face_graph, face_graph
 from superfacets.weights import edge_weights
-from superfacets.elements import face_graph
 
 
 def fold(z: float) -> Mesh:
@@ -229,7 +228,7 @@ def test_vertex_graph_equals_the_numpy_construction_bit_for_bit(seed, polygons):
 
 
 def test_face_graph_caches_the_terms_of_the_weights(sphere):
-    # the cached per-adjacency data equal the formulas of docs/method.md, sections 1-2
+    # the cached per-adjacency data equal the formulas of docs/notes/method.md, sections 1-2
     g = face_graph(sphere)
     assert g is face_graph(sphere) and g.kind == "faces" and g.n_elements == sphere.n_faces
     v, c, n = sphere.vertices, sphere.centroids, sphere.normals
@@ -260,7 +259,7 @@ def test_weights_and_metrics_take_the_graph_or_the_mesh(valley):
 
 def test_vertex_and_point_terms_equal_the_numpy_expressions_bit_for_bit(valley):
     """The one-pass kernel of the vertex and point terms does the numpy expressions'
-    floating-point operations in their order (docs/method.md, sections 1-2)."""
+    floating-point operations in their order (docs/notes/method.md, sections 1-2)."""
     import trimesh
 
     from superfacets.cloud import PointCloud
@@ -374,10 +373,10 @@ def test_face_graph_rebuilds_its_normals_after_its_mesh_is_gone(sphere):
 def test_runs_that_release_the_graph_give_the_same_labels(valley, monkeypatch):
     # the passes run without the released fields; what reads them after
     # (connectivity, clean-up, split and merge) finds them rebuilt, the same
-    from superfacets import Mesh, pipeline, segment
+    from superfacets import Mesh, segment, stages
 
     def run(release_min, **kw):
-        monkeypatch.setattr(pipeline, "_RELEASE_MIN", release_min)
+        monkeypatch.setattr(stages, "_RELEASE_MIN", release_min)
         mesh = Mesh(valley.vertices, valley.faces)
         r = segment(mesh, 12, **kw)
         return r.labels, "pairs" in face_graph(mesh).__dict__

@@ -7,16 +7,15 @@ import os
 
 import numpy as np
 import pytest
+from conftest import grid_mesh, write_benchmark
 
 from superfacets import ParameterError
 from superfacets.cli import main
 from superfacets.datasets.psb import list_meshes
 from superfacets.methods import METHODS, MethodRun, Skipped, register_method
-from superfacets.runner import expand_grid, read_results, run_experiment
 from superfacets.report import load_results, markdown_summary, summary, write_report
 from superfacets.report.tables import series_order
-
-from conftest import grid_mesh, write_benchmark
+from superfacets.runner import expand_grid, read_results, run_experiment
 
 
 def _valley(n, depth):

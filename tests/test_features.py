@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import SHARED, grid_mesh, minority, need
 
 from superfacets import segment
 from superfacets.cloud import InvalidCloudError, PointCloud
@@ -11,7 +12,6 @@ from superfacets.elements import face_graph
 from superfacets.errors import ParameterError
 from superfacets.io import read_cloud
 from superfacets.weights import paper_weights
-from conftest import SHARED, grid_mesh, minority, need
 
 
 def _halves(n=20000, cut=0.37, seed=0):

@@ -8,11 +8,11 @@ import lzma
 import random
 import warnings
 
+import malformed
 import numpy as np
 import pytest
 import trimesh
 
-import malformed
 from superfacets import SuperfacetsError, read_labels, read_mesh
 from superfacets.io.ply import ply_bytes
 
@@ -94,7 +94,7 @@ def _cloud_seeds() -> dict:
     rgb = (rng.random((300, 3)) * 255).astype(np.uint8)
     text = "".join(f"{x:.4f} {y:.4f} {z:.4f}\n" for x, y, z in pts).encode()
     pcd = ("# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
-           f"WIDTH 300\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 300\nDATA binary\n").encode()
+           "WIDTH 300\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 300\nDATA binary\n").encode()
     seeds = {"c.xyz": text, "c.pts": b"300\n" + text, "c.npy": malformed._npy(pts),
              "c.pcd": pcd + pts.astype("<f4").tobytes(),
              "c.ply": trimesh.PointCloud(pts, colors=rgb).export(file_type="ply")}

@@ -1,13 +1,17 @@
 import numpy as np
 import pytest
+from conftest import grid_mesh, slab_and_beads
 
 from superfacets import Mesh, ParameterError
 from superfacets.connectivity import label_components
-from superfacets.weights import paper_weights
-from superfacets.initialization import farthest_point_centers, first_center, flood_labels, grid_labels
-
-from conftest import grid_mesh, slab_and_beads
 from superfacets.elements import face_graph
+from superfacets.initialization import (
+    farthest_point_centers,
+    first_center,
+    flood_labels,
+    grid_labels,
+)
+from superfacets.weights import paper_weights
 
 
 def strip(n: int) -> Mesh:
@@ -47,11 +51,10 @@ def test_farthest_point_matches_brute_force(sphere):
 def test_blocked_farthest_point_equals_the_plain_loop(source, monkeypatch):
     # the grid has many exactly tied distances; the cell-skipping version must break
     # them the same way (lowest face index) and skip only cells it cannot change
-    from superfacets import read_mesh
-    from superfacets._kernels.farthest import (farthest_point, farthest_point_blocked,
-                                               spatial_blocks)
-
     from conftest import MESHES, need
+
+    from superfacets import read_mesh
+    from superfacets._kernels.farthest import farthest_point, farthest_point_blocked, spatial_blocks
 
     if source == "grid":
         mesh = grid_mesh(120, 90)

@@ -6,14 +6,21 @@ import os
 import numpy as np
 import pytest
 import trimesh
-
-from superfacets import (InvalidMeshError, Mesh, MeshFormatError, read_labels, read_mesh,
-                         write_colored_mesh, write_labels, write_mesh)
-from superfacets.io import atomic_write
-from superfacets.colors import superfacet_adjacency
-
 from conftest import MESHES, need
+
+from superfacets import (
+    InvalidMeshError,
+    Mesh,
+    MeshFormatError,
+    read_labels,
+    read_mesh,
+    write_colored_mesh,
+    write_labels,
+    write_mesh,
+)
+from superfacets.colors import superfacet_adjacency
 from superfacets.elements import face_graph
+from superfacets.io import atomic_write
 
 
 @pytest.fixture
@@ -181,7 +188,8 @@ def test_compressed_inputs_match_plain(tmp_path, box):
         np.testing.assert_array_equal(read_mesh(p).faces, box.faces)
 
 
-@pytest.mark.parametrize("name, faces", [("bunny", 69451), ("horse", 96966), ("hand_olivier", 105860)])
+@pytest.mark.parametrize("name, faces", [("bunny", 69451), ("horse", 96966), ("hand_olivier",
+                                                                              105860)])
 def test_table1_meshes_load(name, faces):
     m = read_mesh(need(MESHES / f"{name}.tri.xz"))
     assert m.n_faces == faces

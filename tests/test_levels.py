@@ -5,13 +5,17 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import grid_mesh
 
 from superfacets import segment
 from superfacets.adjacency import superfacet_graph
 from superfacets.errors import ParameterError
-from superfacets.hierarchy import (AUTO_EXTENT_WEIGHT, hierarchy, level_extent_weight,
-                                   planarity_graph)
-from conftest import grid_mesh
+from superfacets.hierarchy import (
+    AUTO_EXTENT_WEIGHT,
+    hierarchy,
+    level_extent_weight,
+    planarity_graph,
+)
 
 
 def _bumpy_cloud(n=1500, seed=0):
@@ -207,8 +211,8 @@ def test_the_examples_in_the_docstrings_run(module):
 def test_the_old_names_still_work_for_one_release_with_a_warning():
     """``compactness=`` (hierarchy, adaptive levels), ``level_compactness`` (function,
     batch keyword, ``--level-compactness``) and ``result.radius`` are deprecated aliases."""
-    from superfacets.hierarchy import AUTO_COMPACTNESS, level_compactness
     from superfacets.cli import build_parser
+    from superfacets.hierarchy import AUTO_COMPACTNESS, level_compactness
 
     r = segment(grid_mesh(20, 20), 30)
     with pytest.warns(DeprecationWarning, match="compactness= is now extent_weight="):

@@ -3,9 +3,9 @@ the right exit status, one clear error line."""
 
 from __future__ import annotations
 
+import malformed
 import pytest
 
-import malformed
 from superfacets.cli import main
 
 CASES = malformed.cases()
@@ -71,10 +71,9 @@ def test_ctrl_c_at_any_moment_is_one_line_and_exit_130(case, tmp_path):
     import time
 
     import numpy as np
+    from conftest import grid_mesh
 
     from superfacets import read_labels, write_mesh
-
-    from conftest import grid_mesh
 
     big = write_mesh(tmp_path / "big.off",
                      grid_mesh(300, 300, height=lambda x, y: 0.2 * np.sin(6 * x) * y))

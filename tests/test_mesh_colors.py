@@ -10,12 +10,12 @@ import sys
 import numpy as np
 import pytest
 import trimesh
+from conftest import grid_mesh, minority
 
 from superfacets import Mesh, segment
 from superfacets.errors import InvalidMeshError, MeshFormatError, ParameterError
 from superfacets.io import read_mesh
 from superfacets.scenes import segment_objects
-from conftest import grid_mesh, minority
 
 BLUE, RED = [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]
 

@@ -1,13 +1,18 @@
 import numpy as np
 import pytest
+from conftest import grid_mesh
 
 from superfacets import Mesh, read_labels, read_mesh, superfacets
-from superfacets.metrics import (achievable_segmentation_accuracy, boundary_precision,
-                                 boundary_recall, compactness,
-                                 contingency, evaluate, mean_over_ground_truths,
-                                 undersegmentation_error)
-
-from conftest import grid_mesh
+from superfacets.metrics import (
+    achievable_segmentation_accuracy,
+    boundary_precision,
+    boundary_recall,
+    compactness,
+    contingency,
+    evaluate,
+    mean_over_ground_truths,
+    undersegmentation_error,
+)
 
 
 @pytest.fixture
@@ -63,7 +68,8 @@ def test_compactness_of_disk_approaches_two_sqrt_pi():
     disk = trimesh.creation.cylinder(radius=1.0, height=1e-3, sections=256)
     top = disk.face_normals[:, 2] > 0.9
     m = Mesh(disk.vertices, disk.faces[top])
-    assert compactness(m, np.zeros(m.n_faces, np.int64)) == pytest.approx(2 * np.sqrt(np.pi), rel=1e-3)
+    assert compactness(m, np.zeros(m.n_faces, np.int64)) == pytest.approx(2 * np.sqrt(np.pi),
+                                                                          rel=1e-3)
 
 
 def test_boundary_recall(plane):
@@ -147,7 +153,9 @@ def test_mean_over_ground_truths_and_errors(plane):
 
 def test_real_mesh_ranges(psb):
     mesh = read_mesh(psb / "off" / "1.off")
-    gts = [read_labels(p, n_faces=mesh.n_faces) for p in sorted((psb / "seg" / "Benchmark" / "1").glob("*.seg"))]
+    gts = [read_labels(p,
+                       n_faces=mesh.n_faces)
+           for p in sorted((psb / "seg" / "Benchmark" / "1").glob("*.seg"))]
     labels = superfacets(mesh, 150, alpha=200)
     ue = mean_over_ground_truths(undersegmentation_error, mesh, labels, gts)
     asa = mean_over_ground_truths(achievable_segmentation_accuracy, mesh, labels, gts)
@@ -155,7 +163,8 @@ def test_real_mesh_ranges(psb):
     assert 0 <= ue < 0.5 and 0.8 < asa <= 1 and 0.5 < br <= 1
     assert 2 * np.sqrt(np.pi) * 0.9 < compactness(mesh, labels) < 20
     # alpha = 0 ignores concavities: its undersegmentation error is higher
-    ue0 = mean_over_ground_truths(undersegmentation_error, mesh, superfacets(mesh, 150, alpha=0), gts)
+    ue0 = mean_over_ground_truths(undersegmentation_error, mesh, superfacets(mesh, 150, alpha=0),
+                                  gts)
     assert ue0 > ue
 
     # evaluate() gives exactly the four metrics, each averaged over the ground truths

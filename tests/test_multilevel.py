@@ -5,19 +5,18 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
+from conftest import grid_mesh
 from scipy.sparse.csgraph import connected_components, dijkstra
+from test_segmentation import check_invariants
 
 from superfacets import Mesh, segment
+from superfacets.elements import face_graph
 from superfacets.errors import ParameterError
 from superfacets.multilevel import coarse_ratio, coarsen, grid_seeds, voronoi_cells
+from superfacets.params import resolve
 from superfacets.passes import hold_small_moves
 from superfacets.segmentation import pipeline
-from superfacets.params import resolve
 from superfacets.weights import csr_weights, paper_weights
-
-from conftest import grid_mesh
-from test_segmentation import check_invariants
-from superfacets.elements import face_graph
 
 
 def _sphere(subdivisions=4, radius=1.0, shift=0.0):

@@ -14,7 +14,8 @@ from superfacets.elements import face_graph
 
 
 def _modules_after(code: str) -> set:
-    out = subprocess.run([sys.executable, "-c", code + "; import sys; print(' '.join(sys.modules))"],
+    out = subprocess.run([sys.executable, "-c",
+                          code + "; import sys; print(' '.join(sys.modules))"],
                          capture_output=True, text=True, check=True).stdout
     return set(out.split())
 
@@ -134,7 +135,8 @@ def test_contour_is_watertight_and_faces_outwards():
     (lambda m: superfacets.superfacets(m, 10, alpha=-1), superfacets.ParameterError),
     (lambda m: superfacets.superfacets(m, 10, n_threads=10**6), superfacets.ParameterError),
     (lambda m: superfacets.enforce_connectivity(m, np.zeros(3, int)), superfacets.ParameterError),
-    (lambda m: superfacets.enforce_connectivity(m, np.zeros(m.n_faces)), superfacets.ParameterError),
+    (lambda m: superfacets.enforce_connectivity(m, np.zeros(m.n_faces)),
+     superfacets.ParameterError),
     (lambda m: superfacets.paper_weights(m, eta_convex=float("nan")), superfacets.ParameterError),
     (lambda m: superfacets.write_labels("x.seg", [0.5, 1.5]), superfacets.ParameterError),
     (lambda m: superfacets.write_colored_mesh("x.ply", m, [1, 2]), superfacets.ParameterError),

@@ -6,9 +6,20 @@ import numpy as np
 import pytest
 
 from superfacets import DEFAULTS, ParameterError, segment
-from superfacets.params import (ASSIGNMENTS, INITS, WEIGHTINGS, check_bool, check_choice,
-                                check_int, check_n_segments, check_nonneg, check_number,
-                                check_positive, check_threads, resolve)
+from superfacets.params import (
+    ASSIGNMENTS,
+    INITS,
+    WEIGHTINGS,
+    check_bool,
+    check_choice,
+    check_int,
+    check_n_segments,
+    check_nonneg,
+    check_number,
+    check_positive,
+    check_threads,
+    resolve,
+)
 
 
 def test_defaults_are_the_api_and_cli_defaults():

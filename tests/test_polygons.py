@@ -5,13 +5,22 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
+from conftest import MESHES, need
 
-from superfacets import (InvalidMeshError, Mesh, MeshFormatError, ParameterError, read_labels,
-                         read_mesh, segment, superfacets, write_colored_mesh, write_mesh)
+from superfacets import (
+    InvalidMeshError,
+    Mesh,
+    MeshFormatError,
+    ParameterError,
+    read_labels,
+    read_mesh,
+    segment,
+    superfacets,
+    write_colored_mesh,
+    write_mesh,
+)
 from superfacets.cli import main
 from superfacets.connectivity import label_components
-
-from conftest import MESHES, need
 from superfacets.elements import face_graph
 
 
@@ -19,7 +28,8 @@ def voxel_surface(filled: np.ndarray, size: float = 1.0) -> Mesh:
     """The closed quad surface of a set of voxels (faces outwards, vertices shared)."""
     filled = np.pad(filled.astype(bool), 1)
     shape = np.array(filled.shape) + 1
-    pid = lambda p: (p[..., 0] * shape[1] + p[..., 1]) * shape[2] + p[..., 2]
+    def pid(p):
+        return (p[..., 0] * shape[1] + p[..., 1]) * shape[2] + p[..., 2]
     quads = []
     for axis in range(3):
         a, b = [(axis + 1) % 3, (axis + 2) % 3]
@@ -98,7 +108,8 @@ def test_polygon_geometry_newell_and_area_weighted_centroid():
     assert repr(mixed) == "Mesh(5 vertices, 2 faces: polygons of 3 to 4 vertices)"
 
 
-@pytest.mark.parametrize("faces, match", [([[0, 1]], "at least 3"), ([[0, 1, 2], [0, 1]], "at least 3 are needed"),
+@pytest.mark.parametrize("faces, match", [([[0, 1]], "at least 3"), ([[0, 1, 2], [0, 1]],
+                                                                     "at least 3 are needed"),
                                           ([[0, 1, 2, 9]], "out of range"),
                                           ([[0, 1, -1, 2], [0, 1, 2, -1]], "-1 may only pad")])
 def test_bad_polygons_are_refused(faces, match):

@@ -1,9 +1,8 @@
 import pytest
+from conftest import grid_mesh
 
 from superfacets import MeshFormatError, write_mesh
 from superfacets.datasets.psb import category, list_meshes
-
-from conftest import grid_mesh
 
 
 def test_category_ranges():
@@ -27,7 +26,8 @@ def test_list_meshes_reads_what_is_present(tmp_path):
     assert [p.name for p in items[1].seg_paths] == ["42_0.seg", "42_1.seg", "42_2.seg", "42_10.seg"]
     assert len(items[1].ground_truths(mesh.n_faces)) == 4
     (d / "42_3.seg").write_text("0\n0\n")
-    with pytest.raises(MeshFormatError, match=r"42_3.seg: has 2 labels but the input has 8 elements"):
+    with pytest.raises(MeshFormatError,
+                       match=r"42_3.seg: has 2 labels but the input has 8 elements"):
         list_meshes(tmp_path)[1].ground_truths(mesh.n_faces)
     with pytest.raises(FileNotFoundError, match="not a benchmark folder"):
         list_meshes(tmp_path / "seg")

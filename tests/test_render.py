@@ -10,17 +10,16 @@ import subprocess
 
 import numpy as np
 import pytest
+from conftest import grid_mesh
 from PIL import Image
 
 from superfacets import ParameterError, superfacets, write_labels, write_mesh
+from superfacets.camera import view_frame
 from superfacets.cli import main
+from superfacets.colors import PALETTE, boundary_edges
+from superfacets.elements import face_graph
 from superfacets.html import html_page, write_html
 from superfacets.render import render, render_panel
-from superfacets.camera import view_frame
-from superfacets.colors import PALETTE, boundary_edges
-
-from conftest import grid_mesh
-from superfacets.elements import face_graph
 
 
 def _foreground(img: np.ndarray, bg=(255, 255, 255)) -> np.ndarray:

@@ -6,8 +6,16 @@ import numpy as np
 import pytest
 
 from superfacets.datasets import scans
-from superfacets.datasets.scans import (SCANS, UNLABELLED, ScanSource, evaluate_scan, fetch_scan,
-                                        load_scan, scan_cache, scan_files)
+from superfacets.datasets.scans import (
+    SCANS,
+    UNLABELLED,
+    ScanSource,
+    evaluate_scan,
+    fetch_scan,
+    load_scan,
+    scan_cache,
+    scan_files,
+)
 from superfacets.errors import MeshFormatError, ParameterError
 
 

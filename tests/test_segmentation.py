@@ -1,21 +1,19 @@
 import numpy as np
 import pytest
 import trimesh
+from conftest import MESHES, TABLE1, grid_mesh, need
 from scipy.sparse import csr_array
 from scipy.sparse.csgraph import dijkstra
 
-from superfacets import (InvalidMeshError, Mesh, ParameterError, read_mesh, segment,
-                         superfacets)
-from superfacets.classify import Exact
+from superfacets import InvalidMeshError, Mesh, ParameterError, read_mesh, segment, superfacets
 from superfacets._kernels.expand import MERGE, expand
+from superfacets.classify import Exact
 from superfacets.connectivity import label_components
+from superfacets.elements import face_graph
 from superfacets.expansion import Workspace, Workspaces, bucket_width
 from superfacets.params import resolve
 from superfacets.segmentation import pipeline
 from superfacets.weights import paper_weights
-
-from conftest import MESHES, TABLE1, grid_mesh, need
-from superfacets.elements import face_graph
 
 
 def reference(mesh, n_segments, **kw):
@@ -281,6 +279,7 @@ def test_optimized_path_gives_the_labels_of_the_straightforward_one(
     # (psb:58 falls into a cycle), on one thread and on two. On the flat regular grid many
     # distances tie exactly: the center of lowest index must win them, across threads too
     import straightforward
+
     from superfacets import classify
     from superfacets.labels import relabel_dense
 
@@ -335,7 +334,8 @@ def test_n_threads_is_checked(sphere):
             segment(sphere, 10, n_threads=bad)
 
 
-@pytest.mark.parametrize("name, faces", [("bunny", 69451), ("horse", 96966), ("hand_olivier", 105860)])
+@pytest.mark.parametrize("name, faces", [("bunny", 69451), ("horse", 96966), ("hand_olivier",
+                                                                              105860)])
 def test_table1_meshes_invariants(name, faces):
     mesh = read_mesh(need(MESHES / f"{name}.tri.xz"))
     r = segment(mesh, 150, alpha=200)
@@ -519,8 +519,9 @@ def test_import_does_no_work_and_warmup_starts_only_when_asked():
     code = ("import threading, superfacets, superfacets.warmup as w; "
             "print(threading.active_count(), w._thread is None); w.start(); t = w._thread; "
             "print(t is not None and (t.join(30) or not t.is_alive()))")
-    run = lambda env: subprocess.run([sys.executable, "-c", code], capture_output=True,
-                                     text=True, env=env, check=True).stdout.split("\n")
+    def run(env):
+        return subprocess.run([sys.executable, "-c", code], capture_output=True,
+                                         text=True, env=env, check=True).stdout.split("\n")
     env = {k: v for k, v in os.environ.items() if k != "SUPERFACETS_NO_WARMUP"}
     out = run(env)
     assert out[0] == "1 True"  # no thread started by the import

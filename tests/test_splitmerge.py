@@ -4,15 +4,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from conftest import MESHES, grid_mesh, need
 
 from superfacets import Mesh, read_mesh, segment
 from superfacets.connectivity import label_components
+from superfacets.elements import face_graph
 from superfacets.errors import ParameterError
 from superfacets.splitmerge import swap_round
 from superfacets.weights import csr_weights, edge_weights
-from superfacets.elements import face_graph
 
 
 def _valley():
@@ -163,7 +162,7 @@ def test_both_are_on_by_default_for_faces_and_vertices():
     np.testing.assert_array_equal(on.labels, both.labels)
     paper = segment(mesh, 12, paper=True)
     assert paper.params["split_merge"] is False and paper.params["cleanup"] is False
-    v = segment(mesh, 12, elements="vertices")  # better there too (docs/cleanup.md)
+    v = segment(mesh, 12, elements="vertices")  # better there too (docs/notes/cleanup.md)
     assert v.params["split_merge"] is True and v.params["cleanup"] is True
     pts = segment(mesh.vertices, 12)  # points: not better on UE, the paper's method
     assert pts.params["split_merge"] is False and pts.params["cleanup"] is False

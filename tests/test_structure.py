@@ -25,7 +25,8 @@ LAYERS = (
      "superfacets.camera", "superfacets.warmup", "superfacets.interrupts", "superfacets.rgb"),
     # inputs: validated meshes and clouds, read from files or the libraries' objects
     ("superfacets.bounds", "superfacets.mesh", "superfacets.cloud", "superfacets.volume",
-     "superfacets.convert", "superfacets.shapes", "superfacets.io.volumes", "superfacets.io.regions",
+     "superfacets.convert", "superfacets.shapes", "superfacets.io.volumes",
+     "superfacets.io.regions",
      "superfacets.io.files", "superfacets.io.ply", "superfacets.io.labels",
      "superfacets.io.meshes", "superfacets.io.clouds"),
     # element graphs of the inputs
@@ -38,7 +39,8 @@ LAYERS = (
      "superfacets.adjacency", "superfacets.adaptive",
      "superfacets.hierarchy"),
     # the method, one run
-    ("superfacets.result", "superfacets.stages", "superfacets.pipeline", "superfacets.segmentation", "superfacets.scenes",
+    ("superfacets.result", "superfacets.stages", "superfacets.pipeline", "superfacets.segmentation",
+     "superfacets.scenes",
      "superfacets.tiling", "superfacets.tile_layout", "superfacets.levels"),
     # every method alike
     ("superfacets.baselines", "superfacets.methods"),

@@ -7,6 +7,7 @@ import json
 import numpy as np
 import pytest
 import trimesh
+from conftest import SHARED, grid_mesh, need
 from scipy.sparse.csgraph import connected_components
 
 from superfacets import Mesh, segment
@@ -21,8 +22,6 @@ from superfacets.errors import MeshFormatError, ParameterError
 from superfacets.io import read_cloud, read_input, read_labels
 from superfacets.metrics import evaluate
 from superfacets.segmentation import superpoints
-
-from conftest import SHARED, grid_mesh, need
 
 
 def connected(graph, labels) -> bool:

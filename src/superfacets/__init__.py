@@ -18,7 +18,7 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING
 
-from ._version import __version__
+from ._version import __version__  # noqa: F401 (the package's version)
 
 #: Public name -> the module that defines it.
 _PUBLIC = {
@@ -118,17 +118,32 @@ def __dir__():
 if TYPE_CHECKING:  # the same names, for type checkers and IDEs
     from .cloud import InvalidCloudError, PointCloud, as_cloud
     from .connectivity import enforce_connectivity
-    from .elements import ElementGraph, face_graph
-    from .errors import (InvalidMeshError, MemoryLimitError, MeshFormatError,
-                         MissingExtraError, ParameterError, SuperfacetsError)
-    from .io import (read_cloud, read_input, read_labels, read_mesh, read_volume,
-                     write_colored_mesh, write_labels, write_mesh, write_segindices,
-                     write_volume_labels)
-    from .volume import TetMesh
-    from .runner.tiles import TiledResult, segment_tiled
     from .convert import as_mesh
+    from .elements import ElementGraph, face_graph
+    from .errors import (
+        InvalidMeshError,
+        MemoryLimitError,
+        MeshFormatError,
+        MissingExtraError,
+        ParameterError,
+        SuperfacetsError,
+    )
+    from .io import (
+        read_cloud,
+        read_input,
+        read_labels,
+        read_mesh,
+        read_volume,
+        write_colored_mesh,
+        write_labels,
+        write_mesh,
+        write_segindices,
+        write_volume_labels,
+    )
+    from .levels import adaptive_superpoints
     from .mesh import Mesh
     from .params import DEFAULTS, SegmentParams
+    from .runner.tiles import TiledResult, segment_tiled
     from .segmentation import SegmentationResult, segment, superfacets, superpoints
-    from .levels import adaptive_superpoints
+    from .volume import TetMesh
     from .weights import edge_weights, paper_weights, shlafman_weights

@@ -25,7 +25,7 @@ centers by farthest points with each element's distance multiplied by ``s_i``
 ``ElementGraph.scale2 = s^2``); the paper's bounded classification, where a
 run asks for it (``assignment='bounded'``), gives each center a window of
 ``2 r / s`` (:func:`window_factors`). Both 0 (the default) change nothing.
-``docs/superpoints.md``, "Content-sensitive superpoints", has the measurements.
+``docs/notes/superpoints.md``, "Content-sensitive superpoints", has the measurements.
 """
 
 from __future__ import annotations
@@ -182,7 +182,8 @@ def window_factors(graph: ElementGraph, rounds: int = WINDOW_ROUNDS) -> np.ndarr
     >>> import trimesh
     >>> from superfacets.elements.inputs import as_element_graph
     >>> g = as_element_graph(trimesh.creation.box())
-    >>> window_factors(g).shape, window_factors(adapted_graph(g, 0.0, 1.0)).round(4)[:2]   # 1 / (1 + pi / 3)^2
+    >>> # 1 / (1 + pi / 3)^2 where each element's mean angle is pi / 2
+    >>> window_factors(g).shape, window_factors(adapted_graph(g, 0.0, 1.0)).round(4)[:2]
     ((0,), array([0.2386, 0.2386]))
     """
     if graph.scale2 is None:
@@ -208,7 +209,7 @@ def density_for(graph: ElementGraph, paper: bool = False) -> float:
     :data:`AUTO_SPREAD` (:func:`size_spread`): a scan whose density falls with
     the range, where equal areas would spend the count on the sparse far range
     (on two LiDAR sweeps ``density=0.5`` lowered the undersegmentation error by
-    13-36 % at 300-3,000 superpoints, ``docs/superpoints.md``). 0 elsewhere:
+    13-36 % at 300-3,000 superpoints, ``docs/notes/superpoints.md``). 0 elsewhere:
     meshes (their superfacets keep the paper's equal areas), clouds of even
     density (every cloud sampled from the benchmark's meshes), ``paper=True``.
 

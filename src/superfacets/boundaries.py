@@ -13,7 +13,7 @@ and *near* one when it lies within ``tolerance`` rings of an element on it.
 Recall alone rewards long, wandering boundaries: a segmentation that puts a
 boundary near every element recalls everything. Read the two together (or
 their harmonic mean, the F-measure) when comparing methods whose superfacets
-differ in shape (``docs/superpoints.md``, "Boundary recall and precision").
+differ in shape (``docs/notes/superpoints.md``, "Boundary recall and precision").
 """
 
 from __future__ import annotations
@@ -80,7 +80,8 @@ def near_boundary(g, s: np.ndarray, tolerance: int,
     return near
 
 
-def recall_lengths(g, near: np.ndarray, gt: np.ndarray, labelled: np.ndarray | None = None) -> float:
+def recall_lengths(g, near: np.ndarray, gt: np.ndarray,
+                   labelled: np.ndarray | None = None) -> float:
     """Length share of the boundary of ``gt`` with an end ``near`` (adjacencies with an
     unlabelled end, where ``labelled`` is given, are no boundary). With the roles swapped
     (``near`` the truth's, ``gt`` the superfacets) it is the precision."""

@@ -44,7 +44,7 @@ def check_camera(view=None, up="y") -> None:
     >>> check_camera("sideways")
     Traceback (most recent call last):
     ...
-    superfacets.errors.ParameterError: unknown view 'sideways'; use auto, front, back, left, right, top, bottom or x,y,z
+    superfacets.errors.ParameterError: unknown view 'sideways'; use auto, front, ...
     """
     if isinstance(up, str):
         if up not in AXES:

@@ -17,7 +17,7 @@ result independent of the thread count); a few sweeps recompute the bands;
 each superfacet keeps its center, and the connectivity step runs last, so the
 number of superfacets is unchanged and each is connected.
 
-``docs/cleanup.md`` has the measurements behind each choice.
+``docs/notes/cleanup.md`` has the measurements behind each choice.
 """
 
 from __future__ import annotations
@@ -100,7 +100,7 @@ def cut_costs(graph, *, alpha: float = DEFAULTS.alpha, eta_convex: float = DEFAU
     factor by which the paper's weight (eq. 3) makes crossing a face edge
     dearer than its length alone; ``crease`` tempers it for boundaries (at
     ``crease = 1`` a one-degree fold already halves the cost at
-    ``alpha = 200``, and boundaries chase noise: ``docs/cleanup.md``).
+    ``alpha = 200``, and boundaries chase noise: ``docs/notes/cleanup.md``).
 
     Parameters
     ----------
@@ -234,7 +234,7 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
     Simari, Picciau, De Floriani, "Fast and Scalable Mesh Superfacets", 2014,
     section 6 (clean-up as future work), eqs. 2-3 (the crease factor).
     Boykov, Veksler, Zabih, "Fast approximate energy minimization via graph
-    cuts", PAMI 2001 (two-label moves solved as minimum cuts). ``docs/cleanup.md``.
+    cuts", PAMI 2001 (two-label moves solved as minimum cuts). ``docs/notes/cleanup.md``.
 
     Examples
     --------

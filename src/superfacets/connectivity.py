@@ -8,7 +8,7 @@ scikit-image's ``slic(enforce_connectivity=True)`` does for superpixels.
 With ``min_elements``, a superfacet of fewer elements goes the same way (as
 scikit-image's ``min_size_factor``; ``segment(..., min_elements=N)`` applies
 it after a run): on a LiDAR sweep the sparse far range gets superpoints of
-one or two points (``docs/superpoints.md``, "Superpoints of one point").
+one or two points (``docs/notes/superpoints.md``, "Superpoints of one point").
 """
 
 from __future__ import annotations

@@ -29,7 +29,8 @@ def as_mesh(mesh, name: str = "") -> Mesh:
 
     Parameters
     ----------
-    mesh : Mesh, trimesh.Trimesh, trimesh.Scene, pyvista.PolyData, open3d TriangleMesh, or (vertices, faces)
+    mesh : Mesh, trimesh.Trimesh or Scene, pyvista.PolyData, open3d mesh, or tuple
+        A mesh, or ``(vertices, faces)``:
         ``vertices`` is ``(n, 3)`` float; ``faces`` an ``(m, k)`` int array
         (triangles: ``k = 3``) or a list of vertex index sequences (polygons).
         A :class:`Mesh` is returned as is (its caches are reused); a scene's

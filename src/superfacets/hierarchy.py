@@ -23,7 +23,7 @@ neighbours merge first whatever their size, so a level spends its segments
 where the surface bends (objects, vegetation, edges) and leaves floors,
 walls and ground in large pieces, as graph-based partitions do. Run on
 superpoints several times more than the level wants, it gives content-adaptive
-superpoints (``docs/superpoints.md``, "Content-adaptive levels"). On a point
+superpoints (``docs/notes/superpoints.md``, "Content-adaptive levels"). On a point
 cloud each point weighs one there (:func:`planarity_graph`: the points'
 least-squares planes), and ``extent_weight`` adds Ward's term, so that large
 flat pieces also pay for their extent (:func:`level_extent_weight`: on scans of
@@ -33,7 +33,7 @@ The merging runs in numba (:mod:`superfacets._kernels.hierarchy`): about
 0.1 s for 10,000 superpoints.
 
 Not in the paper (superpoint hierarchies are what graph networks on scans
-use, e.g. Superpoint Transformer's partition); ``docs/superpoints.md``.
+use, e.g. Superpoint Transformer's partition); ``docs/notes/superpoints.md``.
 """
 
 from __future__ import annotations
@@ -54,7 +54,7 @@ __all__ = ["Hierarchy", "hierarchy", "planarity_graph", "level_extent_weight",
 #: level merged the far range across its classes; 0.01 lowered its undersegmentation
 #: error at 300-3,000 superpoints on two sweeps (0.88 -> 0.68 at 300 on frame
 #: 000700) where it raised it on the rooms and the airborne tile, of even
-#: density (``docs/superpoints.md``, "Content-adaptive levels").
+#: density (``docs/notes/superpoints.md``, "Content-adaptive levels").
 AUTO_EXTENT_WEIGHT = 0.01
 #: The old name of :data:`AUTO_EXTENT_WEIGHT` (one release).
 AUTO_COMPACTNESS = AUTO_EXTENT_WEIGHT
@@ -243,7 +243,6 @@ def planarity_graph(graph, labels, features=None):
     from dataclasses import replace
 
     from .adjacency import superfacet_graph
-
     from .elements.kinds import kind_of
 
     if kind_of(graph.kind).unit_sizes_in_levels:

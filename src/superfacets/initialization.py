@@ -1,4 +1,4 @@
-"""Initializations of the iteration (paper section 3.1; ``docs/method.md``, section 3).
+"""Initializations of the iteration (paper section 3.1; ``docs/notes/method.md``, section 3).
 
 - :func:`farthest_point_centers`: ``k`` center elements, given the number of
   superfacets;
@@ -180,7 +180,8 @@ def farthest_point_centers(graph, n_segments: int, *, every_piece: bool = False)
     return np.r_[out[:keep], seeds[missed[piece[seeds]]]].astype(np.int64)
 
 
-def flood_labels(graph, csr_weights: np.ndarray, radius: float, window: float = DEFAULTS.window) -> np.ndarray:
+def flood_labels(graph, csr_weights: np.ndarray, radius: float,
+                 window: float = DEFAULTS.window) -> np.ndarray:
     """Flood initialization (paper section 3.1; authors' implementation).
 
     Elements are ordered by Euclidean distance to the first seed,

@@ -9,7 +9,7 @@ and keeps the level of ``n_segments`` of their hierarchy with the planarity
 cost (:func:`superfacets.hierarchy.hierarchy`, ``cost='planarity'``; on a
 point cloud each point weighs one, and on a scan of uneven density the
 segments' extent also costs, ``compactness``). Measured
-on labelled scans in ``docs/superpoints.md``, "Content-adaptive levels".
+on labelled scans in ``docs/notes/superpoints.md``, "Content-adaptive levels".
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from .params import check_int, check_nonneg, renamed
 
 __all__ = ["adaptive_superpoints", "adaptive_segment", "START"]
 
-#: Superpoints segmented per superpoint wanted (docs/superpoints.md: from 3 to 20 times,
+#: Superpoints segmented per superpoint wanted (docs/notes/superpoints.md: from 3 to 20 times,
 #: the more the lower the undersegmentation error; 10 times the superpoints take about
 #: as long to merge as to segment).
 START = 10
@@ -70,7 +70,7 @@ def adaptive_superpoints(obj, n_segments: int, *, start: int = START,
     ----------
     Landrieu and Simonovsky, "Large-scale point cloud semantic segmentation with
     superpoint graphs", CVPR 2018 (superpoints that follow the geometry);
-    ``docs/superpoints.md``.
+    ``docs/notes/superpoints.md``.
 
     Examples
     --------

@@ -1,4 +1,4 @@
-"""Mesh validation and derived per-face geometry (``docs/method.md``, section 1).
+"""Mesh validation and derived per-face geometry (``docs/notes/method.md``, section 1).
 
 A :class:`Mesh` holds C-contiguous ``(n, 3) float64`` vertices and
 ``(m, k) int64`` faces (triangles: ``k = 3``; polygons of any size, each

@@ -1,4 +1,5 @@
-"""Evaluation metrics of an over-segmentation (paper section 4; ``docs/method.md``, section 4).
+"""Evaluation metrics of an over-segmentation (paper section 4; ``docs/notes/method.md``,
+section 4).
 
 Pure functions of (element graph, labels[, ground truth]); a mesh stands for
 its cached face graph. Areas are sums of element sizes (face areas) and
@@ -15,13 +16,18 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from .boundaries import (boundary_precision, boundary_recall, near_boundary,
-                         recall_elements, recall_lengths)
+from .boundaries import (
+    boundary_precision,
+    boundary_recall,
+    near_boundary,
+    recall_elements,
+    recall_lengths,
+)
 from .elements.inputs import as_element_graph
 from .elements.kinds import kind_of
 from .errors import InvalidMeshError, ParameterError
-from .params import DEFAULTS
 from .labels import check_labels
+from .params import DEFAULTS
 
 __all__ = ["Contingency", "contingency", "undersegmentation_error", "compactness",
            "achievable_segmentation_accuracy", "boundary_recall", "boundary_precision",
@@ -59,7 +65,8 @@ class Contingency:
 
 def _dense(g, labels, what: str) -> np.ndarray:
     """One label per element, made dense ``0..K-1``."""
-    _, dense = np.unique(check_labels(labels, g.n_elements, what, per=g.element), return_inverse=True)
+    _, dense = np.unique(check_labels(labels, g.n_elements, what, per=g.element),
+                         return_inverse=True)
     return dense.ravel().astype(np.int64)
 
 
@@ -322,7 +329,8 @@ def evaluate(graph, labels, ground_truths: Sequence[np.ndarray], *, tau: float =
 
 
 def evaluate_rows(obj, labels, ground_truths: Sequence[np.ndarray], *,
-                  elements: str | None = None, n_neighbors: int = DEFAULTS.n_neighbors, tau: float = 0.05,
+                  elements: str | None = None, n_neighbors: int = DEFAULTS.n_neighbors,
+                  tau: float = 0.05,
                   tolerance: int = 1, ignore_label: int | None = None,
                   precision: bool = False) -> dict:
     """The metrics of labels given per input row: a mesh's faces or vertices, a cloud's points.

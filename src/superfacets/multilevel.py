@@ -19,7 +19,7 @@ distances follow the fine ones (never shorter) and keep the crease costs.
 A cluster's position is the size-weighted mean of its elements' positions,
 its size their total size and its normal their size-weighted mean normal.
 
-``docs/method.md`` (section "Coarse-to-fine") and ``docs/benchmarks.md``
+``docs/notes/method.md`` (section "Coarse-to-fine") and ``docs/notes/benchmarks.md``
 give the measurements behind the defaults.
 """
 
@@ -31,10 +31,10 @@ from typing import Callable, NamedTuple
 import numpy as np
 
 from ._kernels.voronoi import coarse_pairs, first_in_cells, nearest_seed
-from .elements.graph import ElementGraph, adjacency_csr
-from .expansion import bucket_width
 from .bounds import column_bounds
+from .elements.graph import ElementGraph, adjacency_csr
 from .elements.kinds import kind_of
+from .expansion import bucket_width
 from .params import superfacet_measure
 
 _MIN_CLUSTERS = 4  # clusters per superfacet below which the coarse run is not done

@@ -61,7 +61,8 @@ def result_header(data, result, source: str) -> dict:
         kind: kind_of(kind).n_rows(data),
         "superfacets_count": result.n_segments,
         "parameters": " ".join(f"{k}={v}" for k, v in p.items()),
-        "iterations": f"{result.n_iter} ({'converged' if result.converged else 'max_iter reached'})",
+        "iterations": f"{result.n_iter} "
+                      f"({'converged' if result.converged else 'max_iter reached'})",
         "seconds": f"{result.timings['total']:.3f}",
     }
 

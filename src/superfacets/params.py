@@ -8,7 +8,7 @@ grows with the mesh (the element graph is the memory peak of a run). The
 :class:`~superfacets.errors.ParameterError` (a ``ValueError``) naming the
 parameter and the bad value.
 
-See ``docs/method.md`` for what each parameter means in the method.
+See ``docs/notes/method.md`` for what each parameter means in the method.
 """
 
 from __future__ import annotations
@@ -17,13 +17,23 @@ import math
 from dataclasses import asdict, dataclass, field, make_dataclass, replace
 from typing import Callable
 
-
+from .checks import (
+    check_bool,
+    check_choice,
+    check_int,
+    check_n_segments,
+    check_nonneg,
+    check_number,
+    check_positive,
+    check_threads,
+    max_threads,
+    renamed,
+)
 from .elements.kinds import KINDS, kind_of
-from .checks import (check_bool, check_choice, check_int, check_n_segments, check_nonneg,
-                     check_number, check_positive, check_threads, max_threads, renamed)
 from .errors import ParameterError
 
-__all__ = ["SegmentParams", "DEFAULTS", "Parameter", "PARAMETERS", "PARAMETER", "ALL_KINDS", "INITS", "ASSIGNMENTS", "WEIGHTINGS", "ELEMENTS",
+__all__ = ["SegmentParams", "DEFAULTS", "Parameter", "PARAMETERS", "PARAMETER", "ALL_KINDS",
+           "INITS", "ASSIGNMENTS", "WEIGHTINGS", "ELEMENTS",
            "WEIGHTING_ALPHA", "DEFAULT_CENTER_TOL", "COARSE_MIN_PER_SEGMENT",
            "COARSE_MIN_PER_SEGMENT_POINTS", "COARSE_PER_SEGMENT_POINTS",
            "COARSE_PER_SEGMENT", "DEFAULT_N_SEGMENTS", "DEFAULT_ALPHAS", "resolve", "check_int",
@@ -59,13 +69,14 @@ def better_method(params: "SegmentParams", kind: str) -> tuple[bool, bool]:
 
     On faces both beat the paper at every k from 50 to 300 (UE -6 to -11 %,
     compactness -14 to -19 %) and in every category of the 300 benchmark meshes
-    but Cup at k = 50 and 150, at its speed at the default k (``docs/cleanup.md``,
+    but Cup at k = 50 and 150, at its speed at the default k (``docs/notes/cleanup.md``,
     "The default" and "Swap energies"); on vertices, with the clean-up's
     crease weight and band of that kind (:mod:`superfacets.cleanup`) and the exact
     classification (:func:`assignment_of`), they lower the undersegmentation
-    error by 4-8 % and the compactness by 5-7 % at k = 50, 150, 300. On points they lower the compactness by 18-25 %
+    error by 4-8 % and the compactness by 5-7 % at k = 50, 150, 300. On points they lower
+    the compactness by 18-25 %
     but not the undersegmentation error at k = 150 (+0.3 %), so points keep
-    the paper's method unless asked (``docs/cleanup.md``, "Vertices and points").
+    the paper's method unless asked (``docs/notes/cleanup.md``, "Vertices and points").
     """
     auto = kind_of(kind).better_method and params.weighting == "paper" and not params.paper
     return (auto if params.cleanup is None else bool(params.cleanup),
@@ -83,12 +94,12 @@ def assignment_of(params: "SegmentParams", kind: str) -> str:
     about 4.4 times) gives the same quality as the windows with the default's
     few passes, for about a third of their time; that is what brings the
     better method to the paper's time there. On faces the windows' bound on a
-    superfacet's extent keeps them more compact (``docs/cleanup.md``, "The
+    superfacet's extent keeps them more compact (``docs/notes/cleanup.md``, "The
     default on vertices, at the paper's speed"). Content-sensitive superfacets
     differ in extent by design; the windows follow it (each center's scaled by
     :func:`superfacets.adaptive.window_factors`) and are about 1.6 times faster
     on a million points, but on the five labelled scans the exact search gave
-    the lower undersegmentation error in 11 of 15 settings (``docs/superpoints.md``).
+    the lower undersegmentation error in 11 of 15 settings (``docs/notes/superpoints.md``).
 
     Examples
     --------
@@ -109,7 +120,7 @@ DEFAULT_CENTER_TOL = 0.05
 #: ``coarse_min_per_segment``, ``coarse_per_segment``). On points, clusters of at most
 #: ``n_neighbors // 2`` (15 benchmark meshes sampled with 200,000 points: clusters of 5
 #: keep UE, k = 50: +0.5 %, k = 100: -2.2 %, and take 42 % off the time;
-#: docs/superpoints.md).
+#: docs/notes/superpoints.md).
 COARSE_MIN_PER_SEGMENT = kind_of("faces").coarse_min_per_segment
 COARSE_PER_SEGMENT = kind_of("faces").coarse_per_segment
 COARSE_MIN_PER_SEGMENT_POINTS = kind_of("points").coarse_min_per_segment

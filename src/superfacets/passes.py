@@ -1,6 +1,6 @@
 """The iteration: passes of (classify, update) until no center moves or ``max_iter``.
 
-Paper section 3.1, steps 2-3 (``docs/method.md``, section 3). :func:`iterate`
+Paper section 3.1, steps 2-3 (``docs/notes/method.md``, section 3). :func:`iterate`
 runs the passes with any :class:`~superfacets.classify.Classifier`;
 :func:`update_centers` is the center update; :func:`final_centers` names the
 center of each superfacet of the final labels.

@@ -1,4 +1,4 @@
-"""One run of the superfacet method, as named stages (paper section 3; ``docs/method.md``).
+"""One run of the superfacet method, as named stages (paper section 3; ``docs/notes/method.md``).
 
 :func:`pipeline` takes validated parameters (:func:`superfacets.params.resolve`;
 the public functions of :mod:`superfacets.segmentation` call it) and runs, each
@@ -40,8 +40,17 @@ from .elements.inputs import features_of
 from .params import SegmentParams
 from .passes import final_centers
 from .result import SegmentationResult
-from .stages import (Hooks, build_graph, clean_up, finish, initialize, iterate_passes,
-                     merge_small, resolve_rules, weigh)
+from .stages import (
+    Hooks,
+    build_graph,
+    clean_up,
+    finish,
+    initialize,
+    iterate_passes,
+    merge_small,
+    resolve_rules,
+    weigh,
+)
 
 __all__ = ["pipeline", "SegmentationResult"]
 

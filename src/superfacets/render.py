@@ -22,11 +22,11 @@ import numpy as np
 
 from .camera import view_frame
 from .colors import boundary_edges
+from .convert import as_mesh
 from .errors import NoDisplayError, ParameterError
-from .params import check_number
 from .extras import require
 from .labels import check_labels
-from .convert import as_mesh
+from .params import check_number
 
 __all__ = ["render", "render_points", "render_panel", "show", "has_display", "NoDisplayError"]
 

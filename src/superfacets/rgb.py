@@ -4,7 +4,7 @@ between a mesh's vertices and its faces.
 Point clouds carry one colour per point (:class:`~superfacets.cloud.PointCloud`),
 meshes one per vertex, one per face, or both (:class:`~superfacets.mesh.Mesh`):
 what ``beta > 0`` of :func:`superfacets.segment` reads when no ``features``
-are given (``docs/method.md``, "Features"). A face's colour, where the file
+are given (``docs/notes/method.md``, "Features"). A face's colour, where the file
 gives only vertex colours, is the mean of its vertices' colours; a vertex's,
 where the file gives only face colours, the mean of its faces' colours.
 """

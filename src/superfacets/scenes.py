@@ -6,8 +6,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .errors import ParameterError
 from .convert import as_mesh
+from .errors import ParameterError
 from .params import DEFAULTS as _D
 
 if TYPE_CHECKING:

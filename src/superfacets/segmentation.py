@@ -1,4 +1,4 @@
-"""The superfacet method's public functions (paper section 3; ``docs/method.md``).
+"""The superfacet method's public functions (paper section 3; ``docs/notes/method.md``).
 
 ``superfacets(mesh, ...)`` returns one label per face; ``segment(mesh, ...)``
 takes the same arguments and returns a :class:`SegmentationResult` with the
@@ -77,7 +77,7 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, features=None,
         ``paper``) and in content-sensitive runs (``density`` or
         ``roughness`` above 0, the automatic density included), ``'bounded'``
         otherwise (:func:`~superfacets.params.assignment_of`;
-        ``docs/cleanup.md``). In content-sensitive runs the bounded windows
+        ``docs/notes/cleanup.md``). In content-sensitive runs the bounded windows
         are scaled per center (:func:`superfacets.adaptive.window_factors`).
     enforce_connectivity : bool, default True
         Merge stray pieces of a superfacet into the neighbour with which they
@@ -91,7 +91,7 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, features=None,
         for faces and vertices with the paper's weighting; off for points
         (not better on undersegmentation error there), with
         ``weighting='shlafman'`` and with ``paper=True``. Not in the paper
-        (``docs/cleanup.md``).
+        (``docs/notes/cleanup.md``).
     split_merge : bool, optional
         K-preserving swaps (:mod:`superfacets.splitmerge`): a superfacet
         that straddles a crease (a high energy ``sum(size * d ** 4)`` in the
@@ -104,7 +104,7 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, features=None,
         Both on (the default on faces) against the paper on the 300
         benchmark meshes at ``k = 150``: undersegmentation error -7.8 %,
         compactness -15.5 %, boundary recall 0.805 (paper 0.802), for 0.88
-        of its time (``docs/cleanup.md``, "One pass after the swaps").
+        of its time (``docs/notes/cleanup.md``, "One pass after the swaps").
     paper : bool, default False
         The paper's method as published (Simari, Picciau, De Floriani 2014,
         section 3): its stopping rule (``tol=0``, no center tolerance, no
@@ -120,7 +120,7 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, features=None,
         prefers such edges for boundaries likewise. With RGB in ``[0, 1]`` and
         ``beta = alpha``, a colour jump of 0.5 costs what a concave right-angle
         crease costs. 0 gives the weights of the paper bit for bit
-        (``docs/method.md``, "Features").
+        (``docs/notes/method.md``, "Features").
     features : (N, d) float ndarray, optional
         One feature per input row (face, vertex or point), for ``beta > 0``.
         Default: the input's colours (a point cloud read from PLY, PCD or LAS
@@ -133,7 +133,7 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, features=None,
         (:func:`~superfacets.connectivity.enforce_connectivity`), so ``K``
         falls by the number merged. On a LiDAR sweep, whose sparse far range
         holds superpoints of one or two points, 3 merges 5-16 % of the superpoints at
-        ``n_segments`` = 300-3,000 (``docs/superpoints.md``, "Superpoints
+        ``n_segments`` = 300-3,000 (``docs/notes/superpoints.md``, "Superpoints
         of one point"). 1 merges none; needs ``enforce_connectivity``.
     density : float or None, default None
         Content-sensitive sizes (not in the paper; :mod:`superfacets.adaptive`):
@@ -153,7 +153,7 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, features=None,
         radians between neighbouring normals there (smoothed), so rough places
         (vegetation, clutter, folds) get more, smaller superfacets. On real
         scans ``density=0.5, roughness=1`` lowered the undersegmentation error
-        by 6-34 % in all 15 settings measured (``docs/superpoints.md``,
+        by 6-34 % in all 15 settings measured (``docs/notes/superpoints.md``,
         "Content-sensitive superpoints").
     tol : float, default 0.001
         Convergence tolerance in ``[0, 1]``: also stop once a classification
@@ -163,13 +163,13 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, features=None,
         for bit). The default stops
         about a quarter of the passes earlier with undersegmentation error and
         compactness within 0.05 % of ``tol=0`` on the 300 benchmark meshes
-        (``docs/benchmarks.md``). ``tol=0`` also turns ``center_tol`` and
+        (``docs/notes/benchmarks.md``). ``tol=0`` also turns ``center_tol`` and
         ``coarsen`` off unless they are given.
     center_tol : float, optional
         In ``[0, 1]``: a center that the update would move by less than
         ``center_tol * r`` (``r`` the superfacet radius) stays where it is.
         Default: 0.05 when ``tol > 0``, else 0 (within 0.25 % of ``tol=0``
-        on the 300 benchmark meshes, ``docs/benchmarks.md``).
+        on the 300 benchmark meshes, ``docs/notes/benchmarks.md``).
     coarsen : int, optional
         Coarse-to-fine (``superfacets.multilevel``): first run on clusters of
         about ``coarsen`` elements (Voronoi cells in the weighted graph), then
@@ -227,7 +227,7 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, features=None,
     ----------
     .. [1] G. Simari, G. Picciau, L. De Floriani, "Fast and Scalable Mesh
        Superfacets", Computer Graphics Forum 33(7) (Pacific Graphics), 2014;
-       section 3.1 (the iteration), eqs. 1-3 (weights). ``docs/method.md``.
+       section 3.1 (the iteration), eqs. 1-3 (weights). ``docs/notes/method.md``.
 
     Examples
     --------
@@ -307,7 +307,7 @@ def superpoints(points, n_segments: int | None = _D.n_segments, *, normals=None,
     k-nearest-neighbour density estimate, so ``n_segments`` and ``radius``
     mean what they mean on a mesh; normals are estimated (PCA) and oriented
     consistently when not given; the weights are the paper's eqs. 1-3 with
-    the distance between points as the geodesic term (``docs/method.md``,
+    the distance between points as the geodesic term (``docs/notes/method.md``,
     section "Vertices and points"). Every superpoint is connected in the
     point graph; the result is deterministic. Where the points' density is
     uneven (a LiDAR sweep, an RGB-D frame: the log of the point sizes spreads

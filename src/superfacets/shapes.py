@@ -86,7 +86,8 @@ def contour(sdf: np.ndarray, origin, spacing: float) -> tuple[np.ndarray, np.nda
     faces = faces.reshape(-1, 3).astype(np.int64)
     p, q = keys // sdf.size, keys % sdf.size
     vp, vq = sdf.ravel()[p], sdf.ravel()[q]
-    grid = lambda i: np.stack(np.unravel_index(i, sdf.shape), axis=1) * spacing
+    def grid(i):
+        return np.stack(np.unravel_index(i, sdf.shape), axis=1) * spacing
     t = (vp / (vp - vq))[:, None]
     vertices = grid(p) + t * (grid(q) - grid(p)) + np.asarray(origin, dtype=np.float64)
     # outwards: along the sum of the triangle's grid edges taken from inside to outside

@@ -5,7 +5,7 @@ superfacets straddle a concave crease while two neighbours elsewhere cover
 one smooth patch between them. A *swap* splits the first in two and merges
 the other two, so the number of superfacets stays the same; the iteration
 then runs again from the new centers. Swaps are chosen by an energy of the
-paper's own distances (``docs/method.md``, section 3.1): for a superfacet
+paper's own distances (``docs/notes/method.md``, section 3.1): for a superfacet
 ``S`` with center ``c`` (the element nearest its size-weighted mean),
 
     E(S) = sum over f in S of size_f * d_S(c, f) ** power,
@@ -30,7 +30,7 @@ exceeds the largest gain (that merge can never be taken), and a union that
 leaves the window is never searched.
 
 Not in the paper: the paper names no post-processing, and its authors call a
-clean-up "a priority next step". Judged in ``docs/cleanup.md``.
+clean-up "a priority next step". Judged in ``docs/notes/cleanup.md``.
 """
 
 from __future__ import annotations
@@ -66,14 +66,14 @@ FAST_ROUNDS = 1
 #: compactness -15.1 %, boundary recall 0.805 (paper 0.802), every category lower on both,
 #: for 1.05 times the paper's time (0.98 with 2 passes after, UE -6.1 %, compactness
 #: -15.0 %), where swapping after converged passes (up to three rounds, each iterated to
-#: convergence) took 1.4-2.7 times (docs/cleanup.md, "Split-and-merge at the paper's speed").
+#: convergence) took 1.4-2.7 times (docs/notes/cleanup.md, "Split-and-merge at the paper's speed").
 #: Vertices keep 2: one pass raised their UE (45 meshes, k = 150: -5.4 % against the
 #: paper instead of -6.4 %).
 PASSES_AFTER = kind_of("vertices").passes_after  # values: the table of kinds
 #: The same on faces: 1. With the swap energies of :data:`SWAP_ETA_CONVEX_FACES` the
 #: second pass no longer pays: on the 300 meshes, k = 50 ... 300, UE within 0.4 points of
 #: two passes', compactness the same to 0.1 point, about 5 % of a run's time
-#: (docs/cleanup.md, "One pass after the swaps").
+#: (docs/notes/cleanup.md, "One pass after the swaps").
 PASSES_AFTER_FACES = kind_of("faces").passes_after
 #: Factor of ``eta_convex`` in the weights of the swap energies on faces: 0.5 counts a
 #: convex fold half as much as the passes do, so a superfacet wrapped round a thin convex
@@ -81,12 +81,12 @@ PASSES_AFTER_FACES = kind_of("faces").passes_after
 #: while a cup's rim still does. On the 300 benchmark meshes, k = 50 ... 300: UE 1.2-2.6
 #: points further below the paper's, compactness 0.4-0.6 points; 0 (concave creases
 #: alone, the minima rule) gains more UE but raises Cup's by 11 % at k = 50
-#: (docs/cleanup.md, "Swap energies"). On vertices (neighbourhood-averaged normals) 0
+#: (docs/notes/cleanup.md, "Swap energies"). On vertices (neighbourhood-averaged normals) 0
 #: raised the UE: they keep the run's weights (1).
 SWAP_ETA_CONVEX_FACES = kind_of("faces").swap_eta_convex
 #: On faces, the passes after the swaps keep in place a center that moves by less than
 #: this many times ``center_tol * r`` (its window's expansion is replayed, not run again):
-#: about 4 % of a run's time, the same quality (docs/cleanup.md, "Swap energies").
+#: about 4 % of a run's time, the same quality (docs/notes/cleanup.md, "Swap energies").
 HOLD_AFTER_FACES = kind_of("faces").hold_after
 #: A swap is taken only if its split lowers the energy by at least this many times the
 #: mean energy of a superfacet (the total over K): a split that removes less than an
@@ -95,7 +95,7 @@ HOLD_AFTER_FACES = kind_of("faces").hold_after
 #: On the 300 benchmark meshes, k = 50 ... 300 (with the clean-up's smoothness 0.7 on
 #: faces): every category lower than the paper on UE and compactness at every k (Cup
 #: was above at k <= 150), compactness 0.1-0.4 points lower than with 0, UE within
-#: 0.9 points, and fewer swaps to run (docs/cleanup.md, "The smallest swaps").
+#: 0.9 points, and fewer swaps to run (docs/notes/cleanup.md, "The smallest swaps").
 MIN_GAIN = 1.0
 
 

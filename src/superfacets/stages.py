@@ -24,8 +24,14 @@ from .elements.kinds import ElementKind, kind_of
 from .expansion import Workspaces
 from .labels import relabel_dense
 from .multilevel import coarsening_for, start_centers
-from .params import (DEFAULT_CENTER_TOL, DEFAULTS, SegmentParams, assignment_of, better_method,
-                     superfacet_size)
+from .params import (
+    DEFAULT_CENTER_TOL,
+    DEFAULTS,
+    SegmentParams,
+    assignment_of,
+    better_method,
+    superfacet_size,
+)
 from .passes import Iteration, iterate
 from .weights import csr_weights, edge_weights
 

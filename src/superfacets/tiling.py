@@ -42,12 +42,11 @@ from dataclasses import replace
 import numpy as np
 
 from .classify import make_classifier
-from .elements.inputs import elements_of
+from .elements.inputs import elements_of, features_of
 from .elements.kinds import kind_of
 from .errors import ParameterError
 from .expansion import Workspaces
 from .params import DEFAULTS, SegmentParams, superfacet_measure
-from .elements.inputs import features_of
 from .pipeline import pipeline
 from .stages import build_graph, clean_up, finish, resolve_rules, weigh
 
@@ -58,7 +57,7 @@ __all__ = ["tile_centers", "tile_refine", "tile_labels",
 #: Default halo, in units of ``window * r``. 3 rather than 2: the classification of
 #: the core is exact from 2, and the clean-up near a border nearly so from 3
 #: (elements labelled differently by two tiles: 1,562 -> 41 over 15 benchmark meshes
-#: at k = 600 in 8 tiles; UE +9.8 % -> +5.8 % against one run; docs/tiles.md).
+#: at k = 600 in 8 tiles; UE +9.8 % -> +5.8 % against one run; docs/notes/tiles.md).
 HALO = 3.0
 
 
@@ -92,8 +91,8 @@ def _valid_rows(inp) -> np.ndarray:
 
 def _diagonal(inp) -> float:
     """The bounding-box diagonal of a tile's elements, as its element graph has it."""
-    from .cloud import PointCloud
     from .bounds import column_bounds
+    from .cloud import PointCloud
 
     if isinstance(inp, PointCloud):
         lo, hi = column_bounds(inp.points[inp.valid])

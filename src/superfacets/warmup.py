@@ -26,8 +26,14 @@ def _warm() -> None:
     try:
         import numpy as np
 
-        from ._kernels.adjacency import (count_keys, csr_of_face_pairs, group_pairs,
-                                         scatter_keys, sort_buckets, triangle_half_edges)
+        from ._kernels.adjacency import (
+            count_keys,
+            csr_of_face_pairs,
+            group_pairs,
+            scatter_keys,
+            sort_buckets,
+            triangle_half_edges,
+        )
         from ._kernels.expand import reset_labels
 
         reset_labels(np.empty(1), np.empty(1, dtype=np.int32))

@@ -12,8 +12,15 @@ import numpy as np
 from .elements.graph import ElementGraph, chunked
 from .elements.inputs import as_element_graph
 from .errors import ParameterError
-from .params import (DEFAULTS, MAX_WEIGHT_FACTOR, WEIGHTING_ALPHA, WEIGHTINGS, check_choice,
-                     check_nonneg, check_number)
+from .params import (
+    DEFAULTS,
+    MAX_WEIGHT_FACTOR,
+    WEIGHTING_ALPHA,
+    WEIGHTINGS,
+    check_choice,
+    check_nonneg,
+    check_number,
+)
 
 __all__ = ["paper_weights", "shlafman_weights", "edge_weights", "csr_weights", "check_features",
            "convex_scaled"]
@@ -38,10 +45,10 @@ def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = DEF
     - with ``beta > 0``, a feature term in the same form as ``ang`` (not in the
       paper): ``w = (geo + alpha * ang + beta * |e_ij| * ||f_i - f_j||) / d``,
       ``f`` one feature per element (e.g. RGB in ``[0, 1]``): crossing a colour
-      edge costs as crossing a crease does (``docs/method.md``, "Features").
+      edge costs as crossing a crease does (``docs/notes/method.md``, "Features").
 
     On mesh vertices and cloud points the graph's terms are the analogues
-    (``docs/method.md``, section 6): ``geo = |p_i - p_j|``, the angle of the
+    (``docs/notes/method.md``, section 6): ``geo = |p_i - p_j|``, the angle of the
     element normals, ``ang = eta * |p_i - p_j| * theta / pi`` (``graph.span``)
     and the symmetric convexity test.
 
@@ -75,7 +82,7 @@ def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = DEF
     References
     ----------
     Simari, Picciau, De Floriani, "Fast and Scalable Mesh Superfacets", 2014,
-    eqs. 1-3; ``docs/method.md``.
+    eqs. 1-3; ``docs/notes/method.md``.
 
     Examples
     --------
@@ -139,7 +146,7 @@ def convex_scaled(graph, weights: np.ndarray, *, alpha: float, eta_convex: float
     ----------
     Simari, Picciau, De Floriani, "Fast and Scalable Mesh Superfacets", 2014,
     eqs. 1-3; Hoffman and Richards, "Parts of recognition", 1984 (the minima
-    rule); ``docs/cleanup.md``, "Swap energies".
+    rule); ``docs/notes/cleanup.md``, "Swap energies".
 
     Examples
     --------

@@ -255,7 +255,8 @@ def expand_many(indptr, indices, weights, centroids, srcs, labs, window_r2, loca
     merged right after (while in cache) into ``dist``/``label`` with label
     ``labs[i]`` by the lexicographic rule of :func:`merge_some`.
 
-    The settled faces and distances of expansion ``i`` go to ``rec_face`` / ``rec_dist`` from ``out_start[i] = pos`` onwards
+    The settled faces and distances of expansion ``i`` go to ``rec_face`` /
+    ``rec_dist`` from ``out_start[i] = pos`` onwards
     (``out_len[i]`` entries), below ``lim``. Releases the GIL, so several
     threads may run it at once on disjoint record ranges with their own
     ``local``, queue and ``dist``/``label``. ``wscale``: per-face window

@@ -87,7 +87,8 @@ def dimensionality_features(graph, up: int = 2) -> np.ndarray:
 def cut_pursuit(obj, n_segments: int | None = None, *, reg_strength: float = 0.1,
                 elements: str | None = None, colors=None, up: int = 2,
                 spatial: float = 1.0,
-                n_neighbors: int = DEFAULTS.n_neighbors, neighbor_radius: float | None = None) -> np.ndarray:
+                n_neighbors: int = DEFAULTS.n_neighbors,
+                neighbor_radius: float | None = None) -> np.ndarray:
     """Superpoints by l0 cut pursuit of dimensionality features (module notes).
 
     Parameters

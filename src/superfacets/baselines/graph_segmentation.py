@@ -106,7 +106,7 @@ def graph_segmentation(obj, k_thresh: float = 0.01, min_size: int = 20, *,
     from .._kernels.felzenszwalb import felzenszwalb
     from ..elements.inputs import elements_of, is_cloud
     from ..labels import relabel_dense
-    from ..params import check_choice, ELEMENTS
+    from ..params import ELEMENTS, check_choice
 
     k_thresh = check_positive("k_thresh", k_thresh)
     min_size = check_int("min_size", min_size, lo=1)

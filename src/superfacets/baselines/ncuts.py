@@ -55,13 +55,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import MemoryLimitError, ParameterError
 from ..convert import as_mesh
 from ..elements.faces import face_graph
+from ..errors import MemoryLimitError, ParameterError
 from ..params import check_n_segments, check_positive
 from ..weights import edge_weights
 
-__all__ = ["discretize", "NcutEmbedding", "ncut_embedding", "normalized_cuts", "ncut_memory_estimate",
+__all__ = ["discretize", "NcutEmbedding", "ncut_embedding", "normalized_cuts",
+           "ncut_memory_estimate",
            "default_memory_limit"]
 
 #: Fraction of physical memory one normalized-cuts run may use by default.

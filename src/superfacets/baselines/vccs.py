@@ -10,7 +10,7 @@ build of a standalone header-only port (``segment_vccs``; sources:
 https://github.com/cloneorcopy/py_vccs, which states no licence, so it is
 never a dependency of this package and never installed by it). Build it with
 a C++ compiler and ``pybind11`` and put the module on ``PYTHONPATH``
-(docs/superpoints.md says how). That port uses positions and normals only
+(docs/notes/superpoints.md says how). That port uses positions and normals only
 (no colour) and estimates the normals itself.
 
 Points that the port leaves unlabelled (voxels below its minimum) take the
@@ -46,7 +46,7 @@ def _module():
         raise MissingExtraError(
             f"the VCCS baseline needs the external module vccs_supervoxel ({exc}); it is not "
             f"on the package index: build it from {SOURCE} (C++ compiler and pybind11; "
-            "docs/superpoints.md, 'VCCS') and put it on PYTHONPATH") from None
+            "docs/notes/superpoints.md, 'VCCS') and put it on PYTHONPATH") from None
 
 
 def vccs(obj, n_segments: int | None = None, *, seed_resolution: float = 0.1,

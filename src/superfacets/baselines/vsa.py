@@ -35,9 +35,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ParameterError
 from ..convert import as_mesh
 from ..elements.faces import face_graph
+from ..errors import ParameterError
 from ..params import check_int, check_n_segments
 
 __all__ = ["VSAResult", "variational_shape_approximation", "vsa", "METRICS", "INITS"]

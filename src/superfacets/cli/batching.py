@@ -4,10 +4,15 @@ from __future__ import annotations
 
 import sys
 
-from .options import (add_adaptive_options, add_camera_options, add_element_options,
-                      add_engine_options, add_method_options,
-                      element_kwargs, int_arg,
-                      method_kwargs)
+from .options import (
+    add_adaptive_options,
+    add_camera_options,
+    add_element_options,
+    add_engine_options,
+    add_method_options,
+    element_kwargs,
+    method_kwargs,
+)
 
 __all__ = ["add_parsers"]
 

@@ -10,9 +10,16 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..params import (ASSIGNMENTS, COARSE_MIN_PER_SEGMENT, COARSE_MIN_PER_SEGMENT_POINTS,
-                      COARSE_PER_SEGMENT, DEFAULTS,
-                      ELEMENTS, INITS, WEIGHTINGS)
+from ..params import (
+    ASSIGNMENTS,
+    COARSE_MIN_PER_SEGMENT,
+    COARSE_MIN_PER_SEGMENT_POINTS,
+    COARSE_PER_SEGMENT,
+    DEFAULTS,
+    ELEMENTS,
+    INITS,
+    WEIGHTINGS,
+)
 from ..params import DEFAULT_CENTER_TOL as _D_CENTER_TOL
 
 __all__ = ["int_arg", "float_arg", "size_arg", "view_arg", "add_method_options",
@@ -29,6 +36,17 @@ def int_arg(text: str) -> int:
         return int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+
+
+def levels_arg(text: str) -> list[int]:
+    """argparse type: ``--levels 50,20``, positive integers."""
+    try:
+        out = [int(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        out = []
+    if not out or min(out) < 1:
+        raise argparse.ArgumentTypeError(f"expected positive integers N1,N2,..., got {text!r}")
+    return out
 
 
 def float_arg(text: str) -> float:
@@ -252,7 +270,8 @@ def method_kwargs(args) -> dict:
     return dict(alpha=args.alpha, eta_convex=args.eta_convex, window=args.window,
                 init=args.init, max_iter=args.max_iter, weighting=args.weighting,
                 assignment=args.assignment, enforce_connectivity=not args.no_connectivity,
-                cleanup=args.cleanup, split_merge=args.split_merge, tol=args.tol, center_tol=args.center_tol,
+                cleanup=args.cleanup, split_merge=args.split_merge, tol=args.tol,
+                center_tol=args.center_tol,
                 coarsen=args.coarsen, progress=bool(args.progress), n_threads=args.threads,
                 paper=args.paper, beta=args.beta, min_elements=args.min_elements,
                 density=args.density, roughness=args.roughness)

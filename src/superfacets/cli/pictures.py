@@ -7,8 +7,17 @@ from pathlib import Path
 
 import numpy as np
 
-from .options import (add_camera_options, add_mesh_and_labels, add_method_options,
-                      check_output, float_arg, fmt_value, int_arg, labels_for, read_usable)
+from .options import (
+    add_camera_options,
+    add_mesh_and_labels,
+    add_method_options,
+    check_output,
+    float_arg,
+    fmt_value,
+    int_arg,
+    labels_for,
+    read_usable,
+)
 
 __all__ = ["add_parsers"]
 
@@ -159,7 +168,8 @@ def cmd_view(args) -> int:
         from ..render import faces_to_draw
 
         mesh, labels = faces_to_draw(mesh, labels, elements)
-    show(mesh, labels, title=Path(args.mesh).name, view=args.view, up=args.up or "y")  # pragma: no cover
+    show(mesh, labels, title=Path(args.mesh).name, view=args.view,
+         up=args.up or "y")  # pragma: no cover
     return 0  # pragma: no cover
 
 

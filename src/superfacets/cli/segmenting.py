@@ -10,12 +10,23 @@ import numpy as np
 
 from ..elements.kinds import kind_of
 from ..params import DEFAULTS
-from .options import (add_adaptive_options, add_camera_options, add_element_options,
-                      add_method_options,
-                      add_scan_options, scan_cloud,
-                      check_labels_output,
-                      check_output, element_kwargs, fmt_value, int_arg,
-                      method_kwargs, named_after, read_usable)
+from .options import (
+    add_adaptive_options,
+    add_camera_options,
+    add_element_options,
+    add_method_options,
+    add_scan_options,
+    check_labels_output,
+    check_output,
+    element_kwargs,
+    fmt_value,
+    int_arg,
+    levels_arg,
+    method_kwargs,
+    named_after,
+    read_usable,
+    scan_cloud,
+)
 
 __all__ = ["add_parsers"]
 
@@ -32,7 +43,9 @@ def add_parsers(sub) -> None:
                     "label per point in file order, -1 for invalid points), and write them "
                     "as a .seg label file (one label per line), a ScanNet-style .json "
                     "(segIndices) and/or a coloured mesh or cloud.")
-    p.add_argument("mesh", metavar="INPUT", help="input mesh, point-cloud or tetrahedral-mesh file (.msh, .vtk, .vtu, .mesh)")
+    p.add_argument("mesh", metavar="INPUT",
+                   help="input mesh, point-cloud or tetrahedral-mesh file (.msh, .vtk, "
+                        ".vtu, .mesh)")
     add_method_options(p)
     add_element_options(p)
     add_scan_options(p)
@@ -59,7 +72,7 @@ def add_parsers(sub) -> None:
                    help="write the superfacet (superpoint) adjacency graph: edge_index, "
                         "border_length, mean_angle, concave, area, centroid, normal, feature "
                         "(mean colour), labels (numpy .npz)")
-    p.add_argument("--levels", type=_levels_arg, default=None, metavar="N1,N2,...",
+    p.add_argument("--levels", type=levels_arg, default=None, metavar="N1,N2,...",
                    help="with --graph: also a nested hierarchy of coarser levels of N1, "
                         "N2, ... segments, each connected (parent_<i> and labels_<i> in the "
                         ".npz)")
@@ -274,19 +287,6 @@ def cmd_segment(args) -> int:
     return 0
 
 
-def _levels_arg(text: str) -> list[int]:
-    """``--levels 50,20``: positive integers."""
-    import argparse
-
-    try:
-        out = [int(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        out = []
-    if not out or min(out) < 1:
-        raise argparse.ArgumentTypeError(f"expected positive integers N1,N2,..., got {text!r}")
-    return out
-
-
 def _say_what_was_written(seg_out, ply_out, png_out, html_out, report, up,
                           graph_out=None) -> None:
     axis = f"up axis {up}" if up else "up axis y: give --up z for a z-up mesh"
@@ -309,8 +309,9 @@ def _count_note(args, data, result, kind: str) -> str | None:
     extra = getattr(result, "n_orphan_seeds", 0)
     if args.radius is not None or args.per_object or result.n_segments <= asked:
         return None
-    from ..elements.inputs import elements_of
     from scipy.sparse.csgraph import connected_components
+
+    from ..elements.inputs import elements_of
 
     graph = elements_of(data, kind, n_neighbors=args.neighbors,
                         neighbor_radius=args.neighbor_radius).graph  # kept with the input

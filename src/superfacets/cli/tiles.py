@@ -7,8 +7,13 @@ import time
 from pathlib import Path
 
 from ..elements.kinds import kind_of
-from .options import (add_engine_options, check_labels_output, element_kwargs, method_kwargs,
-                      named_after)
+from .options import (
+    add_engine_options,
+    check_labels_output,
+    element_kwargs,
+    method_kwargs,
+    named_after,
+)
 
 
 def tiles_arg(text: str):
@@ -90,7 +95,7 @@ def segment_tiles(args) -> int:
         what = kind_of(kind).segment_word
         k = args.n_segments
         asked = ("" if k is None or result.n_segments == k else
-                 f" ({k} asked: tiles this small hold fewer centers; see docs/tiles.md)"
+                 f" ({k} asked: tiles this small hold fewer centers; see docs/notes/tiles.md)"
                  if result.n_segments < k else f" ({k} asked)")
         print(f"{Path(args.mesh).name}: {result.labels.size} {kind}, {result.n_segments} "
               f"{what}{asked} in {len(result.tiles)} tiles "

@@ -16,7 +16,7 @@ tetrahedron is an element:
   geodesic term, and what a concave crease is on a surface is a *material
   jump* in a volume. It enters through the feature term (``beta``, the
   materials one-hot by default), in the form of eq. 2: ``beta * |c_i - c_j| *
-  ||f_i - f_j||``. ``docs/method.md``, "Tetrahedral meshes".
+  ||f_i - f_j||``. ``docs/notes/method.md``, "Tetrahedral meshes".
 """
 
 from __future__ import annotations
@@ -60,7 +60,6 @@ def _build(mesh) -> ElementGraph:
     tri, owner = tri[order], owner[order]
     new = np.ones(tri.shape[0], dtype=bool)
     new[1:] = (tri[1:] != tri[:-1]).any(axis=1)
-    group = np.cumsum(new) - 1
     starts = np.flatnonzero(new)
     count = np.diff(np.r_[starts, tri.shape[0]])
     area = 0.5 * np.linalg.norm(np.cross(v[tri[starts, 1]] - v[tri[starts, 0]],

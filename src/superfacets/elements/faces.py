@@ -1,4 +1,4 @@
-"""The face graph (dual graph) of a mesh (``docs/method.md``, sections 1-2).
+"""The face graph (dual graph) of a mesh (``docs/notes/method.md``, sections 1-2).
 
 One element per face (triangle or polygon) and one adjacency per pair of
 faces that share a mesh edge (an edge of a polygon joins two consecutive

@@ -8,7 +8,7 @@ from typing import Callable, Mapping, NamedTuple
 
 import numpy as np
 
-__all__ = ["ElementGraph", "AdjacencyTerms", "as_element_graph", "adjacency_csr", "CHUNK",
+__all__ = ["ElementGraph", "AdjacencyTerms", "adjacency_csr", "CHUNK",
            "chunked", "pairs_from_csr"]
 
 #: Adjacencies per chunk when per-adjacency arrays are computed: bounds the

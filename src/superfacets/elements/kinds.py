@@ -48,17 +48,17 @@ class ElementKind:
         ``split_merge=None``) with the paper's weighting. Faces: both beat the
         paper at every k from 50 to 300 at its speed; vertices: UE -4 to -8 %,
         compactness -5 to -7 %; points: compactness -18 to -25 % but not the UE
-        (+0.3 % at k = 150); cells: not measured (``docs/cleanup.md``).
+        (+0.3 % at k = 150); cells: not measured (``docs/notes/cleanup.md``).
     exact_assignment : bool
         The exact nearest-center classification by default (``assignment=None``)
         with the paper's weighting: vertices, where it gives the windows' quality
-        for a third of their time (``docs/cleanup.md``).
+        for a third of their time (``docs/notes/cleanup.md``).
     crease : float
         Weight of creases in the clean-up's cut cost, a fraction of ``alpha``
         (:func:`superfacets.cleanup.cut_costs`). Faces 0.1; vertices, points and
         cells 1.0: their normals are neighbourhood averages, a crease's angle is
         spread over a few adjacencies (lowest UE of 0.1, 0.3, 1, 3, 10 on 90
-        benchmark meshes, ``docs/cleanup.md``).
+        benchmark meshes, ``docs/notes/cleanup.md``).
     smoothness : float
         Weight of the clean-up's data (compactness) term against the boundary
         length: 0.7 on faces, whose swap energies weigh convex folds less, else 0.3.

@@ -57,7 +57,7 @@ LINEAR = 0.95
 #: ... is also joined to this many times ``n_neighbors`` nearest points: a scan line
 #: (a LiDAR ring far from the sensor) then reaches the next one, as a surface's
 #: neighbourhood should. 13-17 % of the points of two SemanticKITTI sweeps, none of an
-#: airborne scan, 0.02 % of 20,000 points sampled on a mesh (docs/superpoints.md,
+#: airborne scan, 0.02 % of 20,000 points sampled on a mesh (docs/notes/superpoints.md,
 #: "Scan lines").
 WIDEN = 2
 

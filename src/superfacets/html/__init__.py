@@ -23,9 +23,9 @@ import numpy as np
 
 from ..camera import view_frame
 from ..colors import boundary_edges, superfacet_colors
+from ..convert import as_mesh
 from ..errors import ParameterError
 from ..labels import check_labels, relabel_dense
-from ..convert import as_mesh
 
 __all__ = ["write_html", "html_page"]
 
@@ -87,7 +87,8 @@ def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None 
     meta = {"name": name, "faces": m, "vertices": int(used.size), "superfacets": n_sf,
             "info": {str(k): str(v_) for k, v_ in (info or {}).items()},
             "palette": palette.astype(int).tolist(), "indexBytes": np.dtype(index_dtype).itemsize,
-            "nVertices": int(used.size), "nFaces": int(faces.shape[0]), "nEdges": int(edges.shape[0]),
+            "nVertices": int(used.size), "nFaces": int(faces.shape[0]),
+            "nEdges": int(edges.shape[0]),
             "background": background, "rotation": rot.T.ravel().round(6).tolist()}
     data = {"vertices": _b64(v), "faces": _b64(faces.astype("<u4")),
             "colors": _b64(face_index.astype(index_dtype)),

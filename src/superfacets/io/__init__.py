@@ -10,11 +10,11 @@
 - :mod:`.files`: compression by suffix, :func:`atomic_write` and all-or-nothing outputs.
 """
 
+from .clouds import CLOUD_FORMATS, is_cloud_file, read_cloud
+from .export import to_pyvista, to_trimesh, write_colored_mesh, write_mesh
 from .files import atomic_write
 from .labels import read_labels, write_labels, write_segindices
-from .export import to_pyvista, to_trimesh, write_colored_mesh, write_mesh
 from .meshes import MESH_FORMATS, read_mesh
-from .clouds import CLOUD_FORMATS, is_cloud_file, read_cloud
 from .volumes import VOLUME_FORMATS, read_volume, write_volume_labels
 
 

@@ -27,9 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..convert import as_mesh
 from ..elements.kinds import kind_of
 from ..errors import MeshFormatError
-from ..convert import as_mesh
 from .files import Outputs, save, split_suffix
 from .meshes import MESH_FORMATS
 from .ply import ply_bytes

@@ -133,7 +133,8 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
         try:
             labels = np.loadtxt(lines, dtype=np.int64, ndmin=1, comments=None)
         except (ValueError, OverflowError) as exc:
-            raise MeshFormatError(f"{path}: malformed label file: {str(exc).split('; use')[0]}") from None
+            why = str(exc).split('; use')[0]
+            raise MeshFormatError(f"{path}: malformed label file: {why}") from None
         if labels.ndim != 1:
             raise MeshFormatError(f"{path}: malformed label file: expected one label per line")
     if n_faces is not None and labels.shape[0] != n_faces:
@@ -179,7 +180,6 @@ def read_field(path, name: str) -> np.ndarray:
     fmt, comp = split_suffix(path)
     if fmt in ("las", "laz"):
         from ..extras import require
-
         from .clouds import check_laz
 
         laspy = require("laspy", "reading LAS/LAZ files")

@@ -122,7 +122,8 @@ def _parse_off(data: bytes, path: Path):
     head = lines[0].split()
     magic = head[0].upper()
     if not magic.endswith("OFF"):
-        raise MeshFormatError(f"{path}: not an OFF file (first word is {head[0]!r}, expected 'OFF')")
+        raise MeshFormatError(f"{path}: not an OFF file (first word is {head[0]!r}, "
+                              "expected 'OFF')")
     counts = head[1:]
     pos = 1
     if not counts:
@@ -137,9 +138,11 @@ def _parse_off(data: bytes, path: Path):
     vlines = lines[pos:pos + nv]
     flines = lines[pos + nv:pos + nv + nf]
     if len(vlines) < nv:
-        raise MeshFormatError(f"{path}: truncated OFF file: expected {nv} vertices, found {len(vlines)}")
+        raise MeshFormatError(f"{path}: truncated OFF file: expected {nv} vertices, "
+                              f"found {len(vlines)}")
     if len(flines) < nf:
-        raise MeshFormatError(f"{path}: truncated OFF file: expected {nf} faces, found {len(flines)}")
+        raise MeshFormatError(f"{path}: truncated OFF file: expected {nf} faces, "
+                              f"found {len(flines)}")
     v = _loadtxt(vlines, np.float64, "vertex lines", path) if nv else np.zeros((0, 3))
     if v.shape[1] < 3:
         raise MeshFormatError(f"{path}: vertex lines need 3 coordinates, found {v.shape[1]}")
@@ -201,13 +204,15 @@ def _parse_tri(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
     nv = _count(lines[0].split()[0], "vertex", path)
     vlines = lines[1:1 + nv]
     if len(vlines) < nv:
-        raise MeshFormatError(f"{path}: truncated .tri file: expected {nv} vertices, found {len(vlines)}")
+        raise MeshFormatError(f"{path}: truncated .tri file: expected {nv} vertices, "
+                              f"found {len(vlines)}")
     if len(lines) < nv + 2:
         raise MeshFormatError(f"{path}: truncated .tri file: no face count after the vertices")
     nf = _count(lines[1 + nv].split()[0], "face", path)
     flines = lines[2 + nv:2 + nv + nf]
     if len(flines) < nf:
-        raise MeshFormatError(f"{path}: truncated .tri file: expected {nf} faces, found {len(flines)}")
+        raise MeshFormatError(f"{path}: truncated .tri file: expected {nf} faces, "
+                              f"found {len(flines)}")
     v = _loadtxt(vlines, np.float64, "vertex lines", path) if nv else np.zeros((0, 3))
     if v.shape[1] != 3:
         raise MeshFormatError(f"{path}: vertex lines need 3 coordinates, found {v.shape[1]}")
@@ -224,7 +229,8 @@ def _parse_obj(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
     """Wavefront OBJ: ``v`` and ``f`` lines, in file order, every object of the file.
 
     Faces of any size are kept as polygons; ``o`` statements name objects
-    (returned as face ranges). Indices are 1-based; a negative index counts back from the last vertex
+    (returned as face ranges). Indices are 1-based; a negative index counts back from the
+    last vertex
     defined before its face line (the OBJ rule); ``0`` is an error. In ``f``
     lines, ``i/t/n`` keeps ``i``. ``v x y z r g b`` lines give vertex colours
     (where every ``v`` line has them). Separators may be spaces or tabs. Other
@@ -363,7 +369,8 @@ def _load_trimesh_quietly(data: bytes, fmt: str, path: Path):
     except Exception as exc:  # trimesh raises many types for malformed input
         if fmt == "ply" and data.startswith(b"ply"):  # e.g. polygons of mixed sizes
             return _ply_polygons(data, path)
-        raise MeshFormatError(f"{path}: cannot read {fmt.upper()}: {exc or type(exc).__name__}") from None
+        why = exc or type(exc).__name__
+        raise MeshFormatError(f"{path}: cannot read {fmt.upper()}: {why}") from None
     polygons = f.size and (f.ndim != 2 or f.shape[1] != 3)
     if v.size and (v.ndim != 2 or v.shape[1] != 3):
         raise MeshFormatError(f"{path}: vertices must have 3 coordinates")

@@ -127,7 +127,6 @@ class RegionReader:
             return cls(str(p), "points", "ply-points", int(ply["vertex"].count), chunk)
         if suffix in ("las", "laz"):
             from ..extras import require
-
             from .clouds import check_laz
 
             laspy = require("laspy", "reading LAS/LAZ files")
@@ -397,7 +396,8 @@ class RegionReader:
 
 
 def point_cloud_of(pts, colors, normals, viewpoint, name: str = ""):
-    """A :class:`~superfacets.cloud.PointCloud` of a box's points (``viewpoint`` a tuple or None)."""
+    """A :class:`~superfacets.cloud.PointCloud` of a box's points (``viewpoint`` a tuple or
+    None)."""
     from ..cloud import PointCloud
 
     vp = None if viewpoint is None else np.asarray(viewpoint)

@@ -23,8 +23,15 @@ from pathlib import Path
 from typing import Sequence
 
 from .figures import plot_cost, plot_curves, plot_per_category
-from .tables import (METRIC_LABELS, category_means, ok_rows, cost_table, load_results,
-                     markdown_summary, summary)
+from .tables import (
+    METRIC_LABELS,
+    category_means,
+    cost_table,
+    load_results,
+    markdown_summary,
+    ok_rows,
+    summary,
+)
 
 __all__ = ["load_results", "category_means", "summary", "plot_curves", "plot_per_category",
            "plot_cost", "cost_table", "markdown_summary", "write_report", "METRIC_LABELS"]

@@ -17,7 +17,7 @@ from typing import Sequence
 import numpy as np
 
 from ..extras import require
-from .tables import (METRIC_LABELS, category_means, ok_rows, rows_at_k, series_order, summary)
+from .tables import METRIC_LABELS, category_means, ok_rows, rows_at_k, series_order, summary
 
 __all__ = ["plot_curves", "plot_per_category", "plot_cost"]
 

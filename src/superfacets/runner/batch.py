@@ -35,8 +35,15 @@ from ..elements.kinds import kind_of
 from ..errors import ParameterError
 from .engine import Engine, PeakMemory, error_text
 from .inputs import collect_inputs, output_names
-from .manifest import (JOURNAL, MANIFEST_COLUMNS, FolderLock, check_options, read_manifest,
-                       record_options, write_manifest)
+from .manifest import (
+    JOURNAL,
+    MANIFEST_COLUMNS,
+    FolderLock,
+    check_options,
+    read_manifest,
+    record_options,
+    write_manifest,
+)
 
 __all__ = ["run_batch", "collect_inputs", "output_names", "read_manifest", "BatchSummary",
            "MANIFEST_COLUMNS", "segment_file"]

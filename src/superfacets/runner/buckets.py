@@ -146,7 +146,8 @@ class TileBuckets:
 
     def read_box(self, lo, hi, name: str = ""):
         """The elements whose position lies in ``[lo, hi]``: the same rows, positions
-        and input as :meth:`RegionReader.read_box <superfacets.io.regions.RegionReader.read_box>` gives."""
+        and input as :meth:`RegionReader.read_box
+        <superfacets.io.regions.RegionReader.read_box>` gives."""
         from ..mesh import Mesh
 
         lo = np.asarray(lo, dtype=np.float64)

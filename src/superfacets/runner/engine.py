@@ -24,7 +24,6 @@ through ``on_lost`` (a failed row), never a lost run.
 from __future__ import annotations
 
 import contextlib
-
 import logging
 import os
 import traceback

@@ -37,8 +37,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ParameterError, SuperfacetsError
 from ..bounds import check_extent
+from ..errors import ParameterError, SuperfacetsError
 from ..params import DEFAULTS, resolve, superfacet_size
 from ..result import deprecated_radius
 from .engine import Engine, PeakMemory, error_text
@@ -232,7 +232,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         Rounds in which every tile runs the method's passes again from the
         gathered centers within reach (so the centers near a border settle
         with their true neighbours), ``>= 0``. On 15 benchmark meshes in 8
-        tiles, UE against one run: +5.8 % with 0, +1.2 % with 1 (docs/tiles.md).
+        tiles, UE against one run: +5.8 % with 0, +1.2 % with 1 (docs/notes/tiles.md).
     **options
         Keyword arguments of :func:`superfacets.segment` (``alpha``,
         ``window``, ``cleanup``, ``paper``, ``beta``, ``n_neighbors``, ...).
@@ -260,9 +260,9 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
     ((5120,), 40, 2)
     """
     from ..io.regions import STREAMED, RegionReader
-    from .buckets import bucket
     from ..tile_layout import balanced_tiles, check_tiles, tile_grid
     from ..tiling import HALO, check_tileable, halo_distance, orientation_reference
+    from .buckets import bucket
 
     if "features" in options:
         raise ParameterError("a tiled run reads colours from the file; features= is not taken")
@@ -285,7 +285,8 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         t = time.perf_counter()
         if isinstance(source, RegionReader):  # opened by the caller (its viewpoint, up)
             reader = source
-        elif isinstance(source, (str, Path)) and Path(source).suffix.lower().lstrip(".") in STREAMED:
+        elif isinstance(source, (str,
+                                 Path)) and Path(source).suffix.lower().lstrip(".") in STREAMED:
             reader = RegionReader.open(source)
         else:
             reader = RegionReader.spill(source, tmp)
