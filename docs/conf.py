@@ -28,7 +28,8 @@ extensions = [
 ]
 
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
-exclude_patterns = ["_build", "results", "guide/parameter_table.md", "examples/README.rst", "auto_examples/*.ipynb",
+exclude_patterns = ["_build", "results", "guide/parameter_table.md", "examples/README.rst",
+                    "auto_examples/*.ipynb",
                     "auto_examples/*.py", "auto_examples/*.zip", "**/*.md5",
                     "auto_examples/*.codeobj.json", "sg_execution_times.rst"]
 root_doc = "index"
