@@ -260,6 +260,13 @@ def as_cloud(obj, normals=None, name: str = "") -> PointCloud:
         If ``obj`` is none of these.
     InvalidCloudError
         As :class:`PointCloud`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> c = as_cloud(np.random.default_rng(0).random((100, 3)))
+    >>> c.n_points, c.normals is None
+    (100, True)
     """
     if isinstance(obj, PointCloud):
         return obj

@@ -56,6 +56,14 @@ class SegmentationResult:
     params : dict
         The parameters of the run, resolved (``n_segments``, ``radius``,
         ``init``, ...).
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets import segment
+    >>> r = segment(trimesh.creation.icosphere(subdivisions=3), 20)
+    >>> r.n_segments, r.labels.shape, r.params["elements"], r.mesh_radius > 0
+    (20, (1280,), 'faces', True)
     """
 
     labels: np.ndarray

@@ -245,6 +245,18 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, features=None,
             **params) -> SegmentationResult:
     """Superfacets with details: same parameters as :func:`superfacets`.
 
+    Parameters
+    ----------
+    mesh : Mesh, trimesh.Trimesh, (vertices, faces), PointCloud or TetMesh
+        The input (see :func:`superfacets`).
+    n_segments : int, default 150
+        Desired number of superfacets ``k``.
+    features : (N, d) float ndarray, optional
+        One feature per input row, for ``beta > 0``.
+    **params
+        Every other parameter of :func:`superfacets`, by keyword; declared once in
+        :data:`superfacets.params.PARAMETERS` (the signature lists them all).
+
     Returns
     -------
     SegmentationResult

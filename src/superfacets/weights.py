@@ -220,6 +220,14 @@ def shlafman_weights(graph, *, alpha: float = _SHLAFMAN_ALPHA) -> np.ndarray:
     ParameterError
         If ``alpha`` is outside ``[0, 1]``.
 
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.elements.inputs import as_element_graph
+    >>> g = as_element_graph(trimesh.creation.box())
+    >>> shlafman_weights(g, alpha=0.5).shape
+    (18,)
+
     References
     ----------
     Simari et al. 2014, eq. 6; Shlafman, Tal, Katz, "Metamorphosis of
@@ -259,6 +267,15 @@ def edge_weights(graph, weighting: str = "paper", *, alpha: float = _PAPER_ALPHA
     ------
     ParameterError
         On an unknown ``weighting`` or a parameter out of range.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.elements.inputs import as_element_graph
+    >>> g = as_element_graph(trimesh.creation.box())
+    >>> w = edge_weights(g, "paper", alpha=200)
+    >>> w.shape, bool((w > 0).all())
+    ((18,), True)
     """
     check_choice("weighting", weighting, WEIGHTINGS)
     if weighting == "paper":

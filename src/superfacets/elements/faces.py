@@ -79,6 +79,12 @@ def face_graph(mesh) -> ElementGraph:
     ElementGraph
         ``kind = "faces"``; ``edges`` and ``boundary_edges`` hold mesh edges.
 
+    Raises
+    ------
+    TypeError
+        If ``mesh`` is not a :class:`~superfacets.mesh.Mesh` (use
+        :func:`superfacets.as_mesh`, or :func:`superfacets.elements.as_element_graph`).
+
     Examples
     --------
     >>> import trimesh

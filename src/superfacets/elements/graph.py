@@ -191,6 +191,14 @@ class ElementGraph:
         ``dual_edge``, ``lengths``): ``rebuild[name](graph)`` computes that
         field again, the same, as a dict of fields. A field without an entry
         is never released.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets import as_mesh, face_graph
+    >>> g = face_graph(as_mesh(trimesh.creation.box()))
+    >>> g.kind, g.n_elements, g.pairs.shape, g.indptr.shape
+    ('faces', 12, (18, 2), (13,))
     """
 
     kind: str

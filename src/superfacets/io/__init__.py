@@ -20,8 +20,32 @@ from .volumes import VOLUME_FORMATS, read_volume, write_volume_labels
 
 def read_input(path):
     """A mesh (:func:`read_mesh`) or a point cloud (:func:`read_cloud`: a cloud format, or a
-    PLY without faces), by the file."""
+    PLY without faces), by the file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A mesh or point-cloud file (optionally ``.gz``, ``.xz``, ``.bz2``).
+
+    Returns
+    -------
+    Mesh or PointCloud
+
+    Raises
+    ------
+    FileNotFoundError, MeshFormatError, InvalidMeshError, InvalidCloudError
+        As :func:`read_mesh` and :func:`read_cloud`.
+
+    Examples
+    --------
+    >>> import numpy as np, trimesh
+    >>> _ = trimesh.creation.box().export("box.ply")
+    >>> np.save("points.npy", np.random.default_rng(0).random((20, 3)))
+    >>> type(read_input("box.ply")).__name__, type(read_input("points.npy")).__name__
+    ('Mesh', 'PointCloud')
+    """
     return read_cloud(path) if is_cloud_file(path) else read_mesh(path)
+
 
 __all__ = ["read_mesh", "write_mesh", "read_labels", "write_labels", "write_colored_mesh",
            "atomic_write", "MESH_FORMATS", "read_cloud", "read_input", "CLOUD_FORMATS",

@@ -94,6 +94,14 @@ def read_cloud(path, format: str | None = None):
         normals are zero or not finite.
     MissingExtraError
         PCD and LAS/LAZ without the ``clouds`` extra.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> np.savetxt("cloud.xyz", np.random.default_rng(0).random((50, 3)))
+    >>> c = read_cloud("cloud.xyz")
+    >>> c.n_points, c.points.dtype
+    (50, dtype('float64'))
     """
     from ..cloud import InvalidCloudError, PointCloud
 

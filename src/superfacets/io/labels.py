@@ -41,6 +41,11 @@ def write_labels(path, labels, header: dict | Iterable[str] | None = None, *,
     ------
     ParameterError
         If ``labels`` is not a 1-D integer array.
+
+    Examples
+    --------
+    >>> write_labels("labels.seg", [0, 1, 1]).read_text().split()
+    ['0', '1', '1']
     """
     labels = check_labels(labels, None)
     head = ""
@@ -76,6 +81,14 @@ def write_segindices(path, labels, params: dict | None = None, scene_id: str = "
     ------
     ParameterError
         If ``labels`` is not a 1-D integer array.
+
+    Examples
+    --------
+    >>> import json
+    >>> p = write_segindices("scene.segs.json", [0, 0, 1], {"n_segments": 2}, "scene")
+    >>> d = json.loads(p.read_text())
+    >>> d["sceneId"], d["segIndices"]
+    ('scene', [0, 0, 1])
     """
     import json
 
@@ -107,6 +120,12 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
         If the file does not exist.
     MeshFormatError
         If a line is not one integer, or the count differs from ``n_faces``.
+
+    Examples
+    --------
+    >>> path = write_labels("run.seg", [0, 0, 1, 2])
+    >>> read_labels(path, n_faces=4).tolist()
+    [0, 0, 1, 2]
     """
     path = Path(path)
     if not path.exists():

@@ -61,6 +61,14 @@ def read_mesh(path, format: str | None = None) -> Mesh:
     InvalidMeshError
         If the content is not a usable mesh (empty, NaN/inf coordinates,
         indices out of range).
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> _ = trimesh.creation.box().export("box.ply")
+    >>> m = read_mesh("box.ply")
+    >>> m.n_faces, m.n_vertices
+    (12, 8)
     """
     path = Path(path)
     fmt, comp = split_suffix(path)

@@ -46,6 +46,14 @@ def read_volume(path):
         As :class:`~superfacets.volume.TetMesh`.
     MissingExtraError
         Without meshio (``pip install 'superfacets[volumes]'``).
+
+    Examples
+    --------
+    >>> from superfacets import TetMesh
+    >>> t = TetMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], [[0, 1, 2, 3]])
+    >>> _ = write_volume_labels("t.vtu", t, [0])
+    >>> read_volume("t.vtu").n_tets
+    1
     """
     from ..extras import require
     from ..volume import TetMesh
@@ -98,12 +106,24 @@ def write_volume_labels(path, mesh, labels, *, outputs=None) -> Path:
     outputs : Outputs, optional
         Write as part of an all-or-nothing group.
 
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
     Raises
     ------
     ParameterError
         If the labels are not one per tetrahedron.
     MissingExtraError
         Without meshio.
+
+    Examples
+    --------
+    >>> from superfacets import TetMesh
+    >>> t = TetMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], [[0, 1, 2, 3]])
+    >>> write_volume_labels("part.vtu", t, [0]).name
+    'part.vtu'
     """
     import tempfile
 

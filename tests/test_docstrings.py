@@ -1,0 +1,61 @@
+"""Every public name documents itself as the field expects (numpydoc): its parameters,
+what it returns (or its attributes), the errors it raises, and an example that runs."""
+
+from __future__ import annotations
+
+import doctest
+import importlib
+import inspect
+
+import pytest
+
+import superfacets
+
+#: Sections a public function must have; a class has Attributes (or Parameters) instead
+#: of Returns. Constants (DEFAULTS) and errors (one-line exception classes) are exempt
+#: from all but a docstring.
+FUNCTION = ("Parameters", "Returns", "Raises", "Examples")
+CLASS = ("Examples",)
+ERRORS = {"SuperfacetsError", "ParameterError", "InvalidMeshError", "InvalidCloudError",
+          "MeshFormatError", "MemoryLimitError", "MissingExtraError"}
+
+
+def _sections(doc: str) -> set[str]:
+    lines = inspect.cleandoc(doc).splitlines()
+    return {a.strip() for a, b in zip(lines, lines[1:]) if b.strip() and set(b.strip()) == {"-"}}
+
+
+@pytest.mark.parametrize("name", sorted(superfacets.__all__))
+def test_every_public_name_has_the_sections(name):
+    obj = getattr(superfacets, name)
+    doc = inspect.getdoc(obj)
+    assert doc, f"{name} has no docstring"
+    if name in ERRORS or name == "DEFAULTS":
+        return
+    have = _sections(doc)
+    if inspect.isclass(obj):
+        want = set(CLASS) | ({"Attributes"} if "Parameters" not in have else {"Parameters"})
+    else:
+        want = set(FUNCTION)
+    missing = sorted(want - have)
+    assert not missing, f"{name}: no {', '.join(missing)} section"
+
+
+MODULES = sorted({getattr(superfacets, n).__module__ for n in superfacets.__all__
+                  if hasattr(getattr(superfacets, n), "__module__")} |
+                 {"superfacets.params", "superfacets.checks", "superfacets.elements.kinds",
+                  "superfacets.elements.inputs", "superfacets.stages", "superfacets.pipeline",
+                  "superfacets.result", "superfacets.hierarchy", "superfacets.levels"})
+
+
+@pytest.mark.parametrize("module", MODULES)
+def test_the_examples_run(module, tmp_path, monkeypatch):
+    """The Examples of the public modules run as doctests (in a scratch folder)."""
+    monkeypatch.chdir(tmp_path)
+    mod = importlib.import_module(module)
+    finder = doctest.DocTestFinder(exclude_empty=True)
+    runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+    for test in finder.find(mod, module, extraglobs={"np": __import__("numpy")}):
+        runner.run(test)
+    result = runner.summarize(verbose=False)
+    assert result.failed == 0, f"{result.failed} example(s) of {module} failed"
