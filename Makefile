@@ -64,7 +64,7 @@ PSB_DIR ?= $(HOME)/.cache/superfacets/psb
 pictures: $(STAMP)
 	$(VENV)/bin/superfacets panel ../shared/data/meshes/horse.tri.xz --up z --alpha 0 200 1000 \
 	    -k 150 --size 640x520 -o docs/images/fig2_horse.png
-	$(VENV)/bin/python -c "from superfacets.datasets.psb import psb_root; psb_root()"
+	$(VENV)/bin/python -c "from superfacets.evaluation.datasets.psb import psb_root; psb_root()"
 	for id in 21 101 121 181 281 321; do \
 	  $(VENV)/bin/superfacets render $(PSB_DIR)/off/$$id.off -k 150 --size 480x400 \
 	      --title "PSB $$id" -o docs/images/psb_$$id.png; done

@@ -50,8 +50,8 @@ def main() -> int:
     args = ap.parse_args()
 
     from superfacets import read_mesh, segment, write_labels
-    from superfacets.datasets.psb import first_per_category, list_meshes, psb_root
-    from superfacets.runner.batch import read_manifest, run_batch
+    from superfacets.evaluation.datasets.psb import first_per_category, list_meshes, psb_root
+    from superfacets.scale.runner.batch import read_manifest, run_batch
 
     meshes = list_meshes(psb_root())
     if args.per_category:
@@ -60,7 +60,7 @@ def main() -> int:
     n = len(files)
     tmp = Path(tempfile.mkdtemp(prefix="sf-batch-bench-"))
 
-    from superfacets.runner.engine import Engine
+    from superfacets.scale.runner.engine import Engine
 
     labels = ["loop (read + segment + write, one process, warm)", "batch, in process (warm)",
               "batch, Dask, 1 worker (warm cluster)",

@@ -12,8 +12,8 @@ Candidates:
 
 - ``floor``: three rounds of majority smoothing (each boundary element takes
   the neighbouring label that minimises its boundary cost, concave creases
-  cheaper, as :func:`superfacets.cleanup.cut_costs`), then the connectivity step;
-- ``cut ...``: :func:`superfacets.cleanup.clean_boundaries` with the parameters shown
+  cheaper, as :func:`superfacets.method.cleanup.cut_costs`), then the connectivity step;
+- ``cut ...``: :func:`superfacets.method.cleanup.clean_boundaries` with the parameters shown
   (the package's defaults first);
 - ``oracle``: the same graph cut with the human boundaries made 100x cheaper
   (the fraction of the humans who cut an edge), with the default band, with
@@ -74,10 +74,10 @@ def majority_smoothing(graph, labels, cost, rounds: int = 3) -> np.ndarray:
 
 def main() -> None:
     from superfacets import segment
-    from superfacets.cleanup import clean_boundaries, cut_costs
-    from superfacets.connectivity import enforce_connectivity
-    from superfacets.datasets.psb import first_per_category, list_meshes, psb_root
-    from superfacets.metrics import evaluate
+    from superfacets.evaluation.datasets.psb import first_per_category, list_meshes, psb_root
+    from superfacets.evaluation.metrics import evaluate
+    from superfacets.method.cleanup import clean_boundaries, cut_costs
+    from superfacets.method.connectivity import enforce_connectivity
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--per-category", type=int, default=5)
@@ -117,7 +117,7 @@ def main() -> None:
         for name, kw in CANDIDATES:
             run(name, lambda kw=kw: clean_boundaries(g, r.labels, r.centers, alpha=args.alpha,
                                                      **kw))
-        import superfacets.cleanup as cl
+        import superfacets.method.cleanup as cl
 
         real = cl.cut_costs
         cl.cut_costs = lambda graph, **kw: real(graph, **kw) * (1 - 0.99 * human)

@@ -3,7 +3,7 @@
 Usage: python benchmarks/cleanup_concavity.py [--per-category 3] [-k 150] [--alpha 200]
 
 The clean-up's boundary cost makes an adjacency cheaper by its own dihedral
-angle (``superfacets.cleanup.cut_costs``). Human part boundaries follow the
+angle (``superfacets.method.cleanup.cut_costs``). Human part boundaries follow the
 minima rule: they lie where the surface is concave, and on a smooth neck the
 concavity is spread over many faces whose dihedral angles are each small.
 This candidate adds a multi-ring cue: the concave angle integrated over each
@@ -54,10 +54,10 @@ def smoothed_concavity(graph, radius: float, scale: float) -> np.ndarray:
 
 
 def main() -> None:
-    import superfacets.cleanup as cl
+    import superfacets.method.cleanup as cl
     from superfacets import segment
-    from superfacets.datasets.psb import first_per_category, list_meshes, psb_root
-    from superfacets.metrics import evaluate
+    from superfacets.evaluation.datasets.psb import first_per_category, list_meshes, psb_root
+    from superfacets.evaluation.metrics import evaluate
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--per-category", type=int, default=3)

@@ -22,7 +22,7 @@ SHORT = {"undersegmentation_error": "UE", "compactness": "C", "boundary_recall":
 def main() -> None:
     import pandas as pd
 
-    from superfacets.report.tables import load_results, ok_rows
+    from superfacets.evaluation.report.tables import load_results, ok_rows
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("results", nargs="+")

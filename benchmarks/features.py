@@ -63,9 +63,9 @@ def main() -> None:
     a = ap.parse_args()
 
     from superfacets import segment
-    from superfacets.datasets.psb import first_per_category, list_meshes
+    from superfacets.evaluation.datasets.psb import first_per_category, list_meshes
+    from superfacets.evaluation.metrics import evaluate
     from superfacets.io import read_cloud, read_mesh
-    from superfacets.metrics import evaluate
 
     meshes = first_per_category(list_meshes(), a.per_category)
     rows = {b: [] for b in a.beta}
@@ -110,10 +110,10 @@ def file_colours(meshes, a) -> None:
     import trimesh
 
     from superfacets import Mesh, segment
-    from superfacets.datasets.sampling import vertex_ground_truth
     from superfacets.elements.inputs import elements_of
+    from superfacets.evaluation.datasets.sampling import vertex_ground_truth
+    from superfacets.evaluation.metrics import evaluate
     from superfacets.io import read_mesh
-    from superfacets.metrics import evaluate
 
     rows = {(e, b): [] for e in ("faces", "vertices") for b in a.beta}
     with tempfile.TemporaryDirectory() as tmp:

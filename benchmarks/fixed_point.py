@@ -28,7 +28,7 @@ import numpy as np
 
 
 class FreezeCycles:
-    """``update_centers`` of :mod:`superfacets.passes`, freezing the centers of a cycle."""
+    """``update_centers`` of :mod:`superfacets.method.passes`, freezing the centers of a cycle."""
 
     def __init__(self, update):
         self.update = update
@@ -58,9 +58,9 @@ class FreezeCycles:
 
 
 def run(mesh, k, alpha, freeze: bool, **kw):
-    import superfacets.passes as passes
-    from superfacets.params import resolve
-    from superfacets.segmentation import pipeline
+    import superfacets.method.passes as passes
+    from superfacets.api.segmentation import pipeline
+    from superfacets.method.params import resolve
 
     params = resolve(n_segments=k, alpha=alpha, **kw)
     if not freeze:
@@ -80,8 +80,8 @@ def ending(r) -> str:
 
 
 def main() -> None:
-    from superfacets.datasets.psb import first_per_category, list_meshes, psb_root
-    from superfacets.metrics import evaluate
+    from superfacets.evaluation.datasets.psb import first_per_category, list_meshes, psb_root
+    from superfacets.evaluation.metrics import evaluate
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("-k", type=int, default=150)

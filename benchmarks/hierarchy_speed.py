@@ -6,7 +6,7 @@ Usage: python benchmarks/hierarchy_speed.py [--points 100000 1000000] [-k 1000 5
 A synthetic terrain (a seeded uniform sample of a ground with hills, a
 step and noise, the same for every row) of each size is segmented into
 ``start * k`` superpoints; then, each timed apart in the same process: the
-superpoint graph of the planarity cost (:func:`superfacets.hierarchy.planarity_graph`,
+superpoint graph of the planarity cost (:func:`superfacets.graph.hierarchy.planarity_graph`,
 each point weighing one), the level of ``k`` with the planarity cost, the
 same level with Ward's cost (on :meth:`SegmentationResult.graph`), and
 :func:`superfacets.adaptive_superpoints` from the start (segmentation, graph
@@ -40,7 +40,7 @@ def main() -> None:
     a = ap.parse_args()
 
     from superfacets import adaptive_superpoints, segment
-    from superfacets.hierarchy import hierarchy, planarity_graph
+    from superfacets.graph.hierarchy import hierarchy, planarity_graph
 
     print("| points | k | superpoints merged | segment (s) | planarity graph (s) | "
           "planarity level (s) | Ward level (s) | adaptive_superpoints (s) |")

@@ -51,7 +51,7 @@ def make(base: str, level: int, cache: Path) -> Path:
     import trimesh
 
     from superfacets import Mesh, read_mesh, write_mesh
-    from superfacets.datasets.psb import default_archive
+    from superfacets.evaluation.datasets.psb import default_archive
 
     out = cache / f"{base}_x{4 ** level}.ply"
     if out.exists():
@@ -90,7 +90,7 @@ def subdivide(mesh, level: int):
 def make_psb(level: int, per_category: int | None, cache: Path) -> Path:
     """The benchmark subdivided ``level`` times, in ``cache/psb_x<4^level>``."""
     from superfacets import Mesh, read_mesh, write_mesh
-    from superfacets.datasets.psb import first_per_category, list_meshes
+    from superfacets.evaluation.datasets.psb import first_per_category, list_meshes
     from superfacets.io.labels import read_labels
 
     out = cache / f"psb_x{4 ** level}"
@@ -117,7 +117,7 @@ def make_psb(level: int, per_category: int | None, cache: Path) -> Path:
 
 
 def main() -> int:
-    from superfacets.datasets.psb import default_cache
+    from superfacets.evaluation.datasets.psb import default_cache
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--levels", type=int, nargs="+", default=[1, 2, 3, 4])

@@ -36,11 +36,11 @@ SETTINGS = {
 
 def main() -> None:
     from superfacets import Mesh, PointCloud, segment
-    from superfacets.datasets.psb import first_per_category, list_meshes
-    from superfacets.datasets.sampling import sample_points, vertex_ground_truth
     from superfacets.elements.inputs import elements_of
+    from superfacets.evaluation.datasets.psb import first_per_category, list_meshes
+    from superfacets.evaluation.datasets.sampling import sample_points, vertex_ground_truth
+    from superfacets.evaluation.metrics import evaluate
     from superfacets.io import read_mesh
-    from superfacets.metrics import evaluate
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("-k", type=int, default=150)

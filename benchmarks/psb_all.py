@@ -19,9 +19,9 @@ from pathlib import Path
 import numpy as np
 
 from superfacets import read_mesh, segment  # noqa: E402
-from superfacets.connectivity import label_components  # noqa: E402
-from superfacets.datasets.psb import category, psb_root  # noqa: E402
 from superfacets.elements import face_graph
+from superfacets.evaluation.datasets.psb import category, psb_root  # noqa: E402
+from superfacets.method.connectivity import label_components  # noqa: E402
 
 
 def main() -> int:

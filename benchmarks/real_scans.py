@@ -5,7 +5,7 @@ Usage: python benchmarks/real_scans.py [--scans NAME ...] [-k 300 1000 3000]
        [--neighbors 10] [--split-merge] [--min-points 3] [--content] [--adaptive]
        [--leave-out CLASS ...] [--csv results.csv] [--download]
 
-Each scan of ``superfacets.datasets.scans.SCANS`` found in the cache
+Each scan of ``superfacets.evaluation.datasets.scans.SCANS`` found in the cache
 (``$SUPERFACETS_SCANS``, default ``~/.cache/superfacets/scans``; ``--download``
 fetches the missing ones, a few MB each) is segmented by every method at
 each k, on the same point graph (10 nearest neighbours), and measured
@@ -75,7 +75,7 @@ def run(scan, method: str, k: int, beta: float, options: dict | None = None,
     """One method on one scan at ``k``: the metrics and the seconds (its search included);
     with ``leave_out`` classes, also UE and recall with their points unlabelled."""
     from superfacets import segment
-    from superfacets.datasets.scans import evaluate_scan
+    from superfacets.evaluation.datasets.scans import evaluate_scan
 
     t0 = time.perf_counter()
     if method == "superfacets":  # the registry's run, with the colour weight
@@ -93,16 +93,16 @@ def run(scan, method: str, k: int, beta: float, options: dict | None = None,
         else:
             labels = _equal_count(superpoints, k)
     elif method == "graph_segmentation":  # as the registry runs them, with the neighbours
-        from superfacets.baselines.graph_segmentation import graph_segmentation
+        from superfacets.evaluation.baselines.graph_segmentation import graph_segmentation
 
         labels = graph_segmentation(scan.cloud, n_segments=k, elements="points",
                                     n_neighbors=neighbors)
     elif method == "cut_pursuit":
-        from superfacets.baselines.cut_pursuit import cut_pursuit
+        from superfacets.evaluation.baselines.cut_pursuit import cut_pursuit
 
         labels = cut_pursuit(scan.cloud, k, elements="points", n_neighbors=neighbors)
     else:
-        from superfacets.baselines.vccs import vccs
+        from superfacets.evaluation.baselines.vccs import vccs
 
         labels = vccs(scan.cloud, k, n_neighbors=neighbors)
     seconds = time.perf_counter() - t0
@@ -153,7 +153,7 @@ def _equal_count(run_k, k: int, tries: int = 4):
 
 
 def main() -> None:
-    from superfacets.datasets.scans import SCANS, fetch_scan, load_scan, scan_files
+    from superfacets.evaluation.datasets.scans import SCANS, fetch_scan, load_scan, scan_files
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scans", nargs="+", default=list(SCANS), choices=list(SCANS))

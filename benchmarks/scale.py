@@ -54,7 +54,7 @@ def one(path: str, k: int, alpha: float, threads: int | None, baseline: bool = F
     from superfacets import read_mesh, segment
 
     t_import = time.perf_counter() - t
-    from superfacets import warmup
+    from superfacets._runtime import warmup
 
     warmup.start()  # numba's start-up, as the command line does (else on the first call)
     warmup.wait()
@@ -73,7 +73,7 @@ def one(path: str, k: int, alpha: float, threads: int | None, baseline: bool = F
                coarse_elements=r.timings.get("coarse_elements", 0),
                coarse_passes=r.timings.get("coarse_passes", 0))
     if baseline:  # the same faces, in the same process, after ours (its peak is not counted)
-        from superfacets.baselines.graph_segmentation import graph_segmentation
+        from superfacets.evaluation.baselines.graph_segmentation import graph_segmentation
 
         t = time.perf_counter()
         labels = graph_segmentation(mesh, 0.01, 20, n_segments=k)  # threshold searched to k
@@ -140,7 +140,7 @@ def main() -> int:
         return 0
     from large_meshes import make
 
-    from superfacets.datasets.psb import default_archive, default_cache
+    from superfacets.evaluation.datasets.psb import default_archive, default_cache
 
     meshes = default_archive().parent / "meshes"
     runs = [("bunny k=150, cold JIT", meshes / "bunny.tri.xz", 150)]

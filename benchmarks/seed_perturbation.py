@@ -53,8 +53,8 @@ def perturbed(initial_centers, rings: int):
 
 
 def _run(path: Path, args, rings: int | None) -> Path:
-    from superfacets import initialization
     from superfacets.cli import main
+    from superfacets.method import initialization
 
     original = initialization.initial_centers
     if rings is not None:

@@ -5,7 +5,7 @@ Usage: python benchmarks/split_merge_rounds.py [--rounds 1 3 6 10] [--per-catego
 
 For each round limit, runs ``superfacets experiment`` in this process (one
 worker) with ``split_merge=true`` and the limit of
-:func:`superfacets.splitmerge.swap_and_iterate` set to it, plus one run of
+:func:`superfacets.method.splitmerge.swap_and_iterate` set to it, plus one run of
 the paper's method, on the first meshes of each category; then prints one
 Markdown row per setting (means over meshes) and whether every run kept the
 paper's number of superfacets. The CSV files stay in ``--out`` (rerunning
@@ -20,8 +20,8 @@ from pathlib import Path
 
 
 def _run(out: Path, args, rounds: int | None) -> Path:
-    from superfacets import splitmerge
     from superfacets.cli import main
+    from superfacets.method import splitmerge
 
     path = out / ("paper.csv" if rounds is None else f"rounds_{rounds}.csv")
     kw = splitmerge.swap_and_iterate.__kwdefaults__

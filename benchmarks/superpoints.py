@@ -39,7 +39,7 @@ def _peak_mib() -> float:
 
 def row_bunny(repeat: int) -> dict:
     from superfacets import read_mesh, segment
-    from superfacets.baselines.graph_segmentation import graph_segmentation
+    from superfacets.evaluation.baselines.graph_segmentation import graph_segmentation
 
     best = {}
     for _ in range(repeat):
@@ -62,7 +62,7 @@ def row_bunny(repeat: int) -> dict:
 
 def row_million(n: int, repeat: int, content: bool = False) -> dict:
     from superfacets import read_mesh, superpoints
-    from superfacets.datasets.sampling import sample_points
+    from superfacets.evaluation.datasets.sampling import sample_points
 
     pts, _ = sample_points(read_mesh(SHARED / "meshes" / "horse.tri.xz"), n, seed=0)
     best = None

@@ -74,7 +74,7 @@ print(json.dumps(dict(seconds=sec, peak_mib=peak,
 def _subdivided(mesh_id: int, s: int, folder: Path):
     import trimesh
 
-    from superfacets.datasets.psb import list_meshes
+    from superfacets.evaluation.datasets.psb import list_meshes
     from superfacets.io import read_labels, read_mesh
 
     b = next(m for m in list_meshes() if m.id == mesh_id)
@@ -103,9 +103,9 @@ def _graph(data):
 
 
 def _row(name, n, data, gt, path, k, a, folder):
-    from superfacets.connectivity import label_components
-    from superfacets.metrics import undersegmentation_error
-    from superfacets.runner.tiles import segment_tiled
+    from superfacets.evaluation.metrics import undersegmentation_error
+    from superfacets.method.connectivity import label_components
+    from superfacets.scale.runner.tiles import segment_tiled
 
     out = folder / "single.npy"
     t = time.perf_counter()
@@ -159,11 +159,11 @@ def _equal_weight_ue(labels, gt, tau=0.05) -> float:
 
 def _cut_per_tile(path: Path, res, n_neighbors: int) -> tuple[int, int]:
     """(superpoints in pieces, superpoints not inside their tile's checked box)."""
-    from superfacets.connectivity import label_components
     from superfacets.elements.inputs import elements_of
     from superfacets.io.regions import RegionReader
-    from superfacets.runner.buckets import bucket
-    from superfacets.tile_layout import tile_box, tile_of
+    from superfacets.method.connectivity import label_components
+    from superfacets.scale.runner.buckets import bucket
+    from superfacets.scale.tile_layout import tile_box, tile_of
 
     reader = RegionReader.open(path)
     edges = res.layout
@@ -197,7 +197,7 @@ def _cut_per_tile(path: Path, res, n_neighbors: int) -> tuple[int, int]:
 
 
 def _row_tiled_only(name, n, gt, path, k, a) -> None:
-    from superfacets.runner.tiles import segment_tiled
+    from superfacets.scale.runner.tiles import segment_tiled
 
     t = time.perf_counter()
     res = segment_tiled(path, k, tiles=a.tiles, workers=a.workers, halo=a.halo, progress=True)
@@ -219,12 +219,12 @@ def compare(a) -> None:
     import trimesh
 
     from superfacets import Mesh, segment
-    from superfacets.connectivity import label_components
-    from superfacets.datasets.psb import first_per_category, list_meshes
     from superfacets.elements.faces import face_graph
+    from superfacets.evaluation.datasets.psb import first_per_category, list_meshes
+    from superfacets.evaluation.metrics import undersegmentation_error
     from superfacets.io import read_labels, read_mesh
-    from superfacets.metrics import undersegmentation_error
-    from superfacets.runner.tiles import segment_tiled
+    from superfacets.method.connectivity import label_components
+    from superfacets.scale.runner.tiles import segment_tiled
 
     extra = dict(paper=True) if a.paper else {}
     ue_s, ue_t, cut, dis = [], [], 0, 0
@@ -234,8 +234,8 @@ def compare(a) -> None:
         gt = read_labels(b.seg_paths[0], m.n_faces)
         if a.compare_points:  # a cloud sampled on the mesh, each point with its face's class
             from superfacets import PointCloud
-            from superfacets.datasets.sampling import sample_points
             from superfacets.elements.inputs import elements_of
+            from superfacets.evaluation.datasets.sampling import sample_points
 
             pts, face = sample_points(m, a.compare_points, seed=0)
             data = PointCloud(pts)
@@ -295,7 +295,7 @@ def main() -> None:
     if a.compare:
         return compare(a)
     from superfacets import Mesh
-    from superfacets.datasets.sampling import sample_points
+    from superfacets.evaluation.datasets.sampling import sample_points
 
     print(f"machine: {os.cpu_count()} cores; single run in a new process (1 thread per "
           f"core, default method); tiled: {a.workers} Dask workers, halo {a.halo:g}")

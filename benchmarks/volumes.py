@@ -21,7 +21,7 @@ import numpy as np
 def wavy_cube(n: int, seed: int = 0):
     from scipy.spatial import Delaunay
 
-    from superfacets.volume import TetMesh
+    from superfacets.inputs.volume import TetMesh
 
     corners = np.array(np.meshgrid([0.0, 1.0], [0.0, 1.0], [0.0, 1.0])).reshape(3, -1).T
     p = np.r_[np.random.default_rng(seed).random((n, 3)), corners]
@@ -38,8 +38,8 @@ def main() -> None:
     a = ap.parse_args()
     from superfacets import segment
     from superfacets.elements.cells import cell_graph
-    from superfacets.metrics import compactness, undersegmentation_error
-    from superfacets.volume import TetMesh
+    from superfacets.evaluation.metrics import compactness, undersegmentation_error
+    from superfacets.inputs.volume import TetMesh
 
     print("| points | tetrahedra | beta | superfacets | UE by volume | compactness | seconds |")
     print("|---|---|---|---|---|---|---|")

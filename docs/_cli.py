@@ -11,7 +11,7 @@ HEAD = """The command line
 ``superfacets COMMAND --help`` prints what these pages show; they are written from the
 same parser each time the documentation is built. Every command that segments takes the
 method's options (``-k``, ``--alpha``, ``--paper``, ...), declared once with the Python
-API's parameters (``superfacets.params.PARAMETERS``).
+API's parameters (``superfacets.method.params.PARAMETERS``).
 
 .. toctree::
    :maxdepth: 1
@@ -52,8 +52,8 @@ def _indent(text: str) -> str:
 
 
 def write_parameter_table(path: Path) -> None:
-    """A Markdown table of ``superfacets.params.PARAMETERS`` (the one declaration)."""
-    from superfacets.params import PARAMETERS
+    """A Markdown table of ``superfacets.method.params.PARAMETERS`` (the one declaration)."""
+    from superfacets.method.params import PARAMETERS
 
     rows = ["| parameter | default | option | applies to | what it is |", "|---|---|---|---|---|"]
     for p in PARAMETERS:

@@ -9,7 +9,7 @@ import pytest
 import trimesh
 
 from superfacets import Mesh
-from superfacets.datasets.psb import default_archive, psb_root
+from superfacets.evaluation.datasets.psb import default_archive, psb_root
 
 SHARED = default_archive().parent.parent
 MESHES = SHARED / "data" / "meshes"

@@ -35,7 +35,7 @@ WEIGHTINGS = (("paper", 200.0), ("shlafman", 0.5))
 
 def mesh_sources(shared: Path, psb: Path) -> dict[str, Path]:
     """name -> mesh file: the Table-1 meshes, then 2 benchmark meshes per category."""
-    from superfacets.datasets.psb import list_meshes
+    from superfacets.evaluation.datasets.psb import list_meshes
 
     out = {name: shared / "data" / "meshes" / f"{name}.tri.xz" for name in TABLE1}
     by_cat: dict[str, list] = {}
@@ -111,7 +111,7 @@ def compute(sources: dict[str, Path], progress: bool = False):
 
 
 def main() -> int:
-    from superfacets.datasets.psb import default_archive, psb_root
+    from superfacets.evaluation.datasets.psb import default_archive, psb_root
 
     shared = default_archive().parent.parent
     out = {}

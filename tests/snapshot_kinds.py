@@ -44,7 +44,7 @@ def _inputs(shared: Path) -> dict:
     colors = np.c_[uneven[:, 1] > np.median(uneven[:, 1]), np.zeros((len(uneven), 2))]
     cube = np.r_[rng.random((3000, 3)),
                  np.array(np.meshgrid([0.0, 1.0], [0.0, 1.0], [0.0, 1.0])).reshape(3, -1).T]
-    from superfacets.volume import TetMesh
+    from superfacets.inputs.volume import TetMesh
 
     return dict(bunny=bunny, capsule=capsule, even=PointCloud(np.asarray(even)),
                 uneven=PointCloud(np.asarray(uneven), colors=colors.astype(float)),
@@ -92,8 +92,8 @@ def key(name: str, method: str, options: dict) -> str:
 def compute(shared: Path):
     """Yield (key, labels) of every run."""
     from superfacets import segment
-    from superfacets.levels import adaptive_superpoints
-    from superfacets.runner.tiles import segment_tiled
+    from superfacets.api.levels import adaptive_superpoints
+    from superfacets.scale.runner.tiles import segment_tiled
 
     inputs = _inputs(shared)
     for name, method, options in runs():

@@ -17,8 +17,8 @@ from scipy.sparse import csr_array
 from scipy.sparse.csgraph import dijkstra
 
 from superfacets.elements import face_graph
-from superfacets.initialization import farthest_point_centers
-from superfacets.weights import paper_weights
+from superfacets.method.initialization import farthest_point_centers
+from superfacets.method.weights import paper_weights
 
 
 def classify(a: csr_array, c: np.ndarray, centers: list, window_r2: float):

@@ -4,7 +4,10 @@ import numpy as np
 import pytest
 
 from superfacets import segment
-from superfacets.adaptive import (
+from superfacets.elements.points import point_graph
+from superfacets.errors import ParameterError
+from superfacets.inputs.cloud import PointCloud
+from superfacets.method.adaptive import (
     AUTO_DENSITY,
     AUTO_SPREAD,
     adapted_graph,
@@ -14,9 +17,6 @@ from superfacets.adaptive import (
     size_spread,
     window_factors,
 )
-from superfacets.cloud import PointCloud
-from superfacets.elements.points import point_graph
-from superfacets.errors import ParameterError
 
 
 def two_density_plane(seed=0):

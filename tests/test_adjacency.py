@@ -8,12 +8,12 @@ import trimesh
 from conftest import grid_mesh
 
 from superfacets import segment
-from superfacets.adjacency import superfacet_graph
-from superfacets.connectivity import label_components
-from superfacets.convert import as_mesh
 from superfacets.elements import face_graph
 from superfacets.errors import ParameterError
-from superfacets.hierarchy import hierarchy
+from superfacets.graph.adjacency import superfacet_graph
+from superfacets.graph.hierarchy import hierarchy
+from superfacets.inputs.convert import as_mesh
+from superfacets.method.connectivity import label_components
 
 
 def test_box_sides_known_answer():
@@ -133,7 +133,7 @@ def test_superpoint_graph_of_a_cloud_keeps_rows():
     rng = np.random.default_rng(0)
     pts = rng.random((3000, 3)) * [1, 1, 0.01]
     pts[5] = np.nan
-    from superfacets.cloud import PointCloud
+    from superfacets.inputs.cloud import PointCloud
 
     cloud = PointCloud(pts, allow_invalid=True)
     r = segment(cloud, 10)
@@ -255,9 +255,9 @@ def test_adaptive_superpoints_spend_the_count_off_the_floor():
 
 
 def test_cli_adaptive_writes_the_levels_labels(tmp_path, capsys):
+    from superfacets.api.levels import adaptive_segment
     from superfacets.cli import main
     from superfacets.io import write_mesh
-    from superfacets.levels import adaptive_segment
 
     mesh = grid_mesh(40, 40, height=lambda x, y: 0.5 * np.exp(-(x ** 2 + y ** 2) / 0.04))
     path = tmp_path / "b.off"

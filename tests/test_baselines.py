@@ -10,18 +10,18 @@ import trimesh
 from conftest import grid_mesh, write_benchmark
 
 from superfacets import Mesh, ParameterError, as_mesh
-from superfacets.baselines import (
+from superfacets.elements import face_graph
+from superfacets.errors import MemoryLimitError
+from superfacets.evaluation.baselines import (
     ncut_embedding,
     normalized_cuts,
     variational_shape_approximation,
     vsa,
 )
-from superfacets.baselines.ncuts import ncut_memory_estimate
-from superfacets.connectivity import label_components
-from superfacets.elements import face_graph
-from superfacets.errors import MemoryLimitError
-from superfacets.methods import METHODS, Skipped
-from superfacets.runner import expand_grid, read_results, run_experiment
+from superfacets.evaluation.baselines.ncuts import ncut_memory_estimate
+from superfacets.evaluation.methods import METHODS, Skipped
+from superfacets.method.connectivity import label_components
+from superfacets.scale.runner import expand_grid, read_results, run_experiment
 
 
 def _box(subdivisions=2, extents=(1.0, 1.0, 1.0)) -> Mesh:
@@ -254,7 +254,7 @@ def test_every_registered_method_has_one_call_shape(name, monkeypatch):
 
 def test_runner_records_a_mesh_too_large_for_ncuts_as_skipped(tmp_path):
     root = write_benchmark(tmp_path)
-    from superfacets.datasets.psb import list_meshes
+    from superfacets.evaluation.datasets.psb import list_meshes
 
     meshes = list_meshes(root)
     out = tmp_path / "r.csv"
@@ -311,9 +311,9 @@ def test_cli_baseline_writes_labels_and_refuses_too_large(tmp_path, capsys):
 
 def test_cut_pursuit_features_and_known_answers():
     pytest.importorskip("cut_pursuit_py", reason="the baselines extra")
-    from superfacets.baselines.cut_pursuit import cut_pursuit, dimensionality_features
-    from superfacets.cloud import PointCloud
     from superfacets.elements.points import point_graph
+    from superfacets.evaluation.baselines.cut_pursuit import cut_pursuit, dimensionality_features
+    from superfacets.inputs.cloud import PointCloud
 
     rng = np.random.default_rng(0)
     # a plane and a line: planarity ~1 on the plane, linearity ~1 on the line
@@ -369,8 +369,8 @@ def _grid_vccs():
 def test_vccs_without_its_module_says_where_it_comes_from(monkeypatch):
     import sys
 
-    from superfacets.baselines.vccs import vccs
     from superfacets.errors import MissingExtraError
+    from superfacets.evaluation.baselines.vccs import vccs
 
     monkeypatch.setitem(sys.modules, "vccs_supervoxel", None)  # import fails
     with pytest.raises(MissingExtraError, match="py_vccs"):
@@ -380,13 +380,13 @@ def test_vccs_without_its_module_says_where_it_comes_from(monkeypatch):
 def test_vccs_search_and_labels_for_every_point(monkeypatch):
     import sys
 
-    from superfacets.baselines.vccs import vccs
+    from superfacets.evaluation.baselines.vccs import vccs
 
     monkeypatch.setitem(sys.modules, "vccs_supervoxel", _grid_vccs())
     rng = np.random.default_rng(1)
     pts = np.c_[rng.random((4000, 2)), np.zeros(4000)]
     pts[7] = np.nan
-    from superfacets.cloud import PointCloud
+    from superfacets.inputs.cloud import PointCloud
 
     pts = PointCloud(pts, allow_invalid=True)
     labels = vccs(pts, 25)  # seed resolution found by bisection

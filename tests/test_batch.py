@@ -26,9 +26,9 @@ from superfacets import (
     write_mesh,
 )
 from superfacets.cli import main
-from superfacets.runner import batch as bt
-from superfacets.runner import manifest
-from superfacets.runner.batch import collect_inputs, output_names, read_manifest, run_batch
+from superfacets.scale.runner import batch as bt
+from superfacets.scale.runner import manifest
+from superfacets.scale.runner.batch import collect_inputs, output_names, read_manifest, run_batch
 
 KEEP = ("output", "status", "elements", "n_elements", "segments", "passes", "converged")
 
@@ -169,12 +169,12 @@ def test_csv_manifest_without_pyarrow(corpus, tmp_path, monkeypatch):
 
 
 def test_without_dask_the_default_runs_in_this_process(corpus, tmp_path, monkeypatch):
-    import superfacets.runner.engine as eng
+    import superfacets.scale.runner.engine as eng
 
     monkeypatch.setattr(eng, "_have_dask", lambda: False)
     s = run_batch([str(corpus / "a")], tmp_path / "out", 8, progress=False)
     assert s.ok == 6 and "in this process" in s.engine and "distributed" in s.engine
-    import superfacets.extras as extras
+    import superfacets._runtime.extras as extras
 
     monkeypatch.setattr(extras.importlib, "import_module",
                         lambda name: (_ for _ in ()).throw(ImportError(name)))

@@ -7,11 +7,11 @@ import pytest
 from conftest import grid_mesh
 
 from superfacets import segment
-from superfacets.cleanup import clean_boundaries, cut_costs
-from superfacets.connectivity import label_components
 from superfacets.elements import face_graph
 from superfacets.errors import ParameterError
-from superfacets.metrics import compactness
+from superfacets.evaluation.metrics import compactness
+from superfacets.method.cleanup import clean_boundaries, cut_costs
+from superfacets.method.connectivity import label_components
 
 
 def _cut_length(graph, labels) -> float:
@@ -82,7 +82,7 @@ def test_cut_costs_are_the_lengths_without_creases_and_cheaper_on_folds(valley):
 
 
 def test_pipeline_cleanup_on_real_meshes(psb):
-    from superfacets.datasets.psb import list_meshes
+    from superfacets.evaluation.datasets.psb import list_meshes
 
     meshes = list_meshes(psb)
     by_cat = {}
@@ -123,7 +123,7 @@ def test_cleanup_on_vertices_and_points(sphere, elements):
 
 
 def test_crease_weight_per_element_kind():
-    from superfacets.cleanup import CREASE, CREASE_SMOOTH_NORMALS, crease_for
+    from superfacets.method.cleanup import CREASE, CREASE_SMOOTH_NORMALS, crease_for
 
     assert crease_for("faces") == CREASE == 0.1
     assert crease_for("vertices") == crease_for("points") == CREASE_SMOOTH_NORMALS == 1.0
@@ -132,8 +132,8 @@ def test_crease_weight_per_element_kind():
 def test_data_term_weight_per_element_kind():
     # faces weigh roundness more (0.7) than vertices and points (0.3); the default is
     # the kind's, and it matters: a heavier data term leaves rounder superfacets
-    from superfacets.cleanup import SMOOTHNESS, SMOOTHNESS_FACES, smoothness_for
     from superfacets.elements.inputs import elements_of
+    from superfacets.method.cleanup import SMOOTHNESS, SMOOTHNESS_FACES, smoothness_for
 
     assert smoothness_for("faces") == SMOOTHNESS_FACES == 0.7
     assert smoothness_for("vertices") == smoothness_for("points") == SMOOTHNESS == 0.3
@@ -152,8 +152,8 @@ def test_point_boundary_two_spacings_beside_a_concave_crease_ends_on_it():
     # points on the folded plane z = 0.5 |x| (a valley along x = 0), spacing 0.05;
     # the boundary starts two columns right of the crease and ends on it, except in
     # the first and last rows, whose one-sided neighbourhoods keep the old corner
-    from superfacets.cloud import PointCloud
     from superfacets.elements.points import point_graph
+    from superfacets.inputs.cloud import PointCloud
 
     nx, ny = 40, 20
     x, y = np.meshgrid((np.arange(nx) + 0.5) / nx * 2 - 1, (np.arange(ny) + 0.5) / ny * 2 - 1,

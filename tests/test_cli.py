@@ -357,7 +357,7 @@ def test_more_superfacets_than_k_says_why(tmp_path, capsys):
 def test_the_first_run_says_that_it_compiles(tmp_path, monkeypatch):
     import io
 
-    from superfacets import warmup
+    from superfacets._runtime import warmup
 
     class Terminal(io.StringIO):
         def isatty(self):
@@ -375,9 +375,9 @@ def test_the_first_run_says_that_it_compiles(tmp_path, monkeypatch):
 def test_a_cold_cache_is_seen(tmp_path, monkeypatch):
     from pathlib import Path
 
-    from superfacets import warmup
+    from superfacets._runtime import warmup
 
-    here = Path(warmup.__file__).resolve().parent / "_kernels" / "__pycache__"
+    here = Path(warmup.__file__).resolve().parents[1] / "_kernels" / "__pycache__"
     monkeypatch.setattr(Path, "home", lambda: tmp_path)
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))
     real_glob = Path.glob

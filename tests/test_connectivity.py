@@ -3,9 +3,9 @@ import pytest
 from conftest import grid_mesh
 
 from superfacets import enforce_connectivity
-from superfacets.connectivity import label_components
 from superfacets.elements import face_graph
-from superfacets.labels import relabel_dense
+from superfacets.method.connectivity import label_components
+from superfacets.method.labels import relabel_dense
 
 
 def cell_labels(mesh, fn):
@@ -85,7 +85,7 @@ def test_pieces_are_numbered_as_scipy_numbers_components(sphere):
 def test_summed_csr_equals_scipy_coo_to_csr():
     from scipy.sparse import coo_array
 
-    from superfacets.connectivity import _summed_csr
+    from superfacets.method.connectivity import _summed_csr
 
     rng = np.random.default_rng(5)
     for n in (1, 7, 300):
@@ -149,7 +149,7 @@ def sparse_strip_cloud():
 
 def test_segment_min_elements_merges_small_superpoints_at_the_end():
     from superfacets import segment
-    from superfacets.passes import final_centers
+    from superfacets.method.passes import final_centers
 
     xyz = sparse_strip_cloud()
     plain = segment(xyz, 200, density=0)  # equal areas (the automatic density: fewer tiny)

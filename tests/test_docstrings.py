@@ -43,9 +43,11 @@ def test_every_public_name_has_the_sections(name):
 
 MODULES = sorted({getattr(superfacets, n).__module__ for n in superfacets.__all__
                   if hasattr(getattr(superfacets, n), "__module__")} |
-                 {"superfacets.params", "superfacets.checks", "superfacets.elements.kinds",
-                  "superfacets.elements.inputs", "superfacets.stages", "superfacets.pipeline",
-                  "superfacets.result", "superfacets.hierarchy", "superfacets.levels"})
+                 {"superfacets.method.params", "superfacets.checks", "superfacets.elements.kinds",
+                  "superfacets.elements.inputs", "superfacets.method.stages",
+                  "superfacets.method.pipeline",
+                  "superfacets.api.result", "superfacets.graph.hierarchy",
+                  "superfacets.api.levels"})
 
 
 @pytest.mark.parametrize("module", MODULES)

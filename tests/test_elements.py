@@ -3,7 +3,7 @@ import pytest
 
 from superfacets import Mesh, ParameterError, paper_weights, segment, shlafman_weights
 from superfacets.elements import build_face_graph, face_graph
-from superfacets.weights import edge_weights
+from superfacets.method.weights import edge_weights
 
 
 def fold(z: float) -> Mesh:
@@ -247,7 +247,7 @@ def test_face_graph_caches_the_terms_of_the_weights(sphere):
 
 def test_weights_and_metrics_take_the_graph_or_the_mesh(valley):
     from superfacets import superfacets
-    from superfacets.metrics import compactness
+    from superfacets.evaluation.metrics import compactness
 
     g = face_graph(valley)
     np.testing.assert_array_equal(paper_weights(g, alpha=50), paper_weights(valley, alpha=50))
@@ -262,9 +262,9 @@ def test_vertex_and_point_terms_equal_the_numpy_expressions_bit_for_bit(valley):
     floating-point operations in their order (docs/notes/method.md, sections 1-2)."""
     import trimesh
 
-    from superfacets.cloud import PointCloud
     from superfacets.elements.points import point_graph
     from superfacets.elements.vertices import vertex_graph
+    from superfacets.inputs.cloud import PointCloud
 
     rng = np.random.default_rng(0)
     bumpy = trimesh.creation.icosphere(subdivisions=4)
@@ -373,7 +373,8 @@ def test_face_graph_rebuilds_its_normals_after_its_mesh_is_gone(sphere):
 def test_runs_that_release_the_graph_give_the_same_labels(valley, monkeypatch):
     # the passes run without the released fields; what reads them after
     # (connectivity, clean-up, split and merge) finds them rebuilt, the same
-    from superfacets import Mesh, segment, stages
+    from superfacets import Mesh, segment
+    from superfacets.method import stages
 
     def run(release_min, **kw):
         monkeypatch.setattr(stages, "_RELEASE_MIN", release_min)
@@ -391,7 +392,7 @@ def test_runs_that_release_the_graph_give_the_same_labels(valley, monkeypatch):
 def test_graph_and_geometry_on_threads_equal_one_thread(monkeypatch):
     # ranges of half-edges and faces on three threads: the cuts move to edge starts,
     # so non-manifold runs, duplicates and collapsed edges come out as from one call
-    from superfacets import _threads
+    from superfacets._runtime import threads as _threads
 
     rng = np.random.default_rng(1)
     faces = rng.integers(0, 25, size=(3000, 3))
@@ -472,8 +473,8 @@ def test_points_closer_than_the_squared_distance_can_hold_are_two_points():
     """Two distinct points 4e-312 apart are at distance 0 for the KD-tree, which may
     list the other first: each is still its own first neighbour, and no point is its
     own neighbour in the graph (the graph held uninitialized pairs before)."""
-    from superfacets.cloud import PointCloud
     from superfacets.elements.points import point_graph
+    from superfacets.inputs.cloud import PointCloud
 
     pts = np.random.default_rng(0).random((400, 3))
     pts[274] = [3.98616432e-312, 0, 0]
@@ -542,8 +543,8 @@ def test_points_on_scan_lines_reach_the_next_line(monkeypatch):
     (0.4 away; 10 steps on each side reach 0.5): one piece."""
     from scipy.sparse.csgraph import connected_components
 
-    from superfacets.cloud import PointCloud
     from superfacets.elements import points as P
+    from superfacets.inputs.cloud import PointCloud
 
     pts = _scan_lines()
     monkeypatch.setattr(P, "WIDEN", 1)  # the plain graph
@@ -566,8 +567,8 @@ def test_points_on_scan_lines_reach_the_next_line(monkeypatch):
 def test_a_surface_graph_is_not_widened(monkeypatch):
     """Points spread over a surface have no line-like neighbourhood: the graph is the
     plain k-nearest-neighbour graph, to the bit."""
-    from superfacets.cloud import PointCloud
     from superfacets.elements import points as P
+    from superfacets.inputs.cloud import PointCloud
 
     rng = np.random.default_rng(3)
     uv = rng.random((3000, 2))

@@ -11,11 +11,11 @@ from conftest import grid_mesh, write_benchmark
 
 from superfacets import ParameterError
 from superfacets.cli import main
-from superfacets.datasets.psb import list_meshes
-from superfacets.methods import METHODS, MethodRun, Skipped, register_method
-from superfacets.report import load_results, markdown_summary, summary, write_report
-from superfacets.report.tables import series_order
-from superfacets.runner import expand_grid, read_results, run_experiment
+from superfacets.evaluation.datasets.psb import list_meshes
+from superfacets.evaluation.methods import METHODS, MethodRun, Skipped, register_method
+from superfacets.evaluation.report import load_results, markdown_summary, summary, write_report
+from superfacets.evaluation.report.tables import series_order
+from superfacets.scale.runner import expand_grid, read_results, run_experiment
 
 
 def _valley(n, depth):
@@ -156,7 +156,7 @@ def test_a_bad_mesh_does_not_stop_the_run(bench, tmp_path):
 
 
 def test_interrupt_keeps_rows_and_rerun_continues(bench, tmp_path, registry, monkeypatch):
-    import superfacets.runner.experiment as ex
+    import superfacets.scale.runner.experiment as ex
 
     meshes = list_meshes(bench)
     res = tmp_path / "r.csv"
@@ -358,8 +358,8 @@ def test_cli_list_methods(capsys):
 
 
 def test_param_syntax_applies_to_each_method_that_has_the_name():
-    from superfacets.methods import get_method
-    from superfacets.runner import method_grid, parse_params
+    from superfacets.evaluation.methods import get_method
+    from superfacets.scale.runner import method_grid, parse_params
 
     sf, vsa = get_method("superfacets"), get_method("vsa")
     given = method_grid([sf, vsa], parse_params(["max_iter=5,7", "vsa.metric=l2",

@@ -7,11 +7,11 @@ import pytest
 from conftest import SHARED, grid_mesh, minority, need
 
 from superfacets import segment
-from superfacets.cloud import InvalidCloudError, PointCloud
 from superfacets.elements import face_graph
 from superfacets.errors import ParameterError
+from superfacets.inputs.cloud import InvalidCloudError, PointCloud
 from superfacets.io import read_cloud
-from superfacets.weights import paper_weights
+from superfacets.method.weights import paper_weights
 
 
 def _halves(n=20000, cut=0.37, seed=0):

@@ -3,15 +3,15 @@ import pytest
 from conftest import grid_mesh, slab_and_beads
 
 from superfacets import Mesh, ParameterError
-from superfacets.connectivity import label_components
 from superfacets.elements import face_graph
-from superfacets.initialization import (
+from superfacets.method.connectivity import label_components
+from superfacets.method.initialization import (
     farthest_point_centers,
     first_center,
     flood_labels,
     grid_labels,
 )
-from superfacets.weights import paper_weights
+from superfacets.method.weights import paper_weights
 
 
 def strip(n: int) -> Mesh:
@@ -72,7 +72,7 @@ def test_blocked_farthest_point_equals_the_plain_loop(source, monkeypatch):
             blocked = np.empty(k, np.int64)
             farthest_point_blocked(c, k, first_center(mesh), blocked, *spatial_blocks(c, g))
             assert blocked.tolist() == plain.tolist()
-    from superfacets import initialization
+    from superfacets.method import initialization
 
     monkeypatch.setattr(initialization, "_BLOCKED_MIN_WORK", 0)  # the public function, blocked path
     np.testing.assert_array_equal(farthest_point_centers(mesh, 1000), plain)
@@ -110,7 +110,7 @@ def test_flood_labels_cover_mesh_with_connected_regions_within_window(sphere):
 
 
 def test_every_piece_gets_a_center_within_the_count(sphere):
-    from superfacets.initialization import piece_seeds
+    from superfacets.method.initialization import piece_seeds
 
     # connected: the paper's centers exactly
     np.testing.assert_array_equal(farthest_point_centers(sphere, 40, every_piece=True),

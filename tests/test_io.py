@@ -18,9 +18,9 @@ from superfacets import (
     write_labels,
     write_mesh,
 )
-from superfacets.colors import superfacet_adjacency
 from superfacets.elements import face_graph
 from superfacets.io import atomic_write
+from superfacets.viz.colors import superfacet_adjacency
 
 
 @pytest.fixture

@@ -29,12 +29,12 @@ ALLOWED = {
     "elements/": "the table and the builders",
     "io/": "file layouts",
     "cli/": "the command line's wording",
-    "runner/tiles.py": "tile files: faces with their vertices, or points",
-    "runner/buckets.py": "tile files: faces with their vertices, or points",
-    "mesh.py": "a mesh's per-face and per-vertex colours",
-    "render.py": "pictures of a mesh's faces or its vertices",
-    "html/": "pages of a mesh's faces or its vertices",
-    "runner/experiment.py": "the benchmark's per-face ground truth carried to each kind",
+    "scale/runner/tiles.py": "tile files: faces with their vertices, or points",
+    "scale/runner/buckets.py": "tile files: faces with their vertices, or points",
+    "inputs/mesh.py": "a mesh's per-face and per-vertex colours",
+    "viz/render.py": "pictures of a mesh's faces or its vertices",
+    "viz/html/": "pages of a mesh's faces or its vertices",
+    "scale/runner/experiment.py": "the benchmark's per-face ground truth carried to each kind",
 }
 
 
@@ -84,10 +84,10 @@ def test_every_kind_has_a_builder_and_a_row():
 
 
 def test_the_rules_read_the_table():
-    from superfacets.cleanup import band_for, crease_for, smoothness_for
-    from superfacets.multilevel import coarse_ratio
-    from superfacets.params import DEFAULTS, assignment_of, better_method
-    from superfacets.splitmerge import hold_after_for, passes_after_for, swap_eta_convex_for
+    from superfacets.method.cleanup import band_for, crease_for, smoothness_for
+    from superfacets.method.multilevel import coarse_ratio
+    from superfacets.method.params import DEFAULTS, assignment_of, better_method
+    from superfacets.method.splitmerge import hold_after_for, passes_after_for, swap_eta_convex_for
 
     for name, k in KINDS.items():
         assert (crease_for(name), smoothness_for(name), band_for(name)) == (
@@ -105,7 +105,7 @@ def test_the_rules_read_the_table():
 def test_the_superfacet_size_of_a_volume_is_a_ball():
     """Tetrahedra: r of a ball of volume V / k, in the run and in the coarse-to-fine
     estimate of k from a radius (which used a disc's area)."""
-    from superfacets.params import resolve, superfacet_measure, superfacet_size
+    from superfacets.method.params import resolve, superfacet_measure, superfacet_size
 
     k, r = superfacet_size(resolve(n_segments=10), 1.0, 2.0, 1000, "cells")
     assert superfacet_measure(r, 3) == pytest.approx(0.1)

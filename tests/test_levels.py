@@ -8,9 +8,9 @@ import pytest
 from conftest import grid_mesh
 
 from superfacets import segment
-from superfacets.adjacency import superfacet_graph
 from superfacets.errors import ParameterError
-from superfacets.hierarchy import (
+from superfacets.graph.adjacency import superfacet_graph
+from superfacets.graph.hierarchy import (
     AUTO_EXTENT_WEIGHT,
     hierarchy,
     level_extent_weight,
@@ -150,7 +150,7 @@ def test_adaptive_and_cli_take_the_extent_weight(tmp_path, capsys):
 
 def test_the_registry_runs_the_adaptive_level():
     from superfacets import adaptive_superpoints
-    from superfacets.methods import get_method
+    from superfacets.evaluation.methods import get_method
 
     method = get_method("adaptive")
     pts = _bumpy_cloud(2000)
@@ -162,7 +162,7 @@ def test_the_registry_runs_the_adaptive_level():
     np.testing.assert_array_equal(auto.labels, adaptive_superpoints(pts, 12))
     assert method.defaults["start"] == 10 and "points" in method.elements
     # a parameter may not take a metric's column of the results file
-    from superfacets.methods import register_method
+    from superfacets.evaluation.methods import register_method
 
     with pytest.raises(ParameterError, match="reserved by the runner"):
         register_method("x", method.run, defaults={"compactness": 0.1})
@@ -171,7 +171,7 @@ def test_the_registry_runs_the_adaptive_level():
 def test_batch_writes_content_adaptive_superpoints(tmp_path, capsys):
     from superfacets import adaptive_superpoints
     from superfacets.cli import main
-    from superfacets.runner.batch import run_batch
+    from superfacets.scale.runner.batch import run_batch
 
     corpus = tmp_path / "in"
     corpus.mkdir()
@@ -199,7 +199,7 @@ def test_batch_writes_content_adaptive_superpoints(tmp_path, capsys):
     assert not (tmp_path / "o2").exists()
 
 
-@pytest.mark.parametrize("module", ["superfacets.hierarchy", "superfacets.levels"])
+@pytest.mark.parametrize("module", ["superfacets.graph.hierarchy", "superfacets.api.levels"])
 def test_the_examples_in_the_docstrings_run(module):
     import doctest
     import importlib
@@ -212,7 +212,7 @@ def test_the_old_names_still_work_for_one_release_with_a_warning():
     """``compactness=`` (hierarchy, adaptive levels), ``level_compactness`` (function,
     batch keyword, ``--level-compactness``) and ``result.radius`` are deprecated aliases."""
     from superfacets.cli import build_parser
-    from superfacets.hierarchy import AUTO_COMPACTNESS, level_compactness
+    from superfacets.graph.hierarchy import AUTO_COMPACTNESS, level_compactness
 
     r = segment(grid_mesh(20, 20), 30)
     with pytest.warns(DeprecationWarning, match="compactness= is now extent_weight="):

@@ -13,9 +13,9 @@ import trimesh
 from conftest import grid_mesh, minority
 
 from superfacets import Mesh, segment
+from superfacets.api.scenes import segment_objects
 from superfacets.errors import InvalidMeshError, MeshFormatError, ParameterError
 from superfacets.io import read_mesh
-from superfacets.scenes import segment_objects
 
 BLUE, RED = [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]
 
@@ -76,7 +76,7 @@ def test_colours_are_read_from_ply_off_obj_and_glb(tmp_path):
     np.testing.assert_allclose(m.face_colors, frgb / 255.0)
     assert m.colors is None
     # the libraries' objects keep theirs
-    from superfacets.convert import as_mesh
+    from superfacets.inputs.convert import as_mesh
 
     np.testing.assert_allclose(as_mesh(tm).colors, rgb / 255.0)
     np.testing.assert_allclose(as_mesh(tf).face_colors, frgb / 255.0)
@@ -200,7 +200,7 @@ def test_cli_reads_a_coloured_mesh_for_beta(tmp_path):
 
 
 def test_tiled_mesh_runs_read_the_colours(tmp_path):
-    from superfacets.runner.tiles import segment_tiled
+    from superfacets.scale.runner.tiles import segment_tiled
 
     mesh, _ = _two_colour_grid(60)
     blue = mesh.element_colors("faces")[:, 2]
@@ -223,7 +223,7 @@ def test_tiled_mesh_runs_read_the_colours(tmp_path):
 
 
 def test_library_point_clouds_keep_their_colours():
-    from superfacets.cloud import as_cloud
+    from superfacets.inputs.cloud import as_cloud
 
     xyz = np.random.default_rng(3).random((50, 3))
     rgba = np.tile(np.array([255, 0, 51, 255], np.uint8), (50, 1))
@@ -246,7 +246,7 @@ def test_library_point_clouds_keep_their_colours():
 
 def test_pyvista_colour_arrays_are_read():
     pv = pytest.importorskip("pyvista")
-    from superfacets.convert import as_mesh
+    from superfacets.inputs.convert import as_mesh
 
     sphere = pv.Sphere()
     rgb = np.random.default_rng(4).integers(0, 256, (sphere.n_points, 3)).astype(np.uint8)

@@ -3,7 +3,7 @@ import pytest
 from conftest import grid_mesh
 
 from superfacets import Mesh, read_labels, read_mesh, superfacets
-from superfacets.metrics import (
+from superfacets.evaluation.metrics import (
     achievable_segmentation_accuracy,
     boundary_precision,
     boundary_recall,

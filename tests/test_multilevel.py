@@ -10,13 +10,13 @@ from scipy.sparse.csgraph import connected_components, dijkstra
 from test_segmentation import check_invariants
 
 from superfacets import Mesh, segment
+from superfacets.api.segmentation import pipeline
 from superfacets.elements import face_graph
 from superfacets.errors import ParameterError
-from superfacets.multilevel import coarse_ratio, coarsen, grid_seeds, voronoi_cells
-from superfacets.params import resolve
-from superfacets.passes import hold_small_moves
-from superfacets.segmentation import pipeline
-from superfacets.weights import csr_weights, paper_weights
+from superfacets.method.multilevel import coarse_ratio, coarsen, grid_seeds, voronoi_cells
+from superfacets.method.params import resolve
+from superfacets.method.passes import hold_small_moves
+from superfacets.method.weights import csr_weights, paper_weights
 
 
 def _sphere(subdivisions=4, radius=1.0, shift=0.0):
@@ -192,7 +192,7 @@ def test_coarsen_is_capped_to_keep_clusters_per_superfacet():
 
 
 def test_too_few_clusters_for_k_falls_back(sphere):
-    from superfacets.multilevel import coarse_centers
+    from superfacets.method.multilevel import coarse_centers
 
     g, w, wc = _weighted(sphere)
     kw = dict(init="farthest", window=2.0, assignment="bounded", max_iter=50, tol=0.001,

@@ -34,7 +34,8 @@ def test_import_and_help_load_neither_numba_nor_scipy():
                           "assert main(['batch', '.', '-o', '/tmp/x', '--alpha', '-1']) == 2")
     assert not {"numba", "scipy", "trimesh", "dask", "distributed"} & mods
     # segment: an option out of range, a missing input: no numba either (no warm-up started)
-    mods = _modules_after("from superfacets.cli import main; import superfacets.warmup as w; "
+    mods = _modules_after("from superfacets.cli import main; "
+                          "import superfacets._runtime.warmup as w; "
                           "assert main(['segment', '/no/such.off', '--alpha', '-1']) == 2; "
                           "assert main(['segment', '/no/such.off']) == 2; assert w._thread is None")
     assert not {"numba", "scipy", "trimesh"} & mods
@@ -44,7 +45,7 @@ def test_a_plain_segment_loads_no_scipy_sparse():
     """The paper's run (with its connectivity step) needs no scipy.sparse, about 0.15 s
     of a new process; numba itself imports scipy.linalg, so scipy is not asserted."""
     mods = _modules_after(
-        "import superfacets; from superfacets.shapes import creature; "
+        "import superfacets; from superfacets.inputs.shapes import creature; "
         "m = creature(24); r = superfacets.segment(m, 30); assert len(r.labels) == len(m.faces)")
     assert "numba" in mods and "scipy.sparse" not in mods
 
@@ -55,7 +56,7 @@ def test_public_names_resolve_and_are_listed():
     assert callable(superfacets.segment) and callable(superfacets.superfacets)
     import importlib
 
-    importlib.import_module("superfacets.segmentation")  # never shadows the function
+    importlib.import_module("superfacets.api.segmentation")  # never shadows the function
     assert callable(superfacets.segment)
     with pytest.raises(AttributeError):
         superfacets.nope
@@ -68,8 +69,8 @@ def test_version_is_defined_once():
 
 
 def test_missing_extra_names_the_pip_command(monkeypatch, sphere):
-    from superfacets.render import render
-    from superfacets.report import load_results
+    from superfacets.evaluation.report import load_results
+    from superfacets.viz.render import render
 
     monkeypatch.setitem(sys.modules, "pyvista", None)  # import pyvista now fails
     with pytest.raises(MissingExtraError, match=r"pip install 'superfacets\[render\]'"):
@@ -80,7 +81,7 @@ def test_missing_extra_names_the_pip_command(monkeypatch, sphere):
 
 
 def test_benchmark_locator(tmp_path, monkeypatch):
-    from superfacets.datasets.psb import psb_root
+    from superfacets.evaluation.datasets.psb import psb_root
 
     root = tmp_path / "bench"
     (root / "off").mkdir(parents=True)
@@ -104,7 +105,7 @@ def test_benchmark_locator(tmp_path, monkeypatch):
 
 
 def test_yu_shi_discretization_finds_clear_blocks():
-    from superfacets.baselines.ncuts import discretize
+    from superfacets.evaluation.baselines.ncuts import discretize
 
     rng = np.random.default_rng(0)
     truth = np.repeat(np.arange(5), 40)
@@ -117,7 +118,7 @@ def test_yu_shi_discretization_finds_clear_blocks():
 
 def test_contour_is_watertight_and_faces_outwards():
     from superfacets import Mesh
-    from superfacets.shapes import contour, creature
+    from superfacets.inputs.shapes import contour, creature
 
     g = np.mgrid[-1:1:31j, -1:1:31j, -1:1:31j]
     v, f = contour(np.sqrt((g ** 2).sum(0)) - 0.7, (-1, -1, -1), 2 / 30)
@@ -151,8 +152,8 @@ def test_public_functions_raise_the_package_errors(sphere, call, kind, tmp_path,
 
 
 def test_metrics_and_colors_refuse_wrong_labels_with_one_error_type(sphere):
-    from superfacets.colors import face_colors
-    from superfacets.metrics import compactness, evaluate
+    from superfacets.evaluation.metrics import compactness, evaluate
+    from superfacets.viz.colors import face_colors
 
     for call in (lambda: compactness(sphere, [0, 1]), lambda: face_colors(sphere, [0]),
                  lambda: evaluate(sphere, np.zeros(sphere.n_faces, int), [np.zeros(4, int)])):

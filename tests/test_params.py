@@ -1,4 +1,5 @@
-"""Defaults, choices and validation (superfacets.params): one place, checked before any work."""
+"""Defaults, choices and validation (superfacets.method.params): one place, checked before
+any work."""
 
 import math
 
@@ -6,7 +7,7 @@ import numpy as np
 import pytest
 
 from superfacets import DEFAULTS, ParameterError, segment
-from superfacets.params import (
+from superfacets.method.params import (
     ASSIGNMENTS,
     INITS,
     WEIGHTINGS,
@@ -42,7 +43,7 @@ def test_defaults_are_the_api_and_cli_defaults():
 
 
 def test_the_registry_reads_the_same_defaults():
-    from superfacets.methods import get_method
+    from superfacets.evaluation.methods import get_method
 
     d = get_method("superfacets").defaults
     assert (d["alpha"], d["eta_convex"], d["window"], d["max_iter"]) == (
@@ -137,14 +138,14 @@ def test_a_radius_whose_area_underflows_is_refused(init):
     assert segment(mesh, None, radius=1e-100, init=init).n_segments >= 1  # tiny but fine
 
 
-# --- each parameter declared once (superfacets.params.PARAMETERS) ---------------------
+# --- each parameter declared once (superfacets.method.params.PARAMETERS) ---------------------
 
 def test_the_declarations_are_the_fields_and_the_signatures():
     import inspect
 
     from superfacets import superfacets
-    from superfacets.params import PARAMETERS, SegmentParams
-    from superfacets.segmentation import segment as seg
+    from superfacets.api.segmentation import segment as seg
+    from superfacets.method.params import PARAMETERS, SegmentParams
 
     names = [p.name for p in PARAMETERS]
     assert len(set(names)) == len(names) == 25
@@ -166,7 +167,7 @@ def _doc_parameters(doc: str) -> dict[str, str]:
 
 def test_the_docstring_documents_every_declared_parameter_with_its_default():
     from superfacets import superfacets
-    from superfacets.params import PARAMETERS
+    from superfacets.method.params import PARAMETERS
 
     doc = _doc_parameters(superfacets.__doc__)
     missing = [p.name for p in PARAMETERS if p.name not in doc]
@@ -183,7 +184,7 @@ def test_the_docstring_documents_every_declared_parameter_with_its_default():
 
 def test_every_declared_option_of_the_command_line_has_the_declared_default_and_choices():
     from superfacets.cli import build_parser
-    from superfacets.params import PARAMETERS
+    from superfacets.method.params import PARAMETERS
 
     sub = build_parser()._subparsers._group_actions[0].choices["segment"]
     actions = {s: a for a in sub._actions for s in a.option_strings}
@@ -196,7 +197,7 @@ def test_every_declared_option_of_the_command_line_has_the_declared_default_and_
         a = actions[p.cli]
         assert a.default == own.get(p.name, p.default), (p.name, a.default, p.default)
         if a.choices is not None:
-            from superfacets.params import KINDS
+            from superfacets.method.params import KINDS
 
             check = [c for c in list(INITS) + list(ASSIGNMENTS) + list(WEIGHTINGS) +
                      list(KINDS)]
@@ -206,8 +207,8 @@ def test_every_declared_option_of_the_command_line_has_the_declared_default_and_
 
 
 def test_the_registry_uses_the_declared_defaults():
-    from superfacets.methods import get_method
-    from superfacets.params import PARAMETER
+    from superfacets.evaluation.methods import get_method
+    from superfacets.method.params import PARAMETER
 
     d = get_method("superfacets").defaults
     for name, value in d.items():

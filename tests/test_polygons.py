@@ -20,8 +20,8 @@ from superfacets import (
     write_mesh,
 )
 from superfacets.cli import main
-from superfacets.connectivity import label_components
 from superfacets.elements import face_graph
+from superfacets.method.connectivity import label_components
 
 
 def voxel_surface(filled: np.ndarray, size: float = 1.0) -> Mesh:
@@ -78,7 +78,7 @@ def test_concave_edge_of_a_quad_prism_is_a_boundary_at_high_alpha(l_prism):
 
 
 def test_triangulated_copy_gives_similar_superfacets(l_prism):
-    from superfacets.metrics import compactness
+    from superfacets.evaluation.metrics import compactness
 
     tri, owner = l_prism.triangulated()
     copy = Mesh(l_prism.vertices, tri)
@@ -217,7 +217,7 @@ def test_scenes_join_objects_and_segment_per_object(tmp_path):
 
 
 def test_vsa_refuses_polygons_clearly():
-    from superfacets.baselines import vsa
+    from superfacets.evaluation.baselines import vsa
 
     quad = Mesh([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [[0, 1, 2, 3]])
     with pytest.raises(ParameterError, match="triangle mesh"):
@@ -226,9 +226,9 @@ def test_vsa_refuses_polygons_clearly():
 
 def test_pictures_and_metrics_work_on_polygons(l_prism):
     pytest.importorskip("pyvista")
-    from superfacets.html import html_page
-    from superfacets.metrics import evaluate
-    from superfacets.render import render
+    from superfacets.evaluation.metrics import evaluate
+    from superfacets.viz.html import html_page
+    from superfacets.viz.render import render
 
     labels = superfacets(l_prism, 8, alpha=1000)
     img = render(l_prism, labels, size=(200, 160))

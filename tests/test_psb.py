@@ -2,7 +2,7 @@ import pytest
 from conftest import grid_mesh
 
 from superfacets import MeshFormatError, write_mesh
-from superfacets.datasets.psb import category, list_meshes
+from superfacets.evaluation.datasets.psb import category, list_meshes
 
 
 def test_category_ranges():

@@ -22,7 +22,7 @@ def test_the_readme_has_python_blocks():
 def test_the_readme_python_runs_in_order(tmp_path, monkeypatch):
     pytest.importorskip("pyvista")  # to_pyvista
     from superfacets import write_mesh
-    from superfacets.shapes import creature
+    from superfacets.inputs.shapes import creature
 
     (tmp_path / "demo-output").mkdir()
     write_mesh(tmp_path / "demo-output" / "creature.off", creature(58))  # what make demo writes

@@ -14,12 +14,12 @@ from conftest import grid_mesh
 from PIL import Image
 
 from superfacets import ParameterError, superfacets, write_labels, write_mesh
-from superfacets.camera import view_frame
 from superfacets.cli import main
-from superfacets.colors import PALETTE, boundary_edges
 from superfacets.elements import face_graph
-from superfacets.html import html_page, write_html
-from superfacets.render import render, render_panel
+from superfacets.viz.camera import view_frame
+from superfacets.viz.colors import PALETTE, boundary_edges
+from superfacets.viz.html import html_page, write_html
+from superfacets.viz.render import render, render_panel
 
 
 def _foreground(img: np.ndarray, bg=(255, 255, 255)) -> np.ndarray:
@@ -209,7 +209,7 @@ def _sphere_cloud(n=3000):
 
 def test_render_points_colours_a_cloud_by_superpoint(tmp_path):
     from superfacets import superpoints
-    from superfacets.render import render_points
+    from superfacets.viz.render import render_points
 
     pts = _sphere_cloud()
     labels = superpoints(pts, 12)
@@ -248,7 +248,7 @@ def test_cli_segment_pictures_a_cloud(tmp_path):
 
 def test_vertex_regions_cut_each_triangle_at_its_corners(sphere):
     from superfacets.elements.vertices import vertex_graph
-    from superfacets.render import vertex_regions
+    from superfacets.viz.render import vertex_regions
 
     labels = np.arange(sphere.n_vertices) % 7
     regions, lab = vertex_regions(sphere, labels)

@@ -5,8 +5,9 @@ import hashlib
 import numpy as np
 import pytest
 
-from superfacets.datasets import scans
-from superfacets.datasets.scans import (
+from superfacets.errors import MeshFormatError, ParameterError
+from superfacets.evaluation.datasets import scans
+from superfacets.evaluation.datasets.scans import (
     SCANS,
     UNLABELLED,
     ScanSource,
@@ -16,7 +17,6 @@ from superfacets.datasets.scans import (
     scan_cache,
     scan_files,
 )
-from superfacets.errors import MeshFormatError, ParameterError
 
 
 def _plane_points(n=40, seed=0):

@@ -7,13 +7,13 @@ from scipy.sparse.csgraph import dijkstra
 
 from superfacets import InvalidMeshError, Mesh, ParameterError, read_mesh, segment, superfacets
 from superfacets._kernels.expand import MERGE, expand
-from superfacets.classify import Exact
-from superfacets.connectivity import label_components
+from superfacets.api.segmentation import pipeline
 from superfacets.elements import face_graph
-from superfacets.expansion import Workspace, Workspaces, bucket_width
-from superfacets.params import resolve
-from superfacets.segmentation import pipeline
-from superfacets.weights import paper_weights
+from superfacets.method.classify import Exact
+from superfacets.method.connectivity import label_components
+from superfacets.method.expansion import Workspace, Workspaces, bucket_width
+from superfacets.method.params import resolve
+from superfacets.method.weights import paper_weights
 
 
 def reference(mesh, n_segments, **kw):
@@ -139,7 +139,7 @@ def test_exact_assignment_updated_pass_by_pass_equals_a_fresh_search(monkeypatch
     # repeat, the order shuffled, a piece left without a center): each pass updates
     # the previous one's cells and must give the fresh search's labels, distances
     # and orphan centers bit for bit; weights in eighths make the ties real
-    import superfacets.classify as classify_module
+    import superfacets.method.classify as classify_module
     from superfacets.elements.inputs import elements_of
 
     updated = []
@@ -280,8 +280,8 @@ def test_optimized_path_gives_the_labels_of_the_straightforward_one(
     # distances tie exactly: the center of lowest index must win them, across threads too
     import straightforward
 
-    from superfacets import classify
-    from superfacets.labels import relabel_dense
+    from superfacets.method import classify
+    from superfacets.method.labels import relabel_dense
 
     if source == "grid":
         mesh = grid_mesh(70, 60)
@@ -303,7 +303,7 @@ def test_threads_and_buffer_growth_change_no_label(monkeypatch, n_threads):
     # of a tenth of the faces in a reservation of a fifth: the heap regrows, the arena is
     # compacted, its room raised within the reservation and then copied into a larger one,
     # an overflowing thread is redone; labels stay those of the straightforward loop
-    from superfacets import classify, expansion
+    from superfacets.method import classify, expansion
 
     mesh = read_mesh(need(MESHES / "bunny.tri.xz"))
     ref = reference(mesh, 150, max_iter=15)
@@ -516,7 +516,7 @@ def test_import_does_no_work_and_warmup_starts_only_when_asked():
     import subprocess
     import sys
 
-    code = ("import threading, superfacets, superfacets.warmup as w; "
+    code = ("import threading, superfacets, superfacets._runtime.warmup as w; "
             "print(threading.active_count(), w._thread is None); w.start(); t = w._thread; "
             "print(t is not None and (t.join(30) or not t.is_alive()))")
     def run(env):
@@ -551,8 +551,9 @@ def test_tol_zero_is_the_paper_rule_and_tol_stops_early(psb):
 def test_n_threads_also_bounds_the_graph_build(monkeypatch):
     # a fresh mesh's face graph is built inside the run: with n_threads=1 every
     # range-splitting step runs one range, with 2 some run two; same labels
-    from superfacets import Mesh, _threads, segment
-    from superfacets.shapes import creature
+    from superfacets import Mesh, segment
+    from superfacets._runtime import threads as _threads
+    from superfacets.inputs.shapes import creature
 
     shape = creature(24)
     monkeypatch.setattr(_threads, "MIN_PER_THREAD", 50)
@@ -572,7 +573,7 @@ def test_paper_switch_gives_the_straightforward_papers_labels(sphere, valley):
     # paper=True: the method as published, bit for bit, whatever the package's defaults
     import straightforward
 
-    from superfacets.labels import relabel_dense
+    from superfacets.method.labels import relabel_dense
 
     for mesh, k in ((sphere, 40), (valley, 12)):
         ref, _ = straightforward.segment_labels(mesh, k, alpha=200.0, max_iter=50)
@@ -592,8 +593,8 @@ def test_paper_switch_refuses_what_the_paper_does_not_do(sphere, option):
 
 
 def test_fast_split_merge_schedule_keeps_k_connected_and_is_deterministic(sphere):
-    from superfacets.connectivity import label_components
     from superfacets.elements import face_graph
+    from superfacets.method.connectivity import label_components
 
     one = segment(sphere, 30, split_merge=True, cleanup=True, n_threads=1)
     two = segment(sphere, 30, split_merge=True, cleanup=True, n_threads=2)

@@ -7,11 +7,11 @@ import pytest
 from conftest import MESHES, grid_mesh, need
 
 from superfacets import Mesh, read_mesh, segment
-from superfacets.connectivity import label_components
 from superfacets.elements import face_graph
 from superfacets.errors import ParameterError
-from superfacets.splitmerge import swap_round
-from superfacets.weights import csr_weights, edge_weights
+from superfacets.method.connectivity import label_components
+from superfacets.method.splitmerge import swap_round
+from superfacets.method.weights import csr_weights, edge_weights
 
 
 def _valley():
@@ -122,7 +122,7 @@ def test_a_higher_min_gain_takes_fewer_swaps_on_a_real_mesh():
 def test_pruned_candidates_give_the_swaps_of_the_full_evaluation(k, monkeypatch):
     # the lazy splits and abandoned merge searches decide exactly what evaluating
     # every candidate decides, while evaluating a fraction of the splits
-    from superfacets import splitmerge
+    from superfacets.method import splitmerge
 
     mesh = read_mesh(need(MESHES / "bunny.tri.xz"))
     labels = segment(mesh, k).labels
@@ -185,7 +185,7 @@ def test_a_round_that_changes_the_number_of_superfacets_is_undone(monkeypatch):
     # the round is undone, the labels are those before it, no swap is counted
     from dataclasses import replace
 
-    from superfacets import passes
+    from superfacets.method import passes
 
     mesh = read_mesh(need(MESHES / "bunny.tri.xz"))
     paper = segment(mesh, 150, paper=True)  # the passes to convergence before the swaps
@@ -206,7 +206,7 @@ def test_a_round_that_changes_the_number_of_superfacets_is_undone(monkeypatch):
 
 
 def test_members_are_the_stable_sort_of_the_labels():
-    from superfacets.splitmerge import _members
+    from superfacets.method.splitmerge import _members
 
     rng = np.random.default_rng(5)
     for n, k in ((1, 1), (7, 3), (5000, 40)):
@@ -229,8 +229,8 @@ def test_convex_folds_count_less_in_the_swap_energies_on_faces():
     # with the run's weights the superfacet over the convex ridge is split on it; with
     # the convex angular term removed (concave creases alone) the ridge is as flat as the
     # slopes: that square is kept and the largest superfacet is split instead
-    from superfacets.splitmerge import swap_eta_convex_for
-    from superfacets.weights import convex_scaled
+    from superfacets.method.splitmerge import swap_eta_convex_for
+    from superfacets.method.weights import convex_scaled
 
     mesh = _ridge()
     g = face_graph(mesh)
@@ -258,7 +258,7 @@ def test_convex_folds_count_less_in_the_swap_energies_on_faces():
 
 
 def test_convex_scaled_weights_are_the_paper_weights_with_a_smaller_eta_convex():
-    from superfacets.weights import convex_scaled, paper_weights, shlafman_weights
+    from superfacets.method.weights import convex_scaled, paper_weights, shlafman_weights
 
     mesh = read_mesh(need(MESHES / "bunny.tri.xz"))  # concave and convex edges
     g = face_graph(mesh)
@@ -277,8 +277,8 @@ def test_convex_scaled_weights_are_the_paper_weights_with_a_smaller_eta_convex()
 
 def test_the_run_swaps_with_the_weights_of_its_kind(monkeypatch):
     # faces: the convex angular term halved; vertices: the run's own weights
-    from superfacets import splitmerge
-    from superfacets.weights import convex_scaled
+    from superfacets.method import splitmerge
+    from superfacets.method.weights import convex_scaled
 
     seen = []
     real = splitmerge.swap_round
@@ -306,8 +306,8 @@ def test_the_run_swaps_with_the_weights_of_its_kind(monkeypatch):
 def test_the_passes_after_the_swaps_hold_small_center_moves_on_faces(monkeypatch):
     # a center moving by less than 4 x center_tol x r after the swaps stays (faces);
     # on vertices (the exact classification) by less than center_tol x r, as before them
-    from superfacets import passes
-    from superfacets.splitmerge import hold_after_for
+    from superfacets.method import passes
+    from superfacets.method.splitmerge import hold_after_for
 
     holds = []
     real = passes.iterate
@@ -331,8 +331,8 @@ def test_the_passes_after_the_swaps_hold_small_center_moves_on_faces(monkeypatch
 
 def test_one_pass_follows_the_swaps_on_faces_two_on_vertices(monkeypatch):
     # the bound on the passes after the swaps each kind gets, and the runs keep to it
-    from superfacets import passes
-    from superfacets.splitmerge import passes_after_for
+    from superfacets.method import passes
+    from superfacets.method.splitmerge import passes_after_for
 
     runs = []
     real = passes.iterate

@@ -17,41 +17,36 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "superfacets"
 #: Layers, lowest first: a module may import modules of its own layer or of a lower
 #: one. A module's layer is that of the longest prefix listed here.
 LAYERS = (
-    # foundations: no knowledge of meshes
-    ("superfacets._version", "superfacets.errors", "superfacets.checks", "superfacets.params",
-     "superfacets.labels",
-     "superfacets.elements.kinds",
-     "superfacets.extras", "superfacets._threads", "superfacets._kernels",
-     "superfacets.camera", "superfacets.warmup", "superfacets.interrupts", "superfacets.rgb"),
-    # inputs: validated meshes and clouds, read from files or the libraries' objects
-    ("superfacets.bounds", "superfacets.mesh", "superfacets.cloud", "superfacets.volume",
-     "superfacets.convert", "superfacets.shapes", "superfacets.io.volumes",
-     "superfacets.io.regions",
+    # foundations: no knowledge of meshes (errors, checks, the declarations of the
+    # parameters and of the kinds of element, labels, kernels, threads and extras)
+    ("superfacets._version", "superfacets.errors", "superfacets.checks", "superfacets._runtime",
+     "superfacets._kernels", "superfacets.elements.kinds", "superfacets.method.params",
+     "superfacets.method.labels", "superfacets.viz.camera", "superfacets.inputs.rgb"),
+    # inputs: validated meshes, clouds and tetrahedral meshes, read from files or objects
+    ("superfacets.inputs", "superfacets.io.volumes", "superfacets.io.regions",
      "superfacets.io.files", "superfacets.io.ply", "superfacets.io.labels",
      "superfacets.io.meshes", "superfacets.io.clouds"),
     # element graphs of the inputs
     ("superfacets.elements",),
-    # the method's pieces and the measures of a result
-    ("superfacets.weights", "superfacets.expansion", "superfacets.classify",
-     "superfacets.passes", "superfacets.initialization", "superfacets.multilevel",
-     "superfacets.connectivity", "superfacets.cleanup", "superfacets.splitmerge",
-     "superfacets.boundaries", "superfacets.metrics", "superfacets.colors",
-     "superfacets.adjacency", "superfacets.adaptive",
-     "superfacets.hierarchy"),
-    # the method, one run
-    ("superfacets.result", "superfacets.stages", "superfacets.pipeline", "superfacets.segmentation",
-     "superfacets.scenes",
-     "superfacets.tiling", "superfacets.tile_layout", "superfacets.levels"),
+    # the method's pieces, the superfacet graph and the measures of a result
+    ("superfacets.method", "superfacets.graph", "superfacets.evaluation.metrics",
+     "superfacets.evaluation.boundaries", "superfacets.viz.colors"),
+    # the method, one run: its stages in order, the public functions, one tile
+    ("superfacets.method.stages", "superfacets.method.pipeline", "superfacets.api",
+     "superfacets.scale.tiling", "superfacets.scale.tile_layout"),
     # every method alike
-    ("superfacets.baselines", "superfacets.methods"),
-    # what is made of results: files, pictures, pages, experiments, batches
-    ("superfacets.io", "superfacets.render", "superfacets.html", "superfacets.outputs",
-     "superfacets.datasets", "superfacets.runner", "superfacets.report"),
+    ("superfacets.evaluation.baselines", "superfacets.evaluation.methods"),
+    # what is made of results: files, pictures, pages, experiments, batches, tiled runs
+    ("superfacets.io", "superfacets.viz", "superfacets.evaluation", "superfacets.scale"),
     # the command line
     ("superfacets.cli", "superfacets.__main__"),
     # the public facade (imports everything lazily; nothing imports it)
     ("superfacets",),
 )
+
+#: At most this many entries at the package's top (besides __init__, __main__, _version
+#: and py.typed): sub-packages by concept, a reader finds a room by its name.
+MAX_TOP = 16
 
 MAX_LINES = 450
 
@@ -170,11 +165,50 @@ def test_the_circle_finder_finds_circles(case):
 
 def test_the_import_reader_sees_lazy_and_relative_imports(tmp_path):
     path = tmp_path / "x.py"
-    path.write_text("from .mesh import Mesh\nfrom .io.files import Outputs\n"
+    path.write_text("from .inputs.mesh import Mesh\nfrom .io.files import Outputs\n"
                     "def f():\n    from .elements.faces import face_graph\n"
                     "    import superfacets.io\n")
-    assert _imports("superfacets.x", path) == {"superfacets.mesh", "superfacets.io.files",
+    assert _imports("superfacets.x", path) == {"superfacets.inputs.mesh", "superfacets.io.files",
                                                 "superfacets.elements.faces", "superfacets.io"}
     path.write_text("from ..errors import ParameterError\nfrom . import options\n")
     assert _imports("superfacets.cli.x", path) == {"superfacets.errors",
                                                     "superfacets.cli.options"}
+
+
+def test_the_top_holds_few_entries():
+    entries = sorted(p.name for p in SRC.iterdir() if p.name not in (
+        "__init__.py", "__main__.py", "_version.py", "py.typed", "__pycache__"))
+    assert len(entries) <= MAX_TOP, f"{len(entries)} entries at the top: {entries}"
+
+
+def test_no_private_name_crosses_a_module():
+    """``from .x import _name`` between modules: a private name is its module's own."""
+    found = []
+    for name, path in MODULES.items():
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.ImportFrom) and (node.level or (node.module or "").startswith(
+                    "superfacets")):
+                for a in node.names:
+                    if a.name.startswith("_") and not a.name.startswith("__"):
+                        found.append(f"{name}: {a.name} from {node.module}")
+    assert not found, "\n".join(found)
+
+
+def test_old_module_paths_still_import_for_one_release():
+    """``superfacets.metrics`` (before the sub-packages) gives the module now at
+    ``superfacets.evaluation.metrics``, with a DeprecationWarning naming the new path."""
+    import importlib
+    import sys
+
+    import superfacets.evaluation.metrics as metrics
+    import superfacets.scale.runner.tiles as tiles
+
+    for old in ("superfacets.metrics", "superfacets.runner.tiles"):
+        sys.modules.pop(old, None)
+    with pytest.warns(DeprecationWarning, match="superfacets.evaluation.metrics"):
+        assert importlib.import_module("superfacets.metrics") is metrics
+    with pytest.warns(DeprecationWarning, match="superfacets.scale.runner.tiles"):
+        assert importlib.import_module("superfacets.runner.tiles") is tiles
+    from superfacets import metrics as attribute
+
+    assert attribute is metrics

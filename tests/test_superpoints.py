@@ -11,17 +11,17 @@ from conftest import SHARED, grid_mesh, need
 from scipy.sparse.csgraph import connected_components
 
 from superfacets import Mesh, segment
-from superfacets.baselines.graph_segmentation import graph_segmentation
+from superfacets.api.segmentation import superpoints
 from superfacets.cli import main
-from superfacets.cloud import InvalidCloudError, PointCloud
-from superfacets.datasets.sampling import sample_points, vertex_ground_truth
 from superfacets.elements.inputs import elements_of
 from superfacets.elements.points import point_graph
 from superfacets.elements.vertices import vertex_graph
 from superfacets.errors import MeshFormatError, ParameterError
+from superfacets.evaluation.baselines.graph_segmentation import graph_segmentation
+from superfacets.evaluation.datasets.sampling import sample_points, vertex_ground_truth
+from superfacets.evaluation.metrics import evaluate
+from superfacets.inputs.cloud import InvalidCloudError, PointCloud
 from superfacets.io import read_cloud, read_input, read_labels
-from superfacets.metrics import evaluate
-from superfacets.segmentation import superpoints
 
 
 def connected(graph, labels) -> bool:
@@ -233,7 +233,7 @@ def test_an_open_surface_seen_from_above_orients_up_and_its_foot_is_concave():
 def test_a_las_scan_is_oriented_up(tmp_path):
     laspy = pytest.importorskip("laspy")
     from superfacets.io.regions import RegionReader
-    from superfacets.tiling import orientation_reference
+    from superfacets.scale.tiling import orientation_reference
 
     pts, part = _terrain_with_a_block()
     header = laspy.LasHeader(point_format=1, version="1.2")
@@ -477,7 +477,7 @@ def test_cli_orients_a_scan_by_viewpoint_or_side(tmp_path, capsys):
                          (["--viewpoint", "2,2,30"], PointCloud(pts, viewpoint=[2, 2, 30]))):
         assert main(["segment", str(tmp_path / "t.npy"), "-k", "12", "-o", str(out), "-q",
                      "--tiles", "2", *flags]) == 0
-        from superfacets.runner.tiles import segment_tiled
+        from superfacets.scale.runner.tiles import segment_tiled
 
         np.testing.assert_array_equal(read_labels(out), segment_tiled(cloud, 12, tiles=2).labels)
         assert (read_labels(out) != segment_tiled(PointCloud(pts), 12, tiles=2).labels).any()

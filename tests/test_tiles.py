@@ -1,4 +1,5 @@
-"""Tiled runs of one input (superfacets.tiling, superfacets.runner.tiles, superfacets.io.regions):
+"""Tiled runs of one input (superfacets.scale.tiling, superfacets.scale.runner.tiles,
+superfacets.io.regions):
 known answers on synthetic inputs, invariants on several tiles, streamed reading, errors."""
 
 from __future__ import annotations
@@ -12,17 +13,17 @@ import pytest
 import trimesh
 
 from superfacets import Mesh, ParameterError, segment
-from superfacets.cloud import PointCloud
-from superfacets.connectivity import label_components
 from superfacets.elements.faces import face_graph
 from superfacets.errors import MeshFormatError
+from superfacets.inputs.cloud import PointCloud
 from superfacets.io.regions import RegionReader
-from superfacets.params import resolve
-from superfacets.runner import buckets as buckets_module
-from superfacets.runner.buckets import bucket
-from superfacets.runner.tiles import segment_tiled
-from superfacets.tile_layout import balanced_tiles, tile_box, tile_grid, tile_of
-from superfacets.tiling import tile_labels, trim_centers
+from superfacets.method.connectivity import label_components
+from superfacets.method.params import resolve
+from superfacets.scale.runner import buckets as buckets_module
+from superfacets.scale.runner.buckets import bucket
+from superfacets.scale.runner.tiles import segment_tiled
+from superfacets.scale.tile_layout import balanced_tiles, tile_box, tile_grid, tile_of
+from superfacets.scale.tiling import tile_labels, trim_centers
 
 
 def _bumpy(subdivisions: int = 5) -> Mesh:
@@ -384,7 +385,7 @@ def test_every_tile_orients_points_like_the_whole_cloud(tmp_path):
     from scipy.spatial import cKDTree
 
     from superfacets.elements.points import point_graph
-    from superfacets.tiling import orientation_reference
+    from superfacets.scale.tiling import orientation_reference
 
     torus = trimesh.creation.torus(major_radius=1.0, minor_radius=0.4, major_sections=64,
                                    minor_sections=32)
@@ -606,7 +607,7 @@ def test_equal_distances_give_a_tile_the_whole_clouds_neighbours():
 def test_tile_connect_joins_stray_pieces_of_its_own_superfacets():
     """Known answer on a strip of 10 faces x 2: the stray piece of an owned label joins
     the neighbour it shares the longest border with; other labels' pieces are left."""
-    from superfacets.tiling import tile_connect
+    from superfacets.scale.tiling import tile_connect
 
     v = np.array([[x, y, 0.0] for y in (0, 1) for x in range(11)])
     faces = []

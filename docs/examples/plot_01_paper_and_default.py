@@ -11,9 +11,9 @@ is the method as published, its labels bit for bit.
 import matplotlib.pyplot as plt
 
 from superfacets import segment
-from superfacets.metrics import compactness
-from superfacets.render import render_panel
-from superfacets.shapes import creature
+from superfacets.evaluation.metrics import compactness
+from superfacets.inputs.shapes import creature
+from superfacets.viz.render import render_panel
 
 mesh = creature(48)  # a procedural four-legged creature, made on the spot
 paper = segment(mesh, 80, paper=True)

@@ -15,8 +15,8 @@ import numpy as np
 import trimesh
 
 from superfacets import Mesh, read_mesh, segment
-from superfacets.render import render_panel
-from superfacets.scenes import segment_objects
+from superfacets.api.scenes import segment_objects
+from superfacets.viz.render import render_panel
 
 # a wavy quad grid: 40 x 40 quads
 n = 41

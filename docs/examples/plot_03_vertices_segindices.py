@@ -14,8 +14,8 @@ from tempfile import mkdtemp
 import matplotlib.pyplot as plt
 
 from superfacets import segment, write_segindices
-from superfacets.render import render
-from superfacets.shapes import creature
+from superfacets.inputs.shapes import creature
+from superfacets.viz.render import render
 
 mesh = creature(40)
 result = segment(mesh, 100, elements="vertices")

@@ -11,7 +11,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from superfacets import PointCloud, segment
-from superfacets.render import render_points
+from superfacets.viz.render import render_points
 
 rng = np.random.default_rng(0)
 top = np.c_[rng.random((30000, 2)) * [2.0, 1.2], np.zeros(30000)]

@@ -10,8 +10,8 @@ cheapest first, into nested coarser levels, every segment connected.
 import matplotlib.pyplot as plt
 
 from superfacets import segment
-from superfacets.render import render_panel
-from superfacets.shapes import creature
+from superfacets.inputs.shapes import creature
+from superfacets.viz.render import render_panel
 
 mesh = creature(48)
 result = segment(mesh, 120)

@@ -12,8 +12,8 @@ import numpy as np
 from scipy.spatial import Delaunay
 
 from superfacets import TetMesh, segment
-from superfacets.render import render
-from superfacets.volume import cut_surface
+from superfacets.inputs.volume import cut_surface
+from superfacets.viz.render import render
 
 rng = np.random.default_rng(0)
 corners = np.array(np.meshgrid([0.0, 1.0], [0.0, 1.0], [0.0, 1.0])).reshape(3, -1).T

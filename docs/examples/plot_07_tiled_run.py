@@ -16,7 +16,7 @@ import matplotlib.pyplot as plt
 import trimesh
 
 from superfacets import read_mesh, segment_tiled
-from superfacets.render import render
+from superfacets.viz.render import render
 
 path = Path(mkdtemp()) / "ball.ply"
 trimesh.creation.icosphere(subdivisions=5).export(path)  # 20,480 faces, binary PLY

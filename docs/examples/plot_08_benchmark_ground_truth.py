@@ -15,11 +15,11 @@ import numpy as np
 import trimesh
 
 from superfacets import Mesh, read_mesh, segment
-from superfacets.metrics import evaluate
-from superfacets.render import render_panel
+from superfacets.evaluation.metrics import evaluate
+from superfacets.viz.render import render_panel
 
 try:
-    from superfacets.datasets.psb import list_meshes, psb_root
+    from superfacets.evaluation.datasets.psb import list_meshes, psb_root
 
     bm = [b for b in list_meshes(psb_root()) if b.id == 1][0]
     mesh = read_mesh(bm.path)

@@ -22,8 +22,8 @@ from ._version import __version__  # noqa: F401 (the package's version)
 
 #: Public name -> the module that defines it.
 _PUBLIC = {
-    "DEFAULTS": "params",
-    "SegmentParams": "params",
+    "DEFAULTS": "method.params",
+    "SegmentParams": "method.params",
     "ElementGraph": "elements",
     "face_graph": "elements",
     "InvalidMeshError": "errors",
@@ -32,33 +32,33 @@ _PUBLIC = {
     "ParameterError": "errors",
     "SuperfacetsError": "errors",
     "MissingExtraError": "errors",
-    "Mesh": "mesh",
-    "as_mesh": "convert",
+    "Mesh": "inputs.mesh",
+    "as_mesh": "inputs.convert",
     "read_mesh": "io",
     "write_mesh": "io",
     "read_labels": "io",
     "write_labels": "io",
     "write_colored_mesh": "io",
-    "segment": "segmentation",
-    "superfacets": "segmentation",
-    "superpoints": "segmentation",
-    "adaptive_superpoints": "levels",
-    "PointCloud": "cloud",
-    "as_cloud": "cloud",
-    "InvalidCloudError": "cloud",
+    "segment": "api.segmentation",
+    "superfacets": "api.segmentation",
+    "superpoints": "api.segmentation",
+    "adaptive_superpoints": "api.levels",
+    "PointCloud": "inputs.cloud",
+    "as_cloud": "inputs.cloud",
+    "InvalidCloudError": "inputs.cloud",
     "read_cloud": "io",
     "read_input": "io",
     "write_segindices": "io",
-    "SegmentationResult": "segmentation",
-    "enforce_connectivity": "connectivity",
-    "edge_weights": "weights",
-    "paper_weights": "weights",
-    "shlafman_weights": "weights",
-    "TetMesh": "volume",
+    "SegmentationResult": "api.segmentation",
+    "enforce_connectivity": "method.connectivity",
+    "edge_weights": "method.weights",
+    "paper_weights": "method.weights",
+    "shlafman_weights": "method.weights",
+    "TetMesh": "inputs.volume",
     "read_volume": "io",
     "write_volume_labels": "io",
-    "segment_tiled": "runner.tiles",
-    "TiledResult": "runner.tiles",
+    "segment_tiled": "scale.runner.tiles",
+    "TiledResult": "api.result",
 }
 
 __all__ = [
@@ -102,7 +102,93 @@ __all__ = [
 ]
 
 
+#: Old module paths (before the sub-packages) -> where they are now. ``import
+#: superfacets.metrics`` still works for one release, with a DeprecationWarning, and gives
+#: the same module object as ``superfacets.evaluation.metrics``.
+_MOVED = {'_threads': '_runtime.threads',
+          'warmup': '_runtime.warmup',
+          'interrupts': '_runtime.interrupts',
+          'extras': '_runtime.extras',
+          'mesh': 'inputs.mesh',
+          'cloud': 'inputs.cloud',
+          'volume': 'inputs.volume',
+          'convert': 'inputs.convert',
+          'bounds': 'inputs.bounds',
+          'shapes': 'inputs.shapes',
+          'rgb': 'inputs.rgb',
+          'params': 'method.params',
+          'weights': 'method.weights',
+          'initialization': 'method.initialization',
+          'expansion': 'method.expansion',
+          'classify': 'method.classify',
+          'passes': 'method.passes',
+          'multilevel': 'method.multilevel',
+          'adaptive': 'method.adaptive',
+          'splitmerge': 'method.splitmerge',
+          'cleanup': 'method.cleanup',
+          'connectivity': 'method.connectivity',
+          'labels': 'method.labels',
+          'stages': 'method.stages',
+          'pipeline': 'method.pipeline',
+          'adjacency': 'graph.adjacency',
+          'hierarchy': 'graph.hierarchy',
+          'segmentation': 'api.segmentation',
+          'result': 'api.result',
+          'levels': 'api.levels',
+          'scenes': 'api.scenes',
+          'colors': 'viz.colors',
+          'camera': 'viz.camera',
+          'render': 'viz.render',
+          'html': 'viz.html',
+          'outputs': 'viz.outputs',
+          'metrics': 'evaluation.metrics',
+          'boundaries': 'evaluation.boundaries',
+          'methods': 'evaluation.methods',
+          'datasets': 'evaluation.datasets',
+          'baselines': 'evaluation.baselines',
+          'report': 'evaluation.report',
+          'tiling': 'scale.tiling',
+          'tile_layout': 'scale.tile_layout',
+          'runner': 'scale.runner'}
+
+
+class _MovedModules:
+    """Finds ``superfacets.<old path>`` and hands back the module at its new path."""
+
+    @staticmethod
+    def find_spec(name, path=None, target=None):
+        head, _, rest = name.partition(".")
+        first = rest.split(".")[0]
+        if head != __name__ or first not in _MOVED:
+            return None
+        from importlib.machinery import ModuleSpec
+
+        return ModuleSpec(name, _MovedModules, is_package=False)
+
+    @staticmethod
+    def create_module(spec):
+        import warnings
+
+        rest = spec.name.partition(".")[2]
+        first, _, tail = rest.partition(".")
+        new = f"{__name__}.{_MOVED[first]}" + (f".{tail}" if tail else "")
+        warnings.warn(f"{spec.name} is now {new} (the old path goes in the next release)",
+                      DeprecationWarning, stacklevel=2)
+        return importlib.import_module(new)
+
+    @staticmethod
+    def exec_module(module):
+        return None
+
+
+import sys as _sys  # noqa: E402
+
+_sys.meta_path.insert(0, _MovedModules)  # before the path finder: old paths of submodules too
+
+
 def __getattr__(name: str):
+    if name in _MOVED:  # superfacets.metrics as an attribute: the moved module
+        return importlib.import_module(f"{__name__}.{name}")
     module = _PUBLIC.get(name)
     if module is None:
         raise AttributeError(f"module 'superfacets' has no attribute {name!r}")
@@ -116,9 +202,8 @@ def __dir__():
 
 
 if TYPE_CHECKING:  # the same names, for type checkers and IDEs
-    from .cloud import InvalidCloudError, PointCloud, as_cloud
-    from .connectivity import enforce_connectivity
-    from .convert import as_mesh
+    from .api.levels import adaptive_superpoints
+    from .api.segmentation import SegmentationResult, segment, superfacets, superpoints
     from .elements import ElementGraph, face_graph
     from .errors import (
         InvalidMeshError,
@@ -128,6 +213,10 @@ if TYPE_CHECKING:  # the same names, for type checkers and IDEs
         ParameterError,
         SuperfacetsError,
     )
+    from .inputs.cloud import InvalidCloudError, PointCloud, as_cloud
+    from .inputs.convert import as_mesh
+    from .inputs.mesh import Mesh
+    from .inputs.volume import TetMesh
     from .io import (
         read_cloud,
         read_input,
@@ -140,10 +229,7 @@ if TYPE_CHECKING:  # the same names, for type checkers and IDEs
         write_segindices,
         write_volume_labels,
     )
-    from .levels import adaptive_superpoints
-    from .mesh import Mesh
-    from .params import DEFAULTS, SegmentParams
-    from .runner.tiles import TiledResult, segment_tiled
-    from .segmentation import SegmentationResult, segment, superfacets, superpoints
-    from .volume import TetMesh
-    from .weights import edge_weights, paper_weights, shlafman_weights
+    from .method.connectivity import enforce_connectivity
+    from .method.params import DEFAULTS, SegmentParams
+    from .method.weights import edge_weights, paper_weights, shlafman_weights
+    from .scale.runner.tiles import TiledResult, segment_tiled

@@ -2,7 +2,7 @@
 :class:`~superfacets.errors.ParameterError` (a ``ValueError``) naming the parameter
 and the bad value, never ``TypeError``, never an ``assert``.
 
-:mod:`superfacets.params` declares the method's parameters with these checks; the
+:mod:`superfacets.method.params` declares the method's parameters with these checks; the
 other modules check their own arguments with them.
 
 Examples

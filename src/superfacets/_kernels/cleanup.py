@@ -1,5 +1,5 @@
 """Boundary clean-up: bands along superfacet boundaries and one minimum cut per band
-(private kernels of :mod:`superfacets.cleanup`).
+(private kernels of :mod:`superfacets.method.cleanup`).
 
 ``band_distances`` grows, inside each superfacet, the distance from its
 boundary (a multi-source Dijkstra that never crosses a label change), up to a

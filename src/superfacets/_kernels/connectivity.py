@@ -1,4 +1,4 @@
-"""The stray-piece merge of :func:`superfacets.connectivity.enforce_connectivity`
+"""The stray-piece merge of :func:`superfacets.method.connectivity.enforce_connectivity`
 (private kernel: a union-find over the pieces' adjacency)."""
 
 import numpy as np

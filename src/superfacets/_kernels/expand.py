@@ -1,9 +1,9 @@
 """Bounded expansions over the element graph and the merging of their records.
 
-Private kernels of :mod:`superfacets.classify` (and :mod:`superfacets.initialization`
+Private kernels of :mod:`superfacets.method.classify` (and :mod:`superfacets.method.initialization`
 for the flood). The element graph is given as CSR arrays ``indptr`` (int64),
 ``indices`` (int32) and ``weights`` (float64, one per CSR entry). Buffers are
-allocated once per run by the caller (:mod:`superfacets.expansion`):
+allocated once per run by the caller (:mod:`superfacets.method.expansion`):
 
 - ``local`` (n,) float64: per-expansion tentative distances, ``inf`` on
   every element between expansions (each expansion puts back ``inf`` on the
@@ -75,7 +75,7 @@ def queue_push(qface, qdist, qnext, head, bmask, n, g, nd, inv_width, cur):
 def window_of(window_r2, wscale, f):
     """The squared window of an expansion from face ``f``: ``window_r2``, times
     ``wscale[f]`` where ``wscale`` is not empty (content-sensitive runs: a
-    center's window scaled by ``1 / s^2`` of its element, :mod:`superfacets.adaptive`)."""
+    center's window scaled by ``1 / s^2`` of its element, :mod:`superfacets.method.adaptive`)."""
     if wscale.shape[0] > 0:
         return window_r2 * wscale[f]
     return window_r2

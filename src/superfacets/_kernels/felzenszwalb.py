@@ -1,5 +1,5 @@
 """Felzenszwalb-Huttenlocher graph segmentation, in numba (private kernel of
-:mod:`superfacets.baselines.graph_segmentation`).
+:mod:`superfacets.evaluation.baselines.graph_segmentation`).
 
 Union-find with union by rank and path compression; edges taken in the given
 order (sorted by weight), then small components merged along the same order.

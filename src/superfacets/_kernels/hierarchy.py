@@ -1,4 +1,4 @@
-"""The greedy merging of :func:`superfacets.hierarchy.hierarchy`, in numba.
+"""The greedy merging of :func:`superfacets.graph.hierarchy.hierarchy`, in numba.
 
 A heap of ``(cost, lo, hi, version_lo, version_hi)`` tuples with lazy
 deletion (a pair is stale once either end merged or changed), union-find for
@@ -8,7 +8,7 @@ merging ``b`` into ``a`` appends ``b``'s list to ``a``'s and folds the
 entries that now name the same node (after union-find) into one, in place.
 Each undirected adjacency has an entry in both ends' lists; the stats of a
 pair are those of its entry in the list of the node that merged last, which
-folds every part. Private: imported by :mod:`superfacets.hierarchy` only.
+folds every part. Private: imported by :mod:`superfacets.graph.hierarchy` only.
 """
 
 import heapq

@@ -1,5 +1,5 @@
 """Per-CSR-entry values from the per-adjacency terms of an element graph (private
-kernels of :mod:`superfacets.weights` and :mod:`superfacets.cleanup`): one pass
+kernels of :mod:`superfacets.method.weights` and :mod:`superfacets.method.cleanup`): one pass
 over the CSR entries instead of numpy temporaries per adjacency and a gather."""
 
 import math

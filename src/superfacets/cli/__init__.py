@@ -193,7 +193,7 @@ def _terminate_cleanly():
     import signal
     import threading
 
-    from .. import interrupts
+    from .._runtime import interrupts
 
     if threading.current_thread() is not threading.main_thread():
         return lambda: None

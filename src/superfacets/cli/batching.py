@@ -73,7 +73,7 @@ def add_parsers(sub) -> None:
 
 
 def cmd_batch(args) -> int:
-    from ..runner.batch import run_batch
+    from ..scale.runner.batch import run_batch
 
     if args.per_object and args.radius is not None:
         from ..errors import ParameterError

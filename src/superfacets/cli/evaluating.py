@@ -12,7 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..elements.kinds import kind_of
-from ..params import DEFAULTS
+from ..method.params import DEFAULTS
 from .options import float_arg, int_arg, read_usable
 
 __all__ = ["add_parsers", "cmd_evaluate"]
@@ -53,8 +53,8 @@ def add_parsers(sub) -> None:
 
 def cmd_evaluate(args) -> int:
     from ..errors import ParameterError
+    from ..evaluation.metrics import evaluate_rows
     from ..io import read_labels
-    from ..metrics import evaluate_rows
 
     if not (0 <= args.tau < 1):
         raise ParameterError(f"--tau must be in [0, 1), got {args.tau}")

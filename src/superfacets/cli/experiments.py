@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from ..params import DEFAULT_N_SEGMENTS
+from ..method.params import DEFAULT_N_SEGMENTS
 from .options import add_engine_options, float_arg, int_arg
 
 __all__ = ["add_parsers"]
@@ -104,8 +104,8 @@ def _id_list(text: str) -> set[int]:
 
 def select_meshes(args):
     """The benchmark meshes chosen by ``--psb``, ``--ids``, ``--categories``, ``--per-category``."""
-    from ..datasets.psb import first_per_category, list_meshes, psb_root
     from ..errors import ParameterError
+    from ..evaluation.datasets.psb import first_per_category, list_meshes, psb_root
 
     root = psb_root(args.psb)
     meshes = list_meshes(root)
@@ -130,8 +130,8 @@ def select_meshes(args):
 
 
 def cmd_experiment(args) -> int:
-    from ..methods import METHODS, get_method
-    from ..runner import expand_grid, method_grid, parse_params, run_experiment
+    from ..evaluation.methods import METHODS, get_method
+    from ..scale.runner import expand_grid, method_grid, parse_params, run_experiment
 
     if args.list_methods:
         for name, m in sorted(METHODS.items()):
@@ -174,7 +174,7 @@ def cmd_experiment(args) -> int:
 
 
 def cmd_report(args) -> int:
-    from ..report import write_report
+    from ..evaluation.report import write_report
 
     res = [Path(p) for p in args.results]
     out = Path(args.output_dir) if args.output_dir else res[0].with_name(res[0].stem + "_report")

@@ -1,6 +1,6 @@
 """Options shared by several commands, and the helpers that read them.
 
-Defaults and choices come from :mod:`superfacets.params`, so the help texts
+Defaults and choices come from :mod:`superfacets.method.params`, so the help texts
 and the API never disagree. Nothing here imports numba: building the parser
 (``--help``, argument errors) stays light.
 """
@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..params import (
+from ..method.params import (
     ASSIGNMENTS,
     COARSE_MIN_PER_SEGMENT,
     COARSE_MIN_PER_SEGMENT_POINTS,
@@ -20,7 +20,7 @@ from ..params import (
     INITS,
     WEIGHTINGS,
 )
-from ..params import DEFAULT_CENTER_TOL as _D_CENTER_TOL
+from ..method.params import DEFAULT_CENTER_TOL as _D_CENTER_TOL
 
 __all__ = ["int_arg", "float_arg", "size_arg", "view_arg", "add_method_options",
            "add_camera_options", "add_mesh_and_labels", "method_kwargs", "check_output",
@@ -279,7 +279,7 @@ def method_kwargs(args) -> dict:
 
 def add_engine_options(p, *, sees: str, note: str = "", prefix: str = "") -> None:
     """``-j/--workers`` and ``--scheduler``: where the tasks of ``batch``, ``experiment``
-    and ``segment --tiles`` run (:class:`superfacets.runner.engine.Engine`)."""
+    and ``segment --tiles`` run (:class:`superfacets.scale.runner.engine.Engine`)."""
     p.add_argument("-j", "--workers", type=int_arg, default=None, metavar="N",
                    help=f"{prefix}worker processes of a local Dask cluster (default: one per "
                         f"core{note}; 1: in this process)")
@@ -393,7 +393,7 @@ def read_usable(path, *, clouds: bool = False):
     Every command that reads a mesh (or, with ``clouds``, a mesh or a point
     cloud) comes through here, so that an input with coordinates that would
     overflow, a zero extent or a zero area is refused the same way by each
-    (:meth:`superfacets.mesh.Mesh.check_usable`), before any picture, metric
+    (:meth:`superfacets.inputs.mesh.Mesh.check_usable`), before any picture, metric
     or segmentation is attempted.
 
     Raises
@@ -416,9 +416,9 @@ def labels_for(args, mesh):
     """Labels from LABELS.seg, computed with the method options, or None (--plain);
     a dict describing them for titles and pages; and what they label: ``'faces'``, or
     ``'vertices'`` for a file of one label per vertex (``segment --elements vertices``)."""
+    from ..api.segmentation import segment
     from ..errors import MeshFormatError, SuperfacetsError
     from ..io import read_labels
-    from ..segmentation import segment
 
     if args.plain:
         return None, {}, "faces"

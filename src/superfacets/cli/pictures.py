@@ -91,7 +91,7 @@ def add_parsers(sub) -> None:
 
 
 def cmd_render(args) -> int:
-    from ..render import render
+    from ..viz.render import render
 
     out = check_output(args.output, (".png",), "the picture",
                        inputs=(args.mesh, getattr(args, "labels", None)))
@@ -112,10 +112,10 @@ def cmd_panel(args) -> int:
     from itertools import product as _product
 
     from ..errors import ParameterError
+    from ..evaluation.methods import get_method
     from ..io import read_labels
-    from ..methods import get_method
-    from ..render import render_panel
-    from ..runner.grid import expand_grid, method_grid, parse_params
+    from ..scale.runner.grid import expand_grid, method_grid, parse_params
+    from ..viz.render import render_panel
 
     out = check_output(args.output, (".png",), "the picture",
                        inputs=(args.mesh, getattr(args, "labels", None)))
@@ -156,7 +156,7 @@ def cmd_panel(args) -> int:
 
 
 def cmd_view(args) -> int:
-    from ..render import NoDisplayError, has_display, show
+    from ..viz.render import NoDisplayError, has_display, show
 
     if not has_display():  # say so before the (maybe long) segmentation
         raise NoDisplayError("no display available ($DISPLAY is not set): use "
@@ -165,7 +165,7 @@ def cmd_view(args) -> int:
     mesh = read_usable(args.mesh)
     labels, _, elements = labels_for(args, mesh)
     if elements == "vertices":
-        from ..render import faces_to_draw
+        from ..viz.render import faces_to_draw
 
         mesh, labels = faces_to_draw(mesh, labels, elements)
     show(mesh, labels, title=Path(args.mesh).name, view=args.view,
@@ -174,7 +174,7 @@ def cmd_view(args) -> int:
 
 
 def cmd_html(args) -> int:
-    from ..html import write_html
+    from ..viz.html import write_html
 
     out = check_output(args.output, (".html", ".htm"), "the page",
                        inputs=(args.mesh, args.labels))

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..elements.kinds import kind_of
-from ..params import DEFAULTS
+from ..method.params import DEFAULTS
 from .options import (
     add_adaptive_options,
     add_camera_options,
@@ -173,10 +173,10 @@ def _tiny_hint(result) -> str:
 
 
 def cmd_segment(args) -> int:
-    from .. import warmup
+    from .._runtime import warmup
     from ..errors import ParameterError, SuperfacetsError
-    from ..outputs import JoinedResult, write_result
-    from ..params import resolve
+    from ..method.params import resolve
+    from ..viz.outputs import JoinedResult, write_result
 
     if Path(args.mesh).is_dir():
         raise IsADirectoryError(f"{args.mesh}: is a directory; to segment every mesh or cloud "
@@ -239,8 +239,8 @@ def cmd_segment(args) -> int:
         warmup.start()  # numba's start-up in a thread, while the rest is imported and read
     t0 = time.perf_counter()
     data = scan_cloud(read_usable(args.mesh, clouds=True), args)
-    from ..scenes import segment_objects
-    from ..segmentation import segment
+    from ..api.scenes import segment_objects
+    from ..api.segmentation import segment
 
     cloud = not hasattr(data, "faces")
     kind = "points" if cloud else (args.elements or "faces")
@@ -258,7 +258,7 @@ def cmd_segment(args) -> int:
             result = JoinedResult(*segment_objects(data, args.n_segments or DEFAULTS.n_segments,
                                               **kwargs))
         elif args.adaptive is not None:
-            from ..levels import adaptive_segment
+            from ..api.levels import adaptive_segment
 
             result = adaptive_segment(data, args.n_segments or DEFAULTS.n_segments,
                                       start=args.adaptive,
@@ -341,10 +341,10 @@ def _count_note(args, data, result, kind: str) -> str | None:
 
 def cmd_baseline(args) -> int:
     from ..errors import MemoryLimitError, ParameterError
+    from ..evaluation.methods import Skipped, get_method
     from ..io import write_colored_mesh, write_labels
     from ..io.files import Outputs
-    from ..methods import Skipped, get_method
-    from ..runner.grid import method_grid, parse_params
+    from ..scale.runner.grid import method_grid, parse_params
 
     method = get_method(args.method)
     given = method_grid([method], parse_params(args.param))[method.name]
@@ -387,14 +387,14 @@ def cmd_baseline(args) -> int:
 
 
 def cmd_demo(args) -> int:
-    from .. import warmup
-    from ..html import write_html
+    from .._runtime import warmup
+    from ..api.segmentation import segment
+    from ..inputs.shapes import creature
     from ..io import write_colored_mesh, write_labels, write_mesh
     from ..io.files import Outputs
-    from ..outputs import result_header
-    from ..params import check_int, resolve
-    from ..segmentation import segment
-    from ..shapes import creature
+    from ..method.params import check_int, resolve
+    from ..viz.html import write_html
+    from ..viz.outputs import result_header
 
     check_int("--resolution", args.resolution, lo=16, hi=300)
     resolve(n_segments=args.n_segments, **method_kwargs(args))  # every option, before work
@@ -422,7 +422,7 @@ def cmd_demo(args) -> int:
                    up="z", info={"k asked": args.n_segments, "alpha": args.alpha},
                    outputs=outputs)
         try:
-            from ..render import render
+            from ..viz.render import render
 
             render(mesh, result.labels, out / "creature.png", size=(1000, 750), up="z",
                    title=f"{result.n_segments} superfacets, alpha = {args.alpha:g}",

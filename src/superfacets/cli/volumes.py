@@ -12,12 +12,12 @@ from .options import check_labels_output, check_output, method_kwargs, named_aft
 def segment_volume(args) -> int:
     """``segment`` of a tetrahedral mesh: labels per tetrahedron, the mesh with the labels
     as cell data (``--colored-mesh OUT.vtu``), a picture of it cut in half."""
+    from ..api.segmentation import segment
     from ..errors import ParameterError, SuperfacetsError
     from ..io.files import Outputs
     from ..io.labels import write_labels
     from ..io.volumes import read_volume, write_volume_labels
-    from ..params import resolve
-    from ..segmentation import segment
+    from ..method.params import resolve
 
     for flag, given in (("--html", args.html), ("--graph", args.graph),
                         ("--per-object", args.per_object),
@@ -46,8 +46,8 @@ def segment_volume(args) -> int:
         if vol_out is not None:
             write_volume_labels(vol_out, data, result.labels, outputs=outputs)
         if png_out is not None:
-            from ..render import render
-            from ..volume import cut_surface
+            from ..inputs.volume import cut_surface
+            from ..viz.render import render
 
             surface, face_labels = cut_surface(data, result.labels, axis=0, at=0.5)
             render(surface, face_labels, png_out, outputs=outputs, up=args.up or "y",

@@ -60,14 +60,15 @@ def face_graph(mesh) -> ElementGraph:
     """The face graph of a triangle or polygon mesh, with its geometry.
 
     Elements are faces (triangles or polygons): position = centroid, size =
-    area, normal = unit face normal (:class:`~superfacets.mesh.Mesh`'s cached geometry, shared,
+    area, normal = unit face normal (:class:`~superfacets.inputs.mesh.Mesh`'s cached geometry,
+    shared,
     not copied). Per adjacency: the length of the shared mesh edge, and the
     terms of the paper's weights (eqs. 1-3) from the edge midpoint ``m_ij``:
     ``geo = |c_i - m_ij| + |m_ij - c_j|``, the cosine of the dihedral angle
     and the concavity ``n_i . (c_j - c_i) > 0``.
 
     The graph is built on the first call and kept with the mesh: later calls
-    on the same :class:`~superfacets.mesh.Mesh` (segmenting it again with
+    on the same :class:`~superfacets.inputs.mesh.Mesh` (segmenting it again with
     other parameters, the metrics, the pictures) return the same object.
 
     Parameters
@@ -82,7 +83,7 @@ def face_graph(mesh) -> ElementGraph:
     Raises
     ------
     TypeError
-        If ``mesh`` is not a :class:`~superfacets.mesh.Mesh` (use
+        If ``mesh`` is not a :class:`~superfacets.inputs.mesh.Mesh` (use
         :func:`superfacets.as_mesh`, or :func:`superfacets.elements.as_element_graph`).
 
     Examples
@@ -139,7 +140,7 @@ class _MeshNormals:
     """``rebuild["normals"]`` of a face graph: the normals its mesh caches.
 
     The mesh is held by a weak reference (it holds the graph); once it is
-    gone, a new :class:`~superfacets.mesh.Mesh` of the same arrays computes
+    gone, a new :class:`~superfacets.inputs.mesh.Mesh` of the same arrays computes
     them, the same. :meth:`release` makes the mesh forget its copy too.
     """
 
@@ -148,7 +149,7 @@ class _MeshNormals:
         self.vertices, self.faces = mesh.vertices, mesh.faces
 
     def __call__(self, graph: ElementGraph) -> dict[str, np.ndarray]:
-        from ..mesh import Mesh
+        from ..inputs.mesh import Mesh
 
         mesh = self.mesh()
         if mesh is None:
@@ -178,7 +179,7 @@ def order_by_two_keys(key1: np.ndarray, key2: np.ndarray, n_key1: int,
         Entries with ``key1 == v`` are ``order[starts[v]:starts[v + 1]]``.
     """
     from .._kernels.adjacency import count_keys, scatter_keys, sort_buckets
-    from .._threads import run_ranges, split
+    from .._runtime.threads import run_ranges, split
 
     bounds = split(key1.shape[0])
     part = {a: i for i, a in enumerate(bounds[:-1])}
@@ -198,7 +199,7 @@ def order_by_two_keys(key1: np.ndarray, key2: np.ndarray, n_key1: int,
 def _group_pairs_on_threads(group_pairs, half, owner, a, b):
     """``group_pairs`` over ranges of ``half`` cut at edge starts, on threads: each
     range holds whole edges, so the concatenated results are those of one call."""
-    from .._threads import run_ranges, split
+    from .._runtime.threads import run_ranges, split
 
     bounds = split(half.shape[0])
     for i in range(1, len(bounds) - 1):  # move each cut forward to the start of an edge

@@ -180,7 +180,7 @@ class ElementGraph:
         when it differs from ``lengths`` (vertices, points: the distance
         between the two elements); see :attr:`span`.
     scale2 : (n,) float64 ndarray or None
-        Content-sensitive runs (:mod:`superfacets.adaptive`): the squared scale of
+        Content-sensitive runs (:mod:`superfacets.method.adaptive`): the squared scale of
         each element, by which the farthest-point centers multiply squared
         distances; None: 1.
     terms_of : callable or None
@@ -255,7 +255,7 @@ class ElementGraph:
     def terms(self) -> AdjacencyTerms:
         """The :class:`AdjacencyTerms` of every adjacency, computed once (in chunks,
         ranges of chunks on threads)."""
-        from .._threads import run_ranges, split
+        from .._runtime.threads import run_ranges, split
 
         e = self.n_edges
         geo, cos = np.empty(e), np.empty(e)
@@ -320,7 +320,7 @@ def cached_on(owner, key: str, build: Callable[[], object]):
     """``build()``, computed once and kept with ``owner`` (a mesh or a cloud) under ``key``.
 
     The element graphs belong to this package, not to the inputs they are built
-    from: a :class:`~superfacets.mesh.Mesh` or :class:`~superfacets.cloud.PointCloud`
+    from: a :class:`~superfacets.inputs.mesh.Mesh` or :class:`~superfacets.inputs.cloud.PointCloud`
     only lends its attribute dictionary, so it never imports a builder. Its
     arrays are read-only, so a kept graph never goes stale; a pickled input
     leaves its graphs behind (they hold functions) and builds them again.

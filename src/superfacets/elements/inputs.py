@@ -13,7 +13,7 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
-from ..params import DEFAULTS
+from ..method.params import DEFAULTS
 from .graph import ElementGraph
 
 _N_NEIGHBORS = DEFAULTS.n_neighbors
@@ -56,7 +56,8 @@ class ElementInput(NamedTuple):
 
     def colors(self) -> np.ndarray | None:
         """(N, 3) float64: the RGB of each input row (face, vertex or point) in ``[0, 1]``,
-        None where the input has no colours (:meth:`superfacets.mesh.Mesh.element_colors`)."""
+        None where the input has no colours
+        (:meth:`superfacets.inputs.mesh.Mesh.element_colors`)."""
         if hasattr(self.source, "element_colors"):
             return self.source.element_colors("faces" if self.index is None else "vertices")
         return getattr(self.source, "colors", None)
@@ -74,7 +75,7 @@ class ElementInput(NamedTuple):
 def is_cloud(obj) -> bool:
     """Whether ``obj`` is a point cloud (a PointCloud, a bare (N, 3) or (H, W, 3) array,
     a trimesh or Open3D point cloud) rather than a mesh."""
-    from ..cloud import PointCloud
+    from ..inputs.cloud import PointCloud
 
     if isinstance(obj, PointCloud):
         return True
@@ -116,7 +117,7 @@ class Builder(NamedTuple):
 
 
 def _is_volume(obj) -> bool:
-    from ..volume import TetMesh
+    from ..inputs.volume import TetMesh
 
     return isinstance(obj, TetMesh)
 
@@ -131,13 +132,13 @@ def _usable(obj):
 
 
 def _usable_cloud(obj):
-    from ..cloud import as_cloud
+    from ..inputs.cloud import as_cloud
 
     return _usable(as_cloud(obj))
 
 
 def _usable_mesh(obj):
-    from ..convert import as_mesh
+    from ..inputs.convert import as_mesh
 
     return _usable(as_mesh(obj))
 
@@ -262,11 +263,11 @@ def elements_of(obj, elements: str | None = None, *, n_neighbors: int = _N_NEIGH
 
     Parameters
     ----------
-    obj : Mesh, PointCloud, TetMesh, or what :func:`~superfacets.convert.as_mesh` or
-        :func:`~superfacets.cloud.as_cloud` accept
+    obj : Mesh, PointCloud, TetMesh, or what :func:`~superfacets.inputs.convert.as_mesh` or
+        :func:`~superfacets.inputs.cloud.as_cloud` accept
     elements : {'faces', 'vertices', 'points', 'cells'}, optional
         Default: ``'points'`` for a point cloud, ``'cells'`` for a
-        :class:`~superfacets.volume.TetMesh` (its tetrahedra), else ``'faces'``
+        :class:`~superfacets.inputs.volume.TetMesh` (its tetrahedra), else ``'faces'``
         (:func:`kind_for`; the builders: :data:`BUILDERS`).
     n_neighbors, neighbor_radius
         The point graph's neighbourhood (points only).
@@ -324,7 +325,7 @@ def prepared(obj, elements: str | None = None, *, n_segments: int | None = None)
     >>> kind, mesh.n_faces
     ('faces', 12)
     """
-    from ..params import check_n_segments
+    from ..method.params import check_n_segments
 
     kind = kind_for(obj, elements)
     builder = BUILDERS[kind]
@@ -348,11 +349,11 @@ def as_element_graph(obj) -> ElementGraph:
     Raises
     ------
     TypeError, InvalidMeshError
-        As :func:`superfacets.convert.as_mesh`.
+        As :func:`superfacets.inputs.convert.as_mesh`.
     """
     if isinstance(obj, ElementGraph):
         return obj
-    from ..convert import as_mesh
+    from ..inputs.convert import as_mesh
     from .faces import face_graph
 
     return face_graph(as_mesh(obj))

@@ -10,7 +10,7 @@ of :mod:`superfacets.elements`, registered by kind in
 builder and one row of :data:`KINDS`.
 
 This module imports nothing of the package: the parameter checks
-(:mod:`superfacets.params`) read it before any graph exists.
+(:mod:`superfacets.method.params`) read it before any graph exists.
 
 Examples
 --------
@@ -55,7 +55,7 @@ class ElementKind:
         for a third of their time (``docs/notes/cleanup.md``).
     crease : float
         Weight of creases in the clean-up's cut cost, a fraction of ``alpha``
-        (:func:`superfacets.cleanup.cut_costs`). Faces 0.1; vertices, points and
+        (:func:`superfacets.method.cleanup.cut_costs`). Faces 0.1; vertices, points and
         cells 1.0: their normals are neighbourhood averages, a crease's angle is
         spread over a few adjacencies (lowest UE of 0.1, 0.3, 1, 3, 10 on 90
         benchmark meshes, ``docs/notes/cleanup.md``).
@@ -76,7 +76,7 @@ class ElementKind:
         the swaps, to be expanded again: 4 on faces, else 1.
     coarse_min_per_segment : int
         Automatic coarse-to-fine runs where a superfacet holds at least this
-        many elements (:func:`superfacets.multilevel.coarse_ratio`) ...
+        many elements (:func:`superfacets.method.multilevel.coarse_ratio`) ...
     coarse_per_segment : int
         ... and leaves about this many clusters per superfacet.
     coarse_neighbor_cap : bool
@@ -87,10 +87,10 @@ class ElementKind:
         than by its size (faces: by area, as the benchmark's ground truth).
     auto_density : bool
         ``density=None`` looks at the spread of the element sizes
-        (:func:`superfacets.adaptive.density_for`): points, whose density may be
+        (:func:`superfacets.method.adaptive.density_for`): points, whose density may be
         uneven (LiDAR sweeps, RGB-D frames); 0 on the other kinds.
     unit_sizes_in_levels : bool
-        In planarity levels (:func:`superfacets.hierarchy.planarity_graph`) each
+        In planarity levels (:func:`superfacets.graph.hierarchy.planarity_graph`) each
         element weighs one (points: their size estimates are noisy).
     neighborhood : bool
         The graph is built from a neighbourhood search (``n_neighbors``,
@@ -140,7 +140,7 @@ class ElementKind:
         Examples
         --------
         >>> import trimesh
-        >>> from superfacets.convert import as_mesh
+        >>> from superfacets.inputs.convert import as_mesh
         >>> m = as_mesh(trimesh.creation.box())
         >>> kind_of("faces").n_rows(m), kind_of("vertices").n_rows(m)
         (12, 8)

@@ -10,7 +10,7 @@ weights for adjacent elements". Here each point is an element:
   the points are indexed along a Z-order curve that depends on the positions
   alone, so a box of a cloud lists its points in the whole cloud's order and
   gets the whole cloud's neighbours away from its edge
-  (:mod:`superfacets.tiling`); a point whose neighbours lie on a line
+  (:mod:`superfacets.scale.tiling`); a point whose neighbours lie on a line
   (a LiDAR scan line far from the sensor: linearity ``(l1 - l2) / l1`` of
   their covariance above :data:`LINEAR`) is also joined to its
   ``WIDEN * n_neighbors`` nearest, so that the graph spans the surface
@@ -42,9 +42,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..bounds import column_bounds
+from ..inputs.bounds import column_bounds
 from .graph import ElementGraph, adjacency_csr, cached_on
-from .vertices import _REBUILD_PAIRS, symmetric_terms
+from .vertices import REBUILD_PAIRS, symmetric_terms
 
 __all__ = ["point_graph", "PointElements", "estimate_normals", "orient_normals",
            "distinct_points"]
@@ -260,7 +260,7 @@ def _break_ties(tree, pts: np.ndarray, dist: np.ndarray, nbr: np.ndarray, k: int
     """Where the k-th and the next neighbour are equally far (quantized scans), keep the
     tied neighbours of lowest index, in place: the KD-tree's own choice depends on the
     whole cloud, the lowest index (the position's place in :func:`distinct_points`'
-    order) does not, so a tile of a cloud (:mod:`superfacets.tiling`) gets the whole
+    order) does not, so a tile of a cloud (:mod:`superfacets.scale.tiling`) gets the whole
     cloud's graph inside its halo. ``queries``: the positions queried, row by row
     (default: every point, in order)."""
     q = pts if queries is None else queries
@@ -318,7 +318,7 @@ def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
     Parameters
     ----------
     cloud : PointCloud
-        Usable (:meth:`~superfacets.cloud.PointCloud.check_usable`).
+        Usable (:meth:`~superfacets.inputs.cloud.PointCloud.check_usable`).
     n_neighbors : int, default 10
         Nearest neighbours of each point, ``>= 1`` (fewer when the cloud has fewer points).
     neighbor_radius : float, optional
@@ -330,7 +330,7 @@ def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
 
     Examples
     --------
-    >>> from superfacets.cloud import PointCloud
+    >>> from superfacets.inputs.cloud import PointCloud
     >>> xy = np.stack(np.meshgrid(np.arange(10.0), np.arange(10.0)), -1).reshape(-1, 2)
     >>> g = point_graph(PointCloud(np.c_[xy, np.zeros(100)]), 4).graph
     >>> g.n_elements, round(float(np.abs(g.normals[:, 2]).min()), 6)
@@ -429,5 +429,5 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
         centroid=pts.mean(axis=0), lower=lower, diagonal=diagonal, pairs=pairs,
         indptr=indptr, indices=indices, dual_edge=dual_edge, lengths=lengths,
         boundary_elements=np.zeros(0, np.int64), boundary_lengths=np.zeros(0),
-        spans=spans, terms_of=symmetric_terms, rebuild=_REBUILD_PAIRS)
+        spans=spans, terms_of=symmetric_terms, rebuild=REBUILD_PAIRS)
     return PointElements(graph, index)

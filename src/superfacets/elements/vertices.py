@@ -33,14 +33,14 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..bounds import column_bounds
+from ..inputs.bounds import column_bounds
 from .graph import ElementGraph, adjacency_csr, cached_on, pairs_from_csr
 
 __all__ = ["vertex_graph", "VertexElements", "symmetric_terms"]
 
 #: ``ElementGraph.rebuild`` of the vertex and point graphs: their pairs (int64) follow
 #: from the CSR layout; the other fields are kept.
-_REBUILD_PAIRS = dict.fromkeys(("pairs", "dual_edge"), partial(pairs_from_csr, pair_dtype=np.int64))
+REBUILD_PAIRS = dict.fromkeys(("pairs", "dual_edge"), partial(pairs_from_csr, pair_dtype=np.int64))
 
 
 class VertexElements(NamedTuple):
@@ -130,5 +130,5 @@ def _build_vertex_graph_of(mesh) -> VertexElements:
         indices=indices, dual_edge=dual_edge, lengths=lengths,
         boundary_elements=np.concatenate([lo[open_], hi[open_]]),
         boundary_lengths=np.concatenate([half_len, half_len]), spans=spans,
-        terms_of=symmetric_terms, rebuild=_REBUILD_PAIRS)
+        terms_of=symmetric_terms, rebuild=REBUILD_PAIRS)
     return VertexElements(graph, index)

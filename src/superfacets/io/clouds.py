@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MeshFormatError
-from ..rgb import unit_colors
+from ..inputs.rgb import unit_colors
 from .files import read_bytes, split_suffix
 from .ply import ply_colors
 
@@ -103,7 +103,7 @@ def read_cloud(path, format: str | None = None):
     >>> c.n_points, c.points.dtype
     (50, dtype('float64'))
     """
-    from ..cloud import InvalidCloudError, PointCloud
+    from ..inputs.cloud import InvalidCloudError, PointCloud
 
     path = Path(path)
     fmt, comp = split_suffix(path)
@@ -171,7 +171,7 @@ def _packed_rgb(values: np.ndarray) -> np.ndarray:
 
 
 def _read_pcd(path: Path) -> dict:
-    from ..extras import require
+    from .._runtime.extras import require
 
     pypcd4 = require("pypcd4", "reading PCD files")
     if not path.exists():
@@ -215,7 +215,7 @@ def _read_pcd(path: Path) -> dict:
 
 
 def _read_las(path: Path) -> dict:
-    from ..extras import require
+    from .._runtime.extras import require
 
     laspy = require("laspy", "reading LAS/LAZ files")
     if not path.exists():

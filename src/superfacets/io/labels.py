@@ -12,7 +12,7 @@ from typing import Iterable
 import numpy as np
 
 from ..errors import MeshFormatError
-from ..labels import check_labels
+from ..method.labels import check_labels
 from .files import Outputs, read_bytes, save, split_suffix, text_lines
 
 __all__ = ["read_labels", "write_labels", "write_segindices", "read_field"]
@@ -198,7 +198,7 @@ def read_field(path, name: str) -> np.ndarray:
         raise FileNotFoundError(f"{path}: no such file")
     fmt, comp = split_suffix(path)
     if fmt in ("las", "laz"):
-        from ..extras import require
+        from .._runtime.extras import require
         from .clouds import check_laz
 
         laspy = require("laspy", "reading LAS/LAZ files")

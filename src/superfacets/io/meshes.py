@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InvalidMeshError, MeshFormatError
-from ..mesh import Mesh
+from ..inputs.mesh import Mesh
 from .files import read_bytes, split_suffix, text_lines
 
 __all__ = ["read_mesh", "MESH_FORMATS"]
@@ -45,7 +45,7 @@ def read_mesh(path, format: str | None = None) -> Mesh:
         triangles, polygons kept as polygons (OFF, OBJ, PLY). STL: exactly
         coincident vertices are merged, since STL stores none shared. Several
         objects (OBJ ``o`` statements, glTF/GLB scenes) are joined, their
-        face ranges in ``mesh.objects`` (:mod:`superfacets.convert` says in
+        face ranges in ``mesh.objects`` (:mod:`superfacets.inputs.convert` says in
         which order). Colours, where the file has them, in ``mesh.colors``
         (per vertex: PLY ``red green blue``, COFF, OBJ ``v x y z r g b``,
         glTF vertex colours) and ``mesh.face_colors`` (PLY faces' ``red
@@ -171,7 +171,7 @@ def _parse_off(data: bytes, path: Path):
 
 def _unit(rgb: np.ndarray) -> np.ndarray:
     """Text colours (floats in [0, 1], or 0..255) in [0, 1]."""
-    from ..rgb import unit_colors
+    from ..inputs.rgb import unit_colors
 
     return unit_colors(rgb)
 
@@ -308,10 +308,10 @@ def _parse_obj(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _load_scene(path: Path, fmt: str, comp: str | None, data: bytes) -> Mesh:
-    """A glTF/GLB file through trimesh, its objects joined (:mod:`superfacets.convert`)."""
+    """A glTF/GLB file through trimesh, its objects joined (:mod:`superfacets.inputs.convert`)."""
     import trimesh
 
-    from ..convert import mesh_from_scene
+    from ..inputs.convert import mesh_from_scene
 
     try:
         with _quiet_trimesh():

@@ -28,8 +28,8 @@ COLOR_PROPERTIES = (("red", "green", "blue"), ("r", "g", "b"),
 def ply_colors(element) -> np.ndarray | None:
     """(N, 3) float64 in ``[0, 1]``: the RGB of a ``plyfile`` element (vertex or face),
     None where it has none (:data:`COLOR_PROPERTIES`; scaled by
-    :func:`~superfacets.rgb.unit_colors`)."""
-    from ..rgb import unit_colors
+    :func:`~superfacets.inputs.rgb.unit_colors`)."""
+    from ..inputs.rgb import unit_colors
 
     names = [p.name for p in element.properties]
     for rgb in COLOR_PROPERTIES:

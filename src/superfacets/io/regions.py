@@ -26,7 +26,7 @@ points lie in no box (their label stays -1).
 
 A tiled run reads the file twice in all: once for its bounds
 (:meth:`RegionReader.survey`) and once to sort its elements into one file
-per tile (:func:`superfacets.runner.buckets.bucket`); every box is then read
+per tile (:func:`superfacets.scale.runner.buckets.bucket`); every box is then read
 from the files of the tiles it overlaps, not from the whole file.
 """
 
@@ -60,7 +60,7 @@ class Survey:
     size: float
     n_elements: int
     #: (s, 3) float64: the finite positions of every ``ceil(n_rows / SAMPLE)``-th row,
-    #: for balanced tiles (:func:`superfacets.tile_layout.balanced_tiles`)
+    #: for balanced tiles (:func:`superfacets.scale.tile_layout.balanced_tiles`)
     sample: np.ndarray | None = None
     #: the points carry normals (a point cloud's file has them)
     normals: bool = False
@@ -100,7 +100,7 @@ class RegionReader:
     #: orientation sample is turned to agree with it, and the tiles with the sample
     up: tuple | None = None
     #: the divisor of the file's integer point colours, decided by the survey for the
-    #: whole file (:func:`superfacets.rgb.color_top`); None: each chunk's own
+    #: whole file (:func:`superfacets.inputs.rgb.color_top`); None: each chunk's own
     color_top: float | None = None
 
     # ------------------------------------------------------------------ opening
@@ -126,7 +126,7 @@ class RegionReader:
                 return cls(str(p), "faces", "ply-mesh", int(ply["face"].count), chunk)
             return cls(str(p), "points", "ply-points", int(ply["vertex"].count), chunk)
         if suffix in ("las", "laz"):
-            from ..extras import require
+            from .._runtime.extras import require
             from .clouds import check_laz
 
             laspy = require("laspy", "reading LAS/LAZ files")
@@ -156,8 +156,8 @@ class RegionReader:
         MeshFormatError, InvalidMeshError
             As the readers do; also for a polygon mesh (tiles take triangles).
         """
-        from ..cloud import PointCloud, as_cloud
-        from ..convert import as_mesh
+        from ..inputs.cloud import PointCloud, as_cloud
+        from ..inputs.convert import as_mesh
 
         obj = source
         if isinstance(source, (str, Path)):
@@ -242,7 +242,7 @@ class RegionReader:
                 kept.append(every[np.isfinite(every).all(axis=1)])
         if n == 0:
             raise MeshFormatError(f"{self.path}: no {self.kind[:-1]} with a finite position")
-        from ..rgb import color_top
+        from ..inputs.rgb import color_top
 
         top = color_top(stats["itemsize"], stats["largest"]) if stats else None
         return Survey(lo, hi, size, n, np.concatenate(kept).astype(np.float64), normals, colors,
@@ -261,7 +261,7 @@ class RegionReader:
             The faces (with the vertices they use) or the points (with their
             colours), in that order; None where the box holds no element.
         """
-        from ..mesh import Mesh
+        from ..inputs.mesh import Mesh
 
         lo = np.asarray(lo, dtype=np.float64)
         hi = np.asarray(hi, dtype=np.float64)
@@ -335,7 +335,7 @@ class RegionReader:
     def _colors(self, raw: np.ndarray, stats: dict | None) -> np.ndarray:
         """A chunk's colours in [0, 1]: integers divided by the file's :attr:`color_top`
         where the survey decided it (``stats`` collects what it needs)."""
-        from ..rgb import unit_colors
+        from ..inputs.rgb import unit_colors
 
         if stats is not None and np.issubdtype(raw.dtype, np.integer) and raw.size:
             stats["itemsize"] = raw.dtype.itemsize
@@ -396,9 +396,9 @@ class RegionReader:
 
 
 def point_cloud_of(pts, colors, normals, viewpoint, name: str = ""):
-    """A :class:`~superfacets.cloud.PointCloud` of a box's points (``viewpoint`` a tuple or
+    """A :class:`~superfacets.inputs.cloud.PointCloud` of a box's points (``viewpoint`` a tuple or
     None)."""
-    from ..cloud import PointCloud
+    from ..inputs.cloud import PointCloud
 
     vp = None if viewpoint is None else np.asarray(viewpoint)
     return PointCloud(pts, normals, name=name, colors=colors, viewpoint=vp)

@@ -43,7 +43,7 @@ def read_volume(path):
     MeshFormatError
         If meshio cannot read it, or it holds no tetrahedron.
     InvalidMeshError
-        As :class:`~superfacets.volume.TetMesh`.
+        As :class:`~superfacets.inputs.volume.TetMesh`.
     MissingExtraError
         Without meshio (``pip install 'superfacets[volumes]'``).
 
@@ -55,8 +55,8 @@ def read_volume(path):
     >>> read_volume("t.vtu").n_tets
     1
     """
-    from ..extras import require
-    from ..volume import TetMesh
+    from .._runtime.extras import require
+    from ..inputs.volume import TetMesh
 
     meshio = require("meshio", "reading tetrahedral meshes")
     path = Path(path)
@@ -127,8 +127,8 @@ def write_volume_labels(path, mesh, labels, *, outputs=None) -> Path:
     """
     import tempfile
 
-    from ..extras import require
-    from ..labels import check_labels
+    from .._runtime.extras import require
+    from ..method.labels import check_labels
     from .files import atomic_write
 
     meshio = require("meshio", "writing tetrahedral meshes")

@@ -1,0 +1,287 @@
+"""The result of one run: labels and the details of the run (``SegmentationResult``,
+and ``TiledResult`` for a tiled run).
+
+:func:`superfacets.segment` returns it; :func:`superfacets.method.pipeline.pipeline` makes it.
+Its :meth:`~SegmentationResult.graph` and :meth:`~SegmentationResult.hierarchy` give
+the superfacet graph and coarser levels of the run's superfacets.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..elements.inputs import per_element
+from ..method.params import DEFAULTS
+
+__all__ = ["SegmentationResult", "TiledResult"]
+
+_D = DEFAULTS
+
+
+@dataclass(frozen=True)
+class SegmentationResult:
+    """Labels and details of one run of :func:`segment`.
+
+    Attributes
+    ----------
+    labels : (m,) int64 ndarray
+        Superfacet of each face, dense ``0..K-1``.
+    centers : (K,) int64 ndarray
+        Center face of each superfacet (the center of the last
+        classification; for a superfacet that lost it to the connectivity
+        step, its face nearest the area-weighted mean of its centroids).
+    n_iter : int
+        Number of classification passes run.
+    converged : bool
+        True if the run stopped by its rule: the last center update moved no
+        center, a pass changed at most ``tol`` of the area, or the passes
+        after the split-and-merge swaps were done; False if ``max_iter``
+        stopped it.
+    mesh_radius : float
+        Superfacet radius ``r`` used, in the input's units (the ``radius``
+        parameter, ``params['radius']``, is a fraction of the bounding-box
+        diagonal). ``radius`` is its old name (deprecated; one release).
+    n_orphan_seeds : int
+        Centers created on orphan faces over the whole run.
+    timings : dict of str to float
+        Seconds per stage: ``graph`` (face graph and per-face geometry,
+        zero when already cached on the mesh), ``weights``, ``init``,
+        ``iterations``, ``connectivity``, ``cleanup`` (with ``cleanup=True``),
+        ``total``; and, not times,
+        ``expansions`` (Dijkstra expansions run), ``passes``
+        (classifications actually run: fewer than ``n_iter`` when a cycle
+        was skipped) and ``cycle_period`` (0, or the period of the cycle of
+        center sets that was detected).
+    params : dict
+        The parameters of the run, resolved (``n_segments``, ``radius``,
+        ``init``, ...).
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets import segment
+    >>> r = segment(trimesh.creation.icosphere(subdivisions=3), 20)
+    >>> r.n_segments, r.labels.shape, r.params["elements"], r.mesh_radius > 0
+    (20, (1280,), 'faces', True)
+    """
+
+    labels: np.ndarray
+    centers: np.ndarray
+    n_iter: int
+    converged: bool
+    mesh_radius: float
+    n_orphan_seeds: int
+    timings: dict = field(default_factory=dict)
+    params: dict = field(default_factory=dict)
+    #: The input's element graph and the label of each element (not of each row),
+    #: for :meth:`graph` and :meth:`hierarchy`.
+    elements: object = field(default=None, repr=False, compare=False)
+    element_labels: np.ndarray | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def n_segments(self) -> int:
+        """Number of superfacets ``K`` produced."""
+        return int(self.centers.shape[0])
+
+    @property
+    def radius(self) -> float:
+        """The old name of :attr:`mesh_radius` (deprecated; one release)."""
+        return deprecated_radius(self)
+
+    def graph(self, features=None):
+        """The superfacet (superpoint) adjacency graph of this result.
+
+        Parameters
+        ----------
+        features : (N, d) float ndarray, optional
+            One feature per input row (face, vertex or point, e.g. RGB
+            colour); ``feature`` of the graph is its area-weighted mean per
+            superfacet (rows that are not elements are left out). Default:
+            the input's colours if it has any (a cloud read with RGB), else none.
+
+        Returns
+        -------
+        SuperfacetGraph
+            ``edge_index`` (2, E), ``border_length``, ``mean_angle``,
+            ``concave``, ``area``, ``centroid``, ``normal``, ``feature``;
+            ``to_scipy()``, ``to_networkx()``, ``save(path)``
+            (:mod:`superfacets.graph.adjacency`).
+
+        Raises
+        ------
+        ParameterError
+            If ``features`` does not have one finite row per input row.
+
+        Examples
+        --------
+        >>> import trimesh
+        >>> from superfacets import segment
+        >>> r = segment(trimesh.creation.icosphere(subdivisions=3), 12)
+        >>> g = r.graph()
+        >>> g.n_segments, g.edge_index.shape[0], bool((g.border_length > 0).all())
+        (12, 2, True)
+        """
+        from ..graph.adjacency import superfacet_graph
+
+        src = self._source()
+        if features is None:
+            features = src.colors()
+        return superfacet_graph(src.graph, self.element_labels, per_element(src, features))
+
+    def hierarchy(self, levels, *, beta: float = 0.0, features=None, cost: str = "ward",
+                  extent_weight: float | None = None, compactness: float | None = None):
+        """Nested coarser levels of these superfacets, each segment connected
+        (:func:`superfacets.graph.hierarchy.hierarchy`, with this run's ``alpha`` and
+        ``eta_convex``).
+
+        Parameters
+        ----------
+        levels : int or sequence of int
+            Numbers of segments of the levels, each at most ``K``.
+        beta : float, default 0
+            Weight of the feature difference (needs ``features``).
+        features : (N, d) float ndarray, optional
+            One feature per input row, as :meth:`graph`.
+        cost : {'ward', 'planarity'}, default 'ward'
+            Compact segments, or flat regions merged first
+            (:func:`superfacets.graph.hierarchy.hierarchy`; on a point cloud each point
+            weighs one, :func:`~superfacets.graph.hierarchy.planarity_graph`).
+        extent_weight : float, optional
+            With ``cost='planarity'``, the weight of the segments' extent
+            (:func:`superfacets.graph.hierarchy.hierarchy`). Default: left to the
+            method, :func:`~superfacets.graph.hierarchy.level_extent_weight` (0.01 on
+            a scan of uneven density, else 0).
+        compactness : float, optional
+            The old name of ``extent_weight`` (deprecated; one release).
+
+        Returns
+        -------
+        Hierarchy
+            ``.parents[i]``: the parent of each segment of the level below;
+            ``.labels(i, result.labels)``: one label per input row at level ``i``.
+
+        Raises
+        ------
+        ParameterError
+            If a level is out of range.
+
+        Examples
+        --------
+        >>> import trimesh
+        >>> from superfacets import segment
+        >>> r = segment(trimesh.creation.icosphere(subdivisions=4), 40)
+        >>> h = r.hierarchy([10, 3])
+        >>> [int(h.labels(i, r.labels).max()) + 1 for i in range(2)]
+        [10, 3]
+        """
+        from ..graph.hierarchy import hierarchy, level_extent_weight, planarity_graph
+        from ..method.params import renamed
+
+        extent_weight = renamed(extent_weight, compactness, "extent_weight", "compactness")
+        if cost == "planarity":
+            src = self._source()
+            graph = planarity_graph(src.graph, self.element_labels, per_element(
+                src, src.colors() if features is None else features))
+            if extent_weight is None:
+                extent_weight = level_extent_weight(src.graph)
+        else:
+            graph = self.graph(features)
+        return hierarchy(graph, levels, alpha=self.params.get("alpha", _D.alpha),
+                         eta_convex=self.params.get("eta_convex", _D.eta_convex), beta=beta,
+                         cost=cost, extent_weight=extent_weight or 0.0)
+
+    def _source(self):
+        if self.elements is None or self.element_labels is None:
+            from ..errors import ParameterError
+
+            raise ParameterError("this result holds no element graph (made by hand?): use "
+                                 "superfacets.graph.adjacency.superfacet_graph(graph, labels)")
+        return self.elements
+
+
+def deprecated_radius(result) -> float:
+    """``result.mesh_radius``, with a warning: ``radius`` is its old name."""
+    import warnings
+
+    warnings.warn("result.radius is now result.mesh_radius (in the input's units; the "
+                  "radius parameter is a fraction of the diagonal); the old name goes in the "
+                  "next release", DeprecationWarning, stacklevel=3)
+    return result.mesh_radius
+
+
+@dataclass(frozen=True)
+class TiledResult:
+    """Labels and details of a tiled run (:func:`~superfacets.scale.runner.tiles.segment_tiled`).
+
+    Attributes
+    ----------
+    labels : (N,) int64 ndarray
+        Superfacet of each row of the input (face or point, file order),
+        dense ``0..K-1``; -1 for an invalid point.
+    centers : (K,) int64 ndarray
+        Row of each superfacet's center.
+    mesh_radius : float
+        The superfacet radius ``r`` of the whole input (its units; ``radius`` is
+        its old name, deprecated).
+    grid : tuple of int
+        Tiles along x, y and z for a regular grid (``tiles=(nx, ny, nz)``);
+        ``(N,)`` for ``N`` balanced tiles.
+    layout : Tiles
+        The tiles' core boxes (:class:`~superfacets.scale.tile_layout.Tiles`:
+        ``layout.of(positions)``, ``layout.box(t)``).
+    halo : float
+        Width of each tile's halo, in the input's units.
+    disagreements : int
+        Elements of the tiles' inner halos (within ``window * r`` of a core)
+        whose label in that tile's run differs from the one their own tile
+        gave them: 0 means every superfacet reaching a border was seen whole,
+        the same way, from both sides.
+    repaired : int
+        Elements relabelled by the connectivity pass that runs after
+        stitching when ``disagreements > 0`` (a superfacet left in pieces by
+        two tiles' different borders: each stray piece joins its neighbour,
+        :func:`~superfacets.scale.tiling.tile_connect`).
+    tiles : list of dict
+        Per tile with work: ``tile``, ``core`` and ``rows`` (elements in the
+        core, and with the halo), ``centers`` (in its core), ``seconds`` and
+        ``peak_mib`` of each phase.
+    timings : dict of str to float
+        Seconds: ``survey``, ``bucket`` (sorting the input into tiles),
+        ``orientation`` (points without normals or viewpoint: the survey's
+        sample oriented once, :func:`~superfacets.scale.tiling.orientation_reference`), ``areas``,
+        ``centers``, ``refine``, ``labels``, ``stitch``, ``connect`` (only with
+        disagreements), ``total``.
+    params : dict
+        The run's parameters, resolved.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> m = trimesh.creation.icosphere(subdivisions=4)
+    >>> from superfacets import segment_tiled
+    >>> r = segment_tiled((m.vertices, m.faces), 40, tiles=2, workers=1)
+    >>> r.labels.shape, r.grid, r.disagreements >= 0
+    ((5120,), (2,), True)
+    """
+
+    labels: np.ndarray
+    centers: np.ndarray
+    mesh_radius: float
+    grid: tuple
+    halo: float
+    disagreements: int
+    repaired: int = 0
+    tiles: list = field(default_factory=list)
+    timings: dict = field(default_factory=dict)
+    params: dict = field(default_factory=dict)
+    layout: object = field(default=None, repr=False)
+
+    @property
+    def n_segments(self) -> int:
+        """Number of superfacets ``K``."""
+        return int(self.centers.shape[0])
+
+    #: The old name of :attr:`mesh_radius` (deprecated; one release).
+    radius = property(lambda self: deprecated_radius(self))

@@ -1,0 +1,395 @@
+"""Evaluation metrics of an over-segmentation (paper section 4; ``docs/notes/method.md``,
+section 4).
+
+Pure functions of (element graph, labels[, ground truth]); a mesh stands for
+its cached face graph. Areas are sums of element sizes (face areas) and
+lengths sums of the cached border lengths, so every metric is independent of
+the sampling density and invariant to uniform scaling. A shared, area-weighted
+contingency table (:func:`contingency`, like scikit-image's ``table=``) makes
+the overlap-based metrics fast.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Callable, Sequence
+
+import numpy as np
+
+from ..elements.inputs import as_element_graph
+from ..elements.kinds import kind_of
+from ..errors import InvalidMeshError, ParameterError
+from ..method.labels import check_labels
+from ..method.params import DEFAULTS
+from .boundaries import (
+    boundary_precision,
+    boundary_recall,
+    near_boundary,
+    recall_elements,
+    recall_lengths,
+)
+
+__all__ = ["Contingency", "contingency", "undersegmentation_error", "compactness",
+           "achievable_segmentation_accuracy", "boundary_recall", "boundary_precision",
+           "mean_over_ground_truths",
+           "evaluate", "evaluate_rows", "METRICS"]
+
+#: The names of the metrics :func:`evaluate` returns, and whether lower is better.
+METRICS = {"undersegmentation_error": True, "compactness": True,
+           "boundary_recall": False, "achievable_accuracy": False}
+
+
+@dataclass(frozen=True)
+class Contingency:
+    """Area of every non-empty intersection of a superfacet and a ground-truth segment.
+
+    Attributes
+    ----------
+    s, g : (q,) int64 ndarray
+        Superfacet index and ground-truth segment index of each intersection
+        (dense indices, ``0..K-1`` and ``0..G-1``).
+    area : (q,) float64 ndarray
+        ``A(s_j ∩ g_i)``.
+    s_area : (K,) float64 ndarray
+        ``A(s_j)``.
+    g_area : (G,) float64 ndarray
+        ``A(g_i)``.
+    """
+
+    s: np.ndarray
+    g: np.ndarray
+    area: np.ndarray
+    s_area: np.ndarray
+    g_area: np.ndarray
+
+
+def _dense(g, labels, what: str) -> np.ndarray:
+    """One label per element, made dense ``0..K-1``."""
+    _, dense = np.unique(check_labels(labels, g.n_elements, what, per=g.element),
+                         return_inverse=True)
+    return dense.ravel().astype(np.int64)
+
+
+def contingency(graph, labels, ground_truth) -> Contingency:
+    """Area-weighted contingency table of superfacets against a ground truth.
+
+    Parameters
+    ----------
+    graph : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
+    labels : (m,) int ndarray
+        Superfacet of each face (any integers; made dense internally).
+    ground_truth : (m,) int ndarray
+        Ground-truth segment of each face.
+
+    Returns
+    -------
+    Contingency
+
+    Raises
+    ------
+    ParameterError
+        If either label array does not have one integer per element.
+    """
+    graph = as_element_graph(graph)
+    s = _dense(graph, labels, "labels")
+    g = _dense(graph, ground_truth, "ground_truth")
+    n_g = int(g.max()) + 1
+    key = s * n_g + g
+    uniq, inv = np.unique(key, return_inverse=True)
+    area = np.bincount(inv.ravel(), weights=graph.sizes)
+    s_area = np.bincount(s, weights=graph.sizes)
+    g_area = np.bincount(g, weights=graph.sizes, minlength=n_g)
+    return Contingency(s=uniq // n_g, g=uniq % n_g, area=area, s_area=s_area, g_area=g_area)
+
+
+def undersegmentation_error(graph, labels, ground_truth, *, tau: float = 0.05,
+                            table: Contingency | None = None) -> float:
+    """Undersegmentation error (paper eq. 4).
+
+    ``UE = sum_i sum_{j : A(s_j ∩ g_i) > tau A(s_j)} A(s_j \\ g_i) / sum_i A(g_i)``:
+    for each ground-truth segment, the area that the superfacets overlapping
+    it by more than ``tau`` of their own area leak outside it.
+
+    Parameters
+    ----------
+    graph : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
+    labels, ground_truth : (m,) int ndarray
+    tau : float, default 0.05
+        Overlap tolerance as a fraction of each superfacet's area.
+    table : Contingency, optional
+        Precomputed :func:`contingency` of the same arrays.
+
+    Returns
+    -------
+    float
+        ``>= 0``; 0 when every superfacet lies inside one segment. Lower is
+        better. (Can exceed 1 when superfacets straddle many segments.)
+
+    References
+    ----------
+    Simari, Picciau, De Floriani, "Fast and Scalable Mesh Superfacets", 2014, eq. 4.
+    """
+    t = table if table is not None else contingency(graph, labels, ground_truth)
+    sa = t.s_area[t.s]
+    counted = t.area > tau * sa
+    return float((sa[counted] - t.area[counted]).sum() / t.g_area.sum())
+
+
+def achievable_segmentation_accuracy(graph, labels, ground_truth, *,
+                                     table: Contingency | None = None) -> float:
+    """Achievable segmentation accuracy: ``sum_j max_i A(s_j ∩ g_i) / A``.
+
+    The fraction of the area labelled correctly when every superfacet takes
+    its best ground-truth segment. In ``[0, 1]``, higher is better. A
+    standard superpixel measure (Liu et al., CVPR 2011), beyond the paper.
+
+    Parameters
+    ----------
+    graph : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
+    labels, ground_truth : (m,) int ndarray
+    table : Contingency, optional
+
+    Returns
+    -------
+    float
+    """
+    t = table if table is not None else contingency(graph, labels, ground_truth)
+    best = np.zeros(t.s_area.shape[0])
+    np.maximum.at(best, t.s, t.area)
+    return float(best.sum() / t.s_area.sum())
+
+
+def compactness(graph, labels) -> float:
+    """Compactness (paper eq. 5): mean over superfacets of perimeter / sqrt(area).
+
+    The perimeter of a superfacet is the total length of the mesh edges on
+    its boundary: edges shared with a face of another label, and open
+    boundary edges. (A non-manifold edge counts once per pair of its faces
+    that have different labels.) Superfacets of zero area are skipped.
+
+    Parameters
+    ----------
+    graph : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
+    labels : (m,) int ndarray
+
+    Returns
+    -------
+    float
+        Unitless, scale invariant; lower is better. A flat disk gives
+        ``2 sqrt(pi) ≈ 3.545``, a square 4. On tetrahedra (a cell graph):
+        surface area / volume^(2/3), a ball ``(36 pi)^(1/3) ≈ 4.836``, a cube 6.
+
+    References
+    ----------
+    Simari, Picciau, De Floriani, 2014, eq. 5.
+    """
+    g = as_element_graph(graph)
+    s = _dense(g, labels, "labels")
+    k = int(s.max()) + 1
+    a, b = s[g.pairs[:, 0]], s[g.pairs[:, 1]]
+    cut = a != b
+    length = g.lengths[cut]
+    perim = np.zeros(k)
+    perim += np.bincount(a[cut], weights=length, minlength=k)
+    perim += np.bincount(b[cut], weights=length, minlength=k)
+    perim += np.bincount(s[g.boundary_elements], weights=g.boundary_lengths, minlength=k)
+    area = np.bincount(s, weights=g.sizes, minlength=k)
+    ok = area > 0
+    dim = kind_of(g.kind).dim  # a volume: area / volume^(2/3)
+    power = 2.0 / 3.0 if dim == 3 else 0.5
+    return float(np.mean(perim[ok] / area[ok] ** power))
+
+
+
+def mean_over_ground_truths(metric: Callable[..., float], graph, labels,
+                            ground_truths: Sequence[np.ndarray], **kwargs) -> float:
+    """Average a metric over the several human segmentations of one mesh.
+
+    Parameters
+    ----------
+    metric : callable
+        ``metric(graph, labels, ground_truth, **kwargs) -> float``.
+    graph : ElementGraph or Mesh
+    labels : (m,) int ndarray
+    ground_truths : sequence of (m,) int ndarray
+    **kwargs
+        Passed to ``metric``.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    ParameterError
+        If ``ground_truths`` is empty.
+    """
+    if len(ground_truths) == 0:
+        raise ParameterError("no ground-truth segmentation given")
+    return float(np.mean([metric(graph, labels, gt, **kwargs) for gt in ground_truths]))
+
+
+def evaluate(graph, labels, ground_truths: Sequence[np.ndarray], *, tau: float = 0.05,
+             tolerance: int = 1, equal_weight: bool = False,
+             ignore_label: int | None = None, precision: bool = False) -> dict:
+    """Every metric of one segmentation, averaged over the ground truths.
+
+    Computes one contingency table per ground truth (shared by the
+    undersegmentation error and the achievable accuracy) and the superfacet
+    boundary mask once, so it is several times faster than calling each
+    metric through :func:`mean_over_ground_truths`, with identical results.
+
+    Parameters
+    ----------
+    graph : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
+    labels : (m,) int ndarray
+        Superfacet of each face.
+    ground_truths : sequence of (m,) int ndarray
+        Human segmentations of the same mesh (at least one).
+    tau : float, default 0.05
+        Overlap tolerance of :func:`undersegmentation_error` (eq. 4).
+    tolerance : int, default 1
+        Face rings of slack of :func:`boundary_recall`.
+    equal_weight : bool, default False
+        Weigh every element alike instead of by its size (vertices and
+        points: the benchmark of superpoints): the undersegmentation error
+        and the achievable accuracy count elements, and the boundary recall
+        is the fraction of ground-truth boundary *elements* (those with a
+        neighbour in another segment) within ``tolerance`` rings of a
+        superfacet boundary. The compactness stays geometric (eq. 5 on the
+        graph's sizes and border lengths).
+    ignore_label : int, optional
+        A ground-truth value meaning *unlabelled* (a scan's points that no
+        annotator labelled, e.g. SemanticKITTI's class 0): those elements
+        weigh nothing in the undersegmentation error and the achievable
+        accuracy, and neither they nor their adjacencies count as ground-truth
+        boundary. The superfacets themselves are left whole (their labelled
+        part is what is measured). The compactness is unaffected.
+    precision : bool, default False
+        Also return ``boundary_precision``
+        (:func:`~superfacets.evaluation.boundaries.boundary_precision`, by elements with
+        ``equal_weight``, adjacencies with an unlabelled end left out): the
+        counterpart of the recall, which alone rewards long boundaries.
+
+    Returns
+    -------
+    dict of str to float
+        ``undersegmentation_error`` (eq. 4, lower is better), ``compactness``
+        (eq. 5, lower is better; independent of the ground truths),
+        ``boundary_recall`` and ``achievable_accuracy`` (higher is better);
+        the keys of :data:`METRICS`, and ``boundary_precision`` (higher is
+        better) with ``precision``.
+
+    Raises
+    ------
+    ParameterError
+        If ``ground_truths`` is empty or a label array does not have one
+        integer per element.
+    InvalidMeshError
+        If the total area is zero.
+    """
+    if len(ground_truths) == 0:
+        raise ParameterError("no ground-truth segmentation given")
+    g = as_element_graph(graph)
+    if not g.area > 0:
+        raise InvalidMeshError("mesh has zero total area (every face is degenerate): the "
+                               "metrics are area-weighted")
+    s = _dense(g, labels, "labels")
+    near = near_boundary(g, s, tolerance)
+    counted = replace(g, sizes=np.ones(g.n_elements)) if equal_weight else g
+    ue, br, asa, bp = [], [], [], []
+    for gt in ground_truths:
+        this = counted
+        labelled = None
+        if ignore_label is not None:
+            labelled = check_labels(gt, g.n_elements, "ground_truth", per=g.element) \
+                != ignore_label
+            if not labelled.any():
+                raise ParameterError(f"every element of a ground truth is unlabelled "
+                                     f"(ignore_label={ignore_label})")
+            this = replace(counted, sizes=np.where(labelled, counted.sizes, 0.0))
+        t = contingency(this, s, gt)
+        ue.append(undersegmentation_error(this, s, gt, tau=tau, table=t))
+        asa.append(achievable_segmentation_accuracy(this, s, gt, table=t))
+        dense_gt = _dense(g, gt, "ground_truth")
+        br.append(recall_elements(g, near, dense_gt, labelled) if equal_weight else
+                  recall_lengths(g, near, dense_gt, labelled))
+        if precision:
+            near_truth = near_boundary(g, dense_gt, tolerance, labelled)
+            # the precision: the recall with the two segmentations' roles swapped
+            bp.append(recall_elements(g, near_truth, s, labelled) if equal_weight else
+                      recall_lengths(g, near_truth, s, labelled))
+    out = {"undersegmentation_error": float(np.mean(ue)),
+           "compactness": compactness(g, s),
+           "boundary_recall": float(np.mean(br)),
+           "achievable_accuracy": float(np.mean(asa))}
+    if precision:
+        out["boundary_precision"] = float(np.mean(bp))
+    return out
+
+
+def evaluate_rows(obj, labels, ground_truths: Sequence[np.ndarray], *,
+                  elements: str | None = None, n_neighbors: int = DEFAULTS.n_neighbors,
+                  tau: float = 0.05,
+                  tolerance: int = 1, ignore_label: int | None = None,
+                  precision: bool = False) -> dict:
+    """The metrics of labels given per input row: a mesh's faces or vertices, a cloud's points.
+
+    What :func:`superfacets.segment` returns and label files hold is one
+    label per face, per vertex or per point of the file (-1 for invalid
+    points and unused vertices); this builds the element graph the method
+    segments (:func:`superfacets.elements.inputs.elements_of`), takes each
+    element's value from its first row, and calls :func:`evaluate`, area
+    weighted on faces and with every element weighing the same on vertices
+    and points (the superpoint benchmark's convention).
+
+    Parameters
+    ----------
+    obj : Mesh, PointCloud or what :func:`superfacets.segment` accepts
+    labels : (N,) int ndarray
+        One label per row (faces, vertices or points).
+    ground_truths : sequence of (N,) int ndarray
+        One class or segment per row; ``ignore_label`` marks unlabelled rows.
+    elements : {'faces', 'vertices', 'points'}, optional
+        Default: points for a cloud, faces for a mesh.
+    n_neighbors : int, default 10
+        The point graph's neighbours (points only).
+    tau, tolerance, ignore_label, precision
+        As in :func:`evaluate`.
+
+    Returns
+    -------
+    dict
+        :func:`evaluate`'s metrics and ``segments`` (distinct labels among
+        the elements).
+
+    Raises
+    ------
+    ParameterError
+        If an array does not have one integer per row, or no ground truth
+        is given.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from superfacets import PointCloud, segment
+    >>> xy = np.random.default_rng(0).random((2000, 2))
+    >>> cloud = PointCloud(np.c_[xy, np.zeros(2000)])
+    >>> truth = (xy[:, 0] > 0.5).astype(int)
+    >>> m = evaluate_rows(cloud, segment(cloud, 20).labels, [truth])
+    >>> 0 <= m["undersegmentation_error"] < 0.5, m["segments"]
+    (True, 20)
+    """
+    from ..elements.inputs import elements_of
+
+    source = elements_of(obj, elements, n_neighbors=n_neighbors)
+    g = source.graph
+    rows = source.first_rows(np.arange(g.n_elements))
+    n = source.n_rows
+    what = g.element
+    lab = check_labels(labels, n, "labels", per=what)[rows]
+    gts = [check_labels(gt, n, "ground_truth", per=what)[rows] for gt in ground_truths]
+    out = evaluate(g, lab, gts, tau=tau, tolerance=tolerance, precision=precision,
+                   equal_weight=kind_of(g.kind).equal_weight, ignore_label=ignore_label)
+    out["segments"] = int(np.unique(lab).size)
+    return out

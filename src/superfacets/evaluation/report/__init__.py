@@ -1,0 +1,97 @@
+"""Figures and tables from a results file of :func:`superfacets.scale.runner.run_experiment`.
+
+- :func:`load_results`: the rows as a pandas DataFrame, the last row of each
+  (mesh, method, parameters, ``n_segments``) kept, numbers parsed, and a
+  ``series`` column naming the method and the parameters that vary;
+- :func:`category_means` and :func:`summary`: per-category means, and their
+  mean over categories (each category weighs the same, as in the paper);
+- :func:`plot_curves`: the paper's Fig. 4 layout, metric against the number
+  of superfacets, one curve per series, averaged over categories;
+- :func:`plot_per_category`: the same for one metric, one panel per category;
+- :func:`plot_cost`: the paper's Fig. 5 layout, seconds and peak memory
+  against the number of faces (log scales); :func:`cost_table`;
+- :func:`markdown_summary`: Markdown tables;
+- :func:`write_report`: all of the above into a folder (PNG and SVG).
+
+Tables are in :mod:`.tables`, figures in :mod:`.figures`.
+"""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+from typing import Sequence
+
+from .figures import plot_cost, plot_curves, plot_per_category
+from .tables import (
+    METRIC_LABELS,
+    category_means,
+    cost_table,
+    load_results,
+    markdown_summary,
+    ok_rows,
+    summary,
+)
+
+__all__ = ["load_results", "category_means", "summary", "plot_curves", "plot_per_category",
+           "plot_cost", "cost_table", "markdown_summary", "write_report", "METRIC_LABELS"]
+
+
+def _save(fig, path: Path) -> Path:
+    from ...io import atomic_write
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format=path.suffix[1:], dpi=130, bbox_inches="tight")
+    return atomic_write(path, buf.getvalue())
+
+
+def write_report(results, out_dir, *, k_focus: int = 150, prefix: str = "",
+                 series: Sequence[str] | None = None) -> list[Path]:
+    """Write the figures (PNG and SVG) and ``summary.md`` of a results file.
+
+    Parameters
+    ----------
+    results : path or sequence of paths
+        Results CSV(s), pooled (see :func:`load_results`).
+    out_dir : path
+        Folder, created if needed.
+    k_focus : int, default 150
+        See :func:`markdown_summary`.
+    prefix : str, optional
+        Prepended to every file name.
+    series : sequence of str, optional
+        Only these series (see :func:`load_results`).
+
+    Returns
+    -------
+    list of pathlib.Path
+        ``fig4.{png,svg}`` (UE and compactness), ``fig4_extra.{png,svg}``
+        (boundary recall and achievable accuracy), ``per_category_<metric>.{png,svg}``
+        for UE and compactness, ``cost.{png,svg}`` (seconds and peak memory
+        against faces, the Fig. 5 layout) and ``summary.md``.
+
+    Raises
+    ------
+    ParameterError
+        If the file has no successful row, or a series is unknown.
+    """
+    df = load_results(results, series=series)
+    ok_rows(df)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+    figs = {
+        "fig4": plot_curves(df),
+        "fig4_extra": plot_curves(df, ("boundary_recall", "achievable_accuracy")),
+        "per_category_undersegmentation_error": plot_per_category(df, "undersegmentation_error"),
+        "per_category_compactness": plot_per_category(df, "compactness"),
+        "cost": plot_cost(df, k_focus),
+    }
+    for name, fig in figs.items():
+        for ext in ("png", "svg"):
+            written.append(_save(fig, out / f"{prefix}{name}.{ext}"))
+    from ...io import atomic_write
+
+    text = markdown_summary(df, k_focus=k_focus)
+    written.append(atomic_write(out / f"{prefix}summary.md", text.encode()))
+    return written

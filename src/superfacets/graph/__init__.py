@@ -1,0 +1,1 @@
+"""The superfacet graph (adjacency of the superfacets) and its hierarchy of coarser levels."""

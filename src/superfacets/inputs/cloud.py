@@ -1,0 +1,290 @@
+"""Point clouds: validated points (and normals).
+
+A :class:`PointCloud` holds ``(N, 3) float64`` points in input order. Rows
+that are not finite are *invalid points* only where the input says so (an
+organized cloud, a PCD file: PCL marks missing measurements with NaN); they
+take no part in the method and get the label -1. Elsewhere a non-finite row is
+an error naming the row. Exact duplicate points are segmented as one element
+(they get the same label).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from ..errors import InvalidCloudError
+from .bounds import check_extent, column_bounds
+from .mesh import readonly
+from .rgb import check_colors, unit_colors
+
+__all__ = ["PointCloud", "as_cloud", "InvalidCloudError"]
+
+
+@dataclass(frozen=True, eq=False)
+class PointCloud:
+    """A validated point cloud, optionally with normals.
+
+    Parameters
+    ----------
+    points : (N, 3) float ndarray
+        Point positions, any units.
+    normals : (N, 3) float ndarray, optional
+        Normals, trusted as consistently oriented (made unit). Leave them out
+        to have them estimated (PCA of each neighbourhood, then oriented).
+    name : str, optional
+        For messages.
+    viewpoint : (3,) float ndarray, optional
+        Sensor position (a PCD file's ``VIEWPOINT``): estimated normals are
+        turned towards it.
+    allow_invalid : bool, default False
+        Non-finite rows are invalid points (label -1) instead of an error.
+    shape : tuple of int, optional
+        ``(height, width)`` of an organized cloud (labels keep that layout
+        in :func:`superfacets.superpoints`).
+    colors : (N, 3) float ndarray, optional
+        RGB colour of each point in ``[0, 1]`` (the readers scale 8- and
+        16-bit colours): what ``beta > 0`` of :func:`superfacets.segment`
+        uses when no ``features`` are given.
+    orient_like : tuple of two (R, 3) float ndarray, optional
+        ``(positions, normals)``: consistently oriented normals at some
+        positions (a coarser sample of the same surface). Estimated normals
+        are then turned, each connected piece of the point graph as a whole,
+        to agree with the nearest of them (a vote of the piece) instead of
+        outwards from the piece's mean; a tiled run gives every tile the
+        orientation of one sample of the whole input this way. Ignored with
+        ``normals`` or ``viewpoint``.
+    up : (3,) float ndarray, optional
+        The side the surface was seen from, on the whole, for a scan of an
+        open surface (a terrain, a street) whose sensor position is not
+        known: estimated normals are turned, each connected piece of the
+        point graph as a whole, so that they agree with this direction by a
+        vote (``sum n_i . up >= 0``) instead of outwards from the piece's
+        mean, which a nearly flat piece decides by its small bumps (a
+        terrain's normals then point down, and its concave edges read as
+        convex). The LAS/LAZ reader sets ``(0, 0, 1)`` (LAS z is elevation:
+        such scans are seen from above or from the side). Made unit.
+        Ignored with ``normals``, ``viewpoint`` or ``orient_like``.
+
+    Raises
+    ------
+    InvalidCloudError
+        If the arrays have the wrong shape, a row is NaN/inf (unless
+        ``allow_invalid``), a normal is not finite or zero, or a colour of a
+        valid point is not finite or outside ``[0, 1]``.
+    TypeError
+        If ``points`` is not numeric.
+
+    Examples
+    --------
+    >>> cloud = PointCloud(np.random.default_rng(0).random((100, 3)))
+    >>> cloud
+    PointCloud(100 points)
+    """
+
+    points: np.ndarray
+    normals: np.ndarray | None = None
+    name: str = ""
+    viewpoint: np.ndarray | None = None
+    allow_invalid: bool = False
+    shape: tuple | None = field(default=None, repr=False)
+    colors: np.ndarray | None = field(default=None, repr=False)
+    orient_like: tuple | None = field(default=None, repr=False)
+    up: np.ndarray | None = field(default=None, repr=False)
+
+    def __post_init__(self) -> None:
+        where = f"{self.name}: " if self.name else ""
+        p = _coordinates(self.points, "points", where)
+        finite = np.isfinite(p).all(axis=1)
+        if not finite.all() and not self.allow_invalid:
+            row = int(np.flatnonzero(~finite)[0])
+            raise InvalidCloudError(
+                f"{where}point {row} has a non-finite coordinate ({p[row].tolist()}); "
+                f"{int((~finite).sum())} such rows (only organized clouds and PCD files may "
+                "mark invalid points with NaN)")
+        object.__setattr__(self, "points", readonly(p))
+        if self.normals is not None:
+            nrm = _coordinates(self.normals, "normals", where)
+            if nrm.shape != p.shape:
+                raise InvalidCloudError(f"{where}normals must have the shape of the points "
+                                        f"{p.shape}, got {nrm.shape}")
+            length = np.linalg.norm(nrm[finite], axis=1)
+            bad = ~(np.isfinite(length) & (length > 0))
+            if bad.any():
+                row = int(np.flatnonzero(finite)[np.flatnonzero(bad)[0]])
+                raise InvalidCloudError(f"{where}normal {row} is zero or not finite "
+                                        f"({nrm[row].tolist()}); leave normals out to have "
+                                        "them estimated")
+            nrm = nrm.copy()
+            nrm[finite] /= length[:, None]
+            object.__setattr__(self, "normals", readonly(nrm))
+        if self.colors is not None:
+            col = check_colors(self.colors, p.shape[0], "colour", where, InvalidCloudError,
+                               valid=finite)
+            object.__setattr__(self, "colors", readonly(col))
+        if self.viewpoint is not None:
+            vp = np.asarray(self.viewpoint, dtype=np.float64).reshape(-1)
+            if vp.shape != (3,) or not np.isfinite(vp).all():
+                raise InvalidCloudError(f"{where}viewpoint must be 3 finite numbers, got "
+                                        f"{self.viewpoint!r}")
+            object.__setattr__(self, "viewpoint", vp)
+        if self.orient_like is not None:
+            ref = tuple(np.asarray(a, dtype=np.float64) for a in self.orient_like)
+            if (len(ref) != 2 or ref[0].ndim != 2 or ref[0].shape[1:] != (3,)
+                    or ref[1].shape != ref[0].shape or not all(np.isfinite(a).all() for a in ref)):
+                raise InvalidCloudError(f"{where}orient_like must be (positions, normals), "
+                                        "two finite (R, 3) arrays")
+            object.__setattr__(self, "orient_like", ref)
+        if self.up is not None:
+            up = np.asarray(self.up, dtype=np.float64).reshape(-1)
+            length = float(np.linalg.norm(up)) if up.shape == (3,) else 0.0
+            if not (np.isfinite(up).all() and length > 0):
+                raise InvalidCloudError(f"{where}up must be 3 finite numbers, not all zero, "
+                                        f"got {self.up!r}")
+            object.__setattr__(self, "up", up / length)
+
+    def __getstate__(self) -> dict:
+        # the fields only: the point graphs kept with the cloud hold functions (which
+        # pickle cannot) and are built again where the cloud is unpickled
+        return {f: self.__dict__[f] for f in self.__dataclass_fields__}
+
+    def __repr__(self) -> str:
+        invalid = self.n_total - int(self.valid.sum())
+        extra = f", {invalid} invalid" if invalid else ""
+        extra += ", with normals" if self.normals is not None else ""
+        extra += ", with colours" if self.colors is not None else ""
+        return f"PointCloud({self.n_total} points{extra})"
+
+    @property
+    def n_total(self) -> int:
+        """Number of rows ``N``, invalid ones included."""
+        return int(self.points.shape[0])
+
+    @cached_property
+    def valid(self) -> np.ndarray:
+        """(N,) bool: True for points with finite coordinates."""
+        return readonly(np.isfinite(self.points).all(axis=1))
+
+    @cached_property
+    def n_points(self) -> int:
+        """Number of valid points."""
+        return int(self.valid.sum())
+
+    def check_usable(self) -> None:
+        """Raise :class:`InvalidCloudError` unless the cloud spans a surface.
+
+        Needs a valid point, a positive extent within ``1e-70 .. 1e70``
+        (coordinates within ``1e300``), and points that are not all on one
+        line (a line has no area, and no normal).
+        """
+        where = f"{self.name}: " if self.name else ""
+        p = self.points[self.valid]
+        if p.shape[0] == 0:
+            raise InvalidCloudError(f"{where}empty point cloud: no valid point")
+        extent = check_extent(*column_bounds(p), where, "cloud")
+        if extent == 0:
+            raise InvalidCloudError(f"{where}all {p.shape[0]} points coincide: no surface "
+                                    "to segment")
+        if _on_a_line(p, extent):
+            raise InvalidCloudError(f"{where}{_line_cause(p, np.flatnonzero(self.valid))}")
+
+
+def _on_a_line(p: np.ndarray, extent: float) -> bool:
+    """Whether the points' scatter has no second direction, to double precision."""
+    q = (p - p.mean(axis=0)) / extent
+    s = np.linalg.svd(q.T @ q, compute_uv=False)
+    return bool(s[1] <= 1e-12 * s[0])
+
+
+#: A point this many times farther from the others' median than nine in ten of them is
+#: named as a stray point when the cloud, with it, looks like a line.
+_STRAY = 1e4
+
+
+def _line_cause(p: np.ndarray, rows: np.ndarray) -> str:
+    """The message for points that look like one line: a line, or a few stray points so
+    far away that the rest look like one beside them (a scanner's error)."""
+    d = np.linalg.norm(p - np.median(p, axis=0), axis=1)
+    spread = float(np.quantile(d, 0.9))
+    far = d > _STRAY * spread
+    rest = p[~far]
+    if spread > 0 and far.any() and rest.shape[0] >= 3 and \
+            not _on_a_line(rest, float(np.ptp(rest, axis=0).max())):
+        i = int(np.argmax(d))
+        verb = "lies" if far.sum() == 1 else "lie"
+        return (f"{int(far.sum())} of {p.shape[0]} points {verb} over {_STRAY:.0f} times "
+                f"farther from the others than nine in ten of them (row {int(rows[i])} at "
+                f"{d[i]:.3g} from their median, against {spread:.3g}), so the rest look like "
+                "one line: remove such stray points")
+    return f"all {p.shape[0]} points lie on one line: no surface to segment"
+
+
+def _library_colors(values) -> np.ndarray | None:
+    """A trimesh (RGBA, 8-bit) or Open3D (RGB in [0, 1]) cloud's colours, None when it
+    has none (an empty array)."""
+    a = np.asarray(values)
+    return unit_colors(a[:, :3]) if a.ndim == 2 and a.shape[0] and a.shape[1] >= 3 else None
+
+
+def _coordinates(a, what: str, where: str) -> np.ndarray:
+    arr = np.asarray(a)
+    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number)
+                                   or arr.dtype == bool):
+        raise TypeError(f"{where}{what} must be numeric, got dtype {arr.dtype}")
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise InvalidCloudError(f"{where}{what} must have shape (N, 3), got {arr.shape}")
+    return np.ascontiguousarray(arr, dtype=np.float64)
+
+
+def as_cloud(obj, normals=None, name: str = "") -> PointCloud:
+    """A :class:`PointCloud` from what a user has.
+
+    Parameters
+    ----------
+    obj : PointCloud, (N, 3) or organized (H, W, 3) float ndarray, trimesh.PointCloud, or
+        open3d.geometry.PointCloud
+        An organized array may hold NaN rows (invalid points, label -1).
+    normals : (N, 3) or (H, W, 3) float ndarray, optional
+        With an array: its normals (an Open3D cloud brings its own).
+    name : str, optional
+
+    Returns
+    -------
+    PointCloud
+
+    Raises
+    ------
+    TypeError
+        If ``obj`` is none of these.
+    InvalidCloudError
+        As :class:`PointCloud`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> c = as_cloud(np.random.default_rng(0).random((100, 3)))
+    >>> c.n_points, c.normals is None
+    (100, True)
+    """
+    if isinstance(obj, PointCloud):
+        return obj
+    kind = f"{type(obj).__module__}.{type(obj).__name__}"
+    if kind.startswith("trimesh.") and type(obj).__name__ == "PointCloud":
+        return PointCloud(np.asarray(obj.vertices), normals, name=name,
+                          colors=_library_colors(getattr(obj, "colors", ())))
+    if kind.startswith("open3d.") and hasattr(obj, "points"):
+        nrm = np.asarray(obj.normals) if getattr(obj, "has_normals", lambda: False)() else None
+        return PointCloud(np.asarray(obj.points), nrm, name=name,
+                          colors=_library_colors(getattr(obj, "colors", ())))
+    if isinstance(obj, (np.ndarray, list, tuple)):
+        arr = np.asarray(obj)
+        if arr.ndim == 3 and arr.shape[2] == 3:  # organized: rows of a sensor image
+            h, w = arr.shape[:2]
+            nrm = None if normals is None else np.asarray(normals).reshape(-1, 3)
+            return PointCloud(arr.reshape(-1, 3), nrm, name=name, allow_invalid=True,
+                              shape=(h, w))
+        return PointCloud(arr, normals, name=name)
+    raise TypeError(f"expected a point cloud ((N, 3) array, PointCloud, trimesh or Open3D "
+                    f"point cloud), got {type(obj).__name__}")

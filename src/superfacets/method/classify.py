@@ -1,0 +1,364 @@
+"""The classification step of the iteration: strategies behind one interface.
+
+A :class:`Classifier` labels every element with a center, given the centers
+of the pass (paper section 3.1, step 2); elements no center reached (orphans)
+seed new centers, appended to the center list. The strategies:
+
+- :class:`BoundedReplay` (``assignment='bounded'``, the default on faces and
+  points): the paper's window-bounded expansion from each center, an element keeping the smallest
+  distance seen (the earlier center on ties). An expansion depends on its
+  center alone, so a center that did not move since the previous pass is not
+  expanded again: its recorded (element, distance) list is replayed. The
+  centers that moved are expanded on ``n_threads`` threads at once; records
+  are merged by the lexicographic (distance, center index) rule, so the
+  labels are exactly those of :class:`Bounded`, for any thread count.
+- :class:`Bounded`: the same classification written plainly (every center
+  expanded every pass, in order); the reference of the tests.
+- :class:`Exact` (``assignment='exact'``, the default on vertices): one
+  multi-source search from all centers, no window: every element goes to its
+  nearest center (ties: the center listed first); after the first pass, the
+  cells of the centers that did not move are kept and the rest searched again.
+
+:func:`make_classifier` picks one by name.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._kernels import expand as _k
+from .._kernels.exact import NOT_INCREMENTAL, classify_exact, reclassify_exact
+from .adaptive import window_factors
+from .expansion import Workspaces, with_room
+from .params import ASSIGNMENTS, check_choice
+
+__all__ = ["Classifier", "BoundedReplay", "Bounded", "Exact", "make_classifier"]
+
+_ARENA = 5.0  # initial room of the record arena, entries per element
+_RESERVE = 8.0  # arena allocated up front, entries per element (untouched pages cost nothing)
+_SLACK = 0.05  # room added beyond the need when the arena's room is raised
+_PARALLEL_MIN_WORK = 200_000  # recorded elements per pass worth a second thread
+
+
+class Classifier:
+    """One classification per call of :meth:`classify`, on a fixed weighted graph.
+
+    Parameters
+    ----------
+    graph : ElementGraph
+    weights : (2 e,) float64 ndarray
+        Weight of each CSR entry of ``graph``.
+    window_r2 : float
+        Squared window radius ``(window * r)^2`` of the bounded expansions
+        (times :func:`superfacets.method.adaptive.window_factors` of the center's
+        element where ``graph.scale2`` is set: content-sensitive runs).
+    spaces : Workspaces
+        Work buffers and threads, shared with the initialization.
+    """
+
+    def __init__(self, graph, weights: np.ndarray, window_r2: float, spaces: Workspaces):
+        self.m = graph.n_elements
+        self.indptr, self.indices = graph.indptr, graph.indices
+        self.c = np.ascontiguousarray(graph.positions)
+        self.w = weights
+        self.window_r2 = float(window_r2)
+        # content-sensitive runs: a center's window scaled as its superfacet's extent
+        self.wscale = window_factors(graph)
+        self.spaces = spaces
+
+    def classify(self, centers: np.ndarray, n_centers: int, dist: np.ndarray,
+                 label: np.ndarray) -> tuple[int, int]:
+        """Label every element (``label``, int32) and its distance (``dist``).
+
+        ``centers[:n_centers]`` are the centers (label ``s`` for
+        ``centers[s]``); orphan centers are appended to ``centers``.
+
+        Returns
+        -------
+        (K, n_expansions) : (int, int)
+            Centers now in use, and the expansions run.
+        """
+        raise NotImplementedError
+
+
+class Bounded(Classifier):
+    """The paper's bounded classification, every center expanded every pass."""
+
+    def classify(self, centers, n_centers, dist, label):
+        spaces = self.spaces
+        k = with_room(spaces.get(0), lambda ws: _k.classify_bounded(
+            self.indptr, self.indices, self.w, self.c, centers, n_centers, self.window_r2,
+            dist, label, ws.local, ws.queue, spaces.inv_width, ws.vis, self.wscale))
+        return k, k
+
+
+class Exact(Classifier):
+    """Exact nearest-center classification: one multi-source search, no window.
+
+    Every element goes to the center at the smallest distance along the
+    graph; ties go to the center listed first, whatever order the search
+    settles elements in (``(distance, center)`` pairs compared
+    lexicographically). The search uses the bucket queue of the bounded
+    expansions, its node pool grown when a search runs out. From the second
+    pass on, only the cells of the centers that moved are searched again
+    (:func:`~superfacets._kernels.exact.reclassify_exact`: the same labels and
+    distances as a fresh search, bit for bit); late passes, where a few
+    centers move, cost a fraction of the first.
+    """
+
+    def __init__(self, graph, weights, window_r2, spaces):
+        super().__init__(graph, weights, window_r2, spaces)
+        self.inv_width = spaces.inv_width
+        self.head = np.full(spaces.n_buckets, -1, dtype=np.int64)
+        self._pool(self.indices.shape[0] + 2 * self.m + 1)  # a node per push, as a rule
+        # the previous pass's result and centers, updated in place by the next pass
+        self.prev = None
+        self.dist = self.label = None
+        self.first = np.full(self.m, -1, dtype=np.int32 if self.m < 2**31 - 1 else np.int64)
+        self.mark = np.zeros(self.m, dtype=np.bool_)
+
+    def _pool(self, cap: int) -> None:
+        itype = np.int32 if self.m < 2**31 - 1 else np.int64
+        self.queue = (np.empty(cap, dtype=itype), np.empty(cap),
+                      np.empty(cap, dtype=np.int64), self.head)
+        self.qlab = np.empty(cap, dtype=itype)
+
+    def classify(self, centers, n_centers, dist, label):
+        if self.label is None or self.label.dtype != label.dtype:
+            self.dist, self.label, self.prev = np.empty(self.m), np.empty_like(label), None
+        k = NOT_INCREMENTAL
+        if self.prev is not None:  # only the cells of the centers that moved are searched again
+            k = reclassify_exact(self.indptr, self.indices, self.w, centers, n_centers,
+                                 self.dist, self.label, self.queue, self.qlab, self.inv_width,
+                                 self.prev, self.first, self.mark)
+            if k == _k.QUEUE_FULL:  # the previous result is spoilt: from scratch, more room
+                self._pool(2 * self.queue[0].shape[0])
+                k = NOT_INCREMENTAL
+        while k < 0:
+            k = classify_exact(self.indptr, self.indices, self.w, centers, n_centers, self.dist,
+                               self.label, self.queue, self.qlab, self.inv_width)
+            if k < 0:
+                self._pool(2 * self.queue[0].shape[0])
+        self.prev = centers[:k].copy()
+        dist[:] = self.dist
+        label[:] = self.label
+        return k, 0
+
+
+def make_classifier(assignment: str, graph, weights: np.ndarray, window_r2: float,
+                    spaces: Workspaces, *, replay: bool = True) -> Classifier:
+    """The classifier of ``assignment`` (``'bounded'`` or ``'exact'``).
+
+    ``replay=False`` gives the plain :class:`Bounded` instead of
+    :class:`BoundedReplay` (same labels, every center expanded every pass).
+
+    Raises
+    ------
+    ParameterError
+        On an unknown ``assignment``.
+    """
+    check_choice("assignment", assignment, ASSIGNMENTS)
+    if assignment == "exact":
+        return Exact(graph, weights, window_r2, spaces)
+    return (BoundedReplay if replay else Bounded)(graph, weights, window_r2, spaces)
+
+
+class BoundedReplay(Classifier):
+    """The paper's bounded classification, replaying the expansions of centers that did not move.
+
+    The expansions of the previous pass are kept in one arena (``face``
+    int32 and ``dist`` float64, one entry per settled element, ``start`` /
+    ``len`` per center). A center whose element was a center in the previous
+    pass reuses its record; the others are expanded (record only, on up to
+    ``n_threads`` threads). Every record is merged by the lexicographic
+    (distance, center index) rule, so the order of merging does not matter
+    (each new one right after its expansion, on its thread); then orphans are
+    seeded. The arena is compacted (records of centers that moved are
+    dropped) when the free space at its end runs short, and its room raised
+    when that is not enough: within an allocation of ``8 n`` entries made up
+    front, whose pages cost memory only once written, so raising the room
+    copies nothing. About ``12 * 5`` bytes per element are written (each
+    element lies in about 4.4 windows with ``window = 2``).
+    """
+
+    def __init__(self, graph, weights: np.ndarray, window_r2: float, spaces: Workspaces):
+        super().__init__(graph, weights, window_r2, spaces)
+        m = self.m
+        self.limit = int(_ARENA * m) + 1024  # room in use: records lie in [0, limit)
+        cap = int(_RESERVE * m) + 1024
+        self.face = np.empty(cap, dtype=np.int32)
+        self.dist = np.empty(cap)
+        self.end = 0
+        self.slot = np.full(m, -1, dtype=np.int32)  # face -> index among previous centers
+        self.prev_centers = np.empty(0, dtype=np.int64)
+        self.prev_start = np.empty(0, dtype=np.int64)
+        self.prev_len = np.empty(0, dtype=np.int64)
+
+    # -- arena -------------------------------------------------------------
+    def _make_room(self, need: int, start: np.ndarray, length: np.ndarray) -> None:
+        """Free ``need`` entries at the end, keeping the segments ``start``/``length``
+        (``start`` updated in place).
+
+        Dropped records are compacted away before the room is raised, so the
+        part of the arena ever written (its resident memory) stays within a
+        few percent of the largest set of records one pass needs.
+        """
+        if self.limit - self.end >= need:
+            return
+        self.end = int(_k.compact_records(np.argsort(start, kind="stable"), start,
+                                                 length, self.face, self.dist))
+        if self.limit - self.end >= need:
+            return
+        self._grow(need - (self.limit - self.end) + int(_SLACK * (self.end + need)) + 1024)
+
+    def _grow(self, extra: int) -> None:
+        """Raise the room by ``extra`` entries, keeping ``[0, end)``: within the
+        reserved arena for free, else into a larger one (copied)."""
+        self.limit += max(int(extra), 1024)
+        if self.limit <= self.face.shape[0]:
+            return
+        cap = max(self.limit, int(1.5 * self.face.shape[0]))
+        face = np.empty(cap, dtype=np.int32)
+        dist = np.empty(cap)
+        face[:self.end] = self.face[:self.end]
+        dist[:self.end] = self.dist[:self.end]
+        self.face, self.dist = face, dist
+
+    def classify(self, centers, n_centers, dist, label):
+        indptr, indices, w, c, window_r2 = self.indptr, self.indices, self.w, self.c, self.window_r2
+        spaces = self.spaces
+        cs = centers[:n_centers]
+        idx = self.slot[cs]
+        reuse = idx >= 0
+        seg_start = np.empty(self.m + 1, dtype=np.int64)  # per center (orphans appended)
+        seg_len = np.empty(self.m + 1, dtype=np.int64)
+        kept = np.flatnonzero(reuse)
+        todo = np.flatnonzero(~reuse)
+        seg_start[kept] = self.prev_start[idx[kept]]
+        seg_len[kept] = self.prev_len[idx[kept]]
+        if self.prev_len.shape[0]:
+            expected = int(1.1 * todo.shape[0] * self.prev_len.mean())
+        else:  # first pass: each face lies in about 4.4 windows
+            expected = int(0.9 * self.limit)
+        # room for the new expansions, keeping only the records reused now
+        while True:
+            ks = seg_start[kept]
+            self._make_room(expected + 4096, ks, seg_len[kept])
+            seg_start[kept] = ks
+            st = self._expand_and_merge(indptr, indices, w, c, cs, window_r2, seg_start,
+                                        seg_len, kept, todo, expected, dist, label)
+            if st >= 0:
+                break
+            # a thread ran out of room: make more (at least twice what was expected), redo
+            expected = 2 * max(expected, self.limit - self.end)
+        new_end = st
+        # orphans (sequential: they depend on the labels)
+        ws = spaces.get(0)
+        while True:
+            p, k = _k.seed_orphans(
+                indptr, indices, w, c, centers, n_centers, window_r2, dist, label, ws.local,
+                ws.queue, spaces.inv_width, self.face, self.dist, new_end, self.limit,
+                seg_start, seg_len, self.wscale)
+            if p >= 0:
+                break
+            # undo the orphans' labels: merge everything again, then retry with more room
+            if p == _k.QUEUE_FULL:
+                ws.grow(p)
+            else:
+                self.end = new_end
+                self._grow(self.limit // 2)
+            self._merge_only(n_centers, seg_start, seg_len, dist, label)
+        self.end = int(p)
+        # this pass's records become the previous ones
+        self.slot[self.prev_centers] = -1
+        self.prev_centers = centers[:k].copy()
+        self.slot[self.prev_centers] = np.arange(k, dtype=np.int32)
+        self.prev_start = seg_start[:k].copy()
+        self.prev_len = seg_len[:k].copy()
+        return k, int(todo.shape[0]) + (k - n_centers)
+
+    def _merge_only(self, n_centers, seg_start, seg_len, dist, label) -> None:
+        _k.reset_labels(dist, label)
+        _k.merge_some(np.arange(n_centers), seg_start, seg_len, self.face, self.dist,
+                            dist, label)
+
+    def _expand_and_merge(self, indptr, indices, w, c, cs, window_r2, seg_start, seg_len,
+                          kept, todo, expected, dist, label):
+        """Expand the centers ``todo`` into the free end of the arena and merge
+        every record (those of ``kept`` and the new ones) into ``dist``/``label``.
+
+        Thread ``t`` expands an interleaved share of ``todo`` into its own part
+        of the arena and merges its new records, while they are in cache, and a
+        share of the reused ones into its own ``dist``/``label`` (thread 0: the
+        caller's); the shares are then combined face by face. Returns the new
+        end of the arena, or -1 if a thread ran out of room (nothing is kept).
+        """
+        spaces = self.spaces
+        n = todo.shape[0]
+        lo, hi = self.end, self.limit
+        n_thr = spaces.n_threads
+        if n_thr <= 1 or expected + int(seg_len[kept].sum()) < _PARALLEL_MIN_WORK:
+            n_thr = 1
+        parts = [todo[t::n_thr] for t in range(n_thr)]  # interleaved: balanced work
+        if n_thr == 1:
+            share = [kept]
+        else:  # reused records: each to the thread with the least work so far
+            load = [len(p) * expected / max(n, 1) for p in parts]
+            share = [[] for _ in range(n_thr)]
+            for s, ln in zip(kept.tolist(), seg_len[kept].tolist()):
+                t = min(range(n_thr), key=load.__getitem__)
+                share[t].append(s)
+                load[t] += ln
+        bounds = [lo + (hi - lo) * t // n_thr for t in range(n_thr + 1)]
+
+        def run(t):
+            ws = spaces.get(t)
+            d_t, l_t = (dist, label) if t == 0 else ws.labels()
+            part = parts[t]
+            srcs_t = np.ascontiguousarray(cs[part])
+            os_t = np.empty(part.shape[0], dtype=np.int64)
+            ol_t = np.empty(part.shape[0], dtype=np.int64)
+            while True:
+                _k.reset_labels(d_t, l_t)
+                _k.merge_some(np.asarray(share[t], dtype=np.int64), seg_start, seg_len,
+                                    self.face, self.dist, d_t, l_t)
+                p = _k.expand_many(indptr, indices, w, c, srcs_t, part, window_r2,
+                                         ws.local, ws.queue, spaces.inv_width, self.face,
+                                         self.dist, bounds[t], bounds[t + 1], os_t, ol_t,
+                                         d_t, l_t, self.wscale)
+                if p != _k.QUEUE_FULL:
+                    break
+                ws.grow(p)
+            seg_start[part] = os_t
+            seg_len[part] = ol_t
+            return p
+
+        if n_thr == 1:
+            ends = [run(0)]
+        else:
+            futs = [spaces.pool().submit(run, t) for t in range(1, n_thr)]
+            ends = [run(0)] + [f.result() for f in futs]
+        if min(ends) < 0:
+            return -1
+        if n_thr > 1:
+            cuts = [self.m * t // n_thr for t in range(n_thr + 1)]
+
+            def combine(t):
+                for u in range(1, n_thr):
+                    _k.combine_merged(dist, label, *spaces.get(u).labels(), cuts[t],
+                                            cuts[t + 1])
+
+            futs = [spaces.pool().submit(combine, t) for t in range(1, n_thr)]
+            combine(0)
+            for f in futs:
+                f.result()
+        # close the gaps between the threads' ranges
+        pos = ends[0]
+        for t in range(1, n_thr):
+            a, b = bounds[t], ends[t]
+            if a != pos:
+                self.face[pos:pos + b - a] = self.face[a:b]
+                self.dist[pos:pos + b - a] = self.dist[a:b]
+                seg_start[parts[t]] -= a - pos
+            pos += b - a
+        return pos

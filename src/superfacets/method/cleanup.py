@@ -1,0 +1,366 @@
+"""Boundary clean-up after the iteration: boundaries straightened and moved onto creases.
+
+The paper leaves it as "a priority next step": superfacets are assigned by
+distance alone, so their boundaries are stair-stepped along the element
+graph and may run a few elements beside a concave crease instead of on it.
+:func:`clean_boundaries` re-decides, for each pair of adjacent superfacets,
+the elements of a band along their shared boundary by an exact two-label
+graph cut (a minimum s-t cut, Boykov and Kolmogorov's max-flow in numba) of the energy
+
+``E = sum_f smoothness * a_f * |p_f - mu_{L_f}|^2 / r^2 + sum_{ij cut} r * c_ij``
+
+with ``c_ij`` of :func:`cut_costs` (the border length, cheaper on creases as
+the paper's weights make crossing them dearer), ``mu_s`` the area-weighted
+mean position of superfacet ``s`` and ``r`` the superfacet radius. Bands of
+different pairs are disjoint, so they are cut independently (in parallel, the
+result independent of the thread count); a few sweeps recompute the bands;
+each superfacet keeps its center, and the connectivity step runs last, so the
+number of superfacets is unchanged and each is connected.
+
+``docs/notes/cleanup.md`` has the measurements behind each choice.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..elements.graph import chunked
+from ..elements.inputs import as_element_graph
+from ..elements.kinds import kind_of
+from .labels import check_labels, relabel_dense
+from .params import DEFAULTS, check_int, check_nonneg, check_number, check_positive, check_threads
+
+__all__ = ["clean_boundaries", "cut_costs", "crease_for", "band_for", "smoothness_for",
+           "CREASE", "CREASE_SMOOTH_NORMALS", "SMOOTHNESS", "SMOOTHNESS_FACES", "BAND",
+           "BAND_VERTICES", "SWEEPS"]
+
+#: The clean-up's weights on faces and elsewhere, from the table of kinds
+#: (:mod:`superfacets.elements.kinds`, where each value's measurement is noted):
+#: the crease weight in the cut cost, a fraction of ``alpha`` (:func:`cut_costs`) ...
+CREASE = kind_of("faces").crease
+#: ... the same on vertices and points, whose normals are neighbourhood averages ...
+CREASE_SMOOTH_NORMALS = kind_of("vertices").crease
+#: ... the weight of the compactness (data) term against the boundary length ...
+SMOOTHNESS = kind_of("vertices").smoothness
+SMOOTHNESS_FACES = kind_of("faces").smoothness
+#: ... and the half-width of the band along each boundary, a fraction of the radius ``r``.
+BAND = kind_of("faces").band
+BAND_VERTICES = kind_of("vertices").band
+#: Most sweeps (bands recomputed, every band cut).
+SWEEPS = 1
+
+
+def crease_for(kind: str) -> float:
+    """The default crease weight of the clean-up on elements ``kind``:
+    :data:`CREASE` on faces, :data:`CREASE_SMOOTH_NORMALS` on vertices and points.
+
+    Examples
+    --------
+    >>> crease_for("faces"), crease_for("points")
+    (0.1, 1.0)
+    """
+    return kind_of(kind).crease
+
+
+def smoothness_for(kind: str) -> float:
+    """The default weight of the clean-up's data term on elements ``kind``:
+    :data:`SMOOTHNESS_FACES` on faces, :data:`SMOOTHNESS` elsewhere.
+
+    Examples
+    --------
+    >>> smoothness_for("faces"), smoothness_for("vertices")
+    (0.7, 0.3)
+    """
+    return kind_of(kind).smoothness
+
+
+def band_for(kind: str) -> float:
+    """The default band half-width of the clean-up on elements ``kind``, a
+    fraction of ``r``: :data:`BAND_VERTICES` on vertices, :data:`BAND` elsewhere.
+
+    Examples
+    --------
+    >>> band_for("faces"), band_for("vertices")
+    (0.3, 0.2)
+    """
+    return kind_of(kind).band
+
+
+def cut_costs(graph, *, alpha: float = DEFAULTS.alpha, eta_convex: float = DEFAULTS.eta_convex,
+              crease: float = CREASE, features: np.ndarray | None = None,
+              beta: float = 0.0) -> np.ndarray:
+    """Cost of a superfacet boundary along each adjacency: its length, less on creases.
+
+    ``c_ij = |e_ij| / (1 + crease * alpha * eta * theta / pi)``, with
+    ``theta`` the angle of the two normals (faces: the unsigned dihedral
+    angle) and ``eta`` as in the paper's eq. 2 (1 on concave adjacencies,
+    ``eta_convex`` on convex ones). ``1 + alpha * eta * theta / pi`` is the
+    factor by which the paper's weight (eq. 3) makes crossing a face edge
+    dearer than its length alone; ``crease`` tempers it for boundaries (at
+    ``crease = 1`` a one-degree fold already halves the cost at
+    ``alpha = 200``, and boundaries chase noise: ``docs/notes/cleanup.md``).
+
+    Parameters
+    ----------
+    graph : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
+    alpha, eta_convex : float
+        The method's (``>= 0``).
+    crease : float, default 0.1
+        ``>= 0``; 0 weighs every boundary by its length alone.
+    features : (n, d) float ndarray, optional
+    beta : float, default 0
+        The feature term of the weights (:func:`~superfacets.method.weights.paper_weights`):
+        with ``beta > 0`` a feature jump ``||f_i - f_j||`` lowers the cost as
+        the crease does, ``c_ij = |e_ij| / (1 + crease * (alpha * eta * theta
+        / pi + beta * ||f_i - f_j||))``.
+
+    Returns
+    -------
+    (e,) float64 ndarray
+        One cost per adjacency (``graph.pairs`` order), in mesh units,
+        ``0 <= c_ij <= |e_ij|``.
+
+    Raises
+    ------
+    ParameterError
+        If a factor is negative or not finite.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.inputs.convert import as_mesh
+    >>> from superfacets.elements import face_graph
+    >>> g = face_graph(as_mesh(trimesh.creation.box()))
+    >>> bool(np.allclose(cut_costs(g, alpha=0), g.lengths))   # no crease: the lengths
+    True
+    >>> bool((cut_costs(g) < g.lengths).any())                # the box's folds are cheaper
+    True
+    """
+    alpha = check_nonneg("alpha", alpha)
+    eta_convex = check_nonneg("eta_convex", eta_convex)
+    crease = check_nonneg("crease", crease)
+    beta = check_nonneg("beta", beta)
+    g = as_element_graph(graph)
+    t = g.terms
+    factor = crease * alpha / np.pi
+    f = None
+    if beta > 0:
+        from .weights import check_features
+
+        f = check_features(features, g)
+
+    def cost(sl):
+        eta = np.where(t.concave[sl], 1.0, eta_convex)
+        if f is None:
+            return g.lengths[sl] / (1.0 + factor * eta * np.arccos(t.cos[sl]))
+        jump = np.linalg.norm(f[g.pairs[sl, 0]] - f[g.pairs[sl, 1]], axis=1)
+        return g.lengths[sl] / (1.0 + factor * eta * np.arccos(t.cos[sl])
+                                + crease * beta * jump)
+
+    return chunked(g.n_edges, cost)
+
+
+def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alpha,
+                     eta_convex: float = DEFAULTS.eta_convex, radius: float | None = None,
+                     crease: float | None = None, smoothness: float | None = None,
+                     band: float | None = None, sweeps: int = SWEEPS,
+                     connectivity: bool = True, n_threads: int | None = None,
+                     features: np.ndarray | None = None, beta: float = 0.0) -> np.ndarray:
+    """Straighten superfacet boundaries and move them onto nearby creases.
+
+    For every pair of adjacent superfacets, the elements within ``band * r``
+    of their shared boundary (along the graph, inside each superfacet) are
+    relabelled between the two by a minimum cut of the energy in the module
+    notes; up to ``sweeps`` rounds, stopping early when nothing changes.
+    Then every superfacet is made connected
+    (:func:`~superfacets.method.connectivity.enforce_connectivity`).
+
+    Parameters
+    ----------
+    graph : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
+        Faces, vertices or points: only the graph's adjacency, sizes,
+        positions, normals and border lengths are used.
+    labels : (n,) int ndarray
+        Superfacet of each element, ``0..K-1`` (e.g. the paper's labels).
+    centers : (K,) int ndarray, optional
+        An element of each superfacet that keeps its label (the method's
+        centers). Default: the element nearest each superfacet's
+        area-weighted mean.
+    alpha, eta_convex : float
+        The method's weights (eqs. 2-3), ``>= 0``: creases are found as the
+        method finds them.
+    radius : float, optional
+        Superfacet radius ``r`` in mesh units (``> 0``); default
+        ``sqrt(A / (K pi))`` (paper section 3.1).
+    crease : float, optional
+        Weight of creases in the boundary cost (:func:`cut_costs`); default
+        :func:`crease_for` the graph's kind (0.1 on faces, 1.0 on vertices
+        and points).
+    smoothness : float, optional
+        Weight of the data term (squared distance to the superfacet's mean
+        position, in units of ``r^2``) against the boundary length, ``>= 0``;
+        default :func:`smoothness_for` the graph's kind (0.7 on faces, 0.3 elsewhere).
+    band : float, optional
+        Half-width of each band, a fraction of ``r`` (``> 0``): no boundary
+        moves farther; default :func:`band_for` the graph's kind (0.3, 0.2 on
+        vertices).
+    sweeps : int, default 1
+        Most rounds (``>= 0``; 0 changes nothing but the connectivity).
+    connectivity : bool, default True
+        Make every superfacet connected at the end (a cut can split one).
+    n_threads : int, optional
+        Threads cutting bands at once (default: as :func:`superfacets.segment`);
+        the labels do not depend on it.
+    features, beta
+        The feature term (:func:`cut_costs`); ``beta = 0`` (default) ignores features.
+
+    Returns
+    -------
+    labels : (n,) int64 ndarray
+        Dense ``0..K-1``, the same ``K``: no superfacet is lost (each keeps
+        its center), each is connected (with ``connectivity``), deterministic
+        and the same for any thread count.
+
+    Raises
+    ------
+    ParameterError
+        If ``labels`` or ``centers`` do not fit the graph, or a parameter
+        is out of range.
+
+    References
+    ----------
+    Simari, Picciau, De Floriani, "Fast and Scalable Mesh Superfacets", 2014,
+    section 6 (clean-up as future work), eqs. 2-3 (the crease factor).
+    Boykov, Veksler, Zabih, "Fast approximate energy minimization via graph
+    cuts", PAMI 2001 (two-label moves solved as minimum cuts). ``docs/notes/cleanup.md``.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets import segment
+    >>> mesh = trimesh.creation.icosphere(subdivisions=4)
+    >>> r = segment(mesh, 30, cleanup=False)
+    >>> clean = clean_boundaries((mesh.vertices, mesh.faces), r.labels, r.centers)
+    >>> int(clean.max()) + 1
+    30
+    """
+    from .._kernels.cleanup import band_distances, solve_bands
+    from ..errors import ParameterError
+    from .connectivity import enforce_connectivity
+
+    g = as_element_graph(graph)
+    labels = relabel_dense(check_labels(labels, g.n_elements, per=g.element))
+    crease = crease_for(g.kind) if crease is None else crease
+    alpha = check_nonneg("alpha", alpha)
+    eta_convex = check_nonneg("eta_convex", eta_convex)
+    smoothness = check_nonneg("smoothness",
+                              smoothness_for(g.kind) if smoothness is None else smoothness)
+    band = check_positive("band", band_for(g.kind) if band is None else band)
+    sweeps = check_int("sweeps", sweeps, lo=0)
+    n_threads = check_threads(n_threads)
+    k = int(labels.max()) + 1
+    n = g.n_elements
+    if radius is None:
+        radius = math.sqrt(g.area / (k * math.pi)) if g.area > 0 else g.diagonal
+    r = check_number("radius", radius, 0.0, lo_open=True)
+    sizes = np.ascontiguousarray(g.sizes, dtype=np.float64)
+    positions = np.ascontiguousarray(g.positions, dtype=np.float64)
+    if centers is None:
+        from .passes import final_centers
+
+        centers = final_centers(labels, np.empty(0, dtype=np.int64), sizes, positions)
+    centers = np.asarray(centers)
+    if (centers.shape != (k,) or not np.issubdtype(centers.dtype, np.integer)
+            or centers.min() < 0 or centers.max() >= n
+            or not np.array_equal(labels[centers], np.arange(k))):
+        raise ParameterError(f"centers must hold one element of each of the {k} superfacets, "
+                             "in label order")
+    # ties (a band's partner, a cut's side) go by label: number the superfacets by
+    # their centers, so that the result depends on the partition and the centers alone
+    # (a tiled run numbers them otherwise), and give the caller's numbers back at the end
+    order = np.argsort(centers, kind="stable").astype(np.int64)
+    rank = np.empty(k, dtype=np.int64)
+    rank[order] = np.arange(k)
+    labels = rank[labels]
+    centers = centers[order].astype(np.int64)
+    pinned = np.zeros(n, dtype=np.bool_)
+    pinned[centers] = True
+
+    de = g.dual_edge
+    crease = check_nonneg("crease", crease)
+    if check_nonneg("beta", beta) > 0:
+        cut_csr = np.ascontiguousarray(
+            cut_costs(g, alpha=alpha, eta_convex=eta_convex, crease=crease, features=features,
+                      beta=beta)[de] * r)
+    else:  # the same values, per CSR entry in one pass
+        from .._kernels.terms import cut_costs_csr
+
+        t = g.terms
+        cut_csr = cut_costs_csr(de, t.concave, t.cos, g.lengths, crease * alpha / np.pi,
+                                eta_convex, r)
+    dist = np.empty(n)
+    partner = np.empty(n, dtype=np.int64)
+    heap = g.indices.shape[0] + n + 1
+    hkey = np.empty(heap)
+    hval = np.empty(heap, dtype=np.int64)
+    smooth = smoothness / (r * r)
+    dirty = None
+    for _ in range(sweeps):
+        area = np.maximum(np.bincount(labels, weights=sizes, minlength=k), 1e-300)
+        means = np.empty((k, 3))
+        for c in range(3):
+            means[:, c] = np.bincount(labels, weights=sizes * positions[:, c], minlength=k) / area
+        band_distances(g.indptr, g.indices, de, g.terms.geo, g.lengths, labels, pinned,
+                       band * r, dist, partner, hkey, hval)
+        members = np.flatnonzero(partner >= 0)
+        if dirty is not None:  # later sweeps: only bands of superfacets that changed
+            members = members[dirty[labels[members]] | dirty[partner[members]]]
+        if members.size == 0:
+            break
+        la = labels[members]
+        lb = partner[members]
+        key = np.minimum(la, lb) * k + np.maximum(la, lb)
+        o = np.argsort(key, kind="stable")
+        key = key[o]
+        members = members[o]
+        starts = np.concatenate([[0], np.flatnonzero(np.diff(key)) + 1, [key.size]])
+        pair = key[starts[:-1]]
+        band_of = np.full(n, -1, dtype=np.int64)
+        band_of[members] = np.repeat(np.arange(starts.size - 1), np.diff(starts))
+        out = labels.copy()
+        args = (members, starts.astype(np.int64), pair // k, pair % k, band_of, g.indptr,
+                g.indices, cut_csr, labels, sizes, positions, means, smooth, out)
+        _run_chunks(solve_bands, starts, n_threads, args)
+        moved = np.flatnonzero(out != labels)
+        if moved.size == 0:
+            break
+        dirty = np.zeros(k, dtype=bool)
+        dirty[labels[moved]] = True
+        dirty[out[moved]] = True
+        labels = out
+    if connectivity:  # every superfacet keeps its center's piece: the same numbers
+        labels = enforce_connectivity(g, labels, centers)
+    # (a piece with no neighbour becomes a superfacet of its own, numbered from k on)
+    return np.where(labels < k, order[np.minimum(labels, k - 1)], labels)
+
+
+def _run_chunks(kernel, starts: np.ndarray, n_threads: int, args: tuple) -> None:
+    """``kernel(p0, p1, *args)`` over contiguous ranges of bands, balanced by element
+    count, one per thread (the kernels release the GIL; the bands are disjoint)."""
+    n_pairs = starts.size - 1
+    n = min(n_threads, n_pairs)
+    if n <= 1:
+        kernel(0, n_pairs, *args)
+        return
+    cuts = np.searchsorted(starts, np.linspace(0, starts[-1], n + 1)[1:-1])
+    bounds = np.concatenate([[0], np.minimum(cuts, n_pairs), [n_pairs]])
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(n - 1) as pool:
+        futures = [pool.submit(kernel, int(a), int(b), *args)
+                   for a, b in zip(bounds[1:-1], bounds[2:])]
+        kernel(int(bounds[0]), int(bounds[1]), *args)
+        for f in futures:
+            f.result()

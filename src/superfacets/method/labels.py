@@ -1,0 +1,75 @@
+"""Label arrays: the one check every function taking labels uses, and dense relabelling."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ParameterError
+
+__all__ = ["check_labels", "relabel_dense"]
+
+
+def check_labels(labels, n: int | None, what: str = "labels", per: str = "element") -> np.ndarray:
+    """``labels`` as an ``(n,)`` int64 array, one integer per element.
+
+    Parameters
+    ----------
+    labels : array_like
+        One label per element (any integers).
+    n : int or None
+        Number of elements (faces of a mesh); None accepts any length.
+    what : str, default 'labels'
+        Name used in the error message.
+    per : str, default 'element'
+        What one label belongs to, for the message (``'face'``, ``'point'``).
+
+    Returns
+    -------
+    (n,) int64 ndarray
+        The labels, unchanged (not relabelled).
+
+    Raises
+    ------
+    ParameterError
+        If the array is not 1-D, not of length ``n`` or not of an integer dtype.
+
+    Examples
+    --------
+    >>> check_labels([0, 1, 1], 3)
+    array([0, 1, 1])
+    """
+    a = np.asarray(labels)
+    if a.ndim != 1 or (n is not None and a.shape[0] != n) \
+            or not np.issubdtype(a.dtype, np.integer):
+        count = "a 1-D array of integers" if n is None else f"{n} integers"
+        raise ParameterError(f"{what} must be {count}, one per {per}; got shape "
+                             f"{a.shape}, dtype {a.dtype}")
+    return a.astype(np.int64, copy=False)
+
+
+def relabel_dense(labels: np.ndarray) -> np.ndarray:
+    """Map labels to ``0..K-1`` keeping their relative order.
+
+    Parameters
+    ----------
+    labels : (m,) int ndarray
+
+    Returns
+    -------
+    (m,) int64 ndarray
+
+    Examples
+    --------
+    >>> relabel_dense(np.array([5, 2, 5, 9]))
+    array([1, 0, 1, 2])
+    """
+    a = np.asarray(labels).ravel()
+    if a.size and np.issubdtype(a.dtype, np.integer):
+        lo, hi = int(a.min()), int(a.max())
+        if lo >= 0 and hi <= 2 * a.size + 1024:  # small range: a table, no sort
+            present = np.zeros(hi + 1, dtype=bool)
+            present[a] = True
+            rank = np.cumsum(present, dtype=np.int64) - 1
+            return rank[a]
+    _, inv = np.unique(a, return_inverse=True)
+    return inv.astype(np.int64).ravel()

@@ -1,0 +1,416 @@
+"""Defaults, choices and validation of every parameter, defined once.
+
+The API (:func:`superfacets.superfacets`, :func:`superfacets.segment`), the
+command line, the method registry and the docs read the values here;
+:func:`resolve` checks every parameter of a segmentation before any work that
+grows with the mesh (the element graph is the memory peak of a run). The
+``check_*`` helpers are the package's only argument checks: each raises
+:class:`~superfacets.errors.ParameterError` (a ``ValueError``) naming the
+parameter and the bad value.
+
+See ``docs/notes/method.md`` for what each parameter means in the method.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field, make_dataclass, replace
+from typing import Callable
+
+from ..checks import (
+    check_bool,
+    check_choice,
+    check_int,
+    check_n_segments,
+    check_nonneg,
+    check_number,
+    check_positive,
+    check_threads,
+    max_threads,
+    renamed,
+)
+from ..elements.kinds import KINDS, kind_of
+from ..errors import ParameterError
+
+__all__ = ["SegmentParams", "DEFAULTS", "Parameter", "PARAMETERS", "PARAMETER", "ALL_KINDS",
+           "INITS", "ASSIGNMENTS", "WEIGHTINGS", "ELEMENTS",
+           "WEIGHTING_ALPHA", "DEFAULT_CENTER_TOL", "COARSE_MIN_PER_SEGMENT",
+           "COARSE_MIN_PER_SEGMENT_POINTS", "COARSE_PER_SEGMENT_POINTS",
+           "COARSE_PER_SEGMENT", "DEFAULT_N_SEGMENTS", "DEFAULT_ALPHAS", "resolve", "check_int",
+           "check_number", "check_positive", "check_nonneg", "check_choice",
+           "check_n_segments", "check_threads", "check_bool", "max_threads", "superfacet_size",
+           "better_method", "assignment_of", "superfacet_measure", "renamed"]
+
+#: Names accepted by ``init=``: iterative farthest point, flood, regular grid.
+INITS = ("farthest", "flood", "grid")
+#: Names accepted by ``assignment=``: the paper's window-bounded expansions, or
+#: the exact nearest center by one multi-source Dijkstra.
+ASSIGNMENTS = ("bounded", "exact")
+#: Names accepted by ``weighting=``: the paper's eqs. 1-3, Shlafman et al.'s eq. 6.
+WEIGHTINGS = ("paper", "shlafman")
+#: Names accepted by ``elements=``: the faces of a mesh, its vertices, the points of a cloud.
+ELEMENTS = ("faces", "vertices", "points")
+#: Largest number of nearest neighbours of the point graph.
+MAX_NEIGHBORS = 100
+#: Default ``alpha`` of each weighting, and its valid range ``(low, high)``.
+WEIGHTING_ALPHA = {"paper": (200.0, (0.0, math.inf)), "shlafman": (0.5, (0.0, 1.0))}
+#: Largest alpha and eta_convex (beyond, the angular term alone decides anyway; infinite
+#: weights would stall the expansions) and largest window (beyond, every window holds
+#: the whole mesh).
+MAX_WEIGHT_FACTOR = 1e12
+MAX_WINDOW = 1e3
+#: The paper's sweep (Fig. 4): numbers of superfacets and alphas.
+DEFAULT_N_SEGMENTS = (50, 100, 150, 200, 250, 300)
+DEFAULT_ALPHAS = (0.0, 100.0, 200.0, 500.0, 1000.0)
+def better_method(params: "SegmentParams", kind: str) -> tuple[bool, bool]:
+    """``(cleanup, split_merge)`` of a run on elements ``kind``: as given, else (None)
+    on for faces and vertices with the paper's weighting (unless ``paper``), off
+    for points, tetrahedral cells (not measured) and with another weighting.
+
+    On faces both beat the paper at every k from 50 to 300 (UE -6 to -11 %,
+    compactness -14 to -19 %) and in every category of the 300 benchmark meshes
+    but Cup at k = 50 and 150, at its speed at the default k (``docs/notes/cleanup.md``,
+    "The default" and "Swap energies"); on vertices, with the clean-up's
+    crease weight and band of that kind (:mod:`superfacets.method.cleanup`) and the exact
+    classification (:func:`assignment_of`), they lower the undersegmentation
+    error by 4-8 % and the compactness by 5-7 % at k = 50, 150, 300. On points they lower
+    the compactness by 18-25 %
+    but not the undersegmentation error at k = 150 (+0.3 %), so points keep
+    the paper's method unless asked (``docs/notes/cleanup.md``, "Vertices and points").
+    """
+    auto = kind_of(kind).better_method and params.weighting == "paper" and not params.paper
+    return (auto if params.cleanup is None else bool(params.cleanup),
+            auto if params.split_merge is None else bool(params.split_merge))
+
+
+def assignment_of(params: "SegmentParams", kind: str) -> str:
+    """The classification of a run on elements ``kind``: as given, else (None)
+    ``'exact'`` on vertices with the paper's weighting (unless ``paper``) and in
+    content-sensitive runs (``density`` or ``roughness``), the paper's
+    ``'bounded'`` everywhere else.
+
+    On vertices the exact nearest-center search (one multi-source search per
+    pass, every element settled once, where the bounded windows settle each
+    about 4.4 times) gives the same quality as the windows with the default's
+    few passes, for about a third of their time; that is what brings the
+    better method to the paper's time there. On faces the windows' bound on a
+    superfacet's extent keeps them more compact (``docs/notes/cleanup.md``, "The
+    default on vertices, at the paper's speed"). Content-sensitive superfacets
+    differ in extent by design; the windows follow it (each center's scaled by
+    :func:`superfacets.method.adaptive.window_factors`) and are about 1.6 times faster
+    on a million points, but on the five labelled scans the exact search gave
+    the lower undersegmentation error in 11 of 15 settings (``docs/notes/superpoints.md``).
+
+    Examples
+    --------
+    >>> assignment_of(DEFAULTS, "vertices"), assignment_of(DEFAULTS, "faces")
+    ('exact', 'bounded')
+    """
+    if params.assignment is not None:
+        return params.assignment
+    auto = kind_of(kind).exact_assignment and params.weighting == "paper" and not params.paper
+    content = (params.density or 0.0) > 0 or params.roughness > 0
+    return "exact" if auto or content else "bounded"
+
+
+#: ``center_tol`` when ``tol > 0`` and none is given (fraction of the superfacet radius).
+DEFAULT_CENTER_TOL = 0.05
+#: Automatic coarse-to-fine (``coarsen=None``, ``tol > 0``): the faces' (and vertices')
+#: thresholds and the points', from the table of kinds (:mod:`superfacets.elements.kinds`:
+#: ``coarse_min_per_segment``, ``coarse_per_segment``). On points, clusters of at most
+#: ``n_neighbors // 2`` (15 benchmark meshes sampled with 200,000 points: clusters of 5
+#: keep UE, k = 50: +0.5 %, k = 100: -2.2 %, and take 42 % off the time;
+#: docs/notes/superpoints.md).
+COARSE_MIN_PER_SEGMENT = kind_of("faces").coarse_min_per_segment
+COARSE_PER_SEGMENT = kind_of("faces").coarse_per_segment
+COARSE_MIN_PER_SEGMENT_POINTS = kind_of("points").coarse_min_per_segment
+COARSE_PER_SEGMENT_POINTS = kind_of("points").coarse_per_segment
+
+
+ALL_KINDS = ("faces", "vertices", "points", "cells")
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """The declaration of one parameter of the method: the one place that says it.
+
+    :class:`SegmentParams` (its fields and defaults), :func:`resolve` (its check),
+    the command line's options, the method registry and the Parameters section of
+    :func:`superfacets.superfacets` come from :data:`PARAMETERS` or are tested
+    against it (``tests/test_params.py``).
+
+    Attributes
+    ----------
+    name : str
+        The keyword of :func:`superfacets.segment` (and the field of
+        :class:`SegmentParams`).
+    default : object
+        Its default; ``None`` where the method decides (an automatic rule,
+        resolved once per run by :func:`superfacets.method.pipeline.resolve_rules`).
+    type : str
+        The type, as the docstrings write it (``'int'``, ``'float'``, ``'bool'``,
+        ``'str'``; ``' or None'`` where None is accepted).
+    doc : str
+        One line: what it is, its range and unit.
+    check : callable or None
+        ``check(value) -> value``: the validated value (raises
+        :class:`~superfacets.errors.ParameterError`); None where the check needs
+        another parameter (done by :func:`resolve`).
+    kinds : tuple of str
+        The kinds of element it applies to.
+    cli : str or None
+        The command line's option (``segment``), or None.
+    auto : bool
+        None is resolved by ``check`` itself (``n_threads``: numba's thread count).
+    """
+
+    name: str
+    default: object
+    type: str
+    doc: str
+    check: Callable[[object], object] | None = field(default=None, repr=False, compare=False)
+    kinds: tuple = ALL_KINDS
+    cli: str | None = None
+    auto: bool = False
+
+    @property
+    def optional(self) -> bool:
+        """Whether None is accepted (the method then decides)."""
+        return self.type.endswith("or None")
+
+
+def _declare() -> tuple[Parameter, ...]:
+    P, num, integer, flag = Parameter, check_number, check_int, check_bool
+    big = MAX_WEIGHT_FACTOR
+    return (
+        P("n_segments", 150, "int or None", "number of superfacets k, 1 <= k <= elements "
+          "(paper section 3.1); None with radius", None, cli="--n-segments"),
+        P("radius", None, "float or None", "superfacet radius, a fraction of the bounding-box "
+          "diagonal, > 0 (instead of n_segments)",
+          lambda v: check_positive("radius", v), cli="--radius"),
+        P("alpha", WEIGHTING_ALPHA["paper"][0], "float", "weight of the angular (concavity) "
+          "term, eq. 3, >= 0; in [0, 1] with weighting='shlafman' (eq. 6)", None, cli="--alpha"),
+        P("eta_convex", 0.2, "float", "factor of the angular term on convex edges, eq. 2, >= 0",
+          lambda v: num("eta_convex", v, 0.0, big), cli="--eta-convex"),
+        P("window", 2.0, "float", "expansion window, a multiple of the radius, > 0 "
+          "(section 3.1)", lambda v: num("window", v, 0.0, MAX_WINDOW, lo_open=True),
+          cli="--window"),
+        P("init", None, "str or None", "initialization: " + ", ".join(INITS) + " (default "
+          "farthest with n_segments, flood with radius)",
+          lambda v: check_choice("init", v, INITS), cli="--init"),
+        P("max_iter", 50, "int", "most classification passes, >= 1",
+          lambda v: integer("max_iter", v, lo=1), cli="--max-iter"),
+        P("weighting", "paper", "str", "edge weights: paper (eqs. 1-3) or shlafman (eq. 6)",
+          lambda v: check_choice("weighting", v, WEIGHTINGS), cli="--weighting"),
+        P("assignment", None, "str or None", "classification: bounded (the paper's windows) "
+          "or exact (nearest center); None: by kind and content",
+          lambda v: check_choice("assignment", v, ASSIGNMENTS), cli="--assignment"),
+        P("enforce_connectivity", True, "bool", "merge stray pieces so each superfacet is "
+          "connected", lambda v: flag("enforce_connectivity", v), cli="--no-connectivity"),
+        P("cleanup", None, "bool or None", "boundary clean-up after the iteration; None: by "
+          "kind", lambda v: flag("cleanup", v), cli="--cleanup"),
+        P("split_merge", None, "bool or None", "K-preserving split-and-merge swaps; None: by "
+          "kind", lambda v: flag("split_merge", v), cli="--split-merge"),
+        P("tol", 0.001, "float", "stop once a pass changes at most this fraction of the area, "
+          "in [0, 1]; 0: the paper's rule", lambda v: num("tol", v, 0.0, 1.0), cli="--tol"),
+        P("center_tol", None, "float or None", "a center moving less than this fraction of "
+          "the radius stays, in [0, 1]; None: 0.05 with tol > 0, else 0",
+          lambda v: num("center_tol", v, 0.0, 1.0), cli="--center-tol"),
+        P("coarsen", None, "int or None", "coarse-to-fine: elements per cluster, >= 1 (1: "
+          "off); None: by size and kind", lambda v: integer("coarsen", v, lo=1),
+          cli="--coarsen"),
+        P("progress", False, "bool", "a progress bar on stderr", bool, cli="--progress"),
+        P("n_threads", None, "int or None", "threads of the run, 1..max_threads(); None: "
+          "numba's thread count", check_threads, cli="--threads", auto=True),
+        P("elements", None, "str or None", "what is segmented: " + ", ".join(ALL_KINDS) +
+          "; None: the input's default", lambda v: check_choice("elements", v, tuple(KINDS)),
+          cli="--elements"),
+        P("n_neighbors", 10, "int", "nearest neighbours of each point in the point graph, "
+          f"1..{MAX_NEIGHBORS}", lambda v: integer("n_neighbors", v, lo=1, hi=MAX_NEIGHBORS),
+          ("points",), cli="--neighbors"),
+        P("neighbor_radius", None, "float or None", "drop neighbours farther than this "
+          "fraction of the diagonal, > 0", lambda v: check_positive("neighbor_radius", v),
+          ("points",), cli="--neighbor-radius"),
+        P("paper", False, "bool", "the paper's method as published, its labels bit for bit",
+          bool, cli="--paper"),
+        P("beta", 0.0, "float", "weight of the feature (colour) term, >= 0; paper weighting "
+          "only", None, cli="--beta"),
+        P("min_elements", 1, "int", "smallest superfacet in elements, >= 1; smaller ones "
+          "merged at the end", lambda v: integer("min_elements", v, lo=1),
+          cli="--min-elements"),
+        P("density", None, "float or None", "content-sensitive sizes: exponent q in [0, 1] "
+          "(0 equal areas, 1 equal counts); None: by kind and density",
+          lambda v: num("density", v, 0.0, 1.0), cli="--density"),
+        P("roughness", 0.0, "float", "content-sensitive sizes: smaller superfacets where "
+          "normals turn, >= 0", lambda v: num("roughness", v, 0.0, big), cli="--roughness"),
+    )
+
+
+#: Every parameter of the method, declared once (:class:`Parameter`), in the order of
+#: :func:`superfacets.superfacets`'s signature.
+PARAMETERS: tuple[Parameter, ...] = _declare()
+#: The declarations by name.
+PARAMETER = {p.name: p for p in PARAMETERS}
+
+
+def _as_dict(self) -> dict:
+    """The parameters as a plain dict."""
+    return asdict(self)
+
+
+#: Every parameter of one segmentation, a frozen dataclass whose fields and defaults are
+#: :data:`PARAMETERS` (see :func:`superfacets.superfacets`). ``DEFAULTS`` holds the
+#: default of each; :func:`resolve` returns a validated instance with ``init`` resolved.
+SegmentParams = make_dataclass(
+    "SegmentParams", [(p.name, object, field(default=p.default)) for p in PARAMETERS],
+    frozen=True, namespace={"as_dict": _as_dict, "__module__": __name__, "__doc__": (
+        "Every parameter of one segmentation (see :func:`superfacets.superfacets`); its "
+        "fields are declared in :data:`superfacets.method.params.PARAMETERS`.\n\n"
+        "``DEFAULTS`` holds the default of each; :func:`superfacets.method.params.resolve` returns "
+        "a validated instance with ``init`` resolved.\n\n"
+        "Attributes\n----------\n" + "".join(
+            f"{p.name} : {p.type}, default {p.default!r}\n    {p.doc}.\n" for p in PARAMETERS)
+        + "\nExamples\n--------\n>>> DEFAULTS.alpha, DEFAULTS.n_segments\n(200.0, 150)\n")})
+
+#: The default of every parameter.
+DEFAULTS = SegmentParams()
+
+
+def resolve(**params) -> SegmentParams:
+    """Validate the parameters of a segmentation; return them with ``init`` resolved.
+
+    Every check that does not need the input is done here, before any O(m) work:
+    each parameter's own (:data:`PARAMETERS`), then those between parameters
+    (``paper`` and what it excludes, ``n_segments`` or ``radius``, ``alpha`` and
+    ``beta`` by ``weighting``, ``min_elements`` and ``enforce_connectivity``).
+    ``n_segments`` is checked against the number of elements when the input is
+    known, before its graph is built (:func:`superfacets.elements.inputs.elements_of`).
+
+    Parameters
+    ----------
+    **params
+        Fields of :class:`SegmentParams`; the others take their default.
+
+    Returns
+    -------
+    SegmentParams
+
+    Raises
+    ------
+    ParameterError
+        On an unknown name or a value out of range; ``TypeError`` never.
+
+    Examples
+    --------
+    >>> resolve(radius=0.05).init, resolve().init
+    ('flood', 'farthest')
+    >>> resolve(alpha=-1)
+    Traceback (most recent call last):
+    ...
+    superfacets.errors.ParameterError: alpha must be a finite number in [0, 1e+12], got -1
+    """
+    unknown = set(params) - set(PARAMETER)
+    if unknown:
+        raise ParameterError(f"unknown parameter(s) {', '.join(sorted(unknown))}")
+    p = replace(DEFAULTS, **params)
+    if check_bool("paper", p.paper):  # the paper's method as published, bit for bit
+        extra = [name for name, on in (("cleanup", p.cleanup), ("split_merge", p.split_merge),
+                                       ("tol", p.tol not in (0, DEFAULTS.tol)),
+                                       ("center_tol", p.center_tol is not None),
+                                       ("coarsen", p.coarsen not in (None, 1)),
+                                       ("beta", p.beta not in (0, 0.0)),
+                                       ("min_elements", p.min_elements != 1),
+                                       ("density", p.density not in (None, 0, 0.0)),
+                                       ("roughness", p.roughness not in (0, 0.0))) if on]
+        if extra:
+            raise ParameterError(f"paper=True is the paper's method as published; it does not "
+                                 f"go with {', '.join(extra)}")
+        p = replace(p, tol=0.0)
+    min_elements = check_int("min_elements", p.min_elements, lo=1)
+    if min_elements > 1 and not check_bool("enforce_connectivity", p.enforce_connectivity):
+        raise ParameterError("min_elements merges small superfacets as the connectivity step "
+                             "merges stray pieces; it goes with enforce_connectivity=True")
+    if p.radius is not None and p.n_segments not in (None, DEFAULTS.n_segments):
+        raise ParameterError("give either n_segments or radius, not both")
+    n_segments = None if p.radius is not None else (
+        check_int("n_segments", DEFAULTS.n_segments if p.n_segments is None else p.n_segments,
+                  lo=1))
+    radius = None if p.radius is None else check_positive("radius", p.radius)
+    init = p.init if p.init is not None else ("farthest" if radius is None else "flood")
+    check_choice("init", init, INITS)
+    weighting = check_choice("weighting", p.weighting, WEIGHTINGS)
+    lo, hi = WEIGHTING_ALPHA[weighting][1]
+    if weighting == "paper":
+        alpha = check_number("alpha", p.alpha, 0.0, MAX_WEIGHT_FACTOR)
+    else:
+        try:
+            alpha = check_number("alpha", p.alpha, lo, hi)
+        except ParameterError:
+            raise ParameterError(f"alpha of the Shlafman weighting must be in [0, 1], "
+                                 f"got {p.alpha!r}") from None
+    done = dict(n_segments=n_segments, radius=radius, alpha=alpha, init=init,
+                weighting=weighting, beta=_beta(p.beta, weighting), min_elements=min_elements)
+    out = {}
+    for decl in PARAMETERS:  # each parameter's own check, in the signature's order
+        value = getattr(p, decl.name)
+        if decl.name in done:
+            out[decl.name] = done[decl.name]
+        elif value is None and decl.optional and not decl.auto:
+            out[decl.name] = None
+        else:
+            out[decl.name] = decl.check(value)
+    return SegmentParams(**out)
+
+
+def _beta(beta, weighting: str) -> float:
+    b = check_number("beta", beta, 0.0, MAX_WEIGHT_FACTOR)
+    if b > 0 and weighting != "paper":
+        raise ParameterError("beta (the feature term) goes with weighting='paper' only")
+    return b
+
+
+def superfacet_size(params: SegmentParams, area: float, diagonal: float,
+                    n_elements: int, kind: str = "faces") -> tuple[int | None, float]:
+    """The number of centers ``k`` and the radius ``r`` (mesh units) of a run.
+
+    With ``n_segments``: ``r = sqrt(A / (k pi))`` (paper section 3.1); on
+    tetrahedra (``kind = "cells"``, ``A`` a volume) ``r = (3 A / (4 pi k))^(1/3)``. With
+    ``radius`` (a fraction of ``d``): ``r = radius * d``, and for the
+    farthest-point initialization ``k = round(A / (pi r^2))`` clamped to
+    ``1..n``; ``k`` is None for flood and grid.
+
+    Raises
+    ------
+    ParameterError
+        If ``n_segments`` exceeds the number of elements, or ``radius`` is so
+        small that a superfacet's area (volume) is 0 in double precision.
+    """
+    profile = kind_of(kind)  # ``area`` is a volume on cells: r of a ball of volume V / k
+    if params.radius is not None:
+        r = params.radius * diagonal
+        each = superfacet_measure(r, profile.dim)
+        if not each > 0:
+            raise ParameterError(f"radius {params.radius:g} of the diagonal ({r:.3g} in the "
+                                 "input's units) is too small: a superfacet's "
+                                 f"{profile.size_word} would be 0")
+        k = None
+        if params.init == "farthest":
+            k = int(min(n_elements, max(1, round(area / each))))
+        return k, r
+    k = check_n_segments(params.n_segments, n_elements, profile.name)
+    if profile.dim == 3:
+        return k, (3.0 * area / (4.0 * math.pi * k)) ** (1.0 / 3.0)
+    return k, math.sqrt(area / (k * math.pi))
+
+
+def superfacet_measure(r: float, dim: int = 2) -> float:
+    """The size of one superfacet of radius ``r``: a disc's area ``pi r^2`` (paper
+    section 3.1) on surfaces (``dim = 2``), a ball's volume ``4/3 pi r^3`` on
+    tetrahedra (``dim = 3``).
+
+    Examples
+    --------
+    >>> round(superfacet_measure(1.0), 4), round(superfacet_measure(1.0, 3), 4)
+    (3.1416, 4.1888)
+    """
+    return 4.0 / 3.0 * math.pi * r ** 3 if dim == 3 else math.pi * r * r

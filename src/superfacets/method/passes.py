@@ -1,0 +1,231 @@
+"""The iteration: passes of (classify, update) until no center moves or ``max_iter``.
+
+Paper section 3.1, steps 2-3 (``docs/notes/method.md``, section 3). :func:`iterate`
+runs the passes with any :class:`~superfacets.method.classify.Classifier`;
+:func:`update_centers` is the center update; :func:`final_centers` names the
+center of each superfacet of the final labels.
+
+Cycle jump: the ordered center list of a pass determines every later pass,
+so when it repeats the list of an earlier pass the run is periodic (the
+flip-flopping that keeps many runs from converging). :func:`iterate` then
+jumps to the center list that pass ``max_iter`` would have and classifies it
+once: labels, centers, ``n_iter`` and the orphan count are those of running
+every pass (tested against ``jump_cycles=False``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._kernels.update import update_centers as _update_kernel
+
+__all__ = ["Iteration", "iterate", "update_centers", "hold_small_moves", "final_centers"]
+
+
+def update_centers(label: np.ndarray, k: int, sizes: np.ndarray, positions: np.ndarray,
+                   old_centers: np.ndarray) -> np.ndarray:
+    """Center update (paper section 3.1, step 3).
+
+    For each superfacet ``s < k``: the size-weighted mean of its element
+    positions (plain mean if its size is zero), then its element nearest to
+    that mean; the old center stays on ties, else the lowest index wins.
+
+    Parameters
+    ----------
+    label : (n,) int32 ndarray
+        Superfacet of each element, ``0..k-1``.
+    k : int
+    sizes : (n,) float64 ndarray
+    positions : (n, 3) float64 ndarray
+    old_centers : (k,) int64 ndarray
+        Previous center of each superfacet, or -1.
+
+    Returns
+    -------
+    (k,) int64 ndarray
+        New center of each superfacet, -1 for an empty one.
+    """
+    new = np.empty(k, dtype=np.int64)
+    _update_kernel(label, k, sizes, positions, old_centers, new)
+    return new
+
+
+@dataclass
+class Iteration:
+    """Outcome of :func:`iterate`.
+
+    Attributes
+    ----------
+    label : (n,) int32 ndarray
+        Labels of the last classification, ``0..K-1`` (some maybe empty).
+    centers : (K,) int64 ndarray
+        The centers of the last classification (orphan centers included).
+    n_iter : int
+        Passes counted (those skipped by a cycle jump included).
+    converged : bool
+        True when the last update moved no center and seeded no orphan.
+    n_orphan_seeds : int
+        Orphan centers seeded over all passes.
+    n_passes : int
+        Classifications actually run.
+    cycle_period : int
+        0, or the period of the cycle of center lists that was jumped.
+    expansions : int
+        Expansions run by the classifier.
+    changed : float
+        Fraction of the area whose superfacet the last classification changed
+        (-1 when not measured: ``tol = 0``, or the first pass).
+    stopped_by_tol : bool
+        True when the ``tol`` rule ended the run.
+    """
+
+    label: np.ndarray
+    centers: np.ndarray
+    n_iter: int
+    converged: bool
+    n_orphan_seeds: int
+    n_passes: int
+    cycle_period: int
+    expansions: int
+    changed: float = -1.0
+    stopped_by_tol: bool = False
+
+
+def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
+            positions: np.ndarray, max_iter: int, *, jump_cycles: bool = True,
+            tol: float = 0.0, min_move: float = 0.0, bar=None) -> Iteration:
+    """Alternate classification and center update (paper section 3.1).
+
+    Parameters
+    ----------
+    classifier : Classifier
+    centers : (n,) int64 ndarray
+        Work array, ``centers[:n_centers]`` the initial centers.
+    n_centers : int
+    sizes : (n,) float64 ndarray
+    positions : (n, 3) float64 ndarray
+    max_iter : int
+        Passes at most (``>= 1``).
+    jump_cycles : bool, default True
+        Jump over a cycle of center lists (see the module notes); same result.
+    tol : float, default 0
+        Also stop when a classification changed the superfacet of at most this
+        fraction of the total size (area) against the previous one. 0: the
+        paper's rule alone (stop when no center moves), bit for bit.
+    min_move : float, default 0
+        A center that the update would move by less than this (mesh units,
+        between element positions; ``center_tol * r``) stays where it is
+        (:func:`hold_small_moves`); the run has converged when no center moves
+        further. 0: every move counts (the paper).
+    bar : tqdm, optional
+        Progress bar advanced once per pass.
+
+    Returns
+    -------
+    Iteration
+    """
+    m = positions.shape[0]
+    dist = np.empty(m)
+    label = np.empty(m, dtype=np.int32)  # one kernel specialization for all label arrays
+    n_iter = n_orphans = n_passes = n_expanded = period = 0
+    converged = by_tol = False
+    changed = -1.0
+    prev = None  # with tol: the previous labels, in this pass's superfacet indices
+    total = float(sizes.sum()) if tol > 0 else 0.0
+    seen: dict[bytes, int] = {}
+    states: list[np.ndarray] = []
+    orphans_per_pass: list[int] = []
+    while True:
+        key = centers[:n_centers].tobytes()
+        if jump_cycles and key in seen and not period and n_iter < max_iter - 1:
+            j = seen[key]  # pass j (0-based) had the same centers as pass n_iter
+            period = n_iter - j
+            last = max_iter - 1
+            n_orphans += sum(orphans_per_pass[j + ((t - j) % period)] for t in range(n_iter, last))
+            target = states[j + ((last - j) % period)]
+            n_centers = target.shape[0]
+            centers[:n_centers] = target
+            if bar is not None:
+                bar.update(last - n_iter)
+            n_iter = last
+            prev = None  # the state jumped: no previous pass to compare with
+        elif not period:
+            seen[key] = n_iter
+            states.append(centers[:n_centers].copy())
+        k_now, n_exp = classifier.classify(centers, n_centers, dist, label)
+        n_expanded += n_exp
+        n_iter += 1
+        n_passes += 1
+        n_orphans += k_now - n_centers
+        orphans_per_pass.append(k_now - n_centers)
+        used = centers[:k_now].copy()
+        if tol > 0 and prev is not None:
+            changed = float(sizes[label != prev].sum()) / total
+            if changed <= tol:
+                converged = by_tol = True
+                break
+        moved = update_centers(label, k_now, sizes, positions, used)
+        if min_move > 0:
+            hold_small_moves(moved, used, positions, min_move)
+        n_moved = int((moved != used).sum())
+        if bar is not None:
+            bar.update(1)
+            bar.set_postfix(centers=k_now, moved=n_moved)
+        if k_now == n_centers and n_moved == 0:
+            converged = True
+            break
+        if n_iter >= max_iter:
+            break
+        keep = moved >= 0
+        alive = moved[keep]
+        n_centers = alive.shape[0]
+        centers[:n_centers] = alive
+        if tol > 0:  # superfacet s is number remap[s] in the next pass (-1: it died)
+            remap = np.where(keep, np.cumsum(keep) - 1, -1).astype(np.int32)
+            prev = remap[label]
+    return Iteration(label=label, centers=used, n_iter=n_iter, converged=converged,
+                     n_orphan_seeds=n_orphans, n_passes=n_passes, cycle_period=period,
+                     expansions=n_expanded, changed=changed, stopped_by_tol=by_tol)
+
+
+def hold_small_moves(new: np.ndarray, old: np.ndarray, positions: np.ndarray,
+                     min_move: float) -> int:
+    """Keep in place (``new[s] = old[s]``) each center the update moved by
+    less than ``min_move`` (mesh units, between element positions); return
+    how many were kept."""
+    s = np.flatnonzero((new != old) & (new >= 0) & (old >= 0))
+    if s.shape[0] == 0:
+        return 0
+    step = positions[new[s]] - positions[old[s]]
+    small = s[np.einsum("ij,ij->i", step, step) < min_move * min_move]
+    new[small] = old[small]
+    return int(small.shape[0])
+
+
+def final_centers(labels: np.ndarray, old_centers: np.ndarray, sizes: np.ndarray,
+                  positions: np.ndarray) -> np.ndarray:
+    """Center of each final label: an old center that kept its label (the first
+    one, in order), else the element nearest the size-weighted mean.
+
+    Parameters
+    ----------
+    labels : (n,) int64 ndarray
+        Dense labels ``0..K-1``.
+    old_centers : (p,) int64 ndarray
+        Centers of the last classification, of the labels before clean-up.
+    sizes, positions : ndarray
+        Element sizes and positions.
+
+    Returns
+    -------
+    (K,) int64 ndarray
+    """
+    k = int(labels.max()) + 1
+    out = update_centers(labels.astype(np.int32), k, sizes, positions,
+                         np.full(k, -1, dtype=np.int64))
+    kept = labels[old_centers]
+    first = np.unique(kept, return_index=True)[1]
+    out[kept[first]] = old_centers[first]
+    return out

@@ -1,0 +1,172 @@
+"""One run of the superfacet method, as named stages (paper section 3;
+``docs/notes/method.md``).
+
+:func:`pipeline` takes validated parameters (:func:`superfacets.method.params.resolve`;
+the public functions of :mod:`superfacets.api.segmentation` call it) and runs the stages
+of :mod:`superfacets.method.stages`, each entered once and in the paper's order
+(Algorithm 1):
+
+1. ``build_graph``: the element graph (``n_segments`` checked against the input's
+   elements first); with ``density`` (resolved here: it reads the graph) or
+   ``roughness``, its sizes stretched (:mod:`superfacets.method.adaptive`);
+2. ``resolve_rules``: the automatic rules, once: ``k`` and the radius ``r`` (section
+   3.1), clean-up and split-and-merge, the classification, the center tolerance and the
+   coarsening, from the table of kinds (:mod:`superfacets.elements.kinds`);
+3. ``weigh``: the adjacency weights (eqs. 1-3, or Shlafman's eq. 6), and the swap
+   energies' weights;
+4. ``initialize``: the first centers (farthest point, flood or grid, after a coarse run
+   on clusters where it pays: :mod:`superfacets.method.multilevel`);
+5. ``iterate_passes``: passes of (classify, update) until no center moves, ``tol`` or
+   ``max_iter`` (:mod:`superfacets.method.passes`, with a strategy of
+   :mod:`superfacets.method.classify`); with split-and-merge, the K-preserving swaps
+   and the passes again (:mod:`superfacets.method.splitmerge`);
+6. ``finish``: empty superfacets dropped, labels made dense, stray pieces merged
+   (connectivity);
+7. ``clean_up``: the boundaries re-placed (:mod:`superfacets.method.cleanup`);
+8. ``merge_small``: superfacets of fewer than ``min_elements`` merged.
+
+Timings, the progress bar and the release of memory are hooks around the stages
+(:class:`~superfacets.method.stages.Hooks`), not inside them. Tiled runs
+(:mod:`superfacets.scale.tiling`) call the same stages.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..api.result import SegmentationResult
+from ..elements.inputs import features_of
+from .params import SegmentParams
+from .passes import final_centers
+from .stages import (
+    Hooks,
+    build_graph,
+    clean_up,
+    finish,
+    initialize,
+    iterate_passes,
+    merge_small,
+    resolve_rules,
+    weigh,
+)
+
+__all__ = ["pipeline", "SegmentationResult"]
+
+
+def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
+             jump_cycles: bool = True, n_centers: int | None = None,
+             initial: np.ndarray | None = None) -> SegmentationResult:
+    """Run the method with validated parameters, stage by stage (see the module notes).
+
+    Parameters
+    ----------
+    mesh : Mesh, trimesh.Trimesh, (vertices, faces), PointCloud or TetMesh
+    params : SegmentParams
+        From :func:`superfacets.method.params.resolve`.
+    features : (N, d) float ndarray, optional
+        One feature per input row, for ``params.beta > 0`` (default: the
+        input's colours, if it has any).
+    replay : bool, default True
+        Replay the expansions of centers that did not move (bounded
+        assignment); False expands every center on every pass. Same labels.
+    jump_cycles : bool, default True
+        Jump over a repeating cycle of center lists. Same labels.
+    n_centers : int, optional
+        Initial centers instead of the number ``radius`` gives (a tile of a
+        tiled run: :mod:`superfacets.scale.tiling`); ``r`` stays the radius's.
+    initial : (c,) int ndarray, optional
+        Elements to start the passes from, instead of the initialization
+        (a tile starting from the whole run's centers).
+
+    Returns
+    -------
+    SegmentationResult
+
+    Raises
+    ------
+    ParameterError, InvalidMeshError, InvalidCloudError
+        As :func:`superfacets.segment`.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.method.params import resolve
+    >>> r = pipeline(trimesh.creation.icosphere(subdivisions=3), resolve(n_segments=20))
+    >>> r.n_segments, sorted(r.timings)[:4]
+    (20, ['changed', 'cleanup', 'connectivity', 'cycle_period'])
+    """
+    from .._runtime.threads import using
+
+    with using(params.n_threads):  # also the graph build and terms this run triggers
+        return _run(mesh, params, features, replay=replay, jump_cycles=jump_cycles,
+                    n_centers=n_centers, initial=initial)
+
+
+def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
+         n_centers: int | None = None, initial=None) -> SegmentationResult:
+    t_start = time.perf_counter()
+    t = time.perf_counter()
+    source, graph, p = build_graph(obj, p, features)
+    t_graph = time.perf_counter() - t
+    rules = resolve_rules(graph, p, n_centers=n_centers)
+    p = rules.params
+    feats = features_of(source, features) if p.beta > 0 else None
+    hooks = Hooks(p.progress, p.max_iter, graph.kind)
+    hooks.timings["graph"] = t_graph
+    try:
+        with hooks.stage("weights", "weights"):
+            w, swap_w = weigh(graph, rules, feats)
+        with hooks.stage("init"):
+            init, ratio = initialize(graph, w, rules, hooks, initial)
+            release = hooks.release_of(graph)  # (again where no coarse run released them)
+            if release is not None:
+                release()
+        with hooks.stage("iterations", "superfacets"):
+            it = iterate_passes(graph, w, swap_w, init, rules, hooks, replay=replay,
+                                jump_cycles=jump_cycles)
+        w = swap_w = None  # free the weights before the clean-up
+    except BaseException:
+        hooks.close()
+        raise
+    if not rules.cleanup:
+        hooks.close()
+    sizes = np.ascontiguousarray(graph.sizes)
+    positions = np.ascontiguousarray(graph.positions)
+    with hooks.stage("connectivity"):
+        labels, centers = finish(graph, it.label, it.centers, rules)
+        centers = final_centers(labels, centers, sizes, positions)
+    if rules.cleanup:
+        try:
+            with hooks.stage("cleanup", "clean-up"):
+                labels = clean_up(graph, labels, centers, rules, feats)
+        finally:
+            hooks.close()
+        centers = final_centers(labels, centers, sizes, positions)
+    if p.min_elements > 1:  # small superfacets merged as stray pieces are (not the paper)
+        with hooks.stage("connectivity", add=True):
+            labels = merge_small(graph, labels, centers, rules)
+            centers = final_centers(labels, centers, sizes, positions)
+    timings = hooks.timings
+    centers = source.first_rows(centers)
+    element_labels = labels
+    labels = source.to_rows(labels)
+    timings["total"] = time.perf_counter() - t_start
+    timings.update(expansions=it.expansions, passes=it.n_passes, cycle_period=it.cycle_period,
+                   changed=it.changed, stopped_by_tol=it.stopped_by_tol)
+    resolved = dict(n_segments=rules.k, radius=rules.r / graph.diagonal, alpha=p.alpha,
+                    eta_convex=p.eta_convex, window=p.window, init=p.init,
+                    max_iter=p.max_iter, weighting=p.weighting, assignment=p.assignment,
+                    enforce_connectivity=p.enforce_connectivity, cleanup=rules.cleanup,
+                    split_merge=rules.split_merge, tol=p.tol,
+                    center_tol=rules.center_tol, coarsen=ratio,
+                    n_init_centers=init.shape[0], elements=graph.kind, beta=p.beta,
+                    min_elements=p.min_elements, density=p.density, roughness=p.roughness)
+    if rules.kind.neighborhood:
+        resolved.update(n_neighbors=p.n_neighbors, neighbor_radius=p.neighbor_radius)
+    return SegmentationResult(labels=labels, centers=centers, n_iter=it.n_iter,
+                              converged=it.converged, mesh_radius=rules.r,
+                              n_orphan_seeds=it.n_orphan_seeds, timings=timings,
+                              params=resolved, elements=source,
+                              element_labels=element_labels)

@@ -1,0 +1,291 @@
+"""Weights of the element graph: the paper's (eqs. 1-3) and Shlafman et al.'s (eq. 6).
+
+Pure functions of the cached :class:`~superfacets.elements.AdjacencyTerms`
+of an element graph, so any element kind with those terms gets the same
+weights, and several weightings of one mesh share the geometry.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..elements.graph import ElementGraph, chunked
+from ..elements.inputs import as_element_graph
+from ..errors import ParameterError
+from .params import (
+    DEFAULTS,
+    MAX_WEIGHT_FACTOR,
+    WEIGHTING_ALPHA,
+    WEIGHTINGS,
+    check_choice,
+    check_nonneg,
+    check_number,
+)
+
+__all__ = ["paper_weights", "shlafman_weights", "edge_weights", "csr_weights", "check_features",
+           "convex_scaled"]
+
+_PAPER_ALPHA = DEFAULTS.alpha
+_SHLAFMAN_ALPHA = WEIGHTING_ALPHA["shlafman"][0]
+
+
+def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = DEFAULTS.eta_convex,
+                  features: np.ndarray | None = None, beta: float = 0.0) -> np.ndarray:
+    """Weights of the paper (Simari, Picciau, De Floriani 2014, eqs. 1-3).
+
+    For adjacent faces ``f_i, f_j`` with centroids ``c_i, c_j``, unit normals
+    ``n_i, n_j``, shared edge ``e_ij`` of midpoint ``m_ij``:
+
+    - ``geo = |c_i - m_ij| + |m_ij - c_j|`` (eq. 1);
+    - ``theta = arccos(n_i . n_j)`` in ``[0, pi]``, the unsigned dihedral angle;
+    - ``ang = eta * |e_ij| * theta / pi`` (eq. 2), with ``eta = 1`` on concave
+      edges and ``eta_convex`` on convex ones; an edge is concave when
+      ``n_i . (c_j - c_i) > 0`` (authors' implementation), ``i < j``;
+    - ``w = (geo + alpha * ang) / d`` (eq. 3), ``d`` the bounding-box diagonal;
+    - with ``beta > 0``, a feature term in the same form as ``ang`` (not in the
+      paper): ``w = (geo + alpha * ang + beta * |e_ij| * ||f_i - f_j||) / d``,
+      ``f`` one feature per element (e.g. RGB in ``[0, 1]``): crossing a colour
+      edge costs as crossing a crease does (``docs/notes/method.md``, "Features").
+
+    On mesh vertices and cloud points the graph's terms are the analogues
+    (``docs/notes/method.md``, section 6): ``geo = |p_i - p_j|``, the angle of the
+    element normals, ``ang = eta * |p_i - p_j| * theta / pi`` (``graph.span``)
+    and the symmetric convexity test.
+
+    Parameters
+    ----------
+    graph : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
+        The element graph (of a mesh: its cached face graph).
+    alpha : float, default 200
+        Weight of the angular term, in ``[0, 1e12]``.
+    eta_convex : float, default 0.2
+        Factor ``eta`` of convex edges, in ``[0, 1e12]``.
+    features : (n, d) float ndarray, optional
+        One finite feature row per element (needed when ``beta > 0``).
+    beta : float, default 0
+        Weight of the feature term, in ``[0, 1e12]``; 0 gives the paper's
+        weights bit for bit.
+
+    Returns
+    -------
+    weights : (e,) float64 ndarray
+        One weight per adjacency (``graph.pairs`` order), unitless
+        (fractions of ``d``), ``>= 0``. Invariant to uniform scaling and
+        rigid motion of the mesh.
+
+    Raises
+    ------
+    ParameterError
+        If ``alpha``, ``eta_convex`` or ``beta`` is negative, NaN or infinite,
+        or ``beta > 0`` without one finite feature row per element.
+
+    References
+    ----------
+    Simari, Picciau, De Floriani, "Fast and Scalable Mesh Superfacets", 2014,
+    eqs. 1-3; ``docs/notes/method.md``.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> box = trimesh.creation.box()
+    >>> w = paper_weights((box.vertices, box.faces), alpha=0)
+    >>> w.shape
+    (18,)
+    """
+    alpha = check_number("alpha", alpha, 0.0, MAX_WEIGHT_FACTOR)
+    eta_convex = check_number("eta_convex", eta_convex, 0.0, MAX_WEIGHT_FACTOR)
+    beta = check_number("beta", beta, 0.0, MAX_WEIGHT_FACTOR)
+    g = as_element_graph(graph)
+    span = g.span
+    f = check_features(features, g) if beta > 0 else None
+
+    def weight(sl):
+        t = g.terms_in(sl)
+        theta = np.arccos(t.cos)
+        eta = np.where(t.concave, 1.0, eta_convex)
+        ang = eta * span[sl] * theta / np.pi
+        if f is None:
+            return (t.geo + alpha * ang) / g.diagonal
+        jump = np.linalg.norm(f[g.pairs[sl, 0]] - f[g.pairs[sl, 1]], axis=1)
+        return (t.geo + alpha * ang + beta * span[sl] * jump) / g.diagonal
+
+    return chunked(g.n_edges, weight)
+
+
+def convex_scaled(graph, weights: np.ndarray, *, alpha: float, eta_convex: float,
+                  factor: float, weighting: str = "paper") -> np.ndarray:
+    """The paper's weights (eqs. 1-3) with the angular term of convex edges
+    scaled by ``factor`` (0: removed), from the run's CSR weights.
+
+    The swap energies of split-and-merge (:mod:`superfacets.method.splitmerge`) use
+    them on faces with ``factor = 0``: concave creases alone count (the minima
+    rule: parts meet at concavities).
+
+    Parameters
+    ----------
+    graph : ElementGraph
+    weights : (2 e,) float64 ndarray
+        The run's weights, one per CSR entry of ``graph``
+        (:func:`csr_weights` of :func:`paper_weights`, any ``beta``).
+    alpha, eta_convex : float
+        The parameters ``weights`` were made with.
+    factor : float
+        The new ``eta_convex`` as a fraction of the old, in ``[0, 1]``.
+    weighting : str, default 'paper'
+        Other weightings (Shlafman's has no convex/concave distinction) are
+        returned unchanged.
+
+    Returns
+    -------
+    (2 e,) float64 ndarray
+        ``weights`` less ``(1 - factor) * alpha * eta_convex * |e| * theta / (pi d)``
+        on convex edges (concave ones, and the feature term, as they were); ``weights``
+        itself where nothing changes.
+
+    References
+    ----------
+    Simari, Picciau, De Floriani, "Fast and Scalable Mesh Superfacets", 2014,
+    eqs. 1-3; Hoffman and Richards, "Parts of recognition", 1984 (the minima
+    rule); ``docs/notes/cleanup.md``, "Swap energies".
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.inputs.convert import as_mesh
+    >>> from superfacets.elements import face_graph
+    >>> g = face_graph(as_mesh(trimesh.creation.box()))   # every fold convex
+    >>> w = csr_weights(g, paper_weights(g))
+    >>> bool(np.allclose(convex_scaled(g, w, alpha=200, eta_convex=0.2, factor=0.0),
+    ...                  csr_weights(g, paper_weights(g, eta_convex=0.0))))
+    True
+    """
+    g = graph
+    scale = alpha * eta_convex * (1.0 - float(factor))
+    if weighting != "paper" or scale == 0.0:
+        return weights
+    from .._kernels.terms import convex_scaled_csr
+
+    t = g.terms
+    return convex_scaled_csr(np.ascontiguousarray(weights, dtype=np.float64), g.dual_edge,
+                             t.concave, t.cos, g.span, scale / (np.pi * g.diagonal))
+
+
+def check_features(features, graph: ElementGraph) -> np.ndarray:
+    """``features`` as a finite ``(n, d)`` float64 array, one row per element.
+
+    Raises
+    ------
+    ParameterError
+        If it is missing, of another length, or not finite.
+    """
+    if features is None:
+        raise ParameterError("beta > 0 needs features: one row per element (e.g. RGB "
+                             "colours in [0, 1]), or an input with colours")
+    f = np.asarray(features)
+    if f.dtype == object or not np.issubdtype(f.dtype, np.number):
+        raise ParameterError(f"features must be numeric, got dtype {f.dtype}")
+    f = f.astype(np.float64).reshape(f.shape[0], -1) if f.ndim >= 1 else f
+    if f.ndim != 2 or f.shape[0] != graph.n_elements:
+        raise ParameterError(f"features must have one row per {graph.element} "
+                             f"({graph.n_elements}), got shape {np.shape(features)}")
+    if not np.isfinite(f).all():
+        row = int(np.flatnonzero(~np.isfinite(f).all(axis=1))[0])
+        raise ParameterError(f"features of {graph.element} {row} are not finite "
+                             f"({f[row].tolist()})")
+    return f
+
+
+def shlafman_weights(graph, *, alpha: float = _SHLAFMAN_ALPHA) -> np.ndarray:
+    """Weights of Shlafman, Tal and Katz, as written in the paper (eq. 6).
+
+    ``w' = (1 - alpha) * geo + alpha * (1 - (n_i . n_j)^2)``, with ``geo`` of
+    eq. 1. The roles of ``alpha`` and ``1 - alpha`` are swapped with respect
+    to Shlafman et al. so that a higher ``alpha`` favours the angular term, as
+    in the paper. Not scale invariant and blind to the concave/convex
+    distinction: that is the point of the paper's comparison (Fig. 6).
+
+    Parameters
+    ----------
+    graph : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
+    alpha : float, default 0.5
+        In ``[0, 1]``.
+
+    Returns
+    -------
+    weights : (e,) float64 ndarray
+        One weight per adjacency, in mesh units for the geodesic part.
+
+    Raises
+    ------
+    ParameterError
+        If ``alpha`` is outside ``[0, 1]``.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.elements.inputs import as_element_graph
+    >>> g = as_element_graph(trimesh.creation.box())
+    >>> shlafman_weights(g, alpha=0.5).shape
+    (18,)
+
+    References
+    ----------
+    Simari et al. 2014, eq. 6; Shlafman, Tal, Katz, "Metamorphosis of
+    polyhedral surfaces using decomposition", Eurographics 2002.
+    """
+    a = check_nonneg("alpha", alpha)
+    if a > 1:
+        raise ParameterError(f"alpha of the Shlafman weighting must be in [0, 1], got {alpha!r}")
+    g = as_element_graph(graph)
+
+    def weight(sl):
+        t = g.terms_in(sl)
+        return (1.0 - a) * t.geo + a * (1.0 - t.cos * t.cos)
+
+    return chunked(g.n_edges, weight)
+
+
+def edge_weights(graph, weighting: str = "paper", *, alpha: float = _PAPER_ALPHA,
+                 eta_convex: float = DEFAULTS.eta_convex, features: np.ndarray | None = None,
+                 beta: float = 0.0) -> np.ndarray:
+    """:func:`paper_weights` or :func:`shlafman_weights` by name.
+
+    Parameters
+    ----------
+    graph : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
+    weighting : {'paper', 'shlafman'}, default 'paper'
+    alpha, eta_convex : float
+        As the chosen function (``eta_convex`` is ignored by ``'shlafman'``).
+    features, beta
+        The feature term of :func:`paper_weights` (``'paper'`` only).
+
+    Returns
+    -------
+    weights : (e,) float64 ndarray
+
+    Raises
+    ------
+    ParameterError
+        On an unknown ``weighting`` or a parameter out of range.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.elements.inputs import as_element_graph
+    >>> g = as_element_graph(trimesh.creation.box())
+    >>> w = edge_weights(g, "paper", alpha=200)
+    >>> w.shape, bool((w > 0).all())
+    ((18,), True)
+    """
+    check_choice("weighting", weighting, WEIGHTINGS)
+    if weighting == "paper":
+        return paper_weights(graph, alpha=alpha, eta_convex=eta_convex, features=features,
+                             beta=beta)
+    if beta:
+        raise ParameterError("beta (the feature term) goes with weighting='paper' only")
+    return shlafman_weights(graph, alpha=alpha)
+
+
+def csr_weights(graph: ElementGraph, weights: np.ndarray) -> np.ndarray:
+    """Per-adjacency ``weights`` laid out per CSR entry of ``graph`` (contiguous float64)."""
+    return np.ascontiguousarray(weights[graph.dual_edge], dtype=np.float64)

@@ -1,0 +1,432 @@
+"""Segment many files: ``superfacets batch``, resumable, on this machine or on Dask.
+
+:func:`run_batch` segments every input with the same options as
+``superfacets segment`` and writes, under one output folder:
+
+- per input, its labels (``.seg``, or ScanNet's ``.json``) and optionally a
+  coloured mesh or cloud, a picture and a page, each written atomically,
+  named after the input's path relative to the inputs' common folder (so
+  names cannot collide; :mod:`.inputs` finds the inputs and names them);
+- ``manifest.parquet`` (``manifest.csv`` where pyarrow is missing): one row
+  per input, with :data:`~.manifest.MANIFEST_COLUMNS` (:mod:`.manifest`);
+- ``batch.json``: the options, so that a rerun with other options is refused
+  rather than mixing results.
+
+Each finished input is appended at once to a journal (``.manifest.jsonl``)
+that the manifest is made from, so a run interrupted at any point (Ctrl-C,
+``kill -9``, a power cut) loses nothing: a rerun skips every input done, runs
+the rest, and runs the failed ones again on request (``retry_failed``).
+The tasks go to :class:`~.engine.Engine` by path; a worker reads its input
+and writes its outputs itself, so the scheduler never holds meshes.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import time
+from dataclasses import dataclass, field
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Sequence
+
+from ..._runtime import interrupts
+from ...elements.kinds import kind_of
+from ...errors import ParameterError
+from .engine import Engine, PeakMemory, error_text
+from .inputs import collect_inputs, output_names
+from .manifest import (
+    JOURNAL,
+    MANIFEST_COLUMNS,
+    FolderLock,
+    check_options,
+    read_manifest,
+    record_options,
+    write_manifest,
+)
+
+__all__ = ["run_batch", "collect_inputs", "output_names", "read_manifest", "BatchSummary",
+           "MANIFEST_COLUMNS", "segment_file"]
+
+_LABEL_SUFFIX = {"seg": ".seg", "json": ".json"}
+
+
+def segment_file(task: dict) -> dict:
+    """Read, segment and write one input; its manifest row (never raises).
+
+    The worker function of :func:`run_batch` (a module-level function: Dask
+    workers import it by reference).
+
+    Parameters
+    ----------
+    task : dict
+        ``input`` (absolute path), ``outdir``, ``name``, ``options`` (keyword
+        arguments of :func:`superfacets.segment`), ``outputs`` (``labels``:
+        'seg' or 'json'; ``header``, ``colored`` suffix or None, ``picture``,
+        ``html``, ``vertex_colors``), ``per_object``.
+
+    Returns
+    -------
+    dict
+        A row with :data:`MANIFEST_COLUMNS`.
+    """
+    outs = task["outputs"]
+    label_rel = task["name"] + _LABEL_SUFFIX[outs["labels"]]
+    row = dict.fromkeys(MANIFEST_COLUMNS)
+    row.update(input=task["input"], output=label_rel)
+    probe = PeakMemory()
+    t0 = time.perf_counter()
+    try:
+        row.update(_segment_and_write(task, label_rel))
+        row["status"] = "ok"
+    except Exception as exc:  # noqa: BLE001 - a failed row; the batch goes on
+        row.update(status="failed", error=error_text(exc))
+    except MemoryError as exc:  # pragma: no cover - depends on the machine
+        row.update(status="failed", error=error_text(exc))
+    row["seconds"] = round(time.perf_counter() - t0, 4)
+    peak = probe.peak_mib(above_start=False)
+    row["peak_mib"] = None if peak is None else round(peak, 1)
+    row["finished"] = datetime.now(timezone.utc).isoformat(timespec="seconds")
+    return row
+
+
+def _segment_and_write(task: dict, label_rel: str) -> dict:
+    from ...api.scenes import segment_objects
+    from ...api.segmentation import segment
+    from ...io import read_input
+    from ...viz.outputs import JoinedResult, write_result
+
+    outs = task["outputs"]
+    opts = dict(task["options"])
+    base = Path(task["outdir"]) / task["name"]
+    data = read_input(task["input"])
+    cloud = not hasattr(data, "faces")
+    kind = "points" if cloud else (opts.get("elements") or "faces")
+    if not kind_of(kind).objects:
+        if task["per_object"]:
+            raise ParameterError(f"--per-object segments the faces of a scene; not {kind}")
+        if outs["colored"] not in (None, "ply"):
+            raise ParameterError(f"coloured {kind} are written as .ply")
+    if task["per_object"]:
+        opts.pop("radius", None)
+        k = opts.pop("n_segments", None)
+        result = JoinedResult(*segment_objects(data, *(() if k is None else (k,)), **opts))
+    elif task.get("adaptive"):
+        from ...api.levels import adaptive_segment
+        from ...method.params import DEFAULTS
+
+        opts.pop("radius", None)
+        k = opts.pop("n_segments", None) or DEFAULTS.n_segments
+        result = adaptive_segment(data, k, start=task["adaptive"]["start"],
+                                  extent_weight=task["adaptive"]["compactness"], **opts)
+    else:
+        result = segment(data, **opts)
+    n = kind_of(kind).n_rows(data)
+    base.parent.mkdir(parents=True, exist_ok=True)
+    picture = base.with_name(base.name + ".png") if outs["picture"] else None
+    html = base.with_name(base.name + ".html") if outs["html"] else None
+    colored = None
+    if outs["colored"]:
+        colored = base.with_name(base.name + "_superfacets." + outs["colored"])
+    write_result(data, result, kind, Path(task["input"]).name,
+                 labels=Path(task["outdir"]) / label_rel, header=outs["header"],
+                 colored=colored, vertex_colors=outs["vertex_colors"], picture=picture,
+                 html=html, element_options={k: opts[k] for k in ("n_neighbors",
+                                                                  "neighbor_radius")
+                                             if k in opts},
+                 up=outs.get("up", "y"), view=outs.get("view"))
+    return {"elements": kind, "n_elements": int(n), "segments": int(result.n_segments),
+            "passes": int(result.n_iter), "converged": bool(result.converged)}
+
+
+def _lost_row(task: dict, error: str) -> dict:
+    row = dict.fromkeys(MANIFEST_COLUMNS)
+    row.update(input=task["input"], output=task["name"] + _LABEL_SUFFIX[task["outputs"]["labels"]],
+               status="failed", error=error[:500],
+               finished=datetime.now(timezone.utc).isoformat(timespec="seconds"))
+    return row
+
+
+# --- the run ------------------------------------------------------------------------------
+
+@dataclass
+class BatchSummary:
+    """Counts of one :func:`run_batch` call.
+
+    Attributes
+    ----------
+    manifest : pathlib.Path
+    inputs : int
+        Inputs matched.
+    done_before : int
+        Inputs already done (ok, or failed and not retried): not run again.
+    failed_before : int
+        Of those, the failed ones (``retry_failed`` runs them again).
+    ok, failed : int
+        Inputs run by this call, by outcome.
+    seconds : float
+    interrupted : bool
+    engine : str
+        Where the tasks ran.
+    failures : list of (str, str)
+        (input, error) of the inputs that failed in this call.
+    """
+
+    manifest: Path
+    inputs: int = 0
+    done_before: int = 0
+    failed_before: int = 0
+    ok: int = 0
+    failed: int = 0
+    seconds: float = 0.0
+    interrupted: bool = False
+    engine: str = ""
+    failures: list = field(default_factory=list)
+
+
+def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
+              radius: float | None = None, labels: str = "seg", header: bool = False,
+              colored_mesh: str | None = None, vertex_colors: bool = False,
+              picture: bool = False, html: bool = False, up="y", view=None,
+              per_object: bool = False, adaptive: int | None = None,
+              extent_weight: float | None = None, level_compactness: float | None = None,
+              workers: int | None = None, scheduler: str | None = None,
+              memory_limit="auto", retry_failed: bool = False, progress: bool = True,
+              n_threads: int = 1, dask: bool | None = None, **options) -> BatchSummary:
+    """Segment every input with the same options; resumable; on this machine or on Dask.
+
+    Parameters
+    ----------
+    inputs : sequence of str
+        Files, folders (recursively), globs, ``@list.txt`` (:func:`collect_inputs`).
+    outdir : path
+        Output folder, created if missing (its parent must exist).
+    n_segments, radius : optional
+        As :func:`superfacets.segment` (default k = 150).
+    labels : {'seg', 'json'}, default 'seg'
+        Label file of each input: one label per line, or ScanNet's ``segIndices``.
+    header : bool, default False
+        ``.seg`` files start with ``#`` lines (parameters, passes, time).
+    colored_mesh : {'ply', 'glb', 'obj'}, optional
+        Also write each input coloured by superfacet (vertices, points: ``ply``).
+    vertex_colors : bool, default False
+        PLY: colours per vertex.
+    picture, html : bool, default False
+        Also write a PNG (``render`` extra) / an interactive page per input
+        (faces, vertices or points).
+    up, view : optional
+        The pictures' and pages' camera (:func:`superfacets.viz.camera.view_frame`;
+        default: up is +y, the view automatic).
+    per_object : bool, default False
+        Scenes: each object segmented on its own (k shared out by area).
+    adaptive : int, optional
+        Content-adaptive superpoints (:func:`superfacets.adaptive_superpoints`)
+        with this ``start`` (``>= 1``; with ``n_segments``, not ``radius`` or
+        ``per_object``).
+    extent_weight : float, optional
+        Their ``extent_weight`` (default: left to the method).
+    level_compactness : float, optional
+        The old name of ``extent_weight`` (deprecated; one release).
+    workers : int, optional
+        Local worker processes (default: one per core); 1 runs in this process.
+    scheduler : str, optional
+        A running Dask scheduler's address (default: ``DASK_SCHEDULER_ADDRESS``).
+    memory_limit : default 'auto'
+        Per local worker (:class:`~.engine.Engine`).
+    retry_failed : bool, default False
+        Run again the inputs that failed before.
+    progress : bool, default True
+        A progress bar on stderr.
+    n_threads : int, default 1
+        Threads of each segmentation (one task per core already).
+    dask : bool, optional
+        True: a Dask cluster even for one worker (a worker process that dies
+        fails only its input); default: Dask unless ``workers=1``.
+    **options
+        The other keyword arguments of :func:`superfacets.segment` (``alpha``,
+        ``elements``, ``tol``, ``cleanup``, ...).
+
+    Returns
+    -------
+    BatchSummary
+
+    Raises
+    ------
+    ParameterError
+        Bad options, no input, an output folder made with other options or
+        in use by another batch (before any work).
+    FileNotFoundError, NotADirectoryError
+        An input that matches nothing; an output folder that is a file or
+        whose parent is missing.
+    MissingExtraError, SchedulerError
+        Dask or the render extra missing where needed; an unreachable scheduler.
+
+    Examples
+    --------
+    >>> s = run_batch(["meshes/"], "out", 150, workers=2)   # doctest: +SKIP
+    >>> s.ok, s.failed, s.manifest                          # doctest: +SKIP
+    (12, 0, PosixPath('out/manifest.parquet'))
+    """
+    from ...method.params import check_choice, check_int, check_nonneg, resolve
+
+    outdir = Path(outdir)
+    if outdir.exists() and not outdir.is_dir():
+        raise NotADirectoryError(f"{outdir}: exists and is not a folder")
+    parent = outdir.parent if str(outdir.parent) else Path(".")
+    if not parent.is_dir():
+        raise FileNotFoundError(f"{outdir}: its folder {parent} does not exist")
+    check_choice("labels", labels, tuple(_LABEL_SUFFIX))
+    if colored_mesh is not None:
+        check_choice("colored_mesh", colored_mesh, ("ply", "glb", "obj"))
+    if per_object and radius is not None:
+        raise ParameterError("per_object takes n_segments, not radius")
+    if adaptive is not None:
+        adaptive = check_int("adaptive", adaptive, lo=1)
+        if per_object or radius is not None:
+            raise ParameterError("adaptive takes n_segments, on one segmentation (not radius "
+                                 "or per_object)")
+    from ...method.params import renamed
+
+    extent_weight = renamed(extent_weight, level_compactness, "extent_weight",
+                            "level_compactness")
+    if extent_weight is not None:
+        if adaptive is None:
+            raise ParameterError("extent_weight goes with adaptive")
+        extent_weight = check_nonneg("extent_weight", extent_weight)
+    if workers is not None:
+        check_int("workers", workers, lo=1)
+    n_threads = check_int("n_threads", n_threads, lo=1)
+    seg_opts = dict(options, n_segments=n_segments, radius=radius, n_threads=n_threads)
+    resolved = resolve(**seg_opts).as_dict()  # every option checked before any work
+    if picture or html:
+        from ...viz.camera import check_camera
+
+        check_camera(view, up)
+    if picture:
+        from ..._runtime.extras import require
+
+        require("pyvista", "pictures (--picture)")
+    files = collect_inputs(inputs, exclude=outdir if outdir.exists() else None)
+    if not files:
+        raise ParameterError("no input to segment")
+    outputs = {"labels": labels, "header": bool(header), "colored": colored_mesh,
+               "picture": bool(picture), "html": bool(html), "vertex_colors": bool(vertex_colors)}
+    if picture or html:  # recorded only where drawn (folders of earlier runs resume)
+        outputs.update(up=up, view=list(view) if isinstance(view, (tuple, list)) else view)
+    recorded = {"segment": _jsonable({k: v for k, v in resolved.items()  # defaults filled
+                                      if k not in ("n_threads", "progress")}),
+                "outputs": outputs, "per_object": bool(per_object)}
+    level = None
+    if adaptive is not None:  # recorded only where on (folders of earlier runs resume)
+        level = {"start": adaptive, "compactness": extent_weight}  # the key folders hold
+        recorded["adaptive"] = level
+    known = check_options(outdir, recorded)  # before the engine starts: a quick refusal
+    work = bool(_todo(files, read_manifest(outdir) if known else [], retry_failed))
+    # the engine (a cluster to start or reach) only where there is work, before any is done
+    with (Engine(workers, scheduler, memory_limit=memory_limit, dask=dask) if work else
+          contextlib.nullcontext()) as engine:
+        outdir.mkdir(exist_ok=True)
+        with FolderLock(outdir):
+            if not known and not check_options(outdir, recorded):
+                record_options(outdir, recorded)
+            return _run(files, outdir, seg_opts, outputs, per_object, level, engine,
+                        retry_failed, progress)
+
+
+def _done(row, retry_failed: bool) -> bool:
+    return row is not None and (row["status"] == "ok" or
+                                (row["status"] == "failed" and not retry_failed))
+
+
+def _todo(files: list, rows, retry_failed: bool) -> list:
+    """The inputs to run: those without an ok row (or a failed one, unless retried)."""
+    by_input = rows if isinstance(rows, dict) else {r["input"]: r for r in rows}
+    return [f for f in files if not _done(by_input.get(str(f)), retry_failed)]
+
+
+def _jsonable(d: dict) -> dict:
+    return {k: (v if isinstance(v, (int, float, str, bool, type(None))) else str(v))
+            for k, v in sorted(d.items())}
+
+
+def _run(files, outdir, seg_opts, outputs, per_object, level, engine, retry_failed,
+         progress) -> BatchSummary:
+    rows = {r["input"]: r for r in read_manifest(outdir)}  # again, under the lock
+    summary = BatchSummary(outdir / "manifest.parquet", inputs=len(files))
+    keys = {f: str(f) for f in files}
+    todo = _todo(files, rows, retry_failed)
+    if todo and engine is None:  # pragma: no cover - another batch changed the folder
+        raise ParameterError(f"{outdir}: changed by another batch meanwhile; run again")
+    summary.done_before = len(files) - len(todo)
+    summary.failed_before = sum(rows[keys[f]]["status"] == "failed" for f in files
+                                if f not in set(todo))
+    reserved = {r["output"].rsplit(".", 1)[0] for k, r in rows.items() if r.get("output")}
+    earlier = {f: rows[keys[f]]["output"].rsplit(".", 1)[0] for f in todo
+               if keys[f] in rows and rows[keys[f]].get("output")}
+    names = dict(earlier)
+    names.update(output_names([f for f in todo if f not in earlier], reserved))
+    tasks = [{"input": keys[f], "outdir": str(outdir.resolve()), "name": names[f],
+              "options": dict(seg_opts, progress=False), "outputs": outputs,
+              "per_object": per_object, "adaptive": level} for f in _largest_first(todo)]
+    t0 = time.perf_counter()
+    journal_path = outdir / JOURNAL
+    bar = None
+    finished: set[str] = set()
+    last_write = time.monotonic()
+    summary.engine = engine.describe() if engine is not None else ""
+    try:
+        with open(journal_path, "a") as journal:
+            if progress and tasks:
+                from tqdm import tqdm
+
+                bar = tqdm(total=len(tasks), unit="input", desc="batch", dynamic_ncols=True)
+            for row in (engine.run(segment_file, tasks, _lost_row) if tasks else ()):
+                journal.write(json.dumps(row) + "\n")
+                journal.flush()
+                rows[row["input"]] = row
+                finished.add(row["input"])
+                if row["status"] == "ok":
+                    summary.ok += 1
+                else:
+                    summary.failed += 1
+                    summary.failures.append((row["input"], row["error"]))
+                if bar is not None:
+                    bar.update(1)
+                    bar.set_postfix(failed=summary.failed, refresh=False)
+                if time.monotonic() - last_write > 30:  # a manifest to look at, now and then
+                    summary.manifest = write_manifest(outdir, _ordered(rows, files))
+                    last_write = time.monotonic()
+    except KeyboardInterrupt:
+        interrupts.caught()  # stopping in order: the manifest is written below
+        summary.interrupted = True
+    finally:
+        if bar is not None:
+            bar.close()
+        for t in tasks:
+            if t["input"] not in finished and not _done(rows.get(t["input"]), retry_failed):
+                r = _lost_row(t, "not run: the batch stopped before it")
+                r["status"] = "skipped"
+                rows[t["input"]] = r
+        summary.manifest = write_manifest(outdir, _ordered(rows, files))
+        journal_path.unlink(missing_ok=True)  # all in the manifest now
+    summary.seconds = time.perf_counter() - t0
+    return summary
+
+
+def _largest_first(files: list) -> list:
+    """The inputs by decreasing file size: the longest tasks start first, so that no worker
+    is left with a large input at the end while the others wait (the manifest keeps the
+    inputs' order)."""
+    def size(f) -> int:
+        try:
+            return f.stat().st_size
+        except OSError:
+            return 0
+    return sorted(files, key=size, reverse=True)
+
+
+def _ordered(rows: dict, files: list) -> list[dict]:
+    """This run's inputs in order, then rows of earlier runs' other inputs."""
+    keys = [str(f) for f in files]
+    mine = set(keys)
+    return [rows[k] for k in keys if k in rows] + [r for k, r in rows.items() if k not in mine]

@@ -1,0 +1,179 @@
+"""A large input sorted once into one file per tile, for a tiled run.
+
+:func:`bucket` reads a :class:`~superfacets.io.regions.RegionReader`'s file
+once, in chunks, and writes each element to the file of the tile that holds
+it (:meth:`superfacets.scale.tile_layout.Tiles.of`); the :class:`TileBuckets` it returns
+reads a box as the reader does, from the files of the tiles the box
+overlaps. So a tiled run (:mod:`superfacets.scale.runner.tiles`) reads the input
+file twice in all (its survey, this sorting), not once per task.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ...io.regions import point_cloud_of
+
+__all__ = ["bucket", "TileBuckets"]
+
+
+def bucket(reader, tiles, folder, *, progress: bool = False) -> TileBuckets:
+    """Sort the elements into one file per tile, in one pass.
+
+    Each tile's file (``tile-T.bin`` in ``folder``) holds the elements whose
+    position lies in that tile (:meth:`superfacets.scale.tile_layout.Tiles.of`) in
+    file order, with what a box of them needs: the row and position, the
+    colour and normal of a point, the vertex indices and corner positions
+    of a face. A box is then read from the tiles it overlaps
+    (:meth:`TileBuckets.read_box`), the same elements, in the same order,
+    as :meth:`RegionReader.read_box <superfacets.io.regions.RegionReader.read_box>` gives.
+
+    Parameters
+    ----------
+    reader : RegionReader
+        The input, read in chunks.
+    tiles : Tiles
+        The tiles (:mod:`superfacets.scale.tile_layout`).
+    folder : str or os.PathLike
+        Where the files go (every worker must reach it by that path);
+        files of an earlier bucketing there are replaced.
+    progress : bool, default False
+        A progress bar over the rows.
+
+    Returns
+    -------
+    TileBuckets
+
+    Raises
+    ------
+    MeshFormatError
+        As :meth:`survey`.
+    OSError
+        If ``folder`` cannot be written.
+    """
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    n_tiles = tiles.n_tiles
+    for old in folder.glob("tile-*.bin"):
+        old.unlink()
+    lo = np.full((n_tiles, 3), np.inf)
+    hi = np.full((n_tiles, 3), -np.inf)
+    counts = np.zeros(n_tiles, dtype=np.int64)
+    dtype = None
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=reader.n_rows, desc="tiles: bucket", unit="row", leave=False)
+    try:
+        for s, pos, _, extra in reader.chunks():
+            if reader.kind == "faces":
+                tri, verts, col = extra
+                fields = dict(tri=tri, corners=verts[tri])
+                if col is not None:
+                    fields["colors"] = col
+            else:
+                fields = {n: a for n, a in zip(("colors", "normals"), extra) if a is not None}
+            if dtype is None:
+                dtype = np.dtype([("row", "<i8"), ("pos", "<f8", (3,))] + [
+                    (n, "<i8" if n == "tri" else "<f8", a.shape[1:])
+                    for n, a in fields.items()])
+            rec = np.empty(pos.shape[0], dtype=dtype)
+            rec["row"] = np.arange(s, s + pos.shape[0])
+            rec["pos"] = pos
+            for n, a in fields.items():
+                rec[n] = a
+            tile = tiles.of(pos)
+            order = np.argsort(tile, kind="stable")
+            bounds = np.searchsorted(tile[order], np.arange(-1, n_tiles + 1))
+            for t in np.flatnonzero(np.diff(bounds[1:])):
+                block = rec[order[bounds[t + 1]:bounds[t + 2]]]
+                with open(folder / f"tile-{t}.bin", "ab") as f:
+                    block.tofile(f)
+                counts[t] += block.size
+                lo[t] = np.minimum(lo[t], block["pos"].min(axis=0))
+                hi[t] = np.maximum(hi[t], block["pos"].max(axis=0))
+            if bar is not None:
+                bar.update(pos.shape[0])
+    finally:
+        if bar is not None:
+            bar.close()
+    if dtype is None:  # no rows: nothing is ever read
+        dtype = np.dtype([("row", "<i8"), ("pos", "<f8", (3,))])
+    return TileBuckets(str(folder), reader.kind, reader.n_rows, dtype, lo, hi, counts,
+                       reader.viewpoint, reader.path)
+
+
+@dataclass(frozen=True)
+class TileBuckets:
+    """A large input sorted into one file per tile (:func:`bucket`).
+
+    Small and picklable like :class:`~superfacets.io.regions.RegionReader`, and read the same way
+    (:meth:`read_box`), but a box costs the tiles it overlaps instead of a
+    pass over the whole file.
+
+    Attributes
+    ----------
+    folder : str
+        Where the tiles' files are.
+    kind : {'faces', 'points'}
+    n_rows : int
+        Faces or points in the file.
+    dtype : numpy.dtype
+        The record of one element.
+    lo, hi : (T, 3) float64 ndarray
+        Bounds of each tile's element positions (inf, -inf where empty).
+    counts : (T,) int64 ndarray
+        Elements in each tile.
+    viewpoint : tuple or None
+        Sensor position of a scan, as :class:`~superfacets.io.regions.RegionReader`.
+    source : str
+        The file they came from (for messages).
+    """
+
+    folder: str
+    kind: str
+    n_rows: int
+    dtype: np.dtype
+    lo: np.ndarray
+    hi: np.ndarray
+    counts: np.ndarray
+    viewpoint: tuple | None = None
+    source: str = ""
+
+    def read_box(self, lo, hi, name: str = ""):
+        """The elements whose position lies in ``[lo, hi]``: the same rows, positions
+        and input as :meth:`RegionReader.read_box
+        <superfacets.io.regions.RegionReader.read_box>` gives."""
+        from ...inputs.mesh import Mesh
+
+        lo = np.asarray(lo, dtype=np.float64)
+        hi = np.asarray(hi, dtype=np.float64)
+        parts = []
+        near = (self.counts > 0) & (self.lo <= hi).all(axis=1) & (self.hi >= lo).all(axis=1)
+        for t in np.flatnonzero(near):
+            rec = np.memmap(Path(self.folder) / f"tile-{t}.bin", dtype=self.dtype, mode="r",
+                            shape=(int(self.counts[t]),))
+            pos = rec["pos"]
+            parts.append(np.array(rec[np.flatnonzero(((pos >= lo) & (pos <= hi)).all(axis=1))]))
+            del rec
+        rec = np.concatenate(parts) if parts else np.empty(0, dtype=self.dtype)
+        rec = rec[np.argsort(rec["row"], kind="stable")]
+        rows = np.ascontiguousarray(rec["row"])
+        where = np.ascontiguousarray(rec["pos"])
+        if rows.size == 0:
+            return rows, where, None
+        if self.kind == "faces":
+            tri = rec["tri"]
+            used, first, local = np.unique(tri, return_index=True, return_inverse=True)
+            verts = rec["corners"].reshape(-1, 3)[first]
+            return rows, where, Mesh(np.ascontiguousarray(verts), local.reshape(tri.shape),
+                                     name=name, face_colors=np.ascontiguousarray(rec["colors"])
+                                     if "colors" in self.dtype.names else None)
+        names = self.dtype.names
+        col, nrm = (np.ascontiguousarray(rec[n]) if n in names else None
+                    for n in ("colors", "normals"))
+        return rows, where, point_cloud_of(where.copy(), col, nrm, self.viewpoint, name)

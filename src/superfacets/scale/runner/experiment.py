@@ -1,0 +1,319 @@
+"""Run an experiment: methods x parameters x benchmark meshes, evaluated, resumable.
+
+:func:`run_experiment` runs a grid of configurations (:mod:`.grid`) of
+registered methods (:mod:`superfacets.evaluation.methods`) over benchmark meshes in
+worker processes (:class:`.engine.Engine`: a local Dask cluster, or a
+running one) and appends one tidy row per (mesh, method, parameters,
+``n_segments``) to a CSV file (:mod:`.results`) as results arrive; rerunning
+with the same file skips every row already there, so an interrupted run
+continues where it stopped. A failure on one mesh is recorded as a row with
+its error and does not stop the run; a worker that dies is replaced.
+``superfacets batch`` (:mod:`.batch`) runs on the same engine.
+"""
+
+from __future__ import annotations
+
+import csv
+import time
+from dataclasses import dataclass
+from functools import lru_cache
+from itertools import product
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from ...elements.kinds import kind_of
+from ...errors import ParameterError
+from ...evaluation.methods import Skipped, get_method
+from ...method.params import DEFAULT_N_SEGMENTS
+from .engine import Engine, PeakMemory, error_text
+from .grid import Config
+from .results import columns, fmt_value, prepare_file, row_key
+
+__all__ = ["run_experiment", "ExperimentSummary", "PeakMemory"]
+
+
+@lru_cache(maxsize=2)
+def _load(path: str, seg_paths: tuple):
+    from ...evaluation.datasets.psb import BenchmarkMesh
+
+    bm = BenchmarkMesh(0, "", Path(path), tuple(Path(p) for p in seg_paths))
+    mesh = bm.load()
+    return mesh, bm.ground_truths(mesh.n_faces)
+
+
+@lru_cache(maxsize=2)
+def _prepared(path: str, seg_paths: tuple, elements: str, n_points: int, seed: int):
+    """The input of one element kind, its evaluation graph and ground truths per element.
+
+    Faces: the mesh and its ground truths. Vertices: the mesh, ground truth by
+    area-weighted majority of the incident faces. Points: ``n_points`` sampled
+    uniformly by area (fixed seed), each with its face's ground truth.
+    """
+    from ...elements.inputs import elements_of
+    from ...evaluation.datasets.sampling import sample_points, vertex_ground_truth
+    from ...inputs.cloud import PointCloud
+
+    mesh, gts = _load(path, seg_paths)
+    if elements == "faces":
+        from ...elements import face_graph
+
+        return mesh, face_graph(mesh), None, gts
+    if elements == "vertices":
+        obj = mesh
+        rows = [vertex_ground_truth(mesh, gt) for gt in gts]
+    else:
+        pts, faces = sample_points(mesh, n_points, seed)
+        obj = PointCloud(pts, name=Path(path).name)
+        rows = [gt[faces] for gt in gts]
+    source = elements_of(obj, elements)
+    to_el = _element_values(source)
+    return obj, source.graph, to_el, [to_el(r) for r in rows]
+
+
+def _element_values(source):
+    """Per-row values -> per-element values (the first row of each element)."""
+    first = source.first_rows(np.arange(source.graph.n_elements))
+    return lambda values: np.asarray(values)[first]
+
+
+def _run_task(task: dict) -> list[dict]:
+    """Run one config over a list of n_segments on one mesh; one row each."""
+    from ...evaluation.metrics import evaluate
+
+    base = dict(task["base"])
+    run = task["run"]
+    params = dict(task["params"])
+    rows = []
+    kind = task.get("elements", "faces")
+    try:
+        mesh, gts = _load(task["path"], task["seg_paths"])
+        base["n_faces"] = mesh.n_faces
+        data, graph, to_el, gts = _prepared(task["path"], task["seg_paths"], kind,
+                                            task.get("n_points", 0), task["seed"])
+        base["n_elements"] = graph.n_elements
+        n_rows = graph.n_elements if to_el is None else (
+            kind_of(kind).n_rows(data))
+        extra = {} if task.get("faces_only", True) else {"elements": kind}
+    except Exception as exc:  # noqa: BLE001 - recorded, the run goes on
+        return [dict(base, n_segments=k, status="failed", error=error_text(exc))
+                for k in task["ks"]]
+    cache: dict = {}
+    task_peak = 0.0
+    for k in task["ks"]:
+        row = dict(base, n_segments=k)
+        try:
+            probe = PeakMemory()
+            t0 = time.perf_counter()
+            out = run(data, k, cache=cache, seed=task["seed"], **params, **extra)
+            seconds = time.perf_counter() - t0
+            peak = probe.peak_mib()
+            row["seconds"] = round(seconds + float(out.reused_seconds), 4)
+            if peak is not None:
+                task_peak = max(task_peak, peak)
+                row["peak_mib"] = round(task_peak if out.reused_seconds else peak, 1)
+            labels = np.asarray(out.labels)
+            if labels.shape != (n_rows,):
+                raise RuntimeError(f"method returned {labels.shape} labels for "
+                                   f"{n_rows} {kind}")
+            if to_el is not None:
+                labels = to_el(labels)
+            row.update(status="ok", segments=int(np.unique(labels).size),
+                       iterations=out.n_iter, converged=out.converged,
+                       n_ground_truths=len(gts))
+            if gts:
+                row.update({m: round(v, 6) for m, v in
+                            evaluate(graph, labels, gts, tau=task["tau"],
+                                     equal_weight=kind_of(kind).equal_weight).items()})
+        except Skipped as exc:
+            row.update(status="skipped", error=str(exc)[:500], seconds=None)
+        except Exception as exc:  # noqa: BLE001 - recorded, the run goes on
+            row.update(status="failed", error=error_text(exc), seconds=None)
+        rows.append(row)
+    return rows
+
+
+@dataclass
+class ExperimentSummary:
+    """Counts of one :func:`run_experiment` call.
+
+    Attributes
+    ----------
+    path : pathlib.Path
+        The results file.
+    done_before : int
+        Rows found in the file and skipped.
+    ok, failed, skipped : int
+        Rows written by this call, by status.
+    seconds : float
+        Wall-clock time of this call.
+    interrupted : bool
+    note : str
+        Where the engine chose for the user (no Dask installed: in this process).
+    """
+
+    path: Path
+    done_before: int = 0
+    ok: int = 0
+    failed: int = 0
+    skipped: int = 0
+    seconds: float = 0.0
+    interrupted: bool = False
+    note: str = ""
+
+    @property
+    def written(self) -> int:
+        return self.ok + self.failed + self.skipped
+
+
+def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
+                   n_segments: Sequence[int] = DEFAULT_N_SEGMENTS, *, workers: int | None = None,
+                   tau: float = 0.05, seed: int = 0, retry_failed: bool = False,
+                   progress: bool = True, elements: Sequence[str] = ("faces",),
+                   n_points: int = 20_000, scheduler: str | None = None) -> ExperimentSummary:
+    """Run every config at every ``n_segments`` on every mesh, appending rows.
+
+    Parameters
+    ----------
+    meshes : sequence of BenchmarkMesh
+        Meshes with their ground truths (:func:`superfacets.evaluation.datasets.psb.list_meshes`);
+        a mesh without ground truths gets rows without metrics.
+    configs : sequence of Config
+        From :func:`expand_grid`.
+    results : path
+        CSV file, created if missing, appended to otherwise. Rows already
+        there (same mesh, method, parameters, ``n_segments`` and ``seed``)
+        are not run again.
+    n_segments : sequence of int, default (50, 100, ..., 300)
+    workers : int, optional
+        Worker processes of a local Dask cluster (default: one per core; the
+        ``distributed`` extra); 1 runs in this process. A worker that dies
+        (killed, out of memory, a crash in native code) is replaced; its task
+        runs again elsewhere up to Dask's ``allowed-failures`` times, then
+        its rows are recorded as failed.
+    tau : float, default 0.05
+        Overlap tolerance of the undersegmentation error.
+    seed : int, default 0
+        Passed to every method (for those that draw random numbers).
+    retry_failed : bool, default False
+        Run again the rows recorded as ``failed`` (the new row is appended;
+        :func:`superfacets.evaluation.report.load_results` keeps the last one).
+    progress : bool, default True
+        Show a progress bar (rows) on stderr.
+    elements : sequence of {'faces', 'vertices', 'points'}, default ('faces',)
+        Element kinds to run each method on (where it supports them).
+        Vertices: ground truth by area-weighted majority of the incident
+        faces; points: ``n_points`` sampled uniformly by area (seed ``seed``),
+        each with its face's ground truth; both evaluated with equal weight
+        per element (:func:`superfacets.evaluation.metrics.evaluate`).
+    n_points : int, default 20000
+        Points sampled per mesh for ``'points'``.
+    scheduler : str, optional
+        Address of a running Dask scheduler to run on instead (default:
+        ``DASK_SCHEDULER_ADDRESS`` where set); its workers must see the
+        benchmark's files.
+
+    Returns
+    -------
+    ExperimentSummary
+
+    Raises
+    ------
+    ParameterError
+        On an empty grid, a bad ``n_segments``, ``workers`` or ``tau``.
+    MissingExtraError, SchedulerError
+        Dask needed and missing; a scheduler that cannot be reached.
+    """
+    if not configs:
+        raise ParameterError("no method configuration to run")
+    ks = sorted({int(k) for k in n_segments})
+    if not ks or ks[0] < 1:
+        raise ParameterError(f"n_segments must be positive integers, got {list(n_segments)}")
+    if not (0 <= tau < 1):
+        raise ParameterError(f"tau must be in [0, 1), got {tau}")
+    from ...method.params import check_int, max_threads
+
+    workers = None if workers is None else check_int("workers", workers, lo=1,
+                                                     hi=max_threads())
+    path = Path(results)
+    if path.is_dir():
+        raise IsADirectoryError(f"{path}: is a directory")
+    if not path.parent.is_dir():
+        raise FileNotFoundError(f"{path}: folder {path.parent} does not exist")
+    cols, old = prepare_file(path, columns(configs))
+    done = {row_key(r) for r in old if not (retry_failed and r.get("status") == "failed")}
+
+    from ...method.params import ELEMENTS, check_choice
+
+    kinds = [check_choice("elements", e, ELEMENTS) for e in elements]
+    if not kinds:
+        raise ParameterError("no element kind to run")
+    n_points = check_int("n_points", n_points, lo=1)
+    tasks = []
+    for bm, cfg, kind in product(meshes, configs, kinds):
+        method = get_method(cfg.method)
+        if kind not in method.elements:
+            continue
+        base = {"mesh": Path(bm.path).stem, "mesh_id": bm.id, "category": bm.category,
+                "method": cfg.method, "elements": kind, "seed": seed,
+                **{k: fmt_value(v) for k, v in cfg.params}}
+        todo = [k for k in ks if row_key({**base, "n_segments": k}) not in done]
+        if todo:
+            tasks.append({"base": base, "run": method.run, "params": cfg.params,
+                          "path": str(bm.path), "seg_paths": tuple(str(p) for p in bm.seg_paths),
+                          "ks": todo, "seed": seed, "tau": tau, "elements": kind,
+                          "n_points": n_points, "faces_only": method.elements == ("faces",)})
+    if not any(k in get_method(c.method).elements for c in configs for k in kinds):
+        raise ParameterError(f"no method of the grid segments {', '.join(kinds)}")
+    # the longest tasks first (the mesh's file size x its rows), so that no worker is left
+    # with a large mesh at the end while the others wait; a mesh's tasks stay together
+    tasks.sort(key=lambda t: _file_size(t["path"]) * len(t["ks"]), reverse=True)
+    summary = ExperimentSummary(path, done_before=len(done))
+    total = sum(len(t["ks"]) for t in tasks)
+    t0 = time.perf_counter()
+    bar = None
+    if progress and total:
+        from tqdm import tqdm
+
+        bar = tqdm(total=total, unit="row", desc="experiment", dynamic_ncols=True)
+
+    with open(path, "a", newline="") as f:
+        writer = csv.DictWriter(f, cols, restval="", extrasaction="ignore", lineterminator="\n")
+
+        def record(rows: list[dict]) -> None:
+            for r in rows:
+                writer.writerow({k: fmt_value(v) for k, v in r.items()})
+                setattr(summary, r["status"], getattr(summary, r["status"]) + 1)
+            f.flush()
+            if bar is not None:
+                bar.update(len(rows))
+                bar.set_postfix(failed=summary.failed, skipped=summary.skipped, refresh=False)
+
+        try:
+            with Engine(workers if len(tasks) > 1 else 1, scheduler,
+                        exact_memory=True) as engine:  # rows report peak memory
+                summary.note = engine.note
+                for rows in engine.run(_run_task, tasks, _failed_rows):
+                    record(rows)
+        except KeyboardInterrupt:
+            from ..._runtime import interrupts
+
+            interrupts.caught()  # stopping in order: the rows so far are kept
+            summary.interrupted = True
+        finally:
+            if bar is not None:
+                bar.close()
+    summary.seconds = time.perf_counter() - t0
+    return summary
+
+
+def _file_size(path: str) -> int:
+    try:
+        return Path(path).stat().st_size
+    except OSError:
+        return 0
+
+
+def _failed_rows(task: dict, error: str) -> list[dict]:
+    return [dict(task["base"], n_segments=k, status="failed", error=error) for k in task["ks"]]

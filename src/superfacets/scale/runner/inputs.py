@@ -1,0 +1,178 @@
+"""The inputs of a batch: which files, and what their outputs are called.
+
+:func:`collect_inputs` turns files, folders, globs and ``@list.txt`` into a
+list of files, each once; :func:`output_names` gives each a name under the
+output folder that no other input shares (``superfacets batch``, :mod:`.batch`).
+"""
+
+from __future__ import annotations
+
+import glob
+import hashlib
+import os
+from pathlib import Path
+from typing import Sequence
+
+from ...errors import ParameterError
+
+__all__ = ["collect_inputs", "output_names"]
+
+
+def _readable_suffixes(explicit: bool) -> set[str]:
+    from ...io import CLOUD_FORMATS, MESH_FORMATS
+
+    # in folders, .txt is too often something else (a README) to be read as a cloud
+    return set(MESH_FORMATS) | set(CLOUD_FORMATS) - (set() if explicit else {"txt"})
+
+
+def _is_input(path: Path, explicit: bool) -> bool:
+    from ...io.files import split_suffix
+
+    fmt, _ = split_suffix(path)
+    return fmt in _readable_suffixes(explicit)
+
+
+def collect_inputs(specs: Sequence[str], exclude=None) -> list[Path]:
+    """The files named by ``specs``, absolute, each once, in order.
+
+    Parameters
+    ----------
+    specs : sequence of str
+        Files; folders (searched recursively for every format the readers
+        accept, hidden files and ``.txt`` left out); glob patterns (``**``
+        recurses); ``@list.txt`` (one of these per line, ``#`` comments).
+    exclude : path, optional
+        A folder whose files are never inputs (the output folder).
+
+    Returns
+    -------
+    list of pathlib.Path
+
+    Raises
+    ------
+    FileNotFoundError
+        When a spec matches nothing (a typo is not skipped silently).
+    ParameterError
+        When a folder holds no readable file.
+
+    Examples
+    --------
+    >>> collect_inputs(["/no/such/*.off"])
+    Traceback (most recent call last):
+    ...
+    FileNotFoundError: /no/such/*.off: no file matches
+    """
+    skip = Path(exclude).resolve() if exclude is not None else None
+    out: list[Path] = []
+    seen: set[Path] = set()
+
+    def keep(p: Path) -> None:
+        p = p.resolve()
+        if p in seen or (skip is not None and p.is_relative_to(skip)):
+            return
+        seen.add(p)
+        out.append(p)
+
+    def folder(d: Path) -> int:
+        n = 0
+        for root, dirs, files in os.walk(d, followlinks=True):
+            dirs[:] = sorted(x for x in dirs if not x.startswith("."))
+            for name in sorted(files):
+                if not name.startswith(".") and _is_input(Path(name), explicit=False):
+                    keep(Path(root) / name)
+                    n += 1
+        return n
+
+    def one(spec: str, depth: int = 0) -> None:
+        if spec.startswith("@") and depth == 0:
+            lst = Path(spec[1:])
+            if not lst.is_file():
+                raise FileNotFoundError(f"{lst}: no such list file")
+            for line in lst.read_text(errors="replace").splitlines():
+                line = line.strip()
+                if line and not line.startswith("#"):
+                    one(line, depth + 1)
+            return
+        p = Path(spec).expanduser()
+        if p.is_dir():
+            if folder(p) == 0:
+                raise ParameterError(f"{spec}: no mesh or point-cloud file in this folder")
+        elif p.is_file():
+            keep(p)
+        elif glob.has_magic(spec):
+            hits = sorted(glob.glob(str(p), recursive=True))
+            files = [Path(h) for h in hits if Path(h).is_file() and _is_input(Path(h), True)]
+            for h in hits:
+                if Path(h).is_dir():
+                    folder(Path(h))
+            for f in files:
+                keep(f)
+            if not hits:
+                raise FileNotFoundError(f"{spec}: no file matches")
+        else:
+            raise FileNotFoundError(f"{spec}: no such file or folder")
+
+    for s in specs:
+        one(str(s))
+    return out
+
+
+def _stem(path: Path) -> str:
+    """The file name without its format and compression suffixes (``bunny.tri.xz`` -> bunny)."""
+    from ...io.files import COMPRESSIONS
+
+    name = path.name
+    low = name.lower()
+    for comp in COMPRESSIONS:
+        if low.endswith(comp):
+            name, low = name[: -len(comp)], low[: -len(comp)]
+            break
+    base, dot, _ = name.rpartition(".")
+    return base if dot and base else name
+
+
+def output_names(inputs: Sequence[Path], reserved=()) -> dict[Path, str]:
+    """A name for each input's outputs, relative to the output folder, without suffix.
+
+    The input's path relative to the inputs' common folder, its format
+    suffix dropped (``psb/1.off`` -> ``psb/1``); inputs that would share a
+    name keep their whole file name (``x.off`` -> ``x.off``, ``x.ply`` ->
+    ``x.ply``); a name still taken (by one in ``reserved``, outputs of an
+    earlier run) gets ``~`` and 8 hex digits of the input path's hash.
+
+    Parameters
+    ----------
+    inputs : sequence of pathlib.Path
+        Absolute, distinct.
+    reserved : iterable of str
+        Names not to give.
+
+    Returns
+    -------
+    dict
+        Input -> name (``/`` separated).
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> names = output_names([Path("/d/a/x.off"), Path("/d/b/x.off"), Path("/d/b/x.ply")])
+    >>> sorted(names.values())
+    ['a/x', 'b/x.off', 'b/x.ply']
+    """
+    if not inputs:
+        return {}
+    root = Path(os.path.commonpath([str(p.parent) for p in inputs]))
+    rel = {p: p.relative_to(root) for p in inputs}
+    first = {p: (r.parent / _stem(r)).as_posix() for p, r in rel.items()}
+    count: dict[str, int] = {}
+    for n in first.values():
+        count[n] = count.get(n, 0) + 1
+    names = {p: (n if count[n] == 1 else rel[p].as_posix()) for p, n in first.items()}
+    taken = set(reserved)
+    out = {}
+    for p, n in names.items():
+        if n in taken:
+            n = f"{n}~{hashlib.sha1(str(p).encode()).hexdigest()[:8]}"
+        taken.add(n)
+        out[p] = n
+    return out

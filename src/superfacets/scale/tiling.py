@@ -1,0 +1,436 @@
+"""One input cut into spatial tiles: the work of one tile.
+
+An input too large for one process is cut into axis-aligned tiles
+(:mod:`superfacets.scale.tile_layout`: balanced boxes, or a regular grid);
+each element belongs to the *core* of the tile holding its position, and a
+tile is read with a *halo*: every element within ``halo * window * r`` of its
+core box (:mod:`superfacets.io.regions`). The run then has two phases, each
+one task per tile (:mod:`superfacets.scale.runner.tiles` sends them to Dask):
+
+1. **centers** (:func:`tile_centers`): the method runs on the tile and its
+   halo, with the radius ``r`` of the whole input (so the tile gets its share
+   of the ``k`` superfacets); the centers lying in the core are kept. The
+   halo gives the centers near a tile border the neighbours they would have
+   had in one run. Together the tiles' kept centers are the run's centers,
+   each named by its row in the input.
+   Then (:func:`tile_refine`, ``refine`` rounds) each tile runs the passes
+   again from the gathered centers within reach, so that the centers near a
+   border settle beside their true neighbours, not beside the halo's edge.
+2. **labels** (:func:`tile_labels`): each tile classifies its elements from
+   all the centers within reach (one pass of the paper's bounded expansions,
+   centers in one global order), then makes superfacets connected and, with
+   the clean-up on, re-places their boundaries, as a single run does after
+   its last pass. The labels of the core are kept, named by the center's row.
+
+An expansion reaches elements within ``window * r`` of its center, along
+paths that stay within that ball; so with a halo of ``2 * window * r``
+(``halo = 2``) every core element sees every center that can reach it,
+along every path: its classification is the one the whole input would give
+from the same centers. A superfacet crossing a tile border has
+one name on both sides: tiles are stitched by construction, and no
+superfacet is cut by a border. The connectivity step and the clean-up look
+a superfacet's width beyond an element; the default halo's third
+``window * r`` covers that, and the run counts the elements of each tile's inner halo whose
+label differs from the label their own tile gave them (``disagreements``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from ..elements.inputs import elements_of, features_of
+from ..elements.kinds import kind_of
+from ..errors import ParameterError
+from ..method.classify import make_classifier
+from ..method.expansion import Workspaces
+from ..method.params import DEFAULTS, SegmentParams, superfacet_measure
+from ..method.pipeline import pipeline
+from ..method.stages import build_graph, clean_up, finish, resolve_rules, weigh
+
+__all__ = ["tile_centers", "tile_refine", "tile_labels",
+           "tile_connect", "orientation_reference", "trim_centers", "HALO",
+           "point_areas", "check_tileable"]
+
+#: Default halo, in units of ``window * r``. 3 rather than 2: the classification of
+#: the core is exact from 2, and the clean-up near a border nearly so from 3
+#: (elements labelled differently by two tiles: 1,562 -> 41 over 15 benchmark meshes
+#: at k = 600 in 8 tiles; UE +9.8 % -> +5.8 % against one run; docs/notes/tiles.md).
+HALO = 3.0
+
+
+def point_areas(points: np.ndarray, core: np.ndarray, n_neighbors: int) -> float:
+    """Summed area of the ``core`` points of a tile, as the point graph sizes them
+    (``pi rho^2 / K``, ``rho`` the distance to the ``K``-th distinct neighbour among
+    ``points``); duplicate points count once."""
+    from scipy.spatial import cKDTree
+
+    from ..elements.points import distinct_points
+
+    pts, inverse = distinct_points(points)  # duplicates share a position, so a core
+    is_core = np.zeros(pts.shape[0], dtype=bool)
+    is_core[inverse[core]] = True
+    if not is_core.any():
+        return 0.0
+    k = int(min(n_neighbors, pts.shape[0] - 1))
+    if k < 1:
+        return 0.0
+    dist, _ = cKDTree(pts).query(pts[is_core], k=k + 1, workers=-1)
+    return float((np.pi * dist[:, -1] ** 2 / k).sum())
+
+
+def _valid_rows(inp) -> np.ndarray:
+    from ..inputs.cloud import PointCloud
+
+    if isinstance(inp, PointCloud):
+        return np.asarray(inp.valid)
+    return np.ones(inp.n_faces, dtype=bool)
+
+
+def _diagonal(inp) -> float:
+    """The bounding-box diagonal of a tile's elements, as its element graph has it."""
+    from ..inputs.bounds import column_bounds
+    from ..inputs.cloud import PointCloud
+
+    if isinstance(inp, PointCloud):
+        lo, hi = column_bounds(inp.points[inp.valid])
+        return float(np.linalg.norm(hi - lo))
+    return float(inp.diagonal)
+
+
+def check_tileable(params: SegmentParams, colors: bool = True) -> None:
+    """Refuse the options that read the whole graph, which no tile holds: the merge of
+    small superfacets (``min_elements``), content-sensitive sizes (``density``: the
+    median size; ``roughness``). ``density=None`` (automatic) is 0 in a tiled run. Also
+    ``beta > 0`` on an input without ``colors`` (the survey's).
+
+    Raises
+    ------
+    ParameterError
+        Naming the options, with one line on what to do instead.
+    """
+    whole = [n for n in ("min_elements", "density", "roughness")
+             if getattr(params, n) not in (None, 0, getattr(DEFAULTS, n))]
+    if whole:
+        raise ParameterError(f"{' and '.join(whole)}: not available in a tiled run (where the "
+                             "input fits in memory, segment() takes it)")
+    if params.beta > 0 and not colors:
+        raise ParameterError("beta > 0 needs colours, and this input has none (a tiled run "
+                             "reads the colours of the file, not features=)")
+
+
+def _tile_params(params: SegmentParams, r: float, diagonal: float, tile_diagonal: float
+                 ) -> SegmentParams:
+    """The run's parameters for one tile: the whole input's radius ``r``."""
+    nr = params.neighbor_radius
+    # no automatic density: a tile's spread of sizes is not the whole input's
+    return replace(params, n_segments=None, radius=r / tile_diagonal, progress=False,
+                   density=0.0 if params.density is None else params.density,
+                   neighbor_radius=None if nr is None else nr * diagonal / tile_diagonal)
+
+
+def tile_centers(inp, core: np.ndarray, params: SegmentParams, r: float, diagonal: float,
+                 features=None) -> tuple[np.ndarray, object]:
+    """Phase 1: the method on one tile and its halo; the centers in its core.
+
+    Parameters
+    ----------
+    inp : Mesh or PointCloud
+        The tile with its halo.
+    core : (n_rows,) bool ndarray
+        Which rows of ``inp`` lie in the tile's core.
+    params : SegmentParams
+        The run's (validated) parameters.
+    r : float
+        The whole input's superfacet radius (mesh units).
+    diagonal : float
+        The whole input's bounding-box diagonal (for ``neighbor_radius``).
+    features : (n_rows, d) float ndarray, optional
+
+    Returns
+    -------
+    rows : (c,) int64 ndarray
+        Rows of ``inp`` that are centers of the core.
+    result : SegmentationResult
+        The tile's run.
+    """
+    d = _diagonal(inp)
+    if d <= 0:  # every element of the tile at one position: one superfacet
+        return np.flatnonzero(core & _valid_rows(inp))[:1], None
+    p = _tile_params(params, r, diagonal, d)
+    n = _core_share(inp, core, p, r) if p.init == "farthest" else None
+    result = pipeline(inp, p, features=features, n_centers=n)
+    rows = np.asarray(result.centers, dtype=np.int64)
+    return rows[core[rows]], result
+
+
+def tile_refine(inp, core: np.ndarray, center_rows: np.ndarray, params: SegmentParams,
+                r: float, diagonal: float, features=None) -> np.ndarray:
+    """Phase 1b: the method's passes on one tile from the run's centers within reach;
+    the rows of the centers that end in the core.
+
+    The centers near a tile border came from two tiles' runs, each beside an
+    artificial boundary (its halo's edge); from the gathered centers, every
+    tile sees the true neighbours of its border centers, and the passes
+    (and swaps, with the default method) settle them again.
+    """
+    if _diagonal(inp) <= 0 or len(center_rows) == 0:
+        return np.flatnonzero(core & _valid_rows(inp))[:1]
+    p = _tile_params(params, r, diagonal, _diagonal(inp))
+    src = elements_of(inp, p.elements, n_neighbors=p.n_neighbors,
+                      neighbor_radius=p.neighbor_radius)
+    elem = src.to_rows(np.arange(src.graph.n_elements))[np.asarray(center_rows, np.int64)]
+    elem = elem[elem >= 0]
+    _, first = np.unique(elem, return_index=True)
+    result = pipeline(inp, p, features=features, initial=elem[np.sort(first)])
+    rows = np.asarray(result.centers, dtype=np.int64)
+    return rows[core[rows]]
+
+
+def orientation_reference(sample: np.ndarray, n_neighbors: int, up=None) -> tuple:
+    """Oriented normals of an even sample of a cloud's points, for its tiles.
+
+    Points that carry no normals and no sensor position get PCA normals,
+    oriented by propagation and turned outwards per connected piece
+    (:mod:`superfacets.elements.points`). A tile sees a piece cut by its
+    halo, whose own mean can turn it the other way than the whole cloud
+    does (50M points in 16 tiles: 0.13 % of the points labelled differently
+    by two tiles). So the sample the survey keeps (every ``ceil(n / 2^20)``-th
+    point) is oriented once, here, as one run would, and every tile turns
+    each of its pieces to agree with it (``PointCloud(orient_like=...)``).
+    ``up`` (the input's ``PointCloud.up``; LAS files: z) turns the sample's
+    pieces to agree with that direction instead of outwards.
+
+    Returns
+    -------
+    (positions (R, 3), normals (R, 3)) : tuple of float64 ndarray
+        Empty arrays when the sample is too small for a point graph.
+    """
+    from ..elements.points import point_graph
+    from ..inputs.cloud import PointCloud
+
+    pts = np.asarray(sample, dtype=np.float64)
+    if np.unique(pts, axis=0).shape[0] < 3:
+        return np.zeros((0, 3)), np.zeros((0, 3))
+    g = point_graph(PointCloud(pts, up=up), n_neighbors).graph
+    return np.array(g.positions), np.array(g.normals)
+
+
+def trim_centers(positions: np.ndarray, k: int) -> np.ndarray:
+    """Which of the tiles' centers to keep so that at most ``k`` remain.
+
+    Each tile's core holds its share of ``k`` centers when the passes start,
+    but the passes move centers across tile borders, where two tiles' runs
+    can each keep one: the gathered count runs 0-10 % over ``k`` (measured on
+    benchmark meshes). The most crowded go, one at a time: the center whose
+    nearest other center is closest (the later row on a tie), until ``k``
+    remain.
+
+    Returns
+    -------
+    (c,) bool ndarray
+    """
+    from scipy.spatial import cKDTree
+
+    keep = np.ones(positions.shape[0], dtype=bool)
+    while keep.sum() > k:
+        idx = np.flatnonzero(keep)
+        d, j = cKDTree(positions[idx]).query(positions[idx], 2)
+        d, j = d[:, 1], j[:, 1]
+        excess = int(keep.sum()) - k
+        # a pair counts once: drop the later of each closest pair, closest pairs first
+        order = np.lexsort((-idx, d))
+        gone = np.zeros(idx.size, dtype=bool)
+        for a in order:
+            if excess == 0:
+                break
+            if gone[a] or gone[j[a]]:
+                continue
+            gone[max(a, j[a])] = True
+            excess -= 1
+            if d[a] > d[order[0]] * 4:  # the rest after the neighbours are recomputed
+                break
+        keep[idx[gone]] = False
+    return keep
+
+
+def _core_share(inp, core: np.ndarray, p: SegmentParams, r: float) -> int:
+    """Initial centers of a tile such that its core gets its share of the run's.
+
+    Farthest-point sampling puts extra centers on a boundary, and the halo's
+    outer boundary is an artificial one: with ``A_tile / (pi r^2)`` centers the
+    core would get about 6 % fewer than ``A_core / (pi r^2)`` (measured on
+    benchmark meshes). Sampling is incremental, so the tile takes the
+    shortest run of samples whose centers in the core number the core's share.
+    """
+    from ..method.initialization import farthest_point_centers
+
+    src = elements_of(inp, p.elements, n_neighbors=p.n_neighbors,
+                      neighbor_radius=p.neighbor_radius)
+    g = src.graph
+    of_row = src.to_rows(np.arange(g.n_elements))
+    in_core = np.zeros(g.n_elements, dtype=bool)
+    in_core[of_row[core & (of_row >= 0)]] = True
+    each = superfacet_measure(r, kind_of(g.kind).dim)
+    want = max(1, round(float(g.sizes[in_core].sum()) / each))
+    budget = int(min(g.n_elements, max(2 * round(g.area / each), want) + 16))
+    hits = np.cumsum(in_core[farthest_point_centers(g, budget, every_piece=not p.paper)])
+    return int(min(np.searchsorted(hits, want) + 1, budget))
+
+
+def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
+                diagonal: float, features=None) -> np.ndarray:
+    """Phase 2: labels of one tile from fixed centers.
+
+    Parameters
+    ----------
+    inp : Mesh or PointCloud
+        The tile with its halo.
+    center_rows : (c,) int64 ndarray
+        Rows of ``inp`` holding the centers within reach, in the run's
+        global order (ties of the classification go to the earlier).
+    params, r, diagonal, features
+        As :func:`tile_centers`.
+
+    Returns
+    -------
+    (n_rows,) int64 ndarray
+        The row of the center of each row's superfacet (-1: an invalid
+        point). Superfacets seeded on elements no center reached are named by
+        their seed's row.
+    """
+    d = _diagonal(inp)
+    valid = _valid_rows(inp)
+    if d <= 0:  # one position: the first center within reach, else the first row
+        name = int(center_rows[0]) if len(center_rows) else int(np.flatnonzero(valid)[0])
+        return np.where(valid, name, -1).astype(np.int64)
+    # the whole run's stages (superfacets.method.pipeline) with one classification from the
+    # fixed centers in place of the initialization and the passes
+    src, graph, p = build_graph(inp, _tile_params(params, r, diagonal, d), features)
+    rules = resolve_rules(graph, p, r=r)
+    feats = features_of(src, features) if p.beta > 0 else None
+    w, _ = weigh(graph, replace(rules, split_merge=False), feats)
+    m = graph.n_elements
+    of_row = src.to_rows(np.arange(m))
+    elem = of_row[np.asarray(center_rows, dtype=np.int64)]
+    elem = elem[elem >= 0]
+    _, first = np.unique(elem, return_index=True)  # duplicate points: one center
+    elem = elem[np.sort(first)]
+    centers = np.empty(m, dtype=np.int64)
+    centers[:elem.size] = elem
+    dist = np.empty(m)
+    label = np.empty(m, dtype=np.int32)
+    spaces = Workspaces(m, w, p.n_threads)
+    try:
+        classifier = make_classifier(rules.params.assignment, graph, w, rules.window_r2,
+                                     spaces, replay=False)
+        k, _ = classifier.classify(centers, elem.size, dist, label)
+    finally:
+        spaces.close()
+    labels, kept = finish(graph, label, centers[:k], rules)
+    if rules.cleanup:
+        labels = clean_up(graph, labels, kept, rules, feats)
+    name = src.first_rows(kept)  # each superfacet named by its center's row
+    out = src.to_rows(labels)
+    return np.where(out >= 0, name[np.maximum(out, 0)], -1).astype(np.int64)
+
+
+def tile_connect(inp, labels: np.ndarray, owned: np.ndarray, owned_rows: np.ndarray,
+                 params: SegmentParams) -> np.ndarray | None:
+    """Phase 3 (only after border disagreements): make this tile's superfacets connected.
+
+    Two tiles that label a border element differently can leave a superfacet
+    in pieces once their cores are stitched. A superfacet whose center lies in
+    this tile's core lies well inside its halo, so its pieces are found here
+    as in the whole input; each piece but the one holding the center (else
+    the largest) joins the adjacent superfacet with which it shares the
+    longest border (as :func:`~superfacets.method.connectivity.enforce_connectivity`;
+    a piece touching only other stray pieces waits for them).
+
+    Parameters
+    ----------
+    inp : Mesh or PointCloud
+        The tile with its halo.
+    labels : (n_rows,) int64 ndarray
+        The stitched labels of its rows (names: the centers' rows in the
+        input; -1 for an invalid point).
+    owned : (c,) int64 ndarray
+        The names of the superfacets whose center lies in the core.
+    owned_rows : (c,) int64 ndarray
+        The row of ``inp`` holding each one's center.
+    params : SegmentParams
+
+    Returns
+    -------
+    (n_rows,) int64 ndarray or None
+        The labels with the stray pieces of owned superfacets renamed; None
+        when there is none (the usual case).
+    """
+    from ..method.connectivity import label_components
+
+    src = elements_of(inp, params.elements, n_neighbors=params.n_neighbors,
+                      neighbor_radius=params.neighbor_radius)
+    g = src.graph
+    m = g.n_elements
+    name = np.asarray(labels, dtype=np.int64)[src.first_rows(np.arange(m))]
+    names, dense = np.unique(name, return_inverse=True)
+    piece = label_components(g, dense)
+    n_pieces = int(piece.max()) + 1
+    piece_name = np.empty(n_pieces, dtype=np.int64)
+    piece_name[piece] = name
+    if n_pieces == names.size or not owned.size:
+        return None
+    area = np.bincount(piece, weights=g.sizes, minlength=n_pieces)
+    mine = np.isin(piece_name, owned)
+    stray = mine.copy()
+    main = {}
+    at = src.to_rows(np.arange(m))[np.asarray(owned_rows, dtype=np.int64)]
+    for nm, e in zip(owned.tolist(), at.tolist()):
+        if e >= 0 and name[e] == nm:
+            main[nm] = int(piece[e])
+    for p in np.lexsort((np.arange(n_pieces), -area)).tolist():  # else the largest
+        if mine[p]:
+            main.setdefault(int(piece_name[p]), p)
+    stray[list(main.values())] = False
+    if not stray.any():
+        return None
+    pi, pj = piece[g.pairs[:, 0]], piece[g.pairs[:, 1]]
+    cross = (pi != pj) & (stray[pi] | stray[pj])
+    a = np.concatenate([pi[cross], pj[cross]])
+    b = np.concatenate([pj[cross], pi[cross]])
+    length = np.concatenate([g.lengths[cross], g.lengths[cross]])
+    final = piece_name.copy()
+    waiting = [int(p) for p in np.flatnonzero(stray)[np.argsort(area[stray], kind="stable")]]
+    while waiting:
+        left = []
+        for p in waiting:
+            nb, w = b[a == p], length[a == p]
+            ok = ~stray[nb]
+            if not ok.any():
+                left.append(p)
+                continue
+            border = np.bincount(nb[ok], weights=w[ok], minlength=n_pieces)
+            final[p] = final[int(np.argmax(border))]
+            stray[p] = False
+        if len(left) == len(waiting):  # isolated: keeps its name
+            break
+        waiting = left
+    out = src.to_rows(final[piece])
+    return np.where(out >= 0, out, -1).astype(np.int64)
+
+
+def halo_distance(halo: float, window: float, r: float) -> float:
+    """The halo's width in mesh units (``halo * window * r``).
+
+    Raises
+    ------
+    ParameterError
+        If ``halo < 1`` (the issue's floor: a tile must see at least one
+        expansion's reach) or not finite.
+    """
+    if isinstance(halo, bool) or not isinstance(halo, (int, float)) or not math.isfinite(halo) \
+            or halo < 1.0:
+        raise ParameterError(f"halo must be a number >= 1 (in units of window * r), got {halo!r}")
+    return float(halo) * window * r

@@ -1,0 +1,2 @@
+"""Pictures and pages: the palette, the camera, off-screen renders, the HTML viewer, the
+files of one segmentation."""

@@ -1,0 +1,169 @@
+"""The files of one segmentation: labels, coloured mesh or cloud, picture, page.
+
+:func:`write_result` is what ``superfacets segment`` and ``superfacets
+batch`` write for one input, all or nothing (:class:`~superfacets.io.files.Outputs`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..elements.kinds import kind_of
+from ..io.files import Outputs
+
+__all__ = ["write_result", "result_header", "JoinedResult"]
+
+
+class JoinedResult:
+    """The result of segmenting a scene object by object
+    (:func:`superfacets.api.scenes.segment_objects`), for messages and headers.
+
+    Parameters
+    ----------
+    labels : (m,) int64 ndarray
+    results : list of SegmentationResult
+    """
+
+    def __init__(self, labels, results):
+        self.labels = np.asarray(labels)
+        self.n_segments = int(self.labels.max()) + 1
+        self.n_iter = max(r.n_iter for r in results)
+        self.converged = all(r.converged for r in results)
+        self.params = dict(results[0].params, per_object=True)
+        self.timings = {"total": sum(r.timings["total"] for r in results)}
+
+
+def _object_lines(mesh) -> list[str]:
+    """``object NAME: faces A-B`` lines of a scene (several objects), else none."""
+    if len(getattr(mesh, "objects", ())) < 2:
+        return []
+    return [f"object {name}: faces {a}-{b - 1}" for name, a, b in mesh.objects]
+
+
+def result_header(data, result, source: str) -> dict:
+    """The ``#`` header lines of a ``.seg`` file: what, how many, parameters, time.
+
+    Parameters
+    ----------
+    data : Mesh or PointCloud
+    result : SegmentationResult or JoinedResult
+    source : str
+        The input's name.
+
+    Returns
+    -------
+    dict
+    """
+    p = result.params
+    kind = p.get("elements", "faces")
+    return {
+        "superfacets": f"labels of {source}",
+        kind: kind_of(kind).n_rows(data),
+        "superfacets_count": result.n_segments,
+        "parameters": " ".join(f"{k}={v}" for k, v in p.items()),
+        "iterations": f"{result.n_iter} "
+                      f"({'converged' if result.converged else 'max_iter reached'})",
+        "seconds": f"{result.timings['total']:.3f}",
+    }
+
+
+def write_result(data, result, kind: str, source: str, *, labels=None, header: bool = False,
+                 colored=None, vertex_colors: bool = False, picture=None, html=None,
+                 element_options: dict | None = None, up="y", view=None, graph=None,
+                 levels=None, level_cost: str = "ward",
+                 extent_weight: float | None = None) -> None:
+    """Write the files of one segmentation, all or nothing.
+
+    Parameters
+    ----------
+    data : Mesh or PointCloud
+        What was segmented.
+    result : SegmentationResult or JoinedResult
+    kind : {'faces', 'vertices', 'points'}
+        The elements labelled.
+    source : str
+        The input's file name (headers, titles, the JSON's ``sceneId``).
+    labels : path, optional
+        ``.json``: ScanNet's ``segIndices``; anything else (``-``: standard
+        output): one label per line, with ``#`` header lines where
+        ``header`` is True (and always the objects of a scene).
+    colored : path, optional
+        Coloured mesh (``.ply``, ``.glb``, ``.obj``) or, for vertices and
+        points, coloured PLY.
+    vertex_colors : bool, default False
+        PLY of faces: colours per vertex instead of per face.
+    picture : path, optional
+        PNG (needs the ``render`` extra).
+    html : path, optional
+        Interactive page.
+    element_options : dict, optional
+        ``n_neighbors`` and ``neighbor_radius`` of the point graph (to find the
+        cached elements again).
+    up, view
+        The picture's and the page's camera (:func:`superfacets.viz.camera.view_frame`).
+    graph : path, optional
+        ``.npz`` of the superfacet graph (:meth:`SegmentationResult.graph`: the
+        input's colours as ``feature`` if it has any) and ``labels``; with
+        ``levels``, also the hierarchy (``levels``, ``parent_<i>``) and the
+        per-row labels of each level (``labels_<i>``).
+    levels : sequence of int, optional
+        Numbers of segments of the hierarchy's levels.
+    level_cost : {'ward', 'planarity'}, default 'ward'
+        The hierarchy's merge cost (:func:`superfacets.graph.hierarchy.hierarchy`).
+    extent_weight : float, optional
+        Its ``extent_weight`` with ``'planarity'`` (default: left to the method,
+        :meth:`SegmentationResult.hierarchy`).
+
+    Raises
+    ------
+    OSError, MissingExtraError
+        Nothing is written then.
+    ParameterError
+        If a level is out of range (before anything is written).
+    """
+    from ..io.export import write_colored_elements, write_colored_mesh
+    from ..io.labels import write_labels, write_segindices
+
+    arrays = None
+    if graph is not None:
+        sg = result.graph()
+        arrays = {**sg.arrays(), "labels": result.labels}
+        if levels:
+            h = result.hierarchy(levels, cost=level_cost, extent_weight=extent_weight)
+            arrays.update(h.arrays())
+            for i in range(len(h.levels)):
+                arrays[f"labels_{i}"] = h.labels(i, result.labels)
+    with Outputs() as outputs:
+        if arrays is not None:
+            outputs.write(graph, lambda fh: np.savez_compressed(fh, **arrays))
+        if labels is not None and str(labels).lower().endswith(".json"):
+            write_segindices(labels, result.labels, result.params,
+                             scene_id=source.split(".")[0], outputs=outputs)
+        elif labels is not None:
+            head = result_header(data, result, source) if header else None
+            objects = [] if kind_of(kind).cloud else _object_lines(data)
+            if objects:  # a scene: say which faces are which object
+                head = [f"{k}: {v}" for k, v in (head or {}).items()] + objects
+            write_labels(labels, result.labels, outputs=outputs, header=head)
+        if colored is not None and kind_of(kind).objects:
+            write_colored_mesh(colored, data, result.labels, outputs=outputs,
+                               vertex_colors=vertex_colors)
+        elif colored is not None:
+            from ..elements.inputs import elements_of
+
+            source_el = elements_of(data, kind, **(element_options or {}))  # cached
+            write_colored_elements(colored, source_el, result.labels, outputs=outputs)
+        title = f"{source}: {result.n_segments} {kind_of(kind).segment_word}"
+        drawn = {} if kind_of(kind).cloud else {"elements": kind}  # faces or vertices
+        if html is not None:
+            from .html import write_html
+
+            write_html(html, data, result.labels, title=title, outputs=outputs, up=up,
+                       view=view, **drawn)
+        if picture is not None:
+            from .render import render, render_points
+
+            draw = render_points if kind_of(kind).cloud else render
+            draw(data, result.labels, picture, title=title, outputs=outputs, up=up, view=view,
+                 **drawn)
+

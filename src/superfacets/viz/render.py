@@ -1,0 +1,450 @@
+"""Pictures of segmented meshes: off-screen PNG, side-by-side panels, a viewer window.
+
+Rendering is done by PyVista (VTK). With no X display, VTK renders
+off-screen through EGL (Mesa's software renderer on a machine without a
+GPU), so no display server and no GPU are needed: Debian's ``libegl1`` and
+``libgl1-mesa-dri`` provide it (present on most systems; the Makefile's
+set-up does not need root for it when they are).
+
+Faces are coloured by superfacet (adjacent superfacets always in clearly
+different colours, :func:`superfacets.viz.colors.superfacet_colors`), flat shaded,
+with the superfacet boundaries drawn as dark lines.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from .._runtime.extras import require
+from ..errors import NoDisplayError, ParameterError
+from ..inputs.convert import as_mesh
+from ..method.labels import check_labels
+from ..method.params import check_number
+from .camera import view_frame
+from .colors import boundary_edges
+
+__all__ = ["render", "render_points", "render_panel", "show", "has_display", "NoDisplayError"]
+
+
+def has_display() -> bool:
+    """True when an X or Wayland display is available for a window."""
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
+def _pyvista(off_screen: bool):
+    if off_screen and not has_display():
+        # skip VTK's attempt at an X connection (and its warning): go straight to EGL
+        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+    pv = require("pyvista", "drawing pictures")
+
+    return pv
+
+
+def _polydata(pv, mesh, labels):
+    """The mesh as PolyData cells (triangles or polygons), one colour per cell."""
+    from ..io.export import to_pyvista
+
+    return to_pyvista(mesh, labels)
+
+
+def _boundary_lines(pv, mesh, labels, lift: float):
+    e = boundary_edges(mesh, labels)
+    if e.shape[0] == 0:
+        return None
+    # lift the lines off the surface along the vertex normals so they are not z-fought
+    vn = np.zeros((mesh.n_vertices, 3))
+    fn = mesh.normals * mesh.areas[:, None]
+    np.add.at(vn, mesh.corners, np.repeat(fn, mesh.face_sizes, axis=0))
+    vn /= np.maximum(np.linalg.norm(vn, axis=1, keepdims=True), 1e-300)
+    used, inv = np.unique(e.ravel(), return_inverse=True)
+    pts = mesh.vertices[used] + lift * vn[used]
+    lines = np.empty((e.shape[0], 3), dtype=np.int64)
+    lines[:, 0] = 2
+    lines[:, 1:] = inv.reshape(-1, 2)
+    return pv.PolyData(pts, lines=lines.ravel())
+
+
+def _check_labels(mesh, labels):
+    return None if labels is None else check_labels(labels, mesh.n_faces, per="face")
+
+
+def vertex_regions(mesh, labels) -> tuple:
+    """What a picture of per-vertex labels draws: each face cut into one region per corner.
+
+    Each triangle (polygons: the triangles of their fans) is cut, through its
+    centroid and the midpoints of its edges, into three quads, one at each
+    corner, which take the label of that corner's vertex. A vertex's regions
+    together are the barycentric area it stands for (the size of a vertex
+    element, a third of each incident triangle), so superpoints of vertices are
+    drawn as patches with crisp borders, like superfacets.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    labels : (n,) int ndarray
+        Label of each vertex (-1 for vertices used by no face).
+
+    Returns
+    -------
+    regions : Mesh
+        ``3 t`` quads, ``t`` the triangles of ``mesh.triangulated()``.
+    region_labels : (3 t,) int64 ndarray
+
+    Raises
+    ------
+    ParameterError
+        If ``labels`` is not one integer per vertex.
+
+    Examples
+    --------
+    >>> from superfacets import Mesh
+    >>> regions, lab = vertex_regions(Mesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]]),
+    ...                               [7, 8, 9])
+    >>> regions.n_faces, lab.tolist(), round(float(regions.area), 6)
+    (3, [7, 8, 9], 0.5)
+    """
+    from ..inputs.mesh import Mesh
+
+    labels = check_labels(labels, mesh.n_vertices, per="vertex")
+    tri, _ = mesh.triangulated()
+    tri = np.asarray(tri)
+    t, n = tri.shape[0], mesh.n_vertices
+    v = np.asarray(mesh.vertices)
+    half = np.stack([tri, np.roll(tri, -1, axis=1)], axis=2).reshape(-1, 2)  # (a, b) per corner
+    edges, edge_of = np.unique(np.sort(half, axis=1), axis=0, return_inverse=True)
+    edge_of = edge_of.reshape(t, 3)  # edge (corner i, corner i+1) of each triangle
+    points = np.concatenate([v, 0.5 * (v[edges[:, 0]] + v[edges[:, 1]]), v[tri].mean(axis=1)])
+    mid = n + edge_of
+    center = n + edges.shape[0] + np.arange(t)
+    quads = np.concatenate([np.stack([tri[:, i], mid[:, i], center, mid[:, (i + 2) % 3]], 1)
+                            for i in range(3)])
+    return Mesh(points, quads, name=mesh.name), np.concatenate([labels[tri[:, i]]
+                                                                for i in range(3)])
+
+
+def _add(plotter, pv, mesh, labels, *, boundaries: bool, line_width: float,
+         boundary_color, surface_color):
+    poly = _polydata(pv, mesh, labels)
+    if labels is None:
+        plotter.add_mesh(poly, color=surface_color, smooth_shading=False, lighting=True)
+    else:
+        plotter.add_mesh(poly, scalars="rgb", rgb=True, smooth_shading=False, lighting=True,
+                         show_scalar_bar=False)
+        if boundaries:
+            lines = _boundary_lines(pv, mesh, labels, lift=2e-4 * mesh.diagonal)
+            if lines is not None:
+                plotter.add_mesh(lines, color=boundary_color, line_width=line_width,
+                                 lighting=False)
+
+
+def _place_camera(plotter, mesh, view, zoom: float = 1.0, up="y", margin: float = 0.06,
+                  top_margin: float = 0.0):
+    """Orthographic camera from ``view_frame``, framing the mesh's silhouette tightly."""
+    d, up = view_frame(mesh, view, up=up)
+    v = mesh.vertices[mesh.referenced_vertices]
+    right = np.cross(up, d)
+    x, y = v @ right, v @ up
+    cx, cy = (x.min() + x.max()) / 2, (y.min() + y.max()) / 2
+    half_w, half_h = (x.max() - x.min()) / 2, (y.max() - y.min()) / 2
+    w, h = plotter.window_size if plotter.shape == (1, 1) else _subplot_size(plotter)
+    aspect = w / max(h, 1)
+    scale = max(half_h, half_w / aspect) * (1 + 2 * margin) / max(zoom, 1e-6)
+    scale /= max(1e-6, 1 - top_margin)
+    depth = v @ d
+    center = cx * right + cy * up + ((depth.min() + depth.max()) / 2) * d
+    # shift the frame down a little when a title takes the top
+    center = center + up * scale * top_margin
+    dist = mesh.diagonal * 2 + 1e-12
+    plotter.enable_parallel_projection()
+    plotter.camera_position = [tuple(center + dist * d), tuple(center), tuple(up)]
+    plotter.camera.parallel_scale = scale
+    plotter.reset_camera_clipping_range()
+
+
+def _subplot_size(plotter) -> tuple[int, int]:
+    w, h = plotter.window_size
+    rows, cols = plotter.shape
+    return w / cols, h / rows
+
+
+def _save_png(image: np.ndarray, out, outputs=None) -> Path:
+    Image = require("PIL.Image", "writing PNG pictures")
+
+    from ..io.files import save
+
+    buf = io.BytesIO()
+    Image.fromarray(image).save(buf, format="PNG")
+    return save(Path(out), buf.getvalue(), outputs)
+
+
+def _finish(plotter, out, outputs=None) -> np.ndarray:
+    """Take the picture, close the plotter, write the PNG if asked."""
+    try:
+        image = np.asarray(plotter.screenshot(return_img=True))[:, :, :3].copy()
+    finally:
+        plotter.close()
+    if out is not None:
+        _save_png(image, out, outputs)
+    return image
+
+
+def _check_style(pv, background, boundary_color, line_width, zoom) -> None:
+    """Colours, line width and zoom, checked before anything is drawn."""
+    check_number("line_width", line_width, 0.0, 100.0, lo_open=True)
+    check_number("zoom", zoom, 1e-3, 1e3)
+    for name, color in (("background", background), ("boundary_color", boundary_color)):
+        try:
+            pv.Color(color)
+        except (ValueError, TypeError):
+            raise ParameterError(f"{name}: not a colour: {color!r} (a colour name such as "
+                                 f"'white', or '#rrggbb')") from None
+
+
+def _size(size) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in size)
+    except (TypeError, ValueError):
+        raise ParameterError(f"size must be (width, height), got {size!r}") from None
+    if not (16 <= w <= 8192 and 16 <= h <= 8192):
+        raise ParameterError(f"size must be between 16 and 8192 pixels, got {w}x{h}")
+    return w, h
+
+
+def render(mesh, labels=None, out=None, *, size=(1200, 900), view=None,
+           background="white", boundaries: bool = True, boundary_color="black",
+           line_width: float = 1.0, title: str | None = None, zoom: float = 1.0,
+           up="y", outputs=None, elements: str = "faces") -> np.ndarray:
+    """Render a mesh off-screen, faces coloured by superfacet.
+
+    Parameters
+    ----------
+    mesh : Mesh, trimesh.Trimesh or (vertices, faces)
+    labels : (m,) int ndarray, optional
+        Superfacet of each face (with ``elements='vertices'``: ``(n,)``, the
+        superpoint of each vertex, drawn by :func:`vertex_regions`); without it
+        the mesh is drawn in grey.
+    out : path, optional
+        Write the image here as PNG (atomically).
+    size : (int, int), default (1200, 900)
+        Width and height in pixels.
+    view : str or (3,) float, optional
+        See :func:`superfacets.viz.camera.view_frame` (default automatic).
+    background : color, default 'white'
+        Any colour PyVista accepts (name, hex, RGB).
+    boundaries : bool, default True
+        Draw the superfacet boundaries as lines.
+    boundary_color : color, default 'black'
+    line_width : float, default 1
+        Boundary line width in pixels.
+    title : str, optional
+        Text drawn at the top.
+    zoom : float, default 1
+        Camera zoom factor (> 1 magnifies).
+    up : {'y', 'z', 'x', '-y', '-z', '-x'} or (3,) float, default 'y'
+        The mesh's up direction.
+    outputs : superfacets.io.files.Outputs, optional
+        Stage the PNG there (all or nothing with the others).
+    elements : {'faces', 'vertices'}, default 'faces'
+        What ``labels`` label.
+
+    Returns
+    -------
+    image : (height, width, 3) uint8 ndarray
+
+    Raises
+    ------
+    ParameterError
+        On labels that are not one integer per face (vertex), a bad size, view,
+        up axis, colour, line width or zoom.
+    MissingExtraError
+        Without the ``render`` extra (pyvista, Pillow).
+    """
+    mesh = as_mesh(mesh)
+    mesh, labels = faces_to_draw(mesh, labels, elements)
+    w, h = _size(size)
+    pv = _pyvista(off_screen=True)
+    _check_style(pv, background, boundary_color, line_width, zoom)
+    view_frame(mesh, view, up=up)  # a bad view or up axis fails before any drawing
+    return _picture(pv, (w, h), background, mesh, view, zoom, up, title, out, outputs,
+                    lambda p: _add(p, pv, mesh, labels, boundaries=boundaries,
+                                   line_width=line_width, boundary_color=boundary_color,
+                                   surface_color="lightgrey"))
+
+
+def faces_to_draw(mesh, labels, elements: str):
+    """The mesh and per-face labels a picture draws for labels of ``elements``."""
+    from ..method.params import check_choice
+
+    check_choice("elements", elements, ("faces", "vertices"))
+    if elements == "vertices" and labels is not None:
+        return vertex_regions(mesh, labels)
+    return mesh, _check_labels(mesh, labels)
+
+
+def _picture(pv, size, background, frame, view, zoom, up, title, out, outputs, draw):
+    """One off-screen picture: background, ``draw(plotter)``, camera on ``frame``, title."""
+    w, h = size
+    p = pv.Plotter(off_screen=True, window_size=(w, h))
+    try:
+        p.set_background(background)
+        draw(p)
+        _place_camera(p, frame, view, zoom, up, top_margin=0.08 if title else 0.0)
+        if title:
+            p.add_text(title, position="upper_edge", font_size=max(8, h // 60), color="black")
+    except BaseException:
+        p.close()
+        raise
+    return _finish(p, out, outputs)
+
+
+def render_panel(items: Sequence[tuple], out=None, *, ncols: int | None = None,
+                 size=(600, 500), view=None, background="white", boundaries: bool = True,
+                 line_width: float = 1.0, zoom: float = 1.0, up="y",
+                 outputs=None) -> np.ndarray:
+    """Several renders side by side with titles, like the paper's Figs. 2, 3 and 8.
+
+    Parameters
+    ----------
+    items : sequence of (mesh, labels, title)
+        One panel each; ``labels`` may be None.
+    out : path, optional
+        Write the image here as PNG.
+    ncols : int, optional
+        Panels per row (default: all in one row, at most 4).
+    size : (int, int), default (600, 500)
+        Size of one panel in pixels.
+    view, background, boundaries, line_width, zoom, up
+        As in :func:`render` (every panel of the same mesh is seen from the
+        same camera).
+
+    Returns
+    -------
+    image : (H, W, 3) uint8 ndarray
+
+    Raises
+    ------
+    ParameterError
+        On an empty ``items`` or bad labels/size/view.
+    """
+    if not items:
+        raise ParameterError("no panel to render")
+    n = len(items)
+    ncols = min(n, 4) if ncols is None else max(1, min(int(ncols), n))
+    nrows = -(-n // ncols)
+    w, h = _size(size)
+    pv = _pyvista(off_screen=True)
+    _check_style(pv, background, "black", line_width, zoom)
+    p = pv.Plotter(off_screen=True, shape=(nrows, ncols), window_size=(w * ncols, h * nrows),
+                   border=False)
+    try:
+        p.set_background(background)
+        for i, (mesh, labels, title) in enumerate(items):
+            mesh = as_mesh(mesh)
+            labels = _check_labels(mesh, labels)
+            p.subplot(i // ncols, i % ncols)
+            _add(p, pv, mesh, labels, boundaries=boundaries, line_width=line_width,
+                 boundary_color="black", surface_color="lightgrey")
+            _place_camera(p, mesh, view, zoom, up, top_margin=0.1 if title else 0.0)
+            if title:
+                p.add_text(title, position="upper_edge", font_size=max(8, h // 40),
+                           color="black")
+    except BaseException:
+        p.close()
+        raise
+    return _finish(p, out, outputs)
+
+
+def show(mesh, labels=None, *, title: str | None = None, boundaries: bool = True,
+         view=None, up="y") -> None:  # pragma: no cover - needs a display
+    """Open an interactive window (rotate: drag, zoom: wheel, quit: q).
+
+    Raises
+    ------
+    NoDisplayError
+        If no display is available (``$DISPLAY``/``$WAYLAND_DISPLAY`` unset).
+    """
+    if not has_display():
+        raise NoDisplayError("no display available ($DISPLAY is not set): use "
+                             "'superfacets render' for a PNG or 'superfacets html' for a page "
+                             "to open in a browser")
+    mesh = as_mesh(mesh)
+    labels = _check_labels(mesh, labels)
+    pv = _pyvista(off_screen=False)
+    p = pv.Plotter(title=title or "superfacets")
+    _add(p, pv, mesh, labels, boundaries=boundaries, line_width=1.0, boundary_color="black",
+         surface_color="lightgrey")
+    _place_camera(p, mesh, view, up=up)
+    if title:
+        p.add_text(title, position="upper_edge", font_size=12, color="black")
+    p.set_background("white")
+    p.show()
+
+
+class PointsFrame:
+    """What the camera needs of a point cloud (the attributes it reads of a mesh)."""
+
+    def __init__(self, graph):
+        self.vertices = graph.positions
+        self.referenced_vertices = np.ones(graph.n_elements, dtype=bool)
+        self.diagonal = graph.diagonal
+        self.centroids = graph.positions
+        self.areas = graph.sizes
+        self.area = graph.area
+
+
+def render_points(cloud, labels=None, out=None, *, size=(1200, 900), view=None,
+                  background="white", point_size: float | None = None,
+                  title: str | None = None, zoom: float = 1.0, up="y",
+                  outputs=None) -> np.ndarray:
+    """Render a point cloud off-screen, points coloured by superpoint.
+
+    Parameters
+    ----------
+    cloud : PointCloud or (N, 3) float ndarray
+    labels : (N,) int ndarray, optional
+        Superpoint of each point (-1: invalid, not drawn); grey without.
+    out : path, optional
+        Write the PNG here (atomically).
+    size, view, background, title, zoom, up, outputs
+        As :func:`render`.
+    point_size : float, optional
+        Pixels per point (default: from the point density and the image size).
+
+    Returns
+    -------
+    image : (height, width, 3) uint8 ndarray
+
+    Raises
+    ------
+    ParameterError
+        On labels that are not one per point, a bad size, view, colour or zoom.
+    InvalidCloudError
+        If the cloud is unusable.
+    MissingExtraError
+        Without the ``render`` extra.
+    """
+    from ..elements.inputs import elements_of
+    from ..io.export import point_colors
+
+    source = elements_of(cloud, "points")
+    g = source.graph
+    rgb = point_colors(source, labels)
+    w, h = _size(size)
+    pv = _pyvista(off_screen=True)
+    _check_style(pv, background, "black", 1.0, zoom)
+    frame = PointsFrame(g)
+    view_frame(frame, view, up=up)
+    if point_size is None:  # about one point spacing on screen
+        spacing = np.sqrt(np.percentile(g.sizes, 90))
+        point_size = float(np.clip(1.6 * spacing / g.diagonal * max(w, h) * zoom, 1.0, 12.0))
+    poly = pv.PolyData(np.ascontiguousarray(g.positions))
+    poly["rgb"] = rgb
+    return _picture(pv, (w, h), background, frame, view, zoom, up, title, out, outputs,
+                    lambda p: p.add_mesh(poly, scalars="rgb", rgb=True, point_size=point_size,
+                                         render_points_as_spheres=True,
+                                         show_scalar_bar=False))
