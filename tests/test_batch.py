@@ -383,3 +383,102 @@ def test_batch_says_the_pictures_up_axis(corpus, tmp_path, capsys):
     assert main(["batch", str(corpus / "a" / "m2.off"), "-o", str(tmp_path / "p"), "-k", "8",
                  "-j", "1", "--html", "--up", "z"]) == 0
     assert "pages drawn with up axis z" in capsys.readouterr().out
+
+
+# --- datasets laid out with symbolic links -------------------------------------------
+
+@pytest.fixture
+def linked(tmp_path):
+    """``lnk/`` holding two links to meshes elsewhere, a plain file, a dangling link, a
+    looping pair of links and a link to a folder; ``data/`` the meshes themselves."""
+    data = tmp_path / "data" / "meshes"
+    data.mkdir(parents=True)
+    write_mesh(data / "bunny.off", _blob(1))
+    write_mesh(data / "horse.off", _blob(2))
+    lnk = tmp_path / "lnk"
+    lnk.mkdir()
+    (lnk / "scan_a.off").symlink_to(data / "bunny.off")
+    (lnk / "scan_b.off").symlink_to(data / "horse.off")
+    write_mesh(lnk / "copy_of_a.off", _blob(1))
+    return tmp_path, lnk
+
+
+def test_links_keep_the_names_given(linked):
+    tmp_path, lnk = linked
+    files = collect_inputs([str(lnk)])
+    assert [f.name for f in files] == ["copy_of_a.off", "scan_a.off", "scan_b.off"]
+    assert all(f.parent == lnk for f in files)  # not resolved to data/meshes
+    names = output_names(files)
+    assert sorted(names.values()) == ["copy_of_a", "scan_a", "scan_b"]
+    out = tmp_path / "out"
+    s = run_batch([str(lnk)], out, 20, workers=1, progress=False)
+    assert (s.inputs, s.ok, s.failed) == (3, 3, 0)
+    assert sorted(p.name for p in out.glob("*.seg")) == ["copy_of_a.seg", "scan_a.seg",
+                                                         "scan_b.seg"]
+    rows = read_manifest(out)
+    assert sorted(r["input"] for r in rows) == sorted(str(f) for f in files)
+    # the link and the copy of one mesh: the same labels
+    assert (out / "scan_a.seg").read_text() == (out / "copy_of_a.seg").read_text()
+
+
+def test_several_links_to_one_file_are_several_inputs(linked):
+    tmp_path, _ = linked
+    many = tmp_path / "many"
+    many.mkdir()
+    for i in range(1, 5):
+        (many / f"h{i}.off").symlink_to(tmp_path / "data" / "meshes" / "horse.off")
+    out = tmp_path / "out"
+    s = run_batch([str(many)], out, 20, workers=1, progress=False)
+    assert (s.inputs, s.ok) == (4, 4)
+    assert sorted(p.name for p in out.glob("*.seg")) == [f"h{i}.seg" for i in range(1, 5)]
+
+
+def test_a_dangling_or_looping_link_is_a_failed_row(linked, capsys):
+    tmp_path, lnk = linked
+    (lnk / "gone.off").symlink_to(tmp_path / "nowhere.off")
+    (lnk / "loop1.off").symlink_to(lnk / "loop2.off")
+    (lnk / "loop2.off").symlink_to(lnk / "loop1.off")
+    out = tmp_path / "out"
+    assert main(["batch", str(lnk), "-o", str(out), "-k", "20", "-j", "1"]) == 1
+    captured = capsys.readouterr()
+    assert "batch: 6 inputs: 3 ok, 3 failed" in captured.out
+    assert "gone.off: a symbolic link to" in captured.err and "which does not exist" in captured.err
+    assert "loop1.off: a symbolic link that loops" in captured.err
+    rows = {Path(r["input"]).name: r for r in read_manifest(out)}
+    assert rows["gone.off"]["status"] == "failed" and rows["scan_a.off"]["status"] == "ok"
+    # named directly too
+    s = run_batch([str(lnk / "gone.off")], tmp_path / "out2", 20, workers=1, progress=False)
+    assert (s.inputs, s.failed) == (1, 1) and "does not exist" in s.failures[0][1]
+
+
+def test_links_to_folders_and_folder_loops(linked, capsys):
+    tmp_path, lnk = linked
+    (lnk / "sub").symlink_to(tmp_path / "data")        # a link to a folder: followed
+    (lnk / "back").symlink_to(lnk)                     # a link back to itself: a loop
+    (tmp_path / "data" / "meshes" / "up").symlink_to(tmp_path / "data")  # another loop
+    files = collect_inputs([str(lnk)])
+    assert sorted(f.relative_to(lnk).as_posix() for f in files) == [
+        "copy_of_a.off", "scan_a.off", "scan_b.off", "sub/meshes/bunny.off",
+        "sub/meshes/horse.off"]
+
+
+def test_an_unreadable_folder_is_named(linked, monkeypatch, capsys):
+    tmp_path, lnk = linked
+    real_walk = os.walk
+
+    def walk(top, **kw):  # as root no folder is unreadable: make one say so
+        kw["onerror"](PermissionError(13, "Permission denied", str(lnk / "private")))
+        yield from real_walk(top, **kw)
+
+    monkeypatch.setattr(os, "walk", walk)
+    assert main(["batch", str(lnk), "-o", str(tmp_path / "out"), "-k", "20", "-j", "1"]) == 0
+    captured = capsys.readouterr()
+    assert "batch: 3 inputs: 3 ok" in captured.out
+    assert f"note: {lnk / 'private'}: not read (Permission denied)" in captured.err
+
+
+def test_the_summary_counts_one_input_in_the_singular(linked, capsys):
+    tmp_path, lnk = linked
+    assert main(["batch", str(lnk / "scan_a.off"), "-o", str(tmp_path / "o"), "-k", "20",
+                 "-j", "1"]) == 0
+    assert "batch: 1 input: 1 ok" in capsys.readouterr().out

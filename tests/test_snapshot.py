@@ -12,18 +12,23 @@ import snapshot
 from conftest import SHARED, need
 
 
-def test_labels_equal_the_snapshot(psb):
-    need(SHARED / "data" / "meshes" / "bunny.tri.xz")
-    stored = snapshot.load()
-    sources = snapshot.mesh_sources(SHARED, psb)
+def _same_as_stored(stored: dict, computed, digest, what: str = "superfacets") -> None:
+    """Every run of ``computed`` (key, labels) gives the stored digest, and no run is
+    missing or new."""
     seen, wrong = set(), []
-    for key, labels in snapshot.compute(sources):
+    for key, labels in computed:
         seen.add(key)
         want_digest, want_k = stored[key]
-        if snapshot.digest(labels) != want_digest:
-            wrong.append(f"{key}: {int(labels.max()) + 1} superfacets (snapshot: {want_k})")
+        if digest(labels) != want_digest:
+            wrong.append(f"{key}: {int(labels.max()) + 1} {what} (snapshot: {want_k})")
     assert seen == set(stored), "the set of runs differs from the snapshot's"
     assert not wrong, f"{len(wrong)} of {len(stored)} runs changed:\n" + "\n".join(wrong[:20])
+
+
+def test_labels_equal_the_snapshot(psb):
+    need(SHARED / "data" / "meshes" / "bunny.tri.xz")
+    _same_as_stored(snapshot.load(), snapshot.compute(snapshot.mesh_sources(SHARED, psb)),
+                    snapshot.digest)
 
 
 def test_every_kind_and_stage_equals_its_snapshot():
@@ -32,12 +37,5 @@ def test_every_kind_and_stage_equals_its_snapshot():
     import snapshot_kinds
 
     need(SHARED / "data" / "meshes" / "bunny.tri.xz")
-    stored = snapshot_kinds.load()
-    seen, wrong = set(), []
-    for key, labels in snapshot_kinds.compute(SHARED):
-        seen.add(key)
-        want_digest, want_k = stored[key]
-        if snapshot_kinds.digest(labels) != want_digest:
-            wrong.append(f"{key}: {int(labels.max()) + 1} segments (snapshot: {want_k})")
-    assert seen == set(stored), "the set of runs differs from the snapshot's"
-    assert not wrong, f"{len(wrong)} of {len(stored)} runs changed:\n" + "\n".join(wrong)
+    _same_as_stored(snapshot_kinds.load(), snapshot_kinds.compute(SHARED),
+                    snapshot_kinds.digest, "segments")

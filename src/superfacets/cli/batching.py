@@ -93,7 +93,8 @@ def cmd_batch(args) -> int:
                                                else args.progress), **kwargs)
     if not args.quiet:
         ran = s.ok + s.failed
-        print(f"batch: {s.inputs} inputs: {s.ok} ok, {s.failed} failed, {s.done_before} already "
+        print(f"batch: {_count(s.inputs, 'input')}: {s.ok} ok, {s.failed} failed, "
+              f"{s.done_before} already "
               f"done" + (f", {s.inputs - ran - s.done_before} not run" if s.interrupted else "")
               + (f"; {ran} run {s.engine} in {s.seconds:.1f} s" if ran else "")
               + f" -> {s.manifest}")
@@ -105,11 +106,19 @@ def cmd_batch(args) -> int:
         if len(s.failures) > 10:
             print(f"... and {len(s.failures) - 10} more failed (see the manifest)",
                   file=sys.stderr)
+        for folder, reason in s.skipped:
+            print(f"note: {folder}: not read ({reason}); its files are not inputs",
+                  file=sys.stderr)
         if s.failed_before:
-            print(f"note: {s.failed_before} inputs failed in an earlier run; --retry-failed "
-                  "runs them again", file=sys.stderr)
+            print(f"note: {_count(s.failed_before, 'input')} failed in an earlier run; "
+                  "--retry-failed runs them again", file=sys.stderr)
     if s.interrupted:
         print("superfacets: interrupted: run the same command again to continue",
               file=sys.stderr)
         return 130
     return 1 if s.failed or s.failed_before else 0
+
+
+def _count(n: int, word: str) -> str:
+    """``1 input``, ``2 inputs``."""
+    return f"{n} {word}" + ("" if n == 1 else "s")

@@ -34,7 +34,7 @@ from ..._runtime import interrupts
 from ...elements.kinds import kind_of
 from ...errors import ParameterError
 from .engine import Engine, PeakMemory, error_text
-from .inputs import collect_inputs, output_names
+from .inputs import broken_link_reason, collect_inputs, output_names
 from .manifest import (
     JOURNAL,
     MANIFEST_COLUMNS,
@@ -99,6 +99,9 @@ def _segment_and_write(task: dict, label_rel: str) -> dict:
     outs = task["outputs"]
     opts = dict(task["options"])
     base = Path(task["outdir"]) / task["name"]
+    why = broken_link_reason(task["input"])
+    if why is not None:
+        raise ParameterError(f"{task['input']}: {why}")
     data = read_input(task["input"])
     cloud = not hasattr(data, "faces")
     kind = "points" if cloud else (opts.get("elements") or "faces")
@@ -170,6 +173,8 @@ class BatchSummary:
         Where the tasks ran.
     failures : list of (str, str)
         (input, error) of the inputs that failed in this call.
+    skipped : list of (str, str)
+        (folder, reason) of the sub-folders that could not be read.
     """
 
     manifest: Path
@@ -182,6 +187,7 @@ class BatchSummary:
     interrupted: bool = False
     engine: str = ""
     failures: list = field(default_factory=list)
+    skipped: list = field(default_factory=list)
 
 
 def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
@@ -306,7 +312,9 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         from ..._runtime.extras import require
 
         require("pyvista", "pictures (--picture)")
-    files = collect_inputs(inputs, exclude=outdir if outdir.exists() else None)
+    skipped: list = []
+    files = collect_inputs(inputs, exclude=outdir if outdir.exists() else None,
+                           skipped=skipped)
     if not files:
         raise ParameterError("no input to segment")
     outputs = {"labels": labels, "header": bool(header), "colored": colored_mesh,
@@ -329,8 +337,10 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         with FolderLock(outdir):
             if not known and not check_options(outdir, recorded):
                 record_options(outdir, recorded)
-            return _run(files, outdir, seg_opts, outputs, per_object, level, engine,
-                        retry_failed, progress)
+            summary = _run(files, outdir, seg_opts, outputs, per_object, level, engine,
+                           retry_failed, progress)
+    summary.skipped = skipped
+    return summary
 
 
 def _done(row, retry_failed: bool) -> bool:

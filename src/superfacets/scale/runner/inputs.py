@@ -7,6 +7,7 @@ output folder that no other input shares (``superfacets batch``, :mod:`.batch`).
 
 from __future__ import annotations
 
+import errno
 import glob
 import hashlib
 import os
@@ -15,7 +16,7 @@ from typing import Sequence
 
 from ...errors import ParameterError
 
-__all__ = ["collect_inputs", "output_names"]
+__all__ = ["collect_inputs", "output_names", "broken_link_reason"]
 
 
 def _readable_suffixes(explicit: bool) -> set[str]:
@@ -32,17 +33,27 @@ def _is_input(path: Path, explicit: bool) -> bool:
     return fmt in _readable_suffixes(explicit)
 
 
-def collect_inputs(specs: Sequence[str], exclude=None) -> list[Path]:
-    """The files named by ``specs``, absolute, each once, in order.
+def collect_inputs(specs: Sequence[str], exclude=None, skipped: list | None = None
+                   ) -> list[Path]:
+    """The files named by ``specs``, absolute, each once, in order, as given.
+
+    Paths keep the names the user gave: a symbolic link stays the link (its outputs are
+    named after it, not after its target), ``..`` is folded without resolving links.
+    Several links to one file are several inputs. A link that points nowhere or loops
+    is kept: its task fails with that reason.
 
     Parameters
     ----------
     specs : sequence of str
-        Files; folders (searched recursively for every format the readers
-        accept, hidden files and ``.txt`` left out); glob patterns (``**``
-        recurses); ``@list.txt`` (one of these per line, ``#`` comments).
+        Files; folders (searched recursively, links to folders followed once each, for
+        every format the readers accept, hidden files and ``.txt`` left out); glob
+        patterns (``**`` recurses); ``@list.txt`` (one of these per line, ``#``
+        comments).
     exclude : path, optional
         A folder whose files are never inputs (the output folder).
+    skipped : list, optional
+        Receives ``(folder, reason)`` for each sub-folder that could not be read (its
+        files are not inputs); without it such a folder is skipped silently.
 
     Returns
     -------
@@ -62,20 +73,34 @@ def collect_inputs(specs: Sequence[str], exclude=None) -> list[Path]:
     ...
     FileNotFoundError: /no/such/*.off: no file matches
     """
-    skip = Path(exclude).resolve() if exclude is not None else None
+    skip = _Inside(exclude) if exclude is not None else None
     out: list[Path] = []
     seen: set[Path] = set()
 
     def keep(p: Path) -> None:
-        p = p.resolve()
-        if p in seen or (skip is not None and p.is_relative_to(skip)):
+        p = Path(os.path.abspath(p))  # the name as given: links are not resolved
+        if p in seen or (skip is not None and skip(p)):
             return
         seen.add(p)
         out.append(p)
 
     def folder(d: Path) -> int:
         n = 0
-        for root, dirs, files in os.walk(d, followlinks=True):
+        visited: set[tuple[int, int]] = set()
+
+        def unreadable(err: OSError) -> None:
+            if skipped is not None:
+                skipped.append((str(err.filename or d), err.strerror or str(err)))
+
+        for root, dirs, files in os.walk(d, followlinks=True, onerror=unreadable):
+            try:
+                st = os.stat(root)
+            except OSError:
+                continue
+            if (st.st_dev, st.st_ino) in visited:  # a link back to a folder seen: a loop
+                dirs[:] = []
+                continue
+            visited.add((st.st_dev, st.st_ino))
             dirs[:] = sorted(x for x in dirs if not x.startswith("."))
             for name in sorted(files):
                 if not name.startswith(".") and _is_input(Path(name), explicit=False):
@@ -97,11 +122,12 @@ def collect_inputs(specs: Sequence[str], exclude=None) -> list[Path]:
         if p.is_dir():
             if folder(p) == 0:
                 raise ParameterError(f"{spec}: no mesh or point-cloud file in this folder")
-        elif p.is_file():
+        elif p.is_file() or p.is_symlink():  # a dangling or looping link: its task says so
             keep(p)
         elif glob.has_magic(spec):
             hits = sorted(glob.glob(str(p), recursive=True))
-            files = [Path(h) for h in hits if Path(h).is_file() and _is_input(Path(h), True)]
+            files = [Path(h) for h in hits if (Path(h).is_file() or Path(h).is_symlink())
+                     and not Path(h).is_dir() and _is_input(Path(h), True)]
             for h in hits:
                 if Path(h).is_dir():
                     folder(Path(h))
@@ -115,6 +141,46 @@ def collect_inputs(specs: Sequence[str], exclude=None) -> list[Path]:
     for s in specs:
         one(str(s))
     return out
+
+
+class _Inside:
+    """Whether a path lies in a folder, by its name or by where it leads."""
+
+    def __init__(self, folder) -> None:
+        self.name = Path(os.path.abspath(folder))
+        self.real = Path(os.path.realpath(folder))
+
+    def __call__(self, p: Path) -> bool:
+        if p.is_relative_to(self.name):
+            return True
+        try:
+            return Path(os.path.realpath(p)).is_relative_to(self.real)
+        except (OSError, RuntimeError):  # a looping link leads nowhere
+            return False
+
+
+def broken_link_reason(path) -> str | None:
+    """Why ``path`` cannot be read when it is a symbolic link that points nowhere or loops
+    (None otherwise).
+
+    Examples
+    --------
+    >>> broken_link_reason("/no/such/file") is None
+    True
+    """
+    p = Path(path)
+    if not p.is_symlink() or p.exists():
+        return None
+    try:
+        target = os.readlink(p)
+    except OSError:
+        target = "?"
+    try:
+        os.stat(p)
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            return f"a symbolic link that loops (-> {target})"
+    return f"a symbolic link to {target}, which does not exist"
 
 
 def _stem(path: Path) -> str:
