@@ -295,3 +295,36 @@ def test_a_full_device_as_output_is_named_in_the_error(tmp_path, capsys):
     assert main(["segment", str(mesh), "-k", "1", "-o", "/dev/full"]) == 2
     err = capsys.readouterr().err
     assert "/dev/full" in err and "No space left" in err and "Traceback" not in err
+
+
+def test_non_ascii_and_multiline_names_are_written(tmp_path):
+    """Scenes whose objects are named ``Tür`` (OBJ ``o``, glTF nodes), an accented file
+    name in a ``--header``, an OBJ coloured mesh named so: UTF-8 everywhere; a name with
+    a line break stays on its header line, so the file reads back."""
+    import trimesh
+
+    from superfacets.cli import main
+
+    box = trimesh.creation.box()
+    lines = ["o Tür"] + [f"v {x} {y} {z}" for x, y, z in box.vertices] + [
+        f"f {a + 1} {b + 1} {c + 1}" for a, b, c in box.faces[:6]] + ["o Straße"] + [
+        f"f {a + 1} {b + 1} {c + 1}" for a, b, c in box.faces[6:]]
+    obj = tmp_path / "Küche.obj"
+    obj.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    seg = tmp_path / "Küche.seg"
+    assert main(["segment", str(obj), "-k", "4", "-o", str(seg), "--header",
+                 "--colored-mesh", str(tmp_path / "Küche_sf.obj"), "-q"]) == 0
+    text = seg.read_text(encoding="utf-8")
+    assert "# object Tür: faces 0-5" in text and "Küche.obj" in text
+    assert "mtllib Küche_sf.mtl" in (tmp_path / "Küche_sf.obj").read_text(encoding="utf-8")
+    assert main(["evaluate", str(obj), str(seg), str(seg)]) == 0
+    scene = trimesh.Scene()
+    scene.add_geometry(box, node_name="lid\nevil: 1", geom_name="lid\nevil: 1")
+    scene.add_geometry(trimesh.creation.icosphere(), node_name="ball", geom_name="ball")
+    glb = tmp_path / "scene.glb"
+    scene.export(glb)
+    seg = tmp_path / "scene.seg"
+    assert main(["segment", str(glb), "-k", "6", "-o", str(seg), "-q"]) == 0
+    head = [ln for ln in seg.read_text(encoding="utf-8").splitlines() if ln.startswith("#")]
+    assert len(head) == 2 and all(ln.startswith("# object ") for ln in head)
+    assert main(["evaluate", str(glb), str(seg), str(seg)]) == 0

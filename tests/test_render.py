@@ -292,3 +292,41 @@ def test_render_and_html_read_vertex_label_files(sphere, tmp_path, capsys):
     assert main(["render", str(off), str(short), "-o", str(tmp_path / "x.png")]) == 2
     assert "one label per face or per vertex" in capsys.readouterr().err
     assert not (tmp_path / "x.png").exists()
+
+
+HOSTILE = ('x%BLOBS%%META%%TITLE%</script><script>document.documentElement.setAttribute('
+           '"data-pwned","1")</script><!--<script>Tür "q" &amp;')
+
+
+def test_hostile_names_stay_text_in_the_page(sphere, tmp_path):
+    """A file name holding the template's placeholders, a closing script tag or a comment
+    opener is text: one pass fills the template, each value escaped for its place."""
+    import json
+    import re
+
+    from superfacets.viz.html import html_page
+
+    labels = superfacets(sphere, 8)
+    page = html_page(sphere, labels, title=HOSTILE, info={HOSTILE: HOSTILE})
+    plain = html_page(sphere, labels, title="plain")
+    assert page.count("<script") == plain.count("<script")  # no element was opened
+    assert page.count("</script>") == plain.count("</script>")
+    assert "<!--" not in page.split("<title>")[1]
+    meta = json.loads(re.search(r'<script type="application/json" id="meta">(.*?)</script>',
+                                page, re.S).group(1))
+    assert meta["name"] == HOSTILE and meta["info"] == {HOSTILE: HOSTILE}
+    with pytest.raises(ParameterError, match="background must be a CSS colour"):
+        html_page(sphere, labels, background="red;}</style><script>alert(1)</script>")
+
+
+def test_a_hostile_name_runs_no_script_in_a_browser(sphere, tmp_path):
+    labels = superfacets(sphere, 12)
+    page = write_html(tmp_path / "hostile.html", sphere, labels, title=HOSTILE)
+    exe = _chromium()
+    dom = subprocess.run([exe, "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
+                          f"--user-data-dir={tmp_path / 'profile-dom'}",
+                          "--virtual-time-budget=5000", "--dump-dom", page.as_uri()],
+                         capture_output=True, text=True, timeout=120).stdout
+    assert "<html" in dom and 'data-pwned="1"' not in dom  # the attribute was never set
+    img = _screenshot(page, tmp_path)  # and the viewer still draws the mesh
+    assert _foreground(img[160:320, 240:400]).mean() > 0.9

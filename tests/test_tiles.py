@@ -645,3 +645,18 @@ def test_the_connect_pass_repairs_pieces_left_by_a_thin_halo():
     assert res.disagreements > 0 and res.repaired > 0 and "connect" in res.timings
     pieces = label_components(face_graph(mesh), res.labels)
     assert np.unique(pieces).size == res.n_segments
+
+
+def test_a_work_folder_belongs_to_one_run(tmp_path):
+    """Two tiled runs on one --workdir overwrote each other's tile files (wrong labels,
+    exit 0): the second is refused while the first holds the folder."""
+    from superfacets.scale.runner.manifest import FolderLock
+
+    mesh = _bumpy(3)
+    work = tmp_path / "work"
+    work.mkdir()
+    with FolderLock(work, "held by the test"):
+        with pytest.raises(ParameterError, match="another tiled run is using this work folder"):
+            segment_tiled(mesh, 20, tiles=2, workers=1, workdir=work)
+    res = segment_tiled(mesh, 20, tiles=2, workers=1, workdir=work)  # free again
+    assert res.labels.shape == (mesh.n_faces,) and not (work / ".lock").exists()

@@ -97,21 +97,21 @@ def write_mesh(path, mesh, face_colors: np.ndarray | None = None, *,
     v = mesh.vertices
     if fmt == "off":
         head = f"OFF\n{len(v)} {mesh.n_faces} 0\n"
-        return save(path, (head + _rows(v, "%.17g") + _off_face_lines(mesh)).encode("ascii"),
+        return save(path, (head + _rows(v, "%.17g") + _off_face_lines(mesh)).encode("utf-8"),
                     outputs)
     if fmt == "tri":
         if not mesh.is_triangular:
             raise MeshFormatError(f"{path}: the .tri format holds triangles only; write .off, "
                                   ".ply or .obj for polygons")
         body = f"{len(v)}\n" + _rows(v, "%.17g") + f"{mesh.n_faces}\n" + _rows(mesh.faces, "%d")
-        return save(path, body.encode("ascii"), outputs)
+        return save(path, body.encode("utf-8"), outputs)
     if fmt == "ply":
         return save(path, ply_bytes(v, mesh.corners, mesh.offsets, face_colors=face_colors),
                     outputs)
     if fmt == "obj":
         text = _rows(v, "v %.17g %.17g %.17g") + "".join(
             f"f {' '.join(str(i + 1) for i in poly.tolist())}\n" for poly in mesh.polygons())
-        return save(path, text.encode("ascii"), outputs)
+        return save(path, text.encode("utf-8"), outputs)
     import trimesh  # STL: triangles
 
     tri, _ = mesh.triangulated()
@@ -217,8 +217,8 @@ def write_colored_mesh(path, mesh, labels, *, vertex_colors: bool = False,
     mat = "".join(f"newmtl color{i}\nKd {r / 255:.4f} {g / 255:.4f} {b / 255:.4f}\n"
                   for i, (r, g, b) in enumerate(palette.tolist()))
     with Outputs() if outputs is None else nullcontext(outputs) as out:
-        out.write(path, ("\n".join(lines) + "\n").encode("ascii"))
-        out.write(path.with_name(mtl), mat.encode("ascii"))
+        out.write(path, ("\n".join(lines) + "\n").encode("utf-8"))
+        out.write(path.with_name(mtl), mat.encode("utf-8"))
     return path
 
 

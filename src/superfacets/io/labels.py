@@ -6,6 +6,7 @@ compresses. These are the Princeton benchmark's ground-truth files.
 
 from __future__ import annotations
 
+import unicodedata
 from pathlib import Path
 from typing import Iterable
 
@@ -51,9 +52,16 @@ def write_labels(path, labels, header: dict | Iterable[str] | None = None, *,
     head = ""
     if header:
         items = header.items() if isinstance(header, dict) else ((None, h) for h in header)
-        head = "".join(f"# {k}: {v}\n" if k is not None else f"# {v}\n" for k, v in items)
+        head = "".join(f"# {_one_line(k)}: {_one_line(v)}\n" if k is not None else
+                       f"# {_one_line(v)}\n" for k, v in items)
     body = "\n".join(labels.astype(str).tolist())
-    return save(path, (head + body + ("\n" if labels.size else "")).encode("ascii"), outputs)
+    return save(path, (head + body + ("\n" if labels.size else "")).encode("utf-8"), outputs)
+
+
+def _one_line(value) -> str:
+    """A header value on one line: line breaks and other control characters (a glTF node
+    named with a newline) become spaces, so a name never adds a line to the file."""
+    return "".join(" " if unicodedata.category(c)[0] == "C" else c for c in str(value))
 
 
 def write_segindices(path, labels, params: dict | None = None, scene_id: str = "", *,
@@ -95,7 +103,8 @@ def write_segindices(path, labels, params: dict | None = None, scene_id: str = "
     labels = check_labels(labels, None)
     clean = {k: (v.item() if hasattr(v, "item") else v) for k, v in (params or {}).items()}
     doc = {"params": clean, "sceneId": scene_id, "segIndices": labels.tolist()}
-    return save(path, json.dumps(doc, separators=(",", ":")).encode("ascii") + b"\n", outputs)
+    return save(path, json.dumps(doc, separators=(",", ":"), ensure_ascii=False)
+                .encode("utf-8") + b"\n", outputs)
 
 
 def read_labels(path, n_faces: int | None = None) -> np.ndarray:

@@ -186,15 +186,17 @@ def record_options(outdir: Path, options: dict) -> None:
 
 
 class FolderLock:
-    """An exclusive lock on the output folder (one batch writes it at a time).
+    """An exclusive lock on a folder: a batch's output folder, a tiled run's work folder
+    (one run writes it at a time; another is refused with ``held`` as the reason).
 
     The lock file ``.lock`` is there only while a batch runs: it is removed
     before the lock is let go, and a batch that locked a file already removed
     (another batch just finished) locks the new one instead.
     """
 
-    def __init__(self, outdir: Path) -> None:
-        self.path = outdir / ".lock"
+    def __init__(self, outdir: Path, held: str = "another batch is writing this folder") -> None:
+        self.path = Path(outdir) / ".lock"
+        self.held = held
         self.f = None
 
     def __enter__(self):
@@ -207,8 +209,7 @@ class FolderLock:
                 fcntl.flock(self.f, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except OSError:
                 self.f.close()
-                raise ParameterError(f"{self.path.parent}: another batch is writing this "
-                                     "folder") from None
+                raise ParameterError(f"{self.path.parent}: {self.held}") from None
             try:
                 if os.stat(self.path).st_ino == os.fstat(self.f.fileno()).st_ino:
                     return self

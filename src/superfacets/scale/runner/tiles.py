@@ -42,6 +42,7 @@ from ...errors import ParameterError, SuperfacetsError
 from ...inputs.bounds import check_extent
 from ...method.params import DEFAULTS, resolve, superfacet_size
 from .engine import Engine, PeakMemory, error_text
+from .manifest import FolderLock
 
 __all__ = ["segment_tiled", "TiledResult", "tile_task"]
 
@@ -212,8 +213,11 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
             raise ParameterError(f"{name} must be an integer >= {low}, got {v!r}")
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
-    spill = (tempfile.TemporaryDirectory(prefix="superfacets-tiles-") if workdir is None
-             else contextlib.nullcontext(str(workdir)))
+    if workdir is None:
+        spill = tempfile.TemporaryDirectory(prefix="superfacets-tiles-")
+    else:  # the work folder belongs to this run: another one using it is refused
+        Path(workdir).mkdir(parents=True, exist_ok=True)
+        spill = _locked(Path(workdir))
     with spill as tmp:
         t = time.perf_counter()
         if isinstance(source, RegionReader):  # opened by the caller (its viewpoint, up)
@@ -359,6 +363,13 @@ def _gathered(outs: list, params) -> tuple[np.ndarray, np.ndarray]:
         keep = trim_centers(pos, params.n_segments)
         return rows[keep], pos[keep]
     return rows, pos
+
+
+@contextlib.contextmanager
+def _locked(folder: Path):
+    with FolderLock(folder, "another tiled run is using this work folder (give each run "
+                            "its own --workdir)"):
+        yield str(folder)
 
 
 def _gather(engine: Engine, tasks: list, phase: str, progress: bool) -> list:

@@ -16,6 +16,7 @@ from __future__ import annotations
 import base64
 import html as _html
 import json
+import re
 from importlib import resources
 from pathlib import Path
 
@@ -34,6 +35,30 @@ def _template() -> str:
     files = resources.files(__package__)
     page = files.joinpath("viewer.html").read_text(encoding="utf-8")
     return page.replace("%SCRIPT%", files.joinpath("viewer.js").read_text(encoding="utf-8"))
+
+
+#: A CSS colour as the page may hold it: a name, ``#rgb(a)`` hex, or ``rgb()``-style.
+_COLOUR = re.compile(r"^(#[0-9a-fA-F]{3,8}|[a-zA-Z]{1,30}"
+                     r"|(rgb|rgba|hsl|hsla)\([0-9., %]{1,60}\))$")
+
+
+def _page(title: str, background: str, meta: dict, data: dict) -> str:
+    """The viewer page, its template filled in one pass, each value escaped for where it
+    stands: the title as HTML text, the colour checked as a CSS colour, the metadata as
+    JSON inside a script element (``<``, ``>``, ``&`` as ``\\u`` escapes, so no name can
+    close the element or open a comment), the arrays as base64."""
+    if not isinstance(background, str) or not _COLOUR.match(background.strip()):
+        raise ParameterError(f"background must be a CSS colour (a name, #hex or rgb()), "
+                             f"got {background!r}")
+    meta_json = (json.dumps(meta, ensure_ascii=False).replace("<", "\\u003c")
+                 .replace(">", "\\u003e").replace("&", "\\u0026")
+                 .replace("\u2028", "\\u2028").replace("\u2029", "\\u2029"))
+    blobs = "\n".join(f'<script type="application/octet-stream" id="{k}">{b}</script>'
+                      for k, b in data.items())  # base64: no character to escape
+    values = {"TITLE": _html.escape(title), "BACKGROUND": background.strip(),
+              "META": meta_json, "BLOBS": blobs}
+    return re.sub(r"%(TITLE|BACKGROUND|META|BLOBS)%", lambda m: values[m.group(1)],
+                  _template())
 
 
 def _b64(a: np.ndarray) -> str:
@@ -93,12 +118,7 @@ def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None 
     data = {"vertices": _b64(v), "faces": _b64(faces.astype("<u4")),
             "colors": _b64(face_index.astype(index_dtype)),
             "edges": _b64(np.asarray(edges, dtype="<u4"))}
-    blobs = "\n".join(f'<script type="application/octet-stream" id="{k}">{b}</script>'
-                      for k, b in data.items())
-    return (_template().replace("%TITLE%", _html.escape(f"{name} - superfacets"))
-            .replace("%BACKGROUND%", _html.escape(background))
-            .replace("%META%", json.dumps(meta).replace("</", "<\\/"))
-            .replace("%BLOBS%", blobs))
+    return _page(f"{name} - superfacets", background, meta, data)
 
 
 def _points_page(cloud, labels, *, title, info, background, view, up) -> str:
@@ -130,12 +150,7 @@ def _points_page(cloud, labels, *, title, info, background, view, up) -> str:
     data = {"vertices": _b64(v), "faces": "", "colors": _b64(color_index.ravel()
                                                                  .astype(index_dtype)),
             "edges": ""}
-    blobs = "\n".join(f'<script type="application/octet-stream" id="{k}">{b}</script>'
-                      for k, b in data.items())
-    return (_template().replace("%TITLE%", _html.escape(f"{name} - superpoints"))
-            .replace("%BACKGROUND%", _html.escape(background))
-            .replace("%META%", json.dumps(meta).replace("</", "<\\/"))
-            .replace("%BLOBS%", blobs))
+    return _page(f"{name} - superpoints", background, meta, data)
 
 
 def write_html(path, mesh, labels=None, *, title: str | None = None, info: dict | None = None,
