@@ -482,3 +482,27 @@ def test_the_summary_counts_one_input_in_the_singular(linked, capsys):
     assert main(["batch", str(lnk / "scan_a.off"), "-o", str(tmp_path / "o"), "-k", "20",
                  "-j", "1"]) == 0
     assert "batch: 1 input: 1 ok" in capsys.readouterr().out
+
+
+def test_tetrahedral_meshes_are_collected_from_folders(tmp_path, capsys):
+    """The help says every format segment reads: tetrahedral meshes (.vtu, .msh, ...) are
+    collected from folders and segmented, one label per tetrahedron."""
+    pytest.importorskip("meshio")
+    from scipy.spatial import Delaunay
+
+    from superfacets import TetMesh, write_volume_labels
+
+    p = np.random.default_rng(0).random((300, 3))
+    vol = TetMesh(p, Delaunay(p).simplices)
+    folder = tmp_path / "vols"
+    folder.mkdir()
+    write_volume_labels(folder / "part.vtu", vol, np.zeros(vol.n_tets, dtype=int))
+    files = collect_inputs([str(folder)])
+    assert [f.name for f in files] == ["part.vtu"]
+    out = tmp_path / "out"
+    s = run_batch([str(folder)], out, 5, workers=1, progress=False)
+    assert (s.ok, s.failed) == (1, 0)
+    labels = np.loadtxt(out / "part.seg", dtype=int)
+    assert labels.shape == (vol.n_tets,) and labels.max() + 1 >= 5
+    s = run_batch([str(folder)], tmp_path / "o2", 5, workers=1, progress=False, picture=True)
+    assert s.failed == 1 and "tetrahedral meshes: batch writes their labels" in s.failures[0][1]

@@ -151,3 +151,29 @@ def test_cli_segments_a_volume(tmp_path, capsys):
     assert main(["segment", str(tmp_path / "bad.msh"), "-o", str(tmp_path / "b.seg")]) == 2
     assert "cannot read it as a volume mesh" in capsys.readouterr().err
     assert not (tmp_path / "b.seg").exists()
+
+
+def test_far_unused_vertices_do_not_size_the_superfacets():
+    """A vertex of no tetrahedron (far away) set the bounding box: radius 0.1 gave one
+    superfacet. The box is that of the used vertices, as on meshes."""
+    vol = delaunay_cube(800)
+    far = TetMesh(np.r_[vol.vertices, [[1e3, 1e3, 1e3]]], vol.tets)
+    a, b = segment(vol, radius=0.1), segment(far, radius=0.1)
+    assert a.n_segments == b.n_segments > 10
+    np.testing.assert_array_equal(a.labels, b.labels)
+
+
+def test_the_command_line_says_why_the_count_differs(tmp_path, capsys):
+    pytest.importorskip("meshio")
+    from superfacets import write_volume_labels
+    from superfacets.cli import main
+
+    vol = delaunay_cube(600)  # k = 5 gives 9: regions no window reached
+    path = tmp_path / "cube.vtu"
+    write_volume_labels(path, vol, np.zeros(vol.n_tets, dtype=int))
+    assert main(["segment", str(path), "-k", "5", "-o", str(tmp_path / "c.seg")]) == 0
+    err = capsys.readouterr().err
+    assert segment(vol, 5).n_segments == 9
+    assert "note: 9 superfacets for -k 5" in err and "a larger --window" in err
+    assert main(["segment", str(path), "-k", "9", "-o", str(tmp_path / "c.seg")]) == 0
+    assert "note:" not in capsys.readouterr().err

@@ -316,7 +316,7 @@ def _count_note(args, data, result, kind: str) -> str | None:
     graph = elements_of(data, kind, n_neighbors=args.neighbors,
                         neighbor_radius=args.neighbor_radius).graph  # kept with the input
     pieces = connected_components(graph.to_csr(), directed=False)[0]
-    what = {"faces": "superfacets", "vertices": "superpoints", "points": "superpoints"}[kind]
+    what = kind_of(kind).segment_word
     if pieces >= asked:
         return (f"{result.n_segments} {what} for -k {asked}: the input has {pieces} separate "
                 f"pieces and a region cannot cross from one piece to another, so each piece "

@@ -92,10 +92,11 @@ def _build(mesh) -> ElementGraph:
     spans = np.linalg.norm(c[hi] - c[lo], axis=1)
     geo = np.linalg.norm(c[lo] - mid[grp], axis=1) + np.linalg.norm(mid[grp] - c[hi], axis=1)
     once = count == 1
-    lower, upper = v.min(axis=0), v.max(axis=0)
+    used = v[np.unique(mesh.tets)]  # as meshes: vertices of no tetrahedron do not count
+    lower, upper = used.min(axis=0), used.max(axis=0)
     return ElementGraph(
         kind="cells", positions=np.ascontiguousarray(c), sizes=mesh.volumes,
-        normals=np.zeros((m, 3)), centroid=v[np.unique(mesh.tets)].mean(axis=0),
+        normals=np.zeros((m, 3)), centroid=used.mean(axis=0),
         lower=lower, diagonal=float(np.linalg.norm(upper - lower)),
         pairs=np.stack([lo, hi], axis=1), indptr=indptr, indices=indices,
         dual_edge=dual_edge, lengths=lengths, boundary_elements=owner[starts[once]],

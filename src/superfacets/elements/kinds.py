@@ -102,8 +102,8 @@ class ElementKind:
         The input's attribute that counts the labels of a run (one per face, per
         vertex, per point of the cloud including invalid ones, per tetrahedron).
     segment_word : str
-        What the segments are called in summaries: superfacets (faces), else
-        superpoints.
+        What the segments are called in summaries: superfacets (faces and tetrahedra),
+        superpoints (vertices and points).
     objects : bool
         The elements are what a scene's objects are made of (faces): a run may
         share ``k`` among the objects (``--per-object``), the objects are named
@@ -163,7 +163,7 @@ KINDS = {k.name: k for k in (
     ElementKind("points", "point", coarse_min_per_segment=1000, coarse_per_segment=400,
                 coarse_neighbor_cap=True, auto_density=True, unit_sizes_in_levels=True,
                 neighborhood=True, cloud=True, rows="n_total"),
-    ElementKind("cells", "cell", dim=3, rows="n_tets"),
+    ElementKind("cells", "cell", dim=3, rows="n_tets", segment_word="superfacets"),
 )}
 
 

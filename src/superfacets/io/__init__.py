@@ -10,6 +10,8 @@
 - :mod:`.files`: compression by suffix, :func:`atomic_write` and all-or-nothing outputs.
 """
 
+from pathlib import Path
+
 from .clouds import CLOUD_FORMATS, is_cloud_file, read_cloud
 from .export import to_pyvista, to_trimesh, write_colored_mesh, write_mesh
 from .files import atomic_write
@@ -19,8 +21,9 @@ from .volumes import VOLUME_FORMATS, read_volume, write_volume_labels
 
 
 def read_input(path):
-    """A mesh (:func:`read_mesh`) or a point cloud (:func:`read_cloud`: a cloud format, or a
-    PLY without faces), by the file.
+    """A mesh (:func:`read_mesh`), a point cloud (:func:`read_cloud`: a cloud format, or a
+    PLY without faces) or a tetrahedral mesh (:func:`read_volume`: ``.msh``, ``.vtk``,
+    ``.vtu``, ``.mesh``), by the file.
 
     Parameters
     ----------
@@ -29,7 +32,7 @@ def read_input(path):
 
     Returns
     -------
-    Mesh or PointCloud
+    Mesh, PointCloud or TetMesh
 
     Raises
     ------
@@ -44,6 +47,10 @@ def read_input(path):
     >>> type(read_input("box.ply")).__name__, type(read_input("points.npy")).__name__
     ('Mesh', 'PointCloud')
     """
+    from .files import split_suffix
+
+    if split_suffix(Path(path))[0] in VOLUME_FORMATS:  # .msh, .vtk, .vtu, .mesh
+        return read_volume(path)
     return read_cloud(path) if is_cloud_file(path) else read_mesh(path)
 
 

@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import Sequence
 
 from ..._runtime import interrupts
+from ...elements.inputs import kind_for
 from ...elements.kinds import kind_of
 from ...errors import ParameterError
 from .engine import Engine, PeakMemory, error_text
@@ -103,8 +104,11 @@ def _segment_and_write(task: dict, label_rel: str) -> dict:
     if why is not None:
         raise ParameterError(f"{task['input']}: {why}")
     data = read_input(task["input"])
-    cloud = not hasattr(data, "faces")
-    kind = "points" if cloud else (opts.get("elements") or "faces")
+    kind = kind_for(data, opts.get("elements"))
+    if kind_of(kind).dim == 3 and (outs["colored"] or outs["picture"] or outs["html"]):
+        raise ParameterError("tetrahedral meshes: batch writes their labels; `superfacets "
+                             "segment VOLUME --colored-mesh OUT.vtu --picture OUT.png` "
+                             "writes cell data and a picture cut in half")
     if not kind_of(kind).objects:
         if task["per_object"]:
             raise ParameterError(f"--per-object segments the faces of a scene; not {kind}")

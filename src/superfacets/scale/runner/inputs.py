@@ -20,10 +20,11 @@ __all__ = ["collect_inputs", "output_names", "broken_link_reason"]
 
 
 def _readable_suffixes(explicit: bool) -> set[str]:
-    from ...io import CLOUD_FORMATS, MESH_FORMATS
+    from ...io import CLOUD_FORMATS, MESH_FORMATS, VOLUME_FORMATS
 
     # in folders, .txt is too often something else (a README) to be read as a cloud
-    return set(MESH_FORMATS) | set(CLOUD_FORMATS) - (set() if explicit else {"txt"})
+    return (set(MESH_FORMATS) | set(VOLUME_FORMATS) |
+            set(CLOUD_FORMATS) - (set() if explicit else {"txt"}))
 
 
 def _is_input(path: Path, explicit: bool) -> bool:
