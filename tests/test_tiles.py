@@ -224,9 +224,11 @@ def test_buckets_read_every_box_as_the_file_does(tmp_path, kind):
         reader = RegionReader.open(tmp_path / "m.ply", chunk=333)
     elif kind in ("npy-points", "balanced"):
         pts = np.round(rng.random((4000, 3)), 2)  # many positions exactly on tile edges
-        pts[7] = np.nan
+        pts[7] = np.nan  # an invalid point, as a spilled organized scan holds them
         np.save(tmp_path / "p.npy", pts)
-        reader = RegionReader.open(tmp_path / "p.npy", chunk=333)
+        from dataclasses import replace
+
+        reader = replace(RegionReader.open(tmp_path / "p.npy", chunk=333), invalid_ok=True)
     else:
         from superfacets import PointCloud
 
@@ -414,12 +416,19 @@ def test_every_tile_orients_points_like_the_whole_cloud(tmp_path):
 
 
 def test_tiled_points_with_invalid_rows(tmp_path):
+    """An organized scan's holes are invalid points (-1) in tiles as in a whole run; a
+    ``.npy`` file with NaN rows is refused, as a whole run refuses it."""
+    from superfacets.inputs.cloud import InvalidCloudError
+
     mesh = trimesh.creation.icosphere(4)
     pts, _ = trimesh.sample.sample_surface_even(mesh, 6000, seed=0)
     pts = np.asarray(pts, dtype=np.float64)
     pts[[3, 77]] = np.nan
     np.save(tmp_path / "c.npy", pts)
-    res = segment_tiled(tmp_path / "c.npy", 40, tiles=4)
+    with pytest.raises(InvalidCloudError, match="point 3 has a non-finite coordinate"):
+        segment_tiled(tmp_path / "c.npy", 40, tiles=4)
+    organized = pts[: pts.shape[0] // 100 * 100].reshape(-1, 100, 3)
+    res = segment_tiled(organized, 40, tiles=4)
     assert res.labels[3] == res.labels[77] == -1
     ok = res.labels >= 0
     assert ok.sum() == pts.shape[0] - 2 and res.labels[ok].max() + 1 == res.n_segments
@@ -512,8 +521,13 @@ def test_a_tiled_run_on_dask_starts_quietly_beside_another_cluster(tmp_path, rec
     assert not [w for w in recwarn if "already in use" in str(w.message)]
 
 
-def test_tiny_tiles_of_one_point_each():
+def test_tiny_tiles_of_one_point_each(monkeypatch):
+    from superfacets.scale import tile_layout
+
     pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.]])
+    with pytest.raises(ParameterError, match="elements per tile"):  # refused by default
+        segment_tiled(pts, None, radius=0.3, tiles=(2, 2, 1), n_neighbors=2)
+    monkeypatch.setattr(tile_layout, "MIN_PER_TILE", 0)  # the machinery, on tiny tiles
     res = segment_tiled(pts, None, radius=0.3, tiles=(2, 2, 1), n_neighbors=2)
     np.testing.assert_array_equal(np.sort(res.labels), [0, 1, 2])
     with pytest.raises(ParameterError, match="too few or too sparse"):
@@ -660,3 +674,35 @@ def test_a_work_folder_belongs_to_one_run(tmp_path):
             segment_tiled(mesh, 20, tiles=2, workers=1, workdir=work)
     res = segment_tiled(mesh, 20, tiles=2, workers=1, workdir=work)  # free again
     assert res.labels.shape == (mesh.n_faces,) and not (work / ".lock").exists()
+
+
+def test_tiled_runs_refuse_what_whole_runs_refuse(tmp_path):
+    """NaN coordinates (a mesh, a .npy cloud) gave -1 labels and exit 0 in tiles; a tile
+    count that leaves a handful of elements per tile never ended."""
+    from superfacets.errors import InvalidMeshError
+    from superfacets.inputs.cloud import InvalidCloudError
+
+    mesh = _bumpy(3)
+    v = mesh.vertices.copy()
+    v[5] = np.nan
+    with pytest.raises(InvalidMeshError, match="NaN"):
+        segment(Mesh(v, mesh.faces), 20)  # the whole run
+    with pytest.raises(InvalidMeshError, match="NaN"):
+        segment_tiled(Mesh(v, mesh.faces), 20, tiles=2, workers=1)
+    path = tmp_path / "m.ply"
+    _write_ply_mesh(path, v, mesh.faces)
+    with pytest.raises(InvalidMeshError, match="non-finite"):
+        segment_tiled(path, 20, tiles=2, workers=1)
+    pts = np.random.default_rng(0).random((3000, 3))
+    pts[7] = np.nan
+    np.save(tmp_path / "p.npy", pts)
+    with pytest.raises(InvalidCloudError, match="point 7 has a non-finite coordinate"):
+        segment_tiled(str(tmp_path / "p.npy"), 20, tiles=2, workers=1)
+    organized = np.random.default_rng(1).random((60, 50, 3))
+    organized[:3] = np.nan  # an organized scan's holes stay invalid points (-1)
+    res = segment_tiled(organized, 20, tiles=2, workers=1)
+    assert (res.labels.reshape(-1)[:150] == -1).all() and (res.labels[150:] >= 0).all()
+    with pytest.raises(ParameterError, match="elements per tile of this input"):
+        segment_tiled(mesh, 20, tiles=10000, workers=1)
+    with pytest.raises(ParameterError, match="give at most 25 tiles"):
+        segment_tiled(mesh, 20, tiles=(8, 8, 1), workers=1)

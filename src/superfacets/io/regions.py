@@ -102,6 +102,9 @@ class RegionReader:
     #: the divisor of the file's integer point colours, decided by the survey for the
     #: whole file (:func:`superfacets.inputs.rgb.color_top`); None: each chunk's own
     color_top: float | None = None
+    #: rows without a finite position are invalid points (an organized scan's holes, -1
+    #: labels) rather than damage; only a spilled cloud that had such points says so
+    invalid_ok: bool = False
 
     # ------------------------------------------------------------------ opening
     @classmethod
@@ -179,7 +182,9 @@ class RegionReader:
             vp = None if obj.viewpoint is None else tuple(float(x) for x in obj.viewpoint)
             up = getattr(obj, "up", None)
             return cls(str(folder), "points", "npy-points", int(pts.shape[0]), chunk, vp,
-                       None if up is None else tuple(float(x) for x in up))
+                       None if up is None else tuple(float(x) for x in up),
+                       invalid_ok=not bool(obj.valid.all()))
+        obj.check_usable()  # the whole run's checks (NaN coordinates, extent, ...)
         faces = obj.faces
         if faces.ndim != 2 or faces.shape[1] != 3:
             raise MeshFormatError(f"{obj.name or 'mesh'}: a tiled run takes triangle meshes "
@@ -233,6 +238,8 @@ class RegionReader:
             normals = normals or (self.kind == "points" and extra[1] is not None)
             colors = colors or extra[-1 if self.kind == "faces" else 0] is not None
             ok = np.isfinite(pos).all(axis=1)
+            if not self.invalid_ok and not ok.all():
+                self._non_finite(start + int(np.flatnonzero(~ok)[0]))
             if ok.any():
                 lo = np.minimum(lo, pos[ok].min(axis=0))
                 hi = np.maximum(hi, pos[ok].max(axis=0))
@@ -247,6 +254,17 @@ class RegionReader:
         top = color_top(stats["itemsize"], stats["largest"]) if stats else None
         return Survey(lo, hi, size, n, np.concatenate(kept).astype(np.float64), normals, colors,
                       top)
+
+    def _non_finite(self, row: int):
+        """Refuse a row without a finite position, as a whole run refuses it."""
+        from ..errors import InvalidMeshError
+        from ..inputs.cloud import InvalidCloudError
+
+        if self.kind == "faces":
+            raise InvalidMeshError(f"{self.path}: face {row} has a vertex with a non-finite "
+                                   "coordinate (NaN or inf)")
+        raise InvalidCloudError(f"{self.path}: point {row} has a non-finite coordinate (NaN "
+                                "or inf)")
 
     def read_box(self, lo, hi, name: str = ""):
         """The elements whose position lies in ``[lo, hi]``, as an input of their own.

@@ -241,6 +241,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         if check_extent(survey.lo, survey.hi, f"{reader.path}: ",
                         "cloud" if reader.kind == "points" else "mesh") == 0:
             raise ParameterError("the input has zero extent: nothing to tile")
+        check_tiles(tiles, survey.n_elements)  # a handful of elements per tile: refused
         diagonal = float(np.linalg.norm(survey.hi - survey.lo))
         # one more pass sorts the elements into a file per tile, so that a task reads the
         # tiles its box overlaps, not the whole file; without a folder the workers share
