@@ -328,3 +328,44 @@ def test_non_ascii_and_multiline_names_are_written(tmp_path):
     head = [ln for ln in seg.read_text(encoding="utf-8").splitlines() if ln.startswith("#")]
     assert len(head) == 2 and all(ln.startswith("# object ") for ln in head)
     assert main(["evaluate", str(glb), str(seg), str(seg)]) == 0
+
+
+@pytest.mark.parametrize("version", ["1.2", "1.4"])
+def test_las_record_level_damage_is_refused_by_both_readers(tmp_path, version):
+    """A file truncated at a record boundary, a point count larger than the data, a wrong
+    point record length: a whole run read fewer or garbage points and exited 0, the tiled
+    reader refused them. One check now serves both."""
+    import struct
+
+    laspy = pytest.importorskip("laspy")
+    from superfacets import read_cloud
+    from superfacets.errors import MeshFormatError
+    from superfacets.io.regions import RegionReader
+
+    header = laspy.LasHeader(point_format=3, version=version)
+    header.scales = [0.001] * 3
+    las = laspy.LasData(header)
+    pts = np.random.default_rng(0).random((500, 3))
+    las.x, las.y, las.z = pts.T
+    good = tmp_path / "good.las"
+    las.write(good)
+    data = good.read_bytes()
+    start = struct.unpack_from("<I", data, 96)[0]
+    length = struct.unpack_from("<H", data, 105)[0]
+    assert read_cloud(good).n_points == 500
+    damaged = {
+        "cut": data[:start + 400 * length],  # at a record boundary
+        "count": data[:107] + struct.pack("<I", 600) + data[111:],
+        "record": data[:105] + struct.pack("<H", length - 2) + data[107:],
+        "short-record": data[:105] + struct.pack("<H", 20) + data[107:],
+    }
+    if version == "1.4":  # the 64-bit count is the one 1.4 readers use
+        damaged["count"] = (data[:107] + struct.pack("<I", 0) + data[111:247] +
+                            struct.pack("<Q", 600) + data[255:])
+    for name, blob in damaged.items():
+        path = tmp_path / f"{name}.las"
+        path.write_bytes(blob)
+        with pytest.raises(MeshFormatError, match="damaged LAS file"):
+            read_cloud(path)
+        with pytest.raises(MeshFormatError, match="damaged LAS file"):
+            RegionReader.open(path)

@@ -491,12 +491,13 @@ def test_damaged_and_unusable_inputs_of_a_tiled_run_get_clear_errors(tmp_path):
     las.x, las.y, las.z = pts.T
     las.write(tmp_path / "whole.las")
     (tmp_path / "cut.las").write_bytes((tmp_path / "whole.las").read_bytes()[:-30])
-    with pytest.raises(MeshFormatError, match="cut.las: cannot read the points after row 0 "
-                                              r"\(damaged or truncated file\?\)"):
+    # one check of the header against the data, before either reader reads a point
+    with pytest.raises(MeshFormatError, match=r"cut.las: damaged LAS file: the header "
+                                              r"declares 300 points, the file holds 298"):
         segment_tiled(tmp_path / "cut.las", 5, tiles=2)
     from superfacets import read_cloud
 
-    with pytest.raises(MeshFormatError, match=r"damaged or truncated file\?"):
+    with pytest.raises(MeshFormatError, match=r"declares 300 points, the file holds 298"):
         read_cloud(tmp_path / "cut.las")
 
 

@@ -130,10 +130,10 @@ class RegionReader:
             return cls(str(p), "points", "ply-points", int(ply["vertex"].count), chunk)
         if suffix in ("las", "laz"):
             from .._runtime.extras import require
-            from .clouds import check_laz
+            from .clouds import check_las
 
             laspy = require("laspy", "reading LAS/LAZ files")
-            check_laz(p)
+            check_las(p)
             try:
                 with laspy.open(p) as f:
                     n = int(f.header.point_count)
