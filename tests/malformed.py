@@ -180,10 +180,13 @@ def cases() -> list[Case]:
     mesh_case("ply-empty", "m.ply", b"", "empty file")
     mesh_case("ply-header-only", "m.ply", ply[:ply.index(b"end_header") + 11], "")
     mesh_case("ply-truncated-body", "m.ply", ply[:len(ply) // 2], "")
+    mesh_case("ply-billions-declared", "m.ply",  # refused from the header, nothing read
+              ply.replace(b"element face ", b"element face 4000000000 ", 1)
+              if b"element face " in ply else ply, "")
     mesh_case("ply-ascii-faces-missing", "m.ply",  # the header declares a face, none follows
               b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
               b"property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
-              b"end_header\n0 0 0\n1 0 0\n", "early end-of-file")
+              b"end_header\n0 0 0\n1 0 0\n", "declares 3 vertex, 1 face")
     mesh_case("ply-garbage", "m.ply", b"ply\nformat nonsense 1.0\nend_header\n", "")
     mesh_case("ply-huge-count", "m.ply",
               ply.replace(b"element vertex 121", b"element vertex 999999999999"), "")

@@ -369,3 +369,58 @@ def test_las_record_level_damage_is_refused_by_both_readers(tmp_path, version):
             read_cloud(path)
         with pytest.raises(MeshFormatError, match="damaged LAS file"):
             RegionReader.open(path)
+
+
+def test_headers_that_claim_more_than_the_file_are_refused_unread(tmp_path):
+    """A PLY header declaring billions of elements ended in a MemoryError traceback; the
+    data after the header is checked against what it declares, before reading."""
+    import trimesh
+
+    from superfacets import read_cloud
+    from superfacets.errors import MeshFormatError
+    from superfacets.io.headers import header_counts
+
+    good = tmp_path / "good.ply"
+    trimesh.creation.icosphere(subdivisions=2).export(good)
+    assert header_counts(good) == {"vertices": 162, "faces": 320}
+    data = good.read_bytes()
+    huge = tmp_path / "huge.ply"
+    huge.write_bytes(data.replace(b"element face 320", b"element face 3000000000"))
+    with pytest.raises(MeshFormatError, match="declares 162 vertex, 3,000,000,000 face"):
+        read_mesh(huge)
+    pts = tmp_path / "pts.ply"
+    trimesh.PointCloud(np.random.default_rng(0).random((100, 3))).export(pts)
+    pts.write_bytes(pts.read_bytes().replace(b"element vertex 100", b"element vertex 9999"))
+    with pytest.raises(MeshFormatError, match="damaged PLY file"):
+        read_cloud(pts)
+
+
+def test_a_run_that_would_not_fit_is_refused_in_one_line(tmp_path, monkeypatch, capsys):
+    """Under a memory limit a large mesh ended in a MemoryError traceback: the run's peak
+    is estimated from the header (the command line) or the element count (the API)."""
+    import trimesh
+
+    from superfacets import MemoryLimitError, segment
+    from superfacets._runtime import memory
+    from superfacets.cli import main
+
+    mesh = trimesh.creation.icosphere(subdivisions=4)  # 5,120 faces
+    path = tmp_path / "ball.ply"
+    mesh.export(path)
+    monkeypatch.setattr(memory, "available_bytes", lambda: 1_000_000)  # 1 MB left
+    with pytest.raises(MemoryLimitError, match=r"5,120 faces need about .* GiB .* tiles"):
+        segment(mesh, 10)
+    assert main(["segment", str(path), "-k", "10", "-o", str(tmp_path / "b.seg")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "superfacets: error:" in err and "--tiles" in err
+    assert not (tmp_path / "b.seg").exists()
+    monkeypatch.setattr(memory, "available_bytes", lambda: None)
+
+    def oom(*args, **kwargs):
+        raise MemoryError
+
+    import superfacets.api.segmentation as api
+
+    monkeypatch.setattr(api, "pipeline", oom)  # what no estimate foresaw
+    assert main(["segment", str(path), "-k", "10", "-o", str(tmp_path / "b.seg")]) == 2
+    assert "superfacets: error: out of memory" in capsys.readouterr().err

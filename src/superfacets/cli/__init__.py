@@ -116,6 +116,11 @@ def main(argv: list[str] | None = None) -> int:
             msg = f"{exc.filename}: {exc.strerror or msg}"
         print(f"superfacets: error: {msg}", file=sys.stderr)
         return 2
+    except MemoryError:  # what no estimate foresaw: one line, not a traceback
+        print("superfacets: error: out of memory: the input needs more memory than this "
+              "process may use; segment it in tiles (--tiles N) or on a larger machine",
+              file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print("superfacets: interrupted", file=sys.stderr)
         return 130

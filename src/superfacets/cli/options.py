@@ -387,6 +387,26 @@ def named_after(path, exc: Exception) -> Exception:
     return type(exc)(f"{path}: {message}")
 
 
+def check_header(path) -> None:
+    """Before a file is read: refuse a header that declares more than the file holds, or
+    elements whose run would not fit in what this process may use (one line, not a
+    ``MemoryError`` after minutes of reading).
+
+    Raises
+    ------
+    MeshFormatError, MemoryLimitError
+    """
+    from .._runtime.memory import check_memory
+    from ..elements.kinds import kind_of
+    from ..io.headers import header_counts
+
+    counts = header_counts(path)
+    for kind in ("faces", "points"):
+        if counts and counts.get(kind):
+            check_memory(counts[kind], kind_of(kind).peak_bytes,
+                         f"{path}: {counts[kind]:,} {kind}")
+
+
 def read_usable(path, *, clouds: bool = False):
     """Read the input of a command and refuse, in one line, what no command can handle.
 
@@ -404,6 +424,7 @@ def read_usable(path, *, clouds: bool = False):
     from ..errors import SuperfacetsError
     from ..io import read_input, read_mesh
 
+    check_header(path)
     data = read_input(path) if clouds else read_mesh(path)
     try:
         data.check_usable()

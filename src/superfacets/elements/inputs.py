@@ -330,8 +330,14 @@ def prepared(obj, elements: str | None = None, *, n_segments: int | None = None)
     kind = kind_for(obj, elements)
     builder = BUILDERS[kind]
     data = builder.prepare(obj)
+    n = builder.count(data)
     if n_segments is not None:  # before the graph, the memory peak of a run
-        check_n_segments(n_segments, builder.count(data), kind)
+        check_n_segments(n_segments, n, kind)
+    from .._runtime.memory import check_memory
+    from .kinds import kind_of
+
+    check_memory(n, kind_of(kind).peak_bytes,
+                 f"{getattr(data, 'name', '') or 'the input'}: {n:,} {kind}")
     return kind, data
 
 

@@ -104,6 +104,12 @@ class ElementKind:
     segment_word : str
         What the segments are called in summaries: superfacets (faces and tetrahedra),
         superpoints (vertices and points).
+    peak_bytes : int
+        A run's peak memory per element with the defaults, the interpreter included
+        (faces: 426 bytes measured on 6.8M faces; points: 739-757 on 2M points;
+        ``benchmarks/scale.py``, ``benchmarks/superpoints.py``); a run whose estimate
+        exceeds what the process may use is refused before its graph is built
+        (:func:`superfacets._runtime.memory.check_memory`).
     objects : bool
         The elements are what a scene's objects are made of (faces): a run may
         share ``k`` among the objects (``--per-object``), the objects are named
@@ -133,6 +139,7 @@ class ElementKind:
     rows: str = "n_faces"
     segment_word: str = "superpoints"
     objects: bool = False
+    peak_bytes: int = 450
 
     def n_rows(self, data) -> int:
         """Number of labels a run on ``data`` (a mesh, cloud or tetrahedral mesh) returns.
@@ -162,7 +169,7 @@ KINDS = {k.name: k for k in (
                 rows="n_vertices"),
     ElementKind("points", "point", coarse_min_per_segment=1000, coarse_per_segment=400,
                 coarse_neighbor_cap=True, auto_density=True, unit_sizes_in_levels=True,
-                neighborhood=True, cloud=True, rows="n_total"),
+                neighborhood=True, cloud=True, rows="n_total", peak_bytes=800),
     ElementKind("cells", "cell", dim=3, rows="n_tets", segment_word="superfacets"),
 )}
 

@@ -122,6 +122,9 @@ def read_cloud(path, format: str | None = None):
     elif fmt in ("las", "laz"):
         kw = _read_las(path)
     else:
+        from .headers import header_counts
+
+        header_counts(path)  # a header declaring more than the file holds: refused unread
         data = read_bytes(path, comp)
         if fmt == "ply":
             kw = _read_ply(data, path)

@@ -20,6 +20,7 @@ import numpy as np
 from ..errors import InvalidMeshError, MeshFormatError
 from ..inputs.mesh import Mesh
 from .files import read_bytes, split_suffix, text_lines
+from .headers import header_counts
 
 __all__ = ["read_mesh", "MESH_FORMATS"]
 
@@ -84,6 +85,7 @@ def read_mesh(path, format: str | None = None) -> Mesh:
         raise FileNotFoundError(f"{path}: no such file")
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a directory")
+    header_counts(path)  # a header declaring more than the file holds: refused unread
     data = read_bytes(path, comp)
     objects, colors, face_colors = (), None, None
     if fmt == "off":

@@ -1,0 +1,81 @@
+"""Memory a run will need, estimated before it is spent, against what the process may use.
+
+A run's peak grows with its elements (the element graph is the peak: about 430 bytes per
+face and 750 per point with the defaults, measured with ``benchmarks/scale.py`` and
+``benchmarks/superpoints.py``; the table of kinds holds the figure per kind). Where the
+estimate exceeds what this process may still allocate (the machine's available memory,
+or an address-space limit set with ``ulimit -v``), the run is refused with
+:class:`~superfacets.errors.MemoryLimitError` in one line, before reading or building
+anything large, instead of ending in a ``MemoryError`` traceback or the kernel's kill.
+"""
+
+from __future__ import annotations
+
+import os
+import resource
+
+from ..errors import MemoryLimitError
+
+__all__ = ["available_bytes", "check_memory"]
+
+
+def available_bytes() -> int | None:
+    """Bytes this process may still allocate: the machine's available memory
+    (``MemAvailable``), and under an address-space limit what is left of it; None when
+    neither can be read.
+
+    Examples
+    --------
+    >>> n = available_bytes()
+    >>> n is None or n > 0
+    True
+    """
+    avail = None
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    avail = int(line.split()[1]) * 1024
+                    break
+    except OSError:
+        pass
+    soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    if soft != resource.RLIM_INFINITY:
+        try:
+            with open("/proc/self/statm") as f:
+                used = int(f.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
+        except (OSError, ValueError):
+            used = 0
+        left = max(0, soft - used)
+        avail = left if avail is None else min(avail, left)
+    return avail
+
+
+def check_memory(n_elements: int, bytes_per_element: int, what: str) -> None:
+    """Refuse a run whose estimated peak (``n_elements * bytes_per_element``) exceeds
+    what this process may still allocate (:func:`available_bytes`).
+
+    Parameters
+    ----------
+    n_elements : int
+    bytes_per_element : int
+        The run's peak per element (``ElementKind.peak_bytes``).
+    what : str
+        The input and its elements, for the message (``"m.ply: 5,000,000 faces"``).
+
+    Raises
+    ------
+    MemoryLimitError
+        Naming the estimate and what is available, and suggesting tiles.
+
+    Examples
+    --------
+    >>> check_memory(1000, 450, "a small mesh")   # fits anywhere
+    """
+    avail = available_bytes()
+    need = int(n_elements) * int(bytes_per_element)
+    if avail is not None and need > avail:
+        raise MemoryLimitError(
+            f"{what} need about {need / 2**30:.1f} GiB at the run's peak, and this process "
+            f"may use {avail / 2**30:.1f} GiB: segment it in tiles (--tiles N, "
+            "superfacets.segment_tiled) or on a larger machine", need, avail)
