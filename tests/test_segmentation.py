@@ -604,3 +604,26 @@ def test_fast_split_merge_schedule_keeps_k_connected_and_is_deterministic(sphere
     # the early schedule: fewer passes than iterating to convergence before the swaps
     slow = segment(sphere, 30, split_merge=True, cleanup=True, tol=0.0)
     assert one.timings["passes"] <= slow.timings["passes"]
+
+
+def test_the_result_says_why_the_passes_stopped(tmp_path, capsys):
+    """A run that stops on a detected cycle of center lists said 'stopped at max-iter'
+    (converged False) on 18 of 19 scans: it says 'cycle' now, and the command line
+    names the period."""
+    from superfacets.cli import main
+    from superfacets.inputs.shapes import creature
+
+    mesh = creature(40)
+    cyc = segment(mesh, 20, paper=True)
+    assert cyc.stop_reason == "cycle" and cyc.timings["cycle_period"] == 2
+    assert cyc.n_iter == 50 and not cyc.converged
+    assert segment(mesh, 40, paper=True).stop_reason == "converged"
+    assert segment(mesh, 40).stop_reason in ("tolerance", "converged")
+    assert segment(mesh, 40, paper=True, max_iter=3).stop_reason == "max_iter"
+    from superfacets import write_mesh
+
+    write_mesh(tmp_path / "c.off", mesh)
+    assert main(["segment", str(tmp_path / "c.off"), "-k", "20", "--paper",
+                 "-o", str(tmp_path / "c.seg")]) == 0
+    out = capsys.readouterr().out
+    assert "stopped on a repeating cycle of 2 center lists (the labels of pass 50" in out

@@ -24,8 +24,8 @@ LAYERS = (
      "superfacets.method.labels", "superfacets.viz.camera", "superfacets.inputs.rgb"),
     # inputs: validated meshes, clouds and tetrahedral meshes, read from files or objects
     ("superfacets.inputs", "superfacets.io.volumes", "superfacets.io.regions",
-     "superfacets.io.files", "superfacets.io.ply", "superfacets.io.labels",
-     "superfacets.io.meshes", "superfacets.io.clouds"),
+     "superfacets.io.headers", "superfacets.io.files", "superfacets.io.ply",
+     "superfacets.io.labels", "superfacets.io.meshes", "superfacets.io.clouds"),
     # element graphs of the inputs
     ("superfacets.elements",),
     # the method's pieces, the superfacet graph and the measures of a result

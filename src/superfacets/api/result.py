@@ -15,7 +15,7 @@ import numpy as np
 from ..elements.inputs import per_element
 from ..method.params import DEFAULTS
 
-__all__ = ["SegmentationResult", "TiledResult"]
+__all__ = ["SegmentationResult", "TiledResult", "stop_reason", "describe_stop"]
 
 _D = DEFAULTS
 
@@ -89,6 +89,23 @@ class SegmentationResult:
     def radius(self) -> float:
         """The old name of :attr:`mesh_radius` (deprecated; one release)."""
         return deprecated_radius(self)
+
+    @property
+    def stop_reason(self) -> str:
+        """Why the passes stopped: ``'converged'`` (no center moved, or the passes after
+        the split-and-merge swaps were done), ``'tolerance'`` (a pass changed at most
+        ``tol`` of the area), ``'cycle'`` (the center lists repeated with a period; the
+        labels are those of pass ``max_iter``, as running every pass gives) or
+        ``'max_iter'``.
+
+        Examples
+        --------
+        >>> import trimesh
+        >>> from superfacets import segment
+        >>> segment(trimesh.creation.icosphere(subdivisions=3), 12).stop_reason
+        'tolerance'
+        """
+        return stop_reason(self)
 
     def graph(self, features=None):
         """The superfacet (superpoint) adjacency graph of this result.
@@ -199,6 +216,31 @@ class SegmentationResult:
             raise ParameterError("this result holds no element graph (made by hand?): use "
                                  "superfacets.graph.adjacency.superfacet_graph(graph, labels)")
         return self.elements
+
+
+def stop_reason(result) -> str:
+    """:attr:`SegmentationResult.stop_reason` of any result with ``converged`` and
+    ``timings`` (a joined or adaptive result too)."""
+    timings = getattr(result, "timings", None) or {}
+    if timings.get("stopped_by_tol"):
+        return "tolerance"
+    if getattr(result, "converged", False):
+        return "converged"
+    if timings.get("cycle_period"):
+        return "cycle"
+    return "max_iter"
+
+
+def describe_stop(result) -> str:
+    """The stop in words, for summaries: ``converged``, ``converged by tol``, ``stopped on
+    a cycle of 4 center lists (the labels of pass 50)``, ``stopped at max-iter``."""
+    reason = stop_reason(result)
+    if reason == "cycle":
+        period = int(result.timings["cycle_period"])
+        return (f"stopped on a repeating cycle of {period} center lists (the labels of pass "
+                f"{result.n_iter}, as running every pass)")
+    return {"tolerance": "converged by tol", "converged": "converged",
+            "max_iter": "stopped at max-iter"}[reason]
 
 
 def deprecated_radius(result) -> float:

@@ -21,6 +21,7 @@ from ..method.params import (
     WEIGHTINGS,
 )
 from ..method.params import DEFAULT_CENTER_TOL as _D_CENTER_TOL
+from .inputs import check_header, named_after, read_usable  # noqa: F401 (re-exported)
 
 __all__ = ["int_arg", "float_arg", "size_arg", "view_arg", "add_method_options",
            "add_camera_options", "add_mesh_and_labels", "method_kwargs", "check_output",
@@ -378,61 +379,6 @@ def check_labels_output(path: str | None, source: str) -> Path | None:
     return out
 
 
-def named_after(path, exc: Exception) -> Exception:
-    """``exc`` with its message led by the input's name, once (an error about the
-    mesh may already start with it)."""
-    message = str(exc)
-    if any(message.startswith(f"{name}: ") for name in (str(path), Path(path).name)):
-        return exc
-    return type(exc)(f"{path}: {message}")
-
-
-def check_header(path) -> None:
-    """Before a file is read: refuse a header that declares more than the file holds, or
-    elements whose run would not fit in what this process may use (one line, not a
-    ``MemoryError`` after minutes of reading).
-
-    Raises
-    ------
-    MeshFormatError, MemoryLimitError
-    """
-    from .._runtime.memory import check_memory
-    from ..elements.kinds import kind_of
-    from ..io.headers import header_counts
-
-    counts = header_counts(path)
-    for kind in ("faces", "points"):
-        if counts and counts.get(kind):
-            check_memory(counts[kind], kind_of(kind).peak_bytes,
-                         f"{path}: {counts[kind]:,} {kind}")
-
-
-def read_usable(path, *, clouds: bool = False):
-    """Read the input of a command and refuse, in one line, what no command can handle.
-
-    Every command that reads a mesh (or, with ``clouds``, a mesh or a point
-    cloud) comes through here, so that an input with coordinates that would
-    overflow, a zero extent or a zero area is refused the same way by each
-    (:meth:`superfacets.inputs.mesh.Mesh.check_usable`), before any picture, metric
-    or segmentation is attempted.
-
-    Raises
-    ------
-    SuperfacetsError, OSError
-        Named after ``path``.
-    """
-    from ..errors import SuperfacetsError
-    from ..io import read_input, read_mesh
-
-    check_header(path)
-    data = read_input(path) if clouds else read_mesh(path)
-    try:
-        data.check_usable()
-    except SuperfacetsError as exc:
-        raise named_after(path, exc) from None
-    return data
-
-
 def labels_for(args, mesh):
     """Labels from LABELS.seg, computed with the method options, or None (--plain);
     a dict describing them for titles and pages; and what they label: ``'faces'``, or
@@ -460,6 +406,12 @@ def labels_for(args, mesh):
     except SuperfacetsError as exc:
         raise named_after(args.mesh, exc) from None
     info = {"k asked": r.params.get("n_segments"), "alpha": args.alpha,
-            "iterations": f"{r.n_iter} ({'converged' if r.converged else 'max-iter'})",
+            "iterations": f"{r.n_iter} ({_describe_stop(r)})",
             "seconds": f"{r.timings['total']:.2f}"}
     return r.labels, info, "faces"
+
+
+def _describe_stop(result) -> str:
+    from ..api.result import describe_stop
+
+    return describe_stop(result)

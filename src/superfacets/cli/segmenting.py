@@ -10,6 +10,7 @@ import numpy as np
 
 from ..elements.kinds import kind_of
 from ..method.params import DEFAULTS
+from .notes import count_note
 from .options import (
     add_adaptive_options,
     add_camera_options,
@@ -131,7 +132,9 @@ def add_parsers(sub) -> None:
 
 def _summary(name: str, mesh, result, seconds: float, elements: str = "faces",
              density_given: bool = True) -> str:
-    state = "converged" if result.converged else "stopped at max-iter"
+    from ..api.result import describe_stop
+
+    state = describe_stop(result)
     if elements == "points":
         invalid = mesh.n_total - mesh.n_points
         what = f"{mesh.n_total} points" + (f" ({invalid} invalid)" if invalid else "")
@@ -281,7 +284,7 @@ def cmd_segment(args) -> int:
     if not args.quiet:
         _say_what_was_written(seg_out, ply_out, png_out, html_out, report, args.up,
                               graph_out)
-        note = _count_note(args, data, result, kind)
+        note = count_note(args, data, result, kind)
         if note:
             print(f"note: {note}", file=sys.stderr)
     return 0
@@ -299,44 +302,6 @@ def _say_what_was_written(seg_out, ply_out, png_out, html_out, report, up,
     elif seg_out is None:
         print("note: nothing was saved: add -o OUT.seg (or -o - for standard output), "
               "--colored-mesh OUT.ply, --picture OUT.png or --html OUT.html", file=sys.stderr)
-
-
-def _count_note(args, data, result, kind: str) -> str | None:
-    """Why a run asked for k made more superfacets: more separate pieces than k (a
-    region cannot cross from one piece to another), or regions that no center reached
-    (with ``--paper``, whole pieces), and how to keep k."""
-    asked = args.n_segments or DEFAULTS.n_segments
-    extra = getattr(result, "n_orphan_seeds", 0)
-    if args.radius is not None or args.per_object or result.n_segments <= asked:
-        return None
-    from scipy.sparse.csgraph import connected_components
-
-    from ..elements.inputs import elements_of
-
-    graph = elements_of(data, kind, n_neighbors=args.neighbors,
-                        neighbor_radius=args.neighbor_radius).graph  # kept with the input
-    pieces = connected_components(graph.to_csr(), directed=False)[0]
-    what = kind_of(kind).segment_word
-    if pieces >= asked:
-        return (f"{result.n_segments} {what} for -k {asked}: the input has {pieces} separate "
-                f"pieces and a region cannot cross from one piece to another, so each piece "
-                f"is at least one of them ({pieces} is the fewest this input can have)")
-    if not extra:
-        return None
-    if pieces <= 1:
-        return (f"{result.n_segments} {what} for -k {asked}: {extra} regions that no center "
-                f"reached within its window became {what} of their own; a larger --window "
-                "keeps closer to k")
-    fewer = max(pieces, asked - (result.n_segments - asked))
-    hint = (" or --per-object to share k among the file's objects" if kind_of(kind).objects
-            and len(getattr(data, "objects", ())) > 1 else "")
-    why = ("a region cannot cross from one piece to another" if getattr(args, "paper", False)
-           else "each piece has a center, but a center drawn near another piece can leave "
-                "elements of its own out of every window")
-    return (f"{result.n_segments} {what} for -k {asked}: the input has {pieces} separate "
-            f"pieces, and the {extra} " + ("region" if extra == 1 else "regions") +
-            f" that no center reached ({why}) became {what} of their own; ask for fewer "
-            f"(about -k {fewer}){hint} to end near {asked}")
 
 
 def cmd_baseline(args) -> int:

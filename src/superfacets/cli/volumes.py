@@ -64,9 +64,9 @@ def segment_volume(args) -> int:
         print("wrote " + ", ".join(written) if written else
               "note: nothing was saved: add -o OUT.seg, --colored-mesh OUT.vtu or --picture "
               "OUT.png", file=report if written else sys.stderr)
-        from .segmenting import _count_note
+        from .notes import count_note
 
-        note = _count_note(args, data, result, "cells")
+        note = count_note(args, data, result, "cells")
         if note:
             print(f"note: {note}", file=sys.stderr)
     return 0

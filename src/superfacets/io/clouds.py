@@ -23,9 +23,7 @@ error naming its row.
 from __future__ import annotations
 
 import io
-import os
 import re
-import struct
 from pathlib import Path
 
 import numpy as np
@@ -36,6 +34,8 @@ from .files import read_bytes, split_suffix
 from .ply import ply_colors
 
 __all__ = ["read_cloud", "CLOUD_FORMATS", "is_cloud_file", "check_laz", "check_las"]
+
+from .headers import check_las, check_laz  # noqa: E402 (re-exported: they read headers)
 
 #: Point-cloud formats of :func:`read_cloud` (PLY files are clouds when they have no faces).
 CLOUD_FORMATS = ("pcd", "xyz", "pts", "txt", "npy", "las", "laz")
@@ -240,130 +240,6 @@ def _read_las(path: Path) -> dict:
     # LAS z is elevation: an airborne, mobile or terrestrial scan sees its surfaces from
     # above or from the side, so estimated normals are turned upwards piece by piece
     return {"points": pts.astype(np.float64), "colors": col, "up": np.array([0.0, 0.0, 1.0])}
-
-
-#: The smallest point record of any LAS point format (format 0), in bytes: each chunk
-#: of a LAZ file begins with one point stored raw, so a chunk takes at least this much.
-_SMALLEST_RECORD = 20
-
-
-#: The size of a point record of each LAS point format (its standard fields), in bytes.
-_RECORD = {0: 20, 1: 28, 2: 26, 3: 34, 4: 57, 5: 63, 6: 30, 7: 36, 8: 38, 9: 59, 10: 67}
-
-
-def check_las(path) -> None:
-    """Refuse a LAS or LAZ file whose header does not match its data, before it is read;
-    both readers (a whole run's and a tiled run's) call it.
-
-    An uncompressed file's point records must fill its point data: a record length
-    shorter than its point format's, or a point count that the bytes after the header
-    cannot hold (a file truncated, even at a record boundary), or bytes left over for
-    more records (a wrong record length) would give fewer or garbage points. A LAZ
-    file's chunk table is checked by :func:`check_laz`.
-
-    Parameters
-    ----------
-    path : str or Path
-
-    Raises
-    ------
-    MeshFormatError
-        Naming what the header declares and what the file holds.
-
-    Examples
-    --------
-    >>> check_las("missing.las")
-    Traceback (most recent call last):
-    ...
-    FileNotFoundError: [Errno 2] No such file or directory: 'missing.las'
-    """
-    with open(path, "rb") as f:
-        head = f.read(375)
-        size = os.fstat(f.fileno()).st_size
-    if len(head) < 227 or head[:4] != b"LASF":
-        return  # not LAS at all: laspy says what is wrong
-    if head[104] & 0xC0:  # compressed: LAZ
-        check_laz(path)
-        return
-    fmt, length = head[104] & 0x3F, struct.unpack_from("<H", head, 105)[0]
-    start = struct.unpack_from("<I", head, 96)[0]
-    count = struct.unpack_from("<I", head, 107)[0]
-    minor = head[25]
-    end = size
-    if minor >= 4 and len(head) >= 375:
-        count = count or struct.unpack_from("<Q", head, 247)[0]
-        evlr, n_evlr = struct.unpack_from("<QI", head, 235)
-        if n_evlr and start < evlr <= size:
-            end = evlr
-    if minor >= 3 and len(head) >= 235:
-        wave = struct.unpack_from("<Q", head, 227)[0]
-        if start < wave <= end:
-            end = wave
-    if fmt in _RECORD and length < _RECORD[fmt]:
-        raise MeshFormatError(f"{path}: damaged LAS file: point record length {length} is "
-                              f"shorter than point format {fmt}'s {_RECORD[fmt]} bytes")
-    held = max(0, end - start) // length if length else 0
-    if count > held:
-        raise MeshFormatError(f"{path}: damaged LAS file: the header declares {count} points, "
-                              f"the file holds {held} (truncated?)")
-    if length and end - start - count * length >= length:
-        raise MeshFormatError(f"{path}: damaged LAS file: {count} points of {length} bytes "
-                              f"leave {end - start - count * length} bytes of point data "
-                              "unread (a wrong point count or record length?)")
-
-
-def check_laz(path) -> None:
-    """Refuse a LAZ file whose chunk table cannot be right, before ``lazrs`` reads it.
-
-    LAZ data is compressed in chunks listed in a table near the end of the
-    file. ``lazrs`` allocates that table from the count it declares, and a
-    count it cannot allocate (a damaged or truncated file) aborts the whole
-    process, where Python would raise ``MemoryError``. Each chunk begins with
-    one point stored raw, so a count larger than the point data can hold is
-    refused here with a clear error. Files that are not compressed LAS (or
-    are too short to be LAS at all) pass, and laspy says what is wrong.
-
-    Parameters
-    ----------
-    path : str or Path
-        A ``.las`` or ``.laz`` file (LAZ is told by the point format's
-        compression bits, not by the suffix).
-
-    Raises
-    ------
-    MeshFormatError
-        If the chunk table's position lies outside the file, or it declares
-        more chunks than the points can fill.
-
-    Examples
-    --------
-    >>> check_laz("missing.laz")
-    Traceback (most recent call last):
-    ...
-    FileNotFoundError: [Errno 2] No such file or directory: 'missing.laz'
-    """
-    with open(path, "rb") as f:
-        head = f.read(107)
-        if len(head) < 107 or head[:4] != b"LASF" or not head[104] & 0xC0:
-            return
-        size = os.fstat(f.fileno()).st_size
-        start = struct.unpack_from("<I", head, 96)[0]  # the offset to the point data
-        f.seek(start)
-        raw = f.read(8)
-        table = struct.unpack("<q", raw)[0] if len(raw) == 8 else -2
-        if table == -1 and size >= 8:  # written as a stream: the offset is at the very end
-            f.seek(size - 8)
-            table = struct.unpack("<q", f.read(8))[0]
-        if not start + 8 <= table <= size - 8:
-            raise MeshFormatError(f"{path}: damaged LAZ file: its chunk table should start "
-                                  f"at byte {table}, outside its {size} bytes (truncated?)")
-        f.seek(table)
-        count = struct.unpack("<4xI", f.read(8))[0]
-    most = (table - start - 8) // _SMALLEST_RECORD + 1
-    if count > most:
-        raise MeshFormatError(f"{path}: damaged LAZ file: its chunk table declares {count} "
-                              f"chunks, more than its {table - start - 8} bytes of points "
-                              f"can hold ({most} at most)")
 
 
 def _read_npy(data: bytes, path: Path) -> dict:

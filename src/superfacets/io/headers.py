@@ -8,11 +8,15 @@ before anything large is read (:func:`superfacets._runtime.memory.check_memory`)
 
 from __future__ import annotations
 
+import os
+import struct
 from pathlib import Path
+
+import numpy as np
 
 from ..errors import MeshFormatError
 
-__all__ = ["header_counts"]
+__all__ = ["header_counts", "check_las", "check_laz", "ply_mapped", "npy_mapped", "first_line"]
 
 _SIZE = {"char": 1, "uchar": 1, "int8": 1, "uint8": 1, "short": 2, "ushort": 2,
          "int16": 2, "uint16": 2, "int": 4, "uint": 4, "int32": 4, "uint32": 4,
@@ -94,3 +98,171 @@ def _ply(p: Path, head: bytes, size: int) -> dict | None:
     if counts.get("faces", 0) == 0 and "vertices" in counts:
         counts = {"points": counts["vertices"]}
     return counts
+
+
+#: The smallest point record of any LAS point format (format 0), in bytes: each chunk
+#: of a LAZ file begins with one point stored raw, so a chunk takes at least this much.
+_SMALLEST_RECORD = 20
+
+
+#: The size of a point record of each LAS point format (its standard fields), in bytes.
+_RECORD = {0: 20, 1: 28, 2: 26, 3: 34, 4: 57, 5: 63, 6: 30, 7: 36, 8: 38, 9: 59, 10: 67}
+
+
+def check_las(path) -> None:
+    """Refuse a LAS or LAZ file whose header does not match its data, before it is read;
+    both readers (a whole run's and a tiled run's) call it.
+
+    An uncompressed file's point records must fill its point data: a record length
+    shorter than its point format's, or a point count that the bytes after the header
+    cannot hold (a file truncated, even at a record boundary), or bytes left over for
+    more records (a wrong record length) would give fewer or garbage points. A LAZ
+    file's chunk table is checked by :func:`check_laz`.
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Raises
+    ------
+    MeshFormatError
+        Naming what the header declares and what the file holds.
+
+    Examples
+    --------
+    >>> check_las("missing.las")
+    Traceback (most recent call last):
+    ...
+    FileNotFoundError: [Errno 2] No such file or directory: 'missing.las'
+    """
+    with open(path, "rb") as f:
+        head = f.read(375)
+        size = os.fstat(f.fileno()).st_size
+    if len(head) < 227 or head[:4] != b"LASF":
+        return  # not LAS at all: laspy says what is wrong
+    if head[104] & 0xC0:  # compressed: LAZ
+        check_laz(path)
+        return
+    fmt, length = head[104] & 0x3F, struct.unpack_from("<H", head, 105)[0]
+    start = struct.unpack_from("<I", head, 96)[0]
+    count = struct.unpack_from("<I", head, 107)[0]
+    minor = head[25]
+    end = size
+    if minor >= 4 and len(head) >= 375:
+        count = count or struct.unpack_from("<Q", head, 247)[0]
+        evlr, n_evlr = struct.unpack_from("<QI", head, 235)
+        if n_evlr and start < evlr <= size:
+            end = evlr
+    if minor >= 3 and len(head) >= 235:
+        wave = struct.unpack_from("<Q", head, 227)[0]
+        if start < wave <= end:
+            end = wave
+    if fmt in _RECORD and length < _RECORD[fmt]:
+        raise MeshFormatError(f"{path}: damaged LAS file: point record length {length} is "
+                              f"shorter than point format {fmt}'s {_RECORD[fmt]} bytes")
+    held = max(0, end - start) // length if length else 0
+    if count > held:
+        raise MeshFormatError(f"{path}: damaged LAS file: the header declares {count} points, "
+                              f"the file holds {held} (truncated?)")
+    if length and end - start - count * length >= length:
+        raise MeshFormatError(f"{path}: damaged LAS file: {count} points of {length} bytes "
+                              f"leave {end - start - count * length} bytes of point data "
+                              "unread (a wrong point count or record length?)")
+
+
+def check_laz(path) -> None:
+    """Refuse a LAZ file whose chunk table cannot be right, before ``lazrs`` reads it.
+
+    LAZ data is compressed in chunks listed in a table near the end of the
+    file. ``lazrs`` allocates that table from the count it declares, and a
+    count it cannot allocate (a damaged or truncated file) aborts the whole
+    process, where Python would raise ``MemoryError``. Each chunk begins with
+    one point stored raw, so a count larger than the point data can hold is
+    refused here with a clear error. Files that are not compressed LAS (or
+    are too short to be LAS at all) pass, and laspy says what is wrong.
+
+    Parameters
+    ----------
+    path : str or Path
+        A ``.las`` or ``.laz`` file (LAZ is told by the point format's
+        compression bits, not by the suffix).
+
+    Raises
+    ------
+    MeshFormatError
+        If the chunk table's position lies outside the file, or it declares
+        more chunks than the points can fill.
+
+    Examples
+    --------
+    >>> check_laz("missing.laz")
+    Traceback (most recent call last):
+    ...
+    FileNotFoundError: [Errno 2] No such file or directory: 'missing.laz'
+    """
+    with open(path, "rb") as f:
+        head = f.read(107)
+        if len(head) < 107 or head[:4] != b"LASF" or not head[104] & 0xC0:
+            return
+        size = os.fstat(f.fileno()).st_size
+        start = struct.unpack_from("<I", head, 96)[0]  # the offset to the point data
+        f.seek(start)
+        raw = f.read(8)
+        table = struct.unpack("<q", raw)[0] if len(raw) == 8 else -2
+        if table == -1 and size >= 8:  # written as a stream: the offset is at the very end
+            f.seek(size - 8)
+            table = struct.unpack("<q", f.read(8))[0]
+        if not start + 8 <= table <= size - 8:
+            raise MeshFormatError(f"{path}: damaged LAZ file: its chunk table should start "
+                                  f"at byte {table}, outside its {size} bytes (truncated?)")
+        f.seek(table)
+        count = struct.unpack("<4xI", f.read(8))[0]
+    most = (table - start - 8) // _SMALLEST_RECORD + 1
+    if count > most:
+        raise MeshFormatError(f"{path}: damaged LAZ file: its chunk table declares {count} "
+                              f"chunks, more than its {table - start - 8} bytes of points "
+                              f"can hold ({most} at most)")
+
+
+def ply_mapped(path: Path):
+    from plyfile import PlyData, PlyParseError
+
+    try:
+        with path.open("rb") as f:
+            head = f.read(1 << 12)
+        if b"format ascii" in head.split(b"end_header")[0]:
+            raise MeshFormatError(f"{path}: an ASCII PLY is not read in chunks; use "
+                                  "RegionReader.spill (it must fit one machine)")
+        ply = PlyData.read(str(path), mmap=True,
+                           known_list_len={"face": {"vertex_indices": 3, "vertex_index": 3}})
+    except MeshFormatError:
+        raise
+    except (PlyParseError, ValueError, KeyError, IndexError, TypeError, EOFError,
+            OSError) as exc:
+        if "unexpected list length" in str(exc):  # plyfile's check of the face sizes
+            raise MeshFormatError(f"{path}: a tiled run reads triangles, and a face is not "
+                                  f"one ({first_line(exc)}); use RegionReader.spill for "
+                                  "polygons") from None
+        raise MeshFormatError(f"{path}: cannot read PLY: {first_line(exc)}") from None
+    if "vertex" not in [e.name for e in ply.elements]:
+        raise MeshFormatError(f"{path}: the PLY has no vertex element")
+    names = ply["vertex"].data.dtype.names or ()
+    missing = [c for c in "xyz" if c not in names]
+    if missing:
+        raise MeshFormatError(f"{path}: the vertex element has no {', '.join(missing)} property")
+    return ply
+
+
+def npy_mapped(path: Path) -> np.ndarray:
+    try:
+        arr = np.load(path, mmap_mode="r", allow_pickle=False)
+    except Exception as exc:  # noqa: BLE001 - numpy raises many types on damaged files
+        raise MeshFormatError(f"{path}: cannot read NPY: {first_line(exc)}") from None
+    if not np.issubdtype(arr.dtype, np.number):
+        raise MeshFormatError(f"{path}: NPY must hold numbers, got {arr.dtype}")
+    return arr
+
+
+def first_line(exc: BaseException) -> str:
+    text = str(exc).strip()
+    return text.splitlines()[0] if text else type(exc).__name__

@@ -81,12 +81,8 @@ def read_mesh(path, format: str | None = None) -> Mesh:
             f"expected one of {', '.join('.' + f for f in MESH_FORMATS)} "
             "(optionally .gz/.xz/.bz2)"
         )
-    if not path.exists():
-        raise FileNotFoundError(f"{path}: no such file")
-    if path.is_dir():
-        raise IsADirectoryError(f"{path}: is a directory")
     header_counts(path)  # a header declaring more than the file holds: refused unread
-    data = read_bytes(path, comp)
+    data = read_bytes(path, comp)  # (no such file, a folder: refused there)
     objects, colors, face_colors = (), None, None
     if fmt == "off":
         v, f, colors = _parse_off(data, path)

@@ -38,6 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MeshFormatError
+from .headers import first_line, npy_mapped, ply_mapped
 from .ply import VertexView
 
 __all__ = ["RegionReader", "Survey", "CHUNK", "STREAMED", "SAMPLE", "point_cloud_of"]
@@ -123,14 +124,14 @@ class RegionReader:
             raise FileNotFoundError(f"{p}: no such file")
         suffix = p.suffix.lower().lstrip(".")
         if suffix == "ply":
-            ply = _ply(p)  # memory-mapped: the header is read, not the data
+            ply = ply_mapped(p)  # memory-mapped: the header is read, not the data
             names = [e.name for e in ply.elements]
             if "face" in names and ply["face"].count > 0:
                 return cls(str(p), "faces", "ply-mesh", int(ply["face"].count), chunk)
             return cls(str(p), "points", "ply-points", int(ply["vertex"].count), chunk)
         if suffix in ("las", "laz"):
             from .._runtime.extras import require
-            from .clouds import check_las
+            from .headers import check_las
 
             laspy = require("laspy", "reading LAS/LAZ files")
             check_las(p)
@@ -138,10 +139,11 @@ class RegionReader:
                 with laspy.open(p) as f:
                     n = int(f.header.point_count)
             except Exception as exc:  # noqa: BLE001 - laspy raises many types
-                raise MeshFormatError(f"{p}: cannot read {suffix.upper()}: {_first(exc)}") from None
+                raise MeshFormatError(f"{p}: cannot read {suffix.upper()}: "
+                                      f"{first_line(exc)}") from None
             return cls(str(p), "points", "las", n, chunk, up=(0.0, 0.0, 1.0))
         if suffix == "npy":
-            arr = _npy(p)
+            arr = npy_mapped(p)
             if arr.ndim != 2 or arr.shape[1] != 3:
                 raise MeshFormatError(f"{p}: a tiled run reads NPY points of shape (N, 3), "
                                       f"got {arr.shape}")
@@ -321,7 +323,7 @@ class RegionReader:
                     if (folder / "face_colors.npy").exists() else None)
             return (verts, lambda a, b: np.asarray(faces[a:b], dtype=np.int64),
                     lambda a, b, tri: None if fcol is None else np.asarray(fcol[a:b]))
-        ply = _ply(Path(self.path))
+        ply = ply_mapped(Path(self.path))
         v = ply["vertex"].data
         verts = VertexView(v)
         rgb = next((c for c in (("red", "green", "blue"), ("r", "g", "b"))
@@ -376,7 +378,7 @@ class RegionReader:
                 yield s, np.asarray(pts[s:e], dtype=np.float64), tuple(
                     None if a is None else np.asarray(a[s:e], dtype=np.float64) for a in more)
             return
-        v = _ply(Path(self.path))["vertex"].data
+        v = ply_mapped(Path(self.path))["vertex"].data
         names = v.dtype.names
         rgb = next((c for c in (("red", "green", "blue"), ("r", "g", "b")) if set(c) <= set(names)),
                    None)
@@ -407,7 +409,7 @@ class RegionReader:
                     s += xyz.shape[0]
         except Exception as exc:  # noqa: BLE001 - laspy and lazrs raise many types
             raise MeshFormatError(f"{self.path}: cannot read the points after row {s} "
-                                  f"(damaged or truncated file?): {_first(exc)}") from None
+                                  f"(damaged or truncated file?): {first_line(exc)}") from None
         if s != self.n_rows:
             raise MeshFormatError(f"{self.path}: the header declares {self.n_rows} points, "
                                   f"the file holds {s} (truncated?)")
@@ -420,47 +422,3 @@ def point_cloud_of(pts, colors, normals, viewpoint, name: str = ""):
 
     vp = None if viewpoint is None else np.asarray(viewpoint)
     return PointCloud(pts, normals, name=name, colors=colors, viewpoint=vp)
-
-
-def _ply(path: Path):
-    from plyfile import PlyData, PlyParseError
-
-    try:
-        with path.open("rb") as f:
-            head = f.read(1 << 12)
-        if b"format ascii" in head.split(b"end_header")[0]:
-            raise MeshFormatError(f"{path}: an ASCII PLY is not read in chunks; use "
-                                  "RegionReader.spill (it must fit one machine)")
-        ply = PlyData.read(str(path), mmap=True,
-                           known_list_len={"face": {"vertex_indices": 3, "vertex_index": 3}})
-    except MeshFormatError:
-        raise
-    except (PlyParseError, ValueError, KeyError, IndexError, TypeError, EOFError,
-            OSError) as exc:
-        if "unexpected list length" in str(exc):  # plyfile's check of the face sizes
-            raise MeshFormatError(f"{path}: a tiled run reads triangles, and a face is not "
-                                  f"one ({_first(exc)}); use RegionReader.spill for "
-                                  "polygons") from None
-        raise MeshFormatError(f"{path}: cannot read PLY: {_first(exc)}") from None
-    if "vertex" not in [e.name for e in ply.elements]:
-        raise MeshFormatError(f"{path}: the PLY has no vertex element")
-    names = ply["vertex"].data.dtype.names or ()
-    missing = [c for c in "xyz" if c not in names]
-    if missing:
-        raise MeshFormatError(f"{path}: the vertex element has no {', '.join(missing)} property")
-    return ply
-
-
-def _npy(path: Path) -> np.ndarray:
-    try:
-        arr = np.load(path, mmap_mode="r", allow_pickle=False)
-    except Exception as exc:  # noqa: BLE001 - numpy raises many types on damaged files
-        raise MeshFormatError(f"{path}: cannot read NPY: {_first(exc)}") from None
-    if not np.issubdtype(arr.dtype, np.number):
-        raise MeshFormatError(f"{path}: NPY must hold numbers, got {arr.dtype}")
-    return arr
-
-
-def _first(exc: BaseException) -> str:
-    text = str(exc).strip()
-    return text.splitlines()[0] if text else type(exc).__name__

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..api.result import describe_stop
 from ..elements.kinds import kind_of
 from ..io.files import Outputs
 
@@ -62,7 +63,7 @@ def result_header(data, result, source: str) -> dict:
         "superfacets_count": result.n_segments,
         "parameters": " ".join(f"{k}={v}" for k, v in p.items()),
         "iterations": f"{result.n_iter} "
-                      f"({'converged' if result.converged else 'max_iter reached'})",
+                      f"({describe_stop(result)})",
         "seconds": f"{result.timings['total']:.3f}",
     }
 

@@ -1,0 +1,63 @@
+"""Reading a command's input: its header checked before the data, the data refused in
+one line when no command can handle it, errors named after the file."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+__all__ = ["named_after", "check_header", "read_usable"]
+
+
+def named_after(path, exc: Exception) -> Exception:
+    """``exc`` with its message led by the input's name, once (an error about the
+    mesh may already start with it)."""
+    message = str(exc)
+    if any(message.startswith(f"{name}: ") for name in (str(path), Path(path).name)):
+        return exc
+    return type(exc)(f"{path}: {message}")
+
+
+def check_header(path) -> None:
+    """Before a file is read: refuse a header that declares more than the file holds, or
+    elements whose run would not fit in what this process may use (one line, not a
+    ``MemoryError`` after minutes of reading).
+
+    Raises
+    ------
+    MeshFormatError, MemoryLimitError
+    """
+    from .._runtime.memory import check_memory
+    from ..elements.kinds import kind_of
+    from ..io.headers import header_counts
+
+    counts = header_counts(path)
+    for kind in ("faces", "points"):
+        if counts and counts.get(kind):
+            check_memory(counts[kind], kind_of(kind).peak_bytes,
+                         f"{path}: {counts[kind]:,} {kind}")
+
+
+def read_usable(path, *, clouds: bool = False):
+    """Read the input of a command and refuse, in one line, what no command can handle.
+
+    Every command that reads a mesh (or, with ``clouds``, a mesh or a point
+    cloud) comes through here, so that an input with coordinates that would
+    overflow, a zero extent or a zero area is refused the same way by each
+    (:meth:`superfacets.inputs.mesh.Mesh.check_usable`), before any picture, metric
+    or segmentation is attempted.
+
+    Raises
+    ------
+    SuperfacetsError, OSError
+        Named after ``path``.
+    """
+    from ..errors import SuperfacetsError
+    from ..io import read_input, read_mesh
+
+    check_header(path)
+    data = read_input(path) if clouds else read_mesh(path)
+    try:
+        data.check_usable()
+    except SuperfacetsError as exc:
+        raise named_after(path, exc) from None
+    return data

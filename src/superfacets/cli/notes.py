@@ -1,0 +1,47 @@
+"""What the command line says about a run beside its summary: why the count of segments
+differs from the ``-k`` asked for, and how to come closer to it."""
+
+from __future__ import annotations
+
+from ..elements.kinds import kind_of
+from ..method.params import DEFAULTS
+
+__all__ = ["count_note"]
+
+
+def count_note(args, data, result, kind: str) -> str | None:
+    """Why a run asked for k made more superfacets: more separate pieces than k (a
+    region cannot cross from one piece to another), or regions that no center reached
+    (with ``--paper``, whole pieces), and how to keep k."""
+    asked = args.n_segments or DEFAULTS.n_segments
+    extra = getattr(result, "n_orphan_seeds", 0)
+    if args.radius is not None or args.per_object or result.n_segments <= asked:
+        return None
+    from scipy.sparse.csgraph import connected_components
+
+    from ..elements.inputs import elements_of
+
+    graph = elements_of(data, kind, n_neighbors=args.neighbors,
+                        neighbor_radius=args.neighbor_radius).graph  # kept with the input
+    pieces = connected_components(graph.to_csr(), directed=False)[0]
+    what = kind_of(kind).segment_word
+    if pieces >= asked:
+        return (f"{result.n_segments} {what} for -k {asked}: the input has {pieces} separate "
+                f"pieces and a region cannot cross from one piece to another, so each piece "
+                f"is at least one of them ({pieces} is the fewest this input can have)")
+    if not extra:
+        return None
+    if pieces <= 1:
+        return (f"{result.n_segments} {what} for -k {asked}: {extra} regions that no center "
+                f"reached within its window became {what} of their own; a larger --window "
+                "keeps closer to k")
+    fewer = max(pieces, asked - (result.n_segments - asked))
+    hint = (" or --per-object to share k among the file's objects" if kind_of(kind).objects
+            and len(getattr(data, "objects", ())) > 1 else "")
+    why = ("a region cannot cross from one piece to another" if getattr(args, "paper", False)
+           else "each piece has a center, but a center drawn near another piece can leave "
+                "elements of its own out of every window")
+    return (f"{result.n_segments} {what} for -k {asked}: the input has {pieces} separate "
+            f"pieces, and the {extra} " + ("region" if extra == 1 else "regions") +
+            f" that no center reached ({why}) became {what} of their own; ask for fewer "
+            f"(about -k {fewer}){hint} to end near {asked}")
