@@ -16,8 +16,10 @@ from superfacets.inputs.volume import cut_surface
 from superfacets.viz.render import render
 
 rng = np.random.default_rng(0)
-corners = np.array(np.meshgrid([0.0, 1.0], [0.0, 1.0], [0.0, 1.0])).reshape(3, -1).T
-points = np.r_[rng.random((3000, 3)), corners]
+g = np.linspace(0.0, 1.0, 15)
+points = np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
+inside = ((points > 0) & (points < 1)).all(axis=1)
+points[inside] += rng.normal(scale=0.015, size=(int(inside.sum()), 3))  # a jittered lattice
 tets = Delaunay(points).simplices
 materials = (points[tets].mean(axis=1)[:, 0] > 0.6).astype(int)  # two regions
 volume = TetMesh(points, tets, materials=materials)
@@ -28,8 +30,8 @@ inside = np.array([len(set(materials[labels == s])) for s in range(result.n_segm
 print(f"{volume.n_tets} tetrahedra -> {result.n_segments} superfacets; "
       f"{int((inside > 1).sum())} hold both materials")
 
-surface, face_labels = cut_surface(volume, labels, axis=1, at=0.5)  # the cube cut in half
-image = render(surface, face_labels, size=(640, 480), view=(0.6, -1, 0.5), up="z")
+surface, face_labels = cut_surface(volume, labels, axis=0, at=0.5)  # the cube cut in half
+image = render(surface, face_labels, size=(640, 480), view=(1, -0.8, 0.6), up="z")
 plt.figure(figsize=(6.4, 4.8))
 plt.imshow(image)
 plt.axis("off")
