@@ -585,3 +585,33 @@ def test_real_rgbd_scans(name):
     per_element[index[cloud.valid]] = r.labels[cloud.valid]
     assert connected(g, per_element)
     assert 140 <= r.n_segments <= 200
+
+
+def test_a_run_asked_for_k_superpoints_returns_exactly_k():
+    """Regions no window reached seeded superpoints of their own (420 for 200 here): the
+    count is now exactly k, the extra ones merged cheapest first, each still connected;
+    the paper's method keeps its count; separate pieces beyond k: the fewest, warned."""
+    import warnings
+
+    from superfacets.method.connectivity import label_components
+
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(20000, 3))
+    x /= np.linalg.norm(x, axis=1, keepdims=True)
+    r = segment(x, 200, window=1.0)
+    assert r.n_segments == 200 and r.n_orphan_seeds > 0
+    assert np.array_equal(np.unique(r.labels), np.arange(200))
+    pieces = label_components(r.elements.graph, r.element_labels)
+    assert pieces.max() + 1 == 200  # every superpoint connected
+    assert segment(x, 200, window=1.0, paper=True).n_segments > 200
+    two = np.r_[rng.random((500, 3)), rng.random((500, 3)) + [5, 0, 0]]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert segment(two, 1).n_segments == 2
+    assert any("2 separate pieces" in str(w.message) for w in caught)
+
+
+def test_complex_coordinates_are_refused():
+    x = np.random.default_rng(0).random((300, 3)).astype(complex)
+    with pytest.raises(TypeError, match="must be real numbers, got dtype complex128"):
+        segment(x, 5)

@@ -110,6 +110,11 @@ class ElementKind:
         ``benchmarks/scale.py``, ``benchmarks/superpoints.py``); a run whose estimate
         exceeds what the process may use is refused before its graph is built
         (:func:`superfacets._runtime.memory.check_memory`).
+    exact_count : bool
+        A run asked for ``n_segments`` returns exactly that many (points): segments made
+        beyond it (regions no window reached) are merged, cheapest first
+        (:func:`superfacets.method.stages.exact_count`), down to the input's number of
+        separate pieces at the least.
     objects : bool
         The elements are what a scene's objects are made of (faces): a run may
         share ``k`` among the objects (``--per-object``), the objects are named
@@ -140,6 +145,7 @@ class ElementKind:
     segment_word: str = "superpoints"
     objects: bool = False
     peak_bytes: int = 450
+    exact_count: bool = False
 
     def n_rows(self, data) -> int:
         """Number of labels a run on ``data`` (a mesh, cloud or tetrahedral mesh) returns.
@@ -169,7 +175,8 @@ KINDS = {k.name: k for k in (
                 rows="n_vertices"),
     ElementKind("points", "point", coarse_min_per_segment=1000, coarse_per_segment=400,
                 coarse_neighbor_cap=True, auto_density=True, unit_sizes_in_levels=True,
-                neighborhood=True, cloud=True, rows="n_total", peak_bytes=800),
+                neighborhood=True, cloud=True, rows="n_total", peak_bytes=800,
+                exact_count=True),
     ElementKind("cells", "cell", dim=3, rows="n_tets", segment_word="superfacets"),
 )}
 

@@ -45,7 +45,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..method.params import DEFAULTS, check_int, check_nonneg, renamed
 
-__all__ = ["Hierarchy", "hierarchy", "planarity_graph", "level_extent_weight",
+__all__ = ["Hierarchy", "hierarchy", "planarity_graph", "level_extent_weight", "pieces",
            "AUTO_EXTENT_WEIGHT", "level_compactness", "AUTO_COMPACTNESS"]
 
 #: ``extent_weight`` of a planarity level on a point cloud of uneven density (the
@@ -171,10 +171,10 @@ def hierarchy(graph, levels, *, alpha: float = DEFAULTS.alpha,
     if not wanted:
         raise ParameterError("levels must name at least one number of segments")
     wanted = sorted({check_int("levels", v, lo=1) for v in wanted}, reverse=True)
-    pieces = _pieces(graph)
-    if wanted[0] > k or wanted[-1] < pieces:
-        raise ParameterError(f"levels must lie in [{pieces}, {k}]: {k} superfacets in "
-                             f"{pieces} connected piece(s), and segments stay connected; "
+    fewest = pieces(graph)
+    if wanted[0] > k or wanted[-1] < fewest:
+        raise ParameterError(f"levels must lie in [{fewest}, {k}]: {k} superfacets in "
+                             f"{fewest} connected piece(s), and segments stay connected; "
                              f"got {', '.join(map(str, wanted))}")
     if beta > 0 and graph.feature is None:
         raise ParameterError("beta > 0 needs the superfacets' features (graph.feature)")
@@ -305,8 +305,16 @@ def level_compactness(graph) -> float:
     return level_extent_weight(graph)
 
 
-def _pieces(graph) -> int:
-    """Connected pieces of the superfacet graph."""
+def pieces(graph) -> int:
+    """Connected pieces of the superfacet graph (the fewest segments a level can have).
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets import segment
+    >>> pieces(segment(trimesh.creation.icosphere(subdivisions=3), 12).graph())
+    1
+    """
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 

@@ -233,6 +233,8 @@ def _coordinates(a, what: str, where: str) -> np.ndarray:
     if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number)
                                    or arr.dtype == bool):
         raise TypeError(f"{where}{what} must be numeric, got dtype {arr.dtype}")
+    if np.issubdtype(arr.dtype, np.complexfloating):  # casting would drop the imaginary part
+        raise TypeError(f"{where}{what} must be real numbers, got dtype {arr.dtype}")
     if arr.ndim != 2 or arr.shape[1] != 3:
         raise InvalidCloudError(f"{where}{what} must have shape (N, 3), got {arr.shape}")
     return np.ascontiguousarray(arr, dtype=np.float64)

@@ -44,6 +44,7 @@ from .stages import (
     Hooks,
     build_graph,
     clean_up,
+    exact_count,
     finish,
     initialize,
     iterate_passes,
@@ -148,6 +149,17 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
         with hooks.stage("connectivity", add=True):
             labels = merge_small(graph, labels, centers, rules)
             centers = final_centers(labels, centers, sizes, positions)
+    if rules.kind.exact_count and p.n_segments is not None and not p.paper \
+            and p.min_elements == 1:  # exactly the k asked for (not the paper)
+        with hooks.stage("connectivity", add=True):
+            labels, fewest = exact_count(graph, labels, rules)
+            centers = final_centers(labels, centers, sizes, positions)
+        if fewest > p.n_segments:
+            import warnings
+
+            warnings.warn(f"{fewest} superpoints for n_segments={p.n_segments}: the input has "
+                          f"{fewest} separate pieces, and a superpoint cannot cross from one "
+                          "to another", RuntimeWarning, stacklevel=3)
     timings = hooks.timings
     centers = source.first_rows(centers)
     element_labels = labels

@@ -36,7 +36,7 @@ from .passes import Iteration, iterate
 from .weights import csr_weights, edge_weights
 
 __all__ = ["Rules", "Hooks", "build_graph", "resolve_rules", "weigh", "initialize",
-           "iterate_passes", "finish", "clean_up", "merge_small"]
+           "iterate_passes", "finish", "clean_up", "merge_small", "exact_count"]
 
 _D = DEFAULTS
 
@@ -324,6 +324,34 @@ def merge_small(graph, labels: np.ndarray, centers: np.ndarray, rules: Rules) ->
     (n,) int64 ndarray
     """
     return _enforce_connectivity(graph, labels, centers, min_elements=rules.params.min_elements)
+
+
+def exact_count(graph, labels: np.ndarray, rules: Rules) -> tuple[np.ndarray, int]:
+    """Stage 9 (kinds with ``exact_count``: points): a run asked for ``k`` that made more
+    segments (regions no window reached seed their own) merges adjacent ones, cheapest
+    first (:func:`superfacets.graph.hierarchy.hierarchy`, Ward's cost with the run's
+    crease factor), down to ``k``, or to the input's number of separate pieces where
+    that is more: a region cannot cross from one piece to another.
+
+    Returns
+    -------
+    labels : (n,) int64 ndarray
+    fewest : int
+        The count the run could reach: ``k``, or the pieces where there are more.
+    """
+    from ..graph.adjacency import superfacet_graph
+    from ..graph.hierarchy import hierarchy, pieces
+
+    k, n = rules.k, int(labels.max()) + 1 if labels.size else 0
+    if k is None or n <= k:
+        return labels, n
+    sg = superfacet_graph(graph, labels)
+    fewest = max(k, pieces(sg))
+    if n <= fewest:
+        return labels, fewest
+    p = rules.params
+    level = hierarchy(sg, [fewest], alpha=p.alpha, eta_convex=p.eta_convex)
+    return level.labels(0, labels).astype(np.int64), fewest
 
 
 class Hooks:
