@@ -61,3 +61,40 @@ def test_the_examples_run(module, tmp_path, monkeypatch):
         runner.run(test)
     result = runner.summarize(verbose=False)
     assert result.failed == 0, f"{result.failed} example(s) of {module} failed"
+
+
+#: The modules of the API reference (docs/api.rst): every public function and class of
+#: theirs documents itself as the package's root names do.
+REFERENCE = ("superfacets.method.params", "superfacets.method.rules", "superfacets.checks",
+             "superfacets.elements.kinds", "superfacets.elements.inputs",
+             "superfacets.elements.features", "superfacets.method.stages",
+             "superfacets.method.finish", "superfacets.method.pipeline",
+             "superfacets.evaluation.metrics", "superfacets.evaluation.contingency",
+             "superfacets.graph.hierarchy", "superfacets.graph.adjacency",
+             "superfacets.api.levels", "superfacets.api.scenes", "superfacets.api.result")
+
+
+def _reference_names():
+    for module in REFERENCE:
+        mod = importlib.import_module(module)
+        for name in getattr(mod, "__all__", ()):
+            obj = getattr(mod, name, None)
+            if getattr(obj, "__module__", None) == module and (
+                    inspect.isfunction(obj) or (inspect.isclass(obj)
+                                                and not issubclass(obj, Exception))):
+                yield f"{module}.{name}", obj
+
+
+@pytest.mark.parametrize("name, obj", list(_reference_names()), ids=lambda v: str(v)[:60])
+def test_every_name_of_the_reference_modules_has_the_sections(name, obj):
+    have = _sections(inspect.getdoc(obj) or "")
+    want = set(CLASS) if inspect.isclass(obj) else set(FUNCTION)
+    if inspect.isfunction(obj) and not inspect.signature(obj).parameters:
+        want.discard("Parameters")
+    missing = sorted(want - have)
+    assert not missing, f"{name}: no {', '.join(missing)} section"
+
+
+@pytest.mark.parametrize("module", REFERENCE)
+def test_the_reference_modules_examples_run(module, tmp_path, monkeypatch):
+    test_the_examples_run(module, tmp_path, monkeypatch)

@@ -374,10 +374,10 @@ def test_runs_that_release_the_graph_give_the_same_labels(valley, monkeypatch):
     # the passes run without the released fields; what reads them after
     # (connectivity, clean-up, split and merge) finds them rebuilt, the same
     from superfacets import Mesh, segment
-    from superfacets.method import stages
+    from superfacets.method import pipeline
 
     def run(release_min, **kw):
-        monkeypatch.setattr(stages, "_RELEASE_MIN", release_min)
+        monkeypatch.setattr(pipeline, "_RELEASE_MIN", release_min)
         mesh = Mesh(valley.vertices, valley.faces)
         r = segment(mesh, 12, **kw)
         return r.labels, "pairs" in face_graph(mesh).__dict__

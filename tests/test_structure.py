@@ -21,6 +21,7 @@ LAYERS = (
     # parameters and of the kinds of element, labels, kernels, threads and extras)
     ("superfacets._version", "superfacets.errors", "superfacets.checks", "superfacets._runtime",
      "superfacets._kernels", "superfacets.elements.kinds", "superfacets.method.params",
+     "superfacets.method.rules",
      "superfacets.method.labels", "superfacets.viz.camera", "superfacets.inputs.rgb"),
     # inputs: validated meshes, clouds and tetrahedral meshes, read from files or objects
     ("superfacets.inputs", "superfacets.io.volumes", "superfacets.io.regions",
@@ -30,9 +31,11 @@ LAYERS = (
     ("superfacets.elements",),
     # the method's pieces, the superfacet graph and the measures of a result
     ("superfacets.method", "superfacets.graph", "superfacets.evaluation.metrics",
+     "superfacets.evaluation.contingency",
      "superfacets.evaluation.boundaries", "superfacets.viz.colors"),
     # the method, one run: its stages in order, the public functions, one tile
-    ("superfacets.method.stages", "superfacets.method.pipeline", "superfacets.api",
+    ("superfacets.method.stages", "superfacets.method.finish", "superfacets.method.pipeline",
+     "superfacets.api",
      "superfacets.scale.tiling", "superfacets.scale.tile_layout"),
     # every method alike
     ("superfacets.evaluation.baselines", "superfacets.evaluation.methods"),

@@ -30,9 +30,31 @@ def _is_int(value) -> bool:
 def check_int(name: str, value, lo: int | None = None, hi: int | None = None) -> int:
     """``value`` as an int in ``[lo, hi]``; booleans and floats are refused.
 
+    Parameters
+    ----------
+    name : str
+        The parameter's name, for the message.
+    value : object
+    lo, hi : int, optional
+        The bounds, included.
+
+    Returns
+    -------
+    int
+
     Raises
     ------
     ParameterError
+        If ``value`` is not an integer (``True`` and ``2.0`` are not) or out of range.
+
+    Examples
+    --------
+    >>> check_int("k", 5, lo=1)
+    5
+    >>> check_int("k", 0, lo=1)
+    Traceback (most recent call last):
+    ...
+    superfacets.errors.ParameterError: k must be an integer >= 1, got 0
     """
     if not _is_int(value):
         raise ParameterError(f"{name} must be an integer, got {value!r}")
@@ -48,9 +70,29 @@ def check_number(name: str, value, lo: float = -math.inf, hi: float = math.inf, 
                  lo_open: bool = False) -> float:
     """``value`` as a finite float in ``[lo, hi]`` (``(lo, hi]`` with ``lo_open``).
 
+    Parameters
+    ----------
+    name : str
+        The parameter's name, for the message.
+    value : object
+        A number, or a string of one.
+    lo, hi : float
+        The bounds (``hi`` included; ``lo`` included unless ``lo_open``).
+    lo_open : bool, default False
+
+    Returns
+    -------
+    float
+
     Raises
     ------
     ParameterError
+        If ``value`` is not a finite number in range (booleans are refused).
+
+    Examples
+    --------
+    >>> check_number("tol", "0.5", 0.0, 1.0)
+    0.5
     """
     if isinstance(value, (bool, np.bool_)):
         raise ParameterError(f"{name} must be a number, got {value!r}")
@@ -66,17 +108,77 @@ def check_number(name: str, value, lo: float = -math.inf, hi: float = math.inf, 
 
 
 def check_positive(name: str, value) -> float:
-    """A finite number ``> 0``."""
+    """A finite number ``> 0``.
+
+    Parameters
+    ----------
+    name : str
+    value : object
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    ParameterError
+        If ``value`` is not a finite number above 0.
+
+    Examples
+    --------
+    >>> check_positive("radius", 0.05)
+    0.05
+    """
     return check_number(name, value, 0.0, lo_open=True)
 
 
 def check_nonneg(name: str, value) -> float:
-    """A finite number ``>= 0``."""
+    """A finite number ``>= 0``.
+
+    Parameters
+    ----------
+    name : str
+    value : object
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    ParameterError
+        If ``value`` is not a finite number of at least 0.
+
+    Examples
+    --------
+    >>> check_nonneg("alpha", 0)
+    0.0
+    """
     return check_number(name, value, 0.0)
 
 
 def check_bool(name: str, value) -> bool:
-    """``True`` or ``False`` (numpy booleans accepted)."""
+    """``True`` or ``False`` (numpy booleans accepted).
+
+    Parameters
+    ----------
+    name : str
+    value : object
+
+    Returns
+    -------
+    bool
+
+    Raises
+    ------
+    ParameterError
+        If ``value`` is not a boolean (``1`` is not).
+
+    Examples
+    --------
+    >>> check_bool("paper", True)
+    True
+    """
     if not isinstance(value, (bool, np.bool_)):
         raise ParameterError(f"{name} must be True or False, got {value!r}")
     return bool(value)
@@ -85,10 +187,25 @@ def check_bool(name: str, value) -> bool:
 def check_choice(name: str, value, choices) -> str:
     """One of ``choices``.
 
+    Parameters
+    ----------
+    name : str
+    value : object
+    choices : sequence of str
+
+    Returns
+    -------
+    str
+
     Raises
     ------
     ParameterError
         Listing the choices.
+
+    Examples
+    --------
+    >>> check_choice("init", "grid", ("farthest", "flood", "grid"))
+    'grid'
     """
     if not isinstance(value, str) or value not in choices:
         raise ParameterError(f"{name} must be one of {', '.join(choices)}; got {value!r}")
@@ -98,8 +215,20 @@ def check_choice(name: str, value, choices) -> str:
 def renamed(new_value, old_value, new: str, old: str, default=None):
     """The value of a keyword renamed ``old`` -> ``new``, kept for one release.
 
-    Returns ``old_value`` (with a :class:`DeprecationWarning`) when the old name
-    was given, else ``new_value``.
+    Parameters
+    ----------
+    new_value, old_value : object
+        What was given under each name (None: not given).
+    new, old : str
+        The two names.
+    default : object, optional
+        The new keyword's default (given together with the old name is no conflict).
+
+    Returns
+    -------
+    object
+        ``old_value`` (with a :class:`DeprecationWarning`) when the old name was given,
+        else ``new_value``.
 
     Raises
     ------
@@ -125,10 +254,27 @@ def renamed(new_value, old_value, new: str, old: str, default=None):
 def check_n_segments(n_segments, m: int, kind: str = "faces") -> int:
     """A number of segments ``k`` in ``1..m`` (``m`` the number of elements, of ``kind``).
 
+    Parameters
+    ----------
+    n_segments : int
+    m : int
+        The number of elements.
+    kind : str, default 'faces'
+        Their kind, for the message.
+
+    Returns
+    -------
+    int
+
     Raises
     ------
     ParameterError
         If ``n_segments`` is not an integer in ``1..m``.
+
+    Examples
+    --------
+    >>> check_n_segments(10, 12)
+    10
     """
     k = check_int("n_segments", n_segments, lo=1)
     if k > m:
@@ -137,8 +283,23 @@ def check_n_segments(n_segments, m: int, kind: str = "faces") -> int:
 
 
 def max_threads() -> int:
-    """The most threads a run may use: 4 per core, at least 16 (each thread keeps
-    about 12 bytes per element of buffers)."""
+    """The most threads a run may use: 4 per core, at least 16 (each thread keeps about
+    12 bytes per element of buffers).
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    ParameterError
+        Never (no argument to check); listed for the convention.
+
+    Examples
+    --------
+    >>> max_threads() >= 16
+    True
+    """
     import os
 
     return max(16, 4 * (os.cpu_count() or 1))
@@ -147,10 +308,23 @@ def max_threads() -> int:
 def check_threads(n_threads) -> int:
     """Resolve ``n_threads``: None gives numba's thread count (``NUMBA_NUM_THREADS``).
 
+    Parameters
+    ----------
+    n_threads : int or None
+
+    Returns
+    -------
+    int
+
     Raises
     ------
     ParameterError
         If it is not an integer in ``1..max_threads()``.
+
+    Examples
+    --------
+    >>> check_threads(2), check_threads(None) >= 1
+    (2, True)
     """
     if n_threads is None:
         import os

@@ -96,10 +96,27 @@ def adaptive_segment(obj, n_segments: int, *, start: int = START,
     ``params['start']`` the factor); its :meth:`graph` and :meth:`hierarchy`
     are of the level's segments.
 
+    Parameters
+    ----------
+    obj, n_segments, start, extent_weight, compactness, **options
+        As :func:`adaptive_superpoints`.
+
+    Returns
+    -------
+    SegmentationResult
+
     Raises
     ------
     ParameterError
         As :func:`adaptive_superpoints`.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> mesh = trimesh.creation.box().subdivide().subdivide()
+    >>> r = adaptive_segment(mesh, 6, start=4)
+    >>> r.n_segments, r.params["start"]
+    (6, 4)
     """
     from ..errors import ParameterError
     from .segmentation import segment

@@ -92,18 +92,29 @@ class SegmentationResult:
 
     @property
     def stop_reason(self) -> str:
-        """Why the passes stopped: ``'converged'`` (no center moved, or the passes after
-        the split-and-merge swaps were done), ``'tolerance'`` (a pass changed at most
-        ``tol`` of the area), ``'cycle'`` (the center lists repeated with a period; the
-        labels are those of pass ``max_iter``, as running every pass gives) or
-        ``'max_iter'``.
+        """:attr:`SegmentationResult.stop_reason` of any result with ``converged`` and
+        ``timings`` (a joined or adaptive result too).
+
+        Parameters
+        ----------
+        result : SegmentationResult or a result with ``converged`` and ``timings``
+
+        Returns
+        -------
+        str
+            ``'converged'``, ``'tolerance'``, ``'cycle'`` or ``'max_iter'``.
+
+        Raises
+        ------
+        AttributeError
+            Never: a result without ``timings`` reads as one without a cycle or tolerance.
 
         Examples
         --------
         >>> import trimesh
         >>> from superfacets import segment
-        >>> segment(trimesh.creation.icosphere(subdivisions=3), 12).stop_reason
-        'tolerance'
+        >>> stop_reason(segment(trimesh.creation.icosphere(subdivisions=3), 12, paper=True))
+        'converged'
         """
         return stop_reason(self)
 
@@ -220,7 +231,29 @@ class SegmentationResult:
 
 def stop_reason(result) -> str:
     """:attr:`SegmentationResult.stop_reason` of any result with ``converged`` and
-    ``timings`` (a joined or adaptive result too)."""
+    ``timings`` (a joined or adaptive result too).
+
+    Parameters
+    ----------
+    result : SegmentationResult or a result with ``converged`` and ``timings``
+
+    Returns
+    -------
+    str
+        ``'converged'``, ``'tolerance'``, ``'cycle'`` or ``'max_iter'``.
+
+    Raises
+    ------
+    AttributeError
+        Never: a result without ``timings`` reads as one without a cycle or tolerance.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets import segment
+    >>> stop_reason(segment(trimesh.creation.icosphere(subdivisions=3), 12, paper=True))
+    'converged'
+    """
     timings = getattr(result, "timings", None) or {}
     if timings.get("stopped_by_tol"):
         return "tolerance"
@@ -233,7 +266,30 @@ def stop_reason(result) -> str:
 
 def describe_stop(result) -> str:
     """The stop in words, for summaries: ``converged``, ``converged by tol``, ``stopped on
-    a cycle of 4 center lists (the labels of pass 50)``, ``stopped at max-iter``."""
+    a repeating cycle of 4 center lists (the labels of pass 50, ...)``, ``stopped at
+    max-iter``.
+
+    Parameters
+    ----------
+    result : SegmentationResult
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    KeyError
+        Never for a result of :func:`superfacets.segment`.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets import segment
+    >>> describe_stop(segment(trimesh.creation.icosphere(subdivisions=3), 12, max_iter=1,
+    ...                       paper=True))
+    'stopped at max-iter'
+    """
     reason = stop_reason(result)
     if reason == "cycle":
         period = int(result.timings["cycle_period"])

@@ -21,6 +21,8 @@ _N_NEIGHBORS = DEFAULTS.n_neighbors
 __all__ = ["ElementInput", "Builder", "BUILDERS", "as_element_graph", "elements_of",
            "is_cloud", "kind_for", "prepared", "register_builder", "features_of", "per_element"]
 
+from .features import features_of, per_element  # noqa: E402,F401 (re-exported)
+
 
 class ElementInput(NamedTuple):
     """An input ready for the method.
@@ -34,6 +36,12 @@ class ElementInput(NamedTuple):
         elements are the rows themselves (faces).
     source : Mesh or PointCloud
         The validated input.
+
+    Examples
+    --------
+    >>> src = elements_of(np.random.default_rng(0).random((50, 3)))
+    >>> src.graph.kind, src.n_rows, src.to_rows(np.zeros(src.graph.n_elements, int)).shape
+    ('points', 50, (50,))
     """
 
     graph: ElementGraph
@@ -74,7 +82,26 @@ class ElementInput(NamedTuple):
 
 def is_cloud(obj) -> bool:
     """Whether ``obj`` is a point cloud (a PointCloud, a bare (N, 3) or (H, W, 3) array,
-    a trimesh or Open3D point cloud) rather than a mesh."""
+    a trimesh or Open3D point cloud) rather than a mesh.
+
+    Parameters
+    ----------
+    obj : object
+
+    Returns
+    -------
+    bool
+
+    Raises
+    ------
+    TypeError
+        Never: anything that is not a cloud is answered False.
+
+    Examples
+    --------
+    >>> is_cloud(np.zeros((10, 3))), is_cloud((np.zeros((3, 3)), [[0, 1, 2]]))
+    (True, False)
+    """
     from ..inputs.cloud import PointCloud
 
     if isinstance(obj, PointCloud):
@@ -106,6 +133,11 @@ class Builder(NamedTuple):
         take from the input's cache) the graph.
     needs : str
         What the kind needs, for the error when the input does not fit.
+
+    Examples
+    --------
+    >>> BUILDERS["faces"].needs
+    "a mesh; a point cloud has elements='points'"
     """
 
     accepts: Callable[[object], bool]
@@ -208,6 +240,10 @@ def register_builder(kind: str, builder: Builder) -> None:
     Examples
     --------
     >>> register_builder("faces", BUILDERS["faces"])  # as it is
+
+    Returns
+    -------
+    None
     """
     from .kinds import kind_of
 
@@ -356,6 +392,12 @@ def as_element_graph(obj) -> ElementGraph:
     ------
     TypeError, InvalidMeshError
         As :func:`superfacets.inputs.convert.as_mesh`.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> as_element_graph(trimesh.creation.box()).n_elements
+    12
     """
     if isinstance(obj, ElementGraph):
         return obj
@@ -363,52 +405,3 @@ def as_element_graph(obj) -> ElementGraph:
     from .faces import face_graph
 
     return face_graph(as_mesh(obj))
-
-
-def features_of(src, features):
-    """The per-element features of a run with ``beta > 0``: ``features`` (one row per
-    input row), else the input's colours (or a tetrahedral mesh's materials, one-hot).
-
-    Parameters
-    ----------
-    src : ElementInput
-    features : (N, d) float ndarray or None
-
-    Returns
-    -------
-    (n, d) float64 ndarray
-        One row per element.
-
-    Raises
-    ------
-    ParameterError
-        Without features and without colours, or with one row per input row missing.
-    """
-    if features is None:
-        features = src.colors()
-        materials = getattr(src.source, "materials", None)
-        if features is None and materials is not None:  # a volume's regions, one-hot
-            features = (materials[:, None] == np.unique(materials)[None, :]).astype(float)
-        if features is None:
-            from ..errors import ParameterError
-
-            raise ParameterError("beta > 0 needs features: pass features=(one row per "
-                                 f"{src.graph.element}), or an input with colours (PLY, PCD "
-                                 "or LAS points with RGB, a mesh with vertex or face colours) "
-                                 "or materials (a tetrahedral mesh)")
-    return per_element(src, features)
-
-
-def per_element(src, features):
-    """Per-row features of an input -> per-element features (the first row of each)."""
-    if features is None:
-        return None
-    from ..errors import ParameterError
-
-    f = np.asarray(features, dtype=np.float64)
-    f = f.reshape(-1, 1) if f.ndim == 1 else f
-    if f.ndim != 2 or f.shape[0] != src.n_rows:
-        raise ParameterError(f"features must have one row per input row ({src.n_rows}), "
-                             f"got shape {np.shape(features)}")
-    rows = src.first_rows(np.arange(src.graph.n_elements))
-    return f[rows]

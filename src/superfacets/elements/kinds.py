@@ -120,6 +120,12 @@ class ElementKind:
         share ``k`` among the objects (``--per-object``), the objects are named
         in label files, and a coloured copy may be written in any mesh format
         (the other kinds: a coloured PLY).
+
+    Examples
+    --------
+    >>> k = kind_of("points")
+    >>> k.cloud, k.exact_count, k.coarse_min_per_segment, k.segment_word
+    (True, True, 1000, 'superpoints')
     """
 
     name: str

@@ -55,6 +55,14 @@ class SuperfacetGraph:
         Area-weighted scatter of the element positions about the centroid,
         ``sum_i a_i (p_i - c)(p_i - c)^T`` (mesh units^4); its smallest
         eigenvalue is the area-weighted squared distance to the best plane.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets import segment
+    >>> g = segment(trimesh.creation.icosphere(subdivisions=3), 12).graph()
+    >>> g.n_segments, g.edge_index.shape[0], g.area.shape
+    (12, 2, (12,))
     """
 
     edge_index: np.ndarray

@@ -73,6 +73,15 @@ class Hierarchy:
         ``parents[i][t]``: the segment of level ``i`` holding segment ``t``
         of level ``i - 1``. Segments of each level are numbered ``0..n-1``
         in the order of their lowest superfacet.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets import segment
+    >>> r = segment(trimesh.creation.icosphere(subdivisions=4), 40)
+    >>> h = r.hierarchy([10, 3])
+    >>> h.levels, h.of_superfacets(1).shape
+    ((10, 3), (40,))
     """
 
     levels: tuple
@@ -230,6 +239,11 @@ def planarity_graph(graph, labels, features=None):
     -------
     SuperfacetGraph
 
+    Raises
+    ------
+    ParameterError
+        If the labels do not fit the graph.
+
     Examples
     --------
     >>> import numpy as np
@@ -268,6 +282,11 @@ def level_extent_weight(graph) -> float:
     float
         ``AUTO_EXTENT_WEIGHT`` (0.01) or 0.0.
 
+    Raises
+    ------
+    ParameterError
+        Never for a valid graph: nothing is checked beyond it.
+
     Examples
     --------
     >>> import numpy as np, trimesh
@@ -289,6 +308,19 @@ def level_extent_weight(graph) -> float:
 def level_compactness(graph) -> float:
     """The old name of :func:`level_extent_weight` (deprecated; one release).
 
+    Parameters
+    ----------
+    graph : ElementGraph
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    ParameterError
+        As :func:`level_extent_weight`.
+
     Examples
     --------
     >>> import warnings, trimesh
@@ -307,6 +339,19 @@ def level_compactness(graph) -> float:
 
 def pieces(graph) -> int:
     """Connected pieces of the superfacet graph (the fewest segments a level can have).
+
+    Parameters
+    ----------
+    graph : SuperfacetGraph
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    ParameterError
+        Never: a superfacet graph is valid by construction.
 
     Examples
     --------

@@ -3,7 +3,8 @@
 
 :func:`pipeline` takes validated parameters (:func:`superfacets.method.params.resolve`;
 the public functions of :mod:`superfacets.api.segmentation` call it) and runs the stages
-of :mod:`superfacets.method.stages`, each entered once and in the paper's order
+of :mod:`superfacets.method.stages` and :mod:`superfacets.method.finish`, each entered
+once and in the paper's order
 (Algorithm 1):
 
 1. ``build_graph``: the element graph (``n_segments`` checked against the input's
@@ -24,36 +25,90 @@ of :mod:`superfacets.method.stages`, each entered once and in the paper's order
    (connectivity);
 7. ``clean_up``: the boundaries re-placed (:mod:`superfacets.method.cleanup`);
 8. ``merge_small``: superfacets of fewer than ``min_elements`` merged.
+9. ``exact_count`` (kinds that ask for it: points): the count made exactly ``k``.
 
 Timings, the progress bar and the release of memory are hooks around the stages
-(:class:`~superfacets.method.stages.Hooks`), not inside them. Tiled runs
+(:class:`Hooks`), not inside them. Tiled runs
 (:mod:`superfacets.scale.tiling`) call the same stages.
 """
 
 from __future__ import annotations
 
 import time
+from contextlib import contextmanager
 
 import numpy as np
 
 from ..api.result import SegmentationResult
 from ..elements.inputs import features_of
+from .finish import clean_up, exact_count, finish, merge_small
 from .params import SegmentParams
 from .passes import final_centers
-from .stages import (
-    Hooks,
-    build_graph,
-    clean_up,
-    exact_count,
-    finish,
-    initialize,
-    iterate_passes,
-    merge_small,
-    resolve_rules,
-    weigh,
-)
+from .stages import build_graph, initialize, iterate_passes, resolve_rules, weigh
 
-__all__ = ["pipeline", "SegmentationResult"]
+__all__ = ["pipeline", "SegmentationResult", "Hooks"]
+
+
+#: Elements from which a run makes its graph forget, during the passes, the arrays
+#: they do not read (:meth:`ElementGraph.release`: about 60 bytes per face of the
+#: peak). Below it, rebuilding them after costs more than the memory is worth.
+_RELEASE_MIN = 1 << 18
+
+
+class Hooks:
+    """What runs around the stages: their timings, the progress bar, and the
+    release of the graph's arrays the passes do not read.
+
+    Parameters
+    ----------
+    progress : bool
+        Show a progress bar (tqdm) on stderr.
+    max_iter : int
+        The bar's length (the passes).
+    kind : str
+        The kind of element, for the bar's first description.
+
+    Examples
+    --------
+    >>> hooks = Hooks(False, 50, "faces")
+    >>> with hooks.stage("weights"):
+    ...     pass
+    >>> sorted(hooks.timings)
+    ['weights']
+    """
+
+    def __init__(self, progress: bool, max_iter: int, kind: str) -> None:
+        self.timings: dict[str, float] = {}
+        self.bar = None
+        if progress:  # one bar: the set-up stages by name, then the passes
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=max_iter, desc=f"{kind[:-1]} graph", unit="it", leave=False)
+
+    def describe(self, name: str) -> None:
+        if self.bar is not None:
+            self.bar.set_description(name)
+
+    @contextmanager
+    def stage(self, key: str | None, name: str | None = None, add: bool = False):
+        """Time a stage into ``timings[key]`` (added with ``add``); show ``name``."""
+        if name is not None:
+            self.describe(name)
+        t = time.perf_counter()
+        yield
+        if key is not None:
+            dt = time.perf_counter() - t
+            self.timings[key] = self.timings.get(key, 0.0) + dt if add else dt
+
+    @staticmethod
+    def release_of(graph):
+        """The graph's ``release``, for a graph large enough that it pays."""
+        return graph.release if graph.n_elements >= _RELEASE_MIN else None
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
 
 
 def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,

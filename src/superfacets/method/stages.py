@@ -9,8 +9,6 @@ around them: timings, the progress bar, the release of memory.
 
 from __future__ import annotations
 
-import time
-from contextlib import contextmanager
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -19,10 +17,7 @@ from ..elements.inputs import ElementInput, elements_of, prepared
 from ..elements.kinds import ElementKind, kind_of
 from .adaptive import adapted_graph, density_for
 from .classify import make_classifier
-from .cleanup import clean_boundaries
-from .connectivity import enforce_connectivity as _enforce_connectivity
 from .expansion import Workspaces
-from .labels import relabel_dense
 from .multilevel import coarsening_for, start_centers
 from .params import (
     DEFAULT_CENTER_TOL,
@@ -35,15 +30,11 @@ from .params import (
 from .passes import Iteration, iterate
 from .weights import csr_weights, edge_weights
 
-__all__ = ["Rules", "Hooks", "build_graph", "resolve_rules", "weigh", "initialize",
-           "iterate_passes", "finish", "clean_up", "merge_small", "exact_count"]
+__all__ = ["Rules", "build_graph", "resolve_rules", "weigh", "initialize",
+           "iterate_passes"]
 
 _D = DEFAULTS
 
-#: Elements from which a run makes its graph forget, during the passes, the arrays
-#: they do not read (:meth:`ElementGraph.release`: about 60 bytes per face of the
-#: peak). Below it, rebuilding them after costs more than the memory is worth.
-_RELEASE_MIN = 1 << 18
 
 
 @dataclass(frozen=True)
@@ -66,6 +57,16 @@ class Rules:
         A center moving less than ``center_tol * r`` stays.
     coarsen : int
         Elements per cluster of the coarse run (1: none).
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.method.params import resolve
+    >>> ball = trimesh.creation.icosphere(subdivisions=3)
+    >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
+    >>> rules = resolve_rules(graph, p)
+    >>> rules.k, rules.kind.name, rules.cleanup, rules.params.assignment
+    (12, 'faces', True, 'bounded')
     """
 
     params: SegmentParams
@@ -106,6 +107,31 @@ def build_graph(obj, p: SegmentParams, features=None
         The graph the method runs on.
     params : SegmentParams
         ``p`` with ``density`` resolved.
+
+    Parameters
+    ----------
+    obj : Mesh, PointCloud, TetMesh, or what they are made from
+    p : SegmentParams
+        From :func:`superfacets.method.params.resolve`.
+    features : (N, d) float ndarray, optional
+        With ``beta > 0``: one row per input row (checked here).
+
+    Raises
+    ------
+    ParameterError
+        If ``n_segments`` exceeds the elements, or the features do not fit.
+    InvalidMeshError, InvalidCloudError, MemoryLimitError
+        As the input's validation; a run that would not fit in memory.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.method.params import resolve
+    >>> ball = trimesh.creation.icosphere(subdivisions=3)
+    >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
+    >>> rules = resolve_rules(graph, p)
+    >>> graph.kind, graph.n_elements, p.density
+    ('faces', 1280, 0.0)
     """
     kind, data = prepared(obj, p.elements, n_segments=p.n_segments)
     if p.beta > 0:
@@ -163,6 +189,22 @@ def resolve_rules(graph, p: SegmentParams, *, n_centers: int | None = None,
     Returns
     -------
     Rules
+
+    Raises
+    ------
+    ParameterError
+        If ``n_segments`` exceeds the elements or the radius is too small
+        (:func:`superfacets.method.params.superfacet_size`).
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.method.params import resolve
+    >>> ball = trimesh.creation.icosphere(subdivisions=3)
+    >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
+    >>> rules = resolve_rules(graph, p)
+    >>> rules.k, round(rules.r, 4), rules.center_tol, rules.coarsen
+    (12, 0.576, 0.05, 1)
     """
     k, radius = superfacet_size(p, graph.area, graph.diagonal, graph.n_elements, graph.kind)
     if n_centers is not None:
@@ -190,6 +232,29 @@ def weigh(graph, rules: Rules, features=None) -> tuple[np.ndarray, np.ndarray | 
     -------
     weights : (2 e,) float64 ndarray
     swap_weights : (2 e,) float64 ndarray or None
+
+    Parameters
+    ----------
+    graph : ElementGraph
+    rules : Rules
+    features : (n, d) float ndarray, optional
+        Per-element features, with ``beta > 0``.
+
+    Raises
+    ------
+    ParameterError
+        If the features do not fit the graph.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.method.params import resolve
+    >>> ball = trimesh.creation.icosphere(subdivisions=3)
+    >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
+    >>> rules = resolve_rules(graph, p)
+    >>> w, swap_w = weigh(graph, rules)
+    >>> w.shape == (2 * graph.n_edges,), swap_w is not None
+    (True, True)
     """
     p = rules.params
     if rules.cleanup:
@@ -209,7 +274,7 @@ def weigh(graph, rules: Rules, features=None) -> tuple[np.ndarray, np.ndarray | 
     return w, swap_w
 
 
-def initialize(graph, w: np.ndarray, rules: Rules, hooks: Hooks,
+def initialize(graph, w: np.ndarray, rules: Rules, hooks,
                initial: np.ndarray | None = None) -> tuple[np.ndarray, int]:
     """Stage 4: the first centers (paper section 3.1, step 1): farthest point,
     flood or grid, after a coarse run on clusters where the rules say
@@ -221,6 +286,36 @@ def initialize(graph, w: np.ndarray, rules: Rules, hooks: Hooks,
         Elements.
     coarsen : int
         The coarsening used (1: none).
+
+    Parameters
+    ----------
+    graph : ElementGraph
+    w : (2 e,) float64 ndarray
+        The CSR weights (:func:`weigh`).
+    rules : Rules
+    hooks : Hooks
+    initial : (c,) int ndarray, optional
+        Elements to start from instead.
+
+    Raises
+    ------
+    ParameterError
+        Never for rules from :func:`resolve_rules`.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.method.params import resolve
+    >>> ball = trimesh.creation.icosphere(subdivisions=3)
+    >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
+    >>> rules = resolve_rules(graph, p)
+    >>> from superfacets.method.pipeline import Hooks
+    >>> hooks = Hooks(False, p.max_iter, graph.kind)
+    >>> w, swap_w = weigh(graph, rules)
+    >>> init, coarsen = initialize(graph, w, rules, hooks)
+    >>> it = iterate_passes(graph, w, swap_w, init, rules, hooks)
+    >>> init.shape, coarsen
+    ((12,), 1)
     """
     if initial is not None:
         return np.asarray(initial, dtype=np.int64), 1
@@ -230,7 +325,7 @@ def initialize(graph, w: np.ndarray, rules: Rules, hooks: Hooks,
 
 
 def iterate_passes(graph, w: np.ndarray, swap_w, init: np.ndarray, rules: Rules,
-                   hooks: Hooks, *, replay: bool = True,
+                   hooks, *, replay: bool = True,
                    jump_cycles: bool = True) -> Iteration:
     """Stage 5: passes of (classify, update) until no center moves, ``tol`` or
     ``max_iter`` (paper section 3.1, steps 2-3); then, with split-and-merge, the
@@ -241,6 +336,38 @@ def iterate_passes(graph, w: np.ndarray, swap_w, init: np.ndarray, rules: Rules,
     Returns
     -------
     Iteration
+
+    Parameters
+    ----------
+    graph : ElementGraph
+    w, swap_w : float64 ndarray
+        The weights and the swap energies' weights (:func:`weigh`).
+    init : (c,) int64 ndarray
+        The first centers (:func:`initialize`).
+    rules : Rules
+    hooks : Hooks
+    replay, jump_cycles : bool
+        As :func:`superfacets.method.pipeline.pipeline` (the same labels either way).
+
+    Raises
+    ------
+    ParameterError
+        Never for rules from :func:`resolve_rules`.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.method.params import resolve
+    >>> ball = trimesh.creation.icosphere(subdivisions=3)
+    >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
+    >>> rules = resolve_rules(graph, p)
+    >>> from superfacets.method.pipeline import Hooks
+    >>> hooks = Hooks(False, p.max_iter, graph.kind)
+    >>> w, swap_w = weigh(graph, rules)
+    >>> init, coarsen = initialize(graph, w, rules, hooks)
+    >>> it = iterate_passes(graph, w, swap_w, init, rules, hooks)
+    >>> it.label.shape, it.n_iter >= 1
+    ((1280,), True)
     """
     p = rules.params
     spaces = Workspaces(graph.n_elements, w, p.n_threads)
@@ -272,121 +399,3 @@ def iterate_passes(graph, w: np.ndarray, swap_w, init: np.ndarray, rules: Rules,
     finally:
         spaces.close()
     return it
-
-
-def finish(graph, label: np.ndarray, centers: np.ndarray, rules: Rules
-           ) -> tuple[np.ndarray, np.ndarray]:
-    """Stage 6: the labels of the last classification made dense (superfacets left
-    empty dropped) and, unless the clean-up follows (it ends with it), each
-    superfacet made connected (stray pieces merged into the neighbour sharing the
-    longest border).
-
-    Returns
-    -------
-    labels : (n,) int64 ndarray
-    centers : (K,) int64 ndarray
-        The centers of the superfacets kept.
-    """
-    present = np.zeros(centers.shape[0], dtype=bool)
-    present[label] = True
-    labels = relabel_dense(label)
-    kept = centers[present]
-    if rules.params.enforce_connectivity and not rules.cleanup:
-        labels = _enforce_connectivity(graph, labels, kept)
-    return labels, kept
-
-
-def clean_up(graph, labels: np.ndarray, centers: np.ndarray, rules: Rules,
-             features=None) -> np.ndarray:
-    """Stage 7: the boundaries re-placed by minimum cuts within a band
-    (:func:`superfacets.method.cleanup.clean_boundaries`; not in the paper), with the run's
-    ``eta_convex``, ``alpha`` (the paper's default under another weighting) and
-    feature term. The number of superfacets does not change.
-
-    Returns
-    -------
-    (n,) int64 ndarray
-    """
-    p = rules.params
-    return clean_boundaries(graph, labels, centers, radius=rules.r, eta_convex=p.eta_convex,
-                            alpha=p.alpha if p.weighting == "paper" else _D.alpha,
-                            connectivity=p.enforce_connectivity, n_threads=p.n_threads,
-                            features=features, beta=p.beta)
-
-
-def merge_small(graph, labels: np.ndarray, centers: np.ndarray, rules: Rules) -> np.ndarray:
-    """Stage 8: superfacets of fewer than ``min_elements`` elements merged into the
-    neighbour they share the longest border with (as stray pieces are; not in the
-    paper).
-
-    Returns
-    -------
-    (n,) int64 ndarray
-    """
-    return _enforce_connectivity(graph, labels, centers, min_elements=rules.params.min_elements)
-
-
-def exact_count(graph, labels: np.ndarray, rules: Rules) -> tuple[np.ndarray, int]:
-    """Stage 9 (kinds with ``exact_count``: points): a run asked for ``k`` that made more
-    segments (regions no window reached seed their own) merges adjacent ones, cheapest
-    first (:func:`superfacets.graph.hierarchy.hierarchy`, Ward's cost with the run's
-    crease factor), down to ``k``, or to the input's number of separate pieces where
-    that is more: a region cannot cross from one piece to another.
-
-    Returns
-    -------
-    labels : (n,) int64 ndarray
-    fewest : int
-        The count the run could reach: ``k``, or the pieces where there are more.
-    """
-    from ..graph.adjacency import superfacet_graph
-    from ..graph.hierarchy import hierarchy, pieces
-
-    k, n = rules.k, int(labels.max()) + 1 if labels.size else 0
-    if k is None or n <= k:
-        return labels, n
-    sg = superfacet_graph(graph, labels)
-    fewest = max(k, pieces(sg))
-    if n <= fewest:
-        return labels, fewest
-    p = rules.params
-    level = hierarchy(sg, [fewest], alpha=p.alpha, eta_convex=p.eta_convex)
-    return level.labels(0, labels).astype(np.int64), fewest
-
-
-class Hooks:
-    """What runs around the stages: their timings, the progress bar, and the
-    release of the graph's arrays the passes do not read."""
-
-    def __init__(self, progress: bool, max_iter: int, kind: str) -> None:
-        self.timings: dict[str, float] = {}
-        self.bar = None
-        if progress:  # one bar: the set-up stages by name, then the passes
-            from tqdm import tqdm
-
-            self.bar = tqdm(total=max_iter, desc=f"{kind[:-1]} graph", unit="it", leave=False)
-
-    def describe(self, name: str) -> None:
-        if self.bar is not None:
-            self.bar.set_description(name)
-
-    @contextmanager
-    def stage(self, key: str | None, name: str | None = None, add: bool = False):
-        """Time a stage into ``timings[key]`` (added with ``add``); show ``name``."""
-        if name is not None:
-            self.describe(name)
-        t = time.perf_counter()
-        yield
-        if key is not None:
-            dt = time.perf_counter() - t
-            self.timings[key] = self.timings.get(key, 0.0) + dt if add else dt
-
-    @staticmethod
-    def release_of(graph):
-        """The graph's ``release``, for a graph large enough that it pays."""
-        return graph.release if graph.n_elements >= _RELEASE_MIN else None
-
-    def close(self) -> None:
-        if self.bar is not None:
-            self.bar.close()
-            self.bar = None

@@ -46,9 +46,10 @@ from ..elements.kinds import kind_of
 from ..errors import ParameterError
 from ..method.classify import make_classifier
 from ..method.expansion import Workspaces
+from ..method.finish import clean_up, finish
 from ..method.params import DEFAULTS, SegmentParams, superfacet_measure
 from ..method.pipeline import pipeline
-from ..method.stages import build_graph, clean_up, finish, resolve_rules, weigh
+from ..method.stages import build_graph, resolve_rules, weigh
 
 __all__ = ["tile_centers", "tile_refine", "tile_labels",
            "tile_connect", "orientation_reference", "trim_centers", "HALO",

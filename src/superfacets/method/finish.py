@@ -1,0 +1,225 @@
+"""The stages after the passes: the labels made dense and connected, the boundaries
+cleaned up, small segments merged, the count made exact (kinds that ask for it).
+
+:func:`superfacets.method.pipeline.pipeline` runs them after the stages of
+:mod:`superfacets.method.stages`; tiled runs call :func:`finish` and :func:`clean_up`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..method.params import DEFAULTS
+from .cleanup import clean_boundaries
+from .connectivity import enforce_connectivity as _enforce_connectivity
+from .labels import relabel_dense
+from .stages import Rules
+
+__all__ = ["finish", "clean_up", "merge_small", "exact_count"]
+
+_D = DEFAULTS
+
+
+def finish(graph, label: np.ndarray, centers: np.ndarray, rules: Rules
+           ) -> tuple[np.ndarray, np.ndarray]:
+    """Stage 6: the labels of the last classification made dense (superfacets left
+    empty dropped) and, unless the clean-up follows (it ends with it), each
+    superfacet made connected (stray pieces merged into the neighbour sharing the
+    longest border).
+
+    Returns
+    -------
+    labels : (n,) int64 ndarray
+    centers : (K,) int64 ndarray
+        The centers of the superfacets kept.
+
+    Parameters
+    ----------
+    graph : ElementGraph
+    label : (n,) int ndarray
+        The last classification's labels.
+    centers : (c,) int64 ndarray
+        Its centers.
+    rules : Rules
+
+    Raises
+    ------
+    ParameterError
+        If the labels do not fit the graph.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.method.params import resolve
+    >>> from superfacets.method.stages import (build_graph, initialize, iterate_passes,
+    ...                                        resolve_rules, weigh)
+    >>> ball = trimesh.creation.icosphere(subdivisions=3)
+    >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
+    >>> rules = resolve_rules(graph, p)
+    >>> from superfacets.method.pipeline import Hooks
+    >>> hooks = Hooks(False, p.max_iter, graph.kind)
+    >>> w, swap_w = weigh(graph, rules)
+    >>> init, coarsen = initialize(graph, w, rules, hooks)
+    >>> it = iterate_passes(graph, w, swap_w, init, rules, hooks)
+    >>> labels, kept = finish(graph, it.label, it.centers, rules)
+    >>> int(labels.max()) + 1 == kept.shape[0]
+    True
+    """
+    present = np.zeros(centers.shape[0], dtype=bool)
+    present[label] = True
+    labels = relabel_dense(label)
+    kept = centers[present]
+    if rules.params.enforce_connectivity and not rules.cleanup:
+        labels = _enforce_connectivity(graph, labels, kept)
+    return labels, kept
+
+
+def clean_up(graph, labels: np.ndarray, centers: np.ndarray, rules: Rules,
+             features=None) -> np.ndarray:
+    """Stage 7: the boundaries re-placed by minimum cuts within a band
+    (:func:`superfacets.method.cleanup.clean_boundaries`; not in the paper), with the run's
+    ``eta_convex``, ``alpha`` (the paper's default under another weighting) and
+    feature term. The number of superfacets does not change.
+
+    Returns
+    -------
+    (n,) int64 ndarray
+
+    Parameters
+    ----------
+    graph : ElementGraph
+    labels : (n,) int64 ndarray
+    centers : (K,) int64 ndarray
+    rules : Rules
+    features : (n, d) float ndarray, optional
+
+    Raises
+    ------
+    ParameterError
+        If the labels do not fit the graph.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.method.params import resolve
+    >>> from superfacets.method.stages import (build_graph, initialize, iterate_passes,
+    ...                                        resolve_rules, weigh)
+    >>> ball = trimesh.creation.icosphere(subdivisions=3)
+    >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
+    >>> rules = resolve_rules(graph, p)
+    >>> from superfacets.method.pipeline import Hooks
+    >>> hooks = Hooks(False, p.max_iter, graph.kind)
+    >>> w, swap_w = weigh(graph, rules)
+    >>> init, coarsen = initialize(graph, w, rules, hooks)
+    >>> it = iterate_passes(graph, w, swap_w, init, rules, hooks)
+    >>> labels, kept = finish(graph, it.label, it.centers, rules)
+    >>> int(clean_up(graph, labels, kept, rules).max()) + 1 == int(labels.max()) + 1
+    True
+    """
+    p = rules.params
+    return clean_boundaries(graph, labels, centers, radius=rules.r, eta_convex=p.eta_convex,
+                            alpha=p.alpha if p.weighting == "paper" else _D.alpha,
+                            connectivity=p.enforce_connectivity, n_threads=p.n_threads,
+                            features=features, beta=p.beta)
+
+
+def merge_small(graph, labels: np.ndarray, centers: np.ndarray, rules: Rules) -> np.ndarray:
+    """Stage 8: superfacets of fewer than ``min_elements`` elements merged into the
+    neighbour they share the longest border with (as stray pieces are; not in the
+    paper).
+
+    Returns
+    -------
+    (n,) int64 ndarray
+
+    Parameters
+    ----------
+    graph : ElementGraph
+    labels : (n,) int64 ndarray
+    centers : (K,) int64 ndarray
+    rules : Rules
+        Its ``params.min_elements`` is the smallest size kept.
+
+    Raises
+    ------
+    ParameterError
+        If the labels do not fit the graph.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.method.params import resolve
+    >>> from superfacets.method.stages import (build_graph, initialize, iterate_passes,
+    ...                                        resolve_rules, weigh)
+    >>> ball = trimesh.creation.icosphere(subdivisions=3)
+    >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
+    >>> rules = resolve_rules(graph, p)
+    >>> from superfacets.method.pipeline import Hooks
+    >>> hooks = Hooks(False, p.max_iter, graph.kind)
+    >>> w, swap_w = weigh(graph, rules)
+    >>> init, coarsen = initialize(graph, w, rules, hooks)
+    >>> it = iterate_passes(graph, w, swap_w, init, rules, hooks)
+    >>> labels, kept = finish(graph, it.label, it.centers, rules)
+    >>> bool(merge_small(graph, labels, kept, rules).max() == labels.max())  # min 1 element
+    True
+    """
+    return _enforce_connectivity(graph, labels, centers, min_elements=rules.params.min_elements)
+
+
+def exact_count(graph, labels: np.ndarray, rules: Rules) -> tuple[np.ndarray, int]:
+    """Stage 9 (kinds with ``exact_count``: points): a run asked for ``k`` that made more
+    segments (regions no window reached seed their own) merges adjacent ones, cheapest
+    first (:func:`superfacets.graph.hierarchy.hierarchy`, Ward's cost with the run's
+    crease factor), down to ``k``, or to the input's number of separate pieces where
+    that is more: a region cannot cross from one piece to another.
+
+    Returns
+    -------
+    labels : (n,) int64 ndarray
+    fewest : int
+        The count the run could reach: ``k``, or the pieces where there are more.
+
+    Parameters
+    ----------
+    graph : ElementGraph
+    labels : (n,) int64 ndarray
+        Dense labels.
+    rules : Rules
+        Its ``k`` is the count asked for.
+
+    Raises
+    ------
+    ParameterError
+        If the labels do not fit the graph.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.method.params import resolve
+    >>> from superfacets.method.stages import (build_graph, initialize, iterate_passes,
+    ...                                        resolve_rules, weigh)
+    >>> ball = trimesh.creation.icosphere(subdivisions=3)
+    >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
+    >>> rules = resolve_rules(graph, p)
+    >>> from superfacets.method.pipeline import Hooks
+    >>> hooks = Hooks(False, p.max_iter, graph.kind)
+    >>> w, swap_w = weigh(graph, rules)
+    >>> init, coarsen = initialize(graph, w, rules, hooks)
+    >>> it = iterate_passes(graph, w, swap_w, init, rules, hooks)
+    >>> labels, kept = finish(graph, it.label, it.centers, rules)
+    >>> exact_count(graph, labels, rules)[1]
+    12
+    """
+    from ..graph.adjacency import superfacet_graph
+    from ..graph.hierarchy import hierarchy, pieces
+
+    k, n = rules.k, int(labels.max()) + 1 if labels.size else 0
+    if k is None or n <= k:
+        return labels, n
+    sg = superfacet_graph(graph, labels)
+    fewest = max(k, pieces(sg))
+    if n <= fewest:
+        return labels, fewest
+    p = rules.params
+    level = hierarchy(sg, [fewest], alpha=p.alpha, eta_convex=p.eta_convex)
+    return level.labels(0, labels).astype(np.int64), fewest

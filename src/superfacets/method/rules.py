@@ -1,0 +1,193 @@
+"""The automatic rules of a run that depend on the kind of element: whether the clean-up
+and split-and-merge run, which classification, and the superfacet size (paper section
+3.1). Each reads the table of kinds (:mod:`superfacets.elements.kinds`); the run resolves
+them once (:func:`superfacets.method.stages.resolve_rules`).
+"""
+
+from __future__ import annotations
+
+import math
+
+from ..checks import check_n_segments
+from ..elements.kinds import kind_of
+from ..errors import ParameterError
+
+__all__ = ["better_method", "assignment_of", "superfacet_size", "superfacet_measure"]
+
+
+def better_method(params, kind: str) -> tuple[bool, bool]:
+    """``(cleanup, split_merge)`` of a run on elements ``kind``: as given, else (None)
+    on for faces and vertices with the paper's weighting (unless ``paper``), off
+    for points, tetrahedral cells (not measured) and with another weighting.
+
+    On faces both beat the paper at every k from 50 to 300 (UE -6 to -11 %,
+    compactness -14 to -19 %) and in every category of the 300 benchmark meshes
+    but Cup at k = 50 and 150, at its speed at the default k (``docs/notes/cleanup.md``,
+    "The default" and "Swap energies"); on vertices, with the clean-up's
+    crease weight and band of that kind (:mod:`superfacets.method.cleanup`) and the exact
+    classification (:func:`assignment_of`), they lower the undersegmentation
+    error by 4-8 % and the compactness by 5-7 % at k = 50, 150, 300. On points they lower
+    the compactness by 18-25 %
+    but not the undersegmentation error at k = 150 (+0.3 %), so points keep
+    the paper's method unless asked (``docs/notes/cleanup.md``, "Vertices and points").
+
+    Parameters
+    ----------
+    params : SegmentParams
+    kind : str
+        The kind of element (a row of :data:`superfacets.elements.kinds.KINDS`).
+
+    Returns
+    -------
+    (bool, bool)
+        ``(cleanup, split_merge)``.
+
+    Raises
+    ------
+    ValueError
+        For an unknown kind.
+
+    Examples
+    --------
+    >>> from superfacets.method.params import DEFAULTS
+    >>> better_method(DEFAULTS, "faces"), better_method(DEFAULTS, "points")
+    ((True, True), (False, False))
+    """
+    auto = kind_of(kind).better_method and params.weighting == "paper" and not params.paper
+    return (auto if params.cleanup is None else bool(params.cleanup),
+            auto if params.split_merge is None else bool(params.split_merge))
+
+
+def assignment_of(params, kind: str) -> str:
+    """The classification of a run on elements ``kind``: as given, else (None)
+    ``'exact'`` on vertices with the paper's weighting (unless ``paper``) and in
+    content-sensitive runs (``density`` or ``roughness``), the paper's
+    ``'bounded'`` everywhere else.
+
+    On vertices the exact nearest-center search (one multi-source search per
+    pass, every element settled once, where the bounded windows settle each
+    about 4.4 times) gives the same quality as the windows with the default's
+    few passes, for about a third of their time; that is what brings the
+    better method to the paper's time there. On faces the windows' bound on a
+    superfacet's extent keeps them more compact (``docs/notes/cleanup.md``, "The
+    default on vertices, at the paper's speed"). Content-sensitive superfacets
+    differ in extent by design; the windows follow it (each center's scaled by
+    :func:`superfacets.method.adaptive.window_factors`) and are about 1.6 times faster
+    on a million points, but on the five labelled scans the exact search gave
+    the lower undersegmentation error in 11 of 15 settings (``docs/notes/superpoints.md``).
+
+
+    Parameters
+    ----------
+    params : SegmentParams
+    kind : str
+
+    Returns
+    -------
+    str
+        ``'bounded'`` or ``'exact'``.
+
+    Raises
+    ------
+    ValueError
+        For an unknown kind.
+
+    Examples
+    --------
+    >>> from superfacets.method.params import DEFAULTS
+    >>> assignment_of(DEFAULTS, "vertices"), assignment_of(DEFAULTS, "faces")
+    ('exact', 'bounded')
+    """
+    if params.assignment is not None:
+        return params.assignment
+    auto = kind_of(kind).exact_assignment and params.weighting == "paper" and not params.paper
+    content = (params.density or 0.0) > 0 or params.roughness > 0
+    return "exact" if auto or content else "bounded"
+
+
+def superfacet_size(params, area: float, diagonal: float,
+                    n_elements: int, kind: str = "faces") -> tuple[int | None, float]:
+    """The number of centers ``k`` and the radius ``r`` (mesh units) of a run.
+
+    With ``n_segments``: ``r = sqrt(A / (k pi))`` (paper section 3.1); on
+    tetrahedra (``kind = "cells"``, ``A`` a volume) ``r = (3 A / (4 pi k))^(1/3)``. With
+    ``radius`` (a fraction of ``d``): ``r = radius * d``, and for the
+    farthest-point initialization ``k = round(A / (pi r^2))`` clamped to
+    ``1..n``; ``k`` is None for flood and grid.
+
+
+    Parameters
+    ----------
+    params : SegmentParams
+    area : float
+        Total size of the elements (an area; a volume on cells).
+    diagonal : float
+        The bounding-box diagonal ``d``.
+    n_elements : int
+    kind : str, default 'faces'
+
+    Returns
+    -------
+    k : int or None
+    r : float
+        In the input's units.
+
+    Raises
+    ------
+    ParameterError
+        If ``n_segments`` exceeds the number of elements, or ``radius`` is so
+        small that a superfacet's area (volume) is 0 in double precision.
+
+    Examples
+    --------
+    >>> from superfacets.method.params import resolve
+    >>> k, r = superfacet_size(resolve(n_segments=4), 4 * 3.141592653589793, 10.0, 100)
+    >>> k, round(r, 6)
+    (4, 1.0)
+    """
+    profile = kind_of(kind)  # ``area`` is a volume on cells: r of a ball of volume V / k
+    if params.radius is not None:
+        r = params.radius * diagonal
+        each = superfacet_measure(r, profile.dim)
+        if not each > 0:
+            raise ParameterError(f"radius {params.radius:g} of the diagonal ({r:.3g} in the "
+                                 "input's units) is too small: a superfacet's "
+                                 f"{profile.size_word} would be 0")
+        k = None
+        if params.init == "farthest":
+            k = int(min(n_elements, max(1, round(area / each))))
+        return k, r
+    k = check_n_segments(params.n_segments, n_elements, profile.name)
+    if profile.dim == 3:
+        return k, (3.0 * area / (4.0 * math.pi * k)) ** (1.0 / 3.0)
+    return k, math.sqrt(area / (k * math.pi))
+
+
+def superfacet_measure(r: float, dim: int = 2) -> float:
+    """The size of one superfacet of radius ``r``: a disc's area ``pi r^2`` (paper
+    section 3.1) on surfaces (``dim = 2``), a ball's volume ``4/3 pi r^3`` on
+    tetrahedra (``dim = 3``).
+
+
+    Parameters
+    ----------
+    r : float
+        The radius, in the input's units.
+    dim : int, default 2
+        2 for surfaces, 3 for tetrahedra.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    ParameterError
+        Never: no argument is checked here (:func:`superfacet_size` checks them).
+
+    Examples
+    --------
+    >>> round(superfacet_measure(1.0), 4), round(superfacet_measure(1.0, 3), 4)
+    (3.1416, 4.1888)
+    """
+    return 4.0 / 3.0 * math.pi * r ** 3 if dim == 3 else math.pi * r * r
