@@ -63,15 +63,19 @@ def test_the_examples_run(module, tmp_path, monkeypatch):
     assert result.failed == 0, f"{result.failed} example(s) of {module} failed"
 
 
-#: The modules of the API reference (docs/api.rst): every public function and class of
-#: theirs documents itself as the package's root names do.
+#: The modules of the API reference (docs/api.rst) and those a user reaches from the
+#: guide and the gallery (files, pictures, pages, batches, tiles, inputs): every public
+#: function and class of theirs documents itself as the package's root names do.
 REFERENCE = ("superfacets.method.params", "superfacets.method.rules", "superfacets.checks",
              "superfacets.elements.kinds", "superfacets.elements.inputs",
              "superfacets.elements.features", "superfacets.method.stages",
              "superfacets.method.finish", "superfacets.method.pipeline",
              "superfacets.evaluation.metrics", "superfacets.evaluation.contingency",
              "superfacets.graph.hierarchy", "superfacets.graph.adjacency",
-             "superfacets.api.levels", "superfacets.api.scenes", "superfacets.api.result")
+             "superfacets.api.levels", "superfacets.api.scenes", "superfacets.api.result",
+             "superfacets.io.clouds", "superfacets.io.headers", "superfacets.io.labels",
+             "superfacets.io.volumes", "superfacets.viz.html", "superfacets.scale.runner.tiles",
+             "superfacets.inputs.volume", "superfacets.inputs.convert")
 
 
 def _reference_names():

@@ -84,6 +84,22 @@ def from_library(obj, name: str = ""):
     InvalidMeshError
         On a scene without geometry, a PolyData without polygons, an Open3D
         object without triangles.
+
+    Parameters
+    ----------
+    obj : object
+    name : str, optional
+        For messages.
+
+    Returns
+    -------
+    Mesh or None
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from_library(trimesh.Scene(trimesh.creation.box())).n_faces, from_library([1, 2]) is None
+    (12, True)
     """
     mod = _module(obj)
     if mod == "trimesh" and type(obj).__name__ == "Scene":
@@ -111,7 +127,28 @@ def from_library(obj, name: str = ""):
 
 def trimesh_colors(obj) -> dict:
     """``colors`` / ``face_colors`` of a ``trimesh.Trimesh`` whose visual holds vertex or
-    face colours (not a texture, not trimesh's default grey), in ``[0, 1]``; {} else."""
+    face colours (not a texture, not trimesh's default grey), in ``[0, 1]``; {} else.
+
+    Parameters
+    ----------
+    obj : trimesh.Trimesh
+
+    Returns
+    -------
+    dict
+        ``{"colors": (n, 3) float}`` or ``{"face_colors": (m, 3) float}``, or ``{}``.
+
+    Raises
+    ------
+    TypeError
+        Never: an object without colours gives ``{}``.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> trimesh_colors(trimesh.creation.box())
+    {}
+    """
     from .rgb import unit_colors
 
     visual = getattr(obj, "visual", None)
@@ -163,6 +200,22 @@ def mesh_from_scene(scene, name: str = ""):
     ------
     InvalidMeshError
         If the scene holds no triangle mesh.
+
+    Parameters
+    ----------
+    scene : trimesh.Scene
+    name : str, optional
+
+    Returns
+    -------
+    Mesh
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> scene = trimesh.Scene({"a": trimesh.creation.box(), "b": trimesh.creation.box()})
+    >>> [name for name, *_ in mesh_from_scene(scene).objects]
+    ['a', 'b']
     """
     vs, fs, objects, base, start = [], [], [], 0, 0
     cols: dict[str, list] = {"colors": [], "face_colors": []}

@@ -184,6 +184,16 @@ def cut_surface(mesh: TetMesh, labels=None, *, axis: int = 0, at: float = 0.5):
     ------
     ParameterError
         If ``axis`` or ``at`` is out of range, or no tetrahedron is kept.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from scipy.spatial import Delaunay
+    >>> p = np.random.default_rng(0).random((200, 3))
+    >>> t = TetMesh(p, Delaunay(p).simplices)
+    >>> surface, face_labels = cut_surface(t, np.zeros(t.n_tets, dtype=int))
+    >>> surface.n_faces == face_labels.shape[0]
+    True
     """
     from ..errors import ParameterError
     from ..method.params import check_int, check_number

@@ -42,7 +42,26 @@ CLOUD_FORMATS = ("pcd", "xyz", "pts", "txt", "npy", "las", "laz")
 
 
 def is_cloud_file(path) -> bool:
-    """Whether ``path`` holds a point cloud: a cloud format, or a PLY declaring no face."""
+    """Whether ``path`` holds a point cloud: a cloud format, or a PLY declaring no face.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    bool
+
+    Raises
+    ------
+    MeshFormatError
+        If a PLY header cannot be read.
+
+    Examples
+    --------
+    >>> is_cloud_file("scan.pcd"), is_cloud_file("bunny.off")
+    (True, False)
+    """
     path = Path(path)
     fmt, comp = split_suffix(path)
     if fmt in CLOUD_FORMATS:

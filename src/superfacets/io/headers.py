@@ -41,6 +41,14 @@ def header_counts(path) -> dict | None:
     >>> _ = trimesh.creation.box().export("box.ply")
     >>> header_counts("box.ply")
     {'vertices': 8, 'faces': 12}
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    dict or None
     """
     p = Path(path)
     suffix = p.suffix.lower().lstrip(".")
@@ -134,6 +142,10 @@ def check_las(path) -> None:
     Traceback (most recent call last):
     ...
     FileNotFoundError: [Errno 2] No such file or directory: 'missing.las'
+
+    Returns
+    -------
+    None
     """
     with open(path, "rb") as f:
         head = f.read(375)
@@ -199,6 +211,10 @@ def check_laz(path) -> None:
     Traceback (most recent call last):
     ...
     FileNotFoundError: [Errno 2] No such file or directory: 'missing.laz'
+
+    Returns
+    -------
+    None
     """
     with open(path, "rb") as f:
         head = f.read(107)
@@ -225,6 +241,29 @@ def check_laz(path) -> None:
 
 
 def ply_mapped(path: Path):
+    """A PLY file's elements, memory-mapped where its format allows (the header is read,
+    not the data).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+
+    Returns
+    -------
+    plyfile.PlyData
+
+    Raises
+    ------
+    MeshFormatError
+        If the file is an ASCII PLY, its header cannot be read, or its sizes do not fit.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> _ = trimesh.creation.box().export("box.ply")
+    >>> ply_mapped(Path("box.ply"))["face"].count
+    12
+    """
     from plyfile import PlyData, PlyParseError
 
     try:
@@ -254,6 +293,27 @@ def ply_mapped(path: Path):
 
 
 def npy_mapped(path: Path) -> np.ndarray:
+    """A ``.npy`` file's array, memory-mapped (nothing read but the header).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+
+    Returns
+    -------
+    numpy.memmap or ndarray
+
+    Raises
+    ------
+    MeshFormatError
+        If the file is not a readable ``.npy`` array.
+
+    Examples
+    --------
+    >>> np.save("p.npy", np.zeros((5, 3)))
+    >>> npy_mapped(Path("p.npy")).shape
+    (5, 3)
+    """
     try:
         arr = np.load(path, mmap_mode="r", allow_pickle=False)
     except Exception as exc:  # noqa: BLE001 - numpy raises many types on damaged files
@@ -264,5 +324,25 @@ def npy_mapped(path: Path) -> np.ndarray:
 
 
 def first_line(exc: BaseException) -> str:
+    """The first line of an exception's message (its type's name when it has none).
+
+    Parameters
+    ----------
+    exc : BaseException
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    TypeError
+        Never.
+
+    Examples
+    --------
+    >>> first_line(ValueError("bad")), first_line(KeyError())
+    ('bad', 'KeyError')
+    """
     text = str(exc).strip()
     return text.splitlines()[0] if text else type(exc).__name__

@@ -56,6 +56,29 @@ def tile_task(task: dict) -> dict:
     sample, or its file), and for 'labels' the ``centers`` (rows) within reach
     and ``ring`` (a width).
     Returns a dict; an error is returned as ``error`` (text), never raised.
+
+    Parameters
+    ----------
+    task : dict
+        As above.
+
+    Returns
+    -------
+    dict
+        The phase's output for this tile (centers, labels or areas) and its seconds and peak
+        memory.
+
+    Raises
+    ------
+    SuperfacetsError
+        As the method on the tile's input (the engine names the tile).
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> m = trimesh.creation.icosphere(subdivisions=4)
+    >>> segment_tiled((m.vertices, m.faces), 40, tiles=2, workers=1).tiles[0]["tile"]
+    0
     """
     from ..tiling import point_areas, tile_centers, tile_connect, tile_labels, tile_refine
 

@@ -67,7 +67,33 @@ def _b64(a: np.ndarray) -> str:
 
 def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None = None,
               background: str = "#ffffff", view=None, up="y", elements: str = "faces") -> str:
-    """The HTML text of the viewer page (see :func:`write_html`)."""
+    """The HTML text of the viewer page (see :func:`write_html`).
+
+    Parameters
+    ----------
+    mesh, labels, title, info, background, view, up, elements
+        As :func:`write_html`.
+
+    Returns
+    -------
+    str
+        The page, one self-contained HTML file.
+
+    Raises
+    ------
+    ParameterError
+        As :func:`write_html` (labels, view, a background that is not a CSS colour).
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets import segment
+    >>> ball = trimesh.creation.icosphere(subdivisions=3)
+    >>> labels = segment(ball, 12).labels
+    >>> page = html_page(ball, labels, title="ball")
+    >>> page.startswith("<!DOCTYPE html>"), "ball - superfacets" in page
+    (True, True)
+    """
     from ...elements.inputs import is_cloud
 
     if is_cloud(mesh):
@@ -194,6 +220,15 @@ def write_html(path, mesh, labels=None, *, title: str | None = None, info: dict 
     -----
     Size is about 32 bytes of base64 per face (a 1M-face mesh gives a
     ~35 MB page); the browser builds flat-shaded triangles from it.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets import segment
+    >>> ball = trimesh.creation.icosphere(subdivisions=3)
+    >>> labels = segment(ball, 12).labels
+    >>> write_html("ball.html", ball, labels, title="ball").name
+    'ball.html'
     """
     from ...io.files import save
 
