@@ -92,29 +92,18 @@ class SegmentationResult:
 
     @property
     def stop_reason(self) -> str:
-        """:attr:`SegmentationResult.stop_reason` of any result with ``converged`` and
-        ``timings`` (a joined or adaptive result too).
-
-        Parameters
-        ----------
-        result : SegmentationResult or a result with ``converged`` and ``timings``
-
-        Returns
-        -------
-        str
-            ``'converged'``, ``'tolerance'``, ``'cycle'`` or ``'max_iter'``.
-
-        Raises
-        ------
-        AttributeError
-            Never: a result without ``timings`` reads as one without a cycle or tolerance.
+        """Why the passes stopped: ``'converged'`` (no center moved, or the passes after
+        the split-and-merge swaps were done), ``'tolerance'`` (a pass changed at most
+        ``tol`` of the area), ``'cycle'`` (the center lists repeated with a period; the
+        labels are those of pass ``max_iter``, as running every pass gives) or
+        ``'max_iter'`` (:func:`stop_reason`).
 
         Examples
         --------
         >>> import trimesh
         >>> from superfacets import segment
-        >>> stop_reason(segment(trimesh.creation.icosphere(subdivisions=3), 12, paper=True))
-        'converged'
+        >>> segment(trimesh.creation.icosphere(subdivisions=3), 12).stop_reason
+        'tolerance'
         """
         return stop_reason(self)
 
