@@ -313,7 +313,7 @@ def test_released_terms_come_back_the_same(sphere):
 
 
 def _released_fields_come_back(g, mesh=None):
-    names = ("normals", "pairs", "dual_edge", "lengths")
+    names = ("normals", "pairs", "dual_edge", "lengths") + (() if g.spans is None else ("spans",))
     before = {k: getattr(g, k).copy() for k in names}
     terms = g.terms
     g.release()
@@ -354,9 +354,30 @@ def test_face_graph_releases_what_the_passes_do_not_read_and_rebuilds_it(sphere)
 def test_vertex_and_point_graphs_release_their_pairs(sphere):
     from superfacets.elements.inputs import elements_of
 
-    for kind in ("vertices", "points"):
+    for kind, released in (("vertices", ["pairs", "dual_edge"]),
+                           ("points", ["pairs", "dual_edge", "spans"])):
         g = elements_of(sphere if kind == "vertices" else sphere.vertices, kind).graph
-        assert _released_fields_come_back(g) == ["pairs", "dual_edge"]
+        assert _released_fields_come_back(g) == released
+    assert g.pairs.dtype == np.int32  # points: 4-byte pairs, as built and rebuilt
+    g.release(keep=("spans",))
+    assert "spans" in g.__dict__ and "pairs" not in g.__dict__
+
+
+def test_coarsening_reads_no_released_field(sphere):
+    # the pipeline releases the pairs, dual edges and spans before the coarsening: it
+    # reads the CSR layout and the weights per CSR entry instead, with the same result
+    from superfacets.method.multilevel import COARSENING_READS, coarsen
+    from superfacets.method.weights import csr_weights, paper_weights
+
+    g = face_graph(sphere)
+    w = csr_weights(g, paper_weights(g))
+    kept = coarsen(g, w, 8)
+    g.release(keep=COARSENING_READS)
+    released = coarsen(g, w, 8)
+    assert not {"pairs", "dual_edge"} & set(g.__dict__)
+    for a, b in ((kept.graph.pairs, released.graph.pairs), (kept.weights, released.weights),
+                 (kept.graph.lengths, released.graph.lengths), (kept.cluster, released.cluster)):
+        np.testing.assert_array_equal(a, b)
 
 
 def test_face_graph_rebuilds_its_normals_after_its_mesh_is_gone(sphere):
@@ -382,11 +403,31 @@ def test_runs_that_release_the_graph_give_the_same_labels(valley, monkeypatch):
         r = segment(mesh, 12, **kw)
         return r.labels, "pairs" in face_graph(mesh).__dict__
 
-    for kw in ({}, {"cleanup": True, "split_merge": True}):
+    for kw in ({}, {"cleanup": True, "split_merge": True}, {"coarsen": 4}):
         kept, held = run(1 << 60, **kw)
         released, _ = run(0, **kw)
         assert held
         np.testing.assert_array_equal(released, kept)
+
+
+def test_point_runs_that_release_the_graph_give_the_same_labels(monkeypatch):
+    # points release their pairs and spans once the weights are made, before the
+    # coarse-to-fine run's clusters (20,000 points, k = 8: 5 points per cluster)
+    from superfacets import segment
+    from superfacets.method import pipeline
+
+    rng = np.random.default_rng(3)
+    xy = rng.random((20_000, 2))
+    cloud = np.c_[xy, 0.2 * np.sin(6 * xy[:, 0]) * np.cos(4 * xy[:, 1])]
+
+    def run(release_min):
+        monkeypatch.setattr(pipeline, "_RELEASE_MIN", release_min)
+        r = segment(cloud, 8)
+        return r.labels, r.timings.get("coarse_elements")
+
+    (kept, coarse), (released, _) = run(1 << 60), run(0)
+    assert coarse is not None and coarse < 20_000 // 3
+    np.testing.assert_array_equal(released, kept)
 
 
 def test_graph_and_geometry_on_threads_equal_one_thread(monkeypatch):
@@ -608,3 +649,28 @@ def test_superpoints_on_scan_lines_are_the_same_for_any_thread_count():
     ring = np.rint((np.linalg.norm(pts[:, :2], axis=1) - 5.0) / 0.4).astype(int)
     rings_per_label = [np.unique(ring[one.labels == s]).size for s in range(one.n_segments)]
     assert max(rings_per_label) > 1
+
+
+def test_point_graph_is_the_same_for_any_block_of_queries(monkeypatch):
+    # the KD-tree is queried in blocks (4-byte neighbours, the k-th distance kept): any
+    # block size gives the graph of one query of every point, bit for bit, with ties
+    # at the k-th distance (a quantized grid) and scan lines joined wider (a line)
+    from superfacets.elements import neighbors
+    from superfacets.elements.points import point_graph
+    from superfacets.inputs.cloud import PointCloud
+
+    xy = np.stack(np.meshgrid(np.arange(30.0), np.arange(20.0)), -1).reshape(-1, 2)
+    grid = np.c_[xy, 0.05 * (xy[:, 0] % 3)]
+    line = np.c_[np.linspace(0, 29, 200), np.full(200, 25.0), np.zeros(200)]
+    pts = np.concatenate([grid, line])
+
+    def graph(block, radius=None):
+        monkeypatch.setattr(neighbors, "BLOCK", block)
+        return point_graph(PointCloud(pts), 6, radius).graph
+
+    for radius in (None, 0.03):
+        one, blocks = graph(1 << 20, radius), graph(7, radius)
+        for name in ("pairs", "indptr", "indices", "sizes", "normals", "spans", "lengths"):
+            a, b = getattr(one, name), getattr(blocks, name)
+            assert a.dtype == b.dtype and np.array_equal(a, b), name
+    assert one.pairs.dtype == np.int32 and one.n_edges > 0

@@ -64,7 +64,7 @@ def test_components_without_a_seed_get_their_own():
 
 def test_coarse_graph_weights_follow_the_fine_distances(sphere):
     g, w, wc = _weighted(sphere)
-    co = coarsen(g, w, wc, 16)
+    co = coarsen(g, wc, 16)
     cg = co.graph
     assert 0.3 * g.n_elements / 16 < cg.n_elements < 3 * g.n_elements / 16
     np.testing.assert_allclose(cg.area, g.area)
@@ -87,14 +87,20 @@ def test_coarse_pairs_equal_a_stable_sort_and_reduceat():
     minimum path and the summed border lengths (pairs joined by 1 to several hundred
     adjacencies, the large buckets sorted another way)."""
     from superfacets._kernels.voronoi import coarse_pairs
+    from superfacets.elements.graph import adjacency_csr
 
     rng = np.random.default_rng(1)
-    for n, n_c, e in ((3000, 2000, 9000), (3000, 10, 20000), (50, 1, 400), (10, 3, 1)):
-        pairs = np.sort(rng.integers(0, n, (e, 2)), axis=1)
+    for n, n_c, e in ((3000, 2000, 9000), (3000, 10, 20000), (50, 1, 400), (10, 3, 2)):
+        pairs = np.unique(np.sort(rng.integers(0, n, (e, 2)), axis=1), axis=0)
+        pairs = pairs[pairs[:, 0] != pairs[:, 1]]  # a graph's pairs: distinct, sorted
+        e = pairs.shape[0]
         cluster = rng.integers(0, n_c, n)
         dist, w = rng.random(n), rng.random(e)
         lengths = rng.random(e) * 10 ** rng.uniform(-3, 3, e)
-        out, via, length = coarse_pairs(pairs, cluster, dist, w, lengths, n_c)
+        # read from the CSR layout: each entry's weight, the pairs' order
+        indptr, indices, dual_edge = adjacency_csr(pairs[:, 0], pairs[:, 1], n)
+        out, via, length = coarse_pairs(indptr, indices, cluster, dist, w[dual_edge], lengths,
+                                        n_c)
         a, b = cluster[pairs[:, 0]], cluster[pairs[:, 1]]
         cross = a != b
         lo, hi = np.minimum(a, b)[cross], np.maximum(a, b)[cross]
@@ -198,9 +204,9 @@ def test_too_few_clusters_for_k_falls_back(sphere):
     kw = dict(init="farthest", window=2.0, assignment="bounded", max_iter=50, tol=0.001,
               min_move=0.0, n_threads=1)
     r = np.sqrt(g.area / (30 * np.pi))
-    centers, info = coarse_centers(g, w, wc, 100, k=30, radius=r, **kw)  # ~60 clusters
+    centers, info = coarse_centers(g, wc, 100, k=30, radius=r, **kw)  # ~60 clusters
     assert centers is None and info["coarse_elements"] < 4 * 30
-    centers, info = coarse_centers(g, w, wc, 10, k=30, radius=r, **kw)  # ~500 clusters
+    centers, info = coarse_centers(g, wc, 10, k=30, radius=r, **kw)  # ~500 clusters
     assert centers.shape[0] >= 30 and np.unique(centers).size == centers.shape[0]
     assert info["coarse_passes"] >= 1
 
@@ -222,7 +228,7 @@ def test_clusters_without_any_neighbour():
     v = np.concatenate([t + [3.0 * i, 0, 0] for i in range(40)])
     mesh = Mesh(v, np.arange(120).reshape(40, 3))
     g, w, wc = _weighted(mesh)
-    co = coarsen(g, w, wc, 2)
+    co = coarsen(g, wc, 2)
     assert co.graph.n_edges == 0 and co.graph.n_elements == 40
     r = segment(mesh, 4, coarsen=2)  # capped to 1 (40 faces, 4 superfacets): plain run
     check_invariants(mesh, r.labels)

@@ -318,7 +318,7 @@ def knn_csr(nbr, keep, indptr, rows, more, more_keep):
     ``nbr[i]`` (where ``keep``) or ``i`` in ``nbr[j]``, and likewise for the longer
     lists ``more[t]`` (where ``more_keep``) of the points ``rows[t]`` (none: ``rows``
     of length 0). Fills ``indptr`` (n + 1); returns ``indices`` (int32, ascending per
-    row), ``dual_edge`` (int32: the pair of each entry) and ``pairs`` (e, 2) int64,
+    row), ``dual_edge`` (int32: the pair of each entry) and ``pairs`` (e, 2) int32,
     listed in ``(lo, hi)`` order: the layout :func:`csr_of_pairs` gives from the
     sorted distinct pairs. A point listed as its own neighbour is no edge."""
     n, k = nbr.shape
@@ -388,7 +388,7 @@ def knn_csr(nbr, keep, indptr, rows, more, more_keep):
     for i in range(n):
         first[i] = e
         e += indptr[i + 1] - above[i]
-    pairs = np.empty((e, 2), dtype=np.int64)
+    pairs = np.empty((e, 2), dtype=np.int32)
     dual_edge = np.empty(indptr[n], dtype=np.int32)
     for i in prange(n):
         for a in range(indptr[i], indptr[i + 1]):

@@ -81,38 +81,47 @@ def first_in_cells(positions, lo, h, dims, cap):
 
 
 @njit(cache=True, error_model="numpy")
-def coarse_pairs(pairs, cluster, dist, weights, lengths, n_c):
+def coarse_pairs(indptr, indices, cluster, dist, csr_w, lengths, n_c):
     """The adjacency of clusters: every pair of clusters ``lo < hi`` that some
     adjacency ``t`` joins, in ``(lo, hi)`` order, with the shortest path between
-    their seeds through such an adjacency (the minimum of ``dist[i] + weights[t]
-    + dist[j]``) and the summed ``lengths[t]`` (added in adjacency order). The
-    crossing adjacencies are bucketed by ``lo`` (no sort of all of them), each
-    bucket sorted by ``hi``. Returns ``(pairs (m, 2) int64, via (m,), length (m,))``."""
-    e = pairs.shape[0]
+    their seeds through such an adjacency (the minimum of ``dist[i] + w[t]
+    + dist[j]``) and the summed ``lengths[t]`` (added in adjacency order).
+
+    The adjacencies are read from the CSR layout: the entries ``(i, j)``, ``j > i``,
+    row by row, are the pairs ``t = 0, 1, ...`` in order (the graphs list their pairs
+    in ``(lo, hi)`` order), and ``csr_w`` holds each entry's weight; so neither the
+    pairs nor a copy of the weights per pair is needed. The crossing adjacencies
+    are bucketed by ``lo`` (no sort of all of them), each bucket sorted by ``hi``.
+    Returns ``(pairs (m, 2) int64, via (m,), length (m,))``."""
+    n = indptr.shape[0] - 1
     start = np.zeros(n_c + 1, dtype=np.int64)
-    for t in range(e):
-        a = cluster[pairs[t, 0]]
-        b = cluster[pairs[t, 1]]
-        if a != b:
-            start[min(a, b) + 1] += 1
+    for i in range(n):
+        a = cluster[i]
+        for x in range(indptr[i], indptr[i + 1]):
+            j = indices[x]
+            if j > i and cluster[j] != a:
+                start[min(a, cluster[j]) + 1] += 1
     for c in range(n_c):
         start[c + 1] += start[c]
     total = start[n_c]
-    hi = np.empty(total, dtype=np.int64)
+    hi = np.empty(total, dtype=np.int32)  # clusters <= elements < 2**31 (int32 indices)
     via = np.empty(total)
     span = np.empty(total)
     fill = start[:n_c].copy()
-    for t in range(e):  # bucket by lo, adjacency order kept within each bucket
-        i = pairs[t, 0]
-        j = pairs[t, 1]
+    t = 0
+    for i in range(n):  # bucket by lo, adjacency order kept within each bucket
         a = cluster[i]
-        b = cluster[j]
-        if a != b:
-            p = fill[min(a, b)]
-            fill[min(a, b)] += 1
-            hi[p] = max(a, b)
-            via[p] = dist[i] + weights[t] + dist[j]
-            span[p] = lengths[t]
+        for x in range(indptr[i], indptr[i + 1]):
+            j = indices[x]
+            if j > i:
+                b = cluster[j]
+                if a != b:
+                    p = fill[min(a, b)]
+                    fill[min(a, b)] += 1
+                    hi[p] = max(a, b)
+                    via[p] = dist[i] + csr_w[x] + dist[j]
+                    span[p] = lengths[t]
+                t += 1
     m = 0
     for c in range(n_c):  # each bucket sorted by hi, stable (insertion, or merge sort)
         s, f = start[c], start[c + 1]

@@ -84,19 +84,28 @@ def pairs_from_csr(graph: "ElementGraph", pair_dtype=np.int32) -> dict[str, np.n
 class _Rebuilt:
     """A field of :class:`ElementGraph` that :meth:`ElementGraph.release` may forget:
     on next use it is computed again, the same, by ``graph.rebuild[name](graph)``
-    (a dict of one or more fields, each stored if absent)."""
+    (a dict of one or more fields, each stored if absent). ``optional``: the field
+    defaults to None (a graph without a rebuild entry for it keeps None)."""
+
+    def __init__(self, optional: bool = False) -> None:
+        self.optional = optional
 
     def __set_name__(self, owner, name: str) -> None:
         self.name = name
 
     def __get__(self, graph, owner=None):
-        if graph is None:  # class access: the dataclass field has no default
+        if graph is None:  # class access: the dataclass field's default, if any
+            if self.optional:
+                return None
             raise AttributeError(self.name)
         d = graph.__dict__
         try:
             return d[self.name]
         except KeyError:
-            for name, value in graph.rebuild[self.name](graph).items():
+            make = graph.rebuild.get(self.name)
+            if make is None:  # an optional field never given
+                return None
+            for name, value in make(graph).items():
                 d.setdefault(name, value)
             return d[self.name]
 
@@ -188,7 +197,7 @@ class ElementGraph:
         pairs: the :class:`AdjacencyTerms` of those adjacencies.
     rebuild : mapping of str to callable
         For the fields :meth:`release` may forget (``normals``, ``pairs``,
-        ``dual_edge``, ``lengths``): ``rebuild[name](graph)`` computes that
+        ``dual_edge``, ``lengths``, ``spans``): ``rebuild[name](graph)`` computes that
         field again, the same, as a dict of fields. A field without an entry
         is never released.
 
@@ -217,7 +226,7 @@ class ElementGraph:
     boundary_lengths: np.ndarray
     edges: np.ndarray | None = None
     boundary_edges: np.ndarray | None = None
-    spans: np.ndarray | None = None
+    spans: np.ndarray | None = _Rebuilt(optional=True)
     scale2: np.ndarray | None = None
     terms_of: Callable[["ElementGraph", slice], tuple] | None = field(default=None, repr=False)
     rebuild: Mapping[str, Callable[["ElementGraph"], dict]] = field(default_factory=dict,
@@ -287,15 +296,24 @@ class ElementGraph:
         weights are made, so the terms do not stay in memory during the passes."""
         self.__dict__.pop("terms", None)
 
-    def release(self) -> None:
+    def release(self, keep: tuple = ()) -> None:
         """Forget the fields that have a :attr:`rebuild` entry (faces: the
         normals, pairs, dual-edge map and border lengths, about 60 bytes per
-        face, with the mesh's cached normals); each is computed again, the
+        face, with the mesh's cached normals; points: the pairs, dual-edge map
+        and spans, 114 bytes per point); each is computed again, the
         same, on next use. The pipeline calls it before the passes, which
         read only the CSR layout, the positions and the sizes, so that the
-        passes' peak memory does not hold them.
+        passes' peak memory does not hold them; and, keeping the normals and
+        lengths, before the coarsening, which reads those and the CSR layout.
+
+        Parameters
+        ----------
+        keep : tuple of str
+            Fields to keep all the same.
         """
         for name, make in self.rebuild.items():
+            if name in keep:
+                continue
             self.__dict__.pop(name, None)
             forget = getattr(make, "release", None)
             if forget is not None:

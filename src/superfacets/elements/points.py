@@ -38,13 +38,15 @@ weights for adjacent elements". Here each point is an element:
 
 from __future__ import annotations
 
+from functools import partial
 from typing import NamedTuple
 
 import numpy as np
 
 from ..inputs.bounds import column_bounds
-from .graph import ElementGraph, adjacency_csr, cached_on
-from .vertices import REBUILD_PAIRS, symmetric_terms
+from .graph import ElementGraph, adjacency_csr, cached_on, pairs_from_csr
+from .neighbors import nearest
+from .vertices import symmetric_terms
 
 __all__ = ["point_graph", "PointElements", "estimate_normals", "orient_normals",
            "distinct_points"]
@@ -255,58 +257,6 @@ def _key_bits(keys: np.ndarray, start: int) -> np.ndarray:
     return out
 
 
-def _break_ties(tree, pts: np.ndarray, dist: np.ndarray, nbr: np.ndarray, k: int,
-                queries: np.ndarray | None = None) -> None:
-    """Where the k-th and the next neighbour are equally far (quantized scans), keep the
-    tied neighbours of lowest index, in place: the KD-tree's own choice depends on the
-    whole cloud, the lowest index (the position's place in :func:`distinct_points`'
-    order) does not, so a tile of a cloud (:mod:`superfacets.scale.tiling`) gets the whole
-    cloud's graph inside its halo. ``queries``: the positions queried, row by row
-    (default: every point, in order)."""
-    q = pts if queries is None else queries
-    tied = np.flatnonzero(dist[:, k] == dist[:, k + 1])
-    if not tied.size:
-        return
-    reach = tree.query_ball_point(q[tied], dist[tied, k] * (1 + 1e-9), workers=-1)
-    for row, found in zip(tied.tolist(), reach):
-        cand = np.sort(np.asarray(found, dtype=np.int64))
-        d = np.sqrt(((pts[cand] - q[row]) ** 2).sum(axis=1))
-        pick = cand[np.argsort(d, kind="stable")[:k + 1]]  # ties: the lower index first
-        nbr[row, :k + 1] = pick
-        dist[row, :k + 1] = np.sqrt(((pts[pick] - q[row]) ** 2).sum(axis=1))
-
-
-def _query(tree, pts: np.ndarray, queries: np.ndarray, k: int,
-           own: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """The ``k + 1`` nearest points of each query, itself first (``own``: the queries'
-    indices among the points, default every point in order), ties at the k-th distance
-    to the lowest index (:func:`_break_ties`)."""
-    m = queries.shape[0]
-    extra = 1 if k + 1 < pts.shape[0] else 0  # one column more to see ties
-    dist, nbr = tree.query(queries, k=k + 1 + extra, workers=-1)
-    dist, nbr = dist.reshape(m, -1), nbr.reshape(m, -1)
-    if extra:
-        _break_ties(tree, pts, dist, nbr, k, queries)
-    _itself_first(nbr, np.arange(m) if own is None else own)
-    if extra:
-        dist, nbr = dist[:, :k + 1], nbr[:, :k + 1]
-    return dist, nbr
-
-
-def _itself_first(nbr: np.ndarray, own: np.ndarray) -> None:
-    """Put each query's own index in column 0, in place, the others shifted right.
-
-    A point is its own nearest at distance 0, but distinct points closer than about
-    1e-154 are at distance 0 too (the squared distance underflows), and the tree may
-    list such a twin first; as a neighbour of itself a point would then be an edge of
-    its own. (Their distances are all 0: only the indices move.)"""
-    for r in np.flatnonzero(nbr[:, 0] != own).tolist():
-        at = np.flatnonzero(nbr[r] == own[r])
-        end = int(at[0]) if at.size else nbr.shape[1] - 1  # not listed: drop the last
-        nbr[r, 1:end + 1] = nbr[r, :end].copy()
-        nbr[r, 0] = own[r]
-
-
 def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
                 neighbor_radius: float | None = None) -> PointElements:
     """The point graph of a cloud (see the module notes).
@@ -357,8 +307,11 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
     diagonal = float(np.linalg.norm(upper - lower))
     # the points are in Z-order (distinct_points): neighbouring queries walk the same nodes
     tree = cKDTree(pts)
-    dist, nbr = _query(tree, pts, pts, k)  # column 0: the point itself
-    area = np.pi * dist[:, -1] ** 2 / k
+    limit = None if neighbor_radius is None else neighbor_radius * diagonal
+    # column 0: the point itself; 4-byte indices, queried in blocks (elements/neighbors.py)
+    nbr, kth, keep = nearest(tree, pts, pts, k, limit=limit)
+    area = np.pi * kth ** 2 / k
+    del kth
     positive = area > 0
     if not positive.all():  # cannot happen with distinct points; keep sizes > 0 anyway
         area[~positive] = area[positive].min() if positive.any() else 1.0
@@ -379,21 +332,18 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
     k_wide = int(min(WIDEN * k, n - 1))
     if k_wide <= k:
         wide = wide[:0]
-    more = np.zeros((0, 1), dtype=np.int64)
+    more = np.zeros((0, 1), dtype=nbr.dtype)
     more_keep = np.zeros((0, 1), dtype=bool)
     if wide.size:
-        more_d, more = _query(tree, pts, pts[wide], k_wide, wide)
-        more, more_d = more[:, 1:], more_d[:, 1:]
-        more_keep = np.ones(more.shape, dtype=bool) if neighbor_radius is None else (
-            more_d <= neighbor_radius * diagonal)
-        del more_d
+        more, _, more_keep = nearest(tree, pts, pts[wide], k_wide, wide, limit)
+        more = more[:, 1:]
+        if more_keep is None:
+            more_keep = np.ones(more.shape, dtype=bool)
     del tree  # (its copy of the points and its nodes, before the layout's peak)
 
     cand = nbr[:, 1:]  # read in place by the kernel (a copy costs more than it saves)
-    keep = np.ones(cand.shape, dtype=bool)
-    if neighbor_radius is not None:
-        keep = dist[:, 1:] <= neighbor_radius * diagonal
-    del dist
+    if keep is None:
+        keep = np.ones(cand.shape, dtype=bool)
     if 2 * (cand.size + more.size) < 2**31 - 1:  # the kernel's int32 layout
         from .._kernels.adjacency import knn_csr
 
@@ -404,14 +354,14 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
     else:  # the distinct pairs, sorted
         src = np.concatenate([np.repeat(np.arange(n), k).reshape(n, k)[keep],
                               np.repeat(wide, more.shape[1]).reshape(more.shape)[more_keep]])
-        dst = np.concatenate([cand[keep], more[more_keep]])
+        dst = np.concatenate([cand[keep], more[more_keep]]).astype(np.int64)
         src, dst = src[src != dst], dst[src != dst]  # (no point is its own neighbour)
         key = np.minimum(src, dst) * np.int64(n) + np.maximum(src, dst)
         key = np.unique(key)
         lo, hi = key // n, key % n
         pairs = np.stack([lo, hi], axis=1)
         indptr, indices, dual_edge = adjacency_csr(lo, hi, n)
-    del more, more_keep
+    del more, more_keep, nbr, cand, keep
 
     if cloud.normals is None:
         normals = orient_normals(pts, normals, indptr, indices, cloud.viewpoint,
@@ -420,14 +370,28 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
     degree = np.diff(indptr).astype(np.float64)
     share = 2.0 * np.sqrt(np.pi * area) / np.maximum(degree, 1.0)
     lengths = 0.5 * (share[lo] + share[hi])
-    from .._kernels.geometry import edge_lengths
-
-    spans = np.empty(pairs.shape[0])
-    edge_lengths(pts, pairs, spans)  # |p_hi - p_lo|, as np.linalg.norm computes it
+    spans = _edge_spans(pts, pairs)
+    # what release() may forget: the pairs from the CSR layout, the spans from the pairs
+    rebuild = dict.fromkeys(("pairs", "dual_edge"),
+                            partial(pairs_from_csr, pair_dtype=pairs.dtype))
     graph = ElementGraph(
         kind="points", positions=pts, sizes=area, normals=normals,
         centroid=pts.mean(axis=0), lower=lower, diagonal=diagonal, pairs=pairs,
         indptr=indptr, indices=indices, dual_edge=dual_edge, lengths=lengths,
         boundary_elements=np.zeros(0, np.int64), boundary_lengths=np.zeros(0),
-        spans=spans, terms_of=symmetric_terms, rebuild=REBUILD_PAIRS)
+        spans=spans, terms_of=symmetric_terms, rebuild={**rebuild, "spans": _spans})
     return PointElements(graph, index)
+
+
+def _spans(graph: ElementGraph) -> dict:
+    """``rebuild["spans"]`` of a point graph: the spans again, as built."""
+    return {"spans": _edge_spans(graph.positions, graph.pairs)}
+
+
+def _edge_spans(pts: np.ndarray, pairs: np.ndarray) -> np.ndarray:
+    """``|p_hi - p_lo|`` of each pair, as ``np.linalg.norm`` computes it."""
+    from .._kernels.geometry import edge_lengths
+
+    spans = np.empty(pairs.shape[0])
+    edge_lengths(pts, pairs, spans)
+    return spans

@@ -40,10 +40,13 @@ from .params import superfacet_measure
 _MIN_CLUSTERS = 4  # clusters per superfacet below which the coarse run is not done
 _MAX_RATIO_DIV = 8  # coarsen is capped at n / (8 k): clusters per superfacet
 
-__all__ = ["Coarsening", "coarsen", "coarse_centers", "coarse_ratio", "coarsening_for",
-           "grid_seeds",
-           "start_centers", "voronoi_cells"]
+__all__ = ["COARSENING_READS", "Coarsening", "coarsen", "coarse_centers", "coarse_ratio",
+           "coarsening_for", "grid_seeds", "start_centers", "voronoi_cells"]
 
+#: The fields of a graph's :attr:`~superfacets.elements.graph.ElementGraph.rebuild` that
+#: :func:`coarsen` reads (besides the CSR layout, positions and sizes, never released):
+#: the others (pairs, dual edges, spans) may be released before it.
+COARSENING_READS = ("normals", "lengths")
 
 
 class Coarsening(NamedTuple):
@@ -163,18 +166,17 @@ def voronoi_cells(graph: ElementGraph, csr_w: np.ndarray, seeds: np.ndarray
         cap = min(bound, 4 * cap)
 
 
-def coarsen(graph: ElementGraph, weights: np.ndarray, csr_w: np.ndarray,
-            ratio: int) -> Coarsening:
+def coarsen(graph: ElementGraph, csr_w: np.ndarray, ratio: int) -> Coarsening:
     """Group the elements of ``graph`` into clusters of about ``ratio`` elements.
+
+    Reads the graph's CSR layout, positions, sizes, normals and border lengths, not
+    its pairs (the pipeline releases those first: :meth:`ElementGraph.release`).
 
     Parameters
     ----------
     graph : ElementGraph
-    weights : (e,) float64 ndarray or None
-        Weight of each adjacency (``graph.pairs`` order), ``>= 0``; None: read
-        from ``csr_w`` (the same values; the caller need not hold both).
     csr_w : (2 e,) float64 ndarray
-        The same weights per CSR entry.
+        Weight of each CSR entry, ``>= 0``.
     ratio : int
         Elements per cluster wanted (``>= 2``).
 
@@ -183,9 +185,6 @@ def coarsen(graph: ElementGraph, weights: np.ndarray, csr_w: np.ndarray,
     Coarsening
     """
     n = graph.n_elements
-    if weights is None:
-        weights = np.empty(graph.n_edges)
-        weights[graph.dual_edge] = csr_w
     positions = np.ascontiguousarray(graph.positions)
     sizes = graph.sizes
     seeds = grid_seeds(positions, graph.area, max(1, n // ratio))
@@ -211,7 +210,8 @@ def coarsen(graph: ElementGraph, weights: np.ndarray, csr_w: np.ndarray,
 
     # coarse adjacency: the fine pairs whose elements lie in different clusters
     # (the shortest seed-to-seed path through one, the summed border lengths)
-    pairs, w_c, len_c = coarse_pairs(graph.pairs, cluster, dist, weights, graph.lengths, n_c)
+    pairs, w_c, len_c = coarse_pairs(graph.indptr, graph.indices, cluster, dist, csr_w,
+                                     graph.lengths, n_c)
     del dist
     indptr, indices, dual_edge = adjacency_csr(pairs[:, 0], pairs[:, 1], n_c)
     coarse = ElementGraph(
@@ -224,9 +224,9 @@ def coarsen(graph: ElementGraph, weights: np.ndarray, csr_w: np.ndarray,
                       cluster=cluster, seeds=seeds)
 
 
-def coarse_centers(graph: ElementGraph, weights: np.ndarray | None, csr_w: np.ndarray,
-                   ratio: int, *, init: str, k: int | None, radius: float, window: float,
-                   assignment: str, max_iter: int, tol: float, min_move: float, n_threads: int,
+def coarse_centers(graph: ElementGraph, csr_w: np.ndarray, ratio: int, *, init: str,
+                   k: int | None, radius: float, window: float, assignment: str,
+                   max_iter: int, tol: float, min_move: float, n_threads: int,
                    every_piece: bool = False,
                    on_coarsened: Callable[[], None] | None = None) -> tuple[np.ndarray, dict]:
     """Run the method on the graph coarsened by ``ratio``; return fine centers.
@@ -248,7 +248,7 @@ def coarse_centers(graph: ElementGraph, weights: np.ndarray | None, csr_w: np.nd
     info : dict
         ``coarse_elements``, ``coarse_passes``, ``coarse_iterations``.
 
-    ``weights`` may be None (:func:`coarsen`); ``on_coarsened()`` is called once the
+    ``on_coarsened()`` is called once the
     clusters are made, before the coarse run (the pipeline frees there what only
     the coarsening read).
     """
@@ -257,8 +257,7 @@ def coarse_centers(graph: ElementGraph, weights: np.ndarray | None, csr_w: np.nd
     from .initialization import initial_centers
     from .passes import iterate, update_centers
 
-    co = coarsen(graph, weights, csr_w, ratio)
-    del weights
+    co = coarsen(graph, csr_w, ratio)
     if on_coarsened is not None:
         on_coarsened()
     cg = co.graph
@@ -319,7 +318,7 @@ def coarsening_for(graph: ElementGraph, params, k: int | None, radius: float) ->
     return max(1, min(ratio, graph.n_elements // (_MAX_RATIO_DIV * k_est)))
 
 
-def start_centers(graph: ElementGraph, weights: np.ndarray | None, csr_w: np.ndarray, params,
+def start_centers(graph: ElementGraph, csr_w: np.ndarray, params,
                   k, radius: float, ratio: int, center_tol: float, timings: dict,
                   stage=lambda name: None, on_coarsened: Callable[[], None] | None = None):
     """The centers the passes on every element start from.
@@ -327,8 +326,8 @@ def start_centers(graph: ElementGraph, weights: np.ndarray | None, csr_w: np.nda
     Runs :func:`coarse_centers` with ``ratio`` elements per cluster
     (:func:`coarsening_for`), or the plain initialization when ``ratio`` is 1 or
     the coarse run finds too few clusters. Coarse-run details go to ``timings``
-    (``coarse`` seconds, ``coarse_elements``, ``coarse_passes``). ``weights`` and
-    ``on_coarsened`` as in :func:`coarse_centers`. Unless ``params.paper``, the
+    (``coarse`` seconds, ``coarse_elements``, ``coarse_passes``). ``on_coarsened``
+    as in :func:`coarse_centers`. Unless ``params.paper``, the
     farthest points seed every connected piece first
     (:func:`superfacets.method.initialization.farthest_point_centers`).
 
@@ -347,7 +346,7 @@ def start_centers(graph: ElementGraph, weights: np.ndarray | None, csr_w: np.nda
         t = time.perf_counter()
         stage(f"coarse ({ratio}:1)")
         init, info = coarse_centers(
-            graph, weights, csr_w, ratio, init=p.init, k=k, radius=radius, window=p.window,
+            graph, csr_w, ratio, init=p.init, k=k, radius=radius, window=p.window,
             assignment=p.assignment, max_iter=p.max_iter, tol=p.tol,
             min_move=center_tol * radius, n_threads=p.n_threads,
             every_piece=not p.paper, on_coarsened=on_coarsened)

@@ -173,7 +173,7 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
     hooks.timings["graph"] = t_graph
     try:
         with hooks.stage("weights", "weights"):
-            w, swap_w = weigh(graph, rules, feats)
+            w, swap_w = weigh(graph, rules, feats, hooks.release_of(graph))
         with hooks.stage("init"):
             init, ratio = initialize(graph, w, rules, hooks, initial)
             release = hooks.release_of(graph)  # (again where no coarse run released them)

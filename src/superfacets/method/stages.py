@@ -18,7 +18,7 @@ from ..elements.kinds import ElementKind, kind_of
 from .adaptive import adapted_graph, density_for
 from .classify import make_classifier
 from .expansion import Workspaces
-from .multilevel import coarsening_for, start_centers
+from .multilevel import COARSENING_READS, coarsening_for, start_centers
 from .params import (
     DEFAULT_CENTER_TOL,
     DEFAULTS,
@@ -219,14 +219,18 @@ def resolve_rules(graph, p: SegmentParams, *, n_centers: int | None = None,
                  coarsen=coarsening_for(graph, p, k, radius))
 
 
-def weigh(graph, rules: Rules, features=None) -> tuple[np.ndarray, np.ndarray | None]:
+def weigh(graph, rules: Rules, features=None, release=None
+          ) -> tuple[np.ndarray, np.ndarray | None]:
     """Stage 3: the weight of each adjacency, per CSR entry (paper eqs. 1-3, or
     Shlafman's eq. 6; with ``beta``, the feature term), and the swap energies'
     weights where split-and-merge runs (convex folds scaled by the kind's
     ``swap_eta_convex``).
 
     The adjacency terms stay cached on the graph for the clean-up when it runs;
-    otherwise they are released (17 bytes per adjacency).
+    otherwise they are released (17 bytes per adjacency). Without split-and-merge,
+    ``release(keep=...)`` forgets the graph's pairs and spans once the weight of each
+    pair is made, before they are laid out per CSR entry (the memory peak of this
+    stage).
 
     Returns
     -------
@@ -239,6 +243,9 @@ def weigh(graph, rules: Rules, features=None) -> tuple[np.ndarray, np.ndarray | 
     rules : Rules
     features : (n, d) float ndarray, optional
         Per-element features, with ``beta > 0``.
+    release : callable, optional
+        The graph's :meth:`~superfacets.elements.graph.ElementGraph.release`, for a
+        graph large enough that it pays (:meth:`superfacets.method.pipeline.Hooks.release_of`).
 
     Raises
     ------
@@ -261,6 +268,8 @@ def weigh(graph, rules: Rules, features=None) -> tuple[np.ndarray, np.ndarray | 
         graph.terms  # noqa: B018 (kept for the clean-up; else computed chunk by chunk)
     w_pairs = edge_weights(graph, p.weighting, alpha=p.alpha, eta_convex=p.eta_convex,
                            features=features, beta=p.beta)
+    if release is not None and not rules.split_merge:
+        release(keep=COARSENING_READS + ("dual_edge",))  # read by csr_weights
     w = csr_weights(graph, w_pairs)
     del w_pairs  # the coarsening reads the same values from ``w``
     swap_w = None
@@ -319,7 +328,10 @@ def initialize(graph, w: np.ndarray, rules: Rules, hooks,
     """
     if initial is not None:
         return np.asarray(initial, dtype=np.int64), 1
-    return start_centers(graph, None, w, rules.params, rules.k, rules.r, rules.coarsen,
+    release = hooks.release_of(graph)
+    if release is not None and rules.coarsen > 1:
+        release(keep=COARSENING_READS)  # the pairs and spans: not held at the coarsening's peak
+    return start_centers(graph, w, rules.params, rules.k, rules.r, rules.coarsen,
                          rules.center_tol, hooks.timings, hooks.describe,
                          on_coarsened=hooks.release_of(graph))
 

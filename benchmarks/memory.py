@@ -1,0 +1,112 @@
+"""Peak memory per element of a run from the command line, each run a new process.
+
+Usage: python benchmarks/memory.py [--cases faces points2m points10m] [--rounds 1]
+       python benchmarks/memory.py --before /tmp/before/src [--rounds 2]
+
+Each row is ``superfacets segment INPUT -k K -o OUT.seg`` with the defaults, in a new
+process (start-up, reading and writing included); the peak is the process's largest
+resident set (``wait4``'s ``ru_maxrss``: the interpreter, numpy, scipy and numba
+included, about 100-160 MiB), divided by the input's elements. Cases:
+
+- ``faces``: ``hand_olivier`` subdivided three times (6,775,040 faces, made once by
+  ``benchmarks/large_meshes.py`` into ``~/.cache/superfacets/large``), k = 150;
+- ``points2m`` / ``points10m``: 2,000,000 / 10,000,000 points sampled uniformly on the
+  horse (``../shared/data/meshes``; seed 0, saved once as ``.npy`` in
+  ``~/.cache/superfacets/memory``), k = 1,000.
+
+With ``--before SRC`` each case also runs on another version of the package (the
+``src`` folder of a ``git worktree`` of an earlier commit), the two alternating, and
+the labels of both are compared. The table gives the fastest wall time and the largest
+peak of each version's rounds.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+SRC = HERE.parent / "src"
+SHARED = Path(os.environ.get("SUPERFACETS_SHARED", HERE.parents[1] / "shared")) / "data"
+CACHE = Path(os.environ.get("SUPERFACETS_CACHE", Path.home() / ".cache" / "superfacets"))
+
+CASES = {"faces": ("faces", 6_775_040, 150), "points2m": ("points", 2_000_000, 1000),
+         "points10m": ("points", 10_000_000, 1000)}
+
+
+def make_input(case: str) -> Path:
+    """The case's input file, made once into the cache."""
+    kind, n, _ = CASES[case]
+    if kind == "faces":
+        sys.path.insert(0, str(HERE))
+        from large_meshes import make
+
+        return make("hand_olivier", 3, CACHE / "large")
+    path = CACHE / "memory" / f"horse_{n}.npy"
+    if not path.exists():
+        import numpy as np
+
+        from superfacets import read_mesh
+        from superfacets.evaluation.datasets.sampling import sample_points
+
+        pts, _ = sample_points(read_mesh(SHARED / "meshes" / "horse.tri.xz"), n, seed=0)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(".part.npy")
+        np.save(tmp, np.ascontiguousarray(pts, dtype=np.float64))
+        tmp.replace(path)
+    return path
+
+
+def run(src: Path, path: Path, k: int, out: Path) -> tuple[float, float, str]:
+    """Wall seconds, peak MiB and the labels' digest of one run in a new process."""
+    env = dict(os.environ, PYTHONPATH=str(src.resolve()))
+    t = time.perf_counter()
+    proc = subprocess.Popen([sys.executable, "-m", "superfacets", "segment", str(path),
+                             "-k", str(k), "-o", str(out), "-q"], env=env)
+    _, status, usage = os.wait4(proc.pid, 0)
+    wall = time.perf_counter() - t
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    if proc.returncode:
+        raise SystemExit(f"{path.name}: exit {proc.returncode}")
+    return wall, usage.ru_maxrss / 1024, hashlib.sha256(out.read_bytes()).hexdigest()[:16]
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--cases", nargs="+", default=list(CASES), choices=list(CASES))
+    ap.add_argument("--rounds", type=int, default=1)
+    ap.add_argument("--before", type=Path, help="the src folder of an earlier version")
+    args = ap.parse_args(argv)
+    versions = ([("before", args.before)] if args.before else []) + [("this", SRC)]
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for case in args.cases:
+            path = make_input(case)
+            kind, n, k = CASES[case]
+            got = {name: [] for name, _ in versions}
+            for _ in range(args.rounds):
+                for name, src in versions:
+                    got[name].append(run(src, path, k, Path(tmp) / f"{name}.seg"))
+            digests = {r[2] for runs in got.values() for r in runs}
+            for name, _ in versions:
+                wall = min(r[0] for r in got[name])
+                peak = max(r[1] for r in got[name])
+                rows.append((case, f"{n:,} {kind}", k, name, wall, peak,
+                             peak * 2**20 / n, "yes" if len(digests) == 1 else "NO"))
+    print("| case | input | k | version | wall s | peak MiB | B per element | same labels |")
+    print("|---|---|---|---|---|---|---|---|")
+    for case, what, k, name, wall, peak, per, same in rows:
+        print(f"| {case} | {what} | {k} | {name} | {wall:.1f} | {peak:.0f} | {per:.0f} | "
+              f"{same} |")
+    print(f"\n{args.rounds} round(s){', alternating' if args.before else ''}; new process "
+          f"each; {os.cpu_count()} cores; Python {sys.version.split()[0]}")
+
+
+if __name__ == "__main__":
+    main()
