@@ -1,8 +1,8 @@
 """Memory a run will need, estimated before it is spent, against what the process may use.
 
-A run's peak grows with its elements (the element graph is the peak: about 430 bytes per
-face and 750 per point with the defaults, measured with ``benchmarks/scale.py`` and
-``benchmarks/superpoints.py``; the table of kinds holds the figure per kind). Where the
+A run's peak grows with its elements (the element graph and the passes' records: about
+430 bytes per face and 440-530 per point with the defaults, the interpreter included,
+measured with ``benchmarks/memory.py``; the table of kinds holds the figure per kind). Where the
 estimate exceeds what this process may still allocate (the machine's available memory,
 or an address-space limit set with ``ulimit -v``), the run is refused with
 :class:`~superfacets.errors.MemoryLimitError` in one line, before reading or building
