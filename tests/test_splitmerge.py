@@ -352,3 +352,19 @@ def test_one_pass_follows_the_swaps_on_faces_two_on_vertices(monkeypatch):
     assert r.timings["swaps"] > 0 and runs[-1][0] == 2 and 1 <= runs[-1][1] <= 2
     r = segment(mesh, 100, tol=0)  # the paper's rule: the passes after run to convergence
     assert all(bound == 50 for bound, _ in runs[2:])
+
+
+def test_label_pairs_from_the_csr_layout_equal_those_of_the_pairs(sphere):
+    # the adjacent superfacets of a swap round, read without the graph's pairs
+    from superfacets._kernels.splitmerge import label_pairs
+    from superfacets.elements import face_graph
+
+    g = face_graph(sphere)
+    lab = np.random.default_rng(0).integers(0, 40, g.n_elements).astype(np.int32)
+    a, b = lab[g.pairs[:, 0]], lab[g.pairs[:, 1]]
+    cross = a != b
+    want = np.unique(np.minimum(a[cross], b[cross]).astype(np.int64) * 40
+                     + np.maximum(a[cross], b[cross]))
+    np.testing.assert_array_equal(label_pairs(g.indptr, g.indices, lab, np.int64(40)), want)
+    same = np.zeros(g.n_elements, dtype=np.int32)  # one superfacet: no pair
+    assert label_pairs(g.indptr, g.indices, same, np.int64(1)).shape == (0,)

@@ -276,3 +276,28 @@ def merge_energies(indptr, indices, w, label, members, bounds, sizes, positions,
                 out[t], _ = _energy(work, n, sizes, dist, stamp, sid, power)
         sid += 1
     return sid
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def label_pairs(indptr, indices, label, k):
+    """The pairs of labels ``a < b`` that some adjacency joins, each once, as sorted keys
+    ``a * k + b``: read from the CSR layout (each adjacency in the row of its lower
+    element), so the graph's pairs are not needed."""
+    n = indptr.shape[0] - 1
+    m = 0
+    for i in range(n):
+        for x in range(indptr[i], indptr[i + 1]):
+            j = indices[x]
+            if j > i and label[j] != label[i]:
+                m += 1
+    keys = np.empty(m, dtype=np.int64)
+    m = 0
+    for i in range(n):
+        a = np.int64(label[i])
+        for x in range(indptr[i], indptr[i + 1]):
+            j = indices[x]
+            b = np.int64(label[j])
+            if j > i and b != a:
+                keys[m] = min(a, b) * k + max(a, b)
+                m += 1
+    return np.unique(keys)

@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._kernels.splitmerge import energies, merge_energies, split_candidates
+from .._kernels.splitmerge import energies, label_pairs, merge_energies, split_candidates
 from ..elements.kinds import kind_of
 
 __all__ = ["swap_round", "swap_and_iterate", "POWER", "LLOYD",
@@ -219,10 +219,7 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
         if best is None:  # no split lowers the energy: no swap
             return lab.copy(), 0
         # adjacent superfacets: each pair once, a < b
-        a, b = lab[g.pairs[:, 0]], lab[g.pairs[:, 1]]
-        cross = a != b
-        key = np.unique(np.minimum(a[cross], b[cross]).astype(np.int64) * k
-                        + np.maximum(a[cross], b[cross]))
+        key = label_pairs(g.indptr, g.indices, lab, np.int64(k))  # (no pairs rebuilt)
         pa, pb = key // k, key % k
         union = np.empty(key.shape[0])
         most = best[1] if pruned else np.inf
