@@ -355,7 +355,7 @@ def test_vertex_and_point_graphs_release_their_pairs(sphere):
     from superfacets.elements.inputs import elements_of
 
     for kind, released in (("vertices", ["pairs", "dual_edge"]),
-                           ("points", ["pairs", "dual_edge", "spans"])):
+                           ("points", ["pairs", "dual_edge", "lengths", "spans"])):
         g = elements_of(sphere if kind == "vertices" else sphere.vertices, kind).graph
         assert _released_fields_come_back(g) == released
     assert g.pairs.dtype == np.int32  # points: 4-byte pairs, as built and rebuilt

@@ -90,8 +90,10 @@ def coarse_pairs(indptr, indices, cluster, dist, csr_w, lengths, n_c):
     The adjacencies are read from the CSR layout: the entries ``(i, j)``, ``j > i``,
     row by row, are the pairs ``t = 0, 1, ...`` in order (the graphs list their pairs
     in ``(lo, hi)`` order), and ``csr_w`` holds each entry's weight; so neither the
-    pairs nor a copy of the weights per pair is needed. The crossing adjacencies
-    are bucketed by ``lo`` (no sort of all of them), each bucket sorted by ``hi``.
+    pairs nor a copy of the weights per pair is needed. The crossing adjacencies'
+    ``hi`` are bucketed by ``lo`` (4 bytes each, no sort of all of them), each bucket
+    sorted and made distinct: the cluster pairs; a second pass in adjacency order
+    adds each adjacency into its pair (found by bisection in its bucket).
     Returns ``(pairs (m, 2) int64, via (m,), length (m,))``."""
     n = indptr.shape[0] - 1
     start = np.zeros(n_c + 1, dtype=np.int64)
@@ -103,69 +105,64 @@ def coarse_pairs(indptr, indices, cluster, dist, csr_w, lengths, n_c):
                 start[min(a, cluster[j]) + 1] += 1
     for c in range(n_c):
         start[c + 1] += start[c]
-    total = start[n_c]
-    hi = np.empty(total, dtype=np.int32)  # clusters <= elements < 2**31 (int32 indices)
-    via = np.empty(total)
-    span = np.empty(total)
+    hi = np.empty(start[n_c], dtype=np.int32)  # clusters <= elements < 2**31 (int32 ids)
     fill = start[:n_c].copy()
+    for i in range(n):  # bucket by lo
+        a = cluster[i]
+        for x in range(indptr[i], indptr[i + 1]):
+            j = indices[x]
+            if j > i and cluster[j] != a:
+                b = cluster[j]
+                hi[fill[min(a, b)]] = max(a, b)
+                fill[min(a, b)] += 1
+    first = np.zeros(n_c + 1, dtype=np.int64)  # each lo's first pair
+    for c in range(n_c):  # each bucket sorted, its distinct values at its start
+        s, f = start[c], start[c + 1]
+        if f - s > 32:
+            hi[s:f] = np.sort(hi[s:f])
+        else:
+            for x in range(s + 1, f):
+                h = hi[x]
+                y = x - 1
+                while y >= s and hi[y] > h:
+                    hi[y + 1] = hi[y]
+                    y -= 1
+                hi[y + 1] = h
+        u = 0
+        for x in range(s, f):
+            if u == 0 or hi[s + u - 1] != hi[x]:
+                hi[s + u] = hi[x]
+                u += 1
+        first[c + 1] = first[c] + u
+    m = first[n_c]
+    out = np.empty((m, 2), dtype=np.int64)
+    w_c = np.full(m, np.inf)
+    len_c = np.zeros(m)
+    for c in range(n_c):
+        for u in range(first[c + 1] - first[c]):
+            out[first[c] + u, 0] = c
+            out[first[c] + u, 1] = hi[start[c] + u]
     t = 0
-    for i in range(n):  # bucket by lo, adjacency order kept within each bucket
+    for i in range(n):  # in adjacency order: the lengths add up in that order
         a = cluster[i]
         for x in range(indptr[i], indptr[i + 1]):
             j = indices[x]
             if j > i:
                 b = cluster[j]
                 if a != b:
-                    p = fill[min(a, b)]
-                    fill[min(a, b)] += 1
-                    hi[p] = max(a, b)
-                    via[p] = dist[i] + csr_w[x] + dist[j]
-                    span[p] = lengths[t]
+                    lo_, h = min(a, b), max(a, b)
+                    s = start[lo_]
+                    left, right = 0, first[lo_ + 1] - first[lo_]
+                    while left < right:
+                        mid = (left + right) >> 1
+                        if hi[s + mid] < h:
+                            left = mid + 1
+                        else:
+                            right = mid
+                    g = first[lo_] + left
+                    v = dist[i] + csr_w[x] + dist[j]
+                    if v < w_c[g]:
+                        w_c[g] = v
+                    len_c[g] += lengths[t]
                 t += 1
-    m = 0
-    for c in range(n_c):  # each bucket sorted by hi, stable (insertion, or merge sort)
-        s, f = start[c], start[c + 1]
-        if f - s > 32:
-            o = np.argsort(hi[s:f], kind="mergesort") + s
-            hi[s:f] = hi[o]
-            via[s:f] = via[o]
-            span[s:f] = span[o]
-        else:
-            for x in range(s + 1, f):
-                h, v, w = hi[x], via[x], span[x]
-                y = x - 1
-                while y >= s and hi[y] > h:
-                    hi[y + 1] = hi[y]
-                    via[y + 1] = via[y]
-                    span[y + 1] = span[y]
-                    y -= 1
-                hi[y + 1] = h
-                via[y + 1] = v
-                span[y + 1] = w
-        for x in range(s, f):
-            if x == s or hi[x] != hi[x - 1]:
-                m += 1
-    out = np.empty((m, 2), dtype=np.int64)
-    w_c = np.empty(m)
-    len_c = np.empty(m)
-    q = 0
-    for c in range(n_c):
-        x = start[c]
-        f = start[c + 1]
-        while x < f:
-            y = x + 1
-            low = via[x]
-            while y < f and hi[y] == hi[x]:
-                if via[y] < low:
-                    low = via[y]
-                y += 1
-            out[q, 0] = c
-            out[q, 1] = hi[x]
-            w_c[q] = low
-            total = 0.0
-            for z in range(x, y):
-                total += span[z]
-            len_c[q] = total
-            q += 1
-            x = y
     return out, w_c, len_c

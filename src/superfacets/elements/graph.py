@@ -299,8 +299,8 @@ class ElementGraph:
     def release(self, keep: tuple = ()) -> None:
         """Forget the fields that have a :attr:`rebuild` entry (faces: the
         normals, pairs, dual-edge map and border lengths, about 60 bytes per
-        face, with the mesh's cached normals; points: the pairs, dual-edge map
-        and spans, 114 bytes per point); each is computed again, the
+        face, with the mesh's cached normals; points: the pairs, dual-edge map,
+        border lengths and spans, about 160 bytes per point); each is computed again, the
         same, on next use. The pipeline calls it before the passes, which
         read only the CSR layout, the positions and the sizes, so that the
         passes' peak memory does not hold them; and, keeping the normals and

@@ -367,13 +367,14 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
         normals = orient_normals(pts, normals, indptr, indices, cloud.viewpoint,
                                  getattr(cloud, "orient_like", None),
                                  getattr(cloud, "up", None))
-    degree = np.diff(indptr).astype(np.float64)
-    share = 2.0 * np.sqrt(np.pi * area) / np.maximum(degree, 1.0)
-    lengths = 0.5 * (share[lo] + share[hi])
+    lengths = _border_lengths(area, indptr, lo, hi)
     spans = _edge_spans(pts, pairs)
-    # what release() may forget: the pairs from the CSR layout, the spans from the pairs
+    # what release() may forget: the pairs from the CSR layout, the spans and the border
+    # lengths from the pairs (the lengths from the sizes as built: a content-sensitive
+    # run's graph has other sizes)
     rebuild = dict.fromkeys(("pairs", "dual_edge"),
                             partial(pairs_from_csr, pair_dtype=pairs.dtype))
+    rebuild["lengths"] = partial(_lengths, area)
     graph = ElementGraph(
         kind="points", positions=pts, sizes=area, normals=normals,
         centroid=pts.mean(axis=0), lower=lower, diagonal=diagonal, pairs=pairs,
@@ -386,6 +387,21 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
 def _spans(graph: ElementGraph) -> dict:
     """``rebuild["spans"]`` of a point graph: the spans again, as built."""
     return {"spans": _edge_spans(graph.positions, graph.pairs)}
+
+
+def _lengths(area: np.ndarray, graph: ElementGraph) -> dict:
+    """``rebuild["lengths"]`` of a point graph: the border lengths again, as built."""
+    pairs = graph.pairs
+    return {"lengths": _border_lengths(area, graph.indptr, pairs[:, 0], pairs[:, 1])}
+
+
+def _border_lengths(area: np.ndarray, indptr: np.ndarray, lo: np.ndarray, hi: np.ndarray
+                    ) -> np.ndarray:
+    """Each point's disk perimeter ``2 sqrt(pi a_i)`` shared among its neighbours, the
+    two shares of each pair averaged (see the module notes)."""
+    degree = np.diff(indptr).astype(np.float64)
+    share = 2.0 * np.sqrt(np.pi * area) / np.maximum(degree, 1.0)
+    return 0.5 * (share[lo] + share[hi])
 
 
 def _edge_spans(pts: np.ndarray, pairs: np.ndarray) -> np.ndarray:
