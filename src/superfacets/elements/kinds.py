@@ -106,8 +106,9 @@ class ElementKind:
         superpoints (vertices and points).
     peak_bytes : int
         A run's peak memory per element with the defaults, the interpreter included
-        (faces: 425 bytes measured on 6.8M faces; points: 527 on 2M points and 439 on
-        10M; ``benchmarks/memory.py``); a run whose estimate
+        (faces: 387 bytes measured on 6.8M faces; points: 396 on 10M points and 374 on
+        50M, 487 on 2M where the interpreter weighs more; ``benchmarks/memory.py``); a
+        run whose estimate
         exceeds what the process may use is refused before its graph is built
         (:func:`superfacets._runtime.memory.check_memory`).
     exact_count : bool
@@ -181,7 +182,7 @@ KINDS = {k.name: k for k in (
                 rows="n_vertices"),
     ElementKind("points", "point", coarse_min_per_segment=1000, coarse_per_segment=400,
                 coarse_neighbor_cap=True, auto_density=True, unit_sizes_in_levels=True,
-                neighborhood=True, cloud=True, rows="n_total", peak_bytes=600,
+                neighborhood=True, cloud=True, rows="n_total", peak_bytes=420,
                 exact_count=True),
     ElementKind("cells", "cell", dim=3, rows="n_tets", segment_word="superfacets"),
 )}
