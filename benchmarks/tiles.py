@@ -117,7 +117,7 @@ def _row(name, n, data, gt, path, k, a, folder):
     t = time.perf_counter()
     tiled = segment_tiled(path, k, tiles=a.tiles, workers=a.workers, halo=a.halo)
     wall = time.perf_counter() - t
-    src = _graph(data)
+    src = _graph(np.load(data) if isinstance(data, Path) else data)  # (a cloud: loaded now)
     g = src.graph
     el = src.index if src.index is not None else None
 
@@ -134,7 +134,7 @@ def _row(name, n, data, gt, path, k, a, folder):
     cut = int(np.unique(pieces).size - np.unique(per_element(tiled.labels)).size)
     peak = max(t[f"{ph}_peak_mib"] or 0 for t in tiled.tiles for ph in ("centers", "labels"))
     ue_s, ue_t = ue(s_labels), ue(tiled.labels)
-    if isinstance(data, np.ndarray):  # points: also the experiment's measure
+    if isinstance(data, (np.ndarray, Path)):  # points: also the experiment's measure
         print(f"  each point counted once: UE {_equal_weight_ue(s_labels, gt):.4f} / "
               f"{_equal_weight_ue(tiled.labels, gt):.4f}", flush=True)
     print(f"| {name} | {n:,} | {k} | {tiled.layout.describe()} | "
@@ -326,7 +326,9 @@ def main() -> None:
                     _row_tiled_only(f"points on PSB {a.mesh_id} subdivided {s}x", n, label,
                                     pp, a.k, a)
                 else:
-                    _row("points on it", n, np.load(pp), label, pp, a.k, a, folder)
+                    # the cloud is read from its file by each run, and by this process
+                    # only after them (50M points: the single run needs the memory)
+                    _row("points on it", n, pp, label, pp, a.k, a, folder)
 
 
 if __name__ == "__main__":
