@@ -4,9 +4,9 @@ scipy's KD-tree answers a query of ``m`` points with two ``(m, k + 1)`` arrays o
 numbers. For the whole cloud at once those are 192 bytes per point at ``k = 10``, more than
 the rest of the point graph needs at its peak. :func:`nearest` queries blocks of
 :data:`BLOCK` points and keeps only what the graph reads: the neighbours as 4-byte indices,
-the distance to the ``k``-th and, with a radius, which neighbours lie within it (24 + 8 +
-10 bytes per point). Each query is answered alone, so the result is the same for any
-block size, bit for bit.
+the distance to the ``k``-th and, with a radius, which neighbours lie within it (44 + 8,
+and 10 more with a radius, bytes per point at ``k = 10``). Each query is answered alone,
+so the result is the same for any block size, bit for bit.
 
 Ties at the ``k``-th distance (quantized scans) go to the lowest index, and each point is
 its own first neighbour (:func:`superfacets.elements.points.point_graph`).
