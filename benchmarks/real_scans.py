@@ -1,7 +1,8 @@
 """Superpoints on labelled real scans, against the tools scan users run, at equal counts.
 
 Usage: python benchmarks/real_scans.py [--scans NAME ...] [-k 300 1000 3000]
-       [--methods superfacets graph_segmentation cut_pursuit vccs] [--beta 0 50]
+       [--methods superfacets graph_segmentation cut_pursuit spt_partition vccs]
+       [--spt-levels 1 2] [--beta 0 50]
        [--neighbors 10] [--split-merge] [--min-points 3] [--content] [--adaptive]
        [--leave-out CLASS ...] [--csv results.csv] [--download]
 
@@ -36,6 +37,13 @@ Methods (the registry's, so ``superfacets experiment`` runs the same code):
 - ``cut_pursuit``: Superpoint Graph's partition (``cut-pursuit-py``, the
   ``baselines`` extra), its regularisation searched for k; skipped if not
   installed;
+- ``spt_partition``: cut pursuit as Superpoint Transformer runs its
+  partition (``superfacets.evaluation.baselines.spt_partition``), with the
+  dataset settings nearest the scan (``ScanSource.spt_preset``: ScanNet for
+  the rooms, KITTI-360 for the sweeps, DALES for the airborne tile), the
+  regularisation of its level 1 or 2 searched for k (``--spt-levels``: each
+  level asked for is a row; default: the level the count chooses); skipped
+  unless ``pycut-pursuit`` (GPL-3, installed by hand) is importable;
 - ``vccs``: PCL's supervoxels through the external ``vccs_supervoxel``
   module (docs/notes/superpoints.md says how to build it), its seed resolution
   searched for k; skipped if it is not importable.
@@ -53,7 +61,7 @@ import time
 
 import numpy as np
 
-METHODS = ("superfacets", "graph_segmentation", "cut_pursuit", "vccs")
+METHODS = ("superfacets", "graph_segmentation", "cut_pursuit", "spt_partition", "vccs")
 COLUMNS = ("scan", "points", "method", "beta", "k", "segments", "undersegmentation_error",
            "boundary_recall", "boundary_precision", "achievable_accuracy", "median_points",
            "single_points", "seconds", "instances_undersegmentation_error",
@@ -67,6 +75,11 @@ def available(method: str) -> bool:
             importlib.util.find_spec("cut_pursuit_py") is not None
     if method == "vccs":
         return importlib.util.find_spec("vccs_supervoxel") is not None
+    if method == "spt_partition":
+        try:  # a wheel built against NumPy 1 is found but does not import
+            import pycut_pursuit.cp_d0_dist  # noqa: F401
+        except ImportError:
+            return False
     return True
 
 
@@ -107,6 +120,11 @@ def run(scan, method: str, k: int, beta: float, options: dict | None = None,
         from superfacets.evaluation.baselines.cut_pursuit import cut_pursuit
 
         labels = cut_pursuit(cloud, k, elements="points", n_neighbors=neighbors)
+    elif method == "spt_partition":  # its own graph and voxels: the neighbours are its own
+        from superfacets.evaluation.baselines.spt_partition import spt_partition
+
+        labels = spt_partition(cloud, k, preset=scan.source.spt_preset,
+                               level=(options or {}).get("level", "auto"))
     else:
         from superfacets.evaluation.baselines.vccs import vccs
 
@@ -183,6 +201,9 @@ def main() -> None:
                          "ASPRS 'unclassified', scattered points on the airborne tile)")
     ap.add_argument("--adaptive", action="store_true",
                     help="also superfacets' content-adaptive superpoints (adaptive_superpoints)")
+    ap.add_argument("--spt-levels", type=int, nargs="+", choices=(1, 2), default=[],
+                    help="spt_partition: search these levels' regularisation, a row each "
+                         "(default: the level the count chooses)")
     ap.add_argument("--csv", help="also write every row to this CSV file")
     ap.add_argument("--download", action="store_true", help="fetch missing scans first")
     a = ap.parse_args()
@@ -221,6 +242,8 @@ def main() -> None:
                 betas = [b for b in a.beta if b == 0 or coloured] \
                     if method == "superfacets" else [0.0]
                 variants = [(b, {}) for b in betas]
+                if method == "spt_partition" and a.spt_levels:
+                    variants = [(0.0, {"level": lv}) for lv in a.spt_levels]
                 if method == "superfacets" and a.split_merge:
                     variants += [(b, {"split_merge": True}) for b in betas]
                 if method == "superfacets" and a.content:
@@ -235,6 +258,7 @@ def main() -> None:
                         (" split-and-merge" if options.get("split_merge") else "") + \
                         (" content" if "density" in options else "") + \
                         (" adaptive" if options.get("adaptive") else "") + \
+                        (f" level {options['level']}" if "level" in options else "") + \
                         (f" min {options['min_points']} points" if "min_points" in options
                          else "")
                     print(f"| {k} | {label} | {r['undersegmentation_error']:.4f} | "

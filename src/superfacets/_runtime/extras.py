@@ -24,7 +24,8 @@ __all__ = ["require", "EXTRAS"]
 EXTRAS = {"pyvista": "render", "PIL": "render", "pandas": "report", "matplotlib": "report",
           "pypcd4": "clouds", "laspy": "clouds",
           "distributed": "distributed", "dask": "distributed", "pyarrow": "distributed",
-          "networkx": "graph", "cut_pursuit_py": "baselines", "meshio": "volumes"}
+          "networkx": "graph", "cut_pursuit_py": "baselines", "pgeof": "baselines",
+          "sklearn": "baselines", "meshio": "volumes"}
 
 
 def require(module: str, feature: str):

@@ -244,6 +244,13 @@ def _run_cut_pursuit(mesh, n_segments, *, cache, seed, elements="points", reg_st
                                  elements=elements))
 
 
+def _run_spt_partition(mesh, n_segments, *, cache, seed, elements="points", preset, level):
+    from .baselines.spt_partition import spt_partition
+
+    return MethodRun(spt_partition(mesh, n_segments, preset=preset,
+                                   level="auto" if level <= 0 else level))
+
+
 def _run_vccs(mesh, n_segments, *, cache, seed, elements="points", seed_resolution):
     from .baselines.vccs import vccs
 
@@ -314,6 +321,14 @@ register_method(
                 "(Superpoint Graph's partition; the cut-pursuit-py package, baselines extra); "
                 "reg_strength=0 searches it for n_segments",
     elements=("vertices", "points"))
+register_method(
+    "spt_partition", _run_spt_partition, defaults=dict(preset="scannet", level=0),
+    description="cut pursuit as Superpoint Transformer runs its partition (voxels, its point "
+                "features with elevation and colour, its graph, regularisation and minimum "
+                "size; preset: scannet, s3dis, kitti360 or dales); the regularisation of level "
+                "1 or 2 (level=0: chosen by the count) searched for n_segments; needs "
+                "pycut-pursuit (GPL-3, installed by hand) and the baselines extra",
+    elements=("points",))
 register_method(
     "vccs", _run_vccs, defaults=dict(seed_resolution=0.0),
     description="VCCS supervoxels (PCL's SupervoxelClustering) through the external module "

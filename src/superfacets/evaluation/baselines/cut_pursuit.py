@@ -30,7 +30,12 @@ from 1e-4 to 100), so it is applied by dividing the features by
 ``sqrt(reg_strength)`` and passing 1: minimising ``sum ||g - f / s||^2 +
 sum w`` is the problem above with ``reg_strength = s^2``. The solver is
 ``cut-pursuit-py`` (MIT, an optional dependency: ``pip install
-cut-pursuit-py``); the GPL ``pycut-pursuit`` is not used.
+cut-pursuit-py``); the GPL ``pycut-pursuit`` is not used here.
+
+This is Superpoint Graph's partition with the package's own graph, not the
+strongest configuration: :mod:`.spt_partition` runs cut pursuit as
+Superpoint Transformer does (voxels, elevation, its graph, a minimum
+superpoint size, two levels), which the comparison tables use as well.
 
 References
 ----------

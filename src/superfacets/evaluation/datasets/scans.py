@@ -73,6 +73,11 @@ class ScanSource:
         above).
     credit : str
         Who made the data and under which licence.
+    spt_preset : str
+        The Superpoint Transformer dataset settings nearest this scan's
+        sensor and scene (a key of
+        :data:`superfacets.evaluation.baselines.spt_partition.PRESETS`), for
+        that baseline.
     """
 
     name: str
@@ -80,6 +85,7 @@ class ScanSource:
     files: tuple
     labels: str
     credit: str
+    spt_preset: str = "scannet"
 
 
 def _github(repo: str, commit: str, path: str) -> str:
@@ -107,7 +113,7 @@ def _kitti(frame: str, points_sha: str, labels_sha: str) -> ScanSource:
                  ("labels", f"{base}/labels/{frame}.npy", labels_sha))),
         "semantickitti",
         "SemanticKITTI (Behley et al., ICCV 2019; CC BY-NC-SA 4.0), sequence 08 frame "
-        f"{frame} as shipped in Open3D-ML's demo data (19 classes, 0 unlabelled)")
+        f"{frame} as shipped in Open3D-ML's demo data (19 classes, 0 unlabelled)", "kitti360")
 
 
 def _scannet(scene: str, points_sha: str, labels_sha: str, instances_sha: str) -> ScanSource:
@@ -139,7 +145,7 @@ SCANS: dict[str, ScanSource] = {s.name: s for s in (
         "a crop of an airborne survey of France (Lambert-93 coordinates, RIEGL scanner, "
         "classified with TerraScan in the IGN LiDAR HD scheme, coloured), from PDAL's test "
         "data: ASPRS classes ground, low/medium/high vegetation, building, unclassified, "
-        "and 65 (IGN's artefacts)"),
+        "and 65 (IGN's artefacts)", "dales"),
     _scannet("scene0000_00", "c73b979bbff0bb2cc93cf6d57aea10234c807d246df16c6ecc40e8fbd896ac00",
              "7b5bf6e35fd5007618dc22748f50991208635be3aec9783ffd3f0f93761e2f68",
              "5ef2f8b2622c3512a19902807294216130f6332872cf3db121f6d5815cd0a8c4"),
