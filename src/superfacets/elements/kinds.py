@@ -116,6 +116,13 @@ class ElementKind:
         beyond it (regions no window reached) are merged, cheapest first
         (:func:`superfacets.method.stages.exact_count`), down to the input's number of
         separate pieces at the least.
+    single_weights : bool
+        The run's weights per CSR entry are float32 instead of float64 (points: the
+        largest array of a cloud's run, 91 of 396 bytes per point on 10M points; the
+        distances still add up in float64). Judged on the 300 benchmark meshes' sampled
+        clouds at k = 150: 0 of 300 runs changed (faces, whose weights weigh 24 of 387
+        bytes, would move 26 of 300 runs for nothing they need; ``docs/notes/scale-design.md``).
+        ``paper=True`` keeps float64 on every kind.
     objects : bool
         The elements are what a scene's objects are made of (faces): a run may
         share ``k`` among the objects (``--per-object``), the objects are named
@@ -153,6 +160,7 @@ class ElementKind:
     objects: bool = False
     peak_bytes: int = 450
     exact_count: bool = False
+    single_weights: bool = False
 
     def n_rows(self, data) -> int:
         """Number of labels a run on ``data`` (a mesh, cloud or tetrahedral mesh) returns.
@@ -183,7 +191,7 @@ KINDS = {k.name: k for k in (
     ElementKind("points", "point", coarse_min_per_segment=1000, coarse_per_segment=400,
                 coarse_neighbor_cap=True, auto_density=True, unit_sizes_in_levels=True,
                 neighborhood=True, cloud=True, rows="n_total", peak_bytes=420,
-                exact_count=True),
+                exact_count=True, single_weights=True),
     ElementKind("cells", "cell", dim=3, rows="n_tets", segment_word="superfacets"),
 )}
 

@@ -28,7 +28,7 @@ from .params import (
     superfacet_size,
 )
 from .passes import Iteration, iterate
-from .weights import csr_weights, edge_weights
+from .weights import csr_weights, edge_weights, weight_dtype
 
 __all__ = ["Rules", "build_graph", "resolve_rules", "weigh", "initialize",
            "iterate_passes"]
@@ -234,8 +234,10 @@ def weigh(graph, rules: Rules, features=None, release=None
 
     Returns
     -------
-    weights : (2 e,) float64 ndarray
-    swap_weights : (2 e,) float64 ndarray or None
+    weights : (2 e,) float64 or float32 ndarray
+        One per CSR entry; float32 on the kinds the table marks ``single_weights``
+        (points), unless ``paper`` (:func:`~superfacets.method.weights.weight_dtype`).
+    swap_weights : (2 e,) ndarray of the same dtype, or None
 
     Parameters
     ----------
@@ -270,14 +272,15 @@ def weigh(graph, rules: Rules, features=None, release=None
                            features=features, beta=p.beta)
     if release is not None and not rules.split_merge:
         release(keep=COARSENING_READS + ("dual_edge",))  # read by csr_weights
-    w = csr_weights(graph, w_pairs)
+    w = csr_weights(graph, w_pairs, weight_dtype(rules.kind, p.paper))
     del w_pairs  # the coarsening reads the same values from ``w``
     swap_w = None
     if rules.split_merge:  # the swap energies' weights (on faces: convex folds count half)
         from .weights import convex_scaled
 
         swap_w = convex_scaled(graph, w, alpha=p.alpha, eta_convex=p.eta_convex,
-                               factor=rules.kind.swap_eta_convex, weighting=p.weighting)
+                               factor=rules.kind.swap_eta_convex, weighting=p.weighting
+                               ).astype(w.dtype, copy=False)
     if not rules.cleanup:
         graph.release_terms()  # not needed again by this run
     return w, swap_w

@@ -22,8 +22,8 @@ from .params import (
     check_number,
 )
 
-__all__ = ["paper_weights", "shlafman_weights", "edge_weights", "csr_weights", "check_features",
-           "convex_scaled"]
+__all__ = ["paper_weights", "shlafman_weights", "edge_weights", "csr_weights", "weight_dtype",
+           "check_features", "convex_scaled"]
 
 _PAPER_ALPHA = DEFAULTS.alpha
 _SHLAFMAN_ALPHA = WEIGHTING_ALPHA["shlafman"][0]
@@ -286,6 +286,23 @@ def edge_weights(graph, weighting: str = "paper", *, alpha: float = _PAPER_ALPHA
     return shlafman_weights(graph, alpha=alpha)
 
 
-def csr_weights(graph: ElementGraph, weights: np.ndarray) -> np.ndarray:
-    """Per-adjacency ``weights`` laid out per CSR entry of ``graph`` (contiguous float64)."""
-    return np.ascontiguousarray(weights[graph.dual_edge], dtype=np.float64)
+def csr_weights(graph: ElementGraph, weights: np.ndarray, dtype=np.float64) -> np.ndarray:
+    """Per-adjacency ``weights`` laid out per CSR entry of ``graph`` (contiguous; float64
+    by default; :func:`weight_dtype` says which a run uses)."""
+    return np.ascontiguousarray(weights[graph.dual_edge], dtype=dtype)
+
+
+def weight_dtype(kind, paper: bool = False):
+    """The dtype of a run's weights per CSR entry on elements ``kind`` (a name or an
+    :class:`~superfacets.elements.kinds.ElementKind`): float32 where the kinds' table says
+    (``single_weights``: points), float64 elsewhere and for the paper's method (its labels
+    bit for bit). Distances still add up in float64.
+
+    Examples
+    --------
+    >>> weight_dtype("points").__name__, weight_dtype("points", paper=True).__name__
+    ('float32', 'float64')
+    """
+    from ..elements.kinds import kind_of
+
+    return np.float32 if kind_of(kind).single_weights and not paper else np.float64
