@@ -150,3 +150,40 @@ def test_a_new_kind_is_one_builder_and_one_row(monkeypatch):
     assert r.params["elements"] == "facets" and r.params["assignment"] == "exact"
     assert r.n_segments == 12 and r.labels.shape == (1280,)
     assert kinds.kind_of("facets").n_rows(src.source) == 1280
+
+
+def test_points_weigh_in_float32_and_keep_their_labels():
+    """The kinds' table puts points' weights per CSR entry in float32 (half the largest
+    array of a cloud's run); the paper's method and the other kinds keep float64; the
+    per-pair weights are the float64 ones rounded, so labels stay those of float64."""
+    import trimesh
+
+    from superfacets import segment
+    from superfacets.method.params import resolve
+    from superfacets.method.stages import build_graph, resolve_rules, weigh
+    from superfacets.method.weights import csr_weights, edge_weights, weight_dtype
+
+    rng = np.random.default_rng(3)
+    xyz = rng.normal(size=(6000, 3))
+    xyz /= np.linalg.norm(xyz, axis=1, keepdims=True)
+    for obj, kind, paper, want in ((xyz, "points", False, np.float32),
+                                   (xyz, "points", True, np.float64),
+                                   (trimesh.creation.icosphere(subdivisions=3), "faces",
+                                    False, np.float64)):
+        assert weight_dtype(kind, paper) is want
+        _, graph, p = build_graph(obj, resolve(n_segments=20, paper=paper))
+        w, _ = weigh(graph, resolve_rules(graph, p))
+        assert w.dtype == want
+        ref = csr_weights(graph, edge_weights(graph, alpha=p.alpha, eta_convex=p.eta_convex))
+        np.testing.assert_array_equal(w, ref.astype(want))  # float64 weights, rounded
+    # the labels of a float64 run: the same weights in float64 through the same stages
+    import superfacets.method.stages as stages
+
+    a = segment(xyz, 30).labels
+    orig = stages.weight_dtype
+    try:
+        stages.weight_dtype = lambda kind, paper=False: np.float64
+        b = segment(xyz, 30).labels
+    finally:
+        stages.weight_dtype = orig
+    np.testing.assert_array_equal(a, b)

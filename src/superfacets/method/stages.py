@@ -268,11 +268,12 @@ def weigh(graph, rules: Rules, features=None, release=None
     p = rules.params
     if rules.cleanup:
         graph.terms  # noqa: B018 (kept for the clean-up; else computed chunk by chunk)
+    dtype = weight_dtype(rules.kind, p.paper)
     w_pairs = edge_weights(graph, p.weighting, alpha=p.alpha, eta_convex=p.eta_convex,
-                           features=features, beta=p.beta)
+                           features=features, beta=p.beta, dtype=dtype)
     if release is not None and not rules.split_merge:
         release(keep=COARSENING_READS + ("dual_edge",))  # read by csr_weights
-    w = csr_weights(graph, w_pairs, weight_dtype(rules.kind, p.paper))
+    w = csr_weights(graph, w_pairs, dtype)
     del w_pairs  # the coarsening reads the same values from ``w``
     swap_w = None
     if rules.split_merge:  # the swap energies' weights (on faces: convex folds count half)

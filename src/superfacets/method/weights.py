@@ -30,7 +30,8 @@ _SHLAFMAN_ALPHA = WEIGHTING_ALPHA["shlafman"][0]
 
 
 def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = DEFAULTS.eta_convex,
-                  features: np.ndarray | None = None, beta: float = 0.0) -> np.ndarray:
+                  features: np.ndarray | None = None, beta: float = 0.0,
+                  dtype=np.float64) -> np.ndarray:
     """Weights of the paper (Simari, Picciau, De Floriani 2014, eqs. 1-3).
 
     For adjacent faces ``f_i, f_j`` with centroids ``c_i, c_j``, unit normals
@@ -65,6 +66,9 @@ def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = DEF
     beta : float, default 0
         Weight of the feature term, in ``[0, 1e12]``; 0 gives the paper's
         weights bit for bit.
+    dtype : numpy dtype, default float64
+        Of the result (each weight computed in float64, then stored):
+        :func:`weight_dtype`.
 
     Returns
     -------
@@ -109,7 +113,7 @@ def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = DEF
         jump = np.linalg.norm(f[g.pairs[sl, 0]] - f[g.pairs[sl, 1]], axis=1)
         return (t.geo + alpha * ang + beta * span[sl] * jump) / g.diagonal
 
-    return chunked(g.n_edges, weight)
+    return chunked(g.n_edges, weight, dtype)
 
 
 def convex_scaled(graph, weights: np.ndarray, *, alpha: float, eta_convex: float,
@@ -195,7 +199,7 @@ def check_features(features, graph: ElementGraph) -> np.ndarray:
     return f
 
 
-def shlafman_weights(graph, *, alpha: float = _SHLAFMAN_ALPHA) -> np.ndarray:
+def shlafman_weights(graph, *, alpha: float = _SHLAFMAN_ALPHA, dtype=np.float64) -> np.ndarray:
     """Weights of Shlafman, Tal and Katz, as written in the paper (eq. 6).
 
     ``w' = (1 - alpha) * geo + alpha * (1 - (n_i . n_j)^2)``, with ``geo`` of
@@ -242,12 +246,12 @@ def shlafman_weights(graph, *, alpha: float = _SHLAFMAN_ALPHA) -> np.ndarray:
         t = g.terms_in(sl)
         return (1.0 - a) * t.geo + a * (1.0 - t.cos * t.cos)
 
-    return chunked(g.n_edges, weight)
+    return chunked(g.n_edges, weight, dtype)
 
 
 def edge_weights(graph, weighting: str = "paper", *, alpha: float = _PAPER_ALPHA,
                  eta_convex: float = DEFAULTS.eta_convex, features: np.ndarray | None = None,
-                 beta: float = 0.0) -> np.ndarray:
+                 beta: float = 0.0, dtype=np.float64) -> np.ndarray:
     """:func:`paper_weights` or :func:`shlafman_weights` by name.
 
     Parameters
@@ -258,10 +262,12 @@ def edge_weights(graph, weighting: str = "paper", *, alpha: float = _PAPER_ALPHA
         As the chosen function (``eta_convex`` is ignored by ``'shlafman'``).
     features, beta
         The feature term of :func:`paper_weights` (``'paper'`` only).
+    dtype : numpy dtype, default float64
+        Of the result (:func:`weight_dtype`).
 
     Returns
     -------
-    weights : (e,) float64 ndarray
+    weights : (e,) ndarray of ``dtype``
 
     Raises
     ------
@@ -280,16 +286,17 @@ def edge_weights(graph, weighting: str = "paper", *, alpha: float = _PAPER_ALPHA
     check_choice("weighting", weighting, WEIGHTINGS)
     if weighting == "paper":
         return paper_weights(graph, alpha=alpha, eta_convex=eta_convex, features=features,
-                             beta=beta)
+                             beta=beta, dtype=dtype)
     if beta:
         raise ParameterError("beta (the feature term) goes with weighting='paper' only")
-    return shlafman_weights(graph, alpha=alpha)
+    return shlafman_weights(graph, alpha=alpha, dtype=dtype)
 
 
 def csr_weights(graph: ElementGraph, weights: np.ndarray, dtype=np.float64) -> np.ndarray:
     """Per-adjacency ``weights`` laid out per CSR entry of ``graph`` (contiguous; float64
     by default; :func:`weight_dtype` says which a run uses)."""
-    return np.ascontiguousarray(weights[graph.dual_edge], dtype=dtype)
+    # cast before the gather: one array of the CSR size, in the dtype asked for
+    return np.ascontiguousarray(np.asarray(weights).astype(dtype, copy=False)[graph.dual_edge])
 
 
 def weight_dtype(kind, paper: bool = False):
