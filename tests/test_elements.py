@@ -468,7 +468,8 @@ def test_knn_layout_is_the_csr_of_the_distinct_symmetric_pairs(seed):
     more = np.stack([rng.choice(np.r_[:i, i + 1:n], 2 * k, replace=False) for i in rows])
     more_keep = rng.random(more.shape) < 0.9
     indptr = np.empty(n + 1, dtype=np.int64)
-    indices, dual_edge, pairs = knn_csr(nbr, keep, indptr, rows, more, more_keep)
+    indices = knn_csr(nbr, keep, indptr, rows, more, more_keep)
+    dual_edge, pairs = _numbered(indptr, indices)
     src = np.r_[np.repeat(np.arange(n), k).reshape(n, k)[keep],
                 np.repeat(rows, 2 * k).reshape(-1, 2 * k)[more_keep]]
     dst = np.r_[nbr[keep], more[more_keep]]
@@ -478,6 +479,17 @@ def test_knn_layout_is_the_csr_of_the_distinct_symmetric_pairs(seed):
     for got, ref in zip((indptr, indices, dual_edge), want):
         np.testing.assert_array_equal(got, ref)
     assert indices.dtype == np.int32 and dual_edge.dtype == np.int32
+
+
+def _numbered(indptr, indices):
+    """The dual-edge map and pairs of a CSR layout (as the point graph builds them when
+    read: ``pairs_from_csr``)."""
+    from superfacets._kernels.adjacency import number_pairs
+
+    pairs = np.empty((indices.shape[0] // 2, 2), dtype=np.int32)
+    dual_edge = np.empty(indices.shape[0], dtype=np.int32)
+    number_pairs(indptr, indices, indptr.shape[0] - 1, dual_edge, np.empty(0, np.int64), pairs)
+    return dual_edge, pairs
 
 
 def test_a_point_listed_as_its_own_neighbour_is_no_edge():
@@ -491,23 +503,24 @@ def test_a_point_listed_as_its_own_neighbour_is_no_edge():
     rows, more = np.array([3, 7]), np.stack([np.arange(8), np.arange(8) + 1])
     empty = (np.zeros(0, dtype=np.int64), np.zeros((0, 1), dtype=np.int64),
              np.zeros((0, 1), dtype=bool))
-    want = [knn_csr(nbr, keep, np.empty(n + 1, dtype=np.int64), *empty)]
+    indptr = np.empty(n + 1, dtype=np.int64)
+    want = _numbered(indptr, knn_csr(nbr, keep, indptr, *empty))
     selfish = nbr.copy()
     selfish[[5, 9], 2] = [5, 9]  # two points list themselves instead of a neighbour
     keep2 = keep.copy()
     keep2[[5, 9], 2] = True
     indptr = np.empty(n + 1, dtype=np.int64)
-    indices, dual, pairs = knn_csr(selfish, keep2, indptr, rows, more,
-                                   np.ones(more.shape, dtype=bool))
+    indices = knn_csr(selfish, keep2, indptr, rows, more, np.ones(more.shape, dtype=bool))
+    _, pairs = _numbered(indptr, indices)
     assert (pairs[:, 0] < pairs[:, 1]).all() and pairs.max() < n
     assert not any(i in indices[indptr[i]:indptr[i + 1]] for i in range(n))
     ok = keep.copy()
     ok[[5, 9], 2] = False  # the same graph as leaving those entries out
-    ref = knn_csr(nbr, ok, np.empty(n + 1, dtype=np.int64), rows, more,
-                  np.ones(more.shape, dtype=bool))
-    np.testing.assert_array_equal(pairs, ref[2])
-    np.testing.assert_array_equal(indices, ref[0])
-    assert want[0][2].shape[0] > 0
+    ref_indptr = np.empty(n + 1, dtype=np.int64)
+    ref = knn_csr(nbr, ok, ref_indptr, rows, more, np.ones(more.shape, dtype=bool))
+    np.testing.assert_array_equal(pairs, _numbered(ref_indptr, ref)[1])
+    np.testing.assert_array_equal(indices, ref)
+    assert want[1].shape[0] > 0
 
 
 def test_points_closer_than_the_squared_distance_can_hold_are_two_points():
@@ -674,3 +687,67 @@ def test_point_graph_is_the_same_for_any_block_of_queries(monkeypatch):
             a, b = getattr(one, name), getattr(blocks, name)
             assert a.dtype == b.dtype and np.array_equal(a, b), name
     assert one.pairs.dtype == np.int32 and one.n_edges > 0
+
+
+def test_a_point_graph_builds_its_pairs_spans_and_lengths_only_when_read():
+    """A default run on points reads the CSR layout and the border shares alone: the
+    pairs, dual-edge map, spans and border lengths (about 180 bytes per point) are never
+    built; read, they are the sorted distinct pairs and the module's formulas."""
+    from superfacets.elements.points import point_graph
+    from superfacets.inputs.cloud import PointCloud
+    from superfacets.method.connectivity import enforce_connectivity
+
+    rng = np.random.default_rng(4)
+    xyz = rng.normal(size=(3000, 3))
+    xyz /= np.linalg.norm(xyz, axis=1, keepdims=True)
+    cloud = PointCloud(xyz)
+    g = point_graph(cloud).graph
+    lazy = ("pairs", "dual_edge", "lengths", "spans")
+    labels = segment(cloud, 40).labels
+    assert not any(name in g.__dict__ for name in lazy)
+    assert g.n_edges == g.indices.shape[0] // 2
+    # read: the distinct pairs (i, j), i < j, in CSR order, and the formulas
+    row = np.repeat(np.arange(g.n_elements), np.diff(g.indptr))
+    up = g.indices > row
+    np.testing.assert_array_equal(g.pairs, np.c_[row[up], g.indices[up]])
+    np.testing.assert_array_equal(g.pairs[g.dual_edge].min(axis=1),
+                                  np.minimum(row, g.indices))
+    share = 2.0 * np.sqrt(np.pi * g.sizes) / np.diff(g.indptr)
+    lo, hi = g.pairs[:, 0], g.pairs[:, 1]
+    np.testing.assert_array_equal(g.lengths, 0.5 * (share[lo] + share[hi]))
+    np.testing.assert_array_equal(g.spans, np.linalg.norm(g.positions[hi] - g.positions[lo],
+                                                          axis=1))
+    # the kernels that sum border lengths give the same sums from the shares
+    assert np.array_equal(g.border_shares, share)
+    copy = g.replaced(sizes=g.sizes)  # a copy with the lengths built: read per pair
+    lengths_only = copy.replaced(border_shares=None)
+    pieces = labels.copy()
+    pieces[rng.choice(g.n_elements, 30, replace=False)] = 7  # strays to merge
+    np.testing.assert_array_equal(enforce_connectivity(g, pieces),
+                                  enforce_connectivity(lengths_only, pieces))
+    # replaced() leaves unbuilt fields unbuilt
+    fresh = point_graph(PointCloud(xyz)).graph.replaced(sizes=np.ones(g.n_elements))
+    assert not any(name in fresh.__dict__ for name in lazy) and fresh.area == g.n_elements
+
+
+def test_weights_from_the_csr_layout_equal_the_weights_per_pair():
+    """Known answer: csr_point_weights is csr_weights(paper_weights(...)) bit for bit, on
+    points and on mesh vertices, in float64 and float32 (np.arccos as paper_weights
+    calls it)."""
+    import trimesh
+
+    from superfacets.elements.points import point_graph
+    from superfacets.elements.vertices import vertex_graph
+    from superfacets.inputs.cloud import PointCloud
+    from superfacets.method.weights import csr_point_weights, csr_weights
+
+    rng = np.random.default_rng(5)
+    cloud = PointCloud(rng.random((5000, 3)) * [4, 2, 1])
+    ball = trimesh.creation.icosphere(subdivisions=4)
+    for g in (point_graph(cloud).graph, vertex_graph(Mesh(ball.vertices, ball.faces)).graph):
+        for alpha, eta in ((200.0, 0.2), (37.5, 0.9)):
+            ref = paper_weights(g, alpha=alpha, eta_convex=eta)
+            for dtype in (np.float64, np.float32):
+                got = csr_point_weights(g, alpha=alpha, eta_convex=eta, dtype=dtype)
+                assert got.dtype == dtype
+                np.testing.assert_array_equal(got, csr_weights(g, ref, dtype))

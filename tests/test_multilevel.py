@@ -100,7 +100,7 @@ def test_coarse_pairs_equal_a_stable_sort_and_reduceat():
         # read from the CSR layout: each entry's weight, the pairs' order
         indptr, indices, dual_edge = adjacency_csr(pairs[:, 0], pairs[:, 1], n)
         out, via, length = coarse_pairs(indptr, indices, cluster, dist, w[dual_edge], lengths,
-                                        n_c)
+                                        np.empty(0), n_c)
         a, b = cluster[pairs[:, 0]], cluster[pairs[:, 1]]
         cross = a != b
         lo, hi = np.minimum(a, b)[cross], np.maximum(a, b)[cross]
@@ -115,6 +115,14 @@ def test_coarse_pairs_equal_a_stable_sort_and_reduceat():
                                        rtol=1e-12)
         if n_c == 10:
             assert np.diff(np.r_[first, key.size]).max() > 32  # the merge-sorted buckets
+        # border shares per element (points): the same sums as their lengths per pair
+        shares = rng.random(n)
+        from_shares = 0.5 * (shares[pairs[:, 0]] + shares[pairs[:, 1]])
+        np.testing.assert_array_equal(
+            coarse_pairs(indptr, indices, cluster, dist, w[dual_edge], np.empty(0), shares,
+                         n_c)[2],
+            coarse_pairs(indptr, indices, cluster, dist, w[dual_edge], from_shares,
+                         np.empty(0), n_c)[2])
 
 
 def test_coarse_ratio_rule():

@@ -318,9 +318,9 @@ def knn_csr(nbr, keep, indptr, rows, more, more_keep):
     ``nbr[i]`` (where ``keep``) or ``i`` in ``nbr[j]``, and likewise for the longer
     lists ``more[t]`` (where ``more_keep``) of the points ``rows[t]`` (none: ``rows``
     of length 0). Fills ``indptr`` (n + 1); returns ``indices`` (int32, ascending per
-    row), ``dual_edge`` (int32: the pair of each entry) and ``pairs`` (e, 2) int32,
-    listed in ``(lo, hi)`` order: the layout :func:`csr_of_pairs` gives from the
-    sorted distinct pairs. A point listed as its own neighbour is no edge."""
+    row): the layout :func:`csr_of_pairs` gives from the sorted distinct pairs (whose
+    pairs and dual-edge map :func:`number_pairs` numbers from it). A point listed as
+    its own neighbour is no edge."""
     n, k = nbr.shape
     count = np.zeros(n + 1, dtype=np.int64)
     for i in range(n):
@@ -374,37 +374,7 @@ def knn_csr(nbr, keep, indptr, rows, more, more_keep):
     for i in range(n):
         indptr[i + 1] = indptr[i] + kept[i]
     indices = np.empty(indptr[n], dtype=np.int32)
-    first = np.empty(n + 1, dtype=np.int64)  # the pair id of each row's first entry > row
-    above = np.empty(n, dtype=np.int64)  # the position of that entry in the row
     for i in prange(n):
         s = count[i]
-        d = indptr[i + 1] - indptr[i]
-        indices[indptr[i]:indptr[i + 1]] = raw[s:s + d]
-        a = indptr[i]
-        while a < indptr[i + 1] and indices[a] < i:
-            a += 1
-        above[i] = a
-    e = 0
-    for i in range(n):
-        first[i] = e
-        e += indptr[i + 1] - above[i]
-    pairs = np.empty((e, 2), dtype=np.int32)
-    dual_edge = np.empty(indptr[n], dtype=np.int32)
-    for i in prange(n):
-        for a in range(indptr[i], indptr[i + 1]):
-            j = indices[a]
-            if j > i:
-                t = first[i] + a - above[i]
-                pairs[t, 0] = i
-                pairs[t, 1] = j
-            else:  # the pair (j, i): i's place among row j's entries above j
-                lo_, hi_ = above[j], indptr[j + 1]
-                while lo_ < hi_:
-                    mid = (lo_ + hi_) >> 1
-                    if indices[mid] < i:
-                        lo_ = mid + 1
-                    else:
-                        hi_ = mid
-                t = first[j] + lo_ - above[j]
-            dual_edge[a] = t
-    return indices, dual_edge, pairs
+        indices[indptr[i]:indptr[i + 1]] = raw[s:s + indptr[i + 1] - indptr[i]]
+    return indices

@@ -62,25 +62,40 @@ def merge_strays(strays, nb_indptr, nb_indices, nb_data, n_pieces):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def stray_borders(pairs, piece, is_main, lengths):
+def stray_borders(indptr, indices, piece, is_main, lengths, shares):
     """The entries ``(a, b, length)`` of the pieces' adjacency whose row ``a`` is a
-    stray piece: first ``(piece[i], piece[j])`` over adjacencies ``(i, j)`` in
-    order, then ``(piece[j], piece[i])`` (the order of the whole matrix's entries)."""
+    stray piece: first ``(piece[i], piece[j])`` over adjacencies ``(i, j)``, ``i < j``,
+    in order, then ``(piece[j], piece[i])`` (the order of the whole matrix's entries).
+    The adjacencies are the CSR entries ``(i, j)``, ``j > i``, row by row (the pair
+    order); the length of pair ``t`` is ``lengths[t]``, or with ``shares`` not empty
+    ``0.5 * (shares[i] + shares[j])``."""
+    n = indptr.shape[0] - 1
     m = 0
-    for e in range(pairs.shape[0]):
-        p, q = piece[pairs[e, 0]], piece[pairs[e, 1]]
-        if p != q:
-            m += (not is_main[p]) + (not is_main[q])
+    for i in range(n):
+        for x in range(indptr[i], indptr[i + 1]):
+            j = indices[x]
+            if j > i:
+                p, q = piece[i], piece[j]
+                if p != q:
+                    m += (not is_main[p]) + (not is_main[q])
     a = np.empty(m, dtype=np.int64)
     b = np.empty(m, dtype=np.int64)
     w = np.empty(m)
-    t = 0
+    u = 0
     for side in range(2):
-        for e in range(pairs.shape[0]):
-            p, q = piece[pairs[e, side]], piece[pairs[e, 1 - side]]
-            if p != q and not is_main[p]:
-                a[t] = p
-                b[t] = q
-                w[t] = lengths[e]
-                t += 1
+        t = 0
+        for i in range(n):
+            for x in range(indptr[i], indptr[i + 1]):
+                j = indices[x]
+                if j > i:
+                    p, q = (piece[i], piece[j]) if side == 0 else (piece[j], piece[i])
+                    if p != q and not is_main[p]:
+                        a[u] = p
+                        b[u] = q
+                        if shares.shape[0]:
+                            w[u] = 0.5 * (shares[i] + shares[j])
+                        else:
+                            w[u] = lengths[t]
+                        u += 1
+                    t += 1
     return a, b, w

@@ -81,11 +81,13 @@ def first_in_cells(positions, lo, h, dims, cap):
 
 
 @njit(cache=True, error_model="numpy")
-def coarse_pairs(indptr, indices, cluster, dist, csr_w, lengths, n_c):
+def coarse_pairs(indptr, indices, cluster, dist, csr_w, lengths, shares, n_c):
     """The adjacency of clusters: every pair of clusters ``lo < hi`` that some
     adjacency ``t`` joins, in ``(lo, hi)`` order, with the shortest path between
     their seeds through such an adjacency (the minimum of ``dist[i] + w[t]
-    + dist[j]``) and the summed ``lengths[t]`` (added in adjacency order).
+    + dist[j]``) and the summed ``lengths[t]`` (added in adjacency order; with
+    ``shares`` not empty, the length of ``(i, j)`` is ``0.5 * (shares[i] + shares[j])``:
+    :meth:`~superfacets.elements.graph.ElementGraph.border_arrays`).
 
     The adjacencies are read from the CSR layout: the entries ``(i, j)``, ``j > i``,
     row by row, are the pairs ``t = 0, 1, ...`` in order (the graphs list their pairs
@@ -163,6 +165,9 @@ def coarse_pairs(indptr, indices, cluster, dist, csr_w, lengths, n_c):
                     v = dist[i] + csr_w[x] + dist[j]
                     if v < w_c[g]:
                         w_c[g] = v
-                    len_c[g] += lengths[t]
+                    if shares.shape[0]:
+                        len_c[g] += 0.5 * (shares[i] + shares[j])
+                    else:
+                        len_c[g] += lengths[t]
                 t += 1
     return out, w_c, len_c

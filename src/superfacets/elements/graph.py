@@ -2,14 +2,14 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from functools import cached_property
 from typing import Callable, Mapping, NamedTuple
 
 import numpy as np
 
 __all__ = ["ElementGraph", "AdjacencyTerms", "adjacency_csr", "CHUNK",
-           "chunked", "pairs_from_csr"]
+           "chunked", "pairs_from_csr", "LAZY"]
 
 #: Adjacencies per chunk when per-adjacency arrays are computed: bounds the
 #: temporaries (and fixes the slicing, so every result is the same bit for bit).
@@ -81,11 +81,18 @@ def pairs_from_csr(graph: "ElementGraph", pair_dtype=np.int32) -> dict[str, np.n
     return {"pairs": pairs, "dual_edge": dual_edge}
 
 
+#: Given for a field of :class:`ElementGraph` that has a ``rebuild`` entry: the field is
+#: not built until something reads it (a point graph's pairs, dual-edge map, spans and
+#: border lengths, which a default run on points never reads).
+LAZY = object()
+
+
 class _Rebuilt:
     """A field of :class:`ElementGraph` that :meth:`ElementGraph.release` may forget:
     on next use it is computed again, the same, by ``graph.rebuild[name](graph)``
     (a dict of one or more fields, each stored if absent). ``optional``: the field
-    defaults to None (a graph without a rebuild entry for it keeps None)."""
+    defaults to None (a graph without a rebuild entry for it keeps None). Given as
+    :data:`LAZY`, it is built on first use."""
 
     def __init__(self, optional: bool = False) -> None:
         self.optional = optional
@@ -110,7 +117,8 @@ class _Rebuilt:
             return d[self.name]
 
     def __set__(self, graph, value) -> None:  # the dataclass's __init__ only (frozen)
-        graph.__dict__[self.name] = value
+        if value is not LAZY:
+            graph.__dict__[self.name] = value
 
 
 class AdjacencyTerms(NamedTuple):
@@ -188,6 +196,12 @@ class ElementGraph:
         The length that scales the angular term of the paper's weights (eq. 2)
         when it differs from ``lengths`` (vertices, points: the distance
         between the two elements); see :attr:`span`.
+    border_shares : (n,) float64 ndarray or None
+        Points: each element's share of the border of each of its adjacencies; the
+        border length of the adjacency ``(i, j)`` is ``(share_i + share_j) / 2``
+        (:func:`~superfacets.elements.point_graph`), so the kernels that sum border
+        lengths read these 8 bytes per element instead of ``lengths`` (8 per
+        adjacency, then never built). None: read ``lengths``.
     scale2 : (n,) float64 ndarray or None
         Content-sensitive runs (:mod:`superfacets.method.adaptive`): the squared scale of
         each element, by which the farthest-point centers multiply squared
@@ -227,6 +241,7 @@ class ElementGraph:
     edges: np.ndarray | None = None
     boundary_edges: np.ndarray | None = None
     spans: np.ndarray | None = _Rebuilt(optional=True)
+    border_shares: np.ndarray | None = None
     scale2: np.ndarray | None = None
     terms_of: Callable[["ElementGraph", slice], tuple] | None = field(default=None, repr=False)
     rebuild: Mapping[str, Callable[["ElementGraph"], dict]] = field(default_factory=dict,
@@ -246,8 +261,25 @@ class ElementGraph:
 
     @property
     def n_edges(self) -> int:
-        """Number of adjacent pairs ``e``."""
-        return int(self.pairs.shape[0])
+        """Number of adjacent pairs ``e`` (half the CSR entries: the pairs are not built
+        for it)."""
+        return int(self.indices.shape[0] // 2)
+
+    def border_arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(lengths, shares)`` for the kernels that sum border lengths in pair order:
+        ``(empty, border_shares)`` where the graph has shares (the length of pair ``(i,
+        j)`` is then ``0.5 * (shares[i] + shares[j])``), else ``(lengths, empty)``."""
+        if self.border_shares is not None:
+            return np.empty(0), self.border_shares
+        return self.lengths, np.empty(0)
+
+    def replaced(self, **changes) -> "ElementGraph":
+        """:func:`dataclasses.replace` that leaves the fields not built yet (or released)
+        unbuilt in the copy: they are built there on first use, as here. Cached
+        properties (:attr:`terms`, :attr:`area`) are not carried over."""
+        given = {f.name: self.__dict__.get(f.name, LAZY) for f in fields(self) if f.init}
+        given.update(changes)
+        return type(self)(**given)
 
     @property
     def span(self) -> np.ndarray:

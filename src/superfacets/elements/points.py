@@ -44,7 +44,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..inputs.bounds import column_bounds
-from .graph import ElementGraph, adjacency_csr, cached_on, pairs_from_csr
+from .graph import LAZY, ElementGraph, adjacency_csr, cached_on, pairs_from_csr
 from .neighbors import nearest
 from .vertices import symmetric_terms
 
@@ -344,43 +344,45 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
     cand = nbr[:, 1:]  # read in place by the kernel (a copy costs more than it saves)
     if keep is None:
         keep = np.ones(cand.shape, dtype=bool)
+    pair_dtype = np.int32
     if 2 * (cand.size + more.size) < 2**31 - 1:  # the kernel's int32 layout
         from .._kernels.adjacency import knn_csr
 
         indptr = np.empty(n + 1, dtype=np.int64)
         # i ~ j if either lists the other
-        indices, dual_edge, pairs = knn_csr(cand, keep, indptr, wide, more, more_keep)
-        lo, hi = pairs[:, 0], pairs[:, 1]
+        indices = knn_csr(cand, keep, indptr, wide, more, more_keep)
     else:  # the distinct pairs, sorted
         src = np.concatenate([np.repeat(np.arange(n), k).reshape(n, k)[keep],
                               np.repeat(wide, more.shape[1]).reshape(more.shape)[more_keep]])
         dst = np.concatenate([cand[keep], more[more_keep]]).astype(np.int64)
         src, dst = src[src != dst], dst[src != dst]  # (no point is its own neighbour)
         key = np.minimum(src, dst) * np.int64(n) + np.maximum(src, dst)
+        del src, dst
         key = np.unique(key)
-        lo, hi = key // n, key % n
-        pairs = np.stack([lo, hi], axis=1)
-        indptr, indices, dual_edge = adjacency_csr(lo, hi, n)
+        indptr, indices, _ = adjacency_csr(key // n, key % n, n)
+        pair_dtype = np.int64
+        del key
     del more, more_keep, nbr, cand, keep
 
     if cloud.normals is None:
         normals = orient_normals(pts, normals, indptr, indices, cloud.viewpoint,
                                  getattr(cloud, "orient_like", None),
                                  getattr(cloud, "up", None))
-    lengths = _border_lengths(area, indptr, lo, hi)
-    spans = _edge_spans(pts, pairs)
-    # what release() may forget: the pairs from the CSR layout, the spans and the border
-    # lengths from the pairs (the lengths from the sizes as built: a content-sensitive
-    # run's graph has other sizes)
+    # the pairs, dual-edge map, spans and border lengths (about 180 bytes per point) are
+    # built only if read: a default run reads the CSR layout and the border shares alone
+    # (the weights: superfacets.method.weights.csr_point_weights)
+    degree = np.diff(indptr).astype(np.float64)
+    shares = 2.0 * np.sqrt(np.pi * area) / np.maximum(degree, 1.0)
+    del degree
     rebuild = dict.fromkeys(("pairs", "dual_edge"),
-                            partial(pairs_from_csr, pair_dtype=pairs.dtype))
-    rebuild["lengths"] = partial(_lengths, area)
+                            partial(pairs_from_csr, pair_dtype=pair_dtype))
     graph = ElementGraph(
         kind="points", positions=pts, sizes=area, normals=normals,
-        centroid=pts.mean(axis=0), lower=lower, diagonal=diagonal, pairs=pairs,
-        indptr=indptr, indices=indices, dual_edge=dual_edge, lengths=lengths,
+        centroid=pts.mean(axis=0), lower=lower, diagonal=diagonal, pairs=LAZY,
+        indptr=indptr, indices=indices, dual_edge=LAZY, lengths=LAZY,
         boundary_elements=np.zeros(0, np.int64), boundary_lengths=np.zeros(0),
-        spans=spans, terms_of=symmetric_terms, rebuild={**rebuild, "spans": _spans})
+        spans=LAZY, border_shares=shares, terms_of=symmetric_terms,
+        rebuild={**rebuild, "spans": _spans, "lengths": _lengths})
     return PointElements(graph, index)
 
 
@@ -389,19 +391,11 @@ def _spans(graph: ElementGraph) -> dict:
     return {"spans": _edge_spans(graph.positions, graph.pairs)}
 
 
-def _lengths(area: np.ndarray, graph: ElementGraph) -> dict:
-    """``rebuild["lengths"]`` of a point graph: the border lengths again, as built."""
-    pairs = graph.pairs
-    return {"lengths": _border_lengths(area, graph.indptr, pairs[:, 0], pairs[:, 1])}
-
-
-def _border_lengths(area: np.ndarray, indptr: np.ndarray, lo: np.ndarray, hi: np.ndarray
-                    ) -> np.ndarray:
-    """Each point's disk perimeter ``2 sqrt(pi a_i)`` shared among its neighbours, the
-    two shares of each pair averaged (see the module notes)."""
-    degree = np.diff(indptr).astype(np.float64)
-    share = 2.0 * np.sqrt(np.pi * area) / np.maximum(degree, 1.0)
-    return 0.5 * (share[lo] + share[hi])
+def _lengths(graph: ElementGraph) -> dict:
+    """``rebuild["lengths"]`` of a point graph: each pair's border length from the two
+    shares (see the module notes): ``(share_lo + share_hi) / 2``."""
+    pairs, shares = graph.pairs, graph.border_shares
+    return {"lengths": 0.5 * (shares[pairs[:, 0]] + shares[pairs[:, 1]])}
 
 
 def _edge_spans(pts: np.ndarray, pairs: np.ndarray) -> np.ndarray:

@@ -298,7 +298,7 @@ def evaluate(graph, labels, ground_truths: Sequence[np.ndarray], *, tau: float =
                                "metrics are area-weighted")
     s = dense_labels(g, labels, "labels")
     near = near_boundary(g, s, tolerance)
-    counted = replace(g, sizes=np.ones(g.n_elements)) if equal_weight else g
+    counted = g.replaced(sizes=np.ones(g.n_elements)) if equal_weight else g
     ue, br, asa, bp = [], [], [], []
     for gt in ground_truths:
         this = counted

@@ -254,13 +254,12 @@ def planarity_graph(graph, labels, features=None):
     >>> planarity_graph(g, np.arange(500) // 250).area.tolist()
     [250.0, 250.0]
     """
-    from dataclasses import replace
 
     from ..elements.kinds import kind_of
     from .adjacency import superfacet_graph
 
     if kind_of(graph.kind).unit_sizes_in_levels:
-        graph = replace(graph, sizes=np.ones(graph.n_elements))
+        graph = graph.replaced(sizes=np.ones(graph.n_elements))
     return superfacet_graph(graph, labels, features)
 
 

@@ -30,8 +30,6 @@ run asks for it (``assignment='bounded'``), gives each center a window of
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from ..elements.graph import ElementGraph
@@ -154,8 +152,8 @@ def adapted_graph(graph: ElementGraph, density: float, roughness: float) -> Elem
     """
     s = content_scale(graph, density, roughness)
     d = kind_of(graph.kind).dim
-    return replace(graph, sizes=np.ascontiguousarray(graph.sizes * s ** d),
-                   scale2=np.ascontiguousarray(s * s))
+    return graph.replaced(sizes=np.ascontiguousarray(graph.sizes * s ** d),
+                          scale2=np.ascontiguousarray(s * s))
 
 
 def window_factors(graph: ElementGraph, rounds: int = WINDOW_ROUNDS) -> np.ndarray:

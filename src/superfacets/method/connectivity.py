@@ -155,7 +155,7 @@ def enforce_connectivity(graph, labels: np.ndarray, centers: np.ndarray | None =
     # boundary length between a stray and each adjacent piece (the rows of the strays
     # alone, entries in the order of the whole matrix's: the same sums)
     nb_indptr, nb_indices, nb_data = _summed_csr(
-        *stray_borders(g.pairs, piece, is_main, g.lengths), n_pieces)
+        *stray_borders(g.indptr, g.indices, piece, is_main, *g.border_arrays()), n_pieces)
 
     strays = np.flatnonzero(~is_main)
     strays = strays[np.lexsort((strays, area[strays]))]  # smallest first

@@ -211,7 +211,7 @@ def coarsen(graph: ElementGraph, csr_w: np.ndarray, ratio: int) -> Coarsening:
     # coarse adjacency: the fine pairs whose elements lie in different clusters
     # (the shortest seed-to-seed path through one, the summed border lengths)
     pairs, w_c, len_c = coarse_pairs(graph.indptr, graph.indices, cluster, dist, csr_w,
-                                     graph.lengths, n_c)
+                                     *graph.border_arrays(), n_c)
     del dist
     indptr, indices, dual_edge = adjacency_csr(pairs[:, 0], pairs[:, 1], n_c)
     coarse = ElementGraph(

@@ -15,6 +15,7 @@ import numpy as np
 
 from ..elements.inputs import ElementInput, elements_of, prepared
 from ..elements.kinds import ElementKind, kind_of
+from ..elements.vertices import symmetric_terms
 from .adaptive import adapted_graph, density_for
 from .classify import make_classifier
 from .expansion import Workspaces
@@ -28,7 +29,7 @@ from .params import (
     superfacet_size,
 )
 from .passes import Iteration, iterate
-from .weights import csr_weights, edge_weights, weight_dtype
+from .weights import csr_point_weights, csr_weights, edge_weights, weight_dtype
 
 __all__ = ["Rules", "build_graph", "resolve_rules", "weigh", "initialize",
            "iterate_passes"]
@@ -269,12 +270,17 @@ def weigh(graph, rules: Rules, features=None, release=None
     if rules.cleanup:
         graph.terms  # noqa: B018 (kept for the clean-up; else computed chunk by chunk)
     dtype = weight_dtype(rules.kind, p.paper)
-    w_pairs = edge_weights(graph, p.weighting, alpha=p.alpha, eta_convex=p.eta_convex,
-                           features=features, beta=p.beta, dtype=dtype)
-    if release is not None and not rules.split_merge:
-        release(keep=COARSENING_READS + ("dual_edge",))  # read by csr_weights
-    w = csr_weights(graph, w_pairs, dtype)
-    del w_pairs  # the coarsening reads the same values from ``w``
+    if (graph.terms_of is symmetric_terms and p.weighting == "paper" and not p.beta
+            and not rules.cleanup and not rules.split_merge):
+        # points, vertices: from the CSR layout, positions and normals (the same values)
+        w = csr_point_weights(graph, alpha=p.alpha, eta_convex=p.eta_convex, dtype=dtype)
+    else:
+        w_pairs = edge_weights(graph, p.weighting, alpha=p.alpha, eta_convex=p.eta_convex,
+                               features=features, beta=p.beta, dtype=dtype)
+        if release is not None and not rules.split_merge:
+            release(keep=COARSENING_READS + ("dual_edge",))  # read by csr_weights
+        w = csr_weights(graph, w_pairs, dtype)
+        del w_pairs  # the coarsening reads the same values from ``w``
     swap_w = None
     if rules.split_merge:  # the swap energies' weights (on faces: convex folds count half)
         from .weights import convex_scaled

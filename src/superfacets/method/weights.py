@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..elements.graph import ElementGraph, chunked
+from ..elements.graph import CHUNK, ElementGraph, chunked
 from ..elements.inputs import as_element_graph
 from ..errors import ParameterError
 from .params import (
@@ -23,7 +23,7 @@ from .params import (
 )
 
 __all__ = ["paper_weights", "shlafman_weights", "edge_weights", "csr_weights", "weight_dtype",
-           "check_features", "convex_scaled"]
+           "csr_point_weights", "check_features", "convex_scaled"]
 
 _PAPER_ALPHA = DEFAULTS.alpha
 _SHLAFMAN_ALPHA = WEIGHTING_ALPHA["shlafman"][0]
@@ -297,6 +297,68 @@ def csr_weights(graph: ElementGraph, weights: np.ndarray, dtype=np.float64) -> n
     by default; :func:`weight_dtype` says which a run uses)."""
     # cast before the gather: one array of the CSR size, in the dtype asked for
     return np.ascontiguousarray(np.asarray(weights).astype(dtype, copy=False)[graph.dual_edge])
+
+
+def csr_point_weights(graph: ElementGraph, *, alpha: float = _PAPER_ALPHA,
+                      eta_convex: float = DEFAULTS.eta_convex, dtype=np.float64) -> np.ndarray:
+    """The paper's weights per CSR entry of a graph whose elements are points with
+    normals (cloud points, mesh vertices: ``terms_of`` is their symmetric terms), made
+    from the positions, normals and CSR layout alone.
+
+    Equal, bit for bit, to ``csr_weights(graph, paper_weights(graph, ...), dtype)``
+    without the pairs, spans or per-pair weights (about 180 bytes per point a point
+    graph then never builds).
+
+    Parameters
+    ----------
+    graph : ElementGraph
+        Of points or vertices.
+    alpha, eta_convex : float
+        As :func:`paper_weights` (checked there: here as given).
+    dtype : numpy dtype, default float64
+        Of the result (:func:`weight_dtype`).
+
+    Returns
+    -------
+    (2 e,) ndarray of ``dtype``
+        One weight per CSR entry, unitless (fractions of the diagonal ``d``).
+
+    References
+    ----------
+    Simari, Picciau, De Floriani 2014, eqs. 1-3; ``docs/notes/method.md``, section 6.
+
+    Examples
+    --------
+    >>> from superfacets.elements.points import point_graph
+    >>> from superfacets.inputs.cloud import PointCloud
+    >>> g = point_graph(PointCloud(np.random.default_rng(0).random((200, 3)))).graph
+    >>> bool((csr_point_weights(g) == csr_weights(g, paper_weights(g))).all())
+    True
+    """
+    from .._kernels.terms import point_terms_csr
+    from .._runtime.threads import run_ranges, split
+
+    g = graph
+    pos, nor = np.ascontiguousarray(g.positions), np.ascontiguousarray(g.normals)
+    indptr, indices = g.indptr, g.indices
+    out = np.empty(indices.shape[0], dtype=dtype)
+    # rows in blocks of about CHUNK entries (np.arccos as paper_weights calls it: its
+    # values differ from the C library's in the last bit)
+    cuts = np.unique(np.r_[np.searchsorted(indptr, np.arange(0, indptr[-1], CHUNK)),
+                           indptr.shape[0] - 1])
+
+    def blocks(b0: int, b1: int) -> None:
+        for r0, r1 in zip(cuts[b0:b1], cuts[b0 + 1:b1 + 1]):
+            x0, x1 = indptr[r0], indptr[r1]
+            geo, cos = np.empty(x1 - x0), np.empty(x1 - x0)
+            concave = np.empty(x1 - x0, dtype=bool)
+            point_terms_csr(pos, nor, indptr, indices, r0, r1, geo, cos, concave)
+            eta = np.where(concave, 1.0, eta_convex)
+            ang = eta * geo * np.arccos(cos) / np.pi
+            out[x0:x1] = (geo + alpha * ang) / g.diagonal
+
+    run_ranges(blocks, split(cuts.shape[0] - 1, min_per_thread=1))
+    return out
 
 
 def weight_dtype(kind, paper: bool = False):
