@@ -424,3 +424,16 @@ def test_a_run_that_would_not_fit_is_refused_in_one_line(tmp_path, monkeypatch, 
     monkeypatch.setattr(api, "pipeline", oom)  # what no estimate foresaw
     assert main(["segment", str(path), "-k", "10", "-o", str(tmp_path / "b.seg")]) == 2
     assert "superfacets: error: out of memory" in capsys.readouterr().err
+
+
+def test_label_files_are_written_in_blocks_with_the_same_text(tmp_path):
+    """Labels are formatted a block at a time (10M labels as one list of str held 1.3 GB):
+    the file is the one-line-per-label text all the same, across block borders."""
+    from superfacets.io.labels import _BLOCK, write_labels
+
+    rng = np.random.default_rng(0)
+    for labels in (np.zeros(0, np.int64), np.array([7]), rng.integers(-1, 10**6, 2 * _BLOCK + 3)):
+        path = write_labels(tmp_path / "x.seg", labels, {"k": 3})
+        want = "# k: 3\n" + "".join(f"{int(v)}\n" for v in labels)
+        assert path.read_text() == want
+        np.testing.assert_array_equal(read_labels(path), labels)

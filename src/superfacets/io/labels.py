@@ -19,6 +19,9 @@ from .files import Outputs, read_bytes, save, split_suffix, text_lines
 __all__ = ["read_labels", "write_labels", "write_segindices", "read_field"]
 
 
+_BLOCK = 1 << 16  # labels formatted at a time
+
+
 def write_labels(path, labels, header: dict | Iterable[str] | None = None, *,
                  outputs: Outputs | None = None) -> Path:
     """Write a ``.seg`` label file: one integer per face per line, face order.
@@ -54,8 +57,10 @@ def write_labels(path, labels, header: dict | Iterable[str] | None = None, *,
         items = header.items() if isinstance(header, dict) else ((None, h) for h in header)
         head = "".join(f"# {_one_line(k)}: {_one_line(v)}\n" if k is not None else
                        f"# {_one_line(v)}\n" for k, v in items)
-    body = "\n".join(labels.astype(str).tolist())
-    return save(path, (head + body + ("\n" if labels.size else "")).encode("utf-8"), outputs)
+    # formatted in blocks: the text of 10M labels as one list of str held 1.3 GB
+    body = b"".join("".join(f"{v}\n" for v in labels[s:s + _BLOCK].tolist()).encode("ascii")
+                    for s in range(0, labels.shape[0], _BLOCK))
+    return save(path, head.encode("utf-8") + body, outputs)
 
 
 def _one_line(value) -> str:
