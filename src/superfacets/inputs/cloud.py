@@ -177,10 +177,14 @@ class PointCloud:
 
         Needs a valid point, a positive extent within ``1e-70 .. 1e70``
         (coordinates within ``1e300``), and points that are not all on one
-        line (a line has no area, and no normal).
+        line (a line has no area, and no normal). The arrays are read-only, so a
+        cloud found usable is not checked again (a run asks twice).
         """
+        if self.__dict__.get("_usable"):
+            return
         where = f"{self.name}: " if self.name else ""
-        p = self.points[self.valid]
+        valid = self.valid
+        p = self.points if valid.all() else self.points[valid]
         if p.shape[0] == 0:
             raise InvalidCloudError(f"{where}empty point cloud: no valid point")
         extent = check_extent(*column_bounds(p), where, "cloud")
@@ -189,12 +193,20 @@ class PointCloud:
                                     "to segment")
         if _on_a_line(p, extent):
             raise InvalidCloudError(f"{where}{_line_cause(p, np.flatnonzero(self.valid))}")
+        self.__dict__["_usable"] = True
+
+
+_BLOCK = 1 << 20  # points centred at a time
 
 
 def _on_a_line(p: np.ndarray, extent: float) -> bool:
     """Whether the points' scatter has no second direction, to double precision."""
-    q = (p - p.mean(axis=0)) / extent
-    s = np.linalg.svd(q.T @ q, compute_uv=False)
+    mean = p.mean(axis=0)
+    scatter = np.zeros((3, 3))
+    for s in range(0, p.shape[0], _BLOCK):  # (not a centred copy of the whole cloud)
+        q = (p[s:s + _BLOCK] - mean) / extent
+        scatter += q.T @ q
+    s = np.linalg.svd(scatter, compute_uv=False)
     return bool(s[1] <= 1e-12 * s[0])
 
 
