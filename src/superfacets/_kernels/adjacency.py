@@ -317,8 +317,10 @@ def knn_csr(nbr, keep, indptr, rows, more, more_keep):
     """The symmetric graph of k-nearest-neighbour lists: ``i ~ j`` when ``j`` is in
     ``nbr[i]`` (where ``keep``) or ``i`` in ``nbr[j]``, and likewise for the longer
     lists ``more[t]`` (where ``more_keep``) of the points ``rows[t]`` (none: ``rows``
-    of length 0). Fills ``indptr`` (n + 1); returns ``indices`` (int32, ascending per
-    row): the layout :func:`csr_of_pairs` gives from the sorted distinct pairs (whose
+    of length 0). Fills ``indptr`` (n + 1); returns a buffer whose first ``indptr[n]``
+    entries are ``indices`` (int32, ascending per row; the caller copies them out once
+    it has let the lists go, so that the lists, the buffer and the copy are never held
+    at once): the layout :func:`csr_of_pairs` gives from the sorted distinct pairs (whose
     pairs and dual-edge map :func:`number_pairs` numbers from it). A point listed as
     its own neighbour is no edge."""
     n, k = nbr.shape
@@ -373,8 +375,8 @@ def knn_csr(nbr, keep, indptr, rows, more, more_keep):
     indptr[0] = 0
     for i in range(n):
         indptr[i + 1] = indptr[i] + kept[i]
-    indices = np.empty(indptr[n], dtype=np.int32)
-    for i in prange(n):
+    for i in range(n):  # rows moved left in place (indptr[i] <= count[i])
         s = count[i]
-        indices[indptr[i]:indptr[i + 1]] = raw[s:s + indptr[i + 1] - indptr[i]]
-    return indices
+        for a in range(indptr[i + 1] - indptr[i]):
+            raw[indptr[i] + a] = raw[s + a]
+    return raw

@@ -351,6 +351,8 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
         indptr = np.empty(n + 1, dtype=np.int64)
         # i ~ j if either lists the other
         indices = knn_csr(cand, keep, indptr, wide, more, more_keep)
+        del more, more_keep, nbr, cand, keep
+        indices = indices[:indptr[n]].copy()  # (the lists let go first)
     else:  # the distinct pairs, sorted
         src = np.concatenate([np.repeat(np.arange(n), k).reshape(n, k)[keep],
                               np.repeat(wide, more.shape[1]).reshape(more.shape)[more_keep]])
@@ -361,8 +363,7 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
         key = np.unique(key)
         indptr, indices, _ = adjacency_csr(key // n, key % n, n)
         pair_dtype = np.int64
-        del key
-    del more, more_keep, nbr, cand, keep
+        del key, more, more_keep, nbr, cand, keep
 
     if cloud.normals is None:
         normals = orient_normals(pts, normals, indptr, indices, cloud.viewpoint,
