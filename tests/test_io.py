@@ -437,3 +437,20 @@ def test_label_files_are_written_in_blocks_with_the_same_text(tmp_path):
         want = "# k: 3\n" + "".join(f"{int(v)}\n" for v in labels)
         assert path.read_text() == want
         np.testing.assert_array_equal(read_labels(path), labels)
+
+
+def test_segindices_are_written_in_blocks_as_json_writes_them(tmp_path):
+    """The ScanNet-style JSON's labels are formatted a block at a time: the bytes are
+    json.dumps' all the same (empty, one label, across block borders, non-ASCII names)."""
+    import json
+
+    from superfacets.io.labels import _BLOCK, write_segindices
+
+    rng = np.random.default_rng(1)
+    for labels in (np.zeros(0, np.int64), np.array([3]), rng.integers(-1, 10**6, 2 * _BLOCK + 5)):
+        path = write_segindices(tmp_path / "s.json", labels, {"k": np.int64(3), "n": "Tür"},
+                                "scène")
+        want = json.dumps({"params": {"k": 3, "n": "Tür"}, "sceneId": "scène",
+                           "segIndices": labels.tolist()}, separators=(",", ":"),
+                          ensure_ascii=False).encode("utf-8") + b"\n"
+        assert path.read_bytes() == want

@@ -107,9 +107,12 @@ def write_segindices(path, labels, params: dict | None = None, scene_id: str = "
 
     labels = check_labels(labels, None)
     clean = {k: (v.item() if hasattr(v, "item") else v) for k, v in (params or {}).items()}
-    doc = {"params": clean, "sceneId": scene_id, "segIndices": labels.tolist()}
-    return save(path, json.dumps(doc, separators=(",", ":"), ensure_ascii=False)
-                .encode("utf-8") + b"\n", outputs)
+    head = json.dumps({"params": clean, "sceneId": scene_id, "segIndices": []},
+                      separators=(",", ":"), ensure_ascii=False)[:-2]
+    # the labels formatted in blocks, as json.dumps writes a list of ints
+    body = b",".join(",".join(map(str, labels[s:s + _BLOCK].tolist())).encode("ascii")
+                     for s in range(0, labels.shape[0], _BLOCK))
+    return save(path, head.encode("utf-8") + body + b"]}\n", outputs)
 
 
 def read_labels(path, n_faces: int | None = None) -> np.ndarray:
