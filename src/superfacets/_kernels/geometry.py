@@ -166,6 +166,21 @@ def face_terms(vertices, centroids, normals, pairs, edges, lo, hi, geo, cos, con
         concave[u] = s > 0
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def pair_terms(positions, normals, i, j):
+    """``(geo, cos, concave)`` of the elements ``i < j``, points with normals: ``d = p_i -
+    p_j``, ``geo = sqrt((x*x + y*y) + z*z)``, ``cos`` clipped to ``[-1, 1]`` and
+    ``concave = (n_i - n_j) . d < 0``, each dot product summed as ``(x + z) + y``."""
+    dx = positions[i, 0] - positions[j, 0]
+    dy = positions[i, 1] - positions[j, 1]
+    dz = positions[i, 2] - positions[j, 2]
+    c = (normals[i, 0] * normals[j, 0] + normals[i, 2] * normals[j, 2]) \
+        + normals[i, 1] * normals[j, 1]
+    s = ((normals[i, 0] - normals[j, 0]) * dx + (normals[i, 2] - normals[j, 2]) * dz) \
+        + (normals[i, 1] - normals[j, 1]) * dy
+    return np.sqrt(dx * dx + dy * dy + dz * dz), min(max(c, -1.0), 1.0), s < 0
+
+
 @njit(cache=True, error_model="numpy", nogil=True)
 def point_terms(positions, normals, pairs, lo, hi, geo, cos, concave):
     """The terms of the paper's weights for pairs ``lo:hi`` of elements that are points
@@ -175,23 +190,12 @@ def point_terms(positions, normals, pairs, lo, hi, geo, cos, concave):
     expressions ``d = p_i - p_j``, ``geo = np.linalg.norm(d, axis=1)``
     (``sqrt((x*x + y*y) + z*z)``), ``cos = clip(einsum(n_i, n_j), -1, 1)`` and
     ``concave = einsum(n_i - n_j, d) < 0``, the three terms of each ``einsum``
-    summed as ``(x + z) + y`` (as :func:`face_terms`). Writes from index 0.
-    (Tested bit for bit against the numpy expressions.)
+    summed as ``(x + z) + y`` (as :func:`face_terms`; :func:`pair_terms`). Writes from
+    index 0. (Tested bit for bit against the numpy expressions.)
     """
     for t in range(lo, hi):
-        i = pairs[t, 0]
-        j = pairs[t, 1]
-        dx = positions[i, 0] - positions[j, 0]
-        dy = positions[i, 1] - positions[j, 1]
-        dz = positions[i, 2] - positions[j, 2]
         u = t - lo
-        geo[u] = np.sqrt(dx * dx + dy * dy + dz * dz)
-        c = (normals[i, 0] * normals[j, 0] + normals[i, 2] * normals[j, 2]) \
-            + normals[i, 1] * normals[j, 1]
-        cos[u] = min(max(c, -1.0), 1.0)
-        s = ((normals[i, 0] - normals[j, 0]) * dx + (normals[i, 2] - normals[j, 2]) * dz) \
-            + (normals[i, 1] - normals[j, 1]) * dy
-        concave[u] = s < 0
+        geo[u], cos[u], concave[u] = pair_terms(positions, normals, pairs[t, 0], pairs[t, 1])
 
 
 @njit(cache=True, error_model="numpy", nogil=True)

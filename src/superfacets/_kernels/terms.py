@@ -7,6 +7,8 @@ import math
 import numpy as np
 from numba import njit
 
+from .geometry import pair_terms
+
 
 @njit(cache=True, error_model="numpy", nogil=True)
 def convex_scaled_csr(weights, dual_edge, concave, cos, span, coef):
@@ -36,26 +38,14 @@ def cut_costs_csr(dual_edge, concave, cos, lengths, factor, eta_convex, scale):
     return out
 
 
-
 @njit(cache=True, error_model="numpy", nogil=True)
 def point_terms_csr(positions, normals, indptr, indices, r0, r1, geo, cos, concave):
     """:func:`~superfacets._kernels.geometry.point_terms` per CSR entry of the rows
     ``r0:r1`` (written from index 0): entry ``(i, j)`` gets the terms of the pair
-    ``(min, max)``, with the same floating-point operations in the same order."""
+    ``(min, max)`` (:func:`~superfacets._kernels.geometry.pair_terms`)."""
     u = 0
     for i in range(r0, r1):
         for x in range(indptr[i], indptr[i + 1]):
             j = np.int64(indices[x])
-            p = min(i, j)
-            q = max(i, j)
-            dx = positions[p, 0] - positions[q, 0]
-            dy = positions[p, 1] - positions[q, 1]
-            dz = positions[p, 2] - positions[q, 2]
-            geo[u] = np.sqrt(dx * dx + dy * dy + dz * dz)
-            c = (normals[p, 0] * normals[q, 0] + normals[p, 2] * normals[q, 2]) \
-                + normals[p, 1] * normals[q, 1]
-            cos[u] = min(max(c, -1.0), 1.0)
-            s = ((normals[p, 0] - normals[q, 0]) * dx + (normals[p, 2] - normals[q, 2]) * dz) \
-                + (normals[p, 1] - normals[q, 1]) * dy
-            concave[u] = s < 0
+            geo[u], cos[u], concave[u] = pair_terms(positions, normals, min(i, j), max(i, j))
             u += 1
