@@ -275,3 +275,25 @@ def test_cli_adaptive_writes_the_levels_labels(tmp_path, capsys):
                      str(tmp_path / "x.seg")]) == 2
         assert message in capsys.readouterr().err
     assert not (tmp_path / "x.seg").exists()
+
+
+def test_superpoint_graph_of_a_lazy_point_graph_reads_only_its_crossings():
+    """A default point graph never builds its pairs and terms (about 60 bytes per
+    adjacency): its superpoint graph comes from the crossing adjacencies alone, equal to
+    the one made from every pair, and leaves the pairs and terms unbuilt."""
+    from superfacets.elements.points import point_graph
+    from superfacets.inputs.cloud import PointCloud
+
+    rng = np.random.default_rng(6)
+    xyz = rng.random((4000, 3)) * [3, 2, 0.2]
+    pe = point_graph(PointCloud(xyz))
+    g = pe.graph
+    labels = np.empty(g.n_elements, dtype=np.int64)
+    labels[pe.index] = segment(PointCloud(xyz), 25).labels  # (a new cloud: its own graph)
+    lean = superfacet_graph(g, labels)
+    assert not {"pairs", "terms", "lengths"} & set(g.__dict__)
+    g.pairs, g.terms  # noqa: B018 (built: the path over every pair)
+    full = superfacet_graph(g, labels)
+    for name, a in lean.arrays().items():
+        np.testing.assert_array_equal(a, full.arrays()[name], err_msg=name)
+    assert lean.n_edges > 25

@@ -380,3 +380,26 @@ def knn_csr(nbr, keep, indptr, rows, more, more_keep):
         for a in range(indptr[i + 1] - indptr[i]):
             raw[indptr[i] + a] = raw[s + a]
     return raw
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def crossing_pairs(indptr, indices, labels):
+    """The pairs ``(i, j)``, ``i < j``, of a symmetric CSR layout whose labels differ, in
+    pair order (rows ascending, then ``j``): ``(m, 2)`` int64."""
+    n = indptr.shape[0] - 1
+    m = 0
+    for i in range(n):
+        for x in range(indptr[i], indptr[i + 1]):
+            j = indices[x]
+            if j > i and labels[j] != labels[i]:
+                m += 1
+    out = np.empty((m, 2), dtype=np.int64)
+    m = 0
+    for i in range(n):
+        for x in range(indptr[i], indptr[i + 1]):
+            j = indices[x]
+            if j > i and labels[j] != labels[i]:
+                out[m, 0] = i
+                out[m, 1] = j
+                m += 1
+    return out

@@ -215,13 +215,11 @@ def superfacet_graph(graph, labels, features=None) -> SuperfacetGraph:
                                  f"row per {g.element}, got shape {np.shape(features)}")
         feature = np.stack([np.bincount(lab, weights=area_w * f[:, c], minlength=k)
                             for c in range(f.shape[1])], axis=1) / safe[:, None]
-    a, b = lab[g.pairs[:, 0]], lab[g.pairs[:, 1]]
-    cross = np.flatnonzero(a != b)
-    lo, hi = np.minimum(a[cross], b[cross]), np.maximum(a[cross], b[cross])
+    pc, length, cos, concave_el = _crossings(g, lab)
+    a, b = lab[pc[:, 0]], lab[pc[:, 1]]
+    lo, hi = np.minimum(a, b), np.maximum(a, b)
     key, inv = np.unique(lo * k + hi, return_inverse=True)
-    length = np.asarray(g.lengths, dtype=np.float64)[cross]
-    t = g.terms
-    angle = np.arccos(np.clip(t.cos[cross], -1.0, 1.0))
+    angle = np.arccos(np.clip(cos, -1.0, 1.0))
     e = key.shape[0]
     border = np.bincount(inv, weights=length, minlength=e)
     denom = np.where(border > 0, border, 1.0)
@@ -229,10 +227,10 @@ def superfacet_graph(graph, labels, features=None) -> SuperfacetGraph:
     # border-length weighted; where every crossing has zero length, the plain mean
     zero = border <= 0
     mean_angle = np.bincount(inv, weights=length * angle, minlength=e) / denom
-    concave = np.bincount(inv, weights=length * t.concave[cross], minlength=e) / denom
+    concave = np.bincount(inv, weights=length * concave_el, minlength=e) / denom
     if zero.any():
         mean_angle[zero] = (np.bincount(inv, weights=angle, minlength=e) / n_cross)[zero]
-        concave[zero] = (np.bincount(inv, weights=t.concave[cross].astype(float),
+        concave[zero] = (np.bincount(inv, weights=concave_el.astype(float),
                                      minlength=e) / n_cross)[zero]
     edge_index = np.stack([key // k, key % k]).astype(np.int64) if k else np.zeros((2, 0),
                                                                                    np.int64)
@@ -243,3 +241,30 @@ def superfacet_graph(graph, labels, features=None) -> SuperfacetGraph:
     return SuperfacetGraph(edge_index=edge_index, border_length=border, mean_angle=mean_angle,
                            concave=concave, area=area, centroid=centroid, normal=normal,
                            feature=feature, scatter=scatter)
+
+
+def _crossings(g, lab: np.ndarray):
+    """The adjacencies whose two elements have different labels, in pair order: their
+    elements ``(m, 2)``, border lengths, cosines and concavity. A point graph whose pairs
+    and terms were never built (a default run) reads them from its CSR layout, border
+    shares, positions and normals, for the crossing adjacencies alone (the same values:
+    about 60 bytes per point graph adjacency not held)."""
+    from ..elements.vertices import symmetric_terms
+
+    if (g.border_shares is None or g.terms_of is not symmetric_terms
+            or "pairs" in g.__dict__ or "terms" in g.__dict__):
+        a, b = lab[g.pairs[:, 0]], lab[g.pairs[:, 1]]
+        cross = np.flatnonzero(a != b)
+        t = g.terms
+        return (g.pairs[cross], np.asarray(g.lengths, dtype=np.float64)[cross],
+                t.cos[cross], t.concave[cross])
+    from .._kernels.adjacency import crossing_pairs
+    from .._kernels.geometry import point_terms
+
+    pc = crossing_pairs(g.indptr, g.indices, lab)
+    m = pc.shape[0]
+    geo, cos, concave = np.empty(m), np.empty(m), np.empty(m, dtype=bool)
+    point_terms(np.ascontiguousarray(g.positions), np.ascontiguousarray(g.normals), pc, 0, m,
+                geo, cos, concave)
+    shares = g.border_shares
+    return pc, 0.5 * (shares[pc[:, 0]] + shares[pc[:, 1]]), cos, concave
