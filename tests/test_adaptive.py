@@ -204,3 +204,23 @@ def test_cli_density_and_roughness(tmp_path, capsys):
               "-o", str(tmp_path / "bad.seg")])
     assert stop.value.code == 2
     assert "expected a number, got 'high'" in capsys.readouterr().err
+
+
+def test_neighbour_means_come_from_the_csr_layout_as_from_the_pairs():
+    """Known answer: the windows' neighbour averaging reads the CSR layout (a point graph
+    then never builds its pairs) and gives np.bincount's sums over the pairs bit for
+    bit, on values spread over six orders of magnitude."""
+    from superfacets.elements.points import point_graph
+    from superfacets.inputs.cloud import PointCloud
+    from superfacets.method.adaptive import _neighbour_mean
+
+    rng = np.random.default_rng(7)
+    g = point_graph(PointCloud(rng.random((5000, 3)) ** 3)).graph
+    v = rng.random(g.n_elements) * 10 ** rng.uniform(-3, 3, g.n_elements)
+    got = _neighbour_mean(g, v)
+    assert "pairs" not in g.__dict__
+    lo, hi, n = g.pairs[:, 0], g.pairs[:, 1], g.n_elements
+    want = (v + np.bincount(lo, weights=v[hi], minlength=n)
+            + np.bincount(hi, weights=v[lo], minlength=n)) / (
+        1.0 + np.bincount(g.pairs.ravel(), minlength=n))
+    np.testing.assert_array_equal(got, want)

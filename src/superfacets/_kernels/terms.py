@@ -49,3 +49,20 @@ def point_terms_csr(positions, normals, indptr, indices, r0, r1, geo, cos, conca
             j = np.int64(indices[x])
             geo[u], cos[u], concave[u] = pair_terms(positions, normals, min(i, j), max(i, j))
             u += 1
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def neighbour_mean(indptr, indices, x, out):
+    """``out[i] = ((x_i + above) + below) / (1 + degree)``: ``above`` the sum of ``x_j``
+    over the neighbours ``j > i``, ``below`` over ``j < i``, each added in ascending
+    ``j`` from 0.0 (the order of ``np.bincount`` over the pairs ``(lo, hi)``)."""
+    for i in range(indptr.shape[0] - 1):
+        above = 0.0
+        below = 0.0
+        for e in range(indptr[i], indptr[i + 1]):
+            j = indices[e]
+            if j > i:
+                above += x[j]
+            else:
+                below += x[j]
+        out[i] = (x[i] + above + below) / (1.0 + (indptr[i + 1] - indptr[i]))

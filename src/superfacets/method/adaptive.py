@@ -56,12 +56,14 @@ AUTO_SPREAD = 0.7
 
 
 def _neighbour_mean(graph: ElementGraph, x: np.ndarray) -> np.ndarray:
-    """``(x_i + sum of x_j over the neighbours j) / (1 + degree)``."""
-    n = graph.n_elements
-    lo, hi = graph.pairs[:, 0], graph.pairs[:, 1]
-    total = x + np.bincount(lo, weights=x[hi], minlength=n) + np.bincount(
-        hi, weights=x[lo], minlength=n)
-    return total / (1.0 + np.bincount(graph.pairs.ravel(), minlength=n))
+    """``(x_i + sum of x_j over the neighbours j) / (1 + degree)``, from the CSR layout
+    (the sums in the order ``x_i + sum_{j > i} + sum_{j < i}`` of ``np.bincount`` over the
+    pairs: the same values, without the pairs)."""
+    from .._kernels.terms import neighbour_mean
+
+    out = np.empty(graph.n_elements)
+    neighbour_mean(graph.indptr, graph.indices, np.ascontiguousarray(x, dtype=np.float64), out)
+    return out
 
 
 def roughness_of(graph: ElementGraph, rounds: int = SMOOTH_ROUNDS) -> np.ndarray:
