@@ -39,7 +39,9 @@ def _warm() -> None:
         reset_labels(np.empty(1), np.empty(1, dtype=np.int32))
         # the graph build's kernels, with the argument types of a triangle mesh's
         one = np.zeros(1, dtype=np.int32)
-        triangle_half_edges(np.zeros((0, 3), dtype=np.int64), one, one, np.ones(1, dtype=bool))
+        faces = np.zeros((0, 3), dtype=np.int64)
+        faces.setflags(write=False)  # a mesh's faces are read-only: the same specialization
+        triangle_half_edges(faces, one, one, np.ones(1, dtype=bool))
         none = np.ones(1, dtype=bool)
         count_keys(one, none, 0, 1, np.zeros(1, dtype=np.int64))
         scatter_keys(one, none, 0, 1, np.zeros(1, dtype=np.int64), one.copy())
