@@ -26,12 +26,13 @@ give the measurements behind the defaults.
 from __future__ import annotations
 
 import math
+from functools import partial
 from typing import Callable, NamedTuple
 
 import numpy as np
 
 from .._kernels.voronoi import coarse_pairs, first_in_cells, nearest_seed
-from ..elements.graph import ElementGraph, adjacency_csr
+from ..elements.graph import LAZY, ElementGraph, adjacency_csr, pairs_from_csr
 from ..elements.kinds import kind_of
 from ..inputs.bounds import column_bounds
 from .expansion import bucket_width
@@ -214,14 +215,19 @@ def coarsen(graph: ElementGraph, csr_w: np.ndarray, ratio: int) -> Coarsening:
                                      *graph.border_arrays(), n_c)
     del dist
     indptr, indices, dual_edge = adjacency_csr(pairs[:, 0], pairs[:, 1], n_c)
+    weights = np.ascontiguousarray(w_c[dual_edge])
+    # the coarse run reads the CSR layout: its pairs and dual-edge map are built again
+    # (the same: the pairs are in (lo, hi) order) only if something asks
+    del pairs, w_c, dual_edge
     coarse = ElementGraph(
         kind=graph.kind, positions=pos, sizes=tot, normals=nor, centroid=graph.centroid,
-        lower=graph.lower, diagonal=graph.diagonal, pairs=pairs, indptr=indptr,
-        indices=indices, dual_edge=dual_edge, lengths=len_c,
+        lower=graph.lower, diagonal=graph.diagonal, pairs=LAZY, indptr=indptr,
+        indices=indices, dual_edge=LAZY, lengths=len_c,
         boundary_elements=np.empty(0, dtype=np.int64), boundary_lengths=np.empty(0),
-        scale2=scale2)
-    return Coarsening(graph=coarse, weights=np.ascontiguousarray(w_c[dual_edge]),
-                      cluster=cluster, seeds=seeds)
+        scale2=scale2,
+        rebuild=dict.fromkeys(("pairs", "dual_edge"),
+                              partial(pairs_from_csr, pair_dtype=np.int64)))
+    return Coarsening(graph=coarse, weights=weights, cluster=cluster, seeds=seeds)
 
 
 def coarse_centers(graph: ElementGraph, csr_w: np.ndarray, ratio: int, *, init: str,
