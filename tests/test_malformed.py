@@ -111,3 +111,26 @@ def test_ctrl_c_at_any_moment_is_one_line_and_exit_130(case, tmp_path):
         left = [p.name for p in tmp_path.iterdir() if p.name.startswith(".")]
         assert left == [], left
     assert codes.count(130) >= max(1, len(case.delays) - 2), codes
+
+
+def test_a_ctrl_c_the_handler_could_not_raise_is_raised_at_the_next_stage():
+    """A Ctrl-C that lands only in the import machinery or numba's dispatcher (every
+    repeat of it, on a fast start-up) is kept pending and raised at the run's next stage
+    boundary; a run outside the command line never sees one, and the command line
+    forgets it when it ends."""
+    import trimesh
+
+    from superfacets import segment
+    from superfacets._runtime import interrupts
+
+    ball = trimesh.creation.icosphere(subdivisions=3)
+    interrupts.reset()
+    assert segment(ball, 10).n_segments == 10  # nothing pending: the run is unchanged
+    interrupts.pending()
+    with pytest.raises(KeyboardInterrupt):
+        segment(ball, 10)
+    assert segment(ball, 10).n_segments == 10  # raised once
+    interrupts.pending()
+    interrupts.caught()  # stopping in order already: not raised again
+    assert segment(ball, 10).n_segments == 10
+    interrupts.reset()

@@ -11,9 +11,10 @@ from __future__ import annotations
 
 import threading
 
-__all__ = ["caught", "was_caught", "reset"]
+__all__ = ["caught", "was_caught", "reset", "pending", "check"]
 
 _caught = threading.Event()
+_pending = threading.Event()
 
 
 def caught() -> None:
@@ -27,5 +28,23 @@ def was_caught() -> bool:
 
 
 def reset() -> None:
-    """Forget an earlier :func:`caught` (a new command in the same process)."""
+    """Forget an earlier :func:`caught` or :func:`pending` (a new command in the same
+    process)."""
     _caught.clear()
+    _pending.clear()
+
+
+def pending() -> None:
+    """Say that a Ctrl-C came where it could not be raised (the import machinery, numba's
+    dispatcher): :func:`check` raises it at the next safe point."""
+    _pending.set()
+
+
+def check() -> None:
+    """Raise the KeyboardInterrupt of a :func:`pending` Ctrl-C, once: called at the run's
+    stage boundaries, so that a Ctrl-C during the start-up (imports, kernels loading)
+    stops the run even when every repeat of it lands in such code again. Nothing
+    happens outside the command line (no handler sets it)."""
+    if _pending.is_set() and not _caught.is_set():
+        _pending.clear()
+        raise KeyboardInterrupt

@@ -223,6 +223,7 @@ def _terminate_cleanly():
                                                  name="superfacets-interrupt")
             state["repeater"].start()
         if _in_machinery(frame, waits):
+            interrupts.pending()  # raised at the next stage boundary, if not before
             return  # the repeater comes back in 0.2 s
         raise KeyboardInterrupt
 
@@ -243,6 +244,7 @@ def _terminate_cleanly():
         done.set()
         if state["repeater"] is not None:  # no Ctrl-C of ours after the handlers go back
             state["repeater"].join()
+        interrupts.reset()  # nothing pending for a later run in this process
         signal.signal(signal.SIGTERM, previous)
         signal.signal(signal.SIGINT, previous_int)
         sys.unraisablehook = previous_hook

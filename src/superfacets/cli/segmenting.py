@@ -176,7 +176,7 @@ def _tiny_hint(result) -> str:
 
 
 def cmd_segment(args) -> int:
-    from .._runtime import warmup
+    from .._runtime import interrupts, warmup
     from ..errors import ParameterError, SuperfacetsError
     from ..method.params import resolve
     from ..viz.outputs import JoinedResult, write_result
@@ -242,6 +242,7 @@ def cmd_segment(args) -> int:
         warmup.start()  # numba's start-up in a thread, while the rest is imported and read
     t0 = time.perf_counter()
     data = scan_cloud(read_usable(args.mesh, clouds=True), args)
+    interrupts.check()  # a Ctrl-C during the start-up and the reading
     from ..api.scenes import segment_objects
     from ..api.segmentation import segment
 

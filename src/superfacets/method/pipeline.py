@@ -39,6 +39,7 @@ from contextlib import contextmanager
 
 import numpy as np
 
+from .._runtime import interrupts
 from ..api.result import SegmentationResult
 from ..elements.inputs import features_of
 from .finish import clean_up, exact_count, finish, merge_small
@@ -91,7 +92,9 @@ class Hooks:
 
     @contextmanager
     def stage(self, key: str | None, name: str | None = None, add: bool = False):
-        """Time a stage into ``timings[key]`` (added with ``add``); show ``name``."""
+        """Time a stage into ``timings[key]`` (added with ``add``); show ``name``. A Ctrl-C
+        the command line could not raise where it came is raised here, first."""
+        interrupts.check()
         if name is not None:
             self.describe(name)
         t = time.perf_counter()
