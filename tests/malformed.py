@@ -484,7 +484,7 @@ class Interrupt:
     """A command interrupted by Ctrl-C (SIGINT to its whole process group, as a terminal
     sends it) at each of ``delays`` seconds after its start."""
     name: str
-    argv: list  # "{d}" is the case's folder, "{big}" a 180,000-face mesh in it
+    argv: list  # "{d}" is the case's folder, "{big}" a 405,000-face mesh in it
     delays: tuple
     outputs: list  # files that must be whole or absent
 
