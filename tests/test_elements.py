@@ -753,3 +753,29 @@ def test_weights_from_the_csr_layout_equal_the_weights_per_pair():
                 got = csr_point_weights(g, alpha=alpha, eta_convex=eta, dtype=dtype)
                 assert got.dtype == dtype
                 np.testing.assert_array_equal(got, csr_weights(g, ref, dtype))
+
+
+def test_runs_of_equal_positions_found_in_parallel_equal_one_pass_in_order():
+    """Known answer: distinct_in_order (its runs and moves in parallel) gives the arrays
+    of one pass in order: each run of equal rows once, -0.0 equal to 0.0, the first
+    row's values kept; on empty, single and many-duplicate inputs."""
+    from superfacets._kernels.geometry import distinct_in_order
+
+    rng = np.random.default_rng(8)
+    for n in (0, 1, 2, 7, 50_000):
+        p = rng.integers(-2, 3, (n, 3)).astype(np.float64)
+        p[::5, 1] *= -0.0 if n else 1.0  # zeros of both signs
+        order = np.lexsort((p[:, 2], p[:, 1], p[:, 0]))
+        out, inverse = np.empty_like(p), np.empty(n, dtype=np.int64)
+        m = distinct_in_order(p, order, out, inverse)
+        want_out, want_inv, prev = [], np.empty(n, dtype=np.int64), None
+        for row in order:
+            if prev is None or (p[row] != p[prev]).any():
+                want_out.append(p[row].copy())
+            want_inv[row] = len(want_out) - 1
+            prev = row
+        assert m == len(want_out)
+        np.testing.assert_array_equal(out[:m], np.array(want_out).reshape(-1, 3))
+        np.testing.assert_array_equal(np.signbit(out[:m]), np.signbit(
+            np.array(want_out).reshape(-1, 3)))
+        np.testing.assert_array_equal(inverse, want_inv)
