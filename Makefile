@@ -7,7 +7,8 @@ STAMP := $(VENV)/.installed
 
 .PHONY: demo test lint docs bench scale browser pictures sweep comparisons check-wheel clean
 
-$(STAMP): pyproject.toml
+# (setup.py and the C++ sources: pip builds the compiled kernels again when they change)
+$(STAMP): pyproject.toml setup.py $(wildcard src/superfacets/_kernels/cxx/*)
 	$(PYTHON) -m venv $(VENV)
 	$(VENV)/bin/python -m pip install --quiet --upgrade pip
 	$(VENV)/bin/python -m pip install --quiet -e ".[test]"

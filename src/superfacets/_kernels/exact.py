@@ -14,7 +14,8 @@ there, ``qlab`` one label per queue node.
 import numpy as np
 from numba import njit
 
-from .expand import QUEUE_FULL, queue_node, queue_pop, queue_push
+from .codes import NOT_INCREMENTAL, QUEUE_FULL  # noqa: F401
+from .expand import queue_node, queue_pop, queue_push
 
 _INF = np.inf
 
@@ -138,7 +139,6 @@ def _seed_orphans(indptr, indices, weights, centers, n_centers, dist, label, que
 
 
 #: :func:`reclassify_exact` found the previous labels unusable: classify from scratch.
-NOT_INCREMENTAL = -100
 
 
 @njit(cache=True, error_model="numpy")

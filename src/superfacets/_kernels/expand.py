@@ -18,19 +18,9 @@ Nothing here checks its input.
 import numpy as np
 from numba import njit
 
+from .codes import MERGE, QUEUE_FULL, RECORD, RECORD_FULL, UNLABELLED  # noqa: F401
+
 _INF = np.inf
-
-
-#: ``mode`` of :func:`expand`: label faces that get a strictly lower distance
-MERGE = 0
-#: ``mode`` of :func:`expand`: enter and label only faces without a label
-UNLABELLED = 1
-#: ``mode`` of :func:`expand`: touch neither ``dist`` nor ``label``, only record
-RECORD = 2
-#: status returned when the visit/record arrays are full
-RECORD_FULL = -1
-#: status returned when the queue is full
-QUEUE_FULL = -2
 
 
 @njit(cache=True, error_model="numpy", inline="always")

@@ -26,15 +26,13 @@ def _warm() -> None:
     try:
         import numpy as np
 
-        from .._kernels.adjacency import (
-            count_keys,
-            csr_of_face_pairs,
-            group_pairs,
-            scatter_keys,
-            sort_buckets,
-            triangle_half_edges,
-        )
-        from .._kernels.expand import reset_labels
+        from .._kernels.native import reference
+
+        reset_labels = reference("expand.reset_labels")
+        count_keys, scatter_keys, sort_buckets, triangle_half_edges, group_pairs, \
+            csr_of_face_pairs = (reference(f"adjacency.{name}") for name in (
+                "count_keys", "scatter_keys", "sort_buckets", "triangle_half_edges",
+                "group_pairs", "csr_of_face_pairs"))
 
         reset_labels(np.empty(1), np.empty(1, dtype=np.int32))
         # the graph build's kernels, with the argument types of a triangle mesh's
@@ -56,7 +54,8 @@ def _warm() -> None:
 def start() -> None:
     """Start numba's start-up in a background thread, once per process.
 
-    A no-op when already started or when ``SUPERFACETS_NO_WARMUP`` is set.
+    A no-op when already started or when ``SUPERFACETS_NO_WARMUP`` is set. Call it
+    only where the run will use numba (not on faces where the kernels are compiled).
 
     Examples
     --------

@@ -176,6 +176,7 @@ def _tiny_hint(result) -> str:
 
 
 def cmd_segment(args) -> int:
+    from .._kernels import native
     from .._runtime import interrupts, warmup
     from ..errors import ParameterError, SuperfacetsError
     from ..method.params import resolve
@@ -237,9 +238,10 @@ def cmd_segment(args) -> int:
     kwargs = dict(method_kwargs(args), **element_kwargs(args))
     resolve(n_segments=args.n_segments, radius=args.radius, **kwargs)  # before the read
     if Path(args.mesh).is_file():  # no numba work for bad arguments or a missing input
-        if not args.quiet:
-            warmup.say_if_cold()
-        warmup.start()  # numba's start-up in a thread, while the rest is imported and read
+        if not args.quiet:  # said only where numba compiles: the first run after installing
+            native.before_numba(warmup.say_if_cold)
+        if _needs_numba(args.mesh, args.elements):
+            warmup.start()  # numba's start-up in a thread, while the rest is imported and read
     t0 = time.perf_counter()
     data = scan_cloud(read_usable(args.mesh, clouds=True), args)
     interrupts.check()  # a Ctrl-C during the start-up and the reading
@@ -352,7 +354,22 @@ def cmd_baseline(args) -> int:
     return 0
 
 
+def _needs_numba(path, elements: str | None = None) -> bool:
+    """Whether a run on ``path`` (elements ``elements``, default faces) is expected to use
+    numba kernels: always where the compiled kernels are not built; otherwise for
+    vertices, points and files that hold point clouds by their suffix (a run on faces
+    uses the compiled kernels alone: numba's start-up is not warmed for nothing)."""
+    from .._kernels import native
+    from ..io import CLOUD_FORMATS
+    from ..io.files import split_suffix
+
+    if not native.available() or elements not in (None, "faces"):
+        return True
+    return split_suffix(Path(path))[0] in CLOUD_FORMATS
+
+
 def cmd_demo(args) -> int:
+    from .._kernels import native
     from .._runtime import warmup
     from ..api.segmentation import segment
     from ..inputs.shapes import creature
@@ -365,8 +382,9 @@ def cmd_demo(args) -> int:
     check_int("--resolution", args.resolution, lo=16, hi=300)
     resolve(n_segments=args.n_segments, **method_kwargs(args))  # every option, before work
     if not args.quiet:
-        warmup.say_if_cold()
-    warmup.start()
+        native.before_numba(warmup.say_if_cold)
+    if _needs_numba("creature.off"):
+        warmup.start()
     out = Path(args.output_dir)
     if out.exists() and not out.is_dir():
         raise NotADirectoryError(f"{out}: exists and is not a folder")

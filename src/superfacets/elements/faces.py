@@ -24,6 +24,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .._kernels import native
 from .graph import ElementGraph, cached_on, pairs_from_csr
 
 __all__ = ["FaceAdjacency", "build_face_graph", "face_graph"]
@@ -104,7 +105,7 @@ def _build_face_graph_of(mesh) -> ElementGraph:
     v = mesh.vertices
 
     def edge_length(edges):  # |v_b - v_a| as np.linalg.norm(axis=1), in one kernel pass
-        from .._kernels.geometry import edge_lengths
+        edge_lengths = native.kernel("geometry.edge_lengths")
 
         out = np.empty(edges.shape[0])
         edge_lengths(v, edges, out)
@@ -114,7 +115,7 @@ def _build_face_graph_of(mesh) -> ElementGraph:
         # one pass of a kernel; the same operations as the numpy expressions
         #   mid = 0.5 * (v[a] + v[b]); geo = |c_i - mid| + |mid - c_j|,
         #   cos = clip(n_i . n_j, -1, 1), concave = n_i . (c_j - c_i) > 0
-        from .._kernels.geometry import face_terms
+        face_terms = native.kernel("geometry.face_terms")
 
         pairs = g.pairs
         lo, hi = sl.indices(pairs.shape[0])[:2]
@@ -178,7 +179,9 @@ def order_by_two_keys(key1: np.ndarray, key2: np.ndarray, n_key1: int,
     starts : (n_key1 + 1,) int64 ndarray
         Entries with ``key1 == v`` are ``order[starts[v]:starts[v + 1]]``.
     """
-    from .._kernels.adjacency import count_keys, scatter_keys, sort_buckets
+    count_keys = native.kernel("adjacency.count_keys")
+    scatter_keys = native.kernel("adjacency.scatter_keys")
+    sort_buckets = native.kernel("adjacency.sort_buckets")
     from .._runtime.threads import run_ranges, split
 
     bounds = split(key1.shape[0])
@@ -232,7 +235,9 @@ def build_face_graph(faces: np.ndarray, n_vertices: int, offsets: np.ndarray | N
     -------
     FaceAdjacency
     """
-    from .._kernels.adjacency import csr_of_face_pairs, group_pairs, triangle_half_edges
+    csr_of_face_pairs = native.kernel("adjacency.csr_of_face_pairs")
+    group_pairs = native.kernel("adjacency.group_pairs")
+    triangle_half_edges = native.kernel("adjacency.triangle_half_edges")
 
     if offsets is None:  # triangles: half-edge h = 3 * face + corner
         m = faces.shape[0]

@@ -17,6 +17,7 @@ from functools import cached_property
 
 import numpy as np
 
+from .._kernels import native
 from ..errors import InvalidMeshError
 from .bounds import check_extent, column_bounds
 from .rgb import check_colors, face_means, vertex_means
@@ -219,8 +220,6 @@ class Mesh:
             self.__dict__["_geometry"] = (geometry[0], geometry[1], None)
 
     def _compute_geometry(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        from .._kernels.geometry import face_geometry, polygon_geometry
-
         m = self.n_faces
         centroids, areas, normals = np.empty((m, 3)), np.empty(m), np.empty((m, 3))
         v = np.ascontiguousarray(self.vertices)
@@ -228,9 +227,12 @@ class Mesh:
             from .._runtime.threads import run_ranges, split
 
             f = np.ascontiguousarray(self.faces)
+            face_geometry = native.kernel("geometry.face_geometry")
             run_ranges(lambda a, b: face_geometry(v, f[a:b], centroids[a:b], areas[a:b],
                                                   normals[a:b]), split(m))
         else:
+            from .._kernels.geometry import polygon_geometry
+
             polygon_geometry(v, np.ascontiguousarray(self.corners), np.asarray(self.offsets),
                              centroids, areas, normals)
         return readonly(centroids), readonly(areas), readonly(normals)

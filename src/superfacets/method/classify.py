@@ -26,11 +26,23 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._kernels import expand as _k
-from .._kernels.exact import NOT_INCREMENTAL, classify_exact, reclassify_exact
+from .._kernels import native
+from .._kernels.codes import NOT_INCREMENTAL, QUEUE_FULL
 from .adaptive import window_factors
 from .expansion import Workspaces, with_room
 from .params import ASSIGNMENTS, check_choice
+
+_k = native.of("expand")  # the expansion kernels, compiled where built
+
+
+def classify_exact(*args):
+    """:func:`superfacets._kernels.exact.classify_exact` (numba, imported on first use)."""
+    return native.reference("exact.classify_exact")(*args)
+
+
+def reclassify_exact(*args):
+    """:func:`superfacets._kernels.exact.reclassify_exact` (numba, imported on first use)."""
+    return native.reference("exact.reclassify_exact")(*args)
 
 __all__ = ["Classifier", "BoundedReplay", "Bounded", "Exact", "make_classifier"]
 
@@ -128,15 +140,16 @@ class Exact(Classifier):
             self.dist, self.label, self.prev = np.empty(self.m), np.empty_like(label), None
         k = NOT_INCREMENTAL
         if self.prev is not None:  # only the cells of the centers that moved are searched again
-            k = reclassify_exact(self.indptr, self.indices, self.w, centers, n_centers,
-                                 self.dist, self.label, self.queue, self.qlab, self.inv_width,
-                                 self.prev, self.first, self.mark)
-            if k == _k.QUEUE_FULL:  # the previous result is spoilt: from scratch, more room
+            k = reclassify_exact(self.indptr, self.indices, self.w, centers, n_centers, self.dist,
+                           self.label, self.queue, self.qlab, self.inv_width, self.prev,
+                           self.first, self.mark)
+            if k == QUEUE_FULL:  # the previous result is spoilt: from scratch, more room
                 self._pool(2 * self.queue[0].shape[0])
                 k = NOT_INCREMENTAL
         while k < 0:
-            k = classify_exact(self.indptr, self.indices, self.w, centers, n_centers, self.dist,
-                               self.label, self.queue, self.qlab, self.inv_width)
+            k = classify_exact(
+                self.indptr, self.indices, self.w, centers, n_centers, self.dist, self.label,
+                self.queue, self.qlab, self.inv_width)
             if k < 0:
                 self._pool(2 * self.queue[0].shape[0])
         self.prev = centers[:k].copy()
@@ -262,7 +275,7 @@ class BoundedReplay(Classifier):
             if p >= 0:
                 break
             # undo the orphans' labels: merge everything again, then retry with more room
-            if p == _k.QUEUE_FULL:
+            if p == QUEUE_FULL:
                 ws.grow(p)
             else:
                 self.end = new_end
@@ -314,7 +327,8 @@ class BoundedReplay(Classifier):
         def run(t):
             ws = spaces.get(t)
             d_t, l_t = (dist, label) if t == 0 else ws.labels()
-            part = parts[t]
+            part = np.ascontiguousarray(parts[t])  # (a strided view: the compiled kernels
+            # take contiguous arrays)
             srcs_t = np.ascontiguousarray(cs[part])
             os_t = np.empty(part.shape[0], dtype=np.int64)
             ol_t = np.empty(part.shape[0], dtype=np.int64)
@@ -326,7 +340,7 @@ class BoundedReplay(Classifier):
                                          ws.local, ws.queue, spaces.inv_width, self.face,
                                          self.dist, bounds[t], bounds[t + 1], os_t, ol_t,
                                          d_t, l_t, self.wscale)
-                if p != _k.QUEUE_FULL:
+                if p != QUEUE_FULL:
                     break
                 ws.grow(p)
             seg_start[part] = os_t

@@ -26,6 +26,7 @@ import math
 
 import numpy as np
 
+from .._kernels import native
 from ..elements.graph import chunked
 from ..elements.inputs import as_element_graph
 from ..elements.kinds import kind_of
@@ -246,7 +247,8 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
     >>> int(clean.max()) + 1
     30
     """
-    from .._kernels.cleanup import band_distances, solve_bands
+    band_distances = native.kernel("cleanup.band_distances")
+    solve_bands = native.kernel("cleanup.solve_bands")
     from ..errors import ParameterError
     from .connectivity import enforce_connectivity
 
@@ -295,7 +297,7 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
             cut_costs(g, alpha=alpha, eta_convex=eta_convex, crease=crease, features=features,
                       beta=beta)[de] * r)
     else:  # the same values, per CSR entry in one pass
-        from .._kernels.terms import cut_costs_csr
+        cut_costs_csr = native.kernel("terms.cut_costs_csr")
 
         t = g.terms
         cut_csr = cut_costs_csr(de, t.concave, t.cos, g.lengths, crease * alpha / np.pi,

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._kernels import native
 from ..elements.inputs import as_element_graph
 from .labels import check_labels, relabel_dense
 
@@ -42,7 +43,7 @@ def label_components(graph, labels: np.ndarray) -> np.ndarray:
     """
     graph = as_element_graph(graph)
     labels = check_labels(labels, graph.n_elements, per=graph.element)
-    from .._kernels.adjacency import same_label_components
+    same_label_components = native.kernel("adjacency.same_label_components")
 
     # a depth-first search per piece over the graph's CSR, pieces numbered by their
     # lowest element (as scipy's connected_components of the same-label subgraph)
@@ -118,7 +119,8 @@ def enforce_connectivity(graph, labels: np.ndarray, centers: np.ndarray | None =
     by the method (expansions never leave a connected component of the
     mesh); if one does, it becomes a superfacet of its own.
     """
-    from .._kernels.connectivity import merge_strays, stray_borders
+    merge_strays = native.kernel("connectivity.merge_strays")
+    stray_borders = native.kernel("connectivity.stray_borders")
     from .params import check_int
 
     g = as_element_graph(graph)

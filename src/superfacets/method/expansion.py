@@ -14,7 +14,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from .._kernels.expand import QUEUE_FULL, RECORD_FULL
+from .._kernels.codes import QUEUE_FULL, RECORD_FULL
 
 __all__ = ["Workspace", "Workspaces", "bucket_width", "with_room"]
 

@@ -14,8 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._kernels.farthest import farthest_point, farthest_point_blocked, spatial_blocks
-from .._kernels.flood import flood
+from .._kernels import native
 from ..elements.inputs import as_element_graph
 from .expansion import Workspace, bucket_width, with_room
 from .params import DEFAULTS, INITS, check_choice, check_n_segments
@@ -50,7 +49,7 @@ def first_center(graph) -> int:
 
 def _pieces(g) -> tuple[np.ndarray, int]:
     """Connected piece of every element (numbered by lowest element) and their number."""
-    from .._kernels.adjacency import same_label_components
+    same_label_components = native.kernel("adjacency.same_label_components")
 
     n = g.n_elements
     piece = same_label_components(g.indptr, g.indices, np.zeros(n, dtype=np.int64))
@@ -154,10 +153,11 @@ def farthest_point_centers(graph, n_segments: int, *, every_piece: bool = False)
     m = c.shape[0]
     scale2 = g.scale2  # content-sensitive runs (superfacets.method.adaptive); None: the paper's
     if m * k < _BLOCKED_MIN_WORK:
-        farthest_point(c, k, first_center(g), out, scale2)
+        native.kernel("farthest.farthest_point")(c, k, first_center(g), out, scale2)
     else:  # same result; each new center visits only the grid cells it can change
         cells = max(2, round(m ** (1 / 3)))  # cells^3 ~ m: the count array stays O(m)
-        order, bstart, bcenter, bradius = spatial_blocks(c, cells)
+        order, bstart, bcenter, bradius = native.kernel("farthest.spatial_blocks")(c, cells)
+        farthest_point_blocked = native.kernel("farthest.farthest_point_blocked")
         if scale2 is None:
             farthest_point_blocked(c, k, first_center(g), out, order, bstart, bcenter, bradius)
         else:
@@ -214,6 +214,7 @@ def flood_labels(graph, csr_weights: np.ndarray, radius: float,
     labels = np.empty(m, dtype=np.int64)
     inv_width, n_buckets = bucket_width(csr_weights)
     ws = Workspace(m, n_buckets, g.indices.shape[0] + m + 1)
+    flood = native.reference("flood.flood")
     with_room(ws, lambda ws: flood(g.indptr, g.indices, csr_weights, c, order,
                                    float((window * radius) ** 2), labels, ws.local,
                                    ws.queue, inv_width, ws.vis))

@@ -31,12 +31,18 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
-from .._kernels.voronoi import coarse_pairs, first_in_cells, nearest_seed
+from .._kernels import native
 from ..elements.graph import LAZY, ElementGraph, adjacency_csr, pairs_from_csr
 from ..elements.kinds import kind_of
 from ..inputs.bounds import column_bounds
 from .expansion import bucket_width
 from .params import superfacet_measure
+
+
+def _voronoi(name: str):
+    """A Voronoi kernel (numba, imported on first use: runs on faces never load it)."""
+    return native.reference(f"voronoi.{name}")
+
 
 _MIN_CLUSTERS = 4  # clusters per superfacet below which the coarse run is not done
 _MAX_RATIO_DIV = 8  # coarsen is capped at n / (8 k): clusters per superfacet
@@ -113,7 +119,7 @@ def grid_seeds(positions: np.ndarray, area: float, n_target: int) -> np.ndarray:
     if int(dims[0]) * int(dims[1]) * int(dims[2]) < 2**62:
         cap = 1 << max(10, int(4 * n_target + 1).bit_length())
         while True:  # a hash table of cells, grown until at most half full
-            first = first_in_cells(positions, lo, h, dims, cap)
+            first = _voronoi("first_in_cells")(positions, lo, h, dims, cap)
             if first.shape[0] or cap >= 4 * n:
                 break
             cap *= 4
@@ -151,6 +157,7 @@ def voronoi_cells(graph: ElementGraph, csr_w: np.ndarray, seeds: np.ndarray
         queue = (np.empty(cap, dtype=np.int32), np.empty(cap), np.empty(cap, dtype=np.int32),
                  head)
         all_seeds, first, full = seeds, 0, False
+        nearest_seed = _voronoi("nearest_seed")
         while True:
             if nearest_seed(graph.indptr, graph.indices, csr_w, all_seeds, first, dist, label,
                             queue, inv_width) != 0:
@@ -211,8 +218,8 @@ def coarsen(graph: ElementGraph, csr_w: np.ndarray, ratio: int) -> Coarsening:
 
     # coarse adjacency: the fine pairs whose elements lie in different clusters
     # (the shortest seed-to-seed path through one, the summed border lengths)
-    pairs, w_c, len_c = coarse_pairs(graph.indptr, graph.indices, cluster, dist, csr_w,
-                                     *graph.border_arrays(), n_c)
+    pairs, w_c, len_c = _voronoi("coarse_pairs")(graph.indptr, graph.indices, cluster, dist,
+                                                 csr_w, *graph.border_arrays(), n_c)
     del dist
     indptr, indices, dual_edge = adjacency_csr(pairs[:, 0], pairs[:, 1], n_c)
     weights = np.ascontiguousarray(w_c[dual_edge])

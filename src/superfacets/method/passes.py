@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._kernels.update import update_centers as _update_kernel
+from .._kernels import native
 
 __all__ = ["Iteration", "iterate", "update_centers", "hold_small_moves", "final_centers"]
 
@@ -48,7 +48,7 @@ def update_centers(label: np.ndarray, k: int, sizes: np.ndarray, positions: np.n
         New center of each superfacet, -1 for an empty one.
     """
     new = np.empty(k, dtype=np.int64)
-    _update_kernel(label, k, sizes, positions, old_centers, new)
+    native.kernel("update.update_centers")(label, k, sizes, positions, old_centers, new)
     return new
 
 

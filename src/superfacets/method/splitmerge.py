@@ -37,13 +37,18 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._kernels.splitmerge import energies, label_pairs, merge_energies, split_candidates
+from .._kernels import native
 from ..elements.kinds import kind_of
 
 __all__ = ["swap_round", "swap_and_iterate", "POWER", "LLOYD",
            "MAX_FRACTION", "MIN_GAIN", "ROUNDS", "START_TOL", "FAST_ROUNDS", "PASSES_AFTER",
            "SWAP_ETA_CONVEX_FACES", "HOLD_AFTER_FACES", "PASSES_AFTER_FACES",
            "swap_eta_convex_for", "hold_after_for", "passes_after_for"]
+
+# the kernels, compiled where built (module-level names: tests patch them)
+energies, split_candidates, merge_energies, label_pairs = (
+    (lambda *a, _n=n: native.kernel(f"splitmerge.{_n}")(*a))
+    for n in ("energies", "split_candidates", "merge_energies", "label_pairs"))
 
 #: Exponent of the distances in the energy.
 POWER = 4.0
@@ -308,7 +313,8 @@ def hold_after_for(kind: str) -> float:
 def _members(lab: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
     """The elements of each superfacet, ascending: ``members[bounds[s]:bounds[s + 1]]``
     (a stable counting sort of ``lab``, the order of ``np.argsort(lab, kind="stable")``)."""
-    from .._kernels.adjacency import count_keys, scatter_keys
+    count_keys = native.kernel("adjacency.count_keys")
+    scatter_keys = native.kernel("adjacency.scatter_keys")
 
     n = lab.shape[0]
     keep = np.zeros(n, dtype=np.bool_)  # nothing skipped

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._kernels import native
 from ..elements.graph import CHUNK, ElementGraph, chunked
 from ..elements.inputs import as_element_graph
 from ..errors import ParameterError
@@ -167,7 +168,7 @@ def convex_scaled(graph, weights: np.ndarray, *, alpha: float, eta_convex: float
     scale = alpha * eta_convex * (1.0 - float(factor))
     if weighting != "paper" or scale == 0.0:
         return weights
-    from .._kernels.terms import convex_scaled_csr
+    convex_scaled_csr = native.kernel("terms.convex_scaled_csr")
 
     t = g.terms
     return convex_scaled_csr(np.ascontiguousarray(weights, dtype=np.float64), g.dual_edge,

@@ -1,0 +1,355 @@
+// Boundary clean-up: band distances and one minimum cut per band by Boykov and
+// Kolmogorov's max-flow (superfacets/_kernels/cleanup.py), the same operations in order.
+#include "common.hpp"
+
+namespace sfk {
+
+namespace {
+
+constexpr i64 NONE = -1, TERMINAL = -2, ORPHAN = -3;
+
+inline bool rooted(const i64* parent, const i64* head, i64 j) {
+    while (true) {
+        i64 p = parent[j];
+        if (p == TERMINAL) return true;
+        if (p < 0) return false;
+        j = head[p];
+    }
+}
+
+struct Arcs {
+    i64* first;
+    i64* nxt;
+    i64* head;
+    double* cap;
+    double* tr;
+};
+
+struct CutWork {
+    std::vector<i64> head, nxt, first, parent, active, orphans;
+    std::vector<double> cap, tr;
+    std::vector<char> side, sink, queued;
+};
+
+void min_cut_in(const Arcs& g, double eps, char* source_side, i64 n, i64* parent, char* sink,
+                char* queued, i64* active, i64* orphans) {
+    const i64* first = g.first;
+    const i64* nxt = g.nxt;
+    const i64* head = g.head;
+    double* cap = g.cap;
+    double* tr = g.tr;
+    i64 qh = 0, qn = 0;
+    for (i64 u = 0; u < n; ++u) {
+        sink[u] = 0;
+        queued[u] = 0;
+    }
+    for (i64 u = 0; u < n; ++u) {
+        if (tr[u] > eps || -tr[u] > eps) {
+            parent[u] = TERMINAL;
+            sink[u] = tr[u] < 0.0;
+            active[(qh + qn) % n] = u;
+            queued[u] = 1;
+            ++qn;
+        } else {
+            parent[u] = NONE;
+        }
+    }
+    while (qn > 0) {
+        i64 i = active[qh];
+        if (parent[i] == NONE) {
+            qh = (qh + 1) % n;
+            --qn;
+            queued[i] = 0;
+            continue;
+        }
+        i64 mid = -1;
+        bool side = sink[i];
+        i64 a = first[i];
+        while (a != -1) {
+            i64 j = head[a];
+            if ((side ? cap[a ^ 1] : cap[a]) > eps) {
+                if (parent[j] == NONE) {
+                    parent[j] = a ^ 1;
+                    sink[j] = side;
+                    if (!queued[j]) {
+                        active[(qh + qn) % n] = j;
+                        queued[j] = 1;
+                        ++qn;
+                    }
+                } else if (static_cast<bool>(sink[j]) != side) {
+                    mid = side ? a ^ 1 : a;
+                    break;
+                }
+            }
+            a = nxt[a];
+        }
+        if (mid == -1) {
+            qh = (qh + 1) % n;
+            --qn;
+            queued[i] = 0;
+            continue;
+        }
+        double b = cap[mid];
+        i64 u = head[mid ^ 1];
+        while (parent[u] != TERMINAL) {
+            i64 pa = parent[u];
+            b = mn(b, cap[pa ^ 1]);
+            u = head[pa];
+        }
+        b = mn(b, tr[u]);
+        u = head[mid];
+        while (parent[u] != TERMINAL) {
+            i64 pa = parent[u];
+            b = mn(b, cap[pa]);
+            u = head[pa];
+        }
+        b = mn(b, -tr[u]);
+        cap[mid] -= b;
+        cap[mid ^ 1] += b;
+        i64 n_orphans = 0;
+        u = head[mid ^ 1];
+        while (parent[u] != TERMINAL) {
+            i64 pa = parent[u];
+            cap[pa] += b;
+            cap[pa ^ 1] -= b;
+            if (!(cap[pa ^ 1] > eps)) {
+                parent[u] = ORPHAN;
+                orphans[n_orphans++] = u;
+            }
+            u = head[pa];
+        }
+        tr[u] -= b;
+        if (!(tr[u] > eps)) {
+            parent[u] = ORPHAN;
+            orphans[n_orphans++] = u;
+        }
+        u = head[mid];
+        while (parent[u] != TERMINAL) {
+            i64 pa = parent[u];
+            cap[pa ^ 1] += b;
+            cap[pa] -= b;
+            if (!(cap[pa] > eps)) {
+                parent[u] = ORPHAN;
+                orphans[n_orphans++] = u;
+            }
+            u = head[pa];
+        }
+        tr[u] += b;
+        if (!(-tr[u] > eps)) {
+            parent[u] = ORPHAN;
+            orphans[n_orphans++] = u;
+        }
+        i64 k = 0;
+        while (k < n_orphans) {
+            i64 o = orphans[k++];
+            bool oside = sink[o];
+            i64 nw = -1;
+            a = first[o];
+            while (a != -1) {
+                i64 j = head[a];
+                if (static_cast<bool>(sink[j]) == oside && parent[j] != NONE &&
+                    (oside ? cap[a] > eps : cap[a ^ 1] > eps) && rooted(parent, head, j)) {
+                    nw = a;
+                    break;
+                }
+                a = nxt[a];
+            }
+            if (nw != -1) {
+                parent[o] = nw;
+                continue;
+            }
+            a = first[o];
+            while (a != -1) {
+                i64 j = head[a];
+                if (static_cast<bool>(sink[j]) == oside && parent[j] != NONE) {
+                    if ((oside ? cap[a] > eps : cap[a ^ 1] > eps) && !queued[j]) {
+                        active[(qh + qn) % n] = j;
+                        queued[j] = 1;
+                        ++qn;
+                    }
+                    i64 pj = parent[j];
+                    if (pj >= 0 && head[pj] == o) {
+                        parent[j] = ORPHAN;
+                        orphans[n_orphans++] = j;
+                    }
+                }
+                a = nxt[a];
+            }
+            parent[o] = NONE;
+        }
+    }
+    for (i64 u = 0; u < n; ++u) source_side[u] = parent[u] != NONE && !sink[u];
+}
+
+struct Bands {
+    const i64* band_of;
+    const i64* indptr;
+    const i32* indices;
+    const double* cut_cost;
+    const i64* labels;
+    const double* sizes;
+    const double* positions;
+    const double* means;
+    double smooth;
+    i64* out;
+};
+
+void solve_one(const Bands& B, const i64* members, i64 nb, i64 la, i64 lb, i64 pair_id,
+               i64* local, CutWork& W) {
+    for (i64 i = 0; i < nb; ++i) {
+        local[members[i]] = i;
+        W.first[i] = -1;
+    }
+    i64 na = 0;
+    double total = 0.0;
+    for (i64 i = 0; i < nb; ++i) {
+        i64 f = members[i];
+        double da = 0.0, db = 0.0;
+        for (int c = 0; c < 3; ++c) {
+            double xa = B.positions[3 * f + c] - B.means[3 * la + c];
+            double xb = B.positions[3 * f + c] - B.means[3 * lb + c];
+            da += xa * xa;
+            db += xb * xb;
+        }
+        double cost_a = B.smooth * B.sizes[f] * da;
+        double cost_b = B.smooth * B.sizes[f] * db;
+        for (i64 e = B.indptr[f]; e < B.indptr[f + 1]; ++e) {
+            i64 g = B.indices[e];
+            if (B.band_of[g] == pair_id) {
+                if (g > f) {
+                    i64 j = local[g];
+                    double c_e = B.cut_cost[e];
+                    W.head[na] = j;
+                    W.cap[na] = c_e;
+                    W.nxt[na] = W.first[i];
+                    W.first[i] = na;
+                    W.head[na + 1] = i;
+                    W.cap[na + 1] = c_e;
+                    W.nxt[na + 1] = W.first[j];
+                    W.first[j] = na + 1;
+                    na += 2;
+                    total += c_e;
+                }
+            } else if (B.labels[g] == lb) {
+                cost_a += B.cut_cost[e];
+            } else if (B.labels[g] == la) {
+                cost_b += B.cut_cost[e];
+            }
+        }
+        double m = mn(cost_a, cost_b);
+        cost_a -= m;
+        cost_b -= m;
+        total += cost_a + cost_b;
+        W.tr[i] = cost_b > 0.0 ? cost_b : -cost_a;
+    }
+    Arcs g{W.first.data(), W.nxt.data(), W.head.data(), W.cap.data(), W.tr.data()};
+    min_cut_in(g, 1e-12 * total, W.side.data(), nb, W.parent.data(), W.sink.data(),
+               W.queued.data(), W.active.data(), W.orphans.data());
+    for (i64 i = 0; i < nb; ++i) B.out[members[i]] = W.side[i] ? la : lb;
+}
+
+}  // namespace
+
+void band_distances(py::handle indptr_, py::handle indices_, py::handle dual_edge_,
+                    py::handle geo_, py::handle length_, py::handle labels_, py::handle pinned_,
+                    double limit, py::handle dist_, py::handle partner_, py::handle hkey_,
+                    py::handle hval_) {
+    In<i64> indptr(indptr_, "indptr"), labels(labels_, "labels");
+    In<i32> indices(indices_, "indices"), dual_edge(dual_edge_, "dual_edge");
+    In<double> geo(geo_, "geo"), length(length_, "length");
+    In<bool> pinned(pinned_, "pinned");
+    Out<double> dist(dist_, "dist"), hkey(hkey_, "hkey");
+    Out<i64> partner(partner_, "partner"), hval(hval_, "hval");
+    py::gil_scoped_release nogil;
+    const i64 n = labels.n;
+    i64 size = 0;
+    for (i64 f = 0; f < n; ++f) {
+        dist[f] = INF;
+        partner[f] = -1;
+    }
+    for (i64 f = 0; f < n; ++f) {
+        if (pinned[f]) continue;
+        i64 lf = labels[f];
+        i64 best = -1;
+        double best_len = -1.0;
+        for (i64 e = indptr[f]; e < indptr[f + 1]; ++e) {
+            i64 lg = labels[indices[e]];
+            if (lg == lf) continue;
+            double tot = 0.0;
+            for (i64 e2 = indptr[f]; e2 < indptr[f + 1]; ++e2)
+                if (labels[indices[e2]] == lg) tot += length[dual_edge[e2]];
+            if (tot > best_len || (tot == best_len && lg < best)) {
+                best_len = tot;
+                best = lg;
+            }
+        }
+        if (best >= 0) {
+            dist[f] = 0.0;
+            partner[f] = best;
+            size = heap_push(hkey.p, hval.p, size, 0.0, f);
+        }
+    }
+    while (size > 0) {
+        double d = hkey[0];
+        i64 f = hval[0];
+        size = heap_pop(hkey.p, hval.p, size);
+        if (d > dist[f]) continue;
+        i64 lf = labels[f];
+        for (i64 e = indptr[f]; e < indptr[f + 1]; ++e) {
+            i64 g = indices[e];
+            if (labels[g] != lf || pinned[g]) continue;
+            double nd = d + geo[dual_edge[e]];
+            if (nd < limit && nd < dist[g]) {
+                dist[g] = nd;
+                partner[g] = partner[f];
+                size = heap_push(hkey.p, hval.p, size, nd, g);
+            }
+        }
+    }
+}
+
+void solve_bands(i64 p0, i64 p1, py::handle order_, py::handle starts_, py::handle pair_a_,
+                 py::handle pair_b_, py::handle band_of_, py::handle indptr_,
+                 py::handle indices_, py::handle cut_cost_, py::handle labels_,
+                 py::handle sizes_, py::handle positions_, py::handle means_, double smooth,
+                 py::handle out_) {
+    In<i64> order(order_, "order"), starts(starts_, "starts"), pair_a(pair_a_, "pair_a"),
+        pair_b(pair_b_, "pair_b"), band_of(band_of_, "band_of"), indptr(indptr_, "indptr"),
+        labels(labels_, "labels");
+    In<i32> indices(indices_, "indices");
+    In<double> cut_cost(cut_cost_, "cut_cost"), sizes(sizes_, "sizes"),
+        positions(positions_, "positions"), means(means_, "means");
+    Out<i64> out(out_, "out");
+    if (positions.cols != 3 || means.cols != 3) throw Mismatch("argument positions");
+    py::gil_scoped_release nogil;
+    std::vector<i64> local(labels.n);
+    i64 most_nodes = 1, most_arcs = 1;
+    for (i64 p = p0; p < p1; ++p) {
+        i64 nodes = starts[p + 1] - starts[p], arcs = 0;
+        for (i64 t = starts[p]; t < starts[p + 1]; ++t) {
+            i64 f = order[t];
+            arcs += indptr[f + 1] - indptr[f];
+        }
+        most_nodes = mx(most_nodes, nodes);
+        most_arcs = mx(most_arcs, arcs);
+    }
+    CutWork W;
+    W.head.resize(most_arcs);
+    W.cap.resize(most_arcs);
+    W.nxt.resize(most_arcs);
+    for (auto* v : {&W.first, &W.parent, &W.active, &W.orphans}) v->resize(most_nodes);
+    W.tr.resize(most_nodes);
+    for (auto* v : {&W.side, &W.sink, &W.queued}) v->resize(most_nodes);
+    Bands B{band_of.p, indptr.p, indices.p, cut_cost.p, labels.p, sizes.p, positions.p, means.p,
+            smooth, out.p};
+    for (i64 p = p0; p < p1; ++p)
+        solve_one(B, order.p + starts[p], starts[p + 1] - starts[p], pair_a[p], pair_b[p], p,
+                  local.data(), W);
+}
+
+void bind_cleanup(py::module_& m) {
+    m.def("band_distances", &band_distances);
+    m.def("solve_bands", &solve_bands);
+}
+
+}  // namespace sfk

@@ -1,0 +1,148 @@
+// The compiled kernels' common ground: numpy arrays checked without conversion, the
+// binary heap, and the exception that sends a call back to the numba kernel.
+//
+// Each kernel here is the numba kernel of the same name in superfacets/_kernels, the
+// same operations in the same order (tested bit for bit against it). An argument of
+// another dtype, layout or byte order is never converted: the call raises Mismatch
+// (a TypeError) and superfacets._kernels.native runs the numba kernel instead.
+#pragma once
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace py = pybind11;
+
+namespace sfk {
+
+using i64 = std::int64_t;
+using i32 = std::int32_t;
+constexpr double INF = std::numeric_limits<double>::infinity();
+
+// Raised (as superfacets._kernels._cxx.Mismatch, a TypeError) when an argument is not
+// an array of exactly the expected dtype, C-contiguous, in native byte order.
+struct Mismatch : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+template <class T>
+inline bool is_dtype(const py::dtype& d) {
+    const py::dtype want = py::dtype::of<T>();
+    char order = d.byteorder();
+    bool native = order == '=' || order == '|' || order == '<';  // x86-64, aarch64: little
+    return d.kind() == want.kind() && d.itemsize() == want.itemsize() && native;
+}
+
+template <class T>
+inline bool matches(py::handle h) {
+    if (!py::isinstance<py::array>(h)) return false;
+    auto a = py::reinterpret_borrow<py::array>(h);
+    return is_dtype<T>(a.dtype()) && (a.flags() & py::array::c_style);
+}
+
+// A read-only view of an argument: its data and its length along axis 0.
+template <class T>
+struct In {
+    const T* p = nullptr;
+    i64 n = 0;
+    i64 cols = 1;
+    In() = default;
+    In(py::handle h, const char* name) {
+        if (!matches<T>(h)) throw Mismatch(std::string("argument ") + name);
+        auto a = py::reinterpret_borrow<py::array>(h);
+        p = static_cast<const T*>(a.data());
+        n = a.ndim() ? a.shape(0) : 1;
+        cols = a.ndim() == 2 ? a.shape(1) : 1;
+    }
+    const T& operator[](i64 i) const { return p[i]; }
+    const T& operator()(i64 i, i64 j) const { return p[i * cols + j]; }
+};
+
+// A writable view of an argument (an output, or an array updated in place).
+template <class T>
+struct Out {
+    T* p = nullptr;
+    i64 n = 0;
+    i64 cols = 1;
+    Out() = default;
+    Out(py::handle h, const char* name) {
+        if (!matches<T>(h)) throw Mismatch(std::string("argument ") + name);
+        auto a = py::reinterpret_borrow<py::array>(h);
+        if (!a.writeable()) throw Mismatch(std::string("read-only argument ") + name);
+        p = static_cast<T*>(a.mutable_data());
+        n = a.ndim() ? a.shape(0) : 1;
+        cols = a.ndim() == 2 ? a.shape(1) : 1;
+    }
+    T& operator[](i64 i) const { return p[i]; }
+    T& operator()(i64 i, i64 j) const { return p[i * cols + j]; }
+};
+
+// A new array of n (or n x cols) entries, and a writable view of it.
+template <class T>
+inline py::array_t<T> fresh(i64 n, Out<T>& view, i64 cols = 0) {
+    py::array_t<T> a = cols ? py::array_t<T>({n, cols}) : py::array_t<T>(n);
+    view.p = a.mutable_data();
+    view.n = n;
+    view.cols = cols ? cols : 1;
+    return a;
+}
+
+// numba's min / max on two values: the second when strictly below (above), else the first.
+template <class T>
+inline T mn(T a, T b) { return b < a ? b : a; }
+template <class T>
+inline T mx(T a, T b) { return b > a ? b : a; }
+
+// The binary min-heap of superfacets/_kernels/heap.py: (float key, int value), lazy
+// deletion by the caller.
+template <class V>
+inline i64 heap_push(double* hkey, V* hval, i64 size, double key, V val) {
+    i64 i = size;
+    while (i > 0) {
+        i64 p = (i - 1) >> 1;
+        if (hkey[p] <= key) break;
+        hkey[i] = hkey[p];
+        hval[i] = hval[p];
+        i = p;
+    }
+    hkey[i] = key;
+    hval[i] = val;
+    return size + 1;
+}
+
+template <class V>
+inline i64 heap_pop(double* hkey, V* hval, i64 size) {
+    size -= 1;
+    if (size == 0) return 0;
+    double key = hkey[size];
+    V val = hval[size];
+    i64 i = 0;
+    while (true) {
+        i64 c = 2 * i + 1;
+        if (c >= size) break;
+        if (c + 1 < size && hkey[c + 1] < hkey[c]) c += 1;
+        if (hkey[c] >= key) break;
+        hkey[i] = hkey[c];
+        hval[i] = hval[c];
+        i = c;
+    }
+    hkey[i] = key;
+    hval[i] = val;
+    return size;
+}
+
+// Binding registrations, one per source file.
+void bind_graph(py::module_& m);
+void bind_expand(py::module_& m);
+void bind_sampling(py::module_& m);
+void bind_splitmerge(py::module_& m);
+void bind_cleanup(py::module_& m);
+
+}  // namespace sfk

@@ -1,0 +1,386 @@
+// Bounded expansions and the merging of their records (superfacets/_kernels/expand.py),
+// and the center update (update.py), the same operations in the same order.
+#include "common.hpp"
+
+namespace sfk {
+
+namespace {
+
+constexpr int MERGE = 0, UNLABELLED = 1, RECORD = 2;
+constexpr i64 RECORD_FULL = -1, QUEUE_FULL = -2;
+
+struct Graph {
+    const i64* indptr;
+    const i32* indices;
+    const double* weights;
+    const double* centroids;
+};
+
+struct Queue {
+    i32* qface;
+    double* qdist;
+    i32* qnext;
+    i64* head;
+    i64 qcap, nb;
+};
+
+struct Work {
+    Graph g;
+    Queue q;
+    double* local;
+    double inv_width;
+    const double* wscale;
+    i64 n_wscale;
+    double window(double window_r2, i64 f) const {
+        return n_wscale > 0 ? window_r2 * wscale[f] : window_r2;
+    }
+};
+
+Queue queue_of(py::handle t) {
+    auto tup = py::reinterpret_borrow<py::tuple>(t);
+    if (!py::isinstance<py::tuple>(t) || tup.size() != 4) throw Mismatch("argument queue");
+    Out<i32> qface(tup[0], "qface"), qnext(tup[2], "qnext");
+    Out<double> qdist(tup[1], "qdist");
+    Out<i64> head(tup[3], "head");
+    return Queue{qface.p, qdist.p, qnext.p, head.p, qface.n, head.n};
+}
+
+// expand.expand; dist / label / vis_dist may be null (RECORD mode, no distances kept)
+i64 expand(const Work& w, i64 src, i64 lab, double window_r2, double* dist, i32* label,
+           int mode, i32* vis_face, double* vis_dist, i64 pos, i64 lim) {
+    const Queue& q = w.q;
+    const i64 bmask = q.nb - 1;
+    const double* c = w.g.centroids;
+    double* local = w.local;
+    const double cx = c[3 * src], cy = c[3 * src + 1], cz = c[3 * src + 2];
+    const bool only_unlabelled = mode == UNLABELLED;
+    const i64 start = pos;
+    if (pos >= lim) return RECORD_FULL;
+    local[src] = 0.0;
+    vis_face[pos++] = static_cast<i32>(src);
+    q.qface[0] = static_cast<i32>(src);
+    q.qdist[0] = 0.0;
+    q.qnext[0] = -1;
+    q.head[0] = 0;
+    i64 free = -1, bump = 1, live = 1, cur = 0, status = 0;
+    while (live > 0) {
+        // queue_pop
+        i64 b = cur & bmask;
+        while (q.head[b] < 0) {
+            ++cur;
+            b = cur & bmask;
+        }
+        i64 node = q.head[b];
+        q.head[b] = q.qnext[node];
+        q.qnext[node] = static_cast<i32>(free);
+        i64 f = q.qface[node];
+        double d = q.qdist[node];
+        free = node;
+        --live;
+        if (d > local[f]) continue;
+        for (i64 e = w.g.indptr[f]; e < w.g.indptr[f + 1]; ++e) {
+            i64 g = w.g.indices[e];
+            double nd = d + w.g.weights[e];
+            double lg = local[g];
+            if (lg == INF) {
+                double dx = c[3 * g] - cx, dy = c[3 * g + 1] - cy, dz = c[3 * g + 2] - cz;
+                if (dx * dx + dy * dy + dz * dz > window_r2 || (only_unlabelled && label[g] >= 0))
+                    continue;
+                if (pos >= lim) {
+                    status = RECORD_FULL;
+                    break;
+                }
+                vis_face[pos++] = static_cast<i32>(g);
+            } else if (!(nd < lg)) {
+                continue;
+            }
+            local[g] = nd;
+            // queue_node
+            i64 n;
+            if (free >= 0) {
+                n = free;
+                free = q.qnext[free];
+            } else if (bump < q.qcap) {
+                n = bump++;
+            } else {
+                status = QUEUE_FULL;
+                break;
+            }
+            // queue_push
+            i64 i = static_cast<i64>(nd * w.inv_width);
+            if (i < cur) i = cur;
+            i64 bk = i & bmask;
+            q.qface[n] = static_cast<i32>(g);
+            q.qdist[n] = nd;
+            q.qnext[n] = static_cast<i32>(q.head[bk]);
+            q.head[bk] = n;
+            ++live;
+        }
+        if (status != 0) {
+            for (i64 bb = 0; bb < q.nb; ++bb) q.head[bb] = -1;
+            for (i64 j = start; j < pos; ++j) local[vis_face[j]] = INF;
+            return status;
+        }
+    }
+    if (vis_dist)
+        for (i64 j = start; j < pos; ++j) vis_dist[j] = local[vis_face[j]];
+    if (mode == MERGE) {
+        for (i64 j = start; j < pos; ++j) {
+            i64 f = vis_face[j];
+            double d = local[f];
+            if (d < dist[f]) {
+                dist[f] = d;
+                label[f] = static_cast<i32>(lab);
+            }
+        }
+    } else if (only_unlabelled) {
+        for (i64 j = start; j < pos; ++j) label[vis_face[j]] = static_cast<i32>(lab);
+    }
+    for (i64 j = start; j < pos; ++j) local[vis_face[j]] = INF;
+    return pos;
+}
+
+inline void merge_segment(i64 a, i64 n, i64 s, const i32* rec_face, const double* rec_dist,
+                          double* dist, i32* label) {
+    for (i64 e = a; e < a + n; ++e) {
+        i64 f = rec_face[e];
+        double d = rec_dist[e];
+        if (d < dist[f] || (d == dist[f] && s < label[f])) {
+            dist[f] = d;
+            label[f] = static_cast<i32>(s);
+        }
+    }
+}
+
+Work work_of(py::handle indptr_, py::handle indices_, py::handle weights_, py::handle centroids_,
+             py::handle local_, py::handle queue_, double inv_width, py::handle wscale_) {
+    In<i64> indptr(indptr_, "indptr");
+    In<i32> indices(indices_, "indices");
+    In<double> weights(weights_, "weights"), centroids(centroids_, "centroids"),
+        wscale(wscale_, "wscale");
+    Out<double> local(local_, "local");
+    if (centroids.cols != 3) throw Mismatch("argument centroids");
+    return Work{Graph{indptr.p, indices.p, weights.p, centroids.p}, queue_of(queue_), local.p,
+                inv_width, wscale.p, wscale.n};
+}
+
+}  // namespace
+
+i64 classify_bounded(py::handle indptr, py::handle indices, py::handle weights,
+                     py::handle centroids, py::handle centers_, i64 n_centers, double window_r2,
+                     py::handle dist_, py::handle label_, py::handle local, py::handle queue,
+                     double inv_width, py::handle vis_, py::handle wscale) {
+    Work w = work_of(indptr, indices, weights, centroids, local, queue, inv_width, wscale);
+    Out<i64> centers(centers_, "centers");
+    Out<double> dist(dist_, "dist");
+    Out<i32> label(label_, "label"), vis(vis_, "vis");
+    py::gil_scoped_release nogil;
+    const i64 m = label.n, lim = vis.n;
+    for (i64 f = 0; f < m; ++f) {
+        dist[f] = INF;
+        label[f] = -1;
+    }
+    for (i64 s = 0; s < n_centers; ++s) {
+        i64 st = expand(w, centers[s], s, w.window(window_r2, centers[s]), dist.p, label.p, MERGE,
+                        vis.p, nullptr, 0, lim);
+        if (st < 0) return st;
+    }
+    i64 k = n_centers;
+    for (i64 f = 0; f < m; ++f) {
+        if (label[f] < 0) {
+            centers[k] = f;
+            i64 st = expand(w, f, k, w.window(window_r2, f), dist.p, label.p, MERGE, vis.p,
+                            nullptr, 0, lim);
+            if (st < 0) return st;
+            ++k;
+        }
+    }
+    return k;
+}
+
+i64 expand_many(py::handle indptr, py::handle indices, py::handle weights, py::handle centroids,
+                py::handle srcs_, py::handle labs_, double window_r2, py::handle local,
+                py::handle queue, double inv_width, py::handle rec_face_, py::handle rec_dist_,
+                i64 pos, i64 lim, py::handle out_start_, py::handle out_len_, py::handle dist_,
+                py::handle label_, py::handle wscale) {
+    Work w = work_of(indptr, indices, weights, centroids, local, queue, inv_width, wscale);
+    In<i64> srcs(srcs_, "srcs"), labs(labs_, "labs");
+    Out<i32> rec_face(rec_face_, "rec_face"), label(label_, "label");
+    Out<double> rec_dist(rec_dist_, "rec_dist"), dist(dist_, "dist");
+    Out<i64> out_start(out_start_, "out_start"), out_len(out_len_, "out_len");
+    py::gil_scoped_release nogil;
+    for (i64 i = 0; i < srcs.n; ++i) {
+        out_start[i] = pos;
+        i64 p = expand(w, srcs[i], 0, w.window(window_r2, srcs[i]), nullptr, nullptr, RECORD,
+                       rec_face.p, rec_dist.p, pos, lim);
+        if (p < 0) return p;
+        out_len[i] = p - pos;
+        merge_segment(pos, p - pos, labs[i], rec_face.p, rec_dist.p, dist.p, label.p);
+        pos = p;
+    }
+    return pos;
+}
+
+void merge_some(py::handle labs_, py::handle seg_start_, py::handle seg_len_,
+                py::handle rec_face_, py::handle rec_dist_, py::handle dist_, py::handle label_) {
+    In<i64> labs(labs_, "labs"), seg_start(seg_start_, "seg_start"), seg_len(seg_len_, "seg_len");
+    In<i32> rec_face(rec_face_, "rec_face");
+    In<double> rec_dist(rec_dist_, "rec_dist");
+    Out<double> dist(dist_, "dist");
+    Out<i32> label(label_, "label");
+    py::gil_scoped_release nogil;
+    for (i64 i = 0; i < labs.n; ++i) {
+        i64 s = labs[i];
+        merge_segment(seg_start[s], seg_len[s], s, rec_face.p, rec_dist.p, dist.p, label.p);
+    }
+}
+
+void reset_labels(py::handle dist_, py::handle label_) {
+    Out<double> dist(dist_, "dist");
+    Out<i32> label(label_, "label");
+    py::gil_scoped_release nogil;
+    for (i64 f = 0; f < dist.n; ++f) {
+        dist[f] = INF;
+        label[f] = -1;
+    }
+}
+
+void combine_merged(py::handle dist_, py::handle label_, py::handle dist2_, py::handle label2_,
+                    i64 lo, i64 hi) {
+    Out<double> dist(dist_, "dist");
+    Out<i32> label(label_, "label");
+    In<double> dist2(dist2_, "dist2");
+    In<i32> label2(label2_, "label2");
+    py::gil_scoped_release nogil;
+    for (i64 f = lo; f < hi; ++f) {
+        double d = dist2[f];
+        if (d < dist[f] || (d == dist[f] && label2[f] < label[f])) {
+            dist[f] = d;
+            label[f] = label2[f];
+        }
+    }
+}
+
+py::tuple seed_orphans(py::handle indptr, py::handle indices, py::handle weights,
+                       py::handle centroids, py::handle centers_, i64 n_centers, double window_r2,
+                       py::handle dist_, py::handle label_, py::handle local, py::handle queue,
+                       double inv_width, py::handle rec_face_, py::handle rec_dist_, i64 pos,
+                       i64 lim, py::handle seg_start_, py::handle seg_len_, py::handle wscale) {
+    Work w = work_of(indptr, indices, weights, centroids, local, queue, inv_width, wscale);
+    Out<i64> centers(centers_, "centers"), seg_start(seg_start_, "seg_start"),
+        seg_len(seg_len_, "seg_len");
+    Out<double> dist(dist_, "dist"), rec_dist(rec_dist_, "rec_dist");
+    Out<i32> label(label_, "label"), rec_face(rec_face_, "rec_face");
+    i64 k = n_centers, status = pos;
+    {
+        py::gil_scoped_release nogil;
+        for (i64 f = 0; f < label.n; ++f) {
+            if (label[f] < 0) {
+                centers[k] = f;
+                seg_start[k] = pos;
+                i64 p = expand(w, f, k, w.window(window_r2, f), dist.p, label.p, MERGE,
+                               rec_face.p, rec_dist.p, pos, lim);
+                if (p < 0) {
+                    status = p;
+                    break;
+                }
+                seg_len[k] = p - pos;
+                pos = p;
+                ++k;
+            }
+        }
+        if (status >= 0) status = pos;
+    }
+    return py::make_tuple(status, k);
+}
+
+i64 compact_records(py::handle order_, py::handle seg_start_, py::handle seg_len_,
+                    py::handle rec_face_, py::handle rec_dist_) {
+    In<i64> order(order_, "order"), seg_len(seg_len_, "seg_len");
+    Out<i64> seg_start(seg_start_, "seg_start");
+    Out<i32> rec_face(rec_face_, "rec_face");
+    Out<double> rec_dist(rec_dist_, "rec_dist");
+    py::gil_scoped_release nogil;
+    i64 w = 0;
+    for (i64 j = 0; j < order.n; ++j) {
+        i64 i = order[j], a = seg_start[i], n = seg_len[i];
+        if (a != w)
+            for (i64 e = 0; e < n; ++e) {
+                rec_face[w + e] = rec_face[a + e];
+                rec_dist[w + e] = rec_dist[a + e];
+            }
+        seg_start[i] = w;
+        w += n;
+    }
+    return w;
+}
+
+// update.py
+void update_centers(py::handle label_, i64 k, py::handle areas_, py::handle centroids_,
+                    py::handle old_centers_, py::handle new_centers_) {
+    In<i32> label(label_, "label");
+    In<double> areas(areas_, "areas"), c(centroids_, "centroids");
+    In<i64> old_centers(old_centers_, "old_centers");
+    Out<i64> new_centers(new_centers_, "new_centers");
+    if (c.cols != 3) throw Mismatch("argument centroids");
+    py::gil_scoped_release nogil;
+    const i64 m = label.n;
+    std::vector<double> sums(3 * k, 0.0), plain(3 * k, 0.0), wsum(k, 0.0);
+    std::vector<i64> cnt(k, 0);
+    for (i64 f = 0; f < m; ++f) {
+        i64 s = label[f];
+        double a = areas[f];
+        for (int t = 0; t < 3; ++t) {
+            sums[3 * s + t] += a * c(f, t);
+            plain[3 * s + t] += c(f, t);
+        }
+        wsum[s] += a;
+        cnt[s] += 1;
+    }
+    for (i64 s = 0; s < k; ++s) {
+        if (wsum[s] > 0.0) {
+            for (int t = 0; t < 3; ++t) sums[3 * s + t] /= wsum[s];
+        } else if (cnt[s] > 0) {
+            for (int t = 0; t < 3; ++t) sums[3 * s + t] = plain[3 * s + t] / cnt[s];
+        }
+    }
+    std::vector<double> best(k, INF);
+    for (i64 s = 0; s < k; ++s) {
+        new_centers[s] = -1;
+        i64 cc = old_centers[s];
+        if (cc >= 0 && label[cc] == s) {
+            double d = 0.0;
+            for (int t = 0; t < 3; ++t) {
+                double x = c(cc, t) - sums[3 * s + t];
+                d += x * x;
+            }
+            best[s] = d;
+            new_centers[s] = cc;
+        }
+    }
+    for (i64 f = 0; f < m; ++f) {
+        i64 s = label[f];
+        double d = 0.0;
+        for (int t = 0; t < 3; ++t) {
+            double x = c(f, t) - sums[3 * s + t];
+            d += x * x;
+        }
+        if (d < best[s]) {
+            best[s] = d;
+            new_centers[s] = f;
+        }
+    }
+}
+
+void bind_expand(py::module_& m) {
+    m.def("classify_bounded", &classify_bounded);
+    m.def("expand_many", &expand_many);
+    m.def("merge_some", &merge_some);
+    m.def("reset_labels", &reset_labels);
+    m.def("combine_merged", &combine_merged);
+    m.def("seed_orphans", &seed_orphans);
+    m.def("compact_records", &compact_records);
+    m.def("update_centers", &update_centers);
+}
+
+}  // namespace sfk

@@ -1,0 +1,558 @@
+// The face graph's build and its per-entry terms: superfacets/_kernels/adjacency.py,
+// geometry.py (faces), terms.py and connectivity.py, the same operations in order.
+#include "common.hpp"
+
+namespace sfk {
+
+namespace {
+
+constexpr i64 SMALL = 32;  // buckets up to this size: insertion sort
+
+template <class O, class K>
+void sort_bucket(O* order, i64 lo, i64 hi, const K* key2) {
+    if (hi - lo <= SMALL) {
+        for (i64 i = lo + 1; i < hi; ++i) {
+            O x = order[i];
+            K kx = key2[x];
+            i64 j = i - 1;
+            while (j >= lo && key2[order[j]] > kx) {
+                order[j + 1] = order[j];
+                --j;
+            }
+            order[j + 1] = x;
+        }
+    } else {
+        std::vector<O> part(order + lo, order + hi);
+        std::vector<i64> o(hi - lo);
+        for (i64 i = 0; i < hi - lo; ++i) o[i] = i;
+        std::stable_sort(o.begin(), o.end(),
+                         [&](i64 x, i64 y) { return key2[part[x]] < key2[part[y]]; });
+        for (i64 i = 0; i < hi - lo; ++i) order[lo + i] = part[o[i]];
+    }
+}
+
+template <class I, class D>
+void sort_row(I* indices, D* dual_edge, i64 s, i64 f) {
+    if (f - s <= SMALL) {
+        for (i64 i = s + 1; i < f; ++i) {
+            I x = indices[i];
+            D d = dual_edge[i];
+            i64 j = i - 1;
+            while (j >= s && indices[j] > x) {
+                indices[j + 1] = indices[j];
+                dual_edge[j + 1] = dual_edge[j];
+                --j;
+            }
+            indices[j + 1] = x;
+            dual_edge[j + 1] = d;
+        }
+    } else {
+        std::vector<i64> o(f - s);
+        for (i64 i = 0; i < f - s; ++i) o[i] = i;
+        std::stable_sort(o.begin(), o.end(),
+                         [&](i64 x, i64 y) { return indices[s + x] < indices[s + y]; });
+        std::vector<I> ind(indices + s, indices + f);
+        std::vector<D> de(dual_edge + s, dual_edge + f);
+        for (i64 i = 0; i < f - s; ++i) {
+            indices[s + i] = ind[o[i]];
+            dual_edge[s + i] = de[o[i]];
+        }
+    }
+}
+
+// csr_of_pairs into indptr (n + 1)
+void csr_of_pairs(const i32* lo, const i32* hi, i64 e, i64 n, i32* indices, i32* dual_edge,
+                  i64* indptr) {
+    std::fill(indptr, indptr + n + 1, 0);
+    for (i64 t = 0; t < e; ++t) {
+        indptr[lo[t] + 1] += 1;
+        indptr[hi[t] + 1] += 1;
+    }
+    for (i64 v = 0; v < n; ++v) indptr[v + 1] += indptr[v];
+    std::vector<i64> fill(indptr, indptr + n);
+    for (i64 t = 0; t < e; ++t) {
+        i64 a = lo[t], b = hi[t];
+        i64 p = fill[a];
+        indices[p] = static_cast<i32>(b);
+        dual_edge[p] = static_cast<i32>(t);
+        fill[a] = p + 1;
+        p = fill[b];
+        indices[p] = static_cast<i32>(a);
+        dual_edge[p] = static_cast<i32>(t);
+        fill[b] = p + 1;
+    }
+    for (i64 v = 0; v < n; ++v) sort_row(indices, dual_edge, indptr[v], indptr[v + 1]);
+}
+
+// number_pairs with keep given (pairs empty)
+void number_pairs_keep(const i64* indptr, const i32* indices, i64 n, i32* dual_edge, i64* keep) {
+    std::vector<i64> mirror(indptr, indptr + n);
+    i64 nid = 0;
+    for (i64 v = 0; v < n; ++v) {
+        for (i64 i = indptr[v]; i < indptr[v + 1]; ++i) {
+            i64 g = indices[i];
+            if (g > v) {
+                keep[nid] = dual_edge[i];
+                dual_edge[i] = static_cast<i32>(nid);
+                i64 q = mirror[g];
+                dual_edge[q] = static_cast<i32>(nid);
+                mirror[g] = q + 1;
+                nid += 1;
+            }
+        }
+    }
+}
+
+}  // namespace
+
+void triangle_half_edges(py::handle faces_, py::handle a_, py::handle b_, py::handle skip_) {
+    In<i64> faces(faces_, "faces");
+    Out<i32> a(a_, "a"), b(b_, "b");
+    Out<bool> skip(skip_, "skip");
+    py::gil_scoped_release nogil;
+    for (i64 f = 0; f < faces.n; ++f) {
+        for (i64 c = 0; c < 3; ++c) {
+            i64 u = faces(f, c);
+            i64 v = faces(f, c == 2 ? 0 : c + 1);
+            i64 h = 3 * f + c;
+            a[h] = static_cast<i32>(mn(u, v));
+            b[h] = static_cast<i32>(mx(u, v));
+            skip[h] = u == v;
+        }
+    }
+}
+
+void count_keys(py::handle key1_, py::handle skip_, i64 lo, i64 hi, py::handle counts_) {
+    In<i32> key1(key1_, "key1");
+    In<bool> skip(skip_, "skip");
+    Out<i64> counts(counts_, "counts");
+    py::gil_scoped_release nogil;
+    for (i64 t = lo; t < hi; ++t)
+        if (!skip[t]) counts[key1[t]] += 1;
+}
+
+template <class O>
+void scatter_into(const In<i32>& key1, const In<bool>& skip, i64 lo, i64 hi, Out<i64>& fill,
+                  O* order) {
+    for (i64 t = lo; t < hi; ++t) {
+        if (!skip[t]) {
+            i64 k = key1[t];
+            order[fill[k]] = static_cast<O>(t);
+            fill[k] += 1;
+        }
+    }
+}
+
+void scatter_keys(py::handle key1_, py::handle skip_, i64 lo, i64 hi, py::handle fill_,
+                  py::handle order_) {
+    In<i32> key1(key1_, "key1");
+    In<bool> skip(skip_, "skip");
+    Out<i64> fill(fill_, "fill");
+    if (matches<i32>(order_)) {
+        Out<i32> order(order_, "order");
+        py::gil_scoped_release nogil;
+        scatter_into(key1, skip, lo, hi, fill, order.p);
+    } else {
+        Out<i64> order(order_, "order");
+        py::gil_scoped_release nogil;
+        scatter_into(key1, skip, lo, hi, fill, order.p);
+    }
+}
+
+void sort_buckets(py::handle order_, py::handle starts_, py::handle key2_, i64 v0, i64 v1) {
+    Out<i32> order(order_, "order");
+    In<i64> starts(starts_, "starts");
+    In<i32> key2(key2_, "key2");
+    py::gil_scoped_release nogil;
+    for (i64 v = v0; v < v1; ++v)
+        if (starts[v + 1] - starts[v] > 1) sort_bucket(order.p, starts[v], starts[v + 1], key2.p);
+}
+
+py::tuple group_pairs(py::handle half_, py::handle owner_, py::handle a_, py::handle b_) {
+    In<i32> half(half_, "half"), owner(owner_, "owner"), a(a_, "a"), b(b_, "b");
+    const i64 n = half.n;
+    std::vector<char> isnew(n + 1);
+    isnew[n] = 1;
+    i64 n_bound = 0, n_pairs = 0, run = 0;
+    {
+        py::gil_scoped_release nogil;
+        for (i64 i = 0; i < n; ++i) {
+            i64 h = half[i];
+            if (i == 0 || a[h] != a[half[i - 1]] || b[h] != b[half[i - 1]]) {
+                isnew[i] = 1;
+                if (i > 0) {
+                    if (run == 1) n_bound += 1;
+                    else n_pairs += run * (run - 1) / 2;
+                }
+                run = 1;
+            } else {
+                isnew[i] = 0;
+                run += 1;
+            }
+        }
+        if (n) {
+            if (run == 1) n_bound += 1;
+            else n_pairs += run * (run - 1) / 2;
+        }
+    }
+    Out<i64> boundary;
+    Out<i32> lo, hi, ea, eb;
+    auto boundary_a = fresh(n_bound, boundary);
+    auto lo_a = fresh(n_pairs, lo), hi_a = fresh(n_pairs, hi);
+    auto ea_a = fresh(n_pairs, ea), eb_a = fresh(n_pairs, eb);
+    const bool tri = owner.n == 0;
+    i64 p = 0;
+    {
+        py::gil_scoped_release nogil;
+        i64 nb = 0, i = 0;
+        while (i < n) {
+            i64 j = i + 1;
+            while (!isnew[j]) ++j;
+            if (j - i == 1) {
+                boundary[nb++] = i;
+            } else {
+                i32 va = a[half[i]], vb = b[half[i]];
+                for (i64 x = i; x < j; ++x) {
+                    for (i64 y = x + 1; y < j; ++y) {
+                        i32 f = tri ? half[x] / 3 : owner[half[x]];
+                        i32 g = tri ? half[y] / 3 : owner[half[y]];
+                        if (f != g) {
+                            lo[p] = mn(f, g);
+                            hi[p] = mx(f, g);
+                            ea[p] = va;
+                            eb[p] = vb;
+                            ++p;
+                        }
+                    }
+                }
+            }
+            i = j;
+        }
+    }
+    if (p < n_pairs) {
+        py::slice s(0, p, 1);
+        auto cut = [&](py::array_t<i32>& x) { return py::array_t<i32>(x[s]).attr("copy")(); };
+        return py::make_tuple(boundary_a, cut(lo_a), cut(hi_a), cut(ea_a), cut(eb_a));
+    }
+    return py::make_tuple(boundary_a, lo_a, hi_a, ea_a, eb_a);
+}
+
+py::tuple csr_of_face_pairs(py::handle lo_, py::handle hi_, py::handle ka_, py::handle kb_, i64 n,
+                            py::handle indices_, py::handle dual_edge_) {
+    In<i32> lo(lo_, "lo"), hi(hi_, "hi"), ka(ka_, "ka"), kb(kb_, "kb");
+    Out<i32> indices(indices_, "indices"), dual_edge(dual_edge_, "dual_edge");
+    Out<i64> indptr;
+    auto indptr_a = fresh(n + 1, indptr);
+    i64 out = 0;
+    {
+        py::gil_scoped_release nogil;
+        csr_of_pairs(lo.p, hi.p, lo.n, n, indices.p, dual_edge.p, indptr.p);
+        for (i64 v = 0; v < n; ++v) {
+            i64 s = indptr[v], f = indptr[v + 1];
+            indptr[v] = out;
+            i64 i = s;
+            while (i < f) {
+                i32 g = indices[i];
+                i32 best = dual_edge[i];
+                i64 j = i + 1;
+                while (j < f && indices[j] == g) {
+                    i32 u = dual_edge[j];
+                    if (ka[u] < ka[best] || (ka[u] == ka[best] && kb[u] < kb[best])) best = u;
+                    ++j;
+                }
+                indices[out] = g;
+                dual_edge[out] = best;
+                ++out;
+                i = j;
+            }
+        }
+        indptr[n] = out;
+    }
+    Out<i64> keep;
+    auto keep_a = fresh(out / 2, keep);
+    {
+        py::gil_scoped_release nogil;
+        number_pairs_keep(indptr.p, indices.p, n, dual_edge.p, keep.p);
+    }
+    return py::make_tuple(indptr_a, keep_a);
+}
+
+py::array_t<i64> same_label_components(py::handle indptr_, py::handle indices_,
+                                       py::handle labels_) {
+    In<i64> indptr(indptr_, "indptr"), labels(labels_, "labels");
+    In<i32> indices(indices_, "indices");
+    const i64 n = labels.n;
+    Out<i64> comp;
+    auto comp_a = fresh(n, comp);
+    {
+        py::gil_scoped_release nogil;
+        std::fill(comp.p, comp.p + n, -1);
+        std::vector<i64> stack(n);
+        i64 c = 0;
+        for (i64 s = 0; s < n; ++s) {
+            if (comp[s] >= 0) continue;
+            i64 lab = labels[s];
+            comp[s] = c;
+            stack[0] = s;
+            i64 top = 1;
+            while (top > 0) {
+                i64 f = stack[--top];
+                for (i64 e = indptr[f]; e < indptr[f + 1]; ++e) {
+                    i64 g = indices[e];
+                    if (comp[g] < 0 && labels[g] == lab) {
+                        comp[g] = c;
+                        stack[top++] = g;
+                    }
+                }
+            }
+            ++c;
+        }
+    }
+    return comp_a;
+}
+
+// geometry.py: triangles' centroids, areas and unit normals
+void face_geometry(py::handle vertices_, py::handle faces_, py::handle centroids_,
+                   py::handle areas_, py::handle normals_) {
+    In<double> v(vertices_, "vertices");
+    In<i64> faces(faces_, "faces");
+    Out<double> centroids(centroids_, "centroids"), areas(areas_, "areas"),
+        normals(normals_, "normals");
+    py::gil_scoped_release nogil;
+    for (i64 f = 0; f < faces.n; ++f) {
+        i64 i = faces(f, 0), j = faces(f, 1), k = faces(f, 2);
+        for (i64 t = 0; t < 3; ++t) centroids(f, t) = (v(i, t) + v(j, t) + v(k, t)) / 3.0;
+        double a0 = v(j, 0) - v(i, 0), a1 = v(j, 1) - v(i, 1), a2 = v(j, 2) - v(i, 2);
+        double b0 = v(k, 0) - v(i, 0), b1 = v(k, 1) - v(i, 1), b2 = v(k, 2) - v(i, 2);
+        double c0 = a1 * b2 - a2 * b1;
+        double c1 = a2 * b0 - a0 * b2;
+        double c2 = a0 * b1 - a1 * b0;
+        double norm = std::sqrt(c0 * c0 + c1 * c1 + c2 * c2);
+        if (norm > 0) {
+            normals(f, 0) = c0 / norm;
+            normals(f, 1) = c1 / norm;
+            normals(f, 2) = c2 / norm;
+        } else {
+            normals(f, 0) = 0.0;
+            normals(f, 1) = 0.0;
+            normals(f, 2) = 0.0;
+        }
+        areas[f] = 0.5 * norm;
+    }
+}
+
+void face_terms(py::handle vertices_, py::handle centroids_, py::handle normals_,
+                py::handle pairs_, py::handle edges_, i64 lo, i64 hi, py::handle geo_,
+                py::handle cos_, py::handle concave_) {
+    In<double> v(vertices_, "vertices"), c(centroids_, "centroids"), nr(normals_, "normals");
+    In<i32> pairs(pairs_, "pairs"), edges(edges_, "edges");
+    Out<double> geo(geo_, "geo"), cs(cos_, "cos");
+    Out<bool> concave(concave_, "concave");
+    py::gil_scoped_release nogil;
+    for (i64 t = lo; t < hi; ++t) {
+        i64 i = pairs(t, 0), j = pairs(t, 1), a = edges(t, 0), b = edges(t, 1);
+        double mx_ = 0.5 * (v(a, 0) + v(b, 0));
+        double my = 0.5 * (v(a, 1) + v(b, 1));
+        double mz = 0.5 * (v(a, 2) + v(b, 2));
+        double dx = c(i, 0) - mx_, dy = c(i, 1) - my, dz = c(i, 2) - mz;
+        double ex = mx_ - c(j, 0), ey = my - c(j, 1), ez = mz - c(j, 2);
+        i64 u = t - lo;
+        geo[u] = std::sqrt(dx * dx + dy * dy + dz * dz) + std::sqrt(ex * ex + ey * ey + ez * ez);
+        double d = (nr(i, 0) * nr(j, 0) + nr(i, 2) * nr(j, 2)) + nr(i, 1) * nr(j, 1);
+        cs[u] = mn(mx(d, -1.0), 1.0);
+        double s = (nr(i, 0) * (c(j, 0) - c(i, 0)) + nr(i, 2) * (c(j, 2) - c(i, 2))) +
+                   nr(i, 1) * (c(j, 1) - c(i, 1));
+        concave[u] = s > 0;
+    }
+}
+
+template <class E>
+void lengths_into(const In<double>& v, const E* edges, i64 m, double* out) {
+    for (i64 t = 0; t < m; ++t) {
+        i64 a = edges[2 * t], b = edges[2 * t + 1];
+        double x = v(b, 0) - v(a, 0), y = v(b, 1) - v(a, 1), z = v(b, 2) - v(a, 2);
+        out[t] = std::sqrt(x * x + y * y + z * z);
+    }
+}
+
+void edge_lengths(py::handle vertices_, py::handle edges_, py::handle out_) {
+    In<double> v(vertices_, "vertices");
+    Out<double> out(out_, "out");
+    if (matches<i32>(edges_)) {
+        In<i32> e(edges_, "edges");
+        py::gil_scoped_release nogil;
+        lengths_into(v, e.p, e.n, out.p);
+    } else {
+        In<i64> e(edges_, "edges");
+        py::gil_scoped_release nogil;
+        lengths_into(v, e.p, e.n, out.p);
+    }
+}
+
+// terms.py
+py::array_t<double> convex_scaled_csr(py::handle weights_, py::handle dual_edge_,
+                                      py::handle concave_, py::handle cos_, py::handle span_,
+                                      double coef) {
+    In<double> weights(weights_, "weights"), cs(cos_, "cos"), span(span_, "span");
+    In<i32> dual_edge(dual_edge_, "dual_edge");
+    In<bool> concave(concave_, "concave");
+    Out<double> out;
+    auto out_a = fresh(weights.n, out);
+    {
+        py::gil_scoped_release nogil;
+        std::vector<double> delta(cs.n);
+        for (i64 d = 0; d < cs.n; ++d) delta[d] = concave[d] ? 0.0 : coef * span[d] * std::acos(cs[d]);
+        for (i64 e = 0; e < weights.n; ++e) {
+            i64 d = dual_edge[e];
+            out[e] = concave[d] ? weights[e] : mx(weights[e] - delta[d], 0.0);
+        }
+    }
+    return out_a;
+}
+
+py::array_t<double> cut_costs_csr(py::handle dual_edge_, py::handle concave_, py::handle cos_,
+                                  py::handle lengths_, double factor, double eta_convex,
+                                  double scale) {
+    In<i32> dual_edge(dual_edge_, "dual_edge");
+    In<bool> concave(concave_, "concave");
+    In<double> cs(cos_, "cos"), lengths(lengths_, "lengths");
+    Out<double> out;
+    auto out_a = fresh(dual_edge.n, out);
+    {
+        py::gil_scoped_release nogil;
+        std::vector<double> cost(cs.n);
+        for (i64 d = 0; d < cs.n; ++d) {
+            double eta = concave[d] ? 1.0 : eta_convex;
+            cost[d] = lengths[d] / (1.0 + factor * eta * std::acos(cs[d])) * scale;
+        }
+        for (i64 e = 0; e < dual_edge.n; ++e) out[e] = cost[dual_edge[e]];
+    }
+    return out_a;
+}
+
+// connectivity.py
+namespace {
+i64 find(std::vector<i64>& parent, i64 x) {
+    i64 root = x;
+    while (parent[root] != root) root = parent[root];
+    while (parent[x] != root) {
+        i64 nxt = parent[x];
+        parent[x] = root;
+        x = nxt;
+    }
+    return root;
+}
+}  // namespace
+
+py::array_t<i64> merge_strays(py::handle strays_, py::handle nb_indptr_, py::handle nb_indices_,
+                              py::handle nb_data_, i64 n_pieces) {
+    In<i64> strays(strays_, "strays"), nb_indptr(nb_indptr_, "nb_indptr"),
+        nb_indices(nb_indices_, "nb_indices");
+    In<double> nb_data(nb_data_, "nb_data");
+    Out<i64> root;
+    auto root_a = fresh(n_pieces, root);
+    {
+        py::gil_scoped_release nogil;
+        std::vector<i64> parent(n_pieces);
+        for (i64 q = 0; q < n_pieces; ++q) parent[q] = q;
+        std::vector<double> total(n_pieces, 0.0);
+        std::vector<char> seen(n_pieces, 0);
+        std::vector<i64> touched(n_pieces);
+        for (i64 i = 0; i < strays.n; ++i) {
+            i64 p = strays[i];
+            i64 rp = find(parent, p);
+            i64 m = 0;
+            for (i64 e = nb_indptr[p]; e < nb_indptr[p + 1]; ++e) {
+                i64 q = find(parent, nb_indices[e]);
+                if (q == rp) continue;
+                if (!seen[q]) {
+                    seen[q] = 1;
+                    touched[m++] = q;
+                }
+                total[q] += nb_data[e];
+            }
+            if (m == 0) continue;
+            i64 target = -1;
+            double best = 0.0;
+            for (i64 j = 0; j < m; ++j) {
+                i64 q = touched[j];
+                if (target < 0 || total[q] > best || (total[q] == best && q < target)) {
+                    target = q;
+                    best = total[q];
+                }
+                total[q] = 0.0;
+                seen[q] = 0;
+            }
+            parent[rp] = target;
+        }
+        for (i64 q = 0; q < n_pieces; ++q) root[q] = find(parent, q);
+    }
+    return root_a;
+}
+
+py::tuple stray_borders(py::handle indptr_, py::handle indices_, py::handle piece_,
+                        py::handle is_main_, py::handle lengths_, py::handle shares_) {
+    In<i64> indptr(indptr_, "indptr"), piece(piece_, "piece");
+    In<i32> indices(indices_, "indices");
+    In<bool> is_main(is_main_, "is_main");
+    In<double> lengths(lengths_, "lengths"), shares(shares_, "shares");
+    const i64 n = indptr.n - 1;
+    i64 m = 0;
+    {
+        py::gil_scoped_release nogil;
+        for (i64 i = 0; i < n; ++i)
+            for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
+                i64 j = indices[x];
+                if (j > i) {
+                    i64 p = piece[i], q = piece[j];
+                    if (p != q) m += (!is_main[p]) + (!is_main[q]);
+                }
+            }
+    }
+    Out<i64> a, b;
+    Out<double> w;
+    auto a_a = fresh(m, a), b_a = fresh(m, b);
+    auto w_a = fresh(m, w);
+    {
+        py::gil_scoped_release nogil;
+        i64 u = 0;
+        for (int side = 0; side < 2; ++side) {
+            i64 t = 0;
+            for (i64 i = 0; i < n; ++i)
+                for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
+                    i64 j = indices[x];
+                    if (j > i) {
+                        i64 p = side == 0 ? piece[i] : piece[j];
+                        i64 q = side == 0 ? piece[j] : piece[i];
+                        if (p != q && !is_main[p]) {
+                            a[u] = p;
+                            b[u] = q;
+                            w[u] = shares.n ? 0.5 * (shares[i] + shares[j]) : lengths[t];
+                            ++u;
+                        }
+                        ++t;
+                    }
+                }
+        }
+    }
+    return py::make_tuple(a_a, b_a, w_a);
+}
+
+void bind_graph(py::module_& m) {
+    m.def("triangle_half_edges", &triangle_half_edges);
+    m.def("count_keys", &count_keys);
+    m.def("scatter_keys", &scatter_keys);
+    m.def("sort_buckets", &sort_buckets);
+    m.def("group_pairs", &group_pairs);
+    m.def("csr_of_face_pairs", &csr_of_face_pairs);
+    m.def("same_label_components", &same_label_components);
+    m.def("face_geometry", &face_geometry);
+    m.def("face_terms", &face_terms);
+    m.def("edge_lengths", &edge_lengths);
+    m.def("convex_scaled_csr", &convex_scaled_csr);
+    m.def("cut_costs_csr", &cut_costs_csr);
+    m.def("merge_strays", &merge_strays);
+    m.def("stray_borders", &stray_borders);
+}
+
+}  // namespace sfk

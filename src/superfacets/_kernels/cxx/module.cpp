@@ -1,0 +1,19 @@
+// superfacets._kernels._cxx: the compiled kernels of the default run on faces.
+#include "common.hpp"
+
+PYBIND11_MODULE(_cxx, m) {
+    m.doc() = "Compiled kernels (private): the numba kernels of the same names, bit for bit.";
+    static py::exception<sfk::Mismatch> mismatch(m, "Mismatch", PyExc_TypeError);
+    py::register_exception_translator([](std::exception_ptr p) {
+        try {
+            if (p) std::rethrow_exception(p);
+        } catch (const sfk::Mismatch& e) {
+            py::set_error(mismatch, e.what());
+        }
+    });
+    sfk::bind_graph(m);
+    sfk::bind_expand(m);
+    sfk::bind_sampling(m);
+    sfk::bind_splitmerge(m);
+    sfk::bind_cleanup(m);
+}

@@ -1,0 +1,219 @@
+// Farthest-point sampling over spatial blocks (superfacets/_kernels/farthest.py), the same
+// operations in the same order.
+#include "common.hpp"
+
+namespace sfk {
+
+py::tuple spatial_blocks(py::handle centroids_, i64 cells_per_axis) {
+    In<double> c(centroids_, "centroids");
+    if (c.cols != 3 || c.n == 0) throw Mismatch("argument centroids");
+    const i64 m = c.n, g = cells_per_axis, g3 = g * g * g;
+    std::vector<i64> order(m), count(g3 + 1, 0), bstart;
+    i64 nb = 0;
+    {
+        py::gil_scoped_release nogil;
+        double lo[3];
+        double span = 0.0;
+        for (int t = 0; t < 3; ++t) {
+            double a = c(0, t), b = c(0, t);
+            for (i64 f = 0; f < m; ++f) {
+                double x = c(f, t);
+                if (x < a) a = x;
+                if (x > b) b = x;
+            }
+            lo[t] = a;
+            if (b - a > span) span = b - a;
+        }
+        double scale = span > 0 ? static_cast<double>(g) / span : 0.0;
+        std::vector<i64> cell(m);
+        for (i64 f = 0; f < m; ++f) {
+            i64 key = 0;
+            for (int t = 0; t < 3; ++t) {
+                i64 i = static_cast<i64>((c(f, t) - lo[t]) * scale);
+                if (i >= g) i = g - 1;
+                if (i < 0) i = 0;
+                key = key * g + i;
+            }
+            cell[f] = key;
+            count[key + 1] += 1;
+        }
+        for (i64 i = 0; i < g3; ++i) count[i + 1] += count[i];
+        std::vector<i64> fill(count.begin(), count.end() - 1);
+        for (i64 f = 0; f < m; ++f) order[fill[cell[f]]++] = f;
+        for (i64 i = 0; i < g3; ++i)
+            if (count[i + 1] > count[i]) {
+                bstart.push_back(count[i]);
+                ++nb;
+            }
+        bstart.push_back(m);
+    }
+    Out<i64> order_o, bstart_o;
+    Out<double> bcenter, bradius;
+    auto order_a = fresh(m, order_o), bstart_a = fresh(nb + 1, bstart_o);
+    auto bcenter_a = fresh(nb, bcenter, 3);
+    auto bradius_a = fresh(nb, bradius);
+    {
+        py::gil_scoped_release nogil;
+        std::copy(order.begin(), order.end(), order_o.p);
+        std::copy(bstart.begin(), bstart.end(), bstart_o.p);
+        for (i64 b = 0; b < nb; ++b) {
+            for (int t = 0; t < 3; ++t) {
+                double a = INF, z = -INF;
+                for (i64 j = bstart[b]; j < bstart[b + 1]; ++j) {
+                    double x = c(order[j], t);
+                    if (x < a) a = x;
+                    if (x > z) z = x;
+                }
+                bcenter(b, t) = 0.5 * (a + z);
+            }
+            double r2 = 0.0;
+            for (i64 j = bstart[b]; j < bstart[b + 1]; ++j) {
+                i64 f = order[j];
+                double d = 0.0;
+                for (int t = 0; t < 3; ++t) {
+                    double x = c(f, t) - bcenter(b, t);
+                    d += x * x;
+                }
+                if (d > r2) r2 = d;
+            }
+            bradius[b] = std::sqrt(r2) * (1.0 + 1e-9);
+        }
+    }
+    return py::make_tuple(order_a, bstart_a, bcenter_a, bradius_a);
+}
+
+void farthest_point_blocked(py::handle centroids_, i64 k, i64 first, py::handle out_,
+                            py::handle order_, py::handle bstart_, py::handle bcenter_,
+                            py::handle bradius_, py::object scale2_, py::object bscale2_) {
+    In<double> c(centroids_, "centroids"), bcenter(bcenter_, "bcenter"),
+        bradius(bradius_, "bradius");
+    Out<i64> out(out_, "out");
+    In<i64> order(order_, "order"), bstart(bstart_, "bstart");
+    In<double> scale2, bscale2;
+    const bool scaled = !scale2_.is_none();
+    if (scaled) {
+        scale2 = In<double>(scale2_, "scale2");
+        bscale2 = In<double>(bscale2_, "bscale2");
+    }
+    if (c.cols != 3 || bcenter.cols != 3) throw Mismatch("argument centroids");
+    py::gil_scoped_release nogil;
+    const i64 m = c.n, nb = bstart.n - 1;
+    std::vector<double> pos(3 * m);
+    std::vector<i64> slot(m);
+    for (i64 j = 0; j < m; ++j) {
+        i64 f = order[j];
+        slot[f] = j;
+        pos[3 * j] = c(f, 0);
+        pos[3 * j + 1] = c(f, 1);
+        pos[3 * j + 2] = c(f, 2);
+    }
+    std::vector<double> mind(m, INF), bmax(nb, INF);
+    std::vector<i64> barg(nb), home(m);
+    for (i64 b = 0; b < nb; ++b) {
+        barg[b] = m;
+        for (i64 j = bstart[b]; j < bstart[b + 1]; ++j) {
+            i64 f = order[j];
+            home[f] = b;
+            if (f < barg[b]) barg[b] = f;
+        }
+    }
+    i64 cur = first;
+    for (i64 t = 0; t < k; ++t) {
+        out[t] = cur;
+        mind[slot[cur]] = -1.0;
+        const double cx = c(cur, 0), cy = c(cur, 1), cz = c(cur, 2);
+        const i64 hb = home[cur];
+        for (i64 b = 0; b < nb; ++b) {
+            if (b != hb) {
+                double dx = bcenter(b, 0) - cx, dy = bcenter(b, 1) - cy, dz = bcenter(b, 2) - cz;
+                double dc = std::sqrt(dx * dx + dy * dy + dz * dz);
+                double lb = dc - bradius[b] - 1e-9 * (dc + bradius[b]);
+                double lb2 = lb * lb;
+                if (scaled) lb2 *= bscale2[b];
+                if (lb > 0.0 && lb2 >= bmax[b]) continue;
+            }
+            double best = -1.0;
+            i64 arg = m;
+            for (i64 j = bstart[b]; j < bstart[b + 1]; ++j) {
+                // _nearest_so_far on the block-ordered positions
+                double mf = mind[j];
+                if (!(mf < 0.0)) {
+                    double dx = pos[3 * j] - cx, dy = pos[3 * j + 1] - cy, dz = pos[3 * j + 2] - cz;
+                    double d = dx * dx + dy * dy + dz * dz;
+                    if (scaled) d *= scale2[j];
+                    if (d < mf) {
+                        mind[j] = d;
+                        mf = d;
+                    }
+                }
+                if (mf < 0.0) continue;
+                i64 f = order[j];
+                if (mf > best || (mf == best && f < arg)) {
+                    best = mf;
+                    arg = f;
+                }
+            }
+            bmax[b] = best;
+            barg[b] = arg;
+        }
+        double best = -1.0;
+        i64 nxt = -1;
+        for (i64 b = 0; b < nb; ++b)
+            if (bmax[b] > best || (bmax[b] == best && barg[b] < nxt)) {
+                best = bmax[b];
+                nxt = barg[b];
+            }
+        cur = nxt;
+    }
+}
+
+void farthest_point(py::handle centroids_, i64 k, i64 first, py::handle out_,
+                    py::object scale2_) {
+    In<double> c(centroids_, "centroids");
+    Out<i64> out(out_, "out");
+    In<double> scale2;
+    const bool scaled = !scale2_.is_none();
+    if (scaled) scale2 = In<double>(scale2_, "scale2");
+    if (c.cols != 3) throw Mismatch("argument centroids");
+    py::gil_scoped_release nogil;
+    const i64 m = c.n;
+    std::vector<double> mind(m, INF);
+    i64 cur = first;
+    for (i64 t = 0; t < k; ++t) {
+        out[t] = cur;
+        mind[cur] = -1.0;
+        const double cx = c(cur, 0), cy = c(cur, 1), cz = c(cur, 2);
+        double best = -1.0;
+        i64 nxt = -1;
+        for (i64 f = 0; f < m; ++f) {
+            double mf = mind[f];
+            if (!(mf < 0.0)) {
+                double dx = c(f, 0) - cx, dy = c(f, 1) - cy, dz = c(f, 2) - cz;
+                double d = dx * dx + dy * dy + dz * dz;
+                if (scaled) d *= scale2[f];
+                if (d < mf) {
+                    mind[f] = d;
+                    mf = d;
+                }
+            }
+            if (mf < 0.0) continue;
+            if (mf > best) {
+                best = mf;
+                nxt = f;
+            }
+        }
+        cur = nxt;
+    }
+}
+
+void bind_sampling(py::module_& m) {
+    m.def("farthest_point", &farthest_point, py::arg("centroids"), py::arg("k"),
+          py::arg("first"), py::arg("out"), py::arg("scale2") = py::none());
+    m.def("spatial_blocks", &spatial_blocks);
+    m.def("farthest_point_blocked", &farthest_point_blocked, py::arg("centroids"), py::arg("k"),
+          py::arg("first"), py::arg("out"), py::arg("order"), py::arg("bstart"),
+          py::arg("bcenter"), py::arg("bradius"), py::arg("scale2") = py::none(),
+          py::arg("bscale2") = py::none());
+}
+
+}  // namespace sfk

@@ -1,0 +1,332 @@
+// Split and merge candidates of the K-preserving swaps (superfacets/_kernels/splitmerge.py),
+// the same operations in the same order.
+#include "common.hpp"
+
+namespace sfk {
+
+namespace {
+
+inline double pw(double d, double power) {
+    if (power == 4.0) {
+        double q = d * d;
+        return q * q;
+    }
+    return std::pow(d, power);
+}
+
+struct Search {
+    const i64* indptr;
+    const i32* indices;
+    const double* w;
+    const i32* label;
+    const double* sizes;
+    const double* positions;  // (n, 3)
+    double* hkey;
+    i64* hval;
+};
+
+inline i64 relax(const Search& s, i64 la, i64 lb, i64 f, double d, double* dist, i64* stamp,
+                 i64 sid, i64 size) {
+    for (i64 e = s.indptr[f]; e < s.indptr[f + 1]; ++e) {
+        i64 g = s.indices[e];
+        i64 lg = s.label[g];
+        if (lg != la && lg != lb) continue;
+        double nd = d + s.w[e];
+        if (stamp[g] != sid || nd < dist[g]) {
+            dist[g] = nd;
+            stamp[g] = sid;
+            size = heap_push(s.hkey, s.hval, size, nd, g);
+        }
+    }
+    return size;
+}
+
+void search(const Search& s, i64 la, i64 lb, i64 src, double* dist, i64* stamp, i64 sid) {
+    dist[src] = 0.0;
+    stamp[src] = sid;
+    i64 size = heap_push(s.hkey, s.hval, 0, 0.0, src);
+    while (size > 0) {
+        double d = s.hkey[0];
+        i64 f = s.hval[0];
+        size = heap_pop(s.hkey, s.hval, size);
+        if (d > dist[f]) continue;
+        size = relax(s, la, lb, f, d, dist, stamp, sid, size);
+    }
+}
+
+i64 nearest_mean(const i64* elems, i64 n, const double* sizes, const double* pos) {
+    double tot = 0.0, mx_ = 0.0, my = 0.0, mz = 0.0;
+    for (i64 i = 0; i < n; ++i) {
+        i64 f = elems[i];
+        double a = sizes[f];
+        tot += a;
+        mx_ += a * pos[3 * f];
+        my += a * pos[3 * f + 1];
+        mz += a * pos[3 * f + 2];
+    }
+    if (tot > 0) {
+        mx_ /= tot;
+        my /= tot;
+        mz /= tot;
+    } else {
+        mx_ = my = mz = 0.0;
+        for (i64 i = 0; i < n; ++i) {
+            i64 f = elems[i];
+            mx_ += pos[3 * f] / static_cast<double>(n);
+            my += pos[3 * f + 1] / static_cast<double>(n);
+            mz += pos[3 * f + 2] / static_cast<double>(n);
+        }
+    }
+    i64 best = elems[0];
+    double bd = INF;
+    for (i64 i = 0; i < n; ++i) {
+        i64 f = elems[i];
+        double dx = pos[3 * f] - mx_, dy = pos[3 * f + 1] - my, dz = pos[3 * f + 2] - mz;
+        double q = dx * dx + dy * dy + dz * dz;
+        if (q < bd) {
+            bd = q;
+            best = f;
+        }
+    }
+    return best;
+}
+
+std::pair<double, i64> energy_of(const i64* elems, i64 n, const double* sizes,
+                                 const double* dist, const i64* stamp, i64 sid, double power) {
+    double e = 0.0;
+    i64 far = elems[0];
+    double fd = -1.0;
+    for (i64 i = 0; i < n; ++i) {
+        i64 f = elems[i];
+        if (stamp[f] == sid) {
+            double d = dist[f];
+            e += sizes[f] * pw(d, power);
+            if (d > fd) {
+                fd = d;
+                far = f;
+            }
+        }
+    }
+    for (i64 i = 0; i < n; ++i) {
+        i64 f = elems[i];
+        if (stamp[f] != sid) e += sizes[f] * pw(fd, power);
+    }
+    return {e, far};
+}
+
+bool search_below(const Search& s, i64 la, i64 lb, i64 src, double* dist, i64* stamp, i64 sid,
+                  double power, double area, double limit) {
+    dist[src] = 0.0;
+    stamp[src] = sid;
+    i64 size = heap_push(s.hkey, s.hval, 0, 0.0, src);
+    double settled = 0.0, rest = area;
+    while (size > 0) {
+        double d = s.hkey[0];
+        i64 f = s.hval[0];
+        size = heap_pop(s.hkey, s.hval, size);
+        if (d > dist[f]) continue;
+        double dp = pw(d, power);
+        settled += s.sizes[f] * dp;
+        rest -= s.sizes[f];
+        if (settled + mx(rest, 0.0) * dp >= limit) return false;
+        size = relax(s, la, lb, f, d, dist, stamp, sid, size);
+    }
+    return true;
+}
+
+struct Common {
+    In<i64> indptr, members, bounds;
+    In<i32> indices, label;
+    In<double> w, sizes, positions;
+    Common(py::handle indptr_, py::handle indices_, py::handle w_, py::handle label_,
+           py::handle members_, py::handle bounds_, py::handle sizes_, py::handle positions_)
+        : indptr(indptr_, "indptr"), members(members_, "members"), bounds(bounds_, "bounds"),
+          indices(indices_, "indices"), label(label_, "label"), w(w_, "w"),
+          sizes(sizes_, "sizes"), positions(positions_, "positions") {
+        if (positions.cols != 3) throw Mismatch("argument positions");
+    }
+    Search search(double* hkey, i64* hval) const {
+        return Search{indptr.p, indices.p, w.p, label.p, sizes.p, positions.p, hkey, hval};
+    }
+};
+
+}  // namespace
+
+i64 energies(py::handle indptr, py::handle indices, py::handle w, py::handle label,
+             py::handle members, py::handle bounds, py::handle sizes, py::handle positions,
+             double power, py::handle energy_, py::handle far_, py::handle dist_,
+             py::handle stamp_, i64 sid, py::handle hkey_, py::handle hval_, i64 first, i64 step) {
+    Common c(indptr, indices, w, label, members, bounds, sizes, positions);
+    Out<double> energy(energy_, "energy"), dist(dist_, "dist"), hkey(hkey_, "hkey");
+    Out<i64> far(far_, "far"), stamp(stamp_, "stamp"), hval(hval_, "hval");
+    py::gil_scoped_release nogil;
+    Search s = c.search(hkey.p, hval.p);
+    const i64 k = c.bounds.n - 1;
+    for (i64 sp = first; sp < k; sp += step) {
+        i64 lo = c.bounds[sp], n = c.bounds[sp + 1] - lo;
+        const i64* elems = c.members.p + lo;
+        i64 ctr = nearest_mean(elems, n, c.sizes.p, c.positions.p);
+        search(s, sp, sp, ctr, dist.p, stamp.p, sid);
+        auto ef = energy_of(elems, n, c.sizes.p, dist.p, stamp.p, sid, power);
+        energy[sp] = ef.first;
+        far[sp] = ef.second;
+        ++sid;
+    }
+    return sid;
+}
+
+i64 split_candidates(py::handle indptr, py::handle indices, py::handle w, py::handle label,
+                     py::handle members, py::handle bounds, py::handle sizes,
+                     py::handle positions, double power, i64 lloyd, py::handle which_,
+                     py::handle far_, py::handle split_energy_, py::handle second_,
+                     py::handle dist_, py::handle dist2_, py::handle stamp_, py::handle stamp2_,
+                     i64 sid, py::handle hkey_, py::handle hval_, py::handle work_, i64 first,
+                     i64 step) {
+    Common c(indptr, indices, w, label, members, bounds, sizes, positions);
+    In<i64> which(which_, "which"), far(far_, "far");
+    Out<double> split_energy(split_energy_, "split_energy"), dist(dist_, "dist"),
+        dist2(dist2_, "dist2"), hkey(hkey_, "hkey");
+    Out<bool> second(second_, "second");
+    Out<i64> stamp(stamp_, "stamp"), stamp2(stamp2_, "stamp2"), hval(hval_, "hval"),
+        work(work_, "work");
+    py::gil_scoped_release nogil;
+    Search s = c.search(hkey.p, hval.p);
+    const double* sizes_p = c.sizes.p;
+    for (i64 t = first; t < which.n; t += step) {
+        i64 sp = which[t];
+        i64 lo = c.bounds[sp], n = c.bounds[sp + 1] - lo;
+        const i64* elems = c.members.p + lo;
+        split_energy[sp] = INF;
+        if (n < 4) continue;
+        i64 p = far[sp];
+        search(s, sp, sp, p, dist.p, stamp.p, sid);
+        i64 q = energy_of(elems, n, sizes_p, dist.p, stamp.p, sid, power).second;
+        if (q == p) {
+            ++sid;
+            continue;
+        }
+        bool ok = true;
+        i64 last_p = -1, last_q = -1;
+        double e = 0.0;
+        for (i64 it = 0; it < lloyd + 1; ++it) {
+            if (it > 0) {
+                i64 na = 0, nb = 0;
+                for (i64 i = 0; i < n; ++i) {
+                    i64 f = elems[i];
+                    if (second[f]) work[n - 1 - nb++] = f;
+                    else work[na++] = f;
+                }
+                p = nearest_mean(work.p, na, sizes_p, c.positions.p);
+                q = nearest_mean(work.p + (n - nb), nb, sizes_p, c.positions.p);
+                if (p == last_p && q == last_q) break;
+            }
+            last_p = p;
+            last_q = q;
+            search(s, sp, sp, p, dist.p, stamp.p, sid);
+            search(s, sp, sp, q, dist2.p, stamp2.p, sid);
+            i64 na = 0, nb = 0;
+            e = 0.0;
+            for (i64 i = 0; i < n; ++i) {
+                i64 f = elems[i];
+                double dp = stamp[f] == sid ? dist[f] : INF;
+                double dq = stamp2[f] == sid ? dist2[f] : INF;
+                second[f] = dq < dp;
+                if (dq < dp) {
+                    ++nb;
+                    e += sizes_p[f] * pw(dq, power);
+                } else {
+                    ++na;
+                    e += dp < INF ? sizes_p[f] * pw(dp, power) : 0.0;
+                }
+            }
+            ++sid;
+            if (na == 0 || nb == 0) {
+                ok = false;
+                break;
+            }
+        }
+        if (ok) {
+            split_energy[sp] = e;
+        } else {
+            for (i64 i = 0; i < n; ++i) second[elems[i]] = false;
+        }
+    }
+    return sid;
+}
+
+i64 merge_energies(py::handle indptr, py::handle indices, py::handle w, py::handle label,
+                   py::handle members, py::handle bounds, py::handle sizes, py::handle positions,
+                   double power, py::handle pair_a_, py::handle pair_b_, py::handle energy_,
+                   double window_r2, double most, py::handle out_, py::handle dist_,
+                   py::handle stamp_, i64 sid, py::handle hkey_, py::handle hval_,
+                   py::handle work_, i64 first, i64 step) {
+    Common c(indptr, indices, w, label, members, bounds, sizes, positions);
+    In<i64> pair_a(pair_a_, "pair_a"), pair_b(pair_b_, "pair_b");
+    In<double> energy(energy_, "energy");
+    Out<double> out(out_, "out"), dist(dist_, "dist"), hkey(hkey_, "hkey");
+    Out<i64> stamp(stamp_, "stamp"), hval(hval_, "hval"), work(work_, "work");
+    py::gil_scoped_release nogil;
+    Search s = c.search(hkey.p, hval.p);
+    const double* pos = c.positions.p;
+    const double slack = 1.0 + 1e-9;
+    for (i64 t = first; t < pair_a.n; t += step) {
+        i64 a = pair_a[t], b = pair_b[t];
+        i64 n = 0;
+        double area = 0.0;
+        for (i64 sp : {a, b})
+            for (i64 i = c.bounds[sp]; i < c.bounds[sp + 1]; ++i) {
+                work[n] = c.members[i];
+                area += c.sizes[c.members[i]];
+                ++n;
+            }
+        i64 ctr = nearest_mean(work.p, n, c.sizes.p, pos);
+        double far = 0.0;
+        for (i64 i = 0; i < n; ++i) {
+            i64 f = work[i];
+            double dx = pos[3 * f] - pos[3 * ctr], dy = pos[3 * f + 1] - pos[3 * ctr + 1],
+                   dz = pos[3 * f + 2] - pos[3 * ctr + 2];
+            far = mx(far, dx * dx + dy * dy + dz * dz);
+        }
+        out[t] = INF;
+        if (far <= window_r2) {
+            double limit = (energy[a] + energy[b] + most) * slack;
+            if (search_below(s, a, b, ctr, dist.p, stamp.p, sid, power, area, limit))
+                out[t] = energy_of(work.p, n, c.sizes.p, dist.p, stamp.p, sid, power).first;
+        }
+        ++sid;
+    }
+    return sid;
+}
+
+py::array_t<i64> label_pairs(py::handle indptr_, py::handle indices_, py::handle label_, i64 k) {
+    In<i64> indptr(indptr_, "indptr");
+    In<i32> indices(indices_, "indices"), label(label_, "label");
+    std::vector<i64> keys;
+    {
+        py::gil_scoped_release nogil;
+        const i64 n = indptr.n - 1;
+        for (i64 i = 0; i < n; ++i) {
+            i64 a = label[i];
+            for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
+                i64 j = indices[x];
+                i64 b = label[j];
+                if (j > i && b != a) keys.push_back(mn(a, b) * k + mx(a, b));
+            }
+        }
+        std::sort(keys.begin(), keys.end());
+        keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    }
+    Out<i64> out;
+    auto out_a = fresh(static_cast<i64>(keys.size()), out);
+    std::copy(keys.begin(), keys.end(), out.p);
+    return out_a;
+}
+
+void bind_splitmerge(py::module_& m) {
+    m.def("energies", &energies);
+    m.def("split_candidates", &split_candidates);
+    m.def("merge_energies", &merge_energies);
+    m.def("label_pairs", &label_pairs);
+}
+
+}  // namespace sfk

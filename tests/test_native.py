@@ -1,0 +1,189 @@
+"""The compiled kernels (``superfacets._kernels._cxx``) against the numba kernels, bit for bit.
+
+Every call a run makes to a compiled kernel is made again to the numba kernel of the
+same name on copies of its arguments: the outputs, and every array either updates in
+place, must be the same bytes. The runs cover every compiled kernel (asserted), on
+triangles and polygons, closed and open meshes, small and large ``m k`` (the plain and
+the blocked farthest-point sampling), the default (clean-up, split-and-merge) and the
+paper's run, content-sensitive windows. One thread: calls on threads share arrays, so
+the copies of one call would see another's writes.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import superfacets
+from superfacets import Mesh
+from superfacets._kernels import native
+from superfacets.inputs.shapes import creature
+
+pytestmark = pytest.mark.skipif(not native.available(),
+                                reason="the compiled kernels are not built here")
+
+
+def _copy(x):
+    if isinstance(x, np.ndarray):
+        return x.copy()
+    if isinstance(x, tuple):
+        return tuple(_copy(y) for y in x)
+    return x
+
+
+def _same(a, b) -> bool:
+    if isinstance(a, np.ndarray):
+        return (isinstance(b, np.ndarray) and a.dtype == b.dtype and a.shape == b.shape
+                and a.tobytes() == b.tobytes())
+    if isinstance(a, tuple):
+        return isinstance(b, tuple) and len(a) == len(b) and all(map(_same, a, b))
+    return a == b
+
+
+@pytest.fixture
+def shadowed(monkeypatch):
+    """Every compiled-kernel call checked against numba's; yields the calls made."""
+    calls: dict[str, int] = {}
+    bad: list[str] = []
+    plain = native.kernel
+
+    def kernel(path):
+        fast, ref = plain(path), native.reference(path)
+
+        def both(*args, **kwargs):
+            a2, k2 = [_copy(a) for a in args], {k: _copy(v) for k, v in kwargs.items()}
+            expected = ref(*a2, **k2)
+            got = fast(*args, **kwargs)
+            calls[path] = calls.get(path, 0) + 1
+            moved = [i for i, (x, y) in enumerate(zip(args, a2)) if not _same(x, y)]
+            if not _same(got, expected) or moved:
+                bad.append(f"{path}: result {'differs' if not _same(got, expected) else 'same'}"
+                           f", arguments {moved} differ")
+            return got
+        return both
+
+    monkeypatch.setattr(native, "kernel", kernel)
+    native.fallbacks.clear()
+    yield calls, bad
+    assert not bad, bad
+    assert not native.fallbacks, native.fallbacks  # every call went to the compiled kernel
+
+
+def _quad_cube(n: int) -> Mesh:
+    """A cube's surface in ``6 n^2`` quads (a polygon mesh)."""
+    g = np.linspace(-1.0, 1.0, n + 1)
+    verts, faces = [], []
+    for axis in range(3):
+        for side in (-1.0, 1.0):
+            base = len(verts)
+            for i in range(n + 1):
+                for j in range(n + 1):
+                    p = [0.0, 0.0, 0.0]
+                    p[axis], p[(axis + 1) % 3], p[(axis + 2) % 3] = side, g[i], g[j]
+                    verts.append(p)
+            for i in range(n):
+                for j in range(n):
+                    a = base + i * (n + 1) + j
+                    q = [a, a + n + 1, a + n + 2, a + 1]
+                    faces.append(q if side > 0 else q[::-1])
+    v = np.asarray(verts)
+    _, first, inverse = np.unique(v.round(9), axis=0, return_index=True, return_inverse=True)
+    return Mesh(v[first], [[int(inverse.ravel()[c]) for c in f] for f in faces])
+
+
+def test_runs_on_faces_give_numba_results_call_by_call(shadowed):
+    calls, _ = shadowed
+    big = creature(40)
+    small = creature(20)
+    half = big.faces[big.centroids[:, 2] > np.median(big.centroids[:, 2])]
+    used = np.unique(half)
+    remap = np.full(big.n_vertices, -1)
+    remap[used] = np.arange(used.shape[0])
+    open_mesh = Mesh(big.vertices[used], remap[half])  # a boundary: open-boundary edges
+    runs = [
+        (big, 120, {}),
+        (small, 12, {}),  # m k small: the plain farthest-point sampling
+        (open_mesh, 60, {}),
+        (big, 80, {"cleanup": False, "split_merge": False}),  # the paper's run
+        (big, 60, {"roughness": 1.0}),  # content-sensitive windows and sampling
+        (_quad_cube(12), 40, {}),  # polygons: their own half-edges and geometry
+    ]
+    for mesh, k, params in runs:
+        r = superfacets.segment(mesh, k, n_threads=1, **params)
+        assert r.labels.shape[0] == mesh.n_faces
+    compiled = {name for name in dir(native._cxx) if not name.startswith("_")} - {"Mismatch"}
+    missing = {name for name in compiled if not any(p.endswith("." + name) for p in calls)}
+    # two kernels run only on several threads or by the plain replay-less classifier
+    assert missing <= {"combine_merged", "classify_bounded"}, missing
+
+
+def test_kernels_run_on_threads_only_give_numba_results():
+    rng = np.random.default_rng(5)
+    n = 1000
+    dist, dist2 = rng.random(n).round(2), rng.random(n).round(2)
+    label, label2 = rng.integers(0, 9, n).astype(np.int32), rng.integers(0, 9, n).astype(np.int32)
+    outs = []
+    for fn in (native.kernel("expand.combine_merged"), native.reference("expand.combine_merged")):
+        d, lab = dist.copy(), label.copy()
+        fn(d, lab, dist2, label2, 100, 900)
+        outs.append((d, lab))
+    assert _same(outs[0], outs[1]) and not _same(outs[0][1], label)
+
+
+def test_plain_classification_matches_numba():
+    from superfacets.elements import face_graph
+    from superfacets.method.expansion import Workspaces, with_room
+    from superfacets.method.weights import csr_weights, paper_weights
+
+    mesh = creature(30)
+    g = face_graph(mesh)
+    w = csr_weights(g, paper_weights(g, alpha=200.0))
+    centers = np.zeros(g.n_elements, dtype=np.int64)
+    centers[:25] = np.linspace(0, g.n_elements - 1, 25).astype(np.int64)
+    out = []
+    for fn in (native.kernel("expand.classify_bounded"),
+               native.reference("expand.classify_bounded")):
+        spaces = Workspaces(g.n_elements, w)
+        c, dist = centers.copy(), np.empty(g.n_elements)
+        label = np.empty(g.n_elements, dtype=np.int32)
+        k = with_room(spaces.get(0), lambda ws: fn(
+            g.indptr, g.indices, w, np.ascontiguousarray(g.positions), c, 25,
+            float((0.1 * g.diagonal) ** 2), dist, label, ws.local, ws.queue, spaces.inv_width,
+            ws.vis, np.empty(0)))
+        out.append((k, c, dist, label))
+    assert out[0][0] >= 25 and _same(out[0][1:], out[1][1:]) and out[0][0] == out[1][0]
+
+
+def test_other_dtypes_go_to_numba():
+    """A compiled kernel takes the run's dtypes only; anything else is numba's, the same
+    answer (and the reason kept)."""
+    native.fallbacks.clear()
+    edges = np.array([[0, 1], [1, 2]], dtype=np.int64)
+    v = np.array([[0.0, 0, 0], [3, 4, 0], [3, 4, 12]])
+    out = np.empty(2)
+    native.kernel("geometry.edge_lengths")(v, edges, out)  # int64 edges: compiled too
+    assert out.tolist() == [5.0, 12.0] and not native.fallbacks
+    out32 = np.empty(2, dtype=np.float32)
+    native.kernel("geometry.edge_lengths")(v.astype(np.float32), edges, out32)
+    assert out32.tolist() == [5.0, 12.0]
+    assert "vertices" in native.fallbacks["geometry.edge_lengths"]
+    strided = np.arange(10, dtype=np.int64)[::2]
+    comp = native.kernel("adjacency.same_label_components")(
+        np.array([0, 1, 2, 3, 4, 4]), np.array([1, 0, 3, 2], dtype=np.int32), strided)
+    assert comp.tolist() == [0, 1, 2, 3, 4]
+
+
+def test_a_run_on_faces_loads_no_numba():
+    code = ("import sys, superfacets; from superfacets.inputs.shapes import creature; "
+            "r = superfacets.segment(creature(24), 30); "
+            "print('numba' in sys.modules, 'superfacets._kernels._cxx' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.split()
+    assert out == ["False", "True"]
+    env_off = dict(__import__("os").environ, SUPERFACETS_NATIVE="0")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, env=env_off).stdout.split()
+    assert out == ["True", "False"]  # turned off: numba does it all
