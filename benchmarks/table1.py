@@ -5,7 +5,7 @@ Usage: python benchmarks/table1.py [-k 150] [--alpha 200] [--repeat 3]
 Each mesh runs in a fresh process (so peak resident memory is its own):
 read the file, then segment at k = 150, alpha = 200, a few times; the table
 shows the fastest run per stage. A first row measures the cold start: the
-same on the bunny with an empty numba cache (JIT compilation included).
+same on the bunny with an empty numba cache (what a first run after installing meets).
 The paper's times are single-threaded C++ on a 3.2 GHz desktop (Table 1).
 """
 
@@ -94,7 +94,7 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as cache:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache)
         cold = run_child("bunny", argparse.Namespace(k=args.k, alpha=args.alpha, repeat=1), env)
-        cold["name"] = "bunny (cold JIT)"
+        cold["name"] = "bunny (first run, empty numba cache)"
         rows.append(cold)
     for name in PAPER:
         rows.append(run_child(name, args))
@@ -102,11 +102,11 @@ def main() -> int:
             "init s", "iterations s", "connectivity s", "total s", "paper s", "speed-up",
             "peak MiB"]
     print(f"k = {args.k}, alpha = {args.alpha}; best of {args.repeat} runs per mesh "
-          f"(cold row: 1 run, empty numba cache)\n")
+          f"(first row: 1 run, empty numba cache)\n")
     print("| " + " | ".join(cols) + " |")
     print("|" + "|".join(["---"] * len(cols)) + "|")
     for r in rows:
-        paper = PAPER.get(r["name"].split()[0]) if "cold" not in r["name"] else None
+        paper = PAPER.get(r["name"].split()[0]) if "first" not in r["name"] else None
         cells = [r["name"], f"{r['faces']:,}", r["superfacets"],
                  f"{r['iterations']}{'' if r['converged'] else ' (max)'}",
                  *(f"{r[s]:.2f}" for s in ("read", "graph", "weights", "init", "iter_s",
@@ -115,7 +115,7 @@ def main() -> int:
                  f"{r['peak_rss'] / 2**20:.0f}"]
         print("| " + " | ".join(str(c) for c in cells) + " |")
     print(f"\nimport of the package: {rows[-1]['import_s']:.2f} s; resident memory after import "
-          f"{rows[-1]['baseline_rss'] / 2**20:.0f} MiB (Python, numpy, numba); 'total' is read + "
+          f"{rows[-1]['baseline_rss'] / 2**20:.0f} MiB (Python, numpy); 'total' is read + "
           "segment, in process, after import.")
     cli = cli_times(args)
     print(f"\nbunny from the command line in a new process (`superfacets segment bunny.tri.xz "
