@@ -110,14 +110,16 @@ def test_runs_on_faces_give_numba_results_call_by_call(shadowed):
         (big, 80, {"cleanup": False, "split_merge": False}),  # the paper's run
         (big, 60, {"roughness": 1.0}),  # content-sensitive windows and sampling
         (_quad_cube(12), 40, {}),  # polygons: their own half-edges and geometry
+        (creature(58), 4, {}),  # 5,500 faces per superfacet: coarse-to-fine (Voronoi cells)
     ]
     for mesh, k, params in runs:
         r = superfacets.segment(mesh, k, n_threads=1, **params)
         assert r.labels.shape[0] == mesh.n_faces
     compiled = {name for name in dir(native._cxx) if not name.startswith("_")} - {"Mismatch"}
     missing = {name for name in compiled if not any(p.endswith("." + name) for p in calls)}
-    # two kernels run only on several threads or by the plain replay-less classifier
-    assert missing <= {"combine_merged", "classify_bounded"}, missing
+    # run only on several threads, by the plain replay-less classifier, by a lazy graph's
+    # rebuild: tested below
+    assert missing <= {"combine_merged", "classify_bounded", "number_pairs"}, missing
 
 
 def test_kernels_run_on_threads_only_give_numba_results():
@@ -131,6 +133,44 @@ def test_kernels_run_on_threads_only_give_numba_results():
         fn(d, lab, dist2, label2, 100, 900)
         outs.append((d, lab))
     assert _same(outs[0], outs[1]) and not _same(outs[0][1], label)
+
+
+@pytest.mark.parametrize("ptype,dtype", [(np.int32, np.int32), (np.int64, np.int64),
+                                         (np.int32, np.int64)])
+def test_csr_of_pairs_and_their_numbering_match_numba(ptype, dtype):
+    """The graph's CSR from pairs (rows of 40+ entries sorted stably by merge sort) and the
+    pairs numbered again from it (a lazy graph's rebuild), in every dtype the runs use."""
+    native.fallbacks.clear()
+    rng = np.random.default_rng(3)
+    n = 300
+    lo = rng.integers(0, n - 1, 5000)
+    hi = np.minimum(lo + rng.integers(1, 4, 5000), n - 1)
+    lo[:60], hi[:60] = 7, np.arange(100, 160)  # a row longer than the insertion sort's 32
+    keep = lo < hi
+    lo, hi = lo[keep].astype(ptype), hi[keep].astype(ptype)
+    out = []
+    for path in ("adjacency.csr_of_pairs", "adjacency.number_pairs"):
+        got = []
+        for fn in (native.kernel(path), native.reference(path)):
+            ind = np.empty(2 * lo.shape[0], dtype=np.int32)
+            de = np.empty(2 * lo.shape[0], dtype=dtype)
+            indptr = native.reference("adjacency.csr_of_pairs")(lo, hi, n, ind, de)
+            if path.endswith("csr_of_pairs"):
+                indptr = fn(lo, hi, n, ind, de)
+                got.append((indptr, ind, de))
+            else:
+                pairs = np.empty((ind.shape[0] // 2, 2), dtype=ptype)
+                kept = np.empty(ind.shape[0] // 2, dtype=np.int64)
+                fn(indptr, ind, n, de, kept, pairs)
+                got.append((de, kept, pairs))
+        assert _same(got[0], got[1]), path
+        out.append(got[0])
+    assert not native.fallbacks.get("adjacency.csr_of_pairs")
+    # strided columns of an (e, 2) array are numba's (the caller makes them contiguous)
+    both = np.stack([lo, hi], axis=1)
+    ind, de = np.empty(2 * lo.shape[0], dtype=np.int32), np.empty(2 * lo.shape[0], dtype=dtype)
+    indptr = native.kernel("adjacency.csr_of_pairs")(both[:, 0], both[:, 1], n, ind, de)
+    assert _same((indptr, ind, de), out[0])
 
 
 def test_plain_classification_matches_numba():

@@ -44,8 +44,10 @@ def adjacency_csr(lo: np.ndarray, hi: np.ndarray, n: int
     dual_edge : (2 e,) int32 ndarray (int64 beyond 2**31 entries)
         The pair ``t`` of each CSR entry.
     """
-    from .._kernels.adjacency import csr_of_pairs
+    from .._kernels import native
 
+    csr_of_pairs = native.kernel("adjacency.csr_of_pairs")
+    lo, hi = np.ascontiguousarray(lo), np.ascontiguousarray(hi)  # (columns of the pairs)
     e = lo.shape[0]
     indices = np.empty(2 * e, dtype=np.int32)
     dual_edge = np.empty(2 * e, dtype=np.int32 if 2 * e < 2**31 - 1 else np.int64)
@@ -71,8 +73,9 @@ def pairs_from_csr(graph: "ElementGraph", pair_dtype=np.int32) -> dict[str, np.n
     dict
         ``{"pairs": (e, 2) ndarray, "dual_edge": (2 e,) int32 or int64 ndarray}``.
     """
-    from .._kernels.adjacency import number_pairs
+    from .._kernels import native
 
+    number_pairs = native.kernel("adjacency.number_pairs")
     n_csr = graph.indices.shape[0]
     pairs = np.empty((n_csr // 2, 2), dtype=pair_dtype)
     dual_edge = np.empty(n_csr, dtype=np.int32 if n_csr < 2**31 - 1 else np.int64)

@@ -40,8 +40,8 @@ from .params import superfacet_measure
 
 
 def _voronoi(name: str):
-    """A Voronoi kernel (numba, imported on first use: runs on faces never load it)."""
-    return native.reference(f"voronoi.{name}")
+    """A Voronoi kernel, compiled where built."""
+    return native.kernel(f"voronoi.{name}")
 
 
 _MIN_CLUSTERS = 4  # clusters per superfacet below which the coarse run is not done

@@ -144,5 +144,6 @@ void bind_expand(py::module_& m);
 void bind_sampling(py::module_& m);
 void bind_splitmerge(py::module_& m);
 void bind_cleanup(py::module_& m);
+void bind_voronoi(py::module_& m);
 
 }  // namespace sfk

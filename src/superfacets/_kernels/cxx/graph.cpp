@@ -61,7 +61,8 @@ void sort_row(I* indices, D* dual_edge, i64 s, i64 f) {
 }
 
 // csr_of_pairs into indptr (n + 1)
-void csr_of_pairs(const i32* lo, const i32* hi, i64 e, i64 n, i32* indices, i32* dual_edge,
+template <class P, class D>
+void csr_of_pairs(const P* lo, const P* hi, i64 e, i64 n, i32* indices, D* dual_edge,
                   i64* indptr) {
     std::fill(indptr, indptr + n + 1, 0);
     for (i64 t = 0; t < e; ++t) {
@@ -74,28 +75,34 @@ void csr_of_pairs(const i32* lo, const i32* hi, i64 e, i64 n, i32* indices, i32*
         i64 a = lo[t], b = hi[t];
         i64 p = fill[a];
         indices[p] = static_cast<i32>(b);
-        dual_edge[p] = static_cast<i32>(t);
+        dual_edge[p] = static_cast<D>(t);
         fill[a] = p + 1;
         p = fill[b];
         indices[p] = static_cast<i32>(a);
-        dual_edge[p] = static_cast<i32>(t);
+        dual_edge[p] = static_cast<D>(t);
         fill[b] = p + 1;
     }
     for (i64 v = 0; v < n; ++v) sort_row(indices, dual_edge, indptr[v], indptr[v + 1]);
 }
 
-// number_pairs with keep given (pairs empty)
-void number_pairs_keep(const i64* indptr, const i32* indices, i64 n, i32* dual_edge, i64* keep) {
+// number_pairs: keep and pairs may be null
+template <class D, class Q>
+void number_pairs_into(const i64* indptr, const i32* indices, i64 n, D* dual_edge, i64* keep,
+                       Q* pairs) {
     std::vector<i64> mirror(indptr, indptr + n);
     i64 nid = 0;
     for (i64 v = 0; v < n; ++v) {
         for (i64 i = indptr[v]; i < indptr[v + 1]; ++i) {
             i64 g = indices[i];
             if (g > v) {
-                keep[nid] = dual_edge[i];
-                dual_edge[i] = static_cast<i32>(nid);
+                if (keep) keep[nid] = dual_edge[i];
+                if (pairs) {
+                    pairs[2 * nid] = static_cast<Q>(v);
+                    pairs[2 * nid + 1] = static_cast<Q>(g);
+                }
+                dual_edge[i] = static_cast<D>(nid);
                 i64 q = mirror[g];
-                dual_edge[q] = static_cast<i32>(nid);
+                dual_edge[q] = static_cast<D>(nid);
                 mirror[g] = q + 1;
                 nid += 1;
             }
@@ -272,7 +279,7 @@ py::tuple csr_of_face_pairs(py::handle lo_, py::handle hi_, py::handle ka_, py::
     auto keep_a = fresh(out / 2, keep);
     {
         py::gil_scoped_release nogil;
-        number_pairs_keep(indptr.p, indices.p, n, dual_edge.p, keep.p);
+        number_pairs_into(indptr.p, indices.p, n, dual_edge.p, keep.p, static_cast<i32*>(nullptr));
     }
     return py::make_tuple(indptr_a, keep_a);
 }
@@ -538,7 +545,55 @@ py::tuple stray_borders(py::handle indptr_, py::handle indices_, py::handle piec
     return py::make_tuple(a_a, b_a, w_a);
 }
 
+template <class P, class D>
+py::array_t<i64> csr_of_pairs_t(py::handle lo_, py::handle hi_, i64 n, py::handle indices_,
+                                py::handle dual_edge_) {
+    In<P> lo(lo_, "lo"), hi(hi_, "hi");
+    Out<i32> indices(indices_, "indices");
+    Out<D> dual_edge(dual_edge_, "dual_edge");
+    Out<i64> indptr;
+    auto indptr_a = fresh(n + 1, indptr);
+    {
+        py::gil_scoped_release nogil;
+        csr_of_pairs(lo.p, hi.p, lo.n, n, indices.p, dual_edge.p, indptr.p);
+    }
+    return indptr_a;
+}
+
+py::array_t<i64> csr_of_pairs_any(py::handle lo, py::handle hi, i64 n, py::handle indices,
+                                  py::handle dual_edge) {
+    const bool p32 = matches<i32>(lo), d32 = matches<i32>(dual_edge);
+    if (p32) return d32 ? csr_of_pairs_t<i32, i32>(lo, hi, n, indices, dual_edge)
+                        : csr_of_pairs_t<i32, i64>(lo, hi, n, indices, dual_edge);
+    return d32 ? csr_of_pairs_t<i64, i32>(lo, hi, n, indices, dual_edge)
+               : csr_of_pairs_t<i64, i64>(lo, hi, n, indices, dual_edge);
+}
+
+template <class D, class Q>
+void number_pairs_t(py::handle indptr_, py::handle indices_, i64 n, py::handle dual_edge_,
+                    py::handle keep_, py::handle pairs_) {
+    In<i64> indptr(indptr_, "indptr");
+    In<i32> indices(indices_, "indices");
+    Out<D> dual_edge(dual_edge_, "dual_edge");
+    Out<i64> keep(keep_, "keep");
+    Out<Q> pairs(pairs_, "pairs");
+    py::gil_scoped_release nogil;
+    number_pairs_into(indptr.p, indices.p, n, dual_edge.p, keep.n ? keep.p : nullptr,
+                      pairs.n ? pairs.p : static_cast<Q*>(nullptr));
+}
+
+void number_pairs(py::handle indptr, py::handle indices, i64 n, py::handle dual_edge,
+                  py::handle keep, py::handle pairs) {
+    const bool d32 = matches<i32>(dual_edge), q32 = matches<i32>(pairs);
+    if (d32) return q32 ? number_pairs_t<i32, i32>(indptr, indices, n, dual_edge, keep, pairs)
+                        : number_pairs_t<i32, i64>(indptr, indices, n, dual_edge, keep, pairs);
+    return q32 ? number_pairs_t<i64, i32>(indptr, indices, n, dual_edge, keep, pairs)
+               : number_pairs_t<i64, i64>(indptr, indices, n, dual_edge, keep, pairs);
+}
+
 void bind_graph(py::module_& m) {
+    m.def("csr_of_pairs", &csr_of_pairs_any);
+    m.def("number_pairs", &number_pairs);
     m.def("triangle_half_edges", &triangle_half_edges);
     m.def("count_keys", &count_keys);
     m.def("scatter_keys", &scatter_keys);

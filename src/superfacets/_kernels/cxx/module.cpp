@@ -16,4 +16,5 @@ PYBIND11_MODULE(_cxx, m) {
     sfk::bind_sampling(m);
     sfk::bind_splitmerge(m);
     sfk::bind_cleanup(m);
+    sfk::bind_voronoi(m);
 }

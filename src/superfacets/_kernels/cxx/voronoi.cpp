@@ -1,0 +1,303 @@
+// Voronoi cells of seeds in the weighted element graph, for the coarse-to-fine run
+// (superfacets/_kernels/voronoi.py, and exact.py's search_buckets), the same operations
+// in the same order.
+#include "common.hpp"
+
+namespace sfk {
+
+namespace {
+
+constexpr i64 QUEUE_FULL = -2;
+
+// exact.search_buckets without lex (nearest_seed's call): a strictly smaller distance wins
+template <class W, class L>
+i64 search_buckets(const i64* indptr, const i32* indices, const W* weights, double* dist,
+                   L* label, const i64* seeds, i64 ns, i32* qface, double* qdist, i32* qnext,
+                   i64* head, i64 qcap, i64 nb, i64* qlab, double inv_width) {
+    const i64 bmask = nb - 1;
+    i64 free = -1, bump = 0, live = 0, sp = 0, cur = 0;
+    auto node = [&]() -> i64 {  // queue_node
+        if (free >= 0) {
+            i64 n = free;
+            free = qnext[free];
+            return n;
+        }
+        if (bump < qcap) return bump++;
+        return -1;
+    };
+    auto push = [&](i64 n, i64 g, double nd) {  // queue_push
+        i64 i = static_cast<i64>(nd * inv_width);
+        if (i < cur) i = cur;
+        i64 b = i & bmask;
+        qface[n] = static_cast<i32>(g);
+        qdist[n] = nd;
+        qnext[n] = static_cast<i32>(head[b]);
+        head[b] = n;
+    };
+    while (live > 0 || sp < ns) {
+        if (live == 0) {
+            i64 b0 = static_cast<i64>(dist[seeds[sp]] * inv_width);
+            if (b0 > cur) cur = b0;
+        }
+        while (sp < ns) {
+            i64 g = seeds[sp];
+            if (static_cast<i64>(dist[g] * inv_width) > cur + nb - 1) break;
+            ++sp;
+            i64 n = node();
+            if (n < 0) {
+                for (i64 b = 0; b < nb; ++b) head[b] = -1;
+                return QUEUE_FULL;
+            }
+            push(n, g, dist[g]);
+            qlab[n] = label[g];
+            ++live;
+        }
+        // queue_pop
+        i64 b = cur & bmask;
+        while (head[b] < 0) {
+            ++cur;
+            b = cur & bmask;
+        }
+        i64 popped = head[b];
+        head[b] = qnext[popped];
+        qnext[popped] = static_cast<i32>(free);
+        free = popped;
+        i64 f = qface[popped];
+        double d = qdist[popped];
+        i64 lf = qlab[free];
+        --live;
+        if (d != dist[f] || lf != static_cast<i64>(label[f])) continue;
+        for (i64 e = indptr[f]; e < indptr[f + 1]; ++e) {
+            i64 g = indices[e];
+            double nd = d + weights[e];
+            if (nd < dist[g]) {
+                dist[g] = nd;
+                label[g] = static_cast<L>(lf);
+                i64 n = node();
+                if (n < 0) {
+                    for (i64 bb = 0; bb < nb; ++bb) head[bb] = -1;
+                    return QUEUE_FULL;
+                }
+                push(n, g, nd);
+                qlab[n] = lf;
+                ++live;
+            }
+        }
+    }
+    return 0;
+}
+
+template <class W>
+i64 nearest_seed_t(const In<i64>& indptr, const In<i32>& indices, const W* weights,
+                   const In<i64>& seeds, i64 first, Out<double>& dist, Out<i32>& label,
+                   py::handle queue_, double inv_width) {
+    auto tup = py::reinterpret_borrow<py::tuple>(queue_);
+    if (!py::isinstance<py::tuple>(queue_) || tup.size() != 4) throw Mismatch("argument queue");
+    Out<i32> qface(tup[0], "qface"), qnext(tup[2], "qnext");
+    Out<double> qdist(tup[1], "qdist");
+    Out<i64> head(tup[3], "head");
+    py::gil_scoped_release nogil;
+    std::vector<i64> todo(seeds.n - first);
+    i64 n = 0;
+    for (i64 s = first; s < seeds.n; ++s) {
+        i64 f = seeds[s];
+        if (dist[f] == 0.0) continue;
+        dist[f] = 0.0;
+        label[f] = static_cast<i32>(s);
+        todo[n++] = f;
+    }
+    std::vector<i64> qlab(qface.n);
+    return search_buckets(indptr.p, indices.p, weights, dist.p, label.p, todo.data(), n, qface.p,
+                          qdist.p, qnext.p, head.p, qface.n, head.n, qlab.data(), inv_width);
+}
+
+template <class W, class S>
+py::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In<i64>& cluster,
+                         const In<double>& dist, const W* csr_w, const In<double>& lengths,
+                         const S* shares, i64 n_shares, i64 n_c) {
+    const i64 n = indptr.n - 1;
+    std::vector<i64> start(n_c + 1, 0), first(n_c + 1, 0);
+    std::vector<i32> hi;
+    {
+        py::gil_scoped_release nogil;
+        for (i64 i = 0; i < n; ++i) {
+            i64 a = cluster[i];
+            for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
+                i64 j = indices[x];
+                if (j > i && cluster[j] != a) start[mn(a, cluster[j]) + 1] += 1;
+            }
+        }
+        for (i64 c = 0; c < n_c; ++c) start[c + 1] += start[c];
+        hi.resize(start[n_c]);
+        std::vector<i64> fill(start.begin(), start.end() - 1);
+        for (i64 i = 0; i < n; ++i) {
+            i64 a = cluster[i];
+            for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
+                i64 j = indices[x];
+                if (j > i && cluster[j] != a) {
+                    i64 b = cluster[j];
+                    hi[fill[mn(a, b)]++] = static_cast<i32>(mx(a, b));
+                }
+            }
+        }
+        for (i64 c = 0; c < n_c; ++c) {
+            i64 s = start[c], f = start[c + 1];
+            if (f - s > 32) {
+                std::sort(hi.begin() + s, hi.begin() + f);
+            } else {
+                for (i64 x = s + 1; x < f; ++x) {
+                    i32 h = hi[x];
+                    i64 y = x - 1;
+                    while (y >= s && hi[y] > h) {
+                        hi[y + 1] = hi[y];
+                        --y;
+                    }
+                    hi[y + 1] = h;
+                }
+            }
+            i64 u = 0;
+            for (i64 x = s; x < f; ++x)
+                if (u == 0 || hi[s + u - 1] != hi[x]) hi[s + u++] = hi[x];
+            first[c + 1] = first[c] + u;
+        }
+    }
+    const i64 m = first[n_c];
+    Out<i64> out;
+    Out<double> w_c, len_c;
+    auto out_a = fresh(m, out, 2);
+    auto w_a = fresh(m, w_c), len_a = fresh(m, len_c);
+    {
+        py::gil_scoped_release nogil;
+        for (i64 g = 0; g < m; ++g) {
+            w_c[g] = INF;
+            len_c[g] = 0.0;
+        }
+        for (i64 c = 0; c < n_c; ++c)
+            for (i64 u = 0; u < first[c + 1] - first[c]; ++u) {
+                out(first[c] + u, 0) = c;
+                out(first[c] + u, 1) = hi[start[c] + u];
+            }
+        i64 t = 0;
+        for (i64 i = 0; i < n; ++i) {
+            i64 a = cluster[i];
+            for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
+                i64 j = indices[x];
+                if (j > i) {
+                    i64 b = cluster[j];
+                    if (a != b) {
+                        i64 lo = mn(a, b), h = mx(a, b);
+                        i64 s = start[lo];
+                        i64 left = 0, right = first[lo + 1] - first[lo];
+                        while (left < right) {
+                            i64 mid = (left + right) >> 1;
+                            if (hi[s + mid] < h) left = mid + 1;
+                            else right = mid;
+                        }
+                        i64 g = first[lo] + left;
+                        double v = dist[i] + static_cast<double>(csr_w[x]) + dist[j];
+                        if (v < w_c[g]) w_c[g] = v;
+                        if (n_shares) {
+                            S sum = shares[i] + shares[j];  // in the shares' own precision
+                            len_c[g] += 0.5 * static_cast<double>(sum);
+                        } else
+                            len_c[g] += lengths[t];
+                    }
+                    ++t;
+                }
+            }
+        }
+    }
+    return py::make_tuple(out_a, w_a, len_a);
+}
+
+}  // namespace
+
+i64 nearest_seed(py::handle indptr_, py::handle indices_, py::handle weights_, py::handle seeds_,
+                 i64 first, py::handle dist_, py::handle label_, py::handle queue,
+                 double inv_width) {
+    In<i64> indptr(indptr_, "indptr"), seeds(seeds_, "seeds");
+    In<i32> indices(indices_, "indices");
+    Out<double> dist(dist_, "dist");
+    Out<i32> label(label_, "label");
+    if (matches<float>(weights_)) {
+        In<float> w(weights_, "weights");
+        return nearest_seed_t(indptr, indices, w.p, seeds, first, dist, label, queue, inv_width);
+    }
+    In<double> w(weights_, "weights");
+    return nearest_seed_t(indptr, indices, w.p, seeds, first, dist, label, queue, inv_width);
+}
+
+py::tuple coarse_pairs(py::handle indptr_, py::handle indices_, py::handle cluster_,
+                       py::handle dist_, py::handle csr_w_, py::handle lengths_,
+                       py::handle shares_, i64 n_c) {
+    In<i64> indptr(indptr_, "indptr"), cluster(cluster_, "cluster");
+    In<i32> indices(indices_, "indices");
+    In<double> dist(dist_, "dist"), lengths(lengths_, "lengths");
+    const bool w32 = matches<float>(csr_w_), s32 = matches<float>(shares_);
+    if (w32) {
+        In<float> w(csr_w_, "csr_w");
+        if (s32) {
+            In<float> sh(shares_, "shares");
+            return coarse_pairs_t(indptr, indices, cluster, dist, w.p, lengths, sh.p, sh.n, n_c);
+        }
+        In<double> sh(shares_, "shares");
+        return coarse_pairs_t(indptr, indices, cluster, dist, w.p, lengths, sh.p, sh.n, n_c);
+    }
+    In<double> w(csr_w_, "csr_w");
+    if (s32) {
+        In<float> sh(shares_, "shares");
+        return coarse_pairs_t(indptr, indices, cluster, dist, w.p, lengths, sh.p, sh.n, n_c);
+    }
+    In<double> sh(shares_, "shares");
+    return coarse_pairs_t(indptr, indices, cluster, dist, w.p, lengths, sh.p, sh.n, n_c);
+}
+
+py::array_t<i64> first_in_cells(py::handle positions_, py::handle lo_, double h,
+                                py::handle dims_, i64 cap) {
+    In<double> positions(positions_, "positions"), lo(lo_, "lo");
+    In<i64> dims(dims_, "dims");
+    if (positions.cols != 3 || lo.n != 3 || dims.n != 3) throw Mismatch("argument positions");
+    std::vector<i64> keys(cap, -1), first(cap);
+    i64 count = 0;
+    bool full = false;
+    {
+        py::gil_scoped_release nogil;
+        const std::uint64_t mask = static_cast<std::uint64_t>(cap - 1);
+        const std::uint64_t mult = 11400714819323198485ULL;
+        for (i64 t = 0; t < positions.n && !full; ++t) {
+            i64 cx = static_cast<i64>(std::floor((positions(t, 0) - lo[0]) / h));
+            i64 cy = static_cast<i64>(std::floor((positions(t, 1) - lo[1]) / h));
+            i64 cz = static_cast<i64>(std::floor((positions(t, 2) - lo[2]) / h));
+            i64 k = (cx * dims[1] + cy) * dims[2] + cz;
+            std::uint64_t s = ((static_cast<std::uint64_t>(k) * mult) >> 20) & mask;
+            while (true) {
+                i64 i = static_cast<i64>(s);
+                if (keys[i] == k) break;
+                if (keys[i] < 0) {
+                    keys[i] = k;
+                    first[i] = t;
+                    ++count;
+                    if (2 * count > cap) full = true;
+                    break;
+                }
+                s = (s + 1) & mask;
+            }
+        }
+    }
+    Out<i64> out;
+    auto out_a = fresh(full ? 0 : count, out);
+    if (!full) {
+        i64 j = 0;
+        for (i64 i = 0; i < cap; ++i)
+            if (keys[i] >= 0) out[j++] = first[i];
+    }
+    return out_a;
+}
+
+void bind_voronoi(py::module_& m) {
+    m.def("nearest_seed", &nearest_seed);
+    m.def("coarse_pairs", &coarse_pairs);
+    m.def("first_in_cells", &first_in_cells);
+}
+
+}  // namespace sfk
