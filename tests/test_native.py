@@ -26,6 +26,12 @@ pytestmark = pytest.mark.skipif(not native.available(),
                                 reason="the compiled kernels are not built here")
 
 
+#: The compiled kernels of the point graph's build (the others serve faces and points)
+POINT_KERNELS = {"knn_csr", "pca_normals", "pca_linearity", "propagate_signs", "turn_outwards",
+                 "float_morton_keys", "distinct_in_order", "runs_of_equal", "point_terms_csr",
+                 "point_terms", "neighbour_mean", "crossing_pairs"}
+
+
 def _copy(x):
     if isinstance(x, np.ndarray):
         return x.copy()
@@ -116,10 +122,45 @@ def test_runs_on_faces_give_numba_results_call_by_call(shadowed):
         r = superfacets.segment(mesh, k, n_threads=1, **params)
         assert r.labels.shape[0] == mesh.n_faces
     compiled = {name for name in dir(native._cxx) if not name.startswith("_")} - {"Mismatch"}
+    compiled -= POINT_KERNELS
     missing = {name for name in compiled if not any(p.endswith("." + name) for p in calls)}
     # run only on several threads, by the plain replay-less classifier, by a lazy graph's
     # rebuild: tested below
     assert missing <= {"combine_merged", "classify_bounded", "number_pairs"}, missing
+
+
+def _sampled(mesh: Mesh, n: int, seed: int) -> np.ndarray:
+    """``n`` points drawn uniformly on the surface of ``mesh``."""
+    rng = np.random.default_rng(seed)
+    tri = mesh.vertices[mesh.faces]
+    idx = rng.choice(mesh.n_faces, n, p=mesh.areas / mesh.areas.sum())
+    u, v = rng.random((2, n))
+    s = np.sqrt(u)
+    return ((1 - s)[:, None] * tri[idx, 0] + (s * (1 - v))[:, None] * tri[idx, 1]
+            + (s * v)[:, None] * tri[idx, 2])
+
+
+def test_runs_on_points_give_numba_results_call_by_call(shadowed):
+    calls, _ = shadowed
+    body = creature(30)
+    p = _sampled(body, 20_000, 1)
+    dup = np.r_[p, p[:500]]  # repeated positions: merged into distinct points first
+    uneven = np.r_[_sampled(body, 4_000, 2), p[p[:, 0] > np.median(p[:, 0])]]
+    apart = np.r_[p[:6000], p[:6000] + [50.0, 0, 0]]  # two pieces
+    from superfacets.inputs.cloud import as_cloud
+
+    runs = [(p, 60, None, {}), (dup, 40, None, {}), (uneven, 50, None, {}),
+            (p, 8, None, {}),  # 2,500 points per superpoint: coarse-to-fine
+            (apart, 30, None, {}),  # two pieces
+            (p, 60, None, {"window": 1.0}),  # orphans: the exact count's merges
+            (p, 60, None, {"roughness": 1.0}),  # content-sensitive: neighbour averages
+            (p[:8000], 30, np.tile([0.0, 0.0, 1.0], (8000, 1)), {})]  # normals given
+    for pts, k, normals, params in runs:
+        r = superfacets.segment(as_cloud(pts, normals), k, n_threads=1, **params)
+        assert r.labels.shape[0] == pts.shape[0] and r.labels.max() + 1 == k
+    missing = {name for name in POINT_KERNELS | {"expand_many", "nearest_seed", "coarse_pairs"}
+               if not any(path.endswith("." + name) for path in calls)}
+    assert not missing, missing
 
 
 def test_kernels_run_on_threads_only_give_numba_results():

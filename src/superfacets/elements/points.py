@@ -43,6 +43,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .._kernels import native
 from ..inputs.bounds import column_bounds
 from .graph import LAZY, ElementGraph, adjacency_csr, cached_on, pairs_from_csr
 from .neighbors import nearest
@@ -101,7 +102,7 @@ def _normals_and_linearity(points: np.ndarray, neighbors: np.ndarray
                            ) -> tuple[np.ndarray, np.ndarray]:
     """:func:`estimate_normals`, and how much each neighbourhood is a line:
     ``(l1 - l2) / l1`` of its covariance's eigenvalues ``l1 >= l2 >= l3``."""
-    from .._kernels.normals import pca_normals
+    pca_normals = native.kernel("normals.pca_normals")
 
     out = np.empty((points.shape[0], 3))
     linearity = np.empty(points.shape[0])
@@ -141,7 +142,8 @@ def orient_normals(points: np.ndarray, normals: np.ndarray, indptr: np.ndarray,
     if viewpoint is not None:
         flip = np.einsum("ij,ij->i", normals, viewpoint[None, :] - points) < 0
         return np.where(flip[:, None], -normals, normals)
-    from .._kernels.orient import propagate_signs, turn_outwards
+    propagate_signs = native.kernel("orient.propagate_signs")
+    turn_outwards = native.kernel("orient.turn_outwards")
 
     n = points.shape[0]
     sign = np.empty(n, dtype=np.int8)
@@ -190,7 +192,8 @@ def distinct_points(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     >>> pts.tolist(), inv.tolist()
     ([[1.0, 1.0, 1.0], [1.5, 1.0, 1.0]], [1, 0, 1])
     """
-    from .._kernels.geometry import distinct_in_order, runs_of_equal
+    distinct_in_order = native.kernel("geometry.distinct_in_order")
+    runs_of_equal = native.kernel("geometry.runs_of_equal")
 
     p = np.ascontiguousarray(p, dtype=np.float64)
     keys, shared = _spatial_keys(p)
@@ -230,7 +233,7 @@ def _spatial_keys(p: np.ndarray) -> tuple[np.ndarray, int]:
     sorting by the string from ``shared`` on (:func:`_key_bits`) gives the same
     relative order in any subset of the points.
     """
-    from .._kernels.geometry import float_morton_keys
+    float_morton_keys = native.kernel("geometry.float_morton_keys")
 
     n = p.shape[0]
     keys = np.empty((n, 3), dtype=np.uint64)
@@ -318,7 +321,7 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
 
     # normals, and the neighbourhoods that are lines (a scan line), from the k neighbours
     if cloud.normals is not None:
-        from .._kernels.normals import pca_linearity
+        pca_linearity = native.kernel("normals.pca_linearity")
 
         first = np.full(n, -1, dtype=np.int64)
         first[inverse[::-1]] = valid[::-1]  # the first row of each distinct point
@@ -346,7 +349,7 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
         keep = np.ones(cand.shape, dtype=bool)
     pair_dtype = np.int32
     if 2 * (cand.size + more.size) < 2**31 - 1:  # the kernel's int32 layout
-        from .._kernels.adjacency import knn_csr
+        knn_csr = native.kernel("adjacency.knn_csr")
 
         indptr = np.empty(n + 1, dtype=np.int64)
         # i ~ j if either lists the other
@@ -401,7 +404,7 @@ def _lengths(graph: ElementGraph) -> dict:
 
 def _edge_spans(pts: np.ndarray, pairs: np.ndarray) -> np.ndarray:
     """``|p_hi - p_lo|`` of each pair, as ``np.linalg.norm`` computes it."""
-    from .._kernels.geometry import edge_lengths
+    edge_lengths = native.kernel("geometry.edge_lengths")
 
     spans = np.empty(pairs.shape[0])
     edge_lengths(pts, pairs, spans)

@@ -33,6 +33,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .._kernels import native
 from ..inputs.bounds import column_bounds
 from .graph import ElementGraph, adjacency_csr, cached_on, pairs_from_csr
 
@@ -65,7 +66,7 @@ def symmetric_terms(graph: ElementGraph, sl: slice):
     Returns ``(geo, cos, concave)``: ``geo = |p_i - p_j|``, ``cos = n_i . n_j``
     (clipped), ``concave = (n_i - n_j) . (p_i - p_j) < 0``.
     """
-    from .._kernels.geometry import point_terms
+    point_terms = native.kernel("geometry.point_terms")
 
     lo, hi = sl.indices(graph.pairs.shape[0])[:2]
     geo, cos = np.empty(hi - lo), np.empty(hi - lo)

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._kernels import native
 from ..elements.inputs import as_element_graph
 from ..errors import ParameterError
 from ..method.labels import check_labels
@@ -258,8 +259,8 @@ def _crossings(g, lab: np.ndarray):
         t = g.terms
         return (g.pairs[cross], np.asarray(g.lengths, dtype=np.float64)[cross],
                 t.cos[cross], t.concave[cross])
-    from .._kernels.adjacency import crossing_pairs
-    from .._kernels.geometry import point_terms
+    crossing_pairs = native.kernel("adjacency.crossing_pairs")
+    point_terms = native.kernel("geometry.point_terms")
 
     pc = crossing_pairs(g.indptr, g.indices, lab)
     m = pc.shape[0]

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._kernels import native
 from ..elements.graph import ElementGraph
 from ..elements.kinds import kind_of
 
@@ -59,7 +60,7 @@ def _neighbour_mean(graph: ElementGraph, x: np.ndarray) -> np.ndarray:
     """``(x_i + sum of x_j over the neighbours j) / (1 + degree)``, from the CSR layout
     (the sums in the order ``x_i + sum_{j > i} + sum_{j < i}`` of ``np.bincount`` over the
     pairs: the same values, without the pairs)."""
-    from .._kernels.terms import neighbour_mean
+    neighbour_mean = native.kernel("terms.neighbour_mean")
 
     out = np.empty(graph.n_elements)
     neighbour_mean(graph.indptr, graph.indices, np.ascontiguousarray(x, dtype=np.float64), out)

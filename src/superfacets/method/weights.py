@@ -336,7 +336,7 @@ def csr_point_weights(graph: ElementGraph, *, alpha: float = _PAPER_ALPHA,
     >>> bool((csr_point_weights(g) == csr_weights(g, paper_weights(g))).all())
     True
     """
-    from .._kernels.terms import point_terms_csr
+    point_terms_csr = native.kernel("terms.point_terms_csr")
     from .._runtime.threads import run_ranges, split
 
     g = graph

@@ -10,7 +10,11 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <sched.h>
+
 #include <algorithm>
+#include <cstdlib>
+#include <thread>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -138,6 +142,33 @@ inline i64 heap_pop(double* hkey, V* hval, i64 size) {
     return size;
 }
 
+// The threads of a parallel loop: NUMBA_NUM_THREADS where set (as numba's prange would
+// use; the Dask workers set 1), else the CPUs this process may run on.
+inline int threads() {
+    if (const char* env = std::getenv("NUMBA_NUM_THREADS")) {
+        int n = std::atoi(env);
+        if (n >= 1) return n;
+    }
+    cpu_set_t set;
+    if (sched_getaffinity(0, sizeof(set), &set) == 0) return std::max(1, CPU_COUNT(&set));
+    return std::max(1u, std::thread::hardware_concurrency());
+}
+
+// f(lo, hi) over ranges of 0..n on threads (each element on its own: any split gives
+// the same arrays). Small loops run on the calling thread.
+template <class F>
+void parallel_for(i64 n, F f) {
+    const i64 t = std::min<i64>(threads(), n / 4096);
+    if (t <= 1) {
+        f(0, n);
+        return;
+    }
+    std::vector<std::thread> pool;
+    for (i64 w = 1; w < t; ++w) pool.emplace_back(f, n * w / t, n * (w + 1) / t);
+    f(0, n / t);
+    for (auto& th : pool) th.join();
+}
+
 // Binding registrations, one per source file.
 void bind_graph(py::module_& m);
 void bind_expand(py::module_& m);
@@ -145,5 +176,6 @@ void bind_sampling(py::module_& m);
 void bind_splitmerge(py::module_& m);
 void bind_cleanup(py::module_& m);
 void bind_voronoi(py::module_& m);
+void bind_points(py::module_& m);
 
 }  // namespace sfk

@@ -9,10 +9,11 @@ namespace {
 constexpr int MERGE = 0, UNLABELLED = 1, RECORD = 2;
 constexpr i64 RECORD_FULL = -1, QUEUE_FULL = -2;
 
+template <class W>
 struct Graph {
     const i64* indptr;
     const i32* indices;
-    const double* weights;
+    const W* weights;  // float64 (faces) or float32 (points)
     const double* centroids;
 };
 
@@ -24,8 +25,9 @@ struct Queue {
     i64 qcap, nb;
 };
 
+template <class W>
 struct Work {
-    Graph g;
+    Graph<W> g;
     Queue q;
     double* local;
     double inv_width;
@@ -46,7 +48,8 @@ Queue queue_of(py::handle t) {
 }
 
 // expand.expand; dist / label / vis_dist may be null (RECORD mode, no distances kept)
-i64 expand(const Work& w, i64 src, i64 lab, double window_r2, double* dist, i32* label,
+template <class W>
+i64 expand(const Work<W>& w, i64 src, i64 lab, double window_r2, double* dist, i32* label,
            int mode, i32* vis_face, double* vis_dist, i64 pos, i64 lim) {
     const Queue& q = w.q;
     const i64 bmask = q.nb - 1;
@@ -80,7 +83,7 @@ i64 expand(const Work& w, i64 src, i64 lab, double window_r2, double* dist, i32*
         if (d > local[f]) continue;
         for (i64 e = w.g.indptr[f]; e < w.g.indptr[f + 1]; ++e) {
             i64 g = w.g.indices[e];
-            double nd = d + w.g.weights[e];
+            double nd = d + static_cast<double>(w.g.weights[e]);
             double lg = local[g];
             if (lg == INF) {
                 double dx = c[3 * g] - cx, dy = c[3 * g + 1] - cy, dz = c[3 * g + 2] - cz;
@@ -152,25 +155,28 @@ inline void merge_segment(i64 a, i64 n, i64 s, const i32* rec_face, const double
     }
 }
 
-Work work_of(py::handle indptr_, py::handle indices_, py::handle weights_, py::handle centroids_,
-             py::handle local_, py::handle queue_, double inv_width, py::handle wscale_) {
+template <class W>
+Work<W> work_of(py::handle indptr_, py::handle indices_, py::handle weights_,
+                py::handle centroids_, py::handle local_, py::handle queue_, double inv_width,
+                py::handle wscale_) {
     In<i64> indptr(indptr_, "indptr");
     In<i32> indices(indices_, "indices");
-    In<double> weights(weights_, "weights"), centroids(centroids_, "centroids"),
-        wscale(wscale_, "wscale");
+    In<W> weights(weights_, "weights");
+    In<double> centroids(centroids_, "centroids"), wscale(wscale_, "wscale");
     Out<double> local(local_, "local");
     if (centroids.cols != 3) throw Mismatch("argument centroids");
-    return Work{Graph{indptr.p, indices.p, weights.p, centroids.p}, queue_of(queue_), local.p,
-                inv_width, wscale.p, wscale.n};
+    return Work<W>{Graph<W>{indptr.p, indices.p, weights.p, centroids.p}, queue_of(queue_),
+                   local.p, inv_width, wscale.p, wscale.n};
 }
 
 }  // namespace
 
-i64 classify_bounded(py::handle indptr, py::handle indices, py::handle weights,
-                     py::handle centroids, py::handle centers_, i64 n_centers, double window_r2,
-                     py::handle dist_, py::handle label_, py::handle local, py::handle queue,
-                     double inv_width, py::handle vis_, py::handle wscale) {
-    Work w = work_of(indptr, indices, weights, centroids, local, queue, inv_width, wscale);
+template <class W>
+i64 classify_bounded_t(py::handle indptr, py::handle indices, py::handle weights,
+                       py::handle centroids, py::handle centers_, i64 n_centers,
+                       double window_r2, py::handle dist_, py::handle label_, py::handle local,
+                       py::handle queue, double inv_width, py::handle vis_, py::handle wscale) {
+    auto w = work_of<W>(indptr, indices, weights, centroids, local, queue, inv_width, wscale);
     Out<i64> centers(centers_, "centers");
     Out<double> dist(dist_, "dist");
     Out<i32> label(label_, "label"), vis(vis_, "vis");
@@ -198,12 +204,13 @@ i64 classify_bounded(py::handle indptr, py::handle indices, py::handle weights,
     return k;
 }
 
-i64 expand_many(py::handle indptr, py::handle indices, py::handle weights, py::handle centroids,
-                py::handle srcs_, py::handle labs_, double window_r2, py::handle local,
-                py::handle queue, double inv_width, py::handle rec_face_, py::handle rec_dist_,
-                i64 pos, i64 lim, py::handle out_start_, py::handle out_len_, py::handle dist_,
-                py::handle label_, py::handle wscale) {
-    Work w = work_of(indptr, indices, weights, centroids, local, queue, inv_width, wscale);
+template <class W>
+i64 expand_many_t(py::handle indptr, py::handle indices, py::handle weights,
+                  py::handle centroids, py::handle srcs_, py::handle labs_, double window_r2,
+                  py::handle local, py::handle queue, double inv_width, py::handle rec_face_,
+                  py::handle rec_dist_, i64 pos, i64 lim, py::handle out_start_,
+                  py::handle out_len_, py::handle dist_, py::handle label_, py::handle wscale) {
+    auto w = work_of<W>(indptr, indices, weights, centroids, local, queue, inv_width, wscale);
     In<i64> srcs(srcs_, "srcs"), labs(labs_, "labs");
     Out<i32> rec_face(rec_face_, "rec_face"), label(label_, "label");
     Out<double> rec_dist(rec_dist_, "rec_dist"), dist(dist_, "dist");
@@ -261,12 +268,14 @@ void combine_merged(py::handle dist_, py::handle label_, py::handle dist2_, py::
     }
 }
 
-py::tuple seed_orphans(py::handle indptr, py::handle indices, py::handle weights,
-                       py::handle centroids, py::handle centers_, i64 n_centers, double window_r2,
-                       py::handle dist_, py::handle label_, py::handle local, py::handle queue,
-                       double inv_width, py::handle rec_face_, py::handle rec_dist_, i64 pos,
-                       i64 lim, py::handle seg_start_, py::handle seg_len_, py::handle wscale) {
-    Work w = work_of(indptr, indices, weights, centroids, local, queue, inv_width, wscale);
+template <class W>
+py::tuple seed_orphans_t(py::handle indptr, py::handle indices, py::handle weights,
+                         py::handle centroids, py::handle centers_, i64 n_centers,
+                         double window_r2, py::handle dist_, py::handle label_, py::handle local,
+                         py::handle queue, double inv_width, py::handle rec_face_,
+                         py::handle rec_dist_, i64 pos, i64 lim, py::handle seg_start_,
+                         py::handle seg_len_, py::handle wscale) {
+    auto w = work_of<W>(indptr, indices, weights, centroids, local, queue, inv_width, wscale);
     Out<i64> centers(centers_, "centers"), seg_start(seg_start_, "seg_start"),
         seg_len(seg_len_, "seg_len");
     Out<double> dist(dist_, "dist"), rec_dist(rec_dist_, "rec_dist");
@@ -372,13 +381,40 @@ void update_centers(py::handle label_, i64 k, py::handle areas_, py::handle cent
     }
 }
 
+// float64 weights (faces) or float32 (points): the same sums, each weight widened first
+template <class... A>
+i64 classify_bounded(py::handle indptr, py::handle indices, py::handle weights, A... rest) {
+    if (matches<float>(weights)) return classify_bounded_t<float>(indptr, indices, weights, rest...);
+    return classify_bounded_t<double>(indptr, indices, weights, rest...);
+}
+
+template <class... A>
+i64 expand_many(py::handle indptr, py::handle indices, py::handle weights, A... rest) {
+    if (matches<float>(weights)) return expand_many_t<float>(indptr, indices, weights, rest...);
+    return expand_many_t<double>(indptr, indices, weights, rest...);
+}
+
+template <class... A>
+py::tuple seed_orphans(py::handle indptr, py::handle indices, py::handle weights, A... rest) {
+    if (matches<float>(weights)) return seed_orphans_t<float>(indptr, indices, weights, rest...);
+    return seed_orphans_t<double>(indptr, indices, weights, rest...);
+}
+
 void bind_expand(py::module_& m) {
-    m.def("classify_bounded", &classify_bounded);
-    m.def("expand_many", &expand_many);
+    m.def("classify_bounded",
+          &classify_bounded<py::handle, py::handle, i64, double, py::handle, py::handle,
+                            py::handle, py::handle, double, py::handle, py::handle>);
+    m.def("expand_many",
+          &expand_many<py::handle, py::handle, py::handle, double, py::handle, py::handle,
+                       double, py::handle, py::handle, i64, i64, py::handle, py::handle,
+                       py::handle, py::handle, py::handle>);
     m.def("merge_some", &merge_some);
     m.def("reset_labels", &reset_labels);
     m.def("combine_merged", &combine_merged);
-    m.def("seed_orphans", &seed_orphans);
+    m.def("seed_orphans",
+          &seed_orphans<py::handle, py::handle, i64, double, py::handle, py::handle, py::handle,
+                        py::handle, double, py::handle, py::handle, i64, i64, py::handle,
+                        py::handle, py::handle>);
     m.def("compact_records", &compact_records);
     m.def("update_centers", &update_centers);
 }

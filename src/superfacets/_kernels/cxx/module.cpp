@@ -17,4 +17,5 @@ PYBIND11_MODULE(_cxx, m) {
     sfk::bind_splitmerge(m);
     sfk::bind_cleanup(m);
     sfk::bind_voronoi(m);
+    sfk::bind_points(m);
 }

@@ -1,0 +1,566 @@
+// The point graph's build: distinct positions in Z order, the symmetric kNN layout, PCA
+// normals and their orientation, the per-entry terms (superfacets/_kernels/geometry.py,
+// adjacency.py, normals.py, orient.py, terms.py), the same operations in the same order.
+// The loops numba runs with prange run here on threads, each element on its own.
+#include "common.hpp"
+
+namespace sfk {
+
+namespace {
+
+// A 2-D int32 array of any row and column strides (the kNN lists are a column slice).
+struct In2i {
+    const char* p;
+    i64 n, k, s0, s1;
+    In2i(py::handle h, const char* name) {
+        if (!py::isinstance<py::array>(h)) throw Mismatch(std::string("argument ") + name);
+        auto a = py::reinterpret_borrow<py::array>(h);
+        if (!is_dtype<i32>(a.dtype()) || a.ndim() != 2)
+            throw Mismatch(std::string("argument ") + name);
+        p = static_cast<const char*>(a.data());
+        n = a.shape(0);
+        k = a.shape(1);
+        s0 = a.strides(0);
+        s1 = a.strides(1);
+    }
+    i32 operator()(i64 i, i64 j) const {
+        return *reinterpret_cast<const i32*>(p + i * s0 + j * s1);
+    }
+};
+
+inline std::uint64_t spread21(std::uint64_t x) {
+    x &= 0x1FFFFFULL;
+    x = (x | (x << 32)) & 0x1F00000000FFFFULL;
+    x = (x | (x << 16)) & 0x1F0000FF0000FFULL;
+    x = (x | (x << 8)) & 0x100F00F00F00F00FULL;
+    x = (x | (x << 4)) & 0x10C30C30C30C30C3ULL;
+    x = (x | (x << 2)) & 0x1249249249249249ULL;
+    return x;
+}
+
+// normals.py's closed-form spectrum of a symmetric 3x3 matrix
+struct Spectrum {
+    double q, p, phi;
+};
+
+inline Spectrum spectrum(double a00, double a01, double a02, double a11, double a12,
+                         double a22) {
+    double p1 = a01 * a01 + a02 * a02 + a12 * a12;
+    double q = (a00 + a11 + a22) / 3.0;
+    double p2 = (a00 - q) * (a00 - q) + (a11 - q) * (a11 - q) + (a22 - q) * (a22 - q) + 2.0 * p1;
+    if (p2 <= 0.0) return {q, 0.0, 0.0};
+    double p = std::sqrt(p2 / 6.0);
+    double b00 = (a00 - q) / p, b11 = (a11 - q) / p, b22 = (a22 - q) / p;
+    double b01 = a01 / p, b02 = a02 / p, b12 = a12 / p;
+    double r = 0.5 * (b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02) +
+                      b02 * (b01 * b12 - b11 * b02));
+    r = mn(1.0, mx(-1.0, r));
+    return {q, p, std::acos(r) / 3.0};
+}
+
+constexpr double PI = 3.141592653589793;
+
+inline void smallest_eigenvector(double a00, double a01, double a02, double a11, double a12,
+                                 double a22, double* out) {
+    Spectrum sp = spectrum(a00, a01, a02, a11, a12, a22);
+    if (sp.p <= 0.0) {
+        out[0] = 0.0;
+        out[1] = 0.0;
+        out[2] = 1.0;
+        return;
+    }
+    double lam = sp.q + 2.0 * sp.p * std::cos(sp.phi + 2.0 * PI / 3.0);
+    double r0x = a00 - lam, r0y = a01, r0z = a02;
+    double r1x = a01, r1y = a11 - lam, r1z = a12;
+    double r2x = a02, r2y = a12, r2z = a22 - lam;
+    double c0x = r0y * r1z - r0z * r1y, c0y = r0z * r1x - r0x * r1z, c0z = r0x * r1y - r0y * r1x;
+    double c1x = r0y * r2z - r0z * r2y, c1y = r0z * r2x - r0x * r2z, c1z = r0x * r2y - r0y * r2x;
+    double c2x = r1y * r2z - r1z * r2y, c2y = r1z * r2x - r1x * r2z, c2z = r1x * r2y - r1y * r2x;
+    double d0 = c0x * c0x + c0y * c0y + c0z * c0z;
+    double d1 = c1x * c1x + c1y * c1y + c1z * c1z;
+    double d2 = c2x * c2x + c2y * c2y + c2z * c2z;
+    double x, y, z, d;
+    if (d0 >= d1 && d0 >= d2) {
+        x = c0x, y = c0y, z = c0z, d = d0;
+    } else if (d1 >= d2) {
+        x = c1x, y = c1y, z = c1z, d = d1;
+    } else {
+        x = c2x, y = c2y, z = c2z, d = d2;
+    }
+    if (d <= 0.0) {
+        out[0] = 0.0;
+        out[1] = 0.0;
+        out[2] = 1.0;
+        return;
+    }
+    double s = 1.0 / std::sqrt(d);
+    out[0] = x * s;
+    out[1] = y * s;
+    out[2] = z * s;
+}
+
+inline void scatter(const double* pts, const i32* idx, i64 k, double* a) {
+    for (int t = 0; t < 6; ++t) a[t] = 0.0;
+    if (k == 0) return;
+    double mx_ = 0.0, my = 0.0, mz = 0.0;
+    for (i64 t = 0; t < k; ++t) {
+        i64 j = idx[t];
+        mx_ += pts[3 * j];
+        my += pts[3 * j + 1];
+        mz += pts[3 * j + 2];
+    }
+    mx_ /= static_cast<double>(k);
+    my /= static_cast<double>(k);
+    mz /= static_cast<double>(k);
+    for (i64 t = 0; t < k; ++t) {
+        i64 j = idx[t];
+        double x = pts[3 * j] - mx_, y = pts[3 * j + 1] - my, z = pts[3 * j + 2] - mz;
+        a[0] += x * x;
+        a[1] += x * y;
+        a[2] += x * z;
+        a[3] += y * y;
+        a[4] += y * z;
+        a[5] += z * z;
+    }
+}
+
+inline double linearity(double a00, double a01, double a02, double a11, double a12,
+                        double a22) {
+    Spectrum sp = spectrum(a00, a01, a02, a11, a12, a22);
+    if (sp.p <= 0.0 || sp.q <= 0.0) return 0.0;
+    double l1 = sp.q + 2.0 * sp.p * std::cos(sp.phi);
+    double l3 = sp.q + 2.0 * sp.p * std::cos(sp.phi + 2.0 * PI / 3.0);
+    double l2 = 3.0 * sp.q - l1 - l3;
+    return l1 > 0.0 ? (l1 - l2) / l1 : 0.0;
+}
+
+// geometry.pair_terms
+inline void pair_terms(const double* pos, const double* nor, i64 i, i64 j, double& geo,
+                       double& cs, bool& concave) {
+    double dx = pos[3 * i] - pos[3 * j], dy = pos[3 * i + 1] - pos[3 * j + 1],
+           dz = pos[3 * i + 2] - pos[3 * j + 2];
+    double c = (nor[3 * i] * nor[3 * j] + nor[3 * i + 2] * nor[3 * j + 2]) +
+               nor[3 * i + 1] * nor[3 * j + 1];
+    double s = ((nor[3 * i] - nor[3 * j]) * dx + (nor[3 * i + 2] - nor[3 * j + 2]) * dz) +
+               (nor[3 * i + 1] - nor[3 * j + 1]) * dy;
+    geo = std::sqrt(dx * dx + dy * dy + dz * dz);
+    cs = mn(mx(c, -1.0), 1.0);
+    concave = s < 0;
+}
+
+inline bool before(double k1, i64 t1, double k2, i64 t2) {
+    return k1 < k2 || (k1 == k2 && t1 < t2);
+}
+
+}  // namespace
+
+void float_morton_keys(py::handle bits_, py::handle keys_) {
+    In<std::uint64_t> bits(bits_, "bits");
+    Out<std::uint64_t> keys(keys_, "keys");
+    py::gil_scoped_release nogil;
+    const std::uint64_t top = 1ULL << 63;
+    parallel_for(bits.n, [&](i64 lo, i64 hi) {
+        for (i64 i = lo; i < hi; ++i) {
+            std::uint64_t o[3];
+            for (int a = 0; a < 3; ++a) {
+                std::uint64_t b = bits(i, a);
+                if (b == top) b = 0;
+                o[a] = (b & top) ? ~b : (b | top);
+            }
+            for (int w = 0; w < 3; ++w) {
+                std::uint64_t s = static_cast<std::uint64_t>(43 - 21 * w);
+                keys(i, w) = (spread21(o[0] >> s) << 2) | (spread21(o[1] >> s) << 1) |
+                             spread21(o[2] >> s);
+            }
+        }
+    });
+}
+
+i64 runs_of_equal(py::handle w_, py::handle run_, py::handle tied_) {
+    In<std::uint64_t> w(w_, "w");
+    Out<i64> run(run_, "run"), tied(tied_, "tied");
+    py::gil_scoped_release nogil;
+    const i64 n = w.n;
+    i64 r = -1, m = 0;
+    for (i64 i = 0; i < n; ++i) {
+        if (i == 0 || w[i] != w[i - 1]) ++r;
+        run[i] = r;
+        if ((i > 0 && w[i] == w[i - 1]) || (i + 1 < n && w[i] == w[i + 1])) tied[m++] = i;
+    }
+    return m;
+}
+
+i64 distinct_in_order(py::handle p_, py::handle order_, py::handle out_, py::handle inverse_) {
+    In<double> p(p_, "p");
+    In<i64> order(order_, "order");
+    Out<double> out(out_, "out");
+    Out<i64> inverse(inverse_, "inverse");
+    if (p.cols != 3 || out.cols != 3) throw Mismatch("argument p");
+    py::gil_scoped_release nogil;
+    const i64 n = order.n;
+    std::vector<i64> place(n);
+    parallel_for(n, [&](i64 lo, i64 hi) {
+        for (i64 i = lo; i < hi; ++i) {
+            if (i == 0) {
+                place[i] = 1;
+            } else {
+                i64 row = order[i], prev = order[i - 1];
+                bool nw = p(row, 0) != p(prev, 0) || p(row, 1) != p(prev, 1) ||
+                          p(row, 2) != p(prev, 2);
+                place[i] = nw ? 1 : 0;
+            }
+        }
+    });
+    i64 m = 0;
+    for (i64 i = 0; i < n; ++i) {
+        m += place[i];
+        place[i] = m - 1;
+    }
+    parallel_for(n, [&](i64 lo, i64 hi) {
+        for (i64 i = lo; i < hi; ++i) {
+            i64 row = order[i], j = place[i];
+            if (i == 0 || place[i - 1] != j) {
+                out(j, 0) = p(row, 0);
+                out(j, 1) = p(row, 1);
+                out(j, 2) = p(row, 2);
+            }
+            inverse[row] = j;
+        }
+    });
+    return m;
+}
+
+void pca_normals(py::handle points_, py::handle neighbors_, py::handle out_,
+                 py::handle linearity_) {
+    In<double> points(points_, "points");
+    In<i32> nb(neighbors_, "neighbors");
+    Out<double> out(out_, "out"), lin(linearity_, "linearity");
+    if (points.cols != 3 || out.cols != 3) throw Mismatch("argument points");
+    py::gil_scoped_release nogil;
+    const i64 k = nb.cols;
+    parallel_for(nb.n, [&](i64 lo, i64 hi) {
+        double a[6];
+        for (i64 i = lo; i < hi; ++i) {
+            scatter(points.p, nb.p + i * k, k, a);
+            double scale = a[0] + a[3] + a[5];
+            if (scale > 0.0)
+                for (int t = 0; t < 6; ++t) a[t] /= scale;
+            smallest_eigenvector(a[0], a[1], a[2], a[3], a[4], a[5], out.p + 3 * i);
+            lin[i] = linearity(a[0], a[1], a[2], a[3], a[4], a[5]);
+        }
+    });
+}
+
+void pca_linearity(py::handle points_, py::handle neighbors_, py::handle linearity_) {
+    In<double> points(points_, "points");
+    In<i32> nb(neighbors_, "neighbors");
+    Out<double> lin(linearity_, "linearity");
+    if (points.cols != 3) throw Mismatch("argument points");
+    py::gil_scoped_release nogil;
+    const i64 k = nb.cols;
+    parallel_for(nb.n, [&](i64 lo, i64 hi) {
+        double a[6];
+        for (i64 i = lo; i < hi; ++i) {
+            scatter(points.p, nb.p + i * k, k, a);
+            double scale = a[0] + a[3] + a[5];
+            lin[i] = scale > 0.0 ? linearity(a[0] / scale, a[1] / scale, a[2] / scale,
+                                             a[3] / scale, a[4] / scale, a[5] / scale)
+                                 : 0.0;
+        }
+    });
+}
+
+py::array_t<i32> knn_csr(py::handle nbr_, py::handle keep_, py::handle indptr_,
+                         py::handle rows_, py::handle more_, py::handle more_keep_) {
+    In2i nbr(nbr_, "nbr"), more(more_, "more");
+    In<bool> keep(keep_, "keep"), more_keep(more_keep_, "more_keep");
+    Out<i64> indptr(indptr_, "indptr");
+    In<i64> rows(rows_, "rows");
+    const i64 n = nbr.n, k = nbr.k, mk = more.k;
+    if (keep.cols != k || (rows.n && more_keep.cols != mk)) throw Mismatch("argument keep");
+    std::vector<i64> count(n + 1, 0);
+    {
+        py::gil_scoped_release nogil;
+        for (i64 i = 0; i < n; ++i)
+            for (i64 c = 0; c < k; ++c)
+                if (keep(i, c) && nbr(i, c) != i) {
+                    count[i + 1] += 1;
+                    count[nbr(i, c) + 1] += 1;
+                }
+        for (i64 t = 0; t < rows.n; ++t)
+            for (i64 c = 0; c < mk; ++c)
+                if (more_keep(t, c) && more(t, c) != rows[t]) {
+                    count[rows[t] + 1] += 1;
+                    count[more(t, c) + 1] += 1;
+                }
+        for (i64 i = 0; i < n; ++i) count[i + 1] += count[i];
+    }
+    Out<i32> raw;
+    auto raw_a = fresh(count[n], raw);
+    {
+        py::gil_scoped_release nogil;
+        std::vector<i64> fill(count.begin(), count.end() - 1);
+        for (i64 i = 0; i < n; ++i)
+            for (i64 c = 0; c < k; ++c)
+                if (keep(i, c) && nbr(i, c) != i) {
+                    i64 j = nbr(i, c);
+                    raw[fill[i]++] = static_cast<i32>(j);
+                    raw[fill[j]++] = static_cast<i32>(i);
+                }
+        for (i64 t = 0; t < rows.n; ++t) {
+            i64 i = rows[t];
+            for (i64 c = 0; c < mk; ++c)
+                if (more_keep(t, c) && more(t, c) != i) {
+                    i64 j = more(t, c);
+                    raw[fill[i]++] = static_cast<i32>(j);
+                    raw[fill[j]++] = static_cast<i32>(i);
+                }
+        }
+        std::vector<i64> kept(n);
+        parallel_for(n, [&](i64 lo, i64 hi) {
+            for (i64 i = lo; i < hi; ++i) {
+                i64 s = count[i], f = count[i + 1];
+                for (i64 a = s + 1; a < f; ++a) {
+                    i32 x = raw[a];
+                    i64 b = a - 1;
+                    while (b >= s && raw[b] > x) {
+                        raw[b + 1] = raw[b];
+                        --b;
+                    }
+                    raw[b + 1] = x;
+                }
+                i64 m = 0;
+                for (i64 a = s; a < f; ++a)
+                    if (m == 0 || raw[s + m - 1] != raw[a]) raw[s + m++] = raw[a];
+                kept[i] = m;
+            }
+        });
+        indptr[0] = 0;
+        for (i64 i = 0; i < n; ++i) indptr[i + 1] = indptr[i] + kept[i];
+        for (i64 i = 0; i < n; ++i) {
+            i64 s = count[i];
+            for (i64 a = 0; a < indptr[i + 1] - indptr[i]; ++a) raw[indptr[i] + a] = raw[s + a];
+        }
+    }
+    return raw_a;
+}
+
+i64 propagate_signs(py::handle indptr_, py::handle indices_, py::handle normals_,
+                    py::handle sign_, py::handle component_) {
+    In<i64> indptr(indptr_, "indptr");
+    In<i32> indices(indices_, "indices");
+    In<double> nor(normals_, "normals");
+    Out<std::int8_t> sign(sign_, "sign");
+    Out<i64> component(component_, "component");
+    if (nor.cols != 3) throw Mismatch("argument normals");
+    py::gil_scoped_release nogil;
+    const i64 n = nor.n;
+    std::vector<char> done(n, 0);
+    std::vector<i64> at(n, -1), source(n), hent(n), hel(n);
+    std::vector<double> hkey(n);
+    auto put = [&](i64 i, double key, i64 t, i64 el) {
+        hkey[i] = key;
+        hent[i] = t;
+        hel[i] = el;
+        at[el] = i;
+    };
+    auto dot = [&](i64 u, i64 v) {
+        return nor(u, 0) * nor(v, 0) + nor(u, 1) * nor(v, 1) + nor(u, 2) * nor(v, 2);
+    };
+    i64 n_comp = 0;
+    for (i64 s = 0; s < n; ++s) {
+        if (done[s]) continue;
+        i64 size = 0, v = s;
+        done[s] = 1;
+        sign[s] = 1;
+        component[s] = n_comp;
+        while (true) {
+            for (i64 t = indptr[v]; t < indptr[v + 1]; ++t) {
+                i64 w = indices[t];
+                if (done[w]) continue;
+                double key = 1.0 - std::fabs(dot(v, w));
+                i64 i = at[w];
+                if (i < 0) {
+                    i = size++;
+                } else if (!before(key, t, hkey[i], hent[i])) {
+                    continue;
+                }
+                source[w] = v;
+                while (i > 0) {
+                    i64 p = (i - 1) >> 2;
+                    if (before(hkey[p], hent[p], key, t)) break;
+                    put(i, hkey[p], hent[p], hel[p]);
+                    i = p;
+                }
+                put(i, key, t, w);
+            }
+            if (size == 0) break;
+            v = hel[0];
+            at[v] = -1;
+            --size;
+            if (size > 0) {
+                double key = hkey[size];
+                i64 t = hent[size], x = hel[size], i = 0;
+                while (true) {
+                    i64 c = 4 * i + 1;
+                    if (c >= size) break;
+                    i64 m = c;
+                    for (i64 c2 = c + 1; c2 < mn(c + 4, size); ++c2)
+                        if (before(hkey[c2], hent[c2], hkey[m], hent[m])) m = c2;
+                    if (!before(hkey[m], hent[m], key, t)) break;
+                    put(i, hkey[m], hent[m], hel[m]);
+                    i = m;
+                }
+                put(i, key, t, x);
+            }
+            i64 u = source[v];
+            done[v] = 1;
+            component[v] = n_comp;
+            double d = dot(u, v);
+            sign[v] = static_cast<std::int8_t>(d >= 0 ? sign[u] : -sign[u]);
+        }
+        ++n_comp;
+    }
+    return n_comp;
+}
+
+void turn_outwards(py::handle points_, py::handle normals_, py::handle sign_,
+                   py::handle component_, i64 n_comp, py::handle out_) {
+    In<double> pts(points_, "points"), nor(normals_, "normals");
+    In<std::int8_t> sign(sign_, "sign");
+    In<i64> component(component_, "component");
+    Out<double> out(out_, "out");
+    if (pts.cols != 3 || nor.cols != 3 || out.cols != 3) throw Mismatch("argument points");
+    py::gil_scoped_release nogil;
+    const i64 n = pts.n;
+    std::vector<double> count(n_comp, 0.0), mean(3 * n_comp, 0.0), total(n_comp, 0.0);
+    for (i64 i = 0; i < n; ++i) {
+        i64 c = component[i];
+        count[c] += 1.0;
+        for (int a = 0; a < 3; ++a) mean[3 * c + a] += pts(i, a);
+    }
+    for (i64 c = 0; c < n_comp; ++c)
+        for (int a = 0; a < 3; ++a) mean[3 * c + a] /= count[c];
+    for (i64 i = 0; i < n; ++i) {
+        i64 c = component[i];
+        double s = static_cast<double>(sign[i]);
+        total[c] += (nor(i, 0) * s * (pts(i, 0) - mean[3 * c]) +
+                     nor(i, 1) * s * (pts(i, 1) - mean[3 * c + 1])) +
+                    nor(i, 2) * s * (pts(i, 2) - mean[3 * c + 2]);
+    }
+    for (i64 i = 0; i < n; ++i) {
+        double s = static_cast<double>(sign[i]);
+        if (total[component[i]] < 0) s = -s;
+        for (int a = 0; a < 3; ++a) out(i, a) = nor(i, a) * s;
+    }
+}
+
+void point_terms_csr(py::handle positions_, py::handle normals_, py::handle indptr_,
+                     py::handle indices_, i64 r0, i64 r1, py::handle geo_, py::handle cos_,
+                     py::handle concave_) {
+    In<double> pos(positions_, "positions"), nor(normals_, "normals");
+    In<i64> indptr(indptr_, "indptr");
+    In<i32> indices(indices_, "indices");
+    Out<double> geo(geo_, "geo"), cs(cos_, "cos");
+    Out<bool> concave(concave_, "concave");
+    if (pos.cols != 3 || nor.cols != 3) throw Mismatch("argument positions");
+    py::gil_scoped_release nogil;
+    i64 u = 0;
+    for (i64 i = r0; i < r1; ++i)
+        for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
+            i64 j = indices[x];
+            pair_terms(pos.p, nor.p, mn(i, j), mx(i, j), geo[u], cs[u], concave[u]);
+            ++u;
+        }
+}
+
+void point_terms(py::handle positions_, py::handle normals_, py::handle pairs_, i64 lo, i64 hi,
+                 py::handle geo_, py::handle cos_, py::handle concave_) {
+    In<double> pos(positions_, "positions"), nor(normals_, "normals");
+    Out<double> geo(geo_, "geo"), cs(cos_, "cos");
+    Out<bool> concave(concave_, "concave");
+    if (pos.cols != 3 || nor.cols != 3) throw Mismatch("argument positions");
+    if (matches<i32>(pairs_)) {
+        In<i32> pairs(pairs_, "pairs");
+        py::gil_scoped_release nogil;
+        for (i64 t = lo; t < hi; ++t)
+            pair_terms(pos.p, nor.p, pairs(t, 0), pairs(t, 1), geo[t - lo], cs[t - lo],
+                       concave[t - lo]);
+    } else {
+        In<i64> pairs(pairs_, "pairs");
+        py::gil_scoped_release nogil;
+        for (i64 t = lo; t < hi; ++t)
+            pair_terms(pos.p, nor.p, pairs(t, 0), pairs(t, 1), geo[t - lo], cs[t - lo],
+                       concave[t - lo]);
+    }
+}
+
+template <class X>
+void neighbour_mean_t(const In<i64>& indptr, const In<i32>& indices, const X* x, double* out) {
+    for (i64 i = 0; i < indptr.n - 1; ++i) {
+        double above = 0.0, below = 0.0;
+        for (i64 e = indptr[i]; e < indptr[i + 1]; ++e) {
+            i64 j = indices[e];
+            if (j > i) above += x[j];
+            else below += x[j];
+        }
+        out[i] = (x[i] + above + below) / (1.0 + static_cast<double>(indptr[i + 1] - indptr[i]));
+    }
+}
+
+void neighbour_mean(py::handle indptr_, py::handle indices_, py::handle x_, py::handle out_) {
+    In<i64> indptr(indptr_, "indptr");
+    In<i32> indices(indices_, "indices");
+    Out<double> out(out_, "out");
+    In<double> x(x_, "x");
+    py::gil_scoped_release nogil;
+    neighbour_mean_t(indptr, indices, x.p, out.p);
+}
+
+py::array_t<i64> crossing_pairs(py::handle indptr_, py::handle indices_, py::handle labels_) {
+    In<i64> indptr(indptr_, "indptr"), labels(labels_, "labels");
+    In<i32> indices(indices_, "indices");
+    const i64 n = indptr.n - 1;
+    i64 m = 0;
+    {
+        py::gil_scoped_release nogil;
+        for (i64 i = 0; i < n; ++i)
+            for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
+                i64 j = indices[x];
+                if (j > i && labels[j] != labels[i]) ++m;
+            }
+    }
+    Out<i64> out;
+    auto out_a = fresh(m, out, 2);
+    {
+        py::gil_scoped_release nogil;
+        i64 u = 0;
+        for (i64 i = 0; i < n; ++i)
+            for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
+                i64 j = indices[x];
+                if (j > i && labels[j] != labels[i]) {
+                    out(u, 0) = i;
+                    out(u, 1) = j;
+                    ++u;
+                }
+            }
+    }
+    return out_a;
+}
+
+void bind_points(py::module_& m) {
+    m.def("float_morton_keys", &float_morton_keys);
+    m.def("runs_of_equal", &runs_of_equal);
+    m.def("distinct_in_order", &distinct_in_order);
+    m.def("pca_normals", &pca_normals);
+    m.def("pca_linearity", &pca_linearity);
+    m.def("knn_csr", &knn_csr);
+    m.def("propagate_signs", &propagate_signs);
+    m.def("turn_outwards", &turn_outwards);
+    m.def("point_terms_csr", &point_terms_csr);
+    m.def("point_terms", &point_terms);
+    m.def("neighbour_mean", &neighbour_mean);
+    m.def("crossing_pairs", &crossing_pairs);
+}
+
+}  // namespace sfk
