@@ -125,8 +125,9 @@ def test_runs_on_faces_give_numba_results_call_by_call(shadowed):
     compiled -= POINT_KERNELS
     missing = {name for name in compiled if not any(p.endswith("." + name) for p in calls)}
     # run only on several threads, by the plain replay-less classifier, by a lazy graph's
-    # rebuild: tested below
-    assert missing <= {"combine_merged", "classify_bounded", "number_pairs"}, missing
+    # rebuild, by hierarchies and the exact count on points: tested below
+    assert missing <= {"combine_merged", "classify_bounded", "number_pairs", "merge_levels"}, \
+        missing
 
 
 def _sampled(mesh: Mesh, n: int, seed: int) -> np.ndarray:
@@ -158,9 +159,26 @@ def test_runs_on_points_give_numba_results_call_by_call(shadowed):
     for pts, k, normals, params in runs:
         r = superfacets.segment(as_cloud(pts, normals), k, n_threads=1, **params)
         assert r.labels.shape[0] == pts.shape[0] and r.labels.max() + 1 == k
-    missing = {name for name in POINT_KERNELS | {"expand_many", "nearest_seed", "coarse_pairs"}
+    missing = {name for name in POINT_KERNELS | {"expand_many", "nearest_seed", "coarse_pairs",
+                                                 "merge_levels"}
                if not any(path.endswith("." + name) for path in calls)}
     assert not missing, missing
+
+
+@pytest.mark.parametrize("params", [{}, {"cost": "planarity", "extent_weight": 0.5},
+                                    {"beta": 1.0}])
+def test_hierarchies_give_numba_results(shadowed, params):
+    calls, _ = shadowed
+    from superfacets.elements import face_graph
+    from superfacets.graph.adjacency import superfacet_graph
+    from superfacets.graph.hierarchy import hierarchy
+
+    mesh = creature(30)
+    labels = superfacets.segment(mesh, 60, n_threads=1).labels
+    feats = np.c_[mesh.centroids[:, 2], mesh.normals[:, 0]] if params.get("beta") else None
+    sg = superfacet_graph(face_graph(mesh), labels, feats)
+    h = hierarchy(sg, [40, 20, 5], **params)
+    assert h.levels == (40, 20, 5) and "hierarchy.merge_levels" in calls
 
 
 def test_kernels_run_on_threads_only_give_numba_results():

@@ -188,7 +188,9 @@ def hierarchy(graph, levels, *, alpha: float = DEFAULTS.alpha,
     if beta > 0 and graph.feature is None:
         raise ParameterError("beta > 0 needs the superfacets' features (graph.feature)")
 
-    from .._kernels.hierarchy import merge_levels
+    from .._kernels import native
+
+    merge_levels = native.kernel("hierarchy.merge_levels")
 
     area = np.array(graph.area, dtype=np.float64)
     wsum = np.ascontiguousarray(graph.centroid * area[:, None], dtype=np.float64)

@@ -177,5 +177,6 @@ void bind_splitmerge(py::module_& m);
 void bind_cleanup(py::module_& m);
 void bind_voronoi(py::module_& m);
 void bind_points(py::module_& m);
+void bind_hierarchy(py::module_& m);
 
 }  // namespace sfk

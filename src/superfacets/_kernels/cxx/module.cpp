@@ -18,4 +18,5 @@ PYBIND11_MODULE(_cxx, m) {
     sfk::bind_cleanup(m);
     sfk::bind_voronoi(m);
     sfk::bind_points(m);
+    sfk::bind_hierarchy(m);
 }
