@@ -286,3 +286,8 @@ def test_a_run_on_faces_loads_no_numba():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, env=env_off).stdout.split()
     assert out == ["True", "False"]  # turned off: numba does it all
+    for env, said in ((None, "(compiled kernels)"),
+                      (env_off, "numba kernels only: the compiled ones are turned off")):
+        out = subprocess.run([sys.executable, "-m", "superfacets", "--version"], env=env,
+                             capture_output=True, text=True, check=True).stdout
+        assert said in out, out

@@ -22,13 +22,16 @@ import importlib
 import os
 from typing import Any, Callable
 
-__all__ = ["kernel", "of", "available", "reference", "before_numba"]
+__all__ = ["kernel", "of", "available", "missing_because", "reference", "before_numba"]
 
+_why = ""
 try:
     if os.environ.get("SUPERFACETS_NATIVE", "1").strip() in ("0", "no", "false", "off"):
-        raise ImportError("turned off by SUPERFACETS_NATIVE")
+        _why = "turned off (SUPERFACETS_NATIVE=0)"
+        raise ImportError(_why)
     _cxx = importlib.import_module("superfacets._kernels._cxx")
 except ImportError:  # not built (no compiler at install time), or turned off
+    _why = _why or "not built (no C++ compiler at install time?)"
     _cxx = None
 
 _chosen: dict[str, Callable[..., Any]] = {}
@@ -46,6 +49,11 @@ def before_numba(fn: Callable[[], Any]) -> None:
 def available() -> bool:
     """Whether the compiled kernels are built and in use."""
     return _cxx is not None
+
+
+def missing_because() -> str:
+    """Why the compiled kernels are not in use ("" when they are)."""
+    return "" if _cxx is not None else _why
 
 
 def reference(path: str) -> Callable[..., Any]:

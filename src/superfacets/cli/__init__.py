@@ -26,6 +26,24 @@ import sys
 __all__ = ["main", "build_parser"]
 
 
+class _Version(argparse.Action):
+    """``--version``: the version, and which kernels a run uses (the compiled ones, or
+    numba's alone where no C++ compiler was found at install time)."""
+
+    def __init__(self, option_strings, version, dest=argparse.SUPPRESS,
+                 default=argparse.SUPPRESS, help=None):
+        super().__init__(option_strings, dest, default=default, nargs=0, help=help)
+        self.version = version
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from .._kernels import native
+
+        kernels = ("compiled kernels" if native.available() else
+                   f"numba kernels only: the compiled ones are {native.missing_because()}")
+        print(f"{self.version} ({kernels})")
+        parser.exit()
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every command (each sub-parser sets ``func``)."""
     from .._version import __version__
@@ -35,7 +53,8 @@ def build_parser() -> argparse.ArgumentParser:
         prog="superfacets",
         description="Over-segment triangle meshes into superfacets (Simari, Picciau, "
                     "De Floriani, 'Fast and Scalable Mesh Superfacets', 2014).")
-    parser.add_argument("--version", action="version", version=f"superfacets {__version__}")
+    parser.add_argument("--version", action=_Version, version=f"superfacets {__version__}",
+                        help="show the version and whether the compiled kernels are built")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
     segmenting.add_parsers(sub)
