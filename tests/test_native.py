@@ -30,6 +30,8 @@ pytestmark = pytest.mark.skipif(not native.available(),
 POINT_KERNELS = {"knn_csr", "pca_normals", "pca_linearity", "propagate_signs", "turn_outwards",
                  "float_morton_keys", "distinct_in_order", "runs_of_equal", "point_terms_csr",
                  "point_terms", "neighbour_mean", "crossing_pairs"}
+#: Those of the vertex graph and of the exact assignment (the default on vertices)
+VERTEX_KERNELS = {"vertex_cells", "mesh_edges", "classify_exact", "reclassify_exact"}
 
 
 def _copy(x):
@@ -122,7 +124,7 @@ def test_runs_on_faces_give_numba_results_call_by_call(shadowed):
         r = superfacets.segment(mesh, k, n_threads=1, **params)
         assert r.labels.shape[0] == mesh.n_faces
     compiled = {name for name in dir(native._cxx) if not name.startswith("_")} - {"Mismatch"}
-    compiled -= POINT_KERNELS
+    compiled -= POINT_KERNELS | VERTEX_KERNELS
     missing = {name for name in compiled if not any(p.endswith("." + name) for p in calls)}
     # run only on several threads, by the plain replay-less classifier, by a lazy graph's
     # rebuild, by hierarchies and the exact count on points: tested below
@@ -162,6 +164,21 @@ def test_runs_on_points_give_numba_results_call_by_call(shadowed):
     missing = {name for name in POINT_KERNELS | {"expand_many", "nearest_seed", "coarse_pairs",
                                                  "merge_levels"}
                if not any(path.endswith("." + name) for path in calls)}
+    assert not missing, missing
+
+
+def test_runs_on_vertices_give_numba_results_call_by_call(shadowed):
+    calls, _ = shadowed
+    body = creature(30)
+    half = body.faces[body.centroids[:, 2] > np.median(body.centroids[:, 2])]
+    used = np.unique(half)
+    remap = np.full(body.n_vertices, -1)
+    remap[used] = np.arange(used.shape[0])
+    for mesh, k in ((body, 60), (Mesh(body.vertices[used], remap[half]), 30),
+                    (_quad_cube(12), 40)):
+        r = superfacets.segment(mesh, k, n_threads=1, elements="vertices")
+        assert r.labels.shape[0] == mesh.n_vertices
+    missing = {name for name in VERTEX_KERNELS if not any(p.endswith("." + name) for p in calls)}
     assert not missing, missing
 
 

@@ -103,7 +103,8 @@ def vertex_graph(mesh) -> VertexElements:
 
 
 def _build_vertex_graph_of(mesh) -> VertexElements:
-    from .._kernels.vertices import mesh_edges, vertex_cells
+    mesh_edges = native.kernel("vertices.mesh_edges")
+    vertex_cells = native.kernel("vertices.vertex_cells")
 
     n_v = mesh.n_vertices
     corners = np.asarray(mesh.corners)

@@ -36,13 +36,13 @@ _k = native.of("expand")  # the expansion kernels, compiled where built
 
 
 def classify_exact(*args):
-    """:func:`superfacets._kernels.exact.classify_exact` (numba, imported on first use)."""
-    return native.reference("exact.classify_exact")(*args)
+    """:func:`superfacets._kernels.exact.classify_exact`, compiled where built."""
+    return native.kernel("exact.classify_exact")(*args)
 
 
 def reclassify_exact(*args):
-    """:func:`superfacets._kernels.exact.reclassify_exact` (numba, imported on first use)."""
-    return native.reference("exact.reclassify_exact")(*args)
+    """:func:`superfacets._kernels.exact.reclassify_exact`, compiled where built."""
+    return native.kernel("exact.reclassify_exact")(*args)
 
 __all__ = ["Classifier", "BoundedReplay", "Bounded", "Exact", "make_classifier"]
 

@@ -178,5 +178,7 @@ void bind_cleanup(py::module_& m);
 void bind_voronoi(py::module_& m);
 void bind_points(py::module_& m);
 void bind_hierarchy(py::module_& m);
+void bind_exact(py::module_& m);
+void bind_vertices(py::module_& m);
 
 }  // namespace sfk

@@ -19,4 +19,6 @@ PYBIND11_MODULE(_cxx, m) {
     sfk::bind_voronoi(m);
     sfk::bind_points(m);
     sfk::bind_hierarchy(m);
+    sfk::bind_exact(m);
+    sfk::bind_vertices(m);
 }

@@ -1,91 +1,11 @@
 // Voronoi cells of seeds in the weighted element graph, for the coarse-to-fine run
 // (superfacets/_kernels/voronoi.py, and exact.py's search_buckets), the same operations
 // in the same order.
-#include "common.hpp"
+#include "search.hpp"
 
 namespace sfk {
 
 namespace {
-
-constexpr i64 QUEUE_FULL = -2;
-
-// exact.search_buckets without lex (nearest_seed's call): a strictly smaller distance wins
-template <class W, class L>
-i64 search_buckets(const i64* indptr, const i32* indices, const W* weights, double* dist,
-                   L* label, const i64* seeds, i64 ns, i32* qface, double* qdist, i32* qnext,
-                   i64* head, i64 qcap, i64 nb, i64* qlab, double inv_width) {
-    const i64 bmask = nb - 1;
-    i64 free = -1, bump = 0, live = 0, sp = 0, cur = 0;
-    auto node = [&]() -> i64 {  // queue_node
-        if (free >= 0) {
-            i64 n = free;
-            free = qnext[free];
-            return n;
-        }
-        if (bump < qcap) return bump++;
-        return -1;
-    };
-    auto push = [&](i64 n, i64 g, double nd) {  // queue_push
-        i64 i = static_cast<i64>(nd * inv_width);
-        if (i < cur) i = cur;
-        i64 b = i & bmask;
-        qface[n] = static_cast<i32>(g);
-        qdist[n] = nd;
-        qnext[n] = static_cast<i32>(head[b]);
-        head[b] = n;
-    };
-    while (live > 0 || sp < ns) {
-        if (live == 0) {
-            i64 b0 = static_cast<i64>(dist[seeds[sp]] * inv_width);
-            if (b0 > cur) cur = b0;
-        }
-        while (sp < ns) {
-            i64 g = seeds[sp];
-            if (static_cast<i64>(dist[g] * inv_width) > cur + nb - 1) break;
-            ++sp;
-            i64 n = node();
-            if (n < 0) {
-                for (i64 b = 0; b < nb; ++b) head[b] = -1;
-                return QUEUE_FULL;
-            }
-            push(n, g, dist[g]);
-            qlab[n] = label[g];
-            ++live;
-        }
-        // queue_pop
-        i64 b = cur & bmask;
-        while (head[b] < 0) {
-            ++cur;
-            b = cur & bmask;
-        }
-        i64 popped = head[b];
-        head[b] = qnext[popped];
-        qnext[popped] = static_cast<i32>(free);
-        free = popped;
-        i64 f = qface[popped];
-        double d = qdist[popped];
-        i64 lf = qlab[free];
-        --live;
-        if (d != dist[f] || lf != static_cast<i64>(label[f])) continue;
-        for (i64 e = indptr[f]; e < indptr[f + 1]; ++e) {
-            i64 g = indices[e];
-            double nd = d + weights[e];
-            if (nd < dist[g]) {
-                dist[g] = nd;
-                label[g] = static_cast<L>(lf);
-                i64 n = node();
-                if (n < 0) {
-                    for (i64 bb = 0; bb < nb; ++bb) head[bb] = -1;
-                    return QUEUE_FULL;
-                }
-                push(n, g, nd);
-                qlab[n] = lf;
-                ++live;
-            }
-        }
-    }
-    return 0;
-}
 
 template <class W>
 i64 nearest_seed_t(const In<i64>& indptr, const In<i32>& indices, const W* weights,
@@ -107,8 +27,9 @@ i64 nearest_seed_t(const In<i64>& indptr, const In<i32>& indices, const W* weigh
         todo[n++] = f;
     }
     std::vector<i64> qlab(qface.n);
-    return search_buckets(indptr.p, indices.p, weights, dist.p, label.p, todo.data(), n, qface.p,
-                          qdist.p, qnext.p, head.p, qface.n, head.n, qlab.data(), inv_width);
+    return search_buckets<false>(indptr.p, indices.p, weights, dist.p, label.p, todo.data(), n,
+                                 qface.p, qdist.p, qnext.p, head.p, qface.n, head.n, qlab.data(),
+                                 inv_width);
 }
 
 template <class W, class S>

@@ -1,0 +1,228 @@
+// The exact nearest-center assignment and its pass-by-pass update
+// (superfacets/_kernels/exact.py), the same operations in the same order.
+#include "search.hpp"
+
+namespace sfk {
+
+namespace {
+
+constexpr i64 NOT_INCREMENTAL = -100;
+
+// The queue of the exact classifier: node faces in int32, next pointers in int64.
+template <class W, class L>
+struct Exact {
+    const i64* indptr;
+    const i32* indices;
+    const W* weights;
+    double* dist;
+    L* label;
+    i32* qface;
+    double* qdist;
+    i64* qnext;
+    i64* head;
+    i64 qcap, nb;
+    i32* qlab;
+    double inv_width;
+    i64 search(const i64* seeds, i64 ns) const {
+        return search_buckets<true>(indptr, indices, weights, dist, label, seeds, ns, qface,
+                                    qdist, qnext, head, qcap, nb, qlab, inv_width);
+    }
+};
+
+template <class W, class L>
+i64 seed_orphans(const Exact<W, L>& x, i64* centers, i64 n_centers, i64 m) {
+    i64 k = n_centers;
+    i64 one[1];
+    for (i64 f = 0; f < m; ++f) {
+        if (x.label[f] < 0) {
+            centers[k] = f;
+            x.dist[f] = 0.0;
+            x.label[f] = static_cast<L>(k);
+            one[0] = f;
+            if (x.search(one, 1) != 0) return QUEUE_FULL;
+            ++k;
+        }
+    }
+    return k;
+}
+
+template <class W, class L>
+Exact<W, L> exact_of(const In<i64>& indptr, const In<i32>& indices, py::handle weights_,
+                     Out<double>& dist, Out<L>& label, py::handle queue_, Out<i32>& qlab,
+                     double inv_width) {
+    In<W> weights(weights_, "weights");
+    auto tup = py::reinterpret_borrow<py::tuple>(queue_);
+    if (!py::isinstance<py::tuple>(queue_) || tup.size() != 4) throw Mismatch("argument queue");
+    Out<i32> qface(tup[0], "qface");
+    Out<double> qdist(tup[1], "qdist");
+    Out<i64> qnext(tup[2], "qnext"), head(tup[3], "head");
+    return Exact<W, L>{indptr.p, indices.p, weights.p, dist.p, label.p, qface.p, qdist.p,
+                       qnext.p,  head.p,    qface.n,   head.n, qlab.p,  inv_width};
+}
+
+template <class W, class L>
+i64 classify_exact_t(py::handle indptr_, py::handle indices_, py::handle weights_,
+                     py::handle centers_, i64 n_centers, py::handle dist_, py::handle label_,
+                     py::handle queue_, py::handle qlab_, double inv_width) {
+    In<i64> indptr(indptr_, "indptr");
+    In<i32> indices(indices_, "indices");
+    Out<i64> centers(centers_, "centers");
+    Out<double> dist(dist_, "dist");
+    Out<L> label(label_, "label");
+    Out<i32> qlab(qlab_, "qlab");
+    auto x = exact_of<W, L>(indptr, indices, weights_, dist, label, queue_, qlab, inv_width);
+    py::gil_scoped_release nogil;
+    const i64 m = label.n;
+    for (i64 f = 0; f < m; ++f) {
+        dist[f] = INF;
+        label[f] = -1;
+    }
+    std::vector<i64> seeds(n_centers);
+    i64 ns = 0;
+    for (i64 s = 0; s < n_centers; ++s) {
+        i64 c = centers[s];
+        if (label[c] < 0) {
+            dist[c] = 0.0;
+            label[c] = static_cast<L>(s);
+            seeds[ns++] = c;
+        }
+    }
+    if (x.search(seeds.data(), ns) != 0) return QUEUE_FULL;
+    return seed_orphans(x, centers.p, n_centers, m);
+}
+
+template <class W, class L>
+i64 reclassify_exact_t(py::handle indptr_, py::handle indices_, py::handle weights_,
+                       py::handle centers_, i64 n_centers, py::handle dist_, py::handle label_,
+                       py::handle queue_, py::handle qlab_, double inv_width, py::handle prev_,
+                       py::handle first_, py::handle border_mark_) {
+    In<i64> indptr(indptr_, "indptr"), prev(prev_, "prev");
+    In<i32> indices(indices_, "indices");
+    Out<i64> centers(centers_, "centers");
+    Out<double> dist(dist_, "dist");
+    Out<L> label(label_, "label");
+    Out<i32> qlab(qlab_, "qlab");
+    Out<i32> first(first_, "first");
+    Out<bool> border_mark(border_mark_, "border_mark");
+    auto x = exact_of<W, L>(indptr, indices, weights_, dist, label, queue_, qlab, inv_width);
+    py::gil_scoped_release nogil;
+    const i64 m = label.n;
+    for (i64 s = 0; s < n_centers; ++s) {
+        i64 c = centers[s];
+        if (first[c] < 0) first[c] = static_cast<i32>(s);
+    }
+    const i64 kp = prev.n;
+    std::vector<i64> remap(kp);
+    i64 last = -1;
+    bool usable = true;
+    for (i64 j = 0; j < kp; ++j) {
+        i64 i = first[prev[j]];
+        remap[j] = i;
+        if (i >= 0) {
+            if (i <= last) usable = false;
+            last = i;
+        }
+    }
+    if (usable)
+        for (i64 f = 0; f < m; ++f) {
+            i64 lab = label[f];
+            if (lab < 0 || lab >= kp) {
+                usable = false;
+                break;
+            }
+        }
+    if (!usable) {
+        for (i64 s = 0; s < n_centers; ++s) first[centers[s]] = -1;
+        return NOT_INCREMENTAL;
+    }
+    i64 n_clear = 0;
+    for (i64 f = 0; f < m; ++f) {
+        i64 i = remap[label[f]];
+        if (i < 0) {
+            dist[f] = INF;
+            label[f] = -1;
+            ++n_clear;
+        } else {
+            label[f] = static_cast<L>(i);
+        }
+    }
+    std::vector<i64> seeds(n_centers);
+    i64 ns = 0;
+    for (i64 s = 0; s < n_centers; ++s) {
+        i64 c = centers[s];
+        if (first[c] == s && (label[c] < 0 || dist[c] > 0.0 || label[c] > s)) {
+            dist[c] = 0.0;
+            label[c] = static_cast<L>(s);
+            seeds[ns++] = c;
+        }
+    }
+    for (i64 s = 0; s < n_centers; ++s) first[centers[s]] = -1;
+    (void)n_clear;
+    std::vector<i64> border;
+    for (i64 f = 0; f < m; ++f) {
+        if (label[f] >= 0) continue;
+        for (i64 e = indptr[f]; e < indptr[f + 1]; ++e) {
+            i64 g = indices[e];
+            if (label[g] >= 0 && !border_mark[g]) {
+                border_mark[g] = true;
+                border.push_back(g);
+            }
+        }
+    }
+    for (i64 g : border) border_mark[g] = false;
+    std::vector<i64> order(border.size());
+    for (size_t t = 0; t < order.size(); ++t) order[t] = static_cast<i64>(t);
+    std::stable_sort(order.begin(), order.end(),
+                     [&](i64 a, i64 b) { return dist[border[a]] < dist[border[b]]; });
+    std::vector<i64> all_seeds(ns + border.size());
+    for (i64 t = 0; t < ns; ++t) all_seeds[t] = seeds[t];
+    for (size_t t = 0; t < border.size(); ++t) all_seeds[ns + t] = border[order[t]];
+    if (x.search(all_seeds.data(), static_cast<i64>(all_seeds.size())) != 0) return QUEUE_FULL;
+    return seed_orphans(x, centers.p, n_centers, m);
+}
+
+}  // namespace
+
+// float64 or float32 weights; int32 or int64 labels
+template <class... A>
+i64 classify_exact(py::handle indptr, py::handle indices, py::handle weights, py::handle centers,
+                   i64 n_centers, py::handle dist, py::handle label, A... rest) {
+    const bool w32 = matches<float>(weights), l32 = matches<i32>(label);
+    if (w32 && l32)
+        return classify_exact_t<float, i32>(indptr, indices, weights, centers, n_centers, dist,
+                                            label, rest...);
+    if (w32)
+        return classify_exact_t<float, i64>(indptr, indices, weights, centers, n_centers, dist,
+                                            label, rest...);
+    if (l32)
+        return classify_exact_t<double, i32>(indptr, indices, weights, centers, n_centers, dist,
+                                             label, rest...);
+    return classify_exact_t<double, i64>(indptr, indices, weights, centers, n_centers, dist,
+                                         label, rest...);
+}
+
+template <class... A>
+i64 reclassify_exact(py::handle indptr, py::handle indices, py::handle weights,
+                     py::handle centers, i64 n_centers, py::handle dist, py::handle label,
+                     A... rest) {
+    const bool w32 = matches<float>(weights), l32 = matches<i32>(label);
+    if (w32 && l32)
+        return reclassify_exact_t<float, i32>(indptr, indices, weights, centers, n_centers, dist,
+                                              label, rest...);
+    if (w32)
+        return reclassify_exact_t<float, i64>(indptr, indices, weights, centers, n_centers,
+                                              dist, label, rest...);
+    if (l32)
+        return reclassify_exact_t<double, i32>(indptr, indices, weights, centers, n_centers,
+                                               dist, label, rest...);
+    return reclassify_exact_t<double, i64>(indptr, indices, weights, centers, n_centers, dist,
+                                           label, rest...);
+}
+
+void bind_exact(py::module_& m) {
+    m.def("classify_exact", &classify_exact<py::handle, py::handle, double>);
+    m.def("reclassify_exact",
+          &reclassify_exact<py::handle, py::handle, double, py::handle, py::handle, py::handle>);
+}
+
+}  // namespace sfk

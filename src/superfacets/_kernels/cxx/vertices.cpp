@@ -1,0 +1,132 @@
+// The vertex graph of a mesh (superfacets/_kernels/vertices.py), the same operations in
+// the same order.
+#include "common.hpp"
+
+namespace sfk {
+
+void vertex_cells(py::handle corners_, py::handle offsets_, py::handle index_,
+                  py::handle areas_, py::handle normals_, py::handle area_,
+                  py::handle normal_) {
+    In<i64> corners(corners_, "corners"), offsets(offsets_, "offsets"), index(index_, "index");
+    In<double> areas(areas_, "areas"), normals(normals_, "normals");
+    Out<double> area(area_, "area"), normal(normal_, "normal");
+    if (normals.cols != 3 || normal.cols != 3) throw Mismatch("argument normals");
+    py::gil_scoped_release nogil;
+    const i64 n = area.n;
+    for (i64 i = 0; i < n; ++i) {
+        area[i] = 0.0;
+        normal(i, 0) = normal(i, 1) = normal(i, 2) = 0.0;
+    }
+    for (i64 f = 0; f < offsets.n - 1; ++f) {
+        i64 s = offsets[f], e = offsets[f + 1];
+        double share = areas[f] / static_cast<double>(e - s);
+        double fx = normals(f, 0) * areas[f], fy = normals(f, 1) * areas[f],
+               fz = normals(f, 2) * areas[f];
+        for (i64 c = s; c < e; ++c) {
+            i64 i = index[corners[c]];
+            area[i] += share;
+            normal(i, 0) += fx;
+            normal(i, 1) += fy;
+            normal(i, 2) += fz;
+        }
+    }
+    for (i64 i = 0; i < n; ++i) {  // geometry.store_unit
+        double x = normal(i, 0), y = normal(i, 1), z = normal(i, 2);
+        double norm = std::sqrt(x * x + y * y + z * z);
+        if (norm > 0) {
+            normal(i, 0) = x / norm;
+            normal(i, 1) = y / norm;
+            normal(i, 2) = z / norm;
+        } else {
+            normal(i, 0) = normal(i, 1) = normal(i, 2) = 0.0;
+        }
+    }
+}
+
+py::tuple mesh_edges(py::handle corners_, py::handle offsets_, py::handle index_, i64 n,
+                     py::handle positions_, py::handle centroids_) {
+    In<i64> corners(corners_, "corners"), offsets(offsets_, "offsets"), index(index_, "index");
+    In<double> pos(positions_, "positions"), cen(centroids_, "centroids");
+    if (pos.cols != 3 || cen.cols != 3) throw Mismatch("argument positions");
+    const i64 nh = corners.n;
+    std::vector<i64> a(nh), b(nh), owner(nh), starts(n + 1, 0), order;
+    std::vector<char> skip(nh);
+    i64 ne = 0;
+    {
+        py::gil_scoped_release nogil;
+        for (i64 f = 0; f < offsets.n - 1; ++f) {
+            i64 s = offsets[f], e = offsets[f + 1];
+            for (i64 c = s; c < e; ++c) {
+                i64 u = index[corners[c]], v = index[corners[c + 1 < e ? c + 1 : s]];
+                a[c] = mn(u, v);
+                b[c] = mx(u, v);
+                owner[c] = f;
+                skip[c] = u == v;
+            }
+        }
+        for (i64 t = 0; t < nh; ++t)  // count_keys, scatter_keys: a stable counting sort on a
+            if (!skip[t]) starts[a[t] + 1] += 1;
+        for (i64 v = 0; v < n; ++v) starts[v + 1] += starts[v];
+        order.resize(starts[n]);
+        std::vector<i64> fill(starts.begin(), starts.end() - 1);
+        for (i64 t = 0; t < nh; ++t)
+            if (!skip[t]) order[fill[a[t]]++] = t;
+        for (i64 v = 0; v < n; ++v) {  // sort_buckets: each bucket stably on b
+            i64 lo = starts[v], hi = starts[v + 1];
+            if (hi - lo <= 1) continue;
+            if (hi - lo <= 32) {
+                for (i64 i = lo + 1; i < hi; ++i) {
+                    i64 x = order[i], kx = b[x], j = i - 1;
+                    while (j >= lo && b[order[j]] > kx) {
+                        order[j + 1] = order[j];
+                        --j;
+                    }
+                    order[j + 1] = x;
+                }
+            } else {
+                std::stable_sort(order.begin() + lo, order.begin() + hi,
+                                 [&](i64 x, i64 y) { return b[x] < b[y]; });
+            }
+        }
+        for (i64 t = 0; t < static_cast<i64>(order.size()); ++t)
+            if (t == 0 || a[order[t]] != a[order[t - 1]] || b[order[t]] != b[order[t - 1]]) ++ne;
+    }
+    Out<i64> lo, hi, uses;
+    Out<double> lengths, spans;
+    auto lo_a = fresh(ne, lo), hi_a = fresh(ne, hi), uses_a = fresh(ne, uses);
+    auto len_a = fresh(ne, lengths), span_a = fresh(ne, spans);
+    {
+        py::gil_scoped_release nogil;
+        for (i64 t = 0; t < ne; ++t) {
+            lengths[t] = 0.0;
+            uses[t] = 0;
+        }
+        i64 k = -1;
+        const i64 m = static_cast<i64>(order.size());
+        for (i64 t = 0; t < m; ++t) {
+            i64 h = order[t], p = a[h], q = b[h];
+            if (t == 0 || p != a[order[t - 1]] || q != b[order[t - 1]]) {
+                ++k;
+                lo[k] = p;
+                hi[k] = q;
+                double dx = pos(p, 0) - pos(q, 0), dy = pos(p, 1) - pos(q, 1),
+                       dz = pos(p, 2) - pos(q, 2);
+                spans[k] = std::sqrt(dx * dx + dy * dy + dz * dz);
+            }
+            i64 f = owner[h];
+            double dx = cen(f, 0) - 0.5 * (pos(p, 0) + pos(q, 0));
+            double dy = cen(f, 1) - 0.5 * (pos(p, 1) + pos(q, 1));
+            double dz = cen(f, 2) - 0.5 * (pos(p, 2) + pos(q, 2));
+            lengths[k] += std::sqrt(dx * dx + dy * dy + dz * dz);
+            uses[k] += 1;
+        }
+    }
+    return py::make_tuple(lo_a, hi_a, len_a, span_a, uses_a);
+}
+
+void bind_vertices(py::module_& m) {
+    m.def("vertex_cells", &vertex_cells);
+    m.def("mesh_edges", &mesh_edges);
+}
+
+}  // namespace sfk
