@@ -240,7 +240,7 @@ def cmd_segment(args) -> int:
     if Path(args.mesh).is_file():  # no numba work for bad arguments or a missing input
         if not args.quiet:  # said only where numba compiles: the first run after installing
             native.before_numba(warmup.say_if_cold)
-        if _needs_numba(args.mesh, args.elements):
+        if _needs_numba(args.mesh):
             warmup.start()  # numba's start-up in a thread, while the rest is imported and read
     t0 = time.perf_counter()
     data = scan_cloud(read_usable(args.mesh, clouds=True), args)
@@ -354,18 +354,16 @@ def cmd_baseline(args) -> int:
     return 0
 
 
-def _needs_numba(path, elements: str | None = None) -> bool:
-    """Whether a run on ``path`` (elements ``elements``, default faces) is expected to use
-    numba kernels: always where the compiled kernels are not built; otherwise for
-    vertices, points and files that hold point clouds by their suffix (a run on faces
-    uses the compiled kernels alone: numba's start-up is not warmed for nothing)."""
+def _needs_numba(path) -> bool:
+    """Whether a run on ``path`` is expected to use numba kernels: always where the
+    compiled kernels are not built; otherwise only for tetrahedral meshes (the default
+    runs on faces, vertices and points use the compiled kernels alone: numba's start-up
+    is not warmed for nothing)."""
     from .._kernels import native
-    from ..io import CLOUD_FORMATS
+    from ..io import VOLUME_FORMATS
     from ..io.files import split_suffix
 
-    if not native.available() or elements not in (None, "faces"):
-        return True
-    return split_suffix(Path(path))[0] in CLOUD_FORMATS
+    return not native.available() or split_suffix(Path(path))[0] in VOLUME_FORMATS
 
 
 def cmd_demo(args) -> int:

@@ -278,15 +278,22 @@ py::array_t<i32> knn_csr(py::handle nbr_, py::handle keep_, py::handle indptr_,
     In<i64> rows(rows_, "rows");
     const i64 n = nbr.n, k = nbr.k, mk = more.k;
     if (keep.cols != k || (rows.n && more_keep.cols != mk)) throw Mismatch("argument keep");
+    // Every listed pair in both rows: counted, then scattered, on threads with atomic
+    // counters. A row's entries land in any order, but each row is then sorted and made
+    // distinct: the layout is the same as in one pass in order.
     std::vector<i64> count(n + 1, 0);
+    auto bump = [](i64* x) { return __atomic_fetch_add(x, 1, __ATOMIC_RELAXED); };
     {
         py::gil_scoped_release nogil;
-        for (i64 i = 0; i < n; ++i)
-            for (i64 c = 0; c < k; ++c)
-                if (keep(i, c) && nbr(i, c) != i) {
-                    count[i + 1] += 1;
-                    count[nbr(i, c) + 1] += 1;
-                }
+        i64* cnt = count.data();
+        parallel_for(n, [&](i64 lo, i64 hi) {
+            for (i64 i = lo; i < hi; ++i)
+                for (i64 c = 0; c < k; ++c)
+                    if (keep(i, c) && nbr(i, c) != i) {
+                        bump(cnt + i + 1);
+                        bump(cnt + nbr(i, c) + 1);
+                    }
+        });
         for (i64 t = 0; t < rows.n; ++t)
             for (i64 c = 0; c < mk; ++c)
                 if (more_keep(t, c) && more(t, c) != rows[t]) {
@@ -300,13 +307,16 @@ py::array_t<i32> knn_csr(py::handle nbr_, py::handle keep_, py::handle indptr_,
     {
         py::gil_scoped_release nogil;
         std::vector<i64> fill(count.begin(), count.end() - 1);
-        for (i64 i = 0; i < n; ++i)
-            for (i64 c = 0; c < k; ++c)
-                if (keep(i, c) && nbr(i, c) != i) {
-                    i64 j = nbr(i, c);
-                    raw[fill[i]++] = static_cast<i32>(j);
-                    raw[fill[j]++] = static_cast<i32>(i);
-                }
+        i64* fl = fill.data();
+        parallel_for(n, [&](i64 lo, i64 hi) {
+            for (i64 i = lo; i < hi; ++i)
+                for (i64 c = 0; c < k; ++c)
+                    if (keep(i, c) && nbr(i, c) != i) {
+                        i64 j = nbr(i, c);
+                        raw[bump(fl + i)] = static_cast<i32>(j);
+                        raw[bump(fl + j)] = static_cast<i32>(i);
+                    }
+        });
         for (i64 t = 0; t < rows.n; ++t) {
             i64 i = rows[t];
             for (i64 c = 0; c < mk; ++c)
