@@ -231,8 +231,7 @@ class Mesh:
             run_ranges(lambda a, b: face_geometry(v, f[a:b], centroids[a:b], areas[a:b],
                                                   normals[a:b]), split(m))
         else:
-            from .._kernels.geometry import polygon_geometry
-
+            polygon_geometry = native.kernel("geometry.polygon_geometry")
             polygon_geometry(v, np.ascontiguousarray(self.corners), np.asarray(self.offsets),
                              centroids, areas, normals)
         return readonly(centroids), readonly(areas), readonly(normals)

@@ -348,6 +348,75 @@ void face_geometry(py::handle vertices_, py::handle faces_, py::handle centroids
     }
 }
 
+// geometry.py: polygons of any size (Newell's normal, the fan's signed-area centroid)
+void polygon_geometry(py::handle vertices_, py::handle corners_, py::handle offsets_,
+                      py::handle centroids_, py::handle areas_, py::handle normals_) {
+    In<double> v(vertices_, "vertices");
+    In<i64> corners(corners_, "corners"), offsets(offsets_, "offsets");
+    Out<double> centroids(centroids_, "centroids"), areas(areas_, "areas"),
+        normals(normals_, "normals");
+    if (v.cols != 3 || centroids.cols != 3 || normals.cols != 3)
+        throw Mismatch("argument vertices");
+    py::gil_scoped_release nogil;
+    for (i64 f = 0; f < offsets.n - 1; ++f) {
+        const i64 a = offsets[f], k = offsets[f + 1] - a;
+        const i64 o = corners[a];
+        const double ox = v(o, 0), oy = v(o, 1), oz = v(o, 2);
+        auto rel = [&](i64 p, double* q) {
+            q[0] = v(p, 0) - ox;
+            q[1] = v(p, 1) - oy;
+            q[2] = v(p, 2) - oz;
+        };
+        double nx = 0.0, ny = 0.0, nz = 0.0, P[3], Q[3];
+        for (i64 i = 0; i < k; ++i) {
+            rel(corners[a + i], P);
+            rel(corners[a + (i + 1) % k], Q);
+            nx += (P[1] - Q[1]) * (P[2] + Q[2]);
+            ny += (P[2] - Q[2]) * (P[0] + Q[0]);
+            nz += (P[0] - Q[0]) * (P[1] + Q[1]);
+        }
+        double norm = std::sqrt(nx * nx + ny * ny + nz * nz);
+        areas[f] = 0.5 * norm;
+        if (norm > 0) {
+            nx /= norm;
+            ny /= norm;
+            nz /= norm;
+        } else {
+            nx = ny = nz = 0.0;
+        }
+        normals(f, 0) = nx;
+        normals(f, 1) = ny;
+        normals(f, 2) = nz;
+        double wsum = 0.0, cx = 0.0, cy = 0.0, cz = 0.0;
+        for (i64 i = 1; i < k - 1; ++i) {
+            rel(corners[a + i], P);
+            rel(corners[a + i + 1], Q);
+            double w = (P[1] * Q[2] - P[2] * Q[1]) * nx + (P[2] * Q[0] - P[0] * Q[2]) * ny +
+                       (P[0] * Q[1] - P[1] * Q[0]) * nz;
+            wsum += w;
+            cx += w * (P[0] + Q[0]);
+            cy += w * (P[1] + Q[1]);
+            cz += w * (P[2] + Q[2]);
+        }
+        if (wsum != 0.0 && norm > 0) {
+            centroids(f, 0) = ox + cx / (3.0 * wsum);
+            centroids(f, 1) = oy + cy / (3.0 * wsum);
+            centroids(f, 2) = oz + cz / (3.0 * wsum);
+        } else {
+            double sx = 0.0, sy = 0.0, sz = 0.0;
+            for (i64 i = 0; i < k; ++i) {
+                i64 p = corners[a + i];
+                sx += v(p, 0);
+                sy += v(p, 1);
+                sz += v(p, 2);
+            }
+            centroids(f, 0) = sx / static_cast<double>(k);
+            centroids(f, 1) = sy / static_cast<double>(k);
+            centroids(f, 2) = sz / static_cast<double>(k);
+        }
+    }
+}
+
 void face_terms(py::handle vertices_, py::handle centroids_, py::handle normals_,
                 py::handle pairs_, py::handle edges_, i64 lo, i64 hi, py::handle geo_,
                 py::handle cos_, py::handle concave_) {
@@ -603,6 +672,7 @@ void bind_graph(py::module_& m) {
     m.def("same_label_components", &same_label_components);
     m.def("face_geometry", &face_geometry);
     m.def("face_terms", &face_terms);
+    m.def("polygon_geometry", &polygon_geometry);
     m.def("edge_lengths", &edge_lengths);
     m.def("convex_scaled_csr", &convex_scaled_csr);
     m.def("cut_costs_csr", &cut_costs_csr);
