@@ -292,9 +292,14 @@ def test_other_dtypes_go_to_numba():
     assert comp.tolist() == [0, 1, 2, 3, 4]
 
 
-def test_a_run_on_faces_loads_no_numba():
-    code = ("import sys, superfacets; from superfacets.inputs.shapes import creature; "
-            "r = superfacets.segment(creature(24), 30); "
+def test_default_runs_load_no_numba():
+    """Faces, vertices, points and tetrahedra: the compiled kernels alone."""
+    code = ("import sys, numpy as np, superfacets; from scipy.spatial import Delaunay; "
+            "from superfacets.inputs.shapes import creature; m = creature(24); "
+            "superfacets.segment(m, 30); superfacets.segment(m, 30, elements='vertices'); "
+            "superfacets.segment(m.centroids, 30); "
+            "p = np.random.default_rng(0).random((400, 3)); "
+            "superfacets.segment(superfacets.TetMesh(p, Delaunay(p).simplices), 10); "
             "print('numba' in sys.modules, 'superfacets._kernels._cxx' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.split()
