@@ -6,6 +6,7 @@ run instead (they compile on first use). ``-ffp-contract=off``: no fused multipl
 so that every floating-point operation rounds as numba's do (tested bit for bit).
 """
 
+import hashlib
 from glob import glob
 
 from pybind11.setup_helpers import ParallelCompile, Pybind11Extension, build_ext
@@ -13,10 +14,20 @@ from setuptools import setup
 
 ParallelCompile("NPY_NUM_BUILD_JOBS").install()  # the source files on every core
 
+SOURCES = sorted(glob("src/superfacets/_kernels/cxx/*.cpp"))
+HEADERS = sorted(glob("src/superfacets/_kernels/cxx/*.hpp"))
+# the digest of the sources, built into the module: tests/test_native.py tells a module
+# built from older sources (an editable install not rebuilt) from a current one
+digest = hashlib.sha256()
+for path in SOURCES + HEADERS:
+    with open(path, "rb") as f:
+        digest.update(path.rsplit("/", 1)[-1].encode() + b"\0" + f.read())
+
 cxx = Pybind11Extension(
     "superfacets._kernels._cxx",
-    sorted(glob("src/superfacets/_kernels/cxx/*.cpp")),
-    depends=sorted(glob("src/superfacets/_kernels/cxx/*.hpp")),
+    SOURCES,
+    depends=HEADERS,
+    define_macros=[("SFK_SOURCES", f'"{digest.hexdigest()}"')],
     cxx_std=17,
     extra_compile_args=["-O2", "-ffp-contract=off", "-fno-math-errno"],
     optional=True,

@@ -11,8 +11,11 @@ the copies of one call would see another's writes.
 
 from __future__ import annotations
 
+import hashlib
+import shutil
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -22,8 +25,31 @@ from superfacets import Mesh
 from superfacets._kernels import native
 from superfacets.inputs.shapes import creature
 
-pytestmark = pytest.mark.skipif(not native.available(),
-                                reason="the compiled kernels are not built here")
+CXX = Path(native.__file__).parent / "cxx"
+
+
+def test_the_compiled_kernels_are_built_where_a_compiler_is():
+    """The extension is optional (an install without a compiler goes on with numba), so a
+    build that failed would pass unseen: where a C++ compiler is, it must have been built,
+    from the sources of this checkout (an editable install not rebuilt after a change to
+    them would test old kernels)."""
+    import os
+
+    if os.environ.get("SUPERFACETS_NATIVE", "1") == "0":
+        pytest.skip("SUPERFACETS_NATIVE=0: the compiled kernels are turned off")
+    if not (shutil.which("c++") or shutil.which("g++")):
+        pytest.skip("no C++ compiler here: numba runs every kernel")
+    assert native.available(), native.missing_because()
+    if CXX.is_dir():  # a checkout: the module was built from these sources
+        digest = hashlib.sha256()
+        for path in sorted(CXX.glob("*.cpp")) + sorted(CXX.glob("*.hpp")):
+            digest.update(path.name.encode() + b"\0" + path.read_bytes())
+        assert native._cxx.sources_digest == digest.hexdigest(), \
+            "the compiled kernels are older than their sources: pip install -e . again"
+
+
+needs_cxx = pytest.mark.skipif(not native.available(),
+                               reason="the compiled kernels are not built here")
 
 
 #: The compiled kernels of the point graph's build (the others serve faces and points)
@@ -102,6 +128,7 @@ def _quad_cube(n: int) -> Mesh:
     return Mesh(v[first], [[int(inverse.ravel()[c]) for c in f] for f in faces])
 
 
+@needs_cxx
 def test_runs_on_faces_give_numba_results_call_by_call(shadowed):
     calls, _ = shadowed
     big = creature(40)
@@ -123,7 +150,8 @@ def test_runs_on_faces_give_numba_results_call_by_call(shadowed):
     for mesh, k, params in runs:
         r = superfacets.segment(mesh, k, n_threads=1, **params)
         assert r.labels.shape[0] == mesh.n_faces
-    compiled = {name for name in dir(native._cxx) if not name.startswith("_")} - {"Mismatch"}
+    compiled = {name for name in dir(native._cxx)
+                if callable(getattr(native._cxx, name)) and not name.startswith("_")} - {"Mismatch"}
     compiled -= POINT_KERNELS | VERTEX_KERNELS
     missing = {name for name in compiled if not any(p.endswith("." + name) for p in calls)}
     # run only on several threads, by the plain replay-less classifier, by a lazy graph's
@@ -143,6 +171,7 @@ def _sampled(mesh: Mesh, n: int, seed: int) -> np.ndarray:
             + (s * v)[:, None] * tri[idx, 2])
 
 
+@needs_cxx
 def test_runs_on_points_give_numba_results_call_by_call(shadowed):
     calls, _ = shadowed
     body = creature(30)
@@ -167,6 +196,7 @@ def test_runs_on_points_give_numba_results_call_by_call(shadowed):
     assert not missing, missing
 
 
+@needs_cxx
 def test_runs_on_vertices_give_numba_results_call_by_call(shadowed):
     calls, _ = shadowed
     body = creature(30)
@@ -182,6 +212,7 @@ def test_runs_on_vertices_give_numba_results_call_by_call(shadowed):
     assert not missing, missing
 
 
+@needs_cxx
 @pytest.mark.parametrize("params", [{}, {"cost": "planarity", "extent_weight": 0.5},
                                     {"beta": 1.0}])
 def test_hierarchies_give_numba_results(shadowed, params):
@@ -198,6 +229,7 @@ def test_hierarchies_give_numba_results(shadowed, params):
     assert h.levels == (40, 20, 5) and "hierarchy.merge_levels" in calls
 
 
+@needs_cxx
 def test_kernels_run_on_threads_only_give_numba_results():
     rng = np.random.default_rng(5)
     n = 1000
@@ -211,6 +243,7 @@ def test_kernels_run_on_threads_only_give_numba_results():
     assert _same(outs[0], outs[1]) and not _same(outs[0][1], label)
 
 
+@needs_cxx
 @pytest.mark.parametrize("ptype,dtype", [(np.int32, np.int32), (np.int64, np.int64),
                                          (np.int32, np.int64)])
 def test_csr_of_pairs_and_their_numbering_match_numba(ptype, dtype):
@@ -249,6 +282,7 @@ def test_csr_of_pairs_and_their_numbering_match_numba(ptype, dtype):
     assert _same((indptr, ind, de), out[0])
 
 
+@needs_cxx
 def test_plain_classification_matches_numba():
     from superfacets.elements import face_graph
     from superfacets.method.expansion import Workspaces, with_room
@@ -273,6 +307,7 @@ def test_plain_classification_matches_numba():
     assert out[0][0] >= 25 and _same(out[0][1:], out[1][1:]) and out[0][0] == out[1][0]
 
 
+@needs_cxx
 def test_other_dtypes_go_to_numba():
     """A compiled kernel takes the run's dtypes only; anything else is numba's, the same
     answer (and the reason kept)."""
@@ -292,6 +327,7 @@ def test_other_dtypes_go_to_numba():
     assert comp.tolist() == [0, 1, 2, 3, 4]
 
 
+@needs_cxx
 def test_default_runs_load_no_numba():
     """Faces, vertices, points and tetrahedra: the compiled kernels alone."""
     code = ("import sys, numpy as np, superfacets; from scipy.spatial import Delaunay; "

@@ -88,6 +88,50 @@ struct Out {
     T& operator()(i64 i, i64 j) const { return p[i * cols + j]; }
 };
 
+// f(view) with a read-only view of a float32 or a float64 argument, by its dtype.
+template <class F>
+auto with_real(py::handle h, const char* name, F&& f) {
+    if (matches<float>(h)) return f(In<float>(h, name));
+    return f(In<double>(h, name));
+}
+
+// Sort a[s:f] ascending (insertion sort for a few entries) and move its distinct values
+// to its front; returns their number.
+template <class T>
+i64 sort_distinct(T* a, i64 s, i64 f) {
+    if (f - s > 32) {
+        std::sort(a + s, a + f);
+    } else {
+        for (i64 x = s + 1; x < f; ++x) {
+            T h = a[x];
+            i64 y = x - 1;
+            while (y >= s && a[y] > h) {
+                a[y + 1] = a[y];
+                --y;
+            }
+            a[y + 1] = h;
+        }
+    }
+    i64 u = 0;
+    for (i64 x = s; x < f; ++x)
+        if (u == 0 || a[s + u - 1] != a[x]) a[s + u++] = a[x];
+    return u;
+}
+
+// geometry.store_unit: out[0:3] = (x, y, z) / norm, zeros where the norm is not positive;
+// returns the norm, sqrt((x*x + y*y) + z*z).
+inline double store_unit(double* out, double x, double y, double z) {
+    double norm = std::sqrt(x * x + y * y + z * z);
+    if (norm > 0) {
+        out[0] = x / norm;
+        out[1] = y / norm;
+        out[2] = z / norm;
+    } else {
+        out[0] = out[1] = out[2] = 0.0;
+    }
+    return norm;
+}
+
 // A new array of n (or n x cols) entries, and a writable view of it.
 template <class T>
 inline py::array_t<T> fresh(i64 n, Out<T>& view, i64 cols = 0) {

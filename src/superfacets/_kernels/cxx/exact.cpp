@@ -60,17 +60,37 @@ Exact<W, L> exact_of(const In<i64>& indptr, const In<i32>& indices, py::handle w
                        qnext.p,  head.p,    qface.n,   head.n, qlab.p,  inv_width};
 }
 
+// The arguments both entry points share, checked.
+template <class W, class L>
+struct Args {
+    In<i64> indptr;
+    In<i32> indices;
+    Out<i64> centers;
+    Out<double> dist;
+    Out<L> label;
+    Out<i32> qlab;
+    Exact<W, L> x;
+    Args(py::handle indptr_, py::handle indices_, py::handle weights_, py::handle centers_,
+         py::handle dist_, py::handle label_, py::handle queue_, py::handle qlab_,
+         double inv_width)
+        : indptr(indptr_, "indptr"),
+          indices(indices_, "indices"),
+          centers(centers_, "centers"),
+          dist(dist_, "dist"),
+          label(label_, "label"),
+          qlab(qlab_, "qlab"),
+          x(exact_of<W, L>(indptr, indices, weights_, dist, label, queue_, qlab, inv_width)) {}
+};
+
 template <class W, class L>
 i64 classify_exact_t(py::handle indptr_, py::handle indices_, py::handle weights_,
                      py::handle centers_, i64 n_centers, py::handle dist_, py::handle label_,
                      py::handle queue_, py::handle qlab_, double inv_width) {
-    In<i64> indptr(indptr_, "indptr");
-    In<i32> indices(indices_, "indices");
-    Out<i64> centers(centers_, "centers");
-    Out<double> dist(dist_, "dist");
-    Out<L> label(label_, "label");
-    Out<i32> qlab(qlab_, "qlab");
-    auto x = exact_of<W, L>(indptr, indices, weights_, dist, label, queue_, qlab, inv_width);
+    Args<W, L> A(indptr_, indices_, weights_, centers_, dist_, label_, queue_, qlab_, inv_width);
+    auto& centers = A.centers;
+    auto& label = A.label;
+    auto& dist = A.dist;
+    const auto& x = A.x;
     py::gil_scoped_release nogil;
     const i64 m = label.n;
     for (i64 f = 0; f < m; ++f) {
@@ -96,15 +116,16 @@ i64 reclassify_exact_t(py::handle indptr_, py::handle indices_, py::handle weigh
                        py::handle centers_, i64 n_centers, py::handle dist_, py::handle label_,
                        py::handle queue_, py::handle qlab_, double inv_width, py::handle prev_,
                        py::handle first_, py::handle border_mark_) {
-    In<i64> indptr(indptr_, "indptr"), prev(prev_, "prev");
-    In<i32> indices(indices_, "indices");
-    Out<i64> centers(centers_, "centers");
-    Out<double> dist(dist_, "dist");
-    Out<L> label(label_, "label");
-    Out<i32> qlab(qlab_, "qlab");
+    Args<W, L> A(indptr_, indices_, weights_, centers_, dist_, label_, queue_, qlab_, inv_width);
+    auto& centers = A.centers;
+    auto& label = A.label;
+    auto& dist = A.dist;
+    const auto& indptr = A.indptr;
+    const auto& indices = A.indices;
+    const auto& x = A.x;
+    In<i64> prev(prev_, "prev");
     Out<i32> first(first_, "first");
     Out<bool> border_mark(border_mark_, "border_mark");
-    auto x = exact_of<W, L>(indptr, indices, weights_, dist, label, queue_, qlab, inv_width);
     py::gil_scoped_release nogil;
     const i64 m = label.n;
     for (i64 s = 0; s < n_centers; ++s) {

@@ -325,6 +325,8 @@ void face_geometry(py::handle vertices_, py::handle faces_, py::handle centroids
     In<i64> faces(faces_, "faces");
     Out<double> centroids(centroids_, "centroids"), areas(areas_, "areas"),
         normals(normals_, "normals");
+    if (normals.cols != 3 || centroids.cols != 3 || faces.cols != 3)
+        throw Mismatch("argument normals");
     py::gil_scoped_release nogil;
     for (i64 f = 0; f < faces.n; ++f) {
         i64 i = faces(f, 0), j = faces(f, 1), k = faces(f, 2);
@@ -334,16 +336,7 @@ void face_geometry(py::handle vertices_, py::handle faces_, py::handle centroids
         double c0 = a1 * b2 - a2 * b1;
         double c1 = a2 * b0 - a0 * b2;
         double c2 = a0 * b1 - a1 * b0;
-        double norm = std::sqrt(c0 * c0 + c1 * c1 + c2 * c2);
-        if (norm > 0) {
-            normals(f, 0) = c0 / norm;
-            normals(f, 1) = c1 / norm;
-            normals(f, 2) = c2 / norm;
-        } else {
-            normals(f, 0) = 0.0;
-            normals(f, 1) = 0.0;
-            normals(f, 2) = 0.0;
-        }
+        double norm = store_unit(normals.p + 3 * f, c0, c1, c2);
         areas[f] = 0.5 * norm;
     }
 }

@@ -1,5 +1,9 @@
-// superfacets._kernels._cxx: the compiled kernels of the default run on faces.
+// superfacets._kernels._cxx: the compiled kernels of the default runs.
 #include "common.hpp"
+
+#ifndef SFK_SOURCES
+#define SFK_SOURCES ""
+#endif
 
 PYBIND11_MODULE(_cxx, m) {
     m.doc() = "Compiled kernels (private): the numba kernels of the same names, bit for bit.";
@@ -11,6 +15,7 @@ PYBIND11_MODULE(_cxx, m) {
             py::set_error(mismatch, e.what());
         }
     });
+    m.attr("sources_digest") = SFK_SOURCES;  // sha256 of the sources it was built from
     sfk::bind_graph(m);
     sfk::bind_expand(m);
     sfk::bind_sampling(m);

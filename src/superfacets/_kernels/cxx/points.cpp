@@ -124,6 +124,16 @@ inline void scatter(const double* pts, const i32* idx, i64 k, double* a) {
     }
 }
 
+// The scatter of the points idx[0:k], divided by its trace where that is positive;
+// returns whether it was.
+inline bool unit_scatter(const double* pts, const i32* idx, i64 k, double* a) {
+    scatter(pts, idx, k, a);
+    double scale = a[0] + a[3] + a[5];
+    if (!(scale > 0.0)) return false;
+    for (int t = 0; t < 6; ++t) a[t] /= scale;
+    return true;
+}
+
 inline double linearity(double a00, double a01, double a02, double a11, double a12,
                         double a22) {
     Spectrum sp = spectrum(a00, a01, a02, a11, a12, a22);
@@ -241,10 +251,7 @@ void pca_normals(py::handle points_, py::handle neighbors_, py::handle out_,
     parallel_for(nb.n, [&](i64 lo, i64 hi) {
         double a[6];
         for (i64 i = lo; i < hi; ++i) {
-            scatter(points.p, nb.p + i * k, k, a);
-            double scale = a[0] + a[3] + a[5];
-            if (scale > 0.0)
-                for (int t = 0; t < 6; ++t) a[t] /= scale;
+            unit_scatter(points.p, nb.p + i * k, k, a);
             smallest_eigenvector(a[0], a[1], a[2], a[3], a[4], a[5], out.p + 3 * i);
             lin[i] = linearity(a[0], a[1], a[2], a[3], a[4], a[5]);
         }
@@ -261,11 +268,9 @@ void pca_linearity(py::handle points_, py::handle neighbors_, py::handle lineari
     parallel_for(nb.n, [&](i64 lo, i64 hi) {
         double a[6];
         for (i64 i = lo; i < hi; ++i) {
-            scatter(points.p, nb.p + i * k, k, a);
-            double scale = a[0] + a[3] + a[5];
-            lin[i] = scale > 0.0 ? linearity(a[0] / scale, a[1] / scale, a[2] / scale,
-                                             a[3] / scale, a[4] / scale, a[5] / scale)
-                                 : 0.0;
+            lin[i] = unit_scatter(points.p, nb.p + i * k, k, a)
+                         ? linearity(a[0], a[1], a[2], a[3], a[4], a[5])
+                         : 0.0;
         }
     });
 }
@@ -329,19 +334,7 @@ py::array_t<i32> knn_csr(py::handle nbr_, py::handle keep_, py::handle indptr_,
         std::vector<i64> kept(n);
         parallel_for(n, [&](i64 lo, i64 hi) {
             for (i64 i = lo; i < hi; ++i) {
-                i64 s = count[i], f = count[i + 1];
-                for (i64 a = s + 1; a < f; ++a) {
-                    i32 x = raw[a];
-                    i64 b = a - 1;
-                    while (b >= s && raw[b] > x) {
-                        raw[b + 1] = raw[b];
-                        --b;
-                    }
-                    raw[b + 1] = x;
-                }
-                i64 m = 0;
-                for (i64 a = s; a < f; ++a)
-                    if (m == 0 || raw[s + m - 1] != raw[a]) raw[s + m++] = raw[a];
+                i64 m = sort_distinct(raw.p, count[i], count[i + 1]);
                 kept[i] = m;
             }
         });

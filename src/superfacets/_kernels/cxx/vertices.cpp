@@ -30,17 +30,8 @@ void vertex_cells(py::handle corners_, py::handle offsets_, py::handle index_,
             normal(i, 2) += fz;
         }
     }
-    for (i64 i = 0; i < n; ++i) {  // geometry.store_unit
-        double x = normal(i, 0), y = normal(i, 1), z = normal(i, 2);
-        double norm = std::sqrt(x * x + y * y + z * z);
-        if (norm > 0) {
-            normal(i, 0) = x / norm;
-            normal(i, 1) = y / norm;
-            normal(i, 2) = z / norm;
-        } else {
-            normal(i, 0) = normal(i, 1) = normal(i, 2) = 0.0;
-        }
-    }
+    for (i64 i = 0; i < n; ++i)
+        store_unit(normal.p + 3 * i, normal(i, 0), normal(i, 1), normal(i, 2));
 }
 
 py::tuple mesh_edges(py::handle corners_, py::handle offsets_, py::handle index_, i64 n,

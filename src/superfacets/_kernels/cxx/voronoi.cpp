@@ -62,23 +62,7 @@ py::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In
             }
         }
         for (i64 c = 0; c < n_c; ++c) {
-            i64 s = start[c], f = start[c + 1];
-            if (f - s > 32) {
-                std::sort(hi.begin() + s, hi.begin() + f);
-            } else {
-                for (i64 x = s + 1; x < f; ++x) {
-                    i32 h = hi[x];
-                    i64 y = x - 1;
-                    while (y >= s && hi[y] > h) {
-                        hi[y + 1] = hi[y];
-                        --y;
-                    }
-                    hi[y + 1] = h;
-                }
-            }
-            i64 u = 0;
-            for (i64 x = s; x < f; ++x)
-                if (u == 0 || hi[s + u - 1] != hi[x]) hi[s + u++] = hi[x];
+            i64 u = sort_distinct(hi.data(), start[c], start[c + 1]);
             first[c + 1] = first[c] + u;
         }
     }
@@ -140,12 +124,9 @@ i64 nearest_seed(py::handle indptr_, py::handle indices_, py::handle weights_, p
     In<i32> indices(indices_, "indices");
     Out<double> dist(dist_, "dist");
     Out<i32> label(label_, "label");
-    if (matches<float>(weights_)) {
-        In<float> w(weights_, "weights");
+    return with_real(weights_, "weights", [&](auto w) {
         return nearest_seed_t(indptr, indices, w.p, seeds, first, dist, label, queue, inv_width);
-    }
-    In<double> w(weights_, "weights");
-    return nearest_seed_t(indptr, indices, w.p, seeds, first, dist, label, queue, inv_width);
+    });
 }
 
 py::tuple coarse_pairs(py::handle indptr_, py::handle indices_, py::handle cluster_,
@@ -154,23 +135,11 @@ py::tuple coarse_pairs(py::handle indptr_, py::handle indices_, py::handle clust
     In<i64> indptr(indptr_, "indptr"), cluster(cluster_, "cluster");
     In<i32> indices(indices_, "indices");
     In<double> dist(dist_, "dist"), lengths(lengths_, "lengths");
-    const bool w32 = matches<float>(csr_w_), s32 = matches<float>(shares_);
-    if (w32) {
-        In<float> w(csr_w_, "csr_w");
-        if (s32) {
-            In<float> sh(shares_, "shares");
+    return with_real(csr_w_, "csr_w", [&](auto w) {
+        return with_real(shares_, "shares", [&](auto sh) {
             return coarse_pairs_t(indptr, indices, cluster, dist, w.p, lengths, sh.p, sh.n, n_c);
-        }
-        In<double> sh(shares_, "shares");
-        return coarse_pairs_t(indptr, indices, cluster, dist, w.p, lengths, sh.p, sh.n, n_c);
-    }
-    In<double> w(csr_w_, "csr_w");
-    if (s32) {
-        In<float> sh(shares_, "shares");
-        return coarse_pairs_t(indptr, indices, cluster, dist, w.p, lengths, sh.p, sh.n, n_c);
-    }
-    In<double> sh(shares_, "shares");
-    return coarse_pairs_t(indptr, indices, cluster, dist, w.p, lengths, sh.p, sh.n, n_c);
+        });
+    });
 }
 
 py::array_t<i64> first_in_cells(py::handle positions_, py::handle lo_, double h,
