@@ -60,6 +60,12 @@ POINT_KERNELS = {"knn_csr", "pca_normals", "pca_linearity", "propagate_signs", "
 VERTEX_KERNELS = {"vertex_cells", "mesh_edges", "classify_exact", "reclassify_exact"}
 
 
+#: Scratch arguments of the numba kernels that the compiled ones do not use (their heaps
+#: keep each key beside its value, in an array of their own): not compared.
+SCRATCH = {"cleanup.band_distances": {10, 11}, "splitmerge.energies": {14, 15},
+           "splitmerge.split_candidates": {19, 20}, "splitmerge.merge_energies": {18, 19}}
+
+
 def _copy(x):
     if isinstance(x, np.ndarray):
         return x.copy()
@@ -92,7 +98,8 @@ def shadowed(monkeypatch):
             expected = ref(*a2, **k2)
             got = fast(*args, **kwargs)
             calls[path] = calls.get(path, 0) + 1
-            moved = [i for i, (x, y) in enumerate(zip(args, a2)) if not _same(x, y)]
+            moved = [i for i, (x, y) in enumerate(zip(args, a2))
+                     if i not in SCRATCH.get(path, ()) and not _same(x, y)]
             if not _same(got, expected) or moved:
                 bad.append(f"{path}: result {'differs' if not _same(got, expected) else 'same'}"
                            f", arguments {moved} differ")

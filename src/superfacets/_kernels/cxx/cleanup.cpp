@@ -262,7 +262,9 @@ void band_distances(py::handle indptr_, py::handle indices_, py::handle dual_edg
     Out<i64> partner(partner_, "partner"), hval(hval_, "hval");
     py::gil_scoped_release nogil;
     const i64 n = labels.n;
-    i64 size = 0;
+    (void)hkey;  // (the heap's arrays of the numba kernel: here one array of pairs)
+    (void)hval;
+    Heap heap(n / 4);
     for (i64 f = 0; f < n; ++f) {
         dist[f] = INF;
         partner[f] = -1;
@@ -286,13 +288,13 @@ void band_distances(py::handle indptr_, py::handle indices_, py::handle dual_edg
         if (best >= 0) {
             dist[f] = 0.0;
             partner[f] = best;
-            size = heap_push(hkey.p, hval.p, size, 0.0, f);
+            heap.push(0.0, f);
         }
     }
-    while (size > 0) {
-        double d = hkey[0];
-        i64 f = hval[0];
-        size = heap_pop(hkey.p, hval.p, size);
+    while (heap.size > 0) {
+        double d = heap.h[0].key;
+        i64 f = heap.h[0].val;
+        heap.pop();
         if (d > dist[f]) continue;
         i64 lf = labels[f];
         for (i64 e = indptr[f]; e < indptr[f + 1]; ++e) {
@@ -302,7 +304,7 @@ void band_distances(py::handle indptr_, py::handle indices_, py::handle dual_edg
             if (nd < limit && nd < dist[g]) {
                 dist[g] = nd;
                 partner[g] = partner[f];
-                size = heap_push(hkey.p, hval.p, size, nd, g);
+                heap.push(nd, g);
             }
         }
     }

@@ -21,12 +21,11 @@ struct Search {
     const i32* label;
     const double* sizes;
     const double* positions;  // (n, 3)
-    double* hkey;
-    i64* hval;
+    Heap* heap;  // (the numba kernels' hkey / hval: here one array of pairs)
 };
 
-inline i64 relax(const Search& s, i64 la, i64 lb, i64 f, double d, double* dist, i64* stamp,
-                 i64 sid, i64 size) {
+inline void relax(const Search& s, i64 la, i64 lb, i64 f, double d, double* dist, i64* stamp,
+                  i64 sid) {
     for (i64 e = s.indptr[f]; e < s.indptr[f + 1]; ++e) {
         i64 g = s.indices[e];
         i64 lg = s.label[g];
@@ -35,22 +34,23 @@ inline i64 relax(const Search& s, i64 la, i64 lb, i64 f, double d, double* dist,
         if (stamp[g] != sid || nd < dist[g]) {
             dist[g] = nd;
             stamp[g] = sid;
-            size = heap_push(s.hkey, s.hval, size, nd, g);
+            s.heap->push(nd, g);
         }
     }
-    return size;
 }
 
 void search(const Search& s, i64 la, i64 lb, i64 src, double* dist, i64* stamp, i64 sid) {
     dist[src] = 0.0;
     stamp[src] = sid;
-    i64 size = heap_push(s.hkey, s.hval, 0, 0.0, src);
-    while (size > 0) {
-        double d = s.hkey[0];
-        i64 f = s.hval[0];
-        size = heap_pop(s.hkey, s.hval, size);
+    Heap& h = *s.heap;
+    h.size = 0;
+    h.push(0.0, src);
+    while (h.size > 0) {
+        double d = h.h[0].key;
+        i64 f = h.h[0].val;
+        h.pop();
         if (d > dist[f]) continue;
-        size = relax(s, la, lb, f, d, dist, stamp, sid, size);
+        relax(s, la, lb, f, d, dist, stamp, sid);
     }
 }
 
@@ -118,18 +118,20 @@ bool search_below(const Search& s, i64 la, i64 lb, i64 src, double* dist, i64* s
                   double power, double area, double limit) {
     dist[src] = 0.0;
     stamp[src] = sid;
-    i64 size = heap_push(s.hkey, s.hval, 0, 0.0, src);
+    Heap& h = *s.heap;
+    h.size = 0;
+    h.push(0.0, src);
     double settled = 0.0, rest = area;
-    while (size > 0) {
-        double d = s.hkey[0];
-        i64 f = s.hval[0];
-        size = heap_pop(s.hkey, s.hval, size);
+    while (h.size > 0) {
+        double d = h.h[0].key;
+        i64 f = h.h[0].val;
+        h.pop();
         if (d > dist[f]) continue;
         double dp = pw(d, power);
         settled += s.sizes[f] * dp;
         rest -= s.sizes[f];
         if (settled + mx(rest, 0.0) * dp >= limit) return false;
-        size = relax(s, la, lb, f, d, dist, stamp, sid, size);
+        relax(s, la, lb, f, d, dist, stamp, sid);
     }
     return true;
 }
@@ -145,8 +147,8 @@ struct Common {
           sizes(sizes_, "sizes"), positions(positions_, "positions") {
         if (positions.cols != 3) throw Mismatch("argument positions");
     }
-    Search search(double* hkey, i64* hval) const {
-        return Search{indptr.p, indices.p, w.p, label.p, sizes.p, positions.p, hkey, hval};
+    Search search(Heap* heap) const {
+        return Search{indptr.p, indices.p, w.p, label.p, sizes.p, positions.p, heap};
     }
 };
 
@@ -160,7 +162,8 @@ i64 energies(py::handle indptr, py::handle indices, py::handle w, py::handle lab
     Out<double> energy(energy_, "energy"), dist(dist_, "dist"), hkey(hkey_, "hkey");
     Out<i64> far(far_, "far"), stamp(stamp_, "stamp"), hval(hval_, "hval");
     py::gil_scoped_release nogil;
-    Search s = c.search(hkey.p, hval.p);
+    Heap heap(4096);
+    Search s = c.search(&heap);
     const i64 k = c.bounds.n - 1;
     for (i64 sp = first; sp < k; sp += step) {
         i64 lo = c.bounds[sp], n = c.bounds[sp + 1] - lo;
@@ -190,7 +193,8 @@ i64 split_candidates(py::handle indptr, py::handle indices, py::handle w, py::ha
     Out<i64> stamp(stamp_, "stamp"), stamp2(stamp2_, "stamp2"), hval(hval_, "hval"),
         work(work_, "work");
     py::gil_scoped_release nogil;
-    Search s = c.search(hkey.p, hval.p);
+    Heap heap(4096);
+    Search s = c.search(&heap);
     const double* sizes_p = c.sizes.p;
     for (i64 t = first; t < which.n; t += step) {
         i64 sp = which[t];
@@ -266,7 +270,8 @@ i64 merge_energies(py::handle indptr, py::handle indices, py::handle w, py::hand
     Out<double> out(out_, "out"), dist(dist_, "dist"), hkey(hkey_, "hkey");
     Out<i64> stamp(stamp_, "stamp"), hval(hval_, "hval"), work(work_, "work");
     py::gil_scoped_release nogil;
-    Search s = c.search(hkey.p, hval.p);
+    Heap heap(4096);
+    Search s = c.search(&heap);
     const double* pos = c.positions.p;
     const double slack = 1.0 + 1e-9;
     for (i64 t = first; t < pair_a.n; t += step) {
