@@ -60,10 +60,10 @@ def test_a_pipe_or_device_is_refused_as_input(tmp_path, capsys):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m.off"]
 
 
-#: The interrupted mesh's side in quads: 405,000 faces, a run of about 2.5 s from the
-#: command line here, so that the interrupts at 0.3-1.8 s land within it (180,000 faces
-#: ended in 1.2 s once cached, and an interrupt at 1.0 s found it finished).
-SIDE = 450
+#: The interrupted mesh's side in quads: 819,200 faces, a run of about 2.5 s from the
+#: command line here (2026-11-25, compiled kernels), so that the interrupts at 0.3-1.8 s
+#: land within it (405,000 faces ended in 1.2 s once the kernels were compiled C++).
+SIDE = 640
 
 
 @pytest.mark.parametrize("case", malformed.interrupts(), ids=lambda c: c.name)
