@@ -59,7 +59,11 @@ def missing_because() -> str:
 def reference(path: str) -> Callable[..., Any]:
     """The numba kernel ``"module.name"`` of :mod:`superfacets._kernels` (imports numba)."""
     while _before:
-        _before.pop()()
+        try:
+            hook = _before.pop()
+        except IndexError:  # another thread took the last one
+            break
+        hook()
     module, name = path.split(".")
     return getattr(importlib.import_module(f"superfacets._kernels.{module}"), name)
 
