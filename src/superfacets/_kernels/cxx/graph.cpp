@@ -469,12 +469,17 @@ py::array_t<double> convex_scaled_csr(py::handle weights_, py::handle dual_edge_
     auto out_a = fresh(weights.n, out);
     {
         py::gil_scoped_release nogil;
-        std::vector<double> delta(cs.n);
-        for (i64 d = 0; d < cs.n; ++d) delta[d] = concave[d] ? 0.0 : coef * span[d] * std::acos(cs[d]);
-        for (i64 e = 0; e < weights.n; ++e) {
-            i64 d = dual_edge[e];
-            out[e] = concave[d] ? weights[e] : mx(weights[e] - delta[d], 0.0);
-        }
+        std::vector<double> delta(cs.n);  // (each value on its own: on threads)
+        parallel_for(cs.n, [&](i64 lo, i64 hi) {
+            for (i64 d = lo; d < hi; ++d)
+                delta[d] = concave[d] ? 0.0 : coef * span[d] * std::acos(cs[d]);
+        });
+        parallel_for(weights.n, [&](i64 lo, i64 hi) {
+            for (i64 e = lo; e < hi; ++e) {
+                i64 d = dual_edge[e];
+                out[e] = concave[d] ? weights[e] : mx(weights[e] - delta[d], 0.0);
+            }
+        });
     }
     return out_a;
 }
@@ -489,12 +494,16 @@ py::array_t<double> cut_costs_csr(py::handle dual_edge_, py::handle concave_, py
     auto out_a = fresh(dual_edge.n, out);
     {
         py::gil_scoped_release nogil;
-        std::vector<double> cost(cs.n);
-        for (i64 d = 0; d < cs.n; ++d) {
-            double eta = concave[d] ? 1.0 : eta_convex;
-            cost[d] = lengths[d] / (1.0 + factor * eta * std::acos(cs[d])) * scale;
-        }
-        for (i64 e = 0; e < dual_edge.n; ++e) out[e] = cost[dual_edge[e]];
+        std::vector<double> cost(cs.n);  // (each value on its own: on threads)
+        parallel_for(cs.n, [&](i64 lo, i64 hi) {
+            for (i64 d = lo; d < hi; ++d) {
+                double eta = concave[d] ? 1.0 : eta_convex;
+                cost[d] = lengths[d] / (1.0 + factor * eta * std::acos(cs[d])) * scale;
+            }
+        });
+        parallel_for(dual_edge.n, [&](i64 lo, i64 hi) {
+            for (i64 e = lo; e < hi; ++e) out[e] = cost[dual_edge[e]];
+        });
     }
     return out_a;
 }
