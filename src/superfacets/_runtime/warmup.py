@@ -6,7 +6,9 @@ numba kernel (numba's own start-up, before the cached machine code loads).
 while the caller goes on reading the mesh; much of the start-up runs outside
 the GIL (LLVM). Nothing starts at import: the command line calls it before
 reading its input, and a script may do the same. Set
-``SUPERFACETS_NO_WARMUP=1`` to turn it off.
+``SUPERFACETS_NO_WARMUP=1`` to turn it off. Where the compiled kernels are built
+(:mod:`superfacets._kernels.native`), the default runs load no numba, and the
+command line starts the warm-up only where they are missing.
 """
 
 from __future__ import annotations

@@ -240,7 +240,7 @@ def cmd_segment(args) -> int:
     if Path(args.mesh).is_file():  # no numba work for bad arguments or a missing input
         if not args.quiet:  # said only where numba compiles: the first run after installing
             native.before_numba(warmup.say_if_cold)
-        if _needs_numba(args.mesh):
+        if _needs_numba():
             warmup.start()  # numba's start-up in a thread, while the rest is imported and read
     t0 = time.perf_counter()
     data = scan_cloud(read_usable(args.mesh, clouds=True), args)
@@ -354,16 +354,13 @@ def cmd_baseline(args) -> int:
     return 0
 
 
-def _needs_numba(path) -> bool:
-    """Whether a run on ``path`` is expected to use numba kernels: always where the
-    compiled kernels are not built; otherwise only for tetrahedral meshes (the default
-    runs on faces, vertices and points use the compiled kernels alone: numba's start-up
-    is not warmed for nothing)."""
+def _needs_numba() -> bool:
+    """Whether a default run will use numba kernels: only where the compiled kernels are
+    not built (with them, every kind runs compiled: numba's start-up is not warmed for
+    nothing; an option that needs a numba kernel loads it then)."""
     from .._kernels import native
-    from ..io import VOLUME_FORMATS
-    from ..io.files import split_suffix
 
-    return not native.available() or split_suffix(Path(path))[0] in VOLUME_FORMATS
+    return not native.available()
 
 
 def cmd_demo(args) -> int:
@@ -381,7 +378,7 @@ def cmd_demo(args) -> int:
     resolve(n_segments=args.n_segments, **method_kwargs(args))  # every option, before work
     if not args.quiet:
         native.before_numba(warmup.say_if_cold)
-    if _needs_numba("creature.off"):
+    if _needs_numba():
         warmup.start()
     out = Path(args.output_dir)
     if out.exists() and not out.is_dir():

@@ -29,8 +29,8 @@ least-squares planes), and ``extent_weight`` adds Ward's term, so that large
 flat pieces also pay for their extent (:func:`level_extent_weight`: on scans of
 uneven density).
 
-The merging runs in numba (:mod:`superfacets._kernels.hierarchy`): about
-0.1 s for 10,000 superpoints.
+The merging is a compiled kernel (:mod:`superfacets._kernels.hierarchy`, in C++
+where built): about 0.1 s for 10,000 superpoints.
 
 Not in the paper (superpoint hierarchies are what graph networks on scans
 use, e.g. Superpoint Transformer's partition); ``docs/notes/superpoints.md``.

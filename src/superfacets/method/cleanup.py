@@ -5,7 +5,7 @@ distance alone, so their boundaries are stair-stepped along the element
 graph and may run a few elements beside a concave crease instead of on it.
 :func:`clean_boundaries` re-decides, for each pair of adjacent superfacets,
 the elements of a band along their shared boundary by an exact two-label
-graph cut (a minimum s-t cut, Boykov and Kolmogorov's max-flow in numba) of the energy
+graph cut (a minimum s-t cut, Boykov and Kolmogorov's max-flow, a compiled kernel) of the energy
 
 ``E = sum_f smoothness * a_f * |p_f - mu_{L_f}|^2 / r^2 + sum_{ij cut} r * c_ij``
 
