@@ -82,7 +82,9 @@ void csr_of_pairs(const P* lo, const P* hi, i64 e, i64 n, i32* indices, D* dual_
         dual_edge[p] = static_cast<D>(t);
         fill[b] = p + 1;
     }
-    for (i64 v = 0; v < n; ++v) sort_row(indices, dual_edge, indptr[v], indptr[v + 1]);
+    parallel_for(n, [&](i64 lo, i64 hi) {  // rows apart: on threads
+        for (i64 v = lo; v < hi; ++v) sort_row(indices, dual_edge, indptr[v], indptr[v + 1]);
+    });
 }
 
 // number_pairs: keep and pairs may be null

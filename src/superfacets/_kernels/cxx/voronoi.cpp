@@ -40,31 +40,41 @@ py::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In
     std::vector<i64> start(n_c + 1, 0), first(n_c + 1, 0);
     std::vector<i32> hi;
     {
+        // the crossing adjacencies' hi bucketed by lo, on threads with atomic counters (a
+        // bucket's order does not matter: each is then sorted and made distinct)
         py::gil_scoped_release nogil;
-        for (i64 i = 0; i < n; ++i) {
-            i64 a = cluster[i];
-            for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
-                i64 j = indices[x];
-                if (j > i && cluster[j] != a) start[mn(a, cluster[j]) + 1] += 1;
+        auto bump = [](i64* x) { return __atomic_fetch_add(x, 1, __ATOMIC_RELAXED); };
+        i64* st = start.data();
+        parallel_for(n, [&](i64 lo, i64 hi_) {
+            for (i64 i = lo; i < hi_; ++i) {
+                i64 a = cluster[i];
+                for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
+                    i64 j = indices[x];
+                    if (j > i && cluster[j] != a) bump(st + mn(a, cluster[j]) + 1);
+                }
             }
-        }
+        });
         for (i64 c = 0; c < n_c; ++c) start[c + 1] += start[c];
         hi.resize(start[n_c]);
         std::vector<i64> fill(start.begin(), start.end() - 1);
-        for (i64 i = 0; i < n; ++i) {
-            i64 a = cluster[i];
-            for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
-                i64 j = indices[x];
-                if (j > i && cluster[j] != a) {
-                    i64 b = cluster[j];
-                    hi[fill[mn(a, b)]++] = static_cast<i32>(mx(a, b));
+        i64* fl = fill.data();
+        parallel_for(n, [&](i64 lo, i64 hi_) {
+            for (i64 i = lo; i < hi_; ++i) {
+                i64 a = cluster[i];
+                for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
+                    i64 j = indices[x];
+                    if (j > i && cluster[j] != a) {
+                        i64 b = cluster[j];
+                        hi[bump(fl + mn(a, b))] = static_cast<i32>(mx(a, b));
+                    }
                 }
             }
-        }
-        for (i64 c = 0; c < n_c; ++c) {
-            i64 u = sort_distinct(hi.data(), start[c], start[c + 1]);
-            first[c + 1] = first[c] + u;
-        }
+        });
+        std::vector<i64> distinct(n_c);
+        parallel_for(n_c, [&](i64 lo, i64 hi_) {
+            for (i64 c = lo; c < hi_; ++c) distinct[c] = sort_distinct(hi.data(), start[c], start[c + 1]);
+        });
+        for (i64 c = 0; c < n_c; ++c) first[c + 1] = first[c] + distinct[c];
     }
     const i64 m = first[n_c];
     Out<i64> out;
