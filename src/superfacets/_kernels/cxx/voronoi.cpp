@@ -44,32 +44,24 @@ py::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In
         // bucket's order does not matter: each is then sorted and made distinct)
         py::gil_scoped_release nogil;
         auto bump = [](i64* x) { return __atomic_fetch_add(x, 1, __ATOMIC_RELAXED); };
-        i64* st = start.data();
-        parallel_for(n, [&](i64 lo, i64 hi_) {
-            for (i64 i = lo; i < hi_; ++i) {
-                i64 a = cluster[i];
-                for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
-                    i64 j = indices[x];
-                    if (j > i && cluster[j] != a) bump(st + mn(a, cluster[j]) + 1);
+        auto crossings = [&](auto visit) {  // visit(lo, hi) of each crossing adjacency
+            parallel_for(n, [&](i64 r0, i64 r1) {
+                for (i64 i = r0; i < r1; ++i) {
+                    i64 a = cluster[i];
+                    for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
+                        i64 j = indices[x];
+                        if (j > i && cluster[j] != a) visit(mn(a, cluster[j]), mx(a, cluster[j]));
+                    }
                 }
-            }
-        });
+            });
+        };
+        i64* st = start.data();
+        crossings([&](i64 lo, i64) { bump(st + lo + 1); });
         for (i64 c = 0; c < n_c; ++c) start[c + 1] += start[c];
         hi.resize(start[n_c]);
         std::vector<i64> fill(start.begin(), start.end() - 1);
         i64* fl = fill.data();
-        parallel_for(n, [&](i64 lo, i64 hi_) {
-            for (i64 i = lo; i < hi_; ++i) {
-                i64 a = cluster[i];
-                for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
-                    i64 j = indices[x];
-                    if (j > i && cluster[j] != a) {
-                        i64 b = cluster[j];
-                        hi[bump(fl + mn(a, b))] = static_cast<i32>(mx(a, b));
-                    }
-                }
-            }
-        });
+        crossings([&](i64 lo, i64 h) { hi[bump(fl + lo)] = static_cast<i32>(h); });
         std::vector<i64> distinct(n_c);
         parallel_for(n_c, [&](i64 lo, i64 hi_) {
             for (i64 c = lo; c < hi_; ++c) distinct[c] = sort_distinct(hi.data(), start[c], start[c + 1]);
