@@ -89,7 +89,7 @@ def superpoints_on_left(labels, pts, k):
 
 def test_density_puts_the_superpoints_where_the_points_are():
     pts = two_density_plane()
-    area = segment(PointCloud(pts), 40, density=0)
+    area = segment(PointCloud(pts), 40, density=0, merge_from=1)  # no flat merges
     count = segment(PointCloud(pts), 40, density=1.0)
     assert area.n_segments == 40 and count.n_segments == 40
     assert count.params["density"] == 1.0 and count.params["assignment"] == "exact"
@@ -150,8 +150,8 @@ def test_window_factors_are_the_smoothed_inverse_squared_scale():
 
 def test_roughness_puts_more_superpoints_on_the_rough_half():
     pts = bumpy_plane()
-    plain = segment(PointCloud(pts), 40)
-    rough = segment(PointCloud(pts), 40, roughness=3.0)
+    plain = segment(PointCloud(pts), 40, merge_from=1)  # equal areas: no flat merges
+    rough = segment(PointCloud(pts), 40, roughness=3.0, merge_from=1)
     assert rough.n_segments == 40
     assert superpoints_on_left(plain.labels, pts, 40) >= 15
     assert superpoints_on_left(rough.labels, pts, 40) <= 12  # the flat half gets fewer

@@ -422,7 +422,7 @@ def test_point_runs_that_release_the_graph_give_the_same_labels(monkeypatch):
 
     def run(release_min):
         monkeypatch.setattr(pipeline, "_RELEASE_MIN", release_min)
-        r = segment(cloud, 8)
+        r = segment(cloud, 8, merge_from=1)  # 2,500 points per superpoint: coarse-to-fine
         return r.labels, r.timings.get("coarse_elements")
 
     (kept, coarse), (released, _) = run(1 << 60), run(0)

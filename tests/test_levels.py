@@ -124,7 +124,7 @@ def test_adaptive_and_cli_take_the_extent_weight(tmp_path, capsys):
     from superfacets.cli import main
 
     pts = _bumpy_cloud(2000)
-    r = segment(pts, 60)
+    r = segment(pts, 60, merge_from=1)  # the level's own superpoints (merge_from: 1)
     want = r.hierarchy([12], cost="planarity", extent_weight=0.05).labels(0, r.labels)
     np.testing.assert_array_equal(adaptive_superpoints(pts, 12, start=5, extent_weight=0.05),
                                   want)

@@ -189,7 +189,7 @@ def test_runs_on_points_give_numba_results_call_by_call(shadowed):
     from superfacets.inputs.cloud import as_cloud
 
     runs = [(p, 60, None, {}), (dup, 40, None, {}), (uneven, 50, None, {}),
-            (p, 8, None, {}),  # 2,500 points per superpoint: coarse-to-fine
+            (p, 8, None, {"merge_from": 1}),  # 2,500 points per superpoint: coarse-to-fine
             (apart, 30, None, {}),  # two pieces
             (p, 60, None, {"window": 1.0}),  # orphans: the exact count's merges
             (p, 60, None, {"roughness": 1.0}),  # content-sensitive: neighbour averages

@@ -402,8 +402,11 @@ def test_separate_pieces_of_a_cloud_keep_the_count_asked():
     cloud = PointCloud(np.vstack([plane] + blobs))
     paper = segment(cloud, 30, paper=True)  # blobs its farthest points missed: extra
     assert paper.n_segments > 30 and paper.n_orphan_seeds == paper.n_segments - 30
-    r = segment(cloud, 30)
+    r = segment(cloud, 30, merge_from=1)  # the method's own centers: 30
     assert r.params["n_init_centers"] == 30 and r.n_segments < paper.n_segments
+    merged = segment(cloud, 30)  # 150 superpoints merged to 30: pieces stay apart
+    assert merged.n_segments == 30 and all(
+        len(set(merged.labels[4000 + 40 * i:4040 + 40 * i])) == 1 for i in range(5))
     blob_labels = [set(r.labels[4000 + 40 * i:4040 + 40 * i]) for i in range(5)]
     assert all(len(b) == 1 for b in blob_labels)              # a blob is one superpoint
     assert not set().union(*blob_labels) & set(r.labels[:4000])  # of its own

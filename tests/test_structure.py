@@ -34,7 +34,8 @@ LAYERS = (
      "superfacets.evaluation.contingency",
      "superfacets.evaluation.boundaries", "superfacets.viz.colors"),
     # the method, one run: its stages in order, the public functions, one tile
-    ("superfacets.method.stages", "superfacets.method.finish", "superfacets.method.pipeline",
+    ("superfacets.method.stages", "superfacets.method.finish", "superfacets.method.merges",
+     "superfacets.method.pipeline",
      "superfacets.api",
      "superfacets.scale.tiling", "superfacets.scale.tile_layout"),
     # every method alike

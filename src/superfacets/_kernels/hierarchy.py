@@ -71,8 +71,8 @@ def _spread(a, b, area, wsum):
 
 @njit(cache=True, error_model="numpy")
 def _cost(a, b, ln, ang, conc, area, wsum, fsum, scatter, planarity, alpha, eta_convex,
-          beta, compactness, tmp):
-    if planarity:
+          beta, compactness, max_rise, tmp):
+    if planarity > 0:
         _merged_scatter(a, b, area, wsum, scatter, tmp)
         c = (_plane(tmp[0], tmp[1], tmp[2], tmp[3], tmp[4], tmp[5])
              - _plane(scatter[a, 0], scatter[a, 1], scatter[a, 2], scatter[a, 3],
@@ -80,9 +80,12 @@ def _cost(a, b, ln, ang, conc, area, wsum, fsum, scatter, planarity, alpha, eta_
              - _plane(scatter[b, 0], scatter[b, 1], scatter[b, 2], scatter[b, 3],
                       scatter[b, 4], scatter[b, 5]))
         c = max(c, 0.0)
-        if compactness > 0:
+        if planarity == 2:  # flat pairs only (the rise per element of the smaller node)
+            if c > max_rise * min(area[a], area[b]):
+                return np.inf
+        elif compactness > 0:
             c += compactness * _spread(a, b, area, wsum)
-    else:
+    if planarity != 1:  # Ward's, with the crease factor
         if ln > 0:
             theta, share = ang / ln, conc / ln
         else:
@@ -100,10 +103,14 @@ def _cost(a, b, ln, ang, conc, area, wsum, fsum, scatter, planarity, alpha, eta_
 
 @njit(cache=True, error_model="numpy")
 def merge_levels(k, ea, eb, stats, area, wsum, fsum, scatter, planarity, alpha, eta_convex,
-                 beta, compactness, targets):
+                 beta, compactness, max_rise, targets):
     """Merge the cheapest adjacent pair until each of ``targets`` (decreasing, each
-    reachable) live nodes remain; ``(len(targets), k)`` int64: each node's root then.
-    ``area``, ``wsum``, ``fsum`` (k, d) and ``scatter`` (k, 6) are updated in place."""
+    reachable) live nodes remain, or no pair has a finite cost; ``(len(targets), k)``
+    int64: each node's root then (the rows of targets not reached: the roots where the
+    merging stopped). ``planarity``: 0 Ward's cost, 1 the rise of the best plane's
+    distances, 2 Ward's cost of the pairs whose plane rises by at most ``max_rise``
+    per element of the smaller node (the others: infinite). ``area``, ``wsum``,
+    ``fsum`` (k, d) and ``scatter`` (k, 6) are updated in place."""
     n_e = ea.shape[0]
     cap = 2 * n_e
     nb = np.empty(cap, np.int64)
@@ -132,7 +139,7 @@ def merge_levels(k, ea, eb, stats, area, wsum, fsum, scatter, planarity, alpha, 
         a, b = min(ea[t], eb[t]), max(ea[t], eb[t])
         heapq.heappush(heap, (_cost(a, b, stats[t, 0], stats[t, 1], stats[t, 2], area, wsum,
                                     fsum, scatter, planarity, alpha, eta_convex, beta,
-                                    compactness, tmp), a, b, 0, 0))
+                                    compactness, max_rise, tmp), a, b, 0, 0))
     out = np.empty((targets.shape[0], k), np.int64)
     live = k
     step = 0
@@ -143,13 +150,13 @@ def merge_levels(k, ea, eb, stats, area, wsum, fsum, scatter, planarity, alpha, 
                 out[i, s] = _find(owner, s)
             i += 1
             continue
-        _, a, b, va, vb = heapq.heappop(heap)
-        if a < 0:
+        c0, a, b, va, vb = heapq.heappop(heap)
+        if c0 == np.inf:  # the sentinel, or no pair left that may merge
             break
         if owner[a] != a or owner[b] != b or version[a] != va or version[b] != vb:
             continue  # stale
         owner[b] = a  # merge b into a
-        if planarity:
+        if planarity > 0:
             _merged_scatter(a, b, area, wsum, scatter, tmp)
             for j in range(6):
                 scatter[a, j] = tmp[j]
@@ -198,7 +205,12 @@ def merge_levels(k, ea, eb, stats, area, wsum, fsum, scatter, planarity, alpha, 
             lo, hi = (a, c) if a < c else (c, a)
             heapq.heappush(heap, (_cost(lo, hi, st[e, 0], st[e, 1], st[e, 2], area, wsum,
                                         fsum, scatter, planarity, alpha, eta_convex, beta,
-                                        compactness, tmp), lo, hi, version[lo], version[hi]))
+                                        compactness, max_rise, tmp),
+                                  lo, hi, version[lo], version[hi]))
             e = nxt[e]
         live -= 1
+    while i < targets.shape[0]:  # stopped: the roots as they are
+        for s in range(k):
+            out[i, s] = _find(owner, s)
+        i += 1
     return out

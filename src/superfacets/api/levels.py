@@ -126,6 +126,8 @@ def adaptive_segment(obj, n_segments: int, *, start: int = START,
     extent_weight = renamed(extent_weight, compactness, "extent_weight", "compactness")
     if extent_weight is not None:
         check_nonneg("extent_weight", extent_weight)
+    if options.get("merge_from") is None:  # its own many superpoints, merged its own way
+        options["merge_from"] = 1
     if start == 1:
         return segment(obj, k, **options)
     try:

@@ -216,6 +216,10 @@ def add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> No
                    help="content-sensitive sizes: smaller superfacets where neighbouring "
                         "normals turn (C per radian of mean angle); 1 suits scans "
                         f"(default: {_D.roughness:g})")
+    p.add_argument("--merge-from", type=int_arg, default=_D.merge_from, metavar="F",
+                   help="segment F times -k superpoints first, then merge neighbours down to "
+                        "-k, flat ones (within the noise) first; 1: off (default: 5 on point "
+                        "clouds of even density, else 1)")
     p.add_argument("--paper", action="store_true",
                    help="the paper's method as published, its labels bit for bit: its "
                         "stopping rule (--tol 0), no clean-up, no split-and-merge (the "
@@ -275,7 +279,7 @@ def method_kwargs(args) -> dict:
                 center_tol=args.center_tol,
                 coarsen=args.coarsen, progress=bool(args.progress), n_threads=args.threads,
                 paper=args.paper, beta=args.beta, min_elements=args.min_elements,
-                density=args.density, roughness=args.roughness)
+                density=args.density, roughness=args.roughness, merge_from=args.merge_from)
 
 
 def add_engine_options(p, *, sees: str, note: str = "", prefix: str = "") -> None:

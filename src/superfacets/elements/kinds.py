@@ -124,6 +124,13 @@ class ElementKind:
         clouds at k = 150: 0 of 300 runs changed (faces, whose weights weigh 24 of 387
         bytes, would move 26 of 300 runs for nothing they need; ``docs/notes/scale-design.md``).
         ``paper=True`` keeps float64 on every kind.
+    merge_from : int
+        A run with ``merge_from=None`` segments this many times ``k`` superpoints and
+        merges them down to ``k``, flat neighbours first (:mod:`superfacets.method.merges`),
+        where its superpoints have equal areas (:func:`superfacets.method.rules.merge_from_of`):
+        10 on points, whose undersegmentation error it lowered on rooms (0.442 -> 0.302 at
+        k = 1,000), an airborne tile and the benchmark's sampled clouds
+        (``docs/notes/superpoints-defaults.md``); 1 (off) on the other kinds.
     objects : bool
         The elements are what a scene's objects are made of (faces): a run may
         share ``k`` among the objects (``--per-object``), the objects are named
@@ -162,6 +169,7 @@ class ElementKind:
     peak_bytes: int = 450
     exact_count: bool = False
     single_weights: bool = False
+    merge_from: int = 1
 
     def n_rows(self, data) -> int:
         """Number of labels a run on ``data`` (a mesh, cloud or tetrahedral mesh) returns.
@@ -192,7 +200,7 @@ KINDS = {k.name: k for k in (
     ElementKind("points", "point", coarse_min_per_segment=1000, coarse_per_segment=400,
                 coarse_neighbor_cap=True, auto_density=True, unit_sizes_in_levels=True,
                 neighborhood=True, cloud=True, rows="n_total", peak_bytes=420,
-                exact_count=True, single_weights=True),
+                exact_count=True, single_weights=True, merge_from=5),
     ElementKind("cells", "cell", dim=3, rows="n_tets", segment_word="superfacets"),
 )}
 

@@ -206,9 +206,9 @@ def hierarchy(graph, levels, *, alpha: float = DEFAULTS.alpha,
                                           axis=1), dtype=np.float64).reshape(-1, 3)
     edges = np.asarray(graph.edge_index, dtype=np.int64).reshape(2, -1)
     roots = merge_levels(k, np.ascontiguousarray(edges[0]), np.ascontiguousarray(edges[1]),
-                         stats, area, wsum, fsum, scatter, cost == "planarity", alpha,
+                         stats, area, wsum, fsum, scatter, int(cost == "planarity"), alpha,
                          eta_convex, beta if graph.feature is not None else 0.0, extent_weight,
-                         np.asarray(wanted, dtype=np.int64))
+                         np.inf, np.asarray(wanted, dtype=np.int64))
     parents = []
     prev = np.arange(k)  # the level-before's segment of each superfacet
     for level in roots:

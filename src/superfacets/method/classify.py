@@ -315,13 +315,14 @@ class BoundedReplay(Classifier):
         parts = [todo[t::n_thr] for t in range(n_thr)]  # interleaved: balanced work
         if n_thr == 1:
             share = [kept]
-        else:  # reused records: each to the thread with the least work so far
-            load = [len(p) * expected / max(n, 1) for p in parts]
-            share = [[] for _ in range(n_thr)]
-            for s, ln in zip(kept.tolist(), seg_len[kept].tolist()):
-                t = min(range(n_thr), key=load.__getitem__)
-                share[t].append(s)
-                load[t] += ln
+        else:  # reused records: consecutive runs of them topping each thread's work up to
+            # an equal share (records merge in any order: same labels)
+            load = np.array([len(p) * expected / max(n, 1) for p in parts])
+            lengths = seg_len[kept].astype(np.float64)
+            room = np.maximum((load.sum() + lengths.sum()) / n_thr - load, 0.0)
+            mid = np.cumsum(lengths) - 0.5 * lengths
+            owner = np.minimum(np.searchsorted(np.cumsum(room), mid, side="right"), n_thr - 1)
+            share = [kept[owner == t] for t in range(n_thr)]
         bounds = [lo + (hi - lo) * t // n_thr for t in range(n_thr + 1)]
 
         def run(t):

@@ -185,7 +185,7 @@ def exact_count(graph, labels: np.ndarray, rules: Rules) -> tuple[np.ndarray, in
     labels : (n,) int64 ndarray
         Dense labels.
     rules : Rules
-        Its ``k`` is the count asked for.
+        Its ``target`` (else ``k``) is the count asked for.
 
     Raises
     ------
@@ -213,7 +213,8 @@ def exact_count(graph, labels: np.ndarray, rules: Rules) -> tuple[np.ndarray, in
     from ..graph.adjacency import superfacet_graph
     from ..graph.hierarchy import hierarchy, pieces
 
-    k, n = rules.k, int(labels.max()) + 1 if labels.size else 0
+    k = rules.k if rules.target is None else rules.target
+    n = int(labels.max()) + 1 if labels.size else 0
     if k is None or n <= k:
         return labels, n
     sg = superfacet_graph(graph, labels)

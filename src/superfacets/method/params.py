@@ -201,6 +201,9 @@ def _declare() -> tuple[Parameter, ...]:
           lambda v: num("density", v, 0.0, 1.0), cli="--density"),
         P("roughness", 0.0, "float", "content-sensitive sizes: smaller superfacets where "
           "normals turn, >= 0", lambda v: num("roughness", v, 0.0, big), cli="--roughness"),
+        P("merge_from", None, "int or None", "segment this many times n_segments first, then "
+          "merge neighbours down to n_segments, flat ones first, >= 1 (1: off); None: by kind "
+          "and density", lambda v: integer("merge_from", v, lo=1), cli="--merge-from"),
     )
 
 
@@ -279,7 +282,8 @@ def resolve(**params) -> SegmentParams:
                                        ("beta", p.beta not in (0, 0.0)),
                                        ("min_elements", p.min_elements != 1),
                                        ("density", p.density not in (None, 0, 0.0)),
-                                       ("roughness", p.roughness not in (0, 0.0))) if on]
+                                       ("roughness", p.roughness not in (0, 0.0)),
+                                       ("merge_from", p.merge_from not in (None, 1))) if on]
         if extra:
             raise ParameterError(f"paper=True is the paper's method as published; it does not "
                                  f"go with {', '.join(extra)}")

@@ -25,7 +25,10 @@ once and in the paper's order
    (connectivity);
 7. ``clean_up``: the boundaries re-placed (:mod:`superfacets.method.cleanup`);
 8. ``merge_small``: superfacets of fewer than ``min_elements`` merged.
-9. ``exact_count`` (kinds that ask for it: points): the count made exactly ``k``.
+9. ``exact_count`` (kinds that ask for it: points): the count made exactly ``k``; where
+   ``merge_from > 1`` (points of even density), ``merge_to_count`` instead: the run's
+   ``merge_from`` times ``k`` superpoints merged to ``k``, flat neighbours first
+   (:mod:`superfacets.method.merges`).
 
 Timings, the progress bar and the release of memory are hooks around the stages
 (:class:`Hooks`), not inside them. Tiled runs
@@ -43,6 +46,7 @@ from .._runtime import interrupts
 from ..api.result import SegmentationResult
 from ..elements.inputs import features_of
 from .finish import clean_up, exact_count, finish, merge_small
+from .merges import merge_to_count
 from .params import SegmentParams
 from .passes import final_centers
 from .stages import build_graph, initialize, iterate_passes, resolve_rules, weigh
@@ -207,15 +211,16 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
         with hooks.stage("connectivity", add=True):
             labels = merge_small(graph, labels, centers, rules)
             centers = final_centers(labels, centers, sizes, positions)
-    if rules.kind.exact_count and p.n_segments is not None and not p.paper \
-            and p.min_elements == 1:  # exactly the k asked for (not the paper)
-        with hooks.stage("connectivity", add=True):
-            labels, fewest = exact_count(graph, labels, rules)
+    merging = rules.target is not None and rules.target < rules.k  # merge_from > 1
+    if merging or (rules.kind.exact_count and p.n_segments is not None and not p.paper
+                   and p.min_elements == 1):  # exactly the k asked for (not the paper)
+        with hooks.stage("merges" if merging else "connectivity", add=True):
+            labels, fewest = (merge_to_count if merging else exact_count)(graph, labels, rules)
             centers = final_centers(labels, centers, sizes, positions)
-        if fewest > p.n_segments:
+        if fewest > rules.target:
             import warnings
 
-            warnings.warn(f"{fewest} superpoints for n_segments={p.n_segments}: the input has "
+            warnings.warn(f"{fewest} superpoints for n_segments={rules.target}: the input has "
                           f"{fewest} separate pieces, and a superpoint cannot cross from one "
                           "to another", RuntimeWarning, stacklevel=3)
     timings = hooks.timings
@@ -225,14 +230,15 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
     timings["total"] = time.perf_counter() - t_start
     timings.update(expansions=it.expansions, passes=it.n_passes, cycle_period=it.cycle_period,
                    changed=it.changed, stopped_by_tol=it.stopped_by_tol)
-    resolved = dict(n_segments=rules.k, radius=rules.r / graph.diagonal, alpha=p.alpha,
+    resolved = dict(n_segments=rules.target, radius=rules.r / graph.diagonal, alpha=p.alpha,
                     eta_convex=p.eta_convex, window=p.window, init=p.init,
                     max_iter=p.max_iter, weighting=p.weighting, assignment=p.assignment,
                     enforce_connectivity=p.enforce_connectivity, cleanup=rules.cleanup,
                     split_merge=rules.split_merge, tol=p.tol,
                     center_tol=rules.center_tol, coarsen=ratio,
                     n_init_centers=init.shape[0], elements=graph.kind, beta=p.beta,
-                    min_elements=p.min_elements, density=p.density, roughness=p.roughness)
+                    min_elements=p.min_elements, density=p.density, roughness=p.roughness,
+                    merge_from=p.merge_from)
     if rules.kind.neighborhood:
         resolved.update(n_neighbors=p.n_neighbors, neighbor_radius=p.neighbor_radius)
     return SegmentationResult(labels=labels, centers=centers, n_iter=it.n_iter,

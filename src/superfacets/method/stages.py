@@ -29,6 +29,7 @@ from .params import (
     superfacet_size,
 )
 from .passes import Iteration, iterate
+from .rules import MIN_FINE_ELEMENTS, merge_from_of
 from .weights import csr_point_weights, csr_weights, edge_weights, weight_dtype
 
 __all__ = ["Rules", "build_graph", "resolve_rules", "weigh", "initialize",
@@ -58,6 +59,9 @@ class Rules:
         A center moving less than ``center_tol * r`` stays.
     coarsen : int
         Elements per cluster of the coarse run (1: none).
+    target : int or None
+        The count the run returns: ``k``, or the count asked for where the run
+        segments ``merge_from`` times more and merges (:mod:`superfacets.method.merges`).
 
     Examples
     --------
@@ -78,6 +82,7 @@ class Rules:
     split_merge: bool
     center_tol: float
     coarsen: int
+    target: int | None = None
 
     @property
     def fast(self) -> bool:
@@ -174,7 +179,10 @@ def resolve_rules(graph, p: SegmentParams, *, n_centers: int | None = None,
     the diagonal), clean-up and split-and-merge
     (:func:`superfacets.method.params.better_method`), the classification
     (:func:`superfacets.method.params.assignment_of`), the center tolerance (0.05 of ``r``
-    with ``tol > 0``) and the coarsening (:func:`superfacets.method.multilevel.coarsening_for`).
+    with ``tol > 0``), the coarsening (:func:`superfacets.method.multilevel.coarsening_for`)
+    and ``merge_from`` (:func:`superfacets.method.rules.merge_from_of`: where it is above 1,
+    ``k`` is ``merge_from`` times the count asked for, ``target``, at most one superpoint
+    per :data:`~superfacets.method.rules.MIN_FINE_ELEMENTS` elements).
 
     Parameters
     ----------
@@ -210,6 +218,13 @@ def resolve_rules(graph, p: SegmentParams, *, n_centers: int | None = None,
     k, radius = superfacet_size(p, graph.area, graph.diagonal, graph.n_elements, graph.kind)
     if n_centers is not None:
         k = int(min(max(n_centers, 1), graph.n_elements))
+    target = k
+    merge_from = merge_from_of(p, graph.kind, tiled=n_centers is not None or r is not None)
+    p = replace(p, merge_from=merge_from)
+    if merge_from > 1 and k is not None:  # many superpoints first, merged to k at the end
+        fine = min(k * merge_from, max(k, graph.n_elements // MIN_FINE_ELEMENTS))
+        k, radius = superfacet_size(replace(p, n_segments=fine, radius=None), graph.area,
+                                    graph.diagonal, graph.n_elements, graph.kind)
     radius = radius if r is None else r
     cleanup, split_merge = better_method(p, graph.kind)
     p = replace(p, assignment=assignment_of(p, graph.kind))
@@ -217,7 +232,7 @@ def resolve_rules(graph, p: SegmentParams, *, n_centers: int | None = None,
         DEFAULT_CENTER_TOL if p.tol > 0 else 0.0)
     return Rules(params=p, kind=kind_of(graph.kind), k=k, r=radius, cleanup=cleanup,
                  split_merge=split_merge, center_tol=center_tol,
-                 coarsen=coarsening_for(graph, p, k, radius))
+                 coarsen=coarsening_for(graph, p, k, radius), target=target)
 
 
 def weigh(graph, rules: Rules, features=None, release=None

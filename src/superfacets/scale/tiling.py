@@ -104,7 +104,8 @@ def _diagonal(inp) -> float:
 def check_tileable(params: SegmentParams, colors: bool = True) -> None:
     """Refuse the options that read the whole graph, which no tile holds: the merge of
     small superfacets (``min_elements``), content-sensitive sizes (``density``: the
-    median size; ``roughness``). ``density=None`` (automatic) is 0 in a tiled run. Also
+    median size; ``roughness``), the merges to the count (``merge_from`` above 1).
+    ``density=None`` (automatic) is 0 in a tiled run, ``merge_from=None`` 1. Also
     ``beta > 0`` on an input without ``colors`` (the survey's).
 
     Raises
@@ -114,6 +115,8 @@ def check_tileable(params: SegmentParams, colors: bool = True) -> None:
     """
     whole = [n for n in ("min_elements", "density", "roughness")
              if getattr(params, n) not in (None, 0, getattr(DEFAULTS, n))]
+    if params.merge_from not in (None, 1):
+        whole.append("merge_from")
     if whole:
         raise ParameterError(f"{' and '.join(whole)}: not available in a tiled run (where the "
                              "input fits in memory, segment() takes it)")
@@ -126,9 +129,10 @@ def _tile_params(params: SegmentParams, r: float, diagonal: float, tile_diagonal
                  ) -> SegmentParams:
     """The run's parameters for one tile: the whole input's radius ``r``."""
     nr = params.neighbor_radius
-    # no automatic density: a tile's spread of sizes is not the whole input's
+    # no automatic density: a tile's spread of sizes is not the whole input's; no merges:
+    # a tile's count is its share of the whole run's
     return replace(params, n_segments=None, radius=r / tile_diagonal, progress=False,
-                   density=0.0 if params.density is None else params.density,
+                   density=0.0 if params.density is None else params.density, merge_from=1,
                    neighbor_radius=None if nr is None else nr * diagonal / tile_diagonal)
 
 

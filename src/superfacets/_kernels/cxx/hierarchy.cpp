@@ -74,14 +74,14 @@ inline double spread(i64 a, i64 b, const Nodes& N) {
 }
 
 struct Params {
-    bool planarity;
-    double alpha, eta_convex, beta, compactness;
+    i64 planarity;  // 0 Ward's, 1 the plane's rise, 2 Ward's of the flat pairs only
+    double alpha, eta_convex, beta, compactness, max_rise;
 };
 
 double cost(i64 a, i64 b, double ln, double ang, double conc, const Nodes& N, const Params& P,
             double* tmp) {
-    double c;
-    if (P.planarity) {
+    double c = 0.0;
+    if (P.planarity > 0) {
         merged_scatter(a, b, N, tmp);
         const double* sa = N.scatter + 6 * a;
         const double* sb = N.scatter + 6 * b;
@@ -89,8 +89,13 @@ double cost(i64 a, i64 b, double ln, double ang, double conc, const Nodes& N, co
             plane(sa[0], sa[1], sa[2], sa[3], sa[4], sa[5]) -
             plane(sb[0], sb[1], sb[2], sb[3], sb[4], sb[5]);
         c = mx(c, 0.0);
-        if (P.compactness > 0) c += P.compactness * spread(a, b, N);
-    } else {
+        if (P.planarity == 2) {  // flat pairs only: the rise per element of the smaller
+            if (c > P.max_rise * mn(N.area[a], N.area[b])) return INF;
+        } else if (P.compactness > 0) {
+            c += P.compactness * spread(a, b, N);
+        }
+    }
+    if (P.planarity != 1) {  // Ward's, with the crease factor
         double theta = 0.0, share = 0.0;
         if (ln > 0) {
             theta = ang / ln;
@@ -117,9 +122,9 @@ using Entry = std::tuple<double, i64, i64, i64, i64>;
 
 py::array_t<i64> merge_levels(i64 k, py::handle ea_, py::handle eb_, py::handle stats_,
                               py::handle area_, py::handle wsum_, py::handle fsum_,
-                              py::handle scatter_, bool planarity, double alpha,
+                              py::handle scatter_, i64 planarity, double alpha,
                               double eta_convex, double beta, double compactness,
-                              py::handle targets_) {
+                              double max_rise, py::handle targets_) {
     In<i64> ea(ea_, "ea"), eb(eb_, "eb"), targets(targets_, "targets");
     In<double> stats(stats_, "stats");
     Out<double> area(area_, "area"), wsum(wsum_, "wsum"), fsum(fsum_, "fsum"),
@@ -132,7 +137,7 @@ py::array_t<i64> merge_levels(i64 k, py::handle ea_, py::handle eb_, py::handle 
     py::gil_scoped_release nogil;
     const i64 n_e = ea.n, cap = 2 * n_e;
     Nodes N{area.p, wsum.p, fsum.p, fsum.cols, scatter.p};
-    Params P{planarity, alpha, eta_convex, beta, compactness};
+    Params P{planarity, alpha, eta_convex, beta, compactness, max_rise};
     std::vector<i64> nb(cap), nxt(cap, -1), head(k, -1), tail(k, -1);
     std::vector<double> st(3 * cap);
     for (i64 t = 0; t < n_e; ++t)
@@ -163,11 +168,10 @@ py::array_t<i64> merge_levels(i64 k, py::handle ea_, py::handle eb_, py::handle 
         }
         auto [c0, a, b, va, vb] = heap.top();
         heap.pop();
-        (void)c0;
-        if (a < 0) break;
+        if (c0 == INF) break;  // the sentinel, or no pair left that may merge
         if (owner[a] != a || owner[b] != b || version[a] != va || version[b] != vb) continue;
         owner[b] = a;
-        if (planarity) {
+        if (planarity > 0) {
             merged_scatter(a, b, N, tmp);
             for (int j = 0; j < 6; ++j) scatter(a, j) = tmp[j];
         }
@@ -216,6 +220,8 @@ py::array_t<i64> merge_levels(i64 k, py::handle ea_, py::handle eb_, py::handle 
         }
         --live;
     }
+    for (; i < targets.n; ++i)  // stopped: the roots as they are
+        for (i64 s = 0; s < k; ++s) out(i, s) = find(owner.data(), s);
     }
     return out_a;
 }

@@ -1,0 +1,167 @@
+"""Many superpoints merged to the count asked for, flat neighbours first
+(``superfacets.method.merges``; the default on clouds of even density)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from superfacets import PointCloud, segment
+from superfacets.errors import ParameterError
+from superfacets.method.merges import flat_merges, noise_variance
+from superfacets.method.params import DEFAULTS, resolve
+from superfacets.method.rules import merge_from_of
+
+
+def _graph(points):
+    from superfacets.elements.points import point_graph
+
+    return point_graph(PointCloud(points)).graph
+
+
+def _room(seed: int = 0, noise: float = 0.002):
+    """A noisy floor (1 x 1, 12,000 points) with four domes on it (half spheres of
+    radius 0.1, 2,000 points each): returns the points and the part of each (0 the
+    floor, 1..4 the domes)."""
+    rng = np.random.default_rng(seed)
+    floor = np.c_[rng.random((12_000, 2)), noise * rng.standard_normal(12_000)]
+    parts = [floor]
+    for x, y in [(0.2, 0.2), (0.7, 0.25), (0.25, 0.7), (0.7, 0.7)]:
+        d = rng.standard_normal((2000, 3))
+        d[:, 2] = np.abs(d[:, 2])
+        d *= 0.1 / np.linalg.norm(d, axis=1, keepdims=True)
+        parts.append(d + [x, y, 0.0] + noise * rng.standard_normal((2000, 3)))
+    part = np.repeat(np.arange(5), [12_000] + [2000] * 4)
+    return np.vstack(parts), part
+
+
+def test_the_noise_is_the_planes_noise():
+    rng = np.random.default_rng(1)
+    xy = rng.random((20_000, 2))
+    for sigma in (0.001, 0.004):
+        pts = np.c_[xy, sigma * rng.standard_normal(20_000)]
+        # the smallest eigenvalue of ~11 noisy points: a bit below sigma^2
+        assert 0.4 * sigma ** 2 < noise_variance(_graph(pts)) < 1.2 * sigma ** 2
+    assert noise_variance(_graph(np.c_[xy, np.zeros(20_000)])) < 1e-20  # exactly flat
+
+
+def test_flat_merges_join_each_plane_and_never_cross_the_ridge():
+    x = np.linspace(0, 1, 50)
+    xy = np.stack(np.meshgrid(x, x), -1).reshape(-1, 2)
+    roof = np.c_[xy, 0.5 * np.abs(xy[:, 0] - 0.5)]
+    g = _graph(roof)
+    cells = (np.minimum(g.positions[:, 0] * 10, 9.999).astype(np.int64) * 10
+             + np.minimum(g.positions[:, 1] * 10, 9.999).astype(np.int64))
+    left = g.positions[:, 0] < 0.5 - 1e-9
+    merged = flat_merges(g, cells, 1, 1e-12)
+    assert int(merged.max()) + 1 == 2
+    assert len(set(merged[left])) == 1 and not set(merged[left]) & set(merged[~left])
+    # a threshold below what crossing the ridge costs, and k reached first: 30 left
+    assert int(flat_merges(g, cells, 30, 1e-12).max()) + 1 == 30
+    # no pair flat enough: nothing merges
+    bumpy = roof.copy()
+    bumpy[:, 2] += 0.05 * np.sin(40 * xy[:, 0]) * np.sin(40 * xy[:, 1])
+    gb = _graph(bumpy)
+    cb = (np.minimum(gb.positions[:, 0] * 10, 9.999).astype(np.int64) * 10
+          + np.minimum(gb.positions[:, 1] * 10, 9.999).astype(np.int64))
+    assert int(flat_merges(gb, cb, 1, 1e-12).max()) + 1 == 100
+
+
+def test_a_room_spends_its_count_on_the_objects_not_the_floor():
+    pts, part = _room()
+    plain = segment(pts, 60, merge_from=1)
+    merged = segment(pts, 60)
+    assert merged.params["merge_from"] == 5 and merged.params["density"] == 0.0
+    assert merged.n_segments == 60 and np.unique(merged.labels).size == 60
+
+    def on_floor(labels):  # superpoints mostly of floor points
+        share = np.bincount(labels, weights=(part == 0)) / np.bincount(labels)
+        return int((share > 0.5).sum())
+
+    assert on_floor(merged.labels) <= on_floor(plain.labels) // 2
+    # the domes get the count: half the error (UE 0.13 -> 0.07), fewer points off their part
+    def off_part(labels):
+        return sum(int(np.bincount(part[labels == s]).sum() - np.bincount(part[labels == s]).max())
+                   for s in np.unique(labels))
+
+    assert off_part(merged.labels) < 0.7 * off_part(plain.labels)
+
+
+def test_a_flat_plane_keeps_compact_superpoints():
+    # no pair is less flat than another: the merges go by Ward's cost, compact
+    rng = np.random.default_rng(0)
+    xy = rng.random((6000, 2))
+    r = segment(np.c_[xy, np.zeros(6000)], 24)
+    assert r.params["merge_from"] == 5 and r.n_segments == 24
+    spread = [xy[r.labels == s].std(axis=0).max() for s in range(24)]
+    # a square of 1/24 of the unit square has a std of 0.059 along each side
+    assert max(spread) < 0.12
+
+
+def test_the_merges_keep_separate_pieces_apart_and_warn_below_them():
+    rng = np.random.default_rng(2)
+    a = np.c_[rng.random((3000, 2)), np.zeros(3000)]
+    pts = np.r_[a, a + [5.0, 0.0, 0.0], a + [10.0, 0.0, 0.0]]
+    r = segment(pts, 9)
+    assert r.n_segments == 9
+    assert all(len(set(r.labels[3000 * i:3000 * (i + 1)]) & set(r.labels[:3000])) == 0
+               for i in (1, 2))
+    with pytest.warns(RuntimeWarning, match="3 superpoints for n_segments=2"):
+        assert segment(pts, 2).n_segments == 3
+
+
+def test_the_first_run_has_at_most_one_superpoint_per_8_points():
+    rng = np.random.default_rng(3)
+    pts = np.c_[rng.random((800, 2)), np.zeros(800)]
+    r = segment(pts, 50)
+    assert r.params["n_init_centers"] == 100 and r.n_segments == 50
+    # fewer than 2 per 8 points: no merges at all (the method's own run)
+    assert segment(pts, 150).params["n_init_centers"] == 150
+
+
+def test_merge_from_is_chosen_from_the_kind_and_the_density():
+    from dataclasses import replace
+
+    even = replace(DEFAULTS, density=0.0)
+    assert merge_from_of(even, "points") == 5
+    assert merge_from_of(replace(even, density=0.5), "points") == 1  # sweeps, RGB-D frames
+    assert merge_from_of(replace(even, beta=10.0), "points") == 1  # colour: geometric merges
+    assert merge_from_of(replace(even, paper=True), "points") == 1
+    assert merge_from_of(even, "points", tiled=True) == 1
+    assert [merge_from_of(even, kind) for kind in ("faces", "vertices", "cells")] == [1, 1, 1]
+    assert merge_from_of(replace(even, merge_from=3), "faces") == 3  # as given
+    with pytest.raises(ParameterError, match="merge_from must be"):
+        resolve(merge_from=0)
+    with pytest.raises(ParameterError, match="does not go with merge_from"):
+        resolve(paper=True, merge_from=5)
+    resolve(paper=True, merge_from=1)  # 1 is the paper's: no merges
+
+
+def test_an_uneven_cloud_keeps_the_density_and_no_merges():
+    rng = np.random.default_rng(4)
+    dense = np.c_[rng.random((6000, 2)), np.zeros(6000)]
+    sparse = np.c_[rng.random((300, 2)) * [4, 1] + [1.5, 0], np.zeros(300)]
+    r = segment(np.r_[dense, sparse], 40)
+    assert r.params["density"] == 0.5 and r.params["merge_from"] == 1
+
+
+def test_a_tiled_run_refuses_merges_it_cannot_make():
+    from superfacets.scale.tiling import check_tileable
+
+    check_tileable(resolve())  # the default: no merges in the tiles
+    check_tileable(resolve(merge_from=1))
+    with pytest.raises(ParameterError, match="merge_from: not available in a tiled run"):
+        check_tileable(resolve(merge_from=5))
+
+
+def test_the_command_line_takes_merge_from(tmp_path):
+    from superfacets.cli import main
+    rng = np.random.default_rng(5)
+    pts = np.c_[rng.random((3000, 2)), 0.01 * np.sin(9 * rng.random(3000))]
+    path = tmp_path / "cloud.xyz"
+    np.savetxt(path, pts)
+    out = tmp_path / "labels.txt"
+    assert main(["segment", str(path), "-k", "20", "--merge-from", "1", "-o", str(out),
+                 "-q"]) == 0
+    np.testing.assert_array_equal(np.loadtxt(out, dtype=np.int64),
+                                  segment(PointCloud(pts), 20, merge_from=1).labels)
