@@ -190,25 +190,10 @@ def hierarchy(graph, levels, *, alpha: float = DEFAULTS.alpha,
 
     from .._kernels import native
 
-    merge_levels = native.kernel("hierarchy.merge_levels")
-
-    area = np.array(graph.area, dtype=np.float64)
-    wsum = np.ascontiguousarray(graph.centroid * area[:, None], dtype=np.float64)
-    fsum = (np.zeros((k, 0)) if graph.feature is None else
-            np.ascontiguousarray(graph.feature * area[:, None], dtype=np.float64))
-    scatter = np.zeros((k, 6))
-    if cost == "planarity":  # the scatters as (xx, yy, zz, xy, xz, yz)
-        m = np.asarray(graph.scatter, dtype=np.float64)
-        scatter = np.ascontiguousarray(np.stack([m[:, 0, 0], m[:, 1, 1], m[:, 2, 2], m[:, 0, 1],
-                                                 m[:, 0, 2], m[:, 1, 2]], axis=1))
-    ln = np.asarray(graph.border_length, dtype=np.float64)
-    stats = np.ascontiguousarray(np.stack([ln, ln * graph.mean_angle, ln * graph.concave],
-                                          axis=1), dtype=np.float64).reshape(-1, 3)
-    edges = np.asarray(graph.edge_index, dtype=np.int64).reshape(2, -1)
-    roots = merge_levels(k, np.ascontiguousarray(edges[0]), np.ascontiguousarray(edges[1]),
-                         stats, area, wsum, fsum, scatter, int(cost == "planarity"), alpha,
-                         eta_convex, beta if graph.feature is not None else 0.0, extent_weight,
-                         np.inf, np.asarray(wanted, dtype=np.int64))
+    roots = native.kernel("hierarchy.merge_levels")(
+        k, *merge_arrays(graph, cost == "planarity"), int(cost == "planarity"), alpha,
+        eta_convex, beta if graph.feature is not None else 0.0, extent_weight, np.inf,
+        np.asarray(wanted, dtype=np.int64))
     parents = []
     prev = np.arange(k)  # the level-before's segment of each superfacet
     for level in roots:
@@ -218,6 +203,29 @@ def hierarchy(graph, levels, *, alpha: float = DEFAULTS.alpha,
         parents.append(parent)
         prev = top
     return Hierarchy(levels=tuple(wanted), parents=tuple(parents))
+
+
+def merge_arrays(graph, planarity: bool) -> tuple:
+    """The arrays the merging kernel (:mod:`superfacets._kernels.hierarchy`) takes, of a
+    :class:`~superfacets.graph.adjacency.SuperfacetGraph`: ``(ea, eb, stats, area, wsum,
+    fsum, scatter)``, each a fresh contiguous array (the kernel updates the nodes' in
+    place); ``scatter`` as ``(xx, yy, zz, xy, xz, yz)`` with ``planarity``, else zeros."""
+    k = graph.n_segments
+    area = np.array(graph.area, dtype=np.float64)
+    wsum = np.ascontiguousarray(graph.centroid * area[:, None], dtype=np.float64)
+    fsum = (np.zeros((k, 0)) if graph.feature is None else
+            np.ascontiguousarray(graph.feature * area[:, None], dtype=np.float64))
+    scatter = np.zeros((k, 6))
+    if planarity:
+        m = np.asarray(graph.scatter, dtype=np.float64)
+        scatter = np.ascontiguousarray(np.stack([m[:, 0, 0], m[:, 1, 1], m[:, 2, 2], m[:, 0, 1],
+                                                 m[:, 0, 2], m[:, 1, 2]], axis=1))
+    ln = np.asarray(graph.border_length, dtype=np.float64)
+    stats = np.ascontiguousarray(np.stack([ln, ln * graph.mean_angle, ln * graph.concave],
+                                          axis=1), dtype=np.float64).reshape(-1, 3)
+    edges = np.asarray(graph.edge_index, dtype=np.int64).reshape(2, -1)
+    return (np.ascontiguousarray(edges[0]), np.ascontiguousarray(edges[1]), stats, area, wsum,
+            fsum, scatter)
 
 
 def planarity_graph(graph, labels, features=None):

@@ -153,22 +153,12 @@ def flat_merges(graph, labels: np.ndarray, k: int, max_rise: float, *,
     2
     """
     from .._kernels import native
-    from ..graph.hierarchy import planarity_graph
+    from ..graph.hierarchy import merge_arrays, planarity_graph
 
-    pg = planarity_graph(graph, labels)
+    pg = planarity_graph(graph, labels)  # no features: the merges are geometric
     n_nodes = pg.n_segments
-    m = np.asarray(pg.scatter, dtype=np.float64)
-    scatter = np.ascontiguousarray(np.stack([m[:, 0, 0], m[:, 1, 1], m[:, 2, 2], m[:, 0, 1],
-                                             m[:, 0, 2], m[:, 1, 2]], axis=1))
-    area = np.array(pg.area, dtype=np.float64)
-    wsum = np.ascontiguousarray(pg.centroid * area[:, None], dtype=np.float64)
-    edges = np.asarray(pg.edge_index, dtype=np.int64).reshape(2, -1)
-    ln = np.asarray(pg.border_length, dtype=np.float64)
-    stats = np.ascontiguousarray(np.stack([ln, ln * pg.mean_angle, ln * pg.concave], axis=1),
-                                 dtype=np.float64).reshape(-1, 3)
     roots = native.kernel("hierarchy.merge_levels")(
-        n_nodes, np.ascontiguousarray(edges[0]), np.ascontiguousarray(edges[1]), stats, area,
-        wsum, np.zeros((n_nodes, 0)), scatter, 2, float(alpha), float(eta_convex), 0.0, 0.0,
+        n_nodes, *merge_arrays(pg, True), 2, float(alpha), float(eta_convex), 0.0, 0.0,
         float(max_rise), np.asarray([min(k, n_nodes)], dtype=np.int64))[0]
     _, top = np.unique(roots, return_inverse=True)  # numbered by their lowest superpoint
     return top.astype(np.int64)[labels]
