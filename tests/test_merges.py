@@ -110,12 +110,12 @@ def test_the_merges_keep_separate_pieces_apart_and_warn_below_them():
         assert segment(pts, 2).n_segments == 3
 
 
-def test_the_first_run_has_at_most_one_superpoint_per_8_points():
+def test_the_first_run_has_at_most_one_superpoint_per_12_points():
     rng = np.random.default_rng(3)
-    pts = np.c_[rng.random((800, 2)), np.zeros(800)]
+    pts = np.c_[rng.random((1200, 2)), np.zeros(1200)]
     r = segment(pts, 50)
     assert r.params["n_init_centers"] == 100 and r.n_segments == 50
-    # fewer than 2 per 8 points: no merges at all (the method's own run)
+    # one per 12 points or more already: no merges at all (the method's own run)
     assert segment(pts, 150).params["n_init_centers"] == 150
 
 

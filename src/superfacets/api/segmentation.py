@@ -159,14 +159,14 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, features=None,
     merge_from : int or None, default None
         Many superpoints first, merged to ``n_segments`` at the end (not in the
         paper; :mod:`superfacets.method.merges`): the run segments ``merge_from``
-        times ``n_segments`` (at most one per 8 elements), then merges adjacent ones,
+        times ``n_segments`` (at most one per 12 elements), then merges adjacent ones,
         first those whose union stays flat to within the input's noise (walls,
         floors, ground, the flat faces of objects), then the cheapest by Ward's
         cost with the crease factor, down to exactly ``n_segments``. 1 merges
         nothing. None: 5 on point clouds of even density (``density`` resolved to
         0), 1 on sweeps and RGB-D frames, on meshes, with ``paper=True`` and in the
         tiles of a tiled run (:func:`superfacets.method.rules.merge_from_of`). On two
-        ScanNet rooms it lowered the undersegmentation error by 20-34 % at
+        ScanNet rooms it lowered the undersegmentation error by 13-26 % at
         ``n_segments`` = 300-3,000, below the ScanNet Segmentator's; on the 300
         benchmark meshes sampled to clouds by 5.9 % at 150
         (``docs/notes/superpoints-defaults.md``).
@@ -339,7 +339,10 @@ def superpoints(points, n_segments: int | None = _D.n_segments, *, normals=None,
     point graph; the result is deterministic. Where the points' density is
     uneven (a LiDAR sweep, an RGB-D frame: the log of the point sizes spreads
     beyond 0.7), superpoints follow it by default (``density=None``: 0.5 there,
-    0 on even clouds; pass ``density=0`` for the paper's equal areas).
+    0 on even clouds; pass ``density=0`` for the paper's equal areas). Where it is
+    even (rooms, aerial tiles, sampled surfaces), the run segments 5 times the
+    superpoints and merges them to ``n_segments``, flat neighbours first
+    (``merge_from=None``; ``merge_from=1`` for the method's own superpoints).
 
     Parameters
     ----------

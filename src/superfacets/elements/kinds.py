@@ -128,7 +128,7 @@ class ElementKind:
         A run with ``merge_from=None`` segments this many times ``k`` superpoints and
         merges them down to ``k``, flat neighbours first (:mod:`superfacets.method.merges`),
         where its superpoints have equal areas (:func:`superfacets.method.rules.merge_from_of`):
-        10 on points, whose undersegmentation error it lowered on rooms (0.442 -> 0.302 at
+        5 on points, whose undersegmentation error it lowered on rooms (0.442 -> 0.327 at
         k = 1,000), an airborne tile and the benchmark's sampled clouds
         (``docs/notes/superpoints-defaults.md``); 1 (off) on the other kinds.
     objects : bool

@@ -16,9 +16,10 @@ __all__ = ["better_method", "assignment_of", "superfacet_size", "superfacet_meas
            "merge_from_of", "MIN_FINE_ELEMENTS"]
 
 #: The fewest elements per superpoint, on average, of the many superpoints a run with
-#: ``merge_from > 1`` segments first: fewer would leave their planes to two or three
-#: points (a room of 81,000 points at k = 3,000 starts from 10,000, not 30,000).
-MIN_FINE_ELEMENTS = 8
+#: ``merge_from > 1`` segments first: fewer leave their planes to a few points and cost
+#: time for nothing (a room of 81,000 points at k = 3,000 starts from 6,780, not 15,000:
+#: UE 0.250 against 0.241 with 8, in 1.2 instead of 1.6 times the time of no merges).
+MIN_FINE_ELEMENTS = 12
 
 
 def better_method(params, kind: str) -> tuple[bool, bool]:
@@ -201,13 +202,13 @@ def superfacet_measure(r: float, dim: int = 2) -> float:
 
 def merge_from_of(params, kind: str, tiled: bool = False) -> int:
     """``merge_from`` of a run: as given, else (None) the kind's
-    (:attr:`~superfacets.elements.kinds.ElementKind.merge_from`: 10 on points) where
+    (:attr:`~superfacets.elements.kinds.ElementKind.merge_from`: 5 on points) where
     the superpoints have equal areas (``density`` resolved to 0: clouds of even density,
     not LiDAR sweeps) and without the colour term (the merges are geometric: ``beta``
     0), 1 elsewhere, with ``paper`` and in the tiles of a tiled run.
 
     On the even-density clouds measured (two ScanNet rooms, an airborne tile, the 300
-    benchmark meshes sampled) merging 10 times the superpoints down to ``k``, flat
+    benchmark meshes sampled) merging 5 times the superpoints down to ``k``, flat
     neighbours first, lowered the undersegmentation error at every k; on LiDAR sweeps
     the density term does better (``docs/notes/superpoints-defaults.md``).
 
