@@ -154,7 +154,7 @@ def test_a_tiled_run_refuses_merges_it_cannot_make():
         check_tileable(resolve(merge_from=5))
 
 
-def test_the_command_line_takes_merge_from(tmp_path):
+def test_the_command_line_takes_merge_from(tmp_path, capsys):
     from superfacets.cli import main
     rng = np.random.default_rng(5)
     pts = np.c_[rng.random((3000, 2)), 0.01 * np.sin(9 * rng.random(3000))]
@@ -165,3 +165,6 @@ def test_the_command_line_takes_merge_from(tmp_path):
                  "-q"]) == 0
     np.testing.assert_array_equal(np.loadtxt(out, dtype=np.int64),
                                   segment(PointCloud(pts), 20, merge_from=1).labels)
+    capsys.readouterr()
+    assert main(["segment", str(path), "-k", "20", "-o", str(out)]) == 0
+    assert "20 superpoints (merged from 100, flat neighbours first" in capsys.readouterr().out

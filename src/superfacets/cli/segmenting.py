@@ -141,6 +141,10 @@ def _summary(name: str, mesh, result, seconds: float, elements: str = "faces",
         segs = "superpoints"
         if not density_given and ((getattr(result, "params", None) or {}).get("density") or 0):
             segs += " sized by the points' uneven density (auto; --density 0: equal areas)"
+        merged = (getattr(result, "params", None) or {}).get("merge_from") or 1
+        first = (getattr(result, "params", None) or {}).get("n_init_centers") or 0
+        if merged > 1 and first > result.n_segments:
+            segs += f" (merged from {first:,}, flat neighbours first; --merge-from 1: none)"
     else:
         kind = "" if mesh.is_triangular else " (polygons)"
         objs = f" in {len(mesh.objects)} objects" if len(mesh.objects) > 1 else ""
