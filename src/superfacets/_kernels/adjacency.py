@@ -316,7 +316,7 @@ def same_label_components(indptr, indices, labels):
 def knn_csr(nbr, keep, indptr, rows, more, more_keep):
     """The symmetric graph of k-nearest-neighbour lists: ``i ~ j`` when ``j`` is in
     ``nbr[i]`` (where ``keep``) or ``i`` in ``nbr[j]``, and likewise for the longer
-    lists ``more[t]`` (where ``more_keep``) of the points ``rows[t]`` (none: ``rows``
+    lists ``more[t]`` (where ``more_keep``) of the distinct points ``rows[t]`` (none: ``rows``
     of length 0). Fills ``indptr`` (n + 1); returns a buffer whose first ``indptr[n]``
     entries are ``indices`` (int32, ascending per row; the caller copies them out once
     it has let the lists go, so that the lists, the buffer and the copy are never held

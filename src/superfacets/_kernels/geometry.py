@@ -308,3 +308,40 @@ def distinct_in_order(p, order, out, inverse):
             out[j, 2] = p[row, 2]
         inverse[row] = j
     return m
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def label_sums(labels, weights, positions, normals, area, wpos, wnrm):
+    """Per label, added to the zeroed ``area`` (k,), ``wpos`` and ``wnrm`` (k, 3): the
+    weights, and the weighted positions and normals, element by element in order, as
+    ``np.bincount(labels, weights=w * x[:, c])`` adds them (the product rounded first)."""
+    for i in range(labels.shape[0]):
+        s = labels[i]
+        w = weights[i]
+        area[s] += w
+        for c in range(3):
+            wpos[s, c] += w * positions[i, c]
+        for c in range(3):
+            wnrm[s, c] += w * normals[i, c]
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def label_scatter(labels, weights, positions, centroid, scatter):
+    """Per label, added to the zeroed ``scatter`` (k, 9): ``(w * d_a) * d_b`` at ``3 a +
+    b``, ``d = position - centroid[label]``, element by element in order, as
+    ``np.bincount(labels, weights=w * d[:, a] * d[:, b])`` adds them."""
+    for i in range(labels.shape[0]):
+        s = labels[i]
+        w = weights[i]
+        d0 = positions[i, 0] - centroid[s, 0]
+        d1 = positions[i, 1] - centroid[s, 1]
+        d2 = positions[i, 2] - centroid[s, 2]
+        scatter[s, 0] += w * d0 * d0
+        scatter[s, 1] += w * d0 * d1
+        scatter[s, 2] += w * d0 * d2
+        scatter[s, 3] += w * d1 * d0
+        scatter[s, 4] += w * d1 * d1
+        scatter[s, 5] += w * d1 * d2
+        scatter[s, 6] += w * d2 * d0
+        scatter[s, 7] += w * d2 * d1
+        scatter[s, 8] += w * d2 * d2

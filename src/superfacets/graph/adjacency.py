@@ -191,19 +191,20 @@ def superfacet_graph(graph, labels, features=None) -> SuperfacetGraph:
     (True, 1.5708)
     """
     g = as_element_graph(graph)
-    lab = np.asarray(check_labels(labels, g.n_elements, per=g.element), dtype=np.int64)
+    lab = np.ascontiguousarray(check_labels(labels, g.n_elements, per=g.element),
+                               dtype=np.int64)
     k = int(lab.max()) + 1 if lab.size else 0
     area_w = np.ascontiguousarray(g.sizes, dtype=np.float64)
-    area = np.bincount(lab, weights=area_w, minlength=k)
     if (np.bincount(lab, minlength=k) == 0).any():
         raise ParameterError("labels must use every value 0..K-1 (relabel them densely)")
-    pos = np.asarray(g.positions, dtype=np.float64)
+    pos = np.ascontiguousarray(g.positions, dtype=np.float64)
+    # per superfacet, in one pass: the sums np.bincount(lab, weights=...) would make, the
+    # same values (element by element in order, each product rounded first)
+    area, wpos, normal = np.zeros(k), np.zeros((k, 3)), np.zeros((k, 3))
+    native.kernel("geometry.label_sums")(lab, area_w, pos, np.ascontiguousarray(
+        g.normals, dtype=np.float64), area, wpos, normal)
     safe = np.where(area > 0, area, 1.0)
-    centroid = np.stack([np.bincount(lab, weights=area_w * pos[:, c], minlength=k)
-                         for c in range(3)], axis=1) / safe[:, None]
-    nrm = np.asarray(g.normals, dtype=np.float64)
-    normal = np.stack([np.bincount(lab, weights=area_w * nrm[:, c], minlength=k)
-                       for c in range(3)], axis=1)
+    centroid = wpos / safe[:, None]
     norm = np.linalg.norm(normal, axis=1)
     normal = np.divide(normal, norm[:, None], out=np.zeros_like(normal),
                        where=norm[:, None] > 1e-12 * max(1.0, float(norm.max(initial=0.0))))
@@ -235,10 +236,9 @@ def superfacet_graph(graph, labels, features=None) -> SuperfacetGraph:
                                      minlength=e) / n_cross)[zero]
     edge_index = np.stack([key // k, key % k]).astype(np.int64) if k else np.zeros((2, 0),
                                                                                    np.int64)
-    d = pos - centroid[lab]
-    scatter = np.stack([np.stack([np.bincount(lab, weights=area_w * d[:, i] * d[:, j],
-                                              minlength=k) for j in range(3)], axis=1)
-                        for i in range(3)], axis=1)
+    scatter = np.zeros((k, 9))
+    native.kernel("geometry.label_scatter")(lab, area_w, pos, centroid, scatter)
+    scatter = scatter.reshape(k, 3, 3)
     return SuperfacetGraph(edge_index=edge_index, border_length=border, mean_angle=mean_angle,
                            concave=concave, area=area, centroid=centroid, normal=normal,
                            feature=feature, scatter=scatter)

@@ -193,20 +193,20 @@ def coarsen(graph: ElementGraph, csr_w: np.ndarray, ratio: int) -> Coarsening:
     Coarsening
     """
     n = graph.n_elements
-    positions = np.ascontiguousarray(graph.positions)
+    positions = np.ascontiguousarray(graph.positions, dtype=np.float64)
     sizes = graph.sizes
     seeds = grid_seeds(positions, graph.area, max(1, n // ratio))
     seeds, cluster, dist = voronoi_cells(graph, csr_w, seeds)
     n_c = seeds.shape[0]
 
     # clusters: size-weighted mean position and normal, total size
-    tot = np.bincount(cluster, weights=sizes, minlength=n_c)
+    # (the sums np.bincount(cluster, weights=sizes * x[:, a]) makes, in one pass)
+    tot, pos, nor = np.zeros(n_c), np.zeros((n_c, 3)), np.zeros((n_c, 3))
+    native.kernel("geometry.label_sums")(
+        cluster, np.ascontiguousarray(sizes, dtype=np.float64), positions,
+        np.ascontiguousarray(graph.normals, dtype=np.float64), tot, pos, nor)
     safe = np.where(tot > 0, tot, 1.0)
-    pos = np.empty((n_c, 3))
-    nor = np.empty((n_c, 3))
-    for a in range(3):
-        pos[:, a] = np.bincount(cluster, weights=sizes * positions[:, a], minlength=n_c) / safe
-        nor[:, a] = np.bincount(cluster, weights=sizes * graph.normals[:, a], minlength=n_c)
+    pos /= safe[:, None]
     scale2 = None  # content-sensitive runs: the clusters' size-weighted mean scale
     if graph.scale2 is not None:
         scale2 = np.bincount(cluster, weights=sizes * graph.scale2, minlength=n_c) / safe

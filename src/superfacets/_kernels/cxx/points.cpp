@@ -283,65 +283,76 @@ py::array_t<i32> knn_csr(py::handle nbr_, py::handle keep_, py::handle indptr_,
     In<i64> rows(rows_, "rows");
     const i64 n = nbr.n, k = nbr.k, mk = more.k;
     if (keep.cols != k || (rows.n && more_keep.cols != mk)) throw Mismatch("argument keep");
-    // Every listed pair in both rows: counted, then scattered, on threads with atomic
-    // counters. A row's entries land in any order, but each row is then sorted and made
-    // distinct: the layout is the same as in one pass in order.
-    std::vector<i64> count(n + 1, 0);
-    auto bump = [](i64* x) { return __atomic_fetch_add(x, 1, __ATOMIC_RELAXED); };
+    if (n >= (i64(1) << 31)) throw Mismatch("argument nbr");
+    // Every listed pair in both rows. A row's own list is counted and written by the
+    // thread of that row; the reverse entries (row j listed by row i) by any thread, with
+    // atomic counters, after the row's own. A row's entries land in any order, but each
+    // row is then sorted and made distinct: the layout is the same as in one pass in order.
+    std::vector<i32> own(n, 0), rev(n, 0);
+    std::vector<i64> start(n + 1, 0);
+    auto bump = [](i32* x) { return __atomic_fetch_add(x, 1, __ATOMIC_RELAXED); };
+    auto listed = [&](i64 i, i64 c) { return keep(i, c) && nbr(i, c) != i; };
+    auto listed_more = [&](i64 t, i64 c) { return more_keep(t, c) && more(t, c) != rows[t]; };
     {
         py::gil_scoped_release nogil;
-        i64* cnt = count.data();
+        i32* rv = rev.data();
         parallel_for(n, [&](i64 lo, i64 hi) {
-            for (i64 i = lo; i < hi; ++i)
+            for (i64 i = lo; i < hi; ++i) {
+                i32 m = 0;
                 for (i64 c = 0; c < k; ++c)
-                    if (keep(i, c) && nbr(i, c) != i) {
-                        bump(cnt + i + 1);
-                        bump(cnt + nbr(i, c) + 1);
+                    if (listed(i, c)) {
+                        ++m;
+                        bump(rv + nbr(i, c));
                     }
+                own[i] = m;
+            }
         });
         for (i64 t = 0; t < rows.n; ++t)
             for (i64 c = 0; c < mk; ++c)
-                if (more_keep(t, c) && more(t, c) != rows[t]) {
-                    count[rows[t] + 1] += 1;
-                    count[more(t, c) + 1] += 1;
+                if (listed_more(t, c)) {
+                    own[rows[t]] += 1;
+                    rev[more(t, c)] += 1;
                 }
-        for (i64 i = 0; i < n; ++i) count[i + 1] += count[i];
+        for (i64 i = 0; i < n; ++i) start[i + 1] = start[i] + own[i] + rev[i];
     }
     Out<i32> raw;
-    auto raw_a = fresh(count[n], raw);
+    auto raw_a = fresh(start[n], raw);
     {
         py::gil_scoped_release nogil;
-        std::vector<i64> fill(count.begin(), count.end() - 1);
-        i64* fl = fill.data();
+        // rev[j]: the next free place of row j's reverse entries, from the row's start
         parallel_for(n, [&](i64 lo, i64 hi) {
-            for (i64 i = lo; i < hi; ++i)
-                for (i64 c = 0; c < k; ++c)
-                    if (keep(i, c) && nbr(i, c) != i) {
-                        i64 j = nbr(i, c);
-                        raw[bump(fl + i)] = static_cast<i32>(j);
-                        raw[bump(fl + j)] = static_cast<i32>(i);
-                    }
+            for (i64 i = lo; i < hi; ++i) rev[i] = own[i];
         });
-        for (i64 t = 0; t < rows.n; ++t) {
-            i64 i = rows[t];
-            for (i64 c = 0; c < mk; ++c)
-                if (more_keep(t, c) && more(t, c) != i) {
-                    i64 j = more(t, c);
-                    raw[fill[i]++] = static_cast<i32>(j);
-                    raw[fill[j]++] = static_cast<i32>(i);
-                }
-        }
-        std::vector<i64> kept(n);
+        i32* rv = rev.data();
         parallel_for(n, [&](i64 lo, i64 hi) {
             for (i64 i = lo; i < hi; ++i) {
-                i64 m = sort_distinct(raw.p, count[i], count[i + 1]);
-                kept[i] = m;
+                i64 u = start[i];
+                for (i64 c = 0; c < k; ++c)
+                    if (listed(i, c)) {
+                        i64 j = nbr(i, c);
+                        raw[u++] = static_cast<i32>(j);
+                        raw[start[j] + bump(rv + j)] = static_cast<i32>(i);
+                    }
             }
         });
+        for (i64 t = 0; t < rows.n; ++t) {  // the longer lists (distinct rows), after
+            i64 i = rows[t], u = start[i];     // the row's first list
+            for (i64 c = 0; c < k; ++c) u += listed(i, c) ? 1 : 0;
+            for (i64 c = 0; c < mk; ++c)
+                if (listed_more(t, c)) {
+                    i64 j = more(t, c);
+                    raw[u++] = static_cast<i32>(j);
+                    raw[start[j] + rev[j]++] = static_cast<i32>(i);
+                }
+        }
+        parallel_for(n, [&](i64 lo, i64 hi) {
+            for (i64 i = lo; i < hi; ++i)
+                own[i] = static_cast<i32>(sort_distinct(raw.p, start[i], start[i + 1]));
+        });
         indptr[0] = 0;
-        for (i64 i = 0; i < n; ++i) indptr[i + 1] = indptr[i] + kept[i];
+        for (i64 i = 0; i < n; ++i) indptr[i + 1] = indptr[i] + own[i];
         for (i64 i = 0; i < n; ++i) {
-            i64 s = count[i];
+            i64 s = start[i];
             for (i64 a = 0; a < indptr[i + 1] - indptr[i]; ++a) raw[indptr[i] + a] = raw[s + a];
         }
     }
@@ -524,31 +535,86 @@ py::array_t<i64> crossing_pairs(py::handle indptr_, py::handle indices_, py::han
     In<i64> indptr(indptr_, "indptr"), labels(labels_, "labels");
     In<i32> indices(indices_, "indices");
     const i64 n = indptr.n - 1;
-    i64 m = 0;
+    // rows in blocks on threads: each block counts its pairs, then writes them from its
+    // place (a prefix sum of the counts), so the pairs are in row order as in one pass
+    const i64 n_blocks = std::max<i64>(1, std::min<i64>(64, n / 4096));
+    std::vector<i64> at(n_blocks + 1, 0);
+    auto rows = [&](i64 b) { return std::make_pair(n * b / n_blocks, n * (b + 1) / n_blocks); };
+    auto each_block = [&](auto f) {  // f(b) for every block, the blocks split among threads
+        parallel_for(n_blocks * 4096, [&](i64 lo, i64 hi) {
+            for (i64 b = (lo + 4095) / 4096; b * 4096 < hi; ++b) f(b);
+        });
+    };
     {
         py::gil_scoped_release nogil;
-        for (i64 i = 0; i < n; ++i)
-            for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
-                i64 j = indices[x];
-                if (j > i && labels[j] != labels[i]) ++m;
-            }
+        each_block([&](i64 b) {
+            auto [r0, r1] = rows(b);
+            i64 m = 0;
+            for (i64 i = r0; i < r1; ++i)
+                for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
+                    i64 j = indices[x];
+                    if (j > i && labels[j] != labels[i]) ++m;
+                }
+            at[b + 1] = m;
+        });
+        for (i64 b = 0; b < n_blocks; ++b) at[b + 1] += at[b];
     }
     Out<i64> out;
-    auto out_a = fresh(m, out, 2);
+    auto out_a = fresh(at[n_blocks], out, 2);
     {
         py::gil_scoped_release nogil;
-        i64 u = 0;
-        for (i64 i = 0; i < n; ++i)
-            for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
-                i64 j = indices[x];
-                if (j > i && labels[j] != labels[i]) {
-                    out(u, 0) = i;
-                    out(u, 1) = j;
-                    ++u;
+        each_block([&](i64 b) {
+            auto [r0, r1] = rows(b);
+            i64 u = at[b];
+            for (i64 i = r0; i < r1; ++i)
+                for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
+                    i64 j = indices[x];
+                    if (j > i && labels[j] != labels[i]) {
+                        out(u, 0) = i;
+                        out(u, 1) = j;
+                        ++u;
+                    }
                 }
-            }
+        });
     }
     return out_a;
+}
+
+void label_sums(py::handle labels_, py::handle weights_, py::handle positions_,
+                py::handle normals_, py::handle area_, py::handle wpos_, py::handle wnrm_) {
+    In<i64> labels(labels_, "labels");
+    In<double> w(weights_, "weights"), pos(positions_, "positions"), nor(normals_, "normals");
+    Out<double> area(area_, "area"), wpos(wpos_, "wpos"), wnrm(wnrm_, "wnrm");
+    if (pos.cols != 3 || nor.cols != 3 || wpos.cols != 3 || wnrm.cols != 3 ||
+        w.n != labels.n || pos.n != labels.n || nor.n != labels.n || wpos.n != area.n ||
+        wnrm.n != area.n)
+        throw Mismatch("argument positions");
+    py::gil_scoped_release nogil;
+    for (i64 i = 0; i < labels.n; ++i) {
+        i64 s = labels[i];
+        double x = w[i];
+        area[s] += x;
+        for (int c = 0; c < 3; ++c) wpos(s, c) += x * pos(i, c);
+        for (int c = 0; c < 3; ++c) wnrm(s, c) += x * nor(i, c);
+    }
+}
+
+void label_scatter(py::handle labels_, py::handle weights_, py::handle positions_,
+                   py::handle centroid_, py::handle scatter_) {
+    In<i64> labels(labels_, "labels");
+    In<double> w(weights_, "weights"), pos(positions_, "positions"), cen(centroid_, "centroid");
+    Out<double> sc(scatter_, "scatter");
+    if (pos.cols != 3 || cen.cols != 3 || sc.cols != 9 || w.n != labels.n ||
+        pos.n != labels.n || sc.n != cen.n)
+        throw Mismatch("argument positions");
+    py::gil_scoped_release nogil;
+    for (i64 i = 0; i < labels.n; ++i) {
+        i64 s = labels[i];
+        double x = w[i];
+        double d[3] = {pos(i, 0) - cen(s, 0), pos(i, 1) - cen(s, 1), pos(i, 2) - cen(s, 2)};
+        for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b) sc(s, 3 * a + b) += x * d[a] * d[b];
+    }
 }
 
 void bind_points(py::module_& m) {
@@ -564,6 +630,8 @@ void bind_points(py::module_& m) {
     m.def("point_terms", &point_terms);
     m.def("neighbour_mean", &neighbour_mean);
     m.def("crossing_pairs", &crossing_pairs);
+    m.def("label_sums", &label_sums);
+    m.def("label_scatter", &label_scatter);
 }
 
 }  // namespace sfk
