@@ -3,7 +3,7 @@
 Usage: python benchmarks/tiles.py [--mesh-id 281] [--subdivide 2 3] [--points 1000000]
        [-k 2000] [--tiles 8] [--workers 2] [--halo 3] [--no-mesh] [--tiled-only]
        python benchmarks/tiles.py --compare [-k 600] [--tiles 8] [--halo 3] [--paper]
-       [--times 1] [--refine 1] [--compare-points N]
+       [--times 1] [--refine 1] [--compare-points N] [--merge-from F]
 
 ``--compare``: the first benchmark mesh of each category, subdivided ``--times``
 times (default once), segmented once and tiled (in process), the mean
@@ -11,7 +11,8 @@ undersegmentation error of each, the superfacets cut by a border and the
 disagreements (docs/notes/tiles.md). ``--refine``: the tiles' refine rounds
 (default: ``segment_tiled``'s). ``--compare-points N``: ``N`` points sampled
 on each mesh (seed 0, each with its face's class) instead of the subdivided
-faces, the UE on the whole cloud's point graph.
+faces, the UE on the whole cloud's point graph. ``--merge-from F``: both runs with
+``merge_from=F`` (1: no merges to the count).
 
 Inputs with ground truth, larger than the benchmark's: a benchmark mesh
 (``../shared/data/psb.tar.xz``) subdivided ``s`` times (each triangle into 4,
@@ -233,6 +234,8 @@ def compare(a) -> None:
     from superfacets.scale.runner.tiles import segment_tiled
 
     extra = dict(paper=True) if a.paper else {}
+    if a.merge_from is not None:
+        extra["merge_from"] = a.merge_from
     ue_s, ue_t, cut, dis = [], [], 0, 0
     for b in first_per_category(list_meshes(), 1):
         m = read_mesh(b.path)
@@ -291,6 +294,8 @@ def main() -> None:
     ap.add_argument("--compare", action="store_true")
     ap.add_argument("--paper", action="store_true")
     ap.add_argument("--refine", type=int, default=None)
+    ap.add_argument("--merge-from", type=int, default=None,
+                    help="--compare: merge_from of both runs (default: the method's)")
     ap.add_argument("--times", type=int, default=1, help="--compare: subdivisions per mesh")
     ap.add_argument("--compare-points", type=int, default=0, metavar="N",
                     help="--compare: N points sampled on each mesh instead of its faces")

@@ -74,11 +74,7 @@ def test_a_room_spends_its_count_on_the_objects_not_the_floor():
     assert merged.params["merge_from"] == 5 and merged.params["density"] == 0.0
     assert merged.n_segments == 60 and np.unique(merged.labels).size == 60
 
-    def on_floor(labels):  # superpoints mostly of floor points
-        share = np.bincount(labels, weights=(part == 0)) / np.bincount(labels)
-        return int((share > 0.5).sum())
-
-    assert on_floor(merged.labels) <= on_floor(plain.labels) // 2
+    assert _on_floor(merged.labels, part) <= _on_floor(plain.labels, part) // 2
     # the domes get the count: half the error (UE 0.13 -> 0.07), fewer points off their part
     def off_part(labels):
         return sum(int(np.bincount(part[labels == s]).sum() - np.bincount(part[labels == s]).max())
@@ -145,13 +141,83 @@ def test_an_uneven_cloud_keeps_the_density_and_no_merges():
     assert r.params["density"] == 0.5 and r.params["merge_from"] == 1
 
 
-def test_a_tiled_run_refuses_merges_it_cannot_make():
-    from superfacets.scale.tiling import check_tileable
+def _on_floor(labels, part):  # superpoints mostly of floor points
+    share = np.bincount(labels, weights=(part == 0)) / np.bincount(labels)
+    return int((share > 0.5).sum())
 
-    check_tileable(resolve())  # the default: no merges in the tiles
-    check_tileable(resolve(merge_from=1))
-    with pytest.raises(ParameterError, match="merge_from: not available in a tiled run"):
-        check_tileable(resolve(merge_from=5))
+
+def test_a_tiled_run_merges_to_the_count_like_one_run():
+    from superfacets.scale.runner.tiles import segment_tiled
+
+    pts, part = _room(5)
+    plain = segment_tiled(pts, 60, tiles=4, merge_from=1)
+    tiled = segment_tiled(pts, 60, tiles=4)
+    assert tiled.params["merge_from"] == 5 and tiled.params["merged_from"] >= 250
+    assert tiled.n_segments == 60 and np.unique(tiled.labels).size == 60
+    assert plain.params["merge_from"] == 1 and plain.params["merged_from"] is None
+    # as in one run (above): the floor's superpoints at least halve, the domes get the count
+    assert _on_floor(tiled.labels, part) <= _on_floor(plain.labels, part) // 2
+    assert _on_floor(tiled.labels, part) <= 2 * _on_floor(segment(pts, 60).labels, part)
+    # every superpoint one connected piece of the point graph: no merge across a gap
+    from superfacets.elements.points import point_graph
+    from superfacets.method.connectivity import label_components
+
+    g = point_graph(PointCloud(pts))
+    lab = np.zeros(g.graph.n_elements, dtype=np.int64)
+    lab[g.index] = tiled.labels
+    assert np.unique(label_components(g.graph, lab)).size == 60
+
+
+def test_the_tiles_sums_add_up_to_the_whole_clouds():
+    """Each adjacency is summed by one tile, each point by its core's: the sums of two
+    tiles are one tile's, and one tile's merges are one run's, partition for partition."""
+    from dataclasses import replace
+
+    from superfacets.elements.points import point_graph
+    from superfacets.method.merges import merge_to_count
+    from superfacets.method.stages import resolve_rules
+    from superfacets.scale.tile_merges import merge_names, tile_merge_stats
+
+    pts, _ = _room(6)
+    cloud = PointCloud(pts)
+    pe = point_graph(cloud)
+    g = pe.graph
+    fine = np.zeros(g.n_elements, dtype=np.int64)
+    fine[pe.index] = segment(cloud, 200, merge_from=1).labels  # per element
+    names = 7 * np.arange(200) + 3
+    rows = np.arange(g.n_elements)
+    whole = tile_merge_stats(g, fine, names, np.ones(g.n_elements, bool), rows, 8192)
+    east = g.positions[:, 0] > 0.43
+    halves = [tile_merge_stats(g, fine, names, core, rows, 4096) for core in (east, ~east)]
+    for field in ("count", "area"):
+        total = np.zeros(200)
+        for h in halves:
+            total[np.searchsorted(names, h["names"])] += h[field]
+        np.testing.assert_allclose(total, whole[field], rtol=1e-12)
+    edges = np.concatenate([h["edges"] for h in halves])
+    assert len({tuple(e) for e in edges}) < len(edges)  # pairs summed by both halves
+    key = lambda e: e[:, 0] * 10_000 + e[:, 1]  # noqa: E731
+    border = np.bincount(np.searchsorted(key(whole["edges"]), key(edges)),
+                         weights=np.concatenate([h["border"] for h in halves]))
+    np.testing.assert_allclose(border, whole["border"], rtol=1e-12)
+
+    rules = replace(resolve_rules(g, resolve(n_segments=40, density=0.0)), target=40)
+    one_run, _ = merge_to_count(g, fine, rules)
+    got, merged, _, fewest = merge_names([whole], 40, DEFAULTS.alpha, DEFAULTS.eta_convex)
+    assert fewest == 40
+    tiled = merged[np.searchsorted(got, names[fine])]
+    assert np.unique(one_run * 10_000 + tiled).size == 40  # the same partition
+    split = merge_names(halves, 40, DEFAULTS.alpha, DEFAULTS.eta_convex)
+    assert np.unique(split[1]).size == 40
+
+
+def test_a_tiled_run_merges_points_only():
+    import trimesh
+
+    from superfacets.scale.runner.tiles import segment_tiled
+
+    with pytest.raises(ParameterError, match="merge_from above 1: a tiled run merges"):
+        segment_tiled(trimesh.creation.icosphere(3), 20, tiles=2, merge_from=5)
 
 
 def test_the_command_line_takes_merge_from(tmp_path, capsys):

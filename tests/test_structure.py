@@ -37,7 +37,7 @@ LAYERS = (
     ("superfacets.method.stages", "superfacets.method.finish", "superfacets.method.merges",
      "superfacets.method.pipeline",
      "superfacets.api",
-     "superfacets.scale.tiling", "superfacets.scale.tile_layout"),
+     "superfacets.scale.tiling", "superfacets.scale.tile_layout", "superfacets.scale.tile_merges"),
     # every method alike
     ("superfacets.evaluation.baselines", "superfacets.evaluation.methods"),
     # what is made of results: files, pictures, pages, experiments, batches, tiled runs

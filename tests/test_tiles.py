@@ -22,8 +22,8 @@ from superfacets.method.params import resolve
 from superfacets.scale.runner import buckets as buckets_module
 from superfacets.scale.runner.buckets import bucket
 from superfacets.scale.runner.tiles import segment_tiled
-from superfacets.scale.tile_layout import balanced_tiles, tile_box, tile_grid, tile_of
-from superfacets.scale.tiling import tile_labels, trim_centers
+from superfacets.scale.tile_layout import balanced_tiles, tile_box, tile_grid, tile_of, trim_centers
+from superfacets.scale.tiling import tile_labels
 
 
 def _bumpy(subdivisions: int = 5) -> Mesh:

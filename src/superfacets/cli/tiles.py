@@ -97,6 +97,9 @@ def segment_tiles(args) -> int:
         asked = ("" if k is None or result.n_segments == k else
                  f" ({k} asked: tiles this small hold fewer centers; see docs/notes/tiles.md)"
                  if result.n_segments < k else f" ({k} asked)")
+        first = result.params.get("merged_from")
+        if first:
+            what += f" (merged from {first:,}, flat neighbours first; --merge-from 1: none)"
         print(f"{Path(args.mesh).name}: {result.labels.size} {kind}, {result.n_segments} "
               f"{what}{asked} in {len(result.tiles)} tiles "
               f"({result.layout.describe()}), {elapsed:.2f} s; largest tile "

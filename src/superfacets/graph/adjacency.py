@@ -21,7 +21,7 @@ from ..elements.inputs import as_element_graph
 from ..errors import ParameterError
 from ..method.labels import check_labels
 
-__all__ = ["SuperfacetGraph", "superfacet_graph"]
+__all__ = ["SuperfacetGraph", "superfacet_graph", "crossing_adjacencies"]
 
 
 @dataclass(frozen=True)
@@ -217,7 +217,7 @@ def superfacet_graph(graph, labels, features=None) -> SuperfacetGraph:
                                  f"row per {g.element}, got shape {np.shape(features)}")
         feature = np.stack([np.bincount(lab, weights=area_w * f[:, c], minlength=k)
                             for c in range(f.shape[1])], axis=1) / safe[:, None]
-    pc, length, cos, concave_el = _crossings(g, lab)
+    pc, length, cos, concave_el = crossing_adjacencies(g, lab)
     a, b = lab[pc[:, 0]], lab[pc[:, 1]]
     lo, hi = np.minimum(a, b), np.maximum(a, b)
     key, inv = np.unique(lo * k + hi, return_inverse=True)
@@ -244,12 +244,48 @@ def superfacet_graph(graph, labels, features=None) -> SuperfacetGraph:
                            feature=feature, scatter=scatter)
 
 
-def _crossings(g, lab: np.ndarray):
-    """The adjacencies whose two elements have different labels, in pair order: their
-    elements ``(m, 2)``, border lengths, cosines and concavity. A point graph whose pairs
-    and terms were never built (a default run) reads them from its CSR layout, border
-    shares, positions and normals, for the crossing adjacencies alone (the same values:
-    about 60 bytes per point graph adjacency not held)."""
+def crossing_adjacencies(g, lab: np.ndarray):
+    """The element adjacencies whose two elements have different labels, in pair order.
+
+    A point graph whose pairs and terms were never built (a default run) reads them
+    from its CSR layout, border shares, positions and normals, for the crossing
+    adjacencies alone (the same values: about 60 bytes per point graph adjacency not
+    held).
+
+    Parameters
+    ----------
+    g : ElementGraph
+    lab : (n,) int64 ndarray
+        A label per element.
+
+    Returns
+    -------
+    pairs : (m, 2) int ndarray
+        The two elements of each, lower first.
+    length : (m,) float64 ndarray
+        Border length (points: the mean of the two border shares).
+    cos : (m,) float64 ndarray
+        Cosine of the angle between the two normals.
+    concave : (m,) bool ndarray
+        Concave adjacencies (paper eq. 3).
+
+    Raises
+    ------
+    IndexError
+        If ``lab`` is shorter than the graph (the caller checks the labels).
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets import segment
+    >>> from superfacets.elements import face_graph
+    >>> from superfacets.inputs.convert import as_mesh
+    >>> box = as_mesh(trimesh.creation.box())
+    >>> lab = segment(box, 6).labels                         # the six sides
+    >>> pairs, length, cos, concave = crossing_adjacencies(face_graph(box), lab)
+    >>> pairs.shape, float(length[0]), bool(concave.any())   # the 12 edges of the box
+    ((12, 2), 1.0, False)
+    """
     from ..elements.vertices import symmetric_terms
 
     if (g.border_shares is None or g.terms_of is not symmetric_terms

@@ -32,7 +32,8 @@ import numpy as np
 
 from .finish import exact_count
 
-__all__ = ["merge_to_count", "flat_merges", "noise_variance", "FLAT_NOISE", "NOISE_SAMPLE"]
+__all__ = ["merge_to_count", "flat_merges", "flat_merge_nodes", "noise_variance",
+           "neighbourhood_noise", "FLAT_NOISE", "NOISE_SAMPLE"]
 
 #: A flat merge's largest rise of the squared plane distances, per element of the
 #: smaller superpoint, in units of :func:`noise_variance`: 1, the noise itself. Measured
@@ -82,6 +83,14 @@ def noise_variance(graph) -> float:
     """
     n = graph.n_elements
     pick = np.unique(np.linspace(0, n - 1, min(n, NOISE_SAMPLE)).astype(np.int64))
+    return float(max(np.median(neighbourhood_noise(graph, pick)), 0.0)) if n else 0.0
+
+
+def neighbourhood_noise(graph, pick: np.ndarray) -> np.ndarray:
+    """The smallest eigenvalue of the covariance of the neighbourhood (the element and
+    its graph neighbours) of each element ``pick`` (int64, distinct): what
+    :func:`noise_variance` takes the median of ((len(pick),) float64, squared input
+    units; a tiled run gathers them from every tile)."""
     indptr = np.asarray(graph.indptr, dtype=np.int64)
     start, count = indptr[pick], indptr[pick + 1] - indptr[pick]
     owner = np.repeat(np.arange(pick.size), count)
@@ -99,7 +108,7 @@ def noise_variance(graph) -> float:
         for j in range(i, 3):
             cov[:, i, j] = cov[:, j, i] = np.bincount(rows, d[:, i] * d[:, j], pick.size)
     cov /= size[:, None, None]
-    return float(max(np.median(np.linalg.eigvalsh(cov)[:, 0]), 0.0))
+    return np.linalg.eigvalsh(cov)[:, 0]
 
 
 def flat_merges(graph, labels: np.ndarray, k: int, max_rise: float, *,
@@ -152,16 +161,29 @@ def flat_merges(graph, labels: np.ndarray, k: int, max_rise: float, *,
     >>> int(merged.max()) + 1                              # one per plane
     2
     """
-    from .._kernels import native
-    from ..graph.hierarchy import merge_arrays, planarity_graph
+    from ..graph.hierarchy import planarity_graph
 
     pg = planarity_graph(graph, labels)  # no features: the merges are geometric
+    return flat_merge_nodes(pg, k, max_rise, alpha, eta_convex)[labels]
+
+
+def flat_merge_nodes(pg, k: int, max_rise: float, alpha: float = 0.0,
+                     eta_convex: float = 0.0) -> np.ndarray:
+    """:func:`flat_merges` on a superpoint graph whose ``area``, ``centroid`` and
+    ``scatter`` are the points' count, mean and scatter
+    (:func:`superfacets.graph.hierarchy.planarity_graph`): the merged superpoint of
+    each node ((K,) int64, dense, numbered by their lowest node)."""
+    from .._kernels import native
+    from ..graph.hierarchy import merge_arrays
+
     n_nodes = pg.n_segments
+    if n_nodes == 0:
+        return np.zeros(0, dtype=np.int64)
     roots = native.kernel("hierarchy.merge_levels")(
         n_nodes, *merge_arrays(pg, True), 2, float(alpha), float(eta_convex), 0.0, 0.0,
-        float(max_rise), np.asarray([min(k, n_nodes)], dtype=np.int64))[0]
+        float(max_rise), np.asarray([max(1, min(k, n_nodes))], dtype=np.int64))[0]
     _, top = np.unique(roots, return_inverse=True)  # numbered by their lowest superpoint
-    return top.astype(np.int64)[labels]
+    return top.astype(np.int64)
 
 
 def merge_to_count(graph, labels: np.ndarray, rules) -> tuple[np.ndarray, int]:

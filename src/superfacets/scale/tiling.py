@@ -52,7 +52,7 @@ from ..method.pipeline import pipeline
 from ..method.stages import build_graph, resolve_rules, weigh
 
 __all__ = ["tile_centers", "tile_refine", "tile_labels",
-           "tile_connect", "orientation_reference", "trim_centers", "HALO",
+           "tile_connect", "orientation_reference", "HALO",
            "point_areas", "check_tileable"]
 
 #: Default halo, in units of ``window * r``. 3 rather than 2: the classification of
@@ -104,9 +104,9 @@ def _diagonal(inp) -> float:
 def check_tileable(params: SegmentParams, colors: bool = True) -> None:
     """Refuse the options that read the whole graph, which no tile holds: the merge of
     small superfacets (``min_elements``), content-sensitive sizes (``density``: the
-    median size; ``roughness``), the merges to the count (``merge_from`` above 1).
-    ``density=None`` (automatic) is 0 in a tiled run, ``merge_from=None`` 1. Also
-    ``beta > 0`` on an input without ``colors`` (the survey's).
+    median size; ``roughness``). ``density=None`` (automatic) is 0 in a tiled run. Also
+    ``beta > 0`` on an input without ``colors`` (the survey's). (The merges to the count,
+    ``merge_from``, run after the tiles: :mod:`superfacets.scale.tile_merges`.)
 
     Raises
     ------
@@ -115,8 +115,6 @@ def check_tileable(params: SegmentParams, colors: bool = True) -> None:
     """
     whole = [n for n in ("min_elements", "density", "roughness")
              if getattr(params, n) not in (None, 0, getattr(DEFAULTS, n))]
-    if params.merge_from not in (None, 1):
-        whole.append("merge_from")
     if whole:
         raise ParameterError(f"{' and '.join(whole)}: not available in a tiled run (where the "
                              "input fits in memory, segment() takes it)")
@@ -129,8 +127,8 @@ def _tile_params(params: SegmentParams, r: float, diagonal: float, tile_diagonal
                  ) -> SegmentParams:
     """The run's parameters for one tile: the whole input's radius ``r``."""
     nr = params.neighbor_radius
-    # no automatic density: a tile's spread of sizes is not the whole input's; no merges:
-    # a tile's count is its share of the whole run's
+    # no automatic density: a tile's spread of sizes is not the whole input's; no merges
+    # in a tile: they come after, over all the tiles (superfacets.scale.tile_merges)
     return replace(params, n_segments=None, radius=r / tile_diagonal, progress=False,
                    density=0.0 if params.density is None else params.density, merge_from=1,
                    neighbor_radius=None if nr is None else nr * diagonal / tile_diagonal)
@@ -223,44 +221,6 @@ def orientation_reference(sample: np.ndarray, n_neighbors: int, up=None) -> tupl
     return np.array(g.positions), np.array(g.normals)
 
 
-def trim_centers(positions: np.ndarray, k: int) -> np.ndarray:
-    """Which of the tiles' centers to keep so that at most ``k`` remain.
-
-    Each tile's core holds its share of ``k`` centers when the passes start,
-    but the passes move centers across tile borders, where two tiles' runs
-    can each keep one: the gathered count runs 0-10 % over ``k`` (measured on
-    benchmark meshes). The most crowded go, one at a time: the center whose
-    nearest other center is closest (the later row on a tie), until ``k``
-    remain.
-
-    Returns
-    -------
-    (c,) bool ndarray
-    """
-    from scipy.spatial import cKDTree
-
-    keep = np.ones(positions.shape[0], dtype=bool)
-    while keep.sum() > k:
-        idx = np.flatnonzero(keep)
-        d, j = cKDTree(positions[idx]).query(positions[idx], 2)
-        d, j = d[:, 1], j[:, 1]
-        excess = int(keep.sum()) - k
-        # a pair counts once: drop the later of each closest pair, closest pairs first
-        order = np.lexsort((-idx, d))
-        gone = np.zeros(idx.size, dtype=bool)
-        for a in order:
-            if excess == 0:
-                break
-            if gone[a] or gone[j[a]]:
-                continue
-            gone[max(a, j[a])] = True
-            excess -= 1
-            if d[a] > d[order[0]] * 4:  # the rest after the neighbours are recomputed
-                break
-        keep[idx[gone]] = False
-    return keep
-
-
 def _core_share(inp, core: np.ndarray, p: SegmentParams, r: float) -> int:
     """Initial centers of a tile such that its core gets its share of the run's.
 
@@ -286,8 +246,9 @@ def _core_share(inp, core: np.ndarray, p: SegmentParams, r: float) -> int:
 
 
 def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
-                diagonal: float, features=None) -> np.ndarray:
-    """Phase 2: labels of one tile from fixed centers.
+                diagonal: float, features=None, merging: tuple | None = None):
+    """Phase 2: labels of one tile from fixed centers (and, ``merging``, the sums the
+    merges to the count read: :func:`superfacets.scale.tile_merges.tile_merge_stats`).
 
     Parameters
     ----------
@@ -298,6 +259,10 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
         global order (ties of the classification go to the earlier).
     params, r, diagonal, features
         As :func:`tile_centers`.
+    merging : tuple, optional
+        ``(core, rows, n_noise)``: the rows of the tile's core ((n_rows,) bool), the row
+        of each in the input ((n_rows,) int64), and the core points to read the noise
+        on.
 
     Returns
     -------
@@ -305,12 +270,20 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
         The row of the center of each row's superfacet (-1: an invalid
         point). Superfacets seeded on elements no center reached are named by
         their seed's row.
+    dict
+        With ``merging`` only: the tile's sums, superpoints named by their center's
+        row in the input.
     """
     d = _diagonal(inp)
     valid = _valid_rows(inp)
     if d <= 0:  # one position: the first center within reach, else the first row
         name = int(center_rows[0]) if len(center_rows) else int(np.flatnonzero(valid)[0])
-        return np.where(valid, name, -1).astype(np.int64)
+        named = np.where(valid, name, -1).astype(np.int64)
+        if merging is None:
+            return named
+        from .tile_merges import one_position_stats
+
+        return named, one_position_stats(inp, valid, name, merging)
     # the whole run's stages (superfacets.method.pipeline) with one classification from the
     # fixed centers in place of the initialization and the passes
     src, graph, p = build_graph(inp, _tile_params(params, r, diagonal, d), features)
@@ -339,7 +312,15 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
         labels = clean_up(graph, labels, kept, rules, feats)
     name = src.first_rows(kept)  # each superfacet named by its center's row
     out = src.to_rows(labels)
-    return np.where(out >= 0, name[np.maximum(out, 0)], -1).astype(np.int64)
+    named = np.where(out >= 0, name[np.maximum(out, 0)], -1).astype(np.int64)
+    if merging is None:
+        return named
+    from .tile_merges import tile_merge_stats
+
+    core, rows, n_noise = (np.asarray(x) for x in merging)
+    first = src.first_rows(np.arange(m))  # each element's first row
+    return named, tile_merge_stats(graph, labels, rows[name], core[first], rows[first],
+                                   int(n_noise))
 
 
 def tile_connect(inp, labels: np.ndarray, owned: np.ndarray, owned_rows: np.ndarray,

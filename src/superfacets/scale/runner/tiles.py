@@ -19,7 +19,11 @@ no process holds the whole input. The phases (:mod:`superfacets.scale.tiling`):
 2. per tile, labels from all the centers, kept for the core;
 3. only where two tiles saw a border differently: per tile, the stitched
    labels of its box (read from a file in the work folder) made connected
-   (:func:`~superfacets.scale.tiling.tile_connect`).
+   (:func:`~superfacets.scale.tiling.tile_connect`);
+4. on a point cloud of even density (``merge_from``, as one run chooses it):
+   the phases above make ``merge_from`` times the superpoints asked for, each
+   tile sums what the merges read in phase 2, and this process merges them
+   down to the count (:mod:`superfacets.scale.tile_merges`).
 
 Labels are named by their center's row, so a superfacet crossing tile
 borders has one label on every side; they are made dense at the end. Only
@@ -40,7 +44,10 @@ import numpy as np
 from ...api.result import TiledResult
 from ...errors import ParameterError, SuperfacetsError
 from ...inputs.bounds import check_extent
+from ...method.merges import NOISE_SAMPLE
 from ...method.params import DEFAULTS, resolve, superfacet_size
+from ...method.rules import MIN_FINE_ELEMENTS
+from ..tile_merges import merged_labels, tiled_merge_from
 from .engine import Engine, PeakMemory, error_text
 from .manifest import FolderLock
 
@@ -124,7 +131,11 @@ def tile_task(task: dict) -> dict:
                 found = tile_refine(inp, core, at[ok], p, r, d)
                 out.update(centers=rows[found], positions=pos[found])
                 return out
-            named = tile_labels(inp, at[ok], p, r, d)
+            if task.get("n_noise") is not None:  # the merges to the count follow
+                named, out["merge_stats"] = tile_labels(
+                    inp, at[ok], p, r, d, merging=(core, rows, task["n_noise"]))
+            else:
+                named = tile_labels(inp, at[ok], p, r, d)
             gid = np.where(named >= 0, rows[np.maximum(named, 0)], -1)
             lo_c, hi_c = layout.box(task["tile"])
             near = ~core & ((pos >= lo_c - task["ring"]) & (pos <= hi_c + task["ring"])).all(1)
@@ -252,6 +263,11 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
             reader = RegionReader.spill(source, tmp)
         survey = reader.survey()
         check_tileable(params, survey.colors)
+        target, merge_from = params.n_segments, tiled_merge_from(params, reader.kind)
+        if merge_from > 1:  # merge_from times the superpoints, merged to the count at the end
+            fine = min(target * merge_from, max(target, survey.n_elements // MIN_FINE_ELEMENTS))
+            merge_from = merge_from if fine > target else 1
+            params = replace(params, n_segments=fine)
         if survey.color_top is not None:  # one divisor for the whole file's colours
             reader = replace(reader, color_top=survey.color_top)
         timings["survey"] = time.perf_counter() - t
@@ -325,7 +341,9 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                 rows, pos = _gathered(again, params)
 
             t = time.perf_counter()
-            done = [o for o in run("labels", margin, reach) if o["core"]]
+            n_noise = NOISE_SAMPLE // n_tiles + 1 if merge_from > 1 else None
+            done = [o for o in run("labels", margin, lambda t: dict(reach(t), n_noise=n_noise))
+                    if o["core"]]
             timings["labels"] = time.perf_counter() - t
             t = time.perf_counter()
             labels = np.full(reader.n_rows, -1, dtype=np.int64)
@@ -349,6 +367,12 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                         labels[o["moved_rows"]] = o["moved_labels"]
                         repaired += int(o["moved_rows"].size)
                 timings["connect"] = time.perf_counter() - t
+    merged_from = None
+    if merge_from > 1:
+        t = time.perf_counter()
+        merged_from = int(np.unique(labels[labels >= 0]).size)
+        labels = merged_labels(labels, [o["merge_stats"] for o in done], target, params)
+        timings["merges"] = time.perf_counter() - t
     t = time.perf_counter()
     valid = labels >= 0
     names, dense = np.unique(labels[valid], return_inverse=True)
@@ -363,7 +387,8 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
             if phase == "centers":
                 stats[o["tile"]]["centers"] = int(o["centers"].size)
     resolved = dict(params.as_dict(), n_segments=int(names.size), radius=r / diagonal,
-                    tiles=grid, halo=float(halo), elements=reader.kind)
+                    tiles=grid, halo=float(halo), elements=reader.kind, merge_from=merge_from,
+                    merged_from=merged_from)
     return TiledResult(labels=labels, centers=names.astype(np.int64), mesh_radius=r, grid=grid,
                        layout=layout, halo=margin, disagreements=disagreements, repaired=repaired,
                        tiles=[stats[k] for k in sorted(stats)], timings=timings,
@@ -383,7 +408,7 @@ def _gathered(outs: list, params) -> tuple[np.ndarray, np.ndarray]:
     order = np.argsort(rows, kind="stable")
     rows, pos = rows[order], pos[order]
     if params.radius is None and params.init == "farthest":
-        from ..tiling import trim_centers
+        from ..tile_layout import trim_centers
         keep = trim_centers(pos, params.n_segments)
         return rows[keep], pos[keep]
     return rows, pos

@@ -1,0 +1,319 @@
+"""The merges to the count (:mod:`superfacets.method.merges`) in a tiled run.
+
+A tiled run on a cloud of even density segments ``merge_from`` times the superpoints
+asked for, as one run does, and merges them down to the count once every tile has its
+labels. No process holds the whole point graph, so each tile sums what the merges
+read, on its own labels (:func:`tile_merge_stats`, in the labels phase):
+
+- per superpoint, over the tile's core points: their count, mean and scatter about
+  that mean (the least-squares plane of the flat merges), and their area and
+  area-weighted mean (Ward's merges);
+- per pair of adjacent superpoints, over the point graph's adjacencies that cross from
+  one to the other: the border length, and the border-weighted angle and concave
+  share of the normals (each adjacency counted by one tile only: the one whose core
+  holds its point of lower row);
+- the noise: the smallest eigenvalue of the neighbourhoods of some core points,
+  evenly spaced (:func:`superfacets.method.merges.neighbourhood_noise`).
+
+This process adds the tiles' sums (the scatters by Chan's rule for the union of two
+samples), builds the superpoint graph, and merges as one run does
+(:func:`merge_names`): the flat merges up to the noise (the median of the tiles'
+eigenvalues), then Ward's merges down to the count. An element two tiles labelled
+differently (the run's ``disagreements``) counts under its own tile's label in that
+tile's sums: the sums are those of the stitched labels up to those few elements.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from .._kernels import native
+
+__all__ = ["tile_merge_stats", "merge_names", "one_position_stats", "tiled_merge_from",
+           "merged_labels"]
+
+
+def tile_merge_stats(graph, labels: np.ndarray, names: np.ndarray, core: np.ndarray,
+                     rows: np.ndarray, n_noise: int) -> dict:
+    """What the merges read, summed over one tile (see the module notes).
+
+    Parameters
+    ----------
+    graph : ElementGraph
+        The tile's point graph (tile and halo).
+    labels : (m,) int64 ndarray
+        Dense superpoint of each element, ``0..K-1``.
+    names : (K,) int64 ndarray
+        The run-wide name of each superpoint (its center's row in the input).
+    core : (m,) bool ndarray
+        The elements of the tile's core.
+    rows : (m,) int64 ndarray
+        The row in the input of each element (its first row): which tile counts an
+        adjacency.
+    n_noise : int
+        Core elements to read the noise on (evenly spaced), ``>= 0``.
+
+    Returns
+    -------
+    dict
+        ``names`` (K',), ``count`` (K',), ``mean`` (K', 3), ``scatter`` (K', 3, 3),
+        ``area`` (K',), ``area_mean`` (K', 3): the superpoints with core elements;
+        ``edges`` (E, 2) names, lower first, and per edge ``border``, ``angle`` and
+        ``concave`` (border-weighted sums), ``crossings``, ``angle_sum`` and
+        ``concave_sum`` (plain sums); ``noise`` (n_noise',) float64.
+
+    Raises
+    ------
+    ParameterError
+        If the labels do not fit the graph.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from superfacets.inputs.cloud import PointCloud
+    >>> from superfacets.elements.points import point_graph
+    >>> xy = np.stack(np.meshgrid(np.arange(10.0), np.arange(10.0)), -1).reshape(-1, 2)
+    >>> g = point_graph(PointCloud(np.c_[xy, np.zeros(100)])).graph
+    >>> lab = (g.positions[:, 0] >= 5).astype(np.int64)
+    >>> s = tile_merge_stats(g, lab, np.array([7, 9]), np.ones(100, bool), np.arange(100), 4)
+    >>> s["names"].tolist(), s["count"].tolist(), s["edges"].tolist()
+    ([7, 9], [50.0, 50.0], [[7, 9]])
+    """
+    from ..graph.adjacency import crossing_adjacencies
+    from ..method.labels import check_labels
+    from ..method.merges import neighbourhood_noise
+
+    lab = np.ascontiguousarray(check_labels(labels, graph.n_elements, per=graph.element),
+                               dtype=np.int64)
+    names = np.asarray(names, dtype=np.int64)
+    at = np.flatnonzero(core)
+    pos = np.ascontiguousarray(graph.positions, dtype=np.float64)
+    sizes = np.ascontiguousarray(graph.sizes, dtype=np.float64)
+    normals = np.ascontiguousarray(graph.normals, dtype=np.float64)
+    used, local = np.unique(lab[at], return_inverse=True)
+    local = np.ascontiguousarray(local, dtype=np.int64)
+    k = used.size
+    sums = native.kernel("geometry.label_sums")
+    count, wpos, unused = np.zeros(k), np.zeros((k, 3)), np.zeros((k, 3))
+    sums(local, np.ones(at.size), np.ascontiguousarray(pos[at]), normals[at], count, wpos,
+         unused)
+    mean = wpos / np.maximum(count, 1.0)[:, None]
+    scatter = np.zeros((k, 9))
+    native.kernel("geometry.label_scatter")(local, np.ones(at.size), np.ascontiguousarray(
+        pos[at]), mean, scatter)
+    area, apos = np.zeros(k), np.zeros((k, 3))
+    sums(local, sizes[at], np.ascontiguousarray(pos[at]), normals[at], area, apos, unused)
+    area_mean = apos / np.where(area > 0, area, 1.0)[:, None]
+
+    pc, length, cos, concave = crossing_adjacencies(graph, lab)
+    i, j = pc[:, 0], pc[:, 1]
+    mine = (core[i] & (rows[i] < rows[j])) | (core[j] & (rows[j] < rows[i]))
+    a, b = names[lab[i[mine]]], names[lab[j[mine]]]
+    length, cos, concave = length[mine], cos[mine], concave[mine].astype(np.float64)
+    key, inv = np.unique(np.stack([np.minimum(a, b), np.maximum(a, b)], 1), axis=0,
+                         return_inverse=True)
+    inv = inv.reshape(-1)
+    e = key.shape[0]
+    angle = np.arccos(np.clip(cos, -1.0, 1.0))
+
+    def add(w):
+        return np.bincount(inv, weights=w, minlength=e)
+
+    pick = at[np.unique(np.linspace(0, at.size - 1, min(at.size, n_noise)).astype(np.int64))] \
+        if n_noise > 0 and at.size else at[:0]
+    return dict(names=names[used], count=count, mean=mean, scatter=scatter.reshape(k, 3, 3),
+                area=area, area_mean=area_mean, edges=key.reshape(e, 2), border=add(length),
+                angle=add(length * angle), concave=add(length * concave),
+                crossings=np.bincount(inv, minlength=e).astype(np.float64),
+                angle_sum=add(angle), concave_sum=add(concave),
+                noise=neighbourhood_noise(graph, pick))
+
+
+def one_position_stats(inp, valid: np.ndarray, name: int, merging: tuple) -> dict:
+    """:func:`tile_merge_stats` of a tile whose points all lie at one position (a
+    :class:`~superfacets.inputs.cloud.PointCloud`, ``valid`` its usable rows, ``name``
+    the row naming its one superpoint, ``merging`` as
+    :func:`superfacets.scale.tiling.tile_labels` takes it): that superpoint, of the core's
+    points, no scatter, no neighbour (nothing where the core has no usable point)."""
+    core, rows, _ = merging
+    own = np.flatnonzero(valid & np.asarray(core))
+    k = 1 if own.size else 0
+    at = np.asarray(inp.points, dtype=np.float64)[own[:k]].reshape(k, 3)
+    none = np.zeros(0)
+    return dict(names=np.full(k, int(np.asarray(rows)[name]), dtype=np.int64),
+                count=np.full(k, float(own.size)), mean=at, scatter=np.zeros((k, 3, 3)),
+                area=np.full(k, float(own.size)), area_mean=at,
+                edges=np.zeros((0, 2), dtype=np.int64), border=none, angle=none,
+                concave=none, crossings=none, angle_sum=none, concave_sum=none, noise=none)
+
+
+def tiled_merge_from(params, kind: str) -> int:
+    """``merge_from`` of a tiled run: that of one run on the whole input, with the density
+    of a tiled run (0 unless given); 1 where sized by radius. Points only.
+
+    Raises
+    ------
+    ParameterError
+        For ``merge_from`` above 1 on faces.
+    """
+    from ..errors import ParameterError
+    from ..method.rules import merge_from_of
+
+    if kind != "points":
+        if params.merge_from not in (None, 1):
+            raise ParameterError("merge_from above 1: a tiled run merges superpoints of "
+                                 "point clouds only")
+        return 1
+    if params.n_segments is None or params.radius is not None:  # sized by radius
+        return 1
+    density = 0.0 if params.density is None else params.density
+    return merge_from_of(replace(params, density=density), kind)
+
+
+def merged_labels(labels: np.ndarray, stats: list, target: int, params) -> np.ndarray:
+    """A tiled run's stitched labels (center rows; -1 invalid) merged to ``target`` from
+    the tiles' sums (:func:`merge_names`), a warning where the input's separate pieces
+    are more; a label only a repair made (none of the tiles' sums name it) is kept."""
+    names, merged, _, fewest = merge_names(stats, target, params.alpha, params.eta_convex)
+    if fewest > target:
+        import warnings
+
+        warnings.warn(f"{fewest} superpoints for n_segments={target}: the input has {fewest} "
+                      "separate pieces, and a superpoint cannot cross from one to another",
+                      RuntimeWarning, stacklevel=3)
+    out = labels.copy()
+    at = np.searchsorted(names, labels)
+    known = (labels >= 0) & (at < names.size)
+    known[known] = names[at[known]] == labels[known]
+    out[known] = merged[at[known]]
+    return out
+
+
+def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float
+                ) -> tuple[np.ndarray, np.ndarray, int, int]:
+    """Merge a tiled run's superpoints down to ``target`` from the tiles' sums
+    (:func:`tile_merge_stats`): the flat merges, then Ward's merges, as
+    :func:`superfacets.method.merges.merge_to_count` does in one run.
+
+    Parameters
+    ----------
+    stats : list of dict
+        One per tile.
+    target : int
+        The count asked for, ``>= 1``.
+    alpha, eta_convex : float
+        The crease factor of Ward's cost (paper eqs. 2-3).
+
+    Returns
+    -------
+    names : (K,) int64 ndarray
+        Every superpoint's name, ascending.
+    merged : (K,) int64 ndarray
+        The name of the superpoint each is merged into (that of its lowest member).
+    flat : int
+        Superpoints left after the flat merges.
+    fewest : int
+        The count reached: ``target``, or the separate pieces where there are more.
+
+    Raises
+    ------
+    ParameterError
+        Never on the tiles' own sums.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from superfacets.inputs.cloud import PointCloud
+    >>> from superfacets.elements.points import point_graph
+    >>> x = np.linspace(0, 1, 40)
+    >>> xy = np.stack(np.meshgrid(x, x), -1).reshape(-1, 2)
+    >>> roof = np.c_[xy, np.abs(xy[:, 0] - 0.5)]                  # two planes, a ridge
+    >>> g = point_graph(PointCloud(roof)).graph
+    >>> lab = np.minimum(g.positions[:, 0] * 4, 3).astype(np.int64)  # four strips
+    >>> south = g.positions[:, 1] < 0.5                               # two tiles
+    >>> stats = [tile_merge_stats(g, lab, np.array([3, 5, 8, 13]), core,
+    ...                           np.arange(1600), 10) for core in (south, ~south)]
+    >>> names, merged, flat, fewest = merge_names(stats, 2, 200.0, 0.2)
+    >>> merged.tolist(), fewest                                       # one per plane
+    ([3, 3, 8, 8], 2)
+    """
+    from ..graph.hierarchy import hierarchy, pieces
+    from ..method.merges import FLAT_NOISE, flat_merge_nodes
+
+    names = np.unique(np.concatenate([s["names"] for s in stats]))
+    k = names.size
+    node = [np.searchsorted(names, s["names"]) for s in stats]
+    count = _sum(node, stats, "count", k)
+    mean = _sum(node, stats, "mean", k, weight="count") / np.maximum(count, 1.0)[:, None]
+    scatter = np.zeros((k, 3, 3))
+    for at, s in zip(node, stats):  # Chan's rule: each part's scatter about the union's mean
+        d = s["mean"] - mean[at]
+        np.add.at(scatter, at, s["scatter"] + s["count"][:, None, None] * d[:, :, None] *
+                  d[:, None, :])
+    area = _sum(node, stats, "area", k)
+    area_mean = _sum(node, stats, "area_mean", k, weight="area") / \
+        np.where(area > 0, area, 1.0)[:, None]
+    edges = [np.searchsorted(names, s["edges"]) for s in stats]
+    keep = [np.isin(s["edges"], names).all(axis=1) for s in stats]  # (names no core holds)
+    ea = np.concatenate([e[ok] for e, ok in zip(edges, keep)]).reshape(-1, 2)
+    parts = {f: np.concatenate([s[f][ok] for s, ok in zip(stats, keep)])
+             for f in ("border", "angle", "concave", "crossings", "angle_sum", "concave_sum")}
+    noise = np.concatenate([s["noise"] for s in stats])
+    max_rise = FLAT_NOISE * max(float(np.median(noise)), 0.0) if noise.size else 0.0
+
+    unit = _graph(np.arange(k), ea, parts, count, mean, scatter)
+    top = flat_merge_nodes(unit, target, max_rise, alpha, eta_convex)
+    n_flat = int(top.max()) + 1 if k else 0
+    grouped_area = np.bincount(top, weights=area, minlength=n_flat)
+    grouped_mean = np.stack([np.bincount(top, weights=area * area_mean[:, c], minlength=n_flat)
+                             for c in range(3)], 1) / \
+        np.where(grouped_area > 0, grouped_area, 1.0)[:, None]
+    ward = _graph(top, ea, parts, grouped_area, grouped_mean, None)
+    fewest = max(target, pieces(ward)) if n_flat else 0
+    final = top
+    if n_flat > fewest:
+        level = hierarchy(ward, [fewest], alpha=alpha, eta_convex=eta_convex)
+        final = level.labels(0, top).astype(np.int64)
+    lowest = np.full(int(final.max()) + 1 if k else 0, k, dtype=np.int64)
+    np.minimum.at(lowest, final, np.arange(k))
+    return names, names[lowest[final]], n_flat, min(fewest, n_flat) if k else 0
+
+
+def _sum(node: list, stats: list, field: str, k: int, weight: str | None = None):
+    """The tiles' ``field`` added per node (each row times ``weight`` first)."""
+    first = np.asarray(stats[0][field])
+    out = np.zeros((k,) + first.shape[1:])
+    for at, s in zip(node, stats):
+        v = np.asarray(s[field], dtype=np.float64)
+        np.add.at(out, at, v if weight is None else v * s[weight][:, None])
+    return out
+
+
+def _graph(of_node: np.ndarray, ea: np.ndarray, parts: dict, area: np.ndarray,
+           centroid: np.ndarray, scatter):
+    """The superpoint graph of nodes grouped by ``of_node``: the edges between groups,
+    their sums added, the border-weighted means (plain where a border has no length)."""
+    from ..graph.adjacency import SuperfacetGraph
+
+    k = area.shape[0]
+    a, b = of_node[ea[:, 0]], of_node[ea[:, 1]]
+    cross = a != b
+    lo, hi = np.minimum(a, b)[cross], np.maximum(a, b)[cross]
+    key, inv = np.unique(lo * max(k, 1) + hi, return_inverse=True)
+    e = key.size
+
+    def add(f):
+        return np.bincount(inv, weights=parts[f][cross], minlength=e)
+
+    border, n_cross = add("border"), add("crossings")
+    zero = border <= 0
+    mean_angle = add("angle") / np.where(zero, 1.0, border)
+    concave = add("concave") / np.where(zero, 1.0, border)
+    if zero.any():
+        mean_angle[zero] = (add("angle_sum") / np.maximum(n_cross, 1.0))[zero]
+        concave[zero] = (add("concave_sum") / np.maximum(n_cross, 1.0))[zero]
+    return SuperfacetGraph(edge_index=np.stack([key // max(k, 1), key % max(k, 1)]).astype(
+        np.int64), border_length=border, mean_angle=mean_angle, concave=concave, area=area,
+        centroid=centroid, normal=np.zeros((k, 3)), feature=None, scatter=scatter)
