@@ -158,10 +158,11 @@ def tiled_merge_from(params, kind: str) -> int:
     ParameterError
         For ``merge_from`` above 1 on faces.
     """
+    from ..elements.kinds import kind_of
     from ..errors import ParameterError
     from ..method.rules import merge_from_of
 
-    if kind != "points":
+    if not kind_of(kind).cloud:
         if params.merge_from not in (None, 1):
             raise ParameterError("merge_from above 1: a tiled run merges superpoints of "
                                  "point clouds only")
