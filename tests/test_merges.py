@@ -45,6 +45,23 @@ def test_the_noise_is_the_planes_noise():
     assert noise_variance(_graph(np.c_[xy, np.zeros(20_000)])) < 1e-20  # exactly flat
 
 
+def test_the_noise_of_a_curved_surface_is_not_its_curvature():
+    """A clean sphere's neighbourhoods are curved, not noisy: the two-scale estimate
+    takes the curvature's share out (one scale read it as noise, and the flat merges
+    crossed the parts of curved objects); with noise added, the noise comes back."""
+    from superfacets.method.merges import _plane_residual
+
+    rng = np.random.default_rng(7)
+    d = rng.standard_normal((30_000, 3))
+    sphere = d / np.linalg.norm(d, axis=1, keepdims=True)
+    g = _graph(sphere)
+    one_scale = float(np.median(_plane_residual(g, np.arange(0, 30_000, 7), 1)[0]))
+    assert one_scale > 1e-8 and noise_variance(g) < 0.05 * one_scale
+    sigma = 0.004
+    noisy = sphere * (1 + sigma * rng.standard_normal((30_000, 1)))
+    assert 0.4 * sigma ** 2 < noise_variance(_graph(noisy)) < 1.2 * sigma ** 2
+
+
 def test_flat_merges_join_each_plane_and_never_cross_the_ridge():
     x = np.linspace(0, 1, 50)
     xy = np.stack(np.meshgrid(x, x), -1).reshape(-1, 2)

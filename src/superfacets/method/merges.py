@@ -22,8 +22,8 @@ of no flat face gets the method's compact superpoints, merged from finer ones al
 its creases. Not in the paper: graph partitions of scans (the ScanNet Segmentator,
 cut pursuit) leave flat regions whole the same way. Measured in
 ``docs/notes/superpoints-defaults.md``: on two ScanNet rooms the undersegmentation
-error fell by 13-26 % at k = 300-3,000 (0.442 to 0.327 at 1,000 on room 0000_00), on
-the 300 benchmark meshes sampled to clouds by 5.9 % at k = 150.
+error fell by 14-22 % at k = 300-3,000 (0.442 to 0.345 at 1,000 on room 0000_00), on
+the 300 benchmark meshes sampled to clouds by 7.2 % at k = 150 and 5.4 % at k = 300.
 """
 
 from __future__ import annotations
@@ -36,23 +36,26 @@ __all__ = ["merge_to_count", "flat_merges", "flat_merge_nodes", "noise_variance"
            "neighbourhood_noise", "FLAT_NOISE", "NOISE_SAMPLE"]
 
 #: A flat merge's largest rise of the squared plane distances, per element of the
-#: smaller superpoint, in units of :func:`noise_variance`: 1, the noise itself. Measured
-#: from 0.5 to 3 (``docs/notes/superpoints-defaults.md``, with 10 times the superpoints,
-#: the flattest pair first): above 1 the benchmark's sampled objects merge across their
-#: flat parts (pliers, glasses; mean UE +1.5 % at 1.5, +4 % at 3), below it the rooms
-#: keep more of their walls (UE +6 % at k = 1,000 at 0.75).
-FLAT_NOISE = 1.0
+#: smaller superpoint, in units of :func:`noise_variance`. Chosen among 1, 2 and 3 on
+#: the 300 benchmark clouds (k = 50, 150, 300) and the labelled rooms and airborne tile
+#: (``docs/notes/superpoints-defaults.md``): the clean clouds do not depend on it (their
+#: noise is about 0); 1 lets the rooms keep more of their walls (UE +9 % at k = 1,000),
+#: 3 the airborne tile merge across its classes at k = 300 (UE +15 %).
+FLAT_NOISE = 2.0
 #: The most elements :func:`noise_variance` reads (evenly spaced in the input's order).
 NOISE_SAMPLE = 8_192
 
 
 def noise_variance(graph) -> float:
-    """The input's noise: the median smallest eigenvalue of the covariance of each
-    element's neighbourhood (itself and its graph neighbours), in squared input units.
+    """The input's noise: the median over elements of the noise of the surface around
+    each (:func:`neighbourhood_noise`: the smallest eigenvalue of the neighbourhood's
+    covariance, read at two scales, the curvature's share taken out), in squared input
+    units.
 
     On a scan, the squared distance of the points to a plane where the surface is
-    flat: the scanner's noise; on a clean sampled surface, what the curvature leaves
-    over one neighbourhood (about 0 on the flat faces of a CAD model). Read on at most
+    flat: the scanner's noise; on a clean sampled surface about 0, however curved (a
+    single scale read the curvature over one neighbourhood as noise, and let the flat
+    merges cross the parts of pliers and glasses). Read on at most
     :data:`NOISE_SAMPLE` elements, evenly spaced.
 
     Parameters
@@ -87,28 +90,53 @@ def noise_variance(graph) -> float:
 
 
 def neighbourhood_noise(graph, pick: np.ndarray) -> np.ndarray:
-    """The smallest eigenvalue of the covariance of the neighbourhood (the element and
-    its graph neighbours) of each element ``pick`` (int64, distinct): what
+    """The noise of the surface around each element ``pick`` (int64, distinct), what
     :func:`noise_variance` takes the median of ((len(pick),) float64, squared input
-    units; a tiled run gathers them from every tile)."""
+    units; a tiled run gathers them from every tile).
+
+    The smallest eigenvalue of a neighbourhood's covariance is the noise plus what the
+    curvature leaves over its extent, which grows as the fourth power of its radius. So
+    it is read at two scales, ``l1`` on the element and its graph neighbours (radius
+    ``r1``, their mean distance to it) and ``l2`` on those and their neighbours (``r2``),
+    and the curvature's share taken out: ``(q l1 - l2) / (q - 1)``, ``q = (r2 / r1)^4``
+    (an estimate at radius 0). On a scan's flat parts ``l1`` and ``l2`` are both the
+    noise; on a clean sampled surface, curved everywhere, the estimate is about 0.
+    """
+    l1, r1 = _plane_residual(graph, pick, 1)
+    l2, r2 = _plane_residual(graph, pick, 2)
+    q = (r2 / np.where(r1 > 0, r1, 1.0)) ** 4
+    ok = (r1 > 0) & (q > 1.0 + 1e-9)
+    return np.where(ok, (q * l1 - l2) / np.where(ok, q - 1.0, 1.0), l1)
+
+
+def _plane_residual(graph, pick: np.ndarray, rings: int) -> tuple[np.ndarray, np.ndarray]:
+    """Per element of ``pick``: the smallest eigenvalue of the covariance of the elements
+    within ``rings`` graph steps of it (itself included), and their mean distance to it."""
     indptr = np.asarray(graph.indptr, dtype=np.int64)
-    start, count = indptr[pick], indptr[pick + 1] - indptr[pick]
-    owner = np.repeat(np.arange(pick.size), count)
-    entry = np.arange(owner.size) - np.repeat(np.cumsum(count) - count, count) + \
-        np.repeat(start, count)
-    rows = np.concatenate([np.arange(pick.size), owner])  # each element and its neighbours
+    indices = np.asarray(graph.indices, dtype=np.int64)
+    n = indptr.shape[0] - 1
+    owner, member = np.arange(pick.size), pick.astype(np.int64)
+    for _ in range(rings):  # add the neighbours of every member, each once per owner
+        count = indptr[member + 1] - indptr[member]
+        start = np.repeat(indptr[member] - np.cumsum(count) + count, count)
+        owner = np.concatenate([owner, np.repeat(owner, count)])
+        member = np.concatenate([member, indices[start + np.arange(start.size)]])
+        key = np.unique(owner * n + member)
+        owner, member = key // n, key % n
     pos = np.asarray(graph.positions, dtype=np.float64)
-    pts = np.concatenate([pos[pick], pos[np.asarray(graph.indices)[entry]]])
-    size = np.bincount(rows, minlength=pick.size).astype(np.float64)
-    mean = np.stack([np.bincount(rows, pts[:, j], pick.size) for j in range(3)], 1) / \
+    pts = pos[member]
+    size = np.bincount(owner, minlength=pick.size).astype(np.float64)
+    mean = np.stack([np.bincount(owner, pts[:, j], pick.size) for j in range(3)], 1) / \
         size[:, None]
-    d = pts - mean[rows]
+    d = pts - mean[owner]
     cov = np.empty((pick.size, 3, 3))
     for i in range(3):
         for j in range(i, 3):
-            cov[:, i, j] = cov[:, j, i] = np.bincount(rows, d[:, i] * d[:, j], pick.size)
+            cov[:, i, j] = cov[:, j, i] = np.bincount(owner, d[:, i] * d[:, j], pick.size)
     cov /= size[:, None, None]
-    return np.linalg.eigvalsh(cov)[:, 0]
+    radius = np.bincount(owner, np.sqrt(((pts - pos[pick][owner]) ** 2).sum(axis=1)),
+                         pick.size) / np.maximum(size - 1.0, 1.0)
+    return np.linalg.eigvalsh(cov)[:, 0], radius
 
 
 def flat_merges(graph, labels: np.ndarray, k: int, max_rise: float, *,

@@ -168,7 +168,9 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         (it must then fit this machine). Triangle meshes and point clouds.
     n_segments : int, default 150
         Superfacets over the whole input (``r = sqrt(A / (k pi))``, paper
-        section 3.1); or None with ``radius``.
+        section 3.1); or None with ``radius``. On a point cloud of even density the
+        tiles make ``merge_from`` (5) times as many, merged down to exactly this count
+        at the end (:mod:`superfacets.scale.tile_merges`; ``merge_from=1``: none).
     tiles : int or sequence of 3 int, default 4
         Number of balanced tiles (boxes split at the quantiles of the
         positions, so that each holds about ``n / tiles`` elements, however
