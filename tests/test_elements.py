@@ -667,7 +667,7 @@ def test_superpoints_on_scan_lines_are_the_same_for_any_thread_count():
 
 
 def test_point_graph_is_the_same_for_any_block_of_queries(monkeypatch):
-    # the KD-tree is queried in blocks (4-byte neighbours, the k-th distance kept): any
+    # the tree is queried in blocks (4-byte neighbours, the k-th distance kept): any
     # block size gives the graph of one query of every point, bit for bit, with ties
     # at the k-th distance (a quantized grid) and scan lines joined wider (a line)
     from superfacets.elements import neighbors

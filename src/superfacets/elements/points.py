@@ -4,9 +4,9 @@ The paper names point clouds as future work, "with a careful reformulation of
 weights for adjacent elements". Here each point is an element:
 
 - adjacency: ``i ~ j`` when either is among the other's ``n_neighbors``
-  nearest (scipy's KD-tree), optionally only within ``neighbor_radius``
-  (a fraction of the bounding-box diagonal ``d``); points at exactly the
-  ``n_neighbors``-th distance (quantized scans) go to the lowest index;
+  nearest (:mod:`superfacets.elements.neighbors`), optionally only within
+  ``neighbor_radius`` (a fraction of the bounding-box diagonal ``d``); points
+  at equal distances (quantized scans) go in the order of their index;
   the points are indexed along a Z-order curve that depends on the positions
   alone, so a box of a cloud lists its points in the whole cloud's order and
   gets the whole cloud's neighbours away from its edge
@@ -46,7 +46,7 @@ import numpy as np
 from .._kernels import native
 from ..inputs.bounds import column_bounds
 from .graph import LAZY, ElementGraph, adjacency_csr, cached_on, pairs_from_csr
-from .neighbors import nearest
+from .neighbors import nearest, point_tree
 from .vertices import symmetric_terms
 
 __all__ = ["point_graph", "PointElements", "estimate_normals", "orient_normals",
@@ -298,8 +298,6 @@ def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
 
 def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
                           ) -> PointElements:
-    from scipy.spatial import cKDTree
-
     valid = np.flatnonzero(cloud.valid)
     pts, inverse = distinct_points(cloud.points[valid])
     index = np.full(cloud.n_total, -1, dtype=np.int64)
@@ -308,11 +306,11 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
     k = int(min(n_neighbors, n - 1))
     lower, upper = column_bounds(pts)
     diagonal = float(np.linalg.norm(upper - lower))
-    # the points are in Z-order (distinct_points): neighbouring queries walk the same nodes
-    tree = cKDTree(pts)
+    # a tree of the points' Z-order (distinct_points): ranges of rows, no copy of them
+    tree = point_tree(pts)
     limit = None if neighbor_radius is None else neighbor_radius * diagonal
     # column 0: the point itself; 4-byte indices, queried in blocks (elements/neighbors.py)
-    nbr, kth, keep = nearest(tree, pts, pts, k, limit=limit)
+    nbr, kth, keep = nearest(tree, k, limit=limit)
     area = np.pi * kth ** 2 / k
     del kth
     positive = area > 0
@@ -338,11 +336,11 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
     more = np.zeros((0, 1), dtype=nbr.dtype)
     more_keep = np.zeros((0, 1), dtype=bool)
     if wide.size:
-        more, _, more_keep = nearest(tree, pts, pts[wide], k_wide, wide, limit)
+        more, _, more_keep = nearest(tree, k_wide, wide, limit)
         more = more[:, 1:]
         if more_keep is None:
             more_keep = np.ones(more.shape, dtype=bool)
-    del tree  # (its copy of the points and its nodes, before the layout's peak)
+    del tree  # (its nodes, before the layout's peak)
 
     cand = nbr[:, 1:]  # read in place by the kernel (a copy costs more than it saves)
     if keep is None:

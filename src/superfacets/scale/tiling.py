@@ -66,8 +66,7 @@ def point_areas(points: np.ndarray, core: np.ndarray, n_neighbors: int) -> float
     """Summed area of the ``core`` points of a tile, as the point graph sizes them
     (``pi rho^2 / K``, ``rho`` the distance to the ``K``-th distinct neighbour among
     ``points``); duplicate points count once."""
-    from scipy.spatial import cKDTree
-
+    from ..elements.neighbors import nearest, point_tree
     from ..elements.points import distinct_points
 
     pts, inverse = distinct_points(points)  # duplicates share a position, so a core
@@ -78,8 +77,8 @@ def point_areas(points: np.ndarray, core: np.ndarray, n_neighbors: int) -> float
     k = int(min(n_neighbors, pts.shape[0] - 1))
     if k < 1:
         return 0.0
-    dist, _ = cKDTree(pts).query(pts[is_core], k=k + 1, workers=-1)
-    return float((np.pi * dist[:, -1] ** 2 / k).sum())
+    _, kth, _ = nearest(point_tree(pts), k, np.flatnonzero(is_core))
+    return float((np.pi * kth ** 2 / k).sum())
 
 
 def _valid_rows(inp) -> np.ndarray:

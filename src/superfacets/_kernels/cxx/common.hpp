@@ -227,5 +227,6 @@ void bind_points(py::module_& m);
 void bind_hierarchy(py::module_& m);
 void bind_exact(py::module_& m);
 void bind_vertices(py::module_& m);
+void bind_nearest(py::module_& m);
 
 }  // namespace sfk

@@ -1,0 +1,252 @@
+// superfacets/_kernels/nearest.py: the tree of a cloud's Z-order and the k nearest
+// neighbours of its points, the same operations in the same order.
+#include "common.hpp"
+
+namespace sfk {
+
+namespace {
+
+constexpr i64 STACK = 512;
+
+inline i64 first_bit(const std::uint64_t* keys, i64 a, i64 b, i64 start) {
+    for (i64 w = start / 63; w < 3; ++w) {
+        std::uint64_t x = keys[3 * a + w] ^ keys[3 * b + w];
+        if (w == start / 63) x &= (std::uint64_t{1} << (63 - (start - w * 63))) - 1;
+        if (x != 0) {
+            int top = 62;
+            while (((x >> top) & 1u) == 0) --top;
+            return w * 63 + (62 - top);
+        }
+    }
+    return -1;
+}
+
+inline bool bit_of(const std::uint64_t* keys, i64 r, i64 bit) {
+    i64 w = bit / 63;
+    return (keys[3 * r + w] >> (62 - (bit - w * 63))) & 1u;
+}
+
+inline double box_distance(const double* box, double qx, double qy, double qz) {
+    double s = 0.0;
+    double g = box[0] - qx;
+    if (g <= 0.0) {
+        g = qx - box[3];
+        if (g < 0.0) g = 0.0;
+    }
+    s += g * g;
+    g = box[1] - qy;
+    if (g <= 0.0) {
+        g = qy - box[4];
+        if (g < 0.0) g = 0.0;
+    }
+    s += g * g;
+    g = box[2] - qz;
+    if (g <= 0.0) {
+        g = qz - box[5];
+        if (g < 0.0) g = 0.0;
+    }
+    s += g * g;
+    return s;
+}
+
+struct Tree {
+    const double* pts;
+    const i64* start;
+    const i64* end;
+    const i64* left;
+    const double* boxes;
+};
+
+// nearest._query
+i64 query(const Tree& t, i64 i, i64 k, double* bd, i64* bi, i64* stack, double* sd,
+          i64* sib) {
+    const double* p = t.pts;
+    const double qx = p[3 * i], qy = p[3 * i + 1], qz = p[3 * i + 2];
+    i64 cnt = 0, ns = 0, v = 0;
+    while (t.left[v] >= 0) {
+        i64 c = t.left[v];
+        if (i < t.end[c]) {
+            sib[ns] = c + 1;
+            v = c;
+        } else {
+            sib[ns] = c;
+            v = c + 1;
+        }
+        ++ns;
+    }
+    stack[0] = v;
+    sd[0] = 0.0;
+    i64 sp = 1;
+    while (true) {
+        while (sp > 0) {
+            --sp;
+            v = stack[sp];
+            if (cnt == k && sd[sp] > bd[k - 1]) continue;
+            i64 c = t.left[v];
+            if (c < 0) {
+                for (i64 r = t.start[v]; r < t.end[v]; ++r) {
+                    if (r == i) continue;
+                    double dx = p[3 * r] - qx, dy = p[3 * r + 1] - qy, dz = p[3 * r + 2] - qz;
+                    double d = dx * dx + dy * dy + dz * dz;
+                    i64 q;
+                    if (cnt < k) {
+                        q = cnt++;
+                    } else if (d < bd[k - 1] || (d == bd[k - 1] && r < bi[k - 1])) {
+                        q = k - 1;
+                    } else {
+                        continue;
+                    }
+                    while (q > 0 && (bd[q - 1] > d || (bd[q - 1] == d && bi[q - 1] > r))) {
+                        bd[q] = bd[q - 1];
+                        bi[q] = bi[q - 1];
+                        --q;
+                    }
+                    bd[q] = d;
+                    bi[q] = r;
+                }
+            } else {
+                double d0 = box_distance(t.boxes + 6 * c, qx, qy, qz);
+                double d1 = box_distance(t.boxes + 6 * (c + 1), qx, qy, qz);
+                i64 near = c, far = c + 1;
+                if (d1 < d0) {
+                    near = c + 1;
+                    far = c;
+                    std::swap(d0, d1);
+                }
+                if (!(cnt == k && d1 > bd[k - 1])) {
+                    stack[sp] = far;
+                    sd[sp] = d1;
+                    ++sp;
+                }
+                stack[sp] = near;
+                sd[sp] = d0;
+                ++sp;
+            }
+        }
+        if (ns == 0) break;
+        --ns;
+        stack[0] = sib[ns];
+        sd[0] = box_distance(t.boxes + 6 * sib[ns], qx, qy, qz);
+        sp = 1;
+    }
+    return cnt;
+}
+
+}  // namespace
+
+i64 tree_nodes(py::handle pts_, py::handle keys_, i64 leaf, py::handle start_, py::handle end_,
+               py::handle left_, py::handle boxes_) {
+    In<double> pts(pts_, "pts");
+    In<std::uint64_t> keys(keys_, "keys");
+    Out<i64> start(start_, "start"), end(end_, "end"), left(left_, "left");
+    Out<double> boxes(boxes_, "boxes");
+    if (pts.cols != 3 || keys.cols != 3 || keys.n != pts.n || boxes.cols != 6 ||
+        end.n != start.n || left.n != start.n || boxes.n != start.n)
+        throw Mismatch("argument pts");
+    py::gil_scoped_release nogil;
+    const i64 n = pts.n, cap = start.n;
+    if (cap < 1) return -1;
+    std::vector<i64> stack(2 * STACK);
+    start[0] = 0;
+    end[0] = n;
+    i64 nn = 1, sp = 1;
+    stack[0] = 0;
+    stack[1] = 0;
+    while (sp > 0) {
+        --sp;
+        i64 v = stack[2 * sp], b = stack[2 * sp + 1];
+        i64 s = start[v], e = end[v];
+        left[v] = -1;
+        if (e - s <= leaf) continue;
+        i64 m = s;
+        while (true) {
+            i64 bit = first_bit(keys.p, s, e - 1, b);
+            if (bit < 0) {
+                m = (s + e) / 2;
+                b = 189;
+                break;
+            }
+            i64 lo = s, hi = e - 1;
+            while (lo < hi) {
+                i64 mid = (lo + hi) / 2;
+                if (bit_of(keys.p, mid, bit))
+                    hi = mid;
+                else
+                    lo = mid + 1;
+            }
+            b = bit + 1;
+            if (s < lo && lo < e) {
+                m = lo;
+                break;
+            }
+        }
+        if (nn + 2 > cap) return -1;
+        left[v] = nn;
+        start[nn] = s;
+        end[nn] = m;
+        start[nn + 1] = m;
+        end[nn + 1] = e;
+        stack[2 * sp] = nn + 1;
+        stack[2 * sp + 1] = b;
+        stack[2 * sp + 2] = nn;
+        stack[2 * sp + 3] = b;
+        sp += 2;
+        nn += 2;
+    }
+    for (i64 v = nn - 1; v >= 0; --v) {
+        i64 c = left[v];
+        for (int a = 0; a < 3; ++a) {
+            double lo, hi;
+            if (c < 0) {
+                lo = INF;
+                hi = -INF;
+                for (i64 t = start[v]; t < end[v]; ++t) {
+                    double x = pts(t, a);
+                    if (x < lo) lo = x;
+                    if (x > hi) hi = x;
+                }
+            } else {
+                lo = mn(boxes(c, a), boxes(c + 1, a));
+                hi = mx(boxes(c, 3 + a), boxes(c + 1, 3 + a));
+            }
+            boxes(v, a) = lo;
+            boxes(v, 3 + a) = hi;
+        }
+    }
+    return nn;
+}
+
+void nearest_in_tree(py::handle pts_, py::handle start_, py::handle end_, py::handle left_,
+                     py::handle boxes_, py::handle own_, i64 k, py::handle nbr_,
+                     py::handle dist_) {
+    In<double> pts(pts_, "pts"), boxes(boxes_, "boxes");
+    In<i64> start(start_, "start"), end(end_, "end"), left(left_, "left"), own(own_, "own");
+    Out<i32> nbr(nbr_, "nbr");
+    Out<double> dist(dist_, "dist");
+    if (pts.cols != 3 || boxes.cols != 6 || nbr.cols != k + 1 || dist.cols != k + 1 ||
+        nbr.n != own.n || dist.n != own.n || k < 1)
+        throw Mismatch("argument nbr");
+    py::gil_scoped_release nogil;
+    const Tree t{pts.p, start.p, end.p, left.p, boxes.p};
+    parallel_for(own.n, [&](i64 lo, i64 hi) {
+        std::vector<double> bd(k), sd(STACK);
+        std::vector<i64> bi(k), stack(STACK), sib(STACK);
+        for (i64 r = lo; r < hi; ++r) {
+            i64 i = own[r];
+            i64 got = query(t, i, k, bd.data(), bi.data(), stack.data(), sd.data(), sib.data());
+            nbr(r, 0) = static_cast<i32>(i);
+            dist(r, 0) = 0.0;
+            for (i64 j = 0; j < got; ++j) {
+                nbr(r, j + 1) = static_cast<i32>(bi[j]);
+                dist(r, j + 1) = std::sqrt(bd[j]);
+            }
+        }
+    });
+}
+
+void bind_nearest(py::module_& m) {
+    m.def("tree_nodes", &tree_nodes);
+    m.def("nearest_in_tree", &nearest_in_tree);
+}
+
+}  // namespace sfk

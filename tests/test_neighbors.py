@@ -1,0 +1,81 @@
+"""The k nearest neighbours of the point graph (superfacets.elements.neighbors): exact,
+in the order of (distance, index), whatever the order of the points or their ties."""
+
+import numpy as np
+import pytest
+
+from superfacets.elements.neighbors import nearest, point_tree
+from superfacets.elements.points import distinct_points
+
+
+def _brute(pts: np.ndarray, k: int, own: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each query itself, then its k nearest other points by (squared distance, index),
+    the squared distance ``(dx*dx + dy*dy) + dz*dz``; and their distances."""
+    nbr = np.empty((own.size, k + 1), dtype=np.int64)
+    dist = np.zeros((own.size, k + 1))
+    for r, i in enumerate(own):
+        d = pts - pts[i]
+        d2 = (d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1]) + d[:, 2] * d[:, 2]
+        d2[i] = -1.0  # itself first
+        order = np.lexsort((np.arange(pts.shape[0]), d2))[:k + 1]
+        nbr[r] = order
+        dist[r, 1:] = np.sqrt(d2[order[1:]])
+    return nbr, dist
+
+
+def _grid() -> np.ndarray:
+    """A quantized scan: a 25 x 18 grid of step 1 on a tilted plane, rounded to 0.5, so
+    that nearly every point has several neighbours at each equal distance."""
+    xy = np.stack(np.meshgrid(np.arange(25.0), np.arange(18.0)), -1).reshape(-1, 2)
+    return np.c_[xy, np.round(0.3 * xy[:, 0] + 0.1 * xy[:, 1])]
+
+
+@pytest.mark.parametrize("shuffle", [False, True])
+def test_neighbours_are_the_nearest_by_distance_then_index_with_ties(shuffle):
+    pts = _grid()
+    if shuffle:  # any order of the rows: the same answers (the tree only runs slower)
+        pts = pts[np.random.default_rng(3).permutation(pts.shape[0])]
+    else:
+        pts = distinct_points(pts)[0]
+    own = np.arange(pts.shape[0])
+    for k in (1, 4, 10, 23):
+        tree = point_tree(pts, leaf=4)
+        nbr, kth, within = nearest(tree, k, limit=1.5)
+        want, dist = _brute(pts, k, own)
+        np.testing.assert_array_equal(nbr, want)
+        np.testing.assert_array_equal(kth, dist[:, k])
+        np.testing.assert_array_equal(within, dist[:, 1:] <= 1.5)
+    some = np.array([5, 0, 77, 449, 5])  # a subset of queries, in any order, repeated
+    nbr, kth, _ = nearest(point_tree(pts), 9, some)
+    np.testing.assert_array_equal(nbr, _brute(pts, 9, some)[0])
+
+
+def test_duplicates_and_equal_keys_split_by_halves():
+    # 300 copies of 3 positions: the Z-order keys cannot split them; ties at distance 0
+    # go to the lowest index
+    rng = np.random.default_rng(0)
+    pts = np.repeat(rng.random((3, 3)), 100, axis=0)
+    tree = point_tree(pts, leaf=8)
+    assert tree.start.size > 2 * 300 // 8 - 1  # split down to leaves of 8 all the same
+    nbr, kth, _ = nearest(tree, 12)
+    np.testing.assert_array_equal(nbr, _brute(pts, 12, np.arange(300))[0])
+    assert not kth.any()
+
+
+def test_untied_neighbours_and_distances_are_scipys_bit_for_bit():
+    from scipy.spatial import cKDTree
+
+    rng = np.random.default_rng(1)
+    pts = distinct_points(rng.normal(size=(5000, 3)) * [3.0, 1.0, 0.01])[0]
+    nbr, kth, _ = nearest(point_tree(pts), 10)
+    dist, idx = cKDTree(pts).query(pts, k=11)
+    np.testing.assert_array_equal(nbr, idx)
+    np.testing.assert_array_equal(kth, dist[:, 10])
+
+
+def test_no_neighbours_asked_and_too_many_asked():
+    pts = np.eye(3)
+    nbr, kth, within = nearest(point_tree(pts), 0, limit=1.0)
+    assert nbr.tolist() == [[0], [1], [2]] and not kth.any() and within.shape == (3, 0)
+    with pytest.raises(ValueError, match="need 0 <= k < 3"):
+        nearest(point_tree(pts), 3)
