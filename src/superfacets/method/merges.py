@@ -113,14 +113,15 @@ def _plane_residual(graph, pick: np.ndarray, rings: int) -> tuple[np.ndarray, np
     """Per element of ``pick``: the smallest eigenvalue of the covariance of the elements
     within ``rings`` graph steps of it (itself included), and their mean distance to it."""
     indptr = np.asarray(graph.indptr, dtype=np.int64)
-    indices = np.asarray(graph.indices, dtype=np.int64)
+    indices = graph.indices  # (4-byte on points: only the entries read are widened)
     n = indptr.shape[0] - 1
     owner, member = np.arange(pick.size), pick.astype(np.int64)
     for _ in range(rings):  # add the neighbours of every member, each once per owner
         count = indptr[member + 1] - indptr[member]
         start = np.repeat(indptr[member] - np.cumsum(count) + count, count)
         owner = np.concatenate([owner, np.repeat(owner, count)])
-        member = np.concatenate([member, indices[start + np.arange(start.size)]])
+        member = np.concatenate([member,
+                                 indices[start + np.arange(start.size)].astype(np.int64)])
         key = np.unique(owner * n + member)
         owner, member = key // n, key % n
     pos = np.asarray(graph.positions, dtype=np.float64)
