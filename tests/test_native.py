@@ -66,6 +66,10 @@ VERTEX_KERNELS = {"vertex_cells", "mesh_edges", "classify_exact", "reclassify_ex
 SCRATCH = {"cleanup.band_distances": {10, 11}, "splitmerge.energies": {14, 15},
            "splitmerge.split_candidates": {19, 20}, "splitmerge.merge_energies": {18, 19}}
 
+#: Results of which only a part is defined: compared on that part. knn_csr returns a
+#: buffer whose first ``indptr[n]`` entries are the indices (``indptr``: argument 2).
+DEFINED = {"adjacency.knn_csr": lambda result, args: result[:args[2][-1]]}
+
 
 def _copy(x):
     if isinstance(x, np.ndarray):
@@ -101,8 +105,11 @@ def shadowed(monkeypatch):
             calls[path] = calls.get(path, 0) + 1
             moved = [i for i, (x, y) in enumerate(zip(args, a2))
                      if i not in SCRATCH.get(path, ()) and not _same(x, y)]
-            if not _same(got, expected) or moved:
-                bad.append(f"{path}: result {'differs' if not _same(got, expected) else 'same'}"
+            part = DEFINED.get(path)
+            same = (_same(part(got, args), part(expected, a2)) if part
+                    else _same(got, expected))
+            if not same or moved:
+                bad.append(f"{path}: result {'differs' if not same else 'same'}"
                            f", arguments {moved} differ")
             return got
         return both

@@ -318,9 +318,9 @@ def knn_csr(nbr, keep, indptr, rows, more, more_keep):
     ``nbr[i]`` (where ``keep``) or ``i`` in ``nbr[j]``, and likewise for the longer
     lists ``more[t]`` (where ``more_keep``) of the distinct points ``rows[t]`` (none: ``rows``
     of length 0). Fills ``indptr`` (n + 1); returns a buffer whose first ``indptr[n]``
-    entries are ``indices`` (int32, ascending per row; the caller copies them out once
-    it has let the lists go, so that the lists, the buffer and the copy are never held
-    at once): the layout :func:`csr_of_pairs` gives from the sorted distinct pairs (whose
+    entries are ``indices`` (int32, ascending per row; the rest is undefined: the caller
+    shrinks the buffer to them, in place where it can, once it has let the lists go): the
+    layout :func:`csr_of_pairs` gives from the sorted distinct pairs (whose
     pairs and dual-edge map :func:`number_pairs` numbers from it). A point listed as
     its own neighbour is no edge."""
     n, k = nbr.shape

@@ -353,7 +353,7 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
         # i ~ j if either lists the other
         indices = knn_csr(cand, keep, indptr, wide, more, more_keep)
         del more, more_keep, nbr, cand, keep
-        indices = indices[:indptr[n]].copy()  # (the lists let go first)
+        indices = _shrunk(indices, int(indptr[n]))  # (the lists let go first)
     else:  # the distinct pairs, sorted
         src = np.concatenate([np.repeat(np.arange(n), k).reshape(n, k)[keep],
                               np.repeat(wide, more.shape[1]).reshape(more.shape)[more_keep]])
@@ -386,6 +386,19 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
         spans=LAZY, border_shares=shares, terms_of=symmetric_terms,
         rebuild={**rebuild, "spans": _spans, "lengths": _lengths})
     return PointElements(graph, index)
+
+
+def _shrunk(a: np.ndarray, size: int) -> np.ndarray:
+    """The first ``size`` entries of a 1-D array the caller alone holds: the array itself,
+    shrunk in place where numpy owns its memory (no copy: the tail is given back), else a
+    copy."""
+    if a.shape[0] == size:
+        return a
+    try:
+        a.resize(size, refcheck=False)
+        return a
+    except ValueError:  # memory numpy does not own (a numba kernel's array)
+        return a[:size].copy()
 
 
 def _spans(graph: ElementGraph) -> dict:

@@ -4,6 +4,8 @@
 // The loops numba runs with prange run here on threads, each element on its own.
 #include "common.hpp"
 
+#include <cstring>
+
 namespace sfk {
 
 namespace {
@@ -275,6 +277,31 @@ void pca_linearity(py::handle points_, py::handle neighbors_, py::handle lineari
     });
 }
 
+// Sort row raw[s:e] ascending and move its distinct values to its front; returns their
+// number. Its first nf entries are in any order, the rest usually ascending already (the
+// entries other rows listed, written in the order of those rows): then the first part is
+// sorted alone (into tmp) and merged with the rest, in place; else the whole row is sorted.
+i64 sort_row(i32* raw, i64 s, i64 nf, i64 e, std::vector<i32>& tmp) {
+    bool sorted = true;
+    for (i64 x = s + nf + 1; x < e && sorted; ++x) sorted = raw[x - 1] <= raw[x];
+    if (!sorted || nf > 64) return sort_distinct(raw, s, e);
+    tmp.assign(raw + s, raw + s + nf);
+    const i64 na = sort_distinct(tmp.data(), 0, nf);
+    i64 a = 0, b = s + nf, o = s;
+    auto put = [&](i32 v) {
+        if (o == s || raw[o - 1] != v) raw[o++] = v;
+    };
+    while (a < na && b < e) {  // o < b always: the output never passes the unread rest
+        if (tmp[a] <= raw[b])
+            put(tmp[a++]);
+        else
+            put(raw[b++]);
+    }
+    while (a < na) put(tmp[a++]);
+    while (b < e) put(raw[b++]);
+    return o - s;
+}
+
 py::array_t<i32> knn_csr(py::handle nbr_, py::handle keep_, py::handle indptr_,
                          py::handle rows_, py::handle more_, py::handle more_keep_) {
     In2i nbr(nbr_, "nbr"), more(more_, "more");
@@ -284,76 +311,100 @@ py::array_t<i32> knn_csr(py::handle nbr_, py::handle keep_, py::handle indptr_,
     const i64 n = nbr.n, k = nbr.k, mk = more.k;
     if (keep.cols != k || (rows.n && more_keep.cols != mk)) throw Mismatch("argument keep");
     if (n >= (i64(1) << 31)) throw Mismatch("argument nbr");
-    // Every listed pair in both rows. A row's own list is counted and written by the
-    // thread of that row; the reverse entries (row j listed by row i) by any thread, with
-    // atomic counters, after the row's own. A row's entries land in any order, but each
-    // row is then sorted and made distinct: the layout is the same as in one pass in order.
-    std::vector<i32> own(n, 0), rev(n, 0);
+    // Every listed pair in both rows. Thread t owns the rows lo(t) .. lo(t + 1): it counts
+    // and writes their own lists, and reads every list for the entries that land in its
+    // rows (no atomic counters; every thread reads all the lists, in order). A row's
+    // entries are then sorted and made distinct: the layout of one pass in order.
+    const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / 4096));
+    auto lo = [&](i64 t) { return n * t / T; };
+    auto on_threads = [&](auto f) {
+        std::vector<std::thread> pool;
+        for (i64 t = 1; t < T; ++t) pool.emplace_back(f, t);
+        f(0);
+        for (auto& th : pool) th.join();
+    };
+    std::vector<i32> own(n), rev(n);
     std::vector<i64> start(n + 1, 0);
-    auto bump = [](i32* x) { return __atomic_fetch_add(x, 1, __ATOMIC_RELAXED); };
     auto listed = [&](i64 i, i64 c) { return keep(i, c) && nbr(i, c) != i; };
     auto listed_more = [&](i64 t, i64 c) { return more_keep(t, c) && more(t, c) != rows[t]; };
     {
         py::gil_scoped_release nogil;
-        i32* rv = rev.data();
-        parallel_for(n, [&](i64 lo, i64 hi) {
-            for (i64 i = lo; i < hi; ++i) {
+        on_threads([&](i64 t) {
+            const i64 a = lo(t), b = lo(t + 1);
+            for (i64 i = a; i < b; ++i) {
+                own[i] = 0;
+                rev[i] = 0;
+            }
+            for (i64 i = 0; i < n; ++i) {
+                const bool mine = i >= a && i < b;
                 i32 m = 0;
                 for (i64 c = 0; c < k; ++c)
                     if (listed(i, c)) {
                         ++m;
-                        bump(rv + nbr(i, c));
+                        i64 j = nbr(i, c);
+                        if (j >= a && j < b) ++rev[j];
                     }
-                own[i] = m;
+                if (mine) own[i] = m;
             }
+            for (i64 r = 0; r < rows.n; ++r)
+                for (i64 c = 0; c < mk; ++c)
+                    if (listed_more(r, c)) {
+                        i64 i = rows[r], j = more(r, c);
+                        if (i >= a && i < b) ++own[i];
+                        if (j >= a && j < b) ++rev[j];
+                    }
         });
-        for (i64 t = 0; t < rows.n; ++t)
-            for (i64 c = 0; c < mk; ++c)
-                if (listed_more(t, c)) {
-                    own[rows[t]] += 1;
-                    rev[more(t, c)] += 1;
-                }
         for (i64 i = 0; i < n; ++i) start[i + 1] = start[i] + own[i] + rev[i];
     }
     Out<i32> raw;
     auto raw_a = fresh(start[n], raw);
     {
         py::gil_scoped_release nogil;
-        // rev[j]: the next free place of row j's reverse entries, from the row's start
-        parallel_for(n, [&](i64 lo, i64 hi) {
-            for (i64 i = lo; i < hi; ++i) rev[i] = own[i];
-        });
-        i32* rv = rev.data();
-        parallel_for(n, [&](i64 lo, i64 hi) {
-            for (i64 i = lo; i < hi; ++i) {
+        on_threads([&](i64 t) {
+            const i64 a = lo(t), b = lo(t + 1);
+            for (i64 i = a; i < b; ++i) {  // own lists, then the longer ones (below)
                 i64 u = start[i];
+                for (i64 c = 0; c < k; ++c)
+                    if (listed(i, c)) raw[u++] = nbr(i, c);
+                rev[i] = 0;  // now: the reverse entries written into row i
+            }
+            for (i64 r = 0; r < rows.n; ++r) {
+                i64 i = rows[r];
+                if (i < a || i >= b) continue;
+                i64 u = start[i];
+                for (i64 c = 0; c < k; ++c) u += listed(i, c) ? 1 : 0;
+                for (i64 c = 0; c < mk; ++c)
+                    if (listed_more(r, c)) raw[u++] = more(r, c);
+                own[i] = static_cast<i32>(u - start[i]);
+            }
+            for (i64 i = 0; i < n; ++i)
                 for (i64 c = 0; c < k; ++c)
                     if (listed(i, c)) {
                         i64 j = nbr(i, c);
-                        raw[u++] = static_cast<i32>(j);
-                        raw[start[j] + bump(rv + j)] = static_cast<i32>(i);
+                        if (j >= a && j < b) raw[start[j] + own[j] + rev[j]++] = static_cast<i32>(i);
                     }
+            for (i64 r = 0; r < rows.n; ++r)
+                for (i64 c = 0; c < mk; ++c)
+                    if (listed_more(r, c)) {
+                        i64 j = more(r, c);
+                        if (j >= a && j < b)
+                            raw[start[j] + own[j] + rev[j]++] = static_cast<i32>(rows[r]);
+                    }
+            std::vector<i32> tmp;
+            i64 w = start[a];  // rows made distinct, moved left within this thread's part
+            for (i64 i = a; i < b; ++i) {
+                i64 m = sort_row(raw.p, start[i], own[i], start[i + 1], tmp);
+                if (w != start[i]) std::copy(raw.p + start[i], raw.p + start[i] + m, raw.p + w);
+                w += m;
+                own[i] = static_cast<i32>(m);
             }
-        });
-        for (i64 t = 0; t < rows.n; ++t) {  // the longer lists (distinct rows), after
-            i64 i = rows[t], u = start[i];     // the row's first list
-            for (i64 c = 0; c < k; ++c) u += listed(i, c) ? 1 : 0;
-            for (i64 c = 0; c < mk; ++c)
-                if (listed_more(t, c)) {
-                    i64 j = more(t, c);
-                    raw[u++] = static_cast<i32>(j);
-                    raw[start[j] + rev[j]++] = static_cast<i32>(i);
-                }
-        }
-        parallel_for(n, [&](i64 lo, i64 hi) {
-            for (i64 i = lo; i < hi; ++i)
-                own[i] = static_cast<i32>(sort_distinct(raw.p, start[i], start[i + 1]));
         });
         indptr[0] = 0;
         for (i64 i = 0; i < n; ++i) indptr[i + 1] = indptr[i] + own[i];
-        for (i64 i = 0; i < n; ++i) {
-            i64 s = start[i];
-            for (i64 a = 0; a < indptr[i + 1] - indptr[i]; ++a) raw[indptr[i] + a] = raw[s + a];
+        for (i64 t = 1; t < T; ++t) {  // each part to its place (left: never over the next)
+            const i64 a = lo(t), b = lo(t + 1);
+            std::memmove(raw.p + indptr[a], raw.p + start[a],
+                         sizeof(i32) * static_cast<size_t>(indptr[b] - indptr[a]));
         }
     }
     return raw_a;
