@@ -2,6 +2,7 @@
 
 Usage: python benchmarks/tiles.py [--mesh-id 281] [--subdivide 2 3] [--points 1000000]
        [-k 2000] [--tiles 8] [--workers 2] [--halo 3] [--no-mesh] [--tiled-only]
+       [--seeds 0 1 2]
        python benchmarks/tiles.py --compare [-k 600] [--tiles 8] [--halo 3] [--paper]
        [--times 1] [--refine 1] [--compare-points N] [--merge-from F]
 
@@ -29,10 +30,11 @@ connected piece of the whole input's graph; the stitching's promise is 0),
 the border disagreements, wall time and peak resident memory (the single
 run's process; the largest of the tiles' tasks).
 
-``--no-mesh``: only the point rows. ``--tiled-only``: no single run (for a
-cloud larger than this machine holds): the UE counts each point once (as
-``superfacets experiment --elements points``), and "cut by a border" is
-checked tile by tile, without the whole graph: each tile's box, grown by
+``--seeds``: one cloud per seed of the sampling (default 0), to tell the spread of
+the tiled run's difference from a bias. ``--no-mesh``: only the point rows.
+``--tiled-only``: no single run (for a cloud larger than this machine holds): the UE
+counts each point once (as ``superfacets experiment --elements points``), and "cut by a
+border" is checked tile by tile, without the whole graph: each tile's box, grown by
 ``1.5 window r``, is read and its point graph built; every superpoint whose
 center lies in the tile's core must lie in the box and be one connected piece
 of that graph (the box's graph is the whole cloud's away from the box edge).
@@ -300,6 +302,8 @@ def main() -> None:
     ap.add_argument("--compare-points", type=int, default=0, metavar="N",
                     help="--compare: N points sampled on each mesh instead of its faces")
     ap.add_argument("--no-mesh", action="store_true", help="only the point rows")
+    ap.add_argument("--seeds", type=int, nargs="+", default=[0],
+                    help="the points' sampling: one cloud per seed")
     ap.add_argument("--tiled-only", action="store_true",
                     help="points only, no single run (equal-weight UE, cut checked per tile)")
     a = ap.parse_args()
@@ -327,19 +331,21 @@ def main() -> None:
             if not (a.no_mesh or a.tiled_only):
                 _row(f"PSB {a.mesh_id} subdivided {s}x", f.shape[0], mesh, gt, path, a.k, a,
                      folder)
-            for n in (a.points if s == a.subdivide[-1] else []):
-                pts, face = sample_points(mesh, n, seed=0)
+            for n, seed in ((n, seed) for n in (a.points if s == a.subdivide[-1] else [])
+                            for seed in a.seeds):
+                pts, face = sample_points(mesh, n, seed=seed)
                 pp = folder / f"points{n}.npy"
                 np.save(pp, pts)
                 label = gt[face]
                 del pts, face
+                name = "points on it" + (f", seed {seed}" if a.seeds != [0] else "")
                 if a.tiled_only:
-                    _row_tiled_only(f"points on PSB {a.mesh_id} subdivided {s}x", n, label,
-                                    pp, a.k, a)
+                    _row_tiled_only(f"points on PSB {a.mesh_id} subdivided {s}x"
+                                    + name[len("points on it"):], n, label, pp, a.k, a)
                 else:
                     # the cloud is read from its file by each run, and by this process
                     # only after them (50M points: the single run needs the memory)
-                    _row("points on it", n, pp, label, pp, a.k, a, folder)
+                    _row(name, n, pp, label, pp, a.k, a, folder)
 
 
 if __name__ == "__main__":
