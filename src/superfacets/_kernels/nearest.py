@@ -127,30 +127,23 @@ def tree_nodes(pts, keys, leaf, start, end, left, boxes):
     return nn
 
 
+@njit(cache=True, error_model="numpy", nogil=True, inline="always")
+def _gap2(lo, hi, q):
+    """Squared distance from ``q`` to the interval ``[lo, hi]``."""
+    g = lo - q
+    if g <= 0.0:
+        g = q - hi
+        if g < 0.0:
+            g = 0.0
+    return g * g
+
+
 @njit(cache=True, error_model="numpy", nogil=True)
 def _box_distance(boxes, v, qx, qy, qz):
     """Squared distance from the query to node ``v``'s box (0 inside): never more than the
     computed squared distance to any point in it (rounding is monotone)."""
-    s = 0.0
-    g = boxes[v, 0] - qx
-    if g <= 0.0:
-        g = qx - boxes[v, 3]
-        if g < 0.0:
-            g = 0.0
-    s += g * g
-    g = boxes[v, 1] - qy
-    if g <= 0.0:
-        g = qy - boxes[v, 4]
-        if g < 0.0:
-            g = 0.0
-    s += g * g
-    g = boxes[v, 2] - qz
-    if g <= 0.0:
-        g = qz - boxes[v, 5]
-        if g < 0.0:
-            g = 0.0
-    s += g * g
-    return s
+    return (_gap2(boxes[v, 0], boxes[v, 3], qx) + _gap2(boxes[v, 1], boxes[v, 4], qy)
+            + _gap2(boxes[v, 2], boxes[v, 5], qz))
 
 
 @njit(cache=True, error_model="numpy", nogil=True)

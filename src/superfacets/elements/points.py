@@ -106,7 +106,7 @@ def _normals_and_linearity(points: np.ndarray, neighbors: np.ndarray
 
     out = np.empty((points.shape[0], 3))
     linearity = np.empty(points.shape[0])
-    # neighbours as given: a column slice of the KD-tree's answer is read in place (a
+    # neighbours as given: a column slice of the neighbour lists is read in place (a
     # copy of 11 columns of 1M rows costs 0.25 s, row by row)
     pca_normals(np.ascontiguousarray(points), neighbors, out, linearity)
     return out, linearity

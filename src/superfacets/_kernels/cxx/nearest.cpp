@@ -26,27 +26,17 @@ inline bool bit_of(const std::uint64_t* keys, i64 r, i64 bit) {
     return (keys[3 * r + w] >> (62 - (bit - w * 63))) & 1u;
 }
 
+inline double gap2(double lo, double hi, double q) {
+    double g = lo - q;
+    if (g <= 0.0) {
+        g = q - hi;
+        if (g < 0.0) g = 0.0;
+    }
+    return g * g;
+}
+
 inline double box_distance(const double* box, double qx, double qy, double qz) {
-    double s = 0.0;
-    double g = box[0] - qx;
-    if (g <= 0.0) {
-        g = qx - box[3];
-        if (g < 0.0) g = 0.0;
-    }
-    s += g * g;
-    g = box[1] - qy;
-    if (g <= 0.0) {
-        g = qy - box[4];
-        if (g < 0.0) g = 0.0;
-    }
-    s += g * g;
-    g = box[2] - qz;
-    if (g <= 0.0) {
-        g = qz - box[5];
-        if (g < 0.0) g = 0.0;
-    }
-    s += g * g;
-    return s;
+    return gap2(box[0], box[3], qx) + gap2(box[1], box[4], qy) + gap2(box[2], box[5], qz);
 }
 
 struct Tree {
