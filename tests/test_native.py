@@ -259,6 +259,29 @@ def test_kernels_run_on_threads_only_give_numba_results():
 
 
 @needs_cxx
+def test_center_update_on_threads_gives_numba_centers():
+    # enough elements for a thread per range; quantized positions: many equal distances,
+    # so the rule on ties (old center, else lowest index) decides many centers
+    rng = np.random.default_rng(11)
+    m, k = 300_000, 70
+    label = np.repeat(rng.permutation(k - 2), rng.multinomial(m, np.full(k - 2, 1 / (k - 2))))
+    label = label.astype(np.int32)  # runs of one label, as Z-ordered superfacets; two empty
+    pos = rng.integers(0, 4, (m, 3)).astype(np.float64)
+    sizes = rng.integers(0, 3, m).astype(np.float64)
+    sizes[label == 5] = 0.0  # a superfacet of zero size: the plain mean
+    old = np.array([np.flatnonzero(label == s)[-1] if s % 3 else -1 for s in range(k - 2)]
+                   + [-1, 7], dtype=np.int64)
+    outs = []
+    for fn in (native.kernel("update.update_centers"), native.reference("update.update_centers")):
+        new = np.empty(k, dtype=np.int64)
+        fn(label, k, sizes, pos, old, new)
+        outs.append(new)
+    assert (outs[0] == outs[1]).all()
+    assert (outs[0][-2:] == -1).all() and (outs[0][:-2] >= 0).all()
+    assert (outs[0] != old).any() and (outs[0] == old).any()
+
+
+@needs_cxx
 @pytest.mark.parametrize("ptype,dtype", [(np.int32, np.int32), (np.int64, np.int64),
                                          (np.int32, np.int64)])
 def test_csr_of_pairs_and_their_numbering_match_numba(ptype, dtype):

@@ -148,7 +148,9 @@ def voronoi_cells(graph: ElementGraph, csr_w: np.ndarray, seeds: np.ndarray
     n = graph.n_elements
     inv_width, nb = bucket_width(csr_w)
     bound = graph.indices.shape[0] + n + 1
-    cap = min(bound, max(1 << 14, n // 2))
+    # label-correcting: stale entries stay queued until popped (measured: up to 1.35 n
+    # nodes in use on sampled clouds); pages of the queue are touched only once used
+    cap = min(bound, max(1 << 14, 2 * n))
     head = np.full(nb, -1, dtype=np.int64)
     n_target = seeds.shape[0]
     while True:  # until the queue was large enough

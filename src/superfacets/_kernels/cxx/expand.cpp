@@ -336,15 +336,28 @@ void update_centers(py::handle label_, i64 k, py::handle areas_, py::handle cent
     const i64 m = label.n;
     std::vector<double> sums(3 * k, 0.0), plain(3 * k, 0.0), wsum(k, 0.0);
     std::vector<i64> cnt(k, 0);
-    for (i64 f = 0; f < m; ++f) {
-        i64 s = label[f];
-        double a = areas[f];
-        for (int t = 0; t < 3; ++t) {
-            sums[3 * s + t] += a * c(f, t);
-            plain[3 * s + t] += c(f, t);
+    const i64 nt = std::max<i64>(1, std::min<i64>(threads(), m / (1 << 16)));
+    // each superfacet's sums on one thread (those of s * nt / k == w on thread w), over its
+    // elements in index order: the sums of one pass over all elements, to the bit
+    auto add = [&](i64 w) {
+        const i64 lo = k * w / nt, hi = k * (w + 1) / nt;
+        for (i64 f = 0; f < m; ++f) {
+            i64 s = label[f];
+            if (s < lo || s >= hi) continue;
+            double a = areas[f];
+            for (int t = 0; t < 3; ++t) {
+                sums[3 * s + t] += a * c(f, t);
+                plain[3 * s + t] += c(f, t);
+            }
+            wsum[s] += a;
+            cnt[s] += 1;
         }
-        wsum[s] += a;
-        cnt[s] += 1;
+    };
+    {
+        std::vector<std::thread> pool;
+        for (i64 w = 1; w < nt; ++w) pool.emplace_back(add, w);
+        add(0);
+        for (auto& th : pool) th.join();
     }
     for (i64 s = 0; s < k; ++s) {
         if (wsum[s] > 0.0) {
@@ -367,18 +380,38 @@ void update_centers(py::handle label_, i64 k, py::handle areas_, py::handle cent
             new_centers[s] = cc;
         }
     }
-    for (i64 f = 0; f < m; ++f) {
-        i64 s = label[f];
-        double d = 0.0;
-        for (int t = 0; t < 3; ++t) {
-            double x = c(f, t) - sums[3 * s + t];
-            d += x * x;
+    // the element nearest to each mean: each range of elements on its own thread from the
+    // old centers' distances, a strictly smaller distance winning (the lowest index of its
+    // range on ties); the ranges in order, a later one winning only if strictly nearer:
+    // the choices of one pass over all elements
+    std::vector<std::vector<double>> bests(nt - 1, best);
+    std::vector<std::vector<i64>> picks(nt - 1, std::vector<i64>(k, -1));
+    auto nearest = [&](i64 w) {
+        double* bw = w == 0 ? best.data() : bests[w - 1].data();
+        i64* pw = w == 0 ? new_centers.p : picks[w - 1].data();
+        for (i64 f = m * w / nt; f < m * (w + 1) / nt; ++f) {
+            i64 s = label[f];
+            double d = 0.0;
+            for (int t = 0; t < 3; ++t) {
+                double x = c(f, t) - sums[3 * s + t];
+                d += x * x;
+            }
+            if (d < bw[s]) {
+                bw[s] = d;
+                pw[s] = f;
+            }
         }
-        if (d < best[s]) {
-            best[s] = d;
-            new_centers[s] = f;
-        }
-    }
+    };
+    std::vector<std::thread> pool;
+    for (i64 w = 1; w < nt; ++w) pool.emplace_back(nearest, w);
+    nearest(0);
+    for (auto& th : pool) th.join();
+    for (i64 w = 1; w < nt; ++w)
+        for (i64 s = 0; s < k; ++s)
+            if (picks[w - 1][s] >= 0 && bests[w - 1][s] < best[s]) {
+                best[s] = bests[w - 1][s];
+                new_centers[s] = picks[w - 1][s];
+            }
 }
 
 // float64 weights (faces) or float32 (points): the same sums, each weight widened first

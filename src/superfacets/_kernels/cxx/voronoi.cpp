@@ -1,6 +1,8 @@
 // Voronoi cells of seeds in the weighted element graph, for the coarse-to-fine run
 // (superfacets/_kernels/voronoi.py, and exact.py's search_buckets), the same operations
 // in the same order.
+#include <memory>
+
 #include "search.hpp"
 
 namespace sfk {
@@ -26,9 +28,9 @@ i64 nearest_seed_t(const In<i64>& indptr, const In<i32>& indices, const W* weigh
         label[f] = static_cast<i32>(s);
         todo[n++] = f;
     }
-    std::vector<i64> qlab(qface.n);
+    std::unique_ptr<i32[]> qlab(new i32[qface.n]);  // left unset: pages cost only once used
     return search_buckets<false>(indptr.p, indices.p, weights, dist.p, label.p, todo.data(), n,
-                                 qface.p, qdist.p, qnext.p, head.p, qface.n, head.n, qlab.data(),
+                                 qface.p, qdist.p, qnext.p, head.p, qface.n, head.n, qlab.get(),
                                  inv_width);
 }
 
