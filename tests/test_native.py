@@ -171,7 +171,7 @@ def test_runs_on_faces_give_numba_results_call_by_call(shadowed):
     missing = {name for name in compiled if not any(p.endswith("." + name) for p in calls)}
     # run only on several threads, by the plain replay-less classifier, by a lazy graph's
     # rebuild, by hierarchies and the exact count on points: tested below
-    assert missing <= {"combine_merged", "classify_bounded", "number_pairs", "merge_levels"}, \
+    assert missing <= {"classify_bounded", "number_pairs", "merge_levels"}, \
         missing
 
 
@@ -242,20 +242,6 @@ def test_hierarchies_give_numba_results(shadowed, params):
     sg = superfacet_graph(face_graph(mesh), labels, feats)
     h = hierarchy(sg, [40, 20, 5], **params)
     assert h.levels == (40, 20, 5) and "hierarchy.merge_levels" in calls
-
-
-@needs_cxx
-def test_kernels_run_on_threads_only_give_numba_results():
-    rng = np.random.default_rng(5)
-    n = 1000
-    dist, dist2 = rng.random(n).round(2), rng.random(n).round(2)
-    label, label2 = rng.integers(0, 9, n).astype(np.int32), rng.integers(0, 9, n).astype(np.int32)
-    outs = []
-    for fn in (native.kernel("expand.combine_merged"), native.reference("expand.combine_merged")):
-        d, lab = dist.copy(), label.copy()
-        fn(d, lab, dist2, label2, 100, 900)
-        outs.append((d, lab))
-    assert _same(outs[0], outs[1]) and not _same(outs[0][1], label)
 
 
 @needs_cxx

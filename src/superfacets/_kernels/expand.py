@@ -249,7 +249,8 @@ def expand_many(indptr, indices, weights, centroids, srcs, labs, window_r2, loca
     ``rec_dist`` from ``out_start[i] = pos`` onwards
     (``out_len[i]`` entries), below ``lim``. Releases the GIL, so several
     threads may run it at once on disjoint record ranges with their own
-    ``local``, queue and ``dist``/``label``. ``wscale``: per-face window
+    ``local``, queue and ``dist``/``label``. Empty ``dist``/``label``: records
+    only, merged later (:func:`merge_some`). ``wscale``: per-face window
     factors (:func:`window_of`), or empty. Returns the end
     position, or a negative status of :func:`expand`.
     """
@@ -263,7 +264,8 @@ def expand_many(indptr, indices, weights, centroids, srcs, labs, window_r2, loca
         if p < 0:
             return p
         out_len[i] = p - pos
-        _merge_segment(pos, p - pos, labs[i], rec_face, rec_dist, dist, label)
+        if dist.shape[0]:
+            _merge_segment(pos, p - pos, labs[i], rec_face, rec_dist, dist, label)
         pos = p
     return pos
 
@@ -274,9 +276,8 @@ def merge_some(labs, seg_start, seg_len, rec_face, rec_dist, dist, label):
 
     Face ``f`` of the record of center ``s`` takes label ``s`` when ``(d, s)``
     is lexicographically below ``(dist[f], label[f])``. Since the center of
-    lowest index wins ties, merging every record this way, in any order and
-    split over any number of ``dist``/``label`` pairs combined by
-    :func:`combine_merged`, gives the labelling of :func:`classify_bounded`
+    lowest index wins ties, merging every record this way, in any order,
+    gives the labelling of :func:`classify_bounded`
     (centers in order, strict ``<``).
     """
     for i in range(labs.shape[0]):
@@ -291,17 +292,6 @@ def reset_labels(dist, label):
     for f in range(dist.shape[0]):
         dist[f] = _INF
         label[f] = -1
-
-
-@njit(cache=True, error_model="numpy", nogil=True)
-def combine_merged(dist, label, dist2, label2, lo, hi):
-    """Faces ``lo <= f < hi`` keep the lexicographic minimum of ``(dist, label)``
-    and ``(dist2, label2)``."""
-    for f in range(lo, hi):
-        d = dist2[f]
-        if d < dist[f] or (d == dist[f] and label2[f] < label[f]):
-            dist[f] = d
-            label[f] = label2[f]
 
 
 @njit(cache=True, error_model="numpy", nogil=True)

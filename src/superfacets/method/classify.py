@@ -50,6 +50,7 @@ _ARENA = 5.0  # initial room of the record arena, entries per element
 _RESERVE = 8.0  # arena allocated up front, entries per element (untouched pages cost nothing)
 _SLACK = 0.05  # room added beyond the need when the arena's room is raised
 _PARALLEL_MIN_WORK = 200_000  # recorded elements per pass worth a second thread
+_MERGE_COST = 0.02  # merging a record against expanding it (measured: 2.5 against 146 ns)
 
 
 class Classifier:
@@ -185,13 +186,14 @@ class BoundedReplay(Classifier):
     pass reuses its record; the others are expanded (record only, on up to
     ``n_threads`` threads). Every record is merged by the lexicographic
     (distance, center index) rule, so the order of merging does not matter
-    (each new one right after its expansion, on its thread); then orphans are
-    seeded. The arena is compacted (records of centers that moved are
-    dropped) when the free space at its end runs short, and its room raised
-    when that is not enough: within an allocation of ``8 n`` entries made up
-    front, whose pages cost memory only once written, so raising the room
-    copies nothing. About ``12 * 5`` bytes per element are written (each
-    element lies in about 4.4 windows with ``window = 2``).
+    (thread 0's new ones right after their expansion, the other threads' once
+    they are done); then orphans are seeded. The arena is compacted (records
+    of centers that moved are dropped) when the free space at its end runs
+    short, and its room raised when that is not enough: within an allocation
+    of ``8 n`` entries made up front, whose pages cost memory only once
+    written, so raising the room copies nothing. About ``12 * 5`` bytes per
+    element are written (each element lies in about 4.4 windows with
+    ``window = 2``).
     """
 
     def __init__(self, graph, weights: np.ndarray, window_r2: float, spaces: Workspaces):
@@ -300,11 +302,12 @@ class BoundedReplay(Classifier):
         """Expand the centers ``todo`` into the free end of the arena and merge
         every record (those of ``kept`` and the new ones) into ``dist``/``label``.
 
-        Thread ``t`` expands an interleaved share of ``todo`` into its own part
-        of the arena and merges its new records, while they are in cache, and a
-        share of the reused ones into its own ``dist``/``label`` (thread 0: the
-        caller's); the shares are then combined face by face. Returns the new
-        end of the arena, or -1 if a thread ran out of room (nothing is kept).
+        Thread 0 merges the reused records and expands its share of ``todo``,
+        merging each new record while it is in cache; the other threads expand
+        their shares into their own parts of the arena (records only), merged by
+        thread 0 once they are done. Only the caller's ``dist``/``label`` exist
+        (merging costs about 2 % of expanding, per record). Returns the new end
+        of the arena, or -1 if a thread ran out of room (nothing is kept).
         """
         spaces = self.spaces
         n = todo.shape[0]
@@ -312,35 +315,33 @@ class BoundedReplay(Classifier):
         n_thr = spaces.n_threads
         if n_thr <= 1 or expected + int(seg_len[kept].sum()) < _PARALLEL_MIN_WORK:
             n_thr = 1
-        parts = [todo[t::n_thr] for t in range(n_thr)]  # interleaved: balanced work
         if n_thr == 1:
-            share = [kept]
-        else:  # reused records: consecutive runs of them topping each thread's work up to
-            # an equal share (records merge in any order: same labels)
-            load = np.array([len(p) * expected / max(n, 1) for p in parts])
-            lengths = seg_len[kept].astype(np.float64)
-            room = np.maximum((load.sum() + lengths.sum()) / n_thr - load, 0.0)
-            mid = np.cumsum(lengths) - 0.5 * lengths
-            owner = np.minimum(np.searchsorted(np.cumsum(room), mid, side="right"), n_thr - 1)
-            share = [kept[owner == t] for t in range(n_thr)]
+            parts = [todo]
+        else:  # interleaved (balanced work); thread 0 takes fewer, for its merging
+            per = expected / max(n, 1)  # records per expansion
+            merging = _MERGE_COST * (int(seg_len[kept].sum()) + expected) / max(per, 1.0)
+            n0 = int(max(0.0, min(n, (n - (n_thr - 1) * merging) / n_thr)))
+            rest = todo[n0:]
+            parts = [todo[:n0]] + [rest[t::n_thr - 1] for t in range(n_thr - 1)]
         bounds = [lo + (hi - lo) * t // n_thr for t in range(n_thr + 1)]
+        none_d, none_l = np.empty(0), np.empty(0, dtype=np.int32)
 
         def run(t):
             ws = spaces.get(t)
-            d_t, l_t = (dist, label) if t == 0 else ws.labels()
             part = np.ascontiguousarray(parts[t])  # (a strided view: the compiled kernels
             # take contiguous arrays)
             srcs_t = np.ascontiguousarray(cs[part])
             os_t = np.empty(part.shape[0], dtype=np.int64)
             ol_t = np.empty(part.shape[0], dtype=np.int64)
             while True:
-                _k.reset_labels(d_t, l_t)
-                _k.merge_some(np.asarray(share[t], dtype=np.int64), seg_start, seg_len,
-                                    self.face, self.dist, d_t, l_t)
+                if t == 0:
+                    _k.reset_labels(dist, label)
+                    _k.merge_some(kept, seg_start, seg_len, self.face, self.dist, dist, label)
                 p = _k.expand_many(indptr, indices, w, c, srcs_t, part, window_r2,
-                                         ws.local, ws.queue, spaces.inv_width, self.face,
-                                         self.dist, bounds[t], bounds[t + 1], os_t, ol_t,
-                                         d_t, l_t, self.wscale)
+                                   ws.local, ws.queue, spaces.inv_width, self.face,
+                                   self.dist, bounds[t], bounds[t + 1], os_t, ol_t,
+                                   *((dist, label) if t == 0 else (none_d, none_l)),
+                                   self.wscale)
                 if p != QUEUE_FULL:
                     break
                 ws.grow(p)
@@ -355,18 +356,9 @@ class BoundedReplay(Classifier):
             ends = [run(0)] + [f.result() for f in futs]
         if min(ends) < 0:
             return -1
-        if n_thr > 1:
-            cuts = [self.m * t // n_thr for t in range(n_thr + 1)]
-
-            def combine(t):
-                for u in range(1, n_thr):
-                    _k.combine_merged(dist, label, *spaces.get(u).labels(), cuts[t],
-                                            cuts[t + 1])
-
-            futs = [spaces.pool().submit(combine, t) for t in range(1, n_thr)]
-            combine(0)
-            for f in futs:
-                f.result()
+        for t in range(1, n_thr):
+            _k.merge_some(np.ascontiguousarray(parts[t]), seg_start, seg_len, self.face,
+                          self.dist, dist, label)
         # close the gaps between the threads' ranges
         pos = ends[0]
         for t in range(1, n_thr):

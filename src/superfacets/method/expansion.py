@@ -69,13 +69,6 @@ class Workspace:
         self.head = np.full(n_buckets, -1, dtype=np.int64)
         self._queue(min(_QUEUE0, max_nodes))
         self.vis = np.empty(min(_VISIT0, m), dtype=np.int32)
-        self._labels = None
-
-    def labels(self):
-        """This thread's own ``(dist, label)`` (float64, int32), made on first use."""
-        if self._labels is None:
-            self._labels = (np.empty(self.m), np.empty(self.m, dtype=np.int32))
-        return self._labels
 
     def _queue(self, cap: int) -> None:
         self.qface = np.empty(cap, dtype=np.int32)

@@ -222,7 +222,7 @@ i64 expand_many_t(py::handle indptr, py::handle indices, py::handle weights,
                        rec_face.p, rec_dist.p, pos, lim);
         if (p < 0) return p;
         out_len[i] = p - pos;
-        merge_segment(pos, p - pos, labs[i], rec_face.p, rec_dist.p, dist.p, label.p);
+        if (dist.n > 0) merge_segment(pos, p - pos, labs[i], rec_face.p, rec_dist.p, dist.p, label.p);
         pos = p;
     }
     return pos;
@@ -249,22 +249,6 @@ void reset_labels(py::handle dist_, py::handle label_) {
     for (i64 f = 0; f < dist.n; ++f) {
         dist[f] = INF;
         label[f] = -1;
-    }
-}
-
-void combine_merged(py::handle dist_, py::handle label_, py::handle dist2_, py::handle label2_,
-                    i64 lo, i64 hi) {
-    Out<double> dist(dist_, "dist");
-    Out<i32> label(label_, "label");
-    In<double> dist2(dist2_, "dist2");
-    In<i32> label2(label2_, "label2");
-    py::gil_scoped_release nogil;
-    for (i64 f = lo; f < hi; ++f) {
-        double d = dist2[f];
-        if (d < dist[f] || (d == dist[f] && label2[f] < label[f])) {
-            dist[f] = d;
-            label[f] = label2[f];
-        }
     }
 }
 
@@ -443,7 +427,6 @@ void bind_expand(py::module_& m) {
                        py::handle, py::handle, py::handle>);
     m.def("merge_some", &merge_some);
     m.def("reset_labels", &reset_labels);
-    m.def("combine_merged", &combine_merged);
     m.def("seed_orphans",
           &seed_orphans<py::handle, py::handle, i64, double, py::handle, py::handle, py::handle,
                         py::handle, double, py::handle, py::handle, i64, i64, py::handle,
