@@ -261,6 +261,32 @@ def test_replayed_expansions_equal_reference_on_synthetic(valley, sphere):
             assert a.n_iter == b.n_iter
 
 
+@pytest.mark.parametrize("n_threads", [1, 2])
+@pytest.mark.parametrize("source", ["grid", "bunny"])
+def test_labels_updated_in_place_equal_the_plain_run(monkeypatch, source, n_threads):
+    # late passes, where few centers move, update the previous labels in place (only the
+    # faces of the centers that moved, from the records that can reach them): the labels
+    # of merging every record, on a grid of exact ties too; counted, so that the path runs
+    from superfacets.method import classify
+
+    mesh = grid_mesh(70, 60) if source == "grid" else read_mesh(need(MESHES / "bunny.tri.xz"))
+    k = 40 if source == "grid" else 150
+    in_place = []
+    orig = classify.BoundedReplay._unset_moved
+
+    def counted(self, *args):
+        out = orig(self, *args)
+        in_place.append(out is not None)
+        return out
+
+    monkeypatch.setattr(classify.BoundedReplay, "_unset_moved", counted)
+    monkeypatch.setattr(classify, "_PARALLEL_MIN_WORK", 0)
+    a = segment(mesh, k, max_iter=40, paper=True, n_threads=n_threads)
+    b = reference(mesh, k, max_iter=40, paper=True)
+    np.testing.assert_array_equal(a.labels, b.labels)
+    assert a.n_iter == b.n_iter and sum(in_place) >= 2, in_place
+
+
 @pytest.mark.parametrize("name", TABLE1)
 def test_replayed_expansions_equal_reference_on_real_meshes(name):
     mesh = read_mesh(need(MESHES / f"{name}.tri.xz"))

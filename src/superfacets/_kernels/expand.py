@@ -286,6 +286,20 @@ def merge_some(labs, seg_start, seg_len, rec_face, rec_dist, dist, label):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
+def unset_owned(labs, seg_start, seg_len, rec_face, dist, label):
+    """Unlabel (``dist = inf``, ``label = -1``) every face that the record of
+    center ``s`` (for ``s`` in ``labs``) labels ``s``: the faces that lose their
+    center when ``s`` moves."""
+    for i in range(labs.shape[0]):
+        s = labs[i]
+        for e in range(seg_start[s], seg_start[s] + seg_len[s]):
+            f = rec_face[e]
+            if label[f] == s:
+                dist[f] = _INF
+                label[f] = -1
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
 def reset_labels(dist, label):
     """``dist = inf``, ``label = -1`` (records have finite distances, so the
     label of an unreached face never takes part in a comparison)."""

@@ -51,6 +51,8 @@ _RESERVE = 8.0  # arena allocated up front, entries per element (untouched pages
 _SLACK = 0.05  # room added beyond the need when the arena's room is raised
 _PARALLEL_MIN_WORK = 200_000  # recorded elements per pass worth a second thread
 _MERGE_COST = 0.02  # merging a record against expanding it (measured: 2.5 against 146 ns)
+_INCREMENTAL = 8  # labels updated in place when at most 1 center in 8 moved
+_INCREMENTAL_SHARE = 0.5  # ... and the records to merge again are at most this share
 
 
 class Classifier:
@@ -92,6 +94,34 @@ class Classifier:
             Centers now in use, and the expansions run.
         """
         raise NotImplementedError
+
+
+def _near_centers(p: np.ndarray, reach: np.ndarray, q: np.ndarray) -> np.ndarray | None:
+    """Which rows of ``q`` lie within ``reach[i]`` of some ``p[i]`` (give or take a
+    millionth), from a grid of pitch ``reach.max()``; None where the grid would have more
+    than ``2**60`` cells."""
+    h = float(reach.max()) * (1.0 + 1e-6)
+    if not (np.isfinite(h) and h > 0):
+        return None
+    lo = np.minimum(p.min(axis=0), q.min(axis=0)) - h  # a cell of margin: no key wraps
+    dims = np.floor((np.maximum(p.max(axis=0), q.max(axis=0)) + h - lo) / h).astype(np.int64) + 2
+    if float(np.prod(dims.astype(np.float64))) > 2.0**60:
+        return None
+    mult = np.array([dims[1] * dims[2], dims[2], 1], dtype=np.int64)
+    kq = np.floor((q - lo) / h).astype(np.int64) @ mult
+    kp = np.floor((p - lo) / h).astype(np.int64) @ mult
+    order = np.argsort(kq, kind="stable")
+    sk = kq[order]
+    near = np.zeros(q.shape[0], dtype=bool)
+    for off in np.array(np.meshgrid([-1, 0, 1], [-1, 0, 1], [-1, 0, 1])).reshape(3, -1).T:
+        key = kp + off @ mult
+        a, b = np.searchsorted(sk, key, "left"), np.searchsorted(sk, key, "right")
+        n = b - a
+        rows = order[np.repeat(a - np.cumsum(n) + n, n) + np.arange(int(n.sum()))]
+        i = np.repeat(np.arange(p.shape[0]), n)
+        d2 = ((q[rows] - p[i]) ** 2).sum(axis=1)
+        near[rows[d2 <= (reach[i] * (1.0 + 1e-6)) ** 2]] = True
+    return near
 
 
 class Bounded(Classifier):
@@ -249,8 +279,11 @@ class BoundedReplay(Classifier):
         seg_len = np.empty(self.m + 1, dtype=np.int64)
         kept = np.flatnonzero(reuse)
         todo = np.flatnonzero(~reuse)
+        base = self._unset_moved(cs, idx, kept, todo, dist, label)
         seg_start[kept] = self.prev_start[idx[kept]]
         seg_len[kept] = self.prev_len[idx[kept]]
+        if base is None:
+            base = kept
         if self.prev_len.shape[0]:
             expected = int(1.1 * todo.shape[0] * self.prev_len.mean())
         else:  # first pass: each face lies in about 4.4 windows
@@ -261,7 +294,8 @@ class BoundedReplay(Classifier):
             self._make_room(expected + 4096, ks, seg_len[kept])
             seg_start[kept] = ks
             st = self._expand_and_merge(indptr, indices, w, c, cs, window_r2, seg_start,
-                                        seg_len, kept, todo, expected, dist, label)
+                                        seg_len, base, todo, expected, dist, label,
+                                        base is not kept)
             if st >= 0:
                 break
             # a thread ran out of room: make more (at least twice what was expected), redo
@@ -290,7 +324,45 @@ class BoundedReplay(Classifier):
         self.slot[self.prev_centers] = np.arange(k, dtype=np.int32)
         self.prev_start = seg_start[:k].copy()
         self.prev_len = seg_len[:k].copy()
+        self.left = (dist, label)
         return k, int(todo.shape[0]) + (k - n_centers)
+
+    def _unset_moved(self, cs, idx, kept, todo, dist, label):
+        """Where the previous pass's labels can be updated in place, unlabel the faces
+        of the centers that moved and return the reused centers whose records may reach
+        them (to be merged again); else None (every record is merged afresh).
+
+        In place when ``dist``/``label`` are the arrays this classifier left, every
+        reused center keeps its index, and few moved: a face keeps its previous
+        ``(dist, label)``, the least over the records that reach it, unless its
+        center moved; those faces are unlabelled and get the least over the records
+        of the reused centers whose windows meet the moved one's (by the triangle
+        inequality, every record that reaches them) and the new records. Merging a
+        record twice changes nothing, so the labels are those of merging every record.
+        """
+        left = getattr(self, "left", None)
+        n, n_moved = cs.shape[0], todo.shape[0]
+        if (left is None or left[0] is not dist or left[1] is not label
+                or n != self.prev_centers.shape[0] or n_moved * _INCREMENTAL > n
+                or not np.array_equal(idx[kept], kept)):
+            return None
+        if n_moved == 0:
+            return kept[:0]
+        c = self.c
+        old, now = self.prev_centers[todo], cs[kept]
+        if now.shape[0] == 0:
+            return None
+        scale = self.wscale  # window radii: each center's (content-sensitive runs)
+        r_old = np.sqrt(self.window_r2 * (scale[old] if scale.shape[0] else np.ones(n_moved)))
+        r_max = np.sqrt(self.window_r2 * (float(scale[now].max()) if scale.shape[0] else 1.0))
+        near = _near_centers(c[old], r_old + r_max, c[now])
+        if near is None:
+            return None
+        lengths = self.prev_len[kept]
+        if lengths[near].sum() > _INCREMENTAL_SHARE * lengths.sum():
+            return None
+        _k.unset_owned(todo, self.prev_start, self.prev_len, self.face, dist, label)
+        return kept[near]
 
     def _merge_only(self, n_centers, seg_start, seg_len, dist, label) -> None:
         _k.reset_labels(dist, label)
@@ -298,9 +370,10 @@ class BoundedReplay(Classifier):
                             dist, label)
 
     def _expand_and_merge(self, indptr, indices, w, c, cs, window_r2, seg_start, seg_len,
-                          kept, todo, expected, dist, label):
+                          kept, todo, expected, dist, label, in_place=False):
         """Expand the centers ``todo`` into the free end of the arena and merge
-        every record (those of ``kept`` and the new ones) into ``dist``/``label``.
+        every record (those of ``kept`` and the new ones) into ``dist``/``label``
+        (reset first, unless ``in_place``).
 
         Thread 0 merges the reused records and expands its share of ``todo``,
         merging each new record while it is in cache; the other threads expand
@@ -335,7 +408,8 @@ class BoundedReplay(Classifier):
             ol_t = np.empty(part.shape[0], dtype=np.int64)
             while True:
                 if t == 0:
-                    _k.reset_labels(dist, label)
+                    if not in_place:
+                        _k.reset_labels(dist, label)
                     _k.merge_some(kept, seg_start, seg_len, self.face, self.dist, dist, label)
                 p = _k.expand_many(indptr, indices, w, c, srcs_t, part, window_r2,
                                    ws.local, ws.queue, spaces.inv_width, self.face,

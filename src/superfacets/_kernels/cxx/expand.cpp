@@ -242,6 +242,25 @@ void merge_some(py::handle labs_, py::handle seg_start_, py::handle seg_len_,
     }
 }
 
+void unset_owned(py::handle labs_, py::handle seg_start_, py::handle seg_len_,
+                 py::handle rec_face_, py::handle dist_, py::handle label_) {
+    In<i64> labs(labs_, "labs"), seg_start(seg_start_, "seg_start"), seg_len(seg_len_, "seg_len");
+    In<i32> rec_face(rec_face_, "rec_face");
+    Out<double> dist(dist_, "dist");
+    Out<i32> label(label_, "label");
+    py::gil_scoped_release nogil;
+    for (i64 i = 0; i < labs.n; ++i) {
+        i64 s = labs[i];
+        for (i64 e = seg_start[s]; e < seg_start[s] + seg_len[s]; ++e) {
+            i64 f = rec_face[e];
+            if (label[f] == s) {
+                dist[f] = INF;
+                label[f] = -1;
+            }
+        }
+    }
+}
+
 void reset_labels(py::handle dist_, py::handle label_) {
     Out<double> dist(dist_, "dist");
     Out<i32> label(label_, "label");
@@ -427,6 +446,7 @@ void bind_expand(py::module_& m) {
                        py::handle, py::handle, py::handle>);
     m.def("merge_some", &merge_some);
     m.def("reset_labels", &reset_labels);
+    m.def("unset_owned", &unset_owned);
     m.def("seed_orphans",
           &seed_orphans<py::handle, py::handle, i64, double, py::handle, py::handle, py::handle,
                         py::handle, double, py::handle, py::handle, i64, i64, py::handle,
