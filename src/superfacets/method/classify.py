@@ -396,7 +396,9 @@ class BoundedReplay(Classifier):
             n0 = int(max(0.0, min(n, (n - (n_thr - 1) * merging) / n_thr)))
             rest = todo[n0:]
             parts = [todo[:n0]] + [rest[t::n_thr - 1] for t in range(n_thr - 1)]
-        bounds = [lo + (hi - lo) * t // n_thr for t in range(n_thr + 1)]
+        # the free room shared in proportion to the expansions each thread runs
+        share = np.cumsum([0] + [p.shape[0] for p in parts]) / max(n, 1)
+        bounds = [lo + int((hi - lo) * x) for x in share[:-1]] + [hi]
         none_d, none_l = np.empty(0), np.empty(0, dtype=np.int32)
 
         def run(t):
