@@ -30,7 +30,7 @@ class ElementInput(NamedTuple):
     Attributes
     ----------
     graph : ElementGraph
-    index : (N,) int64 ndarray or None
+    index : (N,) int32 or int64 ndarray, or None
         Element of each input row (vertex or point), -1 for rows that are not
         elements (vertices used by no face, invalid points); None when the
         elements are the rows themselves (faces).

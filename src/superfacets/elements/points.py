@@ -72,7 +72,7 @@ class PointElements(NamedTuple):
     ----------
     graph : ElementGraph
         ``kind = "points"``, one element per distinct valid point.
-    index : (N,) int64 ndarray
+    index : (N,) int32 ndarray (int64 from ``2**31`` rows)
         Element of each row of the cloud: -1 for invalid points; exact
         duplicates share one element.
     """
@@ -300,7 +300,7 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
                           ) -> PointElements:
     valid = np.flatnonzero(cloud.valid)
     pts, inverse = distinct_points(cloud.points[valid])
-    index = np.full(cloud.n_total, -1, dtype=np.int64)
+    index = np.full(cloud.n_total, -1, dtype=np.int32 if cloud.n_total < 2**31 else np.int64)
     index[valid] = inverse
     n = pts.shape[0]
     k = int(min(n_neighbors, n - 1))

@@ -29,7 +29,7 @@ import numpy as np
 from .._kernels import native
 from .._kernels.codes import NOT_INCREMENTAL, QUEUE_FULL
 from .adaptive import window_factors
-from .expansion import Workspaces, with_room
+from .expansion import Workspaces, centers_within, with_room
 from .params import ASSIGNMENTS, check_choice
 
 _k = native.of("expand")  # the expansion kernels, compiled where built
@@ -94,34 +94,6 @@ class Classifier:
             Centers now in use, and the expansions run.
         """
         raise NotImplementedError
-
-
-def _near_centers(p: np.ndarray, reach: np.ndarray, q: np.ndarray) -> np.ndarray | None:
-    """Which rows of ``q`` lie within ``reach[i]`` of some ``p[i]`` (give or take a
-    millionth), from a grid of pitch ``reach.max()``; None where the grid would have more
-    than ``2**60`` cells."""
-    h = float(reach.max()) * (1.0 + 1e-6)
-    if not (np.isfinite(h) and h > 0):
-        return None
-    lo = np.minimum(p.min(axis=0), q.min(axis=0)) - h  # a cell of margin: no key wraps
-    dims = np.floor((np.maximum(p.max(axis=0), q.max(axis=0)) + h - lo) / h).astype(np.int64) + 2
-    if float(np.prod(dims.astype(np.float64))) > 2.0**60:
-        return None
-    mult = np.array([dims[1] * dims[2], dims[2], 1], dtype=np.int64)
-    kq = np.floor((q - lo) / h).astype(np.int64) @ mult
-    kp = np.floor((p - lo) / h).astype(np.int64) @ mult
-    order = np.argsort(kq, kind="stable")
-    sk = kq[order]
-    near = np.zeros(q.shape[0], dtype=bool)
-    for off in np.array(np.meshgrid([-1, 0, 1], [-1, 0, 1], [-1, 0, 1])).reshape(3, -1).T:
-        key = kp + off @ mult
-        a, b = np.searchsorted(sk, key, "left"), np.searchsorted(sk, key, "right")
-        n = b - a
-        rows = order[np.repeat(a - np.cumsum(n) + n, n) + np.arange(int(n.sum()))]
-        i = np.repeat(np.arange(p.shape[0]), n)
-        d2 = ((q[rows] - p[i]) ** 2).sum(axis=1)
-        near[rows[d2 <= (reach[i] * (1.0 + 1e-6)) ** 2]] = True
-    return near
 
 
 class Bounded(Classifier):
@@ -234,8 +206,8 @@ class BoundedReplay(Classifier):
         self.face = np.empty(cap, dtype=np.int32)
         self.dist = np.empty(cap)
         self.end = 0
-        self.slot = np.full(m, -1, dtype=np.int32)  # face -> index among previous centers
         self.prev_centers = np.empty(0, dtype=np.int64)
+        self.prev_order = self.prev_sorted = np.empty(0, dtype=np.int64)
         self.prev_start = np.empty(0, dtype=np.int64)
         self.prev_len = np.empty(0, dtype=np.int64)
 
@@ -273,7 +245,10 @@ class BoundedReplay(Classifier):
         indptr, indices, w, c, window_r2 = self.indptr, self.indices, self.w, self.c, self.window_r2
         spaces = self.spaces
         cs = centers[:n_centers]
-        idx = self.slot[cs]
+        # index of each center among the previous ones (-1: none), from the sorted list
+        pos = np.minimum(np.searchsorted(self.prev_sorted, cs), self.prev_sorted.shape[0] - 1)
+        idx = np.where(self.prev_sorted[pos] == cs, self.prev_order[pos], -1) \
+            if self.prev_sorted.shape[0] else np.full(cs.shape[0], -1)
         reuse = idx >= 0
         seg_start = np.empty(self.m + 1, dtype=np.int64)  # per center (orphans appended)
         seg_len = np.empty(self.m + 1, dtype=np.int64)
@@ -319,9 +294,9 @@ class BoundedReplay(Classifier):
             self._merge_only(n_centers, seg_start, seg_len, dist, label)
         self.end = int(p)
         # this pass's records become the previous ones
-        self.slot[self.prev_centers] = -1
         self.prev_centers = centers[:k].copy()
-        self.slot[self.prev_centers] = np.arange(k, dtype=np.int32)
+        self.prev_order = np.argsort(self.prev_centers, kind="stable")
+        self.prev_sorted = self.prev_centers[self.prev_order]
         self.prev_start = seg_start[:k].copy()
         self.prev_len = seg_len[:k].copy()
         self.left = (dist, label)
@@ -355,7 +330,7 @@ class BoundedReplay(Classifier):
         scale = self.wscale  # window radii: each center's (content-sensitive runs)
         r_old = np.sqrt(self.window_r2 * (scale[old] if scale.shape[0] else np.ones(n_moved)))
         r_max = np.sqrt(self.window_r2 * (float(scale[now].max()) if scale.shape[0] else 1.0))
-        near = _near_centers(c[old], r_old + r_max, c[now])
+        near = centers_within(c[old], r_old + r_max, c[now])
         if near is None:
             return None
         lengths = self.prev_len[kept]

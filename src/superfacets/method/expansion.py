@@ -5,7 +5,7 @@
 the values it changed), the bucket queue and a visit buffer, both grown on
 demand (the queue holds one expansion's frontier, a few hundred to a few
 thousand elements, not ``n``). :func:`with_room` reruns a kernel until its
-buffers were large enough.
+buffers were large enough; :func:`centers_within` finds the centers near others.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import numpy as np
 
 from .._kernels.codes import QUEUE_FULL, RECORD_FULL
 
-__all__ = ["Workspace", "Workspaces", "bucket_width", "with_room"]
+__all__ = ["Workspace", "Workspaces", "bucket_width", "centers_within", "with_room"]
 
 _QUEUE0 = 1 << 14  # initial queue nodes
 _VISIT0 = 1 << 16  # initial visit buffer
@@ -141,3 +141,54 @@ def with_room(ws: Workspace, call):
         if st not in (QUEUE_FULL, RECORD_FULL):
             return out
         ws.grow(st)
+
+
+def centers_within(p: np.ndarray, reach: np.ndarray, q: np.ndarray) -> np.ndarray | None:
+    """Which points ``q`` lie within ``reach[i]`` of some point ``p[i]``.
+
+    Used to find the centers whose windows can meet a moved center's (the
+    classification's in-place passes). Read from a grid of pitch ``reach.max()``:
+    each ``p[i]`` looks in the 27 cells around its own.
+
+    Parameters
+    ----------
+    p : (a, 3) float64 ndarray
+    reach : (a,) float64 ndarray
+        Radius around each ``p[i]`` (input units, ``> 0``), widened by a millionth
+        so that rounding never leaves a point out.
+    q : (b, 3) float64 ndarray
+
+    Returns
+    -------
+    (b,) bool ndarray or None
+        None where the grid would have more than ``2**60`` cells, or ``reach`` is
+        not positive and finite.
+
+    Examples
+    --------
+    >>> centers_within(np.zeros((1, 3)), np.array([1.0]),
+    ...                np.array([[0.5, 0, 0], [0, 2.0, 0], [0, 0, -1.0]])).tolist()
+    [True, False, True]
+    """
+    h = float(reach.max()) * (1.0 + 1e-6)
+    if not (np.isfinite(h) and h > 0):
+        return None
+    lo = np.minimum(p.min(axis=0), q.min(axis=0)) - h  # a cell of margin: no key wraps
+    dims = np.floor((np.maximum(p.max(axis=0), q.max(axis=0)) + h - lo) / h).astype(np.int64) + 2
+    if float(np.prod(dims.astype(np.float64))) > 2.0**60:
+        return None
+    mult = np.array([dims[1] * dims[2], dims[2], 1], dtype=np.int64)
+    kq = np.floor((q - lo) / h).astype(np.int64) @ mult
+    kp = np.floor((p - lo) / h).astype(np.int64) @ mult
+    order = np.argsort(kq, kind="stable")
+    sk = kq[order]
+    near = np.zeros(q.shape[0], dtype=bool)
+    for off in np.array(np.meshgrid([-1, 0, 1], [-1, 0, 1], [-1, 0, 1])).reshape(3, -1).T:
+        key = kp + off @ mult
+        a, b = np.searchsorted(sk, key, "left"), np.searchsorted(sk, key, "right")
+        n = b - a
+        rows = order[np.repeat(a - np.cumsum(n) + n, n) + np.arange(int(n.sum()))]
+        i = np.repeat(np.arange(p.shape[0]), n)
+        d2 = ((q[rows] - p[i]) ** 2).sum(axis=1)
+        near[rows[d2 <= (reach[i] * (1.0 + 1e-6)) ** 2]] = True
+    return near
