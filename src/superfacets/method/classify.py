@@ -202,6 +202,7 @@ class BoundedReplay(Classifier):
         super().__init__(graph, weights, window_r2, spaces)
         m = self.m
         self.limit = int(_ARENA * m) + 1024  # room in use: records lie in [0, limit)
+        self.high = 0  # the part of the arena written so far
         cap = int(_RESERVE * m) + 1024
         self.face = np.empty(cap, dtype=np.int32)
         self.dist = np.empty(cap)
@@ -216,11 +217,14 @@ class BoundedReplay(Classifier):
         """Free ``need`` entries at the end, keeping the segments ``start``/``length``
         (``start`` updated in place).
 
-        Dropped records are compacted away before the room is raised, so the
-        part of the arena ever written (its resident memory) stays within a
-        few percent of the largest set of records one pass needs.
+        Dropped records are compacted away before the room is raised, and before
+        writing past the part of the arena written so far (``high``) where they
+        are worth a copy, so that part (its resident memory) stays within a few
+        percent of the largest set of records one pass needs.
         """
-        if self.limit - self.end >= need:
+        holes = self.end - int(length.sum())
+        if self.limit - self.end >= need and (self.end + need <= self.high
+                                              or holes < _SLACK * self.end):
             return
         self.end = int(_k.compact_records(np.argsort(start, kind="stable"), start,
                                                  length, self.face, self.dist))
@@ -293,6 +297,7 @@ class BoundedReplay(Classifier):
                 self._grow(self.limit // 2)
             self._merge_only(n_centers, seg_start, seg_len, dist, label)
         self.end = int(p)
+        self.high = max(self.high, self.end)
         # this pass's records become the previous ones
         self.prev_centers = centers[:k].copy()
         self.prev_order = np.argsort(self.prev_centers, kind="stable")
@@ -359,7 +364,9 @@ class BoundedReplay(Classifier):
         """
         spaces = self.spaces
         n = todo.shape[0]
-        lo, hi = self.end, self.limit
+        # the room the expected records need, and a quarter more (a thread that runs
+        # out redoes the pass with more): pages beyond it stay untouched
+        lo, hi = self.end, min(self.limit, self.end + int(1.25 * expected) + 4096)
         n_thr = spaces.n_threads
         if n_thr <= 1 or expected + int(seg_len[kept].sum()) < _PARALLEL_MIN_WORK:
             n_thr = 1
