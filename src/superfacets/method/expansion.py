@@ -121,6 +121,12 @@ class Workspaces:
             self.ws.append(Workspace(self.m, self.n_buckets, self.heap_bound))
         return self.ws[t]
 
+    def release(self) -> None:
+        """Forget every thread's workspace (``local``: 8 bytes per element each), as
+        between uses that hold other large arrays (the swaps of split-and-merge);
+        :meth:`get` makes them again."""
+        self.ws.clear()
+
     def pool(self) -> ThreadPoolExecutor:
         if self._pool is None:
             self._pool = ThreadPoolExecutor(self.n_threads - 1, thread_name_prefix="superfacets")

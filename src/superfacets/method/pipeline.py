@@ -203,6 +203,10 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
     if rules.cleanup:
         try:
             with hooks.stage("cleanup", "clean-up"):
+                release = hooks.release_of(graph)
+                if release is not None:  # a large graph's terms, released after the
+                    graph.terms  # noqa: B018 (weights), made again; then the normals and
+                    release(keep=("dual_edge", "lengths"))  # pairs they read let go
                 labels = clean_up(graph, labels, centers, rules, feats)
         finally:
             hooks.close()

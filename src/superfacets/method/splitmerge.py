@@ -195,7 +195,9 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
     entries = np.sort(np.bincount(lab, weights=np.diff(g.indptr), minlength=k))
     heap = int(entries[-2:].sum()) + 1
     n_thr = max(1, min(int(n_threads), k))
-    space = [(np.empty(heap), np.empty(heap, dtype=np.int64), np.empty(n, dtype=np.int64))
+    # work lists: the elements of one superfacet (a split) or of two (a merge's union)
+    largest = int(np.sort(np.diff(bounds))[-2:].sum())
+    space = [(np.empty(heap), np.empty(heap, dtype=np.int64), np.empty(largest, dtype=np.int64))
              for _ in range(n_thr)]
     dist, dist2 = np.empty(n), np.empty(n)
     stamp = np.full(n, -1, dtype=np.int64)
@@ -228,9 +230,10 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
         pa, pb = key // k, key % k
         union = np.empty(key.shape[0])
         most = best[1] if pruned else np.inf
-        # unions overlap: each thread its own distances (the first reuses the split's)
-        own = [(dist, stamp)] + [(np.empty(n), np.full(n, -1, dtype=np.int64))
-                                 for _ in range(1, n_thr)]
+        # unions overlap: each thread its own distances; the first two reuse the splits'
+        # (their stamps are search ids never used again, so later splits are unaffected)
+        own = [(dist, stamp), (dist2, stamp2)][:n_thr] + [
+            (np.empty(n), np.full(n, -1, dtype=np.int64)) for _ in range(2, n_thr)]
         mb = [next(calls) << 40 for _ in range(n_thr)]
         threads.run(lambda t: merge_energies(
             *args, pa, pb, energy, float(window_r2), float(most), union, *own[t], mb[t],
@@ -422,6 +425,7 @@ def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.nda
     for _ in range(rounds):
         present = used(it)
         old = it.centers[present]
+        classifier.spaces.release()  # the expansions' buffers: not read by the swaps
         new, n = swap_round(graph, weights if swap_weights is None else swap_weights,
                             relabel_dense(it.label), window_r2=window_r2,
                             n_threads=n_threads)

@@ -242,8 +242,9 @@ def weigh(graph, rules: Rules, features=None, release=None
     weights where split-and-merge runs (convex folds scaled by the kind's
     ``swap_eta_convex``).
 
-    The adjacency terms stay cached on the graph for the clean-up when it runs;
-    otherwise they are released (17 bytes per adjacency). Without split-and-merge,
+    The adjacency terms stay cached on the graph for the clean-up when it runs on a
+    small graph; otherwise they are released (17 bytes per adjacency), and the
+    clean-up computes them again, the same. Without split-and-merge,
     ``release(keep=...)`` forgets the graph's pairs and spans once the weight of each
     pair is made, before they are laid out per CSR entry (the memory peak of this
     stage).
@@ -303,8 +304,10 @@ def weigh(graph, rules: Rules, features=None, release=None
         swap_w = convex_scaled(graph, w, alpha=p.alpha, eta_convex=p.eta_convex,
                                factor=rules.kind.swap_eta_convex, weighting=p.weighting
                                ).astype(w.dtype, copy=False)
-    if not rules.cleanup:
-        graph.release_terms()  # not needed again by this run
+    if not rules.cleanup or release is not None:
+        # not needed again by this run; or, on a large graph, not held through the
+        # passes (17 bytes per adjacency): the clean-up computes them again, the same
+        graph.release_terms()
     return w, swap_w
 
 
