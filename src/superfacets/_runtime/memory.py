@@ -13,10 +13,13 @@ from __future__ import annotations
 
 import os
 import resource
+import sys
 
 from ..errors import MemoryLimitError
 
-__all__ = ["available_bytes", "check_memory"]
+__all__ = ["available_bytes", "check_memory", "give_back_free_memory"]
+
+_trim = None  # glibc's malloc_trim, once looked up (False: not available)
 
 
 def available_bytes() -> int | None:
@@ -79,3 +82,34 @@ def check_memory(n_elements: int, bytes_per_element: int, what: str) -> None:
             f"{what} need about {need / 2**30:.1f} GiB at the run's peak, and this process "
             f"may use {avail / 2**30:.1f} GiB: segment it in tiles (--tiles N, "
             "superfacets.segment_tiled) or on a larger machine", need, avail)
+
+
+def give_back_free_memory() -> None:
+    """Hand the memory the allocator holds free back to the operating system
+    (glibc's ``malloc_trim``; nothing elsewhere).
+
+    Arrays below the allocator's mmap threshold (which grows to 32 MiB once such
+    blocks are freed) come from its heap, and a freed one in the middle of that heap
+    stays in the process's resident memory until the allocator trims it. A run calls
+    this between its stages on large inputs: the passes then start without the
+    graph build's freed temporaries (2M points: 405 -> 316 MiB after the build).
+    The arrays themselves are untouched.
+
+    Examples
+    --------
+    >>> give_back_free_memory()
+    """
+    global _trim
+    if _trim is None:
+        _trim = False
+        if sys.platform.startswith("linux"):
+            try:
+                import ctypes
+
+                _trim = ctypes.CDLL("libc.so.6").malloc_trim
+                _trim.argtypes = [ctypes.c_size_t]
+                _trim.restype = ctypes.c_int
+            except (OSError, AttributeError):  # another C library: nothing to do
+                _trim = False
+    if _trim:
+        _trim(0)

@@ -43,6 +43,7 @@ from contextlib import contextmanager
 import numpy as np
 
 from .._runtime import interrupts
+from .._runtime.memory import give_back_free_memory
 from ..api.result import SegmentationResult
 from ..elements.inputs import features_of
 from .finish import clean_up, exact_count, finish, merge_small
@@ -61,8 +62,9 @@ _RELEASE_MIN = 1 << 18
 
 
 class Hooks:
-    """What runs around the stages: their timings, the progress bar, and the
-    release of the graph's arrays the passes do not read.
+    """What runs around the stages: their timings, the progress bar, the
+    release of the graph's arrays the passes do not read, and, on large graphs
+    (``trim``), the allocator's free memory handed back after each stage.
 
     Parameters
     ----------
@@ -84,6 +86,7 @@ class Hooks:
 
     def __init__(self, progress: bool, max_iter: int, kind: str) -> None:
         self.timings: dict[str, float] = {}
+        self.trim = False  # free memory handed back after each stage (large graphs)
         self.bar = None
         if progress:  # one bar: the set-up stages by name, then the passes
             from tqdm import tqdm
@@ -103,6 +106,8 @@ class Hooks:
             self.describe(name)
         t = time.perf_counter()
         yield
+        if self.trim:
+            give_back_free_memory()
         if key is not None:
             dt = time.perf_counter() - t
             self.timings[key] = self.timings.get(key, 0.0) + dt if add else dt
@@ -178,6 +183,9 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
     feats = features_of(source, features) if p.beta > 0 else None
     hooks = Hooks(p.progress, p.max_iter, graph.kind)
     hooks.timings["graph"] = t_graph
+    if graph.n_elements >= _RELEASE_MIN:  # the build's temporaries handed back, and
+        hooks.trim = True  # each stage's after it
+        give_back_free_memory()
     try:
         with hooks.stage("weights", "weights"):
             w, swap_w = weigh(graph, rules, feats, hooks.release_of(graph))
