@@ -397,17 +397,42 @@ def test_runs_that_release_the_graph_give_the_same_labels(valley, monkeypatch):
     from superfacets import Mesh, segment
     from superfacets.method import pipeline
 
+    trims = []
+    monkeypatch.setattr(pipeline, "give_back_free_memory", lambda: trims.append(1))
+
     def run(release_min, **kw):
         monkeypatch.setattr(pipeline, "_RELEASE_MIN", release_min)
         mesh = Mesh(valley.vertices, valley.faces)
         r = segment(mesh, 12, **kw)
-        return r.labels, "pairs" in face_graph(mesh).__dict__
+        g = face_graph(mesh)
+        return r.labels, "pairs" in g.__dict__, "terms" in g.__dict__
 
     for kw in ({}, {"cleanup": True, "split_merge": True}, {"coarsen": 4}):
-        kept, held = run(1 << 60, **kw)
-        released, _ = run(0, **kw)
-        assert held
+        del trims[:]
+        kept, held, _ = run(1 << 60, **kw)
+        assert held and not trims  # a small graph: nothing released, nothing trimmed
+        released, _, _ = run(0, **kw)
+        assert len(trims) >= 4  # after the build and after each stage
         np.testing.assert_array_equal(released, kept)
+
+
+def test_a_large_graph_holds_no_terms_through_the_passes(valley, monkeypatch):
+    # the clean-up's adjacency terms are made again after the passes, the same values
+    from superfacets import Mesh, segment
+    from superfacets.method import pipeline, stages
+
+    seen = {}
+    iterate = stages.iterate_passes
+
+    def spy(graph, *args, **kw):
+        seen["terms"] = "terms" in graph.__dict__
+        return iterate(graph, *args, **kw)
+
+    monkeypatch.setattr(pipeline, "iterate_passes", spy)
+    for release_min, held in ((1 << 60, True), (0, False)):
+        monkeypatch.setattr(pipeline, "_RELEASE_MIN", release_min)
+        segment(Mesh(valley.vertices, valley.faces), 12, cleanup=True)
+        assert seen["terms"] is held
 
 
 def test_point_runs_that_release_the_graph_give_the_same_labels(monkeypatch):

@@ -656,3 +656,35 @@ def test_the_result_says_why_the_passes_stopped(tmp_path, capsys):
                  "-o", str(tmp_path / "c.seg")]) == 0
     out = capsys.readouterr().out
     assert "stopped on a repeating cycle of 2 center lists (the labels of pass 50" in out
+
+
+def test_workspaces_released_between_passes_give_the_same_labels(sphere):
+    # split-and-merge releases the expansions' buffers during its swaps; the next
+    # passes make them again (all inf) and replay the same records
+    from superfacets.method.classify import make_classifier
+
+    g = face_graph(sphere)
+    cw = paper_weights(sphere, alpha=200)[g.dual_edge]
+    m = sphere.n_faces
+
+    def passes(release: bool):
+        spaces = Workspaces(m, cw, 2)
+        clf = make_classifier("bounded", g, cw, 0.6**2, spaces)
+        out = []
+        for first in (np.arange(0, m, 97), np.r_[np.arange(0, m, 97)[:-3], 5, 6, 7]):
+            centers = np.zeros(m, dtype=np.int64)
+            centers[:first.size] = first
+            dist, label = np.full(m, np.inf), np.full(m, -1, dtype=np.int32)
+            k, _ = clf.classify(centers, first.size, dist, label)
+            out.append((k, label.copy(), dist.copy()))
+            if release:
+                spaces.release()
+                assert spaces.ws == []
+        spaces.close()
+        return out
+
+    for (k1, l1, d1), (k2, l2, d2) in zip(passes(False), passes(True)):
+        assert k1 == k2
+        np.testing.assert_array_equal(l1, l2)
+        np.testing.assert_array_equal(d1, d2)
+    assert np.isposinf(Workspaces(m, cw, 2).get(1).local).all()

@@ -93,6 +93,10 @@ def test_split_merge_invariants_on_a_real_mesh():
     three, n3 = swap_round(face_graph(mesh), w, paper.labels, n_threads=3)
     assert n1 == n3 > 0
     np.testing.assert_array_equal(one, three)
+    # two threads: the second's merge searches run in the splits' second buffers
+    two, n2 = swap_round(face_graph(mesh), w, paper.labels, n_threads=2)
+    assert n2 == n1
+    np.testing.assert_array_equal(two, one)
 
 
 def test_a_swap_needs_a_split_that_removes_an_average_superfacets_energy():
