@@ -195,8 +195,7 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
     entries = np.sort(np.bincount(lab, weights=np.diff(g.indptr), minlength=k))
     heap = int(entries[-2:].sum()) + 1
     n_thr = max(1, min(int(n_threads), k))
-    # work lists: the elements of one superfacet (a split) or of two (a merge's union)
-    largest = int(np.sort(np.diff(bounds))[-2:].sum())
+    largest = int(np.sort(np.diff(bounds))[-2:].sum())  # work lists: a split, or a union
     space = [(np.empty(heap), np.empty(heap, dtype=np.int64), np.empty(largest, dtype=np.int64))
              for _ in range(n_thr)]
     dist, dist2 = np.empty(n), np.empty(n)
@@ -230,8 +229,8 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
         pa, pb = key // k, key % k
         union = np.empty(key.shape[0])
         most = best[1] if pruned else np.inf
-        # unions overlap: each thread its own distances; the first two reuse the splits'
-        # (their stamps are search ids never used again, so later splits are unaffected)
+        # unions overlap: each thread its own distances, the first two the splits' second
+        # ones (stamps are search ids used once: the later splits are unaffected)
         own = [(dist, stamp), (dist2, stamp2)][:n_thr] + [
             (np.empty(n), np.full(n, -1, dtype=np.int64)) for _ in range(2, n_thr)]
         mb = [next(calls) << 40 for _ in range(n_thr)]
