@@ -211,10 +211,12 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
     if rules.cleanup:
         try:
             with hooks.stage("cleanup", "clean-up"):
+                # a large graph's terms (released after the weights) made again, then
+                # the normals and pairs they read let go
                 release = hooks.release_of(graph)
-                if release is not None:  # a large graph's terms, released after the
-                    graph.terms  # noqa: B018 (weights), made again; then the normals and
-                    release(keep=("dual_edge", "lengths"))  # pairs they read let go
+                if release is not None:
+                    graph.terms  # noqa: B018
+                    release(keep=("dual_edge", "lengths"))
                 labels = clean_up(graph, labels, centers, rules, feats)
         finally:
             hooks.close()
