@@ -314,6 +314,7 @@ def test_released_terms_come_back_the_same(sphere):
 
 def _released_fields_come_back(g, mesh=None):
     names = ("normals", "pairs", "dual_edge", "lengths") + (() if g.spans is None else ("spans",))
+    names += () if g.border_shares is None else ("border_shares",)
     before = {k: getattr(g, k).copy() for k in names}
     terms = g.terms
     g.release()
@@ -355,7 +356,8 @@ def test_vertex_and_point_graphs_release_their_pairs(sphere):
     from superfacets.elements.inputs import elements_of
 
     for kind, released in (("vertices", ["pairs", "dual_edge"]),
-                           ("points", ["pairs", "dual_edge", "lengths", "spans"])):
+                           ("points", ["pairs", "dual_edge", "lengths", "spans",
+                                       "border_shares"])):
         g = elements_of(sphere if kind == "vertices" else sphere.vertices, kind).graph
         assert _released_fields_come_back(g) == released
     assert g.pairs.dtype == np.int32  # points: 4-byte pairs, as built and rebuilt
@@ -755,6 +757,11 @@ def test_a_point_graph_builds_its_pairs_spans_and_lengths_only_when_read():
     # replaced() leaves unbuilt fields unbuilt
     fresh = point_graph(PointCloud(xyz)).graph.replaced(sizes=np.ones(g.n_elements))
     assert not any(name in fresh.__dict__ for name in lazy) and fresh.area == g.n_elements
+    # the shares, released (the passes do not read them), come back from the sizes as
+    # built, also in a copy whose sizes were stretched (adaptive density)
+    fresh.release()
+    assert "border_shares" not in fresh.__dict__
+    np.testing.assert_array_equal(fresh.border_shares, share)
 
 
 def test_weights_from_the_csr_layout_equal_the_weights_per_pair():
@@ -804,3 +811,69 @@ def test_runs_of_equal_positions_found_in_parallel_equal_one_pass_in_order():
         np.testing.assert_array_equal(np.signbit(out[:m]), np.signbit(
             np.array(want_out).reshape(-1, 3)))
         np.testing.assert_array_equal(inverse, want_inv)
+
+
+def _owned(a: np.ndarray) -> np.ndarray:
+    """A copy of ``a`` that nothing else holds (as a cloud read from a file)."""
+    return np.array(a, copy=True)
+
+
+def test_a_cloud_lends_its_points_to_its_graph_and_gets_them_back_bit_for_bit():
+    """A cloud that alone holds its points lets them go once its graph holds the distinct
+    points (24 bytes per point of a run's peak), and gives them back on first use bit for
+    bit: duplicates, -0.0 merged with 0.0, invalid rows of an organized cloud."""
+    import pickle
+
+    from superfacets.elements.points import point_graph
+    from superfacets.inputs.cloud import PointCloud
+
+    rng = np.random.default_rng(5)
+    xyz = rng.random((2000, 3))
+    xyz[10] = xyz[20]  # an exact duplicate: one element
+    xyz[30] = [0.0, 0.5, 0.5]
+    xyz[31] = [-0.0, 0.5, 0.5]  # the same point: its row is kept as it was
+    xyz[40:43] = [np.nan, np.inf, -np.inf]  # invalid rows
+    original = xyz.copy()
+    cloud = PointCloud(_owned(xyz), allow_invalid=True)
+    point_graph(cloud)
+    assert "points" in cloud.__dict__  # not checked usable yet: kept
+    cloud = PointCloud(_owned(xyz), allow_invalid=True)
+    labels = segment(cloud, 20).labels
+    assert "points" not in cloud.__dict__  # lent (freed), and not asked back by the run
+    assert point_graph(cloud).graph.n_elements == 2000 - 3 - 2
+    assert cloud.n_total == 2000 and "points" not in cloud.__dict__
+    back = cloud.points
+    assert back.view(np.uint64).tolist() == original.view(np.uint64).tolist()
+    assert not back.flags.writeable and "_lent" not in cloud.__dict__
+    assert labels[10] == labels[20] and labels[30] == labels[31] and (labels[40:43] == -1).all()
+    # a second graph (other neighbours) lends them again once the caller lets go of
+    # them; a pickled cloud has them
+    point_graph(cloud, 6)
+    assert "points" in cloud.__dict__
+    del back
+    point_graph(cloud, 7)
+    assert "points" not in cloud.__dict__
+    again = pickle.loads(pickle.dumps(cloud))
+    assert again.points.view(np.uint64).tolist() == original.view(np.uint64).tolist()
+
+
+def test_a_cloud_keeps_points_its_caller_also_holds():
+    from superfacets.elements.points import point_graph
+    from superfacets.inputs.cloud import PointCloud
+
+    xyz = np.random.default_rng(6).random((500, 3))
+    cloud = PointCloud(xyz)
+    cloud.check_usable()
+    point_graph(cloud)
+    assert cloud.__dict__["points"] is xyz  # the caller's array: freeing it frees nothing
+    # a view of an array the caller holds is kept too; the view alone is lent
+    base = np.random.default_rng(6).random((1000, 3))
+    view_cloud = PointCloud(base[:500])
+    view_cloud.check_usable()
+    point_graph(view_cloud)
+    assert "points" in view_cloud.__dict__
+    alone = PointCloud(_owned(base).reshape(-1)[:1500].reshape(500, 3))
+    alone.check_usable()
+    point_graph(alone)
+    assert "points" not in alone.__dict__
+    np.testing.assert_array_equal(alone.points, base.reshape(-1)[:1500].reshape(500, 3))

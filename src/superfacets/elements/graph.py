@@ -214,9 +214,9 @@ class ElementGraph:
         pairs: the :class:`AdjacencyTerms` of those adjacencies.
     rebuild : mapping of str to callable
         For the fields :meth:`release` may forget (``normals``, ``pairs``,
-        ``dual_edge``, ``lengths``, ``spans``): ``rebuild[name](graph)`` computes that
-        field again, the same, as a dict of fields. A field without an entry
-        is never released.
+        ``dual_edge``, ``lengths``, ``spans``, ``border_shares``):
+        ``rebuild[name](graph)`` computes that field again, the same, as a dict of
+        fields. A field without an entry is never released.
 
     Examples
     --------
@@ -244,7 +244,7 @@ class ElementGraph:
     edges: np.ndarray | None = None
     boundary_edges: np.ndarray | None = None
     spans: np.ndarray | None = _Rebuilt(optional=True)
-    border_shares: np.ndarray | None = None
+    border_shares: np.ndarray | None = _Rebuilt(optional=True)
     scale2: np.ndarray | None = None
     terms_of: Callable[["ElementGraph", slice], tuple] | None = field(default=None, repr=False)
     rebuild: Mapping[str, Callable[["ElementGraph"], dict]] = field(default_factory=dict,

@@ -299,9 +299,15 @@ def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
 def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
                           ) -> PointElements:
     valid = np.flatnonzero(cloud.valid)
-    pts, inverse = distinct_points(cloud.points[valid])
-    index = np.full(cloud.n_total, -1, dtype=np.int32 if cloud.n_total < 2**31 else np.int64)
+    n_rows = cloud.n_total
+    pts, inverse = distinct_points(cloud.points if valid.shape[0] == n_rows else
+                                   cloud.points[valid])
+    index = np.full(n_rows, -1, dtype=np.int32 if n_rows < 2**31 else np.int64)
     index[valid] = inverse
+    del inverse
+    # the cloud's points, where it alone holds them (read from a file), kept as the
+    # distinct points and each row's index until asked for: 24 bytes per point less
+    cloud.lend_points(pts, index)
     n = pts.shape[0]
     k = int(min(n_neighbors, n - 1))
     lower, upper = column_bounds(pts)
@@ -322,7 +328,7 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
         pca_linearity = native.kernel("normals.pca_linearity")
 
         first = np.full(n, -1, dtype=np.int64)
-        first[inverse[::-1]] = valid[::-1]  # the first row of each distinct point
+        first[index[valid][::-1]] = valid[::-1]  # the first row of each distinct point
         normals = np.ascontiguousarray(cloud.normals[first])
         linearity = np.empty(n)
         pca_linearity(np.ascontiguousarray(pts), nbr, linearity)
@@ -373,17 +379,17 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
     # the pairs, dual-edge map, spans and border lengths (about 180 bytes per point) are
     # built only if read: a default run reads the CSR layout and the border shares alone
     # (the weights: superfacets.method.weights.csr_point_weights)
-    degree = np.diff(indptr).astype(np.float64)
-    shares = 2.0 * np.sqrt(np.pi * area) / np.maximum(degree, 1.0)
-    del degree
     rebuild = dict.fromkeys(("pairs", "dual_edge"),
                             partial(pairs_from_csr, pair_dtype=pair_dtype))
+    # the shares from the sizes as built (a run may stretch the sizes: adaptive density),
+    # made again after a release (the passes do not read them: 8 bytes per point)
+    rebuild["border_shares"] = partial(_shares, area)
     graph = ElementGraph(
         kind="points", positions=pts, sizes=area, normals=normals,
         centroid=pts.mean(axis=0), lower=lower, diagonal=diagonal, pairs=LAZY,
         indptr=indptr, indices=indices, dual_edge=LAZY, lengths=LAZY,
         boundary_elements=np.zeros(0, np.int64), boundary_lengths=np.zeros(0),
-        spans=LAZY, border_shares=shares, terms_of=symmetric_terms,
+        spans=LAZY, border_shares=LAZY, terms_of=symmetric_terms,
         rebuild={**rebuild, "spans": _spans, "lengths": _lengths})
     return PointElements(graph, index)
 
@@ -399,6 +405,13 @@ def _shrunk(a: np.ndarray, size: int) -> np.ndarray:
         return a
     except ValueError:  # memory numpy does not own (a numba kernel's array)
         return a[:size].copy()
+
+
+def _shares(area: np.ndarray, graph: ElementGraph) -> dict:
+    """``rebuild["border_shares"]`` of a point graph: each point's share of the perimeter
+    of its disk of area ``area`` (the sizes as built), ``2 sqrt(pi a_i) / deg_i``."""
+    degree = np.diff(graph.indptr).astype(np.float64)
+    return {"border_shares": 2.0 * np.sqrt(np.pi * area) / np.maximum(degree, 1.0)}
 
 
 def _spans(graph: ElementGraph) -> dict:
