@@ -86,6 +86,7 @@ def test_coarse_pairs_equal_a_stable_sort_and_reduceat():
     """The cluster adjacency kernel: each cluster pair once, in (lo, hi) order, the
     minimum path and the summed border lengths (pairs joined by 1 to several hundred
     adjacencies, the large buckets sorted another way)."""
+    from superfacets._kernels import native
     from superfacets._kernels.voronoi import coarse_pairs
     from superfacets.elements.graph import adjacency_csr
 
@@ -101,6 +102,13 @@ def test_coarse_pairs_equal_a_stable_sort_and_reduceat():
         indptr, indices, dual_edge = adjacency_csr(pairs[:, 0], pairs[:, 1], n)
         out, via, length = coarse_pairs(indptr, indices, cluster, dist, w[dual_edge], lengths,
                                         np.empty(0), n_c)
+        assert out.dtype == np.int32  # 4-byte cluster pairs
+        for c in (cluster, cluster.astype(np.int32)):  # compiled: 4- or 8-byte clusters
+            got = native.kernel("voronoi.coarse_pairs")(indptr, indices, c, dist, w[dual_edge],
+                                                        lengths, np.empty(0), n_c)
+            assert got[0].dtype == np.int32
+            for x, y in zip(got, (out, via, length)):
+                np.testing.assert_array_equal(x, y)
         a, b = cluster[pairs[:, 0]], cluster[pairs[:, 1]]
         cross = a != b
         lo, hi = np.minimum(a, b)[cross], np.maximum(a, b)[cross]

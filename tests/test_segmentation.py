@@ -1,3 +1,6 @@
+import os
+import sys
+
 import numpy as np
 import pytest
 import trimesh
@@ -205,7 +208,7 @@ def test_bounded_expansion_is_dijkstra_inside_the_window(sphere):
     ws = Workspace(m, *bucket_width(cw)[1:], g.indices.size + m + 1)
     expand(g.indptr, g.indices, cw, c, src, 0, radius**2, dist, label, ws.local,
            ws.queue, bucket_width(cw)[0], MERGE, ws.vis, np.empty(0), 0, ws.vis.size)
-    assert np.isposinf(ws.local).all()  # the scratch is left as it was found
+    assert not ws.local.view(np.uint64).any()  # the scratch is left as it was found
     reached = label == 0
     assert reached.sum() > 50
     np.testing.assert_array_equal(reached, np.isfinite(ref))
@@ -234,7 +237,7 @@ def test_interrupted_expansion_leaves_its_scratch_clean(sphere):
         st = expand(g.indptr, g.indices, cw, c, 17, 0, 1.0, d2, l2, ws.local, ws.queue,
                     inv_width, MERGE, ws.vis, np.empty(0), 0, lim)
         assert st == status
-        assert np.isposinf(ws.local).all()
+        assert not ws.local.view(np.uint64).any()
         assert (ws.head == -1).all()
         assert (l2 == -1).all()  # nothing was merged
     # grown, the same expansion gives the uninterrupted result
@@ -687,4 +690,61 @@ def test_workspaces_released_between_passes_give_the_same_labels(sphere):
         assert k1 == k2
         np.testing.assert_array_equal(l1, l2)
         np.testing.assert_array_equal(d1, d2)
-    assert np.isposinf(Workspaces(m, cw, 2).get(1).local).all()
+    assert not Workspaces(m, cw, 2).get(1).local.view(np.uint64).any()
+
+
+def test_threads_buffers_handed_back_after_each_pass_give_the_same_labels(sphere, monkeypatch):
+    # on large graphs the expansions' per-thread buffers (zeros between expansions) are
+    # handed back to the system after each pass: the same labels and distances as kept
+    from superfacets.method import classify
+
+    g = face_graph(sphere)
+    cw = paper_weights(sphere, alpha=200)[g.dual_edge]
+    m = sphere.n_faces
+
+    def passes(give_back_min):
+        monkeypatch.setattr(classify, "_GIVE_BACK_MIN", give_back_min)
+        handed = []
+        monkeypatch.setattr(classify, "give_back_zero_pages",
+                            lambda a: handed.append(bool(a.view(np.uint64).any())))
+        monkeypatch.setattr(classify, "_PARALLEL_MIN_WORK", 0)  # both threads expand
+        spaces = Workspaces(m, cw, 2)
+        clf = classify.make_classifier("bounded", g, cw, 0.6**2, spaces)
+        out = []
+        centers = np.zeros(m, dtype=np.int64)
+        first = np.arange(0, m, 97)
+        centers[:first.size] = first
+        dist, label = np.full(m, np.inf), np.full(m, -1, dtype=np.int32)
+        for _ in range(3):  # passes, each center moved to the next face
+            k, _ = clf.classify(centers, first.size, dist, label)
+            out.append((k, label.copy(), dist.copy()))
+            centers[:first.size] = (centers[:first.size] + 1) % m
+        spaces.close()
+        return out, handed
+
+    (kept, none), (handed_back, handed) = passes(1 << 60), passes(0)
+    assert none == [] and handed == [False] * 6  # two buffers a pass, all zeros then
+    for (k1, l1, d1), (k2, l2, d2) in zip(kept, handed_back):
+        assert k1 == k2
+        np.testing.assert_array_equal(l1, l2)
+        np.testing.assert_array_equal(d1, d2)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="madvise: Linux only")
+def test_zero_pages_handed_back_leave_zeros_and_free_the_memory():
+    from superfacets._runtime.memory import give_back_zero_pages
+
+    def resident_mib():
+        with open("/proc/self/statm") as f:
+            return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
+
+    a = np.ones(16 << 20)  # 128 MiB, written
+    a[:] = 0.0
+    before = resident_mib()
+    give_back_zero_pages(a)
+    assert resident_mib() < before - 100  # its pages are gone...
+    assert not a.view(np.uint64).any()  # ... and read as zeros
+    a[::4096] = 1.0  # written again: as any array
+    assert a.sum() == a[::4096].shape[0]
+    give_back_zero_pages(a[::2])  # not contiguous: nothing done
+    assert a.sum() == a[::4096].shape[0]

@@ -5,10 +5,13 @@ for the flood). The element graph is given as CSR arrays ``indptr`` (int64),
 ``indices`` (int32) and ``weights`` (float64, one per CSR entry). Buffers are
 allocated once per run by the caller (:mod:`superfacets.method.expansion`):
 
-- ``local`` (n,) float64: per-expansion tentative distances, ``inf`` on
-  every element between expansions (each expansion puts back ``inf`` on the
-  elements it reached, which it lists anyway, so no O(n) array is reset per
-  center and no per-element expansion id is kept);
+- ``local`` (n,) float64: per-expansion tentative distances, stored negated
+  (``-d``: the sign bit marks an element this expansion reached, ``-0.0`` its
+  source), ``+0.0`` on every element between expansions (each expansion puts
+  back ``+0.0`` on the elements it reached, which it lists anyway, so no O(n)
+  array is reset per center and no per-element expansion id is kept). Zero
+  bits between expansions: a buffer of zeros costs memory only where written,
+  and its pages may be handed back between passes;
 - ``queue``: the bucket queue of :func:`expand` (node pool and bucket heads,
   sized to the frontier of one expansion, grown by the caller on demand).
 
@@ -102,8 +105,9 @@ def expand(indptr, indices, weights, centroids, src, lab, window_r2,
     ``lab``, ignoring ``dist``; :data:`RECORD`: neither ``dist`` nor
     ``label`` is read or written, so the expansion depends on its face alone.
 
-    ``local``: per-face scratch, ``inf`` everywhere on entry and again on
-    return (a face is first reached when its ``local`` is ``inf``; a face
+    ``local``: per-face scratch, ``+0.0`` everywhere on entry and again on
+    return, ``-distance`` (sign bit set, ``-0.0`` for the source) for the faces this
+    expansion reached (a face is first reached when its ``local`` has no sign bit; a face
     outside the window, or labelled in ``UNLABELLED`` mode, is tested again
     each time it is reached and never entered).
     ``queue = (qface, qdist, qnext, head)``: node pool and bucket heads.
@@ -121,7 +125,7 @@ def expand(indptr, indices, weights, centroids, src, lab, window_r2,
     start = pos
     if pos >= lim:
         return RECORD_FULL
-    local[src] = 0.0
+    local[src] = -0.0
     vis_face[pos] = src
     pos += 1
     qface[0] = src
@@ -136,13 +140,13 @@ def expand(indptr, indices, weights, centroids, src, lab, window_r2,
     while live > 0:
         f, d, free, cur = queue_pop(qface, qdist, qnext, head, bmask, cur, free)
         live -= 1
-        if d > local[f]:
+        if d > -local[f]:
             continue  # stale: queued again since with a lower distance
         for e in range(indptr[f], indptr[f + 1]):
             g = indices[e]
             nd = d + weights[e]
             lg = local[g]
-            if lg == _INF:  # not reached yet by this expansion
+            if not np.signbit(lg):  # not reached yet by this expansion
                 dx = centroids[g, 0] - cx
                 dy = centroids[g, 1] - cy
                 dz = centroids[g, 2] - cz
@@ -153,9 +157,9 @@ def expand(indptr, indices, weights, centroids, src, lab, window_r2,
                     break
                 vis_face[pos] = g
                 pos += 1
-            elif not nd < lg:
+            elif not nd < -lg:
                 continue
-            local[g] = nd
+            local[g] = -nd
             n, free, bump = queue_node(qnext, free, bump, qcap)
             if n < 0:
                 status = QUEUE_FULL
@@ -166,15 +170,15 @@ def expand(indptr, indices, weights, centroids, src, lab, window_r2,
             for b in range(nb):
                 head[b] = -1
             for j in range(start, pos):
-                local[vis_face[j]] = _INF
+                local[vis_face[j]] = 0.0
             return status
     if vis_dist.shape[0] > 0:
         for j in range(start, pos):
-            vis_dist[j] = local[vis_face[j]]
+            vis_dist[j] = -local[vis_face[j]]
     if mode == MERGE:
         for j in range(start, pos):
             f = vis_face[j]
-            d = local[f]
+            d = -local[f]
             if d < dist[f]:
                 dist[f] = d
                 label[f] = lab
@@ -182,7 +186,7 @@ def expand(indptr, indices, weights, centroids, src, lab, window_r2,
         for j in range(start, pos):
             label[vis_face[j]] = lab
     for j in range(start, pos):
-        local[vis_face[j]] = _INF
+        local[vis_face[j]] = 0.0
     return pos
 
 

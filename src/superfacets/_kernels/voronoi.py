@@ -96,7 +96,7 @@ def coarse_pairs(indptr, indices, cluster, dist, csr_w, lengths, shares, n_c):
     ``hi`` are bucketed by ``lo`` (4 bytes each, no sort of all of them), each bucket
     sorted and made distinct: the cluster pairs; a second pass in adjacency order
     adds each adjacency into its pair (found by bisection in its bucket).
-    Returns ``(pairs (m, 2) int64, via (m,), length (m,))``."""
+    Returns ``(pairs (m, 2) int32, via (m,), length (m,))``."""
     n = indptr.shape[0] - 1
     start = np.zeros(n_c + 1, dtype=np.int64)
     for i in range(n):
@@ -137,7 +137,7 @@ def coarse_pairs(indptr, indices, cluster, dist, csr_w, lengths, shares, n_c):
                 u += 1
         first[c + 1] = first[c] + u
     m = first[n_c]
-    out = np.empty((m, 2), dtype=np.int64)
+    out = np.empty((m, 2), dtype=np.int32)  # clusters <= elements < 2**31 (as hi)
     w_c = np.full(m, np.inf)
     len_c = np.zeros(m)
     for c in range(n_c):

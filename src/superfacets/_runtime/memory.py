@@ -17,9 +17,11 @@ import sys
 
 from ..errors import MemoryLimitError
 
-__all__ = ["available_bytes", "check_memory", "give_back_free_memory"]
+__all__ = ["available_bytes", "check_memory", "give_back_free_memory", "give_back_zero_pages"]
 
 _trim = None  # glibc's malloc_trim, once looked up (False: not available)
+_madvise = None  # the C library's madvise, once looked up (False: not available)
+_DONTNEED = 4  # MADV_DONTNEED (Linux)
 
 
 def available_bytes() -> int | None:
@@ -113,3 +115,47 @@ def give_back_free_memory() -> None:
                 _trim = False
     if _trim:
         _trim(0)
+
+
+def give_back_zero_pages(a) -> None:
+    """Hand back to the operating system the whole pages of ``a``, a C-contiguous array
+    whose bytes are all zero: they read as zero again and cost memory only once written
+    (``madvise(MADV_DONTNEED)`` on Linux; nothing elsewhere).
+
+    The expansions' per-thread buffers hold zeros between expansions
+    (:mod:`superfacets._kernels.expand`): handed back after each pass, they hold only
+    the pages that pass's expansions wrote, not every page any pass ever wrote.
+
+    Parameters
+    ----------
+    a : ndarray
+        C-contiguous, every byte zero (not checked: other contents would be lost).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> z = np.zeros(1 << 20)
+    >>> give_back_zero_pages(z)
+    >>> bool(z.any())
+    False
+    """
+    global _madvise
+    if _madvise is None:
+        _madvise = False
+        if sys.platform.startswith("linux"):
+            try:
+                import ctypes
+
+                _madvise = ctypes.CDLL("libc.so.6").madvise
+                _madvise.argtypes = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_int]
+                _madvise.restype = ctypes.c_int
+            except (OSError, AttributeError):
+                _madvise = False
+    if not _madvise or not a.flags.c_contiguous:
+        return
+    page = os.sysconf("SC_PAGE_SIZE")
+    start = a.ctypes.data
+    lo = -(-start // page) * page
+    hi = (start + a.nbytes) // page * page
+    if hi > lo:
+        _madvise(lo, hi - lo, _DONTNEED)

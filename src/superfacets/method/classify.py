@@ -28,6 +28,7 @@ import numpy as np
 
 from .._kernels import native
 from .._kernels.codes import NOT_INCREMENTAL, QUEUE_FULL
+from .._runtime.memory import give_back_zero_pages
 from .adaptive import window_factors
 from .expansion import Workspaces, centers_within, with_room
 from .params import ASSIGNMENTS, check_choice
@@ -53,6 +54,7 @@ _PARALLEL_MIN_WORK = 200_000  # recorded elements per pass worth a second thread
 _MERGE_COST = 0.02  # merging a record against expanding it (measured: 2.5 against 146 ns)
 _INCREMENTAL = 8  # labels updated in place when at most 1 center in 8 moved
 _INCREMENTAL_SHARE = 0.5  # ... and the records to merge again are at most this share
+_GIVE_BACK_MIN = 1 << 16  # elements from which the threads' buffers are handed back per pass
 
 
 class Classifier:
@@ -305,6 +307,9 @@ class BoundedReplay(Classifier):
         self.prev_start = seg_start[:k].copy()
         self.prev_len = seg_len[:k].copy()
         self.left = (dist, label)
+        if self.m >= _GIVE_BACK_MIN:  # the threads' buffers (zeros again) cost nothing
+            for ws in spaces.ws:  # until the next pass writes them
+                give_back_zero_pages(ws.local)
         return k, int(todo.shape[0]) + (k - n_centers)
 
     def _unset_moved(self, cs, idx, kept, todo, dist, label):
@@ -372,12 +377,15 @@ class BoundedReplay(Classifier):
             n_thr = 1
         if n_thr == 1:
             parts = [todo]
-        else:  # interleaved (balanced work); thread 0 takes fewer, for its merging
+        else:  # thread 0 takes fewer, for its merging; each thread a run of the centers
+            # by element (the elements' order is spatial: points in Z-order, faces as
+            # meshed), so its windows, and the pages of its `local`, cover a part of
+            # the surface, not all of it
             per = expected / max(n, 1)  # records per expansion
             merging = _MERGE_COST * (int(seg_len[kept].sum()) + expected) / max(per, 1.0)
             n0 = int(max(0.0, min(n, (n - (n_thr - 1) * merging) / n_thr)))
-            rest = todo[n0:]
-            parts = [todo[:n0]] + [rest[t::n_thr - 1] for t in range(n_thr - 1)]
+            by_element = todo[np.argsort(cs[todo], kind="stable")]
+            parts = [by_element[:n0]] + np.array_split(by_element[n0:], n_thr - 1)
         # the free room shared in proportion to the expansions each thread runs
         share = np.cumsum([0] + [p.shape[0] for p in parts]) / max(n, 1)
         bounds = [lo + int((hi - lo) * x) for x in share[:-1]] + [hi]

@@ -1,7 +1,7 @@
 """Work buffers of the bounded expansions (used by the classification and the flood).
 
 :class:`Workspaces` holds, per thread, the per-expansion tentative distances
-(``local``, float64, ``inf`` between expansions: each expansion puts back
+(``local``, float64, ``+0.0`` between expansions: each expansion puts back
 the values it changed), the bucket queue and a visit buffer, both grown on
 demand (the queue holds one expansion's frontier, a few hundred to a few
 thousand elements, not ``n``). :func:`with_room` reruns a kernel until its
@@ -15,6 +15,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from .._kernels.codes import QUEUE_FULL, RECORD_FULL
+from .._runtime.memory import give_back_zero_pages
 
 __all__ = ["Workspace", "Workspaces", "bucket_width", "centers_within", "with_room"]
 
@@ -64,7 +65,11 @@ class Workspace:
 
     def __init__(self, m: int, n_buckets: int, max_nodes: int):
         self.m = m
-        self.local = np.full(m, np.inf)  # inf between expansions (4 B/element less than an id)
+        # +0.0 between expansions (see superfacets._kernels.expand): pages of zeros,
+        # resident only once an expansion writes them (the allocator may have cleared
+        # reused memory: handed back)
+        self.local = np.zeros(m)
+        give_back_zero_pages(self.local)
         self.max_nodes = max_nodes
         self.head = np.full(n_buckets, -1, dtype=np.int64)
         self._queue(min(_QUEUE0, max_nodes))

@@ -65,7 +65,7 @@ class Coarsening(NamedTuple):
         The clusters as elements (``kind`` that of the fine graph).
     weights : (2 e_c,) float64 ndarray
         Weight of each CSR entry of ``graph`` (see the module notes).
-    cluster : (n,) int64 ndarray
+    cluster : (n,) int32 ndarray (int64 from ``2**31 - 1`` elements)
         Cluster of each fine element, ``0..n_c-1``.
     seeds : (n_c,) int64 ndarray
         The fine element each cluster grew from.
@@ -140,7 +140,7 @@ def voronoi_cells(graph: ElementGraph, csr_w: np.ndarray, seeds: np.ndarray
     -------
     seeds : (n_c,) int64 ndarray
         ``seeds`` followed by the added ones.
-    cluster : (n,) int64 ndarray
+    cluster : (n,) int32 ndarray (int64 from ``2**31 - 1`` elements)
         Index into ``seeds`` of each element's nearest seed.
     dist : (n,) float64 ndarray
         Its distance (weights' units).
@@ -172,7 +172,7 @@ def voronoi_cells(graph: ElementGraph, csr_w: np.ndarray, seeds: np.ndarray
                                    max(1, n_target * left.shape[0] // n))]
             all_seeds, first = np.concatenate([all_seeds, more]), all_seeds.shape[0]
         if not full:
-            return all_seeds, label.astype(np.int64), dist
+            return all_seeds, label, dist
         cap = min(bound, 4 * cap)
 
 
@@ -290,7 +290,7 @@ def coarse_centers(graph: ElementGraph, csr_w: np.ndarray, ratio: int, *, init: 
     finally:
         spaces.close()
     n_lab = it.centers.shape[0]
-    fine_label = it.label[co.cluster].astype(np.int32)
+    fine_label = it.label[co.cluster].astype(np.int32, copy=False)
     centers = update_centers(fine_label, n_lab, np.ascontiguousarray(graph.sizes),
                              np.ascontiguousarray(graph.positions),
                              np.full(n_lab, -1, dtype=np.int64))

@@ -184,7 +184,9 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
         centers[:n_centers] = alive
         if tol > 0:  # superfacet s is number remap[s] in the next pass (-1: it died)
             remap = np.where(keep, np.cumsum(keep) - 1, -1).astype(np.int32)
-            prev = remap[label]
+            # (into the previous pass's array: one array of labels, not two at a time)
+            prev = (np.take(remap, label, out=prev, mode="clip") if prev is not None
+                    else remap[label])  # ("clip": unbuffered; every label is in range)
     return Iteration(label=label, centers=used, n_iter=n_iter, converged=converged,
                      n_orphan_seeds=n_orphans, n_passes=n_passes, cycle_period=period,
                      expansions=n_expanded, changed=changed, stopped_by_tol=by_tol)

@@ -95,6 +95,13 @@ auto with_real(py::handle h, const char* name, F&& f) {
     return f(In<double>(h, name));
 }
 
+// f(view) with a read-only view of an int32 or an int64 argument (labels), by its dtype.
+template <class F>
+auto with_index(py::handle h, const char* name, F&& f) {
+    if (matches<i32>(h)) return f(In<i32>(h, name));
+    return f(In<i64>(h, name));
+}
+
 // Sort a[s:f] ascending (insertion sort for a few entries) and move its distinct values
 // to its front; returns their number.
 template <class T>

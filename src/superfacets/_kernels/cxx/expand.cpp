@@ -1,5 +1,6 @@
 // Bounded expansions and the merging of their records (superfacets/_kernels/expand.py),
 // and the center update (update.py), the same operations in the same order.
+#include <cmath>
 #include "common.hpp"
 
 namespace sfk {
@@ -59,7 +60,7 @@ i64 expand(const Work<W>& w, i64 src, i64 lab, double window_r2, double* dist, i
     const bool only_unlabelled = mode == UNLABELLED;
     const i64 start = pos;
     if (pos >= lim) return RECORD_FULL;
-    local[src] = 0.0;
+    local[src] = -0.0;  // reached: -distance (see expand.py: +0.0 is not reached)
     vis_face[pos++] = static_cast<i32>(src);
     q.qface[0] = static_cast<i32>(src);
     q.qdist[0] = 0.0;
@@ -80,12 +81,12 @@ i64 expand(const Work<W>& w, i64 src, i64 lab, double window_r2, double* dist, i
         double d = q.qdist[node];
         free = node;
         --live;
-        if (d > local[f]) continue;
+        if (d > -local[f]) continue;
         for (i64 e = w.g.indptr[f]; e < w.g.indptr[f + 1]; ++e) {
             i64 g = w.g.indices[e];
             double nd = d + static_cast<double>(w.g.weights[e]);
             double lg = local[g];
-            if (lg == INF) {
+            if (!std::signbit(lg)) {
                 double dx = c[3 * g] - cx, dy = c[3 * g + 1] - cy, dz = c[3 * g + 2] - cz;
                 if (dx * dx + dy * dy + dz * dz > window_r2 || (only_unlabelled && label[g] >= 0))
                     continue;
@@ -94,10 +95,10 @@ i64 expand(const Work<W>& w, i64 src, i64 lab, double window_r2, double* dist, i
                     break;
                 }
                 vis_face[pos++] = static_cast<i32>(g);
-            } else if (!(nd < lg)) {
+            } else if (!(nd < -lg)) {
                 continue;
             }
-            local[g] = nd;
+            local[g] = -nd;
             // queue_node
             i64 n;
             if (free >= 0) {
@@ -121,16 +122,16 @@ i64 expand(const Work<W>& w, i64 src, i64 lab, double window_r2, double* dist, i
         }
         if (status != 0) {
             for (i64 bb = 0; bb < q.nb; ++bb) q.head[bb] = -1;
-            for (i64 j = start; j < pos; ++j) local[vis_face[j]] = INF;
+            for (i64 j = start; j < pos; ++j) local[vis_face[j]] = 0.0;
             return status;
         }
     }
     if (vis_dist)
-        for (i64 j = start; j < pos; ++j) vis_dist[j] = local[vis_face[j]];
+        for (i64 j = start; j < pos; ++j) vis_dist[j] = -local[vis_face[j]];
     if (mode == MERGE) {
         for (i64 j = start; j < pos; ++j) {
             i64 f = vis_face[j];
-            double d = local[f];
+            double d = -local[f];
             if (d < dist[f]) {
                 dist[f] = d;
                 label[f] = static_cast<i32>(lab);
@@ -139,7 +140,7 @@ i64 expand(const Work<W>& w, i64 src, i64 lab, double window_r2, double* dist, i
     } else if (only_unlabelled) {
         for (i64 j = start; j < pos; ++j) label[vis_face[j]] = static_cast<i32>(lab);
     }
-    for (i64 j = start; j < pos; ++j) local[vis_face[j]] = INF;
+    for (i64 j = start; j < pos; ++j) local[vis_face[j]] = 0.0;
     return pos;
 }
 

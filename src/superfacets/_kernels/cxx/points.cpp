@@ -633,21 +633,23 @@ py::array_t<i64> crossing_pairs(py::handle indptr_, py::handle indices_, py::han
 
 void label_sums(py::handle labels_, py::handle weights_, py::handle positions_,
                 py::handle normals_, py::handle area_, py::handle wpos_, py::handle wnrm_) {
-    In<i64> labels(labels_, "labels");
     In<double> w(weights_, "weights"), pos(positions_, "positions"), nor(normals_, "normals");
     Out<double> area(area_, "area"), wpos(wpos_, "wpos"), wnrm(wnrm_, "wnrm");
-    if (pos.cols != 3 || nor.cols != 3 || wpos.cols != 3 || wnrm.cols != 3 ||
-        w.n != labels.n || pos.n != labels.n || nor.n != labels.n || wpos.n != area.n ||
-        wnrm.n != area.n)
-        throw Mismatch("argument positions");
-    py::gil_scoped_release nogil;
-    for (i64 i = 0; i < labels.n; ++i) {
-        i64 s = labels[i];
-        double x = w[i];
-        area[s] += x;
-        for (int c = 0; c < 3; ++c) wpos(s, c) += x * pos(i, c);
-        for (int c = 0; c < 3; ++c) wnrm(s, c) += x * nor(i, c);
-    }
+    with_index(labels_, "labels", [&](const auto& labels) {
+        if (pos.cols != 3 || nor.cols != 3 || wpos.cols != 3 || wnrm.cols != 3 ||
+            w.n != labels.n || pos.n != labels.n || nor.n != labels.n || wpos.n != area.n ||
+            wnrm.n != area.n)
+            throw Mismatch("argument positions");
+        py::gil_scoped_release nogil;
+        for (i64 i = 0; i < labels.n; ++i) {
+            i64 s = labels[i];
+            double x = w[i];
+            area[s] += x;
+            for (int c = 0; c < 3; ++c) wpos(s, c) += x * pos(i, c);
+            for (int c = 0; c < 3; ++c) wnrm(s, c) += x * nor(i, c);
+        }
+        return 0;
+    });
 }
 
 void label_scatter(py::handle labels_, py::handle weights_, py::handle positions_,

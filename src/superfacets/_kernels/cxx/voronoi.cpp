@@ -34,8 +34,8 @@ i64 nearest_seed_t(const In<i64>& indptr, const In<i32>& indices, const W* weigh
                                  inv_width);
 }
 
-template <class W, class S>
-py::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In<i64>& cluster,
+template <class C, class W, class S>
+py::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In<C>& cluster,
                          const In<double>& dist, const W* csr_w, const In<double>& lengths,
                          const S* shares, i64 n_shares, i64 n_c) {
     const i64 n = indptr.n - 1;
@@ -52,7 +52,8 @@ py::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In
                     i64 a = cluster[i];
                     for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
                         i64 j = indices[x];
-                        if (j > i && cluster[j] != a) visit(mn(a, cluster[j]), mx(a, cluster[j]));
+                        const i64 b = cluster[j];
+                        if (j > i && b != a) visit(mn(a, b), mx(a, b));
                     }
                 }
             });
@@ -71,7 +72,7 @@ py::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In
         for (i64 c = 0; c < n_c; ++c) first[c + 1] = first[c] + distinct[c];
     }
     const i64 m = first[n_c];
-    Out<i64> out;
+    Out<i32> out;  // clusters <= elements < 2**31 (as hi)
     Out<double> w_c, len_c;
     auto out_a = fresh(m, out, 2);
     auto w_a = fresh(m, w_c), len_a = fresh(m, len_c);
@@ -83,7 +84,7 @@ py::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In
         }
         for (i64 c = 0; c < n_c; ++c)
             for (i64 u = 0; u < first[c + 1] - first[c]; ++u) {
-                out(first[c] + u, 0) = c;
+                out(first[c] + u, 0) = static_cast<i32>(c);
                 out(first[c] + u, 1) = hi[start[c] + u];
             }
         i64 t = 0;
@@ -136,12 +137,15 @@ i64 nearest_seed(py::handle indptr_, py::handle indices_, py::handle weights_, p
 py::tuple coarse_pairs(py::handle indptr_, py::handle indices_, py::handle cluster_,
                        py::handle dist_, py::handle csr_w_, py::handle lengths_,
                        py::handle shares_, i64 n_c) {
-    In<i64> indptr(indptr_, "indptr"), cluster(cluster_, "cluster");
+    In<i64> indptr(indptr_, "indptr");
     In<i32> indices(indices_, "indices");
     In<double> dist(dist_, "dist"), lengths(lengths_, "lengths");
-    return with_real(csr_w_, "csr_w", [&](auto w) {
-        return with_real(shares_, "shares", [&](auto sh) {
-            return coarse_pairs_t(indptr, indices, cluster, dist, w.p, lengths, sh.p, sh.n, n_c);
+    return with_index(cluster_, "cluster", [&](const auto& cluster) {
+        return with_real(csr_w_, "csr_w", [&](auto w) {
+            return with_real(shares_, "shares", [&](auto sh) {
+                return coarse_pairs_t(indptr, indices, cluster, dist, w.p, lengths, sh.p, sh.n,
+                                      n_c);
+            });
         });
     });
 }
