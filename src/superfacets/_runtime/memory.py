@@ -1,7 +1,7 @@
 """Memory a run will need, estimated before it is spent, against what the process may use.
 
 A run's peak grows with its elements (the element graph and the passes' records: about
-300 bytes per face and 290-350 per point with the defaults, the interpreter included,
+300 bytes per face and 250-350 per point with the defaults, the interpreter included,
 measured with ``benchmarks/memory.py``; the table of kinds holds the figure per kind). Where the
 estimate exceeds what this process may still allocate (the machine's available memory,
 or an address-space limit set with ``ulimit -v``), the run is refused with
@@ -19,9 +19,26 @@ from ..errors import MemoryLimitError
 
 __all__ = ["available_bytes", "check_memory", "give_back_free_memory", "give_back_zero_pages"]
 
-_trim = None  # glibc's malloc_trim, once looked up (False: not available)
-_madvise = None  # the C library's madvise, once looked up (False: not available)
+_found: dict = {}  # the C library's functions, once looked up (False: not available)
 _DONTNEED = 4  # MADV_DONTNEED (Linux)
+
+
+def _libc(name: str, argtypes: tuple):
+    """glibc's function ``name`` (``argtypes``: ctypes type names; returns an int), or
+    False where there is none (another system or C library: nothing to do)."""
+    if name not in _found:
+        _found[name] = False
+        if sys.platform.startswith("linux"):
+            try:
+                import ctypes
+
+                f = getattr(ctypes.CDLL("libc.so.6"), name)
+                f.argtypes = [getattr(ctypes, t) for t in argtypes]
+                f.restype = ctypes.c_int
+                _found[name] = f
+            except (OSError, AttributeError):
+                pass
+    return _found[name]
 
 
 def available_bytes() -> int | None:
@@ -101,20 +118,9 @@ def give_back_free_memory() -> None:
     --------
     >>> give_back_free_memory()
     """
-    global _trim
-    if _trim is None:
-        _trim = False
-        if sys.platform.startswith("linux"):
-            try:
-                import ctypes
-
-                _trim = ctypes.CDLL("libc.so.6").malloc_trim
-                _trim.argtypes = [ctypes.c_size_t]
-                _trim.restype = ctypes.c_int
-            except (OSError, AttributeError):  # another C library: nothing to do
-                _trim = False
-    if _trim:
-        _trim(0)
+    trim = _libc("malloc_trim", ("c_size_t",))
+    if trim:
+        trim(0)
 
 
 def give_back_zero_pages(a) -> None:
@@ -139,23 +145,12 @@ def give_back_zero_pages(a) -> None:
     >>> bool(z.any())
     False
     """
-    global _madvise
-    if _madvise is None:
-        _madvise = False
-        if sys.platform.startswith("linux"):
-            try:
-                import ctypes
-
-                _madvise = ctypes.CDLL("libc.so.6").madvise
-                _madvise.argtypes = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_int]
-                _madvise.restype = ctypes.c_int
-            except (OSError, AttributeError):
-                _madvise = False
-    if not _madvise or not a.flags.c_contiguous:
+    madvise = _libc("madvise", ("c_void_p", "c_size_t", "c_int"))
+    if not madvise or not a.flags.c_contiguous:
         return
     page = os.sysconf("SC_PAGE_SIZE")
     start = a.ctypes.data
     lo = -(-start // page) * page
     hi = (start + a.nbytes) // page * page
     if hi > lo:
-        _madvise(lo, hi - lo, _DONTNEED)
+        madvise(lo, hi - lo, _DONTNEED)

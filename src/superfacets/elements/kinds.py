@@ -106,9 +106,9 @@ class ElementKind:
         superpoints (vertices and points).
     peak_bytes : int
         A run's peak memory per element with the defaults, the interpreter included
-        (faces: 301 bytes measured on 6.8M faces; points: 290 on 10M points sampled on a
-        mesh, 346 on 10M points of LiDAR sweeps, 308 on 2M where the interpreter weighs
-        more; ``benchmarks/memory.py``); a
+        (faces: 299 bytes measured on 6.8M faces; points: 246 on 10M points sampled on a
+        mesh, 277 on 2M where the interpreter weighs more, 346 on 10M points of LiDAR
+        sweeps before the latest savings; ``benchmarks/memory.py``); a
         run whose estimate
         exceeds what the process may use is refused before its graph is built
         (:func:`superfacets._runtime.memory.check_memory`).

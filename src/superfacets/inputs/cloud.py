@@ -191,6 +191,15 @@ class PointCloud:
         -------
         bool
             Whether the points were lent.
+
+        Examples
+        --------
+        >>> from superfacets.elements.points import point_graph
+        >>> cloud = PointCloud(np.random.default_rng(0).random((500, 3)))  # its own array
+        >>> cloud.check_usable()
+        >>> graph = point_graph(cloud).graph  # the build lends the points to the graph
+        >>> "points" in cloud.__dict__, cloud.points.shape  # given back when asked
+        (False, (500, 3))
         """
         p = self.__dict__.get("points")
         if (p is None or not self.__dict__.get("_usable") or not _held_alone(p)
