@@ -15,7 +15,8 @@ def flood(indptr, indices, weights, centroids, order, window_r2, label, local, q
     each face still unlabelled starts a new region, grown by a bounded
     expansion that claims only unlabelled faces. Returns the number of
     regions, or a negative status of :func:`expand` if ``queue`` or the
-    visit buffer ``vis`` was too small.
+    visit buffer ``vis`` was too small. ``local``: :func:`expand`'s scratch, ``+0.0``
+    on entry and on return (reached elements hold their distance negated meanwhile).
     """
     m = label.shape[0]
     for f in range(m):

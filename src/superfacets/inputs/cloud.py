@@ -154,7 +154,7 @@ class PointCloud:
     def __getattr__(self, name: str):
         # the points, lent to the point graph (lend_points): given back on first use
         lent = self.__dict__.get("_lent")
-        if name != "points" or lent is None:
+        if lent is None or name != _LENT_FIELD:
             raise AttributeError(f"'PointCloud' object has no attribute {name!r}")
         positions, index, rows, values = lent
         out = np.empty((index.shape[0], 3))
@@ -269,6 +269,7 @@ class PointCloud:
 
 
 _BLOCK = 1 << 20  # points centred (or compared) at a time
+_LENT_FIELD = "points"  # the field a cloud lends to its graph (PointCloud.lend_points)
 
 
 def _held_alone(a: np.ndarray) -> bool:
