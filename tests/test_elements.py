@@ -272,8 +272,9 @@ def test_vertex_and_point_terms_equal_the_numpy_expressions_bit_for_bit(valley):
     pts = trimesh.sample.sample_surface(bumpy, 3000, seed=2)[0]
     graphs = [vertex_graph(valley).graph, vertex_graph(Mesh(bumpy.vertices, bumpy.faces)).graph,
               point_graph(PointCloud(pts)).graph]
+    assert graphs[2].normals.dtype == np.float32  # points keep them in 4 bytes...
     for g in graphs:
-        p, n = g.positions, g.normals
+        p, n = g.positions, g.normals.astype(np.float64)  # ... read in float64
         i, j = g.pairs[:, 0], g.pairs[:, 1]
         d = p[i] - p[j]
         np.testing.assert_array_equal(g.terms.geo, np.linalg.norm(d, axis=1))

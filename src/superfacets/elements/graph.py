@@ -161,7 +161,7 @@ class ElementGraph:
         stands for (faces: area; vertices: a third of the incident triangles'
         areas; points: the k-nearest-neighbour estimate), the weight of its
         position in a superfacet's mean and of the metrics.
-    normals : (n, 3) float64 ndarray
+    normals : (n, 3) float64 ndarray (points: float32)
         Unit normal of each element (zero where undefined).
     centroid : (3,) float64 ndarray
         Reference point of the whole input: the first center is the element

@@ -19,8 +19,8 @@ weights for adjacent elements". Here each point is an element:
   ``rho_i`` the distance to its ``K``-th neighbour (the k-nearest-neighbour
   density estimate on a surface), so the sizes add up to about the surface
   area and ``n_segments`` and ``radius`` mean what they mean on a mesh;
-- normal: given (trusted as oriented), or the PCA normal of the point and
-  its ``K`` neighbours (smallest eigenvector of their covariance), then
+- normal (kept in float32: :data:`NORMALS_DTYPE`): given (trusted as oriented), or the
+  PCA normal of the point and its ``K`` neighbours (smallest eigenvector of their covariance), then
   oriented consistently: towards the sensor when the viewpoint is known,
   else by propagation along a minimum spanning tree of flat steps (Hoppe et
   al. 1992; Prim's tree, ties broken by the order of the adjacency lists)
@@ -54,6 +54,11 @@ __all__ = ["point_graph", "PointElements", "estimate_normals", "orient_normals",
 
 #: Default number of nearest neighbours of the point graph.
 DEFAULT_NEIGHBORS = 10
+#: The point graph keeps its normals in float32 (12 bytes per point less through the
+#: whole run; the passes and the coarsening do not read them); what reads them computes
+#: in float64 from these values. Judged with ``superfacets experiment`` on the 300
+#: benchmark meshes' sampled clouds (``docs/notes/scale-design.md``).
+NORMALS_DTYPE = np.float32
 #: A point whose ``n_neighbors`` neighbours lie on a line (the linearity ``(l1 - l2) / l1``
 #: of their covariance above this) ...
 LINEAR = 0.95
@@ -376,6 +381,7 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
         normals = orient_normals(pts, normals, indptr, indices, cloud.viewpoint,
                                  getattr(cloud, "orient_like", None),
                                  getattr(cloud, "up", None))
+    normals = normals.astype(NORMALS_DTYPE)  # (kept through the run; read in float64)
     # the pairs, dual-edge map, spans and border lengths (about 180 bytes per point) are
     # built only if read: a default run reads the CSR layout and the border shares alone
     # (the weights: superfacets.method.weights.csr_point_weights)

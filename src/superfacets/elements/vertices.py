@@ -71,7 +71,8 @@ def symmetric_terms(graph: ElementGraph, sl: slice):
     lo, hi = sl.indices(graph.pairs.shape[0])[:2]
     geo, cos = np.empty(hi - lo), np.empty(hi - lo)
     concave = np.empty(hi - lo, dtype=bool)
-    point_terms(graph.positions, graph.normals, graph.pairs, lo, hi, geo, cos, concave)
+    point_terms(graph.positions, np.ascontiguousarray(graph.normals, dtype=np.float64),
+                graph.pairs, lo, hi, geo, cos, concave)  # (points keep float32 normals)
     return geo, cos, concave
 
 

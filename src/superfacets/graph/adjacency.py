@@ -301,7 +301,8 @@ def crossing_adjacencies(g, lab: np.ndarray):
     pc = crossing_pairs(g.indptr, g.indices, lab)
     m = pc.shape[0]
     geo, cos, concave = np.empty(m), np.empty(m), np.empty(m, dtype=bool)
-    point_terms(np.ascontiguousarray(g.positions), np.ascontiguousarray(g.normals), pc, 0, m,
+    point_terms(np.ascontiguousarray(g.positions),
+                np.ascontiguousarray(g.normals, dtype=np.float64), pc, 0, m,
                 geo, cos, concave)
     shares = g.border_shares
     return pc, 0.5 * (shares[pc[:, 0]] + shares[pc[:, 1]]), cos, concave

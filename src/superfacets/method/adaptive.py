@@ -92,7 +92,7 @@ def roughness_of(graph: ElementGraph, rounds: int = SMOOTH_ROUNDS) -> np.ndarray
     """
     n = graph.n_elements
     lo, hi = graph.pairs[:, 0], graph.pairs[:, 1]
-    nor = graph.normals
+    nor = np.asarray(graph.normals, dtype=np.float64)  # (points keep float32)
     cos = np.einsum("ij,ij->i", nor[lo], nor[hi])
     angle = np.arccos(np.clip(cos, -1.0, 1.0))
     degree = np.bincount(graph.pairs.ravel(), minlength=n)

@@ -340,7 +340,8 @@ def csr_point_weights(graph: ElementGraph, *, alpha: float = _PAPER_ALPHA,
     from .._runtime.threads import run_ranges, split
 
     g = graph
-    pos, nor = np.ascontiguousarray(g.positions), np.ascontiguousarray(g.normals)
+    pos = np.ascontiguousarray(g.positions)
+    nor = np.ascontiguousarray(g.normals, dtype=np.float64)  # (points keep float32)
     indptr, indices = g.indptr, g.indices
     out = np.empty(indices.shape[0], dtype=dtype)
     # rows in blocks of about CHUNK entries (np.arccos as paper_weights calls it: its
