@@ -106,8 +106,8 @@ class ElementKind:
         superpoints (vertices and points).
     peak_bytes : int
         A run's peak memory per element with the defaults, the interpreter included
-        (faces: 299 bytes measured on 6.8M faces; points: 246 on 10M points sampled on a
-        mesh, 277 on 2M where the interpreter weighs more, 346 on 10M points of LiDAR
+        (faces: 299 bytes measured on 6.8M faces; points: 235 on 10M points sampled on a
+        mesh, 265 on 2M where the interpreter weighs more, 346 on 10M points of LiDAR
         sweeps before the latest savings; ``benchmarks/memory.py``); a
         run whose estimate
         exceeds what the process may use is refused before its graph is built
