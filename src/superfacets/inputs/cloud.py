@@ -158,8 +158,8 @@ class PointCloud:
             raise AttributeError(f"'PointCloud' object has no attribute {name!r}")
         positions, index, rows, values = lent
         out = np.empty((index.shape[0], 3))
-        if rows.shape[0] == 0 and index.shape[0] == positions.shape[0]:
-            np.take(positions, index, axis=0, out=out)
+        if rows.shape[0] == 0:  # every row valid (invalid rows are kept among `rows`)
+            np.take(positions, index, axis=0, out=out, mode="clip")  # (unbuffered)
         else:
             ok = index >= 0
             out[ok] = positions[index[ok]]
