@@ -273,3 +273,24 @@ def test_the_clean_up_does_not_depend_on_how_the_superfacets_are_numbered():
     again = clean_boundaries(mesh, perm[r.labels], r.centers[inverse])
     np.testing.assert_array_equal(again, perm[clean])
     assert not np.array_equal(clean, r.labels)  # the clean-up moved something
+
+
+def test_a_piece_with_no_neighbour_becomes_a_superfacet_numbered_from_k():
+    # superfacet 0 spans the right half of one grid and the whole of a second, separate
+    # grid; its center lies in the first: the second grid's piece touches no other
+    # superfacet and becomes superfacet 3 (k = 3), whatever the other labels' order
+    from superfacets import Mesh
+
+    a = grid_mesh(8, 8)
+    mesh = Mesh(np.r_[a.vertices, a.vertices + [10.0, 0.0, 0.0]],
+                np.r_[a.faces, a.faces + a.vertices.shape[0]])
+    m = a.faces.shape[0]
+    col, _ = _cells(a, 8, 8)
+    labels = np.r_[np.where(col < 4, 2, 0), np.zeros(m, dtype=np.int64)]
+    labels[0] = 1  # a one-face superfacet at a corner
+    centers = np.array([int(np.flatnonzero(labels[:m] == 0)[0]), 0,
+                        int(np.flatnonzero(labels[:m] == 2)[5])])
+    out = clean_boundaries(mesh, labels, centers)
+    np.testing.assert_array_equal(out[m:], 3)  # the separate piece: a number of its own
+    assert set(np.unique(out[:m])) == {0, 1, 2}  # the others keep theirs
+    np.testing.assert_array_equal(out[centers], [0, 1, 2])

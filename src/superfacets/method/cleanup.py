@@ -302,11 +302,7 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
         t = g.terms
         cut_csr = cut_costs_csr(de, t.concave, t.cos, g.lengths, crease * alpha / np.pi,
                                 eta_convex, r)
-    dist = np.empty(n)
-    partner = np.empty(n, dtype=np.int64)
     heap = g.indices.shape[0] + n + 1
-    hkey = np.empty(heap)
-    hval = np.empty(heap, dtype=np.int64)
     smooth = smoothness / (r * r)
     dirty = None
     for _ in range(sweeps):
@@ -314,27 +310,34 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
         means = np.empty((k, 3))
         for c in range(3):
             means[:, c] = np.bincount(labels, weights=sizes * positions[:, c], minlength=k) / area
+        # (each sweep's work arrays let go as soon as read: the run's peak is here)
+        partner = np.empty(n, dtype=np.int64)
         band_distances(g.indptr, g.indices, de, g.terms.geo, g.lengths, labels, pinned,
-                       band * r, dist, partner, hkey, hval)
+                       band * r, np.empty(n), partner, np.empty(heap),
+                       np.empty(heap, dtype=np.int64))
         members = np.flatnonzero(partner >= 0)
         if dirty is not None:  # later sweeps: only bands of superfacets that changed
             members = members[dirty[labels[members]] | dirty[partner[members]]]
         if members.size == 0:
             break
-        la = labels[members]
-        lb = partner[members]
-        key = np.minimum(la, lb) * k + np.maximum(la, lb)
+        key = np.minimum(labels[members], partner[members])
+        key *= k
+        key += np.maximum(labels[members], partner[members])
+        del partner
         o = np.argsort(key, kind="stable")
         key = key[o]
         members = members[o]
+        del o
         starts = np.concatenate([[0], np.flatnonzero(np.diff(key)) + 1, [key.size]])
         pair = key[starts[:-1]]
+        del key
         band_of = np.full(n, -1, dtype=np.int64)
         band_of[members] = np.repeat(np.arange(starts.size - 1), np.diff(starts))
         out = labels.copy()
         args = (members, starts.astype(np.int64), pair // k, pair % k, band_of, g.indptr,
                 g.indices, cut_csr, labels, sizes, positions, means, smooth, out)
         _run_chunks(solve_bands, starts, n_threads, args)
+        del args, band_of, members
         moved = np.flatnonzero(out != labels)
         if moved.size == 0:
             break
@@ -342,10 +345,16 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
         dirty[labels[moved]] = True
         dirty[out[moved]] = True
         labels = out
+        del out, moved
+    partner = cut_csr = pinned = None  # noqa: F841
     if connectivity:  # every superfacet keeps its center's piece: the same numbers
         labels = enforce_connectivity(g, labels, centers)
-    # (a piece with no neighbour becomes a superfacet of its own, numbered from k on)
-    return np.where(labels < k, order[np.minimum(labels, k - 1)], labels)
+    # the caller's numbers back; a piece with no neighbour became a superfacet of its
+    # own, numbered from k on, and keeps its number
+    apart = labels >= k
+    out = order.take(labels, mode="clip")
+    out[apart] = labels[apart]
+    return out
 
 
 def _run_chunks(kernel, starts: np.ndarray, n_threads: int, args: tuple) -> None:

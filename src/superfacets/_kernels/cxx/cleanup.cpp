@@ -1,5 +1,7 @@
 // Boundary clean-up: band distances and one minimum cut per band by Boykov and
 // Kolmogorov's max-flow (superfacets/_kernels/cleanup.py), the same operations in order.
+#include <memory>
+
 #include "common.hpp"
 
 namespace sfk {
@@ -324,7 +326,9 @@ void solve_bands(i64 p0, i64 p1, py::handle order_, py::handle starts_, py::hand
     Out<i64> out(out_, "out");
     if (positions.cols != 3 || means.cols != 3) throw Mismatch("argument positions");
     py::gil_scoped_release nogil;
-    std::vector<i64> local(labels.n);
+    // (written for a band's elements before being read, as numba's np.empty: the pages
+    // of the elements in no band of this call are never touched)
+    std::unique_ptr<i64[]> local(new i64[labels.n]);
     i64 most_nodes = 1, most_arcs = 1;
     for (i64 p = p0; p < p1; ++p) {
         i64 nodes = starts[p + 1] - starts[p], arcs = 0;
@@ -346,7 +350,7 @@ void solve_bands(i64 p0, i64 p1, py::handle order_, py::handle starts_, py::hand
             smooth, out.p};
     for (i64 p = p0; p < p1; ++p)
         solve_one(B, order.p + starts[p], starts[p + 1] - starts[p], pair_a[p], pair_b[p], p,
-                  local.data(), W);
+                  local.get(), W);
 }
 
 void bind_cleanup(py::module_& m) {
