@@ -372,3 +372,27 @@ def test_label_pairs_from_the_csr_layout_equal_those_of_the_pairs(sphere):
     np.testing.assert_array_equal(label_pairs(g.indptr, g.indices, lab, np.int64(40)), want)
     same = np.zeros(g.n_elements, dtype=np.int32)  # one superfacet: no pair
     assert label_pairs(g.indptr, g.indices, same, np.int64(1)).shape == (0,)
+
+
+def test_letting_the_kept_expansions_go_before_the_swaps_keeps_the_labels(monkeypatch):
+    # large graphs forget the passes' records before the swaps (FORGET_MIN): the pass
+    # after the swaps then expands every center, with the labels of replaying them
+    from superfacets.method import classify, splitmerge
+
+    mesh = read_mesh(need(MESHES / "bunny.tri.xz"))
+    kept = segment(mesh, 150, cleanup=False)
+    assert kept.timings["swaps"] > 0
+    forgot = []
+    real = classify.BoundedReplay.forget_records
+
+    def spy(self):
+        forgot.append(self.end)
+        real(self)
+        assert self.end == 0 and self.prev_centers.size == 0
+
+    monkeypatch.setattr(classify.BoundedReplay, "forget_records", spy)
+    monkeypatch.setattr(splitmerge, "FORGET_MIN", 0)
+    r = segment(mesh, 150, cleanup=False)
+    assert forgot and forgot[0] > 0  # records were kept, and let go
+    np.testing.assert_array_equal(r.labels, kept.labels)
+    assert r.timings["expansions"] > kept.timings["expansions"]  # every center again

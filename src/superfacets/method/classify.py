@@ -97,6 +97,10 @@ class Classifier:
         """
         raise NotImplementedError
 
+    def forget_records(self) -> None:
+        """Let go of whatever the classifier keeps between passes to save work (nothing
+        here; :class:`BoundedReplay`'s records); the labels of later passes are the same."""
+
 
 class Bounded(Classifier):
     """The paper's bounded classification, every center expanded every pass."""
@@ -213,6 +217,19 @@ class BoundedReplay(Classifier):
         self.prev_order = self.prev_sorted = np.empty(0, dtype=np.int64)
         self.prev_start = np.empty(0, dtype=np.int64)
         self.prev_len = np.empty(0, dtype=np.int64)
+
+    def forget_records(self) -> None:
+        """Let the kept expansions go (the arena, about 60 bytes per element): the next
+        pass expands every center, with the same labels as replaying them. Split-and-merge
+        calls it before its swaps on large graphs, whose peak memory is then the swaps'
+        own arrays rather than those plus the records."""
+        self.face = np.empty(self.face.shape[0], dtype=np.int32)  # (untouched: no memory)
+        self.dist = np.empty(self.face.shape[0])
+        self.end = self.high = 0
+        self.limit = int(_ARENA * self.m) + 1024
+        self.prev_centers = self.prev_order = self.prev_sorted = np.empty(0, dtype=np.int64)
+        self.prev_start = self.prev_len = np.empty(0, dtype=np.int64)
+        self.left = None
 
     # -- arena -------------------------------------------------------------
     def _make_room(self, need: int, start: np.ndarray, length: np.ndarray) -> None:
