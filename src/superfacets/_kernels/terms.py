@@ -14,13 +14,11 @@ from .geometry import pair_terms
 def convex_scaled_csr(weights, dual_edge, concave, cos, span, coef):
     """``weights[e] - coef * span * arccos(cos)`` (at least 0) on the entries of
     convex adjacencies, ``weights[e]`` on concave ones (adjacency ``dual_edge[e]``)."""
-    delta = np.empty(cos.shape[0])  # one arccos per adjacency
-    for d in range(cos.shape[0]):
-        delta[d] = 0.0 if concave[d] else coef * span[d] * math.acos(cos[d])
-    out = np.empty(weights.shape[0])
+    out = np.empty(weights.shape[0])  # (no array of one delta per adjacency: 8 B each)
     for e in range(weights.shape[0]):
         d = dual_edge[e]
-        out[e] = weights[e] if concave[d] else max(weights[e] - delta[d], 0.0)
+        out[e] = weights[e] if concave[d] else max(
+            weights[e] - coef * span[d] * math.acos(cos[d]), 0.0)
     return out
 
 

@@ -293,8 +293,11 @@ def weigh(graph, rules: Rules, features=None, release=None
     else:
         w_pairs = edge_weights(graph, p.weighting, alpha=p.alpha, eta_convex=p.eta_convex,
                                features=features, beta=p.beta, dtype=dtype)
-        if release is not None and not rules.split_merge:
-            release(keep=COARSENING_READS + ("dual_edge",))  # read by csr_weights
+        if release is not None and (not rules.split_merge or "terms" in graph.__dict__):
+            # read by csr_weights: the dual edges; by the swaps' weights: those, the
+            # terms (here already) and the spans
+            release(keep=COARSENING_READS + ("dual_edge",)
+                    + (("spans",) if rules.split_merge else ()))
         w = csr_weights(graph, w_pairs, dtype)
         del w_pairs  # the coarsening reads the same values from ``w``
     swap_w = None

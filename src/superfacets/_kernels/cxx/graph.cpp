@@ -115,20 +115,21 @@ void number_pairs_into(const i64* indptr, const i32* indices, i64 n, D* dual_edg
 }  // namespace
 
 void triangle_half_edges(py::handle faces_, py::handle a_, py::handle b_, py::handle skip_) {
-    In<i64> faces(faces_, "faces");
     Out<i32> a(a_, "a"), b(b_, "b");
     Out<bool> skip(skip_, "skip");
-    py::gil_scoped_release nogil;
-    for (i64 f = 0; f < faces.n; ++f) {
-        for (i64 c = 0; c < 3; ++c) {
-            i64 u = faces(f, c);
-            i64 v = faces(f, c == 2 ? 0 : c + 1);
-            i64 h = 3 * f + c;
-            a[h] = static_cast<i32>(mn(u, v));
-            b[h] = static_cast<i32>(mx(u, v));
-            skip[h] = u == v;
+    with_index(faces_, "faces", [&](auto faces) {  // (int32 or int64 faces)
+        py::gil_scoped_release nogil;
+        for (i64 f = 0; f < faces.n; ++f) {
+            for (i64 c = 0; c < 3; ++c) {
+                i64 u = faces(f, c);
+                i64 v = faces(f, c == 2 ? 0 : c + 1);
+                i64 h = 3 * f + c;
+                a[h] = static_cast<i32>(mn(u, v));
+                b[h] = static_cast<i32>(mx(u, v));
+                skip[h] = u == v;
+            }
         }
-    }
+    });
 }
 
 void count_keys(py::handle key1_, py::handle skip_, i64 lo, i64 hi, py::handle counts_) {
@@ -324,23 +325,24 @@ py::array_t<i64> same_label_components(py::handle indptr_, py::handle indices_,
 void face_geometry(py::handle vertices_, py::handle faces_, py::handle centroids_,
                    py::handle areas_, py::handle normals_) {
     In<double> v(vertices_, "vertices");
-    In<i64> faces(faces_, "faces");
     Out<double> centroids(centroids_, "centroids"), areas(areas_, "areas"),
         normals(normals_, "normals");
-    if (normals.cols != 3 || centroids.cols != 3 || faces.cols != 3)
-        throw Mismatch("argument normals");
-    py::gil_scoped_release nogil;
-    for (i64 f = 0; f < faces.n; ++f) {
-        i64 i = faces(f, 0), j = faces(f, 1), k = faces(f, 2);
-        for (i64 t = 0; t < 3; ++t) centroids(f, t) = (v(i, t) + v(j, t) + v(k, t)) / 3.0;
-        double a0 = v(j, 0) - v(i, 0), a1 = v(j, 1) - v(i, 1), a2 = v(j, 2) - v(i, 2);
-        double b0 = v(k, 0) - v(i, 0), b1 = v(k, 1) - v(i, 1), b2 = v(k, 2) - v(i, 2);
-        double c0 = a1 * b2 - a2 * b1;
-        double c1 = a2 * b0 - a0 * b2;
-        double c2 = a0 * b1 - a1 * b0;
-        double norm = store_unit(normals.p + 3 * f, c0, c1, c2);
-        areas[f] = 0.5 * norm;
-    }
+    with_index(faces_, "faces", [&](auto faces) {  // (int32 or int64 faces)
+        if (normals.cols != 3 || centroids.cols != 3 || faces.cols != 3)
+            throw Mismatch("argument normals");
+        py::gil_scoped_release nogil;
+        for (i64 f = 0; f < faces.n; ++f) {
+            i64 i = faces(f, 0), j = faces(f, 1), k = faces(f, 2);
+            for (i64 t = 0; t < 3; ++t) centroids(f, t) = (v(i, t) + v(j, t) + v(k, t)) / 3.0;
+            double a0 = v(j, 0) - v(i, 0), a1 = v(j, 1) - v(i, 1), a2 = v(j, 2) - v(i, 2);
+            double b0 = v(k, 0) - v(i, 0), b1 = v(k, 1) - v(i, 1), b2 = v(k, 2) - v(i, 2);
+            double c0 = a1 * b2 - a2 * b1;
+            double c1 = a2 * b0 - a0 * b2;
+            double c2 = a0 * b1 - a1 * b0;
+            double norm = store_unit(normals.p + 3 * f, c0, c1, c2);
+            areas[f] = 0.5 * norm;
+        }
+    });
 }
 
 // geometry.py: polygons of any size (Newell's normal, the fan's signed-area centroid)
@@ -471,15 +473,13 @@ py::array_t<double> convex_scaled_csr(py::handle weights_, py::handle dual_edge_
     auto out_a = fresh(weights.n, out);
     {
         py::gil_scoped_release nogil;
-        std::vector<double> delta(cs.n);  // (each value on its own: on threads)
-        parallel_for(cs.n, [&](i64 lo, i64 hi) {
-            for (i64 d = lo; d < hi; ++d)
-                delta[d] = concave[d] ? 0.0 : coef * span[d] * std::acos(cs[d]);
-        });
+        // (no array of one delta per adjacency: 8 B each; both entries of an adjacency
+        // compute the same value)
         parallel_for(weights.n, [&](i64 lo, i64 hi) {
             for (i64 e = lo; e < hi; ++e) {
                 i64 d = dual_edge[e];
-                out[e] = concave[d] ? weights[e] : mx(weights[e] - delta[d], 0.0);
+                out[e] = concave[d] ? weights[e]
+                                    : mx(weights[e] - coef * span[d] * std::acos(cs[d]), 0.0);
             }
         });
     }
