@@ -132,3 +132,54 @@ def test_a_mesh_with_its_caches_pickles_and_segments_the_same(sphere):
     assert not copy.vertices.flags.writeable and not copy.faces.flags.writeable
     np.testing.assert_array_equal(copy.faces, sphere.faces)
     np.testing.assert_array_equal(segment(copy, 12).labels, before)
+
+
+def test_int32_faces_stay_int32_and_give_what_int64_faces_give(sphere):
+    # a file's reader gives int32 faces (half the memory); the geometry, the graph and
+    # the labels are those of the same faces in int64, bit for bit
+    from superfacets import segment
+
+    v, f = np.asarray(sphere.vertices), np.asarray(sphere.faces)
+    wide, narrow = Mesh(v, f.astype(np.int64)), Mesh(v, f.astype(np.int32))
+    assert wide.faces.dtype == np.int64 and narrow.faces.dtype == np.int32
+    assert Mesh(v, f.astype(np.uint16)).faces.dtype == np.int64  # other types: int64
+    for name in ("centroids", "areas", "normals", "referenced_vertices"):
+        assert getattr(narrow, name).tobytes() == getattr(wide, name).tobytes(), name
+    assert narrow.corners.dtype == np.int64
+    np.testing.assert_array_equal(narrow.corners, wide.corners)
+    gw, gn = face_graph(wide), face_graph(narrow)
+    np.testing.assert_array_equal(gn.pairs, gw.pairs)
+    np.testing.assert_array_equal(gn.indices, gw.indices)
+    for elements in ("faces", "vertices"):
+        a = segment(wide, 20, elements=elements)
+        b = segment(narrow, 20, elements=elements)
+        np.testing.assert_array_equal(b.labels, a.labels)
+    from superfacets._kernels import native
+
+    assert not any("face" in path for path in native.fallbacks)  # compiled for both widths
+
+
+def test_narrow_faces_only_where_every_index_fits():
+    from superfacets.inputs.mesh import narrow_faces
+
+    assert narrow_faces(F, 4).dtype == np.int32
+    np.testing.assert_array_equal(narrow_faces(F, 4), F)
+    big = np.array([[0, 1, 2**31]])
+    assert narrow_faces(big, 4) is big  # out of range stays so, for the mesh's check
+    assert narrow_faces(np.array([[0, 1, -2]]), 4).dtype == np.int64
+    ragged = [[0, 1, 2], [0, 1, 2, 3]]
+    assert narrow_faces(ragged, 4) is ragged
+    assert narrow_faces(F, 2**31).dtype == np.int64  # too many vertices for int32
+
+
+def test_read_meshes_have_int32_faces_and_out_of_range_indices_are_named(tmp_path):
+    from superfacets import read_mesh
+    from superfacets.errors import InvalidMeshError
+
+    good = tmp_path / "tri.off"
+    good.write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")
+    assert read_mesh(good).faces.dtype == np.int32
+    bad = tmp_path / "far.off"
+    bad.write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3000000000\n")
+    with pytest.raises(InvalidMeshError, match="3000000000"):
+        read_mesh(bad)

@@ -1,7 +1,8 @@
 """Mesh validation and derived per-face geometry (``docs/notes/method.md``, section 1).
 
 A :class:`Mesh` holds C-contiguous ``(n, 3) float64`` vertices and
-``(m, k) int64`` faces (triangles: ``k = 3``; polygons of any size, each
+``(m, k) int64`` faces (``int32`` where given so: the mesh readers give them so while
+they fit; triangles: ``k = 3``; polygons of any size, each
 row padded with -1 after its vertices), validated once. Derived quantities (centroids, unit
 normals, areas, bounding-box diagonal) are computed on first use and cached, so
 the method, the metrics and the baselines share them. The mesh knows nothing of
@@ -153,8 +154,8 @@ class Mesh:
     def corners(self) -> np.ndarray:
         """(c,) int64: the vertex indices of every face in order, face after face."""
         if self.is_triangular:
-            return readonly(self.faces.ravel())
-        return readonly(self.faces[self.faces >= 0])
+            return readonly(self.faces.ravel().astype(np.int64, copy=False))
+        return readonly(self.faces[self.faces >= 0].astype(np.int64, copy=False))
 
     def triangulated(self) -> tuple[np.ndarray, np.ndarray]:
         """The faces as triangles, for drawing and triangle-only formats.
@@ -288,7 +289,8 @@ class Mesh:
     def referenced_vertices(self) -> np.ndarray:
         """(n,) bool: True for vertices used by at least one face."""
         mask = np.zeros(self.n_vertices, dtype=bool)
-        mask[self.corners] = True
+        f = self.faces  # (not ``corners``: int64, a copy of int32 faces)
+        mask[f.ravel() if self.is_triangular else f[f >= 0]] = True
         return readonly(mask)
 
     @cached_property
@@ -328,6 +330,28 @@ def readonly(a: np.ndarray) -> np.ndarray:
     """
     a.setflags(write=False)
     return a
+
+
+def narrow_faces(faces: np.ndarray, n_vertices: int) -> np.ndarray:
+    """``faces`` as int32 where the vertex count and every index fit (half the memory
+    of int64: 12 bytes a triangle), else unchanged; for arrays no one else holds (a
+    file just read). Indices out of range stay out of range, for the mesh's check.
+
+    Examples
+    --------
+    >>> narrow_faces(np.array([[0, 1, 2]]), 3).dtype
+    dtype('int32')
+    >>> narrow_faces(np.array([[0, 1, 2**40]]), 3).dtype
+    dtype('int64')
+    """
+    f = faces
+    if (not isinstance(f, np.ndarray) or f.dtype == np.int32
+            or not np.issubdtype(f.dtype, np.integer) or f.size == 0
+            or n_vertices >= 2**31 - 1):
+        return faces
+    if int(f.max()) >= 2**31 or int(f.min()) < -1:
+        return faces
+    return f.astype(np.int32)
 
 
 def _faces_array(faces, where: str) -> np.ndarray:
@@ -385,7 +409,10 @@ def _validate_arrays(vertices, faces, name: str = "") -> tuple[np.ndarray, np.nd
         raise TypeError(f"{where}vertices must be a real numeric array, got dtype {v.dtype}")
     f = _faces_array(faces, where)
     v = np.ascontiguousarray(v, dtype=np.float64)
-    f = np.ascontiguousarray(f, dtype=np.int64)
+    # int32 faces stay int32 (half the memory: a file's reader gives them where they
+    # fit, :func:`narrow_faces`); other integer types become int64
+    f = np.ascontiguousarray(f, dtype=np.int32 if f.dtype == np.int32 and v.shape[0] < 2**31 - 1
+                             else np.int64)
     bad = ~np.isfinite(v).all(axis=1)
     if bad.any():
         i = int(np.flatnonzero(bad)[0])

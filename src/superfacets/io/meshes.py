@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InvalidMeshError, MeshFormatError
-from ..inputs.mesh import Mesh
+from ..inputs.mesh import Mesh, narrow_faces
 from .files import read_bytes, split_suffix, text_lines
 from .headers import header_counts
 
@@ -95,6 +95,7 @@ def read_mesh(path, format: str | None = None) -> Mesh:
     else:
         v, f, colors, face_colors = _load_trimesh(data, fmt, path)
     try:
+        f = narrow_faces(f, len(v))  # (int32 while they fit: the file's arrays are ours)
         return Mesh(v, f, name=path.name, objects=objects, colors=colors,
                     face_colors=face_colors)
     except InvalidMeshError as exc:
