@@ -878,19 +878,3 @@ def test_a_cloud_keeps_points_its_caller_also_holds():
     point_graph(alone)
     assert "points" not in alone.__dict__
     np.testing.assert_array_equal(alone.points, base.reshape(-1)[:1500].reshape(500, 3))
-
-
-def test_large_inputs_have_their_large_blocks_mapped_on_their_own(valley, monkeypatch):
-    # from LARGE_INPUT elements a run fixes glibc's mmap threshold (freed arrays go back
-    # to the system at once); smaller runs leave the allocator as it is
-    from superfacets import Mesh
-    from superfacets._runtime import memory
-    from superfacets.elements import inputs
-
-    calls = []
-    monkeypatch.setattr(memory, "map_large_blocks", lambda: calls.append(1))
-    inputs.prepared(Mesh(valley.vertices, valley.faces), n_segments=4)
-    assert not calls
-    monkeypatch.setattr(inputs, "LARGE_INPUT", 1)
-    inputs.prepared(Mesh(valley.vertices, valley.faces), n_segments=4)
-    assert calls == [1]

@@ -17,14 +17,10 @@ import sys
 
 from ..errors import MemoryLimitError
 
-__all__ = ["available_bytes", "check_memory", "give_back_free_memory", "give_back_zero_pages",
-           "map_large_blocks"]
+__all__ = ["available_bytes", "check_memory", "give_back_free_memory", "give_back_zero_pages"]
 
 _found: dict = {}  # the C library's functions, once looked up (False: not available)
 _DONTNEED = 4  # MADV_DONTNEED (Linux)
-_MMAP_THRESHOLD = -3  # mallopt's M_MMAP_THRESHOLD (glibc)
-#: Blocks from which glibc maps each allocation of its own (:func:`map_large_blocks`).
-LARGE_BLOCK = 1 << 20
 
 
 def _libc(name: str, argtypes: tuple):
@@ -158,24 +154,3 @@ def give_back_zero_pages(a) -> None:
     hi = (start + a.nbytes) // page * page
     if hi > lo:
         madvise(lo, hi - lo, _DONTNEED)
-
-
-def map_large_blocks() -> None:
-    """Have every allocation of :data:`LARGE_BLOCK` (1 MiB) or more mapped on its own,
-    so that freeing it hands it back to the operating system at once (glibc's
-    ``mallopt(M_MMAP_THRESHOLD)``; nothing elsewhere). Process-wide and lasting.
-
-    glibc maps large blocks on their own only above a threshold that it raises, up to
-    32 MiB, each time such a block is freed; the arrays below it come from its heap and
-    stay resident after they are freed until :func:`give_back_free_memory`. A run on a
-    large input (:func:`superfacets.elements.inputs.prepared`, from 262,144 elements)
-    fixes the threshold: on 6.8M faces its peak falls by about 60 MiB in the graph build
-    and the clean-up, for no measurable time.
-
-    Examples
-    --------
-    >>> map_large_blocks()
-    """
-    mallopt = _libc("mallopt", ("c_int", "c_int"))
-    if mallopt:
-        mallopt(_MMAP_THRESHOLD, LARGE_BLOCK)

@@ -17,9 +17,6 @@ from ..method.params import DEFAULTS
 from .graph import ElementGraph
 
 _N_NEIGHBORS = DEFAULTS.n_neighbors
-#: Elements from which a run maps its large arrays on their own (freed at once:
-#: :func:`superfacets._runtime.memory.map_large_blocks`).
-LARGE_INPUT = 1 << 18
 
 __all__ = ["ElementInput", "Builder", "BUILDERS", "as_element_graph", "elements_of",
            "is_cloud", "kind_for", "prepared", "register_builder", "features_of", "per_element"]
@@ -372,13 +369,11 @@ def prepared(obj, elements: str | None = None, *, n_segments: int | None = None)
     n = builder.count(data)
     if n_segments is not None:  # before the graph, the memory peak of a run
         check_n_segments(n_segments, n, kind)
-    from .._runtime.memory import check_memory, map_large_blocks
+    from .._runtime.memory import check_memory
     from .kinds import kind_of
 
     check_memory(n, kind_of(kind).peak_bytes,
                  f"{getattr(data, 'name', '') or 'the input'}: {n:,} {kind}")
-    if n >= LARGE_INPUT:  # freed arrays handed back at once, not kept on the heap
-        map_large_blocks()
     return kind, data
 
 
