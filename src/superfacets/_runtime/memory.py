@@ -1,7 +1,7 @@
 """Memory a run will need, estimated before it is spent, against what the process may use.
 
 A run's peak grows with its elements (the element graph and the passes' records: about
-300 bytes per face and 250-350 per point with the defaults, the interpreter included,
+250 bytes per face and 235-350 per point with the defaults, the interpreter included,
 measured with ``benchmarks/memory.py``; the table of kinds holds the figure per kind). Where the
 estimate exceeds what this process may still allocate (the machine's available memory,
 or an address-space limit set with ``ulimit -v``), the run is refused with

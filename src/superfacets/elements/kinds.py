@@ -106,7 +106,7 @@ class ElementKind:
         superpoints (vertices and points).
     peak_bytes : int
         A run's peak memory per element with the defaults, the interpreter included
-        (faces: 299 bytes measured on 6.8M faces; points: 235 on 10M points sampled on a
+        (faces: 243 bytes measured on 6.8M faces; points: 235 on 10M points sampled on a
         mesh, 265 on 2M where the interpreter weighs more, 346 on 10M points of LiDAR
         sweeps before the latest savings; ``benchmarks/memory.py``); a
         run whose estimate

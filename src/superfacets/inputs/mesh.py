@@ -39,7 +39,9 @@ class Mesh:
         Vertex indices of each face, 0-based, in order around it: triangles
         (``k = 3``), quads, or polygons of any sizes (a list of sequences, or
         an array whose rows end with -1 padding). The face order is kept: it
-        is the order of the labels.
+        is the order of the labels. Stored as ``int32`` when given as int32 (the
+        mesh readers give them so while every index fits: half the memory), as
+        ``int64`` otherwise.
     name : str, optional
         A name for messages and file headers (usually the file name).
     objects : tuple of (str, int, int), optional
@@ -333,9 +335,8 @@ def readonly(a: np.ndarray) -> np.ndarray:
 
 
 def narrow_faces(faces: np.ndarray, n_vertices: int) -> np.ndarray:
-    """``faces`` as int32 where the vertex count and every index fit (half the memory
-    of int64: 12 bytes a triangle), else unchanged; for arrays no one else holds (a
-    file just read). Indices out of range stay out of range, for the mesh's check.
+    """``faces`` as int32 where every index fits (for arrays no one else holds: a file
+    just read), else unchanged; indices out of range stay so, for the mesh's check.
 
     Examples
     --------
@@ -409,8 +410,7 @@ def _validate_arrays(vertices, faces, name: str = "") -> tuple[np.ndarray, np.nd
         raise TypeError(f"{where}vertices must be a real numeric array, got dtype {v.dtype}")
     f = _faces_array(faces, where)
     v = np.ascontiguousarray(v, dtype=np.float64)
-    # int32 faces stay int32 (half the memory: a file's reader gives them where they
-    # fit, :func:`narrow_faces`); other integer types become int64
+    # int32 faces stay int32 (the readers': :func:`narrow_faces`), other types int64
     f = np.ascontiguousarray(f, dtype=np.int32 if f.dtype == np.int32 and v.shape[0] < 2**31 - 1
                              else np.int64)
     bad = ~np.isfinite(v).all(axis=1)

@@ -98,8 +98,7 @@ class Classifier:
         raise NotImplementedError
 
     def forget_records(self) -> None:
-        """Let go of whatever the classifier keeps between passes to save work (nothing
-        here; :class:`BoundedReplay`'s records); the labels of later passes are the same."""
+        """Let go of what is kept between passes to save work (the same labels after)."""
 
 
 class Bounded(Classifier):
@@ -219,12 +218,9 @@ class BoundedReplay(Classifier):
         self.prev_len = np.empty(0, dtype=np.int64)
 
     def forget_records(self) -> None:
-        """Let the kept expansions go (the arena, about 60 bytes per element): the next
-        pass expands every center, with the same labels as replaying them. Split-and-merge
-        calls it before its swaps on large graphs, whose peak memory is then the swaps'
-        own arrays rather than those plus the records."""
-        self.face = np.empty(self.face.shape[0], dtype=np.int32)  # (untouched: no memory)
-        self.dist = np.empty(self.face.shape[0])
+        """Let the kept expansions go (about 60 bytes per element): the next pass expands
+        every center, the same labels as replaying them (before the swaps on large graphs)."""
+        self.face, self.dist = np.empty_like(self.face), np.empty_like(self.dist)  # untouched
         self.end = self.high = 0
         self.limit = int(_ARENA * self.m) + 1024
         self.prev_centers = self.prev_order = self.prev_sorted = np.empty(0, dtype=np.int64)

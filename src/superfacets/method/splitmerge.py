@@ -27,10 +27,8 @@ same swaps as evaluating all: a split's gain is at most its superfacet's
 energy, so the 2-means run lazily, highest energy first, until the greedy
 choice is decided; a merge's search stops as soon as the union's energy
 exceeds the largest gain (that merge can never be taken), and a union that
-leaves the window is never searched.
-
-Not in the paper: the paper names no post-processing, and its authors call a
-clean-up "a priority next step". Judged in ``docs/notes/cleanup.md``.
+leaves the window is never searched. Not in the paper (its authors call a clean-up
+"a priority next step"); judged in ``docs/notes/cleanup.md``.
 """
 
 from __future__ import annotations
@@ -66,12 +64,10 @@ ROUNDS = 3
 START_TOL = 0.2
 #: ... one round of swaps ...
 FAST_ROUNDS = 1
-#: ... then at most this many passes, and the clean-up, if on, finishes the boundaries.
-#: On the 300 benchmark meshes (k = 150, alpha = 200) with the clean-up: UE -6.2 %,
-#: compactness -15.1 %, boundary recall 0.805 (paper 0.802), every category lower on both,
-#: for 1.05 times the paper's time (0.98 with 2 passes after, UE -6.1 %, compactness
-#: -15.0 %), where swapping after converged passes (up to three rounds, each iterated to
-#: convergence) took 1.4-2.7 times (docs/notes/cleanup.md, "Split-and-merge at the paper's speed").
+#: ... then at most this many passes, and the clean-up, if on, finishes the boundaries
+#: (on the 300 benchmark meshes, k = 150, with the clean-up: UE -6.2 %, compactness
+#: -15.1 %, 1.05 times the paper's time; docs/notes/cleanup.md, "Split-and-merge at the
+#: paper's speed").
 #: Vertices keep 2: one pass raised their UE (45 meshes, k = 150: -5.4 % against the
 #: paper instead of -6.4 %).
 PASSES_AFTER = kind_of("vertices").passes_after  # values: the table of kinds
@@ -96,17 +92,12 @@ HOLD_AFTER_FACES = kind_of("faces").hold_after
 #: A swap is taken only if its split lowers the energy by at least this many times the
 #: mean energy of a superfacet (the total over K): a split that removes less than an
 #: average superfacet holds fixes no crease, and its swap mostly reshuffles a smooth
-#: region (a cup's body: the most swaps per K of any category, with the smallest gains).
-#: On the 300 benchmark meshes, k = 50 ... 300 (with the clean-up's smoothness 0.7 on
-#: faces): every category lower than the paper on UE and compactness at every k (Cup
-#: was above at k <= 150), compactness 0.1-0.4 points lower than with 0, UE within
-#: 0.9 points, and fewer swaps to run (docs/notes/cleanup.md, "The smallest swaps").
+#: region (a cup's body). On the 300 benchmark meshes, k = 50 ... 300: every category
+#: below the paper on UE and compactness at every k, and fewer swaps to run
+#: (docs/notes/cleanup.md, "The smallest swaps").
 MIN_GAIN = 1.0
-#: Elements from which the passes' kept expansions (:class:`~superfacets.method.classify.
-#: BoundedReplay`'s records, about 60 bytes per element) are let go before the swaps, so
-#: that the swaps' own arrays do not come on top of them: the pass after the swaps then
-#: expands every center (the same labels; on 6.8M faces about 1 s more, 400 MiB less at
-#: the run's peak).
+#: Elements from which the passes' kept expansions (about 60 bytes per element) are let
+#: go before the swaps; the pass after them expands every center (the same labels).
 FORGET_MIN = 1 << 20
 
 
@@ -275,8 +266,7 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
             n_swaps += 1
     finally:
         threads.close()
-    # the searches' arrays let go before the new labels are made (the round's peak)
-    splits = own = space = dist = dist2 = stamp = stamp2 = members = None  # noqa: F841
+    splits = own = space = dist = dist2 = stamp = stamp2 = members = None  # noqa: F841 (freed)
     out = remap[lab]
     moved = second & (split_to[lab] >= 0)
     out[moved] = split_to[lab[moved]]
