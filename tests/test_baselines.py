@@ -39,11 +39,11 @@ def _side(mesh) -> np.ndarray:
 
 def _dumbbell() -> Mesh:
     """Two unit spheres (centres z = -1.1, +1.1) joined by a short neck of radius 0.15."""
-    z = np.linspace(-2.1, 2.1, 121)
+    z = np.linspace(-2.1, 2.1, 61)  # 3,776 faces: normalized cuts' all-pairs distances
     r = np.maximum(np.sqrt(np.clip(1.0 - (np.abs(z) - 1.1) ** 2, 0, None)), 0.15)
     r[0] = r[-1] = 0.0
     profile = np.column_stack([r, z])
-    return as_mesh(trimesh.creation.revolve(profile, sections=48))
+    return as_mesh(trimesh.creation.revolve(profile, sections=32))
 
 
 @pytest.fixture
