@@ -147,6 +147,8 @@ def test_int32_faces_stay_int32_and_give_what_int64_faces_give(sphere):
         assert getattr(narrow, name).tobytes() == getattr(wide, name).tobytes(), name
     assert narrow.corners.dtype == np.int64
     np.testing.assert_array_equal(narrow.corners, wide.corners)
+    held = [k for k, a in narrow.__dict__.items() if getattr(a, "dtype", None) == np.int64]
+    assert held == []  # the int64 corners of int32 triangles are not kept with the mesh
     gw, gn = face_graph(wide), face_graph(narrow)
     np.testing.assert_array_equal(gn.pairs, gw.pairs)
     np.testing.assert_array_equal(gn.indices, gw.indices)

@@ -152,12 +152,15 @@ class Mesh:
         np.cumsum(self.face_sizes, out=out[1:])
         return readonly(out)
 
-    @cached_property
+    @property
     def corners(self) -> np.ndarray:
-        """(c,) int64: the vertex indices of every face in order, face after face."""
+        """(c,) int64: the vertex indices of every face in order, face after face (of
+        int32 triangles a new copy each time: not held with the mesh)."""
         if self.is_triangular:
             return readonly(self.faces.ravel().astype(np.int64, copy=False))
-        return readonly(self.faces[self.faces >= 0].astype(np.int64, copy=False))
+        if "_corners" not in self.__dict__:
+            self.__dict__["_corners"] = readonly(self.faces[self.faces >= 0].astype(np.int64))
+        return self.__dict__["_corners"]
 
     def triangulated(self) -> tuple[np.ndarray, np.ndarray]:
         """The faces as triangles, for drawing and triangle-only formats.
@@ -290,8 +293,7 @@ class Mesh:
     @cached_property
     def referenced_vertices(self) -> np.ndarray:
         """(n,) bool: True for vertices used by at least one face."""
-        mask = np.zeros(self.n_vertices, dtype=bool)
-        f = self.faces  # (not ``corners``: int64, a copy of int32 faces)
+        mask, f = np.zeros(self.n_vertices, dtype=bool), self.faces  # (not an int64 copy)
         mask[f.ravel() if self.is_triangular else f[f >= 0]] = True
         return readonly(mask)
 
@@ -340,10 +342,8 @@ def narrow_faces(faces: np.ndarray, n_vertices: int) -> np.ndarray:
 
     Examples
     --------
-    >>> narrow_faces(np.array([[0, 1, 2]]), 3).dtype
-    dtype('int32')
-    >>> narrow_faces(np.array([[0, 1, 2**40]]), 3).dtype
-    dtype('int64')
+    >>> [narrow_faces(np.array([[0, 1, i]]), 3).dtype.name for i in (2, 2**40)]
+    ['int32', 'int64']
     """
     f = faces
     if (not isinstance(f, np.ndarray) or f.dtype == np.int32
