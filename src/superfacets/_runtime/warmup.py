@@ -39,7 +39,7 @@ def _warm() -> None:
         reset_labels(np.empty(1), np.empty(1, dtype=np.int32))
         # the graph build's kernels, with the argument types of a triangle mesh's
         one = np.zeros(1, dtype=np.int32)
-        faces = np.zeros((0, 3), dtype=np.int64)
+        faces = np.zeros((0, 3), dtype=np.int32)  # (as the readers give them)
         faces.setflags(write=False)  # a mesh's faces are read-only: the same specialization
         triangle_half_edges(faces, one, one, np.ones(1, dtype=bool))
         none = np.ones(1, dtype=bool)
