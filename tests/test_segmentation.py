@@ -695,8 +695,14 @@ def test_workspaces_released_between_passes_give_the_same_labels(sphere):
 
 def test_threads_buffers_handed_back_after_each_pass_give_the_same_labels(sphere, monkeypatch):
     # on large graphs the expansions' per-thread buffers (zeros between expansions) are
-    # handed back to the system after each pass: the same labels and distances as kept
+    # handed back to the system after each run of expansions and each pass, and the
+    # record arena's pages past its end are discarded: the same labels and distances
     from superfacets.method import classify
+
+    discarded = []
+    real_discard = classify.discard_pages
+    monkeypatch.setattr(classify, "discard_pages",
+                        lambda a: discarded.append(a.shape[0]) or real_discard(a))
 
     g = face_graph(sphere)
     cw = paper_weights(sphere, alpha=200)[g.dual_edge]
@@ -704,6 +710,7 @@ def test_threads_buffers_handed_back_after_each_pass_give_the_same_labels(sphere
 
     def passes(give_back_min):
         monkeypatch.setattr(classify, "_GIVE_BACK_MIN", give_back_min)
+        monkeypatch.setattr(classify, "_GIVE_BACK_EVERY", 4)  # runs of 4 expansions
         handed = []
         monkeypatch.setattr(classify, "give_back_zero_pages",
                             lambda a: handed.append(bool(a.view(np.uint64).any())))
@@ -723,7 +730,9 @@ def test_threads_buffers_handed_back_after_each_pass_give_the_same_labels(sphere
         return out, handed
 
     (kept, none), (handed_back, handed) = passes(1 << 60), passes(0)
-    assert none == [] and handed == [False] * 6  # two buffers a pass, all zeros then
+    assert none == [] and not any(handed)  # all zeros whenever handed back
+    assert len(handed) > 6  # after each run of a thread's expansions, not only each pass
+    assert len(discarded) == 6  # the arena's two arrays past the end, each pass
     for (k1, l1, d1), (k2, l2, d2) in zip(kept, handed_back):
         assert k1 == k2
         np.testing.assert_array_equal(l1, l2)
@@ -748,3 +757,18 @@ def test_zero_pages_handed_back_leave_zeros_and_free_the_memory():
     assert a.sum() == a[::4096].shape[0]
     give_back_zero_pages(a[::2])  # not contiguous: nothing done
     assert a.sum() == a[::4096].shape[0]
+
+
+def test_passes_hand_the_allocators_free_memory_back_on_large_graphs(sphere, monkeypatch):
+    # from _TRIM_MIN elements each pass hands back what its temporaries left free on the
+    # allocator's heap (the changed sizes, the center update's sums): the same labels
+    from superfacets.method import passes
+
+    trims = []
+    monkeypatch.setattr(passes, "give_back_free_memory", lambda: trims.append(1))
+    kept = segment(sphere, 20)
+    assert trims == []
+    monkeypatch.setattr(passes, "_TRIM_MIN", 0)
+    again = segment(sphere, 20)
+    assert len(trims) >= again.n_iter  # after each pass's center update at least
+    np.testing.assert_array_equal(again.labels, kept.labels)

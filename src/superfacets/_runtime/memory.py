@@ -17,10 +17,12 @@ import sys
 
 from ..errors import MemoryLimitError
 
-__all__ = ["available_bytes", "check_memory", "give_back_free_memory", "give_back_zero_pages"]
+__all__ = ["available_bytes", "check_memory", "give_back_free_memory", "give_back_zero_pages",
+           "small_pages", "discard_pages"]
 
 _found: dict = {}  # the C library's functions, once looked up (False: not available)
 _DONTNEED = 4  # MADV_DONTNEED (Linux)
+_NOHUGEPAGE = 15  # MADV_NOHUGEPAGE (Linux)
 
 
 def _libc(name: str, argtypes: tuple):
@@ -145,6 +147,46 @@ def give_back_zero_pages(a) -> None:
     >>> bool(z.any())
     False
     """
+    _advise(a, _DONTNEED)
+
+
+def discard_pages(a) -> None:
+    """Hand back to the operating system the whole pages of ``a`` (C-contiguous), whose
+    contents are no longer needed: they read as zeros after, and cost memory only once
+    written again (``madvise(MADV_DONTNEED)`` on Linux; nothing elsewhere). The passes'
+    record arena past its last record: the threads' records land there before they
+    are moved down, and the pages they left would stay resident.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> a = np.ones(1 << 20)
+    >>> discard_pages(a[1 << 19:])   # (whole pages only: the first and last may stay)
+    >>> float(a[:1 << 19].min()), float(a[3 << 18])   # past the cut: zeros
+    (1.0, 0.0)
+    """
+    _advise(a, _DONTNEED)
+
+
+def small_pages(a) -> None:
+    """Have ``a``'s memory mapped in small pages (4 KiB) even where the system would map
+    it in huge ones (2 MiB: numpy asks for them on large arrays), so that writing a few
+    scattered entries costs a few small pages, not whole huge ones
+    (``madvise(MADV_NOHUGEPAGE)`` on Linux; nothing elsewhere). For arrays written
+    sparsely: the expansions' per-thread buffers, each of whose expansions writes a few
+    thousand entries spread over the buffer.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> z = np.zeros(1 << 20)
+    >>> small_pages(z)
+    """
+    _advise(a, _NOHUGEPAGE)
+
+
+def _advise(a, advice: int) -> None:
+    """``madvise(advice)`` on the whole pages of the C-contiguous array ``a``."""
     madvise = _libc("madvise", ("c_void_p", "c_size_t", "c_int"))
     if not madvise or not a.flags.c_contiguous:
         return
@@ -153,4 +195,4 @@ def give_back_zero_pages(a) -> None:
     lo = -(-start // page) * page
     hi = (start + a.nbytes) // page * page
     if hi > lo:
-        madvise(lo, hi - lo, _DONTNEED)
+        madvise(lo, hi - lo, advice)

@@ -28,7 +28,7 @@ import numpy as np
 
 from .._kernels import native
 from .._kernels.codes import NOT_INCREMENTAL, QUEUE_FULL
-from .._runtime.memory import give_back_zero_pages
+from .._runtime.memory import discard_pages, give_back_zero_pages
 from .adaptive import window_factors
 from .expansion import Workspaces, centers_within, with_room
 from .params import ASSIGNMENTS, check_choice
@@ -55,6 +55,7 @@ _MERGE_COST = 0.02  # merging a record against expanding it (measured: 2.5 again
 _INCREMENTAL = 8  # labels updated in place when at most 1 center in 8 moved
 _INCREMENTAL_SHARE = 0.5  # ... and the records to merge again are at most this share
 _GIVE_BACK_MIN = 1 << 16  # elements from which the threads' buffers are handed back per pass
+_GIVE_BACK_EVERY = 64  # ... and after each run of this many expansions of a thread
 
 
 class Classifier:
@@ -131,9 +132,7 @@ class Exact(Classifier):
         self.inv_width = spaces.inv_width
         self.head = np.full(spaces.n_buckets, -1, dtype=np.int64)
         self._pool(self.indices.shape[0] + 2 * self.m + 1)  # a node per push, as a rule
-        # the previous pass's result and centers, updated in place by the next pass
-        self.prev = None
-        self.dist = self.label = None
+        self.prev = self.dist = self.label = None  # the previous pass's, updated in place
         self.first = np.full(self.m, -1, dtype=np.int32 if self.m < 2**31 - 1 else np.int64)
         self.mark = np.zeros(self.m, dtype=np.bool_)
 
@@ -187,20 +186,14 @@ def make_classifier(assignment: str, graph, weights: np.ndarray, window_r2: floa
 class BoundedReplay(Classifier):
     """The paper's bounded classification, replaying the expansions of centers that did not move.
 
-    The expansions of the previous pass are kept in one arena (``face``
-    int32 and ``dist`` float64, one entry per settled element, ``start`` /
-    ``len`` per center). A center whose element was a center in the previous
-    pass reuses its record; the others are expanded (record only, on up to
-    ``n_threads`` threads). Every record is merged by the lexicographic
-    (distance, center index) rule, so the order of merging does not matter
-    (thread 0's new ones right after their expansion, the other threads' once
-    they are done); then orphans are seeded. The arena is compacted (records
-    of centers that moved are dropped) when the free space at its end runs
-    short, and its room raised when that is not enough: within an allocation
-    of ``8 n`` entries made up front, whose pages cost memory only once
-    written, so raising the room copies nothing. About ``12 * 5`` bytes per
-    element are written (each element lies in about 4.4 windows with
-    ``window = 2``).
+    The previous pass's expansions are kept in one arena (``face`` int32, ``dist``
+    float64, one entry per settled element; ``start`` / ``len`` per center). A center
+    that was a center in the previous pass reuses its record; the others are expanded
+    (on up to ``n_threads`` threads). Records merge by the lexicographic (distance,
+    center index) rule, in any order; then orphans are seeded. The arena is compacted
+    (records of moved centers dropped) when its free end runs short, its room raised
+    within ``8 n`` entries allocated up front (pages cost memory once written): about
+    ``12 * 5`` bytes per element written (each lies in about 4.4 windows, ``window = 2``).
     """
 
     def __init__(self, graph, weights: np.ndarray, window_r2: float, spaces: Workspaces):
@@ -313,6 +306,8 @@ class BoundedReplay(Classifier):
             self._merge_only(n_centers, seg_start, seg_len, dist, label)
         self.end = int(p)
         self.high = max(self.high, self.end)
+        if self.m >= _GIVE_BACK_MIN:  # (records moved down: what lies past the end is dead)
+            discard_pages(self.face[self.end:]), discard_pages(self.dist[self.end:])
         # this pass's records become the previous ones
         self.prev_centers = centers[:k].copy()
         self.prev_order = np.argsort(self.prev_centers, kind="stable")
@@ -331,12 +326,10 @@ class BoundedReplay(Classifier):
         them (to be merged again); else None (every record is merged afresh).
 
         In place when ``dist``/``label`` are the arrays this classifier left, every
-        reused center keeps its index, and few moved: a face keeps its previous
-        ``(dist, label)``, the least over the records that reach it, unless its
-        center moved; those faces are unlabelled and get the least over the records
-        of the reused centers whose windows meet the moved one's (by the triangle
-        inequality, every record that reaches them) and the new records. Merging a
-        record twice changes nothing, so the labels are those of merging every record.
+        reused center keeps its index, and few moved: a face keeps its ``(dist, label)``
+        unless its center moved; those faces get the least over the records of the
+        reused centers whose windows meet the moved one's (by the triangle inequality,
+        every record that reaches them) and the new records: the labels of merging all.
         """
         left = getattr(self, "left", None)
         n, n_moved = cs.shape[0], todo.shape[0]
@@ -391,9 +384,7 @@ class BoundedReplay(Classifier):
         if n_thr == 1:
             parts = [todo]
         else:  # thread 0 takes fewer, for its merging; each thread a run of the centers
-            # by element (the elements' order is spatial: points in Z-order, faces as
-            # meshed), so its windows, and the pages of its `local`, cover a part of
-            # the surface, not all of it
+            # by element (a spatial order: points in Z-order, faces as meshed)
             per = expected / max(n, 1)  # records per expansion
             merging = _MERGE_COST * (int(seg_len[kept].sum()) + expected) / max(per, 1.0)
             n0 = int(max(0.0, min(n, (n - (n_thr - 1) * merging) / n_thr)))
@@ -406,21 +397,29 @@ class BoundedReplay(Classifier):
 
         def run(t):
             ws = spaces.get(t)
-            part = np.ascontiguousarray(parts[t])  # (a strided view: the compiled kernels
-            # take contiguous arrays)
+            part = np.ascontiguousarray(parts[t])  # (the compiled kernels: contiguous)
             srcs_t = np.ascontiguousarray(cs[part])
             os_t = np.empty(part.shape[0], dtype=np.int64)
             ol_t = np.empty(part.shape[0], dtype=np.int64)
+            # large graphs: runs of centers, the buffer's pages handed back after each
+            step = _GIVE_BACK_EVERY if self.m >= _GIVE_BACK_MIN else max(1, part.shape[0])
             while True:
                 if t == 0:
                     if not in_place:
                         _k.reset_labels(dist, label)
                     _k.merge_some(kept, seg_start, seg_len, self.face, self.dist, dist, label)
-                p = _k.expand_many(indptr, indices, w, c, srcs_t, part, window_r2,
-                                   ws.local, ws.queue, spaces.inv_width, self.face,
-                                   self.dist, bounds[t], bounds[t + 1], os_t, ol_t,
-                                   *((dist, label) if t == 0 else (none_d, none_l)),
-                                   self.wscale)
+                p = bounds[t]
+                for a in range(0, part.shape[0], step):
+                    if a:
+                        give_back_zero_pages(ws.local)
+                    b = a + step
+                    p = _k.expand_many(indptr, indices, w, c, srcs_t[a:b], part[a:b],
+                                       window_r2, ws.local, ws.queue, spaces.inv_width,
+                                       self.face, self.dist, p, bounds[t + 1], os_t[a:b],
+                                       ol_t[a:b], *((dist, label) if t == 0 else
+                                                    (none_d, none_l)), self.wscale)
+                    if p < 0:
+                        break
                 if p != QUEUE_FULL:
                     break
                 ws.grow(p)

@@ -15,7 +15,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from .._kernels.codes import QUEUE_FULL, RECORD_FULL
-from .._runtime.memory import give_back_zero_pages
+from .._runtime.memory import give_back_zero_pages, small_pages
 
 __all__ = ["Workspace", "Workspaces", "bucket_width", "centers_within", "with_room"]
 
@@ -69,6 +69,7 @@ class Workspace:
         # resident only once an expansion writes them (the allocator may have cleared
         # reused memory: handed back)
         self.local = np.zeros(m)
+        small_pages(self.local)  # (an expansion writes a few entries spread over it)
         give_back_zero_pages(self.local)
         self.max_nodes = max_nodes
         self.head = np.full(n_buckets, -1, dtype=np.int64)
