@@ -106,8 +106,8 @@ class ElementKind:
         superpoints (vertices and points).
     peak_bytes : int
         A run's peak memory per element with the defaults, the interpreter included
-        (faces: 243 bytes measured on 6.8M faces; points: 235 on 10M points sampled on a
-        mesh, 265 on 2M where the interpreter weighs more, 346 on 10M points of LiDAR
+        (faces: 240 bytes measured on 6.8M faces; points: 234 on 10M points sampled on a
+        mesh, 249 on 2M where the interpreter weighs more, 346 on 10M points of LiDAR
         sweeps before the latest savings; ``benchmarks/memory.py``); a
         run whose estimate
         exceeds what the process may use is refused before its graph is built
