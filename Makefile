@@ -17,8 +17,9 @@ $(STAMP): pyproject.toml setup.py $(wildcard src/superfacets/_kernels/cxx/*)
 demo: $(STAMP)
 	$(VENV)/bin/superfacets demo --output-dir demo-output
 
+# (the tests shared among one worker process per core, at most 4: pytest-xdist)
 test: $(STAMP) browser lint
-	$(VENV)/bin/python -m pytest -q
+	$(VENV)/bin/python -m pytest -q -n auto --maxprocesses=4
 
 # ruff (pyproject.toml [tool.ruff]): the sources, tests, benchmarks and tools
 lint: $(STAMP)

@@ -91,11 +91,13 @@ def load() -> dict:
         return json.load(f)
 
 
-def compute(sources: dict[str, Path], progress: bool = False):
-    """Yield (key, labels) for every run, reading each mesh once."""
+def compute(sources: dict[str, Path], progress: bool = False, part: int = 0,
+            parts: int = 1):
+    """Yield (key, labels) for every run (for every ``parts``-th run from ``part``),
+    reading each mesh once."""
     from superfacets import read_mesh, segment
 
-    todo = runs(list(sources))
+    todo = runs(list(sources))[part::parts]
     mesh_name, mesh = None, None
     for i, (name, kw) in enumerate(todo):
         if name != mesh_name:

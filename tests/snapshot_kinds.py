@@ -89,14 +89,14 @@ def key(name: str, method: str, options: dict) -> str:
     return f"{name} {method} " + " ".join(f"{k}={v}" for k, v in sorted(options.items()))
 
 
-def compute(shared: Path):
-    """Yield (key, labels) of every run."""
+def compute(shared: Path, part: int = 0, parts: int = 1):
+    """Yield (key, labels) of every run (of every ``parts``-th run from ``part``)."""
     from superfacets import segment
     from superfacets.api.levels import adaptive_superpoints
     from superfacets.scale.runner.tiles import segment_tiled
 
     inputs = _inputs(shared)
-    for name, method, options in runs():
+    for name, method, options in runs()[part::parts]:
         obj = inputs[name]
         if method == "segment":
             labels = segment(obj, **options).labels

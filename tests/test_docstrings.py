@@ -89,7 +89,12 @@ def _reference_names():
                 yield f"{module}.{name}", obj
 
 
-@pytest.mark.parametrize("name, obj", list(_reference_names()), ids=lambda v: str(v)[:60])
+_REFERENCE_NAMES = list(_reference_names())
+
+
+# (ids from the names alone: an object's repr holds its address, which differs between
+# the processes of a parallel run)
+@pytest.mark.parametrize("name, obj", _REFERENCE_NAMES, ids=[n for n, _ in _REFERENCE_NAMES])
 def test_every_name_of_the_reference_modules_has_the_sections(name, obj):
     have = _sections(inspect.getdoc(obj) or "")
     want = set(CLASS) if inspect.isclass(obj) else set(FUNCTION)
