@@ -2,9 +2,9 @@
 
 OFF (the Princeton benchmark's format) and the authors' ``.tri`` text format
 and OBJ are parsed here (vectorized with :func:`numpy.loadtxt` where the faces
-are triangles); PLY and STL go through trimesh's parsers (PLY polygons through
-plyfile, since trimesh splits them), never changing the face order. A
-trailing ``.gz``, ``.xz`` or ``.bz2`` is decompressed transparently.
+are triangles); a binary PLY of triangles through plyfile's memory map, other PLY and
+STL through trimesh's parsers (PLY polygons through plyfile, since trimesh splits them),
+never changing the face order. A trailing ``.gz``, ``.xz`` or ``.bz2`` is decompressed.
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ from ..errors import InvalidMeshError, MeshFormatError
 from ..inputs.mesh import Mesh, narrow_faces
 from .files import read_bytes, split_suffix, text_lines
 from .headers import header_counts
+from .ply import read_ply_triangles
 
 __all__ = ["read_mesh", "MESH_FORMATS"]
 
@@ -92,8 +93,9 @@ def read_mesh(path, format: str | None = None) -> Mesh:
         v, f, objects, colors = _parse_obj(data, path)
     elif fmt in ("glb", "gltf"):
         return _load_scene(path, fmt, comp, data)
-    else:
-        v, f, colors, face_colors = _load_trimesh(data, fmt, path)
+    else:  # (the common binary PLY of triangles by plyfile's memory map: no trimesh)
+        v, f, colors, face_colors = (fmt == "ply" and comp is None and read_ply_triangles(
+            path, data)) or _load_trimesh(data, fmt, path)
     try:
         f = narrow_faces(f, len(v))  # (int32 while they fit: the file's arrays are ours)
         return Mesh(v, f, name=path.name, objects=objects, colors=colors,
@@ -412,7 +414,6 @@ def _ply_polygons(data: bytes, path: Path):
     from plyfile import PlyData, PlyParseError
 
     from .ply import ply_colors
-
     end = data.find(b"end_header")
     declared = sum(int(line.split()[2]) for line in data[:max(end, 0)].split(b"\n")
                    if line.startswith(b"element ") and len(line.split()) == 3
