@@ -454,3 +454,28 @@ def test_segindices_are_written_in_blocks_as_json_writes_them(tmp_path):
                            "segIndices": labels.tolist()}, separators=(",", ":"),
                           ensure_ascii=False).encode("utf-8") + b"\n"
         assert path.read_bytes() == want
+
+
+def test_integer_text_is_pythons_decimal_text():
+    from superfacets.io.labels import integer_text
+
+    rng = np.random.default_rng(5)
+    info = np.iinfo(np.int64)
+    cases = [np.array([], dtype=np.int64), np.array([0]), np.array([-1, 9, 10, -10, 99, 100]),
+             np.array([info.min, info.max, 2**32 - 1, 2**32, -(2**32), 10**18, 10**19 // 2]),
+             rng.integers(-1, 3000, 50_000), rng.integers(-(10**12), 10**12, 5_000)]
+    for values in cases:
+        for end in (b"\n", b","):
+            want = "".join(f"{v}{end.decode()}" for v in values.tolist()).encode()
+            assert integer_text(values, end) == want
+    assert integer_text(np.array([7], dtype=np.int32), b"\n") == b"7\n"
+
+
+def test_labels_file_text_across_blocks(tmp_path, monkeypatch):
+    from superfacets.io import labels as module
+
+    monkeypatch.setattr(module, "_BLOCK", 1000)
+    labels = np.random.default_rng(2).integers(0, 12_000, 3_500)
+    path = write_labels(tmp_path / "l.seg", labels)
+    assert path.read_bytes() == "".join(f"{v}\n" for v in labels.tolist()).encode()
+    np.testing.assert_array_equal(read_labels(path), labels)
