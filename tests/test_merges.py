@@ -251,3 +251,17 @@ def test_the_command_line_takes_merge_from(tmp_path, capsys):
     capsys.readouterr()
     assert main(["segment", str(path), "-k", "20", "-o", str(out)]) == 0
     assert "20 superpoints (merged from 100, flat neighbours first" in capsys.readouterr().out
+
+
+def test_sorted_unique_is_numpys_unique():
+    from superfacets._runtime.arrays import sorted_unique
+
+    rng = np.random.default_rng(4)
+    cases = [np.array([], dtype=np.int64), np.array([3]), rng.integers(-50, 50, 1000),
+             rng.integers(0, 10**12, 20_000), rng.integers(0, 5, (40, 30)),
+             np.array([2.5, np.nan, -1.0, 2.5, np.nan]), rng.random(100) > 0.5,
+             rng.integers(0, 300, 5000).astype(np.int32)]
+    for values in cases:
+        got, want = sorted_unique(values), np.unique(values)
+        assert got.dtype == want.dtype
+        np.testing.assert_array_equal(got, want)

@@ -44,6 +44,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._kernels import native
+from .._runtime.arrays import sorted_unique
 from ..inputs.bounds import column_bounds
 from .graph import LAZY, ElementGraph, adjacency_csr, cached_on, pairs_from_csr
 from .neighbors import nearest, point_tree
@@ -372,7 +373,7 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
         src, dst = src[src != dst], dst[src != dst]  # (no point is its own neighbour)
         key = np.minimum(src, dst) * np.int64(n) + np.maximum(src, dst)
         del src, dst
-        key = np.unique(key)
+        key = sorted_unique(key)
         indptr, indices, _ = adjacency_csr(key // n, key % n, n)
         pair_dtype = np.int64
         del key, more, more_keep, nbr, cand, keep

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._runtime.arrays import sorted_unique
 from .finish import exact_count
 
 __all__ = ["merge_to_count", "flat_merges", "flat_merge_nodes", "noise_variance",
@@ -122,7 +123,7 @@ def _plane_residual(graph, pick: np.ndarray, rings: int) -> tuple[np.ndarray, np
         owner = np.concatenate([owner, np.repeat(owner, count)])
         member = np.concatenate([member,
                                  indices[start + np.arange(start.size)].astype(np.int64)])
-        key = np.unique(owner * n + member)
+        key = sorted_unique(owner * n + member)
         owner, member = key // n, key % n
     pos = np.asarray(graph.positions, dtype=np.float64)
     pts = pos[member]

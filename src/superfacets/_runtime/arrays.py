@@ -1,0 +1,44 @@
+"""Array operations numpy makes slow for the arrays a run holds."""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["sorted_unique"]
+
+
+def sorted_unique(values: np.ndarray) -> np.ndarray:
+    """``np.unique(values)`` (the distinct values, ascending) by a sort.
+
+    numpy 2.x finds the distinct values of a plain ``np.unique`` call in a hash table,
+    which is 30 to 50 times slower than sorting on the wide integer keys a run makes
+    (pairs of elements as ``a * n + b``): 1.6 s against 0.03 s for 1.3M keys on this
+    project's machine (numpy 2.4, 2026-11-26). The same values in the same order.
+
+    Parameters
+    ----------
+    values : ndarray
+        Any shape (flattened), any dtype numpy sorts (NaN is kept once at the end, as
+        ``np.unique`` keeps it).
+
+    Returns
+    -------
+    (u,) ndarray
+        Of the dtype of ``values``.
+
+    Raises
+    ------
+    Nothing of its own.
+
+    Examples
+    --------
+    >>> sorted_unique(np.array([5, 1, 5, 3, 1])).tolist()
+    [1, 3, 5]
+    """
+    a = np.sort(np.asarray(values), axis=None)
+    if a.size == 0 or a.dtype.kind in "fc":  # (NaN: np.unique's own rule)
+        return np.unique(a) if a.size else a
+    keep = np.empty(a.shape, dtype=bool)
+    keep[0] = True
+    np.not_equal(a[1:], a[:-1], out=keep[1:])
+    return a[keep]
