@@ -294,3 +294,55 @@ def test_a_piece_with_no_neighbour_becomes_a_superfacet_numbered_from_k():
     np.testing.assert_array_equal(out[m:], 3)  # the separate piece: a number of its own
     assert set(np.unique(out[:m])) == {0, 1, 2}  # the others keep theirs
     np.testing.assert_array_equal(out[centers], [0, 1, 2])
+
+
+@pytest.mark.parametrize("threads", ["1", "2"])
+def test_band_distances_are_the_shortest_and_ties_take_the_lowest_partner(monkeypatch,
+                                                                           threads):
+    """Each element's distance from its superfacet's boundary is the shortest within the
+    superfacet, and its partner the lowest of the seeds at that distance (a regular grid:
+    many exact ties), whatever the threads and the kernel (compiled or numba)."""
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import dijkstra
+
+    from superfacets._kernels import native
+
+    monkeypatch.setenv("NUMBA_NUM_THREADS", threads)
+    mesh = grid_mesh(64, 64)
+    g = face_graph(mesh)
+    col, row = _cells(mesh, 64, 64)
+    labels = (col // 16) * 4 + row // 16 + ((col + row) % 5 == 0) * 0  # 16 squares
+    labels = np.where((col - 30) ** 2 + (row - 34) ** 2 < 40, 16, labels).astype(np.int64)
+    n = g.n_elements
+    pinned = np.zeros(n, dtype=bool)
+    pinned[::97] = True
+    geo, de, limit = g.terms.geo, g.dual_edge, 0.25
+    heap = g.indices.shape[0] + n + 1
+    got = []
+    for kernel in (native.kernel("cleanup.band_distances"),
+                   native.reference("cleanup.band_distances")):
+        dist, partner = np.empty(n), np.empty(n, dtype=np.int64)
+        kernel(g.indptr, g.indices, de, geo, g.lengths, labels, pinned, limit, dist, partner,
+               np.empty(heap), np.empty(heap, dtype=np.int64))
+        got.append((dist, partner))
+    assert got[0][0].tobytes() == got[1][0].tobytes()
+    assert np.array_equal(got[0][1], got[1][1])
+    dist, partner = got[0]
+    # the reference: one multi-source search per partner, inside each superfacet
+    src = np.repeat(np.arange(n), np.diff(g.indptr))
+    dst = g.indices.astype(np.int64)
+    inside = (labels[src] == labels[dst]) & ~pinned[src] & ~pinned[dst]
+    w = csr_matrix((geo[de][inside], (src[inside], dst[inside])), shape=(n, n))
+    seeds = (partner >= 0) & (dist == 0) & ~pinned
+    seed_partner = partner[seeds]
+    best = np.full(n, np.inf)
+    lowest = np.full(n, -1)
+    for p in np.unique(seed_partner):  # ascending: a tie keeps the lower partner
+        d = dijkstra(w, indices=np.flatnonzero(seeds)[seed_partner == p], min_only=True)
+        closer = d < best
+        best[closer], lowest[closer] = d[closer], p
+    best[(best >= limit) | pinned] = np.inf
+    lowest[~np.isfinite(best)] = -1
+    assert np.array_equal(dist, best)
+    assert np.array_equal(partner, lowest)
+    assert (partner >= 0).sum() > n // 4 and not np.signbit(dist).any()

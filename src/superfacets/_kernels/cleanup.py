@@ -4,12 +4,13 @@
 ``band_distances`` grows, inside each superfacet, the distance from its
 boundary (a multi-source Dijkstra that never crosses a label change), up to a
 limit, and remembers for each element which neighbouring superfacet its
-nearest boundary faces: the element then belongs to the band of that pair of
-superfacets. Bands of different pairs are disjoint, so ``solve_bands`` cuts
-each one on its own (on several threads; the result does not depend on the
-order or the thread count): a two-label graph cut, solved exactly as a minimum s-t
-cut by Boykov and Kolmogorov's max-flow (:func:`min_cut`), whose source side
-keeps the first label.
+nearest boundary faces (the lowest at equal distances, so any order of the search
+gives it: the compiled kernel runs the superfacets on several threads): the element
+then belongs to the band of that pair of superfacets. Bands of different pairs are
+disjoint, so ``solve_bands`` cuts each one on its own (on several threads; the result
+does not depend on the order or the thread count): a two-label graph cut, solved
+exactly as a minimum s-t cut by Boykov and Kolmogorov's max-flow (:func:`min_cut`),
+whose source side keeps the first label.
 """
 
 import numpy as np
@@ -29,7 +30,10 @@ def band_distances(indptr, indices, dual_edge, geo, length, labels, pinned, limi
     the neighbouring label sharing the longest border, ties to the lowest).
     The distance grows by ``geo`` (per adjacency ``dual_edge[e]`` of CSR entry
     ``e``, as ``length``) along entries that join two
-    elements of the same label. ``pinned`` elements are never in a band.
+    elements of the same label; an element reached at the same distance from
+    seeds of different partners takes the lowest partner (so the result does not
+    depend on the order of the search: the compiled kernel searches the
+    superfacets on several threads). ``pinned`` elements are never in a band.
     Elements farther than ``limit`` (or pinned) keep ``dist = inf`` and
     ``partner = -1``.
     """
@@ -57,7 +61,7 @@ def band_distances(indptr, indices, dual_edge, geo, length, labels, pinned, limi
                 best_len = tot
                 best = lg
         if best >= 0:
-            dist[f] = 0.0
+            dist[f] = -0.0  # (a seed: never taken over at distance 0; +0.0 at the end)
             partner[f] = best
             size = push(hkey, hval, size, 0.0, f)
     while size > 0:
@@ -65,15 +69,21 @@ def band_distances(indptr, indices, dual_edge, geo, length, labels, pinned, limi
         if d > dist[f]:
             continue
         lf = labels[f]
+        pf = partner[f]
         for e in range(indptr[f], indptr[f + 1]):
             g = indices[e]
             if labels[g] != lf or pinned[g]:
                 continue
             nd = d + geo[dual_edge[e]]
-            if nd < limit and nd < dist[g]:
+            dg = dist[g]
+            if nd < limit and (nd < dg or (nd == dg and pf < partner[g]
+                                           and not np.signbit(dg))):
                 dist[g] = nd
-                partner[g] = partner[f]
+                partner[g] = pf
                 size = push(hkey, hval, size, nd, g)
+    for f in range(n):
+        if dist[f] == 0.0:
+            dist[f] = 0.0
 
 
 _NONE = -1  # parent of a free node

@@ -264,52 +264,77 @@ void band_distances(py::handle indptr_, py::handle indices_, py::handle dual_edg
     Out<i64> partner(partner_, "partner"), hval(hval_, "hval");
     py::gil_scoped_release nogil;
     const i64 n = labels.n;
-    (void)hkey;  // (the heap's arrays of the numba kernel: here one array of pairs)
+    (void)hkey;  // (the heap's arrays of the numba kernel: here one heap per thread)
     (void)hval;
-    Heap heap(n / 4);
-    for (i64 f = 0; f < n; ++f) {
-        dist[f] = INF;
-        partner[f] = -1;
-    }
-    for (i64 f = 0; f < n; ++f) {
-        if (pinned[f]) continue;
-        i64 lf = labels[f];
-        i64 best = -1;
-        double best_len = -1.0;
-        for (i64 e = indptr[f]; e < indptr[f + 1]; ++e) {
-            i64 lg = labels[indices[e]];
-            if (lg == lf) continue;
-            double tot = 0.0;
-            for (i64 e2 = indptr[f]; e2 < indptr[f + 1]; ++e2)
-                if (labels[indices[e2]] == lg) tot += length[dual_edge[e2]];
-            if (tot > best_len || (tot == best_len && lg < best)) {
-                best_len = tot;
-                best = lg;
+    // the seeds, each element on its own (a seed's distance is -0.0 while the searches
+    // run: equal to 0.0, but never taken over by a lower partner at distance 0)
+    parallel_for(n, [&](i64 lo, i64 hi) {
+        for (i64 f = lo; f < hi; ++f) {
+            dist[f] = INF;
+            partner[f] = -1;
+            if (pinned[f]) continue;
+            i64 lf = labels[f];
+            i64 best = -1;
+            double best_len = -1.0;
+            for (i64 e = indptr[f]; e < indptr[f + 1]; ++e) {
+                i64 lg = labels[indices[e]];
+                if (lg == lf) continue;
+                double tot = 0.0;
+                for (i64 e2 = indptr[f]; e2 < indptr[f + 1]; ++e2)
+                    if (labels[indices[e2]] == lg) tot += length[dual_edge[e2]];
+                if (tot > best_len || (tot == best_len && lg < best)) {
+                    best_len = tot;
+                    best = lg;
+                }
+            }
+            if (best >= 0) {
+                dist[f] = -0.0;
+                partner[f] = best;
             }
         }
-        if (best >= 0) {
-            dist[f] = 0.0;
-            partner[f] = best;
-            heap.push(0.0, f);
-        }
-    }
-    while (heap.size > 0) {
-        double d = heap.h[0].key;
-        i64 f = heap.h[0].val;
-        heap.pop();
-        if (d > dist[f]) continue;
-        i64 lf = labels[f];
-        for (i64 e = indptr[f]; e < indptr[f + 1]; ++e) {
-            i64 g = indices[e];
-            if (labels[g] != lf || pinned[g]) continue;
-            double nd = d + geo[dual_edge[e]];
-            if (nd < limit && nd < dist[g]) {
-                dist[g] = nd;
-                partner[g] = partner[f];
-                heap.push(nd, g);
+    });
+    i64 k = 0;
+    for (i64 f = 0; f < n; ++f) k = mx(k, labels[f] + 1);
+    // the searches never cross a label change: the superfacets' searches are apart, a
+    // range of labels on each thread, each with its own heap; ties of distance go to the
+    // lowest partner, so the result is that of any order
+    auto search = [&](i64 la, i64 lb) {
+        Heap heap(1024);
+        for (i64 f = 0; f < n; ++f)
+            if (partner[f] >= 0 && labels[f] >= la && labels[f] < lb) heap.push(0.0, f);
+        while (heap.size > 0) {
+            double d = heap.h[0].key;
+            i64 f = heap.h[0].val;
+            heap.pop();
+            if (d > dist[f]) continue;
+            i64 lf = labels[f], pf = partner[f];
+            for (i64 e = indptr[f]; e < indptr[f + 1]; ++e) {
+                i64 g = indices[e];
+                if (labels[g] != lf || pinned[g]) continue;
+                double nd = d + geo[dual_edge[e]];
+                double dg = dist[g];
+                if (nd < limit && (nd < dg || (nd == dg && pf < partner[g] &&
+                                               !std::signbit(dg)))) {
+                    dist[g] = nd;
+                    partner[g] = pf;
+                    heap.push(nd, g);
+                }
             }
         }
+    };
+    const i64 t = n < (1 << 16) ? 1 : std::min<i64>(threads(), k);
+    if (t <= 1) {
+        search(0, k);
+    } else {
+        std::vector<std::thread> pool;
+        for (i64 w = 1; w < t; ++w) pool.emplace_back(search, k * w / t, k * (w + 1) / t);
+        search(0, k / t);
+        for (auto& th : pool) th.join();
     }
+    parallel_for(n, [&](i64 lo, i64 hi) {
+        for (i64 f = lo; f < hi; ++f)
+            if (dist[f] == 0.0) dist[f] = 0.0;  // (the seeds' -0.0)
+    });
 }
 
 void solve_bands(i64 p0, i64 p1, py::handle order_, py::handle starts_, py::handle pair_a_,
