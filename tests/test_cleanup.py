@@ -307,7 +307,6 @@ def test_band_distances_are_the_shortest_and_ties_take_the_lowest_partner(monkey
 
     from superfacets._kernels import native
 
-    monkeypatch.setenv("NUMBA_NUM_THREADS", threads)
     mesh = grid_mesh(64, 64)
     g = face_graph(mesh)
     col, row = _cells(mesh, 64, 64)
@@ -319,15 +318,20 @@ def test_band_distances_are_the_shortest_and_ties_take_the_lowest_partner(monkey
     geo, de, limit = g.terms.geo, g.dual_edge, 0.25
     heap = g.indices.shape[0] + n + 1
     got = []
-    for kernel in (native.kernel("cleanup.band_distances"),
-                   native.reference("cleanup.band_distances")):
+    for compiled in (False, True):
         dist, partner = np.empty(n), np.empty(n, dtype=np.int64)
-        kernel(g.indptr, g.indices, de, geo, g.lengths, labels, pinned, limit, dist, partner,
-               np.empty(heap), np.empty(heap, dtype=np.int64))
+        args = (g.indptr, g.indices, de, geo, g.lengths, labels, pinned, limit, dist,
+                partner, np.empty(heap), np.empty(heap, dtype=np.int64))
+        if not compiled:
+            native.reference("cleanup.band_distances")(*args)
+        else:  # the compiled kernel's threads (numba, which would read its config again
+            with monkeypatch.context() as m:  # on compiling, runs before)
+                m.setenv("NUMBA_NUM_THREADS", threads)
+                native.kernel("cleanup.band_distances")(*args)
         got.append((dist, partner))
     assert got[0][0].tobytes() == got[1][0].tobytes()
     assert np.array_equal(got[0][1], got[1][1])
-    dist, partner = got[0]
+    dist, partner = got[1]
     # the reference: one multi-source search per partner, inside each superfacet
     src = np.repeat(np.arange(n), np.diff(g.indptr))
     dst = g.indices.astype(np.int64)
