@@ -56,7 +56,7 @@ needs_cxx = pytest.mark.skipif(not native.available(),
 POINT_KERNELS = {"knn_csr", "pca_normals", "pca_linearity", "propagate_signs", "turn_outwards",
                  "float_morton_keys", "distinct_in_order", "runs_of_equal", "point_terms_csr",
                  "point_terms", "neighbour_mean", "crossing_pairs", "label_sums", "label_scatter",
-                 "tree_nodes", "nearest_in_tree"}
+                 "tree_nodes", "nearest_in_tree", "sort_keys", "rows_apart"}
 #: Those of the vertex graph and of the exact assignment (the default on vertices)
 VERTEX_KERNELS = {"vertex_cells", "mesh_edges", "classify_exact", "reclassify_exact"}
 
@@ -205,6 +205,9 @@ def test_runs_on_points_give_numba_results_call_by_call(shadowed):
     for pts, k, normals, params in runs:
         r = superfacets.segment(as_cloud(pts, normals), k, n_threads=1, **params)
         assert r.labels.shape[0] == pts.shape[0] and r.labels.max() + 1 == k
+    # a cloud that alone holds its points (as one read from a file) lends them to its graph
+    r = superfacets.segment(as_cloud(dup.copy()), 40, n_threads=1)
+    assert r.labels.shape[0] == dup.shape[0]
     missing = {name for name in POINT_KERNELS | {"expand_many", "nearest_seed", "coarse_pairs",
                                                  "merge_levels"}
                if not any(path.endswith("." + name) for path in calls)}
@@ -242,6 +245,59 @@ def test_hierarchies_give_numba_results(shadowed, params):
     sg = superfacet_graph(face_graph(mesh), labels, feats)
     h = hierarchy(sg, [40, 20, 5], **params)
     assert h.levels == (40, 20, 5) and "hierarchy.merge_levels" in calls
+
+
+@needs_cxx
+@pytest.mark.parametrize("threads", ["1", "2", "3", "5"])
+def test_sorted_keys_are_the_stable_argsort_on_any_thread_count(monkeypatch, threads):
+    """Known answer: the compiled sort (runs sorted by radix on threads, merged two by two
+    at equal output places) is numpy's stable argsort, equal keys in row order: many ties,
+    keys sharing digits (skipped passes), an odd number of runs to merge."""
+    rng = np.random.default_rng(5)
+    n = 300_007
+    for keys in (rng.integers(0, 2**64 - 1, n, dtype=np.uint64),
+                 rng.integers(0, 40, n).astype(np.uint64) << np.uint64(20),
+                 np.full(n, 7, dtype=np.uint64), np.arange(n, 0, -1, dtype=np.uint64)):
+        expected = np.argsort(keys, kind="stable")
+        ref_order, ref_sorted = np.empty(n, dtype=np.int64), np.empty_like(keys)
+        native.reference("geometry.sort_keys")(keys, ref_order, ref_sorted)
+        order, ordered = np.empty(n, dtype=np.int64), np.empty_like(keys)
+        with monkeypatch.context() as m:  # (numba, above, compiled with its own count)
+            m.setenv("NUMBA_NUM_THREADS", threads)
+            native.kernel("geometry.sort_keys")(keys, order, ordered)
+        assert np.array_equal(order, expected) and np.array_equal(ref_order, expected)
+        assert np.array_equal(ordered, keys[expected]) and np.array_equal(ref_sorted, ordered)
+
+
+@needs_cxx
+@pytest.mark.parametrize("index_dtype", [np.int32, np.int64])
+def test_rows_apart_match_numba_and_stop_at_their_room(monkeypatch, index_dtype):
+    """Known answer: the rows whose distinct point does not give back their bits (an
+    invalid row, -0.0 for 0.0), ascending, found on threads; past the room, -1 and the
+    first rows that fit (the compiled and the numba kernel write the same bytes)."""
+    rng = np.random.default_rng(8)
+    n = 100_000
+    pts = rng.random((n, 3))
+    index = rng.permutation(n).astype(index_dtype)
+    at = np.empty_like(pts)
+    at[index] = pts
+    odd = np.sort(rng.choice(n, 900, replace=False))
+    index[odd[:300]] = -1
+    pts[odd[300:], 1] = 0.0
+    at[index[odd[300:]], 1] = -0.0
+    for room in (n, 900, 899, 0):
+        outs = []
+        for fn in ("kernel", "reference"):
+            rows = np.full(room, -7, dtype=np.int64)
+            with monkeypatch.context() as m:
+                if fn == "kernel":
+                    m.setenv("NUMBA_NUM_THREADS", "3")
+                got = getattr(native, fn)("geometry.rows_apart")(
+                    pts.view(np.uint64), at.view(np.uint64), index, rows)
+            outs.append((got, rows))
+        assert outs[0][0] == outs[1][0] == (900 if room >= 900 else -1)
+        assert np.array_equal(outs[0][1], outs[1][1])
+        assert np.array_equal(outs[0][1][:min(room, 900)], odd[:room])
 
 
 @needs_cxx

@@ -345,3 +345,31 @@ def label_scatter(labels, weights, positions, centroid, scatter):
         scatter[s, 6] += w * d2 * d0
         scatter[s, 7] += w * d2 * d1
         scatter[s, 8] += w * d2 * d2
+
+
+@njit(cache=True, nogil=True)
+def sort_keys(keys, order, out):
+    """``order``: the stable argsort of the uint64 ``keys`` (equal keys in the order of
+    their rows); ``out``: ``keys[order]``."""
+    by = np.argsort(keys, kind="mergesort")
+    for i in range(by.shape[0]):
+        order[i] = by[i]
+        out[i] = keys[by[i]]
+
+
+@njit(cache=True, nogil=True)
+def rows_apart(bits, at, index, rows):
+    """The rows ``i`` (ascending) where ``index[i] < 0`` or the three words of
+    ``at[index[i]]`` differ from ``bits[i]``, written into ``rows``; returns their
+    number, or -1 when there are more than ``rows`` holds (its first entries written)."""
+    cap = rows.shape[0]
+    m = 0
+    for i in range(index.shape[0]):
+        j = index[i]
+        if j < 0 or at[j, 0] != bits[i, 0] or at[j, 1] != bits[i, 1] \
+                or at[j, 2] != bits[i, 2]:
+            if m == cap:
+                return -1
+            rows[m] = i
+            m += 1
+    return m

@@ -200,14 +200,19 @@ def distinct_points(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
     distinct_in_order = native.kernel("geometry.distinct_in_order")
     runs_of_equal = native.kernel("geometry.runs_of_equal")
+    sort_keys = native.kernel("geometry.sort_keys")
 
     p = np.ascontiguousarray(p, dtype=np.float64)
     keys, shared = _spatial_keys(p)
     window = _key_bits(keys, shared)
-    order = np.argsort(window)
+    # a stable sort (on threads where compiled: numpy's argsort of 10M keys takes 2.7 s)
+    order, ordered = np.empty(p.shape[0], dtype=np.int64), np.empty_like(window)
+    sort_keys(window, order, ordered)
+    del window
     run = np.empty(p.shape[0], dtype=np.int64)
     tied = np.empty(p.shape[0], dtype=np.int64)
-    tied = tied[:runs_of_equal(window[order], run, tied)]
+    tied = tied[:runs_of_equal(ordered, run, tied)]
+    del ordered
     if tied.size:  # equal in the window: by the next 64 bits
         rows = order[tied]
         nxt = _key_bits(keys[rows], shared + 64)

@@ -205,17 +205,17 @@ class PointCloud:
         if (p is None or not self.__dict__.get("_usable") or not _held_alone(p)
                 or index.shape[0] != p.shape[0]):  # (checked once: not asked for again)
             return False
+        from .._kernels import native
+
         bits, at = p.view(np.uint64), positions.view(np.uint64)
-        differ = []
-        for s in range(0, p.shape[0], _BLOCK):  # (not a gathered copy of the whole cloud)
-            idx = index[s:s + _BLOCK]
-            ok = idx >= 0
-            same = np.zeros(idx.shape[0], dtype=bool)
-            same[ok] = (at[idx[ok]] == bits[s:s + _BLOCK][ok]).all(axis=1)
-            differ.append(s + np.flatnonzero(~same))
-        rows = np.concatenate(differ)
-        if rows.shape[0] > max(1024, p.shape[0] // 8):  # the exceptions would cost as much
+        if not (bits.flags.c_contiguous and at.flags.c_contiguous):
             return False
+        rows = np.empty(max(1024, p.shape[0] // 8), dtype=np.int64)
+        # (beyond that many, the exceptions would cost as much as the points)
+        m = native.kernel("geometry.rows_apart")(bits, at, index, rows)
+        if m < 0:
+            return False
+        rows = rows[:m].copy()
         del bits
         self.__dict__["_lent"] = (positions, index, rows, p[rows].copy())
         del self.__dict__["points"]
@@ -268,7 +268,7 @@ class PointCloud:
         self.__dict__["_usable"] = True
 
 
-_BLOCK = 1 << 20  # points centred (or compared) at a time
+_BLOCK = 1 << 20  # points centred at a time
 _LENT_FIELD = "points"  # the field a cloud lends to its graph (PointCloud.lend_points)
 
 

@@ -235,5 +235,6 @@ void bind_hierarchy(py::module_& m);
 void bind_exact(py::module_& m);
 void bind_vertices(py::module_& m);
 void bind_nearest(py::module_& m);
+void bind_order(py::module_& m);
 
 }  // namespace sfk

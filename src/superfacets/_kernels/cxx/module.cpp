@@ -27,4 +27,5 @@ PYBIND11_MODULE(_cxx, m) {
     sfk::bind_exact(m);
     sfk::bind_vertices(m);
     sfk::bind_nearest(m);
+    sfk::bind_order(m);
 }
