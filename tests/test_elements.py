@@ -788,7 +788,7 @@ def test_weights_from_the_csr_layout_equal_the_weights_per_pair():
                 np.testing.assert_array_equal(got, csr_weights(g, ref, dtype))
 
 
-def test_runs_of_equal_positions_found_in_parallel_equal_one_pass_in_order():
+def test_distinct_positions_found_in_parallel_equal_one_pass_in_order():
     """Known answer: distinct_in_order (its runs and moves in parallel) gives the arrays
     of one pass in order: each run of equal rows once, -0.0 equal to 0.0, the first
     row's values kept; on empty, single and many-duplicate inputs."""
@@ -812,6 +812,35 @@ def test_runs_of_equal_positions_found_in_parallel_equal_one_pass_in_order():
         np.testing.assert_array_equal(np.signbit(out[:m]), np.signbit(
             np.array(want_out).reshape(-1, 3)))
         np.testing.assert_array_equal(inverse, want_inv)
+
+
+@pytest.mark.parametrize("threads", ["1", "2", "3"])
+def test_the_z_order_sorts_by_the_whole_keys_then_the_positions(monkeypatch, threads):
+    """Known answer: distinct_points' order (a sort of each key's first 64 varying bits,
+    then equal ones by the whole keys and the coordinates, on threads where compiled) is
+    numpy's stable lexsort of the whole keys and the coordinates: points closer than the
+    first 64 bits tell apart, duplicates, -0.0 beside 0.0 (the lowest row's kept)."""
+    from superfacets._kernels import native
+    from superfacets._kernels.geometry import distinct_in_order
+    from superfacets.elements.points import _spatial_keys, distinct_points
+
+    rng = np.random.default_rng(3)
+    near = 1.0 + rng.integers(0, 4, (30_000, 3)) * 1e-13  # equal in the first 64 bits
+    grid = rng.integers(-3, 4, (40_000, 3)).astype(np.float64)  # duplicates, zeros
+    grid[rng.random(grid.shape) < 0.3] *= -1.0  # -0.0 and 0.0 in the same runs
+    p = np.r_[near, grid, rng.random((30_000, 3)) * 1e3, [[-1e5, 2e5, 7.0]]]
+    p = p[rng.permutation(p.shape[0])]
+    keys, _ = _spatial_keys(p)
+    order = np.lexsort((p[:, 2], p[:, 1], p[:, 0], keys[:, 2], keys[:, 1], keys[:, 0]))
+    want, want_inv = np.empty_like(p), np.empty(p.shape[0], dtype=np.int64)
+    m = distinct_in_order(p, order, want, want_inv)
+    with monkeypatch.context() as mp:
+        if native.available():  # (the compiled kernels' threads; numba's as configured)
+            mp.setenv("NUMBA_NUM_THREADS", threads)
+        out, inverse = distinct_points(p)
+    assert out.shape[0] == m < 60_000
+    assert out.tobytes() == want[:m].tobytes()  # -0.0 or 0.0 as the lowest row has it
+    np.testing.assert_array_equal(inverse, want_inv)
 
 
 def _owned(a: np.ndarray) -> np.ndarray:

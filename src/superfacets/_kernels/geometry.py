@@ -257,24 +257,6 @@ def float_morton_keys(bits, keys):
                 _spread21(o1 >> s) << np.uint64(1)) | _spread21(o2 >> s)
 
 
-@njit(cache=True, nogil=True)
-def runs_of_equal(w, run, tied):
-    """Over sorted keys ``w``: ``run[i]`` the index of the run of equal keys that
-    holds ``i`` (from 0); returns the number of elements in runs longer than one,
-    listed in ``tied`` (ascending), as ``np.flatnonzero(np.bincount(run)[run] > 1)``."""
-    n = w.shape[0]
-    r = -1
-    m = 0
-    for i in range(n):
-        if i == 0 or w[i] != w[i - 1]:
-            r += 1
-        run[i] = r
-        if (i > 0 and w[i] == w[i - 1]) or (i + 1 < n and w[i] == w[i + 1]):
-            tied[m] = i
-            m += 1
-    return m
-
-
 @njit(cache=True, nogil=True, parallel=True)
 def distinct_in_order(p, order, out, inverse):
     """The rows of ``p`` taken in ``order``, each run of equal positions once, into
@@ -373,3 +355,59 @@ def rows_apart(bits, at, index, rows):
             rows[m] = i
             m += 1
     return m
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _key_less(keys, p, a, b):
+    """Row ``a`` before row ``b``: by the whole keys, then the positions."""
+    for w in range(3):
+        if keys[a, w] != keys[b, w]:
+            return keys[a, w] < keys[b, w]
+    for w in range(3):
+        if p[a, w] != p[b, w]:
+            return p[a, w] < p[b, w]
+    return False
+
+
+@njit(cache=True, nogil=True)
+def order_ties(order, ordered, keys, p):
+    """Each run of equal keys in ``ordered`` (the sorted Z-order windows of the rows
+    ``order``) put in the order of the rows' whole keys ``keys[row, 0..2]``, then their
+    positions ``p[row]``, stably (rows equal in all keep their order): a merge sort of
+    each run, in place in ``order``."""
+    n = order.shape[0]
+    tmp = np.empty(0, dtype=order.dtype)
+    a = 0
+    while a < n:
+        b = a + 1
+        while b < n and ordered[b] == ordered[a]:
+            b += 1
+        m = b - a
+        if m > 1:
+            if tmp.shape[0] < m:
+                tmp = np.empty(m, dtype=order.dtype)
+            width = 1
+            while width < m:  # bottom-up: runs of `width` merged in pairs, left first
+                for lo in range(a, b, 2 * width):
+                    mid = min(lo + width, b)
+                    hi = min(lo + 2 * width, b)
+                    i, j, o = lo, mid, 0
+                    while i < mid and j < hi:
+                        if _key_less(keys, p, order[j], order[i]):
+                            tmp[o] = order[j]
+                            j += 1
+                        else:
+                            tmp[o] = order[i]
+                            i += 1
+                        o += 1
+                    while i < mid:
+                        tmp[o] = order[i]
+                        i += 1
+                        o += 1
+                    while j < hi:
+                        tmp[o] = order[j]
+                        j += 1
+                        o += 1
+                    order[lo:hi] = tmp[:o]
+                width *= 2
+        a = b

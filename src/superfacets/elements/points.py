@@ -199,33 +199,18 @@ def distinct_points(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     ([[1.0, 1.0, 1.0], [1.5, 1.0, 1.0]], [1, 0, 1])
     """
     distinct_in_order = native.kernel("geometry.distinct_in_order")
-    runs_of_equal = native.kernel("geometry.runs_of_equal")
     sort_keys = native.kernel("geometry.sort_keys")
 
     p = np.ascontiguousarray(p, dtype=np.float64)
     keys, shared = _spatial_keys(p)
     window = _key_bits(keys, shared)
-    # a stable sort (on threads where compiled: numpy's argsort of 10M keys takes 2.7 s)
+    # a stable sort (on threads where compiled: numpy's argsort of 10M keys takes 2.7 s),
+    # then equal windows by the whole keys and the coordinates
     order, ordered = np.empty(p.shape[0], dtype=np.int64), np.empty_like(window)
     sort_keys(window, order, ordered)
     del window
-    run = np.empty(p.shape[0], dtype=np.int64)
-    tied = np.empty(p.shape[0], dtype=np.int64)
-    tied = tied[:runs_of_equal(ordered, run, tied)]
-    del ordered
-    if tied.size:  # equal in the window: by the next 64 bits
-        rows = order[tied]
-        nxt = _key_bits(keys[rows], shared + 64)
-        by = np.lexsort((nxt, run[tied]))
-        order[tied] = rows[by]
-        nxt, r = nxt[by], run[tied]
-        run2 = np.cumsum(np.r_[True, (nxt[1:] != nxt[:-1]) | (r[1:] != r[:-1])]) - 1
-        still = np.flatnonzero(np.bincount(run2)[run2] > 1)
-        if still.size:  # equal in 128 bits: by all the keys, then the coordinates
-            at = tied[still]
-            rows = order[at]
-            order[at] = rows[np.lexsort((p[rows, 2], p[rows, 1], p[rows, 0], keys[rows, 2],
-                                         keys[rows, 1], keys[rows, 0], run2[still]))]
+    native.kernel("geometry.order_ties")(order, ordered, keys, p)
+    del ordered, keys
     out = np.empty_like(p)
     inverse = np.empty(p.shape[0], dtype=np.int64)
     m = distinct_in_order(p, order, out, inverse)

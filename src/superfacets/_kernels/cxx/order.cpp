@@ -1,5 +1,5 @@
-// superfacets/_kernels/geometry.py: sort_keys and rows_apart, the point graph's first
-// steps (a cloud's Z-order, and the rows its distinct points give back exactly).
+// superfacets/_kernels/geometry.py: sort_keys, order_ties and rows_apart, the point
+// graph's first steps (a cloud's Z-order, and the rows its distinct points give back).
 #include "common.hpp"
 
 namespace sfk {
@@ -161,9 +161,41 @@ i64 rows_apart(py::handle bits_, py::handle at_, py::handle index_, py::handle r
     });
 }
 
+// geometry.order_ties: each run of equal keys in `ordered` (the sorted Z-order windows)
+// put in the order of the rows' whole keys (keys[row, 0..2]), then their positions,
+// stably: equal in all, in the order given. Threads take the runs of their range.
+void order_ties(py::handle order_, py::handle ordered_, py::handle keys_, py::handle p_) {
+    Out<i64> order(order_, "order");
+    In<std::uint64_t> ordered(ordered_, "ordered"), keys(keys_, "keys");
+    In<double> p(p_, "p");
+    const i64 n = order.n;
+    if (ordered.n != n || keys.cols != 3 || p.cols != 3 || keys.n != p.n)
+        throw Mismatch("argument keys");
+    py::gil_scoped_release nogil;
+    auto less = [&](i64 a, i64 b) {
+        for (int w = 0; w < 3; ++w)
+            if (keys(a, w) != keys(b, w)) return keys(a, w) < keys(b, w);
+        for (int w = 0; w < 3; ++w)
+            if (p(a, w) != p(b, w)) return p(a, w) < p(b, w);
+        return false;
+    };
+    parallel_for(n, [&](i64 lo, i64 hi) {
+        // the runs that start in [lo, hi)
+        i64 a = lo;
+        while (a > 0 && a < hi && ordered[a] == ordered[a - 1]) ++a;
+        while (a < hi) {
+            i64 b = a + 1;
+            while (b < n && ordered[b] == ordered[a]) ++b;
+            if (b - a > 1) std::stable_sort(order.p + a, order.p + b, less);
+            a = b;
+        }
+    });
+}
+
 void bind_order(py::module_& m) {
     m.def("sort_keys", &sort_keys);
     m.def("rows_apart", &rows_apart);
+    m.def("order_ties", &order_ties);
 }
 
 }  // namespace sfk

@@ -188,20 +188,6 @@ void float_morton_keys(py::handle bits_, py::handle keys_) {
     });
 }
 
-i64 runs_of_equal(py::handle w_, py::handle run_, py::handle tied_) {
-    In<std::uint64_t> w(w_, "w");
-    Out<i64> run(run_, "run"), tied(tied_, "tied");
-    py::gil_scoped_release nogil;
-    const i64 n = w.n;
-    i64 r = -1, m = 0;
-    for (i64 i = 0; i < n; ++i) {
-        if (i == 0 || w[i] != w[i - 1]) ++r;
-        run[i] = r;
-        if ((i > 0 && w[i] == w[i - 1]) || (i + 1 < n && w[i] == w[i + 1])) tied[m++] = i;
-    }
-    return m;
-}
-
 i64 distinct_in_order(py::handle p_, py::handle order_, py::handle out_, py::handle inverse_) {
     In<double> p(p_, "p");
     In<i64> order(order_, "order");
@@ -672,7 +658,6 @@ void label_scatter(py::handle labels_, py::handle weights_, py::handle positions
 
 void bind_points(py::module_& m) {
     m.def("float_morton_keys", &float_morton_keys);
-    m.def("runs_of_equal", &runs_of_equal);
     m.def("distinct_in_order", &distinct_in_order);
     m.def("pca_normals", &pca_normals);
     m.def("pca_linearity", &pca_linearity);
