@@ -53,10 +53,11 @@ needs_cxx = pytest.mark.skipif(not native.available(),
 
 
 #: The compiled kernels of the point graph's build (the others serve faces and points)
-POINT_KERNELS = {"knn_csr", "pca_normals", "pca_linearity", "propagate_signs", "turn_outwards",
-                 "float_morton_keys", "distinct_in_order", "order_ties", "point_terms_csr",
-                 "point_terms", "neighbour_mean", "crossing_pairs", "label_sums", "label_scatter",
-                 "tree_nodes", "nearest_in_tree", "sort_keys", "rows_apart"}
+POINT_KERNELS = {"knn_csr", "pca_normals", "pca_linearity", "propagate_signs",
+                 "turn_outwards", "float_morton_keys", "distinct_in_order", "order_ties",
+                 "point_terms_csr", "point_terms", "combine_weights", "neighbour_mean",
+                 "crossing_pairs", "label_sums", "label_scatter", "tree_nodes",
+                 "nearest_in_tree", "sort_keys", "rows_apart"}
 #: Those of the vertex graph and of the exact assignment (the default on vertices)
 VERTEX_KERNELS = {"vertex_cells", "mesh_edges", "classify_exact", "reclassify_exact"}
 

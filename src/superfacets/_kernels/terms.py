@@ -50,6 +50,17 @@ def point_terms_csr(positions, normals, indptr, indices, r0, r1, geo, cos, conca
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
+def combine_weights(geo, theta, concave, eta_convex, alpha, diagonal, out):
+    """``out = (geo + alpha * ang) / diagonal`` with ``ang = eta * geo * theta / pi``
+    (``eta`` 1 where ``concave``, else ``eta_convex``), as numpy evaluates the same
+    expression over the arrays, the float64 value rounded to ``out``'s dtype."""
+    for u in range(geo.shape[0]):
+        eta = 1.0 if concave[u] else eta_convex
+        ang = eta * geo[u] * theta[u] / np.pi
+        out[u] = (geo[u] + alpha * ang) / diagonal
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
 def neighbour_mean(indptr, indices, x, out):
     """``out[i] = ((x_i + above) + below) / (1 + degree)``: ``above`` the sum of ``x_j``
     over the neighbours ``j > i``, ``below`` over ``j < i``, each added in ascending

@@ -337,6 +337,7 @@ def csr_point_weights(graph: ElementGraph, *, alpha: float = _PAPER_ALPHA,
     True
     """
     point_terms_csr = native.kernel("terms.point_terms_csr")
+    combine_weights = native.kernel("terms.combine_weights")
     from .._runtime.threads import run_ranges, split
 
     g = graph
@@ -355,9 +356,10 @@ def csr_point_weights(graph: ElementGraph, *, alpha: float = _PAPER_ALPHA,
             geo, cos = np.empty(x1 - x0), np.empty(x1 - x0)
             concave = np.empty(x1 - x0, dtype=bool)
             point_terms_csr(pos, nor, indptr, indices, r0, r1, geo, cos, concave)
-            eta = np.where(concave, 1.0, eta_convex)
-            ang = eta * geo * np.arccos(cos) / np.pi
-            out[x0:x1] = (geo + alpha * ang) / g.diagonal
+            theta = np.arccos(cos, out=cos)
+            # (geo + alpha * eta * geo * theta / pi) / d in one pass, as numpy's would give
+            combine_weights(geo, theta, concave, float(eta_convex), float(alpha),
+                            float(g.diagonal), out[x0:x1])
 
     run_ranges(blocks, split(cuts.shape[0] - 1, min_per_thread=1))
     return out

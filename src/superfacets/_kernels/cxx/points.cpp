@@ -525,6 +525,37 @@ void point_terms_csr(py::handle positions_, py::handle normals_, py::handle indp
         }
 }
 
+// terms.combine_weights: out = (geo + alpha * ang) / diagonal, ang = eta * geo * theta / pi
+// (eta 1 where concave, else eta_convex), the float64 value rounded to out's dtype.
+template <class T>
+void combine_into(const In<double>& geo, const In<double>& theta, const In<bool>& concave,
+                  double eta_convex, double alpha, double diagonal, T* out) {
+    constexpr double PI = 3.141592653589793;
+    for (i64 u = 0; u < geo.n; ++u) {
+        const double eta = concave[u] ? 1.0 : eta_convex;
+        const double ang = eta * geo[u] * theta[u] / PI;
+        out[u] = static_cast<T>((geo[u] + alpha * ang) / diagonal);
+    }
+}
+
+void combine_weights(py::handle geo_, py::handle theta_, py::handle concave_, double eta_convex,
+                     double alpha, double diagonal, py::handle out_) {
+    In<double> geo(geo_, "geo"), theta(theta_, "theta");
+    In<bool> concave(concave_, "concave");
+    if (theta.n != geo.n || concave.n != geo.n) throw Mismatch("argument theta");
+    if (matches<float>(out_)) {
+        Out<float> out(out_, "out");
+        if (out.n != geo.n) throw Mismatch("argument out");
+        py::gil_scoped_release nogil;
+        combine_into(geo, theta, concave, eta_convex, alpha, diagonal, out.p);
+    } else {
+        Out<double> out(out_, "out");
+        if (out.n != geo.n) throw Mismatch("argument out");
+        py::gil_scoped_release nogil;
+        combine_into(geo, theta, concave, eta_convex, alpha, diagonal, out.p);
+    }
+}
+
 void point_terms(py::handle positions_, py::handle normals_, py::handle pairs_, i64 lo, i64 hi,
                  py::handle geo_, py::handle cos_, py::handle concave_) {
     In<double> pos(positions_, "positions"), nor(normals_, "normals");
@@ -665,6 +696,7 @@ void bind_points(py::module_& m) {
     m.def("propagate_signs", &propagate_signs);
     m.def("turn_outwards", &turn_outwards);
     m.def("point_terms_csr", &point_terms_csr);
+    m.def("combine_weights", &combine_weights);
     m.def("point_terms", &point_terms);
     m.def("neighbour_mean", &neighbour_mean);
     m.def("crossing_pairs", &crossing_pairs);
