@@ -302,6 +302,34 @@ def test_rows_apart_match_numba_and_stop_at_their_room(monkeypatch, index_dtype)
 
 
 @needs_cxx
+@pytest.mark.parametrize("shared", [False, True])
+def test_coarse_pairs_on_threads_give_numba_pairs(monkeypatch, shared):
+    """The coarse adjacency's weights and summed lengths on several threads (each thread
+    the pairs of a range of clusters, every adjacency read in order): the numba kernel's
+    bytes, lengths given per pair or as shares, float32 weights, large enough to split."""
+    from superfacets.elements.points import point_graph
+    from superfacets.inputs.cloud import PointCloud
+
+    rng = np.random.default_rng(4)
+    g = point_graph(PointCloud(rng.random((150_000, 3)) * [1.0, 1.0, 0.05])).graph
+    n = g.n_elements
+    cluster = (np.arange(n) // 6).astype(np.int32)  # runs of the Z-order: compact clusters
+    cluster[rng.random(n) < 0.05] = rng.integers(0, n // 6, 1)[0]  # and a scattered one
+    n_c = int(cluster.max()) + 1
+    dist = rng.random(n) * 0.01
+    csr_w = rng.random(g.indices.shape[0]).astype(np.float32)
+    n_pairs = int((g.indices > np.repeat(np.arange(n), np.diff(g.indptr))).sum())
+    border = (np.empty(0), rng.random(n)) if shared else (rng.random(n_pairs), np.empty(0))
+    args = (g.indptr, g.indices, cluster, dist, csr_w, *border, n_c)
+    expected = native.reference("voronoi.coarse_pairs")(*args)
+    with monkeypatch.context() as m:  # (numba, above, compiled with its own count)
+        m.setenv("NUMBA_NUM_THREADS", "3")
+        got = native.kernel("voronoi.coarse_pairs")(*args)
+    assert all(a.tobytes() == b.tobytes() for a, b in zip(got, expected))
+    assert got[0].shape[0] > n_c  # many pairs, each cluster's
+
+
+@needs_cxx
 def test_center_update_on_threads_gives_numba_centers():
     # enough elements for a thread per range; quantized positions: many equal distances,
     # so the rule on ties (old center, else lowest index) decides many centers

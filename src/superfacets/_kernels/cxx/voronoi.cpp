@@ -87,35 +87,49 @@ py::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In
                 out(first[c] + u, 0) = static_cast<i32>(c);
                 out(first[c] + u, 1) = hi[start[c] + u];
             }
-        i64 t = 0;
-        for (i64 i = 0; i < n; ++i) {
-            i64 a = cluster[i];
-            for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
-                i64 j = indices[x];
-                if (j > i) {
-                    i64 b = cluster[j];
-                    if (a != b) {
-                        i64 lo = mn(a, b), h = mx(a, b);
-                        i64 s = start[lo];
-                        i64 left = 0, right = first[lo + 1] - first[lo];
-                        while (left < right) {
-                            i64 mid = (left + right) >> 1;
-                            if (hi[s + mid] < h) left = mid + 1;
-                            else right = mid;
+        // thread u the pairs of the clusters c0(u) .. c0(u + 1) - 1 (lo), each reading
+        // every adjacency in order: a pair's lengths added in the order of one pass
+        // (t: the adjacency's number, lengths' index)
+        const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / 65536));
+        std::vector<i64> c0(T + 1);
+        for (i64 u = 0; u <= T; ++u) c0[u] = n_c * u / T;
+        std::vector<std::thread> pool;
+        auto part = [&](i64 u) {
+            const i64 lo_c = c0[u], hi_c = c0[u + 1];
+            i64 t = 0;
+            for (i64 i = 0; i < n; ++i) {
+                i64 a = cluster[i];
+                for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
+                    i64 j = indices[x];
+                    if (j > i) {
+                        i64 b = cluster[j];
+                        i64 lo = mn(a, b);
+                        if (a != b && lo >= lo_c && lo < hi_c) {
+                            i64 h = mx(a, b);
+                            i64 s = start[lo];
+                            i64 left = 0, right = first[lo + 1] - first[lo];
+                            while (left < right) {
+                                i64 mid = (left + right) >> 1;
+                                if (hi[s + mid] < h) left = mid + 1;
+                                else right = mid;
+                            }
+                            i64 g = first[lo] + left;
+                            double v = dist[i] + static_cast<double>(csr_w[x]) + dist[j];
+                            if (v < w_c[g]) w_c[g] = v;
+                            if (n_shares) {
+                                S sum = shares[i] + shares[j];  // in the shares' own precision
+                                len_c[g] += 0.5 * static_cast<double>(sum);
+                            } else
+                                len_c[g] += lengths[t];
                         }
-                        i64 g = first[lo] + left;
-                        double v = dist[i] + static_cast<double>(csr_w[x]) + dist[j];
-                        if (v < w_c[g]) w_c[g] = v;
-                        if (n_shares) {
-                            S sum = shares[i] + shares[j];  // in the shares' own precision
-                            len_c[g] += 0.5 * static_cast<double>(sum);
-                        } else
-                            len_c[g] += lengths[t];
+                        ++t;
                     }
-                    ++t;
                 }
             }
-        }
+        };
+        for (i64 u = 1; u < T; ++u) pool.emplace_back(part, u);
+        part(0);
+        for (auto& th : pool) th.join();
     }
     return py::make_tuple(out_a, w_a, len_a);
 }
