@@ -330,6 +330,32 @@ def test_coarse_pairs_on_threads_give_numba_pairs(monkeypatch, shared):
 
 
 @needs_cxx
+@pytest.mark.parametrize("threads", ["1", "2", "3"])
+def test_pieces_of_labels_on_threads_give_numba_numbers(monkeypatch, threads):
+    """Each label's connected pieces found by a union-find on threads are numbered as one
+    depth-first pass numbers them (in the order of their lowest element): labels in
+    blobs broken by scattered ones (many pieces, one-element pieces), and one label."""
+    from superfacets.elements.points import point_graph
+    from superfacets.inputs.cloud import PointCloud
+
+    rng = np.random.default_rng(6)
+    g = point_graph(PointCloud(rng.random((120_000, 3)) * [1.0, 1.0, 0.02])).graph
+    n = g.n_elements
+    blobs = (np.arange(n) // 500).astype(np.int64) % 37  # runs of the Z-order
+    noisy = np.where(rng.random(n) < 0.2, rng.integers(0, 37, n), blobs)
+    pieces = []
+    for labels in (noisy, np.zeros(n, dtype=np.int64)):
+        expected = native.reference("adjacency.same_label_components")(g.indptr, g.indices,
+                                                                        labels)
+        with monkeypatch.context() as m:
+            m.setenv("NUMBA_NUM_THREADS", threads)
+            got = native.kernel("adjacency.same_label_components")(g.indptr, g.indices, labels)
+        assert got.dtype == np.int64 and np.array_equal(got, expected)
+        pieces.append(int(got.max()) + 1)
+    assert pieces[0] > 5_000 and pieces[1] == 1
+
+
+@needs_cxx
 def test_center_update_on_threads_gives_numba_centers():
     # enough elements for a thread per range; quantized positions: many equal distances,
     # so the rule on ties (old center, else lowest index) decides many centers

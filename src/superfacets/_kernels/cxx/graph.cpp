@@ -287,36 +287,90 @@ py::tuple csr_of_face_pairs(py::handle lo_, py::handle hi_, py::handle ka_, py::
     return py::make_tuple(indptr_a, keep_a);
 }
 
+// adjacency.same_label_components, on threads: a union-find over the adjacencies within
+// a label (each listed in both rows of the CSR; j > i taken), a root linked only under
+// a smaller one, so each piece's root is its lowest element; the pieces then numbered
+// in the order of their roots: the depth-first numbering of one pass, bit for bit.
+namespace {
+
+inline i64 uf_find(i64* parent, i64 x) {  // path halving; a parent only moves up
+    while (true) {
+        i64 p = __atomic_load_n(parent + x, __ATOMIC_RELAXED);
+        if (p == x) return x;
+        i64 g = __atomic_load_n(parent + p, __ATOMIC_RELAXED);
+        if (g != p) __atomic_store_n(parent + x, g, __ATOMIC_RELAXED);
+        x = g;
+    }
+}
+
+inline void uf_union(i64* parent, i64 a, i64 b) {
+    while (true) {
+        a = uf_find(parent, a);
+        b = uf_find(parent, b);
+        if (a == b) return;
+        if (a > b) std::swap(a, b);  // b, the larger root, goes under a
+        i64 expected = b;
+        if (__atomic_compare_exchange_n(parent + b, &expected, a, false, __ATOMIC_ACQ_REL,
+                                        __ATOMIC_RELAXED))
+            return;
+    }
+}
+
+}  // namespace
+
 py::array_t<i64> same_label_components(py::handle indptr_, py::handle indices_,
                                        py::handle labels_) {
     In<i64> indptr(indptr_, "indptr"), labels(labels_, "labels");
     In<i32> indices(indices_, "indices");
     const i64 n = labels.n;
+    if (indptr.n != n + 1) throw Mismatch("argument indptr");
     Out<i64> comp;
     auto comp_a = fresh(n, comp);
     {
         py::gil_scoped_release nogil;
-        std::fill(comp.p, comp.p + n, -1);
-        std::vector<i64> stack(n);
-        i64 c = 0;
-        for (i64 s = 0; s < n; ++s) {
-            if (comp[s] >= 0) continue;
-            i64 lab = labels[s];
-            comp[s] = c;
-            stack[0] = s;
-            i64 top = 1;
-            while (top > 0) {
-                i64 f = stack[--top];
-                for (i64 e = indptr[f]; e < indptr[f + 1]; ++e) {
-                    i64 g = indices[e];
-                    if (comp[g] < 0 && labels[g] == lab) {
-                        comp[g] = c;
-                        stack[top++] = g;
-                    }
+        std::vector<i64> root(n);
+        i64* parent = root.data();
+        parallel_for(n, [&](i64 lo, i64 hi) {
+            for (i64 i = lo; i < hi; ++i) parent[i] = i;
+        });
+        parallel_for(n, [&](i64 lo, i64 hi) {
+            for (i64 i = lo; i < hi; ++i) {
+                const i64 lab = labels[i];
+                for (i64 e = indptr[i]; e < indptr[i + 1]; ++e) {
+                    const i64 j = indices[e];
+                    if (j > i && labels[j] == lab) uf_union(parent, i, j);
                 }
             }
-            ++c;
-        }
+        });
+        parallel_for(n, [&](i64 lo, i64 hi) {  // every element straight to its root
+            for (i64 i = lo; i < hi; ++i) parent[i] = uf_find(parent, i);
+        });
+        // the roots numbered in order: a count per range of elements, then each range's
+        // roots from its first number (comp holds the roots' numbers first)
+        const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / 4096));
+        std::vector<i64> first(T + 1, 0);
+        auto range = [&](i64 t) { return n * t / T; };
+        auto on_threads = [&](auto f) {
+            std::vector<std::thread> pool;
+            for (i64 t = 1; t < T; ++t) pool.emplace_back(f, t);
+            f(0);
+            for (auto& th : pool) th.join();
+        };
+        on_threads([&](i64 t) {
+            i64 m = 0;
+            for (i64 i = range(t); i < range(t + 1); ++i) m += parent[i] == i;
+            first[t + 1] = m;
+        });
+        for (i64 t = 0; t < T; ++t) first[t + 1] += first[t];
+        on_threads([&](i64 t) {
+            i64 c = first[t];
+            for (i64 i = range(t); i < range(t + 1); ++i)
+                if (parent[i] == i) comp[i] = c++;
+        });
+        parallel_for(n, [&](i64 lo, i64 hi) {
+            for (i64 i = lo; i < hi; ++i)
+                if (parent[i] != i) comp[i] = comp[parent[i]];
+        });
     }
     return comp_a;
 }
