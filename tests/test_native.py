@@ -202,6 +202,7 @@ def test_runs_on_points_give_numba_results_call_by_call(shadowed):
             (apart, 30, None, {}),  # two pieces
             (p, 60, None, {"window": 1.0}),  # orphans: the exact count's merges
             (p, 60, None, {"roughness": 1.0}),  # content-sensitive: neighbour averages
+            (p, 40, None, {"neighbor_radius": 0.01}),  # neighbours masked by a radius
             (p[:8000], 30, np.tile([0.0, 0.0, 1.0], (8000, 1)), {})]  # normals given
     for pts, k, normals, params in runs:
         r = superfacets.segment(as_cloud(pts, normals), k, n_threads=1, **params)

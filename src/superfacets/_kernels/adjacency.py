@@ -315,19 +315,20 @@ def same_label_components(indptr, indices, labels):
 @njit(cache=True, error_model="numpy", parallel=True)
 def knn_csr(nbr, keep, indptr, rows, more, more_keep):
     """The symmetric graph of k-nearest-neighbour lists: ``i ~ j`` when ``j`` is in
-    ``nbr[i]`` (where ``keep``) or ``i`` in ``nbr[j]``, and likewise for the longer
-    lists ``more[t]`` (where ``more_keep``) of the distinct points ``rows[t]`` (none: ``rows``
-    of length 0). Fills ``indptr`` (n + 1); returns a buffer whose first ``indptr[n]``
-    entries are ``indices`` (int32, ascending per row; the rest is undefined: the caller
-    shrinks the buffer to them, in place where it can, once it has let the lists go): the
-    layout :func:`csr_of_pairs` gives from the sorted distinct pairs (whose
-    pairs and dual-edge map :func:`number_pairs` numbers from it). A point listed as
-    its own neighbour is no edge."""
+    ``nbr[i]`` (where ``keep``; everywhere when ``keep`` has no rows) or ``i`` in
+    ``nbr[j]``, and likewise for the longer lists ``more[t]`` (where ``more_keep``) of the
+    distinct points ``rows[t]`` (none: ``rows`` of length 0). Fills ``indptr`` (n + 1);
+    returns a buffer whose first ``indptr[n]`` entries are ``indices`` (int32, ascending
+    per row; the rest is undefined: the caller shrinks the buffer to them, in place where
+    it can, once it has let the lists go): the layout :func:`csr_of_pairs` gives from the
+    sorted distinct pairs (whose pairs and dual-edge map :func:`number_pairs` numbers
+    from it). A point listed as its own neighbour is no edge."""
     n, k = nbr.shape
+    all_kept = keep.shape[0] == 0
     count = np.zeros(n + 1, dtype=np.int64)
     for i in range(n):
         for c in range(k):
-            if keep[i, c] and nbr[i, c] != i:
+            if (all_kept or keep[i, c]) and nbr[i, c] != i:
                 count[i + 1] += 1
                 count[nbr[i, c] + 1] += 1
     for t in range(rows.shape[0]):
@@ -341,7 +342,7 @@ def knn_csr(nbr, keep, indptr, rows, more, more_keep):
     fill = count[:n].copy()
     for i in range(n):
         for c in range(k):
-            if keep[i, c] and nbr[i, c] != i:
+            if (all_kept or keep[i, c]) and nbr[i, c] != i:
                 j = nbr[i, c]
                 raw[fill[i]] = j
                 fill[i] += 1

@@ -350,11 +350,11 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
     del tree  # (its nodes, before the layout's peak)
 
     cand = nbr[:, 1:]  # read in place by the kernel (a copy costs more than it saves)
-    if keep is None:
-        keep = np.ones(cand.shape, dtype=bool)
     pair_dtype = np.int32
     if 2 * (cand.size + more.size) < 2**31 - 1:  # the kernel's int32 layout
         knn_csr = native.kernel("adjacency.knn_csr")
+        if keep is None:  # every neighbour listed: no mask (10 bytes per point at the peak)
+            keep = np.zeros((0, cand.shape[1]), dtype=bool)
 
         indptr = np.empty(n + 1, dtype=np.int64)
         # i ~ j if either lists the other
@@ -362,6 +362,8 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
         del more, more_keep, nbr, cand, keep
         indices = _shrunk(indices, int(indptr[n]))  # (the lists let go first)
     else:  # the distinct pairs, sorted
+        if keep is None:
+            keep = np.ones(cand.shape, dtype=bool)
         src = np.concatenate([np.repeat(np.arange(n), k).reshape(n, k)[keep],
                               np.repeat(wide, more.shape[1]).reshape(more.shape)[more_keep]])
         dst = np.concatenate([cand[keep], more[more_keep]]).astype(np.int64)

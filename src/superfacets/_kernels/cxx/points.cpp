@@ -295,7 +295,9 @@ py::array_t<i32> knn_csr(py::handle nbr_, py::handle keep_, py::handle indptr_,
     Out<i64> indptr(indptr_, "indptr");
     In<i64> rows(rows_, "rows");
     const i64 n = nbr.n, k = nbr.k, mk = more.k;
-    if (keep.cols != k || (rows.n && more_keep.cols != mk)) throw Mismatch("argument keep");
+    const bool all_kept = keep.n == 0;  // no rows: every entry listed
+    if ((!all_kept && (keep.cols != k || keep.n != n)) || (rows.n && more_keep.cols != mk))
+        throw Mismatch("argument keep");
     if (n >= (i64(1) << 31)) throw Mismatch("argument nbr");
     // Every listed pair in both rows. Thread t owns the rows lo(t) .. lo(t + 1): it counts
     // and writes their own lists, and reads every list for the entries that land in its
@@ -311,7 +313,7 @@ py::array_t<i32> knn_csr(py::handle nbr_, py::handle keep_, py::handle indptr_,
     };
     std::vector<i32> own(n), rev(n);
     std::vector<i64> start(n + 1, 0);
-    auto listed = [&](i64 i, i64 c) { return keep(i, c) && nbr(i, c) != i; };
+    auto listed = [&](i64 i, i64 c) { return (all_kept || keep(i, c)) && nbr(i, c) != i; };
     auto listed_more = [&](i64 t, i64 c) { return more_keep(t, c) && more(t, c) != rows[t]; };
     {
         py::gil_scoped_release nogil;
