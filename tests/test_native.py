@@ -357,6 +357,31 @@ def test_pieces_of_labels_on_threads_give_numba_numbers(monkeypatch, threads):
 
 
 @needs_cxx
+@pytest.mark.parametrize("shared", [False, True])
+def test_stray_borders_on_threads_give_numba_entries(monkeypatch, shared):
+    """The stray pieces' border entries gathered on threads (each a range of rows, counted
+    then written at its places): numba's arrays in numba's order, lengths per pair or as
+    shares."""
+    from superfacets.elements.points import point_graph
+    from superfacets.inputs.cloud import PointCloud
+
+    rng = np.random.default_rng(9)
+    g = point_graph(PointCloud(rng.random((100_000, 3)) * [1.0, 1.0, 0.02])).graph
+    n = g.n_elements
+    piece = np.where(rng.random(n) < 0.1, rng.integers(0, 3000, n), np.arange(n) // 400)
+    is_main = rng.random(int(piece.max()) + 1) < 0.6
+    n_pairs = int((g.indices > np.repeat(np.arange(n), np.diff(g.indptr))).sum())
+    border = (np.empty(0), rng.random(n)) if shared else (rng.random(n_pairs), np.empty(0))
+    args = (g.indptr, g.indices, piece, is_main, *border)
+    expected = native.reference("connectivity.stray_borders")(*args)
+    with monkeypatch.context() as m:
+        m.setenv("NUMBA_NUM_THREADS", "3")
+        got = native.kernel("connectivity.stray_borders")(*args)
+    assert all(x.tobytes() == y.tobytes() for x, y in zip(got, expected))
+    assert got[0].shape[0] > 10_000
+
+
+@needs_cxx
 def test_center_update_on_threads_gives_numba_centers():
     # enough elements for a thread per range; quantized positions: many equal distances,
     # so the rule on ties (old center, else lowest index) decides many centers

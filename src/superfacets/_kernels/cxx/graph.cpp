@@ -624,6 +624,9 @@ py::array_t<i64> merge_strays(py::handle strays_, py::handle nb_indptr_, py::han
     return root_a;
 }
 
+// connectivity.stray_borders, on threads: each thread a range of rows, counted first
+// (its entries of either side and its adjacencies, for the lengths' numbers), then
+// written at its places: the entries in the order of one pass.
 py::tuple stray_borders(py::handle indptr_, py::handle indices_, py::handle piece_,
                         py::handle is_main_, py::handle lengths_, py::handle shares_) {
     In<i64> indptr(indptr_, "indptr"), piece(piece_, "piece");
@@ -631,43 +634,70 @@ py::tuple stray_borders(py::handle indptr_, py::handle indices_, py::handle piec
     In<bool> is_main(is_main_, "is_main");
     In<double> lengths(lengths_, "lengths"), shares(shares_, "shares");
     const i64 n = indptr.n - 1;
-    i64 m = 0;
+    const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / 4096));
+    auto row = [&](i64 t) { return n * t / T; };
+    auto on_threads = [&](auto f) {
+        std::vector<std::thread> pool;
+        for (i64 t = 1; t < T; ++t) pool.emplace_back(f, t);
+        f(0);
+        for (auto& th : pool) th.join();
+    };
+    // per thread: entries with a stray row on side 0 and on side 1, adjacencies before
+    std::vector<i64> side0(T + 1, 0), side1(T + 1, 0), pairs(T + 1, 0);
     {
         py::gil_scoped_release nogil;
-        for (i64 i = 0; i < n; ++i)
-            for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
-                i64 j = indices[x];
-                if (j > i) {
-                    i64 p = piece[i], q = piece[j];
-                    if (p != q) m += (!is_main[p]) + (!is_main[q]);
+        on_threads([&](i64 t) {
+            i64 s0 = 0, s1 = 0, np_ = 0;
+            for (i64 i = row(t); i < row(t + 1); ++i)
+                for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
+                    i64 j = indices[x];
+                    if (j > i) {
+                        ++np_;
+                        i64 p = piece[i], q = piece[j];
+                        if (p != q) {
+                            s0 += !is_main[p];
+                            s1 += !is_main[q];
+                        }
+                    }
                 }
-            }
+            side0[t + 1] = s0;
+            side1[t + 1] = s1;
+            pairs[t + 1] = np_;
+        });
+        for (i64 t = 0; t < T; ++t) {
+            side0[t + 1] += side0[t];
+            side1[t + 1] += side1[t];
+            pairs[t + 1] += pairs[t];
+        }
     }
+    const i64 m = side0[T] + side1[T];
     Out<i64> a, b;
     Out<double> w;
     auto a_a = fresh(m, a), b_a = fresh(m, b);
     auto w_a = fresh(m, w);
     {
         py::gil_scoped_release nogil;
-        i64 u = 0;
-        for (int side = 0; side < 2; ++side) {
-            i64 t = 0;
-            for (i64 i = 0; i < n; ++i)
-                for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
-                    i64 j = indices[x];
-                    if (j > i) {
-                        i64 p = side == 0 ? piece[i] : piece[j];
-                        i64 q = side == 0 ? piece[j] : piece[i];
-                        if (p != q && !is_main[p]) {
-                            a[u] = p;
-                            b[u] = q;
-                            w[u] = shares.n ? 0.5 * (shares[i] + shares[j]) : lengths[t];
-                            ++u;
+        on_threads([&](i64 t) {
+            for (int side = 0; side < 2; ++side) {
+                i64 u = side == 0 ? side0[t] : side0[T] + side1[t];
+                i64 pt = pairs[t];
+                for (i64 i = row(t); i < row(t + 1); ++i)
+                    for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
+                        i64 j = indices[x];
+                        if (j > i) {
+                            i64 p = side == 0 ? piece[i] : piece[j];
+                            i64 q = side == 0 ? piece[j] : piece[i];
+                            if (p != q && !is_main[p]) {
+                                a[u] = p;
+                                b[u] = q;
+                                w[u] = shares.n ? 0.5 * (shares[i] + shares[j]) : lengths[pt];
+                                ++u;
+                            }
+                            ++pt;
                         }
-                        ++t;
                     }
-                }
-        }
+            }
+        });
     }
     return py::make_tuple(a_a, b_a, w_a);
 }
