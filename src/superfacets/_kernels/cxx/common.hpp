@@ -182,6 +182,15 @@ void parallel_for(i64 n, F f) {
     for (auto& th : pool) th.join();
 }
 
+// f(t) for t = 0 .. n_threads - 1: t = 0 on the calling thread, each other on its own.
+template <class F>
+void on_threads(i64 n_threads, F f) {
+    std::vector<std::thread> pool;
+    for (i64 t = 1; t < n_threads; ++t) pool.emplace_back(f, t);
+    f(0);
+    for (auto& th : pool) th.join();
+}
+
 // The binary min-heap of superfacets/_kernels/heap.py ((float key, int value), lazy
 // deletion by the caller), each key beside its value (one cache line per visit instead
 // of two): the same comparisons and moves, so the same pops in the same order.

@@ -357,12 +357,7 @@ void update_centers(py::handle label_, i64 k, py::handle areas_, py::handle cent
             cnt[s] += 1;
         }
     };
-    {
-        std::vector<std::thread> pool;
-        for (i64 w = 1; w < nt; ++w) pool.emplace_back(add, w);
-        add(0);
-        for (auto& th : pool) th.join();
-    }
+    on_threads(nt, add);
     for (i64 s = 0; s < k; ++s) {
         if (wsum[s] > 0.0) {
             for (int t = 0; t < 3; ++t) sums[3 * s + t] /= wsum[s];
@@ -406,10 +401,7 @@ void update_centers(py::handle label_, i64 k, py::handle areas_, py::handle cent
             }
         }
     };
-    std::vector<std::thread> pool;
-    for (i64 w = 1; w < nt; ++w) pool.emplace_back(nearest, w);
-    nearest(0);
-    for (auto& th : pool) th.join();
+    on_threads(nt, nearest);
     for (i64 w = 1; w < nt; ++w)
         for (i64 s = 0; s < k; ++s)
             if (picks[w - 1][s] >= 0 && bests[w - 1][s] < best[s]) {

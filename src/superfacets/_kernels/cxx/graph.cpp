@@ -350,19 +350,13 @@ py::array_t<i64> same_label_components(py::handle indptr_, py::handle indices_,
         const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / 4096));
         std::vector<i64> first(T + 1, 0);
         auto range = [&](i64 t) { return n * t / T; };
-        auto on_threads = [&](auto f) {
-            std::vector<std::thread> pool;
-            for (i64 t = 1; t < T; ++t) pool.emplace_back(f, t);
-            f(0);
-            for (auto& th : pool) th.join();
-        };
-        on_threads([&](i64 t) {
+        on_threads(T, [&](i64 t) {
             i64 m = 0;
             for (i64 i = range(t); i < range(t + 1); ++i) m += parent[i] == i;
             first[t + 1] = m;
         });
         for (i64 t = 0; t < T; ++t) first[t + 1] += first[t];
-        on_threads([&](i64 t) {
+        on_threads(T, [&](i64 t) {
             i64 c = first[t];
             for (i64 i = range(t); i < range(t + 1); ++i)
                 if (parent[i] == i) comp[i] = c++;
@@ -636,17 +630,11 @@ py::tuple stray_borders(py::handle indptr_, py::handle indices_, py::handle piec
     const i64 n = indptr.n - 1;
     const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / 4096));
     auto row = [&](i64 t) { return n * t / T; };
-    auto on_threads = [&](auto f) {
-        std::vector<std::thread> pool;
-        for (i64 t = 1; t < T; ++t) pool.emplace_back(f, t);
-        f(0);
-        for (auto& th : pool) th.join();
-    };
     // per thread: entries with a stray row on side 0 and on side 1, adjacencies before
     std::vector<i64> side0(T + 1, 0), side1(T + 1, 0), pairs(T + 1, 0);
     {
         py::gil_scoped_release nogil;
-        on_threads([&](i64 t) {
+        on_threads(T, [&](i64 t) {
             i64 s0 = 0, s1 = 0, np_ = 0;
             for (i64 i = row(t); i < row(t + 1); ++i)
                 for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
@@ -677,7 +665,7 @@ py::tuple stray_borders(py::handle indptr_, py::handle indices_, py::handle piec
     auto w_a = fresh(m, w);
     {
         py::gil_scoped_release nogil;
-        on_threads([&](i64 t) {
+        on_threads(T, [&](i64 t) {
             for (int side = 0; side < 2; ++side) {
                 i64 u = side == 0 ? side0[t] : side0[T] + side1[t];
                 i64 pt = pairs[t];

@@ -73,14 +73,8 @@ void sort_keys(py::handle keys_, py::handle order_, py::handle sorted_) {
     std::vector<Pair> a(static_cast<size_t>(n)), b(static_cast<size_t>(n));
     std::vector<i64> cut(T + 1);
     for (i64 t = 0; t <= T; ++t) cut[t] = n * t / T;
-    auto on_threads = [&](auto f) {
-        std::vector<std::thread> pool;
-        for (i64 t = 1; t < T; ++t) pool.emplace_back(f, t);
-        f(0);
-        for (auto& th : pool) th.join();
-    };
     Pair *src = a.data(), *dst = b.data();
-    on_threads([&](i64 t) {  // each run sorted, left in src
+    on_threads(T, [&](i64 t) {  // each run sorted, left in src
         const i64 lo = cut[t], m = cut[t + 1] - lo;
         for (i64 i = lo; i < lo + m; ++i) src[i] = {keys[i], i};
         if (radix_sort(src + lo, dst + lo, m) != src + lo)
@@ -99,7 +93,7 @@ void sort_keys(py::handle keys_, py::handle order_, py::handle sorted_) {
             const Pair* x = src + lo;
             const Pair* y = src + mid;
             const i64 nx = mid - lo, ny = hi - mid, total = nx + ny;
-            on_threads([&](i64 t) {  // the stable merge of x and y, split at equal places
+            on_threads(T, [&](i64 t) {  // the stable merge of x and y, split at equal places
                 const i64 k0 = total * t / T, k1 = total * (t + 1) / T;
                 i64 i = corank(k0, x, nx, y, ny), j = k0 - i;
                 const i64 ie = corank(k1, x, nx, y, ny), je = k1 - ie;
@@ -135,8 +129,7 @@ i64 rows_apart(py::handle bits_, py::handle at_, py::handle index_, py::handle r
         const i64 n = bits.n, cap = rows.n;
         const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / 4096));
         std::vector<std::vector<i64>> found(T);
-        std::vector<std::thread> pool;
-        auto scan = [&](i64 t) {
+        on_threads(T, [&](i64 t) {
             auto& f = found[t];
             for (i64 i = n * t / T; i < n * (t + 1) / T; ++i) {
                 const i64 j = index[i];
@@ -146,10 +139,7 @@ i64 rows_apart(py::handle bits_, py::handle at_, py::handle index_, py::handle r
                     if (static_cast<i64>(f.size()) > cap) return;  // too many already
                 }
             }
-        };
-        for (i64 t = 1; t < T; ++t) pool.emplace_back(scan, t);
-        scan(0);
-        for (auto& th : pool) th.join();
+        });
         i64 m = 0;
         for (i64 t = 0; t < T; ++t) {
             for (i64 r : found[t]) {

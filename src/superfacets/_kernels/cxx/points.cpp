@@ -305,19 +305,13 @@ py::array_t<i32> knn_csr(py::handle nbr_, py::handle keep_, py::handle indptr_,
     // entries are then sorted and made distinct: the layout of one pass in order.
     const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / 4096));
     auto lo = [&](i64 t) { return n * t / T; };
-    auto on_threads = [&](auto f) {
-        std::vector<std::thread> pool;
-        for (i64 t = 1; t < T; ++t) pool.emplace_back(f, t);
-        f(0);
-        for (auto& th : pool) th.join();
-    };
     std::vector<i32> own(n), rev(n);
     std::vector<i64> start(n + 1, 0);
     auto listed = [&](i64 i, i64 c) { return (all_kept || keep(i, c)) && nbr(i, c) != i; };
     auto listed_more = [&](i64 t, i64 c) { return more_keep(t, c) && more(t, c) != rows[t]; };
     {
         py::gil_scoped_release nogil;
-        on_threads([&](i64 t) {
+        on_threads(T, [&](i64 t) {
             const i64 a = lo(t), b = lo(t + 1);
             for (i64 i = a; i < b; ++i) {
                 own[i] = 0;
@@ -348,7 +342,7 @@ py::array_t<i32> knn_csr(py::handle nbr_, py::handle keep_, py::handle indptr_,
     auto raw_a = fresh(start[n], raw);
     {
         py::gil_scoped_release nogil;
-        on_threads([&](i64 t) {
+        on_threads(T, [&](i64 t) {
             const i64 a = lo(t), b = lo(t + 1);
             for (i64 i = a; i < b; ++i) {  // own lists, then the longer ones (below)
                 i64 u = start[i];

@@ -93,8 +93,7 @@ py::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In
         const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / 65536));
         std::vector<i64> c0(T + 1);
         for (i64 u = 0; u <= T; ++u) c0[u] = n_c * u / T;
-        std::vector<std::thread> pool;
-        auto part = [&](i64 u) {
+        on_threads(T, [&](i64 u) {
             const i64 lo_c = c0[u], hi_c = c0[u + 1];
             i64 t = 0;
             for (i64 i = 0; i < n; ++i) {
@@ -126,10 +125,7 @@ py::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In
                     }
                 }
             }
-        };
-        for (i64 u = 1; u < T; ++u) pool.emplace_back(part, u);
-        part(0);
-        for (auto& th : pool) th.join();
+        });
     }
     return py::make_tuple(out_a, w_a, len_a);
 }
