@@ -63,9 +63,25 @@ VERTEX_KERNELS = {"vertex_cells", "mesh_edges", "classify_exact", "reclassify_ex
 
 
 #: Scratch arguments of the numba kernels that the compiled ones do not use (their heaps
-#: keep each key beside its value, in an array of their own): not compared.
+#: keep each key beside its value, in an array of their own; the exact assignment's
+#: search keeps a queue per block): not compared.
 SCRATCH = {"cleanup.band_distances": {10, 11}, "splitmerge.energies": {14, 15},
-           "splitmerge.split_candidates": {19, 20}, "splitmerge.merge_energies": {18, 19}}
+           "splitmerge.split_candidates": {19, 20}, "splitmerge.merge_energies": {18, 19},
+           "exact.classify_exact": {7, 8}, "exact.reclassify_exact": {7, 8}}
+
+def _roomy_queue(args):
+    """The exact assignment's arguments with a node pool numba's search cannot outgrow (the
+    run passes the compiled search, which keeps its own queues, a small one)."""
+    indices, dist = args[1], args[5]
+    cap = indices.shape[0] + 2 * dist.shape[0] + 1
+    args[7] = (np.empty(cap, args[7][0].dtype), np.empty(cap), np.empty(cap, np.int64),
+               args[7][3])
+    args[8] = np.empty(cap, args[8].dtype)
+    return args
+
+
+#: Arguments the numba kernel is given in place of the run's.
+FOR_REFERENCE = {"exact.classify_exact": _roomy_queue, "exact.reclassify_exact": _roomy_queue}
 
 #: Results of which only a part is defined: compared on that part. knn_csr returns a
 #: buffer whose first ``indptr[n]`` entries are the indices (``indptr``: argument 2).
@@ -101,6 +117,8 @@ def shadowed(monkeypatch):
 
         def both(*args, **kwargs):
             a2, k2 = [_copy(a) for a in args], {k: _copy(v) for k, v in kwargs.items()}
+            if path in FOR_REFERENCE:
+                a2 = FOR_REFERENCE[path](a2)
             expected = ref(*a2, **k2)
             got = fast(*args, **kwargs)
             calls[path] = calls.get(path, 0) + 1
@@ -510,3 +528,83 @@ def test_default_runs_load_no_numba():
         out = subprocess.run([sys.executable, "-m", "superfacets", "--version"], env=env,
                              capture_output=True, text=True, check=True).stdout
         assert said in out, out
+
+
+def _grid_csr(side: int, order: np.ndarray | None = None):
+    """A ``side x side`` 4-neighbour grid and a second, smaller one beside it, as CSR (the
+    elements numbered row by row, or in ``order``), with weights in eighths: path sums are
+    exact, so equal distances are real ties."""
+    idx = np.arange(side * side).reshape(side, side)
+    pairs = [np.c_[idx[:, :-1].ravel(), idx[:, 1:].ravel()],
+             np.c_[idx[:-1].ravel(), idx[1:].ravel()]]
+    small = 40
+    sid = side * side + np.arange(small * small).reshape(small, small)
+    pairs += [np.c_[sid[:, :-1].ravel(), sid[:, 1:].ravel()],
+              np.c_[sid[:-1].ravel(), sid[1:].ravel()]]
+    p = np.concatenate(pairs)
+    m = side * side + small * small
+    if order is not None:
+        p = order[p]
+    rng = np.random.default_rng(11)
+    w = rng.integers(1, 5, p.shape[0]) / 8.0
+    src, dst = np.r_[p[:, 0], p[:, 1]], np.r_[p[:, 1], p[:, 0]]
+    ww = np.r_[w, w].astype(np.float32)
+    o = np.lexsort((dst, src))
+    indptr = np.zeros(m + 1, dtype=np.int64)
+    np.cumsum(np.bincount(src, minlength=m), out=indptr[1:])
+    return indptr, dst[o].astype(np.int32), ww[o], m
+
+
+@needs_cxx
+@pytest.mark.parametrize("shuffled", [False, True])
+def test_exact_search_by_blocks_matches_numba_pass_by_pass(monkeypatch, shuffled):
+    """Known answer: the compiled exact assignment searches blocks of 2^15 elements on
+    threads and hands the pairs across their edges between rounds; its labels, distances
+    and orphan centers must be the numba kernels' one-queue search's, bit for bit, fresh
+    and updated pass by pass, on 1, 2 and 3 threads: a grid of 3.3 blocks with real ties
+    (weights in eighths), its elements in rows (few edges between blocks) or shuffled
+    (nearly every edge between blocks), and a second grid no center reaches (orphans)."""
+    side = 330
+    rng = np.random.default_rng(4)
+    order = rng.permutation(side * side + 1600) if shuffled else None
+    indptr, indices, w, m = _grid_csr(side, order)
+    inv_width, nb = 4.0, 64
+
+    def state():
+        cap = indices.shape[0] + 2 * m + 1
+        queue = (np.empty(cap, np.int32), np.empty(cap), np.empty(cap, np.int64),
+                 np.full(nb, -1, np.int64))
+        return [np.empty(m), np.empty(m, np.int32), queue, np.empty(cap, np.int32),
+                np.full(m, -1, np.int32), np.zeros(m, bool)]
+
+    grid_elements = np.arange(side * side) if order is None else order[:side * side]
+    centers = np.empty(m + 64, np.int64)
+    n = 40
+    centers[:n] = rng.choice(grid_elements, n, replace=False)
+    states = {"kernel": state(), "reference": state()}
+    prev = None
+    for step in range(8):
+        got = {}
+        for fn, (dist, label, queue, qlab, first, mark) in states.items():
+            cs = centers.copy()
+            call = getattr(native, fn)
+            with monkeypatch.context() as mp:
+                if fn == "kernel":  # (numba compiled with its own count)
+                    mp.setenv("NUMBA_NUM_THREADS", str(1 + step % 3))
+                k = -100 if prev is None else call("exact.reclassify_exact")(
+                    indptr, indices, w, cs, n, dist, label, queue, qlab, inv_width, prev,
+                    first, mark)
+                if k < 0:
+                    k = call("exact.classify_exact")(indptr, indices, w, cs, n, dist, label,
+                                                     queue, qlab, inv_width)
+            got[fn] = (k, cs[:k].copy(), dist.copy(), label.copy())
+        (k, cs, dist, label), ref = got["kernel"], got["reference"]
+        assert k == ref[0] and np.array_equal(cs, ref[1])
+        assert dist.tobytes() == ref[2].tobytes() and np.array_equal(label, ref[3])
+        assert k > n and (label >= 0).all()  # the second grid's orphan centers
+        assert (step > 0) == (prev is not None)
+        prev = cs.copy()
+        moved = rng.choice(n, int(rng.integers(3, 12)), replace=False)
+        cs = cs[:n].copy()
+        cs[moved] = rng.choice(grid_elements, moved.shape[0])
+        centers[:n] = cs

@@ -1,5 +1,7 @@
 // The exact nearest-center assignment and its pass-by-pass update
-// (superfacets/_kernels/exact.py), the same operations in the same order.
+// (superfacets/_kernels/exact.py): the same operations in the same order, but each
+// search by blocks of elements on threads (search_blocked: the same labels and
+// distances to the bit, never out of queue).
 #include "search.hpp"
 
 namespace sfk {
@@ -8,7 +10,8 @@ namespace {
 
 constexpr i64 NOT_INCREMENTAL = -100;
 
-// The queue of the exact classifier: node faces in int32, next pointers in int64.
+// The exact classifier's graph and state. The compiled search keeps its own queues
+// (search_blocked); the node pool the numba twin searches with is checked, not used.
 template <class W, class L>
 struct Exact {
     const i64* indptr;
@@ -16,16 +19,11 @@ struct Exact {
     const W* weights;
     double* dist;
     L* label;
-    i32* qface;
-    double* qdist;
-    i64* qnext;
-    i64* head;
-    i64 qcap, nb;
-    i32* qlab;
+    i64 m, nb;
     double inv_width;
     i64 search(const i64* seeds, i64 ns) const {
-        return search_buckets<true>(indptr, indices, weights, dist, label, seeds, ns, qface,
-                                    qdist, qnext, head, qcap, nb, qlab, inv_width);
+        search_blocked(indptr, indices, weights, dist, label, m, seeds, ns, inv_width, nb);
+        return 0;
     }
 };
 
@@ -56,8 +54,9 @@ Exact<W, L> exact_of(const In<i64>& indptr, const In<i32>& indices, py::handle w
     Out<i32> qface(tup[0], "qface");
     Out<double> qdist(tup[1], "qdist");
     Out<i64> qnext(tup[2], "qnext"), head(tup[3], "head");
-    return Exact<W, L>{indptr.p, indices.p, weights.p, dist.p, label.p, qface.p, qdist.p,
-                       qnext.p,  head.p,    qface.n,   head.n, qlab.p,  inv_width};
+    (void)qlab;
+    return Exact<W, L>{indptr.p, indices.p, weights.p, dist.p, label.p, label.n, head.n,
+                       inv_width};
 }
 
 // The arguments both entry points share, checked.
