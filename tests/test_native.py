@@ -63,11 +63,12 @@ VERTEX_KERNELS = {"vertex_cells", "mesh_edges", "classify_exact", "reclassify_ex
 
 
 #: Scratch arguments of the numba kernels that the compiled ones do not use (their heaps
-#: keep each key beside its value, in an array of their own; the exact assignment's
-#: search keeps a queue per block): not compared.
+#: keep each key beside its value, in an array of their own; the exact assignment's and
+#: the Voronoi cells' searches keep a queue per block): not compared.
 SCRATCH = {"cleanup.band_distances": {10, 11}, "splitmerge.energies": {14, 15},
            "splitmerge.split_candidates": {19, 20}, "splitmerge.merge_energies": {18, 19},
-           "exact.classify_exact": {7, 8}, "exact.reclassify_exact": {7, 8}}
+           "exact.classify_exact": {7, 8}, "exact.reclassify_exact": {7, 8},
+           "voronoi.nearest_seed": {7}}
 
 def _roomy_queue(args):
     """The exact assignment's arguments with a node pool numba's search cannot outgrow (the
@@ -608,3 +609,34 @@ def test_exact_search_by_blocks_matches_numba_pass_by_pass(monkeypatch, shuffled
         cs = cs[:n].copy()
         cs[moved] = rng.choice(grid_elements, moved.shape[0])
         centers[:n] = cs
+
+
+@needs_cxx
+def test_voronoi_cells_by_blocks_go_to_the_first_seed_on_ties(monkeypatch):
+    """Known answer: each element's nearest seed (scipy's Dijkstra from every seed), the
+    first listed where distances tie (weights in eighths: real ties), for the compiled
+    search by blocks on 1, 2, 3 threads and for numba's one search; a piece no seed reaches
+    keeps -1 and inf."""
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import dijkstra
+
+    side = 330
+    indptr, indices, w, m = _grid_csr(side)
+    rng = np.random.default_rng(9)
+    seeds = rng.choice(side * side, 60, replace=False).astype(np.int64)
+    d = dijkstra(csr_matrix((w.astype(np.float64), indices, indptr), shape=(m, m)),
+                 indices=seeds)
+    near = d.min(axis=0)
+    first = np.where(np.isfinite(near), np.argmin(d, axis=0), -1)
+    assert int(((d == near).sum(axis=0) > 1).sum()) > 1000  # real ties
+    for fn, threads in (("reference", None), ("kernel", "1"), ("kernel", "2"), ("kernel", "3")):
+        dist, label = np.full(m, np.inf), np.full(m, -1, np.int32)
+        cap = indices.shape[0] + m + 1
+        queue = (np.empty(cap, np.int32), np.empty(cap), np.empty(cap, np.int32),
+                 np.full(64, -1, np.int64))
+        with monkeypatch.context() as mp:
+            if threads:
+                mp.setenv("NUMBA_NUM_THREADS", threads)
+            assert getattr(native, fn)("voronoi.nearest_seed")(
+                indptr, indices, w, seeds, 0, dist, label, queue, 4.0) == 0
+        assert np.array_equal(label, first) and np.array_equal(dist, near)

@@ -18,8 +18,10 @@ def nearest_seed(indptr, indices, weights, seeds, first, dist, label, queue, inv
     from ``seeds[:first]`` (in other connected components) already labelled.
 
     The distances are exact (those of Dijkstra's algorithm, see
-    :func:`.expand.expand`); on ties an element keeps the seed that reached
-    it first, which depends on the order of the search only (deterministic).
+    :func:`.expand.expand`); on ties an element takes the seed listed first
+    (``(distance, seed)`` pairs compared lexicographically: the result does not
+    depend on the order of the search, so the compiled kernel searches by blocks
+    on threads).
     Elements no seed reaches keep ``label = -1``, ``dist = inf``.
     ``queue = (qface, qdist, qnext, head)`` as in :func:`.expand.expand`.
     Returns 0, or :data:`.expand.QUEUE_FULL` (grow ``queue`` and call again).
@@ -36,7 +38,7 @@ def nearest_seed(indptr, indices, weights, seeds, first, dist, label, queue, inv
         n += 1
     qlab = np.empty(queue[0].shape[0], dtype=np.int64)
     return search_buckets(indptr, indices, weights, dist, label, todo[:n], queue, qlab,
-                          inv_width, False)
+                          inv_width, True)
 
 
 @njit(cache=True, error_model="numpy")

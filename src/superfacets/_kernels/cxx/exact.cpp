@@ -1,7 +1,9 @@
 // The exact nearest-center assignment and its pass-by-pass update
 // (superfacets/_kernels/exact.py): the same operations in the same order, but each
-// search by blocks of elements on threads (search_blocked: the same labels and
+// search by blocks of elements on threads (BlockedSearch: the same labels and
 // distances to the bit, never out of queue).
+#include <memory>
+
 #include "search.hpp"
 
 namespace sfk {
@@ -10,21 +12,14 @@ namespace {
 
 constexpr i64 NOT_INCREMENTAL = -100;
 
-// The exact classifier's graph and state. The compiled search keeps its own queues
-// (search_blocked); the node pool the numba twin searches with is checked, not used.
+// The exact classifier's state and its search (by blocks on threads: BlockedSearch). The
+// node pool numba's search takes its nodes from is checked, not used.
 template <class W, class L>
 struct Exact {
-    const i64* indptr;
-    const i32* indices;
-    const W* weights;
     double* dist;
     L* label;
-    i64 m, nb;
-    double inv_width;
-    i64 search(const i64* seeds, i64 ns) const {
-        search_blocked(indptr, indices, weights, dist, label, m, seeds, ns, inv_width, nb);
-        return 0;
-    }
+    std::unique_ptr<BlockedSearch<W, L>> searcher;
+    void search(const i64* seeds, i64 ns) const { searcher->run(seeds, ns); }
 };
 
 template <class W, class L>
@@ -37,7 +32,7 @@ i64 seed_orphans(const Exact<W, L>& x, i64* centers, i64 n_centers, i64 m) {
             x.dist[f] = 0.0;
             x.label[f] = static_cast<L>(k);
             one[0] = f;
-            if (x.search(one, 1) != 0) return QUEUE_FULL;
+            x.search(one, 1);
             ++k;
         }
     }
@@ -55,8 +50,10 @@ Exact<W, L> exact_of(const In<i64>& indptr, const In<i32>& indices, py::handle w
     Out<double> qdist(tup[1], "qdist");
     Out<i64> qnext(tup[2], "qnext"), head(tup[3], "head");
     (void)qlab;
-    return Exact<W, L>{indptr.p, indices.p, weights.p, dist.p, label.p, label.n, head.n,
-                       inv_width};
+    return Exact<W, L>{dist.p, label.p,
+                       std::make_unique<BlockedSearch<W, L>>(indptr.p, indices.p, weights.p,
+                                                             dist.p, label.p, label.n,
+                                                             inv_width, head.n)};
 }
 
 // The arguments both entry points share, checked.
@@ -106,7 +103,7 @@ i64 classify_exact_t(py::handle indptr_, py::handle indices_, py::handle weights
             seeds[ns++] = c;
         }
     }
-    if (x.search(seeds.data(), ns) != 0) return QUEUE_FULL;
+    x.search(seeds.data(), ns);
     return seed_orphans(x, centers.p, n_centers, m);
 }
 
@@ -197,7 +194,7 @@ i64 reclassify_exact_t(py::handle indptr_, py::handle indices_, py::handle weigh
     std::vector<i64> all_seeds(ns + border.size());
     for (i64 t = 0; t < ns; ++t) all_seeds[t] = seeds[t];
     for (size_t t = 0; t < border.size(); ++t) all_seeds[ns + t] = border[order[t]];
-    if (x.search(all_seeds.data(), static_cast<i64>(all_seeds.size())) != 0) return QUEUE_FULL;
+    x.search(all_seeds.data(), static_cast<i64>(all_seeds.size()));
     return seed_orphans(x, centers.p, n_centers, m);
 }
 

@@ -1,8 +1,6 @@
 // Voronoi cells of seeds in the weighted element graph, for the coarse-to-fine run
-// (superfacets/_kernels/voronoi.py, and exact.py's search_buckets), the same operations
-// in the same order.
-#include <memory>
-
+// (superfacets/_kernels/voronoi.py): the same operations in the same order, the cells'
+// search by blocks on threads (BlockedSearch: numba's search_buckets' result).
 #include "search.hpp"
 
 namespace sfk {
@@ -15,9 +13,7 @@ i64 nearest_seed_t(const In<i64>& indptr, const In<i32>& indices, const W* weigh
                    py::handle queue_, double inv_width) {
     auto tup = py::reinterpret_borrow<py::tuple>(queue_);
     if (!py::isinstance<py::tuple>(queue_) || tup.size() != 4) throw Mismatch("argument queue");
-    Out<i32> qface(tup[0], "qface"), qnext(tup[2], "qnext");
-    Out<double> qdist(tup[1], "qdist");
-    Out<i64> head(tup[3], "head");
+    Out<i64> head(tup[3], "head");  // (the rest of numba's queue is not used here)
     py::gil_scoped_release nogil;
     std::vector<i64> todo(seeds.n - first);
     i64 n = 0;
@@ -28,10 +24,10 @@ i64 nearest_seed_t(const In<i64>& indptr, const In<i32>& indices, const W* weigh
         label[f] = static_cast<i32>(s);
         todo[n++] = f;
     }
-    std::unique_ptr<i32[]> qlab(new i32[qface.n]);  // left unset: pages cost only once used
-    return search_buckets<false>(indptr.p, indices.p, weights, dist.p, label.p, todo.data(), n,
-                                 qface.p, qdist.p, qnext.p, head.p, qface.n, head.n, qlab.get(),
-                                 inv_width);
+    BlockedSearch<W, i32>(indptr.p, indices.p, weights, dist.p, label.p, label.n, inv_width,
+                          head.n)
+        .run(todo.data(), n);
+    return 0;
 }
 
 template <class C, class W, class S>
