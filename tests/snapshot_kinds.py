@@ -67,6 +67,10 @@ def runs() -> list[tuple[str, str, dict]]:
         ("bunny", "segment", dict(n_segments=150, radius=None, paper=True,
                                   elements="vertices")),
         ("even", "segment", dict(n_segments=150, paper=True)),
+        # the windows on an even cloud (its default before the exact search)
+        ("even", "segment", dict(n_segments=20, assignment="bounded")),
+        ("even", "segment", dict(n_segments=150, assignment="bounded")),
+        ("even", "segment", dict(n_segments=30, assignment="bounded")),
         ("cube", "segment", dict(n_segments=40, paper=True)),
         ("bunny", "segment", dict(n_segments=150, split_merge=False)),
         ("bunny", "segment", dict(n_segments=150, cleanup=False)),

@@ -219,7 +219,9 @@ def test_runs_on_points_give_numba_results_call_by_call(shadowed):
     runs = [(p, 60, None, {}), (dup, 40, None, {}), (uneven, 50, None, {}),
             (p, 8, None, {"merge_from": 1}),  # 2,500 points per superpoint: coarse-to-fine
             (apart, 30, None, {}),  # two pieces
-            (p, 60, None, {"window": 1.0}),  # orphans: the exact count's merges
+            # the paper's windows (the exact search is the default), small: orphans, the
+            # exact count's merges
+            (p, 60, None, {"window": 1.0, "assignment": "bounded"}),
             (p, 60, None, {"roughness": 1.0}),  # content-sensitive: neighbour averages
             (p, 40, None, {"neighbor_radius": 0.01}),  # neighbours masked by a radius
             (p[:8000], 30, np.tile([0.0, 0.0, 1.0], (8000, 1)), {})]  # normals given

@@ -134,7 +134,7 @@ def parse_bool(v) -> bool:
 
 #: Parameters whose default is ``"auto"``, and the kind of their other values.
 _AUTO = {"center_tol": float, "coarsen": int, "cleanup": parse_bool, "split_merge": parse_bool,
-         "merge_from": int}
+         "merge_from": int, "assignment": str}
 
 #: The registry: method name -> :class:`Method`.
 METHODS: dict[str, Method] = {}
@@ -201,16 +201,17 @@ def get_method(name: str) -> Method:
 
 def _auto(value, kind):
     """A registry value of ``center_tol``, ``coarsen``, ``cleanup``, ``split_merge``,
-    ``density``, ``merge_from`` or ``extent_weight``: ``"auto"`` is None."""
+    ``density``, ``merge_from``, ``assignment`` or ``extent_weight``: ``"auto"`` is None."""
     return None if value in (None, "auto") else kind(value)
 
 
 def _segment_options(center_tol="auto", coarsen="auto", cleanup="auto", split_merge="auto",
-                     density="auto", merge_from="auto", **params) -> dict:
+                     density="auto", merge_from="auto", assignment="auto", **params) -> dict:
     """The keyword arguments of :func:`superfacets.segment` from registry values."""
     return dict(center_tol=_auto(center_tol, float), coarsen=_auto(coarsen, int),
                 cleanup=_auto(cleanup, parse_bool), split_merge=_auto(split_merge, parse_bool),
-                density=_auto(density, float), merge_from=_auto(merge_from, int), **params)
+                density=_auto(density, float), merge_from=_auto(merge_from, int),
+                assignment=_auto(assignment, str), **params)
 
 
 def _run_superfacets(mesh, n_segments, *, cache, seed, weighting="paper", **params):
@@ -295,7 +296,7 @@ _SF_DEFAULTS = dict(alpha=DEFAULTS.alpha, eta_convex=DEFAULTS.eta_convex, init=I
                     window=DEFAULTS.window, max_iter=DEFAULTS.max_iter, tol=DEFAULTS.tol,
                     center_tol="auto", coarsen="auto", cleanup="auto",
                     split_merge="auto", paper=DEFAULTS.paper, density="auto",
-                    roughness=DEFAULTS.roughness, merge_from="auto")
+                    roughness=DEFAULTS.roughness, merge_from="auto", assignment="auto")
 register_method(
     "superfacets", _run_superfacets, defaults=_SF_DEFAULTS,
     sweep={"alpha": DEFAULT_ALPHAS},
