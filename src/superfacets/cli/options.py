@@ -170,7 +170,7 @@ def add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> No
     p.add_argument("--assignment", choices=ASSIGNMENTS, default=_D.assignment,
                    help="bounded: the paper's window-bounded expansion per center; "
                         "exact: nearest center by one multi-source search "
-                        "(default: exact on vertices, bounded on faces and points; "
+                        "(default: exact on vertices and points, bounded on faces; "
                         "--paper: bounded)")
     p.add_argument("--tol", type=float_arg, default=_D.tol, metavar="T",
                    help="also stop once a pass changes the superfacet of at most this fraction "

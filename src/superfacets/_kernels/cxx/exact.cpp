@@ -2,6 +2,7 @@
 // (superfacets/_kernels/exact.py): the same operations in the same order, but each
 // search by blocks of elements on threads (BlockedSearch: the same labels and
 // distances to the bit, never out of queue).
+#include <atomic>
 #include <memory>
 
 #include "search.hpp"
@@ -89,10 +90,12 @@ i64 classify_exact_t(py::handle indptr_, py::handle indices_, py::handle weights
     const auto& x = A.x;
     py::gil_scoped_release nogil;
     const i64 m = label.n;
-    for (i64 f = 0; f < m; ++f) {
-        dist[f] = INF;
-        label[f] = -1;
-    }
+    parallel_for(m, [&](i64 f0, i64 f1) {
+        for (i64 f = f0; f < f1; ++f) {
+            dist[f] = INF;
+            label[f] = -1;
+        }
+    });
     std::vector<i64> seeds(n_centers);
     i64 ns = 0;
     for (i64 s = 0; s < n_centers; ++s) {
@@ -121,7 +124,7 @@ i64 reclassify_exact_t(py::handle indptr_, py::handle indices_, py::handle weigh
     const auto& x = A.x;
     In<i64> prev(prev_, "prev");
     Out<i32> first(first_, "first");
-    Out<bool> border_mark(border_mark_, "border_mark");
+    Out<bool> border_mark(border_mark_, "border_mark");  // (numba's; not used here)
     py::gil_scoped_release nogil;
     const i64 m = label.n;
     for (i64 s = 0; s < n_centers; ++s) {
@@ -140,29 +143,34 @@ i64 reclassify_exact_t(py::handle indptr_, py::handle indices_, py::handle weigh
             last = i;
         }
     }
-    if (usable)
-        for (i64 f = 0; f < m; ++f) {
-            i64 lab = label[f];
-            if (lab < 0 || lab >= kp) {
-                usable = false;
-                break;
+    if (usable) {  // every label one of the previous pass's centers
+        std::atomic<bool> in_range{true};
+        parallel_for(m, [&](i64 f0, i64 f1) {
+            for (i64 f = f0; f < f1; ++f) {
+                i64 lab = label[f];
+                if (lab < 0 || lab >= kp) {
+                    in_range = false;
+                    return;
+                }
             }
-        }
+        });
+        usable = in_range;
+    }
     if (!usable) {
         for (i64 s = 0; s < n_centers; ++s) first[centers[s]] = -1;
         return NOT_INCREMENTAL;
     }
-    i64 n_clear = 0;
-    for (i64 f = 0; f < m; ++f) {
-        i64 i = remap[label[f]];
-        if (i < 0) {
-            dist[f] = INF;
-            label[f] = -1;
-            ++n_clear;
-        } else {
-            label[f] = static_cast<L>(i);
+    parallel_for(m, [&](i64 f0, i64 f1) {  // the cells of the centers that moved cleared
+        for (i64 f = f0; f < f1; ++f) {
+            i64 i = remap[label[f]];
+            if (i < 0) {
+                dist[f] = INF;
+                label[f] = -1;
+            } else {
+                label[f] = static_cast<L>(i);
+            }
         }
-    }
+    });
     std::vector<i64> seeds(n_centers);
     i64 ns = 0;
     for (i64 s = 0; s < n_centers; ++s) {
@@ -174,26 +182,25 @@ i64 reclassify_exact_t(py::handle indptr_, py::handle indices_, py::handle weigh
         }
     }
     for (i64 s = 0; s < n_centers; ++s) first[centers[s]] = -1;
-    (void)n_clear;
-    std::vector<i64> border;
-    for (i64 f = 0; f < m; ++f) {
-        if (label[f] >= 0) continue;
-        for (i64 e = indptr[f]; e < indptr[f + 1]; ++e) {
-            i64 g = indices[e];
-            if (label[g] >= 0 && !border_mark[g]) {
-                border_mark[g] = true;
-                border.push_back(g);
+    // the kept elements bordering the cleared ones, on threads (in any order, repeated
+    // or not: the search's result does not depend on its seeds' order)
+    const int T = threads();
+    std::vector<std::vector<i64>> border(T);
+    std::atomic<i64> next{0};
+    const i64 chunk = 1 << 16;
+    on_threads(T, [&](i64 t) {
+        for (i64 f0 = next.fetch_add(chunk); f0 < m; f0 = next.fetch_add(chunk)) {
+            for (i64 f = f0; f < std::min(m, f0 + chunk); ++f) {
+                if (label[f] >= 0) continue;
+                for (i64 e = indptr[f]; e < indptr[f + 1]; ++e) {
+                    i64 g = indices[e];
+                    if (label[g] >= 0) border[t].push_back(g);
+                }
             }
         }
-    }
-    for (i64 g : border) border_mark[g] = false;
-    std::vector<i64> order(border.size());
-    for (size_t t = 0; t < order.size(); ++t) order[t] = static_cast<i64>(t);
-    std::stable_sort(order.begin(), order.end(),
-                     [&](i64 a, i64 b) { return dist[border[a]] < dist[border[b]]; });
-    std::vector<i64> all_seeds(ns + border.size());
-    for (i64 t = 0; t < ns; ++t) all_seeds[t] = seeds[t];
-    for (size_t t = 0; t < border.size(); ++t) all_seeds[ns + t] = border[order[t]];
+    });
+    std::vector<i64> all_seeds(seeds.begin(), seeds.begin() + ns);
+    for (auto& b : border) all_seeds.insert(all_seeds.end(), b.begin(), b.end());
     x.search(all_seeds.data(), static_cast<i64>(all_seeds.size()));
     return seed_orphans(x, centers.p, n_centers, m);
 }
