@@ -559,17 +559,27 @@ def _grid_csr(side: int, order: np.ndarray | None = None):
 
 
 @needs_cxx
-@pytest.mark.parametrize("shuffled", [False, True])
-def test_exact_search_by_blocks_matches_numba_pass_by_pass(monkeypatch, shuffled):
+@pytest.mark.parametrize("layout", ["rows", "strips", "shuffled"])
+def test_exact_search_by_blocks_matches_numba_pass_by_pass(monkeypatch, layout):
     """Known answer: the compiled exact assignment searches blocks of 2^15 elements on
     threads and hands the pairs across their edges between rounds; its labels, distances
     and orphan centers must be the numba kernels' one-queue search's, bit for bit, fresh
     and updated pass by pass, on 1, 2 and 3 threads: a grid of 3.3 blocks with real ties
-    (weights in eighths), its elements in rows (few edges between blocks) or shuffled
-    (nearly every edge between blocks), and a second grid no center reaches (orphans)."""
+    (weights in eighths), its elements in rows (few edges between blocks), in strips of 8
+    rows shuffled (each block a dozen strips from all over the grid), or shuffled (nearly
+    every edge between blocks: one block, one search), and a second grid no center
+    reaches (orphans)."""
     side = 330
     rng = np.random.default_rng(4)
-    order = rng.permutation(side * side + 1600) if shuffled else None
+    order = None
+    if layout == "strips":
+        strips = np.array_split(np.arange(side), side // 8)  # rows, 8 by 8
+        rows = np.concatenate([strips[i] for i in rng.permutation(len(strips))])
+        new_row = np.argsort(rows)  # the place of each row in the new order
+        order = np.r_[(new_row[:, None] * side + np.arange(side)).ravel(),
+                      side * side + np.arange(1600)]
+    elif layout == "shuffled":
+        order = rng.permutation(side * side + 1600)
     indptr, indices, w, m = _grid_csr(side, order)
     inv_width, nb = 4.0, 64
 

@@ -112,8 +112,18 @@ class BlockedSearch {
     BlockedSearch(const i64* indptr, const i32* indices, const W* weights, double* dist,
                   L* label, i64 m, double inv_width, i64 nb)
         : indptr_(indptr), indices_(indices), weights_(weights), dist_(dist), label_(label),
-          m_(m), inv_width_(inv_width), pending_((m + block_ - 1) / block_),
-          queued_(m, false) {
+          m_(m), inv_width_(inv_width), queued_(m, false) {
+        // blocks only where they are patches: where a quarter or more of the edges (of a
+        // strided sample of elements) cross between blocks, as on a subdivided mesh's
+        // vertices (new ones listed after the old), every round would hand most of the
+        // work over: one block, one search
+        i64 edges = 0, crossing = 0;
+        const i64 step = std::max<i64>(1, m >> 16);
+        for (i64 f = 0; f < m; f += step)
+            for (i64 e = indptr[f]; e < indptr[f + 1]; ++e, ++edges)
+                crossing += indices[e] / block_ != f / block_;
+        block_ = 4 * crossing < edges ? kBlock : std::max<i64>(m, 1);
+        pending_.resize((m + block_ - 1) / block_);
         for (int t = 0; t < threads(); ++t) work_.emplace_back(nb);
     }
 
@@ -179,8 +189,9 @@ class BlockedSearch {
     L* label_;
     i64 m_;
     // elements per block: in a core's cache; a multiple of 64, so that no two blocks'
-    // marks share a word of queued_
-    static constexpr i64 block_ = i64{1} << 15;
+    // marks share a word of queued_ (or all of them, in one block)
+    static constexpr i64 kBlock = i64{1} << 15;
+    i64 block_ = kBlock;
     double inv_width_;
     std::vector<std::vector<i64>> pending_;
     std::vector<bool> queued_;  // (a bit per element)
