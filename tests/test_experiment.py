@@ -65,7 +65,8 @@ def test_expand_grid_resolves_and_validates():
     assert cfgs[0].kwargs == {"alpha": 0.0, "cleanup": "auto", "eta_convex": 0.2, "init": "grid",
                               "max_iter": 50, "tol": 0.001, "window": 2.0, "center_tol": "auto",
                               "coarsen": "auto", "split_merge": "auto", "paper": False,
-                              "density": "auto", "roughness": 0.0, "merge_from": "auto"}
+                              "density": "auto", "roughness": 0.0, "merge_from": "auto",
+                              "assignment": "auto"}
     assert isinstance(cfgs[1].kwargs["alpha"], float)
     assert expand_grid("superfacets", alpha=[200, 200.0]) == expand_grid("superfacets", alpha=200)
     with pytest.raises(ParameterError, match="no parameter 'beta'"):

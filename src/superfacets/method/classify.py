@@ -119,23 +119,19 @@ class Exact(Classifier):
     Every element goes to the center at the smallest distance along the
     graph; ties go to the center listed first, whatever order the search
     settles elements in (``(distance, center)`` pairs compared
-    lexicographically). The compiled search works by blocks of elements on
-    threads, each block's search in cache, the pairs across the blocks' edges handed
-    over between rounds (:func:`~superfacets._kernels.exact.classify_exact`): the same
-    fixed point as the numba kernel's one search over the bucket queue of the bounded
-    expansions, whose node pool is grown when a search runs out. From the second
-    pass on, only the cells of the centers that moved are searched again
+    lexicographically). Compiled, by blocks of elements on threads (the same fixed
+    point as numba's one search over the bounded expansions' bucket queue, whose
+    node pool grows when a search runs out). From the second pass on, only the
+    cells of the centers that moved are searched again
     (:func:`~superfacets._kernels.exact.reclassify_exact`: the same labels and
-    distances as a fresh search, bit for bit); late passes, where a few
-    centers move, cost a fraction of the first.
+    distances as a fresh search, bit for bit).
     """
 
     def __init__(self, graph, weights, window_r2, spaces):
         super().__init__(graph, weights, window_r2, spaces)
         self.inv_width = spaces.inv_width
         self.head = np.full(spaces.n_buckets, -1, dtype=np.int64)
-        # numba's search takes a node per push from the pool (as a rule); the compiled
-        # one keeps its own queues, and leaves the pool untouched
+        # numba's search takes a node per push (as a rule); the compiled one has its own
         self._pool(1 << 10 if native.available() else self.indices.shape[0] + 2 * self.m + 1)
         self.prev = self.dist = self.label = None  # the previous pass's, updated in place
         self.first = np.full(self.m, -1, dtype=np.int32 if self.m < 2**31 - 1 else np.int64)
