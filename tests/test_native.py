@@ -186,7 +186,8 @@ def test_runs_on_faces_give_numba_results_call_by_call(shadowed):
         r = superfacets.segment(mesh, k, n_threads=1, **params)
         assert r.labels.shape[0] == mesh.n_faces
     compiled = {name for name in dir(native._cxx)
-                if callable(getattr(native._cxx, name)) and not name.startswith("_")} - {"Mismatch"}
+                if callable(getattr(native._cxx, name)) and not name.startswith("_")} - {
+        "Mismatch", "set_thread_limit", "threads"}  # (the thread limit: tested below)
     compiled -= POINT_KERNELS | VERTEX_KERNELS
     missing = {name for name in compiled if not any(p.endswith("." + name) for p in calls)}
     # run only on several threads, by the plain replay-less classifier, by a lazy graph's
@@ -652,3 +653,41 @@ def test_voronoi_cells_by_blocks_go_to_the_first_seed_on_ties(monkeypatch):
             assert getattr(native, fn)("voronoi.nearest_seed")(
                 indptr, indices, w, seeds, 0, dist, label, queue, 4.0) == 0
         assert np.array_equal(label, first) and np.array_equal(dist, near)
+
+
+@needs_cxx
+def test_a_runs_n_threads_bounds_the_compiled_kernels(monkeypatch):
+    """A run's ``n_threads`` is the most threads any compiled kernel starts while it lasts
+    (they read ``NUMBA_NUM_THREADS`` or the CPUs otherwise), nested limits restored: a
+    run asked for one thread uses one."""
+    from superfacets._runtime.threads import using
+
+    with monkeypatch.context() as m:  # (no numba compiles in this block)
+        m.setenv("NUMBA_NUM_THREADS", "3")
+        assert native._cxx.threads() == 3
+        with using(1):
+            assert native._cxx.threads() == 1
+            with using(2):
+                assert native._cxx.threads() == 2
+            assert native._cxx.threads() == 1
+        assert native._cxx.threads() == 3
+    from superfacets.inputs.cloud import as_cloud
+
+    pts = _sampled(creature(30), 20_000, 3)
+    unbounded = native._cxx.threads()
+    seen = []
+    plain = native.kernel
+
+    def kernel(path):
+        fast = plain(path)
+
+        def counted(*args, **kwargs):
+            seen.append(native._cxx.threads())
+            return fast(*args, **kwargs)
+        return counted
+
+    monkeypatch.setattr(native, "kernel", kernel)
+    one = superfacets.segment(as_cloud(pts), 40, n_threads=1).labels
+    assert seen and set(seen) == {1}
+    assert native._cxx.threads() == unbounded  # the limit ends with the run
+    assert np.array_equal(one, superfacets.segment(as_cloud(pts), 40).labels)

@@ -51,6 +51,13 @@ def available() -> bool:
     return _cxx is not None
 
 
+def limit_threads(n: int) -> int:
+    """Let the compiled kernels use at most ``n`` threads (0: no limit, as
+    ``NUMBA_NUM_THREADS`` or the CPUs allow), process-wide; returns the limit replaced
+    (0 where the compiled kernels are not built)."""
+    return int(_cxx.set_thread_limit(int(n))) if _cxx is not None else 0
+
+
 def missing_because() -> str:
     """Why the compiled kernels are not in use ("" when they are)."""
     return "" if _cxx is not None else _why

@@ -29,12 +29,20 @@ def default_threads() -> int:
 
 @contextmanager
 def using(n_threads: int):
-    """Within the block, :func:`split` makes at most ``n_threads`` ranges (the
-    pipeline's ``n_threads`` also bounds the graph build it triggers)."""
-    token = _limit.set(max(1, int(n_threads)))
+    """Within the block, :func:`split` makes at most ``n_threads`` ranges and the
+    compiled kernels start at most ``n_threads`` threads (the pipeline's ``n_threads``
+    also bounds the graph build it triggers). The compiled kernels' limit is the
+    process's, as ``NUMBA_NUM_THREADS`` is: runs on several Python threads at once
+    share the last one set."""
+    from .._kernels import native
+
+    n = max(1, int(n_threads))
+    token = _limit.set(n)
+    previous = native.limit_threads(n)
     try:
         yield
     finally:
+        native.limit_threads(previous)
         _limit.reset(token)
 
 

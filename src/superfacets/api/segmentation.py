@@ -199,7 +199,8 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, features=None,
         Threads of the run (``>= 1``; default: numba's thread count,
         ``NUMBA_NUM_THREADS``, normally the number of cores): the graph build
         and the weights' terms it triggers, the expansions, the split-and-merge
-        searches and the clean-up's cuts. The labels do not depend on it.
+        searches, the clean-up's cuts and every compiled kernel (a limit of the
+        process while the run lasts). The labels do not depend on it.
     elements : {'faces', 'vertices', 'points'}, optional
         What is segmented: the faces of a mesh (the paper; default for a
         mesh), its vertices (one label per vertex, on the graph of mesh

@@ -13,6 +13,7 @@
 #include <sched.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cstdlib>
 #include <thread>
 #include <cmath>
@@ -155,16 +156,27 @@ inline T mn(T a, T b) { return b < a ? b : a; }
 template <class T>
 inline T mx(T a, T b) { return b > a ? b : a; }
 
+// The most threads a kernel may use (0: no limit): a run's n_threads, set for the run's
+// duration by superfacets._runtime.threads.using (process-wide, as NUMBA_NUM_THREADS).
+inline std::atomic<int>& thread_limit() {
+    static std::atomic<int> limit{0};
+    return limit;
+}
+
 // The threads of a parallel loop: NUMBA_NUM_THREADS where set (as numba's prange would
-// use; the Dask workers set 1), else the CPUs this process may run on.
+// use; the Dask workers set 1), else the CPUs this process may run on; at most the
+// run's limit.
 inline int threads() {
-    if (const char* env = std::getenv("NUMBA_NUM_THREADS")) {
-        int n = std::atoi(env);
-        if (n >= 1) return n;
+    int n = 0;
+    if (const char* env = std::getenv("NUMBA_NUM_THREADS")) n = std::atoi(env);
+    if (n < 1) {
+        cpu_set_t set;
+        n = sched_getaffinity(0, sizeof(set), &set) == 0
+                ? std::max(1, CPU_COUNT(&set))
+                : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
     }
-    cpu_set_t set;
-    if (sched_getaffinity(0, sizeof(set), &set) == 0) return std::max(1, CPU_COUNT(&set));
-    return std::max(1u, std::thread::hardware_concurrency());
+    const int limit = thread_limit().load(std::memory_order_relaxed);
+    return limit >= 1 && limit < n ? limit : n;
 }
 
 // f(lo, hi) over ranges of 0..n on threads (each element on its own: any split gives

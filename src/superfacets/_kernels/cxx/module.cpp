@@ -16,6 +16,9 @@ PYBIND11_MODULE(_cxx, m) {
         }
     });
     m.attr("sources_digest") = SFK_SOURCES;  // sha256 of the sources it was built from
+    // the run's thread limit (0: none); returns the one it replaces
+    m.def("set_thread_limit", [](int n) { return sfk::thread_limit().exchange(n); });
+    m.def("threads", &sfk::threads);  // the threads a kernel would use now
     sfk::bind_graph(m);
     sfk::bind_expand(m);
     sfk::bind_sampling(m);
