@@ -71,6 +71,10 @@ def test_expand_grid_resolves_and_validates():
     assert expand_grid("superfacets", alpha=[200, 200.0]) == expand_grid("superfacets", alpha=200)
     with pytest.raises(ParameterError, match="no parameter 'beta'"):
         expand_grid("superfacets", beta=[1])
+    with pytest.raises(ParameterError, match="assignment must be auto or bounded or exact"):
+        expand_grid("superfacets", assignment=["exact", "nearest"])
+    assert [c.kwargs["assignment"] for c in expand_grid(
+        "superfacets", assignment=["auto", "bounded", "exact"])] == ["auto", "bounded", "exact"]
     with pytest.raises(ParameterError, match="unknown method 'nope'.*superfacets"):
         expand_grid("nope")
     with pytest.raises(ParameterError, match="max_iter must be int"):

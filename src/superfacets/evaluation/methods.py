@@ -17,7 +17,7 @@ import numpy as np
 
 from ..api.segmentation import segment
 from ..errors import MemoryLimitError, ParameterError
-from ..method.params import DEFAULT_ALPHAS, DEFAULTS, ELEMENTS, INITS, WEIGHTING_ALPHA
+from ..method.params import ASSIGNMENTS, DEFAULT_ALPHAS, DEFAULTS, ELEMENTS, INITS, WEIGHTING_ALPHA
 
 __all__ = ["Method", "MethodRun", "Skipped", "METHODS", "register_method", "get_method",
            "parse_bool"]
@@ -132,9 +132,18 @@ def parse_bool(v) -> bool:
     raise ValueError(v)
 
 
+def parse_assignment(v) -> str:
+    t = str(v).strip().lower()
+    if t not in ASSIGNMENTS:
+        raise ValueError(v)
+    return t
+
+
+parse_assignment.__name__ = " or ".join(ASSIGNMENTS)  # (named so in the error message)
+
 #: Parameters whose default is ``"auto"``, and the kind of their other values.
 _AUTO = {"center_tol": float, "coarsen": int, "cleanup": parse_bool, "split_merge": parse_bool,
-         "merge_from": int, "assignment": str}
+         "merge_from": int, "assignment": parse_assignment}
 
 #: The registry: method name -> :class:`Method`.
 METHODS: dict[str, Method] = {}
@@ -211,7 +220,7 @@ def _segment_options(center_tol="auto", coarsen="auto", cleanup="auto", split_me
     return dict(center_tol=_auto(center_tol, float), coarsen=_auto(coarsen, int),
                 cleanup=_auto(cleanup, parse_bool), split_merge=_auto(split_merge, parse_bool),
                 density=_auto(density, float), merge_from=_auto(merge_from, int),
-                assignment=_auto(assignment, str), **params)
+                assignment=_auto(assignment, parse_assignment), **params)
 
 
 def _run_superfacets(mesh, n_segments, *, cache, seed, weighting="paper", **params):
