@@ -625,6 +625,47 @@ def test_exact_search_by_blocks_matches_numba_pass_by_pass(monkeypatch, layout):
 
 
 @needs_cxx
+@pytest.mark.parametrize("layout", ["rows", "strips", "shuffled"])
+def test_orientation_by_blocks_matches_numbas_prim(monkeypatch, layout):
+    """Known answer: the compiled orientation takes each block's minimum spanning forest
+    (blocks of 2^15 elements, on threads) and then Kruskal's algorithm over the forests
+    and the edges between blocks; its signs and components must be those of numba's Prim
+    over the whole graph, on 1, 2 and 3 threads: a grid of 3.3 blocks and a second grid
+    apart (two components), normals from a tetrahedron's four directions with random
+    signs (two keys: 0 and the one of every pair of directions; the order of the edges'
+    ends decides, and since every pair's product is negative, a cycle through three
+    directions turns the sign over: the signs depend on the tree), in rows, in strips of
+    8 rows shuffled, or shuffled (one block)."""
+    side = 330
+    rng = np.random.default_rng(6)
+    order = None
+    if layout == "strips":
+        strips = np.array_split(np.arange(side), side // 8)
+        rows = np.concatenate([strips[i] for i in rng.permutation(len(strips))])
+        new_row = np.argsort(rows)
+        order = np.r_[(new_row[:, None] * side + np.arange(side)).ravel(),
+                      side * side + np.arange(1600)]
+    elif layout == "shuffled":
+        order = rng.permutation(side * side + 1600)
+    indptr, indices, _, m = _grid_csr(side, order)
+    # a tetrahedron's four directions: every pair's product exactly -1/3 as computed
+    ways = np.array([[1.0, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]]) / np.sqrt(3.0)
+    normals = ways[rng.integers(0, 4, m)] * rng.choice([-1.0, 1.0], (m, 1))
+    ref_sign, ref_comp = np.empty(m, np.int8), np.empty(m, np.int64)
+    n_ref = native.reference("orient.propagate_signs")(indptr, indices, normals, ref_sign,
+                                                       ref_comp)
+    assert n_ref == 2 and (ref_sign == -1).any() and (ref_sign == 1).any()
+    for threads in ("1", "2", "3"):
+        sign, comp = np.empty(m, np.int8), np.empty(m, np.int64)
+        with monkeypatch.context() as mp:
+            mp.setenv("NUMBA_NUM_THREADS", threads)
+            n_comp = native.kernel("orient.propagate_signs")(indptr, indices, normals, sign,
+                                                             comp)
+        assert n_comp == n_ref
+        assert np.array_equal(sign, ref_sign) and np.array_equal(comp, ref_comp)
+
+
+@needs_cxx
 def test_voronoi_cells_by_blocks_go_to_the_first_seed_on_ties(monkeypatch):
     """Known answer: each element's nearest seed (scipy's Dijkstra from every seed), the
     first listed where distances tie (weights in eighths: real ties), for the compiled
@@ -691,3 +732,4 @@ def test_a_runs_n_threads_bounds_the_compiled_kernels(monkeypatch):
     assert seen and set(seen) == {1}
     assert native._cxx.threads() == unbounded  # the limit ends with the run
     assert np.array_equal(one, superfacets.segment(as_cloud(pts), 40).labels)
+

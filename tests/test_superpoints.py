@@ -93,16 +93,18 @@ def test_point_normals_are_estimated_and_turned_outwards_on_a_closed_surface():
     assert g.area == pytest.approx(4 * np.pi, rel=0.25)
 
 
-def test_orientation_follows_prims_tree_with_ties_broken_by_csr_entry():
-    """The sign propagation is Prim's tree on ``1 - |n_u . n_v|`` with ties broken by the
-    CSR entry: the same signs and components as a plain heap of every edge, on normals
-    quantized so that many keys tie, in two components."""
-    import heapq
-
+@pytest.mark.parametrize("source", ["kernel", "reference"])
+def test_orientation_follows_the_minimum_spanning_tree_with_ties_broken_by_ends(source):
+    """The sign propagation follows the minimum spanning forest of ``1 - |n_u . n_v|``
+    with ties broken by the edges' ends (lower, then higher): the same signs and
+    components as Kruskal's algorithm over every edge sorted, walked from the lowest
+    element of each tree, on normals quantized so that many keys tie, in two
+    components (the compiled kernel and numba's)."""
     from scipy.sparse import coo_array
 
-    from superfacets._kernels.orient import propagate_signs
+    from superfacets._kernels import native
 
+    propagate_signs = getattr(native, source)("orient.propagate_signs")
     rng = np.random.default_rng(3)
     n = 400
     normals = np.round(rng.normal(size=(n, 3)), 0)
@@ -115,31 +117,47 @@ def test_orientation_follows_prims_tree_with_ties_broken_by_csr_entry():
     a = coo_array((np.ones(keep.sum()), (i[keep], j[keep])), shape=(n, n)).tocsr()
     a = (a + a.T).tocsr()
     a.sort_indices()
-    indptr, indices = a.indptr.astype(np.int64), a.indices.astype(np.int64)
+    indptr, indices = a.indptr.astype(np.int64), a.indices.astype(np.int32)
 
     sign, comp = np.empty(n, dtype=np.int8), np.empty(n, dtype=np.int64)
     n_comp = propagate_signs(indptr, indices, normals, sign, comp)
 
+    rows = np.repeat(np.arange(n), np.diff(indptr))
+    lo, hi = rows[rows < indices], indices[rows < indices].astype(np.int64)
+    d = normals[lo, 0] * normals[hi, 0] + normals[lo, 1] * normals[hi, 1] \
+        + normals[lo, 2] * normals[hi, 2]
+    key = 1.0 - np.abs(d)
+    assert np.unique(key).shape[0] < key.shape[0] // 10  # many ties
+    up = list(range(n))
+
+    def find(x):
+        while up[x] != x:
+            x = up[x]
+        return x
+
+    tree = [[] for _ in range(n)]
+    for e in np.lexsort((hi, lo, key)):  # Kruskal's algorithm
+        x, y = find(lo[e]), find(hi[e])
+        if x != y:
+            up[x] = y
+            tree[lo[e]].append(hi[e])
+            tree[hi[e]].append(lo[e])
     ref_sign, ref_comp = np.zeros(n, dtype=np.int8), np.full(n, -1)
     c = 0
     for s in range(n):
         if ref_comp[s] >= 0:
             continue
         ref_sign[s], ref_comp[s] = 1, c
-        heap = []
-        v = s
-        while True:
-            for t in range(indptr[v], indptr[v + 1]):
-                if ref_comp[indices[t]] < 0:
-                    heapq.heappush(heap, (1.0 - abs(normals[v] @ normals[indices[t]]), t, v))
-            while heap and ref_comp[indices[heap[0][1]]] >= 0:
-                heapq.heappop(heap)
-            if not heap:
-                break
-            _, t, u = heapq.heappop(heap)
-            v = indices[t]
-            ref_comp[v] = c
-            ref_sign[v] = ref_sign[u] if normals[u] @ normals[v] >= 0 else -ref_sign[u]
+        todo = [s]
+        while todo:
+            u = todo.pop()
+            for v in tree[u]:
+                if ref_comp[v] < 0:
+                    ref_comp[v] = c
+                    dot = normals[u, 0] * normals[v, 0] + normals[u, 1] * normals[v, 1] \
+                        + normals[u, 2] * normals[v, 2]
+                    ref_sign[v] = ref_sign[u] if dot >= 0 else -ref_sign[u]
+                    todo.append(v)
         c += 1
     assert n_comp == c >= 2
     assert np.array_equal(comp, ref_comp) and np.array_equal(sign, ref_sign)

@@ -23,7 +23,7 @@ weights for adjacent elements". Here each point is an element:
   PCA normal of the point and its ``K`` neighbours (smallest eigenvector of their covariance), then
   oriented consistently: towards the sensor when the viewpoint is known,
   else by propagation along a minimum spanning tree of flat steps (Hoppe et
-  al. 1992; Prim's tree, ties broken by the order of the adjacency lists)
+  al. 1992; the one tree under the order (cost, lower end, higher end) of the edges)
   with each connected piece turned outwards (away from its mean), or, for
   an open surface seen from a known side (``PointCloud.up``: LAS files,
   z up), turned to agree with that direction.

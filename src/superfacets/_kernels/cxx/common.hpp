@@ -257,5 +257,6 @@ void bind_exact(py::module_& m);
 void bind_vertices(py::module_& m);
 void bind_nearest(py::module_& m);
 void bind_order(py::module_& m);
+void bind_orient(py::module_& m);
 
 }  // namespace sfk

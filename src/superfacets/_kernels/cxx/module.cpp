@@ -31,4 +31,5 @@ PYBIND11_MODULE(_cxx, m) {
     sfk::bind_vertices(m);
     sfk::bind_nearest(m);
     sfk::bind_order(m);
+    sfk::bind_orient(m);
 }

@@ -1,6 +1,7 @@
 // The point graph's build: distinct positions in Z order, the symmetric kNN layout, PCA
-// normals and their orientation, the per-entry terms (superfacets/_kernels/geometry.py,
-// adjacency.py, normals.py, orient.py, terms.py), the same operations in the same order.
+// normals and their turn outwards (their signs: orient.cpp), the per-entry terms
+// (superfacets/_kernels/geometry.py, adjacency.py, normals.py, orient.py, terms.py), the
+// same operations in the same order.
 // The loops numba runs with prange run here on threads, each element on its own.
 #include "common.hpp"
 
@@ -158,10 +159,6 @@ inline void pair_terms(const double* pos, const double* nor, i64 i, i64 j, doubl
     geo = std::sqrt(dx * dx + dy * dy + dz * dz);
     cs = mn(mx(c, -1.0), 1.0);
     concave = s < 0;
-}
-
-inline bool before(double k1, i64 t1, double k2, i64 t2) {
-    return k1 < k2 || (k1 == k2 && t1 < t2);
 }
 
 }  // namespace
@@ -392,85 +389,6 @@ py::array_t<i32> knn_csr(py::handle nbr_, py::handle keep_, py::handle indptr_,
     return raw_a;
 }
 
-i64 propagate_signs(py::handle indptr_, py::handle indices_, py::handle normals_,
-                    py::handle sign_, py::handle component_) {
-    In<i64> indptr(indptr_, "indptr");
-    In<i32> indices(indices_, "indices");
-    In<double> nor(normals_, "normals");
-    Out<std::int8_t> sign(sign_, "sign");
-    Out<i64> component(component_, "component");
-    if (nor.cols != 3) throw Mismatch("argument normals");
-    py::gil_scoped_release nogil;
-    const i64 n = nor.n;
-    std::vector<char> done(n, 0);
-    std::vector<i64> at(n, -1), source(n), hent(n), hel(n);
-    std::vector<double> hkey(n);
-    auto put = [&](i64 i, double key, i64 t, i64 el) {
-        hkey[i] = key;
-        hent[i] = t;
-        hel[i] = el;
-        at[el] = i;
-    };
-    auto dot = [&](i64 u, i64 v) {
-        return nor(u, 0) * nor(v, 0) + nor(u, 1) * nor(v, 1) + nor(u, 2) * nor(v, 2);
-    };
-    i64 n_comp = 0;
-    for (i64 s = 0; s < n; ++s) {
-        if (done[s]) continue;
-        i64 size = 0, v = s;
-        done[s] = 1;
-        sign[s] = 1;
-        component[s] = n_comp;
-        while (true) {
-            for (i64 t = indptr[v]; t < indptr[v + 1]; ++t) {
-                i64 w = indices[t];
-                if (done[w]) continue;
-                double key = 1.0 - std::fabs(dot(v, w));
-                i64 i = at[w];
-                if (i < 0) {
-                    i = size++;
-                } else if (!before(key, t, hkey[i], hent[i])) {
-                    continue;
-                }
-                source[w] = v;
-                while (i > 0) {
-                    i64 p = (i - 1) >> 2;
-                    if (before(hkey[p], hent[p], key, t)) break;
-                    put(i, hkey[p], hent[p], hel[p]);
-                    i = p;
-                }
-                put(i, key, t, w);
-            }
-            if (size == 0) break;
-            v = hel[0];
-            at[v] = -1;
-            --size;
-            if (size > 0) {
-                double key = hkey[size];
-                i64 t = hent[size], x = hel[size], i = 0;
-                while (true) {
-                    i64 c = 4 * i + 1;
-                    if (c >= size) break;
-                    i64 m = c;
-                    for (i64 c2 = c + 1; c2 < mn(c + 4, size); ++c2)
-                        if (before(hkey[c2], hent[c2], hkey[m], hent[m])) m = c2;
-                    if (!before(hkey[m], hent[m], key, t)) break;
-                    put(i, hkey[m], hent[m], hel[m]);
-                    i = m;
-                }
-                put(i, key, t, x);
-            }
-            i64 u = source[v];
-            done[v] = 1;
-            component[v] = n_comp;
-            double d = dot(u, v);
-            sign[v] = static_cast<std::int8_t>(d >= 0 ? sign[u] : -sign[u]);
-        }
-        ++n_comp;
-    }
-    return n_comp;
-}
-
 void turn_outwards(py::handle points_, py::handle normals_, py::handle sign_,
                    py::handle component_, i64 n_comp, py::handle out_) {
     In<double> pts(points_, "points"), nor(normals_, "normals");
@@ -689,7 +607,6 @@ void bind_points(py::module_& m) {
     m.def("pca_normals", &pca_normals);
     m.def("pca_linearity", &pca_linearity);
     m.def("knn_csr", &knn_csr);
-    m.def("propagate_signs", &propagate_signs);
     m.def("turn_outwards", &turn_outwards);
     m.def("point_terms_csr", &point_terms_csr);
     m.def("combine_weights", &combine_weights);
