@@ -733,3 +733,32 @@ def test_a_runs_n_threads_bounds_the_compiled_kernels(monkeypatch):
     assert native._cxx.threads() == unbounded  # the limit ends with the run
     assert np.array_equal(one, superfacets.segment(as_cloud(pts), 40).labels)
 
+
+@needs_cxx
+@pytest.mark.parametrize("source", ["grid", "noisy", "weighted"])
+def test_farthest_points_by_groups_of_blocks_match_numba(source):
+    """Known answer: the compiled farthest-point sampling skips whole groups of 32 blocks
+    that a new center cannot change and takes the next center from the groups' bests; its
+    centers must be numba's (every block tested, every block compared), on a grid of
+    points with many exactly tied distances, the grid's points moved a little, and the
+    same with a scale per point (content-sensitive runs), from 2,000 to 2,560 blocks."""
+    rng = np.random.default_rng(8)
+    x, y = np.meshgrid(np.arange(300.0), np.arange(240.0))
+    c = np.c_[x.ravel(), y.ravel(), np.zeros(x.size)]
+    if source != "grid":
+        c = c + rng.normal(0, 0.05, c.shape)
+    c = np.ascontiguousarray(c)
+    order, bstart, bcenter, bradius = native.kernel("farthest.spatial_blocks")(c, 60)
+    extra = ()
+    if source == "weighted":
+        s2 = np.ascontiguousarray((rng.random(c.shape[0]) * 4 + 0.1)[order])
+        extra = (s2, np.maximum.reduceat(s2, bstart[:-1]))
+    assert bstart.shape[0] - 1 > 64 * 30
+    got = {}
+    for fn in ("kernel", "reference"):
+        out = np.empty(1500, np.int64)
+        getattr(native, fn)("farthest.farthest_point_blocked")(c, 1500, 17, out, order, bstart,
+                                                               bcenter, bradius, *extra)
+        got[fn] = out
+    assert np.array_equal(got["kernel"], got["reference"])
+    assert np.unique(got["kernel"]).shape[0] == 1500

@@ -117,51 +117,127 @@ void farthest_point_blocked(py::handle centroids_, i64 k, i64 first, py::handle 
             if (f < barg[b]) barg[b] = f;
         }
     }
+    // Groups of 32 blocks in the Z-order of their centers, each with a sphere holding its
+    // blocks' spheres, the least scale of its blocks and the best (bmax, barg) among them:
+    // a new center skips a whole group where the group's bound shows that it would skip
+    // each of its blocks (with a margin far above rounding), and the next center is the
+    // best of the groups' bests. The same blocks are scanned, so the same centers as a
+    // loop over every block (which took most of the time: 23,580 blocks for 2M points;
+    // 5,000 centers there 0.81-0.84 -> 0.55 s, 2,500 on 1M points 0.37-0.47 -> 0.18 s).
+    constexpr i64 G = 32;
+    std::vector<i64> gb(nb);
+    {
+        double lo3[3] = {INF, INF, INF}, hi3[3] = {-INF, -INF, -INF};
+        for (i64 b = 0; b < nb; ++b)
+            for (int t = 0; t < 3; ++t) {
+                lo3[t] = mn(lo3[t], bcenter(b, t));
+                hi3[t] = mx(hi3[t], bcenter(b, t));
+            }
+        std::vector<std::pair<std::uint64_t, i64>> key(nb);
+        for (i64 b = 0; b < nb; ++b) {
+            std::uint64_t z = 0;
+            for (int t = 0; t < 3; ++t) {
+                const double span = hi3[t] - lo3[t];
+                std::uint64_t q = span > 0 ? static_cast<std::uint64_t>(
+                                                 (bcenter(b, t) - lo3[t]) / span * 1023.0)
+                                           : 0;
+                for (int bit = 0; bit < 10; ++bit) z |= ((q >> bit) & 1u) << (3 * bit + t);
+            }
+            key[b] = {z, b};
+        }
+        std::sort(key.begin(), key.end());
+        for (i64 b = 0; b < nb; ++b) gb[b] = key[b].second;
+    }
+    const i64 ng = (nb + G - 1) / G;
+    std::vector<double> gc(3 * ng), gr(ng), gscale(ng, 1.0), gmax(ng, INF);
+    std::vector<i64> garg(ng, -1);
+    for (i64 g = 0; g < ng; ++g) {
+        const i64 s0 = g * G, s1 = mn(nb, s0 + G);
+        for (int t = 0; t < 3; ++t) {
+            double a = INF, z = -INF;
+            for (i64 i = s0; i < s1; ++i) {
+                a = mn(a, bcenter(gb[i], t) - bradius[gb[i]]);
+                z = mx(z, bcenter(gb[i], t) + bradius[gb[i]]);
+            }
+            gc[3 * g + t] = 0.5 * (a + z);
+        }
+        double r = 0.0;
+        for (i64 i = s0; i < s1; ++i) {
+            const i64 b = gb[i];
+            double dx = bcenter(b, 0) - gc[3 * g], dy = bcenter(b, 1) - gc[3 * g + 1],
+                   dz = bcenter(b, 2) - gc[3 * g + 2];
+            r = mx(r, std::sqrt(dx * dx + dy * dy + dz * dz) + bradius[b]);
+            if (scaled) gscale[g] = i == s0 ? bscale2[b] : mn(gscale[g], bscale2[b]);
+        }
+        gr[g] = r * (1.0 + 1e-6);
+    }
     i64 cur = first;
     for (i64 t = 0; t < k; ++t) {
         out[t] = cur;
         mind[slot[cur]] = -1.0;
         const double cx = c(cur, 0), cy = c(cur, 1), cz = c(cur, 2);
         const i64 hb = home[cur];
-        for (i64 b = 0; b < nb; ++b) {
-            if (b != hb) {
-                double dx = bcenter(b, 0) - cx, dy = bcenter(b, 1) - cy, dz = bcenter(b, 2) - cz;
+        for (i64 g = 0; g < ng; ++g) {
+            {
+                double dx = gc[3 * g] - cx, dy = gc[3 * g + 1] - cy, dz = gc[3 * g + 2] - cz;
                 double dc = std::sqrt(dx * dx + dy * dy + dz * dz);
-                double lb = dc - bradius[b] - 1e-9 * (dc + bradius[b]);
-                double lb2 = lb * lb;
-                if (scaled) lb2 *= bscale2[b];
-                if (lb > 0.0 && lb2 >= bmax[b]) continue;
+                double lb = dc - gr[g] - 1e-6 * (dc + gr[g]);
+                if (lb > 0.0 && lb * lb * gscale[g] >= gmax[g] * (1.0 + 1e-6)) continue;
             }
-            double best = -1.0;
-            i64 arg = m;
-            for (i64 j = bstart[b]; j < bstart[b + 1]; ++j) {
-                // _nearest_so_far on the block-ordered positions
-                double mf = mind[j];
-                if (!(mf < 0.0)) {
-                    double dx = pos[3 * j] - cx, dy = pos[3 * j + 1] - cy, dz = pos[3 * j + 2] - cz;
-                    double d = dx * dx + dy * dy + dz * dz;
-                    if (scaled) d *= scale2[j];
-                    if (d < mf) {
-                        mind[j] = d;
-                        mf = d;
+            double gbest = -1.0;
+            i64 gbarg = -1;
+            for (i64 i = g * G; i < mn(nb, g * G + G); ++i) {
+                const i64 b = gb[i];
+                bool skip = false;
+                if (b != hb) {
+                    double dx = bcenter(b, 0) - cx, dy = bcenter(b, 1) - cy,
+                           dz = bcenter(b, 2) - cz;
+                    double dc = std::sqrt(dx * dx + dy * dy + dz * dz);
+                    double lb = dc - bradius[b] - 1e-9 * (dc + bradius[b]);
+                    double lb2 = lb * lb;
+                    if (scaled) lb2 *= bscale2[b];
+                    skip = lb > 0.0 && lb2 >= bmax[b];
+                }
+                if (!skip) {
+                    double best = -1.0;
+                    i64 arg = m;
+                    for (i64 j = bstart[b]; j < bstart[b + 1]; ++j) {
+                        // _nearest_so_far on the block-ordered positions
+                        double mf = mind[j];
+                        if (!(mf < 0.0)) {
+                            double ex = pos[3 * j] - cx, ey = pos[3 * j + 1] - cy,
+                                   ez = pos[3 * j + 2] - cz;
+                            double d = ex * ex + ey * ey + ez * ez;
+                            if (scaled) d *= scale2[j];
+                            if (d < mf) {
+                                mind[j] = d;
+                                mf = d;
+                            }
+                        }
+                        if (mf < 0.0) continue;
+                        i64 f = order[j];
+                        if (mf > best || (mf == best && f < arg)) {
+                            best = mf;
+                            arg = f;
+                        }
                     }
+                    bmax[b] = best;
+                    barg[b] = arg;
                 }
-                if (mf < 0.0) continue;
-                i64 f = order[j];
-                if (mf > best || (mf == best && f < arg)) {
-                    best = mf;
-                    arg = f;
+                if (bmax[b] > gbest || (bmax[b] == gbest && barg[b] < gbarg)) {
+                    gbest = bmax[b];
+                    gbarg = barg[b];
                 }
             }
-            bmax[b] = best;
-            barg[b] = arg;
+            gmax[g] = gbest;
+            garg[g] = gbarg;
         }
         double best = -1.0;
         i64 nxt = -1;
-        for (i64 b = 0; b < nb; ++b)
-            if (bmax[b] > best || (bmax[b] == best && barg[b] < nxt)) {
-                best = bmax[b];
-                nxt = barg[b];
+        for (i64 g = 0; g < ng; ++g)
+            if (gmax[g] > best || (gmax[g] == best && garg[g] < nxt)) {
+                best = gmax[g];
+                nxt = garg[g];
             }
         cur = nxt;
     }
