@@ -121,9 +121,9 @@ class BlockedSearch {
         const i64 step = std::max<i64>(1, m >> 16);
         for (i64 f = 0; f < m; f += step)
             for (i64 e = indptr[f]; e < indptr[f + 1]; ++e, ++edges)
-                crossing += indices[e] / block_ != f / block_;
-        block_ = 4 * crossing < edges ? kBlock : std::max<i64>(m, 1);
-        pending_.resize((m + block_ - 1) / block_);
+                crossing += (indices[e] >> kShift) != (f >> kShift);
+        shift_ = 4 * crossing < edges ? kShift : 62;  // (62: every element in block 0)
+        pending_.resize(std::max<i64>(1, (m + (i64{1} << shift_) - 1) >> shift_));
         for (int t = 0; t < threads(); ++t) work_.emplace_back(nb);
     }
 
@@ -152,7 +152,7 @@ class BlockedSearch {
     void wait(i64 g) {  // g seeds its block's next round
         if (!queued_[g]) {
             queued_[g] = true;
-            pending_[g / block_].push_back(g);
+            pending_[g >> shift_].push_back(g);
         }
     }
 
@@ -162,17 +162,17 @@ class BlockedSearch {
         std::stable_sort(sd.begin(), sd.end(),
                          [&](i64 x, i64 y) { return dist_[x] < dist_[y]; });
         w.run(indptr_, indices_, weights_, dist_, label_, sd.data(), static_cast<i64>(sd.size()),
-              b * block_, std::min(m_, (b + 1) * block_), inv_width_);
+              b << shift_, std::min(m_, (b + 1) << shift_), inv_width_);
         sd.clear();
     }
 
     void offer(i64 f) {  // f's pair over its edges out of its block
-        const i64 bf = f / block_;
+        const i64 bf = f >> shift_;
         const double d = dist_[f];
         const L lf = label_[f];
         for (i64 e = indptr_[f]; e < indptr_[f + 1]; ++e) {
             const i64 g = indices_[e];
-            if (g / block_ == bf) continue;
+            if ((g >> shift_) == bf) continue;
             const double nd = d + static_cast<double>(weights_[e]);
             if (nd < dist_[g] || (nd == dist_[g] && lf < label_[g])) {
                 dist_[g] = nd;
@@ -190,8 +190,9 @@ class BlockedSearch {
     i64 m_;
     // elements per block: in a core's cache; a multiple of 64, so that no two blocks'
     // marks share a word of queued_ (or all of them, in one block)
-    static constexpr i64 kBlock = i64{1} << 15;
-    i64 block_ = kBlock;
+    static constexpr int kShift = 15;
+    // (a shift, not a division: the sample's divisions cost 8 ms a search on 1M points)
+    int shift_ = kShift;
     double inv_width_;
     std::vector<std::vector<i64>> pending_;
     std::vector<bool> queued_;  // (a bit per element)
