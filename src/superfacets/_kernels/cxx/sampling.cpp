@@ -4,6 +4,18 @@
 
 namespace sfk {
 
+// farthest.py's _nearest_so_far: a point's squared distance to its nearest center so far
+// (times its scale; a scale of 1.0 changes no bit), lowered by the center at (cx, cy, cz);
+// -1: the point is a center
+inline double nearest_so_far(double& mind, const double* p, double cx, double cy, double cz,
+                             double scale) {
+    if (mind < 0.0) return mind;
+    double dx = p[0] - cx, dy = p[1] - cy, dz = p[2] - cz;
+    double d = (dx * dx + dy * dy + dz * dz) * scale;
+    if (d < mind) mind = d;
+    return mind;
+}
+
 py::tuple spatial_blocks(py::handle centroids_, i64 cells_per_axis) {
     In<double> c(centroids_, "centroids");
     if (c.cols != 3 || c.n == 0) throw Mismatch("argument centroids");
@@ -202,18 +214,9 @@ void farthest_point_blocked(py::handle centroids_, i64 k, i64 first, py::handle 
                     double best = -1.0;
                     i64 arg = m;
                     for (i64 j = bstart[b]; j < bstart[b + 1]; ++j) {
-                        // _nearest_so_far on the block-ordered positions
-                        double mf = mind[j];
-                        if (!(mf < 0.0)) {
-                            double ex = pos[3 * j] - cx, ey = pos[3 * j + 1] - cy,
-                                   ez = pos[3 * j + 2] - cz;
-                            double d = ex * ex + ey * ey + ez * ez;
-                            if (scaled) d *= scale2[j];
-                            if (d < mf) {
-                                mind[j] = d;
-                                mf = d;
-                            }
-                        }
+                        // on the block-ordered positions
+                        const double mf = nearest_so_far(mind[j], pos.data() + 3 * j, cx, cy,
+                                                         cz, scaled ? scale2[j] : 1.0);
                         if (mf < 0.0) continue;
                         i64 f = order[j];
                         if (mf > best || (mf == best && f < arg)) {
@@ -262,16 +265,8 @@ void farthest_point(py::handle centroids_, i64 k, i64 first, py::handle out_,
         double best = -1.0;
         i64 nxt = -1;
         for (i64 f = 0; f < m; ++f) {
-            double mf = mind[f];
-            if (!(mf < 0.0)) {
-                double dx = c(f, 0) - cx, dy = c(f, 1) - cy, dz = c(f, 2) - cz;
-                double d = dx * dx + dy * dy + dz * dz;
-                if (scaled) d *= scale2[f];
-                if (d < mf) {
-                    mind[f] = d;
-                    mf = d;
-                }
-            }
+            const double mf =
+                nearest_so_far(mind[f], c.p + 3 * f, cx, cy, cz, scaled ? scale2[f] : 1.0);
             if (mf < 0.0) continue;
             if (mf > best) {
                 best = mf;
