@@ -735,6 +735,40 @@ def test_a_runs_n_threads_bounds_the_compiled_kernels(monkeypatch):
 
 
 @needs_cxx
+@pytest.mark.parametrize("chords", [0.05, 0.2])
+def test_orientation_by_blocks_with_long_cycles_matches_numba(chords):
+    """Known answer: a ring of 150,000 elements with short hops and random chords between
+    far blocks (6 % and 18 % of the edges between blocks: cycles through many blocks,
+    paths of forests left out) and quantized normals (ties); the compiled signs and
+    components must be numba's Prim's."""
+    from scipy.sparse import coo_array
+
+    rng = np.random.default_rng(5)
+    n = 150_000
+    a = np.arange(n)
+    m = int(chords * 3 * n)
+    i = np.r_[a, a, rng.integers(0, n, m)]
+    j = np.r_[(a + 1) % n, (a + rng.integers(2, 40, n)) % n, rng.integers(0, n, m)]
+    keep = i != j
+    g = coo_array((np.ones(keep.sum()), (i[keep], j[keep])), shape=(n, n)).tocsr()
+    g = (g + g.T).tocsr()
+    g.sort_indices()
+    indptr, indices = g.indptr.astype(np.int64), g.indices.astype(np.int32)
+    normals = np.round(rng.normal(size=(n, 3)))
+    normals[(normals == 0).all(axis=1)] = [0.0, 0.0, 1.0]
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    got = {}
+    for fn in ("kernel", "reference"):
+        sign, comp = np.empty(n, np.int8), np.empty(n, np.int64)
+        k = getattr(native, fn)("orient.propagate_signs")(indptr, indices, normals, sign, comp)
+        got[fn] = (k, sign, comp)
+    assert got["kernel"][0] == got["reference"][0] == 1
+    assert np.array_equal(got["kernel"][1], got["reference"][1])
+    assert np.array_equal(got["kernel"][2], got["reference"][2])
+    assert (got["kernel"][1] < 0).sum() > n // 4  # signs that the tree had to turn
+
+
+@needs_cxx
 @pytest.mark.parametrize("source", ["grid", "noisy", "weighted"])
 def test_farthest_points_by_groups_of_blocks_match_numba(source):
     """Known answer: the compiled farthest-point sampling skips whole groups of 32 blocks
