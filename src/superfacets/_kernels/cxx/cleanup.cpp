@@ -10,12 +10,12 @@ namespace {
 
 constexpr i64 NONE = -1, TERMINAL = -2, ORPHAN = -3;
 
-inline bool rooted(const i64* parent, const i64* head, i64 j) {
+inline bool rooted(const i64* parent, const i64* up, i64 j) {
     while (true) {
         i64 p = parent[j];
         if (p == TERMINAL) return true;
         if (p < 0) return false;
-        j = head[p];
+        j = up[j];
     }
 }
 
@@ -28,13 +28,15 @@ struct Arcs {
 };
 
 struct CutWork {
-    std::vector<i64> head, nxt, first, parent, active, orphans;
+    std::vector<i64> head, nxt, first, parent, up, active, orphans;
     std::vector<double> cap, tr;
     std::vector<char> side, sink, queued;
 };
 
 void min_cut_in(const Arcs& g, double eps, char* source_side, i64 n, i64* parent, char* sink,
-                char* queued, i64* active, i64* orphans) {
+                char* queued, i64* active, i64* orphans, i64* up) {
+    // (up[u] = head[parent[u]] while u has a parent arc: the walks to the roots follow
+    // one load a step)
     const i64* first = g.first;
     const i64* nxt = g.nxt;
     const i64* head = g.head;
@@ -72,6 +74,7 @@ void min_cut_in(const Arcs& g, double eps, char* source_side, i64 n, i64* parent
             if ((side ? cap[a ^ 1] : cap[a]) > eps) {
                 if (parent[j] == NONE) {
                     parent[j] = a ^ 1;
+                    up[j] = i;
                     sink[j] = side;
                     if (!queued[j]) {
                         active[(qh + qn) % n] = j;
@@ -96,14 +99,14 @@ void min_cut_in(const Arcs& g, double eps, char* source_side, i64 n, i64* parent
         while (parent[u] != TERMINAL) {
             i64 pa = parent[u];
             b = mn(b, cap[pa ^ 1]);
-            u = head[pa];
+            u = up[u];
         }
         b = mn(b, tr[u]);
         u = head[mid];
         while (parent[u] != TERMINAL) {
             i64 pa = parent[u];
             b = mn(b, cap[pa]);
-            u = head[pa];
+            u = up[u];
         }
         b = mn(b, -tr[u]);
         cap[mid] -= b;
@@ -118,7 +121,7 @@ void min_cut_in(const Arcs& g, double eps, char* source_side, i64 n, i64* parent
                 parent[u] = ORPHAN;
                 orphans[n_orphans++] = u;
             }
-            u = head[pa];
+            u = up[u];
         }
         tr[u] -= b;
         if (!(tr[u] > eps)) {
@@ -134,7 +137,7 @@ void min_cut_in(const Arcs& g, double eps, char* source_side, i64 n, i64* parent
                 parent[u] = ORPHAN;
                 orphans[n_orphans++] = u;
             }
-            u = head[pa];
+            u = up[u];
         }
         tr[u] += b;
         if (!(-tr[u] > eps)) {
@@ -150,7 +153,7 @@ void min_cut_in(const Arcs& g, double eps, char* source_side, i64 n, i64* parent
             while (a != -1) {
                 i64 j = head[a];
                 if (static_cast<bool>(sink[j]) == oside && parent[j] != NONE &&
-                    (oside ? cap[a] > eps : cap[a ^ 1] > eps) && rooted(parent, head, j)) {
+                    (oside ? cap[a] > eps : cap[a ^ 1] > eps) && rooted(parent, up, j)) {
                     nw = a;
                     break;
                 }
@@ -158,6 +161,7 @@ void min_cut_in(const Arcs& g, double eps, char* source_side, i64 n, i64* parent
             }
             if (nw != -1) {
                 parent[o] = nw;
+                up[o] = head[nw];
                 continue;
             }
             a = first[o];
@@ -246,7 +250,7 @@ void solve_one(const Bands& B, const i64* members, i64 nb, i64 la, i64 lb, i64 p
     }
     Arcs g{W.first.data(), W.nxt.data(), W.head.data(), W.cap.data(), W.tr.data()};
     min_cut_in(g, 1e-12 * total, W.side.data(), nb, W.parent.data(), W.sink.data(),
-               W.queued.data(), W.active.data(), W.orphans.data());
+               W.queued.data(), W.active.data(), W.orphans.data(), W.up.data());
     for (i64 i = 0; i < nb; ++i) B.out[members[i]] = W.side[i] ? la : lb;
 }
 
@@ -368,7 +372,7 @@ void solve_bands(i64 p0, i64 p1, py::handle order_, py::handle starts_, py::hand
     W.head.resize(most_arcs);
     W.cap.resize(most_arcs);
     W.nxt.resize(most_arcs);
-    for (auto* v : {&W.first, &W.parent, &W.active, &W.orphans}) v->resize(most_nodes);
+    for (auto* v : {&W.first, &W.parent, &W.up, &W.active, &W.orphans}) v->resize(most_nodes);
     W.tr.resize(most_nodes);
     for (auto* v : {&W.side, &W.sink, &W.queued}) v->resize(most_nodes);
     Bands B{band_of.p, indptr.p, indices.p, cut_cost.p, labels.p, sizes.p, positions.p, means.p,
