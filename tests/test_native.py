@@ -466,6 +466,49 @@ def test_csr_of_pairs_and_their_numbering_match_numba(ptype, dtype):
 
 
 @needs_cxx
+@pytest.mark.parametrize("threads", ["1", "2", "3"])
+def test_csr_of_pairs_on_threads_keeps_the_pairs_order_in_each_row(monkeypatch, threads):
+    """Known answer on threads (each owns a range of rows, reads every pair): 400,000
+    pairs over 150,000 rows, repeated pairs whose order in a row is the pairs' order (the
+    stable sort keeps it, so a thread that wrote them out of order would fail), rows that
+    cross the threads' bounds; and the face pairs' CSR (repeats dropped, the first kept
+    by its edge keys) the same as numba's."""
+    rng = np.random.default_rng(11)
+    n, e = 150_000, 400_000
+    lo = rng.integers(0, n - 1, e)
+    hi = np.minimum(lo + rng.integers(1, 3, e), n - 1)
+    lo[:2000], hi[:2000] = np.repeat(np.arange(74_990, 75_010), 100), 75_020  # repeats
+    keep = lo < hi
+    lo, hi = lo[keep].astype(np.int32), hi[keep].astype(np.int32)
+    ka = rng.integers(0, 50, lo.shape[0]).astype(np.int32)
+    kb = rng.integers(0, 50, lo.shape[0]).astype(np.int32)
+    with monkeypatch.context() as m:
+        m.setenv("NUMBA_NUM_THREADS", threads)
+        got = []
+        for fn in (native.kernel("adjacency.csr_of_pairs"),
+                   native.reference("adjacency.csr_of_pairs")):
+            ind = np.empty(2 * lo.shape[0], dtype=np.int32)
+            de = np.empty(2 * lo.shape[0], dtype=np.int32)
+            got.append((fn(lo, hi, n, ind, de), ind, de))
+        faces = []
+        for fn in (native.kernel("adjacency.csr_of_face_pairs"),
+                   native.reference("adjacency.csr_of_face_pairs")):
+            ind = np.empty(2 * lo.shape[0], dtype=np.int32)
+            de = np.empty(2 * lo.shape[0], dtype=np.int32)
+            indptr, first = fn(lo, hi, ka, kb, n, ind, de)
+            faces.append((indptr, first, ind[:indptr[-1]], de[:indptr[-1]]))
+    assert _same(got[0], got[1]) and _same(faces[0], faces[1])
+    indptr, ind, de = got[0]
+    # known answer: each row's entries ascending, equal ones in the pairs' order
+    rows = np.repeat(np.arange(n), np.diff(indptr))
+    other = np.where(lo[de] == rows, hi[de], lo[de])
+    assert np.array_equal(other, ind)
+    o = np.lexsort((de, ind, rows))
+    assert np.array_equal(o, np.arange(o.shape[0]))
+    assert np.array_equal(np.diff(faces[0][0]) > 0, np.diff(indptr) > 0)
+
+
+@needs_cxx
 def test_plain_classification_matches_numba():
     from superfacets.elements import face_graph
     from superfacets.method.expansion import Workspaces, with_room

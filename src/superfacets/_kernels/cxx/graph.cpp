@@ -64,24 +64,38 @@ void sort_row(I* indices, D* dual_edge, i64 s, i64 f) {
 template <class P, class D>
 void csr_of_pairs(const P* lo, const P* hi, i64 e, i64 n, i32* indices, D* dual_edge,
                   i64* indptr) {
-    std::fill(indptr, indptr + n + 1, 0);
-    for (i64 t = 0; t < e; ++t) {
-        indptr[lo[t] + 1] += 1;
-        indptr[hi[t] + 1] += 1;
-    }
+    // thread w owns the rows n w / T .. n (w + 1) / T: it reads every pair, in order,
+    // and counts and writes only the entries of its rows (no atomics: one pass's layout)
+    const i64 T = std::max<i64>(1, std::min<i64>(threads(), mn(n, e) / 65536));
+    auto row0 = [&](i64 w) { return n * w / T; };
+    indptr[0] = 0;
+    on_threads(T, [&](i64 w) {
+        const i64 r0 = row0(w), r1 = row0(w + 1);
+        std::fill(indptr + r0 + 1, indptr + r1 + 1, 0);
+        for (i64 t = 0; t < e; ++t) {
+            i64 a = lo[t], b = hi[t];
+            if (a >= r0 && a < r1) indptr[a + 1] += 1;
+            if (b >= r0 && b < r1) indptr[b + 1] += 1;
+        }
+    });
     for (i64 v = 0; v < n; ++v) indptr[v + 1] += indptr[v];
     std::vector<i64> fill(indptr, indptr + n);
-    for (i64 t = 0; t < e; ++t) {
-        i64 a = lo[t], b = hi[t];
-        i64 p = fill[a];
-        indices[p] = static_cast<i32>(b);
-        dual_edge[p] = static_cast<D>(t);
-        fill[a] = p + 1;
-        p = fill[b];
-        indices[p] = static_cast<i32>(a);
-        dual_edge[p] = static_cast<D>(t);
-        fill[b] = p + 1;
-    }
+    on_threads(T, [&](i64 w) {
+        const i64 r0 = row0(w), r1 = row0(w + 1);
+        for (i64 t = 0; t < e; ++t) {
+            i64 a = lo[t], b = hi[t];
+            if (a >= r0 && a < r1) {
+                i64 p = fill[a]++;
+                indices[p] = static_cast<i32>(b);
+                dual_edge[p] = static_cast<D>(t);
+            }
+            if (b >= r0 && b < r1) {
+                i64 p = fill[b]++;
+                indices[p] = static_cast<i32>(a);
+                dual_edge[p] = static_cast<D>(t);
+            }
+        }
+    });
     parallel_for(n, [&](i64 lo, i64 hi) {  // rows apart: on threads
         for (i64 v = lo; v < hi; ++v) sort_row(indices, dual_edge, indptr[v], indptr[v + 1]);
     });
@@ -119,16 +133,18 @@ void triangle_half_edges(py::handle faces_, py::handle a_, py::handle b_, py::ha
     Out<bool> skip(skip_, "skip");
     with_index(faces_, "faces", [&](auto faces) {  // (int32 or int64 faces)
         py::gil_scoped_release nogil;
-        for (i64 f = 0; f < faces.n; ++f) {
-            for (i64 c = 0; c < 3; ++c) {
-                i64 u = faces(f, c);
-                i64 v = faces(f, c == 2 ? 0 : c + 1);
-                i64 h = 3 * f + c;
-                a[h] = static_cast<i32>(mn(u, v));
-                b[h] = static_cast<i32>(mx(u, v));
-                skip[h] = u == v;
+        parallel_for(faces.n, [&](i64 lo, i64 hi) {
+            for (i64 f = lo; f < hi; ++f) {
+                for (i64 c = 0; c < 3; ++c) {
+                    i64 u = faces(f, c);
+                    i64 v = faces(f, c == 2 ? 0 : c + 1);
+                    i64 h = 3 * f + c;
+                    a[h] = static_cast<i32>(mn(u, v));
+                    b[h] = static_cast<i32>(mx(u, v));
+                    skip[h] = u == v;
+                }
             }
-        }
+        });
     });
 }
 
@@ -489,11 +505,13 @@ void face_terms(py::handle vertices_, py::handle centroids_, py::handle normals_
 
 template <class E>
 void lengths_into(const In<double>& v, const E* edges, i64 m, double* out) {
-    for (i64 t = 0; t < m; ++t) {
-        i64 a = edges[2 * t], b = edges[2 * t + 1];
-        double x = v(b, 0) - v(a, 0), y = v(b, 1) - v(a, 1), z = v(b, 2) - v(a, 2);
-        out[t] = std::sqrt(x * x + y * y + z * z);
-    }
+    parallel_for(m, [&](i64 lo, i64 hi) {
+        for (i64 t = lo; t < hi; ++t) {
+            i64 a = edges[2 * t], b = edges[2 * t + 1];
+            double x = v(b, 0) - v(a, 0), y = v(b, 1) - v(a, 1), z = v(b, 2) - v(a, 2);
+            out[t] = std::sqrt(x * x + y * y + z * z);
+        }
+    });
 }
 
 void edge_lengths(py::handle vertices_, py::handle edges_, py::handle out_) {
