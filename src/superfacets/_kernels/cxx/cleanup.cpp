@@ -299,29 +299,41 @@ void band_distances(py::handle indptr_, py::handle indices_, py::handle dual_edg
     });
     i64 k = 0;
     for (i64 f = 0; f < n; ++f) k = mx(k, labels[f] + 1);
-    // the searches never cross a label change: the superfacets' searches are apart, a
-    // range of labels on each thread, each with its own heap; ties of distance go to the
-    // lowest partner, so the result is that of any order
+    // the seeds by label, in element order (a counting sort)
+    std::vector<i64> first(k + 1, 0);
+    for (i64 f = 0; f < n; ++f)
+        if (partner[f] >= 0) ++first[labels[f] + 1];
+    for (i64 l = 0; l < k; ++l) first[l + 1] += first[l];
+    std::vector<i64> seeds(first[k]);
+    {
+        std::vector<i64> fill(first.begin(), first.end() - 1);
+        for (i64 f = 0; f < n; ++f)
+            if (partner[f] >= 0) seeds[fill[labels[f]]++] = f;
+    }
+    // the searches never cross a label change: each superfacet's search on its own (its
+    // heap holds its border: small, in cache), a range of labels on each thread; ties of
+    // distance go to the lowest partner, so the result is that of any order
     auto search = [&](i64 la, i64 lb) {
         Heap heap(1024);
-        for (i64 f = 0; f < n; ++f)
-            if (partner[f] >= 0 && labels[f] >= la && labels[f] < lb) heap.push(0.0, f);
-        while (heap.size > 0) {
-            double d = heap.h[0].key;
-            i64 f = heap.h[0].val;
-            heap.pop();
-            if (d > dist[f]) continue;
-            i64 lf = labels[f], pf = partner[f];
-            for (i64 e = indptr[f]; e < indptr[f + 1]; ++e) {
-                i64 g = indices[e];
-                if (labels[g] != lf || pinned[g]) continue;
-                double nd = d + geo[dual_edge[e]];
-                double dg = dist[g];
-                if (nd < limit && (nd < dg || (nd == dg && pf < partner[g] &&
-                                               !std::signbit(dg)))) {
-                    dist[g] = nd;
-                    partner[g] = pf;
-                    heap.push(nd, g);
+        for (i64 l = la; l < lb; ++l) {
+            for (i64 t = first[l]; t < first[l + 1]; ++t) heap.push(0.0, seeds[t]);
+            while (heap.size > 0) {
+                double d = heap.h[0].key;
+                i64 f = heap.h[0].val;
+                heap.pop();
+                if (d > dist[f]) continue;
+                i64 pf = partner[f];
+                for (i64 e = indptr[f]; e < indptr[f + 1]; ++e) {
+                    i64 g = indices[e];
+                    if (labels[g] != l || pinned[g]) continue;
+                    double nd = d + geo[dual_edge[e]];
+                    double dg = dist[g];
+                    if (nd < limit && (nd < dg || (nd == dg && pf < partner[g] &&
+                                                   !std::signbit(dg)))) {
+                        dist[g] = nd;
+                        partner[g] = pf;
+                        heap.push(nd, g);
+                    }
                 }
             }
         }
