@@ -509,6 +509,31 @@ def test_csr_of_pairs_on_threads_keeps_the_pairs_order_in_each_row(monkeypatch, 
 
 
 @needs_cxx
+@pytest.mark.parametrize("threads", ["1", "2", "3"])
+def test_first_in_cells_on_threads_are_the_lowest_of_each_cell(monkeypatch, threads):
+    """Known answer on threads (one table, cells taken by compare-and-swap): the lowest
+    element of each occupied cell, ascending, as numba's and as ``np.unique`` (a table
+    that kept the last element offered, or the first to arrive, fails); an empty array
+    once more than half the table would fill."""
+    rng = np.random.default_rng(2)
+    pos = rng.random((120_000, 3)) * 7.0
+    lo, h = np.zeros(3), 0.5
+    dims = np.floor((pos.max(0) - lo) / h).astype(np.int64) + 1
+    cell = np.floor((pos - lo) / h).astype(np.int64)
+    expected = np.sort(np.unique(cell, axis=0, return_index=True)[1])
+    with monkeypatch.context() as m:
+        m.setenv("NUMBA_NUM_THREADS", threads)
+        for cap in (8192, 1024):
+            got = native.kernel("voronoi.first_in_cells")(pos, lo, h, dims, cap)
+            ref = native.reference("voronoi.first_in_cells")(pos, lo, h, dims, cap)
+            assert np.array_equal(got, ref)
+            if cap == 8192:
+                assert np.array_equal(got, expected) and expected.shape[0] == 2744
+            else:  # 2,744 cells do not fit half of 1,024 slots
+                assert got.shape[0] == 0
+
+
+@needs_cxx
 def test_plain_classification_matches_numba():
     from superfacets.elements import face_graph
     from superfacets.method.expansion import Workspaces, with_room

@@ -44,7 +44,8 @@ def nearest_seed(indptr, indices, weights, seeds, first, dist, label, queue, inv
 @njit(cache=True, error_model="numpy")
 def first_in_cells(positions, lo, h, dims, cap):
     """The lowest-index element of each occupied cell of pitch ``h`` from ``lo``
-    (``dims`` cells per axis, their product below ``2**62``), in no order.
+    (``dims`` cells per axis, their product below ``2**62``), ascending (the compiled
+    kernel fills one table on threads: its slots' order is not its inputs').
 
     An open-addressing hash table of ``cap`` slots (a power of two); returns
     an empty array when more than half of them would fill (call again with a
@@ -79,6 +80,7 @@ def first_in_cells(positions, lo, h, dims, cap):
         if keys[i] >= 0:
             out[j] = first[i]
             j += 1
+    out.sort()
     return out
 
 

@@ -1,6 +1,11 @@
 // Voronoi cells of seeds in the weighted element graph, for the coarse-to-fine run
 // (superfacets/_kernels/voronoi.py): the same operations in the same order, the cells'
 // search by blocks on threads (BlockedSearch: numba's search_buckets' result).
+#include <algorithm>
+#include <atomic>
+#include <limits>
+#include <memory>
+
 #include "search.hpp"
 
 namespace sfk {
@@ -161,40 +166,64 @@ py::array_t<i64> first_in_cells(py::handle positions_, py::handle lo_, double h,
     In<double> positions(positions_, "positions"), lo(lo_, "lo");
     In<i64> dims(dims_, "dims");
     if (positions.cols != 3 || lo.n != 3 || dims.n != 3) throw Mismatch("argument positions");
-    std::vector<i64> keys(cap, -1), first(cap);
-    i64 count = 0;
-    bool full = false;
+    // one table filled on threads: a cell's slot taken by compare-and-swap, its first
+    // element the least any thread offers; the slots' order then depends on the threads'
+    // timing, so the firsts are given back sorted (as numba's)
+    std::unique_ptr<std::atomic<i64>[]> keys(new std::atomic<i64>[cap]);
+    std::unique_ptr<std::atomic<i64>[]> first(new std::atomic<i64>[cap]);
+    std::atomic<i64> count{0};
+    std::atomic<bool> full{false};
+    std::vector<i64> got;
     {
         py::gil_scoped_release nogil;
+        parallel_for(cap, [&](i64 a, i64 b) {
+            for (i64 i = a; i < b; ++i) {
+                keys[i].store(-1, std::memory_order_relaxed);
+                first[i].store(std::numeric_limits<i64>::max(), std::memory_order_relaxed);
+            }
+        });
         const std::uint64_t mask = static_cast<std::uint64_t>(cap - 1);
         const std::uint64_t mult = 11400714819323198485ULL;
-        for (i64 t = 0; t < positions.n && !full; ++t) {
-            i64 cx = static_cast<i64>(std::floor((positions(t, 0) - lo[0]) / h));
-            i64 cy = static_cast<i64>(std::floor((positions(t, 1) - lo[1]) / h));
-            i64 cz = static_cast<i64>(std::floor((positions(t, 2) - lo[2]) / h));
-            i64 k = (cx * dims[1] + cy) * dims[2] + cz;
-            std::uint64_t s = ((static_cast<std::uint64_t>(k) * mult) >> 20) & mask;
-            while (true) {
-                i64 i = static_cast<i64>(s);
-                if (keys[i] == k) break;
-                if (keys[i] < 0) {
-                    keys[i] = k;
-                    first[i] = t;
-                    ++count;
-                    if (2 * count > cap) full = true;
-                    break;
+        parallel_for(positions.n, [&](i64 t0, i64 t1) {
+            for (i64 t = t0; t < t1; ++t) {
+                if (full.load(std::memory_order_relaxed)) return;  // (never past half)
+                i64 cx = static_cast<i64>(std::floor((positions(t, 0) - lo[0]) / h));
+                i64 cy = static_cast<i64>(std::floor((positions(t, 1) - lo[1]) / h));
+                i64 cz = static_cast<i64>(std::floor((positions(t, 2) - lo[2]) / h));
+                i64 k = (cx * dims[1] + cy) * dims[2] + cz;
+                std::uint64_t s = ((static_cast<std::uint64_t>(k) * mult) >> 20) & mask;
+                while (true) {
+                    i64 i = static_cast<i64>(s);
+                    i64 now = keys[i].load(std::memory_order_relaxed);
+                    if (now < 0) {
+                        i64 expected = -1;
+                        if (keys[i].compare_exchange_strong(expected, k)) {
+                            if (2 * (count.fetch_add(1) + 1) > cap) full.store(true);
+                            now = k;
+                        } else {
+                            now = expected;
+                        }
+                    }
+                    if (now == k) {
+                        i64 f = first[i].load(std::memory_order_relaxed);
+                        while (t < f && !first[i].compare_exchange_weak(f, t)) {
+                        }
+                        break;
+                    }
+                    s = (s + 1) & mask;
                 }
-                s = (s + 1) & mask;
             }
+        });
+        if (!full.load()) {
+            got.reserve(count.load());
+            for (i64 i = 0; i < cap; ++i)
+                if (keys[i].load(std::memory_order_relaxed) >= 0) got.push_back(first[i].load());
+            std::sort(got.begin(), got.end());
         }
     }
     Out<i64> out;
-    auto out_a = fresh(full ? 0 : count, out);
-    if (!full) {
-        i64 j = 0;
-        for (i64 i = 0; i < cap; ++i)
-            if (keys[i] >= 0) out[j++] = first[i];
-    }
+    auto out_a = fresh(static_cast<i64>(got.size()), out);
+    for (i64 j = 0; j < static_cast<i64>(got.size()); ++j) out[j] = got[j];
     return out_a;
 }
 
