@@ -534,6 +534,30 @@ def test_first_in_cells_on_threads_are_the_lowest_of_each_cell(monkeypatch, thre
 
 
 @needs_cxx
+@pytest.mark.parametrize("threads", ["1", "2"])
+def test_point_tree_on_threads_matches_numba(monkeypatch, threads):
+    """The k-d tree of 200,000 points (the leaves' boxes on threads, the others' from
+    their children): numba's nodes and boxes, every box the least holding its points."""
+    from superfacets.elements.neighbors import point_tree
+
+    rng = np.random.default_rng(4)
+    pts = np.round(rng.random((200_000, 3)), 3)  # (ties in every coordinate)
+    with monkeypatch.context() as m:
+        m.setenv("NUMBA_NUM_THREADS", threads)
+        got = point_tree(pts)
+        native.fallbacks.clear()
+        m.setattr(native, "kernel", native.reference)
+        ref = point_tree(pts)
+    for name in ("start", "end", "left", "boxes"):
+        assert np.array_equal(getattr(got, name), getattr(ref, name)), name
+    leaf = np.flatnonzero(got.left < 0)
+    v = leaf[len(leaf) // 2]
+    inside = pts[got.start[v]:got.end[v]]
+    assert np.array_equal(got.boxes[v], np.r_[inside.min(0), inside.max(0)])
+    assert np.array_equal(got.boxes[0], np.r_[pts.min(0), pts.max(0)])
+
+
+@needs_cxx
 def test_plain_classification_matches_numba():
     from superfacets.elements import face_graph
     from superfacets.method.expansion import Workspaces, with_room

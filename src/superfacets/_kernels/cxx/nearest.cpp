@@ -183,24 +183,29 @@ i64 tree_nodes(py::handle pts_, py::handle keys_, i64 leaf, py::handle start_, p
         sp += 2;
         nn += 2;
     }
-    for (i64 v = nn - 1; v >= 0; --v) {
-        i64 c = left[v];
-        for (int a = 0; a < 3; ++a) {
-            double lo, hi;
-            if (c < 0) {
-                lo = INF;
-                hi = -INF;
+    // the leaves' boxes on threads (the points' pass), then the others' from their
+    // children, bottom up (children come after their parent)
+    parallel_for(nn, [&](i64 v0, i64 v1) {
+        for (i64 v = v0; v < v1; ++v) {
+            if (left[v] >= 0) continue;
+            for (int a = 0; a < 3; ++a) {
+                double lo = INF, hi = -INF;
                 for (i64 t = start[v]; t < end[v]; ++t) {
                     double x = pts(t, a);
                     if (x < lo) lo = x;
                     if (x > hi) hi = x;
                 }
-            } else {
-                lo = mn(boxes(c, a), boxes(c + 1, a));
-                hi = mx(boxes(c, 3 + a), boxes(c + 1, 3 + a));
+                boxes(v, a) = lo;
+                boxes(v, 3 + a) = hi;
             }
-            boxes(v, a) = lo;
-            boxes(v, 3 + a) = hi;
+        }
+    });
+    for (i64 v = nn - 1; v >= 0; --v) {
+        i64 c = left[v];
+        if (c < 0) continue;
+        for (int a = 0; a < 3; ++a) {
+            boxes(v, a) = mn(boxes(c, a), boxes(c + 1, a));
+            boxes(v, 3 + a) = mx(boxes(c, 3 + a), boxes(c + 1, 3 + a));
         }
     }
     return nn;
