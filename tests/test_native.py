@@ -558,6 +558,32 @@ def test_point_tree_on_threads_matches_numba(monkeypatch, threads):
 
 
 @needs_cxx
+@pytest.mark.parametrize("threads", ["1", "2", "3"])
+def test_label_sums_on_threads_are_numbas_to_the_bit(monkeypatch, threads):
+    """Per-label sums on threads (each owns a range of labels and reads every element in
+    order): numba's bit for bit, so each label's terms are added in element order (sums of
+    values of mixed scales, where another order rounds otherwise)."""
+    rng = np.random.default_rng(6)
+    n, k = 300_000, 37
+    labels = rng.integers(0, k, n)
+    w = rng.random(n) * 10.0 ** rng.integers(-8, 8, n)
+    pos, nor = rng.normal(size=(n, 3)), rng.normal(size=(n, 3))
+    cen = rng.normal(size=(k, 3))
+    out = []
+    with monkeypatch.context() as m:
+        m.setenv("NUMBA_NUM_THREADS", threads)
+        for get in (native.kernel, native.reference):
+            area, wpos, wnrm, sc = np.zeros(k), np.zeros((k, 3)), np.zeros((k, 3)), np.zeros((k, 9))
+            get("geometry.label_sums")(labels, w, pos, nor, area, wpos, wnrm)
+            get("geometry.label_scatter")(labels, w, pos, cen, sc)
+            out.append((area, wpos, wnrm, sc))
+    assert _same(out[0], out[1])
+    # element order is bincount's; the other order rounds otherwise on these values
+    assert np.array_equal(out[0][0], np.bincount(labels, weights=w, minlength=k))
+    assert not np.array_equal(out[0][0], np.bincount(labels[::-1], weights=w[::-1], minlength=k))
+
+
+@needs_cxx
 def test_plain_classification_matches_numba():
     from superfacets.elements import face_graph
     from superfacets.method.expansion import Workspaces, with_room

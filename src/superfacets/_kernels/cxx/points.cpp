@@ -562,6 +562,15 @@ py::array_t<i64> crossing_pairs(py::handle indptr_, py::handle indices_, py::han
     return out_a;
 }
 
+// f(lo, hi) on threads, each owning the labels lo .. hi - 1 of k: every thread reads all
+// n elements, in order, and adds those of its labels, so each label's sums are those of
+// one pass (bit for bit)
+template <class F>
+void by_label_range(i64 n, i64 k, F f) {
+    const i64 T = std::max<i64>(1, std::min<i64>({threads(), k, n / 65536}));
+    on_threads(T, [&](i64 t) { f(k * t / T, k * (t + 1) / T); });
+}
+
 void label_sums(py::handle labels_, py::handle weights_, py::handle positions_,
                 py::handle normals_, py::handle area_, py::handle wpos_, py::handle wnrm_) {
     In<double> w(weights_, "weights"), pos(positions_, "positions"), nor(normals_, "normals");
@@ -572,13 +581,16 @@ void label_sums(py::handle labels_, py::handle weights_, py::handle positions_,
             wnrm.n != area.n)
             throw Mismatch("argument positions");
         py::gil_scoped_release nogil;
-        for (i64 i = 0; i < labels.n; ++i) {
-            i64 s = labels[i];
-            double x = w[i];
-            area[s] += x;
-            for (int c = 0; c < 3; ++c) wpos(s, c) += x * pos(i, c);
-            for (int c = 0; c < 3; ++c) wnrm(s, c) += x * nor(i, c);
-        }
+        by_label_range(labels.n, area.n, [&](i64 lo, i64 hi) {
+            for (i64 i = 0; i < labels.n; ++i) {
+                i64 s = labels[i];
+                if (s < lo || s >= hi) continue;
+                double x = w[i];
+                area[s] += x;
+                for (int c = 0; c < 3; ++c) wpos(s, c) += x * pos(i, c);
+                for (int c = 0; c < 3; ++c) wnrm(s, c) += x * nor(i, c);
+            }
+        });
         return 0;
     });
 }
@@ -592,13 +604,16 @@ void label_scatter(py::handle labels_, py::handle weights_, py::handle positions
         pos.n != labels.n || sc.n != cen.n)
         throw Mismatch("argument positions");
     py::gil_scoped_release nogil;
-    for (i64 i = 0; i < labels.n; ++i) {
-        i64 s = labels[i];
-        double x = w[i];
-        double d[3] = {pos(i, 0) - cen(s, 0), pos(i, 1) - cen(s, 1), pos(i, 2) - cen(s, 2)};
-        for (int a = 0; a < 3; ++a)
-            for (int b = 0; b < 3; ++b) sc(s, 3 * a + b) += x * d[a] * d[b];
-    }
+    by_label_range(labels.n, sc.n, [&](i64 lo, i64 hi) {
+        for (i64 i = 0; i < labels.n; ++i) {
+            i64 s = labels[i];
+            if (s < lo || s >= hi) continue;
+            double x = w[i];
+            double d[3] = {pos(i, 0) - cen(s, 0), pos(i, 1) - cen(s, 1), pos(i, 2) - cen(s, 2)};
+            for (int a = 0; a < 3; ++a)
+                for (int b = 0; b < 3; ++b) sc(s, 3 * a + b) += x * d[a] * d[b];
+        }
+    });
 }
 
 void bind_points(py::module_& m) {
