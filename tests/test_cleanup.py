@@ -254,6 +254,72 @@ def test_min_cut_is_the_smallest_minimum_source_side_by_brute_force():
         assert np.array_equal(side, smallest), trial
 
 
+def test_min_cut_matches_scipys_maximum_flow_on_bands():
+    """Known answer on bands large enough for the global relabelling (a grid strip whose
+    data term is weak, as the clean-up's, and random sparse graphs), integer capacities
+    with many ties: the source side is what the source reaches in the residual network of
+    scipy's maximum flow (the smallest minimum source side), and the cut's value is the
+    flow's."""
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import breadth_first_order, maximum_flow
+
+    from superfacets._kernels.cleanup import min_cut
+
+    rng = np.random.default_rng(8)
+    sizes = []
+    for trial in range(12):
+        if trial < 4:  # a strip of w x h nodes, neighbours in rows and columns
+            w, h = 60, 12
+            n = w * h
+            caps = {}
+            for y in range(h):
+                for x in range(w):
+                    u = y * w + x
+                    for v in ((u + 1) if x + 1 < w else None, (u + w) if y + 1 < h else None):
+                        if v is not None:
+                            c = int(rng.integers(20, 40))
+                            caps[(u, v)] = (c, c)
+            ramp = np.tile(np.linspace(-1.0, 1.0, w), h)  # the sides' pull, weak
+            tr = np.round(-3 * ramp + rng.integers(-1, 2, n)).astype(np.float64)
+        else:
+            n = int(rng.integers(50, 400))
+            caps = {}
+            for _ in range(3 * n):
+                u, v = sorted(rng.choice(n, 2, replace=False).tolist())
+                caps[(u, v)] = (int(rng.integers(0, 6)), int(rng.integers(0, 6)))
+            tr = rng.integers(-4, 5, n).astype(np.float64)
+        first, nxt, head, cap = _arcs(n, caps)
+        side = np.zeros(n, dtype=bool)
+        min_cut(first, nxt, head, cap, tr.copy(), 0.0, side)
+        # scipy: nodes 0..n-1, the source n, the sink n + 1
+        rows, cols, vals = [], [], []
+        for (u, v), (c_uv, c_vu) in caps.items():
+            rows += [u, v]
+            cols += [v, u]
+            vals += [c_uv, c_vu]
+        for u in range(n):
+            if tr[u] > 0:
+                rows, cols, vals = rows + [n], cols + [u], vals + [int(tr[u])]
+            elif tr[u] < 0:
+                rows, cols, vals = rows + [u], cols + [n + 1], vals + [int(-tr[u])]
+        g = csr_matrix((np.array(vals, dtype=np.int32), (rows, cols)), shape=(n + 2, n + 2))
+        g.sum_duplicates()
+        flow = maximum_flow(g, n, n + 1)
+        residual = g - flow.flow
+        residual.data[residual.data < 0] = 0
+        residual.eliminate_zeros()
+        reached = breadth_first_order(residual, n, directed=True, return_predecessors=False)
+        expected = np.zeros(n, dtype=bool)
+        expected[reached[reached < n]] = True
+        assert np.array_equal(side, expected), trial
+        value = (tr[~side & (tr > 0)].sum() - tr[side & (tr < 0)].sum()
+                 + sum(c_uv * (side[u] and not side[v]) + c_vu * (side[v] and not side[u])
+                       for (u, v), (c_uv, c_vu) in caps.items()))
+        assert value == flow.flow_value, trial
+        sizes.append(int(side.sum()))
+    assert all(0 < x < 720 for x in sizes[:4]) and any(x > 0 for x in sizes[4:]), sizes
+
+
 def test_progress_bar_names_the_cleanup_stage(capsys):
     mesh = grid_mesh(30, 30, height=lambda x, y: 0.5 * np.abs(x))
     labels = segment(mesh, 12, cleanup=True, progress=True).labels

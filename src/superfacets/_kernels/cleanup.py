@@ -9,8 +9,8 @@ gives it: the compiled kernel runs the superfacets on several threads): the elem
 then belongs to the band of that pair of superfacets. Bands of different pairs are
 disjoint, so ``solve_bands`` cuts each one on its own (on several threads; the result
 does not depend on the order or the thread count): a two-label graph cut, solved
-exactly as a minimum s-t cut by Boykov and Kolmogorov's max-flow (:func:`min_cut`),
-whose source side keeps the first label.
+exactly as a minimum s-t cut by push-relabel (:func:`min_cut`), whose source side keeps
+the first label.
 """
 
 import numpy as np
@@ -86,185 +86,143 @@ def band_distances(indptr, indices, dual_edge, geo, length, labels, pinned, limi
             dist[f] = 0.0
 
 
-_NONE = -1  # parent of a free node
-_TERMINAL = -2  # parent of a node joined straight to its terminal
-_ORPHAN = -3
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _rooted(parent, head, j):
-    """True when the tree path from ``j`` reaches a terminal (no orphan on it)."""
-    while True:
-        p = parent[j]
-        if p == _TERMINAL:
-            return True
-        if p < 0:
-            return False
-        j = head[p]
-
-
 @njit(cache=True, error_model="numpy")
 def min_cut(first, nxt, head, cap, tr, eps, source_side):
-    """Minimum s-t cut by Boykov and Kolmogorov's max-flow (IEEE PAMI 26(9), 2004).
+    """Minimum s-t cut by push-relabel (Goldberg and Tarjan, J. ACM 35(4), 1988), its
+    first phase, on the network reversed.
 
     Nodes ``0..n-1``; arc ``a`` runs to ``head[a]`` with residual capacity
     ``cap[a]``, arc ``a ^ 1`` is its reverse; node ``u``'s arcs are
     ``first[u]``, ``nxt[first[u]]``, ... (-1 ends). ``tr[u] > 0`` is a
     capacity from the source to ``u``, ``tr[u] < 0`` one from ``u`` to the sink.
-    Capacities at most ``eps`` count as saturated. Two search trees grow from
-    the terminals; each path found between them is augmented, and the nodes
-    cut off from their tree adopt a new parent or become free.
+    Capacities at most ``eps`` count as saturated.
 
-    ``cap`` and ``tr`` are left residual. ``source_side[u]`` is set to True
-    for the nodes still reachable from the source (through capacities above
-    ``eps``): the source side of the minimum cut with the fewest nodes, the
-    same for any maximum flow.
+    Every arc is taken backwards and the terminals swapped: the sink's arcs are
+    saturated at once, the excess pushed (first in, first out) down exact distance
+    labels to the source, the labels recomputed from the source by a breadth-first
+    search once the nodes have been relabelled ``n`` times. A maximum preflow is
+    enough: the nodes that can still reach the source through the reversed residual
+    capacities are those the source reaches in a maximum flow, the source side of the
+    minimum cut with the fewest nodes, the same for any maximum flow (where ties leave
+    several minimum cuts). The bands' data terms are weak, so the flow travels far from
+    where it enters: pushed, it merges on its way, where augmenting paths (Boykov and
+    Kolmogorov's, before) carried each node's share along its own long path.
+
+    ``cap`` is left residual (of the reversed network); ``tr`` is not changed.
+    ``source_side[u]`` is set to True for the nodes of that source side.
     """
     n = tr.shape[0]
     _min_cut_in(first, nxt, head, cap, tr, eps, source_side, n, np.empty(n, dtype=np.int64),
-                np.empty(n, dtype=np.bool_), np.empty(n, dtype=np.bool_),
-                np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64))
+                np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64),
+                np.empty(n, dtype=np.bool_), np.empty(n), np.empty(n))
 
 
 @njit(cache=True, error_model="numpy")
-def _min_cut_in(first, nxt, head, cap, tr, eps, source_side, n, parent, sink, queued, active,
-                orphans):
-    """:func:`min_cut` of nodes ``0..n-1`` with the work arrays given (length at least
-    ``n`` each: tree parents, tree sides, queue flags, the circular FIFO of active
-    nodes, the orphans), so that many small cuts allocate nothing."""
+def _labels_from_source(first, nxt, head, cap, eps, n, label, order, to_source):
+    """Exact distance labels to the source in the reversed residual network (at most
+    ``n``; ``n + 1``: none); the nodes labelled are listed first in ``order``. Returns how
+    many."""
+    for u in range(n):
+        label[u] = n + 1
+    qt = 0
+    for u in range(n):
+        if to_source[u] > eps:
+            label[u] = 1
+            order[qt] = u
+            qt += 1
     qh = 0
-    qn = 0
-    for u in range(n):
-        sink[u] = False
-        queued[u] = False
-    for u in range(n):
-        if tr[u] > eps or -tr[u] > eps:
-            parent[u] = _TERMINAL
-            sink[u] = tr[u] < 0.0
-            active[(qh + qn) % n] = u
-            queued[u] = True
-            qn += 1
-        else:
-            parent[u] = _NONE
-    while qn > 0:
-        i = active[qh]
-        if parent[i] == _NONE:  # freed since it was queued
-            qh = (qh + 1) % n
-            qn -= 1
-            queued[i] = False
-            continue
-        # grow the tree of i by one arc, or find an arc to the other tree
-        # (the source tree grows along residual i -> j, the sink tree along j -> i)
-        mid = -1
-        side = sink[i]
-        a = first[i]
+    while qh < qt:
+        u = order[qh]
+        qh += 1
+        a = first[u]
         while a != -1:
-            j = head[a]
-            if (cap[a ^ 1] if side else cap[a]) > eps:
-                if parent[j] == _NONE:
-                    parent[j] = a ^ 1
-                    sink[j] = side
-                    if not queued[j]:
-                        active[(qh + qn) % n] = j
-                        queued[j] = True
-                        qn += 1
-                elif sink[j] != side:
-                    mid = a ^ 1 if side else a
-                    break
+            v = head[a]
+            # the reversed arc v -> u has the residual of u -> v
+            if label[v] > n and cap[a] > eps:
+                label[v] = label[u] + 1
+                order[qt] = v
+                qt += 1
             a = nxt[a]
-        if mid == -1:  # i has no arc left to grow along: done with it
+    return qt
+
+
+@njit(cache=True, error_model="numpy")
+def _min_cut_in(first, nxt, head, cap, tr, eps, source_side, n, label, cur, queue, queued,
+                excess, to_source):
+    """:func:`min_cut` of nodes ``0..n-1`` with the work arrays given (length at least
+    ``n`` each: distance labels, current arcs, the circular FIFO of active nodes, their
+    flags, excesses, residual capacities to the source), so that many small cuts
+    allocate nothing."""
+    for u in range(n):
+        excess[u] = -tr[u] if tr[u] < 0.0 else 0.0
+        to_source[u] = tr[u] if tr[u] > 0.0 else 0.0
+    while True:
+        _labels_from_source(first, nxt, head, cap, eps, n, label, cur, to_source)
+        qh = 0
+        qn = 0
+        for u in range(n):
+            queued[u] = False
+        for u in range(n):
+            if excess[u] > eps and label[u] <= n:
+                queue[qn] = u
+                queued[u] = True
+                qn += 1
+        for u in range(n):
+            cur[u] = first[u]
+        if qn == 0:
+            break
+        relabels = 0
+        while qn > 0 and relabels <= n:
+            u = queue[qh]
             qh = (qh + 1) % n
             qn -= 1
-            queued[i] = False
-            continue
-        # augment the path source .. x -> y .. sink through arc mid = x -> y
-        b = cap[mid]
-        u = head[mid ^ 1]
-        while parent[u] != _TERMINAL:
-            pa = parent[u]
-            b = min(b, cap[pa ^ 1])
-            u = head[pa]
-        b = min(b, tr[u])
-        u = head[mid]
-        while parent[u] != _TERMINAL:
-            pa = parent[u]
-            b = min(b, cap[pa])
-            u = head[pa]
-        b = min(b, -tr[u])
-        cap[mid] -= b
-        cap[mid ^ 1] += b
-        n_orphans = 0
-        u = head[mid ^ 1]
-        while parent[u] != _TERMINAL:
-            pa = parent[u]
-            cap[pa] += b
-            cap[pa ^ 1] -= b
-            if not cap[pa ^ 1] > eps:
-                parent[u] = _ORPHAN
-                orphans[n_orphans] = u
-                n_orphans += 1
-            u = head[pa]
-        tr[u] -= b
-        if not tr[u] > eps:
-            parent[u] = _ORPHAN
-            orphans[n_orphans] = u
-            n_orphans += 1
-        u = head[mid]
-        while parent[u] != _TERMINAL:
-            pa = parent[u]
-            cap[pa ^ 1] += b
-            cap[pa] -= b
-            if not cap[pa] > eps:
-                parent[u] = _ORPHAN
-                orphans[n_orphans] = u
-                n_orphans += 1
-            u = head[pa]
-        tr[u] += b
-        if not -tr[u] > eps:
-            parent[u] = _ORPHAN
-            orphans[n_orphans] = u
-            n_orphans += 1
-        # adoption: each orphan takes a neighbour of its tree still rooted, else is freed
-        k = 0
-        while k < n_orphans:
-            o = orphans[k]
-            k += 1
-            side = sink[o]
-            new = -1
-            a = first[o]
-            while a != -1:
-                j = head[a]
-                if sink[j] == side and parent[j] != _NONE and (
-                        cap[a] > eps if side else cap[a ^ 1] > eps) and _rooted(parent, head, j):
-                    new = a
-                    break
-                a = nxt[a]
-            if new != -1:
-                parent[o] = new
-                continue
-            a = first[o]
-            while a != -1:
-                j = head[a]
-                if sink[j] == side and parent[j] != _NONE:
-                    if (cap[a] > eps if side else cap[a ^ 1] > eps) and not queued[j]:
-                        active[(qh + qn) % n] = j
-                        queued[j] = True
+            queued[u] = False
+            while excess[u] > eps and label[u] <= n:
+                if label[u] == 1 and to_source[u] > eps:
+                    delta = min(excess[u], to_source[u])
+                    to_source[u] -= delta
+                    excess[u] -= delta
+                    continue
+                a = cur[u]
+                if a == -1:  # relabel: one above the lowest neighbour it can push to
+                    low = 0 if to_source[u] > eps else n
+                    b = first[u]
+                    while b != -1:
+                        if cap[b ^ 1] > eps and label[head[b]] < low:
+                            low = label[head[b]]
+                        b = nxt[b]
+                    label[u] = low + 1  # (n + 1: it cannot reach the source)
+                    cur[u] = first[u]
+                    relabels += 1
+                    continue
+                v = head[a]
+                r = cap[a ^ 1]  # the reversed arc u -> v: the residual of v -> u
+                if r > eps and label[u] == label[v] + 1:
+                    delta = min(excess[u], r)
+                    cap[a ^ 1] -= delta
+                    cap[a] += delta
+                    excess[u] -= delta
+                    excess[v] += delta
+                    if not queued[v] and excess[v] > eps:
+                        queue[(qh + qn) % n] = v
+                        queued[v] = True
                         qn += 1
-                    pj = parent[j]
-                    if pj >= 0 and head[pj] == o:
-                        parent[j] = _ORPHAN
-                        orphans[n_orphans] = j  # each node is orphaned at most once at a time
-                        n_orphans += 1
-                a = nxt[a]
-            parent[o] = _NONE
+                else:
+                    cur[u] = nxt[a]
+        if qn == 0:
+            break
+    # the nodes that reach the source
     for u in range(n):
-        source_side[u] = parent[u] != _NONE and not sink[u]
+        source_side[u] = False
+    reach = _labels_from_source(first, nxt, head, cap, eps, n, label, cur, to_source)
+    for t in range(reach):
+        source_side[cur[t]] = True
 
 
 @njit(cache=True, error_model="numpy")
 def _solve_one(members, la, lb, pair_id, band_of, local, indptr, indices, cut_cost,
                labels, sizes, positions, means, smooth, out, head, cap, nxt, first, tr, side,
-               work_i, work_b, work_q, work_a, work_o):
+               work_l, work_c, work_q, work_b, work_e, work_s):
     """Minimum cut of one band between labels ``la`` (source) and ``lb`` (sink), in the
     work arrays given (arcs: ``head``, ``cap``, ``nxt``; nodes: the others)."""
     nb = members.shape[0]
@@ -312,8 +270,8 @@ def _solve_one(members, la, lb, pair_id, band_of, local, indptr, indices, cut_co
         total += cost_a + cost_b
         # source -> f (cut when f takes lb: pays cost_b), f -> sink (cut when f keeps la)
         tr[i] = cost_b if cost_b > 0.0 else -cost_a
-    _min_cut_in(first, nxt, head, cap, tr, 1e-12 * total, side, nb, work_i, work_b, work_q,
-                work_a, work_o)
+    _min_cut_in(first, nxt, head, cap, tr, 1e-12 * total, side, nb, work_l, work_c, work_q,
+                work_b, work_e, work_s)
     for i in range(nb):
         out[members[i]] = la if side[i] else lb
 
@@ -345,13 +303,14 @@ def solve_bands(p0, p1, order, starts, pair_a, pair_b, band_of, indptr, indices,
     first = np.empty(most_nodes, dtype=np.int64)
     tr = np.empty(most_nodes, dtype=np.float64)
     side = np.empty(most_nodes, dtype=np.bool_)
-    work_i = np.empty(most_nodes, dtype=np.int64)
+    work_l = np.empty(most_nodes, dtype=np.int64)
+    work_c = np.empty(most_nodes, dtype=np.int64)
+    work_q = np.empty(most_nodes, dtype=np.int64)
     work_b = np.empty(most_nodes, dtype=np.bool_)
-    work_q = np.empty(most_nodes, dtype=np.bool_)
-    work_a = np.empty(most_nodes, dtype=np.int64)
-    work_o = np.empty(most_nodes, dtype=np.int64)
+    work_e = np.empty(most_nodes, dtype=np.float64)
+    work_s = np.empty(most_nodes, dtype=np.float64)
     for p in range(p0, p1):
         members = order[starts[p]:starts[p + 1]]
         _solve_one(members, pair_a[p], pair_b[p], p, band_of, local, indptr, indices,
                    cut_cost, labels, sizes, positions, means, smooth, out, head, cap, nxt,
-                   first, tr, side, work_i, work_b, work_q, work_a, work_o)
+                   first, tr, side, work_l, work_c, work_q, work_b, work_e, work_s)

@@ -5,7 +5,7 @@ distance alone, so their boundaries are stair-stepped along the element
 graph and may run a few elements beside a concave crease instead of on it.
 :func:`clean_boundaries` re-decides, for each pair of adjacent superfacets,
 the elements of a band along their shared boundary by an exact two-label
-graph cut (a minimum s-t cut, Boykov and Kolmogorov's max-flow, a compiled kernel) of the energy
+graph cut (a minimum s-t cut by push-relabel, a compiled kernel) of the energy
 
 ``E = sum_f smoothness * a_f * |p_f - mu_{L_f}|^2 / r^2 + sum_{ij cut} r * c_ij``
 
@@ -235,7 +235,9 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
     Simari, Picciau, De Floriani, "Fast and Scalable Mesh Superfacets", 2014,
     section 6 (clean-up as future work), eqs. 2-3 (the crease factor).
     Boykov, Veksler, Zabih, "Fast approximate energy minimization via graph
-    cuts", PAMI 2001 (two-label moves solved as minimum cuts). ``docs/notes/cleanup.md``.
+    cuts", PAMI 2001 (two-label moves solved as minimum cuts). Goldberg, Tarjan, "A new
+    approach to the maximum-flow problem", J. ACM 1988 (push-relabel).
+    ``docs/notes/cleanup.md``.
 
     Examples
     --------

@@ -1,5 +1,5 @@
-// Boundary clean-up: band distances and one minimum cut per band by Boykov and
-// Kolmogorov's max-flow (superfacets/_kernels/cleanup.py), the same operations in order.
+// Boundary clean-up: band distances and one minimum cut per band by push-relabel
+// (superfacets/_kernels/cleanup.py), the same operations in order.
 #include <memory>
 
 #include "common.hpp"
@@ -7,17 +7,6 @@
 namespace sfk {
 
 namespace {
-
-constexpr i64 NONE = -1, TERMINAL = -2, ORPHAN = -3;
-
-inline bool rooted(const i64* parent, const i64* up, i64 j) {
-    while (true) {
-        i64 p = parent[j];
-        if (p == TERMINAL) return true;
-        if (p < 0) return false;
-        j = up[j];
-    }
-}
 
 struct Arcs {
     i64* first;
@@ -28,163 +17,111 @@ struct Arcs {
 };
 
 struct CutWork {
-    std::vector<i64> head, nxt, first, parent, up, active, orphans;
-    std::vector<double> cap, tr;
-    std::vector<char> side, sink, queued;
+    std::vector<i64> head, nxt, first, label, cur, queue;
+    std::vector<double> cap, tr, excess, to_source;
+    std::vector<char> side, queued;
 };
 
-void min_cut_in(const Arcs& g, double eps, char* source_side, i64 n, i64* parent, char* sink,
-                char* queued, i64* active, i64* orphans, i64* up) {
-    // (up[u] = head[parent[u]] while u has a parent arc: the walks to the roots follow
-    // one load a step)
+// cleanup._labels_from_source
+i64 labels_from_source(const Arcs& g, double eps, i64 n, i64* label, i64* order,
+                       const double* to_source) {
+    for (i64 u = 0; u < n; ++u) label[u] = n + 1;
+    i64 qt = 0;
+    for (i64 u = 0; u < n; ++u) {
+        if (to_source[u] > eps) {
+            label[u] = 1;
+            order[qt++] = u;
+        }
+    }
+    i64 qh = 0;
+    while (qh < qt) {
+        i64 u = order[qh++];
+        for (i64 a = g.first[u]; a != -1; a = g.nxt[a]) {
+            i64 v = g.head[a];
+            if (label[v] > n && g.cap[a] > eps) {
+                label[v] = label[u] + 1;
+                order[qt++] = v;
+            }
+        }
+    }
+    return qt;
+}
+
+// cleanup._min_cut_in: push-relabel's first phase on the reversed network
+void min_cut_in(const Arcs& g, double eps, char* source_side, i64 n, CutWork& W) {
     const i64* first = g.first;
     const i64* nxt = g.nxt;
     const i64* head = g.head;
     double* cap = g.cap;
-    double* tr = g.tr;
-    i64 qh = 0, qn = 0;
+    const double* tr = g.tr;
+    i64* label = W.label.data();
+    i64* cur = W.cur.data();
+    i64* queue = W.queue.data();
+    char* queued = W.queued.data();
+    double* excess = W.excess.data();
+    double* to_source = W.to_source.data();
     for (i64 u = 0; u < n; ++u) {
-        sink[u] = 0;
-        queued[u] = 0;
+        excess[u] = tr[u] < 0.0 ? -tr[u] : 0.0;
+        to_source[u] = tr[u] > 0.0 ? tr[u] : 0.0;
     }
-    for (i64 u = 0; u < n; ++u) {
-        if (tr[u] > eps || -tr[u] > eps) {
-            parent[u] = TERMINAL;
-            sink[u] = tr[u] < 0.0;
-            active[(qh + qn) % n] = u;
-            queued[u] = 1;
-            ++qn;
-        } else {
-            parent[u] = NONE;
+    while (true) {
+        labels_from_source(g, eps, n, label, cur, to_source);
+        i64 qh = 0, qn = 0;
+        for (i64 u = 0; u < n; ++u) queued[u] = 0;
+        for (i64 u = 0; u < n; ++u) {
+            if (excess[u] > eps && label[u] <= n) {
+                queue[qn++] = u;
+                queued[u] = 1;
+            }
         }
-    }
-    while (qn > 0) {
-        i64 i = active[qh];
-        if (parent[i] == NONE) {
+        for (i64 u = 0; u < n; ++u) cur[u] = first[u];
+        if (qn == 0) break;
+        i64 relabels = 0;
+        while (qn > 0 && relabels <= n) {
+            i64 u = queue[qh];
             qh = (qh + 1) % n;
             --qn;
-            queued[i] = 0;
-            continue;
-        }
-        i64 mid = -1;
-        bool side = sink[i];
-        i64 a = first[i];
-        while (a != -1) {
-            i64 j = head[a];
-            if ((side ? cap[a ^ 1] : cap[a]) > eps) {
-                if (parent[j] == NONE) {
-                    parent[j] = a ^ 1;
-                    up[j] = i;
-                    sink[j] = side;
-                    if (!queued[j]) {
-                        active[(qh + qn) % n] = j;
-                        queued[j] = 1;
+            queued[u] = 0;
+            while (excess[u] > eps && label[u] <= n) {
+                if (label[u] == 1 && to_source[u] > eps) {
+                    double delta = mn(excess[u], to_source[u]);
+                    to_source[u] -= delta;
+                    excess[u] -= delta;
+                    continue;
+                }
+                i64 a = cur[u];
+                if (a == -1) {
+                    i64 low = to_source[u] > eps ? 0 : n;
+                    for (i64 b = first[u]; b != -1; b = nxt[b])
+                        if (cap[b ^ 1] > eps && label[head[b]] < low) low = label[head[b]];
+                    label[u] = low + 1;
+                    cur[u] = first[u];
+                    ++relabels;
+                    continue;
+                }
+                i64 v = head[a];
+                double r = cap[a ^ 1];
+                if (r > eps && label[u] == label[v] + 1) {
+                    double delta = mn(excess[u], r);
+                    cap[a ^ 1] -= delta;
+                    cap[a] += delta;
+                    excess[u] -= delta;
+                    excess[v] += delta;
+                    if (!queued[v] && excess[v] > eps) {
+                        queue[(qh + qn) % n] = v;
+                        queued[v] = 1;
                         ++qn;
                     }
-                } else if (static_cast<bool>(sink[j]) != side) {
-                    mid = side ? a ^ 1 : a;
-                    break;
+                } else {
+                    cur[u] = nxt[a];
                 }
             }
-            a = nxt[a];
         }
-        if (mid == -1) {
-            qh = (qh + 1) % n;
-            --qn;
-            queued[i] = 0;
-            continue;
-        }
-        double b = cap[mid];
-        i64 u = head[mid ^ 1];
-        while (parent[u] != TERMINAL) {
-            i64 pa = parent[u];
-            b = mn(b, cap[pa ^ 1]);
-            u = up[u];
-        }
-        b = mn(b, tr[u]);
-        u = head[mid];
-        while (parent[u] != TERMINAL) {
-            i64 pa = parent[u];
-            b = mn(b, cap[pa]);
-            u = up[u];
-        }
-        b = mn(b, -tr[u]);
-        cap[mid] -= b;
-        cap[mid ^ 1] += b;
-        i64 n_orphans = 0;
-        u = head[mid ^ 1];
-        while (parent[u] != TERMINAL) {
-            i64 pa = parent[u];
-            cap[pa] += b;
-            cap[pa ^ 1] -= b;
-            if (!(cap[pa ^ 1] > eps)) {
-                parent[u] = ORPHAN;
-                orphans[n_orphans++] = u;
-            }
-            u = up[u];
-        }
-        tr[u] -= b;
-        if (!(tr[u] > eps)) {
-            parent[u] = ORPHAN;
-            orphans[n_orphans++] = u;
-        }
-        u = head[mid];
-        while (parent[u] != TERMINAL) {
-            i64 pa = parent[u];
-            cap[pa ^ 1] += b;
-            cap[pa] -= b;
-            if (!(cap[pa] > eps)) {
-                parent[u] = ORPHAN;
-                orphans[n_orphans++] = u;
-            }
-            u = up[u];
-        }
-        tr[u] += b;
-        if (!(-tr[u] > eps)) {
-            parent[u] = ORPHAN;
-            orphans[n_orphans++] = u;
-        }
-        i64 k = 0;
-        while (k < n_orphans) {
-            i64 o = orphans[k++];
-            bool oside = sink[o];
-            i64 nw = -1;
-            a = first[o];
-            while (a != -1) {
-                i64 j = head[a];
-                if (static_cast<bool>(sink[j]) == oside && parent[j] != NONE &&
-                    (oside ? cap[a] > eps : cap[a ^ 1] > eps) && rooted(parent, up, j)) {
-                    nw = a;
-                    break;
-                }
-                a = nxt[a];
-            }
-            if (nw != -1) {
-                parent[o] = nw;
-                up[o] = head[nw];
-                continue;
-            }
-            a = first[o];
-            while (a != -1) {
-                i64 j = head[a];
-                if (static_cast<bool>(sink[j]) == oside && parent[j] != NONE) {
-                    if ((oside ? cap[a] > eps : cap[a ^ 1] > eps) && !queued[j]) {
-                        active[(qh + qn) % n] = j;
-                        queued[j] = 1;
-                        ++qn;
-                    }
-                    i64 pj = parent[j];
-                    if (pj >= 0 && head[pj] == o) {
-                        parent[j] = ORPHAN;
-                        orphans[n_orphans++] = j;
-                    }
-                }
-                a = nxt[a];
-            }
-            parent[o] = NONE;
-        }
+        if (qn == 0) break;
     }
-    for (i64 u = 0; u < n; ++u) source_side[u] = parent[u] != NONE && !sink[u];
+    for (i64 u = 0; u < n; ++u) source_side[u] = 0;
+    i64 reach = labels_from_source(g, eps, n, label, cur, to_source);
+    for (i64 t = 0; t < reach; ++t) source_side[cur[t]] = 1;
 }
 
 struct Bands {
@@ -249,8 +186,7 @@ void solve_one(const Bands& B, const i64* members, i64 nb, i64 la, i64 lb, i64 p
         W.tr[i] = cost_b > 0.0 ? cost_b : -cost_a;
     }
     Arcs g{W.first.data(), W.nxt.data(), W.head.data(), W.cap.data(), W.tr.data()};
-    min_cut_in(g, 1e-12 * total, W.side.data(), nb, W.parent.data(), W.sink.data(),
-               W.queued.data(), W.active.data(), W.orphans.data(), W.up.data());
+    min_cut_in(g, 1e-12 * total, W.side.data(), nb, W);
     for (i64 i = 0; i < nb; ++i) B.out[members[i]] = W.side[i] ? la : lb;
 }
 
@@ -384,9 +320,9 @@ void solve_bands(i64 p0, i64 p1, py::handle order_, py::handle starts_, py::hand
     W.head.resize(most_arcs);
     W.cap.resize(most_arcs);
     W.nxt.resize(most_arcs);
-    for (auto* v : {&W.first, &W.parent, &W.up, &W.active, &W.orphans}) v->resize(most_nodes);
-    W.tr.resize(most_nodes);
-    for (auto* v : {&W.side, &W.sink, &W.queued}) v->resize(most_nodes);
+    for (auto* v : {&W.first, &W.label, &W.cur, &W.queue}) v->resize(most_nodes);
+    for (auto* v : {&W.tr, &W.excess, &W.to_source}) v->resize(most_nodes);
+    for (auto* v : {&W.side, &W.queued}) v->resize(most_nodes);
     Bands B{band_of.p, indptr.p, indices.p, cut_cost.p, labels.p, sizes.p, positions.p, means.p,
             smooth, out.p};
     for (i64 p = p0; p < p1; ++p)
