@@ -471,8 +471,8 @@ def test_csr_of_pairs_on_threads_keeps_the_pairs_order_in_each_row(monkeypatch, 
     """Known answer on threads (each owns a range of rows, reads every pair): 400,000
     pairs over 150,000 rows, repeated pairs whose order in a row is the pairs' order (the
     stable sort keeps it, so a thread that wrote them out of order would fail), rows that
-    cross the threads' bounds; and the face pairs' CSR (repeats dropped, the first kept
-    by its edge keys) the same as numba's."""
+    cross the threads' bounds; the face pairs' CSR (repeats dropped, the first kept by
+    its edge keys) and the pairs numbered again on threads, the same as numba's."""
     rng = np.random.default_rng(11)
     n, e = 150_000, 400_000
     lo = rng.integers(0, n - 1, e)
@@ -497,7 +497,19 @@ def test_csr_of_pairs_on_threads_keeps_the_pairs_order_in_each_row(monkeypatch, 
             de = np.empty(2 * lo.shape[0], dtype=np.int32)
             indptr, first = fn(lo, hi, ka, kb, n, ind, de)
             faces.append((indptr, first, ind[:indptr[-1]], de[:indptr[-1]]))
+        numbered = []  # the pairs numbered again (rows with repeated entries)
+        for fn in (native.kernel("adjacency.number_pairs"),
+                   native.reference("adjacency.number_pairs")):
+            indptr, ind, de = (x.copy() for x in got[1])
+            kept = np.empty(ind.shape[0] // 2, dtype=np.int64)
+            pairs = np.empty((ind.shape[0] // 2, 2), dtype=np.int32)
+            fn(indptr, ind, n, de, kept, pairs)
+            numbered.append((de, kept, pairs))
     assert _same(got[0], got[1]) and _same(faces[0], faces[1])
+    assert _same(numbered[0], numbered[1])
+    de, kept, pairs = numbered[0]  # known answer: both entries of pair t hold t
+    assert np.array_equal(np.bincount(de), np.full(pairs.shape[0], 2))
+    assert np.array_equal(pairs, np.stack([lo, hi], axis=1)[kept])
     indptr, ind, de = got[0]
     # known answer: each row's entries ascending, equal ones in the pairs' order
     rows = np.repeat(np.arange(n), np.diff(indptr))

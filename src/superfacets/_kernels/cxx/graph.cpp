@@ -1,5 +1,7 @@
 // The face graph's build and its per-entry terms: superfacets/_kernels/adjacency.py,
 // geometry.py (faces), terms.py and connectivity.py, the same operations in order.
+#include <algorithm>
+
 #include "common.hpp"
 
 namespace sfk {
@@ -105,25 +107,42 @@ void csr_of_pairs(const P* lo, const P* hi, i64 e, i64 n, i32* indices, D* dual_
 template <class D, class Q>
 void number_pairs_into(const i64* indptr, const i32* indices, i64 n, D* dual_edge, i64* keep,
                        Q* pairs) {
-    std::vector<i64> mirror(indptr, indptr + n);
-    i64 nid = 0;
-    for (i64 v = 0; v < n; ++v) {
-        for (i64 i = indptr[v]; i < indptr[v + 1]; ++i) {
-            i64 g = indices[i];
-            if (g > v) {
+    // Thread w numbers the pairs of its rows (their first ids from the counts of the rows
+    // before), and writes each id at its mirror too: for a symmetric CSR whose rows
+    // ascend, the j-th entry g of row v (g > v) mirrors the entry of row g after those
+    // below v, and j - 1 more (the ids one pass gives, and no entry written twice).
+    const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / 65536));
+    auto row0 = [&](i64 w) { return n * w / T; };
+    std::vector<i64> first_id(T + 1, 0);
+    on_threads(T, [&](i64 w) {
+        i64 c = 0;
+        for (i64 v = row0(w); v < row0(w + 1); ++v)
+            for (i64 i = indptr[v]; i < indptr[v + 1]; ++i) c += indices[i] > v;
+        first_id[w + 1] = c;
+    });
+    for (i64 w = 0; w < T; ++w) first_id[w + 1] += first_id[w];
+    on_threads(T, [&](i64 w) {
+        i64 nid = first_id[w];
+        for (i64 v = row0(w); v < row0(w + 1); ++v) {
+            for (i64 i = indptr[v]; i < indptr[v + 1]; ++i) {
+                i64 g = indices[i];
+                if (g <= v) continue;
+                // (binary searches: a vertex may have thousands of neighbours)
+                const i32* row = indices + indptr[v];
+                i64 j = i - indptr[v] - (std::lower_bound(row, indices + i, g) - row);
+                const i32* mir = indices + indptr[g];
+                i64 q = indptr[g] + (std::lower_bound(mir, indices + indptr[g + 1], v) - mir) + j;
                 if (keep) keep[nid] = dual_edge[i];
                 if (pairs) {
                     pairs[2 * nid] = static_cast<Q>(v);
                     pairs[2 * nid + 1] = static_cast<Q>(g);
                 }
                 dual_edge[i] = static_cast<D>(nid);
-                i64 q = mirror[g];
                 dual_edge[q] = static_cast<D>(nid);
-                mirror[g] = q + 1;
                 nid += 1;
             }
         }
-    }
+    });
 }
 
 }  // namespace
