@@ -81,6 +81,16 @@ i64 expand(const Work<W>& w, i64 src, i64 lab, double window_r2, double* dist, i
         double d = q.qdist[node];
         free = node;
         --live;
+        {  // the next pop's row, fetched while this one is relaxed (its index was
+           // fetched when it was queued)
+            i64 nx = q.head[b];
+            if (nx >= 0) {
+                i64 f2 = q.qface[nx];
+                i64 r = w.g.indptr[f2];
+                __builtin_prefetch(w.g.indices + r);
+                __builtin_prefetch(w.g.weights + r);
+            }
+        }
         if (d > -local[f]) continue;
         for (i64 e = w.g.indptr[f]; e < w.g.indptr[f + 1]; ++e) {
             i64 g = w.g.indices[e];
@@ -110,6 +120,7 @@ i64 expand(const Work<W>& w, i64 src, i64 lab, double window_r2, double* dist, i
                 status = QUEUE_FULL;
                 break;
             }
+            __builtin_prefetch(w.g.indptr + g);
             // queue_push
             i64 i = static_cast<i64>(nd * w.inv_width);
             if (i < cur) i = cur;
