@@ -75,6 +75,11 @@ struct BlockSearch {
             const i64 f = qface[popped];
             const double d = qdist[popped];
             const L lf = qlab[popped];
+            if (head[b] >= 0) {  // the next pop's row, fetched while this one is relaxed
+                i64 r = indptr[qface[head[b]]];
+                __builtin_prefetch(indices + r);
+                __builtin_prefetch(weights + r);
+            }
             if (d != dist[f] || lf != label[f]) continue;
             bool out = false;
             for (i64 e = indptr[f]; e < indptr[f + 1]; ++e) {
