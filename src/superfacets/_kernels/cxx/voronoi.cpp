@@ -168,7 +168,7 @@ py::array_t<i64> first_in_cells(py::handle positions_, py::handle lo_, double h,
     if (positions.cols != 3 || lo.n != 3 || dims.n != 3) throw Mismatch("argument positions");
     // one table filled on threads: a cell's slot taken by compare-and-swap, its first
     // element the least any thread offers; the slots' order then depends on the threads'
-    // timing, so the firsts are given back sorted (as numba's)
+    // timing, so the firsts are given back ascending (as numba's)
     std::unique_ptr<std::atomic<i64>[]> keys(new std::atomic<i64>[cap]);
     std::unique_ptr<std::atomic<i64>[]> first(new std::atomic<i64>[cap]);
     std::atomic<i64> count{0};
@@ -214,11 +214,16 @@ py::array_t<i64> first_in_cells(py::handle positions_, py::handle lo_, double h,
                 }
             }
         });
-        if (!full.load()) {
+        if (!full.load()) {  // ascending: each first marked, the marks read in order
+            std::vector<char> mark(positions.n, 0);
+            parallel_for(cap, [&](i64 a, i64 b) {
+                for (i64 i = a; i < b; ++i)
+                    if (keys[i].load(std::memory_order_relaxed) >= 0)
+                        mark[first[i].load(std::memory_order_relaxed)] = 1;
+            });
             got.reserve(count.load());
-            for (i64 i = 0; i < cap; ++i)
-                if (keys[i].load(std::memory_order_relaxed) >= 0) got.push_back(first[i].load());
-            std::sort(got.begin(), got.end());
+            for (i64 t = 0; t < positions.n; ++t)
+                if (mark[t]) got.push_back(t);
         }
     }
     Out<i64> out;
