@@ -251,6 +251,7 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
     """
     band_distances = native.kernel("cleanup.band_distances")
     solve_bands = native.kernel("cleanup.solve_bands")
+    label_sums = native.kernel("geometry.label_sums")
     from ..errors import ParameterError
     from .connectivity import enforce_connectivity
 
@@ -308,10 +309,12 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
     smooth = smoothness / (r * r)
     dirty = None
     for _ in range(sweeps):
-        area = np.maximum(np.bincount(labels, weights=sizes, minlength=k), 1e-300)
-        means = np.empty((k, 3))
-        for c in range(3):
-            means[:, c] = np.bincount(labels, weights=sizes * positions[:, c], minlength=k) / area
+        # the superfacets' areas and mean positions in one compiled pass, each sum added
+        # in element order (as np.bincount adds them)
+        area, means, spare = np.zeros(k), np.zeros((k, 3)), np.zeros((k, 3))
+        label_sums(labels, sizes, positions, positions, area, means, spare)
+        area = np.maximum(area, 1e-300)
+        means /= area[:, None]
         # (each sweep's work arrays let go as soon as read: the run's peak is here)
         partner = np.empty(n, dtype=np.int64)
         band_distances(g.indptr, g.indices, de, g.terms.geo, g.lengths, labels, pinned,
