@@ -694,10 +694,10 @@ def test_workspaces_released_between_passes_give_the_same_labels(sphere):
     assert not Workspaces(m, cw, 2).get(1).local.view(np.uint64).any()
 
 
-def test_threads_buffers_handed_back_after_each_pass_give_the_same_labels(sphere, monkeypatch):
-    # on large graphs the expansions' per-thread buffers (zeros between expansions) are
-    # handed back to the system after each run of expansions and each pass, and the
-    # record arena's pages past its end are discarded: the same labels and distances
+def test_arena_tail_discarded_after_each_pass_gives_the_same_labels(sphere, monkeypatch):
+    # on large graphs the record arena's pages past its end are discarded after each
+    # pass: the same labels and distances; the threads' buffers stay zeros between
+    # passes (kept, not handed back) and are forgotten when the workspaces close
     from superfacets.method import classify
 
     discarded = []
@@ -709,12 +709,8 @@ def test_threads_buffers_handed_back_after_each_pass_give_the_same_labels(sphere
     cw = paper_weights(sphere, alpha=200)[g.dual_edge]
     m = sphere.n_faces
 
-    def passes(give_back_min):
-        monkeypatch.setattr(classify, "_GIVE_BACK_MIN", give_back_min)
-        monkeypatch.setattr(classify, "_GIVE_BACK_EVERY", 4)  # runs of 4 expansions
-        handed = []
-        monkeypatch.setattr(classify, "give_back_zero_pages",
-                            lambda a: handed.append(bool(a.view(np.uint64).any())))
+    def passes(discard_min):
+        monkeypatch.setattr(classify, "_DISCARD_MIN", discard_min)
         monkeypatch.setattr(classify, "_PARALLEL_MIN_WORK", 0)  # both threads expand
         spaces = Workspaces(m, cw, 2)
         clf = classify.make_classifier("bounded", g, cw, 0.6**2, spaces)
@@ -726,15 +722,16 @@ def test_threads_buffers_handed_back_after_each_pass_give_the_same_labels(sphere
         for _ in range(3):  # passes, each center moved to the next face
             k, _ = clf.classify(centers, first.size, dist, label)
             out.append((k, label.copy(), dist.copy()))
+            assert len(spaces.ws) == 2
+            assert not any(ws.local.view(np.uint64).any() for ws in spaces.ws)
             centers[:first.size] = (centers[:first.size] + 1) % m
         spaces.close()
-        return out, handed
+        assert spaces.ws == []
+        return out
 
-    (kept, none), (handed_back, handed) = passes(1 << 60), passes(0)
-    assert none == [] and not any(handed)  # all zeros whenever handed back
-    assert len(handed) > 6  # after each run of a thread's expansions, not only each pass
+    kept, tail_discarded = passes(1 << 60), passes(0)
     assert len(discarded) == 6  # the arena's two arrays past the end, each pass
-    for (k1, l1, d1), (k2, l2, d2) in zip(kept, handed_back):
+    for (k1, l1, d1), (k2, l2, d2) in zip(kept, tail_discarded):
         assert k1 == k2
         np.testing.assert_array_equal(l1, l2)
         np.testing.assert_array_equal(d1, d2)

@@ -28,7 +28,7 @@ import numpy as np
 
 from .._kernels import native
 from .._kernels.codes import NOT_INCREMENTAL, QUEUE_FULL
-from .._runtime.memory import discard_pages, give_back_zero_pages
+from .._runtime.memory import discard_pages
 from .adaptive import window_factors
 from .expansion import Workspaces, centers_within, with_room
 from .params import ASSIGNMENTS, check_choice
@@ -54,8 +54,7 @@ _PARALLEL_MIN_WORK = 200_000  # recorded elements per pass worth a second thread
 _MERGE_COST = 0.02  # merging a record against expanding it (measured: 2.5 against 146 ns)
 _INCREMENTAL = 8  # labels updated in place when at most 1 center in 8 moved
 _INCREMENTAL_SHARE = 0.5  # ... and the records to merge again are at most this share
-_GIVE_BACK_MIN = 1 << 16  # elements from which the threads' buffers are handed back per pass
-_GIVE_BACK_EVERY = 64  # ... and after each run of this many expansions of a thread
+_DISCARD_MIN = 1 << 16  # elements from which the arena's pages past its end are discarded
 
 
 class Classifier:
@@ -307,7 +306,7 @@ class BoundedReplay(Classifier):
             self._merge_only(n_centers, seg_start, seg_len, dist, label)
         self.end = int(p)
         self.high = max(self.high, self.end)
-        if self.m >= _GIVE_BACK_MIN:  # (records moved down: what lies past the end is dead)
+        if self.m >= _DISCARD_MIN:  # (records moved down: what lies past the end is dead)
             discard_pages(self.face[self.end:]), discard_pages(self.dist[self.end:])
         # this pass's records become the previous ones
         self.prev_centers = centers[:k].copy()
@@ -316,9 +315,6 @@ class BoundedReplay(Classifier):
         self.prev_start = seg_start[:k].copy()
         self.prev_len = seg_len[:k].copy()
         self.left = (dist, label)
-        if self.m >= _GIVE_BACK_MIN:  # the threads' buffers (zeros again) cost nothing
-            for ws in spaces.ws:  # until the next pass writes them
-                give_back_zero_pages(ws.local)
         return k, int(todo.shape[0]) + (k - n_centers)
 
     def _unset_moved(self, cs, idx, kept, todo, dist, label):
@@ -402,25 +398,16 @@ class BoundedReplay(Classifier):
             srcs_t = np.ascontiguousarray(cs[part])
             os_t = np.empty(part.shape[0], dtype=np.int64)
             ol_t = np.empty(part.shape[0], dtype=np.int64)
-            # large graphs: runs of centers, the buffer's pages handed back after each
-            step = _GIVE_BACK_EVERY if self.m >= _GIVE_BACK_MIN else max(1, part.shape[0])
             while True:
                 if t == 0:
                     if not in_place:
                         _k.reset_labels(dist, label)
                     _k.merge_some(kept, seg_start, seg_len, self.face, self.dist, dist, label)
-                p = bounds[t]
-                for a in range(0, part.shape[0], step):
-                    if a:
-                        give_back_zero_pages(ws.local)
-                    b = a + step
-                    p = _k.expand_many(indptr, indices, w, c, srcs_t[a:b], part[a:b],
-                                       window_r2, ws.local, ws.queue, spaces.inv_width,
-                                       self.face, self.dist, p, bounds[t + 1], os_t[a:b],
-                                       ol_t[a:b], *((dist, label) if t == 0 else
-                                                    (none_d, none_l)), self.wscale)
-                    if p < 0:
-                        break
+                p = _k.expand_many(indptr, indices, w, c, srcs_t, part, window_r2, ws.local,
+                                   ws.queue, spaces.inv_width, self.face, self.dist, bounds[t],
+                                   bounds[t + 1], os_t, ol_t,
+                                   *((dist, label) if t == 0 else (none_d, none_l)),
+                                   self.wscale)
                 if p != QUEUE_FULL:
                     break
                 ws.grow(p)

@@ -67,7 +67,8 @@ class Workspace:
         self.m = m
         # +0.0 between expansions (see superfacets._kernels.expand): pages of zeros,
         # resident only once an expansion writes them (the allocator may have cleared
-        # reused memory: handed back)
+        # reused memory: handed back), and from then on until the workspace is
+        # forgotten (a page handed back between passes is faulted in again by the next)
         self.local = np.zeros(m)
         small_pages(self.local)  # (an expansion writes a few entries spread over it)
         give_back_zero_pages(self.local)
@@ -139,6 +140,9 @@ class Workspaces:
         return self._pool
 
     def close(self) -> None:
+        """Forget the workspaces (their pages stay resident between passes: see
+        :class:`Workspace`) and stop the threads' pool."""
+        self.release()
         if self._pool is not None:
             self._pool.shutdown()
             self._pool = None
