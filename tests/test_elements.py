@@ -480,6 +480,48 @@ def test_graph_and_geometry_on_threads_equal_one_thread(monkeypatch):
         assert np.array_equal(a, b)
 
 
+def test_weights_and_cut_costs_by_chunks_on_threads_equal_one_thread(sphere, monkeypatch):
+    # the per-adjacency arrays in chunks of 64 on three threads, from a graph whose
+    # pairs and normals were released (made again before the threads start): the same
+    # arrays as the chunks one after the other, and the plain numpy expressions
+    from superfacets._runtime import threads as _threads
+    from superfacets.elements import graph as _graph
+    from superfacets.method.cleanup import cut_costs
+
+    def arrays(n_threads):
+        monkeypatch.setattr(_threads, "default_threads", lambda: n_threads)
+        g = face_graph(sphere)
+        g.release()
+        made = []
+        compute = _graph.chunked
+
+        def spy(n, fn, dtype=np.float64):
+            made.append(n)
+            return compute(n, fn, dtype)
+
+        monkeypatch.setattr("superfacets.method.weights.chunked", spy)
+        monkeypatch.setattr("superfacets.method.cleanup.chunked", spy)
+        out = (paper_weights(g, alpha=200, beta=0.5, features=sphere.centroids),
+               shlafman_weights(g, alpha=0.3), cut_costs(g, alpha=200))
+        assert made == [g.n_edges] * 3
+        return out, g
+
+    monkeypatch.setattr(_graph, "CHUNK", 64)
+    one, g = arrays(1)
+    assert g.n_edges > 6 * 64  # several chunks a thread
+    three, _ = arrays(3)
+    for a, b in zip(one, three):
+        assert np.array_equal(a, b)
+    t = g.terms
+    theta = np.arccos(t.cos)
+    jump = np.linalg.norm(sphere.centroids[g.pairs[:, 0]] - sphere.centroids[g.pairs[:, 1]],
+                          axis=1)
+    want = (t.geo + 200 * np.where(t.concave, 1.0, 0.2) * g.span * theta / np.pi
+            + 0.5 * g.span * jump) / g.diagonal
+    np.testing.assert_allclose(three[0], want, rtol=1e-12)
+    np.testing.assert_allclose(three[1], 0.7 * t.geo + 0.3 * (1 - t.cos**2), rtol=1e-12)
+
+
 @pytest.mark.parametrize("seed", [0, 1])
 def test_knn_layout_is_the_csr_of_the_distinct_symmetric_pairs(seed):
     """Known answer: the point graph's kernel gives the layout of the sorted distinct

@@ -17,11 +17,20 @@ CHUNK = 1 << 18
 
 
 def chunked(n: int, compute: Callable[[slice], np.ndarray], dtype=np.float64) -> np.ndarray:
-    """``compute(sl)`` for consecutive slices of ``range(n)``, into one ``(n,)`` array."""
+    """``compute(sl)`` for consecutive slices of ``range(n)`` (:data:`CHUNK` long), into
+    one ``(n,)`` array: ranges of slices on threads, the same slices for any number of
+    threads, so the same result. ``compute`` runs on several threads at once: it may
+    only read what its caller made before (no cached property computed on first use)."""
+    from .._runtime.threads import run_ranges, split
+
     out = np.empty(n, dtype=dtype)
-    for s in range(0, n, CHUNK):
-        sl = slice(s, min(n, s + CHUNK))
-        out[sl] = compute(sl)
+
+    def part(c0: int, c1: int) -> None:
+        for s in range(c0 * CHUNK, min(n, c1 * CHUNK), CHUNK):
+            sl = slice(s, min(n, s + CHUNK))
+            out[sl] = compute(sl)
+
+    run_ranges(part, split(-(-n // CHUNK), min_per_thread=1))
     return out
 
 

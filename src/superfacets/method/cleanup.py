@@ -145,6 +145,7 @@ def cut_costs(graph, *, alpha: float = DEFAULTS.alpha, eta_convex: float = DEFAU
     beta = check_nonneg("beta", beta)
     g = as_element_graph(graph)
     t = g.terms
+    g.lengths, g.pairs  # noqa: B018 (made here if released: the chunks run on threads)
     factor = crease * alpha / np.pi
     f = None
     if beta > 0:

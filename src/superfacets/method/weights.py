@@ -103,6 +103,7 @@ def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = DEF
     g = as_element_graph(graph)
     span = g.span
     f = check_features(features, g) if beta > 0 else None
+    g.normals, g.pairs  # noqa: B018 (made here if released: the chunks run on threads)
 
     def weight(sl):
         t = g.terms_in(sl)
@@ -242,6 +243,7 @@ def shlafman_weights(graph, *, alpha: float = _SHLAFMAN_ALPHA, dtype=np.float64)
     if a > 1:
         raise ParameterError(f"alpha of the Shlafman weighting must be in [0, 1], got {alpha!r}")
     g = as_element_graph(graph)
+    g.normals, g.pairs  # noqa: B018 (made here if released: the chunks run on threads)
 
     def weight(sl):
         t = g.terms_in(sl)
