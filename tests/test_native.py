@@ -522,6 +522,47 @@ def test_csr_of_pairs_on_threads_keeps_the_pairs_order_in_each_row(monkeypatch, 
 
 @needs_cxx
 @pytest.mark.parametrize("threads", ["1", "2", "3"])
+@pytest.mark.parametrize("polygons", [False, True])
+def test_face_pairs_grouped_on_threads_match_numba(monkeypatch, threads, polygons):
+    """The edges' grouping on threads (ranges cut at edge starts, each counted, then
+    written from its place): 70,000 triangles over 400 vertices, so that edges of 2-12
+    half-edges (non-manifold), duplicated faces (paired with themselves: left out) and
+    open boundaries cross the ranges' bounds; one set of arrays, numba's to the bit, and
+    the known answer of its counts."""
+    from superfacets.elements.faces import order_by_two_keys
+
+    rng = np.random.default_rng(5)
+    m, nv = 70_000, 400
+    faces = rng.integers(0, nv, size=(m, 3)).astype(np.int32)
+    faces[:3000] = faces[3000:6000]  # duplicated faces
+    faces[6000:6600, 1] = faces[6000:6600, 0]  # collapsed edges
+    a = np.minimum(faces, np.roll(faces, -1, axis=1)).ravel()
+    b = np.maximum(faces, np.roll(faces, -1, axis=1)).ravel()
+    owner = (np.arange(3 * m, dtype=np.int32) // 3 if polygons
+             else np.empty(0, dtype=np.int32))
+    half, _ = order_by_two_keys(a, b, nv, a == b)
+    with monkeypatch.context() as mp:
+        mp.setenv("NUMBA_NUM_THREADS", threads)
+        got = native.kernel("adjacency.group_pairs")(half, owner, a, b)
+    want = native.reference("adjacency.group_pairs")(half, owner, a, b)
+    assert not native.fallbacks.get("adjacency.group_pairs")
+    assert _same(got, want)
+    # known answer: per edge of s half-edges, s == 1 is a boundary, else its pairs of
+    # distinct faces
+    key = a[half].astype(np.int64) * nv + b[half]
+    start = np.r_[0, np.flatnonzero(np.diff(key)) + 1]
+    size = np.diff(np.r_[start, half.shape[0]])
+    assert np.array_equal(got[0], start[size == 1])
+    face = half // 3
+    n_pairs = sum(int(face[s + i] != face[s + j]) for s, z in zip(start, size) if z > 1
+                  for i in range(z) for j in range(i + 1, z))
+    assert got[1].shape[0] == n_pairs and (size > 2).any()
+    assert n_pairs < (size * (size - 1) // 2).sum()  # (self-pairs left out)
+    assert (got[1] < got[2]).all()
+
+
+@needs_cxx
+@pytest.mark.parametrize("threads", ["1", "2", "3"])
 def test_first_in_cells_on_threads_are_the_lowest_of_each_cell(monkeypatch, threads):
     """Known answer on threads (one table, cells taken by compare-and-swap): the lowest
     element of each occupied cell, ascending, as numba's and as ``np.unique`` (a table

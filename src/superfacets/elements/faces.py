@@ -201,8 +201,12 @@ def order_by_two_keys(key1: np.ndarray, key2: np.ndarray, n_key1: int,
 
 def _group_pairs_on_threads(group_pairs, half, owner, a, b):
     """``group_pairs`` over ranges of ``half`` cut at edge starts, on threads: each
-    range holds whole edges, so the concatenated results are those of one call."""
+    range holds whole edges, so the concatenated results are those of one call. (The
+    compiled kernel cuts its own ranges and writes one set of arrays: called once.)"""
     from .._runtime.threads import run_ranges, split
+
+    if native.available() and half.dtype == np.int32 and a.dtype == np.int32:
+        return group_pairs(half, owner, a, b)
 
     bounds = split(half.shape[0])
     for i in range(1, len(bounds) - 1):  # move each cut forward to the start of an edge

@@ -213,71 +213,82 @@ void sort_buckets(py::handle order_, py::handle starts_, py::handle key2_, i64 v
         if (starts[v + 1] - starts[v] > 1) sort_bucket(order.p, starts[v], starts[v + 1], key2.p);
 }
 
+// adjacency.group_pairs, on threads: ranges of `half` cut at edge starts (each holds
+// whole edges), each range counted, then written from its place, so the arrays are
+// those of one pass (a face paired with itself is left out of the counts).
 py::tuple group_pairs(py::handle half_, py::handle owner_, py::handle a_, py::handle b_) {
     In<i32> half(half_, "half"), owner(owner_, "owner"), a(a_, "a"), b(b_, "b");
     const i64 n = half.n;
+    const bool tri = owner.n == 0;
     std::vector<char> isnew(n + 1);
     isnew[n] = 1;
-    i64 n_bound = 0, n_pairs = 0, run = 0;
+    auto same = [&](i64 i) {  // half[i] on the edge of half[i - 1]
+        return a[half[i]] == a[half[i - 1]] && b[half[i]] == b[half[i - 1]];
+    };
+    auto face = [&](i64 x) { return tri ? half[x] / 3 : owner[half[x]]; };
+    const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / 65536));
+    std::vector<i64> cut(T + 1), n_bound(T + 1, 0), n_pairs(T + 1, 0);
     {
         py::gil_scoped_release nogil;
-        for (i64 i = 0; i < n; ++i) {
-            i64 h = half[i];
-            if (i == 0 || a[h] != a[half[i - 1]] || b[h] != b[half[i - 1]]) {
-                isnew[i] = 1;
-                if (i > 0) {
-                    if (run == 1) n_bound += 1;
-                    else n_pairs += run * (run - 1) / 2;
-                }
-                run = 1;
-            } else {
-                isnew[i] = 0;
-                run += 1;
-            }
+        for (i64 t = 0; t <= T; ++t) {
+            i64 j = n * t / T;
+            while (j > 0 && j < n && same(j)) ++j;
+            cut[t] = t ? std::max(j, cut[t - 1]) : 0;
         }
-        if (n) {
-            if (run == 1) n_bound += 1;
-            else n_pairs += run * (run - 1) / 2;
+        on_threads(T, [&](i64 t) {  // mark runs, count boundaries and pairs
+            i64 nb = 0, np_ = 0;
+            for (i64 i = cut[t]; i < cut[t + 1]; ++i) isnew[i] = i == 0 || !same(i);
+            for (i64 i = cut[t]; i < cut[t + 1];) {
+                i64 j = i + 1;
+                while (j < cut[t + 1] && !isnew[j]) ++j;
+                if (j - i == 1) {
+                    ++nb;
+                } else {
+                    for (i64 x = i; x < j; ++x)
+                        for (i64 y = x + 1; y < j; ++y) np_ += face(x) != face(y);
+                }
+                i = j;
+            }
+            n_bound[t + 1] = nb;
+            n_pairs[t + 1] = np_;
+        });
+        for (i64 t = 0; t < T; ++t) {
+            n_bound[t + 1] += n_bound[t];
+            n_pairs[t + 1] += n_pairs[t];
         }
     }
     Out<i64> boundary;
     Out<i32> lo, hi, ea, eb;
-    auto boundary_a = fresh(n_bound, boundary);
-    auto lo_a = fresh(n_pairs, lo), hi_a = fresh(n_pairs, hi);
-    auto ea_a = fresh(n_pairs, ea), eb_a = fresh(n_pairs, eb);
-    const bool tri = owner.n == 0;
-    i64 p = 0;
+    auto boundary_a = fresh(n_bound[T], boundary);
+    auto lo_a = fresh(n_pairs[T], lo), hi_a = fresh(n_pairs[T], hi);
+    auto ea_a = fresh(n_pairs[T], ea), eb_a = fresh(n_pairs[T], eb);
     {
         py::gil_scoped_release nogil;
-        i64 nb = 0, i = 0;
-        while (i < n) {
-            i64 j = i + 1;
-            while (!isnew[j]) ++j;
-            if (j - i == 1) {
-                boundary[nb++] = i;
-            } else {
-                i32 va = a[half[i]], vb = b[half[i]];
-                for (i64 x = i; x < j; ++x) {
-                    for (i64 y = x + 1; y < j; ++y) {
-                        i32 f = tri ? half[x] / 3 : owner[half[x]];
-                        i32 g = tri ? half[y] / 3 : owner[half[y]];
-                        if (f != g) {
-                            lo[p] = mn(f, g);
-                            hi[p] = mx(f, g);
-                            ea[p] = va;
-                            eb[p] = vb;
-                            ++p;
+        on_threads(T, [&](i64 t) {
+            i64 nb = n_bound[t], p = n_pairs[t];
+            for (i64 i = cut[t]; i < cut[t + 1];) {
+                i64 j = i + 1;
+                while (!isnew[j]) ++j;
+                if (j - i == 1) {
+                    boundary[nb++] = i;
+                } else {
+                    i32 va = a[half[i]], vb = b[half[i]];
+                    for (i64 x = i; x < j; ++x) {
+                        for (i64 y = x + 1; y < j; ++y) {
+                            i32 f = face(x), g = face(y);
+                            if (f != g) {
+                                lo[p] = mn(f, g);
+                                hi[p] = mx(f, g);
+                                ea[p] = va;
+                                eb[p] = vb;
+                                ++p;
+                            }
                         }
                     }
                 }
+                i = j;
             }
-            i = j;
-        }
-    }
-    if (p < n_pairs) {
-        py::slice s(0, p, 1);
-        auto cut = [&](py::array_t<i32>& x) { return py::array_t<i32>(x[s]).attr("copy")(); };
-        return py::make_tuple(boundary_a, cut(lo_a), cut(hi_a), cut(ea_a), cut(eb_a));
+        });
     }
     return py::make_tuple(boundary_a, lo_a, hi_a, ea_a, eb_a);
 }
