@@ -562,6 +562,28 @@ def test_face_pairs_grouped_on_threads_match_numba(monkeypatch, threads, polygon
 
 
 @needs_cxx
+def test_kept_pairs_taken_on_threads_are_the_gathered_columns(monkeypatch):
+    """The face pairs and edges kept after the CSR's deduplication, gathered on threads:
+    numba's to the bit and numpy's fancy indexing (the known answer)."""
+    rng = np.random.default_rng(2)
+    e = 50_000
+    lo, hi, ka, kb = (rng.integers(0, 10**6, e).astype(np.int32) for _ in range(4))
+    first = np.sort(rng.choice(e, 30_000, replace=False)).astype(np.int64)
+    first[:100] = first[:100][::-1]  # (any order)
+    got = []
+    monkeypatch.setenv("NUMBA_NUM_THREADS", "3")
+    for fn in (native.kernel("adjacency.take_pairs"), native.reference("adjacency.take_pairs")):
+        pairs = np.empty((first.shape[0], 2), dtype=np.int32)
+        edges = np.empty((first.shape[0], 2), dtype=np.int32)
+        fn(first, lo, hi, ka, kb, pairs, edges)
+        got.append((pairs, edges))
+    assert not native.fallbacks.get("adjacency.take_pairs")
+    assert _same(got[0], got[1])
+    assert np.array_equal(got[0][0], np.stack([lo[first], hi[first]], axis=1))
+    assert np.array_equal(got[0][1], np.stack([ka[first], kb[first]], axis=1))
+
+
+@needs_cxx
 @pytest.mark.parametrize("threads", ["1", "2", "3"])
 def test_first_in_cells_on_threads_are_the_lowest_of_each_cell(monkeypatch, threads):
     """Known answer on threads (one table, cells taken by compare-and-swap): the lowest

@@ -208,6 +208,19 @@ def group_pairs(half, owner, a, b):
     return boundary, lo, hi, ea, eb
 
 
+@njit(cache=True, error_model="numpy", nogil=True)
+def take_pairs(first, lo, hi, ka, kb, pairs, edges):
+    """``pairs[t] = (lo[first[t]], hi[first[t]])`` and ``edges[t] = (ka[first[t]],
+    kb[first[t]])``: the kept face pairs and their edges, in one pass (``pairs`` and
+    ``edges`` are ``(len(first), 2)``)."""
+    for t in range(first.shape[0]):
+        u = first[t]
+        pairs[t, 0] = lo[u]
+        pairs[t, 1] = hi[u]
+        edges[t, 0] = ka[u]
+        edges[t, 1] = kb[u]
+
+
 @njit(cache=True, error_model="numpy")
 def csr_of_face_pairs(lo, hi, ka, kb, n, indices, dual_edge):
     """The distinct pairs among ``(lo[t], hi[t])`` (``lo < hi < n``, repeats

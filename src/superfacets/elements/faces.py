@@ -289,11 +289,8 @@ def build_face_graph(faces: np.ndarray, n_vertices: int, offsets: np.ndarray | N
         dual_edge = dual_edge[:n_csr].astype(np.int32 if n_csr < 2**31 - 1 else np.int64)
     # 32-bit while the ids fit (24 bytes per face less, kept for the whole run)
     pairs = np.empty((first.shape[0], 2), dtype=np.int32 if m < 2**31 - 1 else np.int64)
-    pairs[:, 0] = lo[first]
-    pairs[:, 1] = hi[first]
     edges = np.empty((first.shape[0], 2), dtype=ea.dtype)
-    edges[:, 0] = ea[first]
-    edges[:, 1] = eb[first]
+    native.kernel("adjacency.take_pairs")(first, lo, hi, ea, eb, pairs, edges)
     del lo, hi, ea, eb, first
     return FaceAdjacency(
         pairs=pairs,

@@ -293,6 +293,26 @@ py::tuple group_pairs(py::handle half_, py::handle owner_, py::handle a_, py::ha
     return py::make_tuple(boundary_a, lo_a, hi_a, ea_a, eb_a);
 }
 
+// adjacency.take_pairs, on threads (each row on its own)
+void take_pairs(py::handle first_, py::handle lo_, py::handle hi_, py::handle ka_,
+                py::handle kb_, py::handle pairs_, py::handle edges_) {
+    In<i64> first(first_, "first");
+    In<i32> lo(lo_, "lo"), hi(hi_, "hi"), ka(ka_, "ka"), kb(kb_, "kb");
+    Out<i32> pairs(pairs_, "pairs"), edges(edges_, "edges");
+    if (pairs.cols != 2 || edges.cols != 2 || pairs.n != first.n || edges.n != first.n)
+        throw Mismatch("argument pairs");
+    py::gil_scoped_release nogil;
+    parallel_for(first.n, [&](i64 t0, i64 t1) {
+        for (i64 t = t0; t < t1; ++t) {
+            const i64 u = first[t];
+            pairs(t, 0) = lo[u];
+            pairs(t, 1) = hi[u];
+            edges(t, 0) = ka[u];
+            edges(t, 1) = kb[u];
+        }
+    });
+}
+
 py::tuple csr_of_face_pairs(py::handle lo_, py::handle hi_, py::handle ka_, py::handle kb_, i64 n,
                             py::handle indices_, py::handle dual_edge_) {
     In<i32> lo(lo_, "lo"), hi(hi_, "hi"), ka(ka_, "ka"), kb(kb_, "kb");
@@ -793,6 +813,7 @@ void bind_graph(py::module_& m) {
     m.def("sort_buckets", &sort_buckets);
     m.def("group_pairs", &group_pairs);
     m.def("csr_of_face_pairs", &csr_of_face_pairs);
+    m.def("take_pairs", &take_pairs);
     m.def("same_label_components", &same_label_components);
     m.def("face_geometry", &face_geometry);
     m.def("face_terms", &face_terms);
