@@ -8,7 +8,7 @@ namespace sfk {
 
 namespace {
 
-struct Arcs {
+struct Arcs {  // a band's network as built: per node a list of arcs, arc a ^ 1 a's reverse
     i64* first;
     i64* nxt;
     i64* head;
@@ -20,11 +20,38 @@ struct CutWork {
     std::vector<i64> head, nxt, first, label, cur, queue;
     std::vector<double> cap, tr, excess, to_source;
     std::vector<char> side, queued;
+    // the lists laid out node by node, each in its list's order (so the cut's every step
+    // is the one the lists give, without chasing them): node u's arcs are start[u] ..
+    // start[u + 1], arc p goes to to[p] with residual capacity rcap[p], its reverse rev[p]
+    std::vector<i64> start, to, rev, at;
+    std::vector<double> rcap;
 };
 
-// cleanup._labels_from_source
-i64 labels_from_source(const Arcs& g, double eps, i64 n, i64* label, i64* order,
+// The lists of g laid out node by node in W (each node's arcs in its list's order).
+void lay_out(const Arcs& g, i64 n, CutWork& W) {
+    i64* start = W.start.data();
+    i64* at = W.at.data();
+    i64 p = 0;
+    for (i64 u = 0; u < n; ++u) {
+        start[u] = p;
+        for (i64 a = g.first[u]; a != -1; a = g.nxt[a]) {
+            at[a] = p;
+            W.to[p] = g.head[a];
+            W.rcap[p] = g.cap[a];
+            ++p;
+        }
+    }
+    start[n] = p;
+    for (i64 u = 0; u < n; ++u)
+        for (i64 a = g.first[u]; a != -1; a = g.nxt[a]) W.rev[at[a]] = at[a ^ 1];
+}
+
+// cleanup._labels_from_source (on the laid-out arcs: the same visits in the same order)
+i64 labels_from_source(const CutWork& W, double eps, i64 n, i64* label, i64* order,
                        const double* to_source) {
+    const i64* start = W.start.data();
+    const i64* to = W.to.data();
+    const double* rcap = W.rcap.data();
     for (i64 u = 0; u < n; ++u) label[u] = n + 1;
     i64 qt = 0;
     for (i64 u = 0; u < n; ++u) {
@@ -36,9 +63,9 @@ i64 labels_from_source(const Arcs& g, double eps, i64 n, i64* label, i64* order,
     i64 qh = 0;
     while (qh < qt) {
         i64 u = order[qh++];
-        for (i64 a = g.first[u]; a != -1; a = g.nxt[a]) {
-            i64 v = g.head[a];
-            if (label[v] > n && g.cap[a] > eps) {
+        for (i64 p = start[u]; p < start[u + 1]; ++p) {
+            i64 v = to[p];
+            if (label[v] > n && rcap[p] > eps) {
                 label[v] = label[u] + 1;
                 order[qt++] = v;
             }
@@ -47,12 +74,14 @@ i64 labels_from_source(const Arcs& g, double eps, i64 n, i64* label, i64* order,
     return qt;
 }
 
-// cleanup._min_cut_in: push-relabel's first phase on the reversed network
+// cleanup._min_cut_in: push-relabel's first phase on the reversed network (on the
+// laid-out arcs: the same pushes and relabels in the same order as on the lists)
 void min_cut_in(const Arcs& g, double eps, char* source_side, i64 n, CutWork& W) {
-    const i64* first = g.first;
-    const i64* nxt = g.nxt;
-    const i64* head = g.head;
-    double* cap = g.cap;
+    lay_out(g, n, W);
+    const i64* start = W.start.data();
+    const i64* to = W.to.data();
+    const i64* rev = W.rev.data();
+    double* cap = W.rcap.data();
     const double* tr = g.tr;
     i64* label = W.label.data();
     i64* cur = W.cur.data();
@@ -65,7 +94,7 @@ void min_cut_in(const Arcs& g, double eps, char* source_side, i64 n, CutWork& W)
         to_source[u] = tr[u] > 0.0 ? tr[u] : 0.0;
     }
     while (true) {
-        labels_from_source(g, eps, n, label, cur, to_source);
+        labels_from_source(W, eps, n, label, cur, to_source);
         i64 qh = 0, qn = 0;
         for (i64 u = 0; u < n; ++u) queued[u] = 0;
         for (i64 u = 0; u < n; ++u) {
@@ -74,7 +103,7 @@ void min_cut_in(const Arcs& g, double eps, char* source_side, i64 n, CutWork& W)
                 queued[u] = 1;
             }
         }
-        for (i64 u = 0; u < n; ++u) cur[u] = first[u];
+        for (i64 u = 0; u < n; ++u) cur[u] = start[u];
         if (qn == 0) break;
         i64 relabels = 0;
         while (qn > 0 && relabels <= n) {
@@ -89,22 +118,22 @@ void min_cut_in(const Arcs& g, double eps, char* source_side, i64 n, CutWork& W)
                     excess[u] -= delta;
                     continue;
                 }
-                i64 a = cur[u];
-                if (a == -1) {
+                i64 p = cur[u];
+                if (p == start[u + 1]) {
                     i64 low = to_source[u] > eps ? 0 : n;
-                    for (i64 b = first[u]; b != -1; b = nxt[b])
-                        if (cap[b ^ 1] > eps && label[head[b]] < low) low = label[head[b]];
+                    for (i64 b = start[u]; b < start[u + 1]; ++b)
+                        if (cap[rev[b]] > eps && label[to[b]] < low) low = label[to[b]];
                     label[u] = low + 1;
-                    cur[u] = first[u];
+                    cur[u] = start[u];
                     ++relabels;
                     continue;
                 }
-                i64 v = head[a];
-                double r = cap[a ^ 1];
+                i64 v = to[p];
+                double r = cap[rev[p]];
                 if (r > eps && label[u] == label[v] + 1) {
                     double delta = mn(excess[u], r);
-                    cap[a ^ 1] -= delta;
-                    cap[a] += delta;
+                    cap[rev[p]] -= delta;
+                    cap[p] += delta;
                     excess[u] -= delta;
                     excess[v] += delta;
                     if (!queued[v] && excess[v] > eps) {
@@ -113,14 +142,14 @@ void min_cut_in(const Arcs& g, double eps, char* source_side, i64 n, CutWork& W)
                         ++qn;
                     }
                 } else {
-                    cur[u] = nxt[a];
+                    cur[u] = p + 1;
                 }
             }
         }
         if (qn == 0) break;
     }
     for (i64 u = 0; u < n; ++u) source_side[u] = 0;
-    i64 reach = labels_from_source(g, eps, n, label, cur, to_source);
+    i64 reach = labels_from_source(W, eps, n, label, cur, to_source);
     for (i64 t = 0; t < reach; ++t) source_side[cur[t]] = 1;
 }
 
@@ -320,6 +349,9 @@ void solve_bands(i64 p0, i64 p1, py::handle order_, py::handle starts_, py::hand
     W.head.resize(most_arcs);
     W.cap.resize(most_arcs);
     W.nxt.resize(most_arcs);
+    for (auto* v : {&W.to, &W.rev, &W.at}) v->resize(most_arcs);
+    W.rcap.resize(most_arcs);
+    W.start.resize(most_nodes + 1);
     for (auto* v : {&W.first, &W.label, &W.cur, &W.queue}) v->resize(most_nodes);
     for (auto* v : {&W.tr, &W.excess, &W.to_source}) v->resize(most_nodes);
     for (auto* v : {&W.side, &W.queued}) v->resize(most_nodes);
