@@ -196,6 +196,28 @@ def test_runs_on_faces_give_numba_results_call_by_call(shadowed):
         missing
 
 
+@needs_cxx
+def test_swap_searches_by_buckets_give_numba_distances_under_any_weights(shadowed):
+    """The swaps' energies and split candidates search by a circular bucket queue: the
+    same distances, stamps, energies and splits as numba's heap, call by call, under
+    weights spread over six orders of magnitude (entries landing thousands of buckets
+    ahead, around the circle many times) and with zero weights (ties everywhere)."""
+    from superfacets.elements import face_graph
+    from superfacets.method.splitmerge import swap_round
+
+    calls, _ = shadowed
+    mesh = creature(30)
+    g = face_graph(mesh)
+    labels = superfacets.segment(mesh, 40, n_threads=1).labels
+    rng = np.random.default_rng(4)
+    for pair_w in (np.exp(rng.normal(0.0, 3.0, g.n_edges)),
+                   np.where(rng.random(g.n_edges) < 0.3, 0.0, rng.random(g.n_edges))):
+        w = np.ascontiguousarray(pair_w[g.dual_edge])
+        new, _ = swap_round(g, w, labels, n_threads=1, pruned=False)
+        assert new.shape == labels.shape
+    assert calls["splitmerge.energies"] >= 2 and calls["splitmerge.split_candidates"] >= 2
+
+
 def _sampled(mesh: Mesh, n: int, seed: int) -> np.ndarray:
     """``n`` points drawn uniformly on the surface of ``mesh``."""
     rng = np.random.default_rng(seed)

@@ -1,5 +1,7 @@
 // Split and merge candidates of the K-preserving swaps (superfacets/_kernels/splitmerge.py),
 // the same operations in the same order.
+#include <algorithm>
+
 #include "common.hpp"
 
 namespace sfk {
@@ -53,6 +55,92 @@ void search(const Search& s, i64 la, i64 lb, i64 src, double* dist, i64* stamp, 
         relax(s, la, lb, f, d, dist, stamp, sid);
     }
 }
+
+// The same search by a label-correcting bucket queue (buckets of a width of about a
+// quarter of the typical weight, circular: an element's entry lands at most
+// wmax / width + 1 buckets ahead). Its distances and stamps are those of `search` to the
+// bit: every element reached ends with the least float sum over paths, a fixed point
+// that does not depend on the order of the work (the energies and the splits read
+// nothing else; the merges' early stop reads the order of the pops: they keep the heap).
+class Buckets {
+  public:
+    Buckets(const double* w, i64 n_w) {
+        const i64 step = std::max<i64>(1, n_w >> 17);
+        std::vector<double> sample;
+        double wmax = 0.0;
+        for (i64 e = 0; e < n_w; ++e) wmax = mx(wmax, w[e]);
+        for (i64 e = 0; e < n_w; e += step)
+            if (w[e] > 0) sample.push_back(w[e]);
+        double width = 1.0;
+        if (!sample.empty()) {
+            auto mid = sample.begin() + static_cast<i64>(sample.size()) / 2;
+            std::nth_element(sample.begin(), mid, sample.end());
+            width = 0.25 * *mid;
+        }
+        width = mx(width, wmax / static_cast<double>((i64{1} << 16) - 2));
+        if (!(width > 0.0 && width < INF)) width = 1.0;
+        inv_width_ = 1.0 / width;
+        i64 nb = 2;
+        while (static_cast<double>(nb) < wmax * inv_width_ + 2.0) nb *= 2;
+        head_.assign(nb, -1);
+    }
+
+    void search(const Search& s, i64 la, i64 lb, i64 src, double* dist, i64* stamp, i64 sid) {
+        const i64 mask = static_cast<i64>(head_.size()) - 1;
+        face_.clear();
+        next_.clear();
+        key_.clear();
+        i64 free = -1, live = 0, cur = 0;
+        auto push = [&](i64 g, double nd) {
+            i64 n = free;
+            if (n >= 0) {
+                free = next_[n];
+            } else {
+                n = static_cast<i64>(face_.size());
+                face_.push_back(0);
+                next_.push_back(0);
+                key_.push_back(0.0);
+            }
+            i64 i = static_cast<i64>(nd * inv_width_);
+            if (i < cur) i = cur;
+            face_[n] = g;
+            key_[n] = nd;
+            next_[n] = head_[i & mask];
+            head_[i & mask] = n;
+            ++live;
+        };
+        dist[src] = 0.0;
+        stamp[src] = sid;
+        push(src, 0.0);
+        while (live > 0) {
+            while (head_[cur & mask] < 0) ++cur;
+            const i64 b = cur & mask, n = head_[b];
+            head_[b] = next_[n];
+            next_[n] = free;
+            free = n;
+            --live;
+            const i64 f = face_[n];
+            const double d = key_[n];
+            if (d > dist[f]) continue;
+            for (i64 e = s.indptr[f]; e < s.indptr[f + 1]; ++e) {
+                i64 g = s.indices[e];
+                i64 lg = s.label[g];
+                if (lg != la && lg != lb) continue;
+                double nd = d + s.w[e];
+                if (stamp[g] != sid || nd < dist[g]) {
+                    dist[g] = nd;
+                    stamp[g] = sid;
+                    push(g, nd);
+                }
+            }
+        }
+    }
+
+  private:
+    double inv_width_ = 1.0;
+    std::vector<i64> head_, face_, next_;
+    std::vector<double> key_;
+};
 
 i64 nearest_mean(const i64* elems, i64 n, const double* sizes, const double* pos) {
     double tot = 0.0, mx_ = 0.0, my = 0.0, mz = 0.0;
@@ -162,14 +250,14 @@ i64 energies(py::handle indptr, py::handle indices, py::handle w, py::handle lab
     Out<double> energy(energy_, "energy"), dist(dist_, "dist"), hkey(hkey_, "hkey");
     Out<i64> far(far_, "far"), stamp(stamp_, "stamp"), hval(hval_, "hval");
     py::gil_scoped_release nogil;
-    Heap heap(4096);
-    Search s = c.search(&heap);
+    Search s = c.search(nullptr);
+    Buckets bq(c.w.p, c.w.n);
     const i64 k = c.bounds.n - 1;
     for (i64 sp = first; sp < k; sp += step) {
         i64 lo = c.bounds[sp], n = c.bounds[sp + 1] - lo;
         const i64* elems = c.members.p + lo;
         i64 ctr = nearest_mean(elems, n, c.sizes.p, c.positions.p);
-        search(s, sp, sp, ctr, dist.p, stamp.p, sid);
+        bq.search(s, sp, sp, ctr, dist.p, stamp.p, sid);
         auto ef = energy_of(elems, n, c.sizes.p, dist.p, stamp.p, sid, power);
         energy[sp] = ef.first;
         far[sp] = ef.second;
@@ -193,8 +281,8 @@ i64 split_candidates(py::handle indptr, py::handle indices, py::handle w, py::ha
     Out<i64> stamp(stamp_, "stamp"), stamp2(stamp2_, "stamp2"), hval(hval_, "hval"),
         work(work_, "work");
     py::gil_scoped_release nogil;
-    Heap heap(4096);
-    Search s = c.search(&heap);
+    Search s = c.search(nullptr);
+    Buckets bq(c.w.p, c.w.n);
     const double* sizes_p = c.sizes.p;
     for (i64 t = first; t < which.n; t += step) {
         i64 sp = which[t];
@@ -203,7 +291,7 @@ i64 split_candidates(py::handle indptr, py::handle indices, py::handle w, py::ha
         split_energy[sp] = INF;
         if (n < 4) continue;
         i64 p = far[sp];
-        search(s, sp, sp, p, dist.p, stamp.p, sid);
+        bq.search(s, sp, sp, p, dist.p, stamp.p, sid);
         i64 q = energy_of(elems, n, sizes_p, dist.p, stamp.p, sid, power).second;
         if (q == p) {
             ++sid;
@@ -226,8 +314,8 @@ i64 split_candidates(py::handle indptr, py::handle indices, py::handle w, py::ha
             }
             last_p = p;
             last_q = q;
-            search(s, sp, sp, p, dist.p, stamp.p, sid);
-            search(s, sp, sp, q, dist2.p, stamp2.p, sid);
+            bq.search(s, sp, sp, p, dist.p, stamp.p, sid);
+            bq.search(s, sp, sp, q, dist2.p, stamp2.p, sid);
             i64 na = 0, nb = 0;
             e = 0.0;
             for (i64 i = 0; i < n; ++i) {
