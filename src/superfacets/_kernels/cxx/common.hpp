@@ -244,6 +244,84 @@ struct Heap {
     }
 };
 
+// A circular bucket queue of (element, key) entries, keys >= 0, for the label-correcting
+// searches whose result is a fixed point that does not depend on the order of the work
+// (each element ends with the least float sum over paths, ties broken by a total order):
+// buckets about a quarter of the median weight wide (a strided sample), as many as put
+// an entry at most wmax / width + 1 buckets ahead of the one being emptied. One object
+// serves many searches: reset() (when empty) starts the next from bucket 0.
+class BucketQueue {
+  public:
+    BucketQueue(const double* w, i64 n_w) {
+        const i64 step = std::max<i64>(1, n_w >> 17);
+        std::vector<double> sample;
+        double wmax = 0.0;
+        for (i64 e = 0; e < n_w; ++e) wmax = std::max(wmax, w[e]);
+        for (i64 e = 0; e < n_w; e += step)
+            if (w[e] > 0) sample.push_back(w[e]);
+        double width = 1.0;
+        if (!sample.empty()) {
+            auto mid = sample.begin() + static_cast<i64>(sample.size()) / 2;
+            std::nth_element(sample.begin(), mid, sample.end());
+            width = 0.25 * *mid;
+        }
+        width = std::max(width, wmax / static_cast<double>((i64{1} << 16) - 2));
+        if (!(width > 0.0 && width < INF)) width = 1.0;
+        inv_width_ = 1.0 / width;
+        i64 nb = 2;
+        while (static_cast<double>(nb) < wmax * inv_width_ + 2.0) nb *= 2;
+        head_.assign(nb, -1);
+        mask_ = nb - 1;
+    }
+
+    bool empty() const { return live_ == 0; }
+
+    void reset() {  // (empty: every bucket's list ended)
+        cur_ = 0;
+        face_.clear();
+        next_.clear();
+        key_.clear();
+        free_ = -1;
+    }
+
+    void push(i64 g, double key) {
+        i64 n = free_;
+        if (n >= 0) {
+            free_ = next_[n];
+        } else {
+            n = static_cast<i64>(face_.size());
+            face_.push_back(0);
+            next_.push_back(0);
+            key_.push_back(0.0);
+        }
+        i64 i = static_cast<i64>(key * inv_width_);
+        if (i < cur_) i = cur_;
+        face_[n] = g;
+        key_[n] = key;
+        next_[n] = head_[i & mask_];
+        head_[i & mask_] = n;
+        ++live_;
+    }
+
+    // the next entry (the queue not empty): of the lowest bucket, its keys within a width
+    void pop(i64& g, double& key) {
+        while (head_[cur_ & mask_] < 0) ++cur_;
+        const i64 b = cur_ & mask_, n = head_[b];
+        head_[b] = next_[n];
+        next_[n] = free_;
+        free_ = n;
+        --live_;
+        g = face_[n];
+        key = key_[n];
+    }
+
+  private:
+    double inv_width_ = 1.0;
+    i64 mask_ = 1, cur_ = 0, free_ = -1, live_ = 0;
+    std::vector<i64> head_, face_, next_;
+    std::vector<double> key_;
+};
+
 // Binding registrations, one per source file.
 void bind_graph(py::module_& m);
 void bind_expand(py::module_& m);

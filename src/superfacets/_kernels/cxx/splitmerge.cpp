@@ -1,6 +1,6 @@
 // Split and merge candidates of the K-preserving swaps (superfacets/_kernels/splitmerge.py),
 // the same operations in the same order.
-#include <algorithm>
+#include <type_traits>
 
 #include "common.hpp"
 
@@ -26,8 +26,11 @@ struct Search {
     Heap* heap;  // (the numba kernels' hkey / hval: here one array of pairs)
 };
 
-inline void relax(const Search& s, i64 la, i64 lb, i64 f, double d, double* dist, i64* stamp,
-                  i64 sid) {
+// f's neighbours within labels la and lb improved from f's distance d (queued in q: the
+// search's heap, or a bucket queue)
+template <class Q>
+inline void relax_into(const Search& s, i64 la, i64 lb, i64 f, double d, double* dist,
+                       i64* stamp, i64 sid, Q& q) {
     for (i64 e = s.indptr[f]; e < s.indptr[f + 1]; ++e) {
         i64 g = s.indices[e];
         i64 lg = s.label[g];
@@ -36,9 +39,17 @@ inline void relax(const Search& s, i64 la, i64 lb, i64 f, double d, double* dist
         if (stamp[g] != sid || nd < dist[g]) {
             dist[g] = nd;
             stamp[g] = sid;
-            s.heap->push(nd, g);
+            if constexpr (std::is_same_v<Q, Heap>)
+                q.push(nd, g);
+            else
+                q.push(g, nd);
         }
     }
+}
+
+inline void relax(const Search& s, i64 la, i64 lb, i64 f, double d, double* dist, i64* stamp,
+                  i64 sid) {
+    relax_into(s, la, lb, f, d, dist, stamp, sid, *s.heap);
 }
 
 void search(const Search& s, i64 la, i64 lb, i64 src, double* dist, i64* stamp, i64 sid) {
@@ -56,91 +67,25 @@ void search(const Search& s, i64 la, i64 lb, i64 src, double* dist, i64* stamp, 
     }
 }
 
-// The same search by a label-correcting bucket queue (buckets of a width of about a
-// quarter of the typical weight, circular: an element's entry lands at most
-// wmax / width + 1 buckets ahead). Its distances and stamps are those of `search` to the
-// bit: every element reached ends with the least float sum over paths, a fixed point
-// that does not depend on the order of the work (the energies and the splits read
-// nothing else; the merges' early stop reads the order of the pops: they keep the heap).
-class Buckets {
-  public:
-    Buckets(const double* w, i64 n_w) {
-        const i64 step = std::max<i64>(1, n_w >> 17);
-        std::vector<double> sample;
-        double wmax = 0.0;
-        for (i64 e = 0; e < n_w; ++e) wmax = mx(wmax, w[e]);
-        for (i64 e = 0; e < n_w; e += step)
-            if (w[e] > 0) sample.push_back(w[e]);
-        double width = 1.0;
-        if (!sample.empty()) {
-            auto mid = sample.begin() + static_cast<i64>(sample.size()) / 2;
-            std::nth_element(sample.begin(), mid, sample.end());
-            width = 0.25 * *mid;
-        }
-        width = mx(width, wmax / static_cast<double>((i64{1} << 16) - 2));
-        if (!(width > 0.0 && width < INF)) width = 1.0;
-        inv_width_ = 1.0 / width;
-        i64 nb = 2;
-        while (static_cast<double>(nb) < wmax * inv_width_ + 2.0) nb *= 2;
-        head_.assign(nb, -1);
+// The same search by a label-correcting bucket queue (common.hpp): its distances and
+// stamps are those of `search` to the bit, every element reached ending with the least
+// float sum over paths, a fixed point that does not depend on the order of the work (the
+// energies and the splits read nothing else; the merges' early stop reads the order of
+// the pops: they keep the heap).
+void bucket_search(BucketQueue& q, const Search& s, i64 la, i64 lb, i64 src, double* dist,
+                   i64* stamp, i64 sid) {
+    q.reset();
+    dist[src] = 0.0;
+    stamp[src] = sid;
+    q.push(src, 0.0);
+    while (!q.empty()) {
+        i64 f;
+        double d;
+        q.pop(f, d);
+        if (d > dist[f]) continue;
+        relax_into(s, la, lb, f, d, dist, stamp, sid, q);
     }
-
-    void search(const Search& s, i64 la, i64 lb, i64 src, double* dist, i64* stamp, i64 sid) {
-        const i64 mask = static_cast<i64>(head_.size()) - 1;
-        face_.clear();
-        next_.clear();
-        key_.clear();
-        i64 free = -1, live = 0, cur = 0;
-        auto push = [&](i64 g, double nd) {
-            i64 n = free;
-            if (n >= 0) {
-                free = next_[n];
-            } else {
-                n = static_cast<i64>(face_.size());
-                face_.push_back(0);
-                next_.push_back(0);
-                key_.push_back(0.0);
-            }
-            i64 i = static_cast<i64>(nd * inv_width_);
-            if (i < cur) i = cur;
-            face_[n] = g;
-            key_[n] = nd;
-            next_[n] = head_[i & mask];
-            head_[i & mask] = n;
-            ++live;
-        };
-        dist[src] = 0.0;
-        stamp[src] = sid;
-        push(src, 0.0);
-        while (live > 0) {
-            while (head_[cur & mask] < 0) ++cur;
-            const i64 b = cur & mask, n = head_[b];
-            head_[b] = next_[n];
-            next_[n] = free;
-            free = n;
-            --live;
-            const i64 f = face_[n];
-            const double d = key_[n];
-            if (d > dist[f]) continue;
-            for (i64 e = s.indptr[f]; e < s.indptr[f + 1]; ++e) {
-                i64 g = s.indices[e];
-                i64 lg = s.label[g];
-                if (lg != la && lg != lb) continue;
-                double nd = d + s.w[e];
-                if (stamp[g] != sid || nd < dist[g]) {
-                    dist[g] = nd;
-                    stamp[g] = sid;
-                    push(g, nd);
-                }
-            }
-        }
-    }
-
-  private:
-    double inv_width_ = 1.0;
-    std::vector<i64> head_, face_, next_;
-    std::vector<double> key_;
-};
+}
 
 i64 nearest_mean(const i64* elems, i64 n, const double* sizes, const double* pos) {
     double tot = 0.0, mx_ = 0.0, my = 0.0, mz = 0.0;
@@ -251,13 +196,13 @@ i64 energies(py::handle indptr, py::handle indices, py::handle w, py::handle lab
     Out<i64> far(far_, "far"), stamp(stamp_, "stamp"), hval(hval_, "hval");
     py::gil_scoped_release nogil;
     Search s = c.search(nullptr);
-    Buckets bq(c.w.p, c.w.n);
+    BucketQueue bq(c.w.p, c.w.n);
     const i64 k = c.bounds.n - 1;
     for (i64 sp = first; sp < k; sp += step) {
         i64 lo = c.bounds[sp], n = c.bounds[sp + 1] - lo;
         const i64* elems = c.members.p + lo;
         i64 ctr = nearest_mean(elems, n, c.sizes.p, c.positions.p);
-        bq.search(s, sp, sp, ctr, dist.p, stamp.p, sid);
+        bucket_search(bq, s, sp, sp, ctr, dist.p, stamp.p, sid);
         auto ef = energy_of(elems, n, c.sizes.p, dist.p, stamp.p, sid, power);
         energy[sp] = ef.first;
         far[sp] = ef.second;
@@ -282,7 +227,7 @@ i64 split_candidates(py::handle indptr, py::handle indices, py::handle w, py::ha
         work(work_, "work");
     py::gil_scoped_release nogil;
     Search s = c.search(nullptr);
-    Buckets bq(c.w.p, c.w.n);
+    BucketQueue bq(c.w.p, c.w.n);
     const double* sizes_p = c.sizes.p;
     for (i64 t = first; t < which.n; t += step) {
         i64 sp = which[t];
@@ -291,7 +236,7 @@ i64 split_candidates(py::handle indptr, py::handle indices, py::handle w, py::ha
         split_energy[sp] = INF;
         if (n < 4) continue;
         i64 p = far[sp];
-        bq.search(s, sp, sp, p, dist.p, stamp.p, sid);
+        bucket_search(bq, s, sp, sp, p, dist.p, stamp.p, sid);
         i64 q = energy_of(elems, n, sizes_p, dist.p, stamp.p, sid, power).second;
         if (q == p) {
             ++sid;
@@ -314,8 +259,8 @@ i64 split_candidates(py::handle indptr, py::handle indices, py::handle w, py::ha
             }
             last_p = p;
             last_q = q;
-            bq.search(s, sp, sp, p, dist.p, stamp.p, sid);
-            bq.search(s, sp, sp, q, dist2.p, stamp2.p, sid);
+            bucket_search(bq, s, sp, sp, p, dist.p, stamp.p, sid);
+            bucket_search(bq, s, sp, sp, q, dist2.p, stamp2.p, sid);
             i64 na = 0, nb = 0;
             e = 0.0;
             for (i64 i = 0; i < n; ++i) {
