@@ -342,7 +342,13 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
         out = labels.copy()
         args = (members, starts.astype(np.int64), pair // k, pair % k, band_of, g.indptr,
                 g.indices, cut_csr, labels, sizes, positions, means, smooth, out)
-        _run_chunks(solve_bands, starts, n_threads, args)
+        if native.available():  # (the compiled kernel takes the bands in turn on threads)
+            from .._runtime.threads import using
+
+            with using(n_threads):
+                solve_bands(0, starts.size - 1, *args)
+        else:
+            _run_chunks(solve_bands, starts, n_threads, args)
         del args, band_of, members
         moved = np.flatnonzero(out != labels)
         if moved.size == 0:

@@ -1,5 +1,7 @@
 // Boundary clean-up: band distances and one minimum cut per band by push-relabel
 // (superfacets/_kernels/cleanup.py), the same operations in order.
+#include <algorithm>
+#include <atomic>
 #include <memory>
 
 #include "common.hpp"
@@ -333,9 +335,12 @@ void solve_bands(i64 p0, i64 p1, py::handle order_, py::handle starts_, py::hand
     if (positions.cols != 3 || means.cols != 3) throw Mismatch("argument positions");
     py::gil_scoped_release nogil;
     // (written for a band's elements before being read, as numba's np.empty: the pages
-    // of the elements in no band of this call are never touched)
+    // of the elements in no band of this call are never touched; the bands hold disjoint
+    // elements, so the threads share it)
     std::unique_ptr<i64[]> local(new i64[labels.n]);
     i64 most_nodes = 1, most_arcs = 1;
+    std::vector<i64> by_size;  // the bands, largest first (taken in turn by the threads)
+    std::vector<i64> nodes_of(p1 - p0);
     for (i64 p = p0; p < p1; ++p) {
         i64 nodes = starts[p + 1] - starts[p], arcs = 0;
         for (i64 t = starts[p]; t < starts[p + 1]; ++t) {
@@ -344,22 +349,35 @@ void solve_bands(i64 p0, i64 p1, py::handle order_, py::handle starts_, py::hand
         }
         most_nodes = mx(most_nodes, nodes);
         most_arcs = mx(most_arcs, arcs);
+        nodes_of[p - p0] = nodes;
+        by_size.push_back(p);
     }
-    CutWork W;
-    W.head.resize(most_arcs);
-    W.cap.resize(most_arcs);
-    W.nxt.resize(most_arcs);
-    for (auto* v : {&W.to, &W.rev, &W.at}) v->resize(most_arcs);
-    W.rcap.resize(most_arcs);
-    W.start.resize(most_nodes + 1);
-    for (auto* v : {&W.first, &W.label, &W.cur, &W.queue}) v->resize(most_nodes);
-    for (auto* v : {&W.tr, &W.excess, &W.to_source}) v->resize(most_nodes);
-    for (auto* v : {&W.side, &W.queued}) v->resize(most_nodes);
+    std::stable_sort(by_size.begin(), by_size.end(),
+                     [&](i64 a, i64 b) { return nodes_of[a - p0] > nodes_of[b - p0]; });
     Bands B{band_of.p, indptr.p, indices.p, cut_cost.p, labels.p, sizes.p, positions.p, means.p,
             smooth, out.p};
-    for (i64 p = p0; p < p1; ++p)
-        solve_one(B, order.p + starts[p], starts[p + 1] - starts[p], pair_a[p], pair_b[p], p,
-                  local.get(), W);
+    // each band on its own (its cut reads and writes its elements alone): any thread, any
+    // order gives the same labels
+    const i64 n_bands = p1 - p0;
+    const i64 T = std::max<i64>(1, std::min<i64>(threads(), (starts[p1] - starts[p0]) / 4096));
+    std::atomic<i64> next{0};
+    on_threads(std::min(T, n_bands), [&](i64) {
+        CutWork W;
+        W.head.resize(most_arcs);
+        W.cap.resize(most_arcs);
+        W.nxt.resize(most_arcs);
+        for (auto* v : {&W.to, &W.rev, &W.at}) v->resize(most_arcs);
+        W.rcap.resize(most_arcs);
+        W.start.resize(most_nodes + 1);
+        for (auto* v : {&W.first, &W.label, &W.cur, &W.queue}) v->resize(most_nodes);
+        for (auto* v : {&W.tr, &W.excess, &W.to_source}) v->resize(most_nodes);
+        for (auto* v : {&W.side, &W.queued}) v->resize(most_nodes);
+        for (i64 j = next++; j < n_bands; j = next++) {
+            const i64 p = by_size[j];
+            solve_one(B, order.p + starts[p], starts[p + 1] - starts[p], pair_a[p], pair_b[p], p,
+                      local.get(), W);
+        }
+    });
 }
 
 void bind_cleanup(py::module_& m) {
