@@ -124,3 +124,26 @@ def test_reading_binary_triangles_imports_no_trimesh(tmp_path):
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.split()
     assert out == [str(len(_sphere().faces)), "False"]
+
+
+def test_binary_triangles_are_mapped_not_read_whole(tmp_path, monkeypatch):
+    """The common PLY's header is read (its first 64 KiB), its arrays mapped: the file is
+    never read whole (a 6.8M-face file was read into memory, 169 MB, only to be mapped);
+    an ASCII PLY still is, by the general readers."""
+    from pathlib import Path
+
+    m = _sphere()
+    path = _write(tmp_path / "m.ply", XYZ, m.faces)
+    ascii_path = tmp_path / "a.ply"
+    ascii_path.write_bytes(trimesh.exchange.ply.export_ply(m, encoding="ascii"))
+    whole = []
+    real = Path.read_bytes
+    monkeypatch.setattr(Path, "read_bytes", lambda self: whole.append(self.name) or real(self))
+    got = read_mesh(path)
+    assert whole == [] and got.n_faces == len(m.faces)
+    np.testing.assert_array_equal(got.faces, m.faces)
+    assert read_mesh(ascii_path).n_faces == len(m.faces) and whole == ["a.ply"]
+    empty = tmp_path / "empty.ply"
+    empty.write_bytes(b"")
+    with pytest.raises(MeshFormatError, match="empty"):
+        read_mesh(empty)

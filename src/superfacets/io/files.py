@@ -38,6 +38,36 @@ def split_suffix(path: Path) -> tuple[str, str | None]:
     return fmt, comp
 
 
+def _check_regular(path: Path) -> None:
+    """Refuse a missing file, a folder, a device or a pipe (see :func:`read_bytes`)."""
+    if not path.exists():
+        raise FileNotFoundError(f"{path}: no such file")
+    if path.is_dir():
+        raise IsADirectoryError(f"{path}: is a directory")
+    if not path.is_file():
+        raise MeshFormatError(f"{path}: not a regular file (a device or a pipe); give a file")
+
+
+def read_head(path: Path, size: int = 1 << 16) -> bytes:
+    """The first ``size`` bytes of the uncompressed file ``path`` (all of a shorter one):
+    enough for a header, without reading a large file whole.
+
+    Raises
+    ------
+    FileNotFoundError, IsADirectoryError, MeshFormatError
+        As :func:`read_bytes`.
+
+    Examples
+    --------
+    >>> _ = Path("h.txt").write_bytes(b"ply\nformat ascii 1.0\n")
+    >>> read_head(Path("h.txt"), 3)
+    b'ply'
+    """
+    _check_regular(path)
+    with open(path, "rb") as fh:
+        return fh.read(size)
+
+
 def read_bytes(path: Path, comp: str | None, what: str = "file") -> bytes:
     """The content of ``path``, decompressed when ``comp`` names a compression suffix.
 
@@ -49,12 +79,7 @@ def read_bytes(path: Path, comp: str | None, what: str = "file") -> bytes:
         If it is not a regular file (a device or FIFO, which could be endless),
         cannot be decompressed, or is empty ("empty {what}").
     """
-    if not path.exists():
-        raise FileNotFoundError(f"{path}: no such file")
-    if path.is_dir():
-        raise IsADirectoryError(f"{path}: is a directory")
-    if not path.is_file():
-        raise MeshFormatError(f"{path}: not a regular file (a device or a pipe); give a file")
+    _check_regular(path)
     data = path.read_bytes()
     if comp is not None:
         try:

@@ -19,7 +19,7 @@ import numpy as np
 
 from ..errors import InvalidMeshError, MeshFormatError
 from ..inputs.mesh import Mesh, narrow_faces
-from .files import read_bytes, split_suffix, text_lines
+from .files import read_bytes, read_head, split_suffix, text_lines
 from .headers import header_counts
 from .ply import read_ply_triangles
 
@@ -83,8 +83,11 @@ def read_mesh(path, format: str | None = None) -> Mesh:
             "(optionally .gz/.xz/.bz2)"
         )
     header_counts(path)  # a header declaring more than the file holds: refused unread
-    data = read_bytes(path, comp)  # (no such file, a folder: refused there)
     objects, colors, face_colors = (), None, None
+    # the common binary PLY of triangles: its header read, its arrays mapped (plyfile),
+    # the file never read whole
+    ply = fmt == "ply" and comp is None and read_ply_triangles(path, read_head(path))
+    data = b"" if ply else read_bytes(path, comp)  # (no such file, a folder: refused there)
     if fmt == "off":
         v, f, colors = _parse_off(data, path)
     elif fmt == "tri":
@@ -94,8 +97,7 @@ def read_mesh(path, format: str | None = None) -> Mesh:
     elif fmt in ("glb", "gltf"):
         return _load_scene(path, fmt, comp, data)
     else:  # (the common binary PLY of triangles by plyfile's memory map: no trimesh)
-        v, f, colors, face_colors = (fmt == "ply" and comp is None and read_ply_triangles(
-            path, data)) or _load_trimesh(data, fmt, path)
+        v, f, colors, face_colors = ply or _load_trimesh(data, fmt, path)
     try:
         f = narrow_faces(f, len(v))  # (int32 while they fit: the file's arrays are ours)
         return Mesh(v, f, name=path.name, objects=objects, colors=colors,

@@ -55,7 +55,7 @@ def read_ply_triangles(path: Path, data: bytes):
     path : pathlib.Path
         An uncompressed PLY file.
     data : bytes
-        Its content (the header is read from it).
+        Its first bytes (64 KiB, or its whole content): the header is read from them.
 
     Returns
     -------
