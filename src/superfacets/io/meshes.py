@@ -80,12 +80,10 @@ def read_mesh(path, format: str | None = None) -> Mesh:
         raise MeshFormatError(
             f"{path}: unknown mesh format {('.' + fmt) if fmt else '(no suffix)'}; "
             f"expected one of {', '.join('.' + f for f in MESH_FORMATS)} "
-            "(optionally .gz/.xz/.bz2)"
-        )
+            "(optionally .gz/.xz/.bz2)")
     header_counts(path)  # a header declaring more than the file holds: refused unread
     objects, colors, face_colors = (), None, None
-    # the common binary PLY of triangles: its header read, its arrays mapped (plyfile),
-    # the file never read whole
+    # (the common binary PLY of triangles: its header read and its arrays mapped, by plyfile)
     ply = fmt == "ply" and comp is None and read_ply_triangles(path, read_head(path))
     data = b"" if ply else read_bytes(path, comp)  # (no such file, a folder: refused there)
     if fmt == "off":
@@ -96,7 +94,7 @@ def read_mesh(path, format: str | None = None) -> Mesh:
         v, f, objects, colors = _parse_obj(data, path)
     elif fmt in ("glb", "gltf"):
         return _load_scene(path, fmt, comp, data)
-    else:  # (the common binary PLY of triangles by plyfile's memory map: no trimesh)
+    else:
         v, f, colors, face_colors = ply or _load_trimesh(data, fmt, path)
     try:
         f = narrow_faces(f, len(v))  # (int32 while they fit: the file's arrays are ours)
