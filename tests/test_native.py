@@ -605,6 +605,30 @@ def test_face_pairs_grouped_on_threads_match_numba(monkeypatch, threads, polygon
 
 
 @needs_cxx
+def test_values_per_entry_on_threads_are_numpys_take(monkeypatch):
+    """A value per adjacency laid out per CSR entry on threads: numba's and numpy's
+    gather, bit for bit; other dtypes (float32 weights, 8-byte adjacency numbers) go to
+    numba, the same gather."""
+    rng = np.random.default_rng(8)
+    values = rng.random(40_000)
+    dual_edge = rng.integers(0, values.shape[0], 90_000).astype(np.int32)
+    monkeypatch.setenv("NUMBA_NUM_THREADS", "3")
+    native.fallbacks.clear()
+    outs = []
+    for fn in (native.kernel("terms.per_entry"), native.reference("terms.per_entry")):
+        out = np.empty(dual_edge.shape[0])
+        fn(values, dual_edge, out)
+        outs.append(out)
+    assert not native.fallbacks.get("terms.per_entry")
+    assert _same(outs[0], outs[1]) and _same(outs[0], values[dual_edge])
+    out32 = np.empty(dual_edge.shape[0], dtype=np.float32)
+    native.kernel("terms.per_entry")(values.astype(np.float32), dual_edge.astype(np.int64),
+                                     out32)
+    assert native.fallbacks.pop("terms.per_entry")
+    assert _same(out32, values.astype(np.float32)[dual_edge])
+
+
+@needs_cxx
 def test_kept_pairs_taken_on_threads_are_the_gathered_columns(monkeypatch):
     """The face pairs and edges kept after the CSR's deduplication, gathered on threads:
     numba's to the bit and numpy's fancy indexing (the known answer)."""

@@ -11,6 +11,14 @@ from .geometry import pair_terms
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
+def per_entry(values, dual_edge, out):
+    """``out[e] = values[dual_edge[e]]``: a value per adjacency laid out per CSR entry
+    (``np.take``'s result, its float64 values into ``out``'s dtype)."""
+    for e in range(dual_edge.shape[0]):
+        out[e] = values[dual_edge[e]]
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
 def convex_scaled_csr(weights, dual_edge, concave, cos, span, coef):
     """``weights[e] - coef * span * arccos(cos)`` (at least 0) on the entries of
     convex adjacencies, ``weights[e]`` on concave ones (adjacency ``dual_edge[e]``)."""

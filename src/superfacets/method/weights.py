@@ -298,8 +298,12 @@ def edge_weights(graph, weighting: str = "paper", *, alpha: float = _PAPER_ALPHA
 def csr_weights(graph: ElementGraph, weights: np.ndarray, dtype=np.float64) -> np.ndarray:
     """Per-adjacency ``weights`` laid out per CSR entry of ``graph`` (contiguous; float64
     by default; :func:`weight_dtype` says which a run uses)."""
-    # cast before the gather: one array of the CSR size, in the dtype asked for
-    return np.ascontiguousarray(np.asarray(weights).astype(dtype, copy=False)[graph.dual_edge])
+    # cast before the gather: one array of the CSR size, in the dtype asked for (on
+    # threads, compiled: float64 per adjacency into float64 per entry)
+    values = np.ascontiguousarray(np.asarray(weights).astype(dtype, copy=False))
+    out = np.empty(graph.dual_edge.shape[0], dtype=values.dtype)
+    native.kernel("terms.per_entry")(values, graph.dual_edge, out)
+    return out
 
 
 def csr_point_weights(graph: ElementGraph, *, alpha: float = _PAPER_ALPHA,

@@ -579,6 +579,18 @@ void edge_lengths(py::handle vertices_, py::handle edges_, py::handle out_) {
 }
 
 // terms.py
+// terms.per_entry (float64 values, int32 adjacencies), on threads (each entry on its own)
+void per_entry(py::handle values_, py::handle dual_edge_, py::handle out_) {
+    In<double> values(values_, "values");
+    In<i32> dual_edge(dual_edge_, "dual_edge");
+    Out<double> out(out_, "out");
+    if (out.n != dual_edge.n) throw Mismatch("argument out");
+    py::gil_scoped_release nogil;
+    parallel_for(dual_edge.n, [&](i64 lo, i64 hi) {
+        for (i64 e = lo; e < hi; ++e) out[e] = values[dual_edge[e]];
+    });
+}
+
 py::array_t<double> convex_scaled_csr(py::handle weights_, py::handle dual_edge_,
                                       py::handle concave_, py::handle cos_, py::handle span_,
                                       double coef) {
@@ -821,6 +833,7 @@ void bind_graph(py::module_& m) {
     m.def("edge_lengths", &edge_lengths);
     m.def("convex_scaled_csr", &convex_scaled_csr);
     m.def("cut_costs_csr", &cut_costs_csr);
+    m.def("per_entry", &per_entry);
     m.def("merge_strays", &merge_strays);
     m.def("stray_borders", &stray_borders);
 }
