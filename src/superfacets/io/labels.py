@@ -65,8 +65,9 @@ def write_labels(path, labels, header: dict | Iterable[str] | None = None, *,
 
 def integer_text(values: np.ndarray, end: bytes) -> bytes:
     """The decimal text of integers, each followed by the one byte ``end``: what
-    ``"".join(f"{v}{end}" ...)`` gives, its digits written by numpy, one pass per digit
-    (6.8M labels: 2.3 -> 0.5 s).
+    ``"".join(f"{v}{end}" ...)`` gives: where the values span few integers (labels), each
+    one's text made once and gathered; else its digits written by numpy, one pass per
+    digit (6.8M labels in 150 values: 2.3 s as Python text, 0.43 s by digits, 0.33 s).
 
     Examples
     --------
@@ -76,6 +77,15 @@ def integer_text(values: np.ndarray, end: bytes) -> bytes:
     v = np.asarray(values, dtype=np.int64)
     if v.size == 0:
         return b""
+    lo, hi = int(v.min()), int(v.max())
+    if hi - lo < v.size // 16:  # few values (labels): each one's text made once, gathered
+        texts = [f"{x}".encode() + end for x in range(lo, hi + 1)]
+        size = np.fromiter(map(len, texts), np.int64, len(texts))
+        width = int(size.max())
+        rows = np.frombuffer(b"".join(t.ljust(width, b"\0") for t in texts),
+                             np.uint8).reshape(-1, width)
+        at = v - lo
+        return rows[at][(np.arange(width) < size[:, None])[at]].tobytes()
     neg = v < 0
     a = np.abs(v).astype(np.uint64)  # (-2**63 too)
     kind = np.uint32 if int(a.max()) < 2**32 else np.uint64  # (32-bit division is faster)
