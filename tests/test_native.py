@@ -233,8 +233,10 @@ def test_clean_up_bands_taken_in_turn_on_threads_give_numba_labels(shadowed, mon
     ball = trimesh.creation.icosphere(subdivisions=6)
     mesh = Mesh(ball.vertices * [1.0, 1.3, 0.8], ball.faces)
     r = superfacets.segment(mesh, 300, cleanup=False, n_threads=1)
-    monkeypatch.setenv("NUMBA_NUM_THREADS", threads)
-    labels = clean_boundaries(mesh, r.labels, r.centers, n_threads=int(threads))
+    clean_boundaries(mesh, r.labels, r.centers, n_threads=1)  # (numba's kernels compiled)
+    with monkeypatch.context() as mp:  # (numba compiles nothing meanwhile: its pool is set)
+        mp.setenv("NUMBA_NUM_THREADS", threads)
+        labels = clean_boundaries(mesh, r.labels, r.centers, n_threads=int(threads))
     assert calls["cleanup.solve_bands"] >= 1
     assert labels.shape == r.labels.shape and (labels != r.labels).any()
 
@@ -612,13 +614,12 @@ def test_values_per_entry_on_threads_are_numpys_take(monkeypatch):
     rng = np.random.default_rng(8)
     values = rng.random(40_000)
     dual_edge = rng.integers(0, values.shape[0], 90_000).astype(np.int32)
-    monkeypatch.setenv("NUMBA_NUM_THREADS", "3")
     native.fallbacks.clear()
-    outs = []
-    for fn in (native.kernel("terms.per_entry"), native.reference("terms.per_entry")):
-        out = np.empty(dual_edge.shape[0])
-        fn(values, dual_edge, out)
-        outs.append(out)
+    outs = [np.empty(dual_edge.shape[0]) for _ in range(2)]
+    native.reference("terms.per_entry")(values, dual_edge, outs[1])
+    with monkeypatch.context() as mp:  # (numba compiles nothing meanwhile: its pool is set)
+        mp.setenv("NUMBA_NUM_THREADS", "3")
+        native.kernel("terms.per_entry")(values, dual_edge, outs[0])
     assert not native.fallbacks.get("terms.per_entry")
     assert _same(outs[0], outs[1]) and _same(outs[0], values[dual_edge])
     out32 = np.empty(dual_edge.shape[0], dtype=np.float32)
@@ -637,13 +638,12 @@ def test_kept_pairs_taken_on_threads_are_the_gathered_columns(monkeypatch):
     lo, hi, ka, kb = (rng.integers(0, 10**6, e).astype(np.int32) for _ in range(4))
     first = np.sort(rng.choice(e, 30_000, replace=False)).astype(np.int64)
     first[:100] = first[:100][::-1]  # (any order)
-    got = []
-    monkeypatch.setenv("NUMBA_NUM_THREADS", "3")
-    for fn in (native.kernel("adjacency.take_pairs"), native.reference("adjacency.take_pairs")):
-        pairs = np.empty((first.shape[0], 2), dtype=np.int32)
-        edges = np.empty((first.shape[0], 2), dtype=np.int32)
-        fn(first, lo, hi, ka, kb, pairs, edges)
-        got.append((pairs, edges))
+    got = [(np.empty((first.shape[0], 2), dtype=np.int32),
+            np.empty((first.shape[0], 2), dtype=np.int32)) for _ in range(2)]
+    native.reference("adjacency.take_pairs")(first, lo, hi, ka, kb, *got[1])
+    with monkeypatch.context() as mp:  # (numba compiles nothing meanwhile: its pool is set)
+        mp.setenv("NUMBA_NUM_THREADS", "3")
+        native.kernel("adjacency.take_pairs")(first, lo, hi, ka, kb, *got[0])
     assert not native.fallbacks.get("adjacency.take_pairs")
     assert _same(got[0], got[1])
     assert np.array_equal(got[0][0], np.stack([lo[first], hi[first]], axis=1))
