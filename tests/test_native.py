@@ -726,6 +726,43 @@ def test_label_sums_on_threads_are_numbas_to_the_bit(monkeypatch, threads):
 
 
 @needs_cxx
+def test_float32_normals_are_read_as_their_float64_copy():
+    """A cloud's normals stay float32: the point terms (per pair and per CSR entry) and
+    the per-label sums read them as float64, giving what a float64 copy gives, compiled
+    and numba alike (products of float32 values rounded in float32 would differ)."""
+    rng = np.random.default_rng(8)
+    n, k = 5_000, 23
+    pos = rng.normal(size=(n, 3))
+    nor32 = rng.normal(size=(n, 3)).astype(np.float32)
+    nor32 /= np.linalg.norm(nor32, axis=1, keepdims=True)
+    nor64 = nor32.astype(np.float64)
+    nbr = (np.arange(n)[:, None] + rng.integers(1, 40, (n, 6))) % n
+    pairs = np.sort(np.c_[np.repeat(np.arange(n), 6), nbr.ravel()], axis=1)
+    pairs = np.unique(pairs[pairs[:, 0] != pairs[:, 1]], axis=0)
+    indptr = np.r_[0, np.cumsum(np.bincount(pairs[:, 0], minlength=n))].astype(np.int64)
+    indices = pairs[:, 1].astype(np.int32)
+    labels = rng.integers(0, k, n)
+    w = rng.random(n)
+    m = pairs.shape[0]
+    out = {}
+    for get in (native.kernel, native.reference):
+        for nor in (nor32, nor64):
+            terms = [np.empty(m), np.empty(m), np.empty(m, dtype=bool)]
+            get("geometry.point_terms")(pos, nor, pairs, 0, m, *terms)
+            csr = [np.empty(m), np.empty(m), np.empty(m, dtype=bool)]
+            get("terms.point_terms_csr")(pos, nor, indptr, indices, 0, n, *csr)
+            sums = [np.zeros(k), np.zeros((k, 3)), np.zeros((k, 3))]
+            get("geometry.label_sums")(labels, w, pos, nor, *sums)
+            out[get, nor.dtype.name] = (tuple(terms), tuple(csr), tuple(sums))
+    first = out[native.reference, "float64"]
+    for got in out.values():
+        assert _same(got, first)
+    # the float32 products would round otherwise
+    c32 = (nor32[pairs[:, 0]] * nor32[pairs[:, 1]]).sum(axis=1, dtype=np.float32)
+    assert not np.array_equal(np.clip(c32.astype(np.float64), -1, 1), first[0][1])
+
+
+@needs_cxx
 def test_plain_classification_matches_numba():
     from superfacets.elements import face_graph
     from superfacets.method.expansion import Workspaces, with_room

@@ -170,14 +170,15 @@ def face_terms(vertices, centroids, normals, pairs, edges, lo, hi, geo, cos, con
 def pair_terms(positions, normals, i, j):
     """``(geo, cos, concave)`` of the elements ``i < j``, points with normals: ``d = p_i -
     p_j``, ``geo = sqrt((x*x + y*y) + z*z)``, ``cos`` clipped to ``[-1, 1]`` and
-    ``concave = (n_i - n_j) . d < 0``, each dot product summed as ``(x + z) + y``."""
+    ``concave = (n_i - n_j) . d < 0``, each dot product summed as ``(x + z) + y``; float32
+    normals are read as float64 (the values of a float64 copy)."""
     dx = positions[i, 0] - positions[j, 0]
     dy = positions[i, 1] - positions[j, 1]
     dz = positions[i, 2] - positions[j, 2]
-    c = (normals[i, 0] * normals[j, 0] + normals[i, 2] * normals[j, 2]) \
-        + normals[i, 1] * normals[j, 1]
-    s = ((normals[i, 0] - normals[j, 0]) * dx + (normals[i, 2] - normals[j, 2]) * dz) \
-        + (normals[i, 1] - normals[j, 1]) * dy
+    ix, iy, iz = np.float64(normals[i, 0]), np.float64(normals[i, 1]), np.float64(normals[i, 2])
+    jx, jy, jz = np.float64(normals[j, 0]), np.float64(normals[j, 1]), np.float64(normals[j, 2])
+    c = (ix * jx + iz * jz) + iy * jy
+    s = ((ix - jx) * dx + (iz - jz) * dz) + (iy - jy) * dy
     return np.sqrt(dx * dx + dy * dy + dz * dz), min(max(c, -1.0), 1.0), s < 0
 
 
@@ -296,7 +297,8 @@ def distinct_in_order(p, order, out, inverse):
 def label_sums(labels, weights, positions, normals, area, wpos, wnrm):
     """Per label, added to the zeroed ``area`` (k,), ``wpos`` and ``wnrm`` (k, 3): the
     weights, and the weighted positions and normals, element by element in order, as
-    ``np.bincount(labels, weights=w * x[:, c])`` adds them (the product rounded first)."""
+    ``np.bincount(labels, weights=w * x[:, c])`` adds them (the product rounded first);
+    float32 normals are read as float64."""
     for i in range(labels.shape[0]):
         s = labels[i]
         w = weights[i]
@@ -304,7 +306,7 @@ def label_sums(labels, weights, positions, normals, area, wpos, wnrm):
         for c in range(3):
             wpos[s, c] += w * positions[i, c]
         for c in range(3):
-            wnrm[s, c] += w * normals[i, c]
+            wnrm[s, c] += w * np.float64(normals[i, c])
 
 
 @njit(cache=True, error_model="numpy", nogil=True)

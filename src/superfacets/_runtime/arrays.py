@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["sorted_unique"]
+__all__ = ["real_rows", "sorted_unique"]
 
 
 def sorted_unique(values: np.ndarray) -> np.ndarray:
@@ -42,3 +42,30 @@ def sorted_unique(values: np.ndarray) -> np.ndarray:
     keep[0] = True
     np.not_equal(a[1:], a[:-1], out=keep[1:])
     return a[keep]
+
+
+def real_rows(values: np.ndarray) -> np.ndarray:
+    """``values`` as the compiled kernels read real arrays: C-contiguous float32 or
+    float64 as they are (a point cloud's normals stay float32: the kernels read each as
+    float64, the values a float64 copy would hold), anything else as float64.
+
+    Parameters
+    ----------
+    values : ndarray
+        Any shape.
+
+    Returns
+    -------
+    ndarray
+        ``values`` itself where it already is such an array.
+
+    Examples
+    --------
+    >>> a = np.zeros((2, 3), dtype=np.float32)
+    >>> real_rows(a) is a, real_rows(a.astype(np.int64)).dtype.name
+    (True, 'float64')
+    """
+    a = np.asarray(values)
+    if a.dtype == np.float32 or a.dtype == np.float64:
+        return np.ascontiguousarray(a)
+    return np.ascontiguousarray(a, dtype=np.float64)

@@ -34,6 +34,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._kernels import native
+from .._runtime.arrays import real_rows
 from ..inputs.bounds import column_bounds
 from .graph import ElementGraph, adjacency_csr, cached_on, pairs_from_csr
 
@@ -71,7 +72,7 @@ def symmetric_terms(graph: ElementGraph, sl: slice):
     lo, hi = sl.indices(graph.pairs.shape[0])[:2]
     geo, cos = np.empty(hi - lo), np.empty(hi - lo)
     concave = np.empty(hi - lo, dtype=bool)
-    point_terms(graph.positions, np.ascontiguousarray(graph.normals, dtype=np.float64),
+    point_terms(graph.positions, real_rows(graph.normals),
                 graph.pairs, lo, hi, geo, cos, concave)  # (points keep float32 normals)
     return geo, cos, concave
 

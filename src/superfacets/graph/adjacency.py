@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._kernels import native
+from .._runtime.arrays import real_rows
 from ..elements.inputs import as_element_graph
 from ..errors import ParameterError
 from ..method.labels import check_labels
@@ -201,8 +202,7 @@ def superfacet_graph(graph, labels, features=None) -> SuperfacetGraph:
     # per superfacet, in one pass: the sums np.bincount(lab, weights=...) would make, the
     # same values (element by element in order, each product rounded first)
     area, wpos, normal = np.zeros(k), np.zeros((k, 3)), np.zeros((k, 3))
-    native.kernel("geometry.label_sums")(lab, area_w, pos, np.ascontiguousarray(
-        g.normals, dtype=np.float64), area, wpos, normal)
+    native.kernel("geometry.label_sums")(lab, area_w, pos, real_rows(g.normals), area, wpos, normal)
     safe = np.where(area > 0, area, 1.0)
     centroid = wpos / safe[:, None]
     norm = np.linalg.norm(normal, axis=1)
@@ -302,7 +302,7 @@ def crossing_adjacencies(g, lab: np.ndarray):
     m = pc.shape[0]
     geo, cos, concave = np.empty(m), np.empty(m), np.empty(m, dtype=bool)
     point_terms(np.ascontiguousarray(g.positions),
-                np.ascontiguousarray(g.normals, dtype=np.float64), pc, 0, m,
+                real_rows(g.normals), pc, 0, m,
                 geo, cos, concave)
     shares = g.border_shares
     return pc, 0.5 * (shares[pc[:, 0]] + shares[pc[:, 1]]), cos, concave

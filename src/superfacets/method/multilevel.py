@@ -32,6 +32,7 @@ from typing import Callable, NamedTuple
 import numpy as np
 
 from .._kernels import native
+from .._runtime.arrays import real_rows
 from ..elements.graph import LAZY, ElementGraph, adjacency_csr, pairs_from_csr
 from ..elements.kinds import kind_of
 from ..inputs.bounds import column_bounds
@@ -206,7 +207,7 @@ def coarsen(graph: ElementGraph, csr_w: np.ndarray, ratio: int) -> Coarsening:
     tot, pos, nor = np.zeros(n_c), np.zeros((n_c, 3)), np.zeros((n_c, 3))
     native.kernel("geometry.label_sums")(
         cluster, np.ascontiguousarray(sizes, dtype=np.float64), positions,
-        np.ascontiguousarray(graph.normals, dtype=np.float64), tot, pos, nor)
+        real_rows(graph.normals), tot, pos, nor)
     safe = np.where(tot > 0, tot, 1.0)
     pos /= safe[:, None]
     scale2 = None  # content-sensitive runs: the clusters' size-weighted mean scale

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._kernels import native
+from .._runtime.arrays import real_rows
 from ..elements.graph import CHUNK, ElementGraph, chunked
 from ..elements.inputs import as_element_graph
 from ..errors import ParameterError
@@ -348,7 +349,7 @@ def csr_point_weights(graph: ElementGraph, *, alpha: float = _PAPER_ALPHA,
 
     g = graph
     pos = np.ascontiguousarray(g.positions)
-    nor = np.ascontiguousarray(g.normals, dtype=np.float64)  # (points keep float32)
+    nor = real_rows(g.normals)  # (points keep float32: read as float64)
     indptr, indices = g.indptr, g.indices
     out = np.empty(indices.shape[0], dtype=dtype)
     # rows in blocks of about CHUNK entries (np.arccos as paper_weights calls it: its

@@ -30,6 +30,7 @@ from dataclasses import replace
 import numpy as np
 
 from .._kernels import native
+from .._runtime.arrays import real_rows
 
 __all__ = ["tile_merge_stats", "merge_names", "one_position_stats", "tiled_merge_from",
            "merged_labels"]
@@ -91,7 +92,7 @@ def tile_merge_stats(graph, labels: np.ndarray, names: np.ndarray, core: np.ndar
     at = np.flatnonzero(core)
     pos = np.ascontiguousarray(graph.positions, dtype=np.float64)
     sizes = np.ascontiguousarray(graph.sizes, dtype=np.float64)
-    normals = np.ascontiguousarray(graph.normals, dtype=np.float64)
+    normals = real_rows(graph.normals)
     used, local = np.unique(lab[at], return_inverse=True)
     local = np.ascontiguousarray(local, dtype=np.int64)
     k = used.size

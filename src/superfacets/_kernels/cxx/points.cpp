@@ -147,15 +147,16 @@ inline double linearity(double a00, double a01, double a02, double a11, double a
     return l1 > 0.0 ? (l1 - l2) / l1 : 0.0;
 }
 
-// geometry.pair_terms
-inline void pair_terms(const double* pos, const double* nor, i64 i, i64 j, double& geo,
+// geometry.pair_terms (normals float64, or float32 read as float64)
+template <class N>
+inline void pair_terms(const double* pos, const N* nor, i64 i, i64 j, double& geo,
                        double& cs, bool& concave) {
     double dx = pos[3 * i] - pos[3 * j], dy = pos[3 * i + 1] - pos[3 * j + 1],
            dz = pos[3 * i + 2] - pos[3 * j + 2];
-    double c = (nor[3 * i] * nor[3 * j] + nor[3 * i + 2] * nor[3 * j + 2]) +
-               nor[3 * i + 1] * nor[3 * j + 1];
-    double s = ((nor[3 * i] - nor[3 * j]) * dx + (nor[3 * i + 2] - nor[3 * j + 2]) * dz) +
-               (nor[3 * i + 1] - nor[3 * j + 1]) * dy;
+    const double ix = nor[3 * i], iy = nor[3 * i + 1], iz = nor[3 * i + 2];
+    const double jx = nor[3 * j], jy = nor[3 * j + 1], jz = nor[3 * j + 2];
+    double c = (ix * jx + iz * jz) + iy * jy;
+    double s = ((ix - jx) * dx + (iz - jz) * dz) + (iy - jy) * dy;
     geo = std::sqrt(dx * dx + dy * dy + dz * dz);
     cs = mn(mx(c, -1.0), 1.0);
     concave = s < 0;
@@ -423,20 +424,23 @@ void turn_outwards(py::handle points_, py::handle normals_, py::handle sign_,
 void point_terms_csr(py::handle positions_, py::handle normals_, py::handle indptr_,
                      py::handle indices_, i64 r0, i64 r1, py::handle geo_, py::handle cos_,
                      py::handle concave_) {
-    In<double> pos(positions_, "positions"), nor(normals_, "normals");
+    In<double> pos(positions_, "positions");
     In<i64> indptr(indptr_, "indptr");
     In<i32> indices(indices_, "indices");
     Out<double> geo(geo_, "geo"), cs(cos_, "cos");
     Out<bool> concave(concave_, "concave");
-    if (pos.cols != 3 || nor.cols != 3) throw Mismatch("argument positions");
-    py::gil_scoped_release nogil;
-    i64 u = 0;
-    for (i64 i = r0; i < r1; ++i)
-        for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
-            i64 j = indices[x];
-            pair_terms(pos.p, nor.p, mn(i, j), mx(i, j), geo[u], cs[u], concave[u]);
-            ++u;
-        }
+    with_real(normals_, "normals", [&](const auto& nor) {
+        if (pos.cols != 3 || nor.cols != 3) throw Mismatch("argument positions");
+        py::gil_scoped_release nogil;
+        i64 u = 0;
+        for (i64 i = r0; i < r1; ++i)
+            for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
+                i64 j = indices[x];
+                pair_terms(pos.p, nor.p, mn(i, j), mx(i, j), geo[u], cs[u], concave[u]);
+                ++u;
+            }
+        return 0;
+    });
 }
 
 // terms.combine_weights: out = (geo + alpha * ang) / diagonal, ang = eta * geo * theta / pi
@@ -472,23 +476,19 @@ void combine_weights(py::handle geo_, py::handle theta_, py::handle concave_, do
 
 void point_terms(py::handle positions_, py::handle normals_, py::handle pairs_, i64 lo, i64 hi,
                  py::handle geo_, py::handle cos_, py::handle concave_) {
-    In<double> pos(positions_, "positions"), nor(normals_, "normals");
+    In<double> pos(positions_, "positions");
     Out<double> geo(geo_, "geo"), cs(cos_, "cos");
     Out<bool> concave(concave_, "concave");
-    if (pos.cols != 3 || nor.cols != 3) throw Mismatch("argument positions");
-    if (matches<i32>(pairs_)) {
-        In<i32> pairs(pairs_, "pairs");
-        py::gil_scoped_release nogil;
-        for (i64 t = lo; t < hi; ++t)
-            pair_terms(pos.p, nor.p, pairs(t, 0), pairs(t, 1), geo[t - lo], cs[t - lo],
-                       concave[t - lo]);
-    } else {
-        In<i64> pairs(pairs_, "pairs");
-        py::gil_scoped_release nogil;
-        for (i64 t = lo; t < hi; ++t)
-            pair_terms(pos.p, nor.p, pairs(t, 0), pairs(t, 1), geo[t - lo], cs[t - lo],
-                       concave[t - lo]);
-    }
+    with_real(normals_, "normals", [&](const auto& nor) {
+        if (pos.cols != 3 || nor.cols != 3) throw Mismatch("argument positions");
+        return with_index(pairs_, "pairs", [&](const auto& pairs) {
+            py::gil_scoped_release nogil;
+            for (i64 t = lo; t < hi; ++t)
+                pair_terms(pos.p, nor.p, pairs(t, 0), pairs(t, 1), geo[t - lo], cs[t - lo],
+                           concave[t - lo]);
+            return 0;
+        });
+    });
 }
 
 template <class X>
@@ -573,25 +573,28 @@ void by_label_range(i64 n, i64 k, F f) {
 
 void label_sums(py::handle labels_, py::handle weights_, py::handle positions_,
                 py::handle normals_, py::handle area_, py::handle wpos_, py::handle wnrm_) {
-    In<double> w(weights_, "weights"), pos(positions_, "positions"), nor(normals_, "normals");
+    In<double> w(weights_, "weights"), pos(positions_, "positions");
     Out<double> area(area_, "area"), wpos(wpos_, "wpos"), wnrm(wnrm_, "wnrm");
-    with_index(labels_, "labels", [&](const auto& labels) {
-        if (pos.cols != 3 || nor.cols != 3 || wpos.cols != 3 || wnrm.cols != 3 ||
-            w.n != labels.n || pos.n != labels.n || nor.n != labels.n || wpos.n != area.n ||
-            wnrm.n != area.n)
-            throw Mismatch("argument positions");
-        py::gil_scoped_release nogil;
-        by_label_range(labels.n, area.n, [&](i64 lo, i64 hi) {
-            for (i64 i = 0; i < labels.n; ++i) {
-                i64 s = labels[i];
-                if (s < lo || s >= hi) continue;
-                double x = w[i];
-                area[s] += x;
-                for (int c = 0; c < 3; ++c) wpos(s, c) += x * pos(i, c);
-                for (int c = 0; c < 3; ++c) wnrm(s, c) += x * nor(i, c);
-            }
+    with_real(normals_, "normals", [&](const auto& nor) {
+        return with_index(labels_, "labels", [&](const auto& labels) {
+            if (pos.cols != 3 || nor.cols != 3 || wpos.cols != 3 || wnrm.cols != 3 ||
+                w.n != labels.n || pos.n != labels.n || nor.n != labels.n ||
+                wpos.n != area.n || wnrm.n != area.n)
+                throw Mismatch("argument positions");
+            py::gil_scoped_release nogil;
+            by_label_range(labels.n, area.n, [&](i64 lo, i64 hi) {
+                for (i64 i = 0; i < labels.n; ++i) {
+                    i64 s = labels[i];
+                    if (s < lo || s >= hi) continue;
+                    double x = w[i];
+                    area[s] += x;
+                    for (int c = 0; c < 3; ++c) wpos(s, c) += x * pos(i, c);
+                    for (int c = 0; c < 3; ++c)
+                        wnrm(s, c) += x * static_cast<double>(nor(i, c));
+                }
+            });
+            return 0;
         });
-        return 0;
     });
 }
 
