@@ -726,6 +726,39 @@ def test_label_sums_on_threads_are_numbas_to_the_bit(monkeypatch, threads):
 
 
 @needs_cxx
+@pytest.mark.parametrize("threads", ["1", "2", "3"])
+def test_knn_layout_on_threads_is_numbas(monkeypatch, threads):
+    """The symmetric layout of k-nearest-neighbour lists on threads (each owns a range of
+    rows; the reverse entries a thread's lists make in another's rows are posted to it):
+    numba's layout, for lists mostly near their row and some anywhere (posted both ways),
+    repeated entries, rows listing themselves, a mask and longer lists for some rows."""
+    rng = np.random.default_rng(9)
+    n, k = 30_000, 8
+    near = np.arange(n)[:, None] + rng.integers(-60, 60, (n, k))
+    far = rng.integers(0, n, (n, k))
+    nbr = np.where(rng.random((n, k)) < 0.05, far, near).clip(0, n - 1).astype(np.int32)
+    keep = rng.random((n, k)) < 0.9
+    rows = np.sort(rng.choice(n, 300, replace=False)).astype(np.int64)
+    more = np.where(rng.random((300, 2 * k)) < 0.5, rng.integers(0, n, (300, 2 * k)),
+                    nbr[rows].repeat(2, axis=1)).astype(np.int32)
+    more_keep = rng.random(more.shape) < 0.8
+    cases = [  # the first: a strided view, as the point graph passes it
+             (nbr[:, 1:], np.ascontiguousarray(keep[:, 1:]), rows, more, more_keep),
+             (nbr, np.zeros((0, k), dtype=bool), rows[:0], more[:0], more_keep[:0])]
+    for args in cases:
+        want_ptr = np.empty(n + 1, dtype=np.int64)
+        want = native.reference("adjacency.knn_csr")(args[0], args[1], want_ptr, *args[2:])
+        got_ptr = np.empty(n + 1, dtype=np.int64)
+        with monkeypatch.context() as m:
+            m.setenv("NUMBA_NUM_THREADS", threads)
+            got = native.kernel("adjacency.knn_csr")(args[0], args[1], got_ptr, *args[2:])
+        np.testing.assert_array_equal(got_ptr, want_ptr)
+        np.testing.assert_array_equal(got[:got_ptr[-1]], want[:want_ptr[-1]])
+        assert got_ptr[-1] > 2 * n * (k - 2)
+    assert not native.fallbacks
+
+
+@needs_cxx
 def test_float32_normals_are_read_as_their_float64_copy():
     """A cloud's normals stay float32: the point terms (per pair and per CSR entry) and
     the per-label sums read them as float64, giving what a float64 copy gives, compiled

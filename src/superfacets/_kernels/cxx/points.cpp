@@ -298,33 +298,42 @@ py::array_t<i32> knn_csr(py::handle nbr_, py::handle keep_, py::handle indptr_,
         throw Mismatch("argument keep");
     if (n >= (i64(1) << 31)) throw Mismatch("argument nbr");
     // Every listed pair in both rows. Thread t owns the rows lo(t) .. lo(t + 1): it counts
-    // and writes their own lists, and reads every list for the entries that land in its
-    // rows (no atomic counters; every thread reads all the lists, in order). A row's
+    // and writes their own lists and the reverse entries they make in its rows; those
+    // they make in another thread's rows are posted to it (pairs (row, entry), in the
+    // order of the lists: few, the lists being near in space and the rows in Z-order).
+    // The longer lists of the rows `rows` are read by every thread, in order. A row's
     // entries are then sorted and made distinct: the layout of one pass in order.
     const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / 4096));
     auto lo = [&](i64 t) { return n * t / T; };
+    auto owner = [&](i64 j) {
+        i64 t = j * T / mx<i64>(n, 1);
+        while (t > 0 && j < lo(t)) --t;
+        while (t + 1 < T && j >= lo(t + 1)) ++t;
+        return t;
+    };
     std::vector<i32> own(n), rev(n);
     std::vector<i64> start(n + 1, 0);
+    std::vector<std::vector<std::pair<i32, i32>>> post(T * T);  // [from * T + to]
     auto listed = [&](i64 i, i64 c) { return (all_kept || keep(i, c)) && nbr(i, c) != i; };
     auto listed_more = [&](i64 t, i64 c) { return more_keep(t, c) && more(t, c) != rows[t]; };
     {
         py::gil_scoped_release nogil;
         on_threads(T, [&](i64 t) {
             const i64 a = lo(t), b = lo(t + 1);
+            std::fill(rev.begin() + a, rev.begin() + b, 0);
             for (i64 i = a; i < b; ++i) {
-                own[i] = 0;
-                rev[i] = 0;
-            }
-            for (i64 i = 0; i < n; ++i) {
-                const bool mine = i >= a && i < b;
                 i32 m = 0;
                 for (i64 c = 0; c < k; ++c)
                     if (listed(i, c)) {
                         ++m;
-                        i64 j = nbr(i, c);
-                        if (j >= a && j < b) ++rev[j];
+                        const i64 j = nbr(i, c);
+                        if (j >= a && j < b)
+                            ++rev[j];
+                        else
+                            post[t * T + owner(j)].emplace_back(static_cast<i32>(j),
+                                                                static_cast<i32>(i));
                     }
-                if (mine) own[i] = m;
+                own[i] = m;
             }
             for (i64 r = 0; r < rows.n; ++r)
                 for (i64 c = 0; c < mk; ++c)
@@ -334,6 +343,10 @@ py::array_t<i32> knn_csr(py::handle nbr_, py::handle keep_, py::handle indptr_,
                         if (j >= a && j < b) ++rev[j];
                     }
         });
+        on_threads(T, [&](i64 t) {
+            for (i64 f = 0; f < T; ++f)
+                for (const auto& x : post[f * T + t]) ++rev[x.first];
+        });
         for (i64 i = 0; i < n; ++i) start[i + 1] = start[i] + own[i] + rev[i];
     }
     Out<i32> raw;
@@ -342,11 +355,23 @@ py::array_t<i32> knn_csr(py::handle nbr_, py::handle keep_, py::handle indptr_,
         py::gil_scoped_release nogil;
         on_threads(T, [&](i64 t) {
             const i64 a = lo(t), b = lo(t + 1);
-            for (i64 i = a; i < b; ++i) {  // own lists, then the longer ones (below)
+            // each row: its own list, its longer list, then the reverse entries in the
+            // order of their lists (those posted by the threads of lower rows, this
+            // thread's, those posted by the threads of higher rows, the longer lists')
+            std::fill(rev.begin() + a, rev.begin() + b, 0);  // now: reverse entries written
+            auto put = [&](i64 j, i64 i) {
+                raw[start[j] + own[j] + rev[j]++] = static_cast<i32>(i);
+            };
+            for (i64 f = 0; f < t; ++f)
+                for (const auto& x : post[f * T + t]) put(x.first, x.second);
+            for (i64 i = a; i < b; ++i) {
                 i64 u = start[i];
                 for (i64 c = 0; c < k; ++c)
-                    if (listed(i, c)) raw[u++] = nbr(i, c);
-                rev[i] = 0;  // now: the reverse entries written into row i
+                    if (listed(i, c)) {
+                        const i64 j = nbr(i, c);
+                        raw[u++] = static_cast<i32>(j);
+                        if (j >= a && j < b) put(j, i);
+                    }
             }
             for (i64 r = 0; r < rows.n; ++r) {
                 i64 i = rows[r];
@@ -355,14 +380,9 @@ py::array_t<i32> knn_csr(py::handle nbr_, py::handle keep_, py::handle indptr_,
                 for (i64 c = 0; c < k; ++c) u += listed(i, c) ? 1 : 0;
                 for (i64 c = 0; c < mk; ++c)
                     if (listed_more(r, c)) raw[u++] = more(r, c);
-                own[i] = static_cast<i32>(u - start[i]);
             }
-            for (i64 i = 0; i < n; ++i)
-                for (i64 c = 0; c < k; ++c)
-                    if (listed(i, c)) {
-                        i64 j = nbr(i, c);
-                        if (j >= a && j < b) raw[start[j] + own[j] + rev[j]++] = static_cast<i32>(i);
-                    }
+            for (i64 f = t + 1; f < T; ++f)
+                for (const auto& x : post[f * T + t]) put(x.first, x.second);
             for (i64 r = 0; r < rows.n; ++r)
                 for (i64 c = 0; c < mk; ++c)
                     if (listed_more(r, c)) {
