@@ -949,3 +949,26 @@ def test_a_cloud_keeps_points_its_caller_also_holds():
     point_graph(alone)
     assert "points" not in alone.__dict__
     np.testing.assert_array_equal(alone.points, base.reshape(-1)[:1500].reshape(500, 3))
+
+
+def test_rows_of_elements_with_invalid_and_repeated_rows():
+    """Known answers: the labels of a cloud's rows (-1 where a row is no point) and the
+    first row of each point, asked for a few points (the centers) or all of them."""
+    from superfacets.elements.inputs import elements_of
+
+    rng = np.random.default_rng(3)
+    p = rng.random((4000, 3))
+    p = np.r_[p, p[rng.integers(0, 4000, 500)]]  # repeated positions: one point each
+    nan = p.copy()
+    nan[rng.integers(0, 4500, 60)] = np.nan  # rows that are no point (an organized cloud)
+    for cloud in (p, nan.reshape(45, 100, 3)):
+        src = elements_of(cloud, "points")
+        index, n = src.index, src.graph.n_elements
+        brute = np.array([np.flatnonzero(index == e)[0] for e in range(n)])
+        for elements in (np.arange(n), rng.choice(n, 50, replace=False), np.array([7, 7, 3])):
+            np.testing.assert_array_equal(src.first_rows(elements), brute[elements])
+        labels = rng.integers(0, 9, n).astype(np.int32)
+        rows = src.to_rows(labels)
+        assert rows.dtype == np.int32
+        np.testing.assert_array_equal(rows, np.where(index >= 0, labels[index], -1))
+        assert (rows < 0).sum() == (0 if cloud is p else np.isnan(nan).any(axis=1).sum())

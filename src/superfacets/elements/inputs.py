@@ -57,9 +57,12 @@ class ElementInput(NamedTuple):
         """Per-element values -> per-row values (-1 for rows that are not elements)."""
         if self.index is None:
             return labels
-        out = np.full(self.index.shape[0], -1, dtype=labels.dtype)
-        ok = self.index >= 0
-        out[ok] = labels[self.index[ok]]
+        index = self.index
+        if index.shape[0] and int(index.min()) >= 0:  # every row an element: one gather
+            return np.asarray(labels).take(index)
+        out = np.full(index.shape[0], -1, dtype=labels.dtype)
+        ok = index >= 0
+        out[ok] = labels[index[ok]]
         return out
 
     def colors(self) -> np.ndarray | None:
@@ -74,8 +77,16 @@ class ElementInput(NamedTuple):
         """The first input row of each of ``elements`` (the row a center stands for)."""
         if self.index is None:
             return elements
-        rows = np.flatnonzero(self.index >= 0)
-        first = np.full(self.graph.n_elements, -1, dtype=np.int64)
+        elements = np.asarray(elements)
+        n = self.graph.n_elements
+        if 8 * elements.size < n:  # a few (the centers): the rows of those alone
+            wanted = np.zeros(n + 1, dtype=bool)  # (the last: rows of no element, -1)
+            wanted[elements] = True
+            rows = np.flatnonzero(wanted[self.index])
+            rows = rows[self.index[rows] >= 0]
+        else:
+            rows = np.flatnonzero(self.index >= 0)
+        first = np.full(n, -1, dtype=np.int64)
         first[self.index[rows][::-1]] = rows[::-1]
         return first[elements]
 
