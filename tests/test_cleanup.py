@@ -392,7 +392,7 @@ def test_band_distances_are_the_shortest_and_ties_take_the_lowest_partner(monkey
             native.reference("cleanup.band_distances")(*args)
         else:  # the compiled kernel's threads (numba, which would read its config again
             with monkeypatch.context() as m:  # on compiling, runs before)
-                m.setenv("NUMBA_NUM_THREADS", threads)
+                m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
                 native.kernel("cleanup.band_distances")(*args)
         got.append((dist, partner))
     assert got[0][0].tobytes() == got[1][0].tobytes()

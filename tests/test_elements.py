@@ -878,7 +878,7 @@ def test_the_z_order_sorts_by_the_whole_keys_then_the_positions(monkeypatch, thr
     m = distinct_in_order(p, order, want, want_inv)
     with monkeypatch.context() as mp:
         if native.available():  # (the compiled kernels' threads; numba's as configured)
-            mp.setenv("NUMBA_NUM_THREADS", threads)
+            mp.setenv("SUPERFACETS_KERNEL_THREADS", threads)
         out, inverse = distinct_points(p)
     assert out.shape[0] == m < 60_000
     assert out.tobytes() == want[:m].tobytes()  # -0.0 or 0.0 as the lowest row has it

@@ -163,12 +163,16 @@ inline std::atomic<int>& thread_limit() {
     return limit;
 }
 
-// The threads of a parallel loop: NUMBA_NUM_THREADS where set (as numba's prange would
-// use; the Dask workers set 1), else the CPUs this process may run on; at most the
+// The threads of a parallel loop: SUPERFACETS_KERNEL_THREADS where set (the compiled
+// kernels' alone: the tests' thread counts, which numba, refusing a new NUMBA_NUM_THREADS
+// once its threads run, never reads), else NUMBA_NUM_THREADS where set (as numba's prange
+// would use; the Dask workers set 1), else the CPUs this process may run on; at most the
 // run's limit.
 inline int threads() {
     int n = 0;
-    if (const char* env = std::getenv("NUMBA_NUM_THREADS")) n = std::atoi(env);
+    if (const char* env = std::getenv("SUPERFACETS_KERNEL_THREADS")) n = std::atoi(env);
+    if (n < 1)
+        if (const char* env = std::getenv("NUMBA_NUM_THREADS")) n = std::atoi(env);
     if (n < 1) {
         cpu_set_t set;
         n = sched_getaffinity(0, sizeof(set), &set) == 0
