@@ -60,6 +60,8 @@ POINT_KERNELS = {"knn_csr", "pca_normals", "pca_linearity", "propagate_signs",
                  "nearest_in_tree", "sort_keys", "rows_apart"}
 #: Those of the vertex graph and of the exact assignment (the default on vertices)
 VERTEX_KERNELS = {"vertex_cells", "mesh_edges", "classify_exact", "reclassify_exact"}
+#: Those used on large inputs alone (numpy's own below 65,536 rows): tested on their own
+LARGE_KERNELS = {"column_bounds", "finite_rows"}
 
 
 #: Scratch arguments of the numba kernels that the compiled ones do not use (their heaps
@@ -188,7 +190,7 @@ def test_runs_on_faces_give_numba_results_call_by_call(shadowed):
     compiled = {name for name in dir(native._cxx)
                 if callable(getattr(native._cxx, name)) and not name.startswith("_")} - {
         "Mismatch", "set_thread_limit", "threads"}  # (the thread limit: tested below)
-    compiled -= POINT_KERNELS | VERTEX_KERNELS
+    compiled -= POINT_KERNELS | VERTEX_KERNELS | LARGE_KERNELS
     missing = {name for name in compiled if not any(p.endswith("." + name) for p in calls)}
     # run only on several threads, by the plain replay-less classifier, by a lazy graph's
     # rebuild, by hierarchies and the exact count on points: tested below
@@ -234,8 +236,8 @@ def test_clean_up_bands_taken_in_turn_on_threads_give_numba_labels(shadowed, mon
     mesh = Mesh(ball.vertices * [1.0, 1.3, 0.8], ball.faces)
     r = superfacets.segment(mesh, 300, cleanup=False, n_threads=1)
     clean_boundaries(mesh, r.labels, r.centers, n_threads=1)  # (numba's kernels compiled)
-    with monkeypatch.context() as mp:  # (numba compiles nothing meanwhile: its pool is set)
-        mp.setenv("NUMBA_NUM_THREADS", threads)
+    with monkeypatch.context() as mp:  # (the compiled kernels alone read it)
+        mp.setenv("SUPERFACETS_KERNEL_THREADS", threads)
         labels = clean_boundaries(mesh, r.labels, r.centers, n_threads=int(threads))
     assert calls["cleanup.solve_bands"] >= 1
     assert labels.shape == r.labels.shape and (labels != r.labels).any()
@@ -332,7 +334,7 @@ def test_sorted_keys_are_the_stable_argsort_on_any_thread_count(monkeypatch, thr
         native.reference("geometry.sort_keys")(keys, ref_order, ref_sorted)
         order, ordered = np.empty(n, dtype=np.int64), np.empty_like(keys)
         with monkeypatch.context() as m:  # (numba, above, compiled with its own count)
-            m.setenv("NUMBA_NUM_THREADS", threads)
+            m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
             native.kernel("geometry.sort_keys")(keys, order, ordered)
         assert np.array_equal(order, expected) and np.array_equal(ref_order, expected)
         assert np.array_equal(ordered, keys[expected]) and np.array_equal(ref_sorted, ordered)
@@ -360,7 +362,7 @@ def test_rows_apart_match_numba_and_stop_at_their_room(monkeypatch, index_dtype)
             rows = np.full(room, -7, dtype=np.int64)
             with monkeypatch.context() as m:
                 if fn == "kernel":
-                    m.setenv("NUMBA_NUM_THREADS", "3")
+                    m.setenv("SUPERFACETS_KERNEL_THREADS", "3")
                 got = getattr(native, fn)("geometry.rows_apart")(
                     pts.view(np.uint64), at.view(np.uint64), index, rows)
             outs.append((got, rows))
@@ -391,7 +393,7 @@ def test_coarse_pairs_on_threads_give_numba_pairs(monkeypatch, shared):
     args = (g.indptr, g.indices, cluster, dist, csr_w, *border, n_c)
     expected = native.reference("voronoi.coarse_pairs")(*args)
     with monkeypatch.context() as m:  # (numba, above, compiled with its own count)
-        m.setenv("NUMBA_NUM_THREADS", "3")
+        m.setenv("SUPERFACETS_KERNEL_THREADS", "3")
         got = native.kernel("voronoi.coarse_pairs")(*args)
     assert all(a.tobytes() == b.tobytes() for a, b in zip(got, expected))
     assert got[0].shape[0] > n_c  # many pairs, each cluster's
@@ -416,7 +418,7 @@ def test_pieces_of_labels_on_threads_give_numba_numbers(monkeypatch, threads):
         expected = native.reference("adjacency.same_label_components")(g.indptr, g.indices,
                                                                         labels)
         with monkeypatch.context() as m:
-            m.setenv("NUMBA_NUM_THREADS", threads)
+            m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
             got = native.kernel("adjacency.same_label_components")(g.indptr, g.indices, labels)
         assert got.dtype == np.int64 and np.array_equal(got, expected)
         pieces.append(int(got.max()) + 1)
@@ -442,7 +444,7 @@ def test_stray_borders_on_threads_give_numba_entries(monkeypatch, shared):
     args = (g.indptr, g.indices, piece, is_main, *border)
     expected = native.reference("connectivity.stray_borders")(*args)
     with monkeypatch.context() as m:
-        m.setenv("NUMBA_NUM_THREADS", "3")
+        m.setenv("SUPERFACETS_KERNEL_THREADS", "3")
         got = native.kernel("connectivity.stray_borders")(*args)
     assert all(x.tobytes() == y.tobytes() for x, y in zip(got, expected))
     assert got[0].shape[0] > 10_000
@@ -528,7 +530,7 @@ def test_csr_of_pairs_on_threads_keeps_the_pairs_order_in_each_row(monkeypatch, 
     ka = rng.integers(0, 50, lo.shape[0]).astype(np.int32)
     kb = rng.integers(0, 50, lo.shape[0]).astype(np.int32)
     with monkeypatch.context() as m:
-        m.setenv("NUMBA_NUM_THREADS", threads)
+        m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
         got = []
         for fn in (native.kernel("adjacency.csr_of_pairs"),
                    native.reference("adjacency.csr_of_pairs")):
@@ -587,7 +589,7 @@ def test_face_pairs_grouped_on_threads_match_numba(monkeypatch, threads, polygon
              else np.empty(0, dtype=np.int32))
     half, _ = order_by_two_keys(a, b, nv, a == b)
     with monkeypatch.context() as mp:
-        mp.setenv("NUMBA_NUM_THREADS", threads)
+        mp.setenv("SUPERFACETS_KERNEL_THREADS", threads)
         got = native.kernel("adjacency.group_pairs")(half, owner, a, b)
     want = native.reference("adjacency.group_pairs")(half, owner, a, b)
     assert not native.fallbacks.get("adjacency.group_pairs")
@@ -617,8 +619,8 @@ def test_values_per_entry_on_threads_are_numpys_take(monkeypatch):
     native.fallbacks.clear()
     outs = [np.empty(dual_edge.shape[0]) for _ in range(2)]
     native.reference("terms.per_entry")(values, dual_edge, outs[1])
-    with monkeypatch.context() as mp:  # (numba compiles nothing meanwhile: its pool is set)
-        mp.setenv("NUMBA_NUM_THREADS", "3")
+    with monkeypatch.context() as mp:  # (the compiled kernels alone read it)
+        mp.setenv("SUPERFACETS_KERNEL_THREADS", "3")
         native.kernel("terms.per_entry")(values, dual_edge, outs[0])
     assert not native.fallbacks.get("terms.per_entry")
     assert _same(outs[0], outs[1]) and _same(outs[0], values[dual_edge])
@@ -641,8 +643,8 @@ def test_kept_pairs_taken_on_threads_are_the_gathered_columns(monkeypatch):
     got = [(np.empty((first.shape[0], 2), dtype=np.int32),
             np.empty((first.shape[0], 2), dtype=np.int32)) for _ in range(2)]
     native.reference("adjacency.take_pairs")(first, lo, hi, ka, kb, *got[1])
-    with monkeypatch.context() as mp:  # (numba compiles nothing meanwhile: its pool is set)
-        mp.setenv("NUMBA_NUM_THREADS", "3")
+    with monkeypatch.context() as mp:  # (the compiled kernels alone read it)
+        mp.setenv("SUPERFACETS_KERNEL_THREADS", "3")
         native.kernel("adjacency.take_pairs")(first, lo, hi, ka, kb, *got[0])
     assert not native.fallbacks.get("adjacency.take_pairs")
     assert _same(got[0], got[1])
@@ -664,7 +666,7 @@ def test_first_in_cells_on_threads_are_the_lowest_of_each_cell(monkeypatch, thre
     cell = np.floor((pos - lo) / h).astype(np.int64)
     expected = np.sort(np.unique(cell, axis=0, return_index=True)[1])
     with monkeypatch.context() as m:
-        m.setenv("NUMBA_NUM_THREADS", threads)
+        m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
         for cap in (8192, 1024):
             got = native.kernel("voronoi.first_in_cells")(pos, lo, h, dims, cap)
             ref = native.reference("voronoi.first_in_cells")(pos, lo, h, dims, cap)
@@ -685,7 +687,7 @@ def test_point_tree_on_threads_matches_numba(monkeypatch, threads):
     rng = np.random.default_rng(4)
     pts = np.round(rng.random((200_000, 3)), 3)  # (ties in every coordinate)
     with monkeypatch.context() as m:
-        m.setenv("NUMBA_NUM_THREADS", threads)
+        m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
         got = point_tree(pts)
         native.fallbacks.clear()
         m.setattr(native, "kernel", native.reference)
@@ -712,13 +714,14 @@ def test_label_sums_on_threads_are_numbas_to_the_bit(monkeypatch, threads):
     pos, nor = rng.normal(size=(n, 3)), rng.normal(size=(n, 3))
     cen = rng.normal(size=(k, 3))
     out = []
-    with monkeypatch.context() as m:
-        m.setenv("NUMBA_NUM_THREADS", threads)
-        for get in (native.kernel, native.reference):
-            area, wpos, wnrm, sc = np.zeros(k), np.zeros((k, 3)), np.zeros((k, 3)), np.zeros((k, 9))
+    for get in (native.reference, native.kernel):  # (numba compiles outside the context)
+        area, wpos, wnrm, sc = np.zeros(k), np.zeros((k, 3)), np.zeros((k, 3)), np.zeros((k, 9))
+        with monkeypatch.context() as m:
+            if get is native.kernel:
+                m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
             get("geometry.label_sums")(labels, w, pos, nor, area, wpos, wnrm)
             get("geometry.label_scatter")(labels, w, pos, cen, sc)
-            out.append((area, wpos, wnrm, sc))
+        out.insert(0, (area, wpos, wnrm, sc))
     assert _same(out[0], out[1])
     # element order is bincount's; the other order rounds otherwise on these values
     assert np.array_equal(out[0][0], np.bincount(labels, weights=w, minlength=k))
@@ -750,11 +753,43 @@ def test_knn_layout_on_threads_is_numbas(monkeypatch, threads):
         want = native.reference("adjacency.knn_csr")(args[0], args[1], want_ptr, *args[2:])
         got_ptr = np.empty(n + 1, dtype=np.int64)
         with monkeypatch.context() as m:
-            m.setenv("NUMBA_NUM_THREADS", threads)
+            m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
             got = native.kernel("adjacency.knn_csr")(args[0], args[1], got_ptr, *args[2:])
         np.testing.assert_array_equal(got_ptr, want_ptr)
         np.testing.assert_array_equal(got[:got_ptr[-1]], want[:want_ptr[-1]])
         assert got_ptr[-1] > 2 * n * (k - 2)
+    assert not native.fallbacks
+
+
+@needs_cxx
+@pytest.mark.parametrize("threads", ["1", "2", "3"])
+def test_bounds_and_finite_rows_of_large_arrays_are_numpys(monkeypatch, threads):
+    """The columns' bounds and the finite rows of a large array, by row ranges on
+    threads: numpy's values and numba's, with infinities and NaNs (a NaN column's bounds
+    are NaN) at the ends of the threads' ranges and inside them."""
+    from superfacets.inputs.bounds import column_bounds, finite_rows
+
+    rng = np.random.default_rng(11)
+    n = 200_000
+    a = rng.normal(size=(n, 3)) * [1.0, 1e-3, 1e6]
+    b = a.copy()
+    b[[0, n // 2, n // 3, n - 1], [0, 1, 1, 0]] = [np.inf, -np.inf, 5e6, -7e6]
+    c = b.copy()
+    c[[n // 2 - 1, 17], [2, 1]] = np.nan
+    for x in (a, b, c):
+        want = (np.array([x[:, j].min() for j in range(3)]),
+                np.array([x[:, j].max() for j in range(3)]),
+                np.isfinite(x).all(axis=1))
+        ref = np.empty(3), np.empty(3), np.empty(n, dtype=bool)
+        native.reference("geometry.column_bounds")(x, ref[0], ref[1])
+        native.reference("geometry.finite_rows")(x, ref[2])
+        with monkeypatch.context() as m:
+            m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
+            got = (*column_bounds(x), finite_rows(x))
+        for g, w, r in zip(got, want, ref):
+            np.testing.assert_array_equal(g, w)
+            np.testing.assert_array_equal(r, w)
+    assert np.isnan(got[0][1:]).all() and got[0][0] == -7e6 and not got[2][[0, 17]].any()
     assert not native.fallbacks
 
 
@@ -934,7 +969,7 @@ def test_exact_search_by_blocks_matches_numba_pass_by_pass(monkeypatch, layout):
             call = getattr(native, fn)
             with monkeypatch.context() as mp:
                 if fn == "kernel":  # (numba compiled with its own count)
-                    mp.setenv("NUMBA_NUM_THREADS", str(1 + step % 3))
+                    mp.setenv("SUPERFACETS_KERNEL_THREADS", str(1 + step % 3))
                 k = -100 if prev is None else call("exact.reclassify_exact")(
                     indptr, indices, w, cs, n, dist, label, queue, qlab, inv_width, prev,
                     first, mark)
@@ -988,7 +1023,7 @@ def test_orientation_by_blocks_matches_numbas_prim(monkeypatch, layout):
     for threads in ("1", "2", "3"):
         sign, comp = np.empty(m, np.int8), np.empty(m, np.int64)
         with monkeypatch.context() as mp:
-            mp.setenv("NUMBA_NUM_THREADS", threads)
+            mp.setenv("SUPERFACETS_KERNEL_THREADS", threads)
             n_comp = native.kernel("orient.propagate_signs")(indptr, indices, normals, sign,
                                                              comp)
         assert n_comp == n_ref
@@ -1020,7 +1055,7 @@ def test_voronoi_cells_by_blocks_go_to_the_first_seed_on_ties(monkeypatch):
                  np.full(64, -1, np.int64))
         with monkeypatch.context() as mp:
             if threads:
-                mp.setenv("NUMBA_NUM_THREADS", threads)
+                mp.setenv("SUPERFACETS_KERNEL_THREADS", threads)
             assert getattr(native, fn)("voronoi.nearest_seed")(
                 indptr, indices, w, seeds, 0, dist, label, queue, 4.0) == 0
         assert np.array_equal(label, first) and np.array_equal(dist, near)
@@ -1035,6 +1070,10 @@ def test_a_runs_n_threads_bounds_the_compiled_kernels(monkeypatch):
 
     with monkeypatch.context() as m:  # (no numba compiles in this block)
         m.setenv("NUMBA_NUM_THREADS", "3")
+        assert native._cxx.threads() == 3
+        m.setenv("SUPERFACETS_KERNEL_THREADS", "5")  # the compiled kernels' own, first
+        assert native._cxx.threads() == 5
+        m.setenv("SUPERFACETS_KERNEL_THREADS", "0")
         assert native._cxx.threads() == 3
         with using(1):
             assert native._cxx.threads() == 1

@@ -11,11 +11,12 @@ import numpy as np
 
 from ..errors import InvalidCloudError, InvalidMeshError
 
-__all__ = ["check_extent", "column_bounds"]
+__all__ = ["check_extent", "column_bounds", "finite_rows"]
 
 _MAX_COORDINATE = 1e300  # sums of three coordinates stay finite
 _MAX_EXTENT = 1e70  # (edge length)^4 stays finite: areas and normals
 _MIN_EXTENT = 1e-70  # (edge length)^4 stays a normal number
+_COMPILED_MIN = 1 << 16  # rows from which the compiled passes are used
 
 
 def check_extent(lo, hi, where: str = "", what: str = "mesh") -> float:
@@ -73,8 +74,29 @@ def check_extent(lo, hi, where: str = "", what: str = "mesh") -> float:
 
 def column_bounds(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Lowest and highest value of each column of an ``(n, d)`` array, as
-    ``a.min(axis=0), a.max(axis=0)`` (the same values: min and max are exact),
-    column by column: a strided 1-D reduction is several times faster than an
-    ``axis=0`` one over short rows (0.06 s against 0.24 s for 3.4M rows)."""
+    ``a.min(axis=0), a.max(axis=0)`` (the same values: min and max are exact; of a
+    column's zeros of both signs, either). Large float64 arrays in one compiled pass on
+    threads (10M points: 0.02 s against 0.12 s), others column by column: a strided
+    1-D reduction is several times faster than an ``axis=0`` one over short rows."""
+    if (_COMPILED_MIN <= a.shape[0] and a.ndim == 2 and 1 <= a.shape[1] <= 16
+            and a.dtype == np.float64 and a.flags.c_contiguous):
+        from .._kernels import native
+
+        lo, hi = np.empty(a.shape[1]), np.empty(a.shape[1])
+        native.kernel("geometry.column_bounds")(a, lo, hi)
+        return lo, hi
     return (np.array([a[:, j].min() for j in range(a.shape[1])], dtype=a.dtype),
             np.array([a[:, j].max() for j in range(a.shape[1])], dtype=a.dtype))
+
+
+def finite_rows(a: np.ndarray) -> np.ndarray:
+    """``np.isfinite(a).all(axis=1)`` of an ``(n, d)`` array: large float64 arrays in one
+    compiled pass on threads (10M points: 0.01 s against 0.22 s)."""
+    if (_COMPILED_MIN <= a.shape[0] and a.ndim == 2 and a.dtype == np.float64
+            and a.flags.c_contiguous):
+        from .._kernels import native
+
+        out = np.empty(a.shape[0], dtype=bool)
+        native.kernel("geometry.finite_rows")(a, out)
+        return out
+    return np.isfinite(a).all(axis=1)

@@ -17,7 +17,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import InvalidCloudError
-from .bounds import check_extent, column_bounds
+from .bounds import check_extent, column_bounds, finite_rows
 from .mesh import readonly
 from .rgb import check_colors, unit_colors
 
@@ -237,7 +237,7 @@ class PointCloud:
     @cached_property
     def valid(self) -> np.ndarray:
         """(N,) bool: True for points with finite coordinates."""
-        return readonly(np.isfinite(self.points).all(axis=1))
+        return readonly(finite_rows(self.points))
 
     @cached_property
     def n_points(self) -> int:

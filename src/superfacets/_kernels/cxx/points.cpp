@@ -639,6 +639,59 @@ void label_scatter(py::handle labels_, py::handle weights_, py::handle positions
     });
 }
 
+// geometry.column_bounds: each column's least and greatest value (NaN where the column
+// has one; of equal values, the first row's), by row ranges on threads combined in order
+void column_bounds(py::handle a_, py::handle lo_, py::handle hi_) {
+    In<double> a(a_, "a");
+    Out<double> lo(lo_, "lo"), hi(hi_, "hi");
+    const i64 n = a.n, d = a.cols;
+    if (lo.n != d || hi.n != d || n < 1 || d > 16) throw Mismatch("argument lo");
+    py::gil_scoped_release nogil;
+    const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / 65536));
+    std::vector<double> plo(T * d), phi(T * d);
+    auto keep = [](double& l, double& h, double x) {
+        if (x < l || x != x) l = x;
+        if (x > h || x != x) h = x;
+    };
+    on_threads(T, [&](i64 t) {
+        const i64 r0 = n * t / T, r1 = n * (t + 1) / T;
+        double l[16], h[16];
+        for (i64 c = 0; c < d; ++c) l[c] = h[c] = a(r0, c);
+        for (i64 r = r0 + 1; r < r1; ++r)
+            for (i64 c = 0; c < d; ++c) keep(l[c], h[c], a(r, c));
+        for (i64 c = 0; c < d; ++c) {
+            plo[t * d + c] = l[c];
+            phi[t * d + c] = h[c];
+        }
+    });
+    for (i64 c = 0; c < d; ++c) {
+        double l = plo[c], h = phi[c];
+        for (i64 t = 1; t < T; ++t) {
+            const double pl = plo[t * d + c], ph = phi[t * d + c];
+            if (pl < l || pl != pl) l = pl;
+            if (ph > h || ph != ph) h = ph;
+        }
+        lo[c] = l;
+        hi[c] = h;
+    }
+}
+
+// geometry.finite_rows: out[r] whether every value of row r is finite
+void finite_rows(py::handle a_, py::handle out_) {
+    In<double> a(a_, "a");
+    Out<bool> out(out_, "out");
+    if (out.n != a.n) throw Mismatch("argument out");
+    py::gil_scoped_release nogil;
+    const i64 d = a.cols;
+    parallel_for(a.n, [&](i64 r0, i64 r1) {
+        for (i64 r = r0; r < r1; ++r) {
+            bool ok = true;
+            for (i64 c = 0; c < d; ++c) ok = ok && std::isfinite(a(r, c));
+            out[r] = ok;
+        }
+    });
+}
+
 void bind_points(py::module_& m) {
     m.def("float_morton_keys", &float_morton_keys);
     m.def("distinct_in_order", &distinct_in_order);
@@ -653,6 +706,8 @@ void bind_points(py::module_& m) {
     m.def("crossing_pairs", &crossing_pairs);
     m.def("label_sums", &label_sums);
     m.def("label_scatter", &label_scatter);
+    m.def("column_bounds", &column_bounds);
+    m.def("finite_rows", &finite_rows);
 }
 
 }  // namespace sfk
