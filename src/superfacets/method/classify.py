@@ -123,7 +123,10 @@ class Exact(Classifier):
     node pool grows when a search runs out). From the second pass on, only the
     cells of the centers that moved are searched again
     (:func:`~superfacets._kernels.exact.reclassify_exact`: the same labels and
-    distances as a fresh search, bit for bit).
+    distances as a fresh search, bit for bit), where the call gets the same ``dist``
+    and ``label`` arrays as the one before: they hold its result, which the next
+    search starts from (the passes never write them between calls; other arrays start
+    a fresh search). No copy of them is kept.
     """
 
     def __init__(self, graph, weights, window_r2, spaces):
@@ -132,7 +135,7 @@ class Exact(Classifier):
         self.head = np.full(spaces.n_buckets, -1, dtype=np.int64)
         # numba's search takes a node per push (as a rule); the compiled one has its own
         self._pool(1 << 10 if native.available() else self.indices.shape[0] + 2 * self.m + 1)
-        self.prev = self.dist = self.label = None  # the previous pass's, updated in place
+        self.prev = self.dist = self.label = None  # the previous call's (the caller's arrays)
         self.first = np.full(self.m, -1, dtype=np.int32 if self.m < 2**31 - 1 else np.int64)
         self.mark = np.zeros(self.m, dtype=np.bool_)
 
@@ -143,25 +146,25 @@ class Exact(Classifier):
         self.qlab = np.empty(cap, dtype=itype)
 
     def classify(self, centers, n_centers, dist, label):
-        if self.label is None or self.label.dtype != label.dtype:
-            self.dist, self.label, self.prev = np.empty(self.m), np.empty_like(label), None
+        # the arrays of the previous call hold its labels and distances (the passes never
+        # write them between calls): given again, only the cells of the centers that moved
+        # are searched again; other arrays start a fresh search (the same result)
         k = NOT_INCREMENTAL
-        if self.prev is not None:  # only the cells of the centers that moved are searched again
-            k = reclassify_exact(self.indptr, self.indices, self.w, centers, n_centers, self.dist,
-                           self.label, self.queue, self.qlab, self.inv_width, self.prev,
-                           self.first, self.mark)
+        if self.prev is not None and self.label is label and self.dist is dist:
+            k = reclassify_exact(self.indptr, self.indices, self.w, centers, n_centers, dist,
+                                 label, self.queue, self.qlab, self.inv_width, self.prev,
+                                 self.first, self.mark)
             if k == QUEUE_FULL:  # the previous result is spoilt: from scratch, more room
                 self._pool(2 * self.queue[0].shape[0])
                 k = NOT_INCREMENTAL
+        self.dist, self.label = dist, label
         while k < 0:
             k = classify_exact(
-                self.indptr, self.indices, self.w, centers, n_centers, self.dist, self.label,
+                self.indptr, self.indices, self.w, centers, n_centers, dist, label,
                 self.queue, self.qlab, self.inv_width)
             if k < 0:
                 self._pool(2 * self.queue[0].shape[0])
         self.prev = centers[:k].copy()
-        dist[:] = self.dist
-        label[:] = self.label
         return k, 0
 
 
