@@ -735,6 +735,7 @@ def test_knn_layout_on_threads_is_numbas(monkeypatch, threads):
     rows; the reverse entries a thread's lists make in another's rows are posted to it):
     numba's layout, for lists mostly near their row and some anywhere (posted both ways),
     repeated entries, rows listing themselves, a mask and longer lists for some rows."""
+    monkeypatch.setattr(native, "fallbacks", {})  # (this test's calls alone)
     rng = np.random.default_rng(9)
     n, k = 30_000, 8
     near = np.arange(n)[:, None] + rng.integers(-60, 60, (n, k))
@@ -769,6 +770,7 @@ def test_bounds_and_finite_rows_of_large_arrays_are_numpys(monkeypatch, threads)
     are NaN) at the ends of the threads' ranges and inside them."""
     from superfacets.inputs.bounds import column_bounds, finite_rows
 
+    monkeypatch.setattr(native, "fallbacks", {})  # (this test's calls alone)
     rng = np.random.default_rng(11)
     n = 200_000
     a = rng.normal(size=(n, 3)) * [1.0, 1e-3, 1e6]
