@@ -582,13 +582,20 @@ py::array_t<i64> crossing_pairs(py::handle indptr_, py::handle indices_, py::han
     return out_a;
 }
 
-// f(lo, hi) on threads, each owning the labels lo .. hi - 1 of k: every thread reads all
-// n elements, in order, and adds those of its labels, so each label's sums are those of
-// one pass (bit for bit)
-template <class F>
-void by_label_range(i64 n, i64 k, F f) {
+// f(i, s) for each element i and its label s (of k), on threads, each owning a range of
+// the labels: every thread reads all the elements, in order, and takes those of its
+// labels, so each label's sums are those of one pass (bit for bit)
+template <class L, class F>
+void each_by_label(const L& labels, i64 k, F f) {
+    const i64 n = labels.n;
     const i64 T = std::max<i64>(1, std::min<i64>({threads(), k, n / 65536}));
-    on_threads(T, [&](i64 t) { f(k * t / T, k * (t + 1) / T); });
+    on_threads(T, [&](i64 t) {
+        const i64 lo = k * t / T, hi = k * (t + 1) / T;
+        for (i64 i = 0; i < n; ++i) {
+            const i64 s = labels[i];
+            if (s >= lo && s < hi) f(i, s);
+        }
+    });
 }
 
 void label_sums(py::handle labels_, py::handle weights_, py::handle positions_,
@@ -602,16 +609,11 @@ void label_sums(py::handle labels_, py::handle weights_, py::handle positions_,
                 wpos.n != area.n || wnrm.n != area.n)
                 throw Mismatch("argument positions");
             py::gil_scoped_release nogil;
-            by_label_range(labels.n, area.n, [&](i64 lo, i64 hi) {
-                for (i64 i = 0; i < labels.n; ++i) {
-                    i64 s = labels[i];
-                    if (s < lo || s >= hi) continue;
-                    double x = w[i];
-                    area[s] += x;
-                    for (int c = 0; c < 3; ++c) wpos(s, c) += x * pos(i, c);
-                    for (int c = 0; c < 3; ++c)
-                        wnrm(s, c) += x * static_cast<double>(nor(i, c));
-                }
+            each_by_label(labels, area.n, [&](i64 i, i64 s) {
+                double x = w[i];
+                area[s] += x;
+                for (int c = 0; c < 3; ++c) wpos(s, c) += x * pos(i, c);
+                for (int c = 0; c < 3; ++c) wnrm(s, c) += x * static_cast<double>(nor(i, c));
             });
             return 0;
         });
@@ -627,15 +629,11 @@ void label_scatter(py::handle labels_, py::handle weights_, py::handle positions
         pos.n != labels.n || sc.n != cen.n)
         throw Mismatch("argument positions");
     py::gil_scoped_release nogil;
-    by_label_range(labels.n, sc.n, [&](i64 lo, i64 hi) {
-        for (i64 i = 0; i < labels.n; ++i) {
-            i64 s = labels[i];
-            if (s < lo || s >= hi) continue;
-            double x = w[i];
-            double d[3] = {pos(i, 0) - cen(s, 0), pos(i, 1) - cen(s, 1), pos(i, 2) - cen(s, 2)};
-            for (int a = 0; a < 3; ++a)
-                for (int b = 0; b < 3; ++b) sc(s, 3 * a + b) += x * d[a] * d[b];
-        }
+    each_by_label(labels, sc.n, [&](i64 i, i64 s) {
+        double x = w[i];
+        double d[3] = {pos(i, 0) - cen(s, 0), pos(i, 1) - cen(s, 1), pos(i, 2) - cen(s, 2)};
+        for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b) sc(s, 3 * a + b) += x * d[a] * d[b];
     });
 }
 
