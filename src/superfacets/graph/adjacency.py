@@ -156,7 +156,7 @@ class SuperfacetGraph:
         atomic_write(path, lambda fh: np.savez_compressed(fh, **self.arrays(), **extra))
 
 
-def superfacet_graph(graph, labels, features=None) -> SuperfacetGraph:
+def superfacet_graph(graph, labels, features=None, *, finer=None) -> SuperfacetGraph:
     """The superfacet graph of per-element labels.
 
     Parameters
@@ -168,6 +168,9 @@ def superfacet_graph(graph, labels, features=None) -> SuperfacetGraph:
     features : (n, d) float ndarray, optional
         A feature per element (e.g. RGB colour); its area-weighted mean per
         superfacet becomes ``feature``.
+    finer : tuple, optional
+        :func:`crossing_adjacencies` of labels that these coarsen (each of these
+        labels a union of those): read from it instead of found again, the same arrays.
 
     Returns
     -------
@@ -217,7 +220,7 @@ def superfacet_graph(graph, labels, features=None) -> SuperfacetGraph:
                                  f"row per {g.element}, got shape {np.shape(features)}")
         feature = np.stack([np.bincount(lab, weights=area_w * f[:, c], minlength=k)
                             for c in range(f.shape[1])], axis=1) / safe[:, None]
-    pc, length, cos, concave_el = crossing_adjacencies(g, lab)
+    pc, length, cos, concave_el = crossing_adjacencies(g, lab, finer=finer)
     a, b = lab[pc[:, 0]], lab[pc[:, 1]]
     lo, hi = np.minimum(a, b), np.maximum(a, b)
     key, inv = np.unique(lo * k + hi, return_inverse=True)
@@ -244,7 +247,7 @@ def superfacet_graph(graph, labels, features=None) -> SuperfacetGraph:
                            feature=feature, scatter=scatter)
 
 
-def crossing_adjacencies(g, lab: np.ndarray):
+def crossing_adjacencies(g, lab: np.ndarray, *, finer=None):
     """The element adjacencies whose two elements have different labels, in pair order.
 
     A point graph whose pairs and terms were never built (a default run) reads them
@@ -257,6 +260,11 @@ def crossing_adjacencies(g, lab: np.ndarray):
     g : ElementGraph
     lab : (n,) int64 ndarray
         A label per element.
+    finer : tuple, optional
+        This function's result for labels that ``lab`` coarsens (each label of ``lab``
+        a union of those: every adjacency crossing ``lab`` crosses them): its
+        adjacencies that cross ``lab``, in their order (the same arrays as without it).
+        Not checked.
 
     Returns
     -------
@@ -288,6 +296,10 @@ def crossing_adjacencies(g, lab: np.ndarray):
     """
     from ..elements.vertices import symmetric_terms
 
+    if finer is not None:
+        pc = finer[0]
+        keep = np.flatnonzero(lab[pc[:, 0]] != lab[pc[:, 1]])
+        return tuple(a[keep] for a in finer)
     if (g.border_shares is None or g.terms_of is not symmetric_terms
             or "pairs" in g.__dict__ or "terms" in g.__dict__):
         a, b = lab[g.pairs[:, 0]], lab[g.pairs[:, 1]]

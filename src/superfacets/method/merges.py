@@ -142,7 +142,7 @@ def _plane_residual(graph, pick: np.ndarray, rings: int) -> tuple[np.ndarray, np
 
 
 def flat_merges(graph, labels: np.ndarray, k: int, max_rise: float, *,
-                alpha: float = 0.0, eta_convex: float = 0.0) -> np.ndarray:
+                alpha: float = 0.0, eta_convex: float = 0.0, finer=None) -> np.ndarray:
     """Phase 1 of :func:`merge_to_count`: merge adjacent superpoints whose union stays
     flat, the cheapest by Ward's cost first, while more than ``k`` remain.
 
@@ -165,6 +165,9 @@ def flat_merges(graph, labels: np.ndarray, k: int, max_rise: float, *,
         In squared input units (``FLAT_NOISE * noise_variance(graph)``).
     alpha, eta_convex : float, default 0
         The crease factor of Ward's cost (paper eqs. 2-3), ``>= 0``.
+    finer : tuple, optional
+        :func:`~superfacets.graph.adjacency.crossing_adjacencies` of ``labels`` (or of
+        labels they coarsen), if already found.
 
     Returns
     -------
@@ -193,7 +196,7 @@ def flat_merges(graph, labels: np.ndarray, k: int, max_rise: float, *,
     """
     from ..graph.hierarchy import planarity_graph
 
-    pg = planarity_graph(graph, labels)  # no features: the merges are geometric
+    pg = planarity_graph(graph, labels, finer=finer)  # no features: the merges are geometric
     return flat_merge_nodes(pg, k, max_rise, alpha, eta_convex)[labels]
 
 
@@ -255,7 +258,11 @@ def merge_to_count(graph, labels: np.ndarray, rules) -> tuple[np.ndarray, int]:
     n = int(labels.max()) + 1 if labels.size else 0
     if k is None or n <= k:
         return labels, n
+    from ..graph.adjacency import crossing_adjacencies
+
     p = rules.params
+    # the superpoints' crossing adjacencies, found once: the merged labels coarsen them
+    finer = crossing_adjacencies(graph, np.ascontiguousarray(labels, dtype=np.int64))
     labels = flat_merges(graph, labels, k, FLAT_NOISE * noise_variance(graph), alpha=p.alpha,
-                         eta_convex=p.eta_convex)
-    return exact_count(graph, labels, rules)
+                         eta_convex=p.eta_convex, finer=finer)
+    return exact_count(graph, labels, rules, finer=finer)
