@@ -61,7 +61,7 @@ POINT_KERNELS = {"knn_csr", "pca_normals", "pca_linearity", "propagate_signs",
 #: Those of the vertex graph and of the exact assignment (the default on vertices)
 VERTEX_KERNELS = {"vertex_cells", "mesh_edges", "classify_exact", "reclassify_exact"}
 #: Those used on large inputs alone (numpy's own below 65,536 rows): tested on their own
-LARGE_KERNELS = {"column_bounds", "finite_rows"}
+LARGE_KERNELS = {"column_bounds", "finite_rows", "gather"}
 
 
 #: Scratch arguments of the numba kernels that the compiled ones do not use (their heaps
@@ -792,6 +792,43 @@ def test_bounds_and_finite_rows_of_large_arrays_are_numpys(monkeypatch, threads)
             np.testing.assert_array_equal(g, w)
             np.testing.assert_array_equal(r, w)
     assert np.isnan(got[0][1:]).all() and got[0][0] == -7e6 and not got[2][[0, 17]].any()
+    assert not native.fallbacks
+
+
+@needs_cxx
+@pytest.mark.parametrize("threads", ["1", "2", "3"])
+def test_gathers_of_large_index_arrays_are_numpys_take(monkeypatch, threads):
+    """Known answer: ``values[index]`` of int32 and int64 values and indices, gathered by
+    ranges on threads, is numpy's take and numba's, into a new array and into ``out``
+    (as the passes renumber their previous labels); an index out of range is refused
+    with IndexError, counted alike by both kernels."""
+    from superfacets._runtime.arrays import GATHER_MIN, gather
+
+    monkeypatch.setattr(native, "fallbacks", {})  # (this test's calls alone)
+    rng = np.random.default_rng(12)
+    n = 3 * GATHER_MIN + 17
+    for vt in (np.int32, np.int64):
+        values = rng.integers(-2**31, 2**31 - 1, 5_000).astype(vt)
+        for it in (np.int32, np.int64):
+            index = rng.integers(0, values.shape[0], n).astype(it)
+            index[[0, n // 2, n - 1]] = [values.shape[0] - 1, 0, 1]
+            want = np.take(values, index)
+            ref = np.zeros(n, dtype=vt)
+            assert native.reference("geometry.gather")(values, index, ref) == 0
+            out = np.zeros(n, dtype=vt)
+            with monkeypatch.context() as m:
+                m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
+                got = gather(values, index)
+                into = gather(values, index, out=out)
+            assert got.dtype == vt and into is out
+            for a in (got, into, ref):
+                np.testing.assert_array_equal(a, want)
+            bad = index.copy()
+            bad[[5, n - 2]] = [-1, values.shape[0]]
+            with monkeypatch.context() as m, pytest.raises(IndexError, match="2 of"):
+                m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
+                gather(values, bad)
+            assert native.reference("geometry.gather")(values, bad, ref) == 2
     assert not native.fallbacks
 
 

@@ -360,6 +360,21 @@ def finite_rows(a, out):
 
 
 @njit(cache=True, nogil=True)
+def gather(values, index, out):
+    """``out[i] = values[index[i]]`` for each index in range (``0 <= index[i] <
+    len(values)``; others leave ``out[i]`` as it was); returns how many were not."""
+    n = values.shape[0]
+    bad = 0
+    for i in range(index.shape[0]):
+        j = index[i]
+        if j < 0 or j >= n:
+            bad += 1
+        else:
+            out[i] = values[j]
+    return bad
+
+
+@njit(cache=True, nogil=True)
 def sort_keys(keys, order, out):
     """``order``: the stable argsort of the uint64 ``keys`` (equal keys in the order of
     their rows); ``out``: ``keys[order]``."""

@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["real_rows", "sorted_unique"]
+__all__ = ["gather", "real_rows", "sorted_unique"]
+
+#: Indices from which :func:`gather` runs compiled, on threads (numpy's ``take`` below).
+GATHER_MIN = 1 << 16
 
 
 def sorted_unique(values: np.ndarray) -> np.ndarray:
@@ -69,3 +72,51 @@ def real_rows(values: np.ndarray) -> np.ndarray:
     if a.dtype == np.float32 or a.dtype == np.float64:
         return np.ascontiguousarray(a)
     return np.ascontiguousarray(a, dtype=np.float64)
+
+
+def gather(values: np.ndarray, index: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """``values[index]`` of 1-D integer arrays (labels, their numbers), as ``np.take``.
+
+    numpy's ``take`` makes about 3 ns an index on one thread (10M labels: 34 ms, every
+    pass of a run); 65,536 indices or more of int32 or int64 values and indices, C-contiguous,
+    are gathered by a compiled pass on threads. Anything else goes to ``np.take``.
+
+    Parameters
+    ----------
+    values : (n,) int32 or int64 ndarray
+    index : (m,) int32 or int64 ndarray
+        Each in ``0 .. n - 1``.
+    out : (m,) ndarray, optional
+        Of the dtype of ``values``; written and returned.
+
+    Returns
+    -------
+    (m,) ndarray
+        Of the dtype of ``values``.
+
+    Raises
+    ------
+    IndexError
+        If an index is out of range (``out`` may then be partly written).
+
+    Examples
+    --------
+    >>> gather(np.array([10, 20, 30]), np.array([2, 0, 2])).tolist()
+    [30, 10, 30]
+    """
+    ints = (np.int32, np.int64)
+    if (index.shape[0] < GATHER_MIN or values.ndim != 1 or index.ndim != 1
+            or values.dtype not in ints or index.dtype not in ints
+            or not (values.flags.c_contiguous and index.flags.c_contiguous)
+            or (out is not None and (out.dtype != values.dtype or not out.flags.c_contiguous
+                                     or not out.flags.writeable))):
+        return np.take(values, index, out=out)
+    from .._kernels import native
+
+    if out is None:
+        out = np.empty(index.shape[0], dtype=values.dtype)
+    bad = native.kernel("geometry.gather")(values, index, out)
+    if bad:
+        raise IndexError(f"{bad} of {index.shape[0]} indices out of range for "
+                         f"{values.shape[0]} values")
+    return out

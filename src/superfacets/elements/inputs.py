@@ -13,6 +13,7 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
+from .._runtime.arrays import gather
 from ..method.params import DEFAULTS
 from .graph import ElementGraph
 
@@ -59,7 +60,7 @@ class ElementInput(NamedTuple):
             return labels
         index = self.index
         if index.shape[0] and int(index.min()) >= 0:  # every row an element: one gather
-            return np.asarray(labels).take(index)
+            return gather(np.asarray(labels), index)
         out = np.full(index.shape[0], -1, dtype=labels.dtype)
         ok = index >= 0
         out[ok] = labels[index[ok]]

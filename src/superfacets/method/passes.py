@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._kernels import native
+from .._runtime.arrays import gather
 from .._runtime.memory import give_back_free_memory
 
 __all__ = ["Iteration", "iterate", "update_centers", "hold_small_moves", "final_centers"]
@@ -192,8 +193,7 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
         if tol > 0:  # superfacet s is number remap[s] in the next pass (-1: it died)
             remap = np.where(keep, np.cumsum(keep) - 1, -1).astype(np.int32)
             # (into the previous pass's array: one array of labels, not two at a time)
-            prev = (np.take(remap, label, out=prev, mode="clip") if prev is not None
-                    else remap[label])  # ("clip": unbuffered; every label is in range)
+            prev = gather(remap, label, out=prev)
     return Iteration(label=label, centers=used, n_iter=n_iter, converged=converged,
                      n_orphan_seeds=n_orphans, n_passes=n_passes, cycle_period=period,
                      expansions=n_expanded, changed=changed, stopped_by_tol=by_tol)

@@ -690,7 +690,39 @@ void finite_rows(py::handle a_, py::handle out_) {
     });
 }
 
+// geometry.gather: out[i] = values[index[i]] for each index in range (others leave out[i]
+// as it was), on threads; returns how many were out of range
+i64 gather(py::handle values_, py::handle index_, py::handle out_) {
+    auto run = [&](auto tag) -> i64 {
+        using V = decltype(tag);
+        In<V> values(values_, "values");
+        Out<V> out(out_, "out");
+        return with_index(index_, "index", [&](const auto& index) -> i64 {
+            if (out.n != index.n) throw Mismatch("argument out");
+            py::gil_scoped_release nogil;
+            const i64 n = values.n;
+            std::atomic<i64> bad{0};
+            parallel_for(index.n, [&](i64 i0, i64 i1) {
+                i64 b = 0;
+                for (i64 i = i0; i < i1; ++i) {
+                    const i64 j = index[i];
+                    if (j < 0 || j >= n) {
+                        ++b;
+                        continue;
+                    }
+                    out[i] = values[j];
+                }
+                bad += b;
+            });
+            return bad;
+        });
+    };
+    if (matches<i32>(values_)) return run(i32{});
+    return run(i64{});
+}
+
 void bind_points(py::module_& m) {
+    m.def("gather", &gather);
     m.def("float_morton_keys", &float_morton_keys);
     m.def("distinct_in_order", &distinct_in_order);
     m.def("pca_normals", &pca_normals);
