@@ -61,7 +61,7 @@ POINT_KERNELS = {"knn_csr", "pca_normals", "pca_linearity", "propagate_signs",
 #: Those of the vertex graph and of the exact assignment (the default on vertices)
 VERTEX_KERNELS = {"vertex_cells", "mesh_edges", "classify_exact", "reclassify_exact"}
 #: Those used on large inputs alone (numpy's own below 65,536 rows): tested on their own
-LARGE_KERNELS = {"column_bounds", "finite_rows", "gather"}
+LARGE_KERNELS = {"column_bounds", "finite_rows", "gather", "border_shares"}
 
 
 #: Scratch arguments of the numba kernels that the compiled ones do not use (their heaps
@@ -829,6 +829,39 @@ def test_gathers_of_large_index_arrays_are_numpys_take(monkeypatch, threads):
                 m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
                 gather(values, bad)
             assert native.reference("geometry.gather")(values, bad, ref) == 2
+    assert not native.fallbacks
+
+
+@needs_cxx
+@pytest.mark.parametrize("threads", ["1", "3"])
+def test_border_shares_of_a_large_point_graph_are_numpys(monkeypatch, threads):
+    """Known answer: a large point graph's border shares (``2 sqrt(pi a) / max(deg, 1)``,
+    rebuilt whenever asked after a release) by one pass on threads are numpy's
+    expression's values to the bit, and numba's, with degrees of 0 and 1 and zero areas."""
+    from superfacets.elements.points import _shares
+
+    monkeypatch.setattr(native, "fallbacks", {})  # (this test's calls alone)
+    rng = np.random.default_rng(13)
+    n = 150_000
+    deg = rng.integers(0, 25, n)
+    deg[[0, 7, n - 1]] = [0, 1, 0]
+    indptr = np.r_[0, np.cumsum(deg)].astype(np.int64)
+    area = rng.random(n) * 10.0 ** rng.integers(-12, 6, n)
+    area[[3, n // 2]] = 0.0
+
+    class Graph:  # (what _shares reads of the graph)
+        pass
+
+    g = Graph()
+    g.indptr = indptr
+    want = 2.0 * np.sqrt(np.pi * area) / np.maximum(np.diff(indptr).astype(np.float64), 1.0)
+    ref = np.empty(n)
+    native.reference("geometry.border_shares")(indptr, area, ref)
+    with monkeypatch.context() as m:
+        m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
+        got = _shares(area, g)["border_shares"]
+    np.testing.assert_array_equal(got, want)
+    np.testing.assert_array_equal(ref, want)
     assert not native.fallbacks
 
 

@@ -375,6 +375,15 @@ def gather(values, index, out):
 
 
 @njit(cache=True, nogil=True)
+def border_shares(indptr, area, out):
+    """``out = 2.0 * np.sqrt(np.pi * area) / np.maximum(np.diff(indptr), 1.0)``, each
+    operation rounded as numpy's."""
+    for i in range(area.shape[0]):
+        deg = float(indptr[i + 1] - indptr[i])
+        out[i] = 2.0 * np.sqrt(np.pi * area[i]) / (deg if deg > 1.0 else 1.0)
+
+
+@njit(cache=True, nogil=True)
 def sort_keys(keys, order, out):
     """``order``: the stable argsort of the uint64 ``keys`` (equal keys in the order of
     their rows); ``out``: ``keys[order]``."""

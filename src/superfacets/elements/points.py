@@ -44,7 +44,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._kernels import native
-from .._runtime.arrays import sorted_unique
+from .._runtime.arrays import GATHER_MIN, sorted_unique
 from .._runtime.memory import give_back_free_memory
 from ..inputs.bounds import column_bounds
 from .graph import LAZY, ElementGraph, adjacency_csr, cached_on, pairs_from_csr
@@ -414,7 +414,13 @@ def _shrunk(a: np.ndarray, size: int) -> np.ndarray:
 def _shares(area: np.ndarray, graph: ElementGraph) -> dict:
     """``rebuild["border_shares"]`` of a point graph: each point's share of the perimeter
     of its disk of area ``area`` (the sizes as built), ``2 sqrt(pi a_i) / deg_i``."""
-    degree = np.diff(graph.indptr).astype(np.float64)
+    indptr = graph.indptr
+    if (area.shape[0] >= GATHER_MIN and indptr.dtype == np.int64 and area.dtype == np.float64
+            and indptr.flags.c_contiguous and area.flags.c_contiguous):
+        out = np.empty(area.shape[0])  # (the same values, one pass on threads: 10M points
+        native.kernel("geometry.border_shares")(indptr, area, out)  # 0.22 -> 0.03 s)
+        return {"border_shares": out}
+    degree = np.diff(indptr).astype(np.float64)
     return {"border_shares": 2.0 * np.sqrt(np.pi * area) / np.maximum(degree, 1.0)}
 
 

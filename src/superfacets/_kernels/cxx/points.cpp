@@ -721,8 +721,26 @@ i64 gather(py::handle values_, py::handle index_, py::handle out_) {
     return run(i64{});
 }
 
+// geometry.border_shares: out[i] = 2 sqrt(pi area[i]) / max(deg_i, 1), the degree from
+// the CSR layout, each operation as numpy's expression rounds it
+void border_shares(py::handle indptr_, py::handle area_, py::handle out_) {
+    In<i64> indptr(indptr_, "indptr");
+    In<double> area(area_, "area");
+    Out<double> out(out_, "out");
+    if (indptr.n != area.n + 1 || out.n != area.n) throw Mismatch("argument out");
+    py::gil_scoped_release nogil;
+    constexpr double pi = 3.141592653589793;  // np.pi
+    parallel_for(area.n, [&](i64 i0, i64 i1) {
+        for (i64 i = i0; i < i1; ++i) {
+            const double deg = static_cast<double>(indptr[i + 1] - indptr[i]);
+            out[i] = 2.0 * std::sqrt(pi * area[i]) / (deg > 1.0 ? deg : 1.0);
+        }
+    });
+}
+
 void bind_points(py::module_& m) {
     m.def("gather", &gather);
+    m.def("border_shares", &border_shares);
     m.def("float_morton_keys", &float_morton_keys);
     m.def("distinct_in_order", &distinct_in_order);
     m.def("pca_normals", &pca_normals);
