@@ -783,8 +783,8 @@ def test_bounds_and_finite_rows_of_large_arrays_are_numpys(monkeypatch, threads)
                 np.array([x[:, j].max() for j in range(3)]),
                 np.isfinite(x).all(axis=1))
         ref = np.empty(3), np.empty(3), np.empty(n, dtype=bool)
-        native.reference("geometry.column_bounds")(x, ref[0], ref[1])
-        native.reference("geometry.finite_rows")(x, ref[2])
+        native.reference("columns.column_bounds")(x, ref[0], ref[1])
+        native.reference("columns.finite_rows")(x, ref[2])
         with monkeypatch.context() as m:
             m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
             got = (*column_bounds(x), finite_rows(x))
@@ -814,7 +814,7 @@ def test_gathers_of_large_index_arrays_are_numpys_take(monkeypatch, threads):
             index[[0, n // 2, n - 1]] = [values.shape[0] - 1, 0, 1]
             want = np.take(values, index)
             ref = np.zeros(n, dtype=vt)
-            assert native.reference("geometry.gather")(values, index, ref) == 0
+            assert native.reference("columns.gather")(values, index, ref) == 0
             out = np.zeros(n, dtype=vt)
             with monkeypatch.context() as m:
                 m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
@@ -828,7 +828,7 @@ def test_gathers_of_large_index_arrays_are_numpys_take(monkeypatch, threads):
             with monkeypatch.context() as m, pytest.raises(IndexError, match="2 of"):
                 m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
                 gather(values, bad)
-            assert native.reference("geometry.gather")(values, bad, ref) == 2
+            assert native.reference("columns.gather")(values, bad, ref) == 2
     assert not native.fallbacks
 
 

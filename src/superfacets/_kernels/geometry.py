@@ -331,49 +331,6 @@ def label_scatter(labels, weights, positions, centroid, scatter):
         scatter[s, 8] += w * d2 * d2
 
 
-@njit(cache=True, error_model="numpy", nogil=True)
-def column_bounds(a, lo, hi):
-    """``lo[c]``, ``hi[c]``: the least and greatest value of column ``c`` of the ``(n, d)``
-    ``a`` (``n >= 1``), as ``a[:, c].min()`` and ``.max()`` give them: NaN where the
-    column has one; of equal values (signed zeros) the first row's."""
-    for c in range(a.shape[1]):
-        lo[c] = a[0, c]
-        hi[c] = a[0, c]
-    for r in range(1, a.shape[0]):
-        for c in range(a.shape[1]):
-            x = a[r, c]
-            if x < lo[c] or x != x:
-                lo[c] = x
-            if x > hi[c] or x != x:
-                hi[c] = x
-
-
-@njit(cache=True, nogil=True)
-def finite_rows(a, out):
-    """``out[r]``: whether every value of row ``r`` of ``a`` is finite, as
-    ``np.isfinite(a).all(axis=1)``."""
-    for r in range(a.shape[0]):
-        ok = True
-        for c in range(a.shape[1]):
-            ok = ok and np.isfinite(a[r, c])
-        out[r] = ok
-
-
-@njit(cache=True, nogil=True)
-def gather(values, index, out):
-    """``out[i] = values[index[i]]`` for each index in range (``0 <= index[i] <
-    len(values)``; others leave ``out[i]`` as it was); returns how many were not."""
-    n = values.shape[0]
-    bad = 0
-    for i in range(index.shape[0]):
-        j = index[i]
-        if j < 0 or j >= n:
-            bad += 1
-        else:
-            out[i] = values[j]
-    return bad
-
-
 @njit(cache=True, nogil=True)
 def border_shares(indptr, area, out):
     """``out = 2.0 * np.sqrt(np.pi * area) / np.maximum(np.diff(indptr), 1.0)``, each

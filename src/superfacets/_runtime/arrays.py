@@ -115,7 +115,7 @@ def gather(values: np.ndarray, index: np.ndarray, out: np.ndarray | None = None)
 
     if out is None:
         out = np.empty(index.shape[0], dtype=values.dtype)
-    bad = native.kernel("geometry.gather")(values, index, out)
+    bad = native.kernel("columns.gather")(values, index, out)
     if bad:
         raise IndexError(f"{bad} of {index.shape[0]} indices out of range for "
                          f"{values.shape[0]} values")

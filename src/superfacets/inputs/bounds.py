@@ -83,7 +83,7 @@ def column_bounds(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         from .._kernels import native
 
         lo, hi = np.empty(a.shape[1]), np.empty(a.shape[1])
-        native.kernel("geometry.column_bounds")(a, lo, hi)
+        native.kernel("columns.column_bounds")(a, lo, hi)
         return lo, hi
     return (np.array([a[:, j].min() for j in range(a.shape[1])], dtype=a.dtype),
             np.array([a[:, j].max() for j in range(a.shape[1])], dtype=a.dtype))
@@ -97,6 +97,6 @@ def finite_rows(a: np.ndarray) -> np.ndarray:
         from .._kernels import native
 
         out = np.empty(a.shape[0], dtype=bool)
-        native.kernel("geometry.finite_rows")(a, out)
+        native.kernel("columns.finite_rows")(a, out)
         return out
     return np.isfinite(a).all(axis=1)

@@ -1,6 +1,7 @@
 // The point graph's build: distinct positions in Z order, the symmetric kNN layout, PCA
 // normals and their turn outwards (their signs: orient.cpp), the per-entry terms
-// (superfacets/_kernels/geometry.py, adjacency.py, normals.py, orient.py, terms.py), the
+// (superfacets/_kernels/geometry.py, columns.py, adjacency.py, normals.py, orient.py,
+// terms.py), the
 // same operations in the same order.
 // The loops numba runs with prange run here on threads, each element on its own.
 #include "common.hpp"
@@ -637,7 +638,7 @@ void label_scatter(py::handle labels_, py::handle weights_, py::handle positions
     });
 }
 
-// geometry.column_bounds: each column's least and greatest value (NaN where the column
+// columns.column_bounds: each column's least and greatest value (NaN where the column
 // has one; of equal values, the first row's), by row ranges on threads combined in order
 void column_bounds(py::handle a_, py::handle lo_, py::handle hi_) {
     In<double> a(a_, "a");
@@ -674,7 +675,7 @@ void column_bounds(py::handle a_, py::handle lo_, py::handle hi_) {
     }
 }
 
-// geometry.finite_rows: out[r] whether every value of row r is finite
+// columns.finite_rows: out[r] whether every value of row r is finite
 void finite_rows(py::handle a_, py::handle out_) {
     In<double> a(a_, "a");
     Out<bool> out(out_, "out");
@@ -690,7 +691,7 @@ void finite_rows(py::handle a_, py::handle out_) {
     });
 }
 
-// geometry.gather: out[i] = values[index[i]] for each index in range (others leave out[i]
+// columns.gather: out[i] = values[index[i]] for each index in range (others leave out[i]
 // as it was), on threads; returns how many were out of range
 i64 gather(py::handle values_, py::handle index_, py::handle out_) {
     auto run = [&](auto tag) -> i64 {
