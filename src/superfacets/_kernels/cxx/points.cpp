@@ -1,8 +1,7 @@
 // The point graph's build: distinct positions in Z order, the symmetric kNN layout, PCA
 // normals and their turn outwards (their signs: orient.cpp), the per-entry terms
 // (superfacets/_kernels/geometry.py, columns.py, adjacency.py, normals.py, orient.py,
-// terms.py), the
-// same operations in the same order.
+// terms.py), the same operations in the same order.
 // The loops numba runs with prange run here on threads, each element on its own.
 #include "common.hpp"
 
