@@ -885,6 +885,31 @@ def test_the_z_order_sorts_by_the_whole_keys_then_the_positions(monkeypatch, thr
     np.testing.assert_array_equal(inverse, want_inv)
 
 
+def test_the_z_orders_shared_leading_bits_are_those_no_point_changes():
+    """Known answer: the leading bits of the 189-bit key strings that every point shares
+    (the Z-order sorts from the first one that varies): found by or/and reductions, they
+    are the bits up to the highest one where some key differs from the first, in a cloud
+    in a small box far from the origin (many shared bits), one point, and a spread one."""
+    from superfacets.elements.points import _spatial_keys
+
+    rng = np.random.default_rng(5)
+    for p in (1e6 + rng.random((5_000, 3)) * 1e-3, np.array([[1.0, 2.0, 3.0]]),
+              rng.normal(size=(5_000, 3)) * 1e3, np.full((4, 3), 7.0)):
+        keys, shared = _spatial_keys(p)
+        want = 0
+        for w in range(3):
+            vary = 0
+            for x in keys[:, w]:
+                vary |= int(x) ^ int(keys[0, w])
+            if vary:
+                want += 63 - vary.bit_length()
+                break
+            want += 63
+        assert shared == want
+    assert _spatial_keys(np.full((4, 3), 7.0))[1] == 189
+    assert _spatial_keys(1e6 + rng.random((50, 3)) * 1e-3)[1] > 63
+
+
 def _owned(a: np.ndarray) -> np.ndarray:
     """A copy of ``a`` that nothing else holds (as a cloud read from a file)."""
     return np.array(a, copy=True)

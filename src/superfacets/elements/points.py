@@ -239,7 +239,10 @@ def _spatial_keys(p: np.ndarray) -> tuple[np.ndarray, int]:
     float_morton_keys(p.view(np.uint64), keys)
     shared = 0
     for w in range(3):
-        vary = int(np.bitwise_or.reduce(keys[:, w] ^ keys[0, w])) if n else 0
+        # the bits where some key differs from another: set in one, clear in another
+        # (no temporary array: 10M points 0.18 -> 0.04 s)
+        vary = int(np.bitwise_or.reduce(keys[:, w]) & ~np.bitwise_and.reduce(keys[:, w])) \
+            if n else 0
         if vary:
             shared += 63 - vary.bit_length()
             break
