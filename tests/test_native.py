@@ -61,7 +61,7 @@ POINT_KERNELS = {"knn_csr", "pca_normals", "pca_linearity", "propagate_signs",
 #: Those of the vertex graph and of the exact assignment (the default on vertices)
 VERTEX_KERNELS = {"vertex_cells", "mesh_edges", "classify_exact", "reclassify_exact"}
 #: Those used on large inputs alone (numpy's own below 65,536 rows): tested on their own
-LARGE_KERNELS = {"column_bounds", "finite_rows", "gather", "border_shares"}
+LARGE_KERNELS = {"column_bounds", "finite_rows", "gather", "border_shares", "key_window"}
 
 
 #: Scratch arguments of the numba kernels that the compiled ones do not use (their heaps
@@ -862,6 +862,35 @@ def test_border_shares_of_a_large_point_graph_are_numpys(monkeypatch, threads):
         got = _shares(area, g)["border_shares"]
     np.testing.assert_array_equal(got, want)
     np.testing.assert_array_equal(ref, want)
+    assert not native.fallbacks
+
+
+@needs_cxx
+@pytest.mark.parametrize("threads", ["1", "3"])
+def test_key_windows_of_a_large_cloud_are_numpys(monkeypatch, threads):
+    """Known answer: the 64 bits of the Z-order's key strings from any start (the sort's
+    window past the bits every point shares), one pass on threads for a large cloud, are
+    numpy's shifts and masks of the key words and numba's, across word boundaries and
+    past the string's end."""
+    from superfacets.elements import points
+
+    monkeypatch.setattr(native, "fallbacks", {})  # (this test's calls alone)
+    rng = np.random.default_rng(14)
+    n = 70_000
+    keys = rng.integers(0, 2**63, (n, 3), dtype=np.int64).view(np.uint64)
+    keys[:5] = [[0, 0, 0], [2**63 - 1] * 3, [1, 0, 2**62], [2**62, 1, 0], [0, 2**63 - 1, 1]]
+    small = keys[:1000].copy()  # (numpy's path below 65,536 rows)
+    for start in (0, 1, 30, 62, 63, 64, 100, 125, 126, 127, 150, 188):
+        want = points._key_bits(small, start)
+        ref = np.empty(n, dtype=np.uint64)
+        native.reference("geometry.key_window")(keys, start, ref)
+        with monkeypatch.context() as m:
+            m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
+            got = points._key_bits(keys, start)
+        np.testing.assert_array_equal(got[:1000], want, err_msg=str(start))
+        np.testing.assert_array_equal(ref, got, err_msg=str(start))
+        bits = "".join(format(int(w), "063b") for w in keys[2]) + "0" * 64  # row 2's
+        assert int(got[2]) == int(bits[start:start + 64], 2), start
     assert not native.fallbacks
 
 

@@ -341,6 +341,21 @@ def border_shares(indptr, area, out):
 
 
 @njit(cache=True, nogil=True)
+def key_window(keys, start, out):
+    """``out[r]``: bits ``start .. start + 63`` (``0 <= start < 189``) of row ``r``'s
+    189-bit key string (63 bits a word of ``keys``, the first bit the highest; zeros past
+    its end), as one uint64."""
+    j, o = start // 63, start % 63
+    mask = np.uint64((1 << (63 - o)) - 1)
+    left, right = np.uint64(o + 1), np.uint64(62 - o)
+    for r in range(keys.shape[0]):
+        x = (keys[r, j] & mask) << left
+        if j < 2:
+            x |= keys[r, j + 1] >> right
+        out[r] = x
+
+
+@njit(cache=True, nogil=True)
 def sort_keys(keys, order, out):
     """``order``: the stable argsort of the uint64 ``keys`` (equal keys in the order of
     their rows); ``out``: ``keys[order]``."""

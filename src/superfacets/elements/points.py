@@ -239,10 +239,8 @@ def _spatial_keys(p: np.ndarray) -> tuple[np.ndarray, int]:
     float_morton_keys(p.view(np.uint64), keys)
     shared = 0
     for w in range(3):
-        # the bits where some key differs from another: set in one, clear in another
-        # (no temporary array: 10M points 0.18 -> 0.04 s)
-        vary = int(np.bitwise_or.reduce(keys[:, w]) & ~np.bitwise_and.reduce(keys[:, w])) \
-            if n else 0
+        # (the bits set in one key and clear in another: no temporary array, 0.18 -> 0.04 s)
+        vary = int(np.bitwise_or.reduce(keys[:, w]) & ~np.bitwise_and.reduce(keys[:, w]))
         if vary:
             shared += 63 - vary.bit_length()
             break
@@ -255,6 +253,10 @@ def _key_bits(keys: np.ndarray, start: int) -> np.ndarray:
     as one uint64 (the first bit the highest)."""
     if start >= 189:
         return np.zeros(keys.shape[0], dtype=np.uint64)
+    if keys.shape[0] >= GATHER_MIN and keys.flags.c_contiguous:  # one pass on threads
+        out = np.empty(keys.shape[0], dtype=np.uint64)  # (10M points: 0.22 -> 0.03 s)
+        native.kernel("geometry.key_window")(keys, int(start), out)
+        return out
     j, o = divmod(start, 63)
     out = (keys[:, j] & np.uint64((1 << (63 - o)) - 1)) << np.uint64(o + 1)
     if j < 2:

@@ -1,5 +1,5 @@
-// superfacets/_kernels/geometry.py: sort_keys, order_ties and rows_apart, the point
-// graph's first steps (a cloud's Z-order, and the rows its distinct points give back).
+// superfacets/_kernels/geometry.py: key_window, sort_keys, order_ties and rows_apart, the
+// point graph's first steps (a cloud's Z-order, and the rows its distinct points give back).
 #include "common.hpp"
 
 namespace sfk {
@@ -182,7 +182,27 @@ void order_ties(py::handle order_, py::handle ordered_, py::handle keys_, py::ha
     });
 }
 
+// geometry.key_window: bits start .. start + 63 of each row's 189-bit key string (63 bits
+// a word, the first bit the highest; zeros past its end), as one uint64, on threads
+void key_window(py::handle keys_, i64 start, py::handle out_) {
+    In<std::uint64_t> keys(keys_, "keys");
+    Out<std::uint64_t> out(out_, "out");
+    if (keys.cols != 3 || out.n != keys.n || start < 0 || start >= 189)
+        throw Mismatch("argument keys");
+    py::gil_scoped_release nogil;
+    const i64 j = start / 63, o = start % 63;
+    const std::uint64_t mask = (std::uint64_t{1} << (63 - o)) - 1;
+    parallel_for(keys.n, [&](i64 r0, i64 r1) {
+        for (i64 r = r0; r < r1; ++r) {
+            std::uint64_t x = (keys(r, j) & mask) << (o + 1);
+            if (j < 2) x |= keys(r, j + 1) >> (62 - o);
+            out[r] = x;
+        }
+    });
+}
+
 void bind_order(py::module_& m) {
+    m.def("key_window", &key_window);
     m.def("sort_keys", &sort_keys);
     m.def("rows_apart", &rows_apart);
     m.def("order_ties", &order_ties);
