@@ -61,7 +61,8 @@ POINT_KERNELS = {"knn_csr", "pca_normals", "pca_linearity", "propagate_signs",
 #: Those of the vertex graph and of the exact assignment (the default on vertices)
 VERTEX_KERNELS = {"vertex_cells", "mesh_edges", "classify_exact", "reclassify_exact"}
 #: Those used on large inputs alone (numpy's own below 65,536 rows): tested on their own
-LARGE_KERNELS = {"column_bounds", "finite_rows", "gather", "border_shares", "key_window"}
+LARGE_KERNELS = {"column_bounds", "finite_rows", "gather", "border_shares", "key_window",
+                 "column_means"}
 
 
 #: Scratch arguments of the numba kernels that the compiled ones do not use (their heaps
@@ -767,8 +768,10 @@ def test_knn_layout_on_threads_is_numbas(monkeypatch, threads):
 def test_bounds_and_finite_rows_of_large_arrays_are_numpys(monkeypatch, threads):
     """The columns' bounds and the finite rows of a large array, by row ranges on
     threads: numpy's values and numba's, with infinities and NaNs (a NaN column's bounds
-    are NaN) at the ends of the threads' ranges and inside them."""
-    from superfacets.inputs.bounds import column_bounds, finite_rows
+    are NaN) at the ends of the threads' ranges and inside them; the columns' means are
+    ``mean(axis=0)``'s to the bit (rows added in order), also over ten orders of
+    magnitude, where a pairwise sum differs."""
+    from superfacets.inputs.bounds import column_bounds, column_means, finite_rows
 
     monkeypatch.setattr(native, "fallbacks", {})  # (this test's calls alone)
     rng = np.random.default_rng(11)
@@ -791,7 +794,16 @@ def test_bounds_and_finite_rows_of_large_arrays_are_numpys(monkeypatch, threads)
         for g, w, r in zip(got, want, ref):
             np.testing.assert_array_equal(g, w)
             np.testing.assert_array_equal(r, w)
+        means, ref_means = column_means(x), np.empty(3)  # (one thread: the rows in order)
+        native.reference("columns.column_means")(x, ref_means)
+        np.testing.assert_array_equal(means, x.mean(axis=0))
+        np.testing.assert_array_equal(ref_means, x.mean(axis=0))
     assert np.isnan(got[0][1:]).all() and got[0][0] == -7e6 and not got[2][[0, 17]].any()
+    # magnitudes over ten orders, where a pairwise sum gives other last bits
+    y = rng.normal(size=(n, 3)) * 10.0 ** rng.integers(-5, 6, (n, 3))
+    np.testing.assert_array_equal(column_means(y), y.mean(axis=0))
+    assert not np.array_equal(column_means(y), np.array([np.sum(y[:, j]) for j in
+                                                         range(3)]) / n)
     assert not native.fallbacks
 
 

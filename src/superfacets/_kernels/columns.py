@@ -1,5 +1,5 @@
 """Whole-array passes over a large input's columns and indices (private kernels): the
-columns' bounds, the finite rows, integer gathers. The compiled kernels of the same names
+columns' bounds and means, the finite rows, integer gathers. The compiled kernels of the same names
 run them on threads from 65,536 rows (``superfacets.inputs.bounds``,
 ``superfacets._runtime.arrays``)."""
 
@@ -22,6 +22,19 @@ def column_bounds(a, lo, hi):
                 lo[c] = x
             if x > hi[c] or x != x:
                 hi[c] = x
+
+
+@njit(cache=True, nogil=True)
+def column_means(a, out):
+    """``out[c]``: the mean of column ``c`` of the ``(n, d)`` ``a`` (``n >= 1``) as
+    ``a.mean(axis=0)`` makes it: the rows added in order, then divided by ``n``."""
+    for c in range(a.shape[1]):
+        out[c] = 0.0
+    for r in range(a.shape[0]):
+        for c in range(a.shape[1]):
+            out[c] += a[r, c]
+    for c in range(a.shape[1]):
+        out[c] = out[c] / a.shape[0]
 
 
 @njit(cache=True, nogil=True)

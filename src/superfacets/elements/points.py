@@ -46,7 +46,7 @@ import numpy as np
 from .._kernels import native
 from .._runtime.arrays import GATHER_MIN, sorted_unique
 from .._runtime.memory import give_back_free_memory
-from ..inputs.bounds import column_bounds
+from ..inputs.bounds import column_bounds, column_means
 from .graph import LAZY, ElementGraph, adjacency_csr, cached_on, pairs_from_csr
 from .neighbors import nearest, point_tree
 from .vertices import symmetric_terms
@@ -395,7 +395,7 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
     rebuild["border_shares"] = partial(_shares, area)
     graph = ElementGraph(
         kind="points", positions=pts, sizes=area, normals=normals,
-        centroid=pts.mean(axis=0), lower=lower, diagonal=diagonal, pairs=LAZY,
+        centroid=column_means(pts), lower=lower, diagonal=diagonal, pairs=LAZY,
         indptr=indptr, indices=indices, dual_edge=LAZY, lengths=LAZY,
         boundary_elements=np.zeros(0, np.int64), boundary_lengths=np.zeros(0),
         spans=LAZY, border_shares=LAZY, terms_of=symmetric_terms,

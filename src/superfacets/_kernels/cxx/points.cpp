@@ -674,6 +674,21 @@ void column_bounds(py::handle a_, py::handle lo_, py::handle hi_) {
     }
 }
 
+// columns.column_means: each column's mean as numpy's a.mean(axis=0) makes it, the rows
+// added in order (numpy's reduction over the outer axis: no pairwise sum), then divided
+// (one thread: the order of the additions is the value)
+void column_means(py::handle a_, py::handle out_) {
+    In<double> a(a_, "a");
+    Out<double> out(out_, "out");
+    const i64 n = a.n, d = a.cols;
+    if (out.n != d || n < 1 || d > 16) throw Mismatch("argument out");
+    py::gil_scoped_release nogil;
+    double s[16] = {0.0};
+    for (i64 r = 0; r < n; ++r)
+        for (i64 c = 0; c < d; ++c) s[c] += a(r, c);
+    for (i64 c = 0; c < d; ++c) out[c] = s[c] / static_cast<double>(n);
+}
+
 // columns.finite_rows: out[r] whether every value of row r is finite
 void finite_rows(py::handle a_, py::handle out_) {
     In<double> a(a_, "a");
@@ -756,6 +771,7 @@ void bind_points(py::module_& m) {
     m.def("label_scatter", &label_scatter);
     m.def("column_bounds", &column_bounds);
     m.def("finite_rows", &finite_rows);
+    m.def("column_means", &column_means);
 }
 
 }  // namespace sfk
