@@ -6,8 +6,11 @@ import numpy as np
 
 __all__ = ["gather", "real_rows", "sorted_unique"]
 
-#: Indices from which :func:`gather` runs compiled, on threads (numpy's ``take`` below).
-GATHER_MIN = 1 << 16
+#: Rows from which the whole-array passes run compiled, on threads (numpy below): the
+#: gathers here, the columns' bounds and means, a point graph's shares and sort window.
+COMPILED_MIN = 1 << 16
+#: Indices from which :func:`gather` runs compiled (numpy's ``take`` below).
+GATHER_MIN = COMPILED_MIN
 
 
 def sorted_unique(values: np.ndarray) -> np.ndarray:

@@ -44,7 +44,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._kernels import native
-from .._runtime.arrays import GATHER_MIN, sorted_unique
+from .._runtime.arrays import COMPILED_MIN, sorted_unique
 from .._runtime.memory import give_back_free_memory
 from ..inputs.bounds import column_bounds, column_means
 from .graph import LAZY, ElementGraph, adjacency_csr, cached_on, pairs_from_csr
@@ -253,7 +253,7 @@ def _key_bits(keys: np.ndarray, start: int) -> np.ndarray:
     as one uint64 (the first bit the highest)."""
     if start >= 189:
         return np.zeros(keys.shape[0], dtype=np.uint64)
-    if keys.shape[0] >= GATHER_MIN and keys.flags.c_contiguous:  # one pass on threads
+    if keys.shape[0] >= COMPILED_MIN and keys.flags.c_contiguous:  # one pass on threads
         out = np.empty(keys.shape[0], dtype=np.uint64)  # (10M points: 0.22 -> 0.03 s)
         native.kernel("geometry.key_window")(keys, int(start), out)
         return out
@@ -420,7 +420,7 @@ def _shares(area: np.ndarray, graph: ElementGraph) -> dict:
     """``rebuild["border_shares"]`` of a point graph: each point's share of the perimeter
     of its disk of area ``area`` (the sizes as built), ``2 sqrt(pi a_i) / deg_i``."""
     indptr = graph.indptr
-    if (area.shape[0] >= GATHER_MIN and indptr.dtype == np.int64 and area.dtype == np.float64
+    if (area.shape[0] >= COMPILED_MIN and indptr.dtype == np.int64 and area.dtype == np.float64
             and indptr.flags.c_contiguous and area.flags.c_contiguous):
         out = np.empty(area.shape[0])  # (the same values, one pass on threads: 10M points
         native.kernel("geometry.border_shares")(indptr, area, out)  # 0.22 -> 0.03 s)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._runtime.arrays import COMPILED_MIN
 from ..errors import InvalidCloudError, InvalidMeshError
 
 __all__ = ["check_extent", "column_bounds", "column_means", "finite_rows"]
@@ -16,7 +17,7 @@ __all__ = ["check_extent", "column_bounds", "column_means", "finite_rows"]
 _MAX_COORDINATE = 1e300  # sums of three coordinates stay finite
 _MAX_EXTENT = 1e70  # (edge length)^4 stays finite: areas and normals
 _MIN_EXTENT = 1e-70  # (edge length)^4 stays a normal number
-_COMPILED_MIN = 1 << 16  # rows from which the compiled passes are used
+_COMPILED_MIN = COMPILED_MIN  # rows from which the compiled passes are used
 
 
 def check_extent(lo, hi, where: str = "", what: str = "mesh") -> float:
