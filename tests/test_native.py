@@ -57,7 +57,7 @@ POINT_KERNELS = {"knn_csr", "pca_normals", "pca_linearity", "propagate_signs",
                  "turn_outwards", "float_morton_keys", "distinct_in_order", "order_ties",
                  "point_terms_csr", "point_terms", "combine_weights", "neighbour_mean",
                  "crossing_pairs", "label_sums", "label_scatter", "tree_nodes",
-                 "nearest_in_tree", "sort_keys", "rows_apart"}
+                 "nearest_in_tree", "sort_keys", "rows_apart", "neighbourhood_moments"}
 #: Those of the vertex graph and of the exact assignment (the default on vertices)
 VERTEX_KERNELS = {"vertex_cells", "mesh_edges", "classify_exact", "reclassify_exact"}
 #: Those used on large inputs alone (numpy's own below 65,536 rows): tested on their own
@@ -874,6 +874,82 @@ def test_border_shares_of_a_large_point_graph_are_numpys(monkeypatch, threads):
         got = _shares(area, g)["border_shares"]
     np.testing.assert_array_equal(got, want)
     np.testing.assert_array_equal(ref, want)
+    assert not native.fallbacks
+
+
+def _ball_moments_by_numpy(indptr, indices, pos, pick, rings):
+    """The neighbourhoods' covariances and mean distances by numpy: every (picked
+    element, member) key, sorted, then sums by ``bincount`` in that order."""
+    n = indptr.shape[0] - 1
+    owner, member = np.arange(pick.size), pick.astype(np.int64)
+    for _ in range(rings):
+        count = indptr[member + 1] - indptr[member]
+        start = np.repeat(indptr[member] - np.cumsum(count) + count, count)
+        owner = np.concatenate([owner, np.repeat(owner, count)])
+        member = np.concatenate([member, indices[start + np.arange(start.size)]])
+        key = np.unique(owner * n + member)
+        owner, member = key // n, key % n
+    pts = pos[member]
+    size = np.bincount(owner, minlength=pick.size).astype(np.float64)
+    mean = np.stack([np.bincount(owner, pts[:, j], pick.size) for j in range(3)], 1) / \
+        size[:, None]
+    d = pts - mean[owner]
+    cov = np.empty((pick.size, 3, 3))
+    for i in range(3):
+        for j in range(i, 3):
+            cov[:, i, j] = cov[:, j, i] = np.bincount(owner, d[:, i] * d[:, j], pick.size)
+    cov /= size[:, None, None]
+    radius = np.bincount(owner, np.sqrt(((pts - pos[pick][owner]) ** 2).sum(axis=1)),
+                         pick.size) / np.maximum(size - 1.0, 1.0)
+    return cov, radius
+
+
+@needs_cxx
+@pytest.mark.parametrize("threads", ["1", "3"])
+def test_neighbourhood_moments_are_numpys_sums_in_order(monkeypatch, threads):
+    """Known answer: the noise estimate's neighbourhoods (the elements within one and two
+    graph steps of each picked one) give numpy's covariances and mean distances to the
+    bit, compiled on threads and numba, with 4- and 8-byte neighbours, repeated entries,
+    an isolated element and coordinates over twelve orders of magnitude (where a sum in
+    another order differs)."""
+    from superfacets.method.merges import _plane_residual
+
+    monkeypatch.setattr(native, "fallbacks", {})  # (this test's calls alone)
+    rng = np.random.default_rng(15)
+    n = 40_000
+    deg = rng.integers(0, 14, n)
+    deg[[5, 9]] = 0  # 5: isolated (no one lists it either: below)
+    indptr = np.r_[0, np.cumsum(deg)].astype(np.int64)
+    indices = ((np.repeat(np.arange(n), deg) + rng.integers(-300, 300, deg.sum())) % n)
+    indices[indices == 5] = 6
+    indices[: 40] = indices[0]  # repeats
+    pos = rng.standard_normal((n, 3)) * 10.0 ** rng.integers(-6, 6, (n, 1))
+    pick = np.r_[5, 9, rng.choice(n, 3000, replace=False)].astype(np.int64)
+    kernel = native.kernel("normals.neighbourhood_moments")
+    for idx in (indices.astype(np.int32), indices.astype(np.int64)):
+        for rings in (0, 1, 2):
+            want_cov, want_radius = _ball_moments_by_numpy(indptr, idx.astype(np.int64), pos,
+                                                           pick, rings)
+            cov, radius = np.empty((pick.size, 3, 3)), np.empty(pick.size)
+            ref_cov, ref_radius = np.empty_like(cov), np.empty_like(radius)
+            with monkeypatch.context() as m:
+                m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
+                kernel(indptr, idx, pos, pick, rings, cov, radius)
+            native.reference("normals.neighbourhood_moments")(indptr, idx, pos, pick, rings,
+                                                              ref_cov, ref_radius)
+            for got in ((cov, radius), (ref_cov, ref_radius)):
+                np.testing.assert_array_equal(got[0], want_cov)
+                np.testing.assert_array_equal(got[1], want_radius)
+    assert radius[0] == 0.0 and not cov[0].any()  # the isolated element: itself alone
+    assert radius[1] == 0.0  # (9 lists no one: its ball, read from its own row, is itself)
+
+    class Graph:  # (what _plane_residual reads of the graph)
+        pass
+
+    g = Graph()
+    g.indptr, g.indices, g.positions = indptr, indices.astype(np.int32), pos
+    low, radius = _plane_residual(g, pick, 2)
+    np.testing.assert_array_equal(low, np.linalg.eigvalsh(want_cov)[:, 0])
     assert not native.fallbacks
 
 

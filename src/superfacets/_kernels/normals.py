@@ -4,11 +4,13 @@
 For each point: the covariance of its neighbourhood, its smallest eigenvalue
 by the closed form of a symmetric 3x3 matrix (the trigonometric solution of
 the characteristic cubic), and the eigenvector as the largest cross product of
-two rows of ``C - lambda I``.
+two rows of ``C - lambda I``. And the covariances of graph neighbourhoods that the
+superpoint merges' noise estimate reads (:func:`neighbourhood_moments`).
 """
 
 import math
 
+import numpy as np
 from numba import njit, prange
 
 
@@ -151,3 +153,50 @@ def csr_covariances(indptr, indices, points, out):
         out[i, 1, 1] = a11 / m
         out[i, 1, 2] = out[i, 2, 1] = a12 / m
         out[i, 2, 2] = a22 / m
+
+
+@njit(cache=True)
+def _ball(indptr, indices, first, rings):
+    """The elements within ``rings`` graph steps of ``first``, itself included, ascending."""
+    ball = np.full(1, first, dtype=np.int64)
+    for _ in range(rings):
+        count = ball.shape[0]
+        for t in range(ball.shape[0]):
+            count += indptr[ball[t] + 1] - indptr[ball[t]]
+        grown = np.empty(count, dtype=np.int64)
+        grown[:ball.shape[0]] = ball
+        at = ball.shape[0]
+        for t in range(ball.shape[0]):
+            for e in range(indptr[ball[t]], indptr[ball[t] + 1]):
+                grown[at] = indices[e]
+                at += 1
+        ball = np.unique(grown)
+    return ball
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def neighbourhood_moments(indptr, indices, points, pick, rings, cov, radius):
+    """For each element ``pick[i]``, over the elements within ``rings`` graph steps of it
+    (itself included; each sum in their ascending order, from 0): ``cov[i]`` their
+    covariance (the centred outer products' sum divided by their number) and
+    ``radius[i]`` their mean distance to it (the sum divided by their number less one,
+    at least 1)."""
+    for i in prange(pick.shape[0]):
+        p = pick[i]
+        ball = _ball(indptr, indices, p, rings)
+        size = float(ball.shape[0])
+        a00, a01, a02, a11, a12, a22 = _scatter(points, ball)
+        cov[i, 0, 0] = a00 / size
+        cov[i, 0, 1] = cov[i, 1, 0] = a01 / size
+        cov[i, 0, 2] = cov[i, 2, 0] = a02 / size
+        cov[i, 1, 1] = a11 / size
+        cov[i, 1, 2] = cov[i, 2, 1] = a12 / size
+        cov[i, 2, 2] = a22 / size
+        s = 0.0
+        for t in range(ball.shape[0]):
+            j = ball[t]
+            dx = points[j, 0] - points[p, 0]
+            dy = points[j, 1] - points[p, 1]
+            dz = points[j, 2] - points[p, 2]
+            s += math.sqrt(dx * dx + dy * dy + dz * dz)
+        radius[i] = s / max(size - 1.0, 1.0)

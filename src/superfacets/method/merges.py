@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._runtime.arrays import sorted_unique
+from .._kernels import native
 from .finish import exact_count
 
 __all__ = ["merge_to_count", "flat_merges", "flat_merge_nodes", "noise_variance",
@@ -112,32 +112,13 @@ def neighbourhood_noise(graph, pick: np.ndarray) -> np.ndarray:
 
 def _plane_residual(graph, pick: np.ndarray, rings: int) -> tuple[np.ndarray, np.ndarray]:
     """Per element of ``pick``: the smallest eigenvalue of the covariance of the elements
-    within ``rings`` graph steps of it (itself included), and their mean distance to it."""
-    indptr = np.asarray(graph.indptr, dtype=np.int64)
-    indices = graph.indices  # (4-byte on points: only the entries read are widened)
-    n = indptr.shape[0] - 1
-    owner, member = np.arange(pick.size), pick.astype(np.int64)
-    for _ in range(rings):  # add the neighbours of every member, each once per owner
-        count = indptr[member + 1] - indptr[member]
-        start = np.repeat(indptr[member] - np.cumsum(count) + count, count)
-        owner = np.concatenate([owner, np.repeat(owner, count)])
-        member = np.concatenate([member,
-                                 indices[start + np.arange(start.size)].astype(np.int64)])
-        key = sorted_unique(owner * n + member)
-        owner, member = key // n, key % n
-    pos = np.asarray(graph.positions, dtype=np.float64)
-    pts = pos[member]
-    size = np.bincount(owner, minlength=pick.size).astype(np.float64)
-    mean = np.stack([np.bincount(owner, pts[:, j], pick.size) for j in range(3)], 1) / \
-        size[:, None]
-    d = pts - mean[owner]
-    cov = np.empty((pick.size, 3, 3))
-    for i in range(3):
-        for j in range(i, 3):
-            cov[:, i, j] = cov[:, j, i] = np.bincount(owner, d[:, i] * d[:, j], pick.size)
-    cov /= size[:, None, None]
-    radius = np.bincount(owner, np.sqrt(((pts - pos[pick][owner]) ** 2).sum(axis=1)),
-                         pick.size) / np.maximum(size - 1.0, 1.0)
+    within ``rings`` graph steps of it (itself included), and their mean distance to it
+    (one compiled pass on threads: ``normals.neighbourhood_moments``)."""
+    pick = np.ascontiguousarray(pick, dtype=np.int64)
+    cov, radius = np.empty((pick.size, 3, 3)), np.empty(pick.size)
+    native.kernel("normals.neighbourhood_moments")(
+        np.ascontiguousarray(graph.indptr, dtype=np.int64), np.ascontiguousarray(graph.indices),
+        np.ascontiguousarray(graph.positions, dtype=np.float64), pick, int(rings), cov, radius)
     return np.linalg.eigvalsh(cov)[:, 0], radius
 
 

@@ -102,7 +102,8 @@ inline void smallest_eigenvector(double a00, double a01, double a02, double a11,
     out[2] = z * s;
 }
 
-inline void scatter(const double* pts, const i32* idx, i64 k, double* a) {
+template <class I>
+inline void scatter(const double* pts, const I* idx, i64 k, double* a) {
     for (int t = 0; t < 6; ++t) a[t] = 0.0;
     if (k == 0) return;
     double mx_ = 0.0, my = 0.0, mz = 0.0;
@@ -753,8 +754,62 @@ void border_shares(py::handle indptr_, py::handle area_, py::handle out_) {
     });
 }
 
+// normals.neighbourhood_moments: over the elements within `rings` graph steps of each
+// pick[i] (itself included, ascending: each sum in that order, from 0), their covariance
+// (the scatter divided by their number) and their mean distance to it (the sum divided by
+// their number less one, at least 1). On threads, a ball per element picked.
+void neighbourhood_moments(py::handle indptr_, py::handle indices_, py::handle points_,
+                           py::handle pick_, i64 rings, py::handle cov_, py::handle radius_) {
+    In<i64> indptr(indptr_, "indptr"), pick(pick_, "pick");
+    In<double> points(points_, "points");
+    Out<double> cov(cov_, "cov"), radius(radius_, "radius");
+    if (points.cols != 3 || cov.n != pick.n || radius.n != pick.n || rings < 0 ||
+        py::reinterpret_borrow<py::array>(cov_).size() != 9 * pick.n)
+        throw Mismatch("argument cov");
+    with_index(indices_, "indices", [&](const auto& indices) {
+        py::gil_scoped_release nogil;
+        parallel_for(pick.n, [&](i64 lo, i64 hi) {
+            std::vector<i64> ball;
+            double a[6];
+            for (i64 i = lo; i < hi; ++i) {
+                const i64 p = pick[i];
+                ball.assign(1, p);
+                for (i64 r = 0; r < rings; ++r) {  // every member's neighbours added
+                    const i64 end = static_cast<i64>(ball.size());
+                    for (i64 t = 0; t < end; ++t)
+                        for (i64 e = indptr[ball[t]]; e < indptr[ball[t] + 1]; ++e)
+                            ball.push_back(indices[e]);
+                    std::sort(ball.begin(), ball.end());
+                    ball.erase(std::unique(ball.begin(), ball.end()), ball.end());
+                }
+                const i64 k = static_cast<i64>(ball.size());
+                const double size = static_cast<double>(k);
+                scatter(points.p, ball.data(), k, a);
+                double* c = cov.p + 9 * i;
+                c[0] = a[0] / size;
+                c[1] = c[3] = a[1] / size;
+                c[2] = c[6] = a[2] / size;
+                c[4] = a[3] / size;
+                c[5] = c[7] = a[4] / size;
+                c[8] = a[5] / size;
+                double s = 0.0;
+                const double px = points(p, 0), py_ = points(p, 1), pz = points(p, 2);
+                for (i64 t = 0; t < k; ++t) {
+                    const i64 j = ball[t];
+                    double dx = points(j, 0) - px, dy = points(j, 1) - py_,
+                           dz = points(j, 2) - pz;
+                    s += std::sqrt(dx * dx + dy * dy + dz * dz);
+                }
+                radius[i] = s / mx(size - 1.0, 1.0);
+            }
+        });
+        return 0;
+    });
+}
+
 void bind_points(py::module_& m) {
     m.def("gather", &gather);
+    m.def("neighbourhood_moments", &neighbourhood_moments);
     m.def("border_shares", &border_shares);
     m.def("float_morton_keys", &float_morton_keys);
     m.def("distinct_in_order", &distinct_in_order);
