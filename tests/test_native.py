@@ -474,6 +474,64 @@ def test_center_update_on_threads_gives_numba_centers():
     assert (outs[0] != old).any() and (outs[0] == old).any()
 
 
+def _mean_probed(label, pos, s, rng, half):
+    """Superfacet ``s`` made of 2,000 elements spread over the whole array (x over six
+    orders of magnitude, y = z = 0) and two probes, the array's last elements, placed
+    about its mean so that the mean of one pass in index order has the first probe
+    nearest, and the mean added by the ranges below and from ``half`` (each from 0, then
+    summed), the second."""
+    m = label.shape[0]
+    idx = np.r_[np.sort(rng.choice(m - 2, 2000, replace=False)), m - 2, m - 1]
+    label[idx] = s
+    pos[idx] = 0.0
+    pos[idx[:-2], 0] = rng.standard_normal(2000) * 10.0 ** rng.integers(-3, 4, 2000)
+    for _ in range(20):  # the probes move the means a little: placed again until still
+        x = pos[idx, 0]
+        seq = np.add.accumulate(x)[-1] / x.size  # (accumulate: in order)
+        ranges = np.add.accumulate(x[idx < half])[-1] + np.add.accumulate(x[idx >= half])[-1]
+        mid, h = 0.5 * (seq + ranges / x.size), abs(seq - ranges / x.size) / 8
+        probes = [mid + h, mid - h] if seq > ranges / x.size else [mid - h, mid + h]
+        if pos[m - 2, 0] == probes[0] and pos[m - 1, 0] == probes[1]:
+            break
+        pos[[m - 2, m - 1], 0] = probes
+    assert seq != ranges / x.size
+
+
+@needs_cxx
+@pytest.mark.parametrize("threads", ["1", "2", "3"])
+def test_center_update_sums_in_index_order_on_threads(monkeypatch, threads):
+    """The means of the center update added by ranges of elements on threads: a superfacet
+    within one range, or spanning ranges (its elements scattered over the whole array),
+    gets the sums of one pass in index order, to the bit: numba's centers, with positions
+    over twelve orders of magnitude, a superfacet of zero size (the plain mean) and one
+    whose center the last bit of its mean decides (:func:`_mean_probed`: the ranges'
+    partial sums added together fail it on two threads)."""
+    monkeypatch.setattr(native, "fallbacks", {})  # (this test's calls alone)
+    rng = np.random.default_rng(16)
+    m, k = 400_000, 300
+    label = (np.arange(m) * (k - 20) // m).astype(np.int32)  # runs: most in one range
+    scattered = rng.random(m) < 0.05
+    label[scattered] = rng.integers(0, k - 1, int(scattered.sum()))  # and 19 scattered alone
+    pos = rng.standard_normal((m, 3)) * 10.0 ** rng.integers(-6, 7, (m, 1))
+    sizes = rng.random(m) * 10.0 ** rng.integers(-3, 3, m)
+    sizes[label == 7] = 0.0
+    _mean_probed(label, pos, k - 1, rng, m // 2)
+    sizes[label == k - 1] = 1.0
+    old = np.array([np.flatnonzero(label == s)[0] if s % 2 else -1 for s in range(k)],
+                   dtype=np.int64)
+    old[k - 1] = -1
+    ref = np.empty(k, dtype=np.int64)
+    native.reference("update.update_centers")(label, k, sizes, pos, old, ref)
+    assert ref[k - 1] == m - 2
+    new = np.empty(k, dtype=np.int64)
+    with monkeypatch.context() as mp:
+        mp.setenv("SUPERFACETS_KERNEL_THREADS", threads)
+        native.kernel("update.update_centers")(label, k, sizes, pos, old, new)
+    np.testing.assert_array_equal(new, ref)
+    assert (new != old).sum() > k // 2  # (the means decide: most centers move)
+    assert not native.fallbacks
+
+
 @needs_cxx
 @pytest.mark.parametrize("ptype,dtype", [(np.int32, np.int32), (np.int64, np.int64),
                                          (np.int32, np.int64)])

@@ -349,31 +349,60 @@ void update_centers(py::handle label_, i64 k, py::handle areas_, py::handle cent
     if (c.cols != 3) throw Mismatch("argument centroids");
     py::gil_scoped_release nogil;
     const i64 m = label.n;
-    std::vector<double> sums(3 * k, 0.0), plain(3 * k, 0.0), wsum(k, 0.0);
-    std::vector<i64> cnt(k, 0);
-    const i64 nt = std::max<i64>(1, std::min<i64>(threads(), m / (1 << 16)));
-    // each superfacet's sums on one thread (those of s * nt / k == w on thread w), over its
-    // elements in index order: the sums of one pass over all elements, to the bit
-    auto add = [&](i64 w) {
-        const i64 lo = k * w / nt, hi = k * (w + 1) / nt;
-        for (i64 f = 0; f < m; ++f) {
-            i64 s = label[f];
-            if (s < lo || s >= hi) continue;
-            double a = areas[f];
-            for (int t = 0; t < 3; ++t) {
-                sums[3 * s + t] += a * c(f, t);
-                plain[3 * s + t] += c(f, t);
-            }
-            wsum[s] += a;
-            cnt[s] += 1;
+    // (one thread for superfacets of 16 elements or fewer: the ranges' sums would cost
+    // more than they save)
+    const i64 nt = 16 * k > m ? 1 : std::max<i64>(1, std::min<i64>(threads(), m / (1 << 16)));
+    // The sums over each superfacet's elements in index order, as one pass over all of
+    // them adds them: thread w adds those of the range m w / nt .. m (w + 1) / nt from 0,
+    // each superfacet apart (8 values per superfacet per range). A superfacet whose
+    // elements all lie in one range has its sums then; the others go on from their first
+    // range's sums over their elements in the later ranges, in order (one more pass over
+    // those ranges' labels: few superfacets span two ranges).
+    std::vector<i64> bound(nt + 1);
+    for (i64 w = 0; w <= nt; ++w) bound[w] = m * w / nt;
+    std::vector<std::vector<double>> acc(nt, std::vector<double>(8 * k, 0.0));
+    auto add_to = [&](double* a, i64 f) {  // per superfacet: sums (3), plain (3), wsum, count
+        const double ar = areas[f];
+        for (int t = 0; t < 3; ++t) {
+            a[t] += ar * c(f, t);
+            a[3 + t] += c(f, t);
         }
+        a[6] += ar;
+        a[7] += 1.0;
     };
-    on_threads(nt, add);
+    on_threads(nt, [&](i64 w) {
+        double* A = acc[w].data();
+        for (i64 f = bound[w]; f < bound[w + 1]; ++f) add_to(A + 8 * label[f], f);
+    });
+    std::vector<double>& sum = acc[0];
+    std::vector<i64> first(k, -1);  // each superfacet's first range with elements
+    std::vector<char> span(k, 0);
+    bool spans = false;
+    for (i64 w = 0; w < nt; ++w) {
+        const double* A = acc[w].data();
+        for (i64 s = 0; s < k; ++s) {
+            if (A[8 * s + 7] == 0.0) continue;
+            if (first[s] < 0) {
+                first[s] = w;
+                if (w > 0) std::copy(A + 8 * s, A + 8 * s + 8, sum.data() + 8 * s);
+            } else {
+                span[s] = 1;
+                spans = true;
+            }
+        }
+    }
+    if (spans)  // those spanning ranges: their elements past their first range, in order
+        for (i64 f = bound[1]; f < m; ++f) {
+            const i64 s = label[f];
+            if (span[s] && f >= bound[first[s] + 1]) add_to(sum.data() + 8 * s, f);
+        }
+    std::vector<double> sums(3 * k, 0.0);  // each superfacet's mean
     for (i64 s = 0; s < k; ++s) {
-        if (wsum[s] > 0.0) {
-            for (int t = 0; t < 3; ++t) sums[3 * s + t] /= wsum[s];
-        } else if (cnt[s] > 0) {
-            for (int t = 0; t < 3; ++t) sums[3 * s + t] = plain[3 * s + t] / cnt[s];
+        const double* a = sum.data() + 8 * s;
+        if (a[6] > 0.0) {
+            for (int t = 0; t < 3; ++t) sums[3 * s + t] = a[t] / a[6];
+        } else if (a[7] > 0.0) {  // (the count, exact in a double)
+            for (int t = 0; t < 3; ++t) sums[3 * s + t] = a[3 + t] / a[7];
         }
     }
     std::vector<double> best(k, INF);
