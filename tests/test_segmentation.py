@@ -757,18 +757,3 @@ def test_zero_pages_handed_back_leave_zeros_and_free_the_memory():
     assert a.sum() == a[::4096].shape[0]
     give_back_zero_pages(a[::2])  # not contiguous: nothing done
     assert a.sum() == a[::4096].shape[0]
-
-
-def test_passes_hand_the_allocators_free_memory_back_on_large_graphs(sphere, monkeypatch):
-    # from _TRIM_MIN elements each pass hands back what its temporaries left free on the
-    # allocator's heap (the changed sizes, the center update's sums): the same labels
-    from superfacets.method import passes
-
-    trims = []
-    monkeypatch.setattr(passes, "give_back_free_memory", lambda: trims.append(1))
-    kept = segment(sphere, 20)
-    assert trims == []
-    monkeypatch.setattr(passes, "_TRIM_MIN", 0)
-    again = segment(sphere, 20)
-    assert len(trims) >= again.n_iter  # after each pass's center update at least
-    np.testing.assert_array_equal(again.labels, kept.labels)

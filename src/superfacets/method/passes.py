@@ -21,11 +21,9 @@ import numpy as np
 
 from .._kernels import native
 from .._runtime.arrays import gather
-from .._runtime.memory import give_back_free_memory
 
 __all__ = ["Iteration", "iterate", "update_centers", "hold_small_moves", "final_centers"]
 
-_TRIM_MIN = 1 << 18  # elements from which each pass hands the allocator's free memory back
 
 
 def update_centers(label: np.ndarray, k: int, sizes: np.ndarray, positions: np.ndarray,
@@ -167,16 +165,12 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
         used = centers[:k_now].copy()
         if tol > 0 and prev is not None:
             changed = float(sizes[label != prev].sum()) / total
-            if m >= _TRIM_MIN:  # its temporaries (up to 9 bytes per element) not kept on
-                give_back_free_memory()  # the allocator's heap while the next ones come
             if changed <= tol:
                 converged = by_tol = True
                 break
         moved = update_centers(label, k_now, sizes, positions, used)
         if min_move > 0:
             hold_small_moves(moved, used, positions, min_move)
-        if m >= _TRIM_MIN:  # and the center update's
-            give_back_free_memory()
         n_moved = int((moved != used).sum())
         if bar is not None:
             bar.update(1)
