@@ -86,7 +86,7 @@ class Hooks:
 
     def __init__(self, progress: bool, max_iter: int, kind: str) -> None:
         self.timings: dict[str, float] = {}
-        self.trim = False  # free memory handed back after each stage (large graphs)
+        self.trim = False  # free memory handed back before the passes (large graphs)
         self.bar = None
         if progress:  # one bar: the set-up stages by name, then the passes
             from tqdm import tqdm
@@ -106,8 +106,6 @@ class Hooks:
             self.describe(name)
         t = time.perf_counter()
         yield
-        if self.trim:
-            give_back_free_memory()
         if key is not None:
             dt = time.perf_counter() - t
             self.timings[key] = self.timings.get(key, 0.0) + dt if add else dt
@@ -183,9 +181,9 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
     feats = features_of(source, features) if p.beta > 0 else None
     hooks = Hooks(p.progress, p.max_iter, graph.kind)
     hooks.timings["graph"] = t_graph
-    if graph.n_elements >= _RELEASE_MIN:  # the build's temporaries handed back, and
-        hooks.trim = True  # each stage's after it
-        give_back_free_memory()
+    if graph.n_elements >= _RELEASE_MIN:  # the build's temporaries handed back, and the
+        hooks.trim = True  # weights' and the start's before the passes (not after every
+        give_back_free_memory()  # stage: the next stages fault the pages in again)
     try:
         with hooks.stage("weights", "weights"):
             w, swap_w = weigh(graph, rules, feats, hooks.release_of(graph))
@@ -194,6 +192,8 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
             release = hooks.release_of(graph)  # (again where no coarse run released them)
             if release is not None:
                 release()
+            if hooks.trim:  # the passes start without the build's and the start's freed
+                give_back_free_memory()  # temporaries (the peak of a run on a mesh)
         with hooks.stage("iterations", "superfacets"):
             it = iterate_passes(graph, w, swap_w, init, rules, hooks, replay=replay,
                                 jump_cycles=jump_cycles)
