@@ -57,7 +57,8 @@ POINT_KERNELS = {"knn_csr", "pca_normals", "pca_linearity", "propagate_signs",
                  "turn_outwards", "float_morton_keys", "distinct_in_order", "order_ties",
                  "point_terms_csr", "point_terms", "combine_weights", "neighbour_mean",
                  "crossing_pairs", "label_sums", "label_scatter", "tree_nodes",
-                 "nearest_in_tree", "sort_keys", "rows_apart", "neighbourhood_moments"}
+                 "nearest_in_tree", "sort_keys", "rows_apart", "neighbourhood_moments",
+                 "label_pairs"}
 #: Those of the vertex graph and of the exact assignment (the default on vertices)
 VERTEX_KERNELS = {"vertex_cells", "mesh_edges", "classify_exact", "reclassify_exact"}
 #: Those used on large inputs alone (numpy's own below 65,536 rows): tested on their own
@@ -932,6 +933,31 @@ def test_border_shares_of_a_large_point_graph_are_numpys(monkeypatch, threads):
         got = _shares(area, g)["border_shares"]
     np.testing.assert_array_equal(got, want)
     np.testing.assert_array_equal(ref, want)
+    assert not native.fallbacks
+
+
+@needs_cxx
+@pytest.mark.parametrize("dtype", [np.int32, np.int64])
+def test_label_pairs_are_numpys_unique_with_inverse(monkeypatch, dtype):
+    """Known answer: the superfacet graph's borders (each crossing's two labels, lower
+    first, grouped) are ``np.unique(lo * k + hi, return_inverse=True)``, compiled and
+    numba, with pairs listed either way round, repeated, of equal labels, and none."""
+    monkeypatch.setattr(native, "fallbacks", {})  # (this test's calls alone)
+    rng = np.random.default_rng(18)
+    n, k = 50_000, 700
+    labels = rng.integers(0, k, n)
+    for m in (0, 1, 200_000):
+        pairs = rng.integers(0, n, (m, 2)).astype(dtype)
+        pairs[: m // 10] = pairs[m // 10: 2 * (m // 10)]  # repeats
+        a, b = labels[pairs[:, 0]], labels[pairs[:, 1]]
+        want, want_inv = np.unique(np.minimum(a, b) * k + np.maximum(a, b), return_inverse=True)
+        for fn in (native.kernel("borders.label_pairs"), native.reference("borders.label_pairs")):
+            inv = np.empty(m, dtype=np.int64)
+            key = fn(labels, pairs, k, inv)
+            np.testing.assert_array_equal(key, want)
+            np.testing.assert_array_equal(inv, want_inv)
+            assert key.dtype == np.int64
+    assert (a == b).any() and want.size > 1000
     assert not native.fallbacks
 
 

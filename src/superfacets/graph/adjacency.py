@@ -221,9 +221,10 @@ def superfacet_graph(graph, labels, features=None, *, finer=None) -> SuperfacetG
         feature = np.stack([np.bincount(lab, weights=area_w * f[:, c], minlength=k)
                             for c in range(f.shape[1])], axis=1) / safe[:, None]
     pc, length, cos, concave_el = crossing_adjacencies(g, lab, finer=finer)
-    a, b = lab[pc[:, 0]], lab[pc[:, 1]]
-    lo, hi = np.minimum(a, b), np.maximum(a, b)
-    key, inv = np.unique(lo * k + hi, return_inverse=True)
+    # np.unique(lo * k + hi, return_inverse=True) of each crossing's two labels, by a
+    # counting sort on the lower (borders.label_pairs)
+    inv = np.empty(pc.shape[0], dtype=np.int64)
+    key = native.kernel("borders.label_pairs")(lab, np.ascontiguousarray(pc), k, inv)
     angle = np.arccos(np.clip(cos, -1.0, 1.0))
     e = key.shape[0]
     border = np.bincount(inv, weights=length, minlength=e)

@@ -226,6 +226,57 @@ py::array_t<i64> merge_levels(i64 k, py::handle ea_, py::handle eb_, py::handle 
     return out_a;
 }
 
-void bind_hierarchy(py::module_& m) { m.def("merge_levels", &merge_levels); }
+// borders.label_pairs: the distinct label pairs lo * k + hi of the rows of `pairs`,
+// ascending (returned), and each row's place among them (inv): a counting sort on lo,
+// each lo's distinct hi sorted.
+py::array_t<i64> label_pairs(py::handle labels_, py::handle pairs_, i64 k, py::handle inv_) {
+    In<i64> labels(labels_, "labels");
+    Out<i64> inv(inv_, "inv");
+    if (k < 0) throw Mismatch("argument k");
+    std::vector<i64> key;
+    with_index(pairs_, "pairs", [&](const auto& pairs) {
+        if (pairs.cols != 2 || inv.n != pairs.n) throw Mismatch("argument pairs");
+        py::gil_scoped_release nogil;
+        const i64 m = pairs.n;
+        std::vector<i64> lo(m), hi(m), start(k + 1, 0), order(m);
+        for (i64 c = 0; c < m; ++c) {
+            i64 a = labels[pairs(c, 0)], b = labels[pairs(c, 1)];
+            if (a > b) std::swap(a, b);
+            lo[c] = a;
+            hi[c] = b;
+            ++start[a + 1];
+        }
+        for (i64 s = 0; s < k; ++s) start[s + 1] += start[s];
+        std::vector<i64> fill(start.begin(), start.end() - 1);
+        for (i64 c = 0; c < m; ++c) order[fill[lo[c]]++] = c;
+        std::vector<i64> stamp(k, -1), slot(k), seen;
+        for (i64 s = 0; s < k; ++s) {
+            seen.clear();
+            for (i64 t = start[s]; t < start[s + 1]; ++t) {
+                const i64 h = hi[order[t]];
+                if (stamp[h] != s) {
+                    stamp[h] = s;
+                    seen.push_back(h);
+                }
+            }
+            std::sort(seen.begin(), seen.end());
+            for (i64 h : seen) {
+                slot[h] = static_cast<i64>(key.size());
+                key.push_back(s * k + h);
+            }
+            for (i64 t = start[s]; t < start[s + 1]; ++t) inv[order[t]] = slot[hi[order[t]]];
+        }
+        return 0;
+    });
+    Out<i64> out;
+    auto out_a = fresh(static_cast<i64>(key.size()), out);
+    std::copy(key.begin(), key.end(), out.p);
+    return out_a;
+}
+
+void bind_hierarchy(py::module_& m) {
+    m.def("merge_levels", &merge_levels);
+    m.def("label_pairs", &label_pairs);
+}
 
 }  // namespace sfk
