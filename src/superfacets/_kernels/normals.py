@@ -139,6 +139,17 @@ def pca_linearity(points, neighbors, linearity):
             linearity[i] = 0.0
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _put_covariance(out, i, a, m):
+    """``out[i]``: the scatter ``a`` (:func:`_scatter`'s six sums) divided by ``m``."""
+    out[i, 0, 0] = a[0] / m
+    out[i, 0, 1] = out[i, 1, 0] = a[1] / m
+    out[i, 0, 2] = out[i, 2, 0] = a[2] / m
+    out[i, 1, 1] = a[3] / m
+    out[i, 1, 2] = out[i, 2, 1] = a[4] / m
+    out[i, 2, 2] = a[5] / m
+
+
 @njit(cache=True, error_model="numpy", parallel=True)
 def csr_covariances(indptr, indices, points, out):
     """``out[i]``: the 3x3 covariance of the CSR neighbours of point ``i`` (zeros for none)."""
@@ -146,13 +157,7 @@ def csr_covariances(indptr, indices, points, out):
     for i in prange(n):
         idx = indices[indptr[i]:indptr[i + 1]]
         m = max(idx.shape[0], 1)
-        a00, a01, a02, a11, a12, a22 = _scatter(points, idx)
-        out[i, 0, 0] = a00 / m
-        out[i, 0, 1] = out[i, 1, 0] = a01 / m
-        out[i, 0, 2] = out[i, 2, 0] = a02 / m
-        out[i, 1, 1] = a11 / m
-        out[i, 1, 2] = out[i, 2, 1] = a12 / m
-        out[i, 2, 2] = a22 / m
+        _put_covariance(out, i, _scatter(points, idx), m)
 
 
 @njit(cache=True)
@@ -185,13 +190,7 @@ def neighbourhood_moments(indptr, indices, points, pick, rings, cov, radius):
         p = pick[i]
         ball = _ball(indptr, indices, p, rings)
         size = float(ball.shape[0])
-        a00, a01, a02, a11, a12, a22 = _scatter(points, ball)
-        cov[i, 0, 0] = a00 / size
-        cov[i, 0, 1] = cov[i, 1, 0] = a01 / size
-        cov[i, 0, 2] = cov[i, 2, 0] = a02 / size
-        cov[i, 1, 1] = a11 / size
-        cov[i, 1, 2] = cov[i, 2, 1] = a12 / size
-        cov[i, 2, 2] = a22 / size
+        _put_covariance(cov, i, _scatter(points, ball), size)
         s = 0.0
         for t in range(ball.shape[0]):
             j = ball[t]
