@@ -184,7 +184,9 @@ inline int threads() {
 }
 
 // f(lo, hi) over ranges of 0..n on threads (each element on its own: any split gives
-// the same arrays). Small loops run on the calling thread.
+// the same arrays). Small loops run on the calling thread. The ranges, eight a thread
+// (of 4,096 elements at least), are taken in turn: a thread the machine slows down, or
+// whose elements cost more, takes fewer of them.
 template <class F>
 void parallel_for(i64 n, F f) {
     const i64 t = std::min<i64>(threads(), n / 4096);
@@ -192,9 +194,14 @@ void parallel_for(i64 n, F f) {
         f(0, n);
         return;
     }
+    const i64 parts = std::min<i64>(8 * t, n / 4096);
+    std::atomic<i64> next{0};
+    auto work = [&]() {
+        for (i64 c = next++; c < parts; c = next++) f(n * c / parts, n * (c + 1) / parts);
+    };
     std::vector<std::thread> pool;
-    for (i64 w = 1; w < t; ++w) pool.emplace_back(f, n * w / t, n * (w + 1) / t);
-    f(0, n / t);
+    for (i64 w = 1; w < t; ++w) pool.emplace_back(work);
+    work();
     for (auto& th : pool) th.join();
 }
 
