@@ -63,7 +63,7 @@ POINT_KERNELS = {"knn_csr", "pca_normals", "pca_linearity", "propagate_signs",
 VERTEX_KERNELS = {"vertex_cells", "mesh_edges", "classify_exact", "reclassify_exact"}
 #: Those used on large inputs alone (numpy's own below 65,536 rows): tested on their own
 LARGE_KERNELS = {"column_bounds", "finite_rows", "gather", "border_shares", "key_window",
-                 "column_means"}
+                 "column_means", "nearest_row"}
 
 
 #: Scratch arguments of the numba kernels that the compiled ones do not use (their heaps
@@ -958,6 +958,38 @@ def test_label_pairs_are_numpys_unique_with_inverse(monkeypatch, dtype):
             np.testing.assert_array_equal(inv, want_inv)
             assert key.dtype == np.int64
     assert (a == b).any() and want.size > 1000
+    assert not native.fallbacks
+
+
+@needs_cxx
+@pytest.mark.parametrize("threads", ["1", "3"])
+def test_nearest_row_of_a_large_array_is_numpys_argmin(monkeypatch, threads):
+    """Known answer: the first center's row (the element nearest the centroid) by one pass
+    on threads is ``np.argmin`` of numpy's squared distances, compiled and numba: the
+    first of equal distances, where they lie in different threads' ranges too, and
+    numpy's first NaN where a distance is NaN."""
+    from superfacets.inputs.bounds import nearest_row
+
+    monkeypatch.setattr(native, "fallbacks", {})  # (this test's calls alone)
+    rng = np.random.default_rng(19)
+    n = 300_000
+    a = rng.integers(-3, 4, (n, 3)).astype(np.float64)  # many equal distances
+    point = np.array([0.25, -0.5, 0.0])
+    a[[n - 5, n // 2 + 7, 123_456]] = point  # three at distance 0: the first wins
+    cases = [(a, point, 123_456)]
+    b = rng.standard_normal((n, 3)) * 10.0 ** rng.integers(-6, 6, (n, 1))
+    cases.append((b, b.mean(axis=0), None))
+    c = b.copy()
+    c[[200_000, 250_000], 1] = np.nan
+    cases.append((c, b.mean(axis=0), 200_000))  # numpy's argmin: the first NaN
+    for arr, p, want in cases:
+        expected = int(np.argmin(((arr - p) ** 2).sum(axis=1)))
+        assert want is None or expected == want
+        with monkeypatch.context() as m:
+            m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
+            assert nearest_row(arr, p) == expected
+        ref = native.reference("columns.nearest_row")(arr, p)
+        assert ref == (-1 if np.isnan(arr).any() else expected)
     assert not native.fallbacks
 
 

@@ -61,3 +61,23 @@ def gather(values, index, out):
         else:
             out[i] = values[j]
     return bad
+
+
+@njit(cache=True, nogil=True)
+def nearest_row(a, point):
+    """The first row ``r`` of the ``(n, 3)`` ``a`` of least ``(dx dx + dy dy) + dz dz``
+    to ``point`` (``np.argmin(((a - point) ** 2).sum(axis=1))``); -1 where a distance
+    is NaN (numpy's argmin then takes the first NaN)."""
+    best = np.inf
+    at = -1
+    for r in range(a.shape[0]):
+        dx = a[r, 0] - point[0]
+        dy = a[r, 1] - point[1]
+        dz = a[r, 2] - point[2]
+        d = dx * dx + dy * dy + dz * dz
+        if d != d:
+            return -1
+        if d < best or at < 0:
+            best = d
+            at = r
+    return at

@@ -16,6 +16,7 @@ import numpy as np
 
 from .._kernels import native
 from ..elements.inputs import as_element_graph
+from ..inputs.bounds import nearest_row
 from .expansion import Workspace, bucket_width, with_room
 from .params import DEFAULTS, INITS, check_choice, check_n_segments
 from .passes import update_centers
@@ -43,8 +44,7 @@ def first_center(graph) -> int:
         An element index.
     """
     g = as_element_graph(graph)
-    d2 = ((g.positions - g.centroid) ** 2).sum(axis=1)
-    return int(np.argmin(d2))
+    return nearest_row(g.positions, g.centroid)
 
 
 def _pieces(g) -> tuple[np.ndarray, int]:

@@ -807,8 +807,51 @@ void neighbourhood_moments(py::handle indptr_, py::handle indices_, py::handle p
     });
 }
 
+// columns.nearest_row: the first row of least (dx dx + dy dy) + dz dz to `point` (numpy's
+// argmin of the squared distances), each range of rows on a thread, the ranges' bests
+// taken in order (a later one only if strictly nearer); -1 where a distance is NaN
+i64 nearest_row(py::handle a_, py::handle point_) {
+    In<double> a(a_, "a"), point(point_, "point");
+    if (a.cols != 3 || point.n != 3 || a.n < 1) throw Mismatch("argument a");
+    py::gil_scoped_release nogil;
+    const double px = point[0], py_ = point[1], pz = point[2];
+    const i64 n = a.n, T = std::max<i64>(1, std::min<i64>(threads(), n / 65536));
+    std::vector<double> best(T, INF);
+    std::vector<i64> at(T, -1);
+    std::vector<char> nan(T, 0);
+    on_threads(T, [&](i64 t) {
+        double b = INF;
+        i64 w = -1;
+        for (i64 r = n * t / T; r < n * (t + 1) / T; ++r) {
+            const double dx = a(r, 0) - px, dy = a(r, 1) - py_, dz = a(r, 2) - pz;
+            const double d = dx * dx + dy * dy + dz * dz;
+            if (d != d) {
+                nan[t] = 1;
+                return;
+            }
+            if (d < b || w < 0) {
+                b = d;
+                w = r;
+            }
+        }
+        best[t] = b;
+        at[t] = w;
+    });
+    i64 w = -1;
+    double b = INF;
+    for (i64 t = 0; t < T; ++t) {
+        if (nan[t]) return -1;
+        if (at[t] >= 0 && (w < 0 || best[t] < b)) {
+            b = best[t];
+            w = at[t];
+        }
+    }
+    return w;
+}
+
 void bind_points(py::module_& m) {
     m.def("gather", &gather);
+    m.def("nearest_row", &nearest_row);
     m.def("neighbourhood_moments", &neighbourhood_moments);
     m.def("border_shares", &border_shares);
     m.def("float_morton_keys", &float_morton_keys);
