@@ -25,7 +25,6 @@ from .._runtime.arrays import gather
 __all__ = ["Iteration", "iterate", "update_centers", "hold_small_moves", "final_centers"]
 
 
-
 def update_centers(label: np.ndarray, k: int, sizes: np.ndarray, positions: np.ndarray,
                    old_centers: np.ndarray) -> np.ndarray:
     """Center update (paper section 3.1, step 3).
