@@ -193,7 +193,7 @@ def test_the_tiles_sums_add_up_to_the_whole_clouds():
     from superfacets.elements.points import point_graph
     from superfacets.method.merges import merge_to_count
     from superfacets.method.stages import resolve_rules
-    from superfacets.scale.tile_merges import merge_names, tile_merge_stats
+    from superfacets.scale.tile_merges import _outer_sums, merge_names, tile_merge_stats
 
     pts, _ = _room(6)
     cloud = PointCloud(pts)
@@ -211,11 +211,16 @@ def test_the_tiles_sums_add_up_to_the_whole_clouds():
         for h in halves:
             total[np.searchsorted(names, h["names"])] += h[field]
         np.testing.assert_allclose(total, whole[field], rtol=1e-12)
-    edges = np.concatenate([h["edges"] for h in halves])
+    # the adjacencies inside each core summed there, those leaving a core by the driver
+    # (named by the stitched labels: here the whole cloud's)
+    sums = [*halves, _outer_sums(halves, names[fine])]
+    assert all(h["outer_rows"].shape[0] > 0 for h in halves)
+    assert whole["outer_rows"].shape[0] == 0
+    edges = np.concatenate([h["edges"] for h in sums])
     assert len({tuple(e) for e in edges}) < len(edges)  # pairs summed by both halves
     key = lambda e: e[:, 0] * 10_000 + e[:, 1]  # noqa: E731
     border = np.bincount(np.searchsorted(key(whole["edges"]), key(edges)),
-                         weights=np.concatenate([h["border"] for h in halves]))
+                         weights=np.concatenate([h["border"] for h in sums]))
     np.testing.assert_allclose(border, whole["border"], rtol=1e-12)
 
     rules = replace(resolve_rules(g, resolve(n_segments=40, density=0.0)), target=40)
@@ -224,8 +229,41 @@ def test_the_tiles_sums_add_up_to_the_whole_clouds():
     assert fewest == 40
     tiled = merged[np.searchsorted(got, names[fine])]
     assert np.unique(one_run * 10_000 + tiled).size == 40  # the same partition
-    split = merge_names(halves, 40, DEFAULTS.alpha, DEFAULTS.eta_convex)
+    split = merge_names(halves, 40, DEFAULTS.alpha, DEFAULTS.eta_convex, labels=names[fine])
     assert np.unique(split[1]).size == 40
+
+
+def test_a_border_disagreement_never_merges_superpoints_that_do_not_touch():
+    """A tile's label of a point in another tile's core can differ from the stitched one
+    (the run's disagreements); the pairs such points make are named by the stitched
+    labels, so no merged superpoint is left in two pieces."""
+    from superfacets.elements.points import point_graph
+    from superfacets.method.connectivity import label_components
+    from superfacets.scale.tile_merges import merge_names, tile_merge_stats
+
+    pts, _ = _room(6, noise=0.0)  # one flat floor: the flat merges join any two neighbours
+    cloud = PointCloud(pts)
+    pe = point_graph(cloud)
+    g = pe.graph
+    fine = np.zeros(g.n_elements, dtype=np.int64)
+    fine[pe.index] = segment(cloud, 200, merge_from=1).labels
+    names = 7 * np.arange(200) + 3
+    rows = np.arange(g.n_elements)
+    east = g.positions[:, 0] > 0.43
+    # the east tile sees the west points along its border as a far superpoint's
+    ring = ~east & (g.positions[:, 0] > 0.40)
+    floor = np.flatnonzero(np.abs(g.positions[:, 2]) < 1e-9)
+    far = int(fine[floor[np.argmin(g.positions[floor, 0] + g.positions[floor, 1])]])
+    assert not east[fine == far].any()  # far in the west, away from the border
+    seen = fine.copy()
+    seen[ring] = far
+    tiles = [tile_merge_stats(g, seen, names, east, rows, 4096),
+             tile_merge_stats(g, fine, names, ~east, rows, 4096)]
+    for target in (150, 100, 60, 30):
+        got, merged, _, _ = merge_names(tiles, target, DEFAULTS.alpha, DEFAULTS.eta_convex,
+                                        labels=names[fine])
+        lab = np.searchsorted(got, merged[np.searchsorted(got, names[fine])])
+        assert np.unique(label_components(g, lab)).size == np.unique(lab).size, target
 
 
 def test_a_tiled_run_merges_points_only():

@@ -11,7 +11,11 @@ read, on its own labels (:func:`tile_merge_stats`, in the labels phase):
 - per pair of adjacent superpoints, over the point graph's adjacencies that cross from
   one to the other: the border length, and the border-weighted angle and concave
   share of the normals (each adjacency counted by one tile only: the one whose core
-  holds its point of lower row);
+  holds its point of lower row); an adjacency whose other point lies outside that core
+  is sent as it is (the rows of its points), and this process names its two ends by
+  the stitched labels: another tile labels that point, and where the two tiles
+  disagree on it, this tile's label would pair superpoints that do not touch, whose
+  merge would leave a superpoint in two pieces (seen: 2 in 4 clouds of 5M points);
 - the noise: the smallest eigenvalue of the neighbourhoods of some core points,
   evenly spaced (:func:`superfacets.method.merges.neighbourhood_noise`).
 
@@ -20,7 +24,7 @@ samples), builds the superpoint graph, and merges as one run does
 (:func:`merge_names`): the flat merges up to the noise (the median of the tiles'
 eigenvalues), then Ward's merges down to the count. An element two tiles labelled
 differently (the run's ``disagreements``) counts under its own tile's label in that
-tile's sums: the sums are those of the stitched labels up to those few elements.
+tile's point sums: those are the stitched labels' up to those few elements.
 """
 
 from __future__ import annotations
@@ -63,7 +67,11 @@ def tile_merge_stats(graph, labels: np.ndarray, names: np.ndarray, core: np.ndar
         ``area`` (K',), ``area_mean`` (K', 3): the superpoints with core elements;
         ``edges`` (E, 2) names, lower first, and per edge ``border``, ``angle`` and
         ``concave`` (border-weighted sums), ``crossings``, ``angle_sum`` and
-        ``concave_sum`` (plain sums); ``noise`` (n_noise',) float64.
+        ``concave_sum`` (plain sums), of the adjacencies with both ends in the core;
+        those with one end outside it one by one: ``outer_rows`` (F, 2) int64, the rows
+        of their ends, ``outer_names`` (F, 2) this tile's names of them, and
+        ``outer_length``, ``outer_angle``, ``outer_concave`` (F,); ``noise``
+        (n_noise',) float64.
 
     Raises
     ------
@@ -111,25 +119,56 @@ def tile_merge_stats(graph, labels: np.ndarray, names: np.ndarray, core: np.ndar
     pc, length, cos, concave = crossing_adjacencies(graph, lab)
     i, j = pc[:, 0], pc[:, 1]
     mine = (core[i] & (rows[i] < rows[j])) | (core[j] & (rows[j] < rows[i]))
-    a, b = names[lab[i[mine]]], names[lab[j[mine]]]
-    length, cos, concave = length[mine], cos[mine], concave[mine].astype(np.float64)
-    key, inv = np.unique(np.stack([np.minimum(a, b), np.maximum(a, b)], 1), axis=0,
-                         return_inverse=True)
+    angle = np.arccos(np.clip(cos, -1.0, 1.0))
+    concave = concave.astype(np.float64)
+    # an adjacency with an end outside the core: that end's label is another tile's, and
+    # this tile's may differ (a border disagreement), so it goes raw, by rows, named by
+    # the stitched labels in the driver (a pair it names must touch: no merged piece cut)
+    inner = mine & core[i] & core[j]
+    outer = mine & ~inner
+    edges = _pair_sums(names[lab[i[inner]]], names[lab[j[inner]]], length[inner],
+                       angle[inner], concave[inner])
+    pick = at[np.unique(np.linspace(0, at.size - 1, min(at.size, n_noise)).astype(np.int64))] \
+        if n_noise > 0 and at.size else at[:0]
+    return dict(names=names[used], count=count, mean=mean, scatter=scatter.reshape(k, 3, 3),
+                area=area, area_mean=area_mean, **edges,
+                outer_rows=np.stack([rows[i[outer]], rows[j[outer]]], 1).astype(np.int64),
+                outer_names=np.stack([names[lab[i[outer]]], names[lab[j[outer]]]], 1),
+                outer_length=length[outer], outer_angle=angle[outer],
+                outer_concave=concave[outer], noise=neighbourhood_noise(graph, pick))
+
+
+def _pair_sums(a: np.ndarray, b: np.ndarray, length: np.ndarray, angle: np.ndarray,
+               concave: np.ndarray) -> dict:
+    """Adjacencies between superpoints ``a`` and ``b`` (names, one per adjacency, with its
+    border length, angle and concave share) summed per pair: ``edges`` (E, 2), lower
+    name first, and the sums :func:`tile_merge_stats` returns."""
+    key, inv = np.unique(np.stack([np.minimum(a, b), np.maximum(a, b)], 1).reshape(-1, 2),
+                         axis=0, return_inverse=True)
     inv = inv.reshape(-1)
     e = key.shape[0]
-    angle = np.arccos(np.clip(cos, -1.0, 1.0))
 
     def add(w):
         return np.bincount(inv, weights=w, minlength=e)
 
-    pick = at[np.unique(np.linspace(0, at.size - 1, min(at.size, n_noise)).astype(np.int64))] \
-        if n_noise > 0 and at.size else at[:0]
-    return dict(names=names[used], count=count, mean=mean, scatter=scatter.reshape(k, 3, 3),
-                area=area, area_mean=area_mean, edges=key.reshape(e, 2), border=add(length),
+    return dict(edges=key.reshape(e, 2).astype(np.int64), border=add(length),
                 angle=add(length * angle), concave=add(length * concave),
                 crossings=np.bincount(inv, minlength=e).astype(np.float64),
-                angle_sum=add(angle), concave_sum=add(concave),
-                noise=neighbourhood_noise(graph, pick))
+                angle_sum=add(angle), concave_sum=add(concave))
+
+
+def _outer_sums(stats: list[dict], labels: np.ndarray | None) -> dict:
+    """The tiles' adjacencies with an end outside their core, named by the stitched
+    ``labels`` (center rows, -1 invalid; None: by each tile's own labels) and summed per
+    pair of distinct superpoints (:func:`_pair_sums`)."""
+    rows = np.concatenate([s["outer_rows"] for s in stats]).reshape(-1, 2)
+    pair = labels[rows] if labels is not None else \
+        np.concatenate([s["outer_names"] for s in stats]).reshape(-1, 2)
+    ok = (pair[:, 0] != pair[:, 1]) & (pair >= 0).all(axis=1)
+    part = {f: np.concatenate([s[f"outer_{f}"] for s in stats])[ok]
+            for f in ("length", "angle", "concave")}
+    return _pair_sums(pair[ok, 0], pair[ok, 1], part["length"], part["angle"],
+                      part["concave"])
 
 
 def one_position_stats(inp, valid: np.ndarray, name: int, merging: tuple) -> dict:
@@ -147,7 +186,10 @@ def one_position_stats(inp, valid: np.ndarray, name: int, merging: tuple) -> dic
                 count=np.full(k, float(own.size)), mean=at, scatter=np.zeros((k, 3, 3)),
                 area=np.full(k, float(own.size)), area_mean=at,
                 edges=np.zeros((0, 2), dtype=np.int64), border=none, angle=none,
-                concave=none, crossings=none, angle_sum=none, concave_sum=none, noise=none)
+                concave=none, crossings=none, angle_sum=none, concave_sum=none, noise=none,
+                outer_rows=np.zeros((0, 2), dtype=np.int64),
+                outer_names=np.zeros((0, 2), dtype=np.int64), outer_length=none,
+                outer_angle=none, outer_concave=none)
 
 
 def tiled_merge_from(params, kind: str) -> int:
@@ -178,7 +220,8 @@ def merged_labels(labels: np.ndarray, stats: list, target: int, params) -> np.nd
     """A tiled run's stitched labels (center rows; -1 invalid) merged to ``target`` from
     the tiles' sums (:func:`merge_names`), a warning where the input's separate pieces
     are more; a label only a repair made (none of the tiles' sums name it) is kept."""
-    names, merged, _, fewest = merge_names(stats, target, params.alpha, params.eta_convex)
+    names, merged, _, fewest = merge_names(stats, target, params.alpha, params.eta_convex,
+                                           labels=labels)
     if fewest > target:
         import warnings
 
@@ -193,8 +236,8 @@ def merged_labels(labels: np.ndarray, stats: list, target: int, params) -> np.nd
     return out
 
 
-def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float
-                ) -> tuple[np.ndarray, np.ndarray, int, int]:
+def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float, *,
+                labels: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, int, int]:
     """Merge a tiled run's superpoints down to ``target`` from the tiles' sums
     (:func:`tile_merge_stats`): the flat merges, then Ward's merges, as
     :func:`superfacets.method.merges.merge_to_count` does in one run.
@@ -207,6 +250,11 @@ def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float
         The count asked for, ``>= 1``.
     alpha, eta_convex : float
         The crease factor of Ward's cost (paper eqs. 2-3).
+    labels : (n_rows,) int64 ndarray, optional
+        The stitched labels (center rows, -1 invalid): they name the ends of the
+        adjacencies a tile saw leave its core, so that only superpoints that touch in the
+        stitched labels merge (a tile's own label of an element in another's core can
+        differ). Default: each tile's own labels.
 
     Returns
     -------
@@ -257,10 +305,11 @@ def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float
     area = _sum(node, stats, "area", k)
     area_mean = _sum(node, stats, "area_mean", k, weight="area") / \
         np.where(area > 0, area, 1.0)[:, None]
-    edges = [np.searchsorted(names, s["edges"]) for s in stats]
-    keep = [np.isin(s["edges"], names).all(axis=1) for s in stats]  # (names no core holds)
+    sums = [*stats, _outer_sums(stats, labels)] if "outer_rows" in stats[0] else stats
+    edges = [np.searchsorted(names, s["edges"]) for s in sums]
+    keep = [np.isin(s["edges"], names).all(axis=1) for s in sums]  # (names no core holds)
     ea = np.concatenate([e[ok] for e, ok in zip(edges, keep)]).reshape(-1, 2)
-    parts = {f: np.concatenate([s[f][ok] for s, ok in zip(stats, keep)])
+    parts = {f: np.concatenate([s[f][ok] for s, ok in zip(sums, keep)])
              for f in ("border", "angle", "concave", "crossings", "angle_sum", "concave_sum")}
     noise = np.concatenate([s["noise"] for s in stats])
     max_rise = FLAT_NOISE * max(float(np.median(noise)), 0.0) if noise.size else 0.0
