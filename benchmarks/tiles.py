@@ -2,7 +2,7 @@
 
 Usage: python benchmarks/tiles.py [--mesh-id 281] [--subdivide 2 3] [--points 1000000]
        [-k 2000] [--tiles 8] [--workers 2] [--halo 3] [--no-mesh] [--tiled-only]
-       [--seeds 0 1 2]
+       [--seeds 0 1 2] [--fine] [--rotations N]
        python benchmarks/tiles.py --compare [-k 600] [--tiles 8] [--halo 3] [--paper]
        [--times 1] [--refine 1] [--compare-points N] [--merge-from F]
 
@@ -30,8 +30,15 @@ connected piece of the whole input's graph; the stitching's promise is 0),
 the border disagreements, wall time and peak resident memory (the single
 run's process; the largest of the tiles' tasks).
 
-``--seeds``: one cloud per seed of the sampling (default 0), to tell the spread of
-the tiled run's difference from a bias. ``--no-mesh``: only the point rows.
+``--fine`` (clouds merged to the count): also the superpoints before the merges, the UE
+of each run's and of one run's merges (on the whole graph) of the tiled run's: whether a
+difference comes from the superpoints the tiles make or from the merges of their sums
+(the single run's peak then includes saving its superpoints). ``--rotations N``
+(points): also one run on the same cloud turned by N random rotations, in a new process
+each: the spread of one run's error on the same points (the UE, each point once, does
+not change under a rotation). ``--seeds``: one cloud per seed of the sampling (default
+0), to tell the spread of the tiled run's difference from a bias. ``--no-mesh``: only the
+point rows.
 ``--tiled-only``: no single run (for a cloud larger than this machine holds): the UE
 counts each point once (as ``superfacets experiment --elements points``), and "cut by a
 border" is checked tile by tile, without the whole graph: each tile's box, grown by
@@ -43,6 +50,7 @@ of that graph (the box's graph is the whole cloud's away from the box edge).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import subprocess
@@ -59,6 +67,16 @@ import numpy as np
 from superfacets import segment
 from superfacets.io.regions import RegionReader
 src, k, out = sys.argv[1], int(sys.argv[2]), sys.argv[3]
+if len(sys.argv) > 4:  # --fine: the superpoints before the merges to the count, saved
+    import superfacets.method.pipeline as pl
+    built, merge = {}, pl.merge_to_count
+    def _built(*a, _build=pl.build_graph, **kw):
+        built["source"] = (got := _build(*a, **kw))[0]
+        return got
+    def _merge(graph, labels, rules):
+        np.save(sys.argv[4], built["source"].to_rows(labels))
+        return merge(graph, labels, rules)
+    pl.build_graph, pl.merge_to_count = _built, _merge
 if src.endswith(".npy"):
     data = np.load(src)
 else:
@@ -116,15 +134,17 @@ def _row(name, n, data, gt, path, k, a, folder):
     from superfacets.method.connectivity import label_components
     from superfacets.scale.runner.tiles import segment_tiled
 
-    out = folder / "single.npy"
+    out, fine = folder / "single.npy", folder / "single_fine.npy"
     t = time.perf_counter()
-    p = subprocess.run([sys.executable, "-c", _SINGLE, str(path), str(k), str(out)],
+    p = subprocess.run([sys.executable, "-c", _SINGLE, str(path), str(k), str(out)]
+                       + ([str(fine)] if a.fine else []),
                        capture_output=True, text=True, check=True)
     single = json.loads(p.stdout.strip().splitlines()[-1])
     single["wall"] = time.perf_counter() - t
     s_labels = np.load(out)
     t = time.perf_counter()
-    tiled = segment_tiled(path, k, tiles=a.tiles, workers=a.workers, halo=a.halo)
+    with _tiled_fine(a.fine) as t_fine:
+        tiled = segment_tiled(path, k, tiles=a.tiles, workers=a.workers, halo=a.halo)
     wall = time.perf_counter() - t
     src = _graph(np.load(data) if isinstance(data, Path) else data)  # (a cloud: loaded now)
     g = src.graph
@@ -151,6 +171,79 @@ def _row(name, n, data, gt, path, k, a, folder):
           f"({100 * (ue_t / ue_s - 1):+.1f} %) | {cut} | {tiled.disagreements} | "
           f"{single['wall']:.1f} / {wall:.1f} | {single['peak_mib']:.0f} / {peak:.0f} |",
           flush=True)
+    if a.fine and t_fine:  # the whole graph again, alone (50M points: the memory)
+        del src, g, pieces
+        _fine_row(data, gt, np.load(fine), t_fine[0], k)
+    if a.rotations and isinstance(data, Path):
+        _rotated_rows(data, gt, k, a.rotations, folder)
+
+
+@contextlib.contextmanager
+def _tiled_fine(on: bool):
+    """``--fine``: the tiled run's stitched superpoints before its merges to the count,
+    kept (the driver's call of ``merged_labels``, wrapped while the run lasts)."""
+    import superfacets.scale.runner.tiles as runner
+
+    kept, merged = [], runner.merged_labels
+
+    def keep(labels, *rest):
+        kept.append(labels.copy())
+        return merged(labels, *rest)
+
+    if on:
+        runner.merged_labels = keep
+    try:
+        yield kept
+    finally:
+        runner.merged_labels = merged
+
+
+def _fine_row(data, gt, one_fine, tiled_fine, k) -> None:
+    """``--fine``: where a tiled run's error differs from one run's, before or in the
+    merges to the count: the UE of each run's superpoints before the merges, and of one
+    run's merges (on the whole graph) of the tiled run's superpoints."""
+    from unittest import mock
+
+    from superfacets.evaluation.metrics import undersegmentation_error
+    from superfacets.method.merges import merge_to_count
+    from superfacets.method.params import resolve
+    from superfacets.method.stages import build_graph, resolve_rules
+
+    with mock.patch("superfacets._runtime.memory.check_memory", lambda *a, **kw: None):
+        source, graph, p = build_graph(np.load(data) if isinstance(data, Path) else data,
+                                       resolve(n_segments=k))
+    first = source.first_rows(np.arange(graph.n_elements))  # each element's first row
+
+    def ue(element_labels):
+        return undersegmentation_error(graph, element_labels, gt[first])
+
+    _, tiled = np.unique(tiled_fine[first], return_inverse=True)
+    merged, _ = merge_to_count(graph, tiled.astype(np.int64), resolve_rules(graph, p))
+    print(f"  before the merges ({int(one_fine.max()) + 1} / {int(tiled.max()) + 1} "
+          f"superpoints): UE {ue(one_fine[first]):.4f} / {ue(tiled):.4f}; one run's merges "
+          f"of the tiled superpoints: UE {ue(merged):.4f}", flush=True)
+
+
+def _rotated_rows(path: Path, gt, k: int, n: int, folder: Path) -> None:
+    """``--rotations N``: one run (a new process) on the same cloud turned by ``N`` random
+    rotations (scipy's ``Rotation.random(random_state=s)``, s = 0 .. N-1): how much one
+    run's error moves on the same points in another orientation (the UE does not
+    change under a rotation; the run's start and its orders of the points do)."""
+    from scipy.spatial.transform import Rotation
+
+    ues = [_equal_weight_ue(np.load(folder / "single.npy"), gt)]
+    for s in range(n):
+        turned, out = folder / "turned.npy", folder / "turned_labels.npy"
+        np.save(turned, np.load(path) @ Rotation.random(random_state=s).as_matrix().T)
+        p = subprocess.run([sys.executable, "-c", _SINGLE, str(turned), str(k), str(out)],
+                           capture_output=True, text=True, check=True)
+        sec = json.loads(p.stdout.strip().splitlines()[-1])["seconds"]
+        ues.append(_equal_weight_ue(np.load(out), gt))
+        print(f"  one run, the cloud turned (rotation {s}): UE each point once {ues[-1]:.4f} "
+              f"({sec:.0f} s)", flush=True)
+        turned.unlink()
+    print(f"  one run over the {n + 1} orientations: UE each point once {np.mean(ues):.4f} "
+          f"(from {min(ues):.4f} to {max(ues):.4f})", flush=True)
 
 
 def _equal_weight_ue(labels, gt, tau=0.05) -> float:
@@ -304,6 +397,11 @@ def main() -> None:
     ap.add_argument("--no-mesh", action="store_true", help="only the point rows")
     ap.add_argument("--seeds", type=int, nargs="+", default=[0],
                     help="the points' sampling: one cloud per seed")
+    ap.add_argument("--fine", action="store_true",
+                    help="also the superpoints before the merges to the count: the UE of "
+                         "each run's, and of one run's merges of the tiled run's")
+    ap.add_argument("--rotations", type=int, default=0, metavar="N",
+                    help="points: also one run on the cloud turned by N random rotations")
     ap.add_argument("--tiled-only", action="store_true",
                     help="points only, no single run (equal-weight UE, cut checked per tile)")
     a = ap.parse_args()

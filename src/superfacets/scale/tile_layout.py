@@ -363,3 +363,26 @@ def trim_centers(positions: np.ndarray, k: int) -> np.ndarray:
                 break
         keep[idx[gone]] = False
     return keep
+
+
+def any_in_box(positions: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> bool:
+    """Whether any of ``positions`` ((m, 3)) lies in the box ``[lo, hi]``."""
+    return bool(((positions >= lo) & (positions <= hi)).all(axis=1).any())
+
+
+def in_box(reference: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """The rows (position, normal) of ``reference`` (R, 6) whose position lies in the box."""
+    inside = ((reference[:, :3] >= lo) & (reference[:, :3] <= hi)).all(axis=1)
+    return np.asarray(reference[inside], dtype=np.float64)
+
+
+def gathered_centers(outs: list, params) -> tuple[np.ndarray, np.ndarray]:
+    """The tiles' centers (rows, positions) in row order, trimmed to ``n_segments``."""
+    rows = np.concatenate([o["centers"] for o in outs])
+    pos = np.concatenate([o["positions"] for o in outs])
+    order = np.argsort(rows, kind="stable")
+    rows, pos = rows[order], pos[order]
+    if params.radius is None and params.init == "farthest":
+        keep = trim_centers(pos, params.n_segments)
+        return rows[keep], pos[keep]
+    return rows, pos

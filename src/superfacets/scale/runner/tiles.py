@@ -19,7 +19,8 @@ no process holds the whole input. The phases (:mod:`superfacets.scale.tiling`):
 2. per tile, labels from all the centers, kept for the core;
 3. only where two tiles saw a border differently: per tile, the stitched
    labels of its box (read from a file in the work folder) made connected
-   (:func:`~superfacets.scale.tiling.tile_connect`);
+   (:func:`~superfacets.scale.tiling.tile_connect`), again on the tiles near
+   what moved until nothing moves (:data:`CONNECT_ROUNDS` at most);
 4. on a point cloud of even density (``merge_from``, as one run chooses it):
    the phases above make ``merge_from`` times the superpoints asked for, each
    tile sums what the merges read in phase 2, and this process merges them
@@ -47,9 +48,15 @@ from ...inputs.bounds import check_extent
 from ...method.merges import NOISE_SAMPLE
 from ...method.params import DEFAULTS, resolve, superfacet_size
 from ...method.rules import MIN_FINE_ELEMENTS
+from ..tile_layout import any_in_box, gathered_centers, in_box
 from ..tile_merges import merged_labels, tiled_merge_from
 from .engine import Engine, PeakMemory, error_text
 from .manifest import FolderLock
+
+#: Most rounds of the connectivity pass: the first over every tile, each next over the
+#: tiles whose boxes hold elements the last moved (tiles repair at once, from the same
+#: stitched labels, and two repairs can leave a piece apart again).
+CONNECT_ROUNDS = 4
 
 __all__ = ["segment_tiled", "TiledResult", "tile_task"]
 
@@ -99,7 +106,7 @@ def tile_task(task: dict) -> dict:
         ref = task.get("orient_like")
         if ref is not None:  # every tile orients like one sample (a file, or its part)
             if isinstance(ref, str):
-                ref = _within(np.load(ref, mmap_mode="r"), *layout.box(task["tile"],
+                ref = in_box(np.load(ref, mmap_mode="r"), *layout.box(task["tile"],
                                                                         1.5 * task["margin"]))
             inp = replace(inp, orient_like=(ref[:, :3], ref[:, 3:]))
         core = layout.of(pos) == task["tile"]
@@ -118,7 +125,8 @@ def tile_task(task: dict) -> dict:
             fixed = tile_connect(inp, given, owned, np.searchsorted(rows, owned), p)
             moved = np.zeros(0, dtype=bool) if fixed is None else fixed != given
             out.update(moved_rows=rows[moved] if moved.size else rows[:0],
-                       moved_labels=fixed[moved] if moved.size else rows[:0])
+                       moved_labels=fixed[moved] if moved.size else rows[:0],
+                       moved_positions=pos[moved] if moved.size else pos[:0])
         elif task["phase"] == "centers":
             found, _ = tile_centers(inp, core, p, r, d)
             out.update(centers=rows[found], positions=pos[found])
@@ -303,14 +311,14 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                 reference = str(Path(tmp) / "orientation.npy")
             timings["orientation"] = time.perf_counter() - t
         with Engine(workers=workers, scheduler=scheduler, memory_limit=memory_limit) as engine:
-            def run(phase, margin, extra=lambda t: {}):
+            def run(phase, margin, extra=lambda t: {}, only=None):
                 tasks = [dict(phase=phase, reader=reader, layout=layout, tile=t, margin=margin,
                               params=params, r=r, diagonal=diagonal, **extra(t))
-                         for t in range(n_tiles)]
+                         for t in (range(n_tiles) if only is None else only)]
                 if reference is not None and phase != "areas":
                     for task in tasks:
                         task["orient_like"] = reference if isinstance(reference, str) else \
-                            _within(reference, *layout.box(task["tile"], 1.5 * margin))
+                            in_box(reference, *layout.box(task["tile"], 1.5 * margin))
                 return _gather(engine, tasks, phase, progress)
 
             r = math.nan
@@ -329,7 +337,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
             t = time.perf_counter()
             found = [o for o in run("centers", margin) if o["core"]]
             timings["centers"] = time.perf_counter() - t
-            rows, pos = _gathered(found, params)
+            rows, pos = gathered_centers(found, params)
 
             def reach(t):
                 lo, hi = layout.box(t, margin)
@@ -340,7 +348,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                 t = time.perf_counter()
                 again = [o for o in run("refine", margin, reach) if o["core"]]
                 timings["refine"] = timings.get("refine", 0.0) + time.perf_counter() - t
-                rows, pos = _gathered(again, params)
+                rows, pos = gathered_centers(again, params)
 
             t = time.perf_counter()
             n_noise = NOISE_SAMPLE // n_tiles + 1 if merge_from > 1 else None
@@ -357,17 +365,29 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
             repaired = 0
             if disagreements:  # two tiles saw a border differently: pieces are possible
                 t = time.perf_counter()
-                if shared:  # the tasks read their boxes' labels from one file
-                    np.save(Path(tmp) / "stitched.npy", labels)
-                    fixes = run("connect", margin,
-                                lambda t: dict(labels=str(Path(tmp) / "stitched.npy")))
-                else:
-                    box = {o["tile"]: o.pop("box_rows") for o in done}
-                    fixes = run("connect", margin, lambda t: dict(labels=labels[box.get(t, [])]))
-                for o in fixes:
-                    if o.get("moved_rows") is not None and o["moved_rows"].size:
+                box = {} if shared else {o["tile"]: o.pop("box_rows") for o in done}
+                only = None  # every tile, then those whose boxes hold what others moved
+                for _ in range(CONNECT_ROUNDS):
+                    if shared:  # the tasks read their boxes' labels from one file
+                        np.save(Path(tmp) / "stitched.npy", labels)
+                        fixes = run("connect", margin,
+                                    lambda t: dict(labels=str(Path(tmp) / "stitched.npy")),
+                                    only)
+                    else:
+                        fixes = run("connect", margin,
+                                    lambda t: dict(labels=labels[box.get(t, [])]), only)
+                    moved = [o for o in fixes
+                             if o.get("moved_rows") is not None and o["moved_rows"].size]
+                    for o in moved:
                         labels[o["moved_rows"]] = o["moved_labels"]
                         repaired += int(o["moved_rows"].size)
+                    if not moved:
+                        break
+                    # tiles repair at once: a piece one moved can border a piece another
+                    # moved away, so the tiles near what moved look again
+                    at = np.concatenate([o["moved_positions"] for o in moved])
+                    only = [u for u in range(n_tiles)
+                            if any_in_box(at, *layout.box(u, margin))]
                 timings["connect"] = time.perf_counter() - t
     merged_from = None
     if merge_from > 1:
@@ -395,25 +415,6 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                        layout=layout, halo=margin, disagreements=disagreements, repaired=repaired,
                        tiles=[stats[k] for k in sorted(stats)], timings=timings,
                        params=resolved)
-
-
-def _within(reference: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """The rows (position, normal) of ``reference`` (R, 6) whose position lies in the box."""
-    inside = ((reference[:, :3] >= lo) & (reference[:, :3] <= hi)).all(axis=1)
-    return np.asarray(reference[inside], dtype=np.float64)
-
-
-def _gathered(outs: list, params) -> tuple[np.ndarray, np.ndarray]:
-    """The tiles' centers (rows, positions) in row order, trimmed to ``n_segments``."""
-    rows = np.concatenate([o["centers"] for o in outs])
-    pos = np.concatenate([o["positions"] for o in outs])
-    order = np.argsort(rows, kind="stable")
-    rows, pos = rows[order], pos[order]
-    if params.radius is None and params.init == "farthest":
-        from ..tile_layout import trim_centers
-        keep = trim_centers(pos, params.n_segments)
-        return rows[keep], pos[keep]
-    return rows, pos
 
 
 @contextlib.contextmanager
