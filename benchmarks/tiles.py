@@ -130,8 +130,6 @@ def _graph(data):
 
 
 def _row(name, n, data, gt, path, k, a, folder):
-    from superfacets.evaluation.metrics import undersegmentation_error
-    from superfacets.method.connectivity import label_components
     from superfacets.scale.runner.tiles import segment_tiled
 
     out, fine = folder / "single.npy", folder / "single_fine.npy"
@@ -146,23 +144,8 @@ def _row(name, n, data, gt, path, k, a, folder):
     with _tiled_fine(a.fine) as t_fine:
         tiled = segment_tiled(path, k, tiles=a.tiles, workers=a.workers, halo=a.halo)
     wall = time.perf_counter() - t
-    src = _graph(np.load(data) if isinstance(data, Path) else data)  # (a cloud: loaded now)
-    g = src.graph
-    el = src.index if src.index is not None else None
-
-    def per_element(labels):
-        if el is None:
-            return labels
-        first = src.first_rows(np.arange(g.n_elements))
-        return labels[first]
-
-    def ue(labels):
-        return undersegmentation_error(g, per_element(labels), per_element(gt))
-
-    pieces = label_components(g, per_element(tiled.labels))
-    cut = int(np.unique(pieces).size - np.unique(per_element(tiled.labels)).size)
+    ue_s, ue_t, cut = _measured(data, gt, s_labels, tiled.labels)
     peak = max(t[f"{ph}_peak_mib"] or 0 for t in tiled.tiles for ph in ("centers", "labels"))
-    ue_s, ue_t = ue(s_labels), ue(tiled.labels)
     if isinstance(data, (np.ndarray, Path)):  # points: also the experiment's measure
         print(f"  each point counted once: UE {_equal_weight_ue(s_labels, gt):.4f} / "
               f"{_equal_weight_ue(tiled.labels, gt):.4f}", flush=True)
@@ -171,11 +154,34 @@ def _row(name, n, data, gt, path, k, a, folder):
           f"({100 * (ue_t / ue_s - 1):+.1f} %) | {cut} | {tiled.disagreements} | "
           f"{single['wall']:.1f} / {wall:.1f} | {single['peak_mib']:.0f} / {peak:.0f} |",
           flush=True)
-    if a.fine and t_fine:  # the whole graph again, alone (50M points: the memory)
-        del src, g, pieces
-        _fine_row(data, gt, np.load(fine), t_fine[0], k)
+    if not (a.rotations or a.fine):
+        return
+    from superfacets._runtime.memory import give_back_free_memory
+
+    give_back_free_memory()  # (50M points: the runs below need the whole graph's memory)
     if a.rotations and isinstance(data, Path):
         _rotated_rows(data, gt, k, a.rotations, folder)
+    if a.fine and t_fine:  # the whole graph again, alone
+        _fine_row(data, gt, np.load(fine), t_fine[0], k)
+
+
+def _measured(data, gt, one, tiled) -> tuple[float, float, int]:
+    """The UE of one run's labels and of the tiled run's on the whole input's graph, and
+    the tiled superfacets in pieces (the graph freed on return)."""
+    from superfacets.evaluation.metrics import undersegmentation_error
+    from superfacets.method.connectivity import label_components
+
+    src = _graph(np.load(data) if isinstance(data, Path) else data)  # (a cloud: loaded now)
+    g = src.graph
+    first = src.first_rows(np.arange(g.n_elements)) if src.index is not None else None
+
+    def per_element(labels):
+        return labels if first is None else labels[first]
+
+    pieces = label_components(g, per_element(tiled))
+    cut = int(np.unique(pieces).size - np.unique(per_element(tiled)).size)
+    return (undersegmentation_error(g, per_element(one), per_element(gt)),
+            undersegmentation_error(g, per_element(tiled), per_element(gt)), cut)
 
 
 @contextlib.contextmanager
