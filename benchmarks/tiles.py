@@ -2,7 +2,7 @@
 
 Usage: python benchmarks/tiles.py [--mesh-id 281] [--subdivide 2 3] [--points 1000000]
        [-k 2000] [--tiles 8] [--workers 2] [--halo 3] [--no-mesh] [--tiled-only]
-       [--seeds 0 1 2] [--fine] [--rotations N]
+       [--seeds 0 1 2] [--fine] [--rotations N [--rotations-tiled]]
        python benchmarks/tiles.py --compare [-k 600] [--tiles 8] [--halo 3] [--paper]
        [--times 1] [--refine 1] [--compare-points N] [--merge-from F]
 
@@ -36,9 +36,10 @@ difference comes from the superpoints the tiles make or from the merges of their
 (the single run's peak then includes saving its superpoints). ``--rotations N``
 (points): also one run on the same cloud turned by N random rotations, in a new process
 each: the spread of one run's error on the same points (the UE, each point once, does
-not change under a rotation). ``--seeds``: one cloud per seed of the sampling (default
-0), to tell the spread of the tiled run's difference from a bias. ``--no-mesh``: only the
-point rows.
+not change under a rotation); with ``--rotations-tiled`` each turned cloud is also
+tiled, and the two runs' means over the orientations are compared. ``--seeds``: one
+cloud per seed of the sampling (default 0), to tell the spread of the tiled run's
+difference from a bias. ``--no-mesh``: only the point rows.
 ``--tiled-only``: no single run (for a cloud larger than this machine holds): the UE
 counts each point once (as ``superfacets experiment --elements points``), and "cut by a
 border" is checked tile by tile, without the whole graph: each tile's box, grown by
@@ -160,7 +161,8 @@ def _row(name, n, data, gt, path, k, a, folder):
 
     give_back_free_memory()  # (50M points: the runs below need the whole graph's memory)
     if a.rotations and isinstance(data, Path):
-        _rotated_rows(data, gt, k, a.rotations, folder)
+        _rotated_rows(data, gt, k, a.rotations, folder, a,
+                      _equal_weight_ue(tiled.labels, gt) if a.rotations_tiled else None)
     if a.fine and t_fine:  # the whole graph again, alone
         _fine_row(data, gt, np.load(fine), t_fine[0], k)
 
@@ -230,14 +232,19 @@ def _fine_row(data, gt, one_fine, tiled_fine, k) -> None:
           f"of the tiled superpoints: UE {ue(merged):.4f}", flush=True)
 
 
-def _rotated_rows(path: Path, gt, k: int, n: int, folder: Path) -> None:
+def _rotated_rows(path: Path, gt, k: int, n: int, folder: Path, a, tiled_ue=None) -> None:
     """``--rotations N``: one run (a new process) on the same cloud turned by ``N`` random
     rotations (scipy's ``Rotation.random(random_state=s)``, s = 0 .. N-1): how much one
     run's error moves on the same points in another orientation (the UE does not
-    change under a rotation; the run's start and its orders of the points do)."""
+    change under a rotation; the run's start and its orders of the points do). With
+    ``--rotations-tiled`` (``tiled_ue``: the tiled run's UE on the cloud as read), each
+    turned cloud is also tiled, and the two runs' means over the orientations compared."""
     from scipy.spatial.transform import Rotation
 
+    from superfacets.scale.runner.tiles import segment_tiled
+
     ues = [_equal_weight_ue(np.load(folder / "single.npy"), gt)]
+    tiled = [] if tiled_ue is None else [tiled_ue]
     for s in range(n):
         turned, out = folder / "turned.npy", folder / "turned_labels.npy"
         np.save(turned, np.load(path) @ Rotation.random(random_state=s).as_matrix().T)
@@ -245,11 +252,23 @@ def _rotated_rows(path: Path, gt, k: int, n: int, folder: Path) -> None:
                            capture_output=True, text=True, check=True)
         sec = json.loads(p.stdout.strip().splitlines()[-1])["seconds"]
         ues.append(_equal_weight_ue(np.load(out), gt))
-        print(f"  one run, the cloud turned (rotation {s}): UE each point once {ues[-1]:.4f} "
-              f"({sec:.0f} s)", flush=True)
+        line = (f"  the cloud turned (rotation {s}): UE each point once, one run "
+                f"{ues[-1]:.4f} ({sec:.0f} s)")
+        if tiled_ue is not None:
+            t = time.perf_counter()
+            res = segment_tiled(turned, k, tiles=a.tiles, workers=a.workers, halo=a.halo)
+            tiled.append(_equal_weight_ue(res.labels, gt))
+            line += f", tiled {tiled[-1]:.4f} ({time.perf_counter() - t:.0f} s)"
+            del res
+        print(line, flush=True)
         turned.unlink()
     print(f"  one run over the {n + 1} orientations: UE each point once {np.mean(ues):.4f} "
           f"(from {min(ues):.4f} to {max(ues):.4f})", flush=True)
+    if tiled:
+        print(f"  tiled over the {n + 1} orientations: UE each point once {np.mean(tiled):.4f} "
+              f"(from {min(tiled):.4f} to {max(tiled):.4f}), "
+              f"{100 * (np.mean(tiled) / np.mean(ues) - 1):+.1f} % against one run's mean",
+              flush=True)
 
 
 def _equal_weight_ue(labels, gt, tau=0.05) -> float:
@@ -408,6 +427,8 @@ def main() -> None:
                          "each run's, and of one run's merges of the tiled run's")
     ap.add_argument("--rotations", type=int, default=0, metavar="N",
                     help="points: also one run on the cloud turned by N random rotations")
+    ap.add_argument("--rotations-tiled", action="store_true",
+                    help="--rotations: each turned cloud also tiled, the means compared")
     ap.add_argument("--tiled-only", action="store_true",
                     help="points only, no single run (equal-weight UE, cut checked per tile)")
     a = ap.parse_args()
