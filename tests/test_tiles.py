@@ -34,6 +34,14 @@ def _bumpy(subdivisions: int = 5) -> Mesh:
     return Mesh(v, m.faces)
 
 
+def _bumpy_cloud(n: int):
+    """``n`` points sampled on :func:`_bumpy` (no normals, no viewpoint)."""
+    from superfacets import PointCloud
+    from superfacets.evaluation.datasets.sampling import sample_points
+
+    return PointCloud(sample_points(_bumpy(4), n, seed=0)[0])
+
+
 def _write_ply_mesh(path, vertices, faces, counts=None):
     v = np.array([tuple(x) for x in vertices], dtype=[("x", "f4"), ("y", "f4"), ("z", "f4")])
     if counts is None:
@@ -639,6 +647,85 @@ def test_tile_connect_joins_stray_pieces_of_its_own_superfacets():
     # the center's piece keeps the name, wherever it is
     fixed = tile_connect(mesh, labels, np.array([100]), np.array([9]), p)
     np.testing.assert_array_equal(fixed, np.repeat([200, 200, 100, 300, 300], 4))
+
+
+def test_tile_connect_on_points_reads_an_unoriented_graph_of_the_same_adjacency(monkeypatch):
+    """The repair reads the adjacency, sizes and border lengths: on points it builds the
+    graph without orienting the normals (a third of the build), and repairs as with the
+    oriented graph."""
+    from superfacets.elements import points
+    from superfacets.inputs.cloud import PointCloud
+    from superfacets.scale.tiling import tile_connect
+
+    rng = np.random.default_rng(3)
+    xyz = rng.normal(size=(4000, 3))
+    xyz /= np.linalg.norm(xyz, axis=1, keepdims=True)
+    cloud = PointCloud(xyz)
+    u = points.point_graph(cloud, oriented=False).graph
+    g = points.point_graph(cloud).graph
+    assert u is not g and points.point_graph(cloud, oriented=False).graph is g  # (built)
+    for name in ("indptr", "indices", "sizes", "border_shares", "lengths"):
+        np.testing.assert_array_equal(getattr(u, name), getattr(g, name), err_msg=name)
+    cos = (np.asarray(g.normals, float) * np.asarray(u.normals, float)).sum(axis=1)
+    np.testing.assert_allclose(np.abs(cos), 1.0, atol=1e-5)
+    assert (cos < 0).any()  # PCA's signs, not turned outwards
+    labels = (xyz[:, 0] > 0).astype(np.int64) * 7 + 3  # two halves, names 3 and 10
+    labels[(xyz[:, 0] < -0.6) & (xyz[:, 1] > 0.5)] = 10  # a stray piece of 10
+    p = resolve(n_segments=2)
+    center = np.array([int(np.argmax(xyz[:, 0]))])
+    fixed = tile_connect(PointCloud(xyz), labels, np.array([10]), center, p)
+    assert fixed is not None and (fixed[labels == 10] != 10).sum() > 0
+    built = points.point_graph
+    monkeypatch.setattr(points, "point_graph",
+                        lambda *a, oriented=True, **k: built(*a, **k))  # oriented anyway
+    np.testing.assert_array_equal(
+        tile_connect(PointCloud(xyz), labels, np.array([10]), center, p), fixed)
+
+
+def test_a_tile_graph_read_back_is_the_graph_built(tmp_path):
+    """What the later phases of a tile read is what the first built: every array, the
+    pairs' type, and the cloud's points given back bit for bit."""
+    from superfacets.elements.points import point_graph
+    from superfacets.inputs.cloud import PointCloud
+    from superfacets.scale.tile_graphs import tile_graph
+
+    xyz = np.random.default_rng(5).normal(size=(3000, 3))
+    xyz[10] = xyz[11]  # a duplicate point: two rows, one element
+    assert tile_graph(PointCloud(xyz.copy()), tmp_path / "tile-0", 10) == "built"
+    assert not (tmp_path / "tile-0.part").exists()
+    built = point_graph(PointCloud(xyz.copy()), 10)
+    again = PointCloud(xyz.copy())
+    assert tile_graph(again, tmp_path / "tile-0", 10) == "read"
+    read = point_graph(again, 10)  # the graph read back, kept with the cloud
+    for name in ("positions", "sizes", "normals", "indptr", "indices", "centroid", "lower",
+                 "pairs", "lengths", "border_shares"):
+        a, b = getattr(read.graph, name), getattr(built.graph, name)
+        assert a.dtype == b.dtype and np.array_equal(a, b), name
+    assert read.graph.diagonal == built.graph.diagonal
+    np.testing.assert_array_equal(read.index, built.index)
+    assert np.array_equal(again.points.view(np.uint64), xyz.view(np.uint64))
+    # a half-written graph (a task stopped while saving) is not read: built again
+    (tmp_path / "tile-1").mkdir()
+    np.save(tmp_path / "tile-1" / "positions.npy", xyz)
+    assert tile_graph(PointCloud(xyz.copy()), tmp_path / "tile-1", 10) != "read"
+
+
+def test_tiles_that_keep_their_graphs_label_as_those_that_build_them(monkeypatch, tmp_path):
+    """A cloud's tiles build their graphs once and read them in the later phases: the
+    same labels as building them every phase, and the work folder left without them."""
+    import superfacets.scale.runner.tiles as rt
+
+    cloud = _bumpy_cloud(20000)
+    seen, real = [], rt.tile_graph
+    monkeypatch.setattr(rt, "tile_graph", lambda *a: seen.append(real(*a)) or seen[-1])
+    kept = segment_tiled(cloud, 60, tiles=4, halo=1, workdir=tmp_path)
+    assert seen.count("built") == 4 and seen.count("read") >= 8  # refine, labels (connect)
+    assert not (tmp_path / "graphs").exists()
+    monkeypatch.setattr(rt, "graph_folder", lambda *a: None)
+    seen.clear()
+    built = segment_tiled(cloud, 60, tiles=4, halo=1)
+    assert seen == [] and kept.disagreements > 0  # (the connect phase ran too)
+    np.testing.assert_array_equal(kept.labels, built.labels)
 
 
 def test_a_quantized_scan_in_tiles_has_no_cut_superpoint():

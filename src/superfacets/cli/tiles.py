@@ -48,7 +48,8 @@ def add_tile_options(p) -> None:
                         "centers (default 1; 0 is faster, and farther from one run)")
     g.add_argument("--workdir", default=None, metavar="DIR",
                    help="with --tiles: folder for the work files (the input sorted by tile, "
-                        "about its size; default a temporary folder, removed at the end); with "
+                        "about its size; a cloud's tile graphs, about 110 bytes a point with "
+                        "the halos; default a temporary folder, removed at the end); with "
                         "--scheduler, one every worker reaches, or each task reads INPUT whole")
     add_engine_options(g, sees="its workers must read INPUT by the same path",
                        prefix="with --tiles: ")

@@ -49,6 +49,7 @@ from .._runtime.memory import give_back_free_memory
 from ..inputs.bounds import column_bounds, column_means
 from .graph import LAZY, ElementGraph, adjacency_csr, cached_on, pairs_from_csr
 from .neighbors import nearest, point_tree
+from .normals import estimate_normals, normals_and_linearity, orient_normals
 from .vertices import symmetric_terms
 
 _TRIM_MIN = 1 << 18  # rows from which the build hands the allocator's free memory back
@@ -88,90 +89,6 @@ class PointElements(NamedTuple):
 
     graph: ElementGraph
     index: np.ndarray
-
-
-def estimate_normals(points: np.ndarray, neighbors: np.ndarray) -> np.ndarray:
-    """Unit PCA normals: the direction of least variance of each point's neighbourhood.
-
-    Parameters
-    ----------
-    points : (n, 3) float64 ndarray
-    neighbors : (n, K) int ndarray
-        Each point's neighbourhood (itself included).
-
-    Returns
-    -------
-    (n, 3) float64 ndarray
-        Unit normals, signs arbitrary (see :func:`orient_normals`).
-    """
-    return _normals_and_linearity(points, neighbors)[0]
-
-
-def _normals_and_linearity(points: np.ndarray, neighbors: np.ndarray
-                           ) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`estimate_normals`, and how much each neighbourhood is a line:
-    ``(l1 - l2) / l1`` of its covariance's eigenvalues ``l1 >= l2 >= l3``."""
-    pca_normals = native.kernel("normals.pca_normals")
-
-    out = np.empty((points.shape[0], 3))
-    linearity = np.empty(points.shape[0])
-    # neighbours as given: a column slice of the neighbour lists is read in place (a
-    # copy of 11 columns of 1M rows costs 0.25 s, row by row)
-    pca_normals(np.ascontiguousarray(points), neighbors, out, linearity)
-    return out, linearity
-
-
-def orient_normals(points: np.ndarray, normals: np.ndarray, indptr: np.ndarray,
-                   indices: np.ndarray, viewpoint: np.ndarray | None = None,
-                   reference: tuple | None = None, up: np.ndarray | None = None
-                   ) -> np.ndarray:
-    """Flip normals to a consistent orientation (see the module notes).
-
-    Parameters
-    ----------
-    points, normals : (n, 3) float64 ndarray
-    indptr, indices : CSR arrays of the neighbourhood graph
-    viewpoint : (3,) float64 ndarray, optional
-        Turn every normal towards it instead.
-    reference : tuple of two (R, 3) float64 ndarray, optional
-        ``(positions, normals)`` oriented elsewhere (a sample of the same
-        surface): after the propagation, each connected piece is turned to
-        agree with the nearest reference normals, summed over the piece
-        (``sum s_i n_i . m_near(i) >= 0``), instead of outwards from its mean.
-    up : (3,) float64 ndarray, optional
-        Without ``reference``: after the propagation, each connected piece is
-        turned to agree with this direction (``sum s_i n_i . up >= 0``),
-        instead of outwards from its mean (an open surface seen from that
-        side: a terrain from above).
-
-    Returns
-    -------
-    (n, 3) float64 ndarray
-    """
-    if viewpoint is not None:
-        flip = np.einsum("ij,ij->i", normals, viewpoint[None, :] - points) < 0
-        return np.where(flip[:, None], -normals, normals)
-    propagate_signs = native.kernel("orient.propagate_signs")
-    turn_outwards = native.kernel("orient.turn_outwards")
-
-    n = points.shape[0]
-    sign = np.empty(n, dtype=np.int8)
-    comp = np.empty(n, dtype=np.int64)
-    n_comp = propagate_signs(indptr, indices, normals, sign, comp)
-    out = np.empty_like(normals)
-    turn_outwards(points, normals, sign, comp, n_comp, out)
-    agree = None
-    if reference is not None and reference[0].shape[0] and n:
-        from scipy.spatial import cKDTree
-
-        _, near = cKDTree(reference[0]).query(points, k=1, workers=-1)
-        agree = np.einsum("ij,ij->i", out, reference[1][near])
-    elif up is not None and n:
-        agree = out @ np.asarray(up, dtype=np.float64)
-    if agree is not None:
-        flip = np.bincount(comp, weights=agree, minlength=n_comp) < 0
-        out[flip[comp]] *= -1.0
-    return out
 
 
 def distinct_points(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -265,7 +182,8 @@ def _key_bits(keys: np.ndarray, start: int) -> np.ndarray:
 
 
 def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
-                neighbor_radius: float | None = None) -> PointElements:
+                neighbor_radius: float | None = None, *, oriented: bool = True
+                ) -> PointElements:
     """The point graph of a cloud (see the module notes).
 
     Built on the first call for each neighbourhood and kept with the cloud
@@ -280,6 +198,11 @@ def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
         Nearest neighbours of each point, ``>= 1`` (fewer when the cloud has fewer points).
     neighbor_radius : float, optional
         Drop neighbours farther than this fraction of the bounding-box diagonal.
+    oriented : bool, default True
+        False: estimated normals keep the signs PCA gives them (no propagation), for a
+        caller that reads only the adjacency, sizes and border lengths (the same as
+        oriented: the tiled runs' connectivity repair); about a third of the build's
+        time on a cloud. The oriented graph, if already built, is returned.
 
     Returns
     -------
@@ -295,13 +218,15 @@ def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
     """
     graphs = cached_on(cloud, "_point_graphs", dict)
     key = (n_neighbors, neighbor_radius)
+    if not oriented and key not in graphs:  # (the oriented graph, where kept, serves)
+        key += ("unoriented",)
     if key not in graphs:
-        graphs[key] = _build_point_graph_of(cloud, n_neighbors, neighbor_radius)
+        graphs[key] = _build_point_graph_of(cloud, n_neighbors, neighbor_radius, oriented)
     return graphs[key]
 
 
-def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
-                          ) -> PointElements:
+def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None,
+                          oriented: bool = True) -> PointElements:
     valid = np.flatnonzero(cloud.valid)
     n_rows = cloud.n_total
     pts, inverse = distinct_points(cloud.points if valid.shape[0] == n_rows else
@@ -339,7 +264,7 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
         linearity = np.empty(n)
         pca_linearity(np.ascontiguousarray(pts), nbr, linearity)
     else:
-        normals, linearity = _normals_and_linearity(pts, nbr)
+        normals, linearity = normals_and_linearity(pts, nbr)
     wide = np.flatnonzero(linearity > LINEAR)
     del linearity
     k_wide = int(min(WIDEN * k, n - 1))
@@ -380,11 +305,46 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
         pair_dtype = np.int64
         del key, more, more_keep, nbr, cand, keep
 
-    if cloud.normals is None:
+    if cloud.normals is None and oriented:
         normals = orient_normals(pts, normals, indptr, indices, cloud.viewpoint,
                                  getattr(cloud, "orient_like", None),
                                  getattr(cloud, "up", None))
     normals = normals.astype(NORMALS_DTYPE)  # (kept through the run; read in float64)
+    return point_elements(pts, area, normals, indptr, indices, index, pair_dtype,
+                          lower=lower, diagonal=diagonal)
+
+
+def point_elements(pts: np.ndarray, area: np.ndarray, normals: np.ndarray,
+                   indptr: np.ndarray, indices: np.ndarray, index: np.ndarray,
+                   pair_dtype=np.int32, *, lower: np.ndarray | None = None,
+                   diagonal: float | None = None) -> PointElements:
+    """The point graph of its arrays as :func:`point_graph` builds them (also read back
+    from files: :mod:`superfacets.scale.tile_graphs`).
+
+    Parameters
+    ----------
+    pts : (n, 3) float64 ndarray
+        The distinct points, in Z-order.
+    area : (n,) float64 ndarray
+    normals : (n, 3) ndarray
+        In :data:`NORMALS_DTYPE`, oriented.
+    indptr : (n + 1,) int64 ndarray
+    indices : (2 e,) int32 or int64 ndarray
+        The CSR adjacency.
+    index : (N,) int32 or int64 ndarray
+        Element of each row of the cloud, -1 for an invalid row.
+    pair_dtype : numpy dtype, default int32
+        Of the pairs, built when read.
+    lower, diagonal : optional
+        The points' lowest corner and bounding-box diagonal, if known.
+
+    Returns
+    -------
+    PointElements
+    """
+    if lower is None or diagonal is None:
+        lower, upper = column_bounds(pts)
+        diagonal = float(np.linalg.norm(upper - lower))
     # the pairs, dual-edge map, spans and border lengths (about 180 bytes per point) are
     # built only if read: a default run reads the CSR layout and the border shares alone
     # (the weights: superfacets.method.weights.csr_point_weights)

@@ -353,10 +353,17 @@ def tile_connect(inp, labels: np.ndarray, owned: np.ndarray, owned_rows: np.ndar
         The labels with the stray pieces of owned superfacets renamed; None
         when there is none (the usual case).
     """
+    from ..elements.inputs import ElementInput, prepared
+    from ..elements.points import point_graph
     from ..method.connectivity import label_components
 
-    src = elements_of(inp, params.elements, n_neighbors=params.n_neighbors,
-                      neighbor_radius=params.neighbor_radius)
+    kind, data = prepared(inp, params.elements)
+    if kind_of(kind).cloud:  # the adjacency alone: the normals' signs are not read
+        src = ElementInput(*point_graph(data, params.n_neighbors, params.neighbor_radius,
+                                        oriented=False), data)
+    else:
+        src = elements_of(data, kind, n_neighbors=params.n_neighbors,
+                          neighbor_radius=params.neighbor_radius)
     g = src.graph
     m = g.n_elements
     name = np.asarray(labels, dtype=np.int64)[src.first_rows(np.arange(m))]

@@ -1,34 +1,34 @@
 """One input larger than a machine: tiles with halos on Dask, stitched by center.
 
 :func:`segment_tiled` cuts the input into tiles (:mod:`superfacets.scale.tile_layout`:
-balanced boxes, or a regular grid) and runs each tile as a task on
-:class:`~.engine.Engine` (this process, a local Dask cluster or a running
-scheduler). A task gets the file's name and its box, never data: it reads
-its tile and halo itself (:class:`superfacets.io.regions.RegionReader`), so
-no process holds the whole input. The phases (:mod:`superfacets.scale.tiling`):
+balanced boxes, or a regular grid) and runs each tile as a task on :class:`~.engine.Engine`
+(this process, a local Dask cluster or a running scheduler). A task gets the file's name
+and its box, never data: it reads its tile and halo itself
+(:class:`superfacets.io.regions.RegionReader`), so no process holds the whole input. The
+phases (:mod:`superfacets.scale.tiling`):
 
-0. a survey of the file in chunks (bounds, total area) in this process, and
-   a second pass that sorts its elements into one file per tile in the work
-   folder (:func:`~superfacets.scale.runner.buckets.bucket`): from then on
-   a task reads the tiles its box overlaps; for a point cloud asked for
-   ``n_segments``, one task per tile sums the points' areas (the radius
-   needs the total);
-1. per tile, the method on the tile and its halo: the centers of its core;
-   then (``refine`` rounds) per tile, the method's passes again from all the
-   centers within reach: the centers of its core;
+0. a survey of the file in chunks (bounds, total area) in this process, and a second pass
+   that sorts its elements into one file per tile in the work folder
+   (:func:`~superfacets.scale.runner.buckets.bucket`): from then on a task reads the tiles
+   its box overlaps; for a point cloud asked for ``n_segments``, one task per tile sums
+   the points' areas (the radius needs the total);
+1. per tile, the method on the tile and its halo: the centers of its core; then
+   (``refine`` rounds) per tile, the method's passes again from all the centers within
+   reach: the centers of its core;
 2. per tile, labels from all the centers, kept for the core;
-3. only where two tiles saw a border differently: per tile, the stitched
-   labels of its box (read from a file in the work folder) made connected
-   (:func:`~superfacets.scale.tiling.tile_connect`), again on the tiles near
-   what moved until nothing moves (:data:`CONNECT_ROUNDS` at most);
-4. on a point cloud of even density (``merge_from``, as one run chooses it):
-   the phases above make ``merge_from`` times the superpoints asked for, each
-   tile sums what the merges read in phase 2, and this process merges them
-   down to the count (:mod:`superfacets.scale.tile_merges`).
+3. only where two tiles saw a border differently: per tile, the stitched labels of its
+   box (read from a file in the work folder) made connected
+   (:func:`~superfacets.scale.tiling.tile_connect`), again on the tiles near what moved
+   until nothing moves (:data:`CONNECT_ROUNDS` at most);
+4. on a point cloud of even density (``merge_from``, as one run chooses it): the phases
+   above make ``merge_from`` times the superpoints asked for, each tile sums what the
+   merges read in phase 2, and this process merges them down to the count
+   (:mod:`superfacets.scale.tile_merges`).
 
-Labels are named by their center's row, so a superfacet crossing tile
-borders has one label on every side; they are made dense at the end. Only
-the labels (8 bytes per element) and the centers are gathered here.
+A cloud's tile builds its point graph once, in the work folder
+(:mod:`superfacets.scale.tile_graphs`). Labels are named by their center's row, so a
+superfacet crossing tile borders has one label on every side; they are made dense at the
+end. Only the labels (8 bytes per element) and the centers are gathered here.
 """
 
 from __future__ import annotations
@@ -48,6 +48,7 @@ from ...inputs.bounds import check_extent
 from ...method.merges import NOISE_SAMPLE
 from ...method.params import DEFAULTS, resolve, superfacet_size
 from ...method.rules import MIN_FINE_ELEMENTS
+from ..tile_graphs import drop_graphs, graph_folder, tile_graph
 from ..tile_layout import any_in_box, gathered_centers, in_box
 from ..tile_merges import merged_labels, tiled_merge_from
 from .engine import Engine, PeakMemory, error_text
@@ -113,6 +114,9 @@ def tile_task(task: dict) -> dict:
         out.update(rows=int(rows.size), core=int(core.sum()))
         if not core.any():  # no element of its own: nothing to do
             return out
+        if task.get("graphs") and task["phase"] != "areas" and np.ptp(pos, axis=0).max() > 0:
+            tile_graph(inp, Path(task["graphs"]) / f"tile-{task['tile']}",
+                       task["params"].n_neighbors)  # built once, read by the later phases
         p, r, d = task["params"], task["r"], task["diagonal"]
         if task["phase"] == "areas":
             out["area"] = point_areas(pos, core, p.n_neighbors) if core.any() else 0.0
@@ -199,11 +203,11 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         Memory limit of each local worker (Dask's syntax).
     workdir : str or os.PathLike, optional
         Folder for the work files: the input sorted into one file per tile
-        (the file is read twice in all, then each task reads the tiles its
-        box overlaps), the ``.npy`` copy of an input that is not streamed,
-        the stitched labels. Default: a temporary folder, removed at the
-        end. With ``scheduler`` give a folder every worker reaches, or each
-        task reads the whole file for its box.
+        (the file is read twice in all, then each task reads the tiles its box
+        overlaps), the ``.npy`` copy of an input that is not streamed, the tiles' point
+        graphs (:mod:`~superfacets.scale.tile_graphs`), the stitched labels. Default: a
+        temporary folder, removed at the end. With ``scheduler`` give a folder every
+        worker reaches, or each task reads the whole file for its box.
     progress : bool, default False
         A progress bar per phase.
     refine : int, default 1
@@ -310,10 +314,12 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                 np.save(Path(tmp) / "orientation.npy", reference)
                 reference = str(Path(tmp) / "orientation.npy")
             timings["orientation"] = time.perf_counter() - t
+        graphs = graph_folder(tmp, survey.n_elements, reader.kind, shared and n_tiles > 1,
+                              params)  # the tiles' point graphs, kept between phases
         with Engine(workers=workers, scheduler=scheduler, memory_limit=memory_limit) as engine:
             def run(phase, margin, extra=lambda t: {}, only=None):
                 tasks = [dict(phase=phase, reader=reader, layout=layout, tile=t, margin=margin,
-                              params=params, r=r, diagonal=diagonal, **extra(t))
+                              params=params, r=r, diagonal=diagonal, graphs=graphs, **extra(t))
                          for t in (range(n_tiles) if only is None else only)]
                 if reference is not None and phase != "areas":
                     for task in tasks:
@@ -389,6 +395,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                     only = [u for u in range(n_tiles)
                             if any_in_box(at, *layout.box(u, margin))]
                 timings["connect"] = time.perf_counter() - t
+            drop_graphs(graphs)
     merged_from = None
     if merge_from > 1:
         t = time.perf_counter()
