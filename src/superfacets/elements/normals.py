@@ -41,9 +41,8 @@ def normals_and_linearity(points: np.ndarray, neighbors: np.ndarray
 
     Parameters
     ----------
-    points : (n, 3) float64 ndarray
-    neighbors : (n, K) int ndarray
-        Each point's neighbourhood (itself included).
+    points, neighbors
+        As :func:`estimate_normals`.
 
     Returns
     -------
