@@ -18,7 +18,10 @@ included, about 100-160 MiB), divided by the input's elements. Cases:
   000700 (``superfacets.evaluation.datasets.scans``, downloaded once) repeated on an
   11 x 11 grid, side by side, cut at 10M points (its density falls with the range, so the
   automatic density and the exact classification run, and its 2,101 separate pieces
-  leave the exact count more superpoints than asked), k = 1,000; only when asked.
+  leave the exact count more superpoints than asked), k = 1,000; only when asked;
+- ``scanlines10m``: 10M points of a made-up spinning LiDAR (64 rings over a ground
+  plane at z = 0 inside walls, sweeps side by side; :func:`_scan_lines`), k = 1,000;
+  only when asked. Slow (the ground's noise crosses z = 0: see docs/guide/scale.md).
 
 With ``--before SRC`` each case also runs on another version of the package (the
 ``src`` folder of a ``git worktree`` of an earlier commit), the two alternating, and
@@ -44,7 +47,8 @@ CACHE = Path(os.environ.get("SUPERFACETS_CACHE", Path.home() / ".cache" / "super
 
 CASES = {"faces": ("faces", 6_775_040, 150), "points2m": ("points", 2_000_000, 1000),
          "points10m": ("points", 10_000_000, 1000), "points50m": ("points", 50_000_000, 1000),
-         "sweeps10m": ("points", 10_000_000, 1000)}
+         "sweeps10m": ("points", 10_000_000, 1000),
+         "scanlines10m": ("points", 10_000_000, 1000)}
 DEFAULT = ["faces", "points2m", "points10m"]
 
 
@@ -58,6 +62,8 @@ def make_input(case: str) -> Path:
         return make("hand_olivier", 3, CACHE / "large")
     if case == "sweeps10m":
         return _sweeps(n)
+    if case == "scanlines10m":
+        return _scan_lines(n)
     path = CACHE / "memory" / f"horse_{n}.npy"
     if not path.exists():
         import numpy as np
@@ -89,6 +95,39 @@ def _sweeps(n: int) -> Path:
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_suffix(".part.npy")
         np.save(tmp, np.ascontiguousarray(np.concatenate(grid)[:n]))
+        tmp.replace(path)
+    return path
+
+
+def _scan_lines(n: int) -> Path:
+    """``n`` points of a made-up spinning LiDAR, made once: 64 rings (elevations -24.8
+    to -2 degrees, a point every 0.09 degrees) from 1.73 m over a ground plane at z = 0,
+    inside square walls (12-36 m), 1 cm noise; sweeps side by side, 150 m apart, 12 to a
+    row. Needs no download (``sweeps10m`` does)."""
+    import numpy as np
+
+    path = CACHE / "memory" / f"scanlines_{n}.npy"
+    if not path.exists():
+        rng = np.random.default_rng(0)
+        elevation = np.deg2rad(np.linspace(-24.8, -2.0, 64))
+        d = np.deg2rad(np.arange(0, 360, 0.09))
+        d = np.c_[np.cos(d), np.sin(d)]
+        to_wall = 1.0 / np.maximum(np.abs(d[:, 0]), np.abs(d[:, 1]))  # times the half side
+        sweeps, total = [], 0
+        while total < n:
+            k = len(sweeps)
+            wall = (12.0 + 6.0 * ((7 * k) % 5)) * to_wall
+            rings = []
+            for e in elevation:
+                ground = 1.73 / np.tan(-e)
+                r = np.minimum(ground, wall)
+                z = np.where(ground <= wall, 0.0, 1.73 + r * np.tan(e))
+                rings.append(np.c_[d * r[:, None] + [150.0 * (k % 12), 150.0 * (k // 12)], z])
+            sweeps.append(np.concatenate(rings) + rng.normal(0.0, 0.01, (64 * len(d), 3)))
+            total += sweeps[-1].shape[0]
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(".part.npy")
+        np.save(tmp, np.concatenate(sweeps)[:n])
         tmp.replace(path)
     return path
 
