@@ -1,20 +1,40 @@
 # Two commands set everything up on a fresh machine with only python3:
-#   make demo   -- create .venv, install, segment the built-in demo mesh
-#   make test   -- create .venv, install, run the test suite
+#   make demo   -- create .venv, install the package, segment the built-in demo mesh
+#   make test   -- create .venv, install the package and the test tools, run the tests
 PYTHON ?= python3
 VENV := .venv
+# pip shows its progress (what it downloads, the kernels' build) on a terminal
+PIP := $(VENV)/bin/python -m pip
+KERNELS := CMakeLists.txt $(wildcard src/superfacets/_kernels/cxx/*)
+DEMO_STAMP := $(VENV)/.demo-installed
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint docs bench scale browser pictures sweep comparisons check-wheel clean
+.PHONY: demo test lint docs bench scale browser pictures sweep comparisons wheel check-wheel \
+	install-bench clean
 
-# (setup.py and the C++ sources: pip builds the compiled kernels again when they change)
-$(STAMP): pyproject.toml setup.py $(wildcard src/superfacets/_kernels/cxx/*)
+# The environment, with the build's own requirements (pyproject.toml [build-system];
+# CMake and Ninja from PyPI where the machine has none): the installs below build in
+# it, without pip's isolated build environment, so that build/ stays valid and a later
+# install compiles only the kernels' sources that changed.
+$(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
-	$(VENV)/bin/python -m pip install --quiet --upgrade pip
-	$(VENV)/bin/python -m pip install --quiet -e ".[test]"
+	$(PIP) install --upgrade pip "scikit-build-core>=0.10" "nanobind>=2.4" \
+	    $$(command -v cmake >/dev/null || echo "cmake>=3.18") $$(command -v ninja >/dev/null || echo ninja)
+
+PIP_INSTALL := $(PIP) install --no-build-isolation
+
+# The package with the picture extra (the demo writes a PNG). The compiled kernels are
+# built into build/ (about 20 s on 2 cores).
+$(DEMO_STAMP): pyproject.toml $(KERNELS) | $(VENV)/bin/python
+	$(PIP_INSTALL) -e ".[render]"
+	touch $(DEMO_STAMP)
+
+# Everything the tests need (every extra, pytest, ruff, numba for the reference kernels)
+$(STAMP): pyproject.toml $(KERNELS) | $(VENV)/bin/python
+	$(PIP_INSTALL) -e ".[test]"
 	touch $(STAMP)
 
-demo: $(STAMP)
+demo: $(DEMO_STAMP)
 	$(VENV)/bin/superfacets demo --output-dir demo-output
 
 # (the tests shared among one worker process per core, at most 4: pytest-xdist)
@@ -26,10 +46,11 @@ lint: $(STAMP)
 	$(VENV)/bin/ruff check src tests benchmarks tools docs/examples docs/conf.py docs/_cli.py
 
 # The documentation site (Sphinx: user guide, API reference, gallery executed at build
-# time) into docs/_build/html, warnings as errors (about 2 minutes).
+# time) into docs/_build/html, warnings as errors (about 2 minutes). The kernels are not
+# built again: build/ already holds them for these sources.
 DOCS_STAMP := $(VENV)/.docs-installed
 $(DOCS_STAMP): $(STAMP)
-	$(VENV)/bin/python -m pip install --quiet -e ".[test,docs]"
+	$(PIP_INSTALL) --quiet -e ".[test,docs]"
 	touch $(DOCS_STAMP)
 
 docs: $(DOCS_STAMP)
@@ -47,10 +68,20 @@ browser:
 	    echo "note: could not install chromium; the browser test will be skipped"; \
 	  else echo "note: chromium not found; the browser test will be skipped"; fi; }
 
-# A wheel installed with no extras, in a fresh environment: the core commands work, the
-# others name the extra to install; prints the environment's size (about 1 minute)
-check-wheel:
-	tools/check_wheel.sh
+# A wheel of this checkout for this machine's Python and platform, into dist/
+# (cibuildwheel, with pyproject.toml's [tool.cibuildwheel], builds them for the others)
+wheel: | $(VENV)/bin/python
+	$(PIP) wheel --no-deps -w dist .
+
+# That wheel installed with no extras into a fresh environment with no compiler on the
+# PATH: the demo and the core commands work, the others name the extra to install;
+# prints the install's time and the environment's size (about 1 minute)
+check-wheel: wheel
+	tools/check_wheel.sh dist
+
+# The install's time and size, and every option's first run against its second
+install-bench: $(STAMP)
+	$(VENV)/bin/python benchmarks/install.py
 
 # Table 1 meshes, then the scale table up to 1.7M faces (about 2 minutes)
 bench: $(STAMP)
@@ -105,4 +136,4 @@ FIG8 = -m superfacets vsa -k 150 --param vsa.metric=l21,l2 --param vsa.init=rand
 	"VSA L2 random" "VSA L2,1 incremental" "VSA L2 incremental"
 
 clean:
-	rm -rf $(VENV) demo-output build src/*.egg-info docs/_build docs/auto_examples
+	rm -rf $(VENV) demo-output build dist src/*.egg-info docs/_build docs/auto_examples

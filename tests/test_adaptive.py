@@ -62,7 +62,7 @@ def test_roughness_is_zero_on_a_plane_and_the_crease_angle_on_a_box():
 
 
 def test_weighted_farthest_points_blocked_equal_plain():
-    from superfacets._kernels.farthest import farthest_point, farthest_point_blocked, spatial_blocks
+    from oracle.farthest import farthest_point, farthest_point_blocked, spatial_blocks
 
     rng = np.random.default_rng(3)
     c = rng.random((3000, 3))

@@ -214,7 +214,7 @@ def test_planarity_levels_merge_the_flat_floor_first():
 
 
 def test_closed_form_plane_distance_is_numpys_smallest_eigenvalue():
-    from superfacets._kernels.hierarchy import _plane
+    from oracle.hierarchy import _plane
 
     rng = np.random.default_rng(0)
     for i in range(500):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from conftest import grid_mesh
+from oracle import reference
 
 from superfacets import segment
 from superfacets.elements import face_graph
@@ -227,7 +228,7 @@ def _arcs(n, caps):
 def test_min_cut_is_the_smallest_minimum_source_side_by_brute_force():
     from itertools import product
 
-    from superfacets._kernels.cleanup import min_cut
+    from oracle.cleanup import min_cut
 
     rng = np.random.default_rng(3)
     for trial in range(200):
@@ -260,10 +261,9 @@ def test_min_cut_matches_scipys_maximum_flow_on_bands():
     with many ties: the source side is what the source reaches in the residual network of
     scipy's maximum flow (the smallest minimum source side), and the cut's value is the
     flow's."""
+    from oracle.cleanup import min_cut
     from scipy.sparse import csr_matrix
     from scipy.sparse.csgraph import breadth_first_order, maximum_flow
-
-    from superfacets._kernels.cleanup import min_cut
 
     rng = np.random.default_rng(8)
     sizes = []
@@ -389,7 +389,7 @@ def test_band_distances_are_the_shortest_and_ties_take_the_lowest_partner(monkey
         args = (g.indptr, g.indices, de, geo, g.lengths, labels, pinned, limit, dist,
                 partner, np.empty(heap), np.empty(heap, dtype=np.int64))
         if not compiled:
-            native.reference("cleanup.band_distances")(*args)
+            reference("cleanup.band_distances")(*args)
         else:  # the compiled kernel's threads (numba, which would read its config again
             with monkeypatch.context() as m:  # on compiling, runs before)
                 m.setenv("SUPERFACETS_KERNEL_THREADS", threads)

@@ -354,41 +354,6 @@ def test_more_superfacets_than_k_says_why(tmp_path, capsys):
     assert "note:" not in capsys.readouterr().err
 
 
-def test_the_first_run_says_that_it_compiles(tmp_path, monkeypatch):
-    import io
-
-    from superfacets._runtime import warmup
-
-    class Terminal(io.StringIO):
-        def isatty(self):
-            return True
-
-    term = Terminal()
-    monkeypatch.setattr(warmup, "cache_is_cold", lambda: False)  # numba's cache is there
-    assert warmup.say_if_cold(term) is False and term.getvalue() == ""
-    monkeypatch.setattr(warmup, "cache_is_cold", lambda: True)
-    assert warmup.say_if_cold(io.StringIO()) is False  # a pipe or a log: nothing
-    assert warmup.say_if_cold(term) is True and "compiling the numba kernels once" in \
-        term.getvalue()
-
-
-def test_a_cold_cache_is_seen(tmp_path, monkeypatch):
-    from pathlib import Path
-
-    from superfacets._runtime import warmup
-
-    here = Path(warmup.__file__).resolve().parents[1] / "_kernels" / "__pycache__"
-    monkeypatch.setattr(Path, "home", lambda: tmp_path)
-    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))
-    real_glob = Path.glob
-    monkeypatch.setattr(Path, "glob", lambda self, pattern: iter(()) if self == here
-                        else real_glob(self, pattern))
-    assert warmup.cache_is_cold()
-    (tmp_path / "numba" / "x").mkdir(parents=True)
-    (tmp_path / "numba" / "x" / "expand.reset_labels-1.py311.nbi").write_bytes(b"")
-    assert not warmup.cache_is_cold()
-
-
 def test_interrupt_helpers():
     from superfacets import cli
 

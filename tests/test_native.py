@@ -12,45 +12,50 @@ the copies of one call would see another's writes.
 from __future__ import annotations
 
 import hashlib
-import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from oracle import reference
 
 import superfacets
 from superfacets import Mesh
 from superfacets._kernels import native
 from superfacets.inputs.shapes import creature
 
+
+def _implementation(which: str):
+    """The compiled kernel (``"kernel"``) or its numba reference (``"reference"``)."""
+    from superfacets._kernels import native
+
+    return native.kernel if which == "kernel" else reference
+
 CXX = Path(native.__file__).parent / "cxx"
 
 
-def test_the_compiled_kernels_are_built_where_a_compiler_is():
-    """The extension is optional (an install without a compiler goes on with numba), so a
-    build that failed would pass unseen: where a C++ compiler is, it must have been built,
-    from the sources of this checkout (an editable install not rebuilt after a change to
-    them would test old kernels)."""
-    import os
-
-    if os.environ.get("SUPERFACETS_NATIVE", "1") == "0":
-        pytest.skip("SUPERFACETS_NATIVE=0: the compiled kernels are turned off")
-    if not (shutil.which("c++") or shutil.which("g++")):
-        pytest.skip("no C++ compiler here: numba runs every kernel")
+def test_the_compiled_kernels_are_built_from_these_sources():
+    """The extension is required (an install stops without a C++ compiler), and an
+    editable install not rebuilt after a change to the sources would test old kernels:
+    where the sources are at hand, the module was built from them."""
     assert native.available(), native.missing_because()
     if CXX.is_dir():  # a checkout: the module was built from these sources
-        digest = hashlib.sha256()
-        for path in sorted(CXX.glob("*.cpp")) + sorted(CXX.glob("*.hpp")):
-            digest.update(path.name.encode() + b"\0" + path.read_bytes())
-        assert native._cxx.sources_digest == digest.hexdigest(), \
+        # as CMakeLists.txt hashes them: "name sha256" lines in name order
+        paths = sorted([*CXX.glob("*.cpp"), *CXX.glob("*.hpp")], key=lambda p: p.name)
+        listing = "".join(f"{p.name} {hashlib.sha256(p.read_bytes()).hexdigest()}\n"
+                          for p in paths)
+        assert native._cxx.sources_digest == hashlib.sha256(listing.encode()).hexdigest(), \
             "the compiled kernels are older than their sources: pip install -e . again"
 
 
 needs_cxx = pytest.mark.skipif(not native.available(),
                                reason="the compiled kernels are not built here")
 
+
+#: The compiled kernels off the default path (tested in the options' and baselines' test)
+OPTION_KERNELS = {"flood", "felzenszwalb", "csr_covariances", "vsa_partition", "vsa_sums",
+                  "vsa_assess", "vsa_worst_faces"}
 
 #: The compiled kernels of the point graph's build (the others serve faces and points)
 POINT_KERNELS = {"knn_csr", "pca_normals", "pca_linearity", "propagate_signs",
@@ -118,7 +123,7 @@ def shadowed(monkeypatch):
     plain = native.kernel
 
     def kernel(path):
-        fast, ref = plain(path), native.reference(path)
+        fast, ref = plain(path), reference(path)
 
         def both(*args, **kwargs):
             a2, k2 = [_copy(a) for a in args], {k: _copy(v) for k, v in kwargs.items()}
@@ -139,10 +144,32 @@ def shadowed(monkeypatch):
         return both
 
     monkeypatch.setattr(native, "kernel", kernel)
-    native.fallbacks.clear()
     yield calls, bad
     assert not bad, bad
-    assert not native.fallbacks, native.fallbacks  # every call went to the compiled kernel
+
+
+@needs_cxx
+def test_options_and_baselines_give_numba_results_call_by_call(shadowed):
+    """The kernels off the default path, compiled too: the flood initialization (faces
+    and points), the graph segmentation (the Segmentator's method), the features of cut
+    pursuit and VSA (both metrics, with region insertion), each call numba's to the bit."""
+    from superfacets.evaluation.baselines.cut_pursuit import dimensionality_features
+    from superfacets.evaluation.baselines.graph_segmentation import graph_segmentation
+    from superfacets.evaluation.baselines.vsa import vsa
+
+    calls, _ = shadowed
+    mesh = creature(24)
+    superfacets.segment(mesh, None, radius=0.08, init="flood", n_threads=1)
+    superfacets.segment(mesh.centroids, None, radius=0.08, init="flood", n_threads=1)
+    graph_segmentation(mesh, n_segments=30)
+    for metric in ("l21", "l2"):
+        vsa(mesh, 12, metric=metric, init="incremental", rng=0)
+    from superfacets.elements.inputs import elements_of
+
+    dimensionality_features(elements_of(mesh.centroids, "points").graph)
+    assert {"expand.flood", "baselines.felzenszwalb", "baselines.csr_covariances",
+            "baselines.vsa_partition", "baselines.vsa_sums", "baselines.vsa_assess",
+            "baselines.vsa_worst_faces"} <= set(calls), calls
 
 
 def _quad_cube(n: int) -> Mesh:
@@ -192,7 +219,7 @@ def test_runs_on_faces_give_numba_results_call_by_call(shadowed):
     compiled = {name for name in dir(native._cxx)
                 if callable(getattr(native._cxx, name)) and not name.startswith("_")} - {
         "Mismatch", "set_thread_limit", "threads"}  # (the thread limit: tested below)
-    compiled -= POINT_KERNELS | VERTEX_KERNELS | LARGE_KERNELS
+    compiled -= POINT_KERNELS | VERTEX_KERNELS | LARGE_KERNELS | OPTION_KERNELS
     missing = {name for name in compiled if not any(p.endswith("." + name) for p in calls)}
     # run only on several threads, by the plain replay-less classifier, by a lazy graph's
     # rebuild, by hierarchies and the exact count on points: tested below
@@ -333,7 +360,7 @@ def test_sorted_keys_are_the_stable_argsort_on_any_thread_count(monkeypatch, thr
                  np.full(n, 7, dtype=np.uint64), np.arange(n, 0, -1, dtype=np.uint64)):
         expected = np.argsort(keys, kind="stable")
         ref_order, ref_sorted = np.empty(n, dtype=np.int64), np.empty_like(keys)
-        native.reference("geometry.sort_keys")(keys, ref_order, ref_sorted)
+        reference("geometry.sort_keys")(keys, ref_order, ref_sorted)
         order, ordered = np.empty(n, dtype=np.int64), np.empty_like(keys)
         with monkeypatch.context() as m:  # (numba, above, compiled with its own count)
             m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
@@ -365,7 +392,7 @@ def test_rows_apart_match_numba_and_stop_at_their_room(monkeypatch, index_dtype)
             with monkeypatch.context() as m:
                 if fn == "kernel":
                     m.setenv("SUPERFACETS_KERNEL_THREADS", "3")
-                got = getattr(native, fn)("geometry.rows_apart")(
+                got = _implementation(fn)("geometry.rows_apart")(
                     pts.view(np.uint64), at.view(np.uint64), index, rows)
             outs.append((got, rows))
         assert outs[0][0] == outs[1][0] == (900 if room >= 900 else -1)
@@ -393,7 +420,7 @@ def test_coarse_pairs_on_threads_give_numba_pairs(monkeypatch, shared):
     n_pairs = int((g.indices > np.repeat(np.arange(n), np.diff(g.indptr))).sum())
     border = (np.empty(0), rng.random(n)) if shared else (rng.random(n_pairs), np.empty(0))
     args = (g.indptr, g.indices, cluster, dist, csr_w, *border, n_c)
-    expected = native.reference("voronoi.coarse_pairs")(*args)
+    expected = reference("voronoi.coarse_pairs")(*args)
     with monkeypatch.context() as m:  # (numba, above, compiled with its own count)
         m.setenv("SUPERFACETS_KERNEL_THREADS", "3")
         got = native.kernel("voronoi.coarse_pairs")(*args)
@@ -417,7 +444,7 @@ def test_pieces_of_labels_on_threads_give_numba_numbers(monkeypatch, threads):
     noisy = np.where(rng.random(n) < 0.2, rng.integers(0, 37, n), blobs)
     pieces = []
     for labels in (noisy, np.zeros(n, dtype=np.int64)):
-        expected = native.reference("adjacency.same_label_components")(g.indptr, g.indices,
+        expected = reference("adjacency.same_label_components")(g.indptr, g.indices,
                                                                         labels)
         with monkeypatch.context() as m:
             m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
@@ -444,7 +471,7 @@ def test_stray_borders_on_threads_give_numba_entries(monkeypatch, shared):
     n_pairs = int((g.indices > np.repeat(np.arange(n), np.diff(g.indptr))).sum())
     border = (np.empty(0), rng.random(n)) if shared else (rng.random(n_pairs), np.empty(0))
     args = (g.indptr, g.indices, piece, is_main, *border)
-    expected = native.reference("connectivity.stray_borders")(*args)
+    expected = reference("connectivity.stray_borders")(*args)
     with monkeypatch.context() as m:
         m.setenv("SUPERFACETS_KERNEL_THREADS", "3")
         got = native.kernel("connectivity.stray_borders")(*args)
@@ -466,7 +493,7 @@ def test_center_update_on_threads_gives_numba_centers():
     old = np.array([np.flatnonzero(label == s)[-1] if s % 3 else -1 for s in range(k - 2)]
                    + [-1, 7], dtype=np.int64)
     outs = []
-    for fn in (native.kernel("update.update_centers"), native.reference("update.update_centers")):
+    for fn in (native.kernel("update.update_centers"), reference("update.update_centers")):
         new = np.empty(k, dtype=np.int64)
         fn(label, k, sizes, pos, old, new)
         outs.append(new)
@@ -507,7 +534,6 @@ def test_center_update_sums_in_index_order_on_threads(monkeypatch, threads):
     over twelve orders of magnitude, a superfacet of zero size (the plain mean) and one
     whose center the last bit of its mean decides (:func:`_mean_probed`: the ranges'
     partial sums added together fail it on two threads)."""
-    monkeypatch.setattr(native, "fallbacks", {})  # (this test's calls alone)
     rng = np.random.default_rng(16)
     m, k = 400_000, 300
     label = (np.arange(m) * (k - 20) // m).astype(np.int32)  # runs: most in one range
@@ -522,7 +548,7 @@ def test_center_update_sums_in_index_order_on_threads(monkeypatch, threads):
                    dtype=np.int64)
     old[k - 1] = -1
     ref = np.empty(k, dtype=np.int64)
-    native.reference("update.update_centers")(label, k, sizes, pos, old, ref)
+    reference("update.update_centers")(label, k, sizes, pos, old, ref)
     assert ref[k - 1] == m - 2
     new = np.empty(k, dtype=np.int64)
     with monkeypatch.context() as mp:
@@ -530,7 +556,6 @@ def test_center_update_sums_in_index_order_on_threads(monkeypatch, threads):
         native.kernel("update.update_centers")(label, k, sizes, pos, old, new)
     np.testing.assert_array_equal(new, ref)
     assert (new != old).sum() > k // 2  # (the means decide: most centers move)
-    assert not native.fallbacks
 
 
 @needs_cxx
@@ -539,7 +564,6 @@ def test_center_update_sums_in_index_order_on_threads(monkeypatch, threads):
 def test_csr_of_pairs_and_their_numbering_match_numba(ptype, dtype):
     """The graph's CSR from pairs (rows of 40+ entries sorted stably by merge sort) and the
     pairs numbered again from it (a lazy graph's rebuild), in every dtype the runs use."""
-    native.fallbacks.clear()
     rng = np.random.default_rng(3)
     n = 300
     lo = rng.integers(0, n - 1, 5000)
@@ -550,10 +574,10 @@ def test_csr_of_pairs_and_their_numbering_match_numba(ptype, dtype):
     out = []
     for path in ("adjacency.csr_of_pairs", "adjacency.number_pairs"):
         got = []
-        for fn in (native.kernel(path), native.reference(path)):
+        for fn in (native.kernel(path), reference(path)):
             ind = np.empty(2 * lo.shape[0], dtype=np.int32)
             de = np.empty(2 * lo.shape[0], dtype=dtype)
-            indptr = native.reference("adjacency.csr_of_pairs")(lo, hi, n, ind, de)
+            indptr = reference("adjacency.csr_of_pairs")(lo, hi, n, ind, de)
             if path.endswith("csr_of_pairs"):
                 indptr = fn(lo, hi, n, ind, de)
                 got.append((indptr, ind, de))
@@ -564,12 +588,11 @@ def test_csr_of_pairs_and_their_numbering_match_numba(ptype, dtype):
                 got.append((de, kept, pairs))
         assert _same(got[0], got[1]), path
         out.append(got[0])
-    assert not native.fallbacks.get("adjacency.csr_of_pairs")
-    # strided columns of an (e, 2) array are numba's (the caller makes them contiguous)
+    # strided columns of an (e, 2) array are refused (the caller makes them contiguous)
     both = np.stack([lo, hi], axis=1)
     ind, de = np.empty(2 * lo.shape[0], dtype=np.int32), np.empty(2 * lo.shape[0], dtype=dtype)
-    indptr = native.kernel("adjacency.csr_of_pairs")(both[:, 0], both[:, 1], n, ind, de)
-    assert _same((indptr, ind, de), out[0])
+    with pytest.raises(TypeError, match="lo"):
+        native.kernel("adjacency.csr_of_pairs")(both[:, 0], both[:, 1], n, ind, de)
 
 
 @needs_cxx
@@ -593,20 +616,20 @@ def test_csr_of_pairs_on_threads_keeps_the_pairs_order_in_each_row(monkeypatch, 
         m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
         got = []
         for fn in (native.kernel("adjacency.csr_of_pairs"),
-                   native.reference("adjacency.csr_of_pairs")):
+                   reference("adjacency.csr_of_pairs")):
             ind = np.empty(2 * lo.shape[0], dtype=np.int32)
             de = np.empty(2 * lo.shape[0], dtype=np.int32)
             got.append((fn(lo, hi, n, ind, de), ind, de))
         faces = []
         for fn in (native.kernel("adjacency.csr_of_face_pairs"),
-                   native.reference("adjacency.csr_of_face_pairs")):
+                   reference("adjacency.csr_of_face_pairs")):
             ind = np.empty(2 * lo.shape[0], dtype=np.int32)
             de = np.empty(2 * lo.shape[0], dtype=np.int32)
             indptr, first = fn(lo, hi, ka, kb, n, ind, de)
             faces.append((indptr, first, ind[:indptr[-1]], de[:indptr[-1]]))
         numbered = []  # the pairs numbered again (rows with repeated entries)
         for fn in (native.kernel("adjacency.number_pairs"),
-                   native.reference("adjacency.number_pairs")):
+                   reference("adjacency.number_pairs")):
             indptr, ind, de = (x.copy() for x in got[1])
             kept = np.empty(ind.shape[0] // 2, dtype=np.int64)
             pairs = np.empty((ind.shape[0] // 2, 2), dtype=np.int32)
@@ -651,8 +674,7 @@ def test_face_pairs_grouped_on_threads_match_numba(monkeypatch, threads, polygon
     with monkeypatch.context() as mp:
         mp.setenv("SUPERFACETS_KERNEL_THREADS", threads)
         got = native.kernel("adjacency.group_pairs")(half, owner, a, b)
-    want = native.reference("adjacency.group_pairs")(half, owner, a, b)
-    assert not native.fallbacks.get("adjacency.group_pairs")
+    want = reference("adjacency.group_pairs")(half, owner, a, b)
     assert _same(got, want)
     # known answer: per edge of s half-edges, s == 1 is a boundary, else its pairs of
     # distinct faces
@@ -671,24 +693,26 @@ def test_face_pairs_grouped_on_threads_match_numba(monkeypatch, threads, polygon
 @needs_cxx
 def test_values_per_entry_on_threads_are_numpys_take(monkeypatch):
     """A value per adjacency laid out per CSR entry on threads: numba's and numpy's
-    gather, bit for bit; other dtypes (float32 weights, 8-byte adjacency numbers) go to
-    numba, the same gather."""
+    gather, bit for bit, for float64 and float32 weights; other dtypes (8-byte adjacency
+    numbers, float32 values into a float64 output) are refused."""
     rng = np.random.default_rng(8)
     values = rng.random(40_000)
     dual_edge = rng.integers(0, values.shape[0], 90_000).astype(np.int32)
-    native.fallbacks.clear()
     outs = [np.empty(dual_edge.shape[0]) for _ in range(2)]
-    native.reference("terms.per_entry")(values, dual_edge, outs[1])
+    reference("terms.per_entry")(values, dual_edge, outs[1])
     with monkeypatch.context() as mp:  # (the compiled kernels alone read it)
         mp.setenv("SUPERFACETS_KERNEL_THREADS", "3")
         native.kernel("terms.per_entry")(values, dual_edge, outs[0])
-    assert not native.fallbacks.get("terms.per_entry")
     assert _same(outs[0], outs[1]) and _same(outs[0], values[dual_edge])
-    out32 = np.empty(dual_edge.shape[0], dtype=np.float32)
-    native.kernel("terms.per_entry")(values.astype(np.float32), dual_edge.astype(np.int64),
-                                     out32)
-    assert native.fallbacks.pop("terms.per_entry")
-    assert _same(out32, values.astype(np.float32)[dual_edge])
+    v32, out32 = values.astype(np.float32), np.empty(dual_edge.shape[0], dtype=np.float32)
+    ref32 = np.empty_like(out32)
+    native.kernel("terms.per_entry")(v32, dual_edge, out32)
+    reference("terms.per_entry")(v32, dual_edge, ref32)
+    assert _same(out32, ref32) and _same(out32, v32[dual_edge])
+    with pytest.raises(TypeError, match="dual_edge"):
+        native.kernel("terms.per_entry")(values, dual_edge.astype(np.int64), outs[0])
+    with pytest.raises(TypeError, match="out"):
+        native.kernel("terms.per_entry")(v32, dual_edge, outs[0])
 
 
 @needs_cxx
@@ -702,11 +726,10 @@ def test_kept_pairs_taken_on_threads_are_the_gathered_columns(monkeypatch):
     first[:100] = first[:100][::-1]  # (any order)
     got = [(np.empty((first.shape[0], 2), dtype=np.int32),
             np.empty((first.shape[0], 2), dtype=np.int32)) for _ in range(2)]
-    native.reference("adjacency.take_pairs")(first, lo, hi, ka, kb, *got[1])
+    reference("adjacency.take_pairs")(first, lo, hi, ka, kb, *got[1])
     with monkeypatch.context() as mp:  # (the compiled kernels alone read it)
         mp.setenv("SUPERFACETS_KERNEL_THREADS", "3")
         native.kernel("adjacency.take_pairs")(first, lo, hi, ka, kb, *got[0])
-    assert not native.fallbacks.get("adjacency.take_pairs")
     assert _same(got[0], got[1])
     assert np.array_equal(got[0][0], np.stack([lo[first], hi[first]], axis=1))
     assert np.array_equal(got[0][1], np.stack([ka[first], kb[first]], axis=1))
@@ -729,7 +752,7 @@ def test_first_in_cells_on_threads_are_the_lowest_of_each_cell(monkeypatch, thre
         m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
         for cap in (8192, 1024):
             got = native.kernel("voronoi.first_in_cells")(pos, lo, h, dims, cap)
-            ref = native.reference("voronoi.first_in_cells")(pos, lo, h, dims, cap)
+            ref = reference("voronoi.first_in_cells")(pos, lo, h, dims, cap)
             assert np.array_equal(got, ref)
             if cap == 8192:
                 assert np.array_equal(got, expected) and expected.shape[0] == 2744
@@ -749,8 +772,7 @@ def test_point_tree_on_threads_matches_numba(monkeypatch, threads):
     with monkeypatch.context() as m:
         m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
         got = point_tree(pts)
-        native.fallbacks.clear()
-        m.setattr(native, "kernel", native.reference)
+        m.setattr(native, "kernel", reference)
         ref = point_tree(pts)
     for name in ("start", "end", "left", "boxes"):
         assert np.array_equal(getattr(got, name), getattr(ref, name)), name
@@ -774,7 +796,7 @@ def test_label_sums_on_threads_are_numbas_to_the_bit(monkeypatch, threads):
     pos, nor = rng.normal(size=(n, 3)), rng.normal(size=(n, 3))
     cen = rng.normal(size=(k, 3))
     out = []
-    for get in (native.reference, native.kernel):  # (numba compiles outside the context)
+    for get in (reference, native.kernel):  # (numba compiles outside the context)
         area, wpos, wnrm, sc = np.zeros(k), np.zeros((k, 3)), np.zeros((k, 3)), np.zeros((k, 9))
         with monkeypatch.context() as m:
             if get is native.kernel:
@@ -795,7 +817,6 @@ def test_knn_layout_on_threads_is_numbas(monkeypatch, threads):
     rows; the reverse entries a thread's lists make in another's rows are posted to it):
     numba's layout, for lists mostly near their row and some anywhere (posted both ways),
     repeated entries, rows listing themselves, a mask and longer lists for some rows."""
-    monkeypatch.setattr(native, "fallbacks", {})  # (this test's calls alone)
     rng = np.random.default_rng(9)
     n, k = 30_000, 8
     near = np.arange(n)[:, None] + rng.integers(-60, 60, (n, k))
@@ -811,7 +832,7 @@ def test_knn_layout_on_threads_is_numbas(monkeypatch, threads):
              (nbr, np.zeros((0, k), dtype=bool), rows[:0], more[:0], more_keep[:0])]
     for args in cases:
         want_ptr = np.empty(n + 1, dtype=np.int64)
-        want = native.reference("adjacency.knn_csr")(args[0], args[1], want_ptr, *args[2:])
+        want = reference("adjacency.knn_csr")(args[0], args[1], want_ptr, *args[2:])
         got_ptr = np.empty(n + 1, dtype=np.int64)
         with monkeypatch.context() as m:
             m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
@@ -819,7 +840,6 @@ def test_knn_layout_on_threads_is_numbas(monkeypatch, threads):
         np.testing.assert_array_equal(got_ptr, want_ptr)
         np.testing.assert_array_equal(got[:got_ptr[-1]], want[:want_ptr[-1]])
         assert got_ptr[-1] > 2 * n * (k - 2)
-    assert not native.fallbacks
 
 
 @needs_cxx
@@ -832,7 +852,6 @@ def test_bounds_and_finite_rows_of_large_arrays_are_numpys(monkeypatch, threads)
     magnitude, where a pairwise sum differs."""
     from superfacets.inputs.bounds import column_bounds, column_means, finite_rows
 
-    monkeypatch.setattr(native, "fallbacks", {})  # (this test's calls alone)
     rng = np.random.default_rng(11)
     n = 200_000
     a = rng.normal(size=(n, 3)) * [1.0, 1e-3, 1e6]
@@ -845,8 +864,8 @@ def test_bounds_and_finite_rows_of_large_arrays_are_numpys(monkeypatch, threads)
                 np.array([x[:, j].max() for j in range(3)]),
                 np.isfinite(x).all(axis=1))
         ref = np.empty(3), np.empty(3), np.empty(n, dtype=bool)
-        native.reference("columns.column_bounds")(x, ref[0], ref[1])
-        native.reference("columns.finite_rows")(x, ref[2])
+        reference("columns.column_bounds")(x, ref[0], ref[1])
+        reference("columns.finite_rows")(x, ref[2])
         with monkeypatch.context() as m:
             m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
             got = (*column_bounds(x), finite_rows(x))
@@ -854,7 +873,7 @@ def test_bounds_and_finite_rows_of_large_arrays_are_numpys(monkeypatch, threads)
             np.testing.assert_array_equal(g, w)
             np.testing.assert_array_equal(r, w)
         means, ref_means = column_means(x), np.empty(3)  # (one thread: the rows in order)
-        native.reference("columns.column_means")(x, ref_means)
+        reference("columns.column_means")(x, ref_means)
         np.testing.assert_array_equal(means, x.mean(axis=0))
         np.testing.assert_array_equal(ref_means, x.mean(axis=0))
     assert np.isnan(got[0][1:]).all() and got[0][0] == -7e6 and not got[2][[0, 17]].any()
@@ -863,7 +882,6 @@ def test_bounds_and_finite_rows_of_large_arrays_are_numpys(monkeypatch, threads)
     np.testing.assert_array_equal(column_means(y), y.mean(axis=0))
     assert not np.array_equal(column_means(y), np.array([np.sum(y[:, j]) for j in
                                                          range(3)]) / n)
-    assert not native.fallbacks
 
 
 @needs_cxx
@@ -875,7 +893,6 @@ def test_gathers_of_large_index_arrays_are_numpys_take(monkeypatch, threads):
     with IndexError, counted alike by both kernels."""
     from superfacets._runtime.arrays import GATHER_MIN, gather
 
-    monkeypatch.setattr(native, "fallbacks", {})  # (this test's calls alone)
     rng = np.random.default_rng(12)
     n = 3 * GATHER_MIN + 17
     for vt in (np.int32, np.int64):
@@ -885,7 +902,7 @@ def test_gathers_of_large_index_arrays_are_numpys_take(monkeypatch, threads):
             index[[0, n // 2, n - 1]] = [values.shape[0] - 1, 0, 1]
             want = np.take(values, index)
             ref = np.zeros(n, dtype=vt)
-            assert native.reference("columns.gather")(values, index, ref) == 0
+            assert reference("columns.gather")(values, index, ref) == 0
             out = np.zeros(n, dtype=vt)
             with monkeypatch.context() as m:
                 m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
@@ -899,8 +916,7 @@ def test_gathers_of_large_index_arrays_are_numpys_take(monkeypatch, threads):
             with monkeypatch.context() as m, pytest.raises(IndexError, match="2 of"):
                 m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
                 gather(values, bad)
-            assert native.reference("columns.gather")(values, bad, ref) == 2
-    assert not native.fallbacks
+            assert reference("columns.gather")(values, bad, ref) == 2
 
 
 @needs_cxx
@@ -911,7 +927,6 @@ def test_border_shares_of_a_large_point_graph_are_numpys(monkeypatch, threads):
     expression's values to the bit, and numba's, with degrees of 0 and 1 and zero areas."""
     from superfacets.elements.points import _shares
 
-    monkeypatch.setattr(native, "fallbacks", {})  # (this test's calls alone)
     rng = np.random.default_rng(13)
     n = 150_000
     deg = rng.integers(0, 25, n)
@@ -927,13 +942,12 @@ def test_border_shares_of_a_large_point_graph_are_numpys(monkeypatch, threads):
     g.indptr = indptr
     want = 2.0 * np.sqrt(np.pi * area) / np.maximum(np.diff(indptr).astype(np.float64), 1.0)
     ref = np.empty(n)
-    native.reference("geometry.border_shares")(indptr, area, ref)
+    reference("geometry.border_shares")(indptr, area, ref)
     with monkeypatch.context() as m:
         m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
         got = _shares(area, g)["border_shares"]
     np.testing.assert_array_equal(got, want)
     np.testing.assert_array_equal(ref, want)
-    assert not native.fallbacks
 
 
 @needs_cxx
@@ -942,7 +956,6 @@ def test_label_pairs_are_numpys_unique_with_inverse(monkeypatch, dtype):
     """Known answer: the superfacet graph's borders (each crossing's two labels, lower
     first, grouped) are ``np.unique(lo * k + hi, return_inverse=True)``, compiled and
     numba, with pairs listed either way round, repeated, of equal labels, and none."""
-    monkeypatch.setattr(native, "fallbacks", {})  # (this test's calls alone)
     rng = np.random.default_rng(18)
     n, k = 50_000, 700
     labels = rng.integers(0, k, n)
@@ -951,14 +964,13 @@ def test_label_pairs_are_numpys_unique_with_inverse(monkeypatch, dtype):
         pairs[: m // 10] = pairs[m // 10: 2 * (m // 10)]  # repeats
         a, b = labels[pairs[:, 0]], labels[pairs[:, 1]]
         want, want_inv = np.unique(np.minimum(a, b) * k + np.maximum(a, b), return_inverse=True)
-        for fn in (native.kernel("borders.label_pairs"), native.reference("borders.label_pairs")):
+        for fn in (native.kernel("borders.label_pairs"), reference("borders.label_pairs")):
             inv = np.empty(m, dtype=np.int64)
             key = fn(labels, pairs, k, inv)
             np.testing.assert_array_equal(key, want)
             np.testing.assert_array_equal(inv, want_inv)
             assert key.dtype == np.int64
     assert (a == b).any() and want.size > 1000
-    assert not native.fallbacks
 
 
 @needs_cxx
@@ -970,7 +982,6 @@ def test_nearest_row_of_a_large_array_is_numpys_argmin(monkeypatch, threads):
     numpy's first NaN where a distance is NaN."""
     from superfacets.inputs.bounds import nearest_row
 
-    monkeypatch.setattr(native, "fallbacks", {})  # (this test's calls alone)
     rng = np.random.default_rng(19)
     n = 300_000
     a = rng.integers(-3, 4, (n, 3)).astype(np.float64)  # many equal distances
@@ -988,9 +999,8 @@ def test_nearest_row_of_a_large_array_is_numpys_argmin(monkeypatch, threads):
         with monkeypatch.context() as m:
             m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
             assert nearest_row(arr, p) == expected
-        ref = native.reference("columns.nearest_row")(arr, p)
+        ref = reference("columns.nearest_row")(arr, p)
         assert ref == (-1 if np.isnan(arr).any() else expected)
-    assert not native.fallbacks
 
 
 def _ball_moments_by_numpy(indptr, indices, pos, pick, rings):
@@ -1030,7 +1040,6 @@ def test_neighbourhood_moments_are_numpys_sums_in_order(monkeypatch, threads):
     another order differs)."""
     from superfacets.method.merges import _plane_residual
 
-    monkeypatch.setattr(native, "fallbacks", {})  # (this test's calls alone)
     rng = np.random.default_rng(15)
     n = 40_000
     deg = rng.integers(0, 14, n)
@@ -1051,7 +1060,7 @@ def test_neighbourhood_moments_are_numpys_sums_in_order(monkeypatch, threads):
             with monkeypatch.context() as m:
                 m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
                 kernel(indptr, idx, pos, pick, rings, cov, radius)
-            native.reference("normals.neighbourhood_moments")(indptr, idx, pos, pick, rings,
+            reference("normals.neighbourhood_moments")(indptr, idx, pos, pick, rings,
                                                               ref_cov, ref_radius)
             for got in ((cov, radius), (ref_cov, ref_radius)):
                 np.testing.assert_array_equal(got[0], want_cov)
@@ -1066,7 +1075,6 @@ def test_neighbourhood_moments_are_numpys_sums_in_order(monkeypatch, threads):
     g.indptr, g.indices, g.positions = indptr, indices.astype(np.int32), pos
     low, radius = _plane_residual(g, pick, 2)
     np.testing.assert_array_equal(low, np.linalg.eigvalsh(want_cov)[:, 0])
-    assert not native.fallbacks
 
 
 @needs_cxx
@@ -1078,7 +1086,6 @@ def test_key_windows_of_a_large_cloud_are_numpys(monkeypatch, threads):
     past the string's end."""
     from superfacets.elements import points
 
-    monkeypatch.setattr(native, "fallbacks", {})  # (this test's calls alone)
     rng = np.random.default_rng(14)
     n = 70_000
     keys = rng.integers(0, 2**63, (n, 3), dtype=np.int64).view(np.uint64)
@@ -1087,7 +1094,7 @@ def test_key_windows_of_a_large_cloud_are_numpys(monkeypatch, threads):
     for start in (0, 1, 30, 62, 63, 64, 100, 125, 126, 127, 150, 188):
         want = points._key_bits(small, start)
         ref = np.empty(n, dtype=np.uint64)
-        native.reference("geometry.key_window")(keys, start, ref)
+        reference("geometry.key_window")(keys, start, ref)
         with monkeypatch.context() as m:
             m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
             got = points._key_bits(keys, start)
@@ -1095,7 +1102,6 @@ def test_key_windows_of_a_large_cloud_are_numpys(monkeypatch, threads):
         np.testing.assert_array_equal(ref, got, err_msg=str(start))
         bits = "".join(format(int(w), "063b") for w in keys[2]) + "0" * 64  # row 2's
         assert int(got[2]) == int(bits[start:start + 64], 2), start
-    assert not native.fallbacks
 
 
 @needs_cxx
@@ -1118,7 +1124,7 @@ def test_float32_normals_are_read_as_their_float64_copy():
     w = rng.random(n)
     m = pairs.shape[0]
     out = {}
-    for get in (native.kernel, native.reference):
+    for get in (native.kernel, reference):
         for nor in (nor32, nor64):
             terms = [np.empty(m), np.empty(m), np.empty(m, dtype=bool)]
             get("geometry.point_terms")(pos, nor, pairs, 0, m, *terms)
@@ -1127,7 +1133,7 @@ def test_float32_normals_are_read_as_their_float64_copy():
             sums = [np.zeros(k), np.zeros((k, 3)), np.zeros((k, 3))]
             get("geometry.label_sums")(labels, w, pos, nor, *sums)
             out[get, nor.dtype.name] = (tuple(terms), tuple(csr), tuple(sums))
-    first = out[native.reference, "float64"]
+    first = out[reference, "float64"]
     for got in out.values():
         assert _same(got, first)
     # the float32 products would round otherwise
@@ -1148,7 +1154,7 @@ def test_plain_classification_matches_numba():
     centers[:25] = np.linspace(0, g.n_elements - 1, 25).astype(np.int64)
     out = []
     for fn in (native.kernel("expand.classify_bounded"),
-               native.reference("expand.classify_bounded")):
+               reference("expand.classify_bounded")):
         spaces = Workspaces(g.n_elements, w)
         c, dist = centers.copy(), np.empty(g.n_elements)
         label = np.empty(g.n_elements, dtype=np.int32)
@@ -1161,23 +1167,33 @@ def test_plain_classification_matches_numba():
 
 
 @needs_cxx
-def test_other_dtypes_go_to_numba():
-    """A compiled kernel takes the run's dtypes only; anything else is numba's, the same
-    answer (and the reason kept)."""
-    native.fallbacks.clear()
+def test_other_dtypes_and_layouts_are_refused_before_any_work():
+    """A compiled kernel takes the run's dtypes and C-contiguous arrays only; anything
+    else (another width, a strided view, a read-only output, a non-array) raises its
+    Mismatch, a TypeError naming the argument, and writes nothing."""
     edges = np.array([[0, 1], [1, 2]], dtype=np.int64)
     v = np.array([[0.0, 0, 0], [3, 4, 0], [3, 4, 12]])
     out = np.empty(2)
     native.kernel("geometry.edge_lengths")(v, edges, out)  # int64 edges: compiled too
-    assert out.tolist() == [5.0, 12.0] and not native.fallbacks
-    out32 = np.empty(2, dtype=np.float32)
-    native.kernel("geometry.edge_lengths")(v.astype(np.float32), edges, out32)
-    assert out32.tolist() == [5.0, 12.0]
-    assert "vertices" in native.fallbacks["geometry.edge_lengths"]
+    assert out.tolist() == [5.0, 12.0]
+    out32 = np.full(2, 7.0, dtype=np.float32)
+    with pytest.raises(native.require().Mismatch, match="vertices"):
+        native.kernel("geometry.edge_lengths")(v.astype(np.float32), edges, out32)
+    assert out32.tolist() == [7.0, 7.0]
+    assert issubclass(native.require().Mismatch, TypeError)
     strided = np.arange(10, dtype=np.int64)[::2]
-    comp = native.kernel("adjacency.same_label_components")(
-        np.array([0, 1, 2, 3, 4, 4]), np.array([1, 0, 3, 2], dtype=np.int32), strided)
-    assert comp.tolist() == [0, 1, 2, 3, 4]
+    with pytest.raises(TypeError, match="labels"):
+        native.kernel("adjacency.same_label_components")(
+            np.array([0, 1, 2, 3, 4, 4]), np.array([1, 0, 3, 2], dtype=np.int32), strided)
+    ro = np.empty(2)
+    ro.setflags(write=False)
+    with pytest.raises(TypeError, match="read-only"):
+        native.kernel("geometry.edge_lengths")(v, edges, ro)
+    with pytest.raises(TypeError, match="vertices"):
+        native.kernel("geometry.edge_lengths")(v.tolist(), edges, out)
+    big_endian = v.astype(">f8")
+    with pytest.raises(TypeError, match="vertices"):
+        native.kernel("geometry.edge_lengths")(big_endian, edges, out)
 
 
 @needs_cxx
@@ -1193,15 +1209,9 @@ def test_default_runs_load_no_numba():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.split()
     assert out == ["False", "True"]
-    env_off = dict(__import__("os").environ, SUPERFACETS_NATIVE="0")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True, env=env_off).stdout.split()
-    assert out == ["True", "False"]  # turned off: numba does it all
-    for env, said in ((None, "(compiled kernels)"),
-                      (env_off, "numba kernels only: the compiled ones are turned off")):
-        out = subprocess.run([sys.executable, "-m", "superfacets", "--version"], env=env,
-                             capture_output=True, text=True, check=True).stdout
-        assert said in out, out
+    out = subprocess.run([sys.executable, "-m", "superfacets", "--version"],
+                         capture_output=True, text=True, check=True).stdout
+    assert "compiled kernels" in out and "C++" in out, out
 
 
 def _grid_csr(side: int, order: np.ndarray | None = None):
@@ -1271,7 +1281,7 @@ def test_exact_search_by_blocks_matches_numba_pass_by_pass(monkeypatch, layout):
         got = {}
         for fn, (dist, label, queue, qlab, first, mark) in states.items():
             cs = centers.copy()
-            call = getattr(native, fn)
+            call = _implementation(fn)
             with monkeypatch.context() as mp:
                 if fn == "kernel":  # (numba compiled with its own count)
                     mp.setenv("SUPERFACETS_KERNEL_THREADS", str(1 + step % 3))
@@ -1322,7 +1332,7 @@ def test_orientation_by_blocks_matches_numbas_prim(monkeypatch, layout):
     ways = np.array([[1.0, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]]) / np.sqrt(3.0)
     normals = ways[rng.integers(0, 4, m)] * rng.choice([-1.0, 1.0], (m, 1))
     ref_sign, ref_comp = np.empty(m, np.int8), np.empty(m, np.int64)
-    n_ref = native.reference("orient.propagate_signs")(indptr, indices, normals, ref_sign,
+    n_ref = reference("orient.propagate_signs")(indptr, indices, normals, ref_sign,
                                                        ref_comp)
     assert n_ref == 2 and (ref_sign == -1).any() and (ref_sign == 1).any()
     for threads in ("1", "2", "3"):
@@ -1361,7 +1371,7 @@ def test_voronoi_cells_by_blocks_go_to_the_first_seed_on_ties(monkeypatch):
         with monkeypatch.context() as mp:
             if threads:
                 mp.setenv("SUPERFACETS_KERNEL_THREADS", threads)
-            assert getattr(native, fn)("voronoi.nearest_seed")(
+            assert _implementation(fn)("voronoi.nearest_seed")(
                 indptr, indices, w, seeds, 0, dist, label, queue, 4.0) == 0
         assert np.array_equal(label, first) and np.array_equal(dist, near)
 
@@ -1369,12 +1379,12 @@ def test_voronoi_cells_by_blocks_go_to_the_first_seed_on_ties(monkeypatch):
 @needs_cxx
 def test_a_runs_n_threads_bounds_the_compiled_kernels(monkeypatch):
     """A run's ``n_threads`` is the most threads any compiled kernel starts while it lasts
-    (they read ``NUMBA_NUM_THREADS`` or the CPUs otherwise), nested limits restored: a
-    run asked for one thread uses one."""
+    (they read ``SUPERFACETS_NUM_THREADS`` or the CPUs otherwise), nested limits
+    restored: a run asked for one thread uses one."""
     from superfacets._runtime.threads import using
 
-    with monkeypatch.context() as m:  # (no numba compiles in this block)
-        m.setenv("NUMBA_NUM_THREADS", "3")
+    with monkeypatch.context() as m:
+        m.setenv("SUPERFACETS_NUM_THREADS", "3")
         assert native._cxx.threads() == 3
         m.setenv("SUPERFACETS_KERNEL_THREADS", "5")  # the compiled kernels' own, first
         assert native._cxx.threads() == 5
@@ -1434,7 +1444,7 @@ def test_orientation_by_blocks_with_long_cycles_matches_numba(chords):
     got = {}
     for fn in ("kernel", "reference"):
         sign, comp = np.empty(n, np.int8), np.empty(n, np.int64)
-        k = getattr(native, fn)("orient.propagate_signs")(indptr, indices, normals, sign, comp)
+        k = _implementation(fn)("orient.propagate_signs")(indptr, indices, normals, sign, comp)
         got[fn] = (k, sign, comp)
     assert got["kernel"][0] == got["reference"][0] == 1
     assert np.array_equal(got["kernel"][1], got["reference"][1])
@@ -1465,7 +1475,7 @@ def test_farthest_points_by_groups_of_blocks_match_numba(source):
     got = {}
     for fn in ("kernel", "reference"):
         out = np.empty(1500, np.int64)
-        getattr(native, fn)("farthest.farthest_point_blocked")(c, 1500, 17, out, order, bstart,
+        _implementation(fn)("farthest.farthest_point_blocked")(c, 1500, 17, out, order, bstart,
                                                                bcenter, bradius, *extra)
         got[fn] = out
     assert np.array_equal(got["kernel"], got["reference"])

@@ -91,20 +91,13 @@ def test_check_choice_bool_threads_and_n_segments():
         check_n_segments(5, 4, "points")
 
 
-def test_thread_count_while_numba_is_half_imported(monkeypatch):
-    # the warm-up thread may be importing numba while a run checks its arguments:
-    # a module without its config yet must not break the check
-    import sys
-    import types
-
-    half = types.ModuleType("numba")  # as sys.modules holds it mid-import
-    monkeypatch.setitem(sys.modules, "numba", half)
-    monkeypatch.setenv("NUMBA_NUM_THREADS", "3")
+def test_thread_count_default_reads_the_environment(monkeypatch):
+    monkeypatch.setenv("SUPERFACETS_NUM_THREADS", "3")
     assert check_threads(None) == 3
-    half.config = types.SimpleNamespace()  # config module present, not yet filled
-    assert check_threads(None) == 3
-    half.config.NUMBA_NUM_THREADS = 5
-    assert check_threads(None) == 5
+    monkeypatch.setenv("SUPERFACETS_NUM_THREADS", "many")  # not a number: the cores
+    assert check_threads(None) >= 1
+    monkeypatch.delenv("SUPERFACETS_NUM_THREADS")
+    assert check_threads(None) == len(__import__("os").sched_getaffinity(0))
 
 
 def test_resolve_resolves_init_and_refuses_unknown_names():

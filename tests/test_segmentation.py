@@ -5,11 +5,11 @@ import numpy as np
 import pytest
 import trimesh
 from conftest import MESHES, TABLE1, grid_mesh, need
+from oracle.expand import MERGE, expand
 from scipy.sparse import csr_array
 from scipy.sparse.csgraph import dijkstra
 
 from superfacets import InvalidMeshError, Mesh, ParameterError, read_mesh, segment, superfacets
-from superfacets._kernels.expand import MERGE, expand
 from superfacets.api.segmentation import pipeline
 from superfacets.elements import face_graph
 from superfacets.method.classify import Exact
@@ -220,7 +220,7 @@ def test_bounded_expansion_is_dijkstra_inside_the_window(sphere):
 def test_interrupted_expansion_leaves_its_scratch_clean(sphere):
     """An expansion stopped by a full record or queue puts ``inf`` back in
     ``local``, so the caller can grow the buffer and run it again."""
-    from superfacets._kernels.expand import QUEUE_FULL, RECORD_FULL
+    from oracle.expand import QUEUE_FULL, RECORD_FULL
 
     g = face_graph(sphere)
     cw = paper_weights(sphere, alpha=200)[g.dual_edge]
@@ -546,22 +546,14 @@ def test_cycle_jump_gives_the_labels_of_running_every_pass(psb, mesh_id, max_ite
     assert (a.n_iter, a.converged, a.n_orphan_seeds) == (b.n_iter, b.converged, b.n_orphan_seeds)
 
 
-def test_import_does_no_work_and_warmup_starts_only_when_asked():
-    import os
+def test_import_starts_no_thread():
     import subprocess
     import sys
 
-    code = ("import threading, superfacets, superfacets._runtime.warmup as w; "
-            "print(threading.active_count(), w._thread is None); w.start(); t = w._thread; "
-            "print(t is not None and (t.join(30) or not t.is_alive()))")
-    def run(env):
-        return subprocess.run([sys.executable, "-c", code], capture_output=True,
-                                         text=True, env=env, check=True).stdout.split("\n")
-    env = {k: v for k, v in os.environ.items() if k != "SUPERFACETS_NO_WARMUP"}
-    out = run(env)
-    assert out[0] == "1 True"  # no thread started by the import
-    assert out[1] == "True"  # started when asked, and finishes
-    assert run({**env, "SUPERFACETS_NO_WARMUP": "1"})[1] == "False"
+    code = "import threading, superfacets; print(threading.active_count())"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.split()
+    assert out == ["1"]  # nothing started by the import
 
 
 def test_tol_zero_is_the_paper_rule_and_tol_stops_early(psb):

@@ -360,7 +360,8 @@ def test_one_pass_follows_the_swaps_on_faces_two_on_vertices(monkeypatch):
 
 def test_label_pairs_from_the_csr_layout_equal_those_of_the_pairs(sphere):
     # the adjacent superfacets of a swap round, read without the graph's pairs
-    from superfacets._kernels.splitmerge import label_pairs
+    from oracle.splitmerge import label_pairs
+
     from superfacets.elements import face_graph
 
     g = face_graph(sphere)

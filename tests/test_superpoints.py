@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 import trimesh
 from conftest import SHARED, grid_mesh, need
+from oracle import reference
 from scipy.sparse.csgraph import connected_components
 
 from superfacets import Mesh, segment
@@ -22,6 +23,13 @@ from superfacets.evaluation.datasets.sampling import sample_points, vertex_groun
 from superfacets.evaluation.metrics import evaluate
 from superfacets.inputs.cloud import InvalidCloudError, PointCloud
 from superfacets.io import read_cloud, read_input, read_labels
+
+
+def _implementation(which: str):
+    """The compiled kernel (``"kernel"``) or its numba reference (``"reference"``)."""
+    from superfacets._kernels import native
+
+    return native.kernel if which == "kernel" else reference
 
 
 def connected(graph, labels) -> bool:
@@ -102,9 +110,8 @@ def test_orientation_follows_the_minimum_spanning_tree_with_ties_broken_by_ends(
     components (the compiled kernel and numba's)."""
     from scipy.sparse import coo_array
 
-    from superfacets._kernels import native
 
-    propagate_signs = getattr(native, source)("orient.propagate_signs")
+    propagate_signs = _implementation(source)("orient.propagate_signs")
     rng = np.random.default_rng(3)
     n = 400
     normals = np.round(rng.normal(size=(n, 3)), 0)

@@ -106,7 +106,6 @@ __all__ = [
 #: superfacets.metrics`` still works for one release, with a DeprecationWarning, and gives
 #: the same module object as ``superfacets.evaluation.metrics``.
 _MOVED = {'_threads': '_runtime.threads',
-          'warmup': '_runtime.warmup',
           'interrupts': '_runtime.interrupts',
           'extras': '_runtime.extras',
           'mesh': 'inputs.mesh',

@@ -306,7 +306,8 @@ def max_threads() -> int:
 
 
 def check_threads(n_threads) -> int:
-    """Resolve ``n_threads``: None gives numba's thread count (``NUMBA_NUM_THREADS``).
+    """Resolve ``n_threads``: None gives ``SUPERFACETS_NUM_THREADS`` where set, else the
+    CPUs this process may run on.
 
     Parameters
     ----------
@@ -328,17 +329,9 @@ def check_threads(n_threads) -> int:
     """
     if n_threads is None:
         import os
-        import sys
 
-        # numba's setting once numba is imported; while another thread (the
-        # warm-up) is still importing it, its config may not be there yet
-        config = getattr(sys.modules.get("numba"), "config", None)
-        value = getattr(config, "NUMBA_NUM_THREADS", None)
-        if value is not None:
-            return int(value)
-        # numba's own rule, without importing numba (checking arguments stays light)
         try:
-            return max(1, int(os.environ["NUMBA_NUM_THREADS"]))
+            return max(1, int(os.environ["SUPERFACETS_NUM_THREADS"]))
         except (KeyError, ValueError):
             try:
                 return max(1, len(os.sched_getaffinity(0)))

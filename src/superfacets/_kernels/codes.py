@@ -1,5 +1,5 @@
-"""The modes and status codes the expansion kernels share (numba-free: the compiled
-kernels and their callers read them without loading numba)."""
+"""The modes and status codes the expansion kernels share (their callers and the
+reference kernels read them here)."""
 
 #: ``mode`` of ``expand``: label faces that get a strictly lower distance
 MERGE = 0

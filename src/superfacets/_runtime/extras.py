@@ -1,7 +1,8 @@
 """Optional dependencies: import one, or say which extra to install.
 
 The core (segmenting, evaluating, writing labels, meshes and HTML pages)
-needs numpy, scipy, numba, trimesh and tqdm. The rest comes with extras:
+needs numpy, scipy, trimesh, tqdm and plyfile (and the compiled kernels, built at
+install). The rest comes with extras:
 
 - ``render``: pictures and the viewer window (pyvista, Pillow);
 - ``report``: result tables and figures (pandas, matplotlib);

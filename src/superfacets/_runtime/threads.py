@@ -18,7 +18,7 @@ _limit: ContextVar[int | None] = ContextVar("superfacets_threads", default=None)
 
 def default_threads() -> int:
     """The thread count of the run in progress (:func:`using`), else the package's
-    default (numba's, as ``n_threads=None``)."""
+    default (as ``n_threads=None``: ``SUPERFACETS_NUM_THREADS`` or the CPUs)."""
     n = _limit.get()
     if n is not None:
         return n
@@ -32,7 +32,7 @@ def using(n_threads: int):
     """Within the block, :func:`split` makes at most ``n_threads`` ranges and the
     compiled kernels start at most ``n_threads`` threads (the pipeline's ``n_threads``
     also bounds the graph build it triggers). The compiled kernels' limit is the
-    process's, as ``NUMBA_NUM_THREADS`` is: runs on several Python threads at once
+    process's, as ``SUPERFACETS_NUM_THREADS`` is: runs on several Python threads at once
     share the last one set."""
     from .._kernels import native
 

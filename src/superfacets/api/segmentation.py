@@ -196,8 +196,8 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, features=None,
         Show a progress bar on stderr: the set-up stages by name (face graph,
         weights, init), then the iterations.
     n_threads : int, optional
-        Threads of the run (``>= 1``; default: numba's thread count,
-        ``NUMBA_NUM_THREADS``, normally the number of cores): the graph build
+        Threads of the run (``>= 1``; default: ``SUPERFACETS_NUM_THREADS``
+        where set, else the number of cores this process may use): the graph build
         and the weights' terms it triggers, the expansions, the split-and-merge
         searches, the clean-up's cuts and every compiled kernel (a limit of the
         process while the run lasts). The labels do not depend on it.

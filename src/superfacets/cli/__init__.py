@@ -27,8 +27,8 @@ __all__ = ["main", "build_parser"]
 
 
 class _Version(argparse.Action):
-    """``--version``: the version, and which kernels a run uses (the compiled ones, or
-    numba's alone where no C++ compiler was found at install time)."""
+    """``--version``: the version, and the kernels a run uses (the compiled ones, with the
+    threads they may take; or why they cannot run)."""
 
     def __init__(self, option_strings, version, dest=argparse.SUPPRESS,
                  default=argparse.SUPPRESS, help=None):
@@ -38,8 +38,12 @@ class _Version(argparse.Action):
     def __call__(self, parser, namespace, values, option_string=None):
         from .._kernels import native
 
-        kernels = ("compiled kernels" if native.available() else
-                   f"numba kernels only: the compiled ones are {native.missing_because()}")
+        if native.available():
+            cxx = native.require()
+            kernels = (f"compiled kernels: C++ ({cxx.compiler}), up to {cxx.threads()} "
+                       "threads")
+        else:
+            kernels = f"no kernels: the compiled ones are {native.missing_because()}"
         print(f"{self.version} ({kernels})")
         parser.exit()
 

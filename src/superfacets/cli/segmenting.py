@@ -180,8 +180,7 @@ def _tiny_hint(result) -> str:
 
 
 def cmd_segment(args) -> int:
-    from .._kernels import native
-    from .._runtime import interrupts, warmup
+    from .._runtime import interrupts
     from ..errors import ParameterError, SuperfacetsError
     from ..method.params import resolve
     from ..viz.outputs import JoinedResult, write_result
@@ -241,11 +240,6 @@ def cmd_segment(args) -> int:
         raise ParameterError("two outputs go to the same file")
     kwargs = dict(method_kwargs(args), **element_kwargs(args))
     resolve(n_segments=args.n_segments, radius=args.radius, **kwargs)  # before the read
-    if Path(args.mesh).is_file():  # no numba work for bad arguments or a missing input
-        if not args.quiet:  # said only where numba compiles: the first run after installing
-            native.before_numba(warmup.say_if_cold)
-        if _needs_numba():
-            warmup.start()  # numba's start-up in a thread, while the rest is imported and read
     t0 = time.perf_counter()
     data = scan_cloud(read_usable(args.mesh, clouds=True), args)
     interrupts.check()  # a Ctrl-C during the start-up and the reading
@@ -358,18 +352,7 @@ def cmd_baseline(args) -> int:
     return 0
 
 
-def _needs_numba() -> bool:
-    """Whether a default run will use numba kernels: only where the compiled kernels are
-    not built (with them, every kind runs compiled: numba's start-up is not warmed for
-    nothing; an option that needs a numba kernel loads it then)."""
-    from .._kernels import native
-
-    return not native.available()
-
-
 def cmd_demo(args) -> int:
-    from .._kernels import native
-    from .._runtime import warmup
     from ..api.segmentation import segment
     from ..inputs.shapes import creature
     from ..io import write_colored_mesh, write_labels, write_mesh
@@ -380,10 +363,6 @@ def cmd_demo(args) -> int:
 
     check_int("--resolution", args.resolution, lo=16, hi=300)
     resolve(n_segments=args.n_segments, **method_kwargs(args))  # every option, before work
-    if not args.quiet:
-        native.before_numba(warmup.say_if_cold)
-    if _needs_numba():
-        warmup.start()
     out = Path(args.output_dir)
     if out.exists() and not out.is_dir():
         raise NotADirectoryError(f"{out}: exists and is not a folder")

@@ -214,7 +214,7 @@ def flood_labels(graph, csr_weights: np.ndarray, radius: float,
     labels = np.empty(m, dtype=np.int64)
     inv_width, n_buckets = bucket_width(csr_weights)
     ws = Workspace(m, n_buckets, g.indices.shape[0] + m + 1)
-    flood = native.reference("flood.flood")
+    flood = native.kernel("expand.flood")
     with_room(ws, lambda ws: flood(g.indptr, g.indices, csr_weights, c, order,
                                    float((window * radius) ** 2), labels, ws.local,
                                    ws.queue, inv_width, ws.vis))

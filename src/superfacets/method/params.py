@@ -111,7 +111,8 @@ class Parameter:
     cli : str or None
         The command line's option (``segment``), or None.
     auto : bool
-        None is resolved by ``check`` itself (``n_threads``: numba's thread count).
+        None is resolved by ``check`` itself (``n_threads``: ``SUPERFACETS_NUM_THREADS`` or the
+        cores).
 
     Examples
     --------
@@ -179,7 +180,7 @@ def _declare() -> tuple[Parameter, ...]:
           cli="--coarsen"),
         P("progress", False, "bool", "a progress bar on stderr", bool, cli="--progress"),
         P("n_threads", None, "int or None", "threads of the run, 1..max_threads(); None: "
-          "numba's thread count", check_threads, cli="--threads", auto=True),
+          "SUPERFACETS_NUM_THREADS or the cores", check_threads, cli="--threads", auto=True),
         P("elements", None, "str or None", "what is segmented: " + ", ".join(ALL_KINDS) +
           "; None: the input's default", lambda v: check_choice("elements", v, tuple(KINDS)),
           cli="--elements"),

@@ -223,17 +223,17 @@ void solve_one(const Bands& B, const i64* members, i64 nb, i64 la, i64 lb, i64 p
 
 }  // namespace
 
-void band_distances(py::handle indptr_, py::handle indices_, py::handle dual_edge_,
-                    py::handle geo_, py::handle length_, py::handle labels_, py::handle pinned_,
-                    double limit, py::handle dist_, py::handle partner_, py::handle hkey_,
-                    py::handle hval_) {
+void band_distances(nb::handle indptr_, nb::handle indices_, nb::handle dual_edge_,
+                    nb::handle geo_, nb::handle length_, nb::handle labels_, nb::handle pinned_,
+                    double limit, nb::handle dist_, nb::handle partner_, nb::handle hkey_,
+                    nb::handle hval_) {
     In<i64> indptr(indptr_, "indptr"), labels(labels_, "labels");
     In<i32> indices(indices_, "indices"), dual_edge(dual_edge_, "dual_edge");
     In<double> geo(geo_, "geo"), length(length_, "length");
     In<bool> pinned(pinned_, "pinned");
     Out<double> dist(dist_, "dist"), hkey(hkey_, "hkey");
     Out<i64> partner(partner_, "partner"), hval(hval_, "hval");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     const i64 n = labels.n;
     (void)hkey;  // (the heap's arrays of the numba kernel: here one heap per thread)
     (void)hval;
@@ -320,11 +320,11 @@ void band_distances(py::handle indptr_, py::handle indices_, py::handle dual_edg
     });
 }
 
-void solve_bands(i64 p0, i64 p1, py::handle order_, py::handle starts_, py::handle pair_a_,
-                 py::handle pair_b_, py::handle band_of_, py::handle indptr_,
-                 py::handle indices_, py::handle cut_cost_, py::handle labels_,
-                 py::handle sizes_, py::handle positions_, py::handle means_, double smooth,
-                 py::handle out_) {
+void solve_bands(i64 p0, i64 p1, nb::handle order_, nb::handle starts_, nb::handle pair_a_,
+                 nb::handle pair_b_, nb::handle band_of_, nb::handle indptr_,
+                 nb::handle indices_, nb::handle cut_cost_, nb::handle labels_,
+                 nb::handle sizes_, nb::handle positions_, nb::handle means_, double smooth,
+                 nb::handle out_) {
     In<i64> order(order_, "order"), starts(starts_, "starts"), pair_a(pair_a_, "pair_a"),
         pair_b(pair_b_, "pair_b"), band_of(band_of_, "band_of"), indptr(indptr_, "indptr"),
         labels(labels_, "labels");
@@ -333,7 +333,7 @@ void solve_bands(i64 p0, i64 p1, py::handle order_, py::handle starts_, py::hand
         positions(positions_, "positions"), means(means_, "means");
     Out<i64> out(out_, "out");
     if (positions.cols != 3 || means.cols != 3) throw Mismatch("argument positions");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     // (written for a band's elements before being read, as numba's np.empty: the pages
     // of the elements in no band of this call are never touched; the bands hold disjoint
     // elements, so the threads share it)
@@ -380,7 +380,7 @@ void solve_bands(i64 p0, i64 p1, py::handle order_, py::handle starts_, py::hand
     });
 }
 
-void bind_cleanup(py::module_& m) {
+void bind_cleanup(nb::module_& m) {
     m.def("band_distances", &band_distances);
     m.def("solve_bands", &solve_bands);
 }

@@ -1,16 +1,17 @@
-// The compiled kernels' common ground: numpy arrays checked without conversion, the
-// binary heap, and the exception that sends a call back to the numba kernel.
+// The compiled kernels' common ground: numpy arrays read through the buffer protocol and
+// checked without conversion, the threads, the binary heap and the bucket queue.
 //
-// Each kernel here is the numba kernel of the same name in superfacets/_kernels, the
-// same operations in the same order (tested bit for bit against it). An argument of
+// Each kernel here has a reference kernel of the same name in tests/oracle (numba): the
+// same operations in the same order, tested bit for bit against it. An argument of
 // another dtype, layout or byte order is never converted: the call raises Mismatch
-// (a TypeError) and superfacets._kernels.native runs the numba kernel instead.
+// (a TypeError naming the argument) before touching any array.
 #pragma once
 
-#include <pybind11/numpy.h>
-#include <pybind11/pybind11.h>
+#include <nanobind/nanobind.h>
 
+#if defined(__linux__)
 #include <sched.h>
+#endif
 
 #include <algorithm>
 #include <atomic>
@@ -18,12 +19,14 @@
 #include <thread>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
-namespace py = pybind11;
+namespace nb = nanobind;
 
 namespace sfk {
 
@@ -32,24 +35,73 @@ using i32 = std::int32_t;
 constexpr double INF = std::numeric_limits<double>::infinity();
 
 // Raised (as superfacets._kernels._cxx.Mismatch, a TypeError) when an argument is not
-// an array of exactly the expected dtype, C-contiguous, in native byte order.
+// an array of exactly the expected dtype, C-contiguous, in native byte order: the
+// caller converts (the kernels never copy or convert an argument).
 struct Mismatch : std::runtime_error {
     using std::runtime_error::runtime_error;
 };
 
+// Whether a buffer's struct format (PEP 3118, as numpy writes it) is the element type T
+// in native byte order (x86-64 and aarch64: little-endian).
 template <class T>
-inline bool is_dtype(const py::dtype& d) {
-    const py::dtype want = py::dtype::of<T>();
-    char order = d.byteorder();
-    bool native = order == '=' || order == '|' || order == '<';  // x86-64, aarch64: little
-    return d.kind() == want.kind() && d.itemsize() == want.itemsize() && native;
+inline bool format_is(const char* f, Py_ssize_t itemsize) {
+    if (!f || itemsize != static_cast<Py_ssize_t>(sizeof(T))) return false;
+    if (*f == '@' || *f == '=' || *f == '<') ++f;
+    if (f[0] == '\0' || f[1] != '\0') return false;
+    const char c = f[0];
+    if constexpr (std::is_same_v<T, bool>) return c == '?';
+    else if constexpr (std::is_floating_point_v<T>) return c == (sizeof(T) == 8 ? 'd' : 'f');
+    else if constexpr (std::is_signed_v<T>)
+        return c == (sizeof(T) == 1 ? 'b' : sizeof(T) == 2 ? 'h' : 0) ||
+               ((c == 'i' || c == 'l' || c == 'q') && sizeof(T) >= 4);
+    else
+        return c == (sizeof(T) == 1 ? 'B' : sizeof(T) == 2 ? 'H' : 0) ||
+               ((c == 'I' || c == 'L' || c == 'Q') && sizeof(T) >= 4);
 }
 
+// An argument's buffer (the buffer protocol: numpy arrays and their views), read once:
+// its data, shape, strides, and whether it is C-contiguous and writable. The caller
+// holds the array for the call, so the pointer stays valid after the release.
+struct Buffer {
+    void* data = nullptr;
+    int ndim = 0;
+    i64 shape[2] = {1, 1};  // (of the first two axes)
+    i64 strides[2] = {0, 0};
+    i64 size = 1;
+    bool contiguous = false, writable = false;
+
+    template <class T>
+    static bool read(nb::handle h, Buffer& b) {
+        if (!h.is_valid() || !PyObject_CheckBuffer(h.ptr())) return false;
+        Py_buffer v;
+        if (PyObject_GetBuffer(h.ptr(), &v, PyBUF_RECORDS_RO) != 0) {
+            PyErr_Clear();
+            return false;
+        }
+        bool ok = format_is<T>(v.format, v.itemsize);
+        if (ok) {
+            b.data = v.buf;
+            b.ndim = v.ndim;
+            b.size = 1;
+            for (int d = 0; d < v.ndim; ++d) {
+                if (d < 2) {
+                    b.shape[d] = v.shape[d];
+                    b.strides[d] = v.strides ? v.strides[d] : 0;
+                }
+                b.size *= v.shape[d];
+            }
+            b.contiguous = PyBuffer_IsContiguous(&v, 'C') != 0;
+            b.writable = !v.readonly;
+        }
+        PyBuffer_Release(&v);
+        return ok;
+    }
+};
+
 template <class T>
-inline bool matches(py::handle h) {
-    if (!py::isinstance<py::array>(h)) return false;
-    auto a = py::reinterpret_borrow<py::array>(h);
-    return is_dtype<T>(a.dtype()) && (a.flags() & py::array::c_style);
+inline bool matches(nb::handle h) {
+    Buffer b;
+    return Buffer::read<T>(h, b) && b.contiguous;
 }
 
 // A read-only view of an argument: its data and its length along axis 0.
@@ -59,12 +111,13 @@ struct In {
     i64 n = 0;
     i64 cols = 1;
     In() = default;
-    In(py::handle h, const char* name) {
-        if (!matches<T>(h)) throw Mismatch(std::string("argument ") + name);
-        auto a = py::reinterpret_borrow<py::array>(h);
-        p = static_cast<const T*>(a.data());
-        n = a.ndim() ? a.shape(0) : 1;
-        cols = a.ndim() == 2 ? a.shape(1) : 1;
+    In(nb::handle h, const char* name) {
+        Buffer b;
+        if (!Buffer::read<T>(h, b) || !b.contiguous)
+            throw Mismatch(std::string("argument ") + name);
+        p = static_cast<const T*>(b.data);
+        n = b.ndim ? b.shape[0] : 1;
+        cols = b.ndim == 2 ? b.shape[1] : 1;
     }
     const T& operator[](i64 i) const { return p[i]; }
     const T& operator()(i64 i, i64 j) const { return p[i * cols + j]; }
@@ -77,28 +130,43 @@ struct Out {
     i64 n = 0;
     i64 cols = 1;
     Out() = default;
-    Out(py::handle h, const char* name) {
-        if (!matches<T>(h)) throw Mismatch(std::string("argument ") + name);
-        auto a = py::reinterpret_borrow<py::array>(h);
-        if (!a.writeable()) throw Mismatch(std::string("read-only argument ") + name);
-        p = static_cast<T*>(a.mutable_data());
-        n = a.ndim() ? a.shape(0) : 1;
-        cols = a.ndim() == 2 ? a.shape(1) : 1;
+    Out(nb::handle h, const char* name) {
+        Buffer b;
+        if (!Buffer::read<T>(h, b) || !b.contiguous)
+            throw Mismatch(std::string("argument ") + name);
+        if (!b.writable) throw Mismatch(std::string("read-only argument ") + name);
+        p = static_cast<T*>(b.data);
+        n = b.ndim ? b.shape[0] : 1;
+        cols = b.ndim == 2 ? b.shape[1] : 1;
     }
     T& operator[](i64 i) const { return p[i]; }
     T& operator()(i64 i, i64 j) const { return p[i * cols + j]; }
 };
 
+// The number of entries of an array argument (0 where it is none).
+inline i64 size_of(nb::handle h) {
+    if (!h.is_valid() || !PyObject_CheckBuffer(h.ptr())) return 0;
+    Py_buffer v;
+    if (PyObject_GetBuffer(h.ptr(), &v, PyBUF_RECORDS_RO) != 0) {
+        PyErr_Clear();
+        return 0;
+    }
+    i64 s = 1;
+    for (int d = 0; d < v.ndim; ++d) s *= v.shape[d];
+    PyBuffer_Release(&v);
+    return s;
+}
+
 // f(view) with a read-only view of a float32 or a float64 argument, by its dtype.
 template <class F>
-auto with_real(py::handle h, const char* name, F&& f) {
+auto with_real(nb::handle h, const char* name, F&& f) {
     if (matches<float>(h)) return f(In<float>(h, name));
     return f(In<double>(h, name));
 }
 
 // f(view) with a read-only view of an int32 or an int64 argument (labels), by its dtype.
 template <class F>
-auto with_index(py::handle h, const char* name, F&& f) {
+auto with_index(nb::handle h, const char* name, F&& f) {
     if (matches<i32>(h)) return f(In<i32>(h, name));
     return f(In<i64>(h, name));
 }
@@ -140,13 +208,28 @@ inline double store_unit(double* out, double x, double y, double z) {
     return norm;
 }
 
-// A new array of n (or n x cols) entries, and a writable view of it.
+// numpy's name of the element type T
 template <class T>
-inline py::array_t<T> fresh(i64 n, Out<T>& view, i64 cols = 0) {
-    py::array_t<T> a = cols ? py::array_t<T>({n, cols}) : py::array_t<T>(n);
-    view.p = a.mutable_data();
-    view.n = n;
-    view.cols = cols ? cols : 1;
+constexpr const char* dtype_name() {
+    if constexpr (std::is_same_v<T, bool>) return "bool";
+    else if constexpr (std::is_same_v<T, double>) return "float64";
+    else if constexpr (std::is_same_v<T, float>) return "float32";
+    else if constexpr (std::is_same_v<T, i64>) return "int64";
+    else if constexpr (std::is_same_v<T, i32>) return "int32";
+    else if constexpr (std::is_same_v<T, std::uint64_t>) return "uint64";
+    else if constexpr (std::is_same_v<T, std::uint8_t>) return "uint8";
+    else return "int8";
+}
+
+// A new numpy array of n (or n x cols) entries (numpy.empty: numpy owns it, as every
+// other array of a run), and a writable view of it. Called holding the GIL.
+template <class T>
+inline nb::object fresh(i64 n, Out<T>& view, i64 cols = 0) {
+    // (kept for the process's life: never destroyed after the interpreter)
+    static nb::object* empty = new nb::object(nb::module_::import_("numpy").attr("empty"));
+    nb::object a = cols ? (*empty)(nb::make_tuple(n, cols), dtype_name<T>())
+                        : (*empty)(n, dtype_name<T>());
+    view = Out<T>(a, "fresh");
     return a;
 }
 
@@ -157,27 +240,30 @@ template <class T>
 inline T mx(T a, T b) { return b > a ? b : a; }
 
 // The most threads a kernel may use (0: no limit): a run's n_threads, set for the run's
-// duration by superfacets._runtime.threads.using (process-wide, as NUMBA_NUM_THREADS).
+// duration by superfacets._runtime.threads.using (process-wide).
 inline std::atomic<int>& thread_limit() {
     static std::atomic<int> limit{0};
     return limit;
 }
 
-// The threads of a parallel loop: SUPERFACETS_KERNEL_THREADS where set (the compiled
-// kernels' alone: the tests' thread counts, which numba, refusing a new NUMBA_NUM_THREADS
-// once its threads run, never reads), else NUMBA_NUM_THREADS where set (as numba's prange
-// would use; the Dask workers set 1), else the CPUs this process may run on; at most the
-// run's limit.
+// The threads of a parallel loop: SUPERFACETS_KERNEL_THREADS where set (the kernels'
+// alone: the tests' thread counts), else SUPERFACETS_NUM_THREADS where set (the package's
+// default thread count; the Dask workers set 1), else the CPUs this process may run on;
+// at most the run's limit.
 inline int threads() {
     int n = 0;
     if (const char* env = std::getenv("SUPERFACETS_KERNEL_THREADS")) n = std::atoi(env);
     if (n < 1)
-        if (const char* env = std::getenv("NUMBA_NUM_THREADS")) n = std::atoi(env);
+        if (const char* env = std::getenv("SUPERFACETS_NUM_THREADS")) n = std::atoi(env);
     if (n < 1) {
+#if defined(__linux__)
         cpu_set_t set;
         n = sched_getaffinity(0, sizeof(set), &set) == 0
                 ? std::max(1, CPU_COUNT(&set))
                 : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+#else
+        n = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+#endif
     }
     const int limit = thread_limit().load(std::memory_order_relaxed);
     return limit >= 1 && limit < n ? limit : n;
@@ -334,18 +420,19 @@ class BucketQueue {
 };
 
 // Binding registrations, one per source file.
-void bind_graph(py::module_& m);
-void bind_expand(py::module_& m);
-void bind_sampling(py::module_& m);
-void bind_splitmerge(py::module_& m);
-void bind_cleanup(py::module_& m);
-void bind_voronoi(py::module_& m);
-void bind_points(py::module_& m);
-void bind_hierarchy(py::module_& m);
-void bind_exact(py::module_& m);
-void bind_vertices(py::module_& m);
-void bind_nearest(py::module_& m);
-void bind_order(py::module_& m);
-void bind_orient(py::module_& m);
+void bind_graph(nb::module_& m);
+void bind_expand(nb::module_& m);
+void bind_sampling(nb::module_& m);
+void bind_splitmerge(nb::module_& m);
+void bind_cleanup(nb::module_& m);
+void bind_voronoi(nb::module_& m);
+void bind_points(nb::module_& m);
+void bind_hierarchy(nb::module_& m);
+void bind_exact(nb::module_& m);
+void bind_vertices(nb::module_& m);
+void bind_nearest(nb::module_& m);
+void bind_order(nb::module_& m);
+void bind_orient(nb::module_& m);
+void bind_baselines(nb::module_& m);
 
 }  // namespace sfk

@@ -41,12 +41,12 @@ i64 seed_orphans(const Exact<W, L>& x, i64* centers, i64 n_centers, i64 m) {
 }
 
 template <class W, class L>
-Exact<W, L> exact_of(const In<i64>& indptr, const In<i32>& indices, py::handle weights_,
-                     Out<double>& dist, Out<L>& label, py::handle queue_, Out<i32>& qlab,
+Exact<W, L> exact_of(const In<i64>& indptr, const In<i32>& indices, nb::handle weights_,
+                     Out<double>& dist, Out<L>& label, nb::handle queue_, Out<i32>& qlab,
                      double inv_width) {
     In<W> weights(weights_, "weights");
-    auto tup = py::reinterpret_borrow<py::tuple>(queue_);
-    if (!py::isinstance<py::tuple>(queue_) || tup.size() != 4) throw Mismatch("argument queue");
+    auto tup = nb::borrow<nb::tuple>(queue_);
+    if (!nb::isinstance<nb::tuple>(queue_) || tup.size() != 4) throw Mismatch("argument queue");
     Out<i32> qface(tup[0], "qface");
     Out<double> qdist(tup[1], "qdist");
     Out<i64> qnext(tup[2], "qnext"), head(tup[3], "head");
@@ -67,8 +67,8 @@ struct Args {
     Out<L> label;
     Out<i32> qlab;
     Exact<W, L> x;
-    Args(py::handle indptr_, py::handle indices_, py::handle weights_, py::handle centers_,
-         py::handle dist_, py::handle label_, py::handle queue_, py::handle qlab_,
+    Args(nb::handle indptr_, nb::handle indices_, nb::handle weights_, nb::handle centers_,
+         nb::handle dist_, nb::handle label_, nb::handle queue_, nb::handle qlab_,
          double inv_width)
         : indptr(indptr_, "indptr"),
           indices(indices_, "indices"),
@@ -80,15 +80,15 @@ struct Args {
 };
 
 template <class W, class L>
-i64 classify_exact_t(py::handle indptr_, py::handle indices_, py::handle weights_,
-                     py::handle centers_, i64 n_centers, py::handle dist_, py::handle label_,
-                     py::handle queue_, py::handle qlab_, double inv_width) {
+i64 classify_exact_t(nb::handle indptr_, nb::handle indices_, nb::handle weights_,
+                     nb::handle centers_, i64 n_centers, nb::handle dist_, nb::handle label_,
+                     nb::handle queue_, nb::handle qlab_, double inv_width) {
     Args<W, L> A(indptr_, indices_, weights_, centers_, dist_, label_, queue_, qlab_, inv_width);
     auto& centers = A.centers;
     auto& label = A.label;
     auto& dist = A.dist;
     const auto& x = A.x;
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     const i64 m = label.n;
     parallel_for(m, [&](i64 f0, i64 f1) {
         for (i64 f = f0; f < f1; ++f) {
@@ -111,10 +111,10 @@ i64 classify_exact_t(py::handle indptr_, py::handle indices_, py::handle weights
 }
 
 template <class W, class L>
-i64 reclassify_exact_t(py::handle indptr_, py::handle indices_, py::handle weights_,
-                       py::handle centers_, i64 n_centers, py::handle dist_, py::handle label_,
-                       py::handle queue_, py::handle qlab_, double inv_width, py::handle prev_,
-                       py::handle first_, py::handle border_mark_) {
+i64 reclassify_exact_t(nb::handle indptr_, nb::handle indices_, nb::handle weights_,
+                       nb::handle centers_, i64 n_centers, nb::handle dist_, nb::handle label_,
+                       nb::handle queue_, nb::handle qlab_, double inv_width, nb::handle prev_,
+                       nb::handle first_, nb::handle border_mark_) {
     Args<W, L> A(indptr_, indices_, weights_, centers_, dist_, label_, queue_, qlab_, inv_width);
     auto& centers = A.centers;
     auto& label = A.label;
@@ -125,7 +125,7 @@ i64 reclassify_exact_t(py::handle indptr_, py::handle indices_, py::handle weigh
     In<i64> prev(prev_, "prev");
     Out<i32> first(first_, "first");
     Out<bool> border_mark(border_mark_, "border_mark");  // (numba's; not used here)
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     const i64 m = label.n;
     for (i64 s = 0; s < n_centers; ++s) {
         i64 c = centers[s];
@@ -209,8 +209,8 @@ i64 reclassify_exact_t(py::handle indptr_, py::handle indices_, py::handle weigh
 
 // float64 or float32 weights; int32 or int64 labels
 template <class... A>
-i64 classify_exact(py::handle indptr, py::handle indices, py::handle weights, py::handle centers,
-                   i64 n_centers, py::handle dist, py::handle label, A... rest) {
+i64 classify_exact(nb::handle indptr, nb::handle indices, nb::handle weights, nb::handle centers,
+                   i64 n_centers, nb::handle dist, nb::handle label, A... rest) {
     const bool w32 = matches<float>(weights), l32 = matches<i32>(label);
     if (w32 && l32)
         return classify_exact_t<float, i32>(indptr, indices, weights, centers, n_centers, dist,
@@ -226,8 +226,8 @@ i64 classify_exact(py::handle indptr, py::handle indices, py::handle weights, py
 }
 
 template <class... A>
-i64 reclassify_exact(py::handle indptr, py::handle indices, py::handle weights,
-                     py::handle centers, i64 n_centers, py::handle dist, py::handle label,
+i64 reclassify_exact(nb::handle indptr, nb::handle indices, nb::handle weights,
+                     nb::handle centers, i64 n_centers, nb::handle dist, nb::handle label,
                      A... rest) {
     const bool w32 = matches<float>(weights), l32 = matches<i32>(label);
     if (w32 && l32)
@@ -243,10 +243,10 @@ i64 reclassify_exact(py::handle indptr, py::handle indices, py::handle weights,
                                            label, rest...);
 }
 
-void bind_exact(py::module_& m) {
-    m.def("classify_exact", &classify_exact<py::handle, py::handle, double>);
+void bind_exact(nb::module_& m) {
+    m.def("classify_exact", &classify_exact<nb::handle, nb::handle, double>);
     m.def("reclassify_exact",
-          &reclassify_exact<py::handle, py::handle, double, py::handle, py::handle, py::handle>);
+          &reclassify_exact<nb::handle, nb::handle, double, nb::handle, nb::handle, nb::handle>);
 }
 
 }  // namespace sfk

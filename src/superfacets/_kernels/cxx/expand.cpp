@@ -39,9 +39,9 @@ struct Work {
     }
 };
 
-Queue queue_of(py::handle t) {
-    auto tup = py::reinterpret_borrow<py::tuple>(t);
-    if (!py::isinstance<py::tuple>(t) || tup.size() != 4) throw Mismatch("argument queue");
+Queue queue_of(nb::handle t) {
+    auto tup = nb::borrow<nb::tuple>(t);
+    if (!nb::isinstance<nb::tuple>(t) || tup.size() != 4) throw Mismatch("argument queue");
     Out<i32> qface(tup[0], "qface"), qnext(tup[2], "qnext");
     Out<double> qdist(tup[1], "qdist");
     Out<i64> head(tup[3], "head");
@@ -168,9 +168,9 @@ inline void merge_segment(i64 a, i64 n, i64 s, const i32* rec_face, const double
 }
 
 template <class W>
-Work<W> work_of(py::handle indptr_, py::handle indices_, py::handle weights_,
-                py::handle centroids_, py::handle local_, py::handle queue_, double inv_width,
-                py::handle wscale_) {
+Work<W> work_of(nb::handle indptr_, nb::handle indices_, nb::handle weights_,
+                nb::handle centroids_, nb::handle local_, nb::handle queue_, double inv_width,
+                nb::handle wscale_) {
     In<i64> indptr(indptr_, "indptr");
     In<i32> indices(indices_, "indices");
     In<W> weights(weights_, "weights");
@@ -184,15 +184,15 @@ Work<W> work_of(py::handle indptr_, py::handle indices_, py::handle weights_,
 }  // namespace
 
 template <class W>
-i64 classify_bounded_t(py::handle indptr, py::handle indices, py::handle weights,
-                       py::handle centroids, py::handle centers_, i64 n_centers,
-                       double window_r2, py::handle dist_, py::handle label_, py::handle local,
-                       py::handle queue, double inv_width, py::handle vis_, py::handle wscale) {
+i64 classify_bounded_t(nb::handle indptr, nb::handle indices, nb::handle weights,
+                       nb::handle centroids, nb::handle centers_, i64 n_centers,
+                       double window_r2, nb::handle dist_, nb::handle label_, nb::handle local,
+                       nb::handle queue, double inv_width, nb::handle vis_, nb::handle wscale) {
     auto w = work_of<W>(indptr, indices, weights, centroids, local, queue, inv_width, wscale);
     Out<i64> centers(centers_, "centers");
     Out<double> dist(dist_, "dist");
     Out<i32> label(label_, "label"), vis(vis_, "vis");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     const i64 m = label.n, lim = vis.n;
     for (i64 f = 0; f < m; ++f) {
         dist[f] = INF;
@@ -217,17 +217,17 @@ i64 classify_bounded_t(py::handle indptr, py::handle indices, py::handle weights
 }
 
 template <class W>
-i64 expand_many_t(py::handle indptr, py::handle indices, py::handle weights,
-                  py::handle centroids, py::handle srcs_, py::handle labs_, double window_r2,
-                  py::handle local, py::handle queue, double inv_width, py::handle rec_face_,
-                  py::handle rec_dist_, i64 pos, i64 lim, py::handle out_start_,
-                  py::handle out_len_, py::handle dist_, py::handle label_, py::handle wscale) {
+i64 expand_many_t(nb::handle indptr, nb::handle indices, nb::handle weights,
+                  nb::handle centroids, nb::handle srcs_, nb::handle labs_, double window_r2,
+                  nb::handle local, nb::handle queue, double inv_width, nb::handle rec_face_,
+                  nb::handle rec_dist_, i64 pos, i64 lim, nb::handle out_start_,
+                  nb::handle out_len_, nb::handle dist_, nb::handle label_, nb::handle wscale) {
     auto w = work_of<W>(indptr, indices, weights, centroids, local, queue, inv_width, wscale);
     In<i64> srcs(srcs_, "srcs"), labs(labs_, "labs");
     Out<i32> rec_face(rec_face_, "rec_face"), label(label_, "label");
     Out<double> rec_dist(rec_dist_, "rec_dist"), dist(dist_, "dist");
     Out<i64> out_start(out_start_, "out_start"), out_len(out_len_, "out_len");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     for (i64 i = 0; i < srcs.n; ++i) {
         out_start[i] = pos;
         i64 p = expand(w, srcs[i], 0, w.window(window_r2, srcs[i]), nullptr, nullptr, RECORD,
@@ -240,27 +240,27 @@ i64 expand_many_t(py::handle indptr, py::handle indices, py::handle weights,
     return pos;
 }
 
-void merge_some(py::handle labs_, py::handle seg_start_, py::handle seg_len_,
-                py::handle rec_face_, py::handle rec_dist_, py::handle dist_, py::handle label_) {
+void merge_some(nb::handle labs_, nb::handle seg_start_, nb::handle seg_len_,
+                nb::handle rec_face_, nb::handle rec_dist_, nb::handle dist_, nb::handle label_) {
     In<i64> labs(labs_, "labs"), seg_start(seg_start_, "seg_start"), seg_len(seg_len_, "seg_len");
     In<i32> rec_face(rec_face_, "rec_face");
     In<double> rec_dist(rec_dist_, "rec_dist");
     Out<double> dist(dist_, "dist");
     Out<i32> label(label_, "label");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     for (i64 i = 0; i < labs.n; ++i) {
         i64 s = labs[i];
         merge_segment(seg_start[s], seg_len[s], s, rec_face.p, rec_dist.p, dist.p, label.p);
     }
 }
 
-void unset_owned(py::handle labs_, py::handle seg_start_, py::handle seg_len_,
-                 py::handle rec_face_, py::handle dist_, py::handle label_) {
+void unset_owned(nb::handle labs_, nb::handle seg_start_, nb::handle seg_len_,
+                 nb::handle rec_face_, nb::handle dist_, nb::handle label_) {
     In<i64> labs(labs_, "labs"), seg_start(seg_start_, "seg_start"), seg_len(seg_len_, "seg_len");
     In<i32> rec_face(rec_face_, "rec_face");
     Out<double> dist(dist_, "dist");
     Out<i32> label(label_, "label");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     for (i64 i = 0; i < labs.n; ++i) {
         i64 s = labs[i];
         for (i64 e = seg_start[s]; e < seg_start[s] + seg_len[s]; ++e) {
@@ -273,10 +273,10 @@ void unset_owned(py::handle labs_, py::handle seg_start_, py::handle seg_len_,
     }
 }
 
-void reset_labels(py::handle dist_, py::handle label_) {
+void reset_labels(nb::handle dist_, nb::handle label_) {
     Out<double> dist(dist_, "dist");
     Out<i32> label(label_, "label");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     for (i64 f = 0; f < dist.n; ++f) {
         dist[f] = INF;
         label[f] = -1;
@@ -284,12 +284,12 @@ void reset_labels(py::handle dist_, py::handle label_) {
 }
 
 template <class W>
-py::tuple seed_orphans_t(py::handle indptr, py::handle indices, py::handle weights,
-                         py::handle centroids, py::handle centers_, i64 n_centers,
-                         double window_r2, py::handle dist_, py::handle label_, py::handle local,
-                         py::handle queue, double inv_width, py::handle rec_face_,
-                         py::handle rec_dist_, i64 pos, i64 lim, py::handle seg_start_,
-                         py::handle seg_len_, py::handle wscale) {
+nb::tuple seed_orphans_t(nb::handle indptr, nb::handle indices, nb::handle weights,
+                         nb::handle centroids, nb::handle centers_, i64 n_centers,
+                         double window_r2, nb::handle dist_, nb::handle label_, nb::handle local,
+                         nb::handle queue, double inv_width, nb::handle rec_face_,
+                         nb::handle rec_dist_, i64 pos, i64 lim, nb::handle seg_start_,
+                         nb::handle seg_len_, nb::handle wscale) {
     auto w = work_of<W>(indptr, indices, weights, centroids, local, queue, inv_width, wscale);
     Out<i64> centers(centers_, "centers"), seg_start(seg_start_, "seg_start"),
         seg_len(seg_len_, "seg_len");
@@ -297,7 +297,7 @@ py::tuple seed_orphans_t(py::handle indptr, py::handle indices, py::handle weigh
     Out<i32> label(label_, "label"), rec_face(rec_face_, "rec_face");
     i64 k = n_centers, status = pos;
     {
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         for (i64 f = 0; f < label.n; ++f) {
             if (label[f] < 0) {
                 centers[k] = f;
@@ -315,16 +315,16 @@ py::tuple seed_orphans_t(py::handle indptr, py::handle indices, py::handle weigh
         }
         if (status >= 0) status = pos;
     }
-    return py::make_tuple(status, k);
+    return nb::make_tuple(status, k);
 }
 
-i64 compact_records(py::handle order_, py::handle seg_start_, py::handle seg_len_,
-                    py::handle rec_face_, py::handle rec_dist_) {
+i64 compact_records(nb::handle order_, nb::handle seg_start_, nb::handle seg_len_,
+                    nb::handle rec_face_, nb::handle rec_dist_) {
     In<i64> order(order_, "order"), seg_len(seg_len_, "seg_len");
     Out<i64> seg_start(seg_start_, "seg_start");
     Out<i32> rec_face(rec_face_, "rec_face");
     Out<double> rec_dist(rec_dist_, "rec_dist");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     i64 w = 0;
     for (i64 j = 0; j < order.n; ++j) {
         i64 i = order[j], a = seg_start[i], n = seg_len[i];
@@ -340,14 +340,14 @@ i64 compact_records(py::handle order_, py::handle seg_start_, py::handle seg_len
 }
 
 // update.py
-void update_centers(py::handle label_, i64 k, py::handle areas_, py::handle centroids_,
-                    py::handle old_centers_, py::handle new_centers_) {
+void update_centers(nb::handle label_, i64 k, nb::handle areas_, nb::handle centroids_,
+                    nb::handle old_centers_, nb::handle new_centers_) {
     In<i32> label(label_, "label");
     In<double> areas(areas_, "areas"), c(centroids_, "centroids");
     In<i64> old_centers(old_centers_, "old_centers");
     Out<i64> new_centers(new_centers_, "new_centers");
     if (c.cols != 3) throw Mismatch("argument centroids");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     const i64 m = label.n;
     // (one thread for superfacets of 16 elements or fewer: the ranges' sums would cost
     // more than they save)
@@ -450,40 +450,83 @@ void update_centers(py::handle label_, i64 k, py::handle areas_, py::handle cent
             }
 }
 
+// flood.flood: the flood initialization (the authors' implementation). Elements are
+// visited in `order`; each one still unlabelled starts a new region, grown by a bounded
+// expansion that claims only unlabelled elements. Returns the number of regions, or
+// the negative status of expand where the queue or the visit buffer `vis` was too small.
+template <class W>
+i64 flood_t(nb::handle indptr_, nb::handle indices_, nb::handle weights_, nb::handle centroids_,
+            nb::handle order_, double window_r2, nb::handle label_, nb::handle local_,
+            nb::handle queue_, double inv_width, nb::handle vis_) {
+    In<i64> indptr(indptr_, "indptr"), order(order_, "order");
+    In<i32> indices(indices_, "indices");
+    In<W> weights(weights_, "weights");
+    In<double> centroids(centroids_, "centroids");
+    Out<double> local(local_, "local");
+    Out<i64> label(label_, "label");
+    Out<i32> vis(vis_, "vis");
+    if (centroids.cols != 3) throw Mismatch("argument centroids");
+    const Work<W> w{Graph<W>{indptr.p, indices.p, weights.p, centroids.p}, queue_of(queue_),
+                    local.p, inv_width, nullptr, 0};
+    nb::gil_scoped_release nogil;
+    const i64 m = label.n;
+    std::vector<i32> lab(m, -1);  // (expand's labels are int32; the regions fit)
+    i64 n = 0;
+    for (i64 i = 0; i < order.n; ++i) {
+        const i64 f = order[i];
+        if (lab[f] < 0) {
+            i64 st = expand(w, f, n, window_r2, nullptr, lab.data(), UNLABELLED, vis.p, nullptr,
+                            0, vis.n);
+            if (st < 0) return st;
+            ++n;
+        }
+    }
+    for (i64 f = 0; f < m; ++f) label[f] = lab[f];
+    return n;
+}
+
 // float64 weights (faces) or float32 (points): the same sums, each weight widened first
 template <class... A>
-i64 classify_bounded(py::handle indptr, py::handle indices, py::handle weights, A... rest) {
+i64 classify_bounded(nb::handle indptr, nb::handle indices, nb::handle weights, A... rest) {
     if (matches<float>(weights)) return classify_bounded_t<float>(indptr, indices, weights, rest...);
     return classify_bounded_t<double>(indptr, indices, weights, rest...);
 }
 
 template <class... A>
-i64 expand_many(py::handle indptr, py::handle indices, py::handle weights, A... rest) {
+i64 flood(nb::handle indptr, nb::handle indices, nb::handle weights, A... rest) {
+    if (matches<float>(weights)) return flood_t<float>(indptr, indices, weights, rest...);
+    return flood_t<double>(indptr, indices, weights, rest...);
+}
+
+template <class... A>
+i64 expand_many(nb::handle indptr, nb::handle indices, nb::handle weights, A... rest) {
     if (matches<float>(weights)) return expand_many_t<float>(indptr, indices, weights, rest...);
     return expand_many_t<double>(indptr, indices, weights, rest...);
 }
 
 template <class... A>
-py::tuple seed_orphans(py::handle indptr, py::handle indices, py::handle weights, A... rest) {
+nb::tuple seed_orphans(nb::handle indptr, nb::handle indices, nb::handle weights, A... rest) {
     if (matches<float>(weights)) return seed_orphans_t<float>(indptr, indices, weights, rest...);
     return seed_orphans_t<double>(indptr, indices, weights, rest...);
 }
 
-void bind_expand(py::module_& m) {
+void bind_expand(nb::module_& m) {
     m.def("classify_bounded",
-          &classify_bounded<py::handle, py::handle, i64, double, py::handle, py::handle,
-                            py::handle, py::handle, double, py::handle, py::handle>);
+          &classify_bounded<nb::handle, nb::handle, i64, double, nb::handle, nb::handle,
+                            nb::handle, nb::handle, double, nb::handle, nb::handle>);
     m.def("expand_many",
-          &expand_many<py::handle, py::handle, py::handle, double, py::handle, py::handle,
-                       double, py::handle, py::handle, i64, i64, py::handle, py::handle,
-                       py::handle, py::handle, py::handle>);
+          &expand_many<nb::handle, nb::handle, nb::handle, double, nb::handle, nb::handle,
+                       double, nb::handle, nb::handle, i64, i64, nb::handle, nb::handle,
+                       nb::handle, nb::handle, nb::handle>);
+    m.def("flood", &flood<nb::handle, nb::handle, double, nb::handle, nb::handle, nb::handle,
+                          double, nb::handle>);
     m.def("merge_some", &merge_some);
     m.def("reset_labels", &reset_labels);
     m.def("unset_owned", &unset_owned);
     m.def("seed_orphans",
-          &seed_orphans<py::handle, py::handle, i64, double, py::handle, py::handle, py::handle,
-                        py::handle, double, py::handle, py::handle, i64, i64, py::handle,
-                        py::handle, py::handle>);
+          &seed_orphans<nb::handle, nb::handle, i64, double, nb::handle, nb::handle, nb::handle,
+                        nb::handle, double, nb::handle, nb::handle, i64, i64, nb::handle,
+                        nb::handle, nb::handle>);
     m.def("compact_records", &compact_records);
     m.def("update_centers", &update_centers);
 }

@@ -147,11 +147,11 @@ void number_pairs_into(const i64* indptr, const i32* indices, i64 n, D* dual_edg
 
 }  // namespace
 
-void triangle_half_edges(py::handle faces_, py::handle a_, py::handle b_, py::handle skip_) {
+void triangle_half_edges(nb::handle faces_, nb::handle a_, nb::handle b_, nb::handle skip_) {
     Out<i32> a(a_, "a"), b(b_, "b");
     Out<bool> skip(skip_, "skip");
     with_index(faces_, "faces", [&](auto faces) {  // (int32 or int64 faces)
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         parallel_for(faces.n, [&](i64 lo, i64 hi) {
             for (i64 f = lo; f < hi; ++f) {
                 for (i64 c = 0; c < 3; ++c) {
@@ -167,11 +167,11 @@ void triangle_half_edges(py::handle faces_, py::handle a_, py::handle b_, py::ha
     });
 }
 
-void count_keys(py::handle key1_, py::handle skip_, i64 lo, i64 hi, py::handle counts_) {
+void count_keys(nb::handle key1_, nb::handle skip_, i64 lo, i64 hi, nb::handle counts_) {
     In<i32> key1(key1_, "key1");
     In<bool> skip(skip_, "skip");
     Out<i64> counts(counts_, "counts");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     for (i64 t = lo; t < hi; ++t)
         if (!skip[t]) counts[key1[t]] += 1;
 }
@@ -188,27 +188,27 @@ void scatter_into(const In<i32>& key1, const In<bool>& skip, i64 lo, i64 hi, Out
     }
 }
 
-void scatter_keys(py::handle key1_, py::handle skip_, i64 lo, i64 hi, py::handle fill_,
-                  py::handle order_) {
+void scatter_keys(nb::handle key1_, nb::handle skip_, i64 lo, i64 hi, nb::handle fill_,
+                  nb::handle order_) {
     In<i32> key1(key1_, "key1");
     In<bool> skip(skip_, "skip");
     Out<i64> fill(fill_, "fill");
     if (matches<i32>(order_)) {
         Out<i32> order(order_, "order");
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         scatter_into(key1, skip, lo, hi, fill, order.p);
     } else {
         Out<i64> order(order_, "order");
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         scatter_into(key1, skip, lo, hi, fill, order.p);
     }
 }
 
-void sort_buckets(py::handle order_, py::handle starts_, py::handle key2_, i64 v0, i64 v1) {
+void sort_buckets(nb::handle order_, nb::handle starts_, nb::handle key2_, i64 v0, i64 v1) {
     Out<i32> order(order_, "order");
     In<i64> starts(starts_, "starts");
     In<i32> key2(key2_, "key2");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     for (i64 v = v0; v < v1; ++v)
         if (starts[v + 1] - starts[v] > 1) sort_bucket(order.p, starts[v], starts[v + 1], key2.p);
 }
@@ -216,7 +216,7 @@ void sort_buckets(py::handle order_, py::handle starts_, py::handle key2_, i64 v
 // adjacency.group_pairs, on threads: ranges of `half` cut at edge starts (each holds
 // whole edges), each range counted, then written from its place, so the arrays are
 // those of one pass (a face paired with itself is left out of the counts).
-py::tuple group_pairs(py::handle half_, py::handle owner_, py::handle a_, py::handle b_) {
+nb::tuple group_pairs(nb::handle half_, nb::handle owner_, nb::handle a_, nb::handle b_) {
     In<i32> half(half_, "half"), owner(owner_, "owner"), a(a_, "a"), b(b_, "b");
     const i64 n = half.n;
     const bool tri = owner.n == 0;
@@ -229,7 +229,7 @@ py::tuple group_pairs(py::handle half_, py::handle owner_, py::handle a_, py::ha
     const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / 65536));
     std::vector<i64> cut(T + 1), n_bound(T + 1, 0), n_pairs(T + 1, 0);
     {
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         for (i64 t = 0; t <= T; ++t) {
             i64 j = n * t / T;
             while (j > 0 && j < n && same(j)) ++j;
@@ -263,7 +263,7 @@ py::tuple group_pairs(py::handle half_, py::handle owner_, py::handle a_, py::ha
     auto lo_a = fresh(n_pairs[T], lo), hi_a = fresh(n_pairs[T], hi);
     auto ea_a = fresh(n_pairs[T], ea), eb_a = fresh(n_pairs[T], eb);
     {
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         on_threads(T, [&](i64 t) {
             i64 nb = n_bound[t], p = n_pairs[t];
             for (i64 i = cut[t]; i < cut[t + 1];) {
@@ -290,18 +290,18 @@ py::tuple group_pairs(py::handle half_, py::handle owner_, py::handle a_, py::ha
             }
         });
     }
-    return py::make_tuple(boundary_a, lo_a, hi_a, ea_a, eb_a);
+    return nb::make_tuple(boundary_a, lo_a, hi_a, ea_a, eb_a);
 }
 
 // adjacency.take_pairs, on threads (each row on its own)
-void take_pairs(py::handle first_, py::handle lo_, py::handle hi_, py::handle ka_,
-                py::handle kb_, py::handle pairs_, py::handle edges_) {
+void take_pairs(nb::handle first_, nb::handle lo_, nb::handle hi_, nb::handle ka_,
+                nb::handle kb_, nb::handle pairs_, nb::handle edges_) {
     In<i64> first(first_, "first");
     In<i32> lo(lo_, "lo"), hi(hi_, "hi"), ka(ka_, "ka"), kb(kb_, "kb");
     Out<i32> pairs(pairs_, "pairs"), edges(edges_, "edges");
     if (pairs.cols != 2 || edges.cols != 2 || pairs.n != first.n || edges.n != first.n)
         throw Mismatch("argument pairs");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     parallel_for(first.n, [&](i64 t0, i64 t1) {
         for (i64 t = t0; t < t1; ++t) {
             const i64 u = first[t];
@@ -313,15 +313,15 @@ void take_pairs(py::handle first_, py::handle lo_, py::handle hi_, py::handle ka
     });
 }
 
-py::tuple csr_of_face_pairs(py::handle lo_, py::handle hi_, py::handle ka_, py::handle kb_, i64 n,
-                            py::handle indices_, py::handle dual_edge_) {
+nb::tuple csr_of_face_pairs(nb::handle lo_, nb::handle hi_, nb::handle ka_, nb::handle kb_, i64 n,
+                            nb::handle indices_, nb::handle dual_edge_) {
     In<i32> lo(lo_, "lo"), hi(hi_, "hi"), ka(ka_, "ka"), kb(kb_, "kb");
     Out<i32> indices(indices_, "indices"), dual_edge(dual_edge_, "dual_edge");
     Out<i64> indptr;
     auto indptr_a = fresh(n + 1, indptr);
     i64 out = 0;
     {
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         csr_of_pairs(lo.p, hi.p, lo.n, n, indices.p, dual_edge.p, indptr.p);
         for (i64 v = 0; v < n; ++v) {
             i64 s = indptr[v], f = indptr[v + 1];
@@ -347,10 +347,10 @@ py::tuple csr_of_face_pairs(py::handle lo_, py::handle hi_, py::handle ka_, py::
     Out<i64> keep;
     auto keep_a = fresh(out / 2, keep);
     {
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         number_pairs_into(indptr.p, indices.p, n, dual_edge.p, keep.p, static_cast<i32*>(nullptr));
     }
-    return py::make_tuple(indptr_a, keep_a);
+    return nb::make_tuple(indptr_a, keep_a);
 }
 
 // adjacency.same_label_components, on threads: a union-find over the adjacencies within
@@ -384,8 +384,8 @@ inline void uf_union(i64* parent, i64 a, i64 b) {
 
 }  // namespace
 
-py::array_t<i64> same_label_components(py::handle indptr_, py::handle indices_,
-                                       py::handle labels_) {
+nb::object same_label_components(nb::handle indptr_, nb::handle indices_,
+                                       nb::handle labels_) {
     In<i64> indptr(indptr_, "indptr"), labels(labels_, "labels");
     In<i32> indices(indices_, "indices");
     const i64 n = labels.n;
@@ -393,7 +393,7 @@ py::array_t<i64> same_label_components(py::handle indptr_, py::handle indices_,
     Out<i64> comp;
     auto comp_a = fresh(n, comp);
     {
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         std::vector<i64> root(n);
         i64* parent = root.data();
         parallel_for(n, [&](i64 lo, i64 hi) {
@@ -436,15 +436,15 @@ py::array_t<i64> same_label_components(py::handle indptr_, py::handle indices_,
 }
 
 // geometry.py: triangles' centroids, areas and unit normals
-void face_geometry(py::handle vertices_, py::handle faces_, py::handle centroids_,
-                   py::handle areas_, py::handle normals_) {
+void face_geometry(nb::handle vertices_, nb::handle faces_, nb::handle centroids_,
+                   nb::handle areas_, nb::handle normals_) {
     In<double> v(vertices_, "vertices");
     Out<double> centroids(centroids_, "centroids"), areas(areas_, "areas"),
         normals(normals_, "normals");
     with_index(faces_, "faces", [&](auto faces) {  // (int32 or int64 faces)
         if (normals.cols != 3 || centroids.cols != 3 || faces.cols != 3)
             throw Mismatch("argument normals");
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         for (i64 f = 0; f < faces.n; ++f) {
             i64 i = faces(f, 0), j = faces(f, 1), k = faces(f, 2);
             for (i64 t = 0; t < 3; ++t) centroids(f, t) = (v(i, t) + v(j, t) + v(k, t)) / 3.0;
@@ -460,15 +460,15 @@ void face_geometry(py::handle vertices_, py::handle faces_, py::handle centroids
 }
 
 // geometry.py: polygons of any size (Newell's normal, the fan's signed-area centroid)
-void polygon_geometry(py::handle vertices_, py::handle corners_, py::handle offsets_,
-                      py::handle centroids_, py::handle areas_, py::handle normals_) {
+void polygon_geometry(nb::handle vertices_, nb::handle corners_, nb::handle offsets_,
+                      nb::handle centroids_, nb::handle areas_, nb::handle normals_) {
     In<double> v(vertices_, "vertices");
     In<i64> corners(corners_, "corners"), offsets(offsets_, "offsets");
     Out<double> centroids(centroids_, "centroids"), areas(areas_, "areas"),
         normals(normals_, "normals");
     if (v.cols != 3 || centroids.cols != 3 || normals.cols != 3)
         throw Mismatch("argument vertices");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     for (i64 f = 0; f < offsets.n - 1; ++f) {
         const i64 a = offsets[f], k = offsets[f + 1] - a;
         const i64 o = corners[a];
@@ -528,14 +528,14 @@ void polygon_geometry(py::handle vertices_, py::handle corners_, py::handle offs
     }
 }
 
-void face_terms(py::handle vertices_, py::handle centroids_, py::handle normals_,
-                py::handle pairs_, py::handle edges_, i64 lo, i64 hi, py::handle geo_,
-                py::handle cos_, py::handle concave_) {
+void face_terms(nb::handle vertices_, nb::handle centroids_, nb::handle normals_,
+                nb::handle pairs_, nb::handle edges_, i64 lo, i64 hi, nb::handle geo_,
+                nb::handle cos_, nb::handle concave_) {
     In<double> v(vertices_, "vertices"), c(centroids_, "centroids"), nr(normals_, "normals");
     In<i32> pairs(pairs_, "pairs"), edges(edges_, "edges");
     Out<double> geo(geo_, "geo"), cs(cos_, "cos");
     Out<bool> concave(concave_, "concave");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     for (i64 t = lo; t < hi; ++t) {
         i64 i = pairs(t, 0), j = pairs(t, 1), a = edges(t, 0), b = edges(t, 1);
         double mx_ = 0.5 * (v(a, 0) + v(b, 0));
@@ -564,35 +564,38 @@ void lengths_into(const In<double>& v, const E* edges, i64 m, double* out) {
     });
 }
 
-void edge_lengths(py::handle vertices_, py::handle edges_, py::handle out_) {
+void edge_lengths(nb::handle vertices_, nb::handle edges_, nb::handle out_) {
     In<double> v(vertices_, "vertices");
     Out<double> out(out_, "out");
     if (matches<i32>(edges_)) {
         In<i32> e(edges_, "edges");
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         lengths_into(v, e.p, e.n, out.p);
     } else {
         In<i64> e(edges_, "edges");
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         lengths_into(v, e.p, e.n, out.p);
     }
 }
 
 // terms.py
-// terms.per_entry (float64 values, int32 adjacencies), on threads (each entry on its own)
-void per_entry(py::handle values_, py::handle dual_edge_, py::handle out_) {
-    In<double> values(values_, "values");
+// terms.per_entry (float64 or float32 values, int32 adjacencies), on threads (each entry
+// on its own)
+void per_entry(nb::handle values_, nb::handle dual_edge_, nb::handle out_) {
     In<i32> dual_edge(dual_edge_, "dual_edge");
-    Out<double> out(out_, "out");
-    if (out.n != dual_edge.n) throw Mismatch("argument out");
-    py::gil_scoped_release nogil;
-    parallel_for(dual_edge.n, [&](i64 lo, i64 hi) {
-        for (i64 e = lo; e < hi; ++e) out[e] = values[dual_edge[e]];
+    with_real(values_, "values", [&](const auto& values) {
+        using T = std::remove_cv_t<std::remove_reference_t<decltype(values[0])>>;
+        Out<T> out(out_, "out");  // (the values' dtype: float64 or float32)
+        if (out.n != dual_edge.n) throw Mismatch("argument out");
+        nb::gil_scoped_release nogil;
+        parallel_for(dual_edge.n, [&](i64 lo, i64 hi) {
+            for (i64 e = lo; e < hi; ++e) out[e] = values[dual_edge[e]];
+        });
     });
 }
 
-py::array_t<double> convex_scaled_csr(py::handle weights_, py::handle dual_edge_,
-                                      py::handle concave_, py::handle cos_, py::handle span_,
+nb::object convex_scaled_csr(nb::handle weights_, nb::handle dual_edge_,
+                                      nb::handle concave_, nb::handle cos_, nb::handle span_,
                                       double coef) {
     In<double> weights(weights_, "weights"), cs(cos_, "cos"), span(span_, "span");
     In<i32> dual_edge(dual_edge_, "dual_edge");
@@ -600,7 +603,7 @@ py::array_t<double> convex_scaled_csr(py::handle weights_, py::handle dual_edge_
     Out<double> out;
     auto out_a = fresh(weights.n, out);
     {
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         // (no array of one delta per adjacency: 8 B each; both entries of an adjacency
         // compute the same value)
         parallel_for(weights.n, [&](i64 lo, i64 hi) {
@@ -614,8 +617,8 @@ py::array_t<double> convex_scaled_csr(py::handle weights_, py::handle dual_edge_
     return out_a;
 }
 
-py::array_t<double> cut_costs_csr(py::handle dual_edge_, py::handle concave_, py::handle cos_,
-                                  py::handle lengths_, double factor, double eta_convex,
+nb::object cut_costs_csr(nb::handle dual_edge_, nb::handle concave_, nb::handle cos_,
+                                  nb::handle lengths_, double factor, double eta_convex,
                                   double scale) {
     In<i32> dual_edge(dual_edge_, "dual_edge");
     In<bool> concave(concave_, "concave");
@@ -623,7 +626,7 @@ py::array_t<double> cut_costs_csr(py::handle dual_edge_, py::handle concave_, py
     Out<double> out;
     auto out_a = fresh(dual_edge.n, out);
     {
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         std::vector<double> cost(cs.n);  // (each value on its own: on threads)
         parallel_for(cs.n, [&](i64 lo, i64 hi) {
             for (i64 d = lo; d < hi; ++d) {
@@ -652,15 +655,15 @@ i64 find(std::vector<i64>& parent, i64 x) {
 }
 }  // namespace
 
-py::array_t<i64> merge_strays(py::handle strays_, py::handle nb_indptr_, py::handle nb_indices_,
-                              py::handle nb_data_, i64 n_pieces) {
+nb::object merge_strays(nb::handle strays_, nb::handle nb_indptr_, nb::handle nb_indices_,
+                              nb::handle nb_data_, i64 n_pieces) {
     In<i64> strays(strays_, "strays"), nb_indptr(nb_indptr_, "nb_indptr"),
         nb_indices(nb_indices_, "nb_indices");
     In<double> nb_data(nb_data_, "nb_data");
     Out<i64> root;
     auto root_a = fresh(n_pieces, root);
     {
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         std::vector<i64> parent(n_pieces);
         for (i64 q = 0; q < n_pieces; ++q) parent[q] = q;
         std::vector<double> total(n_pieces, 0.0);
@@ -701,8 +704,8 @@ py::array_t<i64> merge_strays(py::handle strays_, py::handle nb_indptr_, py::han
 // connectivity.stray_borders, on threads: each thread a range of rows, counted first
 // (its entries of either side and its adjacencies, for the lengths' numbers), then
 // written at its places: the entries in the order of one pass.
-py::tuple stray_borders(py::handle indptr_, py::handle indices_, py::handle piece_,
-                        py::handle is_main_, py::handle lengths_, py::handle shares_) {
+nb::tuple stray_borders(nb::handle indptr_, nb::handle indices_, nb::handle piece_,
+                        nb::handle is_main_, nb::handle lengths_, nb::handle shares_) {
     In<i64> indptr(indptr_, "indptr"), piece(piece_, "piece");
     In<i32> indices(indices_, "indices");
     In<bool> is_main(is_main_, "is_main");
@@ -713,7 +716,7 @@ py::tuple stray_borders(py::handle indptr_, py::handle indices_, py::handle piec
     // per thread: entries with a stray row on side 0 and on side 1, adjacencies before
     std::vector<i64> side0(T + 1, 0), side1(T + 1, 0), pairs(T + 1, 0);
     {
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         on_threads(T, [&](i64 t) {
             i64 s0 = 0, s1 = 0, np_ = 0;
             for (i64 i = row(t); i < row(t + 1); ++i)
@@ -744,7 +747,7 @@ py::tuple stray_borders(py::handle indptr_, py::handle indices_, py::handle piec
     auto a_a = fresh(m, a), b_a = fresh(m, b);
     auto w_a = fresh(m, w);
     {
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         on_threads(T, [&](i64 t) {
             for (int side = 0; side < 2; ++side) {
                 i64 u = side == 0 ? side0[t] : side0[T] + side1[t];
@@ -767,26 +770,26 @@ py::tuple stray_borders(py::handle indptr_, py::handle indices_, py::handle piec
             }
         });
     }
-    return py::make_tuple(a_a, b_a, w_a);
+    return nb::make_tuple(a_a, b_a, w_a);
 }
 
 template <class P, class D>
-py::array_t<i64> csr_of_pairs_t(py::handle lo_, py::handle hi_, i64 n, py::handle indices_,
-                                py::handle dual_edge_) {
+nb::object csr_of_pairs_t(nb::handle lo_, nb::handle hi_, i64 n, nb::handle indices_,
+                                nb::handle dual_edge_) {
     In<P> lo(lo_, "lo"), hi(hi_, "hi");
     Out<i32> indices(indices_, "indices");
     Out<D> dual_edge(dual_edge_, "dual_edge");
     Out<i64> indptr;
     auto indptr_a = fresh(n + 1, indptr);
     {
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         csr_of_pairs(lo.p, hi.p, lo.n, n, indices.p, dual_edge.p, indptr.p);
     }
     return indptr_a;
 }
 
-py::array_t<i64> csr_of_pairs_any(py::handle lo, py::handle hi, i64 n, py::handle indices,
-                                  py::handle dual_edge) {
+nb::object csr_of_pairs_any(nb::handle lo, nb::handle hi, i64 n, nb::handle indices,
+                                  nb::handle dual_edge) {
     const bool p32 = matches<i32>(lo), d32 = matches<i32>(dual_edge);
     if (p32) return d32 ? csr_of_pairs_t<i32, i32>(lo, hi, n, indices, dual_edge)
                         : csr_of_pairs_t<i32, i64>(lo, hi, n, indices, dual_edge);
@@ -795,20 +798,20 @@ py::array_t<i64> csr_of_pairs_any(py::handle lo, py::handle hi, i64 n, py::handl
 }
 
 template <class D, class Q>
-void number_pairs_t(py::handle indptr_, py::handle indices_, i64 n, py::handle dual_edge_,
-                    py::handle keep_, py::handle pairs_) {
+void number_pairs_t(nb::handle indptr_, nb::handle indices_, i64 n, nb::handle dual_edge_,
+                    nb::handle keep_, nb::handle pairs_) {
     In<i64> indptr(indptr_, "indptr");
     In<i32> indices(indices_, "indices");
     Out<D> dual_edge(dual_edge_, "dual_edge");
     Out<i64> keep(keep_, "keep");
     Out<Q> pairs(pairs_, "pairs");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     number_pairs_into(indptr.p, indices.p, n, dual_edge.p, keep.n ? keep.p : nullptr,
                       pairs.n ? pairs.p : static_cast<Q*>(nullptr));
 }
 
-void number_pairs(py::handle indptr, py::handle indices, i64 n, py::handle dual_edge,
-                  py::handle keep, py::handle pairs) {
+void number_pairs(nb::handle indptr, nb::handle indices, i64 n, nb::handle dual_edge,
+                  nb::handle keep, nb::handle pairs) {
     const bool d32 = matches<i32>(dual_edge), q32 = matches<i32>(pairs);
     if (d32) return q32 ? number_pairs_t<i32, i32>(indptr, indices, n, dual_edge, keep, pairs)
                         : number_pairs_t<i32, i64>(indptr, indices, n, dual_edge, keep, pairs);
@@ -816,7 +819,7 @@ void number_pairs(py::handle indptr, py::handle indices, i64 n, py::handle dual_
                : number_pairs_t<i64, i64>(indptr, indices, n, dual_edge, keep, pairs);
 }
 
-void bind_graph(py::module_& m) {
+void bind_graph(nb::module_& m) {
     m.def("csr_of_pairs", &csr_of_pairs_any);
     m.def("number_pairs", &number_pairs);
     m.def("triangle_half_edges", &triangle_half_edges);

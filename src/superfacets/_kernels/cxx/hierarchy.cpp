@@ -120,11 +120,11 @@ using Entry = std::tuple<double, i64, i64, i64, i64>;
 
 }  // namespace
 
-py::array_t<i64> merge_levels(i64 k, py::handle ea_, py::handle eb_, py::handle stats_,
-                              py::handle area_, py::handle wsum_, py::handle fsum_,
-                              py::handle scatter_, i64 planarity, double alpha,
+nb::object merge_levels(i64 k, nb::handle ea_, nb::handle eb_, nb::handle stats_,
+                              nb::handle area_, nb::handle wsum_, nb::handle fsum_,
+                              nb::handle scatter_, i64 planarity, double alpha,
                               double eta_convex, double beta, double compactness,
-                              double max_rise, py::handle targets_) {
+                              double max_rise, nb::handle targets_) {
     In<i64> ea(ea_, "ea"), eb(eb_, "eb"), targets(targets_, "targets");
     In<double> stats(stats_, "stats");
     Out<double> area(area_, "area"), wsum(wsum_, "wsum"), fsum(fsum_, "fsum"),
@@ -134,7 +134,7 @@ py::array_t<i64> merge_levels(i64 k, py::handle ea_, py::handle eb_, py::handle 
     Out<i64> out;
     auto out_a = fresh(targets.n, out, k);
     {
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     const i64 n_e = ea.n, cap = 2 * n_e;
     Nodes N{area.p, wsum.p, fsum.p, fsum.cols, scatter.p};
     Params P{planarity, alpha, eta_convex, beta, compactness, max_rise};
@@ -229,14 +229,14 @@ py::array_t<i64> merge_levels(i64 k, py::handle ea_, py::handle eb_, py::handle 
 // borders.label_pairs: the distinct label pairs lo * k + hi of the rows of `pairs`,
 // ascending (returned), and each row's place among them (inv): a counting sort on lo,
 // each lo's distinct hi sorted.
-py::array_t<i64> label_pairs(py::handle labels_, py::handle pairs_, i64 k, py::handle inv_) {
+nb::object label_pairs(nb::handle labels_, nb::handle pairs_, i64 k, nb::handle inv_) {
     In<i64> labels(labels_, "labels");
     Out<i64> inv(inv_, "inv");
     if (k < 0) throw Mismatch("argument k");
     std::vector<i64> key;
     with_index(pairs_, "pairs", [&](const auto& pairs) {
         if (pairs.cols != 2 || inv.n != pairs.n) throw Mismatch("argument pairs");
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         const i64 m = pairs.n;
         std::vector<i64> lo(m), hi(m), start(k + 1, 0), order(m);
         for (i64 c = 0; c < m; ++c) {
@@ -274,7 +274,7 @@ py::array_t<i64> label_pairs(py::handle labels_, py::handle pairs_, i64 k, py::h
     return out_a;
 }
 
-void bind_hierarchy(py::module_& m) {
+void bind_hierarchy(nb::module_& m) {
     m.def("merge_levels", &merge_levels);
     m.def("label_pairs", &label_pairs);
 }

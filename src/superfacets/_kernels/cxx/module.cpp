@@ -1,21 +1,25 @@
-// superfacets._kernels._cxx: the compiled kernels of the default runs.
+// superfacets._kernels._cxx: the compiled kernels of every run (C++17, nanobind).
 #include "common.hpp"
 
 #ifndef SFK_SOURCES
 #define SFK_SOURCES ""
 #endif
+#define SFK_STR2(x) #x
+#define SFK_STR(x) SFK_STR2(x)
 
-PYBIND11_MODULE(_cxx, m) {
-    m.doc() = "Compiled kernels (private): the numba kernels of the same names, bit for bit.";
-    static py::exception<sfk::Mismatch> mismatch(m, "Mismatch", PyExc_TypeError);
-    py::register_exception_translator([](std::exception_ptr p) {
-        try {
-            if (p) std::rethrow_exception(p);
-        } catch (const sfk::Mismatch& e) {
-            py::set_error(mismatch, e.what());
-        }
-    });
+NB_MODULE(_cxx, m) {
+    m.doc() = "Compiled kernels (private): one implementation of each kernel of superfacets.";
+    nb::exception<sfk::Mismatch>(m, "Mismatch", PyExc_TypeError);
     m.attr("sources_digest") = SFK_SOURCES;  // sha256 of the sources it was built from
+#if defined(__clang__)
+    m.attr("compiler") = "clang " __clang_version__;
+#elif defined(__GNUC__)
+    m.attr("compiler") = "gcc " __VERSION__;
+#elif defined(_MSC_VER)
+    m.attr("compiler") = "MSVC " SFK_STR(_MSC_VER);
+#else
+    m.attr("compiler") = "unknown";
+#endif
     // the run's thread limit (0: none); returns the one it replaces
     m.def("set_thread_limit", [](int n) { return sfk::thread_limit().exchange(n); });
     m.def("threads", &sfk::threads);  // the threads a kernel would use now
@@ -32,4 +36,5 @@ PYBIND11_MODULE(_cxx, m) {
     sfk::bind_nearest(m);
     sfk::bind_order(m);
     sfk::bind_orient(m);
+    sfk::bind_baselines(m);
 }

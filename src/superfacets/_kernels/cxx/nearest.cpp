@@ -124,8 +124,8 @@ i64 query(const Tree& t, i64 i, i64 k, double* bd, i64* bi, i64* stack, double* 
 
 }  // namespace
 
-i64 tree_nodes(py::handle pts_, py::handle keys_, i64 leaf, py::handle start_, py::handle end_,
-               py::handle left_, py::handle boxes_) {
+i64 tree_nodes(nb::handle pts_, nb::handle keys_, i64 leaf, nb::handle start_, nb::handle end_,
+               nb::handle left_, nb::handle boxes_) {
     In<double> pts(pts_, "pts");
     In<std::uint64_t> keys(keys_, "keys");
     Out<i64> start(start_, "start"), end(end_, "end"), left(left_, "left");
@@ -133,7 +133,7 @@ i64 tree_nodes(py::handle pts_, py::handle keys_, i64 leaf, py::handle start_, p
     if (pts.cols != 3 || keys.cols != 3 || keys.n != pts.n || boxes.cols != 6 ||
         end.n != start.n || left.n != start.n || boxes.n != start.n)
         throw Mismatch("argument pts");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     const i64 n = pts.n, cap = start.n;
     if (cap < 1) return -1;
     std::vector<i64> stack(2 * STACK);
@@ -211,9 +211,9 @@ i64 tree_nodes(py::handle pts_, py::handle keys_, i64 leaf, py::handle start_, p
     return nn;
 }
 
-void nearest_in_tree(py::handle pts_, py::handle start_, py::handle end_, py::handle left_,
-                     py::handle boxes_, py::handle own_, i64 k, py::handle nbr_,
-                     py::handle dist_) {
+void nearest_in_tree(nb::handle pts_, nb::handle start_, nb::handle end_, nb::handle left_,
+                     nb::handle boxes_, nb::handle own_, i64 k, nb::handle nbr_,
+                     nb::handle dist_) {
     In<double> pts(pts_, "pts"), boxes(boxes_, "boxes");
     In<i64> start(start_, "start"), end(end_, "end"), left(left_, "left"), own(own_, "own");
     Out<i32> nbr(nbr_, "nbr");
@@ -221,7 +221,7 @@ void nearest_in_tree(py::handle pts_, py::handle start_, py::handle end_, py::ha
     if (pts.cols != 3 || boxes.cols != 6 || nbr.cols != k + 1 || dist.cols != k + 1 ||
         nbr.n != own.n || dist.n != own.n || k < 1)
         throw Mismatch("argument nbr");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     const Tree t{pts.p, start.p, end.p, left.p, boxes.p};
     parallel_for(own.n, [&](i64 lo, i64 hi) {
         std::vector<double> bd(k), sd(STACK);
@@ -239,7 +239,7 @@ void nearest_in_tree(py::handle pts_, py::handle start_, py::handle end_, py::ha
     });
 }
 
-void bind_nearest(py::module_& m) {
+void bind_nearest(nb::module_& m) {
     m.def("tree_nodes", &tree_nodes);
     m.def("nearest_in_tree", &nearest_in_tree);
 }

@@ -62,13 +62,13 @@ i64 corank(i64 k, const Pair* a, i64 na, const Pair* b, i64 nb) {
 // thread sorts a run of the keys (radix), then the runs are merged two by two, each
 // merge split over the threads at equal output places (the stable merge: the same
 // order as one stable sort of all the keys).
-void sort_keys(py::handle keys_, py::handle order_, py::handle sorted_) {
+void sort_keys(nb::handle keys_, nb::handle order_, nb::handle sorted_) {
     In<std::uint64_t> keys(keys_, "keys");
     Out<i64> order(order_, "order");
     Out<std::uint64_t> sorted(sorted_, "sorted");
     const i64 n = keys.n;
     if (order.n != n || sorted.n != n || keys.cols != 1) throw Mismatch("argument order");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / (1 << 16)));
     std::vector<Pair> a(static_cast<size_t>(n)), b(static_cast<size_t>(n));
     std::vector<i64> cut(T + 1);
@@ -119,13 +119,13 @@ void sort_keys(py::handle keys_, py::handle order_, py::handle sorted_) {
 // geometry.rows_apart: the rows i (ascending) where index[i] < 0 or the three words of
 // at[index[i]] differ from bits[i], into rows; their number, or -1 (rows[:cap] written,
 // the first cap of them) when there are more than rows' length cap.
-i64 rows_apart(py::handle bits_, py::handle at_, py::handle index_, py::handle rows_) {
+i64 rows_apart(nb::handle bits_, nb::handle at_, nb::handle index_, nb::handle rows_) {
     In<std::uint64_t> bits(bits_, "bits"), at(at_, "at");
     Out<i64> rows(rows_, "rows");
     if (bits.cols != 3 || at.cols != 3) throw Mismatch("argument bits");
     return with_index(index_, "index", [&](const auto& index) -> i64 {
         if (index.n != bits.n) throw Mismatch("argument index");
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         const i64 n = bits.n, cap = rows.n;
         const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / 4096));
         std::vector<std::vector<i64>> found(T);
@@ -154,14 +154,14 @@ i64 rows_apart(py::handle bits_, py::handle at_, py::handle index_, py::handle r
 // geometry.order_ties: each run of equal keys in `ordered` (the sorted Z-order windows)
 // put in the order of the rows' whole keys (keys[row, 0..2]), then their positions,
 // stably: equal in all, in the order given. Threads take the runs of their range.
-void order_ties(py::handle order_, py::handle ordered_, py::handle keys_, py::handle p_) {
+void order_ties(nb::handle order_, nb::handle ordered_, nb::handle keys_, nb::handle p_) {
     Out<i64> order(order_, "order");
     In<std::uint64_t> ordered(ordered_, "ordered"), keys(keys_, "keys");
     In<double> p(p_, "p");
     const i64 n = order.n;
     if (ordered.n != n || keys.cols != 3 || p.cols != 3 || keys.n != p.n)
         throw Mismatch("argument keys");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     auto less = [&](i64 a, i64 b) {
         for (int w = 0; w < 3; ++w)
             if (keys(a, w) != keys(b, w)) return keys(a, w) < keys(b, w);
@@ -184,12 +184,12 @@ void order_ties(py::handle order_, py::handle ordered_, py::handle keys_, py::ha
 
 // geometry.key_window: bits start .. start + 63 of each row's 189-bit key string (63 bits
 // a word, the first bit the highest; zeros past its end), as one uint64, on threads
-void key_window(py::handle keys_, i64 start, py::handle out_) {
+void key_window(nb::handle keys_, i64 start, nb::handle out_) {
     In<std::uint64_t> keys(keys_, "keys");
     Out<std::uint64_t> out(out_, "out");
     if (keys.cols != 3 || out.n != keys.n || start < 0 || start >= 189)
         throw Mismatch("argument keys");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     const i64 j = start / 63, o = start % 63;
     const std::uint64_t mask = (std::uint64_t{1} << (63 - o)) - 1;
     parallel_for(keys.n, [&](i64 r0, i64 r1) {
@@ -201,7 +201,7 @@ void key_window(py::handle keys_, i64 start, py::handle out_) {
     });
 }
 
-void bind_order(py::module_& m) {
+void bind_order(nb::module_& m) {
     m.def("key_window", &key_window);
     m.def("sort_keys", &sort_keys);
     m.def("rows_apart", &rows_apart);

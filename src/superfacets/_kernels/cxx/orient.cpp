@@ -153,8 +153,8 @@ struct Rows {
 
 }  // namespace
 
-i64 propagate_signs(py::handle indptr_, py::handle indices_, py::handle normals_,
-                    py::handle sign_, py::handle component_) {
+i64 propagate_signs(nb::handle indptr_, nb::handle indices_, nb::handle normals_,
+                    nb::handle sign_, nb::handle component_) {
     In<i64> indptr(indptr_, "indptr");
     In<i32> indices(indices_, "indices");
     In<double> nor(normals_, "normals");
@@ -163,7 +163,7 @@ i64 propagate_signs(py::handle indptr_, py::handle indices_, py::handle normals_
     if (nor.cols != 3 || indptr.n != nor.n + 1 || sign.n != nor.n || component.n != nor.n ||
         nor.n >= (i64(1) << 31) - 1)
         throw Mismatch("argument normals");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     const i64 n = nor.n;
     const double* np_ = nor.p;
     // blocks only where they are patches (as BlockedSearch): a strided sample's edges
@@ -381,6 +381,6 @@ i64 propagate_signs(py::handle indptr_, py::handle indices_, py::handle normals_
     return n_comp;
 }
 
-void bind_orient(py::module_& m) { m.def("propagate_signs", &propagate_signs); }
+void bind_orient(nb::module_& m) { m.def("propagate_signs", &propagate_signs); }
 
 }  // namespace sfk

@@ -15,16 +15,15 @@ namespace {
 struct In2i {
     const char* p;
     i64 n, k, s0, s1;
-    In2i(py::handle h, const char* name) {
-        if (!py::isinstance<py::array>(h)) throw Mismatch(std::string("argument ") + name);
-        auto a = py::reinterpret_borrow<py::array>(h);
-        if (!is_dtype<i32>(a.dtype()) || a.ndim() != 2)
+    In2i(nb::handle h, const char* name) {
+        Buffer b;
+        if (!Buffer::read<i32>(h, b) || b.ndim != 2)
             throw Mismatch(std::string("argument ") + name);
-        p = static_cast<const char*>(a.data());
-        n = a.shape(0);
-        k = a.shape(1);
-        s0 = a.strides(0);
-        s1 = a.strides(1);
+        p = static_cast<const char*>(b.data);
+        n = b.shape[0];
+        k = b.shape[1];
+        s0 = b.strides[0];
+        s1 = b.strides[1];
     }
     i32 operator()(i64 i, i64 j) const {
         return *reinterpret_cast<const i32*>(p + i * s0 + j * s1);
@@ -165,10 +164,10 @@ inline void pair_terms(const double* pos, const N* nor, i64 i, i64 j, double& ge
 
 }  // namespace
 
-void float_morton_keys(py::handle bits_, py::handle keys_) {
+void float_morton_keys(nb::handle bits_, nb::handle keys_) {
     In<std::uint64_t> bits(bits_, "bits");
     Out<std::uint64_t> keys(keys_, "keys");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     const std::uint64_t top = 1ULL << 63;
     parallel_for(bits.n, [&](i64 lo, i64 hi) {
         for (i64 i = lo; i < hi; ++i) {
@@ -187,13 +186,13 @@ void float_morton_keys(py::handle bits_, py::handle keys_) {
     });
 }
 
-i64 distinct_in_order(py::handle p_, py::handle order_, py::handle out_, py::handle inverse_) {
+i64 distinct_in_order(nb::handle p_, nb::handle order_, nb::handle out_, nb::handle inverse_) {
     In<double> p(p_, "p");
     In<i64> order(order_, "order");
     Out<double> out(out_, "out");
     Out<i64> inverse(inverse_, "inverse");
     if (p.cols != 3 || out.cols != 3) throw Mismatch("argument p");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     const i64 n = order.n;
     std::vector<i64> place(n);
     parallel_for(n, [&](i64 lo, i64 hi) {
@@ -227,13 +226,13 @@ i64 distinct_in_order(py::handle p_, py::handle order_, py::handle out_, py::han
     return m;
 }
 
-void pca_normals(py::handle points_, py::handle neighbors_, py::handle out_,
-                 py::handle linearity_) {
+void pca_normals(nb::handle points_, nb::handle neighbors_, nb::handle out_,
+                 nb::handle linearity_) {
     In<double> points(points_, "points");
     In<i32> nb(neighbors_, "neighbors");
     Out<double> out(out_, "out"), lin(linearity_, "linearity");
     if (points.cols != 3 || out.cols != 3) throw Mismatch("argument points");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     const i64 k = nb.cols;
     parallel_for(nb.n, [&](i64 lo, i64 hi) {
         double a[6];
@@ -245,12 +244,12 @@ void pca_normals(py::handle points_, py::handle neighbors_, py::handle out_,
     });
 }
 
-void pca_linearity(py::handle points_, py::handle neighbors_, py::handle linearity_) {
+void pca_linearity(nb::handle points_, nb::handle neighbors_, nb::handle linearity_) {
     In<double> points(points_, "points");
     In<i32> nb(neighbors_, "neighbors");
     Out<double> lin(linearity_, "linearity");
     if (points.cols != 3) throw Mismatch("argument points");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     const i64 k = nb.cols;
     parallel_for(nb.n, [&](i64 lo, i64 hi) {
         double a[6];
@@ -287,8 +286,8 @@ i64 sort_row(i32* raw, i64 s, i64 nf, i64 e, std::vector<i32>& tmp) {
     return o - s;
 }
 
-py::array_t<i32> knn_csr(py::handle nbr_, py::handle keep_, py::handle indptr_,
-                         py::handle rows_, py::handle more_, py::handle more_keep_) {
+nb::object knn_csr(nb::handle nbr_, nb::handle keep_, nb::handle indptr_,
+                         nb::handle rows_, nb::handle more_, nb::handle more_keep_) {
     In2i nbr(nbr_, "nbr"), more(more_, "more");
     In<bool> keep(keep_, "keep"), more_keep(more_keep_, "more_keep");
     Out<i64> indptr(indptr_, "indptr");
@@ -318,7 +317,7 @@ py::array_t<i32> knn_csr(py::handle nbr_, py::handle keep_, py::handle indptr_,
     auto listed = [&](i64 i, i64 c) { return (all_kept || keep(i, c)) && nbr(i, c) != i; };
     auto listed_more = [&](i64 t, i64 c) { return more_keep(t, c) && more(t, c) != rows[t]; };
     {
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         on_threads(T, [&](i64 t) {
             const i64 a = lo(t), b = lo(t + 1);
             std::fill(rev.begin() + a, rev.begin() + b, 0);
@@ -353,7 +352,7 @@ py::array_t<i32> knn_csr(py::handle nbr_, py::handle keep_, py::handle indptr_,
     Out<i32> raw;
     auto raw_a = fresh(start[n], raw);
     {
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         on_threads(T, [&](i64 t) {
             const i64 a = lo(t), b = lo(t + 1);
             // each row: its own list, its longer list, then the reverse entries in the
@@ -411,14 +410,14 @@ py::array_t<i32> knn_csr(py::handle nbr_, py::handle keep_, py::handle indptr_,
     return raw_a;
 }
 
-void turn_outwards(py::handle points_, py::handle normals_, py::handle sign_,
-                   py::handle component_, i64 n_comp, py::handle out_) {
+void turn_outwards(nb::handle points_, nb::handle normals_, nb::handle sign_,
+                   nb::handle component_, i64 n_comp, nb::handle out_) {
     In<double> pts(points_, "points"), nor(normals_, "normals");
     In<std::int8_t> sign(sign_, "sign");
     In<i64> component(component_, "component");
     Out<double> out(out_, "out");
     if (pts.cols != 3 || nor.cols != 3 || out.cols != 3) throw Mismatch("argument points");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     const i64 n = pts.n;
     std::vector<double> count(n_comp, 0.0), mean(3 * n_comp, 0.0), total(n_comp, 0.0);
     for (i64 i = 0; i < n; ++i) {
@@ -442,9 +441,9 @@ void turn_outwards(py::handle points_, py::handle normals_, py::handle sign_,
     }
 }
 
-void point_terms_csr(py::handle positions_, py::handle normals_, py::handle indptr_,
-                     py::handle indices_, i64 r0, i64 r1, py::handle geo_, py::handle cos_,
-                     py::handle concave_) {
+void point_terms_csr(nb::handle positions_, nb::handle normals_, nb::handle indptr_,
+                     nb::handle indices_, i64 r0, i64 r1, nb::handle geo_, nb::handle cos_,
+                     nb::handle concave_) {
     In<double> pos(positions_, "positions");
     In<i64> indptr(indptr_, "indptr");
     In<i32> indices(indices_, "indices");
@@ -452,7 +451,7 @@ void point_terms_csr(py::handle positions_, py::handle normals_, py::handle indp
     Out<bool> concave(concave_, "concave");
     with_real(normals_, "normals", [&](const auto& nor) {
         if (pos.cols != 3 || nor.cols != 3) throw Mismatch("argument positions");
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         i64 u = 0;
         for (i64 i = r0; i < r1; ++i)
             for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
@@ -477,33 +476,33 @@ void combine_into(const In<double>& geo, const In<double>& theta, const In<bool>
     }
 }
 
-void combine_weights(py::handle geo_, py::handle theta_, py::handle concave_, double eta_convex,
-                     double alpha, double diagonal, py::handle out_) {
+void combine_weights(nb::handle geo_, nb::handle theta_, nb::handle concave_, double eta_convex,
+                     double alpha, double diagonal, nb::handle out_) {
     In<double> geo(geo_, "geo"), theta(theta_, "theta");
     In<bool> concave(concave_, "concave");
     if (theta.n != geo.n || concave.n != geo.n) throw Mismatch("argument theta");
     if (matches<float>(out_)) {
         Out<float> out(out_, "out");
         if (out.n != geo.n) throw Mismatch("argument out");
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         combine_into(geo, theta, concave, eta_convex, alpha, diagonal, out.p);
     } else {
         Out<double> out(out_, "out");
         if (out.n != geo.n) throw Mismatch("argument out");
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         combine_into(geo, theta, concave, eta_convex, alpha, diagonal, out.p);
     }
 }
 
-void point_terms(py::handle positions_, py::handle normals_, py::handle pairs_, i64 lo, i64 hi,
-                 py::handle geo_, py::handle cos_, py::handle concave_) {
+void point_terms(nb::handle positions_, nb::handle normals_, nb::handle pairs_, i64 lo, i64 hi,
+                 nb::handle geo_, nb::handle cos_, nb::handle concave_) {
     In<double> pos(positions_, "positions");
     Out<double> geo(geo_, "geo"), cs(cos_, "cos");
     Out<bool> concave(concave_, "concave");
     with_real(normals_, "normals", [&](const auto& nor) {
         if (pos.cols != 3 || nor.cols != 3) throw Mismatch("argument positions");
         return with_index(pairs_, "pairs", [&](const auto& pairs) {
-            py::gil_scoped_release nogil;
+            nb::gil_scoped_release nogil;
             for (i64 t = lo; t < hi; ++t)
                 pair_terms(pos.p, nor.p, pairs(t, 0), pairs(t, 1), geo[t - lo], cs[t - lo],
                            concave[t - lo]);
@@ -525,16 +524,16 @@ void neighbour_mean_t(const In<i64>& indptr, const In<i32>& indices, const X* x,
     }
 }
 
-void neighbour_mean(py::handle indptr_, py::handle indices_, py::handle x_, py::handle out_) {
+void neighbour_mean(nb::handle indptr_, nb::handle indices_, nb::handle x_, nb::handle out_) {
     In<i64> indptr(indptr_, "indptr");
     In<i32> indices(indices_, "indices");
     Out<double> out(out_, "out");
     In<double> x(x_, "x");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     neighbour_mean_t(indptr, indices, x.p, out.p);
 }
 
-py::array_t<i64> crossing_pairs(py::handle indptr_, py::handle indices_, py::handle labels_) {
+nb::object crossing_pairs(nb::handle indptr_, nb::handle indices_, nb::handle labels_) {
     In<i64> indptr(indptr_, "indptr"), labels(labels_, "labels");
     In<i32> indices(indices_, "indices");
     const i64 n = indptr.n - 1;
@@ -549,7 +548,7 @@ py::array_t<i64> crossing_pairs(py::handle indptr_, py::handle indices_, py::han
         });
     };
     {
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         each_block([&](i64 b) {
             auto [r0, r1] = rows(b);
             i64 m = 0;
@@ -565,7 +564,7 @@ py::array_t<i64> crossing_pairs(py::handle indptr_, py::handle indices_, py::han
     Out<i64> out;
     auto out_a = fresh(at[n_blocks], out, 2);
     {
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         each_block([&](i64 b) {
             auto [r0, r1] = rows(b);
             i64 u = at[b];
@@ -599,8 +598,8 @@ void each_by_label(const L& labels, i64 k, F f) {
     });
 }
 
-void label_sums(py::handle labels_, py::handle weights_, py::handle positions_,
-                py::handle normals_, py::handle area_, py::handle wpos_, py::handle wnrm_) {
+void label_sums(nb::handle labels_, nb::handle weights_, nb::handle positions_,
+                nb::handle normals_, nb::handle area_, nb::handle wpos_, nb::handle wnrm_) {
     In<double> w(weights_, "weights"), pos(positions_, "positions");
     Out<double> area(area_, "area"), wpos(wpos_, "wpos"), wnrm(wnrm_, "wnrm");
     with_real(normals_, "normals", [&](const auto& nor) {
@@ -609,7 +608,7 @@ void label_sums(py::handle labels_, py::handle weights_, py::handle positions_,
                 w.n != labels.n || pos.n != labels.n || nor.n != labels.n ||
                 wpos.n != area.n || wnrm.n != area.n)
                 throw Mismatch("argument positions");
-            py::gil_scoped_release nogil;
+            nb::gil_scoped_release nogil;
             each_by_label(labels, area.n, [&](i64 i, i64 s) {
                 double x = w[i];
                 area[s] += x;
@@ -621,15 +620,15 @@ void label_sums(py::handle labels_, py::handle weights_, py::handle positions_,
     });
 }
 
-void label_scatter(py::handle labels_, py::handle weights_, py::handle positions_,
-                   py::handle centroid_, py::handle scatter_) {
+void label_scatter(nb::handle labels_, nb::handle weights_, nb::handle positions_,
+                   nb::handle centroid_, nb::handle scatter_) {
     In<i64> labels(labels_, "labels");
     In<double> w(weights_, "weights"), pos(positions_, "positions"), cen(centroid_, "centroid");
     Out<double> sc(scatter_, "scatter");
     if (pos.cols != 3 || cen.cols != 3 || sc.cols != 9 || w.n != labels.n ||
         pos.n != labels.n || sc.n != cen.n)
         throw Mismatch("argument positions");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     each_by_label(labels, sc.n, [&](i64 i, i64 s) {
         double x = w[i];
         double d[3] = {pos(i, 0) - cen(s, 0), pos(i, 1) - cen(s, 1), pos(i, 2) - cen(s, 2)};
@@ -640,12 +639,12 @@ void label_scatter(py::handle labels_, py::handle weights_, py::handle positions
 
 // columns.column_bounds: each column's least and greatest value (NaN where the column
 // has one; of equal values, the first row's), by row ranges on threads combined in order
-void column_bounds(py::handle a_, py::handle lo_, py::handle hi_) {
+void column_bounds(nb::handle a_, nb::handle lo_, nb::handle hi_) {
     In<double> a(a_, "a");
     Out<double> lo(lo_, "lo"), hi(hi_, "hi");
     const i64 n = a.n, d = a.cols;
     if (lo.n != d || hi.n != d || n < 1 || d > 16) throw Mismatch("argument lo");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / 65536));
     std::vector<double> plo(T * d), phi(T * d);
     auto keep = [](double& l, double& h, double x) {
@@ -678,12 +677,12 @@ void column_bounds(py::handle a_, py::handle lo_, py::handle hi_) {
 // columns.column_means: each column's mean as numpy's a.mean(axis=0) makes it, the rows
 // added in order (numpy's reduction over the outer axis: no pairwise sum), then divided
 // (one thread: the order of the additions is the value)
-void column_means(py::handle a_, py::handle out_) {
+void column_means(nb::handle a_, nb::handle out_) {
     In<double> a(a_, "a");
     Out<double> out(out_, "out");
     const i64 n = a.n, d = a.cols;
     if (out.n != d || n < 1 || d > 16) throw Mismatch("argument out");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     double s[16] = {0.0};
     for (i64 r = 0; r < n; ++r)
         for (i64 c = 0; c < d; ++c) s[c] += a(r, c);
@@ -691,11 +690,11 @@ void column_means(py::handle a_, py::handle out_) {
 }
 
 // columns.finite_rows: out[r] whether every value of row r is finite
-void finite_rows(py::handle a_, py::handle out_) {
+void finite_rows(nb::handle a_, nb::handle out_) {
     In<double> a(a_, "a");
     Out<bool> out(out_, "out");
     if (out.n != a.n) throw Mismatch("argument out");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     const i64 d = a.cols;
     parallel_for(a.n, [&](i64 r0, i64 r1) {
         for (i64 r = r0; r < r1; ++r) {
@@ -708,14 +707,14 @@ void finite_rows(py::handle a_, py::handle out_) {
 
 // columns.gather: out[i] = values[index[i]] for each index in range (others leave out[i]
 // as it was), on threads; returns how many were out of range
-i64 gather(py::handle values_, py::handle index_, py::handle out_) {
+i64 gather(nb::handle values_, nb::handle index_, nb::handle out_) {
     auto run = [&](auto tag) -> i64 {
         using V = decltype(tag);
         In<V> values(values_, "values");
         Out<V> out(out_, "out");
         return with_index(index_, "index", [&](const auto& index) -> i64 {
             if (out.n != index.n) throw Mismatch("argument out");
-            py::gil_scoped_release nogil;
+            nb::gil_scoped_release nogil;
             const i64 n = values.n;
             std::atomic<i64> bad{0};
             parallel_for(index.n, [&](i64 i0, i64 i1) {
@@ -739,12 +738,12 @@ i64 gather(py::handle values_, py::handle index_, py::handle out_) {
 
 // geometry.border_shares: out[i] = 2 sqrt(pi area[i]) / max(deg_i, 1), the degree from
 // the CSR layout, each operation as numpy's expression rounds it
-void border_shares(py::handle indptr_, py::handle area_, py::handle out_) {
+void border_shares(nb::handle indptr_, nb::handle area_, nb::handle out_) {
     In<i64> indptr(indptr_, "indptr");
     In<double> area(area_, "area");
     Out<double> out(out_, "out");
     if (indptr.n != area.n + 1 || out.n != area.n) throw Mismatch("argument out");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     constexpr double pi = 3.141592653589793;  // np.pi
     parallel_for(area.n, [&](i64 i0, i64 i1) {
         for (i64 i = i0; i < i1; ++i) {
@@ -758,16 +757,16 @@ void border_shares(py::handle indptr_, py::handle area_, py::handle out_) {
 // pick[i] (itself included, ascending: each sum in that order, from 0), their covariance
 // (the scatter divided by their number) and their mean distance to it (the sum divided by
 // their number less one, at least 1). On threads, a ball per element picked.
-void neighbourhood_moments(py::handle indptr_, py::handle indices_, py::handle points_,
-                           py::handle pick_, i64 rings, py::handle cov_, py::handle radius_) {
+void neighbourhood_moments(nb::handle indptr_, nb::handle indices_, nb::handle points_,
+                           nb::handle pick_, i64 rings, nb::handle cov_, nb::handle radius_) {
     In<i64> indptr(indptr_, "indptr"), pick(pick_, "pick");
     In<double> points(points_, "points");
     Out<double> cov(cov_, "cov"), radius(radius_, "radius");
     if (points.cols != 3 || cov.n != pick.n || radius.n != pick.n || rings < 0 ||
-        py::reinterpret_borrow<py::array>(cov_).size() != 9 * pick.n)
+        size_of(cov_) != 9 * pick.n)
         throw Mismatch("argument cov");
     with_index(indices_, "indices", [&](const auto& indices) {
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         parallel_for(pick.n, [&](i64 lo, i64 hi) {
             std::vector<i64> ball;
             double a[6];
@@ -810,10 +809,10 @@ void neighbourhood_moments(py::handle indptr_, py::handle indices_, py::handle p
 // columns.nearest_row: the first row of least (dx dx + dy dy) + dz dz to `point` (numpy's
 // argmin of the squared distances), each range of rows on a thread, the ranges' bests
 // taken in order (a later one only if strictly nearer); -1 where a distance is NaN
-i64 nearest_row(py::handle a_, py::handle point_) {
+i64 nearest_row(nb::handle a_, nb::handle point_) {
     In<double> a(a_, "a"), point(point_, "point");
     if (a.cols != 3 || point.n != 3 || a.n < 1) throw Mismatch("argument a");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     const double px = point[0], py_ = point[1], pz = point[2];
     const i64 n = a.n, T = std::max<i64>(1, std::min<i64>(threads(), n / 65536));
     std::vector<double> best(T, INF);
@@ -849,7 +848,7 @@ i64 nearest_row(py::handle a_, py::handle point_) {
     return w;
 }
 
-void bind_points(py::module_& m) {
+void bind_points(nb::module_& m) {
     m.def("gather", &gather);
     m.def("nearest_row", &nearest_row);
     m.def("neighbourhood_moments", &neighbourhood_moments);

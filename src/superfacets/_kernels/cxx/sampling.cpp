@@ -16,14 +16,14 @@ inline double nearest_so_far(double& mind, const double* p, double cx, double cy
     return mind;
 }
 
-py::tuple spatial_blocks(py::handle centroids_, i64 cells_per_axis) {
+nb::tuple spatial_blocks(nb::handle centroids_, i64 cells_per_axis) {
     In<double> c(centroids_, "centroids");
     if (c.cols != 3 || c.n == 0) throw Mismatch("argument centroids");
     const i64 m = c.n, g = cells_per_axis, g3 = g * g * g;
     std::vector<i64> order(m), count(g3 + 1, 0), bstart;
     i64 nb = 0;
     {
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         double lo[3];
         double span = 0.0;
         for (int t = 0; t < 3; ++t) {
@@ -65,7 +65,7 @@ py::tuple spatial_blocks(py::handle centroids_, i64 cells_per_axis) {
     auto bcenter_a = fresh(nb, bcenter, 3);
     auto bradius_a = fresh(nb, bradius);
     {
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         std::copy(order.begin(), order.end(), order_o.p);
         std::copy(bstart.begin(), bstart.end(), bstart_o.p);
         for (i64 b = 0; b < nb; ++b) {
@@ -91,12 +91,12 @@ py::tuple spatial_blocks(py::handle centroids_, i64 cells_per_axis) {
             bradius[b] = std::sqrt(r2) * (1.0 + 1e-9);
         }
     }
-    return py::make_tuple(order_a, bstart_a, bcenter_a, bradius_a);
+    return nb::make_tuple(order_a, bstart_a, bcenter_a, bradius_a);
 }
 
-void farthest_point_blocked(py::handle centroids_, i64 k, i64 first, py::handle out_,
-                            py::handle order_, py::handle bstart_, py::handle bcenter_,
-                            py::handle bradius_, py::object scale2_, py::object bscale2_) {
+void farthest_point_blocked(nb::handle centroids_, i64 k, i64 first, nb::handle out_,
+                            nb::handle order_, nb::handle bstart_, nb::handle bcenter_,
+                            nb::handle bradius_, nb::object scale2_, nb::object bscale2_) {
     In<double> c(centroids_, "centroids"), bcenter(bcenter_, "bcenter"),
         bradius(bradius_, "bradius");
     Out<i64> out(out_, "out");
@@ -108,7 +108,7 @@ void farthest_point_blocked(py::handle centroids_, i64 k, i64 first, py::handle 
         bscale2 = In<double>(bscale2_, "bscale2");
     }
     if (c.cols != 3 || bcenter.cols != 3) throw Mismatch("argument centroids");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     const i64 m = c.n, nb = bstart.n - 1;
     std::vector<double> pos(3 * m);
     std::vector<i64> slot(m);
@@ -246,15 +246,15 @@ void farthest_point_blocked(py::handle centroids_, i64 k, i64 first, py::handle 
     }
 }
 
-void farthest_point(py::handle centroids_, i64 k, i64 first, py::handle out_,
-                    py::object scale2_) {
+void farthest_point(nb::handle centroids_, i64 k, i64 first, nb::handle out_,
+                    nb::object scale2_) {
     In<double> c(centroids_, "centroids");
     Out<i64> out(out_, "out");
     In<double> scale2;
     const bool scaled = !scale2_.is_none();
     if (scaled) scale2 = In<double>(scale2_, "scale2");
     if (c.cols != 3) throw Mismatch("argument centroids");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     const i64 m = c.n;
     std::vector<double> mind(m, INF);
     i64 cur = first;
@@ -277,14 +277,14 @@ void farthest_point(py::handle centroids_, i64 k, i64 first, py::handle out_,
     }
 }
 
-void bind_sampling(py::module_& m) {
-    m.def("farthest_point", &farthest_point, py::arg("centroids"), py::arg("k"),
-          py::arg("first"), py::arg("out"), py::arg("scale2") = py::none());
+void bind_sampling(nb::module_& m) {
+    m.def("farthest_point", &farthest_point, nb::arg("centroids"), nb::arg("k"),
+          nb::arg("first"), nb::arg("out"), nb::arg("scale2") = nb::none());
     m.def("spatial_blocks", &spatial_blocks);
-    m.def("farthest_point_blocked", &farthest_point_blocked, py::arg("centroids"), py::arg("k"),
-          py::arg("first"), py::arg("out"), py::arg("order"), py::arg("bstart"),
-          py::arg("bcenter"), py::arg("bradius"), py::arg("scale2") = py::none(),
-          py::arg("bscale2") = py::none());
+    m.def("farthest_point_blocked", &farthest_point_blocked, nb::arg("centroids"), nb::arg("k"),
+          nb::arg("first"), nb::arg("out"), nb::arg("order"), nb::arg("bstart"),
+          nb::arg("bcenter"), nb::arg("bradius"), nb::arg("scale2") = nb::none(),
+          nb::arg("bscale2") = nb::none());
 }
 
 }  // namespace sfk

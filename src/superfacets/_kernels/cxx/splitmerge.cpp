@@ -173,8 +173,8 @@ struct Common {
     In<i64> indptr, members, bounds;
     In<i32> indices, label;
     In<double> w, sizes, positions;
-    Common(py::handle indptr_, py::handle indices_, py::handle w_, py::handle label_,
-           py::handle members_, py::handle bounds_, py::handle sizes_, py::handle positions_)
+    Common(nb::handle indptr_, nb::handle indices_, nb::handle w_, nb::handle label_,
+           nb::handle members_, nb::handle bounds_, nb::handle sizes_, nb::handle positions_)
         : indptr(indptr_, "indptr"), members(members_, "members"), bounds(bounds_, "bounds"),
           indices(indices_, "indices"), label(label_, "label"), w(w_, "w"),
           sizes(sizes_, "sizes"), positions(positions_, "positions") {
@@ -187,14 +187,14 @@ struct Common {
 
 }  // namespace
 
-i64 energies(py::handle indptr, py::handle indices, py::handle w, py::handle label,
-             py::handle members, py::handle bounds, py::handle sizes, py::handle positions,
-             double power, py::handle energy_, py::handle far_, py::handle dist_,
-             py::handle stamp_, i64 sid, py::handle hkey_, py::handle hval_, i64 first, i64 step) {
+i64 energies(nb::handle indptr, nb::handle indices, nb::handle w, nb::handle label,
+             nb::handle members, nb::handle bounds, nb::handle sizes, nb::handle positions,
+             double power, nb::handle energy_, nb::handle far_, nb::handle dist_,
+             nb::handle stamp_, i64 sid, nb::handle hkey_, nb::handle hval_, i64 first, i64 step) {
     Common c(indptr, indices, w, label, members, bounds, sizes, positions);
     Out<double> energy(energy_, "energy"), dist(dist_, "dist"), hkey(hkey_, "hkey");
     Out<i64> far(far_, "far"), stamp(stamp_, "stamp"), hval(hval_, "hval");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     Search s = c.search(nullptr);
     BucketQueue bq(c.w.p, c.w.n);
     const i64 k = c.bounds.n - 1;
@@ -211,12 +211,12 @@ i64 energies(py::handle indptr, py::handle indices, py::handle w, py::handle lab
     return sid;
 }
 
-i64 split_candidates(py::handle indptr, py::handle indices, py::handle w, py::handle label,
-                     py::handle members, py::handle bounds, py::handle sizes,
-                     py::handle positions, double power, i64 lloyd, py::handle which_,
-                     py::handle far_, py::handle split_energy_, py::handle second_,
-                     py::handle dist_, py::handle dist2_, py::handle stamp_, py::handle stamp2_,
-                     i64 sid, py::handle hkey_, py::handle hval_, py::handle work_, i64 first,
+i64 split_candidates(nb::handle indptr, nb::handle indices, nb::handle w, nb::handle label,
+                     nb::handle members, nb::handle bounds, nb::handle sizes,
+                     nb::handle positions, double power, i64 lloyd, nb::handle which_,
+                     nb::handle far_, nb::handle split_energy_, nb::handle second_,
+                     nb::handle dist_, nb::handle dist2_, nb::handle stamp_, nb::handle stamp2_,
+                     i64 sid, nb::handle hkey_, nb::handle hval_, nb::handle work_, i64 first,
                      i64 step) {
     Common c(indptr, indices, w, label, members, bounds, sizes, positions);
     In<i64> which(which_, "which"), far(far_, "far");
@@ -225,7 +225,7 @@ i64 split_candidates(py::handle indptr, py::handle indices, py::handle w, py::ha
     Out<bool> second(second_, "second");
     Out<i64> stamp(stamp_, "stamp"), stamp2(stamp2_, "stamp2"), hval(hval_, "hval"),
         work(work_, "work");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     Search s = c.search(nullptr);
     BucketQueue bq(c.w.p, c.w.n);
     const double* sizes_p = c.sizes.p;
@@ -291,18 +291,18 @@ i64 split_candidates(py::handle indptr, py::handle indices, py::handle w, py::ha
     return sid;
 }
 
-i64 merge_energies(py::handle indptr, py::handle indices, py::handle w, py::handle label,
-                   py::handle members, py::handle bounds, py::handle sizes, py::handle positions,
-                   double power, py::handle pair_a_, py::handle pair_b_, py::handle energy_,
-                   double window_r2, double most, py::handle out_, py::handle dist_,
-                   py::handle stamp_, i64 sid, py::handle hkey_, py::handle hval_,
-                   py::handle work_, i64 first, i64 step) {
+i64 merge_energies(nb::handle indptr, nb::handle indices, nb::handle w, nb::handle label,
+                   nb::handle members, nb::handle bounds, nb::handle sizes, nb::handle positions,
+                   double power, nb::handle pair_a_, nb::handle pair_b_, nb::handle energy_,
+                   double window_r2, double most, nb::handle out_, nb::handle dist_,
+                   nb::handle stamp_, i64 sid, nb::handle hkey_, nb::handle hval_,
+                   nb::handle work_, i64 first, i64 step) {
     Common c(indptr, indices, w, label, members, bounds, sizes, positions);
     In<i64> pair_a(pair_a_, "pair_a"), pair_b(pair_b_, "pair_b");
     In<double> energy(energy_, "energy");
     Out<double> out(out_, "out"), dist(dist_, "dist"), hkey(hkey_, "hkey");
     Out<i64> stamp(stamp_, "stamp"), hval(hval_, "hval"), work(work_, "work");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     Heap heap(4096);
     Search s = c.search(&heap);
     const double* pos = c.positions.p;
@@ -336,12 +336,12 @@ i64 merge_energies(py::handle indptr, py::handle indices, py::handle w, py::hand
     return sid;
 }
 
-py::array_t<i64> label_pairs(py::handle indptr_, py::handle indices_, py::handle label_, i64 k) {
+nb::object label_pairs(nb::handle indptr_, nb::handle indices_, nb::handle label_, i64 k) {
     In<i64> indptr(indptr_, "indptr");
     In<i32> indices(indices_, "indices"), label(label_, "label");
     std::vector<i64> keys;
     {
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         const i64 n = indptr.n - 1;
         for (i64 i = 0; i < n; ++i) {
             i64 a = label[i];
@@ -360,7 +360,7 @@ py::array_t<i64> label_pairs(py::handle indptr_, py::handle indices_, py::handle
     return out_a;
 }
 
-void bind_splitmerge(py::module_& m) {
+void bind_splitmerge(nb::module_& m) {
     m.def("energies", &energies);
     m.def("split_candidates", &split_candidates);
     m.def("merge_energies", &merge_energies);

@@ -4,14 +4,14 @@
 
 namespace sfk {
 
-void vertex_cells(py::handle corners_, py::handle offsets_, py::handle index_,
-                  py::handle areas_, py::handle normals_, py::handle area_,
-                  py::handle normal_) {
+void vertex_cells(nb::handle corners_, nb::handle offsets_, nb::handle index_,
+                  nb::handle areas_, nb::handle normals_, nb::handle area_,
+                  nb::handle normal_) {
     In<i64> corners(corners_, "corners"), offsets(offsets_, "offsets"), index(index_, "index");
     In<double> areas(areas_, "areas"), normals(normals_, "normals");
     Out<double> area(area_, "area"), normal(normal_, "normal");
     if (normals.cols != 3 || normal.cols != 3) throw Mismatch("argument normals");
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     const i64 n = area.n;
     for (i64 i = 0; i < n; ++i) {
         area[i] = 0.0;
@@ -34,8 +34,8 @@ void vertex_cells(py::handle corners_, py::handle offsets_, py::handle index_,
         store_unit(normal.p + 3 * i, normal(i, 0), normal(i, 1), normal(i, 2));
 }
 
-py::tuple mesh_edges(py::handle corners_, py::handle offsets_, py::handle index_, i64 n,
-                     py::handle positions_, py::handle centroids_) {
+nb::tuple mesh_edges(nb::handle corners_, nb::handle offsets_, nb::handle index_, i64 n,
+                     nb::handle positions_, nb::handle centroids_) {
     In<i64> corners(corners_, "corners"), offsets(offsets_, "offsets"), index(index_, "index");
     In<double> pos(positions_, "positions"), cen(centroids_, "centroids");
     if (pos.cols != 3 || cen.cols != 3) throw Mismatch("argument positions");
@@ -44,7 +44,7 @@ py::tuple mesh_edges(py::handle corners_, py::handle offsets_, py::handle index_
     std::vector<char> skip(nh);
     i64 ne = 0;
     {
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         for (i64 f = 0; f < offsets.n - 1; ++f) {
             i64 s = offsets[f], e = offsets[f + 1];
             for (i64 c = s; c < e; ++c) {
@@ -87,7 +87,7 @@ py::tuple mesh_edges(py::handle corners_, py::handle offsets_, py::handle index_
     auto lo_a = fresh(ne, lo), hi_a = fresh(ne, hi), uses_a = fresh(ne, uses);
     auto len_a = fresh(ne, lengths), span_a = fresh(ne, spans);
     {
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         for (i64 t = 0; t < ne; ++t) {
             lengths[t] = 0.0;
             uses[t] = 0;
@@ -112,10 +112,10 @@ py::tuple mesh_edges(py::handle corners_, py::handle offsets_, py::handle index_
             uses[k] += 1;
         }
     }
-    return py::make_tuple(lo_a, hi_a, len_a, span_a, uses_a);
+    return nb::make_tuple(lo_a, hi_a, len_a, span_a, uses_a);
 }
 
-void bind_vertices(py::module_& m) {
+void bind_vertices(nb::module_& m) {
     m.def("vertex_cells", &vertex_cells);
     m.def("mesh_edges", &mesh_edges);
 }

@@ -15,11 +15,11 @@ namespace {
 template <class W>
 i64 nearest_seed_t(const In<i64>& indptr, const In<i32>& indices, const W* weights,
                    const In<i64>& seeds, i64 first, Out<double>& dist, Out<i32>& label,
-                   py::handle queue_, double inv_width) {
-    auto tup = py::reinterpret_borrow<py::tuple>(queue_);
-    if (!py::isinstance<py::tuple>(queue_) || tup.size() != 4) throw Mismatch("argument queue");
+                   nb::handle queue_, double inv_width) {
+    auto tup = nb::borrow<nb::tuple>(queue_);
+    if (!nb::isinstance<nb::tuple>(queue_) || tup.size() != 4) throw Mismatch("argument queue");
     Out<i64> head(tup[3], "head");  // (the rest of numba's queue is not used here)
-    py::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;
     std::vector<i64> todo(seeds.n - first);
     i64 n = 0;
     for (i64 s = first; s < seeds.n; ++s) {
@@ -36,7 +36,7 @@ i64 nearest_seed_t(const In<i64>& indptr, const In<i32>& indices, const W* weigh
 }
 
 template <class C, class W, class S>
-py::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In<C>& cluster,
+nb::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In<C>& cluster,
                          const In<double>& dist, const W* csr_w, const In<double>& lengths,
                          const S* shares, i64 n_shares, i64 n_c) {
     const i64 n = indptr.n - 1;
@@ -45,7 +45,7 @@ py::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In
     {
         // the crossing adjacencies' hi bucketed by lo, on threads with atomic counters (a
         // bucket's order does not matter: each is then sorted and made distinct)
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         auto bump = [](i64* x) { return __atomic_fetch_add(x, 1, __ATOMIC_RELAXED); };
         auto crossings = [&](auto visit) {  // visit(lo, hi) of each crossing adjacency
             parallel_for(n, [&](i64 r0, i64 r1) {
@@ -78,7 +78,7 @@ py::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In
     auto out_a = fresh(m, out, 2);
     auto w_a = fresh(m, w_c), len_a = fresh(m, len_c);
     {
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         for (i64 g = 0; g < m; ++g) {
             w_c[g] = INF;
             len_c[g] = 0.0;
@@ -128,13 +128,13 @@ py::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In
             }
         });
     }
-    return py::make_tuple(out_a, w_a, len_a);
+    return nb::make_tuple(out_a, w_a, len_a);
 }
 
 }  // namespace
 
-i64 nearest_seed(py::handle indptr_, py::handle indices_, py::handle weights_, py::handle seeds_,
-                 i64 first, py::handle dist_, py::handle label_, py::handle queue,
+i64 nearest_seed(nb::handle indptr_, nb::handle indices_, nb::handle weights_, nb::handle seeds_,
+                 i64 first, nb::handle dist_, nb::handle label_, nb::handle queue,
                  double inv_width) {
     In<i64> indptr(indptr_, "indptr"), seeds(seeds_, "seeds");
     In<i32> indices(indices_, "indices");
@@ -145,9 +145,9 @@ i64 nearest_seed(py::handle indptr_, py::handle indices_, py::handle weights_, p
     });
 }
 
-py::tuple coarse_pairs(py::handle indptr_, py::handle indices_, py::handle cluster_,
-                       py::handle dist_, py::handle csr_w_, py::handle lengths_,
-                       py::handle shares_, i64 n_c) {
+nb::tuple coarse_pairs(nb::handle indptr_, nb::handle indices_, nb::handle cluster_,
+                       nb::handle dist_, nb::handle csr_w_, nb::handle lengths_,
+                       nb::handle shares_, i64 n_c) {
     In<i64> indptr(indptr_, "indptr");
     In<i32> indices(indices_, "indices");
     In<double> dist(dist_, "dist"), lengths(lengths_, "lengths");
@@ -161,8 +161,8 @@ py::tuple coarse_pairs(py::handle indptr_, py::handle indices_, py::handle clust
     });
 }
 
-py::array_t<i64> first_in_cells(py::handle positions_, py::handle lo_, double h,
-                                py::handle dims_, i64 cap) {
+nb::object first_in_cells(nb::handle positions_, nb::handle lo_, double h,
+                                nb::handle dims_, i64 cap) {
     In<double> positions(positions_, "positions"), lo(lo_, "lo");
     In<i64> dims(dims_, "dims");
     if (positions.cols != 3 || lo.n != 3 || dims.n != 3) throw Mismatch("argument positions");
@@ -175,7 +175,7 @@ py::array_t<i64> first_in_cells(py::handle positions_, py::handle lo_, double h,
     std::atomic<bool> full{false};
     std::vector<i64> got;
     {
-        py::gil_scoped_release nogil;
+        nb::gil_scoped_release nogil;
         parallel_for(cap, [&](i64 a, i64 b) {
             for (i64 i = a; i < b; ++i) {
                 keys[i].store(-1, std::memory_order_relaxed);
@@ -232,7 +232,7 @@ py::array_t<i64> first_in_cells(py::handle positions_, py::handle lo_, double h,
     return out_a;
 }
 
-void bind_voronoi(py::module_& m) {
+void bind_voronoi(nb::module_& m) {
     m.def("nearest_seed", &nearest_seed);
     m.def("coarse_pairs", &coarse_pairs);
     m.def("first_in_cells", &first_in_cells);

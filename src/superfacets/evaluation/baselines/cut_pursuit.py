@@ -69,11 +69,13 @@ def dimensionality_features(graph, up: int = 2) -> np.ndarray:
     (n, 4) float64 ndarray
         Each in ``[0, 1]`` (an element with a degenerate neighbourhood: zeros).
     """
-    from ..._kernels.normals import csr_covariances
+    from ..._kernels import native
 
     n = graph.n_elements
     cov = np.empty((n, 3, 3))
-    csr_covariances(graph.indptr, graph.indices, np.ascontiguousarray(graph.positions), cov)
+    native.kernel("baselines.csr_covariances")(
+        np.ascontiguousarray(graph.indptr, dtype=np.int64), graph.indices,
+        np.ascontiguousarray(graph.positions, dtype=np.float64), cov)
     lam, vec = np.linalg.eigh(cov)  # ascending
     lam = np.maximum(lam[:, ::-1], 0.0)  # l1 >= l2 >= l3
     vec = vec[:, :, ::-1]

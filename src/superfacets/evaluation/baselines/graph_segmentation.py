@@ -6,7 +6,7 @@ of mesh edges, weight ``w = 1 - n_i . n_j`` (vertex normals), squared on
 convex edges so that convex bends matter less; Felzenszwalb and
 Huttenlocher's greedy merge with threshold ``k_thresh`` (default 0.01); then
 segments smaller than ``min_size`` elements (default 20) merged into a
-neighbour. Reimplemented here (numba) on any element graph: mesh vertices,
+neighbour. Reimplemented here (compiled) on any element graph: mesh vertices,
 cloud points, or faces.
 
 Differences from the original, all minor: normals are the graph's
@@ -103,7 +103,7 @@ def graph_segmentation(obj, k_thresh: float = 0.01, min_size: int = 20, *,
     >>> int(graph_segmentation(box).max()) + 1   # segments under 20 vertices merged
     1
     """
-    from ..._kernels.felzenszwalb import felzenszwalb
+    from ..._kernels import native
     from ...elements.inputs import elements_of, is_cloud
     from ...method.labels import relabel_dense
     from ...method.params import ELEMENTS, check_choice
@@ -119,13 +119,14 @@ def graph_segmentation(obj, k_thresh: float = 0.01, min_size: int = 20, *,
     if n_segments is not None:
         n_segments = check_int("n_segments", n_segments, lo=1, hi=g.n_elements)
     w = segmentator_weights(g).astype(np.float32)  # the original's float precision
-    order = np.argsort(w, kind="stable")
-    lo = np.ascontiguousarray(g.pairs[:, 0])
-    hi = np.ascontiguousarray(g.pairs[:, 1])
+    order = np.argsort(w, kind="stable").astype(np.int64)
+    lo = np.ascontiguousarray(g.pairs[:, 0], dtype=np.int64)
+    hi = np.ascontiguousarray(g.pairs[:, 1], dtype=np.int64)
     labels = np.empty(g.n_elements, dtype=np.int64)
 
     def run(k: float) -> int:
-        return felzenszwalb(g.n_elements, lo, hi, w, order, np.float32(k), min_size, labels)
+        return native.kernel("baselines.felzenszwalb")(g.n_elements, lo, hi, w, order,
+                                                         float(np.float32(k)), min_size, labels)
 
     if n_segments is None:
         run(k_thresh)

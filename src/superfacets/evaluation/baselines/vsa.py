@@ -100,9 +100,6 @@ class _State:
         self.total = np.zeros(capacity)
         self.n = 0
         self.label = np.full(self.m, -1, dtype=np.int64)
-        cap = self.indices.shape[0] + 1
-        self.hkey = np.empty(cap)
-        self.hval = np.empty(cap, dtype=np.int64)
 
     def add(self, face: int) -> None:
         """A proxy seeded at ``face``, fitted to that face alone."""
@@ -112,30 +109,66 @@ class _State:
         self.seeds[p] = face
         self.n += 1
 
+    def _proxies(self) -> tuple:
+        """The arguments every VSA kernel takes after the labels (metric to ``N``)."""
+        return (self.metric, self.areas, self.face_normals, self.centroids, self.corners,
+                self.X, self.N)
+
     def step(self) -> bool:
         """Flood, fit, reseed; return True when the partition did not change."""
-        from ._vsa_kernels import assess, fit, partition
+        from ..._kernels import native
 
         old = self.label.copy()
         n = self.n
-        partition(self.indptr, self.indices, self.metric, self.areas, self.face_normals,
-                  self.corners, self.X, self.N, self.seeds, n, self.label, self.hkey, self.hval)
-        fit(self.label, n, self.metric, self.areas, self.face_normals, self.centroids,
-            self.corners, self.X, self.N)
-        assess(self.label, n, self.metric, self.areas, self.face_normals, self.centroids,
-               self.corners, self.X, self.N, self.seeds, self.total)
+        native.kernel("baselines.vsa_partition")(
+            self.indptr, self.indices, self.metric, self.areas, self.face_normals,
+            self.corners, self.X, self.N, self.seeds, n, self.label)
+        self.fit()
+        native.kernel("baselines.vsa_assess")(self.label, n, *self._proxies(), self.seeds,
+                                              self.total)
         return bool(np.array_equal(old, self.label))
+
+    def fit(self) -> None:
+        """Best proxy of each region (CSAD04, section 3.4), in place in ``X``, ``N``.
+
+        L2,1: ``N`` = the normalized area-weighted mean normal. L2: ``N`` = the
+        eigenvector of the smallest eigenvalue of the region's exact covariance
+        (integrated over its triangles), turned like the mean normal. ``X`` = the area
+        centroid in both cases. A region of zero area (or zero mean normal) keeps its
+        previous proxy."""
+        from ..._kernels import native
+
+        n = self.n
+        area, nsum, csum = np.empty(n), np.empty((n, 3)), np.empty((n, 3))
+        mom = np.empty((n, 3, 3))
+        native.kernel("baselines.vsa_sums")(self.label, n, self.metric, self.areas,
+                                            self.face_normals, self.centroids, self.corners,
+                                            area, nsum, csum, mom)
+        ok = area > 0.0
+        X, N = self.X[:n], self.N[:n]
+        X[ok] = csum[ok] / area[ok, None]
+        if self.metric == 0:
+            norm = np.sqrt(nsum[:, 0] ** 2 + nsum[:, 1] ** 2 + nsum[:, 2] ** 2)
+            ok &= norm > 0.0
+            N[ok] = nsum[ok] / norm[ok, None]
+            return
+        if not ok.any():
+            return
+        cov = mom[ok] - area[ok, None, None] * X[ok][:, :, None] * X[ok][:, None, :]
+        v = np.linalg.eigh(cov)[1][:, :, 0]  # of the smallest eigenvalue
+        sign = np.where(np.einsum("pi,pi->p", v, nsum[ok]) < 0.0, -1.0, 1.0)
+        N[ok] = sign[:, None] * v  # (cosmetic: L2 ignores the sign)
 
     def insert(self) -> None:
         """Region insertion: a proxy on the worst non-seed face of the worst region."""
-        from ._vsa_kernels import worst_faces
+        from ..._kernels import native
 
         n = self.n
         is_seed = np.zeros(self.m, dtype=np.bool_)
         is_seed[self.seeds[:n]] = True
         worst = np.empty(n, dtype=np.int64)
-        worst_faces(self.label, n, self.metric, self.areas, self.face_normals, self.centroids,
-                    self.corners, self.X, self.N, self.seeds, is_seed, worst)
+        native.kernel("baselines.vsa_worst_faces")(self.label, n, *self._proxies(),
+                                                   self.seeds, is_seed, worst)
         totals = np.where(worst >= 0, self.total[:n], -np.inf)
         self.add(int(worst[int(np.argmax(totals))]))
 
@@ -271,11 +304,11 @@ def variational_shape_approximation(mesh, n_segments: int = 150, *, metric: str 
         if st.step():
             converged = True
             break
-    from ._vsa_kernels import assess
+    from ..._kernels import native
 
     n = st.n
-    distortion = assess(st.label, n, st.metric, st.areas, st.face_normals, st.centroids,
-                        st.corners, st.X, st.N, st.seeds.copy(), st.total)
+    distortion = native.kernel("baselines.vsa_assess")(st.label, n, *st._proxies(),
+                                                       st.seeds.copy(), st.total)
     used, labels = np.unique(st.label, return_inverse=True)
     return VSAResult(labels.astype(np.int64).ravel(), st.X[used].copy(), st.N[used].copy(),
                      st.seeds[used].copy(), float(distortion), it, converged)

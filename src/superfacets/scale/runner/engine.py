@@ -38,7 +38,7 @@ LOST_WORKER = "worker process died (killed, e.g. out of memory, or crashed)"
 
 #: Environment of local worker processes: one thread each (the engine runs one task per core).
 _WORKER_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
-               "NUMBA_NUM_THREADS": "1", "SUPERFACETS_KERNEL_THREADS": "1"}
+               "SUPERFACETS_NUM_THREADS": "1", "SUPERFACETS_KERNEL_THREADS": "1"}
 #: With ``exact_memory``: glibc gives arrays of 64 KiB and more back to the system when
 #: freed, so each task's peak resident memory is its own, not hidden by memory kept from an
 #: earlier task. It costs time (fresh pages for every array: about +15 % on the benchmark's

@@ -21,7 +21,7 @@ Nothing here checks its input.
 import numpy as np
 from numba import njit
 
-from .codes import MERGE, QUEUE_FULL, RECORD, RECORD_FULL, UNLABELLED  # noqa: F401
+from superfacets._kernels.codes import MERGE, QUEUE_FULL, RECORD, RECORD_FULL, UNLABELLED  # noqa: F401
 
 _INF = np.inf
 

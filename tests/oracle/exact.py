@@ -14,7 +14,8 @@ there, ``qlab`` one label per queue node.
 import numpy as np
 from numba import njit
 
-from .codes import NOT_INCREMENTAL, QUEUE_FULL  # noqa: F401
+from superfacets._kernels.codes import NOT_INCREMENTAL, QUEUE_FULL  # noqa: F401
+
 from .expand import queue_node, queue_pop, queue_push
 
 _INF = np.inf

@@ -9,7 +9,7 @@ the binary min-heap of ``superfacets._kernels`` (float64 keys, int64 values
 import numpy as np
 from numba import njit
 
-from ..._kernels.heap import pop, push
+from .heap import pop, push
 
 
 @njit(cache=True, inline="always")
