@@ -85,9 +85,10 @@ def install_rows(work: Path) -> list[tuple[str, str]]:
 def _cases(mesh: Path, cloud: Path, tet: Path) -> list[tuple[str, list[str]]]:
     seg = ["segment", str(mesh), "-k", "100", "-o", "{out}", "-q"]
     cases = [("faces, defaults", seg)]
+    by_radius = ["segment", str(mesh), "--radius", "0.05", "-o", "{out}", "-q"]
     for init in ("farthest", "flood", "grid"):
-        cases.append((f"--init {init}", seg + ["--init", init] +
-                      (["-r", "0.02"] if init != "farthest" else [])))
+        cases.append((f"--init {init}" + (" --radius 0.05" if init != "farthest" else ""),
+                      (seg if init == "farthest" else by_radius) + ["--init", init]))
     cases += [("--assignment exact", seg + ["--assignment", "exact"]),
               ("--weighting shlafman", seg + ["--weighting", "shlafman", "--alpha", "0.5"]),
               ("--coarsen 16", seg + ["--coarsen", "16"]),
@@ -101,9 +102,13 @@ def _cases(mesh: Path, cloud: Path, tet: Path) -> list[tuple[str, list[str]]]:
               ("points --adaptive", ["segment", str(cloud), "-k", "100", "--adaptive",
                                      "-o", "{out}", "-q"]),
               ("tetrahedra", ["segment", str(tet), "-k", "30", "-o", "{out}", "-q"])]
-    for method in ("vsa", "shlafman", "graph_segmentation", "ncuts"):
+    for method in ("vsa", "shlafman", "graph_segmentation"):
         cases.append((f"baseline {method}",
                       ["baseline", str(mesh), "-m", method, "-k", "30", "-o", "{out}", "-q"]))
+    # (on clouds, from the API: the command line's baseline reads meshes)
+    cases.append(("cut_pursuit on the cloud (API)", [
+        "-c", "import numpy as np; from superfacets.evaluation.baselines.cut_pursuit import "
+        f"cut_pursuit; cut_pursuit(np.load({str(cloud)!r}), 100)"]))
     return cases
 
 
@@ -133,15 +138,21 @@ def first_run_rows(work: Path, mesh: Path | None) -> list[tuple[str, str, str]]:
     from scipy.spatial import Delaunay
 
     pts = rng.random((3000, 3))
-    tet = work / "tets.npz"
-    np.savez(tet, points=pts, tetrahedra=Delaunay(pts).simplices)
+    tet = work / "tets.vtu"
+    try:  # (the volumes extra)
+        import meshio
+
+        meshio.write(tet, meshio.Mesh(pts, [("tetra", Delaunay(pts).simplices)]))
+    except ImportError:
+        tet = None
     rows = []
     env = dict(os.environ)
     for name, args in _cases(mesh, cloud, tet):
         times = []
         for rnd in range(2):
             out = str(work / f"out{rnd}.seg")
-            cmd = sf + [a.replace("{out}", out) for a in args]
+            cmd = ([sys.executable] if args[0] == "-c" else sf) + [
+                a.replace("{out}", out) for a in args]
             times.append(_timed(cmd, env=env))
         rows.append((name, f"{times[0]:.2f} s", f"{times[1]:.2f} s"))
     return rows

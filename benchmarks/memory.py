@@ -5,7 +5,7 @@ Usage: python benchmarks/memory.py [--cases faces points2m points10m] [--rounds 
 
 Each row is ``superfacets segment INPUT -k K -o OUT.seg`` with the defaults, in a new
 process (start-up, reading and writing included); the peak is the process's largest
-resident set (``wait4``'s ``ru_maxrss``: the interpreter, numpy, scipy and numba
+resident set (``wait4``'s ``ru_maxrss``: the interpreter, numpy and scipy
 included, about 100-160 MiB), divided by the input's elements. Cases:
 
 - ``faces``: ``hand_olivier`` subdivided three times (6,775,040 faces, made once by

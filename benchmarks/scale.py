@@ -2,17 +2,16 @@
 
 Usage: python benchmarks/scale.py [--max-faces 2e6] [-k 150] [--alpha 200] [--threads N]
 
-Rows: the Bunny with an empty numba cache (the first run after installing:
-every kernel compiled), then the Bunny at k = 50, 150, 500 and 2000 (cost
-should not grow with k), then hand_olivier and its subdivisions
+Rows: the Bunny once (a first run; nothing is compiled at run time), then the
+Bunny at k = 50, 150, 500 and 2000 (cost should not grow with k), then hand_olivier
+and its subdivisions
 (``benchmarks/large_meshes.py`` makes and caches them: 0.42M, 1.7M, 6.8M,
 27M faces) up to ``--max-faces``. Each row runs in a fresh process: import
 the package (timed apart), read the file, segment, all timed; "total" is
-read + segment, and includes numba's start-up in a new process (its first
-call of a compiled kernel, about 0.2-0.3 s, lands in "init"). Peak resident
+read + segment in a new process. Peak resident
 memory is the process's own; bytes/face is reported both for the whole
-process and above the resident size right after import and numba's start-up
-(Python, numpy, scipy, numba: about 150 MiB). The paper's Table 1 time of the mesh of comparable
+process and above the resident size right after import
+(Python, numpy, scipy: about 100 MiB). The paper's Table 1 time of the mesh of comparable
 size (single-threaded C++, 3.2 GHz) is shown beside, and, measured in the same process
 after ours, the graph-segmentation baseline (Felzenszwalb-Huttenlocher with the ScanNet
 Segmentator's weights, on the same faces): its threshold searched until it gives k
@@ -28,7 +27,6 @@ import os
 import resource
 import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -54,10 +52,6 @@ def one(path: str, k: int, alpha: float, threads: int | None, baseline: bool = F
     from superfacets import read_mesh, segment
 
     t_import = time.perf_counter() - t
-    from superfacets._runtime import warmup
-
-    warmup.start()  # numba's start-up, as the command line does (else on the first call)
-    warmup.wait()
     rss0 = _current_rss()
     t = time.perf_counter()
     mesh = read_mesh(path)
@@ -143,7 +137,7 @@ def main() -> int:
     from superfacets.evaluation.datasets.psb import default_archive, default_cache
 
     meshes = default_archive().parent / "meshes"
-    runs = [("bunny k=150, cold JIT", meshes / "bunny.tri.xz", 150)]
+    runs = [("bunny k=150, first run", meshes / "bunny.tri.xz", 150)]
     runs += [(f"bunny k={k}", meshes / "bunny.tri.xz", k) for k in (50, 150, 500, 2000)]
     runs.append(("hand_olivier", meshes / "hand_olivier.tri.xz", args.k))
     for level in (1, 2, 3, 4):
@@ -168,9 +162,8 @@ def main() -> int:
     print("| " + " | ".join(cols) + " |")
     print("|" + "---|" * len(cols))
     for name, path, k in runs:
-        if "cold" in name:
-            with tempfile.TemporaryDirectory() as empty:  # nothing cached: compile everything
-                r = child(path, k, args.alpha, args.threads, env={"NUMBA_CACHE_DIR": empty})
+        if "first run" in name:
+            r = child(path, k, args.alpha, args.threads)
         else:
             r = child(path, k, args.alpha, args.threads,
                       baseline=not args.no_baseline and k == args.k)
@@ -182,7 +175,7 @@ def main() -> int:
                  *(f"{r[s]:.2f}" for s in ("read", "graph", "init", "iterations", "total")),
                  f"{r['iterations'] / max(r['passes'], 1):.3f}", f"{r['peak'] / 2**20:,.0f}",
                  f"{r['peak'] / r['faces']:,.0f}", f"{(r['peak'] - r['rss0']) / r['faces']:,.0f}",
-                 paper_time(r["faces"]) if k == 150 and "cold" not in name else "",
+                 paper_time(r["faces"]) if k == 150 and "first run" not in name else "",
                  f"{r['gs_search']:.2f} ({r['gs_segments']}); {r['gs_one']:.2f}"
                  if "gs_search" in r else ""]
         print("| " + " | ".join(str(c) for c in cells) + " |", flush=True)

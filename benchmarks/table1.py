@@ -4,8 +4,8 @@ Usage: python benchmarks/table1.py [-k 150] [--alpha 200] [--repeat 3]
 
 Each mesh runs in a fresh process (so peak resident memory is its own):
 read the file, then segment at k = 150, alpha = 200, a few times; the table
-shows the fastest run per stage. A first row measures the cold start: the
-same on the bunny with an empty numba cache (what a first run after installing meets).
+shows the fastest run per stage. A first row measures the bunny's first run
+alone (nothing is compiled at run time: it should equal the others).
 The paper's times are single-threaded C++ on a 3.2 GHz desktop (Table 1).
 """
 
@@ -17,7 +17,6 @@ import os
 import resource
 import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -91,18 +90,17 @@ def main() -> int:
               file=sys.stderr)
         return 1
     rows = []
-    with tempfile.TemporaryDirectory() as cache:
-        env = dict(os.environ, NUMBA_CACHE_DIR=cache)
-        cold = run_child("bunny", argparse.Namespace(k=args.k, alpha=args.alpha, repeat=1), env)
-        cold["name"] = "bunny (first run, empty numba cache)"
-        rows.append(cold)
+    cold = run_child("bunny", argparse.Namespace(k=args.k, alpha=args.alpha, repeat=1),
+                     dict(os.environ))
+    cold["name"] = "bunny (first run)"
+    rows.append(cold)
     for name in PAPER:
         rows.append(run_child(name, args))
     cols = ["mesh", "faces", "superfacets", "iterations", "read s", "graph s", "weights s",
             "init s", "iterations s", "connectivity s", "total s", "paper s", "speed-up",
             "peak MiB"]
     print(f"k = {args.k}, alpha = {args.alpha}; best of {args.repeat} runs per mesh "
-          f"(first row: 1 run, empty numba cache)\n")
+          f"(first row: 1 run)\n")
     print("| " + " | ".join(cols) + " |")
     print("|" + "|".join(["---"] * len(cols)) + "|")
     for r in rows:

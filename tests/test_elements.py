@@ -999,3 +999,14 @@ def test_rows_of_elements_with_invalid_and_repeated_rows():
         assert rows.dtype == np.int32
         np.testing.assert_array_equal(rows, np.where(index >= 0, labels[index], -1))
         assert (rows < 0).sum() == (0 if cloud is p else np.isnan(nan).any(axis=1).sum())
+
+
+def test_a_mesh_of_2_31_half_edges_is_refused_in_one_line():
+    """int64 half-edge ids (from 2**31 half-edges, about 715M triangles) are refused
+    before the compiled grouping, which takes int32 ids, is called."""
+    from superfacets.elements.faces import _group_pairs_on_threads
+    from superfacets.errors import MemoryLimitError
+
+    wide = np.zeros(6, dtype=np.int64)
+    with pytest.raises(MemoryLimitError, match=r"2\*\*31 half-edges.*--tiles"):
+        _group_pairs_on_threads(None, wide, np.empty(0, dtype=np.int64), wide, wide)

@@ -693,8 +693,8 @@ def test_face_pairs_grouped_on_threads_match_numba(monkeypatch, threads, polygon
 @needs_cxx
 def test_values_per_entry_on_threads_are_numpys_take(monkeypatch):
     """A value per adjacency laid out per CSR entry on threads: numba's and numpy's
-    gather, bit for bit, for float64 and float32 weights; other dtypes (8-byte adjacency
-    numbers, float32 values into a float64 output) are refused."""
+    gather, bit for bit, for float64 and float32 weights and int32 or int64 adjacency
+    numbers; float32 values into a float64 output are refused."""
     rng = np.random.default_rng(8)
     values = rng.random(40_000)
     dual_edge = rng.integers(0, values.shape[0], 90_000).astype(np.int32)
@@ -709,8 +709,11 @@ def test_values_per_entry_on_threads_are_numpys_take(monkeypatch):
     native.kernel("terms.per_entry")(v32, dual_edge, out32)
     reference("terms.per_entry")(v32, dual_edge, ref32)
     assert _same(out32, ref32) and _same(out32, v32[dual_edge])
+    wide = np.empty_like(outs[0])
+    native.kernel("terms.per_entry")(values, dual_edge.astype(np.int64), wide)
+    assert _same(wide, outs[1])
     with pytest.raises(TypeError, match="dual_edge"):
-        native.kernel("terms.per_entry")(values, dual_edge.astype(np.int64), outs[0])
+        native.kernel("terms.per_entry")(values, dual_edge.astype(np.int16), outs[0])
     with pytest.raises(TypeError, match="out"):
         native.kernel("terms.per_entry")(v32, dual_edge, outs[0])
 
@@ -1480,3 +1483,46 @@ def test_farthest_points_by_groups_of_blocks_match_numba(source):
         got[fn] = out
     assert np.array_equal(got["kernel"], got["reference"])
     assert np.unique(got["kernel"]).shape[0] == 1500
+
+
+@needs_cxx
+def test_int64_adjacency_numbers_give_the_same_labels(monkeypatch):
+    """From 2**31 CSR entries on (a cloud of about 100M points), adjacency numbers are
+    int64: every kernel that reads them takes that layout too (no other implementation
+    to fall back to), with the int32 layout's labels. Lowered here to every graph."""
+    from scipy.spatial import Delaunay
+
+    import superfacets.elements.graph as graph_module
+
+    rng = np.random.default_rng(0)
+    pts = rng.random((400, 3))
+    runs = {
+        "faces": lambda: superfacets.segment(creature(20), 20),
+        "faces, paper": lambda: superfacets.segment(creature(20), 20, paper=True),
+        "faces, flood": lambda: superfacets.segment(creature(20), None, radius=0.1),
+        "polygons": lambda: superfacets.segment(_quad_cube(8), 12),
+        "vertices": lambda: superfacets.segment(creature(20), 20, elements="vertices"),
+        "points": lambda: superfacets.segment(creature(20).centroids, 20),
+        "points, swaps and clean-up": lambda: superfacets.segment(
+            creature(20).centroids, 20, split_merge=True, cleanup=True),
+        "tetrahedra": lambda: superfacets.segment(
+            superfacets.TetMesh(pts, Delaunay(pts).simplices), 10),
+    }
+    narrow = {name: run().labels for name, run in runs.items()}
+    monkeypatch.setattr(graph_module, "WIDE_ENTRIES", 0)
+    seen = []
+    plain = native.kernel
+
+    def kernel(path):  # (records the int64 layouts the kernels are given)
+        fn = plain(path)
+
+        def call(*args):
+            seen.extend(a.dtype for a in args if isinstance(a, np.ndarray) and a.ndim == 1
+                        and a.dtype == np.int64 and path.endswith(("per_entry", "pairs")))
+            return fn(*args)
+        return call
+
+    monkeypatch.setattr(native, "kernel", kernel)
+    for name, run in runs.items():
+        np.testing.assert_array_equal(run().labels, narrow[name], err_msg=name)
+    assert seen  # the int64 layouts were taken

@@ -1,1 +1,1 @@
-"""What runs around the method: threads, the kernels' warm-up, interrupts, optional extras."""
+"""What runs around the method: threads, interrupts, memory, optional extras."""

@@ -131,7 +131,7 @@ def give_back_zero_pages(a) -> None:
     (``madvise(MADV_DONTNEED)`` on Linux; nothing elsewhere).
 
     The expansions' per-thread buffers hold zeros between expansions
-    (:mod:`superfacets._kernels.expand`): handed back after each pass, they hold only
+    (the compiled expansion kernels): handed back after each pass, they hold only
     the pages that pass's expansions wrote, not every page any pass ever wrote.
 
     Parameters

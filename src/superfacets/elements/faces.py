@@ -25,6 +25,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._kernels import native
+from . import graph as _graph
 from .graph import ElementGraph, cached_on, pairs_from_csr
 
 __all__ = ["FaceAdjacency", "build_face_graph", "face_graph"]
@@ -200,25 +201,16 @@ def order_by_two_keys(key1: np.ndarray, key2: np.ndarray, n_key1: int,
 
 
 def _group_pairs_on_threads(group_pairs, half, owner, a, b):
-    """``group_pairs`` over ranges of ``half`` cut at edge starts, on threads: each
-    range holds whole edges, so the concatenated results are those of one call. (The
-    compiled kernel cuts its own ranges and writes one set of arrays: called once.)"""
-    from .._runtime.threads import run_ranges, split
+    """``group_pairs`` (the compiled kernel cuts ``half`` into ranges of whole edges on
+    threads itself); int32 half-edge and vertex ids only: a mesh of 2**31 half-edges or
+    more is refused in one line."""
+    if half.dtype != np.int32 or a.dtype != np.int32:
+        from ..errors import MemoryLimitError
 
-    if native.available() and half.dtype == np.int32 and a.dtype == np.int32:
-        return group_pairs(half, owner, a, b)
-
-    bounds = split(half.shape[0])
-    for i in range(1, len(bounds) - 1):  # move each cut forward to the start of an edge
-        j = bounds[i]
-        while j < half.shape[0] and a[half[j]] == a[half[j - 1]] and b[half[j]] == b[half[j - 1]]:
-            j += 1
-        bounds[i] = max(j, bounds[i - 1])
-    parts = run_ranges(lambda i, j: group_pairs(half[i:j], owner, a, b), bounds)
-    if len(parts) == 1:
-        return parts[0]
-    one = np.concatenate([p[0] + i for p, i in zip(parts, bounds)])
-    return (one, *(np.concatenate([p[k] for p in parts]) for k in range(1, 5)))
+        raise MemoryLimitError(
+            f"{half.shape[0]:,} half-edges: one run takes meshes of fewer than 2**31 "
+            "half-edges (about 715M triangles); cut larger ones into tiles (--tiles)")
+    return group_pairs(half, owner, a, b)
 
 
 def build_face_graph(faces: np.ndarray, n_vertices: int, offsets: np.ndarray | None = None
@@ -281,12 +273,12 @@ def build_face_graph(faces: np.ndarray, n_vertices: int, offsets: np.ndarray | N
     # pairs in (lo, hi) order and their CSR, in one counting sort
     n_max = 2 * lo.shape[0]
     indices = np.empty(n_max, dtype=np.int32)
-    dual_edge = np.empty(n_max, dtype=np.int32 if n_max < 2**31 - 1 else np.int64)
+    dual_edge = np.empty(n_max, dtype=_graph.adjacency_dtype(n_max))
     indptr, first = csr_of_face_pairs(lo, hi, ea, eb, m, indices, dual_edge)
     n_csr = 2 * first.shape[0]
     if n_csr < n_max:  # repeated pairs dropped: shrink to fit
         indices = indices[:n_csr].copy()
-        dual_edge = dual_edge[:n_csr].astype(np.int32 if n_csr < 2**31 - 1 else np.int64)
+        dual_edge = dual_edge[:n_csr].astype(_graph.adjacency_dtype(n_csr))
     # 32-bit while the ids fit (24 bytes per face less, kept for the whole run)
     pairs = np.empty((first.shape[0], 2), dtype=np.int32 if m < 2**31 - 1 else np.int64)
     edges = np.empty((first.shape[0], 2), dtype=ea.dtype)

@@ -15,6 +15,15 @@ __all__ = ["ElementGraph", "AdjacencyTerms", "adjacency_csr", "CHUNK",
 #: temporaries (and fixes the slicing, so every result is the same bit for bit).
 CHUNK = 1 << 18
 
+#: CSR entries (twice the adjacencies) from which adjacency numbers are int64: int32
+#: below, 4 bytes less per entry (the tests lower it to run the int64 layouts)
+WIDE_ENTRIES = 2**31 - 1
+
+
+def adjacency_dtype(n_entries: int) -> type:
+    """The dtype of adjacency numbers (``dual_edge``) for a CSR of ``n_entries``."""
+    return np.int32 if n_entries < WIDE_ENTRIES else np.int64
+
 
 def chunked(n: int, compute: Callable[[slice], np.ndarray], dtype=np.float64) -> np.ndarray:
     """``compute(sl)`` for consecutive slices of ``range(n)`` (:data:`CHUNK` long), into
@@ -59,7 +68,7 @@ def adjacency_csr(lo: np.ndarray, hi: np.ndarray, n: int
     lo, hi = np.ascontiguousarray(lo), np.ascontiguousarray(hi)  # (columns of the pairs)
     e = lo.shape[0]
     indices = np.empty(2 * e, dtype=np.int32)
-    dual_edge = np.empty(2 * e, dtype=np.int32 if 2 * e < 2**31 - 1 else np.int64)
+    dual_edge = np.empty(2 * e, dtype=adjacency_dtype(2 * e))
     indptr = csr_of_pairs(lo, hi, int(n), indices, dual_edge)
     return indptr, indices, dual_edge
 
@@ -87,7 +96,7 @@ def pairs_from_csr(graph: "ElementGraph", pair_dtype=np.int32) -> dict[str, np.n
     number_pairs = native.kernel("adjacency.number_pairs")
     n_csr = graph.indices.shape[0]
     pairs = np.empty((n_csr // 2, 2), dtype=pair_dtype)
-    dual_edge = np.empty(n_csr, dtype=np.int32 if n_csr < 2**31 - 1 else np.int64)
+    dual_edge = np.empty(n_csr, dtype=adjacency_dtype(n_csr))
     number_pairs(graph.indptr, graph.indices, graph.n_elements, dual_edge,
                  np.empty(0, dtype=np.int64), pairs)
     return {"pairs": pairs, "dual_edge": dual_edge}

@@ -2,7 +2,7 @@
 
 :func:`point_tree` builds a tree over a cloud's distinct points in their Z-order (a binary
 radix tree of the Z-order keys, node boxes of its points: about 15 bytes per point, no
-copy of the points; :mod:`superfacets._kernels.nearest`), and :func:`nearest` queries it
+copy of the points; the compiled kernels' ``nearest``), and :func:`nearest` queries it
 in blocks of :data:`BLOCK` points, keeping only what the graph reads: the neighbours as
 4-byte indices, the distance to the ``k``-th and, with a radius, which neighbours lie
 within it (44 + 8, and 10 more with a radius, bytes per point at ``k = 10``).

@@ -47,6 +47,7 @@ from .._kernels import native
 from .._runtime.arrays import COMPILED_MIN, sorted_unique
 from .._runtime.memory import give_back_free_memory
 from ..inputs.bounds import column_bounds, column_means
+from . import graph as _graph
 from .graph import LAZY, ElementGraph, adjacency_csr, cached_on, pairs_from_csr
 from .neighbors import nearest, point_tree
 from .normals import estimate_normals, normals_and_linearity, orient_normals
@@ -142,7 +143,7 @@ def _spatial_keys(p: np.ndarray) -> tuple[np.ndarray, int]:
 
     ``keys`` ((n, 3) uint64): the bits of x, y and z (mapped so that unsigned
     order is numeric order) interleaved from the top, 63 per word, a string
-    of 189 bits (:func:`~superfacets._kernels.geometry.float_morton_keys`);
+    of 189 bits (the compiled ``float_morton_keys``);
     the points sorted by it run along a Z-order curve within each
     power-of-two cell. ``shared``: the leading bits of that string that all
     the points share. Bits every point shares do not change the order, so
@@ -281,7 +282,7 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
 
     cand = nbr[:, 1:]  # read in place by the kernel (a copy costs more than it saves)
     pair_dtype = np.int32
-    if 2 * (cand.size + more.size) < 2**31 - 1:  # the kernel's int32 layout
+    if _graph.adjacency_dtype(2 * (cand.size + more.size)) == np.int32:  # the kernel's layout
         knn_csr = native.kernel("adjacency.knn_csr")
         if keep is None:  # every neighbour listed: no mask (10 bytes per point at the peak)
             keep = np.zeros((0, cand.shape[1]), dtype=bool)

@@ -29,8 +29,8 @@ least-squares planes), and ``extent_weight`` adds Ward's term, so that large
 flat pieces also pay for their extent (:func:`level_extent_weight`: on scans of
 uneven density).
 
-The merging is a compiled kernel (:mod:`superfacets._kernels.hierarchy`, in C++
-where built): about 0.1 s for 10,000 superpoints.
+The merging is a compiled kernel (``merge_levels``, C++): about 0.1 s for 10,000
+superpoints.
 
 Not in the paper (superpoint hierarchies are what graph networks on scans
 use, e.g. Superpoint Transformer's partition); ``docs/notes/superpoints.md``.
@@ -206,7 +206,7 @@ def hierarchy(graph, levels, *, alpha: float = DEFAULTS.alpha,
 
 
 def merge_arrays(graph, planarity: bool) -> tuple:
-    """The arrays the merging kernel (:mod:`superfacets._kernels.hierarchy`) takes, of a
+    """The arrays the merging kernel (``merge_levels``) takes, of a
     :class:`~superfacets.graph.adjacency.SuperfacetGraph`: ``(ea, eb, stats, area, wsum,
     fsum, scatter)``, each a fresh contiguous array (the kernel updates the nodes' in
     place); ``scatter`` as ``(xx, yy, zz, xy, xz, yz)`` with ``planarity``, else zeros."""

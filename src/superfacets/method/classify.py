@@ -33,16 +33,16 @@ from .adaptive import window_factors
 from .expansion import Workspaces, centers_within, with_room
 from .params import ASSIGNMENTS, check_choice
 
-_k = native.of("expand")  # the expansion kernels, compiled where built
+_k = native.of("expand")  # the compiled expansion kernels
 
 
 def classify_exact(*args):
-    """:func:`superfacets._kernels.exact.classify_exact`, compiled where built."""
+    """The compiled ``classify_exact``."""
     return native.kernel("exact.classify_exact")(*args)
 
 
 def reclassify_exact(*args):
-    """:func:`superfacets._kernels.exact.reclassify_exact`, compiled where built."""
+    """The compiled ``reclassify_exact``."""
     return native.kernel("exact.reclassify_exact")(*args)
 
 __all__ = ["Classifier", "BoundedReplay", "Bounded", "Exact", "make_classifier"]
@@ -119,10 +119,9 @@ class Exact(Classifier):
     graph; ties go to the center listed first, whatever order the search
     settles elements in (``(distance, center)`` pairs compared
     lexicographically). Compiled, by blocks of elements on threads (the same fixed
-    point as numba's one search over the bounded expansions' bucket queue, whose
-    node pool grows when a search runs out). From the second pass on, only the
-    cells of the centers that moved are searched again
-    (:func:`~superfacets._kernels.exact.reclassify_exact`: the same labels and
+    point as one search over the bounded expansions' bucket queue). From the second
+    pass on, only the cells of the centers that moved are searched again
+    (the compiled ``reclassify_exact``: the same labels and
     distances as a fresh search, bit for bit), where the call gets the same ``dist``
     and ``label`` arrays as the one before: they hold its result, which the next
     search starts from (the passes never write them between calls; other arrays start
@@ -133,8 +132,7 @@ class Exact(Classifier):
         super().__init__(graph, weights, window_r2, spaces)
         self.inv_width = spaces.inv_width
         self.head = np.full(spaces.n_buckets, -1, dtype=np.int64)
-        # numba's search takes a node per push (as a rule); the compiled one has its own
-        self._pool(1 << 10 if native.available() else self.indices.shape[0] + 2 * self.m + 1)
+        self._pool(1 << 10)  # (the kernel grows its own node pool as it needs)
         self.prev = self.dist = self.label = None  # the previous call's (the caller's arrays)
         self.first = np.full(self.m, -1, dtype=np.int32 if self.m < 2**31 - 1 else np.int64)
         self.mark = np.zeros(self.m, dtype=np.bool_)

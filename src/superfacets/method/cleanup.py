@@ -342,13 +342,10 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
         out = labels.copy()
         args = (members, starts.astype(np.int64), pair // k, pair % k, band_of, g.indptr,
                 g.indices, cut_csr, labels, sizes, positions, means, smooth, out)
-        if native.available():  # (the compiled kernel takes the bands in turn on threads)
-            from .._runtime.threads import using
+        from .._runtime.threads import using
 
-            with using(n_threads):
-                solve_bands(0, starts.size - 1, *args)
-        else:
-            _run_chunks(solve_bands, starts, n_threads, args)
+        with using(n_threads):  # (the kernel takes the bands in turn on threads)
+            solve_bands(0, starts.size - 1, *args)
         del args, band_of, members
         moved = np.flatnonzero(out != labels)
         if moved.size == 0:
@@ -367,23 +364,3 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
     out = order.take(labels, mode="clip")
     out[apart] = labels[apart]
     return out
-
-
-def _run_chunks(kernel, starts: np.ndarray, n_threads: int, args: tuple) -> None:
-    """``kernel(p0, p1, *args)`` over contiguous ranges of bands, balanced by element
-    count, one per thread (the kernels release the GIL; the bands are disjoint)."""
-    n_pairs = starts.size - 1
-    n = min(n_threads, n_pairs)
-    if n <= 1:
-        kernel(0, n_pairs, *args)
-        return
-    cuts = np.searchsorted(starts, np.linspace(0, starts[-1], n + 1)[1:-1])
-    bounds = np.concatenate([[0], np.minimum(cuts, n_pairs), [n_pairs]])
-    from concurrent.futures import ThreadPoolExecutor
-
-    with ThreadPoolExecutor(n - 1) as pool:
-        futures = [pool.submit(kernel, int(a), int(b), *args)
-                   for a, b in zip(bounds[1:-1], bounds[2:])]
-        kernel(int(bounds[0]), int(bounds[1]), *args)
-        for f in futures:
-            f.result()

@@ -65,7 +65,7 @@ class Workspace:
 
     def __init__(self, m: int, n_buckets: int, max_nodes: int):
         self.m = m
-        # +0.0 between expansions (see superfacets._kernels.expand): pages of zeros,
+        # +0.0 between expansions (see the compiled ``expand``): pages of zeros,
         # resident only once an expansion writes them (the allocator may have cleared
         # reused memory: handed back), and from then on until the workspace is
         # forgotten (a page handed back between passes is faulted in again by the next)

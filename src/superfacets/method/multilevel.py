@@ -41,7 +41,7 @@ from .params import superfacet_measure
 
 
 def _voronoi(name: str):
-    """A Voronoi kernel, compiled where built."""
+    """A compiled Voronoi kernel."""
     return native.kernel(f"voronoi.{name}")
 
 

@@ -43,7 +43,7 @@ __all__ = ["swap_round", "swap_and_iterate", "POWER", "LLOYD",
            "SWAP_ETA_CONVEX_FACES", "HOLD_AFTER_FACES", "PASSES_AFTER_FACES",
            "swap_eta_convex_for", "hold_after_for", "passes_after_for", "FORGET_MIN"]
 
-# the kernels, compiled where built (module-level names: tests patch them)
+# the compiled kernels (module-level names: tests patch them)
 energies, split_candidates, merge_energies, label_pairs = (
     (lambda *a, _n=n: native.kernel(f"splitmerge.{_n}")(*a))
     for n in ("energies", "split_candidates", "merge_energies", "label_pairs"))

@@ -223,12 +223,14 @@ void solve_one(const Bands& B, const i64* members, i64 nb, i64 la, i64 lb, i64 p
 
 }  // namespace
 
-void band_distances(nb::handle indptr_, nb::handle indices_, nb::handle dual_edge_,
-                    nb::handle geo_, nb::handle length_, nb::handle labels_, nb::handle pinned_,
-                    double limit, nb::handle dist_, nb::handle partner_, nb::handle hkey_,
-                    nb::handle hval_) {
+template <class D>
+void band_distances_t(nb::handle indptr_, nb::handle indices_, nb::handle dual_edge_,
+                      nb::handle geo_, nb::handle length_, nb::handle labels_, nb::handle pinned_,
+                      double limit, nb::handle dist_, nb::handle partner_, nb::handle hkey_,
+                      nb::handle hval_) {
     In<i64> indptr(indptr_, "indptr"), labels(labels_, "labels");
-    In<i32> indices(indices_, "indices"), dual_edge(dual_edge_, "dual_edge");
+    In<i32> indices(indices_, "indices");
+    In<D> dual_edge(dual_edge_, "dual_edge");
     In<double> geo(geo_, "geo"), length(length_, "length");
     In<bool> pinned(pinned_, "pinned");
     Out<double> dist(dist_, "dist"), hkey(hkey_, "hkey");
@@ -320,6 +322,13 @@ void band_distances(nb::handle indptr_, nb::handle indices_, nb::handle dual_edg
     });
 }
 
+// (int64 adjacency numbers from 2**31 CSR entries on)
+template <class... A>
+void band_distances(nb::handle indptr, nb::handle indices, nb::handle dual_edge, A... rest) {
+    if (matches<i32>(dual_edge)) return band_distances_t<i32>(indptr, indices, dual_edge, rest...);
+    band_distances_t<i64>(indptr, indices, dual_edge, rest...);
+}
+
 void solve_bands(i64 p0, i64 p1, nb::handle order_, nb::handle starts_, nb::handle pair_a_,
                  nb::handle pair_b_, nb::handle band_of_, nb::handle indptr_,
                  nb::handle indices_, nb::handle cut_cost_, nb::handle labels_,
@@ -381,7 +390,9 @@ void solve_bands(i64 p0, i64 p1, nb::handle order_, nb::handle starts_, nb::hand
 }
 
 void bind_cleanup(nb::module_& m) {
-    m.def("band_distances", &band_distances);
+    m.def("band_distances", &band_distances<nb::handle, nb::handle, nb::handle, nb::handle,
+                                             double, nb::handle, nb::handle, nb::handle,
+                                             nb::handle>);
     m.def("solve_bands", &solve_bands);
 }
 

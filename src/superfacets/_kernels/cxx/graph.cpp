@@ -313,10 +313,12 @@ void take_pairs(nb::handle first_, nb::handle lo_, nb::handle hi_, nb::handle ka
     });
 }
 
-nb::tuple csr_of_face_pairs(nb::handle lo_, nb::handle hi_, nb::handle ka_, nb::handle kb_, i64 n,
-                            nb::handle indices_, nb::handle dual_edge_) {
+template <class D>
+nb::tuple csr_of_face_pairs_t(nb::handle lo_, nb::handle hi_, nb::handle ka_, nb::handle kb_,
+                              i64 n, nb::handle indices_, nb::handle dual_edge_) {
     In<i32> lo(lo_, "lo"), hi(hi_, "hi"), ka(ka_, "ka"), kb(kb_, "kb");
-    Out<i32> indices(indices_, "indices"), dual_edge(dual_edge_, "dual_edge");
+    Out<i32> indices(indices_, "indices");
+    Out<D> dual_edge(dual_edge_, "dual_edge");
     Out<i64> indptr;
     auto indptr_a = fresh(n + 1, indptr);
     i64 out = 0;
@@ -329,10 +331,10 @@ nb::tuple csr_of_face_pairs(nb::handle lo_, nb::handle hi_, nb::handle ka_, nb::
             i64 i = s;
             while (i < f) {
                 i32 g = indices[i];
-                i32 best = dual_edge[i];
+                D best = dual_edge[i];
                 i64 j = i + 1;
                 while (j < f && indices[j] == g) {
-                    i32 u = dual_edge[j];
+                    D u = dual_edge[j];
                     if (ka[u] < ka[best] || (ka[u] == ka[best] && kb[u] < kb[best])) best = u;
                     ++j;
                 }
@@ -351,6 +353,14 @@ nb::tuple csr_of_face_pairs(nb::handle lo_, nb::handle hi_, nb::handle ka_, nb::
         number_pairs_into(indptr.p, indices.p, n, dual_edge.p, keep.p, static_cast<i32*>(nullptr));
     }
     return nb::make_tuple(indptr_a, keep_a);
+}
+
+// (int64 adjacency numbers from 2**31 CSR entries on)
+nb::tuple csr_of_face_pairs(nb::handle lo, nb::handle hi, nb::handle ka, nb::handle kb, i64 n,
+                            nb::handle indices, nb::handle dual_edge) {
+    if (matches<i32>(dual_edge))
+        return csr_of_face_pairs_t<i32>(lo, hi, ka, kb, n, indices, dual_edge);
+    return csr_of_face_pairs_t<i64>(lo, hi, ka, kb, n, indices, dual_edge);
 }
 
 // adjacency.same_label_components, on threads: a union-find over the adjacencies within
@@ -582,14 +592,15 @@ void edge_lengths(nb::handle vertices_, nb::handle edges_, nb::handle out_) {
 // terms.per_entry (float64 or float32 values, int32 adjacencies), on threads (each entry
 // on its own)
 void per_entry(nb::handle values_, nb::handle dual_edge_, nb::handle out_) {
-    In<i32> dual_edge(dual_edge_, "dual_edge");
-    with_real(values_, "values", [&](const auto& values) {
-        using T = std::remove_cv_t<std::remove_reference_t<decltype(values[0])>>;
-        Out<T> out(out_, "out");  // (the values' dtype: float64 or float32)
-        if (out.n != dual_edge.n) throw Mismatch("argument out");
-        nb::gil_scoped_release nogil;
-        parallel_for(dual_edge.n, [&](i64 lo, i64 hi) {
-            for (i64 e = lo; e < hi; ++e) out[e] = values[dual_edge[e]];
+    with_index(dual_edge_, "dual_edge", [&](const auto& dual_edge) {
+        with_real(values_, "values", [&](const auto& values) {
+            using T = std::remove_cv_t<std::remove_reference_t<decltype(values[0])>>;
+            Out<T> out(out_, "out");  // (the values' dtype: float64 or float32)
+            if (out.n != dual_edge.n) throw Mismatch("argument out");
+            nb::gil_scoped_release nogil;
+            parallel_for(dual_edge.n, [&](i64 lo, i64 hi) {
+                for (i64 e = lo; e < hi; ++e) out[e] = values[dual_edge[e]];
+            });
         });
     });
 }
@@ -598,11 +609,10 @@ nb::object convex_scaled_csr(nb::handle weights_, nb::handle dual_edge_,
                                       nb::handle concave_, nb::handle cos_, nb::handle span_,
                                       double coef) {
     In<double> weights(weights_, "weights"), cs(cos_, "cos"), span(span_, "span");
-    In<i32> dual_edge(dual_edge_, "dual_edge");
     In<bool> concave(concave_, "concave");
     Out<double> out;
     auto out_a = fresh(weights.n, out);
-    {
+    with_index(dual_edge_, "dual_edge", [&](const auto& dual_edge) {
         nb::gil_scoped_release nogil;
         // (no array of one delta per adjacency: 8 B each; both entries of an adjacency
         // compute the same value)
@@ -613,19 +623,18 @@ nb::object convex_scaled_csr(nb::handle weights_, nb::handle dual_edge_,
                                     : mx(weights[e] - coef * span[d] * std::acos(cs[d]), 0.0);
             }
         });
-    }
+    });
     return out_a;
 }
 
 nb::object cut_costs_csr(nb::handle dual_edge_, nb::handle concave_, nb::handle cos_,
                                   nb::handle lengths_, double factor, double eta_convex,
                                   double scale) {
-    In<i32> dual_edge(dual_edge_, "dual_edge");
     In<bool> concave(concave_, "concave");
     In<double> cs(cos_, "cos"), lengths(lengths_, "lengths");
     Out<double> out;
-    auto out_a = fresh(dual_edge.n, out);
-    {
+    auto out_a = fresh(size_of(dual_edge_), out);
+    with_index(dual_edge_, "dual_edge", [&](const auto& dual_edge) {
         nb::gil_scoped_release nogil;
         std::vector<double> cost(cs.n);  // (each value on its own: on threads)
         parallel_for(cs.n, [&](i64 lo, i64 hi) {
@@ -637,7 +646,7 @@ nb::object cut_costs_csr(nb::handle dual_edge_, nb::handle concave_, nb::handle 
         parallel_for(dual_edge.n, [&](i64 lo, i64 hi) {
             for (i64 e = lo; e < hi; ++e) out[e] = cost[dual_edge[e]];
         });
-    }
+    });
     return out_a;
 }
 
