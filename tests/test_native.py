@@ -45,7 +45,7 @@ def test_the_compiled_kernels_are_built_from_these_sources():
         paths = sorted([*CXX.glob("*.cpp"), *CXX.glob("*.hpp")], key=lambda p: p.name)
         listing = "".join(f"{p.name} {hashlib.sha256(p.read_bytes()).hexdigest()}\n"
                           for p in paths)
-        assert native._cxx.sources_digest == hashlib.sha256(listing.encode()).hexdigest(), \
+        assert native.sources_digest() == hashlib.sha256(listing.encode()).hexdigest(), \
             "the compiled kernels are older than their sources: pip install -e . again"
 
 
@@ -1526,3 +1526,29 @@ def test_int64_adjacency_numbers_give_the_same_labels(monkeypatch):
     for name, run in runs.items():
         np.testing.assert_array_equal(run().labels, narrow[name], err_msg=name)
     assert seen  # the int64 layouts were taken
+
+
+def test_without_the_compiled_kernels_a_run_says_so_in_one_line(monkeypatch, capsys,
+                                                                 tmp_path):
+    """A source folder imported without installing (no ``_cxx``): the first kernel a
+    run needs raises KernelsMissingError, one line from the command line (exit 2, no
+    output written), naming the install to run; --version says so too."""
+    from superfacets.cli import main
+    from superfacets.errors import KernelsMissingError
+    from superfacets.io import write_mesh
+
+    path = tmp_path / "c.off"
+    write_mesh(path, creature(16))
+    monkeypatch.setattr(native, "_cxx", None)
+    monkeypatch.setattr(native, "_why", "not built (no module)")
+    monkeypatch.setattr(native, "_chosen", {})
+    with pytest.raises(KernelsMissingError, match="pip install"):
+        native.kernel("geometry.face_geometry")
+    capsys.readouterr()
+    assert main(["segment", str(path), "-k", "5", "-o", str(tmp_path / "c.seg")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "compiled kernels are not built" in err, err
+    assert not (tmp_path / "c.seg").exists()
+    with pytest.raises(SystemExit):
+        main(["--version"])
+    assert "no kernels: the compiled ones are not built" in capsys.readouterr().out

@@ -30,7 +30,7 @@ nocc "$sf" demo --output-dir demo -q   # without the render extra: no picture, s
 ls demo
 mesh=${mesh:-$work/demo/creature.off}
 nocc "$sf" segment "$mesh" -k 50 -o out.seg --colored-mesh out.ply
-nocc "$sf" segment "$mesh" -k 50 -o flood.seg --init flood -r 0.02 -q
+nocc "$sf" segment "$mesh" --radius 0.05 --init flood -o flood.seg -q
 nocc "$sf" baseline "$mesh" -m vsa -k 20 -o vsa.seg -q
 nocc "$sf" evaluate "$mesh" out.seg out.seg
 nocc "$sf" html "$mesh" out.seg -o out.html -q

@@ -7,7 +7,8 @@ Every error caused by bad input is a :class:`SuperfacetsError`, which is also a
 
 __all__ = ["SuperfacetsError", "MeshFormatError", "InvalidMeshError", "InvalidCloudError",
            "ParameterError",
-           "SchedulerError", "MemoryLimitError", "MissingExtraError", "NoDisplayError"]
+           "SchedulerError", "MemoryLimitError", "MissingExtraError", "KernelsMissingError",
+           "NoDisplayError"]
 
 
 class SuperfacetsError(ValueError):
@@ -52,6 +53,11 @@ class MissingExtraError(SuperfacetsError, ImportError):
 
     The message names the ``pip install 'superfacets[EXTRA]'`` command to run.
     """
+
+
+class KernelsMissingError(SuperfacetsError, ImportError):
+    """The compiled kernels are not built: the package's source folder was imported
+    without installing it (``pip install .`` builds them)."""
 
 
 class SchedulerError(SuperfacetsError):

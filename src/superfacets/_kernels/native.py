@@ -18,7 +18,8 @@ from __future__ import annotations
 import importlib
 from typing import Any, Callable
 
-__all__ = ["kernel", "of", "available", "missing_because", "limit_threads", "require"]
+__all__ = ["kernel", "of", "available", "missing_because", "limit_threads", "require",
+           "sources_digest"]
 
 _why = ""
 try:
@@ -28,10 +29,6 @@ except ImportError as exc:  # a source tree used without building it
     _cxx = None
 
 _chosen: dict[str, Callable[..., Any]] = {}
-
-
-class KernelsMissingError(ImportError):
-    """The compiled kernels are not built (a source tree imported without installing)."""
 
 
 def available() -> bool:
@@ -44,9 +41,22 @@ def missing_because() -> str:
     return "" if _cxx is not None else _why
 
 
+def sources_digest() -> str:
+    """The digest of the C++ sources the kernels were built from (CMakeLists.txt writes it
+    beside the module); "" where it is not there."""
+    from pathlib import Path
+
+    if _cxx is None:
+        return ""
+    path = Path(_cxx.__file__).with_name("_cxx_sources.txt")
+    return path.read_text().strip() if path.is_file() else ""
+
+
 def require():
     """The compiled module; :class:`KernelsMissingError` (one line) where it is not built."""
     if _cxx is None:
+        from ..errors import KernelsMissingError
+
         raise KernelsMissingError(
             f"superfacets' compiled kernels are {_why}: install the package "
             "(pip install . in a clone, with a C++17 compiler), not its source folder alone")

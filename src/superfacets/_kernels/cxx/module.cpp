@@ -1,16 +1,12 @@
 // superfacets._kernels._cxx: the compiled kernels of every run (C++17, nanobind).
 #include "common.hpp"
 
-#ifndef SFK_SOURCES
-#define SFK_SOURCES ""
-#endif
 #define SFK_STR2(x) #x
 #define SFK_STR(x) SFK_STR2(x)
 
 NB_MODULE(_cxx, m) {
     m.doc() = "Compiled kernels (private): one implementation of each kernel of superfacets.";
     nb::exception<sfk::Mismatch>(m, "Mismatch", PyExc_TypeError);
-    m.attr("sources_digest") = SFK_SOURCES;  // sha256 of the sources it was built from
 #if defined(__clang__)
     m.attr("compiler") = "clang " __clang_version__;
 #elif defined(__GNUC__)
