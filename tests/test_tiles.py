@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -281,12 +282,21 @@ def test_a_tiled_run_reads_the_file_twice_and_gives_the_same_labels(tmp_path, mo
         yield from chunks(self, *args)
 
     monkeypatch.setattr(RegionReader, "chunks", counted)
+    written, real_bucket = [], buckets_module.bucket
+
+    def bucket(reader, tiles, folder, **kw):  # (the tile files, seen before the run ends)
+        out = real_bucket(reader, tiles, folder, **kw)
+        written.append((Path(folder), sorted(p.name for p in Path(folder).glob("tile-*.bin"))))
+        return out
+
+    monkeypatch.setattr(buckets_module, "bucket", bucket)
     res = segment_tiled(path, 40, tiles=(2, 2, 2), halo=1, workdir=tmp_path / "work")
     assert len(passes) == 2 and res.timings["bucket"] > 0
-    assert len(list((tmp_path / "work" / "buckets").glob("tile-*.bin"))) == 8
+    (folder, files), = written
+    assert len(files) == 8 and folder.parent.parent == (tmp_path / "work").resolve()
+    assert list((tmp_path / "work").iterdir()) == []  # the run's own folder, removed
     # halo 1 leaves pieces: the connect phase ran on the stitched labels read from a file
     assert res.disagreements > 0 and res.repaired > 0
-    assert (tmp_path / "work" / "stitched.npy").exists()
     passes.clear()
     monkeypatch.setattr(buckets_module, "bucket", lambda reader, *a, **k: reader)
     each = segment_tiled(path, 40, tiles=(2, 2, 2), halo=1)
@@ -555,7 +565,7 @@ def test_cli_tiles_writes_labels_and_refuses_whole_input_outputs(tmp_path):
     assert "2 tiles (2x1x1 grid)" in out.stdout
     labels = np.loadtxt(tmp_path / "m.seg", dtype=int)
     assert labels.shape == (mesh.n_faces,) and np.unique(labels).size == labels.max() + 1
-    assert len(list((tmp_path / "work" / "buckets").glob("tile-*.bin"))) == 2
+    assert list((tmp_path / "work").iterdir()) == []  # (the run's own folder, removed)
     bad = subprocess.run(run + ["--tiles", "2", "--colored-mesh", str(tmp_path / "c.ply")],
                          capture_output=True, text=True)
     assert bad.returncode != 0 and "not with --tiles" in bad.stderr
@@ -710,6 +720,32 @@ def test_a_tile_graph_read_back_is_the_graph_built(tmp_path):
     assert tile_graph(PointCloud(xyz.copy()), tmp_path / "tile-1", 10) != "read"
 
 
+@pytest.mark.parametrize("change", ["indices", "indptr", "index", "positions", "meta"])
+def test_a_tile_graph_changed_between_phases_is_refused(tmp_path, change):
+    """Work files changed between phases went to the compiled kernels unchecked: an
+    index of 2**62, an indptr entry past the end or a row of 2**30 crashed the process
+    (SIGSEGV), other positions gave another cloud's labels. Each file's SHA-256 is kept
+    with the graph and checked before anything reads it: one line."""
+    from superfacets.errors import SuperfacetsError
+    from superfacets.inputs.cloud import PointCloud
+    from superfacets.scale.tile_graphs import tile_graph
+
+    xyz = np.random.default_rng(5).normal(size=(2000, 3))
+    folder = tmp_path / "tile-0"
+    assert tile_graph(PointCloud(xyz.copy()), folder, 10) == "built"
+    if change == "meta":  # a graph.json without the digests (or of another writer)
+        (folder / "graph.json").write_text('{"pair_dtype": "int32"}')
+    else:
+        a = np.load(folder / f"{change}.npy")
+        if change == "positions":
+            a = a + 1e-9  # valid, but not the cloud's
+        else:
+            a.flat[len(a) // 2] = 2**30 if a.dtype.itemsize == 4 else 2**62
+        np.save(folder / f"{change}.npy", a)
+    with pytest.raises(SuperfacetsError, match="changed since this run wrote it"):
+        tile_graph(PointCloud(xyz.copy()), folder, 10)
+
+
 def test_tiles_that_keep_their_graphs_label_as_those_that_build_them(monkeypatch, tmp_path):
     """A cloud's tiles build their graphs once and read them in the later phases: the
     same labels as building them every phase, and the work folder left without them."""
@@ -786,19 +822,48 @@ def test_the_connect_pass_looks_again_near_what_a_repair_moved(monkeypatch):
     assert res.repaired == plain.repaired + 2  # the face moved away, and back
 
 
-def test_a_work_folder_belongs_to_one_run(tmp_path):
-    """Two tiled runs on one --workdir overwrote each other's tile files (wrong labels,
-    exit 0): the second is refused while the first holds the folder."""
-    from superfacets.scale.runner.manifest import FolderLock
+def test_the_work_folder_is_the_runs_own(tmp_path, capsys):
+    """A tiled run removed a user's W/graphs/ with its files, unlinked W/.lock and
+    overwrote W/orientation.npy (exit 0): it now works in a folder of its own that it
+    makes inside --workdir and removes at its end, nothing else there touched; two runs
+    share a folder; the leftovers of a killed run are removed, and said, by the next."""
+    import fcntl
 
     mesh = _bumpy(3)
     work = tmp_path / "work"
-    work.mkdir()
-    with FolderLock(work, "held by the test"):
-        with pytest.raises(ParameterError, match="another tiled run is using this work folder"):
-            segment_tiled(mesh, 20, tiles=2, workers=1, workdir=work)
-    res = segment_tiled(mesh, 20, tiles=2, workers=1, workdir=work)  # free again
-    assert res.labels.shape == (mesh.n_faces,) and not (work / ".lock").exists()
+    (work / "graphs").mkdir(parents=True)
+    mine = {work / "graphs" / "keep.txt": b"mine", work / "orientation.npy": b"not an array",
+            work / ".lock": b"lock of mine"}
+    for path, data in mine.items():
+        path.write_bytes(data)
+    live = work / "superfacets-tiles-live"  # another run, still going: its lock held
+    live.mkdir()
+    (live / "tile-0.npy").write_bytes(b"its work")
+    held = open(live / "run.lock", "w")
+    fcntl.flock(held, fcntl.LOCK_EX)
+    dead = work / "superfacets-tiles-dead"  # a killed run's leftovers: lock released
+    dead.mkdir()
+    (dead / "run.lock").write_bytes(b"")
+    (dead / "tile-0.npy").write_bytes(b"stale")
+    try:
+        res = segment_tiled(mesh, 20, tiles=2, workers=1, workdir=work)
+        assert res.labels.shape == (mesh.n_faces,)
+        assert all(path.read_bytes() == data for path, data in mine.items())
+        assert (live / "tile-0.npy").read_bytes() == b"its work"  # the live run's, kept
+        assert not dead.exists() and f"removed {dead}" in capsys.readouterr().err
+        assert sorted(p.name for p in work.iterdir()) == [
+            ".lock", "graphs", "orientation.npy", "superfacets-tiles-live"]
+        # a folder inside a run's own folder: that run's end would remove it
+        with pytest.raises(ParameterError, match="inside the work folder of a tiled run"):
+            segment_tiled(mesh, 20, tiles=2, workers=1, workdir=live / "graphs")
+    finally:
+        held.close()
+    with pytest.raises(ParameterError, match="empty path"):
+        segment_tiled(mesh, 20, tiles=2, workers=1, workdir="")
+    with pytest.raises(ParameterError, match="not a folder"):
+        segment_tiled(mesh, 20, tiles=2, workers=1, workdir=work / ".lock")
+    same = segment_tiled(mesh, 20, tiles=2, workers=1)  # a temporary folder: the same labels
+    np.testing.assert_array_equal(same.labels, res.labels)
 
 
 def test_tiled_runs_refuse_what_whole_runs_refuse(tmp_path):
@@ -831,3 +896,22 @@ def test_tiled_runs_refuse_what_whole_runs_refuse(tmp_path):
         segment_tiled(mesh, 20, tiles=10000, workers=1)
     with pytest.raises(ParameterError, match="give at most 25 tiles"):
         segment_tiled(mesh, 20, tiles=(8, 8, 1), workers=1)
+
+
+def test_a_killed_tiled_run_leaves_nothing_for_long(tmp_path, monkeypatch, capsys):
+    """A SIGKILLed tiled run left its temporary folder (about 14 times the input)
+    forever: without --workdir the runs work in the system's temporary folder the same
+    way, and the next run removes what a killed one left (its lock released)."""
+    import tempfile
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    dead = tmp_path / "superfacets-tiles-killed"
+    dead.mkdir()
+    (dead / "run.lock").write_bytes(b"")
+    (dead / "buckets").mkdir()
+    other = tmp_path / "superfacets-tiles-not-ours"  # no lock file: not a run's, kept
+    other.mkdir()
+    res = segment_tiled(_bumpy(3), 20, tiles=2, workers=1)
+    assert res.n_segments > 0 and not dead.exists() and other.exists()
+    assert f"removed {dead}" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["superfacets-tiles-not-ours"]

@@ -49,8 +49,10 @@ def add_tile_options(p) -> None:
     g.add_argument("--workdir", default=None, metavar="DIR",
                    help="with --tiles: folder for the work files (the input sorted by tile, "
                         "about its size; a cloud's tile graphs, about 110 bytes a point with "
-                        "the halos; default a temporary folder, removed at the end); with "
-                        "--scheduler, one every worker reaches, or each task reads INPUT whole")
+                        "the halos), in a folder of the run's own made inside DIR and "
+                        "removed at the end, nothing else in DIR touched (default: the "
+                        "system's temporary folder); with --scheduler, one every worker "
+                        "reaches, or each task reads INPUT whole")
     add_engine_options(g, sees="its workers must read INPUT by the same path",
                        prefix="with --tiles: ")
 

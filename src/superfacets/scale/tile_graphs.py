@@ -11,6 +11,8 @@ same arrays, so the same labels.
 
 from __future__ import annotations
 
+import hashlib
+import io
 import json
 import os
 import shutil
@@ -106,8 +108,8 @@ def tile_graph(cloud, folder, n_neighbors: int) -> str:
         return "kept"
     done = folder / "graph.json"
     if done.is_file():
-        arrays = {name: np.load(folder / f"{name}.npy") for name in GRAPH_FILES}
         meta = json.loads(done.read_text(encoding="utf-8"))
+        arrays = _read_checked(folder, meta)
         el = point_elements(arrays["positions"], arrays["sizes"], arrays["normals"],
                             arrays["indptr"], arrays["indices"], arrays["index"],
                             np.dtype(meta["pair_dtype"]))
@@ -120,12 +122,14 @@ def tile_graph(cloud, folder, n_neighbors: int) -> str:
     for old in (part, folder):  # (not whole: never read)
         shutil.rmtree(old, ignore_errors=True)
     part.mkdir(parents=True)
+    digests = {}
     for name, a in (("positions", g.positions), ("sizes", g.sizes), ("normals", g.normals),
                     ("indptr", g.indptr), ("indices", g.indices), ("index", el.index)):
         np.save(part / f"{name}.npy", a)
+        digests[name] = _digest(part / f"{name}.npy")
     pair_dtype = g.rebuild["pairs"].keywords["pair_dtype"]
-    (part / "graph.json").write_text(json.dumps({"pair_dtype": np.dtype(pair_dtype).name}),
-                                     encoding="utf-8")
+    (part / "graph.json").write_text(json.dumps({"pair_dtype": np.dtype(pair_dtype).name,
+                                                 "sha256": digests}), encoding="utf-8")
     try:  # whole or absent: a phase never reads half a graph
         os.replace(part, folder)
     except OSError:  # the same tile saved by another try of the task
@@ -133,3 +137,29 @@ def tile_graph(cloud, folder, n_neighbors: int) -> str:
         if not done.is_file():
             raise
     return "built"
+
+
+def _digest(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 24), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def _read_checked(folder: Path, meta: dict) -> dict:
+    """The graph's arrays, each file's SHA-256 checked against the one written with it:
+    the work folder may be shared with other machines, and the compiled kernels trust
+    the arrays they are given (a changed index reads out of bounds)."""
+    from ..errors import SuperfacetsError
+
+    want = meta.get("sha256", {}) if isinstance(meta, dict) else {}
+    arrays = {}
+    for name in GRAPH_FILES:
+        path = folder / f"{name}.npy"
+        data = path.read_bytes()
+        if want.get(name) != hashlib.sha256(data).hexdigest():
+            raise SuperfacetsError(f"{path}: changed since this run wrote it (the work "
+                                   "folder's files belong to the run): refused")
+        arrays[name] = np.load(io.BytesIO(data), allow_pickle=False)
+    return arrays

@@ -186,8 +186,8 @@ def record_options(outdir: Path, options: dict) -> None:
 
 
 class FolderLock:
-    """An exclusive lock on a folder: a batch's output folder, a tiled run's work folder
-    (one run writes it at a time; another is refused with ``held`` as the reason).
+    """An exclusive lock on a folder: a batch's output folder (one batch writes it at a
+    time; another is refused with ``held`` as the reason).
 
     The lock file ``.lock`` is there only while a batch runs: it is removed
     before the lock is let go, and a batch that locked a file already removed

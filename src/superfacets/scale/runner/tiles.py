@@ -33,9 +33,7 @@ end. Only the labels (8 bytes per element) and the centers are gathered here.
 
 from __future__ import annotations
 
-import contextlib
 import math
-import tempfile
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -52,7 +50,7 @@ from ..tile_graphs import drop_graphs, graph_folder, tile_graph
 from ..tile_layout import any_in_box, gathered_centers, in_box
 from ..tile_merges import merged_labels, tiled_merge_from
 from .engine import Engine, PeakMemory, error_text
-from .manifest import FolderLock
+from .workdir import run_folder
 
 #: Most rounds of the connectivity pass: the first over every tile, each next over the
 #: tiles whose boxes hold elements the last moved (tiles repair at once, from the same
@@ -205,9 +203,12 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         Folder for the work files: the input sorted into one file per tile
         (the file is read twice in all, then each task reads the tiles its box
         overlaps), the ``.npy`` copy of an input that is not streamed, the tiles' point
-        graphs (:mod:`~superfacets.scale.tile_graphs`), the stitched labels. Default: a
-        temporary folder, removed at the end. With ``scheduler`` give a folder every
-        worker reaches, or each task reads the whole file for its box.
+        graphs (:mod:`~superfacets.scale.tile_graphs`), the stitched labels. The run
+        works in a folder of its own that it makes inside ``workdir`` and removes at its
+        end; nothing else there is touched, and two runs may share it
+        (:mod:`~superfacets.scale.runner.workdir`). Default: a temporary folder. With
+        ``scheduler`` give a folder every worker reaches, or each task reads the whole
+        file for its box.
     progress : bool, default False
         A progress bar per phase.
     refine : int, default 1
@@ -261,12 +262,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
             raise ParameterError(f"{name} must be an integer >= {low}, got {v!r}")
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
-    if workdir is None:
-        spill = tempfile.TemporaryDirectory(prefix="superfacets-tiles-")
-    else:  # the work folder belongs to this run: another one using it is refused
-        Path(workdir).mkdir(parents=True, exist_ok=True)
-        spill = _locked(Path(workdir))
-    with spill as tmp:
+    with run_folder(workdir) as tmp:  # the run's own folder, removed at its end
         t = time.perf_counter()
         if isinstance(source, RegionReader):  # opened by the caller (its viewpoint, up)
             reader = source
@@ -422,13 +418,6 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                        layout=layout, halo=margin, disagreements=disagreements, repaired=repaired,
                        tiles=[stats[k] for k in sorted(stats)], timings=timings,
                        params=resolved)
-
-
-@contextlib.contextmanager
-def _locked(folder: Path):
-    with FolderLock(folder, "another tiled run is using this work folder (give each run "
-                            "its own --workdir)"):
-        yield str(folder)
 
 
 def _gather(engine: Engine, tasks: list, phase: str, progress: bool) -> list:
