@@ -1552,3 +1552,55 @@ def test_without_the_compiled_kernels_a_run_says_so_in_one_line(monkeypatch, cap
     with pytest.raises(SystemExit):
         main(["--version"])
     assert "no kernels: the compiled ones are not built" in capsys.readouterr().out
+
+
+def test_threads_the_system_refuses_leave_the_same_labels(tmp_path):
+    """Under ``ulimit -v`` a thread that could not start was a traceback (the swaps'
+    pool) or an abort (the compiled kernels: std::system_error): a refused thread's
+    share now runs on the calling thread, the same labels. A new process, its address
+    space limited to what it holds plus 80 MiB, 64 kernel threads asked for (their
+    8 MiB stacks cannot all fit)."""
+    code = """
+import os, re, resource
+import numpy as np
+import superfacets
+from superfacets.inputs.shapes import creature
+m = creature(80)
+ref = superfacets.segment(m, 80, n_threads=1).labels
+pts = m.centroids.copy()
+refp = superfacets.segment(pts, 80, n_threads=1).labels
+vm = int(re.search(r"VmSize:\\s+(\\d+)", open("/proc/self/status").read()).group(1)) * 1024
+resource.setrlimit(resource.RLIMIT_AS, (vm + 80 * 2**20, resource.RLIM_INFINITY))
+os.environ["SUPERFACETS_KERNEL_THREADS"] = "64"
+got = superfacets.segment(m, 80, n_threads=16).labels
+gotp = superfacets.segment(pts, 80, n_threads=16).labels
+print(np.array_equal(ref, got), np.array_equal(refp, gotp))
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.split() == ["True", "True"]
+
+
+def test_python_threads_the_system_refuses_run_on_the_calling_thread(monkeypatch):
+    """The swaps and the bounded classification start Python threads: where one is
+    refused ("can't start new thread"), its call runs on the calling thread."""
+    import threading
+
+    from superfacets._runtime.threads import in_parallel
+
+    mesh = creature(40)
+    ref = superfacets.segment(mesh, 60, n_threads=1).labels
+    refused = []
+
+    def start(self):
+        if self.name == "superfacets":
+            refused.append(1)
+            raise RuntimeError("can't start new thread")
+        return real(self)
+
+    real = threading.Thread.start
+    monkeypatch.setattr(threading.Thread, "start", start)
+    assert in_parallel(lambda t: t * t, 4) == [0, 1, 4, 9] and len(refused) == 3
+    got = superfacets.segment(creature(40), 60, n_threads=2).labels
+    np.testing.assert_array_equal(got, ref)
+    assert len(refused) > 3

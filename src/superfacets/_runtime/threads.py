@@ -6,7 +6,7 @@ their outputs, so the results are the same for any number of threads.
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
+import threading
 from contextlib import contextmanager
 from contextvars import ContextVar
 
@@ -61,11 +61,43 @@ def split(n: int, n_threads: int | None = None, min_per_thread: int | None = Non
 
 def run_ranges(fn, bounds: list[int]) -> list:
     """``[fn(bounds[i], bounds[i + 1]) for i ...]``, the first range on the calling
-    thread and the others on a pool at the same time."""
+    thread and the others on threads at the same time (:func:`in_parallel`)."""
     ranges = list(zip(bounds[:-1], bounds[1:]))
-    if len(ranges) <= 1:
-        return [fn(a, b) for a, b in ranges]
-    with ThreadPoolExecutor(len(ranges) - 1, thread_name_prefix="superfacets") as pool:
-        futures = [pool.submit(fn, a, b) for a, b in ranges[1:]]
-        first = fn(*ranges[0])
-        return [first] + [f.result() for f in futures]
+    return in_parallel(lambda i: fn(*ranges[i]), len(ranges))
+
+
+def in_parallel(fn, n: int) -> list:
+    """``[fn(0), ..., fn(n - 1)]``: ``fn(0)`` on the calling thread, the others on
+    threads of their own at the same time (the kernels they call release the GIL, each
+    writing its own part). A thread the system will not start (a limit on processes or
+    memory: ``ulimit -u``, ``ulimit -v``) is not an error: its call runs on the calling
+    thread after ``fn(0)``, the same result later. The first exception is raised once
+    every call has ended."""
+    if n <= 1:
+        return [fn(t) for t in range(n)]
+    out: list = [None] * n
+    errors: list = [None] * n
+
+    def call(t: int) -> None:
+        try:
+            out[t] = fn(t)
+        except BaseException as exc:  # (raised below, once the others have ended)
+            errors[t] = exc
+
+    started, here = [], []
+    for t in range(1, n):
+        th = threading.Thread(target=call, args=(t,), name="superfacets", daemon=True)
+        try:
+            th.start()
+            started.append(th)
+        except RuntimeError:  # "can't start new thread"
+            here.append(t)
+    call(0)
+    for t in here:
+        call(t)
+    for th in started:
+        th.join()
+    for exc in errors:
+        if exc is not None:
+            raise exc
+    return out

@@ -29,6 +29,7 @@ import numpy as np
 from .._kernels import native
 from .._kernels.codes import NOT_INCREMENTAL, QUEUE_FULL
 from .._runtime.memory import discard_pages
+from .._runtime.threads import in_parallel
 from .adaptive import window_factors
 from .expansion import Workspaces, centers_within, with_room
 from .params import ASSIGNMENTS, check_choice
@@ -416,11 +417,7 @@ class BoundedReplay(Classifier):
             seg_len[part] = ol_t
             return p
 
-        if n_thr == 1:
-            ends = [run(0)]
-        else:
-            futs = [spaces.pool().submit(run, t) for t in range(1, n_thr)]
-            ends = [run(0)] + [f.result() for f in futs]
+        ends = in_parallel(run, n_thr)
         if min(ends) < 0:
             return -1
         for t in range(1, n_thr):

@@ -10,8 +10,6 @@ buffers were large enough; :func:`centers_within` finds the centers near others.
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
-
 import numpy as np
 
 from .._kernels.codes import QUEUE_FULL, RECORD_FULL
@@ -121,7 +119,6 @@ class Workspaces:
         self.inv_width, self.n_buckets = bucket_width(weights)
         self.n_threads = max(1, int(n_threads))
         self.ws = [Workspace(m, self.n_buckets, self.heap_bound)]
-        self._pool = None
 
     def get(self, t: int) -> Workspace:
         while len(self.ws) <= t:
@@ -134,18 +131,10 @@ class Workspaces:
         :meth:`get` makes them again."""
         self.ws.clear()
 
-    def pool(self) -> ThreadPoolExecutor:
-        if self._pool is None:
-            self._pool = ThreadPoolExecutor(self.n_threads - 1, thread_name_prefix="superfacets")
-        return self._pool
-
     def close(self) -> None:
         """Forget the workspaces (their pages stay resident between passes: see
-        :class:`Workspace`) and stop the threads' pool."""
+        :class:`Workspace`)."""
         self.release()
-        if self._pool is not None:
-            self._pool.shutdown()
-            self._pool = None
 
 
 def with_room(ws: Workspace, call):

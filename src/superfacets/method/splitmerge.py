@@ -36,6 +36,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._kernels import native
+from .._runtime.threads import in_parallel
 from ..elements.kinds import kind_of
 
 __all__ = ["swap_round", "swap_and_iterate", "POWER", "LLOYD",
@@ -99,29 +100,6 @@ MIN_GAIN = 1.0
 #: Elements from which the passes' kept expansions (about 60 bytes per element) go before
 #: the swaps; the pass after them expands every center (same labels; 1.7M faces: +0.7 s).
 FORGET_MIN = 1 << 22
-
-
-class _Threads:
-    """``run(fn)`` calls ``fn(t)`` for ``t < n`` on ``n`` threads (the kernels
-    release the GIL), with one pool for all the calls of a round."""
-
-    def __init__(self, n: int):
-        self.n = n
-        self.pool = None
-        if n > 1:
-            from concurrent.futures import ThreadPoolExecutor
-
-            self.pool = ThreadPoolExecutor(n - 1, thread_name_prefix="superfacets-swaps")
-
-    def run(self, fn) -> None:
-        futs = [self.pool.submit(fn, t) for t in range(1, self.n)] if self.pool else []
-        fn(0)
-        for f in futs:
-            f.result()
-
-    def close(self) -> None:
-        if self.pool is not None:
-            self.pool.shutdown()
 
 
 def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: float = np.inf,
@@ -202,70 +180,66 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
     second = np.zeros(n, dtype=np.bool_)
     calls = iter(range(1, 1 << 22))  # search ids of a kernel call: from call * 2**40 on
     args = (g.indptr, g.indices, weights, lab, members, bounds, sizes, positions, float(power))
-    threads = _Threads(n_thr)
-    try:
-        # energies of superfacets t, t + n_thr, ... on thread t: disjoint, shared arrays
-        bases = [next(calls) << 40 for _ in range(n_thr)]
-        threads.run(lambda t: energies(*args, energy, far, dist, stamp, bases[t],
-                                       *space[t][:2], t, n_thr))
+    # energies of superfacets t, t + n_thr, ... on thread t: disjoint, shared arrays
+    bases = [next(calls) << 40 for _ in range(n_thr)]
+    in_parallel(lambda t: energies(*args, energy, far, dist, stamp, bases[t],
+                                   *space[t][:2], t, n_thr), n_thr)
 
-        def evaluate(which):  # the splits of superfacets ``which``
-            which = np.asarray(which, dtype=np.int64)
-            b = [next(calls) << 40 for _ in range(n_thr)]
-            threads.run(lambda t: split_candidates(
-                *args, int(lloyd), which, far, split_energy, second, dist, dist2, stamp,
-                stamp2, b[t], *space[t], t, n_thr))
+    def evaluate(which):  # the splits of superfacets ``which``
+        which = np.asarray(which, dtype=np.int64)
+        b = [next(calls) << 40 for _ in range(n_thr)]
+        in_parallel(lambda t: split_candidates(
+            *args, int(lloyd), which, far, split_energy, second, dist, dist2, stamp,
+            stamp2, b[t], *space[t], t, n_thr), n_thr)
 
-        splits = _SplitOrder(energy, split_energy, evaluate, 8 * n_thr, pruned)
-        limit = max(1, int(max_fraction * k))
-        best = splits.peek()
-        if best is None:  # no split lowers the energy: no swap
-            return lab.copy(), 0
-        # adjacent superfacets: each pair once, a < b
-        key = label_pairs(g.indptr, g.indices, lab, np.int64(k))  # (no pairs rebuilt)
-        pa, pb = key // k, key % k
-        union = np.empty(key.shape[0])
-        most = best[1] if pruned else np.inf
-        # unions overlap: each thread its own distances, the first two the splits' second
-        # ones (stamps are search ids used once: the later splits are unaffected)
-        own = [(dist, stamp), (dist2, stamp2)][:n_thr] + [
-            (np.empty(n), np.full(n, -1, dtype=np.int64)) for _ in range(2, n_thr)]
-        mb = [next(calls) << 40 for _ in range(n_thr)]
-        threads.run(lambda t: merge_energies(
-            *args, pa, pb, energy, float(window_r2), float(most), union, *own[t], mb[t],
-            *space[t], t, n_thr))
-        loss = union - energy[pa] - energy[pb]  # inf: not allowed, or beyond any gain
+    splits = _SplitOrder(energy, split_energy, evaluate, 8 * n_thr, pruned)
+    limit = max(1, int(max_fraction * k))
+    best = splits.peek()
+    if best is None:  # no split lowers the energy: no swap
+        return lab.copy(), 0
+    # adjacent superfacets: each pair once, a < b
+    key = label_pairs(g.indptr, g.indices, lab, np.int64(k))  # (no pairs rebuilt)
+    pa, pb = key // k, key % k
+    union = np.empty(key.shape[0])
+    most = best[1] if pruned else np.inf
+    # unions overlap: each thread its own distances, the first two the splits' second
+    # ones (stamps are search ids used once: the later splits are unaffected)
+    own = [(dist, stamp), (dist2, stamp2)][:n_thr] + [
+        (np.empty(n), np.full(n, -1, dtype=np.int64)) for _ in range(2, n_thr)]
+    mb = [next(calls) << 40 for _ in range(n_thr)]
+    in_parallel(lambda t: merge_energies(
+        *args, pa, pb, energy, float(window_r2), float(most), union, *own[t], mb[t],
+        *space[t], t, n_thr), n_thr)
+    loss = union - energy[pa] - energy[pb]  # inf: not allowed, or beyond any gain
 
-        # greedy: the largest gains with the smallest losses, each superfacet in one swap
-        merges = np.lexsort((pb, pa, loss))
-        used = np.zeros(k, dtype=bool)
-        remap = np.arange(k, dtype=np.int32)
-        split_to = np.full(k, -1, dtype=np.int32)
-        j = 0
-        n_swaps = 0
-        mean_energy = float(np.mean(energy))
-        for _ in range(limit):
-            nxt = splits.pop()
-            if nxt is None:
-                break
-            s, gain = nxt
-            if gain < min_gain * mean_energy:  # the gains come largest first
-                break
-            if used[s]:
-                continue
-            while j < merges.shape[0] and (used[pa[merges[j]]] or used[pb[merges[j]]]
-                                           or s in (pa[merges[j]], pb[merges[j]])):
-                j += 1
-            if j >= merges.shape[0] or loss[merges[j]] >= gain:
-                break
-            u, v = int(pa[merges[j]]), int(pb[merges[j]])
+    # greedy: the largest gains with the smallest losses, each superfacet in one swap
+    merges = np.lexsort((pb, pa, loss))
+    used = np.zeros(k, dtype=bool)
+    remap = np.arange(k, dtype=np.int32)
+    split_to = np.full(k, -1, dtype=np.int32)
+    j = 0
+    n_swaps = 0
+    mean_energy = float(np.mean(energy))
+    for _ in range(limit):
+        nxt = splits.pop()
+        if nxt is None:
+            break
+        s, gain = nxt
+        if gain < min_gain * mean_energy:  # the gains come largest first
+            break
+        if used[s]:
+            continue
+        while j < merges.shape[0] and (used[pa[merges[j]]] or used[pb[merges[j]]]
+                                       or s in (pa[merges[j]], pb[merges[j]])):
             j += 1
-            remap[v] = u  # v merges into u; its label goes to the second part of s
-            split_to[s] = v
-            used[[s, u, v]] = True
-            n_swaps += 1
-    finally:
-        threads.close()
+        if j >= merges.shape[0] or loss[merges[j]] >= gain:
+            break
+        u, v = int(pa[merges[j]]), int(pb[merges[j]])
+        j += 1
+        remap[v] = u  # v merges into u; its label goes to the second part of s
+        split_to[s] = v
+        used[[s, u, v]] = True
+        n_swaps += 1
     splits = own = space = dist = dist2 = stamp = stamp2 = members = None  # noqa: F841 (freed)
     out = remap[lab]
     moved = second & (split_to[lab] >= 0)

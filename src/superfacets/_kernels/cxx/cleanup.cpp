@@ -311,10 +311,7 @@ void band_distances_t(nb::handle indptr_, nb::handle indices_, nb::handle dual_e
     if (t <= 1) {
         search(0, k);
     } else {
-        std::vector<std::thread> pool;
-        for (i64 w = 1; w < t; ++w) pool.emplace_back(search, k * w / t, k * (w + 1) / t);
-        search(0, k / t);
-        for (auto& th : pool) th.join();
+        on_threads(t, [&](i64 w) { search(k * w / t, k * (w + 1) / t); });
     }
     parallel_for(n, [&](i64 lo, i64 hi) {
         for (i64 f = lo; f < hi; ++f)

@@ -23,6 +23,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <system_error>
 #include <type_traits>
 #include <vector>
 
@@ -269,6 +270,18 @@ inline int threads() {
     return limit >= 1 && limit < n ? limit : n;
 }
 
+// Start a thread running g into pool; false where the system refuses one (std::thread
+// throws std::system_error, EAGAIN, under ulimit -u or -v): the caller runs that work.
+template <class G>
+inline bool start_thread(std::vector<std::thread>& pool, G&& g) {
+    try {
+        pool.emplace_back(std::forward<G>(g));
+        return true;
+    } catch (const std::system_error&) {
+        return false;
+    }
+}
+
 // f(lo, hi) over ranges of 0..n on threads (each element on its own: any split gives
 // the same arrays). Small loops run on the calling thread. The ranges, eight a thread
 // (of 4,096 elements at least), are taken in turn: a thread the machine slows down, or
@@ -286,17 +299,23 @@ void parallel_for(i64 n, F f) {
         for (i64 c = next++; c < parts; c = next++) f(n * c / parts, n * (c + 1) / parts);
     };
     std::vector<std::thread> pool;
-    for (i64 w = 1; w < t; ++w) pool.emplace_back(work);
+    for (i64 w = 1; w < t; ++w)
+        if (!start_thread(pool, work)) break;  // the others take its ranges
     work();
     for (auto& th : pool) th.join();
 }
 
 // f(t) for t = 0 .. n_threads - 1: t = 0 on the calling thread, each other on its own.
+// A thread the system will not start (a limit on processes or memory) runs its call on
+// the calling thread after f(0): each t's work is its own, so the same results.
 template <class F>
 void on_threads(i64 n_threads, F f) {
     std::vector<std::thread> pool;
-    for (i64 t = 1; t < n_threads; ++t) pool.emplace_back(f, t);
+    std::vector<i64> here;
+    for (i64 t = 1; t < n_threads; ++t)
+        if (!start_thread(pool, [&f, t]() { f(t); })) here.push_back(t);
     f(0);
+    for (i64 t : here) f(t);
     for (auto& th : pool) th.join();
 }
 
