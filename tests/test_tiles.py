@@ -915,3 +915,36 @@ def test_a_killed_tiled_run_leaves_nothing_for_long(tmp_path, monkeypatch, capsy
     assert res.n_segments > 0 and not dead.exists() and other.exists()
     assert f"removed {dead}" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["superfacets-tiles-not-ours"]
+
+
+def test_option_extremes_are_refused_before_any_work(tmp_path, monkeypatch):
+    """--tiles 1000,1000,1000 built the layout of a billion tiles (exit 134 after 55 s and
+    3.7 GiB) before the count was checked; 1,1,99999999999999999999 and a 400-digit count
+    were tracebacks; --refine and -j had no bound (-j 1000 started 1,000 processes). Each
+    is one line now, before the tile layout (none is built) and before any worker."""
+    import superfacets.scale.tile_layout as layouts
+    from superfacets.cli import main
+    from superfacets.scale.runner.engine import Engine
+
+    mesh = _bumpy(3)
+    monkeypatch.setattr(layouts, "balanced_tiles", lambda *a: pytest.fail("a layout built"))
+    monkeypatch.setattr(layouts, "tile_grid", lambda *a: pytest.fail("a layout built"))
+    for tiles, said in (((1000, 1000, 1000), "makes more than 1,048,576 tiles"),
+                        ((1, 1, 10**20), "at most 1,048,576, got 100000000000000000000"),
+                        (10**400, "a 401-digit number"),
+                        (500, "elements per tile of this input")):
+        with pytest.raises(ParameterError, match=said):
+            segment_tiled(mesh, 20, tiles=tiles, workers=1)
+    with pytest.raises(ParameterError, match=r"refine must be an integer in 0\.\.100"):
+        segment_tiled(mesh, 20, tiles=2, workers=1, refine=10**9)
+    with pytest.raises(ParameterError, match=r"workers must be an integer in 1\.\."):
+        segment_tiled(mesh, 20, tiles=2, workers=1000)
+    with pytest.raises(ParameterError, match="workers must be an integer"):
+        Engine(workers=1000)
+    path = tmp_path / "m.ply"
+    _write_ply_mesh(path, mesh.vertices, mesh.faces)
+    for args in (["--tiles", "1,1," + "9" * 400], ["--tiles", "1000,1000,1000"],
+                 ["--tiles", "2", "--refine", "1000000000"], ["--tiles", "2", "-j", "1000"]):
+        assert main(["segment", str(path), "-k", "20", "-o", str(tmp_path / "x.seg"),
+                     *args]) == 2, args
+        assert not (tmp_path / "x.seg").exists()

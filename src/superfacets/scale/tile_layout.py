@@ -26,7 +26,7 @@ position has one tile); a non-finite one has none (-1).
 
 from __future__ import annotations
 
-import itertools
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -259,6 +259,8 @@ def tile_box(tiles: Tiles, t: int, margin: float = 0.0) -> tuple[np.ndarray, np.
 #: Fewest elements a tile holds on average: below, the tiles' halos and tasks cost more
 #: than the method (200 tiles of a 5,000-face mesh took 20 s; 10,000 never ended).
 MIN_PER_TILE = 50
+#: The most tiles a run takes (a million: 50M elements per tile would be 50 trillion)
+MAX_TILES = 1 << 20
 
 
 def check_tiles(tiles, n_elements: int | None = None) -> None:
@@ -281,7 +283,7 @@ def check_tiles(tiles, n_elements: int | None = None) -> None:
     """
     if n_elements is not None:
         check_tiles(tiles)
-        n = int(np.prod(tiles))
+        n = math.prod(int(t) for t in np.ravel(tiles))
         if n > 1 and n_elements < n * MIN_PER_TILE:
             raise ParameterError(
                 f"tiles={tiles!r} leaves {n_elements / n:.2g} elements per tile of this input "
@@ -295,15 +297,16 @@ def check_tiles(tiles, n_elements: int | None = None) -> None:
     else:
         for t in tiles:
             _positive_int(t)
+        if math.prod(int(t) for t in tiles) > MAX_TILES:
+            raise ParameterError(f"tiles={tuple(int(t) for t in tiles)!r} makes more than "
+                                 f"{MAX_TILES:,} tiles")
 
 
 def _grid_counts(ext: np.ndarray, tiles) -> np.ndarray:
     if np.ndim(tiles) == 0:
         n = _positive_int(tiles)
         best = None
-        for a, b in itertools.product(range(1, n + 1), repeat=2):
-            if n % (a * b):
-                continue
+        for a, b in _factor_pairs(n):  # (a, b ascending, a * b dividing n)
             counts = np.array([a, b, n // (a * b)])
             if (counts[ext <= 0] > 1).any():
                 continue
@@ -321,9 +324,25 @@ def _grid_counts(ext: np.ndarray, tiles) -> np.ndarray:
     return np.array([int(t) for t in tiles])
 
 
+def _divisors(n: int) -> list[int]:
+    small = [d for d in range(1, math.isqrt(n) + 1) if n % d == 0]
+    return sorted(set(small + [n // d for d in small]))
+
+
+def _factor_pairs(n: int):
+    """The pairs ``(a, b)``, ``a * b`` dividing ``n``, in the order of a loop over
+    ``a`` then ``b`` from 1 to ``n`` (in time of the divisors, not of ``n**2``)."""
+    for a in _divisors(n):
+        for b in _divisors(n // a):
+            yield a, b
+
+
 def _positive_int(v) -> int:
     if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)) or v < 1:
         raise ParameterError(f"tiles must be positive integers, got {v!r}")
+    if v > MAX_TILES:
+        shown = str(v) if len(str(v)) < 30 else f"a {len(str(v))}-digit number"
+        raise ParameterError(f"tiles must be at most {MAX_TILES:,}, got {shown}")
     return int(v)
 
 

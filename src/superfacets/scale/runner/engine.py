@@ -196,6 +196,15 @@ class Engine:
                  memory_limit="auto", connect_timeout: float = 10.0,
                  wait_workers: float = 60.0, dask: bool | None = None,
                  exact_memory: bool = False) -> None:
+        import numbers
+
+        from ...checks import max_threads
+        from ...errors import ParameterError
+
+        if workers is not None and (isinstance(workers, bool) or not isinstance(
+                workers, numbers.Integral) or not 1 <= workers <= max_threads()):
+            raise ParameterError(f"workers must be an integer in 1..{max_threads()} (at most "
+                                 f"4 per core), got {workers!r}")
         self.scheduler = scheduler if scheduler else _scheduler_from_config()
         self.workers = default_workers() if workers is None else int(workers)
         #: a line for the user where the engine chose for them (no Dask: in this process)

@@ -41,6 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from ...api.result import TiledResult
+from ...checks import max_threads
 from ...errors import ParameterError, SuperfacetsError
 from ...inputs.bounds import check_extent
 from ...method.merges import NOISE_SAMPLE
@@ -163,6 +164,10 @@ def tile_task(task: dict) -> dict:
     return out
 
 
+#: The most refinement rounds (each runs the passes on every tile again; 1 is the default)
+MAX_REFINE = 100
+
+
 def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles=4,
                   halo: float | None = None, workers: int | None = 1,
                   scheduler: str | None = None, memory_limit="auto", workdir=None,
@@ -256,10 +261,11 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
     check_tiles(tiles)  # before any pass over the file
     halo = HALO if halo is None else halo
     halo_distance(halo, params.window, 1.0)  # validated before any work
-    for name, v, low in (("refine", refine, 0), ("workers", workers, 1)):
+    for name, v, low, high in (("refine", refine, 0, MAX_REFINE),
+                               ("workers", workers, 1, max_threads())):
         if v is not None and (isinstance(v, bool) or not isinstance(v, (int, np.integer))
-                              or v < low):
-            raise ParameterError(f"{name} must be an integer >= {low}, got {v!r}")
+                              or not low <= v <= high):
+            raise ParameterError(f"{name} must be an integer in {low}..{high}, got {v!r}")
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
     with run_folder(workdir) as tmp:  # the run's own folder, removed at its end
@@ -272,6 +278,10 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         else:
             reader = RegionReader.spill(source, tmp)
         survey = reader.survey()
+        if check_extent(survey.lo, survey.hi, f"{reader.path}: ",
+                        "cloud" if reader.kind == "points" else "mesh") == 0:
+            raise ParameterError("the input has zero extent: nothing to tile")
+        check_tiles(tiles, survey.n_elements)  # a handful of elements per tile: refused
         check_tileable(params, survey.colors)
         target, merge_from = params.n_segments, tiled_merge_from(params, reader.kind)
         if merge_from > 1:  # merge_from times the superpoints, merged to the count at the end
@@ -287,10 +297,6 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
             layout = tile_grid(survey.lo, survey.hi, tiles)
         grid = layout.shape or (layout.n_tiles,)
         n_tiles = layout.n_tiles
-        if check_extent(survey.lo, survey.hi, f"{reader.path}: ",
-                        "cloud" if reader.kind == "points" else "mesh") == 0:
-            raise ParameterError("the input has zero extent: nothing to tile")
-        check_tiles(tiles, survey.n_elements)  # a handful of elements per tile: refused
         diagonal = float(np.linalg.norm(survey.hi - survey.lo))
         # one more pass sorts the elements into a file per tile, so that a task reads the
         # tiles its box overlaps, not the whole file; without a folder the workers share
