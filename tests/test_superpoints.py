@@ -400,7 +400,7 @@ def test_more_superpoints_than_points_and_bad_options_are_refused():
         segment(trimesh.creation.box(), 2, elements="points")
     with pytest.raises(ParameterError, match="needs a mesh"):
         segment(pts, 2, elements="faces")
-    with pytest.raises(TypeError, match="numeric"):
+    with pytest.raises(TypeError, match="real numbers"):
         PointCloud(np.array([["a", "b", "c"]]))
 
 

@@ -20,7 +20,71 @@ import numpy as np
 from .errors import ParameterError
 
 __all__ = ["check_int", "check_number", "check_positive", "check_nonneg", "check_bool",
-           "check_choice", "check_n_segments", "check_threads", "max_threads", "renamed"]
+           "check_choice", "check_n_segments", "check_threads", "max_threads", "renamed",
+           "not_real", "check_real"]
+
+
+def not_real(dtype, what: str) -> str:
+    """Why an array of ``dtype`` cannot hold coordinates: "" for real numbers (integers,
+    floats); the one sentence every door (the API, each reader, the tiled readers,
+    :class:`~superfacets.TetMesh`) gives for the others (complex: casting would drop the
+    imaginary part; objects, strings, booleans, records).
+
+    Parameters
+    ----------
+    dtype : numpy.dtype or str
+        The array's element type.
+    what : str
+        What the array holds, for the sentence (``"points"``).
+
+    Returns
+    -------
+    str
+        "" where ``dtype`` is an integer or floating type, else the sentence.
+
+    Raises
+    ------
+    TypeError
+        Never for a dtype; if ``dtype`` is not one (numpy's own error).
+
+    Examples
+    --------
+    >>> not_real(np.dtype("complex128"), "points")
+    'points must be real numbers, got dtype complex128'
+    >>> not_real(np.dtype("float32"), "points")
+    ''
+    """
+    dtype = np.dtype(dtype)
+    if dtype.names is None and (np.issubdtype(dtype, np.integer)
+                                or np.issubdtype(dtype, np.floating)):
+        return ""
+    return f"{what} must be real numbers, got dtype {dtype}"
+
+
+def check_real(dtype, what: str) -> None:
+    """Refuse coordinates of any ``dtype`` but integers and floats (:func:`not_real`).
+
+    Parameters
+    ----------
+    dtype : numpy.dtype or str
+    what : str
+        What the array holds, with the input's name where it has one.
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    TypeError
+        With :func:`not_real`'s sentence.
+
+    Examples
+    --------
+    >>> check_real(np.dtype("int32"), "faces")
+    """
+    if not_real(dtype, what):
+        raise TypeError(not_real(dtype, what))
 
 
 def _is_int(value) -> bool:
@@ -57,12 +121,12 @@ def check_int(name: str, value, lo: int | None = None, hi: int | None = None) ->
     superfacets.errors.ParameterError: k must be an integer >= 1, got 0
     """
     if not _is_int(value):
-        raise ParameterError(f"{name} must be an integer, got {value!r}")
+        raise ParameterError(f"{name} must be an integer, got {_shown(value)}")
     v = int(value)
     if lo is not None and v < lo:
-        raise ParameterError(f"{name} must be an integer >= {lo}, got {v}")
+        raise ParameterError(f"{name} must be an integer >= {lo}, got {_shown(v)}")
     if hi is not None and v > hi:
-        raise ParameterError(f"{name} must be an integer <= {hi}, got {v}")
+        raise ParameterError(f"{name} must be an integer <= {hi}, got {_shown(v)}")
     return v
 
 
@@ -94,17 +158,26 @@ def check_number(name: str, value, lo: float = -math.inf, hi: float = math.inf, 
     >>> check_number("tol", "0.5", 0.0, 1.0)
     0.5
     """
+    shown = _shown(value)
     if isinstance(value, (bool, np.bool_)):
-        raise ParameterError(f"{name} must be a number, got {value!r}")
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ParameterError(f"{name} must be a number, got {value!r}") from None
+        raise ParameterError(f"{name} must be a number, got {shown}")
     low = f"> {lo:g}" if lo_open else f">= {lo:g}"
     rng = low if hi == math.inf else f"in {'(' if lo_open else '['}{lo:g}, {hi:g}]"
+    try:
+        x = float(value)
+    except OverflowError:  # an integer past float64's range (10**400)
+        raise ParameterError(f"{name} must be a finite number {rng}, got {shown}") from None
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be a number, got {shown}") from None
     if not math.isfinite(x) or (x <= lo if lo_open else x < lo) or x > hi:
-        raise ParameterError(f"{name} must be a finite number {rng}, got {value!r}")
+        raise ParameterError(f"{name} must be a finite number {rng}, got {shown}")
     return x
+
+
+def _shown(value) -> str:
+    """``repr(value)``, a number of many digits named by its length instead."""
+    text = repr(value)
+    return text if len(text) <= 40 else f"a {len(text)}-character {type(value).__name__}"
 
 
 def check_positive(name: str, value) -> float:
@@ -180,7 +253,7 @@ def check_bool(name: str, value) -> bool:
     True
     """
     if not isinstance(value, (bool, np.bool_)):
-        raise ParameterError(f"{name} must be True or False, got {value!r}")
+        raise ParameterError(f"{name} must be True or False, got {_shown(value)}")
     return bool(value)
 
 
@@ -208,7 +281,7 @@ def check_choice(name: str, value, choices) -> str:
     'grid'
     """
     if not isinstance(value, str) or value not in choices:
-        raise ParameterError(f"{name} must be one of {', '.join(choices)}; got {value!r}")
+        raise ParameterError(f"{name} must be one of {', '.join(choices)}; got {_shown(value)}")
     return value
 
 

@@ -16,6 +16,7 @@ from functools import cached_property
 
 import numpy as np
 
+from ..checks import check_real
 from ..errors import InvalidCloudError
 from .bounds import check_extent, column_bounds, finite_rows
 from .mesh import readonly
@@ -342,11 +343,7 @@ def _library_colors(values) -> np.ndarray | None:
 
 def _coordinates(a, what: str, where: str) -> np.ndarray:
     arr = np.asarray(a)
-    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number)
-                                   or arr.dtype == bool):
-        raise TypeError(f"{where}{what} must be numeric, got dtype {arr.dtype}")
-    if np.issubdtype(arr.dtype, np.complexfloating):  # casting would drop the imaginary part
-        raise TypeError(f"{where}{what} must be real numbers, got dtype {arr.dtype}")
+    check_real(arr.dtype, where + what)
     if arr.ndim != 2 or arr.shape[1] != 3:
         raise InvalidCloudError(f"{where}{what} must have shape (N, 3), got {arr.shape}")
     return np.ascontiguousarray(arr, dtype=np.float64)

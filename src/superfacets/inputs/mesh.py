@@ -19,6 +19,7 @@ from functools import cached_property
 import numpy as np
 
 from .._kernels import native
+from ..checks import check_real
 from ..errors import InvalidMeshError
 from .bounds import check_extent, column_bounds
 from .rgb import check_colors, face_means, vertex_means
@@ -406,8 +407,7 @@ def _validate_arrays(vertices, faces, name: str = "") -> tuple[np.ndarray, np.nd
         raise InvalidMeshError(f"{where}vertices are not an array: {exc}") from None
     if v.ndim != 2 or v.shape[1] != 3:
         raise InvalidMeshError(f"{where}vertices must have shape (n, 3), got {v.shape}")
-    if not np.issubdtype(v.dtype, np.number) or np.issubdtype(v.dtype, np.complexfloating):
-        raise TypeError(f"{where}vertices must be a real numeric array, got dtype {v.dtype}")
+    check_real(v.dtype, where + "vertices")
     f = _faces_array(faces, where)
     v = np.ascontiguousarray(v, dtype=np.float64)
     # int32 faces stay int32 (the readers': :func:`narrow_faces`), other types int64

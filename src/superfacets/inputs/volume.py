@@ -13,6 +13,7 @@ from functools import cached_property
 
 import numpy as np
 
+from ..checks import check_real
 from ..errors import InvalidMeshError
 from .bounds import check_extent, column_bounds
 from .mesh import readonly
@@ -59,8 +60,7 @@ class TetMesh:
     def __post_init__(self) -> None:
         where = f"{self.name}: " if self.name else ""
         v = np.asarray(self.vertices)
-        if v.dtype == object or not np.issubdtype(v.dtype, np.number):
-            raise InvalidMeshError(f"{where}vertices must be numeric, got dtype {v.dtype}")
+        check_real(v.dtype, where + "vertices")
         v = np.ascontiguousarray(v, dtype=np.float64)
         if v.ndim != 2 or v.shape[1] != 3:
             raise InvalidMeshError(f"{where}vertices must have shape (n, 3), got {v.shape}")

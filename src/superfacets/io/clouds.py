@@ -200,6 +200,7 @@ def _read_pcd(path: Path) -> dict:
         raise FileNotFoundError(f"{path}: no such file")
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a directory")
+    _check_pcd_header(path)
     try:
         pc = pypcd4.PointCloud.from_path(path)
         fields = tuple(pc.fields)
@@ -236,6 +237,41 @@ def _read_pcd(path: Path) -> dict:
             "shape": (height, width) if height > 1 else None}
 
 
+def _check_pcd_header(path: Path) -> None:
+    """Refuse a PCD whose header declares more points than the file can hold, before
+    anything is allocated (a 200-byte file declaring 10**12 points was a MemoryError)."""
+    size = path.stat().st_size
+    head: dict = {}
+    with open(path, "rb") as f:
+        for _ in range(64):  # (the header's lines, DATA last)
+            line = f.readline(4096).decode("ascii", "replace").split("#")[0].split()
+            if line:
+                head[line[0].upper()] = line[1:]
+            if not line and f.tell() >= size or "DATA" in head:
+                break
+        body = size - f.tell()
+        sizes = f.read(8)  # binary_compressed: the compressed and the whole sizes
+    packed = np.frombuffer(sizes, dtype="<u4") if len(sizes) == 8 else np.zeros(2, int)
+    try:
+        n = int(head.get("POINTS", ["0"])[0])
+        per = sum(int(a) * int(b) for a, b in zip(head.get("SIZE", []),
+                                                   head.get("COUNT", head.get("SIZE", [])))
+                  ) if "COUNT" in head else sum(int(a) for a in head.get("SIZE", []))
+    except ValueError:
+        return  # (pypcd4 names what is wrong)
+    kind = (head.get("DATA") or ["ascii"])[0].lower()
+    need = {"binary": n * per, "ascii": n}.get(kind, 0)  # (ascii: a byte a point at least)
+    if kind == "binary_compressed" and (int(packed[1]) != n * per
+                                        or int(packed[0]) > body - 8):
+        raise MeshFormatError(f"{path}: the PCD header declares {n:,} points ({n * per:,} "
+                              f"bytes), its compressed data {int(packed[1]):,} bytes in "
+                              f"{int(packed[0]):,} of the file's {body:,}")
+    if n < 0 or need > body:
+        raise MeshFormatError(f"{path}: the PCD header declares {n:,} points "
+                              f"({need:,} bytes at least) but the file holds {body:,} bytes "
+                              "after it")
+
+
 def _read_las(path: Path) -> dict:
     from .._runtime.extras import require
 
@@ -266,10 +302,11 @@ def _read_npy(data: bytes, path: Path) -> dict:
         arr = np.load(io.BytesIO(data), allow_pickle=False)
     except Exception as exc:  # noqa: BLE001 - numpy raises many types on damaged files
         raise MeshFormatError(f"{path}: cannot read NPY: {exc}") from None
-    if not isinstance(arr, np.ndarray) or arr.dtype.names is not None \
-            or not np.issubdtype(arr.dtype, np.number):
-        raise MeshFormatError(f"{path}: NPY must hold a numeric array, got dtype "
-                              f"{getattr(arr, 'dtype', type(arr).__name__)}")
+    from ..checks import not_real
+
+    if not isinstance(arr, np.ndarray) or not_real(arr.dtype, "NPY points"):
+        raise MeshFormatError(f"{path}: " + (not_real(arr.dtype, "NPY points") if isinstance(
+            arr, np.ndarray) else f"NPY must hold an array, got {type(arr).__name__}"))
     if arr.ndim == 3 and arr.shape[2] == 3:
         h, w = arr.shape[:2]
         return {"points": arr.reshape(-1, 3).astype(np.float64), "allow_invalid": True,

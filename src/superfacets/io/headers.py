@@ -16,7 +16,8 @@ import numpy as np
 
 from ..errors import MeshFormatError
 
-__all__ = ["header_counts", "check_las", "check_laz", "ply_mapped", "npy_mapped", "first_line"]
+__all__ = ["header_counts", "check_las", "check_laz", "check_stl", "ply_mapped", "npy_mapped",
+           "first_line"]
 
 _SIZE = {"char": 1, "uchar": 1, "int8": 1, "uint8": 1, "short": 2, "ushort": 2,
          "int16": 2, "uint16": 2, "int": 4, "uint": 4, "int32": 4, "uint32": 4,
@@ -318,9 +319,50 @@ def npy_mapped(path: Path) -> np.ndarray:
         arr = np.load(path, mmap_mode="r", allow_pickle=False)
     except Exception as exc:  # noqa: BLE001 - numpy raises many types on damaged files
         raise MeshFormatError(f"{path}: cannot read NPY: {first_line(exc)}") from None
-    if not np.issubdtype(arr.dtype, np.number):
-        raise MeshFormatError(f"{path}: NPY must hold numbers, got {arr.dtype}")
+    from ..checks import not_real
+
+    if not_real(arr.dtype, "NPY points"):
+        raise MeshFormatError(f"{path}: {not_real(arr.dtype, 'NPY points')}")
     return arr
+
+
+def check_stl(data: bytes, path: Path) -> None:
+    """Refuse a truncated STL in one line: a binary STL's size is 84 bytes plus 50 per
+    triangle it declares; an ASCII one ends its last facet (trimesh read both as an
+    empty mesh).
+
+    Parameters
+    ----------
+    data : bytes
+        The file's bytes.
+    path : pathlib.Path
+        Its name, for the message.
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    MeshFormatError
+        If the file is shorter than it declares.
+
+    Examples
+    --------
+    >>> check_stl(bytes(84), Path("empty.stl"))  # a binary STL of no triangles
+    """
+    if data[:5].lower() == b"solid" and b"facet" in data[:4096]:  # ASCII
+        tail = data.rstrip()[-256:].lower()
+        if b"endsolid" not in tail and not tail.endswith(b"endfacet"):
+            raise MeshFormatError(f"{path}: truncated ASCII STL (its last facet does not end)")
+        return
+    if len(data) < 84:
+        raise MeshFormatError(f"{path}: truncated STL: {len(data)} bytes, not even the "
+                              "84 of a binary STL's header")
+    n = int.from_bytes(data[80:84], "little")
+    if len(data) < 84 + 50 * n:
+        raise MeshFormatError(f"{path}: truncated binary STL: {n:,} triangles declared "
+                              f"({84 + 50 * n:,} bytes), {len(data):,} bytes in the file")
 
 
 def first_line(exc: BaseException) -> str:

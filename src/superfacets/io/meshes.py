@@ -1,10 +1,10 @@
 """Reading mesh files: OFF, ``.tri``, PLY, OBJ, STL (triangles or polygons).
 
-OFF (the Princeton benchmark's format) and the authors' ``.tri`` text format
-and OBJ are parsed here (vectorized with :func:`numpy.loadtxt` where the faces
-are triangles); a binary PLY of triangles through plyfile's memory map, other PLY and
-STL through trimesh's parsers (PLY polygons through plyfile, since trimesh splits them),
-never changing the face order. A trailing ``.gz``, ``.xz`` or ``.bz2`` is decompressed.
+OFF (the Princeton benchmark's format), the authors' ``.tri`` text format and OBJ are
+parsed here (vectorized with :func:`numpy.loadtxt` where the faces are triangles); a
+binary PLY of triangles through plyfile's memory map, other PLY and STL through
+trimesh's parsers (PLY polygons through plyfile, since trimesh splits them), never
+changing the face order. A trailing ``.gz``, ``.xz`` or ``.bz2`` is decompressed.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import numpy as np
 from ..errors import InvalidMeshError, MeshFormatError
 from ..inputs.mesh import Mesh, narrow_faces
 from .files import read_bytes, read_head, split_suffix, text_lines
-from .headers import header_counts
+from .headers import check_stl, header_counts
 from .ply import read_ply_triangles
 
 __all__ = ["read_mesh", "MESH_FORMATS"]
@@ -353,6 +353,8 @@ def _quiet_trimesh():
 
 def _load_trimesh(data: bytes, fmt: str, path: Path):
     """PLY or STL: vertices, faces, vertex colours, face colours (None where absent)."""
+    if fmt == "stl":  # (a truncated STL named so: trimesh reads it as no faces)
+        check_stl(data, path)
     with _quiet_trimesh():
         return _load_trimesh_quietly(data, fmt, path)
 
@@ -360,7 +362,6 @@ def _load_trimesh(data: bytes, fmt: str, path: Path):
 def _load_trimesh_quietly(data: bytes, fmt: str, path: Path):
     import trimesh
 
-    kwargs = {}
     colors = [None, None]
     try:
         if fmt == "ply":  # trimesh's PLY parser alone: building a Trimesh costs 40x more
@@ -370,8 +371,7 @@ def _load_trimesh_quietly(data: bytes, fmt: str, path: Path):
             v, f = loaded.get("vertices"), loaded.get("faces")
             colors = [_rgb(loaded.get(key)) for key in ("vertex_colors", "face_colors")]
         else:
-            loaded = trimesh.load(io.BytesIO(data), file_type=fmt, process=False,
-                                  validate=False, force="mesh", **kwargs)
+            loaded = trimesh.load(io.BytesIO(data), file_type=fmt, process=False, force="mesh")
             v, f = getattr(loaded, "vertices", None), getattr(loaded, "faces", None)
         v = np.array(np.zeros((0, 3)) if v is None else v, dtype=np.float64)
         f = np.array(np.zeros((0, 3)) if f is None else f, dtype=np.int64)

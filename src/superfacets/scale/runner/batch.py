@@ -35,7 +35,7 @@ from ...elements.inputs import kind_for
 from ...elements.kinds import kind_of
 from ...errors import ParameterError
 from .engine import Engine, PeakMemory, error_text
-from .inputs import broken_link_reason, collect_inputs, output_names
+from .inputs import broken_link_reason, collect_inputs, no_inputs, output_names
 from .manifest import (
     JOURNAL,
     MANIFEST_COLUMNS,
@@ -320,7 +320,7 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
     files = collect_inputs(inputs, exclude=outdir if outdir.exists() else None,
                            skipped=skipped)
     if not files:
-        raise ParameterError("no input to segment")
+        raise no_inputs(inputs, outdir)
     outputs = {"labels": labels, "header": bool(header), "colored": colored_mesh,
                "picture": bool(picture), "html": bool(html), "vertex_colors": bool(vertex_colors)}
     if picture or html:  # recorded only where drawn (folders of earlier runs resume)

@@ -16,7 +16,7 @@ from typing import Sequence
 
 from ...errors import ParameterError
 
-__all__ = ["collect_inputs", "output_names", "broken_link_reason"]
+__all__ = ["collect_inputs", "output_names", "broken_link_reason", "no_inputs"]
 
 
 def _readable_suffixes(explicit: bool) -> set[str]:
@@ -32,6 +32,18 @@ def _is_input(path: Path, explicit: bool) -> bool:
 
     fmt, _ = split_suffix(path)
     return fmt in _readable_suffixes(explicit)
+
+
+def no_inputs(inputs, outdir: Path) -> ParameterError:
+    """The error of a batch that found nothing to segment, naming an input folder that
+    holds the output folder (whose files are left out)."""
+    inside = [str(p) for p in inputs if outdir.exists() and Path(p).resolve()
+              in (outdir.resolve(), *outdir.resolve().parents)]
+    if inside:
+        return ParameterError(f"no input to segment: {inside[0]} is or holds the output "
+                              f"folder {outdir} (its files are left out); give -o a folder "
+                              "outside the inputs")
+    return ParameterError("no input to segment")
 
 
 def collect_inputs(specs: Sequence[str], exclude=None, skipped: list | None = None
