@@ -677,15 +677,16 @@ def test_face_pairs_grouped_on_threads_match_numba(monkeypatch, threads, polygon
     want = reference("adjacency.group_pairs")(half, owner, a, b)
     assert _same(got, want)
     # known answer: per edge of s half-edges, s == 1 is a boundary, else its pairs of
-    # distinct faces
+    # distinct faces: every two up to 8, each and the next (cyclically) beyond
     key = a[half].astype(np.int64) * nv + b[half]
     start = np.r_[0, np.flatnonzero(np.diff(key)) + 1]
     size = np.diff(np.r_[start, half.shape[0]])
     assert np.array_equal(got[0], start[size == 1])
     face = half // 3
     n_pairs = sum(int(face[s + i] != face[s + j]) for s, z in zip(start, size) if z > 1
-                  for i in range(z) for j in range(i + 1, z))
-    assert got[1].shape[0] == n_pairs and (size > 2).any()
+                  for i in range(z)
+                  for j in (range(i + 1, z) if z <= 8 else [(i + 1) % z]))
+    assert got[1].shape[0] == n_pairs and (size > 2).any() and (size > 8).any()
     assert n_pairs < (size * (size - 1) // 2).sum()  # (self-pairs left out)
     assert (got[1] < got[2]).all()
 
@@ -1558,8 +1559,9 @@ def test_threads_the_system_refuses_leave_the_same_labels(tmp_path):
     """Under ``ulimit -v`` a thread that could not start was a traceback (the swaps'
     pool) or an abort (the compiled kernels: std::system_error): a refused thread's
     share now runs on the calling thread, the same labels. A new process, its address
-    space limited to what it holds plus 80 MiB, 64 kernel threads asked for (their
-    8 MiB stacks cannot all fit)."""
+    space limited to what it holds plus 200 MiB, 64 kernel threads asked for (their
+    8 MiB stacks cannot all fit): the same labels, or, where the threads that did start
+    left no room for the run's arrays, a MemoryError (never an abort)."""
     code = """
 import os, re, resource
 import numpy as np
@@ -1570,15 +1572,18 @@ ref = superfacets.segment(m, 80, n_threads=1).labels
 pts = m.centroids.copy()
 refp = superfacets.segment(pts, 80, n_threads=1).labels
 vm = int(re.search(r"VmSize:\\s+(\\d+)", open("/proc/self/status").read()).group(1)) * 1024
-resource.setrlimit(resource.RLIMIT_AS, (vm + 80 * 2**20, resource.RLIM_INFINITY))
+resource.setrlimit(resource.RLIMIT_AS, (vm + 200 * 2**20, resource.RLIM_INFINITY))
 os.environ["SUPERFACETS_KERNEL_THREADS"] = "64"
-got = superfacets.segment(m, 80, n_threads=16).labels
-gotp = superfacets.segment(pts, 80, n_threads=16).labels
-print(np.array_equal(ref, got), np.array_equal(refp, gotp))
+try:
+    got = superfacets.segment(m, 80, n_threads=16).labels
+    gotp = superfacets.segment(pts, 80, n_threads=16).labels
+    print(np.array_equal(ref, got), np.array_equal(refp, gotp))
+except MemoryError as exc:  # (the threads that did start took the room: a clean error)
+    print("MemoryError", exc)
 """
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
-    assert out.returncode == 0, out.stderr[-2000:]
-    assert out.stdout.split() == ["True", "True"]
+    assert out.returncode == 0, out.stderr[-2000:]  # never an abort (terminate called)
+    assert out.stdout.split() == ["True", "True"] or out.stdout.startswith("MemoryError")
 
 
 def test_python_threads_the_system_refuses_run_on_the_calling_thread(monkeypatch):

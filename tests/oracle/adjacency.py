@@ -13,6 +13,10 @@ from numba import njit, prange
 _SMALL = 32  # buckets up to this size: insertion sort
 
 
+#: Faces around one edge up to which every two are paired (the compiled kernel's)
+MAX_FAN = 8
+
+
 @njit(cache=True, error_model="numpy")
 def _sort_bucket(order, lo, hi, key2):
     """Sort ``order[lo:hi]`` by ``key2[order[.]]``, stably."""
@@ -136,9 +140,11 @@ def group_pairs(half, owner, a, b):
     ``half`` holds half-edge ids ordered by their vertices ``(a[h], b[h])``;
     the face of half-edge ``h`` is ``owner[h]``, or ``h // 3`` (triangles)
     when ``owner`` is empty. A run of equal ``(a, b)`` is one
-    edge: of one half-edge, an open boundary; of ``s >= 2``, each of the
+    edge: of one half-edge, an open boundary; of ``2 <= s <= MAX_FAN``, each of the
     ``s (s - 1) / 2`` pairs of its faces (``i < j`` within the run; a face
-    paired with itself left out) is a face pair across that edge.
+    paired with itself left out) is a face pair across that edge; of ``s > MAX_FAN``
+    (a fan of copies, a "book"), each face with the next in the run, the last with the
+    first: ``s`` pairs, so the pairs stay in proportion to the faces.
 
     Returns
     -------
@@ -163,7 +169,7 @@ def group_pairs(half, owner, a, b):
                 if run == 1:
                     n_bound += 1
                 else:
-                    n_pairs += run * (run - 1) // 2
+                    n_pairs += run * (run - 1) // 2 if run <= MAX_FAN else run
             run = 1
         else:
             new[i] = False
@@ -172,7 +178,7 @@ def group_pairs(half, owner, a, b):
         if run == 1:
             n_bound += 1
         else:
-            n_pairs += run * (run - 1) // 2
+            n_pairs += run * (run - 1) // 2 if run <= MAX_FAN else run
     boundary = np.empty(n_bound, dtype=np.int64)
     lo = np.empty(n_pairs, dtype=half.dtype)
     hi = np.empty(n_pairs, dtype=half.dtype)
@@ -193,7 +199,12 @@ def group_pairs(half, owner, a, b):
             va = a[half[i]]
             vb = b[half[i]]
             for x in range(i, j):
-                for y in range(x + 1, j):
+                if j - i <= MAX_FAN:  # every later face
+                    y0, y1 = x + 1, j
+                else:  # the next face, the last with the first
+                    y0 = x + 1 if x + 1 < j else i
+                    y1 = y0 + 1
+                for y in range(y0, y1):
                     f = half[x] // 3 if tri else owner[half[x]]
                     g = half[y] // 3 if tri else owner[half[y]]
                     if f != g:

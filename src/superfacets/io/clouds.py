@@ -143,8 +143,8 @@ def read_cloud(path, format: str | None = None):
     else:
         from .headers import header_counts
 
-        header_counts(path)  # a header declaring more than the file holds: refused unread
-        data = read_bytes(path, comp)
+        counts = header_counts(path)  # a header declaring more than the file holds: refused
+        data = read_bytes(path, comp, counts=counts)
         if fmt == "ply":
             kw = _read_ply(data, path)
         elif fmt == "npy":

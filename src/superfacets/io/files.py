@@ -22,10 +22,14 @@ from typing import Callable
 from ..errors import MeshFormatError
 
 __all__ = ["split_suffix", "read_bytes", "text_lines", "atomic_write", "Outputs", "save",
-           "COMPRESSIONS"]
+           "COMPRESSIONS", "decompressed", "decompressed_head"]
+
 
 #: Compression suffixes understood on reading and writing.
 COMPRESSIONS = {".gz": gzip.decompress, ".xz": lzma.decompress, ".bz2": bz2.decompress}
+#: Their streams, read a block at a time (never the whole output at once)
+_OPENERS = {".gz": gzip.open, ".xz": lzma.open, ".bz2": bz2.open}
+_ERRORS = (OSError, EOFError, lzma.LZMAError, ValueError, zlib.error)
 _COMPRESSORS = {".gz": gzip.compress, ".xz": lzma.compress, ".bz2": bz2.compress}
 
 
@@ -68,8 +72,12 @@ def read_head(path: Path, size: int = 1 << 16) -> bytes:
         return fh.read(size)
 
 
-def read_bytes(path: Path, comp: str | None, what: str = "file") -> bytes:
-    """The content of ``path``, decompressed when ``comp`` names a compression suffix.
+def read_bytes(path: Path, comp: str | None, what: str = "file",
+               counts: dict | None = None) -> bytes:
+    """The content of ``path``, decompressed when ``comp`` names a compression suffix:
+    at most 256 bytes for each element its header declares (``counts``, from
+    :func:`~superfacets.io.headers.header_counts`) beyond its first 64 KiB, and at most
+    half of what this process may allocate (:func:`decompressed`).
 
     Raises
     ------
@@ -80,15 +88,98 @@ def read_bytes(path: Path, comp: str | None, what: str = "file") -> bytes:
         cannot be decompressed, or is empty ("empty {what}").
     """
     _check_regular(path)
-    data = path.read_bytes()
-    if comp is not None:
-        try:
-            data = COMPRESSIONS[comp](data)
-        except (OSError, EOFError, lzma.LZMAError, ValueError, zlib.error, MemoryError) as exc:
-            raise MeshFormatError(f"{path}: cannot decompress ({comp[1:]}): {exc}") from None
+    limit = (1 << 16) + 256 * sum(counts.values()) if counts else None
+    data = path.read_bytes() if comp is None else decompressed(path, comp, limit)
     if not data:
         raise MeshFormatError(f"{path}: empty {what}")
     return data
+
+
+def decompressed(path: Path, comp: str, limit: int | None = None) -> bytes:
+    """The decompressed content of ``path``, read as a stream a block at a time and
+    stopped past ``limit`` bytes or half of what this process may still allocate (a run
+    needs more than its file), so that a small file that decompresses to more than it
+    declares or than fits (a decompression bomb) is refused early, not after filling
+    the memory.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+    comp : str
+        The compression suffix (``".gz"``, ``".xz"``, ``".bz2"``).
+    limit : int, optional
+        The most bytes to decompress.
+
+    Returns
+    -------
+    bytes
+
+    Raises
+    ------
+    MeshFormatError
+        If the stream is damaged.
+    MemoryLimitError
+        If it decompresses to more than ``limit``.
+
+    Examples
+    --------
+    >>> _ = Path("x.txt.gz").write_bytes(gzip.compress(b"0 1 2"))
+    >>> decompressed(Path("x.txt.gz"), ".gz")
+    b'0 1 2'
+    """
+    from .._runtime.memory import available_bytes
+
+    avail = available_bytes()
+    cap = avail // 2 if avail else 1 << 62
+    why = ("what its header declares allows" if limit is not None and limit < cap else
+           "this process may use for it")
+    limit = min(limit or cap, cap)
+    out = io.BytesIO()
+    try:
+        with _OPENERS[comp](path, "rb") as f:
+            while out.tell() <= limit and (block := f.read(min(1 << 24, limit + 1 - out.tell()))):
+                out.write(block)
+    except _ERRORS as exc:
+        raise MeshFormatError(f"{path}: cannot decompress ({comp[1:]}): {exc}") from None
+    if out.tell() > limit:
+        from ..errors import MemoryLimitError
+
+        raise MemoryLimitError(f"{path}: decompresses to more than {limit:,} bytes (the file "
+                               f"holds {path.stat().st_size:,}), more than {why}: refused",
+                               limit, limit)
+    return out.getvalue()
+
+
+def decompressed_head(path: Path, comp: str, size: int) -> bytes:
+    """The first ``size`` bytes of the decompressed content (the rest not decompressed).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+    comp : str
+        The compression suffix.
+    size : int
+
+    Returns
+    -------
+    bytes
+
+    Raises
+    ------
+    MeshFormatError
+        If the stream's start is damaged.
+
+    Examples
+    --------
+    >>> _ = Path("x.off.gz").write_bytes(gzip.compress(b"OFF\n3 1 0\n" + bytes(10**6)))
+    >>> decompressed_head(Path("x.off.gz"), ".gz", 10)
+    b'OFF\n3 1 0\n'
+    """
+    try:
+        with _OPENERS[comp](path, "rb") as f:
+            return f.read(size)
+    except _ERRORS as exc:
+        raise MeshFormatError(f"{path}: cannot decompress ({comp[1:]}): {exc}") from None
 
 
 def text_lines(data: bytes, path: Path) -> list[str]:

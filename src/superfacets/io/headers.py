@@ -26,8 +26,9 @@ _HEAD = 1 << 16  # a header longer than this is not one this package writes or r
 
 
 def header_counts(path) -> dict | None:
-    """``{"faces": m, "vertices": n}`` or ``{"points": n}`` as an uncompressed PLY, OFF or
-    ``.tri`` file's header declares them; None for other formats and compressed files.
+    """``{"faces": m, "vertices": n}`` or ``{"points": n}`` as a PLY, OFF or ``.tri``
+    file's header declares them (of a compressed one, its start alone decompressed);
+    None for other formats.
 
     Raises
     ------
@@ -51,13 +52,19 @@ def header_counts(path) -> dict | None:
     -------
     dict or None
     """
+    from .files import decompressed_head, split_suffix
+
     p = Path(path)
-    suffix = p.suffix.lower().lstrip(".")
+    suffix, comp = split_suffix(p)
     if suffix not in ("ply", "off", "tri") or not p.is_file():
         return None
-    with open(p, "rb") as f:
-        head = f.read(_HEAD)
-    size = p.stat().st_size
+    if comp is None:
+        with open(p, "rb") as f:
+            head = f.read(_HEAD)
+        size = p.stat().st_size
+    else:  # the head alone decompressed: the counts before the rest (a decompression
+        head = decompressed_head(p, comp, _HEAD)  # bomb is refused by them, unread)
+        size = None
     if suffix == "ply":
         return _ply(p, head, size)
     words = head.split(b"\n", 2)
@@ -74,7 +81,7 @@ def header_counts(path) -> dict | None:
     return {"vertices": nv}
 
 
-def _ply(p: Path, head: bytes, size: int) -> dict | None:
+def _ply(p: Path, head: bytes, size: int | None) -> dict | None:
     end = head.find(b"end_header")
     if not head.startswith(b"ply") or end < 0:
         return None
@@ -97,7 +104,7 @@ def _ply(p: Path, head: bytes, size: int) -> dict | None:
             else:
                 elements[-1][2] += 2 if ascii_ else _SIZE.get(w[1], 1)
     need = sum(count * smallest for _, count, smallest in elements)
-    if need > size - start:
+    if size is not None and need > size - start:
         declared = ", ".join(f"{count:,} {name}" for name, count, _ in elements)
         raise MeshFormatError(f"{p}: damaged PLY file: its header declares {declared} "
                               f"({need:,} bytes at the least), and {size - start:,} bytes "

@@ -81,11 +81,11 @@ def read_mesh(path, format: str | None = None) -> Mesh:
             f"{path}: unknown mesh format {('.' + fmt) if fmt else '(no suffix)'}; "
             f"expected one of {', '.join('.' + f for f in MESH_FORMATS)} "
             "(optionally .gz/.xz/.bz2)")
-    header_counts(path)  # a header declaring more than the file holds: refused unread
+    counts = header_counts(path)  # a header declaring more than the file holds: refused
     objects, colors, face_colors = (), None, None
     # (the common binary PLY of triangles: its header read and its arrays mapped, by plyfile)
     ply = fmt == "ply" and comp is None and read_ply_triangles(path, read_head(path))
-    data = b"" if ply else read_bytes(path, comp)  # (no such file, a folder: refused there)
+    data = b"" if ply else read_bytes(path, comp, counts=counts)  # (folders refused there)
     if fmt == "off":
         v, f, colors = _parse_off(data, path)
     elif fmt == "tri":

@@ -20,6 +20,8 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <exception>
+#include <mutex>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -270,6 +272,29 @@ inline int threads() {
     return limit >= 1 && limit < n ? limit : n;
 }
 
+// The first exception of a parallel loop's threads (std::bad_alloc under a memory
+// limit, say), kept until every thread has ended and then thrown on the calling thread:
+// an exception must not leave a thread's function, nor unwind past running threads.
+class FirstError {
+  public:
+    template <class G>
+    void run(G&& g) {
+        try {
+            g();
+        } catch (...) {
+            std::lock_guard<std::mutex> lock(m_);
+            if (!error_) error_ = std::current_exception();
+        }
+    }
+    void rethrow() {
+        if (error_) std::rethrow_exception(error_);
+    }
+
+  private:
+    std::mutex m_;
+    std::exception_ptr error_;
+};
+
 // Start a thread running g into pool; false where the system refuses one (std::thread
 // throws std::system_error, EAGAIN, under ulimit -u or -v): the caller runs that work.
 template <class G>
@@ -295,14 +320,18 @@ void parallel_for(i64 n, F f) {
     }
     const i64 parts = std::min<i64>(8 * t, n / 4096);
     std::atomic<i64> next{0};
+    FirstError error;
     auto work = [&]() {
-        for (i64 c = next++; c < parts; c = next++) f(n * c / parts, n * (c + 1) / parts);
+        error.run([&]() {
+            for (i64 c = next++; c < parts; c = next++) f(n * c / parts, n * (c + 1) / parts);
+        });
     };
     std::vector<std::thread> pool;
     for (i64 w = 1; w < t; ++w)
         if (!start_thread(pool, work)) break;  // the others take its ranges
     work();
     for (auto& th : pool) th.join();
+    error.rethrow();
 }
 
 // f(t) for t = 0 .. n_threads - 1: t = 0 on the calling thread, each other on its own.
@@ -312,11 +341,14 @@ template <class F>
 void on_threads(i64 n_threads, F f) {
     std::vector<std::thread> pool;
     std::vector<i64> here;
+    FirstError error;
     for (i64 t = 1; t < n_threads; ++t)
-        if (!start_thread(pool, [&f, t]() { f(t); })) here.push_back(t);
-    f(0);
-    for (i64 t : here) f(t);
+        if (!start_thread(pool, [&f, &error, t]() { error.run([&]() { f(t); }); }))
+            here.push_back(t);
+    error.run([&]() { f(0); });
+    for (i64 t : here) error.run([&]() { f(t); });
     for (auto& th : pool) th.join();
+    error.rethrow();
 }
 
 // The binary min-heap of superfacets/_kernels/heap.py ((float key, int value), lazy

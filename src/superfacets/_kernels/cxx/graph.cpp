@@ -213,6 +213,9 @@ void sort_buckets(nb::handle order_, nb::handle starts_, nb::handle key2_, i64 v
         if (starts[v + 1] - starts[v] > 1) sort_bucket(order.p, starts[v], starts[v + 1], key2.p);
 }
 
+// Faces around one edge up to which every two are paired (tests/oracle: MAX_FAN)
+constexpr i64 kMaxFan = 8;
+
 // adjacency.group_pairs, on threads: ranges of `half` cut at edge starts (each holds
 // whole edges), each range counted, then written from its place, so the arrays are
 // those of one pass (a face paired with itself is left out of the counts).
@@ -226,6 +229,16 @@ nb::tuple group_pairs(nb::handle half_, nb::handle owner_, nb::handle a_, nb::ha
         return a[half[i]] == a[half[i - 1]] && b[half[i]] == b[half[i - 1]];
     };
     auto face = [&](i64 x) { return tri ? half[x] / 3 : owner[half[x]]; };
+    // the partners y of x in the run [i, j) of one edge: every later face up to
+    // kMaxFan faces around the edge; beyond (a fan of copies, a "book" of thousands of
+    // faces), the next face only, the last with the first: pairs in proportion to faces
+    auto each_partner = [](i64 x, i64 i, i64 j, auto&& g) {
+        if (j - i <= kMaxFan) {
+            for (i64 y = x + 1; y < j; ++y) g(y);
+        } else {
+            g(x + 1 < j ? x + 1 : i);
+        }
+    };
     const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / 65536));
     std::vector<i64> cut(T + 1), n_bound(T + 1, 0), n_pairs(T + 1, 0);
     {
@@ -245,7 +258,7 @@ nb::tuple group_pairs(nb::handle half_, nb::handle owner_, nb::handle a_, nb::ha
                     ++nb;
                 } else {
                     for (i64 x = i; x < j; ++x)
-                        for (i64 y = x + 1; y < j; ++y) np_ += face(x) != face(y);
+                        each_partner(x, i, j, [&](i64 y) { np_ += face(x) != face(y); });
                 }
                 i = j;
             }
@@ -274,7 +287,7 @@ nb::tuple group_pairs(nb::handle half_, nb::handle owner_, nb::handle a_, nb::ha
                 } else {
                     i32 va = a[half[i]], vb = b[half[i]];
                     for (i64 x = i; x < j; ++x) {
-                        for (i64 y = x + 1; y < j; ++y) {
+                        each_partner(x, i, j, [&](i64 y) {
                             i32 f = face(x), g = face(y);
                             if (f != g) {
                                 lo[p] = mn(f, g);
@@ -283,7 +296,7 @@ nb::tuple group_pairs(nb::handle half_, nb::handle owner_, nb::handle a_, nb::ha
                                 eb[p] = vb;
                                 ++p;
                             }
-                        }
+                        });
                     }
                 }
                 i = j;
