@@ -218,7 +218,7 @@ def test_runs_on_faces_give_numba_results_call_by_call(shadowed):
         assert r.labels.shape[0] == mesh.n_faces
     compiled = {name for name in dir(native._cxx)
                 if callable(getattr(native._cxx, name)) and not name.startswith("_")} - {
-        "Mismatch", "set_thread_limit", "threads"}  # (the thread limit: tested below)
+        "Mismatch", "set_thread_limit", "threads", "Interrupted", "interrupt"}  # (below)
     compiled -= POINT_KERNELS | VERTEX_KERNELS | LARGE_KERNELS | OPTION_KERNELS
     missing = {name for name in compiled if not any(p.endswith("." + name) for p in calls)}
     # run only on several threads, by the plain replay-less classifier, by a lazy graph's
@@ -1609,3 +1609,50 @@ def test_python_threads_the_system_refuses_run_on_the_calling_thread(monkeypatch
     got = superfacets.segment(creature(40), 60, n_threads=2).labels
     np.testing.assert_array_equal(got, ref)
     assert len(refused) > 3
+
+
+@needs_cxx
+def test_an_interrupt_stops_the_compiled_kernels_at_once():
+    """A compiled kernel holds no GIL, so Python's signal handlers wait for it to return:
+    the kernels' long loops read an interrupt flag (``_cxx.interrupt``) and stop with a
+    KeyboardInterrupt, for every kind of run."""
+    cxx = native.require()
+    m = creature(40)
+    try:
+        cxx.interrupt(1)
+        for run in (lambda: superfacets.segment(creature(40), 20),  # graph, expansions
+                    lambda: superfacets.segment(m.centroids, 20),  # kNN, PCA, orientation
+                    lambda: superfacets.segment(m, 20, assignment="exact")):
+            with pytest.raises(KeyboardInterrupt):
+                run()
+    finally:
+        cxx.interrupt(0)
+    assert superfacets.segment(m, 20).n_segments == 20  # the flag cleared: runs again
+
+
+@pytest.mark.parametrize("sig, code", [("SIGTERM", 143), ("SIGINT", 130)])
+def test_a_signal_stops_a_run_within_a_second_at_any_moment(tmp_path, sig, code):
+    """A run of 1M points from the command line, signalled at several moments (reading,
+    the graph build, the passes): it ends within a second (two on a busy machine), with
+    130 or 143, one line, and no output file."""
+    import signal
+    import time
+
+    pts = np.random.default_rng(0).random((1_000_000, 3))
+    np.save(tmp_path / "p.npy", pts)
+    for delay in (0.8, 2.0, 3.2):
+        proc = subprocess.Popen([sys.executable, "-m", "superfacets", "segment",
+                                 str(tmp_path / "p.npy"), "-k", "500", "-q",
+                                 "-o", str(tmp_path / "p.seg")], stderr=subprocess.PIPE,
+                                text=True)
+        time.sleep(delay)
+        if proc.poll() is not None:
+            break  # (a fast machine finished first)
+        t0 = time.perf_counter()
+        proc.send_signal(getattr(signal, sig))
+        err = proc.communicate(timeout=60)[1]
+        took = time.perf_counter() - t0
+        assert proc.returncode == code, err
+        assert took < 2.0, (delay, took)
+        assert err.strip().count("\n") == 0 and "Traceback" not in err
+        assert not (tmp_path / "p.seg").exists()

@@ -948,3 +948,27 @@ def test_option_extremes_are_refused_before_any_work(tmp_path, monkeypatch):
         assert main(["segment", str(path), "-k", "20", "-o", str(tmp_path / "x.seg"),
                      *args]) == 2, args
         assert not (tmp_path / "x.seg").exists()
+
+
+def test_a_tile_file_changed_before_it_is_read_is_refused(tmp_path, monkeypatch):
+    """A changed row number in a tile's file (the input sorted by tile, in the work
+    folder) was a traceback, and changed positions gave other elements' labels: each
+    file's SHA-256 is kept and checked before a task reads it."""
+    from superfacets.errors import SuperfacetsError
+
+    mesh = _bumpy(4)
+    path = tmp_path / "m.ply"
+    _write_ply_mesh(path, mesh.vertices, mesh.faces)
+    real = buckets_module.bucket
+
+    def tampered(reader, tiles, folder, **kw):
+        out = real(reader, tiles, folder, **kw)
+        tile = sorted(Path(folder).glob("tile-*.bin"))[0]
+        data = bytearray(tile.read_bytes())
+        data[3] ^= 0x40  # the first record's row number
+        tile.write_bytes(bytes(data))
+        return out
+
+    monkeypatch.setattr(buckets_module, "bucket", tampered)
+    with pytest.raises(SuperfacetsError, match="changed since this run wrote it"):
+        segment_tiled(path, 20, tiles=2, workers=1, workdir=tmp_path / "work")

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import threading
 
-__all__ = ["caught", "was_caught", "reset", "pending", "check"]
+__all__ = ["caught", "was_caught", "reset", "pending", "check", "SignalWatch"]
 
 _caught = threading.Event()
 _pending = threading.Event()
@@ -48,3 +48,70 @@ def check() -> None:
     if _pending.is_set() and not _caught.is_set():
         _pending.clear()
         raise KeyboardInterrupt
+
+
+
+class SignalWatch:
+    """While a run lasts, tell the compiled kernels at once that SIGINT or SIGTERM came.
+
+    Python runs its signal handlers on the main thread between bytecodes, so a run
+    inside a long compiled kernel heard nothing until the kernel returned (minutes on a
+    large input). Python's own C-level handler also writes each signal's number to a
+    wakeup file descriptor (:func:`signal.set_wakeup_fd`): a thread here reads it and
+    sets the kernels' interrupt flag, and the kernels stop within milliseconds with a
+    KeyboardInterrupt. :attr:`signum` is the signal that stopped the run (SIGTERM stays
+    the reason once seen: the command line exits 143 for it, 130 for SIGINT). Made on
+    the main thread; :meth:`close` puts the previous wakeup descriptor back and clears
+    the flag.
+    """
+
+    def __init__(self):
+        import signal
+        import socket
+
+        self.signum = 0
+        self._read, self._write = socket.socketpair()
+        self._write.setblocking(False)
+        self._previous = signal.set_wakeup_fd(self._write.fileno(), warn_on_full_buffer=False)
+        self._thread = threading.Thread(target=self._watch, daemon=True,
+                                        name="superfacets-signals")
+        self._thread.start()
+
+    @staticmethod
+    def _kernels():
+        import sys  # (never imported from here: a kernel runs once the run loaded them)
+
+        return sys.modules.get("superfacets._kernels._cxx")
+
+    def _watch(self) -> None:
+        import signal
+
+        while True:
+            try:
+                got = self._read.recv(64)
+            except OSError:
+                return
+            if not got:
+                return
+            for signum in got:
+                if signum in (signal.SIGINT, signal.SIGTERM):
+                    if self.signum != signal.SIGTERM:
+                        self.signum = signum
+                    kernels = self._kernels()
+                    if kernels is not None:
+                        kernels.interrupt(1)
+
+    def close(self) -> None:
+        import signal
+
+        try:
+            signal.set_wakeup_fd(self._previous)
+        except ValueError:  # pragma: no cover - not the main thread
+            pass
+        self._write.close()
+        self._read.shutdown(2)
+        self._thread.join(1.0)
+        self._read.close()
+        kernels = self._kernels()
+        if kernels is not None:
+            kernels.interrupt(0)

@@ -72,32 +72,64 @@ def in_parallel(fn, n: int) -> list:
     writing its own part). A thread the system will not start (a limit on processes or
     memory: ``ulimit -u``, ``ulimit -v``) is not an error: its call runs on the calling
     thread after ``fn(0)``, the same result later. The first exception is raised once
-    every call has ended."""
+    every call has ended: a Ctrl-C never leaves a thread running a kernel behind (one
+    that returned into an interpreter being finalized aborted the process).
+    :func:`wait_for_stragglers` waits for any the caller could not."""
     if n <= 1:
         return [fn(t) for t in range(n)]
     out: list = [None] * n
     errors: list = [None] * n
+    ended = [threading.Event() for _ in range(n)]
 
     def call(t: int) -> None:
         try:
             out[t] = fn(t)
         except BaseException as exc:  # (raised below, once the others have ended)
             errors[t] = exc
+        finally:
+            ended[t].set()
 
-    started, here = [], []
-    for t in range(1, n):
-        th = threading.Thread(target=call, args=(t,), name="superfacets", daemon=True)
+    waits = []
+    try:  # (a Ctrl-C can land in a thread's start: the threads started are waited for)
+        here = []
+        for t in range(1, n):
+            th = threading.Thread(target=call, args=(t,), name="superfacets")
+            try:
+                waits.append(ended[t])
+                _running.add(ended[t])
+                th.start()
+            except RuntimeError:  # "can't start new thread": no call of t to wait for
+                waits.pop()
+                _running.discard(ended[t])
+                here.append(t)
+        call(0)
+        for t in here:
+            call(t)
+    except BaseException as exc:
+        errors[0] = errors[0] or exc
+    while True:
         try:
-            th.start()
-            started.append(th)
-        except RuntimeError:  # "can't start new thread"
-            here.append(t)
-    call(0)
-    for t in here:
-        call(t)
-    for th in started:
-        th.join()
+            _wait(waits)
+            break
+        except BaseException as exc:  # a Ctrl-C while waiting: wait again
+            errors[0] = errors[0] or exc
     for exc in errors:
         if exc is not None:
             raise exc
     return out
+
+
+#: the end of every call started on a thread of :func:`in_parallel` and not yet waited for
+_running: set = set()
+
+
+def _wait(events) -> None:
+    for event in events:
+        event.wait()
+        _running.discard(event)
+
+
+def wait_for_stragglers() -> None:
+    """Wait until every call that :func:`in_parallel` started on a thread has ended (the
+    command line, before the interpreter exits, with Ctrl-C ignored)."""
+    _wait(list(_running))

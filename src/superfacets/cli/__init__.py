@@ -145,6 +145,10 @@ def main(argv: list[str] | None = None) -> int:
               file=sys.stderr)
         return 2
     except KeyboardInterrupt:
+        if getattr(getattr(restore, "watch", None), "signum", 0) == 15:  # SIGTERM, heard
+            # by a compiled kernel, which stopped with a KeyboardInterrupt
+            print("superfacets: terminated", file=sys.stderr)
+            return 143
         print("superfacets: interrupted", file=sys.stderr)
         return 130
     except _Terminated:
@@ -230,6 +234,8 @@ def _terminate_cleanly():
     waits = _blocking_waits()
 
     def on_term(signum, frame):
+        if _interrupted(sys.exc_info()[1]):  # a compiled kernel heard it first: stopping
+            return
         raise _Terminated()
 
     def repeat() -> None:  # the same Ctrl-C until the run has unwound
@@ -261,9 +267,15 @@ def _terminate_cleanly():
         previous_int = signal.signal(signal.SIGINT, on_int)
     except (ValueError, OSError):  # pragma: no cover - not settable here
         return lambda: None
+    try:
+        watch = interrupts.SignalWatch()  # the compiled kernels hear them too
+    except (ValueError, OSError):  # pragma: no cover - no wakeup descriptor to be had
+        watch = None
     previous_hook, sys.unraisablehook = sys.unraisablehook, unraisable
 
     def restore():
+        if watch is not None:
+            watch.close()
         done.set()
         if state["repeater"] is not None:  # no Ctrl-C of ours after the handlers go back
             state["repeater"].join()
@@ -272,6 +284,7 @@ def _terminate_cleanly():
         signal.signal(signal.SIGINT, previous_int)
         sys.unraisablehook = previous_hook
 
+    restore.watch = watch
     return restore
 
 
@@ -283,6 +296,12 @@ def _quiet_exit() -> None:
 
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, signal.SIG_IGN)
+        # a run interrupted may have left a thread of its kernels running (a Ctrl-C
+        # between two of the waiting's bytecodes): wait for it here, where no Ctrl-C
+        # lands, so that it never returns to an interpreter being finalized (an abort)
+        from .._runtime.threads import wait_for_stragglers
+
+        wait_for_stragglers()
 
 
 def _silence_stdout() -> None:

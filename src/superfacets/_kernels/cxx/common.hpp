@@ -272,6 +272,31 @@ inline int threads() {
     return limit >= 1 && limit < n ? limit : n;
 }
 
+// A run interrupted (SIGINT, SIGTERM): set by superfacets._runtime.interrupts'
+// SignalWatch (the kernels hold no GIL, so Python's handlers wait for them to return),
+// read by the kernels' long loops, which then stop within milliseconds: Interrupted,
+// raised as a KeyboardInterrupt.
+struct Interrupted : std::runtime_error {
+    Interrupted() : std::runtime_error("interrupted") {}
+};
+
+inline std::atomic<int>& interrupt_flag() {
+    static std::atomic<int> flag{0};
+    return flag;
+}
+
+inline void check_interrupt() {
+    if (interrupt_flag().load(std::memory_order_relaxed)) throw Interrupted();
+}
+
+// check_interrupt every 2**16 calls of tick() (a loop's cheap count)
+struct Poll {
+    std::uint32_t n = 0;
+    void tick() {
+        if (((++n) & 0xFFFF) == 0) check_interrupt();
+    }
+};
+
 // The first exception of a parallel loop's threads (std::bad_alloc under a memory
 // limit, say), kept until every thread has ended and then thrown on the calling thread:
 // an exception must not leave a thread's function, nor unwind past running threads.
@@ -315,15 +340,20 @@ template <class F>
 void parallel_for(i64 n, F f) {
     const i64 t = std::min<i64>(threads(), n / 4096);
     if (t <= 1) {
+        check_interrupt();
         f(0, n);
         return;
     }
-    const i64 parts = std::min<i64>(8 * t, n / 4096);
+    // (and ranges of at most 65,536 elements: a run interrupted stops within one)
+    const i64 parts = std::min<i64>(std::max<i64>(8 * t, n / 65536), n / 4096);
     std::atomic<i64> next{0};
     FirstError error;
     auto work = [&]() {
         error.run([&]() {
-            for (i64 c = next++; c < parts; c = next++) f(n * c / parts, n * (c + 1) / parts);
+            for (i64 c = next++; c < parts; c = next++) {
+                check_interrupt();
+                f(n * c / parts, n * (c + 1) / parts);
+            }
         });
     };
     std::vector<std::thread> pool;
@@ -374,8 +404,10 @@ struct Heap {
         h[i] = {key, val};
         ++size;
     }
+    Poll poll;
     // remove the root (read h[0] first)
     void pop() {
+        poll.tick();
         --size;
         if (size == 0) return;
         Entry last = h[size];
@@ -453,6 +485,7 @@ class BucketQueue {
 
     // the next entry (the queue not empty): of the lowest bucket, its keys within a width
     void pop(i64& g, double& key) {
+        poll_.tick();
         while (head_[cur_ & mask_] < 0) ++cur_;
         const i64 b = cur_ & mask_, n = head_[b];
         head_[b] = next_[n];
@@ -465,6 +498,7 @@ class BucketQueue {
 
   private:
     double inv_width_ = 1.0;
+    Poll poll_;
     i64 mask_ = 1, cur_ = 0, free_ = -1, live_ = 0;
     std::vector<i64> head_, face_, next_;
     std::vector<double> key_;

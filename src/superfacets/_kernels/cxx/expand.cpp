@@ -67,7 +67,9 @@ i64 expand(const Work<W>& w, i64 src, i64 lab, double window_r2, double* dist, i
     q.qnext[0] = -1;
     q.head[0] = 0;
     i64 free = -1, bump = 1, live = 1, cur = 0, status = 0;
+    Poll poll;
     while (live > 0) {
+        poll.tick();
         // queue_pop
         i64 b = cur & bmask;
         while (q.head[b] < 0) {

@@ -7,6 +7,9 @@
 NB_MODULE(_cxx, m) {
     m.doc() = "Compiled kernels (private): one implementation of each kernel of superfacets.";
     nb::exception<sfk::Mismatch>(m, "Mismatch", PyExc_TypeError);
+    nb::exception<sfk::Interrupted>(m, "Interrupted", PyExc_KeyboardInterrupt);
+    // the run's interrupt (a signal's watcher sets it; cleared when the run ends)
+    m.def("interrupt", [](int on) { sfk::interrupt_flag().store(on); });
 #if defined(__clang__)
     m.attr("compiler") = "clang " __clang_version__;
 #elif defined(__GNUC__)

@@ -182,6 +182,7 @@ i64 propagate_signs(nb::handle indptr_, nb::handle indices_, nb::handle normals_
         std::vector<Edge> inside, tmp;
         Forest forest;
         for (i64 b = next++; b < n_blocks; b = next++) {
+            check_interrupt();
             const i64 lo = b * block, hi = mn(n, lo + block);
             inside.clear();
             for (i64 v = lo; v < hi; ++v)
@@ -212,6 +213,7 @@ i64 propagate_signs(nb::handle indptr_, nb::handle indices_, nb::handle normals_
         std::vector<i32> degree, todo;
         std::vector<char> key_node;
         for (i64 b = next++; b < n_blocks; b = next++) {
+            check_interrupt();
             const i64 lo = b * block, nb = mn(n, lo + block) - lo;
             const auto& f = kept[b];
             rows.build(f, lo, nb);
@@ -295,6 +297,7 @@ i64 propagate_signs(nb::handle indptr_, nb::handle indices_, nb::handle normals_
         std::vector<char> seen;
         std::vector<i32> stack;
         for (i64 b = next++; b < n_blocks; b = next++) {
+            check_interrupt();
             const i64 lo = b * block, nb = mn(n, lo + block) - lo;
             const auto& f = kept[b];
             rows.build(f, lo, nb);

@@ -185,6 +185,7 @@ void farthest_point_blocked(nb::handle centroids_, i64 k, i64 first, nb::handle 
     }
     i64 cur = first;
     for (i64 t = 0; t < k; ++t) {
+        check_interrupt();  // (each center a pass over the elements)
         out[t] = cur;
         mind[slot[cur]] = -1.0;
         const double cx = c(cur, 0), cy = c(cur, 1), cz = c(cur, 2);
@@ -259,6 +260,7 @@ void farthest_point(nb::handle centroids_, i64 k, i64 first, nb::handle out_,
     std::vector<double> mind(m, INF);
     i64 cur = first;
     for (i64 t = 0; t < k; ++t) {
+        check_interrupt();  // (each center a pass over the elements)
         out[t] = cur;
         mind[cur] = -1.0;
         const double cx = c(cur, 0), cy = c(cur, 1), cz = c(cur, 2);

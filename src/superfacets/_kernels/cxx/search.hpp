@@ -51,7 +51,9 @@ struct BlockSearch {
             head[b] = n;
             ++live;
         };
+        Poll poll;
         while (live > 0 || sp < ns) {
+            poll.tick();
             if (live == 0) {
                 i64 b0 = static_cast<i64>(dist[seeds[sp]] * inv_width);
                 if (b0 > cur) cur = b0;

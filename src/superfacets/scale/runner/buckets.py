@@ -103,8 +103,20 @@ def bucket(reader, tiles, folder, *, progress: bool = False) -> TileBuckets:
             bar.close()
     if dtype is None:  # no rows: nothing is ever read
         dtype = np.dtype([("row", "<i8"), ("pos", "<f8", (3,))])
+    digests = tuple(_digest(folder / f"tile-{t}.bin") if counts[t] else ""
+                    for t in range(n_tiles))
     return TileBuckets(str(folder), reader.kind, reader.n_rows, dtype, lo, hi, counts,
-                       reader.viewpoint, reader.path)
+                       reader.viewpoint, reader.path, digests)
+
+
+def _digest(path: Path) -> str:
+    import hashlib
+
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 24), b""):
+            h.update(block)
+    return h.hexdigest()
 
 
 @dataclass(frozen=True)
@@ -132,6 +144,9 @@ class TileBuckets:
         Sensor position of a scan, as :class:`~superfacets.io.regions.RegionReader`.
     source : str
         The file they came from (for messages).
+    digests : tuple of str
+        Each tile file's SHA-256, checked before it is read (the work folder may be
+        shared with other machines, and a changed file gave other elements' rows).
     """
 
     folder: str
@@ -143,6 +158,7 @@ class TileBuckets:
     counts: np.ndarray
     viewpoint: tuple | None = None
     source: str = ""
+    digests: tuple = ()
 
     def read_box(self, lo, hi, name: str = ""):
         """The elements whose position lies in ``[lo, hi]``: the same rows, positions
@@ -155,8 +171,7 @@ class TileBuckets:
         parts = []
         near = (self.counts > 0) & (self.lo <= hi).all(axis=1) & (self.hi >= lo).all(axis=1)
         for t in np.flatnonzero(near):
-            rec = np.memmap(Path(self.folder) / f"tile-{t}.bin", dtype=self.dtype, mode="r",
-                            shape=(int(self.counts[t]),))
+            rec = self._tile(int(t))
             pos = rec["pos"]
             parts.append(np.array(rec[np.flatnonzero(((pos >= lo) & (pos <= hi)).all(axis=1))]))
             del rec
@@ -177,3 +192,17 @@ class TileBuckets:
         col, nrm = (np.ascontiguousarray(rec[n]) if n in names else None
                     for n in ("colors", "normals"))
         return rows, where, point_cloud_of(where.copy(), col, nrm, self.viewpoint, name)
+
+    def _tile(self, t: int) -> np.ndarray:
+        """Tile ``t``'s records, its file checked against the digest written with it."""
+        import hashlib
+
+        from ...errors import SuperfacetsError
+
+        path = Path(self.folder) / f"tile-{t}.bin"
+        data = path.read_bytes()
+        if self.digests and hashlib.sha256(data).hexdigest() != self.digests[t] \
+                or len(data) != int(self.counts[t]) * self.dtype.itemsize:
+            raise SuperfacetsError(f"{path}: changed since this run wrote it (the work "
+                                   "folder's files belong to the run): refused")
+        return np.frombuffer(data, dtype=self.dtype)
