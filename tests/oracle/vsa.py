@@ -70,58 +70,6 @@ def partition(indptr, indices, metric, areas, normals, corners, X, N, seeds, n_p
                                 corners, X, N, label, hkey, hval, size)
 
 
-@njit(cache=True)
-def fit(label, n_proxies, metric, areas, normals, centroids, corners, X, N):
-    """Best proxy of each region (CSAD04, section 3.4), in place in ``X``, ``N``.
-
-    L2,1: ``N`` = normalized area-weighted mean normal. L2: ``N`` = the
-    eigenvector of the smallest eigenvalue of the region's exact covariance
-    (integrated over its triangles). ``X`` = the area centroid in both cases.
-    A region of zero area (or zero mean normal) keeps its previous proxy.
-    """
-    area = np.zeros(n_proxies)
-    nsum = np.zeros((n_proxies, 3))
-    csum = np.zeros((n_proxies, 3))
-    mom = np.zeros((n_proxies, 3, 3))
-    for f in range(label.shape[0]):
-        p = label[f]
-        a = areas[f]
-        area[p] += a
-        for i in range(3):
-            nsum[p, i] += a * normals[f, i]
-            csum[p, i] += a * centroids[f, i]
-        if metric == 1:
-            # integral of x x^T over a triangle: a/12 (sum_i v_i v_i^T + s s^T), s = sum_i v_i
-            for r in range(3):
-                sr = corners[f, 0, r] + corners[f, 1, r] + corners[f, 2, r]
-                for c in range(3):
-                    sc = corners[f, 0, c] + corners[f, 1, c] + corners[f, 2, c]
-                    vv = (corners[f, 0, r] * corners[f, 0, c] + corners[f, 1, r] * corners[f, 1, c]
-                          + corners[f, 2, r] * corners[f, 2, c])
-                    mom[p, r, c] += a / 12.0 * (vv + sr * sc)
-    for p in range(n_proxies):
-        if area[p] <= 0.0:
-            continue
-        for i in range(3):
-            X[p, i] = csum[p, i] / area[p]
-        if metric == 0:
-            nn = np.sqrt(nsum[p, 0] ** 2 + nsum[p, 1] ** 2 + nsum[p, 2] ** 2)
-            if nn > 0.0:
-                for i in range(3):
-                    N[p, i] = nsum[p, i] / nn
-        else:
-            cov = np.empty((3, 3))
-            for r in range(3):
-                for c in range(3):
-                    cov[r, c] = mom[p, r, c] - area[p] * X[p, r] * X[p, c]
-            w, v = np.linalg.eigh(cov)
-            s = 1.0
-            if v[0, 0] * nsum[p, 0] + v[1, 0] * nsum[p, 1] + v[2, 0] * nsum[p, 2] < 0.0:
-                s = -1.0  # orient like the mean normal (cosmetic: L2 ignores the sign)
-            for i in range(3):
-                N[p, i] = s * v[i, 0]
-
-
 @njit(cache=True, inline="always")
 def _d2(centroids, f, P, p):
     dx = centroids[f, 0] - P[p, 0]

@@ -22,7 +22,7 @@ from typing import Callable
 from ..errors import MeshFormatError
 
 __all__ = ["split_suffix", "read_bytes", "text_lines", "atomic_write", "Outputs", "save",
-           "COMPRESSIONS", "decompressed", "decompressed_head"]
+           "COMPRESSIONS", "decompressed", "decompressed_head", "sha256_of"]
 
 
 #: Compression suffixes understood on reading and writing.
@@ -180,6 +180,37 @@ def decompressed_head(path: Path, comp: str, size: int) -> bytes:
             return f.read(size)
     except _ERRORS as exc:
         raise MeshFormatError(f"{path}: cannot decompress ({comp[1:]}): {exc}") from None
+
+
+def sha256_of(path) -> str:
+    """The SHA-256 of a file's bytes, read 16 MiB at a time (hex digits).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    OSError
+        If the file cannot be read.
+
+    Examples
+    --------
+    >>> _ = Path("e.bin").write_bytes(b"")
+    >>> sha256_of("e.bin")[:12]
+    'e3b0c44298fc'
+    """
+    import hashlib
+
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 24), b""):
+            h.update(block)
+    return h.hexdigest()
 
 
 def text_lines(data: bytes, path: Path) -> list[str]:

@@ -20,6 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io.files import sha256_of
+
 __all__ = ["GRAPH_FILES", "BYTES_PER_POINT", "graph_folder", "drop_graphs", "tile_graph",
            "room_for_graphs"]
 
@@ -126,7 +128,7 @@ def tile_graph(cloud, folder, n_neighbors: int) -> str:
     for name, a in (("positions", g.positions), ("sizes", g.sizes), ("normals", g.normals),
                     ("indptr", g.indptr), ("indices", g.indices), ("index", el.index)):
         np.save(part / f"{name}.npy", a)
-        digests[name] = _digest(part / f"{name}.npy")
+        digests[name] = sha256_of(part / f"{name}.npy")
     pair_dtype = g.rebuild["pairs"].keywords["pair_dtype"]
     (part / "graph.json").write_text(json.dumps({"pair_dtype": np.dtype(pair_dtype).name,
                                                  "sha256": digests}), encoding="utf-8")
@@ -137,14 +139,6 @@ def tile_graph(cloud, folder, n_neighbors: int) -> str:
         if not done.is_file():
             raise
     return "built"
-
-
-def _digest(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 24), b""):
-            h.update(block)
-    return h.hexdigest()
 
 
 def _read_checked(folder: Path, meta: dict) -> dict:

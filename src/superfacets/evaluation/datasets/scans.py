@@ -33,7 +33,6 @@ Examples
 
 from __future__ import annotations
 
-import hashlib
 import os
 import urllib.request
 from dataclasses import dataclass
@@ -42,6 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import MeshFormatError, ParameterError
+from ...io.files import sha256_of
 
 __all__ = ["Scan", "ScanSource", "SCANS", "UNLABELLED", "scan_cache", "scan_files",
            "fetch_scan", "load_scan", "missing_help", "evaluate_scan"]
@@ -215,14 +215,6 @@ def missing_help(name: str, cache=None) -> str:
     return "\n".join(lines)
 
 
-def _sha256(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
 def fetch_scan(name: str, cache=None, *, timeout: float = 60.0) -> list[Path]:
     """Download the files of scan ``name`` into the cache (those not already there).
 
@@ -256,13 +248,13 @@ def fetch_scan(name: str, cache=None, *, timeout: float = 60.0) -> list[Path]:
     out = []
     for fname, url, sha in src.files:
         path = folder / fname
-        if not (path.is_file() and _sha256(path) == sha):
+        if not (path.is_file() and sha256_of(path) == sha):
             tmp = path.with_name(f".{fname}.{os.getpid()}.part")
             try:
                 with urllib.request.urlopen(url, timeout=timeout) as resp, open(tmp, "wb") as fh:
                     while block := resp.read(1 << 20):
                         fh.write(block)
-                got = _sha256(tmp)
+                got = sha256_of(tmp)
                 if got != sha:
                     raise FileNotFoundError(f"{url}: checksum {got[:12]}... differs from the "
                                      f"expected {sha[:12]}...; nothing kept")

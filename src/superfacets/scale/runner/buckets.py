@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...io.files import sha256_of
 from ...io.regions import point_cloud_of
 
 __all__ = ["bucket", "TileBuckets"]
@@ -103,20 +104,10 @@ def bucket(reader, tiles, folder, *, progress: bool = False) -> TileBuckets:
             bar.close()
     if dtype is None:  # no rows: nothing is ever read
         dtype = np.dtype([("row", "<i8"), ("pos", "<f8", (3,))])
-    digests = tuple(_digest(folder / f"tile-{t}.bin") if counts[t] else ""
+    digests = tuple(sha256_of(folder / f"tile-{t}.bin") if counts[t] else ""
                     for t in range(n_tiles))
     return TileBuckets(str(folder), reader.kind, reader.n_rows, dtype, lo, hi, counts,
                        reader.viewpoint, reader.path, digests)
-
-
-def _digest(path: Path) -> str:
-    import hashlib
-
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 24), b""):
-            h.update(block)
-    return h.hexdigest()
 
 
 @dataclass(frozen=True)
