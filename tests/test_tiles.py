@@ -972,3 +972,32 @@ def test_a_tile_file_changed_before_it_is_read_is_refused(tmp_path, monkeypatch)
     monkeypatch.setattr(buckets_module, "bucket", tampered)
     with pytest.raises(SuperfacetsError, match="changed since this run wrote it"):
         segment_tiled(path, 20, tiles=2, workers=1, workdir=tmp_path / "work")
+
+
+def test_a_full_disk_under_the_work_folder_says_so(tmp_path, monkeypatch):
+    """A full disk under the work folder said only '50000 requested and 48256 written'
+    (numpy's short write): it names the folder and the room the tiles' files need."""
+    import builtins
+
+    mesh = _bumpy(3)
+    path = tmp_path / "m.ply"
+    _write_ply_mesh(path, mesh.vertices, mesh.faces)
+
+    class Full:
+        def __init__(self, *a, **k):
+            pass
+
+        def __enter__(self):
+            raise OSError("50000 requested and 48256 written")
+
+        def __exit__(self, *a):
+            return False
+
+    real_open = builtins.open
+    monkeypatch.setattr(buckets_module, "open",
+                        lambda p, mode="r", *a, **k: Full() if str(p).endswith(".bin")
+                        and "a" in mode else real_open(p, mode, *a, **k), raising=False)
+    with pytest.raises(OSError, match=r"the tiles' files of the input could not be written "
+                                      r"\(50000 requested.*needs about the input's size free"):
+        segment_tiled(path, 20, tiles=2, workers=1, workdir=tmp_path / "work")
+    assert list((tmp_path / "work").iterdir()) == []  # (the run's own folder, removed)

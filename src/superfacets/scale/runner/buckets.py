@@ -92,8 +92,14 @@ def bucket(reader, tiles, folder, *, progress: bool = False) -> TileBuckets:
             bounds = np.searchsorted(tile[order], np.arange(-1, n_tiles + 1))
             for t in np.flatnonzero(np.diff(bounds[1:])):
                 block = rec[order[bounds[t + 1]:bounds[t + 2]]]
-                with open(folder / f"tile-{t}.bin", "ab") as f:
-                    block.tofile(f)
+                try:
+                    with open(folder / f"tile-{t}.bin", "ab") as f:
+                        block.tofile(f)
+                except OSError as exc:  # a full disk: numpy's "50000 requested and ..."
+                    raise OSError(exc.errno or 28, f"{folder}: the tiles' files of the input "
+                                  f"could not be written ({exc}): the work folder needs about "
+                                  "the input's size free; give --workdir a folder with room"
+                                  ) from None
                 counts[t] += block.size
                 lo[t] = np.minimum(lo[t], block["pos"].min(axis=0))
                 hi[t] = np.maximum(hi[t], block["pos"].max(axis=0))
