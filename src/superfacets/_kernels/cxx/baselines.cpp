@@ -132,8 +132,7 @@ void csr_covariances(nb::handle indptr_, nb::handle indices_, nb::handle points_
     const i64 n = indptr.n - 1;
     if (points.cols != 3 || out.n != n || size_of(out_) != 9 * n) throw Mismatch("argument out");
     with_index(indices_, "indices", [&](const auto& indices) {
-        for (i64 e = 0; e < indices.n; ++e)
-            if (indices[e] < 0 || indices[e] >= points.n) throw Mismatch("argument indices");
+        check_csr(indptr, indices, n, points.n);
         nb::gil_scoped_release nogil;
         parallel_for(n, [&](i64 lo, i64 hi) {
             double a[6] = {0, 0, 0, 0, 0, 0};
@@ -194,6 +193,7 @@ void vsa_partition(nb::handle indptr_, nb::handle indices_, i64 metric, nb::hand
         throw Mismatch("argument seeds");
     for (i64 p = 0; p < n_proxies; ++p)
         if (seeds[p] < 0 || seeds[p] >= m) throw Mismatch("argument seeds");
+    check_csr(indptr, indices, m, m);
     nb::gil_scoped_release nogil;
     Heap heap(indices.n + 1);
     for (i64 f = 0; f < m; ++f) label[f] = -1;

@@ -235,6 +235,12 @@ void band_distances_t(nb::handle indptr_, nb::handle indices_, nb::handle dual_e
     In<bool> pinned(pinned_, "pinned");
     Out<double> dist(dist_, "dist"), hkey(hkey_, "hkey");
     Out<i64> partner(partner_, "partner"), hval(hval_, "hval");
+    check_csr(indptr, indices, labels.n, labels.n);
+    check_rows(dual_edge, indptr[labels.n], "dual_edge");
+    check_range(dual_edge, 0, mn(geo.n, length.n), "dual_edge", indptr[labels.n]);
+    check_range(labels, 0, labels.n, "labels");
+    for (i64 m : {pinned.n, dist.n, partner.n})
+        if (m < labels.n) throw OutOfRange("arguments pinned, dist, partner: one per element");
     nb::gil_scoped_release nogil;
     const i64 n = labels.n;
     (void)hkey;  // (the heap's arrays of the numba kernel: here one heap per thread)
@@ -326,6 +332,26 @@ void band_distances(nb::handle indptr, nb::handle indices, nb::handle dual_edge,
     band_distances_t<i64>(indptr, indices, dual_edge, rest...);
 }
 
+// Bands p0 .. p1 - 1 of n elements: band p the elements order[starts[p]:starts[p + 1]],
+// each of them with band_of p and no other element with it; pair_a, pair_b the labels of
+// each band's two sides, rows of means (n_means).
+inline void check_bands(i64 p0, i64 p1, const In<i64>& order, const In<i64>& starts,
+                        const In<i64>& pair_a, const In<i64>& pair_b, const In<i64>& band_of,
+                        i64 n_means, i64 n) {
+    check_span(p0, p1, starts.n - 1, mn(pair_a.n, pair_b.n));
+    check_csr(In<i64>(starts.p + p0, p1 - p0 + 1), order, p1 - p0, n, "starts");
+    check_range(In<i64>(pair_a.p + p0, p1 - p0), 0, n_means, "pair_a");
+    check_range(In<i64>(pair_b.p + p0, p1 - p0), 0, n_means, "pair_b");
+    check_rows(band_of, n, "band_of");
+    i64 in_bands = 0;
+    for (i64 f = 0; f < n; ++f) in_bands += band_of[f] >= p0 && band_of[f] < p1;
+    for (i64 p = p0; p < p1; ++p)
+        for (i64 t = starts[p]; t < starts[p + 1]; ++t)
+            if (band_of[order[t]] != p) throw OutOfRange("argument band_of: not the bands' own");
+    if (in_bands != starts[p1] - starts[p0])
+        throw OutOfRange("argument band_of: elements of a band not among its members");
+}
+
 void solve_bands(i64 p0, i64 p1, nb::handle order_, nb::handle starts_, nb::handle pair_a_,
                  nb::handle pair_b_, nb::handle band_of_, nb::handle indptr_,
                  nb::handle indices_, nb::handle cut_cost_, nb::handle labels_,
@@ -339,6 +365,11 @@ void solve_bands(i64 p0, i64 p1, nb::handle order_, nb::handle starts_, nb::hand
         positions(positions_, "positions"), means(means_, "means");
     Out<i64> out(out_, "out");
     if (positions.cols != 3 || means.cols != 3) throw Mismatch("argument positions");
+    check_bands(p0, p1, order, starts, pair_a, pair_b, band_of, means.n, labels.n);
+    check_csr(indptr, indices, labels.n, labels.n);
+    check_rows(cut_cost, indptr[labels.n], "cut_cost");
+    for (i64 m : {sizes.n, positions.n, out.n})
+        if (m < labels.n) throw OutOfRange("arguments sizes, positions, out: one per element");
     nb::gil_scoped_release nogil;
     // (written for a band's elements before being read, as numba's np.empty: the pages
     // of the elements in no band of this call are never touched; the bands hold disjoint

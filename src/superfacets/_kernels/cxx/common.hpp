@@ -114,6 +114,7 @@ struct In {
     i64 n = 0;
     i64 cols = 1;
     In() = default;
+    In(const T* p_, i64 n_, i64 cols_ = 1) : p(p_), n(n_), cols(cols_) {}  // a part of one
     In(nb::handle h, const char* name) {
         Buffer b;
         if (!Buffer::read<T>(h, b) || !b.contiguous)
@@ -145,6 +146,84 @@ struct Out {
     T& operator[](i64 i) const { return p[i]; }
     T& operator()(i64 i, i64 j) const { return p[i * cols + j]; }
 };
+
+// Raised (as superfacets._kernels._cxx.OutOfRange, a ValueError) when an argument's
+// entries would take a kernel outside an array: an index past its end or negative, an
+// indptr that is not monotone, a length that does not match. Every kernel checks the
+// indices it follows at its entry, before any work, whatever it is given.
+struct OutOfRange : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+// Every entry of a (its first `count` entries, all where count < 0) within [lo, hi).
+template <class V>
+void check_range(const V& a, i64 lo, i64 hi, const char* name, i64 count = -1) {
+    const i64 n = count < 0 ? a.n * a.cols : std::min(count, a.n * a.cols);
+    if (count > a.n * a.cols)
+        throw OutOfRange(std::string("argument ") + name + ": " + std::to_string(a.n * a.cols) +
+                         " entries, " + std::to_string(count) + " needed");
+    using T = std::remove_cv_t<std::remove_reference_t<decltype(a.p[0])>>;
+    T low = n ? a.p[0] : T(0), high = low;
+    for (i64 i = 0; i < n; ++i) {  // (branch-free: vectorized)
+        low = a.p[i] < low ? a.p[i] : low;
+        high = a.p[i] > high ? a.p[i] : high;
+    }
+    if (n && (static_cast<long double>(low) < lo || static_cast<long double>(high) >= hi)) {
+        for (i64 i = 0; i < n; ++i)
+            if (static_cast<long double>(a.p[i]) < lo || static_cast<long double>(a.p[i]) >= hi)
+                throw OutOfRange(std::string("argument ") + name + ": entry " +
+                                 std::to_string(i) + " is " + std::to_string(a.p[i]) +
+                                 ", outside " + std::to_string(lo) + ".." + std::to_string(hi - 1));
+    }
+}
+
+// An array's length along axis 0 is at least (exactly, with exact) `need`.
+template <class V>
+void check_rows(const V& a, i64 need, const char* name, bool exact = false) {
+    if (a.n < need || (exact && a.n != need))
+        throw OutOfRange(std::string("argument ") + name + ": " + std::to_string(a.n) +
+                         " rows, " + (exact ? "" : "at least ") + std::to_string(need) +
+                         " needed");
+}
+
+// A compressed-row graph that stays inside its arrays: indptr has n_rows + 1 entries (all
+// of them where n_rows < 0), starts at 0 or above, never falls, ends within indices; the
+// entries it spans are within [0, n_cols). Returns n_rows.
+template <class P, class J>
+i64 check_csr(const P& indptr, const J& indices, i64 n_rows, i64 n_cols,
+              const char* name = "indptr") {
+    if (n_rows < 0) n_rows = indptr.n - 1;
+    if (n_rows < 0 || indptr.n < n_rows + 1)
+        throw OutOfRange(std::string("argument ") + name + ": " + std::to_string(indptr.n) +
+                         " entries for " + std::to_string(n_rows) + " rows");
+    if (indptr.p[0] < 0) throw OutOfRange(std::string("argument ") + name + ": negative start");
+    bool falls = false;
+    for (i64 r = 0; r < n_rows; ++r) falls |= indptr.p[r + 1] < indptr.p[r];
+    if (falls) throw OutOfRange(std::string("argument ") + name + ": entries that fall");
+    if (static_cast<i64>(indptr.p[n_rows]) > indices.n * indices.cols)
+        throw OutOfRange(std::string("argument ") + name + ": ends at " +
+                         std::to_string(indptr.p[n_rows]) + ", past the " +
+                         std::to_string(indices.n * indices.cols) + " entries of its indices");
+    using J_ = std::remove_cv_t<std::remove_reference_t<decltype(indices.p[0])>>;
+    check_range(In<J_>(indices.p + indptr.p[0], indptr.p[n_rows] - indptr.p[0]), 0, n_cols,
+                "indices");
+    return n_rows;
+}
+
+// 0 <= lo <= hi <= each of the lengths: a range of rows a kernel is given
+inline void check_span(i64 lo, i64 hi, i64 n1, i64 n2) {
+    if (lo < 0 || hi < lo || hi > n1 || hi > n2)
+        throw OutOfRange("arguments lo, hi: rows " + std::to_string(lo) + ".." +
+                         std::to_string(hi) + " of " + std::to_string(std::min(n1, n2)));
+}
+
+// The edges (m x 2 vertex numbers) of vertices (n x 3), and out, an entry per edge.
+template <class V, class E, class O>
+void check_lengths(const V& v, const E& e, const O& out) {
+    if (v.cols != 3 || e.cols != 2) throw Mismatch("argument edges");
+    check_rows(out, e.n, "out");
+    check_range(e, 0, v.n, "edges");
+}
 
 // The number of entries of an array argument (0 where it is none).
 inline i64 size_of(nb::handle h) {

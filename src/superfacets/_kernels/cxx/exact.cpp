@@ -51,6 +51,11 @@ Exact<W, L> exact_of(const In<i64>& indptr, const In<i32>& indices, nb::handle w
     Out<double> qdist(tup[1], "qdist");
     Out<i64> qnext(tup[2], "qnext"), head(tup[3], "head");
     (void)qlab;
+    const i64 n = check_csr(indptr, indices, label.n, label.n);
+    check_rows(weights, indptr[n], "weights");
+    check_rows(dist, n, "dist", true);
+    if (head.n < 1 || (head.n & (head.n - 1)))
+        throw OutOfRange("argument queue: a ring of a power of two of buckets");
     return Exact<W, L>{dist.p, label.p,
                        std::make_unique<BlockedSearch<W, L>>(indptr.p, indices.p, weights.p,
                                                              dist.p, label.p, label.n,
@@ -77,6 +82,12 @@ struct Args {
           label(label_, "label"),
           qlab(qlab_, "qlab"),
           x(exact_of<W, L>(indptr, indices, weights_, dist, label, queue_, qlab, inv_width)) {}
+    // n_centers centers, each an element, and room for a center per element (the orphans')
+    void check_centers(i64 n_centers) const {
+        if (n_centers < 0 || centers.n < label.n)
+            throw OutOfRange("argument centers: room for a center per element");
+        check_range(centers, 0, label.n, "centers", n_centers);
+    }
 };
 
 template <class W, class L>
@@ -88,6 +99,7 @@ i64 classify_exact_t(nb::handle indptr_, nb::handle indices_, nb::handle weights
     auto& label = A.label;
     auto& dist = A.dist;
     const auto& x = A.x;
+    A.check_centers(n_centers);
     nb::gil_scoped_release nogil;
     const i64 m = label.n;
     parallel_for(m, [&](i64 f0, i64 f1) {
@@ -125,6 +137,10 @@ i64 reclassify_exact_t(nb::handle indptr_, nb::handle indices_, nb::handle weigh
     In<i64> prev(prev_, "prev");
     Out<i32> first(first_, "first");
     Out<bool> border_mark(border_mark_, "border_mark");  // (numba's; not used here)
+    A.check_centers(n_centers);
+    check_range(prev, 0, label.n, "prev");
+    check_rows(first, label.n, "first");
+    check_range(first, -1, 0, "first", label.n);  // (all -1 between passes)
     nb::gil_scoped_release nogil;
     const i64 m = label.n;
     for (i64 s = 0; s < n_centers; ++s) {

@@ -45,6 +45,12 @@ Queue queue_of(nb::handle t) {
     Out<i32> qface(tup[0], "qface"), qnext(tup[2], "qnext");
     Out<double> qdist(tup[1], "qdist");
     Out<i64> head(tup[3], "head");
+    // (a bucket ring of a power of two of empty buckets, a node pool of equal arrays)
+    if (head.n < 1 || (head.n & (head.n - 1)) || qdist.n != qface.n || qnext.n != qface.n ||
+        qface.n < 1)
+        throw OutOfRange("argument queue: not an empty queue");
+    for (i64 b = 0; b < head.n; ++b)
+        if (head[b] != -1) throw OutOfRange("argument queue: not an empty queue");
     return Queue{qface.p, qdist.p, qnext.p, head.p, qface.n, head.n};
 }
 
@@ -169,6 +175,36 @@ inline void merge_segment(i64 a, i64 n, i64 s, const i32* rec_face, const double
     }
 }
 
+// An element graph an expansion stays inside: n rows (n centroids), each entry a
+// weight, and a scratch distance per element.
+template <class W>
+void check_graph(const In<i64>& indptr, const In<i32>& indices, const In<W>& weights,
+                 const In<double>& centroids, const Out<double>& local) {
+    const i64 n = check_csr(indptr, indices, centroids.n, centroids.n);
+    check_rows(weights, indptr[n], "weights");
+    check_rows(local, n, "local");
+}
+
+// Records pos .. lim of an expansion's elements in rec (and rec_dist, where given)
+inline void check_records(i64 pos, i64 lim, i64 n_rec, i64 n_dist) {
+    if (pos < 0 || lim < pos || lim > n_rec || (n_dist >= 0 && lim > n_dist))
+        throw OutOfRange("arguments pos, lim: records past their arrays");
+}
+
+// Each segment s (of labs) within the records rec_face, each record an element of n
+template <class L>
+void check_segments(const L& labs, const In<i64>& seg_start, const In<i64>& seg_len,
+                    const In<i32>& rec_face, i64 n) {
+    check_rows(seg_len, seg_start.n, "seg_len", true);
+    check_range(labs, 0, seg_start.n, "labs");
+    for (i64 i = 0; i < labs.n; ++i) {
+        const i64 s = labs[i], a = seg_start[s], m = seg_len[s];
+        if (a < 0 || m < 0 || a > rec_face.n - m)
+            throw OutOfRange("arguments seg_start, seg_len: a segment past the records");
+        check_range(In<i32>(rec_face.p + a, m), 0, n, "rec_face");
+    }
+}
+
 template <class W>
 Work<W> work_of(nb::handle indptr_, nb::handle indices_, nb::handle weights_,
                 nb::handle centroids_, nb::handle local_, nb::handle queue_, double inv_width,
@@ -179,6 +215,8 @@ Work<W> work_of(nb::handle indptr_, nb::handle indices_, nb::handle weights_,
     In<double> centroids(centroids_, "centroids"), wscale(wscale_, "wscale");
     Out<double> local(local_, "local");
     if (centroids.cols != 3) throw Mismatch("argument centroids");
+    check_graph(indptr, indices, weights, centroids, local);
+    if (wscale.n) check_rows(wscale, centroids.n, "wscale");
     return Work<W>{Graph<W>{indptr.p, indices.p, weights.p, centroids.p}, queue_of(queue_),
                    local.p, inv_width, wscale.p, wscale.n};
 }
@@ -194,6 +232,11 @@ i64 classify_bounded_t(nb::handle indptr, nb::handle indices, nb::handle weights
     Out<i64> centers(centers_, "centers");
     Out<double> dist(dist_, "dist");
     Out<i32> label(label_, "label"), vis(vis_, "vis");
+    const i64 n = size_of(centroids) / 3;
+    check_rows(label, n, "label", true);
+    check_rows(dist, n, "dist", true);
+    check_range(centers, 0, n, "centers", n_centers);
+    if (centers.n < n) throw OutOfRange("argument centers: no room for the orphans' centers");
     nb::gil_scoped_release nogil;
     const i64 m = label.n, lim = vis.n;
     for (i64 f = 0; f < m; ++f) {
@@ -229,6 +272,16 @@ i64 expand_many_t(nb::handle indptr, nb::handle indices, nb::handle weights,
     Out<i32> rec_face(rec_face_, "rec_face"), label(label_, "label");
     Out<double> rec_dist(rec_dist_, "rec_dist"), dist(dist_, "dist");
     Out<i64> out_start(out_start_, "out_start"), out_len(out_len_, "out_len");
+    const i64 n = size_of(centroids) / 3;
+    check_range(srcs, 0, n, "srcs");
+    check_rows(out_start, srcs.n, "out_start");
+    check_rows(out_len, srcs.n, "out_len");
+    check_records(pos, lim, rec_face.n, rec_dist.n);
+    if (dist.n > 0) {
+        check_rows(dist, n, "dist", true);
+        check_rows(label, n, "label", true);
+        check_rows(labs, srcs.n, "labs");
+    }
     nb::gil_scoped_release nogil;
     for (i64 i = 0; i < srcs.n; ++i) {
         out_start[i] = pos;
@@ -249,6 +302,9 @@ void merge_some(nb::handle labs_, nb::handle seg_start_, nb::handle seg_len_,
     In<double> rec_dist(rec_dist_, "rec_dist");
     Out<double> dist(dist_, "dist");
     Out<i32> label(label_, "label");
+    check_rows(label, dist.n, "label", true);
+    check_rows(rec_dist, rec_face.n, "rec_dist");
+    check_segments(labs, seg_start, seg_len, rec_face, dist.n);
     nb::gil_scoped_release nogil;
     for (i64 i = 0; i < labs.n; ++i) {
         i64 s = labs[i];
@@ -262,6 +318,8 @@ void unset_owned(nb::handle labs_, nb::handle seg_start_, nb::handle seg_len_,
     In<i32> rec_face(rec_face_, "rec_face");
     Out<double> dist(dist_, "dist");
     Out<i32> label(label_, "label");
+    check_rows(label, dist.n, "label", true);
+    check_segments(labs, seg_start, seg_len, rec_face, dist.n);
     nb::gil_scoped_release nogil;
     for (i64 i = 0; i < labs.n; ++i) {
         i64 s = labs[i];
@@ -278,6 +336,7 @@ void unset_owned(nb::handle labs_, nb::handle seg_start_, nb::handle seg_len_,
 void reset_labels(nb::handle dist_, nb::handle label_) {
     Out<double> dist(dist_, "dist");
     Out<i32> label(label_, "label");
+    check_rows(label, dist.n, "label");
     nb::gil_scoped_release nogil;
     for (i64 f = 0; f < dist.n; ++f) {
         dist[f] = INF;
@@ -297,6 +356,15 @@ nb::tuple seed_orphans_t(nb::handle indptr, nb::handle indices, nb::handle weigh
         seg_len(seg_len_, "seg_len");
     Out<double> dist(dist_, "dist"), rec_dist(rec_dist_, "rec_dist");
     Out<i32> label(label_, "label"), rec_face(rec_face_, "rec_face");
+    const i64 n = size_of(centroids) / 3;
+    check_rows(label, n, "label", true);
+    check_rows(dist, n, "dist", true);
+    check_records(pos, lim, rec_face.n, rec_dist.n);
+    if (n_centers < 0) throw OutOfRange("argument n_centers");
+    i64 orphans = 0;
+    for (i64 f = 0; f < n; ++f) orphans += label[f] < 0;
+    for (auto* x : {&centers, &seg_start, &seg_len})
+        check_rows(*x, n_centers + orphans, "centers, seg_start, seg_len");
     i64 k = n_centers, status = pos;
     {
         nb::gil_scoped_release nogil;
@@ -326,6 +394,13 @@ i64 compact_records(nb::handle order_, nb::handle seg_start_, nb::handle seg_len
     Out<i64> seg_start(seg_start_, "seg_start");
     Out<i32> rec_face(rec_face_, "rec_face");
     Out<double> rec_dist(rec_dist_, "rec_dist");
+    check_rows(seg_len, seg_start.n, "seg_len", true);
+    check_range(order, 0, seg_start.n, "order");
+    for (i64 j = 0; j < order.n; ++j) {
+        const i64 a = seg_start[order[j]], m = seg_len[order[j]];
+        if (a < 0 || m < 0 || a > mn(rec_face.n, rec_dist.n) - m)
+            throw OutOfRange("arguments seg_start, seg_len: a segment past the records");
+    }
     nb::gil_scoped_release nogil;
     i64 w = 0;
     for (i64 j = 0; j < order.n; ++j) {
@@ -349,6 +424,12 @@ void update_centers(nb::handle label_, i64 k, nb::handle areas_, nb::handle cent
     In<i64> old_centers(old_centers_, "old_centers");
     Out<i64> new_centers(new_centers_, "new_centers");
     if (c.cols != 3) throw Mismatch("argument centroids");
+    check_rows(areas, label.n, "areas");
+    check_rows(c, label.n, "centroids");
+    check_range(label, 0, k, "label");
+    check_rows(old_centers, k, "old_centers");
+    check_range(old_centers, -1, label.n, "old_centers", k);
+    check_rows(new_centers, k, "new_centers");
     nb::gil_scoped_release nogil;
     const i64 m = label.n;
     // (one thread for superfacets of 16 elements or fewer: the ranges' sums would cost
@@ -468,6 +549,9 @@ i64 flood_t(nb::handle indptr_, nb::handle indices_, nb::handle weights_, nb::ha
     Out<i64> label(label_, "label");
     Out<i32> vis(vis_, "vis");
     if (centroids.cols != 3) throw Mismatch("argument centroids");
+    check_graph(indptr, indices, weights, centroids, local);
+    check_rows(label, centroids.n, "label", true);
+    check_range(order, 0, centroids.n, "order");
     const Work<W> w{Graph<W>{indptr.p, indices.p, weights.p, centroids.p}, queue_of(queue_),
                     local.p, inv_width, nullptr, 0};
     nb::gil_scoped_release nogil;

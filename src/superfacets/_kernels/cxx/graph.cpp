@@ -106,7 +106,7 @@ void csr_of_pairs(const P* lo, const P* hi, i64 e, i64 n, i32* indices, D* dual_
 // number_pairs: keep and pairs may be null
 template <class D, class Q>
 void number_pairs_into(const i64* indptr, const i32* indices, i64 n, D* dual_edge, i64* keep,
-                       Q* pairs) {
+                       Q* pairs, i64 room = std::numeric_limits<i64>::max()) {
     // Thread w numbers the pairs of its rows (their first ids from the counts of the rows
     // before), and writes each id at its mirror too: for a symmetric CSR whose rows
     // ascend, the j-th entry g of row v (g > v) mirrors the entry of row g after those
@@ -121,6 +121,7 @@ void number_pairs_into(const i64* indptr, const i32* indices, i64 n, D* dual_edg
         first_id[w + 1] = c;
     });
     for (i64 w = 0; w < T; ++w) first_id[w + 1] += first_id[w];
+    if (first_id[T] > room) throw OutOfRange("arguments keep, pairs: too short for the pairs");
     on_threads(T, [&](i64 w) {
         i64 nid = first_id[w];
         for (i64 v = row0(w); v < row0(w + 1); ++v) {
@@ -132,6 +133,8 @@ void number_pairs_into(const i64* indptr, const i32* indices, i64 n, D* dual_edg
                 i64 j = i - indptr[v] - (std::lower_bound(row, indices + i, g) - row);
                 const i32* mir = indices + indptr[g];
                 i64 q = indptr[g] + (std::lower_bound(mir, indices + indptr[g + 1], v) - mir) + j;
+                if (q >= indptr[g + 1] || indices[q] != v)
+                    throw OutOfRange("argument indices: rows not symmetric");
                 if (keep) keep[nid] = dual_edge[i];
                 if (pairs) {
                     pairs[2 * nid] = static_cast<Q>(v);
@@ -151,6 +154,11 @@ void triangle_half_edges(nb::handle faces_, nb::handle a_, nb::handle b_, nb::ha
     Out<i32> a(a_, "a"), b(b_, "b");
     Out<bool> skip(skip_, "skip");
     with_index(faces_, "faces", [&](auto faces) {  // (int32 or int64 faces)
+        if (faces.cols != 3) throw Mismatch("argument faces");
+        check_rows(a, 3 * faces.n, "a");
+        check_rows(b, 3 * faces.n, "b");
+        check_rows(skip, 3 * faces.n, "skip");
+        check_range(faces, 0, std::numeric_limits<i32>::max(), "faces");
         nb::gil_scoped_release nogil;
         parallel_for(faces.n, [&](i64 lo, i64 hi) {
             for (i64 f = lo; f < hi; ++f) {
@@ -171,6 +179,8 @@ void count_keys(nb::handle key1_, nb::handle skip_, i64 lo, i64 hi, nb::handle c
     In<i32> key1(key1_, "key1");
     In<bool> skip(skip_, "skip");
     Out<i64> counts(counts_, "counts");
+    check_span(lo, hi, key1.n, skip.n);
+    check_range(In<i32>{key1.p + lo, hi - lo, 1}, 0, counts.n, "key1");
     nb::gil_scoped_release nogil;
     for (i64 t = lo; t < hi; ++t)
         if (!skip[t]) counts[key1[t]] += 1;
@@ -178,10 +188,11 @@ void count_keys(nb::handle key1_, nb::handle skip_, i64 lo, i64 hi, nb::handle c
 
 template <class O>
 void scatter_into(const In<i32>& key1, const In<bool>& skip, i64 lo, i64 hi, Out<i64>& fill,
-                  O* order) {
+                  O* order, i64 n_order) {
     for (i64 t = lo; t < hi; ++t) {
         if (!skip[t]) {
             i64 k = key1[t];
+            if (fill[k] < 0 || fill[k] >= n_order) throw OutOfRange("argument fill: past order");
             order[fill[k]] = static_cast<O>(t);
             fill[k] += 1;
         }
@@ -193,14 +204,16 @@ void scatter_keys(nb::handle key1_, nb::handle skip_, i64 lo, i64 hi, nb::handle
     In<i32> key1(key1_, "key1");
     In<bool> skip(skip_, "skip");
     Out<i64> fill(fill_, "fill");
+    check_span(lo, hi, key1.n, skip.n);
+    check_range(In<i32>{key1.p + lo, hi - lo, 1}, 0, fill.n, "key1");
     if (matches<i32>(order_)) {
         Out<i32> order(order_, "order");
         nb::gil_scoped_release nogil;
-        scatter_into(key1, skip, lo, hi, fill, order.p);
+        scatter_into(key1, skip, lo, hi, fill, order.p, order.n);
     } else {
         Out<i64> order(order_, "order");
         nb::gil_scoped_release nogil;
-        scatter_into(key1, skip, lo, hi, fill, order.p);
+        scatter_into(key1, skip, lo, hi, fill, order.p, order.n);
     }
 }
 
@@ -208,6 +221,8 @@ void sort_buckets(nb::handle order_, nb::handle starts_, nb::handle key2_, i64 v
     Out<i32> order(order_, "order");
     In<i64> starts(starts_, "starts");
     In<i32> key2(key2_, "key2");
+    check_span(v0, v1, starts.n - 1, starts.n - 1);
+    check_csr(In<i64>{starts.p + v0, v1 - v0 + 1, 1}, order, v1 - v0, key2.n, "starts");
     nb::gil_scoped_release nogil;
     for (i64 v = v0; v < v1; ++v)
         if (starts[v + 1] - starts[v] > 1) sort_bucket(order.p, starts[v], starts[v + 1], key2.p);
@@ -223,6 +238,9 @@ nb::tuple group_pairs(nb::handle half_, nb::handle owner_, nb::handle a_, nb::ha
     In<i32> half(half_, "half"), owner(owner_, "owner"), a(a_, "a"), b(b_, "b");
     const i64 n = half.n;
     const bool tri = owner.n == 0;
+    check_rows(b, a.n, "b", true);
+    check_range(half, 0, a.n, "half");
+    if (!tri) check_rows(owner, a.n, "owner");
     std::vector<char> isnew(n + 1);
     isnew[n] = 1;
     auto same = [&](i64 i) {  // half[i] on the edge of half[i - 1]
@@ -314,6 +332,8 @@ void take_pairs(nb::handle first_, nb::handle lo_, nb::handle hi_, nb::handle ka
     Out<i32> pairs(pairs_, "pairs"), edges(edges_, "edges");
     if (pairs.cols != 2 || edges.cols != 2 || pairs.n != first.n || edges.n != first.n)
         throw Mismatch("argument pairs");
+    for (auto* x : {&hi, &ka, &kb}) check_rows(*x, lo.n, "hi, ka, kb");
+    check_range(first, 0, lo.n, "first");
     nb::gil_scoped_release nogil;
     parallel_for(first.n, [&](i64 t0, i64 t1) {
         for (i64 t = t0; t < t1; ++t) {
@@ -332,6 +352,11 @@ nb::tuple csr_of_face_pairs_t(nb::handle lo_, nb::handle hi_, nb::handle ka_, nb
     In<i32> lo(lo_, "lo"), hi(hi_, "hi"), ka(ka_, "ka"), kb(kb_, "kb");
     Out<i32> indices(indices_, "indices");
     Out<D> dual_edge(dual_edge_, "dual_edge");
+    for (auto* x : {&hi, &ka, &kb}) check_rows(*x, lo.n, "hi, ka, kb", true);
+    check_rows(indices, 2 * lo.n, "indices");
+    check_rows(dual_edge, 2 * lo.n, "dual_edge");
+    check_range(lo, 0, n, "lo");
+    check_range(hi, 0, n, "hi");
     Out<i64> indptr;
     auto indptr_a = fresh(n + 1, indptr);
     i64 out = 0;
@@ -413,6 +438,7 @@ nb::object same_label_components(nb::handle indptr_, nb::handle indices_,
     In<i32> indices(indices_, "indices");
     const i64 n = labels.n;
     if (indptr.n != n + 1) throw Mismatch("argument indptr");
+    check_csr(indptr, indices, n, n);
     Out<i64> comp;
     auto comp_a = fresh(n, comp);
     {
@@ -467,6 +493,9 @@ void face_geometry(nb::handle vertices_, nb::handle faces_, nb::handle centroids
     with_index(faces_, "faces", [&](auto faces) {  // (int32 or int64 faces)
         if (normals.cols != 3 || centroids.cols != 3 || faces.cols != 3)
             throw Mismatch("argument normals");
+        for (auto* x : {&centroids, &areas, &normals}) check_rows(*x, faces.n, "centroids");
+        if (v.cols != 3) throw Mismatch("argument vertices");
+        check_range(faces, 0, v.n, "faces");
         nb::gil_scoped_release nogil;
         for (i64 f = 0; f < faces.n; ++f) {
             i64 i = faces(f, 0), j = faces(f, 1), k = faces(f, 2);
@@ -491,6 +520,10 @@ void polygon_geometry(nb::handle vertices_, nb::handle corners_, nb::handle offs
         normals(normals_, "normals");
     if (v.cols != 3 || centroids.cols != 3 || normals.cols != 3)
         throw Mismatch("argument vertices");
+    check_csr(offsets, corners, -1, v.n, "offsets");
+    for (i64 f = 0; f + 1 < offsets.n; ++f)
+        if (offsets[f + 1] == offsets[f]) throw OutOfRange("argument offsets: an empty polygon");
+    for (auto* x : {&centroids, &areas, &normals}) check_rows(*x, offsets.n - 1, "centroids");
     nb::gil_scoped_release nogil;
     for (i64 f = 0; f < offsets.n - 1; ++f) {
         const i64 a = offsets[f], k = offsets[f + 1] - a;
@@ -558,6 +591,13 @@ void face_terms(nb::handle vertices_, nb::handle centroids_, nb::handle normals_
     In<i32> pairs(pairs_, "pairs"), edges(edges_, "edges");
     Out<double> geo(geo_, "geo"), cs(cos_, "cos");
     Out<bool> concave(concave_, "concave");
+    if (pairs.cols != 2 || edges.cols != 2 || v.cols != 3 || c.cols != 3 || nr.cols != 3)
+        throw Mismatch("argument pairs");
+    check_span(lo, hi, pairs.n, edges.n);
+    check_range(In<i32>{pairs.p + 2 * lo, hi - lo, 2}, 0, mn(c.n, nr.n), "pairs");
+    check_range(In<i32>{edges.p + 2 * lo, hi - lo, 2}, 0, v.n, "edges");
+    for (auto* x : {&geo, &cs}) check_rows(*x, hi - lo, "geo");
+    check_rows(concave, hi - lo, "concave");
     nb::gil_scoped_release nogil;
     for (i64 t = lo; t < hi; ++t) {
         i64 i = pairs(t, 0), j = pairs(t, 1), a = edges(t, 0), b = edges(t, 1);
@@ -592,10 +632,12 @@ void edge_lengths(nb::handle vertices_, nb::handle edges_, nb::handle out_) {
     Out<double> out(out_, "out");
     if (matches<i32>(edges_)) {
         In<i32> e(edges_, "edges");
+        check_lengths(v, e, out);
         nb::gil_scoped_release nogil;
         lengths_into(v, e.p, e.n, out.p);
     } else {
         In<i64> e(edges_, "edges");
+        check_lengths(v, e, out);
         nb::gil_scoped_release nogil;
         lengths_into(v, e.p, e.n, out.p);
     }
@@ -610,6 +652,7 @@ void per_entry(nb::handle values_, nb::handle dual_edge_, nb::handle out_) {
             using T = std::remove_cv_t<std::remove_reference_t<decltype(values[0])>>;
             Out<T> out(out_, "out");  // (the values' dtype: float64 or float32)
             if (out.n != dual_edge.n) throw Mismatch("argument out");
+            check_range(dual_edge, 0, values.n, "dual_edge");
             nb::gil_scoped_release nogil;
             parallel_for(dual_edge.n, [&](i64 lo, i64 hi) {
                 for (i64 e = lo; e < hi; ++e) out[e] = values[dual_edge[e]];
@@ -624,6 +667,10 @@ nb::object convex_scaled_csr(nb::handle weights_, nb::handle dual_edge_,
     In<double> weights(weights_, "weights"), cs(cos_, "cos"), span(span_, "span");
     In<bool> concave(concave_, "concave");
     Out<double> out;
+    with_index(dual_edge_, "dual_edge", [&](const auto& dual_edge) {
+        check_rows(dual_edge, weights.n, "dual_edge");
+        check_range(dual_edge, 0, mn(mn(concave.n, cs.n), span.n), "dual_edge", weights.n);
+    });
     auto out_a = fresh(weights.n, out);
     with_index(dual_edge_, "dual_edge", [&](const auto& dual_edge) {
         nb::gil_scoped_release nogil;
@@ -646,6 +693,10 @@ nb::object cut_costs_csr(nb::handle dual_edge_, nb::handle concave_, nb::handle 
     In<bool> concave(concave_, "concave");
     In<double> cs(cos_, "cos"), lengths(lengths_, "lengths");
     Out<double> out;
+    check_rows(concave, cs.n, "concave");
+    check_rows(lengths, cs.n, "lengths");
+    with_index(dual_edge_, "dual_edge",
+               [&](const auto& dual_edge) { check_range(dual_edge, 0, cs.n, "dual_edge"); });
     auto out_a = fresh(size_of(dual_edge_), out);
     with_index(dual_edge_, "dual_edge", [&](const auto& dual_edge) {
         nb::gil_scoped_release nogil;
@@ -682,6 +733,10 @@ nb::object merge_strays(nb::handle strays_, nb::handle nb_indptr_, nb::handle nb
     In<i64> strays(strays_, "strays"), nb_indptr(nb_indptr_, "nb_indptr"),
         nb_indices(nb_indices_, "nb_indices");
     In<double> nb_data(nb_data_, "nb_data");
+    if (n_pieces < 0) throw OutOfRange("argument n_pieces");
+    check_csr(nb_indptr, nb_indices, n_pieces, n_pieces, "nb_indptr");
+    check_rows(nb_data, nb_indptr[n_pieces], "nb_data");
+    check_range(strays, 0, n_pieces, "strays");
     Out<i64> root;
     auto root_a = fresh(n_pieces, root);
     {
@@ -732,7 +787,16 @@ nb::tuple stray_borders(nb::handle indptr_, nb::handle indices_, nb::handle piec
     In<i32> indices(indices_, "indices");
     In<bool> is_main(is_main_, "is_main");
     In<double> lengths(lengths_, "lengths"), shares(shares_, "shares");
-    const i64 n = indptr.n - 1;
+    const i64 n = check_csr(indptr, indices, -1, piece.n);
+    check_rows(piece, n, "piece", true);
+    check_range(piece, 0, is_main.n, "piece");
+    if (shares.n) check_rows(shares, n, "shares");
+    else {
+        i64 above = 0;  // (the adjacencies: lengths has one each)
+        for (i64 i = 0; i < n; ++i)
+            for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) above += indices[x] > i;
+        check_rows(lengths, above, "lengths");
+    }
     const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / 4096));
     auto row = [&](i64 t) { return n * t / T; };
     // per thread: entries with a stray row on side 0 and on side 1, adjacencies before
@@ -801,6 +865,11 @@ nb::object csr_of_pairs_t(nb::handle lo_, nb::handle hi_, i64 n, nb::handle indi
     In<P> lo(lo_, "lo"), hi(hi_, "hi");
     Out<i32> indices(indices_, "indices");
     Out<D> dual_edge(dual_edge_, "dual_edge");
+    check_rows(hi, lo.n, "hi", true);
+    check_rows(indices, 2 * lo.n, "indices");
+    check_rows(dual_edge, 2 * lo.n, "dual_edge");
+    check_range(lo, 0, n, "lo");
+    check_range(hi, 0, n, "hi");
     Out<i64> indptr;
     auto indptr_a = fresh(n + 1, indptr);
     {
@@ -827,9 +896,16 @@ void number_pairs_t(nb::handle indptr_, nb::handle indices_, i64 n, nb::handle d
     Out<D> dual_edge(dual_edge_, "dual_edge");
     Out<i64> keep(keep_, "keep");
     Out<Q> pairs(pairs_, "pairs");
+    check_csr(indptr, indices, n, n);
+    check_rows(dual_edge, indptr[n], "dual_edge");
+    for (i64 v = 0; v < n; ++v)  // (rows ascending: their mirrors found by bisection)
+        for (i64 i = indptr[v] + 1; i < indptr[v + 1]; ++i)
+            if (indices[i] < indices[i - 1]) throw OutOfRange("argument indices: rows not sorted");
+    const i64 room = mn(keep.n ? keep.n : std::numeric_limits<i64>::max(),
+                        pairs.n ? pairs.n * pairs.cols / 2 : std::numeric_limits<i64>::max());
     nb::gil_scoped_release nogil;
     number_pairs_into(indptr.p, indices.p, n, dual_edge.p, keep.n ? keep.p : nullptr,
-                      pairs.n ? pairs.p : static_cast<Q*>(nullptr));
+                      pairs.n ? pairs.p : static_cast<Q*>(nullptr), room);
 }
 
 void number_pairs(nb::handle indptr, nb::handle indices, i64 n, nb::handle dual_edge,

@@ -131,6 +131,14 @@ nb::object merge_levels(i64 k, nb::handle ea_, nb::handle eb_, nb::handle stats_
         scatter(scatter_, "scatter");
     if (stats.cols != 3 || wsum.cols != 3 || scatter.cols != 6 || k < 1)
         throw Mismatch("argument stats");
+    check_rows(eb, ea.n, "eb", true);
+    check_rows(stats, ea.n, "stats");
+    check_range(ea, 0, k, "ea");
+    check_range(eb, 0, k, "eb");
+    check_rows(area, k, "area");
+    check_rows(wsum, k, "wsum");
+    check_rows(fsum, k, "fsum");
+    check_rows(scatter, k, "scatter");
     Out<i64> out;
     auto out_a = fresh(targets.n, out, k);
     {
@@ -236,6 +244,8 @@ nb::object label_pairs(nb::handle labels_, nb::handle pairs_, i64 k, nb::handle 
     std::vector<i64> key;
     with_index(pairs_, "pairs", [&](const auto& pairs) {
         if (pairs.cols != 2 || inv.n != pairs.n) throw Mismatch("argument pairs");
+        check_range(pairs, 0, labels.n, "pairs");
+        check_range(labels, 0, k, "labels");
         nb::gil_scoped_release nogil;
         const i64 m = pairs.n;
         std::vector<i64> lo(m), hi(m), start(k + 1, 0), order(m);

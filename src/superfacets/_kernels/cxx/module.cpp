@@ -7,6 +7,7 @@
 NB_MODULE(_cxx, m) {
     m.doc() = "Compiled kernels (private): one implementation of each kernel of superfacets.";
     nb::exception<sfk::Mismatch>(m, "Mismatch", PyExc_TypeError);
+    nb::exception<sfk::OutOfRange>(m, "OutOfRange", PyExc_ValueError);
     nb::exception<sfk::Interrupted>(m, "Interrupted", PyExc_KeyboardInterrupt);
     // the run's interrupt (a signal's watcher sets it; cleared when the run ends)
     m.def("interrupt", [](int on) { sfk::interrupt_flag().store(on); });

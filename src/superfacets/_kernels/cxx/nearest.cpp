@@ -211,6 +211,26 @@ i64 tree_nodes(nb::handle pts_, nb::handle keys_, i64 leaf, nb::handle start_, n
     return nn;
 }
 
+// A tree that keeps a search inside its arrays: nodes of the points start..end, each
+// inner node's children later than it and splitting its range, at most STACK - 2 deep.
+inline void check_tree(i64 n_pts, const In<i64>& start, const In<i64>& end,
+                       const In<i64>& left, i64 n_boxes) {
+    const i64 n = start.n;
+    if (n < 1 || end.n != n || left.n != n || n_boxes != n)
+        throw OutOfRange("arguments start, end, left, boxes: one entry per node");
+    if (start[0] != 0 || end[0] != n_pts) throw OutOfRange("argument start: not the points");
+    std::vector<i64> depth(n, 0);
+    for (i64 v = 0; v < n; ++v) {
+        const i64 c = left[v];
+        if (c < 0) continue;
+        if (c <= v || c + 1 >= n || start[c] != start[v] || end[c] != start[c + 1] ||
+            end[c + 1] != end[v] || start[c] > end[c] || start[c + 1] > end[c + 1] ||
+            depth[v] + 1 >= STACK - 2)
+            throw OutOfRange("argument left: not a tree of the points");
+        depth[c] = depth[c + 1] = depth[v] + 1;
+    }
+}
+
 void nearest_in_tree(nb::handle pts_, nb::handle start_, nb::handle end_, nb::handle left_,
                      nb::handle boxes_, nb::handle own_, i64 k, nb::handle nbr_,
                      nb::handle dist_) {
@@ -221,6 +241,8 @@ void nearest_in_tree(nb::handle pts_, nb::handle start_, nb::handle end_, nb::ha
     if (pts.cols != 3 || boxes.cols != 6 || nbr.cols != k + 1 || dist.cols != k + 1 ||
         nbr.n != own.n || dist.n != own.n || k < 1)
         throw Mismatch("argument nbr");
+    check_tree(pts.n, start, end, left, boxes.n);
+    check_range(own, 0, pts.n, "own");
     nb::gil_scoped_release nogil;
     const Tree t{pts.p, start.p, end.p, left.p, boxes.p};
     parallel_for(own.n, [&](i64 lo, i64 hi) {

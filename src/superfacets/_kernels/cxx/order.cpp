@@ -125,6 +125,7 @@ i64 rows_apart(nb::handle bits_, nb::handle at_, nb::handle index_, nb::handle r
     if (bits.cols != 3 || at.cols != 3) throw Mismatch("argument bits");
     return with_index(index_, "index", [&](const auto& index) -> i64 {
         if (index.n != bits.n) throw Mismatch("argument index");
+        check_range(index, std::numeric_limits<i64>::min(), at.n, "index");  // (-1: none)
         nb::gil_scoped_release nogil;
         const i64 n = bits.n, cap = rows.n;
         const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / 4096));
@@ -161,6 +162,7 @@ void order_ties(nb::handle order_, nb::handle ordered_, nb::handle keys_, nb::ha
     const i64 n = order.n;
     if (ordered.n != n || keys.cols != 3 || p.cols != 3 || keys.n != p.n)
         throw Mismatch("argument keys");
+    check_range(order, 0, keys.n, "order");
     nb::gil_scoped_release nogil;
     auto less = [&](i64 a, i64 b) {
         for (int w = 0; w < 3; ++w)

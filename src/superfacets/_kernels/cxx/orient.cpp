@@ -163,6 +163,7 @@ i64 propagate_signs(nb::handle indptr_, nb::handle indices_, nb::handle normals_
     if (nor.cols != 3 || indptr.n != nor.n + 1 || sign.n != nor.n || component.n != nor.n ||
         nor.n >= (i64(1) << 31) - 1)
         throw Mismatch("argument normals");
+    check_csr(indptr, indices, nor.n, nor.n);
     nb::gil_scoped_release nogil;
     const i64 n = nor.n;
     const double* np_ = nor.p;

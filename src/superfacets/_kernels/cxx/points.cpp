@@ -28,6 +28,14 @@ struct In2i {
     i32 operator()(i64 i, i64 j) const {
         return *reinterpret_cast<const i32*>(p + i * s0 + j * s1);
     }
+    void check(i64 hi, const char* name) const {  // every entry within [0, hi)
+        for (i64 i = 0; i < n; ++i)
+            for (i64 j = 0; j < k; ++j)
+                if ((*this)(i, j) < 0 || (*this)(i, j) >= hi)
+                    throw OutOfRange(std::string("argument ") + name + ": entry " +
+                                     std::to_string((*this)(i, j)) + " outside 0.." +
+                                     std::to_string(hi - 1));
+    }
 };
 
 inline std::uint64_t spread21(std::uint64_t x) {
@@ -192,6 +200,8 @@ i64 distinct_in_order(nb::handle p_, nb::handle order_, nb::handle out_, nb::han
     Out<double> out(out_, "out");
     Out<i64> inverse(inverse_, "inverse");
     if (p.cols != 3 || out.cols != 3) throw Mismatch("argument p");
+    check_range(order, 0, mn(p.n, inverse.n), "order");
+    check_rows(out, order.n, "out");
     nb::gil_scoped_release nogil;
     const i64 n = order.n;
     std::vector<i64> place(n);
@@ -232,6 +242,9 @@ void pca_normals(nb::handle points_, nb::handle neighbors_, nb::handle out_,
     In<i32> nb(neighbors_, "neighbors");
     Out<double> out(out_, "out"), lin(linearity_, "linearity");
     if (points.cols != 3 || out.cols != 3) throw Mismatch("argument points");
+    check_range(nb, 0, points.n, "neighbors");
+    check_rows(out, nb.n, "out");
+    check_rows(lin, nb.n, "linearity");
     nb::gil_scoped_release nogil;
     const i64 k = nb.cols;
     parallel_for(nb.n, [&](i64 lo, i64 hi) {
@@ -249,6 +262,8 @@ void pca_linearity(nb::handle points_, nb::handle neighbors_, nb::handle lineari
     In<i32> nb(neighbors_, "neighbors");
     Out<double> lin(linearity_, "linearity");
     if (points.cols != 3) throw Mismatch("argument points");
+    check_range(nb, 0, points.n, "neighbors");
+    check_rows(lin, nb.n, "linearity");
     nb::gil_scoped_release nogil;
     const i64 k = nb.cols;
     parallel_for(nb.n, [&](i64 lo, i64 hi) {
@@ -297,6 +312,13 @@ nb::object knn_csr(nb::handle nbr_, nb::handle keep_, nb::handle indptr_,
     if ((!all_kept && (keep.cols != k || keep.n != n)) || (rows.n && more_keep.cols != mk))
         throw Mismatch("argument keep");
     if (n >= (i64(1) << 31)) throw Mismatch("argument nbr");
+    nbr.check(n, "nbr");
+    check_rows(indptr, n + 1, "indptr");
+    if (rows.n) {
+        check_range(rows, 0, n, "rows");
+        if (more.n != rows.n || more_keep.n != rows.n) throw Mismatch("argument more");
+        more.check(n, "more");
+    }
     // Every listed pair in both rows. Thread t owns the rows lo(t) .. lo(t + 1): it counts
     // and writes their own lists and the reverse entries they make in its rows; those
     // they make in another thread's rows are posted to it (pairs (row, entry), in the
@@ -417,6 +439,9 @@ void turn_outwards(nb::handle points_, nb::handle normals_, nb::handle sign_,
     In<i64> component(component_, "component");
     Out<double> out(out_, "out");
     if (pts.cols != 3 || nor.cols != 3 || out.cols != 3) throw Mismatch("argument points");
+    for (i64 m : {nor.n, sign.n, component.n, out.n})
+        if (m != pts.n) throw Mismatch("argument normals");
+    check_range(component, 0, n_comp, "component");
     nb::gil_scoped_release nogil;
     const i64 n = pts.n;
     std::vector<double> count(n_comp, 0.0), mean(3 * n_comp, 0.0), total(n_comp, 0.0);
@@ -451,6 +476,13 @@ void point_terms_csr(nb::handle positions_, nb::handle normals_, nb::handle indp
     Out<bool> concave(concave_, "concave");
     with_real(normals_, "normals", [&](const auto& nor) {
         if (pos.cols != 3 || nor.cols != 3) throw Mismatch("argument positions");
+        check_span(r0, r1, indptr.n - 1, indptr.n - 1);
+        check_csr(In<i64>(indptr.p + r0, r1 - r0 + 1), indices, r1 - r0, mn(pos.n, nor.n));
+        if (r1 > pos.n || r1 > nor.n) throw OutOfRange("arguments r0, r1: rows past positions");
+        const i64 m = indptr[r1] - indptr[r0];
+        check_rows(geo, m, "geo");
+        check_rows(cs, m, "cos");
+        check_rows(concave, m, "concave");
         nb::gil_scoped_release nogil;
         i64 u = 0;
         for (i64 i = r0; i < r1; ++i)
@@ -502,6 +534,13 @@ void point_terms(nb::handle positions_, nb::handle normals_, nb::handle pairs_, 
     with_real(normals_, "normals", [&](const auto& nor) {
         if (pos.cols != 3 || nor.cols != 3) throw Mismatch("argument positions");
         return with_index(pairs_, "pairs", [&](const auto& pairs) {
+            if (pairs.cols != 2) throw Mismatch("argument pairs");
+            check_span(lo, hi, pairs.n, pairs.n);
+            using P = std::remove_cv_t<std::remove_reference_t<decltype(pairs.p[0])>>;
+            check_range(In<P>(pairs.p + 2 * lo, hi - lo, 2), 0, mn(pos.n, nor.n), "pairs");
+            check_rows(geo, hi - lo, "geo");
+            check_rows(cs, hi - lo, "cos");
+            check_rows(concave, hi - lo, "concave");
             nb::gil_scoped_release nogil;
             for (i64 t = lo; t < hi; ++t)
                 pair_terms(pos.p, nor.p, pairs(t, 0), pairs(t, 1), geo[t - lo], cs[t - lo],
@@ -529,6 +568,9 @@ void neighbour_mean(nb::handle indptr_, nb::handle indices_, nb::handle x_, nb::
     In<i32> indices(indices_, "indices");
     Out<double> out(out_, "out");
     In<double> x(x_, "x");
+    const i64 n = check_csr(indptr, indices, -1, x.n);
+    check_rows(x, n, "x");
+    check_rows(out, n, "out");
     nb::gil_scoped_release nogil;
     neighbour_mean_t(indptr, indices, x.p, out.p);
 }
@@ -536,7 +578,8 @@ void neighbour_mean(nb::handle indptr_, nb::handle indices_, nb::handle x_, nb::
 nb::object crossing_pairs(nb::handle indptr_, nb::handle indices_, nb::handle labels_) {
     In<i64> indptr(indptr_, "indptr"), labels(labels_, "labels");
     In<i32> indices(indices_, "indices");
-    const i64 n = indptr.n - 1;
+    const i64 n = check_csr(indptr, indices, -1, labels.n);
+    check_rows(labels, n, "labels");
     // rows in blocks on threads: each block counts its pairs, then writes them from its
     // place (a prefix sum of the counts), so the pairs are in row order as in one pass
     const i64 n_blocks = std::max<i64>(1, std::min<i64>(64, n / 4096));
@@ -608,7 +651,7 @@ void label_sums(nb::handle labels_, nb::handle weights_, nb::handle positions_,
                 w.n != labels.n || pos.n != labels.n || nor.n != labels.n ||
                 wpos.n != area.n || wnrm.n != area.n)
                 throw Mismatch("argument positions");
-            nb::gil_scoped_release nogil;
+            nb::gil_scoped_release nogil;  // (labels outside 0..k - 1 are skipped)
             each_by_label(labels, area.n, [&](i64 i, i64 s) {
                 double x = w[i];
                 area[s] += x;
@@ -628,7 +671,7 @@ void label_scatter(nb::handle labels_, nb::handle weights_, nb::handle positions
     if (pos.cols != 3 || cen.cols != 3 || sc.cols != 9 || w.n != labels.n ||
         pos.n != labels.n || sc.n != cen.n)
         throw Mismatch("argument positions");
-    nb::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;  // (labels outside 0..k - 1 are skipped)
     each_by_label(labels, sc.n, [&](i64 i, i64 s) {
         double x = w[i];
         double d[3] = {pos(i, 0) - cen(s, 0), pos(i, 1) - cen(s, 1), pos(i, 2) - cen(s, 2)};
@@ -743,7 +786,7 @@ void border_shares(nb::handle indptr_, nb::handle area_, nb::handle out_) {
     In<double> area(area_, "area");
     Out<double> out(out_, "out");
     if (indptr.n != area.n + 1 || out.n != area.n) throw Mismatch("argument out");
-    nb::gil_scoped_release nogil;
+    nb::gil_scoped_release nogil;  // (only differences of indptr read: any values)
     constexpr double pi = 3.141592653589793;  // np.pi
     parallel_for(area.n, [&](i64 i0, i64 i1) {
         for (i64 i = i0; i < i1; ++i) {
@@ -766,6 +809,8 @@ void neighbourhood_moments(nb::handle indptr_, nb::handle indices_, nb::handle p
         size_of(cov_) != 9 * pick.n)
         throw Mismatch("argument cov");
     with_index(indices_, "indices", [&](const auto& indices) {
+        check_csr(indptr, indices, points.n, points.n);
+        check_range(pick, 0, points.n, "pick");
         nb::gil_scoped_release nogil;
         parallel_for(pick.n, [&](i64 lo, i64 hi) {
             std::vector<i64> ball;

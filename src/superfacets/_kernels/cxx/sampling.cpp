@@ -94,6 +94,13 @@ nb::tuple spatial_blocks(nb::handle centroids_, i64 cells_per_axis) {
     return nb::make_tuple(order_a, bstart_a, bcenter_a, bradius_a);
 }
 
+// k samples of m elements from `first`, into out; scale2 (where given) one per element
+inline void check_sampling(i64 m, i64 k, i64 first, i64 n_out, i64 n_scale) {
+    if (first < 0 || first >= m) throw OutOfRange("argument first: not an element");
+    if (k < 0 || k > n_out || k > m) throw OutOfRange("argument k: more samples than room");
+    check_rows(In<double>(nullptr, n_scale), m, "scale2");
+}
+
 void farthest_point_blocked(nb::handle centroids_, i64 k, i64 first, nb::handle out_,
                             nb::handle order_, nb::handle bstart_, nb::handle bcenter_,
                             nb::handle bradius_, nb::object scale2_, nb::object bscale2_) {
@@ -108,6 +115,11 @@ void farthest_point_blocked(nb::handle centroids_, i64 k, i64 first, nb::handle 
         bscale2 = In<double>(bscale2_, "bscale2");
     }
     if (c.cols != 3 || bcenter.cols != 3) throw Mismatch("argument centroids");
+    check_sampling(c.n, k, first, out.n, scaled ? scale2.n : c.n);
+    const i64 n_blocks = check_csr(bstart, order, -1, c.n, "bstart");
+    check_rows(bcenter, n_blocks, "bcenter");
+    check_rows(bradius, n_blocks, "bradius");
+    if (scaled) check_rows(bscale2, n_blocks, "bscale2");
     nb::gil_scoped_release nogil;
     const i64 m = c.n, nb = bstart.n - 1;
     std::vector<double> pos(3 * m);
@@ -255,6 +267,7 @@ void farthest_point(nb::handle centroids_, i64 k, i64 first, nb::handle out_,
     const bool scaled = !scale2_.is_none();
     if (scaled) scale2 = In<double>(scale2_, "scale2");
     if (c.cols != 3) throw Mismatch("argument centroids");
+    check_sampling(c.n, k, first, out.n, scaled ? scale2.n : c.n);
     nb::gil_scoped_release nogil;
     const i64 m = c.n;
     std::vector<double> mind(m, INF);

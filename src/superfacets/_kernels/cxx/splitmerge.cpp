@@ -179,7 +179,21 @@ struct Common {
           indices(indices_, "indices"), label(label_, "label"), w(w_, "w"),
           sizes(sizes_, "sizes"), positions(positions_, "positions") {
         if (positions.cols != 3) throw Mismatch("argument positions");
+        const i64 n = check_csr(indptr, indices, label.n, label.n);
+        check_rows(w, indptr[n], "w");
+        check_rows(sizes, n, "sizes");
+        check_rows(positions, n, "positions");
+        check_csr(bounds, members, -1, n, "bounds");
     }
+    i64 k() const { return bounds.n - 1; }
+    // per-element arrays of a search (at least one entry per element), the loop's stride
+    template <class... V>
+    void check_scratch(i64 first, i64 step, const V&... per_element) const {
+        if (first < 0 || step < 1) throw OutOfRange("arguments first, step");
+        for (i64 m : {per_element.n...})
+            if (m < label.n) throw OutOfRange("arguments dist, stamp: one entry per element");
+    }
+    i64 members_of(i64 sp) const { return bounds[sp + 1] - bounds[sp]; }
     Search search(Heap* heap) const {
         return Search{indptr.p, indices.p, w.p, label.p, sizes.p, positions.p, heap};
     }
@@ -194,6 +208,9 @@ i64 energies(nb::handle indptr, nb::handle indices, nb::handle w, nb::handle lab
     Common c(indptr, indices, w, label, members, bounds, sizes, positions);
     Out<double> energy(energy_, "energy"), dist(dist_, "dist"), hkey(hkey_, "hkey");
     Out<i64> far(far_, "far"), stamp(stamp_, "stamp"), hval(hval_, "hval");
+    c.check_scratch(first, step, dist, stamp);
+    check_rows(energy, c.k(), "energy");
+    check_rows(far, c.k(), "far");
     nb::gil_scoped_release nogil;
     Search s = c.search(nullptr);
     BucketQueue bq(c.w.p, c.w.n);
@@ -225,6 +242,15 @@ i64 split_candidates(nb::handle indptr, nb::handle indices, nb::handle w, nb::ha
     Out<bool> second(second_, "second");
     Out<i64> stamp(stamp_, "stamp"), stamp2(stamp2_, "stamp2"), hval(hval_, "hval"),
         work(work_, "work");
+    c.check_scratch(first, step, dist, dist2, stamp, stamp2, second);
+    check_range(which, 0, c.k(), "which");
+    check_rows(far, c.k(), "far");
+    check_rows(split_energy, c.k(), "split_energy");
+    for (i64 t = 0; t < which.n; ++t) {
+        const i64 sp = which[t];
+        if (far[sp] < 0 || far[sp] >= c.label.n) throw OutOfRange("argument far: not an element");
+        if (c.members_of(sp) > work.n) throw OutOfRange("argument work: too short");
+    }
     nb::gil_scoped_release nogil;
     Search s = c.search(nullptr);
     BucketQueue bq(c.w.p, c.w.n);
@@ -302,6 +328,15 @@ i64 merge_energies(nb::handle indptr, nb::handle indices, nb::handle w, nb::hand
     In<double> energy(energy_, "energy");
     Out<double> out(out_, "out"), dist(dist_, "dist"), hkey(hkey_, "hkey");
     Out<i64> stamp(stamp_, "stamp"), hval(hval_, "hval"), work(work_, "work");
+    c.check_scratch(first, step, dist, stamp);
+    check_rows(pair_b, pair_a.n, "pair_b", true);
+    check_range(pair_a, 0, c.k(), "pair_a");
+    check_range(pair_b, 0, c.k(), "pair_b");
+    check_rows(energy, c.k(), "energy");
+    check_rows(out, pair_a.n, "out");
+    for (i64 t = 0; t < pair_a.n; ++t)
+        if (c.members_of(pair_a[t]) + c.members_of(pair_b[t]) > work.n)
+            throw OutOfRange("argument work: too short");
     nb::gil_scoped_release nogil;
     Heap heap(4096);
     Search s = c.search(&heap);
@@ -339,6 +374,9 @@ i64 merge_energies(nb::handle indptr, nb::handle indices, nb::handle w, nb::hand
 nb::object label_pairs(nb::handle indptr_, nb::handle indices_, nb::handle label_, i64 k) {
     In<i64> indptr(indptr_, "indptr");
     In<i32> indices(indices_, "indices"), label(label_, "label");
+    check_csr(indptr, indices, label.n, label.n);
+    if (k < 0 || k > (i64(1) << 31)) throw OutOfRange("argument k");
+    check_range(label, 0, k, "label");
     std::vector<i64> keys;
     {
         nb::gil_scoped_release nogil;

@@ -4,6 +4,15 @@
 
 namespace sfk {
 
+// Every corner's vertex numbered within [0, n) by index (the vertices no face uses may
+// have any number: they are never read)
+inline void check_used(const In<i64>& corners, const In<i64>& index, i64 n) {
+    for (i64 c = 0; c < corners.n; ++c)
+        if (index[corners[c]] < 0 || index[corners[c]] >= n)
+            throw OutOfRange("argument index: a used vertex numbered outside 0.." +
+                             std::to_string(n - 1));
+}
+
 void vertex_cells(nb::handle corners_, nb::handle offsets_, nb::handle index_,
                   nb::handle areas_, nb::handle normals_, nb::handle area_,
                   nb::handle normal_) {
@@ -11,6 +20,10 @@ void vertex_cells(nb::handle corners_, nb::handle offsets_, nb::handle index_,
     In<double> areas(areas_, "areas"), normals(normals_, "normals");
     Out<double> area(area_, "area"), normal(normal_, "normal");
     if (normals.cols != 3 || normal.cols != 3) throw Mismatch("argument normals");
+    const i64 n_faces = check_csr(offsets, corners, -1, index.n, "offsets");
+    check_used(corners, index, mn(area.n, normal.n));
+    check_rows(areas, n_faces, "areas");
+    check_rows(normals, n_faces, "normals");
     nb::gil_scoped_release nogil;
     const i64 n = area.n;
     for (i64 i = 0; i < n; ++i) {
@@ -39,6 +52,11 @@ nb::tuple mesh_edges(nb::handle corners_, nb::handle offsets_, nb::handle index_
     In<i64> corners(corners_, "corners"), offsets(offsets_, "offsets"), index(index_, "index");
     In<double> pos(positions_, "positions"), cen(centroids_, "centroids");
     if (pos.cols != 3 || cen.cols != 3) throw Mismatch("argument positions");
+    const i64 n_faces = check_csr(offsets, corners, -1, index.n, "offsets");
+    if (offsets[n_faces] != corners.n || offsets[0] != 0)
+        throw OutOfRange("argument offsets: not the corners' layout");
+    check_used(corners, index, mn(n, pos.n));
+    check_rows(cen, n_faces, "centroids");
     const i64 nh = corners.n;
     std::vector<i64> a(nh), b(nh), owner(nh), starts(n + 1, 0), order;
     std::vector<char> skip(nh);

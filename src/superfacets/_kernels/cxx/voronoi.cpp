@@ -140,7 +140,12 @@ i64 nearest_seed(nb::handle indptr_, nb::handle indices_, nb::handle weights_, n
     In<i32> indices(indices_, "indices");
     Out<double> dist(dist_, "dist");
     Out<i32> label(label_, "label");
+    const i64 n = check_csr(indptr, indices, label.n, label.n);
+    check_rows(dist, n, "dist");
+    check_range(seeds, 0, n, "seeds");
+    if (first < 0 || first > seeds.n) throw OutOfRange("argument first");
     return with_real(weights_, "weights", [&](auto w) {
+        check_rows(w, indptr[n], "weights");
         return nearest_seed_t(indptr, indices, w.p, seeds, first, dist, label, queue, inv_width);
     });
 }
@@ -151,9 +156,23 @@ nb::tuple coarse_pairs(nb::handle indptr_, nb::handle indices_, nb::handle clust
     In<i64> indptr(indptr_, "indptr");
     In<i32> indices(indices_, "indices");
     In<double> dist(dist_, "dist"), lengths(lengths_, "lengths");
+    const i64 n = check_csr(indptr, indices, -1, indptr.n - 1);
+    check_rows(dist, n, "dist");
+    if (n_c < 0) throw OutOfRange("argument n_c");
     return with_index(cluster_, "cluster", [&](const auto& cluster) {
+        check_rows(cluster, n, "cluster");
+        check_range(cluster, 0, n_c, "cluster", n);
         return with_real(csr_w_, "csr_w", [&](auto w) {
+            check_rows(w, indptr[n], "csr_w");
             return with_real(shares_, "shares", [&](auto sh) {
+                if (sh.n) {
+                    check_rows(sh, n, "shares");
+                } else {
+                    i64 above = 0;  // (the adjacencies: lengths has one each)
+                    for (i64 i = 0; i < n; ++i)
+                        for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) above += indices[x] > i;
+                    check_rows(lengths, above, "lengths");
+                }
                 return coarse_pairs_t(indptr, indices, cluster, dist, w.p, lengths, sh.p, sh.n,
                                       n_c);
             });
