@@ -408,12 +408,20 @@ def test_a_run_that_would_not_fit_is_refused_in_one_line(tmp_path, monkeypatch, 
     path = tmp_path / "ball.ply"
     mesh.export(path)
     monkeypatch.setattr(memory, "available_bytes", lambda: 1_000_000)  # 1 MB left
-    with pytest.raises(MemoryLimitError, match=r"5,120 faces need about .* GiB .* tiles"):
+    with pytest.raises(MemoryLimitError, match=r"5,120 faces need about .* GiB .* larger "
+                       r"machine \(SUPERFACETS_MEMORY_CHECK=off runs it anyway\)") as exc:
         segment(mesh, 10)
+    assert "tiles" not in str(exc.value)  # (the interpreter alone would not fit)
+    # room for a third of the run: tiles are named, with a count that fits
+    third = memory.BASE_BYTES + 5120 * 250 // 3
+    monkeypatch.setattr(memory, "available_bytes", lambda: third)
     assert main(["segment", str(path), "-k", "10", "-o", str(tmp_path / "b.seg")]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "superfacets: error:" in err and "--tiles" in err
+    assert err.count("\n") == 1 and "superfacets: error:" in err and "--tiles 5" in err
     assert not (tmp_path / "b.seg").exists()
+    monkeypatch.setenv("SUPERFACETS_MEMORY_CHECK", "off")  # the override
+    assert segment(mesh, 10).n_segments == 10
+    monkeypatch.delenv("SUPERFACETS_MEMORY_CHECK")
     monkeypatch.setattr(memory, "available_bytes", lambda: None)
 
     def oom(*args, **kwargs):
@@ -479,3 +487,22 @@ def test_labels_file_text_across_blocks(tmp_path, monkeypatch):
     path = write_labels(tmp_path / "l.seg", labels)
     assert path.read_bytes() == "".join(f"{v}\n" for v in labels.tolist()).encode()
     np.testing.assert_array_equal(read_labels(path), labels)
+
+
+def test_the_memory_check_counts_the_face_pairs_of_a_fan_and_sends_it_not_to_tiles(
+        monkeypatch):
+    """Copies of one triangle make three face pairs a face, not one and a half: the
+    estimate counts them; tiles cannot help (one edge's pairs are in one tile)."""
+    from superfacets import MemoryLimitError, segment
+    from superfacets._runtime import memory
+
+    n = 6000
+    vertices = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.5]])
+    faces = np.r_[np.tile([[0, 1, 2]], (n, 1)), [[1, 3, 2]]]
+    faces_only = memory.estimated_peak(n + 1, 250)
+    monkeypatch.setattr(memory, "available_bytes", lambda: faces_only + 1000)
+    with pytest.raises(MemoryLimitError, match=r"6,001 faces with 18,001 face pairs") as exc:
+        segment((vertices, faces), 2)
+    assert "tiles" not in str(exc.value)
+    monkeypatch.setattr(memory, "available_bytes", lambda: None)
+    assert segment((vertices, faces), 2).labels.shape == (n + 1,)

@@ -1,8 +1,9 @@
 """Memory a run will need, estimated before it is spent, against what the process may use.
 
-A run's peak grows with its elements (the element graph and the passes' records: about
-250 bytes per face and 235-350 per point with the defaults, the interpreter included,
-measured with ``benchmarks/memory.py``; the table of kinds holds the figure per kind). Where the
+A run's peak grows with its elements (the element graph and the passes' records: beyond
+the interpreter's 100 MiB, about 216 bytes a face and 200-220 a point sampled on a
+surface with the defaults, measured with ``benchmarks/memory.py``; the table of kinds
+holds the figure per kind, with a margin). Where the
 estimate exceeds what this process may still allocate (the machine's available memory,
 or an address-space limit set with ``ulimit -v``), the run is refused with
 :class:`~superfacets.errors.MemoryLimitError` in one line, before reading or building
@@ -17,7 +18,8 @@ import sys
 
 from ..errors import MemoryLimitError
 
-__all__ = ["available_bytes", "check_memory", "give_back_free_memory", "give_back_zero_pages",
+__all__ = ["BASE_BYTES", "available_bytes", "check_memory", "estimated_peak", "tiles_that_fit",
+           "give_back_free_memory", "give_back_zero_pages",
            "small_pages", "discard_pages"]
 
 _found: dict = {}  # the C library's functions, once looked up (False: not available)
@@ -75,34 +77,96 @@ def available_bytes() -> int | None:
     return avail
 
 
-def check_memory(n_elements: int, bytes_per_element: int, what: str) -> None:
-    """Refuse a run whose estimated peak (``n_elements * bytes_per_element``) exceeds
-    what this process may still allocate (:func:`available_bytes`).
+#: A run's memory beyond its elements': the interpreter, numpy, scipy and the kernels
+#: (a new process of ``segment`` on a few thousand faces: 40-80 MiB; the per-element
+#: figures, ``ElementKind.peak_bytes``, were fitted with this base)
+BASE_BYTES = 100 * 2**20
+
+#: Tiles whose elements a tiled run holds at once, as a share of one tile's (its halo)
+_HALO_SHARE = 1.5
+
+
+def estimated_peak(n_elements: int, bytes_per_element: int) -> int:
+    """A run's estimated peak, in bytes: :data:`BASE_BYTES` and ``bytes_per_element``
+    for each element.
+
+    Examples
+    --------
+    >>> estimated_peak(1_000_000, 250) // 2**20
+    338
+    """
+    return BASE_BYTES + int(n_elements) * int(bytes_per_element)
+
+
+def tiles_that_fit(n_elements: int, bytes_per_element: int, avail: int, *,
+                   input_bytes: int = 0, most: int = 4096) -> int | None:
+    """The fewest tiles (2 .. ``most``) whose run fits in ``avail`` bytes: one tile's
+    elements and its halo at a time, beside ``input_bytes`` for each element of the
+    input (0 where the tiled run streams it from its file); None where none does (the
+    input alone does not fit, or tiles of 50 elements would not).
+
+    Examples
+    --------
+    >>> tiles_that_fit(10_000_000, 250, 2 * 2**30)
+    2
+    >>> tiles_that_fit(10_000_000, 250, 2**30, input_bytes=200) is None
+    True
+    """
+    left = avail - BASE_BYTES - int(n_elements) * int(input_bytes)
+    if left <= 0:
+        return None
+    t = -(-int(n_elements * bytes_per_element * _HALO_SHARE) // left)
+    t = max(t, 2)
+    return t if t <= most and n_elements // t >= 50 else None
+
+
+def check_memory(n_elements: int, bytes_per_element: int, what: str, *,
+                 tiles_help: bool = False, input_bytes: int = 0) -> None:
+    """Refuse a run whose estimated peak (:func:`estimated_peak`) exceeds what this
+    process may still allocate (:func:`available_bytes`).
+
+    ``SUPERFACETS_MEMORY_CHECK=off`` in the environment runs it anyway (where the
+    estimate reads high for an input, or the machine's swap is meant to be used).
 
     Parameters
     ----------
     n_elements : int
     bytes_per_element : int
-        The run's peak per element (``ElementKind.peak_bytes``).
+        The run's peak per element beyond :data:`BASE_BYTES` (``ElementKind.peak_bytes``).
     what : str
         The input and its elements, for the message (``"m.ply: 5,000,000 faces"``).
+    tiles_help : bool, default False
+        Whether a tiled run could take this input (faces or points): the message then
+        names the tile count that would fit (:func:`tiles_that_fit`), where one does.
+        A peak that one edge's faces make, or an input that alone does not fit, is
+        never sent to tiles.
+    input_bytes : int, default 0
+        Bytes per element that the input itself holds during a tiled run (0: streamed
+        from its file).
 
     Raises
     ------
     MemoryLimitError
-        Naming the estimate and what is available, and suggesting tiles.
+        Naming the estimate, what is available, and what would fit.
 
     Examples
     --------
-    >>> check_memory(1000, 450, "a small mesh")   # fits anywhere
+    >>> check_memory(1000, 250, "a small mesh")   # fits anywhere
     """
+    if os.environ.get("SUPERFACETS_MEMORY_CHECK", "").strip().lower() in ("off", "0", "no"):
+        return
     avail = available_bytes()
-    need = int(n_elements) * int(bytes_per_element)
-    if avail is not None and need > avail:
-        raise MemoryLimitError(
-            f"{what} need about {need / 2**30:.1f} GiB at the run's peak, and this process "
-            f"may use {avail / 2**30:.1f} GiB: segment it in tiles (--tiles N, "
-            "superfacets.segment_tiled) or on a larger machine", need, avail)
+    need = estimated_peak(n_elements, bytes_per_element)
+    if avail is None or need <= avail:
+        return
+    tiles = tiles_that_fit(n_elements, bytes_per_element, avail,
+                           input_bytes=input_bytes) if tiles_help else None
+    advice = (f"segment it in {tiles} tiles (--tiles {tiles}, superfacets.segment_tiled) or "
+              "on a larger machine" if tiles else "segment it on a larger machine")
+    raise MemoryLimitError(
+        f"{what} need about {need / 2**30:.1f} GiB at the run's peak, and this process "
+        f"may use {avail / 2**30:.1f} GiB: {advice} (SUPERFACETS_MEMORY_CHECK=off runs it "
+        "anyway)", need, avail)
 
 
 def give_back_free_memory() -> None:

@@ -8,8 +8,10 @@ drops non-manifold edges:
 
 - an edge with one face is an open boundary and gives no adjacency;
 - an edge with two faces gives one adjacency;
-- a **non-manifold** edge with ``s >= 3`` faces joins *every* pair of its
-  faces (``s (s - 1) / 2`` adjacencies), so no face is cut off;
+- a **non-manifold** edge with ``3 <= s <= 8`` faces joins *every* pair of its
+  faces (``s (s - 1) / 2`` adjacencies), so no face is cut off; beyond 8 (a fan of
+  copies, a "book" of faces on one edge), each face is joined to the next around the
+  edge and the last to the first (``s`` adjacencies: work in proportion to the faces);
 - a collapsed edge (both ends the same vertex, in a degenerate face) joins
   nothing;
 - two faces sharing more than one edge (duplicate faces) get a single
@@ -213,6 +215,26 @@ def _group_pairs_on_threads(group_pairs, half, owner, a, b):
     return group_pairs(half, owner, a, b)
 
 
+#: Memory of each face pair of the graph beyond a manifold mesh's 1.5 a face: its two CSR
+#: entries, adjacency number, pair, edge, weights and terms, bytes
+_PAIR_BYTES = 100
+
+
+def _check_pairs(m: int, n_pairs: int) -> None:
+    """Refuse, before the graph is built, a mesh whose edges shared by more than two faces
+    make far more face pairs than its faces (a manifold mesh has 1.5 a face): the memory
+    check counts them (:func:`superfacets._runtime.memory.check_memory`); tiles cannot
+    help (the pairs of one edge are in one tile)."""
+    extra = n_pairs - 3 * m // 2
+    if extra > m // 2:
+        from .._runtime.memory import check_memory
+        from .kinds import kind_of
+
+        per_face = kind_of("faces").peak_bytes + -(-extra * _PAIR_BYTES // max(m, 1))
+        check_memory(m, per_face, f"{m:,} faces with {n_pairs:,} face pairs (edges of "
+                     "more than two faces)")
+
+
 def build_face_graph(faces: np.ndarray, n_vertices: int, offsets: np.ndarray | None = None
                      ) -> FaceAdjacency:
     """Group mesh edges and build the face graph (see the module notes).
@@ -265,6 +287,7 @@ def build_face_graph(faces: np.ndarray, n_vertices: int, offsets: np.ndarray | N
     # edges (runs of equal (a, b)): open boundaries, and the face pairs across each,
     # all pairs for non-manifold edges, a degenerate face paired with itself left out
     one, lo, hi, ea, eb = _group_pairs_on_threads(group_pairs, half, owner, a, b)
+    _check_pairs(m, lo.shape[0])
     h_one = half[one]
     boundary_faces = (h_one // 3 if offsets is None else owner[h_one]).astype(np.int64)
     boundary_edges = np.stack([a[h_one], b[h_one]], axis=1).astype(np.int64)

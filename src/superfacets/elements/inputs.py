@@ -385,7 +385,8 @@ def prepared(obj, elements: str | None = None, *, n_segments: int | None = None)
     from .kinds import kind_of
 
     check_memory(n, kind_of(kind).peak_bytes,
-                 f"{getattr(data, 'name', '') or 'the input'}: {n:,} {kind}")
+                 f"{getattr(data, 'name', '') or 'the input'}: {n:,} {kind}",
+                 tiles_help=kind_of(kind).tiled_bytes is not None)  # (input held already)
     return kind, data
 
 

@@ -109,13 +109,19 @@ class ElementKind:
         What the segments are called in summaries: superfacets (faces and tetrahedra),
         superpoints (vertices and points).
     peak_bytes : int
-        A run's peak memory per element with the defaults, the interpreter included
-        (faces: 240 bytes measured on 6.8M faces; points: 234 on 10M points sampled on a
-        mesh, 249 on 2M where the interpreter weighs more, 346 on 10M points of LiDAR
-        sweeps before the latest savings; ``benchmarks/memory.py``); a
-        run whose estimate
-        exceeds what the process may use is refused before its graph is built
+        A run's peak memory per element with the defaults, beyond the interpreter's
+        (:data:`superfacets._runtime.memory.BASE_BYTES`): a new process of ``segment``
+        peaked at 100 MiB + 216 bytes a face on 1.7M and 6.8M faces, 100 MiB + 201-216
+        bytes a point on 1M and 3M points sampled on a mesh, 100 MiB + 626 bytes a vertex
+        on 3.4M vertices (their mesh's faces included), measured 2026-11-27 on this
+        project's 2-core machine. A run whose estimate exceeds what the process may use
+        is refused before its graph is built
         (:func:`superfacets._runtime.memory.check_memory`).
+    tiled_bytes : int or None
+        None where a tiled run (:func:`superfacets.segment_tiled`) does not take this
+        kind; else the bytes an element's input holds during one where the input is read
+        whole first (a file not streamed: a mesh's faces with their vertices, a cloud's
+        points), which the memory check adds to one tile's peak.
     exact_count : bool
         A run asked for ``n_segments`` returns exactly that many (points): segments made
         beyond it (regions no window reached) are merged, cheapest first
@@ -170,7 +176,8 @@ class ElementKind:
     rows: str = "n_faces"
     segment_word: str = "superpoints"
     objects: bool = False
-    peak_bytes: int = 450
+    peak_bytes: int = 250
+    tiled_bytes: int | None = None
     exact_count: bool = False
     single_weights: bool = False
     merge_from: int = 1
@@ -198,13 +205,13 @@ class ElementKind:
 KINDS = {k.name: k for k in (
     ElementKind("faces", "face", better_method=True, crease=0.1, smoothness=0.7,
                 swap_eta_convex=0.5, passes_after=1, hold_after=4.0, equal_weight=False,
-                segment_word="superfacets", objects=True),
+                segment_word="superfacets", objects=True, tiled_bytes=64),
     ElementKind("vertices", "vertex", better_method=True, exact_assignment=True, band=0.2,
-                rows="n_vertices"),
+                rows="n_vertices", peak_bytes=680),
     ElementKind("points", "point", exact_assignment=True, coarse_min_per_segment=1000,
                 coarse_per_segment=400,
                 coarse_neighbor_cap=True, auto_density=True, unit_sizes_in_levels=True,
-                neighborhood=True, cloud=True, rows="n_total", peak_bytes=420,
+                neighborhood=True, cloud=True, rows="n_total", peak_bytes=250, tiled_bytes=32,
                 exact_count=True, single_weights=True, merge_from=5),
     ElementKind("cells", "cell", dim=3, rows="n_tets", segment_word="superfacets"),
 )}
