@@ -48,7 +48,9 @@ def write_labels(path, labels, header: dict | Iterable[str] | None = None, *,
 
     Examples
     --------
-    >>> write_labels("labels.seg", [0, 1, 1]).read_text().split()
+    >>> import tempfile
+    >>> folder = tempfile.mkdtemp()
+    >>> write_labels(f"{folder}/labels.seg", [0, 1, 1]).read_text().split()
     ['0', '1', '1']
     """
     labels = check_labels(labels, None)
@@ -142,8 +144,10 @@ def write_segindices(path, labels, params: dict | None = None, scene_id: str = "
 
     Examples
     --------
-    >>> import json
-    >>> p = write_segindices("scene.segs.json", [0, 0, 1], {"n_segments": 2}, "scene")
+    >>> import json, tempfile
+    >>> folder = tempfile.mkdtemp()
+    >>> p = write_segindices(f"{folder}/scene.segs.json", [0, 0, 1], {"n_segments": 2},
+    ...                      "scene")
     >>> d = json.loads(p.read_text())
     >>> d["sceneId"], d["segIndices"]
     ('scene', [0, 0, 1])
@@ -185,7 +189,8 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
 
     Examples
     --------
-    >>> path = write_labels("run.seg", [0, 0, 1, 2])
+    >>> import tempfile
+    >>> path = write_labels(f"{tempfile.mkdtemp()}/run.seg", [0, 0, 1, 2])
     >>> read_labels(path, n_faces=4).tolist()
     [0, 0, 1, 2]
     """
