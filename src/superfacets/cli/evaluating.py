@@ -82,7 +82,7 @@ def cmd_evaluate(args) -> int:
                       tau=args.tau, ignore_label=args.ignore_label, precision=True)
     segs = kind_of(kind).segment_word
     print(f"{Path(args.mesh).name}: {n} {kind}, {m['segments']} {segs}, "
-          f"{len(gts)} ground truths")
+          f"{len(gts)} ground truth{'s' if len(gts) != 1 else ''}")
     print(f"undersegmentation_error {m['undersegmentation_error']:.4f}  (lower is better)")
     estimate = "; estimated on points" if kind_of(kind).cloud else ""
     print(f"compactness             {m['compactness']:.4f}  (lower is better; disk 3.545"
