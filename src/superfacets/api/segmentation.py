@@ -36,9 +36,10 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, features=None,
     Parameters
     ----------
     mesh : Mesh, trimesh.Trimesh or tuple of ((n, 3) float, (m, 3) int) ndarray, or a point cloud
-        Triangle or polygon mesh. Degenerate faces, duplicate faces, unreferenced
-        vertices, non-manifold edges and several connected components are
-        accepted (each component gets its own superfacets). Or a point
+        Triangle or polygon mesh. Degenerate faces, unreferenced vertices,
+        non-manifold edges and several connected components are accepted (each
+        component gets its own superfacets); copies of a face (the same vertices, in
+        any order) are one element and share its label. Or a point
         cloud (see :func:`superpoints`).
     n_segments : int, default 150
         Desired number of superfacets ``k``, ``1 <= k <= m``. The radius is

@@ -6,7 +6,22 @@ from __future__ import annotations
 from ..elements.kinds import kind_of
 from ..method.params import DEFAULTS
 
-__all__ = ["count_note"]
+__all__ = ["count_note", "duplicates_note"]
+
+
+def duplicates_note(data, kind: str) -> str | None:
+    """Copies of a face (the same vertices) are segmented as one element: say how many
+    share a label with an earlier face."""
+    if kind != "faces":
+        return None
+    from ..elements.faces import distinct_faces
+
+    found = distinct_faces(data)  # (from the face graph kept with the mesh)
+    if found is None:
+        return None
+    copies = data.n_faces - found[0].shape[0]
+    return (f"{copies:,} " + ("face is a copy" if copies == 1 else "faces are copies") +
+            " of an earlier face (the same vertices) and share its label")
 
 
 def count_note(args, data, result, kind: str) -> str | None:

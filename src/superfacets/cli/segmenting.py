@@ -10,7 +10,7 @@ import numpy as np
 
 from ..elements.kinds import kind_of
 from ..method.params import DEFAULTS
-from .notes import count_note
+from .notes import count_note, duplicates_note
 from .options import (
     add_adaptive_options,
     add_camera_options,
@@ -285,9 +285,9 @@ def cmd_segment(args) -> int:
     if not args.quiet:
         _say_what_was_written(seg_out, ply_out, png_out, html_out, report, args.up,
                               graph_out)
-        note = count_note(args, data, result, kind)
-        if note:
-            print(f"note: {note}", file=sys.stderr)
+        for note in (duplicates_note(data, kind), count_note(args, data, result, kind)):
+            if note:
+                print(f"note: {note}", file=sys.stderr)
     return 0
 
 

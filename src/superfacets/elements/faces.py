@@ -30,7 +30,7 @@ from .._kernels import native
 from . import graph as _graph
 from .graph import ElementGraph, cached_on, pairs_from_csr
 
-__all__ = ["FaceAdjacency", "build_face_graph", "face_graph"]
+__all__ = ["FaceAdjacency", "build_face_graph", "distinct_faces", "face_graph"]
 
 
 class FaceAdjacency(NamedTuple):
@@ -49,6 +49,9 @@ class FaceAdjacency(NamedTuple):
         Mesh edges used by exactly one face, ``a < b``.
     boundary_faces : (b,) int64 ndarray
         The face of each boundary edge.
+    repeated : int
+        Face pairs that share more than one edge (kept once): two triangles sharing two
+        edges have the same three vertices, duplicates (:func:`distinct_faces`).
     """
 
     pairs: np.ndarray
@@ -58,6 +61,7 @@ class FaceAdjacency(NamedTuple):
     dual_edge: np.ndarray
     boundary_edges: np.ndarray
     boundary_faces: np.ndarray
+    repeated: int = 0
 
 
 def face_graph(mesh) -> ElementGraph:
@@ -105,6 +109,7 @@ def face_graph(mesh) -> ElementGraph:
 def _build_face_graph_of(mesh) -> ElementGraph:
     topo = (build_face_graph(mesh.faces, mesh.n_vertices) if mesh.is_triangular else
             build_face_graph(np.asarray(mesh.corners), mesh.n_vertices, np.asarray(mesh.offsets)))
+    mesh.__dict__["_repeated_face_pairs"] = topo.repeated  # (for distinct_faces)
     v = mesh.vertices
 
     def edge_length(edges):  # |v_b - v_a| as np.linalg.norm(axis=1), in one kernel pass
@@ -138,6 +143,47 @@ def _build_face_graph_of(mesh) -> ElementGraph:
         edges=topo.edges, boundary_edges=topo.boundary_edges, terms_of=terms_of,
         rebuild={"normals": _MeshNormals(mesh), "pairs": csr_pairs, "dual_edge": csr_pairs,
                  "lengths": lambda g: {"lengths": edge_length(g.edges)}})
+
+
+def distinct_faces(mesh) -> tuple[np.ndarray, np.ndarray] | None:
+    """The first of each set of duplicate faces (the same vertices, in any order or
+    orientation), and the distinct face of every face; None where every face is distinct.
+
+    A segmentation takes each distinct face once (:func:`superfacets.segment`): copies of
+    a face share its element, and so its label. Found from the face graph (cached with the
+    mesh): only where two faces share more than one edge are the faces compared, so a
+    mesh without duplicates costs nothing more.
+
+    Parameters
+    ----------
+    mesh : Mesh
+
+    Returns
+    -------
+    (first, index) : ((d,) int64 ndarray, (m,) int64 ndarray), or None
+        ``first``: the distinct faces, by their first copy, ascending; ``index[f]``: the
+        row of ``first`` that face ``f`` is a copy of (``first[index[f]]`` has its
+        vertices).
+
+    Examples
+    --------
+    >>> from superfacets import Mesh
+    >>> m = Mesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], [[0, 1, 2], [1, 3, 2], [2, 1, 0]])
+    >>> first, index = distinct_faces(m)
+    >>> first.tolist(), index.tolist()
+    ([0, 1], [0, 1, 0])
+    """
+    face_graph(mesh)  # (built once: it counts the faces sharing more than one edge)
+    if not mesh.__dict__.get("_repeated_face_pairs", 0):
+        return None
+    _, first, inverse = np.unique(np.sort(mesh.faces, axis=1), axis=0, return_index=True,
+                                  return_inverse=True)
+    if first.shape[0] == mesh.n_faces:
+        return None
+    order = np.argsort(first, kind="stable")  # the distinct faces in the input's order
+    rank = np.empty_like(order)
+    rank[order] = np.arange(order.shape[0])
+    return first[order].astype(np.int64), rank[inverse.ravel()].astype(np.int64)
 
 
 class _MeshNormals:
@@ -315,4 +361,5 @@ def build_face_graph(faces: np.ndarray, n_vertices: int, offsets: np.ndarray | N
         dual_edge=dual_edge,
         boundary_edges=boundary_edges,
         boundary_faces=boundary_faces,
+        repeated=(n_max - n_csr) // 2,
     )

@@ -15,7 +15,7 @@ import numpy as np
 
 from .._runtime.arrays import gather
 from ..method.params import DEFAULTS
-from .graph import ElementGraph
+from .graph import ElementGraph, cached_on
 
 _N_NEIGHBORS = DEFAULTS.n_neighbors
 
@@ -71,7 +71,7 @@ class ElementInput(NamedTuple):
         None where the input has no colours
         (:meth:`superfacets.inputs.mesh.Mesh.element_colors`)."""
         if hasattr(self.source, "element_colors"):
-            return self.source.element_colors("faces" if self.index is None else "vertices")
+            return self.source.element_colors(self.graph.kind)
         return getattr(self.source, "colors", None)
 
     def first_rows(self, elements: np.ndarray) -> np.ndarray:
@@ -208,9 +208,24 @@ def _vertices(mesh, n_neighbors, neighbor_radius) -> ElementInput:
 
 
 def _faces(mesh, n_neighbors, neighbor_radius) -> ElementInput:
-    from .faces import face_graph
+    from .faces import distinct_faces, face_graph
 
-    return ElementInput(face_graph(mesh), None, mesh)
+    found = distinct_faces(mesh)
+    if found is None:
+        return ElementInput(face_graph(mesh), None, mesh)
+    # copies of a face are one element: the graph of the distinct faces, kept with the mesh
+    first, index = found
+    return cached_on(mesh, "_distinct_faces_input",
+                     lambda: ElementInput(face_graph(_faces_of(mesh, first)), index, mesh))
+
+
+def _faces_of(mesh, first):
+    """The mesh of the faces ``first`` of ``mesh`` (its vertices, colours and name)."""
+    from ..inputs.mesh import Mesh
+
+    face_colors = None if mesh.face_colors is None else mesh.face_colors[first]
+    return Mesh(mesh.vertices, mesh.faces[first], name=mesh.name, colors=mesh.colors,
+                face_colors=face_colors)
 
 
 def _used_vertices(mesh) -> int:

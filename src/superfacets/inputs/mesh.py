@@ -66,8 +66,8 @@ class Mesh:
 
     Notes
     -----
-    Degenerate (zero-area) faces, duplicate faces, unreferenced vertices,
-    several connected components and non-manifold edges are valid input;
+    Degenerate (zero-area) faces, duplicate faces (one element: ``distinct_faces``),
+    unreferenced vertices, several components and non-manifold edges are valid input;
     so are non-planar and non-convex polygons (their area and normal come
     from Newell's method). The arrays are stored as read-only views; the
     caller's arrays are never modified.
