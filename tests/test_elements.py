@@ -1081,3 +1081,9 @@ def test_copies_of_a_face_are_one_element_and_share_its_label(capsys, tmp_path):
     trimesh.Trimesh(mesh.vertices, mesh.faces, process=False).export(path)
     assert main(["segment", str(path), "-k", "40", "-o", str(tmp_path / "c.seg")]) == 0
     assert "note: 550 faces are copies of an earlier face" in capsys.readouterr().err
+    pts = np.random.default_rng(0).random((2000, 3))
+    np.save(tmp_path / "p.npy", np.r_[pts, pts[:30]])
+    assert main(["segment", str(tmp_path / "p.npy"), "-k", "20", "-o",
+                 str(tmp_path / "p.seg")]) == 0
+    assert ("note: 30 points are at the position of an earlier point and share its label"
+            in capsys.readouterr().err)

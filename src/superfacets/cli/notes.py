@@ -9,19 +9,29 @@ from ..method.params import DEFAULTS
 __all__ = ["count_note", "duplicates_note"]
 
 
-def duplicates_note(data, kind: str) -> str | None:
-    """Copies of a face (the same vertices) are segmented as one element: say how many
-    share a label with an earlier face."""
-    if kind != "faces":
-        return None
-    from ..elements.faces import distinct_faces
+def duplicates_note(args, data, kind: str) -> str | None:
+    """Copies of a face (the same vertices) and points at the same position are segmented
+    as one element: say how many share a label with an earlier one."""
+    if kind == "faces":
+        from ..elements.faces import distinct_faces
 
-    found = distinct_faces(data)  # (from the face graph kept with the mesh)
-    if found is None:
+        found = distinct_faces(data)  # (from the face graph kept with the mesh)
+        copies = 0 if found is None else data.n_faces - found[0].shape[0]
+        what = ("face is a copy" if copies == 1 else "faces are copies") + \
+            " of an earlier face (the same vertices)"
+    elif kind == "points":
+        import numpy as np
+
+        from ..elements.inputs import elements_of
+
+        src = elements_of(data, kind, n_neighbors=args.neighbors,
+                          neighbor_radius=args.neighbor_radius)  # (kept with the input)
+        copies = int(np.count_nonzero(src.index >= 0)) - src.graph.n_elements
+        what = ("point is" if copies == 1 else "points are") + \
+            " at the position of an earlier point"
+    else:
         return None
-    copies = data.n_faces - found[0].shape[0]
-    return (f"{copies:,} " + ("face is a copy" if copies == 1 else "faces are copies") +
-            " of an earlier face (the same vertices) and share its label")
+    return f"{copies:,} {what} and share its label" if copies else None
 
 
 def count_note(args, data, result, kind: str) -> str | None:

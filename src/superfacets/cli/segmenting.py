@@ -285,7 +285,7 @@ def cmd_segment(args) -> int:
     if not args.quiet:
         _say_what_was_written(seg_out, ply_out, png_out, html_out, report, args.up,
                               graph_out)
-        for note in (duplicates_note(data, kind), count_note(args, data, result, kind)):
+        for note in (duplicates_note(args, data, kind), count_note(args, data, result, kind)):
             if note:
                 print(f"note: {note}", file=sys.stderr)
     return 0
