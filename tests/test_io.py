@@ -411,14 +411,21 @@ def test_a_run_that_would_not_fit_is_refused_in_one_line(tmp_path, monkeypatch, 
     with pytest.raises(MemoryLimitError, match=r"5,120 faces need about .* GiB .* larger "
                        r"machine \(SUPERFACETS_MEMORY_CHECK=off runs it anyway\)") as exc:
         segment(mesh, 10)
-    assert "tiles" not in str(exc.value)  # (the interpreter alone would not fit)
-    # room for a third of the run: tiles are named, with a count that fits
-    third = memory.BASE_BYTES + 5120 * 250 // 3
-    monkeypatch.setattr(memory, "available_bytes", lambda: third)
+    assert "tiles" not in str(exc.value)  # (a tiled run of a mesh peaks higher)
     assert main(["segment", str(path), "-k", "10", "-o", str(tmp_path / "b.seg")]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "superfacets: error:" in err and "--tiles 5" in err
+    assert err.count("\n") == 1 and "superfacets: error:" in err and "larger machine" in err
     assert not (tmp_path / "b.seg").exists()
+    # points: room for the tiled run's rows and a fifth of the run: tiles are named
+    np.save(tmp_path / "p.npy", np.random.default_rng(0).random((20_000, 3)))
+    room = 20_000 * 100 + 20_000 * 250 // 4
+    monkeypatch.setattr(memory, "resident_bytes", lambda: memory.BASE_BYTES)
+    monkeypatch.setattr(memory, "available_bytes", lambda: room)
+    assert main(["segment", str(tmp_path / "p.npy"), "-k", "10", "-o",
+                 str(tmp_path / "p.seg")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "(--tiles 5," in err, err
+    assert not (tmp_path / "p.seg").exists()
     monkeypatch.setenv("SUPERFACETS_MEMORY_CHECK", "off")  # the override
     assert segment(mesh, 10).n_segments == 10
     monkeypatch.delenv("SUPERFACETS_MEMORY_CHECK")
@@ -499,7 +506,8 @@ def test_the_memory_check_counts_the_face_pairs_of_a_fan_and_sends_it_not_to_til
     n = 6000
     vertices = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.5]])
     faces = np.r_[np.tile([[0, 1, 2]], (n, 1)), [[1, 3, 2]]]
-    faces_only = memory.estimated_peak(n + 1, 250)
+    monkeypatch.setattr(memory, "resident_bytes", lambda: memory.BASE_BYTES)
+    faces_only = memory.estimated_peak(n + 1, 250, held=memory.BASE_BYTES)
     monkeypatch.setattr(memory, "available_bytes", lambda: faces_only + 1000)
     with pytest.raises(MemoryLimitError, match=r"6,001 faces with 18,001 face pairs") as exc:
         segment((vertices, faces), 2)

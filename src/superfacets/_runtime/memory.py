@@ -18,7 +18,8 @@ import sys
 
 from ..errors import MemoryLimitError
 
-__all__ = ["BASE_BYTES", "available_bytes", "check_memory", "estimated_peak", "tiles_that_fit",
+__all__ = ["BASE_BYTES", "available_bytes", "check_memory", "estimated_peak", "resident_bytes",
+           "tiles_that_fit",
            "give_back_free_memory", "give_back_zero_pages",
            "small_pages", "discard_pages"]
 
@@ -82,37 +83,51 @@ def available_bytes() -> int | None:
 #: figures, ``ElementKind.peak_bytes``, were fitted with this base)
 BASE_BYTES = 100 * 2**20
 
-#: Tiles whose elements a tiled run holds at once, as a share of one tile's (its halo)
-_HALO_SHARE = 1.5
+#: A tile's elements with its halo, as a share of its core's (3M points in 3 tiles:
+#: 1.13; room for uneven tiles)
+_HALO_SHARE = 1.25
 
 
-def estimated_peak(n_elements: int, bytes_per_element: int) -> int:
-    """A run's estimated peak, in bytes: :data:`BASE_BYTES` and ``bytes_per_element``
-    for each element.
+def resident_bytes() -> int:
+    """This process's resident memory now (0 where it cannot be read)."""
+    try:
+        with open("/proc/self/statm") as f:
+            return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, IndexError):
+        return 0
+
+
+def estimated_peak(n_elements: int, bytes_per_element: int, *, held: int = 0) -> int:
+    """A run's estimated peak, in bytes, beyond what the process holds now (``held``):
+    what :data:`BASE_BYTES` has left beyond it, and ``bytes_per_element`` for each
+    element.
 
     Examples
     --------
     >>> estimated_peak(1_000_000, 250) // 2**20
     338
+    >>> estimated_peak(1_000_000, 250, held=2**30) // 2**20   # (the interpreter held)
+    238
     """
-    return BASE_BYTES + int(n_elements) * int(bytes_per_element)
+    return max(BASE_BYTES - int(held), 0) + int(n_elements) * int(bytes_per_element)
 
 
 def tiles_that_fit(n_elements: int, bytes_per_element: int, avail: int, *,
                    input_bytes: int = 0, most: int = 4096) -> int | None:
     """The fewest tiles (2 .. ``most``) whose run fits in ``avail`` bytes: one tile's
     elements and its halo at a time, beside ``input_bytes`` for each element of the
-    input (0 where the tiled run streams it from its file); None where none does (the
-    input alone does not fit, or tiles of 50 elements would not).
+    whole input (what the tiled run holds of it: ``ElementKind.tiled_bytes``, and the
+    input's own arrays where it is read whole); None where none does (that alone does not
+    fit, or tiles of 50 elements would not).
 
     Examples
     --------
-    >>> tiles_that_fit(10_000_000, 250, 2 * 2**30)
-    2
+    >>> tiles_that_fit(10_000_000, 250, 2 * 2**30, input_bytes=100)
+    3
     >>> tiles_that_fit(10_000_000, 250, 2**30, input_bytes=200) is None
     True
     """
-    left = avail - BASE_BYTES - int(n_elements) * int(input_bytes)
+    left = avail - int(n_elements) * int(input_bytes)
     if left <= 0:
         return None
     t = -(-int(n_elements * bytes_per_element * _HALO_SHARE) // left)
@@ -141,8 +156,7 @@ def check_memory(n_elements: int, bytes_per_element: int, what: str, *,
         A peak that one edge's faces make, or an input that alone does not fit, is
         never sent to tiles.
     input_bytes : int, default 0
-        Bytes per element that the input itself holds during a tiled run (0: streamed
-        from its file).
+        Bytes a tiled run holds for each element of the whole input (:func:`tiles_that_fit`).
 
     Raises
     ------
@@ -156,7 +170,7 @@ def check_memory(n_elements: int, bytes_per_element: int, what: str, *,
     if os.environ.get("SUPERFACETS_MEMORY_CHECK", "").strip().lower() in ("off", "0", "no"):
         return
     avail = available_bytes()
-    need = estimated_peak(n_elements, bytes_per_element)
+    need = estimated_peak(n_elements, bytes_per_element, held=resident_bytes())
     if avail is None or need <= avail:
         return
     tiles = tiles_that_fit(n_elements, bytes_per_element, avail,

@@ -32,14 +32,14 @@ def check_header(path) -> None:
 
     counts = header_counts(path)
     # (binary PLY, LAS/LAZ and .npy files are read a region at a time by a tiled run;
-    # any other file is read whole first, and must fit beside the tiles)
+    # any other file is read whole first: its points, 32 bytes each, beside the tiles)
     streamed = Path(path).suffix.lower() in (".ply", ".las", ".laz", ".npy")
     for kind in ("faces", "points"):
         if counts and counts.get(kind):
             rules = kind_of(kind)
             check_memory(counts[kind], rules.peak_bytes, f"{path}: {counts[kind]:,} {kind}",
                          tiles_help=rules.tiled_bytes is not None,
-                         input_bytes=0 if streamed else rules.tiled_bytes)
+                         input_bytes=(rules.tiled_bytes or 0) + (0 if streamed else 32))
 
 
 def read_usable(path, *, clouds: bool = False):

@@ -401,7 +401,8 @@ def prepared(obj, elements: str | None = None, *, n_segments: int | None = None)
 
     check_memory(n, kind_of(kind).peak_bytes,
                  f"{getattr(data, 'name', '') or 'the input'}: {n:,} {kind}",
-                 tiles_help=kind_of(kind).tiled_bytes is not None)  # (input held already)
+                 tiles_help=kind_of(kind).tiled_bytes is not None,
+                 input_bytes=kind_of(kind).tiled_bytes or 0)  # (the input is held already)
     return kind, data
 
 

@@ -118,10 +118,12 @@ class ElementKind:
         is refused before its graph is built
         (:func:`superfacets._runtime.memory.check_memory`).
     tiled_bytes : int or None
-        None where a tiled run (:func:`superfacets.segment_tiled`) does not take this
-        kind; else the bytes an element's input holds during one where the input is read
-        whole first (a file not streamed: a mesh's faces with their vertices, a cloud's
-        points), which the memory check adds to one tile's peak.
+        Bytes a tiled run (:func:`superfacets.segment_tiled`) holds for each element of
+        the whole input beside one tile's run (its buckets, rows and labels: 3M points
+        in 8 and 16 tiles peaked at 371-381 MiB); the memory check names tiles only for
+        kinds that have it. None where tiles do not lower the peak: a tiled run of a
+        mesh peaks higher than one run (1.7M faces: 822-1,042 MiB in 8 to 2 tiles
+        against 464 MiB).
     exact_count : bool
         A run asked for ``n_segments`` returns exactly that many (points): segments made
         beyond it (regions no window reached) are merged, cheapest first
@@ -205,13 +207,13 @@ class ElementKind:
 KINDS = {k.name: k for k in (
     ElementKind("faces", "face", better_method=True, crease=0.1, smoothness=0.7,
                 swap_eta_convex=0.5, passes_after=1, hold_after=4.0, equal_weight=False,
-                segment_word="superfacets", objects=True, tiled_bytes=64),
+                segment_word="superfacets", objects=True),
     ElementKind("vertices", "vertex", better_method=True, exact_assignment=True, band=0.2,
                 rows="n_vertices", peak_bytes=680),
     ElementKind("points", "point", exact_assignment=True, coarse_min_per_segment=1000,
                 coarse_per_segment=400,
                 coarse_neighbor_cap=True, auto_density=True, unit_sizes_in_levels=True,
-                neighborhood=True, cloud=True, rows="n_total", peak_bytes=250, tiled_bytes=32,
+                neighborhood=True, cloud=True, rows="n_total", peak_bytes=250, tiled_bytes=100,
                 exact_count=True, single_weights=True, merge_from=5),
     ElementKind("cells", "cell", dim=3, rows="n_tets", segment_word="superfacets"),
 )}

@@ -34,6 +34,7 @@ end. Only the labels (8 bytes per element) and the centers are gathered here.
 from __future__ import annotations
 
 import math
+import re
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -440,6 +441,9 @@ def _gather(engine: Engine, tasks: list, phase: str, progress: bool) -> list:
     out = []
     for o in results:
         if "error" in o:
-            raise SuperfacetsError(f"tile {o['tile']} ({phase}): {o['error']}")
+            # (a tile's memory check speaks of that tile: more of them, not "N tiles")
+            why = re.sub(r"segment it in \d+ tiles \(--tiles \d+, superfacets\.segment_tiled\)",
+                         "segment it in more tiles (--tiles)", o["error"])
+            raise SuperfacetsError(f"tile {o['tile']} ({phase}): {why}")
         out.append(o)
     return sorted(out, key=lambda o: o["tile"])
