@@ -4,10 +4,7 @@ import numpy as np
 import pytest
 
 from superfacets import segment
-from superfacets.elements.points import point_graph
-from superfacets.errors import ParameterError
-from superfacets.inputs.cloud import PointCloud
-from superfacets.method.adaptive import (
+from superfacets.elements.density import (
     AUTO_DENSITY,
     AUTO_SPREAD,
     adapted_graph,
@@ -17,6 +14,9 @@ from superfacets.method.adaptive import (
     size_spread,
     window_factors,
 )
+from superfacets.elements.points import point_graph
+from superfacets.errors import ParameterError
+from superfacets.inputs.cloud import PointCloud
 
 
 def two_density_plane(seed=0):
@@ -210,9 +210,9 @@ def test_neighbour_means_come_from_the_csr_layout_as_from_the_pairs():
     """Known answer: the windows' neighbour averaging reads the CSR layout (a point graph
     then never builds its pairs) and gives np.bincount's sums over the pairs bit for
     bit, on values spread over six orders of magnitude."""
+    from superfacets.elements.density import _neighbour_mean
     from superfacets.elements.points import point_graph
     from superfacets.inputs.cloud import PointCloud
-    from superfacets.method.adaptive import _neighbour_mean
 
     rng = np.random.default_rng(7)
     g = point_graph(PointCloud(rng.random((5000, 3)) ** 3)).graph

@@ -4,8 +4,8 @@ from conftest import grid_mesh
 
 from superfacets import enforce_connectivity
 from superfacets.elements import face_graph
+from superfacets.elements.labels import relabel_dense
 from superfacets.method.connectivity import label_components
-from superfacets.method.labels import relabel_dense
 
 
 def cell_labels(mesh, fn):

@@ -20,7 +20,7 @@ from superfacets import (
 )
 from superfacets.elements import face_graph
 from superfacets.io import atomic_write
-from superfacets.viz.colors import superfacet_adjacency
+from superfacets.io.colors import superfacet_adjacency
 
 
 @pytest.fixture

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from superfacets import ParameterError
-from superfacets.method.labels import check_labels, relabel_dense
+from superfacets.elements.labels import check_labels, relabel_dense
 
 
 def test_check_labels_accepts_one_integer_per_element():

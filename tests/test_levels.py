@@ -208,25 +208,15 @@ def test_the_examples_in_the_docstrings_run(module):
     assert result.attempted > 0 and result.failed == 0
 
 
-def test_the_old_names_still_work_for_one_release_with_a_warning():
-    """``compactness=`` (hierarchy, adaptive levels), ``level_compactness`` (function,
-    batch keyword, ``--level-compactness``) and ``result.radius`` are deprecated aliases."""
+def test_the_old_names_are_gone():
+    """``compactness=``, ``level_compactness``, ``--level-compactness`` and
+    ``result.radius`` (renamed before any release) are not kept."""
     from superfacets.cli import build_parser
-    from superfacets.graph.hierarchy import AUTO_COMPACTNESS, level_compactness
 
     r = segment(grid_mesh(20, 20), 30)
-    with pytest.warns(DeprecationWarning, match="compactness= is now extent_weight="):
-        old = r.hierarchy([5], cost="planarity", compactness=0.2).parents
-    new = r.hierarchy([5], cost="planarity", extent_weight=0.2).parents
-    assert all((a == b).all() for a, b in zip(old, new))
-    with pytest.raises(ParameterError, match="not both extent_weight and compactness"):
-        with pytest.warns(DeprecationWarning):
-            r.hierarchy([5], cost="planarity", compactness=0.2, extent_weight=0.1)
-    with pytest.warns(DeprecationWarning, match="level_extent_weight"):
-        assert level_compactness(r.elements.graph) == 0.0
-    assert AUTO_COMPACTNESS == AUTO_EXTENT_WEIGHT
-    with pytest.warns(DeprecationWarning, match="mesh_radius"):
-        assert r.radius == r.mesh_radius > 0
-    args = build_parser().parse_args(["segment", "m.off", "--adaptive", "--level-compactness",
-                                      "0.2"])
-    assert args.extent_weight == 0.2
+    with pytest.raises(TypeError):
+        r.hierarchy([5], cost="planarity", compactness=0.2)
+    assert not hasattr(r, "radius")
+    with pytest.raises(SystemExit):
+        build_parser().parse_args(["segment", "m.off", "--adaptive", "--level-compactness",
+                                   "0.2"])

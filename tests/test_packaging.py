@@ -152,7 +152,7 @@ def test_public_functions_raise_the_package_errors(sphere, call, kind, tmp_path,
 
 def test_metrics_and_colors_refuse_wrong_labels_with_one_error_type(sphere):
     from superfacets.evaluation.metrics import compactness, evaluate
-    from superfacets.viz.colors import face_colors
+    from superfacets.io.colors import face_colors
 
     for call in (lambda: compactness(sphere, [0, 1]), lambda: face_colors(sphere, [0]),
                  lambda: evaluate(sphere, np.zeros(sphere.n_faces, int), [np.zeros(4, int)])):

@@ -16,8 +16,8 @@ from PIL import Image
 from superfacets import ParameterError, superfacets, write_labels, write_mesh
 from superfacets.cli import main
 from superfacets.elements import face_graph
+from superfacets.io.colors import PALETTE, boundary_edges
 from superfacets.viz.camera import view_frame
-from superfacets.viz.colors import PALETTE, boundary_edges
 from superfacets.viz.html import html_page, write_html
 from superfacets.viz.render import render, render_panel
 

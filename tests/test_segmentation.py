@@ -311,8 +311,8 @@ def test_optimized_path_gives_the_labels_of_the_straightforward_one(
     # distances tie exactly: the center of lowest index must win them, across threads too
     import straightforward
 
+    from superfacets.elements.labels import relabel_dense
     from superfacets.method import classify
-    from superfacets.method.labels import relabel_dense
 
     if source == "grid":
         mesh = grid_mesh(70, 60)
@@ -600,7 +600,7 @@ def test_paper_switch_gives_the_straightforward_papers_labels(sphere, valley):
     # paper=True: the method as published, bit for bit, whatever the package's defaults
     import straightforward
 
-    from superfacets.method.labels import relabel_dense
+    from superfacets.elements.labels import relabel_dense
 
     for mesh, k in ((sphere, 40), (valley, 12)):
         ref, _ = straightforward.segment_labels(mesh, k, alpha=200.0, max_iter=50)

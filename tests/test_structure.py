@@ -14,38 +14,25 @@ import pytest
 
 SRC = Path(__file__).resolve().parents[1] / "src" / "superfacets"
 
-#: Layers, lowest first: a module may import modules of its own layer or of a lower
-#: one. A module's layer is that of the longest prefix listed here.
+#: Layers, lowest first, one line a floor of folders (README "Layout"): a module may
+#: import modules of its own folder or of a lower floor, never of a higher one, nor of
+#: another folder of its own floor. A module's layer is that of the longest prefix listed.
 LAYERS = (
-    # foundations: no knowledge of meshes (errors, checks, the declarations of the
-    # parameters and of the kinds of element, labels, kernels, threads and extras)
-    ("superfacets._version", "superfacets.errors", "superfacets.checks", "superfacets._runtime",
-     "superfacets._kernels", "superfacets.elements.kinds", "superfacets.method.params",
-     "superfacets.method.rules",
-     "superfacets.method.labels", "superfacets.viz.camera", "superfacets.inputs.rgb"),
-    # inputs: validated meshes, clouds and tetrahedral meshes, read from files or objects
-    ("superfacets.inputs", "superfacets.io.volumes", "superfacets.io.regions",
-     "superfacets.io.headers", "superfacets.io.files", "superfacets.io.ply",
-     "superfacets.io.labels", "superfacets.io.meshes", "superfacets.io.clouds"),
-    # element graphs of the inputs
-    ("superfacets.elements",),
-    # the method's pieces, the superfacet graph and the measures of a result
-    ("superfacets.method", "superfacets.graph", "superfacets.evaluation.metrics",
-     "superfacets.evaluation.contingency",
-     "superfacets.evaluation.boundaries", "superfacets.viz.colors"),
-    # the method, one run: its stages in order, the public functions, one tile
-    ("superfacets.method.stages", "superfacets.method.finish", "superfacets.method.merges",
-     "superfacets.method.pipeline",
-     "superfacets.api",
-     "superfacets.scale.tiling", "superfacets.scale.tile_layout", "superfacets.scale.tile_merges"),
-    # every method alike
-    ("superfacets.evaluation.baselines", "superfacets.evaluation.methods"),
-    # what is made of results: files, pictures, pages, experiments, batches, tiled runs
-    ("superfacets.io", "superfacets.viz", "superfacets.evaluation", "superfacets.scale"),
-    # the command line
-    ("superfacets.cli", "superfacets.__main__"),
-    # the public facade (imports everything lazily; nothing imports it)
-    ("superfacets",),
+    ("superfacets._version", "superfacets.errors"),  # what every module may raise
+    ("superfacets._kernels",),  # the compiled kernels
+    ("superfacets.checks",),  # one rule for each kind of argument
+    ("superfacets._runtime",),  # threads, memory, signals, optional extras
+    ("superfacets.inputs",),  # validated meshes, clouds and tetrahedral meshes
+    ("superfacets.elements",),  # their element graphs, the kinds, labels, density
+    ("superfacets.io",),  # files: reading, writing, labels, colours
+    ("superfacets.graph",),  # the superfacet graph and the hierarchy
+    ("superfacets.method",),  # the method: parameters, stages, one run
+    ("superfacets.api",),  # the public functions and their results
+    ("superfacets.viz", "superfacets.evaluation"),  # pictures; measures, baselines, reports
+    ("superfacets.scale",),  # tiles, batches, experiments
+    ("superfacets.cli",),  # the command line
+    ("superfacets.__main__",),  # python -m superfacets
+    ("superfacets",),  # the public facade (imports everything lazily; nothing imports it)
 )
 
 #: At most this many entries at the package's top (besides __init__, __main__, _version
@@ -140,11 +127,26 @@ def test_every_module_has_a_layer():
         layer_of(name)
 
 
+def _folder(name: str) -> str:
+    """The sub-package (or top module) a module belongs to: its folder."""
+    return ".".join(name.split(".")[:2])
+
+
 def test_no_import_runs_up_the_layers():
     upward = sorted(f"{a} (layer {layer_of(a)}) imports {b} (layer {layer_of(b)})"
                     for a, targets in GRAPH.items() for b in targets
                     if layer_of(b) > layer_of(a))
     assert upward == [], "\n".join(upward)
+
+
+def test_no_two_folders_import_each_other():
+    """Folders are floors: between two folders imports run one way (on one floor, none)."""
+    edges = {(_folder(a), _folder(b)) for a, targets in GRAPH.items() for b in targets
+             if _folder(a) != _folder(b)}
+    both = sorted(f"{a} <-> {b}" for a, b in edges if (b, a) in edges and a < b)
+    same = sorted(f"{a} -> {b}" for a, b in edges
+                  if layer_of(a) == layer_of(b) and a != "superfacets")
+    assert both == [] and same == [], both + same
 
 
 def test_no_import_circle():
@@ -198,21 +200,10 @@ def test_no_private_name_crosses_a_module():
     assert not found, "\n".join(found)
 
 
-def test_old_module_paths_still_import_for_one_release():
-    """``superfacets.metrics`` (before the sub-packages) gives the module now at
-    ``superfacets.evaluation.metrics``, with a DeprecationWarning naming the new path."""
+def test_old_module_paths_are_gone():
+    """The import paths from before the sub-packages (never released) are not kept."""
     import importlib
-    import sys
 
-    import superfacets.evaluation.metrics as metrics
-    import superfacets.scale.runner.tiles as tiles
-
-    for old in ("superfacets.metrics", "superfacets.runner.tiles"):
-        sys.modules.pop(old, None)
-    with pytest.warns(DeprecationWarning, match="superfacets.evaluation.metrics"):
-        assert importlib.import_module("superfacets.metrics") is metrics
-    with pytest.warns(DeprecationWarning, match="superfacets.scale.runner.tiles"):
-        assert importlib.import_module("superfacets.runner.tiles") is tiles
-    from superfacets import metrics as attribute
-
-    assert attribute is metrics
+    for old in ("superfacets.metrics", "superfacets.runner", "superfacets.params"):
+        with pytest.raises(ModuleNotFoundError):
+            importlib.import_module(old)

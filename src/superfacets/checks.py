@@ -20,7 +20,7 @@ import numpy as np
 from .errors import ParameterError
 
 __all__ = ["check_int", "check_number", "check_positive", "check_nonneg", "check_bool",
-           "check_choice", "check_n_segments", "check_threads", "max_threads", "renamed",
+           "check_choice", "check_n_segments", "check_threads", "max_threads",
            "not_real", "check_real"]
 
 
@@ -283,45 +283,6 @@ def check_choice(name: str, value, choices) -> str:
     if not isinstance(value, str) or value not in choices:
         raise ParameterError(f"{name} must be one of {', '.join(choices)}; got {_shown(value)}")
     return value
-
-
-def renamed(new_value, old_value, new: str, old: str, default=None):
-    """The value of a keyword renamed ``old`` -> ``new``, kept for one release.
-
-    Parameters
-    ----------
-    new_value, old_value : object
-        What was given under each name (None: not given).
-    new, old : str
-        The two names.
-    default : object, optional
-        The new keyword's default (given together with the old name is no conflict).
-
-    Returns
-    -------
-    object
-        ``old_value`` (with a :class:`DeprecationWarning`) when the old name was given,
-        else ``new_value``.
-
-    Raises
-    ------
-    ParameterError
-        If both names were given.
-
-    Examples
-    --------
-    >>> renamed(0.5, None, "extent_weight", "compactness")
-    0.5
-    """
-    if old_value is None:
-        return new_value
-    import warnings
-
-    warnings.warn(f"{old}= is now {new}= (the old name goes in the next release)",
-                  DeprecationWarning, stacklevel=3)
-    if new_value is not None and new_value != default:
-        raise ParameterError(f"give {new}, not both {new} and {old}")
-    return old_value
 
 
 def check_n_segments(n_segments, m: int, kind: str = "faces") -> int:

@@ -68,7 +68,7 @@ def queue_push(qface, qdist, qnext, head, bmask, n, g, nd, inv_width, cur):
 def window_of(window_r2, wscale, f):
     """The squared window of an expansion from face ``f``: ``window_r2``, times
     ``wscale[f]`` where ``wscale`` is not empty (content-sensitive runs: a
-    center's window scaled by ``1 / s^2`` of its element, :mod:`superfacets.method.adaptive`)."""
+    center's window scaled by ``1 / s^2`` of its element, :mod:`superfacets.elements.density`)."""
     if wscale.shape[0] > 0:
         return window_r2 * wscale[f]
     return window_r2

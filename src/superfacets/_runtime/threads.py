@@ -22,7 +22,7 @@ def default_threads() -> int:
     n = _limit.get()
     if n is not None:
         return n
-    from ..method.params import check_threads
+    from ..checks import check_threads
 
     return check_threads(None)
 

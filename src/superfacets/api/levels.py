@@ -18,7 +18,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..method.params import check_int, check_nonneg, renamed
+from ..checks import check_int, check_nonneg
 
 __all__ = ["adaptive_superpoints", "adaptive_segment", "START"]
 
@@ -29,8 +29,7 @@ START = 10
 
 
 def adaptive_superpoints(obj, n_segments: int, *, start: int = START,
-                         extent_weight: float | None = None, compactness: float | None = None,
-                         **options) -> np.ndarray:
+                         extent_weight: float | None = None, **options) -> np.ndarray:
     """Superpoints (or superfacets) sized by what the surface holds: flat regions merged.
 
     Parameters
@@ -48,8 +47,6 @@ def adaptive_superpoints(obj, n_segments: int, *, start: int = START,
         :func:`superfacets.graph.hierarchy.hierarchy`). Default: 0.01 on a scan of
         uneven density (a LiDAR sweep), else 0
         (:func:`~superfacets.graph.hierarchy.level_extent_weight`).
-    compactness : float, optional
-        The old name of ``extent_weight`` (deprecated; one release).
     **options
         The other keyword arguments of :func:`superfacets.segment` (``beta``
         also weighs the colour difference of a merge).
@@ -81,14 +78,13 @@ def adaptive_superpoints(obj, n_segments: int, *, start: int = START,
     6
     """
     return np.asarray(adaptive_segment(obj, n_segments, start=start, extent_weight=extent_weight,
-                                       compactness=compactness, **options).labels)
+                                       **options).labels)
 
 
 def adaptive_segment(obj, n_segments: int, *, start: int = START,
-                     extent_weight: float | None = None, compactness: float | None = None,
-                     **options):
+                     extent_weight: float | None = None, **options):
     """:func:`adaptive_superpoints` with details: a
-    :class:`~superfacets.method.pipeline.SegmentationResult` of the level.
+    :class:`~superfacets.api.result.SegmentationResult` of the level.
 
     Its ``centers`` are, for each segment, the center of its lowest-numbered
     superpoint of the first run; ``n_iter``, ``converged``, ``timings`` and
@@ -98,7 +94,7 @@ def adaptive_segment(obj, n_segments: int, *, start: int = START,
 
     Parameters
     ----------
-    obj, n_segments, start, extent_weight, compactness, **options
+    obj, n_segments, start, extent_weight, **options
         As :func:`adaptive_superpoints`.
 
     Returns
@@ -123,7 +119,6 @@ def adaptive_segment(obj, n_segments: int, *, start: int = START,
 
     k = check_int("n_segments", n_segments, lo=1)
     start = check_int("start", start, lo=1)
-    extent_weight = renamed(extent_weight, compactness, "extent_weight", "compactness")
     if extent_weight is not None:
         check_nonneg("extent_weight", extent_weight)
     if options.get("merge_from") is None:  # its own many superpoints, merged its own way

@@ -42,7 +42,7 @@ class SegmentationResult:
     mesh_radius : float
         Superfacet radius ``r`` used, in the input's units (the ``radius``
         parameter, ``params['radius']``, is a fraction of the bounding-box
-        diagonal). ``radius`` is its old name (deprecated; one release).
+        diagonal).
     n_orphan_seeds : int
         Centers created on orphan faces over the whole run.
     timings : dict of str to float
@@ -84,11 +84,6 @@ class SegmentationResult:
     def n_segments(self) -> int:
         """Number of superfacets ``K`` produced."""
         return int(self.centers.shape[0])
-
-    @property
-    def radius(self) -> float:
-        """The old name of :attr:`mesh_radius` (deprecated; one release)."""
-        return deprecated_radius(self)
 
     @property
     def stop_reason(self) -> str:
@@ -148,7 +143,7 @@ class SegmentationResult:
         return superfacet_graph(src.graph, self.element_labels, per_element(src, features))
 
     def hierarchy(self, levels, *, beta: float = 0.0, features=None, cost: str = "ward",
-                  extent_weight: float | None = None, compactness: float | None = None):
+                  extent_weight: float | None = None):
         """Nested coarser levels of these superfacets, each segment connected
         (:func:`superfacets.graph.hierarchy.hierarchy`, with this run's ``alpha`` and
         ``eta_convex``).
@@ -170,8 +165,6 @@ class SegmentationResult:
             (:func:`superfacets.graph.hierarchy.hierarchy`). Default: left to the
             method, :func:`~superfacets.graph.hierarchy.level_extent_weight` (0.01 on
             a scan of uneven density, else 0).
-        compactness : float, optional
-            The old name of ``extent_weight`` (deprecated; one release).
 
         Returns
         -------
@@ -194,9 +187,7 @@ class SegmentationResult:
         [10, 3]
         """
         from ..graph.hierarchy import hierarchy, level_extent_weight, planarity_graph
-        from ..method.params import renamed
 
-        extent_weight = renamed(extent_weight, compactness, "extent_weight", "compactness")
         if cost == "planarity":
             src = self._source()
             graph = planarity_graph(src.graph, self.element_labels, per_element(
@@ -288,16 +279,6 @@ def describe_stop(result) -> str:
             "max_iter": "stopped at max-iter"}[reason]
 
 
-def deprecated_radius(result) -> float:
-    """``result.mesh_radius``, with a warning: ``radius`` is its old name."""
-    import warnings
-
-    warnings.warn("result.radius is now result.mesh_radius (in the input's units; the "
-                  "radius parameter is a fraction of the diagonal); the old name goes in the "
-                  "next release", DeprecationWarning, stacklevel=3)
-    return result.mesh_radius
-
-
 @dataclass(frozen=True)
 class TiledResult:
     """Labels and details of a tiled run (:func:`~superfacets.scale.runner.tiles.segment_tiled`).
@@ -310,8 +291,7 @@ class TiledResult:
     centers : (K,) int64 ndarray
         Row of each superfacet's center.
     mesh_radius : float
-        The superfacet radius ``r`` of the whole input (its units; ``radius`` is
-        its old name, deprecated).
+        The superfacet radius ``r`` of the whole input (its units).
     grid : tuple of int
         Tiles along x, y and z for a regular grid (``tiles=(nx, ny, nz)``);
         ``(N,)`` for ``N`` balanced tiles.
@@ -370,5 +350,3 @@ class TiledResult:
         """Number of superfacets ``K``."""
         return int(self.centers.shape[0])
 
-    #: The old name of :attr:`mesh_radius` (deprecated; one release).
-    radius = property(lambda self: deprecated_radius(self))

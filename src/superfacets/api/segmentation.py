@@ -79,7 +79,7 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, features=None,
         ``roughness`` above 0, the automatic density included), ``'bounded'``
         otherwise (:func:`~superfacets.method.params.assignment_of`;
         ``docs/notes/cleanup.md``). In content-sensitive runs the bounded windows
-        are scaled per center (:func:`superfacets.method.adaptive.window_factors`).
+        are scaled per center (:func:`superfacets.elements.density.window_factors`).
     enforce_connectivity : bool, default True
         Merge stray pieces of a superfacet into the neighbour with which they
         share the longest boundary, so each superfacet is face-connected.
@@ -138,7 +138,7 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, features=None,
         ``n_segments`` = 300-3,000 (``docs/notes/superpoints.md``, "Superpoints
         of one point"). 1 merges none; needs ``enforce_connectivity``.
     density : float or None, default None
-        Content-sensitive sizes (not in the paper; :mod:`superfacets.method.adaptive`):
+        Content-sensitive sizes (not in the paper; :mod:`superfacets.elements.density`):
         exponent ``q`` in ``[0, 1]`` by which superfacets follow the density of
         the elements: 0 gives superfacets of equal area (the paper), 1 of equal
         numbers of elements (points), between them ``a_i^(1-q)`` times the
@@ -147,7 +147,7 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, features=None,
         None: 0.5 on a point cloud whose density is uneven (the log of its
         point sizes spreads beyond 0.7: LiDAR sweeps, RGB-D frames), 0 on even
         clouds (every cloud sampled from the benchmark), meshes and with
-        ``paper=True`` (:func:`superfacets.method.adaptive.density_for`); the value
+        ``paper=True`` (:func:`superfacets.elements.density.density_for`); the value
         used is in ``result.params``.
     roughness : float, default 0
         Content-sensitive sizes (not in the paper): each element's length
@@ -305,7 +305,8 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, features=None,
     >>> r.n_segments, r.labels.dtype
     (20, dtype('int64'))
     """
-    return pipeline(mesh, resolve(n_segments=n_segments, **params), features=features)
+    run = pipeline(mesh, resolve(n_segments=n_segments, **params), features=features)
+    return SegmentationResult(**run._asdict())
 
 
 def _signature(returns) -> inspect.Signature:

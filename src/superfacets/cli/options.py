@@ -236,14 +236,13 @@ def add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> No
 
 
 def add_adaptive_options(p: argparse.ArgumentParser, levels: bool = True) -> None:
-    """``--adaptive [START]`` and ``--extent-weight C`` (of ``segment`` and ``batch``;
-    ``--level-compactness`` is its old name, kept for one release)."""
+    """``--adaptive [START]`` and ``--extent-weight C`` (of ``segment`` and ``batch``)."""
     p.add_argument("--adaptive", nargs="?", const=10, default=None, type=int_arg,
                    metavar="START",
                    help="content-adaptive superpoints: segment START (default 10) times -k, "
                         "then keep the level of -k that merges the flattest neighbours first "
                         "(rooms, aerial tiles; on LiDAR sweeps at small -k only)")
-    p.add_argument("--extent-weight", "--level-compactness", type=float, default=None,
+    p.add_argument("--extent-weight", type=float, default=None,
                    metavar="C", dest="extent_weight",
                    help=("planarity levels and " if levels else "") + "--adaptive: weight of "
                         "the segments' extent (default: 0.01 on a scan of uneven density, "

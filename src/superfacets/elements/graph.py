@@ -224,7 +224,7 @@ class ElementGraph:
         lengths read these 8 bytes per element instead of ``lengths`` (8 per
         adjacency, then never built). None: read ``lengths``.
     scale2 : (n,) float64 ndarray or None
-        Content-sensitive runs (:mod:`superfacets.method.adaptive`): the squared scale of
+        Content-sensitive runs (:mod:`superfacets.elements.density`): the squared scale of
         each element, by which the farthest-point centers multiply squared
         distances; None: 1.
     terms_of : callable or None

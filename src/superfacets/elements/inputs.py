@@ -14,10 +14,8 @@ from typing import Callable, NamedTuple
 import numpy as np
 
 from .._runtime.arrays import gather
-from ..method.params import DEFAULTS
 from .graph import ElementGraph, cached_on
-
-_N_NEIGHBORS = DEFAULTS.n_neighbors
+from .points import DEFAULT_NEIGHBORS as _N_NEIGHBORS
 
 __all__ = ["ElementInput", "Builder", "BUILDERS", "as_element_graph", "elements_of",
            "is_cloud", "kind_for", "prepared", "register_builder", "features_of", "per_element"]
@@ -388,7 +386,7 @@ def prepared(obj, elements: str | None = None, *, n_segments: int | None = None)
     >>> kind, mesh.n_faces
     ('faces', 12)
     """
-    from ..method.params import check_n_segments
+    from ..checks import check_n_segments
 
     kind = kind_for(obj, elements)
     builder = BUILDERS[kind]

@@ -91,7 +91,7 @@ class ElementKind:
         than by its size (faces: by area, as the benchmark's ground truth).
     auto_density : bool
         ``density=None`` looks at the spread of the element sizes
-        (:func:`superfacets.method.adaptive.density_for`): points, whose density may be
+        (:func:`superfacets.elements.density.density_for`): points, whose density may be
         uneven (LiDAR sweeps, RGB-D frames); 0 on the other kinds.
     unit_sizes_in_levels : bool
         In planarity levels (:func:`superfacets.graph.hierarchy.planarity_graph`) each

@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..elements.inputs import as_element_graph
-from ..method.labels import check_labels, relabel_dense
+from ..elements.labels import check_labels, relabel_dense
 
 __all__ = ["boundary_recall", "boundary_precision", "near_boundary", "recall_lengths",
            "recall_elements"]

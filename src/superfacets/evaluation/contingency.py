@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..elements.inputs import as_element_graph
-from ..method.labels import check_labels
+from ..elements.labels import check_labels
 
 __all__ = ["Contingency", "contingency", "dense_labels"]
 

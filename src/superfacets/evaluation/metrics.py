@@ -18,8 +18,8 @@ import numpy as np
 
 from ..elements.inputs import as_element_graph
 from ..elements.kinds import kind_of
+from ..elements.labels import check_labels
 from ..errors import InvalidMeshError, ParameterError
-from ..method.labels import check_labels
 from ..method.params import DEFAULTS
 from .boundaries import (
     boundary_precision,

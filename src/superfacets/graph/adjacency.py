@@ -19,8 +19,8 @@ import numpy as np
 from .._kernels import native
 from .._runtime.arrays import real_rows
 from ..elements.inputs import as_element_graph
+from ..elements.labels import check_labels
 from ..errors import ParameterError
-from ..method.labels import check_labels
 
 __all__ = ["SuperfacetGraph", "superfacet_graph", "crossing_adjacencies"]
 

@@ -42,11 +42,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..checks import check_int, check_nonneg
 from ..errors import ParameterError
-from ..method.params import DEFAULTS, check_int, check_nonneg, renamed
 
 __all__ = ["Hierarchy", "hierarchy", "planarity_graph", "level_extent_weight", "pieces",
-           "AUTO_EXTENT_WEIGHT", "level_compactness", "AUTO_COMPACTNESS"]
+           "AUTO_EXTENT_WEIGHT", "ALPHA", "ETA_CONVEX"]
+
+#: The crease factor's defaults, the method's own (``superfacets.DEFAULTS.alpha`` and
+#: ``.eta_convex``, eqs. 2-3; the hierarchy sits below the method, which calls it)
+ALPHA, ETA_CONVEX = 200.0, 0.2
 
 #: ``extent_weight`` of a planarity level on a point cloud of uneven density (the
 #: clouds that get the automatic ``density``: LiDAR sweeps): there, with each
@@ -56,8 +60,6 @@ __all__ = ["Hierarchy", "hierarchy", "planarity_graph", "level_extent_weight", "
 #: 000700) where it raised it on the rooms and the airborne tile, of even
 #: density (``docs/notes/superpoints.md``, "Content-adaptive levels").
 AUTO_EXTENT_WEIGHT = 0.01
-#: The old name of :data:`AUTO_EXTENT_WEIGHT` (one release).
-AUTO_COMPACTNESS = AUTO_EXTENT_WEIGHT
 
 
 @dataclass(frozen=True)
@@ -109,10 +111,8 @@ class Hierarchy:
         return out
 
 
-def hierarchy(graph, levels, *, alpha: float = DEFAULTS.alpha,
-              eta_convex: float = DEFAULTS.eta_convex,
-              beta: float = 0.0, cost: str = "ward", extent_weight: float = 0.0,
-              compactness: float | None = None) -> Hierarchy:
+def hierarchy(graph, levels, *, alpha: float = ALPHA, eta_convex: float = ETA_CONVEX,
+              beta: float = 0.0, cost: str = "ward", extent_weight: float = 0.0) -> Hierarchy:
     """Merge adjacent superfacets, cheapest first, into nested levels (module notes).
 
     Parameters
@@ -136,8 +136,6 @@ def hierarchy(graph, levels, *, alpha: float = DEFAULTS.alpha,
         plane's rise, so large flat pieces also pay for their extent: 0 merges
         any coplanar neighbours for nothing; ``>= 0``, dimensionless (both
         terms are weights times squared lengths).
-    compactness : float, optional
-        The old name of ``extent_weight`` (deprecated; one release).
 
     Returns
     -------
@@ -161,8 +159,7 @@ def hierarchy(graph, levels, *, alpha: float = DEFAULTS.alpha,
     alpha = check_nonneg("alpha", alpha)
     eta_convex = check_nonneg("eta_convex", eta_convex)
     beta = check_nonneg("beta", beta)
-    extent_weight = check_nonneg("extent_weight", renamed(extent_weight, compactness,
-                                                          "extent_weight", "compactness", 0.0))
+    extent_weight = check_nonneg("extent_weight", extent_weight)
     if cost not in ("ward", "planarity"):
         raise ParameterError(f"cost must be 'ward' or 'planarity', got {cost!r}")
     if extent_weight > 0 and cost != "planarity":
@@ -280,7 +277,7 @@ def level_extent_weight(graph) -> float:
 
     :data:`AUTO_EXTENT_WEIGHT` on a point cloud whose point sizes spread like
     those of a scan whose density falls with the range (the cue of the
-    automatic ``density``, :func:`superfacets.method.adaptive.density_for`), 0
+    automatic ``density``, :func:`superfacets.elements.density.density_for`), 0
     elsewhere (meshes, clouds of even density).
 
     Parameters
@@ -311,41 +308,9 @@ def level_extent_weight(graph) -> float:
     >>> level_extent_weight(point_graph(PointCloud(np.c_[xy, np.zeros(3200)])).graph)
     0.01
     """
-    from ..method.adaptive import density_for
+    from ..elements.density import density_for
 
     return AUTO_EXTENT_WEIGHT if density_for(graph) > 0 else 0.0
-
-
-def level_compactness(graph) -> float:
-    """The old name of :func:`level_extent_weight` (deprecated; one release).
-
-    Parameters
-    ----------
-    graph : ElementGraph
-
-    Returns
-    -------
-    float
-
-    Raises
-    ------
-    ParameterError
-        As :func:`level_extent_weight`.
-
-    Examples
-    --------
-    >>> import warnings, trimesh
-    >>> from superfacets import segment
-    >>> with warnings.catch_warnings():
-    ...     warnings.simplefilter("ignore")
-    ...     level_compactness(segment(trimesh.creation.icosphere(), 10).elements.graph)
-    0.0
-    """
-    import warnings
-
-    warnings.warn("level_compactness is now level_extent_weight (the old name goes in the "
-                  "next release)", DeprecationWarning, stacklevel=2)
-    return level_extent_weight(graph)
 
 
 def pieces(graph) -> int:

@@ -6,7 +6,7 @@ from itertools import permutations
 
 import numpy as np
 
-from ..method.params import check_int
+from ..checks import check_int
 from .mesh import Mesh
 
 __all__ = ["creature"]

@@ -195,8 +195,8 @@ def cut_surface(mesh: TetMesh, labels=None, *, axis: int = 0, at: float = 0.5):
     >>> surface.n_faces == face_labels.shape[0]
     True
     """
+    from ..checks import check_int, check_number
     from ..errors import ParameterError
-    from ..method.params import check_int, check_number
     from .mesh import Mesh
 
     axis = check_int("axis", axis, lo=0, hi=2)

@@ -126,7 +126,7 @@ def write_colored_mesh(path, mesh, labels, *, vertex_colors: bool = False,
 
     Adjacent superfacets always get clearly different colours (a greedy
     colouring of the superfacet adjacency graph,
-    :func:`superfacets.viz.colors.superfacet_colors`).
+    :func:`superfacets.io.colors.superfacet_colors`).
 
     Parameters
     ----------
@@ -167,8 +167,8 @@ def write_colored_mesh(path, mesh, labels, *, vertex_colors: bool = False,
     >>> read_labels(p).tolist()
     [0, 1]
     """
-    from ..method.labels import check_labels
-    from ..viz.colors import face_colors
+    from ..elements.labels import check_labels
+    from .colors import face_colors
 
     mesh = as_mesh(mesh)
     labels = check_labels(labels, mesh.n_faces, per="face")
@@ -238,8 +238,8 @@ def element_colors(source, labels) -> np.ndarray:
     -------
     (N, 3) uint8 ndarray
     """
-    from ..method.labels import relabel_dense
-    from ..viz.colors import superfacet_colors
+    from ..elements.labels import relabel_dense
+    from .colors import superfacet_colors
 
     g, index = source.graph, source.index
     ok = index >= 0
@@ -271,7 +271,7 @@ def point_colors(source, labels=None) -> np.ndarray:
     ParameterError
         If ``labels`` is not one integer per point.
     """
-    from ..method.labels import check_labels
+    from ..elements.labels import check_labels
 
     g, index = source.graph, source.index
     if labels is None:
@@ -309,7 +309,7 @@ def write_colored_elements(path, source, labels, *, outputs: Outputs | None = No
     MeshFormatError
         If ``path`` does not end in ``.ply``.
     """
-    from ..method.labels import check_labels
+    from ..elements.labels import check_labels
     from .ply import points_ply_bytes
 
     path = Path(path)
@@ -327,8 +327,8 @@ def write_colored_elements(path, source, labels, *, outputs: Outputs | None = No
 
 
 def _labelled(mesh, labels):
-    from ..method.labels import check_labels
-    from ..viz.colors import face_colors
+    from ..elements.labels import check_labels
+    from .colors import face_colors
 
     labels = check_labels(labels, mesh.n_faces, per="face")
     return labels, face_colors(mesh, labels)

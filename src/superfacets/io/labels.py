@@ -12,8 +12,8 @@ from typing import Iterable
 
 import numpy as np
 
+from ..elements.labels import check_labels
 from ..errors import MeshFormatError
-from ..method.labels import check_labels
 from .files import Outputs, read_bytes, save, split_suffix, text_lines
 
 __all__ = ["read_labels", "write_labels", "write_segindices", "read_field"]

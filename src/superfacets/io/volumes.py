@@ -128,7 +128,7 @@ def write_volume_labels(path, mesh, labels, *, outputs=None) -> Path:
     import tempfile
 
     from .._runtime.extras import require
-    from ..method.labels import check_labels
+    from ..elements.labels import check_labels
     from .files import atomic_write
 
     meshio = require("meshio", "writing tetrahedral meshes")

@@ -30,7 +30,7 @@ from .._kernels import native
 from .._kernels.codes import NOT_INCREMENTAL, QUEUE_FULL
 from .._runtime.memory import discard_pages
 from .._runtime.threads import in_parallel
-from .adaptive import window_factors
+from ..elements.density import window_factors
 from .expansion import Workspaces, centers_within, with_room
 from .params import ASSIGNMENTS, check_choice
 
@@ -68,7 +68,7 @@ class Classifier:
         Weight of each CSR entry of ``graph``.
     window_r2 : float
         Squared window radius ``(window * r)^2`` of the bounded expansions
-        (times :func:`superfacets.method.adaptive.window_factors` of the center's
+        (times :func:`superfacets.elements.density.window_factors` of the center's
         element where ``graph.scale2`` is set: content-sensitive runs).
     spaces : Workspaces
         Work buffers and threads, shared with the initialization.

@@ -30,7 +30,7 @@ from .._kernels import native
 from ..elements.graph import chunked
 from ..elements.inputs import as_element_graph
 from ..elements.kinds import kind_of
-from .labels import check_labels, relabel_dense
+from ..elements.labels import check_labels, relabel_dense
 from .params import DEFAULTS, check_int, check_nonneg, check_number, check_positive, check_threads
 
 __all__ = ["clean_boundaries", "cut_costs", "crease_for", "band_for", "smoothness_for",

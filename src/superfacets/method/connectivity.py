@@ -17,7 +17,7 @@ import numpy as np
 
 from .._kernels import native
 from ..elements.inputs import as_element_graph
-from .labels import check_labels, relabel_dense
+from ..elements.labels import check_labels, relabel_dense
 
 __all__ = ["enforce_connectivity", "label_components"]
 

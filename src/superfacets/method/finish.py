@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..elements.labels import relabel_dense
 from ..method.params import DEFAULTS
 from .cleanup import clean_boundaries
 from .connectivity import enforce_connectivity as _enforce_connectivity
-from .labels import relabel_dense
 from .stages import Rules
 
 __all__ = ["finish", "clean_up", "merge_small", "exact_count"]

@@ -105,7 +105,7 @@ def farthest_point_centers(graph, n_segments: int, *, every_piece: bool = False)
     The first center is :func:`first_center`; each next one is the element
     whose position has the largest Euclidean distance to its nearest chosen
     center (with ``graph.scale2``, a content-sensitive run of
-    :mod:`superfacets.method.adaptive`, that distance times ``sqrt(scale2)`` of the
+    :mod:`superfacets.elements.density`, that distance times ``sqrt(scale2)`` of the
     element: centers closer together where it is large). With ``every_piece``
     (beyond the paper), every connected piece
     of the graph gets a center within the ``k``: the paper's first ``L``
@@ -151,7 +151,7 @@ def farthest_point_centers(graph, n_segments: int, *, every_piece: bool = False)
     out = np.empty(k, dtype=np.int64)
     c = np.ascontiguousarray(g.positions)
     m = c.shape[0]
-    scale2 = g.scale2  # content-sensitive runs (superfacets.method.adaptive); None: the paper's
+    scale2 = g.scale2  # content-sensitive runs (superfacets.elements.density); None: the paper's
     if m * k < _BLOCKED_MIN_WORK:
         native.kernel("farthest.farthest_point")(c, k, first_center(g), out, scale2)
     else:  # same result; each new center visits only the grid cells it can change

@@ -27,9 +27,9 @@ from ..checks import (
     check_positive,
     check_threads,
     max_threads,
-    renamed,
 )
 from ..elements.kinds import KINDS, kind_of
+from ..elements.points import DEFAULT_NEIGHBORS
 from ..errors import ParameterError
 from .rules import assignment_of, better_method, superfacet_measure, superfacet_size  # noqa: F401
 
@@ -40,7 +40,7 @@ __all__ = ["SegmentParams", "DEFAULTS", "Parameter", "PARAMETERS", "PARAMETER", 
            "COARSE_PER_SEGMENT", "DEFAULT_N_SEGMENTS", "DEFAULT_ALPHAS", "resolve", "check_int",
            "check_number", "check_positive", "check_nonneg", "check_choice",
            "check_n_segments", "check_threads", "check_bool", "max_threads", "superfacet_size",
-           "better_method", "assignment_of", "superfacet_measure", "renamed"]
+           "better_method", "assignment_of", "superfacet_measure"]
 
 #: Names accepted by ``init=``: iterative farthest point, flood, regular grid.
 INITS = ("farthest", "flood", "grid")
@@ -184,9 +184,10 @@ def _declare() -> tuple[Parameter, ...]:
         P("elements", None, "str or None", "what is segmented: " + ", ".join(ALL_KINDS) +
           "; None: the input's default", lambda v: check_choice("elements", v, tuple(KINDS)),
           cli="--elements"),
-        P("n_neighbors", 10, "int", "nearest neighbours of each point in the point graph, "
-          f"1..{MAX_NEIGHBORS}", lambda v: integer("n_neighbors", v, lo=1, hi=MAX_NEIGHBORS),
-          ("points",), cli="--neighbors"),
+        P("n_neighbors", DEFAULT_NEIGHBORS, "int", "nearest neighbours of each point in the "
+          f"point graph, 1..{MAX_NEIGHBORS}",
+          lambda v: integer("n_neighbors", v, lo=1, hi=MAX_NEIGHBORS), ("points",),
+          cli="--neighbors"),
         P("neighbor_radius", None, "float or None", "drop neighbours farther than this "
           "fraction of the diagonal, > 0", lambda v: check_positive("neighbor_radius", v),
           ("points",), cli="--neighbor-radius"),

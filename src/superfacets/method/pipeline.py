@@ -9,7 +9,7 @@ once and in the paper's order
 
 1. ``build_graph``: the element graph (``n_segments`` checked against the input's
    elements first); with ``density`` (resolved here: it reads the graph) or
-   ``roughness``, its sizes stretched (:mod:`superfacets.method.adaptive`);
+   ``roughness``, its sizes stretched (:mod:`superfacets.elements.density`);
 2. ``resolve_rules``: the automatic rules, once: ``k`` and the radius ``r`` (section
    3.1), clean-up and split-and-merge, the classification, the center tolerance and the
    coarsening, from the table of kinds (:mod:`superfacets.elements.kinds`);
@@ -39,12 +39,12 @@ from __future__ import annotations
 
 import time
 from contextlib import contextmanager
+from typing import NamedTuple
 
 import numpy as np
 
 from .._runtime import interrupts
 from .._runtime.memory import give_back_free_memory
-from ..api.result import SegmentationResult
 from ..elements.inputs import features_of
 from .finish import clean_up, exact_count, finish, merge_small
 from .merges import merge_to_count
@@ -52,7 +52,33 @@ from .params import SegmentParams
 from .passes import final_centers
 from .stages import build_graph, initialize, iterate_passes, resolve_rules, weigh
 
-__all__ = ["pipeline", "SegmentationResult", "Hooks"]
+__all__ = ["pipeline", "RunRecord", "Hooks"]
+
+
+class RunRecord(NamedTuple):
+    """What one run of the method gives: the fields of
+    :class:`superfacets.api.result.SegmentationResult`, which wraps it (the method sits
+    below the public API).
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.method.params import resolve
+    >>> run = pipeline(trimesh.creation.icosphere(subdivisions=2), resolve(n_segments=8))
+    >>> run.labels.shape, int(run.labels.max()) + 1
+    ((320,), 8)
+    """
+
+    labels: np.ndarray
+    centers: np.ndarray
+    n_iter: int
+    converged: bool
+    mesh_radius: float
+    n_orphan_seeds: int
+    timings: dict
+    params: dict
+    elements: object
+    element_labels: np.ndarray
 
 
 #: Elements from which a run makes its graph forget, during the passes, the arrays
@@ -123,7 +149,7 @@ class Hooks:
 
 def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
              jump_cycles: bool = True, n_centers: int | None = None,
-             initial: np.ndarray | None = None) -> SegmentationResult:
+             initial: np.ndarray | None = None) -> RunRecord:
     """Run the method with validated parameters, stage by stage (see the module notes).
 
     Parameters
@@ -148,7 +174,9 @@ def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
 
     Returns
     -------
-    SegmentationResult
+    RunRecord
+        The labels and details (:func:`superfacets.segment` wraps them as a
+        :class:`~superfacets.api.result.SegmentationResult`).
 
     Raises
     ------
@@ -160,7 +188,7 @@ def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
     >>> import trimesh
     >>> from superfacets.method.params import resolve
     >>> r = pipeline(trimesh.creation.icosphere(subdivisions=3), resolve(n_segments=20))
-    >>> r.n_segments, sorted(r.timings)[:4]
+    >>> len(r.centers), sorted(r.timings)[:4]
     (20, ['changed', 'cleanup', 'connectivity', 'cycle_period'])
     """
     from .._runtime.threads import using
@@ -171,7 +199,7 @@ def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
 
 
 def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
-         n_centers: int | None = None, initial=None) -> SegmentationResult:
+         n_centers: int | None = None, initial=None) -> RunRecord:
     t_start = time.perf_counter()
     t = time.perf_counter()
     source, graph, p = build_graph(obj, p, features)
@@ -255,8 +283,6 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
                     merge_from=p.merge_from)
     if rules.kind.neighborhood:
         resolved.update(n_neighbors=p.n_neighbors, neighbor_radius=p.neighbor_radius)
-    return SegmentationResult(labels=labels, centers=centers, n_iter=it.n_iter,
-                              converged=it.converged, mesh_radius=rules.r,
-                              n_orphan_seeds=it.n_orphan_seeds, timings=timings,
-                              params=resolved, elements=source,
-                              element_labels=element_labels)
+    return RunRecord(labels=labels, centers=centers, n_iter=it.n_iter, converged=it.converged,
+                     mesh_radius=rules.r, n_orphan_seeds=it.n_orphan_seeds, timings=timings,
+                     params=resolved, elements=source, element_labels=element_labels)

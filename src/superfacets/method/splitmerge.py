@@ -383,7 +383,7 @@ def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.nda
     """
     from dataclasses import replace
 
-    from .labels import relabel_dense
+    from ..elements.labels import relabel_dense
     from .passes import hold_small_moves, iterate, update_centers
 
     def used(it) -> np.ndarray:

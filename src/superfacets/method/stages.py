@@ -13,10 +13,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..elements.density import adapted_graph, density_for
 from ..elements.inputs import ElementInput, elements_of, prepared
 from ..elements.kinds import ElementKind, kind_of
 from ..elements.vertices import symmetric_terms
-from .adaptive import adapted_graph, density_for
 from .classify import make_classifier
 from .expansion import Workspaces
 from .multilevel import COARSENING_READS, coarsening_for, start_centers
@@ -102,9 +102,9 @@ def build_graph(obj, p: SegmentParams, features=None
     ``n_segments`` is checked against the input's elements, and ``features`` (with
     ``beta > 0``) against its rows, before the graph is built (the memory peak of a
     run). ``density=None`` is resolved here, from the
-    graph (:func:`superfacets.method.adaptive.density_for`); with ``density`` or
+    graph (:func:`superfacets.elements.density.density_for`); with ``density`` or
     ``roughness`` above 0 the returned graph's sizes are stretched
-    (:func:`superfacets.method.adaptive.adapted_graph`; the cached graph is not changed).
+    (:func:`superfacets.elements.density.adapted_graph`; the cached graph is not changed).
 
     Returns
     -------

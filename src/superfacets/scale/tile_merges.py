@@ -90,8 +90,8 @@ def tile_merge_stats(graph, labels: np.ndarray, names: np.ndarray, core: np.ndar
     >>> s["names"].tolist(), s["count"].tolist(), s["edges"].tolist()
     ([7, 9], [50.0, 50.0], [[7, 9]])
     """
+    from ..elements.labels import check_labels
     from ..graph.adjacency import crossing_adjacencies
-    from ..method.labels import check_labels
     from ..method.merges import neighbourhood_noise
 
     lab = np.ascontiguousarray(check_labels(labels, graph.n_elements, per=graph.element),

@@ -7,7 +7,7 @@ GPU), so no display server and no GPU are needed: Debian's ``libegl1`` and
 set-up does not need root for it when they are).
 
 Faces are coloured by superfacet (adjacent superfacets always in clearly
-different colours, :func:`superfacets.viz.colors.superfacet_colors`), flat shaded,
+different colours, :func:`superfacets.io.colors.superfacet_colors`), flat shaded,
 with the superfacet boundaries drawn as dark lines.
 """
 
@@ -21,12 +21,12 @@ from typing import Sequence
 import numpy as np
 
 from .._runtime.extras import require
+from ..elements.labels import check_labels
 from ..errors import NoDisplayError, ParameterError
 from ..inputs.convert import as_mesh
-from ..method.labels import check_labels
+from ..io.colors import boundary_edges
 from ..method.params import check_number
 from .camera import view_frame
-from .colors import boundary_edges
 
 __all__ = ["render", "render_points", "render_panel", "show", "has_display", "NoDisplayError"]
 

@@ -144,7 +144,7 @@ def cut_pursuit(obj, n_segments: int | None = None, *, reg_strength: float = 0.1
     """
     from ..._runtime.extras import require
     from ...elements.inputs import elements_of, is_cloud
-    from ...method.labels import relabel_dense
+    from ...elements.labels import relabel_dense
     from ...method.params import check_positive
 
     cp = require("cut_pursuit_py", "the cut pursuit baseline")

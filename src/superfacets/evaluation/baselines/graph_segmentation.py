@@ -105,7 +105,7 @@ def graph_segmentation(obj, k_thresh: float = 0.01, min_size: int = 20, *,
     """
     from ..._kernels import native
     from ...elements.inputs import elements_of, is_cloud
-    from ...method.labels import relabel_dense
+    from ...elements.labels import relabel_dense
     from ...method.params import ELEMENTS, check_choice
 
     k_thresh = check_positive("k_thresh", k_thresh)

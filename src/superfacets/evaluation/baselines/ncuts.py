@@ -357,7 +357,7 @@ def normalized_cuts(mesh, n_segments: int = 150, *, embedding: NcutEmbedding | N
     >>> labels.shape, int(labels.max()) + 1
     ((320,), 8)
     """
-    from ...method.labels import relabel_dense
+    from ...elements.labels import relabel_dense
 
     mesh = as_mesh(mesh)
     k = check_n_segments(n_segments, mesh.n_faces)

@@ -93,7 +93,7 @@ def vccs(obj, n_segments: int | None = None, *, seed_resolution: float = 0.1,
     from scipy.spatial import cKDTree
 
     from ...elements.inputs import elements_of
-    from ...method.labels import relabel_dense
+    from ...elements.labels import relabel_dense
 
     mod = _module()
     spatial_importance = check_nonneg("spatial_importance", spatial_importance)

@@ -83,7 +83,7 @@ def vertex_ground_truth(mesh, face_labels) -> np.ndarray:
     (n_vertices,) int64 ndarray
         -1 for vertices used by no face.
     """
-    from ...method.labels import check_labels
+    from ...elements.labels import check_labels
 
     labels = check_labels(face_labels, mesh.n_faces, "ground truth", per="face")
     corners = np.asarray(mesh.corners)

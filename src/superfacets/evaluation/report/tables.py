@@ -66,8 +66,8 @@ def load_results(path, series: Sequence[str] | None = None):
     """
     pd = require("pandas", "making result tables")
 
-    from ...scale.runner.results import PARAMS_BEFORE, read_results, row_key
     from ..methods import METHODS
+    from ..results import PARAMS_BEFORE, read_results, row_key
 
     paths = [path] if isinstance(path, (str, Path)) else list(path)
     last = {row_key(r): r for p in paths for r in read_results(p)}  # a retried row: the last

@@ -199,7 +199,7 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
               colored_mesh: str | None = None, vertex_colors: bool = False,
               picture: bool = False, html: bool = False, up="y", view=None,
               per_object: bool = False, adaptive: int | None = None,
-              extent_weight: float | None = None, level_compactness: float | None = None,
+              extent_weight: float | None = None,
               workers: int | None = None, scheduler: str | None = None,
               memory_limit="auto", retry_failed: bool = False, progress: bool = True,
               n_threads: int = 1, dask: bool | None = None, **options) -> BatchSummary:
@@ -235,8 +235,6 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         ``per_object``).
     extent_weight : float, optional
         Their ``extent_weight`` (default: left to the method).
-    level_compactness : float, optional
-        The old name of ``extent_weight`` (deprecated; one release).
     workers : int, optional
         Local worker processes (default: one per core); 1 runs in this process.
     scheduler : str, optional
@@ -295,10 +293,6 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         if per_object or radius is not None:
             raise ParameterError("adaptive takes n_segments, on one segmentation (not radius "
                                  "or per_object)")
-    from ...method.params import renamed
-
-    extent_weight = renamed(extent_weight, level_compactness, "extent_weight",
-                            "level_compactness")
     if extent_weight is not None:
         if adaptive is None:
             raise ParameterError("extent_weight goes with adaptive")

@@ -26,10 +26,10 @@ import numpy as np
 from ...elements.kinds import kind_of
 from ...errors import ParameterError
 from ...evaluation.methods import Skipped, get_method
+from ...evaluation.results import columns, fmt_value, prepare_file, row_key
 from ...method.params import DEFAULT_N_SEGMENTS
 from .engine import Engine, PeakMemory, error_text
 from .grid import Config
-from .results import columns, fmt_value, prepare_file, row_key
 
 __all__ = ["run_experiment", "ExperimentSummary", "PeakMemory"]
 

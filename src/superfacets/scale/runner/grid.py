@@ -9,7 +9,7 @@ import numpy as np
 
 from ...errors import ParameterError
 from ...evaluation.methods import Method, get_method
-from .results import fmt_value
+from ...evaluation.results import fmt_value
 
 __all__ = ["Config", "expand_grid", "parse_params", "method_grid"]
 

@@ -22,11 +22,11 @@ from pathlib import Path
 
 import numpy as np
 
+from ...elements.labels import check_labels, relabel_dense
 from ...errors import ParameterError
 from ...inputs.convert import as_mesh
-from ...method.labels import check_labels, relabel_dense
+from ...io.colors import boundary_edges, superfacet_colors
 from ..camera import view_frame
-from ..colors import boundary_edges, superfacet_colors
 
 __all__ = ["write_html", "html_page"]
 

@@ -33,8 +33,8 @@ from __future__ import annotations
 import numpy as np
 
 from .._kernels import native
-from ..elements.graph import ElementGraph
-from ..elements.kinds import kind_of
+from .graph import ElementGraph
+from .kinds import kind_of
 
 __all__ = ["roughness_of", "content_scale", "adapted_graph", "window_factors", "density_for",
            "size_spread", "AUTO_DENSITY", "AUTO_SPREAD"]

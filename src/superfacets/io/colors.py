@@ -13,7 +13,7 @@ import colorsys
 
 import numpy as np
 
-from ..method.labels import check_labels, relabel_dense
+from ..elements.labels import check_labels, relabel_dense
 
 __all__ = ["PALETTE", "superfacet_colors", "face_colors", "superfacet_adjacency",
            "boundary_edges"]
