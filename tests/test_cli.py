@@ -370,3 +370,51 @@ def test_interrupt_helpers():
     exec(code, ns)
     assert cli._in_machinery(ns["f"])
     assert not cli._in_machinery(__import__("sys")._getframe())
+
+
+def _non_default(p):
+    """A value of parameter ``p`` other than its default, and its command-line words."""
+    from superfacets.cli.parameters import SHOWN
+
+    style = SHOWN.get(p.name, ("", None, ""))[1]
+    if style in ("switch", "negated"):
+        return (not p.default), [p.cli]
+    if style == "both":
+        value = not p.default if p.default is not None else False
+        return value, [p.cli if value else "--no-" + p.cli[2:]]
+    if p.choices:
+        value = next(c for c in p.choices if c != p.default)
+        extra = ["--alpha", "0.5"] if value == "shlafman" else []  # (its alpha's range)
+        return value, [p.cli, value, *extra]
+    special = {"n_segments": 7, "radius": 0.3, "n_threads": 1, "elements": "faces",
+               "center_tol": 0.01, "coarsen": 3, "density": 0.25, "merge_from": 2,
+               "tol": 0.01, "neighbor_radius": 0.2, "n_neighbors": 6, "max_iter": 9,
+               "window": 1.5, "min_elements": 2}
+    value = special.get(p.name, 0.125 if "float" in p.type else 3)
+    return value, [p.cli, str(value)]
+
+
+def test_every_parameter_has_an_option_that_reaches_the_run(monkeypatch, small_off,
+                                                              tmp_path):
+    """The options are made from the declarations (PARAMETERS): each one, given on the
+    command line, arrives in the run's parameters (a forgotten entry would be dropped)."""
+    import superfacets.api.segmentation as api
+    from superfacets.method.params import PARAMETERS
+
+    seen = []
+
+    def record(mesh, params, **kw):
+        seen.append(params)
+        raise SystemExit(0)
+
+    monkeypatch.setattr(api, "pipeline", record)
+    for p in PARAMETERS:
+        assert p.cli, f"{p.name} has no option"
+        value, words = _non_default(p)
+        size = [] if p.name in ("n_segments", "radius") else ["-k", "5"]
+        seen.clear()
+        with pytest.raises(SystemExit):
+            main(["segment", str(small_off), *size, *words, "-o", str(tmp_path / "x.seg")])
+        assert seen, p.name
+        got = getattr(seen[0], p.name)
+        assert got == value or (p.name == "n_threads" and got == 1), (p.name, got, value)

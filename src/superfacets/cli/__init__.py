@@ -55,7 +55,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     parser = _Parser(
         prog="superfacets",
-        description="Over-segment triangle meshes into superfacets (Simari, Picciau, "
+        description="Over-segment meshes (triangles or polygons), point clouds and "
+                    "tetrahedral meshes into superfacets and superpoints (Simari, Picciau, "
                     "De Floriani, 'Fast and Scalable Mesh Superfacets', 2014).")
     parser.add_argument("--version", action=_Version, version=f"superfacets {__version__}",
                         help="show the version and whether the compiled kernels are built")

@@ -10,18 +10,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..method.params import (
-    ASSIGNMENTS,
-    COARSE_MIN_PER_SEGMENT,
-    COARSE_MIN_PER_SEGMENT_POINTS,
-    COARSE_PER_SEGMENT,
-    DEFAULTS,
-    ELEMENTS,
-    INITS,
-    WEIGHTINGS,
-)
-from ..method.params import DEFAULT_CENTER_TOL as _D_CENTER_TOL
+from ..method.params import DEFAULTS, PARAMETERS
 from .inputs import check_header, named_after, read_usable  # noqa: F401 (re-exported)
+from .parameters import auto_float_arg, float_arg, int_arg  # noqa: F401 (re-exported)
 
 __all__ = ["int_arg", "float_arg", "size_arg", "view_arg", "add_method_options",
            "add_camera_options", "add_mesh_and_labels", "method_kwargs", "check_output",
@@ -29,14 +20,6 @@ __all__ = ["int_arg", "float_arg", "size_arg", "view_arg", "add_method_options",
            "point_arg"]
 
 _D = DEFAULTS
-
-
-def int_arg(text: str) -> int:
-    """argparse type: an integer."""
-    try:
-        return int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
 
 
 def levels_arg(text: str) -> list[int]:
@@ -48,19 +31,6 @@ def levels_arg(text: str) -> list[int]:
     if not out or min(out) < 1:
         raise argparse.ArgumentTypeError(f"expected positive integers N1,N2,..., got {text!r}")
     return out
-
-
-def float_arg(text: str) -> float:
-    """argparse type: a number."""
-    try:
-        return float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-
-
-def auto_float_arg(text: str) -> float | None:
-    """argparse type: a number, or ``auto`` (None: the method decides)."""
-    return None if text.strip().lower() == "auto" else float_arg(text)
 
 
 def size_arg(text: str) -> tuple[int, int]:
@@ -143,96 +113,20 @@ def fmt_value(v) -> str:
 
 
 def add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> None:
-    """The parameters of the method (``segment`` and the commands that segment)."""
-    if with_size:
-        size = p.add_mutually_exclusive_group()
-        size.add_argument("-k", "--n-segments", type=int_arg, default=None, metavar="N",
-                          help=f"number of superfacets k (default: {_D.n_segments} unless "
-                               "--radius is given)")
-        size.add_argument("--radius", type=float_arg, default=None, metavar="R",
-                          help="superfacet radius as a fraction of the bounding-box diagonal "
-                               "(instead of -k; default init then 'flood')")
-    p.add_argument("--alpha", type=float_arg, default=_D.alpha, metavar="A",
-                   help="weight of the concavity (angular) term, >= 0; 0 = most compact, "
-                        f"larger = follows concavities more (default: {_D.alpha:g})")
-    p.add_argument("--eta-convex", type=float_arg, default=_D.eta_convex, metavar="E",
-                   help="factor of the angular term on convex edges (concave: 1) "
-                        f"(default: {_D.eta_convex:g})")
-    p.add_argument("--init", choices=INITS, default=_D.init,
-                   help="initialization (default: farthest with -k, flood with --radius)")
-    p.add_argument("--window", type=float_arg, default=_D.window, metavar="W",
-                   help=f"expansion window, a multiple of the radius (default: {_D.window:g})")
-    p.add_argument("--max-iter", type=int_arg, default=_D.max_iter, metavar="N",
-                   help=f"maximum number of iterations (default: {_D.max_iter})")
-    p.add_argument("--weighting", choices=WEIGHTINGS, default=_D.weighting,
-                   help="edge weights: the paper's eqs. 1-3 or Shlafman's eq. 6 "
-                        f"(then --alpha in [0, 1]) (default: {_D.weighting})")
-    p.add_argument("--assignment", choices=ASSIGNMENTS, default=_D.assignment,
-                   help="bounded: the paper's window-bounded expansion per center; "
-                        "exact: nearest center by one multi-source search "
-                        "(default: exact on vertices and points, bounded on faces; "
-                        "--paper: bounded)")
-    p.add_argument("--tol", type=float_arg, default=_D.tol, metavar="T",
-                   help="also stop once a pass changes the superfacet of at most this fraction "
-                        f"of the area (default: {_D.tol:g}; 0: the paper's rule: stop when no "
-                        "center moves, and --center-tol 0 --coarsen 1 unless given; --paper "
-                        "for the paper's labels bit for bit)")
-    p.add_argument("--center-tol", type=float_arg, default=None, metavar="F",
-                   help="a center the update would move by less than this fraction of the "
-                        f"superfacet radius stays where it is (default: {_D_CENTER_TOL:g}, "
-                        "0 with --tol 0)")
-    p.add_argument("--coarsen", type=int_arg, default=None, metavar="N",
-                   help="coarse-to-fine: first solve on clusters of about N elements, then "
-                        "refine on all of them; 1: off (default: on where a superfacet holds "
-                        f"at least {COARSE_MIN_PER_SEGMENT:,} elements, leaving about "
-                        f"{COARSE_PER_SEGMENT:,} clusters per superfacet; for points from "
-                        f"{COARSE_MIN_PER_SEGMENT_POINTS:,} points per superpoint, clusters of at "
-                        "most n_neighbors / 2 points; off with --tol 0)")
-    p.add_argument("--no-connectivity", action="store_true",
-                   help="keep superfacets split in several pieces (default: merge stray "
-                        "pieces into the neighbour sharing the longest boundary)")
-    p.add_argument("--cleanup", action=argparse.BooleanOptionalAction, default=None,
-                   help="boundary clean-up after the iteration: boundaries straightened and "
-                        "moved onto nearby creases, same superfacets (default: on for faces "
-                        "and vertices, off for points, --paper and --weighting shlafman)")
-    p.add_argument("--split-merge", action=argparse.BooleanOptionalAction, default=None,
-                   help="split superfacets that straddle a crease and merge as many pairs of "
-                        "neighbours elsewhere, then iterate again; same number of superfacets "
-                        "(default: on for faces and vertices, off for points, --paper and "
-                        "--weighting shlafman)")
-    p.add_argument("--beta", type=float_arg, default=_D.beta, metavar="B",
-                   help="weight of the colour term: crossing a colour edge costs as crossing "
-                        "a crease does (the input's RGB: PLY, PCD or LAS points); 0: off "
-                        f"(default: {_D.beta:g})")
-    p.add_argument("--min-elements", type=int_arg, default=_D.min_elements, metavar="N",
-                   help="merge superfacets (superpoints) of fewer than N faces (vertices, "
-                        "points) into a neighbour at the end; the count falls by those "
-                        f"merged (default: {_D.min_elements}, none)")
-    p.add_argument("--density", type=auto_float_arg, default=_D.density, metavar="Q",
-                   help="content-sensitive sizes: 0 superfacets of equal area (the paper), "
-                        "1 of equal numbers of elements; auto: 0.5 on point clouds of uneven "
-                        "density (LiDAR sweeps, RGB-D frames), else 0 (default: auto)")
-    p.add_argument("--roughness", type=float_arg, default=_D.roughness, metavar="C",
-                   help="content-sensitive sizes: smaller superfacets where neighbouring "
-                        "normals turn (C per radian of mean angle); 1 suits scans "
-                        f"(default: {_D.roughness:g})")
-    p.add_argument("--merge-from", type=int_arg, default=_D.merge_from, metavar="F",
-                   help="segment F times -k superpoints first, then merge neighbours down to "
-                        "-k, flat ones (within the noise) first; 1: off (default: 5 on point "
-                        "clouds of even density, else 1)")
-    p.add_argument("--paper", action="store_true",
-                   help="the paper's method as published, its labels bit for bit: its "
-                        "stopping rule (--tol 0), no clean-up, no split-and-merge (the "
-                        "default on faces adds both: lower undersegmentation error and "
-                        "more compact superfacets at the paper's speed)")
-    p.add_argument("--threads", type=int_arg, default=None, metavar="N",
-                   help="threads of the run: graph build, expansions, split-and-merge "
-                        "searches, clean-up cuts (default: all cores; the labels do not "
-                        "depend on it)")
+    """The parameters of the method (``segment`` and the commands that segment), made
+    from their declarations (:mod:`superfacets.cli.parameters`), and ``-q``."""
+    from .parameters import add_parameters
+
+    add_parameters(p, _method_names(with_size))
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
-    p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
-                   help="progress bar of the stages and iterations on stderr (default: on for "
-                        "meshes of 500,000 faces or more when stderr is a terminal)")
+
+
+def _method_names(with_size: bool = True) -> tuple[str, ...]:
+    from .parameters import ELEMENT_PARAMETERS
+
+    size = ("n_segments", "radius")
+    return tuple(q.name for q in PARAMETERS if q.name not in ELEMENT_PARAMETERS and
+                 (with_size or q.name not in size))
 
 
 def add_adaptive_options(p: argparse.ArgumentParser, levels: bool = True) -> None:
@@ -250,35 +144,26 @@ def add_adaptive_options(p: argparse.ArgumentParser, levels: bool = True) -> Non
 
 
 def add_element_options(p: argparse.ArgumentParser) -> None:
-    """What is segmented: faces, vertices or points, and the point graph's neighbourhood."""
-    p.add_argument("--elements", choices=ELEMENTS, default=None,
-                   help="segment the faces of a mesh (the paper), its vertices (one label per "
-                        "vertex, like the ScanNet Segmentator) or the points of a cloud "
-                        "(default: points for a point cloud, faces for a mesh)")
-    p.add_argument("--neighbors", type=int_arg, default=_D.n_neighbors, metavar="N",
-                   help=f"point clouds: nearest neighbours of each point (default: "
-                        f"{_D.n_neighbors})")
-    p.add_argument("--neighbor-radius", type=float_arg, default=None, metavar="R",
-                   help="point clouds: drop neighbours farther than this fraction of the "
-                        "bounding-box diagonal (default: none)")
+    """What is segmented: faces, vertices or points, and the point graph's neighbourhood
+    (from their declarations, :mod:`superfacets.cli.parameters`)."""
+    from .parameters import ELEMENT_PARAMETERS, add_parameters
+
+    add_parameters(p, ELEMENT_PARAMETERS)
 
 
 def element_kwargs(args) -> dict:
     """Keyword arguments of :func:`superfacets.segment` from :func:`add_element_options`."""
-    return dict(elements=args.elements, n_neighbors=args.neighbors,
-                neighbor_radius=args.neighbor_radius)
+    from .parameters import ELEMENT_PARAMETERS, parameter_kwargs
+
+    return parameter_kwargs(args, ELEMENT_PARAMETERS)
 
 
 def method_kwargs(args) -> dict:
-    """Keyword arguments of :func:`superfacets.segment` from the method options."""
-    return dict(alpha=args.alpha, eta_convex=args.eta_convex, window=args.window,
-                init=args.init, max_iter=args.max_iter, weighting=args.weighting,
-                assignment=args.assignment, enforce_connectivity=not args.no_connectivity,
-                cleanup=args.cleanup, split_merge=args.split_merge, tol=args.tol,
-                center_tol=args.center_tol,
-                coarsen=args.coarsen, progress=bool(args.progress), n_threads=args.threads,
-                paper=args.paper, beta=args.beta, min_elements=args.min_elements,
-                density=args.density, roughness=args.roughness, merge_from=args.merge_from)
+    """Keyword arguments of :func:`superfacets.segment` from the method options (the size,
+    ``-k`` or ``--radius``, apart)."""
+    from .parameters import parameter_kwargs
+
+    return parameter_kwargs(args, _method_names(with_size=False))
 
 
 def add_engine_options(p, *, sees: str, note: str = "", prefix: str = "") -> None:

@@ -44,48 +44,56 @@ def add_parsers(sub) -> None:
                     "label per point in file order, -1 for invalid points), and write them "
                     "as a .seg label file (one label per line), a ScanNet-style .json "
                     "(segIndices) and/or a coloured mesh or cloud.")
-    p.add_argument("mesh", metavar="INPUT",
-                   help="input mesh, point-cloud or tetrahedral-mesh file (.msh, .vtk, "
-                        ".vtu, .mesh)")
+    inp = p.add_argument_group("input")
+    inp.add_argument("mesh", metavar="INPUT",
+                     help="a mesh (.off, .tri, .ply, .obj, .stl, .glb, .gltf), a point cloud "
+                          "(.ply without faces, .pcd, .xyz/.pts/.txt, .npy, .las/.laz) or a "
+                          "tetrahedral mesh (.msh, .vtk, .vtu, .mesh), optionally "
+                          ".gz/.xz/.bz2")
+    add_scan_options(inp)
     add_method_options(p)
     add_element_options(p)
-    add_scan_options(p)
-    p.add_argument("-o", "--output", metavar="OUT.seg", default=None,
-                   help="write the labels here: one per face, vertex or point per line, or "
-                        "{'segIndices': [...], 'params': ...} when it ends in .json "
-                        "('-': standard output; default: none)")
-    p.add_argument("--header", action="store_true",
-                   help="start the .seg file with '#' lines recording parameters, "
-                        "iterations and time (default: labels only, as the benchmark's files)")
-    p.add_argument("--colored-mesh", metavar="OUT.ply", default=None,
-                   help="write the mesh coloured by superfacet: .ply (polygons kept, face "
-                        "colours and an int32 face property 'label'), .glb (for Blender, "
-                        "three.js, model viewers) or .obj (a material per colour, with .mtl)")
-    p.add_argument("--vertex-colors", action="store_true",
-                   help="PLY: colours per vertex (each face its own vertices) instead of per "
-                        "face, for tools that show only vertex colours")
-    p.add_argument("--picture", metavar="OUT.png", default=None,
-                   help="also render a picture (faces or points coloured by label; needs "
-                        "the render extra)")
-    p.add_argument("--html", metavar="OUT.html", default=None,
-                   help="also write an interactive page (open in a browser)")
-    p.add_argument("--graph", metavar="OUT.npz", default=None,
-                   help="write the superfacet (superpoint) adjacency graph: edge_index, "
-                        "border_length, mean_angle, concave, area, centroid, normal, feature "
-                        "(mean colour), labels (numpy .npz)")
-    p.add_argument("--levels", type=levels_arg, default=None, metavar="N1,N2,...",
-                   help="with --graph: also a nested hierarchy of coarser levels of N1, "
-                        "N2, ... segments, each connected (parent_<i> and labels_<i> in the "
-                        ".npz)")
-    add_adaptive_options(p)
-    p.add_argument("--level-cost", choices=("ward", "planarity"), default="ward",
-                   help="the levels' merge cost: ward (compact segments, the default) or "
-                        "planarity (flat regions merged first: with -k several times the "
-                        "level, content-adaptive superpoints)")
-    p.add_argument("--per-object", action="store_true",
-                   help="segment each object of a scene on its own (-k shared out by area); "
-                        "labels stay unique over the scene")
-    add_camera_options(p, "")  # --view, --up of --picture and --html
+    out = p.add_argument_group("outputs")
+    out.add_argument("-o", "--output", metavar="OUT.seg", default=None,
+                     help="write the labels here: one per face, vertex or point per line, or "
+                          "{'segIndices': [...], 'params': ...} when it ends in .json "
+                          "('-': standard output; default: none)")
+    out.add_argument("--header", action="store_true",
+                     help="start the .seg file with '#' lines recording parameters, "
+                          "iterations and time (default: labels only, as the benchmark's "
+                          "files)")
+    out.add_argument("--colored-mesh", metavar="OUT.ply", default=None,
+                     help="write the mesh coloured by superfacet: .ply (polygons kept, face "
+                          "colours and an int32 face property 'label'), .glb (for Blender, "
+                          "three.js, model viewers) or .obj (a material per colour, with "
+                          ".mtl)")
+    out.add_argument("--vertex-colors", action="store_true",
+                     help="PLY: colours per vertex (each face its own vertices) instead of "
+                          "per face, for tools that show only vertex colours")
+    out.add_argument("--graph", metavar="OUT.npz", default=None,
+                     help="write the superfacet (superpoint) adjacency graph: edge_index, "
+                          "border_length, mean_angle, concave, area, centroid, normal, "
+                          "feature (mean colour), labels (numpy .npz)")
+    levels = p.add_argument_group("levels (coarser, nested segmentations)")
+    levels.add_argument("--levels", type=levels_arg, default=None, metavar="N1,N2,...",
+                        help="with --graph: also a nested hierarchy of coarser levels of N1, "
+                             "N2, ... segments, each connected (parent_<i> and labels_<i> in "
+                             "the .npz)")
+    add_adaptive_options(levels)
+    levels.add_argument("--level-cost", choices=("ward", "planarity"), default="ward",
+                        help="the levels' merge cost: ward (compact segments, the default) "
+                             "or planarity (flat regions merged first: with -k several times "
+                             "the level, content-adaptive superpoints)")
+    levels.add_argument("--per-object", action="store_true",
+                        help="segment each object of a scene on its own (-k shared out by "
+                             "area); labels stay unique over the scene")
+    pics = p.add_argument_group("pictures")
+    pics.add_argument("--picture", metavar="OUT.png", default=None,
+                      help="also render a picture (faces or points coloured by label; needs "
+                           "the render extra)")
+    pics.add_argument("--html", metavar="OUT.html", default=None,
+                      help="also write an interactive page (open in a browser)")
+    add_camera_options(pics, "")  # --view, --up of --picture and --html
     from .tiles import add_tile_options
 
     add_tile_options(p)

@@ -110,6 +110,8 @@ class Parameter:
         The kinds of element it applies to.
     cli : str or None
         The command line's option (``segment``), or None.
+    choices : tuple of str
+        The values a string parameter takes (its option's choices), else empty.
     auto : bool
         None is resolved by ``check`` itself (``n_threads``: ``SUPERFACETS_NUM_THREADS`` or the
         cores).
@@ -131,6 +133,7 @@ class Parameter:
     kinds: tuple = ALL_KINDS
     cli: str | None = None
     auto: bool = False
+    choices: tuple = ()
 
     @property
     def optional(self) -> bool:
@@ -156,14 +159,16 @@ def _declare() -> tuple[Parameter, ...]:
           cli="--window"),
         P("init", None, "str or None", "initialization: " + ", ".join(INITS) + " (default "
           "farthest with n_segments, flood with radius)",
-          lambda v: check_choice("init", v, INITS), cli="--init"),
+          lambda v: check_choice("init", v, INITS), cli="--init", choices=INITS),
         P("max_iter", 50, "int", "most classification passes, >= 1",
           lambda v: integer("max_iter", v, lo=1), cli="--max-iter"),
         P("weighting", "paper", "str", "edge weights: paper (eqs. 1-3) or shlafman (eq. 6)",
-          lambda v: check_choice("weighting", v, WEIGHTINGS), cli="--weighting"),
+          lambda v: check_choice("weighting", v, WEIGHTINGS), cli="--weighting",
+          choices=WEIGHTINGS),
         P("assignment", None, "str or None", "classification: bounded (the paper's windows) "
           "or exact (nearest center); None: by kind and content",
-          lambda v: check_choice("assignment", v, ASSIGNMENTS), cli="--assignment"),
+          lambda v: check_choice("assignment", v, ASSIGNMENTS), cli="--assignment",
+          choices=ASSIGNMENTS),
         P("enforce_connectivity", True, "bool", "merge stray pieces so each superfacet is "
           "connected", lambda v: flag("enforce_connectivity", v), cli="--no-connectivity"),
         P("cleanup", None, "bool or None", "boundary clean-up after the iteration; None: by "
@@ -183,7 +188,7 @@ def _declare() -> tuple[Parameter, ...]:
           "SUPERFACETS_NUM_THREADS or the cores", check_threads, cli="--threads", auto=True),
         P("elements", None, "str or None", "what is segmented: " + ", ".join(ALL_KINDS) +
           "; None: the input's default", lambda v: check_choice("elements", v, tuple(KINDS)),
-          cli="--elements"),
+          cli="--elements", choices=ELEMENTS),
         P("n_neighbors", DEFAULT_NEIGHBORS, "int", "nearest neighbours of each point in the "
           f"point graph, 1..{MAX_NEIGHBORS}",
           lambda v: integer("n_neighbors", v, lo=1, hi=MAX_NEIGHBORS), ("points",),
