@@ -55,6 +55,7 @@ $(DOCS_STAMP): $(STAMP)
 
 docs: $(DOCS_STAMP)
 	$(VENV)/bin/python -m sphinx -W --keep-going -b html -q docs docs/_build/html
+	$(VENV)/bin/python tools/check_site.py docs/_build/html
 
 # The HTML page is tested in headless Chromium (Debian's package). Installed here
 # when missing and possible (root with apt-get); otherwise that one test is skipped.

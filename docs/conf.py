@@ -53,13 +53,18 @@ sphinx_gallery_conf = {
     "remove_config_comments": True,
     "show_memory": False,
     "reference_url": {},
+    "write_computation_times": False,  # (its page loads scripts from CDNs: none offline)
 }
 
 html_theme = "pydata_sphinx_theme"
 html_title = f"superfacets {release}"
 html_theme_options = {"navigation_with_keys": False, "show_toc_level": 2,
                       "secondary_sidebar_items": ["page-toc"]}
-html_static_path: list[str] = []
+html_static_path = ["_static"]
+html_css_files = ["custom.css"]
+#: No navigation sidebar on the pages at the top of the site (it had nothing to list)
+html_sidebars = {"index": [], "benchmarks": [], "changelog": [], "api": [],
+                 "auto_examples/index": [], "notes/index": []}
 html_show_sourcelink = False
 
 
