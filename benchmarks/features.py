@@ -110,7 +110,7 @@ def file_colours(meshes, a) -> None:
     import trimesh
 
     from superfacets import Mesh, segment
-    from superfacets.elements.inputs import elements_of
+    from superfacets.elements.builders import elements_of
     from superfacets.evaluation.datasets.sampling import vertex_ground_truth
     from superfacets.evaluation.metrics import evaluate
     from superfacets.io import read_mesh

@@ -36,7 +36,7 @@ SETTINGS = {
 
 def main() -> None:
     from superfacets import Mesh, PointCloud, segment
-    from superfacets.elements.inputs import elements_of
+    from superfacets.elements.builders import elements_of
     from superfacets.evaluation.datasets.psb import first_per_category, list_meshes
     from superfacets.evaluation.datasets.sampling import sample_points, vertex_ground_truth
     from superfacets.evaluation.metrics import evaluate

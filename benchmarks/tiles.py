@@ -124,7 +124,7 @@ def _graph(data):
     run's estimate would refuse it)."""
     from unittest import mock
 
-    from superfacets.elements.inputs import elements_of
+    from superfacets.elements.builders import elements_of
 
     with mock.patch("superfacets._runtime.memory.check_memory", lambda *a, **k: None):
         return elements_of(data)
@@ -286,7 +286,7 @@ def _equal_weight_ue(labels, gt, tau=0.05) -> float:
 
 def _cut_per_tile(path: Path, res, n_neighbors: int) -> tuple[int, int]:
     """(superpoints in pieces, superpoints not inside their tile's checked box)."""
-    from superfacets.elements.inputs import elements_of
+    from superfacets.elements.builders import elements_of
     from superfacets.io.regions import RegionReader
     from superfacets.method.connectivity import label_components
     from superfacets.scale.runner.buckets import bucket
@@ -363,7 +363,7 @@ def compare(a) -> None:
         gt = read_labels(b.seg_paths[0], m.n_faces)
         if a.compare_points:  # a cloud sampled on the mesh, each point with its face's class
             from superfacets import PointCloud
-            from superfacets.elements.inputs import elements_of
+            from superfacets.elements.builders import elements_of
             from superfacets.evaluation.datasets.sampling import sample_points
 
             pts, face = sample_points(m, a.compare_points, seed=0)

@@ -21,7 +21,7 @@ import numpy as np
 def wavy_cube(n: int, seed: int = 0):
     from scipy.spatial import Delaunay
 
-    from superfacets.inputs.volume import TetMesh
+    from superfacets.inputs.tetmesh import TetMesh
 
     corners = np.array(np.meshgrid([0.0, 1.0], [0.0, 1.0], [0.0, 1.0])).reshape(3, -1).T
     p = np.r_[np.random.default_rng(seed).random((n, 3)), corners]
@@ -39,7 +39,7 @@ def main() -> None:
     from superfacets import segment
     from superfacets.elements.cells import cell_graph
     from superfacets.evaluation.metrics import compactness, undersegmentation_error
-    from superfacets.inputs.volume import TetMesh
+    from superfacets.inputs.tetmesh import TetMesh
 
     print("| points | tetrahedra | beta | superfacets | UE by volume | compactness | seconds |")
     print("|---|---|---|---|---|---|---|")

@@ -44,7 +44,7 @@ def _inputs(shared: Path) -> dict:
     colors = np.c_[uneven[:, 1] > np.median(uneven[:, 1]), np.zeros((len(uneven), 2))]
     cube = np.r_[rng.random((3000, 3)),
                  np.array(np.meshgrid([0.0, 1.0], [0.0, 1.0], [0.0, 1.0])).reshape(3, -1).T]
-    from superfacets.inputs.volume import TetMesh
+    from superfacets.inputs.tetmesh import TetMesh
 
     return dict(bunny=bunny, capsule=capsule, even=PointCloud(np.asarray(even)),
                 uneven=PointCloud(np.asarray(uneven), colors=colors.astype(float)),

@@ -51,7 +51,7 @@ def test_scale_is_one_without_options_and_equalises_sizes_with_density_one():
 def test_roughness_is_zero_on_a_plane_and_the_crease_angle_on_a_box():
     import trimesh
 
-    from superfacets.elements.inputs import as_element_graph
+    from superfacets.elements.builders import as_element_graph
 
     flat = point_graph(PointCloud(two_density_plane())).graph
     assert np.abs(roughness_of(flat)).max() < 1e-6

@@ -133,7 +133,7 @@ def test_crease_weight_per_element_kind():
 def test_data_term_weight_per_element_kind():
     # faces weigh roundness more (0.7) than vertices and points (0.3); the default is
     # the kind's, and it matters: a heavier data term leaves rounder superfacets
-    from superfacets.elements.inputs import elements_of
+    from superfacets.elements.builders import elements_of
     from superfacets.method.cleanup import SMOOTHNESS, SMOOTHNESS_FACES, smoothness_for
 
     assert smoothness_for("faces") == SMOOTHNESS_FACES == 0.7

@@ -44,7 +44,7 @@ def test_every_public_name_has_the_sections(name):
 MODULES = sorted({getattr(superfacets, n).__module__ for n in superfacets.__all__
                   if hasattr(getattr(superfacets, n), "__module__")} |
                  {"superfacets.method.params", "superfacets.checks", "superfacets.elements.kinds",
-                  "superfacets.elements.inputs", "superfacets.method.stages",
+                  "superfacets.elements.builders", "superfacets.method.stages",
                   "superfacets.method.pipeline",
                   "superfacets.api.result", "superfacets.graph.hierarchy",
                   "superfacets.api.levels"})
@@ -67,15 +67,15 @@ def test_the_examples_run(module, tmp_path, monkeypatch):
 #: guide and the gallery (files, pictures, pages, batches, tiles, inputs): every public
 #: function and class of theirs documents itself as the package's root names do.
 REFERENCE = ("superfacets.method.params", "superfacets.method.rules", "superfacets.checks",
-             "superfacets.elements.kinds", "superfacets.elements.inputs",
+             "superfacets.elements.kinds", "superfacets.elements.builders",
              "superfacets.elements.features", "superfacets.method.stages",
              "superfacets.method.finish", "superfacets.method.pipeline",
              "superfacets.evaluation.metrics", "superfacets.evaluation.contingency",
              "superfacets.graph.hierarchy", "superfacets.graph.adjacency",
              "superfacets.api.levels", "superfacets.api.scenes", "superfacets.api.result",
              "superfacets.io.clouds", "superfacets.io.headers", "superfacets.io.labels",
-             "superfacets.io.volumes", "superfacets.viz.html", "superfacets.scale.runner.tiles",
-             "superfacets.inputs.volume", "superfacets.inputs.convert")
+             "superfacets.io.tetmeshes", "superfacets.viz.html", "superfacets.scale.runner.tiles",
+             "superfacets.inputs.tetmesh", "superfacets.inputs.convert")
 
 
 def _reference_names():

@@ -355,7 +355,7 @@ def test_face_graph_releases_what_the_passes_do_not_read_and_rebuilds_it(sphere)
 
 
 def test_vertex_and_point_graphs_release_their_pairs(sphere):
-    from superfacets.elements.inputs import elements_of
+    from superfacets.elements.builders import elements_of
 
     for kind, released in (("vertices", ["pairs", "dual_edge"]),
                            ("points", ["pairs", "dual_edge", "lengths", "spans",
@@ -370,7 +370,7 @@ def test_vertex_and_point_graphs_release_their_pairs(sphere):
 def test_coarsening_reads_no_released_field(sphere):
     # the pipeline releases the pairs, dual edges and spans before the coarsening: it
     # reads the CSR layout and the weights per CSR entry instead, with the same result
-    from superfacets.method.multilevel import COARSENING_READS, coarsen
+    from superfacets.method.coarse_to_fine import COARSENING_READS, coarsen
     from superfacets.method.weights import csr_weights, paper_weights
 
     g = face_graph(sphere)
@@ -982,7 +982,7 @@ def test_a_cloud_keeps_points_its_caller_also_holds():
 def test_rows_of_elements_with_invalid_and_repeated_rows():
     """Known answers: the labels of a cloud's rows (-1 where a row is no point) and the
     first row of each point, asked for a few points (the centers) or all of them."""
-    from superfacets.elements.inputs import elements_of
+    from superfacets.elements.builders import elements_of
 
     rng = np.random.default_rng(3)
     p = rng.random((4000, 3))
@@ -1058,8 +1058,8 @@ def test_copies_of_a_face_are_one_element_and_share_its_label(capsys, tmp_path):
     import trimesh
 
     from superfacets.cli import main
+    from superfacets.elements.builders import elements_of
     from superfacets.elements.faces import distinct_faces
-    from superfacets.elements.inputs import elements_of
     from superfacets.inputs.shapes import creature
 
     body = creature(30)

@@ -46,7 +46,7 @@ def _recorded_calls(monkeypatch) -> dict:
     from test_native import _quad_cube
 
     from superfacets._runtime import arrays
-    from superfacets.elements.inputs import elements_of
+    from superfacets.elements.builders import elements_of
     from superfacets.evaluation.baselines.cut_pursuit import dimensionality_features
     from superfacets.evaluation.baselines.graph_segmentation import graph_segmentation
     from superfacets.evaluation.baselines.vsa import vsa

@@ -14,7 +14,7 @@ import trimesh
 
 from superfacets import segment
 from superfacets.elements import kinds
-from superfacets.elements.inputs import BUILDERS, Builder, elements_of, kind_for
+from superfacets.elements.builders import BUILDERS, Builder, elements_of, kind_for
 from superfacets.elements.kinds import KINDS, kind_of
 from superfacets.errors import ParameterError
 
@@ -85,7 +85,7 @@ def test_every_kind_has_a_builder_and_a_row():
 
 def test_the_rules_read_the_table():
     from superfacets.method.cleanup import band_for, crease_for, smoothness_for
-    from superfacets.method.multilevel import coarse_ratio
+    from superfacets.method.coarse_to_fine import coarse_ratio
     from superfacets.method.params import DEFAULTS, assignment_of, better_method
     from superfacets.method.splitmerge import hold_after_for, passes_after_for, swap_eta_convex_for
 

@@ -13,7 +13,7 @@ from superfacets import Mesh, segment
 from superfacets.api.segmentation import pipeline
 from superfacets.elements import face_graph
 from superfacets.errors import ParameterError
-from superfacets.method.multilevel import coarse_ratio, coarsen, grid_seeds, voronoi_cells
+from superfacets.method.coarse_to_fine import coarse_ratio, coarsen, grid_seeds, voronoi_cells
 from superfacets.method.params import resolve
 from superfacets.method.passes import hold_small_moves
 from superfacets.method.weights import csr_weights, paper_weights
@@ -215,7 +215,7 @@ def test_coarsen_is_capped_to_keep_clusters_per_superfacet():
 
 
 def test_too_few_clusters_for_k_falls_back(sphere):
-    from superfacets.method.multilevel import coarse_centers
+    from superfacets.method.coarse_to_fine import coarse_centers
 
     g, w, wc = _weighted(sphere)
     kw = dict(init="farthest", window=2.0, assignment="bounded", max_iter=50, tol=0.001,

@@ -164,7 +164,7 @@ def test_options_and_baselines_give_numba_results_call_by_call(shadowed):
     graph_segmentation(mesh, n_segments=30)
     for metric in ("l21", "l2"):
         vsa(mesh, 12, metric=metric, init="incremental", rng=0)
-    from superfacets.elements.inputs import elements_of
+    from superfacets.elements.builders import elements_of
 
     dimensionality_features(elements_of(mesh.centroids, "points").graph)
     assert {"expand.flood", "baselines.felzenszwalb", "baselines.csr_covariances",

@@ -117,7 +117,7 @@ def test_exact_assignment_ties_go_to_the_first_center(kind):
     # weights in eighths: every path sum is exact, so equal distances are real ties (a
     # grid has many); an element goes to the first listed center at the least distance,
     # however the search orders its work, and a repeated center stays empty
-    from superfacets.elements.inputs import elements_of
+    from superfacets.elements.builders import elements_of
 
     g = elements_of(grid_mesh(12, 12), kind).graph
     rng = np.random.default_rng(3)
@@ -143,7 +143,7 @@ def test_exact_assignment_updated_pass_by_pass_equals_a_fresh_search(monkeypatch
     # the previous one's cells and must give the fresh search's labels, distances
     # and orphan centers bit for bit; weights in eighths make the ties real
     import superfacets.method.classify as classify_module
-    from superfacets.elements.inputs import elements_of
+    from superfacets.elements.builders import elements_of
 
     updated = []
 

@@ -14,7 +14,7 @@ from scipy.sparse.csgraph import connected_components
 from superfacets import Mesh, segment
 from superfacets.api.segmentation import superpoints
 from superfacets.cli import main
-from superfacets.elements.inputs import elements_of
+from superfacets.elements.builders import elements_of
 from superfacets.elements.points import point_graph
 from superfacets.elements.vertices import vertex_graph
 from superfacets.errors import MeshFormatError, ParameterError

@@ -9,7 +9,7 @@ from superfacets import segment
 from superfacets.elements.cells import cell_graph
 from superfacets.errors import InvalidMeshError, MeshFormatError, ParameterError
 from superfacets.evaluation.metrics import compactness, undersegmentation_error
-from superfacets.inputs.volume import TetMesh, cut_surface
+from superfacets.inputs.tetmesh import TetMesh, cut_surface
 from superfacets.method.connectivity import label_components
 
 CORNERS = np.array(np.meshgrid([0.0, 1.0], [0.0, 1.0], [0.0, 1.0])).reshape(3, -1).T

@@ -12,7 +12,7 @@ import numpy as np
 from scipy.spatial import Delaunay
 
 from superfacets import TetMesh, segment
-from superfacets.inputs.volume import cut_surface
+from superfacets.inputs.tetmesh import cut_surface
 from superfacets.viz.render import render
 
 rng = np.random.default_rng(0)

@@ -54,7 +54,7 @@ _PUBLIC = {
     "edge_weights": "method.weights",
     "paper_weights": "method.weights",
     "shlafman_weights": "method.weights",
-    "TetMesh": "inputs.volume",
+    "TetMesh": "inputs.tetmesh",
     "read_volume": "io",
     "write_volume_labels": "io",
     "segment_tiled": "scale.runner.tiles",
@@ -130,7 +130,7 @@ if TYPE_CHECKING:  # the same names, for type checkers and IDEs
     from .inputs.cloud import InvalidCloudError, PointCloud, as_cloud
     from .inputs.convert import as_mesh
     from .inputs.mesh import Mesh
-    from .inputs.volume import TetMesh
+    from .inputs.tetmesh import TetMesh
     from .io import (
         read_cloud,
         read_input,

@@ -1,5 +1,5 @@
 """Voronoi cells of seeds in the weighted element graph (private kernel of
-:mod:`superfacets.method.multilevel`): one multi-source shortest-path search with the
+:mod:`superfacets.method.coarse_to_fine`): one multi-source shortest-path search with the
 bucket queue of :func:`.expand.expand`."""
 
 import numpy as np

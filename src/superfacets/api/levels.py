@@ -144,6 +144,6 @@ def adaptive_segment(obj, n_segments: int, *, start: int = START,
 
 def _elements(obj, options: dict) -> int:
     """The number of elements of the input (the most superpoints it can have)."""
-    from ..elements.inputs import elements_of
+    from ..elements.builders import elements_of
 
     return int(elements_of(obj, options.get("elements")).graph.n_elements)

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..elements.inputs import per_element
+from ..elements.builders import per_element
 from ..method.params import DEFAULTS
 
 __all__ = ["SegmentationResult", "TiledResult", "stop_reason", "describe_stop"]

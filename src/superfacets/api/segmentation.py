@@ -187,7 +187,7 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, features=None,
         Default: 0.05 when ``tol > 0``, else 0 (within 0.25 % of ``tol=0``
         on the 300 benchmark meshes, ``docs/notes/benchmarks.md``).
     coarsen : int, optional
-        Coarse-to-fine (``superfacets.method.multilevel``): first run on clusters of
+        Coarse-to-fine (``superfacets.method.coarse_to_fine``): first run on clusters of
         about ``coarsen`` elements (Voronoi cells in the weighted graph), then
         on every element from the centers found there; capped at ``n / (8
         k)``; 1 turns it off. Default: when ``tol > 0`` and a superfacet holds

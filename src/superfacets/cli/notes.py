@@ -22,7 +22,7 @@ def duplicates_note(args, data, kind: str) -> str | None:
     elif kind == "points":
         import numpy as np
 
-        from ..elements.inputs import elements_of
+        from ..elements.builders import elements_of
 
         src = elements_of(data, kind, n_neighbors=args.neighbors,
                           neighbor_radius=args.neighbor_radius)  # (kept with the input)
@@ -44,7 +44,7 @@ def count_note(args, data, result, kind: str) -> str | None:
         return None
     import numpy as np
 
-    from ..elements.inputs import elements_of
+    from ..elements.builders import elements_of
     from ..method.connectivity import label_components
 
     graph = elements_of(data, kind, n_neighbors=args.neighbors,

@@ -11,8 +11,8 @@ import argparse
 from pathlib import Path
 
 from ..method.params import DEFAULTS, PARAMETERS
-from .inputs import check_header, named_after, read_usable  # noqa: F401 (re-exported)
 from .parameters import auto_float_arg, float_arg, int_arg  # noqa: F401 (re-exported)
+from .reading import check_header, named_after, read_usable  # noqa: F401 (re-exported)
 
 __all__ = ["int_arg", "float_arg", "size_arg", "view_arg", "add_method_options",
            "add_camera_options", "add_mesh_and_labels", "method_kwargs", "check_output",

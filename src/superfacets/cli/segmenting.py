@@ -196,13 +196,13 @@ def cmd_segment(args) -> int:
     if Path(args.mesh).is_dir():
         raise IsADirectoryError(f"{args.mesh}: is a directory; to segment every mesh or cloud "
                                 f"in it: superfacets batch {args.mesh} -o OUTDIR")
-    from ..io.volumes import VOLUME_FORMATS
+    from ..io.tetmeshes import VOLUME_FORMATS
 
     if Path(args.mesh).suffix.lower().lstrip(".") in VOLUME_FORMATS:
         if args.tiles is not None:
             raise ParameterError("--tiles takes triangle meshes and point clouds, not "
                                  "tetrahedral meshes")
-        from .volumes import segment_volume
+        from .tetmeshes import segment_volume
 
         return segment_volume(args)
     if args.tiles is not None:

@@ -20,11 +20,11 @@ import importlib
 __all__ = ["ElementGraph", "AdjacencyTerms", "as_element_graph", "face_graph",
            "build_face_graph"]
 
-_WHERE = {"ElementGraph": "graph", "AdjacencyTerms": "graph", "as_element_graph": "inputs",
+_WHERE = {"ElementGraph": "graph", "AdjacencyTerms": "graph", "as_element_graph": "builders",
           "face_graph": "faces", "build_face_graph": "faces"}
 
 
-def __getattr__(name):  # lazy: ``elements.kinds`` is read before numba is imported
+def __getattr__(name):  # lazy: ``elements.kinds`` is read before any builder is imported
     if name in _WHERE:
         return getattr(importlib.import_module(f"{__name__}.{_WHERE[name]}"), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -29,7 +29,7 @@ __all__ = ["cell_graph"]
 
 
 def cell_graph(mesh) -> ElementGraph:
-    """The cell graph of a :class:`~superfacets.inputs.volume.TetMesh` (module notes),
+    """The cell graph of a :class:`~superfacets.inputs.tetmesh.TetMesh` (module notes),
     built once and kept with the mesh.
 
     Returns
@@ -39,7 +39,7 @@ def cell_graph(mesh) -> ElementGraph:
 
     Examples
     --------
-    >>> from superfacets.inputs.volume import TetMesh
+    >>> from superfacets.inputs.tetmesh import TetMesh
     >>> t = TetMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1]],
     ...             [[0, 1, 2, 3], [1, 2, 3, 4]])
     >>> g = cell_graph(t)
@@ -50,7 +50,7 @@ def cell_graph(mesh) -> ElementGraph:
 
 
 def _build(mesh) -> ElementGraph:
-    from ..inputs.volume import TET_FACES
+    from ..inputs.tetmesh import TET_FACES
 
     m = mesh.n_tets
     v = mesh.vertices

@@ -84,7 +84,7 @@ def roughness_of(graph: ElementGraph, rounds: int = SMOOTH_ROUNDS) -> np.ndarray
     Examples
     --------
     >>> import trimesh
-    >>> from superfacets.elements.inputs import as_element_graph
+    >>> from superfacets.elements.builders import as_element_graph
     >>> box = trimesh.creation.box()
     >>> rho = roughness_of(as_element_graph((box.vertices, box.faces)), rounds=0)
     >>> round(float(rho.min()), 4), round(float(rho.max()), 4)
@@ -181,7 +181,7 @@ def window_factors(graph: ElementGraph, rounds: int = WINDOW_ROUNDS) -> np.ndarr
     Examples
     --------
     >>> import trimesh
-    >>> from superfacets.elements.inputs import as_element_graph
+    >>> from superfacets.elements.builders import as_element_graph
     >>> g = as_element_graph(trimesh.creation.box())
     >>> # 1 / (1 + pi / 3)^2 where each element's mean angle is pi / 2
     >>> window_factors(g).shape, window_factors(adapted_graph(g, 0.0, 1.0)).round(4)[:2]

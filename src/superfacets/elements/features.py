@@ -30,7 +30,7 @@ def features_of(src, features):
     Examples
     --------
     >>> import trimesh
-    >>> from superfacets.elements.inputs import elements_of
+    >>> from superfacets.elements.builders import elements_of
     >>> src = elements_of(trimesh.creation.box())
     >>> features_of(src, np.arange(12.0)).shape
     (12, 1)
@@ -70,7 +70,7 @@ def per_element(src, features):
 
     Examples
     --------
-    >>> from superfacets.elements.inputs import elements_of
+    >>> from superfacets.elements.builders import elements_of
     >>> src = elements_of(np.random.default_rng(0).random((30, 3)))
     >>> per_element(src, np.ones(30)).shape
     (30, 1)

@@ -4,7 +4,7 @@ The method is written once for every kind of element (faces of a triangle or
 polygon mesh, mesh vertices, points of a cloud, tetrahedral cells). What
 differs between them is either how the element graph is built (the builders
 of :mod:`superfacets.elements`, registered by kind in
-:mod:`superfacets.elements.inputs`) or a rule held here, in one frozen
+:mod:`superfacets.elements.builders`) or a rule held here, in one frozen
 :class:`ElementKind` per kind. No other module branches on a kind's name
 (``tests/test_kinds.py`` fails when one does), so adding a kind is one
 builder and one row of :data:`KINDS`.
@@ -80,7 +80,7 @@ class ElementKind:
         the swaps, to be expanded again: 4 on faces, else 1.
     coarse_min_per_segment : int
         Automatic coarse-to-fine runs where a superfacet holds at least this
-        many elements (:func:`superfacets.method.multilevel.coarse_ratio`) ...
+        many elements (:func:`superfacets.method.coarse_to_fine.coarse_ratio`) ...
     coarse_per_segment : int
         ... and leaves about this many clusters per superfacet.
     coarse_neighbor_cap : bool

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..elements.inputs import as_element_graph
+from ..elements.builders import as_element_graph
 from ..elements.labels import check_labels, relabel_dense
 
 __all__ = ["boundary_recall", "boundary_precision", "near_boundary", "recall_lengths",

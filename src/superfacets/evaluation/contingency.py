@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..elements.inputs import as_element_graph
+from ..elements.builders import as_element_graph
 from ..elements.labels import check_labels
 
 __all__ = ["Contingency", "contingency", "dense_labels"]
@@ -72,7 +72,7 @@ def dense_labels(g, labels, what: str) -> np.ndarray:
     Examples
     --------
     >>> import trimesh
-    >>> from superfacets.elements.inputs import as_element_graph
+    >>> from superfacets.elements.builders import as_element_graph
     >>> g = as_element_graph(trimesh.creation.box())
     >>> dense_labels(g, [5] * 6 + [9] * 6, "labels").tolist()
     [0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1]

@@ -16,7 +16,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from ..elements.inputs import as_element_graph
+from ..elements.builders import as_element_graph
 from ..elements.kinds import kind_of
 from ..elements.labels import check_labels
 from ..errors import InvalidMeshError, ParameterError
@@ -340,7 +340,7 @@ def evaluate_rows(obj, labels, ground_truths: Sequence[np.ndarray], *,
     What :func:`superfacets.segment` returns and label files hold is one
     label per face, per vertex or per point of the file (-1 for invalid
     points and unused vertices); this builds the element graph the method
-    segments (:func:`superfacets.elements.inputs.elements_of`), takes each
+    segments (:func:`superfacets.elements.builders.elements_of`), takes each
     element's value from its first row, and calls :func:`evaluate`, area
     weighted on faces and with every element weighing the same on vertices
     and points (the superpoint benchmark's convention).
@@ -382,7 +382,7 @@ def evaluate_rows(obj, labels, ground_truths: Sequence[np.ndarray], *,
     >>> 0 <= m["undersegmentation_error"] < 0.5, m["segments"]
     (True, 20)
     """
-    from ..elements.inputs import elements_of
+    from ..elements.builders import elements_of
 
     source = elements_of(obj, elements, n_neighbors=n_neighbors)
     g = source.graph

@@ -18,7 +18,7 @@ import numpy as np
 
 from .._kernels import native
 from .._runtime.arrays import real_rows
-from ..elements.inputs import as_element_graph
+from ..elements.builders import as_element_graph
 from ..elements.labels import check_labels
 from ..errors import ParameterError
 

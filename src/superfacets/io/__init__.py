@@ -4,7 +4,7 @@
 - :mod:`.clouds`: :func:`read_cloud` (PLY without faces, PCD, XYZ/PTS/TXT, NPY, LAS/LAZ);
 - :mod:`.export`: :func:`write_mesh`, :func:`write_colored_mesh` (PLY with labels, GLB, OBJ),
   :func:`to_trimesh` and :func:`to_pyvista` (a result as the libraries' objects);
-- :mod:`.volumes`: :func:`read_volume`, :func:`write_volume_labels` (tetrahedra, meshio);
+- :mod:`.tetmeshes`: :func:`read_volume`, :func:`write_volume_labels` (tetrahedra, meshio);
 - :mod:`.labels`: :func:`read_labels` (``.seg``, or a coloured PLY), :func:`write_labels`;
 - :mod:`.ply`: the binary PLY writer and the label reader;
 - :mod:`.files`: compression by suffix, :func:`atomic_write` and all-or-nothing outputs.
@@ -17,7 +17,7 @@ from .export import to_pyvista, to_trimesh, write_colored_mesh, write_mesh
 from .files import atomic_write
 from .labels import read_labels, write_labels, write_segindices
 from .meshes import MESH_FORMATS, read_mesh
-from .volumes import VOLUME_FORMATS, read_volume, write_volume_labels
+from .tetmeshes import VOLUME_FORMATS, read_volume, write_volume_labels
 
 
 def read_input(path):

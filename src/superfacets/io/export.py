@@ -230,7 +230,7 @@ def element_colors(source, labels) -> np.ndarray:
     Parameters
     ----------
     source : ElementInput
-        From :func:`superfacets.elements.inputs.elements_of`.
+        From :func:`superfacets.elements.builders.elements_of`.
     labels : (N,) int ndarray
         One label per input row (-1 where the row is not an element).
 

@@ -27,8 +27,8 @@ import math
 import numpy as np
 
 from .._kernels import native
+from ..elements.builders import as_element_graph
 from ..elements.graph import chunked
-from ..elements.inputs import as_element_graph
 from ..elements.kinds import kind_of
 from ..elements.labels import check_labels, relabel_dense
 from .params import DEFAULTS, check_int, check_nonneg, check_number, check_positive, check_threads

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._kernels import native
-from ..elements.inputs import as_element_graph
+from ..elements.builders import as_element_graph
 from ..elements.labels import check_labels, relabel_dense
 
 __all__ = ["enforce_connectivity", "label_components"]

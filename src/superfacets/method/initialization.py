@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._kernels import native
-from ..elements.inputs import as_element_graph
+from ..elements.builders import as_element_graph
 from ..inputs.bounds import nearest_row
 from .expansion import Workspace, bucket_width, with_room
 from .params import DEFAULTS, INITS, check_choice, check_n_segments

@@ -252,7 +252,7 @@ def resolve(**params) -> SegmentParams:
     (``paper`` and what it excludes, ``n_segments`` or ``radius``, ``alpha`` and
     ``beta`` by ``weighting``, ``min_elements`` and ``enforce_connectivity``).
     ``n_segments`` is checked against the number of elements when the input is
-    known, before its graph is built (:func:`superfacets.elements.inputs.elements_of`).
+    known, before its graph is built (:func:`superfacets.elements.builders.elements_of`).
 
     Parameters
     ----------

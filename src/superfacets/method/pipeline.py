@@ -16,7 +16,7 @@ once and in the paper's order
 3. ``weigh``: the adjacency weights (eqs. 1-3, or Shlafman's eq. 6), and the swap
    energies' weights;
 4. ``initialize``: the first centers (farthest point, flood or grid, after a coarse run
-   on clusters where it pays: :mod:`superfacets.method.multilevel`);
+   on clusters where it pays: :mod:`superfacets.method.coarse_to_fine`);
 5. ``iterate_passes``: passes of (classify, update) until no center moves, ``tol`` or
    ``max_iter`` (:mod:`superfacets.method.passes`, with a strategy of
    :mod:`superfacets.method.classify`); with split-and-merge, the K-preserving swaps
@@ -45,7 +45,7 @@ import numpy as np
 
 from .._runtime import interrupts
 from .._runtime.memory import give_back_free_memory
-from ..elements.inputs import features_of
+from ..elements.builders import features_of
 from .finish import clean_up, exact_count, finish, merge_small
 from .merges import merge_to_count
 from .params import SegmentParams

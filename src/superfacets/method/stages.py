@@ -13,13 +13,13 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..elements.builders import ElementInput, elements_of, prepared
 from ..elements.density import adapted_graph, density_for
-from ..elements.inputs import ElementInput, elements_of, prepared
 from ..elements.kinds import ElementKind, kind_of
 from ..elements.vertices import symmetric_terms
 from .classify import make_classifier
+from .coarse_to_fine import COARSENING_READS, coarsening_for, start_centers
 from .expansion import Workspaces
-from .multilevel import COARSENING_READS, coarsening_for, start_centers
 from .params import (
     DEFAULT_CENTER_TOL,
     DEFAULTS,
@@ -179,7 +179,7 @@ def resolve_rules(graph, p: SegmentParams, *, n_centers: int | None = None,
     the diagonal), clean-up and split-and-merge
     (:func:`superfacets.method.params.better_method`), the classification
     (:func:`superfacets.method.params.assignment_of`), the center tolerance (0.05 of ``r``
-    with ``tol > 0``), the coarsening (:func:`superfacets.method.multilevel.coarsening_for`)
+    with ``tol > 0``), the coarsening (:func:`superfacets.method.coarse_to_fine.coarsening_for`)
     and ``merge_from`` (:func:`superfacets.method.rules.merge_from_of`: where it is above 1,
     ``k`` is ``merge_from`` times the count asked for, ``target``, at most one superpoint
     per :data:`~superfacets.method.rules.MIN_FINE_ELEMENTS` elements).
@@ -318,7 +318,7 @@ def initialize(graph, w: np.ndarray, rules: Rules, hooks,
                initial: np.ndarray | None = None) -> tuple[np.ndarray, int]:
     """Stage 4: the first centers (paper section 3.1, step 1): farthest point,
     flood or grid, after a coarse run on clusters where the rules say
-    (:func:`superfacets.method.multilevel.start_centers`); or ``initial``.
+    (:func:`superfacets.method.coarse_to_fine.start_centers`); or ``initial``.
 
     Returns
     -------

@@ -11,8 +11,8 @@ import numpy as np
 
 from .._kernels import native
 from .._runtime.arrays import real_rows
+from ..elements.builders import as_element_graph
 from ..elements.graph import CHUNK, ElementGraph, chunked
-from ..elements.inputs import as_element_graph
 from ..errors import ParameterError
 from .params import (
     DEFAULTS,
@@ -230,7 +230,7 @@ def shlafman_weights(graph, *, alpha: float = _SHLAFMAN_ALPHA, dtype=np.float64)
     Examples
     --------
     >>> import trimesh
-    >>> from superfacets.elements.inputs import as_element_graph
+    >>> from superfacets.elements.builders import as_element_graph
     >>> g = as_element_graph(trimesh.creation.box())
     >>> shlafman_weights(g, alpha=0.5).shape
     (18,)
@@ -281,7 +281,7 @@ def edge_weights(graph, weighting: str = "paper", *, alpha: float = _PAPER_ALPHA
     Examples
     --------
     >>> import trimesh
-    >>> from superfacets.elements.inputs import as_element_graph
+    >>> from superfacets.elements.builders import as_element_graph
     >>> g = as_element_graph(trimesh.creation.box())
     >>> w = edge_weights(g, "paper", alpha=200)
     >>> w.shape, bool((w > 0).all())

@@ -83,7 +83,7 @@ def tile_graph(cloud, folder, n_neighbors: int) -> str:
     Raises
     ------
     InvalidCloudError, MemoryLimitError
-        As :func:`superfacets.elements.inputs.elements_of`.
+        As :func:`superfacets.elements.builders.elements_of`.
     OSError
         If the folder cannot be written or read.
 
@@ -98,8 +98,8 @@ def tile_graph(cloud, folder, n_neighbors: int) -> str:
     ...     print(first, tile_graph(again, Path(tmp) / "tile0", 10), tile_graph(again, "", 10))
     built read kept
     """
+    from ..elements.builders import prepared
     from ..elements.graph import cached_on
-    from ..elements.inputs import prepared
     from ..elements.points import point_elements, point_graph
 
     folder = Path(folder)

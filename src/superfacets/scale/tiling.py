@@ -41,7 +41,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..elements.inputs import elements_of, features_of
+from ..elements.builders import elements_of, features_of
 from ..elements.kinds import kind_of
 from ..errors import ParameterError
 from ..method.classify import make_classifier
@@ -353,7 +353,7 @@ def tile_connect(inp, labels: np.ndarray, owned: np.ndarray, owned_rows: np.ndar
         The labels with the stray pieces of owned superfacets renamed; None
         when there is none (the usual case).
     """
-    from ..elements.inputs import ElementInput, prepared
+    from ..elements.builders import ElementInput, prepared
     from ..elements.points import point_graph
     from ..method.connectivity import label_components
 

@@ -150,7 +150,7 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
             write_colored_mesh(colored, data, result.labels, outputs=outputs,
                                vertex_colors=vertex_colors)
         elif colored is not None:
-            from ..elements.inputs import elements_of
+            from ..elements.builders import elements_of
 
             source_el = elements_of(data, kind, **(element_options or {}))  # cached
             write_colored_elements(colored, source_el, result.labels, outputs=outputs)

@@ -428,7 +428,7 @@ def render_points(cloud, labels=None, out=None, *, size=(1200, 900), view=None,
     MissingExtraError
         Without the ``render`` extra.
     """
-    from ..elements.inputs import elements_of
+    from ..elements.builders import elements_of
     from ..io.export import point_colors
 
     source = elements_of(cloud, "points")

@@ -143,7 +143,7 @@ def cut_pursuit(obj, n_segments: int | None = None, *, reg_strength: float = 0.1
     >>> labels = cut_pursuit(xyz, 20)           # doctest: +SKIP
     """
     from ..._runtime.extras import require
-    from ...elements.inputs import elements_of, is_cloud
+    from ...elements.builders import elements_of, is_cloud
     from ...elements.labels import relabel_dense
     from ...method.params import check_positive
 

@@ -104,7 +104,7 @@ def graph_segmentation(obj, k_thresh: float = 0.01, min_size: int = 20, *,
     1
     """
     from ..._kernels import native
-    from ...elements.inputs import elements_of, is_cloud
+    from ...elements.builders import elements_of, is_cloud
     from ...elements.labels import relabel_dense
     from ...method.params import ELEMENTS, check_choice
 

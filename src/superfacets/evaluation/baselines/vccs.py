@@ -92,7 +92,7 @@ def vccs(obj, n_segments: int | None = None, *, seed_resolution: float = 0.1,
     """
     from scipy.spatial import cKDTree
 
-    from ...elements.inputs import elements_of
+    from ...elements.builders import elements_of
     from ...elements.labels import relabel_dense
 
     mod = _module()

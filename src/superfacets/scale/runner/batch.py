@@ -31,11 +31,11 @@ from pathlib import Path
 from typing import Sequence
 
 from ..._runtime import interrupts
-from ...elements.inputs import kind_for
+from ...elements.builders import kind_for
 from ...elements.kinds import kind_of
 from ...errors import ParameterError
+from .collect import broken_link_reason, collect_inputs, no_inputs, output_names
 from .engine import Engine, PeakMemory, error_text
-from .inputs import broken_link_reason, collect_inputs, no_inputs, output_names
 from .manifest import (
     JOURNAL,
     MANIFEST_COLUMNS,

@@ -51,7 +51,7 @@ def _prepared(path: str, seg_paths: tuple, elements: str, n_points: int, seed: i
     area-weighted majority of the incident faces. Points: ``n_points`` sampled
     uniformly by area (fixed seed), each with its face's ground truth.
     """
-    from ...elements.inputs import elements_of
+    from ...elements.builders import elements_of
     from ...evaluation.datasets.sampling import sample_points, vertex_ground_truth
     from ...inputs.cloud import PointCloud
 

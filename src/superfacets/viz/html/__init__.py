@@ -94,7 +94,7 @@ def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None 
     >>> page.startswith("<!DOCTYPE html>"), "ball - superfacets" in page
     (True, True)
     """
-    from ...elements.inputs import is_cloud
+    from ...elements.builders import is_cloud
 
     if is_cloud(mesh):
         return _points_page(mesh, labels, title=title, info=info, background=background,
@@ -149,7 +149,7 @@ def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None 
 
 def _points_page(cloud, labels, *, title, info, background, view, up) -> str:
     """The viewer page of a point cloud: points coloured by superpoint (invalid ones left out)."""
-    from ...elements.inputs import elements_of
+    from ...elements.builders import elements_of
     from ...io.export import point_colors
     from ..render import PointsFrame
 

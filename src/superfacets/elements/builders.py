@@ -159,7 +159,7 @@ class Builder(NamedTuple):
 
 
 def _is_volume(obj) -> bool:
-    from ..inputs.volume import TetMesh
+    from ..inputs.tetmesh import TetMesh
 
     return isinstance(obj, TetMesh)
 
@@ -328,7 +328,7 @@ def elements_of(obj, elements: str | None = None, *, n_neighbors: int = _N_NEIGH
         :func:`~superfacets.inputs.cloud.as_cloud` accept
     elements : {'faces', 'vertices', 'points', 'cells'}, optional
         Default: ``'points'`` for a point cloud, ``'cells'`` for a
-        :class:`~superfacets.inputs.volume.TetMesh` (its tetrahedra), else ``'faces'``
+        :class:`~superfacets.inputs.tetmesh.TetMesh` (its tetrahedra), else ``'faces'``
         (:func:`kind_for`; the builders: :data:`BUILDERS`).
     n_neighbors, neighbor_radius
         The point graph's neighbourhood (points only).

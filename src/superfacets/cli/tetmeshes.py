@@ -16,7 +16,7 @@ def segment_volume(args) -> int:
     from ..errors import ParameterError, SuperfacetsError
     from ..io.files import Outputs
     from ..io.labels import write_labels
-    from ..io.volumes import read_volume, write_volume_labels
+    from ..io.tetmeshes import read_volume, write_volume_labels
     from ..method.params import resolve
 
     for flag, given in (("--html", args.html), ("--graph", args.graph),
@@ -46,7 +46,7 @@ def segment_volume(args) -> int:
         if vol_out is not None:
             write_volume_labels(vol_out, data, result.labels, outputs=outputs)
         if png_out is not None:
-            from ..inputs.volume import cut_surface
+            from ..inputs.tetmesh import cut_surface
             from ..viz.render import render
 
             surface, face_labels = cut_surface(data, result.labels, axis=0, at=0.5)

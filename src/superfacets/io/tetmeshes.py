@@ -43,7 +43,7 @@ def read_volume(path):
     MeshFormatError
         If meshio cannot read it, or it holds no tetrahedron.
     InvalidMeshError
-        As :class:`~superfacets.inputs.volume.TetMesh`.
+        As :class:`~superfacets.inputs.tetmesh.TetMesh`.
     MissingExtraError
         Without meshio (``pip install 'superfacets[volumes]'``).
 
@@ -56,7 +56,7 @@ def read_volume(path):
     1
     """
     from .._runtime.extras import require
-    from ..inputs.volume import TetMesh
+    from ..inputs.tetmesh import TetMesh
 
     meshio = require("meshio", "reading tetrahedral meshes")
     path = Path(path)
