@@ -34,6 +34,12 @@ __all__ = ["add_parsers"]
 
 def add_parsers(sub) -> None:
     """Add ``segment``, ``baseline`` and ``demo`` to the sub-parsers."""
+    _add_segment(sub)
+    _add_baseline(sub)
+    _add_demo(sub)
+
+
+def _add_segment(sub) -> None:
     p = sub.add_parser(
         "segment", help="compute the superfacets of a mesh or a point cloud file",
         description="Compute the superfacets of a mesh file (.off, .tri, .ply, .obj, .stl, "
@@ -99,6 +105,8 @@ def add_parsers(sub) -> None:
     add_tile_options(p)
     p.set_defaults(func=cmd_segment)
 
+
+def _add_baseline(sub) -> None:
     bl = sub.add_parser(
         "baseline", help="segment a mesh file with a baseline (normalized cuts, VSA, ...)",
         description="Segment a mesh file with any method of the registry (see 'superfacets "
@@ -124,6 +132,8 @@ def add_parsers(sub) -> None:
     bl.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     bl.set_defaults(func=cmd_baseline)
 
+
+def _add_demo(sub) -> None:
     d = sub.add_parser(
         "demo", help="segment a built-in procedural mesh (no data needed)",
         description="Build a procedural four-legged creature (about 22,000 faces), compute "
@@ -189,13 +199,31 @@ def _tiny_hint(result) -> str:
 
 def cmd_segment(args) -> int:
     from .._runtime import interrupts
-    from ..errors import ParameterError, SuperfacetsError
     from ..method.params import resolve
-    from ..viz.outputs import JoinedResult, write_result
 
     if Path(args.mesh).is_dir():
         raise IsADirectoryError(f"{args.mesh}: is a directory; to segment every mesh or cloud "
                                 f"in it: superfacets batch {args.mesh} -o OUTDIR")
+    elsewhere = _other_command(args)  # a tetrahedral mesh, tiles
+    if elsewhere is not None:
+        return elsewhere()
+    outputs = _checked_outputs(args)
+    kwargs = dict(method_kwargs(args), **element_kwargs(args))
+    resolve(n_segments=args.n_segments, radius=args.radius, **kwargs)  # before the read
+    t0 = time.perf_counter()
+    data = scan_cloud(read_usable(args.mesh, clouds=True), args)
+    interrupts.check()  # a Ctrl-C during the start-up and the reading
+    kind = _kind_of_run(args, data, outputs["colored"])
+    result = _run(args, data, kwargs)
+    elapsed = time.perf_counter() - t0
+    _write_and_say(args, data, result, kind, outputs, elapsed)
+    return 0
+
+
+def _other_command(args):
+    """The command that takes this input instead (a tetrahedral mesh, ``--tiles``), as a
+    function of no argument; None where it is this one (then no tile option is given)."""
+    from ..errors import ParameterError
     from ..io.tetmeshes import VOLUME_FORMATS
 
     if Path(args.mesh).suffix.lower().lstrip(".") in VOLUME_FORMATS:
@@ -204,18 +232,26 @@ def cmd_segment(args) -> int:
                                  "tetrahedral meshes")
         from .tetmeshes import segment_volume
 
-        return segment_volume(args)
+        return lambda: segment_volume(args)
     if args.tiles is not None:
         if args.adaptive is not None:
             raise ParameterError("--adaptive merges levels of the whole input; not with --tiles")
         from .tiles import segment_tiles
 
-        return segment_tiles(args)
+        return lambda: segment_tiles(args)
     for flag, given in (("--halo", args.halo), ("--workers", args.workers),
                         ("--scheduler", args.scheduler), ("--refine", args.refine),
                         ("--workdir", args.workdir)):
         if given is not None:
             raise ParameterError(f"{flag} goes with --tiles")
+    return None
+
+
+def _checked_outputs(args) -> dict:
+    """The output paths of ``segment``, checked against each other and the options that
+    go with them, before anything is read (one line each)."""
+    from ..errors import ParameterError
+
     seg_out = check_labels_output(args.output, args.mesh)
     ply_out = check_output(args.colored_mesh, (".ply", ".glb", ".obj"), "the coloured mesh",
                            inputs=(args.mesh,))
@@ -223,6 +259,26 @@ def cmd_segment(args) -> int:
         raise ParameterError(f"{seg_out}: the labels and the coloured mesh cannot both go there")
     if args.vertex_colors and (ply_out is None or not ply_out.name.lower().endswith(".ply")):
         raise ParameterError("--vertex-colors goes with --colored-mesh OUT.ply")
+    _check_levels(args)
+    png_out = check_output(args.picture, (".png",), "the picture", inputs=(args.mesh,))
+    html_out = check_output(args.html, (".html", ".htm"), "the page", inputs=(args.mesh,))
+    graph_out = check_output(args.graph, (".npz",), "the graph", inputs=(args.mesh,))
+    if args.levels and graph_out is None:
+        raise ParameterError("--levels goes with --graph OUT.npz (the hierarchy is written there)")
+    if graph_out is not None and args.per_object:
+        raise ParameterError("--graph is of one segmentation; not with --per-object")
+    named = [str(x) for x in (seg_out, ply_out, png_out, html_out, graph_out)
+             if x is not None]
+    if len(set(named)) < len(named):
+        raise ParameterError("two outputs go to the same file")
+    return dict(labels=seg_out, colored=ply_out, picture=png_out, html=html_out,
+                graph=graph_out)
+
+
+def _check_levels(args) -> None:
+    """``--per-object``, ``--adaptive`` and ``--extent-weight`` with what they need."""
+    from ..errors import ParameterError
+
     if args.per_object and args.radius is not None:
         raise ParameterError("--per-object takes -k, not --radius")
     if args.extent_weight is not None and (
@@ -235,68 +291,69 @@ def cmd_segment(args) -> int:
     if args.adaptive is not None and (args.per_object or args.radius is not None):
         raise ParameterError("--adaptive takes -k, on one segmentation (not --radius or "
                              "--per-object)")
-    png_out = check_output(args.picture, (".png",), "the picture", inputs=(args.mesh,))
-    html_out = check_output(args.html, (".html", ".htm"), "the page", inputs=(args.mesh,))
-    graph_out = check_output(args.graph, (".npz",), "the graph", inputs=(args.mesh,))
-    if args.levels and graph_out is None:
-        raise ParameterError("--levels goes with --graph OUT.npz (the hierarchy is written there)")
-    if graph_out is not None and args.per_object:
-        raise ParameterError("--graph is of one segmentation; not with --per-object")
-    named = [str(x) for x in (seg_out, ply_out, png_out, html_out, graph_out)
-             if x is not None]
-    if len(set(named)) < len(named):
-        raise ParameterError("two outputs go to the same file")
-    kwargs = dict(method_kwargs(args), **element_kwargs(args))
-    resolve(n_segments=args.n_segments, radius=args.radius, **kwargs)  # before the read
-    t0 = time.perf_counter()
-    data = scan_cloud(read_usable(args.mesh, clouds=True), args)
-    interrupts.check()  # a Ctrl-C during the start-up and the reading
-    from ..api.scenes import segment_objects
-    from ..api.segmentation import segment
 
-    cloud = not hasattr(data, "faces")
-    kind = "points" if cloud else (args.elements or "faces")
+
+def _kind_of_run(args, data, ply_out) -> str:
+    """The elements segmented, checked against the options that need faces."""
+    from ..errors import ParameterError
+
+    kind = "points" if not hasattr(data, "faces") else (args.elements or "faces")
     if not kind_of(kind).objects:
         if args.per_object:
             raise ParameterError("--per-object segments the faces of a scene; not with "
                                  f"{kind}")
         if ply_out is not None and not ply_out.name.lower().endswith(".ply"):
             raise ParameterError(f"{ply_out}: coloured {kind} are written as .ply")
-    size = data.n_total if cloud else data.n_faces
+    return kind
+
+
+def _run(args, data, kwargs):
+    """The segmentation the options ask for: per object, content-adaptive or one run."""
+    from ..api.scenes import segment_objects
+    from ..api.segmentation import segment
+    from ..errors import SuperfacetsError
+    from ..viz.outputs import JoinedResult
+
+    size = data.n_faces if hasattr(data, "faces") else data.n_total
     if args.progress is None:  # long runs show where they are
-        kwargs["progress"] = size >= 500_000 and sys.stderr.isatty()
+        kwargs = dict(kwargs, progress=size >= 500_000 and sys.stderr.isatty())
+    k = args.n_segments or DEFAULTS.n_segments
     try:
         if args.per_object:
-            result = JoinedResult(*segment_objects(data, args.n_segments or DEFAULTS.n_segments,
-                                              **kwargs))
-        elif args.adaptive is not None:
+            return JoinedResult(*segment_objects(data, k, **kwargs))
+        if args.adaptive is not None:
             from ..api.levels import adaptive_segment
 
-            result = adaptive_segment(data, args.n_segments or DEFAULTS.n_segments,
-                                      start=args.adaptive,
-                                      extent_weight=args.extent_weight, **kwargs)
-        else:
-            result = segment(data, args.n_segments, radius=args.radius, **kwargs)
+            return adaptive_segment(data, k, start=args.adaptive,
+                                    extent_weight=args.extent_weight, **kwargs)
+        return segment(data, args.n_segments, radius=args.radius, **kwargs)
     except SuperfacetsError as exc:
         raise named_after(args.mesh, exc) from None
-    elapsed = time.perf_counter() - t0
-    write_result(data, result, kind, Path(args.mesh).name, labels=seg_out, header=args.header,
-                 colored=ply_out, vertex_colors=args.vertex_colors, picture=png_out,
-                 html=html_out, element_options=dict(n_neighbors=args.neighbors,
-                                                     neighbor_radius=args.neighbor_radius),
-                 up=args.up or "y", view=args.view, graph=graph_out, levels=args.levels,
-                 level_cost=args.level_cost, extent_weight=args.extent_weight)
+
+
+def _write_and_say(args, data, result, kind, outputs, elapsed) -> None:
+    """Write the outputs, then the summary, what was written and the notes."""
+    from ..viz.outputs import write_result
+
+    write_result(data, result, kind, Path(args.mesh).name, labels=outputs["labels"],
+                 header=args.header, colored=outputs["colored"],
+                 vertex_colors=args.vertex_colors, picture=outputs["picture"],
+                 html=outputs["html"], element_options=dict(
+                     n_neighbors=args.neighbors, neighbor_radius=args.neighbor_radius),
+                 up=args.up or "y", view=args.view, graph=outputs["graph"],
+                 levels=args.levels, level_cost=args.level_cost,
+                 extent_weight=args.extent_weight)
+    if args.quiet:
+        return
+    seg_out = outputs["labels"]
     report = sys.stderr if str(seg_out) == "-" else sys.stdout  # stdout holds the labels
-    if not args.quiet:
-        print(_summary(Path(args.mesh).name, data, result, elapsed, kind,
-                       getattr(args, "density", None) is not None), file=report)
-    if not args.quiet:
-        _say_what_was_written(seg_out, ply_out, png_out, html_out, report, args.up,
-                              graph_out)
-        for note in (duplicates_note(args, data, kind), count_note(args, data, result, kind)):
-            if note:
-                print(f"note: {note}", file=sys.stderr)
-    return 0
+    print(_summary(Path(args.mesh).name, data, result, elapsed, kind,
+                   getattr(args, "density", None) is not None), file=report)
+    _say_what_was_written(seg_out, outputs["colored"], outputs["picture"], outputs["html"],
+                          report, args.up, outputs["graph"])
+    for note in (duplicates_note(args, data, kind), count_note(args, data, result, kind)):
+        if note:
+            print(f"note: {note}", file=sys.stderr)
 
 
 def _say_what_was_written(seg_out, ply_out, png_out, html_out, report, up,

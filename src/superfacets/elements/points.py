@@ -226,6 +226,22 @@ def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
     return graphs[key]
 
 
+def _normals_and_linearity(cloud, pts, nbr, index, valid):
+    """Each distinct point's normal (the cloud's own, of its first row, where it has them;
+    else PCA of the k neighbours) and how much its neighbourhood is a line (a scan line)."""
+    if cloud.normals is None:
+        return normals_and_linearity(pts, nbr)
+    pca_linearity = native.kernel("normals.pca_linearity")
+
+    n = pts.shape[0]
+    first = np.full(n, -1, dtype=np.int64)
+    first[index[valid][::-1]] = valid[::-1]  # the first row of each distinct point
+    normals = np.ascontiguousarray(cloud.normals[first])
+    linearity = np.empty(n)
+    pca_linearity(np.ascontiguousarray(pts), nbr, linearity)
+    return normals, linearity
+
+
 def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None,
                           oriented: bool = True) -> PointElements:
     valid = np.flatnonzero(cloud.valid)
@@ -255,17 +271,7 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
     if not positive.all():  # cannot happen with distinct points; keep sizes > 0 anyway
         area[~positive] = area[positive].min() if positive.any() else 1.0
 
-    # normals, and the neighbourhoods that are lines (a scan line), from the k neighbours
-    if cloud.normals is not None:
-        pca_linearity = native.kernel("normals.pca_linearity")
-
-        first = np.full(n, -1, dtype=np.int64)
-        first[index[valid][::-1]] = valid[::-1]  # the first row of each distinct point
-        normals = np.ascontiguousarray(cloud.normals[first])
-        linearity = np.empty(n)
-        pca_linearity(np.ascontiguousarray(pts), nbr, linearity)
-    else:
-        normals, linearity = normals_and_linearity(pts, nbr)
+    normals, linearity = _normals_and_linearity(cloud, pts, nbr, index, valid)
     wide = np.flatnonzero(linearity > LINEAR)
     del linearity
     k_wide = int(min(WIDEN * k, n - 1))

@@ -164,6 +164,53 @@ def cut_costs(graph, *, alpha: float = DEFAULTS.alpha, eta_convex: float = DEFAU
     return chunked(g.n_edges, cost)
 
 
+def _checked_centers(labels, centers, sizes, positions) -> np.ndarray:
+    """The centers given (one element of each superfacet, in label order: checked), or
+    each superfacet's element nearest its mean position."""
+    from ..errors import ParameterError
+
+    k, n = int(labels.max()) + 1, labels.shape[0]
+    if centers is None:
+        from .passes import final_centers
+
+        return final_centers(labels, np.empty(0, dtype=np.int64), sizes, positions)
+    centers = np.asarray(centers)
+    if (centers.shape != (k,) or not np.issubdtype(centers.dtype, np.integer)
+            or centers.min() < 0 or centers.max() >= n
+            or not np.array_equal(labels[centers], np.arange(k))):
+        raise ParameterError(f"centers must hold one element of each of the {k} superfacets, "
+                             "in label order")
+    return centers
+
+
+def _cut_costs_per_entry(g, alpha, eta_convex, crease, features, beta, r) -> np.ndarray:
+    """The cost of cutting each CSR entry's adjacency, times the radius ``r``."""
+    if beta > 0:
+        return np.ascontiguousarray(
+            cut_costs(g, alpha=alpha, eta_convex=eta_convex, crease=crease, features=features,
+                      beta=beta)[g.dual_edge] * r)
+    cut_costs_csr = native.kernel("terms.cut_costs_csr")  # the same values, in one pass
+
+    t = g.terms
+    return cut_costs_csr(g.dual_edge, t.concave, t.cos, g.lengths, crease * alpha / np.pi,
+                         eta_convex, r)
+
+
+def _bands(members, labels, partner, k: int):
+    """The band elements ``members`` grouped by the pair of superfacets they lie between
+    (sorted by the pair, stably): the members, where each band starts, and each band's
+    pair as ``lo * k + hi``."""
+    key = np.minimum(labels[members], partner[members])
+    key *= k
+    key += np.maximum(labels[members], partner[members])
+    o = np.argsort(key, kind="stable")
+    key = key[o]
+    members = members[o]
+    del o
+    starts = np.concatenate([[0], np.flatnonzero(np.diff(key)) + 1, [key.size]])
+    return members, starts, key[starts[:-1]]
+
+
 def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alpha,
                      eta_convex: float = DEFAULTS.eta_convex, radius: float | None = None,
                      crease: float | None = None, smoothness: float | None = None,
@@ -253,19 +300,16 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
     band_distances = native.kernel("cleanup.band_distances")
     solve_bands = native.kernel("cleanup.solve_bands")
     label_sums = native.kernel("geometry.label_sums")
-    from ..errors import ParameterError
     from .connectivity import enforce_connectivity
 
     g = as_element_graph(graph)
     labels = relabel_dense(check_labels(labels, g.n_elements, per=g.element))
     crease = crease_for(g.kind) if crease is None else crease
-    alpha = check_nonneg("alpha", alpha)
-    eta_convex = check_nonneg("eta_convex", eta_convex)
+    alpha, eta_convex = check_nonneg("alpha", alpha), check_nonneg("eta_convex", eta_convex)
     smoothness = check_nonneg("smoothness",
                               smoothness_for(g.kind) if smoothness is None else smoothness)
     band = check_positive("band", band_for(g.kind) if band is None else band)
-    sweeps = check_int("sweeps", sweeps, lo=0)
-    n_threads = check_threads(n_threads)
+    sweeps, n_threads = check_int("sweeps", sweeps, lo=0), check_threads(n_threads)
     k = int(labels.max()) + 1
     n = g.n_elements
     if radius is None:
@@ -273,39 +317,17 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
     r = check_number("radius", radius, 0.0, lo_open=True)
     sizes = np.ascontiguousarray(g.sizes, dtype=np.float64)
     positions = np.ascontiguousarray(g.positions, dtype=np.float64)
-    if centers is None:
-        from .passes import final_centers
-
-        centers = final_centers(labels, np.empty(0, dtype=np.int64), sizes, positions)
-    centers = np.asarray(centers)
-    if (centers.shape != (k,) or not np.issubdtype(centers.dtype, np.integer)
-            or centers.min() < 0 or centers.max() >= n
-            or not np.array_equal(labels[centers], np.arange(k))):
-        raise ParameterError(f"centers must hold one element of each of the {k} superfacets, "
-                             "in label order")
+    centers = _checked_centers(labels, centers, sizes, positions)
     # ties (a band's partner, a cut's side) go by label: number the superfacets by
     # their centers, so that the result depends on the partition and the centers alone
     # (a tiled run numbers them otherwise), and give the caller's numbers back at the end
-    order = np.argsort(centers, kind="stable").astype(np.int64)
-    rank = np.empty(k, dtype=np.int64)
-    rank[order] = np.arange(k)
-    labels = rank[labels]
-    centers = centers[order].astype(np.int64)
+    labels, centers, order = _numbered_by_centers(labels, centers)
     pinned = np.zeros(n, dtype=np.bool_)
     pinned[centers] = True
 
     de = g.dual_edge
-    crease = check_nonneg("crease", crease)
-    if check_nonneg("beta", beta) > 0:
-        cut_csr = np.ascontiguousarray(
-            cut_costs(g, alpha=alpha, eta_convex=eta_convex, crease=crease, features=features,
-                      beta=beta)[de] * r)
-    else:  # the same values, per CSR entry in one pass
-        cut_costs_csr = native.kernel("terms.cut_costs_csr")
-
-        t = g.terms
-        cut_csr = cut_costs_csr(de, t.concave, t.cos, g.lengths, crease * alpha / np.pi,
-                                eta_convex, r)
+    cut_csr = _cut_costs_per_entry(g, alpha, eta_convex, check_nonneg("crease", crease),
+                                   features, check_nonneg("beta", beta), r)
     heap = g.indices.shape[0] + n + 1
     smooth = smoothness / (r * r)
     dirty = None
@@ -326,17 +348,8 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
             members = members[dirty[labels[members]] | dirty[partner[members]]]
         if members.size == 0:
             break
-        key = np.minimum(labels[members], partner[members])
-        key *= k
-        key += np.maximum(labels[members], partner[members])
+        members, starts, pair = _bands(members, labels, partner, k)
         del partner
-        o = np.argsort(key, kind="stable")
-        key = key[o]
-        members = members[o]
-        del o
-        starts = np.concatenate([[0], np.flatnonzero(np.diff(key)) + 1, [key.size]])
-        pair = key[starts[:-1]]
-        del key
         band_of = np.full(n, -1, dtype=np.int64)
         band_of[members] = np.repeat(np.arange(starts.size - 1), np.diff(starts))
         out = labels.copy()
@@ -364,3 +377,13 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
     out = order.take(labels, mode="clip")
     out[apart] = labels[apart]
     return out
+
+
+def _numbered_by_centers(labels, centers):
+    """The superfacets numbered by their centers (ascending): the labels and centers so
+    numbered, and the caller's number of each (``order``)."""
+    k = centers.shape[0]
+    order = np.argsort(centers, kind="stable").astype(np.int64)
+    rank = np.empty(k, dtype=np.int64)
+    rank[order] = np.arange(k)
+    return rank[labels], centers[order].astype(np.int64), order

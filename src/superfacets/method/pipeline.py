@@ -231,6 +231,24 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
         raise
     if not rules.cleanup:
         hooks.close()
+    labels, centers = _finished(graph, it, rules, hooks, feats)
+    timings = hooks.timings
+    centers = source.first_rows(centers)
+    element_labels = labels
+    labels = source.to_rows(labels)
+    timings["total"] = time.perf_counter() - t_start
+    timings.update(expansions=it.expansions, passes=it.n_passes, cycle_period=it.cycle_period,
+                   changed=it.changed, stopped_by_tol=it.stopped_by_tol)
+    return RunRecord(labels=labels, centers=centers, n_iter=it.n_iter, converged=it.converged,
+                     mesh_radius=rules.r, n_orphan_seeds=it.n_orphan_seeds, timings=timings,
+                     params=_resolved(graph, rules, ratio, init.shape[0]), elements=source,
+                     element_labels=element_labels)
+
+
+def _finished(graph, it, rules, hooks, feats):
+    """The labels and centers after the passes: connected, cleaned up, small ones merged,
+    exactly the count asked for where the kind wants it (the finishing stages)."""
+    p = rules.params
     sizes = np.ascontiguousarray(graph.sizes)
     positions = np.ascontiguousarray(graph.positions)
     with hooks.stage("connectivity"):
@@ -264,25 +282,22 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
 
             warnings.warn(f"{fewest} superpoints for n_segments={rules.target}: the input has "
                           f"{fewest} separate pieces, and a superpoint cannot cross from one "
-                          "to another", RuntimeWarning, stacklevel=3)
-    timings = hooks.timings
-    centers = source.first_rows(centers)
-    element_labels = labels
-    labels = source.to_rows(labels)
-    timings["total"] = time.perf_counter() - t_start
-    timings.update(expansions=it.expansions, passes=it.n_passes, cycle_period=it.cycle_period,
-                   changed=it.changed, stopped_by_tol=it.stopped_by_tol)
+                          "to another", RuntimeWarning, stacklevel=4)
+    return labels, centers
+
+
+def _resolved(graph, rules, ratio, n_init: int) -> dict:
+    """The run's parameters as the method resolved them (``SegmentationResult.params``)."""
+    p = rules.params
     resolved = dict(n_segments=rules.target, radius=rules.r / graph.diagonal, alpha=p.alpha,
                     eta_convex=p.eta_convex, window=p.window, init=p.init,
                     max_iter=p.max_iter, weighting=p.weighting, assignment=p.assignment,
                     enforce_connectivity=p.enforce_connectivity, cleanup=rules.cleanup,
                     split_merge=rules.split_merge, tol=p.tol,
                     center_tol=rules.center_tol, coarsen=ratio,
-                    n_init_centers=init.shape[0], elements=graph.kind, beta=p.beta,
+                    n_init_centers=n_init, elements=graph.kind, beta=p.beta,
                     min_elements=p.min_elements, density=p.density, roughness=p.roughness,
                     merge_from=p.merge_from)
     if rules.kind.neighborhood:
         resolved.update(n_neighbors=p.n_neighbors, neighbor_radius=p.neighbor_radius)
-    return RunRecord(labels=labels, centers=centers, n_iter=it.n_iter, converged=it.converged,
-                     mesh_radius=rules.r, n_orphan_seeds=it.n_orphan_seeds, timings=timings,
-                     params=resolved, elements=source, element_labels=element_labels)
+    return resolved

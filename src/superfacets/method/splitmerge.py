@@ -212,20 +212,32 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
         *space[t], t, n_thr), n_thr)
     loss = union - energy[pa] - energy[pb]  # inf: not allowed, or beyond any gain
 
-    # greedy: the largest gains with the smallest losses, each superfacet in one swap
+    remap, split_to, n_swaps = _greedy_swaps(splits, pa, pb, loss, k, limit,
+                                             min_gain * float(np.mean(energy)))
+    splits = own = space = dist = dist2 = stamp = stamp2 = members = None  # noqa: F841 (freed)
+    out = remap[lab]
+    moved = second & (split_to[lab] >= 0)
+    out[moved] = split_to[lab[moved]]
+    return out, n_swaps
+
+
+def _greedy_swaps(splits, pa, pb, loss, k: int, limit: int, least_gain: float):
+    """The swaps chosen greedily, at most ``limit``: the largest gains (splits, taken from
+    ``splits`` largest first, down to ``least_gain``) with the smallest losses (merges of
+    the adjacent pairs ``pa``, ``pb``), each superfacet in one swap. Returns the label of
+    each label after the merges, the label the second part of each split takes (-1: not
+    split) and the number of swaps."""
     merges = np.lexsort((pb, pa, loss))
     used = np.zeros(k, dtype=bool)
     remap = np.arange(k, dtype=np.int32)
     split_to = np.full(k, -1, dtype=np.int32)
-    j = 0
-    n_swaps = 0
-    mean_energy = float(np.mean(energy))
+    j = n_swaps = 0
     for _ in range(limit):
         nxt = splits.pop()
         if nxt is None:
             break
         s, gain = nxt
-        if gain < min_gain * mean_energy:  # the gains come largest first
+        if gain < least_gain:  # the gains come largest first
             break
         if used[s]:
             continue
@@ -240,11 +252,7 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
         split_to[s] = v
         used[[s, u, v]] = True
         n_swaps += 1
-    splits = own = space = dist = dist2 = stamp = stamp2 = members = None  # noqa: F841 (freed)
-    out = remap[lab]
-    moved = second & (split_to[lab] >= 0)
-    out[moved] = split_to[lab[moved]]
-    return out, n_swaps
+    return remap, split_to, n_swaps
 
 
 def swap_eta_convex_for(kind: str) -> float:

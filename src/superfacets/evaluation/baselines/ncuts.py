@@ -161,6 +161,41 @@ def _check_limit(what: str, required: int, limit: int, m: int) -> None:
             required, limit)
 
 
+def _all_pair_distances(graph, m: int, nth: int, progress: bool):
+    """Every face's graph distance to every other (float32, ``m x m``, a block of rows
+    at a time) and each row's ``nth`` smallest (the bandwidth's reference)."""
+    from scipy.sparse.csgraph import dijkstra
+
+    dist = np.empty((m, m), dtype=np.float32)
+    kth = np.empty(m, dtype=np.float64)
+    b = _block_rows(m)
+    starts = range(0, m, b)
+    if progress:
+        from tqdm import tqdm
+
+        starts = tqdm(starts, desc="all-pairs distances", unit="block", leave=False)
+    for s in starts:
+        e = min(m, s + b)
+        block = dijkstra(graph, directed=True, indices=np.arange(s, e))
+        kth[s:e] = np.partition(block, nth, axis=1)[:, nth]
+        dist[s:e] = block
+    return dist, kth
+
+
+def _leading_eigenvectors(affinity, c: int, dense_solver: bool, gen):
+    """The ``c`` largest eigenvalues of the normalized affinity and their vectors (LAPACK
+    on small problems, else ARPACK from a seeded start)."""
+    m = affinity.shape[0]
+    if dense_solver:
+        from scipy.linalg import eigh
+
+        return eigh(affinity.toarray(), subset_by_index=[m - c, m - 1])
+    from scipy.sparse.linalg import eigsh
+
+    v0 = gen.uniform(-1.0, 1.0, m)
+    return eigsh(affinity, k=c, which="LA", v0=v0, tol=1e-6)
+
+
 def ncut_embedding(mesh, n_components: int = 300, *, alpha: float = 100.0,
                    eta_convex: float = 0.2, weighting: str = "paper", bandwidth: float = 1.0,
                    reference_segments: int = 150, cutoff: float = 1e-4,
@@ -216,7 +251,6 @@ def ncut_embedding(mesh, n_components: int = 300, *, alpha: float = 100.0,
        Superfacets", Computer Graphics Forum 33(7), 2014, section 5.
     """
     from scipy.sparse import csr_array
-    from scipy.sparse.csgraph import dijkstra
 
     mesh = as_mesh(mesh)
     mesh.check_usable()
@@ -241,21 +275,8 @@ def ncut_embedding(mesh, n_components: int = 300, *, alpha: float = 100.0,
     g = face_graph(mesh)
     graph = csr_array((w[g.dual_edge], g.indices, g.indptr),
                       shape=(m, m))
-    dist = np.empty((m, m), dtype=np.float32)
-    kth = np.empty(m, dtype=np.float64)
-    nth = min(m - 1, math.ceil(m / k_ref))
+    dist, kth = _all_pair_distances(graph, m, min(m - 1, math.ceil(m / k_ref)), progress)
     b = _block_rows(m)
-    starts = range(0, m, b)
-    if progress:
-        from tqdm import tqdm
-
-        starts = tqdm(starts, desc="all-pairs distances", unit="block", leave=False)
-    for s in starts:
-        e = min(m, s + b)
-        block = dijkstra(graph, directed=True, indices=np.arange(s, e))
-        kth[s:e] = np.partition(block, nth, axis=1)[:, nth]
-        dist[s:e] = block
-    del block
     seconds["distances"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
@@ -294,15 +315,7 @@ def ncut_embedding(mesh, n_components: int = 300, *, alpha: float = 100.0,
     seconds["affinity"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    if dense_solver:
-        from scipy.linalg import eigh
-
-        vals, vecs = eigh(affinity.toarray(), subset_by_index=[m - c, m - 1])
-    else:
-        from scipy.sparse.linalg import eigsh
-
-        v0 = gen.uniform(-1.0, 1.0, m)
-        vals, vecs = eigsh(affinity, k=c, which="LA", v0=v0, tol=1e-6)
+    vals, vecs = _leading_eigenvectors(affinity, c, dense_solver, gen)
     order = np.argsort(-vals, kind="stable")
     vals = vals[order]
     vecs = vecs[:, order] * isd[:, None]

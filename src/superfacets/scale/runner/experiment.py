@@ -167,6 +167,26 @@ class ExperimentSummary:
         return self.ok + self.failed + self.skipped
 
 
+def _tasks(meshes, configs, kinds, ks, done, common: dict) -> list[dict]:
+    """One task per mesh, configuration and kind with rows still to run (its counts
+    ``ks`` not in ``done``); ``common``: seed, tau and n_points of every task."""
+    tasks = []
+    for bm, cfg, kind in product(meshes, configs, kinds):
+        method = get_method(cfg.method)
+        if kind not in method.elements:
+            continue
+        base = {"mesh": Path(bm.path).stem, "mesh_id": bm.id, "category": bm.category,
+                "method": cfg.method, "elements": kind, "seed": common["seed"],
+                **{k: fmt_value(v) for k, v in cfg.params}}
+        todo = [k for k in ks if row_key({**base, "n_segments": k}) not in done]
+        if todo:
+            tasks.append({"base": base, "run": method.run, "params": cfg.params,
+                          "path": str(bm.path), "seg_paths": tuple(str(p) for p in bm.seg_paths),
+                          "ks": todo, "elements": kind,
+                          "faces_only": method.elements == ("faces",), **common})
+    return tasks
+
+
 def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
                    n_segments: Sequence[int] = DEFAULT_N_SEGMENTS, *, workers: int | None = None,
                    tau: float = 0.05, seed: int = 0, retry_failed: bool = False,
@@ -250,20 +270,8 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
     if not kinds:
         raise ParameterError("no element kind to run")
     n_points = check_int("n_points", n_points, lo=1)
-    tasks = []
-    for bm, cfg, kind in product(meshes, configs, kinds):
-        method = get_method(cfg.method)
-        if kind not in method.elements:
-            continue
-        base = {"mesh": Path(bm.path).stem, "mesh_id": bm.id, "category": bm.category,
-                "method": cfg.method, "elements": kind, "seed": seed,
-                **{k: fmt_value(v) for k, v in cfg.params}}
-        todo = [k for k in ks if row_key({**base, "n_segments": k}) not in done]
-        if todo:
-            tasks.append({"base": base, "run": method.run, "params": cfg.params,
-                          "path": str(bm.path), "seg_paths": tuple(str(p) for p in bm.seg_paths),
-                          "ks": todo, "seed": seed, "tau": tau, "elements": kind,
-                          "n_points": n_points, "faces_only": method.elements == ("faces",)})
+    tasks = _tasks(meshes, configs, kinds, ks, done,
+                   dict(seed=seed, tau=tau, n_points=n_points))
     if not any(k in get_method(c.method).elements for c in configs for k in kinds):
         raise ParameterError(f"no method of the grid segments {', '.join(kinds)}")
     # the longest tasks first (the mesh's file size x its rows), so that no worker is left
