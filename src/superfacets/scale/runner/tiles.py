@@ -248,10 +248,176 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
     >>> r.labels.shape, r.n_segments, r.layout.n_tiles   # 39 of 40: small tiles
     ((5120,), 39, 2)
     """
-    from ...io.regions import STREAMED, RegionReader
-    from ..tile_layout import balanced_tiles, check_tiles, tile_grid
-    from ..tiling import HALO, check_tileable, halo_distance, orientation_reference
+    from ..tile_layout import balanced_tiles, tile_grid
+    from ..tiling import halo_distance
     from .buckets import bucket
+
+    params, halo = _checked_options(n_segments, options, tiles, halo, refine, workers)
+    t_start = time.perf_counter()
+    timings: dict[str, float] = {}
+    with run_folder(workdir) as tmp:  # the run's own folder, removed at its end
+        t = time.perf_counter()
+        reader, survey = _surveyed(source, tmp, tiles, params)
+        target, merge_from, params = _merge_plan(params, reader.kind, survey.n_elements)
+        if survey.color_top is not None:  # one divisor for the whole file's colours
+            reader = replace(reader, color_top=survey.color_top)
+        timings["survey"] = time.perf_counter() - t
+        layout = (balanced_tiles(survey.sample, survey.lo, survey.hi, tiles)
+                  if np.ndim(tiles) == 0 else tile_grid(survey.lo, survey.hi, tiles))
+        grid = layout.shape or (layout.n_tiles,)
+        n_tiles = layout.n_tiles
+        diagonal = float(np.linalg.norm(survey.hi - survey.lo))
+        # one more pass sorts the elements into a file per tile, so that a task reads the
+        # tiles its box overlaps, not the whole file; without a folder the workers share
+        # (a remote scheduler and no workdir) every task reads the file
+        shared = scheduler is None or workdir is not None
+        up = getattr(reader, "up", None)  # (the buckets keep the viewpoint, not this)
+        if shared and n_tiles > 1:
+            t = time.perf_counter()
+            reader = bucket(reader, layout, Path(tmp) / "buckets", progress=progress)
+            timings["bucket"] = time.perf_counter() - t
+        t = time.perf_counter()
+        reference = _orientation(reader, survey, params.n_neighbors, up, shared and tmp)
+        timings["orientation"] = time.perf_counter() - t
+        graphs = graph_folder(tmp, survey.n_elements, reader.kind, shared and n_tiles > 1,
+                              params)  # the tiles' point graphs, kept between phases
+        with Engine(workers=workers, scheduler=scheduler, memory_limit=memory_limit) as engine:
+            def run(phase, margin, extra=lambda t: {}, only=None):
+                tasks = [dict(phase=phase, reader=reader, layout=layout, tile=t, margin=margin,
+                              params=params, r=r, diagonal=diagonal, graphs=graphs, **extra(t))
+                         for t in (range(n_tiles) if only is None else only)]
+                if reference is not None and phase != "areas":
+                    for task in tasks:
+                        task["orient_like"] = reference if isinstance(reference, str) else \
+                            in_box(reference, *layout.box(task["tile"], 1.5 * margin))
+                return _gather(engine, tasks, phase, progress)
+
+            r = math.nan
+            t = time.perf_counter()
+            area = _area(run, layout, reader.kind, params, survey.size)
+            timings["areas"] = time.perf_counter() - t
+            r = superfacet_size(params, area, diagonal, survey.n_elements, reader.kind)[1]
+            margin = halo_distance(halo, params.window, r)
+            found, done = _classified(run, layout, params, margin, params.window * r,
+                                      dict(refine=refine, box_rows=not shared,
+                                           noise=merge_from > 1), timings)
+            t = time.perf_counter()
+            labels, disagreements = _stitched(done, reader.n_rows)
+            timings["stitch"] = time.perf_counter() - t
+            repaired = 0
+            if disagreements:  # two tiles saw a border differently: pieces are possible
+                t = time.perf_counter()
+                box = None if shared else {o["tile"]: o.pop("box_rows") for o in done}
+                repaired = _connected(run, labels, layout, margin, tmp, box)
+                timings["connect"] = time.perf_counter() - t
+            drop_graphs(graphs)
+    merged_from = None
+    if merge_from > 1:
+        t = time.perf_counter()
+        merged_from = int(np.unique(labels[labels >= 0]).size)
+        labels = merged_labels(labels, [o["merge_stats"] for o in done], target, params)
+        timings["merges"] = time.perf_counter() - t
+    t = time.perf_counter()
+    names = _numbered_densely(labels)
+    timings["stitch"] += time.perf_counter() - t
+    timings["total"] = time.perf_counter() - t_start
+    resolved = dict(params.as_dict(), n_segments=int(names.size), radius=r / diagonal,
+                    tiles=grid, halo=float(halo), elements=reader.kind, merge_from=merge_from,
+                    merged_from=merged_from)
+    return TiledResult(labels=labels, centers=names.astype(np.int64), mesh_radius=r, grid=grid,
+                       layout=layout, halo=margin, disagreements=disagreements, repaired=repaired,
+                       tiles=_tile_stats(found, done), timings=timings, params=resolved)
+
+
+def _classified(run, layout, params, margin: float, ring: float, how: dict,
+                timings: dict):
+    """The centers phase, ``how['refine']`` refinements, then the labels phase: the
+    tiles' outputs of the first and of the last (each tile its own core's)."""
+    t = time.perf_counter()
+    found = [o for o in run("centers", margin) if o["core"]]
+    timings["centers"] = time.perf_counter() - t
+    rows, pos = gathered_centers(found, params)
+
+    def reach(t):
+        lo, hi = layout.box(t, margin)
+        inside = ((pos >= lo) & (pos <= hi)).all(axis=1)
+        return dict(centers=rows[inside], ring=ring, box_rows=how["box_rows"])
+
+    for _ in range(how["refine"]):
+        t = time.perf_counter()
+        again = [o for o in run("refine", margin, reach) if o["core"]]
+        timings["refine"] = timings.get("refine", 0.0) + time.perf_counter() - t
+        rows, pos = gathered_centers(again, params)
+    t = time.perf_counter()
+    n_noise = NOISE_SAMPLE // layout.n_tiles + 1 if how["noise"] else None
+    done = [o for o in run("labels", margin, lambda t: dict(reach(t), n_noise=n_noise))
+            if o["core"]]
+    timings["labels"] = time.perf_counter() - t
+    return found, done
+
+
+def _numbered_densely(labels: np.ndarray) -> np.ndarray:
+    """Number the labels (>= 0; -1 stays) 0..K-1 in place, in the order of their values;
+    returns the values (each superfacet's name before)."""
+    valid = labels >= 0
+    names, dense = np.unique(labels[valid], return_inverse=True)
+    labels[valid] = dense
+    return names
+
+
+def _merge_plan(params, kind: str, n_elements: int):
+    """The count asked for, the factor of the superpoints made before the merges down to
+    it (1: none), and the parameters of the tiles' runs (their count that many times)."""
+    target, merge_from = params.n_segments, tiled_merge_from(params, kind)
+    if merge_from > 1:  # merge_from times the superpoints, merged to the count at the end
+        fine = min(target * merge_from, max(target, n_elements // MIN_FINE_ELEMENTS))
+        merge_from = merge_from if fine > target else 1
+        params = replace(params, n_segments=fine)
+    return target, merge_from, params
+
+
+def _orientation(reader, survey, n_neighbors: int, up, folder):
+    """The normals' orientation reference of a cloud with neither normals nor viewpoint
+    (from the survey's sample; saved in ``folder`` where the tasks share one, and then its
+    path), else None."""
+    from ..tiling import orientation_reference
+
+    if reader.kind != "points" or survey.normals or reader.viewpoint is not None:
+        return None
+    reference = np.hstack(orientation_reference(survey.sample, n_neighbors, up))
+    if folder:  # read by the tasks from the work folder, not shipped with each
+        np.save(Path(folder) / "orientation.npy", reference)
+        return str(Path(folder) / "orientation.npy")
+    return reference
+
+
+def _area(run, layout, kind: str, params, surveyed: float) -> float:
+    """The input's area: a cloud's sized by n_segments from its tiles' point graphs, else
+    the survey's."""
+    if kind != "points" or params.radius is not None:
+        return surveyed
+    area = sum(o.get("area", 0.0) for o in run("areas", 0.25 * layout.min_side()))
+    if area <= 0:
+        raise ParameterError("the points are too few or too sparse to size superpoints by "
+                             "n_segments; give radius instead")
+    return area
+
+
+def _stitched(done: list, n_rows: int):
+    """Each row's label from the tile whose core holds it, and how many rows of the tiles'
+    rings another tile labelled otherwise."""
+    labels = np.full(n_rows, -1, dtype=np.int64)
+    for o in done:
+        labels[o["core_rows"]] = o["core_labels"]
+    disagreements = sum(int((labels[o["ring_rows"]] != o["ring_labels"]).sum()) for o in done)
+    return labels, disagreements
+
+
+def _checked_options(n_segments, options, tiles, halo, refine, workers):
+    """The run's parameters and halo, every option checked before any pass over the
+    input."""
+    from ..tile_layout import check_tiles
+    from ..tiling import HALO, check_tileable, halo_distance
 
     if "features" in options:
         raise ParameterError("a tiled run reads colours from the file; features= is not taken")
@@ -267,150 +433,58 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         if v is not None and (isinstance(v, bool) or not isinstance(v, (int, np.integer))
                               or not low <= v <= high):
             raise ParameterError(f"{name} must be an integer in {low}..{high}, got {v!r}")
-    t_start = time.perf_counter()
-    timings: dict[str, float] = {}
-    with run_folder(workdir) as tmp:  # the run's own folder, removed at its end
-        t = time.perf_counter()
-        if isinstance(source, RegionReader):  # opened by the caller (its viewpoint, up)
-            reader = source
-        elif isinstance(source, (str,
-                                 Path)) and Path(source).suffix.lower().lstrip(".") in STREAMED:
-            reader = RegionReader.open(source)
+    return params, halo
+
+
+def _surveyed(source, tmp, tiles, params):
+    """The input's reader (streamed from its file, or spilled to the work folder) and its
+    survey (bounds, counts, a sample), checked against the tiles and the parameters."""
+    from ...io.regions import STREAMED, RegionReader
+    from ..tile_layout import check_tiles
+    from ..tiling import check_tileable
+
+    if isinstance(source, RegionReader):  # opened by the caller (its viewpoint, up)
+        reader = source
+    elif isinstance(source, (str, Path)) and Path(source).suffix.lower().lstrip(".") in STREAMED:
+        reader = RegionReader.open(source)
+    else:
+        reader = RegionReader.spill(source, tmp)
+    survey = reader.survey()
+    if check_extent(survey.lo, survey.hi, f"{reader.path}: ",
+                    "cloud" if reader.kind == "points" else "mesh") == 0:
+        raise ParameterError("the input has zero extent: nothing to tile")
+    check_tiles(tiles, survey.n_elements)  # a handful of elements per tile: refused
+    check_tileable(params, survey.colors)
+    return reader, survey
+
+
+def _connected(run, labels, layout, margin, tmp, box) -> int:
+    """Repair the pieces two tiles' different views of a border left, in ``labels`` (in
+    place), a few rounds, each over the tiles near what the last one moved; returns the
+    rows moved. ``box``: each tile's rows where the tasks are not sharing a folder."""
+    repaired, only = 0, None  # every tile, then those whose boxes hold what others moved
+    for _ in range(CONNECT_ROUNDS):
+        if box is None:  # the tasks read their boxes' labels from one file
+            np.save(Path(tmp) / "stitched.npy", labels)
+            fixes = run("connect", margin,
+                        lambda t: dict(labels=str(Path(tmp) / "stitched.npy")), only)
         else:
-            reader = RegionReader.spill(source, tmp)
-        survey = reader.survey()
-        if check_extent(survey.lo, survey.hi, f"{reader.path}: ",
-                        "cloud" if reader.kind == "points" else "mesh") == 0:
-            raise ParameterError("the input has zero extent: nothing to tile")
-        check_tiles(tiles, survey.n_elements)  # a handful of elements per tile: refused
-        check_tileable(params, survey.colors)
-        target, merge_from = params.n_segments, tiled_merge_from(params, reader.kind)
-        if merge_from > 1:  # merge_from times the superpoints, merged to the count at the end
-            fine = min(target * merge_from, max(target, survey.n_elements // MIN_FINE_ELEMENTS))
-            merge_from = merge_from if fine > target else 1
-            params = replace(params, n_segments=fine)
-        if survey.color_top is not None:  # one divisor for the whole file's colours
-            reader = replace(reader, color_top=survey.color_top)
-        timings["survey"] = time.perf_counter() - t
-        if np.ndim(tiles) == 0:
-            layout = balanced_tiles(survey.sample, survey.lo, survey.hi, tiles)
-        else:
-            layout = tile_grid(survey.lo, survey.hi, tiles)
-        grid = layout.shape or (layout.n_tiles,)
-        n_tiles = layout.n_tiles
-        diagonal = float(np.linalg.norm(survey.hi - survey.lo))
-        # one more pass sorts the elements into a file per tile, so that a task reads the
-        # tiles its box overlaps, not the whole file; without a folder the workers share
-        # (a remote scheduler and no workdir) every task reads the file
-        shared = scheduler is None or workdir is not None
-        up = getattr(reader, "up", None)  # (the buckets keep the viewpoint, not this)
-        if shared and n_tiles > 1:
-            t = time.perf_counter()
-            reader = bucket(reader, layout, Path(tmp) / "buckets", progress=progress)
-            timings["bucket"] = time.perf_counter() - t
-        reference = None
-        if reader.kind == "points" and not survey.normals and reader.viewpoint is None:
-            t = time.perf_counter()
-            reference = np.hstack(orientation_reference(survey.sample, params.n_neighbors,
-                                                        up))
-            if shared:  # read by the tasks from the work folder, not shipped with each
-                np.save(Path(tmp) / "orientation.npy", reference)
-                reference = str(Path(tmp) / "orientation.npy")
-            timings["orientation"] = time.perf_counter() - t
-        graphs = graph_folder(tmp, survey.n_elements, reader.kind, shared and n_tiles > 1,
-                              params)  # the tiles' point graphs, kept between phases
-        with Engine(workers=workers, scheduler=scheduler, memory_limit=memory_limit) as engine:
-            def run(phase, margin, extra=lambda t: {}, only=None):
-                tasks = [dict(phase=phase, reader=reader, layout=layout, tile=t, margin=margin,
-                              params=params, r=r, diagonal=diagonal, graphs=graphs, **extra(t))
-                         for t in (range(n_tiles) if only is None else only)]
-                if reference is not None and phase != "areas":
-                    for task in tasks:
-                        task["orient_like"] = reference if isinstance(reference, str) else \
-                            in_box(reference, *layout.box(task["tile"], 1.5 * margin))
-                return _gather(engine, tasks, phase, progress)
+            fixes = run("connect", margin, lambda t: dict(labels=labels[box.get(t, [])]), only)
+        moved = [o for o in fixes if o.get("moved_rows") is not None and o["moved_rows"].size]
+        for o in moved:
+            labels[o["moved_rows"]] = o["moved_labels"]
+            repaired += int(o["moved_rows"].size)
+        if not moved:
+            break
+        # tiles repair at once: a piece one moved can border a piece another moved away,
+        # so the tiles near what moved look again
+        at = np.concatenate([o["moved_positions"] for o in moved])
+        only = [u for u in range(layout.n_tiles) if any_in_box(at, *layout.box(u, margin))]
+    return repaired
 
-            r = math.nan
-            if reader.kind == "points" and params.radius is None:
-                t = time.perf_counter()
-                side = layout.min_side()
-                area = sum(o.get("area", 0.0) for o in run("areas", 0.25 * side))
-                if area <= 0:
-                    raise ParameterError("the points are too few or too sparse to size "
-                                         "superpoints by n_segments; give radius instead")
-                timings["areas"] = time.perf_counter() - t
-            else:
-                area = survey.size
-            r = superfacet_size(params, area, diagonal, survey.n_elements, reader.kind)[1]
-            margin = halo_distance(halo, params.window, r)
-            t = time.perf_counter()
-            found = [o for o in run("centers", margin) if o["core"]]
-            timings["centers"] = time.perf_counter() - t
-            rows, pos = gathered_centers(found, params)
 
-            def reach(t):
-                lo, hi = layout.box(t, margin)
-                inside = ((pos >= lo) & (pos <= hi)).all(axis=1)
-                return dict(centers=rows[inside], ring=params.window * r, box_rows=not shared)
-
-            for _ in range(refine):
-                t = time.perf_counter()
-                again = [o for o in run("refine", margin, reach) if o["core"]]
-                timings["refine"] = timings.get("refine", 0.0) + time.perf_counter() - t
-                rows, pos = gathered_centers(again, params)
-
-            t = time.perf_counter()
-            n_noise = NOISE_SAMPLE // n_tiles + 1 if merge_from > 1 else None
-            done = [o for o in run("labels", margin, lambda t: dict(reach(t), n_noise=n_noise))
-                    if o["core"]]
-            timings["labels"] = time.perf_counter() - t
-            t = time.perf_counter()
-            labels = np.full(reader.n_rows, -1, dtype=np.int64)
-            for o in done:
-                labels[o["core_rows"]] = o["core_labels"]
-            disagreements = sum(int((labels[o["ring_rows"]] != o["ring_labels"]).sum())
-                                for o in done)
-            timings["stitch"] = time.perf_counter() - t
-            repaired = 0
-            if disagreements:  # two tiles saw a border differently: pieces are possible
-                t = time.perf_counter()
-                box = {} if shared else {o["tile"]: o.pop("box_rows") for o in done}
-                only = None  # every tile, then those whose boxes hold what others moved
-                for _ in range(CONNECT_ROUNDS):
-                    if shared:  # the tasks read their boxes' labels from one file
-                        np.save(Path(tmp) / "stitched.npy", labels)
-                        fixes = run("connect", margin,
-                                    lambda t: dict(labels=str(Path(tmp) / "stitched.npy")),
-                                    only)
-                    else:
-                        fixes = run("connect", margin,
-                                    lambda t: dict(labels=labels[box.get(t, [])]), only)
-                    moved = [o for o in fixes
-                             if o.get("moved_rows") is not None and o["moved_rows"].size]
-                    for o in moved:
-                        labels[o["moved_rows"]] = o["moved_labels"]
-                        repaired += int(o["moved_rows"].size)
-                    if not moved:
-                        break
-                    # tiles repair at once: a piece one moved can border a piece another
-                    # moved away, so the tiles near what moved look again
-                    at = np.concatenate([o["moved_positions"] for o in moved])
-                    only = [u for u in range(n_tiles)
-                            if any_in_box(at, *layout.box(u, margin))]
-                timings["connect"] = time.perf_counter() - t
-            drop_graphs(graphs)
-    merged_from = None
-    if merge_from > 1:
-        t = time.perf_counter()
-        merged_from = int(np.unique(labels[labels >= 0]).size)
-        labels = merged_labels(labels, [o["merge_stats"] for o in done], target, params)
-        timings["merges"] = time.perf_counter() - t
-    t = time.perf_counter()
-    valid = labels >= 0
-    names, dense = np.unique(labels[valid], return_inverse=True)
-    labels[valid] = dense
-    timings["stitch"] += time.perf_counter() - t
-    timings["total"] = time.perf_counter() - t_start
+def _tile_stats(found: list, done: list) -> list[dict]:
+    """Each tile's core and rows, and the seconds and peak memory of its phases."""
     stats = {o["tile"]: dict(tile=o["tile"], core=o["core"], rows=o["rows"]) for o in found}
     for phase, outs in (("centers", found), ("labels", done)):
         for o in outs:
@@ -418,13 +492,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                                      f"{phase}_peak_mib": o["peak_mib"]})
             if phase == "centers":
                 stats[o["tile"]]["centers"] = int(o["centers"].size)
-    resolved = dict(params.as_dict(), n_segments=int(names.size), radius=r / diagonal,
-                    tiles=grid, halo=float(halo), elements=reader.kind, merge_from=merge_from,
-                    merged_from=merged_from)
-    return TiledResult(labels=labels, centers=names.astype(np.int64), mesh_radius=r, grid=grid,
-                       layout=layout, halo=margin, disagreements=disagreements, repaired=repaired,
-                       tiles=[stats[k] for k in sorted(stats)], timings=timings,
-                       params=resolved)
+    return [stats[k] for k in sorted(stats)]
 
 
 def _gather(engine: Engine, tasks: list, phase: str, progress: bool) -> list:
