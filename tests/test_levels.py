@@ -220,3 +220,24 @@ def test_the_old_names_are_gone():
     with pytest.raises(SystemExit):
         build_parser().parse_args(["segment", "m.off", "--adaptive", "--level-compactness",
                                    "0.2"])
+
+
+def test_the_adaptive_level_is_a_parameter_of_segment_and_superpoints():
+    """One front door: ``segment(cloud, k, adaptive=True)`` (was "unknown parameter(s)
+    adaptive") and ``superpoints(..., adaptive=START)`` give the adaptive level's labels;
+    ``extent_weight`` alone is refused."""
+    from superfacets import superpoints
+    from superfacets.api.levels import adaptive_segment
+
+    rng = np.random.default_rng(0)
+    xyz = rng.normal(size=(3000, 3))
+    xyz /= np.linalg.norm(xyz, axis=1, keepdims=True)
+    level = adaptive_segment(xyz, 12, start=4)
+    r = segment(xyz, 12, adaptive=4)
+    assert np.array_equal(r.labels, level.labels) and r.params["start"] == 4
+    assert segment(xyz, 12, adaptive=True).params["start"] == 10
+    assert np.array_equal(superpoints(xyz, 12, adaptive=4), level.labels)
+    with pytest.raises(ParameterError, match="extent_weight is a term of the adaptive"):
+        segment(xyz, 12, extent_weight=0.1)
+    with pytest.raises(ParameterError, match="adaptive takes n_segments"):
+        segment(xyz, None, radius=0.1, adaptive=True)

@@ -81,6 +81,17 @@ def adaptive_superpoints(obj, n_segments: int, *, start: int = START,
                                        **options).labels)
 
 
+def _one_run(obj, n_segments, *, features=None, **options):
+    """One plain run (``superfacets.segment`` without a level: the public door calls this
+    module for ``adaptive=``, so this module runs the pipeline itself)."""
+    from ..method.params import resolve
+    from ..method.pipeline import pipeline
+    from .result import SegmentationResult
+
+    run = pipeline(obj, resolve(n_segments=n_segments, **options), features=features)
+    return SegmentationResult(**run._asdict())
+
+
 def adaptive_segment(obj, n_segments: int, *, start: int = START,
                      extent_weight: float | None = None, **options):
     """:func:`adaptive_superpoints` with details: a
@@ -115,7 +126,6 @@ def adaptive_segment(obj, n_segments: int, *, start: int = START,
     (6, 4)
     """
     from ..errors import ParameterError
-    from .segmentation import segment
 
     k = check_int("n_segments", n_segments, lo=1)
     start = check_int("start", start, lo=1)
@@ -124,13 +134,13 @@ def adaptive_segment(obj, n_segments: int, *, start: int = START,
     if options.get("merge_from") is None:  # its own many superpoints, merged its own way
         options["merge_from"] = 1
     if start == 1:
-        return segment(obj, k, **options)
+        return _one_run(obj, k, **options)
     try:
-        result = segment(obj, k * start, **options)
+        result = _one_run(obj, k * start, **options)
     except ParameterError as exc:  # more than the elements: start from every element
         if "is larger than the number of" not in str(exc):
             raise
-        result = segment(obj, max(k, _elements(obj, options)), **options)
+        result = _one_run(obj, max(k, _elements(obj, options)), **options)
     beta = float(result.params.get("beta") or 0.0)
     level = result.hierarchy([k], cost="planarity", beta=beta, extent_weight=extent_weight)
     top = level.of_superfacets(0)  # the level's segment of each superpoint

@@ -259,6 +259,7 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, features=None,
 
 
 def segment(mesh, n_segments: int | None = _D.n_segments, *, features=None,
+            adaptive: bool | int | None = None, extent_weight: float | None = None,
             **params) -> SegmentationResult:
     """Superfacets with details: same parameters as :func:`superfacets`.
 
@@ -270,6 +271,13 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, features=None,
         Desired number of superfacets ``k``.
     features : (N, d) float ndarray, optional
         One feature per input row, for ``beta > 0``.
+    adaptive : bool or int, optional
+        The content-adaptive level (``--adaptive [START]``): segment ``START`` times
+        ``n_segments`` (``True``: 10), then keep the level of ``n_segments`` that merges
+        the flattest neighbours first (:func:`superfacets.api.levels.adaptive_segment`).
+    extent_weight : float, optional
+        With ``adaptive``: the weight of the segments' extent in the merges (default:
+        0.01 on a scan of uneven density, else 0).
     **params
         Every other parameter of :func:`superfacets`, by keyword; declared once in
         :data:`superfacets.method.params.PARAMETERS` (the signature lists them all).
@@ -305,8 +313,24 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, features=None,
     >>> r.n_segments, r.labels.dtype
     (20, dtype('int64'))
     """
+    if adaptive is not None and adaptive is not False:
+        return _adaptive(mesh, n_segments, adaptive, extent_weight, features=features,
+                         **params)
+    if extent_weight is not None:
+        raise ParameterError("extent_weight is a term of the adaptive level: give adaptive=")
     run = pipeline(mesh, resolve(n_segments=n_segments, **params), features=features)
     return SegmentationResult(**run._asdict())
+
+
+def _adaptive(obj, n_segments, adaptive, extent_weight, **options):
+    """The content-adaptive level of ``n_segments`` (``adaptive``: True or its START)."""
+    from .levels import START, adaptive_segment
+
+    if n_segments is None:
+        raise ParameterError("adaptive takes n_segments, not radius")
+    start = START if adaptive is True else adaptive
+    return adaptive_segment(obj, n_segments, start=start, extent_weight=extent_weight,
+                            **options)
 
 
 def _signature(returns) -> inspect.Signature:
@@ -329,6 +353,7 @@ segment.__signature__ = _signature(SegmentationResult)
 def superpoints(points, n_segments: int | None = _D.n_segments, *, normals=None,
                 n_neighbors: int = _D.n_neighbors,
                 neighbor_radius: float | None = _D.neighbor_radius, viewpoint=None,
+                adaptive: bool | int | None = None, extent_weight: float | None = None,
                 **options) -> np.ndarray:
     """Over-segment a point cloud into superpoints: the paper's method on the point graph.
 
@@ -363,6 +388,12 @@ def superpoints(points, n_segments: int | None = _D.n_segments, *, normals=None,
         Drop neighbours farther than this fraction of the bounding-box diagonal.
     viewpoint : (3,) float ndarray, optional
         Sensor position: estimated normals face it.
+    adaptive : bool or int, optional
+        Content-adaptive superpoints (``--adaptive [START]``): ``START`` times (``True``:
+        10) the superpoints first, then the level of ``n_segments`` that merges the
+        flattest neighbours first (as :func:`segment`).
+    extent_weight : float, optional
+        With ``adaptive``: the weight of the segments' extent in the merges.
     **options
         The other keyword arguments of :func:`superfacets` (``alpha``,
         ``radius``, ``init``, ``tol``, ...).
@@ -410,5 +441,12 @@ def superpoints(points, n_segments: int | None = _D.n_segments, *, normals=None,
     cloud = as_cloud(points, normals)
     if viewpoint is not None:  # the cloud's other fields (colours, up, ...) kept
         cloud = replace(cloud, viewpoint=viewpoint)
-    labels = pipeline(cloud, params).labels
+    if adaptive is not None and adaptive is not False:
+        labels = _adaptive(cloud, n_segments, adaptive, extent_weight, elements="points",
+                           n_neighbors=n_neighbors, neighbor_radius=neighbor_radius,
+                           **options).labels
+    elif extent_weight is not None:
+        raise ParameterError("extent_weight is a term of the adaptive level: give adaptive=")
+    else:
+        labels = pipeline(cloud, params).labels
     return labels.reshape(cloud.shape) if cloud.shape is not None else labels

@@ -321,11 +321,9 @@ def _run(args, data, kwargs):
     try:
         if args.per_object:
             return JoinedResult(*segment_objects(data, k, **kwargs))
-        if args.adaptive is not None:
-            from ..api.levels import adaptive_segment
-
-            return adaptive_segment(data, k, start=args.adaptive,
-                                    extent_weight=args.extent_weight, **kwargs)
+        if args.adaptive is not None:  # (the API's one door: segment(..., adaptive=START))
+            return segment(data, k, adaptive=args.adaptive, extent_weight=args.extent_weight,
+                           **kwargs)
         return segment(data, args.n_segments, radius=args.radius, **kwargs)
     except SuperfacetsError as exc:
         raise named_after(args.mesh, exc) from None
