@@ -29,11 +29,8 @@ ALLOWED = {
     "elements/": "the table and the builders",
     "io/": "file layouts",
     "cli/": "the command line's wording",
-    "scale/runner/tiles.py": "tile files: faces with their vertices, or points",
     "scale/runner/buckets.py": "tile files: faces with their vertices, or points",
     "inputs/mesh.py": "a mesh's per-face and per-vertex colours",
-    "viz/render.py": "pictures of a mesh's faces or its vertices",
-    "viz/html/": "pages of a mesh's faces or its vertices",
     "scale/runner/experiment.py": "the benchmark's per-face ground truth carried to each kind",
 }
 

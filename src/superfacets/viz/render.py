@@ -21,6 +21,7 @@ from typing import Sequence
 import numpy as np
 
 from .._runtime.extras import require
+from ..elements.kinds import kind_of
 from ..elements.labels import check_labels
 from ..errors import NoDisplayError, ParameterError
 from ..inputs.convert import as_mesh
@@ -281,7 +282,7 @@ def faces_to_draw(mesh, labels, elements: str):
     from ..method.params import check_choice
 
     check_choice("elements", elements, ("faces", "vertices"))
-    if elements == "vertices" and labels is not None:
+    if kind_of(elements).rows == "n_vertices" and labels is not None:  # one per vertex
         return vertex_regions(mesh, labels)
     return mesh, _check_labels(mesh, labels)
 

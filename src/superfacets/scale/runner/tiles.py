@@ -43,6 +43,7 @@ import numpy as np
 
 from ...api.result import TiledResult
 from ...checks import max_threads
+from ...elements.kinds import kind_of
 from ...errors import ParameterError, SuperfacetsError
 from ...inputs.bounds import check_extent
 from ...method.merges import NOISE_SAMPLE
@@ -382,7 +383,7 @@ def _orientation(reader, survey, n_neighbors: int, up, folder):
     path), else None."""
     from ..tiling import orientation_reference
 
-    if reader.kind != "points" or survey.normals or reader.viewpoint is not None:
+    if not kind_of(reader.kind).cloud or survey.normals or reader.viewpoint is not None:
         return None
     reference = np.hstack(orientation_reference(survey.sample, n_neighbors, up))
     if folder:  # read by the tasks from the work folder, not shipped with each
@@ -394,7 +395,7 @@ def _orientation(reader, survey, n_neighbors: int, up, folder):
 def _area(run, layout, kind: str, params, surveyed: float) -> float:
     """The input's area: a cloud's sized by n_segments from its tiles' point graphs, else
     the survey's."""
-    if kind != "points" or params.radius is not None:
+    if not kind_of(kind).cloud or params.radius is not None:
         return surveyed
     area = sum(o.get("area", 0.0) for o in run("areas", 0.25 * layout.min_side()))
     if area <= 0:
@@ -451,7 +452,7 @@ def _surveyed(source, tmp, tiles, params):
         reader = RegionReader.spill(source, tmp)
     survey = reader.survey()
     if check_extent(survey.lo, survey.hi, f"{reader.path}: ",
-                    "cloud" if reader.kind == "points" else "mesh") == 0:
+                    "cloud" if kind_of(reader.kind).cloud else "mesh") == 0:
         raise ParameterError("the input has zero extent: nothing to tile")
     check_tiles(tiles, survey.n_elements)  # a handful of elements per tile: refused
     check_tileable(params, survey.colors)

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...elements.kinds import kind_of
 from ...elements.labels import check_labels, relabel_dense
 from ...errors import ParameterError
 from ...inputs.convert import as_mesh
@@ -100,7 +101,7 @@ def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None 
         return _points_page(mesh, labels, title=title, info=info, background=background,
                             view=view, up=up)
     mesh = as_mesh(mesh)
-    if elements != "faces":
+    if kind_of(elements).rows != "n_faces":  # labels of the vertices: drawn on faces
         from ..render import faces_to_draw
 
         mesh, labels = faces_to_draw(mesh, labels, elements)
