@@ -418,3 +418,17 @@ def test_every_parameter_has_an_option_that_reaches_the_run(monkeypatch, small_o
         assert seen, p.name
         got = getattr(seen[0], p.name)
         assert got == value or (p.name == "n_threads" and got == 1), (p.name, got, value)
+
+
+def test_pictures_of_a_cloud_with_an_up_axis_stand_on_it():
+    """A LAS cloud is read with z up: its pictures are upright without --up (y stays the
+    default where the input says nothing; --up wins)."""
+    from types import SimpleNamespace
+
+    from superfacets.cli.options import up_of
+
+    las = SimpleNamespace(up=np.array([0.0, 0.0, 1.0]))
+    assert up_of(SimpleNamespace(up=None), las) == "z"
+    assert up_of(SimpleNamespace(up=None), SimpleNamespace(up=np.array([0.0, -2.0, 0.1]))) == "-y"
+    assert up_of(SimpleNamespace(up="x"), las) == "x"
+    assert up_of(SimpleNamespace(up=None), SimpleNamespace()) is None

@@ -107,6 +107,21 @@ def scan_cloud(data, args):
     return replace(data, **changes)
 
 
+def up_of(args, data) -> str | None:
+    """The pictures' up axis: ``--up``, else the input's own (a LAS cloud's: z), else None
+    (the default, y)."""
+    if getattr(args, "up", None):
+        return args.up
+    up = getattr(data, "up", None)
+    if up is None:
+        return None
+    import numpy as np
+
+    up = np.asarray(up, dtype=np.float64).reshape(-1)
+    i = int(np.argmax(np.abs(up)))
+    return ("-" if up[i] < 0 else "") + "xyz"[i]
+
+
 def fmt_value(v) -> str:
     """A parameter value for messages and titles (floats without trailing zeros)."""
     return f"{v:g}" if isinstance(v, float) else str(v)

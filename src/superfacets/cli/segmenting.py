@@ -27,6 +27,7 @@ from .options import (
     named_after,
     read_usable,
     scan_cloud,
+    up_of,
 )
 
 __all__ = ["add_parsers"]
@@ -333,12 +334,13 @@ def _write_and_say(args, data, result, kind, outputs, elapsed) -> None:
     """Write the outputs, then the summary, what was written and the notes."""
     from ..viz.outputs import write_result
 
+    up = up_of(args, data)  # (a LAS cloud is upright with z up)
     write_result(data, result, kind, Path(args.mesh).name, labels=outputs["labels"],
                  header=args.header, colored=outputs["colored"],
                  vertex_colors=args.vertex_colors, picture=outputs["picture"],
                  html=outputs["html"], element_options=dict(
                      n_neighbors=args.neighbors, neighbor_radius=args.neighbor_radius),
-                 up=args.up or "y", view=args.view, graph=outputs["graph"],
+                 up=up or "y", view=args.view, graph=outputs["graph"],
                  levels=args.levels, level_cost=args.level_cost,
                  extent_weight=args.extent_weight)
     if args.quiet:
@@ -348,7 +350,7 @@ def _write_and_say(args, data, result, kind, outputs, elapsed) -> None:
     print(_summary(Path(args.mesh).name, data, result, elapsed, kind,
                    getattr(args, "density", None) is not None), file=report)
     _say_what_was_written(seg_out, outputs["colored"], outputs["picture"], outputs["html"],
-                          report, args.up, outputs["graph"])
+                          report, up, outputs["graph"])
     for note in (duplicates_note(args, data, kind), count_note(args, data, result, kind)):
         if note:
             print(f"note: {note}", file=sys.stderr)
