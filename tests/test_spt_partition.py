@@ -126,3 +126,46 @@ def test_partition_with_pycut_pursuit():
     a, b = np.bincount(labels, floor, k), np.bincount(labels, ~floor, k)
     assert np.minimum(a, b).sum() < 0.03 * 2 * half  # superpoints keep to floor or wall
     assert np.bincount(labels).min() >= 10  # the cut-off: no superpoint under 10 voxels
+
+
+def test_a_voxelized_cloud_is_used_as_given():
+    """Points a voxel apart already (a cloud voxelized at 3 cm, with its own grid) are not
+    voxelized again at a shifted grid (41,568 points became 27,571)."""
+    g = np.arange(0, 1.5, 0.03)
+    rng = np.random.default_rng(1)
+    pts = np.stack(np.meshgrid(g, g, [0.0]), axis=-1).reshape(-1, 3) + 0.029  # its own grid
+    pts[:, :2] += rng.uniform(-0.002, 0.002, (pts.shape[0], 2))  # (means, not centres)
+    keys = np.floor(pts / 0.03)
+    assert np.unique(keys, axis=0).shape[0] < pts.shape[0]  # voxelized again: merged
+    xyz, _, voxel_of = spt._voxels(pts, None, 0.03)
+    assert xyz.shape[0] == pts.shape[0] and np.array_equal(voxel_of, np.arange(len(pts)))
+    dense = np.r_[pts, pts + 0.004]  # two points a voxel: averaged
+    assert spt._voxels(dense, None, 0.03)[0].shape[0] < dense.shape[0]
+
+
+def test_the_ground_fit_stands_a_low_outlier():
+    """A sweep whose lowest point is an outlier 8.6 m under the ground: RANSAC raised a
+    ValueError (nothing within the threshold of that point); the ground is found."""
+    rng = np.random.default_rng(0)
+    ground = np.c_[rng.random((3000, 2)) * 20, rng.normal(0, 0.01, 3000)]
+    wall = np.c_[rng.random((500, 1)) * 20, np.zeros((500, 1)), rng.random((500, 1)) * 3]
+    xyz = np.r_[ground, wall, [[5.0, 5.0, -8.6]]]
+    h = spt._elevation(xyz, threshold=0.5, scale=1.0)
+    assert abs(np.median(h[:3000])) < 0.02 and h[-1] < -8
+
+
+def test_the_missing_solver_names_a_command_that_works(monkeypatch):
+    from superfacets._runtime import extras
+    from superfacets.errors import MissingExtraError
+
+    real = extras.require
+
+    def require(module, feature):
+        if module == "pycut_pursuit.cp_d0_dist":
+            raise MissingExtraError(f"{feature} needs pycut-pursuit; pip install it")
+        return real(module, feature)
+
+    monkeypatch.setattr(extras, "require", require)
+    cloud, _ = _room()
+    with pytest.raises(MissingExtraError, match=r"pycut-pursuit==0\.1\.3.*install\.md"):
+        spt.spt_partition(cloud)

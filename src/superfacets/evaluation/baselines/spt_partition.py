@@ -150,9 +150,28 @@ class SPTProblem:
     feature_names: tuple
 
 
+#: A cloud whose points lie this far apart or more, in voxel sides (the median distance to
+#: each point's nearest other), is voxelized already: it is used as given (voxelized again
+#: at a shifted grid, a room of 3 cm voxels lost a third of its points, 41,568 -> 27,571)
+VOXELIZED = 0.8
+
+
+def _voxelized_already(points: np.ndarray, size: float) -> bool:
+    """Whether the points are spaced as voxels of side ``size`` (or more) already."""
+    from scipy.spatial import cKDTree
+
+    if points.shape[0] < 2:
+        return True
+    sample = points[np.linspace(0, points.shape[0] - 1, min(points.shape[0], 20_000))
+                    .astype(np.int64)]
+    d, _ = cKDTree(points).query(sample, k=2)
+    return bool(np.median(d[:, 1]) >= VOXELIZED * size)
+
+
 def _voxels(points: np.ndarray, colors, size: float):
-    """Mean position (and colour) per voxel, and each point's voxel."""
-    if size <= 0:
+    """Mean position (and colour) per voxel, and each point's voxel (the points as given
+    where they are voxels of that side already)."""
+    if size <= 0 or _voxelized_already(points, size):
         return points, colors, np.arange(points.shape[0])
     keys = np.floor(points / size).astype(np.int64)  # the grid of the input's coordinates
     _, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
@@ -170,10 +189,20 @@ def _elevation(xyz: np.ndarray, threshold: float, scale: float) -> np.ndarray:
     from ..._runtime.extras import require
 
     linear = require("sklearn.linear_model", "the Superpoint Transformer partition")
-    low = np.flatnonzero(xyz[:, 2] - xyz[:, 2].min() < threshold)
+    # the ground's candidates: within the threshold of a low quantile, not of the lowest
+    # point (a sweep's lowest point was an outlier 8.6 m under the ground: alone, it left
+    # RANSAC nothing to fit)
+    z = xyz[:, 2]
+    ref = float(np.quantile(z, 0.005))
+    low = np.flatnonzero(np.abs(z - ref) < threshold)
+    if low.size < 3:  # no plane to fit: heights above that level
+        return (z - ref) / scale
     ransac = linear.RANSACRegressor(random_state=0, residual_threshold=1e-3)
-    ransac.fit(xyz[low, :2], xyz[low, 2])
-    return (xyz[:, 2] - ransac.predict(xyz[:, :2])) / scale
+    try:
+        ransac.fit(xyz[low, :2], xyz[low, 2])
+    except ValueError:  # (no consensus within the residual threshold)
+        return (z - ref) / scale
+    return (z - ransac.predict(xyz[:, :2])) / scale
 
 
 def _hsv(rgb: np.ndarray) -> np.ndarray:
@@ -357,8 +386,11 @@ def spt_partition(obj, n_segments: int | None = None, *, preset: str = "scannet"
     try:
         cp = require("pycut_pursuit.cp_d0_dist", "the Superpoint Transformer partition")
     except MissingExtraError as exc:
-        raise MissingExtraError(f"{str(exc).split(';')[0]}; it is GPL-3, so never installed "
-                                "with superfacets: pip install pycut-pursuit") from None
+        raise MissingExtraError(
+            f"{str(exc).split(';')[0]}; it is GPL-3, so never installed with superfacets, and "
+            "its wheel (0.1.4) does not import beside NumPy 2: pip install setuptools wheel && "
+            "pip install --no-build-isolation --no-binary pycut-pursuit "
+            "'pycut-pursuit==0.1.3' (docs/guide/install.md)") from None
     known = {f.name for f in fields(SPTSettings)}
     unknown = sorted(set(overrides) - known)
     if unknown:
