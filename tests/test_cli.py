@@ -223,6 +223,9 @@ def test_progress_bar_names_the_stages_then_counts_passes(tmp_path, small_off, c
     err = capsys.readouterr().err
     for stage in ("face graph", "weights", "init (farthest)", "superfacets"):
         assert stage in err
+    # counted, with no length: a run stops where it converges, so no remaining time is
+    # reckoned from --max-iter (it read "03:46 remaining" just before the end)
+    assert "pass [" in err and "/50" not in err and "<" not in err
     assert main(["segment", str(small_off), "-k", "20", "-q"]) == 0  # small mesh: no bar
     assert capsys.readouterr().err == ""
 

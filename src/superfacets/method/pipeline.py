@@ -45,7 +45,7 @@ import numpy as np
 
 from .._runtime import interrupts
 from .._runtime.memory import give_back_free_memory
-from ..elements.builders import features_of
+from ..elements.builders import features_of, kind_for
 from .finish import clean_up, exact_count, finish, merge_small
 from .merges import merge_to_count
 from .params import SegmentParams
@@ -95,9 +95,11 @@ class Hooks:
     Parameters
     ----------
     progress : bool
-        Show a progress bar (tqdm) on stderr.
+        Show a progress bar (tqdm) on stderr, from the start of the graph's build.
     max_iter : int
-        The bar's length (the passes).
+        The most passes (the bar counts the passes run, with no length: a run stops
+        where it converges, mostly well before ``max_iter``, so a remaining time
+        reckoned from it would be wrong).
     kind : str
         The kind of element, for the bar's first description.
 
@@ -117,11 +119,12 @@ class Hooks:
         if progress:  # one bar: the set-up stages by name, then the passes
             from tqdm import tqdm
 
-            self.bar = tqdm(total=max_iter, desc=f"{kind[:-1]} graph", unit="it", leave=False)
+            self.bar = tqdm(total=None, desc=f"{kind[:-1]} graph", unit="pass", leave=False)
+            self.bar.refresh()  # (shown at once: the graph's build is a run's longest wait)
 
     def describe(self, name: str) -> None:
         if self.bar is not None:
-            self.bar.set_description(name)
+            self.bar.set_description_str(name)
 
     @contextmanager
     def stage(self, key: str | None, name: str | None = None, add: bool = False):
@@ -201,14 +204,16 @@ def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
 def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
          n_centers: int | None = None, initial=None) -> RunRecord:
     t_start = time.perf_counter()
-    t = time.perf_counter()
-    source, graph, p = build_graph(obj, p, features)
-    t_graph = time.perf_counter() - t
-    rules = resolve_rules(graph, p, n_centers=n_centers)
-    p = rules.params
-    feats = features_of(source, features) if p.beta > 0 else None
-    hooks = Hooks(p.progress, p.max_iter, graph.kind)
-    hooks.timings["graph"] = t_graph
+    hooks = Hooks(p.progress, p.max_iter, kind_for(obj, p.elements))
+    try:
+        with hooks.stage("graph"):
+            source, graph, p = build_graph(obj, p, features)
+        rules = resolve_rules(graph, p, n_centers=n_centers)
+        p = rules.params
+        feats = features_of(source, features) if p.beta > 0 else None
+    except BaseException:
+        hooks.close()
+        raise
     if graph.n_elements >= _RELEASE_MIN:  # the build's temporaries handed back, and the
         hooks.trim = True  # weights' and the start's before the passes (not after every
         give_back_free_memory()  # stage: the next stages fault the pages in again)
