@@ -49,19 +49,10 @@ def finish(graph, label: np.ndarray, centers: np.ndarray, rules: Rules
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets.method.params import resolve
-    >>> from superfacets.method.stages import (build_graph, initialize, iterate_passes,
-    ...                                        resolve_rules, weigh)
-    >>> ball = trimesh.creation.icosphere(subdivisions=3)
-    >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
-    >>> rules = resolve_rules(graph, p)
-    >>> from superfacets.method.pipeline import Hooks
-    >>> hooks = Hooks(False, p.max_iter, graph.kind)
-    >>> w, swap_w = weigh(graph, rules)
-    >>> init, coarsen = initialize(graph, w, rules, hooks)
-    >>> it = iterate_passes(graph, w, swap_w, init, rules, hooks)
-    >>> labels, kept = finish(graph, it.label, it.centers, rules)
+    >>> from superfacets.method.stages import passes_example
+    >>> s = passes_example()  # an icosphere's run up to its passes
+    >>> graph, rules = s.graph, s.rules
+    >>> labels, kept = finish(graph, s.it.label, s.it.centers, rules)
     >>> int(labels.max()) + 1 == kept.shape[0]
     True
     """
@@ -100,19 +91,10 @@ def clean_up(graph, labels: np.ndarray, centers: np.ndarray, rules: Rules,
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets.method.params import resolve
-    >>> from superfacets.method.stages import (build_graph, initialize, iterate_passes,
-    ...                                        resolve_rules, weigh)
-    >>> ball = trimesh.creation.icosphere(subdivisions=3)
-    >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
-    >>> rules = resolve_rules(graph, p)
-    >>> from superfacets.method.pipeline import Hooks
-    >>> hooks = Hooks(False, p.max_iter, graph.kind)
-    >>> w, swap_w = weigh(graph, rules)
-    >>> init, coarsen = initialize(graph, w, rules, hooks)
-    >>> it = iterate_passes(graph, w, swap_w, init, rules, hooks)
-    >>> labels, kept = finish(graph, it.label, it.centers, rules)
+    >>> from superfacets.method.stages import passes_example
+    >>> s = passes_example()  # an icosphere's run up to its passes
+    >>> graph, rules = s.graph, s.rules
+    >>> labels, kept = finish(graph, s.it.label, s.it.centers, rules)
     >>> int(clean_up(graph, labels, kept, rules).max()) + 1 == int(labels.max()) + 1
     True
     """
@@ -147,19 +129,10 @@ def merge_small(graph, labels: np.ndarray, centers: np.ndarray, rules: Rules) ->
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets.method.params import resolve
-    >>> from superfacets.method.stages import (build_graph, initialize, iterate_passes,
-    ...                                        resolve_rules, weigh)
-    >>> ball = trimesh.creation.icosphere(subdivisions=3)
-    >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
-    >>> rules = resolve_rules(graph, p)
-    >>> from superfacets.method.pipeline import Hooks
-    >>> hooks = Hooks(False, p.max_iter, graph.kind)
-    >>> w, swap_w = weigh(graph, rules)
-    >>> init, coarsen = initialize(graph, w, rules, hooks)
-    >>> it = iterate_passes(graph, w, swap_w, init, rules, hooks)
-    >>> labels, kept = finish(graph, it.label, it.centers, rules)
+    >>> from superfacets.method.stages import passes_example
+    >>> s = passes_example()  # an icosphere's run up to its passes
+    >>> graph, rules = s.graph, s.rules
+    >>> labels, kept = finish(graph, s.it.label, s.it.centers, rules)
     >>> bool(merge_small(graph, labels, kept, rules).max() == labels.max())  # min 1 element
     True
     """
@@ -198,19 +171,10 @@ def exact_count(graph, labels: np.ndarray, rules: Rules, *, finer=None
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets.method.params import resolve
-    >>> from superfacets.method.stages import (build_graph, initialize, iterate_passes,
-    ...                                        resolve_rules, weigh)
-    >>> ball = trimesh.creation.icosphere(subdivisions=3)
-    >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
-    >>> rules = resolve_rules(graph, p)
-    >>> from superfacets.method.pipeline import Hooks
-    >>> hooks = Hooks(False, p.max_iter, graph.kind)
-    >>> w, swap_w = weigh(graph, rules)
-    >>> init, coarsen = initialize(graph, w, rules, hooks)
-    >>> it = iterate_passes(graph, w, swap_w, init, rules, hooks)
-    >>> labels, kept = finish(graph, it.label, it.centers, rules)
+    >>> from superfacets.method.stages import passes_example
+    >>> s = passes_example()  # an icosphere's run up to its passes
+    >>> graph, rules = s.graph, s.rules
+    >>> labels, kept = finish(graph, s.it.label, s.it.centers, rules)
     >>> exact_count(graph, labels, rules)[1]
     12
     """
