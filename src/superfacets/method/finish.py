@@ -49,7 +49,7 @@ def finish(graph, label: np.ndarray, centers: np.ndarray, rules: Rules
 
     Examples
     --------
-    >>> from superfacets.method.stages import passes_example
+    >>> from superfacets.method.pipeline import passes_example
     >>> s = passes_example()  # an icosphere's run up to its passes
     >>> graph, rules = s.graph, s.rules
     >>> labels, kept = finish(graph, s.it.label, s.it.centers, rules)
@@ -91,7 +91,7 @@ def clean_up(graph, labels: np.ndarray, centers: np.ndarray, rules: Rules,
 
     Examples
     --------
-    >>> from superfacets.method.stages import passes_example
+    >>> from superfacets.method.pipeline import passes_example
     >>> s = passes_example()  # an icosphere's run up to its passes
     >>> graph, rules = s.graph, s.rules
     >>> labels, kept = finish(graph, s.it.label, s.it.centers, rules)
@@ -129,7 +129,7 @@ def merge_small(graph, labels: np.ndarray, centers: np.ndarray, rules: Rules) ->
 
     Examples
     --------
-    >>> from superfacets.method.stages import passes_example
+    >>> from superfacets.method.pipeline import passes_example
     >>> s = passes_example()  # an icosphere's run up to its passes
     >>> graph, rules = s.graph, s.rules
     >>> labels, kept = finish(graph, s.it.label, s.it.centers, rules)
@@ -171,7 +171,7 @@ def exact_count(graph, labels: np.ndarray, rules: Rules, *, finer=None
 
     Examples
     --------
-    >>> from superfacets.method.stages import passes_example
+    >>> from superfacets.method.pipeline import passes_example
     >>> s = passes_example()  # an icosphere's run up to its passes
     >>> graph, rules = s.graph, s.rules
     >>> labels, kept = finish(graph, s.it.label, s.it.centers, rules)

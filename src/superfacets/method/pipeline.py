@@ -52,7 +52,7 @@ from .params import SegmentParams
 from .passes import final_centers
 from .stages import build_graph, initialize, iterate_passes, resolve_rules, weigh
 
-__all__ = ["pipeline", "RunRecord", "Hooks"]
+__all__ = ["pipeline", "RunRecord", "Hooks", "passes_example"]
 
 
 class RunRecord(NamedTuple):
@@ -306,3 +306,46 @@ def _resolved(graph, rules, ratio, n_init: int) -> dict:
     if rules.kind.neighborhood:
         resolved.update(n_neighbors=p.n_neighbors, neighbor_radius=p.neighbor_radius)
     return resolved
+
+
+def passes_example(n_segments: int = 12):
+    """A run up to its passes, on an icosphere of 1,280 faces: the set-up the examples of
+    the later stages share (:mod:`superfacets.method.finish`).
+
+    Parameters
+    ----------
+    n_segments : int, default 12
+
+    Returns
+    -------
+    types.SimpleNamespace
+        ``graph``, ``rules``, ``hooks``, ``w``, ``swap_w``, ``init`` and ``it`` (the
+        passes' :class:`~superfacets.method.passes.Iteration`).
+
+    Raises
+    ------
+    ParameterError
+        If ``n_segments`` is not in ``1..1280``.
+
+    Examples
+    --------
+    >>> s = passes_example()
+    >>> s.graph.n_elements, s.rules.k, int(s.it.label.max()) + 1
+    (1280, 12, 12)
+    """
+    from types import SimpleNamespace
+
+    import trimesh
+
+    from .params import resolve
+    from .stages import build_graph, initialize, iterate_passes, resolve_rules, weigh
+
+    ball = trimesh.creation.icosphere(subdivisions=3)
+    _, graph, p = build_graph(ball, resolve(n_segments=n_segments))
+    rules = resolve_rules(graph, p)
+    hooks = Hooks(False, p.max_iter, graph.kind)
+    w, swap_w = weigh(graph, rules)
+    init, _ = initialize(graph, w, rules, hooks)
+    it = iterate_passes(graph, w, swap_w, init, rules, hooks)
+    return SimpleNamespace(graph=graph, rules=rules, hooks=hooks, w=w, swap_w=swap_w,
+                           init=init, it=it)

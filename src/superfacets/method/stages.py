@@ -33,7 +33,7 @@ from .rules import MIN_FINE_ELEMENTS, merge_from_of
 from .weights import csr_point_weights, csr_weights, edge_weights, weight_dtype
 
 __all__ = ["Rules", "build_graph", "resolve_rules", "weigh", "initialize",
-           "iterate_passes", "passes_example"]
+           "iterate_passes"]
 
 _D = DEFAULTS
 
@@ -443,40 +443,3 @@ def iterate_passes(graph, w: np.ndarray, swap_w, init: np.ndarray, rules: Rules,
         spaces.close()
     return it
 
-
-def passes_example(n_segments: int = 12):
-    """A run up to its passes, on an icosphere of 1,280 faces: the set-up the examples of
-    the later stages share (:mod:`superfacets.method.finish`).
-
-    Parameters
-    ----------
-    n_segments : int, default 12
-
-    Returns
-    -------
-    types.SimpleNamespace
-        ``graph``, ``rules``, ``hooks``, ``w``, ``swap_w``, ``init`` and ``it`` (the
-        passes' :class:`~superfacets.method.passes.Iteration`).
-
-    Examples
-    --------
-    >>> s = passes_example()
-    >>> s.graph.n_elements, s.rules.k, int(s.it.label.max()) + 1
-    (1280, 12, 12)
-    """
-    from types import SimpleNamespace
-
-    import trimesh
-
-    from .params import resolve
-    from .pipeline import Hooks
-
-    ball = trimesh.creation.icosphere(subdivisions=3)
-    _, graph, p = build_graph(ball, resolve(n_segments=n_segments))
-    rules = resolve_rules(graph, p)
-    hooks = Hooks(False, p.max_iter, graph.kind)
-    w, swap_w = weigh(graph, rules)
-    init, _ = initialize(graph, w, rules, hooks)
-    it = iterate_passes(graph, w, swap_w, init, rules, hooks)
-    return SimpleNamespace(graph=graph, rules=rules, hooks=hooks, w=w, swap_w=swap_w,
-                           init=init, it=it)
