@@ -8,7 +8,7 @@ bare mirror) of the repository is at hand, this reads each file of
 :data:`~superfacets.evaluation.datasets.scans.SCANS` from the clone at the same commit
 (``git cat-file``), checks its SHA-256 and writes it into the cache
 (``$SUPERFACETS_SCANS``, by default ``~/.cache/superfacets/scans``), where
-``load_scan``, ``benchmarks/real_scans.py`` and ``tests/test_scans.py`` find it. The
+``load_scan``, ``benchmarks/real_scans.py`` and ``tests/evaluation/test_scans.py`` find it. The
 files stay outside the repository. Example::
 
     python tools/scans_from_mirrors.py isl-org/Open3D-ML=~/src/Open3D-ML \\

@@ -3,7 +3,7 @@
 The package runs one implementation of each kernel, the compiled one
 (``superfacets._kernels._cxx``, C++). Each module here holds the numba kernels that the
 compiled ones were written from, the same operations in the same order, so that
-``tests/test_native.py`` can check every compiled kernel against its reference bit for
+``tests/kernels/test_native.py`` can check every compiled kernel against its reference bit for
 bit, on the inputs of real runs. They need numba (the ``test`` extra), never the package.
 
 :func:`reference` gives the numba kernel that the package's ``native.kernel(path)``

@@ -5,7 +5,7 @@ this module adds only how the command line shows it (a metavar, a longer help wh
 one-line ``doc`` does not say enough, the group of ``--help`` it stands in) and builds
 both the options and the keyword arguments of a run from the declarations. A parameter
 declared with an option but shown nowhere here still gets its option, with its ``doc``
-as help: nothing declared is dropped (``tests/test_cli.py`` sends every parameter from
+as help: nothing declared is dropped (``tests/cli/test_cli.py`` sends every parameter from
 the command line and checks that it reaches the run).
 """
 

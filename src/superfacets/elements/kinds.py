@@ -6,7 +6,7 @@ differs between them is either how the element graph is built (the builders
 of :mod:`superfacets.elements`, registered by kind in
 :mod:`superfacets.elements.builders`) or a rule held here, in one frozen
 :class:`ElementKind` per kind. No other module branches on a kind's name
-(``tests/test_kinds.py`` fails when one does), so adding a kind is one
+(``tests/elements/test_kinds.py`` fails when one does), so adding a kind is one
 builder and one row of :data:`KINDS`.
 
 This module imports nothing of the package: the parameter checks

@@ -87,7 +87,7 @@ class Parameter:
     :class:`SegmentParams` (its fields and defaults), :func:`resolve` (its check),
     the command line's options, the method registry and the Parameters section of
     :func:`superfacets.superfacets` come from :data:`PARAMETERS` or are tested
-    against it (``tests/test_params.py``).
+    against it (``tests/method/test_params.py``).
 
     Attributes
     ----------

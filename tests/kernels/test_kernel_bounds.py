@@ -100,7 +100,7 @@ def test_spoilt_indices_are_refused_at_the_kernels_entry(monkeypatch, tmp_path):
     missing = {n for n in indexed if not any(p.endswith("." + n) for p in calls)}
     assert missing <= {"classify_bounded", "pca_linearity", "rows_apart"}, missing
     (tmp_path / "calls.pkl").write_bytes(pickle.dumps(calls))
-    script = Path(__file__).with_name("hostile_calls.py")
+    script = Path(__file__).resolve().parents[1] / "hostile_calls.py"
     out = subprocess.run([sys.executable, str(script), str(tmp_path / "calls.pkl")],
                          capture_output=True, text=True, timeout=600)
     lines = out.stdout.splitlines()

@@ -18,7 +18,7 @@ from superfacets.elements.builders import BUILDERS, Builder, elements_of, kind_f
 from superfacets.elements.kinds import KINDS, kind_of
 from superfacets.errors import ParameterError
 
-SRC = Path(__file__).resolve().parents[1] / "src" / "superfacets"
+SRC = Path(__file__).resolve().parents[2] / "src" / "superfacets"
 
 #: Where a kind's name may be compared, and why: the table itself and the builders
 #: (which decide what the elements of an input are); code that reads and writes files,
