@@ -48,7 +48,7 @@ from .._runtime.memory import give_back_free_memory
 from ..elements.builders import features_of, kind_for
 from .finish import clean_up, exact_count, finish, merge_small
 from .merges import merge_to_count
-from .params import SegmentParams
+from .params import ALL_KINDS, PARAMETERS, SegmentParams
 from .passes import final_centers
 from .stages import build_graph, initialize, iterate_passes, resolve_rules, weigh
 
@@ -291,20 +291,21 @@ def _finished(graph, it, rules, hooks, feats):
     return labels, centers
 
 
+#: Parameters of how a run is carried out, not of its result: not in its record
+_NOT_RECORDED = ("progress", "n_threads", "paper")
+
+
 def _resolved(graph, rules, ratio, n_init: int) -> dict:
-    """The run's parameters as the method resolved them (``SegmentationResult.params``)."""
+    """The run's parameters as the method resolved them (``SegmentationResult.params``):
+    every declared parameter of the graph's kind (:data:`~superfacets.method.params.
+    PARAMETERS`) but those of how it ran, with the values the method settled on."""
     p = rules.params
-    resolved = dict(n_segments=rules.target, radius=rules.r / graph.diagonal, alpha=p.alpha,
-                    eta_convex=p.eta_convex, window=p.window, init=p.init,
-                    max_iter=p.max_iter, weighting=p.weighting, assignment=p.assignment,
-                    enforce_connectivity=p.enforce_connectivity, cleanup=rules.cleanup,
-                    split_merge=rules.split_merge, tol=p.tol,
-                    center_tol=rules.center_tol, coarsen=ratio,
-                    n_init_centers=n_init, elements=graph.kind, beta=p.beta,
-                    min_elements=p.min_elements, density=p.density, roughness=p.roughness,
-                    merge_from=p.merge_from)
-    if rules.kind.neighborhood:
-        resolved.update(n_neighbors=p.n_neighbors, neighbor_radius=p.neighbor_radius)
+    resolved = {q.name: getattr(p, q.name) for q in PARAMETERS  # (a kind's own, or all's)
+                if q.name not in _NOT_RECORDED and (q.kinds == ALL_KINDS or graph.kind in q.kinds)}
+    resolved.update(n_segments=rules.target, radius=rules.r / graph.diagonal,
+                    cleanup=rules.cleanup, split_merge=rules.split_merge,
+                    center_tol=rules.center_tol, coarsen=ratio, elements=graph.kind,
+                    n_init_centers=n_init)
     return resolved
 
 
