@@ -435,3 +435,9 @@ def test_pictures_of_a_cloud_with_an_up_axis_stand_on_it():
     assert up_of(SimpleNamespace(up=None), SimpleNamespace(up=np.array([0.0, -2.0, 0.1]))) == "-y"
     assert up_of(SimpleNamespace(up="x"), las) == "x"
     assert up_of(SimpleNamespace(up=None), SimpleNamespace()) is None
+
+
+def test_the_summary_is_in_the_singular_where_there_is_one(tmp_path, small_off, capsys):
+    assert main(["segment", str(small_off), "-k", "1", "-o", str(tmp_path / "one.seg")]) == 0
+    line = capsys.readouterr().out.splitlines()[0]
+    assert ", 1 superfacet, 1 iteration (" in line and "1 superfacets" not in line

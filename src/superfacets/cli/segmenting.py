@@ -176,10 +176,17 @@ def _summary(name: str, mesh, result, seconds: float, elements: str = "faces",
     t = getattr(result, "timings", None) or {}
     coarse = (f", after {t['coarse_passes']} on {t['coarse_elements']:,} clusters "
               f"(coarse-to-fine)" if t.get("coarse_elements") and "coarse_passes" in t else "")
-    swaps = f", {t['swaps']} split-and-merge swaps" if "swaps" in t else ""
+    swaps = f", {_count(t['swaps'], 'split-and-merge swap')}" if "swaps" in t else ""
+    if result.n_segments == 1:  # (one superfacet, one superpoint)
+        segs = segs.replace("superfacets", "superfacet", 1).replace("superpoints", "superpoint", 1)
     return (f"{name}: {what}, {result.n_segments} {segs}, "
-            f"{result.n_iter} iterations ({state}){coarse}{swaps}, {seconds:.2f} s"
+            f"{_count(result.n_iter, 'iteration')} ({state}){coarse}{swaps}, {seconds:.2f} s"
             f"{_tiny_hint(result) if elements == 'points' and not start else ''}")
+
+
+def _count(n: int, word: str) -> str:
+    """``n`` and ``word``, plural unless ``n`` is 1 ("1 iteration", "3 iterations")."""
+    return f"{n} {word}" if n == 1 else f"{n} {word}s"
 
 
 def _tiny_hint(result) -> str:
