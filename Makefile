@@ -103,10 +103,13 @@ pictures: $(STAMP)
 	  $(VENV)/bin/superfacets render $(PSB_DIR)/off/$$id.off -k 150 --size 480x400 \
 	      --title "PSB $$id" -o docs/images/psb_$$id.png; done
 
-# The evaluation sweep of the README (docs/results): about 15 minutes on 2 cores.
+# The evaluation sweep of the README: about 15 minutes on 2 cores. Its rows and figures
+# go to docs/results (not kept in the repository); the figure the guide shows is copied
+# to docs/figures.
 sweep: $(STAMP)
 	$(VENV)/bin/superfacets experiment -o docs/results/psb_sweep.csv
 	$(VENV)/bin/superfacets report docs/results/psb_sweep.csv -o docs/results
+	cp docs/results/fig4.png docs/results/per_category_*.png docs/figures/
 
 # The paper's comparisons with its baselines (docs/results, README "Comparisons"):
 # normalized cuts on a stratified subset (the 2 meshes with fewest faces of each of the
@@ -128,6 +131,10 @@ comparisons: $(STAMP)
 	    --series "superfacets α=200" --series "vsa init=random metric=l21" \
 	    --series "vsa init=random metric=l2" --series "vsa init=incremental metric=l21" \
 	    --series "vsa init=incremental metric=l2"
+	for f in fig4_fig5_ncuts/fig4 fig4_fig5_ncuts/cost fig6_shlafman/fig4 fig7_vsa/fig4 \
+	    fig7_vsa/per_category_undersegmentation_error; do \
+	  name=$$(echo $$f | sed -e 's|^fig4_fig5_||' -e 's|^fig[67]_||' -e 's|/|_|'); \
+	  cp docs/results/$$f.png docs/figures/$$name.png; done
 	$(SF) panel $(PSB_DIR)/off/1.off --up z $(FIG8) -o docs/images/fig8_vsa_human.png
 	$(SF) panel $(PSB_DIR)/off/321.off $(FIG8) -o docs/images/fig8_vsa_mech.png
 
