@@ -24,7 +24,8 @@ def estimate_normals(points: np.ndarray, neighbors: np.ndarray) -> np.ndarray:
     ----------
     points : (n, 3) float64 ndarray
     neighbors : (n, K) int ndarray
-        Each point's neighbourhood (itself included).
+        Each point's neighbourhood (itself included); int32 is read in place, other
+        integer types are converted.
 
     Returns
     -------
@@ -62,9 +63,11 @@ def normals_and_linearity(points: np.ndarray, neighbors: np.ndarray
 
     out = np.empty((points.shape[0], 3))
     linearity = np.empty(points.shape[0])
-    # neighbours as given: a column slice of the neighbour lists is read in place (a
-    # copy of 11 columns of 1M rows costs 0.25 s, row by row)
-    pca_normals(np.ascontiguousarray(points), neighbors, out, linearity)
+    # int32 neighbours as given: a column slice of the neighbour lists is read in place
+    # (a copy of 11 columns of 1M rows costs 0.25 s, row by row)
+    if neighbors.dtype != np.int32:
+        neighbors = np.asarray(neighbors, dtype=np.int32)
+    pca_normals(np.ascontiguousarray(points, dtype=np.float64), neighbors, out, linearity)
     return out, linearity
 
 

@@ -53,7 +53,7 @@ def _check_regular(path: Path) -> None:
 
 
 def read_head(path: Path, size: int = 1 << 16) -> bytes:
-    """The first ``size`` bytes of the uncompressed file ``path`` (all of a shorter one):
+    r"""The first ``size`` bytes of the uncompressed file ``path`` (all of a shorter one):
     enough for a header, without reading a large file whole.
 
     Raises
@@ -151,7 +151,7 @@ def decompressed(path: Path, comp: str, limit: int | None = None) -> bytes:
 
 
 def decompressed_head(path: Path, comp: str, size: int) -> bytes:
-    """The first ``size`` bytes of the decompressed content (the rest not decompressed).
+    r"""The first ``size`` bytes of the decompressed content (the rest not decompressed).
 
     Parameters
     ----------

@@ -50,8 +50,8 @@ def expand_grid(method: str, **values) -> list[Config]:
 
     Examples
     --------
-    >>> expand_grid("superfacets", alpha=[0, 200])[0].label()[:53]
-    'superfacets alpha=0.0 cleanup=false eta_convex=0.2 in'
+    >>> [c.label().split()[:2] for c in expand_grid("superfacets", alpha=[0, 200])]
+    [['superfacets', 'alpha=0.0'], ['superfacets', 'alpha=200.0']]
     """
     m = get_method(method)
     names = sorted(values)
