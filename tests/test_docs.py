@@ -57,3 +57,13 @@ def test_every_gallery_example_ends_in_a_picture():
     for p in examples:
         text = p.read_text()
         assert "plt.show()" in text and text.lstrip().startswith('"""'), p.name
+
+
+def test_the_changelog_has_a_short_entry_per_change():
+    """One change, one entry of at most three lines: what was measured is in the docs."""
+    import re
+
+    text = (ROOT / "CHANGELOG.md").read_text()
+    long = [e.splitlines()[0][:60] for e in re.split(r"\n(?=- |\n|#)", text)
+            if e.startswith("- ") and len(e.splitlines()) > 3]
+    assert not long, long
