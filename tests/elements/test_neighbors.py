@@ -79,3 +79,33 @@ def test_no_neighbours_asked_and_too_many_asked():
     assert nbr.tolist() == [[0], [1], [2]] and not kth.any() and within.shape == (3, 0)
     with pytest.raises(ValueError, match="need 0 <= k < 3"):
         nearest(point_tree(pts), 3)
+
+
+@pytest.mark.parametrize("shift", [(0.0, 0.0, 0.0), (0.0, 0.0, -1000.0),
+                                   (500_000.0, 5_000_000.0, 0.0)])
+def test_the_tree_is_the_same_wherever_the_cloud_sits(shift):
+    """The tree splits space in the cloud's own frame: a floor of centimetre noise at
+    z = 0 (where the bits of the floats span many binades), or in survey coordinates, gets
+    the very tree the same floor gets at z = 10 (the points, exact multiples of 2**-10,
+    move exactly), and the same neighbours by position."""
+    rng = np.random.default_rng(8)
+    n = 5000
+    base = np.c_[rng.integers(0, 60 * 1024, (n, 2)), rng.integers(-10, 11, n)] / 1024.0
+    base = distinct_points(base)[0]
+
+    def tree_and_neighbours(p):
+        tree = point_tree(p)
+        nbr, kth, _ = nearest(tree, 6)
+        return tree, p[nbr], kth  # (neighbours by position: the rows' order may differ)
+
+    ref_tree, ref_pos, ref_kth = tree_and_neighbours(base + [0.0, 0.0, 10.0])
+    moved = distinct_points(base + np.array(shift))[0]
+    tree, pos, kth = tree_and_neighbours(moved)
+    for name in ("start", "end", "left"):
+        assert np.array_equal(getattr(tree, name), getattr(ref_tree, name)), name
+    back = moved - np.array(shift)
+    order = np.lexsort(back.T[::-1])
+    ref_order = np.lexsort((base).T[::-1])
+    assert np.array_equal(back[order], base[ref_order])
+    assert np.array_equal(kth[order], ref_kth[ref_order])
+    assert np.array_equal(pos[order] - np.array(shift), ref_pos[ref_order] - [0.0, 0.0, 10.0])

@@ -59,7 +59,8 @@ OPTION_KERNELS = {"flood", "felzenszwalb", "csr_covariances", "vsa_partition", "
 
 #: The compiled kernels of the point graph's build (the others serve faces and points)
 POINT_KERNELS = {"knn_csr", "pca_normals", "pca_linearity", "propagate_signs",
-                 "turn_outwards", "float_morton_keys", "distinct_in_order", "order_ties",
+                 "turn_outwards", "float_morton_keys", "local_morton_keys", "distinct_in_order",
+                 "order_ties",
                  "point_terms_csr", "point_terms", "combine_weights", "neighbour_mean",
                  "crossing_pairs", "label_sums", "label_scatter", "tree_nodes",
                  "nearest_in_tree", "sort_keys", "rows_apart", "neighbourhood_moments",
@@ -779,11 +780,11 @@ def test_point_tree_on_threads_matches_numba(monkeypatch, threads):
         got = point_tree(pts)
         m.setattr(native, "kernel", reference)
         ref = point_tree(pts)
-    for name in ("start", "end", "left", "boxes"):
+    for name in ("start", "end", "left", "boxes", "ids", "rows", "points"):
         assert np.array_equal(getattr(got, name), getattr(ref, name)), name
     leaf = np.flatnonzero(got.left < 0)
     v = leaf[len(leaf) // 2]
-    inside = pts[got.start[v]:got.end[v]]
+    inside = got.points[got.start[v]:got.end[v]]
     assert np.array_equal(got.boxes[v], np.r_[inside.min(0), inside.max(0)])
     assert np.array_equal(got.boxes[0], np.r_[pts.min(0), pts.max(0)])
 
@@ -1089,7 +1090,7 @@ def test_key_windows_of_a_large_cloud_are_numpys(monkeypatch, threads):
     window past the bits every point shares), one pass on threads for a large cloud, are
     numpy's shifts and masks of the key words and numba's, across word boundaries and
     past the string's end."""
-    from superfacets.elements import points
+    from superfacets.elements import neighbors
 
     rng = np.random.default_rng(14)
     n = 70_000
@@ -1097,12 +1098,12 @@ def test_key_windows_of_a_large_cloud_are_numpys(monkeypatch, threads):
     keys[:5] = [[0, 0, 0], [2**63 - 1] * 3, [1, 0, 2**62], [2**62, 1, 0], [0, 2**63 - 1, 1]]
     small = keys[:1000].copy()  # (numpy's path below 65,536 rows)
     for start in (0, 1, 30, 62, 63, 64, 100, 125, 126, 127, 150, 188):
-        want = points._key_bits(small, start)
+        want = neighbors.key_window(small, start)
         ref = np.empty(n, dtype=np.uint64)
         reference("geometry.key_window")(keys, start, ref)
         with monkeypatch.context() as m:
             m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
-            got = points._key_bits(keys, start)
+            got = neighbors.key_window(keys, start)
         np.testing.assert_array_equal(got[:1000], want, err_msg=str(start))
         np.testing.assert_array_equal(ref, got, err_msg=str(start))
         bits = "".join(format(int(w), "063b") for w in keys[2]) + "0" * 64  # row 2's

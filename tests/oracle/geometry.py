@@ -259,6 +259,36 @@ def float_morton_keys(bits, keys):
 
 
 @njit(cache=True, nogil=True, parallel=True)
+def local_morton_keys(pts, lo, scale, keys):
+    """Z-order keys in a local frame: each coordinate as the integer
+    ``min(floor((x - lo) * scale), 2**62)`` (0 below ``lo`` and for NaN), its top bit set,
+    interleaved as :func:`float_morton_keys` does."""
+    top = np.uint64(1) << np.uint64(63)
+    cap = 4611686018427387904.0
+    for i in prange(pts.shape[0]):
+        o0 = np.uint64(0)
+        o1 = np.uint64(0)
+        o2 = np.uint64(0)
+        for a in range(3):
+            q = np.floor((pts[i, a] - lo[a]) * scale)
+            if not q > 0.0:
+                q = 0.0
+            if q > cap:
+                q = cap
+            b = np.uint64(q) | top
+            if a == 0:
+                o0 = b
+            elif a == 1:
+                o1 = b
+            else:
+                o2 = b
+        for w in range(3):
+            s = np.uint64(43 - 21 * w)
+            keys[i, w] = (_spread21(o0 >> s) << np.uint64(2)) | (
+                _spread21(o1 >> s) << np.uint64(1)) | _spread21(o2 >> s)
+
+
+@njit(cache=True, nogil=True, parallel=True)
 def distinct_in_order(p, order, out, inverse):
     """The rows of ``p`` taken in ``order``, each run of equal positions once, into
     ``out`` (from 0); ``inverse[order[i]]`` the place in ``out`` of row ``order[i]``.

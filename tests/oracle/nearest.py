@@ -147,9 +147,10 @@ def _box_distance(boxes, v, qx, qy, qz):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _query(pts, start, end, left, boxes, i, k, bd, bi, stack, sd, sib):
+def _query(pts, start, end, left, boxes, ids, i, k, bd, bi, stack, sd, sib):
     """The ``k`` nearest points other than row ``i`` into ``bd`` (squared distances) and
-    ``bi`` (rows), by (squared distance, row); returns how many were found."""
+    ``bi`` (their ids, ``ids[row]``), by (squared distance, id); returns how many were
+    found."""
     qx = pts[i, 0]
     qy = pts[i, 1]
     qz = pts[i, 2]
@@ -183,19 +184,20 @@ def _query(pts, start, end, left, boxes, i, k, bd, bi, stack, sd, sib):
                     dy = pts[t, 1] - qy
                     dz = pts[t, 2] - qz
                     d = dx * dx + dy * dy + dz * dz
+                    u = ids[t]
                     if cnt < k:
                         p = cnt
                         cnt += 1
-                    elif d < bd[k - 1] or (d == bd[k - 1] and t < bi[k - 1]):
+                    elif d < bd[k - 1] or (d == bd[k - 1] and u < bi[k - 1]):
                         p = k - 1
                     else:
                         continue
-                    while p > 0 and (bd[p - 1] > d or (bd[p - 1] == d and bi[p - 1] > t)):
+                    while p > 0 and (bd[p - 1] > d or (bd[p - 1] == d and bi[p - 1] > u)):
                         bd[p] = bd[p - 1]
                         bi[p] = bi[p - 1]
                         p -= 1
                     bd[p] = d
-                    bi[p] = t
+                    bi[p] = u
             else:
                 d0 = _box_distance(boxes, c, qx, qy, qz)
                 d1 = _box_distance(boxes, c + 1, qx, qy, qz)
@@ -222,10 +224,11 @@ def _query(pts, start, end, left, boxes, i, k, bd, bi, stack, sd, sib):
 
 
 @njit(cache=True, error_model="numpy", nogil=True, parallel=True)
-def nearest_in_tree(pts, start, end, left, boxes, own, k, nbr, dist):
-    """For each query ``r`` (the row ``own[r]`` of ``pts``): ``nbr[r, 0] = own[r]``, then
-    its ``k`` nearest other rows by (distance, row); ``dist[r]`` their distances (0 for
-    itself). ``nbr`` and ``dist``: (m, k + 1); ``k < n``."""
+def nearest_in_tree(pts, start, end, left, boxes, ids, own, k, nbr, dist):
+    """For each query ``r`` (the row ``own[r]`` of ``pts``, the rows in the tree's order,
+    ``ids[row]`` each one's point): ``nbr[r, 0] = ids[own[r]]``, then the ids of its ``k``
+    nearest other rows by (distance, id); ``dist[r]`` their distances (0 for itself).
+    ``nbr`` and ``dist``: (m, k + 1); ``k < n``."""
     m = own.shape[0]
     for ch in prange((m + CHUNK - 1) // CHUNK):
         bd = np.empty(max(k, 1))
@@ -235,8 +238,8 @@ def nearest_in_tree(pts, start, end, left, boxes, own, k, nbr, dist):
         sib = np.empty(STACK, dtype=np.int64)
         for r in range(ch * CHUNK, min(m, ch * CHUNK + CHUNK)):
             i = own[r]
-            got = _query(pts, start, end, left, boxes, i, k, bd, bi, stack, sd, sib)
-            nbr[r, 0] = i
+            got = _query(pts, start, end, left, boxes, ids, i, k, bd, bi, stack, sd, sib)
+            nbr[r, 0] = ids[i]
             dist[r, 0] = 0.0
             for j in range(got):
                 nbr[r, j + 1] = bi[j]

@@ -49,7 +49,7 @@ from .._runtime.memory import give_back_free_memory
 from ..inputs.bounds import column_bounds, column_means
 from . import graph as _graph
 from .graph import LAZY, ElementGraph, adjacency_csr, cached_on, pairs_from_csr
-from .neighbors import nearest, point_tree
+from .neighbors import key_window, nearest, point_tree, shared_prefix
 from .normals import estimate_normals, normals_and_linearity, orient_normals
 from .vertices import symmetric_terms
 
@@ -124,7 +124,7 @@ def distinct_points(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
     p = np.ascontiguousarray(p, dtype=np.float64)
     keys, shared = _spatial_keys(p)
-    window = _key_bits(keys, shared)
+    window = key_window(keys, shared)
     # a stable sort (on threads where compiled: numpy's argsort of 10M keys takes 2.7 s),
     # then equal windows by the whole keys and the coordinates
     order, ordered = np.empty(p.shape[0], dtype=np.int64), np.empty_like(window)
@@ -147,39 +147,16 @@ def _spatial_keys(p: np.ndarray) -> tuple[np.ndarray, int]:
     the points sorted by it run along a Z-order curve within each
     power-of-two cell. ``shared``: the leading bits of that string that all
     the points share. Bits every point shares do not change the order, so
-    sorting by the string from ``shared`` on (:func:`_key_bits`) gives the same
-    relative order in any subset of the points.
+    sorting by the string from ``shared`` on
+    (:func:`~superfacets.elements.neighbors.key_window`) gives the same relative order in
+    any subset of the points.
     """
     float_morton_keys = native.kernel("geometry.float_morton_keys")
 
     n = p.shape[0]
     keys = np.empty((n, 3), dtype=np.uint64)
     float_morton_keys(p.view(np.uint64), keys)
-    shared = 0
-    for w in range(3):
-        # (the bits set in one key and clear in another: no temporary array, 0.18 -> 0.04 s)
-        vary = int(np.bitwise_or.reduce(keys[:, w]) & ~np.bitwise_and.reduce(keys[:, w]))
-        if vary:
-            shared += 63 - vary.bit_length()
-            break
-        shared += 63
-    return keys, shared
-
-
-def _key_bits(keys: np.ndarray, start: int) -> np.ndarray:
-    """Bits ``start .. start + 63`` of each row's 189-bit key string (zeros past its end),
-    as one uint64 (the first bit the highest)."""
-    if start >= 189:
-        return np.zeros(keys.shape[0], dtype=np.uint64)
-    if keys.shape[0] >= COMPILED_MIN and keys.flags.c_contiguous:  # one pass on threads
-        out = np.empty(keys.shape[0], dtype=np.uint64)  # (10M points: 0.22 -> 0.03 s)
-        native.kernel("geometry.key_window")(keys, int(start), out)
-        return out
-    j, o = divmod(start, 63)
-    out = (keys[:, j] & np.uint64((1 << (63 - o)) - 1)) << np.uint64(o + 1)
-    if j < 2:
-        out |= keys[:, j + 1] >> np.uint64(62 - o)
-    return out
+    return keys, shared_prefix(keys)
 
 
 def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,

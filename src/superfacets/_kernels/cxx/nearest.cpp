@@ -1,6 +1,9 @@
 // superfacets/_kernels/nearest.py: the tree of a cloud's Z-order and the k nearest
-// neighbours of its points, the same operations in the same order.
+// neighbours of its points, the same operations in the same order. The tree's rows are
+// the points in its own order; ids names the point of each row (ties go to the lower id).
 #include "common.hpp"
+
+#include <limits>
 
 namespace sfk {
 
@@ -45,6 +48,7 @@ struct Tree {
     const i64* end;
     const i64* left;
     const double* boxes;
+    const i64* ids;  // the point of each row (rows are in the tree's order)
 };
 
 // nearest._query
@@ -78,21 +82,22 @@ i64 query(const Tree& t, i64 i, i64 k, double* bd, i64* bi, i64* stack, double* 
                     if (r == i) continue;
                     double dx = p[3 * r] - qx, dy = p[3 * r + 1] - qy, dz = p[3 * r + 2] - qz;
                     double d = dx * dx + dy * dy + dz * dz;
+                    const i64 id = t.ids[r];
                     i64 q;
                     if (cnt < k) {
                         q = cnt++;
-                    } else if (d < bd[k - 1] || (d == bd[k - 1] && r < bi[k - 1])) {
+                    } else if (d < bd[k - 1] || (d == bd[k - 1] && id < bi[k - 1])) {
                         q = k - 1;
                     } else {
                         continue;
                     }
-                    while (q > 0 && (bd[q - 1] > d || (bd[q - 1] == d && bi[q - 1] > r))) {
+                    while (q > 0 && (bd[q - 1] > d || (bd[q - 1] == d && bi[q - 1] > id))) {
                         bd[q] = bd[q - 1];
                         bi[q] = bi[q - 1];
                         --q;
                     }
                     bd[q] = d;
-                    bi[q] = r;
+                    bi[q] = id;
                 }
             } else {
                 double d0 = box_distance(t.boxes + 6 * c, qx, qy, qz);
@@ -232,10 +237,11 @@ inline void check_tree(i64 n_pts, const In<i64>& start, const In<i64>& end,
 }
 
 void nearest_in_tree(nb::handle pts_, nb::handle start_, nb::handle end_, nb::handle left_,
-                     nb::handle boxes_, nb::handle own_, i64 k, nb::handle nbr_,
-                     nb::handle dist_) {
+                     nb::handle boxes_, nb::handle ids_, nb::handle own_, i64 k,
+                     nb::handle nbr_, nb::handle dist_) {
     In<double> pts(pts_, "pts"), boxes(boxes_, "boxes");
-    In<i64> start(start_, "start"), end(end_, "end"), left(left_, "left"), own(own_, "own");
+    In<i64> start(start_, "start"), end(end_, "end"), left(left_, "left"), own(own_, "own"),
+        ids(ids_, "ids");
     Out<i32> nbr(nbr_, "nbr");
     Out<double> dist(dist_, "dist");
     if (pts.cols != 3 || boxes.cols != 6 || nbr.cols != k + 1 || dist.cols != k + 1 ||
@@ -243,15 +249,17 @@ void nearest_in_tree(nb::handle pts_, nb::handle start_, nb::handle end_, nb::ha
         throw Mismatch("argument nbr");
     check_tree(pts.n, start, end, left, boxes.n);
     check_range(own, 0, pts.n, "own");
+    if (ids.n != pts.n) throw Mismatch("argument ids");
+    check_range(ids, 0, std::numeric_limits<i32>::max(), "ids");
     nb::gil_scoped_release nogil;
-    const Tree t{pts.p, start.p, end.p, left.p, boxes.p};
+    const Tree t{pts.p, start.p, end.p, left.p, boxes.p, ids.p};
     parallel_for(own.n, [&](i64 lo, i64 hi) {
         std::vector<double> bd(k), sd(STACK);
         std::vector<i64> bi(k), stack(STACK), sib(STACK);
         for (i64 r = lo; r < hi; ++r) {
             i64 i = own[r];
             i64 got = query(t, i, k, bd.data(), bi.data(), stack.data(), sd.data(), sib.data());
-            nbr(r, 0) = static_cast<i32>(i);
+            nbr(r, 0) = static_cast<i32>(t.ids[i]);
             dist(r, 0) = 0.0;
             for (i64 j = 0; j < got; ++j) {
                 nbr(r, j + 1) = static_cast<i32>(bi[j]);

@@ -170,6 +170,14 @@ inline void pair_terms(const double* pos, const N* nor, i64 i, i64 j, double& ge
     concave = s < 0;
 }
 
+// The 63 x 3 bits of o[0..2], interleaved x, y, z from the top: 21 of each a word.
+inline void interleave(const std::uint64_t* o, std::uint64_t* key) {
+    for (int w = 0; w < 3; ++w) {
+        std::uint64_t s = static_cast<std::uint64_t>(43 - 21 * w);
+        key[w] = (spread21(o[0] >> s) << 2) | (spread21(o[1] >> s) << 1) | spread21(o[2] >> s);
+    }
+}
+
 }  // namespace
 
 void float_morton_keys(nb::handle bits_, nb::handle keys_) {
@@ -185,11 +193,34 @@ void float_morton_keys(nb::handle bits_, nb::handle keys_) {
                 if (b == top) b = 0;
                 o[a] = (b & top) ? ~b : (b | top);
             }
-            for (int w = 0; w < 3; ++w) {
-                std::uint64_t s = static_cast<std::uint64_t>(43 - 21 * w);
-                keys(i, w) = (spread21(o[0] >> s) << 2) | (spread21(o[1] >> s) << 1) |
-                             spread21(o[2] >> s);
+            interleave(o, &keys(i, 0));
+        }
+    });
+}
+
+// Z-order keys in a local frame: each coordinate as the integer
+// min(floor((x - lo) * scale), 2^62), its top bit set, interleaved as float_morton_keys
+// does. With lo the cloud's lower corner and 2^62 / scale its largest side, the keys
+// split space alike along every axis, wherever the cloud sits.
+void local_morton_keys(nb::handle pts_, nb::handle lo_, double scale, nb::handle keys_) {
+    In<double> pts(pts_, "pts"), lo(lo_, "lo");
+    Out<std::uint64_t> keys(keys_, "keys");
+    if (pts.cols != 3 || lo.n != 3 || keys.cols != 3) throw Mismatch("argument pts");
+    check_rows(keys, pts.n, "keys");
+    nb::gil_scoped_release nogil;
+    const double cap = 4611686018427387904.0;  // 2^62
+    const double l0 = lo[0], l1 = lo[1], l2 = lo[2];
+    parallel_for(pts.n, [&](i64 a0, i64 a1) {
+        for (i64 i = a0; i < a1; ++i) {
+            std::uint64_t o[3];
+            const double l[3] = {l0, l1, l2};
+            for (int a = 0; a < 3; ++a) {
+                double q = std::floor((pts(i, a) - l[a]) * scale);
+                if (!(q > 0.0)) q = 0.0;  // (NaN too)
+                if (q > cap) q = cap;
+                o[a] = static_cast<std::uint64_t>(q) | (1ULL << 63);
             }
+            interleave(o, &keys(i, 0));
         }
     });
 }
@@ -899,6 +930,7 @@ void bind_points(nb::module_& m) {
     m.def("neighbourhood_moments", &neighbourhood_moments);
     m.def("border_shares", &border_shares);
     m.def("float_morton_keys", &float_morton_keys);
+    m.def("local_morton_keys", &local_morton_keys);
     m.def("distinct_in_order", &distinct_in_order);
     m.def("pca_normals", &pca_normals);
     m.def("pca_linearity", &pca_linearity);
