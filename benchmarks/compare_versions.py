@@ -1,9 +1,9 @@
 """Two versions of the package on the same inputs, alternating, each run a new process.
 
-For a change that must not alter speed or memory (a reorganisation): check out the
-version before it beside this one (``git worktree add /tmp/before <commit>``), then
+For a change that must not alter speed or memory (a reorganisation): build the version
+before it beside this one (``benchmarks/_versions.py`` says how), then
 
-    python benchmarks/compare_versions.py /tmp/before/src src --rounds 3
+    python benchmarks/compare_versions.py /tmp/before-site installed --rounds 3
 
 Each case runs ``rounds`` times per version, the versions alternating (A B A B ...) so
 a busy hour weighs on both alike; the table gives the fastest time of each (the
@@ -20,9 +20,10 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import sys
 from pathlib import Path
+
+from _versions import run_code
 
 HERE = Path(__file__).resolve().parent
 SHARED = HERE.parents[1] / "shared" / "data" / "meshes"
@@ -51,17 +52,18 @@ print(json.dumps({"seconds": dt, "peak_mib": peak, "labels": digest}))
 """
 
 
-def run(src: str, case: str) -> dict:
-    env = dict(os.environ, PYTHONPATH=str(Path(src).resolve()))
-    out = subprocess.run([sys.executable, "-c", CASE, case, str(SHARED)], env=env,
-                         capture_output=True, text=True, check=True)
+def run(version: str, case: str) -> dict:
+    out = run_code(version, CASE, case, str(SHARED))
+    if out.returncode:
+        raise SystemExit(f"{version}, {case}: {out.stderr.strip()[-500:]}")
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("before", help="the src folder of the version before")
-    ap.add_argument("after", help="the src folder of the version after")
+    ap.add_argument("before", help="the version before: 'installed' or the folder of "
+                    "a built version (benchmarks/_versions.py)")
+    ap.add_argument("after", help="the version after, likewise")
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--cases", nargs="+", default=["faces", "vertices", "points"])
     args = ap.parse_args(argv)
