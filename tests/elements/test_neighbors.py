@@ -109,3 +109,13 @@ def test_the_tree_is_the_same_wherever_the_cloud_sits(shift):
     assert np.array_equal(back[order], base[ref_order])
     assert np.array_equal(kth[order], ref_kth[ref_order])
     assert np.array_equal(pos[order] - np.array(shift), ref_pos[ref_order] - [0.0, 0.0, 10.0])
+
+
+def test_a_cloud_wider_than_the_largest_float_is_one_cell():
+    """A side past the largest float (1e308 on both sides of 0) has no frame: every point in
+    one cell, the tree split by halves, the answers by (distance, index) still."""
+    pts = np.array([[1e308, 0, 0], [-1e308, 0, 0], [0, 0, 0.0], [1.0, 0, 0]])
+    with np.errstate(over="ignore"):
+        want, _ = _brute(pts, 2, np.arange(4))
+    nbr, _, _ = nearest(point_tree(pts), 2)
+    assert nbr.tolist() == want.tolist()

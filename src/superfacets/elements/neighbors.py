@@ -124,9 +124,12 @@ def local_frame(points: np.ndarray) -> tuple[np.ndarray, float]:
     integers across their largest side (0 when they are one position)."""
     from ..inputs.bounds import column_bounds
 
+    if not points.shape[0]:
+        return np.zeros(3), 0.0
     lo, hi = column_bounds(points)
-    side = float(np.max(hi - lo)) if points.shape[0] else 0.0
-    return lo, (2.0 ** 62 / side if side > 0 else 0.0)
+    with np.errstate(over="ignore"):  # (a side past the largest float: one cell)
+        side = float(np.max(hi - lo))
+    return lo, (2.0 ** 62 / side if 0 < side < np.inf else 0.0)
 
 
 def point_tree(points: np.ndarray, leaf: int = LEAF) -> PointTree:
