@@ -617,8 +617,9 @@ def test_points_closer_than_the_squared_distance_can_hold_are_two_points():
 
 
 def test_points_are_indexed_along_a_z_order_curve():
-    """Known answer: points of one power-of-two cell ([1, 2) here) are listed along the
-    Z-order curve of their coordinates' bits, x the major bit."""
+    """Known answer: points of a box are listed along the Z-order curve of their
+    coordinates as integers from its lower corner (the cube of the least power of two
+    above its largest side, halved), x the major bit."""
     from superfacets.elements.points import distinct_points
 
     i, j = np.meshgrid(np.arange(4), np.arange(4), indexing="ij")
@@ -632,9 +633,11 @@ def test_points_are_indexed_along_a_z_order_curve():
 
 @pytest.mark.parametrize("seed", [0, 1])
 def test_distinct_points_of_a_box_keep_the_whole_clouds_order(seed):
-    """Invariant: the order of the distinct points depends on the positions alone, so a
-    box of a cloud (a tile) lists its points in the whole cloud's relative order; each
-    input row maps to its own position; -0.0 and 0.0 are one point."""
+    """Invariant: the order of the distinct points depends on the positions and the
+    frame alone, so a box of a cloud (a tile) given the whole cloud's frame lists its
+    points in the whole cloud's relative order; each input row maps to its own position;
+    -0.0 and 0.0 are one point."""
+    from superfacets.elements.neighbors import local_frame
     from superfacets.elements.points import distinct_points
 
     rng = np.random.default_rng(seed)
@@ -648,7 +651,7 @@ def test_distinct_points_of_a_box_keep_the_whole_clouds_order(seed):
     assert s.shape[0] == np.unique(p, axis=0).shape[0] == np.unique(s, axis=0).shape[0]
     for lo, hi in (([-0.5, -2, -1], [3, 0.7, 9]), ([-1e9] * 3, [0, 0, 1e9]), ([0] * 3, [1] * 3)):
         box = ((p >= lo) & (p <= hi)).all(axis=1)
-        sub, _ = distinct_points(p[box])
+        sub, _ = distinct_points(p[box], local_frame(p))
         inside = ((s >= lo) & (s <= hi)).all(axis=1)
         np.testing.assert_array_equal(sub, s[inside])
 
@@ -867,7 +870,8 @@ def test_the_z_order_sorts_by_the_whole_keys_then_the_positions(monkeypatch, thr
     from oracle.geometry import distinct_in_order
 
     from superfacets._kernels import native
-    from superfacets.elements.points import _spatial_keys, distinct_points
+    from superfacets.elements.neighbors import local_frame, local_keys
+    from superfacets.elements.points import distinct_points
 
     rng = np.random.default_rng(3)
     near = 1.0 + rng.integers(0, 4, (30_000, 3)) * 1e-13  # equal in the first 64 bits
@@ -875,7 +879,7 @@ def test_the_z_order_sorts_by_the_whole_keys_then_the_positions(monkeypatch, thr
     grid[rng.random(grid.shape) < 0.3] *= -1.0  # -0.0 and 0.0 in the same runs
     p = np.r_[near, grid, rng.random((30_000, 3)) * 1e3, [[-1e5, 2e5, 7.0]]]
     p = p[rng.permutation(p.shape[0])]
-    keys, _ = _spatial_keys(p)
+    keys = local_keys(p, local_frame(p))
     order = np.lexsort((p[:, 2], p[:, 1], p[:, 0], keys[:, 2], keys[:, 1], keys[:, 0]))
     want, want_inv = np.empty_like(p), np.empty(p.shape[0], dtype=np.int64)
     m = distinct_in_order(p, order, want, want_inv)
@@ -892,13 +896,16 @@ def test_the_z_orders_shared_leading_bits_are_those_no_point_changes():
     """Known answer: the leading bits of the 189-bit key strings that every point shares
     (the Z-order sorts from the first one that varies): found by or/and reductions, they
     are the bits up to the highest one where some key differs from the first, in a cloud
-    in a small box far from the origin (many shared bits), one point, and a spread one."""
-    from superfacets.elements.points import _spatial_keys
+    in a small box far from the origin, a cloud in a slab (its frame's upper z bits
+    shared), one point, and a spread one."""
+    from superfacets.elements.neighbors import local_frame, local_keys, shared_prefix
 
     rng = np.random.default_rng(5)
-    for p in (1e6 + rng.random((5_000, 3)) * 1e-3, np.array([[1.0, 2.0, 3.0]]),
+    slab = np.c_[rng.random((5_000, 2)) * 60.0, rng.normal(0.0, 0.01, 5_000)]
+    for p in (1e6 + rng.random((5_000, 3)) * 1e-3, np.array([[1.0, 2.0, 3.0]]), slab,
               rng.normal(size=(5_000, 3)) * 1e3, np.full((4, 3), 7.0)):
-        keys, shared = _spatial_keys(p)
+        keys = local_keys(p, local_frame(p))
+        shared = shared_prefix(keys)
         want = 0
         for w in range(3):
             vary = 0
@@ -909,8 +916,8 @@ def test_the_z_orders_shared_leading_bits_are_those_no_point_changes():
                 break
             want += 63
         assert shared == want
-    assert _spatial_keys(np.full((4, 3), 7.0))[1] == 189
-    assert _spatial_keys(1e6 + rng.random((50, 3)) * 1e-3)[1] > 63
+    same = np.full((4, 3), 7.0)
+    assert shared_prefix(local_keys(same, local_frame(same))) == 189
 
 
 def _owned(a: np.ndarray) -> np.ndarray:

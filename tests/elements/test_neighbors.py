@@ -119,3 +119,22 @@ def test_a_cloud_wider_than_the_largest_float_is_one_cell():
         want, _ = _brute(pts, 2, np.arange(4))
     nbr, _, _ = nearest(point_tree(pts), 2)
     assert nbr.tolist() == want.tolist()
+
+
+@pytest.mark.parametrize("shift", [(0.0, 0.0, -10.0), (0.0, 0.0, -1010.0),
+                                   (500_000.0, 5_000_000.0, -10.0)])
+def test_a_cloud_moved_exactly_keeps_its_order_and_its_labels(shift):
+    """The elements are numbered in the cloud's own frame: a floor at z = 10 moved to
+    z = 0, to z = -1,000 and into survey coordinates (exactly: its coordinates are
+    multiples of 2**-10) lists its points in the same order and gets the same labels."""
+    from superfacets import segment
+
+    rng = np.random.default_rng(9)
+    n = 4000
+    floor = np.c_[rng.integers(0, 20 * 1024, (n, 2)), rng.integers(-10, 11, n)] / 1024.0
+    floor[:, 2] += 10.0
+    moved = floor + np.array(shift)
+    a, inv_a = distinct_points(floor)
+    b, inv_b = distinct_points(moved)
+    assert np.array_equal(b - np.array(shift), a) and np.array_equal(inv_a, inv_b)
+    assert np.array_equal(segment(floor, 40).labels, segment(moved, 40).labels)

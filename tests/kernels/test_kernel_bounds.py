@@ -24,7 +24,7 @@ from superfacets.inputs.shapes import creature
 
 #: Kernels that follow no index an argument gives (coordinates, keys, counts only)
 NO_INDICES = {"column_bounds", "column_means", "finite_rows", "nearest_row", "key_window",
-              "sort_keys", "float_morton_keys", "local_morton_keys", "spatial_blocks",
+              "sort_keys", "local_morton_keys", "spatial_blocks",
               "tree_nodes",
               "first_in_cells", "combine_weights", "interrupt", "set_thread_limit",
               "threads", "border_shares", "gather"}

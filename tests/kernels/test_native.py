@@ -59,7 +59,7 @@ OPTION_KERNELS = {"flood", "felzenszwalb", "csr_covariances", "vsa_partition", "
 
 #: The compiled kernels of the point graph's build (the others serve faces and points)
 POINT_KERNELS = {"knn_csr", "pca_normals", "pca_linearity", "propagate_signs",
-                 "turn_outwards", "float_morton_keys", "local_morton_keys", "distinct_in_order",
+                 "turn_outwards", "local_morton_keys", "distinct_in_order",
                  "order_ties",
                  "point_terms_csr", "point_terms", "combine_weights", "neighbour_mean",
                  "crossing_pairs", "label_sums", "label_scatter", "tree_nodes",

@@ -107,8 +107,10 @@ def test_a_flat_plane_keeps_compact_superpoints():
     r = segment(np.c_[xy, np.zeros(6000)], 24)
     assert r.params["merge_from"] == 5 and r.n_segments == 24
     spread = [xy[r.labels == s].std(axis=0).max() for s in range(24)]
-    # a square of 1/24 of the unit square has a std of 0.059 along each side
-    assert max(spread) < 0.12
+    # a square of 1/24 of the unit square has a std of 0.059 along each side; over six
+    # samplings the mean spread was 0.064-0.079 and the largest 0.10-0.16 (a
+    # strip across the square has 0.29)
+    assert np.mean(spread) < 0.085 and max(spread) < 0.17
 
 
 def test_the_merges_keep_separate_pieces_apart_and_warn_below_them():

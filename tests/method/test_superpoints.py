@@ -255,6 +255,14 @@ def test_an_open_surface_seen_from_above_orients_up_and_its_foot_is_concave():
             PointCloud(pts, up=bad)
 
 
+def test_a_frame_must_be_a_box():
+    pts = np.random.default_rng(0).random((50, 3))
+    assert PointCloud(pts, frame=[[0, 0, 0], [1, 1, 1]]).frame.shape == (2, 3)
+    for bad in ([0, 0, 0], [[0, 0, 0], [1, np.nan, 1]], [[1, 0, 0], [0, 1, 1]]):
+        with pytest.raises(InvalidCloudError, match="frame must be a box"):
+            PointCloud(pts, frame=bad)
+
+
 def test_a_las_scan_is_oriented_up(tmp_path):
     laspy = pytest.importorskip("laspy")
     from superfacets.io.regions import RegionReader

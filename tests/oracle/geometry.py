@@ -225,44 +225,11 @@ def _spread21(x):
 
 
 @njit(cache=True, nogil=True, parallel=True)
-def float_morton_keys(bits, keys):
-    """Z-order keys of float64 positions that depend on each position alone.
-
-    Each coordinate's bits, mapped so that unsigned order is numeric order
-    (``-0.0`` as ``0.0``), are interleaved x, y, z from the top: ``keys[i, 0]``
-    holds the top 21 bits of each (sign, exponent, 9 mantissa bits), ``keys[i, 1]``
-    the next 21, ``keys[i, 2]`` the next 21. Sorting by the three keys lists
-    the points along a Z-order curve within each power-of-two cell, the same
-    relative order for any subset of them. ``bits`` is the (n, 3) float64
-    array viewed as uint64; writes ``keys`` ((n, 3) uint64).
-    """
-    top = np.uint64(1) << np.uint64(63)
-    for i in prange(bits.shape[0]):  # (each row on its own)
-        o0 = np.uint64(0)
-        o1 = np.uint64(0)
-        o2 = np.uint64(0)
-        for a in range(3):
-            b = bits[i, a]
-            if b == top:  # -0.0: as 0.0
-                b = np.uint64(0)
-            b = ~b if b & top else b | top
-            if a == 0:
-                o0 = b
-            elif a == 1:
-                o1 = b
-            else:
-                o2 = b
-        for w in range(3):
-            s = np.uint64(43 - 21 * w)
-            keys[i, w] = (_spread21(o0 >> s) << np.uint64(2)) | (
-                _spread21(o1 >> s) << np.uint64(1)) | _spread21(o2 >> s)
-
-
-@njit(cache=True, nogil=True, parallel=True)
 def local_morton_keys(pts, lo, scale, keys):
     """Z-order keys in a local frame: each coordinate as the integer
     ``min(floor((x - lo) * scale), 2**62)`` (0 below ``lo`` and for NaN), its top bit set,
-    interleaved as :func:`float_morton_keys` does."""
+    interleaved x, y, z from the top: ``keys[i, 0]`` holds the top 21 bits of each,
+    ``keys[i, 1]`` the next 21, ``keys[i, 2]`` the next 21."""
     top = np.uint64(1) << np.uint64(63)
     cap = 4611686018427387904.0
     for i in prange(pts.shape[0]):

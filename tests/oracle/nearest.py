@@ -184,7 +184,7 @@ def _query(pts, start, end, left, boxes, ids, i, k, bd, bi, stack, sd, sib):
                     dy = pts[t, 1] - qy
                     dz = pts[t, 2] - qz
                     d = dx * dx + dy * dy + dz * dz
-                    u = ids[t]
+                    u = ids[t] if ids.shape[0] else t
                     if cnt < k:
                         p = cnt
                         cnt += 1
@@ -226,9 +226,9 @@ def _query(pts, start, end, left, boxes, ids, i, k, bd, bi, stack, sd, sib):
 @njit(cache=True, error_model="numpy", nogil=True, parallel=True)
 def nearest_in_tree(pts, start, end, left, boxes, ids, own, k, nbr, dist):
     """For each query ``r`` (the row ``own[r]`` of ``pts``, the rows in the tree's order,
-    ``ids[row]`` each one's point): ``nbr[r, 0] = ids[own[r]]``, then the ids of its ``k``
-    nearest other rows by (distance, id); ``dist[r]`` their distances (0 for itself).
-    ``nbr`` and ``dist``: (m, k + 1); ``k < n``."""
+    ``ids[row]`` each one's point, none: the rows are the points): ``nbr[r, 0] =
+    ids[own[r]]``, then the ids of its ``k`` nearest other rows by (distance, id);
+    ``dist[r]`` their distances (0 for itself). ``nbr`` and ``dist``: (m, k + 1); ``k < n``."""
     m = own.shape[0]
     for ch in prange((m + CHUNK - 1) // CHUNK):
         bd = np.empty(max(k, 1))
@@ -239,7 +239,7 @@ def nearest_in_tree(pts, start, end, left, boxes, ids, own, k, nbr, dist):
         for r in range(ch * CHUNK, min(m, ch * CHUNK + CHUNK)):
             i = own[r]
             got = _query(pts, start, end, left, boxes, ids, i, k, bd, bi, stack, sd, sib)
-            nbr[r, 0] = ids[i]
+            nbr[r, 0] = ids[i] if ids.shape[0] else i
             dist[r, 0] = 0.0
             for j in range(got):
                 nbr[r, j + 1] = bi[j]

@@ -1,19 +1,21 @@
 """The k nearest neighbours of each point, in blocks (the point graph's first step).
 
 :func:`point_tree` builds a tree over a cloud's distinct points in the Z-order of a local
-frame (a binary radix tree of Z-order keys, node boxes of its points), and
+frame (a binary radix tree of Z-order keys, node boxes of its points: about 15 bytes per
+point, no copy of the points where they come in that order), and
 :func:`nearest` queries it in blocks of :data:`BLOCK` points, keeping only what the graph
 reads: the neighbours as 4-byte indices, the distance to the ``k``-th and, with a radius,
 which neighbours lie within it (44 + 8, and 10 more with a radius, bytes per point at
 ``k = 10``).
 
-The tree's keys are the points' coordinates as integers in the cloud's own frame (from
-its lower corner, the same scale on every axis: :func:`local_keys`), so its cells split
-space alike along every axis wherever the cloud sits: a floor at ``z = 0`` (where the bits
-of a float spread a centimetre of noise over many binades) and survey coordinates
-(UTM: x about 5e5, y about 5e6) are searched as fast as the same cloud near the origin.
-The tree holds the points in its own order (24 bytes a point, and 16 for the ids and
-rows that map them back).
+The keys are the points' coordinates as integers in a frame (from the lower corner of
+the cloud's box, the same power-of-two scale on every axis: :func:`local_keys`), so the
+cells split space alike along every axis wherever the cloud sits: a floor at ``z = 0``
+(where the bits of a float spread a centimetre of noise over many binades) and survey
+coordinates (UTM: x about 5e5, y about 5e6) are searched as fast as the same cloud near
+the origin. :func:`~superfacets.elements.points.distinct_points` lists the points in
+that order, and the tree takes them as they are; points in another order are copied
+into it (24 bytes a point, and 16 for the maps between the orders).
 
 Each point's neighbours are its ``k`` nearest other points in the order of (distance,
 index), itself first: ties at any distance (quantized scans) go to the lowest index, the
@@ -27,6 +29,7 @@ computes them (the same neighbours and distances where no two are tied).
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -46,17 +49,17 @@ LEAF = 16
 class PointTree(NamedTuple):
     """The tree of :func:`point_tree`: ``points`` are the cloud's points in the tree's
     order, ``ids[r]`` the index of row ``r`` in the cloud and ``rows`` the inverse (the row
-    of each point); node ``v`` holds the rows ``start[v]:end[v]``, its children are
-    ``left[v]`` and ``left[v] + 1`` (-1: a leaf), its box ``boxes[v]`` (lower corner, upper
-    corner)."""
+    of each point), both None where the rows are the points; node ``v`` holds the rows
+    ``start[v]:end[v]``, its children are ``left[v]`` and ``left[v] + 1`` (-1: a leaf), its
+    box ``boxes[v]`` (lower corner, upper corner)."""
 
     points: np.ndarray
     start: np.ndarray
     end: np.ndarray
     left: np.ndarray
     boxes: np.ndarray
-    ids: np.ndarray
-    rows: np.ndarray
+    ids: np.ndarray | None
+    rows: np.ndarray | None
 
 
 def shared_prefix(keys: np.ndarray) -> int:
@@ -119,20 +122,30 @@ def local_keys(points: np.ndarray, frame: tuple[np.ndarray, float]) -> np.ndarra
     return keys
 
 
-def local_frame(points: np.ndarray) -> tuple[np.ndarray, float]:
-    """The frame of :func:`local_keys` for ``points``: their lower corner, and ``2**62``
-    integers across their largest side (0 when they are one position)."""
+def local_frame(points: np.ndarray, box: np.ndarray | None = None
+                ) -> tuple[np.ndarray, float]:
+    """The frame of :func:`local_keys` for ``points``: the lower corner of their box (or
+    of ``box``, (2, 3): lower and upper corner, holding them), and ``2**62`` integers
+    across the least power of two above its largest side (0 when it is one position):
+    the Z-order's cells are then the halvings of a cube from that corner, and scaling
+    by a power of two rounds nothing."""
     from ..inputs.bounds import column_bounds
 
-    if not points.shape[0]:
+    if box is not None:
+        lo, hi = (np.asarray(c, dtype=np.float64) for c in box)
+    elif not points.shape[0]:
         return np.zeros(3), 0.0
-    lo, hi = column_bounds(points)
+    else:
+        lo, hi = column_bounds(points)
     with np.errstate(over="ignore"):  # (a side past the largest float: one cell)
         side = float(np.max(hi - lo))
-    return lo, (2.0 ** 62 / side if 0 < side < np.inf else 0.0)
+    if not 0 < side < np.inf:
+        return lo, 0.0
+    return lo, math.ldexp(1.0, 62 - math.frexp(side)[1])  # (side < 2**frexp(side)[1])
 
 
-def point_tree(points: np.ndarray, leaf: int = LEAF) -> PointTree:
+def point_tree(points: np.ndarray, leaf: int = LEAF,
+               frame: tuple[np.ndarray, float] | None = None) -> PointTree:
     """The search tree of distinct points in the Z-order of their own frame (see the
     module notes).
 
@@ -142,6 +155,11 @@ def point_tree(points: np.ndarray, leaf: int = LEAF) -> PointTree:
         Finite and distinct (:func:`~superfacets.elements.points.distinct_points`).
     leaf : int, default :data:`LEAF`
         Most points in a leaf.
+    frame : (lo, scale), optional
+        The frame ``points`` are already ordered in (as
+        :func:`~superfacets.elements.points.distinct_points` lists them): the tree takes
+        them as they are. Default: the points' own frame (:func:`local_frame`), and
+        the tree orders a copy of them.
 
     Returns
     -------
@@ -156,21 +174,21 @@ def point_tree(points: np.ndarray, leaf: int = LEAF) -> PointTree:
     >>> bool((tree.ids[tree.rows] == np.arange(40)).all())
     True
     """
-    sort_keys = native.kernel("geometry.sort_keys")
-
     pts = np.ascontiguousarray(points, dtype=np.float64)
     n = pts.shape[0]
-    frame = local_frame(pts)
-    keys = local_keys(pts, frame)
-    window = key_window(keys, shared_prefix(keys))
-    del keys
-    ids, ordered = np.empty(n, dtype=np.int64), np.empty_like(window)
-    sort_keys(window, ids, ordered)  # (stable: equal windows keep the points' order)
-    del window, ordered
-    pts = pts[ids]
-    rows = np.empty(n, dtype=np.int64)
-    rows[ids] = np.arange(n, dtype=np.int64)
-    keys = local_keys(pts, frame)  # (again, in the tree's order: no copy of 24 bytes a point)
+    ids = rows = None
+    if frame is None:
+        frame = local_frame(pts)
+        keys = local_keys(pts, frame)
+        window = key_window(keys, shared_prefix(keys))
+        del keys
+        ids, ordered = np.empty(n, dtype=np.int64), np.empty_like(window)
+        native.kernel("geometry.sort_keys")(window, ids, ordered)  # (stable)
+        del window, ordered
+        pts = pts[ids]
+        rows = np.empty(n, dtype=np.int64)
+        rows[ids] = np.arange(n, dtype=np.int64)
+    keys = local_keys(pts, frame)  # (in the tree's order: no copy of 24 bytes a point)
     tree_nodes = native.kernel("nearest.tree_nodes")
     cap = n // max(leaf // 4, 1) + 64  # about n / 5 nodes are made at 16 points per leaf
     while True:
@@ -240,12 +258,13 @@ def nearest(tree: PointTree, k: int, own: np.ndarray | None = None,
         neighbors[:, 0] = own
         return neighbors, kth, within
     query = native.kernel("nearest.nearest_in_tree")
+    ids = np.empty(0, dtype=np.int64) if tree.ids is None else tree.ids
     dist = np.empty((min(m, BLOCK), k + 1))
     for s in range(0, m, BLOCK):
         e = min(m, s + BLOCK)
         d = dist[:e - s]
-        query(pts, tree.start, tree.end, tree.left, tree.boxes, tree.ids, tree.rows[own[s:e]],
-              k, neighbors[s:e], d)
+        query(pts, tree.start, tree.end, tree.left, tree.boxes, ids,
+              own[s:e] if tree.rows is None else tree.rows[own[s:e]], k, neighbors[s:e], d)
         kth[s:e] = d[:, k]
         if within is not None:
             within[s:e] = d[:, 1:] <= limit

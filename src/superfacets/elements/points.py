@@ -7,12 +7,14 @@ weights for adjacent elements". Here each point is an element:
   nearest (:mod:`superfacets.elements.neighbors`), optionally only within
   ``neighbor_radius`` (a fraction of the bounding-box diagonal ``d``); points
   at equal distances (quantized scans) go in the order of their index;
-  the points are indexed along a Z-order curve that depends on the positions
-  alone, so a box of a cloud lists its points in the whole cloud's order and
-  gets the whole cloud's neighbours away from its edge
-  (:mod:`superfacets.scale.tiling`); a point whose neighbours lie on a line
-  (a LiDAR scan line far from the sensor: linearity ``(l1 - l2) / l1`` of
-  their covariance above :data:`LINEAR`) is also joined to its
+  the points are indexed along a Z-order curve of their coordinates as integers
+  in the cloud's frame (its box's lower corner, one scale on every axis), so the
+  order is as good at z = 0 or in survey coordinates as near the origin, and a
+  box of a cloud given the whole cloud's frame (``PointCloud.frame``: a tiled
+  run's tiles) lists its points in the whole cloud's order and gets the whole
+  cloud's neighbours away from its edge (:mod:`superfacets.scale.tiling`); a point
+  whose neighbours lie on a line (a LiDAR scan line far from the sensor: linearity
+  ``(l1 - l2) / l1`` of their covariance above :data:`LINEAR`) is also joined to its
   ``WIDEN * n_neighbors`` nearest, so that the graph spans the surface
   across scan lines instead of following each line alone;
 - size: the area the point stands for, ``a_i = pi rho_i^2 / K`` with
@@ -49,7 +51,7 @@ from .._runtime.memory import give_back_free_memory
 from ..inputs.bounds import column_bounds, column_means
 from . import graph as _graph
 from .graph import LAZY, ElementGraph, adjacency_csr, cached_on, pairs_from_csr
-from .neighbors import key_window, nearest, point_tree, shared_prefix
+from .neighbors import key_window, local_frame, local_keys, nearest, point_tree, shared_prefix
 from .normals import estimate_normals, normals_and_linearity, orient_normals
 from .vertices import symmetric_terms
 
@@ -92,19 +94,25 @@ class PointElements(NamedTuple):
     index: np.ndarray
 
 
-def distinct_points(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def distinct_points(p: np.ndarray, frame: tuple[np.ndarray, float] | None = None
+                    ) -> tuple[np.ndarray, np.ndarray]:
     """The distinct positions of a cloud in Z-order, and the one of each input row.
 
-    The order is a fixed function of the positions (:func:`_spatial_keys`):
-    any subset of a cloud (a tile's box) lists its points in the same
-    relative order as the whole cloud, and neighbours in space are mostly
-    near in the list, so the graph's kernels read memory in order (1M points:
-    the method 13.7 -> 8.5 s against the lexicographic order).
+    The order is the Z-order of the positions as integers in a frame
+    (:func:`~superfacets.elements.neighbors.local_keys`): given the same frame,
+    any subset of a cloud (a tile's box) lists its points in the same relative
+    order as the whole cloud; the frame's cells are cubes wherever the cloud
+    sits (at 0, in survey coordinates), so neighbours in space are near in the
+    list and the graph's kernels read memory in order (1M points: the method
+    13.7 -> 8.5 s against the lexicographic order).
 
     Parameters
     ----------
     p : (n, 3) float ndarray
         Finite positions.
+    frame : (lo, scale), optional
+        The frame (:func:`~superfacets.elements.neighbors.local_frame`); default the
+        positions' own.
 
     Returns
     -------
@@ -123,8 +131,8 @@ def distinct_points(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     sort_keys = native.kernel("geometry.sort_keys")
 
     p = np.ascontiguousarray(p, dtype=np.float64)
-    keys, shared = _spatial_keys(p)
-    window = key_window(keys, shared)
+    keys = local_keys(p, local_frame(p) if frame is None else frame)
+    window = key_window(keys, shared_prefix(keys))
     # a stable sort (on threads where compiled: numpy's argsort of 10M keys takes 2.7 s),
     # then equal windows by the whole keys and the coordinates
     order, ordered = np.empty(p.shape[0], dtype=np.int64), np.empty_like(window)
@@ -136,27 +144,6 @@ def distinct_points(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     inverse = np.empty(p.shape[0], dtype=np.int64)
     m = distinct_in_order(p, order, out, inverse)
     return out[:m].copy() if m < p.shape[0] else out, inverse
-
-
-def _spatial_keys(p: np.ndarray) -> tuple[np.ndarray, int]:
-    """Z-order keys of positions that depend on each position alone.
-
-    ``keys`` ((n, 3) uint64): the bits of x, y and z (mapped so that unsigned
-    order is numeric order) interleaved from the top, 63 per word, a string
-    of 189 bits (the compiled ``float_morton_keys``);
-    the points sorted by it run along a Z-order curve within each
-    power-of-two cell. ``shared``: the leading bits of that string that all
-    the points share. Bits every point shares do not change the order, so
-    sorting by the string from ``shared`` on
-    (:func:`~superfacets.elements.neighbors.key_window`) gives the same relative order in
-    any subset of the points.
-    """
-    float_morton_keys = native.kernel("geometry.float_morton_keys")
-
-    n = p.shape[0]
-    keys = np.empty((n, 3), dtype=np.uint64)
-    float_morton_keys(p.view(np.uint64), keys)
-    return keys, shared_prefix(keys)
 
 
 def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
@@ -223,8 +210,10 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
                           oriented: bool = True) -> PointElements:
     valid = np.flatnonzero(cloud.valid)
     n_rows = cloud.n_total
-    pts, inverse = distinct_points(cloud.points if valid.shape[0] == n_rows else
-                                   cloud.points[valid])
+    given = cloud.points if valid.shape[0] == n_rows else cloud.points[valid]
+    frame = local_frame(given, cloud.frame)  # (a tile's: the whole cloud's)
+    pts, inverse = distinct_points(given, frame)
+    del given
     index = np.full(n_rows, -1, dtype=np.int32 if n_rows < 2**31 else np.int64)
     index[valid] = inverse
     del inverse
@@ -238,7 +227,7 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
     lower, upper = column_bounds(pts)
     diagonal = float(np.linalg.norm(upper - lower))
     # a tree of the points' Z-order (distinct_points): ranges of rows, no copy of them
-    tree = point_tree(pts)
+    tree = point_tree(pts, frame=frame)
     limit = None if neighbor_radius is None else neighbor_radius * diagonal
     # column 0: the point itself; 4-byte indices, queried in blocks (elements/neighbors.py)
     nbr, kth, keep = nearest(tree, k, limit=limit)

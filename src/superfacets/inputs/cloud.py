@@ -69,6 +69,12 @@ class PointCloud:
         convex). The LAS/LAZ reader sets ``(0, 0, 1)`` (LAS z is elevation:
         such scans are seen from above or from the side). Made unit.
         Ignored with ``normals``, ``viewpoint`` or ``orient_like``.
+    frame : (2, 3) float ndarray, optional
+        A box (lower corner, upper corner) holding the points, whose frame numbers
+        them (the Z-order of their coordinates as integers from its lower corner,
+        :func:`superfacets.elements.points.distinct_points`). A tiled run gives every
+        tile the whole cloud's box, so that a tile numbers its points as the whole
+        cloud does. Default: the points' own box.
 
     Raises
     ------
@@ -95,6 +101,7 @@ class PointCloud:
     colors: np.ndarray | None = field(default=None, repr=False)
     orient_like: tuple | None = field(default=None, repr=False)
     up: np.ndarray | None = field(default=None, repr=False)
+    frame: np.ndarray | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         where = f"{self.name}: " if self.name else ""
@@ -139,6 +146,12 @@ class PointCloud:
                 raise InvalidCloudError(f"{where}orient_like must be (positions, normals), "
                                         "two finite (R, 3) arrays")
             object.__setattr__(self, "orient_like", ref)
+        if self.frame is not None:
+            box = np.asarray(self.frame, dtype=np.float64)
+            if box.shape != (2, 3) or not np.isfinite(box).all() or (box[0] > box[1]).any():
+                raise InvalidCloudError(f"{where}frame must be a box: its lower and upper "
+                                        "corners, (2, 3) finite numbers, lower <= upper")
+            object.__setattr__(self, "frame", readonly(box))
         if self.up is not None:
             up = np.asarray(self.up, dtype=np.float64).reshape(-1)
             length = float(np.linalg.norm(up)) if up.shape == (3,) else 0.0

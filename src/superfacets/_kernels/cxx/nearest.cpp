@@ -1,6 +1,7 @@
 // superfacets/_kernels/nearest.py: the tree of a cloud's Z-order and the k nearest
 // neighbours of its points, the same operations in the same order. The tree's rows are
-// the points in its own order; ids names the point of each row (ties go to the lower id).
+// the points in its own order; ids names the point of each row (ties go to the lower id;
+// no ids: the rows are the points).
 #include "common.hpp"
 
 #include <limits>
@@ -48,7 +49,7 @@ struct Tree {
     const i64* end;
     const i64* left;
     const double* boxes;
-    const i64* ids;  // the point of each row (rows are in the tree's order)
+    const i64* ids;  // the point of each row (rows in the tree's order); null: the row
 };
 
 // nearest._query
@@ -82,7 +83,7 @@ i64 query(const Tree& t, i64 i, i64 k, double* bd, i64* bi, i64* stack, double* 
                     if (r == i) continue;
                     double dx = p[3 * r] - qx, dy = p[3 * r + 1] - qy, dz = p[3 * r + 2] - qz;
                     double d = dx * dx + dy * dy + dz * dz;
-                    const i64 id = t.ids[r];
+                    const i64 id = t.ids ? t.ids[r] : r;
                     i64 q;
                     if (cnt < k) {
                         q = cnt++;
@@ -249,17 +250,17 @@ void nearest_in_tree(nb::handle pts_, nb::handle start_, nb::handle end_, nb::ha
         throw Mismatch("argument nbr");
     check_tree(pts.n, start, end, left, boxes.n);
     check_range(own, 0, pts.n, "own");
-    if (ids.n != pts.n) throw Mismatch("argument ids");
+    if (ids.n != pts.n && ids.n != 0) throw Mismatch("argument ids");
     check_range(ids, 0, std::numeric_limits<i32>::max(), "ids");
     nb::gil_scoped_release nogil;
-    const Tree t{pts.p, start.p, end.p, left.p, boxes.p, ids.p};
+    const Tree t{pts.p, start.p, end.p, left.p, boxes.p, ids.n ? ids.p : nullptr};
     parallel_for(own.n, [&](i64 lo, i64 hi) {
         std::vector<double> bd(k), sd(STACK);
         std::vector<i64> bi(k), stack(STACK), sib(STACK);
         for (i64 r = lo; r < hi; ++r) {
             i64 i = own[r];
             i64 got = query(t, i, k, bd.data(), bi.data(), stack.data(), sd.data(), sib.data());
-            nbr(r, 0) = static_cast<i32>(t.ids[i]);
+            nbr(r, 0) = static_cast<i32>(t.ids ? t.ids[i] : i);
             dist(r, 0) = 0.0;
             for (i64 j = 0; j < got; ++j) {
                 nbr(r, j + 1) = static_cast<i32>(bi[j]);

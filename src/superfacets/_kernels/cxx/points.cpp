@@ -180,28 +180,11 @@ inline void interleave(const std::uint64_t* o, std::uint64_t* key) {
 
 }  // namespace
 
-void float_morton_keys(nb::handle bits_, nb::handle keys_) {
-    In<std::uint64_t> bits(bits_, "bits");
-    Out<std::uint64_t> keys(keys_, "keys");
-    nb::gil_scoped_release nogil;
-    const std::uint64_t top = 1ULL << 63;
-    parallel_for(bits.n, [&](i64 lo, i64 hi) {
-        for (i64 i = lo; i < hi; ++i) {
-            std::uint64_t o[3];
-            for (int a = 0; a < 3; ++a) {
-                std::uint64_t b = bits(i, a);
-                if (b == top) b = 0;
-                o[a] = (b & top) ? ~b : (b | top);
-            }
-            interleave(o, &keys(i, 0));
-        }
-    });
-}
-
 // Z-order keys in a local frame: each coordinate as the integer
-// min(floor((x - lo) * scale), 2^62), its top bit set, interleaved as float_morton_keys
-// does. With lo the cloud's lower corner and 2^62 / scale its largest side, the keys
-// split space alike along every axis, wherever the cloud sits.
+// min(floor((x - lo) * scale), 2^62), its top bit set, interleaved x, y, z from the top
+// (21 bits of each a word). With lo the cloud's lower corner and 2^62 / scale the least
+// power of two above its largest side, the keys split space alike along every axis,
+// wherever the cloud sits.
 void local_morton_keys(nb::handle pts_, nb::handle lo_, double scale, nb::handle keys_) {
     In<double> pts(pts_, "pts"), lo(lo_, "lo");
     Out<std::uint64_t> keys(keys_, "keys");
@@ -929,7 +912,6 @@ void bind_points(nb::module_& m) {
     m.def("nearest_row", &nearest_row);
     m.def("neighbourhood_moments", &neighbourhood_moments);
     m.def("border_shares", &border_shares);
-    m.def("float_morton_keys", &float_morton_keys);
     m.def("local_morton_keys", &local_morton_keys);
     m.def("distinct_in_order", &distinct_in_order);
     m.def("pca_normals", &pca_normals);

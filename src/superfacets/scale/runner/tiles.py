@@ -69,7 +69,8 @@ def tile_task(task: dict) -> dict:
     ``task`` holds ``phase`` ('areas', 'centers' or 'labels'), ``reader``,
     ``layout`` (:class:`~superfacets.scale.tile_layout.Tiles`), ``tile``, ``margin``,
     ``params``, ``r``, ``diagonal``, ``orient_like`` (optional: the oriented
-    sample, or its file), and for 'labels' the ``centers`` (rows) within reach
+    sample, or its file), ``frame`` (optional: the whole cloud's box, whose frame
+    numbers a tile's points), and for 'labels' the ``centers`` (rows) within reach
     and ``ring`` (a width).
     Returns a dict; an error is returned as ``error`` (text), never raised.
 
@@ -111,6 +112,8 @@ def tile_task(task: dict) -> dict:
                 ref = in_box(np.load(ref, mmap_mode="r"), *layout.box(task["tile"],
                                                                         1.5 * task["margin"]))
             inp = replace(inp, orient_like=(ref[:, :3], ref[:, 3:]))
+        if task.get("frame") is not None and inp is not None:  # (None: no point in the box)
+            inp = replace(inp, frame=task["frame"])  # numbered as the whole cloud numbers them
         core = layout.of(pos) == task["tile"]
         out.update(rows=int(rows.size), core=int(core.sum()))
         if not core.any():  # no element of its own: nothing to do
@@ -285,7 +288,8 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         with Engine(workers=workers, scheduler=scheduler, memory_limit=memory_limit) as engine:
             def run(phase, margin, extra=lambda t: {}, only=None):
                 tasks = [dict(phase=phase, reader=reader, layout=layout, tile=t, margin=margin,
-                              params=params, r=r, diagonal=diagonal, graphs=graphs, **extra(t))
+                              params=params, r=r, diagonal=diagonal, graphs=graphs,
+                              frame=_frame(reader, survey), **extra(t))
                          for t in (range(n_tiles) if only is None else only)]
                 if reference is not None and phase != "areas":
                     for task in tasks:
@@ -355,6 +359,11 @@ def _classified(run, layout, params, margin: float, ring: float, how: dict,
             if o["core"]]
     timings["labels"] = time.perf_counter() - t
     return found, done
+
+
+def _frame(reader, survey) -> np.ndarray | None:
+    """The whole cloud's box, whose frame numbers every tile's points (None: a mesh)."""
+    return np.array([survey.lo, survey.hi]) if kind_of(reader.kind).cloud else None
 
 
 def _numbered_densely(labels: np.ndarray) -> np.ndarray:
