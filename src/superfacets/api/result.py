@@ -271,6 +271,11 @@ def describe_stop(result) -> str:
     'stopped at max-iter'
     """
     reason = stop_reason(result)
+    held = int(result.timings.get("settled", 0)) if reason != "max_iter" else 0
+    if held:  # (a cycle settled: the run went on to converge)
+        word = "center" if held == 1 else "centers"
+        return ("converged by tol" if reason == "tolerance" else "converged") + \
+            f" ({held} {word} held where a cycle of center lists moved them)"
     if reason == "cycle":
         period = int(result.timings["cycle_period"])
         return (f"stopped on a repeating cycle of {period} center lists (the labels of pass "

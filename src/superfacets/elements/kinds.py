@@ -143,6 +143,12 @@ class ElementKind:
         5 on points, whose undersegmentation error it lowered on rooms (0.442 -> 0.327 at
         k = 1,000), an airborne tile and the benchmark's sampled clouds
         (``docs/notes/superpoints-defaults.md``); 1 (off) on the other kinds.
+    settle_cycles : bool
+        A cycle of center lists is settled (:mod:`superfacets.method.passes`: the
+        cycle's pass of lowest energy, the centers that moved in it held) and the passes
+        go on to convergence, instead of being jumped over as the paper's passes would
+        run (``paper=True`` keeps the jump): points, where a cycle stopped 7-33 % of the
+        benchmark's sampled clouds (``docs/notes/superpoints-defaults.md``).
     objects : bool
         The elements are what a scene's objects are made of (faces): a run may
         share ``k`` among the objects (``--per-object``), the objects are named
@@ -183,6 +189,7 @@ class ElementKind:
     exact_count: bool = False
     single_weights: bool = False
     merge_from: int = 1
+    settle_cycles: bool = False
 
     def n_rows(self, data) -> int:
         """Number of labels a run on ``data`` (a mesh, cloud or tetrahedral mesh) returns.
@@ -214,7 +221,7 @@ KINDS = {k.name: k for k in (
                 coarse_per_segment=400,
                 coarse_neighbor_cap=True, auto_density=True, unit_sizes_in_levels=True,
                 neighborhood=True, cloud=True, rows="n_total", peak_bytes=250, tiled_bytes=100,
-                exact_count=True, single_weights=True, merge_from=5),
+                exact_count=True, single_weights=True, merge_from=5, settle_cycles=True),
     ElementKind("cells", "cell", dim=3, rows="n_tets", segment_word="superfacets"),
 )}
 

@@ -11,6 +11,13 @@ flip-flopping that keeps many runs from converging). :func:`iterate` then
 jumps to the center list that pass ``max_iter`` would have and classifies it
 once: labels, centers, ``n_iter`` and the orphan count are those of running
 every pass (tested against ``jump_cycles=False``).
+
+Settling (``settle=True``, the rule on point clouds): a cycle is a flaw of the update,
+not a place to stop. When the center list repeats, the run goes back to the pass of the
+cycle whose classification had the lowest energy (the summed size-weighted distances,
+paper eq. 3) and holds where they are the centers that moved during the cycle; the
+others go on until no center moves, and the run has converged (a later cycle holds
+more). The centers held are counted in :attr:`Iteration.settled`.
 """
 
 from __future__ import annotations
@@ -80,6 +87,8 @@ class Iteration:
         (-1 when not measured: ``tol = 0``, or the first pass).
     stopped_by_tol : bool
         True when the ``tol`` rule ended the run.
+    settled : int
+        Centers held where a cycle moved them (``settle=True``; 0 otherwise).
     """
 
     label: np.ndarray
@@ -92,11 +101,13 @@ class Iteration:
     expansions: int
     changed: float = -1.0
     stopped_by_tol: bool = False
+    settled: int = 0
 
 
 def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
             positions: np.ndarray, max_iter: int, *, jump_cycles: bool = True,
-            tol: float = 0.0, min_move: float = 0.0, bar=None) -> Iteration:
+            tol: float = 0.0, min_move: float = 0.0, bar=None,
+            settle: bool = False) -> Iteration:
     """Alternate classification and center update (paper section 3.1).
 
     Parameters
@@ -122,6 +133,9 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
         further. 0: every move counts (the paper).
     bar : tqdm, optional
         Progress bar advanced once per pass.
+    settle : bool, default False
+        On a cycle of center lists, settle it (see the module notes) instead of
+        jumping over it.
 
     Returns
     -------
@@ -138,8 +152,15 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
     seen: dict[bytes, int] = {}
     states: list[np.ndarray] = []
     orphans_per_pass: list[int] = []
+    energies: list[float] = []
+    held = np.zeros(m, dtype=bool) if settle else None  # elements whose center stays
     while True:
         key = centers[:n_centers].tobytes()
+        if settle and key in seen:  # back to the cycle's best pass, its movers held
+            n_centers = _settle(centers, states, energies, seen.pop(key), held)
+            seen, states, energies, orphans_per_pass = {}, [], [], []
+            prev = None
+            continue
         if jump_cycles and key in seen and not period and n_iter < max_iter - 1:
             j = seen[key]  # pass j (0-based) had the same centers as pass n_iter
             period = n_iter - j
@@ -156,6 +177,8 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
             seen[key] = n_iter
             states.append(centers[:n_centers].copy())
         k_now, n_exp = classifier.classify(centers, n_centers, dist, label)
+        if settle:
+            energies.append(_energy(sizes, dist))
         n_expanded += n_exp
         n_iter += 1
         n_passes += 1
@@ -170,6 +193,9 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
         moved = update_centers(label, k_now, sizes, positions, used)
         if min_move > 0:
             hold_small_moves(moved, used, positions, min_move)
+        if settle:
+            stay = held[used] & (moved >= 0)
+            moved[stay] = used[stay]
         n_moved = int((moved != used).sum())
         if bar is not None:
             bar.update(1)
@@ -189,7 +215,33 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
             prev = gather(remap, label, out=prev)
     return Iteration(label=label, centers=used, n_iter=n_iter, converged=converged,
                      n_orphan_seeds=n_orphans, n_passes=n_passes, cycle_period=period,
-                     expansions=n_expanded, changed=changed, stopped_by_tol=by_tol)
+                     expansions=n_expanded, changed=changed, stopped_by_tol=by_tol,
+                     settled=int(held.sum()) if settle else 0)
+
+
+def _energy(sizes: np.ndarray, dist: np.ndarray) -> float:
+    """The classification's energy: the size-weighted sum of each element's distance to
+    its center (elements no center reached left out)."""
+    reached = np.isfinite(dist)
+    # (not np.dot: a BLAS call wakes OpenBLAS's threads, which then spin against the
+    # compiled kernels' threads and slowed the whole run by half)
+    return float((sizes[reached] * dist[reached]).sum())
+
+
+def _settle(centers: np.ndarray, states: list, energies: list, first: int,
+            held: np.ndarray) -> int:
+    """Settle a cycle of center lists: the passes ``first ..`` of ``states`` (their
+    classifications' ``energies``) repeat. Puts the list of the pass of lowest energy in
+    ``centers`` and marks in ``held`` its centers that some pass of the cycle did not
+    have (those that moved); returns the list's length."""
+    cycle = range(first, len(states))
+    best = states[min(cycle, key=lambda t: (energies[t], t))]
+    always = best
+    for t in cycle:
+        always = always[np.isin(always, states[t])]
+    held[best[~np.isin(best, always)]] = True
+    centers[:best.shape[0]] = best
+    return int(best.shape[0])
 
 
 def hold_small_moves(new: np.ndarray, old: np.ndarray, positions: np.ndarray,

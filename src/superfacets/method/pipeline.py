@@ -243,7 +243,7 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
     labels = source.to_rows(labels)
     timings["total"] = time.perf_counter() - t_start
     timings.update(expansions=it.expansions, passes=it.n_passes, cycle_period=it.cycle_period,
-                   changed=it.changed, stopped_by_tol=it.stopped_by_tol)
+                   changed=it.changed, stopped_by_tol=it.stopped_by_tol, settled=it.settled)
     return RunRecord(labels=labels, centers=centers, n_iter=it.n_iter, converged=it.converged,
                      mesh_radius=rules.r, n_orphan_seeds=it.n_orphan_seeds, timings=timings,
                      params=_resolved(graph, rules, ratio, init.shape[0]), elements=source,

@@ -400,6 +400,7 @@ def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.nda
         return present
 
     n_swaps, n_iter, n_passes, expansions = 0, it.n_iter, it.n_passes, it.expansions
+    settled = it.settled
     # float32 weights (points) widened once: the kernels add each to a float64 distance
     swap_w = np.asarray(weights if swap_weights is None else swap_weights, dtype=np.float64)
     for _ in range(rounds):
@@ -425,8 +426,10 @@ def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.nda
         n_iter += after.n_iter
         n_passes += after.n_passes
         expansions += after.expansions
+        settled += after.settled
         if used(after).sum() != present.sum():
             break  # an orphan seeded a superfacet or one was emptied: keep the labels before
         it = after
         n_swaps += n
-    return replace(it, n_iter=n_iter, n_passes=n_passes, expansions=expansions), n_swaps
+    return replace(it, n_iter=n_iter, n_passes=n_passes, expansions=expansions,
+                   settled=settled), n_swaps

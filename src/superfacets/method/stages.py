@@ -419,6 +419,7 @@ def iterate_passes(graph, w: np.ndarray, swap_w, init: np.ndarray, rules: Rules,
     sizes = np.ascontiguousarray(graph.sizes)
     positions = np.ascontiguousarray(graph.positions)
     min_move = rules.center_tol * rules.r
+    settle = rules.kind.settle_cycles and not p.paper
     try:
         classifier = make_classifier(p.assignment, graph, w, rules.window_r2, spaces,
                                      replay=replay)
@@ -426,14 +427,14 @@ def iterate_passes(graph, w: np.ndarray, swap_w, init: np.ndarray, rules: Rules,
             from .splitmerge import START_TOL
         it = iterate(classifier, centers, init.shape[0], sizes, positions, p.max_iter,
                      jump_cycles=jump_cycles, tol=max(p.tol, START_TOL) if rules.fast else p.tol,
-                     min_move=min_move, bar=hooks.bar)
+                     min_move=min_move, bar=hooks.bar, settle=settle)
         if rules.split_merge:
             from .splitmerge import FAST_ROUNDS, ROUNDS, swap_and_iterate
 
             hooks.describe("split and merge")
             it, hooks.timings["swaps"] = swap_and_iterate(
                 it, graph, w, classifier, centers, sizes, positions, p.max_iter,
-                window_r2=rules.window_r2, jump_cycles=jump_cycles, tol=p.tol,
+                window_r2=rules.window_r2, jump_cycles=jump_cycles, tol=p.tol, settle=settle,
                 min_move=min_move, n_threads=spaces.n_threads,
                 rounds=FAST_ROUNDS if rules.fast else ROUNDS,
                 passes_after=rules.kind.passes_after if rules.fast else None,
