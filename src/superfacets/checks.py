@@ -21,7 +21,36 @@ from .errors import ParameterError
 
 __all__ = ["check_int", "check_number", "check_positive", "check_nonneg", "check_bool",
            "check_choice", "check_n_segments", "check_threads", "max_threads",
-           "not_real", "check_real"]
+           "not_real", "check_real", "counted"]
+
+
+def counted(n: int, one: str, many: str | None = None) -> str:
+    """``n`` and its noun, in the singular for one: ``counted(1, "piece")`` is ``"1 piece"``,
+    ``counted(3, "piece")`` ``"3 pieces"``, thousands separated (``"5,120 faces"``).
+
+    Parameters
+    ----------
+    n : int
+    one : str
+        The noun in the singular.
+    many : str, optional
+        Its plural, where it is not ``one + "s"``.
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    ValueError
+        If ``n`` is not a number (the format's).
+
+    Examples
+    --------
+    >>> counted(1, "connected piece"), counted(2, "vertex", "vertices")
+    ('1 connected piece', '2 vertices')
+    """
+    return f"{n:,} {one if n == 1 else (many or one + 's')}"
 
 
 def not_real(dtype, what: str) -> str:

@@ -16,7 +16,7 @@ def test_segment_writes_labels_colored_mesh_and_summary(tmp_path, small_off, cap
     assert main(["segment", str(small_off), "-k", "30", "--alpha", "200", "-o", str(seg),
                  "--colored-mesh", str(ply)]) == 0
     line, wrote = capsys.readouterr().out.strip().splitlines()
-    assert line.startswith("sphere.off: 5120 faces, 30 superfacets,") and line.endswith(" s")
+    assert line.startswith("sphere.off: 5,120 faces, 30 superfacets,") and line.endswith(" s")
     assert wrote == f"wrote {seg} (labels), {ply} (coloured mesh)"
     labels = read_labels(seg, n_faces=5120)
     assert labels.max() + 1 == 30
@@ -249,7 +249,7 @@ def test_cleanup_option(tmp_path, small_off):
 def test_summary_names_the_coarse_run(small_off, capsys):
     assert main(["segment", str(small_off), "-k", "2", "--coarsen", "16"]) == 0
     out = capsys.readouterr().out
-    assert "clusters (coarse-to-fine)" in out and "5120 faces, 2 superfacets" in out
+    assert "clusters (coarse-to-fine)" in out and "5,120 faces, 2 superfacets" in out
 
 
 def test_split_merge_flag_runs_the_swaps_and_names_them(small_off, tmp_path, capsys):

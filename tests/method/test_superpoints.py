@@ -496,7 +496,7 @@ def test_cli_segments_a_ply_of_points_one_label_per_point(tmp_path, capsys):
                  "--colored-mesh", str(tmp_path / "col.ply")]) == 0
     labels = read_labels(out)
     assert labels.shape == (2000,) and labels.max() + 1 == 25
-    assert "2000 points, 25 superpoints" in capsys.readouterr().out
+    assert "2,000 points, 25 superpoints" in capsys.readouterr().out
     colored = read_cloud(tmp_path / "col.ply")
     assert np.allclose(colored.points, pts)
     assert np.array_equal(read_labels(tmp_path / "col.ply" if False else out), labels)

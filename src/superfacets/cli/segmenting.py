@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..checks import counted
 from ..elements.kinds import kind_of
 from ..method.params import DEFAULTS
 from .notes import count_note, duplicates_note
@@ -156,7 +157,7 @@ def _summary(name: str, mesh, result, seconds: float, elements: str = "faces",
     state = describe_stop(result)
     if elements == "points":
         invalid = mesh.n_total - mesh.n_points
-        what = f"{mesh.n_total} points" + (f" ({invalid} invalid)" if invalid else "")
+        what = counted(mesh.n_total, "point") + (f" ({invalid:,} invalid)" if invalid else "")
         segs = "superpoints"
         if not density_given and ((getattr(result, "params", None) or {}).get("density") or 0):
             segs += " sized by the points' uneven density (auto; --density 0: equal areas)"
@@ -167,8 +168,9 @@ def _summary(name: str, mesh, result, seconds: float, elements: str = "faces",
     else:
         kind = "" if mesh.is_triangular else " (polygons)"
         objs = f" in {len(mesh.objects)} objects" if len(mesh.objects) > 1 else ""
-        what = (f"{mesh.n_faces} faces{kind}{objs}" if elements == "faces" else
-                f"{mesh.n_vertices} vertices ({mesh.n_faces} faces{kind})")
+        faces = counted(mesh.n_faces, "face")
+        what = (f"{faces}{kind}{objs}" if elements == "faces" else
+                f"{counted(mesh.n_vertices, 'vertex', 'vertices')} ({faces}{kind})")
         segs = kind_of(elements).segment_word
     start = (getattr(result, "params", None) or {}).get("start")
     if start:  # --adaptive: the iterations and the hints are of the start's segmentation
@@ -398,7 +400,7 @@ def cmd_baseline(args) -> int:
     show = not args.quiet and sys.stderr.isatty()
     extra = {"progress": show} if method.progress else {}
     if show and not method.progress:
-        print(f"{Path(args.mesh).name}: {mesh.n_faces} faces, running {method.name}...",
+        print(f"{Path(args.mesh).name}: {counted(mesh.n_faces, 'face')}, running {method.name}...",
               file=sys.stderr, flush=True)
     try:
         run = method.run(mesh, args.n_segments, cache={}, seed=args.seed, **params, **extra)
@@ -418,7 +420,7 @@ def cmd_baseline(args) -> int:
         iters = "" if run.n_iter is None else (
             f", {run.n_iter} iterations" + ("" if run.converged is None else
                                             " (converged)" if run.converged else " (max)"))
-        print(f"{Path(args.mesh).name}: {mesh.n_faces} faces, {method.name} ({shown}): "
+        print(f"{Path(args.mesh).name}: {counted(mesh.n_faces, 'face')}, {method.name} ({shown}): "
               f"{int(labels.max()) + 1} segments{iters}, {elapsed:.2f} s",
               file=sys.stderr if str(seg_out) == "-" else sys.stdout)
     return 0

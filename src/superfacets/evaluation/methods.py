@@ -182,7 +182,8 @@ def register_method(name: str, run: Callable[..., MethodRun], *, defaults: dict,
 
     clash = set(defaults) & ({"n_segments", "seed", "cache"} | set(METRICS))
     if clash:  # the results file has one column of each name
-        raise ParameterError(f"parameter name(s) reserved by the runner (its arguments and "
+        word = "name" if len(clash) == 1 else "names"
+        raise ParameterError(f"parameter {word} reserved by the runner (its arguments and "
                              f"the metrics' columns): {sorted(clash)}")
     m = Method(name, run, dict(defaults), dict(sweep or {}), description, progress,
                tuple(elements))

@@ -42,7 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..checks import check_int, check_nonneg
+from ..checks import check_int, check_nonneg, counted
 from ..errors import ParameterError
 
 __all__ = ["Hierarchy", "hierarchy", "planarity_graph", "level_extent_weight", "pieces",
@@ -180,7 +180,8 @@ def hierarchy(graph, levels, *, alpha: float = ALPHA, eta_convex: float = ETA_CO
     fewest = pieces(graph)
     if wanted[0] > k or wanted[-1] < fewest:
         raise ParameterError(f"levels must lie in [{fewest}, {k}]: {k} superfacets in "
-                             f"{fewest} connected piece(s), and segments stay connected; "
+                             f"{counted(fewest, 'connected piece')}, and segments stay "
+                             "connected; "
                              f"got {', '.join(map(str, wanted))}")
     if beta > 0 and graph.feature is None:
         raise ParameterError("beta > 0 needs the superfacets' features (graph.feature)")

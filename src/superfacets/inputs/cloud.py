@@ -16,7 +16,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ..checks import check_real
+from ..checks import check_real, counted
 from ..errors import InvalidCloudError
 from .bounds import check_extent, column_bounds, finite_rows
 from .mesh import readonly
@@ -240,7 +240,7 @@ class PointCloud:
         extra = f", {invalid} invalid" if invalid else ""
         extra += ", with normals" if self.normals is not None else ""
         extra += ", with colours" if self.colors is not None else ""
-        return f"PointCloud({self.n_total} points{extra})"
+        return f"PointCloud({counted(self.n_total, 'point')}{extra})"
 
     @property
     def n_total(self) -> int:

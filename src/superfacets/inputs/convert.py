@@ -53,7 +53,7 @@ def as_mesh(mesh, name: str = "") -> Mesh:
     Examples
     --------
     >>> as_mesh(([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]]))
-    Mesh(3 vertices, 1 faces: triangles)
+    Mesh(3 vertices, 1 face: triangles)
     """
     if isinstance(mesh, Mesh):
         return mesh

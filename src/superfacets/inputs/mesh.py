@@ -19,7 +19,7 @@ from functools import cached_property
 import numpy as np
 
 from .._kernels import native
-from ..checks import check_real
+from ..checks import check_real, counted
 from ..errors import InvalidMeshError
 from .bounds import check_extent, column_bounds
 from .rgb import check_colors, face_means, vertex_means
@@ -76,7 +76,7 @@ class Mesh:
     --------
     >>> quad = Mesh([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [[0, 1, 2, 3]])
     >>> quad
-    Mesh(4 vertices, 1 faces: polygons of 4 vertices)
+    Mesh(4 vertices, 1 face: polygons of 4 vertices)
     >>> float(quad.areas[0])
     1.0
     """
@@ -95,7 +95,8 @@ class Mesh:
                 else f"polygons of {lo} to {hi} vertices")
         name = f", name={self.name!r}" if self.name else ""
         objs = f", {len(self.objects)} objects" if len(self.objects) > 1 else ""
-        return f"Mesh({self.n_vertices} vertices, {self.n_faces} faces: {kind}{objs}{name})"
+        return (f"Mesh({counted(self.n_vertices, 'vertex', 'vertices')}, "
+                f"{counted(self.n_faces, 'face')}: {kind}{objs}{name})")
 
     def __post_init__(self) -> None:
         vertices, faces = _validate_arrays(self.vertices, self.faces, self.name)

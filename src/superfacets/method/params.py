@@ -279,7 +279,8 @@ def resolve(**params) -> SegmentParams:
     """
     unknown = set(params) - set(PARAMETER)
     if unknown:
-        raise ParameterError(f"unknown parameter(s) {', '.join(sorted(unknown))}")
+        word = "parameter" if len(unknown) == 1 else "parameters"
+        raise ParameterError(f"unknown {word} {', '.join(sorted(unknown))}")
     p = replace(DEFAULTS, **params)
     if check_bool("paper", p.paper):  # the paper's method as published, bit for bit
         extra = [name for name, on in (("cleanup", p.cleanup), ("split_merge", p.split_merge),

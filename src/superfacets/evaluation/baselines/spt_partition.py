@@ -394,7 +394,8 @@ def spt_partition(obj, n_segments: int | None = None, *, preset: str = "scannet"
     known = {f.name for f in fields(SPTSettings)}
     unknown = sorted(set(overrides) - known)
     if unknown:
-        raise ParameterError(f"unknown setting(s) {', '.join(unknown)}; known: "
+        word = "setting" if len(unknown) == 1 else "settings"
+        raise ParameterError(f"unknown {word} {', '.join(unknown)}; known: "
                              f"{', '.join(sorted(known))}")
     s = replace(_settings(preset), **overrides)
     cloud = as_cloud(obj)
