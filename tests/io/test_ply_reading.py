@@ -147,3 +147,47 @@ def test_binary_triangles_are_mapped_not_read_whole(tmp_path, monkeypatch):
     empty.write_bytes(b"")
     with pytest.raises(MeshFormatError, match="empty"):
         read_mesh(empty)
+
+
+@pytest.mark.parametrize("byte_order", ["<", ">"])
+def test_a_binary_ply_of_points_is_read_whole_as_plyfile_reads_it(tmp_path, byte_order):
+    """Known answer: a binary PLY cloud (positions, normals, 8-bit colours, an extra
+    element) read by arrays (read_ply_scalars) gives plyfile's values, compressed or not;
+    ASCII and list properties are left to plyfile (None)."""
+    import gzip
+
+    from plyfile import PlyData, PlyElement
+
+    from superfacets import read_cloud
+    from superfacets.io.ply import read_ply_scalars
+
+    rng = np.random.default_rng(2)
+    n = 500
+    v = np.empty(n, dtype=[("x", "f4"), ("y", "f4"), ("z", "f8"), ("nx", "f4"), ("ny", "f4"),
+                           ("nz", "f4"), ("red", "u1"), ("green", "u1"), ("blue", "u1")])
+    for name in v.dtype.names[:3]:
+        v[name] = rng.normal(size=n)
+    nrm = rng.normal(size=(n, 3))
+    nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+    v["nx"], v["ny"], v["nz"] = nrm.T
+    for name in ("red", "green", "blue"):
+        v[name] = rng.integers(0, 256, n)
+    extra = np.zeros(3, dtype=[("t", "i4")])
+    ply = PlyData([PlyElement.describe(v, "vertex"), PlyElement.describe(extra, "camera")],
+                  byte_order=byte_order)
+    path = tmp_path / "c.ply"
+    ply.write(str(path))
+    (tmp_path / "c.ply.gz").write_bytes(gzip.compress(path.read_bytes()))
+    got = read_ply_scalars(path.read_bytes())
+    assert set(got) == {"vertex", "camera"} and got["camera"].count == 3
+    for name in v.dtype.names:
+        np.testing.assert_array_equal(got["vertex"][name], v[name])
+    for f in (path, tmp_path / "c.ply.gz"):
+        c = read_cloud(f)
+        np.testing.assert_array_equal(c.points, np.c_[v["x"], v["y"], v["z"]].astype(float))
+        np.testing.assert_allclose(c.normals, nrm, atol=1e-6)
+        np.testing.assert_array_equal(np.round(c.colors * 255), np.c_[v["red"], v["green"],
+                                                                      v["blue"]])
+    PlyData([PlyElement.describe(v, "vertex")], text=True).write(str(tmp_path / "a.ply"))
+    assert read_ply_scalars((tmp_path / "a.ply").read_bytes()) is None
+    assert read_ply_scalars(path.read_bytes()[:-1]) is None  # a body one byte short

@@ -31,7 +31,7 @@ import numpy as np
 from ..errors import MeshFormatError
 from ..inputs.rgb import unit_colors
 from .files import read_bytes, split_suffix
-from .ply import ply_colors
+from .ply import ply_colors, read_ply_scalars
 
 __all__ = ["read_cloud", "CLOUD_FORMATS", "is_cloud_file", "check_laz", "check_las"]
 
@@ -163,8 +163,9 @@ def _read_ply(data: bytes, path: Path) -> dict:
     from plyfile import PlyData, PlyParseError
 
     try:
-        ply = PlyData.read(io.BytesIO(data))
-        vert = ply["vertex"]
+        fast = read_ply_scalars(data)  # (plyfile reads bytes a row at a time)
+        vert = fast["vertex"] if fast and "vertex" in fast else \
+            PlyData.read(io.BytesIO(data))["vertex"]
         names = [p.name for p in vert.properties]
         missing = [c for c in "xyz" if c not in names]
         if missing:
