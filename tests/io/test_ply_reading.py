@@ -151,9 +151,9 @@ def test_binary_triangles_are_mapped_not_read_whole(tmp_path, monkeypatch):
 
 @pytest.mark.parametrize("byte_order", ["<", ">"])
 def test_a_binary_ply_of_points_is_read_whole_as_plyfile_reads_it(tmp_path, byte_order):
-    """Known answer: a binary PLY cloud (positions, normals, 8-bit colours, an extra
-    element) read by arrays (read_ply_scalars) gives plyfile's values, compressed or not;
-    ASCII and list properties are left to plyfile (None)."""
+    """Known answer: a PLY cloud (positions, normals, 8-bit colours, an extra element),
+    binary or ASCII, read by arrays (read_ply_scalars) gives plyfile's values, compressed
+    or not; a short body is left to plyfile (None)."""
     import gzip
 
     from plyfile import PlyData, PlyElement
@@ -189,5 +189,8 @@ def test_a_binary_ply_of_points_is_read_whole_as_plyfile_reads_it(tmp_path, byte
         np.testing.assert_array_equal(np.round(c.colors * 255), np.c_[v["red"], v["green"],
                                                                       v["blue"]])
     PlyData([PlyElement.describe(v, "vertex")], text=True).write(str(tmp_path / "a.ply"))
-    assert read_ply_scalars((tmp_path / "a.ply").read_bytes()) is None
+    text = read_ply_scalars((tmp_path / "a.ply").read_bytes())["vertex"]
+    ref = PlyData.read(str(tmp_path / "a.ply"))["vertex"]
+    for name in v.dtype.names:
+        np.testing.assert_array_equal(text[name], ref[name])
     assert read_ply_scalars(path.read_bytes()[:-1]) is None  # a body one byte short

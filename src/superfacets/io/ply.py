@@ -11,6 +11,7 @@ shown by MeshLab, Blender, Open3D or trimesh. Vertices are written as doubles
 from __future__ import annotations
 
 import io
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -133,13 +134,14 @@ class ScalarElement:
 
 
 def read_ply_scalars(data: bytes) -> dict | None:
-    r"""The elements of a binary PLY whose elements all hold scalar properties (a point
-    cloud), each a :class:`ScalarElement` viewing ``data`` (no copy, no loop over rows);
-    None for anything else (ASCII, list properties, a header it cannot read, a body too
-    short), which ``plyfile`` then reads.
+    r"""The elements of a PLY whose elements all hold scalar properties (a point cloud),
+    each a :class:`ScalarElement`: binary ones viewing ``data`` (no copy, no loop over
+    rows), ASCII ones parsed by numpy; None for anything else (list properties, a header
+    it cannot read, a body too short, a line it cannot parse), which ``plyfile`` then
+    reads and names.
 
     ``plyfile`` reads such a file from memory (a decompressed or in-memory one) a row and a
-    property at a time: 5M points took 13.7 s; here, 0.1 s.
+    property at a time: 5M binary points took 13.7 s, here 0.6 s; 2M ASCII points 6.7 s.
 
     Parameters
     ----------
@@ -171,7 +173,8 @@ def read_ply_scalars(data: bytes) -> dict | None:
         if not parts or parts[0] in ("comment", "obj_info"):
             continue
         if parts[0] == "format" and len(parts) >= 2:
-            order = {"binary_little_endian": "<", "binary_big_endian": ">"}.get(parts[1])
+            order = {"binary_little_endian": "<", "binary_big_endian": ">",
+                     "ascii": "="}.get(parts[1])
         elif parts[0] == "element" and len(parts) == 3 and parts[2].isdigit():
             layout.append((parts[1], int(parts[2]), []))
         elif (parts[0] == "property" and len(parts) == 3 and layout
@@ -181,6 +184,8 @@ def read_ply_scalars(data: bytes) -> dict | None:
             return None
     if order is None or start <= 0:
         return None
+    if order == "=":
+        return _ascii_scalars(data[start:], layout)
     out = {}
     for name, count, props in layout:
         if not props or len({p for p, _ in props}) != len(props):
@@ -190,6 +195,34 @@ def read_ply_scalars(data: bytes) -> dict | None:
             return None
         out[name] = ScalarElement(np.frombuffer(data, dtype, count, start))
         start += count * dtype.itemsize
+    return out
+
+
+def _ascii_scalars(body: bytes, layout: list) -> dict | None:
+    """:func:`read_ply_scalars` of an ASCII body: each element's lines parsed by numpy."""
+    lines = body.split(b"\n")
+    out, at = {}, 0
+    for name, count, props in layout:
+        if not props or len({p for p, _ in props}) != len(props) or at + count > len(lines):
+            return None
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                values = np.loadtxt([ln.decode("ascii") for ln in lines[at:at + count]],
+                                    dtype=np.float64, comments=None, ndmin=2)
+        except (ValueError, UnicodeDecodeError):
+            return None
+        if values.shape != (count, len(props)) and count:
+            return None
+        dtype = np.dtype([(p, "=" + t[1:]) for p, t in props])
+        rows = np.empty(count, dtype=dtype)
+        for j, (p, t) in enumerate(props):
+            column = values[:, j] if count else np.zeros(0)
+            if t[1] in "iu" and not np.array_equal(column, np.round(column)):
+                return None  # (an integer property holding a fraction: plyfile says so)
+            rows[p] = column
+        out[name] = ScalarElement(rows)
+        at += count
     return out
 
 
