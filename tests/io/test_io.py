@@ -514,3 +514,18 @@ def test_the_memory_check_counts_the_face_pairs_of_a_fan_and_sends_it_not_to_til
     assert "tiles" not in str(exc.value)
     monkeypatch.setattr(memory, "available_bytes", lambda: None)
     assert segment((vertices, faces), 2).labels.shape == (n + 1,)
+
+
+@pytest.mark.parametrize("n", [1, 2, 60, 3000])
+def test_an_stls_vertices_merge_as_numpy_unique_merges_them(n):
+    """Known answer: STL's merged vertices (a sort of the columns) are
+    ``np.unique(axis=0)``'s arrays, signed zeros as one, on rows with many repeats."""
+    from superfacets.io.meshes import _merged_rows
+
+    rng = np.random.default_rng(n)
+    v = np.round(rng.normal(size=(n, 3)), 1)
+    v[::5] *= -0.0
+    want, want_inv = np.unique(v, axis=0, return_inverse=True)
+    got, inv = _merged_rows(v)
+    np.testing.assert_array_equal(got, want)
+    np.testing.assert_array_equal(inv, want_inv.ravel())

