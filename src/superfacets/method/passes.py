@@ -14,10 +14,11 @@ every pass (tested against ``jump_cycles=False``).
 
 Settling (``settle=True``, the rule on point clouds): a cycle is a flaw of the update,
 not a place to stop. When the center list repeats, the run goes back to the pass of the
-cycle whose classification had the lowest energy (the summed size-weighted distances,
-paper eq. 3) and holds where they are the centers that moved during the cycle; the
-others go on until no center moves, and the run has converged (a later cycle holds
-more). The centers held are counted in :attr:`Iteration.settled`.
+cycle whose classification had the lowest energy (each element's distance to its center
+along the graph weighted by paper eq. 3, summed weighted by size) and holds where they
+are the centers that moved during the cycle; the others go on until no center moves, and
+the run has converged (a later cycle holds more). The centers held are counted in
+:attr:`Iteration.settled`.
 """
 
 from __future__ import annotations
