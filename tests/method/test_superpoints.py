@@ -735,3 +735,20 @@ def test_settling_holds_the_centers_that_moved_at_the_cycles_best_pass():
     held = np.zeros(12, dtype=bool)
     assert _settle(centers, states, energies, 0, held) == 3
     assert centers[:3].tolist() == [1, 6, 9] and np.flatnonzero(held).tolist() == [1, 6]
+
+
+def test_a_center_sent_back_to_one_of_its_recent_places_is_held():
+    """Known answer: superfacet 0's center goes 5 -> 6 -> 5 (held at 6 when sent back),
+    superfacet 1's moves on; a compaction drops a dead superfacet's past."""
+    from superfacets.method.passes import _Recent
+
+    held = np.zeros(20, dtype=bool)
+    recent = _Recent()
+    used, moved = np.array([5, 10]), np.array([6, 11])
+    recent.hold(used, moved, held)
+    assert moved.tolist() == [6, 11] and not held.any()
+    used, moved = np.array([6, 11]), np.array([5, 12])
+    recent.hold(used, moved, held)
+    assert np.flatnonzero(held).tolist() == [6]
+    recent.compact(np.array([False, True]))
+    assert recent.rows.shape[0] == 1 and 10 in recent.rows[0] and 11 in recent.rows[0]

@@ -144,11 +144,12 @@ class ElementKind:
         k = 1,000), an airborne tile and the benchmark's sampled clouds
         (``docs/notes/superpoints-defaults.md``); 1 (off) on the other kinds.
     settle_cycles : bool
-        A cycle of center lists is settled (:mod:`superfacets.method.passes`: the
-        cycle's pass of lowest energy, the centers that moved in it held) and the passes
-        go on to convergence, instead of being jumped over as the paper's passes would
-        run (``paper=True`` keeps the jump): points, where a cycle stopped 7-33 % of the
-        benchmark's sampled clouds (``docs/notes/superpoints-defaults.md``).
+        Centers that oscillate are held and the passes go on to convergence
+        (:mod:`superfacets.method.passes`: a cycle of center lists settled at its pass of
+        lowest energy, a center sent back to a recent place held), instead of a cycle
+        being jumped over as the paper's passes would run (``paper=True`` keeps the
+        jump): points, where a cycle stopped 7-33 % of the benchmark's sampled clouds
+        (``docs/notes/superpoints-defaults.md``).
     objects : bool
         The elements are what a scene's objects are made of (faces): a run may
         share ``k`` among the objects (``--per-object``), the objects are named

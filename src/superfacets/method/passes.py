@@ -17,7 +17,9 @@ not a place to stop. When the center list repeats, the run goes back to the pass
 cycle whose classification had the lowest energy (each element's distance to its center
 along the graph weighted by paper eq. 3, summed weighted by size) and holds where they
 are the centers that moved during the cycle; the others go on until no center moves, and
-the run has converged (a later cycle holds more). The centers held are counted in
+the run has converged (a later cycle holds more). Centers oscillating out of phase keep
+the whole list from ever repeating: a center the update sends back to one of its last
+:data:`RECENT` places is held too (:class:`_Recent`). The centers held are counted in
 :attr:`Iteration.settled`.
 """
 
@@ -155,6 +157,7 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
     orphans_per_pass: list[int] = []
     energies: list[float] = []
     held = np.zeros(m, dtype=bool) if settle else None  # elements whose center stays
+    recent = _Recent() if settle else None
     while True:
         key = centers[:n_centers].tobytes()
         if settle and key in seen:  # back to the cycle's best pass, its movers held
@@ -195,6 +198,7 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
         if min_move > 0:
             hold_small_moves(moved, used, positions, min_move)
         if settle:
+            recent.hold(used, moved, held)
             stay = held[used] & (moved >= 0)
             moved[stay] = used[stay]
         n_moved = int((moved != used).sum())
@@ -210,6 +214,8 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
         alive = moved[keep]
         n_centers = alive.shape[0]
         centers[:n_centers] = alive
+        if settle:
+            recent.compact(keep)
         if tol > 0:  # superfacet s is number remap[s] in the next pass (-1: it died)
             remap = np.where(keep, np.cumsum(keep) - 1, -1).astype(np.int32)
             # (into the previous pass's array: one array of labels, not two at a time)
@@ -218,6 +224,33 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
                      n_orphan_seeds=n_orphans, n_passes=n_passes, cycle_period=period,
                      expansions=n_expanded, changed=changed, stopped_by_tol=by_tol,
                      settled=int(held.sum()) if settle else 0)
+
+
+class _Recent:
+    """The last :data:`RECENT` centers of each superfacet (by its place in the list): a
+    center the update sends back to one of them is held where it is. Several centers
+    oscillating out of phase keep the whole list from repeating (a cycle of the list is
+    then never seen); each one's own return is."""
+
+    def __init__(self) -> None:
+        self.rows = np.full((0, RECENT), -1, dtype=np.int64)
+        self.at = 0
+
+    def hold(self, used: np.ndarray, moved: np.ndarray, held: np.ndarray) -> None:
+        k = used.shape[0]
+        if self.rows.shape[0] < k:  # (orphan centers: new superfacets, no past)
+            self.rows = np.r_[self.rows, np.full((k - self.rows.shape[0], RECENT), -1)]
+        back = (moved >= 0) & (moved != used) & (self.rows[:k] == moved[:, None]).any(axis=1)
+        held[used[back]] = True
+        self.rows[:k, self.at % RECENT] = used
+        self.at += 1
+
+    def compact(self, keep: np.ndarray) -> None:
+        self.rows = self.rows[:keep.shape[0]][keep]
+
+
+#: Past centers of a superfacet a return to which holds it (:class:`_Recent`).
+RECENT = 4
 
 
 def _energy(sizes: np.ndarray, dist: np.ndarray) -> float:
