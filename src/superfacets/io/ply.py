@@ -163,32 +163,20 @@ def read_ply_scalars(data: bytes) -> dict | None:
     >>> read_ply_scalars(head + b"end_header\n" + body)["vertex"]["x"].tolist()
     [1.5, -2.0]
     """
-    end = data.find(b"end_header", 0, 1 << 16)
-    if not data.startswith(b"ply") or end < 0:
+    header = _ply_header(data)
+    order = header and {"binary_little_endian": "<", "binary_big_endian": ">",
+                        "ascii": "="}.get(header[0])
+    if not order or any(count is None or any(t not in _PLY_TYPES for t in props.values())
+                        for _, count, props in header[2]):
         return None
-    start = data.find(b"\n", end) + 1
-    order, layout = None, []
-    for line in data[:end].split(b"\n")[1:]:
-        parts = line.decode("ascii", "replace").split()
-        if not parts or parts[0] in ("comment", "obj_info"):
-            continue
-        if parts[0] == "format" and len(parts) >= 2:
-            order = {"binary_little_endian": "<", "binary_big_endian": ">",
-                     "ascii": "="}.get(parts[1])
-        elif parts[0] == "element" and len(parts) == 3 and parts[2].isdigit():
-            layout.append((parts[1], int(parts[2]), []))
-        elif (parts[0] == "property" and len(parts) == 3 and layout
-              and parts[1] in _PLY_TYPES):
-            layout[-1][2].append((parts[2], order + _PLY_TYPES[parts[1]] if order else ""))
-        else:
-            return None
-    if order is None or start <= 0:
-        return None
+    start = header[1]
+    layout = [(name, count, [(p, order + _PLY_TYPES[t]) for p, t in props.items()])
+              for name, count, props in header[2]]
     if order == "=":
         return _ascii_scalars(data[start:], layout)
     out = {}
     for name, count, props in layout:
-        if not props or len({p for p, _ in props}) != len(props):
+        if not props:
             return None
         dtype = np.dtype(props)
         if start + count * dtype.itemsize > len(data):
@@ -203,7 +191,7 @@ def _ascii_scalars(body: bytes, layout: list) -> dict | None:
     lines = body.split(b"\n")
     out, at = {}, 0
     for name, count, props in layout:
-        if not props or len({p for p, _ in props}) != len(props) or at + count > len(lines):
+        if not props or at + count > len(lines):
             return None
         try:
             with warnings.catch_warnings():
@@ -226,26 +214,39 @@ def _ascii_scalars(body: bytes, layout: list) -> dict | None:
     return out
 
 
-def _binary_elements(data: bytes):
-    """The elements of a binary PLY header, ``[(name, {property: type or 'list'})]``,
-    or None where the header is not one."""
+def _ply_header(data: bytes):
+    """A PLY header: ``(format, offset of the body, [(element, count or None,
+    {property: type or 'list'})])``, or None where ``data`` does not start with one. A
+    property named twice is kept once (the readers then differ from plyfile: None)."""
     end = data.find(b"end_header", 0, 1 << 16)
     if not data.startswith(b"ply") or end < 0:
         return None
-    elements, binary = [], False
+    fmt, elements = "", []
     for line in data[:end].split(b"\n")[1:]:
         parts = line.decode("ascii", "replace").split()
         if not parts or parts[0] in ("comment", "obj_info"):
             continue
         if parts[0] == "format":
-            binary = len(parts) >= 2 and parts[1].startswith("binary_")
+            fmt = parts[1] if len(parts) >= 2 else ""
         elif parts[0] == "element" and len(parts) == 3:
-            elements.append((parts[1], {}))
+            elements.append((parts[1], int(parts[2]) if parts[2].isdigit() else None, {}))
         elif parts[0] == "property" and elements and len(parts) in (3, 5):
-            elements[-1][1][parts[-1]] = "list" if parts[1] == "list" else parts[1]
+            props = elements[-1][2]
+            if parts[-1] in props:
+                return None
+            props[parts[-1]] = "list" if parts[1] == "list" else parts[1]
         else:
             return None
-    return elements if binary else None
+    return fmt, data.find(b"\n", end) + 1, elements
+
+
+def _binary_elements(data: bytes):
+    """The elements of a binary PLY header, ``[(name, {property: type or 'list'})]``,
+    or None where the header is not one."""
+    header = _ply_header(data)
+    if header is None or not header[0].startswith("binary_"):
+        return None
+    return [(name, props) for name, _, props in header[2]]
 
 
 def ply_bytes(vertices: np.ndarray, corners: np.ndarray, offsets: np.ndarray, *,
