@@ -24,10 +24,9 @@ if os.environ.get("SUPERFACETS_BENCH_VERSION"):
 """
 
 
-def run_code(version: str, code: str, *args: str, timeout: float | None = None
-             ) -> subprocess.CompletedProcess:
-    """``python -c code args`` against ``version`` (see the module notes); raises
-    ``subprocess.TimeoutExpired`` past ``timeout`` seconds."""
+def version_env(version: str) -> dict:
+    """The environment of a child process that imports ``version`` (with :data:`PRELUDE`
+    run first; see the module notes)."""
     env = dict(os.environ)
     env.pop("SUPERFACETS_BENCH_VERSION", None)
     if version != "installed":
@@ -36,5 +35,13 @@ def run_code(version: str, code: str, *args: str, timeout: float | None = None
                 (folder / "superfacets" / "_kernels").glob("_cxx*")):
             raise SystemExit(f"{folder}: no built package there (see benchmarks/_versions.py)")
         env["SUPERFACETS_BENCH_VERSION"] = str(folder)
+    return env
+
+
+def run_code(version: str, code: str, *args: str, timeout: float | None = None
+             ) -> subprocess.CompletedProcess:
+    """``python -c code args`` against ``version`` (see the module notes); raises
+    ``subprocess.TimeoutExpired`` past ``timeout`` seconds."""
+    env = version_env(version)
     return subprocess.run([sys.executable, "-c", PRELUDE + code, *args], env=env,
                           capture_output=True, text=True, check=False, timeout=timeout)

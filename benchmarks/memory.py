@@ -1,7 +1,7 @@
 """Peak memory per element of a run from the command line, each run a new process.
 
 Usage: python benchmarks/memory.py [--cases faces points2m points10m] [--rounds 1]
-       python benchmarks/memory.py --before /tmp/before/src [--rounds 2]
+       python benchmarks/memory.py --before /tmp/before-site [--rounds 2]
 
 Each row is ``superfacets segment INPUT -k K -o OUT.seg`` with the defaults, in a new
 process (start-up, reading and writing included); the peak is the process's largest
@@ -21,10 +21,10 @@ included, about 100-160 MiB), divided by the input's elements. Cases:
   leave the exact count more superpoints than asked), k = 1,000; only when asked;
 - ``scanlines10m``: 10M points of a made-up spinning LiDAR (64 rings over a ground
   plane at z = 0 inside walls, sweeps side by side; :func:`_scan_lines`), k = 1,000;
-  only when asked. Slow (the ground's noise crosses z = 0: see docs/guide/scale.md).
+  only when asked.
 
-With ``--before SRC`` each case also runs on another version of the package (the
-``src`` folder of a ``git worktree`` of an earlier commit), the two alternating, and
+With ``--before SITE`` each case also runs on another built version of the package
+(``benchmarks/_versions.py`` says how to build one), the two alternating, and
 the labels of both are compared. The table gives the fastest wall time and the largest
 peak of each version's rounds.
 """
@@ -40,8 +40,9 @@ import tempfile
 import time
 from pathlib import Path
 
+from _versions import PRELUDE, version_env
+
 HERE = Path(__file__).resolve().parent
-SRC = HERE.parent / "src"
 SHARED = Path(os.environ.get("SUPERFACETS_SHARED", HERE.parents[1] / "shared")) / "data"
 CACHE = Path(os.environ.get("SUPERFACETS_CACHE", Path.home() / ".cache" / "superfacets"))
 
@@ -141,12 +142,13 @@ def _input(case: str) -> Path:
     return Path(out.strip().splitlines()[-1])
 
 
-def run(src: Path, path: Path, k: int, out: Path) -> tuple[float, float, str]:
-    """Wall seconds, peak MiB and the labels' digest of one run in a new process."""
-    env = dict(os.environ, PYTHONPATH=str(src.resolve()))
+def run(version: str, path: Path, k: int, out: Path) -> tuple[float, float, str]:
+    """Wall seconds, peak MiB and the labels' digest of one run of ``version``
+    (:mod:`_versions`) in a new process."""
+    code = PRELUDE + "import runpy; runpy.run_module('superfacets', run_name='__main__')"
     t = time.perf_counter()
-    proc = subprocess.Popen([sys.executable, "-m", "superfacets", "segment", str(path),
-                             "-k", str(k), "-o", str(out), "-q"], env=env)
+    proc = subprocess.Popen([sys.executable, "-c", code, "segment", str(path),
+                             "-k", str(k), "-o", str(out), "-q"], env=version_env(version))
     _, status, usage = os.wait4(proc.pid, 0)
     wall = time.perf_counter() - t
     proc.returncode = os.waitstatus_to_exitcode(status)
@@ -159,13 +161,13 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--cases", nargs="+", default=DEFAULT, choices=list(CASES))
     ap.add_argument("--rounds", type=int, default=1)
-    ap.add_argument("--before", type=Path, help="the src folder of an earlier version")
+    ap.add_argument("--before", help="a built copy of another version (benchmarks/_versions.py)")
     ap.add_argument("--make-input", choices=list(CASES), help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.make_input:  # (in a child process: see _input)
         print(make_input(args.make_input))
         return
-    versions = ([("before", args.before)] if args.before else []) + [("this", SRC)]
+    versions = ([("before", args.before)] if args.before else []) + [("this", "installed")]
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for case in args.cases:

@@ -1094,3 +1094,43 @@ def test_copies_of_a_face_are_one_element_and_share_its_label(capsys, tmp_path):
                  str(tmp_path / "p.seg")]) == 0
     assert ("note: 30 points are at the position of an earlier point and share its label"
             in capsys.readouterr().err)
+
+
+def test_no_stage_before_the_passes_makes_again_what_it_declared(valley, monkeypatch):
+    # the one place that forgets (Hooks.before) keeps what the stages up to the passes
+    # declare (stage_reads); the passes hold none of the fields; only the stages after
+    # them make fields again
+    from superfacets import Mesh, segment
+    from superfacets.method import pipeline
+
+    monkeypatch.setattr(pipeline, "_RELEASE_MIN", 0)
+    log, held = [], {}
+    before, iterate = pipeline.Hooks.before, pipeline.iterate_passes
+
+    def spy_before(hooks, stage):
+        log.append(stage)
+        if len(log) == 1:  # the graph's rebuilds wrapped, to log which stage made them
+            g = hooks.graph
+            for name, make in list(g.rebuild.items()):
+                g.rebuild[name] = (lambda make=make, name=name:
+                                   lambda graph: log.append(f"made {name}") or make(graph))()
+        before(hooks, stage)
+
+    def spy_passes(graph, *args, **kw):
+        held["fields"] = sorted((set(graph.rebuild) | {"terms"}) & set(graph.__dict__))
+        return iterate(graph, *args, **kw)
+
+    monkeypatch.setattr(pipeline.Hooks, "before", spy_before)
+    monkeypatch.setattr(pipeline, "iterate_passes", spy_passes)
+    for kw in ({"coarsen": 4}, {"cleanup": True, "split_merge": True}):
+        log.clear()
+        mesh = Mesh(valley.vertices, valley.faces)
+        segment(mesh, 12, **kw)
+        assert held["fields"] == []
+        stages = [s for s in log if not s.startswith("made")]
+        assert stages[-1] == "clean-up" and "passes" in stages
+        assert ("coarsening" in stages) == ("coarsen" in kw)
+        made_early = [s for s in log[:log.index("clean-up")] if s.startswith("made")]
+        assert made_early == [], log
+        assert {s for s in log[log.index("clean-up"):] if s.startswith("made")} <= {
+            "made normals", "made pairs", "made dual_edge", "made lengths"}

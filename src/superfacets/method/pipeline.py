@@ -30,8 +30,9 @@ once and in the paper's order
    ``merge_from`` times ``k`` superpoints merged to ``k``, flat neighbours first
    (:mod:`superfacets.method.merges`).
 
-Timings, the progress bar and the release of memory are hooks around the stages
-(:class:`Hooks`), not inside them. Tiled runs
+Each stage declares what it reads (:func:`~superfacets.method.stages.stage_reads`);
+timings, the progress bar and the one place that forgets what no later stage reads
+are hooks around the stages (:class:`Hooks`), not inside them. Tiled runs
 (:mod:`superfacets.scale.tiling`) call the same stages.
 """
 
@@ -50,7 +51,14 @@ from .finish import clean_up, exact_count, finish, merge_small
 from .merges import merge_to_count
 from .params import ALL_KINDS, PARAMETERS, SegmentParams
 from .passes import final_centers
-from .stages import build_graph, initialize, iterate_passes, resolve_rules, weigh
+from .stages import (
+    build_graph,
+    initialize,
+    iterate_passes,
+    resolve_rules,
+    stage_reads,
+    weigh,
+)
 
 __all__ = ["pipeline", "RunRecord", "Hooks", "passes_example"]
 
@@ -89,8 +97,8 @@ _RELEASE_MIN = 1 << 18
 
 class Hooks:
     """What runs around the stages: their timings, the progress bar, the
-    release of the graph's arrays the passes do not read, and, on large graphs
-    (``trim``), the allocator's free memory handed back after each stage.
+    release of the graph's arrays no later stage reads (:meth:`before`), and, on large
+    graphs (``trim``), the allocator's free memory handed back before the passes.
 
     Parameters
     ----------
@@ -114,6 +122,7 @@ class Hooks:
 
     def __init__(self, progress: bool, max_iter: int, kind: str) -> None:
         self.timings: dict[str, float] = {}
+        self.graph, self.plan = None, ()  # what before() forgets of (follow())
         self.trim = False  # free memory handed back before the passes (large graphs)
         self.bar = None
         if progress:  # one bar: the set-up stages by name, then the passes
@@ -139,10 +148,41 @@ class Hooks:
             dt = time.perf_counter() - t
             self.timings[key] = self.timings.get(key, 0.0) + dt if add else dt
 
-    @staticmethod
-    def release_of(graph):
-        """The graph's ``release``, for a graph large enough that it pays."""
-        return graph.release if graph.n_elements >= _RELEASE_MIN else None
+    def follow(self, graph, plan) -> None:
+        """Forget, from now on, what ``graph``'s later stages do not read: ``plan`` is
+        :func:`~superfacets.method.stages.stage_reads`."""
+        self.graph, self.plan = graph, plan
+
+    def before(self, stage: str) -> None:
+        """The one place a run forgets: before ``stage`` (a stage of the plan given to
+        :meth:`follow`), the fields of the graph that neither it nor a later stage reads.
+
+        On a graph of :data:`_RELEASE_MIN` elements or more, "later" ends at the passes
+        (which read no such field and are a run's memory peak: the stages after them make
+        again what they read); the terms a stage reads are made before their
+        ingredients (normals and pairs) go. On a smaller graph only the terms no later
+        stage reads are forgotten (making the others again would cost more than their
+        memory is worth).
+        """
+        graph, plan = self.graph, self.plan
+        if graph is None:
+            return
+        names = [name for name, _ in plan]
+        i = names.index(stage)
+        passes = names.index("passes")
+        ahead = [fields for _, fields in plan[i:passes if i <= passes else None]]
+        needed = set().union(*ahead)
+        if graph.n_elements < _RELEASE_MIN:
+            if "terms" not in set().union(*(fields for _, fields in plan[i:])):
+                graph.release_terms()
+            return
+        if "terms" in plan[i][1]:
+            graph.terms  # noqa: B018 (made here, so that their ingredients can go)
+        elif "terms" in needed and "terms" not in graph.__dict__:
+            needed |= {"normals", "pairs"}  # (what a later stage makes them from)
+        if "terms" not in needed:
+            graph.release_terms()
+        graph.release(keep=tuple(needed))
 
     def close(self) -> None:
         if self.bar is not None:
@@ -209,6 +249,7 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
         with hooks.stage("graph"):
             source, graph, p = build_graph(obj, p, features)
         rules = resolve_rules(graph, p, n_centers=n_centers)
+        hooks.follow(graph, stage_reads(rules, initial))
         p = rules.params
         feats = features_of(source, features) if p.beta > 0 else None
     except BaseException:
@@ -219,12 +260,10 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
         give_back_free_memory()  # stage: the next stages fault the pages in again)
     try:
         with hooks.stage("weights", "weights"):
-            w, swap_w = weigh(graph, rules, feats, hooks.release_of(graph))
+            w, swap_w = weigh(graph, rules, feats, hooks)
         with hooks.stage("init"):
             init, ratio = initialize(graph, w, rules, hooks, initial)
-            release = hooks.release_of(graph)  # (again where no coarse run released them)
-            if release is not None:
-                release()
+            hooks.before("passes")  # (again where no coarse run forgot)
             if hooks.trim:  # the passes start without the build's and the start's freed
                 give_back_free_memory()  # temporaries (the peak of a run on a mesh)
         with hooks.stage("iterations", "superfacets"):
@@ -262,12 +301,7 @@ def _finished(graph, it, rules, hooks, feats):
     if rules.cleanup:
         try:
             with hooks.stage("cleanup", "clean-up"):
-                # a large graph's terms (released after the weights) made again, then
-                # the normals and pairs they read let go
-                release = hooks.release_of(graph)
-                if release is not None:
-                    graph.terms  # noqa: B018
-                    release(keep=("dual_edge", "lengths"))
+                hooks.before("clean-up")
                 labels = clean_up(graph, labels, centers, rules, feats)
         finally:
             hooks.close()

@@ -33,7 +33,7 @@ from .rules import MIN_FINE_ELEMENTS, merge_from_of
 from .weights import csr_point_weights, csr_weights, edge_weights, weight_dtype
 
 __all__ = ["Rules", "build_graph", "resolve_rules", "weigh", "initialize",
-           "iterate_passes"]
+           "iterate_passes", "stage_reads"]
 
 _D = DEFAULTS
 
@@ -93,6 +93,60 @@ class Rules:
     def window_r2(self) -> float:
         """The squared reach of an expansion, ``(window r)^2`` (section 3.1)."""
         return (self.params.window * self.r) ** 2
+
+
+def stage_reads(rules: Rules, initial=None) -> tuple[tuple[str, frozenset], ...]:
+    """What each stage after the graph's build reads of the fields the graph can
+    forget and make again (its :attr:`~superfacets.elements.graph.ElementGraph.rebuild`
+    fields and its cached :attr:`~superfacets.elements.graph.ElementGraph.terms`), in the
+    run's order (Algorithm 1).
+
+    Besides these, every stage reads the CSR layout, the positions and the sizes, which
+    are never forgotten. The passes read nothing more: :meth:`superfacets.method.pipeline.
+    Hooks.before` (the one place that forgets) lets go, on a large graph, of what no
+    stage before the passes still reads, and the stages after them make again what they
+    read (the passes are a run's memory peak).
+
+    Parameters
+    ----------
+    rules : Rules
+    initial : (c,) int ndarray, optional
+        Given centers (no initialization, so no coarsening).
+
+    Returns
+    -------
+    tuple of (str, frozenset of str)
+        ``(stage, fields)`` in the run's order: ``"pair weights"`` (eqs. 1-3 per
+        adjacency), ``"weight layout"`` (per CSR entry, and the swap energies'),
+        ``"coarsening"`` (where the rules coarsen), ``"passes"`` and ``"clean-up"``
+        (where it runs).
+
+    Raises
+    ------
+    AttributeError
+        Never for rules from :func:`resolve_rules`.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.method.params import resolve
+    >>> ball = trimesh.creation.icosphere(subdivisions=3)
+    >>> _, graph, p = build_graph(ball, resolve(n_segments=12))
+    >>> [(name, sorted(fields)) for name, fields in stage_reads(resolve_rules(graph, p))][1:]
+    ... # doctest: +NORMALIZE_WHITESPACE
+    [('weight layout', ['dual_edge', 'lengths', 'spans', 'terms']), ('passes', []),
+     ('clean-up', ['dual_edge', 'lengths', 'terms'])]
+    """
+    plan = [("pair weights", {"normals", "pairs", "lengths", "spans", "border_shares",
+                              "terms"}),
+            ("weight layout", {"dual_edge"} | ({"terms", "spans", "lengths"}
+                                               if rules.split_merge else set()))]
+    if rules.coarsen > 1 and initial is None:
+        plan.append(("coarsening", set(COARSENING_READS)))
+    plan.append(("passes", set()))
+    if rules.cleanup:
+        plan.append(("clean-up", {"terms", "dual_edge", "lengths"}))
+    return tuple((name, frozenset(fields)) for name, fields in plan)
 
 
 def build_graph(obj, p: SegmentParams, features=None
@@ -235,19 +289,18 @@ def resolve_rules(graph, p: SegmentParams, *, n_centers: int | None = None,
                  coarsen=coarsening_for(graph, p, k, radius), target=target)
 
 
-def weigh(graph, rules: Rules, features=None, release=None
+def weigh(graph, rules: Rules, features=None, hooks=None
           ) -> tuple[np.ndarray, np.ndarray | None]:
     """Stage 3: the weight of each adjacency, per CSR entry (paper eqs. 1-3, or
     Shlafman's eq. 6; with ``beta``, the feature term), and the swap energies'
     weights where split-and-merge runs (convex folds scaled by the kind's
     ``swap_eta_convex``).
 
-    The adjacency terms stay cached on the graph for the clean-up when it runs on a
-    small graph; otherwise they are released (17 bytes per adjacency), and the
-    clean-up computes them again, the same. Without split-and-merge,
-    ``release(keep=...)`` forgets the graph's pairs and spans once the weight of each
-    pair is made, before they are laid out per CSR entry (the memory peak of this
-    stage).
+    With the clean-up the adjacency terms are cached on the graph first (it reads
+    them again). Once the weight of each pair is made, ``hooks.before("weight
+    layout")`` forgets what the later stages do not read (on a large graph: the pairs,
+    before the weights are laid out per CSR entry, this stage's memory peak;
+    :func:`stage_reads`).
 
     Returns
     -------
@@ -262,9 +315,9 @@ def weigh(graph, rules: Rules, features=None, release=None
     rules : Rules
     features : (n, d) float ndarray, optional
         Per-element features, with ``beta > 0``.
-    release : callable, optional
-        The graph's :meth:`~superfacets.elements.graph.ElementGraph.release`, for a
-        graph large enough that it pays (:meth:`superfacets.method.pipeline.Hooks.release_of`).
+    hooks : Hooks, optional
+        The run's :class:`~superfacets.method.pipeline.Hooks` (None: nothing is
+        forgotten).
 
     Raises
     ------
@@ -293,11 +346,8 @@ def weigh(graph, rules: Rules, features=None, release=None
     else:
         w_pairs = edge_weights(graph, p.weighting, alpha=p.alpha, eta_convex=p.eta_convex,
                                features=features, beta=p.beta, dtype=dtype)
-        if release is not None and (not rules.split_merge or "terms" in graph.__dict__):
-            # read by csr_weights: the dual edges; by the swaps' weights: those, the
-            # terms (here already) and the spans
-            release(keep=COARSENING_READS + ("dual_edge",)
-                    + (("spans",) if rules.split_merge else ()))
+        if hooks is not None:
+            hooks.before("weight layout")
         w = csr_weights(graph, w_pairs, dtype)
         del w_pairs  # the coarsening reads the same values from ``w``
     swap_w = None
@@ -307,10 +357,6 @@ def weigh(graph, rules: Rules, features=None, release=None
         swap_w = convex_scaled(graph, w, alpha=p.alpha, eta_convex=p.eta_convex,
                                factor=rules.kind.swap_eta_convex, weighting=p.weighting
                                ).astype(w.dtype, copy=False)
-    if not rules.cleanup or release is not None:
-        # not needed again by this run; or, on a large graph, not held through the
-        # passes (17 bytes per adjacency): the clean-up computes them again, the same
-        graph.release_terms()
     return w, swap_w
 
 
@@ -359,12 +405,11 @@ def initialize(graph, w: np.ndarray, rules: Rules, hooks,
     """
     if initial is not None:
         return np.asarray(initial, dtype=np.int64), 1
-    release = hooks.release_of(graph)
-    if release is not None and rules.coarsen > 1:
-        release(keep=COARSENING_READS)  # the pairs and spans: not held at the coarsening's peak
+    if rules.coarsen > 1:
+        hooks.before("coarsening")
     return start_centers(graph, w, rules.params, rules.k, rules.r, rules.coarsen,
                          rules.center_tol, hooks.timings, hooks.describe,
-                         on_coarsened=hooks.release_of(graph))
+                         on_coarsened=lambda: hooks.before("passes"))
 
 
 def iterate_passes(graph, w: np.ndarray, swap_w, init: np.ndarray, rules: Rules,
