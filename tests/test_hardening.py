@@ -143,3 +143,26 @@ def test_compressed_files_are_read_as_bounded_streams(tmp_path, capsys):
     small = tmp_path / "small.off.gz"  # (a whole file still reads)
     small.write_bytes(gzip.compress(b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"))
     assert read_mesh(small).n_faces == 1
+
+
+@pytest.mark.parametrize("quaternion, up", [("1 0 0 0", [0.0, -1.0, 0.0]),
+                                            ("0 1 0 0", [0.0, 1.0, 0.0]),
+                                            ("0.7071068 0 0 0.7071068", [1.0, 0.0, 0.0])])
+def test_an_organized_pcd_stands_on_its_sensors_up(tmp_path, quaternion, up):
+    """Pictures of an RGB-D frame came out upside down (up y; a camera's y points down)."""
+    pytest.importorskip("pypcd4")
+    from superfacets import read_cloud
+    from superfacets.io.orientation import up_axis
+
+    pts = np.random.default_rng(0).random((6, 3)).astype("<f4")
+    header = (f"# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+              f"WIDTH 3\nHEIGHT 2\nVIEWPOINT 0 0 0 {quaternion}\nPOINTS 6\nDATA binary\n")
+    path = tmp_path / "frame.pcd"
+    path.write_bytes(header.encode() + pts.tobytes())
+    cloud = read_cloud(path)
+    np.testing.assert_allclose(cloud.up, up, atol=1e-6)
+    assert up_axis(cloud, path)[1] == "the file's"
+    flat = tmp_path / "flat.pcd"  # not an image: no sensor frame is declared
+    flat.write_bytes(header.replace("WIDTH 3\nHEIGHT 2", "WIDTH 6\nHEIGHT 1").encode()
+                     + pts.tobytes())
+    assert read_cloud(flat).up is None and up_axis(read_cloud(flat), flat) == ("y", "the default")

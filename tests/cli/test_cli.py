@@ -1,5 +1,6 @@
 import numpy as np
 import pytest
+import trimesh
 from conftest import MESHES, need
 
 from superfacets import read_labels, read_mesh, segment, write_mesh
@@ -271,11 +272,16 @@ def test_segment_lists_the_files_it_wrote_and_the_picture_axis(tmp_path, small_o
     assert main(["segment", str(small_off), "-k", "20", "-o", str(seg), "--picture",
                  str(png)]) == 0
     out, err = capsys.readouterr()
-    assert f"wrote {seg} (labels), {png} (picture, up axis y: give --up z" in out
+    assert f"wrote {seg} (labels), {png} (picture, up axis y (the default; --up z" in out
     assert "nothing was saved" not in out + err
     assert main(["segment", str(small_off), "-k", "20", "--picture", str(png), "--up", "z"]) == 0
     out, err = capsys.readouterr()
     assert f"wrote {png} (picture, up axis z)" in out and "nothing was saved" not in err
+    stl = tmp_path / "part.stl"  # an STL stands on z, as CAD and 3D printing write it
+    m = read_mesh(small_off)
+    trimesh.Trimesh(m.vertices, m.faces, process=False).export(stl)
+    assert main(["segment", str(stl), "-k", "20", "--picture", str(png)]) == 0
+    assert "up axis z (STL's convention)" in capsys.readouterr().out
     assert main(["segment", str(small_off), "-k", "20"]) == 0
     assert "nothing was saved" in capsys.readouterr().err
 
@@ -431,10 +437,15 @@ def test_pictures_of_a_cloud_with_an_up_axis_stand_on_it():
     from superfacets.cli.options import up_of
 
     las = SimpleNamespace(up=np.array([0.0, 0.0, 1.0]))
-    assert up_of(SimpleNamespace(up=None), las) == "z"
-    assert up_of(SimpleNamespace(up=None), SimpleNamespace(up=np.array([0.0, -2.0, 0.1]))) == "-y"
-    assert up_of(SimpleNamespace(up="x"), las) == "x"
-    assert up_of(SimpleNamespace(up=None), SimpleNamespace()) is None
+    assert up_of(SimpleNamespace(up=None), las) == ("z", "the file's")
+    assert up_of(SimpleNamespace(up=None), SimpleNamespace(up=np.array([0.0, -2.0, 0.1])))[0] \
+        == "-y"
+    assert up_of(SimpleNamespace(up="x"), las) == ("x", "--up")
+    mesh = SimpleNamespace()  # a mesh: its format's convention, else y
+    assert up_of(SimpleNamespace(up=None, mesh="a.stl.gz"), mesh) == ("z", "STL's convention")
+    assert up_of(SimpleNamespace(up=None, mesh="a.glb"), mesh) == ("y", "GLB's convention")
+    assert up_of(SimpleNamespace(up=None, mesh="a.off"), mesh) == ("y", "the default")
+    assert up_of(SimpleNamespace(up=None), SimpleNamespace()) == ("y", "the default")
 
 
 def test_the_summary_is_in_the_singular_where_there_is_one(tmp_path, small_off, capsys):

@@ -379,7 +379,7 @@ def test_batch_says_the_pictures_up_axis(corpus, tmp_path, capsys):
     pytest.importorskip("pyvista")
     assert main(["batch", str(corpus / "a" / "m1.off"), "-o", str(tmp_path / "o"), "-k", "8",
                  "-j", "1", "--picture"]) == 0
-    assert "up axis y (the default: --up z for z-up meshes)" in capsys.readouterr().out
+    assert "up axis of each input's file or format (else y" in capsys.readouterr().out
     assert main(["batch", str(corpus / "a" / "m2.off"), "-o", str(tmp_path / "p"), "-k", "8",
                  "-j", "1", "--html", "--up", "z"]) == 0
     assert "pages drawn with up axis z" in capsys.readouterr().out

@@ -84,7 +84,7 @@ def cmd_batch(args) -> int:
     s = run_batch(args.inputs, args.output_dir, args.n_segments, radius=args.radius,
                   labels=args.labels, header=args.header, colored_mesh=args.colored_mesh,
                   vertex_colors=args.vertex_colors, picture=args.picture, html=args.html,
-                  up=args.up or "y", view=args.view,
+                  up=args.up, view=args.view,
                   per_object=args.per_object, adaptive=args.adaptive,
                   extent_weight=args.extent_weight,
                   workers=args.workers, scheduler=args.scheduler,
@@ -100,7 +100,7 @@ def cmd_batch(args) -> int:
               + f" -> {s.manifest}")
         if args.picture or args.html:
             print("pictures and pages drawn with up axis " + (
-                args.up or "y (the default: --up z for z-up meshes)"))
+                args.up or "of each input's file or format (else y; --up for another)"))
         for path, error in s.failures[:10]:
             print(f"failed: {path}: {error}", file=sys.stderr)
         if len(s.failures) > 10:

@@ -107,19 +107,23 @@ def scan_cloud(data, args):
     return replace(data, **changes)
 
 
-def up_of(args, data) -> str | None:
-    """The pictures' up axis: ``--up``, else the input's own (a LAS cloud's: z), else None
-    (the default, y)."""
+def up_of(args, data, path=None) -> tuple[str, str]:
+    """The pictures' up axis and what said so: ``--up``, else the input's own or its
+    format's (:func:`superfacets.io.orientation.up_axis`), else y."""
     if getattr(args, "up", None):
-        return args.up
-    up = getattr(data, "up", None)
-    if up is None:
-        return None
-    import numpy as np
+        return args.up, "--up"
+    from ..io.orientation import up_axis
 
-    up = np.asarray(up, dtype=np.float64).reshape(-1)
-    i = int(np.argmax(np.abs(up)))
-    return ("-" if up[i] < 0 else "") + "xyz"[i]
+    return up_axis(data, path if path is not None else getattr(args, "mesh", None))
+
+
+def said_up(up: tuple[str, str]) -> str:
+    """``up axis z (STL's convention)``, for messages; the default names ``--up``."""
+    axis, source = up
+    if source == "--up":
+        return f"up axis {axis}"
+    hint = "; --up z for a z-up mesh" if source == "the default" else ""
+    return f"up axis {axis} ({source}{hint})"
 
 
 def fmt_value(v) -> str:
@@ -198,8 +202,9 @@ def add_camera_options(p, size: str) -> None:
                    help="camera: auto (default: along the mesh's thinnest axis), front, back, "
                         "left, right, top, bottom, or a direction x,y,z from the mesh")
     p.add_argument("--up", default=None, choices=("x", "y", "z", "-x", "-y", "-z"),
-                   help="the mesh's up axis (default: y, as the benchmark's meshes; the "
-                        "picture commands say which they used)")
+                   help="the input's up axis (default: the file's own, e.g. a LAS "
+                        "cloud's z or an RGB-D scan's sensor up, else its format's: STL z, "
+                        "glTF y, else y; the picture commands say which they used)")
     if size:
         p.add_argument("--size", type=size_arg, default=size_arg(size), metavar="WxH",
                        help=f"image size in pixels (default: {size})")

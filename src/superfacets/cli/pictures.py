@@ -17,6 +17,8 @@ from .options import (
     int_arg,
     labels_for,
     read_usable,
+    said_up,
+    up_of,
 )
 
 __all__ = ["add_parsers"]
@@ -98,12 +100,12 @@ def cmd_render(args) -> int:
     mesh = read_usable(args.mesh)
     labels, _, elements = labels_for(args, mesh)
     t0 = time.perf_counter()
-    render(mesh, labels, out, size=args.size, view=args.view, up=args.up or "y",
+    up = up_of(args, mesh)
+    render(mesh, labels, out, size=args.size, view=args.view, up=up[0],
            background=args.background, boundaries=not args.no_boundaries,
            line_width=args.line_width, title=args.title, zoom=args.zoom, elements=elements)
     if not args.quiet:
-        up = args.up or "y (the default: --up z for z-up meshes)"
-        print(f"wrote {out} ({args.size[0]}x{args.size[1]}, {mesh.n_faces} faces, up axis {up}, "
+        print(f"wrote {out} ({args.size[0]}x{args.size[1]}, {mesh.n_faces} faces, {said_up(up)}, "
               f"rendered in {time.perf_counter() - t0:.2f} s)")
     return 0
 
@@ -147,11 +149,11 @@ def cmd_panel(args) -> int:
         if len(args.titles) != len(items):
             raise ParameterError(f"--titles: {len(args.titles)} given for {len(items)} panels")
         items = [(m, lab, t) for (m, lab, _), t in zip(items, args.titles)]
-    render_panel(items, out, ncols=args.columns, size=args.size, view=args.view, up=args.up or "y",
+    up = up_of(args, mesh)
+    render_panel(items, out, ncols=args.columns, size=args.size, view=args.view, up=up[0],
                  background=args.background, boundaries=not args.no_boundaries,
                  line_width=args.line_width, zoom=args.zoom)
-    print(f"wrote {out}: {len(items)} panels, up axis "
-          f"{args.up or 'y (the default: --up z for z-up meshes)'}")
+    print(f"wrote {out}: {len(items)} panels, {said_up(up)}")
     return 0
 
 
@@ -169,7 +171,7 @@ def cmd_view(args) -> int:
 
         mesh, labels = faces_to_draw(mesh, labels, elements)
     show(mesh, labels, title=Path(args.mesh).name, view=args.view,
-         up=args.up or "y")  # pragma: no cover
+         up=up_of(args, mesh)[0])  # pragma: no cover
     return 0  # pragma: no cover
 
 
@@ -181,7 +183,7 @@ def cmd_html(args) -> int:
     mesh = read_usable(args.mesh)
     labels, info, elements = labels_for(args, mesh)
     write_html(out, mesh, labels, title=args.title or Path(args.mesh).name, info=info,
-               background=args.background, view=args.view, up=args.up or "y",
+               background=args.background, view=args.view, up=up_of(args, mesh)[0],
                elements=elements)
     if not args.quiet:
         print(f"wrote {out} ({out.stat().st_size / 1e6:.1f} MB): open it in a browser")

@@ -27,6 +27,7 @@ from .options import (
     method_kwargs,
     named_after,
     read_usable,
+    said_up,
     scan_cloud,
     up_of,
 )
@@ -341,15 +342,17 @@ def _run(args, data, kwargs):
 
 def _write_and_say(args, data, result, kind, outputs, elapsed) -> None:
     """Write the outputs, then the summary, what was written and the notes."""
+    from ..io.orientation import sensor_view
     from ..viz.outputs import write_result
 
-    up = up_of(args, data)  # (a LAS cloud is upright with z up)
+    up = up_of(args, data)  # (a LAS cloud is upright with z up, an STL mesh too)
+    view = args.view if args.view is not None else sensor_view(data)  # (an RGB-D frame)
     write_result(data, result, kind, Path(args.mesh).name, labels=outputs["labels"],
                  header=args.header, colored=outputs["colored"],
                  vertex_colors=args.vertex_colors, picture=outputs["picture"],
                  html=outputs["html"], element_options=dict(
                      n_neighbors=args.neighbors, neighbor_radius=args.neighbor_radius),
-                 up=up or "y", view=args.view, graph=outputs["graph"],
+                 up=up[0], view=view, graph=outputs["graph"],
                  levels=args.levels, level_cost=args.level_cost,
                  extent_weight=args.extent_weight)
     if args.quiet:
@@ -367,7 +370,7 @@ def _write_and_say(args, data, result, kind, outputs, elapsed) -> None:
 
 def _say_what_was_written(seg_out, ply_out, png_out, html_out, report, up,
                           graph_out=None) -> None:
-    axis = f"up axis {up}" if up else "up axis y: give --up z for a z-up mesh"
+    axis = said_up(up)
     written = [f"{path} ({what})" for path, what in
                ((seg_out, "labels"), (ply_out, "coloured mesh"), (png_out, f"picture, {axis}"),
                 (html_out, "page: open it in a browser"), (graph_out, "superfacet graph"))

@@ -221,7 +221,7 @@ def _read_pcd(path: Path) -> dict:
                 break
         meta = pc.metadata
         height, width = int(meta.height), int(meta.width)
-        viewpoint = np.asarray(meta.viewpoint[:3], dtype=np.float64)
+        viewpoint = np.asarray(meta.viewpoint, dtype=np.float64)
     except MeshFormatError:
         raise
     except Exception as exc:  # noqa: BLE001 - pypcd4/pydantic raise many types
@@ -234,9 +234,13 @@ def _read_pcd(path: Path) -> dict:
         bad = ~np.isfinite(nrm).all(axis=1) | (np.abs(nrm).sum(axis=1) == 0)
         if bad.any():  # PCL leaves normals NaN where it could not estimate one
             nrm = None
-    return {"points": pts, "normals": nrm, "colors": col, "allow_invalid": True,
-            "viewpoint": viewpoint,
-            "shape": (height, width) if height > 1 else None}
+    out = {"points": pts, "normals": nrm, "colors": col, "allow_invalid": True,
+           "viewpoint": viewpoint[:3], "shape": (height, width) if height > 1 else None}
+    if height > 1:  # an image of a camera: up is its -y, turned as the sensor was
+        from .orientation import sensor_up
+
+        out["up"] = sensor_up(viewpoint)
+    return out
 
 
 def _check_pcd_header(path: Path) -> None:

@@ -34,6 +34,7 @@ from ..._runtime import interrupts
 from ...elements.builders import kind_for
 from ...elements.kinds import kind_of
 from ...errors import ParameterError
+from ...io.orientation import up_axis
 from .collect import broken_link_reason, collect_inputs, no_inputs, output_names
 from .engine import Engine, PeakMemory, error_text
 from .manifest import (
@@ -141,7 +142,7 @@ def _segment_and_write(task: dict, label_rel: str) -> dict:
                  html=html, element_options={k: opts[k] for k in ("n_neighbors",
                                                                   "neighbor_radius")
                                              if k in opts},
-                 up=outs.get("up", "y"), view=outs.get("view"))
+                 up=outs.get("up") or up_axis(data, task["input"])[0], view=outs.get("view"))
     return {"elements": kind, "n_elements": int(n), "segments": int(result.n_segments),
             "passes": int(result.n_iter), "converged": bool(result.converged)}
 
@@ -197,7 +198,7 @@ class BatchSummary:
 def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
               radius: float | None = None, labels: str = "seg", header: bool = False,
               colored_mesh: str | None = None, vertex_colors: bool = False,
-              picture: bool = False, html: bool = False, up="y", view=None,
+              picture: bool = False, html: bool = False, up=None, view=None,
               per_object: bool = False, adaptive: int | None = None,
               extent_weight: float | None = None,
               workers: int | None = None, scheduler: str | None = None,
@@ -226,7 +227,8 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         (faces, vertices or points).
     up, view : optional
         The pictures' and pages' camera (:func:`superfacets.viz.camera.view_frame`;
-        default: up is +y, the view automatic).
+        default: each input's up axis, :func:`superfacets.io.orientation.up_axis`, the
+        view automatic).
     per_object : bool, default False
         Scenes: each object segmented on its own (k shared out by area).
     adaptive : int, optional
@@ -305,7 +307,7 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
     if picture or html:
         from ...viz.camera import check_camera
 
-        check_camera(view, up)
+        check_camera(view, up or "y")
     if picture:
         from ..._runtime.extras import require
 
