@@ -66,11 +66,13 @@ def test_expand_grid_resolves_and_validates():
                               "max_iter": 50, "tol": 0.001, "window": 2.0, "center_tol": "auto",
                               "coarsen": "auto", "split_merge": "auto", "paper": False,
                               "density": "auto", "roughness": 0.0, "merge_from": "auto",
-                              "assignment": "auto"}
+                              "assignment": "auto", "beta": "auto"}
     assert isinstance(cfgs[1].kwargs["alpha"], float)
     assert expand_grid("superfacets", alpha=[200, 200.0]) == expand_grid("superfacets", alpha=200)
-    with pytest.raises(ParameterError, match="no parameter 'beta'"):
-        expand_grid("superfacets", beta=[1])
+    with pytest.raises(ParameterError, match="no parameter 'gamma'"):
+        expand_grid("superfacets", gamma=[1])
+    assert [c.kwargs["beta"] for c in expand_grid("superfacets", beta=["auto", 0])] == [
+        "auto", "0"]  # ("auto" parameters keep their text: the run reads it)
     with pytest.raises(ParameterError, match="assignment must be auto or bounded or exact"):
         expand_grid("superfacets", assignment=["exact", "nearest"])
     assert [c.kwargs["assignment"] for c in expand_grid(
@@ -371,9 +373,9 @@ def test_param_syntax_applies_to_each_method_that_has_the_name():
                                                  "superfacets.alpha=0"]))
     assert given == {"superfacets": {"max_iter": ["5", "7"], "alpha": ["0"]},
                      "vsa": {"max_iter": ["5", "7"], "metric": ["l2"]}}
-    with pytest.raises(ParameterError, match=r"--param beta: no method given has it.*vsa: "
+    with pytest.raises(ParameterError, match=r"--param gamma: no method given has it.*vsa: "
                                              r"init, insert_iter, max_iter, metric"):
-        method_grid([sf, vsa], parse_params(["beta=1"]))
+        method_grid([sf, vsa], parse_params(["gamma=1"]))
     with pytest.raises(ParameterError, match="NAME=V1,V2"):
         parse_params(["alpha"])
 

@@ -150,10 +150,12 @@ def test_a_colour_edge_on_a_flat_mesh_becomes_a_border(elements):
     blue = mesh.element_colors(elements)[:, 2]
     pure = (blue == 0) | (blue == 1)  # faces across the edge have a mixed colour: left out
     side = blue[pure] == 1
-    blind = segment(mesh, 16, elements=elements)
+    blind = segment(mesh, 16, elements=elements, beta=0)
     seeing = segment(mesh, 16, elements=elements, beta=400)
     assert minority(blind.labels[pure], side) > 20
     assert minority(seeing.labels[pure], side) < 0.2 * minority(blind.labels[pure], side)
+    auto = segment(mesh, 16, elements=elements)  # the default reads the mesh's colours
+    assert minority(auto.labels[pure], side) < 0.2 * minority(blind.labels[pure], side)
     # the same as passing the colours as features
     given = segment(Mesh(mesh.vertices, mesh.faces), 16, elements=elements, beta=400,
                     features=mesh.element_colors(elements))
@@ -206,9 +208,11 @@ def test_tiled_mesh_runs_read_the_colours(tmp_path):
     blue = mesh.element_colors("faces")[:, 2]
     pure = (blue == 0) | (blue == 1)
     side = blue[pure] == 1
-    blind = segment_tiled(mesh, 16, tiles=2)
+    blind = segment_tiled(mesh, 16, tiles=2, beta=0)
     seeing = segment_tiled(mesh, 16, tiles=2, beta=400)  # spilled: the faces' colours
     assert minority(seeing.labels[pure], side) < 0.2 * minority(blind.labels[pure], side)
+    auto = segment_tiled(mesh, 16, tiles=2)  # each tile reads the term from its colours
+    assert minority(auto.labels[pure], side) < 0.2 * minority(blind.labels[pure], side)
     # a binary PLY read in chunks: each face the mean of its vertices' 8-bit colours
     tm = trimesh.Trimesh(mesh.vertices, mesh.faces, process=False)
     tm.visual.vertex_colors = np.c_[np.round(mesh.colors * 255),

@@ -140,7 +140,7 @@ def test_merge_from_is_chosen_from_the_kind_and_the_density():
     even = replace(DEFAULTS, density=0.0)
     assert merge_from_of(even, "points") == 5
     assert merge_from_of(replace(even, density=0.5), "points") == 1  # sweeps, RGB-D frames
-    assert merge_from_of(replace(even, beta=10.0), "points") == 1  # colour: geometric merges
+    assert merge_from_of(replace(even, beta=10.0), "points") == 5  # colour: merges of one colour
     assert merge_from_of(replace(even, paper=True), "points") == 1
     assert merge_from_of(even, "points", tiled=True) == 1
     assert [merge_from_of(even, kind) for kind in ("faces", "vertices", "cells")] == [1, 1, 1]
@@ -305,3 +305,27 @@ def test_sorted_unique_is_numpys_unique():
         got, want = sorted_unique(values), np.unique(values)
         assert got.dtype == want.dtype
         np.testing.assert_array_equal(got, want)
+
+
+def test_the_merges_do_not_join_neighbours_of_another_colour():
+    # a flat floor, a third of it painted: flat merges join the paint to the floor unless
+    # the colour term is on; with it, only neighbours of one colour merge
+    from superfacets import PointCloud
+
+    rng = np.random.default_rng(5)
+    xy = rng.random((6000, 2))
+    painted = xy[:, 0] > 0.62
+    col = np.where(painted[:, None], [0.2, 0.3, 0.8], [0.8, 0.8, 0.75])
+    col = np.clip(col + rng.normal(0, 0.02, col.shape), 0, 1)
+    cloud = PointCloud(np.c_[xy, rng.normal(0, 1e-3, 6000)], colors=col)
+    blind, seeing = segment(cloud, 6, beta=0), segment(cloud, 6)
+    assert blind.params["merge_from"] == seeing.params["merge_from"] == 5
+
+    def mixed(labels):  # points in a superpoint whose majority is of the other side
+        out = 0
+        for s in np.unique(labels):
+            m = painted[labels == s]
+            out += min(m.sum(), (~m).sum())
+        return out
+
+    assert mixed(seeing.labels) < 0.1 * mixed(blind.labels)

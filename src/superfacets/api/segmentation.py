@@ -115,14 +115,17 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, features=None,
         ``cleanup=True``, ``split_merge=True``, ``tol``, ``center_tol``,
         ``coarsen``, ``beta``, ``min_elements``, ``density``, ``roughness`` or
         ``merge_from`` above 1.
-    beta : float, default 0
-        Weight of the feature term (not in the paper): ``beta *
-        |e_ij| * ||f_i - f_j||`` joins eq. 3's numerator, so crossing a
-        colour (feature) edge costs as crossing a crease does; the clean-up
-        prefers such edges for boundaries likewise. With RGB in ``[0, 1]`` and
-        ``beta = alpha``, a colour jump of 0.5 costs what a concave right-angle
-        crease costs. 0 gives the weights of the paper bit for bit
-        (``docs/notes/method.md``, "Features").
+    beta : float or None, default None
+        Weight of the feature (colour) term (not in the paper): ``beta * |e_ij| *
+        max(0, ||f_i - f_j|| - floor)`` joins eq. 3's numerator, so crossing a colour
+        (feature) edge costs as crossing a crease does; the clean-up prefers such
+        edges for boundaries likewise. ``floor`` is the features' noise, the difference
+        90 % of neighbouring elements stay under. None (the default) reads ``beta`` from the data
+        where the input has colours or ``features`` are given: the term then weighs,
+        on average over the adjacencies, as much as distance and angle together
+        (:func:`superfacets.method.weights.feature_scale`); 0 without colours. 0
+        gives the weights of the paper bit for bit (``docs/notes/method.md``,
+        "Features"). The run's value is ``result.params["beta"]``.
     features : (N, d) float ndarray, optional
         One feature per input row (face, vertex or point), for ``beta > 0``.
         Default: the input's colours (a point cloud read from PLY, PCD or LAS

@@ -40,6 +40,12 @@ def add_parsers(sub) -> None:
     x.add_argument("--param", action="append", default=[], metavar="NAME=V1,V2",
                    help="values of a method parameter, for each method that has it "
                         "(METHOD.NAME=... for one method), repeatable (e.g. init=grid,flood)")
+    x.add_argument("--dataset", choices=("psb", "rooms"), default="psb",
+                   help="psb: the Princeton benchmark's meshes (default); rooms: made-up "
+                        "labelled rooms (S3DIS-like point clouds with colour, judged against "
+                        "their classes; --elements points)")
+    x.add_argument("--rooms", type=int_arg, default=10, metavar="N",
+                   help="with --dataset rooms: the first N rooms (default: 10)")
     x.add_argument("--ids", default=None, metavar="LIST",
                    help="mesh ids, e.g. 1-20,45 (default: all)")
     x.add_argument("--categories", default=None, metavar="LIST",
@@ -107,6 +113,12 @@ def select_meshes(args):
     from ..errors import ParameterError
     from ..evaluation.datasets.psb import first_per_category, list_meshes, psb_root
 
+    if getattr(args, "dataset", "psb") == "rooms":
+        from ..evaluation.datasets.rooms import room_entries
+
+        if "points" not in args.elements.split(","):
+            raise ParameterError("--dataset rooms holds point clouds: add --elements points")
+        return room_entries(args.rooms)
     root = psb_root(args.psb)
     meshes = list_meshes(root)
     if args.ids:

@@ -77,8 +77,10 @@ SHOWN = {
                 f"{COARSE_MIN_PER_SEGMENT_POINTS:,} points per superpoint, clusters of at "
                 "most n_neighbors / 2 points; off with --tol 0)"),
     "beta": ("method", "B", "weight of the colour term: crossing a colour edge costs as "
-             "crossing a crease does (the input's RGB: PLY, PCD or LAS points); 0: off "
-             f"(default: {_D.beta:g})"),
+             "crossing a crease does (the input's RGB: PLY, PCD or LAS points, a mesh's "
+             "vertex or face colours); auto: differences within the colours' noise cost "
+             "nothing and the rest weighs on average as much as distance and angle; 0: off "
+             "(default: auto where the input has colours)"),
     "min_elements": ("method", "N", "merge superfacets (superpoints) of fewer than N faces "
                      "(vertices, points) into a neighbour at the end; the count falls by "
                      f"those merged (default: {_D.min_elements}, none)"),
@@ -146,7 +148,7 @@ def _parse(p):
         return None
     if p.type.startswith("int"):
         return int_arg
-    if p.name == "density":  # (None is spelled "auto")
+    if p.name in ("density", "beta"):  # (None is spelled "auto")
         return auto_float_arg
     return float_arg
 

@@ -173,7 +173,10 @@ def _summary(name: str, mesh, result, seconds: float, elements: str = "faces",
         what = (f"{faces}{kind}{objs}" if elements == "faces" else
                 f"{counted(mesh.n_vertices, 'vertex', 'vertices')} ({faces}{kind})")
         segs = kind_of(elements).segment_word
-    start = (getattr(result, "params", None) or {}).get("start")
+    params = getattr(result, "params", None) or {}
+    if params.get("feature_floor") is not None:  # the colour term ran
+        segs += f", following colour (beta {params['beta']:.3g}; --beta 0: off)"
+    start = params.get("start")
     if start:  # --adaptive: the iterations and the hints are of the start's segmentation
         segs = f"content-adaptive {segs} (merged from {start} times as many)"
     t = getattr(result, "timings", None) or {}

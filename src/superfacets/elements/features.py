@@ -5,7 +5,36 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["features_of", "per_element"]
+__all__ = ["features_of", "per_element", "colors_or_features"]
+
+
+def colors_or_features(src, features):
+    """What a run with ``beta=None`` may weigh: ``features`` (one row per input row), else
+    the input's colours (a cloud's, a mesh's vertex or face colours), else None.
+
+    Parameters
+    ----------
+    src : ElementInput
+    features : (N, d) float ndarray or None
+
+    Returns
+    -------
+    (N, d) float ndarray or None
+        One row per input row (:func:`per_element` makes them one per element).
+
+    Raises
+    ------
+    ParameterError
+        Never (a tetrahedral mesh's materials are read only with ``beta > 0``).
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.elements.builders import elements_of
+    >>> colors_or_features(elements_of(trimesh.creation.box()), None) is None
+    True
+    """
+    return features if features is not None else src.colors()
 
 
 def features_of(src, features):

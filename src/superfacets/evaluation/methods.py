@@ -216,9 +216,11 @@ def _auto(value, kind):
 
 
 def _segment_options(center_tol="auto", coarsen="auto", cleanup="auto", split_merge="auto",
-                     density="auto", merge_from="auto", assignment="auto", **params) -> dict:
+                     density="auto", merge_from="auto", assignment="auto", beta="auto",
+                     **params) -> dict:
     """The keyword arguments of :func:`superfacets.segment` from registry values."""
     return dict(center_tol=_auto(center_tol, float), coarsen=_auto(coarsen, int),
+                beta=_auto(beta, float),
                 cleanup=_auto(cleanup, parse_bool), split_merge=_auto(split_merge, parse_bool),
                 density=_auto(density, float), merge_from=_auto(merge_from, int),
                 assignment=_auto(assignment, parse_assignment), **params)
@@ -306,7 +308,8 @@ _SF_DEFAULTS = dict(alpha=DEFAULTS.alpha, eta_convex=DEFAULTS.eta_convex, init=I
                     window=DEFAULTS.window, max_iter=DEFAULTS.max_iter, tol=DEFAULTS.tol,
                     center_tol="auto", coarsen="auto", cleanup="auto",
                     split_merge="auto", paper=DEFAULTS.paper, density="auto",
-                    roughness=DEFAULTS.roughness, merge_from="auto", assignment="auto")
+                    roughness=DEFAULTS.roughness, merge_from="auto", assignment="auto",
+                    beta="auto")
 register_method(
     "superfacets", _run_superfacets, defaults=_SF_DEFAULTS,
     sweep={"alpha": DEFAULT_ALPHAS},

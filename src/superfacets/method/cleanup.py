@@ -91,7 +91,7 @@ def band_for(kind: str) -> float:
 
 def cut_costs(graph, *, alpha: float = DEFAULTS.alpha, eta_convex: float = DEFAULTS.eta_convex,
               crease: float = CREASE, features: np.ndarray | None = None,
-              beta: float = 0.0) -> np.ndarray:
+              beta: float = 0.0, floor: float = 0.0) -> np.ndarray:
     """Cost of a superfacet boundary along each adjacency: its length, less on creases.
 
     ``c_ij = |e_ij| / (1 + crease * alpha * eta * theta / pi)``, with
@@ -111,11 +111,12 @@ def cut_costs(graph, *, alpha: float = DEFAULTS.alpha, eta_convex: float = DEFAU
     crease : float, default 0.1
         ``>= 0``; 0 weighs every boundary by its length alone.
     features : (n, d) float ndarray, optional
-    beta : float, default 0
+    beta, floor : float, default 0
         The feature term of the weights (:func:`~superfacets.method.weights.paper_weights`):
-        with ``beta > 0`` a feature jump ``||f_i - f_j||`` lowers the cost as
+        with ``beta > 0`` a feature jump (``||f_i - f_j||`` beyond ``floor``:
+        :func:`~superfacets.method.weights.feature_jumps`) lowers the cost as
         the crease does, ``c_ij = |e_ij| / (1 + crease * (alpha * eta * theta
-        / pi + beta * ||f_i - f_j||))``.
+        / pi + beta * jump))``.
 
     Returns
     -------
@@ -149,7 +150,7 @@ def cut_costs(graph, *, alpha: float = DEFAULTS.alpha, eta_convex: float = DEFAU
     factor = crease * alpha / np.pi
     f = None
     if beta > 0:
-        from .weights import check_features
+        from .weights import check_features, feature_jumps
 
         f = check_features(features, g)
 
@@ -157,7 +158,7 @@ def cut_costs(graph, *, alpha: float = DEFAULTS.alpha, eta_convex: float = DEFAU
         eta = np.where(t.concave[sl], 1.0, eta_convex)
         if f is None:
             return g.lengths[sl] / (1.0 + factor * eta * np.arccos(t.cos[sl]))
-        jump = np.linalg.norm(f[g.pairs[sl, 0]] - f[g.pairs[sl, 1]], axis=1)
+        jump = feature_jumps(f, g.pairs[sl], floor)
         return g.lengths[sl] / (1.0 + factor * eta * np.arccos(t.cos[sl])
                                 + crease * beta * jump)
 
@@ -183,12 +184,13 @@ def _checked_centers(labels, centers, sizes, positions) -> np.ndarray:
     return centers
 
 
-def _cut_costs_per_entry(g, alpha, eta_convex, crease, features, beta, r) -> np.ndarray:
+def _cut_costs_per_entry(g, alpha, eta_convex, crease, features, beta, r,
+                         floor: float = 0.0) -> np.ndarray:
     """The cost of cutting each CSR entry's adjacency, times the radius ``r``."""
     if beta > 0:
         return np.ascontiguousarray(
             cut_costs(g, alpha=alpha, eta_convex=eta_convex, crease=crease, features=features,
-                      beta=beta)[g.dual_edge] * r)
+                      beta=beta, floor=floor)[g.dual_edge] * r)
     cut_costs_csr = native.kernel("terms.cut_costs_csr")  # the same values, in one pass
 
     t = g.terms
@@ -216,7 +218,8 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
                      crease: float | None = None, smoothness: float | None = None,
                      band: float | None = None, sweeps: int = SWEEPS,
                      connectivity: bool = True, n_threads: int | None = None,
-                     features: np.ndarray | None = None, beta: float = 0.0) -> np.ndarray:
+                     features: np.ndarray | None = None, beta: float = 0.0,
+                     floor: float = 0.0) -> np.ndarray:
     """Straighten superfacet boundaries and move them onto nearby creases.
 
     For every pair of adjacent superfacets, the elements within ``band * r``
@@ -262,7 +265,7 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
     n_threads : int, optional
         Threads cutting bands at once (default: as :func:`superfacets.segment`);
         the labels do not depend on it.
-    features, beta
+    features, beta, floor
         The feature term (:func:`cut_costs`); ``beta = 0`` (default) ignores features.
 
     Returns
@@ -324,10 +327,10 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
     labels, centers, order = _numbered_by_centers(labels, centers)
     pinned = np.zeros(n, dtype=np.bool_)
     pinned[centers] = True
-
     de = g.dual_edge
     cut_csr = _cut_costs_per_entry(g, alpha, eta_convex, check_nonneg("crease", crease),
-                                   features, check_nonneg("beta", beta), r)
+                                   features, check_nonneg("beta", beta), r,
+                                   check_nonneg("floor", floor))
     heap = g.indices.shape[0] + n + 1
     smooth = smoothness / (r * r)
     dirty = None

@@ -102,7 +102,7 @@ def clean_up(graph, labels: np.ndarray, centers: np.ndarray, rules: Rules,
     return clean_boundaries(graph, labels, centers, radius=rules.r, eta_convex=p.eta_convex,
                             alpha=p.alpha if p.weighting == "paper" else _D.alpha,
                             connectivity=p.enforce_connectivity, n_threads=p.n_threads,
-                            features=features, beta=p.beta)
+                            features=features, beta=p.beta, floor=rules.feature_floor)
 
 
 def merge_small(graph, labels: np.ndarray, centers: np.ndarray, rules: Rules) -> np.ndarray:

@@ -33,7 +33,8 @@ import numpy as np
 from .._kernels import native
 from .finish import exact_count
 
-__all__ = ["merge_to_count", "flat_merges", "flat_merge_nodes", "noise_variance",
+__all__ = ["merge_to_count", "flat_merges", "flat_merge_nodes", "same_feature_edges",
+           "noise_variance",
            "neighbourhood_noise", "FLAT_NOISE", "NOISE_SAMPLE"]
 
 #: A flat merge's largest rise of the squared plane distances, per element of the
@@ -123,7 +124,8 @@ def _plane_residual(graph, pick: np.ndarray, rings: int) -> tuple[np.ndarray, np
 
 
 def flat_merges(graph, labels: np.ndarray, k: int, max_rise: float, *,
-                alpha: float = 0.0, eta_convex: float = 0.0, finer=None) -> np.ndarray:
+                alpha: float = 0.0, eta_convex: float = 0.0, finer=None,
+                features: np.ndarray | None = None, max_jump: float = 0.0) -> np.ndarray:
     """Phase 1 of :func:`merge_to_count`: merge adjacent superpoints whose union stays
     flat, the cheapest by Ward's cost first, while more than ``k`` remain.
 
@@ -149,6 +151,11 @@ def flat_merges(graph, labels: np.ndarray, k: int, max_rise: float, *,
     finer : tuple, optional
         :func:`~superfacets.graph.adjacency.crossing_adjacencies` of ``labels`` (or of
         labels they coarsen), if already found.
+    features : (n, d) float ndarray, optional
+        With them, only neighbours whose mean features differ by at most ``max_jump``
+        may merge (a run's colour term: a board on a wall is flat too).
+    max_jump : float, default 0
+        ``>= 0`` (a run's feature floor: the colours' noise between neighbouring points).
 
     Returns
     -------
@@ -177,8 +184,37 @@ def flat_merges(graph, labels: np.ndarray, k: int, max_rise: float, *,
     """
     from ..graph.hierarchy import planarity_graph
 
-    pg = planarity_graph(graph, labels, finer=finer)  # no features: the merges are geometric
+    pg = planarity_graph(graph, labels, features, finer=finer)
+    if features is not None:  # neighbours of another colour do not merge, however flat
+        pg = same_feature_edges(pg, max_jump)
     return flat_merge_nodes(pg, k, max_rise, alpha, eta_convex)[labels]
+
+
+def same_feature_edges(pg, max_jump: float):
+    """``pg`` with only its edges between superpoints whose mean features differ by at
+    most ``max_jump`` (and ``feature`` None again: the merges order by geometry).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from superfacets.inputs.cloud import PointCloud
+    >>> from superfacets.elements.points import point_graph
+    >>> from superfacets.graph.hierarchy import planarity_graph
+    >>> g = point_graph(PointCloud(np.c_[np.random.default_rng(0).random((600, 2)),
+    ...                                   np.zeros(600)])).graph
+    >>> third = (g.positions[:, 0] * 2.999).astype(np.int64)       # three strips
+    >>> colour = (third == 2).astype(float)[:, None]                 # the last one another
+    >>> pg = planarity_graph(g, third, colour)
+    >>> same_feature_edges(pg, 0.1).edge_index.T.tolist()
+    [[0, 1]]
+    """
+    from dataclasses import replace
+
+    a, b = np.asarray(pg.edge_index, dtype=np.int64)
+    jump = np.linalg.norm(pg.feature[a] - pg.feature[b], axis=1)
+    keep = jump <= max(float(max_jump), 1e-9)
+    return replace(pg, edge_index=pg.edge_index[:, keep], border_length=pg.border_length[keep],
+                   mean_angle=pg.mean_angle[keep], concave=pg.concave[keep], feature=None)
 
 
 def flat_merge_nodes(pg, k: int, max_rise: float, alpha: float = 0.0,
@@ -200,7 +236,8 @@ def flat_merge_nodes(pg, k: int, max_rise: float, alpha: float = 0.0,
     return top.astype(np.int64)
 
 
-def merge_to_count(graph, labels: np.ndarray, rules) -> tuple[np.ndarray, int]:
+def merge_to_count(graph, labels: np.ndarray, rules, features: np.ndarray | None = None
+                   ) -> tuple[np.ndarray, int]:
     """Stage 9 where ``rules.params.merge_from > 1``: the flat merges
     (:func:`flat_merges`, up to :data:`FLAT_NOISE` times :func:`noise_variance`), then
     Ward's merges down to ``rules.target`` (:func:`superfacets.method.finish.exact_count`).
@@ -245,5 +282,7 @@ def merge_to_count(graph, labels: np.ndarray, rules) -> tuple[np.ndarray, int]:
     # the superpoints' crossing adjacencies, found once: the merged labels coarsen them
     finer = crossing_adjacencies(graph, np.ascontiguousarray(labels, dtype=np.int64))
     labels = flat_merges(graph, labels, k, FLAT_NOISE * noise_variance(graph), alpha=p.alpha,
-                         eta_convex=p.eta_convex, finer=finer)
+                         eta_convex=p.eta_convex, finer=finer,
+                         features=features if p.beta > 0 else None,
+                         max_jump=rules.feature_floor)
     return exact_count(graph, labels, rules, finer=finer)

@@ -198,8 +198,9 @@ def _declare() -> tuple[Parameter, ...]:
           ("points",), cli="--neighbor-radius"),
         P("paper", False, "bool", "the paper's method as published, its labels bit for bit",
           bool, cli="--paper"),
-        P("beta", 0.0, "float", "weight of the feature (colour) term, >= 0; paper weighting "
-          "only", None, cli="--beta"),
+        P("beta", None, "float or None", "weight of the feature (colour) term, >= 0; paper "
+          "weighting only; None: read from the data where the input has colours or features "
+          "are given, else 0", None, cli="--beta"),
         P("min_elements", 1, "int", "smallest superfacet in elements, >= 1; smaller ones "
           "merged at the end", lambda v: integer("min_elements", v, lo=1),
           cli="--min-elements"),
@@ -287,7 +288,7 @@ def resolve(**params) -> SegmentParams:
                                        ("tol", p.tol not in (0, DEFAULTS.tol)),
                                        ("center_tol", p.center_tol is not None),
                                        ("coarsen", p.coarsen not in (None, 1)),
-                                       ("beta", p.beta not in (0, 0.0)),
+                                       ("beta", p.beta not in (None, 0, 0.0)),
                                        ("min_elements", p.min_elements != 1),
                                        ("density", p.density not in (None, 0, 0.0)),
                                        ("roughness", p.roughness not in (0, 0.0)),
@@ -319,7 +320,8 @@ def resolve(**params) -> SegmentParams:
             raise ParameterError(f"alpha of the Shlafman weighting must be in [0, 1], "
                                  f"got {p.alpha!r}") from None
     done = dict(n_segments=n_segments, radius=radius, alpha=alpha, init=init,
-                weighting=weighting, beta=_beta(p.beta, weighting), min_elements=min_elements)
+                weighting=weighting, beta=_beta(p.beta, weighting, p.paper),
+                min_elements=min_elements)
     out = {}
     for decl in PARAMETERS:  # each parameter's own check, in the signature's order
         value = getattr(p, decl.name)
@@ -332,7 +334,9 @@ def resolve(**params) -> SegmentParams:
     return SegmentParams(**out)
 
 
-def _beta(beta, weighting: str) -> float:
+def _beta(beta, weighting: str, paper: bool = False) -> float | None:
+    if beta is None:  # read from the data (superfacets.method.stages.resolve_features)
+        return 0.0 if paper or weighting != "paper" else None
     b = check_number("beta", beta, 0.0, MAX_WEIGHT_FACTOR)
     if b > 0 and weighting != "paper":
         raise ParameterError("beta (the feature term) goes with weighting='paper' only")

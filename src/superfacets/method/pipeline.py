@@ -10,7 +10,9 @@ once and in the paper's order
 1. ``build_graph``: the element graph (``n_segments`` checked against the input's
    elements first); with ``density`` (resolved here: it reads the graph) or
    ``roughness``, its sizes stretched (:mod:`superfacets.elements.density`);
-2. ``resolve_rules``: the automatic rules, once: ``k`` and the radius ``r`` (section
+2. ``resolve_features`` (where the input has colours or features: the colour term's
+   weight and the features' noise, read from the data) and ``resolve_rules``: the
+   automatic rules, once: ``k`` and the radius ``r`` (section
    3.1), clean-up and split-and-merge, the classification, the center tolerance and the
    coarsening, from the table of kinds (:mod:`superfacets.elements.kinds`);
 3. ``weigh``: the adjacency weights (eqs. 1-3, or Shlafman's eq. 6), and the swap
@@ -46,7 +48,7 @@ import numpy as np
 
 from .._runtime import interrupts
 from .._runtime.memory import give_back_free_memory
-from ..elements.builders import features_of, kind_for
+from ..elements.builders import kind_for
 from .finish import clean_up, exact_count, finish, merge_small
 from .merges import merge_to_count
 from .params import ALL_KINDS, PARAMETERS, SegmentParams
@@ -55,6 +57,7 @@ from .stages import (
     build_graph,
     initialize,
     iterate_passes,
+    resolve_features,
     resolve_rules,
     stage_reads,
     weigh,
@@ -201,8 +204,8 @@ def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
     params : SegmentParams
         From :func:`superfacets.method.params.resolve`.
     features : (N, d) float ndarray, optional
-        One feature per input row, for ``params.beta > 0`` (default: the
-        input's colours, if it has any).
+        One feature per input row, for the colour term (default: the input's colours,
+        if it has any; ``params.beta`` None reads the term's weight from them).
     replay : bool, default True
         Replay the expansions of centers that did not move (bounded
         assignment); False expands every center on every pass. Same labels.
@@ -248,10 +251,11 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
     try:
         with hooks.stage("graph"):
             source, graph, p = build_graph(obj, p, features)
-        rules = resolve_rules(graph, p, n_centers=n_centers)
+        with hooks.stage("features"):  # (the colour term's weight and floor, where read)
+            p, feats, floor = resolve_features(source, graph, p, features)
+        rules = resolve_rules(graph, p, n_centers=n_centers, feature_floor=floor)
         hooks.follow(graph, stage_reads(rules, initial))
         p = rules.params
-        feats = features_of(source, features) if p.beta > 0 else None
     except BaseException:
         hooks.close()
         raise
@@ -314,7 +318,8 @@ def _finished(graph, it, rules, hooks, feats):
     if merging or (rules.kind.exact_count and p.n_segments is not None and not p.paper
                    and p.min_elements == 1):  # exactly the k asked for (not the paper)
         with hooks.stage("merges" if merging else "connectivity", add=True):
-            labels, fewest = (merge_to_count if merging else exact_count)(graph, labels, rules)
+            labels, fewest = (merge_to_count(graph, labels, rules, feats) if merging else
+                              exact_count(graph, labels, rules))
             centers = final_centers(labels, centers, sizes, positions)
         if fewest > rules.target:
             import warnings
@@ -340,6 +345,8 @@ def _resolved(graph, rules, ratio, n_init: int) -> dict:
                     cleanup=rules.cleanup, split_merge=rules.split_merge,
                     center_tol=rules.center_tol, coarsen=ratio, elements=graph.kind,
                     n_init_centers=n_init)
+    if p.beta > 0:  # the colour term's noise floor (read from the data)
+        resolved["feature_floor"] = rules.feature_floor
     return resolved
 
 

@@ -244,6 +244,6 @@ def merge_from_of(params, kind: str, tiled: bool = False) -> int:
     """
     if params.merge_from is not None:
         return int(params.merge_from)
-    if params.paper or tiled or (params.density or 0.0) > 0 or (params.beta or 0.0) > 0:
+    if params.paper or tiled or (params.density or 0.0) > 0:
         return 1
     return kind_of(kind).merge_from

@@ -32,8 +32,8 @@ from .passes import Iteration, iterate
 from .rules import MIN_FINE_ELEMENTS, merge_from_of
 from .weights import csr_point_weights, csr_weights, edge_weights, weight_dtype
 
-__all__ = ["Rules", "build_graph", "resolve_rules", "weigh", "initialize",
-           "iterate_passes", "stage_reads"]
+__all__ = ["Rules", "build_graph", "resolve_features", "resolve_rules", "weigh",
+           "initialize", "iterate_passes", "stage_reads"]
 
 _D = DEFAULTS
 
@@ -62,6 +62,8 @@ class Rules:
     target : int or None
         The count the run returns: ``k``, or the count asked for where the run
         segments ``merge_from`` times more and merges (:mod:`superfacets.method.merges`).
+    feature_floor : float
+        Feature differences up to it cost nothing (:func:`resolve_features`).
 
     Examples
     --------
@@ -83,6 +85,7 @@ class Rules:
     center_tol: float
     coarsen: int
     target: int | None = None
+    feature_floor: float = 0.0
 
     @property
     def fast(self) -> bool:
@@ -194,7 +197,7 @@ def build_graph(obj, p: SegmentParams, features=None
     ('faces', 1280, 0.0)
     """
     kind, data = prepared(obj, p.elements, n_segments=p.n_segments)
-    if p.beta > 0:
+    if p.beta is not None and p.beta > 0:
         _check_features(kind, data, features)
     source = elements_of(data, kind, n_neighbors=p.n_neighbors,
                          neighbor_radius=p.neighbor_radius)
@@ -225,8 +228,75 @@ def _check_features(kind: str, data, features) -> None:
                              "or materials (a tetrahedral mesh)")
 
 
+def resolve_features(source: ElementInput, graph, p: SegmentParams, features=None
+                     ) -> tuple[SegmentParams, np.ndarray | None, float]:
+    """Stage 2a (not in the paper): the feature (colour) term of the weights.
+
+    ``beta=None`` (the default) reads it from the data where the input has colours (a
+    cloud's or a mesh's) or ``features`` are given: differences up to the features'
+    noise between neighbours cost nothing, and the rest weighs, on average, as much as
+    distance and angle together (:func:`superfacets.method.weights.feature_scale`); 0
+    where there are none. A ``beta`` given keeps its value, with the same floor.
+
+    Parameters
+    ----------
+    source : ElementInput
+    graph : ElementGraph
+        The graph the run weighs (:func:`build_graph`).
+    p : SegmentParams
+    features : (N, d) float ndarray, optional
+        One row per input row (default: the input's colours).
+
+    Returns
+    -------
+    params : SegmentParams
+        ``p`` with ``beta`` a number.
+    features : (n, d) float64 ndarray or None
+        One row per element, where ``beta > 0``.
+    floor : float
+
+    Raises
+    ------
+    ParameterError
+        If ``beta > 0`` and the input has no features, or they do not fit.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.method.params import resolve
+    >>> ball = trimesh.creation.icosphere(subdivisions=3)
+    >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
+    >>> resolve_features(src, graph, p)[0].beta  # no colours: no colour term
+    0.0
+    >>> rgb = np.where((ball.triangles_center[:, 2] > 0)[:, None], [1.0, 0, 0], [0, 0, 1])
+    >>> p, feats, floor = resolve_features(src, graph, p, rgb)
+    >>> p.beta > 0, feats.shape, floor
+    (True, (1280, 3), 0.0)
+    """
+    from ..elements.features import colors_or_features, features_of, per_element
+    from .weights import feature_scale
+
+    if p.beta is not None and p.beta <= 0:
+        return p, None, 0.0
+    given = colors_or_features(source, features) if p.beta is None else None
+    if p.beta is None and given is None:
+        return replace(p, beta=0.0), None, 0.0
+    feats = per_element(source, given) if given is not None else features_of(source, features)
+    if p.beta is None and not np.isfinite(feats).all():  # (asked for none: not an error)
+        import warnings
+
+        warnings.warn("the colour term is off: the input's colours (or features) are not all "
+                      "finite numbers", RuntimeWarning, stacklevel=3)
+        return replace(p, beta=0.0), None, 0.0
+    alpha = p.alpha if p.weighting == "paper" else _D.alpha
+    beta, floor = feature_scale(graph, feats, alpha=alpha, eta_convex=p.eta_convex)
+    if p.beta is not None:
+        beta = p.beta
+    return replace(p, beta=beta), (feats if beta > 0 else None), floor
+
+
 def resolve_rules(graph, p: SegmentParams, *, n_centers: int | None = None,
-                  r: float | None = None) -> Rules:
+                  r: float | None = None, feature_floor: float = 0.0) -> Rules:
     """Stage 2: every automatic rule of the run, once, from the table of kinds.
 
     ``k`` and ``r`` (paper section 3.1: ``r = sqrt(A / (k pi))``, or ``radius`` times
@@ -248,6 +318,8 @@ def resolve_rules(graph, p: SegmentParams, *, n_centers: int | None = None,
     r : float, optional
         The radius in mesh units, instead of the one ``p`` gives (a tile of a
         tiled run takes the whole run's).
+    feature_floor : float, default 0
+        From :func:`resolve_features` (a ``beta`` it has not resolved, None, is 0).
 
     Returns
     -------
@@ -269,6 +341,8 @@ def resolve_rules(graph, p: SegmentParams, *, n_centers: int | None = None,
     >>> rules.k, round(rules.r, 4), rules.center_tol, rules.coarsen
     (12, 0.576, 0.05, 1)
     """
+    if p.beta is None:
+        p = replace(p, beta=0.0)
     k, radius = superfacet_size(p, graph.area, graph.diagonal, graph.n_elements, graph.kind)
     if n_centers is not None:
         k = int(min(max(n_centers, 1), graph.n_elements))
@@ -286,7 +360,8 @@ def resolve_rules(graph, p: SegmentParams, *, n_centers: int | None = None,
         DEFAULT_CENTER_TOL if p.tol > 0 else 0.0)
     return Rules(params=p, kind=kind_of(graph.kind), k=k, r=radius, cleanup=cleanup,
                  split_merge=split_merge, center_tol=center_tol,
-                 coarsen=coarsening_for(graph, p, k, radius), target=target)
+                 coarsen=coarsening_for(graph, p, k, radius), target=target,
+                 feature_floor=feature_floor)
 
 
 def weigh(graph, rules: Rules, features=None, hooks=None
@@ -345,7 +420,8 @@ def weigh(graph, rules: Rules, features=None, hooks=None
         w = csr_point_weights(graph, alpha=p.alpha, eta_convex=p.eta_convex, dtype=dtype)
     else:
         w_pairs = edge_weights(graph, p.weighting, alpha=p.alpha, eta_convex=p.eta_convex,
-                               features=features, beta=p.beta, dtype=dtype)
+                               features=features, beta=p.beta, floor=rules.feature_floor,
+                               dtype=dtype)
         if hooks is not None:
             hooks.before("weight layout")
         w = csr_weights(graph, w_pairs, dtype)

@@ -25,14 +25,15 @@ from .params import (
 )
 
 __all__ = ["paper_weights", "shlafman_weights", "edge_weights", "csr_weights", "weight_dtype",
-           "csr_point_weights", "check_features", "convex_scaled"]
+           "csr_point_weights", "check_features", "convex_scaled", "feature_jumps",
+           "feature_scale", "FEATURE_FLOOR_QUANTILE"]
 
 _PAPER_ALPHA = DEFAULTS.alpha
 _SHLAFMAN_ALPHA = WEIGHTING_ALPHA["shlafman"][0]
 
 
 def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = DEFAULTS.eta_convex,
-                  features: np.ndarray | None = None, beta: float = 0.0,
+                  features: np.ndarray | None = None, beta: float = 0.0, floor: float = 0.0,
                   dtype=np.float64) -> np.ndarray:
     """Weights of the paper (Simari, Picciau, De Floriani 2014, eqs. 1-3).
 
@@ -46,9 +47,11 @@ def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = DEF
       ``n_i . (c_j - c_i) > 0`` (authors' implementation), ``i < j``;
     - ``w = (geo + alpha * ang) / d`` (eq. 3), ``d`` the bounding-box diagonal;
     - with ``beta > 0``, a feature term in the same form as ``ang`` (not in the
-      paper): ``w = (geo + alpha * ang + beta * |e_ij| * ||f_i - f_j||) / d``,
-      ``f`` one feature per element (e.g. RGB in ``[0, 1]``): crossing a colour
-      edge costs as crossing a crease does (``docs/notes/method.md``, "Features").
+      paper): ``w = (geo + alpha * ang + beta * |e_ij| * jump) / d``, ``jump =
+      max(0, ||f_i - f_j|| - floor)`` (:func:`feature_jumps`), ``f`` one feature per
+      element (e.g. RGB in ``[0, 1]``), ``floor`` the features' noise between
+      neighbours (:func:`feature_scale`): crossing a colour edge costs as crossing a
+      crease does (``docs/notes/method.md``, "Features").
 
     On mesh vertices and cloud points the graph's terms are the analogues
     (``docs/notes/method.md``, section 6): ``geo = |p_i - p_j|``, the angle of the
@@ -68,6 +71,8 @@ def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = DEF
     beta : float, default 0
         Weight of the feature term, in ``[0, 1e12]``; 0 gives the paper's
         weights bit for bit.
+    floor : float, default 0
+        Feature differences up to it cost nothing (:func:`feature_jumps`), ``>= 0``.
     dtype : numpy dtype, default float64
         Of the result (each weight computed in float64, then stored):
         :func:`weight_dtype`.
@@ -101,6 +106,7 @@ def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = DEF
     alpha = check_number("alpha", alpha, 0.0, MAX_WEIGHT_FACTOR)
     eta_convex = check_number("eta_convex", eta_convex, 0.0, MAX_WEIGHT_FACTOR)
     beta = check_number("beta", beta, 0.0, MAX_WEIGHT_FACTOR)
+    floor = check_nonneg("floor", floor)
     g = as_element_graph(graph)
     span = g.span
     f = check_features(features, g) if beta > 0 else None
@@ -113,7 +119,7 @@ def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = DEF
         ang = eta * span[sl] * theta / np.pi
         if f is None:
             return (t.geo + alpha * ang) / g.diagonal
-        jump = np.linalg.norm(f[g.pairs[sl, 0]] - f[g.pairs[sl, 1]], axis=1)
+        jump = feature_jumps(f, g.pairs[sl], floor)
         return (t.geo + alpha * ang + beta * span[sl] * jump) / g.diagonal
 
     return chunked(g.n_edges, weight, dtype)
@@ -175,6 +181,116 @@ def convex_scaled(graph, weights: np.ndarray, *, alpha: float, eta_convex: float
     t = g.terms
     return convex_scaled_csr(np.ascontiguousarray(weights, dtype=np.float64), g.dual_edge,
                              t.concave, t.cos, g.span, scale / (np.pi * g.diagonal))
+
+
+def feature_jumps(features: np.ndarray, pairs: np.ndarray, floor: float = 0.0) -> np.ndarray:
+    """How far the features of each pair differ beyond ``floor``: ``max(0, ||f_i - f_j||
+    - floor)`` (the feature term of :func:`paper_weights` and of the clean-up's cuts).
+
+    Parameters
+    ----------
+    features : (n, d) float64 ndarray
+    pairs : (e, 2) int ndarray
+    floor : float, default 0
+        The differences within the features' noise (:func:`feature_scale`), which cost
+        nothing.
+
+    Returns
+    -------
+    (e,) float64 ndarray
+
+    Raises
+    ------
+    IndexError
+        If a pair names a row ``features`` does not have.
+
+    Examples
+    --------
+    >>> f = np.array([[0.0, 0, 0], [0.3, 0.4, 0], [0.3, 0.4, 0.01]])
+    >>> feature_jumps(f, np.array([[0, 1], [1, 2]]), floor=0.1).round(3).tolist()
+    [0.4, 0.0]
+    """
+    jump = np.linalg.norm(features[pairs[:, 0]] - features[pairs[:, 1]], axis=1)
+    return np.maximum(jump - floor, 0.0) if floor > 0 else jump
+
+
+#: The share of neighbouring elements whose feature difference is taken for noise: the
+#: floor of :func:`feature_scale`. 0.9 over the median (0.5) on the labelled scans
+#: (``docs/notes/superpoints-defaults.md``): a wall's shading and a cushion's print stay
+#: under it; boards, doors and paint (a tenth of the adjacencies at most) stand above.
+FEATURE_FLOOR_QUANTILE = 0.9
+
+#: Adjacencies :func:`feature_scale` reads (evenly spread slices of the pairs)
+_SCALE_SAMPLE, _SCALE_SLICE = 1 << 17, 1 << 10
+
+
+def feature_scale(graph, features: np.ndarray, *, alpha: float = _PAPER_ALPHA,
+                  eta_convex: float = DEFAULTS.eta_convex) -> tuple[float, float]:
+    """The feature term's weight and floor read from the data (``beta=None``, not in the
+    paper).
+
+    The floor is the feature difference that 90 % of the neighbouring pairs do not
+    exceed (:data:`FEATURE_FLOOR_QUANTILE`): most adjacencies lie within one surface, so
+    it is the features' noise (a scan's colour noise, a wall's shading, a texture), and
+    differences up to it cost nothing. The weight ``beta`` makes the term, on average over
+    the adjacencies, weigh as much as the geometric terms of eq. 3 together:
+    ``beta = mean(geo / |e| + alpha * eta * theta / pi) / mean(jump)``, ``jump`` the
+    differences beyond the floor (:func:`feature_jumps`). Read on at most about 131,000
+    adjacencies (128 slices evenly spread over the pairs' order).
+
+    Parameters
+    ----------
+    graph : ElementGraph
+    features : (n, d) float64 ndarray
+        One row per element (:func:`check_features`).
+    alpha, eta_convex : float
+        The run's.
+
+    Returns
+    -------
+    beta : float
+        0 where no difference stands above the floor (features of one value).
+    floor : float
+
+    Raises
+    ------
+    ParameterError
+        If the features do not fit the graph.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.elements.builders import as_element_graph
+    >>> g = as_element_graph(trimesh.creation.icosphere(subdivisions=3))
+    >>> top = (g.positions[:, 2] > 0)[:, None]  # two colours, one edge between them
+    >>> beta, floor = feature_scale(g, np.where(top, [1.0, 0, 0], [0, 0, 1.0]))
+    >>> floor, beta > 0
+    (0.0, True)
+    >>> feature_scale(g, np.ones((g.n_elements, 3)))
+    (0.0, 0.0)
+    """
+    f = check_features(features, graph)
+    e = graph.n_edges
+    step = max(_SCALE_SLICE, -(-e // (_SCALE_SAMPLE // _SCALE_SLICE)))
+    geometric, jumps = [], []
+    span = graph.span
+    for start in range(0, e, step):
+        sl = slice(start, min(e, start + _SCALE_SLICE))
+        t = graph.terms_in(sl)
+        eta = np.where(t.concave, 1.0, eta_convex)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            geo = np.where(span[sl] > 0, t.geo / span[sl], 1.0)
+        geometric.append(geo + alpha * eta * np.arccos(t.cos) / np.pi)
+        jumps.append(feature_jumps(f, graph.pairs[sl]))
+    if not jumps:
+        return 0.0, 0.0
+    jump = np.concatenate(jumps)
+    floor = float(np.quantile(jump, FEATURE_FLOOR_QUANTILE))
+    above = float(np.maximum(jump - floor, 0.0).mean())
+    if not above > 0:
+        return 0.0, floor
+    beta = float(np.concatenate(geometric).mean()) / above
+    return (min(beta, MAX_WEIGHT_FACTOR) if np.isfinite(beta) else 0.0), floor
 
 
 def check_features(features, graph: ElementGraph) -> np.ndarray:
@@ -255,7 +371,7 @@ def shlafman_weights(graph, *, alpha: float = _SHLAFMAN_ALPHA, dtype=np.float64)
 
 def edge_weights(graph, weighting: str = "paper", *, alpha: float = _PAPER_ALPHA,
                  eta_convex: float = DEFAULTS.eta_convex, features: np.ndarray | None = None,
-                 beta: float = 0.0, dtype=np.float64) -> np.ndarray:
+                 beta: float = 0.0, floor: float = 0.0, dtype=np.float64) -> np.ndarray:
     """:func:`paper_weights` or :func:`shlafman_weights` by name.
 
     Parameters
@@ -264,7 +380,7 @@ def edge_weights(graph, weighting: str = "paper", *, alpha: float = _PAPER_ALPHA
     weighting : {'paper', 'shlafman'}, default 'paper'
     alpha, eta_convex : float
         As the chosen function (``eta_convex`` is ignored by ``'shlafman'``).
-    features, beta
+    features, beta, floor
         The feature term of :func:`paper_weights` (``'paper'`` only).
     dtype : numpy dtype, default float64
         Of the result (:func:`weight_dtype`).
@@ -290,7 +406,7 @@ def edge_weights(graph, weighting: str = "paper", *, alpha: float = _PAPER_ALPHA
     check_choice("weighting", weighting, WEIGHTINGS)
     if weighting == "paper":
         return paper_weights(graph, alpha=alpha, eta_convex=eta_convex, features=features,
-                             beta=beta, dtype=dtype)
+                             beta=beta, floor=floor, dtype=dtype)
     if beta:
         raise ParameterError("beta (the feature term) goes with weighting='paper' only")
     return shlafman_weights(graph, alpha=alpha, dtype=dtype)

@@ -192,9 +192,11 @@ def one_position_stats(inp, valid: np.ndarray, name: int, merging: tuple) -> dic
                 outer_angle=none, outer_concave=none)
 
 
-def tiled_merge_from(params, kind: str) -> int:
+def tiled_merge_from(params, kind: str, colors: bool = False) -> int:
     """``merge_from`` of a tiled run: that of one run on the whole input, with the density
-    of a tiled run (0 unless given); 1 where sized by radius. Points only.
+    of a tiled run (0 unless given); 1 where sized by radius, and where the colour term is
+    on (``beta > 0``, or ``beta=None`` on an input with ``colors``: the tiles' sums hold
+    no colours, and merges blind to them would join a board to its wall). Points only.
 
     Raises
     ------
@@ -213,6 +215,8 @@ def tiled_merge_from(params, kind: str) -> int:
     if params.n_segments is None or params.radius is not None:  # sized by radius
         return 1
     density = 0.0 if params.density is None else params.density
+    if (params.beta if params.beta is not None else float(colors)) > 0:
+        return 1
     return merge_from_of(replace(params, density=density), kind)
 
 

@@ -41,7 +41,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..elements.builders import elements_of, features_of
+from ..elements.builders import elements_of
 from ..elements.kinds import kind_of
 from ..errors import ParameterError
 from ..method.classify import make_classifier
@@ -49,7 +49,7 @@ from ..method.expansion import Workspaces
 from ..method.finish import clean_up, finish
 from ..method.params import DEFAULTS, SegmentParams, superfacet_measure
 from ..method.pipeline import pipeline
-from ..method.stages import build_graph, resolve_rules, weigh
+from ..method.stages import build_graph, resolve_features, resolve_rules, weigh
 
 __all__ = ["tile_centers", "tile_refine", "tile_labels",
            "tile_connect", "orientation_reference", "HALO",
@@ -117,7 +117,7 @@ def check_tileable(params: SegmentParams, colors: bool = True) -> None:
     if whole:
         raise ParameterError(f"{' and '.join(whole)}: not available in a tiled run (where the "
                              "input fits in memory, segment() takes it)")
-    if params.beta > 0 and not colors:
+    if params.beta is not None and params.beta > 0 and not colors:
         raise ParameterError("beta > 0 needs colours, and this input has none (a tiled run "
                              "reads the colours of the file, not features=)")
 
@@ -286,8 +286,8 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
     # the whole run's stages (superfacets.method.pipeline) with one classification from the
     # fixed centers in place of the initialization and the passes
     src, graph, p = build_graph(inp, _tile_params(params, r, diagonal, d), features)
-    rules = resolve_rules(graph, p, r=r)
-    feats = features_of(src, features) if p.beta > 0 else None
+    p, feats, floor = resolve_features(src, graph, p, features)
+    rules = resolve_rules(graph, p, r=r, feature_floor=floor)
     w, _ = weigh(graph, replace(rules, split_merge=False), feats)
     m = graph.n_elements
     of_row = src.to_rows(np.arange(m))

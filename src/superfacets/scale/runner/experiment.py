@@ -72,6 +72,19 @@ def _prepared(path: str, seg_paths: tuple, elements: str, n_points: int, seed: i
     return obj, source.graph, to_el, [to_el(r) for r in rows]
 
 
+@lru_cache(maxsize=2)
+def _room(name: str):
+    """A made-up room (:mod:`superfacets.evaluation.datasets.rooms`) as :func:`_prepared`
+    gives an input: its cloud, point graph, per-element values and its classes."""
+    from ...elements.builders import elements_of
+    from ...evaluation.datasets.rooms import load_room
+
+    scan = load_room(name)
+    source = elements_of(scan.cloud, "points")
+    to_el = _element_values(source)
+    return scan.cloud, source.graph, to_el, [to_el(scan.ground_truth)]
+
+
 def _element_values(source):
     """Per-row values -> per-element values (the first row of each element)."""
     first = source.first_rows(np.arange(source.graph.n_elements))
@@ -88,10 +101,12 @@ def _run_task(task: dict) -> list[dict]:
     rows = []
     kind = task.get("elements", "faces")
     try:
-        mesh, gts = _load(task["path"], task["seg_paths"])
-        base["n_faces"] = mesh.n_faces
-        data, graph, to_el, gts = _prepared(task["path"], task["seg_paths"], kind,
-                                            task.get("n_points", 0), task["seed"])
+        if task.get("room"):  # a made-up room: points with their classes
+            data, graph, to_el, gts = _room(task["path"])
+        else:
+            base["n_faces"] = _load(task["path"], task["seg_paths"])[0].n_faces
+            data, graph, to_el, gts = _prepared(task["path"], task["seg_paths"], kind,
+                                                task.get("n_points", 0), task["seed"])
         base["n_elements"] = graph.n_elements
         n_rows = graph.n_elements if to_el is None else (
             kind_of(kind).n_rows(data))
@@ -173,7 +188,8 @@ def _tasks(meshes, configs, kinds, ks, done, common: dict) -> list[dict]:
     tasks = []
     for bm, cfg, kind in product(meshes, configs, kinds):
         method = get_method(cfg.method)
-        if kind not in method.elements:
+        room = getattr(bm, "room", False)
+        if kind not in method.elements or (room and kind != "points"):
             continue
         base = {"mesh": Path(bm.path).stem, "mesh_id": bm.id, "category": bm.category,
                 "method": cfg.method, "elements": kind, "seed": common["seed"],
@@ -182,7 +198,7 @@ def _tasks(meshes, configs, kinds, ks, done, common: dict) -> list[dict]:
         if todo:
             tasks.append({"base": base, "run": method.run, "params": cfg.params,
                           "path": str(bm.path), "seg_paths": tuple(str(p) for p in bm.seg_paths),
-                          "ks": todo, "elements": kind,
+                          "ks": todo, "elements": kind, "room": room,
                           "faces_only": method.elements == ("faces",), **common})
     return tasks
 
@@ -196,9 +212,11 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
 
     Parameters
     ----------
-    meshes : sequence of BenchmarkMesh
+    meshes : sequence of BenchmarkMesh or RoomEntry
         Meshes with their ground truths (:func:`superfacets.evaluation.datasets.psb.list_meshes`);
-        a mesh without ground truths gets rows without metrics.
+        a mesh without ground truths gets rows without metrics. Or made-up rooms
+        (:func:`superfacets.evaluation.datasets.rooms.room_entries`: points, against their
+        classes; run where ``elements`` has ``'points'``).
     configs : sequence of Config
         From :func:`expand_grid`.
     results : path

@@ -262,7 +262,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
     with run_folder(workdir) as tmp:  # the run's own folder, removed at its end
         t = time.perf_counter()
         reader, survey = _surveyed(source, tmp, tiles, params)
-        target, merge_from, params = _merge_plan(params, reader.kind, survey.n_elements)
+        target, merge_from, params = _merge_plan(params, reader.kind, survey)
         if survey.color_top is not None:  # one divisor for the whole file's colours
             reader = replace(reader, color_top=survey.color_top)
         timings["survey"] = time.perf_counter() - t
@@ -375,10 +375,11 @@ def _numbered_densely(labels: np.ndarray) -> np.ndarray:
     return names
 
 
-def _merge_plan(params, kind: str, n_elements: int):
+def _merge_plan(params, kind: str, survey):
     """The count asked for, the factor of the superpoints made before the merges down to
     it (1: none), and the parameters of the tiles' runs (their count that many times)."""
-    target, merge_from = params.n_segments, tiled_merge_from(params, kind)
+    n_elements = survey.n_elements
+    target, merge_from = params.n_segments, tiled_merge_from(params, kind, survey.colors)
     if merge_from > 1:  # merge_from times the superpoints, merged to the count at the end
         fine = min(target * merge_from, max(target, n_elements // MIN_FINE_ELEMENTS))
         merge_from = merge_from if fine > target else 1
