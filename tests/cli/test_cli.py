@@ -1,3 +1,5 @@
+import re
+
 import numpy as np
 import pytest
 import trimesh
@@ -222,11 +224,19 @@ def test_evaluate_reads_a_ground_truth_field_of_the_input(tmp_path, capsys):
 def test_progress_bar_names_the_stages_then_counts_passes(tmp_path, small_off, capsys):
     assert main(["segment", str(small_off), "-k", "20", "--progress", "-q"]) == 0
     err = capsys.readouterr().err
-    for stage in ("face graph", "weights", "init (farthest)", "superfacets"):
-        assert stage in err
-    # counted, with no length: a run stops where it converges, so no remaining time is
-    # reckoned from --max-iter (it read "03:46 remaining" just before the end)
-    assert "pass [" in err and "/50" not in err and "<" not in err
+    for stage in ("reading sphere.off", "face graph", "weights", "init (farthest)",
+                  "superfacets", "connectivity", "clean-up"):
+        assert stage in err, stage
+    # no remaining time reckoned from --max-iter (it read "03:46 remaining" just before
+    # the end): the passes to come are guessed from how fast the movers fall
+    assert "pass [" in err and "/50" not in err
+    rng = np.random.default_rng(0)
+    cloud = tmp_path / "plane.npy"
+    np.save(cloud, np.c_[rng.random((20000, 2)), np.zeros(20000)])
+    assert main(["segment", str(cloud), "-k", "300", "--progress", "-q"]) == 0
+    err = capsys.readouterr().err
+    totals = [int(t) for t in re.findall(r"\| *\d+/(\d+) \[", err)]
+    assert totals and max(totals) < 50 and "merges to the count" in err
     assert main(["segment", str(small_off), "-k", "20", "-q"]) == 0  # small mesh: no bar
     assert capsys.readouterr().err == ""
 

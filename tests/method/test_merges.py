@@ -329,3 +329,26 @@ def test_the_merges_do_not_join_neighbours_of_another_colour():
         return out
 
     assert mixed(seeing.labels) < 0.1 * mixed(blind.labels)
+
+
+def test_no_stage_is_silent_on_a_terminal(monkeypatch):
+    # the bar is redrawn every TICK seconds while a stage runs (its elapsed time goes on)
+    import io
+    import time
+
+    from tqdm import tqdm
+
+    from superfacets._runtime import progress
+
+    monkeypatch.setattr(progress, "TICK", 0.02)
+    out = io.StringIO()
+    bar = tqdm(total=None, desc="a long stage", file=out, mininterval=0)
+    stop = progress.tick(bar)
+    give_up = time.monotonic() + 30  # (a stage that releases the interpreter, as the
+    while out.getvalue().count("a long stage") < 5 and time.monotonic() < give_up:
+        time.sleep(0.01)  # compiled ones do: the bar is drawn again meanwhile)
+    stop.set()
+    bar.close()
+    assert out.getvalue().count("a long stage") >= 5
+    with progress.waiting_bar("reading", show=False) as w:
+        assert w.bar is None

@@ -225,13 +225,31 @@ def cmd_segment(args) -> int:
     kwargs = dict(method_kwargs(args), **element_kwargs(args))
     resolve(n_segments=args.n_segments, radius=args.radius, **kwargs)  # before the read
     t0 = time.perf_counter()
-    data = scan_cloud(read_usable(args.mesh, clouds=True), args)
+    with _reading_bar(args):
+        data = scan_cloud(read_usable(args.mesh, clouds=True), args)
     interrupts.check()  # a Ctrl-C during the start-up and the reading
     kind = _kind_of_run(args, data, outputs["colored"])
     result = _run(args, data, kwargs)
     elapsed = time.perf_counter() - t0
     _write_and_say(args, data, result, kind, outputs, elapsed)
     return 0
+
+
+#: Input files from this size on show a bar while they are read (on a terminal)
+READING_BAR_BYTES = 32 << 20
+
+
+def _reading_bar(args):
+    """A bar naming the file while it is read, its elapsed time going on, where the run
+    shows progress (``--progress``, or a file of :data:`READING_BAR_BYTES` or more on a
+    terminal without ``-q``; not with ``--no-progress``)."""
+    from .._runtime.progress import waiting_bar
+
+    path = Path(args.mesh)
+    size = path.stat().st_size if path.is_file() else 0
+    show = args.progress if args.progress is not None else (
+        size >= READING_BAR_BYTES and sys.stderr.isatty() and not args.quiet)
+    return waiting_bar(f"reading {path.name} ({size / 2**20:,.0f} MiB)", bool(show))
 
 
 def _other_command(args):

@@ -107,6 +107,45 @@ class Iteration:
     settled: int = 0
 
 
+def passes_done(bar, n_iter: int, max_iter: int, k_now: int, n_moved: int, changed: float,
+                tol: float) -> None:
+    """Advance the progress bar by one pass, and size it by the passes still to come: the
+    movers' (and, with ``tol``, the changed share's) geometric decay over the passes so
+    far, extrapolated to no mover (to ``tol``), at most ``max_iter`` (tqdm then shows a
+    remaining time; a guess, renewed every pass).
+
+    Examples
+    --------
+    >>> from tqdm import tqdm
+    >>> bar = tqdm(total=None, disable=True)
+    >>> for i, moved in enumerate((800, 400, 200), start=1):
+    ...     passes_done(bar, i, 50, 100, moved, -1.0, 0.0)
+    >>> bar.total  # 200 movers halving each pass: 9 more passes to fewer than one
+    12
+    """
+    bar.update(1)
+    history = bar.__dict__.setdefault("_superfacets_history", [])
+    history.append((max(n_moved, 0), changed))
+    left = _left(history, 0, 0.5)
+    if tol > 0 and changed >= 0:
+        left = min(left, _left(history, 1, tol))
+    bar.total = min(max_iter, n_iter + left) if left < max_iter else None
+    bar.set_postfix(centers=k_now, moved=n_moved)
+
+
+def _left(history: list, column: int, target: float) -> int:
+    """Passes until ``history``'s ``column`` decays to ``target``, at the rate of its last
+    three passes; ``1 << 30`` where it does not decay."""
+    values = [h[column] for h in history[-4:] if h[column] >= 0]
+    if len(values) < 2 or values[-1] <= target:
+        return 0 if values and values[-1] <= target else 1 << 30
+    first, last = max(values[0], 1e-300), values[-1]
+    rate = (last / first) ** (1.0 / (len(values) - 1))
+    if not 0 < rate < 1:
+        return 1 << 30
+    return int(np.ceil(np.log(target / last) / np.log(rate)))
+
+
 def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
             positions: np.ndarray, max_iter: int, *, jump_cycles: bool = True,
             tol: float = 0.0, min_move: float = 0.0, bar=None,
@@ -135,7 +174,7 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
         (:func:`hold_small_moves`); the run has converged when no center moves
         further. 0: every move counts (the paper).
     bar : tqdm, optional
-        Progress bar advanced once per pass.
+        Progress bar advanced once per pass (:func:`passes_done`).
     settle : bool, default False
         On a cycle of center lists, settle it (see the module notes) instead of
         jumping over it.
@@ -203,8 +242,8 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
             moved[stay] = used[stay]
         n_moved = int((moved != used).sum())
         if bar is not None:
-            bar.update(1)
-            bar.set_postfix(centers=k_now, moved=n_moved)
+            passes_done(bar, n_iter, max_iter, k_now, n_moved, changed if prev is not None
+                        else -1.0, tol)
         if k_now == n_centers and n_moved == 0:
             converged = True
             break

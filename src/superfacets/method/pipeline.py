@@ -48,6 +48,7 @@ import numpy as np
 
 from .._runtime import interrupts
 from .._runtime.memory import give_back_free_memory
+from .._runtime.progress import tick
 from ..elements.builders import kind_for
 from .finish import clean_up, exact_count, finish, merge_small
 from .merges import merge_to_count
@@ -128,11 +129,13 @@ class Hooks:
         self.graph, self.plan = None, ()  # what before() forgets of (follow())
         self.trim = False  # free memory handed back before the passes (large graphs)
         self.bar = None
+        self._ticking = None
         if progress:  # one bar: the set-up stages by name, then the passes
             from tqdm import tqdm
 
             self.bar = tqdm(total=None, desc=f"{kind[:-1]} graph", unit="pass", leave=False)
             self.bar.refresh()  # (shown at once: the graph's build is a run's longest wait)
+            self._ticking = tick(self.bar)
 
     def describe(self, name: str) -> None:
         if self.bar is not None:
@@ -188,9 +191,13 @@ class Hooks:
         graph.release(keep=tuple(needed))
 
     def close(self) -> None:
+        if self._ticking is not None:
+            self._ticking.set()
+            self._ticking = None
         if self.bar is not None:
             self.bar.close()
             self.bar = None
+
 
 
 def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
@@ -277,9 +284,10 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
     except BaseException:
         hooks.close()
         raise
-    if not rules.cleanup:
+    try:
+        labels, centers = _finished(graph, it, rules, hooks, feats)
+    finally:
         hooks.close()
-    labels, centers = _finished(graph, it, rules, hooks, feats)
     timings = hooks.timings
     centers = source.first_rows(centers)
     element_labels = labels
@@ -299,16 +307,13 @@ def _finished(graph, it, rules, hooks, feats):
     p = rules.params
     sizes = np.ascontiguousarray(graph.sizes)
     positions = np.ascontiguousarray(graph.positions)
-    with hooks.stage("connectivity"):
+    with hooks.stage("connectivity", "connectivity"):
         labels, centers = finish(graph, it.label, it.centers, rules)
         centers = final_centers(labels, centers, sizes, positions)
     if rules.cleanup:
-        try:
-            with hooks.stage("cleanup", "clean-up"):
-                hooks.before("clean-up")
-                labels = clean_up(graph, labels, centers, rules, feats)
-        finally:
-            hooks.close()
+        with hooks.stage("cleanup", "clean-up"):
+            hooks.before("clean-up")
+            labels = clean_up(graph, labels, centers, rules, feats)
         centers = final_centers(labels, centers, sizes, positions)
     if p.min_elements > 1:  # small superfacets merged as stray pieces are (not the paper)
         with hooks.stage("connectivity", add=True):
@@ -317,7 +322,8 @@ def _finished(graph, it, rules, hooks, feats):
     merging = rules.target is not None and rules.target < rules.k  # merge_from > 1
     if merging or (rules.kind.exact_count and p.n_segments is not None and not p.paper
                    and p.min_elements == 1):  # exactly the k asked for (not the paper)
-        with hooks.stage("merges" if merging else "connectivity", add=True):
+        with hooks.stage("merges" if merging else "connectivity",
+                         "merges to the count" if merging else None, add=True):
             labels, fewest = (merge_to_count(graph, labels, rules, feats) if merging else
                               exact_count(graph, labels, rules))
             centers = final_centers(labels, centers, sizes, positions)
