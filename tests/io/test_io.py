@@ -407,7 +407,7 @@ def test_a_run_that_would_not_fit_is_refused_in_one_line(tmp_path, monkeypatch, 
     mesh = trimesh.creation.icosphere(subdivisions=4)  # 5,120 faces
     path = tmp_path / "ball.ply"
     mesh.export(path)
-    monkeypatch.setattr(memory, "available_bytes", lambda: 1_000_000)  # 1 MB left
+    monkeypatch.setattr(memory, "available_bytes", lambda: 100_000)  # 100 kB left
     with pytest.raises(MemoryLimitError, match=r"5,120 faces need about .* GiB .* larger "
                        r"machine \(SUPERFACETS_MEMORY_CHECK=off runs it anyway\)") as exc:
         segment(mesh, 10)
@@ -418,7 +418,9 @@ def test_a_run_that_would_not_fit_is_refused_in_one_line(tmp_path, monkeypatch, 
     assert not (tmp_path / "b.seg").exists()
     # points: room for the tiled run's rows and a fifth of the run: tiles are named
     np.save(tmp_path / "p.npy", np.random.default_rng(0).random((20_000, 3)))
-    room = 20_000 * 100 + 20_000 * 250 // 4
+    from superfacets.elements.kinds import kind_of
+
+    room = 20_000 * 100 + 20_000 * kind_of("points").peak_bytes // 4
     monkeypatch.setattr(memory, "resident_bytes", lambda: memory.BASE_BYTES)
     monkeypatch.setattr(memory, "available_bytes", lambda: room)
     assert main(["segment", str(tmp_path / "p.npy"), "-k", "10", "-o",
@@ -507,7 +509,10 @@ def test_the_memory_check_counts_the_face_pairs_of_a_fan_and_sends_it_not_to_til
     vertices = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.5]])
     faces = np.r_[np.tile([[0, 1, 2]], (n, 1)), [[1, 3, 2]]]
     monkeypatch.setattr(memory, "resident_bytes", lambda: memory.BASE_BYTES)
-    faces_only = memory.estimated_peak(n + 1, 250, held=memory.BASE_BYTES)
+    from superfacets.elements.kinds import kind_of
+
+    faces_only = memory.estimated_peak(n + 1, kind_of("faces").peak_bytes,
+                                       held=memory.BASE_BYTES)
     monkeypatch.setattr(memory, "available_bytes", lambda: faces_only + 1000)
     with pytest.raises(MemoryLimitError, match=r"6,001 faces with 18,001 face pairs") as exc:
         segment((vertices, faces), 2)
@@ -529,3 +534,31 @@ def test_an_stls_vertices_merge_as_numpy_unique_merges_them(n):
     got, inv = _merged_rows(v)
     np.testing.assert_array_equal(got, want)
     np.testing.assert_array_equal(inv, want_inv.ravel())
+
+
+def test_the_memory_check_counts_an_input_it_holds_once(monkeypatch):
+    """After the read, the input's own arrays are held already, and counted in the bytes
+    per element: the check does not count them twice (6.8M faces were estimated at 1.44
+    times their peak)."""
+    import trimesh
+
+    from superfacets import segment
+    from superfacets._runtime import memory
+    from superfacets.elements.builders import _array_bytes
+    from superfacets.elements.kinds import kind_of
+    from superfacets.inputs.convert import as_mesh
+
+    mesh = as_mesh(trimesh.creation.icosphere(subdivisions=4))
+    seen = []
+    check = memory.check_memory
+    monkeypatch.setattr(memory, "check_memory",
+                        lambda n, bpe, what, **kw: seen.append(kw) or check(n, bpe, what, **kw))
+    own = _array_bytes(mesh)  # (before the run: it keeps its graph with the mesh)
+    segment(mesh, 10)
+    assert own == mesh.vertices.nbytes + mesh.faces.nbytes
+    # the input's arrays and what its check computed of them (areas, normals, centroids)
+    held = seen[0]["held_input"]
+    assert own + mesh.areas.nbytes + mesh.normals.nbytes <= held <= _array_bytes(mesh)
+    n, bpe = mesh.n_faces, kind_of("faces").peak_bytes
+    assert memory.estimated_peak(n, bpe, held=0, input_bytes=held) == (
+        memory.BASE_BYTES + n * bpe - held)

@@ -79,9 +79,10 @@ def available_bytes() -> int | None:
 
 
 #: A run's memory beyond its elements': the interpreter, numpy, scipy and the kernels
-#: (a new process of ``segment`` on a few thousand faces: 40-80 MiB; the per-element
-#: figures, ``ElementKind.peak_bytes``, were fitted with this base)
-BASE_BYTES = 100 * 2**20
+#: (a new process of ``segment`` on 81,000 points peaked at 123 MiB; the per-element
+#: figures, ``ElementKind.peak_bytes``, were fitted with this base:
+#: ``benchmarks/memory_check.py``)
+BASE_BYTES = 90 * 2**20
 
 #: A tile's elements with its halo, as a share of its core's (3M points in 3 tiles:
 #: 1.13; room for uneven tiles)
@@ -97,19 +98,24 @@ def resident_bytes() -> int:
         return 0
 
 
-def estimated_peak(n_elements: int, bytes_per_element: int, *, held: int = 0) -> int:
+def estimated_peak(n_elements: int, bytes_per_element: int, *, held: int = 0,
+                   input_bytes: int = 0) -> int:
     """A run's estimated peak, in bytes, beyond what the process holds now (``held``):
     what :data:`BASE_BYTES` has left beyond it, and ``bytes_per_element`` for each
-    element.
+    element, less the input's own arrays where they are held already (``input_bytes``:
+    the bytes per element count them).
 
     Examples
     --------
     >>> estimated_peak(1_000_000, 250) // 2**20
-    338
+    328
     >>> estimated_peak(1_000_000, 250, held=2**30) // 2**20   # (the interpreter held)
     238
+    >>> estimated_peak(1_000_000, 250, held=2**30, input_bytes=24_000_000) // 2**20
+    215
     """
-    return max(BASE_BYTES - int(held), 0) + int(n_elements) * int(bytes_per_element)
+    per_element = max(int(n_elements) * int(bytes_per_element) - int(input_bytes), 0)
+    return max(BASE_BYTES - int(held), 0) + per_element
 
 
 def tiles_that_fit(n_elements: int, bytes_per_element: int, avail: int, *,
@@ -136,7 +142,7 @@ def tiles_that_fit(n_elements: int, bytes_per_element: int, avail: int, *,
 
 
 def check_memory(n_elements: int, bytes_per_element: int, what: str, *,
-                 tiles_help: bool = False, input_bytes: int = 0) -> None:
+                 tiles_help: bool = False, input_bytes: int = 0, held_input: int = 0) -> None:
     """Refuse a run whose estimated peak (:func:`estimated_peak`) exceeds what this
     process may still allocate (:func:`available_bytes`).
 
@@ -157,6 +163,9 @@ def check_memory(n_elements: int, bytes_per_element: int, what: str, *,
         never sent to tiles.
     input_bytes : int, default 0
         Bytes a tiled run holds for each element of the whole input (:func:`tiles_that_fit`).
+    held_input : int, default 0
+        Bytes of the input's own arrays, where it is read already (counted in
+        ``bytes_per_element``: not twice).
 
     Raises
     ------
@@ -170,7 +179,10 @@ def check_memory(n_elements: int, bytes_per_element: int, what: str, *,
     if os.environ.get("SUPERFACETS_MEMORY_CHECK", "").strip().lower() in ("off", "0", "no"):
         return
     avail = available_bytes()
-    need = estimated_peak(n_elements, bytes_per_element, held=resident_bytes())
+    if int(n_elements) * int(bytes_per_element) > 256 * 2**20:  # what the read freed: given
+        give_back_free_memory()  # back, so that it is not taken for held
+    need = estimated_peak(n_elements, bytes_per_element, held=resident_bytes(),
+                          input_bytes=held_input)
     if avail is None or need <= avail:
         return
     tiles = tiles_that_fit(n_elements, bytes_per_element, avail,

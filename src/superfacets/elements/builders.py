@@ -397,11 +397,24 @@ def prepared(obj, elements: str | None = None, *, n_segments: int | None = None)
     from .._runtime.memory import check_memory
     from .kinds import kind_of
 
-    check_memory(n, kind_of(kind).peak_bytes,
+    rows = max(n, int(kind_of(kind).n_rows(data)))  # (invalid points are held too)
+    check_memory(rows, kind_of(kind).peak_bytes,
                  f"{getattr(data, 'name', '') or 'the input'}: {n:,} {kind}",
                  tiles_help=kind_of(kind).tiled_bytes is not None,
-                 input_bytes=kind_of(kind).tiled_bytes or 0)  # (the input is held already)
+                 input_bytes=kind_of(kind).tiled_bytes or 0, held_input=_array_bytes(data))
     return kind, data
+
+
+def _array_bytes(data) -> int:
+    """The bytes of an input's own arrays (its vertices, faces, points, colours) and of
+    what it keeps computed from them (a mesh's areas, centroids and normals, which its
+    check made and the graph reads)."""
+    total = 0
+    for v in getattr(data, "__dict__", {}).values():
+        for a in (v if isinstance(v, tuple) else (v,)):
+            if isinstance(a, np.ndarray):
+                total += a.nbytes
+    return int(total)
 
 
 def as_element_graph(obj) -> ElementGraph:

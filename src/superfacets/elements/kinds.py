@@ -109,13 +109,14 @@ class ElementKind:
         What the segments are called in summaries: superfacets (faces and tetrahedra),
         superpoints (vertices and points).
     peak_bytes : int
-        A run's peak memory per element with the defaults, beyond the interpreter's
-        (:data:`superfacets._runtime.memory.BASE_BYTES`): a new process of ``segment``
-        peaked at 100 MiB + 216 bytes a face on 1.7M and 6.8M faces, 100 MiB + 201-216
-        bytes a point on 1M and 3M points sampled on a mesh, 100 MiB + 626 bytes a vertex
-        on 3.4M vertices (their mesh's faces included), measured 2026-11-27 on this
-        project's 2-core machine. A run whose estimate exceeds what the process may use
-        is refused before its graph is built
+        A run's peak memory per element with the defaults, the input's own arrays
+        included, beyond the interpreter's (:data:`superfacets._runtime.memory.BASE_BYTES`):
+        chosen so that the estimate is within 25 % of the peak of a new process of
+        ``segment`` on meshes (faces, vertices), sampled surfaces, scans of rings,
+        LiDAR sweeps, RGB-D frames and rooms, and at most 1.2 times it
+        (``benchmarks/memory_check.py``, 2026-11-27, this project's 2-core machine: the
+        table in ``docs/benchmarks.md``). A run whose estimate exceeds what the process
+        may use is refused before its graph is built
         (:func:`superfacets._runtime.memory.check_memory`).
     tiled_bytes : int or None
         Bytes a tiled run (:func:`superfacets.segment_tiled`) holds for each element of
@@ -185,7 +186,7 @@ class ElementKind:
     rows: str = "n_faces"
     segment_word: str = "superpoints"
     objects: bool = False
-    peak_bytes: int = 250
+    peak_bytes: int = 215
     tiled_bytes: int | None = None
     exact_count: bool = False
     single_weights: bool = False
@@ -217,11 +218,11 @@ KINDS = {k.name: k for k in (
                 swap_eta_convex=0.5, passes_after=1, hold_after=4.0, equal_weight=False,
                 segment_word="superfacets", objects=True),
     ElementKind("vertices", "vertex", better_method=True, exact_assignment=True, band=0.2,
-                rows="n_vertices", peak_bytes=680),
+                rows="n_vertices", peak_bytes=620),
     ElementKind("points", "point", exact_assignment=True, coarse_min_per_segment=1000,
                 coarse_per_segment=400,
                 coarse_neighbor_cap=True, auto_density=True, unit_sizes_in_levels=True,
-                neighborhood=True, cloud=True, rows="n_total", peak_bytes=250, tiled_bytes=100,
+                neighborhood=True, cloud=True, rows="n_total", peak_bytes=240, tiled_bytes=100,
                 exact_count=True, single_weights=True, merge_from=5, settle_cycles=True),
     ElementKind("cells", "cell", dim=3, rows="n_tets", segment_word="superfacets"),
 )}
