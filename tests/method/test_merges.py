@@ -329,6 +329,12 @@ def test_the_merges_do_not_join_neighbours_of_another_colour():
         return out
 
     assert mixed(seeing.labels) < 0.1 * mixed(blind.labels)
+    # a tiled run merges as one run does: its tiles' sums carry the colours
+    from superfacets import segment_tiled
+
+    tiled_blind = segment_tiled(cloud, 6, tiles=2, beta=0)
+    tiled = segment_tiled(cloud, 6, tiles=2)
+    assert tiled.n_segments == 6 and mixed(tiled.labels) < 0.1 * mixed(tiled_blind.labels)
 
 
 def test_no_stage_is_silent_on_a_terminal(monkeypatch):

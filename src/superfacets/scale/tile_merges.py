@@ -41,7 +41,8 @@ __all__ = ["tile_merge_stats", "merge_names", "one_position_stats", "tiled_merge
 
 
 def tile_merge_stats(graph, labels: np.ndarray, names: np.ndarray, core: np.ndarray,
-                     rows: np.ndarray, n_noise: int) -> dict:
+                     rows: np.ndarray, n_noise: int, *, features: np.ndarray | None = None,
+                     floor: float = 0.0) -> dict:
     """What the merges read, summed over one tile (see the module notes).
 
     Parameters
@@ -59,6 +60,11 @@ def tile_merge_stats(graph, labels: np.ndarray, names: np.ndarray, core: np.ndar
         adjacency.
     n_noise : int
         Core elements to read the noise on (evenly spaced), ``>= 0``.
+    features : (m, d) float64 ndarray, optional
+        The run's colours (where its colour term is on): their sums go with the
+        superpoints, so that the merges join only neighbours of one colour.
+    floor : float, default 0
+        The tile's colour floor (:func:`superfacets.method.weights.feature_scale`).
 
     Returns
     -------
@@ -71,7 +77,7 @@ def tile_merge_stats(graph, labels: np.ndarray, names: np.ndarray, core: np.ndar
         those with one end outside it one by one: ``outer_rows`` (F, 2) int64, the rows
         of their ends, ``outer_names`` (F, 2) this tile's names of them, and
         ``outer_length``, ``outer_angle``, ``outer_concave`` (F,); ``noise``
-        (n_noise',) float64.
+        (n_noise',) float64; with ``features``, ``feature_sum`` (K', d) and ``floor``.
 
     Raises
     ------
@@ -130,8 +136,12 @@ def tile_merge_stats(graph, labels: np.ndarray, names: np.ndarray, core: np.ndar
                        angle[inner], concave[inner])
     pick = at[np.unique(np.linspace(0, at.size - 1, min(at.size, n_noise)).astype(np.int64))] \
         if n_noise > 0 and at.size else at[:0]
+    colour = {} if features is None else dict(
+        floor=float(floor), feature_sum=np.stack([np.bincount(local, weights=features[at, c],
+                                                              minlength=k)
+                                                  for c in range(features.shape[1])], 1))
     return dict(names=names[used], count=count, mean=mean, scatter=scatter.reshape(k, 3, 3),
-                area=area, area_mean=area_mean, **edges,
+                area=area, area_mean=area_mean, **edges, **colour,
                 outer_rows=np.stack([rows[i[outer]], rows[j[outer]]], 1).astype(np.int64),
                 outer_names=np.stack([names[lab[i[outer]]], names[lab[j[outer]]]], 1),
                 outer_length=length[outer], outer_angle=angle[outer],
@@ -192,11 +202,10 @@ def one_position_stats(inp, valid: np.ndarray, name: int, merging: tuple) -> dic
                 outer_angle=none, outer_concave=none)
 
 
-def tiled_merge_from(params, kind: str, colors: bool = False) -> int:
+def tiled_merge_from(params, kind: str) -> int:
     """``merge_from`` of a tiled run: that of one run on the whole input, with the density
-    of a tiled run (0 unless given); 1 where sized by radius, and where the colour term is
-    on (``beta > 0``, or ``beta=None`` on an input with ``colors``: the tiles' sums hold
-    no colours, and merges blind to them would join a board to its wall). Points only.
+    of a tiled run (0 unless given); 1 where sized by radius. Points only. (With colour,
+    the tiles' sums carry the colours: the merges join only neighbours of one colour.)
 
     Raises
     ------
@@ -215,8 +224,6 @@ def tiled_merge_from(params, kind: str, colors: bool = False) -> int:
     if params.n_segments is None or params.radius is not None:  # sized by radius
         return 1
     density = 0.0 if params.density is None else params.density
-    if (params.beta if params.beta is not None else float(colors)) > 0:
-        return 1
     return merge_from_of(replace(params, density=density), kind)
 
 
@@ -319,6 +326,14 @@ def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float,
     max_rise = FLAT_NOISE * max(float(np.median(noise)), 0.0) if noise.size else 0.0
 
     unit = _graph(np.arange(k), ea, parts, count, mean, scatter)
+    if all("feature_sum" in s for s in stats) and stats:  # the colour term was on
+        from dataclasses import replace as _with
+
+        from ..method.merges import same_feature_edges
+
+        colour = _sum(node, stats, "feature_sum", k) / np.maximum(count, 1.0)[:, None]
+        floor = float(np.median([s["floor"] for s in stats]))
+        unit = same_feature_edges(_with(unit, feature=colour), floor)
     top = flat_merge_nodes(unit, target, max_rise, alpha, eta_convex)
     n_flat = int(top.max()) + 1 if k else 0
     grouped_area = np.bincount(top, weights=area, minlength=n_flat)

@@ -319,7 +319,7 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
     core, rows, n_noise = (np.asarray(x) for x in merging)
     first = src.first_rows(np.arange(m))  # each element's first row
     return named, tile_merge_stats(graph, labels, rows[name], core[first], rows[first],
-                                   int(n_noise))
+                                   int(n_noise), features=feats, floor=rules.feature_floor)
 
 
 def tile_connect(inp, labels: np.ndarray, owned: np.ndarray, owned_rows: np.ndarray,

@@ -379,7 +379,7 @@ def _merge_plan(params, kind: str, survey):
     """The count asked for, the factor of the superpoints made before the merges down to
     it (1: none), and the parameters of the tiles' runs (their count that many times)."""
     n_elements = survey.n_elements
-    target, merge_from = params.n_segments, tiled_merge_from(params, kind, survey.colors)
+    target, merge_from = params.n_segments, tiled_merge_from(params, kind)
     if merge_from > 1:  # merge_from times the superpoints, merged to the count at the end
         fine = min(target * merge_from, max(target, n_elements // MIN_FINE_ELEMENTS))
         merge_from = merge_from if fine > target else 1
