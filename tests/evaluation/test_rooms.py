@@ -95,3 +95,35 @@ def test_the_colour_floor_follows_the_noise():
         src = elements_of(scan.cloud)
         floors.append(feature_scale(src.graph, features_of(src, None))[1])
     assert floors[1] > 3 * floors[0]
+
+
+def test_experiment_runs_on_the_rooms(tmp_path, capsys):
+    import csv
+
+    from superfacets.cli import main
+
+    out = tmp_path / "rooms.csv"
+    assert main(["experiment", "--dataset", "rooms", "--rooms", "1", "--elements", "points",
+                 "-k", "200", "--alpha", "200", "--param", "superfacets.beta=0,auto", "-j",
+                 "1", "-o", str(out), "-q"]) == 0
+    rows = list(csv.DictReader(out.open()))
+    assert [(r["mesh"], r["category"], r["beta"], r["status"]) for r in rows] == [
+        ("room-0", "Room", "0", "ok"), ("room-0", "Room", "auto", "ok")]
+    ue = {r["beta"]: float(r["undersegmentation_error"]) for r in rows}
+    assert ue["auto"] < ue["0"]  # the boards and doors: told by colour only
+    assert main(["experiment", "--dataset", "rooms", "-o", str(out)]) == 2  # (faces)
+    assert "--elements points" in capsys.readouterr().err
+
+
+def test_features_that_are_not_numbers_turn_the_default_term_off():
+    from superfacets import PointCloud
+
+    rng = np.random.default_rng(0)
+    feats = rng.random((2000, 3))
+    feats[5] = np.nan  # (a cloud's own colours are checked when it is made)
+    cloud = PointCloud(np.c_[rng.random((2000, 2)), np.zeros(2000)])
+    with pytest.warns(RuntimeWarning, match="colour term is off"):
+        r = segment(cloud, 20, features=feats)
+    assert r.params["beta"] == 0 and r.n_segments == 20
+    with pytest.raises(ParameterError, match="not finite"):
+        segment(cloud, 20, beta=10, features=feats)  # asked for: an error, not a warning
