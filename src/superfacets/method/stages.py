@@ -414,10 +414,11 @@ def weigh(graph, rules: Rules, features=None, hooks=None
     if rules.cleanup:
         graph.terms  # noqa: B018 (kept for the clean-up; else computed chunk by chunk)
     dtype = weight_dtype(rules.kind, p.paper)
-    if (graph.terms_of is symmetric_terms and p.weighting == "paper" and not p.beta
+    if (graph.terms_of is symmetric_terms and p.weighting == "paper"
             and not rules.cleanup and not rules.split_merge):
         # points, vertices: from the CSR layout, positions and normals (the same values)
-        w = csr_point_weights(graph, alpha=p.alpha, eta_convex=p.eta_convex, dtype=dtype)
+        w = csr_point_weights(graph, alpha=p.alpha, eta_convex=p.eta_convex, dtype=dtype,
+                              features=features, beta=p.beta, floor=rules.feature_floor)
     else:
         w_pairs = edge_weights(graph, p.weighting, alpha=p.alpha, eta_convex=p.eta_convex,
                                features=features, beta=p.beta, floor=rules.feature_floor,

@@ -235,8 +235,9 @@ def feature_scale(graph, features: np.ndarray, *, alpha: float = _PAPER_ALPHA,
     differences up to it cost nothing. The weight ``beta`` makes the term, on average over
     the adjacencies, weigh as much as the geometric terms of eq. 3 together:
     ``beta = mean(geo / |e| + alpha * eta * theta / pi) / mean(jump)``, ``jump`` the
-    differences beyond the floor (:func:`feature_jumps`). Read on at most about 131,000
-    adjacencies (128 slices evenly spread over the pairs' order).
+    differences beyond the floor (:func:`feature_jumps`). Read on about 131,000
+    adjacencies at most, in 128 slices evenly spread over the graph (points and vertices:
+    over its rows, both directions of each adjacency).
 
     Parameters
     ----------
@@ -270,18 +271,7 @@ def feature_scale(graph, features: np.ndarray, *, alpha: float = _PAPER_ALPHA,
     (0.0, 0.0)
     """
     f = check_features(features, graph)
-    e = graph.n_edges
-    step = max(_SCALE_SLICE, -(-e // (_SCALE_SAMPLE // _SCALE_SLICE)))
-    geometric, jumps = [], []
-    span = graph.span
-    for start in range(0, e, step):
-        sl = slice(start, min(e, start + _SCALE_SLICE))
-        t = graph.terms_in(sl)
-        eta = np.where(t.concave, 1.0, eta_convex)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            geo = np.where(span[sl] > 0, t.geo / span[sl], 1.0)
-        geometric.append(geo + alpha * eta * np.arccos(t.cos) / np.pi)
-        jumps.append(feature_jumps(f, graph.pairs[sl]))
+    geometric, jumps = _scale_sample(graph, f, alpha, eta_convex)
     if not jumps:
         return 0.0, 0.0
     jump = np.concatenate(jumps)
@@ -291,6 +281,46 @@ def feature_scale(graph, features: np.ndarray, *, alpha: float = _PAPER_ALPHA,
         return 0.0, floor
     beta = float(np.concatenate(geometric).mean()) / above
     return (min(beta, MAX_WEIGHT_FACTOR) if np.isfinite(beta) else 0.0), floor
+
+
+def _scale_sample(graph, f: np.ndarray, alpha: float, eta_convex: float) -> tuple[list, list]:
+    """The geometric terms (``geo / |e| + alpha * eta * theta / pi``) and the feature
+    differences of evenly spread slices of the adjacencies: of the pairs, or, on a graph of
+    points or vertices, of the CSR rows (their terms from the positions and normals: the
+    pairs, which such a run never builds, are not made for it)."""
+    from ..elements.vertices import symmetric_terms
+
+    geometric, jumps = [], []
+    if graph.terms_of is symmetric_terms:  # points, vertices: span = geo
+        point_terms_csr = native.kernel("terms.point_terms_csr")
+        indptr, indices = graph.indptr, graph.indices
+        n = graph.n_elements
+        rows = max(1, _SCALE_SLICE * n // max(int(indptr[-1]), 1))  # about a slice a block
+        step = max(rows, -(-n // (_SCALE_SAMPLE // _SCALE_SLICE)))
+        pos, nor = np.ascontiguousarray(graph.positions), real_rows(graph.normals)
+        for r0 in range(0, n, step):
+            r1 = min(n, r0 + rows)
+            x0, x1 = int(indptr[r0]), int(indptr[r1])
+            geo, cos = np.empty(x1 - x0), np.empty(x1 - x0)
+            concave = np.empty(x1 - x0, dtype=bool)
+            point_terms_csr(pos, nor, indptr, indices, r0, r1, geo, cos, concave)
+            eta = np.where(concave, 1.0, eta_convex)
+            geometric.append(1.0 + alpha * eta * np.arccos(cos) / np.pi)
+            i = np.repeat(np.arange(r0, r1), np.diff(indptr[r0:r1 + 1]))
+            jumps.append(feature_jumps(f, np.stack([i, indices[x0:x1]], 1)))
+        return geometric, jumps
+    e = graph.n_edges
+    step = max(_SCALE_SLICE, -(-e // (_SCALE_SAMPLE // _SCALE_SLICE)))
+    span = graph.span
+    for start in range(0, e, step):
+        sl = slice(start, min(e, start + _SCALE_SLICE))
+        t = graph.terms_in(sl)
+        eta = np.where(t.concave, 1.0, eta_convex)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            geo = np.where(span[sl] > 0, t.geo / span[sl], 1.0)
+        geometric.append(geo + alpha * eta * np.arccos(t.cos) / np.pi)
+        jumps.append(feature_jumps(f, graph.pairs[sl]))
+    return geometric, jumps
 
 
 def check_features(features, graph: ElementGraph) -> np.ndarray:
@@ -424,7 +454,9 @@ def csr_weights(graph: ElementGraph, weights: np.ndarray, dtype=np.float64) -> n
 
 
 def csr_point_weights(graph: ElementGraph, *, alpha: float = _PAPER_ALPHA,
-                      eta_convex: float = DEFAULTS.eta_convex, dtype=np.float64) -> np.ndarray:
+                      eta_convex: float = DEFAULTS.eta_convex, dtype=np.float64,
+                      features: np.ndarray | None = None, beta: float = 0.0,
+                      floor: float = 0.0) -> np.ndarray:
     """The paper's weights per CSR entry of a graph whose elements are points with
     normals (cloud points, mesh vertices: ``terms_of`` is their symmetric terms), made
     from the positions, normals and CSR layout alone.
@@ -441,6 +473,8 @@ def csr_point_weights(graph: ElementGraph, *, alpha: float = _PAPER_ALPHA,
         As :func:`paper_weights` (checked there: here as given).
     dtype : numpy dtype, default float64
         Of the result (:func:`weight_dtype`).
+    features, beta, floor
+        The feature term, as :func:`paper_weights` (``beta > 0``: the same values too).
 
     Returns
     -------
@@ -464,6 +498,7 @@ def csr_point_weights(graph: ElementGraph, *, alpha: float = _PAPER_ALPHA,
     from .._runtime.threads import run_ranges, split
 
     g = graph
+    f = check_features(features, g) if beta > 0 else None
     pos = np.ascontiguousarray(g.positions)
     nor = real_rows(g.normals)  # (points keep float32: read as float64)
     indptr, indices = g.indptr, g.indices
@@ -480,6 +515,12 @@ def csr_point_weights(graph: ElementGraph, *, alpha: float = _PAPER_ALPHA,
             concave = np.empty(x1 - x0, dtype=bool)
             point_terms_csr(pos, nor, indptr, indices, r0, r1, geo, cos, concave)
             theta = np.arccos(cos, out=cos)
+            if f is not None:  # paper_weights' expression, in its order
+                ang = np.where(concave, 1.0, eta_convex) * geo * theta / np.pi
+                i = np.repeat(np.arange(r0, r1), np.diff(indptr[r0:r1 + 1]))
+                jump = feature_jumps(f, np.stack([i, indices[x0:x1]], 1), floor)
+                out[x0:x1] = (geo + alpha * ang + beta * geo * jump) / g.diagonal
+                continue
             # (geo + alpha * eta * geo * theta / pi) / d in one pass, as numpy's would give
             combine_weights(geo, theta, concave, float(eta_convex), float(alpha),
                             float(g.diagonal), out[x0:x1])
