@@ -292,22 +292,15 @@ def _scale_sample(graph, f: np.ndarray, alpha: float, eta_convex: float) -> tupl
 
     geometric, jumps = [], []
     if graph.terms_of is symmetric_terms:  # points, vertices: span = geo
-        point_terms_csr = native.kernel("terms.point_terms_csr")
-        indptr, indices = graph.indptr, graph.indices
-        n = graph.n_elements
+        indptr, n = graph.indptr, graph.n_elements
         rows = max(1, _SCALE_SLICE * n // max(int(indptr[-1]), 1))  # about a slice a block
         step = max(rows, -(-n // (_SCALE_SAMPLE // _SCALE_SLICE)))
         pos, nor = np.ascontiguousarray(graph.positions), real_rows(graph.normals)
         for r0 in range(0, n, step):
-            r1 = min(n, r0 + rows)
-            x0, x1 = int(indptr[r0]), int(indptr[r1])
-            geo, cos = np.empty(x1 - x0), np.empty(x1 - x0)
-            concave = np.empty(x1 - x0, dtype=bool)
-            point_terms_csr(pos, nor, indptr, indices, r0, r1, geo, cos, concave)
+            geo, cos, concave, pairs = _csr_block_terms(graph, pos, nor, r0, min(n, r0 + rows))
             eta = np.where(concave, 1.0, eta_convex)
             geometric.append(1.0 + alpha * eta * np.arccos(cos) / np.pi)
-            i = np.repeat(np.arange(r0, r1), np.diff(indptr[r0:r1 + 1]))
-            jumps.append(feature_jumps(f, np.stack([i, indices[x0:x1]], 1)))
+            jumps.append(feature_jumps(f, pairs))
         return geometric, jumps
     e = graph.n_edges
     step = max(_SCALE_SLICE, -(-e // (_SCALE_SAMPLE // _SCALE_SLICE)))
@@ -321,6 +314,23 @@ def _scale_sample(graph, f: np.ndarray, alpha: float, eta_convex: float) -> tupl
         geometric.append(geo + alpha * eta * np.arccos(t.cos) / np.pi)
         jumps.append(feature_jumps(f, graph.pairs[sl]))
     return geometric, jumps
+
+
+def _csr_block_terms(graph, pos: np.ndarray, nor: np.ndarray, r0: int, r1: int,
+                     pairs: bool = True):
+    """``(geo, cos, concave, pairs)`` of the CSR entries of rows ``r0:r1`` of a graph of
+    points or vertices (compiled, from the positions and normals), ``pairs`` the (row,
+    neighbour) of each entry (None unless asked for)."""
+    indptr, indices = graph.indptr, graph.indices
+    x0, x1 = int(indptr[r0]), int(indptr[r1])
+    geo, cos = np.empty(x1 - x0), np.empty(x1 - x0)
+    concave = np.empty(x1 - x0, dtype=bool)
+    native.kernel("terms.point_terms_csr")(pos, nor, indptr, indices, r0, r1, geo, cos,
+                                           concave)
+    if not pairs:
+        return geo, cos, concave, None
+    rows = np.repeat(np.arange(r0, r1), np.diff(indptr[r0:r1 + 1]))
+    return geo, cos, concave, np.stack([rows, indices[x0:x1]], 1)
 
 
 def check_features(features, graph: ElementGraph) -> np.ndarray:
@@ -493,7 +503,6 @@ def csr_point_weights(graph: ElementGraph, *, alpha: float = _PAPER_ALPHA,
     >>> bool((csr_point_weights(g) == csr_weights(g, paper_weights(g))).all())
     True
     """
-    point_terms_csr = native.kernel("terms.point_terms_csr")
     combine_weights = native.kernel("terms.combine_weights")
     from .._runtime.threads import run_ranges, split
 
@@ -511,14 +520,11 @@ def csr_point_weights(graph: ElementGraph, *, alpha: float = _PAPER_ALPHA,
     def blocks(b0: int, b1: int) -> None:
         for r0, r1 in zip(cuts[b0:b1], cuts[b0 + 1:b1 + 1]):
             x0, x1 = indptr[r0], indptr[r1]
-            geo, cos = np.empty(x1 - x0), np.empty(x1 - x0)
-            concave = np.empty(x1 - x0, dtype=bool)
-            point_terms_csr(pos, nor, indptr, indices, r0, r1, geo, cos, concave)
+            geo, cos, concave, pairs = _csr_block_terms(g, pos, nor, r0, r1, f is not None)
             theta = np.arccos(cos, out=cos)
             if f is not None:  # paper_weights' expression, in its order
                 ang = np.where(concave, 1.0, eta_convex) * geo * theta / np.pi
-                i = np.repeat(np.arange(r0, r1), np.diff(indptr[r0:r1 + 1]))
-                jump = feature_jumps(f, np.stack([i, indices[x0:x1]], 1), floor)
+                jump = feature_jumps(f, pairs, floor)
                 out[x0:x1] = (geo + alpha * ang + beta * geo * jump) / g.diagonal
                 continue
             # (geo + alpha * eta * geo * theta / pi) / d in one pass, as numpy's would give
