@@ -53,7 +53,7 @@ def _recorded_calls(monkeypatch) -> dict:
     from superfacets.evaluation.baselines.vsa import vsa
     from superfacets.graph.adjacency import superfacet_graph
     from superfacets.graph.hierarchy import hierarchy
-    from superfacets.inputs.cloud import as_cloud
+    from superfacets.inputs.cloud import PointCloud, as_cloud
 
     calls: dict = {}
     plain = native.kernel
@@ -83,7 +83,8 @@ def _recorded_calls(monkeypatch) -> dict:
             (as_cloud(np.r_[pts, pts[:50]]), 30, {}), (as_cloud(pts), 3, {"merge_from": 1}),
             (as_cloud(pts), 30, {"window": 1.0, "assignment": "bounded"}),
             (as_cloud(pts), 30, {"roughness": 1.0}),
-            (as_cloud(np.r_[pts, pts + [50.0, 0, 0]]), 20, {})]:
+            (as_cloud(np.r_[pts, pts + [50.0, 0, 0]]), 20, {}),
+            (PointCloud(pts, colors=np.c_[pts[:, :1] > 0, pts[:, 1:] > 0] * 0.5), 30, {})]:
         superfacets.segment(data, k, n_threads=1, **params)
     labels = superfacets.segment(mesh, 30, n_threads=1).labels
     hierarchy(superfacet_graph(elements_of(mesh, "faces").graph, labels, None), [20, 5])

@@ -69,6 +69,31 @@ def combine_weights(geo, theta, concave, eta_convex, alpha, diagonal, out):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
+def feature_weights_csr(geo, theta, concave, features, indptr, indices, r0, r1, eta_convex,
+                        alpha, beta, floor, diagonal, out):
+    """The weights of the CSR entries of rows ``r0:r1`` with the feature term:
+    ``((geo + alpha * ang) + (beta * geo) * jump) / diagonal``, ``ang`` as
+    :func:`combine_weights`, ``jump`` the distance of the rows' features (squares added in
+    column order) less ``floor``, at least 0, where ``floor > 0``."""
+    u = 0
+    for i in range(r0, r1):
+        for x in range(indptr[i], indptr[i + 1]):
+            j = indices[x]
+            s = 0.0
+            for c in range(features.shape[1]):
+                t = features[i, c] - features[j, c]
+                s += t * t
+            jump = np.sqrt(s)
+            if floor > 0:
+                over = jump - floor
+                jump = over if over >= 0.0 else 0.0
+            eta = 1.0 if concave[u] else eta_convex
+            ang = eta * geo[u] * theta[u] / np.pi
+            out[u] = (geo[u] + alpha * ang + beta * geo[u] * jump) / diagonal
+            u += 1
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
 def neighbour_mean(indptr, indices, x, out):
     """``out[i] = ((x_i + above) + below) / (1 + degree)``: ``above`` the sum of ``x_j``
     over the neighbours ``j > i``, ``below`` over ``j < i``, each added in ascending

@@ -517,11 +517,22 @@ def csr_point_weights(graph: ElementGraph, *, alpha: float = _PAPER_ALPHA,
     cuts = np.unique(np.r_[np.searchsorted(indptr, np.arange(0, indptr[-1], CHUNK)),
                            indptr.shape[0] - 1])
 
+    compiled = f is not None and f.shape[1] <= 5  # (numpy's norm adds more columns pairwise)
+    if compiled:
+        feature_weights = native.kernel("terms.feature_weights_csr")
+        f = np.ascontiguousarray(f)
+
     def blocks(b0: int, b1: int) -> None:
         for r0, r1 in zip(cuts[b0:b1], cuts[b0 + 1:b1 + 1]):
             x0, x1 = indptr[r0], indptr[r1]
-            geo, cos, concave, pairs = _csr_block_terms(g, pos, nor, r0, r1, f is not None)
+            geo, cos, concave, pairs = _csr_block_terms(g, pos, nor, r0, r1,
+                                                        f is not None and not compiled)
             theta = np.arccos(cos, out=cos)
+            if compiled:  # paper_weights' expression, in its order, per CSR entry
+                feature_weights(geo, theta, concave, f, indptr, indices, int(r0), int(r1),
+                                float(eta_convex), float(alpha), float(beta), float(floor),
+                                float(g.diagonal), out[x0:x1])
+                continue
             if f is not None:  # paper_weights' expression, in its order
                 ang = np.where(concave, 1.0, eta_convex) * geo * theta / np.pi
                 jump = feature_jumps(f, pairs, floor)

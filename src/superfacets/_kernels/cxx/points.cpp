@@ -540,6 +540,66 @@ void combine_weights(nb::handle geo_, nb::handle theta_, nb::handle concave_, do
     }
 }
 
+// terms.feature_weights_csr: the weights of the CSR entries of rows r0:r1 with the
+// feature term, as csr_point_weights' numpy expression gives them, bit for bit:
+// out = ((geo + alpha * ang) + (beta * geo) * jump) / diagonal, ang as combine_weights,
+// jump = ||f_i - f_j|| (its squares added in column order, as numpy's norm adds up to 5
+// columns) less floor, at least 0, where floor > 0.
+template <class T>
+void feature_weights_into(const In<double>& geo, const In<double>& theta,
+                          const In<bool>& concave, const In<double>& f, const In<i64>& indptr,
+                          const In<i32>& indices, i64 r0, i64 r1, double eta_convex,
+                          double alpha, double beta, double floor, double diagonal, T* out) {
+    constexpr double PI = 3.141592653589793;
+    const i64 d = f.cols;
+    i64 u = 0;
+    for (i64 i = r0; i < r1; ++i)
+        for (i64 x = indptr[i]; x < indptr[i + 1]; ++x, ++u) {
+            const i64 j = indices[x];
+            double s = 0.0;
+            for (i64 c = 0; c < d; ++c) {
+                const double t = f(i, c) - f(j, c);
+                s += t * t;
+            }
+            double jump = std::sqrt(s);
+            if (floor > 0) {
+                const double over = jump - floor;
+                jump = over >= 0.0 ? over : 0.0;
+            }
+            const double eta = concave[u] ? 1.0 : eta_convex;
+            const double ang = eta * geo[u] * theta[u] / PI;
+            out[u] = static_cast<T>((geo[u] + alpha * ang + beta * geo[u] * jump) / diagonal);
+        }
+}
+
+void feature_weights_csr(nb::handle geo_, nb::handle theta_, nb::handle concave_,
+                         nb::handle features_, nb::handle indptr_, nb::handle indices_, i64 r0,
+                         i64 r1, double eta_convex, double alpha, double beta, double floor,
+                         double diagonal, nb::handle out_) {
+    In<double> geo(geo_, "geo"), theta(theta_, "theta"), f(features_, "features");
+    In<bool> concave(concave_, "concave");
+    In<i64> indptr(indptr_, "indptr");
+    In<i32> indices(indices_, "indices");
+    if (f.cols < 1 || f.cols > 5) throw Mismatch("argument features: 1 to 5 columns");
+    check_span(r0, r1, indptr.n - 1, indptr.n - 1);
+    check_csr(In<i64>(indptr.p + r0, r1 - r0 + 1), indices, r1 - r0, f.n);
+    if (r1 > f.n) throw OutOfRange("arguments r0, r1: rows past features");
+    const i64 m = indptr[r1] - indptr[r0];
+    if (geo.n != m || theta.n != m || concave.n != m) throw Mismatch("argument geo");
+    auto run = [&](auto* tag) {
+        using T = std::remove_pointer_t<decltype(tag)>;
+        Out<T> out(out_, "out");
+        if (out.n != m) throw Mismatch("argument out");
+        nb::gil_scoped_release nogil;
+        feature_weights_into(geo, theta, concave, f, indptr, indices, r0, r1, eta_convex, alpha,
+                             beta, floor, diagonal, out.p);
+    };
+    if (matches<float>(out_))
+        run(static_cast<float*>(nullptr));
+    else
+        run(static_cast<double*>(nullptr));
+}
+
 void point_terms(nb::handle positions_, nb::handle normals_, nb::handle pairs_, i64 lo, i64 hi,
                  nb::handle geo_, nb::handle cos_, nb::handle concave_) {
     In<double> pos(positions_, "positions");
@@ -920,6 +980,7 @@ void bind_points(nb::module_& m) {
     m.def("turn_outwards", &turn_outwards);
     m.def("point_terms_csr", &point_terms_csr);
     m.def("combine_weights", &combine_weights);
+    m.def("feature_weights_csr", &feature_weights_csr);
     m.def("point_terms", &point_terms);
     m.def("neighbour_mean", &neighbour_mean);
     m.def("crossing_pairs", &crossing_pairs);
