@@ -268,6 +268,74 @@ def test_buckets_read_every_box_as_the_file_does(tmp_path, kind):
         np.testing.assert_array_equal(buckets.read_box(s.lo, s.hi)[2].viewpoint, [0, 0, 5.0])
 
 
+def test_a_kept_box_is_read_back_whole_and_only_for_the_same_box(tmp_path):
+    """A tile's later phases read its box from the one file its first phase kept: the same
+    rows, positions and cloud; another box is read from the tiles; a changed file refused."""
+    from superfacets import PointCloud
+    from superfacets.errors import SuperfacetsError
+
+    rng = np.random.default_rng(3)
+    cloud = PointCloud(rng.random((4000, 3)), colors=rng.random((4000, 3)))
+    reader = RegionReader.spill(cloud, tmp_path / "spill", chunk=500)
+    s = reader.survey()
+    buckets = bucket(reader, balanced_tiles(s.sample, s.lo, s.hi, 6), tmp_path / "b")
+    keep = tmp_path / "box-0"
+    lo, hi = np.full(3, 0.2), np.full(3, 0.7)
+    first = buckets.read_box(lo, hi, keep=keep)
+    for name in [f"tile-{t}.bin" for t in range(6)]:  # read again: from the kept file alone
+        (tmp_path / "b" / name).rename(tmp_path / f"away-{name}")
+    _same_box(buckets.read_box(lo, hi, keep=keep), first)
+    _same_box(first, reader.read_box(lo, hi))
+    with pytest.raises(FileNotFoundError):  # another box: not the kept one
+        buckets.read_box(lo, hi + 0.1, keep=keep)
+    data = bytearray((tmp_path / "box-0.npy").read_bytes())
+    data[-1] ^= 1
+    (tmp_path / "box-0.npy").write_bytes(bytes(data))
+    with pytest.raises(SuperfacetsError, match="changed since this run wrote it"):
+        buckets.read_box(lo, hi, keep=keep)
+
+
+def test_tiles_read_the_whole_clouds_area_on_the_graphs_they_keep(monkeypatch, tmp_path):
+    """The areas of a cloud's tiles are read on the graphs they build once (boxes sized by
+    the survey's sample): the radius is one run's; a sample that asks for too narrow a
+    halo has the graphs dropped and built again on the halo the radius asks for."""
+    import superfacets.scale.runner.tiles as rt
+    from superfacets.elements.points import point_graph
+
+    cloud = _bumpy_cloud(20000)
+    area = float(point_graph(cloud, 10).graph.sizes.sum())
+    seen, real = [], rt.tile_graph
+    monkeypatch.setattr(rt, "tile_graph", lambda *a: seen.append(real(*a)) or seen[-1])
+    res = segment_tiled(cloud, 60, tiles=4, workdir=tmp_path)
+    fine = 60 * res.params["merge_from"]  # (an even cloud: superpoints merged to the count)
+    assert res.mesh_radius == pytest.approx(math.sqrt(area / (fine * math.pi)), rel=1e-9)
+    assert seen.count("built") == 4 and res.halo >= 3 * 2 * res.mesh_radius
+    monkeypatch.setattr(rt, "GRAPH_SLACK", 0.5)  # the sample's halo too narrow
+    seen.clear()
+    narrow = segment_tiled(cloud, 60, tiles=4, workdir=tmp_path)
+    assert seen.count("built") == 8 and narrow.halo == pytest.approx(6 * narrow.mesh_radius)
+    assert narrow.mesh_radius == pytest.approx(res.mesh_radius, rel=1e-12)
+    monkeypatch.setattr(rt, "graph_folder", lambda *a: None)
+    np.testing.assert_array_equal(segment_tiled(cloud, 60, tiles=4).labels, narrow.labels)
+
+
+def test_pair_sums_of_names_too_large_for_one_key_are_the_same(monkeypatch):
+    from superfacets.scale import tile_merges
+
+    rng = np.random.default_rng(0)
+    a, b = rng.integers(0, 50, 5000) * 1_000_003, rng.integers(0, 50, 5000) * 1_000_003
+    w = [rng.random(5000) for _ in range(3)]
+    one = tile_merges._pair_sums(a, b, *w)
+    monkeypatch.setattr(tile_merges, "_ONE_KEY", 0)  # every pair by a sort of rows
+    rows = tile_merges._pair_sums(a, b, *w)
+    assert one.keys() == rows.keys()
+    for key in one:
+        np.testing.assert_array_equal(one[key], rows[key])
+    e = one["edges"]
+    assert (e[:, 0] <= e[:, 1]).all()
+    assert (np.lexsort((e[:, 1], e[:, 0])) == np.arange(len(e))).all()  # in the pairs' order
+
+
 def test_a_tiled_run_reads_the_file_twice_and_gives_the_same_labels(tmp_path, monkeypatch):
     """After the survey and the bucketing no task reads the file; the labels are those of
     tasks that each read the file (the path a remote scheduler without workdir takes)."""
@@ -549,8 +617,10 @@ def test_tiny_tiles_of_one_point_each(monkeypatch):
     monkeypatch.setattr(tile_layout, "MIN_PER_TILE", 0)  # the machinery, on tiny tiles
     res = segment_tiled(pts, None, radius=0.3, tiles=(2, 2, 1), n_neighbors=2)
     np.testing.assert_array_equal(np.sort(res.labels), [0, 1, 2])
-    with pytest.raises(ParameterError, match="too few or too sparse"):
-        segment_tiled(pts, 2, tiles=(2, 2, 1), n_neighbors=2)
+    # sized by n_segments: each tile's box reaches as far as the halo the survey's sample
+    # asks for, so the tiny tiles read the points' areas as one run does
+    tiled = segment_tiled(pts, 2, tiles=(2, 2, 1), n_neighbors=2)
+    np.testing.assert_array_equal(tiled.labels, segment(pts, 2, n_neighbors=2).labels)
 
 
 def test_cli_tiles_writes_labels_and_refuses_whole_input_outputs(tmp_path):

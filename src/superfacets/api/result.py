@@ -304,7 +304,9 @@ class TiledResult:
         The tiles' core boxes (:class:`~superfacets.scale.tile_layout.Tiles`:
         ``layout.of(positions)``, ``layout.box(t)``).
     halo : float
-        Width of each tile's halo, in the input's units.
+        Width of each tile's halo, in the input's units: ``halo * window * r``, or on a
+        cloud sized by ``n_segments`` up to 2 % more (the halo its survey's sample asked
+        for, its graphs built once on it).
     disagreements : int
         Elements of the tiles' inner halos (within ``window * r`` of a core)
         whose label in that tile's run differs from the one their own tile

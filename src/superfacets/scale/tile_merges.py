@@ -148,13 +148,22 @@ def tile_merge_stats(graph, labels: np.ndarray, names: np.ndarray, core: np.ndar
                 outer_concave=concave[outer], noise=neighbourhood_noise(graph, pick))
 
 
+#: The largest name + 1 whose pairs :func:`_pair_sums` keys as one int64 (its square fits).
+_ONE_KEY = 3_037_000_499
+
+
 def _pair_sums(a: np.ndarray, b: np.ndarray, length: np.ndarray, angle: np.ndarray,
                concave: np.ndarray) -> dict:
     """Adjacencies between superpoints ``a`` and ``b`` (names, one per adjacency, with its
     border length, angle and concave share) summed per pair: ``edges`` (E, 2), lower
     name first, and the sums :func:`tile_merge_stats` returns."""
-    key, inv = np.unique(np.stack([np.minimum(a, b), np.maximum(a, b)], 1).reshape(-1, 2),
-                         axis=0, return_inverse=True)
+    lo, hi = np.minimum(a, b).astype(np.int64), np.maximum(a, b).astype(np.int64)
+    m = int(hi.max()) + 1 if hi.size else 1
+    if lo.size and (int(lo.min()) < 0 or m > _ONE_KEY):  # (names too large for one key)
+        key, inv = np.unique(np.stack([lo, hi], 1), axis=0, return_inverse=True)
+    else:  # one int64 key a pair, in the same order as the pairs (a sort, not a lexsort)
+        one, inv = np.unique(lo * np.int64(m) + hi, return_inverse=True)
+        key = np.stack([one // m, one % m], 1)
     inv = inv.reshape(-1)
     e = key.shape[0]
 

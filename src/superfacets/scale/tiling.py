@@ -53,7 +53,7 @@ from ..method.stages import build_graph, resolve_features, resolve_rules, weigh
 
 __all__ = ["tile_centers", "tile_refine", "tile_labels",
            "tile_connect", "orientation_reference", "HALO",
-           "point_areas", "check_tileable"]
+           "point_areas", "core_area", "oriented_sample", "check_tileable"]
 
 #: Default halo, in units of ``window * r``. 3 rather than 2: the classification of
 #: the core is exact from 2, and the clean-up near a border nearly so from 3
@@ -210,14 +210,37 @@ def orientation_reference(sample: np.ndarray, n_neighbors: int, up=None) -> tupl
     (positions (R, 3), normals (R, 3)) : tuple of float64 ndarray
         Empty arrays when the sample is too small for a point graph.
     """
+    graph = oriented_sample(sample, n_neighbors, up)
+    if graph is None:
+        return np.zeros((0, 3)), np.zeros((0, 3))
+    return np.array(graph.positions), np.array(graph.normals, dtype=np.float64)
+
+
+def oriented_sample(sample: np.ndarray, n_neighbors: int, up=None):
+    """The point graph (:class:`~superfacets.elements.graph.ElementGraph`) of the sample
+    :func:`orientation_reference` orients, or None when it has fewer than 3 distinct
+    points; its ``sizes`` sum to the sample's area as a run reads a cloud's."""
     from ..elements.points import point_graph
     from ..inputs.cloud import PointCloud
 
     pts = np.asarray(sample, dtype=np.float64)
     if np.unique(pts, axis=0).shape[0] < 3:
-        return np.zeros((0, 3)), np.zeros((0, 3))
-    g = point_graph(PointCloud(pts, up=up), n_neighbors).graph
-    return np.array(g.positions), np.array(g.normals)
+        return None
+    return point_graph(PointCloud(pts, up=up), n_neighbors).graph
+
+
+def core_area(cloud, core: np.ndarray, n_neighbors: int) -> float:
+    """Summed size of the distinct points the ``core`` rows of a tile's cloud hold, read
+    on the point graph the tile builds (:func:`point_areas` reads the same sizes on a
+    tree of its own; the graph built here is kept with the cloud for the tile's phases).
+    """
+    from ..elements.builders import prepared
+    from ..elements.points import point_graph
+
+    el = point_graph(prepared(cloud, "points")[1], n_neighbors)  # (where tile_graph keeps it)
+    at = np.asarray(el.index)[np.flatnonzero(core)]
+    at = np.unique(at[at >= 0])
+    return float(np.asarray(el.graph.sizes)[at].sum())
 
 
 def _core_share(inp, core: np.ndarray, p: SegmentParams, r: float) -> int:

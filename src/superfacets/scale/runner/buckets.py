@@ -157,14 +157,26 @@ class TileBuckets:
     source: str = ""
     digests: tuple = ()
 
-    def read_box(self, lo, hi, name: str = ""):
+    def read_box(self, lo, hi, name: str = "", keep=None):
         """The elements whose position lies in ``[lo, hi]``: the same rows, positions
         and input as :meth:`RegionReader.read_box
-        <superfacets.io.regions.RegionReader.read_box>` gives."""
-        from ...inputs.mesh import Mesh
+        <superfacets.io.regions.RegionReader.read_box>` gives.
 
+        ``keep`` (a path without suffix, optional): the box's records are saved there
+        (``keep.npy``, with ``keep.json``: the box and the file's SHA-256) and read from
+        there when the same box is asked for again (a tile's later phases), instead of
+        from the tiles it overlaps."""
         lo = np.asarray(lo, dtype=np.float64)
         hi = np.asarray(hi, dtype=np.float64)
+        rec = None if keep is None else _kept_box(keep, lo, hi, self.dtype)
+        if rec is None:
+            rec = self._records(lo, hi)
+            if keep is not None:
+                _keep_box(keep, rec, lo, hi)
+        return self._of_records(rec, name)
+
+    def _records(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+        """The records of the elements in ``[lo, hi]``, in the order of their rows."""
         parts = []
         near = (self.counts > 0) & (self.lo <= hi).all(axis=1) & (self.hi >= lo).all(axis=1)
         for t in np.flatnonzero(near):
@@ -173,7 +185,12 @@ class TileBuckets:
             parts.append(np.array(rec[np.flatnonzero(((pos >= lo) & (pos <= hi)).all(axis=1))]))
             del rec
         rec = np.concatenate(parts) if parts else np.empty(0, dtype=self.dtype)
-        rec = rec[np.argsort(rec["row"], kind="stable")]
+        return rec[np.argsort(rec["row"], kind="stable")]
+
+    def _of_records(self, rec: np.ndarray, name: str):
+        """The rows, positions and input of a box's records."""
+        from ...inputs.mesh import Mesh
+
         rows = np.ascontiguousarray(rec["row"])
         where = np.ascontiguousarray(rec["pos"])
         if rows.size == 0:
@@ -203,3 +220,45 @@ class TileBuckets:
             raise SuperfacetsError(f"{path}: changed since this run wrote it (the work "
                                    "folder's files belong to the run): refused")
         return np.frombuffer(data, dtype=self.dtype)
+
+
+def _keep_box(keep, rec: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> None:
+    """Save a box's records at ``keep`` (whole or not at all: the files are renamed into
+    place, the description last)."""
+    import json
+    import os
+
+    keep = Path(keep)
+    part = keep.with_name(f"{keep.name}.{os.getpid()}.part")
+    try:
+        np.save(f"{part}.npy", rec, allow_pickle=False)
+        meta = {"lo": lo.tolist(), "hi": hi.tolist(), "sha256": sha256_of(f"{part}.npy")}
+        Path(f"{part}.json").write_text(json.dumps(meta), encoding="utf-8")
+        os.replace(f"{part}.npy", f"{keep}.npy")
+        os.replace(f"{part}.json", f"{keep}.json")
+    except OSError:  # (a full disk: the later phases read the tiles again)
+        for suffix in (".npy", ".json"):
+            Path(f"{part}{suffix}").unlink(missing_ok=True)
+
+
+def _kept_box(keep, lo: np.ndarray, hi: np.ndarray, dtype: np.dtype):
+    """The records :func:`_keep_box` saved for this very box, else None; a file changed
+    since is refused, as the tiles' files are."""
+    import hashlib
+    import io
+    import json
+
+    from ...errors import SuperfacetsError
+
+    try:
+        meta = json.loads(Path(f"{keep}.json").read_text(encoding="utf-8"))
+        data = Path(f"{keep}.npy").read_bytes()
+    except (OSError, ValueError):
+        return None
+    if meta.get("lo") != lo.tolist() or meta.get("hi") != hi.tolist():
+        return None
+    if hashlib.sha256(data).hexdigest() != meta.get("sha256"):
+        raise SuperfacetsError(f"{keep}.npy: changed since this run wrote it (the work "
+                               "folder's files belong to the run): refused")
+    rec = np.load(io.BytesIO(data), allow_pickle=False)
+    return rec if rec.dtype == dtype else None

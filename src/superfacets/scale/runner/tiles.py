@@ -10,8 +10,9 @@ phases (:mod:`superfacets.scale.tiling`):
 0. a survey of the file in chunks (bounds, total area) in this process, and a second pass
    that sorts its elements into one file per tile in the work folder
    (:func:`~superfacets.scale.runner.buckets.bucket`): from then on a task reads the tiles
-   its box overlaps; for a point cloud asked for ``n_segments``, one task per tile sums
-   the points' areas (the radius needs the total);
+   its box overlaps; for a point cloud asked for ``n_segments``, one task per tile
+   builds its point graph (kept for the later phases) and sums the points' areas on it
+   (the radius needs the total; the halo it reads with comes from the survey's sample);
 1. per tile, the method on the tile and its halo: the centers of its core; then
    (``refine`` rounds) per tile, the method's passes again from all the centers within
    reach: the centers of its core;
@@ -97,7 +98,14 @@ def tile_task(task: dict) -> dict:
     >>> segment_tiled((m.vertices, m.faces), 40, tiles=2, workers=1).tiles[0]["tile"]
     0
     """
-    from ..tiling import point_areas, tile_centers, tile_connect, tile_labels, tile_refine
+    from ..tiling import (
+        core_area,
+        point_areas,
+        tile_centers,
+        tile_connect,
+        tile_labels,
+        tile_refine,
+    )
 
     probe = PeakMemory()
     t0 = time.perf_counter()
@@ -105,7 +113,7 @@ def tile_task(task: dict) -> dict:
     try:
         layout = task["layout"]
         lo, hi = layout.box(task["tile"], task["margin"])
-        rows, pos, inp = task["reader"].read_box(lo, hi, name=f"tile {task['tile']}")
+        rows, pos, inp = _box(task, lo, hi)
         ref = task.get("orient_like")
         if ref is not None:  # every tile orients like one sample (a file, or its part)
             if isinstance(ref, str):
@@ -118,12 +126,15 @@ def tile_task(task: dict) -> dict:
         out.update(rows=int(rows.size), core=int(core.sum()))
         if not core.any():  # no element of its own: nothing to do
             return out
-        if task.get("graphs") and task["phase"] != "areas" and np.ptp(pos, axis=0).max() > 0:
+        spread = np.ptp(pos, axis=0).max() > 0
+        graph_area = task.get("graph_area", False) and spread
+        if task.get("graphs") and (task["phase"] != "areas" or graph_area) and spread:
             tile_graph(inp, Path(task["graphs"]) / f"tile-{task['tile']}",
                        task["params"].n_neighbors)  # built once, read by the later phases
         p, r, d = task["params"], task["r"], task["diagonal"]
         if task["phase"] == "areas":
-            out["area"] = point_areas(pos, core, p.n_neighbors) if core.any() else 0.0
+            out["area"] = (core_area(inp, core, p.n_neighbors) if graph_area
+                           else point_areas(pos, core, p.n_neighbors))
         elif task["phase"] == "connect":
             given = task["labels"]
             if isinstance(given, str):  # the stitched labels, in a file every worker reads
@@ -253,7 +264,6 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
     ((5120,), 39, 2)
     """
     from ..tile_layout import balanced_tiles, tile_grid
-    from ..tiling import halo_distance
     from .buckets import bucket
 
     params, halo = _checked_options(n_segments, options, tiles, halo, refine, workers)
@@ -281,7 +291,8 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
             reader = bucket(reader, layout, Path(tmp) / "buckets", progress=progress)
             timings["bucket"] = time.perf_counter() - t
         t = time.perf_counter()
-        reference = _orientation(reader, survey, params.n_neighbors, up, shared and tmp)
+        reference, sample_area = _orientation(reader, survey, params.n_neighbors, up,
+                                              shared and tmp)
         timings["orientation"] = time.perf_counter() - t
         graphs = graph_folder(tmp, survey.n_elements, reader.kind, shared and n_tiles > 1,
                               params)  # the tiles' point graphs, kept between phases
@@ -291,7 +302,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                               params=params, r=r, diagonal=diagonal, graphs=graphs,
                               frame=_frame(reader, survey), **extra(t))
                          for t in (range(n_tiles) if only is None else only)]
-                if reference is not None and phase != "areas":
+                if reference is not None and (phase != "areas" or graphs is not None):
                     for task in tasks:
                         task["orient_like"] = reference if isinstance(reference, str) else \
                             in_box(reference, *layout.box(task["tile"], 1.5 * margin))
@@ -299,10 +310,9 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
 
             r = math.nan
             t = time.perf_counter()
-            area = _area(run, layout, reader.kind, params, survey.size)
+            r, margin = _sized(run, layout, reader.kind, params, survey, diagonal, halo,
+                               (graphs, sample_area))
             timings["areas"] = time.perf_counter() - t
-            r = superfacet_size(params, area, diagonal, survey.n_elements, reader.kind)[1]
-            margin = halo_distance(halo, params.window, r)
             found, done = _classified(run, layout, params, margin, params.window * r,
                                       dict(refine=refine, box_rows=not shared,
                                            noise=merge_from > 1), timings)
@@ -387,31 +397,82 @@ def _merge_plan(params, kind: str, survey):
     return target, merge_from, params
 
 
+def _box(task: dict, lo, hi):
+    """A task's box: its rows, positions and input; the first phase of a tile that keeps
+    its graph keeps the box's records beside it for the later phases (one file, not the
+    tiles the box overlaps)."""
+    from .buckets import TileBuckets
+
+    reader, name = task["reader"], f"tile {task['tile']}"
+    if task.get("graphs") and isinstance(reader, TileBuckets):
+        Path(task["graphs"]).mkdir(parents=True, exist_ok=True)
+        return reader.read_box(lo, hi, name=name,
+                               keep=Path(task["graphs"]) / f"box-{task['tile']}")
+    return reader.read_box(lo, hi, name=name)
+
+
 def _orientation(reader, survey, n_neighbors: int, up, folder):
     """The normals' orientation reference of a cloud with neither normals nor viewpoint
     (from the survey's sample; saved in ``folder`` where the tasks share one, and then its
-    path), else None."""
-    from ..tiling import orientation_reference
+    path), else None; and the sample's area where its graph was built (else None)."""
+    from ..tiling import oriented_sample
 
     if not kind_of(reader.kind).cloud or survey.normals or reader.viewpoint is not None:
-        return None
-    reference = np.hstack(orientation_reference(survey.sample, n_neighbors, up))
+        return None, None
+    graph = oriented_sample(survey.sample, n_neighbors, up)
+    if graph is None:
+        return np.zeros((0, 6)), None
+    reference = np.hstack([graph.positions, graph.normals.astype(np.float64)])
+    area = float(graph.sizes.sum())
     if folder:  # read by the tasks from the work folder, not shipped with each
         np.save(Path(folder) / "orientation.npy", reference)
-        return str(Path(folder) / "orientation.npy")
-    return reference
+        return str(Path(folder) / "orientation.npy"), area
+    return reference, area
 
 
-def _area(run, layout, kind: str, params, surveyed: float) -> float:
-    """The input's area: a cloud's sized by n_segments from its tiles' point graphs, else
-    the survey's."""
+#: How much wider than the halo its estimate gives the boxes of the graphs built with the
+#: areas are (the radius read on the survey's sample is within a few per cent of the
+#: whole cloud's; a narrower halo than asked is never used: the graphs are then built again).
+GRAPH_SLACK = 1.02
+
+
+def _sized(run, layout, kind: str, params, survey, diagonal: float, halo: float, kept):
+    """The radius ``r`` of the run and the margin its tiles are read with.
+
+    A cloud sized by ``n_segments`` sums its tiles' point areas, read on boxes whose halo
+    comes from the radius the survey's sample gives (``kept[1]``, its area, else read
+    here), widened by :data:`GRAPH_SLACK`; where the tiles keep their point graphs
+    (``kept[0]``, the graphs' folder), on the graphs each tile builds there. The phases then
+    read the same boxes, so the graphs are built once (and a run that keeps none labels
+    alike). If the halo the exact radius asks for is wider, the graphs are dropped, and
+    the phases read that halo and build them."""
+    from ..tiling import halo_distance, point_areas
+
+    graphs, sample_area = kept
+    n, window = survey.n_elements, params.window
     if not kind_of(kind).cloud or params.radius is not None:
-        return surveyed
-    area = sum(o.get("area", 0.0) for o in run("areas", 0.25 * layout.min_side()))
+        r = superfacet_size(params, survey.size, diagonal, n, kind)[1]
+        return r, halo_distance(halo, window, r)
+    wide, sample = None, survey.sample
+    if sample is not None and sample.shape[0] > 1:
+        if sample_area is None:
+            sample_area = point_areas(sample, np.ones(sample.shape[0], dtype=bool),
+                                      params.n_neighbors)
+        if sample_area:  # (each point of the even sample sized by its sparser neighbours)
+            rough = superfacet_size(params, sample_area, diagonal, n, kind)[1]
+            wide = GRAPH_SLACK * halo_distance(halo, window, rough)
+    outs = run("areas", 0.25 * layout.min_side() if wide is None else wide,
+               lambda t: dict(graph_area=wide is not None and graphs is not None))
+    area = sum(o.get("area", 0.0) for o in outs)
     if area <= 0:
         raise ParameterError("the points are too few or too sparse to size superpoints by "
                              "n_segments; give radius instead")
-    return area
+    r = superfacet_size(params, area, diagonal, n, kind)[1]
+    margin = halo_distance(halo, window, r)
+    if wide is not None and margin <= wide:
+        return r, wide  # the boxes the graphs were built on (kept or not: the same boxes)
+    drop_graphs(graphs)  # (too narrow: the phases build them on their boxes)
+    return r, margin
 
 
 def _stitched(done: list, n_rows: int):
