@@ -337,6 +337,38 @@ def test_the_merges_do_not_join_neighbours_of_another_colour():
     assert tiled.n_segments == 6 and mixed(tiled.labels) < 0.1 * mixed(tiled_blind.labels)
 
 
+def test_textured_neighbours_merge_and_an_even_board_stays_apart():
+    """The colour gate of the flat merges reads each superpoint's own spread: neighbours
+    on a textured floor (a photograph's grass) merge though their means differ beyond the
+    points' noise floor; an evenly painted board does not, however flat."""
+    from superfacets.inputs.cloud import PointCloud
+    from superfacets.method.merges import feature_spread
+
+    x = np.linspace(0, 1, 60)
+    xy = np.stack(np.meshgrid(x, x), -1).reshape(-1, 2)
+    g = _graph(np.c_[xy, np.zeros(len(xy))])
+    cells = (np.minimum(g.positions[:, 0] * 6, 5.999).astype(np.int64) * 6
+             + np.minimum(g.positions[:, 1] * 6, 5.999).astype(np.int64))
+    rng = np.random.default_rng(2)
+    shade = rng.normal(0, 0.06, (36, 1))  # each square's own mean: beyond the floor below
+    texture = 0.5 + shade[cells] + rng.normal(0, 0.15, (len(xy), 1))
+    spread = feature_spread(cells, texture, 36)
+    assert np.allclose(spread, 0.15 ** 2, rtol=0.5)  # (100 points a square)
+    merged = flat_merges(g, cells, 1, 1e-12, features=texture, max_jump=0.01)
+    assert int(merged.max()) + 1 == 1  # the texture's spread lets every pair merge
+    board = (cells == 14)[:, None]  # one square painted evenly, 0.3 apart
+    even = 0.5 + 0.3 * board + rng.normal(0, 0.01, (len(xy), 1))
+    merged = flat_merges(g, cells, 1, 1e-12, features=even, max_jump=0.03)
+    assert int(merged.max()) + 1 == 2 and len(set(merged[board[:, 0]])) == 1
+    # the same in tiles: their sums carry the squares of the colours
+    from superfacets import segment, segment_tiled
+
+    rgb = np.repeat(np.clip(texture, 0, 1), 3, axis=1)
+    cloud = PointCloud(np.c_[xy, np.zeros(len(xy))], colors=rgb)
+    one, tiled = segment(cloud, 4), segment_tiled(cloud, 4, tiles=2)
+    assert one.n_segments == tiled.n_segments == 4
+
+
 def test_no_stage_is_silent_on_a_terminal(monkeypatch):
     # the bar is redrawn every TICK seconds while a stage runs (its elapsed time goes on)
     import io

@@ -34,7 +34,7 @@ from .._kernels import native
 from .finish import exact_count
 
 __all__ = ["merge_to_count", "flat_merges", "flat_merge_nodes", "same_feature_edges",
-           "noise_variance",
+           "feature_spread", "noise_variance",
            "neighbourhood_noise", "FLAT_NOISE", "NOISE_SAMPLE"]
 
 #: A flat merge's largest rise of the squared plane distances, per element of the
@@ -186,13 +186,44 @@ def flat_merges(graph, labels: np.ndarray, k: int, max_rise: float, *,
 
     pg = planarity_graph(graph, labels, features, finer=finer)
     if features is not None:  # neighbours of another colour do not merge, however flat
-        pg = same_feature_edges(pg, max_jump)
+        pg = same_feature_edges(pg, max_jump, feature_spread(labels, features, pg.n_segments))
     return flat_merge_nodes(pg, k, max_rise, alpha, eta_convex)[labels]
 
 
-def same_feature_edges(pg, max_jump: float):
+def feature_spread(labels: np.ndarray, features: np.ndarray, k: int, *, sums=None
+                   ) -> np.ndarray:
+    """The spread of each superpoint's features: the variance about their mean, summed
+    over the features ((k,) float64, ``>= 0``), from the elements' ``labels`` (dense,
+    ``0..k-1``) and ``features`` ((n, d)); or from ``sums`` = ``(count (k,), sum (k, d),
+    sum of squares (k, d))`` (a tiled run's, summed over its tiles).
+
+    Examples
+    --------
+    >>> f = np.array([[0.0], [1.0], [0.5], [0.5]])
+    >>> feature_spread(np.array([0, 0, 1, 1]), f, 2).tolist()
+    [0.25, 0.0]
+    """
+    if sums is None:
+        count = np.bincount(labels, minlength=k).astype(np.float64)
+        cols = range(features.shape[1])
+        total = np.stack([np.bincount(labels, weights=features[:, c], minlength=k)
+                          for c in cols], 1)
+        squares = np.stack([np.bincount(labels, weights=features[:, c] ** 2, minlength=k)
+                            for c in cols], 1)
+    else:
+        count, total, squares = sums
+    n = np.maximum(count, 1.0)[:, None]
+    mean = total / n
+    return np.maximum(squares / n - mean * mean, 0.0).sum(axis=1)
+
+
+def same_feature_edges(pg, max_jump: float, spread: np.ndarray | None = None):
     """``pg`` with only its edges between superpoints whose mean features differ by at
-    most ``max_jump`` (and ``feature`` None again: the merges order by geometry).
+    most ``max_jump``, or by at most their features' spread within them
+    (``sqrt(spread_a + spread_b)``, :func:`feature_spread`, where given): a textured
+    surface (grass, a photograph's shadows) keeps neighbours whose means differ by less
+    than the texture, a board whose colour is even stays apart from its wall. The result
+    has ``feature`` None again: the merges order by geometry.
 
     Examples
     --------
@@ -212,7 +243,10 @@ def same_feature_edges(pg, max_jump: float):
 
     a, b = np.asarray(pg.edge_index, dtype=np.int64)
     jump = np.linalg.norm(pg.feature[a] - pg.feature[b], axis=1)
-    keep = jump <= max(float(max_jump), 1e-9)
+    limit = max(float(max_jump), 1e-9)
+    if spread is not None:
+        limit = np.maximum(limit, np.sqrt(spread[a] + spread[b]))
+    keep = jump <= limit
     return replace(pg, edge_index=pg.edge_index[:, keep], border_length=pg.border_length[keep],
                    mean_angle=pg.mean_angle[keep], concave=pg.concave[keep], feature=None)
 

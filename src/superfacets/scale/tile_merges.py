@@ -77,7 +77,8 @@ def tile_merge_stats(graph, labels: np.ndarray, names: np.ndarray, core: np.ndar
         those with one end outside it one by one: ``outer_rows`` (F, 2) int64, the rows
         of their ends, ``outer_names`` (F, 2) this tile's names of them, and
         ``outer_length``, ``outer_angle``, ``outer_concave`` (F,); ``noise``
-        (n_noise',) float64; with ``features``, ``feature_sum`` (K', d) and ``floor``.
+        (n_noise',) float64; with ``features``, ``feature_sum`` and ``feature_squares``
+        (K', d), and ``floor``.
 
     Raises
     ------
@@ -137,9 +138,11 @@ def tile_merge_stats(graph, labels: np.ndarray, names: np.ndarray, core: np.ndar
     pick = at[np.unique(np.linspace(0, at.size - 1, min(at.size, n_noise)).astype(np.int64))] \
         if n_noise > 0 and at.size else at[:0]
     colour = {} if features is None else dict(
-        floor=float(floor), feature_sum=np.stack([np.bincount(local, weights=features[at, c],
-                                                              minlength=k)
-                                                  for c in range(features.shape[1])], 1))
+        floor=float(floor), **{name: np.stack([np.bincount(local, weights=f(features[at, c]),
+                                                           minlength=k)
+                                               for c in range(features.shape[1])], 1)
+                               for name, f in (("feature_sum", lambda x: x),
+                                               ("feature_squares", np.square))})
     return dict(names=names[used], count=count, mean=mean, scatter=scatter.reshape(k, 3, 3),
                 area=area, area_mean=area_mean, **edges, **colour,
                 outer_rows=np.stack([rows[i[outer]], rows[j[outer]]], 1).astype(np.int64),
@@ -338,11 +341,14 @@ def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float,
     if all("feature_sum" in s for s in stats) and stats:  # the colour term was on
         from dataclasses import replace as _with
 
-        from ..method.merges import same_feature_edges
+        from ..method.merges import feature_spread, same_feature_edges
 
-        colour = _sum(node, stats, "feature_sum", k) / np.maximum(count, 1.0)[:, None]
+        total = _sum(node, stats, "feature_sum", k)
+        colour = total / np.maximum(count, 1.0)[:, None]
+        spread = feature_spread(None, None, k, sums=(
+            count, total, _sum(node, stats, "feature_squares", k)))
         floor = float(np.median([s["floor"] for s in stats]))
-        unit = same_feature_edges(_with(unit, feature=colour), floor)
+        unit = same_feature_edges(_with(unit, feature=colour), floor, spread)
     top = flat_merge_nodes(unit, target, max_rise, alpha, eta_convex)
     n_flat = int(top.max()) + 1 if k else 0
     grouped_area = np.bincount(top, weights=area, minlength=n_flat)
