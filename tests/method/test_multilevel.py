@@ -138,9 +138,11 @@ def test_coarse_ratio_rule():
     assert coarse_ratio(100_000, 150) == 1  # ~670 faces per superfacet: no coarsening
     assert coarse_ratio(1_693_760, 150) == 11
     assert coarse_ratio(6_775_040, 150) == 45
-    # points: from 1,000 per superpoint, about 400 clusters each, at most n_neighbors // 2
-    assert coarse_ratio(999_000, 1000, "points") == 1
-    assert coarse_ratio(1_000_000, 1000, "points") == 2
+    # points: from 1,200 per superpoint (clusters of 3 points at least: a coarse graph of
+    # half the points saved no time), about 400 clusters each, at most n_neighbors // 2
+    assert coarse_ratio(1_000_000, 1000, "points") == 1
+    assert coarse_ratio(1_199_000, 1000, "points") == 1
+    assert coarse_ratio(1_200_000, 1000, "points") == 3
     assert coarse_ratio(1_000_000, 500, "points") == 5
     assert coarse_ratio(10_000_000, 500, "points") == 5
     assert coarse_ratio(10_000_000, 500, "points", n_neighbors=16) == 8

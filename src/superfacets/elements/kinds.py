@@ -161,7 +161,7 @@ class ElementKind:
     --------
     >>> k = kind_of("points")
     >>> k.cloud, k.exact_count, k.coarse_min_per_segment, k.segment_word
-    (True, True, 1000, 'superpoints')
+    (True, True, 1200, 'superpoints')
     """
 
     name: str
@@ -219,7 +219,7 @@ KINDS = {k.name: k for k in (
                 segment_word="superfacets", objects=True),
     ElementKind("vertices", "vertex", better_method=True, exact_assignment=True, band=0.2,
                 rows="n_vertices", peak_bytes=620),
-    ElementKind("points", "point", exact_assignment=True, coarse_min_per_segment=1000,
+    ElementKind("points", "point", exact_assignment=True, coarse_min_per_segment=1200,
                 coarse_per_segment=400,
                 coarse_neighbor_cap=True, auto_density=True, unit_sizes_in_levels=True,
                 neighborhood=True, cloud=True, rows="n_total", peak_bytes=240, tiled_bytes=100,
