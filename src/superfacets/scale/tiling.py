@@ -15,7 +15,9 @@ one task per tile (:mod:`superfacets.scale.runner.tiles` sends them to Dask):
    each named by its row in the input.
    Then (:func:`tile_refine`, ``refine`` rounds) each tile runs the passes
    again from the gathered centers within reach, so that the centers near a
-   border settle beside their true neighbours, not beside the halo's edge.
+   border settle beside their true neighbours, not beside the halo's edge
+   (with refine rounds to come, the centers phase runs its start and one pass:
+   the rounds run the passes).
 2. **labels** (:func:`tile_labels`): each tile classifies its elements from
    all the centers within reach (one pass of the paper's bounded expansions,
    centers in one global order), then makes superfacets connected and, with

@@ -56,6 +56,11 @@ from ..tile_merges import merged_labels, tiled_merge_from
 from .engine import Engine, PeakMemory, error_text
 from .workdir import run_folder
 
+#: Passes of the centers phase where refine rounds follow (they run the passes again
+#: from the gathered centers): 10M points in 4 tiles, the phases 29.9 -> 28.1 s in process;
+#: the tiled error on 15 clouds of 1M points the same (0.0212 -> 0.0211; docs/notes/tiles.md).
+CENTER_PASSES = 1
+
 #: Most rounds of the connectivity pass: the first over every tile, each next over the
 #: tiles whose boxes hold elements the last moved (tiles repair at once, from the same
 #: stitched labels, and two repairs can leave a piece apart again).
@@ -146,8 +151,9 @@ def tile_task(task: dict) -> dict:
             out.update(moved_rows=rows[moved] if moved.size else rows[:0],
                        moved_labels=fixed[moved] if moved.size else rows[:0],
                        moved_positions=pos[moved] if moved.size else pos[:0])
-        elif task["phase"] == "centers":
-            found, _ = tile_centers(inp, core, p, r, d)
+        elif task["phase"] == "centers":  # (with refine rounds to come: the start, one pass)
+            found, _ = tile_centers(inp, core, replace(p, max_iter=task.get("passes")
+                                                       or p.max_iter), r, d)
             out.update(centers=rows[found], positions=pos[found])
         else:
             want = np.asarray(task["centers"], dtype=np.int64)
@@ -260,8 +266,8 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
     >>> import trimesh
     >>> m = trimesh.creation.icosphere(subdivisions=4)
     >>> r = segment_tiled((m.vertices, m.faces), 40, tiles=2)
-    >>> r.labels.shape, r.n_segments, r.layout.n_tiles   # 39 of 40: small tiles
-    ((5120,), 39, 2)
+    >>> r.labels.shape, r.n_segments, r.layout.n_tiles
+    ((5120,), 40, 2)
     """
     from ..tile_layout import balanced_tiles, tile_grid
     from .buckets import bucket
@@ -349,7 +355,10 @@ def _classified(run, layout, params, margin: float, ring: float, how: dict,
     """The centers phase, ``how['refine']`` refinements, then the labels phase: the
     tiles' outputs of the first and of the last (each tile its own core's)."""
     t = time.perf_counter()
-    found = [o for o in run("centers", margin) if o["core"]]
+    # where refine rounds follow, they run the passes: the centers phase gives each tile's
+    # start and one pass (its passes to the end were run again by the round)
+    passes = CENTER_PASSES if how["refine"] else None
+    found = [o for o in run("centers", margin, lambda t: dict(passes=passes)) if o["core"]]
     timings["centers"] = time.perf_counter() - t
     rows, pos = gathered_centers(found, params)
 
