@@ -119,14 +119,7 @@ def tile_task(task: dict) -> dict:
         layout = task["layout"]
         lo, hi = layout.box(task["tile"], task["margin"])
         rows, pos, inp = _box(task, lo, hi)
-        ref = task.get("orient_like")
-        if ref is not None:  # every tile orients like one sample (a file, or its part)
-            if isinstance(ref, str):
-                ref = in_box(np.load(ref, mmap_mode="r"), *layout.box(task["tile"],
-                                                                        1.5 * task["margin"]))
-            inp = replace(inp, orient_like=(ref[:, :3], ref[:, 3:]))
-        if task.get("frame") is not None and inp is not None:  # (None: no point in the box)
-            inp = replace(inp, frame=task["frame"])  # numbered as the whole cloud numbers them
+        inp = _framed(task, layout, inp)
         core = layout.of(pos) == task["tile"]
         out.update(rows=int(rows.size), core=int(core.sum()))
         if not core.any():  # no element of its own: nothing to do
@@ -404,6 +397,19 @@ def _merge_plan(params, kind: str, survey):
         merge_from = merge_from if fine > target else 1
         params = replace(params, n_segments=fine)
     return target, merge_from, params
+
+
+def _framed(task: dict, layout, inp):
+    """A task's input with the run's orientation reference and frame, where it has them."""
+    ref = task.get("orient_like")
+    if ref is not None:  # every tile orients like one sample (a file, or its part)
+        if isinstance(ref, str):
+            ref = in_box(np.load(ref, mmap_mode="r"), *layout.box(task["tile"],
+                                                                    1.5 * task["margin"]))
+        inp = replace(inp, orient_like=(ref[:, :3], ref[:, 3:]))
+    if task.get("frame") is not None and inp is not None:  # (None: no point in the box)
+        inp = replace(inp, frame=task["frame"])  # numbered as the whole cloud numbers them
+    return inp
 
 
 def _box(task: dict, lo, hi):
