@@ -197,13 +197,42 @@ def coarsen(graph: ElementGraph, csr_w: np.ndarray, ratio: int) -> Coarsening:
     """
     n = graph.n_elements
     positions = np.ascontiguousarray(graph.positions, dtype=np.float64)
-    sizes = graph.sizes
     seeds = grid_seeds(positions, graph.area, max(1, n // ratio))
     seeds, cluster, dist = voronoi_cells(graph, csr_w, seeds)
     n_c = seeds.shape[0]
 
-    # clusters: size-weighted mean position and normal, total size
-    # (the sums np.bincount(cluster, weights=sizes * x[:, a]) makes, in one pass)
+    # coarse adjacency first (its weights read the distances, let go before the clusters'
+    # means are made): the fine pairs whose elements lie in different clusters (the
+    # shortest seed-to-seed path through one, the summed border lengths)
+    pairs, w_c, len_c = _voronoi("coarse_pairs")(graph.indptr, graph.indices, cluster, dist,
+                                                 csr_w, *graph.border_arrays(), n_c)
+    del dist
+    indptr, indices, dual_edge = adjacency_csr(pairs[:, 0], pairs[:, 1], n_c)
+    # the coarse run reads the CSR layout: its pairs and dual-edge map are built again
+    # (the same: the pairs are in (lo, hi) order) only if something asks
+    del pairs
+    weights = np.ascontiguousarray(w_c[dual_edge])
+    del w_c, dual_edge
+    tot, pos, nor, scale2 = _cluster_means(graph, positions, cluster, seeds)
+    coarse = ElementGraph(
+        kind=graph.kind, positions=pos, sizes=tot, normals=nor, centroid=graph.centroid,
+        lower=graph.lower, diagonal=graph.diagonal, pairs=LAZY, indptr=indptr,
+        indices=indices, dual_edge=LAZY, lengths=len_c,
+        boundary_elements=np.empty(0, dtype=np.int64), boundary_lengths=np.empty(0),
+        scale2=scale2,
+        rebuild=dict.fromkeys(("pairs", "dual_edge"),
+                              partial(pairs_from_csr, pair_dtype=np.int64)))
+    return Coarsening(graph=coarse, weights=weights, cluster=cluster, seeds=seeds)
+
+
+def _cluster_means(graph: ElementGraph, positions: np.ndarray, cluster: np.ndarray,
+                   seeds: np.ndarray) -> tuple:
+    """Each cluster's total size, size-weighted mean position and (unit) mean normal, and
+    its size-weighted mean squared scale (None where the graph has no scales); a cluster
+    of zero size takes its seed's position (the sums ``np.bincount(cluster, weights=sizes
+    * x[:, a])`` makes, in one compiled pass)."""
+    n_c = seeds.shape[0]
+    sizes = graph.sizes
     tot, pos, nor = np.zeros(n_c), np.zeros((n_c, 3)), np.zeros((n_c, 3))
     native.kernel("geometry.label_sums")(
         cluster, np.ascontiguousarray(sizes, dtype=np.float64), positions,
@@ -218,26 +247,7 @@ def coarsen(graph: ElementGraph, csr_w: np.ndarray, ratio: int) -> Coarsening:
     pos[empty] = positions[seeds[empty]]
     norm = np.linalg.norm(nor, axis=1)
     nor /= np.where(norm > 0, norm, 1.0)[:, None]
-
-    # coarse adjacency: the fine pairs whose elements lie in different clusters
-    # (the shortest seed-to-seed path through one, the summed border lengths)
-    pairs, w_c, len_c = _voronoi("coarse_pairs")(graph.indptr, graph.indices, cluster, dist,
-                                                 csr_w, *graph.border_arrays(), n_c)
-    del dist
-    indptr, indices, dual_edge = adjacency_csr(pairs[:, 0], pairs[:, 1], n_c)
-    weights = np.ascontiguousarray(w_c[dual_edge])
-    # the coarse run reads the CSR layout: its pairs and dual-edge map are built again
-    # (the same: the pairs are in (lo, hi) order) only if something asks
-    del pairs, w_c, dual_edge
-    coarse = ElementGraph(
-        kind=graph.kind, positions=pos, sizes=tot, normals=nor, centroid=graph.centroid,
-        lower=graph.lower, diagonal=graph.diagonal, pairs=LAZY, indptr=indptr,
-        indices=indices, dual_edge=LAZY, lengths=len_c,
-        boundary_elements=np.empty(0, dtype=np.int64), boundary_lengths=np.empty(0),
-        scale2=scale2,
-        rebuild=dict.fromkeys(("pairs", "dual_edge"),
-                              partial(pairs_from_csr, pair_dtype=np.int64)))
-    return Coarsening(graph=coarse, weights=weights, cluster=cluster, seeds=seeds)
+    return tot, pos, nor, scale2
 
 
 def coarse_centers(graph: ElementGraph, csr_w: np.ndarray, ratio: int, *, init: str,

@@ -338,7 +338,9 @@ nb::object knn_csr(nb::handle nbr_, nb::handle keep_, nb::handle indptr_,
     // they make in another thread's rows are posted to it (pairs (row, entry), in the
     // order of the lists: few, the lists being near in space and the rows in Z-order).
     // The longer lists of the rows `rows` are read by every thread, in order. A row's
-    // entries are then sorted and made distinct: the layout of one pass in order.
+    // entries are then sorted and made distinct: the layout of one pass in order. A pair
+    // that both rows' own lists hold makes no reverse entry (it would be a duplicate):
+    // the entries are then about the layout's own number, not twice the lists'.
     const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / 4096));
     auto lo = [&](i64 t) { return n * t / T; };
     auto owner = [&](i64 j) {
@@ -352,6 +354,11 @@ nb::object knn_csr(nb::handle nbr_, nb::handle keep_, nb::handle indptr_,
     std::vector<std::vector<std::pair<i32, i32>>> post(T * T);  // [from * T + to]
     auto listed = [&](i64 i, i64 c) { return (all_kept || keep(i, c)) && nbr(i, c) != i; };
     auto listed_more = [&](i64 t, i64 c) { return more_keep(t, c) && more(t, c) != rows[t]; };
+    auto mutual = [&](i64 i, i64 j) {  // j's own list holds i too
+        for (i64 c = 0; c < k; ++c)
+            if (nbr(j, c) == i && (all_kept || keep(j, c))) return true;
+        return false;
+    };
     {
         nb::gil_scoped_release nogil;
         on_threads(T, [&](i64 t) {
@@ -363,6 +370,8 @@ nb::object knn_csr(nb::handle nbr_, nb::handle keep_, nb::handle indptr_,
                     if (listed(i, c)) {
                         ++m;
                         const i64 j = nbr(i, c);
+                        if (mutual(i, j))
+                            continue;
                         if (j >= a && j < b)
                             ++rev[j];
                         else
@@ -406,7 +415,7 @@ nb::object knn_csr(nb::handle nbr_, nb::handle keep_, nb::handle indptr_,
                     if (listed(i, c)) {
                         const i64 j = nbr(i, c);
                         raw[u++] = static_cast<i32>(j);
-                        if (j >= a && j < b) put(j, i);
+                        if (j >= a && j < b && !mutual(i, j)) put(j, i);
                     }
             }
             for (i64 r = 0; r < rows.n; ++r) {

@@ -71,7 +71,17 @@ nb::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In
             for (i64 c = lo; c < hi_; ++c) distinct[c] = sort_distinct(hi.data(), start[c], start[c + 1]);
         });
         for (i64 c = 0; c < n_c; ++c) first[c + 1] = first[c] + distinct[c];
+        // the distinct hi alone, in a list of their own (the crossings are several times
+        // the pairs: the outputs below are made once that list is let go)
+        std::vector<i32> kept(first[n_c]);
+        parallel_for(n_c, [&](i64 lo, i64 hi_) {
+            for (i64 c = lo; c < hi_; ++c)
+                std::copy(hi.begin() + start[c], hi.begin() + start[c] + distinct[c],
+                          kept.begin() + first[c]);
+        });
+        hi.swap(kept);
     }
+    std::vector<i64>().swap(start);
     const i64 m = first[n_c];
     Out<i32> out;  // clusters <= elements < 2**31 (as hi)
     Out<double> w_c, len_c;
@@ -86,7 +96,7 @@ nb::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In
         for (i64 c = 0; c < n_c; ++c)
             for (i64 u = 0; u < first[c + 1] - first[c]; ++u) {
                 out(first[c] + u, 0) = static_cast<i32>(c);
-                out(first[c] + u, 1) = hi[start[c] + u];
+                out(first[c] + u, 1) = hi[first[c] + u];
             }
         // thread u the pairs of the clusters c0(u) .. c0(u + 1) - 1 (lo), each reading
         // every adjacency in order: a pair's lengths added in the order of one pass
@@ -106,7 +116,7 @@ nb::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In
                         i64 lo = mn(a, b);
                         if (a != b && lo >= lo_c && lo < hi_c) {
                             i64 h = mx(a, b);
-                            i64 s = start[lo];
+                            i64 s = first[lo];
                             i64 left = 0, right = first[lo + 1] - first[lo];
                             while (left < right) {
                                 i64 mid = (left + right) >> 1;

@@ -43,9 +43,11 @@ float32 (as ``pgeof`` takes them): georeferenced coordinates in float32
 would otherwise lose the centimetres.
 
 The solver is ``pycut-pursuit``, which is GPL-3: it is never a dependency of
-this MIT package, only an optional baseline installed by hand
-(``pip install pycut-pursuit``). ``pgeof`` (MIT) and scikit-learn come with
-the ``baselines`` extra.
+this MIT package, only an optional baseline installed by hand: its one wheel
+(0.1.4) does not import beside NumPy 2, so build 0.1.3 from source (``pip install
+setuptools wheel``, then ``pip install --no-build-isolation --no-binary
+pycut-pursuit "pycut-pursuit==0.1.3"``; ``docs/guide/install.md``). ``pgeof`` (MIT)
+and scikit-learn come with the ``baselines`` extra.
 
 References
 ----------
