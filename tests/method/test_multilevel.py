@@ -251,3 +251,29 @@ def test_clusters_without_any_neighbour():
     assert co.graph.n_edges == 0 and co.graph.n_elements == 40
     r = segment(mesh, 4, coarsen=2)  # capped to 1 (40 faces, 4 superfacets): plain run
     check_invariants(mesh, r.labels)
+
+
+def test_a_large_clouds_coarse_start_lets_its_weights_go_and_the_passes_read_them_again(
+        monkeypatch):
+    """On a large cloud the coarse start forgets the fine weights once its clusters'
+    graph is made, and they are made again for the passes: the same labels as a run
+    that keeps them, and they are made exactly once more."""
+    import superfacets.method.pipeline as pl
+    from superfacets.method.weights import HeldWeights
+
+    rng = np.random.default_rng(3)
+    u, v = rng.random((2, 300_000))  # a wavy sheet: 300,000 points, above the size
+    pts = np.c_[u, v, 0.05 * np.sin(6 * u) * np.cos(4 * v)]  # where runs release
+    made = []
+    real = pl.held_weights
+
+    def counted(*args, **kwargs):
+        made.append(real(*args, **kwargs))
+        return made[-1]
+
+    monkeypatch.setattr(pl, "held_weights", counted)
+    let_go = segment(pts, 40)
+    assert let_go.params["coarsen"] > 1 and [h.remade for h in made] == [1]
+    monkeypatch.setattr(pl, "held_weights", lambda g, r, w, *a: HeldWeights(w))
+    kept = segment(pts, 40)
+    np.testing.assert_array_equal(let_go.labels, kept.labels)

@@ -38,6 +38,7 @@ from ..elements.kinds import kind_of
 from ..inputs.bounds import column_bounds
 from .expansion import bucket_width
 from .params import superfacet_measure
+from .weights import HeldWeights, weights_array
 
 
 def _voronoi(name: str):
@@ -177,7 +178,7 @@ def voronoi_cells(graph: ElementGraph, csr_w: np.ndarray, seeds: np.ndarray
         cap = min(bound, 4 * cap)
 
 
-def coarsen(graph: ElementGraph, csr_w: np.ndarray, ratio: int) -> Coarsening:
+def coarsen(graph: ElementGraph, csr_w, ratio: int) -> Coarsening:
     """Group the elements of ``graph`` into clusters of about ``ratio`` elements.
 
     Reads the graph's CSR layout, positions, sizes, normals and border lengths, not
@@ -186,8 +187,9 @@ def coarsen(graph: ElementGraph, csr_w: np.ndarray, ratio: int) -> Coarsening:
     Parameters
     ----------
     graph : ElementGraph
-    csr_w : (2 e,) float64 ndarray
-        Weight of each CSR entry, ``>= 0``.
+    csr_w : (2 e,) float64 ndarray or HeldWeights
+        Weight of each CSR entry, ``>= 0``; a :class:`~superfacets.method.weights.
+        HeldWeights` is let go once the clusters' adjacency is read from it.
     ratio : int
         Elements per cluster wanted (``>= 2``).
 
@@ -195,6 +197,7 @@ def coarsen(graph: ElementGraph, csr_w: np.ndarray, ratio: int) -> Coarsening:
     -------
     Coarsening
     """
+    held, csr_w = csr_w, weights_array(csr_w)
     n = graph.n_elements
     positions = np.ascontiguousarray(graph.positions, dtype=np.float64)
     seeds = grid_seeds(positions, graph.area, max(1, n // ratio))
@@ -206,7 +209,9 @@ def coarsen(graph: ElementGraph, csr_w: np.ndarray, ratio: int) -> Coarsening:
     # shortest seed-to-seed path through one, the summed border lengths)
     pairs, w_c, len_c = _voronoi("coarse_pairs")(graph.indptr, graph.indices, cluster, dist,
                                                  csr_w, *graph.border_arrays(), n_c)
-    del dist
+    del dist, csr_w
+    if isinstance(held, HeldWeights):  # (the fine weights: not read again before the passes)
+        held.let_go()
     indptr, indices, dual_edge = adjacency_csr(pairs[:, 0], pairs[:, 1], n_c)
     # the coarse run reads the CSR layout: its pairs and dual-edge map are built again
     # (the same: the pairs are in (lo, hi) order) only if something asks
@@ -380,4 +385,5 @@ def start_centers(graph: ElementGraph, csr_w: np.ndarray, params,
             timings.update(info, coarse=time.perf_counter() - t)
             return init, ratio
     stage(f"init ({p.init})")
-    return initial_centers(p.init, graph, csr_w, k, radius, p.window, not p.paper), 1
+    return initial_centers(p.init, graph, weights_array(csr_w), k, radius, p.window,
+                           not p.paper), 1

@@ -56,6 +56,7 @@ from .params import ALL_KINDS, PARAMETERS, SegmentParams
 from .passes import final_centers
 from .stages import (
     build_graph,
+    held_weights,
     initialize,
     iterate_passes,
     resolve_features,
@@ -63,6 +64,7 @@ from .stages import (
     stage_reads,
     weigh,
 )
+from .weights import weights_array
 
 __all__ = ["pipeline", "RunRecord", "Hooks", "passes_example"]
 
@@ -272,11 +274,17 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
     try:
         with hooks.stage("weights", "weights"):
             w, swap_w = weigh(graph, rules, feats, hooks)
-        with hooks.stage("init"):
-            init, ratio = initialize(graph, w, rules, hooks, initial)
-            hooks.before("passes")  # (again where no coarse run forgot)
-            if hooks.trim:  # the passes start without the build's and the start's freed
-                give_back_free_memory()  # temporaries (the peak of a run on a mesh)
+        with hooks.stage("init"):  # (the coarse start may let the weights go: held)
+            held = held_weights(graph, rules, w, feats, initial) if hooks.trim else w
+            del w
+            init, ratio = initialize(graph, held, rules, hooks, initial)
+        with hooks.stage("weights", add=True):  # (made again where they were let go)
+            w = weights_array(held)
+            del held
+        with hooks.stage("init", add=True):
+            hooks.before("passes")  # (again: where no coarse run forgot, or the weights
+            if hooks.trim:  # were made again) the passes start without the build's and
+                give_back_free_memory()  # the start's freed temporaries (a mesh's peak)
         with hooks.stage("iterations", "superfacets"):
             it = iterate_passes(graph, w, swap_w, init, rules, hooks, replay=replay,
                                 jump_cycles=jump_cycles)

@@ -30,7 +30,7 @@ from .params import (
 )
 from .passes import Iteration, iterate
 from .rules import MIN_FINE_ELEMENTS, merge_from_of
-from .weights import csr_point_weights, csr_weights, edge_weights, weight_dtype
+from .weights import HeldWeights, csr_point_weights, csr_weights, edge_weights, weight_dtype
 
 __all__ = ["Rules", "build_graph", "resolve_features", "resolve_rules", "weigh",
            "initialize", "iterate_passes", "stage_reads"]
@@ -435,6 +435,36 @@ def weigh(graph, rules: Rules, features=None, hooks=None
                                factor=rules.kind.swap_eta_convex, weighting=p.weighting
                                ).astype(w.dtype, copy=False)
     return w, swap_w
+
+
+def held_weights(graph, rules: Rules, w: np.ndarray, features=None, initial=None
+                 ) -> HeldWeights:
+    """Stage 3's weights as the start holds them: let go by the coarse start where they
+    are made again cheaply (the compiled weights of points and vertices, from the CSR
+    layout, positions and normals, which the passes keep) and the start runs coarse; the
+    passes then read them made again, the same values.
+
+    Returns
+    -------
+    HeldWeights
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets.method.params import resolve
+    >>> ball = trimesh.creation.icosphere(subdivisions=3)
+    >>> _, graph, p = build_graph(ball, resolve(n_segments=12))
+    >>> rules = resolve_rules(graph, p)
+    >>> w, _ = weigh(graph, rules)
+    >>> held_weights(graph, rules, w).get() is w  # (faces: never let go)
+    True
+    """
+    p = rules.params
+    cheap = (graph.terms_of is symmetric_terms and p.weighting == "paper"
+             and not rules.cleanup and not rules.split_merge)
+    if not cheap or rules.coarsen <= 1 or initial is not None:
+        return HeldWeights(w)
+    return HeldWeights(w, remake=lambda: weigh(graph, rules, features)[0])
 
 
 def initialize(graph, w: np.ndarray, rules: Rules, hooks,

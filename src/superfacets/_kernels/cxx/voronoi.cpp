@@ -66,17 +66,19 @@ nb::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In
         std::vector<i64> fill(start.begin(), start.end() - 1);
         i64* fl = fill.data();
         crossings([&](i64 lo, i64 h) { hi[bump(fl + lo)] = static_cast<i32>(h); });
-        std::vector<i64> distinct(n_c);
+        std::vector<i64>().swap(fill);
+        // each bucket sorted and made distinct; first: the distinct ones' offsets
         parallel_for(n_c, [&](i64 lo, i64 hi_) {
-            for (i64 c = lo; c < hi_; ++c) distinct[c] = sort_distinct(hi.data(), start[c], start[c + 1]);
+            for (i64 c = lo; c < hi_; ++c)
+                first[c + 1] = sort_distinct(hi.data(), start[c], start[c + 1]);
         });
-        for (i64 c = 0; c < n_c; ++c) first[c + 1] = first[c] + distinct[c];
+        for (i64 c = 0; c < n_c; ++c) first[c + 1] += first[c];
         // the distinct hi alone, in a list of their own (the crossings are several times
         // the pairs: the outputs below are made once that list is let go)
         std::vector<i32> kept(first[n_c]);
         parallel_for(n_c, [&](i64 lo, i64 hi_) {
             for (i64 c = lo; c < hi_; ++c)
-                std::copy(hi.begin() + start[c], hi.begin() + start[c] + distinct[c],
+                std::copy(hi.begin() + start[c], hi.begin() + start[c] + (first[c + 1] - first[c]),
                           kept.begin() + first[c]);
         });
         hi.swap(kept);
@@ -84,8 +86,17 @@ nb::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In
     std::vector<i64>().swap(start);
     const i64 m = first[n_c];
     Out<i32> out;  // clusters <= elements < 2**31 (as hi)
-    Out<double> w_c, len_c;
     auto out_a = fresh(m, out, 2);
+    {
+        nb::gil_scoped_release nogil;
+        for (i64 c = 0; c < n_c; ++c)
+            for (i64 g = first[c]; g < first[c + 1]; ++g) {
+                out(g, 0) = static_cast<i32>(c);
+                out(g, 1) = hi[g];
+            }
+    }
+    std::vector<i32>().swap(hi);  // (read from the pairs' second column from here on)
+    Out<double> w_c, len_c;
     auto w_a = fresh(m, w_c), len_a = fresh(m, len_c);
     {
         nb::gil_scoped_release nogil;
@@ -93,11 +104,6 @@ nb::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In
             w_c[g] = INF;
             len_c[g] = 0.0;
         }
-        for (i64 c = 0; c < n_c; ++c)
-            for (i64 u = 0; u < first[c + 1] - first[c]; ++u) {
-                out(first[c] + u, 0) = static_cast<i32>(c);
-                out(first[c] + u, 1) = hi[first[c] + u];
-            }
         // thread u the pairs of the clusters c0(u) .. c0(u + 1) - 1 (lo), each reading
         // every adjacency in order: a pair's lengths added in the order of one pass
         // (t: the adjacency's number, lengths' index)
@@ -120,7 +126,7 @@ nb::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In
                             i64 left = 0, right = first[lo + 1] - first[lo];
                             while (left < right) {
                                 i64 mid = (left + right) >> 1;
-                                if (hi[s + mid] < h) left = mid + 1;
+                                if (out(s + mid, 1) < h) left = mid + 1;
                                 else right = mid;
                             }
                             i64 g = first[lo] + left;
