@@ -314,7 +314,7 @@ def test_runs_on_points_give_numba_results_call_by_call(shadowed):
     r = superfacets.segment(as_cloud(dup.copy()), 40, n_threads=1)
     assert r.labels.shape[0] == dup.shape[0]
     missing = {name for name in POINT_KERNELS | {"expand_many", "nearest_seed", "coarse_pairs",
-                                                 "merge_levels"}
+                                                 "coarse_lengths", "merge_levels"}
                if not any(path.endswith("." + name) for path in calls)}
     assert not missing, missing
 
@@ -431,6 +431,19 @@ def test_coarse_pairs_on_threads_give_numba_pairs(monkeypatch, shared):
         got = native.kernel("voronoi.coarse_pairs")(*args)
     assert all(a.tobytes() == b.tobytes() for a, b in zip(got, expected))
     assert got[0].shape[0] > n_c  # many pairs, each cluster's
+    # the lengths made apart, as a run makes them once the distances and weights are let
+    # go: the same sums, bit for bit; and the pairs and weights without them the same
+    with monkeypatch.context() as m:
+        m.setenv("SUPERFACETS_KERNEL_THREADS", "3")
+        apart = native.kernel("voronoi.coarse_lengths")(g.indptr, g.indices, cluster, got[0],
+                                                         *border, n_c)
+        none = np.empty(0)
+        bare = native.kernel("voronoi.coarse_pairs")(*args[:5], none, none, n_c)
+    assert apart.tobytes() == got[2].tobytes()
+    assert bare[0].tobytes() == got[0].tobytes() and bare[1].tobytes() == got[1].tobytes()
+    assert bare[2].shape == (0,)
+    assert reference("voronoi.coarse_lengths")(g.indptr, g.indices, cluster, got[0], *border,
+                                               n_c).tobytes() == got[2].tobytes()
 
 
 @needs_cxx

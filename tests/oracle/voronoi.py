@@ -143,7 +143,8 @@ def coarse_pairs(indptr, indices, cluster, dist, csr_w, lengths, shares, n_c):
     m = first[n_c]
     out = np.empty((m, 2), dtype=np.int32)  # clusters <= elements < 2**31 (as hi)
     w_c = np.full(m, np.inf)
-    len_c = np.zeros(m)
+    with_len = shares.shape[0] > 0 or lengths.shape[0] > 0
+    len_c = np.zeros(m if with_len else 0)
     for c in range(n_c):
         for u in range(first[c + 1] - first[c]):
             out[first[c] + u, 0] = c
@@ -169,9 +170,48 @@ def coarse_pairs(indptr, indices, cluster, dist, csr_w, lengths, shares, n_c):
                     v = dist[i] + csr_w[x] + dist[j]
                     if v < w_c[g]:
                         w_c[g] = v
-                    if shares.shape[0]:
+                    if not with_len:
+                        pass
+                    elif shares.shape[0]:
                         len_c[g] += 0.5 * (shares[i] + shares[j])
                     else:
                         len_c[g] += lengths[t]
                 t += 1
     return out, w_c, len_c
+
+
+@njit(cache=True, error_model="numpy")
+def coarse_lengths(indptr, indices, cluster, pairs, lengths, shares, n_c):
+    """The summed border lengths of the cluster pairs ``pairs`` (:func:`coarse_pairs`'
+    pairs, in ``(lo, hi)`` order): its third output when given ``lengths`` or ``shares``,
+    added in the same adjacency order."""
+    n = indptr.shape[0] - 1
+    m = pairs.shape[0]
+    first = np.zeros(n_c + 1, dtype=np.int64)
+    for g in range(m):
+        first[pairs[g, 0] + 1] += 1
+    for c in range(n_c):
+        first[c + 1] += first[c]
+    len_c = np.zeros(m)
+    t = 0
+    for i in range(n):
+        a = cluster[i]
+        for x in range(indptr[i], indptr[i + 1]):
+            j = indices[x]
+            if j > i:
+                b = cluster[j]
+                if a != b:
+                    lo_, h = min(a, b), max(a, b)
+                    left, right = first[lo_], first[lo_ + 1]
+                    while left < right:
+                        mid = (left + right) >> 1
+                        if pairs[mid, 1] < h:
+                            left = mid + 1
+                        else:
+                            right = mid
+                    if shares.shape[0]:
+                        len_c[left] += 0.5 * (shares[i] + shares[j])
+                    else:
+                        len_c[left] += lengths[t]
+                t += 1
+    return len_c

@@ -206,12 +206,16 @@ def coarsen(graph: ElementGraph, csr_w, ratio: int) -> Coarsening:
 
     # coarse adjacency first (its weights read the distances, let go before the clusters'
     # means are made): the fine pairs whose elements lie in different clusters (the
-    # shortest seed-to-seed path through one, the summed border lengths)
-    pairs, w_c, len_c = _voronoi("coarse_pairs")(graph.indptr, graph.indices, cluster, dist,
-                                                 csr_w, *graph.border_arrays(), n_c)
+    # shortest seed-to-seed path through one); their summed border lengths once the
+    # distances and the fine weights are let go (the same sums, apart)
+    none = np.empty(0)
+    pairs, w_c, _ = _voronoi("coarse_pairs")(graph.indptr, graph.indices, cluster, dist,
+                                             csr_w, none, none, n_c)
     del dist, csr_w
     if isinstance(held, HeldWeights):  # (the fine weights: not read again before the passes)
         held.let_go()
+    len_c = _voronoi("coarse_lengths")(graph.indptr, graph.indices, cluster, pairs,
+                                       *graph.border_arrays(), n_c)
     indptr, indices, dual_edge = adjacency_csr(pairs[:, 0], pairs[:, 1], n_c)
     # the coarse run reads the CSR layout: its pairs and dual-edge map are built again
     # (the same: the pairs are in (lo, hi) order) only if something asks

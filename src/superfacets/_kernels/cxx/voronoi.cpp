@@ -35,6 +35,44 @@ i64 nearest_seed_t(const In<i64>& indptr, const In<i32>& indices, const W* weigh
     return 0;
 }
 
+// Each crossing adjacency (i, j), j > i, x its CSR entry and t its number, with the
+// cluster pair g it joins (found by bisection among the pairs of its lo, `first`: their
+// offsets, `hi_of(g)`: a pair's hi): visit(g, i, j, x, t). On threads, thread u the
+// pairs of the lo clusters c0(u) .. c0(u + 1) - 1, each reading every adjacency in
+// order, so that a pair's sums are added in the order of one pass.
+template <class C, class H, class V>
+void crossing_pairs(const In<i64>& indptr, const In<i32>& indices, const In<C>& cluster,
+                    const std::vector<i64>& first, i64 n_c, H hi_of, V visit) {
+    const i64 n = indptr.n - 1;
+    const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / 65536));
+    std::vector<i64> c0(T + 1);
+    for (i64 u = 0; u <= T; ++u) c0[u] = n_c * u / T;
+    on_threads(T, [&](i64 u) {
+        const i64 lo_c = c0[u], hi_c = c0[u + 1];
+        i64 t = 0;
+        for (i64 i = 0; i < n; ++i) {
+            i64 a = cluster[i];
+            for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
+                i64 j = indices[x];
+                if (j <= i) continue;
+                i64 b = cluster[j];
+                i64 lo = mn(a, b);
+                if (a != b && lo >= lo_c && lo < hi_c) {
+                    i64 h = mx(a, b);
+                    i64 left = first[lo], right = first[lo + 1];
+                    while (left < right) {
+                        i64 mid = (left + right) >> 1;
+                        if (hi_of(mid) < h) left = mid + 1;
+                        else right = mid;
+                    }
+                    visit(left, i, j, x, t);
+                }
+                ++t;
+            }
+        }
+    });
+}
+
 template <class C, class W, class S>
 nb::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In<C>& cluster,
                          const In<double>& dist, const W* csr_w, const In<double>& lengths,
@@ -96,55 +134,53 @@ nb::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In
             }
     }
     std::vector<i32>().swap(hi);  // (read from the pairs' second column from here on)
+    // the lengths only where given (lengths or shares: a run reads them later, with
+    // coarse_lengths, once the distances and the fine weights are let go)
+    const bool with_len = n_shares || lengths.n;
     Out<double> w_c, len_c;
-    auto w_a = fresh(m, w_c), len_a = fresh(m, len_c);
+    auto w_a = fresh(m, w_c), len_a = fresh(with_len ? m : 0, len_c);
     {
         nb::gil_scoped_release nogil;
-        for (i64 g = 0; g < m; ++g) {
-            w_c[g] = INF;
-            len_c[g] = 0.0;
-        }
-        // thread u the pairs of the clusters c0(u) .. c0(u + 1) - 1 (lo), each reading
-        // every adjacency in order: a pair's lengths added in the order of one pass
-        // (t: the adjacency's number, lengths' index)
-        const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / 65536));
-        std::vector<i64> c0(T + 1);
-        for (i64 u = 0; u <= T; ++u) c0[u] = n_c * u / T;
-        on_threads(T, [&](i64 u) {
-            const i64 lo_c = c0[u], hi_c = c0[u + 1];
-            i64 t = 0;
-            for (i64 i = 0; i < n; ++i) {
-                i64 a = cluster[i];
-                for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
-                    i64 j = indices[x];
-                    if (j > i) {
-                        i64 b = cluster[j];
-                        i64 lo = mn(a, b);
-                        if (a != b && lo >= lo_c && lo < hi_c) {
-                            i64 h = mx(a, b);
-                            i64 s = first[lo];
-                            i64 left = 0, right = first[lo + 1] - first[lo];
-                            while (left < right) {
-                                i64 mid = (left + right) >> 1;
-                                if (out(s + mid, 1) < h) left = mid + 1;
-                                else right = mid;
-                            }
-                            i64 g = first[lo] + left;
-                            double v = dist[i] + static_cast<double>(csr_w[x]) + dist[j];
-                            if (v < w_c[g]) w_c[g] = v;
-                            if (n_shares) {
-                                S sum = shares[i] + shares[j];  // in the shares' own precision
-                                len_c[g] += 0.5 * static_cast<double>(sum);
-                            } else
-                                len_c[g] += lengths[t];
-                        }
-                        ++t;
-                    }
-                }
-            }
-        });
+        for (i64 g = 0; g < m; ++g) w_c[g] = INF;
+        for (i64 g = 0; g < len_c.n; ++g) len_c[g] = 0.0;
+        crossing_pairs(indptr, indices, cluster, first, n_c, [&](i64 g) { return out(g, 1); },
+                       [&](i64 g, i64 i, i64 j, i64 x, i64 t) {
+                           double v = dist[i] + static_cast<double>(csr_w[x]) + dist[j];
+                           if (v < w_c[g]) w_c[g] = v;
+                           if (!with_len) return;
+                           if (n_shares) {
+                               S sum = shares[i] + shares[j];  // in the shares' own precision
+                               len_c[g] += 0.5 * static_cast<double>(sum);
+                           } else
+                               len_c[g] += lengths[t];
+                       });
     }
     return nb::make_tuple(out_a, w_a, len_a);
+}
+
+// The summed border lengths of the cluster pairs `pairs` (coarse_pairs' pairs, in (lo,
+// hi) order): coarse_pairs' third output, the same values, made apart.
+template <class C, class S>
+nb::object coarse_lengths_t(const In<i64>& indptr, const In<i32>& indices, const In<C>& cluster,
+                            const In<i32>& pairs, const In<double>& lengths, const S* shares,
+                            i64 n_shares, i64 n_c) {
+    const i64 m = pairs.n;
+    std::vector<i64> first(n_c + 1, 0);
+    for (i64 g = 0; g < m; ++g) ++first[pairs(g, 0) + 1];
+    for (i64 c = 0; c < n_c; ++c) first[c + 1] += first[c];
+    Out<double> len_c;
+    auto len_a = fresh(m, len_c);
+    nb::gil_scoped_release nogil;
+    for (i64 g = 0; g < m; ++g) len_c[g] = 0.0;
+    crossing_pairs(indptr, indices, cluster, first, n_c, [&](i64 g) { return pairs(g, 1); },
+                   [&](i64 g, i64 i, i64 j, i64, i64 t) {
+                       if (n_shares) {
+                           S sum = shares[i] + shares[j];  // in the shares' own precision
+                           len_c[g] += 0.5 * static_cast<double>(sum);
+                       } else
+                           len_c[g] += lengths[t];
+                   });
+    return len_a;
 }
 
 }  // namespace
@@ -166,6 +202,20 @@ i64 nearest_seed(nb::handle indptr_, nb::handle indices_, nb::handle weights_, n
     });
 }
 
+// shares (one per element) or lengths (one per adjacency), where given or `needed`
+static void check_border(const In<i64>& indptr, const In<i32>& indices, const In<double>& lengths,
+                         i64 n_shares, bool needed) {
+    const i64 n = indptr.n - 1;
+    if (n_shares) {
+        if (n_shares != n) throw Mismatch("argument shares");
+    } else if (lengths.n || needed) {
+        i64 above = 0;  // (the adjacencies: lengths has one each)
+        for (i64 i = 0; i < n; ++i)
+            for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) above += indices[x] > i;
+        check_rows(lengths, above, "lengths");
+    }
+}
+
 nb::tuple coarse_pairs(nb::handle indptr_, nb::handle indices_, nb::handle cluster_,
                        nb::handle dist_, nb::handle csr_w_, nb::handle lengths_,
                        nb::handle shares_, i64 n_c) {
@@ -181,17 +231,33 @@ nb::tuple coarse_pairs(nb::handle indptr_, nb::handle indices_, nb::handle clust
         return with_real(csr_w_, "csr_w", [&](auto w) {
             check_rows(w, indptr[n], "csr_w");
             return with_real(shares_, "shares", [&](auto sh) {
-                if (sh.n) {
-                    check_rows(sh, n, "shares");
-                } else {
-                    i64 above = 0;  // (the adjacencies: lengths has one each)
-                    for (i64 i = 0; i < n; ++i)
-                        for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) above += indices[x] > i;
-                    check_rows(lengths, above, "lengths");
-                }
+                check_border(indptr, indices, lengths, sh.n, false);
                 return coarse_pairs_t(indptr, indices, cluster, dist, w.p, lengths, sh.p, sh.n,
                                       n_c);
             });
+        });
+    });
+}
+
+nb::object coarse_lengths(nb::handle indptr_, nb::handle indices_, nb::handle cluster_,
+                          nb::handle pairs_, nb::handle lengths_, nb::handle shares_, i64 n_c) {
+    In<i64> indptr(indptr_, "indptr");
+    In<i32> indices(indices_, "indices"), pairs(pairs_, "pairs");
+    In<double> lengths(lengths_, "lengths");
+    const i64 n = check_csr(indptr, indices, -1, indptr.n - 1);
+    if (n_c < 0) throw OutOfRange("argument n_c");
+    if (pairs.cols != 2) throw Mismatch("argument pairs");
+    check_range(pairs, 0, n_c, "pairs");
+    for (i64 g = 1; g < pairs.n; ++g)  // (lo, hi) order, distinct: coarse_pairs' pairs
+        if (pairs(g, 0) < pairs(g - 1, 0) ||
+            (pairs(g, 0) == pairs(g - 1, 0) && pairs(g, 1) <= pairs(g - 1, 1)))
+            throw Mismatch("argument pairs");
+    return with_index(cluster_, "cluster", [&](const auto& cluster) {
+        check_rows(cluster, n, "cluster");
+        check_range(cluster, 0, n_c, "cluster", n);
+        return with_real(shares_, "shares", [&](auto sh) {
+            check_border(indptr, indices, lengths, sh.n, true);
+            return coarse_lengths_t(indptr, indices, cluster, pairs, lengths, sh.p, sh.n, n_c);
         });
     });
 }
@@ -270,6 +336,7 @@ nb::object first_in_cells(nb::handle positions_, nb::handle lo_, double h,
 void bind_voronoi(nb::module_& m) {
     m.def("nearest_seed", &nearest_seed);
     m.def("coarse_pairs", &coarse_pairs);
+    m.def("coarse_lengths", &coarse_lengths);
     m.def("first_in_cells", &first_in_cells);
 }
 
