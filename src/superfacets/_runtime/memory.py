@@ -79,10 +79,10 @@ def available_bytes() -> int | None:
 
 
 #: A run's memory beyond its elements': the interpreter, numpy, scipy and the kernels
-#: (a new process of ``segment`` on 81,000 points peaked at 123 MiB; the per-element
-#: figures, ``ElementKind.peak_bytes``, were fitted with this base:
+#: (a new process of ``segment`` on 118,000 points of a room peaked at 89 MiB; the
+#: per-element figures, ``ElementKind.peak_bytes``, were fitted with this base:
 #: ``benchmarks/memory_check.py``)
-BASE_BYTES = 90 * 2**20
+BASE_BYTES = 80 * 2**20
 
 #: A tile's elements with its halo, as a share of its core's (3M points in 3 tiles:
 #: 1.13; room for uneven tiles)

@@ -222,7 +222,7 @@ KINDS = {k.name: k for k in (
     ElementKind("points", "point", exact_assignment=True, coarse_min_per_segment=1200,
                 coarse_per_segment=400,
                 coarse_neighbor_cap=True, auto_density=True, unit_sizes_in_levels=True,
-                neighborhood=True, cloud=True, rows="n_total", peak_bytes=240, tiled_bytes=100,
+                neighborhood=True, cloud=True, rows="n_total", peak_bytes=220, tiled_bytes=100,
                 exact_count=True, single_weights=True, merge_from=5, settle_cycles=True),
     ElementKind("cells", "cell", dim=3, rows="n_tets", segment_word="superfacets"),
 )}
