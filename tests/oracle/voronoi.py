@@ -180,38 +180,12 @@ def coarse_pairs(indptr, indices, cluster, dist, csr_w, lengths, shares, n_c):
     return out, w_c, len_c
 
 
-@njit(cache=True, error_model="numpy")
 def coarse_lengths(indptr, indices, cluster, pairs, lengths, shares, n_c):
     """The summed border lengths of the cluster pairs ``pairs`` (:func:`coarse_pairs`'
-    pairs, in ``(lo, hi)`` order): its third output when given ``lengths`` or ``shares``,
-    added in the same adjacency order."""
+    pairs, in ``(lo, hi)`` order): its third output when given ``lengths`` or ``shares``
+    (by definition: that output, the pairs checked to be its pairs)."""
     n = indptr.shape[0] - 1
-    m = pairs.shape[0]
-    first = np.zeros(n_c + 1, dtype=np.int64)
-    for g in range(m):
-        first[pairs[g, 0] + 1] += 1
-    for c in range(n_c):
-        first[c + 1] += first[c]
-    len_c = np.zeros(m)
-    t = 0
-    for i in range(n):
-        a = cluster[i]
-        for x in range(indptr[i], indptr[i + 1]):
-            j = indices[x]
-            if j > i:
-                b = cluster[j]
-                if a != b:
-                    lo_, h = min(a, b), max(a, b)
-                    left, right = first[lo_], first[lo_ + 1]
-                    while left < right:
-                        mid = (left + right) >> 1
-                        if pairs[mid, 1] < h:
-                            left = mid + 1
-                        else:
-                            right = mid
-                    if shares.shape[0]:
-                        len_c[left] += 0.5 * (shares[i] + shares[j])
-                    else:
-                        len_c[left] += lengths[t]
-                t += 1
+    out, _, len_c = coarse_pairs(indptr, indices, cluster, np.zeros(n),
+                                 np.zeros(indices.shape[0]), lengths, shares, n_c)
+    assert np.array_equal(out, pairs)
     return len_c

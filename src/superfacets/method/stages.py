@@ -414,8 +414,7 @@ def weigh(graph, rules: Rules, features=None, hooks=None
     if rules.cleanup:
         graph.terms  # noqa: B018 (kept for the clean-up; else computed chunk by chunk)
     dtype = weight_dtype(rules.kind, p.paper)
-    if (graph.terms_of is symmetric_terms and p.weighting == "paper"
-            and not rules.cleanup and not rules.split_merge):
+    if _per_entry(graph, rules):
         # points, vertices: from the CSR layout, positions and normals (the same values)
         w = csr_point_weights(graph, alpha=p.alpha, eta_convex=p.eta_convex, dtype=dtype,
                               features=features, beta=p.beta, floor=rules.feature_floor)
@@ -455,16 +454,21 @@ def held_weights(graph, rules: Rules, w: np.ndarray, features=None, initial=None
     >>> ball = trimesh.creation.icosphere(subdivisions=3)
     >>> _, graph, p = build_graph(ball, resolve(n_segments=12))
     >>> rules = resolve_rules(graph, p)
-    >>> w, _ = weigh(graph, rules)
-    >>> held_weights(graph, rules, w).get() is w  # (faces: never let go)
-    True
+    >>> held = held_weights(graph, rules, weigh(graph, rules)[0])
+    >>> held.let_go(); held.remade, held.get().dtype.name  # (faces: never let go)
+    (0, 'float64')
     """
-    p = rules.params
-    cheap = (graph.terms_of is symmetric_terms and p.weighting == "paper"
-             and not rules.cleanup and not rules.split_merge)
-    if not cheap or rules.coarsen <= 1 or initial is not None:
+    if not _per_entry(graph, rules) or rules.coarsen <= 1 or initial is not None:
         return HeldWeights(w)
     return HeldWeights(w, remake=lambda: weigh(graph, rules, features)[0])
+
+
+def _per_entry(graph, rules: Rules) -> bool:
+    """Whether :func:`weigh` makes the weights per CSR entry in one compiled pass (points
+    and vertices with the paper's weighting, no clean-up, no split-and-merge)."""
+    p = rules.params
+    return (graph.terms_of is symmetric_terms and p.weighting == "paper"
+            and not rules.cleanup and not rules.split_merge)
 
 
 def initialize(graph, w: np.ndarray, rules: Rules, hooks,
