@@ -108,7 +108,7 @@ def estimated_peak(n_elements: int, bytes_per_element: int, *, held: int = 0,
     Examples
     --------
     >>> estimated_peak(1_000_000, 250) // 2**20
-    328
+    318
     >>> estimated_peak(1_000_000, 250, held=2**30) // 2**20   # (the interpreter held)
     238
     >>> estimated_peak(1_000_000, 250, held=2**30, input_bytes=24_000_000) // 2**20
