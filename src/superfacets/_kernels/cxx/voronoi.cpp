@@ -2,6 +2,8 @@
 // (superfacets/_kernels/voronoi.py): the same operations in the same order, the cells'
 // search by blocks on threads (BlockedSearch: numba's search_buckets' result).
 #include <algorithm>
+#include <cstdint>
+#include <cstring>
 #include <atomic>
 #include <limits>
 #include <memory>
@@ -35,6 +37,19 @@ i64 nearest_seed_t(const In<i64>& indptr, const In<i32>& indices, const W* weigh
     return 0;
 }
 
+// The pair (lo, h) among the pairs of lo (`first`: their offsets, `hi_of(g)`: a pair's
+// hi, ascending), by bisection
+template <class H>
+inline i64 pair_index(const std::vector<i64>& first, H hi_of, i64 lo, i64 h) {
+    i64 left = first[lo], right = first[lo + 1];
+    while (left < right) {
+        i64 mid = (left + right) >> 1;
+        if (hi_of(mid) < h) left = mid + 1;
+        else right = mid;
+    }
+    return left;
+}
+
 // Each crossing adjacency (i, j), j > i, x its CSR entry and t its number, with the
 // cluster pair g it joins (found by bisection among the pairs of its lo, `first`: their
 // offsets, `hi_of(g)`: a pair's hi): visit(g, i, j, x, t). On threads, thread u the
@@ -57,20 +72,27 @@ void crossing_pairs(const In<i64>& indptr, const In<i32>& indices, const In<C>& 
                 if (j <= i) continue;
                 i64 b = cluster[j];
                 i64 lo = mn(a, b);
-                if (a != b && lo >= lo_c && lo < hi_c) {
-                    i64 h = mx(a, b);
-                    i64 left = first[lo], right = first[lo + 1];
-                    while (left < right) {
-                        i64 mid = (left + right) >> 1;
-                        if (hi_of(mid) < h) left = mid + 1;
-                        else right = mid;
-                    }
-                    visit(left, i, j, x, t);
-                }
+                if (a != b && lo >= lo_c && lo < hi_c)
+                    visit(pair_index(first, hi_of, lo, mx(a, b)), i, j, x, t);
                 ++t;
             }
         }
     });
+}
+
+// Lower *p to v where v is less, atomically (the minimum of any order: the same value)
+inline void atomic_min(double* p, double v) {
+    std::uint64_t want, cur;
+    std::memcpy(&want, &v, sizeof want);
+    cur = __atomic_load_n(reinterpret_cast<std::uint64_t*>(p), __ATOMIC_RELAXED);
+    for (;;) {
+        double c;
+        std::memcpy(&c, &cur, sizeof c);
+        if (!(v < c) ||
+            __atomic_compare_exchange_n(reinterpret_cast<std::uint64_t*>(p), &cur, want, true,
+                                        __ATOMIC_RELAXED, __ATOMIC_RELAXED))
+            return;
+    }
 }
 
 template <class C, class W, class S>
@@ -143,17 +165,32 @@ nb::tuple coarse_pairs_t(const In<i64>& indptr, const In<i32>& indices, const In
         nb::gil_scoped_release nogil;
         for (i64 g = 0; g < m; ++g) w_c[g] = INF;
         for (i64 g = 0; g < len_c.n; ++g) len_c[g] = 0.0;
-        crossing_pairs(indptr, indices, cluster, first, n_c, [&](i64 g) { return out(g, 1); },
-                       [&](i64 g, i64 i, i64 j, i64 x, i64 t) {
-                           double v = dist[i] + static_cast<double>(csr_w[x]) + dist[j];
-                           if (v < w_c[g]) w_c[g] = v;
-                           if (!with_len) return;
-                           if (n_shares) {
-                               S sum = shares[i] + shares[j];  // in the shares' own precision
-                               len_c[g] += 0.5 * static_cast<double>(sum);
-                           } else
-                               len_c[g] += lengths[t];
-                       });
+        auto hi_of = [&](i64 g) { return out(g, 1); };
+        if (!with_len) {  // the minima alone: rows on threads (any order gives them)
+            parallel_for(n, [&](i64 r0, i64 r1) {
+                for (i64 i = r0; i < r1; ++i) {
+                    const i64 a = cluster[i];
+                    for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
+                        const i64 j = indices[x];
+                        const i64 b = cluster[j];
+                        if (j <= i || a == b) continue;
+                        const i64 g = pair_index(first, hi_of, mn(a, b), mx(a, b));
+                        atomic_min(&w_c[g], dist[i] + static_cast<double>(csr_w[x]) + dist[j]);
+                    }
+                }
+            });
+        } else {  // with the lengths: in the order of one pass (crossing_pairs)
+            crossing_pairs(indptr, indices, cluster, first, n_c, hi_of,
+                           [&](i64 g, i64 i, i64 j, i64 x, i64 t) {
+                               double v = dist[i] + static_cast<double>(csr_w[x]) + dist[j];
+                               if (v < w_c[g]) w_c[g] = v;
+                               if (n_shares) {
+                                   S sum = shares[i] + shares[j];  // the shares' precision
+                                   len_c[g] += 0.5 * static_cast<double>(sum);
+                               } else
+                                   len_c[g] += lengths[t];
+                           });
+        }
     }
     return nb::make_tuple(out_a, w_a, len_a);
 }
