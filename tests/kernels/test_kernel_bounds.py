@@ -54,6 +54,8 @@ def _recorded_calls(monkeypatch) -> dict:
     from superfacets.graph.adjacency import superfacet_graph
     from superfacets.graph.hierarchy import hierarchy
     from superfacets.inputs.cloud import PointCloud, as_cloud
+    from superfacets.method.coarse_to_fine import coarsen
+    from superfacets.method.weights import csr_weights, paper_weights
 
     calls: dict = {}
     plain = native.kernel
@@ -91,6 +93,8 @@ def _recorded_calls(monkeypatch) -> dict:
     graph_segmentation(mesh, n_segments=30)
     vsa(mesh, 12, metric="l21", init="incremental", rng=0)
     dimensionality_features(elements_of(pts, "points").graph)
+    g = elements_of(mesh, "faces").graph
+    coarsen(g, csr_weights(g, paper_weights(g)), 8).graph.lengths  # noqa: B018 (made if read)
     return calls
 
 

@@ -225,8 +225,9 @@ def test_runs_on_faces_give_numba_results_call_by_call(shadowed):
     compiled -= POINT_KERNELS | VERTEX_KERNELS | LARGE_KERNELS | OPTION_KERNELS
     missing = {name for name in compiled if not any(p.endswith("." + name) for p in calls)}
     # run only on several threads, by the plain replay-less classifier, by a lazy graph's
-    # rebuild, by hierarchies and the exact count on points: tested below
-    assert missing <= {"classify_bounded", "number_pairs", "merge_levels"}, \
+    # rebuild (a coarse graph's lengths too), by hierarchies and the exact count on
+    # points: tested below
+    assert missing <= {"classify_bounded", "number_pairs", "merge_levels", "coarse_lengths"}, \
         missing
 
 
@@ -314,7 +315,7 @@ def test_runs_on_points_give_numba_results_call_by_call(shadowed):
     r = superfacets.segment(as_cloud(dup.copy()), 40, n_threads=1)
     assert r.labels.shape[0] == dup.shape[0]
     missing = {name for name in POINT_KERNELS | {"expand_many", "nearest_seed", "coarse_pairs",
-                                                 "coarse_lengths", "merge_levels"}
+                                                 "merge_levels"}
                if not any(path.endswith("." + name) for path in calls)}
     assert not missing, missing
 

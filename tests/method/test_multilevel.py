@@ -277,3 +277,21 @@ def test_a_large_clouds_coarse_start_lets_its_weights_go_and_the_passes_read_the
     monkeypatch.setattr(pl, "held_weights", lambda g, r, w, *a: HeldWeights(w))
     kept = segment(pts, 40)
     np.testing.assert_array_equal(let_go.labels, kept.labels)
+
+
+def test_a_coarse_graphs_lengths_are_made_when_read_the_fine_sums():
+    """The clusters' border lengths are not made by the coarsening (the coarse run does
+    not read them); read, they are the fine adjacencies' lengths summed per pair."""
+    g, _, wc = _weighted(Mesh(*_sphere(4)))
+    co = coarsen(g, wc, 8)
+    assert "lengths" not in co.graph.__dict__
+    pairs, lengths = co.graph.pairs, co.graph.lengths
+    c = co.cluster[g.pairs]
+    cross = c[:, 0] != c[:, 1]
+    key = np.sort(c[cross], axis=1)
+    expected = {}
+    for (a, b), length in zip(map(tuple, key), g.lengths[cross]):
+        expected[(a, b)] = expected.get((a, b), 0.0) + length
+    assert len(expected) == pairs.shape[0]
+    got = dict(zip(map(tuple, pairs), lengths))
+    assert all(abs(got[p] - v) <= 1e-12 * max(1.0, v) for p, v in expected.items())

@@ -206,16 +206,14 @@ def coarsen(graph: ElementGraph, csr_w, ratio: int) -> Coarsening:
 
     # coarse adjacency first (its weights read the distances, let go before the clusters'
     # means are made): the fine pairs whose elements lie in different clusters (the
-    # shortest seed-to-seed path through one); their summed border lengths once the
-    # distances and the fine weights are let go (the same sums, apart)
+    # shortest seed-to-seed path through one); their summed border lengths only if read
+    # (the coarse run does not: _coarse_lengths, the same sums)
     none = np.empty(0)
     pairs, w_c, _ = _voronoi("coarse_pairs")(graph.indptr, graph.indices, cluster, dist,
                                              csr_w, none, none, n_c)
     del dist, csr_w
     if isinstance(held, HeldWeights):  # (the fine weights: not read again before the passes)
         held.let_go()
-    len_c = _voronoi("coarse_lengths")(graph.indptr, graph.indices, cluster, pairs,
-                                       *graph.border_arrays(), n_c)
     indptr, indices, dual_edge = adjacency_csr(pairs[:, 0], pairs[:, 1], n_c)
     # the coarse run reads the CSR layout: its pairs and dual-edge map are built again
     # (the same: the pairs are in (lo, hi) order) only if something asks
@@ -226,12 +224,22 @@ def coarsen(graph: ElementGraph, csr_w, ratio: int) -> Coarsening:
     coarse = ElementGraph(
         kind=graph.kind, positions=pos, sizes=tot, normals=nor, centroid=graph.centroid,
         lower=graph.lower, diagonal=graph.diagonal, pairs=LAZY, indptr=indptr,
-        indices=indices, dual_edge=LAZY, lengths=len_c,
+        indices=indices, dual_edge=LAZY, lengths=LAZY,
         boundary_elements=np.empty(0, dtype=np.int64), boundary_lengths=np.empty(0),
         scale2=scale2,
-        rebuild=dict.fromkeys(("pairs", "dual_edge"),
-                              partial(pairs_from_csr, pair_dtype=np.int64)))
+        rebuild={**dict.fromkeys(("pairs", "dual_edge"),
+                                 partial(pairs_from_csr, pair_dtype=np.int64)),
+                 "lengths": partial(_coarse_lengths, graph, cluster)})
     return Coarsening(graph=coarse, weights=weights, cluster=cluster, seeds=seeds)
+
+
+def _coarse_lengths(fine: ElementGraph, cluster: np.ndarray, coarse: ElementGraph) -> dict:
+    """The clusters' border lengths, made when first read: the lengths of the fine
+    adjacencies joining each pair of clusters, summed in the fine graph's order
+    (``voronoi.coarse_lengths``: ``coarse_pairs``' sums, bit for bit)."""
+    pairs = np.ascontiguousarray(coarse.pairs, dtype=np.int32)
+    return {"lengths": _voronoi("coarse_lengths")(fine.indptr, fine.indices, cluster, pairs,
+                                                  *fine.border_arrays(), coarse.n_elements)}
 
 
 def _cluster_means(graph: ElementGraph, positions: np.ndarray, cluster: np.ndarray,
