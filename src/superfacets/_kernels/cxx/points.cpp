@@ -359,6 +359,16 @@ nb::object knn_csr(nb::handle nbr_, nb::handle keep_, nb::handle indptr_,
             if (nbr(j, c) == i && (all_kept || keep(j, c))) return true;
         return false;
     };
+    // which listings are mutual, found when counting and read when writing (a bit each)
+    std::vector<std::uint64_t> both((n * k + 63) / 64, 0);
+    auto mark = [&](i64 i, i64 c) {
+        const i64 b = i * k + c;
+        __atomic_fetch_or(&both[b >> 6], std::uint64_t(1) << (b & 63), __ATOMIC_RELAXED);
+    };
+    auto marked = [&](i64 i, i64 c) {
+        const i64 b = i * k + c;
+        return (both[b >> 6] >> (b & 63)) & 1;
+    };
     {
         nb::gil_scoped_release nogil;
         on_threads(T, [&](i64 t) {
@@ -370,8 +380,10 @@ nb::object knn_csr(nb::handle nbr_, nb::handle keep_, nb::handle indptr_,
                     if (listed(i, c)) {
                         ++m;
                         const i64 j = nbr(i, c);
-                        if (mutual(i, j))
+                        if (mutual(i, j)) {
+                            mark(i, c);
                             continue;
+                        }
                         if (j >= a && j < b)
                             ++rev[j];
                         else
@@ -415,7 +427,7 @@ nb::object knn_csr(nb::handle nbr_, nb::handle keep_, nb::handle indptr_,
                     if (listed(i, c)) {
                         const i64 j = nbr(i, c);
                         raw[u++] = static_cast<i32>(j);
-                        if (j >= a && j < b && !mutual(i, j)) put(j, i);
+                        if (j >= a && j < b && !marked(i, c)) put(j, i);
                     }
             }
             for (i64 r = 0; r < rows.n; ++r) {
