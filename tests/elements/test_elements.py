@@ -354,6 +354,39 @@ def test_face_graph_releases_what_the_passes_do_not_read_and_rebuilds_it(sphere)
                                                        "lengths"]
 
 
+def test_a_triangle_meshs_edges_are_made_again_from_its_faces(sphere, valley):
+    # the shared edge of each face pair, from the two triangles' vertices: the same as
+    # built on closed, open and non-manifold meshes; not offered where a pair shares more
+    # than one edge (duplicate faces; a degenerate face lists its edge twice) or polygons
+    import trimesh
+
+    v = np.array([[0, 0, 0], [1, 0, 0], [0.5, 1, 0], [0.5, -1, 0], [0.5, 0, 1], [1.5, 1, 0],
+                  [2, 0, 0]], float)
+    fan = Mesh(v, [[0, 1, 2], [1, 0, 3], [0, 1, 4], [1, 5, 2], [6, 1, 5]])
+    half = valley.faces[valley.centroids[:, 0] > 0]
+    used = np.unique(half)
+    remap = np.full(valley.n_vertices, -1)
+    remap[used] = np.arange(used.shape[0])
+    ball = trimesh.creation.icosphere(subdivisions=6)  # (normals made in several blocks)
+    for mesh in (sphere, Mesh(valley.vertices[used], remap[half]), fan,
+                 Mesh(ball.vertices, ball.faces)):
+        g = face_graph(mesh)
+        assert "edges" in g.rebuild
+        built, normals = g.edges.copy(), g.normals.copy()
+        g.release()
+        assert "edges" not in g.__dict__ and mesh.__dict__["_geometry"][2] is None
+        assert g.edges.dtype == built.dtype
+        np.testing.assert_array_equal(g.edges, built)
+        np.testing.assert_array_equal(g.normals, normals)
+    dup = Mesh(v[:4], [[0, 1, 2], [0, 1, 2], [1, 3, 2]])  # a pair shares three vertices
+    flat = Mesh(v, [[0, 1, 2], [1, 6, 6], [6, 1, 5]])  # (1, 6) twice in a degenerate face
+    for mesh in (_polygon_grid(5, 4), dup, flat):
+        g = face_graph(mesh)
+        edges = g.edges
+        g.release()
+        assert "edges" not in g.rebuild and g.edges is edges
+
+
 def test_vertex_and_point_graphs_release_their_pairs(sphere):
     from superfacets.elements.builders import elements_of
 
@@ -1101,6 +1134,7 @@ def test_no_stage_before_the_passes_makes_again_what_it_declared(valley, monkeyp
     # declare (stage_reads); the passes hold none of the fields; only the stages after
     # them make fields again
     from superfacets import Mesh, segment
+    from superfacets.elements import face_graph
     from superfacets.method import pipeline
 
     monkeypatch.setattr(pipeline, "_RELEASE_MIN", 0)
@@ -1126,11 +1160,14 @@ def test_no_stage_before_the_passes_makes_again_what_it_declared(valley, monkeyp
         log.clear()
         mesh = Mesh(valley.vertices, valley.faces)
         segment(mesh, 12, **kw)
-        assert held["fields"] == []
+        assert held["fields"] == []  # (a triangle mesh's edges too: made again from faces)
+        assert "edges" in face_graph(mesh).rebuild
         stages = [s for s in log if not s.startswith("made")]
-        assert stages[-1] == "clean-up" and "passes" in stages
+        assert stages[-2:] == ["clean-up", "cuts"] and "passes" in stages
         assert ("coarsening" in stages) == ("coarsen" in kw)
         made_early = [s for s in log[:log.index("clean-up")] if s.startswith("made")]
         assert made_early == [], log
         assert {s for s in log[log.index("clean-up"):] if s.startswith("made")} <= {
-            "made normals", "made pairs", "made dual_edge", "made lengths"}
+            "made normals", "made pairs", "made dual_edge", "made lengths", "made edges"}
+        # the cuts read none of them: the graph holds none after the run (on a large one)
+        assert not (set(face_graph(mesh).rebuild) | {"terms"}) & set(face_graph(mesh).__dict__)

@@ -615,6 +615,31 @@ def test_csr_of_pairs_and_their_numbering_match_numba(ptype, dtype):
 
 
 @needs_cxx
+@pytest.mark.parametrize("ftype,ptype,etype", [(np.int64, np.int32, np.int32),
+                                               (np.int32, np.int64, np.int64)])
+def test_shared_edges_match_numba_and_count_what_is_not_one_edge(ftype, ptype, etype):
+    """The edge two triangles share (a triangle mesh's edges made again): known answers,
+    numba's results in every dtype, and the pairs that share no edge, or three vertices,
+    or (checking) another edge, counted."""
+    faces = np.array([[0, 1, 2], [2, 1, 3], [4, 2, 3], [0, 1, 2], [2, 3, 3], [6, 7, 8]],
+                     dtype=ftype)
+    pairs = np.array([[0, 1], [1, 2], [1, 4], [0, 3], [0, 5], [2, 4]], dtype=ptype)
+    got = []
+    for fn in (native.kernel("adjacency.shared_edges"), reference("adjacency.shared_edges")):
+        edges = np.full((6, 2), -1, dtype=etype)
+        bad = fn(faces, pairs, edges, False)
+        wrong = edges.copy()
+        wrong[0] = [0, 2]
+        got.append((bad, edges[[0, 1, 2, 5]], fn(faces, pairs, edges, True),
+                    fn(faces, pairs, wrong, True)))
+    assert got[0][0] == got[1][0] == 2  # (0, 3): three vertices; (0, 5): none
+    assert got[0][1].tolist() == got[1][1].tolist() == [[1, 2], [2, 3], [2, 3], [2, 3]]
+    assert got[0][2:] == got[1][2:] == (2, 3)
+    with pytest.raises(ValueError, match="pairs"):  # (OutOfRange: no face read)
+        native.kernel("adjacency.shared_edges")(faces, pairs + 6, edges, False)
+
+
+@needs_cxx
 @pytest.mark.parametrize("threads", ["1", "2", "3"])
 def test_csr_of_pairs_on_threads_keeps_the_pairs_order_in_each_row(monkeypatch, threads):
     """Known answer on threads (each owns a range of rows, reads every pair): 400,000

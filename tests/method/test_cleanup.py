@@ -416,3 +416,25 @@ def test_band_distances_are_the_shortest_and_ties_take_the_lowest_partner(monkey
     assert np.array_equal(dist, best)
     assert np.array_equal(partner, lowest)
     assert (partner >= 0).sum() > n // 4 and not np.signbit(dist).any()
+
+
+def test_the_clean_up_lets_the_graph_go_once_its_bands_are_found(valley):
+    # what a run forgets there (the terms, border lengths, dual-edge map) is not read by
+    # the cuts: the same labels, the callback called once, the graph left without them
+    from superfacets import Mesh
+
+    mesh = Mesh(valley.vertices, valley.faces)
+    r = segment(mesh, 12, cleanup=False)
+    g = face_graph(mesh)
+    plain = clean_boundaries(g, r.labels, r.centers)
+    calls = []
+
+    def forget():
+        calls.append(len(calls))
+        g.release()
+        g.release_terms()
+
+    got = clean_boundaries(g, r.labels, r.centers, bands_found=forget)
+    assert calls == [0]
+    np.testing.assert_array_equal(got, plain)
+    assert not {"terms", "lengths", "dual_edge", "edges"} & set(g.__dict__)

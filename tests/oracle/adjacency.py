@@ -233,6 +233,39 @@ def take_pairs(first, lo, hi, ka, kb, pairs, edges):
 
 
 @njit(cache=True, error_model="numpy")
+def shared_edges(faces, pairs, edges, check):
+    """The mesh edge ``(a, b)``, ``a < b``, each pair of triangles ``pairs[t]`` shares:
+    the two distinct vertices of the first face that the second has too, written to
+    ``edges[t]`` (with ``check``: compared with it). Returns the pairs that do not share
+    exactly two distinct vertices, or (``check``) whose edge differs."""
+    bad = 0
+    got = np.empty(3, dtype=np.int64)
+    for t in range(pairs.shape[0]):
+        i, j = pairs[t, 0], pairs[t, 1]
+        k = 0
+        for c in range(3):
+            v = faces[i, c]
+            twice = False
+            for u in range(k):
+                if got[u] == v:
+                    twice = True
+            if not twice and (faces[j, 0] == v or faces[j, 1] == v or faces[j, 2] == v):
+                got[k] = v
+                k += 1
+        if k != 2:
+            bad += 1
+            continue
+        a, b = min(got[0], got[1]), max(got[0], got[1])
+        if check:
+            if edges[t, 0] != a or edges[t, 1] != b:
+                bad += 1
+        else:
+            edges[t, 0] = a
+            edges[t, 1] = b
+    return bad
+
+
+@njit(cache=True, error_model="numpy")
 def csr_of_face_pairs(lo, hi, ka, kb, n, indices, dual_edge):
     """The distinct pairs among ``(lo[t], hi[t])`` (``lo < hi < n``, repeats
     allowed) and their symmetric CSR, in one counting sort.

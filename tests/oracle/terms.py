@@ -22,7 +22,9 @@ def per_entry(values, dual_edge, out):
 def convex_scaled_csr(weights, dual_edge, concave, cos, span, coef):
     """``weights[e] - coef * span * arccos(cos)`` (at least 0) on the entries of
     convex adjacencies, ``weights[e]`` on concave ones (adjacency ``dual_edge[e]``)."""
-    out = np.empty(weights.shape[0])  # (no array of one delta per adjacency: 8 B each)
+    # (no array of one delta per adjacency: 8 B each); in the weights' dtype, each value
+    # computed in float64 and rounded
+    out = np.empty(weights.shape[0], dtype=weights.dtype)
     for e in range(weights.shape[0]):
         d = dual_edge[e]
         out[e] = weights[e] if concave[d] else max(

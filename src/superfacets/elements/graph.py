@@ -232,7 +232,8 @@ class ElementGraph:
         pairs: the :class:`AdjacencyTerms` of those adjacencies.
     rebuild : mapping of str to callable
         For the fields :meth:`release` may forget (``normals``, ``pairs``,
-        ``dual_edge``, ``lengths``, ``spans``, ``border_shares``):
+        ``dual_edge``, ``lengths``, ``spans``, ``border_shares``, and a triangle mesh's
+        ``edges``):
         ``rebuild[name](graph)`` computes that field again, the same, as a dict of
         fields. A field without an entry is never released.
 
@@ -259,7 +260,7 @@ class ElementGraph:
     lengths: np.ndarray = _Rebuilt()
     boundary_elements: np.ndarray
     boundary_lengths: np.ndarray
-    edges: np.ndarray | None = None
+    edges: np.ndarray | None = _Rebuilt(optional=True)
     boundary_edges: np.ndarray | None = None
     spans: np.ndarray | None = _Rebuilt(optional=True)
     border_shares: np.ndarray | None = _Rebuilt(optional=True)
@@ -322,7 +323,8 @@ class ElementGraph:
         e = self.n_edges
         geo, cos = np.empty(e), np.empty(e)
         concave = np.empty(e, dtype=bool)
-        self.normals, self.pairs  # noqa: B018 (rebuilt here if released, not on the threads)
+        self.normals, self.pairs, self.edges  # noqa: B018 (rebuilt here if released, not on
+        # the threads)
 
         def chunks(c0: int, c1: int) -> None:
             for s in range(c0 * CHUNK, min(e, c1 * CHUNK), CHUNK):
@@ -352,7 +354,8 @@ class ElementGraph:
     def release(self, keep: tuple = ()) -> None:
         """Forget the fields that have a :attr:`rebuild` entry (faces: the
         normals, pairs, dual-edge map and border lengths, about 60 bytes per
-        face, with the mesh's cached normals; points: the pairs, dual-edge map,
+        face, with the mesh's cached normals, and a triangle mesh's shared edges, 12 more;
+        points: the pairs, dual-edge map,
         border lengths and spans, about 160 bytes per point); each is computed again, the
         same, on next use. The pipeline calls it before the passes, which
         read only the CSR layout, the positions and the sizes, so that the

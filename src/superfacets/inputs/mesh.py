@@ -244,6 +244,29 @@ class Mesh:
                              centroids, areas, normals)
         return readonly(centroids), readonly(areas), readonly(normals)
 
+    def _compute_normals(self) -> np.ndarray:
+        """The normals alone, as :meth:`_compute_geometry` makes them: the triangles' in
+        blocks, each block's centroids and areas written to scratch and let go (the
+        normals of a large mesh are made again after being released, while the graph
+        holds the centroids and areas already)."""
+        if not self.is_triangular:
+            return self._compute_geometry()[2]
+        from .._runtime.threads import run_ranges, split
+
+        m, block = self.n_faces, 1 << 15
+        normals = np.empty((m, 3))
+        v, f = np.ascontiguousarray(self.vertices), np.ascontiguousarray(self.faces)
+        face_geometry = native.kernel("geometry.face_geometry")
+
+        def part(a: int, b: int) -> None:
+            centroids, areas = np.empty((min(block, b - a), 3)), np.empty(min(block, b - a))
+            for s in range(a, b, block):
+                t = min(b, s + block)
+                face_geometry(v, f[s:t], centroids[:t - s], areas[:t - s], normals[s:t])
+
+        run_ranges(part, split(m))
+        return readonly(normals)
+
     @property
     def centroids(self) -> np.ndarray:
         """(m, 3) float64: face centroids (triangles: mean of the three vertex positions;
@@ -264,7 +287,7 @@ class Mesh:
         """
         geometry = self._geometry
         if geometry[2] is None:  # released: computed again (the same kernel, the same values)
-            geometry = (geometry[0], geometry[1], self._compute_geometry()[2])
+            geometry = (geometry[0], geometry[1], self._compute_normals())
             self.__dict__["_geometry"] = geometry
         return geometry[2]
 

@@ -27,6 +27,7 @@ import math
 import numpy as np
 
 from .._kernels import native
+from .._runtime.memory import give_back_free_memory
 from ..elements.builders import as_element_graph
 from ..elements.graph import chunked
 from ..elements.kinds import kind_of
@@ -198,6 +199,39 @@ def _cut_costs_per_entry(g, alpha, eta_convex, crease, features, beta, r,
                          eta_convex, r)
 
 
+def _means(labels, sizes, positions, k: int) -> np.ndarray:
+    """The superfacets' area-weighted mean positions, in one compiled pass (each sum
+    added in element order, as np.bincount adds them)."""
+    label_sums = native.kernel("geometry.label_sums")
+
+    area, means, spare = np.zeros(k), np.zeros((k, 3)), np.zeros((k, 3))
+    label_sums(labels, sizes, positions, positions, area, means, spare)
+    area = np.maximum(area, 1e-300)
+    means /= area[:, None]
+    return means
+
+
+def _band_members(g, labels, pinned, width: float, dirty, k: int):
+    """The elements within ``width`` of a boundary (along the graph, inside their
+    superfacet; with ``dirty``, only the bands of superfacets that changed), grouped by
+    band as :func:`_bands` gives them; None where there are none. (Each work array is let
+    go as soon as read: a run's clean-up peaks here.)"""
+    band_distances = native.kernel("cleanup.band_distances")
+
+    n = g.n_elements
+    heap = g.indices.shape[0] + n + 1
+    partner = np.empty(n, dtype=np.int64)
+    band_distances(g.indptr, g.indices, g.dual_edge, g.terms.geo, g.lengths, labels,
+                   pinned, width, np.empty(n), partner, np.empty(heap),
+                   np.empty(heap, dtype=np.int64))
+    members = np.flatnonzero(partner >= 0)
+    if dirty is not None:  # later sweeps: only bands of superfacets that changed
+        members = members[dirty[labels[members]] | dirty[partner[members]]]
+    if members.size == 0:
+        return None
+    return _bands(members, labels, partner, k)
+
+
 def _bands(members, labels, partner, k: int):
     """The band elements ``members`` grouped by the pair of superfacets they lie between
     (sorted by the pair, stably): the members, where each band starts, and each band's
@@ -219,7 +253,7 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
                      band: float | None = None, sweeps: int = SWEEPS,
                      connectivity: bool = True, n_threads: int | None = None,
                      features: np.ndarray | None = None, beta: float = 0.0,
-                     floor: float = 0.0) -> np.ndarray:
+                     floor: float = 0.0, bands_found=None) -> np.ndarray:
     """Straighten superfacet boundaries and move them onto nearby creases.
 
     For every pair of adjacent superfacets, the elements within ``band * r``
@@ -267,6 +301,10 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
         the labels do not depend on it.
     features, beta, floor
         The feature term (:func:`cut_costs`); ``beta = 0`` (default) ignores features.
+    bands_found : callable, optional
+        Called (no arguments) once the last sweep's bands are found: from then on the
+        graph's terms, border lengths and dual-edge map are not read (a run forgets
+        them there on a large graph: :meth:`superfacets.method.pipeline.Hooks.before`).
 
     Returns
     -------
@@ -300,9 +338,7 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
     >>> int(clean.max()) + 1
     30
     """
-    band_distances = native.kernel("cleanup.band_distances")
     solve_bands = native.kernel("cleanup.solve_bands")
-    label_sums = native.kernel("geometry.label_sums")
     from .connectivity import enforce_connectivity
 
     g = as_element_graph(graph)
@@ -327,32 +363,24 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
     labels, centers, order = _numbered_by_centers(labels, centers)
     pinned = np.zeros(n, dtype=np.bool_)
     pinned[centers] = True
-    de = g.dual_edge
-    cut_csr = _cut_costs_per_entry(g, alpha, eta_convex, check_nonneg("crease", crease),
-                                   features, check_nonneg("beta", beta), r,
-                                   check_nonneg("floor", floor))
-    heap = g.indices.shape[0] + n + 1
+    cost_of = (alpha, eta_convex, check_nonneg("crease", crease), features,
+               check_nonneg("beta", beta), r, check_nonneg("floor", floor))
+    cut_csr = None  # (made once the first bands are found: not held while they are)
     smooth = smoothness / (r * r)
     dirty = None
-    for _ in range(sweeps):
-        # the superfacets' areas and mean positions in one compiled pass, each sum added
-        # in element order (as np.bincount adds them)
-        area, means, spare = np.zeros(k), np.zeros((k, 3)), np.zeros((k, 3))
-        label_sums(labels, sizes, positions, positions, area, means, spare)
-        area = np.maximum(area, 1e-300)
-        means /= area[:, None]
-        # (each sweep's work arrays let go as soon as read: the run's peak is here)
-        partner = np.empty(n, dtype=np.int64)
-        band_distances(g.indptr, g.indices, de, g.terms.geo, g.lengths, labels, pinned,
-                       band * r, np.empty(n), partner, np.empty(heap),
-                       np.empty(heap, dtype=np.int64))
-        members = np.flatnonzero(partner >= 0)
-        if dirty is not None:  # later sweeps: only bands of superfacets that changed
-            members = members[dirty[labels[members]] | dirty[partner[members]]]
-        if members.size == 0:
+    for sweep in range(sweeps):
+        means = _means(labels, sizes, positions, k)
+        found = _band_members(g, labels, pinned, band * r, dirty, k)
+        if found is None:
             break
-        members, starts, pair = _bands(members, labels, partner, k)
-        del partner
+        members, starts, pair = found
+        del found
+        if cut_csr is None:
+            if bands_found is not None:  # (a large graph: the bands' freed temporaries
+                give_back_free_memory()  # handed back before the costs are made)
+            cut_csr = _cut_costs_per_entry(g, *cost_of)
+        if bands_found is not None and sweep == sweeps - 1:
+            bands_found()
         band_of = np.full(n, -1, dtype=np.int64)
         band_of[members] = np.repeat(np.arange(starts.size - 1), np.diff(starts))
         out = labels.copy()

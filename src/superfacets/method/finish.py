@@ -66,7 +66,7 @@ def finish(graph, label: np.ndarray, centers: np.ndarray, rules: Rules
 
 
 def clean_up(graph, labels: np.ndarray, centers: np.ndarray, rules: Rules,
-             features=None) -> np.ndarray:
+             features=None, bands_found=None) -> np.ndarray:
     """Stage 7: the boundaries re-placed by minimum cuts within a band
     (:func:`superfacets.method.cleanup.clean_boundaries`; not in the paper), with the run's
     ``eta_convex``, ``alpha`` (the paper's default under another weighting) and
@@ -83,6 +83,8 @@ def clean_up(graph, labels: np.ndarray, centers: np.ndarray, rules: Rules,
     centers : (K,) int64 ndarray
     rules : Rules
     features : (n, d) float ndarray, optional
+    bands_found : callable, optional
+        As :func:`~superfacets.method.cleanup.clean_boundaries`.
 
     Raises
     ------
@@ -102,7 +104,8 @@ def clean_up(graph, labels: np.ndarray, centers: np.ndarray, rules: Rules,
     return clean_boundaries(graph, labels, centers, radius=rules.r, eta_convex=p.eta_convex,
                             alpha=p.alpha if p.weighting == "paper" else _D.alpha,
                             connectivity=p.enforce_connectivity, n_threads=p.n_threads,
-                            features=features, beta=p.beta, floor=rules.feature_floor)
+                            features=features, beta=p.beta, floor=rules.feature_floor,
+                            bands_found=bands_found)
 
 
 def merge_small(graph, labels: np.ndarray, centers: np.ndarray, rules: Rules) -> np.ndarray:

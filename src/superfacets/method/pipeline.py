@@ -167,10 +167,10 @@ class Hooks:
 
         On a graph of :data:`_RELEASE_MIN` elements or more, "later" ends at the passes
         (which read no such field and are a run's memory peak: the stages after them make
-        again what they read); the terms a stage reads are made before their
-        ingredients (normals and pairs) go. On a smaller graph only the terms no later
-        stage reads are forgotten (making the others again would cost more than their
-        memory is worth).
+        again what they read); the terms and border lengths a stage reads are made before
+        their ingredients (normals, pairs, a triangle mesh's edges) go. On a smaller graph
+        only the terms no later stage reads are forgotten (making the others again would
+        cost more than their memory is worth).
         """
         graph, plan = self.graph, self.plan
         if graph is None:
@@ -184,10 +184,18 @@ class Hooks:
             if "terms" not in set().union(*(fields for _, fields in plan[i:])):
                 graph.release_terms()
             return
-        if "terms" in plan[i][1]:
+        reads = plan[i][1]
+        if "terms" in reads:
             graph.terms  # noqa: B018 (made here, so that their ingredients can go)
         elif "terms" in needed and "terms" not in graph.__dict__:
-            needed |= {"normals", "pairs"}  # (what a later stage makes them from)
+            needed |= {"normals", "pairs", "edges"}  # (what a later stage makes them from)
+        if ("edges" in graph.rebuild and "lengths" in needed
+                and "lengths" not in graph.__dict__):  # (a triangle mesh's edges: the
+            if "lengths" not in reads:  # border lengths' ingredient)
+                needed.add("edges")
+            else:  # made here, once the terms' other ingredients went
+                graph.release(keep=tuple(needed | {"edges"}))
+                graph.lengths  # noqa: B018
         if "terms" not in needed:
             graph.release_terms()
         graph.release(keep=tuple(needed))
@@ -321,7 +329,9 @@ def _finished(graph, it, rules, hooks, feats):
     if rules.cleanup:
         with hooks.stage("cleanup", "clean-up"):
             hooks.before("clean-up")
-            labels = clean_up(graph, labels, centers, rules, feats)
+            labels = clean_up(graph, labels, centers, rules, feats,  # (a large graph's
+                              bands_found=(lambda: hooks.before("cuts")) if hooks.trim
+                              else None)  # terms, lengths, dual-edge map let go for its cuts)
         centers = final_centers(labels, centers, sizes, positions)
     if p.min_elements > 1:  # small superfacets merged as stray pieces are (not the paper)
         with hooks.stage("connectivity", add=True):

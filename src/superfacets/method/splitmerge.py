@@ -401,16 +401,19 @@ def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.nda
 
     n_swaps, n_iter, n_passes, expansions = 0, it.n_iter, it.n_passes, it.expansions
     settled = it.settled
-    # float32 weights (points) widened once: the kernels add each to a float64 distance
-    swap_w = np.asarray(weights if swap_weights is None else swap_weights, dtype=np.float64)
     for _ in range(rounds):
         present = used(it)
         old = it.centers[present]
         classifier.spaces.release()  # the expansions' buffers: not read by the swaps
         if graph.n_elements >= FORGET_MIN:  # nor the kept expansions (60 B per element)
             classifier.forget_records()
+        # float32 weights widened for the round (the kernels add each to a float64
+        # distance), once the expansions' records are let go (a large graph's peak)
+        swap_w = np.asarray(weights if swap_weights is None else swap_weights,
+                            dtype=np.float64)
         new, n = swap_round(graph, swap_w, relabel_dense(it.label).astype(np.int32),
                             window_r2=window_r2, n_threads=n_threads)
+        del swap_w
         if n == 0:
             break
         moved = update_centers(new, old.shape[0], sizes, positions, old)

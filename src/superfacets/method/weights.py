@@ -110,7 +110,7 @@ def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = DEF
     g = as_element_graph(graph)
     span = g.span
     f = check_features(features, g) if beta > 0 else None
-    g.normals, g.pairs  # noqa: B018 (made here if released: the chunks run on threads)
+    g.normals, g.pairs, g.edges  # noqa: B018 (made here if released: chunks on threads)
 
     def weight(sl):
         t = g.terms_in(sl)
@@ -137,7 +137,7 @@ def convex_scaled(graph, weights: np.ndarray, *, alpha: float, eta_convex: float
     Parameters
     ----------
     graph : ElementGraph
-    weights : (2 e,) float64 ndarray
+    weights : (2 e,) float64 or float32 ndarray
         The run's weights, one per CSR entry of ``graph``
         (:func:`csr_weights` of :func:`paper_weights`, any ``beta``).
     alpha, eta_convex : float
@@ -150,10 +150,11 @@ def convex_scaled(graph, weights: np.ndarray, *, alpha: float, eta_convex: float
 
     Returns
     -------
-    (2 e,) float64 ndarray
+    (2 e,) ndarray of the weights' dtype
         ``weights`` less ``(1 - factor) * alpha * eta_convex * |e| * theta / (pi d)``
-        on convex edges (concave ones, and the feature term, as they were); ``weights``
-        itself where nothing changes.
+        on convex edges (concave ones, and the feature term, as they were; each value
+        computed in float64, then rounded to the weights' dtype); ``weights`` itself
+        where nothing changes.
 
     References
     ----------
@@ -179,7 +180,7 @@ def convex_scaled(graph, weights: np.ndarray, *, alpha: float, eta_convex: float
     convex_scaled_csr = native.kernel("terms.convex_scaled_csr")
 
     t = g.terms
-    return convex_scaled_csr(np.ascontiguousarray(weights, dtype=np.float64), g.dual_edge,
+    return convex_scaled_csr(np.ascontiguousarray(weights), g.dual_edge,
                              t.concave, t.cos, g.span, scale / (np.pi * g.diagonal))
 
 
@@ -400,7 +401,7 @@ def shlafman_weights(graph, *, alpha: float = _SHLAFMAN_ALPHA, dtype=np.float64)
     if a > 1:
         raise ParameterError(f"alpha of the Shlafman weighting must be in [0, 1], got {alpha!r}")
     g = as_element_graph(graph)
-    g.normals, g.pairs  # noqa: B018 (made here if released: the chunks run on threads)
+    g.normals, g.pairs, g.edges  # noqa: B018 (made here if released: chunks on threads)
 
     def weight(sl):
         t = g.terms_in(sl)

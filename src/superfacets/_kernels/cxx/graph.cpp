@@ -346,6 +346,65 @@ void take_pairs(nb::handle first_, nb::handle lo_, nb::handle hi_, nb::handle ka
     });
 }
 
+// adjacency.shared_edges, on threads (each pair on its own): the mesh edge (a, b), a < b,
+// two triangles share, from their vertices: the two distinct vertices of face i that
+// face j has too. With `check`, edges are compared with what they would be, not written.
+// Returns the pairs that do not share exactly two distinct vertices, or (check) whose
+// edge differs: 0 where the edges are those of the triangles' pairs.
+template <class F, class P, class E>
+i64 shared_edges_t(const In<F>& faces, const In<P>& pairs, E* edges, bool check) {
+    std::atomic<i64> bad{0};
+    parallel_for(pairs.n, [&](i64 t0, i64 t1) {
+        i64 miss = 0;
+        for (i64 t = t0; t < t1; ++t) {
+            const F* fi = faces.p + 3 * static_cast<i64>(pairs(t, 0));
+            const F* fj = faces.p + 3 * static_cast<i64>(pairs(t, 1));
+            i64 got[3];
+            int k = 0;
+            for (int c = 0; c < 3; ++c) {
+                const i64 v = fi[c];
+                bool twice = false;
+                for (int u = 0; u < k; ++u) twice |= got[u] == v;
+                if (!twice && (fj[0] == v || fj[1] == v || fj[2] == v)) got[k++] = v;
+            }
+            if (k != 2) {
+                ++miss;
+                continue;
+            }
+            const E a = static_cast<E>(mn(got[0], got[1])), b = static_cast<E>(mx(got[0], got[1]));
+            if (check) {
+                miss += edges[2 * t] != a || edges[2 * t + 1] != b;
+            } else {
+                edges[2 * t] = a;
+                edges[2 * t + 1] = b;
+            }
+        }
+        bad += miss;
+    });
+    return bad.load();
+}
+
+i64 shared_edges(nb::handle faces_, nb::handle pairs_, nb::handle edges_, bool check) {
+    return with_index(faces_, "faces", [&](const auto& faces) {
+        return with_index(pairs_, "pairs", [&](const auto& pairs) -> i64 {
+            if (faces.cols != 3) throw Mismatch("argument faces");
+            if (pairs.cols != 2) throw Mismatch("argument pairs");
+            check_range(pairs, 0, faces.n, "pairs");
+            auto run = [&](auto& edges) {
+                if (edges.cols != 2 || edges.n != pairs.n) throw Mismatch("argument edges");
+                nb::gil_scoped_release nogil;
+                return shared_edges_t(faces, pairs, edges.p, check);
+            };
+            if (matches<i32>(edges_)) {
+                Out<i32> edges(edges_, "edges");
+                return run(edges);
+            }
+            Out<i64> edges(edges_, "edges");
+            return run(edges);
+        });
+    });
+}
+
 template <class D>
 nb::tuple csr_of_face_pairs_t(nb::handle lo_, nb::handle hi_, nb::handle ka_, nb::handle kb_,
                               i64 n, nb::handle indices_, nb::handle dual_edge_) {
@@ -661,30 +720,36 @@ void per_entry(nb::handle values_, nb::handle dual_edge_, nb::handle out_) {
     });
 }
 
+// terms.convex_scaled_csr: float64 or float32 weights, the values in the weights' dtype
+// (each computed in float64, then rounded)
 nb::object convex_scaled_csr(nb::handle weights_, nb::handle dual_edge_,
                                       nb::handle concave_, nb::handle cos_, nb::handle span_,
                                       double coef) {
-    In<double> weights(weights_, "weights"), cs(cos_, "cos"), span(span_, "span");
+    In<double> cs(cos_, "cos"), span(span_, "span");
     In<bool> concave(concave_, "concave");
-    Out<double> out;
-    with_index(dual_edge_, "dual_edge", [&](const auto& dual_edge) {
-        check_rows(dual_edge, weights.n, "dual_edge");
-        check_range(dual_edge, 0, mn(mn(concave.n, cs.n), span.n), "dual_edge", weights.n);
-    });
-    auto out_a = fresh(weights.n, out);
-    with_index(dual_edge_, "dual_edge", [&](const auto& dual_edge) {
-        nb::gil_scoped_release nogil;
-        // (no array of one delta per adjacency: 8 B each; both entries of an adjacency
-        // compute the same value)
-        parallel_for(weights.n, [&](i64 lo, i64 hi) {
-            for (i64 e = lo; e < hi; ++e) {
-                i64 d = dual_edge[e];
-                out[e] = concave[d] ? weights[e]
-                                    : mx(weights[e] - coef * span[d] * std::acos(cs[d]), 0.0);
-            }
+    return with_real(weights_, "weights", [&](const auto& weights) -> nb::object {
+        using T = std::remove_cv_t<std::remove_reference_t<decltype(weights[0])>>;
+        with_index(dual_edge_, "dual_edge", [&](const auto& dual_edge) {
+            check_rows(dual_edge, weights.n, "dual_edge");
+            check_range(dual_edge, 0, mn(mn(concave.n, cs.n), span.n), "dual_edge", weights.n);
         });
+        Out<T> out;
+        auto out_a = fresh(weights.n, out);
+        with_index(dual_edge_, "dual_edge", [&](const auto& dual_edge) {
+            nb::gil_scoped_release nogil;
+            // (no array of one delta per adjacency: 8 B each; both entries of an adjacency
+            // compute the same value)
+            parallel_for(weights.n, [&](i64 lo, i64 hi) {
+                for (i64 e = lo; e < hi; ++e) {
+                    i64 d = dual_edge[e];
+                    const double we = static_cast<double>(weights[e]);
+                    out[e] = static_cast<T>(
+                        concave[d] ? we : mx(we - coef * span[d] * std::acos(cs[d]), 0.0));
+                }
+            });
+        });
+        return out_a;
     });
-    return out_a;
 }
 
 nb::object cut_costs_csr(nb::handle dual_edge_, nb::handle concave_, nb::handle cos_,
@@ -927,6 +992,7 @@ void bind_graph(nb::module_& m) {
     m.def("group_pairs", &group_pairs);
     m.def("csr_of_face_pairs", &csr_of_face_pairs);
     m.def("take_pairs", &take_pairs);
+    m.def("shared_edges", &shared_edges);
     m.def("same_label_components", &same_label_components);
     m.def("face_geometry", &face_geometry);
     m.def("face_terms", &face_terms);
