@@ -166,7 +166,9 @@ def test_points_weigh_in_float32_and_keep_their_labels():
     for obj, kind, paper, want in ((xyz, "points", False, np.float32),
                                    (xyz, "points", True, np.float64),
                                    (trimesh.creation.icosphere(subdivisions=3), "faces",
-                                    False, np.float64)):
+                                    False, np.float32),
+                                   (trimesh.creation.icosphere(subdivisions=3), "faces",
+                                    True, np.float64)):
         assert weight_dtype(kind, paper) is want
         _, graph, p = build_graph(obj, resolve(n_segments=20, paper=paper))
         w, _ = weigh(graph, resolve_rules(graph, p))

@@ -149,7 +149,11 @@ def test_pruned_candidates_give_the_swaps_of_the_full_evaluation(k, monkeypatch)
         assert len(evaluated) == len(set(evaluated)) < 0.6 * k  # each once, most never
 
 
-def test_split_merge_off_is_the_paper():
+def test_split_merge_off_is_the_paper(monkeypatch):
+    # (with the paper's float64 weights: a run's are float32)
+    import superfacets.method.stages as stages
+
+    monkeypatch.setattr(stages, "weight_dtype", lambda kind, paper: np.float64)
     mesh = grid_mesh(30, 30, height=lambda x, y: 0.3 * np.abs(x))
     a = segment(mesh, 12, split_merge=False, cleanup=False, tol=0)
     b = segment(mesh, 12, paper=True)
@@ -296,9 +300,10 @@ def test_the_run_swaps_with_the_weights_of_its_kind(monkeypatch):
     segment(mesh, 12)
     g, got = seen[-1]
     assert g.kind == "faces"
-    w = csr_weights(g, edge_weights(g, "paper", alpha=200.0, eta_convex=0.2))
+    w = csr_weights(g, edge_weights(g, "paper", alpha=200.0, eta_convex=0.2,
+                                    dtype=np.float32), np.float32)  # (a run's: float32)
     np.testing.assert_array_equal(got, convex_scaled(g, w, alpha=200.0, eta_convex=0.2,
-                                                     factor=0.5))
+                                                     factor=0.5).astype(np.float64))
     assert (got < w).any()  # the ridge along y = 0 is convex
     segment(mesh, 12, elements="vertices")
     g, got = seen[-1]

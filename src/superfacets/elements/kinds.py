@@ -131,11 +131,13 @@ class ElementKind:
         (:func:`superfacets.method.stages.exact_count`), down to the input's number of
         separate pieces at the least.
     single_weights : bool
-        The run's weights per CSR entry are float32 instead of float64 (points: the
-        largest array of a cloud's run, 91 of 396 bytes per point on 10M points; the
-        distances still add up in float64). Judged on the 300 benchmark meshes' sampled
-        clouds at k = 150: 0 of 300 runs changed (faces, whose weights weigh 24 of 387
-        bytes, would move 26 of 300 runs for nothing they need; ``docs/notes/scale-design.md``).
+        The run's weights per CSR entry are float32 instead of float64 (each computed in
+        float64, then rounded; the distances still add up in float64). Points: the
+        largest array of a cloud's run (91 of 396 bytes per point on 10M points), 0 of
+        300 benchmark clouds changed at k = 150. Faces: 24 of the 233 bytes per face
+        6.8M faces peaked at (the weights and the swap energies' weights); on the 300
+        benchmark meshes at k = 50, 150, 300 and alpha 0, 200 up to 48 of 300 runs change
+        labels, mean UE and compactness within 0.01 % (``docs/notes/scale-design.md``).
         ``paper=True`` keeps float64 on every kind.
     merge_from : int
         A run with ``merge_from=None`` segments this many times ``k`` superpoints and
@@ -216,7 +218,7 @@ class ElementKind:
 KINDS = {k.name: k for k in (
     ElementKind("faces", "face", better_method=True, crease=0.1, smoothness=0.7,
                 swap_eta_convex=0.5, passes_after=1, hold_after=4.0, equal_weight=False,
-                segment_word="superfacets", objects=True),
+                segment_word="superfacets", objects=True, single_weights=True),
     ElementKind("vertices", "vertex", better_method=True, exact_assignment=True, band=0.2,
                 rows="n_vertices", peak_bytes=620),
     ElementKind("points", "point", exact_assignment=True, coarse_min_per_segment=1200,

@@ -121,8 +121,8 @@ def stage_reads(rules: Rules, initial=None) -> tuple[tuple[str, frozenset], ...]
     tuple of (str, frozenset of str)
         ``(stage, fields)`` in the run's order: ``"pair weights"`` (eqs. 1-3 per
         adjacency), ``"weight layout"`` (per CSR entry, and the swap energies'),
-        ``"coarsening"`` (where the rules coarsen), ``"passes"`` and ``"clean-up"``
-        (where it runs).
+        ``"coarsening"`` (where the rules coarsen), ``"passes"``, and ``"clean-up"``
+        (its bands) and ``"cuts"`` (where it runs).
 
     Raises
     ------
@@ -138,7 +138,7 @@ def stage_reads(rules: Rules, initial=None) -> tuple[tuple[str, frozenset], ...]
     >>> [(name, sorted(fields)) for name, fields in stage_reads(resolve_rules(graph, p))][1:]
     ... # doctest: +NORMALIZE_WHITESPACE
     [('weight layout', ['dual_edge', 'lengths', 'spans', 'terms']), ('passes', []),
-     ('clean-up', ['dual_edge', 'lengths', 'terms'])]
+     ('clean-up', ['dual_edge', 'lengths', 'terms']), ('cuts', [])]
     """
     plan = [("pair weights", {"normals", "pairs", "lengths", "spans", "border_shares",
                               "terms"}),
@@ -147,8 +147,8 @@ def stage_reads(rules: Rules, initial=None) -> tuple[tuple[str, frozenset], ...]
     if rules.coarsen > 1 and initial is None:
         plan.append(("coarsening", set(COARSENING_READS)))
     plan.append(("passes", set()))
-    if rules.cleanup:
-        plan.append(("clean-up", {"terms", "dual_edge", "lengths"}))
+    if rules.cleanup:  # (its bands read these; its cuts, after them, none)
+        plan += [("clean-up", {"terms", "dual_edge", "lengths"}), ("cuts", set())]
     return tuple((name, frozenset(fields)) for name, fields in plan)
 
 
@@ -456,7 +456,7 @@ def held_weights(graph, rules: Rules, w: np.ndarray, features=None, initial=None
     >>> rules = resolve_rules(graph, p)
     >>> held = held_weights(graph, rules, weigh(graph, rules)[0])
     >>> held.let_go(); held.remade, held.get().dtype.name  # (faces: never let go)
-    (0, 'float64')
+    (0, 'float32')
     """
     if not _per_entry(graph, rules) or rules.coarsen <= 1 or initial is not None:
         return HeldWeights(w)

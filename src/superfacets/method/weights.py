@@ -550,12 +550,14 @@ def csr_point_weights(graph: ElementGraph, *, alpha: float = _PAPER_ALPHA,
 def weight_dtype(kind, paper: bool = False):
     """The dtype of a run's weights per CSR entry on elements ``kind`` (a name or an
     :class:`~superfacets.elements.kinds.ElementKind`): float32 where the kinds' table says
-    (``single_weights``: points), float64 elsewhere and for the paper's method (its labels
-    bit for bit). Distances still add up in float64.
+    (``single_weights``: faces and points), float64 elsewhere and for the paper's method
+    (its labels bit for bit). Distances still add up in float64.
 
     Examples
     --------
     >>> weight_dtype("points").__name__, weight_dtype("points", paper=True).__name__
+    ('float32', 'float64')
+    >>> weight_dtype("faces").__name__, weight_dtype("vertices").__name__
     ('float32', 'float64')
     """
     from ..elements.kinds import kind_of
