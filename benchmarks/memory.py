@@ -2,6 +2,7 @@
 
 Usage: python benchmarks/memory.py [--cases faces points2m points10m] [--rounds 1]
        python benchmarks/memory.py --before /tmp/before-site [--rounds 2]
+       python benchmarks/memory.py --cases faces --threads 2 8 16
 
 Each row is ``superfacets segment INPUT -k K -o OUT.seg`` with the defaults, in a new
 process (start-up, reading and writing included); the peak is the process's largest
@@ -25,8 +26,11 @@ included, about 100-160 MiB), divided by the input's elements. Cases:
 
 With ``--before SITE`` each case also runs on another built version of the package
 (``benchmarks/_versions.py`` says how to build one), the two alternating, and
-the labels of both are compared. The table gives the fastest wall time and the largest
-peak of each version's rounds.
+the labels of both are compared. With ``--threads T ...`` each run is made with each
+``--threads`` given (a row each; the labels of all compared): how the peak grows with the
+threads (on a machine of fewer cores the threads share them, and the times mean
+little). The table gives the fastest wall time and the largest peak of each version's
+rounds.
 """
 
 from __future__ import annotations
@@ -142,13 +146,16 @@ def _input(case: str) -> Path:
     return Path(out.strip().splitlines()[-1])
 
 
-def run(version: str, path: Path, k: int, out: Path) -> tuple[float, float, str]:
+def run(version: str, path: Path, k: int, out: Path, threads: int | None = None
+        ) -> tuple[float, float, str]:
     """Wall seconds, peak MiB and the labels' digest of one run of ``version``
-    (:mod:`_versions`) in a new process."""
+    (:mod:`_versions`) in a new process (with ``--threads threads`` where given)."""
     code = PRELUDE + "import runpy; runpy.run_module('superfacets', run_name='__main__')"
+    more = [] if threads is None else ["--threads", str(threads)]
     t = time.perf_counter()
     proc = subprocess.Popen([sys.executable, "-c", code, "segment", str(path),
-                             "-k", str(k), "-o", str(out), "-q"], env=version_env(version))
+                             "-k", str(k), "-o", str(out), "-q", *more],
+                            env=version_env(version))
     _, status, usage = os.wait4(proc.pid, 0)
     wall = time.perf_counter() - t
     proc.returncode = os.waitstatus_to_exitcode(status)
@@ -162,23 +169,26 @@ def main(argv=None) -> None:
     ap.add_argument("--cases", nargs="+", default=DEFAULT, choices=list(CASES))
     ap.add_argument("--rounds", type=int, default=1)
     ap.add_argument("--before", help="a built copy of another version (benchmarks/_versions.py)")
+    ap.add_argument("--threads", type=int, nargs="+", help="run each case with these")
     ap.add_argument("--make-input", choices=list(CASES), help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.make_input:  # (in a child process: see _input)
         print(make_input(args.make_input))
         return
-    versions = ([("before", args.before)] if args.before else []) + [("this", "installed")]
+    versions = [(f"{name}{'' if t is None else f', {t} threads'}", src, t)
+                for name, src in ([("before", args.before)] if args.before else [])
+                + [("this", "installed")] for t in (args.threads or [None])]
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for case in args.cases:
             path = _input(case)
             kind, n, k = CASES[case]
-            got = {name: [] for name, _ in versions}
+            got = {name: [] for name, _, _ in versions}
             for _ in range(args.rounds):
-                for name, src in versions:
-                    got[name].append(run(src, path, k, Path(tmp) / f"{name}.seg"))
+                for i, (name, src, t) in enumerate(versions):
+                    got[name].append(run(src, path, k, Path(tmp) / f"{i}.seg", t))
             digests = {r[2] for runs in got.values() for r in runs}
-            for name, _ in versions:
+            for name, _, _ in versions:
                 wall = min(r[0] for r in got[name])
                 peak = max(r[1] for r in got[name])
                 rows.append((case, f"{n:,} {kind}", k, name, wall, peak,

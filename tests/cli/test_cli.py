@@ -37,6 +37,19 @@ def test_threads_option_gives_the_same_labels(tmp_path, small_off):
     assert main(["segment", str(small_off), "--threads", "0", "-q"]) == 2
 
 
+def test_the_command_line_keeps_few_allocator_arenas(tmp_path, small_off, monkeypatch):
+    # before any thread starts: each thread's arena would keep what its kernels freed
+    from superfacets._runtime import memory
+
+    calls = []
+    monkeypatch.setattr(memory, "limit_arenas", lambda n=memory.ARENAS: calls.append(n))
+    assert main(["segment", str(small_off), "-k", "10", "-o", str(tmp_path / "a.seg"),
+                 "-q"]) == 0
+    assert calls == [2]
+    if memory._libc("mallopt", ("c_int", "c_int")):  # glibc: the option is one it takes
+        assert memory._libc("mallopt", ("c_int", "c_int"))(-8, 2) == 1
+
+
 def test_header_option(tmp_path, small_off, capsys):
     seg = tmp_path / "h.seg"
     assert main(["segment", str(small_off), "--radius", "0.1", "--init", "grid", "-o", str(seg),

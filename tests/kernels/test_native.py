@@ -77,7 +77,7 @@ LARGE_KERNELS = {"column_bounds", "finite_rows", "gather", "border_shares", "key
 #: keep each key beside its value, in an array of their own; the exact assignment's and
 #: the Voronoi cells' searches keep a queue per block): not compared.
 SCRATCH = {"cleanup.band_distances": {10, 11}, "splitmerge.energies": {14, 15},
-           "splitmerge.split_candidates": {19, 20}, "splitmerge.merge_energies": {18, 19},
+           "splitmerge.split_candidates": {19, 20}, "splitmerge.merge_energies": {19, 20},
            "exact.classify_exact": {7, 8}, "exact.reclassify_exact": {7, 8},
            "voronoi.nearest_seed": {7}}
 

@@ -118,29 +118,64 @@ def _energy(elems, n, sizes, dist, stamp, sid, power):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _search_below(indptr, indices, w, label, la, lb, src, dist, stamp, sid, hkey, hval,
-                  sizes, power, area, limit):
-    """:func:`_search`, abandoned (returning False) as soon as the energy of the
-    elements it spans is sure to reach ``limit``: the elements settled so far
-    at their distances, the others (``area`` in all) at least at the distance
-    being settled."""
-    dist[src] = 0.0
-    stamp[src] = sid
+def _slot(g, lg, la, na, rank):
+    """The slot of element ``g`` (of superfacet ``lg``) in the union of ``la`` (``na``
+    members) and another."""
+    return rank[g] if lg == la else na + rank[g]
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _union_search_below(indptr, indices, w, label, la, lb, na, rank, src, dist, stamp, sid,
+                        hkey, hval, sizes, power, area, limit):
+    """Dijkstra from ``src`` over the union of ``la`` and ``lb``, its distances and
+    stamps kept by slot (:func:`_slot`), abandoned (returning False) as soon as the energy
+    of the elements it spans is sure to reach ``limit``: the elements settled so far at
+    their distances, the others (``area`` in all) at least at the distance being
+    settled."""
+    x = _slot(src, label[src], la, na, rank)
+    dist[x] = 0.0
+    stamp[x] = sid
     size = push(hkey, hval, 0, 0.0, src)
     settled = 0.0
     rest = area
     while size > 0:
         d, f, size = pop_min(hkey, hval, size)
-        if d > dist[f]:
+        if d > dist[_slot(f, label[f], la, na, rank)]:
             continue
         dp = _pow(d, power)
         settled += sizes[f] * dp
         rest -= sizes[f]
         if settled + max(rest, 0.0) * dp >= limit:
             return False
-        size = _relax(indptr, indices, w, label, la, lb, f, d, dist, stamp, sid, hkey, hval,
-                      size)
+        for e in range(indptr[f], indptr[f + 1]):
+            g = indices[e]
+            lg = label[g]
+            if lg != la and lg != lb:
+                continue
+            nd = d + w[e]
+            xg = _slot(g, lg, la, na, rank)
+            if stamp[xg] != sid or nd < dist[xg]:
+                dist[xg] = nd
+                stamp[xg] = sid
+                size = push(hkey, hval, size, nd, g)
     return True
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _union_energy(elems, n, sizes, dist, stamp, sid, power):
+    """:func:`_energy` over a union's ``elems``, whose slots are their places in it."""
+    e = 0.0
+    fd = -1.0
+    for i in range(n):
+        if stamp[i] == sid:
+            d = dist[i]
+            e += sizes[elems[i]] * _pow(d, power)
+            if d > fd:
+                fd = d
+    for i in range(n):
+        if stamp[i] != sid:
+            e += sizes[elems[i]] * _pow(fd, power)
+    return e
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -239,16 +274,18 @@ def split_candidates(indptr, indices, w, label, members, bounds, sizes, position
 
 @njit(cache=True, error_model="numpy", nogil=True)
 def merge_energies(indptr, indices, w, label, members, bounds, sizes, positions, power,
-                   pair_a, pair_b, energy, window_r2, most, out, dist, stamp, sid, hkey, hval,
-                   work, first, step):
+                   pair_a, pair_b, energy, window_r2, most, out, dist, stamp, rank, sid, hkey,
+                   hval, work, first, step):
     """Energy of the union of superfacets ``a = pair_a[t]`` and ``b = pair_b[t]``
     around the element nearest its mean, into ``out[t]``, for ``t = first,
     first + step, ...``; ``inf`` where some element of the union lies farther
     (in space) than ``sqrt(window_r2)`` from that element, or where the union's
     energy exceeds ``energy[a] + energy[b] + most`` (its search is then
     abandoned: a merge that costs more than ``most`` is never taken). Returns
-    the next free search id. Unions overlap: concurrent calls need their own
-    ``dist`` and ``stamp``."""
+    the next free search id. ``dist`` and ``stamp`` are kept by slot within the union
+    (an element ``g`` of ``a`` at ``rank[g]``, its place among ``a``'s members, of ``b``
+    after ``a``'s): one entry per element of the largest union. Unions overlap:
+    concurrent calls need their own ``dist`` and ``stamp``."""
     slack = 1.0 + 1e-9  # abandon only beyond rounding
     for t in range(first, pair_a.shape[0], step):
         a = pair_a[t]
@@ -271,9 +308,10 @@ def merge_energies(indptr, indices, w, label, members, bounds, sizes, positions,
         out[t] = np.inf
         if far <= window_r2:
             limit = (energy[a] + energy[b] + most) * slack
-            if _search_below(indptr, indices, w, label, a, b, c, dist, stamp, sid, hkey, hval,
-                             sizes, power, area, limit):
-                out[t], _ = _energy(work, n, sizes, dist, stamp, sid, power)
+            na = bounds[a + 1] - bounds[a]
+            if _union_search_below(indptr, indices, w, label, a, b, na, rank, c, dist, stamp,
+                                   sid, hkey, hval, sizes, power, area, limit):
+                out[t] = _union_energy(work, n, sizes, dist, stamp, sid, power)
         sid += 1
     return sid
 

@@ -121,6 +121,9 @@ def main(argv: list[str] | None = None) -> int:
     from ..errors import NoDisplayError, SuperfacetsError
 
     restore = _terminate_cleanly()  # first: Ctrl-C during the imports too
+    from .._runtime.memory import limit_arenas
+
+    limit_arenas()  # (before any thread starts: see its notes)
     try:
         parser = build_parser()
         parser.argv = list(sys.argv[1:] if argv is None else argv)  # for its error hints

@@ -63,10 +63,10 @@ class Workspace:
 
     def __init__(self, m: int, n_buckets: int, max_nodes: int):
         self.m = m
-        # +0.0 between expansions (see the compiled ``expand``): pages of zeros,
-        # resident only once an expansion writes them (the allocator may have cleared
-        # reused memory: handed back), and from then on until the workspace is
-        # forgotten (a page handed back between passes is faulted in again by the next)
+        # the expansions' scratch distances as the reference kernels keep them (+0.0
+        # between expansions): the compiled kernels keep them in a table of their own,
+        # the size of their largest expansion, and never write this array, so its pages
+        # of zeros cost no memory (handed back, where the allocator reused memory)
         self.local = np.zeros(m)
         small_pages(self.local)  # (an expansion writes a few entries spread over it)
         give_back_zero_pages(self.local)
@@ -126,14 +126,13 @@ class Workspaces:
         return self.ws[t]
 
     def release(self) -> None:
-        """Forget every thread's workspace (``local``: 8 bytes per element each), as
-        between uses that hold other large arrays (the swaps of split-and-merge);
-        :meth:`get` makes them again."""
+        """Forget every thread's workspace (its queue and visit buffer), as between uses
+        that hold other large arrays (the swaps of split-and-merge); :meth:`get` makes
+        them again."""
         self.ws.clear()
 
     def close(self) -> None:
-        """Forget the workspaces (their pages stay resident between passes: see
-        :class:`Workspace`)."""
+        """Forget the workspaces."""
         self.release()
 
 

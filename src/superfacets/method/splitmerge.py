@@ -36,6 +36,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._kernels import native
+from .._runtime.memory import give_back_free_memory
 from .._runtime.threads import in_parallel
 from ..elements.kinds import kind_of
 
@@ -202,19 +203,20 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
     pa, pb = key // k, key % k
     union = np.empty(key.shape[0])
     most = best[1] if pruned else np.inf
-    # unions overlap: each thread its own distances, the first two the splits' second
-    # ones (stamps are search ids used once: the later splits are unaffected)
-    own = [(dist, stamp), (dist2, stamp2)][:n_thr] + [
-        (np.empty(n), np.full(n, -1, dtype=np.int64)) for _ in range(2, n_thr)]
+    # unions overlap: each thread its own distances and stamps, kept by slot within the
+    # union (an element at its place among its superfacet's members, the second's after
+    # the first's): the size of the largest union, not of the input, on each thread
+    rank = _ranks(members, bounds, lab)
+    own = [(np.empty(largest), np.full(largest, -1, dtype=np.int64)) for _ in range(n_thr)]
     mb = [next(calls) << 40 for _ in range(n_thr)]
     in_parallel(lambda t: merge_energies(
-        *args, pa, pb, energy, float(window_r2), float(most), union, *own[t], mb[t],
+        *args, pa, pb, energy, float(window_r2), float(most), union, *own[t], rank, mb[t],
         *space[t], t, n_thr), n_thr)
     loss = union - energy[pa] - energy[pb]  # inf: not allowed, or beyond any gain
 
     remap, split_to, n_swaps = _greedy_swaps(splits, pa, pb, loss, k, limit,
                                              min_gain * float(np.mean(energy)))
-    splits = own = space = dist = dist2 = stamp = stamp2 = members = None  # noqa: F841 (freed)
+    splits = own = space = rank = dist = dist2 = stamp = stamp2 = members = None  # noqa: F841
     out = remap[lab]
     moved = second & (split_to[lab] >= 0)
     out[moved] = split_to[lab[moved]]
@@ -290,6 +292,17 @@ def hold_after_for(kind: str) -> float:
     (4.0, 1.0)
     """
     return kind_of(kind).hold_after
+
+
+def _ranks(members: np.ndarray, bounds: np.ndarray, lab: np.ndarray) -> np.ndarray:
+    """Each element's place among its superfacet's members (:func:`_members`), made by
+    blocks (no temporary of one entry per element)."""
+    n, block = members.shape[0], 1 << 20
+    rank = np.empty(n, dtype=np.int64)
+    for a in range(0, n, block):
+        part = members[a:a + block]
+        rank[part] = np.arange(a, a + part.shape[0], dtype=np.int64) - bounds[lab[part]]
+    return rank
 
 
 def _members(lab: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
@@ -405,8 +418,9 @@ def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.nda
         present = used(it)
         old = it.centers[present]
         classifier.spaces.release()  # the expansions' buffers: not read by the swaps
-        if graph.n_elements >= FORGET_MIN:  # nor the kept expansions (60 B per element)
-            classifier.forget_records()
+        if graph.n_elements >= FORGET_MIN:  # nor the kept expansions (60 B per element),
+            classifier.forget_records()  # nor what the threads' kernels freed (the
+            give_back_free_memory()  # allocator keeps it per thread: tens of MiB each)
         # float32 weights widened for the round (the kernels add each to a float64
         # distance), once the expansions' records are let go (a large graph's peak)
         swap_w = np.asarray(weights if swap_weights is None else swap_weights,

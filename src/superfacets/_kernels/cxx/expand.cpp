@@ -1,6 +1,7 @@
 // Bounded expansions and the merging of their records (superfacets/_kernels/expand.py),
 // and the center update (update.py), the same operations in the same order.
 #include <cmath>
+#include <memory>
 #include "common.hpp"
 
 namespace sfk {
@@ -26,11 +27,58 @@ struct Queue {
     i64 qcap, nb;
 };
 
+// An expansion's scratch distances: -distance for each element it reached (-0.0 for
+// its source), +0.0 for every other element, as a dense array of one entry per element
+// would hold them (the argument `local`, which the reference kernels use), but kept for
+// the reached elements only (open addressing by element id): a thread's scratch is the
+// size of its largest expansion, not of the input (8 bytes an element per thread).
+struct Scratch {
+    std::vector<i32> key;  // -1: an empty slot
+    std::vector<double> val;
+    std::vector<i64> used;  // the slots taken, emptied by clear()
+    i64 mask = 0;
+    int shift = 0;
+    Scratch() { make(i64(1) << 12); }
+    void make(i64 cap) {
+        key.assign(cap, -1);
+        val.assign(cap, 0.0);
+        used.clear();
+        mask = cap - 1;
+        shift = 64 - __builtin_ctzll(static_cast<unsigned long long>(cap));
+    }
+    i64 slot(i64 g) const {  // g's slot, or the empty one where it would go
+        i64 h = static_cast<i64>((static_cast<std::uint64_t>(g) * 0x9E3779B97F4A7C15ull) >> shift);
+        while (key[h] >= 0 && key[h] != g) h = (h + 1) & mask;
+        return h;
+    }
+    double at(i64 h, i64 g) const { return key[h] == g ? val[h] : 0.0; }
+    double get(i64 g) const { return at(slot(g), g); }
+    void put(i64 h, i64 g, double v) {  // (h: slot(g), nothing put since)
+        if (key[h] != g) {
+            key[h] = static_cast<i32>(g);
+            used.push_back(h);
+        }
+        val[h] = v;
+        if (2 * static_cast<i64>(used.size()) > mask) grow();
+    }
+    void grow() {
+        std::vector<std::pair<i32, double>> kept;
+        kept.reserve(used.size());
+        for (i64 h : used) kept.emplace_back(key[h], val[h]);
+        make(2 * (mask + 1));
+        for (const auto& kv : kept) put(slot(kv.first), kv.first, kv.second);
+    }
+    void clear() {
+        for (i64 h : used) key[h] = -1;
+        used.clear();
+    }
+};
+
 template <class W>
 struct Work {
     Graph<W> g;
     Queue q;
-    double* local;
+    std::shared_ptr<Scratch> local;
     double inv_width;
     const double* wscale;
     i64 n_wscale;
@@ -61,12 +109,12 @@ i64 expand(const Work<W>& w, i64 src, i64 lab, double window_r2, double* dist, i
     const Queue& q = w.q;
     const i64 bmask = q.nb - 1;
     const double* c = w.g.centroids;
-    double* local = w.local;
+    Scratch& local = *w.local;
     const double cx = c[3 * src], cy = c[3 * src + 1], cz = c[3 * src + 2];
     const bool only_unlabelled = mode == UNLABELLED;
     const i64 start = pos;
     if (pos >= lim) return RECORD_FULL;
-    local[src] = -0.0;  // reached: -distance (see expand.py: +0.0 is not reached)
+    local.put(local.slot(src), src, -0.0);  // reached: -distance (+0.0: not reached)
     vis_face[pos++] = static_cast<i32>(src);
     q.qface[0] = static_cast<i32>(src);
     q.qdist[0] = 0.0;
@@ -99,11 +147,12 @@ i64 expand(const Work<W>& w, i64 src, i64 lab, double window_r2, double* dist, i
                 __builtin_prefetch(w.g.weights + r);
             }
         }
-        if (d > -local[f]) continue;
+        if (d > -local.get(f)) continue;
         for (i64 e = w.g.indptr[f]; e < w.g.indptr[f + 1]; ++e) {
             i64 g = w.g.indices[e];
             double nd = d + static_cast<double>(w.g.weights[e]);
-            double lg = local[g];
+            const i64 hg = local.slot(g);
+            double lg = local.at(hg, g);
             if (!std::signbit(lg)) {
                 double dx = c[3 * g] - cx, dy = c[3 * g + 1] - cy, dz = c[3 * g + 2] - cz;
                 if (dx * dx + dy * dy + dz * dz > window_r2 || (only_unlabelled && label[g] >= 0))
@@ -116,7 +165,7 @@ i64 expand(const Work<W>& w, i64 src, i64 lab, double window_r2, double* dist, i
             } else if (!(nd < -lg)) {
                 continue;
             }
-            local[g] = -nd;
+            local.put(hg, g, -nd);
             // queue_node
             i64 n;
             if (free >= 0) {
@@ -141,16 +190,16 @@ i64 expand(const Work<W>& w, i64 src, i64 lab, double window_r2, double* dist, i
         }
         if (status != 0) {
             for (i64 bb = 0; bb < q.nb; ++bb) q.head[bb] = -1;
-            for (i64 j = start; j < pos; ++j) local[vis_face[j]] = 0.0;
+            local.clear();
             return status;
         }
     }
     if (vis_dist)
-        for (i64 j = start; j < pos; ++j) vis_dist[j] = -local[vis_face[j]];
+        for (i64 j = start; j < pos; ++j) vis_dist[j] = -local.get(vis_face[j]);
     if (mode == MERGE) {
         for (i64 j = start; j < pos; ++j) {
             i64 f = vis_face[j];
-            double d = -local[f];
+            double d = -local.get(f);
             if (d < dist[f]) {
                 dist[f] = d;
                 label[f] = static_cast<i32>(lab);
@@ -159,7 +208,7 @@ i64 expand(const Work<W>& w, i64 src, i64 lab, double window_r2, double* dist, i
     } else if (only_unlabelled) {
         for (i64 j = start; j < pos; ++j) label[vis_face[j]] = static_cast<i32>(lab);
     }
-    for (i64 j = start; j < pos; ++j) local[vis_face[j]] = 0.0;
+    local.clear();
     return pos;
 }
 
@@ -218,7 +267,7 @@ Work<W> work_of(nb::handle indptr_, nb::handle indices_, nb::handle weights_,
     check_graph(indptr, indices, weights, centroids, local);
     if (wscale.n) check_rows(wscale, centroids.n, "wscale");
     return Work<W>{Graph<W>{indptr.p, indices.p, weights.p, centroids.p}, queue_of(queue_),
-                   local.p, inv_width, wscale.p, wscale.n};
+                   std::make_shared<Scratch>(), inv_width, wscale.p, wscale.n};
 }
 
 }  // namespace
@@ -553,7 +602,7 @@ i64 flood_t(nb::handle indptr_, nb::handle indices_, nb::handle weights_, nb::ha
     check_rows(label, centroids.n, "label", true);
     check_range(order, 0, centroids.n, "order");
     const Work<W> w{Graph<W>{indptr.p, indices.p, weights.p, centroids.p}, queue_of(queue_),
-                    local.p, inv_width, nullptr, 0};
+                    std::make_shared<Scratch>(), inv_width, nullptr, 0};
     nb::gil_scoped_release nogil;
     const i64 m = label.n;
     std::vector<i32> lab(m, -1);  // (expand's labels are int32; the regions fit)

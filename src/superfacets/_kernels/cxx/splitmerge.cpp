@@ -147,10 +147,17 @@ std::pair<double, i64> energy_of(const i64* elems, i64 n, const double* sizes,
     return {e, far};
 }
 
-bool search_below(const Search& s, i64 la, i64 lb, i64 src, double* dist, i64* stamp, i64 sid,
-                  double power, double area, double limit) {
-    dist[src] = 0.0;
-    stamp[src] = sid;
+// The same search over the union of superfacets la and lb, its distances and stamps kept
+// by slot, not by element (a thread's scratch the size of the union, not of the input):
+// an element g of la at rank[g], of lb at na + rank[g] (rank: its place in its
+// superfacet's members; na: la's members). The same pops in the same order.
+bool union_search_below(const Search& s, i64 la, i64 lb, i64 na, const i64* rank, i64 src,
+                        double* dist, i64* stamp, i64 sid, double power, double area,
+                        double limit) {
+    auto slot = [&](i64 g, i64 lg) { return lg == la ? rank[g] : na + rank[g]; };
+    const i64 x0 = slot(src, s.label[src]);
+    dist[x0] = 0.0;
+    stamp[x0] = sid;
     Heap& h = *s.heap;
     h.size = 0;
     h.push(0.0, src);
@@ -159,14 +166,40 @@ bool search_below(const Search& s, i64 la, i64 lb, i64 src, double* dist, i64* s
         double d = h.h[0].key;
         i64 f = h.h[0].val;
         h.pop();
-        if (d > dist[f]) continue;
+        if (d > dist[slot(f, s.label[f])]) continue;
         double dp = pw(d, power);
         settled += s.sizes[f] * dp;
         rest -= s.sizes[f];
         if (settled + mx(rest, 0.0) * dp >= limit) return false;
-        relax(s, la, lb, f, d, dist, stamp, sid);
+        for (i64 e = s.indptr[f]; e < s.indptr[f + 1]; ++e) {
+            i64 g = s.indices[e];
+            i64 lg = s.label[g];
+            if (lg != la && lg != lb) continue;
+            double nd = d + s.w[e];
+            i64 xg = slot(g, lg);
+            if (stamp[xg] != sid || nd < dist[xg]) {
+                dist[xg] = nd;
+                stamp[xg] = sid;
+                h.push(nd, g);
+            }
+        }
     }
     return true;
+}
+
+// energy_of over the union's elems, whose slots are their places in elems
+double union_energy(const i64* elems, i64 n, const double* sizes, const double* dist,
+                    const i64* stamp, i64 sid, double power) {
+    double e = 0.0, fd = -1.0;
+    for (i64 i = 0; i < n; ++i)
+        if (stamp[i] == sid) {
+            double d = dist[i];
+            e += sizes[elems[i]] * pw(d, power);
+            if (d > fd) fd = d;
+        }
+    for (i64 i = 0; i < n; ++i)
+        if (stamp[i] != sid) e += sizes[elems[i]] * pw(fd, power);
+    return e;
 }
 
 struct Common {
@@ -321,22 +354,30 @@ i64 merge_energies(nb::handle indptr, nb::handle indices, nb::handle w, nb::hand
                    nb::handle members, nb::handle bounds, nb::handle sizes, nb::handle positions,
                    double power, nb::handle pair_a_, nb::handle pair_b_, nb::handle energy_,
                    double window_r2, double most, nb::handle out_, nb::handle dist_,
-                   nb::handle stamp_, i64 sid, nb::handle hkey_, nb::handle hval_,
-                   nb::handle work_, i64 first, i64 step) {
+                   nb::handle stamp_, nb::handle rank_, i64 sid, nb::handle hkey_,
+                   nb::handle hval_, nb::handle work_, i64 first, i64 step) {
     Common c(indptr, indices, w, label, members, bounds, sizes, positions);
-    In<i64> pair_a(pair_a_, "pair_a"), pair_b(pair_b_, "pair_b");
+    In<i64> pair_a(pair_a_, "pair_a"), pair_b(pair_b_, "pair_b"), rank(rank_, "rank");
     In<double> energy(energy_, "energy");
     Out<double> out(out_, "out"), dist(dist_, "dist"), hkey(hkey_, "hkey");
     Out<i64> stamp(stamp_, "stamp"), hval(hval_, "hval"), work(work_, "work");
-    c.check_scratch(first, step, dist, stamp);
+    if (first < 0 || step < 1) throw OutOfRange("arguments first, step");
     check_rows(pair_b, pair_a.n, "pair_b", true);
     check_range(pair_a, 0, c.k(), "pair_a");
     check_range(pair_b, 0, c.k(), "pair_b");
     check_rows(energy, c.k(), "energy");
     check_rows(out, pair_a.n, "out");
-    for (i64 t = 0; t < pair_a.n; ++t)
-        if (c.members_of(pair_a[t]) + c.members_of(pair_b[t]) > work.n)
-            throw OutOfRange("argument work: too short");
+    check_range(c.label, 0, c.k(), "label");
+    check_rows(rank, c.label.n, "rank");
+    for (i64 g = 0; g < rank.n; ++g)  // (a slot within its union)
+        if (rank[g] < 0 || rank[g] >= c.members_of(c.label[g]))
+            throw OutOfRange("argument rank: not a place among the members");
+    for (i64 t = 0; t < pair_a.n; ++t) {
+        const i64 u = c.members_of(pair_a[t]) + c.members_of(pair_b[t]);
+        if (u > work.n) throw OutOfRange("argument work: too short");
+        if (u > dist.n || u > stamp.n)
+            throw OutOfRange("arguments dist, stamp: one entry per element of a union");
+    }
     nb::gil_scoped_release nogil;
     Heap heap(4096);
     Search s = c.search(&heap);
@@ -363,8 +404,9 @@ i64 merge_energies(nb::handle indptr, nb::handle indices, nb::handle w, nb::hand
         out[t] = INF;
         if (far <= window_r2) {
             double limit = (energy[a] + energy[b] + most) * slack;
-            if (search_below(s, a, b, ctr, dist.p, stamp.p, sid, power, area, limit))
-                out[t] = energy_of(work.p, n, c.sizes.p, dist.p, stamp.p, sid, power).first;
+            if (union_search_below(s, a, b, c.members_of(a), rank.p, ctr, dist.p, stamp.p, sid,
+                                   power, area, limit))
+                out[t] = union_energy(work.p, n, c.sizes.p, dist.p, stamp.p, sid, power);
         }
         ++sid;
     }
