@@ -28,18 +28,21 @@ def _pow(d, power):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _relax(indptr, indices, w, label, la, lb, f, d, dist, stamp, sid, hkey, hval, size):
+def _relax(indptr, indices, w, label, la, lb, f, d, dist, stamp, sid, hkey, hval, size,
+           na=0, rank=None):
     """Relax the edges of ``f`` (settled at ``d``) toward elements labelled ``la`` or
-    ``lb``; return the heap's new size."""
+    ``lb``; return the heap's new size. ``dist`` and ``stamp`` by element, or with
+    ``rank`` by slot within the union (:func:`_slot`)."""
     for e in range(indptr[f], indptr[f + 1]):
         g = indices[e]
         lg = label[g]
         if lg != la and lg != lb:
             continue
         nd = d + w[e]
-        if stamp[g] != sid or nd < dist[g]:
-            dist[g] = nd
-            stamp[g] = sid
+        x = g if rank is None else _slot(g, lg, la, na, rank)
+        if stamp[x] != sid or nd < dist[x]:
+            dist[x] = nd
+            stamp[x] = sid
             size = push(hkey, hval, size, nd, g)
     return size
 
@@ -147,17 +150,8 @@ def _union_search_below(indptr, indices, w, label, la, lb, na, rank, src, dist, 
         rest -= sizes[f]
         if settled + max(rest, 0.0) * dp >= limit:
             return False
-        for e in range(indptr[f], indptr[f + 1]):
-            g = indices[e]
-            lg = label[g]
-            if lg != la and lg != lb:
-                continue
-            nd = d + w[e]
-            xg = _slot(g, lg, la, na, rank)
-            if stamp[xg] != sid or nd < dist[xg]:
-                dist[xg] = nd
-                stamp[xg] = sid
-                size = push(hkey, hval, size, nd, g)
+        size = _relax(indptr, indices, w, label, la, lb, f, d, dist, stamp, sid, hkey, hval,
+                      size, na, rank)
     return True
 
 
