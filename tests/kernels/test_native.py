@@ -898,7 +898,7 @@ def test_bounds_and_finite_rows_of_large_arrays_are_numpys(monkeypatch, threads)
     are NaN) at the ends of the threads' ranges and inside them; the columns' means are
     ``mean(axis=0)``'s to the bit (rows added in order), also over ten orders of
     magnitude, where a pairwise sum differs."""
-    from superfacets.inputs.bounds import column_bounds, column_means, finite_rows
+    from superfacets.inputs.bounds import column_bounds, column_means, finite_rows, rows_in_box
 
     rng = np.random.default_rng(11)
     n = 200_000
@@ -920,6 +920,10 @@ def test_bounds_and_finite_rows_of_large_arrays_are_numpys(monkeypatch, threads)
         for g, w, r in zip(got, want, ref):
             np.testing.assert_array_equal(g, w)
             np.testing.assert_array_equal(r, w)
+        lo, hi = np.array([-1.0, -1e-3, -1e6]), np.array([0.5, np.inf, 5e5])
+        inside = ((x >= lo) & (x <= hi)).all(axis=1)  # (NaN rows outside; some of each)
+        assert 0 < inside.sum() < n
+        np.testing.assert_array_equal(rows_in_box(x, lo, hi), inside)
         means, ref_means = column_means(x), np.empty(3)  # (one thread: the rows in order)
         reference("columns.column_means")(x, ref_means)
         np.testing.assert_array_equal(means, x.mean(axis=0))

@@ -12,7 +12,8 @@ import numpy as np
 from .._runtime.arrays import COMPILED_MIN
 from ..errors import InvalidCloudError, InvalidMeshError
 
-__all__ = ["check_extent", "column_bounds", "column_means", "finite_rows", "nearest_row"]
+__all__ = ["check_extent", "column_bounds", "column_means", "finite_rows", "nearest_row",
+           "rows_in_box"]
 
 _MAX_COORDINATE = 1e300  # sums of three coordinates stay finite
 _MAX_EXTENT = 1e70  # (edge length)^4 stays finite: areas and normals
@@ -118,6 +119,23 @@ def nearest_row(a: np.ndarray, point: np.ndarray) -> int:
         if r >= 0:
             return r
     return int(np.argmin(((a - point) ** 2).sum(axis=1)))
+
+
+def rows_in_box(a: np.ndarray, lo, hi) -> np.ndarray:
+    """``((a >= lo) & (a <= hi)).all(axis=1)`` of an ``(n, d)`` array (a row with a NaN is
+    outside), column by column: no ``(n, d)`` temporaries and no reduction over short rows
+    (2M points: several times faster).
+
+    Examples
+    --------
+    >>> rows_in_box(np.array([[0.5, 0.5], [2.0, 0.5], [np.nan, 0.0]]), [0, 0], [1, 1]).tolist()
+    [True, False, False]
+    """
+    inside = (a[:, 0] >= lo[0]) & (a[:, 0] <= hi[0])
+    for j in range(1, a.shape[1]):
+        inside &= a[:, j] >= lo[j]
+        inside &= a[:, j] <= hi[j]
+    return inside
 
 
 def finite_rows(a: np.ndarray) -> np.ndarray:

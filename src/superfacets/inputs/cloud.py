@@ -106,7 +106,7 @@ class PointCloud:
     def __post_init__(self) -> None:
         where = f"{self.name}: " if self.name else ""
         p = _coordinates(self.points, "points", where)
-        finite = np.isfinite(p).all(axis=1)
+        finite = finite_rows(p)
         if not finite.all() and not self.allow_invalid:
             row = int(np.flatnonzero(~finite)[0])
             raise InvalidCloudError(

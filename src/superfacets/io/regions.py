@@ -38,6 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MeshFormatError
+from ..inputs.bounds import rows_in_box
 from .headers import first_line, npy_mapped, ply_mapped
 from .ply import VertexView
 
@@ -288,7 +289,7 @@ class RegionReader:
         rows, keep, where = [], [], []
         verts = None
         for s, pos, _, extra in self.chunks():
-            inside = np.flatnonzero(((pos >= lo) & (pos <= hi)).all(axis=1))
+            inside = np.flatnonzero(rows_in_box(pos, lo, hi))
             rows.append(inside + s)
             where.append(pos[inside])
             if self.kind == "faces":

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ParameterError
+from ..inputs.bounds import finite_rows, rows_in_box
 
 __all__ = ["Tiles", "tile_grid", "balanced_tiles", "tile_of", "tile_box", "check_tiles",
            "trim_centers"]
@@ -73,7 +74,7 @@ class Tiles:
         """The tile of each position, ``(n,)`` int64; -1 for a non-finite one."""
         p = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
         out = np.full(p.shape[0], -1, dtype=np.int64)
-        rows = np.flatnonzero(np.isfinite(p).all(axis=1))
+        rows = np.flatnonzero(finite_rows(p))
         if self.axis.size == 0:  # one tile
             out[rows] = 0
             return out
@@ -386,12 +387,12 @@ def trim_centers(positions: np.ndarray, k: int) -> np.ndarray:
 
 def any_in_box(positions: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> bool:
     """Whether any of ``positions`` ((m, 3)) lies in the box ``[lo, hi]``."""
-    return bool(((positions >= lo) & (positions <= hi)).all(axis=1).any())
+    return bool(rows_in_box(positions, lo, hi).any())
 
 
 def in_box(reference: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """The rows (position, normal) of ``reference`` (R, 6) whose position lies in the box."""
-    inside = ((reference[:, :3] >= lo) & (reference[:, :3] <= hi)).all(axis=1)
+    inside = rows_in_box(reference[:, :3], lo, hi)
     return np.asarray(reference[inside], dtype=np.float64)
 
 

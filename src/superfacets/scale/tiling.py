@@ -241,8 +241,9 @@ def core_area(cloud, core: np.ndarray, n_neighbors: int) -> float:
 
     el = point_graph(prepared(cloud, "points")[1], n_neighbors)  # (where tile_graph keeps it)
     at = np.asarray(el.index)[np.flatnonzero(core)]
-    at = np.unique(at[at >= 0])
-    return float(np.asarray(el.graph.sizes)[at].sum())
+    held = np.zeros(el.graph.n_elements, dtype=bool)  # (ascending, as np.unique gave them:
+    held[at[at >= 0]] = True  # the same sum)
+    return float(np.asarray(el.graph.sizes)[held].sum())
 
 
 def _core_share(inp, core: np.ndarray, p: SegmentParams, r: float) -> int:

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...inputs.bounds import column_bounds, rows_in_box
 from ...io.files import sha256_of
 from ...io.regions import point_cloud_of
 
@@ -101,8 +102,9 @@ def bucket(reader, tiles, folder, *, progress: bool = False) -> TileBuckets:
                                   "the input's size free; give --workdir a folder with room"
                                   ) from None
                 counts[t] += block.size
-                lo[t] = np.minimum(lo[t], block["pos"].min(axis=0))
-                hi[t] = np.maximum(hi[t], block["pos"].max(axis=0))
+                low, high = column_bounds(block["pos"])
+                lo[t] = np.minimum(lo[t], low)
+                hi[t] = np.maximum(hi[t], high)
             if bar is not None:
                 bar.update(pos.shape[0])
     finally:
@@ -182,7 +184,7 @@ class TileBuckets:
         for t in np.flatnonzero(near):
             rec = self._tile(int(t))
             pos = rec["pos"]
-            parts.append(np.array(rec[np.flatnonzero(((pos >= lo) & (pos <= hi)).all(axis=1))]))
+            parts.append(np.array(rec[np.flatnonzero(rows_in_box(pos, lo, hi))]))
             del rec
         rec = np.concatenate(parts) if parts else np.empty(0, dtype=self.dtype)
         return rec[np.argsort(rec["row"], kind="stable")]

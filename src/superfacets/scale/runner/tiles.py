@@ -46,7 +46,7 @@ from ...api.result import TiledResult
 from ...checks import max_threads
 from ...elements.kinds import kind_of
 from ...errors import ParameterError, SuperfacetsError
-from ...inputs.bounds import check_extent
+from ...inputs.bounds import check_extent, column_bounds, rows_in_box
 from ...method.merges import NOISE_SAMPLE
 from ...method.params import DEFAULTS, resolve, superfacet_size
 from ...method.rules import MIN_FINE_ELEMENTS
@@ -124,7 +124,8 @@ def tile_task(task: dict) -> dict:
         out.update(rows=int(rows.size), core=int(core.sum()))
         if not core.any():  # no element of its own: nothing to do
             return out
-        spread = np.ptp(pos, axis=0).max() > 0
+        low, high = column_bounds(pos)
+        spread = bool((high > low).any())
         graph_area = task.get("graph_area", False) and spread
         if task.get("graphs") and (task["phase"] != "areas" or graph_area) and spread:
             tile_graph(inp, Path(task["graphs"]) / f"tile-{task['tile']}",
@@ -357,7 +358,7 @@ def _classified(run, layout, params, margin: float, ring: float, how: dict,
 
     def reach(t):
         lo, hi = layout.box(t, margin)
-        inside = ((pos >= lo) & (pos <= hi)).all(axis=1)
+        inside = rows_in_box(pos, lo, hi)
         return dict(centers=rows[inside], ring=ring, box_rows=how["box_rows"])
 
     for _ in range(how["refine"]):
