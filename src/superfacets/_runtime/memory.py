@@ -245,9 +245,10 @@ def give_back_zero_pages(a) -> None:
     whose bytes are all zero: they read as zero again and cost memory only once written
     (``madvise(MADV_DONTNEED)`` on Linux; nothing elsewhere).
 
-    The expansions' per-thread buffers hold zeros between expansions
-    (the compiled expansion kernels): handed back after each pass, they hold only
-    the pages that pass's expansions wrote, not every page any pass ever wrote.
+    The expansions' per-thread buffers hold zeros between expansions (the reference
+    kernels write them; the compiled ones keep a table of their own and leave them
+    untouched): handed back after each pass, they hold only the pages that pass's
+    expansions wrote, not every page any pass ever wrote.
 
     Parameters
     ----------
@@ -288,8 +289,8 @@ def small_pages(a) -> None:
     it in huge ones (2 MiB: numpy asks for them on large arrays), so that writing a few
     scattered entries costs a few small pages, not whole huge ones
     (``madvise(MADV_NOHUGEPAGE)`` on Linux; nothing elsewhere). For arrays written
-    sparsely: the expansions' per-thread buffers, each of whose expansions writes a few
-    thousand entries spread over the buffer.
+    sparsely: the expansions' per-thread buffers as the reference kernels write them,
+    a few thousand entries spread over the buffer per expansion.
 
     Examples
     --------
