@@ -79,7 +79,8 @@ LARGE_KERNELS = {"column_bounds", "finite_rows", "gather", "border_shares", "key
 SCRATCH = {"cleanup.band_distances": {10, 11}, "splitmerge.energies": {14, 15},
            "splitmerge.split_candidates": {19, 20}, "splitmerge.merge_energies": {19, 20},
            "exact.classify_exact": {7, 8}, "exact.reclassify_exact": {7, 8},
-           "voronoi.nearest_seed": {7}}
+           "voronoi.nearest_seed": {7}, "expand.classify_bounded": {9},
+           "expand.seed_orphans": {9}, "expand.expand_many": {7}, "expand.flood": {7}}
 
 def _roomy_queue(args):
     """The exact assignment's arguments with a node pool numba's search cannot outgrow (the
@@ -92,8 +93,21 @@ def _roomy_queue(args):
     return args
 
 
+def _dense_scratch(at: int):
+    """The expansions' arguments with the dense scratch (one zero per element) the numba
+    kernels keep their distances in, at ``at`` (the run gives none: the compiled
+    expansions keep a table of their own)."""
+    def given(args):
+        args[at] = np.zeros(args[0].shape[0] - 1)
+        return args
+    return given
+
+
 #: Arguments the numba kernel is given in place of the run's.
-FOR_REFERENCE = {"exact.classify_exact": _roomy_queue, "exact.reclassify_exact": _roomy_queue}
+FOR_REFERENCE = {"exact.classify_exact": _roomy_queue, "exact.reclassify_exact": _roomy_queue,
+                 "expand.classify_bounded": _dense_scratch(9),
+                 "expand.seed_orphans": _dense_scratch(9),
+                 "expand.expand_many": _dense_scratch(7), "expand.flood": _dense_scratch(7)}
 
 #: Results of which only a part is defined: compared on that part. knn_csr returns a
 #: buffer whose first ``indptr[n]`` entries are the indices (``indptr``: argument 2).
@@ -1210,9 +1224,10 @@ def test_plain_classification_matches_numba():
         spaces = Workspaces(g.n_elements, w)
         c, dist = centers.copy(), np.empty(g.n_elements)
         label = np.empty(g.n_elements, dtype=np.int32)
-        k = with_room(spaces.get(0), lambda ws: fn(
+        local = np.zeros(g.n_elements)  # (the reference's dense scratch; the compiled
+        k = with_room(spaces.get(0), lambda ws: fn(  # kernel ignores it)
             g.indptr, g.indices, w, np.ascontiguousarray(g.positions), c, 25,
-            float((0.1 * g.diagonal) ** 2), dist, label, ws.local, ws.queue, spaces.inv_width,
+            float((0.1 * g.diagonal) ** 2), dist, label, local, ws.queue, spaces.inv_width,
             ws.vis, np.empty(0)))
         out.append((k, c, dist, label))
     assert out[0][0] >= 25 and _same(out[0][1:], out[1][1:]) and out[0][0] == out[1][0]

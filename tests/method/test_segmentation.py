@@ -208,9 +208,10 @@ def test_bounded_expansion_is_dijkstra_inside_the_window(sphere):
     dist = np.full(m, np.inf)
     label = np.full(m, -1, np.int64)
     ws = Workspace(m, *bucket_width(cw)[1:], g.indices.size + m + 1)
-    expand(g.indptr, g.indices, cw, c, src, 0, radius**2, dist, label, ws.local,
+    local = np.zeros(m)  # (the reference's dense scratch)
+    expand(g.indptr, g.indices, cw, c, src, 0, radius**2, dist, label, local,
            ws.queue, bucket_width(cw)[0], MERGE, ws.vis, np.empty(0), 0, ws.vis.size)
-    assert not ws.local.view(np.uint64).any()  # the scratch is left as it was found
+    assert not local.view(np.uint64).any()  # the scratch is left as it was found
     reached = label == 0
     assert reached.sum() > 50
     np.testing.assert_array_equal(reached, np.isfinite(ref))
@@ -218,9 +219,12 @@ def test_bounded_expansion_is_dijkstra_inside_the_window(sphere):
 
 
 def test_interrupted_expansion_leaves_its_scratch_clean(sphere):
-    """An expansion stopped by a full record or queue puts ``inf`` back in
-    ``local``, so the caller can grow the buffer and run it again."""
+    """An expansion stopped by a full record or queue puts +0.0 back in the reference's
+    ``local`` (and the compiled one clears its table), so the caller can grow the buffer
+    and run it again: the uninterrupted result."""
     from oracle.expand import QUEUE_FULL, RECORD_FULL
+
+    from superfacets._kernels import native
 
     g = face_graph(sphere)
     cw = paper_weights(sphere, alpha=200)[g.dual_edge]
@@ -228,11 +232,13 @@ def test_interrupted_expansion_leaves_its_scratch_clean(sphere):
     c = np.ascontiguousarray(sphere.centroids)
     inv_width, nb = bucket_width(cw)
     full = Workspace(m, nb, g.indices.size + m + 1)
+    full.local = np.zeros(m)  # (the reference's dense scratch)
     dist, label = np.full(m, np.inf), np.full(m, -1, np.int64)
     n = expand(g.indptr, g.indices, cw, c, 17, 0, 1.0, dist, label, full.local, full.queue,
                inv_width, MERGE, full.vis, np.empty(0), 0, full.vis.size)
     assert n > 40
     small = Workspace(m, nb, g.indices.size + m + 1)
+    small.local = np.zeros(m)
     small._queue(4)
     for ws, lim, status in ((full, 20, RECORD_FULL), (small, small.vis.size, QUEUE_FULL)):
         d2, l2 = np.full(m, np.inf), np.full(m, -1, np.int64)
@@ -254,6 +260,29 @@ def test_interrupted_expansion_leaves_its_scratch_clean(sphere):
     assert st == n
     np.testing.assert_array_equal(d2, dist)
     np.testing.assert_array_equal(l2, label)
+    # the compiled classification (its own scratch, no dense one given): stopped by a full
+    # queue, it gives, grown, the same distances and labels as with room
+    if native.available():
+        classify = native.kernel("expand.classify_bounded")
+        got, stops = [], 0
+        for cap in (4, None):
+            ws = Workspace(m, nb, g.indices.size + m + 1)
+            if cap:
+                ws._queue(cap)
+            d3, l3 = np.full(m, np.inf), np.full(m, -1, np.int32)
+            centers = np.zeros(m, dtype=np.int64)  # (room for orphans' centers)
+            centers[:2] = [17, 400]
+            while (k := classify(g.indptr, g.indices, cw, c, centers, 2, 1.0, d3, l3,
+                                 ws.local, ws.queue, inv_width, ws.vis, np.empty(0))) < 0:
+                assert k == QUEUE_FULL and cap
+                stops += 1
+                ws.grow(k)
+                d3, l3 = np.full(m, np.inf), np.full(m, -1, np.int32)
+                centers[2:] = 0
+            got.append((d3, l3))
+        assert stops >= 1 and (got[1][1] >= 0).sum() > 40
+        np.testing.assert_array_equal(got[0][0], got[1][0])
+        np.testing.assert_array_equal(got[0][1], got[1][1])
 
 
 def test_replayed_expansions_equal_reference_on_synthetic(valley, sphere):
@@ -685,7 +714,7 @@ def test_workspaces_released_between_passes_give_the_same_labels(sphere):
         assert k1 == k2
         np.testing.assert_array_equal(l1, l2)
         np.testing.assert_array_equal(d1, d2)
-    assert not Workspaces(m, cw, 2).get(1).local.view(np.uint64).any()
+    assert Workspaces(m, cw, 2).get(1).local.size == 0  # (the compiled scratch is a table)
 
 
 def test_arena_tail_discarded_after_each_pass_gives_the_same_labels(sphere, monkeypatch):
@@ -717,7 +746,7 @@ def test_arena_tail_discarded_after_each_pass_gives_the_same_labels(sphere, monk
             k, _ = clf.classify(centers, first.size, dist, label)
             out.append((k, label.copy(), dist.copy()))
             assert len(spaces.ws) == 2
-            assert not any(ws.local.view(np.uint64).any() for ws in spaces.ws)
+            assert all(ws.local.size == 0 for ws in spaces.ws)  # (no dense scratch)
             centers[:first.size] = (centers[:first.size] + 1) % m
         spaces.close()
         assert spaces.ws == []
@@ -732,8 +761,8 @@ def test_arena_tail_discarded_after_each_pass_gives_the_same_labels(sphere, monk
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="madvise: Linux only")
-def test_zero_pages_handed_back_leave_zeros_and_free_the_memory():
-    from superfacets._runtime.memory import give_back_zero_pages
+def test_pages_handed_back_leave_zeros_and_free_the_memory():
+    from superfacets._runtime.memory import discard_pages
 
     def resident_mib():
         with open("/proc/self/statm") as f:
@@ -742,10 +771,10 @@ def test_zero_pages_handed_back_leave_zeros_and_free_the_memory():
     a = np.ones(16 << 20)  # 128 MiB, written
     a[:] = 0.0
     before = resident_mib()
-    give_back_zero_pages(a)
+    discard_pages(a)
     assert resident_mib() < before - 100  # its pages are gone...
     assert not a.view(np.uint64).any()  # ... and read as zeros
     a[::4096] = 1.0  # written again: as any array
     assert a.sum() == a[::4096].shape[0]
-    give_back_zero_pages(a[::2])  # not contiguous: nothing done
+    discard_pages(a[::2])  # not contiguous: nothing done
     assert a.sum() == a[::4096].shape[0]

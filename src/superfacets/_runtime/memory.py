@@ -20,12 +20,10 @@ from ..errors import MemoryLimitError
 
 __all__ = ["ARENAS", "BASE_BYTES", "available_bytes", "check_memory", "estimated_peak",
            "resident_bytes", "tiles_that_fit", "limit_arenas",
-           "give_back_free_memory", "give_back_zero_pages",
-           "small_pages", "discard_pages"]
+           "give_back_free_memory", "discard_pages"]
 
 _found: dict = {}  # the C library's functions, once looked up (False: not available)
 _DONTNEED = 4  # MADV_DONTNEED (Linux)
-_NOHUGEPAGE = 15  # MADV_NOHUGEPAGE (Linux)
 
 
 def _libc(name: str, argtypes: tuple):
@@ -240,32 +238,6 @@ def limit_arenas(n: int = ARENAS) -> None:
         mallopt(-8, int(n))  # (M_ARENA_MAX in glibc's malloc.h)
 
 
-def give_back_zero_pages(a) -> None:
-    """Hand back to the operating system the whole pages of ``a``, a C-contiguous array
-    whose bytes are all zero: they read as zero again and cost memory only once written
-    (``madvise(MADV_DONTNEED)`` on Linux; nothing elsewhere).
-
-    The expansions' per-thread buffers hold zeros between expansions (the reference
-    kernels write them; the compiled ones keep a table of their own and leave them
-    untouched): handed back after each pass, they hold only the pages that pass's
-    expansions wrote, not every page any pass ever wrote.
-
-    Parameters
-    ----------
-    a : ndarray
-        C-contiguous, every byte zero (not checked: other contents would be lost).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> z = np.zeros(1 << 20)
-    >>> give_back_zero_pages(z)
-    >>> bool(z.any())
-    False
-    """
-    _advise(a, _DONTNEED)
-
-
 def discard_pages(a) -> None:
     """Hand back to the operating system the whole pages of ``a`` (C-contiguous), whose
     contents are no longer needed: they read as zeros after, and cost memory only once
@@ -282,23 +254,6 @@ def discard_pages(a) -> None:
     (1.0, 0.0)
     """
     _advise(a, _DONTNEED)
-
-
-def small_pages(a) -> None:
-    """Have ``a``'s memory mapped in small pages (4 KiB) even where the system would map
-    it in huge ones (2 MiB: numpy asks for them on large arrays), so that writing a few
-    scattered entries costs a few small pages, not whole huge ones
-    (``madvise(MADV_NOHUGEPAGE)`` on Linux; nothing elsewhere). For arrays written
-    sparsely: the expansions' per-thread buffers as the reference kernels write them,
-    a few thousand entries spread over the buffer per expansion.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> z = np.zeros(1 << 20)
-    >>> small_pages(z)
-    """
-    _advise(a, _NOHUGEPAGE)
 
 
 def _advise(a, advice: int) -> None:

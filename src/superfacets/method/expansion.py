@@ -13,7 +13,6 @@ from __future__ import annotations
 import numpy as np
 
 from .._kernels.codes import QUEUE_FULL, RECORD_FULL
-from .._runtime.memory import give_back_zero_pages, small_pages
 
 __all__ = ["Workspace", "Workspaces", "bucket_width", "centers_within", "with_room"]
 
@@ -48,8 +47,14 @@ def bucket_width(weights: np.ndarray) -> tuple[float, int]:
     return 1.0 / width, nb
 
 
+#: The dense scratch a run gives the compiled expansions: none (see :class:`Workspace`)
+_NO_SCRATCH = np.zeros(0)
+
+
 class Workspace:
-    """``local``, bucket queue and visit buffer of one thread.
+    """Bucket queue and visit buffer of one thread (and ``local``, empty: the reference
+    kernels' dense scratch distances, which the compiled ones keep in a table of their
+    own).
 
     Parameters
     ----------
@@ -63,13 +68,10 @@ class Workspace:
 
     def __init__(self, m: int, n_buckets: int, max_nodes: int):
         self.m = m
-        # the expansions' scratch distances as the reference kernels keep them (+0.0
-        # between expansions): the compiled kernels keep them in a table of their own,
-        # the size of their largest expansion, and never write this array, so its pages
-        # of zeros cost no memory (handed back, where the allocator reused memory)
-        self.local = np.zeros(m)
-        small_pages(self.local)  # (an expansion writes a few entries spread over it)
-        give_back_zero_pages(self.local)
+        # the argument where the reference kernels keep their dense scratch distances
+        # (one per element): the compiled expansions keep theirs in a table of their own,
+        # the size of their largest expansion, so a run gives them none
+        self.local = _NO_SCRATCH
         self.max_nodes = max_nodes
         self.head = np.full(n_buckets, -1, dtype=np.int64)
         self._queue(min(_QUEUE0, max_nodes))

@@ -225,13 +225,13 @@ inline void merge_segment(i64 a, i64 n, i64 s, const i32* rec_face, const double
 }
 
 // An element graph an expansion stays inside: n rows (n centroids), each entry a
-// weight, and a scratch distance per element.
+// weight. (The argument `local`, the reference kernels' dense scratch, may have any
+// length here: the compiled expansion keeps its own, a Scratch.)
 template <class W>
 void check_graph(const In<i64>& indptr, const In<i32>& indices, const In<W>& weights,
-                 const In<double>& centroids, const Out<double>& local) {
+                 const In<double>& centroids) {
     const i64 n = check_csr(indptr, indices, centroids.n, centroids.n);
     check_rows(weights, indptr[n], "weights");
-    check_rows(local, n, "local");
 }
 
 // Records pos .. lim of an expansion's elements in rec (and rec_dist, where given)
@@ -264,7 +264,7 @@ Work<W> work_of(nb::handle indptr_, nb::handle indices_, nb::handle weights_,
     In<double> centroids(centroids_, "centroids"), wscale(wscale_, "wscale");
     Out<double> local(local_, "local");
     if (centroids.cols != 3) throw Mismatch("argument centroids");
-    check_graph(indptr, indices, weights, centroids, local);
+    check_graph(indptr, indices, weights, centroids);
     if (wscale.n) check_rows(wscale, centroids.n, "wscale");
     return Work<W>{Graph<W>{indptr.p, indices.p, weights.p, centroids.p}, queue_of(queue_),
                    std::make_shared<Scratch>(), inv_width, wscale.p, wscale.n};
@@ -598,7 +598,7 @@ i64 flood_t(nb::handle indptr_, nb::handle indices_, nb::handle weights_, nb::ha
     Out<i64> label(label_, "label");
     Out<i32> vis(vis_, "vis");
     if (centroids.cols != 3) throw Mismatch("argument centroids");
-    check_graph(indptr, indices, weights, centroids, local);
+    check_graph(indptr, indices, weights, centroids);
     check_rows(label, centroids.n, "label", true);
     check_range(order, 0, centroids.n, "order");
     const Work<W> w{Graph<W>{indptr.p, indices.p, weights.p, centroids.p}, queue_of(queue_),
