@@ -141,6 +141,26 @@ def test_every_position_has_one_tile_and_boxes_hold_them(layout):
     assert tile_of(np.array([[np.nan, 0, 0]]), tiles)[0] == -1
 
 
+@pytest.mark.parametrize("n_tiles", [1, 2, 3, 7, 16])
+def test_a_tiles_core_holds_exactly_the_positions_of_that_tile(n_tiles):
+    """``Tiles.holds(p, t)`` (the splits on the way to ``t`` only) is ``of(p) == t``,
+    non-finite positions in no core, on a split in the tile above it."""
+    rng = np.random.default_rng(n_tiles)
+    pts = rng.normal(size=(6000, 3))
+    tiles = balanced_tiles(pts, pts.min(0), pts.max(0), n_tiles)
+    pts[::97] = np.nan
+    pts[5::101, 1] = np.inf
+    pts[7::103, tiles.axis[0] if tiles.axis.size else 0] = tiles.value[0] if \
+        tiles.axis.size else 0.0  # (on the first split)
+    of = tiles.of(pts)
+    for t in range(tiles.n_tiles):
+        np.testing.assert_array_equal(tiles.holds(pts, t), of == t)
+    grid = tile_grid(np.zeros(3), np.ones(3), (2, 3, 1))
+    cells = rng.random((3000, 3))
+    for t in range(6):
+        np.testing.assert_array_equal(grid.holds(cells, t), grid.of(cells) == t)
+
+
 def test_trim_keeps_k_and_drops_the_most_crowded():
     pos = np.array([[0, 0, 0], [10, 0, 0], [20, 0, 0], [20.1, 0, 0], [30, 0, 0.]])
     keep = trim_centers(pos, 4)
@@ -371,6 +391,53 @@ def test_a_tiled_run_reads_the_file_twice_and_gives_the_same_labels(tmp_path, mo
     assert len(passes) > 8 * 3  # every task of every phase read the file
     np.testing.assert_array_equal(res.labels, each.labels)
     assert res.repaired == each.repaired and res.disagreements == each.disagreements
+
+
+def test_the_surveys_sample_names_its_rows(tmp_path, monkeypatch):
+    """Every ``ceil(n / SAMPLE)``-th finite row, over chunks whose starts are not
+    multiples of the stride: ``sample == positions[sample_rows]``."""
+    from superfacets.io import regions
+
+    monkeypatch.setattr(regions, "SAMPLE", 1000)
+    monkeypatch.setattr(regions, "CHUNK", 777)
+    pts = np.random.default_rng(0).random((10_001, 3))
+    np.save(tmp_path / "c.npy", pts)
+    survey = RegionReader.open(tmp_path / "c.npy").survey()
+    np.testing.assert_array_equal(survey.sample_rows, np.arange(0, 10_001, 11))
+    np.testing.assert_array_equal(survey.sample, pts[survey.sample_rows])
+
+
+def test_a_clouds_tiles_start_from_centers_found_on_the_sample(monkeypatch):
+    """On a cloud the tiles' centers phase is replaced by one run on the survey's
+    sample (thinned to a quarter of the cloud here); the refine round starts from its
+    centers, the labels phase from theirs; the same count; ``refine=0`` keeps the
+    centers phase (where no round follows to run the passes on every point)."""
+    from superfacets.scale import tiling
+
+    seen = []
+    real = tiling.sample_start
+
+    def start(sample, rows, *args, **kw):
+        out = real(sample, rows, *args, **kw)
+        seen.append((sample, rows, out))
+        return out
+
+    monkeypatch.setattr(tiling, "sample_start", start)
+    monkeypatch.setattr(tiling, "START_MIN_POINTS", 1000)
+    cloud = _bumpy_cloud(20_000)
+    res = segment_tiled(cloud, 30, tiles=4, merge_from=1)
+    (sample, rows, (found, pos)), = seen
+    np.testing.assert_array_equal(sample[rows], cloud.points)  # (the whole cloud here)
+    assert 30 <= found.size and (np.diff(found) > 0).all() and found.max() < 20_000
+    assert (found % 4 == 0).all()  # on every 4th point: a quarter of the cloud
+    np.testing.assert_array_equal(pos, cloud.points[found])
+    assert res.n_segments == 30 and "start" in res.timings and "centers" not in res.timings
+    assert sum(t["centers"] for t in res.tiles) >= 30
+    assert all(t["peak_mib"] is None or t["peak_mib"] >= t["labels_peak_mib"]
+               for t in res.tiles)
+    assert all("refine_seconds" in t and "labels_seconds" in t for t in res.tiles)
+    plain = segment_tiled(cloud, 30, tiles=4, merge_from=1, refine=0)
+    assert "centers" in plain.timings and "start" not in plain.timings and len(seen) == 1
 
 
 def test_streamed_reading_errors_are_clear(tmp_path):

@@ -319,14 +319,18 @@ class TiledResult:
         :func:`~superfacets.scale.tiling.tile_connect`).
     tiles : list of dict
         Per tile with work: ``tile``, ``core`` and ``rows`` (elements in the
-        core, and with the halo), ``centers`` (in its core), ``seconds`` and
-        ``peak_mib`` of each phase.
+        core, and with the halo), ``centers`` (in its core after the first phase that
+        places them: ``centers``, or on a cloud the first ``refine`` round), the
+        ``seconds`` and ``peak_mib`` of that phase and of ``labels`` (``centers_seconds``,
+        ``labels_peak_mib``, ...), and ``peak_mib``, the larger peak.
     timings : dict of str to float
         Seconds: ``survey``, ``bucket`` (sorting the input into tiles),
         ``orientation`` (points without normals or viewpoint: the survey's
         sample oriented once, :func:`~superfacets.scale.tiling.orientation_reference`), ``areas``,
-        ``centers``, ``refine``, ``labels``, ``stitch``, ``connect`` (only with
-        disagreements), ``total``.
+        ``start`` (a cloud's centers found on that sample:
+        :func:`~superfacets.scale.tiling.sample_start`) or ``centers`` (each tile's),
+        ``refine``, ``labels``, ``stitch``, ``connect`` (only with disagreements),
+        ``total``.
     params : dict
         The run's parameters, resolved.
 

@@ -94,7 +94,7 @@ def segment_tiles(args) -> int:
     report = sys.stderr if str(seg_out) == "-" else sys.stdout
     if not args.quiet:
         kind = result.params["elements"]
-        peak = max((t.get("centers_peak_mib") or 0 for t in result.tiles), default=0)
+        peak = max((t.get("peak_mib") or 0 for t in result.tiles), default=0)
         what = kind_of(kind).segment_word
         k = args.n_segments
         asked = ("" if k is None or result.n_segments == k else

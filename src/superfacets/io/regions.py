@@ -70,6 +70,8 @@ class Survey:
     colors: bool = False
     #: the divisor of the points' integer colours over the whole file (None: not integers)
     color_top: float | None = None
+    #: (s,) int64: the row in the input of each position of ``sample``
+    sample_rows: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -234,7 +236,7 @@ class RegionReader:
         size = 0.0
         n = 0
         stride = max(1, -(-self.n_rows // SAMPLE))
-        kept = []
+        kept, kept_rows = [], []
         normals = colors = False
         stats: dict = {}
         for start, pos, sz, extra in self.chunks(stats):
@@ -248,15 +250,17 @@ class RegionReader:
                 hi = np.maximum(hi, pos[ok].max(axis=0))
                 size += float(sz[ok].sum())
                 n += int(ok.sum())
-                every = pos[(-start) % stride::stride]
-                kept.append(every[np.isfinite(every).all(axis=1)])
+                at = np.arange((-start) % stride, pos.shape[0], stride)
+                finite = ok[at]
+                kept.append(pos[at[finite]])
+                kept_rows.append(start + at[finite])
         if n == 0:
             raise MeshFormatError(f"{self.path}: no {self.kind[:-1]} with a finite position")
         from ..inputs.rgb import color_top
 
         top = color_top(stats["itemsize"], stats["largest"]) if stats else None
         return Survey(lo, hi, size, n, np.concatenate(kept).astype(np.float64), normals, colors,
-                      top)
+                      top, np.concatenate(kept_rows).astype(np.int64))
 
     def _non_finite(self, row: int):
         """Refuse a row without a finite position, as a whole run refuses it."""

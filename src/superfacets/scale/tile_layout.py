@@ -87,6 +87,30 @@ class Tiles:
             rows, node = rows[~leaf], node[~leaf]
         return out
 
+    def holds(self, positions: np.ndarray, t: int) -> np.ndarray:
+        """Whether each position lies in tile ``t``'s core, ``(n,)`` bool: ``self.of(
+        positions) == t``, tested on the splits from the root to ``t`` only (a column
+        compared per split, no walk of every position down the tree)."""
+        p = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
+        inside = finite_rows(p)
+        for node, above in self._path(t):
+            column = p[:, self.axis[node]]
+            inside &= (column >= self.value[node]) if above else (column < self.value[node])
+        return inside
+
+    def _path(self, t: int) -> list:
+        """The splits from the root to tile ``t``: (node, whether ``t`` lies above it)."""
+        parent = {}
+        for node in range(self.axis.size):
+            for child, above in ((self.left[node], False), (self.right[node], True)):
+                parent[int(child)] = (node, above)
+        path, at = [], -1 - int(t)
+        while at in parent:
+            node, above = parent[at]
+            path.append((node, above))
+            at = node
+        return path[::-1]
+
     def box(self, t: int, margin: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
         """The core box ``(lo, hi)`` of tile ``t``, grown by ``margin`` on every side."""
         return self.lo[t] - margin, self.hi[t] + margin

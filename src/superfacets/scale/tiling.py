@@ -17,7 +17,9 @@ one task per tile (:mod:`superfacets.scale.runner.tiles` sends them to Dask):
    again from the gathered centers within reach, so that the centers near a
    border settle beside their true neighbours, not beside the halo's edge
    (with refine rounds to come, the centers phase runs its start and one pass:
-   the rounds run the passes).
+   the rounds run the passes). On a cloud with refine rounds, the centers phase
+   gives way to one run on the survey's even sample of the cloud
+   (:func:`sample_start`): the rounds start from its centers.
 2. **labels** (:func:`tile_labels`): each tile classifies its elements from
    all the centers within reach (one pass of the paper's bounded expansions,
    centers in one global order), then makes superfacets connected and, with
@@ -53,7 +55,7 @@ from ..method.params import DEFAULTS, SegmentParams, superfacet_measure
 from ..method.pipeline import pipeline
 from ..method.stages import build_graph, resolve_features, resolve_rules, weigh
 
-__all__ = ["tile_centers", "tile_refine", "tile_labels",
+__all__ = ["tile_centers", "sample_start", "tile_refine", "tile_labels",
            "tile_connect", "orientation_reference", "HALO",
            "point_areas", "core_area", "oriented_sample", "check_tileable"]
 
@@ -97,7 +99,8 @@ def _diagonal(inp) -> float:
     from ..inputs.cloud import PointCloud
 
     if isinstance(inp, PointCloud):
-        lo, hi = column_bounds(inp.points[inp.valid])
+        valid = np.asarray(inp.valid)
+        lo, hi = column_bounds(inp.points if valid.all() else inp.points[valid])
         return float(np.linalg.norm(hi - lo))
     return float(inp.diagonal)
 
@@ -170,6 +173,88 @@ def tile_centers(inp, core: np.ndarray, params: SegmentParams, r: float, diagona
     return rows[core[rows]], result
 
 
+#: A tiled cloud's start runs on an even sample of at most this share of its points
+#: (:func:`sample_start`): a coarse copy of the cloud, not the cloud again.
+START_SHARE = 0.25
+#: ... and of at least this many points per center and in all (or the whole sample).
+START_POINTS_PER_CENTER = 16
+START_MIN_POINTS = 10_000
+
+
+def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: SegmentParams,
+                 r: float, diagonal: float, cloud=None, up=None
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """The start of a tiled run on a cloud: the method on an even sample of its points.
+
+    Replaces the centers phase of :func:`tile_centers` on clouds: instead of each tile
+    sampling its centers on its box and halo (whose outer edge is an artificial
+    boundary) and running a pass, the method runs once, start and passes, on the
+    survey's even sample of the cloud (every ``ceil(n / 2^20)``-th point, thinned to
+    at most :data:`START_SHARE` of the cloud where it keeps at least
+    :data:`START_MIN_POINTS` points and :data:`START_POINTS_PER_CENTER` points a
+    center), with the whole cloud's radius
+    ``r``. Its centers, named by their rows in the cloud, are where the refine rounds
+    (:func:`tile_refine`) start: each tile runs the passes on its points from the
+    centers within reach. The colour term is off here (the sample keeps positions
+    only); the rounds read the colours.
+
+    Parameters
+    ----------
+    sample : (s, 3) float64 ndarray
+        The survey's sample (:class:`superfacets.io.regions.Survey`), finite positions.
+    rows : (s,) int64 ndarray
+        The row of each sample point in the cloud, increasing.
+    n_rows : int
+        Rows of the cloud.
+    params : SegmentParams
+        The run's (validated) parameters; ``n_segments`` (the superpoints the tiles
+        make) is the number of centers sampled, or None with a ``radius``.
+    r : float
+        The whole cloud's superpoint radius (its units).
+    diagonal : float
+        The whole cloud's bounding-box diagonal.
+    cloud : PointCloud, optional
+        The sample as a cloud with its point graph (the orientation reference's:
+        :func:`oriented_sample`), used when the sample is not thinned.
+    up : (3,) float ndarray, optional
+        The cloud's up direction (``PointCloud.up``), for the sample's normals.
+
+    Returns
+    -------
+    rows : (c,) int64 ndarray
+        Rows of the cloud holding the start's centers, increasing.
+    positions : (c, 3) float64 ndarray
+        Their positions.
+
+    Examples
+    --------
+    >>> from superfacets.method.params import resolve
+    >>> xy = np.random.default_rng(0).random((4000, 2))
+    >>> pts = np.column_stack([xy, np.zeros(4000)])
+    >>> rows, pos = sample_start(pts, np.arange(4000), 4000, resolve(n_segments=10),
+    ...                          0.18, 1.41)
+    >>> len(rows), bool((np.diff(rows) > 0).all())
+    (10, True)
+    """
+    from ..inputs.cloud import PointCloud
+    from .tile_layout import gathered_centers
+
+    sample = np.asarray(sample, dtype=np.float64)
+    least = max(START_MIN_POINTS, START_POINTS_PER_CENTER * (params.n_segments or 0))
+    step = max(1, min(math.ceil(sample.shape[0] / (START_SHARE * n_rows)),
+                      sample.shape[0] // least))
+    if step > 1 or cloud is None:
+        cloud = PointCloud(sample[::step], up=up)
+        sample, rows = sample[::step], rows[::step]
+    d = _diagonal(cloud)
+    if d <= 0 or sample.shape[0] < 3:
+        return rows[:1], sample[:1]
+    p = replace(_tile_params(params, r, diagonal, d), beta=0.0)
+    n = params.n_segments if p.init == "farthest" else None
+    found = np.asarray(pipeline(cloud, p, n_centers=n).centers, dtype=np.int64)
+    return gathered_centers([dict(centers=rows[found], positions=sample[found])], params)
+
+
 def tile_refine(inp, core: np.ndarray, center_rows: np.ndarray, params: SegmentParams,
                 r: float, diagonal: float, features=None) -> np.ndarray:
     """Phase 1b: the method's passes on one tile from the run's centers within reach;
@@ -180,9 +265,10 @@ def tile_refine(inp, core: np.ndarray, center_rows: np.ndarray, params: SegmentP
     tile sees the true neighbours of its border centers, and the passes
     (and swaps, with the default method) settle them again.
     """
-    if _diagonal(inp) <= 0 or len(center_rows) == 0:
+    d = _diagonal(inp)
+    if d <= 0 or len(center_rows) == 0:
         return np.flatnonzero(core & _valid_rows(inp))[:1]
-    p = _tile_params(params, r, diagonal, _diagonal(inp))
+    p = _tile_params(params, r, diagonal, d)
     src = elements_of(inp, p.elements, n_neighbors=p.n_neighbors,
                       neighbor_radius=p.neighbor_radius)
     elem = src.to_rows(np.arange(src.graph.n_elements))[np.asarray(center_rows, np.int64)]
@@ -223,12 +309,23 @@ def oriented_sample(sample: np.ndarray, n_neighbors: int, up=None):
     :func:`orientation_reference` orients, or None when it has fewer than 3 distinct
     points; its ``sizes`` sum to the sample's area as a run reads a cloud's."""
     from ..elements.points import point_graph
+
+    cloud = sample_cloud(sample, n_neighbors, up)
+    return None if cloud is None else point_graph(cloud, n_neighbors).graph
+
+
+def sample_cloud(sample: np.ndarray, n_neighbors: int, up=None):
+    """The sample :func:`oriented_sample` orients, as a cloud with its point graph
+    (built), or None when it has fewer than 3 distinct points."""
+    from ..elements.points import point_graph
     from ..inputs.cloud import PointCloud
 
     pts = np.asarray(sample, dtype=np.float64)
     if np.unique(pts, axis=0).shape[0] < 3:
         return None
-    return point_graph(PointCloud(pts, up=up), n_neighbors).graph
+    cloud = PointCloud(pts, up=up)
+    point_graph(cloud, n_neighbors)  # (kept with the cloud)
+    return cloud
 
 
 def core_area(cloud, core: np.ndarray, n_neighbors: int) -> float:

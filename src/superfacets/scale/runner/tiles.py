@@ -103,14 +103,7 @@ def tile_task(task: dict) -> dict:
     >>> segment_tiled((m.vertices, m.faces), 40, tiles=2, workers=1).tiles[0]["tile"]
     0
     """
-    from ..tiling import (
-        core_area,
-        point_areas,
-        tile_centers,
-        tile_connect,
-        tile_labels,
-        tile_refine,
-    )
+    from ..tiling import core_area, point_areas, tile_centers, tile_connect, tile_refine
 
     probe = PeakMemory()
     t0 = time.perf_counter()
@@ -120,7 +113,7 @@ def tile_task(task: dict) -> dict:
         lo, hi = layout.box(task["tile"], task["margin"])
         rows, pos, inp = _box(task, lo, hi)
         inp = _framed(task, layout, inp)
-        core = layout.of(pos) == task["tile"]
+        core = layout.holds(pos, task["tile"])
         out.update(rows=int(rows.size), core=int(core.sum()))
         if not core.any():  # no element of its own: nothing to do
             return out
@@ -157,19 +150,8 @@ def tile_task(task: dict) -> dict:
             if task["phase"] == "refine":
                 found = tile_refine(inp, core, at[ok], p, r, d)
                 out.update(centers=rows[found], positions=pos[found])
-                return out
-            if task.get("n_noise") is not None:  # the merges to the count follow
-                named, out["merge_stats"] = tile_labels(
-                    inp, at[ok], p, r, d, merging=(core, rows, task["n_noise"]))
             else:
-                named = tile_labels(inp, at[ok], p, r, d)
-            gid = np.where(named >= 0, rows[np.maximum(named, 0)], -1)
-            lo_c, hi_c = layout.box(task["tile"])
-            near = ~core & ((pos >= lo_c - task["ring"]) & (pos <= hi_c + task["ring"])).all(1)
-            out.update(core_rows=rows[core], core_labels=gid[core], ring_rows=rows[near],
-                       ring_labels=gid[near])
-            if task.get("box_rows", True):  # for the connect phase, unless read from a file
-                out["box_rows"] = rows
+                _labelled(task, out, (rows, pos, inp, core), at[ok])
     except Exception as exc:  # noqa: BLE001 - reported by the driver, with the tile
         out["error"] = error_text(exc)
     except MemoryError as exc:  # pragma: no cover - depends on the machine
@@ -178,6 +160,28 @@ def tile_task(task: dict) -> dict:
     peak = probe.peak_mib(above_start=False)
     out["peak_mib"] = None if peak is None else round(peak, 1)
     return out
+
+
+def _labelled(task: dict, out: dict, box: tuple, centers: np.ndarray) -> None:
+    """The labels phase of one tile (``box``: its rows, positions, input and core) from
+    the ``centers`` (rows of the box) within reach: its core's and its ring's labels in
+    ``out``, each named by its center's row in the input, and the merges' sums."""
+    from ..tiling import tile_labels
+
+    rows, pos, inp, core = box
+    p, r, d = task["params"], task["r"], task["diagonal"]
+    if task.get("n_noise") is not None:  # the merges to the count follow
+        named, out["merge_stats"] = tile_labels(
+            inp, centers, p, r, d, merging=(core, rows, task["n_noise"]))
+    else:
+        named = tile_labels(inp, centers, p, r, d)
+    gid = np.where(named >= 0, rows[np.maximum(named, 0)], -1)
+    lo_c, hi_c = task["layout"].box(task["tile"])
+    near = ~core & ((pos >= lo_c - task["ring"]) & (pos <= hi_c + task["ring"])).all(1)
+    out.update(core_rows=rows[core], core_labels=gid[core], ring_rows=rows[near],
+               ring_labels=gid[near])
+    if task.get("box_rows", True):  # for the connect phase, unless read from a file
+        out["box_rows"] = rows
 
 
 #: The most refinement rounds (each runs the passes on every tile again; 1 is the default)
@@ -291,8 +295,8 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
             reader = bucket(reader, layout, Path(tmp) / "buckets", progress=progress)
             timings["bucket"] = time.perf_counter() - t
         t = time.perf_counter()
-        reference, sample_area = _orientation(reader, survey, params.n_neighbors, up,
-                                              shared and tmp)
+        reference, sample_area, sampled = _orientation(reader, survey, params.n_neighbors,
+                                                       up, shared and tmp)
         timings["orientation"] = time.perf_counter() - t
         graphs = graph_folder(tmp, survey.n_elements, reader.kind, shared and n_tiles > 1,
                               params)  # the tiles' point graphs, kept between phases
@@ -313,9 +317,10 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
             r, margin = _sized(run, layout, reader.kind, params, survey, diagonal, halo,
                                (graphs, sample_area))
             timings["areas"] = time.perf_counter() - t
-            found, done = _classified(run, layout, params, margin, params.window * r,
-                                      dict(refine=refine, box_rows=not shared,
-                                           noise=merge_from > 1), timings)
+            found, done = _classified(run, layout, params, margin, params.window * r, dict(
+                refine=refine, box_rows=not shared, noise=merge_from > 1, start=_sample_start(
+                    reader, survey, params, r, diagonal, refine, timings, (sampled, up))),
+                timings)
             t = time.perf_counter()
             labels, disagreements = _stitched(done, reader.n_rows)
             timings["stitch"] = time.perf_counter() - t
@@ -346,15 +351,21 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
 
 def _classified(run, layout, params, margin: float, ring: float, how: dict,
                 timings: dict):
-    """The centers phase, ``how['refine']`` refinements, then the labels phase: the
-    tiles' outputs of the first and of the last (each tile its own core's)."""
-    t = time.perf_counter()
-    # where refine rounds follow, they run the passes: the centers phase gives each tile's
-    # start and one pass (its passes to the end were run again by the round)
-    passes = CENTER_PASSES if how["refine"] else None
-    found = [o for o in run("centers", margin, lambda t: dict(passes=passes)) if o["core"]]
-    timings["centers"] = time.perf_counter() - t
-    rows, pos = gathered_centers(found, params)
+    """The centers phase (or, given ``how['start']``, the centers it gives),
+    ``how['refine']`` refinements, then the labels phase: the tiles' outputs of the first
+    phase run and of the last (each tile its own core's)."""
+    found = None
+    if how.get("start") is not None:
+        rows, pos = how["start"]
+    else:
+        t = time.perf_counter()
+        # where refine rounds follow, they run the passes: the centers phase gives each
+        # tile's start and one pass (its passes to the end were run again by the round)
+        passes = CENTER_PASSES if how["refine"] else None
+        found = [o for o in run("centers", margin, lambda t: dict(passes=passes))
+                 if o["core"]]
+        timings["centers"] = time.perf_counter() - t
+        rows, pos = gathered_centers(found, params)
 
     def reach(t):
         lo, hi = layout.box(t, margin)
@@ -366,12 +377,33 @@ def _classified(run, layout, params, margin: float, ring: float, how: dict,
         again = [o for o in run("refine", margin, reach) if o["core"]]
         timings["refine"] = timings.get("refine", 0.0) + time.perf_counter() - t
         rows, pos = gathered_centers(again, params)
+        found = again if found is None else found
     t = time.perf_counter()
     n_noise = NOISE_SAMPLE // layout.n_tiles + 1 if how["noise"] else None
     done = [o for o in run("labels", margin, lambda t: dict(reach(t), n_noise=n_noise))
             if o["core"]]
     timings["labels"] = time.perf_counter() - t
     return found, done
+
+
+def _sample_start(reader, survey, params, r: float, diagonal: float, refine: int,
+                  timings: dict, sampled: tuple):
+    """The centers a cloud's refine rounds start from, found on the survey's sample
+    (:func:`~superfacets.scale.tiling.sample_start`; ``sampled``: the orientation's
+    sample cloud, or None, and the cloud's up direction); None where the tiles' centers
+    phase gives them (meshes; ``refine=0``, where no round follows to run the passes on
+    every point; a sample too small)."""
+    from ..tiling import sample_start
+
+    sample = survey.sample
+    if not kind_of(reader.kind).cloud or refine < 1 or sample is None \
+            or survey.sample_rows is None or sample.shape[0] < 3:
+        return None
+    t = time.perf_counter()
+    start = sample_start(sample, survey.sample_rows, reader.n_rows, params, r, diagonal,
+                         *sampled)
+    timings["start"] = time.perf_counter() - t
+    return start
 
 
 def _frame(reader, survey) -> np.ndarray | None:
@@ -430,20 +462,24 @@ def _box(task: dict, lo, hi):
 def _orientation(reader, survey, n_neighbors: int, up, folder):
     """The normals' orientation reference of a cloud with neither normals nor viewpoint
     (from the survey's sample; saved in ``folder`` where the tasks share one, and then its
-    path), else None; and the sample's area where its graph was built (else None)."""
-    from ..tiling import oriented_sample
+    path), else None; the sample's area where its graph was built (else None); and the
+    sample as a cloud with that graph (else None: :func:`~superfacets.scale.tiling.
+    sample_start` reads it)."""
+    from ...elements.points import point_graph
+    from ..tiling import sample_cloud
 
     if not kind_of(reader.kind).cloud or survey.normals or reader.viewpoint is not None:
-        return None, None
-    graph = oriented_sample(survey.sample, n_neighbors, up)
-    if graph is None:
-        return np.zeros((0, 6)), None
+        return None, None, None
+    cloud = sample_cloud(survey.sample, n_neighbors, up)
+    if cloud is None:
+        return np.zeros((0, 6)), None, None
+    graph = point_graph(cloud, n_neighbors).graph  # (built with the cloud: kept there)
     reference = np.hstack([graph.positions, graph.normals.astype(np.float64)])
     area = float(graph.sizes.sum())
     if folder:  # read by the tasks from the work folder, not shipped with each
         np.save(Path(folder) / "orientation.npy", reference)
-        return str(Path(folder) / "orientation.npy"), area
-    return reference, area
+        return str(Path(folder) / "orientation.npy"), area, cloud
+    return reference, area, cloud
 
 
 #: How much wider than the halo its estimate gives the boxes of the graphs built with the
@@ -572,13 +608,19 @@ def _connected(run, labels, layout, margin, tmp, box) -> int:
 
 
 def _tile_stats(found: list, done: list) -> list[dict]:
-    """Each tile's core and rows, and the seconds and peak memory of its phases."""
+    """Each tile's core and rows, the centers in its core after the first phase that
+    finds them (the centers phase, or the first refine round after a sample start), and
+    the seconds and peak memory of that phase and of the labels phase (``peak_mib``: the
+    larger)."""
     stats = {o["tile"]: dict(tile=o["tile"], core=o["core"], rows=o["rows"]) for o in found}
-    for phase, outs in (("centers", found), ("labels", done)):
+    for outs in (found, done):
         for o in outs:
+            phase, peak = o["phase"], o["peak_mib"]
             stats[o["tile"]].update({f"{phase}_seconds": round(o["seconds"], 3),
-                                     f"{phase}_peak_mib": o["peak_mib"]})
-            if phase == "centers":
+                                     f"{phase}_peak_mib": peak})
+            if peak is not None:
+                stats[o["tile"]]["peak_mib"] = max(peak, stats[o["tile"]].get("peak_mib", 0))
+            if outs is found:
                 stats[o["tile"]]["centers"] = int(o["centers"].size)
     return [stats[k] for k in sorted(stats)]
 
