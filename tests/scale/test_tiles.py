@@ -440,6 +440,30 @@ def test_a_clouds_tiles_start_from_centers_found_on_the_sample(monkeypatch):
     assert "centers" in plain.timings and "start" not in plain.timings and len(seen) == 1
 
 
+def test_a_tiled_run_shows_every_stage_and_redraws_while_a_tile_runs(monkeypatch, capsys):
+    """With ``progress`` each stage shows a line (the phases a bar of tiles), redrawn
+    every TICK seconds while it runs: no stage is silent on a terminal."""
+    import time
+
+    from superfacets._runtime import progress
+    from superfacets.scale import tiling
+
+    monkeypatch.setattr(progress, "TICK", 0.02)
+    real = tiling.tile_refine
+
+    def slow(*args, **kw):  # (a tile that takes a while)
+        time.sleep(0.3)
+        return real(*args, **kw)
+
+    monkeypatch.setattr(tiling, "tile_refine", slow)
+    res = segment_tiled(_bumpy_cloud(20_000), 30, tiles=2, progress=True)
+    err = capsys.readouterr().err
+    for name in ("survey", "orientation", "areas", "start", "refine", "labels", "stitch",
+                 "merges"):
+        assert f"tiles: {name}" in err and name in res.timings
+    assert err.count("tiles: refine") >= 10  # redrawn while the two slow tiles ran
+
+
 def test_streamed_reading_errors_are_clear(tmp_path):
     with pytest.raises(FileNotFoundError, match="no such file"):
         RegionReader.open(tmp_path / "missing.ply")

@@ -37,11 +37,14 @@ from __future__ import annotations
 import math
 import re
 import time
+from contextlib import contextmanager
 from dataclasses import replace
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 
+from ..._runtime.progress import tick, waiting_bar
 from ...api.result import TiledResult
 from ...checks import max_threads
 from ...elements.kinds import kind_of
@@ -273,13 +276,13 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
     params, halo = _checked_options(n_segments, options, tiles, halo, refine, workers)
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
+    stage = partial(_stage, timings, progress)  # (each stage timed, and shown as it runs)
     with run_folder(workdir) as tmp:  # the run's own folder, removed at its end
-        t = time.perf_counter()
-        reader, survey = _surveyed(source, tmp, tiles, params)
-        target, merge_from, params = _merge_plan(params, reader.kind, survey)
-        if survey.color_top is not None:  # one divisor for the whole file's colours
-            reader = replace(reader, color_top=survey.color_top)
-        timings["survey"] = time.perf_counter() - t
+        with stage("survey"):
+            reader, survey = _surveyed(source, tmp, tiles, params)
+            target, merge_from, params = _merge_plan(params, reader.kind, survey)
+            if survey.color_top is not None:  # one divisor for the whole file's colours
+                reader = replace(reader, color_top=survey.color_top)
         layout = (balanced_tiles(survey.sample, survey.lo, survey.hi, tiles)
                   if np.ndim(tiles) == 0 else tile_grid(survey.lo, survey.hi, tiles))
         grid = layout.shape or (layout.n_tiles,)
@@ -291,13 +294,11 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         shared = scheduler is None or workdir is not None
         up = getattr(reader, "up", None)  # (the buckets keep the viewpoint, not this)
         if shared and n_tiles > 1:
-            t = time.perf_counter()
-            reader = bucket(reader, layout, Path(tmp) / "buckets", progress=progress)
-            timings["bucket"] = time.perf_counter() - t
-        t = time.perf_counter()
-        reference, sample_area, sampled = _orientation(reader, survey, params.n_neighbors,
-                                                       up, shared and tmp)
-        timings["orientation"] = time.perf_counter() - t
+            with stage("bucket", bar=False):  # (a bar of its own)
+                reader = bucket(reader, layout, Path(tmp) / "buckets", progress=progress)
+        with stage("orientation"):
+            reference, sample_area, sampled = _orientation(reader, survey, params.n_neighbors,
+                                                           up, shared and tmp)
         graphs = graph_folder(tmp, survey.n_elements, reader.kind, shared and n_tiles > 1,
                               params)  # the tiles' point graphs, kept between phases
         with Engine(workers=workers, scheduler=scheduler, memory_limit=memory_limit) as engine:
@@ -313,33 +314,28 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                 return _gather(engine, tasks, phase, progress)
 
             r = math.nan
-            t = time.perf_counter()
-            r, margin = _sized(run, layout, reader.kind, params, survey, diagonal, halo,
-                               (graphs, sample_area))
-            timings["areas"] = time.perf_counter() - t
+            with stage("areas", bar=False):  # (the phases' bars)
+                r, margin = _sized(run, layout, reader.kind, params, survey, diagonal, halo,
+                                   (graphs, sample_area))
             found, done = _classified(run, layout, params, margin, params.window * r, dict(
                 refine=refine, box_rows=not shared, noise=merge_from > 1, start=_sample_start(
-                    reader, survey, params, r, diagonal, refine, timings, (sampled, up))),
+                    reader, survey, params, r, diagonal, refine, stage, (sampled, up))),
                 timings)
-            t = time.perf_counter()
-            labels, disagreements = _stitched(done, reader.n_rows)
-            timings["stitch"] = time.perf_counter() - t
+            with stage("stitch"):
+                labels, disagreements = _stitched(done, reader.n_rows)
             repaired = 0
             if disagreements:  # two tiles saw a border differently: pieces are possible
-                t = time.perf_counter()
-                box = None if shared else {o["tile"]: o.pop("box_rows") for o in done}
-                repaired = _connected(run, labels, layout, margin, tmp, box)
-                timings["connect"] = time.perf_counter() - t
+                with stage("connect", bar=False):
+                    box = None if shared else {o["tile"]: o.pop("box_rows") for o in done}
+                    repaired = _connected(run, labels, layout, margin, tmp, box)
             drop_graphs(graphs)
     merged_from = None
     if merge_from > 1:
-        t = time.perf_counter()
-        merged_from = int(np.unique(labels[labels >= 0]).size)
-        labels = merged_labels(labels, [o["merge_stats"] for o in done], target, params)
-        timings["merges"] = time.perf_counter() - t
-    t = time.perf_counter()
-    names = _numbered_densely(labels)
-    timings["stitch"] += time.perf_counter() - t
+        with stage("merges"):
+            merged_from = int(np.unique(labels[labels >= 0]).size)
+            labels = merged_labels(labels, [o["merge_stats"] for o in done], target, params)
+    with stage("stitch", add=True):
+        names = _numbered_densely(labels)
     timings["total"] = time.perf_counter() - t_start
     resolved = dict(params.as_dict(), n_segments=int(names.size), radius=r / diagonal,
                     tiles=grid, halo=float(halo), elements=reader.kind, merge_from=merge_from,
@@ -387,7 +383,7 @@ def _classified(run, layout, params, margin: float, ring: float, how: dict,
 
 
 def _sample_start(reader, survey, params, r: float, diagonal: float, refine: int,
-                  timings: dict, sampled: tuple):
+                  stage, sampled: tuple):
     """The centers a cloud's refine rounds start from, found on the survey's sample
     (:func:`~superfacets.scale.tiling.sample_start`; ``sampled``: the orientation's
     sample cloud, or None, and the cloud's up direction); None where the tiles' centers
@@ -399,11 +395,9 @@ def _sample_start(reader, survey, params, r: float, diagonal: float, refine: int
     if not kind_of(reader.kind).cloud or refine < 1 or sample is None \
             or survey.sample_rows is None or sample.shape[0] < 3:
         return None
-    t = time.perf_counter()
-    start = sample_start(sample, survey.sample_rows, reader.n_rows, params, r, diagonal,
-                         *sampled)
-    timings["start"] = time.perf_counter() - t
-    return start
+    with stage("start"):  # (timed and shown: :func:`_stage`)
+        return sample_start(sample, survey.sample_rows, reader.n_rows, params, r, diagonal,
+                            *sampled)
 
 
 def _frame(reader, survey) -> np.ndarray | None:
@@ -630,18 +624,35 @@ def _gather(engine: Engine, tasks: list, phase: str, progress: bool) -> list:
     def lost(task, text):
         return {"tile": task["tile"], "phase": phase, "error": text}
 
-    results = engine.run(tile_task, tasks, on_lost=lost)
-    if progress:
+    results, stop = engine.run(tile_task, tasks, on_lost=lost), None
+    if progress:  # (its elapsed time redrawn while a tile runs: never silent)
         from tqdm import tqdm
 
         results = tqdm(results, total=len(tasks), desc=f"tiles: {phase}", unit="tile",
                        leave=False)
+        stop = tick(results)
     out = []
-    for o in results:
-        if "error" in o:
-            # (a tile's memory check speaks of that tile: more of them, not "N tiles")
-            why = re.sub(r"segment it in \d+ tiles \(--tiles \d+, superfacets\.segment_tiled\)",
-                         "segment it in more tiles (--tiles)", o["error"])
-            raise SuperfacetsError(f"tile {o['tile']} ({phase}): {why}")
-        out.append(o)
+    try:
+        for o in results:
+            if "error" in o:
+                # (a tile's memory check speaks of that tile: more of them, not "N tiles")
+                why = re.sub(r"segment it in \d+ tiles \(--tiles \d+, "
+                             r"superfacets\.segment_tiled\)",
+                             "segment it in more tiles (--tiles)", o["error"])
+                raise SuperfacetsError(f"tile {o['tile']} ({phase}): {why}")
+            out.append(o)
+    finally:
+        if stop is not None:
+            stop.set()
     return sorted(out, key=lambda o: o["tile"])
+
+
+@contextmanager
+def _stage(timings: dict, progress: bool, name: str, bar: bool = True, add: bool = False):
+    """Time a stage of the run into ``timings[name]`` (added to what is there with
+    ``add``), showing a line with its elapsed time while it runs where ``progress`` and
+    ``bar`` (stages that show bars of their own pass ``bar=False``)."""
+    t = time.perf_counter()
+    with waiting_bar(f"tiles: {name}", show=progress and bar):
+        yield
+    timings[name] = (timings.get(name, 0.0) if add else 0.0) + time.perf_counter() - t
