@@ -204,6 +204,33 @@ def test_a_piece_cut_from_a_closed_surface_orients_like_a_reference():
         PointCloud(pts, orient_like=(pts, pts[:10]))
 
 
+def test_a_large_piece_votes_with_an_even_sample_of_its_points(monkeypatch):
+    """Against a reference, every point of a small piece votes for its side, every
+    ``ceil(size / VOTERS)``-th of a larger one (in their order); on a sphere's cap
+    oriented like inward normals (against its own mean's outward rule) the sample turns
+    the piece as every point does."""
+    from superfacets.elements import normals
+
+    comp = np.array([0, 1, 0, 0, 2, 1, 0, 0, 0, 0, 0])
+    monkeypatch.setattr(normals, "VOTERS", 3)  # piece 0: 8 points, every 3rd of them
+    np.testing.assert_array_equal(normals._voters(comp, 3), [0, 1, 4, 5, 6, 9])
+    monkeypatch.setattr(normals, "VOTERS", 8)
+    np.testing.assert_array_equal(normals._voters(comp, 3), np.arange(11))
+    rng = np.random.default_rng(0)
+    d = rng.normal(size=(6000, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    cap = d[d[:, 2] > 0.2]
+    reference = (d[::5], -d[::5])  # the whole sphere's normals, turned inwards
+    sides = []
+    for voters in (10 ** 9, 64):
+        monkeypatch.setattr(normals, "VOTERS", voters)
+        g = point_graph(PointCloud(cap, orient_like=reference)).graph
+        sides.append(np.einsum("ij,ij->i", g.normals, g.positions) < 0)
+    assert sides[0].all() and sides[1].all()
+    own = point_graph(PointCloud(cap)).graph  # (outwards from its mean, by default)
+    assert (np.einsum("ij,ij->i", own.normals, own.positions) > 0).all()
+
+
 def _terrain_with_a_block(seed=4):
     """A shallow valley ``z = 0.1 r^2`` around (2, 2) on [0, 4]^2 with a 1 x 1 x 0.5
     block standing in its middle (top and four walls), points about 0.04 apart: an

@@ -87,7 +87,8 @@ def orient_normals(points: np.ndarray, normals: np.ndarray, indptr: np.ndarray,
         ``(positions, normals)`` oriented elsewhere (a sample of the same
         surface): after the propagation, each connected piece is turned to
         agree with the nearest reference normals, summed over the piece
-        (``sum s_i n_i . m_near(i) >= 0``), instead of outwards from its mean.
+        (``sum s_i n_i . m_near(i) >= 0``; over an even sample of :data:`VOTERS`
+        points of a larger piece), instead of outwards from its mean.
     up : (3,) float64 ndarray, optional
         Without ``reference``: after the propagation, each connected piece is
         turned to agree with this direction (``sum s_i n_i . up >= 0``),
@@ -110,15 +111,38 @@ def orient_normals(points: np.ndarray, normals: np.ndarray, indptr: np.ndarray,
     n_comp = propagate_signs(indptr, indices, normals, sign, comp)
     out = np.empty_like(normals)
     turn_outwards(points, normals, sign, comp, n_comp, out)
-    agree = None
+    vote = None
     if reference is not None and reference[0].shape[0] and n:
         from scipy.spatial import cKDTree
 
-        _, near = cKDTree(reference[0]).query(points, k=1, workers=-1)
-        agree = np.einsum("ij,ij->i", out, reference[1][near])
+        at = _voters(comp, n_comp)
+        _, near = cKDTree(reference[0]).query(points[at], k=1, workers=-1)
+        vote = np.bincount(comp[at], weights=np.einsum("ij,ij->i", out[at],
+                                                       reference[1][near]), minlength=n_comp)
     elif up is not None and n:
-        agree = out @ np.asarray(up, dtype=np.float64)
-    if agree is not None:
-        flip = np.bincount(comp, weights=agree, minlength=n_comp) < 0
-        out[flip[comp]] *= -1.0
+        vote = np.bincount(comp, weights=out @ np.asarray(up, dtype=np.float64),
+                           minlength=n_comp)
+    if vote is not None:
+        out[(vote < 0)[comp]] *= -1.0
     return out
+
+
+#: The points of a piece that vote with the reference normals (:func:`orient_normals`):
+#: all of a piece up to this many, else an even subsample of about this many.
+VOTERS = 4096
+
+
+def _voters(comp: np.ndarray, n_comp: int) -> np.ndarray:
+    """The points that vote for their piece's side, in increasing order: every point of a
+    piece of at most :data:`VOTERS`, every ``ceil(size / VOTERS)``-th of a larger one (in
+    the order of the points): a piece of millions of points agrees or disagrees with the
+    reference by a margin its even sample keeps, and the reference's nearest-neighbour
+    query is the tiles' longest step of the orientation otherwise."""
+    size = np.bincount(comp, minlength=n_comp)
+    step = np.maximum(1, -(-size // VOTERS))
+    if (step == 1).all():
+        return np.arange(comp.size)
+    order = np.argsort(comp, kind="stable")  # each piece's points, in their order
+    start = np.concatenate([[0], np.cumsum(size)[:-1]])
+    rank = np.arange(comp.size) - start[comp[order]]
+    return np.sort(order[rank % step[comp[order]] == 0])
