@@ -440,6 +440,22 @@ def test_a_clouds_tiles_start_from_centers_found_on_the_sample(monkeypatch):
     assert "centers" in plain.timings and "start" not in plain.timings and len(seen) == 1
 
 
+@pytest.mark.parametrize("options", [dict(n_segments=100), dict(n_segments=None,
+                                                                radius=0.004)])
+def test_a_sample_too_small_for_the_centers_leaves_them_to_the_tiles(options, tmp_path,
+                                                                     monkeypatch):
+    """A survey's sample of 16 points a center or fewer (a huge count on a huge cloud),
+    or of fewer points than the radius asks centers, starts no run: each tile samples its
+    own centers, as on a mesh."""
+    from superfacets.io import regions
+
+    monkeypatch.setattr(regions, "SAMPLE", 500)  # every 40th of 20,000 points
+    np.save(tmp_path / "c.npy", _bumpy_cloud(20_000).points)
+    res = segment_tiled(tmp_path / "c.npy", tiles=4, merge_from=1, **options)
+    assert "centers" in res.timings and all(t["centers_seconds"] >= 0 for t in res.tiles)
+    assert res.n_segments >= (100 if options["n_segments"] else 2000)
+
+
 def test_a_tiled_run_shows_every_stage_and_redraws_while_a_tile_runs(monkeypatch, capsys):
     """With ``progress`` each stage shows a line (the phases a bar of tiles), redrawn
     every TICK seconds while it runs: no stage is silent on a terminal."""

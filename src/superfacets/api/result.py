@@ -328,7 +328,8 @@ class TiledResult:
         ``orientation`` (points without normals or viewpoint: the survey's
         sample oriented once, :func:`~superfacets.scale.tiling.orientation_reference`), ``areas``,
         ``start`` (a cloud's centers found on that sample:
-        :func:`~superfacets.scale.tiling.sample_start`) or ``centers`` (each tile's),
+        :func:`~superfacets.scale.tiling.sample_start`), ``centers`` (each tile's, where
+        no sample start gave them),
         ``refine``, ``labels``, ``stitch``, ``connect`` (only with disagreements),
         ``total``.
     params : dict

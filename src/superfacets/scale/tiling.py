@@ -224,7 +224,9 @@ def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: Segm
     rows : (c,) int64 ndarray
         Rows of the cloud holding the start's centers, increasing.
     positions : (c, 3) float64 ndarray
-        Their positions.
+        Their positions. None instead of both where a run sized by ``radius`` asks more
+        than one center in :data:`START_POINTS_PER_CENTER` points of a sample that is not
+        the whole cloud (the tiles then sample their own centers).
 
     Examples
     --------
@@ -249,6 +251,12 @@ def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: Segm
     d = _diagonal(cloud)
     if d <= 0 or sample.shape[0] < 3:
         return rows[:1], sample[:1]
+    if params.n_segments is None and sample.shape[0] < n_rows:  # (sized by the radius)
+        from ..elements.points import point_graph
+
+        area = float(point_graph(cloud, params.n_neighbors).graph.area)  # (kept with it)
+        if sample.shape[0] < START_POINTS_PER_CENTER * area / superfacet_measure(r, 2):
+            return None
     p = replace(_tile_params(params, r, diagonal, d), beta=0.0)
     n = params.n_segments if p.init == "farthest" else None
     found = np.asarray(pipeline(cloud, p, n_centers=n).centers, dtype=np.int64)
