@@ -779,6 +779,25 @@ def test_a_scans_viewpoint_reaches_every_tile(tmp_path):
     np.testing.assert_array_equal(part.viewpoint, [0.5, 0.5, 5.0])
 
 
+def test_a_scans_viewpoint_reaches_the_start_on_its_sample(monkeypatch):
+    """The sample a tiled scan starts from faces its scanner, as every tile does."""
+    from superfacets.scale import tiling
+
+    seen = []
+    real = tiling.pipeline
+
+    def pipeline(cloud, *args, **kw):
+        seen.append(cloud.viewpoint)
+        return real(cloud, *args, **kw)
+
+    monkeypatch.setattr(tiling, "pipeline", pipeline)
+    cloud = _bumpy_cloud(20_000)
+    scan = PointCloud(cloud.points, viewpoint=np.array([0.0, 0.0, 9.0]))
+    res = segment_tiled(scan, 30, tiles=4, merge_from=1)
+    assert "start" in res.timings
+    np.testing.assert_array_equal(seen[0], [0.0, 0.0, 9.0])  # (the start runs first)
+
+
 def _lattice_cloud(n: int = 40, seed: int = 3):
     """A wavy sheet on an integer lattice, positions rounded to millimetres: the many
     equal distances of a quantized RGB-D scan."""

@@ -182,8 +182,8 @@ START_MIN_POINTS = 10_000
 
 
 def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: SegmentParams,
-                 r: float, diagonal: float, cloud=None, up=None
-                 ) -> tuple[np.ndarray, np.ndarray]:
+                 r: float, diagonal: float, cloud=None, up=None, viewpoint=None
+                 ) -> tuple[np.ndarray, np.ndarray] | None:
     """The start of a tiled run on a cloud: the method on an even sample of its points.
 
     Replaces the centers phase of :func:`tile_centers` on clouds: instead of each tile
@@ -218,6 +218,8 @@ def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: Segm
         :func:`oriented_sample`), used when the sample is not thinned.
     up : (3,) float ndarray, optional
         The cloud's up direction (``PointCloud.up``), for the sample's normals.
+    viewpoint : (3,) float ndarray, optional
+        The scanner's position (``PointCloud.viewpoint``): the sample's normals face it.
 
     Returns
     -------
@@ -246,7 +248,7 @@ def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: Segm
     step = max(1, min(math.ceil(sample.shape[0] / (START_SHARE * n_rows)),
                       sample.shape[0] // least))
     if step > 1 or cloud is None:
-        cloud = PointCloud(sample[::step], up=up)
+        cloud = PointCloud(sample[::step], up=up, viewpoint=viewpoint)
         sample, rows = sample[::step], rows[::step]
     d = _diagonal(cloud)
     if d <= 0 or sample.shape[0] < 3:

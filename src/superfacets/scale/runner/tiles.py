@@ -400,7 +400,7 @@ def _sample_start(reader, survey, params, r: float, diagonal: float, refine: int
         return None
     with stage("start"):  # (timed and shown: :func:`_stage`)
         return sample_start(sample, survey.sample_rows, reader.n_rows, params, r, diagonal,
-                            *sampled)
+                            *sampled, viewpoint=reader.viewpoint)
 
 
 def _frame(reader, survey) -> np.ndarray | None:
