@@ -779,3 +779,21 @@ def test_a_center_sent_back_to_one_of_its_recent_places_is_held():
     assert np.flatnonzero(held).tolist() == [6]
     recent.compact(np.array([False, True]))
     assert recent.rows.shape[0] == 1 and 10 in recent.rows[0] and 11 in recent.rows[0]
+
+
+@pytest.mark.parametrize("n", [1, 7, 8, 130, 1001, 65_536, 65_537, 300_001])
+def test_the_passes_energy_is_numpys_sum_bit_for_bit(n, monkeypatch):
+    """The energy sums the products in blocks, in numpy's own pairwise order: the same
+    bits as ``(sizes * dist).sum()`` (the passes' stopping rules compare energies), and
+    the elements no center reached are left out."""
+    from superfacets.method import passes
+
+    rng = np.random.default_rng(n)
+    sizes = rng.random(n) * 10.0 ** rng.integers(-4, 4, n)
+    dist = rng.random(n) ** 3
+    for block in (128, 1000, passes.ENERGY_BLOCK):  # (numpy's own blocks: 128)
+        monkeypatch.setattr(passes, "ENERGY_BLOCK", block)
+        assert passes._energy(sizes, dist) == float((sizes * dist).sum())
+    dist[::3] = np.inf
+    keep = np.isfinite(dist)
+    assert passes._energy(sizes, dist) == float((sizes[keep] * dist[keep]).sum())

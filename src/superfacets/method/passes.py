@@ -292,16 +292,34 @@ class _Recent:
 RECENT = 4
 
 
+#: Elements whose products the energy sums at a time (:func:`_product_sum`): 512 KiB; at
+#: least 128, the blocks numpy's pairwise summation adds without splitting them.
+ENERGY_BLOCK = 1 << 16
+
+
 def _energy(sizes: np.ndarray, dist: np.ndarray) -> float:
     """The classification's energy: the size-weighted sum of each element's distance to
     its center (elements no center reached left out)."""
     # (not np.dot: a BLAS call wakes OpenBLAS's threads, which then spin against the
     # compiled kernels' threads and slowed the whole run by half)
-    energy = float((sizes * dist).sum())
+    energy = float(_product_sum(sizes, dist, np.empty(min(sizes.size, ENERGY_BLOCK))))
     if np.isfinite(energy):  # (every element reached: the usual case, one pass)
         return energy
     reached = np.isfinite(dist)
     return float((sizes[reached] * dist[reached]).sum())
+
+
+def _product_sum(a: np.ndarray, b: np.ndarray, buf: np.ndarray):
+    """``(a * b).sum()`` of two (n,) float arrays, the same bits, without a temporary of
+    ``n``: the halves numpy's pairwise summation adds (``n // 2``, less its remainder by
+    8) are split the same way down to blocks of ``buf``'s length, each summed by numpy
+    (10M elements: 30 -> 6 ms, the products' pages no longer faulted in every pass)."""
+    n = a.shape[0]
+    if n <= buf.shape[0]:
+        return np.multiply(a, b, out=buf[:n]).sum()
+    half = n // 2
+    half -= half % 8
+    return _product_sum(a[:half], b[:half], buf) + _product_sum(a[half:], b[half:], buf)
 
 
 def _settle(centers: np.ndarray, states: list, energies: list, first: int,
