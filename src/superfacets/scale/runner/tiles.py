@@ -75,12 +75,12 @@ __all__ = ["segment_tiled", "TiledResult", "tile_task"]
 def tile_task(task: dict) -> dict:
     """One tile's work (a module-level function: Dask workers import it by reference).
 
-    ``task`` holds ``phase`` ('areas', 'centers' or 'labels'), ``reader``,
-    ``layout`` (:class:`~superfacets.scale.tile_layout.Tiles`), ``tile``, ``margin``,
-    ``params``, ``r``, ``diagonal``, ``orient_like`` (optional: the oriented
+    ``task`` holds ``phase`` ('areas', 'centers', 'refine', 'labels' or 'connect'),
+    ``reader``, ``layout`` (:class:`~superfacets.scale.tile_layout.Tiles`), ``tile``,
+    ``margin``, ``params``, ``r``, ``diagonal``, ``orient_like`` (optional: the oriented
     sample, or its file), ``frame`` (optional: the whole cloud's box, whose frame
-    numbers a tile's points), and for 'labels' the ``centers`` (rows) within reach
-    and ``ring`` (a width).
+    numbers a tile's points), for 'refine' and 'labels' the ``centers`` (rows) within
+    reach, for 'labels' a ``ring`` (a width), for 'connect' the stitched ``labels``.
     Returns a dict; an error is returned as ``error`` (text), never raised.
 
     Parameters
