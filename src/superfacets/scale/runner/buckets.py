@@ -183,9 +183,8 @@ class TileBuckets:
         near = (self.counts > 0) & (self.lo <= hi).all(axis=1) & (self.hi >= lo).all(axis=1)
         for t in np.flatnonzero(near):
             rec = self._tile(int(t))
-            pos = rec["pos"]
-            parts.append(np.array(rec[np.flatnonzero(rows_in_box(pos, lo, hi))]))
-            del rec
+            parts.append(rec[rows_in_box(rec["pos"], lo, hi)])  # (a copy: not of the file's
+            del rec  # bytes, let go here)
         rec = np.concatenate(parts) if parts else np.empty(0, dtype=self.dtype)
         return rec[np.argsort(rec["row"], kind="stable")]
 
