@@ -226,9 +226,9 @@ def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: Segm
     rows : (c,) int64 ndarray
         Rows of the cloud holding the start's centers, increasing.
     positions : (c, 3) float64 ndarray
-        Their positions. None instead of both where a run sized by ``radius`` asks more
-        than one center in :data:`START_POINTS_PER_CENTER` points of a sample that is not
-        the whole cloud (the tiles then sample their own centers).
+        Their positions. None instead of both where the sample is not the whole cloud and
+        holds fewer than :data:`START_POINTS_PER_CENTER` points a center (``n_segments``,
+        or the centers ``radius`` asks): the tiles then sample their own centers.
 
     Examples
     --------
@@ -244,6 +244,8 @@ def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: Segm
     from .tile_layout import gathered_centers
 
     sample = np.asarray(sample, dtype=np.float64)
+    if sample.shape[0] < min(START_POINTS_PER_CENTER * (params.n_segments or 0), n_rows):
+        return None  # (fewer points a center than a start needs, and not the whole cloud)
     least = max(START_MIN_POINTS, START_POINTS_PER_CENTER * (params.n_segments or 0))
     step = max(1, min(math.ceil(sample.shape[0] / (START_SHARE * n_rows)),
                       sample.shape[0] // least))

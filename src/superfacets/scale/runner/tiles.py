@@ -388,15 +388,13 @@ def _sample_start(reader, survey, params, r: float, diagonal: float, refine: int
     (:func:`~superfacets.scale.tiling.sample_start`; ``sampled``: the orientation's
     sample cloud, or None, and the cloud's up direction); None where the tiles' centers
     phase gives them (meshes; ``refine=0``, where no round follows to run the passes on
-    every point; a sample too small: of fewer than :data:`~superfacets.scale.tiling.
-    START_POINTS_PER_CENTER` points a center, unless it is the whole cloud, or of fewer
-    points than the radius asks centers)."""
-    from ..tiling import START_POINTS_PER_CENTER, sample_start
+    every point; a sample too small for the centers: :func:`~superfacets.scale.tiling.
+    sample_start` says so)."""
+    from ..tiling import sample_start
 
     sample = survey.sample
     if not kind_of(reader.kind).cloud or refine < 1 or sample is None \
-            or survey.sample_rows is None or sample.shape[0] < 3 or sample.shape[0] < min(
-                START_POINTS_PER_CENTER * (params.n_segments or 0), reader.n_rows):
+            or survey.sample_rows is None or sample.shape[0] < 3:
         return None
     with stage("start"):  # (timed and shown: :func:`_stage`)
         return sample_start(sample, survey.sample_rows, reader.n_rows, params, r, diagonal,
