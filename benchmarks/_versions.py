@@ -7,14 +7,21 @@ included) or a folder holding a built copy of another version, made with::
     pip install --no-build-isolation --no-deps --target /tmp/before-site /tmp/before
 
 (the folder is put first on the path, and an editable install's import hook, which
-would otherwise come first, is set aside).
+would otherwise come first, is set aside). The child's own children (a tiled run's Dask
+workers) import the same version: a ``sitecustomize`` on their ``PYTHONPATH`` does the
+same at their start (without it they imported the installed package: a tiled run of
+another version measured that version's driver with this one's tasks).
 """
 
 from __future__ import annotations
 
+import atexit
+import functools
 import os
+import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 PRELUDE = """import os, sys
@@ -35,7 +42,20 @@ def version_env(version: str) -> dict:
                 (folder / "superfacets" / "_kernels").glob("_cxx*")):
             raise SystemExit(f"{folder}: no built package there (see benchmarks/_versions.py)")
         env["SUPERFACETS_BENCH_VERSION"] = str(folder)
+        env["PYTHONPATH"] = os.pathsep.join(
+            [_site_folder(), str(folder)] + ([env["PYTHONPATH"]] if env.get("PYTHONPATH")
+                                             else []))
     return env
+
+
+@functools.cache
+def _site_folder() -> str:
+    """A folder holding a ``sitecustomize`` that runs :data:`PRELUDE` in every process
+    started with it on the path (removed when this process ends)."""
+    folder = tempfile.mkdtemp(prefix="superfacets-bench-site-")
+    atexit.register(shutil.rmtree, folder, True)
+    Path(folder, "sitecustomize.py").write_text(PRELUDE, encoding="utf-8")
+    return folder
 
 
 def run_code(version: str, code: str, *args: str, timeout: float | None = None
