@@ -562,3 +562,39 @@ def test_the_memory_check_counts_an_input_it_holds_once(monkeypatch):
     n, bpe = mesh.n_faces, kind_of("faces").peak_bytes
     assert memory.estimated_peak(n, bpe, held=0, input_bytes=held) == (
         memory.BASE_BYTES + n * bpe - held)
+
+
+def test_a_work_files_digest_is_taken_in_memory_and_checked_on_reading(tmp_path):
+    """A work file's digest (CRC-32 of its dtype, shape and bytes) is taken from the array
+    as written and checked on the array read back: a changed byte, dtype or shape, a
+    truncated raw file or an unreadable header is refused in one line."""
+    import zlib
+
+    from superfacets.errors import SuperfacetsError
+    from superfacets.io.files import array_digest, load_checked
+
+    a = np.arange(12, dtype=np.int32).reshape(4, 3)
+    np.save(tmp_path / "a.npy", a)
+    np.testing.assert_array_equal(load_checked(tmp_path / "a.npy", array_digest(a)), a)
+    for other in (a.reshape(3, 4), a.astype(np.int64), a.astype(np.float32), a[:3]):
+        assert array_digest(other) != array_digest(a)
+    data = bytearray((tmp_path / "a.npy").read_bytes())
+    data[-1] ^= 1
+    (tmp_path / "b.npy").write_bytes(bytes(data))
+    (tmp_path / "c.npy").write_bytes(b"\x93NUMPY garbage")
+    for name, digest in (("b", array_digest(a)), ("c", array_digest(a)), ("a", None)):
+        with pytest.raises(SuperfacetsError, match="changed since this run wrote it"):
+            load_checked(tmp_path / f"{name}.npy", digest)
+    rec = np.zeros(5, dtype=[("row", "<i8"), ("pos", "<f8", (3,))])
+    rec["row"] = np.arange(5)
+    crc = 0
+    for block in (rec[:2], rec[2:]):  # as the tiles' files are written, block by block
+        with open(tmp_path / "r.bin", "ab") as f:
+            block.tofile(f)
+        crc = zlib.crc32(block.view(np.uint8), crc)
+    assert f"{crc:08x}" == array_digest(rec, described=False)
+    got = load_checked(tmp_path / "r.bin", f"{crc:08x}", rec.dtype)
+    assert got.dtype == rec.dtype and np.array_equal(got, rec)
+    (tmp_path / "r.bin").write_bytes((tmp_path / "r.bin").read_bytes()[:-8])
+    with pytest.raises(SuperfacetsError, match="changed since this run wrote it"):
+        load_checked(tmp_path / "r.bin", f"{crc:08x}", rec.dtype)

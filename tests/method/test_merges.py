@@ -307,6 +307,28 @@ def test_sorted_unique_is_numpys_unique():
         np.testing.assert_array_equal(got, want)
 
 
+def test_ranked_labels_are_numpys_unique_with_its_inverse():
+    """The tables that number a tiled run's labels (named by rows) and look up its merged
+    names give what ``np.unique`` and ``np.searchsorted`` gave, -1 kept."""
+    from superfacets._runtime.arrays import ranked, row_table
+
+    rng = np.random.default_rng(8)
+    for n, upper in ((0, 5), (1, 1), (1000, 50), (20_000, 10**6)):
+        labels = rng.integers(-1, upper, n)
+        names, ranks = ranked(labels, upper)
+        valid = labels >= 0
+        want, inverse = np.unique(labels[valid], return_inverse=True)
+        np.testing.assert_array_equal(names, want)
+        np.testing.assert_array_equal(ranks[valid], inverse)
+        assert ranks.dtype == np.int64 and (ranks[~valid] == -1).all()
+        at = row_table(names, upper)[labels]
+        np.testing.assert_array_equal(np.where(valid, names[np.maximum(at, 0)], -1), labels)
+    table = row_table(np.array([4, 0]), 6)
+    assert table.tolist() == [1, -1, -1, -1, 0, -1, -1]
+    with pytest.raises(ValueError, match="-1..9"):
+        ranked(np.array([3, 10]), 10)
+
+
 def test_the_merges_do_not_join_neighbours_of_another_colour():
     # a flat floor, a third of it painted: flat merges join the paint to the floor unless
     # the colour term is on; with it, only neighbours of one colour merge

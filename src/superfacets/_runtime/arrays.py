@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["gather", "real_rows", "sorted_unique"]
+__all__ = ["gather", "real_rows", "sorted_unique", "ranked", "row_table"]
 
 #: Rows from which the whole-array passes run compiled, on threads (numpy below): the
 #: gathers here, the columns' bounds and means, a point graph's shares and sort window.
@@ -48,6 +48,74 @@ def sorted_unique(values: np.ndarray) -> np.ndarray:
     keep[0] = True
     np.not_equal(a[1:], a[:-1], out=keep[1:])
     return a[keep]
+
+
+def row_table(names: np.ndarray, upper: int) -> np.ndarray:
+    """Where each of ``upper`` values stands in ``names`` (distinct values in ``0..upper-1``):
+    ``table[v]`` is ``v``'s position, ``-1`` for a value not named, and ``table[-1]`` (one
+    entry past ``upper``) is ``-1``, so that ``table[labels]`` reads ``-1`` for a label of
+    ``-1``. A lookup in place of ``np.searchsorted`` on labels named by rows: 4 bytes per
+    value (8 past 2**31 names), one gather instead of a binary search per label.
+
+    Parameters
+    ----------
+    names : (K,) int ndarray
+        Distinct, in ``0..upper-1``.
+    upper : int
+        The values' bound.
+
+    Returns
+    -------
+    (upper + 1,) int32 or int64 ndarray
+
+    Examples
+    --------
+    >>> row_table(np.array([7, 2]), 9)[np.array([2, 7, 3, -1])].tolist()
+    [1, 0, -1, -1]
+    """
+    names = np.asarray(names)
+    table = np.full(int(upper) + 1, -1, dtype=np.int32 if names.size < 2**31 else np.int64)
+    table[names] = np.arange(names.size, dtype=table.dtype)
+    return table
+
+
+def ranked(labels: np.ndarray, upper: int) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct values of ``labels`` (``-1`` aside) ascending, and each label's rank
+    among them (``-1`` stays): ``np.unique(labels[labels >= 0], return_inverse=True)`` by a
+    table of ``upper`` entries instead of a sort (10M labels named by rows: 0.6 s -> 0.1 s,
+    5 bytes per value of the table against 24 per label).
+
+    Parameters
+    ----------
+    labels : (n,) int ndarray
+        Each in ``-1..upper-1``.
+    upper : int
+        The labels' bound.
+
+    Returns
+    -------
+    names : (K,) int64 ndarray
+    ranks : (n,) int64 ndarray
+
+    Raises
+    ------
+    ValueError
+        If a label lies outside ``-1..upper-1``.
+
+    Examples
+    --------
+    >>> names, ranks = ranked(np.array([9, -1, 4, 9]), 10)
+    >>> names.tolist(), ranks.tolist()
+    ([4, 9], [1, -1, 0, 1])
+    """
+    labels = np.asarray(labels)
+    if labels.size and (labels.min() < -1 or labels.max() >= upper):
+        raise ValueError(f"labels must lie in -1..{upper - 1}")
+    present = np.zeros(int(upper) + 1, dtype=bool)
+    present[labels] = True  # (-1: the entry past upper)
+    present[-1] = False
+    names = np.flatnonzero(present)
+    return names, row_table(names, upper)[labels].astype(np.int64)
 
 
 def real_rows(values: np.ndarray) -> np.ndarray:

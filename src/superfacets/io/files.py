@@ -22,7 +22,8 @@ from typing import Callable
 from ..errors import MeshFormatError
 
 __all__ = ["split_suffix", "read_bytes", "text_lines", "atomic_write", "Outputs", "save",
-           "COMPRESSIONS", "decompressed", "decompressed_head", "sha256_of"]
+           "COMPRESSIONS", "decompressed", "decompressed_head", "sha256_of", "array_digest",
+           "load_checked"]
 
 
 #: Compression suffixes understood on reading and writing.
@@ -211,6 +212,91 @@ def sha256_of(path) -> str:
         for block in iter(lambda: f.read(1 << 24), b""):
             h.update(block)
     return h.hexdigest()
+
+
+def array_digest(a, described: bool = True) -> str:
+    """The CRC-32 of an array's dtype, shape and bytes (8 hex digits), read where it lies in
+    memory: a work file's digest taken as it is written (no second read of the file), and
+    checked on the array read back (:func:`load_checked`).
+
+    A checksum that catches a file changed by accident (another run, another machine on a
+    shared folder, a truncated copy), at about 7 GB/s (SHA-256 reads 2 GB/s: 3 of the 45 s
+    of 10M points in 4 tiles); not a signature: a work file's digest is kept in the work
+    folder beside it.
+
+    Parameters
+    ----------
+    a : ndarray
+        Any dtype (structured included), any shape.
+    described : bool, default True
+        False: of the bytes alone (a raw file of records, summed block by block as it is
+        appended to: ``zlib.crc32(block, crc)`` over the blocks gives the same).
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> array_digest(np.arange(3)) == array_digest(np.arange(3.0))
+    False
+    >>> first, rest = np.arange(5)[:2], np.arange(5)[2:]
+    >>> f"{zlib.crc32(rest, zlib.crc32(first)):08x}" == array_digest(np.arange(5), False)
+    True
+    """
+    import numpy as np
+
+    a = np.ascontiguousarray(a)
+    crc = zlib.crc32(f"{a.dtype.descr}{a.shape}".encode()) if described else 0
+    return f"{zlib.crc32(a.reshape(-1).view(np.uint8), crc):08x}"
+
+
+def load_checked(path, digest: str | None, dtype=None):
+    """An array read back from a work file, refused unless it is the one written there.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A ``.npy`` file, or with ``dtype`` raw records of that dtype.
+    digest : str or None
+        Its :func:`array_digest` when written (None: nothing to check against, refused).
+    dtype : numpy.dtype, optional
+        The records' dtype of a raw file (whose digest is of its bytes alone:
+        ``described=False``).
+
+    Returns
+    -------
+    ndarray
+
+    Raises
+    ------
+    SuperfacetsError
+        If the array read is not the one written (its bytes, dtype or shape changed, or the
+        file no longer reads): the compiled kernels trust the arrays they are given.
+    OSError
+        If the file cannot be read.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> np.save("a.npy", np.arange(4))
+    >>> load_checked("a.npy", array_digest(np.arange(4))).tolist()
+    [0, 1, 2, 3]
+    """
+    import numpy as np
+
+    from ..errors import SuperfacetsError
+
+    try:
+        a = np.fromfile(path, dtype=dtype) if dtype is not None else np.load(
+            path, allow_pickle=False)
+    except ValueError:  # (a header that no longer reads)
+        a = None
+    if a is None or digest is None or array_digest(a, dtype is None) != digest:
+        raise SuperfacetsError(f"{path}: changed since this run wrote it (the work "
+                               "folder's files belong to the run): refused")
+    return a
 
 
 def text_lines(data: bytes, path: Path) -> list[str]:

@@ -11,8 +11,6 @@ same arrays, so the same labels.
 
 from __future__ import annotations
 
-import hashlib
-import io
 import json
 import os
 import shutil
@@ -20,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io.files import sha256_of
+from ..io.files import array_digest, load_checked
 
 __all__ = ["GRAPH_FILES", "BYTES_PER_POINT", "graph_folder", "drop_graphs", "tile_graph",
            "room_for_graphs"]
@@ -128,10 +126,10 @@ def tile_graph(cloud, folder, n_neighbors: int) -> str:
     for name, a in (("positions", g.positions), ("sizes", g.sizes), ("normals", g.normals),
                     ("indptr", g.indptr), ("indices", g.indices), ("index", el.index)):
         np.save(part / f"{name}.npy", a)
-        digests[name] = sha256_of(part / f"{name}.npy")
+        digests[name] = array_digest(a)  # (of the array in memory: not read back)
     pair_dtype = g.rebuild["pairs"].keywords["pair_dtype"]
     (part / "graph.json").write_text(json.dumps({"pair_dtype": np.dtype(pair_dtype).name,
-                                                 "sha256": digests}), encoding="utf-8")
+                                                 "digests": digests}), encoding="utf-8")
     try:  # whole or absent: a phase never reads half a graph
         os.replace(part, folder)
     except OSError:  # the same tile saved by another try of the task
@@ -142,18 +140,9 @@ def tile_graph(cloud, folder, n_neighbors: int) -> str:
 
 
 def _read_checked(folder: Path, meta: dict) -> dict:
-    """The graph's arrays, each file's SHA-256 checked against the one written with it:
-    the work folder may be shared with other machines, and the compiled kernels trust
-    the arrays they are given (a changed index reads out of bounds)."""
-    from ..errors import SuperfacetsError
-
-    want = meta.get("sha256", {}) if isinstance(meta, dict) else {}
-    arrays = {}
-    for name in GRAPH_FILES:
-        path = folder / f"{name}.npy"
-        data = path.read_bytes()
-        if want.get(name) != hashlib.sha256(data).hexdigest():
-            raise SuperfacetsError(f"{path}: changed since this run wrote it (the work "
-                                   "folder's files belong to the run): refused")
-        arrays[name] = np.load(io.BytesIO(data), allow_pickle=False)
-    return arrays
+    """The graph's arrays, each checked against the digest written with it
+    (:func:`~superfacets.io.files.load_checked`): the work folder may be shared with
+    other machines, and the compiled kernels trust the arrays they are given (a changed
+    index reads out of bounds)."""
+    want = meta.get("digests", {}) if isinstance(meta, dict) else {}
+    return {name: load_checked(folder / f"{name}.npy", want.get(name)) for name in GRAPH_FILES}

@@ -34,7 +34,7 @@ from dataclasses import replace
 import numpy as np
 
 from .._kernels import native
-from .._runtime.arrays import real_rows
+from .._runtime.arrays import ranked, real_rows, row_table
 
 __all__ = ["tile_merge_stats", "merge_names", "one_position_stats", "tiled_merge_from",
            "merged_labels"]
@@ -108,8 +108,7 @@ def tile_merge_stats(graph, labels: np.ndarray, names: np.ndarray, core: np.ndar
     pos = np.ascontiguousarray(graph.positions, dtype=np.float64)
     sizes = np.ascontiguousarray(graph.sizes, dtype=np.float64)
     normals = real_rows(graph.normals)
-    used, local = np.unique(lab[at], return_inverse=True)
-    local = np.ascontiguousarray(local, dtype=np.int64)
+    used, local = ranked(lab[at], names.size)
     k = used.size
     sums = native.kernel("geometry.label_sums")
     count, wpos, unused = np.zeros(k), np.zeros((k, 3)), np.zeros((k, 3))
@@ -251,12 +250,10 @@ def merged_labels(labels: np.ndarray, stats: list, target: int, params) -> np.nd
         warnings.warn(f"{fewest} superpoints for n_segments={target}: the input has {fewest} "
                       "separate pieces, and a superpoint cannot cross from one to another",
                       RuntimeWarning, stacklevel=3)
-    out = labels.copy()
-    at = np.searchsorted(names, labels)
-    known = (labels >= 0) & (at < names.size)
-    known[known] = names[at[known]] == labels[known]
-    out[known] = merged[at[known]]
-    return out
+    if names.size == 0:
+        return labels.copy()
+    at = row_table(names, labels.size)[labels]  # (each names a row of the input)
+    return np.where(at >= 0, merged[at], labels)
 
 
 def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float, *,

@@ -333,11 +333,22 @@ def sample_cloud(sample: np.ndarray, n_neighbors: int, up=None):
     from ..inputs.cloud import PointCloud
 
     pts = np.asarray(sample, dtype=np.float64)
-    if np.unique(pts, axis=0).shape[0] < 3:
+    if not _three_distinct(pts):
         return None
     cloud = PointCloud(pts, up=up)
     point_graph(cloud, n_neighbors)  # (kept with the cloud)
     return cloud
+
+
+def _three_distinct(pts: np.ndarray) -> bool:
+    """Whether the rows of ``pts`` (n, 3) hold at least three distinct points (one pass
+    per point found, not a sort of the rows)."""
+    if pts.shape[0] < 3:
+        return False
+    differs = (pts != pts[0]).any(axis=1)
+    if not differs.any():
+        return False
+    return bool((differs & (pts != pts[np.argmax(differs)]).any(axis=1)).any())
 
 
 def core_area(cloud, core: np.ndarray, n_neighbors: int) -> float:

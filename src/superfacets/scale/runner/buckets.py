@@ -10,13 +10,14 @@ file twice in all (its survey, this sorting), not once per task.
 
 from __future__ import annotations
 
+import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ...inputs.bounds import column_bounds, rows_in_box
-from ...io.files import sha256_of
+from ...io.files import array_digest, load_checked
 from ...io.regions import point_cloud_of
 
 __all__ = ["bucket", "TileBuckets"]
@@ -64,6 +65,7 @@ def bucket(reader, tiles, folder, *, progress: bool = False) -> TileBuckets:
     lo = np.full((n_tiles, 3), np.inf)
     hi = np.full((n_tiles, 3), -np.inf)
     counts = np.zeros(n_tiles, dtype=np.int64)
+    crcs = [0] * n_tiles  # (each file's digest, summed as it is written)
     dtype = None
     bar = None
     if progress:
@@ -102,6 +104,7 @@ def bucket(reader, tiles, folder, *, progress: bool = False) -> TileBuckets:
                                   "the input's size free; give --workdir a folder with room"
                                   ) from None
                 counts[t] += block.size
+                crcs[t] = zlib.crc32(block.view(np.uint8), crcs[t])
                 low, high = column_bounds(block["pos"])
                 lo[t] = np.minimum(lo[t], low)
                 hi[t] = np.maximum(hi[t], high)
@@ -112,8 +115,7 @@ def bucket(reader, tiles, folder, *, progress: bool = False) -> TileBuckets:
             bar.close()
     if dtype is None:  # no rows: nothing is ever read
         dtype = np.dtype([("row", "<i8"), ("pos", "<f8", (3,))])
-    digests = tuple(sha256_of(folder / f"tile-{t}.bin") if counts[t] else ""
-                    for t in range(n_tiles))
+    digests = tuple(f"{crc:08x}" if c else "" for crc, c in zip(crcs, counts))
     return TileBuckets(str(folder), reader.kind, reader.n_rows, dtype, lo, hi, counts,
                        reader.viewpoint, reader.path, digests)
 
@@ -144,7 +146,8 @@ class TileBuckets:
     source : str
         The file they came from (for messages).
     digests : tuple of str
-        Each tile file's SHA-256, checked before it is read (the work folder may be
+        Each tile file's digest (:func:`~superfacets.io.files.array_digest` of its bytes),
+        checked before it is read (the work folder may be
         shared with other machines, and a changed file gave other elements' rows).
     """
 
@@ -165,7 +168,7 @@ class TileBuckets:
         <superfacets.io.regions.RegionReader.read_box>` gives.
 
         ``keep`` (a path without suffix, optional): the box's records are saved there
-        (``keep.npy``, with ``keep.json``: the box and the file's SHA-256) and read from
+        (``keep.npy``, with ``keep.json``: the box and the array's digest) and read from
         there when the same box is asked for again (a tile's later phases), instead of
         from the tiles it overlaps."""
         lo = np.asarray(lo, dtype=np.float64)
@@ -210,17 +213,14 @@ class TileBuckets:
 
     def _tile(self, t: int) -> np.ndarray:
         """Tile ``t``'s records, its file checked against the digest written with it."""
-        import hashlib
-
         from ...errors import SuperfacetsError
 
         path = Path(self.folder) / f"tile-{t}.bin"
-        data = path.read_bytes()
-        if self.digests and hashlib.sha256(data).hexdigest() != self.digests[t] \
-                or len(data) != int(self.counts[t]) * self.dtype.itemsize:
+        rec = load_checked(path, self.digests[t] if self.digests else None, self.dtype)
+        if rec.size != int(self.counts[t]):  # (its digest matched: another run's file)
             raise SuperfacetsError(f"{path}: changed since this run wrote it (the work "
                                    "folder's files belong to the run): refused")
-        return np.frombuffer(data, dtype=self.dtype)
+        return rec
 
 
 def _keep_box(keep, rec: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> None:
@@ -233,7 +233,7 @@ def _keep_box(keep, rec: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> None:
     part = keep.with_name(f"{keep.name}.{os.getpid()}.part")
     try:
         np.save(f"{part}.npy", rec, allow_pickle=False)
-        meta = {"lo": lo.tolist(), "hi": hi.tolist(), "sha256": sha256_of(f"{part}.npy")}
+        meta = {"lo": lo.tolist(), "hi": hi.tolist(), "digest": array_digest(rec)}
         Path(f"{part}.json").write_text(json.dumps(meta), encoding="utf-8")
         os.replace(f"{part}.npy", f"{keep}.npy")
         os.replace(f"{part}.json", f"{keep}.json")
@@ -245,21 +245,17 @@ def _keep_box(keep, rec: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> None:
 def _kept_box(keep, lo: np.ndarray, hi: np.ndarray, dtype: np.dtype):
     """The records :func:`_keep_box` saved for this very box, else None; a file changed
     since is refused, as the tiles' files are."""
-    import hashlib
-    import io
     import json
-
-    from ...errors import SuperfacetsError
 
     try:
         meta = json.loads(Path(f"{keep}.json").read_text(encoding="utf-8"))
-        data = Path(f"{keep}.npy").read_bytes()
     except (OSError, ValueError):
         return None
-    if meta.get("lo") != lo.tolist() or meta.get("hi") != hi.tolist():
+    if not isinstance(meta, dict) or meta.get("lo") != lo.tolist() \
+            or meta.get("hi") != hi.tolist():
         return None
-    if hashlib.sha256(data).hexdigest() != meta.get("sha256"):
-        raise SuperfacetsError(f"{keep}.npy: changed since this run wrote it (the work "
-                               "folder's files belong to the run): refused")
-    rec = np.load(io.BytesIO(data), allow_pickle=False)
+    try:
+        rec = load_checked(f"{keep}.npy", meta.get("digest"))
+    except FileNotFoundError:
+        return None
     return rec if rec.dtype == dtype else None

@@ -44,6 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..._runtime.arrays import ranked
 from ..._runtime.progress import tick, waiting_bar
 from ...api.result import TiledResult
 from ...checks import max_threads
@@ -409,9 +410,7 @@ def _frame(reader, survey) -> np.ndarray | None:
 def _numbered_densely(labels: np.ndarray) -> np.ndarray:
     """Number the labels (>= 0; -1 stays) 0..K-1 in place, in the order of their values;
     returns the values (each superfacet's name before)."""
-    valid = labels >= 0
-    names, dense = np.unique(labels[valid], return_inverse=True)
-    labels[valid] = dense
+    names, labels[:] = ranked(labels, labels.size)  # (each names a row of the input)
     return names
 
 
