@@ -57,7 +57,7 @@ from .vertices import symmetric_terms
 
 _TRIM_MIN = 1 << 18  # rows from which the build hands the allocator's free memory back
 
-__all__ = ["point_graph", "PointElements", "estimate_normals", "orient_normals",
+__all__ = ["point_graph", "kept_diagonal", "PointElements", "estimate_normals", "orient_normals",
            "distinct_points"]
 
 #: Default number of nearest neighbours of the point graph.
@@ -188,6 +188,24 @@ def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
     if key not in graphs:
         graphs[key] = _build_point_graph_of(cloud, n_neighbors, neighbor_radius, oriented)
     return graphs[key]
+
+
+def kept_diagonal(cloud) -> float | None:
+    """The bounding-box diagonal of a cloud's valid points, read on a point graph already
+    built for it (:func:`point_graph`, any neighbourhood: the same points), else None.
+
+    The graph's distinct points have the bounds of the valid rows, so the same diagonal,
+    without giving back the points the build lent (24 bytes a point, and a pass).
+
+    Examples
+    --------
+    >>> from superfacets.inputs.cloud import PointCloud
+    >>> cloud = PointCloud(np.array([[0.0, 0, 0], [3, 4, 0], [3, 0, 0], [0, 4, 0]]))
+    >>> kept_diagonal(cloud), float(point_graph(cloud, 2).graph.diagonal), kept_diagonal(cloud)
+    (None, 5.0, 5.0)
+    """
+    graphs = cloud.__dict__.get("_point_graphs")
+    return float(next(iter(graphs.values())).graph.diagonal) if graphs else None
 
 
 def _normals_and_linearity(cloud, pts, nbr, index, valid):

@@ -300,8 +300,7 @@ class RegionReader:
                 tri, verts, col = extra
                 keep.append((tri[inside], None if col is None else col[inside]))
             else:
-                keep.append((pos[inside],) + tuple(None if a is None else a[inside]
-                                                   for a in extra))
+                keep.append((None,) + tuple(None if a is None else a[inside] for a in extra))
         rows = np.concatenate(rows).astype(np.int64) if rows else np.empty(0, dtype=np.int64)
         where = np.concatenate(where) if where else np.empty((0, 3))
         if rows.size == 0:
@@ -312,9 +311,10 @@ class RegionReader:
             used, local = np.unique(tri, return_inverse=True)
             return rows, where, Mesh(np.asarray(verts[used], dtype=np.float64),
                                      local.reshape(tri.shape), name=name, face_colors=col)
-        pts, col, nrm = (None if keep[0][i] is None else np.concatenate([k[i] for k in keep])
-                         for i in range(3))
-        return rows, where, point_cloud_of(pts, col, nrm, self.viewpoint, name)
+        col, nrm = (None if keep[0][i] is None else np.concatenate([k[i] for k in keep])
+                    for i in (1, 2))
+        # (the cloud reads the positions the caller is given: one array, not two)
+        return rows, where, point_cloud_of(where, col, nrm, self.viewpoint, name)
 
     # ------------------------------------------------------------------ layouts
     def _mesh_arrays(self):

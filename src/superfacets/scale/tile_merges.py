@@ -105,21 +105,21 @@ def tile_merge_stats(graph, labels: np.ndarray, names: np.ndarray, core: np.ndar
                                dtype=np.int64)
     names = np.asarray(names, dtype=np.int64)
     at = np.flatnonzero(core)
-    pos = np.ascontiguousarray(graph.positions, dtype=np.float64)
-    sizes = np.ascontiguousarray(graph.sizes, dtype=np.float64)
-    normals = real_rows(graph.normals)
+    pos = np.ascontiguousarray(np.asarray(graph.positions, dtype=np.float64)[at])  # (the
+    normals = real_rows(graph.normals)[at]  # core's, once for the three sums)
+    sizes = np.asarray(graph.sizes, dtype=np.float64)[at]
     used, local = ranked(lab[at], names.size)
     k = used.size
     sums = native.kernel("geometry.label_sums")
     count, wpos, unused = np.zeros(k), np.zeros((k, 3)), np.zeros((k, 3))
-    sums(local, np.ones(at.size), np.ascontiguousarray(pos[at]), normals[at], count, wpos,
-         unused)
+    ones = np.ones(at.size)
+    sums(local, ones, pos, normals, count, wpos, unused)
     mean = wpos / np.maximum(count, 1.0)[:, None]
     scatter = np.zeros((k, 9))
-    native.kernel("geometry.label_scatter")(local, np.ones(at.size), np.ascontiguousarray(
-        pos[at]), mean, scatter)
+    native.kernel("geometry.label_scatter")(local, ones, pos, mean, scatter)
     area, apos = np.zeros(k), np.zeros((k, 3))
-    sums(local, sizes[at], np.ascontiguousarray(pos[at]), normals[at], area, apos, unused)
+    sums(local, sizes, pos, normals, area, apos, unused)
+    del pos, normals, sizes
     area_mean = apos / np.where(area > 0, area, 1.0)[:, None]
 
     pc, length, cos, concave = crossing_adjacencies(graph, lab)

@@ -99,6 +99,11 @@ def _diagonal(inp) -> float:
     from ..inputs.cloud import PointCloud
 
     if isinstance(inp, PointCloud):
+        from ..elements.points import kept_diagonal
+
+        kept = kept_diagonal(inp)  # (the tile's graph, kept or read: its points lent)
+        if kept is not None:
+            return kept
         valid = np.asarray(inp.valid)
         lo, hi = column_bounds(inp.points if valid.all() else inp.points[valid])
         return float(np.linalg.norm(hi - lo))

@@ -209,7 +209,9 @@ class TileBuckets:
         names = self.dtype.names
         col, nrm = (np.ascontiguousarray(rec[n]) if n in names else None
                     for n in ("colors", "normals"))
-        return rows, where, point_cloud_of(where.copy(), col, nrm, self.viewpoint, name)
+        # (the cloud reads the positions the caller is given: one array, not a copy for the
+        # cloud to lend to its graph, which the caller's array keeps from being freed)
+        return rows, where, point_cloud_of(where, col, nrm, self.viewpoint, name)
 
     def _tile(self, t: int) -> np.ndarray:
         """Tile ``t``'s records, its file checked against the digest written with it."""
