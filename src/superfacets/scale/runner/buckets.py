@@ -184,10 +184,15 @@ class TileBuckets:
         """The records of the elements in ``[lo, hi]``, in the order of their rows."""
         parts = []
         near = (self.counts > 0) & (self.lo <= hi).all(axis=1) & (self.hi >= lo).all(axis=1)
+        inside = ((self.lo >= lo) & (self.hi <= hi)).all(axis=1)
         for t in np.flatnonzero(near):
             rec = self._tile(int(t))
-            parts.append(rec[rows_in_box(rec["pos"], lo, hi)])  # (a copy: not of the file's
-            del rec  # bytes, let go here)
+            # (a tile wholly in the box is taken as read; another's elements in the box are
+            # a copy, not of the file's bytes, which are let go here)
+            parts.append(rec if inside[t] else rec[rows_in_box(rec["pos"], lo, hi)])
+            del rec
+        if len(parts) == 1:
+            return parts[0]  # (one file: in the order of its rows already)
         rec = np.concatenate(parts) if parts else np.empty(0, dtype=self.dtype)
         return rec[np.argsort(rec["row"], kind="stable")]
 
