@@ -582,7 +582,11 @@ def test_a_work_files_digest_is_taken_in_memory_and_checked_on_reading(tmp_path)
     data[-1] ^= 1
     (tmp_path / "b.npy").write_bytes(bytes(data))
     (tmp_path / "c.npy").write_bytes(b"\x93NUMPY garbage")
-    for name, digest in (("b", array_digest(a)), ("c", array_digest(a)), ("a", None)):
+    header = (tmp_path / "a.npy").read_bytes()  # a shape asking for 3 TB: refused unread
+    (tmp_path / "d.npy").write_bytes(header.replace(b"(4, 3)", b"(400000000000, 3)"))
+    assert (tmp_path / "d.npy").read_bytes() != header
+    for name, digest in (("b", array_digest(a)), ("c", array_digest(a)), ("a", None),
+                         ("d", array_digest(a))):
         with pytest.raises(SuperfacetsError, match="changed since this run wrote it"):
             load_checked(tmp_path / f"{name}.npy", digest)
     rec = np.zeros(5, dtype=[("row", "<i8"), ("pos", "<f8", (3,))])

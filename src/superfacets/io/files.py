@@ -13,6 +13,7 @@ import bz2
 import gzip
 import io
 import lzma
+import math
 import os
 import tempfile
 import zlib
@@ -289,14 +290,34 @@ def load_checked(path, digest: str | None, dtype=None):
     from ..errors import SuperfacetsError
 
     try:
-        a = np.fromfile(path, dtype=dtype) if dtype is not None else np.load(
-            path, allow_pickle=False)
+        a = np.fromfile(path, dtype=dtype) if dtype is not None else (
+            np.load(path, allow_pickle=False) if _npy_fits(path) else None)
     except ValueError:  # (a header that no longer reads)
         a = None
     if a is None or digest is None or array_digest(a, dtype is None) != digest:
         raise SuperfacetsError(f"{path}: changed since this run wrote it (the work "
                                "folder's files belong to the run): refused")
     return a
+
+
+def _npy_fits(path) -> bool:
+    """Whether a ``.npy`` file's header describes exactly the bytes that follow it (a
+    changed shape would have ``np.load`` ask for any amount of memory before the digest
+    is checked)."""
+    from numpy.lib import format as npy
+
+    try:
+        with open(path, "rb") as f:
+            version = npy.read_magic(f)
+            read = {(1, 0): npy.read_array_header_1_0, (2, 0): npy.read_array_header_2_0}
+            if version not in read:
+                return False
+            shape, _, dtype = read[version](f)
+            size = os.fstat(f.fileno()).st_size
+            return not dtype.hasobject and \
+                f.tell() + math.prod(shape) * dtype.itemsize == size
+    except (ValueError, TypeError, SyntaxError):
+        return False
 
 
 def text_lines(data: bytes, path: Path) -> list[str]:
