@@ -1199,3 +1199,23 @@ def test_a_full_disk_under_the_work_folder_says_so(tmp_path, monkeypatch):
                                       r"\(50000 requested.*needs about the input's size free"):
         segment_tiled(path, 20, tiles=2, workers=1, workdir=tmp_path / "work")
     assert list((tmp_path / "work").iterdir()) == []  # (the run's own folder, removed)
+
+
+def test_a_sample_of_fewer_than_three_distinct_points_gives_no_reference():
+    """The survey's sample is oriented only where it holds three distinct points (a pass
+    per point found, as ``np.unique`` over its rows counted them): one or two distinct
+    points, repeated, give empty arrays; a third anywhere in the sample gives normals."""
+    from superfacets.scale.tiling import _three_distinct, orientation_reference
+
+    rng = np.random.default_rng(11)
+    a, b, c = np.zeros(3), np.array([1.0, 0, 0]), np.array([0, 1.0, 0])
+    for rows, want in (([a], False), ([a, a, a], False), ([a, b, a, b, b], False),
+                       ([a, b, c], True), ([b, b, b, b, a, a, c], True),
+                       ([a, -0.0 * a, b], False)):
+        pts = np.array(rows, dtype=np.float64)
+        assert _three_distinct(pts) == want == (np.unique(pts, axis=0).shape[0] >= 3)
+    for _ in range(20):
+        pts = rng.integers(0, 2, (rng.integers(1, 9), 3)).astype(np.float64)
+        assert _three_distinct(pts) == (np.unique(pts, axis=0).shape[0] >= 3)
+    positions, normals = orientation_reference(np.array([a, b] * 50), 10)
+    assert positions.shape == normals.shape == (0, 3)
