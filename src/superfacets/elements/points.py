@@ -57,8 +57,8 @@ from .vertices import symmetric_terms
 
 _TRIM_MIN = 1 << 18  # rows from which the build hands the allocator's free memory back
 
-__all__ = ["point_graph", "kept_diagonal", "PointElements", "estimate_normals", "orient_normals",
-           "distinct_points"]
+__all__ = ["point_graph", "kept_diagonal", "PointElements", "estimate_normals",
+           "orient_normals", "distinct_points"]
 
 #: Default number of nearest neighbours of the point graph.
 DEFAULT_NEIGHBORS = 10
@@ -196,6 +196,15 @@ def kept_diagonal(cloud) -> float | None:
 
     The graph's distinct points have the bounds of the valid rows, so the same diagonal,
     without giving back the points the build lent (24 bytes a point, and a pass).
+
+    Parameters
+    ----------
+    cloud : PointCloud
+
+    Returns
+    -------
+    float or None
+        In the cloud's units.
 
     Examples
     --------
