@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MeshFormatError
-from ..inputs.bounds import rows_in_box
+from ..inputs.bounds import column_bounds, finite_rows, rows_in_box
 from .headers import first_line, npy_mapped, ply_mapped
 from .ply import VertexView
 
@@ -242,14 +242,16 @@ class RegionReader:
         for start, pos, sz, extra in self.chunks(stats):
             normals = normals or (self.kind == "points" and extra[1] is not None)
             colors = colors or extra[-1 if self.kind == "faces" else 0] is not None
-            ok = np.isfinite(pos).all(axis=1)
-            if not self.invalid_ok and not ok.all():
+            ok = finite_rows(pos)  # (one compiled pass each, not numpy's over short rows)
+            every = bool(ok.all())
+            if not self.invalid_ok and not every:
                 self._non_finite(start + int(np.flatnonzero(~ok)[0]))
-            if ok.any():
-                lo = np.minimum(lo, pos[ok].min(axis=0))
-                hi = np.maximum(hi, pos[ok].max(axis=0))
-                size += float(sz[ok].sum())
-                n += int(ok.sum())
+            if every or ok.any():
+                low, high = column_bounds(pos if every else pos[ok])
+                lo = np.minimum(lo, low)
+                hi = np.maximum(hi, high)
+                size += float(sz.sum() if every else sz[ok].sum())
+                n += pos.shape[0] if every else int(ok.sum())
                 at = np.arange((-start) % stride, pos.shape[0], stride)
                 finite = ok[at]
                 kept.append(pos[at[finite]])

@@ -91,7 +91,9 @@ def bucket(reader, tiles, folder, *, progress: bool = False) -> TileBuckets:
             for n, a in fields.items():
                 rec[n] = a
             tile = tiles.of(pos)
-            order = np.argsort(tile, kind="stable")
+            # (a stable sort of 16-bit keys is numpy's radix sort: one pass, not a merge sort)
+            order = np.argsort(tile.astype(np.int16) if n_tiles < 2**15 else tile,
+                               kind="stable")
             bounds = np.searchsorted(tile[order], np.arange(-1, n_tiles + 1))
             for t in np.flatnonzero(np.diff(bounds[1:])):
                 block = rec[order[bounds[t + 1]:bounds[t + 2]]]
