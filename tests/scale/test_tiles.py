@@ -1219,3 +1219,17 @@ def test_a_sample_of_fewer_than_three_distinct_points_gives_no_reference():
         assert _three_distinct(pts) == (np.unique(pts, axis=0).shape[0] >= 3)
     positions, normals = orientation_reference(np.array([a, b] * 50), 10)
     assert positions.shape == normals.shape == (0, 3)
+
+
+def test_grid_tiles_whose_boxes_hold_no_point_are_skipped_on_a_cloud():
+    """A regular grid over two patches 10 apart leaves its middle tiles without a point,
+    halo included: their tasks failed with a TypeError (the orientation reference given to
+    an empty box); they are skipped, and the patches are segmented as with balanced
+    tiles: every point labelled, exactly k, no superpoint on both patches."""
+    rng = np.random.default_rng(0)
+    patch = rng.random((3000, 3)) * [1, 1, 0.01]
+    pts = np.vstack([patch, patch + [10, 0, 0]])
+    r = segment_tiled(pts, 20, tiles=(5, 1, 1), workers=1)
+    assert r.n_segments == 20 and (r.labels >= 0).all()
+    assert [t["core"] for t in r.tiles] == [3000, 3000]
+    assert not set(r.labels[:3000]) & set(r.labels[3000:])

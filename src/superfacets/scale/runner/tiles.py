@@ -427,16 +427,20 @@ def _merge_plan(params, kind: str, survey):
 
 
 def _framed(task: dict, layout, inp):
-    """A task's input with the run's orientation reference and frame, where it has them."""
+    """A task's input with the run's orientation reference and frame, where it has them
+    (``inp`` None, a box without an element, stays None)."""
+    if inp is None:
+        return None
+    changes = {}
     ref = task.get("orient_like")
     if ref is not None:  # every tile orients like one sample (a file, or its part)
         if isinstance(ref, str):
             ref = in_box(np.load(ref, mmap_mode="r"), *layout.box(task["tile"],
                                                                     1.5 * task["margin"]))
-        inp = replace(inp, orient_like=(ref[:, :3], ref[:, 3:]))
-    if task.get("frame") is not None and inp is not None:  # (None: no point in the box)
-        inp = replace(inp, frame=task["frame"])  # numbered as the whole cloud numbers them
-    return inp
+        changes["orient_like"] = (ref[:, :3], ref[:, 3:])
+    if task.get("frame") is not None:
+        changes["frame"] = task["frame"]  # numbered as the whole cloud numbers them
+    return replace(inp, **changes) if changes else inp  # (one check of the input, not two)
 
 
 def _box(task: dict, lo, hi):
