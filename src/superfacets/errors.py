@@ -61,7 +61,8 @@ class KernelsMissingError(SuperfacetsError, ImportError):
 
 
 class SchedulerError(SuperfacetsError):
-    """A Dask scheduler cannot be reached, or has no worker to run the tasks."""
+    """A Dask scheduler cannot be reached, or has no worker to run the tasks, or the local
+    workers cannot start."""
 
 
 class NoDisplayError(RuntimeError):

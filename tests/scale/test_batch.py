@@ -506,3 +506,21 @@ def test_tetrahedral_meshes_are_collected_from_folders(tmp_path, capsys):
     assert labels.shape == (vol.n_tets,) and labels.max() + 1 >= 5
     s = run_batch([str(folder)], tmp_path / "o2", 5, workers=1, progress=False, picture=True)
     assert s.failed == 1 and "tetrahedral meshes: batch writes their labels" in s.failures[0][1]
+
+
+def test_local_workers_started_outside_a_main_guard_say_what_to_do(tmp_path):
+    """A script that starts local Dask workers outside ``if __name__ == "__main__":`` ran
+    itself again in each worker, and the run ended in Dask's "Nanny failed to start.":
+    it ends in a SchedulerError that names the guard and one worker."""
+    pytest.importorskip("distributed")
+    script = tmp_path / "noguard.py"
+    script.write_text("from superfacets.scale.runner.engine import Engine\n"
+                      "with Engine(workers=2) as engine:\n"
+                      "    print(list(engine.run(abs, [-1], on_lost=lambda t, e: None)))\n")
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                         timeout=120, cwd=tmp_path)
+    assert out.returncode != 0
+    last = out.stderr.strip().splitlines()[-1]
+    assert last.startswith("superfacets.errors.SchedulerError: the local Dask workers did "
+                           "not start") and 'if __name__ == "__main__":' in last
+    assert "workers=1" in last

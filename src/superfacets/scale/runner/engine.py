@@ -183,7 +183,9 @@ class Engine:
     MissingExtraError
         On entering, where Dask is needed and ``distributed`` is not installed.
     SchedulerError
-        On entering, where the scheduler cannot be reached or has no worker.
+        On entering, where the scheduler cannot be reached or has no worker, or where the
+        local workers cannot start (a script that starts them outside
+        ``if __name__ == "__main__":``).
 
     Examples
     --------
@@ -290,6 +292,16 @@ class Engine:
                         # its default, 8787, taken by another run, printed Dask's warning
                         scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
                 self.client = Client(self._cluster, set_as_default=False)
+        except RuntimeError as exc:  # (Dask: "Nanny failed to start.")
+            self.__exit__(None, None, None)
+            if "failed to start" not in str(exc):
+                raise
+            from ...errors import SchedulerError
+
+            raise SchedulerError(
+                f"the local Dask workers did not start ({exc}). In a script, run this under "
+                "'if __name__ == \"__main__\":' (each worker is a new Python process that "
+                "imports the script first); or use one worker (workers=1, -j 1)") from None
         except BaseException:
             self.__exit__(None, None, None)
             raise
