@@ -102,7 +102,8 @@ def segment_tiles(args) -> int:
                  if result.n_segments < k else f" ({k} asked)")
         first = result.params.get("merged_from")
         if first:
-            what += f" (merged from {first:,}, flat neighbours first; --merge-from 1: none)"
+            how = "flat neighbours first" if kind_of(kind).cloud else "Ward's merges"
+            what += f" (merged from {first:,}, {how}; --merge-from 1: none)"
         print(f"{Path(args.mesh).name}: {result.labels.size} {kind}, {result.n_segments} "
               f"{what}{asked} in {len(result.tiles)} tiles "
               f"({result.layout.describe()}), {elapsed:.2f} s; largest tile "

@@ -2,8 +2,10 @@
 
 A tiled run on a cloud of even density segments ``merge_from`` times the superpoints
 asked for, as one run does, and merges them down to the count once every tile has its
-labels. No process holds the whole point graph, so each tile sums what the merges
-read, on its own labels (:func:`tile_merge_stats`, in the labels phase):
+labels; a tiled mesh segments a few more than asked (its tiles' cores end with fewer
+centers than their shares) and merges them by Ward's merges alone. No process holds the
+whole graph, so each tile sums what the merges read, on its own labels
+(:func:`tile_merge_stats`, in the labels phase):
 
 - per superpoint, over the tile's core points: their count, mean and scatter about
   that mean (the least-squares plane of the flat merges), and their area and
@@ -194,14 +196,15 @@ def _outer_sums(stats: list[dict], labels: np.ndarray | None) -> dict:
 
 def one_position_stats(inp, valid: np.ndarray, name: int, merging: tuple) -> dict:
     """:func:`tile_merge_stats` of a tile whose points all lie at one position (a
-    :class:`~superfacets.inputs.cloud.PointCloud`, ``valid`` its usable rows, ``name``
-    the row naming its one superpoint, ``merging`` as
+    :class:`~superfacets.inputs.cloud.PointCloud` or a mesh, ``valid`` its usable rows,
+    ``name`` the row naming its one superpoint, ``merging`` as
     :func:`superfacets.scale.tiling.tile_labels` takes it): that superpoint, of the core's
     points, no scatter, no neighbour (nothing where the core has no usable point)."""
     core, rows, _ = merging
     own = np.flatnonzero(valid & np.asarray(core))
     k = 1 if own.size else 0
-    at = np.asarray(inp.points, dtype=np.float64)[own[:k]].reshape(k, 3)
+    where = inp.points if hasattr(inp, "points") else inp.centroids  # (a mesh: its faces')
+    at = np.asarray(where, dtype=np.float64)[own[:k]].reshape(k, 3)
     none = np.zeros(0)
     return dict(names=np.full(k, int(np.asarray(rows)[name]), dtype=np.int64),
                 count=np.full(k, float(own.size)), mean=at, scatter=np.zeros((k, 3, 3)),
@@ -260,7 +263,8 @@ def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float,
                 labels: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, int, int]:
     """Merge a tiled run's superpoints down to ``target`` from the tiles' sums
     (:func:`tile_merge_stats`): the flat merges, then Ward's merges, as
-    :func:`superfacets.method.merges.merge_to_count` does in one run.
+    :func:`superfacets.method.merges.merge_to_count` does in one run (where the tiles read
+    no noise, as a mesh's do, Ward's merges only).
 
     Parameters
     ----------
@@ -310,7 +314,7 @@ def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float,
     ([3, 3, 8, 8], 2)
     """
     from ..graph.hierarchy import hierarchy, pieces
-    from ..method.merges import FLAT_NOISE, flat_merge_nodes
+    from ..method.merges import FLAT_NOISE
 
     names = np.unique(np.concatenate([s["names"] for s in stats]))
     k = names.size
@@ -332,21 +336,10 @@ def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float,
     parts = {f: np.concatenate([s[f][ok] for s, ok in zip(sums, keep)])
              for f in ("border", "angle", "concave", "crossings", "angle_sum", "concave_sum")}
     noise = np.concatenate([s["noise"] for s in stats])
-    max_rise = FLAT_NOISE * max(float(np.median(noise)), 0.0) if noise.size else 0.0
-
-    unit = _graph(np.arange(k), ea, parts, count, mean, scatter)
-    if all("feature_sum" in s for s in stats) and stats:  # the colour term was on
-        from dataclasses import replace as _with
-
-        from ..method.merges import feature_spread, same_feature_edges
-
-        total = _sum(node, stats, "feature_sum", k)
-        colour = total / np.maximum(count, 1.0)[:, None]
-        spread = feature_spread(None, None, k, sums=(
-            count, total, _sum(node, stats, "feature_squares", k)))
-        floor = float(np.median([s["floor"] for s in stats]))
-        unit = same_feature_edges(_with(unit, feature=colour), floor, spread)
-    top = flat_merge_nodes(unit, target, max_rise, alpha, eta_convex)
+    top = np.arange(k)  # (no noise read, as on a mesh: Ward's merges only)
+    if noise.size:
+        top = _flat_merged(stats, node, k, ea, parts, (count, mean, scatter), target,
+                           FLAT_NOISE * max(float(np.median(noise)), 0.0), alpha, eta_convex)
     n_flat = int(top.max()) + 1 if k else 0
     grouped_area = np.bincount(top, weights=area, minlength=n_flat)
     grouped_mean = np.stack([np.bincount(top, weights=area * area_mean[:, c], minlength=n_flat)
@@ -361,6 +354,28 @@ def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float,
     lowest = np.full(int(final.max()) + 1 if k else 0, k, dtype=np.int64)
     np.minimum.at(lowest, final, np.arange(k))
     return names, names[lowest[final]], n_flat, min(fewest, n_flat) if k else 0
+
+
+def _flat_merged(stats, node, k: int, ea, parts, planes: tuple, target: int,
+                 max_rise: float, alpha: float, eta_convex: float) -> np.ndarray:
+    """The flat merges of :func:`merge_names` (``planes``: the nodes' point count, mean and
+    scatter; with the tiles' colours, only neighbours of one colour): each node's group."""
+    from ..method.merges import flat_merge_nodes
+
+    count, mean, scatter = planes
+    unit = _graph(np.arange(k), ea, parts, count, mean, scatter)
+    if all("feature_sum" in s for s in stats) and stats:  # the colour term was on
+        from dataclasses import replace as _with
+
+        from ..method.merges import feature_spread, same_feature_edges
+
+        total = _sum(node, stats, "feature_sum", k)
+        colour = total / np.maximum(count, 1.0)[:, None]
+        spread = feature_spread(None, None, k, sums=(
+            count, total, _sum(node, stats, "feature_squares", k)))
+        floor = float(np.median([s["floor"] for s in stats]))
+        unit = same_feature_edges(_with(unit, feature=colour), floor, spread)
+    return flat_merge_nodes(unit, target, max_rise, alpha, eta_convex)
 
 
 def _sum(node: list, stats: list, field: str, k: int, weight: str | None = None):

@@ -52,6 +52,7 @@ from ..method.classify import make_classifier
 from ..method.expansion import Workspaces
 from ..method.finish import clean_up, finish
 from ..method.params import DEFAULTS, SegmentParams, superfacet_measure
+from ..method.passes import final_centers
 from ..method.pipeline import pipeline
 from ..method.stages import build_graph, resolve_features, resolve_rules, weigh
 
@@ -458,8 +459,9 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
     finally:
         spaces.close()
     labels, kept = finish(graph, label, centers[:k], rules)
-    if rules.cleanup:
-        labels = clean_up(graph, labels, kept, rules, feats)
+    if rules.cleanup:  # (a piece the clean-up leaves with no neighbour is a superfacet of
+        labels = clean_up(graph, labels, kept, rules, feats)  # its own: a center each)
+        kept = final_centers(labels, kept, graph.sizes, graph.positions)
     name = src.first_rows(kept)  # each superfacet named by its center's row
     out = src.to_rows(labels)
     named = np.where(out >= 0, name[np.maximum(out, 0)], -1).astype(np.int64)

@@ -24,7 +24,8 @@ phases (:mod:`superfacets.scale.tiling`):
 4. on a point cloud of even density (``merge_from``, as one run chooses it): the phases
    above make ``merge_from`` times the superpoints asked for, each tile sums what the
    merges read in phase 2, and this process merges them down to the count
-   (:mod:`superfacets.scale.tile_merges`).
+   (:mod:`superfacets.scale.tile_merges`); a mesh's tiles make a few more than asked
+   (:data:`MESH_EXCESS`), merged to the count by Ward's merges alone.
 
 A cloud's tile builds its point graph once, in the work folder
 (:mod:`superfacets.scale.tile_graphs`). Labels are named by their center's row, so a
@@ -209,7 +210,10 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         Superfacets over the whole input (``r = sqrt(A / (k pi))``, paper
         section 3.1); or None with ``radius``. On a point cloud of even density the
         tiles make ``merge_from`` (5) times as many, merged down to exactly this count
-        at the end (:mod:`superfacets.scale.tile_merges`; ``merge_from=1``: none).
+        at the end (:mod:`superfacets.scale.tile_merges`; ``merge_from=1``: none); on a
+        mesh in several tiles, 5 % more and one a tile (:data:`MESH_EXCESS`), merged
+        by Ward's merges to exactly this count (``merge_from=1``: none, the tiles' own
+        count, which can fall short by a few).
     tiles : int or sequence of 3 int, default 4
         Number of balanced tiles (boxes split at the quantiles of the
         positions, so that each holds about ``n / tiles`` elements, however
@@ -281,13 +285,14 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
     with run_folder(workdir) as tmp:  # the run's own folder, removed at its end
         with stage("survey"):
             reader, survey = _surveyed(source, tmp, tiles, params)
-            target, merge_from, params = _merge_plan(params, reader.kind, survey)
             if survey.color_top is not None:  # one divisor for the whole file's colours
                 reader = replace(reader, color_top=survey.color_top)
         layout = (balanced_tiles(survey.sample, survey.lo, survey.hi, tiles)
                   if np.ndim(tiles) == 0 else tile_grid(survey.lo, survey.hi, tiles))
         grid = layout.shape or (layout.n_tiles,)
         n_tiles = layout.n_tiles
+        target, merge_from, params = _merge_plan(params, reader.kind, survey, n_tiles)
+        merging = params.n_segments != target  # (the tiles make more: merged at the end)
         diagonal = float(np.linalg.norm(survey.hi - survey.lo))
         # one more pass sorts the elements into a file per tile, so that a task reads the
         # tiles its box overlaps, not the whole file; without a folder the workers share
@@ -319,7 +324,8 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                 r, margin = _sized(run, layout, reader.kind, params, survey, diagonal, halo,
                                    (graphs, sample_area))
             found, done = _classified(run, layout, params, margin, params.window * r, dict(
-                refine=refine, box_rows=not shared, noise=merge_from > 1, start=_sample_start(
+                refine=refine, box_rows=not shared, n_noise=_noise_points(merging, merge_from,
+                    n_tiles), start=_sample_start(
                     reader, survey, params, r, diagonal, refine, stage, (sampled, up))),
                 timings)
             with stage("stitch"):
@@ -331,7 +337,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                     repaired = _connected(run, labels, layout, margin, tmp, box)
             drop_graphs(graphs)
     merged_from = None
-    if merge_from > 1:
+    if merging:
         with stage("merges"):
             merged_from = int(np.unique(labels[labels >= 0]).size)
             labels = merged_labels(labels, [o["merge_stats"] for o in done], target, params)
@@ -376,11 +382,18 @@ def _classified(run, layout, params, margin: float, ring: float, how: dict,
         rows, pos = gathered_centers(again, params)
         found = again if found is None else found
     t = time.perf_counter()
-    n_noise = NOISE_SAMPLE // layout.n_tiles + 1 if how["noise"] else None
-    done = [o for o in run("labels", margin, lambda t: dict(reach(t), n_noise=n_noise))
+    done = [o for o in run("labels", margin, lambda t: dict(reach(t), n_noise=how["n_noise"]))
             if o["core"]]
     timings["labels"] = time.perf_counter() - t
     return found, done
+
+
+def _noise_points(merging: bool, merge_from: int, n_tiles: int) -> int | None:
+    """Points of each tile's core to read the noise on for the merges to the count (a
+    cloud's flat merges; 0: a mesh's, Ward's merges only), or None: no merges."""
+    if not merging:
+        return None
+    return NOISE_SAMPLE // n_tiles + 1 if merge_from > 1 else 0
 
 
 def _sample_start(reader, survey, params, r: float, diagonal: float, refine: int,
@@ -414,15 +427,28 @@ def _numbered_densely(labels: np.ndarray) -> np.ndarray:
     return names
 
 
-def _merge_plan(params, kind: str, survey):
+#: A tiled mesh asks its tiles for this share more superfacets than the count, and one
+#: more a tile, merged down to exactly the count by Ward's merges at the end: its tiles'
+#: cores end with fewer centers than their shares (a center the passes carry across a
+#: border can leave both tiles' cores), 0-5 % on 15 benchmark meshes in 8 tiles and up
+#: to a third at 1-2 superfacets a tile (docs/notes/tiles.md, "Exactly k on meshes").
+MESH_EXCESS = 0.05
+
+
+def _merge_plan(params, kind: str, survey, n_tiles: int):
     """The count asked for, the factor of the superpoints made before the merges down to
-    it (1: none), and the parameters of the tiles' runs (their count that many times)."""
+    it (1: none; a mesh's few more: :data:`MESH_EXCESS`), and the parameters of the tiles'
+    runs (their count that many times)."""
     n_elements = survey.n_elements
     target, merge_from = params.n_segments, tiled_merge_from(params, kind)
     if merge_from > 1:  # merge_from times the superpoints, merged to the count at the end
         fine = min(target * merge_from, max(target, n_elements // MIN_FINE_ELEMENTS))
         merge_from = merge_from if fine > target else 1
         params = replace(params, n_segments=fine)
+    elif (not kind_of(kind).cloud and target is not None and params.radius is None
+          and n_tiles > 1 and params.merge_from is None):  # a few more, merged to the count
+        fine = min(n_elements, target + math.ceil(MESH_EXCESS * target) + n_tiles)
+        params = replace(params, n_segments=max(fine, target))
     return target, merge_from, params
 
 
