@@ -742,8 +742,9 @@ def test_cli_tiles_writes_labels_and_refuses_whole_input_outputs(tmp_path):
                          capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     assert "2 tiles (2x1x1 grid)" in out.stdout
+    assert "30 superfacets (merged from " in out.stdout and "Ward's merges" in out.stdout
     labels = np.loadtxt(tmp_path / "m.seg", dtype=int)
-    assert labels.shape == (mesh.n_faces,) and np.unique(labels).size == labels.max() + 1
+    assert labels.shape == (mesh.n_faces,) and np.unique(labels).size == labels.max() + 1 == 30
     assert list((tmp_path / "work").iterdir()) == []  # (the run's own folder, removed)
     bad = subprocess.run(run + ["--tiles", "2", "--colored-mesh", str(tmp_path / "c.ply")],
                          capture_output=True, text=True)
@@ -753,7 +754,6 @@ def test_cli_tiles_writes_labels_and_refuses_whole_input_outputs(tmp_path):
     assert bad.returncode != 0 and "--halo goes with --tiles" in bad.stderr
     bad = subprocess.run(run + ["--workdir", str(tmp_path)], capture_output=True, text=True)
     assert bad.returncode != 0 and "--workdir goes with --tiles" in bad.stderr
-
 
 
 def test_a_meshs_merges_from_its_tiles_sums_are_one_runs_wards_merges():
