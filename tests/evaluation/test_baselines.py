@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import tracemalloc
+import warnings
 
 import numpy as np
 import pytest
@@ -231,6 +232,7 @@ def test_ncuts_rejects_bad_parameters(ball):
 # --- the registry ------------------------------------------------------------------------
 
 
+@pytest.mark.filterwarnings("ignore:.* segments for n_segments=:RuntimeWarning")  # (tiny)
 @pytest.mark.parametrize("name", sorted(METHODS))
 def test_every_registered_method_has_one_call_shape(name, monkeypatch):
     sphere = as_mesh(trimesh.creation.icosphere(subdivisions=2))
@@ -413,3 +415,22 @@ def test_vccs_search_and_labels_for_every_point(monkeypatch):
         vccs(pts, 10, spatial_importance=-1)
     run = METHODS["vccs"]
     assert run.elements == ("points",)
+
+
+def test_a_count_the_segmentators_search_cannot_reach_is_said():
+    """A flat plane without noise is one segment to the Segmentator's method at any
+    threshold: asked for 10, it gives 1 and says so (a comparison at equal counts would
+    otherwise compare 1 segment with 10 in silence)."""
+    from superfacets.evaluation.baselines.graph_segmentation import graph_segmentation
+    from superfacets.inputs.cloud import PointCloud
+
+    xy = np.random.default_rng(0).random((2000, 2))
+    plane = PointCloud(np.c_[xy, np.zeros(2000)])
+    with pytest.warns(RuntimeWarning, match="gave 1 segments for n_segments=10"):
+        labels = graph_segmentation(plane, n_segments=10, elements="points")
+    assert labels.max() == 0
+    bumpy = PointCloud(np.c_[xy, 0.05 * np.sin(12 * xy[:, 0]) * np.cos(9 * xy[:, 1])])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)  # reached: nothing said
+        got = int(graph_segmentation(bumpy, n_segments=10, elements="points").max()) + 1
+    assert abs(got - 10) <= 1

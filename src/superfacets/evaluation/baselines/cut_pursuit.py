@@ -185,5 +185,6 @@ def cut_pursuit(obj, n_segments: int | None = None, *, reg_strength: float = 0.1
         n_segments = check_int("n_segments", n_segments, lo=1, hi=g.n_elements)
         from ._count import search_count
 
-        labels = search_count(run, n_segments, -8.0, 2.0, 16)  # log10 of reg_strength
+        # log10 of reg_strength
+        labels = search_count(run, n_segments, -8.0, 2.0, 16, "cut pursuit")
     return source.to_rows(labels)

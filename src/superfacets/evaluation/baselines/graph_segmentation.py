@@ -74,7 +74,8 @@ def graph_segmentation(obj, k_thresh: float = 0.01, min_size: int = 20, *,
         Search ``k_thresh`` (bisection, 40 steps at most) for this many
         segments; when it cannot come within 10 % of it (segments of
         ``min_size`` elements do not fit), ``min_size`` is halved and the
-        search run again.
+        search run again (down to 1; then a ``RuntimeWarning`` says how many it
+        gave: a flat plane without noise is one segment at any threshold).
     elements : {'faces', 'vertices', 'points'}, optional
         Default: ``'vertices'`` for a mesh (as the Segmentator), ``'points'``
         for a cloud.
@@ -107,6 +108,7 @@ def graph_segmentation(obj, k_thresh: float = 0.01, min_size: int = 20, *,
     from ...elements.builders import elements_of, is_cloud
     from ...elements.labels import relabel_dense
     from ...method.params import ELEMENTS, check_choice
+    from ._count import count_missed
 
     k_thresh = check_positive("k_thresh", k_thresh)
     min_size = check_int("min_size", min_size, lo=1)
@@ -147,5 +149,5 @@ def graph_segmentation(obj, k_thresh: float = 0.01, min_size: int = 20, *,
             if best[0] <= 0.1 * n_segments or min_size == 1:
                 break
             min_size = max(1, min_size // 2)  # too few segments of min_size: smaller ones
-        run(10.0 ** best[1])
+        count_missed("the Segmentator's method", run(10.0 ** best[1]), n_segments)
     return source.to_rows(relabel_dense(labels))

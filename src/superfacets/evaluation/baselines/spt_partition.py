@@ -426,11 +426,12 @@ def spt_partition(obj, n_segments: int | None = None, *, preset: str = "scannet"
                     adj.astype(np.uint32), (w / s.regularization).astype(np.float32),
                     np.bincount(comp).astype(np.float32), coor, s.cutoff_2)
             comp = search_count(lambda reg: solve(*args, reg)[0], n_segments,
-                                -6.0, 3.0, 16)[comp]
+                                -6.0, 3.0, 16, "the Superpoint Transformer partition")[comp]
         else:  # level 1's regularisation searched
             args = (y, prob.first_edge, prob.adj_vertices, prob.edge_weights,
                     np.ones(y.shape[1], dtype=np.float32), prob.coor_weights, s.cutoff)
-            comp = search_count(lambda reg: solve(*args, reg)[0], n_segments, -6.0, 2.0, 16)
+            comp = search_count(lambda reg: solve(*args, reg)[0], n_segments, -6.0, 2.0, 16,
+                                "the Superpoint Transformer partition")
     voxel_labels = comp
     out = np.full(cloud.n_total, -1, dtype=np.int64)
     out[cloud.valid] = voxel_labels[prob.voxel_of]

@@ -128,5 +128,6 @@ def vccs(obj, n_segments: int | None = None, *, seed_resolution: float = 0.1,
         from ._count import search_count
 
         # seeds from one voxel apart to the whole box apart
-        labels = search_count(run, n_segments, np.log10(voxel), np.log10(diagonal), 20)
+        labels = search_count(run, n_segments, np.log10(voxel), np.log10(diagonal), 20,
+                              "VCCS")
     return source.to_rows(labels)
