@@ -1,4 +1,6 @@
+import os
 import re
+import sys
 
 import numpy as np
 import pytest
@@ -252,6 +254,36 @@ def test_progress_bar_names_the_stages_then_counts_passes(tmp_path, small_off, c
     assert totals and max(totals) < 50 and "merges to the count" in err
     assert main(["segment", str(small_off), "-k", "20", "-q"]) == 0  # small mesh: no bar
     assert capsys.readouterr().err == ""
+
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="pseudo-terminals are POSIX")
+def test_progress_shows_on_a_terminal_that_reports_no_width(tmp_path, small_off):
+    """A pseudo-terminal opened without a size reports 0 columns, and tqdm drew nothing
+    there: a long run stayed silent to its end. The bars are 80 columns wide there."""
+    import pty
+    import select
+    import subprocess
+
+    leader, follower = pty.openpty()  # (no size set: 0 x 0)
+    assert os.get_terminal_size(follower).columns == 0
+    proc = subprocess.Popen([sys.executable, "-m", "superfacets", "segment", str(small_off),
+                             "-k", "20", "--progress", "-q"], stdin=follower,
+                            stdout=follower, stderr=follower, close_fds=True)
+    os.close(follower)
+    seen = b""
+    while True:
+        ready, _, _ = select.select([leader], [], [], 60)
+        try:
+            chunk = os.read(leader, 65536) if ready else b""
+        except OSError:  # (the other end closed: the run is over)
+            chunk = b""
+        if not chunk:
+            break
+        seen += chunk
+    os.close(leader)
+    assert proc.wait(timeout=60) == 0
+    assert b"face graph" in seen and b"superfacets" in seen and b"pass" in seen
 
 
 def test_cleanup_option(tmp_path, small_off):

@@ -2,12 +2,47 @@
 
 from __future__ import annotations
 
+import os
+import sys
 import threading
 
-__all__ = ["TICK", "tick", "waiting_bar"]
+__all__ = ["TICK", "new_bar", "tick", "waiting_bar"]
 
 #: Seconds between two redraws of a bar while a stage runs
 TICK = 0.5
+#: The size of the screen a bar is drawn for on a terminal that reports none
+NO_SIZE = (80, 24)
+
+
+def new_bar(iterable=None, **kwargs):
+    """A tqdm bar on stderr, drawn for a screen of :data:`NO_SIZE` (columns, lines) where
+    stderr is a terminal that reports no size (a pseudo-terminal opened without one, as
+    some remote shells and CI runners open them): tqdm draws nothing on a screen of 0
+    columns, and hides a bar below its 0 lines.
+
+    Examples
+    --------
+    >>> bar = new_bar(total=3, disable=True)
+    >>> bar.update(3); bar.close()
+    """
+    from tqdm import tqdm
+
+    size = _stderr_size()
+    if size is not None:
+        if size[0] == 0 and "ncols" not in kwargs:
+            kwargs.pop("dynamic_ncols", None)
+            kwargs["ncols"] = NO_SIZE[0]
+        if size[1] == 0 and "nrows" not in kwargs:
+            kwargs["nrows"] = NO_SIZE[1]
+    return tqdm(iterable, **kwargs)
+
+
+def _stderr_size() -> tuple[int, int] | None:
+    """The columns and lines of the terminal stderr is (0: reports none), or None."""
+    try:
+        return tuple(os.get_terminal_size(sys.stderr.fileno()))
+    except (OSError, ValueError, AttributeError):  # (not a terminal, or no descriptor)
+        return None
 
 
 def tick(bar) -> threading.Event:
@@ -51,10 +86,8 @@ class waiting_bar:
 
     def __enter__(self):
         if self.show:
-            from tqdm import tqdm
-
-            self.bar = tqdm(total=None, desc=self.desc, bar_format="{desc} [{elapsed}]",
-                            leave=False)
+            self.bar = new_bar(total=None, desc=self.desc, bar_format="{desc} [{elapsed}]",
+                               leave=False)
             self.bar.refresh()
             self.stop = tick(self.bar)
         return self

@@ -133,9 +133,9 @@ class Hooks:
         self.bar = None
         self._ticking = None
         if progress:  # one bar: the set-up stages by name, then the passes
-            from tqdm import tqdm
+            from .._runtime.progress import new_bar
 
-            self.bar = tqdm(total=None, desc=f"{kind[:-1]} graph", unit="pass", leave=False)
+            self.bar = new_bar(total=None, desc=f"{kind[:-1]} graph", unit="pass", leave=False)
             self.bar.refresh()  # (shown at once: the graph's build is a run's longest wait)
             self._ticking = tick(self.bar)
 

@@ -171,9 +171,9 @@ def _all_pair_distances(graph, m: int, nth: int, progress: bool):
     b = _block_rows(m)
     starts = range(0, m, b)
     if progress:
-        from tqdm import tqdm
+        from ..._runtime.progress import new_bar
 
-        starts = tqdm(starts, desc="all-pairs distances", unit="block", leave=False)
+        starts = new_bar(starts, desc="all-pairs distances", unit="block", leave=False)
     for s in starts:
         e = min(m, s + b)
         block = dijkstra(graph, directed=True, indices=np.arange(s, e))

@@ -387,9 +387,9 @@ def _run(files, outdir, seg_opts, outputs, per_object, level, engine, retry_fail
     try:
         with open(journal_path, "a") as journal:
             if progress and tasks:
-                from tqdm import tqdm
+                from ..._runtime.progress import new_bar
 
-                bar = tqdm(total=len(tasks), unit="input", desc="batch", dynamic_ncols=True)
+                bar = new_bar(total=len(tasks), unit="input", desc="batch", dynamic_ncols=True)
             for row in (engine.run(segment_file, tasks, _lost_row) if tasks else ()):
                 journal.write(json.dumps(row) + "\n")
                 journal.flush()

@@ -69,9 +69,9 @@ def bucket(reader, tiles, folder, *, progress: bool = False) -> TileBuckets:
     dtype = None
     bar = None
     if progress:
-        from tqdm import tqdm
+        from ..._runtime.progress import new_bar
 
-        bar = tqdm(total=reader.n_rows, desc="tiles: bucket", unit="row", leave=False)
+        bar = new_bar(total=reader.n_rows, desc="tiles: bucket", unit="row", leave=False)
     try:
         for s, pos, _, extra in reader.chunks():
             if reader.kind == "faces":

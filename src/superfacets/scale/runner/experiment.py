@@ -305,9 +305,9 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
     t0 = time.perf_counter()
     bar = None
     if progress and total:
-        from tqdm import tqdm
+        from ..._runtime.progress import new_bar
 
-        bar = tqdm(total=total, unit="row", desc="experiment", dynamic_ncols=True)
+        bar = new_bar(total=total, unit="row", desc="experiment", dynamic_ncols=True)
 
     with open(path, "a", newline="") as f:
         writer = csv.DictWriter(f, cols, restval="", extrasaction="ignore", lineterminator="\n")

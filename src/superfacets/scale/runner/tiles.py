@@ -656,10 +656,10 @@ def _gather(engine: Engine, tasks: list, phase: str, progress: bool) -> list:
 
     results, stop = engine.run(tile_task, tasks, on_lost=lost), None
     if progress:  # (its elapsed time redrawn while a tile runs: never silent)
-        from tqdm import tqdm
+        from ..._runtime.progress import new_bar
 
-        results = tqdm(results, total=len(tasks), desc=f"tiles: {phase}", unit="tile",
-                       leave=False)
+        results = new_bar(results, total=len(tasks), desc=f"tiles: {phase}", unit="tile",
+                          leave=False)
         stop = tick(results)
     out = []
     try:
