@@ -408,3 +408,33 @@ def test_report_leaves_the_matplotlib_backend_alone(bench, tmp_path):
     write_report(res, tmp_path / "rep")
     assert matplotlib.get_backend() == before
     assert (tmp_path / "rep" / "fig4.png").stat().st_size > 1000
+
+
+def test_an_experiment_bar_is_redrawn_while_a_mesh_runs(bench, tmp_path, monkeypatch,
+                                                         capsys):
+    """The experiment's bar (its elapsed time) is redrawn every TICK seconds while a mesh
+    runs in a worker, not only when its rows arrive, and a baseline's count far from k
+    is recorded in the row's `segments`, not warned about."""
+    import time
+    import warnings
+
+    from superfacets._runtime import progress
+    from superfacets.scale.runner import experiment
+
+    monkeypatch.setattr(progress, "TICK", 0.02)
+    real = experiment._run_task
+
+    def slow(task):  # (a mesh that takes a while)
+        time.sleep(0.4)
+        return real(task)
+
+    monkeypatch.setattr(experiment, "_run_task", slow)
+    res = tmp_path / "r.csv"
+    cfgs = expand_grid("graph_segmentation")
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        s = run_experiment(list_meshes(bench)[:1], cfgs, res, [300], workers=1,
+                           progress=True)
+    assert s.ok == 1 and not [w for w in seen if "n_segments=300" in str(w.message)]
+    assert capsys.readouterr().err.count("experiment") >= 10
+    assert int(read_results(res)[0]["segments"]) < 270  # (the mesh holds fewer)

@@ -524,3 +524,24 @@ def test_local_workers_started_outside_a_main_guard_say_what_to_do(tmp_path):
     assert last.startswith("superfacets.errors.SchedulerError: the local Dask workers did "
                            "not start") and 'if __name__ == "__main__":' in last
     assert "workers=1" in last
+
+
+def test_a_batch_bar_is_redrawn_while_an_input_runs(tmp_path, monkeypatch, capsys):
+    """A large input takes minutes in a worker: the batch's bar (its elapsed time) is
+    redrawn every TICK seconds meanwhile, not only when an input ends."""
+    from superfacets._runtime import progress
+
+    monkeypatch.setattr(progress, "TICK", 0.02)
+    real = bt.segment_file
+
+    def slow(task):  # (an input that takes a while)
+        time.sleep(0.4)
+        return real(task)
+
+    monkeypatch.setattr(bt, "segment_file", slow)
+    folder = tmp_path / "in"
+    folder.mkdir()
+    trimesh.creation.icosphere(subdivisions=2).export(folder / "s.off")
+    s = run_batch([str(folder)], tmp_path / "out", 8, workers=1, progress=True)
+    assert s.ok == 1
+    assert capsys.readouterr().err.count("batch") >= 10  # redrawn while it ran

@@ -386,10 +386,11 @@ def _run(files, outdir, seg_opts, outputs, per_object, level, engine, retry_fail
     summary.engine = engine.describe() if engine is not None else ""
     try:
         with open(journal_path, "a") as journal:
-            if progress and tasks:
-                from ..._runtime.progress import new_bar
+            if progress and tasks:  # (its elapsed time redrawn while an input runs)
+                from ..._runtime.progress import new_bar, tick
 
                 bar = new_bar(total=len(tasks), unit="input", desc="batch", dynamic_ncols=True)
+                ticking = tick(bar)
             for row in (engine.run(segment_file, tasks, _lost_row) if tasks else ()):
                 journal.write(json.dumps(row) + "\n")
                 journal.flush()
@@ -411,6 +412,7 @@ def _run(files, outdir, seg_opts, outputs, per_object, level, engine, retry_fail
         summary.interrupted = True
     finally:
         if bar is not None:
+            ticking.set()
             bar.close()
         for t in tasks:
             if t["input"] not in finished and not _done(rows.get(t["input"]), retry_failed):

@@ -304,10 +304,11 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
     total = sum(len(t["ks"]) for t in tasks)
     t0 = time.perf_counter()
     bar = None
-    if progress and total:
-        from ..._runtime.progress import new_bar
+    if progress and total:  # (its elapsed time redrawn while a mesh runs)
+        from ..._runtime.progress import new_bar, tick
 
         bar = new_bar(total=total, unit="row", desc="experiment", dynamic_ncols=True)
+        ticking = tick(bar)
 
     with open(path, "a", newline="") as f:
         writer = csv.DictWriter(f, cols, restval="", extrasaction="ignore", lineterminator="\n")
@@ -334,6 +335,7 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
             summary.interrupted = True
         finally:
             if bar is not None:
+                ticking.set()
                 bar.close()
     summary.seconds = time.perf_counter() - t0
     return summary
