@@ -254,6 +254,12 @@ def test_progress_bar_names_the_stages_then_counts_passes(tmp_path, small_off, c
     assert totals and max(totals) < 50 and "merges to the count" in err
     assert main(["segment", str(small_off), "-k", "20", "-q"]) == 0  # small mesh: no bar
     assert capsys.readouterr().err == ""
+    # the outputs written under a bar of their own (a large mesh's picture takes seconds)
+    assert main(["segment", str(small_off), "-k", "20", "--progress", "-q", "-o",
+                 str(tmp_path / "o.seg"), "--html", str(tmp_path / "o.html")]) == 0
+    assert "writing o.seg, o.html [" in capsys.readouterr().err
+    assert main(["segment", str(small_off), "-k", "20", "-q", "-o", str(tmp_path / "o.seg")]) == 0
+    assert capsys.readouterr().err == ""
 
 
 

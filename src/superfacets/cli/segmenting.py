@@ -368,14 +368,15 @@ def _write_and_say(args, data, result, kind, outputs, elapsed) -> None:
 
     up = up_of(args, data)  # (a LAS cloud is upright with z up, an STL mesh too)
     view = args.view if args.view is not None else sensor_view(data)  # (an RGB-D frame)
-    write_result(data, result, kind, Path(args.mesh).name, labels=outputs["labels"],
-                 header=args.header, colored=outputs["colored"],
-                 vertex_colors=args.vertex_colors, picture=outputs["picture"],
-                 html=outputs["html"], element_options=dict(
-                     n_neighbors=args.neighbors, neighbor_radius=args.neighbor_radius),
-                 up=up[0], view=view, graph=outputs["graph"],
-                 levels=args.levels, level_cost=args.level_cost,
-                 extent_weight=args.extent_weight)
+    with _writing_bar(args, data, outputs):
+        write_result(data, result, kind, Path(args.mesh).name, labels=outputs["labels"],
+                     header=args.header, colored=outputs["colored"],
+                     vertex_colors=args.vertex_colors, picture=outputs["picture"],
+                     html=outputs["html"], element_options=dict(
+                         n_neighbors=args.neighbors, neighbor_radius=args.neighbor_radius),
+                     up=up[0], view=view, graph=outputs["graph"],
+                     levels=args.levels, level_cost=args.level_cost,
+                     extent_weight=args.extent_weight)
     if args.quiet:
         return
     seg_out = outputs["labels"]
@@ -387,6 +388,20 @@ def _write_and_say(args, data, result, kind, outputs, elapsed) -> None:
     for note in (duplicates_note(args, data, kind), count_note(args, data, result, kind)):
         if note:
             print(f"note: {note}", file=sys.stderr)
+
+
+def _writing_bar(args, data, outputs):
+    """A bar naming the files being written, its elapsed time going on (a picture and a
+    page of millions of faces take seconds), where the run showed progress (``--progress``,
+    or 500,000 elements or more on a terminal without ``-q``; not with ``--no-progress``)."""
+    from .._runtime.progress import waiting_bar
+
+    names = [Path(str(outputs[k])).name for k in ("labels", "colored", "picture", "html",
+                                                   "graph") if outputs[k] not in (None, "-")]
+    size = data.n_faces if hasattr(data, "faces") else data.n_total
+    show = args.progress if args.progress is not None else (
+        size >= 500_000 and sys.stderr.isatty() and not args.quiet)
+    return waiting_bar(f"writing {', '.join(names)}", bool(show and names))
 
 
 def _say_what_was_written(seg_out, ply_out, png_out, html_out, report, up,
