@@ -419,6 +419,7 @@ def _say_what_was_written(seg_out, ply_out, png_out, html_out, report, up,
 
 
 def cmd_baseline(args) -> int:
+    from .._runtime.progress import waiting_bar
     from ..errors import MemoryLimitError, ParameterError
     from ..evaluation.methods import Skipped, get_method
     from ..io import write_colored_mesh, write_labels
@@ -438,11 +439,11 @@ def cmd_baseline(args) -> int:
     t0 = time.perf_counter()
     show = not args.quiet and sys.stderr.isatty()
     extra = {"progress": show} if method.progress else {}
-    if show and not method.progress:
-        print(f"{Path(args.mesh).name}: {counted(mesh.n_faces, 'face')}, running {method.name}...",
-              file=sys.stderr, flush=True)
-    try:
-        run = method.run(mesh, args.n_segments, cache={}, seed=args.seed, **params, **extra)
+    try:  # (a method without bars of its own: one line, its elapsed time going on)
+        with waiting_bar(f"{Path(args.mesh).name}: {counted(mesh.n_faces, 'face')}, running "
+                         f"{method.name}", show and not method.progress):
+            run = method.run(mesh, args.n_segments, cache={}, seed=args.seed, **params,
+                             **extra)
     except Skipped as exc:
         raise MemoryLimitError(f"{args.mesh}: {exc}") from None
     except ParameterError as exc:
