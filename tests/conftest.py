@@ -128,3 +128,20 @@ def components_solver():
         return comp.astype(np.uint32), values, (rfirst, rb.astype(np.uint32), w)
 
     return types.SimpleNamespace(cp_d0_dist=cp_d0_dist)
+
+
+def slowed(monkeypatch, owner, name: str, seconds: float = 0.4) -> None:
+    """Make ``owner.name`` (a function) take ``seconds`` more, and the progress bars redraw
+    every 0.02 s: a stage long enough to be seen redrawn while it runs."""
+    import time
+
+    from superfacets._runtime import progress
+
+    monkeypatch.setattr(progress, "TICK", 0.02)
+    real = getattr(owner, name)
+
+    def slow(*args, **kwargs):
+        time.sleep(seconds)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(owner, name, slow)

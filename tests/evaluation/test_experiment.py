@@ -415,20 +415,13 @@ def test_an_experiment_bar_is_redrawn_while_a_mesh_runs(bench, tmp_path, monkeyp
     """The experiment's bar (its elapsed time) is redrawn every TICK seconds while a mesh
     runs in a worker, not only when its rows arrive, and a baseline's count far from k
     is recorded in the row's `segments`, not warned about."""
-    import time
     import warnings
 
-    from superfacets._runtime import progress
+    from conftest import slowed
+
     from superfacets.scale.runner import experiment
 
-    monkeypatch.setattr(progress, "TICK", 0.02)
-    real = experiment._run_task
-
-    def slow(task):  # (a mesh that takes a while)
-        time.sleep(0.4)
-        return real(task)
-
-    monkeypatch.setattr(experiment, "_run_task", slow)
+    slowed(monkeypatch, experiment, "_run_task")  # (a mesh that takes a while)
     res = tmp_path / "r.csv"
     cfgs = expand_grid("graph_segmentation")
     with warnings.catch_warnings(record=True) as seen:

@@ -529,16 +529,9 @@ def test_local_workers_started_outside_a_main_guard_say_what_to_do(tmp_path):
 def test_a_batch_bar_is_redrawn_while_an_input_runs(tmp_path, monkeypatch, capsys):
     """A large input takes minutes in a worker: the batch's bar (its elapsed time) is
     redrawn every TICK seconds meanwhile, not only when an input ends."""
-    from superfacets._runtime import progress
+    from conftest import slowed
 
-    monkeypatch.setattr(progress, "TICK", 0.02)
-    real = bt.segment_file
-
-    def slow(task):  # (an input that takes a while)
-        time.sleep(0.4)
-        return real(task)
-
-    monkeypatch.setattr(bt, "segment_file", slow)
+    slowed(monkeypatch, bt, "segment_file")  # (an input that takes a while)
     folder = tmp_path / "in"
     folder.mkdir()
     trimesh.creation.icosphere(subdivisions=2).export(folder / "s.off")

@@ -459,19 +459,11 @@ def test_a_sample_too_small_for_the_centers_leaves_them_to_the_tiles(options, tm
 def test_a_tiled_run_shows_every_stage_and_redraws_while_a_tile_runs(monkeypatch, capsys):
     """With ``progress`` each stage shows a line (the phases a bar of tiles), redrawn
     every TICK seconds while it runs: no stage is silent on a terminal."""
-    import time
+    from conftest import slowed
 
-    from superfacets._runtime import progress
     from superfacets.scale import tiling
 
-    monkeypatch.setattr(progress, "TICK", 0.02)
-    real = tiling.tile_refine
-
-    def slow(*args, **kw):  # (a tile that takes a while)
-        time.sleep(0.3)
-        return real(*args, **kw)
-
-    monkeypatch.setattr(tiling, "tile_refine", slow)
+    slowed(monkeypatch, tiling, "tile_refine", 0.3)  # (a tile that takes a while)
     res = segment_tiled(_bumpy_cloud(20_000), 30, tiles=2, progress=True)
     err = capsys.readouterr().err
     for name in ("survey", "orientation", "areas", "start", "refine", "labels", "stitch",
