@@ -513,3 +513,19 @@ def test_the_summary_is_in_the_singular_where_there_is_one(tmp_path, small_off, 
     assert main(["segment", str(small_off), "-k", "1", "-o", str(tmp_path / "one.seg")]) == 0
     line = capsys.readouterr().out.splitlines()[0]
     assert ", 1 superfacet, 1 iteration (" in line and "1 superfacets" not in line
+
+
+def test_compressed_inputs_show_the_reading_bar_from_a_smaller_size(tmp_path, monkeypatch):
+    """A compressed file takes longer to read a byte (a LAZ tile of 3 MiB holds 0.7M
+    points): on a terminal its reading bar shows from 4 MiB, a plain file's from 32."""
+    from types import SimpleNamespace
+
+    from superfacets.cli import segmenting
+
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    for name in ("m.ply", "m.ply.gz", "s.laz"):
+        (tmp_path / name).write_bytes(b"\0" * (5 << 20))
+        args = SimpleNamespace(mesh=str(tmp_path / name), progress=None, quiet=False)
+        assert segmenting._reading_bar(args).show == (name != "m.ply"), name
+    args = SimpleNamespace(mesh=str(tmp_path / "s.laz"), progress=None, quiet=True)
+    assert not segmenting._reading_bar(args).show
