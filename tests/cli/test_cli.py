@@ -147,6 +147,7 @@ def test_evaluate_one_call(tmp_path, capsys):
     assert "undersegmentation_error 0.0000" in out and "boundary_recall         1.0000" in out
     # three borders of equal length, one of them the true one
     assert "boundary_precision      0.3333" in out
+    assert capsys.readouterr().err == ""  # (no terminal, and small: no bar)
     bad = tmp_path / "short.seg"
     bad.write_text("0\n1\n")
     assert main(["evaluate", str(off), str(sf), str(bad)]) == 2
@@ -520,8 +521,9 @@ def test_compressed_inputs_show_the_reading_bar_from_a_smaller_size(tmp_path, mo
     points): on a terminal its reading bar shows from 4 MiB, a plain file's from 32."""
     from types import SimpleNamespace
 
-    from superfacets.cli import segmenting
+    from superfacets.cli import reading, segmenting
 
+    assert reading.COMPRESSED_BAR_BYTES < 5 << 20 <= reading.READING_BAR_BYTES
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
     for name in ("m.ply", "m.ply.gz", "s.laz"):
         (tmp_path / name).write_bytes(b"\0" * (5 << 20))
@@ -529,3 +531,22 @@ def test_compressed_inputs_show_the_reading_bar_from_a_smaller_size(tmp_path, mo
         assert segmenting._reading_bar(args).show == (name != "m.ply"), name
     args = SimpleNamespace(mesh=str(tmp_path / "s.laz"), progress=None, quiet=True)
     assert not segmenting._reading_bar(args).show
+
+
+def test_evaluate_shows_its_long_stages_on_a_terminal(tmp_path, capsys, monkeypatch):
+    """Measuring millions of faces takes seconds (6.8M faces: 6.7 s of silence): on a
+    terminal the labels' reading and the measuring each show a line, its time going on."""
+    from conftest import grid_mesh
+
+    from superfacets import write_labels
+    from superfacets.cli import evaluating
+
+    mesh = grid_mesh(20, 20)
+    off = write_mesh(tmp_path / "plane.off", mesh)
+    gt = write_labels(tmp_path / "gt.seg", (mesh.centroids[:, 0] > 0).astype(int))
+    monkeypatch.setattr(evaluating, "EVALUATE_BAR_ELEMENTS", 100)  # (as if it were large)
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    assert main(["evaluate", str(off), str(gt), str(gt)]) == 0
+    err = capsys.readouterr().err
+    assert "reading the labels of 800 faces [" in err and "measuring plane.off (800 faces) [" in err
+

@@ -9,6 +9,7 @@ unlabelled ones left out with ``--ignore-label``); ground truths from
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 from ..elements.kinds import kind_of
@@ -16,6 +17,9 @@ from ..method.params import DEFAULTS
 from .options import float_arg, int_arg, read_usable
 
 __all__ = ["add_parsers", "cmd_evaluate"]
+
+#: Inputs of this many elements or more show a line while they are measured (on a terminal)
+EVALUATE_BAR_ELEMENTS = 500_000
 
 
 def add_parsers(sub) -> None:
@@ -52,13 +56,17 @@ def add_parsers(sub) -> None:
 
 
 def cmd_evaluate(args) -> int:
+    from .._runtime.progress import waiting_bar
     from ..errors import ParameterError
     from ..evaluation.metrics import evaluate_rows
     from ..io import read_labels
+    from .reading import reads_long
 
     if not (0 <= args.tau < 1):
         raise ParameterError(f"--tau must be in [0, 1), got {args.tau}")
-    data = read_usable(args.mesh, clouds=True)  # area-weighted metrics need a measurable mesh
+    tty, name = sys.stderr.isatty(), Path(args.mesh).name  # (long stages: a line, ticking)
+    with waiting_bar(f"reading {name}", tty and reads_long(args.mesh)):
+        data = read_usable(args.mesh, clouds=True)  # area-weighted metrics: a measurable mesh
     cloud = not hasattr(data, "faces")
     if cloud and args.elements not in (None, "points"):
         raise ParameterError(f"{args.mesh} is a point cloud: its labels are of points, not "
@@ -66,8 +74,10 @@ def cmd_evaluate(args) -> int:
     kind = "points" if cloud else (args.elements or "faces")
     n = {"faces": getattr(data, "n_faces", 0), "vertices": getattr(data, "n_vertices", 0),
          "points": getattr(data, "n_total", 0)}[kind]
-    labels = read_labels(args.labels, n_faces=n)
-    gts = [read_labels(p, n_faces=n) for p in args.ground_truths]
+    long = tty and n >= EVALUATE_BAR_ELEMENTS
+    with waiting_bar(f"reading the labels of {n:,} {kind}", long):
+        labels = read_labels(args.labels, n_faces=n)
+        gts = [read_labels(p, n_faces=n) for p in args.ground_truths]
     if args.ground_truth_field is not None:
         from ..io.labels import read_field
 
@@ -78,8 +88,9 @@ def cmd_evaluate(args) -> int:
         gts.append(gt)
     if not gts:
         raise ParameterError("give a ground truth: GT.seg files or --ground-truth-field NAME")
-    m = evaluate_rows(data, labels, gts, elements=kind, n_neighbors=args.neighbors,
-                      tau=args.tau, ignore_label=args.ignore_label, precision=True)
+    with waiting_bar(f"measuring {name} ({n:,} {kind})", long):
+        m = evaluate_rows(data, labels, gts, elements=kind, n_neighbors=args.neighbors,
+                          tau=args.tau, ignore_label=args.ignore_label, precision=True)
     segs = kind_of(kind).segment_word
     print(f"{Path(args.mesh).name}: {n} {kind}, {m['segments']} {segs}, "
           f"{len(gts)} ground truth{'s' if len(gts) != 1 else ''}")

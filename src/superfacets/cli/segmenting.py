@@ -235,26 +235,17 @@ def cmd_segment(args) -> int:
     return 0
 
 
-#: Input files from this size on show a bar while they are read (on a terminal)
-READING_BAR_BYTES = 32 << 20
-#: ... compressed ones (LAZ, .gz, .xz, .bz2) from this size: they take longer a byte
-#: (a LAZ tile of 3 MiB holds 0.7M points, read in 0.4 s)
-COMPRESSED_BAR_BYTES = 4 << 20
-_COMPRESSED = (".laz", ".gz", ".xz", ".bz2")
-
-
 def _reading_bar(args):
     """A bar naming the file while it is read, its elapsed time going on, where the run
-    shows progress (``--progress``, or a file of :data:`READING_BAR_BYTES` or more on a
-    terminal without ``-q``, :data:`COMPRESSED_BAR_BYTES` for a compressed one; not with
-    ``--no-progress``)."""
+    shows progress (``--progress``, or a file that reads long on a terminal without
+    ``-q``: :func:`~superfacets.cli.reading.reads_long`; not with ``--no-progress``)."""
     from .._runtime.progress import waiting_bar
+    from .reading import reads_long
 
     path = Path(args.mesh)
     size = path.stat().st_size if path.is_file() else 0
-    least = COMPRESSED_BAR_BYTES if path.suffix.lower() in _COMPRESSED else READING_BAR_BYTES
     show = args.progress if args.progress is not None else (
-        size >= least and sys.stderr.isatty() and not args.quiet)
+        reads_long(path) and sys.stderr.isatty() and not args.quiet)
     return waiting_bar(f"reading {path.name} ({size / 2**20:,.0f} MiB)", bool(show))
 
 
