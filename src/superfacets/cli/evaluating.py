@@ -9,7 +9,6 @@ unlabelled ones left out with ``--ignore-label``); ground truths from
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 from ..elements.kinds import kind_of
@@ -17,9 +16,6 @@ from ..method.params import DEFAULTS
 from .options import float_arg, int_arg, read_usable
 
 __all__ = ["add_parsers", "cmd_evaluate"]
-
-#: Inputs of this many elements or more show a line while they are measured (on a terminal)
-EVALUATE_BAR_ELEMENTS = 500_000
 
 
 def add_parsers(sub) -> None:
@@ -60,12 +56,12 @@ def cmd_evaluate(args) -> int:
     from ..errors import ParameterError
     from ..evaluation.metrics import evaluate_rows
     from ..io import read_labels
-    from .reading import reads_long
+    from .reading import shows_stages
 
     if not (0 <= args.tau < 1):
         raise ParameterError(f"--tau must be in [0, 1), got {args.tau}")
-    tty, name = sys.stderr.isatty(), Path(args.mesh).name  # (long stages: a line, ticking)
-    with waiting_bar(f"reading {name}", tty and reads_long(args.mesh)):
+    name = Path(args.mesh).name  # (long stages on a terminal: a line, its time going on)
+    with waiting_bar(f"reading {name}", shows_stages(args, path=args.mesh)):
         data = read_usable(args.mesh, clouds=True)  # area-weighted metrics: a measurable mesh
     cloud = not hasattr(data, "faces")
     if cloud and args.elements not in (None, "points"):
@@ -74,7 +70,7 @@ def cmd_evaluate(args) -> int:
     kind = "points" if cloud else (args.elements or "faces")
     n = {"faces": getattr(data, "n_faces", 0), "vertices": getattr(data, "n_vertices", 0),
          "points": getattr(data, "n_total", 0)}[kind]
-    long = tty and n >= EVALUATE_BAR_ELEMENTS
+    long = shows_stages(args, n)
     with waiting_bar(f"reading the labels of {n:,} {kind}", long):
         labels = read_labels(args.labels, n_faces=n)
         gts = [read_labels(p, n_faces=n) for p in args.ground_truths]

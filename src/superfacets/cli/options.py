@@ -12,7 +12,12 @@ from pathlib import Path
 
 from ..method.params import DEFAULTS, PARAMETERS
 from .parameters import auto_float_arg, float_arg, int_arg  # noqa: F401 (re-exported)
-from .reading import check_header, named_after, read_usable  # noqa: F401 (re-exported)
+from .reading import (  # noqa: F401 (re-exported)
+    check_header,
+    named_after,
+    read_usable,
+    shows_stages,
+)
 
 __all__ = ["int_arg", "float_arg", "size_arg", "view_arg", "add_method_options",
            "add_camera_options", "add_mesh_and_labels", "method_kwargs", "check_output",
@@ -308,7 +313,7 @@ def labels_for(args, mesh):
                               f"{mesh.n_faces} faces and {mesh.n_vertices} vertices (one "
                               "label per face or per vertex is needed)")
     kw = method_kwargs(args)
-    kw["progress"] = False
+    kw["progress"] = shows_stages(args, mesh.n_faces)  # (a large mesh: its bars)
     try:
         r = segment(mesh, args.n_segments, radius=args.radius, **kw)
     except SuperfacetsError as exc:

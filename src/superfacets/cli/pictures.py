@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._runtime.progress import waiting_bar
 from .options import (
     add_camera_options,
     add_mesh_and_labels,
@@ -18,10 +19,17 @@ from .options import (
     labels_for,
     read_usable,
     said_up,
+    shows_stages,
     up_of,
 )
 
 __all__ = ["add_parsers"]
+
+
+def _read(args):
+    """The command's mesh, read under a line naming it where reading takes long."""
+    with waiting_bar(f"reading {Path(args.mesh).name}", shows_stages(args, path=args.mesh)):
+        return read_usable(args.mesh)
 
 
 def add_parsers(sub) -> None:
@@ -97,13 +105,15 @@ def cmd_render(args) -> int:
 
     out = check_output(args.output, (".png",), "the picture",
                        inputs=(args.mesh, getattr(args, "labels", None)))
-    mesh = read_usable(args.mesh)
+    mesh = _read(args)
     labels, _, elements = labels_for(args, mesh)
     t0 = time.perf_counter()
     up = up_of(args, mesh)
-    render(mesh, labels, out, size=args.size, view=args.view, up=up[0],
-           background=args.background, boundaries=not args.no_boundaries,
-           line_width=args.line_width, title=args.title, zoom=args.zoom, elements=elements)
+    with waiting_bar(f"rendering {out.name}", shows_stages(args, mesh.n_faces)):
+        render(mesh, labels, out, size=args.size, view=args.view, up=up[0],
+               background=args.background, boundaries=not args.no_boundaries,
+               line_width=args.line_width, title=args.title, zoom=args.zoom,
+               elements=elements)
     if not args.quiet:
         print(f"wrote {out} ({args.size[0]}x{args.size[1]}, {mesh.n_faces} faces, {said_up(up)}, "
               f"rendered in {time.perf_counter() - t0:.2f} s)")
@@ -121,7 +131,7 @@ def cmd_panel(args) -> int:
 
     out = check_output(args.output, (".png",), "the picture",
                        inputs=(args.mesh, getattr(args, "labels", None)))
-    mesh = read_usable(args.mesh)
+    mesh = _read(args)
     items = []
     if args.labels:
         for p in args.labels:
@@ -164,7 +174,7 @@ def cmd_view(args) -> int:
         raise NoDisplayError("no display available ($DISPLAY is not set): use "
                              "'superfacets render' for a PNG or 'superfacets html' for a page "
                              "to open in a browser")
-    mesh = read_usable(args.mesh)
+    mesh = _read(args)
     labels, _, elements = labels_for(args, mesh)
     if elements == "vertices":
         from ..viz.render import faces_to_draw
@@ -180,11 +190,12 @@ def cmd_html(args) -> int:
 
     out = check_output(args.output, (".html", ".htm"), "the page",
                        inputs=(args.mesh, args.labels))
-    mesh = read_usable(args.mesh)
+    mesh = _read(args)
     labels, info, elements = labels_for(args, mesh)
-    write_html(out, mesh, labels, title=args.title or Path(args.mesh).name, info=info,
-               background=args.background, view=args.view, up=up_of(args, mesh)[0],
-               elements=elements)
+    with waiting_bar(f"writing {out.name}", shows_stages(args, mesh.n_faces)):
+        write_html(out, mesh, labels, title=args.title or Path(args.mesh).name, info=info,
+                   background=args.background, view=args.view, up=up_of(args, mesh)[0],
+                   elements=elements)
     if not args.quiet:
         print(f"wrote {out} ({out.stat().st_size / 1e6:.1f} MB): open it in a browser")
     return 0

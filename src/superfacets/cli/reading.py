@@ -5,7 +5,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-__all__ = ["named_after", "check_header", "read_usable", "reads_long"]
+__all__ = ["named_after", "check_header", "read_usable", "reads_long", "shows_stages",
+           "LONG_ELEMENTS"]
+
+#: Inputs of this many elements or more show their long stages on a terminal
+LONG_ELEMENTS = 500_000
 
 #: Input files from this size on show a bar while they are read (on a terminal)
 READING_BAR_BYTES = 32 << 20
@@ -88,3 +92,22 @@ def read_usable(path, *, clouds: bool = False):
     except SuperfacetsError as exc:
         raise named_after(path, exc) from None
     return data
+
+
+
+def shows_stages(args, n_elements: int | None = None, path=None) -> bool:
+    """Whether a command shows a line for a long stage (reading, segmenting, rendering,
+    writing): on a terminal, without ``-q``, for a file that reads long
+    (:func:`reads_long`) or an input of :data:`LONG_ELEMENTS` elements or more.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> shows_stages(SimpleNamespace(quiet=True), 10**7)
+    False
+    """
+    import sys
+
+    if getattr(args, "quiet", False) or not sys.stderr.isatty():
+        return False
+    return reads_long(path) if n_elements is None else n_elements >= LONG_ELEMENTS

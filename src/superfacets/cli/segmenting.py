@@ -29,6 +29,7 @@ from .options import (
     read_usable,
     said_up,
     scan_cloud,
+    shows_stages,
     up_of,
 )
 
@@ -240,12 +241,10 @@ def _reading_bar(args):
     shows progress (``--progress``, or a file that reads long on a terminal without
     ``-q``: :func:`~superfacets.cli.reading.reads_long`; not with ``--no-progress``)."""
     from .._runtime.progress import waiting_bar
-    from .reading import reads_long
 
     path = Path(args.mesh)
     size = path.stat().st_size if path.is_file() else 0
-    show = args.progress if args.progress is not None else (
-        reads_long(path) and sys.stderr.isatty() and not args.quiet)
+    show = args.progress if args.progress is not None else shows_stages(args, path=path)
     return waiting_bar(f"reading {path.name} ({size / 2**20:,.0f} MiB)", bool(show))
 
 
@@ -396,8 +395,7 @@ def _writing_bar(args, data, outputs):
     names = [Path(str(outputs[k])).name for k in ("labels", "colored", "picture", "html",
                                                    "graph") if outputs[k] not in (None, "-")]
     size = data.n_faces if hasattr(data, "faces") else data.n_total
-    show = args.progress if args.progress is not None else (
-        size >= 500_000 and sys.stderr.isatty() and not args.quiet)
+    show = args.progress if args.progress is not None else shows_stages(args, size)
     return waiting_bar(f"writing {', '.join(names)}", bool(show and names))
 
 
