@@ -338,8 +338,8 @@ def test_cli_experiment_report_and_evaluate(bench, tmp_path, capsys):
     assert "4 rows written (4 ok" in capsys.readouterr().out and len(read_results(res)) == 12
     rep = tmp_path / "rep"
     assert main(["report", str(res), "-o", str(rep)]) == 0
-    out = capsys.readouterr().out
-    assert "superfacets α=500" in out and "Cup" in out
+    out, err = capsys.readouterr()
+    assert "superfacets α=500" in out and "Cup" in out and err == ""  # (no terminal: no line)
     from PIL import Image
 
     for name in ("fig4", "fig4_extra", "per_category_undersegmentation_error",
@@ -431,3 +431,17 @@ def test_an_experiment_bar_is_redrawn_while_a_mesh_runs(bench, tmp_path, monkeyp
     assert s.ok == 1 and not [w for w in seen if "n_segments=300" in str(w.message)]
     assert capsys.readouterr().err.count("experiment") >= 10
     assert int(read_results(res)[0]["segments"]) < 270  # (the mesh holds fewer)
+
+
+def test_report_shows_a_line_while_it_draws_on_a_terminal(bench, tmp_path, capsys,
+                                                          monkeypatch):
+    """Drawing a report's figures takes seconds: on a terminal a line says so meanwhile."""
+    import sys
+
+    res = tmp_path / "r.csv"
+    run_experiment(list_meshes(bench)[:1], expand_grid("superfacets"), res, [4], workers=1,
+                   progress=False)
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    assert main(["report", str(res), "-o", str(tmp_path / "rep")]) == 0
+    assert f"writing the report to {tmp_path / 'rep'} [" in capsys.readouterr().err
+

@@ -186,11 +186,13 @@ def cmd_experiment(args) -> int:
 
 
 def cmd_report(args) -> int:
+    from .._runtime.progress import waiting_bar
     from ..evaluation.report import write_report
 
     res = [Path(p) for p in args.results]
     out = Path(args.output_dir) if args.output_dir else res[0].with_name(res[0].stem + "_report")
-    files = write_report(res, out, k_focus=args.k_focus, series=args.series)
+    with waiting_bar(f"writing the report to {out}", sys.stderr.isatty()):  # (seconds)
+        files = write_report(res, out, k_focus=args.k_focus, series=args.series)
     print((out / "summary.md").read_text())
     print(f"wrote {len(files)} files to {out}: " + ", ".join(f.name for f in files))
     return 0
