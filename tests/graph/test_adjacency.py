@@ -297,39 +297,3 @@ def test_superpoint_graph_of_a_lazy_point_graph_reads_only_its_crossings():
     for name, a in lean.arrays().items():
         np.testing.assert_array_equal(a, full.arrays()[name], err_msg=name)
     assert lean.n_edges > 25
-
-
-def test_crossing_adjacencies_of_coarser_labels_are_read_from_the_finer_ones():
-    """Known answer: labels that coarsen others (each a union of them, as the merges
-    make) cross a subset of the finer labels' adjacencies; read from the finer ones
-    (``finer=``) they are the arrays found from scratch, in the same order, on a point
-    graph (its crossing kernel) and on a mesh's face graph (every pair), and so is the
-    superfacet graph made from them."""
-    import trimesh
-
-    from superfacets.elements import face_graph
-    from superfacets.elements.points import point_graph
-    from superfacets.graph.adjacency import crossing_adjacencies
-    from superfacets.inputs.cloud import PointCloud
-    from superfacets.inputs.convert import as_mesh
-
-    rng = np.random.default_rng(11)
-    xyz = rng.random((5000, 3)) * [3, 2, 0.3]
-    graphs = [point_graph(PointCloud(xyz)).graph,
-              face_graph(as_mesh(trimesh.creation.icosphere(subdivisions=4)))]
-    for g in graphs:
-        fine = (g.positions[:, 0] * 9).astype(np.int64) * 7 + \
-            (g.positions[:, 1] * 6.5).astype(np.int64) % 7
-        fine = np.unique(fine, return_inverse=True)[1].astype(np.int64)
-        coarse = rng.integers(0, 6, fine.max() + 1)[fine]  # a union of fine labels each
-        finer = crossing_adjacencies(g, fine)
-        direct = crossing_adjacencies(g, coarse)
-        read = crossing_adjacencies(g, coarse, finer=finer)
-        assert 0 < direct[0].shape[0] < finer[0].shape[0]
-        for a, b in zip(direct, read):
-            np.testing.assert_array_equal(a, b)
-        dense = np.unique(coarse, return_inverse=True)[1].astype(np.int64)
-        want = superfacet_graph(g, dense).arrays()
-        got = superfacet_graph(g, dense, finer=finer).arrays()
-        for name, a in want.items():
-            np.testing.assert_array_equal(a, got[name], err_msg=name)

@@ -93,6 +93,8 @@ def _recorded_calls(monkeypatch) -> dict:
     graph_segmentation(mesh, n_segments=30)
     vsa(mesh, 12, metric="l21", init="incremental", rng=0)
     dimensionality_features(elements_of(pts, "points").graph)
+    cloud_labels = superfacets.segment(as_cloud(pts), 30, n_threads=1).labels
+    superfacet_graph(elements_of(pts, "points").graph, cloud_labels)  # (pairs listed)
     g = elements_of(mesh, "faces").graph
     coarsen(g, csr_weights(g, paper_weights(g)), 8).graph.lengths  # noqa: B018 (made if read)
     return calls

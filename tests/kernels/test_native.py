@@ -63,7 +63,8 @@ POINT_KERNELS = {"knn_csr", "pca_normals", "pca_linearity", "propagate_signs",
                  "order_ties",
                  "point_terms_csr", "point_terms", "combine_weights", "feature_weights_csr",
                  "neighbour_mean",
-                 "crossing_pairs", "label_sums", "label_scatter", "tree_nodes",
+                 "crossing_pairs", "label_pair_sums", "label_sums", "label_scatter",
+                 "tree_nodes",
                  "nearest_in_tree", "sort_keys", "rows_apart", "neighbourhood_moments",
                  "label_pairs"}
 #: Those of the vertex graph and of the exact assignment (the default on vertices)
@@ -325,6 +326,7 @@ def test_runs_on_points_give_numba_results_call_by_call(shadowed):
     for pts, k, normals, params in runs:
         r = superfacets.segment(as_cloud(pts, normals), k, n_threads=1, **params)
         assert r.labels.shape[0] == pts.shape[0] and r.labels.max() + 1 == k
+    assert r.graph().n_segments == 40  # the superpoint graph: its crossing pairs listed
     # a cloud that alone holds its points (as one read from a file) lends them to its graph
     r = superfacets.segment(as_cloud(dup.copy()), 40, n_threads=1)
     assert r.labels.shape[0] == dup.shape[0]

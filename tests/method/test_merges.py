@@ -132,6 +132,57 @@ def test_the_first_run_has_at_most_one_superpoint_per_12_points():
     assert r.params["n_init_centers"] == 100 and r.n_segments == 50
     # one per 12 points or more already: no merges at all (the method's own run)
     assert segment(pts, 150).params["n_init_centers"] == 150
+    # and at least one per 100 points: a large scan at a small k starts from small pieces
+    big = np.c_[rng.random((30_000, 2)), np.zeros(30_000)]
+    assert segment(big, 10).params["n_init_centers"] == 300
+
+
+def _terrain(seed: int = 0, n: int = 40_000, bushes: int = 10):
+    """Gently rolling ground (1 x 1, amplitude 0.01, noise 0.002) with ``bushes`` half
+    spheres of radius 0.04 (400 points each) standing on it: the points and the part of
+    each (0 the ground)."""
+    rng = np.random.default_rng(seed)
+
+    def ground(xy):
+        return 0.01 * np.sin(2 * np.pi * xy[..., 0]) * np.cos(np.pi * xy[..., 1])
+
+    xy = rng.random((n, 2))
+    parts = [np.c_[xy, ground(xy) + 0.002 * rng.standard_normal(n)]]
+    for c in rng.random((bushes, 2)) * 0.8 + 0.1:
+        d = rng.standard_normal((400, 3))
+        d[:, 2] = np.abs(d[:, 2])
+        d *= 0.04 / np.linalg.norm(d, axis=1, keepdims=True)
+        parts.append(d + [c[0], c[1], ground(c)] + 0.002 * rng.standard_normal((400, 3)))
+    return np.vstack(parts), np.repeat(np.arange(bushes + 1), [n] + [400] * bushes)
+
+
+def test_a_scene_merges_by_the_planes_rise_and_an_object_by_wards(monkeypatch):
+    import superfacets.graph.hierarchy as hierarchy
+
+    ran, real = [], hierarchy.hierarchy
+    monkeypatch.setattr(hierarchy, "hierarchy", lambda *a, **kw: (
+        ran.append(kw.get("cost", "ward")), real(*a, **kw))[1])
+    # an airborne tile in miniature: most points on the ground, flat to within its noise
+    pts, part = _terrain()
+    r = segment(pts, 15)
+    assert ran == ["planarity"] and r.n_segments == 15
+    # the count goes to the bushes: a few ground superpoints, and UE about a fifth of
+    # Ward's merges' (0.08-0.11 over three samplings, against 0.40-0.59)
+    assert _on_floor(r.labels, part) <= 8
+    assert _ue(r.labels, part) < 0.15
+    # a curved object: no flat region, Ward's merges keep compact superpoints
+    ran.clear()
+    ball = np.random.default_rng(1).standard_normal((6000, 3))
+    ball /= np.linalg.norm(ball, axis=1, keepdims=True)
+    assert segment(ball, 20).n_segments == 20 and ran == ["ward"]
+
+
+def _ue(labels, part):
+    """Undersegmentation error (eq. 4, 5 % tolerance) against ``part``."""
+    table = np.zeros((labels.max() + 1, part.max() + 1))
+    np.add.at(table, (labels, part), 1)
+    size = table.sum(1)
+    return float(((size[:, None] - table) * (table > 0.05 * size[:, None])).sum() / labels.size)
 
 
 def test_merge_from_is_chosen_from_the_kind_and_the_density():
@@ -193,7 +244,7 @@ def test_the_tiles_sums_add_up_to_the_whole_clouds():
     from dataclasses import replace
 
     from superfacets.elements.points import point_graph
-    from superfacets.method.merges import merge_to_count
+    from superfacets.method.merges import FLAT_NOISE, flat_share, merge_to_count
     from superfacets.method.stages import resolve_rules
     from superfacets.scale.tile_merges import _outer_sums, merge_names, tile_merge_stats
 
@@ -233,6 +284,14 @@ def test_the_tiles_sums_add_up_to_the_whole_clouds():
     assert np.unique(one_run * 10_000 + tiled).size == 40  # the same partition
     split = merge_names(halves, 40, DEFAULTS.alpha, DEFAULTS.eta_convex, labels=names[fine])
     assert np.unique(split[1]).size == 40
+    # down to 10 the flat merges stop at 34, most points on the floor: the plane's rise
+    rules = replace(rules, target=10)
+    assert flat_share(fine, flat_merges(g, fine, 10, FLAT_NOISE * noise_variance(g))) > 0.5
+    one_run, _ = merge_to_count(g, fine, rules)
+    got, merged, flat, fewest = merge_names([whole], 10, DEFAULTS.alpha, DEFAULTS.eta_convex)
+    assert (flat, fewest) == (34, 10)
+    tiled = merged[np.searchsorted(got, names[fine])]
+    assert np.unique(one_run * 10_000 + tiled).size == 10  # the same partition
 
 
 def test_a_border_disagreement_never_merges_superpoints_that_do_not_touch():

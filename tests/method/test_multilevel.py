@@ -272,10 +272,10 @@ def test_a_large_clouds_coarse_start_lets_its_weights_go_and_the_passes_read_the
         return made[-1]
 
     monkeypatch.setattr(pl, "held_weights", counted)
-    let_go = segment(pts, 40)
+    let_go = segment(pts, 40, merge_from=1)  # 40 superpoints (merges: 3,000, no coarse start)
     assert let_go.params["coarsen"] > 1 and [h.remade for h in made] == [1]
     monkeypatch.setattr(pl, "held_weights", lambda g, r, w, *a: HeldWeights(w))
-    kept = segment(pts, 40)
+    kept = segment(pts, 40, merge_from=1)
     np.testing.assert_array_equal(let_go.labels, kept.labels)
 
 

@@ -10,6 +10,8 @@ vertex shared by thousands of faces). They give exactly the order a stable
 import numpy as np
 from numba import njit, prange
 
+from .geometry import pair_terms
+
 _SMALL = 32  # buckets up to this size: insertion sort
 
 
@@ -461,3 +463,43 @@ def crossing_pairs(indptr, indices, labels):
                 out[m, 1] = j
                 m += 1
     return out
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def label_pair_sums(indptr, indices, labels, k, positions, normals, shares):
+    """The crossing adjacencies (:func:`crossing_pairs`) summed per pair of labels: the
+    keys ``lo * k + hi`` ascending, and per key ``(border, border * angle, border *
+    concave, crossings, angle, concave)`` added in pair order (a stable sort of the keys),
+    each border the mean of the two points' border shares and each angle ``acos`` of
+    :func:`~superfacets._kernels.geometry.pair_terms`' cosine: ``(E,)`` int64, ``(E, 6)``."""
+    pairs = crossing_pairs(indptr, indices, labels)
+    m = pairs.shape[0]
+    key = np.empty(m, dtype=np.int64)
+    for t in range(m):
+        a, b = labels[pairs[t, 0]], labels[pairs[t, 1]]
+        key[t] = min(a, b) * k + max(a, b)
+    order = np.argsort(key, kind="mergesort")
+    e = 0
+    for u in range(m):
+        if u == 0 or key[order[u]] != key[order[u - 1]]:
+            e += 1
+    keys = np.empty(e, dtype=np.int64)
+    sums = np.zeros((e, 6))
+    r = -1
+    for u in range(m):
+        t = order[u]
+        if u == 0 or key[t] != key[order[u - 1]]:
+            r += 1
+            keys[r] = key[t]
+        i, j = pairs[t, 0], pairs[t, 1]
+        _, cs, concave = pair_terms(positions, normals, i, j)
+        length = 0.5 * (shares[i] + shares[j])
+        ang = np.arccos(cs)
+        cc = 1.0 if concave else 0.0
+        sums[r, 0] += length
+        sums[r, 1] += length * ang
+        sums[r, 2] += length * cc
+        sums[r, 3] += 1.0
+        sums[r, 4] += ang
+        sums[r, 5] += cc
+    return keys, sums

@@ -339,23 +339,6 @@ def test_tiles_read_the_whole_clouds_area_on_the_graphs_they_keep(monkeypatch, t
     np.testing.assert_array_equal(segment_tiled(cloud, 60, tiles=4).labels, narrow.labels)
 
 
-def test_pair_sums_of_names_too_large_for_one_key_are_the_same(monkeypatch):
-    from superfacets.scale import tile_merges
-
-    rng = np.random.default_rng(0)
-    a, b = rng.integers(0, 50, 5000) * 1_000_003, rng.integers(0, 50, 5000) * 1_000_003
-    w = [rng.random(5000) for _ in range(3)]
-    one = tile_merges._pair_sums(a, b, *w)
-    monkeypatch.setattr(tile_merges, "_ONE_KEY", 0)  # every pair by a sort of rows
-    rows = tile_merges._pair_sums(a, b, *w)
-    assert one.keys() == rows.keys()
-    for key in one:
-        np.testing.assert_array_equal(one[key], rows[key])
-    e = one["edges"]
-    assert (e[:, 0] <= e[:, 1]).all()
-    assert (np.lexsort((e[:, 1], e[:, 0])) == np.arange(len(e))).all()  # in the pairs' order
-
-
 def test_a_tiled_run_reads_the_file_twice_and_gives_the_same_labels(tmp_path, monkeypatch):
     """After the survey and the bucketing no task reads the file; the labels are those of
     tasks that each read the file (the path a remote scheduler without workdir takes)."""

@@ -156,7 +156,7 @@ class SuperfacetGraph:
         atomic_write(path, lambda fh: np.savez_compressed(fh, **self.arrays(), **extra))
 
 
-def superfacet_graph(graph, labels, features=None, *, finer=None) -> SuperfacetGraph:
+def superfacet_graph(graph, labels, features=None) -> SuperfacetGraph:
     """The superfacet graph of per-element labels.
 
     Parameters
@@ -168,9 +168,6 @@ def superfacet_graph(graph, labels, features=None, *, finer=None) -> SuperfacetG
     features : (n, d) float ndarray, optional
         A feature per element (e.g. RGB colour); its area-weighted mean per
         superfacet becomes ``feature``.
-    finer : tuple, optional
-        :func:`crossing_adjacencies` of labels that these coarsen (each of these
-        labels a union of those): read from it instead of found again, the same arrays.
 
     Returns
     -------
@@ -220,7 +217,7 @@ def superfacet_graph(graph, labels, features=None, *, finer=None) -> SuperfacetG
                                  f"row per {g.element}, got shape {np.shape(features)}")
         feature = np.stack([np.bincount(lab, weights=area_w * f[:, c], minlength=k)
                             for c in range(f.shape[1])], axis=1) / safe[:, None]
-    pc, length, cos, concave_el = crossing_adjacencies(g, lab, finer=finer)
+    pc, length, cos, concave_el = crossing_adjacencies(g, lab)
     # np.unique(lo * k + hi, return_inverse=True) of each crossing's two labels, by a
     # counting sort on the lower (borders.label_pairs)
     inv = np.empty(pc.shape[0], dtype=np.int64)
@@ -248,7 +245,7 @@ def superfacet_graph(graph, labels, features=None, *, finer=None) -> SuperfacetG
                            feature=feature, scatter=scatter)
 
 
-def crossing_adjacencies(g, lab: np.ndarray, *, finer=None):
+def crossing_adjacencies(g, lab: np.ndarray):
     """The element adjacencies whose two elements have different labels, in pair order.
 
     A point graph whose pairs and terms were never built (a default run) reads them
@@ -261,11 +258,6 @@ def crossing_adjacencies(g, lab: np.ndarray, *, finer=None):
     g : ElementGraph
     lab : (n,) int64 ndarray
         A label per element.
-    finer : tuple, optional
-        This function's result for labels that ``lab`` coarsens (each label of ``lab``
-        a union of those: every adjacency crossing ``lab`` crosses them): its
-        adjacencies that cross ``lab``, in their order (the same arrays as without it).
-        Not checked.
 
     Returns
     -------
@@ -297,10 +289,6 @@ def crossing_adjacencies(g, lab: np.ndarray, *, finer=None):
     """
     from ..elements.vertices import symmetric_terms
 
-    if finer is not None:
-        pc = finer[0]
-        keep = np.flatnonzero(lab[pc[:, 0]] != lab[pc[:, 1]])
-        return tuple(a[keep] for a in finer)
     if (g.border_shares is None or g.terms_of is not symmetric_terms
             or "pairs" in g.__dict__ or "terms" in g.__dict__):
         a, b = lab[g.pairs[:, 0]], lab[g.pairs[:, 1]]

@@ -226,7 +226,7 @@ def merge_arrays(graph, planarity: bool) -> tuple:
             fsum, scatter)
 
 
-def planarity_graph(graph, labels, features=None, *, finer=None):
+def planarity_graph(graph, labels, features=None):
     """The superfacet graph a planarity level merges: that of
     :func:`superfacets.graph.adjacency.superfacet_graph`, but on a point cloud each
     point weighs one (``area`` is the points' count, ``centroid`` and
@@ -241,8 +241,6 @@ def planarity_graph(graph, labels, features=None, *, finer=None):
     labels : (n,) int ndarray
         Superfacet of each element, ``0..K-1``.
     features : (n, d) float ndarray, optional
-        As :func:`~superfacets.graph.adjacency.superfacet_graph`.
-    finer : tuple, optional
         As :func:`~superfacets.graph.adjacency.superfacet_graph`.
 
     Returns
@@ -270,7 +268,7 @@ def planarity_graph(graph, labels, features=None, *, finer=None):
 
     if kind_of(graph.kind).unit_sizes_in_levels:
         graph = graph.replaced(sizes=np.ones(graph.n_elements))
-    return superfacet_graph(graph, labels, features, finer=finer)
+    return superfacet_graph(graph, labels, features)
 
 
 def level_extent_weight(graph) -> float:

@@ -142,8 +142,7 @@ def merge_small(graph, labels: np.ndarray, centers: np.ndarray, rules: Rules) ->
     return _enforce_connectivity(graph, labels, centers, min_elements=rules.params.min_elements)
 
 
-def exact_count(graph, labels: np.ndarray, rules: Rules, *, finer=None
-                ) -> tuple[np.ndarray, int]:
+def exact_count(graph, labels: np.ndarray, rules: Rules) -> tuple[np.ndarray, int]:
     """Stage 9 (kinds with ``exact_count``: points): a run asked for ``k`` that made more
     segments (regions no window reached seed their own) merges adjacent ones, cheapest
     first (:func:`superfacets.graph.hierarchy.hierarchy`, Ward's cost with the run's
@@ -163,9 +162,6 @@ def exact_count(graph, labels: np.ndarray, rules: Rules, *, finer=None
         Dense labels.
     rules : Rules
         Its ``target`` (else ``k``) is the count asked for.
-    finer : tuple, optional
-        :func:`~superfacets.graph.adjacency.crossing_adjacencies` of labels that
-        ``labels`` coarsen, if already found (the same result).
 
     Raises
     ------
@@ -188,7 +184,7 @@ def exact_count(graph, labels: np.ndarray, rules: Rules, *, finer=None
     n = int(labels.max()) + 1 if labels.size else 0
     if k is None or n <= k:
         return labels, n
-    sg = superfacet_graph(graph, labels, finer=finer)
+    sg = superfacet_graph(graph, labels)
     fewest = max(k, pieces(sg))
     if n <= fewest:
         return labels, fewest

@@ -13,9 +13,16 @@ resolve_rules`), then :func:`merge_to_count` merges adjacent superpoints in two 
    flat region grows in compact pieces. Walls, floors, ground and the flat faces of
    objects become large superpoints; curved surfaces, whose planes bend beyond the
    noise, keep theirs.
-2. **Ward's merges** with the run's crease factor (:func:`superfacets.method.finish.
-   exact_count`) down to ``k``: compact superpoints where the surface is not flat,
-   exactly ``k`` of them (or the input's separate pieces, where there are more).
+2. Down to ``k`` (or the input's separate pieces, where there are more), by one of two
+   costs, chosen by what phase 1 found (:func:`flat_share`):
+
+   - where at least :data:`FLAT_SHARE` of the elements lie in flat regions (a scene:
+     floors, walls, ground, the flat faces of machined parts), the **plane's rise**
+     (:func:`merge_nodes`): the pair whose union leaves its plane least merges first,
+     so the count goes to what stands on the flat regions, not to the regions;
+   - elsewhere (an object of curved parts), **Ward's merges** with the run's crease
+     factor (:func:`superfacets.method.finish.exact_count`): compact superpoints,
+     merged along the creases.
 
 So the count a room spends on its walls goes to the objects on them, and an object
 of no flat face gets the method's compact superpoints, merged from finer ones along
@@ -31,11 +38,10 @@ from __future__ import annotations
 import numpy as np
 
 from .._kernels import native
-from .finish import exact_count
 
-__all__ = ["merge_to_count", "flat_merges", "flat_merge_nodes", "same_feature_edges",
-           "feature_spread", "noise_variance",
-           "neighbourhood_noise", "FLAT_NOISE", "NOISE_SAMPLE"]
+__all__ = ["merge_to_count", "merge_nodes", "flat_merges", "flat_share", "flat_merge_nodes",
+           "same_feature_edges", "feature_spread", "noise_variance", "neighbourhood_noise",
+           "FLAT_NOISE", "FLAT_SHARE", "NOISE_SAMPLE"]
 
 #: A flat merge's largest rise of the squared plane distances, per element of the
 #: smaller superpoint, in units of :func:`noise_variance`. Chosen among 1, 2 and 3 on
@@ -44,6 +50,14 @@ __all__ = ["merge_to_count", "flat_merges", "flat_merge_nodes", "same_feature_ed
 #: noise is about 0); 1 lets the rooms keep more of their walls (UE +9 % at k = 1,000),
 #: 3 the airborne tile merge across its classes at k = 300 (UE +15 %).
 FLAT_NOISE = 2.0
+#: The share of the elements in flat regions (superpoints the flat merges grew from two
+#: or more) from which phase 2 merges by the plane's rise, not by Ward's cost. Measured
+#: (``docs/notes/superpoints-defaults.md``): labelled scans 0.42-0.98 (an airborne
+#: tile 0.70-0.96, ScanNet rooms 0.42-0.62, made-up rooms 0.92-0.98); the benchmark's
+#: sampled meshes 0 on most, up to 0.45 on tables and 0.82 on machine parts. "Most of
+#: the surface" (0.5) left the benchmark's mean error within 0.5 % at k = 50-300; 0.25
+#: let tables and chairs merge across their parts (+1 % at k = 300).
+FLAT_SHARE = 0.5
 #: The most elements :func:`noise_variance` reads (evenly spaced in the input's order).
 NOISE_SAMPLE = 8_192
 
@@ -124,7 +138,7 @@ def _plane_residual(graph, pick: np.ndarray, rings: int) -> tuple[np.ndarray, np
 
 
 def flat_merges(graph, labels: np.ndarray, k: int, max_rise: float, *,
-                alpha: float = 0.0, eta_convex: float = 0.0, finer=None,
+                alpha: float = 0.0, eta_convex: float = 0.0,
                 features: np.ndarray | None = None, max_jump: float = 0.0) -> np.ndarray:
     """Phase 1 of :func:`merge_to_count`: merge adjacent superpoints whose union stays
     flat, the cheapest by Ward's cost first, while more than ``k`` remain.
@@ -148,9 +162,6 @@ def flat_merges(graph, labels: np.ndarray, k: int, max_rise: float, *,
         In squared input units (``FLAT_NOISE * noise_variance(graph)``).
     alpha, eta_convex : float, default 0
         The crease factor of Ward's cost (paper eqs. 2-3), ``>= 0``.
-    finer : tuple, optional
-        :func:`~superfacets.graph.adjacency.crossing_adjacencies` of ``labels`` (or of
-        labels they coarsen), if already found.
     features : (n, d) float ndarray, optional
         With them, only neighbours whose mean features differ by at most ``max_jump``
         may merge (a run's colour term: a board on a wall is flat too).
@@ -182,12 +193,9 @@ def flat_merges(graph, labels: np.ndarray, k: int, max_rise: float, *,
     >>> int(merged.max()) + 1                              # one per plane
     2
     """
-    from ..graph.hierarchy import planarity_graph
-
-    pg = planarity_graph(graph, labels, features, finer=finer)
-    if features is not None:  # neighbours of another colour do not merge, however flat
-        pg = same_feature_edges(pg, max_jump, feature_spread(labels, features, pg.n_segments))
-    return flat_merge_nodes(pg, k, max_rise, alpha, eta_convex)[labels]
+    lab, nodes, pairs = _sums(graph, labels, features)
+    unit = _flat_graph(nodes, pairs, None if features is None else max_jump)
+    return flat_merge_nodes(unit, k, max_rise, alpha, eta_convex)[lab]
 
 
 def feature_spread(labels: np.ndarray, features: np.ndarray, k: int, *, sums=None
@@ -310,13 +318,159 @@ def merge_to_count(graph, labels: np.ndarray, rules, features: np.ndarray | None
     n = int(labels.max()) + 1 if labels.size else 0
     if k is None or n <= k:
         return labels, n
-    from ..graph.adjacency import crossing_adjacencies
-
     p = rules.params
-    # the superpoints' crossing adjacencies, found once: the merged labels coarsen them
-    finer = crossing_adjacencies(graph, np.ascontiguousarray(labels, dtype=np.int64))
-    labels = flat_merges(graph, labels, k, FLAT_NOISE * noise_variance(graph), alpha=p.alpha,
-                         eta_convex=p.eta_convex, finer=finer,
-                         features=features if p.beta > 0 else None,
-                         max_jump=rules.feature_floor)
-    return exact_count(graph, labels, rules, finer=finer)
+    lab, nodes, pairs = _sums(graph, labels, features if p.beta > 0 else None)
+    _, final, fewest = merge_nodes(nodes, pairs, k, FLAT_NOISE * noise_variance(graph),
+                                   p.alpha, p.eta_convex,
+                                   max_jump=rules.feature_floor if p.beta > 0 else None)
+    return final[lab], fewest
+
+
+def _sums(graph, labels: np.ndarray, features=None) -> tuple:
+    """Dense int64 ``labels``, and what the merges read of them: per superpoint
+    (:func:`~superfacets.graph.sums.point_sums`) and per adjacent pair
+    (:func:`~superfacets.graph.sums.border_sums`)."""
+    from .._runtime.arrays import real_rows
+    from ..elements.labels import check_labels
+    from ..graph.sums import border_sums, point_sums
+
+    lab = np.ascontiguousarray(check_labels(labels, graph.n_elements, per=graph.element),
+                               dtype=np.int64)
+    k = int(lab.max()) + 1 if lab.size else 0
+    feats = None if features is None else np.asarray(features, dtype=np.float64).reshape(
+        graph.n_elements, -1)
+    nodes = point_sums(lab, k, graph.positions, real_rows(graph.normals), graph.sizes, feats)
+    return lab, nodes, border_sums(graph, lab, k)
+
+
+def merge_nodes(nodes: dict, pairs: dict, target: int, max_rise: float | None,
+                alpha: float, eta_convex: float, *, max_jump: float | None = None
+                ) -> tuple[np.ndarray, np.ndarray, int]:
+    """Both phases of :func:`merge_to_count` on the superpoints' sums (one run's, or a
+    tiled run's added over its tiles: the same merges).
+
+    Parameters
+    ----------
+    nodes : dict
+        Per superpoint, :func:`superfacets.graph.sums.point_sums`.
+    pairs : dict
+        Per adjacent pair, :func:`superfacets.graph.sums.border_sums` (a pair may repeat:
+        its sums are added).
+    target : int
+        The count asked for, ``>= 1``.
+    max_rise : float or None
+        The flat merges' threshold (:func:`flat_merges`); None: no flat merges (no noise
+        read: a tiled mesh), Ward's merges alone.
+    alpha, eta_convex : float
+        The crease factor of Ward's cost (paper eqs. 2-3).
+    max_jump : float, optional
+        With the nodes' ``feature_sum`` and ``feature_squares``: the flat merges join only
+        neighbours of one colour (:func:`same_feature_edges`).
+
+    Returns
+    -------
+    flat : (K,) int64 ndarray
+        Each superpoint's group after the flat merges.
+    final : (K,) int64 ndarray
+        Each superpoint's label, dense.
+    fewest : int
+        The count reached: ``target``, or the separate pieces where there are more (or
+        the superpoints, where fewer).
+
+    Raises
+    ------
+    ParameterError
+        Never on sums of valid labels.
+
+    Examples
+    --------
+    >>> from superfacets.graph.sums import PAIR_FIELDS
+    >>> nodes = dict(count=np.ones(3), mean=np.eye(3), scatter=np.zeros((3, 3, 3)),
+    ...              area=np.ones(3), area_mean=np.eye(3))
+    >>> pairs = dict(edges=np.array([[0, 1], [1, 2]]), **dict(zip(PAIR_FIELDS, np.ones((6, 2)))))
+    >>> flat, final, fewest = merge_nodes(nodes, pairs, 2, None, 0.0, 0.0)
+    >>> sorted(np.bincount(final).tolist()), fewest
+    ([1, 2], 2)
+    """
+    from ..graph.hierarchy import hierarchy, pieces
+    from ..graph.sums import grouped_graph, grouped_planes
+
+    count = nodes["count"]
+    k = count.shape[0]
+    flat = np.arange(k)
+    if max_rise is not None:
+        flat = flat_merge_nodes(_flat_graph(nodes, pairs, max_jump), target, max_rise, alpha,
+                                eta_convex)
+    n_flat = int(flat.max()) + 1 if k else 0
+    planar = max_rise is not None and flat_share(np.arange(k), flat, count) >= FLAT_SHARE
+    if planar:
+        graph = grouped_graph(flat, pairs["edges"], pairs, *grouped_planes(
+            flat, count, nodes["mean"], nodes["scatter"]))
+    else:
+        area = np.bincount(flat, weights=nodes["area"], minlength=n_flat)
+        mean = np.stack([np.bincount(flat, weights=nodes["area"] * nodes["area_mean"][:, c],
+                                     minlength=n_flat) for c in range(3)], 1)
+        graph = grouped_graph(flat, pairs["edges"], pairs, area,
+                              mean / np.where(area > 0, area, 1.0)[:, None])
+    fewest = max(target, pieces(graph)) if n_flat else 0
+    final = flat
+    if n_flat > fewest:
+        level = (hierarchy(graph, [fewest], cost="planarity") if planar else
+                 hierarchy(graph, [fewest], alpha=alpha, eta_convex=eta_convex))
+        final = level.labels(0, flat).astype(np.int64)
+    return flat, final, min(fewest, n_flat)
+
+
+def _flat_graph(nodes: dict, pairs: dict, max_jump: float | None):
+    """The graph the flat merges read: each superpoint's points' count, mean and scatter
+    (its least-squares plane); with ``max_jump``, only its edges between neighbours of one
+    colour (:func:`same_feature_edges`)."""
+    from dataclasses import replace
+
+    from ..graph.sums import grouped_graph
+
+    count = nodes["count"]
+    k = count.shape[0]
+    unit = grouped_graph(np.arange(k), pairs["edges"], pairs, count, nodes["mean"],
+                         nodes["scatter"])
+    if max_jump is None:
+        return unit
+    total = nodes["feature_sum"]
+    spread = feature_spread(None, None, k, sums=(count, total, nodes["feature_squares"]))
+    colour = total / np.maximum(count, 1.0)[:, None]
+    return same_feature_edges(replace(unit, feature=colour), max_jump, spread)
+
+
+def flat_share(fine: np.ndarray, merged: np.ndarray, weights: np.ndarray | None = None
+               ) -> float:
+    """The share of the elements that lie in flat regions: superpoints of ``merged``
+    (phase 1's, :func:`flat_merges`) made of two or more of ``fine``.
+
+    Parameters
+    ----------
+    fine, merged : (n,) int64 ndarray
+        Dense labels; ``merged`` coarsens ``fine``.
+    weights : (K,) float ndarray, optional
+        Each fine superpoint's elements (a tiled run's sums), instead of counting them
+        in ``fine``.
+
+    Returns
+    -------
+    float
+        In ``[0, 1]``; 0 for no elements.
+
+    Examples
+    --------
+    >>> flat_share(np.array([0, 0, 1, 2, 3, 3]), np.array([0, 0, 0, 1, 2, 2]))
+    0.5
+    """
+    if fine.size == 0:
+        return 0.0
+    k = int(fine.max()) + 1
+    top = np.zeros(k, dtype=np.int64)
+    top[fine] = merged  # the merged superpoint of each fine one
+    grown = np.bincount(top)[top] >= 2
+    size = np.bincount(fine, minlength=k).astype(np.float64) if weights is None else \
+        np.asarray(weights, dtype=np.float64)
+    total = float(size.sum())
+    return float(size[grown].sum()) / total if total > 0 else 0.0

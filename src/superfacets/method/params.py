@@ -209,9 +209,10 @@ def _declare() -> tuple[Parameter, ...]:
           lambda v: num("density", v, 0.0, 1.0), cli="--density"),
         P("roughness", 0.0, "float", "content-sensitive sizes: smaller superfacets where "
           "normals turn, >= 0", lambda v: num("roughness", v, 0.0, big), cli="--roughness"),
-        P("merge_from", None, "int or None", "segment this many times n_segments first, then "
-          "merge neighbours down to n_segments, flat ones first, >= 1 (1: off); None: by kind "
-          "and density", lambda v: integer("merge_from", v, lo=1), cli="--merge-from"),
+        P("merge_from", None, "int or None", "segment this many times n_segments first (at "
+          "least one per 100 elements), then merge neighbours down to n_segments, flat ones "
+          "first, >= 1 (1: off); None: by kind and density",
+          lambda v: integer("merge_from", v, lo=1), cli="--merge-from"),
     )
 
 

@@ -13,13 +13,52 @@ from ..elements.kinds import kind_of
 from ..errors import ParameterError
 
 __all__ = ["better_method", "assignment_of", "superfacet_size", "superfacet_measure",
-           "merge_from_of", "MIN_FINE_ELEMENTS"]
+           "merge_from_of", "fine_count", "MIN_FINE_ELEMENTS", "FINE_ELEMENTS"]
 
 #: The fewest elements per superpoint, on average, of the many superpoints a run with
 #: ``merge_from > 1`` segments first: fewer leave their planes to a few points and cost
 #: time for nothing (a room of 81,000 points at k = 3,000 starts from 6,780, not 15,000:
 #: UE 0.250 against 0.241 with 8, in 1.2 instead of 1.6 times the time of no merges).
 MIN_FINE_ELEMENTS = 12
+#: The most elements per superpoint, on average, of those first superpoints: on a large
+#: scan at a small ``k`` (an airborne tile of 700,000 points at k = 100: 1,400 points
+#: each at 5 times) they are too large to keep to one surface, and the merges cannot
+#: undo what they join (the tile's UE 0.035 -> 0.016 at k = 100 from 100 points each;
+#: 50 and 200 did worse: ``docs/notes/superpoints-defaults.md``).
+FINE_ELEMENTS = 100
+
+
+def fine_count(k: int, merge_from: int, n_elements: int) -> int:
+    """The superpoints a run with ``merge_from > 1`` segments before merging them down to
+    ``k``: ``merge_from`` times ``k``, at least one per :data:`FINE_ELEMENTS` elements,
+    at most one per :data:`MIN_FINE_ELEMENTS` (and never fewer than ``k``).
+
+    Parameters
+    ----------
+    k : int
+        The count asked for, ``>= 1``.
+    merge_from : int
+        ``>= 1`` (:func:`merge_from_of`).
+    n_elements : int
+        The input's elements.
+
+    Returns
+    -------
+    int
+        ``>= k``.
+
+    Raises
+    ------
+    TypeError
+        Never for integers: nothing is checked (the run has checked ``k``).
+
+    Examples
+    --------
+    >>> fine_count(300, 5, 20_000), fine_count(100, 5, 700_000), fine_count(3000, 5, 81_000)
+    (1500, 7000, 6750)
+    """
+    return min(max(k * merge_from, n_elements // FINE_ELEMENTS),
+               max(k, n_elements // MIN_FINE_ELEMENTS))
 
 
 def better_method(params, kind: str) -> tuple[bool, bool]:

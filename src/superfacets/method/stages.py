@@ -29,7 +29,7 @@ from .params import (
     superfacet_size,
 )
 from .passes import Iteration, iterate
-from .rules import MIN_FINE_ELEMENTS, merge_from_of
+from .rules import fine_count, merge_from_of
 from .weights import HeldWeights, csr_point_weights, csr_weights, edge_weights, weight_dtype
 
 __all__ = ["Rules", "build_graph", "resolve_features", "resolve_rules", "weigh",
@@ -305,8 +305,10 @@ def resolve_rules(graph, p: SegmentParams, *, n_centers: int | None = None,
     (:func:`superfacets.method.params.assignment_of`), the center tolerance (0.05 of ``r``
     with ``tol > 0``), the coarsening (:func:`superfacets.method.coarse_to_fine.coarsening_for`)
     and ``merge_from`` (:func:`superfacets.method.rules.merge_from_of`: where it is above 1,
-    ``k`` is ``merge_from`` times the count asked for, ``target``, at most one superpoint
-    per :data:`~superfacets.method.rules.MIN_FINE_ELEMENTS` elements).
+    ``k`` is :func:`~superfacets.method.rules.fine_count`: ``merge_from`` times the count
+    asked for, ``target``, at least one superpoint per
+    :data:`~superfacets.method.rules.FINE_ELEMENTS` elements, at most one per
+    :data:`~superfacets.method.rules.MIN_FINE_ELEMENTS`).
 
     Parameters
     ----------
@@ -350,7 +352,7 @@ def resolve_rules(graph, p: SegmentParams, *, n_centers: int | None = None,
     merge_from = merge_from_of(p, graph.kind, tiled=n_centers is not None or r is not None)
     p = replace(p, merge_from=merge_from)
     if merge_from > 1 and k is not None:  # many superpoints first, merged to k at the end
-        fine = min(k * merge_from, max(k, graph.n_elements // MIN_FINE_ELEMENTS))
+        fine = fine_count(k, merge_from, graph.n_elements)
         k, radius = superfacet_size(replace(p, n_segments=fine, radius=None), graph.area,
                                     graph.diagonal, graph.n_elements, graph.kind)
     radius = radius if r is None else r

@@ -35,7 +35,6 @@ from dataclasses import replace
 
 import numpy as np
 
-from .._kernels import native
 from .._runtime.arrays import ranked, real_rows, row_table
 
 __all__ = ["tile_merge_stats", "merge_names", "one_position_stats", "tiled_merge_from",
@@ -101,28 +100,18 @@ def tile_merge_stats(graph, labels: np.ndarray, names: np.ndarray, core: np.ndar
     """
     from ..elements.labels import check_labels
     from ..graph.adjacency import crossing_adjacencies
+    from ..graph.sums import pair_sums, point_sums
     from ..method.merges import neighbourhood_noise
 
     lab = np.ascontiguousarray(check_labels(labels, graph.n_elements, per=graph.element),
                                dtype=np.int64)
     names = np.asarray(names, dtype=np.int64)
     at = np.flatnonzero(core)
-    pos = np.ascontiguousarray(np.asarray(graph.positions, dtype=np.float64)[at])  # (the
-    normals = real_rows(graph.normals)[at]  # core's, once for the three sums)
-    sizes = np.asarray(graph.sizes, dtype=np.float64)[at]
     used, local = ranked(lab[at], names.size)
     k = used.size
-    sums = native.kernel("geometry.label_sums")
-    count, wpos, unused = np.zeros(k), np.zeros((k, 3)), np.zeros((k, 3))
-    ones = np.ones(at.size)
-    sums(local, ones, pos, normals, count, wpos, unused)
-    mean = wpos / np.maximum(count, 1.0)[:, None]
-    scatter = np.zeros((k, 9))
-    native.kernel("geometry.label_scatter")(local, ones, pos, mean, scatter)
-    area, apos = np.zeros(k), np.zeros((k, 3))
-    sums(local, sizes, pos, normals, area, apos, unused)
-    del pos, normals, sizes
-    area_mean = apos / np.where(area > 0, area, 1.0)[:, None]
+    nodes = point_sums(local, k, np.asarray(graph.positions, dtype=np.float64)[at],
+                       real_rows(graph.normals)[at], np.asarray(graph.sizes)[at],
+                       None if features is None else features[at])
 
     pc, length, cos, concave = crossing_adjacencies(graph, lab)
     i, j = pc[:, 0], pc[:, 1]
@@ -134,64 +123,32 @@ def tile_merge_stats(graph, labels: np.ndarray, names: np.ndarray, core: np.ndar
     # the stitched labels in the driver (a pair it names must touch: no merged piece cut)
     inner = mine & core[i] & core[j]
     outer = mine & ~inner
-    edges = _pair_sums(names[lab[i[inner]]], names[lab[j[inner]]], length[inner],
-                       angle[inner], concave[inner])
+    edges = pair_sums(names[lab[i[inner]]], names[lab[j[inner]]], length[inner],
+                      angle[inner], concave[inner])
     pick = at[np.unique(np.linspace(0, at.size - 1, min(at.size, n_noise)).astype(np.int64))] \
         if n_noise > 0 and at.size else at[:0]
-    colour = {} if features is None else dict(
-        floor=float(floor), **{name: np.stack([np.bincount(local, weights=f(features[at, c]),
-                                                           minlength=k)
-                                               for c in range(features.shape[1])], 1)
-                               for name, f in (("feature_sum", lambda x: x),
-                                               ("feature_squares", np.square))})
-    return dict(names=names[used], count=count, mean=mean, scatter=scatter.reshape(k, 3, 3),
-                area=area, area_mean=area_mean, **edges, **colour,
+    colour = {} if features is None else dict(floor=float(floor))
+    return dict(names=names[used], **nodes, **edges, **colour,
                 outer_rows=np.stack([rows[i[outer]], rows[j[outer]]], 1).astype(np.int64),
                 outer_names=np.stack([names[lab[i[outer]]], names[lab[j[outer]]]], 1),
                 outer_length=length[outer], outer_angle=angle[outer],
                 outer_concave=concave[outer], noise=neighbourhood_noise(graph, pick))
 
 
-#: The largest name + 1 whose pairs :func:`_pair_sums` keys as one int64 (its square fits).
-_ONE_KEY = 3_037_000_499
-
-
-def _pair_sums(a: np.ndarray, b: np.ndarray, length: np.ndarray, angle: np.ndarray,
-               concave: np.ndarray) -> dict:
-    """Adjacencies between superpoints ``a`` and ``b`` (names, one per adjacency, with its
-    border length, angle and concave share) summed per pair: ``edges`` (E, 2), lower
-    name first, and the sums :func:`tile_merge_stats` returns."""
-    lo, hi = np.minimum(a, b).astype(np.int64), np.maximum(a, b).astype(np.int64)
-    m = int(hi.max()) + 1 if hi.size else 1
-    if lo.size and (int(lo.min()) < 0 or m > _ONE_KEY):  # (names too large for one key)
-        key, inv = np.unique(np.stack([lo, hi], 1), axis=0, return_inverse=True)
-    else:  # one int64 key a pair, in the same order as the pairs (a sort, not a lexsort)
-        one, inv = np.unique(lo * np.int64(m) + hi, return_inverse=True)
-        key = np.stack([one // m, one % m], 1)
-    inv = inv.reshape(-1)
-    e = key.shape[0]
-
-    def add(w):
-        return np.bincount(inv, weights=w, minlength=e)
-
-    return dict(edges=key.reshape(e, 2).astype(np.int64), border=add(length),
-                angle=add(length * angle), concave=add(length * concave),
-                crossings=np.bincount(inv, minlength=e).astype(np.float64),
-                angle_sum=add(angle), concave_sum=add(concave))
-
-
 def _outer_sums(stats: list[dict], labels: np.ndarray | None) -> dict:
     """The tiles' adjacencies with an end outside their core, named by the stitched
     ``labels`` (center rows, -1 invalid; None: by each tile's own labels) and summed per
-    pair of distinct superpoints (:func:`_pair_sums`)."""
+    pair of distinct superpoints (:func:`superfacets.graph.sums.pair_sums`)."""
     rows = np.concatenate([s["outer_rows"] for s in stats]).reshape(-1, 2)
     pair = labels[rows] if labels is not None else \
         np.concatenate([s["outer_names"] for s in stats]).reshape(-1, 2)
     ok = (pair[:, 0] != pair[:, 1]) & (pair >= 0).all(axis=1)
     part = {f: np.concatenate([s[f"outer_{f}"] for s in stats])[ok]
             for f in ("length", "angle", "concave")}
-    return _pair_sums(pair[ok, 0], pair[ok, 1], part["length"], part["angle"],
-                      part["concave"])
+    from ..graph.sums import pair_sums
+
+    return pair_sums(pair[ok, 0], pair[ok, 1], part["length"], part["angle"],
+                     part["concave"])
 
 
 def one_position_stats(inp, valid: np.ndarray, name: int, merging: tuple) -> dict:
@@ -262,7 +219,9 @@ def merged_labels(labels: np.ndarray, stats: list, target: int, params) -> np.nd
 def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float, *,
                 labels: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, int, int]:
     """Merge a tiled run's superpoints down to ``target`` from the tiles' sums
-    (:func:`tile_merge_stats`): the flat merges, then Ward's merges, as
+    (:func:`tile_merge_stats`): the flat merges, then Ward's merges or, where most of the
+    points lie in flat regions, the plane's rise
+    (:data:`~superfacets.method.merges.FLAT_SHARE`), as
     :func:`superfacets.method.merges.merge_to_count` does in one run (where the tiles read
     no noise, as a mesh's do, Ward's merges only).
 
@@ -313,8 +272,8 @@ def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float,
     >>> merged.tolist(), fewest                                       # one per plane
     ([3, 3, 8, 8], 2)
     """
-    from ..graph.hierarchy import hierarchy, pieces
-    from ..method.merges import FLAT_NOISE
+    from ..graph.sums import PAIR_FIELDS
+    from ..method.merges import FLAT_NOISE, merge_nodes
 
     names = np.unique(np.concatenate([s["names"] for s in stats]))
     k = names.size
@@ -329,53 +288,26 @@ def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float,
     area = _sum(node, stats, "area", k)
     area_mean = _sum(node, stats, "area_mean", k, weight="area") / \
         np.where(area > 0, area, 1.0)[:, None]
+    nodes = dict(count=count, mean=mean, scatter=scatter, area=area, area_mean=area_mean)
     sums = [*stats, _outer_sums(stats, labels)] if "outer_rows" in stats[0] else stats
     edges = [np.searchsorted(names, s["edges"]) for s in sums]
     keep = [np.isin(s["edges"], names).all(axis=1) for s in sums]  # (names no core holds)
-    ea = np.concatenate([e[ok] for e, ok in zip(edges, keep)]).reshape(-1, 2)
-    parts = {f: np.concatenate([s[f][ok] for s, ok in zip(sums, keep)])
-             for f in ("border", "angle", "concave", "crossings", "angle_sum", "concave_sum")}
+    pairs = {f: np.concatenate([s[f][ok] for s, ok in zip(sums, keep)]) for f in PAIR_FIELDS}
+    pairs["edges"] = np.concatenate([e[ok] for e, ok in zip(edges, keep)]).reshape(-1, 2)
     noise = np.concatenate([s["noise"] for s in stats])
-    top = np.arange(k)  # (no noise read, as on a mesh: Ward's merges only)
-    if noise.size:
-        top = _flat_merged(stats, node, k, ea, parts, (count, mean, scatter), target,
-                           FLAT_NOISE * max(float(np.median(noise)), 0.0), alpha, eta_convex)
-    n_flat = int(top.max()) + 1 if k else 0
-    grouped_area = np.bincount(top, weights=area, minlength=n_flat)
-    grouped_mean = np.stack([np.bincount(top, weights=area * area_mean[:, c], minlength=n_flat)
-                             for c in range(3)], 1) / \
-        np.where(grouped_area > 0, grouped_area, 1.0)[:, None]
-    ward = _graph(top, ea, parts, grouped_area, grouped_mean, None)
-    fewest = max(target, pieces(ward)) if n_flat else 0
-    final = top
-    if n_flat > fewest:
-        level = hierarchy(ward, [fewest], alpha=alpha, eta_convex=eta_convex)
-        final = level.labels(0, top).astype(np.int64)
+    max_jump = None
+    if noise.size and stats and all("feature_sum" in s for s in stats):  # colour on
+        nodes["feature_sum"] = _sum(node, stats, "feature_sum", k)
+        nodes["feature_squares"] = _sum(node, stats, "feature_squares", k)
+        max_jump = float(np.median([s["floor"] for s in stats]))
+    # (no noise read, as on a mesh: Ward's merges only)
+    rise = FLAT_NOISE * max(float(np.median(noise)), 0.0) if noise.size else None
+    flat, final, fewest = merge_nodes(nodes, pairs, target, rise, alpha, eta_convex,
+                                      max_jump=max_jump)
+    n_flat = int(flat.max()) + 1 if k else 0
     lowest = np.full(int(final.max()) + 1 if k else 0, k, dtype=np.int64)
     np.minimum.at(lowest, final, np.arange(k))
-    return names, names[lowest[final]], n_flat, min(fewest, n_flat) if k else 0
-
-
-def _flat_merged(stats, node, k: int, ea, parts, planes: tuple, target: int,
-                 max_rise: float, alpha: float, eta_convex: float) -> np.ndarray:
-    """The flat merges of :func:`merge_names` (``planes``: the nodes' point count, mean and
-    scatter; with the tiles' colours, only neighbours of one colour): each node's group."""
-    from ..method.merges import flat_merge_nodes
-
-    count, mean, scatter = planes
-    unit = _graph(np.arange(k), ea, parts, count, mean, scatter)
-    if all("feature_sum" in s for s in stats) and stats:  # the colour term was on
-        from dataclasses import replace as _with
-
-        from ..method.merges import feature_spread, same_feature_edges
-
-        total = _sum(node, stats, "feature_sum", k)
-        colour = total / np.maximum(count, 1.0)[:, None]
-        spread = feature_spread(None, None, k, sums=(
-            count, total, _sum(node, stats, "feature_squares", k)))
-        floor = float(np.median([s["floor"] for s in stats]))
-        unit = same_feature_edges(_with(unit, feature=colour), floor, spread)
-    return flat_merge_nodes(unit, target, max_rise, alpha, eta_convex)
+    return names, names[lowest[final]], n_flat, fewest if k else 0
 
 
 def _sum(node: list, stats: list, field: str, k: int, weight: str | None = None):
@@ -386,31 +318,3 @@ def _sum(node: list, stats: list, field: str, k: int, weight: str | None = None)
         v = np.asarray(s[field], dtype=np.float64)
         np.add.at(out, at, v if weight is None else v * s[weight][:, None])
     return out
-
-
-def _graph(of_node: np.ndarray, ea: np.ndarray, parts: dict, area: np.ndarray,
-           centroid: np.ndarray, scatter):
-    """The superpoint graph of nodes grouped by ``of_node``: the edges between groups,
-    their sums added, the border-weighted means (plain where a border has no length)."""
-    from ..graph.adjacency import SuperfacetGraph
-
-    k = area.shape[0]
-    a, b = of_node[ea[:, 0]], of_node[ea[:, 1]]
-    cross = a != b
-    lo, hi = np.minimum(a, b)[cross], np.maximum(a, b)[cross]
-    key, inv = np.unique(lo * max(k, 1) + hi, return_inverse=True)
-    e = key.size
-
-    def add(f):
-        return np.bincount(inv, weights=parts[f][cross], minlength=e)
-
-    border, n_cross = add("border"), add("crossings")
-    zero = border <= 0
-    mean_angle = add("angle") / np.where(zero, 1.0, border)
-    concave = add("concave") / np.where(zero, 1.0, border)
-    if zero.any():
-        mean_angle[zero] = (add("angle_sum") / np.maximum(n_cross, 1.0))[zero]
-        concave[zero] = (add("concave_sum") / np.maximum(n_cross, 1.0))[zero]
-    return SuperfacetGraph(edge_index=np.stack([key // max(k, 1), key % max(k, 1)]).astype(
-        np.int64), border_length=border, mean_angle=mean_angle, concave=concave, area=area,
-        centroid=centroid, normal=np.zeros((k, 3)), feature=None, scatter=scatter)

@@ -5,6 +5,7 @@
 // The loops numba runs with prange run here on threads, each element on its own.
 #include "common.hpp"
 
+#include <array>
 #include <cstring>
 
 namespace sfk {
@@ -720,6 +721,74 @@ nb::object crossing_pairs(nb::handle indptr_, nb::handle indices_, nb::handle la
     return out_a;
 }
 
+// adjacency.label_pair_sums: the adjacencies of a symmetric CSR point graph whose two
+// points have different labels (of k), summed per pair of labels without listing them
+// (crossing_pairs, point_terms and a np.bincount per sum would hold every one): the keys
+// lo * k + hi, ascending, and per key (border, border * angle, border * concave,
+// crossings, angle, concave) summed over its adjacencies in pair order (rows ascending,
+// then j: np.bincount's order over crossing_pairs' rows), an adjacency's border the
+// mean of its points' border shares and its angle acos of its normals' cosine.
+nb::object label_pair_sums(nb::handle indptr_, nb::handle indices_, nb::handle labels_, i64 k,
+                           nb::handle positions_, nb::handle normals_, nb::handle shares_) {
+    In<i64> indptr(indptr_, "indptr"), labels(labels_, "labels");
+    In<i32> indices(indices_, "indices");
+    In<double> pos(positions_, "positions"), shares(shares_, "shares");
+    const i64 n = check_csr(indptr, indices, -1, labels.n);
+    check_rows(labels, n, "labels");
+    check_rows(shares, n, "shares");
+    check_range(labels, 0, k, "labels");
+    if (pos.cols != 3 || pos.n < n) throw Mismatch("argument positions");
+    std::vector<std::vector<std::pair<i64, i64>>> seen(static_cast<size_t>(k));  // (hi, row)
+    std::vector<std::array<double, 6>> acc;
+    with_real(normals_, "normals", [&](const auto& nor) {
+        if (nor.cols != 3 || nor.n < n) throw Mismatch("argument normals");
+        nb::gil_scoped_release nogil;
+        for (i64 i = 0; i < n; ++i)
+            for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
+                const i64 j = indices[x];
+                if (j <= i || labels[j] == labels[i]) continue;
+                const i64 lo = mn(labels[i], labels[j]), hi = mx(labels[i], labels[j]);
+                auto& near = seen[static_cast<size_t>(lo)];
+                i64 at = -1;
+                for (const auto& [h, r] : near)
+                    if (h == hi) { at = r; break; }
+                if (at < 0) {
+                    at = static_cast<i64>(acc.size());
+                    near.emplace_back(hi, at);
+                    acc.push_back({0.0, 0.0, 0.0, 0.0, 0.0, 0.0});
+                }
+                double geo, cs;
+                bool concave;
+                pair_terms(pos.p, nor.p, i, j, geo, cs, concave);
+                const double len = 0.5 * (shares[i] + shares[j]), ang = std::acos(cs);
+                const double cc = concave ? 1.0 : 0.0;
+                auto& a = acc[static_cast<size_t>(at)];
+                a[0] += len;
+                a[1] += len * ang;
+                a[2] += len * cc;
+                a[3] += 1.0;
+                a[4] += ang;
+                a[5] += cc;
+            }
+        return 0;
+    });
+    Out<i64> keys;
+    Out<double> sums;
+    auto keys_a = fresh(static_cast<i64>(acc.size()), keys);
+    auto sums_a = fresh(static_cast<i64>(acc.size()), sums, 6);
+    i64 u = 0;
+    for (i64 lo = 0; lo < k; ++lo) {
+        auto& near = seen[static_cast<size_t>(lo)];
+        std::sort(near.begin(), near.end());
+        for (const auto& [h, r] : near) {
+            keys[u] = lo * k + h;
+            for (int c = 0; c < 6; ++c) sums(u, c) = acc[static_cast<size_t>(r)][c];
+            ++u;
+        }
+    }
+    return nb::make_tuple(keys_a, sums_a);
+}
+
 // f(i, s) for each element i and its label s (of k), on threads, each owning a range of
 // the labels: every thread reads all the elements, in order, and takes those of its
 // labels, so each label's sums are those of one pass (bit for bit)
@@ -1005,6 +1074,7 @@ void bind_points(nb::module_& m) {
     m.def("point_terms", &point_terms);
     m.def("neighbour_mean", &neighbour_mean);
     m.def("crossing_pairs", &crossing_pairs);
+    m.def("label_pair_sums", &label_pair_sums);
     m.def("label_sums", &label_sums);
     m.def("label_scatter", &label_scatter);
     m.def("column_bounds", &column_bounds);

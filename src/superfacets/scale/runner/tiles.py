@@ -54,7 +54,7 @@ from ...errors import ParameterError, SuperfacetsError
 from ...inputs.bounds import check_extent, column_bounds, rows_in_box
 from ...method.merges import NOISE_SAMPLE
 from ...method.params import DEFAULTS, resolve, superfacet_size
-from ...method.rules import MIN_FINE_ELEMENTS
+from ...method.rules import fine_count
 from ..tile_graphs import drop_graphs, graph_folder, tile_graph
 from ..tile_layout import any_in_box, gathered_centers, in_box
 from ..tile_merges import merged_labels, tiled_merge_from
@@ -442,7 +442,7 @@ def _merge_plan(params, kind: str, survey, n_tiles: int):
     n_elements = survey.n_elements
     target, merge_from = params.n_segments, tiled_merge_from(params, kind)
     if merge_from > 1:  # merge_from times the superpoints, merged to the count at the end
-        fine = min(target * merge_from, max(target, n_elements // MIN_FINE_ELEMENTS))
+        fine = fine_count(target, merge_from, n_elements)
         merge_from = merge_from if fine > target else 1
         params = replace(params, n_segments=fine)
     elif (not kind_of(kind).cloud and target is not None and params.radius is None
