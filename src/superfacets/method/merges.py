@@ -319,10 +319,11 @@ def merge_to_count(graph, labels: np.ndarray, rules, features: np.ndarray | None
     if k is None or n <= k:
         return labels, n
     p = rules.params
-    lab, nodes, pairs = _sums(graph, labels, features if p.beta > 0 else None)
+    colour = features if p.beta > 0 else None  # the merges join one colour's neighbours
+    lab, nodes, pairs = _sums(graph, labels, colour)
     _, final, fewest = merge_nodes(nodes, pairs, k, FLAT_NOISE * noise_variance(graph),
                                    p.alpha, p.eta_convex,
-                                   max_jump=rules.feature_floor if p.beta > 0 else None)
+                                   max_jump=None if colour is None else rules.feature_floor)
     return final[lab], fewest
 
 
