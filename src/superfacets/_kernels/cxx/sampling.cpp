@@ -122,22 +122,36 @@ void farthest_point_blocked(nb::handle centroids_, i64 k, i64 first, nb::handle 
     if (scaled) check_rows(bscale2, n_blocks, "bscale2");
     nb::gil_scoped_release nogil;
     const i64 m = c.n, nb = bstart.n - 1;
+    // each element's place in the block order (32 bits where they hold it: 4 bytes a point
+    // less), its block found from that place (a binary search, once a center)
     std::vector<double> pos(3 * m);
-    std::vector<i64> slot(m);
+    std::vector<std::int32_t> slot32(m < INT32_MAX ? m : 0);
+    std::vector<i64> slot64(m < INT32_MAX ? 0 : m);
     for (i64 j = 0; j < m; ++j) {
         i64 f = order[j];
-        slot[f] = j;
+        if (m < INT32_MAX) slot32[f] = static_cast<std::int32_t>(j);
+        else slot64[f] = j;
         pos[3 * j] = c(f, 0);
         pos[3 * j + 1] = c(f, 1);
         pos[3 * j + 2] = c(f, 2);
     }
+    auto slot = [&](i64 f) { return m < INT32_MAX ? static_cast<i64>(slot32[f]) : slot64[f]; };
+    auto home = [&](i64 f) {  // the block holding place slot(f): bstart[b] <= it < bstart[b + 1]
+        const i64 j = slot(f);
+        i64 lo = 0, hi = nb;
+        while (hi - lo > 1) {
+            const i64 mid = (lo + hi) / 2;
+            if (bstart[mid] <= j) lo = mid;
+            else hi = mid;
+        }
+        return lo;
+    };
     std::vector<double> mind(m, INF), bmax(nb, INF);
-    std::vector<i64> barg(nb), home(m);
+    std::vector<i64> barg(nb);
     for (i64 b = 0; b < nb; ++b) {
         barg[b] = m;
         for (i64 j = bstart[b]; j < bstart[b + 1]; ++j) {
             i64 f = order[j];
-            home[f] = b;
             if (f < barg[b]) barg[b] = f;
         }
     }
@@ -199,9 +213,9 @@ void farthest_point_blocked(nb::handle centroids_, i64 k, i64 first, nb::handle 
     for (i64 t = 0; t < k; ++t) {
         check_interrupt();  // (each center a pass over the elements)
         out[t] = cur;
-        mind[slot[cur]] = -1.0;
+        mind[slot(cur)] = -1.0;
         const double cx = c(cur, 0), cy = c(cur, 1), cz = c(cur, 2);
-        const i64 hb = home[cur];
+        const i64 hb = home(cur);
         for (i64 g = 0; g < ng; ++g) {
             {
                 double dx = gc[3 * g] - cx, dy = gc[3 * g + 1] - cy, dz = gc[3 * g + 2] - cz;
