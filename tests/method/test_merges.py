@@ -209,6 +209,31 @@ def test_a_scan_under_half_flat_merges_by_the_planes_rise(monkeypatch):
     assert _ue(r.labels, part) < 0.015
 
 
+def test_the_planes_rise_keeps_a_rug_of_another_colour_off_its_floor(monkeypatch):
+    """The plane's rise merges neighbours of one colour first: a blue rug on the floor (as
+    flat as the floor) stays a superpoint of its own at k = 8 (UE 0.03; merged into the
+    floor without the colour guard: 0.65), while isolated points of another colour (colour
+    noise) still join their neighbours: no superpoint of a single point."""
+    import superfacets.graph.hierarchy as hierarchy
+
+    pts, part = _room(0)
+    rug = (part == 0) & (np.abs(pts[:, 0] - 0.45) < 0.15) & (np.abs(pts[:, 1] - 0.45) < 0.15)
+    part = np.where(rug, 5, part)
+    rng = np.random.default_rng(1)
+    colors = np.where(rug[:, None], [0.1, 0.2, 0.8], [0.6, 0.6, 0.6]) + \
+        0.01 * rng.standard_normal((len(pts), 3))
+    odd = rng.choice(np.flatnonzero(part == 0), 40, replace=False)  # colour noise
+    colors[odd] = [0.9, 0.1, 0.1]
+    ran, real = [], hierarchy.hierarchy
+    monkeypatch.setattr(hierarchy, "hierarchy", lambda *a, **kw: (
+        ran.append(kw.get("cost", "ward")), real(*a, **kw))[1])
+    r = segment(PointCloud(pts, colors=np.clip(colors, 0, 1)), 8)
+    assert "planarity" in ran and r.n_segments == 8
+    own = np.bincount(r.labels[rug]).argmax()
+    assert (r.labels[rug] == own).mean() > 0.95 and rug[r.labels == own].mean() > 0.95
+    assert np.bincount(r.labels).min() > 1 and _ue(r.labels, part) < 0.1
+
+
 def _ue(labels, part):
     """Undersegmentation error (eq. 4, 5 % tolerance) against ``part``."""
     table = np.zeros((labels.max() + 1, part.max() + 1))

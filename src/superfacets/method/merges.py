@@ -20,7 +20,8 @@ resolve_rules`), then :func:`merge_to_count` merges adjacent superpoints in two 
      floors, walls, ground, the flat faces of machined parts; on a scan, whose noise is
      read above zero, :data:`SCAN_FLAT_SHARE`), the **plane's rise**
      (:func:`merge_nodes`): the pair whose union leaves its plane least merges first,
-     so the count goes to what stands on the flat regions, not to the regions;
+     so the count goes to what stands on the flat regions, not to the regions (with
+     colours, neighbours of one colour first: a rug is as flat as its floor);
    - elsewhere (an object of curved parts), **Ward's merges** with the run's crease
      factor (:func:`superfacets.method.finish.exact_count`): compact superpoints,
      merged along the creases.
@@ -201,7 +202,8 @@ def flat_merges(graph, labels: np.ndarray, k: int, max_rise: float, *,
     2
     """
     lab, nodes, pairs = _sums(graph, labels, features)
-    unit = _flat_graph(nodes, pairs, None if features is None else max_jump)
+    unit = _planes_graph(nodes, pairs, np.arange(lab.max() + 1 if lab.size else 0),
+                         None if features is None else max_jump)
     return flat_merge_nodes(unit, k, max_rise, alpha, eta_convex)[lab]
 
 
@@ -232,13 +234,16 @@ def feature_spread(labels: np.ndarray, features: np.ndarray, k: int, *, sums=Non
     return np.maximum(squares / n - mean * mean, 0.0).sum(axis=1)
 
 
-def same_feature_edges(pg, max_jump: float, spread: np.ndarray | None = None):
+def same_feature_edges(pg, max_jump: float, spread: np.ndarray | None = None, *,
+                       free_below: float = 0.0):
     """``pg`` with only its edges between superpoints whose mean features differ by at
     most ``max_jump``, or by at most their features' spread within them
     (``sqrt(spread_a + spread_b)``, :func:`feature_spread`, where given): a textured
     surface (grass, a photograph's shadows) keeps neighbours whose means differ by less
-    than the texture, a board whose colour is even stays apart from its wall. The result
-    has ``feature`` None again: the merges order by geometry.
+    than the texture, a board whose colour is even stays apart from its wall. With
+    ``free_below``, an edge one of whose superpoints has a smaller ``area`` is kept
+    whatever the colours (a few points of another colour are noise, not a board). The
+    result has ``feature`` None again: the merges order by geometry.
 
     Examples
     --------
@@ -261,7 +266,7 @@ def same_feature_edges(pg, max_jump: float, spread: np.ndarray | None = None):
     limit = max(float(max_jump), 1e-9)
     if spread is not None:
         limit = np.maximum(limit, np.sqrt(spread[a] + spread[b]))
-    keep = jump <= limit
+    keep = (jump <= limit) | (np.minimum(pg.area[a], pg.area[b]) < free_below)
     return replace(pg, edge_index=pg.edge_index[:, keep], border_length=pg.border_length[keep],
                    mean_angle=pg.mean_angle[keep], concave=pg.concave[keep], feature=None)
 
@@ -401,53 +406,70 @@ def merge_nodes(nodes: dict, pairs: dict, target: int, max_rise: float | None,
     ([1, 2], 2)
     """
     from ..graph.hierarchy import hierarchy, pieces
-    from ..graph.sums import grouped_graph, grouped_planes
+    from ..graph.sums import grouped_graph
 
     count = nodes["count"]
     k = count.shape[0]
     flat = np.arange(k)
     if max_rise is not None:
-        flat = flat_merge_nodes(_flat_graph(nodes, pairs, max_jump), target, max_rise, alpha,
-                                eta_convex)
+        flat = flat_merge_nodes(_planes_graph(nodes, pairs, flat, max_jump), target, max_rise,
+                                alpha, eta_convex)
     n_flat = int(flat.max()) + 1 if k else 0
-    planar = max_rise is not None and flat_share(np.arange(k), flat, count) >= (
-        SCAN_FLAT_SHARE if max_rise > 0 else FLAT_SHARE)
-    if planar:
-        graph = grouped_graph(flat, pairs["edges"], pairs, *grouped_planes(
-            flat, count, nodes["mean"], nodes["scatter"]))
-    else:
-        area = np.bincount(flat, weights=nodes["area"], minlength=n_flat)
-        mean = np.stack([np.bincount(flat, weights=nodes["area"] * nodes["area_mean"][:, c],
-                                     minlength=n_flat) for c in range(3)], 1)
-        graph = grouped_graph(flat, pairs["edges"], pairs, area,
-                              mean / np.where(area > 0, area, 1.0)[:, None])
-    fewest = max(target, pieces(graph)) if n_flat else 0
+    if not n_flat:
+        return flat, flat, 0
+    if max_rise is not None and flat_share(np.arange(k), flat, count) >= (
+            SCAN_FLAT_SHARE if max_rise > 0 else FLAT_SHARE):
+        # the plane's rise: among neighbours of one colour first (a board on its wall is
+        # flat too), then across colours where the count needs it
+        final = flat
+        for guard in ((max_jump, None) if max_jump is not None else (None,)):
+            graph = _planes_graph(nodes, pairs, final, guard)
+            fewest = max(target, pieces(graph))
+            if graph.n_segments > fewest:
+                final = hierarchy(graph, [fewest], cost="planarity").labels(0, final).astype(
+                    np.int64)
+        return flat, final, min(fewest, n_flat)
+    area = np.bincount(flat, weights=nodes["area"], minlength=n_flat)
+    mean = np.stack([np.bincount(flat, weights=nodes["area"] * nodes["area_mean"][:, c],
+                                 minlength=n_flat) for c in range(3)], 1)
+    graph = grouped_graph(flat, pairs["edges"], pairs, area,
+                          mean / np.where(area > 0, area, 1.0)[:, None])
+    fewest = max(target, pieces(graph))
     final = flat
     if n_flat > fewest:
-        level = (hierarchy(graph, [fewest], cost="planarity") if planar else
-                 hierarchy(graph, [fewest], alpha=alpha, eta_convex=eta_convex))
+        level = hierarchy(graph, [fewest], alpha=alpha, eta_convex=eta_convex)
         final = level.labels(0, flat).astype(np.int64)
     return flat, final, min(fewest, n_flat)
 
 
-def _flat_graph(nodes: dict, pairs: dict, max_jump: float | None):
-    """The graph the flat merges read: each superpoint's points' count, mean and scatter
-    (its least-squares plane); with ``max_jump``, only its edges between neighbours of one
-    colour (:func:`same_feature_edges`)."""
+def _planes_graph(nodes: dict, pairs: dict, group: np.ndarray, max_jump: float | None):
+    """The graph of the superpoints grouped by ``group`` ((K,), dense) as the flat merges and
+    the plane's rise read it: each group's points' count, mean and scatter (its
+    least-squares plane); with ``max_jump``, only its edges between neighbours of one colour
+    (:func:`same_feature_edges`)."""
     from dataclasses import replace
 
-    from ..graph.sums import grouped_graph
+    from ..graph.sums import grouped_graph, grouped_planes
 
-    count = nodes["count"]
-    k = count.shape[0]
-    unit = grouped_graph(np.arange(k), pairs["edges"], pairs, count, nodes["mean"],
-                         nodes["scatter"])
+    planes = (nodes["count"], nodes["mean"], nodes["scatter"])
+    if not np.array_equal(group, np.arange(group.size)):  # (each alone: its own, as summed)
+        planes = grouped_planes(group, *planes)
+    count = planes[0]
+    graph = grouped_graph(group, pairs["edges"], pairs, *planes)
     if max_jump is None:
-        return unit
-    total = nodes["feature_sum"]
-    spread = feature_spread(None, None, k, sums=(count, total, nodes["feature_squares"]))
+        return graph
+    g = count.shape[0]
+    total, squares = (np.stack([np.bincount(group, weights=nodes[f][:, c], minlength=g)
+                                for c in range(nodes[f].shape[1])], 1)
+                      for f in ("feature_sum", "feature_squares"))
+    spread = feature_spread(None, None, g, sums=(count, total, squares))
     colour = total / np.maximum(count, 1.0)[:, None]
-    return same_feature_edges(replace(unit, feature=colour), max_jump, spread)
+    # grouped (the plane's rise), a group smaller than the first superpoints on average
+    # joins its neighbours whatever its colour: isolated points of another colour (a
+    # photograph's noise) would otherwise stay superpoints of their own
+    small = 0.0 if g == group.size else float(count.sum()) / max(group.size, 1)
+    return same_feature_edges(replace(graph, feature=colour), max_jump, spread,
+                              free_below=small)
 
 
 def flat_share(fine: np.ndarray, merged: np.ndarray, weights: np.ndarray | None = None
