@@ -202,8 +202,7 @@ def flat_merges(graph, labels: np.ndarray, k: int, max_rise: float, *,
     2
     """
     lab, nodes, pairs = _sums(graph, labels, features)
-    unit = _planes_graph(nodes, pairs, np.arange(lab.max() + 1 if lab.size else 0),
-                         None if features is None else max_jump)
+    unit = _planes_graph(nodes, pairs, None, None if features is None else max_jump)
     return flat_merge_nodes(unit, k, max_rise, alpha, eta_convex)[lab]
 
 
@@ -412,7 +411,7 @@ def merge_nodes(nodes: dict, pairs: dict, target: int, max_rise: float | None,
     k = count.shape[0]
     flat = np.arange(k)
     if max_rise is not None:
-        flat = flat_merge_nodes(_planes_graph(nodes, pairs, flat, max_jump), target, max_rise,
+        flat = flat_merge_nodes(_planes_graph(nodes, pairs, None, max_jump), target, max_rise,
                                 alpha, eta_convex)
     n_flat = int(flat.max()) + 1 if k else 0
     if not n_flat:
@@ -442,17 +441,21 @@ def merge_nodes(nodes: dict, pairs: dict, target: int, max_rise: float | None,
     return flat, final, min(fewest, n_flat)
 
 
-def _planes_graph(nodes: dict, pairs: dict, group: np.ndarray, max_jump: float | None):
-    """The graph of the superpoints grouped by ``group`` ((K,), dense) as the flat merges and
-    the plane's rise read it: each group's points' count, mean and scatter (its
-    least-squares plane); with ``max_jump``, only its edges between neighbours of one colour
-    (:func:`same_feature_edges`)."""
+def _planes_graph(nodes: dict, pairs: dict, group: np.ndarray | None,
+                  max_jump: float | None):
+    """The graph of the superpoints grouped by ``group`` ((K,), dense; None: each alone) as
+    the flat merges and the plane's rise read it: each group's points' count, mean and
+    scatter (its least-squares plane); with ``max_jump``, only its edges between neighbours
+    of one colour (:func:`same_feature_edges`)."""
     from dataclasses import replace
 
     from ..graph.sums import grouped_graph, grouped_planes
 
     planes = (nodes["count"], nodes["mean"], nodes["scatter"])
-    if not np.array_equal(group, np.arange(group.size)):  # (each alone: its own, as summed)
+    alone = group is None
+    if alone:
+        group = np.arange(planes[0].size)
+    else:
         planes = grouped_planes(group, *planes)
     count = planes[0]
     graph = grouped_graph(group, pairs["edges"], pairs, *planes)
@@ -467,7 +470,7 @@ def _planes_graph(nodes: dict, pairs: dict, group: np.ndarray, max_jump: float |
     # grouped (the plane's rise), a group smaller than the first superpoints on average
     # joins its neighbours whatever its colour: isolated points of another colour (a
     # photograph's noise) would otherwise stay superpoints of their own
-    small = 0.0 if g == group.size else float(count.sum()) / max(group.size, 1)
+    small = 0.0 if alone else float(count.sum()) / max(group.size, 1)
     return same_feature_edges(replace(graph, feature=colour), max_jump, spread,
                               free_below=small)
 

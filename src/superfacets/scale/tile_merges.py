@@ -272,19 +272,15 @@ def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float,
     >>> merged.tolist(), fewest                                       # one per plane
     ([3, 3, 8, 8], 2)
     """
-    from ..graph.sums import PAIR_FIELDS
+    from ..graph.sums import PAIR_FIELDS, grouped_planes
     from ..method.merges import FLAT_NOISE, merge_nodes
 
     names = np.unique(np.concatenate([s["names"] for s in stats]))
     k = names.size
     node = [np.searchsorted(names, s["names"]) for s in stats]
-    count = _sum(node, stats, "count", k)
-    mean = _sum(node, stats, "mean", k, weight="count") / np.maximum(count, 1.0)[:, None]
-    scatter = np.zeros((k, 3, 3))
-    for at, s in zip(node, stats):  # Chan's rule: each part's scatter about the union's mean
-        d = s["mean"] - mean[at]
-        np.add.at(scatter, at, s["scatter"] + s["count"][:, None, None] * d[:, :, None] *
-                  d[:, None, :])
+    # each superpoint's parts in the tiles, as one grouping (Chan's rule)
+    count, mean, scatter = grouped_planes(np.concatenate(node), *(
+        np.concatenate([s[f] for s in stats]) for f in ("count", "mean", "scatter")))
     area = _sum(node, stats, "area", k)
     area_mean = _sum(node, stats, "area_mean", k, weight="area") / \
         np.where(area > 0, area, 1.0)[:, None]
