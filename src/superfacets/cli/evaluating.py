@@ -28,8 +28,10 @@ def add_parsers(sub) -> None:
                     "a mesh; each element counted once on its vertices (--elements vertices) "
                     "or the points of a cloud (a labelled scan).")
     e.add_argument("mesh", metavar="INPUT", help="the mesh or point-cloud file")
-    e.add_argument("labels", metavar="LABELS.seg",
-                   help="labels, one per face (vertex, point) in file order")
+    e.add_argument("labels", metavar="LABELS",
+                   help="labels, one per face (vertex, point) in file order: a .seg file, a "
+                        "segIndices .json, or a PLY or LAS/LAZ written by 'segment -o' (its "
+                        "ClusterID)")
     e.add_argument("ground_truths", metavar="GT.seg", nargs="*",
                    help="one or more ground truths of the same input, one per face (vertex, "
                         "point)")
@@ -48,6 +50,12 @@ def add_parsers(sub) -> None:
     e.add_argument("--ignore-label", type=int_arg, default=None, metavar="L",
                    help="a ground-truth value meaning unlabelled (e.g. -1, or 0 for "
                         "SemanticKITTI): those elements are left out of the metrics")
+    fmt = e.add_mutually_exclusive_group()
+    fmt.add_argument("--json", dest="format", action="store_const", const="json",
+                     default="text", help="print one JSON object (input, elements, counts, "
+                                          "metrics) for scripts")
+    fmt.add_argument("--csv", dest="format", action="store_const", const="csv",
+                     help="print a CSV header line and one row, for scripts and spreadsheets")
     e.set_defaults(func=cmd_evaluate)
 
 
@@ -87,6 +95,9 @@ def cmd_evaluate(args) -> int:
     with waiting_bar(f"measuring {name} ({n:,} {kind})", long):
         m = evaluate_rows(data, labels, gts, elements=kind, n_neighbors=args.neighbors,
                           tau=args.tau, ignore_label=args.ignore_label, precision=True)
+    if args.format != "text":
+        _print_table(args, kind, n, len(gts), m)
+        return 0
     segs = kind_of(kind).segment_word
     print(f"{Path(args.mesh).name}: {n} {kind}, {m['segments']} {segs}, "
           f"{len(gts)} ground truth{'s' if len(gts) != 1 else ''}")
@@ -99,3 +110,26 @@ def cmd_evaluate(args) -> int:
           "with the recall)")
     print(f"achievable_accuracy     {m['achievable_accuracy']:.4f}  (higher is better)")
     return 0
+
+
+#: The metrics printed, in order.
+METRICS = ("undersegmentation_error", "compactness", "boundary_recall", "boundary_precision",
+           "achievable_accuracy")
+
+
+def _print_table(args, kind: str, n: int, n_truths: int, m: dict) -> None:
+    """The metrics as one JSON object or one CSV row (with its header line)."""
+    import csv
+    import json
+    import sys
+
+    row = {"input": Path(args.mesh).name, "labels": Path(args.labels).name,
+           "elements": kind, "n_elements": int(n), "segments": int(m["segments"]),
+           "ground_truths": int(n_truths), "tau": float(args.tau),
+           **{k: float(m[k]) for k in METRICS}}
+    if args.format == "json":
+        print(json.dumps(row, indent=2))
+        return
+    out = csv.DictWriter(sys.stdout, fieldnames=list(row), lineterminator="\n")
+    out.writeheader()
+    out.writerow(row)

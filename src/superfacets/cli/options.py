@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..elements.kinds import kind_of
 from ..method.params import DEFAULTS, PARAMETERS
 from .parameters import auto_float_arg, float_arg, int_arg  # noqa: F401 (re-exported)
 from .reading import (  # noqa: F401 (re-exported)
@@ -224,12 +225,20 @@ def add_camera_options(p, size: str) -> None:
 
 
 def add_mesh_and_labels(p, plain: bool = True) -> None:
-    """``MESH [LABELS.seg]`` and ``--plain``."""
-    p.add_argument("mesh", metavar="MESH", help="input mesh file")
-    p.add_argument("labels", metavar="LABELS.seg", nargs="?", default=None,
-                   help="superfacet labels, one per face (default: computed)")
+    """``INPUT [LABELS]``, ``--labels-from`` and ``--plain``."""
+    p.add_argument("mesh", metavar="INPUT",
+                   help="a mesh, a point cloud (every format 'segment' reads) or a "
+                        "tetrahedral mesh")
+    p.add_argument("labels", metavar="LABELS", nargs="?", default=None,
+                   help="labels, one per face, vertex, point or tetrahedron: a .seg file, a "
+                        "segIndices .json, a PLY or LAS/LAZ written by 'segment -o' "
+                        "(default: computed)")
+    p.add_argument("--labels-from", metavar="FIELD", default=None,
+                   help="take the labels from a field of the input itself: a LAS/LAZ "
+                        "dimension or a PLY vertex property (ClusterID, as 'segment -o "
+                        "OUT.laz' writes it; scalar_ClusterID is found as ClusterID)")
     if plain:
-        p.add_argument("--plain", action="store_true", help="draw the mesh without superfacets")
+        p.add_argument("--plain", action="store_true", help="draw the input without labels")
 
 
 def check_output(path: str | None, suffixes: tuple[str, ...], what: str,
@@ -267,19 +276,24 @@ def check_output(path: str | None, suffixes: tuple[str, ...], what: str,
     return out
 
 
-def check_labels_output(path: str | None, source: str) -> Path | None:
-    """``-o``: a label file (``.seg`` or any text name, ``.json`` for segIndices, ``-``).
+def check_labels_output(path: str | None, source: str, records: bool = False) -> Path | None:
+    """``-o``: a label file (``.seg`` or any text name, ``.json`` for segIndices, ``-``),
+    or, where ``records`` is True, a copy of a LAS/LAZ or PLY input with the labels in its
+    records (:func:`superfacets.io.records.write_labels_into`).
 
-    A name that says mesh, cloud, picture or page (``x.ply``, ``x.png``, ...) is
+    Any other name that says mesh, cloud, picture or page (``x.pcd``, ``x.png``, ...) is
     refused: ``-o`` writes text labels there, which no viewer would open; the
     message names the option that writes such a file.
     """
     from ..errors import ParameterError
     from ..io import CLOUD_FORMATS, MESH_FORMATS
     from ..io.files import split_suffix
+    from ..io.records import records_kind
 
     out = check_output(path, (), "label file", stdout=True, inputs=(source,))
     if out is None or str(out) == "-":
+        return out
+    if records and records_kind(out, source) is not None:  # (a mismatch: refused there)
         return out
     fmt = split_suffix(out)[0]
     option = {"png": "--picture", "html": "--html", "htm": "--html"}.get(
@@ -288,40 +302,74 @@ def check_labels_output(path: str | None, source: str) -> Path | None:
         raise ParameterError(
             f"{out}: -o writes the labels as text (one per line; .json for segIndices), not a "
             f".{fmt} file" + (f"; for that use {option} {out.name}" if option else "")
-            + "; name the labels e.g. " + out.name.split(".")[0] + ".seg")
+            + "; name the labels e.g. " + out.name.split(".")[0] + ".seg"
+            + ("" if not records or fmt not in ("las", "laz", "ply") else
+               f" (a .{fmt} takes the labels into a copy of a "
+               f"{'PLY' if fmt == 'ply' else 'LAS/LAZ'} input's records)"))
     return out
 
 
-def labels_for(args, mesh):
-    """Labels from LABELS.seg, computed with the method options, or None (--plain);
-    a dict describing them for titles and pages; and what they label: ``'faces'``, or
-    ``'vertices'`` for a file of one label per vertex (``segment --elements vertices``)."""
-    from ..api.segmentation import segment
-    from ..errors import MeshFormatError, SuperfacetsError
-    from ..io import read_labels
+def elements_of_input(data) -> str:
+    """What an input's elements are by default: ``'faces'`` (a mesh), ``'points'`` (a
+    cloud) or ``'cells'`` (a tetrahedral mesh)."""
+    if hasattr(data, "tets"):
+        return "cells"
+    return "faces" if hasattr(data, "faces") else "points"
 
-    if args.plain:
-        return None, {}, "faces"
-    if args.labels:
-        labels = read_labels(args.labels)
-        info = {"labels": Path(args.labels).name}
-        if labels.shape[0] == mesh.n_faces:
-            return labels, info, "faces"
-        if labels.shape[0] == mesh.n_vertices:
-            return labels, info, "vertices"
-        raise MeshFormatError(f"{args.labels}: {labels.shape[0]} labels, but {args.mesh} has "
-                              f"{mesh.n_faces} faces and {mesh.n_vertices} vertices (one "
-                              "label per face or per vertex is needed)")
+
+def _counts(data) -> dict:
+    """The number of each kind of element an input has, by kind."""
+    kind = elements_of_input(data)
+    if kind == "points":
+        return {"points": data.n_total}
+    if kind == "cells":
+        return {"cells": data.n_tets}
+    return {"faces": data.n_faces, "vertices": data.n_vertices}
+
+
+def labels_for(args, data):
+    """Labels from LABELS (a file) or ``--labels-from FIELD`` (the input's own), computed
+    with the method options, or None (``--plain``); a dict describing them for titles and
+    pages; and what they label: ``'faces'``, ``'vertices'`` (one label per vertex, as
+    ``segment --elements vertices`` writes), ``'points'`` or ``'cells'``."""
+    from ..api.segmentation import segment
+    from ..errors import MeshFormatError, ParameterError, SuperfacetsError
+    from ..io import read_labels
+    from ..io.labels import read_field
+
+    counts = _counts(data)
+    first = next(iter(counts))
+    field = getattr(args, "labels_from", None)
+    if getattr(args, "plain", False):
+        if args.labels or field:
+            raise ParameterError("--plain draws no labels: not with LABELS or --labels-from")
+        return None, {}, first
+    if field and args.labels:
+        raise ParameterError("give the labels once: LABELS or --labels-from FIELD")
+    if args.labels or field:
+        labels = read_field(args.mesh, field) if field else read_labels(args.labels)
+        info = {"labels": f"{Path(args.mesh).name}: {field}" if field else
+                Path(args.labels).name}
+        for kind, n in counts.items():
+            if labels.shape[0] == n:
+                return labels, info, kind
+        said = " and ".join(f"{n:,} {k if k != 'cells' else 'tetrahedra'}"
+                            for k, n in counts.items())
+        raise MeshFormatError(f"{field or args.labels}: {labels.shape[0]:,} labels, but "
+                              f"{args.mesh} has {said} (one label per "
+                              f"{' or per '.join(kind_of(k).singular for k in counts)} "
+                              "is needed)")
     kw = method_kwargs(args)
-    kw["progress"] = shows_stages(args, mesh.n_faces)  # (a large mesh: its bars)
+    size = next(iter(counts.values()))
+    kw["progress"] = shows_stages(args, size)  # (a large input: its bars)
     try:
-        r = segment(mesh, args.n_segments, radius=args.radius, **kw)
+        r = segment(data, args.n_segments, radius=args.radius, **kw)
     except SuperfacetsError as exc:
         raise named_after(args.mesh, exc) from None
     info = {"k asked": r.params.get("n_segments"), "alpha": args.alpha,
             "iterations": f"{r.n_iter} ({_describe_stop(r)})",
             "seconds": f"{r.timings['total']:.2f}"}
-    return r.labels, info, "faces"
+    return r.labels, info, first
 
 
 def _describe_stop(result) -> str:

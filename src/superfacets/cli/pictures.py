@@ -8,6 +8,8 @@ from pathlib import Path
 import numpy as np
 
 from .._runtime.progress import waiting_bar
+from ..elements.kinds import kind_of
+from ..io.orientation import default_view
 from .options import (
     add_camera_options,
     add_mesh_and_labels,
@@ -26,21 +28,47 @@ from .options import (
 __all__ = ["add_parsers"]
 
 
-def _read(args):
-    """The command's mesh, read under a line naming it where reading takes long."""
+def _read(args, clouds: bool = False):
+    """The command's mesh (or, with ``clouds``, any input: a mesh, a point cloud or a
+    tetrahedral mesh), read under a line naming it where reading takes long."""
     with waiting_bar(f"reading {Path(args.mesh).name}", shows_stages(args, path=args.mesh)):
-        return read_usable(args.mesh)
+        return read_usable(args.mesh, clouds=clouds)
+
+
+def _drawn(data, labels, elements: str):
+    """What a picture or page draws of an input: a tetrahedral mesh as the surface of its
+    tetrahedra cut at the middle of x (each triangle its tetrahedron's label), else the
+    input itself; with the labels and what they label."""
+    if elements != "cells":
+        return data, labels, elements
+    from ..inputs.tetmesh import cut_surface
+
+    surface, face_labels = cut_surface(data, labels, axis=0, at=0.5)
+    return surface, face_labels, "faces"
+
+
+def _size_said(data, elements: str) -> str:
+    """``'69,451 faces'``, ``'3,000 points'``, ... for the summary line."""
+    from ..checks import counted
+
+    n = {"points": lambda: data.n_total, "cells": lambda: data.n_tets,
+         "vertices": lambda: data.n_vertices, "faces": lambda: data.n_faces}[elements]()
+    return counted(n, kind_of(elements).singular) if elements != "cells" else \
+        counted(n, "tetrahedron").replace("tetrahedrons", "tetrahedra")
 
 
 def add_parsers(sub) -> None:
     """Add ``render``, ``panel``, ``view`` and ``html`` to the sub-parsers."""
-    seg_note = ("Without LABELS.seg the mesh is segmented first with the method options "
-                "below (default k = 150, alpha = 200); with --plain it is drawn grey.")
+    seg_note = ("Without LABELS (or --labels-from FIELD) the input is segmented first with "
+                "the method options below (default k = 150, alpha = 200); with --plain it "
+                "is drawn grey.")
     r = sub.add_parser(
-        "render", help="render a segmented mesh to a PNG, off-screen",
-        description="Render a mesh off-screen (no display or GPU needed) to a PNG: flat "
-                    "shaded, faces coloured by superfacet (adjacent superfacets in clearly "
-                    "different colours), boundaries as dark lines. " + seg_note)
+        "render", help="render a segmented mesh or point cloud to a PNG, off-screen",
+        description="Render a mesh, a point cloud or a tetrahedral mesh (cut at the middle "
+                    "of x) off-screen (no display or GPU needed) to a PNG: flat shaded, faces "
+                    "or points coloured by superfacet or superpoint (adjacent ones in clearly "
+                    "different colours), boundaries as dark lines; an airborne tile drawn "
+                    "from above, north up, a sensor's frame from its sensor. " + seg_note)
     add_mesh_and_labels(r)
     r.add_argument("-o", "--output", metavar="OUT.png", required=True, help="PNG to write")
     r.add_argument("--title", default=None, help="text at the top (default: none)")
@@ -88,8 +116,9 @@ def add_parsers(sub) -> None:
     h = sub.add_parser(
         "html", help="write a self-contained interactive web page",
         description="Write one HTML file (no network needed to open it) showing the coloured "
-                    "mesh interactively in a browser (WebGL), with its name, face count, "
-                    "superfacet count and parameters. " + seg_note)
+                    "mesh, point cloud or tetrahedral mesh (cut at the middle of x) "
+                    "interactively in a browser (WebGL), with its name, element count, "
+                    "segment count and parameters. " + seg_note)
     add_mesh_and_labels(h)
     h.add_argument("-o", "--output", metavar="OUT.html", required=True, help="page to write")
     h.add_argument("--title", default=None, help="page title (default: the file name)")
@@ -101,21 +130,28 @@ def add_parsers(sub) -> None:
 
 
 def cmd_render(args) -> int:
-    from ..viz.render import render
+    from ..viz.render import render, render_points
 
     out = check_output(args.output, (".png",), "the picture",
                        inputs=(args.mesh, getattr(args, "labels", None)))
-    mesh = _read(args)
-    labels, _, elements = labels_for(args, mesh)
+    data = _read(args, clouds=True)
+    labels, _, elements = labels_for(args, data)
+    said = _size_said(data, elements)
     t0 = time.perf_counter()
-    up = up_of(args, mesh)
-    with waiting_bar(f"rendering {out.name}", shows_stages(args, mesh.n_faces)):
-        render(mesh, labels, out, size=args.size, view=args.view, up=up[0],
-               background=args.background, boundaries=not args.no_boundaries,
-               line_width=args.line_width, title=args.title, zoom=args.zoom,
-               elements=elements)
+    up = up_of(args, data)
+    view = args.view if args.view is not None else default_view(data)
+    data, labels, elements = _drawn(data, labels, elements)
+    style = dict(size=args.size, view=view, up=up[0], background=args.background,
+                 title=args.title, zoom=args.zoom)
+    with waiting_bar(f"rendering {out.name}", shows_stages(args, len(labels) if labels
+                                                           is not None else 0)):
+        if elements == "points":
+            render_points(data, labels, out, **style)
+        else:
+            render(data, labels, out, boundaries=not args.no_boundaries,
+                   line_width=args.line_width, elements=elements, **style)
     if not args.quiet:
-        print(f"wrote {out} ({args.size[0]}x{args.size[1]}, {mesh.n_faces} faces, {said_up(up)}, "
+        print(f"wrote {out} ({args.size[0]}x{args.size[1]}, {said}, {said_up(up)}, "
               f"rendered in {time.perf_counter() - t0:.2f} s)")
     return 0
 
@@ -190,12 +226,16 @@ def cmd_html(args) -> int:
 
     out = check_output(args.output, (".html", ".htm"), "the page",
                        inputs=(args.mesh, args.labels))
-    mesh = _read(args)
-    labels, info, elements = labels_for(args, mesh)
-    with waiting_bar(f"writing {out.name}", shows_stages(args, mesh.n_faces)):
-        write_html(out, mesh, labels, title=args.title or Path(args.mesh).name, info=info,
-                   background=args.background, view=args.view, up=up_of(args, mesh)[0],
-                   elements=elements)
+    data = _read(args, clouds=True)
+    labels, info, elements = labels_for(args, data)
+    view = args.view if args.view is not None else default_view(data)
+    up = up_of(args, data)[0]
+    data, labels, elements = _drawn(data, labels, elements)
+    drawn = {} if elements == "points" else {"elements": elements}
+    with waiting_bar(f"writing {out.name}", shows_stages(args, len(labels) if labels
+                                                         is not None else 0)):
+        write_html(out, data, labels, title=args.title or Path(args.mesh).name, info=info,
+                   background=args.background, view=view, up=up, **drawn)
     if not args.quiet:
         print(f"wrote {out} ({out.stat().st_size / 1e6:.1f} MB): open it in a browser")
     return 0

@@ -280,7 +280,7 @@ def _checked_outputs(args) -> dict:
     go with them, before anything is read (one line each)."""
     from ..errors import ParameterError
 
-    seg_out = check_labels_output(args.output, args.mesh)
+    seg_out = check_labels_output(args.output, args.mesh, records=True)
     ply_out = check_output(args.colored_mesh, (".ply", ".glb", ".obj"), "the coloured mesh",
                            inputs=(args.mesh,))
     if seg_out is not None and ply_out is not None and str(seg_out) == str(ply_out):
@@ -326,6 +326,11 @@ def _kind_of_run(args, data, ply_out) -> str:
     from ..errors import ParameterError
 
     kind = "points" if not hasattr(data, "faces") else (args.elements or "faces")
+    if kind == "faces" and _into_records(args.output, args.mesh):
+        raise ParameterError(f"{args.output}: a PLY's records are its vertices: -o OUT.ply "
+                             "takes the labels of --elements vertices; the labels of faces go "
+                             "in a label file (-o NAME.seg) or as the coloured mesh's face "
+                             "property 'label' (--colored-mesh OUT.ply)")
     if not kind_of(kind).objects:
         if args.per_object:
             raise ParameterError("--per-object segments the faces of a scene; not with "
@@ -333,6 +338,13 @@ def _kind_of_run(args, data, ply_out) -> str:
         if ply_out is not None and not ply_out.name.lower().endswith(".ply"):
             raise ParameterError(f"{ply_out}: coloured {kind} are written as .ply")
     return kind
+
+
+def _into_records(output, source) -> bool:
+    """Whether ``-o`` writes a copy of the input with the labels in its records."""
+    from ..io.records import records_kind
+
+    return output not in (None, "-") and records_kind(output, source) is not None
 
 
 def _run(args, data, kwargs):
@@ -359,13 +371,14 @@ def _run(args, data, kwargs):
 
 def _write_and_say(args, data, result, kind, outputs, elapsed) -> None:
     """Write the outputs, then the summary, what was written and the notes."""
-    from ..io.orientation import sensor_view
+    from ..io.orientation import default_view
     from ..viz.outputs import write_result
 
     up = up_of(args, data)  # (a LAS cloud is upright with z up, an STL mesh too)
-    view = args.view if args.view is not None else sensor_view(data)  # (an RGB-D frame)
+    view = args.view if args.view is not None else default_view(data)  # (a scan's own)
     with _writing_bar(args, data, outputs):
         write_result(data, result, kind, Path(args.mesh).name, labels=outputs["labels"],
+                     source_path=args.mesh,
                      header=args.header, colored=outputs["colored"],
                      vertex_colors=args.vertex_colors, picture=outputs["picture"],
                      html=outputs["html"], element_options=dict(
@@ -380,7 +393,7 @@ def _write_and_say(args, data, result, kind, outputs, elapsed) -> None:
     print(_summary(Path(args.mesh).name, data, result, elapsed, kind,
                    getattr(args, "density", None) is not None), file=report)
     _say_what_was_written(seg_out, outputs["colored"], outputs["picture"], outputs["html"],
-                          report, up, outputs["graph"])
+                          report, up, outputs["graph"], _labels_what(args, kind))
     for note in (duplicates_note(args, data, kind), count_note(args, data, result, kind)):
         if note:
             print(f"note: {note}", file=sys.stderr)
@@ -399,11 +412,23 @@ def _writing_bar(args, data, outputs):
     return waiting_bar(f"writing {', '.join(names)}", bool(show and names))
 
 
+def _labels_what(args, kind: str) -> str:
+    """What ``-o`` holds, said in the summary: labels, or the input's records with them."""
+    from ..io.records import LABEL_FIELD, ply_field_name
+
+    if not _into_records(args.output, args.mesh):
+        return "labels"
+    rows = "vertices" if kind == "vertices" else "points"
+    field = (LABEL_FIELD if not str(args.output).lower().endswith(".ply") else
+             f"{ply_field_name(LABEL_FIELD)}, CloudCompare's scalar field {LABEL_FIELD}")
+    return f"the input's {rows}, every field kept, labels as {field}"
+
+
 def _say_what_was_written(seg_out, ply_out, png_out, html_out, report, up,
-                          graph_out=None) -> None:
+                          graph_out=None, labels_what: str = "labels") -> None:
     axis = said_up(up)
     written = [f"{path} ({what})" for path, what in
-               ((seg_out, "labels"), (ply_out, "coloured mesh"), (png_out, f"picture, {axis}"),
+               ((seg_out, labels_what), (ply_out, "coloured mesh"), (png_out, f"picture, {axis}"),
                 (html_out, "page: open it in a browser"), (graph_out, "superfacet graph"))
                if path is not None and str(path) != "-"]
     if written:

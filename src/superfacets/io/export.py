@@ -287,8 +287,9 @@ def write_colored_elements(path, source, labels, *, outputs: Outputs | None = No
     """Write vertex or point labels as a coloured PLY.
 
     Points: a PLY of the points (file order, invalid rows kept) with
-    ``red green blue`` and an int32 ``label`` per point. Vertices: the mesh
-    with per-vertex colours.
+    ``red green blue`` and an int32 ``scalar_ClusterID`` per point. Vertices:
+    the mesh with per-vertex colours and ``scalar_ClusterID``. CloudCompare
+    loads ``scalar_ClusterID`` as the scalar field ``ClusterID``.
 
     Parameters
     ----------
@@ -322,7 +323,8 @@ def write_colored_elements(path, source, labels, *, outputs: Outputs | None = No
         data = points_ply_bytes(source.source.points, colors, labels)
     else:
         mesh = source.source
-        data = ply_bytes(mesh.vertices, mesh.corners, mesh.offsets, vertex_colors=colors)
+        data = ply_bytes(mesh.vertices, mesh.corners, mesh.offsets, vertex_colors=colors,
+                         vertex_labels=labels)
     return save(path, data, outputs)
 
 

@@ -166,7 +166,9 @@ def write_segindices(path, labels, params: dict | None = None, scene_id: str = "
 
 def read_labels(path, n_faces: int | None = None) -> np.ndarray:
     """Read labels: a ``.seg`` file (``#`` lines skipped; may be compressed), the
-    ``label`` face property of a coloured PLY written by this package, or the
+    labels of a PLY written by this package (the ``label`` face property of a
+    coloured mesh, else the vertex property ``scalar_ClusterID``), the
+    ``ClusterID`` dimension of a LAS/LAZ written by ``segment -o OUT.laz``, or the
     ``segIndices`` of a ScanNet-style ``.json``.
 
     Parameters
@@ -198,6 +200,14 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file")
     fmt, comp = split_suffix(path)
+    if fmt in ("las", "laz"):  # a scan written by segment -o OUT.laz
+        from .records import LABEL_FIELD
+
+        labels = read_field(path, LABEL_FIELD)
+        if n_faces is not None and labels.shape[0] != n_faces:
+            raise MeshFormatError(f"{path}: has {labels.shape[0]} points but the input has "
+                                  f"{n_faces}")
+        return labels
     data = read_bytes(path, comp, "file of labels")
     if fmt == "ply":
         from .ply import read_ply_labels
@@ -241,7 +251,8 @@ def read_field(path, name: str) -> np.ndarray:
     path : str or os.PathLike
         A ``.las``/``.laz`` or ``.ply`` file (optionally compressed PLY).
     name : str
-        The LAS dimension or the PLY vertex property.
+        The LAS dimension or the PLY vertex property (``NAME`` also finds
+        ``scalar_NAME``, CloudCompare's name of a scalar field).
 
     Returns
     -------
@@ -284,6 +295,8 @@ def read_field(path, name: str) -> np.ndarray:
         try:
             vertex = PlyData.read(io.BytesIO(read_bytes(path, comp, "PLY file")))["vertex"]
             names = [p.name for p in vertex.properties]
+            if name not in names and f"scalar_{name}" in names:  # CloudCompare's scalar field
+                name = f"scalar_{name}"
             values = np.asarray(vertex[name]) if name in names else None
         except (PlyParseError, KeyError, ValueError, IndexError, EOFError) as exc:
             raise MeshFormatError(f"{path}: cannot read PLY vertices: {exc}") from None

@@ -16,7 +16,12 @@ import numpy as np
 
 from .files import split_suffix
 
-__all__ = ["FORMAT_UP", "up_axis", "sensor_up", "sensor_view"]
+__all__ = ["FORMAT_UP", "up_axis", "sensor_up", "sensor_view", "default_view", "is_map",
+           "image_up"]
+
+#: A scan whose height is at most this fraction of its smaller horizontal side is a map
+#: (an airborne or street tile): its pictures look straight down, north up.
+MAP_HEIGHT = 0.5
 
 #: Up axes by format convention, where a format has one.
 FORMAT_UP = {"stl": "z", "glb": "y", "gltf": "y", "las": "z", "laz": "z"}
@@ -61,6 +66,49 @@ def sensor_up(viewpoint) -> np.ndarray:
     return -column_y + 0.0  # (no negative zeros)
 
 
+def image_up(data) -> np.ndarray | None:
+    """The up of an organized scan's picture: from the points of its image's bottom half
+    to those of its top half (row 0 is the top of a sensor's image), made perpendicular
+    to the direction from the points to the sensor. None for other inputs.
+
+    The image's own layout is what makes it upright as its sensor saw it; a file's
+    declared orientation (a PCD ``VIEWPOINT`` quaternion) is often left at a default
+    that does not match its data.
+
+    Parameters
+    ----------
+    data : PointCloud, Mesh or TetMesh
+
+    Returns
+    -------
+    (3,) float64 ndarray or None
+        A unit vector.
+
+    Examples
+    --------
+    >>> from superfacets import PointCloud
+    >>> rows, cols = np.mgrid[0:4, 0:5]  # a camera's image: x right, y down, z ahead
+    >>> pts = np.stack([cols, rows, np.full(rows.shape, 3)], -1).reshape(-1, 3) * 1.0
+    >>> image_up(PointCloud(pts, shape=(4, 5), viewpoint=(2, 1.5, 0))).round(6).tolist()
+    [0.0, -1.0, 0.0]
+    """
+    shape = getattr(data, "shape", None)
+    if shape is None or len(shape) != 2 or shape[0] < 2:
+        return None
+    pts = np.asarray(data.points, dtype=np.float64).reshape(shape[0], shape[1], 3)
+    half = shape[0] // 2
+    top, bottom = pts[:half].reshape(-1, 3), pts[shape[0] - half:].reshape(-1, 3)
+    top, bottom = (a[np.isfinite(a).all(axis=1)] for a in (top, bottom))
+    if not top.shape[0] or not bottom.shape[0]:
+        return None
+    up = top.mean(axis=0) - bottom.mean(axis=0)
+    view = sensor_view(data)
+    if view is not None:
+        up = up - (up @ view) * view
+    norm = np.linalg.norm(up)
+    return up / norm if np.isfinite(norm) and norm > 0 else None
+
+
 def up_axis(data, path=None) -> tuple[str, str]:
     """The axis a picture of ``data`` stands on, and what said so.
 
@@ -78,8 +126,9 @@ def up_axis(data, path=None) -> tuple[str, str]:
         ``"x"``, ``"y"``, ``"z"``, ``"-x"``, ``"-y"`` or ``"-z"`` (the nearest axis to a
         declared direction).
     source : str
-        What said so, for messages: ``"the file's"``, ``"STL's convention"``, or
-        ``"the default"``.
+        What said so, for messages: ``"the image's"`` (an organized scan: from its
+        bottom rows to its top rows, :func:`image_up`), ``"the file's"``, ``"STL's
+        convention"``, or ``"the default"``.
 
     Raises
     ------
@@ -95,6 +144,10 @@ def up_axis(data, path=None) -> tuple[str, str]:
     >>> up_axis(as_mesh(trimesh.creation.box()), "box.off")
     ('y', 'the default')
     """
+    up = image_up(data)
+    if up is not None:
+        return ("-" if up[int(np.argmax(np.abs(up)))] < 0 else "") + "xyz"[
+            int(np.argmax(np.abs(up)))], "the image's"
     up = getattr(data, "up", None)
     if up is not None:
         up = np.asarray(up, dtype=np.float64).reshape(-1)
@@ -142,3 +195,67 @@ def sensor_view(data) -> np.ndarray | None:
     d = np.asarray(viewpoint, dtype=np.float64) - pts.mean(axis=0)
     n = float(np.linalg.norm(d))
     return d / n + 0.0 if np.isfinite(n) and n > 0 else None
+
+
+def is_map(data) -> bool:
+    """Whether a picture of ``data`` is best a map: a point cloud whose file declares an
+    elevation axis (a LAS/LAZ or E57 scan: z) and whose height is at most
+    :data:`MAP_HEIGHT` of its smaller horizontal side (an airborne tile, a street).
+
+    Parameters
+    ----------
+    data : PointCloud, Mesh or TetMesh
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> from superfacets import PointCloud
+    >>> rng = np.random.default_rng(0)
+    >>> tile = rng.random((500, 3)) * (200.0, 100.0, 10.0)
+    >>> is_map(PointCloud(tile, up=(0, 0, 1))), is_map(PointCloud(tile))
+    (True, False)
+    """
+    up = getattr(data, "up", None)
+    if up is None or hasattr(data, "faces") or getattr(data, "shape", None) is not None:
+        return False
+    up = np.asarray(up, dtype=np.float64).reshape(-1)
+    axis = int(np.argmax(np.abs(up)))
+    pts = np.asarray(data.points, dtype=np.float64)
+    pts = pts[np.isfinite(pts).all(axis=1)]
+    if pts.shape[0] < 2:
+        return False
+    extent = pts.max(axis=0) - pts.min(axis=0)
+    sides = np.delete(extent, axis)
+    return bool(sides.min() > 0 and extent[axis] <= MAP_HEIGHT * sides.min())
+
+
+def default_view(data):
+    """The view a picture or page of ``data`` takes when none is asked for.
+
+    An organized scan is seen from its sensor (:func:`sensor_view`); a map-like scan
+    (:func:`is_map`: an airborne or street tile) from straight above, north up
+    (``'top'``); anything else from the automatic view
+    (:func:`superfacets.viz.camera.view_frame`).
+
+    Parameters
+    ----------
+    data : PointCloud, Mesh or TetMesh
+
+    Returns
+    -------
+    (3,) float64 ndarray, ``'top'`` or None
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets import as_mesh
+    >>> default_view(as_mesh(trimesh.creation.box())) is None
+    True
+    """
+    sensor = sensor_view(data)
+    if sensor is not None:
+        return sensor
+    return "top" if is_map(data) else None

@@ -249,9 +249,16 @@ def _binary_elements(data: bytes):
     return [(name, props) for name, _, props in header[2]]
 
 
+#: The vertex property of a point's or vertex's label in the PLY files written here: the
+#: ``scalar_`` prefix is what CloudCompare loads as a scalar field (here ``ClusterID``, the
+#: name PDAL gives a cluster's label).
+LABEL_PROPERTY = "scalar_ClusterID"
+
+
 def ply_bytes(vertices: np.ndarray, corners: np.ndarray, offsets: np.ndarray, *,
               face_colors: np.ndarray | None = None, labels: np.ndarray | None = None,
-              vertex_colors: np.ndarray | None = None) -> bytes:
+              vertex_colors: np.ndarray | None = None,
+              vertex_labels: np.ndarray | None = None) -> bytes:
     """A binary little-endian PLY of polygons (any sizes), in face order.
 
     Parameters
@@ -265,6 +272,9 @@ def ply_bytes(vertices: np.ndarray, corners: np.ndarray, offsets: np.ndarray, *,
     labels : (m,) int ndarray, optional
         Written as the int32 face property ``label``.
     vertex_colors : (n, 3) uint8 ndarray, optional
+    vertex_labels : (n,) int ndarray, optional
+        Written as the int32 vertex property ``scalar_ClusterID`` (a vertex
+        segmentation; CloudCompare's scalar field ``ClusterID``).
 
     Returns
     -------
@@ -280,6 +290,9 @@ def ply_bytes(vertices: np.ndarray, corners: np.ndarray, offsets: np.ndarray, *,
     if vertex_colors is not None:
         head += ["property uchar red", "property uchar green", "property uchar blue"]
         vfields.append(("rgb", "u1", (3,)))
+    if vertex_labels is not None:
+        head.append(f"property int {LABEL_PROPERTY}")
+        vfields.append(("label", "<i4"))
     head += [f"element face {m}", f"property list {count} int vertex_indices"]
     extra = []
     if face_colors is not None:
@@ -293,6 +306,8 @@ def ply_bytes(vertices: np.ndarray, corners: np.ndarray, offsets: np.ndarray, *,
     vrec["xyz"] = v
     if vertex_colors is not None:
         vrec["rgb"] = np.asarray(vertex_colors)[:, :3]
+    if vertex_labels is not None:
+        vrec["label"] = vertex_labels
     out = io.BytesIO()
     out.write(("\n".join(head) + "\n").encode("ascii"))
     out.write(vrec.tobytes())
@@ -323,19 +338,22 @@ def ply_bytes(vertices: np.ndarray, corners: np.ndarray, offsets: np.ndarray, *,
 
 def points_ply_bytes(points: np.ndarray, colors: np.ndarray, labels: np.ndarray) -> bytes:
     """A binary little-endian PLY of coloured points (no faces): ``x y z`` (double),
-    ``red green blue`` (uchar) and an int32 ``label`` per point, in point order."""
+    ``red green blue`` (uchar) and an int32 ``scalar_ClusterID`` per point (the scalar
+    field ``ClusterID`` of CloudCompare), in point order."""
     n = points.shape[0]
     head = ["ply", "format binary_little_endian 1.0", "comment made by superfacets",
             f"element vertex {n}", "property double x", "property double y", "property double z",
             "property uchar red", "property uchar green", "property uchar blue",
-            "property int label", "end_header"]
+            f"property int {LABEL_PROPERTY}", "end_header"]
     rec = np.empty(n, dtype=[("xyz", "<f8", (3,)), ("rgb", "u1", (3,)), ("label", "<i4")])
     rec["xyz"], rec["rgb"], rec["label"] = points, colors, labels
     return ("\n".join(head) + "\n").encode("ascii") + rec.tobytes()
 
 
 def read_ply_labels(path, data: bytes | None = None) -> np.ndarray:
-    """The ``label`` face property of a PLY (as written by ``--colored-mesh``).
+    """The labels of a PLY: its ``label`` face property (as written by ``--colored-mesh``),
+    else its vertex property ``scalar_ClusterID`` (a coloured cloud or vertex
+    segmentation, or ``-o OUT.ply`` of a PLY input), else a vertex ``label``.
 
     Parameters
     ----------
@@ -356,10 +374,14 @@ def read_ply_labels(path, data: bytes | None = None) -> np.ndarray:
 
     try:
         ply = PlyData.read(io.BytesIO(Path(path).read_bytes() if data is None else data))
-        face = ply["face"]
-        if "label" not in [p.name for p in face.properties]:
-            raise MeshFormatError(f"{path}: the PLY's faces have no 'label' property")
-        return np.asarray(face["label"], dtype=np.int64)
+        names = {e.name: [p.name for p in e.properties] for e in ply.elements}
+        if "label" in names.get("face", ()):
+            return np.asarray(ply["face"]["label"], dtype=np.int64)
+        for name in (LABEL_PROPERTY, "label"):  # a coloured cloud's or vertices' labels
+            if name in names.get("vertex", ()):
+                return np.asarray(ply["vertex"][name], dtype=np.int64)
+        raise MeshFormatError(f"{path}: the PLY has no labels: no face property 'label', no "
+                              f"vertex property {LABEL_PROPERTY!r} or 'label'")
     except (PlyParseError, KeyError, ValueError, IndexError, TypeError, EOFError) as exc:
         raise MeshFormatError(f"{path}: cannot read labels from this PLY: {exc}") from None
 

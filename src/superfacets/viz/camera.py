@@ -58,6 +58,24 @@ def check_camera(view=None, up="y") -> None:
         _direction(view, "view direction")
 
 
+def _turn_to(up: np.ndarray) -> np.ndarray:
+    """The rotation taking +y (the up of the named views) to the unit vector ``up``, about
+    the axis perpendicular to both (z up: front is seen from -y, the south, top from +z
+    with +y, the north, at the top of the picture)."""
+    y = np.array([0.0, 1.0, 0.0])
+    u = up / np.linalg.norm(up)
+    c = float(y @ u)
+    if c > 1 - 1e-12:
+        return np.eye(3)
+    if c < -1 + 1e-12:  # half a turn about x
+        return np.diag([1.0, -1.0, -1.0])
+    k = np.cross(y, u)
+    s = np.linalg.norm(k)
+    k /= s
+    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + s * K + (1 - c) * (K @ K)
+
+
 def view_frame(mesh, view=None, elevation: float = 20.0,
                up="y") -> tuple[np.ndarray, np.ndarray]:
     """A camera direction and up vector that show a mesh well.
@@ -74,8 +92,12 @@ def view_frame(mesh, view=None, elevation: float = 20.0,
     view : str or (3,) float, optional
         ``'auto'``, ``'front'`` (+z), ``'back'``, ``'left'``, ``'right'``,
         ``'top'`` (+y), ``'bottom'``, or a direction from the mesh to the camera.
+        The names are those of a y-up input, turned with ``up``: with z up,
+        ``'front'`` is seen from -y (the south) and ``'top'`` looks straight down
+        with +y (the north) at the top of the picture, a map.
     elevation : float, default 20
-        Degrees of upward tilt of an automatic or named view.
+        Degrees of upward tilt of an automatic or named side view (none for
+        ``'top'`` and ``'bottom'``).
     up : {'y', 'z', 'x', '-y', '-z', '-x'} or (3,) float, default 'y'
         The mesh's up direction (most benchmark meshes: +y).
 
@@ -111,8 +133,12 @@ def view_frame(mesh, view=None, elevation: float = 20.0,
         # face the camera from the positive side of the dominant world axis of d
         if d[np.argmax(np.abs(d))] < 0:
             d = -d
-    elif isinstance(view, str):
-        d = np.array(VIEWS[view], dtype=float)
+    elif isinstance(view, str):  # named from the input's up: 'top' looks down along it
+        turn = _turn_to(up_axis)
+        d = turn @ np.array(VIEWS[view], dtype=float)
+        if view in ("top", "bottom"):  # straight down (up), the far side (north) at the top
+            elevation = 0.0
+            return d, turn @ np.array((0.0, 0.0, -1.0 if view == "top" else 1.0))
     else:
         d = _direction(view, "view direction")
         elevation = 0.0 if view is not None else elevation

@@ -72,7 +72,7 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
                  colored=None, vertex_colors: bool = False, picture=None, html=None,
                  element_options: dict | None = None, up="y", view=None, graph=None,
                  levels=None, level_cost: str = "ward",
-                 extent_weight: float | None = None) -> None:
+                 extent_weight: float | None = None, source_path=None) -> None:
     """Write the files of one segmentation, all or nothing.
 
     Parameters
@@ -85,9 +85,12 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
     source : str
         The input's file name (headers, titles, the JSON's ``sceneId``).
     labels : path, optional
-        ``.json``: ScanNet's ``segIndices``; anything else (``-``: standard
-        output): one label per line, with ``#`` header lines where
-        ``header`` is True (and always the objects of a scene).
+        ``.json``: ScanNet's ``segIndices``; ``.las``/``.laz``/``.ply`` of a
+        LAS/LAZ or PLY ``source_path``: a copy of the input with the labels in
+        its point (vertex) records (:func:`superfacets.io.records.write_labels_into`:
+        ``ClusterID``); anything else (``-``: standard output): one label per
+        line, with ``#`` header lines where ``header`` is True (and always the
+        objects of a scene).
     colored : path, optional
         Coloured mesh (``.ply``, ``.glb``, ``.obj``) or, for vertices and
         points, coloured PLY.
@@ -114,6 +117,8 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
     extent_weight : float, optional
         Its ``extent_weight`` with ``'planarity'`` (default: left to the method,
         :meth:`SegmentationResult.hierarchy`).
+    source_path : path, optional
+        The input file (labels written into its records).
 
     Raises
     ------
@@ -137,7 +142,16 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
     with Outputs() as outputs:
         if arrays is not None:
             outputs.write(graph, lambda fh: np.savez_compressed(fh, **arrays))
-        if labels is not None and str(labels).lower().endswith(".json"):
+        into = None
+        if labels is not None and source_path is not None and str(labels) != "-":
+            from ..io.records import records_kind
+
+            into = records_kind(labels, source_path)
+        if into is not None:
+            from ..io.records import write_labels_into
+
+            write_labels_into(labels, source_path, result.labels, outputs=outputs)
+        elif labels is not None and str(labels).lower().endswith(".json"):
             write_segindices(labels, result.labels, result.params,
                              scene_id=source.split(".")[0], outputs=outputs)
         elif labels is not None:

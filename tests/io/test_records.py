@@ -1,0 +1,184 @@
+"""Labels written back into the input's own records (LAS/LAZ, PLY), read by laspy, by this
+package and by CloudCompare; the commands that take a scan's labels from its own file."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from superfacets.cli import main
+from superfacets.errors import ParameterError
+from superfacets.io import read_labels
+from superfacets.io.records import write_labels_into
+
+laspy = pytest.importorskip("laspy")
+
+WKT = ('PROJCS["RGF93 v1 / Lambert-93",GEOGCS["RGF93 v1",DATUM["Reseau_Geodesique_Francais_'
+       '1993_v1",SPHEROID["GRS 1980",6378137,298.257222101]],PRIMEM["Greenwich",0],UNIT["degree"'
+       ',0.0174532925199433]],PROJECTION["Lambert_Conformal_Conic_2SP"],UNIT["metre",1]]')
+
+
+def _laz(path, n=2000, seed=0):
+    """A LAZ tile of two terraces with RGB, GPS time, classification, an extra dimension
+    and a WKT CRS: what a user's airborne tile carries."""
+    from laspy.vlrs.known import WktCoordinateSystemVlr
+
+    rng = np.random.default_rng(seed)
+    las = laspy.create(point_format=7, file_version="1.4")
+    las.add_extra_dim(laspy.ExtraBytesParams(name="reflectance", type=np.float32))
+    las.header.scales = [0.001, 0.001, 0.001]
+    las.header.offsets = [652000.0, 6862000.0, 0.0]
+    xy = rng.random((n, 2)) * [40.0, 20.0]
+    high = xy[:, 0] > 20
+    las.x, las.y = xy[:, 0] + 652000.0, xy[:, 1] + 6862000.0
+    las.z = np.where(high, 0.8, 0.0) + rng.normal(0, 0.01, n)
+    las.red = np.where(high, 60000, 9000).astype(np.uint16)
+    las.green, las.blue = las.red, las.red
+    las.gps_time = np.sort(rng.random(n)) * 100
+    las.classification = np.where(high, 6, 2).astype(np.uint8)
+    las.reflectance = rng.random(n).astype(np.float32)
+    las.vlrs.append(WktCoordinateSystemVlr(WKT))
+    las.header.global_encoding.wkt = True
+    las.write(str(path))
+    return path
+
+
+def test_segment_writes_the_labels_into_a_copy_of_the_laz(tmp_path, capsys):
+    src = _laz(tmp_path / "tile.laz")
+    out = tmp_path / "out.laz"
+    assert main(["segment", str(src), "-k", "12", "-o", str(out)]) == 0
+    said = capsys.readouterr().out
+    assert "labels as ClusterID" in said
+    assert main(["segment", str(src), "-k", "12", "-o", str(tmp_path / "out.seg"), "-q"]) == 0
+    a, b = laspy.read(src), laspy.read(out)
+    assert out.read_bytes()[:4] == b"LASF" and b.header.are_points_compressed
+    for dim in a.point_format.dimension_names:  # every dimension of the input, unchanged
+        assert np.array_equal(np.asarray(a[dim]), np.asarray(b[dim])), dim
+    assert list(b.point_format.dimension_names) == list(a.point_format.dimension_names) + [
+        "ClusterID"]
+    assert b.header.point_format.id == a.header.point_format.id == 7
+    assert np.array_equal(b.header.scales, a.header.scales)
+    assert np.array_equal(b.header.offsets, a.header.offsets)
+    assert (b.header.version, b.header.global_encoding.wkt) == (a.header.version, True)
+    assert b.header.parse_crs is not None
+    wkt = [v for v in b.header.vlrs if type(v).__name__ == "WktCoordinateSystemVlr"]
+    assert len(wkt) == 1 and WKT in wkt[0].string
+    labels = np.asarray(b.ClusterID)
+    assert labels.dtype == np.int32
+    assert np.array_equal(labels, read_labels(tmp_path / "out.seg"))
+    assert len(np.unique(labels)) == 12
+    # read back by this package: as a label file, and as the input's own field
+    assert np.array_equal(read_labels(out), labels)
+
+
+def test_labels_from_the_file_feed_evaluate_render_and_html(tmp_path, capsys):
+    src = _laz(tmp_path / "tile.laz")
+    out = tmp_path / "out.laz"
+    assert main(["segment", str(src), "-k", "12", "-o", str(out), "-q"]) == 0
+    capsys.readouterr()
+    assert main(["evaluate", str(out), str(out), "--ground-truth-field", "classification",
+                 "--json"]) == 0
+    import json
+
+    scores = json.loads(capsys.readouterr().out)
+    assert scores["segments"] == 12 and 0 <= scores["undersegmentation_error"] < 0.05
+    assert main(["html", str(out), "--labels-from", "ClusterID", "-o",
+                 str(tmp_path / "p.html")]) == 0
+    assert (tmp_path / "p.html").stat().st_size > 10_000
+    capsys.readouterr()
+    # a field that is not there: one line naming those that are
+    assert main(["html", str(src), "--labels-from", "ClusterID", "-o",
+                 str(tmp_path / "q.html")]) == 2
+    err = capsys.readouterr().err
+    assert "no field 'ClusterID'" in err and "classification" in err
+    assert not (tmp_path / "q.html").exists()
+
+
+def test_ply_cloud_records_keep_every_property_and_cloudcompare_reads_the_field(tmp_path):
+    from plyfile import PlyData, PlyElement
+
+    rng = np.random.default_rng(1)
+    n = 1500
+    v = np.empty(n, dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("intensity", "<f4"),
+                           ("red", "u1"), ("green", "u1"), ("blue", "u1")])
+    p = rng.normal(size=(n, 3))
+    p /= np.linalg.norm(p, axis=1, keepdims=True)
+    v["x"], v["y"], v["z"] = p.T
+    v["intensity"] = rng.random(n)
+    v["red"] = v["green"] = v["blue"] = 128
+    src = tmp_path / "ball.ply"
+    PlyData([PlyElement.describe(v, "vertex")], text=True,
+             comments=["scanned"]).write(str(src))
+    out = tmp_path / "ball_sp.ply"
+    assert main(["segment", str(src), "-k", "10", "-o", str(out), "-q"]) == 0
+    a, b = PlyData.read(str(src)), PlyData.read(str(out))
+    assert b.text and b.comments == ["scanned"]  # the input's encoding and comments kept
+    for name in v.dtype.names:
+        assert np.array_equal(a["vertex"][name], b["vertex"][name]), name
+    labels = np.asarray(b["vertex"]["scalar_ClusterID"])
+    assert labels.min() == 0 and labels.max() == 9
+    assert np.array_equal(read_labels(out), labels)
+    if shutil.which("CloudCompare") is None:
+        pytest.skip("CloudCompare not found: install Debian's 'cloudcompare' package (make "
+                    "test does, as root)")
+    asc = tmp_path / "cc.asc"
+    run = subprocess.run(["CloudCompare", "-SILENT", "-AUTO_SAVE", "OFF", "-O", str(out),
+                          "-C_EXPORT_FMT", "ASC", "-ADD_HEADER", "-SAVE_CLOUDS", "FILE",
+                          str(asc)], capture_output=True, text=True, timeout=120,
+                         env={"QT_QPA_PLATFORM": "offscreen", "PATH": "/usr/bin:/bin",
+                              "HOME": str(tmp_path)})
+    assert run.returncode == 0, run.stdout[-2000:]
+    head = asc.read_text().splitlines()[0]
+    assert "ClusterID" in head.split(), head  # CloudCompare's scalar field
+    column = head.lstrip("/").split().index("ClusterID")
+    got = np.loadtxt(asc, comments="//")[:, column].astype(int)
+    assert np.array_equal(got, labels)
+
+
+def test_a_vertex_segmentation_goes_into_the_mesh_ply_and_its_coloured_ply(tmp_path, sphere):
+    from plyfile import PlyData
+
+    from superfacets import write_mesh
+
+    src = tmp_path / "ball.ply"
+    write_mesh(src, sphere)
+    out, col = tmp_path / "out.ply", tmp_path / "col.ply"
+    assert main(["segment", str(src), "--elements", "vertices", "-k", "8", "-o", str(out),
+                 "--colored-mesh", str(col), "-q"]) == 0
+    for path in (out, col):
+        ply = PlyData.read(str(path))
+        assert len(ply["face"].data) == sphere.n_faces
+        labels = np.asarray(ply["vertex"]["scalar_ClusterID"])
+        assert labels.shape == (sphere.n_vertices,) and len(np.unique(labels)) == 8
+    # the faces of a mesh have no records of their own: -o OUT.ply is refused before the run
+    assert main(["segment", str(src), "-k", "8", "-o", str(tmp_path / "f.ply")]) == 2
+    assert not (tmp_path / "f.ply").exists()
+
+
+@pytest.mark.parametrize("name, said", [("x.ply", "needs a .ply input"),
+                                        ("x.las.gz", "compressed as LAZ: name it .laz")])
+def test_records_of_another_family_are_refused_in_one_line(tmp_path, capsys, name, said):
+    src = _laz(tmp_path / "tile.laz", n=300)
+    assert main(["segment", str(src), "-k", "5", "-o", str(tmp_path / name)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("superfacets: error:") and len(err.splitlines()) == 1
+    assert said in err, err
+    assert not (tmp_path / name).exists()
+
+
+def test_write_labels_into_checks_counts_and_types(tmp_path):
+    src = _laz(tmp_path / "tile.las", n=50)
+    with pytest.raises(ParameterError, match="49 labels for 50 points"):
+        write_labels_into(tmp_path / "o.las", src, np.zeros(49, dtype=int))
+    with pytest.raises(ParameterError, match="-1"):
+        write_labels_into(tmp_path / "o.las", src, np.full(50, -2))
+    assert not (tmp_path / "o.las").exists()
+    # a second run over its own output overwrites the field, not adds another
+    once = write_labels_into(tmp_path / "o.las", src, np.arange(50) % 3)
+    twice = write_labels_into(tmp_path / "p.laz", once, np.arange(50) % 4)
+    las = laspy.read(twice)
+    assert list(las.point_format.dimension_names).count("ClusterID") == 1
+    assert np.array_equal(las.ClusterID, np.arange(50) % 4)
