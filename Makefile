@@ -9,7 +9,7 @@ KERNELS := CMakeLists.txt $(wildcard src/superfacets/_kernels/cxx/*)
 DEMO_STAMP := $(VENV)/.demo-installed
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint docs bench scale browser pictures sweep comparisons wheel check-wheel \
+.PHONY: demo test lint docs bench scale clients pictures sweep comparisons wheel check-wheel \
 	install-bench clean
 
 # The environment, with the build's own requirements (pyproject.toml [build-system];
@@ -38,7 +38,7 @@ demo: $(DEMO_STAMP)
 	$(VENV)/bin/superfacets demo --output-dir demo-output
 
 # (the tests shared among one worker process per core, at most 4: pytest-xdist)
-test: $(STAMP) browser lint
+test: $(STAMP) clients lint
 	$(VENV)/bin/python -m pytest -q -n auto --maxprocesses=4
 
 # ruff (pyproject.toml [tool.ruff]): the sources, tests, benchmarks and tools
@@ -57,17 +57,20 @@ docs: $(DOCS_STAMP)
 	$(VENV)/bin/python -m sphinx -W --keep-going -b html -q docs docs/_build/html
 	$(VENV)/bin/python tools/check_site.py docs/_build/html
 
-# The HTML page is tested in headless Chromium (Debian's package). Installed here
-# when missing and possible (root with apt-get); otherwise that one test is skipped.
-browser:
-	@command -v chromium >/dev/null 2>&1 || { \
+# The real clients the tests check their files with, Debian's packages: the HTML page in
+# headless Chromium, the PLY's label scalar field in CloudCompare's command line. Installed
+# here when missing and possible (root with apt-get); otherwise those tests are skipped.
+CLIENTS := chromium:chromium CloudCompare:cloudcompare
+clients:
+	@for pair in $(CLIENTS); do cmd=$${pair%%:*}; pkg=$${pair#*:}; \
+	  command -v $$cmd >/dev/null 2>&1 && continue; \
 	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
-	    echo "installing chromium (Debian package) for the browser test..."; \
-	    (apt-get install -y -q --no-install-recommends chromium >/dev/null 2>&1 || \
+	    echo "installing $$pkg (Debian package) for the tests that open files with it..."; \
+	    (apt-get install -y -q --no-install-recommends $$pkg >/dev/null 2>&1 || \
 	     (apt-get update -q >/dev/null 2>&1 && \
-	      apt-get install -y -q --no-install-recommends chromium >/dev/null 2>&1)) || \
-	    echo "note: could not install chromium; the browser test will be skipped"; \
-	  else echo "note: chromium not found; the browser test will be skipped"; fi; }
+	      apt-get install -y -q --no-install-recommends $$pkg >/dev/null 2>&1)) || \
+	    echo "note: could not install $$pkg; the tests that need it will be skipped"; \
+	  else echo "note: $$cmd not found; the tests that need it will be skipped"; fi; done
 
 # A wheel of this checkout for this machine's Python and platform, into dist/
 # (cibuildwheel, with pyproject.toml's [tool.cibuildwheel], builds them for the others)
