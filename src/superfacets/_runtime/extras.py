@@ -23,7 +23,7 @@ __all__ = ["require", "EXTRAS"]
 
 #: Module -> the extra that installs it.
 EXTRAS = {"pyvista": "render", "PIL": "render", "pandas": "report", "matplotlib": "report",
-          "pypcd4": "clouds", "laspy": "clouds",
+          "pypcd4": "clouds", "laspy": "clouds", "pye57": "clouds",
           "distributed": "distributed", "dask": "distributed", "pyarrow": "distributed",
           "networkx": "graph", "cut_pursuit_py": "baselines", "pgeof": "baselines",
           "sklearn": "baselines", "meshio": "volumes"}

@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import ParameterError
+from ..inputs.cloud import PointCloud
 from ..inputs.convert import as_mesh
 from ..method.params import DEFAULTS as _D
 
@@ -27,8 +28,10 @@ def segment_objects(mesh, n_segments: int = _D.n_segments, **options
 
     Parameters
     ----------
-    mesh : Mesh or any form :func:`superfacets.inputs.convert.as_mesh` accepts
-        With ``mesh.objects`` (a scene); a mesh without is one object.
+    mesh : Mesh, PointCloud, or any form :func:`superfacets.inputs.convert.as_mesh` accepts
+        With ``mesh.objects`` (a scene; the scans of an E57 file); an input without is
+        one object. A cloud's count is shared out by valid points, each scan's normals
+        facing its own scanner (``object_viewpoints``).
     n_segments : int, default 150
         Superfacets in all (more when there are more objects than that).
     **options
@@ -38,7 +41,8 @@ def segment_objects(mesh, n_segments: int = _D.n_segments, **options
     Returns
     -------
     labels : (m,) int64 ndarray
-        Dense over the whole mesh; object ``i``'s labels follow object ``i-1``'s.
+        Dense over the whole mesh; object ``i``'s labels follow object ``i-1``'s
+        (a cloud's invalid points: -1).
     results : list of SegmentationResult
         One per object, in order.
 
@@ -62,17 +66,14 @@ def segment_objects(mesh, n_segments: int = _D.n_segments, **options
 
     if options.get("radius") is not None:
         raise ParameterError("segmenting per object takes n_segments, not radius")
-    mesh = as_mesh(mesh)
     k = check_int("n_segments", n_segments, lo=1)
+    if isinstance(mesh, PointCloud):
+        return _cloud_objects(mesh, k, options)
+    mesh = as_mesh(mesh)
     objects = mesh.objects or ((mesh.name or "mesh", 0, mesh.n_faces),)
     areas = np.array([mesh.areas[a:b].sum() for _, a, b in objects])
     faces = np.array([b - a for _, a, b in objects])
-    share = k * areas / areas.sum() if areas.sum() > 0 else np.full(len(objects), k / len(objects))
-    ks = np.floor(share).astype(np.int64)
-    extra = int(k - ks.sum())
-    if extra > 0:
-        ks[np.argsort(-(share - ks), kind="stable")[:extra]] += 1
-    ks = np.minimum(np.maximum(ks, 1), faces)
+    ks = _shares(k, areas, faces)
     labels = np.empty(mesh.n_faces, dtype=np.int64)
     results, base = [], 0
     for (name, a, b), k_i in zip(objects, ks.tolist()):
@@ -84,6 +85,49 @@ def segment_objects(mesh, n_segments: int = _D.n_segments, **options
         except SuperfacetsError as exc:
             raise type(exc)(f"object {name!r} (faces {a}-{b - 1}): {exc}") from None
         labels[a:b] = r.labels + base
+        base += r.n_segments
+        results.append(r)
+    return labels, results
+
+
+def _shares(k: int, sizes: np.ndarray, caps: np.ndarray) -> np.ndarray:
+    """``k`` shared out in proportion to ``sizes`` (largest remainders), at least one
+    each, at most each one's cap."""
+    share = k * sizes / sizes.sum() if sizes.sum() > 0 else np.full(len(sizes), k / len(sizes))
+    ks = np.floor(share).astype(np.int64)
+    extra = int(k - ks.sum())
+    if extra > 0:
+        ks[np.argsort(-(share - ks), kind="stable")[:extra]] += 1
+    return np.minimum(np.maximum(ks, 1), caps)
+
+
+def _cloud_objects(cloud: PointCloud, k: int, options: dict):
+    """:func:`segment_objects` of a point cloud: each object (scan) alone, its rows'
+    labels offset by the superpoints of the objects before it."""
+    from ..errors import SuperfacetsError
+    from .segmentation import segment
+
+    objects = cloud.objects or ((cloud.name or "cloud", 0, cloud.n_total),)
+    valid = cloud.valid
+    counts = np.array([int(valid[a:b].sum()) for _, a, b in objects])
+    ks = _shares(k, counts.astype(float), np.maximum(counts, 1))
+    labels = np.full(cloud.n_total, -1, dtype=np.int64)
+    results, base = [], 0
+    for i, ((name, a, b), k_i) in enumerate(zip(objects, ks.tolist())):
+        if counts[i] == 0:
+            continue  # a scan with no valid point: its rows stay -1
+        view = (cloud.object_viewpoints[i] if cloud.object_viewpoints is not None
+                else cloud.viewpoint)
+        part = PointCloud(cloud.points[a:b], None if cloud.normals is None else
+                          cloud.normals[a:b], name=f"{cloud.name or 'cloud'}:{name}",
+                          viewpoint=view, allow_invalid=True, up=cloud.up,
+                          colors=None if cloud.colors is None else cloud.colors[a:b])
+        try:
+            r = segment(part, k_i, **options)
+        except SuperfacetsError as exc:
+            raise type(exc)(f"object {name!r} (points {a}-{b - 1}): {exc}") from None
+        mine = r.labels >= 0
+        labels[a:b][mine] = r.labels[mine] + base
         base += r.n_segments
         results.append(r)
     return labels, results

@@ -106,6 +106,7 @@ def cmd_batch(args) -> int:
         if len(s.failures) > 10:
             print(f"... and {len(s.failures) - 10} more failed (see the manifest)",
                   file=sys.stderr)
+        _say_passed(s.passed)
         for folder, reason in s.skipped:
             print(f"note: {folder}: not read ({reason}); its files are not inputs",
                   file=sys.stderr)
@@ -122,3 +123,19 @@ def cmd_batch(args) -> int:
 def _count(n: int, word: str) -> str:
     """``1 input``, ``2 inputs``."""
     return f"{n} {word}" + ("" if n == 1 else "s")
+
+
+#: Files not inputs listed one by one; past this many, the rest are counted by reason.
+LISTED = 20
+
+
+def _say_passed(passed: list) -> None:
+    """Each file of the searched folders that is not an input, with the reason (past
+    :data:`LISTED`, the rest counted by reason)."""
+    for path, reason in passed[:LISTED]:
+        print(f"skipped: {path} ({reason})", file=sys.stderr)
+    rest: dict = {}
+    for _, reason in passed[LISTED:]:
+        rest[reason] = rest.get(reason, 0) + 1
+    for reason, n in rest.items():
+        print(f"skipped: {_count(n, 'more file')} ({reason})", file=sys.stderr)

@@ -95,8 +95,9 @@ def _add_segment(sub) -> None:
                              "or planarity (flat regions merged first: with -k several times "
                              "the level, content-adaptive superpoints)")
     levels.add_argument("--per-object", action="store_true",
-                        help="segment each object of a scene on its own (-k shared out by "
-                             "area); labels stay unique over the scene")
+                        help="segment each object of a scene (each scan of an E57 file) on "
+                             "its own (-k shared out by area, or points); labels stay unique "
+                             "over the scene")
     pics = p.add_argument_group("pictures")
     pics.add_argument("--picture", metavar="OUT.png", default=None,
                       help="also render a picture (faces or points coloured by label; needs "
@@ -112,16 +113,24 @@ def _add_segment(sub) -> None:
 
 def _add_baseline(sub) -> None:
     bl = sub.add_parser(
-        "baseline", help="segment a mesh file with a baseline (normalized cuts, VSA, ...)",
-        description="Segment a mesh file with any method of the registry (see 'superfacets "
-                    "experiment --list-methods'): the baselines of the paper's comparisons, "
-                    "normalized cuts ('ncuts', O(m^2) memory: meshes over its memory limit "
-                    "are refused before anything is allocated) and Variational Shape "
-                    "Approximation ('vsa'), or 'shlafman'. Writes a .seg label file and/or a "
-                    "coloured PLY, like 'segment'.")
-    bl.add_argument("mesh", metavar="MESH", help="input mesh file")
+        "baseline", help="segment a mesh or a point cloud with a baseline (normalized cuts, "
+                         "VSA, cut pursuit, ...)",
+        description="Segment a mesh or a point cloud with any method of the registry (see "
+                    "'superfacets experiment --list-methods'): the baselines of the paper's "
+                    "comparisons, normalized cuts ('ncuts', O(m^2) memory: meshes over its "
+                    "memory limit are refused before anything is allocated) and Variational "
+                    "Shape Approximation ('vsa'), or 'shlafman'; on point clouds the "
+                    "Segmentator's graph segmentation, cut pursuit, Superpoint Transformer's "
+                    "partition ('spt_partition') and VCCS. Writes a .seg label file (or the "
+                    "input's records: -o OUT.laz) and/or a coloured PLY, like 'segment'.")
+    bl.add_argument("mesh", metavar="INPUT",
+                    help="a mesh or a point cloud (every format 'segment' reads)")
     bl.add_argument("-m", "--method", required=True, metavar="NAME",
-                    help="registered method: ncuts, vsa, shlafman, superfacets")
+                    help="registered method (superfacets experiment --list-methods): ncuts, "
+                         "vsa, shlafman on faces; graph_segmentation (the ScanNet "
+                         "Segmentator's), cut_pursuit, spt_partition, vccs on points")
+    bl.add_argument("--elements", choices=("faces", "vertices", "points"), default=None,
+                    help="what to segment of a mesh (default: faces; a cloud's points)")
     bl.add_argument("-k", "--n-segments", type=int_arg, default=DEFAULTS.n_segments,
                     metavar="N", help=f"number of segments (default: {DEFAULTS.n_segments})")
     bl.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
@@ -332,8 +341,9 @@ def _kind_of_run(args, data, ply_out) -> str:
                              "in a label file (-o NAME.seg) or as the coloured mesh's face "
                              "property 'label' (--colored-mesh OUT.ply)")
     if not kind_of(kind).objects:
-        if args.per_object:
-            raise ParameterError("--per-object segments the faces of a scene; not with "
+        if args.per_object and not (kind == "points" and getattr(data, "objects", ())):
+            raise ParameterError("--per-object segments the faces of a scene or the scans of "
+                                 "a multi-scan cloud (E57); not with "
                                  f"{kind}")
         if ply_out is not None and not ply_out.name.lower().endswith(".ply"):
             raise ParameterError(f"{ply_out}: coloured {kind} are written as .ply")
@@ -442,8 +452,6 @@ def cmd_baseline(args) -> int:
     from .._runtime.progress import waiting_bar
     from ..errors import MemoryLimitError, ParameterError
     from ..evaluation.methods import Skipped, get_method
-    from ..io import write_colored_mesh, write_labels
-    from ..io.files import Outputs
     from ..scale.runner.grid import method_grid, parse_params
 
     method = get_method(args.method)
@@ -452,17 +460,22 @@ def cmd_baseline(args) -> int:
     if many:
         raise ParameterError(f"--param: give one value for {', '.join(many)}")
     params = method.resolve({n: v[0] for n, v in given.items()})
-    seg_out = check_labels_output(args.output, args.mesh)
+    seg_out = check_labels_output(args.output, args.mesh, records=True)
     ply_out = check_output(args.colored_mesh, (".ply", ".glb", ".obj"), "the coloured mesh",
                            inputs=(args.mesh,))
-    mesh = read_usable(args.mesh)
+    data = read_usable(args.mesh, clouds=True)
+    kind = _baseline_kind(args, data, method, ply_out)
     t0 = time.perf_counter()
     show = not args.quiet and sys.stderr.isatty()
     extra = {"progress": show} if method.progress else {}
+    if method.elements != ("faces",):
+        extra["elements"] = kind
+    n = kind_of(kind).n_rows(data)
+    size = f"{n:,} {kind if n != 1 else kind_of(kind).singular}"
     try:  # (a method without bars of its own: one line, its elapsed time going on)
-        with waiting_bar(f"{Path(args.mesh).name}: {counted(mesh.n_faces, 'face')}, running "
-                         f"{method.name}", show and not method.progress):
-            run = method.run(mesh, args.n_segments, cache={}, seed=args.seed, **params,
+        with waiting_bar(f"{Path(args.mesh).name}: {size}, running {method.name}",
+                         show and not method.progress):
+            run = method.run(data, args.n_segments, cache={}, seed=args.seed, **params,
                              **extra)
     except Skipped as exc:
         raise MemoryLimitError(f"{args.mesh}: {exc}") from None
@@ -470,20 +483,63 @@ def cmd_baseline(args) -> int:
         raise ParameterError(f"{args.mesh}: {exc}") from None
     elapsed = time.perf_counter() - t0
     labels = np.asarray(run.labels)
-    with Outputs() as outputs:  # all or nothing
-        if seg_out is not None:
-            write_labels(seg_out, labels, outputs=outputs)
-        if ply_out is not None:
-            write_colored_mesh(ply_out, mesh, labels, outputs=outputs)
+    _write_baseline(args, data, kind, labels, seg_out, ply_out)
     if not args.quiet:
         shown = ", ".join(f"{k}={fmt_value(v)}" for k, v in params.items())
         iters = "" if run.n_iter is None else (
             f", {run.n_iter} iterations" + ("" if run.converged is None else
                                             " (converged)" if run.converged else " (max)"))
-        print(f"{Path(args.mesh).name}: {counted(mesh.n_faces, 'face')}, {method.name} ({shown}): "
-              f"{int(labels.max()) + 1} segments{iters}, {elapsed:.2f} s",
-              file=sys.stderr if str(seg_out) == "-" else sys.stdout)
+        n_segs = int(np.unique(labels[labels >= 0]).size)
+        print(f"{Path(args.mesh).name}: {size}, {method.name} ({shown}): "
+              f"{counted(n_segs, kind_of(kind).segment_word.rstrip('s'))}{iters}, "
+              f"{elapsed:.2f} s", file=sys.stderr if str(seg_out) == "-" else sys.stdout)
     return 0
+
+
+def _baseline_kind(args, data, method, ply_out) -> str:
+    """The elements a baseline segments: a cloud's points, a mesh's faces (or
+    ``--elements vertices``); refused in one line where the method does not segment them."""
+    from ..errors import ParameterError
+    from ..evaluation.methods import METHODS
+
+    if hasattr(data, "tets"):
+        raise ParameterError(f"{args.mesh}: the baselines segment surfaces and point clouds, "
+                             "not tetrahedra; 'superfacets segment' segments a tetrahedral "
+                             "mesh")
+    kind = "points" if not hasattr(data, "faces") else (args.elements or "faces")
+    if kind == "points" and args.elements not in (None, "points"):
+        raise ParameterError(f"{args.mesh} is a point cloud: its elements are points, not "
+                             f"{args.elements}")
+    if kind not in method.elements:
+        able = ", ".join(n for n, m in METHODS.items() if kind in m.elements)
+        raise ParameterError(f"{method.name} segments {' and '.join(method.elements)}, not "
+                             f"{kind}; methods that segment {kind}: {able}")
+    if kind == "faces" and _into_records(args.output, args.mesh):
+        raise ParameterError(f"{args.output}: a PLY's records are its vertices: -o OUT.ply "
+                             "takes the labels of --elements vertices")
+    if kind != "faces" and ply_out is not None and not ply_out.name.lower().endswith(".ply"):
+        raise ParameterError(f"{ply_out}: coloured {kind} are written as .ply")
+    return kind
+
+
+def _write_baseline(args, data, kind, labels, seg_out, ply_out) -> None:
+    """A baseline's files, all or nothing: labels (a label file, or the input's records)
+    and a coloured mesh or cloud."""
+    from ..elements.builders import elements_of
+    from ..io import write_colored_mesh, write_labels
+    from ..io.export import write_colored_elements
+    from ..io.files import Outputs
+    from ..io.records import write_labels_into
+
+    with Outputs() as outputs:  # all or nothing
+        if seg_out is not None and _into_records(args.output, args.mesh):
+            write_labels_into(seg_out, args.mesh, labels, outputs=outputs)
+        elif seg_out is not None:
+            write_labels(seg_out, labels, outputs=outputs)
+        if ply_out is not None and kind == "faces":
+            write_colored_mesh(ply_out, data, labels, outputs=outputs)
+        elif ply_out is not None:
+            write_colored_elements(ply_out, elements_of(data, kind), labels, outputs=outputs)
 
 
 def cmd_demo(args) -> int:

@@ -75,6 +75,13 @@ class PointCloud:
         :func:`superfacets.elements.points.distinct_points`). A tiled run gives every
         tile the whole cloud's box, so that a tile numbers its points as the whole
         cloud does. Default: the points' own box.
+    objects : tuple of (str, int, int), optional
+        ``(name, start, end)`` of each object (each scan of a multi-scan E57 file), its
+        rows ``start:end``, in row order, covering every row:
+        :func:`superfacets.api.scenes.segment_objects` segments each alone.
+    object_viewpoints : (len(objects), 3) float ndarray, optional
+        Each object's sensor position (a scan's scanner): its estimated normals face it
+        when objects are segmented alone.
 
     Raises
     ------
@@ -102,6 +109,8 @@ class PointCloud:
     orient_like: tuple | None = field(default=None, repr=False)
     up: np.ndarray | None = field(default=None, repr=False)
     frame: np.ndarray | None = field(default=None, repr=False)
+    objects: tuple = field(default=(), repr=False)
+    object_viewpoints: np.ndarray | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         where = f"{self.name}: " if self.name else ""
@@ -152,6 +161,7 @@ class PointCloud:
                 raise InvalidCloudError(f"{where}frame must be a box: its lower and upper "
                                         "corners, (2, 3) finite numbers, lower <= upper")
             object.__setattr__(self, "frame", readonly(box))
+        self._check_objects(where, p.shape[0])
         if self.up is not None:
             up = np.asarray(self.up, dtype=np.float64).reshape(-1)
             length = float(np.linalg.norm(up)) if up.shape == (3,) else 0.0
@@ -159,6 +169,23 @@ class PointCloud:
                 raise InvalidCloudError(f"{where}up must be 3 finite numbers, not all zero, "
                                         f"got {self.up!r}")
             object.__setattr__(self, "up", up / length)
+
+    def _check_objects(self, where: str, n: int) -> None:
+        """``objects`` cover the rows in order; ``object_viewpoints`` one finite position
+        each."""
+        objs = tuple((str(o[0]), int(o[1]), int(o[2])) for o in self.objects)
+        ends = [0] + [b for _, _, b in objs]
+        if objs and (any(a != ends[i] or b < a for i, (_, a, b) in enumerate(objs))
+                     or ends[-1] != n):
+            raise InvalidCloudError(f"{where}objects must be (name, start, end) rows in order, "
+                                    f"covering the {n} rows, got {list(objs)[:4]}")
+        object.__setattr__(self, "objects", objs)
+        if self.object_viewpoints is not None:
+            vp = np.asarray(self.object_viewpoints, dtype=np.float64)
+            if vp.shape != (len(objs), 3) or not np.isfinite(vp).all():
+                raise InvalidCloudError(f"{where}object_viewpoints must be one finite position "
+                                        f"per object, ({len(objs)}, 3), got {vp.shape}")
+            object.__setattr__(self, "object_viewpoints", readonly(vp))
 
     def __getstate__(self) -> dict:
         # the fields only: the point graphs kept with the cloud hold functions (which
@@ -368,7 +395,8 @@ def as_cloud(obj, normals=None, name: str = "") -> PointCloud:
     Parameters
     ----------
     obj : PointCloud, (N, 3) or organized (H, W, 3) float ndarray, trimesh.PointCloud, or
-        open3d.geometry.PointCloud
+        open3d.geometry.PointCloud or open3d.t.geometry.PointCloud (its ``positions``,
+        ``normals`` and ``colors``)
         An organized array may hold NaN rows (invalid points, label -1).
     normals : (N, 3) or (H, W, 3) float ndarray, optional
         With an array: its normals (an Open3D cloud brings its own).
@@ -398,6 +426,13 @@ def as_cloud(obj, normals=None, name: str = "") -> PointCloud:
     if kind.startswith("trimesh.") and type(obj).__name__ == "PointCloud":
         return PointCloud(np.asarray(obj.vertices), normals, name=name,
                           colors=_library_colors(getattr(obj, "colors", ())))
+    if kind.startswith("open3d.") and hasattr(obj, "point"):  # a tensor cloud (open3d.t)
+        fields = obj.point
+        got = {k: fields[k].numpy() for k in ("positions", "normals", "colors") if k in fields}
+        if "positions" not in got:
+            raise InvalidCloudError(f"{name or 'open3d cloud'}: no positions")
+        return PointCloud(got["positions"], got.get("normals"), name=name,
+                          colors=_library_colors(got.get("colors", ())))
     if kind.startswith("open3d.") and hasattr(obj, "points"):
         nrm = np.asarray(obj.normals) if getattr(obj, "has_normals", lambda: False)() else None
         return PointCloud(np.asarray(obj.points), nrm, name=name,

@@ -111,6 +111,14 @@ def from_library(obj, name: str = ""):
         return Mesh(np.asarray(obj.points, dtype=np.float64), _split_cells(cells), name=name,
                     colors=_pyvista_colors(getattr(obj, "point_data", None)),
                     face_colors=_pyvista_colors(getattr(obj, "cell_data", None)))
+    if mod == "open3d" and hasattr(obj, "triangle"):  # a tensor mesh (open3d.t.geometry)
+        tri = obj.triangle.indices.numpy().astype(np.int64) if "indices" in obj.triangle \
+            else np.zeros((0, 3), dtype=np.int64)
+        if tri.size == 0:
+            raise InvalidMeshError(f"{name or 'open3d mesh'}: no triangles")
+        vc = obj.vertex.colors.numpy() if "colors" in obj.vertex else None
+        return Mesh(obj.vertex.positions.numpy().astype(np.float64), tri, name=name,
+                    colors=None if vc is None or not vc.size else vc.astype(np.float64))
     if mod == "open3d":
         if hasattr(obj, "triangles"):
             tri = np.asarray(obj.triangles, dtype=np.int64)

@@ -1,4 +1,5 @@
-"""Reading point clouds: PLY without faces, PCD, XYZ/PTS/TXT columns, ``.npy``, LAS/LAZ.
+"""Reading point clouds: PLY without faces, PCD, XYZ/PTS/TXT columns, ``.npy``, LAS/LAZ,
+E57.
 
 Points keep their file order (labels come back in that order). Readers:
 
@@ -15,6 +16,11 @@ Points keep their file order (labels come back in that order). Readers:
   ``(H, W, 3)`` (NaN points invalid);
 - LAS / LAZ: ``laspy`` (extra ``clouds``; LAZ through its ``lazrs`` backend),
   scaled coordinates.
+- E57 (ASTM E2807, terrestrial scanners' exchange format): ``pye57`` (extra
+  ``clouds``). Every scan in the file's order, in the file's common frame (each
+  scan's pose applied); each scan an object (:attr:`PointCloud.objects`) with its
+  scanner's position; points the scanner marked invalid are invalid points
+  (label -1); z is up.
 
 Elsewhere than PCD files and organized arrays a non-finite coordinate is an
 error naming its row.
@@ -34,12 +40,13 @@ from ..inputs.rgb import unit_colors
 from .files import read_bytes, split_suffix
 from .ply import ply_colors, read_ply_scalars
 
-__all__ = ["read_cloud", "CLOUD_FORMATS", "is_cloud_file", "check_laz", "check_las"]
+__all__ = ["read_cloud", "CLOUD_FORMATS", "is_cloud_file", "check_laz", "check_las",
+           "e57_counts"]
 
-from .headers import check_las, check_laz  # noqa: E402 (re-exported: they read headers)
+from .headers import check_las, check_laz, e57_counts  # noqa: E402 (re-exported: headers)
 
 #: Point-cloud formats of :func:`read_cloud` (PLY files are clouds when they have no faces).
-CLOUD_FORMATS = ("pcd", "xyz", "pts", "txt", "npy", "las", "laz")
+CLOUD_FORMATS = ("pcd", "xyz", "pts", "txt", "npy", "las", "laz", "e57")
 
 
 def is_cloud_file(path) -> bool:
@@ -141,6 +148,11 @@ def read_cloud(path, format: str | None = None):
         kw = _read_pcd(path)
     elif fmt in ("las", "laz"):
         kw = _read_las(path)
+    elif fmt == "e57":
+        if comp:
+            raise MeshFormatError(f"{path}: compressed E57 files are not supported; "
+                                  "decompress it first")
+        kw = _read_e57(path)
     else:
         from .headers import header_counts
 
@@ -301,6 +313,73 @@ def _read_las(path: Path) -> dict:
     # LAS z is elevation: an airborne, mobile or terrestrial scan sees its surfaces from
     # above or from the side, so estimated normals are turned upwards piece by piece
     return {"points": pts.astype(np.float64), "colors": col, "up": np.array([0.0, 0.0, 1.0])}
+
+
+def _e57_positions(raw: dict, path: Path) -> np.ndarray:
+    """A scan's local positions: its Cartesian fields, else its spherical ones (range,
+    azimuth, elevation, as E57 defines them)."""
+    if all(c in raw for c in ("cartesianX", "cartesianY", "cartesianZ")):
+        return np.stack([np.asarray(raw[c], dtype=np.float64) for c in
+                         ("cartesianX", "cartesianY", "cartesianZ")], axis=1)
+    if all(c in raw for c in ("sphericalRange", "sphericalAzimuth", "sphericalElevation")):
+        r, az, el = (np.asarray(raw[c], dtype=np.float64) for c in
+                     ("sphericalRange", "sphericalAzimuth", "sphericalElevation"))
+        return np.stack([r * np.cos(el) * np.cos(az), r * np.cos(el) * np.sin(az),
+                         r * np.sin(el)], axis=1)
+    raise MeshFormatError(f"{path}: an E57 scan without Cartesian or spherical coordinates")
+
+
+def _read_e57(path: Path) -> dict:
+    from .._runtime.extras import require
+
+    pye57 = require("pye57", "reading E57 files")
+    if not path.exists():
+        raise FileNotFoundError(f"{path}: no such file")
+    if path.is_dir():
+        raise IsADirectoryError(f"{path}: is a directory")
+    scans = e57_counts(path)
+    if not scans:
+        raise MeshFormatError(f"{path}: the E57 file holds no scan")
+    pts, cols, objects, at = [], [], [], 0
+    try:
+        e57 = pye57.E57(str(path))
+        try:
+            for i, (name, _, _) in enumerate(scans):
+                head = e57.get_header(i)
+                raw = e57.read_scan_raw(i)  # every record, in file order
+                p = _e57_positions(raw, path)
+                if "cartesianInvalidState" in raw:  # 1: a direction only, 2: no point
+                    p[np.asarray(raw["cartesianInvalidState"]) != 0] = np.nan
+                if head.has_pose():  # to the file's common frame
+                    p = p @ np.asarray(head.rotation_matrix).T + np.asarray(head.translation)
+                pts.append(p)
+                colors = [raw.get(c) for c in ("colorRed", "colorGreen", "colorBlue")]
+                cols.append(None if any(c is None for c in colors) else
+                            np.stack([np.asarray(c) for c in colors], axis=1))
+                objects.append((name, at, at + p.shape[0]))
+                at += p.shape[0]
+        finally:
+            e57.close()
+    except MeshFormatError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - libE57Format raises its own types
+        msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise MeshFormatError(f"{path}: cannot read E57 (damaged or truncated file?): "
+                              f"{msg}") from None
+    points = np.concatenate(pts) if len(pts) > 1 else pts[0]
+    col = None
+    if all(c is not None for c in cols):
+        col = np.empty((points.shape[0], 3))
+        for (_, a, b), c in zip(objects, cols):
+            col[a:b] = unit_colors(c)
+    positions = np.array([s[2] for s in scans])
+    out = {"points": points, "colors": col, "up": np.array([0.0, 0.0, 1.0]),
+           "allow_invalid": bool(not np.isfinite(points).all())}
+    if len(scans) == 1:  # one scan: its normals face its scanner
+        out["viewpoint"] = positions[0]
+    else:
+        out.update(objects=tuple(objects), object_viewpoints=positions)
+    return out
 
 
 def _read_npy(data: bytes, path: Path) -> dict:

@@ -16,8 +16,8 @@ import numpy as np
 
 from ..errors import MeshFormatError
 
-__all__ = ["header_counts", "check_las", "check_laz", "check_stl", "ply_mapped", "npy_mapped",
-           "first_line"]
+__all__ = ["header_counts", "e57_counts", "check_las", "check_laz", "check_stl", "ply_mapped",
+           "npy_mapped", "first_line"]
 
 _SIZE = {"char": 1, "uchar": 1, "int8": 1, "uint8": 1, "short": 2, "ushort": 2,
          "int16": 2, "uint16": 2, "int": 4, "uint": 4, "int32": 4, "uint32": 4,
@@ -26,7 +26,7 @@ _HEAD = 1 << 16  # a header longer than this is not one this package writes or r
 
 
 def header_counts(path) -> dict | None:
-    """``{"faces": m, "vertices": n}`` or ``{"points": n}`` as a PLY, OFF or ``.tri``
+    """``{"faces": m, "vertices": n}`` or ``{"points": n}`` as a PLY, OFF, ``.tri`` or E57
     file's header declares them (of a compressed one, its start alone decompressed);
     None for other formats.
 
@@ -56,6 +56,13 @@ def header_counts(path) -> dict | None:
 
     p = Path(path)
     suffix, comp = split_suffix(p)
+    if suffix == "e57" and comp is None and p.is_file():  # (its XML header: scans, counts)
+        from ..errors import MissingExtraError
+
+        try:
+            return {"points": sum(n for _, n, _ in e57_counts(p))}
+        except MissingExtraError:
+            return None  # the reader says which extra
     if suffix not in ("ply", "off", "tri") or not p.is_file():
         return None
     if comp is None:
@@ -395,3 +402,54 @@ def first_line(exc: BaseException) -> str:
     """
     text = str(exc).strip()
     return text.splitlines()[0] if text else type(exc).__name__
+
+
+def e57_counts(path: Path) -> list:
+    """``(name, points, position)`` of each scan of an E57 file, from its XML header
+    alone (no point is read).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+
+    Returns
+    -------
+    list of (str, int, (3,) float64 ndarray)
+        Each scan's name (``scan i`` where it has none), its number of point records
+        and its scanner's position in the file's common frame (the pose's translation;
+        the origin without a pose).
+
+    Raises
+    ------
+    MeshFormatError
+        If the file is not an E57 file pye57 can open.
+    MissingExtraError
+        Without the ``clouds`` extra.
+
+    Examples
+    --------
+    >>> e57_counts(Path("site.e57"))  # doctest: +SKIP
+    [('station 0', 3000, array([0., 0., 0.]))]
+    """
+    from .._runtime.extras import require
+
+    pye57 = require("pye57", "reading E57 files")
+    try:
+        e57 = pye57.E57(str(path))
+        try:
+            out = []
+            for i in range(e57.scan_count):
+                head = e57.get_header(i)
+                try:
+                    name = str(head["name"].value())
+                except Exception:  # noqa: BLE001 - an unnamed scan
+                    name = f"scan {i}"
+                position = np.asarray(head.translation, dtype=np.float64) if \
+                    head.has_pose() else np.zeros(3)
+                out.append((name, int(head.point_count), position))
+            return out
+        finally:
+            e57.close()
+    except Exception as exc:  # noqa: BLE001 - libE57Format raises its own types
+        msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise MeshFormatError(f"{path}: cannot read E57 (damaged or not E57?): {msg}") from None

@@ -180,6 +180,8 @@ class BatchSummary:
         (input, error) of the inputs that failed in this call.
     skipped : list of (str, str)
         (folder, reason) of the sub-folders that could not be read.
+    passed : list of (str, str)
+        (file, reason) of the files of the searched folders that are not inputs.
     """
 
     manifest: Path
@@ -193,6 +195,7 @@ class BatchSummary:
     engine: str = ""
     failures: list = field(default_factory=list)
     skipped: list = field(default_factory=list)
+    passed: list = field(default_factory=list)
 
 
 def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
@@ -313,8 +316,9 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
 
         require("pyvista", "pictures (--picture)")
     skipped: list = []
+    passed: list = []
     files = collect_inputs(inputs, exclude=outdir if outdir.exists() else None,
-                           skipped=skipped)
+                           skipped=skipped, passed=passed)
     if not files:
         raise no_inputs(inputs, outdir)
     outputs = {"labels": labels, "header": bool(header), "colored": colored_mesh,
@@ -340,6 +344,7 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
             summary = _run(files, outdir, seg_opts, outputs, per_object, level, engine,
                            retry_failed, progress)
     summary.skipped = skipped
+    summary.passed = passed
     return summary
 
 

@@ -46,8 +46,18 @@ def no_inputs(inputs, outdir: Path) -> ParameterError:
     return ParameterError("no input to segment")
 
 
-def collect_inputs(specs: Sequence[str], exclude=None, skipped: list | None = None
-                   ) -> list[Path]:
+def _why_not(name: str) -> str:
+    """Why a file found in a folder is not an input, in one phrase."""
+    from ...io.files import split_suffix
+
+    fmt, _ = split_suffix(Path(name))
+    if fmt == "txt":
+        return "a .txt in a folder is not read as a cloud (a README?); name it to read it"
+    return f"{'.' + fmt if fmt else 'no suffix'}: not a mesh, cloud or volume format"
+
+
+def collect_inputs(specs: Sequence[str], exclude=None, skipped: list | None = None,
+                   passed: list | None = None) -> list[Path]:
     """The files named by ``specs``, absolute, each once, in order, as given.
 
     Paths keep the names the user gave: a symbolic link stays the link (its outputs are
@@ -67,6 +77,9 @@ def collect_inputs(specs: Sequence[str], exclude=None, skipped: list | None = No
     skipped : list, optional
         Receives ``(folder, reason)`` for each sub-folder that could not be read (its
         files are not inputs); without it such a folder is skipped silently.
+    passed : list, optional
+        Receives ``(file, reason)`` for each file of a searched folder that is not an
+        input (another format, a ``.txt``; hidden files are left out silently).
 
     Returns
     -------
@@ -119,6 +132,9 @@ def collect_inputs(specs: Sequence[str], exclude=None, skipped: list | None = No
                 if not name.startswith(".") and _is_input(Path(name), explicit=False):
                     keep(Path(root) / name)
                     n += 1
+                elif passed is not None and not name.startswith(".") and (
+                        skip is None or not skip(Path(root) / name)):
+                    passed.append((str(Path(root) / name), _why_not(name)))
         return n
 
     def one(spec: str, depth: int = 0) -> None:

@@ -1,0 +1,118 @@
+"""Scans in: E57 files (each scan an object, its scanner's position kept), Open3D's tensor
+clouds and meshes, and a batch that lists every file it leaves out."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from superfacets import read_cloud, segment
+from superfacets.api.scenes import segment_objects
+from superfacets.cli import main
+from superfacets.errors import MeshFormatError
+from superfacets.io import read_labels
+
+
+def _station(rng, n, centre):
+    """A terrestrial scan in miniature: a floor and a wall around a scanner."""
+    floor = np.c_[rng.random((n // 2, 2)) * 10 - 5, np.zeros(n // 2)]
+    wall = np.c_[rng.random(n - n // 2) * 10 - 5, np.full(n - n // 2, 5.0),
+                 rng.random(n - n // 2) * 3]
+    return np.vstack([floor, wall]) + rng.normal(0, 0.005, (n, 3)), np.asarray(centre)
+
+
+def _e57(path, scans=2, n=3000, invalid=0, seed=0):
+    pye57 = pytest.importorskip("pye57")
+    rng = np.random.default_rng(seed)
+    e57 = pye57.E57(str(path), mode="w")
+    truths = []
+    for i in range(scans):
+        local, _ = _station(rng, n, (0, 0, 1.5))
+        pose = np.array([20.0 * i, 0.0, 0.0])
+        d = {"cartesianX": local[:, 0], "cartesianY": local[:, 1], "cartesianZ": local[:, 2],
+             "colorRed": np.full(n, 200, np.uint8), "colorGreen": np.full(n, 100, np.uint8),
+             "colorBlue": np.full(n, 50, np.uint8)}
+        if invalid:
+            state = np.zeros(n, dtype=np.int8)
+            state[:invalid] = 2
+            d["cartesianInvalidState"] = state
+        e57.write_scan_raw(d, name=f"station {i}", translation=pose,
+                           rotation=np.array([1.0, 0.0, 0.0, 0.0]))
+        truths.append(local + pose)
+    e57.close()
+    return path, np.vstack(truths)
+
+
+def test_an_e57_file_reads_every_scan_in_its_common_frame(tmp_path):
+    path, truth = _e57(tmp_path / "site.e57", scans=2)
+    cloud = read_cloud(path)
+    assert cloud.n_total == 6000 and np.allclose(cloud.points, truth)  # each pose applied
+    assert cloud.objects == (("station 0", 0, 3000), ("station 1", 3000, 6000))
+    assert np.allclose(cloud.object_viewpoints, [[0, 0, 0], [20, 0, 0]])
+    assert np.allclose(cloud.colors[0], [200 / 255, 100 / 255, 50 / 255])
+    assert np.allclose(cloud.up, [0, 0, 1])
+    labels, parts = segment_objects(cloud, 20)
+    assert [r.n_segments for r in parts] == [10, 10]
+    assert set(labels[:3000]) == set(range(10)) and set(labels[3000:]) == set(range(10, 20))
+
+
+def test_one_scan_faces_its_scanner_and_invalid_points_stay_rows(tmp_path):
+    path, _ = _e57(tmp_path / "one.e57", scans=1, invalid=25)
+    cloud = read_cloud(path)
+    assert cloud.objects == () and np.allclose(cloud.viewpoint, [0, 0, 0])
+    assert cloud.n_total == 3000 and cloud.n_points == 2975
+    r = segment(cloud, 12)
+    assert r.n_segments == 12 and (r.labels[:25] == -1).all() and (r.labels[25:] >= 0).all()
+
+
+def test_the_command_line_segments_an_e57_per_scan(tmp_path, capsys):
+    path, _ = _e57(tmp_path / "site.e57", scans=2)
+    out = tmp_path / "site.seg"
+    assert main(["segment", str(path), "-k", "16", "--per-object", "-o", str(out)]) == 0
+    assert "6,000 points, 16 superpoints" in capsys.readouterr().out
+    labels = read_labels(out)
+    assert labels.shape == (6000,) and len(np.unique(labels)) == 16
+    assert not set(labels[:3000]) & set(labels[3000:])  # labels unique over the site
+
+
+def test_a_damaged_e57_is_refused_in_one_line(tmp_path, capsys):
+    pytest.importorskip("pye57")
+    bad = tmp_path / "bad.e57"
+    bad.write_bytes(b"ASTM-E57" + b"\0" * 200)
+    with pytest.raises(MeshFormatError, match="cannot read E57"):
+        read_cloud(bad)
+    assert main(["segment", str(bad), "-o", str(tmp_path / "x.seg")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("superfacets: error:") and len(err.splitlines()) == 1
+    assert not (tmp_path / "x.seg").exists()
+
+
+def test_open3d_tensor_clouds_and_meshes_segment():
+    o3d = pytest.importorskip("open3d", exc_type=ImportError)
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(4000, 3))
+    x /= np.linalg.norm(x, axis=1, keepdims=True)
+    cloud = o3d.t.geometry.PointCloud(o3d.core.Tensor(x))
+    cloud.point.colors = o3d.core.Tensor(np.full((4000, 3), 0.25, dtype=np.float32))
+    r = segment(cloud, 25)
+    assert r.labels.shape == (4000,) and r.n_segments == 25
+    mesh = o3d.t.geometry.TriangleMesh.from_legacy(o3d.geometry.TriangleMesh.create_sphere())
+    r = segment(mesh, 30)
+    assert r.labels.shape == (mesh.triangle.indices.shape[0],) and r.n_segments == 30
+
+
+def test_a_batch_lists_every_file_it_leaves_out(tmp_path, capsys, sphere):
+    from superfacets import write_mesh
+
+    folder = tmp_path / "in"
+    folder.mkdir()
+    write_mesh(folder / "ball.off", sphere)
+    (folder / "notes.txt").write_text("a readme\n")
+    (folder / "scan.rcp").write_bytes(b"\0" * 10)
+    (folder / ".hidden").write_text("x")
+    assert main(["batch", str(folder), "-o", str(tmp_path / "out"), "-k", "8",
+                 "--workers", "1"]) == 0
+    err = capsys.readouterr().err
+    assert f"skipped: {folder / 'notes.txt'} (a .txt in a folder" in err
+    assert f"skipped: {folder / 'scan.rcp'} (.rcp: not a mesh, cloud or volume format)" in err
+    assert ".hidden" not in err
