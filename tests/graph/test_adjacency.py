@@ -159,6 +159,11 @@ def test_cli_writes_the_graph_and_the_levels(tmp_path, capsys):
     with np.load(out) as z:
         k = int(z["labels"].max()) + 1
         assert z["edge_index"].shape[0] == 2 and z["area"].shape == (k,)
+        e = z["edge_index"]  # PyTorch Geometric's layout: each edge both ways
+        assert {tuple(p) for p in e.T} == {tuple(p) for p in e[::-1].T}
+        assert z["x"].shape == (k, len(z["node_features"]))
+        assert z["edge_attr"].shape == (e.shape[1], len(z["edge_features"]))
+        np.testing.assert_array_equal(z["super_index"], z["labels"])
         assert z["levels"].tolist() == [8, 3]
         assert z["parent_0"].shape == (k,) and z["parent_1"].shape == (8,)
         np.testing.assert_array_equal(z["labels_1"], z["parent_1"][z["parent_0"]][z["labels"]])

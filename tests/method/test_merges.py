@@ -406,7 +406,8 @@ def test_the_command_line_takes_merge_from(tmp_path, capsys):
                                   segment(PointCloud(pts), 20, merge_from=1).labels)
     capsys.readouterr()
     assert main(["segment", str(path), "-k", "20", "-o", str(out)]) == 0
-    assert "20 superpoints (merged from 100, flat neighbours first" in capsys.readouterr().out
+    assert "20 superpoints (merged from 100 finer ones, flat neighbours first" in \
+        capsys.readouterr().out
 
 
 def test_sorted_unique_is_numpys_unique():

@@ -682,7 +682,7 @@ def test_the_result_says_why_the_passes_stopped(tmp_path, capsys):
     assert main(["segment", str(tmp_path / "c.off"), "-k", "20", "--paper",
                  "-o", str(tmp_path / "c.seg")]) == 0
     out = capsys.readouterr().out
-    assert "stopped on a repeating cycle of 2 center lists (the labels of pass 50" in out
+    assert "stopped: the centers oscillate with period 2 (the labels of pass 50" in out
 
 
 def test_workspaces_released_between_passes_give_the_same_labels(sphere):

@@ -748,7 +748,7 @@ def test_a_cycle_on_a_cloud_is_settled_and_the_passes_converge(monkeypatch):
     assert settled.converged and settled.stop_reason in ("converged", "tolerance")
     assert 0 < settled.timings["settled"] < 120 and settled.n_iter < 20
     assert settled.n_segments == jumped.n_segments == 120
-    assert "held where a cycle of center lists moved them" in describe_stop(settled)
+    assert "oscillating centers frozen" in describe_stop(settled)
 
 
 def test_settling_holds_the_centers_that_moved_at_the_cycles_best_pass():

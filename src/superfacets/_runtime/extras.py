@@ -26,7 +26,8 @@ EXTRAS = {"pyvista": "render", "PIL": "render", "pandas": "report", "matplotlib"
           "pypcd4": "clouds", "laspy": "clouds", "pye57": "clouds",
           "distributed": "distributed", "dask": "distributed", "pyarrow": "distributed",
           "networkx": "graph", "cut_pursuit_py": "baselines", "pgeof": "baselines",
-          "sklearn": "baselines", "meshio": "volumes"}
+          "sklearn": "baselines", "meshio": "volumes", "torch": "pyg",
+          "torch_geometric": "pyg"}
 
 
 def require(module: str, feature: str):

@@ -200,6 +200,84 @@ class SegmentationResult:
                          eta_convex=self.params.get("eta_convex", _D.eta_convex), beta=beta,
                          cost=cost, extent_weight=extent_weight or 0.0)
 
+    def learning_graph(self, features=None, up=None) -> dict:
+        """The superpoint graph in the layout learning pipelines read (PyTorch Geometric):
+        ``edge_index`` with each edge in both directions, per superpoint the handcrafted
+        features Superpoint Transformer uses (linearity, planarity, scattering,
+        verticality, elevation, size, normal, mean colour), per edge its offsets.
+
+        Parameters
+        ----------
+        features : (N, d) float ndarray, optional
+            As :meth:`graph` (default: the input's colours).
+        up : (3,) float, optional
+            The vertical (default: the input's own ``up``, a LAS or E57 scan's z; else z).
+
+        Returns
+        -------
+        dict of ndarray
+            ``x``, ``pos``, ``edge_index`` (2, 2E), ``edge_attr``, ``super_index``,
+            ``node_features``, ``edge_features``
+            (:func:`superfacets.graph.learning.learning_arrays`).
+
+        Raises
+        ------
+        ParameterError
+            As :meth:`graph`.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from superfacets import segment
+        >>> xyz = np.random.default_rng(0).random((3000, 3)) * (10, 10, 0.01)
+        >>> a = segment(xyz, 20).learning_graph()
+        >>> names = list(a["node_features"])
+        >>> bool(a["x"][:, names.index("planarity")].min() > 0.5)
+        True
+        """
+        from ..graph.learning import learning_arrays
+
+        src = self._source()
+        if up is None:
+            up = getattr(src.source, "up", None)
+        return learning_arrays(self.graph(features), src.graph.positions, self.element_labels,
+                               self.labels, (0.0, 0.0, 1.0) if up is None else up)
+
+    def to_pyg(self, features=None, up=None):
+        """The superpoint graph as a ``torch_geometric.data.Data`` (``x``, ``pos``,
+        ``edge_index`` in both directions, ``edge_attr``, ``super_index``), for learning
+        pipelines; needs torch_geometric (not a dependency of this package).
+
+        Parameters
+        ----------
+        features, up
+            As :meth:`learning_graph`.
+
+        Returns
+        -------
+        torch_geometric.data.Data
+
+        Raises
+        ------
+        MissingExtraError
+            Without torch_geometric (``pip install torch_geometric``).
+
+        Examples
+        --------
+        >>> data = result.to_pyg()  # doctest: +SKIP
+        >>> data.edge_index.shape  # doctest: +SKIP
+        torch.Size([2, 52])
+        """
+        from .._runtime.extras import require
+
+        torch = require("torch", "to_pyg (torch_geometric)")
+        pyg = require("torch_geometric.data", "to_pyg")
+        a = self.learning_graph(features, up)
+        return pyg.Data(**{k: torch.from_numpy(np.ascontiguousarray(a[k])) for k in
+                           ("x", "pos", "edge_index", "edge_attr", "super_index")},
+                        node_features=list(a["node_features"]),
+                        edge_features=list(a["edge_features"]))
+
     def _source(self):
         if self.elements is None or self.element_labels is None:
             from ..errors import ParameterError
@@ -245,9 +323,10 @@ def stop_reason(result) -> str:
 
 
 def describe_stop(result) -> str:
-    """The stop in words, for summaries: ``converged``, ``converged by tol``, ``stopped on
-    a repeating cycle of 4 center lists (the labels of pass 50, ...)``, ``stopped at
-    max-iter``.
+    """The stop in words, for summaries: ``converged: no label changed``, ``converged:
+    centers moved less than tol`` (with ``; 3 oscillating centers frozen`` where centers
+    that went back and forth were held), ``stopped: the centers oscillate with period 4
+    (the labels of pass 50, ...)``, ``stopped at max-iter``.
 
     Parameters
     ----------
@@ -272,16 +351,16 @@ def describe_stop(result) -> str:
     """
     reason = stop_reason(result)
     held = int(result.timings.get("settled", 0)) if reason != "max_iter" else 0
+    done = {"tolerance": "converged: centers moved less than tol",
+            "converged": "converged: no label changed", "max_iter": "stopped at max-iter"}
     if held:  # (a cycle settled: the run went on to converge)
         word = "center" if held == 1 else "centers"
-        return ("converged by tol" if reason == "tolerance" else "converged") + \
-            f" ({held} {word} held where a cycle of center lists moved them)"
+        return done.get(reason, "converged") + f"; {held} oscillating {word} frozen"
     if reason == "cycle":
         period = int(result.timings["cycle_period"])
-        return (f"stopped on a repeating cycle of {period} center lists (the labels of pass "
+        return (f"stopped: the centers oscillate with period {period} (the labels of pass "
                 f"{result.n_iter}, as running every pass)")
-    return {"tolerance": "converged by tol", "converged": "converged",
-            "max_iter": "stopped at max-iter"}[reason]
+    return done[reason]
 
 
 @dataclass(frozen=True)

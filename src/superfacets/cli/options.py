@@ -87,6 +87,18 @@ def add_scan_options(p: argparse.ArgumentParser) -> None:
                         ".las/.laz, else outwards from each piece's mean)")
 
 
+def add_unit_options(p) -> None:
+    """Sizes in the data's units: ``--seed-resolution`` (instead of ``-k``) and
+    ``--neighbor-distance`` (instead of ``--neighbor-radius``)."""
+    p.add_argument("--seed-resolution", type=float_arg, default=None, metavar="R",
+                   help="the size of a superpoint (superfacet) in the data's units (metres "
+                        "for most scans), as VCCS's seed resolution: k = surface area / R^2 "
+                        "(instead of -k or --radius)")
+    p.add_argument("--neighbor-distance", type=float_arg, default=None, metavar="D",
+                   help="point clouds: drop neighbours farther than D, in the data's units "
+                        "(instead of --neighbor-radius, a fraction of the diagonal)")
+
+
 def scan_fields(args) -> dict:
     """The cloud fields :func:`add_scan_options` set: ``viewpoint`` and ``up`` (tuples)."""
     out = {}

@@ -18,6 +18,7 @@ from .options import (
     add_element_options,
     add_method_options,
     add_scan_options,
+    add_unit_options,
     check_labels_output,
     check_output,
     element_kwargs,
@@ -63,6 +64,7 @@ def _add_segment(sub) -> None:
     add_scan_options(inp)
     add_method_options(p)
     add_element_options(p)
+    add_unit_options(p.add_argument_group("sizes in the data's units"))
     out = p.add_argument_group("outputs")
     out.add_argument("-o", "--output", metavar="OUT.seg", default=None,
                      help="write the labels here: one per face, vertex or point per line, or "
@@ -175,7 +177,8 @@ def _summary(name: str, mesh, result, seconds: float, elements: str = "faces",
         merged = (getattr(result, "params", None) or {}).get("merge_from") or 1
         first = (getattr(result, "params", None) or {}).get("n_init_centers") or 0
         if merged > 1 and first > result.n_segments:
-            segs += f" (merged from {first:,}, flat neighbours first; --merge-from 1: none)"
+            segs += (f" (merged from {first:,} finer ones, flat neighbours first; "
+                     "--merge-from 1: no merging)")
     else:
         kind = "" if mesh.is_triangular else " (polygons)"
         objs = f" in {len(mesh.objects)} objects" if len(mesh.objects) > 1 else ""
@@ -232,6 +235,7 @@ def cmd_segment(args) -> int:
     if elsewhere is not None:
         return elsewhere()
     outputs = _checked_outputs(args)
+    _check_units(args)
     kwargs = dict(method_kwargs(args), **element_kwargs(args))
     resolve(n_segments=args.n_segments, radius=args.radius, **kwargs)  # before the read
     t0 = time.perf_counter()
@@ -239,10 +243,58 @@ def cmd_segment(args) -> int:
         data = scan_cloud(read_usable(args.mesh, clouds=True), args)
     interrupts.check()  # a Ctrl-C during the start-up and the reading
     kind = _kind_of_run(args, data, outputs["colored"])
+    kwargs, size_note = _sizes(args, data, kind, kwargs)
     result = _run(args, data, kwargs)
     elapsed = time.perf_counter() - t0
-    _write_and_say(args, data, result, kind, outputs, elapsed)
+    _write_and_say(args, data, result, kind, outputs, elapsed, size_note)
     return 0
+
+
+def _check_units(args) -> None:
+    """The sizes in the data's units against the options they replace (before reading)."""
+    from ..errors import ParameterError
+
+    if args.seed_resolution is not None and (args.n_segments is not None or
+                                             args.radius is not None):
+        raise ParameterError("--seed-resolution gives the count: not with -k or --radius")
+    if args.neighbor_distance is not None and args.neighbor_radius is not None:
+        raise ParameterError("give --neighbor-distance (data units) or --neighbor-radius "
+                             "(a fraction of the diagonal), not both")
+    for flag, v in (("--seed-resolution", args.seed_resolution),
+                    ("--neighbor-distance", args.neighbor_distance)):
+        if v is not None and not v > 0:
+            raise ParameterError(f"{flag} must be a length > 0, got {v}")
+
+
+def _sizes(args, data, kind: str, kwargs: dict) -> tuple[dict, str]:
+    """The count and the neighbour radius from the sizes in the data's units, or the
+    count that grows with the input where none is given; and a line saying which."""
+    from ..api.sizes import POINTS_PER_SEGMENT, count_for_resolution, default_count
+    from ..api.sizes import diagonal_fraction
+
+    if args.neighbor_distance is not None:
+        if kind != "points":
+            from ..errors import ParameterError
+
+            raise ParameterError("--neighbor-distance is of a point cloud's graph")
+        kwargs = dict(kwargs, neighbor_radius=diagonal_fraction(
+            data, args.neighbor_distance, "--neighbor-distance"))
+    segs = kind_of(kind).segment_word
+    if args.seed_resolution is not None:
+        options = {k: kwargs[k] for k in ("n_neighbors", "neighbor_radius") if k in kwargs}
+        k, area = count_for_resolution(data, args.seed_resolution, kind, **options)
+        args.n_segments = k
+        return kwargs, (f"k = {k:,} {segs} from --seed-resolution {args.seed_resolution:g}: "
+                        f"a surface of {area:,.4g} square units / {args.seed_resolution:g}^2")
+    if args.n_segments is None and args.radius is None:
+        k = default_count(data, kind, DEFAULTS.n_segments)
+        args.n_segments = k
+        if k != DEFAULTS.n_segments:
+            why = (f"one per {POINTS_PER_SEGMENT:,} points" if k > DEFAULTS.n_segments else
+                   "at most one per 12 elements of this small input")
+            return kwargs, (f"k = {k:,} {segs} by default ({why}; -k or --seed-resolution "
+                            "to choose)")
+    return kwargs, ""
 
 
 def _reading_bar(args):
@@ -379,7 +431,7 @@ def _run(args, data, kwargs):
         raise named_after(args.mesh, exc) from None
 
 
-def _write_and_say(args, data, result, kind, outputs, elapsed) -> None:
+def _write_and_say(args, data, result, kind, outputs, elapsed, size_note: str = "") -> None:
     """Write the outputs, then the summary, what was written and the notes."""
     from ..io.orientation import default_view
     from ..viz.outputs import write_result
@@ -402,8 +454,10 @@ def _write_and_say(args, data, result, kind, outputs, elapsed) -> None:
     report = sys.stderr if str(seg_out) == "-" else sys.stdout  # stdout holds the labels
     print(_summary(Path(args.mesh).name, data, result, elapsed, kind,
                    getattr(args, "density", None) is not None), file=report)
+    if size_note:
+        print(size_note, file=report)
     _say_what_was_written(seg_out, outputs["colored"], outputs["picture"], outputs["html"],
-                          report, up, outputs["graph"], _labels_what(args, kind))
+                          report, up, outputs["graph"], _labels_what(args, kind), kind)
     for note in (duplicates_note(args, data, kind), count_note(args, data, result, kind)):
         if note:
             print(f"note: {note}", file=sys.stderr)
@@ -435,11 +489,15 @@ def _labels_what(args, kind: str) -> str:
 
 
 def _say_what_was_written(seg_out, ply_out, png_out, html_out, report, up,
-                          graph_out=None, labels_what: str = "labels") -> None:
+                          graph_out=None, labels_what: str = "labels",
+                          kind: str = "faces") -> None:
     axis = said_up(up)
+    colored = "coloured cloud" if kind == "points" else "coloured mesh"
+    graph = "superpoint graph" if kind_of(kind).segment_word == "superpoints" else \
+        "superfacet graph"
     written = [f"{path} ({what})" for path, what in
-               ((seg_out, labels_what), (ply_out, "coloured mesh"), (png_out, f"picture, {axis}"),
-                (html_out, "page: open it in a browser"), (graph_out, "superfacet graph"))
+               ((seg_out, labels_what), (ply_out, colored), (png_out, f"picture, {axis}"),
+                (html_out, "page: open it in a browser"), (graph_out, graph))
                if path is not None and str(path) != "-"]
     if written:
         print("wrote " + ", ".join(written), file=report)

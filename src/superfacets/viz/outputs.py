@@ -106,8 +106,12 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
     up, view
         The picture's and the page's camera (:func:`superfacets.viz.camera.view_frame`).
     graph : path, optional
-        ``.npz`` of the superfacet graph (:meth:`SegmentationResult.graph`: the
-        input's colours as ``feature`` if it has any) and ``labels``; with
+        ``.npz`` of the superfacet (superpoint) graph in PyTorch Geometric's layout
+        (:meth:`SegmentationResult.learning_graph`: ``x``, ``pos``, ``edge_index``
+        with each edge in both directions, ``edge_attr``, ``super_index``,
+        ``node_features``, ``edge_features``), each node's ``area``, ``centroid``,
+        ``normal`` and ``feature`` (the input's colours if it has any) and
+        ``labels``; with
         ``levels``, also the hierarchy (``levels``, ``parent_<i>``) and the
         per-row labels of each level (``labels_<i>``).
     levels : sequence of int, optional
@@ -131,9 +135,12 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
     from ..io.labels import write_labels, write_segindices
 
     arrays = None
-    if graph is not None:
+    if graph is not None:  # (PyTorch Geometric's layout, and the nodes' own arrays)
         sg = result.graph()
-        arrays = {**sg.arrays(), "labels": result.labels}
+        learn = result.learning_graph()
+        arrays = {**{k: v for k, v in sg.arrays().items() if k in ("area", "centroid",
+                                                                  "normal", "feature")},
+                  **learn, "labels": result.labels}
         if levels:
             h = result.hierarchy(levels, cost=level_cost, extent_weight=extent_weight)
             arrays.update(h.arrays())

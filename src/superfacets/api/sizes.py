@@ -1,0 +1,176 @@
+"""Sizes in the data's units: a superpoint size instead of a count, distances instead of
+fractions of the diagonal, and a default count that grows with the input.
+
+A scan's users think in metres (PCL's VCCS asks for a voxel and a seed resolution, lidR
+and PDAL for distances): :func:`count_for_resolution` turns a seed resolution ``R`` into
+the count ``k = A / R^2`` that gives superpoints of about ``R`` by ``R`` on a surface of
+area ``A`` (the paper's surface area of a mesh, the points' estimated areas of a cloud,
+section 3.1: ``A = k pi r^2``); :func:`diagonal_fraction` turns a distance into the
+fraction of the bounding-box diagonal the method's options take.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..elements.kinds import kind_of
+from ..errors import ParameterError
+
+__all__ = ["count_for_resolution", "default_count", "diagonal_fraction", "POINTS_PER_SEGMENT",
+           "MIN_ELEMENTS_PER_SEGMENT"]
+
+#: A cloud given no count gets one superpoint per this many valid points, and never
+#: fewer than the method's default count where it has enough points.
+POINTS_PER_SEGMENT = 1000
+
+#: A default or derived count leaves at least this many elements per segment (the
+#: method's first superpoints hold at least as many: ``method.rules``).
+MIN_ELEMENTS_PER_SEGMENT = 12
+
+
+def _rows(data, elements: str) -> int:
+    if elements == "points":
+        return int(data.n_points)
+    return int(kind_of(elements).n_rows(data))
+
+
+def _kind(data, elements: str | None) -> str:
+    if elements is not None:
+        return elements
+    if hasattr(data, "tets"):
+        return "cells"
+    return "faces" if hasattr(data, "faces") else "points"
+
+
+def default_count(data, elements: str | None = None, default: int = 150) -> int:
+    """The number of segments a run takes when none is given.
+
+    A mesh takes the paper's ``default`` (150); a point cloud one superpoint per
+    :data:`POINTS_PER_SEGMENT` valid points, at least ``default``; either at most one
+    segment per :data:`MIN_ELEMENTS_PER_SEGMENT` elements (a small input) and at least 1.
+
+    Parameters
+    ----------
+    data : Mesh, PointCloud or TetMesh
+    elements : {'faces', 'vertices', 'points', 'cells'}, optional
+        What is segmented (default: the input's own kind).
+    default : int, default 150
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> from superfacets import PointCloud
+    >>> rng = np.random.default_rng(0)
+    >>> default_count(PointCloud(rng.random((3_000_000, 3))))
+    3000
+    >>> default_count(PointCloud(rng.random((70, 3))))
+    5
+    """
+    kind = _kind(data, elements)
+    n = _rows(data, kind)
+    k = max(default, n // POINTS_PER_SEGMENT) if kind == "points" else default
+    return int(max(1, min(k, n // MIN_ELEMENTS_PER_SEGMENT)))
+
+
+def count_for_resolution(data, resolution: float, elements: str | None = None,
+                         **element_options) -> tuple[int, float]:
+    """The count of superpoints (superfacets) of about ``resolution`` by ``resolution``,
+    in the data's units: ``k = A / resolution^2`` for a surface of area ``A``.
+
+    As VCCS's seed resolution: a plane of 10 m by 10 m at 0.5 gives about 400.
+
+    Parameters
+    ----------
+    data : Mesh or PointCloud
+    resolution : float
+        A length in the data's units (metres for most scans), ``> 0``.
+    elements : {'faces', 'vertices', 'points'}, optional
+        What is segmented (default: the input's own kind).
+    **element_options
+        ``n_neighbors``, ``neighbor_radius`` of a cloud's point graph (whose point
+        areas add up to its surface area; the graph is kept for the run).
+
+    Returns
+    -------
+    k : int
+        At least 1, at most one per :data:`MIN_ELEMENTS_PER_SEGMENT` elements.
+    area : float
+        The surface area it was computed from, in the data's units squared.
+
+    Raises
+    ------
+    ParameterError
+        If ``resolution`` is not a finite number > 0, or the input is a tetrahedral
+        mesh (a volume: give a count).
+
+    Examples
+    --------
+    >>> from superfacets import PointCloud
+    >>> g = np.mgrid[0:100, 0:100].reshape(2, -1).T * 0.1  # 10 m by 10 m, 0.1 m apart
+    >>> k, area = count_for_resolution(PointCloud(np.c_[g, np.zeros(len(g))]), 0.5)
+    >>> 300 < k < 500, round(area)
+    (True, 100)
+    """
+    from ..elements.builders import elements_of
+
+    try:
+        r = float(resolution)
+    except (TypeError, ValueError):
+        raise ParameterError(f"the seed resolution must be a number, got {resolution!r}") \
+            from None
+    if not (np.isfinite(r) and r > 0):
+        raise ParameterError(f"the seed resolution must be a finite length > 0, got {r}")
+    kind = _kind(data, elements)
+    if kind == "cells":
+        raise ParameterError("a seed resolution is a size on a surface; a tetrahedral mesh "
+                             "takes a count (-k)")
+    if kind == "points":
+        area = float(elements_of(data, "points", **element_options).graph.sizes.sum())
+    else:
+        area = float(data.area)
+    n = _rows(data, kind)
+    k = int(round(area / (r * r)))
+    return int(max(1, min(k, max(1, n // MIN_ELEMENTS_PER_SEGMENT)))), area
+
+
+def diagonal_fraction(data, distance: float, what: str = "distance") -> float:
+    """A distance in the data's units as the fraction of the bounding-box diagonal that
+    the method's options (``radius``, ``neighbor_radius``) take.
+
+    Parameters
+    ----------
+    data : Mesh or PointCloud
+    distance : float
+        ``> 0``, in the data's units.
+    what : str
+        The option's name, for the message.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    ParameterError
+        If ``distance`` is not finite and ``> 0``, or the input has no extent.
+
+    Examples
+    --------
+    >>> from superfacets import PointCloud
+    >>> cloud = PointCloud(np.array([[0.0, 0, 0], [3, 4, 0], [1, 1, 0]]))
+    >>> diagonal_fraction(cloud, 0.5)
+    0.1
+    """
+    d = float(distance)
+    if not (np.isfinite(d) and d > 0):
+        raise ParameterError(f"{what} must be a finite length > 0, got {distance}")
+    pts = np.asarray(data.points if hasattr(data, "points") else data.vertices,
+                     dtype=np.float64)
+    pts = pts[np.isfinite(pts).all(axis=1)]
+    diag = float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0))) if len(pts) else 0.0
+    if not diag > 0:
+        raise ParameterError(f"{what}: the input has no extent to measure it against")
+    return d / diag

@@ -1,0 +1,173 @@
+"""The superpoint graph in the layout learning pipelines read.
+
+PyTorch Geometric's ``Data`` holds ``x`` (node features), ``pos``, ``edge_index``
+with each edge in both directions and ``edge_attr`` per directed edge; Superpoint
+Transformer (Robert et al., CVPR 2023) adds ``super_index`` (each point's superpoint)
+and describes each superpoint by the handcrafted features of its points' covariance
+(Demantke et al. 2011, as Superpoint Graph, Landrieu and Simonovsky 2018, computes
+them): with ``s1 >= s2 >= s3`` the square roots of its eigenvalues,
+
+- linearity ``(s1 - s2) / s1``, planarity ``(s2 - s3) / s1``, scattering ``s3 / s1``
+  (they add up to 1: a pole is linear, a wall or the ground planar, a bush scattered);
+- verticality ``1 - |n . up|`` of the normal ``n`` of the best plane (0 on the ground,
+  1 on a wall or a pole);
+- elevation: the centroid's height above the ground beneath it (the lowest element of
+  its column, on a grid of :data:`GROUND_CELLS` cells along the longer horizontal
+  side), in the data's units;
+- size: its element count and area; its mean normal and mean colour (where given).
+
+Per edge: its border length, mean angle, concave share (:class:`SuperfacetGraph`)
+and the offset between the two centroids (``pos[j] - pos[i]`` of ``i -> j``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .adjacency import SuperfacetGraph
+
+__all__ = ["shape_features", "learning_arrays", "GROUND_CELLS", "NODE_FEATURES",
+           "EDGE_FEATURES"]
+
+#: The ground beneath a superpoint: the lowest element of its cell, on a grid of this
+#: many cells along the input's longer horizontal side.
+GROUND_CELLS = 64
+
+#: The columns of ``x``, in order (``red green blue`` follow where there are colours).
+NODE_FEATURES = ("linearity", "planarity", "scattering", "verticality", "elevation",
+                 "log_count", "log_area", "normal_x", "normal_y", "normal_z")
+
+#: The columns of ``edge_attr``, in order.
+EDGE_FEATURES = ("border_length", "mean_angle", "concave", "offset_x", "offset_y",
+                 "offset_z")
+
+
+def shape_features(graph: SuperfacetGraph, up=(0.0, 0.0, 1.0)) -> dict[str, np.ndarray]:
+    """Linearity, planarity, scattering and verticality of each superpoint.
+
+    Parameters
+    ----------
+    graph : SuperfacetGraph
+        With its ``scatter`` (as :func:`~superfacets.graph.adjacency.superfacet_graph`
+        makes it).
+    up : (3,) float, default (0, 0, 1)
+        The vertical direction (z for scans read from LAS/LAZ or E57).
+
+    Returns
+    -------
+    dict of (K,) float64 ndarray
+        ``linearity``, ``planarity``, ``scattering`` (in ``[0, 1]``, adding up to 1;
+        all 0 for a superpoint of one point) and ``verticality`` (in ``[0, 1]``).
+
+    Raises
+    ------
+    ValueError
+        If the graph has no ``scatter``.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets import segment
+    >>> plane = trimesh.creation.box(extents=(4, 4, 0.001)).subdivide().subdivide()
+    >>> g = segment(plane, 4).graph()
+    >>> f = shape_features(g)
+    >>> bool((f["planarity"] > 0.5).all()), f["linearity"].shape
+    (True, (4,))
+    """
+    if graph.scatter is None:
+        raise ValueError("the graph has no scatter of its elements: build it with "
+                         "superfacet_graph")
+    area = np.maximum(graph.area, 1e-300)
+    cov = graph.scatter / area[:, None, None]
+    evals, evecs = np.linalg.eigh(cov)  # ascending
+    sigma = np.sqrt(np.clip(evals, 0.0, None))
+    s3, s2, s1 = sigma[:, 0], sigma[:, 1], sigma[:, 2]
+    ok = s1 > 0
+    safe = np.where(ok, s1, 1.0)
+    u = np.asarray(up, dtype=np.float64)
+    u = u / np.linalg.norm(u)
+    normal = evecs[:, :, 0]
+    return {"linearity": np.where(ok, (s1 - s2) / safe, 0.0),
+            "planarity": np.where(ok, (s2 - s3) / safe, 0.0),
+            "scattering": np.where(ok, s3 / safe, 0.0),
+            "verticality": np.where(ok, 1.0 - np.abs(normal @ u), 0.0)}
+
+
+def _elevation(positions: np.ndarray, centroid: np.ndarray, up: np.ndarray) -> np.ndarray:
+    """Each centroid's height above the lowest element of its grid cell (the ground
+    beneath it; the nearest non-empty cell where its own holds none)."""
+    from scipy.spatial import cKDTree
+
+    u = up / np.linalg.norm(up)
+    a = np.eye(3)[int(np.argmin(np.abs(u)))]  # two horizontal axes
+    e1 = np.cross(u, a)
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(u, e1)
+    flat = np.c_[positions @ e1, positions @ e2]
+    height = positions @ u
+    lo = flat.min(axis=0)
+    cell = max(float((flat.max(axis=0) - lo).max()) / GROUND_CELLS, 1e-300)
+    ij = np.floor((flat - lo) / cell).astype(np.int64)
+    keys, inverse = np.unique(ij, axis=0, return_inverse=True)
+    ground = np.full(keys.shape[0], np.inf)
+    np.minimum.at(ground, inverse.ravel(), height)
+    centres = (keys + 0.5) * cell + lo
+    where = cKDTree(centres).query(np.c_[centroid @ e1, centroid @ e2])[1]
+    return centroid @ u - ground[where]
+
+
+def learning_arrays(graph: SuperfacetGraph, positions: np.ndarray, element_labels,
+                    row_labels, up=(0.0, 0.0, 1.0)) -> dict[str, np.ndarray]:
+    """The superpoint graph as PyTorch Geometric lays it out, as numpy arrays.
+
+    Parameters
+    ----------
+    graph : SuperfacetGraph
+        Of ``element_labels``.
+    positions : (n, 3) float ndarray
+        The elements' positions (face centroids, vertices, points).
+    element_labels : (n,) int ndarray
+        Each element's superpoint.
+    row_labels : (N,) int ndarray
+        Each input row's superpoint (``-1``: an invalid point), as ``super_index``.
+    up : (3,) float, default (0, 0, 1)
+
+    Returns
+    -------
+    dict
+        ``x`` (K, F) float32 (:data:`NODE_FEATURES`, then ``red green blue`` where the
+        graph has a 3-column ``feature``), ``pos`` (K, 3) float64 centroids,
+        ``edge_index`` (2, 2E) int64, each edge in both directions (``i -> j`` then
+        ``j -> i``), ``edge_attr`` (2E, 6) float32 (:data:`EDGE_FEATURES`),
+        ``super_index`` (N,) int64, ``node_features`` and ``edge_features`` (the
+        column names, as arrays of str).
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets import segment
+    >>> r = segment(trimesh.creation.icosphere(subdivisions=3), 12)
+    >>> a = r.learning_graph()
+    >>> a["x"].shape, a["edge_index"].shape[1] == 2 * r.graph().n_edges
+    ((12, 10), True)
+    """
+    u = np.asarray(up, dtype=np.float64)
+    shape = shape_features(graph, u)
+    lab = np.asarray(element_labels, dtype=np.int64)
+    count = np.bincount(lab[lab >= 0], minlength=graph.n_segments).astype(np.float64)
+    cols = [shape["linearity"], shape["planarity"], shape["scattering"], shape["verticality"],
+            _elevation(np.asarray(positions, dtype=np.float64), graph.centroid, u),
+            np.log1p(count), np.log1p(graph.area), *graph.normal.T]
+    names = list(NODE_FEATURES)
+    if graph.feature is not None and graph.feature.shape[1] == 3:
+        cols += list(graph.feature.T)
+        names += ["red", "green", "blue"]
+    a, b = graph.edge_index
+    both = np.stack([np.r_[a, b], np.r_[b, a]])
+    offset = graph.centroid[both[1]] - graph.centroid[both[0]]
+    per_pair = np.c_[graph.border_length, graph.mean_angle, graph.concave]
+    edge_attr = np.c_[np.r_[per_pair, per_pair], offset]
+    return {"x": np.stack(cols, axis=1).astype(np.float32), "pos": graph.centroid,
+            "edge_index": both.astype(np.int64), "edge_attr": edge_attr.astype(np.float32),
+            "super_index": np.asarray(row_labels, dtype=np.int64),
+            "node_features": np.array(names), "edge_features": np.array(EDGE_FEATURES)}
