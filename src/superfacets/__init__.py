@@ -59,6 +59,7 @@ _PUBLIC = {
     "write_volume_labels": "io",
     "segment_tiled": "scale.runner.tiles",
     "TiledResult": "api.result",
+    "NotebookView": "viz.html",
 }
 
 __all__ = [

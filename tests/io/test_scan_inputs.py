@@ -116,3 +116,60 @@ def test_a_batch_lists_every_file_it_leaves_out(tmp_path, capsys, sphere):
     assert f"skipped: {folder / 'notes.txt'} (a .txt in a folder" in err
     assert f"skipped: {folder / 'scan.rcp'} (.rcp: not a mesh, cloud or volume format)" in err
     assert ".hidden" not in err
+
+
+def test_a_seed_resolution_gives_about_area_over_r_squared_on_a_plane(tmp_path, capsys):
+    from superfacets.api.sizes import count_for_resolution
+
+    rng = np.random.default_rng(4)
+    plane = np.c_[rng.random((40000, 2)) * [40.0, 25.0], rng.normal(0, 0.01, 40000)]
+    path = tmp_path / "plane.npy"
+    np.save(path, plane)
+    for r in (0.5, 1.0, 2.5):
+        k, area = count_for_resolution(read_cloud(path), r)
+        assert abs(area - 1000.0) < 100  # the points' areas add up to the plane's
+        assert abs(k - 1000.0 / r**2) <= 0.3 * 1000.0 / r**2, (r, k)
+    out = tmp_path / "plane.seg"
+    assert main(["segment", str(path), "--seed-resolution", "2", "-o", str(out)]) == 0
+    said = capsys.readouterr().out
+    n = len(np.unique(read_labels(out)))
+    assert 175 <= n <= 325 and f"k = {n} superpoints from --seed-resolution 2" in said
+    assert main(["segment", str(path), "--seed-resolution", "2", "-k", "9"]) == 2
+    assert "not with -k" in capsys.readouterr().err
+
+
+def test_the_default_count_grows_with_a_cloud_and_the_summary_says_so(tmp_path, capsys):
+    from superfacets.api.sizes import default_count
+
+    rng = np.random.default_rng(5)
+    big = tmp_path / "big.npy"
+    np.save(big, rng.random((400_000, 3)) * [100, 100, 0.1])
+    assert main(["segment", str(big), "-o", str(tmp_path / "big.seg")]) == 0
+    said = capsys.readouterr().out
+    assert "k = 400 superpoints by default (one per 1,000 points" in said
+    assert len(np.unique(read_labels(tmp_path / "big.seg"))) == 400
+    small = rng.random((70, 3))
+    assert default_count(read_cloud(_npy(tmp_path / "small.npy", small))) == 5
+    np.save(tmp_path / "mid.npy", rng.random((20_000, 3)))
+    assert default_count(read_cloud(tmp_path / "mid.npy")) == 150  # the method's default
+
+
+def test_a_neighbour_distance_in_the_data_s_units(tmp_path, capsys):
+    from superfacets.api.sizes import diagonal_fraction
+
+    rng = np.random.default_rng(6)
+    pts = rng.random((5000, 3)) * [30.0, 40.0, 0.0]
+    np.save(tmp_path / "p.npy", pts)
+    cloud = read_cloud(tmp_path / "p.npy")
+    assert abs(diagonal_fraction(cloud, 5.0) - 5.0 / 50.0) < 1e-2
+    assert main(["segment", str(tmp_path / "p.npy"), "-k", "20", "--neighbor-distance", "2",
+                 "-o", str(tmp_path / "a.seg")]) == 0
+    fraction = diagonal_fraction(cloud, 2.0)  # the same radius as a fraction: same labels
+    assert main(["segment", str(tmp_path / "p.npy"), "-k", "20", "--neighbor-radius",
+                 repr(fraction), "-o", str(tmp_path / "b.seg")]) == 0
+    assert np.array_equal(read_labels(tmp_path / "a.seg"), read_labels(tmp_path / "b.seg"))
+
+
+def _npy(path, a):
+    np.save(path, a)
+    return path

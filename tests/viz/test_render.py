@@ -330,3 +330,27 @@ def test_a_hostile_name_runs_no_script_in_a_browser(sphere, tmp_path):
     assert "<html" in dom and 'data-pwned="1"' not in dom  # the attribute was never set
     img = _screenshot(page, tmp_path)  # and the viewer still draws the mesh
     assert _foreground(img[160:320, 240:400]).mean() > 0.9
+
+
+def test_the_notebook_view_is_the_page_inline():
+    """A notebook shows ``_repr_html_``: the same self-contained page (drawn in Chromium
+    above) in an isolated iframe whose scripts run (the notebook's own are untouched)."""
+    import html
+
+    from superfacets import segment, superpoints
+    from superfacets.viz.html import NotebookView
+
+    pts = _sphere_cloud(8000)
+    result = segment(pts, 15)
+    view = NotebookView(result, height=460)
+    inline = view._repr_html_()
+    assert inline.startswith("<iframe srcdoc=\"") and 'sandbox="allow-scripts"' in inline
+    assert "height: 460px" in inline and inline.count("<") == 2  # the page is escaped
+    srcdoc = html.unescape(re.search(r'srcdoc="([^"]*)"', inline).group(1))
+    assert srcdoc == view.html() and srcdoc.startswith("<!DOCTYPE html>")
+    meta = json.loads(re.search(r'id="meta"[^>]*>(.*?)</script>', srcdoc, re.S).group(1))
+    assert meta["points"] == 8000 and meta["superfacets"] == 15
+    assert np.array_equal(result.labels, superpoints(pts, 15))
+    grey = NotebookView(pts).html()  # an input without labels: drawn grey
+    assert json.loads(re.search(r'id="meta"[^>]*>(.*?)</script>', grey, re.S)
+                      .group(1))["superfacets"] == 0

@@ -269,8 +269,12 @@ def _check_units(args) -> None:
 def _sizes(args, data, kind: str, kwargs: dict) -> tuple[dict, str]:
     """The count and the neighbour radius from the sizes in the data's units, or the
     count that grows with the input where none is given; and a line saying which."""
-    from ..api.sizes import POINTS_PER_SEGMENT, count_for_resolution, default_count
-    from ..api.sizes import diagonal_fraction
+    from ..api.sizes import (
+        POINTS_PER_SEGMENT,
+        count_for_resolution,
+        default_count,
+        diagonal_fraction,
+    )
 
     if args.neighbor_distance is not None:
         if kind != "points":

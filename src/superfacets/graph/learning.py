@@ -11,9 +11,11 @@ them): with ``s1 >= s2 >= s3`` the square roots of its eigenvalues,
   (they add up to 1: a pole is linear, a wall or the ground planar, a bush scattered);
 - verticality ``1 - |n . up|`` of the normal ``n`` of the best plane (0 on the ground,
   1 on a wall or a pole);
-- elevation: the centroid's height above the ground beneath it (the lowest element of
-  its column, on a grid of :data:`GROUND_CELLS` cells along the longer horizontal
-  side), in the data's units;
+- elevation: the centroid's height above the ground, in the data's units: a quadratic
+  surface fitted to the lowest element of each cell of a grid (:data:`GROUND_CELLS`
+  along the longer horizontal side), refitted to the lower half of the cells
+  (:data:`GROUND_FITS` times) so that roofs and canopies do not lift it; a coarse model
+  of a gently rolling ground, as a tile's;
 - size: its element count and area; its mean normal and mean colour (where given).
 
 Per edge: its border length, mean angle, concave share (:class:`SuperfacetGraph`)
@@ -26,12 +28,15 @@ import numpy as np
 
 from .adjacency import SuperfacetGraph
 
-__all__ = ["shape_features", "learning_arrays", "GROUND_CELLS", "NODE_FEATURES",
-           "EDGE_FEATURES"]
+__all__ = ["shape_features", "learning_arrays", "GROUND_CELLS", "GROUND_FITS",
+           "NODE_FEATURES", "EDGE_FEATURES"]
 
-#: The ground beneath a superpoint: the lowest element of its cell, on a grid of this
-#: many cells along the input's longer horizontal side.
+#: The ground beneath the superpoints: a quadratic surface fitted to the lowest element
+#: of each cell of a grid of this many cells along the input's longer horizontal side ...
 GROUND_CELLS = 64
+#: ... fitted again this many times to the lower half of the cells, so that roofs and
+#: canopies (cells with no ground) do not lift it.
+GROUND_FITS = 3
 
 #: The columns of ``x``, in order (``red green blue`` follow where there are colours).
 NODE_FEATURES = ("linearity", "planarity", "scattering", "verticality", "elevation",
@@ -94,10 +99,9 @@ def shape_features(graph: SuperfacetGraph, up=(0.0, 0.0, 1.0)) -> dict[str, np.n
 
 
 def _elevation(positions: np.ndarray, centroid: np.ndarray, up: np.ndarray) -> np.ndarray:
-    """Each centroid's height above the lowest element of its grid cell (the ground
-    beneath it; the nearest non-empty cell where its own holds none)."""
-    from scipy.spatial import cKDTree
-
+    """Each centroid's height above the ground: a quadratic surface fitted to the lowest
+    element of each grid cell, refitted :data:`GROUND_FITS` times to the lower half of
+    them (the cells whose lowest element is a roof or a canopy stand above it)."""
     u = up / np.linalg.norm(up)
     a = np.eye(3)[int(np.argmin(np.abs(u)))]  # two horizontal axes
     e1 = np.cross(u, a)
@@ -106,14 +110,27 @@ def _elevation(positions: np.ndarray, centroid: np.ndarray, up: np.ndarray) -> n
     flat = np.c_[positions @ e1, positions @ e2]
     height = positions @ u
     lo = flat.min(axis=0)
-    cell = max(float((flat.max(axis=0) - lo).max()) / GROUND_CELLS, 1e-300)
-    ij = np.floor((flat - lo) / cell).astype(np.int64)
+    span = max(float((flat.max(axis=0) - lo).max()), 1e-300)
+    ij = np.floor((flat - lo) / (span / GROUND_CELLS)).astype(np.int64)
     keys, inverse = np.unique(ij, axis=0, return_inverse=True)
     ground = np.full(keys.shape[0], np.inf)
     np.minimum.at(ground, inverse.ravel(), height)
-    centres = (keys + 0.5) * cell + lo
-    where = cKDTree(centres).query(np.c_[centroid @ e1, centroid @ e2])[1]
-    return centroid @ u - ground[where]
+    centres = (keys + 0.5) * (span / GROUND_CELLS) / span  # in [0, 1]: a conditioned fit
+
+    def design(xy):
+        x, y = xy[:, 0], xy[:, 1]
+        return np.c_[np.ones_like(x), x, y, x * x, x * y, y * y]
+
+    keep = np.ones(keys.shape[0], dtype=bool)
+    coef = np.zeros(6)
+    for _ in range(GROUND_FITS):
+        if keep.sum() < 6:
+            break
+        coef = np.linalg.lstsq(design(centres[keep]), ground[keep], rcond=None)[0]
+        residual = ground - design(centres) @ coef
+        keep = residual <= np.median(residual[keep])
+    at = (np.c_[centroid @ e1, centroid @ e2] - lo) / span
+    return centroid @ u - design(at) @ coef
 
 
 def learning_arrays(graph: SuperfacetGraph, positions: np.ndarray, element_labels,

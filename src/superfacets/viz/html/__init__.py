@@ -29,7 +29,7 @@ from ...inputs.convert import as_mesh
 from ...io.colors import boundary_edges, superfacet_colors
 from ..camera import view_frame
 
-__all__ = ["write_html", "html_page"]
+__all__ = ["NotebookView", "write_html", "html_page"]
 
 
 def _template() -> str:
@@ -236,3 +236,58 @@ def write_html(path, mesh, labels=None, *, title: str | None = None, info: dict 
     text = html_page(mesh, labels, title=title, info=info, background=background, view=view,
                      up=up, elements=elements)
     return save(path, text.encode("utf-8"), outputs)
+
+
+class NotebookView:
+    """The interactive viewer shown inline in a Jupyter notebook (or any front end that
+    shows ``_repr_html_``: JupyterLab, VS Code, Colab): the page of :func:`html_page`,
+    self-contained (no network), in an ``iframe`` of its own.
+
+    Parameters
+    ----------
+    data : Mesh, PointCloud, SegmentationResult, or what :func:`html_page` takes
+        A result draws its own input and labels.
+    labels : (m,) int ndarray, optional
+        Per face (``elements='vertices'``: per vertex) or per point; a result's own by
+        default.
+    height : int, default 480
+        The view's height in pixels (its width is the notebook's).
+    **options
+        ``title``, ``info``, ``background``, ``view``, ``up``, ``elements`` of
+        :func:`html_page`.
+
+    Raises
+    ------
+    ParameterError
+        As :func:`html_page`, when shown.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from superfacets import segment
+    >>> view = NotebookView(segment(trimesh.creation.icosphere(subdivisions=3), 12))
+    >>> view._repr_html_().startswith("<iframe")
+    True
+    """
+
+    def __init__(self, data, labels=None, *, height: int = 480, **options) -> None:
+        source = getattr(data, "elements", None)
+        if source is not None and hasattr(data, "labels"):  # a SegmentationResult
+            kind = source.graph.kind
+            if labels is None:
+                labels = data.labels
+            if kind == "vertices":
+                options.setdefault("elements", "vertices")
+            data = source.source
+        self.data, self.labels, self.height, self.options = data, labels, int(height), options
+
+    def html(self) -> str:
+        """The page (one self-contained HTML document)."""
+        return html_page(self.data, self.labels, **self.options)
+
+    def _repr_html_(self) -> str:
+        import html as _html
+
+        return (f'<iframe srcdoc="{_html.escape(self.html(), quote=True)}" '
+                f'style="width: 100%; height: {self.height}px; border: 0" '
+                'sandbox="allow-scripts"></iframe>')
