@@ -40,10 +40,18 @@ def add_parsers(sub) -> None:
     x.add_argument("--param", action="append", default=[], metavar="NAME=V1,V2",
                    help="values of a method parameter, for each method that has it "
                         "(METHOD.NAME=... for one method), repeatable (e.g. init=grid,flood)")
-    x.add_argument("--dataset", choices=("psb", "rooms"), default="psb",
+    x.add_argument("--dataset", choices=("psb", "rooms", "files"), default=None,
                    help="psb: the Princeton benchmark's meshes (default); rooms: made-up "
                         "labelled rooms (S3DIS-like point clouds with colour, judged against "
-                        "their classes; --elements points)")
+                        "their classes; --elements points); files: your own (--inputs)")
+    x.add_argument("--inputs", nargs="+", default=None, metavar="PATH",
+                   help="your own meshes and point clouds (files, folders, globs, "
+                        "@list.txt; every format 'segment' reads): --dataset files. A "
+                        "cloud's points are segmented; a mesh's --elements")
+    x.add_argument("--ground-truth-field", metavar="NAME", default=None,
+                   help="with --inputs: each file's ground truth, a field of its own (a "
+                        "LAS/LAZ classification, a PLY vertex label); without it, rows have "
+                        "no metrics")
     x.add_argument("--rooms", type=int_arg, default=10, metavar="N",
                    help="with --dataset rooms: the first N rooms (default: 10)")
     x.add_argument("--ids", default=None, metavar="LIST",
@@ -113,7 +121,17 @@ def select_meshes(args):
     from ..errors import ParameterError
     from ..evaluation.datasets.psb import first_per_category, list_meshes, psb_root
 
-    if getattr(args, "dataset", "psb") == "rooms":
+    dataset = getattr(args, "dataset", None) or (
+        "files" if getattr(args, "inputs", None) else "psb")
+    if (dataset == "files") != bool(getattr(args, "inputs", None)):
+        raise ParameterError("--inputs PATH ... goes with --dataset files (its default)")
+    if getattr(args, "ground_truth_field", None) and dataset != "files":
+        raise ParameterError("--ground-truth-field goes with --inputs")
+    if dataset == "files":
+        from ..evaluation.datasets.files import file_entries
+
+        return file_entries(args.inputs, args.ground_truth_field)
+    if dataset == "rooms":
         from ..evaluation.datasets.rooms import room_entries
 
         if "points" not in args.elements.split(","):
@@ -165,7 +183,9 @@ def cmd_experiment(args) -> int:
     ks = args.n_segments or list(DEFAULT_N_SEGMENTS)
     out = Path(args.results)
     if not args.quiet:
-        print(f"{len(meshes)} meshes x {len(configs)} settings x {len(ks)} values of k "
+        what = ("inputs" if getattr(meshes[0], "file", False) else
+                "rooms" if getattr(meshes[0], "room", False) else "meshes")
+        print(f"{len(meshes)} {what} x {len(configs)} settings x {len(ks)} values of k "
               f"-> {out}", file=sys.stderr)
     kinds = [e.strip() for e in args.elements.split(",") if e.strip()]
     s = run_experiment(meshes, configs, out, ks, workers=args.workers, tau=args.tau,

@@ -87,6 +87,25 @@ def _room(name: str):
     return scan.cloud, source.graph, to_el, [to_el(scan.ground_truth)]
 
 
+@lru_cache(maxsize=2)
+def _file(path: str, field: str | None, elements: str):
+    """A user's file (:mod:`superfacets.evaluation.datasets.files`) as :func:`_prepared`
+    gives an input: the mesh or cloud, its element graph, per-element values and its
+    ground truth (the file's ``field``; none without)."""
+    from ...elements.builders import elements_of
+    from ...io import read_input
+    from ...io.labels import read_field
+
+    if field is not None and elements == "faces":
+        raise ParameterError(f"{Path(path).name}: a field ({field}) holds one value per "
+                             "vertex or point: judge a mesh's vertices (--elements vertices)")
+    data = read_input(path)
+    source = elements_of(data, elements)
+    to_el = _element_values(source)
+    gts = [] if field is None else [to_el(read_field(path, field))]
+    return data, source.graph, to_el, gts
+
+
 def _element_values(source):
     """Per-row values -> per-element values (the first row of each element)."""
     first = source.first_rows(np.arange(source.graph.n_elements))
@@ -105,6 +124,8 @@ def _run_task(task: dict) -> list[dict]:
     try:
         if task.get("room"):  # a made-up room: points with their classes
             data, graph, to_el, gts = _room(task["path"])
+        elif task.get("file"):  # a user's file: judged against its own field, if named
+            data, graph, to_el, gts = _file(task["path"], task.get("field"), kind)
         else:
             base["n_faces"] = _load(task["path"], task["seg_paths"])[0].n_faces
             data, graph, to_el, gts = _prepared(task["path"], task["seg_paths"], kind,
@@ -194,7 +215,10 @@ def _tasks(meshes, configs, kinds, ks, done, common: dict) -> list[dict]:
     for bm, cfg, kind in product(meshes, configs, kinds):
         method = get_method(cfg.method)
         room = getattr(bm, "room", False)
-        if kind not in method.elements or (room and kind != "points"):
+        file = getattr(bm, "file", False)
+        cloud = room or (file and bm.category == "cloud")
+        if kind not in method.elements or (cloud and kind != "points") or (
+                file and not cloud and kind == "points"):
             continue
         base = {"mesh": Path(bm.path).stem, "mesh_id": bm.id, "category": bm.category,
                 "method": cfg.method, "elements": kind, "seed": common["seed"],
@@ -203,7 +227,8 @@ def _tasks(meshes, configs, kinds, ks, done, common: dict) -> list[dict]:
         if todo:
             tasks.append({"base": base, "run": method.run, "params": cfg.params,
                           "path": str(bm.path), "seg_paths": tuple(str(p) for p in bm.seg_paths),
-                          "ks": todo, "elements": kind, "room": room,
+                          "ks": todo, "elements": kind, "room": room, "file": file,
+                          "field": getattr(bm, "field", None),
                           "faces_only": method.elements == ("faces",), **common})
     return tasks
 

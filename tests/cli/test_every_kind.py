@@ -1,0 +1,115 @@
+"""Every command takes every kind of input: meshes, point clouds (every format 'segment'
+reads) and tetrahedral meshes, where the command has something to do with it."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import numpy as np
+import pytest
+
+from superfacets.cli import main
+
+laspy = pytest.importorskip("laspy")
+
+
+def _laz(path, n=3000, seed=0):
+    rng = np.random.default_rng(seed)
+    las = laspy.create(point_format=3, file_version="1.4")
+    las.header.scales = [0.01] * 3
+    xy = rng.random((n, 2)) * [40.0, 20.0]
+    las.x, las.y = xy.T
+    las.z = np.where(xy[:, 0] > 20, 2.0, 0.0) + 0.5 * np.sin(xy[:, 1])
+    las.classification = np.where(xy[:, 0] > 20, 6, 2).astype(np.uint8)
+    las.write(str(path))
+    return path
+
+
+def _tets(path):
+    meshio = pytest.importorskip("meshio")
+    from scipy.spatial import Delaunay
+
+    p = np.random.default_rng(0).random((300, 3))
+    meshio.write(str(path), meshio.Mesh(p, [("tetra", Delaunay(p).simplices)]))
+    return path
+
+
+def test_render_and_html_draw_clouds_and_tetrahedral_meshes(tmp_path, capsys):
+    pytest.importorskip("pyvista")
+    laz = _laz(tmp_path / "tile.laz")
+    assert main(["render", str(laz), "-k", "12", "-o", str(tmp_path / "t.png"),
+                 "--size", "320x240"]) == 0
+    said = capsys.readouterr().out
+    assert "3,000 points" in said and "up axis z" in said
+    vol = _tets(tmp_path / "v.vtu")
+    assert main(["render", str(vol), "-k", "6", "-o", str(tmp_path / "v.png"),
+                 "--size", "320x240"]) == 0
+    assert "tetrahedra" in capsys.readouterr().out
+    assert main(["html", str(vol), "-k", "6", "-o", str(tmp_path / "v.html")]) == 0
+    assert (tmp_path / "v.html").stat().st_size > 1000
+    labels = tmp_path / "v.seg"  # labels of the tetrahedra, from a file
+    assert main(["segment", str(vol), "-k", "6", "-o", str(labels), "-q"]) == 0
+    assert main(["html", str(vol), str(labels), "-o", str(tmp_path / "w.html")]) == 0
+    # labels that fit no kind of the input: one line saying what is needed
+    (tmp_path / "bad.seg").write_text("0\n1\n")
+    assert main(["render", str(laz), str(tmp_path / "bad.seg"), "-o",
+                 str(tmp_path / "x.png")]) == 2
+    assert "2 labels, but" in capsys.readouterr().err and not (tmp_path / "x.png").exists()
+
+
+def test_evaluate_prints_json_and_csv_for_scripts(tmp_path, capsys):
+    laz = _laz(tmp_path / "tile.laz")
+    seg = tmp_path / "t.seg"
+    assert main(["segment", str(laz), "-k", "20", "-o", str(seg), "-q"]) == 0
+    assert main(["evaluate", str(laz), str(seg), "--ground-truth-field", "classification",
+                 "--csv"]) == 0
+    rows = list(csv.DictReader(capsys.readouterr().out.splitlines()))
+    assert len(rows) == 1 and rows[0]["elements"] == "points"
+    assert int(rows[0]["n_elements"]) == 3000 and int(rows[0]["segments"]) == 20
+    assert main(["evaluate", str(laz), str(seg), "--ground-truth-field", "classification",
+                 "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert got["undersegmentation_error"] == pytest.approx(
+        float(rows[0]["undersegmentation_error"]))
+    with pytest.raises(SystemExit) as stop:  # one of them (argparse says so)
+        main(["evaluate", str(laz), str(seg), "--json", "--csv"])
+    assert stop.value.code == 2 and "not allowed with" in capsys.readouterr().err
+
+
+def test_baseline_runs_the_point_methods_on_a_laz(tmp_path, capsys):
+    laz = _laz(tmp_path / "tile.laz")
+    for method in ("graph_segmentation", "cut_pursuit"):
+        out = tmp_path / f"{method}.laz"
+        assert main(["baseline", str(laz), "-m", method, "-k", "15", "-o", str(out)]) == 0
+        assert "3,000 points" in capsys.readouterr().out
+        labels = np.asarray(laspy.read(out).ClusterID)
+        assert 10 <= len(np.unique(labels)) <= 20
+    assert main(["baseline", str(laz), "-m", "vsa", "-k", "15"]) == 2
+    err = capsys.readouterr().err
+    assert "vsa segments faces, not points" in err and "cut_pursuit" in err
+
+
+def test_experiment_runs_on_a_user_s_files(tmp_path, capsys, sphere):
+    from superfacets import write_mesh
+
+    laz = _laz(tmp_path / "tile.laz")
+    write_mesh(tmp_path / "ball.off", sphere)
+    out = tmp_path / "rows.csv"
+    assert main(["experiment", "--inputs", str(laz), "--ground-truth-field", "classification",
+                 "-m", "superfacets", "-m", "graph_segmentation", "-k", "10", "30",
+                 "--alpha", "200", "--elements", "points", "-o", str(out), "-j", "1",
+                 "-q"]) == 0
+    rows = list(csv.DictReader(out.open()))
+    assert {(r["method"], r["n_segments"]) for r in rows} == {
+        (m, k) for m in ("superfacets", "graph_segmentation") for k in ("10", "30")}
+    assert all(r["status"] == "ok" and r["elements"] == "points" for r in rows)
+    assert all(0 <= float(r["undersegmentation_error"]) < 1 for r in rows)
+    mesh_rows = tmp_path / "mesh.csv"
+    assert main(["experiment", "--inputs", str(tmp_path / "ball.off"), "-k", "12",
+                 "--alpha", "200", "-o", str(mesh_rows), "-j", "1", "-q"]) == 0
+    (row,) = list(csv.DictReader(mesh_rows.open()))
+    assert row["status"] == "ok" and row["elements"] == "faces" and row["segments"] == "12"
+    capsys.readouterr()
+    assert main(["experiment", "--ground-truth-field", "x", "-o", str(out)]) == 2
+    assert "goes with --inputs" in capsys.readouterr().err
