@@ -164,8 +164,8 @@ def test_an_organized_pcd_stands_on_its_sensors_up(tmp_path, quaternion, up):
     path = tmp_path / "frame.pcd"
     path.write_bytes(header.encode() + pts.tobytes())
     cloud = read_cloud(path)
-    np.testing.assert_allclose(cloud.up, up, atol=1e-6)
-    assert up_axis(cloud, path)[1] == "the file's"
+    np.testing.assert_allclose(cloud.up, up, atol=1e-6)  # (its normals' side, as declared)
+    assert up_axis(cloud, path)[1] == "the image's"  # a picture stands as the image does
     flat = tmp_path / "flat.pcd"  # not an image: no sensor frame is declared
     flat.write_bytes(header.replace("WIDTH 3\nHEIGHT 2", "WIDTH 6\nHEIGHT 1").encode()
                      + pts.tobytes())

@@ -221,3 +221,22 @@ def test_old_module_paths_are_gone():
     for old in ("superfacets.metrics", "superfacets.runner", "superfacets.params"):
         with pytest.raises(ModuleNotFoundError):
             importlib.import_module(old)
+
+
+#: What the repository's root holds (tracked): anything else is a file a run or a doctest
+#: left there and a commit picked up.
+ROOT = {".ci", ".gitignore", "CHANGELOG.md", "CMakeLists.txt", "LICENSE", "Makefile",
+        "README.md", "benchmarks", "docs", "pyproject.toml", "src", "tests", "tools"}
+
+
+def test_the_repository_root_holds_only_the_project_s_own_entries():
+    import shutil
+    import subprocess
+
+    root = Path(__file__).resolve().parent.parent
+    if shutil.which("git") is None or not (root / ".git").exists():
+        pytest.skip(f"{root}: not a git checkout")
+    tracked = subprocess.run(["git", "ls-files"], cwd=root, capture_output=True, text=True,
+                             check=True).stdout.split()
+    stray = sorted({p.split("/")[0] for p in tracked} - ROOT)
+    assert not stray, f"tracked at the repository's root: {stray}"

@@ -232,7 +232,7 @@ class SegmentationResult:
         >>> xyz = np.random.default_rng(0).random((3000, 3)) * (10, 10, 0.01)
         >>> a = segment(xyz, 20).learning_graph()
         >>> names = list(a["node_features"])
-        >>> bool(a["x"][:, names.index("planarity")].min() > 0.5)
+        >>> bool(a["x"][:, names.index("scattering")].max() < 0.01)  # flat superpoints
         True
         """
         from ..graph.learning import learning_arrays

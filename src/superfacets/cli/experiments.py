@@ -44,14 +44,7 @@ def add_parsers(sub) -> None:
                    help="psb: the Princeton benchmark's meshes (default); rooms: made-up "
                         "labelled rooms (S3DIS-like point clouds with colour, judged against "
                         "their classes; --elements points); files: your own (--inputs)")
-    x.add_argument("--inputs", nargs="+", default=None, metavar="PATH",
-                   help="your own meshes and point clouds (files, folders, globs, "
-                        "@list.txt; every format 'segment' reads): --dataset files. A "
-                        "cloud's points are segmented; a mesh's --elements")
-    x.add_argument("--ground-truth-field", metavar="NAME", default=None,
-                   help="with --inputs: each file's ground truth, a field of its own (a "
-                        "LAS/LAZ classification, a PLY vertex label); without it, rows have "
-                        "no metrics")
+    _add_inputs(x)
     x.add_argument("--rooms", type=int_arg, default=10, metavar="N",
                    help="with --dataset rooms: the first N rooms (default: 10)")
     x.add_argument("--ids", default=None, metavar="LIST",
@@ -98,6 +91,18 @@ def add_parsers(sub) -> None:
     r.set_defaults(func=cmd_report)
 
 
+def _add_inputs(x) -> None:
+    """``--inputs`` and ``--ground-truth-field``: an experiment on the user's own files."""
+    x.add_argument("--inputs", nargs="+", default=None, metavar="PATH",
+                   help="your own meshes and point clouds (files, folders, globs, "
+                        "@list.txt; every format 'segment' reads): --dataset files. A "
+                        "cloud's points are segmented; a mesh's --elements")
+    x.add_argument("--ground-truth-field", metavar="NAME", default=None,
+                   help="with --inputs: each file's ground truth, a field of its own (a "
+                        "LAS/LAZ classification, a PLY vertex label); without it, rows have "
+                        "no metrics")
+
+
 def _id_list(text: str) -> set[int]:
     from ..errors import ParameterError
 
@@ -128,7 +133,7 @@ def select_meshes(args):
     if getattr(args, "ground_truth_field", None) and dataset != "files":
         raise ParameterError("--ground-truth-field goes with --inputs")
     if dataset == "files":
-        from ..evaluation.datasets.files import file_entries
+        from ..scale.runner.collect import file_entries
 
         return file_entries(args.inputs, args.ground_truth_field)
     if dataset == "rooms":

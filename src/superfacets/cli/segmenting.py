@@ -553,7 +553,7 @@ def cmd_baseline(args) -> int:
                                             " (converged)" if run.converged else " (max)"))
         n_segs = int(np.unique(labels[labels >= 0]).size)
         print(f"{Path(args.mesh).name}: {size}, {method.name} ({shown}): "
-              f"{counted(n_segs, kind_of(kind).segment_word.rstrip('s'))}{iters}, "
+              f"{counted(n_segs, 'segment')}{iters}, "
               f"{elapsed:.2f} s", file=sys.stderr if str(seg_out) == "-" else sys.stdout)
     return 0
 

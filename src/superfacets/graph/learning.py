@@ -76,7 +76,7 @@ def shape_features(graph: SuperfacetGraph, up=(0.0, 0.0, 1.0)) -> dict[str, np.n
     >>> plane = trimesh.creation.box(extents=(4, 4, 0.001)).subdivide().subdivide()
     >>> g = segment(plane, 4).graph()
     >>> f = shape_features(g)
-    >>> bool((f["planarity"] > 0.5).all()), f["linearity"].shape
+    >>> bool((f["scattering"] < 0.01).all()), f["linearity"].shape  # flat: no scatter
     (True, (4,))
     """
     if graph.scatter is None:

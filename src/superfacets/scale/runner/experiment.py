@@ -89,7 +89,7 @@ def _room(name: str):
 
 @lru_cache(maxsize=2)
 def _file(path: str, field: str | None, elements: str):
-    """A user's file (:mod:`superfacets.evaluation.datasets.files`) as :func:`_prepared`
+    """A user's file (:func:`superfacets.scale.runner.collect.file_entries`) as :func:`_prepared`
     gives an input: the mesh or cloud, its element graph, per-element values and its
     ground truth (the file's ``field``; none without)."""
     from ...elements.builders import elements_of

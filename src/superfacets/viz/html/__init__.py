@@ -276,8 +276,8 @@ class NotebookView:
             kind = source.graph.kind
             if labels is None:
                 labels = data.labels
-            if kind == "vertices":
-                options.setdefault("elements", "vertices")
+            if not kind_of(kind).cloud:  # faces, or vertices drawn on the faces
+                options.setdefault("elements", kind)
             data = source.source
         self.data, self.labels, self.height, self.options = data, labels, int(height), options
 
