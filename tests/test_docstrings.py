@@ -74,7 +74,9 @@ REFERENCE = ("superfacets.method.params", "superfacets.method.rules", "superface
              "superfacets.api.levels", "superfacets.api.scenes", "superfacets.api.result",
              "superfacets.io.clouds", "superfacets.io.headers", "superfacets.io.labels",
              "superfacets.io.tetmeshes", "superfacets.viz.html", "superfacets.scale.runner.tiles",
-             "superfacets.inputs.tetmesh", "superfacets.inputs.convert")
+             "superfacets.inputs.tetmesh", "superfacets.inputs.convert",
+             "superfacets.graph.learning", "superfacets.api.sizes", "superfacets.io.records",
+             "superfacets.io.orientation")
 
 
 def _reference_names():

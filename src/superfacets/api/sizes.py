@@ -59,6 +59,11 @@ def default_count(data, elements: str | None = None, default: int = 150) -> int:
     -------
     int
 
+    Raises
+    ------
+    KeyError
+        If ``elements`` is no kind of element.
+
     Examples
     --------
     >>> from superfacets import PointCloud

@@ -159,6 +159,11 @@ def learning_arrays(graph: SuperfacetGraph, positions: np.ndarray, element_label
         ``super_index`` (N,) int64, ``node_features`` and ``edge_features`` (the
         column names, as arrays of str).
 
+    Raises
+    ------
+    ValueError
+        If the graph has no ``scatter`` (:func:`shape_features`).
+
     Examples
     --------
     >>> import trimesh

@@ -84,6 +84,11 @@ def image_up(data) -> np.ndarray | None:
     (3,) float64 ndarray or None
         A unit vector.
 
+    Raises
+    ------
+    ValueError
+        Never for inputs read by this package.
+
     Examples
     --------
     >>> from superfacets import PointCloud
@@ -210,6 +215,11 @@ def is_map(data) -> bool:
     -------
     bool
 
+    Raises
+    ------
+    ValueError
+        Never for inputs read by this package.
+
     Examples
     --------
     >>> from superfacets import PointCloud
@@ -247,6 +257,11 @@ def default_view(data):
     Returns
     -------
     (3,) float64 ndarray, ``'top'`` or None
+
+    Raises
+    ------
+    ValueError
+        Never for inputs read by this package.
 
     Examples
     --------

@@ -40,6 +40,15 @@ def records_kind(output, source) -> str | None:
     """The format of the records ``output`` writes for input ``source``: ``'las'`` or
     ``'ply'`` where it names one the input can be written back as, None for a label file.
 
+    Parameters
+    ----------
+    output, source : str or os.PathLike
+        The output's name; the input file.
+
+    Returns
+    -------
+    str or None
+
     Raises
     ------
     ParameterError
@@ -70,6 +79,20 @@ def records_kind(output, source) -> str | None:
 
 def ply_field_name(name: str) -> str:
     """The PLY property that CloudCompare loads as the scalar field ``name``.
+
+    Parameters
+    ----------
+    name : str
+
+    Returns
+    -------
+    str
+        ``scalar_<name>`` (``name`` itself where it already starts so).
+
+    Raises
+    ------
+    AttributeError
+        If ``name`` is not a str.
 
     Examples
     --------
