@@ -401,7 +401,7 @@ class PointsFrame:
 def render_points(cloud, labels=None, out=None, *, size=(1200, 900), view=None,
                   background="white", point_size: float | None = None,
                   title: str | None = None, zoom: float = 1.0, up="y",
-                  outputs=None) -> np.ndarray:
+                  outputs=None, eye_dome: bool | None = None) -> np.ndarray:
     """Render a point cloud off-screen, points coloured by superpoint.
 
     Parameters
@@ -415,6 +415,11 @@ def render_points(cloud, labels=None, out=None, *, size=(1200, 900), view=None,
         As :func:`render`.
     point_size : float, optional
         Pixels per point (default: from the point density and the image size).
+    eye_dome : bool, optional
+        Eye-dome lighting (as CloudCompare and Potree shade scans: edges in depth
+        darkened) instead of points drawn as shaded spheres. Default: on for a view
+        from straight above or below (``'top'``, ``'bottom'``: a map, whose relief
+        spheres cannot show), off otherwise.
 
     Returns
     -------
@@ -445,7 +450,14 @@ def render_points(cloud, labels=None, out=None, *, size=(1200, 900), view=None,
         point_size = float(np.clip(1.6 * spacing / g.diagonal * max(w, h) * zoom, 1.0, 12.0))
     poly = pv.PolyData(np.ascontiguousarray(g.positions))
     poly["rgb"] = rgb
-    return _picture(pv, (w, h), background, frame, view, zoom, up, title, out, outputs,
-                    lambda p: p.add_mesh(poly, scalars="rgb", rgb=True, point_size=point_size,
-                                         render_points_as_spheres=True,
-                                         show_scalar_bar=False))
+    if eye_dome is None:  # a map: seen from straight above, the relief is in the edges
+        eye_dome = isinstance(view, str) and view in ("top", "bottom")
+
+    def draw(p):  # (flat squares: a little larger, so that no background shows between)
+        p.add_mesh(poly, scalars="rgb", rgb=True,
+                   point_size=point_size * (1.6 if eye_dome else 1.0),
+                   render_points_as_spheres=not eye_dome, show_scalar_bar=False)
+        if eye_dome:
+            p.enable_eye_dome_lighting()
+
+    return _picture(pv, (w, h), background, frame, view, zoom, up, title, out, outputs, draw)
