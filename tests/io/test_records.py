@@ -182,3 +182,30 @@ def test_write_labels_into_checks_counts_and_types(tmp_path):
     las = laspy.read(twice)
     assert list(las.point_format.dimension_names).count("ClusterID") == 1
     assert np.array_equal(las.ClusterID, np.arange(50) % 4)
+
+
+def test_a_tiled_run_writes_the_labels_into_the_laz_too(tmp_path, capsys):
+    src = _laz(tmp_path / "tile.laz", n=6000)
+    out = tmp_path / "tiled.laz"
+    assert main(["segment", str(src), "--tiles", "2", "--workers", "1", "-k", "20", "-o",
+                 str(out)]) == 0
+    assert "labels as ClusterID" in capsys.readouterr().out
+    a, b = laspy.read(src), laspy.read(out)
+    for dim in a.point_format.dimension_names:
+        assert np.array_equal(np.asarray(a[dim]), np.asarray(b[dim])), dim
+    assert len(np.unique(np.asarray(b.ClusterID))) == 20
+
+
+def test_a_batch_writes_each_scan_s_own_records(tmp_path, capsys, sphere):
+    from superfacets import write_mesh
+
+    folder = tmp_path / "in"
+    folder.mkdir()
+    _laz(folder / "a.laz", n=1500, seed=1)
+    write_mesh(folder / "ball.off", sphere)
+    out = tmp_path / "out"
+    assert main(["batch", str(folder), "-o", str(out), "-k", "9", "--labels", "records",
+                 "--workers", "1"]) == 0
+    labels = np.asarray(laspy.read(out / "a.laz").ClusterID)
+    assert labels.shape == (1500,) and len(np.unique(labels)) == 9
+    assert len(np.unique(read_labels(out / "ball.seg"))) == 9  # a mesh: its label file

@@ -13,7 +13,7 @@ from pathlib import Path
 
 from ..elements.kinds import kind_of
 from ..method.params import DEFAULTS
-from .options import float_arg, int_arg, read_usable
+from .options import elements_of_input, float_arg, int_arg, read_usable
 
 __all__ = ["add_parsers", "cmd_evaluate"]
 
@@ -71,13 +71,13 @@ def cmd_evaluate(args) -> int:
     name = Path(args.mesh).name  # (long stages on a terminal: a line, its time going on)
     with waiting_bar(f"reading {name}", shows_stages(args, path=args.mesh)):
         data = read_usable(args.mesh, clouds=True)  # area-weighted metrics: a measurable mesh
-    cloud = not hasattr(data, "faces")
-    if cloud and args.elements not in (None, "points"):
-        raise ParameterError(f"{args.mesh} is a point cloud: its labels are of points, not "
+    own = elements_of_input(data)  # faces (a mesh), points (a cloud), cells (tetrahedra)
+    if own != "faces" and args.elements not in (None, own):
+        what = "a point cloud" if own == "points" else "a tetrahedral mesh"
+        raise ParameterError(f"{args.mesh} is {what}: its labels are of {own}, not "
                              f"{args.elements}")
-    kind = "points" if cloud else (args.elements or "faces")
-    n = {"faces": getattr(data, "n_faces", 0), "vertices": getattr(data, "n_vertices", 0),
-         "points": getattr(data, "n_total", 0)}[kind]
+    kind = args.elements or own
+    n = kind_of(kind).n_rows(data)
     long = shows_stages(args, n)
     with waiting_bar(f"reading the labels of {n:,} {kind}", long):
         labels = read_labels(args.labels, n_faces=n)

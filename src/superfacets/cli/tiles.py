@@ -72,7 +72,12 @@ def segment_tiles(args) -> int:
                                  "--tiles (write -o OUT.seg, then view a part)")
     if getattr(args, "elements", None) == "vertices":
         raise ParameterError("--tiles segments faces or points, not vertices")
-    seg_out = check_labels_output(args.output, args.mesh)
+    seg_out = check_labels_output(args.output, args.mesh, records=True)
+    for flag, given in (("--seed-resolution", args.seed_resolution),
+                        ("--neighbor-distance", args.neighbor_distance)):
+        if given is not None:
+            raise ParameterError(f"{flag} measures the whole input; with --tiles give -k "
+                                 "and --neighbor-radius")
     kwargs = dict(method_kwargs(args), **element_kwargs(args))
     kwargs.pop("progress", None)
     t0 = time.perf_counter()
@@ -87,7 +92,11 @@ def segment_tiles(args) -> int:
     elapsed = time.perf_counter() - t0
     with Outputs() as outputs:
         if seg_out is not None:
-            if str(seg_out).lower().endswith(".json"):
+            from ..io.records import records_kind, write_labels_into
+
+            if str(seg_out) != "-" and records_kind(seg_out, args.mesh) is not None:
+                write_labels_into(seg_out, args.mesh, result.labels, outputs=outputs)
+            elif str(seg_out).lower().endswith(".json"):
                 write_segindices(seg_out, result.labels, result.params, outputs=outputs)
             else:
                 write_labels(seg_out, result.labels, outputs=outputs)
@@ -103,14 +112,18 @@ def segment_tiles(args) -> int:
         first = result.params.get("merged_from")
         if first:
             how = "flat neighbours first" if kind_of(kind).cloud else "Ward's merges"
-            what += f" (merged from {first:,}, {how}; --merge-from 1: none)"
+            what += f" (merged from {first:,} finer ones, {how}; --merge-from 1: no merging)"
         print(f"{Path(args.mesh).name}: {result.labels.size} {kind}, {result.n_segments} "
               f"{what}{asked} in {len(result.tiles)} tiles "
               f"({result.layout.describe()}), {elapsed:.2f} s; largest tile "
               f"{max(t['rows'] for t in result.tiles)} {kind} with its halo, peak "
               f"{peak:.0f} MiB; {result.disagreements} border disagreements", file=report)
         if seg_out is not None and str(seg_out) != "-":
-            print(f"wrote {seg_out} (labels, one per {kind[:-1]})", file=report)
+            from ..io.records import LABEL_FIELD, records_kind
+
+            what = (f"the input's {kind}, every field kept, labels as {LABEL_FIELD}" if
+                    records_kind(seg_out, args.mesh) else f"labels, one per {kind[:-1]}")
+            print(f"wrote {seg_out} ({what})", file=report)
         elif seg_out is None:
             print("note: nothing was saved: add -o OUT.seg", file=sys.stderr)
     return 0

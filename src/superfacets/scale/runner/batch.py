@@ -34,7 +34,7 @@ from ..._runtime import interrupts
 from ...elements.builders import kind_for
 from ...elements.kinds import kind_of
 from ...errors import ParameterError
-from ...io.orientation import up_axis
+from ...io.orientation import default_view, up_axis
 from .collect import broken_link_reason, collect_inputs, no_inputs, output_names
 from .engine import Engine, PeakMemory, error_text
 from .manifest import (
@@ -50,7 +50,26 @@ from .manifest import (
 __all__ = ["run_batch", "collect_inputs", "output_names", "read_manifest", "BatchSummary",
            "MANIFEST_COLUMNS", "segment_file"]
 
-_LABEL_SUFFIX = {"seg": ".seg", "json": ".json"}
+_LABEL_SUFFIX = {"seg": ".seg", "json": ".json", "records": None}
+
+
+def _label_suffix(labels: str, source) -> str:
+    """The suffix of an input's labels: ``.seg``, ``.json``, or for ``records`` its own
+    format where labels go into it (``.las``, ``.laz``, ``.ply``), else ``.seg``."""
+    from ...io.files import split_suffix
+    from ...io.records import RECORD_FORMATS
+
+    if labels != "records":
+        return _LABEL_SUFFIX[labels]
+    fmt = split_suffix(Path(source))[0]
+    if fmt == "ply":  # a cloud's records are its points; a mesh's faces have none of theirs
+        from ...io.clouds import is_cloud_file
+
+        try:
+            return ".ply" if is_cloud_file(source) else ".seg"
+        except Exception:  # noqa: BLE001 - an unreadable header: its task says why
+            return ".seg"
+    return f".{fmt}" if fmt in RECORD_FORMATS else ".seg"
 
 
 def segment_file(task: dict) -> dict:
@@ -64,7 +83,8 @@ def segment_file(task: dict) -> dict:
     task : dict
         ``input`` (absolute path), ``outdir``, ``name``, ``options`` (keyword
         arguments of :func:`superfacets.segment`), ``outputs`` (``labels``:
-        'seg' or 'json'; ``header``, ``colored`` suffix or None, ``picture``,
+        'seg', 'json' or 'records' (a LAS/LAZ/PLY input's own records with
+        ``ClusterID``, others .seg); ``header``, ``colored`` suffix or None, ``picture``,
         ``html``, ``vertex_colors``), ``per_object``.
 
     Returns
@@ -73,7 +93,7 @@ def segment_file(task: dict) -> dict:
         A row with :data:`MANIFEST_COLUMNS`.
     """
     outs = task["outputs"]
-    label_rel = task["name"] + _LABEL_SUFFIX[outs["labels"]]
+    label_rel = task["name"] + _label_suffix(outs["labels"], task["input"])
     row = dict.fromkeys(MANIFEST_COLUMNS)
     row.update(input=task["input"], output=label_rel)
     probe = PeakMemory()
@@ -138,18 +158,21 @@ def _segment_and_write(task: dict, label_rel: str) -> dict:
         colored = base.with_name(base.name + "_superfacets." + outs["colored"])
     write_result(data, result, kind, Path(task["input"]).name,
                  labels=Path(task["outdir"]) / label_rel, header=outs["header"],
+                 source_path=task["input"] if outs["labels"] == "records" else None,
                  colored=colored, vertex_colors=outs["vertex_colors"], picture=picture,
                  html=html, element_options={k: opts[k] for k in ("n_neighbors",
                                                                   "neighbor_radius")
                                              if k in opts},
-                 up=outs.get("up") or up_axis(data, task["input"])[0], view=outs.get("view"))
+                 up=outs.get("up") or up_axis(data, task["input"])[0],
+                 view=outs.get("view") or default_view(data))
     return {"elements": kind, "n_elements": int(n), "segments": int(result.n_segments),
             "passes": int(result.n_iter), "converged": bool(result.converged)}
 
 
 def _lost_row(task: dict, error: str) -> dict:
     row = dict.fromkeys(MANIFEST_COLUMNS)
-    row.update(input=task["input"], output=task["name"] + _LABEL_SUFFIX[task["outputs"]["labels"]],
+    row.update(input=task["input"], output=task["name"] + _label_suffix(
+        task["outputs"]["labels"], task["input"]),
                status="failed", error=error[:500],
                finished=datetime.now(timezone.utc).isoformat(timespec="seconds"))
     return row
