@@ -21,7 +21,7 @@ from .errors import ParameterError
 
 __all__ = ["check_int", "check_number", "check_positive", "check_nonneg", "check_bool",
            "check_choice", "check_n_segments", "check_threads", "max_threads",
-           "not_real", "check_real", "counted"]
+           "threads_from_env", "not_real", "check_real", "counted"]
 
 
 def counted(n: int, one: str, many: str | None = None) -> str:
@@ -393,11 +393,44 @@ def check_threads(n_threads) -> int:
     if n_threads is None:
         import os
 
+        given = threads_from_env()
+        if given is not None:
+            return given
         try:
-            return max(1, int(os.environ["SUPERFACETS_NUM_THREADS"]))
-        except (KeyError, ValueError):
-            try:
-                return max(1, len(os.sched_getaffinity(0)))
-            except AttributeError:  # pragma: no cover - not Linux
-                return max(1, os.cpu_count() or 1)
+            return max(1, len(os.sched_getaffinity(0)))
+        except AttributeError:  # pragma: no cover - not Linux
+            return max(1, os.cpu_count() or 1)
     return check_int("n_threads", n_threads, lo=1, hi=max_threads())
+
+
+def threads_from_env() -> int | None:
+    """``SUPERFACETS_NUM_THREADS`` read by the rule ``--threads`` follows: a whole number
+    from 1 to :func:`max_threads`; None where it is not set (or empty).
+
+    Returns
+    -------
+    int or None
+
+    Raises
+    ------
+    ParameterError
+        If it is set to anything else (``1e3``, ``2.5``, ``0``, ``2**63``), naming it.
+
+    Examples
+    --------
+    >>> import os
+    >>> os.environ["SUPERFACETS_NUM_THREADS"] = "2"
+    >>> threads_from_env()
+    2
+    >>> del os.environ["SUPERFACETS_NUM_THREADS"]
+    """
+    import os
+
+    raw = os.environ.get("SUPERFACETS_NUM_THREADS", "").strip()
+    if not raw:
+        return None
+    hi = max_threads()
+    if not (raw.isascii() and raw.isdigit()) or not 1 <= int(raw) <= hi:
+        raise ParameterError(f"SUPERFACETS_NUM_THREADS={raw[:40]!r}: give a whole number of "
+                             f"threads from 1 to {hi} (as --threads), or unset it")
+    return int(raw)

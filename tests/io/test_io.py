@@ -408,8 +408,9 @@ def test_a_run_that_would_not_fit_is_refused_in_one_line(tmp_path, monkeypatch, 
     path = tmp_path / "ball.ply"
     mesh.export(path)
     monkeypatch.setattr(memory, "available_bytes", lambda: 100_000)  # 100 kB left
-    with pytest.raises(MemoryLimitError, match=r"5,120 faces need about .* GiB .* larger "
-                       r"machine \(SUPERFACETS_MEMORY_CHECK=off runs it anyway\)") as exc:
+    with pytest.raises(MemoryLimitError, match=r"5,120 faces need about \d+ KiB .* may use "
+                       r"97.7 KiB: .* larger machine \(SUPERFACETS_MEMORY_CHECK=off runs it "
+                       r"anyway\)") as exc:
         segment(mesh, 10)
     assert "tiles" not in str(exc.value)  # (a tiled run of a mesh peaks higher)
     assert main(["segment", str(path), "-k", "10", "-o", str(tmp_path / "b.seg")]) == 2

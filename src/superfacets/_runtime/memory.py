@@ -188,9 +188,29 @@ def check_memory(n_elements: int, bytes_per_element: int, what: str, *,
     advice = (f"segment it in {tiles} tiles (--tiles {tiles}, superfacets.segment_tiled) or "
               "on a larger machine" if tiles else "segment it on a larger machine")
     raise MemoryLimitError(
-        f"{what} need about {need / 2**30:.1f} GiB at the run's peak, and this process "
-        f"may use {avail / 2**30:.1f} GiB: {advice} (SUPERFACETS_MEMORY_CHECK=off runs it "
+        f"{what} need about {_amount(need)} at the run's peak, and this process "
+        f"may use {_amount(avail)}: {advice} (SUPERFACETS_MEMORY_CHECK=off runs it "
         "anyway)", need, avail)
+
+
+def _amount(n: float) -> str:
+    """Bytes in the unit that shows them with three figures: ``1.23 GiB``, ``96.0 MiB``,
+    ``412 KiB`` (a refusal that read "0.1 GiB" for both its figures hid its reason).
+
+    Examples
+    --------
+    >>> _amount(1.5 * 2**30), _amount(96 * 2**20), _amount(412 * 2**10)
+    ('1.50 GiB', '96.0 MiB', '412 KiB')
+    """
+    for unit, size in (("GiB", 2**30), ("MiB", 2**20), ("KiB", 2**10)):
+        if n >= size:
+            return f"{_three(n / size)} {unit}"
+    return f"{int(n)} bytes"
+
+
+def _three(v: float) -> str:
+    """``v`` with three significant figures, trailing zeros kept (1.50, 96.0, 412)."""
+    return f"{v:.2f}" if v < 10 else f"{v:.1f}" if v < 100 else f"{v:.0f}"
 
 
 def give_back_free_memory() -> None:

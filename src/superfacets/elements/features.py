@@ -108,7 +108,11 @@ def per_element(src, features):
         return None
     from ..errors import ParameterError
 
-    f = np.asarray(features, dtype=np.float64)
+    raw = np.asarray(features)
+    if raw.dtype == object or not (np.issubdtype(raw.dtype, np.number) or raw.dtype == bool) \
+            or np.issubdtype(raw.dtype, np.complexfloating):  # (complex: a cast drops a part)
+        raise ParameterError(f"features must be real numbers, got dtype {raw.dtype}")
+    f = raw.astype(np.float64)
     f = f.reshape(-1, 1) if f.ndim == 1 else f
     if f.ndim != 2 or f.shape[0] != src.n_rows:
         raise ParameterError(f"features must have one row per input row ({src.n_rows}), "

@@ -37,13 +37,15 @@ import numpy as np
 from .._kernels import native
 from .._runtime.arrays import COMPILED_MIN
 
-__all__ = ["BLOCK", "LEAF", "PointTree", "point_tree", "nearest", "local_keys",
+__all__ = ["BLOCK", "LEAF", "MAX_LEAF", "PointTree", "point_tree", "nearest", "local_keys",
            "local_frame", "key_window", "shared_prefix"]
 
 #: Queries per block: bounds the distances of a block to about 6 MiB at ``k = 10``.
 BLOCK = 1 << 16
 #: Points per leaf of the tree (2M points: 16 and 32 query alike, 8 is 1.5 times slower).
 LEAF = 16
+#: The most points a leaf may hold (a larger leaf is a slower tree, never a wrong one).
+MAX_LEAF = 1 << 20
 
 
 class PointTree(NamedTuple):
@@ -154,7 +156,7 @@ def point_tree(points: np.ndarray, leaf: int = LEAF,
     points : (n, 3) float64 ndarray
         Finite and distinct (:func:`~superfacets.elements.points.distinct_points`).
     leaf : int, default :data:`LEAF`
-        Most points in a leaf.
+        Most points in a leaf, ``1 <= leaf <= MAX_LEAF``.
     frame : (lo, scale), optional
         The frame ``points`` are already ordered in (as
         :func:`~superfacets.elements.points.distinct_points` lists them): the tree takes
@@ -165,6 +167,12 @@ def point_tree(points: np.ndarray, leaf: int = LEAF,
     -------
     PointTree
 
+    Raises
+    ------
+    ParameterError
+        If ``leaf`` is not an integer in ``1..MAX_LEAF``, or the points are not finite
+        ``(n, 3)``.
+
     Examples
     --------
     >>> pts = np.c_[np.arange(40.0), np.zeros(40), np.zeros(40)] + [5e5, 5e6, 0]
@@ -174,7 +182,14 @@ def point_tree(points: np.ndarray, leaf: int = LEAF,
     >>> bool((tree.ids[tree.rows] == np.arange(40)).all())
     True
     """
+    from ..checks import check_int
+
+    leaf = check_int("leaf", leaf, lo=1, hi=MAX_LEAF)  # (0: a leaf never small enough)
     pts = np.ascontiguousarray(points, dtype=np.float64)
+    if pts.ndim != 2 or pts.shape[1:] != (3,) or not np.isfinite(pts).all():
+        from ..errors import ParameterError
+
+        raise ParameterError(f"points must be finite, of shape (n, 3), got {pts.shape}")
     n = pts.shape[0]
     ids = rows = None
     if frame is None:

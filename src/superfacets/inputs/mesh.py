@@ -380,6 +380,19 @@ def narrow_faces(faces: np.ndarray, n_vertices: int) -> np.ndarray:
     return f.astype(np.int32)
 
 
+def _index_row(row) -> np.ndarray:
+    """One face's vertex indices as an array: a row of Python ints in an object array is
+    read as the integers it holds (an object row of anything else stays as it is, for the
+    caller's message)."""
+    r = np.asarray(row).ravel()
+    if r.dtype == object and r.size and all(isinstance(x, (int, np.integer)) and
+                                            not isinstance(x, bool) for x in r.tolist()):
+        values = r.tolist()
+        if all(-2**63 <= x < 2**63 for x in values):
+            return np.array(values, dtype=np.int64)
+    return r
+
+
 def _faces_array(faces, where: str) -> np.ndarray:
     """Faces as an (m, k) int64 array, polygons of fewer than k vertices padded with -1."""
     if isinstance(faces, np.ndarray) and faces.dtype != object:
@@ -391,7 +404,7 @@ def _faces_array(faces, where: str) -> np.ndarray:
             f = None
         if f is None or f.dtype == object:
             try:
-                rows = [np.asarray(r).ravel() for r in faces]
+                rows = [_index_row(r) for r in faces]
             except TypeError:
                 raise InvalidMeshError(f"{where}faces must be an (m, k) array or a list of "
                                        "vertex index sequences") from None
@@ -433,6 +446,11 @@ def _validate_arrays(vertices, faces, name: str = "") -> tuple[np.ndarray, np.nd
         raise InvalidMeshError(f"{where}vertices must have shape (n, 3), got {v.shape}")
     check_real(v.dtype, where + "vertices")
     f = _faces_array(faces, where)
+    if f.dtype.kind == "u" and f.size and int(f.max()) >= v.shape[0]:  # (before a cast
+        rows = np.flatnonzero((f >= v.shape[0]).any(axis=1))  # to int64 could wrap it)
+        raise InvalidMeshError(
+            f"{where}{rows.size} faces have vertex indices out of range 0..{v.shape[0] - 1} "
+            f"(first: face {int(rows[0])} = {f[int(rows[0])].tolist()})")
     v = np.ascontiguousarray(v, dtype=np.float64)
     # int32 faces stay int32 (the readers': :func:`narrow_faces`), other types int64
     f = np.ascontiguousarray(f, dtype=np.int32 if f.dtype == np.int32 and v.shape[0] < 2**31 - 1

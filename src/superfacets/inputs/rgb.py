@@ -101,6 +101,8 @@ def check_colors(colors, n: int, what: str, where: str, error: type,
     arr = np.asarray(colors)
     if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool):
         raise TypeError(f"{where}{what}s must be numeric, got dtype {arr.dtype}")
+    if np.issubdtype(arr.dtype, np.complexfloating):  # (a cast would drop the imaginary part)
+        raise TypeError(f"{where}{what}s must be real numbers, got dtype {arr.dtype}")
     if arr.shape != (n, 3):
         raise error(f"{where}{what}s must have shape ({n}, 3), got {arr.shape}")
     col = np.ascontiguousarray(arr, dtype=np.float64)

@@ -74,12 +74,55 @@ def read_head(path: Path, size: int = 1 << 16) -> bytes:
         return fh.read(size)
 
 
+#: A compressed mesh or cloud decompresses to at most this many times its size: real
+#: ones are 3 to 10 times (the benchmark's archive 6, its Table-1 meshes 3.5-4.8), a
+#: regular grid's coordinates written as text up to 82 (xz); the decompression bombs of
+#: an attack, one element repeated millions of times, 700 to 7,000.
+#: ``SUPERFACETS_MAX_RATIO`` raises it for a genuine file.
+MAX_RATIO = 250
+
+
+def max_ratio() -> float:
+    """The bound on decompressed / compressed size: ``SUPERFACETS_MAX_RATIO`` where set
+    (a number >= 1), else :data:`MAX_RATIO`.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    ParameterError
+        If ``SUPERFACETS_MAX_RATIO`` is set to anything but a number >= 1.
+
+    Examples
+    --------
+    >>> max_ratio() == MAX_RATIO
+    True
+    """
+    raw = os.environ.get("SUPERFACETS_MAX_RATIO", "").strip()
+    if not raw:
+        return float(MAX_RATIO)
+    try:
+        value = float(raw)
+    except ValueError:
+        value = float("nan")
+    if not (value >= 1 and math.isfinite(value)):
+        from ..errors import ParameterError
+
+        raise ParameterError(f"SUPERFACETS_MAX_RATIO={raw[:40]!r}: give a number >= 1 (the "
+                             "most times a compressed input may grow), or unset it")
+    return value
+
+
 def read_bytes(path: Path, comp: str | None, what: str = "file",
-               counts: dict | None = None) -> bytes:
+               counts: dict | None = None, bounded: bool = True) -> bytes:
     """The content of ``path``, decompressed when ``comp`` names a compression suffix:
     at most 256 bytes for each element its header declares (``counts``, from
-    :func:`~superfacets.io.headers.header_counts`) beyond its first 64 KiB, and at most
-    half of what this process may allocate (:func:`decompressed`).
+    :func:`~superfacets.io.headers.header_counts`) beyond its first 64 KiB, at most
+    :func:`max_ratio` times the file's size where ``bounded`` (a mesh or a cloud: a
+    label file, a run of repeated values, is not), and at most half of what this process
+    may allocate (:func:`decompressed`).
 
     Raises
     ------
@@ -91,13 +134,15 @@ def read_bytes(path: Path, comp: str | None, what: str = "file",
     """
     _check_regular(path)
     limit = (1 << 16) + 256 * sum(counts.values()) if counts else None
-    data = path.read_bytes() if comp is None else decompressed(path, comp, limit)
+    ratio = max_ratio() if bounded and comp is not None else None
+    data = path.read_bytes() if comp is None else decompressed(path, comp, limit, ratio)
     if not data:
         raise MeshFormatError(f"{path}: empty {what}")
     return data
 
 
-def decompressed(path: Path, comp: str, limit: int | None = None) -> bytes:
+def decompressed(path: Path, comp: str, limit: int | None = None,
+                 ratio: float | None = None) -> bytes:
     """The decompressed content of ``path``, read as a stream a block at a time and
     stopped past ``limit`` bytes or half of what this process may still allocate (a run
     needs more than its file), so that a small file that decompresses to more than it
@@ -111,6 +156,8 @@ def decompressed(path: Path, comp: str, limit: int | None = None) -> bytes:
         The compression suffix (``".gz"``, ``".xz"``, ``".bz2"``).
     limit : int, optional
         The most bytes to decompress.
+    ratio : float, optional
+        The most times the file's size it may decompress to.
 
     Returns
     -------
@@ -136,6 +183,10 @@ def decompressed(path: Path, comp: str, limit: int | None = None) -> bytes:
     why = ("what its header declares allows" if limit is not None and limit < cap else
            "this process may use for it")
     limit = min(limit or cap, cap)
+    size = path.stat().st_size
+    bomb = ratio is not None and int(ratio * max(size, 1 << 12)) < limit
+    if bomb:
+        limit = int(ratio * max(size, 1 << 12))  # (a file of a few KiB: as one of 4 KiB)
     out = io.BytesIO()
     try:
         with _OPENERS[comp](path, "rb") as f:
@@ -146,9 +197,13 @@ def decompressed(path: Path, comp: str, limit: int | None = None) -> bytes:
     if out.tell() > limit:
         from ..errors import MemoryLimitError
 
+        if bomb:
+            raise MemoryLimitError(
+                f"{path}: decompresses to more than {ratio:g} times its {size:,} bytes (real "
+                "meshes and scans: 3 to 80 times): refused as a likely decompression bomb; "
+                "SUPERFACETS_MAX_RATIO raises the bound for a genuine file", limit, limit)
         raise MemoryLimitError(f"{path}: decompresses to more than {limit:,} bytes (the file "
-                               f"holds {path.stat().st_size:,}), more than {why}: refused",
-                               limit, limit)
+                               f"holds {size:,}), more than {why}: refused", limit, limit)
     return out.getvalue()
 
 

@@ -208,7 +208,7 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
             raise MeshFormatError(f"{path}: has {labels.shape[0]} points but the input has "
                                   f"{n_faces}")
         return labels
-    data = read_bytes(path, comp, "file of labels")
+    data = read_bytes(path, comp, "file of labels", bounded=False)  # (runs of one value)
     if fmt == "ply":
         from .ply import read_ply_labels
 

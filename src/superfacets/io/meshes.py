@@ -20,7 +20,7 @@ import numpy as np
 from ..errors import InvalidMeshError, MeshFormatError
 from ..inputs.mesh import Mesh, narrow_faces
 from .files import read_bytes, read_head, split_suffix, text_lines
-from .headers import check_stl, header_counts
+from .headers import check_gltf, check_stl, header_counts
 from .ply import read_ply_triangles
 
 __all__ = ["read_mesh", "MESH_FORMATS"]
@@ -93,6 +93,7 @@ def read_mesh(path, format: str | None = None) -> Mesh:
     elif fmt == "obj":
         v, f, objects, colors = _parse_obj(data, path)
     elif fmt in ("glb", "gltf"):
+        check_gltf(data, fmt, path)  # (a cycle or a deep nesting: before trimesh walks it)
         return _load_scene(path, fmt, comp, data)
     else:
         v, f, colors, face_colors = ply or _load_trimesh(data, fmt, path)

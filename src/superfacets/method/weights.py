@@ -122,7 +122,11 @@ def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = DEF
         jump = feature_jumps(f, g.pairs[sl], floor)
         return (t.geo + alpha * ang + beta * span[sl] * jump) / g.diagonal
 
-    return chunked(g.n_edges, weight, dtype)
+    with np.errstate(over="ignore"):  # (an overflow is refused below, by its name)
+        out = chunked(g.n_edges, weight, dtype)
+    if f is not None:
+        _check_finite_weights(out, beta)
+    return out
 
 
 def convex_scaled(graph, weights: np.ndarray, *, alpha: float, eta_convex: float,
@@ -334,6 +338,11 @@ def _csr_block_terms(graph, pos: np.ndarray, nor: np.ndarray, r0: int, r1: int,
     return geo, cos, concave, np.stack([rows, indices[x0:x1]], 1)
 
 
+#: The largest feature magnitude taken: differences of features are squared in double
+#: precision (whose largest number is about 1.8e308).
+MAX_FEATURE = 1e150
+
+
 def check_features(features, graph: ElementGraph) -> np.ndarray:
     """``features`` as a finite ``(n, d)`` float64 array, one row per element.
 
@@ -346,8 +355,9 @@ def check_features(features, graph: ElementGraph) -> np.ndarray:
         raise ParameterError("beta > 0 needs features: one row per element (e.g. RGB "
                              "colours in [0, 1]), or an input with colours")
     f = np.asarray(features)
-    if f.dtype == object or not np.issubdtype(f.dtype, np.number):
-        raise ParameterError(f"features must be numeric, got dtype {f.dtype}")
+    if f.dtype == object or not np.issubdtype(f.dtype, np.number) or \
+            np.issubdtype(f.dtype, np.complexfloating):  # (a cast would drop a part)
+        raise ParameterError(f"features must be real numbers, got dtype {f.dtype}")
     f = f.astype(np.float64).reshape(f.shape[0], -1) if f.ndim >= 1 else f
     if f.ndim != 2 or f.shape[0] != graph.n_elements:
         raise ParameterError(f"features must have one row per {graph.element} "
@@ -356,6 +366,10 @@ def check_features(features, graph: ElementGraph) -> np.ndarray:
         row = int(np.flatnonzero(~np.isfinite(f).all(axis=1))[0])
         raise ParameterError(f"features of {graph.element} {row} are not finite "
                              f"({f[row].tolist()})")
+    big = float(np.abs(f).max()) if f.size else 0.0
+    if big > MAX_FEATURE:  # (their differences' squares would overflow double precision)
+        raise ParameterError(f"features reach {big:.3g}, beyond {MAX_FEATURE:.0e}: scale them "
+                             "(e.g. to [0, 1]); their differences' squares overflow")
     return f
 
 
@@ -544,7 +558,18 @@ def csr_point_weights(graph: ElementGraph, *, alpha: float = _PAPER_ALPHA,
                             float(g.diagonal), out[x0:x1])
 
     run_ranges(blocks, split(cuts.shape[0] - 1, min_per_thread=1))
+    if f is not None:
+        _check_finite_weights(out, beta)
     return out
+
+
+def _check_finite_weights(w: np.ndarray, beta: float) -> None:
+    """Refuse weights that the feature term sent past the dtype's range (features of huge
+    magnitude: a search over infinite distances never settles)."""
+    if not np.isfinite(w).all():
+        raise ParameterError(f"the feature term (beta {beta:g}) makes weights too large for "
+                             f"{w.dtype} ({np.finfo(w.dtype).max:.3g}): scale the features "
+                             "(e.g. to [0, 1]) or lower beta")
 
 
 def weight_dtype(kind, paper: bool = False):

@@ -7,6 +7,7 @@
 // (a TypeError naming the argument) before touching any array.
 #pragma once
 
+#include <cerrno>
 #include <nanobind/nanobind.h>
 
 #if defined(__linux__)
@@ -332,11 +333,22 @@ inline std::atomic<int>& thread_limit() {
 // alone: the tests' thread counts), else SUPERFACETS_NUM_THREADS where set (the package's
 // default thread count; the Dask workers set 1), else the CPUs this process may run on;
 // at most the run's limit.
+// A thread count from the environment: a whole number from 1 to 4096 alone (what Python's
+// check_threads takes: "1e3", "2.5" or 2**63 are no count), else 0.
+inline int env_threads(const char* name) {
+    const char* env = std::getenv(name);
+    if (env == nullptr || *env == '\0') return 0;
+    char* end = nullptr;
+    errno = 0;
+    const long v = std::strtol(env, &end, 10);
+    while (end != nullptr && (*end == ' ' || *end == '\t' || *end == '\n')) ++end;
+    if (errno != 0 || end == env || *end != '\0' || v < 1 || v > 4096) return 0;
+    return static_cast<int>(v);
+}
+
 inline int threads() {
-    int n = 0;
-    if (const char* env = std::getenv("SUPERFACETS_KERNEL_THREADS")) n = std::atoi(env);
-    if (n < 1)
-        if (const char* env = std::getenv("SUPERFACETS_NUM_THREADS")) n = std::atoi(env);
+    int n = env_threads("SUPERFACETS_KERNEL_THREADS");
+    if (n < 1) n = env_threads("SUPERFACETS_NUM_THREADS");
     if (n < 1) {
 #if defined(__linux__)
         cpu_set_t set;

@@ -139,6 +139,8 @@ i64 tree_nodes(nb::handle pts_, nb::handle keys_, i64 leaf, nb::handle start_, n
     if (pts.cols != 3 || keys.cols != 3 || keys.n != pts.n || boxes.cols != 6 ||
         end.n != start.n || left.n != start.n || boxes.n != start.n)
         throw Mismatch("argument pts");
+    if (leaf < 1)  // (a leaf of 0 points is never small enough: the split never ends)
+        throw OutOfRange("argument leaf: " + std::to_string(leaf) + ", outside 1..");
     nb::gil_scoped_release nogil;
     const i64 n = pts.n, cap = start.n;
     if (cap < 1) return -1;

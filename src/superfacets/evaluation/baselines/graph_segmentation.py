@@ -111,7 +111,7 @@ def graph_segmentation(obj, k_thresh: float = 0.01, min_size: int = 20, *,
     from ._count import count_missed
 
     k_thresh = check_positive("k_thresh", k_thresh)
-    min_size = check_int("min_size", min_size, lo=1)
+    min_size = check_int("min_size", min_size, lo=1, hi=2**62)  # (an int64 for the kernel)
     if elements is None:
         elements = "points" if is_cloud(obj) else "vertices"
     check_choice("elements", elements, ELEMENTS)

@@ -1,0 +1,178 @@
+"""The faults of the fourth attack (issue 110) that a file, an option or a public function
+reaches: each case fails without its fix."""
+
+from __future__ import annotations
+
+import gzip
+import json
+import lzma
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+import trimesh
+
+from superfacets import Mesh, PointCloud, segment
+from superfacets.cli import main
+from superfacets.errors import MemoryLimitError, ParameterError
+
+
+@pytest.mark.parametrize("name, content", [
+    ("bomb.obj.gz", lambda: gzip.compress(b"v 0 0 0\nv 1 0 0\nv 0 1 0\n"
+                                          + b"f 1 2 3\n" * 3_000_000)),
+    ("bomb.xyz.gz", lambda: gzip.compress(b"0 0 0\n" * 5_000_000)),
+    ("bomb.off.xz", lambda: lzma.compress(b"OFF\n3 2000000 0\n0 0 0\n1 0 0\n0 1 0\n"
+                                          + b"3 0 1 2\n" * 2_000_000)),
+])
+def test_a_small_compressed_file_cannot_cost_gigabytes(tmp_path, capsys, name, content):
+    """One element repeated millions of times, in formats without a header (and one whose
+    header declares them): refused after decompressing a bounded multiple of its size."""
+    path = tmp_path / name
+    path.write_bytes(content())
+    assert path.stat().st_size < 100_000
+    t0 = time.perf_counter()
+    assert main(["segment", str(path), "-o", str(tmp_path / "x.seg")]) == 2
+    assert time.perf_counter() - t0 < 30  # (was a minute and 5.7 GB at the attack's size)
+    err = capsys.readouterr().err
+    assert "likely decompression bomb" in err and "SUPERFACETS_MAX_RATIO" in err
+    assert not (tmp_path / "x.seg").exists()
+
+
+def test_a_genuine_compressed_file_reads_and_the_bound_can_be_raised(tmp_path, monkeypatch):
+    from superfacets import read_cloud
+    from superfacets.io.files import MAX_RATIO
+
+    g = np.mgrid[0:200, 0:200].reshape(2, -1).T * 0.01  # a regular grid: compresses well
+    text = "\n".join(f"{x:.6f} {y:.6f} 0.000000" for x, y in g).encode()
+    path = tmp_path / "grid.xyz.xz"
+    path.write_bytes(lzma.compress(text))
+    assert len(text) / path.stat().st_size < MAX_RATIO
+    assert read_cloud(path).n_points == 40000
+    monkeypatch.setenv("SUPERFACETS_MAX_RATIO", "2")
+    with pytest.raises(MemoryLimitError, match="decompression bomb"):
+        read_cloud(path)
+    monkeypatch.setenv("SUPERFACETS_MAX_RATIO", "lots")
+    with pytest.raises(ParameterError, match="SUPERFACETS_MAX_RATIO='lots'"):
+        read_cloud(path)
+
+
+def test_compressed_labels_are_not_bounded_by_the_ratio(tmp_path):
+    from superfacets import read_labels, write_labels
+
+    labels = np.repeat(np.arange(3), 400_000)  # runs of one value: thousands of times
+    path = write_labels(tmp_path / "l.seg.gz", labels)
+    assert np.array_equal(read_labels(path), labels)
+
+
+@pytest.mark.parametrize("leaf", [-1, 0, 2**62, 1.5, True])
+def test_point_tree_refuses_a_leaf_size_it_cannot_build(leaf):
+    from superfacets.elements.neighbors import point_tree
+
+    pts = np.random.default_rng(0).random((200, 3))
+    with pytest.raises(ParameterError, match="leaf"):
+        point_tree(pts, leaf=leaf)
+    assert point_tree(pts, leaf=1).points.shape == (200, 3)
+
+
+def test_huge_features_are_refused_not_looped_over():
+    mesh = trimesh.creation.icosphere(subdivisions=3)
+    f = np.random.default_rng(0).random((len(mesh.faces), 3))
+    for scale, says in ((1e100, "too large for float32"), (1e200, "beyond 1e\\+150")):
+        with pytest.raises(ParameterError, match=says):
+            segment(mesh, 20, features=f * scale, beta=1.0)
+    assert segment(mesh, 20, features=f * 1e100).n_segments == 20  # beta from the data
+    assert segment(mesh, 20, features=f * 1e30, beta=1.0).n_segments == 20
+
+
+def _gltf(nodes, scene_nodes) -> dict:
+    import base64
+
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype="<f4")
+    i = np.array([0, 1, 2, 0], dtype="<u2")
+    buf = v.tobytes() + i.tobytes()
+    return {"asset": {"version": "2.0"},
+            "buffers": [{"byteLength": len(buf), "uri": "data:application/octet-stream;"
+                         "base64," + base64.b64encode(buf).decode()}],
+            "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
+                            {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
+            "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                           "min": [0, 0, 0], "max": [1, 1, 0]},
+                          {"bufferView": 1, "componentType": 5123, "count": 3,
+                           "type": "SCALAR"}],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+            "nodes": nodes, "scenes": [{"nodes": scene_nodes}], "scene": 0}
+
+
+@pytest.mark.parametrize("nodes, roots, says", [
+    ([{"mesh": 0, "children": [1]}, {"children": [2]}, {"mesh": 0, "children": [0]}], [1],
+     "cycle: node 0 is its own ancestor (0 -> 1 -> 2 -> 0)"),
+    ([{"mesh": 0, "children": [0]}], [0], "node 0 is its own child"),
+    ([{"mesh": 0, "children": [1]}, {"mesh": 0}, {"children": [1]}], [0, 2], "two parents"),
+    ([{"mesh": 0, "children": [7]}], [0], "outside the 1 nodes"),
+    ([{"mesh": 0, "children": [1]}] + [{"children": [k + 1]} for k in range(1, 1500)]
+     + [{"mesh": 0}], [0], "nested deeper than 1,000 levels"),
+])
+def test_gltf_node_graphs_are_checked_before_they_are_walked(tmp_path, capsys, nodes, roots,
+                                                             says):
+    path = tmp_path / "scene.gltf"
+    path.write_text(json.dumps(_gltf(nodes, roots)))
+    t0 = time.perf_counter()
+    assert main(["segment", str(path), "-k", "1", "-o", str(tmp_path / "x.seg")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("superfacets: error:") and len(err.splitlines()) == 1
+    assert says in err and time.perf_counter() - t0 < 20
+    deep = tmp_path / "deep.gltf"  # a deep but bounded hierarchy reads
+    chain = [{"mesh": 0, "children": [1]}] + [{"children": [k + 1]} for k in range(1, 50)] + [
+        {"mesh": 0}]
+    deep.write_text(json.dumps(_gltf(chain, [0])))
+    assert main(["segment", str(deep), "-k", "2", "-o", str(tmp_path / "d.seg"), "-q"]) == 0
+
+
+def test_complex_colours_and_features_are_refused_like_coordinates():
+    mesh = trimesh.creation.icosphere(subdivisions=2)
+    with pytest.raises(TypeError, match="real numbers"):
+        PointCloud(np.random.default_rng(0).random((10, 3)), colors=np.full((10, 3), 0.5 + 1j))
+    with pytest.raises(TypeError, match="real numbers"):
+        Mesh(mesh.vertices, mesh.faces, face_colors=np.full((len(mesh.faces), 3), 0.5 + 0j))
+    with pytest.raises(ParameterError, match="real numbers"):
+        segment(mesh, 10, features=np.ones((len(mesh.faces), 3)) * (1 + 2j), beta=1.0)
+    with pytest.raises(ParameterError, match="real numbers"):
+        segment(mesh, 10, features=np.ones((len(mesh.faces), 3)) * (1 + 0j))
+
+
+@pytest.mark.parametrize("value", ["1e3", "9223372036854775808", "10000", "0", "-2", "2.5"])
+def test_the_thread_variable_follows_the_option_s_rule(tmp_path, sphere, value):
+    from superfacets import write_mesh
+
+    path = tmp_path / "ball.off"
+    write_mesh(path, sphere)
+    run = subprocess.run([sys.executable, "-m", "superfacets", "segment", str(path), "-k", "5",
+                          "-o", str(tmp_path / "x.seg")], capture_output=True, text=True,
+                         env={"SUPERFACETS_NUM_THREADS": value, "PATH": "/usr/bin:/bin"},
+                         timeout=120)
+    assert run.returncode == 2, run.stderr[-500:]
+    from superfacets.checks import max_threads
+
+    assert run.stderr.strip().splitlines() == [
+        f"superfacets: error: SUPERFACETS_NUM_THREADS={value!r}: give a whole number of "
+        f"threads from 1 to {max_threads()} (as --threads), or unset it"]
+
+
+def test_smaller_faults_speak_the_user_s_terms():
+    from superfacets._runtime.memory import _amount
+    from superfacets.evaluation.baselines.graph_segmentation import graph_segmentation
+
+    box = trimesh.creation.box()
+    with pytest.raises(ParameterError, match="min_size must be an integer <="):
+        graph_segmentation(box, min_size=2**63)
+    ints = np.empty(len(box.faces), dtype=object)  # an object array of Python ints
+    ints[:] = [list(map(int, f)) for f in box.faces]
+    assert Mesh(box.vertices, ints).n_faces == 12
+    assert Mesh(box.vertices, np.array(box.faces.tolist(), dtype=object)).n_faces == 12
+    big = box.faces.astype(np.uint64)
+    big[0, 0] = np.iinfo(np.uint64).max
+    with pytest.raises(Exception, match="18446744073709551615"):  # as given, not as -1
+        Mesh(box.vertices, big)
+    assert (_amount(0.1 * 2**30), _amount(0.06 * 2**30)) == ("102 MiB", "61.4 MiB")
