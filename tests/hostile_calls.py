@@ -1,5 +1,10 @@
 """Hostile arguments for the compiled kernels, run in a process of its own.
 
+``python hostile_calls.py CALLS.pkl scalars [SECONDS]``: each scalar argument (a count, a
+size, a cap, a double bounding a loop) spoilt in turn, and each array inside a tuple
+argument emptied, each case in a forked child killed past SECONDS (a hang).
+
+
 ``python hostile_calls.py CALLS.pkl``: for each recorded kernel call (``{path: (args,
 kwargs)}``, the first call of each kernel in real runs), each integer array among its
 arguments is spoiled in turn (an entry set to a huge value, to a negative one, and its
@@ -68,6 +73,98 @@ def call(calls: dict, path: str, i: int, j, how: str):
     return native.kernel(path)(*args, **copy(kwargs))
 
 
+#: The values a scalar argument is spoilt with: counts and sizes of 0, -1 and past any
+#: memory; doubles that bound loops, not finite or not positive.
+INTS = (0, -1, 2**62, 2**31)
+#: The refusals a spoilt scalar may meet, by the exit status a child reports them with:
+#: the kernels' own, nanobind's for a value no C++ type holds, an allocation refused.
+REFUSALS = {"OutOfRange": 10, "Mismatch": 11, "TypeError": 12, "MemoryError": 13,
+            "ValueError": 14, "OverflowError": 15}
+FLOATS = (float("nan"), float("inf"), -float("inf"), 0.0, -1.0)
+
+
+def scalar_cases(calls: dict):
+    """(path, argument, member, value) of every call with one scalar spoilt, or one array
+    inside a tuple argument emptied (member: its place; value: None)."""
+    for path in sorted(calls):
+        args, _ = calls[path]
+        for i, a in enumerate(args):
+            if isinstance(a, (bool, np.bool_)):
+                continue
+            if isinstance(a, (int, np.integer)):
+                yield from ((path, i, None, v) for v in INTS)
+            elif isinstance(a, (float, np.floating)):
+                yield from ((path, i, None, v) for v in FLOATS)
+            elif isinstance(a, tuple):
+                yield from ((path, i, j, None) for j, x in enumerate(a)
+                            if isinstance(x, np.ndarray))
+
+
+def scalar_call(calls: dict, path: str, i: int, j, value):
+    """The kernel ``path`` on copies of its recorded arguments, argument ``i`` (or member
+    ``j`` of it, emptied) spoilt."""
+    from superfacets._kernels import native
+
+    def copy(x):
+        if isinstance(x, np.ndarray):
+            return x.copy()
+        return tuple(map(copy, x)) if isinstance(x, tuple) else x
+
+    args, kwargs = calls[path]
+    args = [copy(a) for a in args]
+    if j is None:
+        args[i] = value
+    else:
+        parts = list(args[i])
+        parts[j] = parts[j][:0]
+        args[i] = tuple(parts)
+    return native.kernel(path)(*args, **copy(kwargs))
+
+
+def scalars(path: str, limit: float) -> None:
+    """Each scalar case in a forked child of its own, killed past ``limit`` seconds: prints
+    ``CASE``, then ``RESULT <outcome>``: ``ok``, the refusal's type, ``crash <signal>`` or
+    ``hang``."""
+    import os
+    import signal
+    import time
+
+    with open(path, "rb") as f:
+        calls = pickle.load(f)
+    for case in scalar_cases(calls):
+        print("CASE", *case, flush=True)
+        pid = os.fork()
+        if pid == 0:  # the child: its outcome as its exit status
+            resource.setrlimit(resource.RLIMIT_AS, (4 << 30, 4 << 30))
+            code = 0
+            try:
+                scalar_call(calls, *case)
+            except Exception as exc:  # noqa: BLE001 (each outcome reported)
+                code = REFUSALS.get(type(exc).__name__, 99)
+                if code == 99:
+                    print("OTHER", type(exc).__name__, str(exc)[:200], flush=True)
+            os._exit(code)
+        t0, status = time.monotonic(), None
+        while time.monotonic() - t0 < limit:
+            done, got = os.waitpid(pid, os.WNOHANG)
+            if done:
+                status = got
+                break
+            time.sleep(0.005)
+        if status is None:
+            os.kill(pid, signal.SIGKILL)
+            os.waitpid(pid, 0)
+            outcome = "hang"
+        elif os.WIFSIGNALED(status):
+            outcome = f"crash {os.WTERMSIG(status)}"
+        else:
+            names = {code: name for name, code in REFUSALS.items()}
+            outcome = "ok" if os.WEXITSTATUS(status) == 0 else names.get(
+                os.WEXITSTATUS(status), "other")
+        print("RESULT", outcome, flush=True)
+    print("DONE", flush=True)
+
+
 def main(path: str) -> None:
     resource.setrlimit(resource.RLIMIT_AS, (8 << 30, 8 << 30))  # (a huge allocation fails)
     with open(path, "rb") as f:
@@ -84,4 +181,7 @@ def main(path: str) -> None:
 
 
 if __name__ == "__main__":
-    main(sys.argv[1])
+    if len(sys.argv) > 2 and sys.argv[2] == "scalars":
+        scalars(sys.argv[1], float(sys.argv[3]) if len(sys.argv) > 3 else 20.0)
+    else:
+        main(sys.argv[1])

@@ -121,6 +121,28 @@ def test_spoilt_indices_are_refused_at_the_kernels_entry(monkeypatch, tmp_path):
 
 
 @pytest.mark.skipif(not native.available(), reason="the compiled kernels are not built")
+def test_spoilt_counts_and_bounds_are_refused_not_crashed_or_looped_on(monkeypatch, tmp_path):
+    """Every scalar argument of every kernel spoilt (0, -1, 2**62, 2**31; NaN, +-inf, 0,
+    -1) and every array inside a tuple argument emptied, each case in a forked child: a
+    result or a refusal, never a crash or a hang (issue 110: 24 crashes, 30 hangs)."""
+    calls = _recorded_calls(monkeypatch)
+    (tmp_path / "calls.pkl").write_bytes(pickle.dumps(calls))
+    script = Path(__file__).resolve().parents[1] / "hostile_calls.py"
+    out = subprocess.run([sys.executable, str(script), str(tmp_path / "calls.pkl"), "scalars",
+                          "30"], capture_output=True, text=True, timeout=900,
+                         env={**__import__("os").environ, "SUPERFACETS_KERNEL_THREADS": "1"})
+    lines = out.stdout.splitlines()
+    assert out.returncode == 0 and lines[-1] == "DONE", (out.returncode, out.stderr[-2000:])
+    cases = [x for x in lines if x.startswith("CASE")]
+    outcomes = [x.split(" ", 1)[1] for x in lines if x.startswith("RESULT")]
+    bad = [(c, o) for c, o in zip(cases, outcomes)
+           if o not in ("ok", "OutOfRange", "Mismatch", "TypeError", "MemoryError",
+                        "ValueError", "OverflowError")]
+    assert not bad, bad
+    assert len(cases) > 400 and outcomes.count("OutOfRange") > 50
+
+
+@pytest.mark.skipif(not native.available(), reason="the compiled kernels are not built")
 def test_a_compressed_row_layout_past_its_indices_is_named():
     from superfacets._kernels._cxx import OutOfRange
 

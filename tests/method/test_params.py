@@ -94,8 +94,11 @@ def test_check_choice_bool_threads_and_n_segments():
 def test_thread_count_default_reads_the_environment(monkeypatch):
     monkeypatch.setenv("SUPERFACETS_NUM_THREADS", "3")
     assert check_threads(None) == 3
-    monkeypatch.setenv("SUPERFACETS_NUM_THREADS", "many")  # not a number: the cores
-    assert check_threads(None) >= 1
+    monkeypatch.setenv("SUPERFACETS_NUM_THREADS", "many")  # not a count: said, as --threads
+    with pytest.raises(ParameterError, match="SUPERFACETS_NUM_THREADS='many'"):
+        check_threads(None)
+    monkeypatch.setenv("SUPERFACETS_NUM_THREADS", " ")  # empty: as unset
+    assert check_threads(None) == len(__import__("os").sched_getaffinity(0))
     monkeypatch.delenv("SUPERFACETS_NUM_THREADS")
     assert check_threads(None) == len(__import__("os").sched_getaffinity(0))
 

@@ -969,9 +969,11 @@ void neighbourhood_moments(nb::handle indptr_, nb::handle indices_, nb::handle p
     In<i64> indptr(indptr_, "indptr"), pick(pick_, "pick");
     In<double> points(points_, "points");
     Out<double> cov(cov_, "cov"), radius(radius_, "radius");
-    if (points.cols != 3 || cov.n != pick.n || radius.n != pick.n || rings < 0 ||
+    if (points.cols != 3 || cov.n != pick.n || radius.n != pick.n ||
         size_of(cov_) != 9 * pick.n)
         throw Mismatch("argument cov");
+    if (rings < 0 || rings > 64)  // (a neighbourhood of a few graph steps)
+        throw OutOfRange("argument rings: " + std::to_string(rings) + ", outside 0..64");
     with_index(indices_, "indices", [&](const auto& indices) {
         check_csr(indptr, indices, points.n, points.n);
         check_range(pick, 0, points.n, "pick");
@@ -981,9 +983,12 @@ void neighbourhood_moments(nb::handle indptr_, nb::handle indices_, nb::handle p
             double a[6];
             for (i64 i = lo; i < hi; ++i) {
                 const i64 p = pick[i];
+                i64 grown = 0;
                 ball.assign(1, p);
                 for (i64 r = 0; r < rings; ++r) {  // every member's neighbours added
                     const i64 end = static_cast<i64>(ball.size());
+                    if (r > 0 && end == grown) break;  // (the ball stopped growing: done)
+                    grown = end;
                     for (i64 t = 0; t < end; ++t)
                         for (i64 e = indptr[ball[t]]; e < indptr[ball[t] + 1]; ++e)
                             ball.push_back(indices[e]);

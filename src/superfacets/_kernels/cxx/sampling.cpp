@@ -19,6 +19,11 @@ inline double nearest_so_far(double& mind, const double* p, double cx, double cy
 nb::tuple spatial_blocks(nb::handle centroids_, i64 cells_per_axis) {
     In<double> c(centroids_, "centroids");
     if (c.cols != 3 || c.n == 0) throw Mismatch("argument centroids");
+    // (cells^3 about the elements: the count array stays O(m))
+    if (cells_per_axis < 1 || cells_per_axis > (i64(1) << 20) ||
+        cells_per_axis * cells_per_axis * cells_per_axis > 8 * c.n + 4096)
+        throw OutOfRange("argument cells_per_axis: " + std::to_string(cells_per_axis) +
+                         ", outside 1..(8 m + 4096)^(1/3)");
     const i64 m = c.n, g = cells_per_axis, g3 = g * g * g;
     std::vector<i64> order(m), count(g3 + 1, 0), bstart;
     i64 nb = 0;

@@ -276,6 +276,8 @@ i64 split_candidates(nb::handle indptr, nb::handle indices, nb::handle w, nb::ha
     Out<i64> stamp(stamp_, "stamp"), stamp2(stamp2_, "stamp2"), hval(hval_, "hval"),
         work(work_, "work");
     c.check_scratch(first, step, dist, dist2, stamp, stamp2, second);
+    if (lloyd < 0 || lloyd > (i64(1) << 16))  // (the Lloyd rounds of a split: a few)
+        throw OutOfRange("argument lloyd: " + std::to_string(lloyd) + ", outside 0..65536");
     check_range(which, 0, c.k(), "which");
     check_rows(far, c.k(), "far");
     check_rows(split_energy, c.k(), "split_energy");

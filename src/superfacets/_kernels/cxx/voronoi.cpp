@@ -21,6 +21,7 @@ i64 nearest_seed_t(const In<i64>& indptr, const In<i32>& indices, const W* weigh
     auto tup = nb::borrow<nb::tuple>(queue_);
     if (!nb::isinstance<nb::tuple>(queue_) || tup.size() != 4) throw Mismatch("argument queue");
     Out<i64> head(tup[3], "head");  // (the rest of numba's queue is not used here)
+    if (head.n < 1) throw OutOfRange("argument queue: its head holds no bucket");
     nb::gil_scoped_release nogil;
     std::vector<i64> todo(seeds.n - first);
     i64 n = 0;
@@ -233,6 +234,9 @@ i64 nearest_seed(nb::handle indptr_, nb::handle indices_, nb::handle weights_, n
     check_rows(dist, n, "dist");
     check_range(seeds, 0, n, "seeds");
     if (first < 0 || first > seeds.n) throw OutOfRange("argument first");
+    if (!(inv_width > 0.0) || !std::isfinite(inv_width))  // (the buckets' width: > 0)
+        throw OutOfRange("argument inv_width: " + std::to_string(inv_width) +
+                         ", not a finite number > 0");
     return with_real(weights_, "weights", [&](auto w) {
         check_rows(w, indptr[n], "weights");
         return nearest_seed_t(indptr, indices, w.p, seeds, first, dist, label, queue, inv_width);
@@ -299,11 +303,29 @@ nb::object coarse_lengths(nb::handle indptr_, nb::handle indices_, nb::handle cl
     });
 }
 
+// The cell of x along one axis, within 0..dims - 1 (a point outside the grid or not finite
+// counts in the nearest cell: a cell number never falls outside the table's keys)
+static inline i64 cell_of(double x, double lo, double h, i64 dims) {
+    const double c = std::floor((x - lo) / h);
+    if (!(c >= 0.0)) return 0;
+    return c >= static_cast<double>(dims - 1) ? dims - 1 : static_cast<i64>(c);
+}
+
 nb::object first_in_cells(nb::handle positions_, nb::handle lo_, double h,
                                 nb::handle dims_, i64 cap) {
     In<double> positions(positions_, "positions"), lo(lo_, "lo");
     In<i64> dims(dims_, "dims");
     if (positions.cols != 3 || lo.n != 3 || dims.n != 3) throw Mismatch("argument positions");
+    // the table: a power of two of slots (its mask), at most 2**40; cells of a finite
+    // width > 0 over a grid whose cell numbers fit in 62 bits
+    if (cap < 2 || cap > (i64(1) << 40) || (cap & (cap - 1)) != 0)
+        throw OutOfRange("argument cap: " + std::to_string(cap) +
+                         ", not a power of two in 2..2**40");
+    if (!(h > 0.0) || !std::isfinite(h))
+        throw OutOfRange("argument h: " + std::to_string(h) + ", not a finite number > 0");
+    for (int t = 0; t < 3; ++t)
+        if (dims[t] < 1 || dims[t] > (i64(1) << 20) || !std::isfinite(lo[t]))
+            throw OutOfRange("argument dims: each in 1..2**20, lo finite");
     // one table filled on threads: a cell's slot taken by compare-and-swap, its first
     // element the least any thread offers; the slots' order then depends on the threads'
     // timing, so the firsts are given back ascending (as numba's)
@@ -325,9 +347,9 @@ nb::object first_in_cells(nb::handle positions_, nb::handle lo_, double h,
         parallel_for(positions.n, [&](i64 t0, i64 t1) {
             for (i64 t = t0; t < t1; ++t) {
                 if (full.load(std::memory_order_relaxed)) return;  // (never past half)
-                i64 cx = static_cast<i64>(std::floor((positions(t, 0) - lo[0]) / h));
-                i64 cy = static_cast<i64>(std::floor((positions(t, 1) - lo[1]) / h));
-                i64 cz = static_cast<i64>(std::floor((positions(t, 2) - lo[2]) / h));
+                i64 cx = cell_of(positions(t, 0), lo[0], h, dims[0]);
+                i64 cy = cell_of(positions(t, 1), lo[1], h, dims[1]);
+                i64 cz = cell_of(positions(t, 2), lo[2], h, dims[2]);
                 i64 k = (cx * dims[1] + cy) * dims[2] + cz;
                 std::uint64_t s = ((static_cast<std::uint64_t>(k) * mult) >> 20) & mask;
                 while (true) {
