@@ -176,3 +176,62 @@ def test_smaller_faults_speak_the_user_s_terms():
     with pytest.raises(Exception, match="18446744073709551615"):  # as given, not as -1
         Mesh(box.vertices, big)
     assert (_amount(0.1 * 2**30), _amount(0.06 * 2**30)) == ("102 MiB", "61.4 MiB")
+
+
+_SWALLOWED = r"""
+import os, signal, sys, time
+import superfacets.cli.segmenting as seg
+from superfacets.cli import main
+
+class Finalized:
+    def __del__(self):  # as a callback of Dask's garbage collection: the SIGTERM lands here
+        os.kill(os.getpid(), signal.SIGTERM)
+        for _ in range(100000):
+            pass
+
+def command(args):
+    x = Finalized()
+    del x  # its finalizer took the SIGTERM: printed as ignored, the run went on
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < 20:
+        time.sleep(0.01)
+    print("ran to the end")
+    return 0
+
+seg.cmd_segment = command
+sys.exit(main(["segment", "anything.off"]))
+"""
+
+
+def test_a_sigterm_swallowed_by_a_finalizer_still_ends_the_run_with_143(tmp_path):
+    t0 = time.perf_counter()
+    run = subprocess.run([sys.executable, "-c", _SWALLOWED], capture_output=True, text=True,
+                         timeout=60, cwd=tmp_path)
+    assert run.returncode == 143, (run.returncode, run.stderr[-1000:])
+    assert time.perf_counter() - t0 < 15  # sent again at once, not after the 20 s of work
+    assert "ran to the end" not in run.stdout
+    assert "Traceback" not in run.stderr and "Exception ignored" not in run.stderr
+    assert run.stderr.strip().splitlines()[-1] == "superfacets: terminated"
+
+
+_UNDER_LIMIT = r"""
+import resource, sys
+resource.setrlimit(resource.RLIMIT_AS, (6 << 30, 6 << 30))
+from superfacets.cli import main
+code = main(["segment", "missing.off", "-o", "x.seg"])  # (refused: no such file)
+import numpy, threadpoolctl
+blas = [p for p in threadpoolctl.threadpool_info() if p["user_api"] == "blas"]
+print(code, sorted({p["num_threads"] for p in blas}))
+"""
+
+
+def test_under_an_address_space_limit_the_blas_starts_one_thread(tmp_path):
+    """(OpenBLAS retried a refused mmap for ever as it started its threads, deaf to
+    SIGTERM, under `ulimit -v 400 MB`.)"""
+    pytest.importorskip("threadpoolctl")
+    env = {k: v for k, v in __import__("os").environ.items()
+           if k not in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")}
+    run = subprocess.run([sys.executable, "-c", _UNDER_LIMIT], capture_output=True,
+                         text=True, timeout=120, env=env, cwd=tmp_path)
+    assert run.returncode == 0, run.stderr[-1000:]
+    assert run.stdout.split("\n")[-2].endswith("[1]"), run.stdout

@@ -258,6 +258,41 @@ def limit_arenas(n: int = ARENAS) -> None:
         mallopt(-8, int(n))  # (M_ARENA_MAX in glibc's malloc.h)
 
 
+#: The BLAS libraries' thread counts, by environment variable (read when they load).
+BLAS_THREADS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+def limit_blas_threads() -> bool:
+    """Under an address-space limit (``ulimit -v``: ``RLIMIT_AS``), have the BLAS that numpy
+    and scipy load start one thread (the variables of :data:`BLAS_THREADS` the user left
+    unset): OpenBLAS maps a buffer of tens of MiB per thread as it starts them, and where
+    the limit refuses one it retries for ever, deaf to SIGTERM. The package's own threads
+    are its kernels'; its BLAS calls are small. Call it before numpy is imported (the
+    command line does, first).
+
+    Returns
+    -------
+    bool
+        Whether a limit was found (and the variables set where unset).
+
+    Examples
+    --------
+    >>> limit_blas_threads() in (True, False)
+    True
+    """
+    try:
+        import resource
+
+        soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    except (ImportError, ValueError, OSError):  # pragma: no cover - not POSIX
+        return False
+    if soft == resource.RLIM_INFINITY:
+        return False
+    for name in BLAS_THREADS:
+        os.environ.setdefault(name, "1")
+    return True
+
+
 def discard_pages(a) -> None:
     """Hand back to the operating system the whole pages of ``a`` (C-contiguous), whose
     contents are no longer needed: they read as zeros after, and cost memory only once

@@ -121,14 +121,19 @@ def main(argv: list[str] | None = None) -> int:
     from ..errors import NoDisplayError, SuperfacetsError
 
     restore = _terminate_cleanly()  # first: Ctrl-C during the imports too
-    from .._runtime.memory import limit_arenas
+    from .._runtime.memory import limit_arenas, limit_blas_threads
 
     limit_arenas()  # (before any thread starts: see its notes)
+    limit_blas_threads()  # (before numpy loads its BLAS: under `ulimit -v`, one thread)
     try:
         parser = build_parser()
         parser.argv = list(sys.argv[1:] if argv is None else argv)  # for its error hints
         args = parser.parse_args(argv)
-        return args.func(args)
+        code = args.func(args)
+        if getattr(restore, "state", {}).get("terminated"):  # a SIGTERM the run went on
+            print("superfacets: terminated", file=sys.stderr)  # past (swallowed on the
+            return 143  # way, or heard by a kernel that stopped in order): said, as 143
+        return code
     except SystemError as exc:  # numba's dispatcher around a KeyboardInterrupt
         if not _interrupted(exc):
             raise
@@ -149,7 +154,8 @@ def main(argv: list[str] | None = None) -> int:
               file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        if getattr(getattr(restore, "watch", None), "signum", 0) == 15:  # SIGTERM, heard
+        if getattr(getattr(restore, "watch", None), "signum", 0) == 15 or getattr(
+                restore, "state", {}).get("terminated"):  # SIGTERM, heard
             # by a compiled kernel, which stopped with a KeyboardInterrupt
             print("superfacets: terminated", file=sys.stderr)
             return 143
@@ -238,6 +244,7 @@ def _terminate_cleanly():
     waits = _blocking_waits()
 
     def on_term(signum, frame):
+        state["terminated"] = True  # (kept: the run ends 143 even where it was swallowed)
         if _interrupted(sys.exc_info()[1]):  # a compiled kernel heard it first: stopping
             return
         raise _Terminated()
@@ -246,7 +253,7 @@ def _terminate_cleanly():
         while not done.wait(0.2):
             os.kill(os.getpid(), signal.SIGINT)
 
-    state = {"repeater": None}
+    state = {"repeater": None, "terminated": False}
 
     def on_int(signum, frame):
         if done.is_set() or interrupts.was_caught() or _interrupted(sys.exc_info()[1]):
@@ -262,7 +269,13 @@ def _terminate_cleanly():
 
     def unraisable(event) -> None:
         # a KeyboardInterrupt raised in a finalizer cannot unwind the run: say nothing
-        # (the repeater interrupts again where it can)
+        # (the repeater interrupts again where it can); a SIGTERM that landed in one (a
+        # callback of Dask's garbage collection took it) is sent again, once, to land
+        # where it unwinds the run
+        if isinstance(event.exc_value, _Terminated):
+            if not done.is_set():
+                threading.Timer(0.05, os.kill, (os.getpid(), signal.SIGTERM)).start()
+            return
         if not _interrupted(event.exc_value):
             previous_hook(event)
 
@@ -289,17 +302,22 @@ def _terminate_cleanly():
         sys.unraisablehook = previous_hook
 
     restore.watch = watch
+    restore.state = state
     return restore
 
 
 def _quiet_exit() -> None:
     """Ignore Ctrl-C while the interpreter exits (Dask's and numba's exit handlers would
-    otherwise print a KeyboardInterrupt traceback after the run's last line)."""
+    otherwise print a KeyboardInterrupt traceback after the run's last line); a SIGTERM
+    then exits 143 (the outputs are whole), not by the signal."""
+    import os
     import signal
     import threading
 
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, signal.SIG_IGN)
+        # the outputs are whole by now: a SIGTERM ends the exit with 143, as during the run
+        signal.signal(signal.SIGTERM, lambda signum, frame: os._exit(143))
         # a run interrupted may have left a thread of its kernels running (a Ctrl-C
         # between two of the waiting's bytecodes): wait for it here, where no Ctrl-C
         # lands, so that it never returns to an interpreter being finalized (an abort)
