@@ -235,3 +235,17 @@ def test_under_an_address_space_limit_the_blas_starts_one_thread(tmp_path):
                          text=True, timeout=120, env=env, cwd=tmp_path)
     assert run.returncode == 0, run.stderr[-1000:]
     assert run.stdout.split("\n")[-2].endswith("[1]"), run.stdout
+
+
+def test_a_laz_of_one_point_repeated_is_refused_before_it_is_read(tmp_path, capsys):
+    laspy = pytest.importorskip("laspy")
+    las = laspy.create(point_format=0, file_version="1.2")
+    n = 2_000_000  # (the attack's: 50M points in a few hundred KiB)
+    las.x, las.y, las.z = np.zeros(n), np.zeros(n), np.zeros(n)
+    path = tmp_path / "same.laz"
+    las.write(str(path))
+    assert path.stat().st_size < 40_000
+    t0 = time.perf_counter()
+    assert main(["segment", str(path), "-o", str(tmp_path / "x.seg")]) == 2
+    assert time.perf_counter() - t0 < 5
+    assert "likely decompression bomb" in capsys.readouterr().err

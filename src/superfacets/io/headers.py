@@ -219,6 +219,9 @@ def check_laz(path) -> None:
     MeshFormatError
         If the chunk table's position lies outside the file, or it declares
         more chunks than the points can fill.
+    MemoryLimitError
+        If its points would take more than :func:`~superfacets.io.files.max_ratio`
+        times its size (a decompression bomb).
 
     Examples
     --------
@@ -248,11 +251,35 @@ def check_laz(path) -> None:
                                   f"at byte {table}, outside its {size} bytes (truncated?)")
         f.seek(table)
         count = struct.unpack("<4xI", f.read(8))[0]
+        f.seek(0)
+        full = f.read(255)
     most = (table - start - 8) // _SMALLEST_RECORD + 1
     if count > most:
         raise MeshFormatError(f"{path}: damaged LAZ file: its chunk table declares {count} "
                               f"chunks, more than its {table - start - 8} bytes of points "
                               f"can hold ({most} at most)")
+    _check_laz_ratio(path, full, size)
+
+
+def _check_laz_ratio(path, head: bytes, size: int) -> None:
+    """Refuse a LAZ whose points would take more than :func:`~superfacets.io.files.max_ratio`
+    times its size as LAS records (real LAZ: about 10; millions of one point repeated
+    compress to a few bytes each): a decompression bomb, refused before it is read."""
+    from .files import max_ratio
+
+    length = struct.unpack_from("<H", head, 105)[0]
+    points = struct.unpack_from("<I", head, 107)[0]
+    if len(head) >= 255 and head[25] >= 4:  # LAS 1.4: the 64-bit count
+        points = max(points, struct.unpack_from("<Q", head, 247)[0])
+    ratio = max_ratio()
+    if points * length > ratio * max(size, 1 << 12):
+        from ..errors import MemoryLimitError
+
+        raise MemoryLimitError(
+            f"{path}: its {points:,} points of {length} bytes would take more than {ratio:g} "
+            f"times its {size:,} bytes (real LAZ files: about 10 times): refused as a likely "
+            "decompression bomb; SUPERFACETS_MAX_RATIO raises the bound for a genuine file",
+            points * length, int(ratio * size))
 
 
 def ply_mapped(path: Path):
