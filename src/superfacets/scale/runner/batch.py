@@ -148,6 +148,10 @@ def _segment_and_write(task: dict, label_rel: str) -> dict:
         result = adaptive_segment(data, k, start=task["adaptive"]["start"],
                                   extent_weight=task["adaptive"]["compactness"], **opts)
     else:
+        if opts.get("n_segments") is None and opts.get("radius") is None:
+            from ...api.sizes import default_count  # (as segment: a cloud's grows with it)
+
+            opts["n_segments"] = default_count(data, kind)
         result = segment(data, **opts)
     n = kind_of(kind).n_rows(data)
     base.parent.mkdir(parents=True, exist_ok=True)
