@@ -96,6 +96,7 @@ def _ply(p: Path, head: bytes, size: int | None) -> dict | None:
     start = end + len(b"end_header") + (2 if head[end + 10:end + 12] == b"\r\n" else 1)
     ascii_ = any(line.split()[:2] == ["format", "ascii"] for line in body)
     elements: list[list] = []  # [name, count, smallest record]
+    layout: list[list] = []  # per element: (type, or ("list", count type)) of each property
     for line in body:
         w = line.split()
         if len(w) >= 3 and w[0] == "element":
@@ -103,7 +104,9 @@ def _ply(p: Path, head: bytes, size: int | None) -> dict | None:
                 elements.append([w[1], int(w[2]), 0])
             except ValueError:
                 return None
+            layout.append([])
         elif len(w) >= 3 and w[0] == "property" and elements:
+            layout[-1].append(("list", w[2]) if w[1] == "list" else w[1])
             if w[1] == "list" and len(w) >= 5:
                 corners = 3 if elements[-1][0] == "face" else 0
                 elements[-1][2] += (2 * (1 + corners) if ascii_ else
@@ -116,11 +119,50 @@ def _ply(p: Path, head: bytes, size: int | None) -> dict | None:
         raise MeshFormatError(f"{p}: damaged PLY file: its header declares {declared} "
                               f"({need:,} bytes at the least), and {size - start:,} bytes "
                               "follow it (truncated?)")
+    if size is not None and not ascii_:
+        _check_first_face(p, head, start, elements, layout)
     counts = {("vertices" if name == "vertex" else "faces" if name == "face" else name): c
               for name, c, _ in elements}
     if counts.get("faces", 0) == 0 and "vertices" in counts:
         counts = {"points": counts["vertices"]}
     return counts
+
+
+_NUMPY = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2",
+          "int16": "i2", "ushort": "u2", "uint16": "u2", "int": "i4", "int32": "i4",
+          "uint": "u4", "uint32": "u4", "float": "f4", "float32": "f4", "double": "f8",
+          "float64": "f8"}
+
+
+def _check_first_face(p: Path, head: bytes, start: int, elements: list, layout: list) -> None:
+    """Refuse a binary PLY whose first face lists fewer than 3 vertices, before its faces
+    are parsed one by one (50M faces of no vertex took minutes to be refused): where every
+    element before the faces has records of one size, the first face's count is read
+    where it lies. A file laid out otherwise passes: the reader says what is wrong."""
+    names = [e[0] for e in elements]
+    if "face" not in names:
+        return
+    f = names.index("face")
+    if not layout[f] or not isinstance(layout[f][0], tuple) or elements[f][1] < 1:
+        return
+    offset = start
+    for (_, count, _), props in zip(elements[:f], layout[:f]):
+        if any(isinstance(t, tuple) or t not in _NUMPY for t in props):
+            return  # (lists before the faces: records of several sizes)
+        offset += count * sum(int(_NUMPY[t][1]) for t in props)
+    kind = _NUMPY.get(layout[f][0][1])
+    if kind is None or kind[0] == "f":
+        return
+    order = "<" if b"binary_little_endian" in head[:start] else ">"
+    with open(p, "rb") as fh:
+        fh.seek(offset)
+        raw = fh.read(int(kind[1]))
+    if len(raw) < int(kind[1]):
+        return
+    n = int(np.frombuffer(raw, dtype=order + kind)[0])
+    if n < 3:
+        raise MeshFormatError(f"{p}: face 0 lists {n} vertices (a face needs at least 3); "
+                              f"its header declares {elements[f][1]:,} faces")
 
 
 #: The smallest point record of any LAS point format (format 0), in bytes: each chunk
