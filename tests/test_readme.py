@@ -33,5 +33,7 @@ def test_the_readme_python_runs_in_order(tmp_path, monkeypatch):
             exec(compile(block, f"README.md python block {i + 1}", "exec"), namespace)
         except Exception as exc:  # name the block: the README must change, not the test
             raise AssertionError(f"README python block {i + 1} fails: {exc!r}\n{block}") from exc
-    assert (tmp_path / "creature.seg").is_file() and (tmp_path / "scan.npy").is_file()
+    assert (tmp_path / "demo-output" / "labels.seg").is_file()
+    assert (tmp_path / "demo-output" / "scan.npy").is_file()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["demo-output"]  # nothing beside
     assert len(namespace["per_object"]) == 2 and namespace["scene_labels"].min() == 0

@@ -113,3 +113,21 @@ def test_experiment_runs_on_a_user_s_files(tmp_path, capsys, sphere):
     capsys.readouterr()
     assert main(["experiment", "--ground-truth-field", "x", "-o", str(out)]) == 2
     assert "goes with --inputs" in capsys.readouterr().err
+
+
+def test_an_axis_value_may_start_with_a_minus(tmp_path, capsys, sphere):
+    """``--up -y`` was refused by argparse (a value starting with a minus read as an
+    option); only ``--up=-y`` worked."""
+    from superfacets import write_mesh
+
+    path = tmp_path / "ball.off"
+    write_mesh(path, sphere)
+    for flag in ("--up", "--up="):
+        argv = ["html", str(path), "-k", "5", "-o", str(tmp_path / "b.html")]
+        argv += [flag + "-z"] if flag.endswith("=") else [flag, "-z"]
+        assert main(argv) == 0, capsys.readouterr().err
+    page = (tmp_path / "b.html").read_text()
+    np.save(tmp_path / "p.npy", np.random.default_rng(0).random((500, 3)) * [1, 1, 0.01])
+    assert main(["segment", str(tmp_path / "p.npy"), "-k", "5", "--seen-from", "-z", "-o",
+                 str(tmp_path / "p.seg"), "-q"]) == 0
+    assert "superfacets" in page

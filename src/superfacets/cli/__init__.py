@@ -128,7 +128,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         parser = build_parser()
         parser.argv = list(sys.argv[1:] if argv is None else argv)  # for its error hints
-        args = parser.parse_args(argv)
+        args = parser.parse_args(_axis_values(parser.argv))
         code = args.func(args)
         if getattr(restore, "state", {}).get("terminated"):  # a SIGTERM the run went on
             print("superfacets: terminated", file=sys.stderr)  # past (swallowed on the
@@ -168,6 +168,31 @@ def main(argv: list[str] | None = None) -> int:
         restore()
         if argv is None:  # the program itself: its work is done, a late Ctrl-C is moot
             _quiet_exit()
+
+
+#: Options whose values may start with a minus: an axis (``--up -y``, ``--seen-from -z``).
+_AXIS_OPTIONS = ("--up", "--seen-from")
+
+
+def _axis_values(argv: list[str]) -> list[str]:
+    """``--up -y`` as ``--up=-y``: argparse takes a value that starts with a minus for an
+    option of its own and refuses it, where the axis was meant.
+
+    Examples
+    --------
+    >>> _axis_values(["render", "m.off", "--up", "-z", "-o", "m.png"])
+    ['render', 'm.off', '--up=-z', '-o', 'm.png']
+    """
+    out, i = [], 0
+    while i < len(argv):
+        a = argv[i]
+        if a in _AXIS_OPTIONS and i + 1 < len(argv) and argv[i + 1] in ("-x", "-y", "-z"):
+            out.append(f"{a}={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(a)
+        i += 1
+    return out
 
 
 class _Terminated(BaseException):
