@@ -72,6 +72,10 @@ def test_evaluate_prints_json_and_csv_for_scripts(tmp_path, capsys):
     got = json.loads(capsys.readouterr().out)
     assert got["undersegmentation_error"] == pytest.approx(
         float(rows[0]["undersegmentation_error"]))
+    # two terraces, two classes, 20 superpoints: the majority labelling is nearly exact
+    assert got["oracle_miou"] > 0.9 and set(got["oracle_iou_per_class"]) == {"2", "6"}
+    assert got["size_min"] <= got["size_median"] <= got["size_max"]
+    assert sum(got["size_histogram"]) == 20
     with pytest.raises(SystemExit) as stop:  # one of them (argparse says so)
         main(["evaluate", str(laz), str(seg), "--json", "--csv"])
     assert stop.value.code == 2 and "not allowed with" in capsys.readouterr().err

@@ -109,12 +109,19 @@ def cmd_evaluate(args) -> int:
     print(f"boundary_precision      {m['boundary_precision']:.4f}  (higher is better; read "
           "with the recall)")
     print(f"achievable_accuracy     {m['achievable_accuracy']:.4f}  (higher is better)")
+    print(f"oracle_miou             {m['oracle_miou']:.4f}  (higher is better; each segment "
+          "given its majority class)")
+    for cls, iou in sorted(m.get("oracle_iou_per_class", {}).items()):
+        print(f"  class {cls:<6} IoU {iou:.4f}")
+    hist = ", ".join(f"{2**i}+: {c}" for i, c in enumerate(m["size_histogram"]) if c)
+    print(f"segment sizes           {m['size_min']} / {m['size_median']:g} / "
+          f"{m['size_max']} {kind} (min / median / max; by size {hist})")
     return 0
 
 
 #: The metrics printed, in order.
 METRICS = ("undersegmentation_error", "compactness", "boundary_recall", "boundary_precision",
-           "achievable_accuracy")
+           "achievable_accuracy", "oracle_miou")
 
 
 def _print_table(args, kind: str, n: int, n_truths: int, m: dict) -> None:
@@ -126,7 +133,12 @@ def _print_table(args, kind: str, n: int, n_truths: int, m: dict) -> None:
     row = {"input": Path(args.mesh).name, "labels": Path(args.labels).name,
            "elements": kind, "n_elements": int(n), "segments": int(m["segments"]),
            "ground_truths": int(n_truths), "tau": float(args.tau),
-           **{k: float(m[k]) for k in METRICS}}
+           **{k: float(m[k]) for k in METRICS},
+           **{k: m[k] for k in ("size_min", "size_median", "size_max")}}
+    if args.format == "json":
+        row["oracle_iou_per_class"] = {str(k): v for k, v in
+                                       m.get("oracle_iou_per_class", {}).items()}
+        row["size_histogram"] = m["size_histogram"]
     if args.format == "json":
         print(json.dumps(row, indent=2))
         return

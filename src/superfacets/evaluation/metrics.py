@@ -33,7 +33,7 @@ from .contingency import Contingency, contingency, dense_labels  # noqa: F401 (r
 __all__ = ["Contingency", "contingency", "undersegmentation_error", "compactness",
            "achievable_segmentation_accuracy", "boundary_recall", "boundary_precision",
            "mean_over_ground_truths",
-           "evaluate", "evaluate_rows", "METRICS"]
+           "evaluate", "evaluate_rows", "oracle_miou", "size_summary", "METRICS"]
 
 #: The names of the metrics :func:`evaluate` returns, and whether lower is better.
 METRICS = {"undersegmentation_error": True, "compactness": True,
@@ -330,6 +330,103 @@ def evaluate(graph, labels, ground_truths: Sequence[np.ndarray], *, tau: float =
     return out
 
 
+def oracle_miou(labels, ground_truth, *, weights=None, ignore_label: int | None = None
+                ) -> tuple[float, dict]:
+    """The oracle mIoU of a partition: each segment given the majority class of its
+    elements, the mean over the classes of the intersection over union of that labelling
+    with the classes (the figure Superpoint Transformer and EZ-SP publish for their
+    partitions: the best semantic segmentation the superpoints allow).
+
+    Parameters
+    ----------
+    labels : (n,) int ndarray
+        Each element's segment.
+    ground_truth : (n,) int ndarray
+        Each element's class; ``ignore_label`` marks unlabelled elements, left out.
+    weights : (n,) float ndarray, optional
+        Each element's weight (faces: their areas); default 1 each (points).
+    ignore_label : int, optional
+
+    Returns
+    -------
+    miou : float
+        In ``[0, 1]``; the mean over the classes present among the labelled elements.
+    per_class : dict
+        Class -> its IoU.
+
+    Raises
+    ------
+    ParameterError
+        If the arrays differ in length, or no element is labelled.
+
+    Examples
+    --------
+    >>> labels = np.array([0, 0, 0, 1, 1, 1])
+    >>> truth = np.array([5, 5, 7, 7, 7, 7])  # segment 0 holds one element of class 7
+    >>> miou, per_class = oracle_miou(labels, truth)
+    >>> round(miou, 3), {k: round(v, 3) for k, v in per_class.items()}
+    (0.775, {5: 0.667, 7: 0.75})
+    """
+    lab = np.asarray(labels, dtype=np.int64)
+    gt = np.asarray(ground_truth, dtype=np.int64)
+    if lab.shape != gt.shape or lab.ndim != 1:
+        raise ParameterError(f"labels and ground truth must have one value per element, got "
+                             f"{lab.shape} and {gt.shape}")
+    w = np.ones(lab.shape[0]) if weights is None else np.asarray(weights, dtype=np.float64)
+    keep = np.ones(lab.shape[0], dtype=bool) if ignore_label is None else gt != ignore_label
+    keep &= lab >= 0
+    if not keep.any():
+        raise ParameterError("no labelled element to measure the oracle mIoU on")
+    lab, gt, w = lab[keep], gt[keep], w[keep]
+    segs, seg = np.unique(lab, return_inverse=True)
+    classes, cls = np.unique(gt, return_inverse=True)
+    table = np.zeros((segs.size, classes.size))
+    np.add.at(table, (seg, cls), w)
+    best = table.argmax(axis=1)  # each segment's majority class (the lowest on a tie)
+    predicted = best[seg]
+    per_class = {}
+    for c in range(classes.size):
+        inter = w[(predicted == c) & (cls == c)].sum()
+        union = w[(predicted == c) | (cls == c)].sum()
+        per_class[int(classes[c])] = float(inter / union) if union > 0 else 0.0
+    return float(np.mean(list(per_class.values()))), per_class
+
+
+def size_summary(labels) -> dict:
+    """The sizes of a partition's segments, in elements: ``size_min``, ``size_median``,
+    ``size_max`` and ``size_histogram`` (counts of segments by size in powers of two:
+    ``[1], [2, 3], [4, 7], ...``), labels below 0 left out.
+
+    Parameters
+    ----------
+    labels : (n,) int ndarray
+
+    Returns
+    -------
+    dict
+
+    Raises
+    ------
+    ParameterError
+        If no element has a label.
+
+    Examples
+    --------
+    >>> s = size_summary(np.array([0, 0, 1, 1, 1, 1, 2]))
+    >>> s["size_min"], s["size_median"], s["size_max"], s["size_histogram"]
+    (1, 2.0, 4, [1, 1, 1])
+    """
+    lab = np.asarray(labels, dtype=np.int64)
+    lab = lab[lab >= 0]
+    if not lab.size:
+        raise ParameterError("no labelled element")
+    sizes = np.unique(lab, return_counts=True)[1]
+    bins = np.floor(np.log2(sizes)).astype(np.int64)
+    return {"size_min": int(sizes.min()), "size_median": float(np.median(sizes)),
+            "size_max": int(sizes.max()),
+            "size_histogram": np.bincount(bins).astype(int).tolist()}
+
+
 def evaluate_rows(obj, labels, ground_truths: Sequence[np.ndarray], *,
                   elements: str | None = None, n_neighbors: int = DEFAULTS.n_neighbors,
                   tau: float = 0.05,
@@ -362,8 +459,10 @@ def evaluate_rows(obj, labels, ground_truths: Sequence[np.ndarray], *,
     Returns
     -------
     dict
-        :func:`evaluate`'s metrics and ``segments`` (distinct labels among
-        the elements).
+        :func:`evaluate`'s metrics, ``segments`` (distinct labels among the
+        elements), ``oracle_miou`` (:func:`oracle_miou`, the mean over the ground
+        truths) and ``oracle_iou_per_class`` (with one ground truth), and the
+        segments' sizes (:func:`size_summary`).
 
     Raises
     ------
@@ -394,4 +493,9 @@ def evaluate_rows(obj, labels, ground_truths: Sequence[np.ndarray], *,
     out = evaluate(g, lab, gts, tau=tau, tolerance=tolerance, precision=precision,
                    equal_weight=kind_of(g.kind).equal_weight, ignore_label=ignore_label)
     out["segments"] = int(np.unique(lab).size)
+    weights = None if kind_of(g.kind).equal_weight else g.sizes
+    mious = [oracle_miou(lab, gt, weights=weights, ignore_label=ignore_label) for gt in gts]
+    out["oracle_miou"] = float(np.mean([m for m, _ in mious]))
+    out["oracle_iou_per_class"] = mious[0][1] if len(mious) == 1 else {}
+    out.update(size_summary(lab))
     return out
