@@ -85,7 +85,8 @@ FLOATS = (float("nan"), float("inf"), -float("inf"), 0.0, -1.0)
 
 def scalar_cases(calls: dict):
     """(path, argument, member, value) of every call with one scalar spoilt, or one array
-    inside a tuple argument emptied (member: its place; value: None)."""
+    emptied (member ``'all'``: the argument; an int: its place in a tuple argument;
+    value: None)."""
     for path in sorted(calls):
         args, _ = calls[path]
         for i, a in enumerate(args):
@@ -95,6 +96,8 @@ def scalar_cases(calls: dict):
                 yield from ((path, i, None, v) for v in INTS)
             elif isinstance(a, (float, np.floating)):
                 yield from ((path, i, None, v) for v in FLOATS)
+            elif isinstance(a, np.ndarray) and a.size:
+                yield path, i, "all", None  # (the array emptied: a cap, a buffer of 0)
             elif isinstance(a, tuple):
                 yield from ((path, i, j, None) for j, x in enumerate(a)
                             if isinstance(x, np.ndarray))
@@ -114,6 +117,8 @@ def scalar_call(calls: dict, path: str, i: int, j, value):
     args = [copy(a) for a in args]
     if j is None:
         args[i] = value
+    elif j == "all":
+        args[i] = args[i][:0]
     else:
         parts = list(args[i])
         parts[j] = parts[j][:0]
