@@ -109,6 +109,7 @@ def test_experiment_runs_on_a_user_s_files(tmp_path, capsys, sphere):
         (m, k) for m in ("superfacets", "graph_segmentation") for k in ("10", "30")}
     assert all(r["status"] == "ok" and r["elements"] == "points" for r in rows)
     assert all(0 <= float(r["undersegmentation_error"]) < 1 for r in rows)
+    assert all(0.9 < float(r["oracle_miou"]) <= 1 for r in rows)  # two terraces, two classes
     mesh_rows = tmp_path / "mesh.csv"
     assert main(["experiment", "--inputs", str(tmp_path / "ball.off"), "-k", "12",
                  "--alpha", "200", "-o", str(mesh_rows), "-j", "1", "-q"]) == 0

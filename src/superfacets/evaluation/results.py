@@ -31,7 +31,7 @@ KEY_COLUMNS = ("mesh", "method", "n_segments", "seed")
 _HEAD = ["mesh", "mesh_id", "category", "n_faces", "method", "elements", "n_elements",
          "n_segments"]
 _TAIL = ["seed", "status", "segments", "iterations", "converged", "seconds", "peak_mib",
-         *METRICS, "n_ground_truths", "error"]
+         *METRICS, "oracle_miou", "n_ground_truths", "error"]
 
 
 def _param_names(configs: Iterable = ()) -> list[str]:

@@ -114,7 +114,7 @@ def _element_values(source):
 
 def _run_task(task: dict) -> list[dict]:
     """Run one config over a list of n_segments on one mesh; one row each."""
-    from ...evaluation.metrics import evaluate
+    from ...evaluation.metrics import evaluate, oracle_miou
 
     base = dict(task["base"])
     run = task["run"]
@@ -164,9 +164,13 @@ def _run_task(task: dict) -> list[dict]:
                        iterations=out.n_iter, converged=out.converged,
                        n_ground_truths=len(gts))
             if gts:
+                equal = kind_of(kind).equal_weight
                 row.update({m: round(v, 6) for m, v in
                             evaluate(graph, labels, gts, tau=task["tau"],
-                                     equal_weight=kind_of(kind).equal_weight).items()})
+                                     equal_weight=equal).items()})
+                weights = None if equal else graph.sizes  # (each class's share, as the UE's)
+                row["oracle_miou"] = round(float(np.mean(
+                    [oracle_miou(labels, gt, weights=weights)[0] for gt in gts])), 6)
         except Skipped as exc:
             row.update(status="skipped", error=str(exc)[:500], seconds=None)
         except Exception as exc:  # noqa: BLE001 - recorded, the run goes on
