@@ -53,14 +53,16 @@ def cases(calls: dict):
                     yield path, i, j, how
 
 
+def copy(x):
+    """A copy of an argument: arrays copied, tuples of them too; anything else as it is."""
+    if isinstance(x, np.ndarray):
+        return x.copy()
+    return tuple(map(copy, x)) if isinstance(x, tuple) else x
+
+
 def call(calls: dict, path: str, i: int, j, how: str):
     """The kernel ``path`` on copies of its recorded arguments, argument ``i`` spoilt."""
     from superfacets._kernels import native
-
-    def copy(x):
-        if isinstance(x, np.ndarray):
-            return x.copy()
-        return tuple(map(copy, x)) if isinstance(x, tuple) else x
 
     args, kwargs = calls[path]
     args = [copy(a) for a in args]
@@ -107,11 +109,6 @@ def scalar_call(calls: dict, path: str, i: int, j, value):
     """The kernel ``path`` on copies of its recorded arguments, argument ``i`` (or member
     ``j`` of it, emptied) spoilt."""
     from superfacets._kernels import native
-
-    def copy(x):
-        if isinstance(x, np.ndarray):
-            return x.copy()
-        return tuple(map(copy, x)) if isinstance(x, tuple) else x
 
     args, kwargs = calls[path]
     args = [copy(a) for a in args]
