@@ -145,3 +145,41 @@ def slowed(monkeypatch, owner, name: str, seconds: float = 0.4) -> None:
         return real(*args, **kwargs)
 
     monkeypatch.setattr(owner, name, slow)
+
+
+# -- nothing written into the repository ------------------------------------------------
+# A test or an example writes into temporary folders only: the untracked files that git
+# does not ignore are listed as the session starts and again as it ends (in the process
+# that runs the session, not in pytest-xdist's workers); a new one fails the run.
+_REPO = Path(__file__).resolve().parent.parent
+
+
+def _stray_files() -> set[str] | None:
+    import shutil
+    import subprocess
+
+    if shutil.which("git") is None or not (_REPO / ".git").exists():
+        return None
+    run = subprocess.run(["git", "status", "--porcelain", "--untracked-files=all"],
+                         cwd=_REPO, capture_output=True, text=True)
+    if run.returncode != 0:
+        return None
+    return {line[3:] for line in run.stdout.splitlines() if line.startswith("?? ")}
+
+
+def pytest_sessionstart(session):
+    if not hasattr(session.config, "workerinput"):
+        session.config._stray_before = _stray_files()
+
+
+def pytest_sessionfinish(session, exitstatus):
+    before = getattr(session.config, "_stray_before", None)
+    if before is None or hasattr(session.config, "workerinput"):
+        return
+    new = sorted((_stray_files() or set()) - before)
+    if new:
+        reporter = session.config.pluginmanager.get_plugin("terminalreporter")
+        if reporter is not None:
+            reporter.write_line(f"the tests left files in the repository: {new[:10]}",
+                                red=True)
+        session.exitstatus = pytest.ExitCode.TESTS_FAILED
