@@ -29,14 +29,13 @@ error naming its row.
 from __future__ import annotations
 
 import io
-import re
-import warnings
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import MeshFormatError
 from ..inputs.rgb import unit_colors
+from .columns import read_columns
 from .files import read_bytes, split_suffix
 from .ply import ply_colors, read_ply_scalars
 
@@ -163,7 +162,7 @@ def read_cloud(path, format: str | None = None):
         elif fmt == "npy":
             kw = _read_npy(data, path)
         else:
-            kw = _read_columns(data, path)
+            kw = read_columns(data, path)
     if kw["points"].shape[0] == 0:
         raise InvalidCloudError(f"{path}: empty point cloud: no point")
     try:
@@ -401,93 +400,3 @@ def _read_npy(data: bytes, path: Path) -> dict:
         return {"points": arr[:, :3], "normals": arr[:, 3:] if arr.shape[1] == 6 else None}
     raise MeshFormatError(f"{path}: NPY array of shape {arr.shape}: expected (N, 3) points, "
                           "(N, 6) points and normals, or organized (H, W, 3)")
-
-
-_HEADER = re.compile(r"^\s*(#|//)\s*")
-
-
-def _read_columns(data: bytes, path: Path) -> dict:
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError:
-        raise MeshFormatError(f"{path}: not a text file (binary data in a text format)") \
-            from None
-    lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
-    names = None
-    body = []
-    for ln in lines:
-        if _HEADER.match(ln):
-            if names is None and body == []:
-                words = [w.lower() for w in re.split(r"[\s,]+", _HEADER.sub("", ln).strip()) if w]
-                if words and not all(_is_number(w) for w in words):
-                    names = words
-            continue
-        body.append(ln)
-    if body and len(body[0].split()) == 1 and body[0].strip().isdigit():
-        declared = int(body[0])  # a PTS count line
-        body = body[1:]
-        if len(body) < declared:
-            raise MeshFormatError(f"{path}: truncated: the first line declares {declared} "
-                                  f"points, the file has {len(body)}")
-        body = body[:declared]
-    if not body:
-        return {"points": np.zeros((0, 3))}
-    arr = _numbers(body)
-    if arr is None:  # (ragged, or not numbers as numpy reads them: line by line)
-        arr = _parsed_by_line(body, path)
-    width = arr.shape[1]
-    if names is not None:
-        if len(names) != width:
-            raise MeshFormatError(f"{path}: the header names {len(names)} columns "
-                                  f"({' '.join(names)}), the lines have {width}")
-        missing = [c for c in "xyz" if c not in names]
-        if missing:
-            raise MeshFormatError(f"{path}: unknown columns: the header {' '.join(names)} "
-                                  f"names no {', '.join(missing)} column")
-        pts = arr[:, [names.index(c) for c in "xyz"]]
-        nrm = None
-        if all(c in names for c in ("nx", "ny", "nz")):
-            nrm = arr[:, [names.index(c) for c in ("nx", "ny", "nz")]]
-        return {"points": pts, "normals": nrm}
-    if width < 3:
-        raise MeshFormatError(f"{path}: point lines need 3 columns (x y z), found {width}")
-    return {"points": arr[:, :3]}
-
-
-def _numbers(body: list) -> np.ndarray | None:
-    """The lines' numbers as an (n, width) float64 array, parsed by numpy (2M lines of
-    three: 0.3 s, against 4 s split by a pattern), or None where a line is ragged or holds
-    something else."""
-    if any("," in ln or ";" in ln for ln in body):
-        body = [ln.replace(",", " ").replace(";", " ") for ln in body]
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            return np.loadtxt(body, dtype=np.float64, comments=None, ndmin=2)
-    except ValueError:
-        return None
-
-
-def _parsed_by_line(body: list, path: Path) -> np.ndarray:
-    """The lines' numbers, split line by line; a line with another number of columns than
-    the first, or holding something other than numbers, named (:class:`MeshFormatError`)."""
-    rows = [re.split(r"[\s,;]+", b.strip()) for b in body]
-    width = len(rows[0])
-    for i, r in enumerate(rows):
-        if len(r) != width:
-            raise MeshFormatError(f"{path}: line {i + 1} of the points has {len(r)} columns, "
-                                  f"the first has {width}")
-    try:
-        return np.array(rows, dtype=np.float64)
-    except ValueError:
-        bad = next(i for i, r in enumerate(rows) if not all(_is_number(w) for w in r))
-        raise MeshFormatError(f"{path}: point line {bad + 1} is not numbers: "
-                              f"{body[bad].strip()[:80]!r}") from None
-
-
-def _is_number(word: str) -> bool:
-    try:
-        float(word)
-        return True
-    except ValueError:
-        return False

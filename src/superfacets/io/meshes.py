@@ -21,6 +21,7 @@ from ..errors import InvalidMeshError, MeshFormatError
 from ..inputs.mesh import Mesh, narrow_faces
 from .files import read_bytes, read_head, split_suffix, text_lines
 from .headers import check_gltf, check_stl, header_counts
+from .obj import parse_obj
 from .ply import read_ply_triangles
 
 __all__ = ["read_mesh", "MESH_FORMATS"]
@@ -91,7 +92,7 @@ def read_mesh(path, format: str | None = None) -> Mesh:
     elif fmt == "tri":
         v, f = _parse_tri(data, path)
     elif fmt == "obj":
-        v, f, objects, colors = _parse_obj(data, path)
+        v, f, objects, colors = parse_obj(data, path)
     elif fmt in ("glb", "gltf"):
         check_gltf(data, fmt, path)  # (a cycle or a deep nesting: before trimesh walks it)
         return _load_scene(path, fmt, comp, data)
@@ -235,80 +236,6 @@ def _parse_tri(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
     return v, f
 
 
-def _parse_obj(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
-    """Wavefront OBJ: ``v`` and ``f`` lines, in file order, every object of the file.
-
-    Faces of any size are kept as polygons; ``o`` statements name objects
-    (returned as face ranges). Indices are 1-based; a negative index counts back from the
-    last vertex
-    defined before its face line (the OBJ rule); ``0`` is an error. In ``f``
-    lines, ``i/t/n`` keeps ``i``. ``v x y z r g b`` lines give vertex colours
-    (where every ``v`` line has them). Separators may be spaces or tabs. Other
-    statements (``vt``, ``vn``, ``g``, ``o``, ``usemtl``, ...) are skipped.
-    """
-    vrows: list[str] = []
-    frows: list[str] = []
-    before: list[int] = []  # vertices defined before each face line
-    starts: list[tuple[str, int]] = []  # ("o" statements) object name, first face
-    for ln in text_lines(data, path):
-        key, *rest = ln.split(None, 1)  # spaces or tabs
-        rest = rest[0] if rest else ""
-        if key == "v":
-            vrows.append(rest)
-        elif key == "f":
-            frows.append(rest)
-            before.append(len(vrows))
-        elif key == "o":
-            starts.append((rest.strip() or f"object{len(starts)}", len(frows)))
-    if not frows:
-        raise InvalidMeshError(f"{path}: empty mesh: no faces")
-    rows = [r.split() for r in vrows]
-    try:
-        v = np.array([r[:3] for r in rows], dtype=np.float64).reshape(-1, 3)
-    except ValueError:
-        bad = next(i for i, r in enumerate(vrows) if not _floats3(r))
-        raise MeshFormatError(f"{path}: malformed vertex {bad}: 'v {vrows[bad]}' (3 "
-                              "coordinates expected)") from None
-    colors = None
-    if rows and all(len(r) >= 6 for r in rows):  # v x y z r g b (MeshLab, Open3D)
-        try:
-            colors = _unit(np.array([r[3:6] for r in rows], dtype=np.float64))
-        except ValueError:
-            bad = next(i for i, r in enumerate(rows) if not _floats3(" ".join(r[3:6])))
-            raise MeshFormatError(f"{path}: malformed vertex colour {bad}: 'v {vrows[bad]}' "
-                                  "(x y z r g b expected)") from None
-    faces: list[list[int]] = []
-    for i, (row, nv) in enumerate(zip(frows, before)):
-        tok = row.split()
-        if len(tok) < 3:
-            raise MeshFormatError(f"{path}: face {i} has only {len(tok)} vertex indices (3 or "
-                                  f"more needed): 'f {row}'")
-        face = [0] * len(tok)
-        for j, t in enumerate(tok):
-            try:
-                k = int(t.split("/", 1)[0])
-            except ValueError:
-                raise MeshFormatError(f"{path}: face {i}: malformed vertex index {t!r}") \
-                    from None
-            if k == 0:
-                raise MeshFormatError(f"{path}: face {i}: vertex index 0 (OBJ indices start "
-                                      "at 1)")
-            k = k - 1 if k > 0 else nv + k
-            if not 0 <= k < len(vrows):
-                raise MeshFormatError(f"{path}: face {i}: vertex index {t} out of range "
-                                      f"({nv} vertices defined before it, {len(vrows)} in all)")
-            face[j] = k
-        faces.append(face)
-    objects = []
-    if starts:  # faces before the first "o" form an unnamed object
-        bounds = ([("default", 0)] if starts[0][1] > 0 else []) + starts
-        ends = [b for _, b in bounds[1:]] + [len(faces)]
-        objects = [(nm, a, b) for (nm, a), b in zip(bounds, ends) if b > a]
-    if all(len(f) == 3 for f in faces):
-        faces = np.array(faces, dtype=np.int64).reshape(-1, 3)
-    return v, faces, tuple(objects), colors
-
-
 def _load_scene(path: Path, fmt: str, comp: str | None, data: bytes) -> Mesh:
     """A glTF/GLB file through trimesh, its objects joined (:mod:`superfacets.inputs.convert`)."""
     import trimesh
@@ -329,13 +256,6 @@ def _load_scene(path: Path, fmt: str, comp: str | None, data: bytes) -> Mesh:
         return mesh_from_scene(scene, name=path.name)
     except InvalidMeshError as exc:
         raise InvalidMeshError(f"{path}: {str(exc).removeprefix(path.name + ': ')}") from None
-
-
-def _floats3(row: str) -> bool:
-    try:
-        return len([float(x) for x in row.split()[:3]]) == 3
-    except ValueError:
-        return False
 
 
 # ---------------------------------------------------------- via trimesh

@@ -1,0 +1,184 @@
+"""Points as columns of text (XYZ, PTS, TXT, CSV), read in pieces of a few megabytes.
+
+The header (comment lines before the first point, ``#`` or ``//``; the first of them
+that holds words names the columns) is read line by line; the points' lines are cut
+into pieces parsed by :func:`numpy.loadtxt` (2M lines of three numbers: 0.3 s), a piece
+numpy cannot read whole being read line by line, which names the faulty line. The lines
+of the whole file are never held at once as Python strings.
+"""
+
+from __future__ import annotations
+
+import re
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import MeshFormatError
+
+__all__ = ["read_columns"]
+
+_HEADER = re.compile(r"^\s*(#|//)\s*")
+_COMMENT = ("#", "//")
+
+
+def read_columns(data: bytes, path: Path, size: int = 1 << 23) -> dict:
+    """The points (and normals, where the header names ``nx ny nz``) of a text cloud.
+
+    Parameters
+    ----------
+    data : bytes
+        The file's (decompressed) content, UTF-8.
+    path : pathlib.Path
+        Named in errors.
+    size : int
+        Bytes per piece.
+
+    Returns
+    -------
+    dict
+        ``points`` ``(N, 3) float64`` and, where named, ``normals``.
+
+    Raises
+    ------
+    MeshFormatError
+        Binary data, a header naming other columns than the lines have or no x, y, z, a
+        line of another width than the first or holding something else than numbers, a
+        PTS count line declaring more points than follow.
+
+    Examples
+    --------
+    >>> read_columns(b"// x y z\\n0 0 1\\n1 0 0\\n", Path("p.xyz"))["points"].tolist()
+    [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]]
+    """
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise MeshFormatError(f"{path}: not a text file (binary data in a text format)") \
+            from None
+    if "\r" in text:  # (old Mac and Windows line ends, as the header is read by "\n")
+        text = text.replace("\r\n", "\n").replace("\r", "\n")
+    names, start = _header(text)
+    parts: list[np.ndarray] = []
+    seen, declared = 0, None
+    for lines in _pieces(text, start, size):
+        if not parts and declared is None and lines[0].isdigit() and \
+                len(lines[0].split()) == 1:
+            declared, lines = int(lines[0]), lines[1:]  # a PTS count line
+        if declared is not None:
+            lines = lines[:declared - seen]
+        if lines:
+            arr = _numbers(lines)
+            if arr is None:  # (ragged, or not numbers as numpy reads them: line by line)
+                arr = _parsed_by_line(lines, path, seen)
+            _check_width(arr, parts, seen, path)
+            parts.append(arr)
+            seen += len(arr)
+        if declared is not None and seen >= declared:
+            break
+    if declared is not None and seen < declared:
+        raise MeshFormatError(f"{path}: truncated: the first line declares {declared} "
+                              f"points, the file has {seen}")
+    if not parts:
+        return {"points": np.zeros((0, 3))}
+    return _named(np.concatenate(parts), names, path)
+
+
+def _header(text: str) -> tuple[list[str] | None, int]:
+    """The column names (or None) and the offset of the first point's line."""
+    names, at = None, 0
+    while at < len(text):
+        end = text.find("\n", at)
+        end = len(text) if end < 0 else end + 1
+        ln = text[at:end].strip()
+        if ln and not _HEADER.match(ln):
+            break
+        if ln and names is None:
+            words = [w.lower() for w in re.split(r"[\s,]+", _HEADER.sub("", ln).strip()) if w]
+            if words and not all(_is_number(w) for w in words):
+                names = words
+        at = end
+    return names, at
+
+
+def _pieces(text: str, start: int, size: int):
+    """Lists of the points' lines (stripped, commas and semicolons as spaces, comments
+    and blank lines left out), each from about ``size`` characters."""
+    while start < len(text):
+        end = text.find("\n", min(start + size, len(text)) - 1)
+        end = len(text) if end < 0 else end + 1
+        piece = text[start:end]
+        if ";" in piece or "," in piece:
+            piece = piece.replace(",", " ").replace(";", " ")
+        lines = list(filter(None, map(str.strip, piece.splitlines())))  # (the loop in C)
+        if "#" in piece or "//" in piece:
+            lines = [ln for ln in lines if not ln.startswith(_COMMENT)]
+        if lines:
+            yield lines
+        start = end
+
+
+def _check_width(arr: np.ndarray, parts: list, seen: int, path: Path) -> None:
+    if parts and arr.shape[1] != parts[0].shape[1]:
+        raise MeshFormatError(f"{path}: line {seen + 1} of the points has {arr.shape[1]} "
+                              f"columns, the first has {parts[0].shape[1]}")
+
+
+def _named(arr: np.ndarray, names: list[str] | None, path: Path) -> dict:
+    """The points (and normals) from the columns the header names, else the first three."""
+    width = arr.shape[1]
+    if names is not None:
+        shown = " ".join(names)
+        shown = shown if len(shown) <= 80 else shown[:77] + "..."
+        if len(names) != width:
+            raise MeshFormatError(f"{path}: the header names {len(names)} columns "
+                                  f"({shown}), the lines have {width}")
+        missing = [c for c in "xyz" if c not in names]
+        if missing:
+            raise MeshFormatError(f"{path}: unknown columns: the header {shown} "
+                                  f"names no {', '.join(missing)} column")
+        pts = arr[:, [names.index(c) for c in "xyz"]]
+        nrm = None
+        if all(c in names for c in ("nx", "ny", "nz")):
+            nrm = arr[:, [names.index(c) for c in ("nx", "ny", "nz")]]
+        return {"points": pts, "normals": nrm}
+    if width < 3:
+        raise MeshFormatError(f"{path}: point lines need 3 columns (x y z), found {width}")
+    return {"points": arr[:, :3]}
+
+
+def _numbers(body: list) -> np.ndarray | None:
+    """The lines' numbers as an (n, width) float64 array, parsed by numpy (about 0.5 s per
+    million lines), or None where a line is ragged or holds something else."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return np.loadtxt(body, dtype=np.float64, comments=None, ndmin=2)
+    except ValueError:
+        return None
+
+
+def _parsed_by_line(body: list, path: Path, seen: int) -> np.ndarray:
+    """The lines' numbers, split line by line; a line with another number of columns than
+    the first, or holding something other than numbers, named (:class:`MeshFormatError`)."""
+    rows = [re.split(r"[\s,;]+", b.strip()) for b in body]
+    width = len(rows[0])
+    for i, r in enumerate(rows):
+        if len(r) != width:
+            raise MeshFormatError(f"{path}: line {seen + i + 1} of the points has {len(r)} "
+                                  f"columns, the first has {width}")
+    try:
+        return np.array(rows, dtype=np.float64)
+    except ValueError:
+        bad = next(i for i, r in enumerate(rows) if not all(_is_number(w) for w in r))
+        raise MeshFormatError(f"{path}: point line {seen + bad + 1} is not numbers: "
+                              f"{body[bad].strip()[:80]!r}") from None
+
+
+def _is_number(word: str) -> bool:
+    try:
+        float(word)
+        return True
+    except ValueError:
+        return False
