@@ -78,10 +78,6 @@ def call(calls: dict, path: str, i: int, j, how: str):
 #: The values a scalar argument is spoilt with: counts and sizes of 0, -1 and past any
 #: memory; doubles that bound loops, not finite or not positive.
 INTS = (0, -1, 2**62, 2**31)
-#: The refusals a spoilt scalar may meet, by the exit status a child reports them with:
-#: the kernels' own, nanobind's for a value no C++ type holds, an allocation refused.
-REFUSALS = {"OutOfRange": 10, "Mismatch": 11, "TypeError": 12, "MemoryError": 13,
-            "ValueError": 14, "OverflowError": 15}
 FLOATS = (float("nan"), float("inf"), -float("inf"), 0.0, -1.0)
 
 
@@ -123,47 +119,52 @@ def scalar_call(calls: dict, path: str, i: int, j, value):
     return native.kernel(path)(*args, **copy(kwargs))
 
 
-def scalars(path: str, limit: float) -> None:
-    """Each scalar case in a forked child of its own, killed past ``limit`` seconds: prints
-    ``CASE``, then ``RESULT <outcome>``: ``ok``, the refusal's type, ``crash <signal>`` or
+def forked(run, limit: float, memory: int = 4 << 30) -> str:
+    """``run()`` in a forked child (its address space bounded by ``memory`` bytes), killed
+    past ``limit`` seconds: ``ok``, the type name of what it raised, ``crash <signal>`` or
     ``hang``."""
     import os
     import signal
     import time
 
+    r, w = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # the child: its outcome through the pipe
+        os.close(r)
+        resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
+        try:
+            run()
+            outcome = "ok"
+        except BaseException as exc:  # noqa: BLE001 (each outcome reported)
+            outcome = type(exc).__name__
+        os.write(w, outcome.encode())
+        os._exit(0)
+    os.close(w)
+    t0, status = time.monotonic(), None
+    while time.monotonic() - t0 < limit:
+        done, got = os.waitpid(pid, os.WNOHANG)
+        if done:
+            status = got
+            break
+        time.sleep(0.002)
+    if status is None:
+        os.kill(pid, signal.SIGKILL)
+        os.waitpid(pid, 0)
+    said = os.read(r, 200).decode(errors="replace")
+    os.close(r)
+    if status is None:
+        return "hang"
+    return f"crash {os.WTERMSIG(status)}" if os.WIFSIGNALED(status) else said or "silent"
+
+
+def scalars(path: str, limit: float) -> None:
+    """Each scalar case in a forked child of its own, killed past ``limit`` seconds: prints
+    ``CASE``, then ``RESULT <outcome>`` (:func:`forked`)."""
     with open(path, "rb") as f:
         calls = pickle.load(f)
     for case in scalar_cases(calls):
         print("CASE", *case, flush=True)
-        pid = os.fork()
-        if pid == 0:  # the child: its outcome as its exit status
-            resource.setrlimit(resource.RLIMIT_AS, (4 << 30, 4 << 30))
-            code = 0
-            try:
-                scalar_call(calls, *case)
-            except Exception as exc:  # noqa: BLE001 (each outcome reported)
-                code = REFUSALS.get(type(exc).__name__, 99)
-                if code == 99:
-                    print("OTHER", type(exc).__name__, str(exc)[:200], flush=True)
-            os._exit(code)
-        t0, status = time.monotonic(), None
-        while time.monotonic() - t0 < limit:
-            done, got = os.waitpid(pid, os.WNOHANG)
-            if done:
-                status = got
-                break
-            time.sleep(0.005)
-        if status is None:
-            os.kill(pid, signal.SIGKILL)
-            os.waitpid(pid, 0)
-            outcome = "hang"
-        elif os.WIFSIGNALED(status):
-            outcome = f"crash {os.WTERMSIG(status)}"
-        else:
-            names = {code: name for name, code in REFUSALS.items()}
-            outcome = "ok" if os.WEXITSTATUS(status) == 0 else names.get(
-                os.WEXITSTATUS(status), "other")
-        print("RESULT", outcome, flush=True)
+        print("RESULT", forked(lambda: scalar_call(calls, *case), limit), flush=True)
     print("DONE", flush=True)
 
 

@@ -6,9 +6,11 @@ from __future__ import annotations
 import gzip
 import json
 import lzma
+import os
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -266,3 +268,47 @@ def test_a_ply_of_faces_listing_no_vertex_is_refused_before_they_are_parsed(tmp_
     assert main(["segment", str(path), "-o", str(tmp_path / "x.seg")]) == 2
     assert time.perf_counter() - t0 < 3  # (was 4 s here for this 1M, minutes for 50M)
     assert "face 0 lists 0 vertices" in capsys.readouterr().err
+
+
+def test_public_functions_refuse_spoilt_arguments_without_crash_or_hang():
+    """Each public function's own example call with one argument spoilt (numbers: -1,
+    2**62, NaN; the top-level functions' arguments also a word, None, an object, an empty
+    array, a complex number), each in a forked child: a result or an exception, never a
+    crash or a hang (issue 110: boundary tolerances and smoothing rounds of 2**62 looped)."""
+    import inspect
+
+    import superfacets.errors as errors
+
+    script = Path(__file__).resolve().parent / "hostile_api.py"
+    out = subprocess.run([sys.executable, str(script), "30"], capture_output=True, text=True,
+                         timeout=900, cwd=script.parent,
+                         env={**os.environ, "SUPERFACETS_NUM_THREADS": "1"})
+    lines = out.stdout.splitlines()
+    assert out.returncode == 0 and lines and lines[-1] == "DONE", out.stderr[-2000:]
+    recorded = int(next(x for x in lines if x.startswith("RECORDED")).split()[1])
+    cases = [x[5:] for x in lines if x.startswith("CASE")]
+    outcomes = [x.split(" ", 1)[1] for x in lines if x.startswith("RESULT")]
+    ours = {n for n, c in vars(errors).items() if inspect.isclass(c)
+            and issubclass(c, errors.SuperfacetsError)}
+    allowed = ours | {"ok", "ValueError", "TypeError", "OverflowError", "MemoryError",
+                      "FileNotFoundError", "OutOfRange", "Mismatch"}
+    bad = [(c, o) for c, o in zip(cases, outcomes) if o not in allowed]
+    assert not bad, bad
+    assert recorded > 250 and len(cases) > 600 and outcomes.count("ParameterError") > 200
+
+
+def test_arguments_of_the_wrong_kind_are_named(tmp_path):
+    """A non-mesh to face_graph, a non-string format, a stray ``outputs``, a viewpoint in
+    words: one clear error each (were AttributeError and ValueError from inside)."""
+    from superfacets import face_graph, read_mesh, write_labels
+    from superfacets.errors import InvalidCloudError
+
+    with pytest.raises(TypeError, match="face_graph needs a superfacets.Mesh"):
+        face_graph(np.zeros((3, 3)))
+    with pytest.raises(TypeError, match="format must be a suffix"):
+        read_mesh(tmp_path / "m.off", format=3)
+    with pytest.raises(TypeError, match="outputs must be"):
+        write_labels(tmp_path / "l.seg", np.zeros(3, int), outputs=object())
+    assert not (tmp_path / "l.seg").exists()
+    with pytest.raises(InvalidCloudError, match="viewpoint must be 3 finite numbers"):
+        PointCloud(np.random.default_rng(0).random((10, 3)), viewpoint="x")

@@ -33,6 +33,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._kernels import native
+from ..checks import check_int
 from .graph import ElementGraph
 from .kinds import kind_of
 
@@ -41,6 +42,8 @@ __all__ = ["roughness_of", "content_scale", "adapted_graph", "window_factors", "
 
 #: Rounds of neighbour averaging of the roughness.
 SMOOTH_ROUNDS = 2
+#: The most smoothing rounds :func:`roughness_of` takes (each one pass over the pairs).
+MAX_ROUNDS = 10_000
 
 #: Rounds of neighbour averaging of the window factors (:func:`window_factors`).
 WINDOW_ROUNDS = 4
@@ -75,11 +78,17 @@ def roughness_of(graph: ElementGraph, rounds: int = SMOOTH_ROUNDS) -> np.ndarray
     ----------
     graph : ElementGraph
     rounds : int, default 2
+        At most :data:`MAX_ROUNDS`.
 
     Returns
     -------
     (n,) float64 ndarray
         Radians, in ``[0, pi]``; 0 on a plane, 0 for an element without neighbours.
+
+    Raises
+    ------
+    ParameterError
+        If ``rounds`` is not an integer in ``[0, MAX_ROUNDS]``.
 
     Examples
     --------
@@ -90,6 +99,7 @@ def roughness_of(graph: ElementGraph, rounds: int = SMOOTH_ROUNDS) -> np.ndarray
     >>> round(float(rho.min()), 4), round(float(rho.max()), 4)
     (1.0472, 1.0472)
     """
+    rounds = check_int("rounds", rounds, lo=0, hi=MAX_ROUNDS)
     n = graph.n_elements
     lo, hi = graph.pairs[:, 0], graph.pairs[:, 1]
     nor = np.asarray(graph.normals, dtype=np.float64)  # (points keep float32)

@@ -103,6 +103,9 @@ def face_graph(mesh) -> ElementGraph:
     >>> g.n_elements, g.n_edges
     (12, 18)
     """
+    if not all(hasattr(mesh, a) for a in ("faces", "n_vertices", "is_triangular")):
+        raise TypeError(f"face_graph needs a superfacets.Mesh, got {type(mesh).__name__} "
+                        "(superfacets.as_mesh converts trimesh, Open3D and (V, F) pairs)")
     return cached_on(mesh, "_face_graph", lambda: _build_face_graph_of(mesh))
 
 

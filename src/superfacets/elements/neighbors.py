@@ -36,6 +36,7 @@ import numpy as np
 
 from .._kernels import native
 from .._runtime.arrays import COMPILED_MIN
+from ..checks import check_int
 
 __all__ = ["BLOCK", "LEAF", "MAX_LEAF", "PointTree", "point_tree", "nearest", "local_keys",
            "local_frame", "key_window", "shared_prefix"]
@@ -79,7 +80,8 @@ def shared_prefix(keys: np.ndarray) -> int:
 
 def key_window(keys: np.ndarray, start: int) -> np.ndarray:
     """Bits ``start .. start + 63`` of each row's 189-bit key string (zeros past its end),
-    as one uint64 (the first bit the highest)."""
+    as one uint64 (the first bit the highest); ``start`` an integer >= 0."""
+    start = check_int("start", start, lo=0)
     if start >= 189:
         return np.zeros(keys.shape[0], dtype=np.uint64)
     if keys.shape[0] >= COMPILED_MIN and keys.flags.c_contiguous:  # one pass on threads

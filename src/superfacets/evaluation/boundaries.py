@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..checks import check_int
 from ..elements.builders import as_element_graph
 from ..elements.labels import check_labels, relabel_dense
 
@@ -64,7 +65,9 @@ def boundary_recall(graph, labels, ground_truth, *, tolerance: int = 1) -> float
 def near_boundary(g, s: np.ndarray, tolerance: int,
                   labelled: np.ndarray | None = None) -> np.ndarray:
     """(m,) bool: elements within ``tolerance`` rings of one on a boundary of ``s``
-    (where ``labelled`` is given, adjacencies with an unlabelled end are no boundary)."""
+    (where ``labelled`` is given, adjacencies with an unlabelled end are no boundary);
+    the rings stop growing once they cover every element they can reach."""
+    tolerance = check_int("tolerance", tolerance, lo=0)
     i, j = g.pairs[:, 0], g.pairs[:, 1]
     near = np.zeros(g.n_elements, dtype=bool)
     cut = s[i] != s[j]
@@ -72,10 +75,12 @@ def near_boundary(g, s: np.ndarray, tolerance: int,
         cut &= labelled[i] & labelled[j]
     near[i[cut]] = True
     near[j[cut]] = True
-    for _ in range(int(tolerance)):
+    for _ in range(tolerance):
         grow = near.copy()
         grow[j[near[i]]] = True
         grow[i[near[j]]] = True
+        if np.array_equal(grow, near):  # (a tolerance of 2**62 rings: as many as needed)
+            break
         near = grow
     return near
 
@@ -139,7 +144,8 @@ def boundary_precision(graph, labels, ground_truth, *, tolerance: int = 1) -> fl
     Raises
     ------
     ParameterError
-        If a label array does not have one integer per element.
+        If a label array does not have one integer per element, or ``tolerance`` is not
+        an integer >= 0.
 
     References
     ----------

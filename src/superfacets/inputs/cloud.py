@@ -143,7 +143,10 @@ class PointCloud:
                                valid=finite)
             object.__setattr__(self, "colors", readonly(col))
         if self.viewpoint is not None:
-            vp = np.asarray(self.viewpoint, dtype=np.float64).reshape(-1)
+            try:
+                vp = np.asarray(self.viewpoint, dtype=np.float64).reshape(-1)
+            except (TypeError, ValueError):  # (words, complex numbers, objects)
+                vp = np.full(1, np.nan)
             if vp.shape != (3,) or not np.isfinite(vp).all():
                 raise InvalidCloudError(f"{where}viewpoint must be 3 finite numbers, got "
                                         f"{self.viewpoint!r}")

@@ -120,6 +120,8 @@ def read_cloud(path, format: str | None = None):
         normals are zero or not finite.
     MissingExtraError
         PCD and LAS/LAZ without the ``clouds`` extra.
+    TypeError
+        If ``format`` is not a string.
 
     Examples
     --------
@@ -134,6 +136,8 @@ def read_cloud(path, format: str | None = None):
     path = Path(path)
     fmt, comp = split_suffix(path)
     if format is not None:
+        if not isinstance(format, str):
+            raise TypeError(f"format must be a suffix such as 'ply', got {format!r}")
         fmt = format.lower().lstrip(".")
     if fmt not in CLOUD_FORMATS + ("ply",):
         raise MeshFormatError(f"{path}: unknown point-cloud format "

@@ -21,6 +21,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Callable
 
+from ..checks import check_int
 from ..errors import MeshFormatError
 
 __all__ = ["split_suffix", "read_bytes", "text_lines", "text_chunks", "atomic_write", "Outputs",
@@ -217,6 +218,7 @@ def decompressed_head(path: Path, comp: str, size: int) -> bytes:
     comp : str
         The compression suffix.
     size : int
+        At most 1 GiB (a header is a few kilobytes).
 
     Returns
     -------
@@ -226,6 +228,8 @@ def decompressed_head(path: Path, comp: str, size: int) -> bytes:
     ------
     MeshFormatError
         If the stream's start is damaged.
+    ParameterError
+        If ``size`` is not an integer in ``[0, 2**30]``.
 
     Examples
     --------
@@ -233,6 +237,7 @@ def decompressed_head(path: Path, comp: str, size: int) -> bytes:
     >>> decompressed_head(Path("x.off.gz"), ".gz", 10)
     b'OFF\n3 1 0\n'
     """
+    size = check_int("size", size, lo=0, hi=1 << 30)
     try:
         with _OPENERS[comp](path, "rb") as f:
             return f.read(size)
@@ -572,5 +577,9 @@ def atomic_write(path, write: Callable[[io.BufferedWriter], None] | bytes) -> Pa
 
 
 def save(path, content, outputs: Outputs | None = None) -> Path:
-    """Write ``content`` to ``path`` atomically, or stage it in ``outputs`` when given."""
+    """Write ``content`` to ``path`` atomically, or stage it in ``outputs`` when given
+    (a :class:`TypeError` where ``outputs`` is something else)."""
+    if outputs is not None and not isinstance(outputs, Outputs):
+        raise TypeError(f"outputs must be a superfacets.io.files.Outputs, got "
+                        f"{type(outputs).__name__}")
     return atomic_write(path, content) if outputs is None else outputs.write(path, content)

@@ -64,6 +64,8 @@ def read_mesh(path, format: str | None = None) -> Mesh:
     InvalidMeshError
         If the content is not a usable mesh (empty, NaN/inf coordinates,
         indices out of range).
+    TypeError
+        If ``format`` is not a string.
 
     Examples
     --------
@@ -76,6 +78,8 @@ def read_mesh(path, format: str | None = None) -> Mesh:
     path = Path(path)
     fmt, comp = split_suffix(path)
     if format is not None:
+        if not isinstance(format, str):
+            raise TypeError(f"format must be a suffix such as 'ply', got {format!r}")
         fmt = format.lower().lstrip(".")
     if fmt not in MESH_FORMATS:
         raise MeshFormatError(

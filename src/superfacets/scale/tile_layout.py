@@ -31,6 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..checks import check_int
 from ..errors import ParameterError
 from ..inputs.bounds import finite_rows, rows_in_box
 
@@ -384,8 +385,15 @@ def trim_centers(positions: np.ndarray, k: int) -> np.ndarray:
     Returns
     -------
     (c,) bool ndarray
+
+    Raises
+    ------
+    ParameterError
+        If ``k`` is not an integer >= 0.
     """
     from scipy.spatial import cKDTree
+
+    k = check_int("k", k, lo=0)
 
     keep = np.ones(positions.shape[0], dtype=bool)
     while keep.sum() > k:

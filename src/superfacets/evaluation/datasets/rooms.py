@@ -33,6 +33,8 @@ from functools import lru_cache
 
 import numpy as np
 
+from ...checks import check_int
+
 __all__ = ["CLASSES", "make_room", "room_names", "load_room", "statues", "RoomEntry",
            "room_entries"]
 
@@ -40,6 +42,8 @@ __all__ = ["CLASSES", "make_room", "room_names", "load_room", "statues", "RoomEn
 CLASSES = {"ceiling": 0, "floor": 1, "wall": 2, "window": 5, "door": 6, "table": 7,
            "chair": 8, "sofa": 9, "bookcase": 10, "board": 11, "clutter": 12}
 
+#: The most rooms an experiment may ask for (each a few seconds to make).
+MAX_ROOMS = 100_000
 _SPACING = 0.03  # the voxel, metres (S3DIS's usual subsampling)
 _NOISE = 0.005  # sensor noise in position, metres (one standard deviation)
 _COLOR_NOISE = 0.02  # and in each colour channel (colours in [0, 1])
@@ -328,12 +332,17 @@ def make_room(seed: int = 0, meshes=(), *, color_noise: float = _COLOR_NOISE
 def room_names(n: int) -> list[str]:
     """The names of the first ``n`` rooms: ``room-0`` ... (what :func:`load_room` reads).
 
+    Raises
+    ------
+    ParameterError
+        If ``n`` is not an integer in ``[0, MAX_ROOMS]``.
+
     Examples
     --------
     >>> room_names(2)
     ['room-0', 'room-1']
     """
-    return [f"room-{i}" for i in range(n)]
+    return [f"room-{i}" for i in range(check_int("the number of rooms", n, 0, MAX_ROOMS))]
 
 
 @lru_cache(maxsize=1)
@@ -419,6 +428,6 @@ def room_entries(n: int) -> list[RoomEntry]:
 
     from ...errors import ParameterError
 
-    if n < 1:
+    if isinstance(n, int) and n < 1:
         raise ParameterError(f"--rooms must be at least 1, got {n}")
     return [RoomEntry(i, path=Path(name)) for i, name in enumerate(room_names(n))]
