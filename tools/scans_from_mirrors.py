@@ -12,7 +12,8 @@ bare mirror) of the repository is at hand, this reads each file of
 files stay outside the repository. Example::
 
     python tools/scans_from_mirrors.py isl-org/Open3D-ML=~/src/Open3D-ML \\
-        open-mmlab/mmdetection3d=~/src/mmdetection3d PDAL/PDAL=~/src/PDAL
+        open-mmlab/mmdetection3d=~/src/mmdetection3d PDAL/PDAL=~/src/PDAL \\
+        r-lidar/lidR=~/src/lidR
 """
 
 from __future__ import annotations

@@ -37,7 +37,19 @@ def _write_kitti(folder, frame="000700", unlabelled=50):
 
 
 def test_registry_pins_every_file():
-    assert len(SCANS) >= 3
+    """At least ten scans of three kinds (issue 109: airborne, street, indoor), each file
+    pinned to a commit and its SHA-256, each cache name its own."""
+    import importlib.util
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location(
+        "real_scans", Path(__file__).resolve().parents[2] / "benchmarks" / "real_scans.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    kinds = {bench.scan_kind(n) for n in SCANS}
+    assert len(SCANS) >= 10 and {"airborne", "street", "indoor"} <= kinds
+    names = [f for src in SCANS.values() for f, _, _ in src.files]
+    assert len(set(names)) == len(names)
     for name, src in SCANS.items():
         assert src.name == name and src.labels in ("semantickitti", "las", "scannet")
         for fname, url, sha in src.files:
@@ -185,6 +197,33 @@ def test_fetch_checks_the_checksum_and_keeps_nothing_wrong(tmp_path, monkeypatch
     with pytest.raises(FileNotFoundError, match="checksum"):
         fetch_scan(name, cache)
     assert list(cache.iterdir()) == []  # no file, no partial download
+
+
+def test_las_instances_from_an_extra_dimension(tmp_path, monkeypatch):
+    """lidR's treeID: each tree an instance; points on none (0, or lidR's NA written as
+    the largest double) one instance per class; class 0 unlabelled in both."""
+    laspy = pytest.importorskip("laspy")
+    pts, cls = _plane_points()
+    las = laspy.LasData(laspy.LasHeader(point_format=1, version="1.2"))
+    las.add_extra_dim(laspy.ExtraBytesParams("treeID", type=np.float64))
+    las.header.scales = [0.001] * 3
+    las.x, las.y, las.z = pts.T
+    cls = np.where(cls == 1, 2, 1).astype(np.uint8)  # ground, unclassified
+    cls[:5] = 0
+    las.classification = cls
+    tree = np.where(cls == 1, 1 + np.arange(len(cls)) % 2, np.finfo(np.float64).max)
+    tree[np.flatnonzero(cls == 2)[:3]] = 0
+    las["treeID"] = tree
+    las.write(tmp_path / "t.las")
+    src = ScanSource("trees", "airborne LiDAR, test", (("t.las", "https://x/" + "0" * 40,
+                                                        "0" * 64),), "las", "test",
+                     instance_field="treeID")
+    monkeypatch.setitem(scans.SCANS, "trees", src)
+    s = load_scan("trees", tmp_path)
+    gt, inst = s.ground_truth, s.instances
+    assert ((gt == UNLABELLED) == (inst == UNLABELLED)).all() and (gt[:5] == UNLABELLED).all()
+    assert sorted(np.unique(inst[cls == 1]).tolist()) == [1, 2]  # two trees
+    assert len(np.unique(inst[cls == 2])) == 1 and inst[cls == 2][0] > 2  # ground: one
 
 
 def test_fetch_failure_is_one_clear_error(tmp_path, monkeypatch):

@@ -78,6 +78,9 @@ class ScanSource:
         sensor and scene (a key of
         :data:`superfacets.evaluation.baselines.spt_partition.PRESETS`), for
         that baseline.
+    instance_field : str
+        A LAS extra dimension naming each point's object (lidR's ``treeID``: 0 where
+        the point is on no tree; those take one instance per class), or ``""``.
     """
 
     name: str
@@ -86,6 +89,7 @@ class ScanSource:
     labels: str
     credit: str
     spt_preset: str = "scannet"
+    instance_field: str = ""
 
 
 def _github(repo: str, commit: str, path: str) -> str:
@@ -95,6 +99,20 @@ def _github(repo: str, commit: str, path: str) -> str:
 _O3D = ("isl-org/Open3D-ML", "0cbfde63a7eb5821f73118bbe0cf20ca353bb974")
 _PDAL = ("PDAL/PDAL", "ccf0ab7046072f68cab78734e90d0d3149f3af10")
 _MMDET3D = ("open-mmlab/mmdetection3d", "9e39d469eb37054d469b8979ae5ac031a48017fc")
+_LIDR = ("r-lidar/lidR", "d185a7eb3d8de52272c9c60500fd104b97197cf3")
+
+
+def _las(name: str, kind: str, repo: tuple, path: str, sha: str, credit: str, *,
+         instance_field: str = "") -> ScanSource:
+    """An airborne tile of a project's test data, its ASPRS classes as ground truth."""
+    return ScanSource(name, kind, ((f"{name.replace('-', '_')}.{path.rsplit('.', 1)[1]}",
+                                    _github(*repo, path), sha),), "las", credit, "dales",
+                      instance_field)
+
+
+_LIDR_CREDIT = ("from lidR's example data (Roussel et al., Remote Sensing of Environment "
+                "2020; GPL-3 package, data as shipped in inst/extdata): ASPRS classes ")
+_PDAL_CREDIT = "from PDAL's test data (BSD): ASPRS classes "
 
 
 def _pinned(repo: tuple, prefix: str, files) -> tuple:
@@ -146,6 +164,32 @@ SCANS: dict[str, ScanSource] = {s.name: s for s in (
         "classified with TerraScan in the IGN LiDAR HD scheme, coloured), from PDAL's test "
         "data: ASPRS classes ground, low/medium/high vegetation, building, unclassified, "
         "and 65 (IGN's artefacts)", "dales"),
+    _las("lidr-megaplot", "airborne LiDAR, forest plot", _LIDR, "inst/extdata/Megaplot.laz",
+         "e6526a427e3a7554dc7fd9df13900b8365b2136c6ff219a9fc130844c853a627",
+         _LIDR_CREDIT + "ground and unclassified (the trees)"),
+    _las("lidr-mixedconifer", "airborne LiDAR, conifer forest", _LIDR,
+         "inst/extdata/MixedConifer.laz",
+         "b7af31a4cf752044e493c3620d4f4301aa41553dd840502569f2f110ad876eb3",
+         _LIDR_CREDIT + "ground, unclassified and water; each tree an instance (treeID)",
+         instance_field="treeID"),
+    _las("lidr-topography", "airborne LiDAR, hilly terrain", _LIDR,
+         "inst/extdata/Topography.laz",
+         "3016d0d654a7b38f5589c1f60c302a50045b9bba6b2047b2e47a474e9ac8c149",
+         _LIDR_CREDIT + "ground, unclassified and water"),
+    _las("pdal-autzen", "airborne LiDAR, town (Autzen Stadium, Oregon)", _PDAL,
+         "test/data/las/autzen_trim.las",
+         "3d351885f3aa03d5ac92358037ba0b850ea4f56f644ffcc56d57cd5d830aaf75",
+         _PDAL_CREDIT + "ground and unclassified (buildings, trees)"),
+    _las("pdal-crop", "airborne LiDAR, 200 m tile", _PDAL, "test/data/las/4_6_crop.las",
+         "c432b44d4e938ed3895d3a8515f4e425da1ae5d9cffa74f95937854c40b8ed83",
+         _PDAL_CREDIT + "ground and unclassified"),
+    _las("pdal-sample", "airborne LiDAR, classified town block", _PDAL,
+         "test/data/las/sample_c.las",
+         "6f6b0be5970a86fceddde988ef6ae42661309a5067a6f65019581300e1df4fe8",
+         _PDAL_CREDIT + "ground, low/medium/high vegetation, building and others"),
+    _las("pdal-hexbin", "airborne LiDAR, open ground", _PDAL, "test/data/filters/hexbin-crop.las",
+         "d1206c580a8c9c56ae7b7bac4ac09d3e7c0082365fcd2340eeffcf6a2825ceef",
+         _PDAL_CREDIT + "ground and unclassified"),
     _scannet("scene0000_00", "c73b979bbff0bb2cc93cf6d57aea10234c807d246df16c6ecc40e8fbd896ac00",
              "7b5bf6e35fd5007618dc22748f50991208635be3aec9783ffd3f0f93761e2f68",
              "5ef2f8b2622c3512a19902807294216130f6332872cf3db121f6d5815cd0a8c4"),
@@ -332,8 +376,15 @@ def load_scan(name: str, cache=None, *, download: bool = False) -> Scan:
         laspy = require("laspy", "reading LAS/LAZ files")
         cloud = read_cloud(paths[0])
         with laspy.open(paths[0]) as fh:
-            gt = np.asarray(fh.read().classification, dtype=np.int64)
+            records = fh.read()
+        gt = np.asarray(records.classification, dtype=np.int64)
         gt[gt == 0] = UNLABELLED
+        if src.instance_field:  # each object; a point on none: one instance per class
+            raw = np.asarray(records[src.instance_field], dtype=np.float64)
+            none = ~(np.isfinite(raw) & (raw > 0) & (raw < 2**31))  # (lidR's NA: DBL_MAX)
+            ids = np.where(none, 0, raw).astype(np.int64)
+            instances = np.where(ids > 0, ids, ids.max(initial=0) + 1 + gt)
+            instances[gt == UNLABELLED] = UNLABELLED
     else:  # pragma: no cover - the registry above is the only source
         raise ParameterError(f"scan {name!r}: unknown label kind {src.labels!r}")
     if gt.shape[0] != cloud.n_total:
