@@ -479,11 +479,11 @@ def test_pieces_of_labels_on_threads_give_numba_numbers(monkeypatch, threads):
     noisy = np.where(rng.random(n) < 0.2, rng.integers(0, 37, n), blobs)
     pieces = []
     for labels in (noisy, np.zeros(n, dtype=np.int64)):
-        expected = reference("adjacency.same_label_components")(g.indptr, g.indices,
+        expected = reference("connectivity.same_label_components")(g.indptr, g.indices,
                                                                         labels)
         with monkeypatch.context() as m:
             m.setenv("SUPERFACETS_KERNEL_THREADS", threads)
-            got = native.kernel("adjacency.same_label_components")(g.indptr, g.indices, labels)
+            got = native.kernel("connectivity.same_label_components")(g.indptr, g.indices, labels)
         assert got.dtype == np.int64 and np.array_equal(got, expected)
         pieces.append(int(got.max()) + 1)
     assert pieces[0] > 5_000 and pieces[1] == 1
@@ -1252,7 +1252,7 @@ def test_other_dtypes_and_layouts_are_refused_before_any_work():
     assert issubclass(native.require().Mismatch, TypeError)
     strided = np.arange(10, dtype=np.int64)[::2]
     with pytest.raises(TypeError, match="labels"):
-        native.kernel("adjacency.same_label_components")(
+        native.kernel("connectivity.same_label_components")(
             np.array([0, 1, 2, 3, 4, 4]), np.array([1, 0, 3, 2], dtype=np.int32), strided)
     ro = np.empty(2)
     ro.setflags(write=False)

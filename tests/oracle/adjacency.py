@@ -10,8 +10,6 @@ vertex shared by thousands of faces). They give exactly the order a stable
 import numpy as np
 from numba import njit, prange
 
-from .geometry import pair_terms
-
 _SMALL = 32  # buckets up to this size: insertion sort
 
 
@@ -341,36 +339,6 @@ def number_pairs(indptr, indices, n, dual_edge, keep, pairs):
                 nid += 1
 
 
-@njit(cache=True, error_model="numpy")
-def same_label_components(indptr, indices, labels):
-    """Connected pieces of each label: ``comp[f]`` numbers the piece of ``f``,
-    pieces numbered in the order of their lowest element (the numbering of
-    ``scipy.sparse.csgraph.connected_components``). Returns ``comp`` (int64)."""
-    n = labels.shape[0]
-    comp = np.full(n, -1, dtype=np.int64)
-    stack = np.empty(n, dtype=np.int64)
-    c = 0
-    for s in range(n):
-        if comp[s] >= 0:
-            continue
-        lab = labels[s]
-        comp[s] = c
-        top = 0
-        stack[0] = s
-        top = 1
-        while top > 0:
-            top -= 1
-            f = stack[top]
-            for e in range(indptr[f], indptr[f + 1]):
-                g = indices[e]
-                if comp[g] < 0 and labels[g] == lab:
-                    comp[g] = c
-                    stack[top] = g
-                    top += 1
-        c += 1
-    return comp
-
-
 @njit(cache=True, error_model="numpy", parallel=True)
 def knn_csr(nbr, keep, indptr, rows, more, more_keep):
     """The symmetric graph of k-nearest-neighbour lists: ``i ~ j`` when ``j`` is in
@@ -440,66 +408,3 @@ def knn_csr(nbr, keep, indptr, rows, more, more_keep):
         for a in range(indptr[i + 1] - indptr[i]):
             raw[indptr[i] + a] = raw[s + a]
     return raw
-
-
-@njit(cache=True, error_model="numpy", nogil=True)
-def crossing_pairs(indptr, indices, labels):
-    """The pairs ``(i, j)``, ``i < j``, of a symmetric CSR layout whose labels differ, in
-    pair order (rows ascending, then ``j``): ``(m, 2)`` int64."""
-    n = indptr.shape[0] - 1
-    m = 0
-    for i in range(n):
-        for x in range(indptr[i], indptr[i + 1]):
-            j = indices[x]
-            if j > i and labels[j] != labels[i]:
-                m += 1
-    out = np.empty((m, 2), dtype=np.int64)
-    m = 0
-    for i in range(n):
-        for x in range(indptr[i], indptr[i + 1]):
-            j = indices[x]
-            if j > i and labels[j] != labels[i]:
-                out[m, 0] = i
-                out[m, 1] = j
-                m += 1
-    return out
-
-
-@njit(cache=True, error_model="numpy", nogil=True)
-def label_pair_sums(indptr, indices, labels, k, positions, normals, shares):
-    """The crossing adjacencies (:func:`crossing_pairs`) summed per pair of labels: the
-    keys ``lo * k + hi`` ascending, and per key ``(border, border * angle, border *
-    concave, crossings, angle, concave)`` added in pair order (a stable sort of the keys),
-    each border the mean of the two points' border shares and each angle ``acos`` of
-    :func:`~superfacets._kernels.geometry.pair_terms`' cosine: ``(E,)`` int64, ``(E, 6)``."""
-    pairs = crossing_pairs(indptr, indices, labels)
-    m = pairs.shape[0]
-    key = np.empty(m, dtype=np.int64)
-    for t in range(m):
-        a, b = labels[pairs[t, 0]], labels[pairs[t, 1]]
-        key[t] = min(a, b) * k + max(a, b)
-    order = np.argsort(key, kind="mergesort")
-    e = 0
-    for u in range(m):
-        if u == 0 or key[order[u]] != key[order[u - 1]]:
-            e += 1
-    keys = np.empty(e, dtype=np.int64)
-    sums = np.zeros((e, 6))
-    r = -1
-    for u in range(m):
-        t = order[u]
-        if u == 0 or key[t] != key[order[u - 1]]:
-            r += 1
-            keys[r] = key[t]
-        i, j = pairs[t, 0], pairs[t, 1]
-        _, cs, concave = pair_terms(positions, normals, i, j)
-        length = 0.5 * (shares[i] + shares[j])
-        ang = np.arccos(cs)
-        cc = 1.0 if concave else 0.0
-        sums[r, 0] += length
-        sums[r, 1] += length * ang
-        sums[r, 2] += length * cc
-        sums[r, 3] += 1.0
-        sums[r, 4] += ang
-        sums[r, 5] += cc
-    return keys, sums

@@ -99,3 +99,33 @@ def stray_borders(indptr, indices, piece, is_main, lengths, shares):
                         u += 1
                     t += 1
     return a, b, w
+
+
+@njit(cache=True, error_model="numpy")
+def same_label_components(indptr, indices, labels):
+    """Connected pieces of each label: ``comp[f]`` numbers the piece of ``f``,
+    pieces numbered in the order of their lowest element (the numbering of
+    ``scipy.sparse.csgraph.connected_components``). Returns ``comp`` (int64)."""
+    n = labels.shape[0]
+    comp = np.full(n, -1, dtype=np.int64)
+    stack = np.empty(n, dtype=np.int64)
+    c = 0
+    for s in range(n):
+        if comp[s] >= 0:
+            continue
+        lab = labels[s]
+        comp[s] = c
+        top = 0
+        stack[0] = s
+        top = 1
+        while top > 0:
+            top -= 1
+            f = stack[top]
+            for e in range(indptr[f], indptr[f + 1]):
+                g = indices[e]
+                if comp[g] < 0 and labels[g] == lab:
+                    comp[g] = c
+                    stack[top] = g
+                    top += 1
+        c += 1
+    return comp

@@ -7,8 +7,10 @@ the first run of any option is as fast as the next. The reference kernels they w
 written from (numba) live in the tests (``tests/oracle``), which check each compiled
 kernel against its reference bit for bit.
 
-:func:`kernel` gives the compiled callable for ``"module.name"`` (the module part names
-the concept the kernel serves; the compiled module is flat). A kernel takes exactly the
+:func:`kernel` gives the compiled callable for ``"source.name"``: one name in three places,
+the C++ source that defines it (``_kernels/cxx/source.cpp``, bound as the submodule
+``_cxx.source``), the address the package calls it by, and its reference
+(``tests/oracle/source.py``). A kernel takes exactly the
 dtypes and layouts its callers pass and never converts: anything else raises its
 ``Mismatch`` (a :class:`TypeError`) before touching any array, a defect of the caller.
 """
@@ -71,12 +73,15 @@ def limit_threads(n: int) -> int:
 
 
 def kernel(path: str) -> Callable[..., Any]:
-    """The compiled kernel ``"module.name"``."""
+    """The compiled kernel ``"source.name"``: ``name`` defined in ``_kernels/cxx/source.cpp``
+    (bound as the submodule ``_cxx.source``), its reference ``tests/oracle/source.py``."""
     found = _chosen.get(path)
     if found is None:
-        found = getattr(require(), path.split(".")[1], None)
+        source, _, name = path.partition(".")
+        found = getattr(getattr(require(), source, None), name, None)
         if found is None:
-            raise AttributeError(f"no compiled kernel {path!r}")
+            raise AttributeError(f"no compiled kernel {path!r} (src/superfacets/_kernels/cxx/"
+                                 f"{source}.cpp binds none of that name)")
         _chosen[path] = found
     return found
 

@@ -296,7 +296,7 @@ def crossing_adjacencies(g, lab: np.ndarray):
         t = g.terms
         return (g.pairs[cross], np.asarray(g.lengths, dtype=np.float64)[cross],
                 t.cos[cross], t.concave[cross])
-    crossing_pairs = native.kernel("adjacency.crossing_pairs")
+    crossing_pairs = native.kernel("borders.crossing_pairs")
     point_terms = native.kernel("geometry.point_terms")
 
     pc = crossing_pairs(g.indptr, g.indices, lab)

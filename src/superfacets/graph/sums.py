@@ -75,7 +75,7 @@ def border_sums(graph, labels: np.ndarray, k: int) -> dict:
         pc, length, cos, concave = crossing_adjacencies(graph, lab)
         return pair_sums(lab[pc[:, 0]], lab[pc[:, 1]], length,
                          np.arccos(np.clip(cos, -1.0, 1.0)), concave.astype(np.float64))
-    keys, sums = native.kernel("adjacency.label_pair_sums")(
+    keys, sums = native.kernel("borders.label_pair_sums")(
         graph.indptr, graph.indices, lab, int(k), np.ascontiguousarray(graph.positions),
         graph.normals, np.ascontiguousarray(graph.border_shares, dtype=np.float64))
     kk = max(int(k), 1)

@@ -43,7 +43,7 @@ def label_components(graph, labels: np.ndarray) -> np.ndarray:
     """
     graph = as_element_graph(graph)
     labels = check_labels(labels, graph.n_elements, per=graph.element)
-    same_label_components = native.kernel("adjacency.same_label_components")
+    same_label_components = native.kernel("connectivity.same_label_components")
 
     # a depth-first search per piece over the graph's CSR, pieces numbered by their
     # lowest element (as scipy's connected_components of the same-label subgraph)

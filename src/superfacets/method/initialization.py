@@ -49,7 +49,7 @@ def first_center(graph) -> int:
 
 def _pieces(g) -> tuple[np.ndarray, int]:
     """Connected piece of every element (numbered by lowest element) and their number."""
-    same_label_components = native.kernel("adjacency.same_label_components")
+    same_label_components = native.kernel("connectivity.same_label_components")
 
     n = g.n_elements
     piece = same_label_components(g.indptr, g.indices, np.zeros(n, dtype=np.int64))

@@ -1,8 +1,8 @@
 // The kernels of the baselines that are not the method: the Felzenszwalb-Huttenlocher
 // graph segmentation (the ScanNet Segmentator's method), the covariances of cut pursuit's
 // geometric features, and Variational Shape Approximation's flooding, fitting sums and
-// assessment (Cohen-Steiner, Alliez, Desbrun 2004). The reference kernels are in
-// tests/oracle; each here does the same operations in the same order.
+// assessment (Cohen-Steiner, Alliez, Desbrun 2004). Reference, bit for bit:
+// tests/oracle/baselines.py (felzenszwalb.py, vsa.py); the same operations in order.
 #include "common.hpp"
 
 namespace sfk {
@@ -347,12 +347,34 @@ void vsa_worst_faces(nb::handle label_, i64 n_proxies, i64 metric, nb::handle ar
 }
 
 void bind_baselines(nb::module_& m) {
-    m.def("felzenszwalb", &felzenszwalb);
-    m.def("csr_covariances", &csr_covariances);
-    m.def("vsa_partition", &vsa_partition);
-    m.def("vsa_sums", &vsa_sums);
-    m.def("vsa_assess", &vsa_assess);
-    m.def("vsa_worst_faces", &vsa_worst_faces);
+    m.def("felzenszwalb", &felzenszwalb,
+          ".felzenszwalb.felzenszwalb with its threshold as float32 (the compiled kernel takes "
+          "it as a float holding a float32 value).",
+          nb::arg("n"), nb::arg("lo"), nb::arg("hi"), nb::arg("w"), nb::arg("order"),
+          nb::arg("k_thresh"), nb::arg("min_size"), nb::arg("labels"));
+    m.def("csr_covariances", &csr_covariances,
+          "Out[i].",
+          nb::arg("indptr"), nb::arg("indices"), nb::arg("points"), nb::arg("out"));
+    m.def("vsa_partition", &vsa_partition,
+          ".vsa.partition with its heap arrays made here.",
+          nb::arg("indptr"), nb::arg("indices"), nb::arg("metric"), nb::arg("areas"),
+          nb::arg("normals"), nb::arg("corners"), nb::arg("X"), nb::arg("N"), nb::arg("seeds"),
+          nb::arg("n_proxies"), nb::arg("label"));
+    m.def("vsa_sums", &vsa_sums,
+          "The sums of .vsa.fit, in its order.",
+          nb::arg("label"), nb::arg("n_proxies"), nb::arg("metric"), nb::arg("areas"),
+          nb::arg("normals"), nb::arg("centroids"), nb::arg("corners"), nb::arg("area"),
+          nb::arg("nsum"), nb::arg("csum"), nb::arg("mom"));
+    m.def("vsa_assess", &vsa_assess,
+          "Per region.",
+          nb::arg("label"), nb::arg("n_proxies"), nb::arg("metric"), nb::arg("areas"),
+          nb::arg("normals"), nb::arg("centroids"), nb::arg("corners"), nb::arg("X"),
+          nb::arg("N"), nb::arg("seeds"), nb::arg("total"));
+    m.def("vsa_worst_faces", &vsa_worst_faces,
+          "Per region, the face of largest distortion that is not a seed (-1 if none).",
+          nb::arg("label"), nb::arg("n_proxies"), nb::arg("metric"), nb::arg("areas"),
+          nb::arg("normals"), nb::arg("centroids"), nb::arg("corners"), nb::arg("X"),
+          nb::arg("N"), nb::arg("seeds"), nb::arg("is_seed"), nb::arg("worst"));
 }
 
 }  // namespace sfk

@@ -1,5 +1,5 @@
 // Boundary clean-up: band distances and one minimum cut per band by push-relabel
-// (superfacets/_kernels/cleanup.py), the same operations in order.
+// (tests/oracle/cleanup.py), the same operations in order.
 #include <algorithm>
 #include <atomic>
 #include <memory>
@@ -420,8 +420,17 @@ void solve_bands(i64 p0, i64 p1, nb::handle order_, nb::handle starts_, nb::hand
 void bind_cleanup(nb::module_& m) {
     m.def("band_distances", &band_distances<nb::handle, nb::handle, nb::handle, nb::handle,
                                              double, nb::handle, nb::handle, nb::handle,
-                                             nb::handle>);
-    m.def("solve_bands", &solve_bands);
+                                             nb::handle>,
+          "Distance of every element from its superfacet's boundary, below limit.",
+          nb::arg("indptr"), nb::arg("indices"), nb::arg("dual_edge"), nb::arg("geo"),
+          nb::arg("length"), nb::arg("labels"), nb::arg("pinned"), nb::arg("limit"),
+          nb::arg("dist"), nb::arg("partner"), nb::arg("hkey"), nb::arg("hval"));
+    m.def("solve_bands", &solve_bands,
+          "Cut bands p0 .",
+          nb::arg("p0"), nb::arg("p1"), nb::arg("order"), nb::arg("starts"), nb::arg("pair_a"),
+          nb::arg("pair_b"), nb::arg("band_of"), nb::arg("indptr"), nb::arg("indices"),
+          nb::arg("cut_cost"), nb::arg("labels"), nb::arg("sizes"), nb::arg("positions"),
+          nb::arg("means"), nb::arg("smooth"), nb::arg("out"));
 }
 
 }  // namespace sfk

@@ -472,7 +472,7 @@ void on_threads(i64 n_threads, F f) {
     error.rethrow();
 }
 
-// The binary min-heap of superfacets/_kernels/heap.py ((float key, int value), lazy
+// The binary min-heap of tests/oracle/heap.py ((float key, int value), lazy
 // deletion by the caller), each key beside its value (one cache line per visit instead
 // of two): the same comparisons and moves, so the same pops in the same order.
 struct Heap {
@@ -596,19 +596,24 @@ class BucketQueue {
 };
 
 // Binding registrations, one per source file.
-void bind_graph(nb::module_& m);
-void bind_expand(nb::module_& m);
-void bind_sampling(nb::module_& m);
-void bind_splitmerge(nb::module_& m);
-void bind_cleanup(nb::module_& m);
-void bind_voronoi(nb::module_& m);
-void bind_points(nb::module_& m);
-void bind_hierarchy(nb::module_& m);
-void bind_exact(nb::module_& m);
-void bind_vertices(nb::module_& m);
-void bind_nearest(nb::module_& m);
-void bind_order(nb::module_& m);
-void bind_orient(nb::module_& m);
+void bind_adjacency(nb::module_& m);
 void bind_baselines(nb::module_& m);
+void bind_borders(nb::module_& m);
+void bind_cleanup(nb::module_& m);
+void bind_columns(nb::module_& m);
+void bind_connectivity(nb::module_& m);
+void bind_exact(nb::module_& m);
+void bind_expand(nb::module_& m);
+void bind_farthest(nb::module_& m);
+void bind_geometry(nb::module_& m);
+void bind_hierarchy(nb::module_& m);
+void bind_nearest(nb::module_& m);
+void bind_normals(nb::module_& m);
+void bind_orient(nb::module_& m);
+void bind_splitmerge(nb::module_& m);
+void bind_terms(nb::module_& m);
+void bind_update(nb::module_& m);
+void bind_vertices(nb::module_& m);
+void bind_voronoi(nb::module_& m);
 
 }  // namespace sfk

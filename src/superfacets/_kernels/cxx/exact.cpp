@@ -1,5 +1,5 @@
 // The exact nearest-center assignment and its pass-by-pass update
-// (superfacets/_kernels/exact.py): the same operations in the same order, but each
+// (tests/oracle/exact.py): the same operations in the same order, but each
 // search by blocks of elements on threads (BlockedSearch: the same labels and
 // distances to the bit, never out of queue).
 #include <atomic>
@@ -260,9 +260,18 @@ i64 reclassify_exact(nb::handle indptr, nb::handle indices, nb::handle weights,
 }
 
 void bind_exact(nb::module_& m) {
-    m.def("classify_exact", &classify_exact<nb::handle, nb::handle, double>);
-    m.def("reclassify_exact",
-          &reclassify_exact<nb::handle, nb::handle, double, nb::handle, nb::handle, nb::handle>);
+    m.def("classify_exact", &classify_exact<nb::handle, nb::handle, double>,
+          "Exact nearest-center assignment.",
+          nb::arg("indptr"), nb::arg("indices"), nb::arg("weights"), nb::arg("centers"),
+          nb::arg("n_centers"), nb::arg("dist"), nb::arg("label"), nb::arg("queue"),
+          nb::arg("qlab"), nb::arg("inv_width"));
+    m.def("reclassify_exact", &reclassify_exact<nb::handle, nb::handle, double, nb::handle, nb::handle, nb::handle>,
+          "Classify_exact of centers[:n_centers], updated from the previous pass's result "
+          "instead of searched again from scratch.",
+          nb::arg("indptr"), nb::arg("indices"), nb::arg("weights"), nb::arg("centers"),
+          nb::arg("n_centers"), nb::arg("dist"), nb::arg("label"), nb::arg("queue"),
+          nb::arg("qlab"), nb::arg("inv_width"), nb::arg("prev"), nb::arg("first"),
+          nb::arg("border_mark"));
 }
 
 }  // namespace sfk

@@ -1,5 +1,5 @@
 // The greedy merges of the superfacet hierarchy and of the exact count
-// (superfacets/_kernels/hierarchy.py), the same operations in the same order. The heap
+// (tests/oracle/hierarchy.py), the same operations in the same order. The heap
 // pops its (cost, lo, hi, version_lo, version_hi) tuples in increasing lexicographic
 // order, as Python's heapq does: equal tuples are equal values, so any heap gives the
 // same sequence.
@@ -234,59 +234,14 @@ nb::object merge_levels(i64 k, nb::handle ea_, nb::handle eb_, nb::handle stats_
     return out_a;
 }
 
-// borders.label_pairs: the distinct label pairs lo * k + hi of the rows of `pairs`,
-// ascending (returned), and each row's place among them (inv): a counting sort on lo,
-// each lo's distinct hi sorted.
-nb::object label_pairs(nb::handle labels_, nb::handle pairs_, i64 k, nb::handle inv_) {
-    In<i64> labels(labels_, "labels");
-    Out<i64> inv(inv_, "inv");
-    if (k < 0) throw Mismatch("argument k");
-    std::vector<i64> key;
-    with_index(pairs_, "pairs", [&](const auto& pairs) {
-        if (pairs.cols != 2 || inv.n != pairs.n) throw Mismatch("argument pairs");
-        check_range(pairs, 0, labels.n, "pairs");
-        check_range(labels, 0, k, "labels");
-        nb::gil_scoped_release nogil;
-        const i64 m = pairs.n;
-        std::vector<i64> lo(m), hi(m), start(k + 1, 0), order(m);
-        for (i64 c = 0; c < m; ++c) {
-            i64 a = labels[pairs(c, 0)], b = labels[pairs(c, 1)];
-            if (a > b) std::swap(a, b);
-            lo[c] = a;
-            hi[c] = b;
-            ++start[a + 1];
-        }
-        for (i64 s = 0; s < k; ++s) start[s + 1] += start[s];
-        std::vector<i64> fill(start.begin(), start.end() - 1);
-        for (i64 c = 0; c < m; ++c) order[fill[lo[c]]++] = c;
-        std::vector<i64> stamp(k, -1), slot(k), seen;
-        for (i64 s = 0; s < k; ++s) {
-            seen.clear();
-            for (i64 t = start[s]; t < start[s + 1]; ++t) {
-                const i64 h = hi[order[t]];
-                if (stamp[h] != s) {
-                    stamp[h] = s;
-                    seen.push_back(h);
-                }
-            }
-            std::sort(seen.begin(), seen.end());
-            for (i64 h : seen) {
-                slot[h] = static_cast<i64>(key.size());
-                key.push_back(s * k + h);
-            }
-            for (i64 t = start[s]; t < start[s + 1]; ++t) inv[order[t]] = slot[hi[order[t]]];
-        }
-        return 0;
-    });
-    Out<i64> out;
-    auto out_a = fresh(static_cast<i64>(key.size()), out);
-    std::copy(key.begin(), key.end(), out.p);
-    return out_a;
-}
-
 void bind_hierarchy(nb::module_& m) {
-    m.def("merge_levels", &merge_levels);
-    m.def("label_pairs", &label_pairs);
+    m.def("merge_levels", &merge_levels,
+          "Merge the cheapest adjacent pair until each of targets (decreasing, each reachable) "
+          "live nodes remain, or no pair has a finite cost.",
+          nb::arg("k"), nb::arg("ea"), nb::arg("eb"), nb::arg("stats"), nb::arg("area"),
+          nb::arg("wsum"), nb::arg("fsum"), nb::arg("scatter"), nb::arg("planarity"),
+          nb::arg("alpha"), nb::arg("eta_convex"), nb::arg("beta"), nb::arg("compactness"),
+          nb::arg("max_rise"), nb::arg("targets"));
 }
 
 }  // namespace sfk

@@ -23,18 +23,26 @@ NB_MODULE(_cxx, m) {
     // the run's thread limit (0: none); returns the one it replaces
     m.def("set_thread_limit", [](int n) { return sfk::thread_limit().exchange(n); });
     m.def("threads", &sfk::threads);  // the threads a kernel would use now
-    sfk::bind_graph(m);
-    sfk::bind_expand(m);
-    sfk::bind_sampling(m);
-    sfk::bind_splitmerge(m);
-    sfk::bind_cleanup(m);
-    sfk::bind_voronoi(m);
-    sfk::bind_points(m);
-    sfk::bind_hierarchy(m);
-    sfk::bind_exact(m);
-    sfk::bind_vertices(m);
-    sfk::bind_nearest(m);
-    sfk::bind_order(m);
-    sfk::bind_orient(m);
-    sfk::bind_baselines(m);
+    // each source file a submodule of its name: kernel("geometry.label_sums") is
+    // _cxx.geometry.label_sums, defined in geometry.cpp, its reference in
+    // tests/oracle/geometry.py
+    { nb::module_ s = m.def_submodule("adjacency"); sfk::bind_adjacency(s); }
+    { nb::module_ s = m.def_submodule("baselines"); sfk::bind_baselines(s); }
+    { nb::module_ s = m.def_submodule("borders"); sfk::bind_borders(s); }
+    { nb::module_ s = m.def_submodule("cleanup"); sfk::bind_cleanup(s); }
+    { nb::module_ s = m.def_submodule("columns"); sfk::bind_columns(s); }
+    { nb::module_ s = m.def_submodule("connectivity"); sfk::bind_connectivity(s); }
+    { nb::module_ s = m.def_submodule("exact"); sfk::bind_exact(s); }
+    { nb::module_ s = m.def_submodule("expand"); sfk::bind_expand(s); }
+    { nb::module_ s = m.def_submodule("farthest"); sfk::bind_farthest(s); }
+    { nb::module_ s = m.def_submodule("geometry"); sfk::bind_geometry(s); }
+    { nb::module_ s = m.def_submodule("hierarchy"); sfk::bind_hierarchy(s); }
+    { nb::module_ s = m.def_submodule("nearest"); sfk::bind_nearest(s); }
+    { nb::module_ s = m.def_submodule("normals"); sfk::bind_normals(s); }
+    { nb::module_ s = m.def_submodule("orient"); sfk::bind_orient(s); }
+    { nb::module_ s = m.def_submodule("splitmerge"); sfk::bind_splitmerge(s); }
+    { nb::module_ s = m.def_submodule("terms"); sfk::bind_terms(s); }
+    { nb::module_ s = m.def_submodule("update"); sfk::bind_update(s); }
+    { nb::module_ s = m.def_submodule("vertices"); sfk::bind_vertices(s); }
+    { nb::module_ s = m.def_submodule("voronoi"); sfk::bind_voronoi(s); }
 }

@@ -1,4 +1,4 @@
-// superfacets/_kernels/nearest.py: the tree of a cloud's Z-order and the k nearest
+// tests/oracle/nearest.py: the tree of a cloud's Z-order and the k nearest
 // neighbours of its points, the same operations in the same order. The tree's rows are
 // the points in its own order; ids names the point of each row (ties go to the lower id;
 // no ids: the rows are the points).
@@ -273,8 +273,16 @@ void nearest_in_tree(nb::handle pts_, nb::handle start_, nb::handle end_, nb::ha
 }
 
 void bind_nearest(nb::module_& m) {
-    m.def("tree_nodes", &tree_nodes);
-    m.def("nearest_in_tree", &nearest_in_tree);
+    m.def("tree_nodes", &tree_nodes,
+          "Build the tree over pts ((n, 3) float64, sorted by their Z-order keys, (n, 3) "
+          "uint64).",
+          nb::arg("pts"), nb::arg("keys"), nb::arg("leaf"), nb::arg("start"), nb::arg("end"),
+          nb::arg("left"), nb::arg("boxes"));
+    m.def("nearest_in_tree", &nearest_in_tree,
+          "For each query r (the row own[r] of pts, the rows in the tree's order, ids[row] each"
+          " one's point, none.",
+          nb::arg("pts"), nb::arg("start"), nb::arg("end"), nb::arg("left"), nb::arg("boxes"),
+          nb::arg("ids"), nb::arg("own"), nb::arg("k"), nb::arg("nbr"), nb::arg("dist"));
 }
 
 }  // namespace sfk

@@ -1,4 +1,5 @@
-// superfacets/_kernels/orient.py's propagate_signs: the signs of Hoppe's orientation along
+// Normals turned outwards (turn_outwards) and tests/oracle/orient.py's
+// propagate_signs: the signs of Hoppe's orientation along
 // the minimum spanning tree of the neighbourhood graph, the same tree and signs.
 //
 // The tree is the unique minimum spanning forest under a strict order of the undirected
@@ -28,6 +29,7 @@
 #include <cstring>
 
 #include "common.hpp"
+#include "points.hpp"
 
 namespace sfk {
 
@@ -385,6 +387,49 @@ i64 propagate_signs(nb::handle indptr_, nb::handle indices_, nb::handle normals_
     return n_comp;
 }
 
-void bind_orient(nb::module_& m) { m.def("propagate_signs", &propagate_signs); }
+void turn_outwards(nb::handle points_, nb::handle normals_, nb::handle sign_,
+                   nb::handle component_, i64 n_comp, nb::handle out_) {
+    In<double> pts(points_, "points"), nor(normals_, "normals");
+    In<std::int8_t> sign(sign_, "sign");
+    In<i64> component(component_, "component");
+    Out<double> out(out_, "out");
+    if (pts.cols != 3 || nor.cols != 3 || out.cols != 3) throw Mismatch("argument points");
+    for (i64 m : {nor.n, sign.n, component.n, out.n})
+        if (m != pts.n) throw Mismatch("argument normals");
+    check_range(component, 0, n_comp, "component");
+    nb::gil_scoped_release nogil;
+    const i64 n = pts.n;
+    std::vector<double> count(n_comp, 0.0), mean(3 * n_comp, 0.0), total(n_comp, 0.0);
+    for (i64 i = 0; i < n; ++i) {
+        i64 c = component[i];
+        count[c] += 1.0;
+        for (int a = 0; a < 3; ++a) mean[3 * c + a] += pts(i, a);
+    }
+    for (i64 c = 0; c < n_comp; ++c)
+        for (int a = 0; a < 3; ++a) mean[3 * c + a] /= count[c];
+    for (i64 i = 0; i < n; ++i) {
+        i64 c = component[i];
+        double s = static_cast<double>(sign[i]);
+        total[c] += (nor(i, 0) * s * (pts(i, 0) - mean[3 * c]) +
+                     nor(i, 1) * s * (pts(i, 1) - mean[3 * c + 1])) +
+                    nor(i, 2) * s * (pts(i, 2) - mean[3 * c + 2]);
+    }
+    for (i64 i = 0; i < n; ++i) {
+        double s = static_cast<double>(sign[i]);
+        if (total[component[i]] < 0) s = -s;
+        for (int a = 0; a < 3; ++a) out(i, a) = nor(i, a) * s;
+    }
+}
+
+void bind_orient(nb::module_& m) {
+    m.def("turn_outwards", &turn_outwards,
+          "Out.",
+          nb::arg("points"), nb::arg("normals"), nb::arg("sign"), nb::arg("component"),
+          nb::arg("n_comp"), nb::arg("out"));
+    m.def("propagate_signs", &propagate_signs,
+          "Fill sign (+1/-1 per element) and component (ids from 0).",
+          nb::arg("indptr"), nb::arg("indices"), nb::arg("normals"), nb::arg("sign"),
+          nb::arg("component"));
+}
 
 }  // namespace sfk

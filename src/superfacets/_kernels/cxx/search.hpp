@@ -1,4 +1,4 @@
-// The label-correcting multi-source search of superfacets/_kernels/exact.py's
+// The label-correcting multi-source search of tests/oracle/exact.py's
 // search_buckets (lexicographic pairs), by blocks of elements on threads: shared by the
 // Voronoi cells of coarse-to-fine and the exact assignment.
 #pragma once

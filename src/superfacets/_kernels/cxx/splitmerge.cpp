@@ -1,4 +1,4 @@
-// Split and merge candidates of the K-preserving swaps (superfacets/_kernels/splitmerge.py),
+// Split and merge candidates of the K-preserving swaps (tests/oracle/splitmerge.py),
 // the same operations in the same order.
 #include <type_traits>
 
@@ -443,10 +443,35 @@ nb::object label_pairs(nb::handle indptr_, nb::handle indices_, nb::handle label
 }
 
 void bind_splitmerge(nb::module_& m) {
-    m.def("energies", &energies);
-    m.def("split_candidates", &split_candidates);
-    m.def("merge_energies", &merge_energies);
-    m.def("label_pairs", &label_pairs);
+    m.def("label_pairs", &label_pairs,
+          "The pairs of labels a < b that some adjacency joins, each once, as sorted keys a * k"
+          " + b.",
+          nb::arg("indptr"), nb::arg("indices"), nb::arg("label"), nb::arg("k"));
+    m.def("energies", &energies,
+          "Energy of each superfacet first, first + step, .",
+          nb::arg("indptr"), nb::arg("indices"), nb::arg("w"), nb::arg("label"),
+          nb::arg("members"), nb::arg("bounds"), nb::arg("sizes"), nb::arg("positions"),
+          nb::arg("power"), nb::arg("energy"), nb::arg("far"), nb::arg("dist"),
+          nb::arg("stamp"), nb::arg("sid"), nb::arg("hkey"), nb::arg("hval"), nb::arg("first"),
+          nb::arg("step"));
+    m.def("split_candidates", &split_candidates,
+          "Energy of the best split in two of each superfacet s = which[first], which[first + "
+          "step], .",
+          nb::arg("indptr"), nb::arg("indices"), nb::arg("w"), nb::arg("label"),
+          nb::arg("members"), nb::arg("bounds"), nb::arg("sizes"), nb::arg("positions"),
+          nb::arg("power"), nb::arg("lloyd"), nb::arg("which"), nb::arg("far"),
+          nb::arg("split_energy"), nb::arg("second"), nb::arg("dist"), nb::arg("dist2"),
+          nb::arg("stamp"), nb::arg("stamp2"), nb::arg("sid"), nb::arg("hkey"), nb::arg("hval"),
+          nb::arg("work"), nb::arg("first"), nb::arg("step"));
+    m.def("merge_energies", &merge_energies,
+          "Energy of the union of superfacets a = pair_a[t] and b = pair_b[t] around the "
+          "element nearest its mean, into out[t], for t = first, first + step, .",
+          nb::arg("indptr"), nb::arg("indices"), nb::arg("w"), nb::arg("label"),
+          nb::arg("members"), nb::arg("bounds"), nb::arg("sizes"), nb::arg("positions"),
+          nb::arg("power"), nb::arg("pair_a"), nb::arg("pair_b"), nb::arg("energy"),
+          nb::arg("window_r2"), nb::arg("most"), nb::arg("out"), nb::arg("dist"),
+          nb::arg("stamp"), nb::arg("rank"), nb::arg("sid"), nb::arg("hkey"), nb::arg("hval"),
+          nb::arg("work"), nb::arg("first"), nb::arg("step"));
 }
 
 }  // namespace sfk

@@ -1,4 +1,4 @@
-// The vertex graph of a mesh (superfacets/_kernels/vertices.py), the same operations in
+// The vertex graph of a mesh (tests/oracle/vertices.py), the same operations in
 // the same order.
 #include "common.hpp"
 
@@ -134,8 +134,14 @@ nb::tuple mesh_edges(nb::handle corners_, nb::handle offsets_, nb::handle index_
 }
 
 void bind_vertices(nb::module_& m) {
-    m.def("vertex_cells", &vertex_cells);
-    m.def("mesh_edges", &mesh_edges);
+    m.def("vertex_cells", &vertex_cells,
+          "Barycentric area and unit area-weighted normal of every vertex element.",
+          nb::arg("corners"), nb::arg("offsets"), nb::arg("index"), nb::arg("areas"),
+          nb::arg("normals"), nb::arg("area"), nb::arg("normal"));
+    m.def("mesh_edges", &mesh_edges,
+          "The edges of a mesh's vertex elements, their dual lengths and uses.",
+          nb::arg("corners"), nb::arg("offsets"), nb::arg("index"), nb::arg("n"),
+          nb::arg("positions"), nb::arg("centroids"));
 }
 
 }  // namespace sfk

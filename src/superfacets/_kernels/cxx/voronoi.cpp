@@ -1,5 +1,5 @@
 // Voronoi cells of seeds in the weighted element graph, for the coarse-to-fine run
-// (superfacets/_kernels/voronoi.py): the same operations in the same order, the cells'
+// (tests/oracle/voronoi.py): the same operations in the same order, the cells'
 // search by blocks on threads (BlockedSearch: numba's search_buckets' result).
 #include <algorithm>
 #include <cstdint>
@@ -393,10 +393,25 @@ nb::object first_in_cells(nb::handle positions_, nb::handle lo_, double h,
 }
 
 void bind_voronoi(nb::module_& m) {
-    m.def("nearest_seed", &nearest_seed);
-    m.def("coarse_pairs", &coarse_pairs);
-    m.def("coarse_lengths", &coarse_lengths);
-    m.def("first_in_cells", &first_in_cells);
+    m.def("nearest_seed", &nearest_seed,
+          "Label every element with its nearest seed (index into seeds) and that distance, by a"
+          " label-correcting multi-source search from seeds[first:] ....",
+          nb::arg("indptr"), nb::arg("indices"), nb::arg("weights"), nb::arg("seeds"),
+          nb::arg("first"), nb::arg("dist"), nb::arg("label"), nb::arg("queue"),
+          nb::arg("inv_width"));
+    m.def("coarse_pairs", &coarse_pairs,
+          "The adjacency of clusters.",
+          nb::arg("indptr"), nb::arg("indices"), nb::arg("cluster"), nb::arg("dist"),
+          nb::arg("csr_w"), nb::arg("lengths"), nb::arg("shares"), nb::arg("n_c"));
+    m.def("coarse_lengths", &coarse_lengths,
+          "The summed border lengths of the cluster pairs pairs (coarse_pairs' pairs, in (lo, "
+          "hi) order).",
+          nb::arg("indptr"), nb::arg("indices"), nb::arg("cluster"), nb::arg("pairs"),
+          nb::arg("lengths"), nb::arg("shares"), nb::arg("n_c"));
+    m.def("first_in_cells", &first_in_cells,
+          "The lowest-index element of each occupied cell of pitch h from lo (dims cells per "
+          "axis, their product below 2**62), ascending (the compiled kernel ....",
+          nb::arg("positions"), nb::arg("lo"), nb::arg("h"), nb::arg("dims"), nb::arg("cap"));
 }
 
 }  // namespace sfk

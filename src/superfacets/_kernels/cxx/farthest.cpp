@@ -1,4 +1,4 @@
-// Farthest-point sampling over spatial blocks (superfacets/_kernels/farthest.py), the same
+// Farthest-point sampling over spatial blocks (tests/oracle/farthest.py), the same
 // operations in the same order.
 #include "common.hpp"
 
@@ -311,14 +311,19 @@ void farthest_point(nb::handle centroids_, i64 k, i64 first, nb::handle out_,
     }
 }
 
-void bind_sampling(nb::module_& m) {
-    m.def("farthest_point", &farthest_point, nb::arg("centroids"), nb::arg("k"),
-          nb::arg("first"), nb::arg("out"), nb::arg("scale2") = nb::none());
-    m.def("spatial_blocks", &spatial_blocks);
-    m.def("farthest_point_blocked", &farthest_point_blocked, nb::arg("centroids"), nb::arg("k"),
-          nb::arg("first"), nb::arg("out"), nb::arg("order"), nb::arg("bstart"),
-          nb::arg("bcenter"), nb::arg("bradius"), nb::arg("scale2") = nb::none(),
-          nb::arg("bscale2") = nb::none());
+void bind_farthest(nb::module_& m) {
+    m.def("farthest_point", &farthest_point,
+          "Iterative farthest point sampling in O(m k) with a running minimum.",
+          nb::arg("centroids"), nb::arg("k"), nb::arg("first"), nb::arg("out"),
+          nb::arg("scale2") = nb::none());
+    m.def("spatial_blocks", &spatial_blocks,
+          "Group faces by the cell of a regular grid that holds their centroid.",
+          nb::arg("centroids"), nb::arg("cells_per_axis"));
+    m.def("farthest_point_blocked", &farthest_point_blocked,
+          "Farthest_point, skipping the blocks a new center cannot change.",
+          nb::arg("centroids"), nb::arg("k"), nb::arg("first"), nb::arg("out"),
+          nb::arg("order"), nb::arg("bstart"), nb::arg("bcenter"), nb::arg("bradius"),
+          nb::arg("scale2") = nb::none(), nb::arg("bscale2") = nb::none());
 }
 
 }  // namespace sfk

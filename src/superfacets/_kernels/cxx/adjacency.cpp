@@ -1,8 +1,13 @@
-// The face graph's build and its per-entry terms: superfacets/_kernels/adjacency.py,
-// geometry.py (faces), terms.py and connectivity.py, the same operations in order.
+// The element graphs' build: the face graph's pairs (half edges bucketed and
+// grouped), the CSR layouts of pairs, the points' symmetric kNN layout, and the
+// components of one label.
+// Reference, bit for bit: tests/oracle/adjacency.py.
 #include <algorithm>
+#include <cstring>
+#include <vector>
 
 #include "common.hpp"
+#include "points.hpp"
 
 namespace sfk {
 
@@ -460,470 +465,6 @@ nb::tuple csr_of_face_pairs(nb::handle lo, nb::handle hi, nb::handle ka, nb::han
     return csr_of_face_pairs_t<i64>(lo, hi, ka, kb, n, indices, dual_edge);
 }
 
-// adjacency.same_label_components, on threads: a union-find over the adjacencies within
-// a label (each listed in both rows of the CSR; j > i taken), a root linked only under
-// a smaller one, so each piece's root is its lowest element; the pieces then numbered
-// in the order of their roots: the depth-first numbering of one pass, bit for bit.
-namespace {
-
-inline i64 uf_find(i64* parent, i64 x) {  // path halving; a parent only moves up
-    while (true) {
-        i64 p = __atomic_load_n(parent + x, __ATOMIC_RELAXED);
-        if (p == x) return x;
-        i64 g = __atomic_load_n(parent + p, __ATOMIC_RELAXED);
-        if (g != p) __atomic_store_n(parent + x, g, __ATOMIC_RELAXED);
-        x = g;
-    }
-}
-
-inline void uf_union(i64* parent, i64 a, i64 b) {
-    while (true) {
-        a = uf_find(parent, a);
-        b = uf_find(parent, b);
-        if (a == b) return;
-        if (a > b) std::swap(a, b);  // b, the larger root, goes under a
-        i64 expected = b;
-        if (__atomic_compare_exchange_n(parent + b, &expected, a, false, __ATOMIC_ACQ_REL,
-                                        __ATOMIC_RELAXED))
-            return;
-    }
-}
-
-}  // namespace
-
-nb::object same_label_components(nb::handle indptr_, nb::handle indices_,
-                                       nb::handle labels_) {
-    In<i64> indptr(indptr_, "indptr"), labels(labels_, "labels");
-    In<i32> indices(indices_, "indices");
-    const i64 n = labels.n;
-    if (indptr.n != n + 1) throw Mismatch("argument indptr");
-    check_csr(indptr, indices, n, n);
-    Out<i64> comp;
-    auto comp_a = fresh(n, comp);
-    {
-        nb::gil_scoped_release nogil;
-        std::vector<i64> root(n);
-        i64* parent = root.data();
-        parallel_for(n, [&](i64 lo, i64 hi) {
-            for (i64 i = lo; i < hi; ++i) parent[i] = i;
-        });
-        parallel_for(n, [&](i64 lo, i64 hi) {
-            for (i64 i = lo; i < hi; ++i) {
-                const i64 lab = labels[i];
-                for (i64 e = indptr[i]; e < indptr[i + 1]; ++e) {
-                    const i64 j = indices[e];
-                    if (j > i && labels[j] == lab) uf_union(parent, i, j);
-                }
-            }
-        });
-        parallel_for(n, [&](i64 lo, i64 hi) {  // every element straight to its root
-            for (i64 i = lo; i < hi; ++i) parent[i] = uf_find(parent, i);
-        });
-        // the roots numbered in order: a count per range of elements, then each range's
-        // roots from its first number (comp holds the roots' numbers first)
-        const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / 4096));
-        std::vector<i64> first(T + 1, 0);
-        auto range = [&](i64 t) { return n * t / T; };
-        on_threads(T, [&](i64 t) {
-            i64 m = 0;
-            for (i64 i = range(t); i < range(t + 1); ++i) m += parent[i] == i;
-            first[t + 1] = m;
-        });
-        for (i64 t = 0; t < T; ++t) first[t + 1] += first[t];
-        on_threads(T, [&](i64 t) {
-            i64 c = first[t];
-            for (i64 i = range(t); i < range(t + 1); ++i)
-                if (parent[i] == i) comp[i] = c++;
-        });
-        parallel_for(n, [&](i64 lo, i64 hi) {
-            for (i64 i = lo; i < hi; ++i)
-                if (parent[i] != i) comp[i] = comp[parent[i]];
-        });
-    }
-    return comp_a;
-}
-
-// geometry.py: triangles' centroids, areas and unit normals
-void face_geometry(nb::handle vertices_, nb::handle faces_, nb::handle centroids_,
-                   nb::handle areas_, nb::handle normals_) {
-    In<double> v(vertices_, "vertices");
-    Out<double> centroids(centroids_, "centroids"), areas(areas_, "areas"),
-        normals(normals_, "normals");
-    with_index(faces_, "faces", [&](auto faces) {  // (int32 or int64 faces)
-        if (normals.cols != 3 || centroids.cols != 3 || faces.cols != 3)
-            throw Mismatch("argument normals");
-        for (auto* x : {&centroids, &areas, &normals}) check_rows(*x, faces.n, "centroids");
-        if (v.cols != 3) throw Mismatch("argument vertices");
-        check_range(faces, 0, v.n, "faces");
-        nb::gil_scoped_release nogil;
-        for (i64 f = 0; f < faces.n; ++f) {
-            i64 i = faces(f, 0), j = faces(f, 1), k = faces(f, 2);
-            for (i64 t = 0; t < 3; ++t) centroids(f, t) = (v(i, t) + v(j, t) + v(k, t)) / 3.0;
-            double a0 = v(j, 0) - v(i, 0), a1 = v(j, 1) - v(i, 1), a2 = v(j, 2) - v(i, 2);
-            double b0 = v(k, 0) - v(i, 0), b1 = v(k, 1) - v(i, 1), b2 = v(k, 2) - v(i, 2);
-            double c0 = a1 * b2 - a2 * b1;
-            double c1 = a2 * b0 - a0 * b2;
-            double c2 = a0 * b1 - a1 * b0;
-            double norm = store_unit(normals.p + 3 * f, c0, c1, c2);
-            areas[f] = 0.5 * norm;
-        }
-    });
-}
-
-// geometry.py: polygons of any size (Newell's normal, the fan's signed-area centroid)
-void polygon_geometry(nb::handle vertices_, nb::handle corners_, nb::handle offsets_,
-                      nb::handle centroids_, nb::handle areas_, nb::handle normals_) {
-    In<double> v(vertices_, "vertices");
-    In<i64> corners(corners_, "corners"), offsets(offsets_, "offsets");
-    Out<double> centroids(centroids_, "centroids"), areas(areas_, "areas"),
-        normals(normals_, "normals");
-    if (v.cols != 3 || centroids.cols != 3 || normals.cols != 3)
-        throw Mismatch("argument vertices");
-    check_csr(offsets, corners, -1, v.n, "offsets");
-    for (i64 f = 0; f + 1 < offsets.n; ++f)
-        if (offsets[f + 1] == offsets[f]) throw OutOfRange("argument offsets: an empty polygon");
-    for (auto* x : {&centroids, &areas, &normals}) check_rows(*x, offsets.n - 1, "centroids");
-    nb::gil_scoped_release nogil;
-    for (i64 f = 0; f < offsets.n - 1; ++f) {
-        const i64 a = offsets[f], k = offsets[f + 1] - a;
-        const i64 o = corners[a];
-        const double ox = v(o, 0), oy = v(o, 1), oz = v(o, 2);
-        auto rel = [&](i64 p, double* q) {
-            q[0] = v(p, 0) - ox;
-            q[1] = v(p, 1) - oy;
-            q[2] = v(p, 2) - oz;
-        };
-        double nx = 0.0, ny = 0.0, nz = 0.0, P[3], Q[3];
-        for (i64 i = 0; i < k; ++i) {
-            rel(corners[a + i], P);
-            rel(corners[a + (i + 1) % k], Q);
-            nx += (P[1] - Q[1]) * (P[2] + Q[2]);
-            ny += (P[2] - Q[2]) * (P[0] + Q[0]);
-            nz += (P[0] - Q[0]) * (P[1] + Q[1]);
-        }
-        double norm = std::sqrt(nx * nx + ny * ny + nz * nz);
-        areas[f] = 0.5 * norm;
-        if (norm > 0) {
-            nx /= norm;
-            ny /= norm;
-            nz /= norm;
-        } else {
-            nx = ny = nz = 0.0;
-        }
-        normals(f, 0) = nx;
-        normals(f, 1) = ny;
-        normals(f, 2) = nz;
-        double wsum = 0.0, cx = 0.0, cy = 0.0, cz = 0.0;
-        for (i64 i = 1; i < k - 1; ++i) {
-            rel(corners[a + i], P);
-            rel(corners[a + i + 1], Q);
-            double w = (P[1] * Q[2] - P[2] * Q[1]) * nx + (P[2] * Q[0] - P[0] * Q[2]) * ny +
-                       (P[0] * Q[1] - P[1] * Q[0]) * nz;
-            wsum += w;
-            cx += w * (P[0] + Q[0]);
-            cy += w * (P[1] + Q[1]);
-            cz += w * (P[2] + Q[2]);
-        }
-        if (wsum != 0.0 && norm > 0) {
-            centroids(f, 0) = ox + cx / (3.0 * wsum);
-            centroids(f, 1) = oy + cy / (3.0 * wsum);
-            centroids(f, 2) = oz + cz / (3.0 * wsum);
-        } else {
-            double sx = 0.0, sy = 0.0, sz = 0.0;
-            for (i64 i = 0; i < k; ++i) {
-                i64 p = corners[a + i];
-                sx += v(p, 0);
-                sy += v(p, 1);
-                sz += v(p, 2);
-            }
-            centroids(f, 0) = sx / static_cast<double>(k);
-            centroids(f, 1) = sy / static_cast<double>(k);
-            centroids(f, 2) = sz / static_cast<double>(k);
-        }
-    }
-}
-
-void face_terms(nb::handle vertices_, nb::handle centroids_, nb::handle normals_,
-                nb::handle pairs_, nb::handle edges_, i64 lo, i64 hi, nb::handle geo_,
-                nb::handle cos_, nb::handle concave_) {
-    In<double> v(vertices_, "vertices"), c(centroids_, "centroids"), nr(normals_, "normals");
-    In<i32> pairs(pairs_, "pairs"), edges(edges_, "edges");
-    Out<double> geo(geo_, "geo"), cs(cos_, "cos");
-    Out<bool> concave(concave_, "concave");
-    if (pairs.cols != 2 || edges.cols != 2 || v.cols != 3 || c.cols != 3 || nr.cols != 3)
-        throw Mismatch("argument pairs");
-    check_span(lo, hi, pairs.n, edges.n);
-    check_range(In<i32>{pairs.p + 2 * lo, hi - lo, 2}, 0, mn(c.n, nr.n), "pairs");
-    check_range(In<i32>{edges.p + 2 * lo, hi - lo, 2}, 0, v.n, "edges");
-    for (auto* x : {&geo, &cs}) check_rows(*x, hi - lo, "geo");
-    check_rows(concave, hi - lo, "concave");
-    nb::gil_scoped_release nogil;
-    for (i64 t = lo; t < hi; ++t) {
-        i64 i = pairs(t, 0), j = pairs(t, 1), a = edges(t, 0), b = edges(t, 1);
-        double mx_ = 0.5 * (v(a, 0) + v(b, 0));
-        double my = 0.5 * (v(a, 1) + v(b, 1));
-        double mz = 0.5 * (v(a, 2) + v(b, 2));
-        double dx = c(i, 0) - mx_, dy = c(i, 1) - my, dz = c(i, 2) - mz;
-        double ex = mx_ - c(j, 0), ey = my - c(j, 1), ez = mz - c(j, 2);
-        i64 u = t - lo;
-        geo[u] = std::sqrt(dx * dx + dy * dy + dz * dz) + std::sqrt(ex * ex + ey * ey + ez * ez);
-        double d = (nr(i, 0) * nr(j, 0) + nr(i, 2) * nr(j, 2)) + nr(i, 1) * nr(j, 1);
-        cs[u] = mn(mx(d, -1.0), 1.0);
-        double s = (nr(i, 0) * (c(j, 0) - c(i, 0)) + nr(i, 2) * (c(j, 2) - c(i, 2))) +
-                   nr(i, 1) * (c(j, 1) - c(i, 1));
-        concave[u] = s > 0;
-    }
-}
-
-template <class E>
-void lengths_into(const In<double>& v, const E* edges, i64 m, double* out) {
-    parallel_for(m, [&](i64 lo, i64 hi) {
-        for (i64 t = lo; t < hi; ++t) {
-            i64 a = edges[2 * t], b = edges[2 * t + 1];
-            double x = v(b, 0) - v(a, 0), y = v(b, 1) - v(a, 1), z = v(b, 2) - v(a, 2);
-            out[t] = std::sqrt(x * x + y * y + z * z);
-        }
-    });
-}
-
-void edge_lengths(nb::handle vertices_, nb::handle edges_, nb::handle out_) {
-    In<double> v(vertices_, "vertices");
-    Out<double> out(out_, "out");
-    if (matches<i32>(edges_)) {
-        In<i32> e(edges_, "edges");
-        check_lengths(v, e, out);
-        nb::gil_scoped_release nogil;
-        lengths_into(v, e.p, e.n, out.p);
-    } else {
-        In<i64> e(edges_, "edges");
-        check_lengths(v, e, out);
-        nb::gil_scoped_release nogil;
-        lengths_into(v, e.p, e.n, out.p);
-    }
-}
-
-// terms.py
-// terms.per_entry (float64 or float32 values, int32 adjacencies), on threads (each entry
-// on its own)
-void per_entry(nb::handle values_, nb::handle dual_edge_, nb::handle out_) {
-    with_index(dual_edge_, "dual_edge", [&](const auto& dual_edge) {
-        with_real(values_, "values", [&](const auto& values) {
-            using T = std::remove_cv_t<std::remove_reference_t<decltype(values[0])>>;
-            Out<T> out(out_, "out");  // (the values' dtype: float64 or float32)
-            if (out.n != dual_edge.n) throw Mismatch("argument out");
-            check_range(dual_edge, 0, values.n, "dual_edge");
-            nb::gil_scoped_release nogil;
-            parallel_for(dual_edge.n, [&](i64 lo, i64 hi) {
-                for (i64 e = lo; e < hi; ++e) out[e] = values[dual_edge[e]];
-            });
-        });
-    });
-}
-
-// terms.convex_scaled_csr: float64 or float32 weights, the values in the weights' dtype
-// (each computed in float64, then rounded)
-nb::object convex_scaled_csr(nb::handle weights_, nb::handle dual_edge_,
-                                      nb::handle concave_, nb::handle cos_, nb::handle span_,
-                                      double coef) {
-    In<double> cs(cos_, "cos"), span(span_, "span");
-    In<bool> concave(concave_, "concave");
-    return with_real(weights_, "weights", [&](const auto& weights) -> nb::object {
-        using T = std::remove_cv_t<std::remove_reference_t<decltype(weights[0])>>;
-        with_index(dual_edge_, "dual_edge", [&](const auto& dual_edge) {
-            check_rows(dual_edge, weights.n, "dual_edge");
-            check_range(dual_edge, 0, mn(mn(concave.n, cs.n), span.n), "dual_edge", weights.n);
-        });
-        Out<T> out;
-        auto out_a = fresh(weights.n, out);
-        with_index(dual_edge_, "dual_edge", [&](const auto& dual_edge) {
-            nb::gil_scoped_release nogil;
-            // (no array of one delta per adjacency: 8 B each; both entries of an adjacency
-            // compute the same value)
-            parallel_for(weights.n, [&](i64 lo, i64 hi) {
-                for (i64 e = lo; e < hi; ++e) {
-                    i64 d = dual_edge[e];
-                    const double we = static_cast<double>(weights[e]);
-                    out[e] = static_cast<T>(
-                        concave[d] ? we : mx(we - coef * span[d] * std::acos(cs[d]), 0.0));
-                }
-            });
-        });
-        return out_a;
-    });
-}
-
-nb::object cut_costs_csr(nb::handle dual_edge_, nb::handle concave_, nb::handle cos_,
-                                  nb::handle lengths_, double factor, double eta_convex,
-                                  double scale) {
-    In<bool> concave(concave_, "concave");
-    In<double> cs(cos_, "cos"), lengths(lengths_, "lengths");
-    Out<double> out;
-    check_rows(concave, cs.n, "concave");
-    check_rows(lengths, cs.n, "lengths");
-    with_index(dual_edge_, "dual_edge",
-               [&](const auto& dual_edge) { check_range(dual_edge, 0, cs.n, "dual_edge"); });
-    auto out_a = fresh(size_of(dual_edge_), out);
-    with_index(dual_edge_, "dual_edge", [&](const auto& dual_edge) {
-        nb::gil_scoped_release nogil;
-        std::vector<double> cost(cs.n);  // (each value on its own: on threads)
-        parallel_for(cs.n, [&](i64 lo, i64 hi) {
-            for (i64 d = lo; d < hi; ++d) {
-                double eta = concave[d] ? 1.0 : eta_convex;
-                cost[d] = lengths[d] / (1.0 + factor * eta * std::acos(cs[d])) * scale;
-            }
-        });
-        parallel_for(dual_edge.n, [&](i64 lo, i64 hi) {
-            for (i64 e = lo; e < hi; ++e) out[e] = cost[dual_edge[e]];
-        });
-    });
-    return out_a;
-}
-
-// connectivity.py
-namespace {
-i64 find(std::vector<i64>& parent, i64 x) {
-    i64 root = x;
-    while (parent[root] != root) root = parent[root];
-    while (parent[x] != root) {
-        i64 nxt = parent[x];
-        parent[x] = root;
-        x = nxt;
-    }
-    return root;
-}
-}  // namespace
-
-nb::object merge_strays(nb::handle strays_, nb::handle nb_indptr_, nb::handle nb_indices_,
-                              nb::handle nb_data_, i64 n_pieces) {
-    In<i64> strays(strays_, "strays"), nb_indptr(nb_indptr_, "nb_indptr"),
-        nb_indices(nb_indices_, "nb_indices");
-    In<double> nb_data(nb_data_, "nb_data");
-    if (n_pieces < 0) throw OutOfRange("argument n_pieces");
-    check_csr(nb_indptr, nb_indices, n_pieces, n_pieces, "nb_indptr");
-    check_rows(nb_data, nb_indptr[n_pieces], "nb_data");
-    check_range(strays, 0, n_pieces, "strays");
-    Out<i64> root;
-    auto root_a = fresh(n_pieces, root);
-    {
-        nb::gil_scoped_release nogil;
-        std::vector<i64> parent(n_pieces);
-        for (i64 q = 0; q < n_pieces; ++q) parent[q] = q;
-        std::vector<double> total(n_pieces, 0.0);
-        std::vector<char> seen(n_pieces, 0);
-        std::vector<i64> touched(n_pieces);
-        for (i64 i = 0; i < strays.n; ++i) {
-            i64 p = strays[i];
-            i64 rp = find(parent, p);
-            i64 m = 0;
-            for (i64 e = nb_indptr[p]; e < nb_indptr[p + 1]; ++e) {
-                i64 q = find(parent, nb_indices[e]);
-                if (q == rp) continue;
-                if (!seen[q]) {
-                    seen[q] = 1;
-                    touched[m++] = q;
-                }
-                total[q] += nb_data[e];
-            }
-            if (m == 0) continue;
-            i64 target = -1;
-            double best = 0.0;
-            for (i64 j = 0; j < m; ++j) {
-                i64 q = touched[j];
-                if (target < 0 || total[q] > best || (total[q] == best && q < target)) {
-                    target = q;
-                    best = total[q];
-                }
-                total[q] = 0.0;
-                seen[q] = 0;
-            }
-            parent[rp] = target;
-        }
-        for (i64 q = 0; q < n_pieces; ++q) root[q] = find(parent, q);
-    }
-    return root_a;
-}
-
-// connectivity.stray_borders, on threads: each thread a range of rows, counted first
-// (its entries of either side and its adjacencies, for the lengths' numbers), then
-// written at its places: the entries in the order of one pass.
-nb::tuple stray_borders(nb::handle indptr_, nb::handle indices_, nb::handle piece_,
-                        nb::handle is_main_, nb::handle lengths_, nb::handle shares_) {
-    In<i64> indptr(indptr_, "indptr"), piece(piece_, "piece");
-    In<i32> indices(indices_, "indices");
-    In<bool> is_main(is_main_, "is_main");
-    In<double> lengths(lengths_, "lengths"), shares(shares_, "shares");
-    const i64 n = check_csr(indptr, indices, -1, piece.n);
-    check_rows(piece, n, "piece", true);
-    check_range(piece, 0, is_main.n, "piece");
-    if (shares.n) check_rows(shares, n, "shares");
-    else {
-        i64 above = 0;  // (the adjacencies: lengths has one each)
-        for (i64 i = 0; i < n; ++i)
-            for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) above += indices[x] > i;
-        check_rows(lengths, above, "lengths");
-    }
-    const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / 4096));
-    auto row = [&](i64 t) { return n * t / T; };
-    // per thread: entries with a stray row on side 0 and on side 1, adjacencies before
-    std::vector<i64> side0(T + 1, 0), side1(T + 1, 0), pairs(T + 1, 0);
-    {
-        nb::gil_scoped_release nogil;
-        on_threads(T, [&](i64 t) {
-            i64 s0 = 0, s1 = 0, np_ = 0;
-            for (i64 i = row(t); i < row(t + 1); ++i)
-                for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
-                    i64 j = indices[x];
-                    if (j > i) {
-                        ++np_;
-                        i64 p = piece[i], q = piece[j];
-                        if (p != q) {
-                            s0 += !is_main[p];
-                            s1 += !is_main[q];
-                        }
-                    }
-                }
-            side0[t + 1] = s0;
-            side1[t + 1] = s1;
-            pairs[t + 1] = np_;
-        });
-        for (i64 t = 0; t < T; ++t) {
-            side0[t + 1] += side0[t];
-            side1[t + 1] += side1[t];
-            pairs[t + 1] += pairs[t];
-        }
-    }
-    const i64 m = side0[T] + side1[T];
-    Out<i64> a, b;
-    Out<double> w;
-    auto a_a = fresh(m, a), b_a = fresh(m, b);
-    auto w_a = fresh(m, w);
-    {
-        nb::gil_scoped_release nogil;
-        on_threads(T, [&](i64 t) {
-            for (int side = 0; side < 2; ++side) {
-                i64 u = side == 0 ? side0[t] : side0[T] + side1[t];
-                i64 pt = pairs[t];
-                for (i64 i = row(t); i < row(t + 1); ++i)
-                    for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
-                        i64 j = indices[x];
-                        if (j > i) {
-                            i64 p = side == 0 ? piece[i] : piece[j];
-                            i64 q = side == 0 ? piece[j] : piece[i];
-                            if (p != q && !is_main[p]) {
-                                a[u] = p;
-                                b[u] = q;
-                                w[u] = shares.n ? 0.5 * (shares[i] + shares[j]) : lengths[pt];
-                                ++u;
-                            }
-                            ++pt;
-                        }
-                    }
-            }
-        });
-    }
-    return nb::make_tuple(a_a, b_a, w_a);
-}
-
 template <class P, class D>
 nb::object csr_of_pairs_t(nb::handle lo_, nb::handle hi_, i64 n, nb::handle indices_,
                                 nb::handle dual_edge_) {
@@ -982,27 +523,225 @@ void number_pairs(nb::handle indptr, nb::handle indices, i64 n, nb::handle dual_
                : number_pairs_t<i64, i64>(indptr, indices, n, dual_edge, keep, pairs);
 }
 
-void bind_graph(nb::module_& m) {
-    m.def("csr_of_pairs", &csr_of_pairs_any);
-    m.def("number_pairs", &number_pairs);
-    m.def("triangle_half_edges", &triangle_half_edges);
-    m.def("count_keys", &count_keys);
-    m.def("scatter_keys", &scatter_keys);
-    m.def("sort_buckets", &sort_buckets);
-    m.def("group_pairs", &group_pairs);
-    m.def("csr_of_face_pairs", &csr_of_face_pairs);
-    m.def("take_pairs", &take_pairs);
-    m.def("shared_edges", &shared_edges);
-    m.def("same_label_components", &same_label_components);
-    m.def("face_geometry", &face_geometry);
-    m.def("face_terms", &face_terms);
-    m.def("polygon_geometry", &polygon_geometry);
-    m.def("edge_lengths", &edge_lengths);
-    m.def("convex_scaled_csr", &convex_scaled_csr);
-    m.def("cut_costs_csr", &cut_costs_csr);
-    m.def("per_entry", &per_entry);
-    m.def("merge_strays", &merge_strays);
-    m.def("stray_borders", &stray_borders);
+// Sort row raw[s:e] ascending and move its distinct values to its front; returns their
+// number. Its first nf entries are in any order, the rest usually ascending already (the
+// entries other rows listed, written in the order of those rows): then the first part is
+// sorted alone (into tmp) and merged with the rest, in place; else the whole row is sorted.
+i64 sort_row(i32* raw, i64 s, i64 nf, i64 e, std::vector<i32>& tmp) {
+    bool sorted = true;
+    for (i64 x = s + nf + 1; x < e && sorted; ++x) sorted = raw[x - 1] <= raw[x];
+    if (!sorted || nf > 64) return sort_distinct(raw, s, e);
+    tmp.assign(raw + s, raw + s + nf);
+    const i64 na = sort_distinct(tmp.data(), 0, nf);
+    i64 a = 0, b = s + nf, o = s;
+    auto put = [&](i32 v) {
+        if (o == s || raw[o - 1] != v) raw[o++] = v;
+    };
+    while (a < na && b < e) {  // o < b always: the output never passes the unread rest
+        if (tmp[a] <= raw[b])
+            put(tmp[a++]);
+        else
+            put(raw[b++]);
+    }
+    while (a < na) put(tmp[a++]);
+    while (b < e) put(raw[b++]);
+    return o - s;
+}
+
+nb::object knn_csr(nb::handle nbr_, nb::handle keep_, nb::handle indptr_,
+                         nb::handle rows_, nb::handle more_, nb::handle more_keep_) {
+    In2i nbr(nbr_, "nbr"), more(more_, "more");
+    In<bool> keep(keep_, "keep"), more_keep(more_keep_, "more_keep");
+    Out<i64> indptr(indptr_, "indptr");
+    In<i64> rows(rows_, "rows");
+    const i64 n = nbr.n, k = nbr.k, mk = more.k;
+    const bool all_kept = keep.n == 0;  // no rows: every entry listed
+    if ((!all_kept && (keep.cols != k || keep.n != n)) || (rows.n && more_keep.cols != mk))
+        throw Mismatch("argument keep");
+    if (n >= (i64(1) << 31)) throw Mismatch("argument nbr");
+    nbr.check(n, "nbr");
+    check_rows(indptr, n + 1, "indptr");
+    if (rows.n) {
+        check_range(rows, 0, n, "rows");
+        if (more.n != rows.n || more_keep.n != rows.n) throw Mismatch("argument more");
+        more.check(n, "more");
+    }
+    // Every listed pair in both rows. Thread t owns the rows lo(t) .. lo(t + 1): it counts
+    // and writes their own lists and the reverse entries they make in its rows; those
+    // they make in another thread's rows are posted to it (pairs (row, entry), in the
+    // order of the lists: few, the lists being near in space and the rows in Z-order).
+    // The longer lists of the rows `rows` are read by every thread, in order. A row's
+    // entries are then sorted and made distinct: the layout of one pass in order. A pair
+    // that both rows' own lists hold makes no reverse entry (it would be a duplicate):
+    // the entries are then about the layout's own number, not twice the lists'.
+    const i64 T = std::max<i64>(1, std::min<i64>(threads(), n / 4096));
+    auto lo = [&](i64 t) { return n * t / T; };
+    auto owner = [&](i64 j) {
+        i64 t = j * T / mx<i64>(n, 1);
+        while (t > 0 && j < lo(t)) --t;
+        while (t + 1 < T && j >= lo(t + 1)) ++t;
+        return t;
+    };
+    std::vector<i32> own(n), rev(n);
+    std::vector<i64> start(n + 1, 0);
+    std::vector<std::vector<std::pair<i32, i32>>> post(T * T);  // [from * T + to]
+    auto listed = [&](i64 i, i64 c) { return (all_kept || keep(i, c)) && nbr(i, c) != i; };
+    auto listed_more = [&](i64 t, i64 c) { return more_keep(t, c) && more(t, c) != rows[t]; };
+    auto mutual = [&](i64 i, i64 j) {  // j's own list holds i too
+        for (i64 c = 0; c < k; ++c)
+            if (nbr(j, c) == i && (all_kept || keep(j, c))) return true;
+        return false;
+    };
+    // which listings are mutual, found when counting and read when writing (a bit each)
+    std::vector<std::uint64_t> both((n * k + 63) / 64, 0);
+    auto mark = [&](i64 i, i64 c) {
+        const i64 b = i * k + c;
+        __atomic_fetch_or(&both[b >> 6], std::uint64_t(1) << (b & 63), __ATOMIC_RELAXED);
+    };
+    auto marked = [&](i64 i, i64 c) {
+        const i64 b = i * k + c;
+        return (both[b >> 6] >> (b & 63)) & 1;
+    };
+    {
+        nb::gil_scoped_release nogil;
+        on_threads(T, [&](i64 t) {
+            const i64 a = lo(t), b = lo(t + 1);
+            std::fill(rev.begin() + a, rev.begin() + b, 0);
+            for (i64 i = a; i < b; ++i) {
+                i32 m = 0;
+                for (i64 c = 0; c < k; ++c)
+                    if (listed(i, c)) {
+                        ++m;
+                        const i64 j = nbr(i, c);
+                        if (mutual(i, j)) {
+                            mark(i, c);
+                            continue;
+                        }
+                        if (j >= a && j < b)
+                            ++rev[j];
+                        else
+                            post[t * T + owner(j)].emplace_back(static_cast<i32>(j),
+                                                                static_cast<i32>(i));
+                    }
+                own[i] = m;
+            }
+            for (i64 r = 0; r < rows.n; ++r)
+                for (i64 c = 0; c < mk; ++c)
+                    if (listed_more(r, c)) {
+                        i64 i = rows[r], j = more(r, c);
+                        if (i >= a && i < b) ++own[i];
+                        if (j >= a && j < b) ++rev[j];
+                    }
+        });
+        on_threads(T, [&](i64 t) {
+            for (i64 f = 0; f < T; ++f)
+                for (const auto& x : post[f * T + t]) ++rev[x.first];
+        });
+        for (i64 i = 0; i < n; ++i) start[i + 1] = start[i] + own[i] + rev[i];
+    }
+    Out<i32> raw;
+    auto raw_a = fresh(start[n], raw);
+    {
+        nb::gil_scoped_release nogil;
+        on_threads(T, [&](i64 t) {
+            const i64 a = lo(t), b = lo(t + 1);
+            // each row: its own list, its longer list, then the reverse entries in the
+            // order of their lists (those posted by the threads of lower rows, this
+            // thread's, those posted by the threads of higher rows, the longer lists')
+            std::fill(rev.begin() + a, rev.begin() + b, 0);  // now: reverse entries written
+            auto put = [&](i64 j, i64 i) {
+                raw[start[j] + own[j] + rev[j]++] = static_cast<i32>(i);
+            };
+            for (i64 f = 0; f < t; ++f)
+                for (const auto& x : post[f * T + t]) put(x.first, x.second);
+            for (i64 i = a; i < b; ++i) {
+                i64 u = start[i];
+                for (i64 c = 0; c < k; ++c)
+                    if (listed(i, c)) {
+                        const i64 j = nbr(i, c);
+                        raw[u++] = static_cast<i32>(j);
+                        if (j >= a && j < b && !marked(i, c)) put(j, i);
+                    }
+            }
+            for (i64 r = 0; r < rows.n; ++r) {
+                i64 i = rows[r];
+                if (i < a || i >= b) continue;
+                i64 u = start[i];
+                for (i64 c = 0; c < k; ++c) u += listed(i, c) ? 1 : 0;
+                for (i64 c = 0; c < mk; ++c)
+                    if (listed_more(r, c)) raw[u++] = more(r, c);
+            }
+            for (i64 f = t + 1; f < T; ++f)
+                for (const auto& x : post[f * T + t]) put(x.first, x.second);
+            for (i64 r = 0; r < rows.n; ++r)
+                for (i64 c = 0; c < mk; ++c)
+                    if (listed_more(r, c)) {
+                        i64 j = more(r, c);
+                        if (j >= a && j < b)
+                            raw[start[j] + own[j] + rev[j]++] = static_cast<i32>(rows[r]);
+                    }
+            std::vector<i32> tmp;
+            i64 w = start[a];  // rows made distinct, moved left within this thread's part
+            for (i64 i = a; i < b; ++i) {
+                i64 m = sort_row(raw.p, start[i], own[i], start[i + 1], tmp);
+                if (w != start[i]) std::copy(raw.p + start[i], raw.p + start[i] + m, raw.p + w);
+                w += m;
+                own[i] = static_cast<i32>(m);
+            }
+        });
+        indptr[0] = 0;
+        for (i64 i = 0; i < n; ++i) indptr[i + 1] = indptr[i] + own[i];
+        for (i64 t = 1; t < T; ++t) {  // each part to its place (left: never over the next)
+            const i64 a = lo(t), b = lo(t + 1);
+            std::memmove(raw.p + indptr[a], raw.p + start[a],
+                         sizeof(i32) * static_cast<size_t>(indptr[b] - indptr[a]));
+        }
+    }
+    return raw_a;
+}
+
+void bind_adjacency(nb::module_& m) {
+    m.def("csr_of_pairs", &csr_of_pairs_any,
+          "Symmetric CSR of the pairs (lo[t], hi[t]).",
+          nb::arg("lo"), nb::arg("hi"), nb::arg("n"), nb::arg("indices"), nb::arg("dual_edge"));
+    m.def("number_pairs", &number_pairs,
+          "Number the pairs of a symmetric CSR (rows ascending) in (lo, hi) order.",
+          nb::arg("indptr"), nb::arg("indices"), nb::arg("n"), nb::arg("dual_edge"),
+          nb::arg("keep"), nb::arg("pairs"));
+    m.def("triangle_half_edges", &triangle_half_edges,
+          "The half-edges of triangles.",
+          nb::arg("faces"), nb::arg("a"), nb::arg("b"), nb::arg("skip"));
+    m.def("count_keys", &count_keys,
+          "Counts[v] += the number of t in lo..hi-1 with key1[t] == v and not skip[t] (the "
+          "first pass of a counting sort on key1).",
+          nb::arg("key1"), nb::arg("skip"), nb::arg("lo"), nb::arg("hi"), nb::arg("counts"));
+    m.def("scatter_keys", &scatter_keys,
+          "Put each kept t in lo..hi-1 at order[fill[key1[t]]], advancing fill (the second pass"
+          " of a stable counting sort).",
+          nb::arg("key1"), nb::arg("skip"), nb::arg("lo"), nb::arg("hi"), nb::arg("fill"),
+          nb::arg("order"));
+    m.def("sort_buckets", &sort_buckets,
+          "Sort each bucket order[starts[v]:starts[v + 1]], v0 <= v < v1, by key2, stably.",
+          nb::arg("order"), nb::arg("starts"), nb::arg("key2"), nb::arg("v0"), nb::arg("v1"));
+    m.def("group_pairs", &group_pairs,
+          "The edges of sorted half-edges and the face pairs that share them.",
+          nb::arg("half"), nb::arg("owner"), nb::arg("a"), nb::arg("b"));
+    m.def("csr_of_face_pairs", &csr_of_face_pairs,
+          "The distinct pairs among (lo[t], hi[t]) (lo < hi < n, repeats allowed) and their "
+          "symmetric CSR, in one counting sort.",
+          nb::arg("lo"), nb::arg("hi"), nb::arg("ka"), nb::arg("kb"), nb::arg("n"),
+          nb::arg("indices"), nb::arg("dual_edge"));
+    m.def("take_pairs", &take_pairs,
+          "Pairs[t] = (lo[first[t]], hi[first[t]]) and edges[t] = (ka[first[t]], kb[first[t]]).",
+          nb::arg("first"), nb::arg("lo"), nb::arg("hi"), nb::arg("ka"), nb::arg("kb"),
+          nb::arg("pairs"), nb::arg("edges"));
+    m.def("shared_edges", &shared_edges,
+          "The mesh edge (a, b), a < b, each pair of triangles pairs[t] shares.",
+          nb::arg("faces"), nb::arg("pairs"), nb::arg("edges"), nb::arg("check"));
+    m.def("knn_csr", &knn_csr,
+          "The symmetric graph of k-nearest-neighbour lists.",
+          nb::arg("nbr"), nb::arg("keep"), nb::arg("indptr"), nb::arg("rows"), nb::arg("more"),
+          nb::arg("more_keep"));
 }
 
 }  // namespace sfk

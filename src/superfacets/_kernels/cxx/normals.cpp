@@ -1,0 +1,132 @@
+// Point normals: PCA of each point's neighbours (normals, linearity) and the
+// neighbourhoods' moments within some rings.
+// Reference, bit for bit: tests/oracle/normals.py.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <type_traits>
+#include <vector>
+
+#include "common.hpp"
+#include "points.hpp"
+
+namespace sfk {
+
+void pca_normals(nb::handle points_, nb::handle neighbors_, nb::handle out_,
+                 nb::handle linearity_) {
+    In<double> points(points_, "points");
+    In<i32> nb(neighbors_, "neighbors");
+    Out<double> out(out_, "out"), lin(linearity_, "linearity");
+    if (points.cols != 3 || out.cols != 3) throw Mismatch("argument points");
+    check_range(nb, 0, points.n, "neighbors");
+    check_rows(out, nb.n, "out");
+    check_rows(lin, nb.n, "linearity");
+    nb::gil_scoped_release nogil;
+    const i64 k = nb.cols;
+    parallel_for(nb.n, [&](i64 lo, i64 hi) {
+        double a[6];
+        for (i64 i = lo; i < hi; ++i) {
+            unit_scatter(points.p, nb.p + i * k, k, a);
+            smallest_eigenvector(a[0], a[1], a[2], a[3], a[4], a[5], out.p + 3 * i);
+            lin[i] = linearity(a[0], a[1], a[2], a[3], a[4], a[5]);
+        }
+    });
+}
+
+void pca_linearity(nb::handle points_, nb::handle neighbors_, nb::handle linearity_) {
+    In<double> points(points_, "points");
+    In<i32> nb(neighbors_, "neighbors");
+    Out<double> lin(linearity_, "linearity");
+    if (points.cols != 3) throw Mismatch("argument points");
+    check_range(nb, 0, points.n, "neighbors");
+    check_rows(lin, nb.n, "linearity");
+    nb::gil_scoped_release nogil;
+    const i64 k = nb.cols;
+    parallel_for(nb.n, [&](i64 lo, i64 hi) {
+        double a[6];
+        for (i64 i = lo; i < hi; ++i) {
+            lin[i] = unit_scatter(points.p, nb.p + i * k, k, a)
+                         ? linearity(a[0], a[1], a[2], a[3], a[4], a[5])
+                         : 0.0;
+        }
+    });
+}
+
+// normals.neighbourhood_moments: over the elements within `rings` graph steps of each
+// pick[i] (itself included, ascending: each sum in that order, from 0), their covariance
+// (the scatter divided by their number) and their mean distance to it (the sum divided by
+// their number less one, at least 1). On threads, a ball per element picked.
+void neighbourhood_moments(nb::handle indptr_, nb::handle indices_, nb::handle points_,
+                           nb::handle pick_, i64 rings, nb::handle cov_, nb::handle radius_) {
+    In<i64> indptr(indptr_, "indptr"), pick(pick_, "pick");
+    In<double> points(points_, "points");
+    Out<double> cov(cov_, "cov"), radius(radius_, "radius");
+    if (points.cols != 3 || cov.n != pick.n || radius.n != pick.n ||
+        size_of(cov_) != 9 * pick.n)
+        throw Mismatch("argument cov");
+    if (rings < 0 || rings > 64)  // (a neighbourhood of a few graph steps)
+        throw OutOfRange("argument rings: " + std::to_string(rings) + ", outside 0..64");
+    with_index(indices_, "indices", [&](const auto& indices) {
+        check_csr(indptr, indices, points.n, points.n);
+        check_range(pick, 0, points.n, "pick");
+        nb::gil_scoped_release nogil;
+        parallel_for(pick.n, [&](i64 lo, i64 hi) {
+            std::vector<i64> ball;
+            double a[6];
+            for (i64 i = lo; i < hi; ++i) {
+                const i64 p = pick[i];
+                i64 grown = 0;
+                ball.assign(1, p);
+                for (i64 r = 0; r < rings; ++r) {  // every member's neighbours added
+                    const i64 end = static_cast<i64>(ball.size());
+                    if (r > 0 && end == grown) break;  // (the ball stopped growing: done)
+                    grown = end;
+                    for (i64 t = 0; t < end; ++t)
+                        for (i64 e = indptr[ball[t]]; e < indptr[ball[t] + 1]; ++e)
+                            ball.push_back(indices[e]);
+                    std::sort(ball.begin(), ball.end());
+                    ball.erase(std::unique(ball.begin(), ball.end()), ball.end());
+                }
+                const i64 k = static_cast<i64>(ball.size());
+                const double size = static_cast<double>(k);
+                scatter(points.p, ball.data(), k, a);
+                double* c = cov.p + 9 * i;
+                c[0] = a[0] / size;
+                c[1] = c[3] = a[1] / size;
+                c[2] = c[6] = a[2] / size;
+                c[4] = a[3] / size;
+                c[5] = c[7] = a[4] / size;
+                c[8] = a[5] / size;
+                double s = 0.0;
+                const double px = points(p, 0), py_ = points(p, 1), pz = points(p, 2);
+                for (i64 t = 0; t < k; ++t) {
+                    const i64 j = ball[t];
+                    double dx = points(j, 0) - px, dy = points(j, 1) - py_,
+                           dz = points(j, 2) - pz;
+                    s += std::sqrt(dx * dx + dy * dy + dz * dz);
+                }
+                radius[i] = s / mx(size - 1.0, 1.0);
+            }
+        });
+        return 0;
+    });
+}
+
+void bind_normals(nb::module_& m) {
+    m.def("neighbourhood_moments", &neighbourhood_moments,
+          "For each element pick[i], over the elements within rings graph steps of it (itself "
+          "included.",
+          nb::arg("indptr"), nb::arg("indices"), nb::arg("points"), nb::arg("pick"),
+          nb::arg("rings"), nb::arg("cov"), nb::arg("radius"));
+    m.def("pca_normals", &pca_normals,
+          "Out[i].",
+          nb::arg("points"), nb::arg("neighbors"), nb::arg("out"), nb::arg("linearity"));
+    m.def("pca_linearity", &pca_linearity,
+          "Linearity[i] of the points neighbors[i] alone (pca_normals' second output, for "
+          "clouds whose normals are given).",
+          nb::arg("points"), nb::arg("neighbors"), nb::arg("linearity"));
+}
+
+}  // namespace sfk
