@@ -131,7 +131,7 @@ def _graph(data):
 
 
 def _row(name, n, data, gt, path, k, a, folder):
-    from superfacets.scale.runner.tiles import segment_tiled
+    from superfacets.scale.tiles.run import segment_tiled
 
     out, fine = folder / "single.npy", folder / "single_fine.npy"
     t = time.perf_counter()
@@ -190,7 +190,7 @@ def _measured(data, gt, one, tiled) -> tuple[float, float, int]:
 def _tiled_fine(on: bool):
     """``--fine``: the tiled run's stitched superpoints before its merges to the count,
     kept (the driver's call of ``merged_labels``, wrapped while the run lasts)."""
-    import superfacets.scale.runner.tiles as runner
+    import superfacets.scale.tiles.run as runner
 
     kept, merged = [], runner.merged_labels
 
@@ -241,7 +241,7 @@ def _rotated_rows(path: Path, gt, k: int, n: int, folder: Path, a, tiled_ue=None
     turned cloud is also tiled, and the two runs' means over the orientations compared."""
     from scipy.spatial.transform import Rotation
 
-    from superfacets.scale.runner.tiles import segment_tiled
+    from superfacets.scale.tiles.run import segment_tiled
 
     ues = [_equal_weight_ue(np.load(folder / "single.npy"), gt)]
     tiled = [] if tiled_ue is None else [tiled_ue]
@@ -289,8 +289,8 @@ def _cut_per_tile(path: Path, res, n_neighbors: int) -> tuple[int, int]:
     from superfacets.elements.builders import elements_of
     from superfacets.io.regions import RegionReader
     from superfacets.method.connectivity import label_components
-    from superfacets.scale.runner.buckets import bucket
-    from superfacets.scale.tile_layout import tile_box, tile_of
+    from superfacets.scale.tiles.buckets import bucket
+    from superfacets.scale.tiles.layout import tile_box, tile_of
 
     reader = RegionReader.open(path)
     edges = res.layout
@@ -324,7 +324,7 @@ def _cut_per_tile(path: Path, res, n_neighbors: int) -> tuple[int, int]:
 
 
 def _row_tiled_only(name, n, gt, path, k, a) -> None:
-    from superfacets.scale.runner.tiles import segment_tiled
+    from superfacets.scale.tiles.run import segment_tiled
 
     t = time.perf_counter()
     res = segment_tiled(path, k, tiles=a.tiles, workers=a.workers, halo=a.halo, progress=True)
@@ -351,7 +351,7 @@ def compare(a) -> None:
     from superfacets.evaluation.metrics import undersegmentation_error
     from superfacets.io import read_labels, read_mesh
     from superfacets.method.connectivity import label_components
-    from superfacets.scale.runner.tiles import segment_tiled
+    from superfacets.scale.tiles.run import segment_tiled
 
     extra = dict(paper=True) if a.paper else {}
     if a.merge_from is not None:

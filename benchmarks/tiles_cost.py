@@ -39,7 +39,7 @@ def main():
         from superfacets.io import read_cloud
         n = segment(read_cloud(path), k).n_segments
     else:
-        from superfacets.scale.runner.tiles import segment_tiled
+        from superfacets.scale.tiles.run import segment_tiled
         n = segment_tiled(path, k, tiles=tiles, workers=workers).n_segments
     print(json.dumps(dict(wall=time.perf_counter() - t, cpu=cpu() - c, n=int(n))))
 if __name__ == "__main__":

@@ -97,7 +97,7 @@ def compute(shared: Path, part: int = 0, parts: int = 1):
     """Yield (key, labels) of every run (of every ``parts``-th run from ``part``)."""
     from superfacets import segment
     from superfacets.api.levels import adaptive_superpoints
-    from superfacets.scale.runner.tiles import segment_tiled
+    from superfacets.scale.tiles.run import segment_tiled
 
     inputs = _inputs(shared)
     for name, method, options in runs()[part::parts]:

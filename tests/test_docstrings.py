@@ -92,7 +92,7 @@ REFERENCE = ("superfacets.method.params", "superfacets.method.rules", "superface
              "superfacets.graph.hierarchy", "superfacets.graph.adjacency",
              "superfacets.api.levels", "superfacets.api.scenes", "superfacets.api.result",
              "superfacets.io.clouds", "superfacets.io.headers", "superfacets.io.labels",
-             "superfacets.io.tetmeshes", "superfacets.viz.html", "superfacets.scale.runner.tiles",
+             "superfacets.io.tetmeshes", "superfacets.viz.html", "superfacets.scale.tiles.run",
              "superfacets.inputs.tetmesh", "superfacets.inputs.convert",
              "superfacets.graph.learning", "superfacets.api.sizes", "superfacets.io.records",
              "superfacets.io.orientation")

@@ -29,7 +29,8 @@ LAYERS = (
     ("superfacets.method",),  # the method: parameters, stages, one run
     ("superfacets.api",),  # the public functions and their results
     ("superfacets.viz", "superfacets.evaluation"),  # pictures; measures, baselines, reports
-    ("superfacets.scale",),  # tiles, batches, experiments
+    ("superfacets.scale", "superfacets.scale.runner"),  # the engine, batches, experiments
+    ("superfacets.scale.tiles",),  # the tiled run (on the engine)
     ("superfacets.cli",),  # the command line
     ("superfacets.__main__",),  # python -m superfacets
     ("superfacets",),  # the public facade (imports everything lazily; nothing imports it)

@@ -57,7 +57,7 @@ _PUBLIC = {
     "TetMesh": "inputs.tetmesh",
     "read_volume": "io",
     "write_volume_labels": "io",
-    "segment_tiled": "scale.runner.tiles",
+    "segment_tiled": "scale.tiles.run",
     "TiledResult": "api.result",
     "NotebookView": "viz.html",
 }
@@ -147,4 +147,4 @@ if TYPE_CHECKING:  # the same names, for type checkers and IDEs
     from .method.connectivity import enforce_connectivity
     from .method.params import DEFAULTS, SegmentParams
     from .method.weights import edge_weights, paper_weights, shlafman_weights
-    from .scale.runner.tiles import TiledResult, segment_tiled
+    from .scale.tiles.run import TiledResult, segment_tiled

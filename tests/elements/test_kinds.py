@@ -29,7 +29,6 @@ ALLOWED = {
     "elements/": "the table and the builders",
     "io/": "file layouts",
     "cli/": "the command line's wording",
-    "scale/runner/buckets.py": "tile files: faces with their vertices, or points",
     "inputs/mesh.py": "a mesh's per-face and per-vertex colours",
     "scale/runner/experiment.py": "the benchmark's per-face ground truth carried to each kind",
 }

@@ -202,7 +202,7 @@ def test_cli_reads_a_coloured_mesh_for_beta(tmp_path):
 
 
 def test_tiled_mesh_runs_read_the_colours(tmp_path):
-    from superfacets.scale.runner.tiles import segment_tiled
+    from superfacets.scale.tiles.run import segment_tiled
 
     mesh, _ = _two_colour_grid(60)
     blue = mesh.element_colors("faces")[:, 2]

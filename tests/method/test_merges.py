@@ -274,7 +274,7 @@ def _on_floor(labels, part):  # superpoints mostly of floor points
 
 
 def test_a_tiled_run_merges_to_the_count_like_one_run():
-    from superfacets.scale.runner.tiles import segment_tiled
+    from superfacets.scale.tiles.run import segment_tiled
 
     pts, part = _room(5)
     plain = segment_tiled(pts, 60, tiles=4, merge_from=1)
@@ -303,7 +303,7 @@ def test_the_tiles_sums_add_up_to_the_whole_clouds():
     from superfacets.elements.points import point_graph
     from superfacets.method.merges import FLAT_NOISE, flat_share, merge_to_count
     from superfacets.method.stages import resolve_rules
-    from superfacets.scale.tile_merges import _outer_sums, merge_names, tile_merge_stats
+    from superfacets.scale.tiles.merges import _outer_sums, merge_names, tile_merge_stats
 
     pts, _ = _room(6)
     cloud = PointCloud(pts)
@@ -357,7 +357,7 @@ def test_a_border_disagreement_never_merges_superpoints_that_do_not_touch():
     labels, so no merged superpoint is left in two pieces."""
     from superfacets.elements.points import point_graph
     from superfacets.method.connectivity import label_components
-    from superfacets.scale.tile_merges import merge_names, tile_merge_stats
+    from superfacets.scale.tiles.merges import merge_names, tile_merge_stats
 
     pts, _ = _room(6, noise=0.0)  # one flat floor: the flat merges join any two neighbours
     cloud = PointCloud(pts)
@@ -387,7 +387,7 @@ def test_a_border_disagreement_never_merges_superpoints_that_do_not_touch():
 def test_a_tiled_run_merges_points_only():
     import trimesh
 
-    from superfacets.scale.runner.tiles import segment_tiled
+    from superfacets.scale.tiles.run import segment_tiled
 
     with pytest.raises(ParameterError, match="merge_from above 1: a tiled run merges"):
         segment_tiled(trimesh.creation.icosphere(3), 20, tiles=2, merge_from=5)

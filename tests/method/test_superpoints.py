@@ -293,7 +293,7 @@ def test_a_frame_must_be_a_box():
 def test_a_las_scan_is_oriented_up(tmp_path):
     laspy = pytest.importorskip("laspy")
     from superfacets.io.regions import RegionReader
-    from superfacets.scale.tiling import orientation_reference
+    from superfacets.scale.tiles.phases import orientation_reference
 
     pts, part = _terrain_with_a_block()
     header = laspy.LasHeader(point_format=1, version="1.2")
@@ -578,7 +578,7 @@ def test_cli_orients_a_scan_by_viewpoint_or_side(tmp_path, capsys):
                          (["--viewpoint", "2,2,30"], PointCloud(pts, viewpoint=[2, 2, 30]))):
         assert main(["segment", str(tmp_path / "t.npy"), "-k", "12", "-o", str(out), "-q",
                      "--tiles", "2", *flags]) == 0
-        from superfacets.scale.runner.tiles import segment_tiled
+        from superfacets.scale.tiles.run import segment_tiled
 
         np.testing.assert_array_equal(read_labels(out), segment_tiled(cloud, 12, tiles=2).labels)
         assert (read_labels(out) != segment_tiled(PointCloud(pts), 12, tiles=2).labels).any()

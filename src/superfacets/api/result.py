@@ -365,7 +365,7 @@ def describe_stop(result) -> str:
 
 @dataclass(frozen=True)
 class TiledResult:
-    """Labels and details of a tiled run (:func:`~superfacets.scale.runner.tiles.segment_tiled`).
+    """Labels and details of a tiled run (:func:`~superfacets.scale.tiles.run.segment_tiled`).
 
     Attributes
     ----------
@@ -380,7 +380,7 @@ class TiledResult:
         Tiles along x, y and z for a regular grid (``tiles=(nx, ny, nz)``);
         ``(N,)`` for ``N`` balanced tiles.
     layout : Tiles
-        The tiles' core boxes (:class:`~superfacets.scale.tile_layout.Tiles`:
+        The tiles' core boxes (:class:`~superfacets.scale.tiles.layout.Tiles`:
         ``layout.of(positions)``, ``layout.box(t)``).
     halo : float
         Width of each tile's halo, in the input's units: ``halo * window * r``, or on a
@@ -395,7 +395,7 @@ class TiledResult:
         Elements relabelled by the connectivity pass that runs after
         stitching when ``disagreements > 0`` (a superfacet left in pieces by
         two tiles' different borders: each stray piece joins its neighbour,
-        :func:`~superfacets.scale.tiling.tile_connect`).
+        :func:`~superfacets.scale.tiles.phases.tile_connect`).
     tiles : list of dict
         Per tile with work: ``tile``, ``core`` and ``rows`` (elements in the
         core, and with the halo), ``centers`` (in its core after the first phase that
@@ -405,9 +405,10 @@ class TiledResult:
     timings : dict of str to float
         Seconds: ``survey``, ``bucket`` (sorting the input into tiles),
         ``orientation`` (points without normals or viewpoint: the survey's
-        sample oriented once, :func:`~superfacets.scale.tiling.orientation_reference`), ``areas``,
+        sample oriented once,
+        :func:`~superfacets.scale.tiles.phases.orientation_reference`), ``areas``,
         ``start`` (a cloud's centers found on that sample:
-        :func:`~superfacets.scale.tiling.sample_start`), ``centers`` (each tile's, where
+        :func:`~superfacets.scale.tiles.phases.sample_start`), ``centers`` (each tile's, where
         no sample start gave them),
         ``refine``, ``labels``, ``stitch``, ``connect`` (only with disagreements),
         ``total``.

@@ -62,7 +62,7 @@ def segment_tiles(args) -> int:
     from ..errors import ParameterError, SuperfacetsError
     from ..io.files import Outputs
     from ..io.labels import write_labels, write_segindices
-    from ..scale.runner.tiles import segment_tiled
+    from ..scale.tiles.run import segment_tiled
 
     for flag, given in (("--colored-mesh", args.colored_mesh), ("--picture", args.picture),
                         ("--html", args.html), ("--graph", args.graph),

@@ -22,7 +22,7 @@ index), itself first: ties at any distance (quantized scans) go to the lowest in
 index being the position's place in
 :func:`~superfacets.elements.points.distinct_points`' order, so the answer is a function
 of the positions alone, whatever the tree: a tile of a cloud
-(:mod:`superfacets.scale.tiling`) gets the whole cloud's neighbours inside its halo, and no
+(:mod:`superfacets.scale.tiles.phases`) gets the whole cloud's neighbours inside its halo, and no
 block size or thread count changes a bit of it. Distances are computed as scipy's KD-tree
 computes them (the same neighbours and distances where no two are tied).
 """

@@ -12,7 +12,7 @@ weights for adjacent elements". Here each point is an element:
   order is as good at z = 0 or in survey coordinates as near the origin, and a
   box of a cloud given the whole cloud's frame (``PointCloud.frame``: a tiled
   run's tiles) lists its points in the whole cloud's order and gets the whole
-  cloud's neighbours away from its edge (:mod:`superfacets.scale.tiling`); a point
+  cloud's neighbours away from its edge (:mod:`superfacets.scale.tiles.phases`); a point
   whose neighbours lie on a line (a LiDAR scan line far from the sensor: linearity
   ``(l1 - l2) / l1`` of their covariance above :data:`LINEAR`) is also joined to its
   ``WIDEN * n_neighbors`` nearest, so that the graph spans the surface
@@ -319,7 +319,7 @@ def point_elements(pts: np.ndarray, area: np.ndarray, normals: np.ndarray,
                    pair_dtype=np.int32, *, lower: np.ndarray | None = None,
                    diagonal: float | None = None) -> PointElements:
     """The point graph of its arrays as :func:`point_graph` builds them (also read back
-    from files: :mod:`superfacets.scale.tile_graphs`).
+    from files: :mod:`superfacets.scale.tiles.graphs`).
 
     Parameters
     ----------

@@ -9,7 +9,7 @@ area-weighted mean (Ward's cost); per pair of adjacent superpoints the border le
 the border-weighted angle and concave share of the normals (the crease factor) and the
 plain sums where a border has no length. One run sums them over its whole graph
 (:func:`border_sums`, :func:`point_sums`); a tiled run over each tile's core, added in
-the driver (:mod:`superfacets.scale.tile_merges`); both merge the same sums the same way.
+the driver (:mod:`superfacets.scale.tiles.merges`); both merge the same sums the same way.
 
 On a point graph whose adjacencies were never listed (a default run) the pairs' sums are
 made in one pass over its layout (``label_pair_sums``): no array per crossing adjacency

@@ -26,7 +26,7 @@ points lie in no box (their label stays -1).
 
 A tiled run reads the file twice in all: once for its bounds
 (:meth:`RegionReader.survey`) and once to sort its elements into one file
-per tile (:func:`superfacets.scale.runner.buckets.bucket`); every box is then read
+per tile (:func:`superfacets.scale.tiles.buckets.bucket`); every box is then read
 from the files of the tiles it overlaps, not from the whole file.
 """
 
@@ -62,7 +62,7 @@ class Survey:
     size: float
     n_elements: int
     #: (s, 3) float64: the finite positions of every ``ceil(n_rows / SAMPLE)``-th row,
-    #: for balanced tiles (:func:`superfacets.scale.tile_layout.balanced_tiles`)
+    #: for balanced tiles (:func:`superfacets.scale.tiles.layout.balanced_tiles`)
     sample: np.ndarray | None = None
     #: the points carry normals (a point cloud's file has them)
     normals: bool = False

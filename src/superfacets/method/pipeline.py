@@ -35,7 +35,7 @@ once and in the paper's order
 Each stage declares what it reads (:func:`~superfacets.method.stages.stage_reads`);
 timings, the progress bar and the one place that forgets what no later stage reads
 are hooks around the stages (:class:`Hooks`), not inside them. Tiled runs
-(:mod:`superfacets.scale.tiling`) call the same stages.
+(:mod:`superfacets.scale.tiles.phases`) call the same stages.
 """
 
 from __future__ import annotations
@@ -230,7 +230,7 @@ def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
         Jump over a repeating cycle of center lists. Same labels.
     n_centers : int, optional
         Initial centers instead of the number ``radius`` gives (a tile of a
-        tiled run: :mod:`superfacets.scale.tiling`); ``r`` stays the radius's.
+        tiled run: :mod:`superfacets.scale.tiles.phases`); ``r`` stays the radius's.
     initial : (c,) int ndarray, optional
         Elements to start the passes from, instead of the initialization
         (a tile starting from the whole run's centers).

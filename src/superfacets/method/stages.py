@@ -1,7 +1,7 @@
 """The stages of one run of the method, each entered once, in the paper's order.
 
 :func:`superfacets.method.pipeline.pipeline` runs them (its notes list them); tiled runs
-(:mod:`superfacets.scale.tiling`) call the same ones. Each stage takes what the one before
+(:mod:`superfacets.scale.tiles.phases`) call the same ones. Each stage takes what the one before
 hands it: the element graph, the run's :class:`Rules` (every automatic rule
 resolved once), the weights, the centers, the labels. :class:`Hooks` hold what runs
 around them: timings, the progress bar, the release of memory.

@@ -1,6 +1,6 @@
 """The tiles one large input is cut into: axis-aligned boxes, a regular grid or balanced.
 
-A tiled run (:mod:`superfacets.scale.tiling`, :mod:`superfacets.scale.runner.tiles`) gives
+A tiled run (:mod:`superfacets.scale.tiles.phases`, :mod:`superfacets.scale.tiles.run`) gives
 every element to the *core* of one tile, the box holding its position, and
 reads each tile with a halo around that box. The tiles are the leaves of a
 binary tree of axis-aligned splits (the cells of a k-d tree) covering the
@@ -31,9 +31,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..checks import check_int
-from ..errors import ParameterError
-from ..inputs.bounds import finite_rows, rows_in_box
+from ...checks import check_int
+from ...errors import ParameterError
+from ...inputs.bounds import finite_rows, rows_in_box
 
 __all__ = ["Tiles", "tile_grid", "balanced_tiles", "tile_of", "tile_box", "check_tiles",
            "trim_centers"]

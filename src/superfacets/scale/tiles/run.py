@@ -1,15 +1,15 @@
 """One input larger than a machine: tiles with halos on Dask, stitched by center.
 
-:func:`segment_tiled` cuts the input into tiles (:mod:`superfacets.scale.tile_layout`:
+:func:`segment_tiled` cuts the input into tiles (:mod:`superfacets.scale.tiles.layout`:
 balanced boxes, or a regular grid) and runs each tile as a task on :class:`~.engine.Engine`
 (this process, a local Dask cluster or a running scheduler). A task gets the file's name
 and its box, never data: it reads its tile and halo itself
 (:class:`superfacets.io.regions.RegionReader`), so no process holds the whole input. The
-phases (:mod:`superfacets.scale.tiling`):
+phases (:mod:`superfacets.scale.tiles.phases`):
 
 0. a survey of the file in chunks (bounds, total area) in this process, and a second pass
    that sorts its elements into one file per tile in the work folder
-   (:func:`~superfacets.scale.runner.buckets.bucket`): from then on a task reads the tiles
+   (:func:`~superfacets.scale.tiles.buckets.bucket`): from then on a task reads the tiles
    its box overlaps; for a point cloud asked for ``n_segments``, one task per tile
    builds its point graph (kept for the later phases) and sums the points' areas on it
    (the radius needs the total; the halo it reads with comes from the survey's sample);
@@ -19,16 +19,16 @@ phases (:mod:`superfacets.scale.tiling`):
 2. per tile, labels from all the centers, kept for the core;
 3. only where two tiles saw a border differently: per tile, the stitched labels of its
    box (read from a file in the work folder) made connected
-   (:func:`~superfacets.scale.tiling.tile_connect`), again on the tiles near what moved
+   (:func:`~superfacets.scale.tiles.phases.tile_connect`), again on the tiles near what moved
    until nothing moves (:data:`CONNECT_ROUNDS` at most);
 4. on a point cloud of even density (``merge_from``, as one run chooses it): the phases
    above make ``merge_from`` times the superpoints asked for, each tile sums what the
    merges read in phase 2, and this process merges them down to the count
-   (:mod:`superfacets.scale.tile_merges`); a mesh's tiles make a few more than asked
+   (:mod:`superfacets.scale.tiles.merges`); a mesh's tiles make a few more than asked
    (:data:`MESH_EXCESS`), merged to the count by Ward's merges alone.
 
 A cloud's tile builds its point graph once, in the work folder
-(:mod:`superfacets.scale.tile_graphs`). Labels are named by their center's row, so a
+(:mod:`superfacets.scale.tiles.graphs`). Labels are named by their center's row, so a
 superfacet crossing tile borders has one label on every side; they are made dense at the
 end. Only the labels (8 bytes per element) and the centers are gathered here.
 """
@@ -51,14 +51,15 @@ from ...api.result import TiledResult
 from ...checks import max_threads
 from ...elements.kinds import kind_of
 from ...errors import ParameterError, SuperfacetsError
-from ...inputs.bounds import check_extent, column_bounds, rows_in_box
+from ...inputs.bounds import check_extent, rows_in_box
 from ...method.merges import NOISE_SAMPLE
 from ...method.params import DEFAULTS, resolve, superfacet_size
 from ...method.rules import fine_count
-from ..tile_graphs import drop_graphs, graph_folder, tile_graph
-from ..tile_layout import any_in_box, gathered_centers, in_box
-from ..tile_merges import merged_labels, tiled_merge_from
-from .engine import Engine, PeakMemory, error_text
+from ..runner.engine import Engine
+from .graphs import drop_graphs, graph_folder
+from .layout import any_in_box, gathered_centers, in_box
+from .merges import merged_labels, tiled_merge_from
+from .task import tile_task
 from .workdir import run_folder
 
 #: Passes of the centers phase where refine rounds follow (they run the passes again
@@ -71,122 +72,7 @@ CENTER_PASSES = 1
 #: stitched labels, and two repairs can leave a piece apart again).
 CONNECT_ROUNDS = 4
 
-__all__ = ["segment_tiled", "TiledResult", "tile_task"]
-
-
-def tile_task(task: dict) -> dict:
-    """One tile's work (a module-level function: Dask workers import it by reference).
-
-    ``task`` holds ``phase`` ('areas', 'centers', 'refine', 'labels' or 'connect'),
-    ``reader``, ``layout`` (:class:`~superfacets.scale.tile_layout.Tiles`), ``tile``,
-    ``margin``, ``params``, ``r``, ``diagonal``, ``orient_like`` (optional: the oriented
-    sample, or its file), ``frame`` (optional: the whole cloud's box, whose frame
-    numbers a tile's points), for 'refine' and 'labels' the ``centers`` (rows) within
-    reach, for 'labels' a ``ring`` (a width), for 'connect' the stitched ``labels``.
-    Returns a dict; an error is returned as ``error`` (text), never raised.
-
-    Parameters
-    ----------
-    task : dict
-        As above.
-
-    Returns
-    -------
-    dict
-        The phase's output for this tile (centers, labels or areas) and its seconds and peak
-        memory.
-
-    Raises
-    ------
-    SuperfacetsError
-        As the method on the tile's input (the engine names the tile).
-
-    Examples
-    --------
-    >>> import trimesh
-    >>> m = trimesh.creation.icosphere(subdivisions=4)
-    >>> segment_tiled((m.vertices, m.faces), 40, tiles=2, workers=1).tiles[0]["tile"]
-    0
-    """
-    from ..tiling import core_area, point_areas, tile_centers, tile_connect, tile_refine
-
-    probe = PeakMemory()
-    t0 = time.perf_counter()
-    out = {"tile": task["tile"], "phase": task["phase"]}
-    try:
-        layout = task["layout"]
-        lo, hi = layout.box(task["tile"], task["margin"])
-        rows, pos, inp = _box(task, lo, hi)
-        inp = _framed(task, layout, inp)
-        core = layout.holds(pos, task["tile"])
-        out.update(rows=int(rows.size), core=int(core.sum()))
-        if not core.any():  # no element of its own: nothing to do
-            return out
-        low, high = column_bounds(pos)
-        spread = bool((high > low).any())
-        graph_area = task.get("graph_area", False) and spread
-        if task.get("graphs") and (task["phase"] != "areas" or graph_area) and spread:
-            tile_graph(inp, Path(task["graphs"]) / f"tile-{task['tile']}",
-                       task["params"].n_neighbors)  # built once, read by the later phases
-        p, r, d = task["params"], task["r"], task["diagonal"]
-        if task["phase"] == "areas":
-            out["area"] = (core_area(inp, core, p.n_neighbors) if graph_area
-                           else point_areas(pos, core, p.n_neighbors))
-        elif task["phase"] == "connect":
-            given = task["labels"]
-            if isinstance(given, str):  # the stitched labels, in a file every worker reads
-                given = np.load(given, mmap_mode="r")[rows]
-            given = np.asarray(given, dtype=np.int64)
-            owned = np.intersect1d(given[given >= 0], rows[core])
-            fixed = tile_connect(inp, given, owned, np.searchsorted(rows, owned), p)
-            moved = np.zeros(0, dtype=bool) if fixed is None else fixed != given
-            out.update(moved_rows=rows[moved] if moved.size else rows[:0],
-                       moved_labels=fixed[moved] if moved.size else rows[:0],
-                       moved_positions=pos[moved] if moved.size else pos[:0])
-        elif task["phase"] == "centers":  # (with refine rounds to come: the start, one pass)
-            found, _ = tile_centers(inp, core, replace(p, max_iter=task.get("passes")
-                                                       or p.max_iter), r, d)
-            out.update(centers=rows[found], positions=pos[found])
-        else:
-            want = np.asarray(task["centers"], dtype=np.int64)
-            at = np.searchsorted(rows, want)
-            ok = at < rows.size
-            ok[ok] = rows[at[ok]] == want[ok]
-            if task["phase"] == "refine":
-                found = tile_refine(inp, core, at[ok], p, r, d)
-                out.update(centers=rows[found], positions=pos[found])
-            else:
-                _labelled(task, out, (rows, pos, inp, core), at[ok])
-    except Exception as exc:  # noqa: BLE001 - reported by the driver, with the tile
-        out["error"] = error_text(exc)
-    except MemoryError as exc:  # pragma: no cover - depends on the machine
-        out["error"] = error_text(exc)
-    out["seconds"] = time.perf_counter() - t0
-    peak = probe.peak_mib(above_start=False)
-    out["peak_mib"] = None if peak is None else round(peak, 1)
-    return out
-
-
-def _labelled(task: dict, out: dict, box: tuple, centers: np.ndarray) -> None:
-    """The labels phase of one tile (``box``: its rows, positions, input and core) from
-    the ``centers`` (rows of the box) within reach: its core's and its ring's labels in
-    ``out``, each named by its center's row in the input, and the merges' sums."""
-    from ..tiling import tile_labels
-
-    rows, pos, inp, core = box
-    p, r, d = task["params"], task["r"], task["diagonal"]
-    if task.get("n_noise") is not None:  # the merges to the count follow
-        named, out["merge_stats"] = tile_labels(
-            inp, centers, p, r, d, merging=(core, rows, task["n_noise"]))
-    else:
-        named = tile_labels(inp, centers, p, r, d)
-    gid = np.where(named >= 0, rows[np.maximum(named, 0)], -1)
-    lo_c, hi_c = task["layout"].box(task["tile"])
-    near = ~core & ((pos >= lo_c - task["ring"]) & (pos <= hi_c + task["ring"])).all(1)
-    out.update(core_rows=rows[core], core_labels=gid[core], ring_rows=rows[near],
-               ring_labels=gid[near])
-    if task.get("box_rows", True):  # for the connect phase, unless read from a file
-        out["box_rows"] = rows
+__all__ = ["segment_tiled", "TiledResult"]
 
 
 #: The most refinement rounds (each runs the passes on every tile again; 1 is the default)
@@ -210,20 +96,20 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         Superfacets over the whole input (``r = sqrt(A / (k pi))``, paper
         section 3.1); or None with ``radius``. On a point cloud of even density the
         tiles make ``merge_from`` (5) times as many, merged down to exactly this count
-        at the end (:mod:`superfacets.scale.tile_merges`; ``merge_from=1``: none); on a
+        at the end (:mod:`superfacets.scale.tiles.merges`; ``merge_from=1``: none); on a
         mesh in several tiles, 5 % more and one a tile (:data:`MESH_EXCESS`), merged
         by Ward's merges to exactly this count (``merge_from=1``: none, the tiles' own
         count, which can fall short by a few).
     tiles : int or sequence of 3 int, default 4
         Number of balanced tiles (boxes split at the quantiles of the
         positions, so that each holds about ``n / tiles`` elements, however
-        uneven the input: :func:`~superfacets.scale.tile_layout.balanced_tiles`),
+        uneven the input: :func:`~superfacets.scale.tiles.layout.balanced_tiles`),
         or three integers: a regular grid of equal boxes, tiles along x, y, z.
     halo : float, optional
         Halo width in units of ``window * r``, ``>= 1``; default 3. From 2
         each core element's classification is that of a single run from the
         same centers; the third makes the clean-up near borders agree
-        (:mod:`superfacets.scale.tiling`).
+        (:mod:`superfacets.scale.tiles.phases`).
     workers : int, default 1
         Local Dask worker processes; 1 runs the tiles one after another in
         this process. Ignored with ``scheduler``.
@@ -236,10 +122,10 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         Folder for the work files: the input sorted into one file per tile
         (the file is read twice in all, then each task reads the tiles its box
         overlaps), the ``.npy`` copy of an input that is not streamed, the tiles' point
-        graphs (:mod:`~superfacets.scale.tile_graphs`), the stitched labels. The run
+        graphs (:mod:`~superfacets.scale.tiles.graphs`), the stitched labels. The run
         works in a folder of its own that it makes inside ``workdir`` and removes at its
         end; nothing else there is touched, and two runs may share it
-        (:mod:`~superfacets.scale.runner.workdir`). Default: a temporary folder. With
+        (:mod:`~superfacets.scale.tiles.workdir`). Default: a temporary folder. With
         ``scheduler`` give a folder every worker reaches, or each task reads the whole
         file for its box.
     progress : bool, default False
@@ -275,8 +161,8 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
     >>> r.labels.shape, r.n_segments, r.layout.n_tiles
     ((5120,), 40, 2)
     """
-    from ..tile_layout import balanced_tiles, tile_grid
     from .buckets import bucket
+    from .layout import balanced_tiles, tile_grid
 
     params, halo = _checked_options(n_segments, options, tiles, halo, refine, workers)
     t_start = time.perf_counter()
@@ -399,12 +285,12 @@ def _noise_points(merging: bool, merge_from: int, n_tiles: int) -> int | None:
 def _sample_start(reader, survey, params, r: float, diagonal: float, refine: int,
                   stage, sampled: tuple):
     """The centers a cloud's refine rounds start from, found on the survey's sample
-    (:func:`~superfacets.scale.tiling.sample_start`; ``sampled``: the orientation's
+    (:func:`~superfacets.scale.tiles.phases.sample_start`; ``sampled``: the orientation's
     sample cloud, or None, and the cloud's up direction); None where the tiles' centers
     phase gives them (meshes; ``refine=0``, where no round follows to run the passes on
-    every point; a sample too small for the centers: :func:`~superfacets.scale.tiling.
+    every point; a sample too small for the centers: :func:`~superfacets.scale.tiles.phases.
     sample_start` says so)."""
-    from ..tiling import sample_start
+    from .phases import sample_start
 
     sample = survey.sample
     if not kind_of(reader.kind).cloud or refine < 1 or sample is None \
@@ -452,45 +338,14 @@ def _merge_plan(params, kind: str, survey, n_tiles: int):
     return target, merge_from, params
 
 
-def _framed(task: dict, layout, inp):
-    """A task's input with the run's orientation reference and frame, where it has them
-    (``inp`` None, a box without an element, stays None)."""
-    if inp is None:
-        return None
-    changes = {}
-    ref = task.get("orient_like")
-    if ref is not None:  # every tile orients like one sample (a file, or its part)
-        if isinstance(ref, str):
-            ref = in_box(np.load(ref, mmap_mode="r"), *layout.box(task["tile"],
-                                                                    1.5 * task["margin"]))
-        changes["orient_like"] = (ref[:, :3], ref[:, 3:])
-    if task.get("frame") is not None:
-        changes["frame"] = task["frame"]  # numbered as the whole cloud numbers them
-    return replace(inp, **changes) if changes else inp  # (one check of the input, not two)
-
-
-def _box(task: dict, lo, hi):
-    """A task's box: its rows, positions and input; the first phase of a tile that keeps
-    its graph keeps the box's records beside it for the later phases (one file, not the
-    tiles the box overlaps)."""
-    from .buckets import TileBuckets
-
-    reader, name = task["reader"], f"tile {task['tile']}"
-    if task.get("graphs") and isinstance(reader, TileBuckets):
-        Path(task["graphs"]).mkdir(parents=True, exist_ok=True)
-        return reader.read_box(lo, hi, name=name,
-                               keep=Path(task["graphs"]) / f"box-{task['tile']}")
-    return reader.read_box(lo, hi, name=name)
-
-
 def _orientation(reader, survey, n_neighbors: int, up, folder):
     """The normals' orientation reference of a cloud with neither normals nor viewpoint
     (from the survey's sample; saved in ``folder`` where the tasks share one, and then its
     path), else None; the sample's area where its graph was built (else None); and the
-    sample as a cloud with that graph (else None: :func:`~superfacets.scale.tiling.
+    sample as a cloud with that graph (else None: :func:`~superfacets.scale.tiles.phases.
     sample_start` reads it)."""
     from ...elements.points import point_graph
-    from ..tiling import sample_cloud
+    from .phases import sample_cloud
 
     if not kind_of(reader.kind).cloud or survey.normals or reader.viewpoint is not None:
         return None, None, None
@@ -522,7 +377,7 @@ def _sized(run, layout, kind: str, params, survey, diagonal: float, halo: float,
     read the same boxes, so the graphs are built once (and a run that keeps none labels
     alike). If the halo the exact radius asks for is wider, the graphs are dropped, and
     the phases read that halo and build them."""
-    from ..tiling import halo_distance, point_areas
+    from .phases import halo_distance, point_areas
 
     graphs, sample_area = kept
     n, window = survey.n_elements, params.window
@@ -564,8 +419,8 @@ def _stitched(done: list, n_rows: int):
 def _checked_options(n_segments, options, tiles, halo, refine, workers):
     """The run's parameters and halo, every option checked before any pass over the
     input."""
-    from ..tile_layout import check_tiles
-    from ..tiling import HALO, check_tileable, halo_distance
+    from .layout import check_tiles
+    from .phases import HALO, check_tileable, halo_distance
 
     if "features" in options:
         raise ParameterError("a tiled run reads colours from the file; features= is not taken")
@@ -588,8 +443,8 @@ def _surveyed(source, tmp, tiles, params):
     """The input's reader (streamed from its file, or spilled to the work folder) and its
     survey (bounds, counts, a sample), checked against the tiles and the parameters."""
     from ...io.regions import STREAMED, RegionReader
-    from ..tile_layout import check_tiles
-    from ..tiling import check_tileable
+    from .layout import check_tiles
+    from .phases import check_tileable
 
     if isinstance(source, RegionReader):  # opened by the caller (its viewpoint, up)
         reader = source

@@ -1,11 +1,11 @@
 """One input cut into spatial tiles: the work of one tile.
 
 An input too large for one process is cut into axis-aligned tiles
-(:mod:`superfacets.scale.tile_layout`: balanced boxes, or a regular grid);
+(:mod:`superfacets.scale.tiles.layout`: balanced boxes, or a regular grid);
 each element belongs to the *core* of the tile holding its position, and a
 tile is read with a *halo*: every element within ``halo * window * r`` of its
 core box (:mod:`superfacets.io.regions`). The run then has two phases, each
-one task per tile (:mod:`superfacets.scale.runner.tiles` sends them to Dask):
+one task per tile (:mod:`superfacets.scale.tiles.run` sends them to Dask):
 
 1. **centers** (:func:`tile_centers`): the method runs on the tile and its
    halo, with the radius ``r`` of the whole input (so the tile gets its share
@@ -45,16 +45,16 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..elements.builders import elements_of
-from ..elements.kinds import kind_of
-from ..errors import ParameterError
-from ..method.classify import make_classifier
-from ..method.expansion import Workspaces
-from ..method.finish import clean_up, finish
-from ..method.params import DEFAULTS, SegmentParams, superfacet_measure
-from ..method.passes import final_centers
-from ..method.pipeline import pipeline
-from ..method.stages import build_graph, resolve_features, resolve_rules, weigh
+from ...elements.builders import elements_of
+from ...elements.kinds import kind_of
+from ...errors import ParameterError
+from ...method.classify import make_classifier
+from ...method.expansion import Workspaces
+from ...method.finish import clean_up, finish
+from ...method.params import DEFAULTS, SegmentParams, superfacet_measure
+from ...method.passes import final_centers
+from ...method.pipeline import pipeline
+from ...method.stages import build_graph, resolve_features, resolve_rules, weigh
 
 __all__ = ["tile_centers", "sample_start", "tile_refine", "tile_labels",
            "tile_connect", "orientation_reference", "HALO",
@@ -71,8 +71,8 @@ def point_areas(points: np.ndarray, core: np.ndarray, n_neighbors: int) -> float
     """Summed area of the ``core`` points of a tile, as the point graph sizes them
     (``pi rho^2 / K``, ``rho`` the distance to the ``K``-th distinct neighbour among
     ``points``); duplicate points count once."""
-    from ..elements.neighbors import nearest, point_tree
-    from ..elements.points import distinct_points
+    from ...elements.neighbors import nearest, point_tree
+    from ...elements.points import distinct_points
 
     pts, inverse = distinct_points(points)  # duplicates share a position, so a core
     is_core = np.zeros(pts.shape[0], dtype=bool)
@@ -87,7 +87,7 @@ def point_areas(points: np.ndarray, core: np.ndarray, n_neighbors: int) -> float
 
 
 def _valid_rows(inp) -> np.ndarray:
-    from ..inputs.cloud import PointCloud
+    from ...inputs.cloud import PointCloud
 
     if isinstance(inp, PointCloud):
         return np.asarray(inp.valid)
@@ -96,11 +96,11 @@ def _valid_rows(inp) -> np.ndarray:
 
 def _diagonal(inp) -> float:
     """The bounding-box diagonal of a tile's elements, as its element graph has it."""
-    from ..inputs.bounds import column_bounds
-    from ..inputs.cloud import PointCloud
+    from ...inputs.bounds import column_bounds
+    from ...inputs.cloud import PointCloud
 
     if isinstance(inp, PointCloud):
-        from ..elements.points import kept_diagonal
+        from ...elements.points import kept_diagonal
 
         kept = kept_diagonal(inp)  # (the tile's graph, kept or read: its points lent)
         if kept is not None:
@@ -116,7 +116,7 @@ def check_tileable(params: SegmentParams, colors: bool = True) -> None:
     small superfacets (``min_elements``), content-sensitive sizes (``density``: the
     median size; ``roughness``). ``density=None`` (automatic) is 0 in a tiled run. Also
     ``beta > 0`` on an input without ``colors`` (the survey's). (The merges to the count,
-    ``merge_from``, run after the tiles: :mod:`superfacets.scale.tile_merges`.)
+    ``merge_from``, run after the tiles: :mod:`superfacets.scale.tiles.merges`.)
 
     Raises
     ------
@@ -138,7 +138,7 @@ def _tile_params(params: SegmentParams, r: float, diagonal: float, tile_diagonal
     """The run's parameters for one tile: the whole input's radius ``r``."""
     nr = params.neighbor_radius
     # no automatic density: a tile's spread of sizes is not the whole input's; no merges
-    # in a tile: they come after, over all the tiles (superfacets.scale.tile_merges)
+    # in a tile: they come after, over all the tiles (superfacets.scale.tiles.merges)
     return replace(params, n_segments=None, radius=r / tile_diagonal, progress=False,
                    density=0.0 if params.density is None else params.density, merge_from=1,
                    neighbor_radius=None if nr is None else nr * diagonal / tile_diagonal)
@@ -246,8 +246,8 @@ def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: Segm
     >>> len(rows), bool((np.diff(rows) > 0).all())
     (10, True)
     """
-    from ..inputs.cloud import PointCloud
-    from .tile_layout import gathered_centers
+    from ...inputs.cloud import PointCloud
+    from .layout import gathered_centers
 
     sample = np.asarray(sample, dtype=np.float64)
     if sample.shape[0] < min(START_POINTS_PER_CENTER * (params.n_segments or 0), n_rows):
@@ -262,7 +262,7 @@ def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: Segm
     if d <= 0 or sample.shape[0] < 3:
         return rows[:1], sample[:1]
     if params.n_segments is None and sample.shape[0] < n_rows:  # (sized by the radius)
-        from ..elements.points import point_graph
+        from ...elements.points import point_graph
 
         area = float(point_graph(cloud, params.n_neighbors).graph.area)  # (kept with it)
         if sample.shape[0] < START_POINTS_PER_CENTER * area / superfacet_measure(r, 2):
@@ -326,7 +326,7 @@ def oriented_sample(sample: np.ndarray, n_neighbors: int, up=None):
     """The point graph (:class:`~superfacets.elements.graph.ElementGraph`) of the sample
     :func:`orientation_reference` orients, or None when it has fewer than 3 distinct
     points; its ``sizes`` sum to the sample's area as a run reads a cloud's."""
-    from ..elements.points import point_graph
+    from ...elements.points import point_graph
 
     cloud = sample_cloud(sample, n_neighbors, up)
     return None if cloud is None else point_graph(cloud, n_neighbors).graph
@@ -335,8 +335,8 @@ def oriented_sample(sample: np.ndarray, n_neighbors: int, up=None):
 def sample_cloud(sample: np.ndarray, n_neighbors: int, up=None):
     """The sample :func:`oriented_sample` orients, as a cloud with its point graph
     (built), or None when it has fewer than 3 distinct points."""
-    from ..elements.points import point_graph
-    from ..inputs.cloud import PointCloud
+    from ...elements.points import point_graph
+    from ...inputs.cloud import PointCloud
 
     pts = np.asarray(sample, dtype=np.float64)
     if not _three_distinct(pts):
@@ -362,8 +362,8 @@ def core_area(cloud, core: np.ndarray, n_neighbors: int) -> float:
     on the point graph the tile builds (:func:`point_areas` reads the same sizes on a
     tree of its own; the graph built here is kept with the cloud for the tile's phases).
     """
-    from ..elements.builders import prepared
-    from ..elements.points import point_graph
+    from ...elements.builders import prepared
+    from ...elements.points import point_graph
 
     el = point_graph(prepared(cloud, "points")[1], n_neighbors)  # (where tile_graph keeps it)
     at = np.asarray(el.index)[np.flatnonzero(core)]
@@ -381,7 +381,7 @@ def _core_share(inp, core: np.ndarray, p: SegmentParams, r: float) -> int:
     benchmark meshes). Sampling is incremental, so the tile takes the
     shortest run of samples whose centers in the core number the core's share.
     """
-    from ..method.initialization import farthest_point_centers
+    from ...method.initialization import farthest_point_centers
 
     src = elements_of(inp, p.elements, n_neighbors=p.n_neighbors,
                       neighbor_radius=p.neighbor_radius)
@@ -399,7 +399,7 @@ def _core_share(inp, core: np.ndarray, p: SegmentParams, r: float) -> int:
 def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
                 diagonal: float, features=None, merging: tuple | None = None):
     """Phase 2: labels of one tile from fixed centers (and, ``merging``, the sums the
-    merges to the count read: :func:`superfacets.scale.tile_merges.tile_merge_stats`).
+    merges to the count read: :func:`superfacets.scale.tiles.merges.tile_merge_stats`).
 
     Parameters
     ----------
@@ -432,7 +432,7 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
         named = np.where(valid, name, -1).astype(np.int64)
         if merging is None:
             return named
-        from .tile_merges import one_position_stats
+        from .merges import one_position_stats
 
         return named, one_position_stats(inp, valid, name, merging)
     # the whole run's stages (superfacets.method.pipeline) with one classification from the
@@ -467,7 +467,7 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
     named = np.where(out >= 0, name[np.maximum(out, 0)], -1).astype(np.int64)
     if merging is None:
         return named
-    from .tile_merges import tile_merge_stats
+    from .merges import tile_merge_stats
 
     core, rows, n_noise = (np.asarray(x) for x in merging)
     first = src.first_rows(np.arange(m))  # each element's first row
@@ -506,9 +506,9 @@ def tile_connect(inp, labels: np.ndarray, owned: np.ndarray, owned_rows: np.ndar
         The labels with the stray pieces of owned superfacets renamed; None
         when there is none (the usual case).
     """
-    from ..elements.builders import ElementInput, prepared
-    from ..elements.points import point_graph
-    from ..method.connectivity import label_components
+    from ...elements.builders import ElementInput, prepared
+    from ...elements.points import point_graph
+    from ...method.connectivity import label_components
 
     kind, data = prepared(inp, params.elements)
     if kind_of(kind).cloud:  # the adjacency alone: the normals' signs are not read

@@ -2,9 +2,9 @@
 
 :func:`bucket` reads a :class:`~superfacets.io.regions.RegionReader`'s file
 once, in chunks, and writes each element to the file of the tile that holds
-it (:meth:`superfacets.scale.tile_layout.Tiles.of`); the :class:`TileBuckets` it returns
+it (:meth:`superfacets.scale.tiles.layout.Tiles.of`); the :class:`TileBuckets` it returns
 reads a box as the reader does, from the files of the tiles the box
-overlaps. So a tiled run (:mod:`superfacets.scale.runner.tiles`) reads the input
+overlaps. So a tiled run (:mod:`superfacets.scale.tiles.run`) reads the input
 file twice in all (its survey, this sorting), not once per task.
 """
 
@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...elements.kinds import KINDS
 from ...inputs.bounds import column_bounds, rows_in_box
 from ...io.files import array_digest, load_checked
 from ...io.regions import point_cloud_of
@@ -27,7 +28,7 @@ def bucket(reader, tiles, folder, *, progress: bool = False) -> TileBuckets:
     """Sort the elements into one file per tile, in one pass.
 
     Each tile's file (``tile-T.bin`` in ``folder``) holds the elements whose
-    position lies in that tile (:meth:`superfacets.scale.tile_layout.Tiles.of`) in
+    position lies in that tile (:meth:`superfacets.scale.tiles.layout.Tiles.of`) in
     file order, with what a box of them needs: the row and position, the
     colour and normal of a point, the vertex indices and corner positions
     of a face. A box is then read from the tiles it overlaps
@@ -39,7 +40,7 @@ def bucket(reader, tiles, folder, *, progress: bool = False) -> TileBuckets:
     reader : RegionReader
         The input, read in chunks.
     tiles : Tiles
-        The tiles (:mod:`superfacets.scale.tile_layout`).
+        The tiles (:mod:`superfacets.scale.tiles.layout`).
     folder : str or os.PathLike
         Where the files go (every worker must reach it by that path);
         files of an earlier bucketing there are replaced.
@@ -74,7 +75,7 @@ def bucket(reader, tiles, folder, *, progress: bool = False) -> TileBuckets:
         bar = new_bar(total=reader.n_rows, desc="tiles: bucket", unit="row", leave=False)
     try:
         for s, pos, _, extra in reader.chunks():
-            if reader.kind == "faces":
+            if not KINDS[reader.kind].cloud:  # faces, with their vertices
                 tri, verts, col = extra
                 fields = dict(tri=tri, corners=verts[tri])
                 if col is not None:
@@ -206,7 +207,7 @@ class TileBuckets:
         where = np.ascontiguousarray(rec["pos"])
         if rows.size == 0:
             return rows, where, None
-        if self.kind == "faces":
+        if not KINDS[self.kind].cloud:  # faces, with their vertices
             tri = rec["tri"]
             used, first, local = np.unique(tri, return_index=True, return_inverse=True)
             verts = rec["corners"].reshape(-1, 3)[first]

@@ -1,0 +1,168 @@
+"""One tile's task: what a worker runs for each tile and phase of a tiled run.
+
+:func:`tile_task` is a module-level function, so that Dask workers import it by
+reference; :func:`superfacets.scale.tiles.run.segment_tiled` hands it one dict per tile
+and phase, and gathers what it returns (its errors as text, never raised).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from ...inputs.bounds import column_bounds
+from ..runner.engine import PeakMemory, error_text
+from .graphs import tile_graph
+from .layout import in_box
+
+__all__ = ["tile_task"]
+
+
+def tile_task(task: dict) -> dict:
+    """One tile's work (a module-level function: Dask workers import it by reference).
+
+    ``task`` holds ``phase`` ('areas', 'centers', 'refine', 'labels' or 'connect'),
+    ``reader``, ``layout`` (:class:`~superfacets.scale.tiles.layout.Tiles`), ``tile``,
+    ``margin``, ``params``, ``r``, ``diagonal``, ``orient_like`` (optional: the oriented
+    sample, or its file), ``frame`` (optional: the whole cloud's box, whose frame
+    numbers a tile's points), for 'refine' and 'labels' the ``centers`` (rows) within
+    reach, for 'labels' a ``ring`` (a width), for 'connect' the stitched ``labels``.
+    Returns a dict; an error is returned as ``error`` (text), never raised.
+
+    Parameters
+    ----------
+    task : dict
+        As above.
+
+    Returns
+    -------
+    dict
+        The phase's output for this tile (centers, labels or areas) and its seconds and peak
+        memory.
+
+    Raises
+    ------
+    SuperfacetsError
+        As the method on the tile's input (the engine names the tile).
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> m = trimesh.creation.icosphere(subdivisions=4)
+    >>> from superfacets.scale.tiles.run import segment_tiled
+    >>> segment_tiled((m.vertices, m.faces), 40, tiles=2, workers=1).tiles[0]["tile"]
+    0
+    """
+    from .phases import core_area, point_areas, tile_centers, tile_connect, tile_refine
+
+    probe = PeakMemory()
+    t0 = time.perf_counter()
+    out = {"tile": task["tile"], "phase": task["phase"]}
+    try:
+        layout = task["layout"]
+        lo, hi = layout.box(task["tile"], task["margin"])
+        rows, pos, inp = _box(task, lo, hi)
+        inp = _framed(task, layout, inp)
+        core = layout.holds(pos, task["tile"])
+        out.update(rows=int(rows.size), core=int(core.sum()))
+        if not core.any():  # no element of its own: nothing to do
+            return out
+        low, high = column_bounds(pos)
+        spread = bool((high > low).any())
+        graph_area = task.get("graph_area", False) and spread
+        if task.get("graphs") and (task["phase"] != "areas" or graph_area) and spread:
+            tile_graph(inp, Path(task["graphs"]) / f"tile-{task['tile']}",
+                       task["params"].n_neighbors)  # built once, read by the later phases
+        p, r, d = task["params"], task["r"], task["diagonal"]
+        if task["phase"] == "areas":
+            out["area"] = (core_area(inp, core, p.n_neighbors) if graph_area
+                           else point_areas(pos, core, p.n_neighbors))
+        elif task["phase"] == "connect":
+            given = task["labels"]
+            if isinstance(given, str):  # the stitched labels, in a file every worker reads
+                given = np.load(given, mmap_mode="r")[rows]
+            given = np.asarray(given, dtype=np.int64)
+            owned = np.intersect1d(given[given >= 0], rows[core])
+            fixed = tile_connect(inp, given, owned, np.searchsorted(rows, owned), p)
+            moved = np.zeros(0, dtype=bool) if fixed is None else fixed != given
+            out.update(moved_rows=rows[moved] if moved.size else rows[:0],
+                       moved_labels=fixed[moved] if moved.size else rows[:0],
+                       moved_positions=pos[moved] if moved.size else pos[:0])
+        elif task["phase"] == "centers":  # (with refine rounds to come: the start, one pass)
+            found, _ = tile_centers(inp, core, replace(p, max_iter=task.get("passes")
+                                                       or p.max_iter), r, d)
+            out.update(centers=rows[found], positions=pos[found])
+        else:
+            want = np.asarray(task["centers"], dtype=np.int64)
+            at = np.searchsorted(rows, want)
+            ok = at < rows.size
+            ok[ok] = rows[at[ok]] == want[ok]
+            if task["phase"] == "refine":
+                found = tile_refine(inp, core, at[ok], p, r, d)
+                out.update(centers=rows[found], positions=pos[found])
+            else:
+                _labelled(task, out, (rows, pos, inp, core), at[ok])
+    except Exception as exc:  # noqa: BLE001 - reported by the driver, with the tile
+        out["error"] = error_text(exc)
+    except MemoryError as exc:  # pragma: no cover - depends on the machine
+        out["error"] = error_text(exc)
+    out["seconds"] = time.perf_counter() - t0
+    peak = probe.peak_mib(above_start=False)
+    out["peak_mib"] = None if peak is None else round(peak, 1)
+    return out
+
+
+def _labelled(task: dict, out: dict, box: tuple, centers: np.ndarray) -> None:
+    """The labels phase of one tile (``box``: its rows, positions, input and core) from
+    the ``centers`` (rows of the box) within reach: its core's and its ring's labels in
+    ``out``, each named by its center's row in the input, and the merges' sums."""
+    from .phases import tile_labels
+
+    rows, pos, inp, core = box
+    p, r, d = task["params"], task["r"], task["diagonal"]
+    if task.get("n_noise") is not None:  # the merges to the count follow
+        named, out["merge_stats"] = tile_labels(
+            inp, centers, p, r, d, merging=(core, rows, task["n_noise"]))
+    else:
+        named = tile_labels(inp, centers, p, r, d)
+    gid = np.where(named >= 0, rows[np.maximum(named, 0)], -1)
+    lo_c, hi_c = task["layout"].box(task["tile"])
+    near = ~core & ((pos >= lo_c - task["ring"]) & (pos <= hi_c + task["ring"])).all(1)
+    out.update(core_rows=rows[core], core_labels=gid[core], ring_rows=rows[near],
+               ring_labels=gid[near])
+    if task.get("box_rows", True):  # for the connect phase, unless read from a file
+        out["box_rows"] = rows
+
+
+def _framed(task: dict, layout, inp):
+    """A task's input with the run's orientation reference and frame, where it has them
+    (``inp`` None, a box without an element, stays None)."""
+    if inp is None:
+        return None
+    changes = {}
+    ref = task.get("orient_like")
+    if ref is not None:  # every tile orients like one sample (a file, or its part)
+        if isinstance(ref, str):
+            ref = in_box(np.load(ref, mmap_mode="r"), *layout.box(task["tile"],
+                                                                    1.5 * task["margin"]))
+        changes["orient_like"] = (ref[:, :3], ref[:, 3:])
+    if task.get("frame") is not None:
+        changes["frame"] = task["frame"]  # numbered as the whole cloud numbers them
+    return replace(inp, **changes) if changes else inp  # (one check of the input, not two)
+
+
+def _box(task: dict, lo, hi):
+    """A task's box: its rows, positions and input; the first phase of a tile that keeps
+    its graph keeps the box's records beside it for the later phases (one file, not the
+    tiles the box overlaps)."""
+    from .buckets import TileBuckets
+
+    reader, name = task["reader"], f"tile {task['tile']}"
+    if task.get("graphs") and isinstance(reader, TileBuckets):
+        Path(task["graphs"]).mkdir(parents=True, exist_ok=True)
+        return reader.read_box(lo, hi, name=name,
+                               keep=Path(task["graphs"]) / f"box-{task['tile']}")
+    return reader.read_box(lo, hi, name=name)

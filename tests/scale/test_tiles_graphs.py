@@ -1,0 +1,110 @@
+"""Each tile's element graph, built once and read back (superfacets.scale.tiles.graphs)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from tiled import _bumpy_cloud
+
+from superfacets.inputs.cloud import PointCloud
+from superfacets.scale.tiles.run import segment_tiled
+
+
+def test_a_tile_graph_read_back_is_the_graph_built(tmp_path):
+    """What the later phases of a tile read is what the first built: every array, the
+    pairs' type, and the cloud's points given back bit for bit."""
+    from superfacets.elements.points import point_graph
+    from superfacets.scale.tiles.graphs import tile_graph
+
+    xyz = np.random.default_rng(5).normal(size=(3000, 3))
+    xyz[10] = xyz[11]  # a duplicate point: two rows, one element
+    assert tile_graph(PointCloud(xyz.copy()), tmp_path / "tile-0", 10) == "built"
+    assert not (tmp_path / "tile-0.part").exists()
+    built = point_graph(PointCloud(xyz.copy()), 10)
+    again = PointCloud(xyz.copy())
+    assert tile_graph(again, tmp_path / "tile-0", 10) == "read"
+    read = point_graph(again, 10)  # the graph read back, kept with the cloud
+    for name in ("positions", "sizes", "normals", "indptr", "indices", "centroid", "lower",
+                 "pairs", "lengths", "border_shares"):
+        a, b = getattr(read.graph, name), getattr(built.graph, name)
+        assert a.dtype == b.dtype and np.array_equal(a, b), name
+    assert read.graph.diagonal == built.graph.diagonal
+    np.testing.assert_array_equal(read.index, built.index)
+    assert np.array_equal(again.points.view(np.uint64), xyz.view(np.uint64))
+    # a half-written graph (a task stopped while saving) is not read: built again
+    (tmp_path / "tile-1").mkdir()
+    np.save(tmp_path / "tile-1" / "positions.npy", xyz)
+    assert tile_graph(PointCloud(xyz.copy()), tmp_path / "tile-1", 10) != "read"
+
+
+@pytest.mark.parametrize("change", ["indices", "indptr", "index", "positions", "meta"])
+def test_a_tile_graph_changed_between_phases_is_refused(tmp_path, change):
+    """Work files changed between phases went to the compiled kernels unchecked: an
+    index of 2**62, an indptr entry past the end or a row of 2**30 crashed the process
+    (SIGSEGV), other positions gave another cloud's labels. Each file's SHA-256 is kept
+    with the graph and checked before anything reads it: one line."""
+    from superfacets.errors import SuperfacetsError
+    from superfacets.scale.tiles.graphs import tile_graph
+
+    xyz = np.random.default_rng(5).normal(size=(2000, 3))
+    folder = tmp_path / "tile-0"
+    assert tile_graph(PointCloud(xyz.copy()), folder, 10) == "built"
+    if change == "meta":  # a graph.json without the digests (or of another writer)
+        (folder / "graph.json").write_text('{"pair_dtype": "int32"}')
+    else:
+        a = np.load(folder / f"{change}.npy")
+        if change == "positions":
+            a = a + 1e-9  # valid, but not the cloud's
+        else:
+            a.flat[len(a) // 2] = 2**30 if a.dtype.itemsize == 4 else 2**62
+        np.save(folder / f"{change}.npy", a)
+    with pytest.raises(SuperfacetsError, match="changed since this run wrote it"):
+        tile_graph(PointCloud(xyz.copy()), folder, 10)
+
+
+def test_tiles_that_keep_their_graphs_label_as_those_that_build_them(monkeypatch, tmp_path):
+    """A cloud's tiles build their graphs once and read them in the later phases: the
+    same labels as building them every phase, and the work folder left without them."""
+    import superfacets.scale.tiles.task as rt
+
+    cloud = _bumpy_cloud(20000)
+    seen, real = [], rt.tile_graph
+    monkeypatch.setattr(rt, "tile_graph", lambda *a: seen.append(real(*a)) or seen[-1])
+    kept = segment_tiled(cloud, 60, tiles=4, halo=1, workdir=tmp_path)
+    assert seen.count("built") == 4 and seen.count("read") >= 8  # refine, labels (connect)
+    assert not (tmp_path / "graphs").exists()
+    import superfacets.scale.tiles.run as run
+
+    monkeypatch.setattr(run, "graph_folder", lambda *a: None)
+    seen.clear()
+    built = segment_tiled(cloud, 60, tiles=4, halo=1)
+    assert seen == [] and kept.disagreements > 0  # (the connect phase ran too)
+    np.testing.assert_array_equal(kept.labels, built.labels)
+
+
+def test_tiles_read_the_whole_clouds_area_on_the_graphs_they_keep(monkeypatch, tmp_path):
+    """The areas of a cloud's tiles are read on the graphs they build once (boxes sized by
+    the survey's sample): the radius is one run's; a sample that asks for too narrow a
+    halo has the graphs dropped and built again on the halo the radius asks for."""
+    import superfacets.scale.tiles.task as rt
+    from superfacets.elements.points import point_graph
+
+    cloud = _bumpy_cloud(20000)
+    area = float(point_graph(cloud, 10).graph.sizes.sum())
+    seen, real = [], rt.tile_graph
+    monkeypatch.setattr(rt, "tile_graph", lambda *a: seen.append(real(*a)) or seen[-1])
+    res = segment_tiled(cloud, 60, tiles=4, workdir=tmp_path)
+    fine = 60 * res.params["merge_from"]  # (an even cloud: superpoints merged to the count)
+    assert res.mesh_radius == pytest.approx(math.sqrt(area / (fine * math.pi)), rel=1e-9)
+    assert seen.count("built") == 4 and res.halo >= 3 * 2 * res.mesh_radius
+    import superfacets.scale.tiles.run as run
+
+    monkeypatch.setattr(run, "GRAPH_SLACK", 0.5)  # the sample's halo too narrow
+    seen.clear()
+    narrow = segment_tiled(cloud, 60, tiles=4, workdir=tmp_path)
+    assert seen.count("built") == 8 and narrow.halo == pytest.approx(6 * narrow.mesh_radius)
+    assert narrow.mesh_radius == pytest.approx(res.mesh_radius, rel=1e-12)
+    monkeypatch.setattr(run, "graph_folder", lambda *a: None)
+    np.testing.assert_array_equal(segment_tiled(cloud, 60, tiles=4).labels, narrow.labels)

@@ -1,0 +1,385 @@
+"""Tiled runs end to end (superfacets.scale.tiles.run): labels as one run's, options,
+Dask, the command line, errors."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+from tiled import _bumpy, _bumpy_cloud, _lattice_cloud, _write_ply_mesh
+
+from superfacets import Mesh, ParameterError, segment
+from superfacets.elements.faces import face_graph
+from superfacets.errors import MeshFormatError
+from superfacets.io.regions import RegionReader
+from superfacets.method.connectivity import label_components
+from superfacets.scale.tiles import buckets as buckets_module
+from superfacets.scale.tiles.layout import (
+    tile_of,
+)
+from superfacets.scale.tiles.run import segment_tiled
+
+
+def test_a_tiled_run_reads_the_file_twice_and_gives_the_same_labels(tmp_path, monkeypatch):
+    """After the survey and the bucketing no task reads the file; the labels are those of
+    tasks that each read the file (the path a remote scheduler without workdir takes)."""
+    mesh = _bumpy(5)  # (at k = 40 a halo of 1 leaves 72 pieces to repair)
+    path = tmp_path / "m.ply"
+    _write_ply_mesh(path, mesh.vertices, mesh.faces)
+    passes = []
+    chunks = RegionReader.chunks
+
+    def counted(self, *args):
+        passes.append(1)
+        yield from chunks(self, *args)
+
+    monkeypatch.setattr(RegionReader, "chunks", counted)
+    written, real_bucket = [], buckets_module.bucket
+
+    def bucket(reader, tiles, folder, **kw):  # (the tile files, seen before the run ends)
+        out = real_bucket(reader, tiles, folder, **kw)
+        written.append((Path(folder), sorted(p.name for p in Path(folder).glob("tile-*.bin"))))
+        return out
+
+    monkeypatch.setattr(buckets_module, "bucket", bucket)
+    res = segment_tiled(path, 40, tiles=(2, 2, 2), halo=1, workdir=tmp_path / "work")
+    assert len(passes) == 2 and res.timings["bucket"] > 0
+    (folder, files), = written
+    assert len(files) == 8 and folder.parent.parent == (tmp_path / "work").resolve()
+    assert list((tmp_path / "work").iterdir()) == []  # the run's own folder, removed
+    # halo 1 leaves pieces: the connect phase ran on the stitched labels read from a file
+    assert res.disagreements > 0 and res.repaired > 0
+    passes.clear()
+    monkeypatch.setattr(buckets_module, "bucket", lambda reader, *a, **k: reader)
+    each = segment_tiled(path, 40, tiles=(2, 2, 2), halo=1)
+    assert len(passes) > 8 * 3  # every task of every phase read the file
+    np.testing.assert_array_equal(res.labels, each.labels)
+    assert res.repaired == each.repaired and res.disagreements == each.disagreements
+
+
+def test_a_tiled_run_shows_every_stage_and_redraws_while_a_tile_runs(monkeypatch, capsys):
+    """With ``progress`` each stage shows a line (the phases a bar of tiles), redrawn
+    every TICK seconds while it runs: no stage is silent on a terminal."""
+    from conftest import slowed
+
+    from superfacets.scale.tiles import phases as tiling
+
+    slowed(monkeypatch, tiling, "tile_refine", 0.3)  # (a tile that takes a while)
+    res = segment_tiled(_bumpy_cloud(20_000), 30, tiles=2, progress=True)
+    err = capsys.readouterr().err
+    for name in ("survey", "orientation", "areas", "start", "refine", "labels", "stitch",
+                 "merges"):
+        assert f"tiles: {name}" in err and name in res.timings
+    assert err.count("tiles: refine") >= 10  # redrawn while the two slow tiles ran
+
+
+@pytest.mark.parametrize("extra", [dict(paper=True), {}], ids=["paper", "default"])
+def test_one_tile_gives_the_single_runs_partition(extra):
+    mesh = _bumpy(4)
+    single = segment(mesh, 50, **extra)
+    tiled = segment_tiled(mesh, 50, tiles=1, refine=0, **extra)
+    assert tiled.n_segments == single.n_segments == 50
+    pairs = np.unique(single.labels * 1000 + tiled.labels)
+    assert pairs.size == 50  # the same partition, labels aside
+
+
+@pytest.mark.parametrize("extra, tiles", [(dict(paper=True), (2, 2, 2)), ({}, 8),
+                                          (dict(paper=True), 8)],
+                         ids=["paper-grid", "default-balanced", "paper-balanced"])
+def test_several_tiles_stitch_without_cutting_a_superfacet(extra, tiles):
+    mesh = _bumpy(5)
+    res = segment_tiled(mesh, 150, tiles=tiles, **extra)
+    labels = res.labels
+    assert labels.shape == (mesh.n_faces,) and labels.min() == 0
+    assert np.unique(labels).size == res.n_segments == labels.max() + 1
+    # the tiles make a few more than asked (their cores end with fewer than their shares),
+    # merged by Ward's merges to exactly the count
+    assert res.n_segments == 150 and res.params["merged_from"] >= 150
+    # every superfacet one connected piece of the face graph: none cut by a tile border
+    pieces = label_components(face_graph(mesh), labels)
+    assert np.unique(pieces).size == res.n_segments
+    g = face_graph(mesh)
+    assert res.layout.n_tiles == 8
+    t = tile_of(g.positions, res.layout)
+    if res.layout.shape is None:
+        assert res.grid == (8,)
+        counts = np.bincount(t, minlength=8)  # balanced: about equal cores (ties on a split)
+        assert counts.max() <= 1.05 * counts.mean()
+    else:
+        assert res.grid == (2, 2, 2)
+    crossing = np.unique(labels[t == 0])
+    assert np.isin(crossing, labels[t != 0]).any()  # some do cross a border
+    assert res.centers.shape == (res.n_segments,)
+    np.testing.assert_array_equal(labels[res.centers], np.arange(res.n_segments))
+    assert len(res.tiles) == 8 and sum(t["core"] for t in res.tiles) == mesh.n_faces
+    if extra:  # the paper's classification is exact from halo 2; faces no window
+        # reached seed superfacets in each tile's own order (a few elements can differ)
+        assert res.disagreements <= 0.001 * mesh.n_faces
+        if res.layout.shape:
+            assert res.disagreements == 0
+
+
+def test_tiled_points_with_invalid_rows(tmp_path):
+    """An organized scan's holes are invalid points (-1) in tiles as in a whole run; a
+    ``.npy`` file with NaN rows is refused, as a whole run refuses it."""
+    from superfacets.inputs.cloud import InvalidCloudError
+
+    mesh = trimesh.creation.icosphere(4)
+    pts, _ = trimesh.sample.sample_surface_even(mesh, 6000, seed=0)
+    pts = np.asarray(pts, dtype=np.float64)
+    pts[[3, 77]] = np.nan
+    np.save(tmp_path / "c.npy", pts)
+    with pytest.raises(InvalidCloudError, match="point 3 has a non-finite coordinate"):
+        segment_tiled(tmp_path / "c.npy", 40, tiles=4)
+    organized = pts[: pts.shape[0] // 100 * 100].reshape(-1, 100, 3)
+    res = segment_tiled(organized, 40, tiles=4)
+    assert res.labels[3] == res.labels[77] == -1
+    ok = res.labels >= 0
+    assert ok.sum() == pts.shape[0] - 2 and res.labels[ok].max() + 1 == res.n_segments
+    assert 35 <= res.n_segments <= 40 and res.params["elements"] == "points"
+
+
+def test_dask_workers_give_the_same_labels(tmp_path):
+    pytest.importorskip("distributed")
+    mesh = _bumpy(4)
+    path = tmp_path / "m.ply"
+    _write_ply_mesh(path, mesh.vertices, mesh.faces)
+    here = segment_tiled(path, 60, tiles=4, workers=1)
+    there = segment_tiled(path, 60, tiles=4, workers=2)
+    np.testing.assert_array_equal(here.labels, there.labels)
+
+
+def test_bad_options_are_refused_before_any_work(tmp_path):
+    mesh = _bumpy(2)
+    with pytest.raises(ParameterError, match="halo must be"):
+        segment_tiled(mesh, 10, halo=0.5)
+    with pytest.raises(ParameterError, match="refine must be"):
+        segment_tiled(mesh, 10, refine=-1)
+    with pytest.raises(ParameterError, match="workers must be"):
+        segment_tiled(mesh, 10, workers=0)
+    with pytest.raises(ParameterError, match="features"):
+        segment_tiled(mesh, 10, features=np.zeros((mesh.n_faces, 3)))
+    with pytest.raises(ParameterError, match="faces or points"):
+        segment_tiled(mesh, 10, elements="vertices")
+    with pytest.raises(ParameterError, match="larger than the number of"):
+        segment_tiled(mesh, mesh.n_faces + 1)
+    with pytest.raises(ParameterError, match="unknown parameter"):
+        segment_tiled(mesh, 10, colour=1)
+
+
+def test_a_failing_tile_names_itself(tmp_path):
+    path = tmp_path / "quad.ply"
+    _write_ply_mesh(path, np.eye(4, 3), [[0, 1, 2], [0, 1, 2, 3]], counts=True)
+    with pytest.raises(MeshFormatError, match="reads triangles"):
+        segment_tiled(path, 1, tiles=2)
+    np.save(tmp_path / "flat.npy", np.zeros((5, 3)))
+    with pytest.raises(ParameterError, match="zero extent"):
+        segment_tiled(tmp_path / "flat.npy", 1, tiles=2)
+
+
+def test_damaged_and_unusable_inputs_of_a_tiled_run_get_clear_errors(tmp_path):
+    """The errors of the whole-input run, from the survey and the chunked readers."""
+    from superfacets import InvalidMeshError
+
+    pts = np.random.default_rng(0).random((300, 3))
+    huge = pts.copy()
+    huge[7] = 1e200  # beyond what areas and normals can square in double precision
+    np.save(tmp_path / "huge.npy", huge)
+    with pytest.raises(InvalidMeshError, match="huge.npy: coordinates up to 1e.200.*rescale "
+                                               "the cloud"):
+        segment_tiled(tmp_path / "huge.npy", 5, tiles=2)
+    laspy = pytest.importorskip("laspy")
+    header = laspy.LasHeader(point_format=1, version="1.2")
+    header.scales = [0.001] * 3
+    las = laspy.LasData(header)
+    las.x, las.y, las.z = pts.T
+    las.write(tmp_path / "whole.las")
+    (tmp_path / "cut.las").write_bytes((tmp_path / "whole.las").read_bytes()[:-30])
+    # one check of the header against the data, before either reader reads a point
+    with pytest.raises(MeshFormatError, match=r"cut.las: damaged LAS file: the header "
+                                              r"declares 300 points, the file holds 298"):
+        segment_tiled(tmp_path / "cut.las", 5, tiles=2)
+    from superfacets import read_cloud
+
+    with pytest.raises(MeshFormatError, match=r"declares 300 points, the file holds 298"):
+        read_cloud(tmp_path / "cut.las")
+
+
+def test_a_tiled_run_on_dask_starts_quietly_beside_another_cluster(tmp_path, recwarn):
+    """Dask's scheduler serves HTTP routes on port 8787 by default, and warned when
+    another run held it; the engine's scheduler takes a free local port."""
+    import socket
+
+    pytest.importorskip("distributed")
+    held = socket.socket()
+    try:
+        held.bind(("127.0.0.1", 8787))
+        held.listen(1)
+    except OSError:
+        pass  # already held by something else: the case to test all the same
+    try:
+        pts = np.random.default_rng(1).random((2000, 3)) * [1, 1, 0.1]
+        res = segment_tiled(pts, 20, tiles=2, workers=2)
+    finally:
+        held.close()
+    assert res.n_segments == 20
+    assert not [w for w in recwarn if "already in use" in str(w.message)]
+
+
+def test_tiny_tiles_of_one_point_each(monkeypatch):
+    from superfacets.scale.tiles import layout as tile_layout
+
+    pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.]])
+    with pytest.raises(ParameterError, match="elements per tile"):  # refused by default
+        segment_tiled(pts, None, radius=0.3, tiles=(2, 2, 1), n_neighbors=2)
+    monkeypatch.setattr(tile_layout, "MIN_PER_TILE", 0)  # the machinery, on tiny tiles
+    res = segment_tiled(pts, None, radius=0.3, tiles=(2, 2, 1), n_neighbors=2)
+    np.testing.assert_array_equal(np.sort(res.labels), [0, 1, 2])
+    # sized by n_segments: each tile's box reaches as far as the halo the survey's sample
+    # asks for, so the tiny tiles read the points' areas as one run does
+    tiled = segment_tiled(pts, 2, tiles=(2, 2, 1), n_neighbors=2)
+    np.testing.assert_array_equal(tiled.labels, segment(pts, 2, n_neighbors=2).labels)
+
+
+def test_cli_tiles_writes_labels_and_refuses_whole_input_outputs(tmp_path):
+    mesh = _bumpy(3)
+    path = tmp_path / "m.ply"
+    _write_ply_mesh(path, mesh.vertices, mesh.faces)
+    run = [sys.executable, "-m", "superfacets", "segment", str(path), "-k", "30"]
+    out = subprocess.run(run + ["--tiles", "2,1,1", "-j", "1", "-o", str(tmp_path / "m.seg"),
+                                "--workdir", str(tmp_path / "work")],
+                         capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert "2 tiles (2x1x1 grid)" in out.stdout
+    assert "30 superfacets (merged from " in out.stdout and "Ward's merges" in out.stdout
+    labels = np.loadtxt(tmp_path / "m.seg", dtype=int)
+    assert labels.shape == (mesh.n_faces,) and np.unique(labels).size == labels.max() + 1 == 30
+    assert list((tmp_path / "work").iterdir()) == []  # (the run's own folder, removed)
+    bad = subprocess.run(run + ["--tiles", "2", "--colored-mesh", str(tmp_path / "c.ply")],
+                         capture_output=True, text=True)
+    assert bad.returncode != 0 and "not with --tiles" in bad.stderr
+    assert not (tmp_path / "c.ply").exists()
+    bad = subprocess.run(run + ["--halo", "2"], capture_output=True, text=True)
+    assert bad.returncode != 0 and "--halo goes with --tiles" in bad.stderr
+    bad = subprocess.run(run + ["--workdir", str(tmp_path)], capture_output=True, text=True)
+    assert bad.returncode != 0 and "--workdir goes with --tiles" in bad.stderr
+
+
+def test_the_cli_says_when_tiles_give_fewer_superpoints_than_asked(tmp_path, capsys):
+    """Each tile's core takes its share of the centers, so a few hundred points in two
+    tiles may end with fewer superpoints than asked: the summary says so."""
+    from superfacets.cli import main
+
+    np.save(tmp_path / "c.npy", np.random.default_rng(0).random((400, 3)))
+    assert main(["segment", str(tmp_path / "c.npy"), "-k", "6", "--tiles", "2",
+                 "-o", str(tmp_path / "c.seg")]) == 0
+    got = int(np.loadtxt(tmp_path / "c.seg").max()) + 1
+    line = capsys.readouterr().out.splitlines()[0]
+    assert f", {got} superpoints" in line
+    assert ("(6 asked: tiles this small hold fewer centers" in line) == (got < 6)
+    assert got <= 6
+
+
+def test_a_scans_viewpoint_reaches_every_tile(tmp_path):
+    from superfacets import PointCloud
+
+    rng = np.random.default_rng(2)
+    cloud = PointCloud(rng.random((500, 3)), viewpoint=np.array([0.5, 0.5, 5.0]))
+    reader = RegionReader.spill(cloud, tmp_path)
+    assert reader.viewpoint == (0.5, 0.5, 5.0)
+    _, _, part = reader.read_box([0, 0, 0], [0.5, 0.5, 1])
+    np.testing.assert_array_equal(part.viewpoint, [0.5, 0.5, 5.0])
+
+
+def test_a_quantized_scan_in_tiles_has_no_cut_superpoint():
+    from superfacets.elements.points import point_graph
+
+    cloud = _lattice_cloud(60)
+    res = segment_tiled(cloud, 40, tiles=4)
+    g = point_graph(cloud, 10)
+    el = res.labels[np.argsort(g.index)]  # distinct points: one row per element
+    assert np.unique(label_components(g.graph, el)).size == res.n_segments
+    assert res.disagreements == 0 and res.repaired == 0
+
+
+def test_tiled_runs_refuse_what_whole_runs_refuse(tmp_path):
+    """NaN coordinates (a mesh, a .npy cloud) gave -1 labels and exit 0 in tiles; a tile
+    count that leaves a handful of elements per tile never ended."""
+    from superfacets.errors import InvalidMeshError
+    from superfacets.inputs.cloud import InvalidCloudError
+
+    mesh = _bumpy(3)
+    v = mesh.vertices.copy()
+    v[5] = np.nan
+    with pytest.raises(InvalidMeshError, match="NaN"):
+        segment(Mesh(v, mesh.faces), 20)  # the whole run
+    with pytest.raises(InvalidMeshError, match="NaN"):
+        segment_tiled(Mesh(v, mesh.faces), 20, tiles=2, workers=1)
+    path = tmp_path / "m.ply"
+    _write_ply_mesh(path, v, mesh.faces)
+    with pytest.raises(InvalidMeshError, match="non-finite"):
+        segment_tiled(path, 20, tiles=2, workers=1)
+    pts = np.random.default_rng(0).random((3000, 3))
+    pts[7] = np.nan
+    np.save(tmp_path / "p.npy", pts)
+    with pytest.raises(InvalidCloudError, match="point 7 has a non-finite coordinate"):
+        segment_tiled(str(tmp_path / "p.npy"), 20, tiles=2, workers=1)
+    organized = np.random.default_rng(1).random((60, 50, 3))
+    organized[:3] = np.nan  # an organized scan's holes stay invalid points (-1)
+    res = segment_tiled(organized, 20, tiles=2, workers=1)
+    assert (res.labels.reshape(-1)[:150] == -1).all() and (res.labels[150:] >= 0).all()
+    with pytest.raises(ParameterError, match="elements per tile of this input"):
+        segment_tiled(mesh, 20, tiles=10000, workers=1)
+    with pytest.raises(ParameterError, match="give at most 25 tiles"):
+        segment_tiled(mesh, 20, tiles=(8, 8, 1), workers=1)
+
+
+def test_option_extremes_are_refused_before_any_work(tmp_path, monkeypatch):
+    """--tiles 1000,1000,1000 built the layout of a billion tiles (exit 134 after 55 s and
+    3.7 GiB) before the count was checked; 1,1,99999999999999999999 and a 400-digit count
+    were tracebacks; --refine and -j had no bound (-j 1000 started 1,000 processes). Each
+    is one line now, before the tile layout (none is built) and before any worker."""
+    import superfacets.scale.tiles.layout as layouts
+    from superfacets.cli import main
+    from superfacets.scale.runner.engine import Engine
+
+    mesh = _bumpy(3)
+    monkeypatch.setattr(layouts, "balanced_tiles", lambda *a: pytest.fail("a layout built"))
+    monkeypatch.setattr(layouts, "tile_grid", lambda *a: pytest.fail("a layout built"))
+    for tiles, said in (((1000, 1000, 1000), "makes more than 1,048,576 tiles"),
+                        ((1, 1, 10**20), "at most 1,048,576, got 100000000000000000000"),
+                        (10**400, "a 401-digit number"),
+                        (500, "elements per tile of this input")):
+        with pytest.raises(ParameterError, match=said):
+            segment_tiled(mesh, 20, tiles=tiles, workers=1)
+    with pytest.raises(ParameterError, match=r"refine must be an integer in 0\.\.100"):
+        segment_tiled(mesh, 20, tiles=2, workers=1, refine=10**9)
+    with pytest.raises(ParameterError, match=r"workers must be an integer in 1\.\."):
+        segment_tiled(mesh, 20, tiles=2, workers=1000)
+    with pytest.raises(ParameterError, match="workers must be an integer"):
+        Engine(workers=1000)
+    path = tmp_path / "m.ply"
+    _write_ply_mesh(path, mesh.vertices, mesh.faces)
+    for args in (["--tiles", "1,1," + "9" * 400], ["--tiles", "1000,1000,1000"],
+                 ["--tiles", "2", "--refine", "1000000000"], ["--tiles", "2", "-j", "1000"]):
+        assert main(["segment", str(path), "-k", "20", "-o", str(tmp_path / "x.seg"),
+                     *args]) == 2, args
+        assert not (tmp_path / "x.seg").exists()
+
+
+def test_grid_tiles_whose_boxes_hold_no_point_are_skipped_on_a_cloud():
+    """A regular grid over two patches 10 apart leaves its middle tiles without a point,
+    halo included: their tasks failed with a TypeError (the orientation reference given to
+    an empty box); they are skipped, and the patches are segmented as with balanced
+    tiles: every point labelled, exactly k, no superpoint on both patches."""
+    rng = np.random.default_rng(0)
+    patch = rng.random((3000, 3)) * [1, 1, 0.01]
+    pts = np.vstack([patch, patch + [10, 0, 0]])
+    r = segment_tiled(pts, 20, tiles=(5, 1, 1), workers=1)
+    assert r.n_segments == 20 and (r.labels >= 0).all()
+    assert [t["core"] for t in r.tiles] == [3000, 3000]
+    assert not set(r.labels[:3000]) & set(r.labels[3000:])
