@@ -59,7 +59,9 @@ sphinx_gallery_conf = {
 html_theme = "pydata_sphinx_theme"
 html_title = f"superfacets {release}"
 html_theme_options = {"navigation_with_keys": False, "show_toc_level": 2,
-                      "secondary_sidebar_items": ["page-toc"]}
+                      "secondary_sidebar_items": ["page-toc"],
+                      # (the search as a button: the top bar's links on one line at 1,280 px)
+                      "navbar_persistent": ["search-button"]}
 html_static_path = ["_static"]
 html_css_files = ["custom.css"]
 #: No navigation sidebar on the pages at the top of the site (it had nothing to list)

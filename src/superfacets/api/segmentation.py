@@ -336,21 +336,22 @@ def _adaptive(obj, n_segments, adaptive, extent_weight, **options):
                             **options)
 
 
-def _signature(returns) -> inspect.Signature:
-    """``(mesh, n_segments=150, *, <every other parameter>, features=None)``: the
-    keywords of :data:`superfacets.method.params.PARAMETERS` with their defaults."""
+def _signature(returns, own=()) -> inspect.Signature:
+    """``(mesh, n_segments=150, *, <every other parameter>, features=None, <own>)``: the
+    keywords of :data:`superfacets.method.params.PARAMETERS` with their defaults, and the
+    function's ``own`` keywords (each None by default)."""
     P = inspect.Parameter
     out = [P("mesh", P.POSITIONAL_OR_KEYWORD),
            P("n_segments", P.POSITIONAL_OR_KEYWORD, default=_D.n_segments)]
     out += [P(d.name, P.KEYWORD_ONLY, default=d.default) for d in PARAMETERS
             if d.name != "n_segments"]
-    out.append(P("features", P.KEYWORD_ONLY, default=None))
+    out += [P(name, P.KEYWORD_ONLY, default=None) for name in ("features", *own)]
     return inspect.Signature(out, return_annotation=returns)
 
 
 # the signature ``help()``, IDEs and the API reference show: one keyword per declaration
 superfacets.__signature__ = _signature(np.ndarray)
-segment.__signature__ = _signature(SegmentationResult)
+segment.__signature__ = _signature(SegmentationResult, ("adaptive", "extent_weight"))
 
 
 def superpoints(points, n_segments: int | None = _D.n_segments, *, normals=None,

@@ -152,10 +152,11 @@ def fmt_value(v) -> str:
 def add_method_options(p: argparse.ArgumentParser, with_size: bool = True) -> None:
     """The parameters of the method (``segment`` and the commands that segment), made
     from their declarations (:mod:`superfacets.cli.parameters`), and ``-q``."""
-    from .parameters import add_parameters
+    from .parameters import GROUPS, add_parameters
 
     add_parameters(p, _method_names(with_size))
-    p.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
+    run = next((g for g in p._action_groups if g.title == GROUPS["run"]), p)
+    run.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
 
 
 def _method_names(with_size: bool = True) -> tuple[str, ...]:

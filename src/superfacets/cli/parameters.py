@@ -179,8 +179,8 @@ def add_parameters(parser, names, *, groups: bool = True) -> None:
         if not groups:
             return parser
         if key not in made:
-            made[key] = (parser.add_mutually_exclusive_group() if key == "size" else
-                         parser.add_argument_group(GROUPS[key]))
+            group = parser.add_argument_group(GROUPS[key])  # (-k or --radius: one of them)
+            made[key] = group.add_mutually_exclusive_group() if key == "size" else group
         return made[key]
 
     for p in PARAMETERS:
