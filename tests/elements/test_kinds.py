@@ -80,16 +80,16 @@ def test_every_kind_has_a_builder_and_a_row():
 
 
 def test_the_rules_read_the_table():
-    from superfacets.method.cleanup import band_for, crease_for, smoothness_for
+    from superfacets.method.cleanup import BAND, BAND_VERTICES, CREASE, SMOOTHNESS_FACES
     from superfacets.method.coarse_to_fine import coarse_ratio
     from superfacets.method.params import DEFAULTS, assignment_of, better_method
-    from superfacets.method.splitmerge import hold_after_for, passes_after_for, swap_eta_convex_for
+    from superfacets.method.splitmerge import HOLD_AFTER_FACES, SWAP_ETA_CONVEX_FACES
 
+    assert (CREASE, SMOOTHNESS_FACES, BAND, SWAP_ETA_CONVEX_FACES, HOLD_AFTER_FACES) == (
+        KINDS["faces"].crease, KINDS["faces"].smoothness, KINDS["faces"].band,
+        KINDS["faces"].swap_eta_convex, KINDS["faces"].hold_after)
+    assert BAND_VERTICES == KINDS["vertices"].band
     for name, k in KINDS.items():
-        assert (crease_for(name), smoothness_for(name), band_for(name)) == (
-            k.crease, k.smoothness, k.band)
-        assert (swap_eta_convex_for(name), passes_after_for(name), hold_after_for(name)) == (
-            k.swap_eta_convex, k.passes_after, k.hold_after)
         assert better_method(DEFAULTS, name) == (k.better_method, k.better_method)
         assert (assignment_of(DEFAULTS, name) == "exact") == k.exact_assignment
         per = k.coarse_min_per_segment

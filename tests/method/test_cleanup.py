@@ -124,20 +124,22 @@ def test_cleanup_on_vertices_and_points(sphere, elements):
 
 
 def test_crease_weight_per_element_kind():
-    from superfacets.method.cleanup import CREASE, CREASE_SMOOTH_NORMALS, crease_for
+    from superfacets.elements.kinds import kind_of
+    from superfacets.method.cleanup import CREASE, CREASE_SMOOTH_NORMALS
 
-    assert crease_for("faces") == CREASE == 0.1
-    assert crease_for("vertices") == crease_for("points") == CREASE_SMOOTH_NORMALS == 1.0
+    assert kind_of("faces").crease == CREASE == 0.1
+    assert kind_of("vertices").crease == kind_of("points").crease == CREASE_SMOOTH_NORMALS == 1.0
 
 
 def test_data_term_weight_per_element_kind():
     # faces weigh roundness more (0.7) than vertices and points (0.3); the default is
     # the kind's, and it matters: a heavier data term leaves rounder superfacets
     from superfacets.elements.builders import elements_of
-    from superfacets.method.cleanup import SMOOTHNESS, SMOOTHNESS_FACES, smoothness_for
+    from superfacets.elements.kinds import kind_of
+    from superfacets.method.cleanup import SMOOTHNESS, SMOOTHNESS_FACES
 
-    assert smoothness_for("faces") == SMOOTHNESS_FACES == 0.7
-    assert smoothness_for("vertices") == smoothness_for("points") == SMOOTHNESS == 0.3
+    assert kind_of("faces").smoothness == SMOOTHNESS_FACES == 0.7
+    assert kind_of("vertices").smoothness == kind_of("points").smoothness == SMOOTHNESS == 0.3
     mesh = grid_mesh(30, 30, height=lambda x, y: 0.2 * np.sin(3 * x) * np.cos(2 * y))
     for kind, value, other in (("faces", 0.7, 0.3), ("vertices", 0.3, 1.0)):
         g = elements_of(mesh, kind).graph

@@ -147,10 +147,11 @@ def test_the_declarations_are_the_fields_and_the_signatures():
     assert len(set(names)) == len(names) == 26
     assert list(SegmentParams.__dataclass_fields__) == names
     assert [getattr(DEFAULTS, n) for n in names] == [p.default for p in PARAMETERS]
-    for f in (superfacets, seg):
-        sig = inspect.signature(f).parameters
-        assert list(sig) == ["mesh"] + names + ["features"]
+    for f, own in ((superfacets, []), (seg, ["adaptive", "extent_weight"])):
+        sig = inspect.signature(f).parameters  # (segment's own keywords shown too)
+        assert list(sig) == ["mesh"] + names + ["features"] + own
         assert all(sig[p.name].default == p.default for p in PARAMETERS)
+        assert set(own) <= set(f.__code__.co_varnames)  # (keywords the function takes)
 
 
 def _doc_parameters(doc: str) -> dict[str, str]:

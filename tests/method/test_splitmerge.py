@@ -237,7 +237,7 @@ def test_convex_folds_count_less_in_the_swap_energies_on_faces():
     # with the run's weights the superfacet over the convex ridge is split on it; with
     # the convex angular term removed (concave creases alone) the ridge is as flat as the
     # slopes: that square is kept and the largest superfacet is split instead
-    from superfacets.method.splitmerge import swap_eta_convex_for
+    from superfacets.elements.kinds import kind_of
     from superfacets.method.weights import convex_scaled
 
     mesh = _ridge()
@@ -249,7 +249,7 @@ def test_convex_folds_count_less_in_the_swap_energies_on_faces():
     assert n == 1
     assert np.unique(out[(np.abs(x) < 0.25) & (x < 0)]).size == 1
     assert out[(np.abs(x) < 0.25) & (x < 0)][0] != out[(np.abs(x) < 0.25) & (x > 0)][0]
-    assert swap_eta_convex_for("faces") == 0.5 and swap_eta_convex_for("vertices") == 1.0
+    assert kind_of("faces").swap_eta_convex == 0.5 and kind_of("vertices").swap_eta_convex == 1.0
     concave_only = convex_scaled(g, w, alpha=200.0, eta_convex=0.2, factor=0.0)
     out, n = swap_round(g, concave_only, labels)
     assert n == 1
@@ -315,8 +315,8 @@ def test_the_run_swaps_with_the_weights_of_its_kind(monkeypatch):
 def test_the_passes_after_the_swaps_hold_small_center_moves_on_faces(monkeypatch):
     # a center moving by less than 4 x center_tol x r after the swaps stays (faces);
     # on vertices (the exact classification) by less than center_tol x r, as before them
+    from superfacets.elements.kinds import kind_of
     from superfacets.method import passes
-    from superfacets.method.splitmerge import hold_after_for
 
     holds = []
     real = passes.iterate
@@ -328,7 +328,7 @@ def test_the_passes_after_the_swaps_hold_small_center_moves_on_faces(monkeypatch
     monkeypatch.setattr(passes, "iterate", spy)  # the passes after the swaps only
     mesh = read_mesh(need(MESHES / "bunny.tri.xz"))
     r = segment(mesh, 100)
-    assert hold_after_for("faces") == 4.0 and hold_after_for("vertices") == 1.0
+    assert kind_of("faces").hold_after == 4.0 and kind_of("vertices").hold_after == 1.0
     assert r.timings["swaps"] > 0 and len(holds) == 1
     assert holds[-1] == pytest.approx(4.0 * 0.05 * r.mesh_radius)
     r = segment(mesh, 100, elements="vertices")
@@ -340,8 +340,8 @@ def test_the_passes_after_the_swaps_hold_small_center_moves_on_faces(monkeypatch
 
 def test_one_pass_follows_the_swaps_on_faces_two_on_vertices(monkeypatch):
     # the bound on the passes after the swaps each kind gets, and the runs keep to it
+    from superfacets.elements.kinds import kind_of
     from superfacets.method import passes
-    from superfacets.method.splitmerge import passes_after_for
 
     runs = []
     real = passes.iterate
@@ -353,7 +353,7 @@ def test_one_pass_follows_the_swaps_on_faces_two_on_vertices(monkeypatch):
 
     monkeypatch.setattr(passes, "iterate", spy)  # the passes after the swaps only
     mesh = read_mesh(need(MESHES / "bunny.tri.xz"))
-    assert passes_after_for("faces") == 1 and passes_after_for("vertices") == 2
+    assert kind_of("faces").passes_after == 1 and kind_of("vertices").passes_after == 2
     r = segment(mesh, 100)
     assert r.timings["swaps"] > 0 and runs[-1][0] == 1 and runs[-1][1] == 1
     assert r.converged  # the schedule's end, not max_iter

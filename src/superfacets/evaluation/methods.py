@@ -17,7 +17,14 @@ import numpy as np
 
 from ..api.segmentation import segment
 from ..errors import MemoryLimitError, ParameterError
-from ..method.params import ASSIGNMENTS, DEFAULT_ALPHAS, DEFAULTS, ELEMENTS, INITS, WEIGHTING_ALPHA
+from ..method.params import (
+    ASSIGNMENTS,
+    DEFAULT_ALPHAS,
+    ELEMENTS,
+    INITS,
+    PARAMETER,
+    WEIGHTING_ALPHA,
+)
 
 __all__ = ["Method", "MethodRun", "Skipped", "METHODS", "register_method", "get_method",
            "parse_bool"]
@@ -304,12 +311,15 @@ def _run_vsa(mesh, n_segments, *, cache, seed, **params):
     return MethodRun(r.labels, r.n_iter, r.converged)
 
 
-_SF_DEFAULTS = dict(alpha=DEFAULTS.alpha, eta_convex=DEFAULTS.eta_convex, init=INITS[0],
-                    window=DEFAULTS.window, max_iter=DEFAULTS.max_iter, tol=DEFAULTS.tol,
-                    center_tol="auto", coarsen="auto", cleanup="auto",
-                    split_merge="auto", paper=DEFAULTS.paper, density="auto",
-                    roughness=DEFAULTS.roughness, merge_from="auto", assignment="auto",
-                    beta="auto")
+#: The method's parameters an experiment records and may vary (the others are the run's
+#: own: the count, threads, progress, the elements), each at its declared default ("auto"
+#: where the run decides; the start: farthest points, which "auto" is without a radius)
+_SF_GRID = ("alpha", "eta_convex", "init", "window", "max_iter", "tol", "center_tol",
+            "coarsen", "cleanup", "split_merge", "paper", "density", "roughness", "merge_from",
+            "assignment", "beta")
+_SF_DEFAULTS = {name: INITS[0] if name == "init" else
+                "auto" if PARAMETER[name].default is None else PARAMETER[name].default
+                for name in _SF_GRID}
 register_method(
     "superfacets", _run_superfacets, defaults=_SF_DEFAULTS,
     sweep={"alpha": DEFAULT_ALPHAS},

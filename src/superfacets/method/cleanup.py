@@ -34,7 +34,7 @@ from ..elements.kinds import kind_of
 from ..elements.labels import check_labels, relabel_dense
 from .params import DEFAULTS, check_int, check_nonneg, check_number, check_positive, check_threads
 
-__all__ = ["clean_boundaries", "cut_costs", "crease_for", "band_for", "smoothness_for",
+__all__ = ["clean_boundaries", "cut_costs",
            "CREASE", "CREASE_SMOOTH_NORMALS", "SMOOTHNESS", "SMOOTHNESS_FACES", "BAND",
            "BAND_VERTICES", "SWEEPS"]
 
@@ -52,42 +52,6 @@ BAND = kind_of("faces").band
 BAND_VERTICES = kind_of("vertices").band
 #: Most sweeps (bands recomputed, every band cut).
 SWEEPS = 1
-
-
-def crease_for(kind: str) -> float:
-    """The default crease weight of the clean-up on elements ``kind``:
-    :data:`CREASE` on faces, :data:`CREASE_SMOOTH_NORMALS` on vertices and points.
-
-    Examples
-    --------
-    >>> crease_for("faces"), crease_for("points")
-    (0.1, 1.0)
-    """
-    return kind_of(kind).crease
-
-
-def smoothness_for(kind: str) -> float:
-    """The default weight of the clean-up's data term on elements ``kind``:
-    :data:`SMOOTHNESS_FACES` on faces, :data:`SMOOTHNESS` elsewhere.
-
-    Examples
-    --------
-    >>> smoothness_for("faces"), smoothness_for("vertices")
-    (0.7, 0.3)
-    """
-    return kind_of(kind).smoothness
-
-
-def band_for(kind: str) -> float:
-    """The default band half-width of the clean-up on elements ``kind``, a
-    fraction of ``r``: :data:`BAND_VERTICES` on vertices, :data:`BAND` elsewhere.
-
-    Examples
-    --------
-    >>> band_for("faces"), band_for("vertices")
-    (0.3, 0.2)
-    """
-    return kind_of(kind).band
 
 
 def cut_costs(graph, *, alpha: float = DEFAULTS.alpha, eta_convex: float = DEFAULTS.eta_convex,
@@ -282,15 +246,15 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
         ``sqrt(A / (K pi))`` (paper section 3.1).
     crease : float, optional
         Weight of creases in the boundary cost (:func:`cut_costs`); default
-        :func:`crease_for` the graph's kind (0.1 on faces, 1.0 on vertices
-        and points).
+        the graph's kind's ``crease`` (:mod:`superfacets.elements.kinds`: 0.1 on faces,
+        1.0 on vertices and points).
     smoothness : float, optional
         Weight of the data term (squared distance to the superfacet's mean
         position, in units of ``r^2``) against the boundary length, ``>= 0``;
-        default :func:`smoothness_for` the graph's kind (0.7 on faces, 0.3 elsewhere).
+        default the graph's kind's ``smoothness`` (0.7 on faces, 0.3 elsewhere).
     band : float, optional
         Half-width of each band, a fraction of ``r`` (``> 0``): no boundary
-        moves farther; default :func:`band_for` the graph's kind (0.3, 0.2 on
+        moves farther; default the graph's kind's ``band`` (0.3, 0.2 on
         vertices).
     sweeps : int, default 1
         Most rounds (``>= 0``; 0 changes nothing but the connectivity).
@@ -343,11 +307,11 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
 
     g = as_element_graph(graph)
     labels = relabel_dense(check_labels(labels, g.n_elements, per=g.element))
-    crease = crease_for(g.kind) if crease is None else crease
+    crease = kind_of(g.kind).crease if crease is None else crease
     alpha, eta_convex = check_nonneg("alpha", alpha), check_nonneg("eta_convex", eta_convex)
     smoothness = check_nonneg("smoothness",
-                              smoothness_for(g.kind) if smoothness is None else smoothness)
-    band = check_positive("band", band_for(g.kind) if band is None else band)
+                              kind_of(g.kind).smoothness if smoothness is None else smoothness)
+    band = check_positive("band", kind_of(g.kind).band if band is None else band)
     sweeps, n_threads = check_int("sweeps", sweeps, lo=0), check_threads(n_threads)
     k = int(labels.max()) + 1
     n = g.n_elements

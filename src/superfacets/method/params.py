@@ -49,8 +49,9 @@ INITS = ("farthest", "flood", "grid")
 ASSIGNMENTS = ("bounded", "exact")
 #: Names accepted by ``weighting=``: the paper's eqs. 1-3, Shlafman et al.'s eq. 6.
 WEIGHTINGS = ("paper", "shlafman")
-#: Names accepted by ``elements=``: the faces of a mesh, its vertices, the points of a cloud.
-ELEMENTS = ("faces", "vertices", "points")
+#: Names accepted by ``elements=``: the faces of a mesh, its vertices, the points of a cloud
+#: (the kinds of surface elements of :data:`~superfacets.elements.kinds.KINDS`).
+ELEMENTS = tuple(name for name, kind in KINDS.items() if kind.dim == 2)
 #: Largest number of nearest neighbours of the point graph.
 MAX_NEIGHBORS = 100
 #: Default ``alpha`` of each weighting, and its valid range ``(low, high)``.
@@ -77,7 +78,8 @@ COARSE_MIN_PER_SEGMENT_POINTS = kind_of("points").coarse_min_per_segment
 COARSE_PER_SEGMENT_POINTS = kind_of("points").coarse_per_segment
 
 
-ALL_KINDS = ("faces", "vertices", "points", "cells")
+#: Every kind of element (:data:`~superfacets.elements.kinds.KINDS`), cells too.
+ALL_KINDS = tuple(KINDS)
 
 
 @dataclass(frozen=True)

@@ -43,7 +43,7 @@ from ..elements.kinds import kind_of
 __all__ = ["swap_round", "swap_and_iterate", "POWER", "LLOYD",
            "MAX_FRACTION", "MIN_GAIN", "ROUNDS", "START_TOL", "FAST_ROUNDS", "PASSES_AFTER",
            "SWAP_ETA_CONVEX_FACES", "HOLD_AFTER_FACES", "PASSES_AFTER_FACES",
-           "swap_eta_convex_for", "hold_after_for", "passes_after_for", "FORGET_MIN"]
+           "FORGET_MIN"]
 
 # the compiled kernels (module-level names: tests patch them)
 energies, split_candidates, merge_energies, label_pairs = (
@@ -257,43 +257,6 @@ def _greedy_swaps(splits, pa, pb, loss, k: int, limit: int, least_gain: float):
     return remap, split_to, n_swaps
 
 
-def swap_eta_convex_for(kind: str) -> float:
-    """The factor of ``eta_convex`` in the swap energies on elements ``kind``:
-    :data:`SWAP_ETA_CONVEX_FACES` on faces, 1 (the run's weights) elsewhere.
-
-    Examples
-    --------
-    >>> swap_eta_convex_for("faces"), swap_eta_convex_for("vertices")
-    (0.5, 1.0)
-    """
-    return kind_of(kind).swap_eta_convex
-
-
-def passes_after_for(kind: str) -> int:
-    """Most passes after the swaps (with ``tol > 0``) on elements ``kind``:
-    :data:`PASSES_AFTER_FACES` on faces, :data:`PASSES_AFTER` elsewhere.
-
-    Examples
-    --------
-    >>> passes_after_for("faces"), passes_after_for("vertices")
-    (1, 2)
-    """
-    return kind_of(kind).passes_after
-
-
-def hold_after_for(kind: str) -> float:
-    """How many times ``center_tol * r`` a center must move, in the passes after the
-    swaps, to be expanded again: :data:`HOLD_AFTER_FACES` on faces, 1 elsewhere
-    (the exact classification of vertices expands every center anyway).
-
-    Examples
-    --------
-    >>> hold_after_for("faces"), hold_after_for("points")
-    (4.0, 1.0)
-    """
-    return kind_of(kind).hold_after
-
-
 def _ranks(members: np.ndarray, bounds: np.ndarray, lab: np.ndarray) -> np.ndarray:
     """Each element's place among its superfacet's members (:func:`_members`), made by
     blocks (no temporary of one entry per element)."""
@@ -391,7 +354,7 @@ def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.nda
     converged (the schedule's end, not ``max_iter``). ``swap_weights`` are
     the weights of the swap energies (default: ``weights``, those of the
     passes; the pipeline gives :func:`~superfacets.method.weights.convex_scaled`
-    with :func:`swap_eta_convex_for`). In the passes after
+    with the kind's ``swap_eta_convex``). In the passes after
     a round a center moving by less than ``hold_after * min_move`` stays.
 
     Returns
