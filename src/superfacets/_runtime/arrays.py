@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._kernels import native
+
 __all__ = ["gather", "real_rows", "sorted_unique", "ranked", "row_table"]
 
 #: Rows from which the whole-array passes run compiled, on threads (numpy below): the
@@ -182,7 +184,6 @@ def gather(values: np.ndarray, index: np.ndarray, out: np.ndarray | None = None)
             or (out is not None and (out.dtype != values.dtype or not out.flags.c_contiguous
                                      or not out.flags.writeable))):
         return np.take(values, index, out=out)
-    from .._kernels import native
 
     if out is None:
         out = np.empty(index.shape[0], dtype=values.dtype)

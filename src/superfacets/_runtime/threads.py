@@ -10,6 +10,9 @@ import threading
 from contextlib import contextmanager
 from contextvars import ContextVar
 
+from .._kernels import native
+from ..checks import check_threads
+
 #: Below this many items a range is not worth a second thread.
 MIN_PER_THREAD = 100_000
 
@@ -22,7 +25,6 @@ def default_threads() -> int:
     n = _limit.get()
     if n is not None:
         return n
-    from ..checks import check_threads
 
     return check_threads(None)
 
@@ -34,7 +36,6 @@ def using(n_threads: int):
     also bounds the graph build it triggers). The compiled kernels' limit is the
     process's, as ``SUPERFACETS_NUM_THREADS`` is: runs on several Python threads at once
     share the last one set."""
-    from .._kernels import native
 
     n = max(1, int(n_threads))
     token = _limit.set(n)

@@ -19,6 +19,10 @@ from dataclasses import replace
 import numpy as np
 
 from ..checks import check_int, check_nonneg
+from ..elements.builders import elements_of
+from ..errors import ParameterError
+from ..method.params import resolve
+from .result import SegmentationResult
 
 __all__ = ["adaptive_superpoints", "adaptive_segment", "START"]
 
@@ -84,9 +88,7 @@ def adaptive_superpoints(obj, n_segments: int, *, start: int = START,
 def _one_run(obj, n_segments, *, features=None, **options):
     """One plain run (``superfacets.segment`` without a level: the public door calls this
     module for ``adaptive=``, so this module runs the pipeline itself)."""
-    from ..method.params import resolve
     from ..method.pipeline import pipeline
-    from .result import SegmentationResult
 
     run = pipeline(obj, resolve(n_segments=n_segments, **options), features=features)
     return SegmentationResult(**run._asdict())
@@ -125,7 +127,6 @@ def adaptive_segment(obj, n_segments: int, *, start: int = START,
     >>> r.n_segments, r.params["start"]
     (6, 4)
     """
-    from ..errors import ParameterError
 
     k = check_int("n_segments", n_segments, lo=1)
     start = check_int("start", start, lo=1)
@@ -154,6 +155,5 @@ def adaptive_segment(obj, n_segments: int, *, start: int = START,
 
 def _elements(obj, options: dict) -> int:
     """The number of elements of the input (the most superpoints it can have)."""
-    from ..elements.builders import elements_of
 
     return int(elements_of(obj, options.get("elements")).graph.n_elements)

@@ -13,6 +13,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..elements.builders import per_element
+from ..graph.adjacency import superfacet_graph
+from ..graph.learning import learning_arrays
 from ..method.params import DEFAULTS
 
 __all__ = ["SegmentationResult", "TiledResult", "stop_reason", "describe_stop"]
@@ -135,7 +137,6 @@ class SegmentationResult:
         >>> g.n_segments, g.edge_index.shape[0], bool((g.border_length > 0).all())
         (12, 2, True)
         """
-        from ..graph.adjacency import superfacet_graph
 
         src = self._source()
         if features is None:
@@ -235,7 +236,6 @@ class SegmentationResult:
         >>> bool(a["x"][:, names.index("scattering")].max() < 0.01)  # flat superpoints
         True
         """
-        from ..graph.learning import learning_arrays
 
         src = self._source()
         if up is None:

@@ -6,10 +6,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..errors import ParameterError
+from ..errors import ParameterError, SuperfacetsError
 from ..inputs.cloud import PointCloud
 from ..inputs.convert import as_mesh
+from ..inputs.mesh import Mesh
 from ..method.params import DEFAULTS as _D
+from ..method.params import check_int
+from .segmentation import segment
 
 if TYPE_CHECKING:
     from .segmentation import SegmentationResult
@@ -59,10 +62,6 @@ def segment_objects(mesh, n_segments: int = _D.n_segments, **options
     >>> [r.n_segments for r in parts], int(labels.max()) + 1
     ([14, 6], 20)
     """
-    from ..errors import SuperfacetsError
-    from ..inputs.mesh import Mesh
-    from ..method.params import check_int
-    from .segmentation import segment
 
     if options.get("radius") is not None:
         raise ParameterError("segmenting per object takes n_segments, not radius")
@@ -104,8 +103,6 @@ def _shares(k: int, sizes: np.ndarray, caps: np.ndarray) -> np.ndarray:
 def _cloud_objects(cloud: PointCloud, k: int, options: dict):
     """:func:`segment_objects` of a point cloud: each object (scan) alone, its rows'
     labels offset by the superpoints of the objects before it."""
-    from ..errors import SuperfacetsError
-    from .segmentation import segment
 
     objects = cloud.objects or ((cloud.name or "cloud", 0, cloud.n_total),)
     valid = cloud.valid

@@ -15,8 +15,10 @@ import inspect
 import numpy as np
 
 from ..errors import ParameterError
+from ..inputs.cloud import as_cloud
 from ..method.params import DEFAULTS, PARAMETERS, resolve
 from ..method.pipeline import pipeline
+from .levels import START, adaptive_segment
 from .result import SegmentationResult
 
 __all__ = ["superfacets", "superpoints", "segment", "pipeline", "SegmentationResult"]
@@ -327,7 +329,6 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, features=None,
 
 def _adaptive(obj, n_segments, adaptive, extent_weight, **options):
     """The content-adaptive level of ``n_segments`` (``adaptive``: True or its START)."""
-    from .levels import START, adaptive_segment
 
     if n_segments is None:
         raise ParameterError("adaptive takes n_segments, not radius")
@@ -435,7 +436,6 @@ def superpoints(points, n_segments: int | None = _D.n_segments, *, normals=None,
     """
     from dataclasses import replace
 
-    from ..inputs.cloud import as_cloud
 
     if "elements" in options and options["elements"] not in (None, "points"):
         raise ParameterError("superpoints segments points; use superfacets() for meshes")

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..elements.builders import elements_of
 from ..elements.kinds import kind_of
 from ..errors import ParameterError
 
@@ -118,7 +119,6 @@ def count_for_resolution(data, resolution: float, elements: str | None = None,
     >>> 300 < k < 500, 90 < area < 110
     (True, True)
     """
-    from ..elements.builders import elements_of
 
     try:
         r = float(resolution)

@@ -20,7 +20,15 @@ from .points import DEFAULT_NEIGHBORS as _N_NEIGHBORS
 __all__ = ["ElementInput", "Builder", "BUILDERS", "as_element_graph", "elements_of",
            "is_cloud", "kind_for", "prepared", "register_builder", "features_of", "per_element"]
 
+from ..checks import check_n_segments
+from ..errors import ParameterError
+from ..inputs.cloud import PointCloud, as_cloud
+from ..inputs.convert import as_mesh
+from ..inputs.mesh import Mesh
+from ..inputs.tetmesh import TetMesh
+from .cells import cell_graph
 from .features import features_of, per_element  # noqa: E402,F401 (re-exported)
+from .kinds import kind_of
 
 
 class ElementInput(NamedTuple):
@@ -112,7 +120,6 @@ def is_cloud(obj) -> bool:
     >>> is_cloud(np.zeros((10, 3))), is_cloud((np.zeros((3, 3)), [[0, 1, 2]]))
     (True, False)
     """
-    from ..inputs.cloud import PointCloud
 
     if isinstance(obj, PointCloud):
         return True
@@ -159,8 +166,6 @@ class Builder(NamedTuple):
 
 
 def _is_volume(obj) -> bool:
-    from ..inputs.tetmesh import TetMesh
-
     return isinstance(obj, TetMesh)
 
 
@@ -174,20 +179,14 @@ def _usable(obj):
 
 
 def _usable_cloud(obj):
-    from ..inputs.cloud import as_cloud
-
     return _usable(as_cloud(obj))
 
 
 def _usable_mesh(obj):
-    from ..inputs.convert import as_mesh
-
     return _usable(as_mesh(obj))
 
 
 def _cells(volume, n_neighbors, neighbor_radius) -> ElementInput:
-    from .cells import cell_graph
-
     return ElementInput(cell_graph(volume), None, volume)
 
 
@@ -219,7 +218,6 @@ def _faces(mesh, n_neighbors, neighbor_radius) -> ElementInput:
 
 def _faces_of(mesh, first):
     """The mesh of the faces ``first`` of ``mesh`` (its vertices, colours and name)."""
-    from ..inputs.mesh import Mesh
 
     face_colors = None if mesh.face_colors is None else mesh.face_colors[first]
     return Mesh(mesh.vertices, mesh.faces[first], name=mesh.name, colors=mesh.colors,
@@ -270,7 +268,6 @@ def register_builder(kind: str, builder: Builder) -> None:
     -------
     None
     """
-    from .kinds import kind_of
 
     kind_of(kind)
     BUILDERS[kind] = builder
@@ -300,7 +297,6 @@ def kind_for(obj, elements: str | None = None) -> str:
     >>> kind_for(trimesh.creation.box()), kind_for(np.zeros((5, 3)))
     ('faces', 'points')
     """
-    from ..errors import ParameterError
 
     if elements is None:
         for kind, b in BUILDERS.items():
@@ -386,7 +382,6 @@ def prepared(obj, elements: str | None = None, *, n_segments: int | None = None)
     >>> kind, mesh.n_faces
     ('faces', 12)
     """
-    from ..checks import check_n_segments
 
     kind = kind_for(obj, elements)
     builder = BUILDERS[kind]
@@ -395,7 +390,6 @@ def prepared(obj, elements: str | None = None, *, n_segments: int | None = None)
     if n_segments is not None:  # before the graph, the memory peak of a run
         check_n_segments(n_segments, n, kind)
     from .._runtime.memory import check_memory
-    from .kinds import kind_of
 
     rows = max(n, int(kind_of(kind).n_rows(data)))  # (invalid points are held too)
     check_memory(rows, kind_of(kind).peak_bytes,
@@ -441,7 +435,6 @@ def as_element_graph(obj) -> ElementGraph:
     """
     if isinstance(obj, ElementGraph):
         return obj
-    from ..inputs.convert import as_mesh
     from .faces import face_graph
 
     return face_graph(as_mesh(obj))

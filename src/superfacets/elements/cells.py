@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..inputs.tetmesh import TET_FACES
 from .graph import ElementGraph, adjacency_csr, cached_on
 
 __all__ = ["cell_graph"]
@@ -50,8 +51,6 @@ def cell_graph(mesh) -> ElementGraph:
 
 
 def _build(mesh) -> ElementGraph:
-    from ..inputs.tetmesh import TET_FACES
-
     m = mesh.n_tets
     v = mesh.vertices
     tri = np.sort(mesh.tets[:, TET_FACES].reshape(-1, 3), axis=1)

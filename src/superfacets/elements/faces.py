@@ -27,6 +27,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._kernels import native
+from ..inputs.mesh import Mesh
 from . import graph as _graph
 from .graph import ElementGraph, cached_on, pairs_from_csr
 
@@ -237,8 +238,6 @@ class _MeshNormals:
         self.vertices, self.faces = mesh.vertices, mesh.faces
 
     def __call__(self, graph: ElementGraph) -> dict[str, np.ndarray]:
-        from ..inputs.mesh import Mesh
-
         mesh = self.mesh()
         if mesh is None:
             mesh = Mesh(self.vertices, self.faces)

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import ParameterError
+
 __all__ = ["features_of", "per_element", "colors_or_features"]
 
 
@@ -106,7 +108,6 @@ def per_element(src, features):
     """
     if features is None:
         return None
-    from ..errors import ParameterError
 
     raw = np.asarray(features)
     if raw.dtype == object or not (np.issubdtype(raw.dtype, np.number) or raw.dtype == bool) \

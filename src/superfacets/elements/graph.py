@@ -8,6 +8,9 @@ from typing import Callable, Mapping, NamedTuple
 
 import numpy as np
 
+from .._kernels import native
+from .kinds import KINDS
+
 __all__ = ["ElementGraph", "AdjacencyTerms", "adjacency_csr", "CHUNK",
            "chunked", "pairs_from_csr", "LAZY"]
 
@@ -62,7 +65,6 @@ def adjacency_csr(lo: np.ndarray, hi: np.ndarray, n: int
     dual_edge : (2 e,) int32 ndarray (int64 beyond 2**31 entries)
         The pair ``t`` of each CSR entry.
     """
-    from .._kernels import native
 
     csr_of_pairs = native.kernel("adjacency.csr_of_pairs")
     lo, hi = np.ascontiguousarray(lo), np.ascontiguousarray(hi)  # (columns of the pairs)
@@ -91,7 +93,6 @@ def pairs_from_csr(graph: "ElementGraph", pair_dtype=np.int32) -> dict[str, np.n
     dict
         ``{"pairs": (e, 2) ndarray, "dual_edge": (2 e,) int32 or int64 ndarray}``.
     """
-    from .._kernels import native
 
     number_pairs = native.kernel("adjacency.number_pairs")
     n_csr = graph.indices.shape[0]
@@ -272,7 +273,6 @@ class ElementGraph:
     @property
     def element(self) -> str:
         """The singular of ``kind``: ``"face"``, ``"vertex"`` or ``"point"``."""
-        from .kinds import KINDS
 
         return KINDS[self.kind].singular if self.kind in KINDS else self.kind
 

@@ -37,6 +37,7 @@ import numpy as np
 from .._kernels import native
 from .._runtime.arrays import COMPILED_MIN
 from ..checks import check_int
+from ..inputs.bounds import column_bounds
 
 __all__ = ["BLOCK", "LEAF", "MAX_LEAF", "PointTree", "point_tree", "nearest", "local_keys",
            "local_frame", "key_window", "shared_prefix"]
@@ -133,7 +134,6 @@ def local_frame(points: np.ndarray, box: np.ndarray | None = None
     across the least power of two above its largest side (0 when it is one position):
     the Z-order's cells are then the halvings of a cube from that corner, and scaling
     by a power of two rounds nothing."""
-    from ..inputs.bounds import column_bounds
 
     if box is not None:
         lo, hi = (np.asarray(c, dtype=np.float64) for c in box)

@@ -15,6 +15,7 @@ from typing import Callable
 
 import numpy as np
 
+from ..api.levels import adaptive_segment
 from ..api.segmentation import segment
 from ..errors import MemoryLimitError, ParameterError
 from ..method.params import (
@@ -25,6 +26,13 @@ from ..method.params import (
     PARAMETER,
     WEIGHTING_ALPHA,
 )
+from .baselines.cut_pursuit import cut_pursuit
+from .baselines.graph_segmentation import graph_segmentation
+from .baselines.ncuts import ncut_embedding, normalized_cuts
+from .baselines.spt_partition import spt_partition
+from .baselines.vccs import vccs
+from .baselines.vsa import variational_shape_approximation
+from .metrics import METRICS
 
 __all__ = ["Method", "MethodRun", "Skipped", "METHODS", "register_method", "get_method",
            "parse_bool"]
@@ -185,7 +193,6 @@ def register_method(name: str, run: Callable[..., MethodRun], *, defaults: dict,
     """
     if not name or not all(c.isalnum() or c in "_-" for c in name):
         raise ParameterError(f"invalid method name {name!r}")
-    from .metrics import METRICS
 
     clash = set(defaults) & ({"n_segments", "seed", "cache"} | set(METRICS))
     if clash:  # the results file has one column of each name
@@ -240,8 +247,6 @@ def _run_superfacets(mesh, n_segments, *, cache, seed, weighting="paper", **para
 
 def _run_adaptive(mesh, n_segments, *, cache, seed, start, extent_weight="auto",
                   **params):
-    from ..api.levels import adaptive_segment
-
     r = adaptive_segment(mesh, n_segments, start=start,
                          extent_weight=_auto(extent_weight, float),
                          **_segment_options(**params))
@@ -250,31 +255,23 @@ def _run_adaptive(mesh, n_segments, *, cache, seed, start, extent_weight="auto",
 
 def _run_graph_segmentation(mesh, n_segments, *, cache, seed, elements="faces", k_thresh,
                             min_size):
-    from .baselines.graph_segmentation import graph_segmentation
-
     return MethodRun(graph_segmentation(mesh, k_thresh if k_thresh > 0 else 0.01, min_size,
                                         n_segments=n_segments if k_thresh <= 0 else None,
                                         elements=elements))
 
 
 def _run_cut_pursuit(mesh, n_segments, *, cache, seed, elements="points", reg_strength):
-    from .baselines.cut_pursuit import cut_pursuit
-
     return MethodRun(cut_pursuit(mesh, n_segments if reg_strength <= 0 else None,
                                  reg_strength=reg_strength if reg_strength > 0 else 0.1,
                                  elements=elements))
 
 
 def _run_spt_partition(mesh, n_segments, *, cache, seed, elements="points", preset, level):
-    from .baselines.spt_partition import spt_partition
-
     return MethodRun(spt_partition(mesh, n_segments, preset=preset,
                                    level="auto" if level <= 0 else level))
 
 
 def _run_vccs(mesh, n_segments, *, cache, seed, elements="points", seed_resolution):
-    from .baselines.vccs import vccs
-
     return MethodRun(vccs(mesh, n_segments if seed_resolution <= 0 else None,
                           seed_resolution=seed_resolution if seed_resolution > 0 else 0.1))
 
@@ -286,8 +283,6 @@ def _run_shlafman(mesh, n_segments, *, cache, seed, progress=False, **params):
 
 def _run_ncuts(mesh, n_segments, *, cache, seed, components, memory_limit_gib, progress=False,
                **params):
-    from .baselines.ncuts import ncut_embedding, normalized_cuts
-
     emb = cache.get("ncut_embedding")
     reused = 0.0
     if emb is None or emb.n_components < min(n_segments, mesh.n_faces):
@@ -305,8 +300,6 @@ def _run_ncuts(mesh, n_segments, *, cache, seed, components, memory_limit_gib, p
 
 
 def _run_vsa(mesh, n_segments, *, cache, seed, **params):
-    from .baselines.vsa import variational_shape_approximation
-
     r = variational_shape_approximation(mesh, n_segments, rng=seed, cache=cache, **params)
     return MethodRun(r.labels, r.n_iter, r.converged)
 

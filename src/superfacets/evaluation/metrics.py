@@ -16,7 +16,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from ..elements.builders import as_element_graph
+from ..elements.builders import as_element_graph, elements_of
 from ..elements.kinds import kind_of
 from ..elements.labels import check_labels
 from ..errors import InvalidMeshError, ParameterError
@@ -481,7 +481,6 @@ def evaluate_rows(obj, labels, ground_truths: Sequence[np.ndarray], *,
     >>> 0 <= m["undersegmentation_error"] < 0.5, m["segments"]
     (True, 20)
     """
-    from ..elements.builders import elements_of
 
     source = elements_of(obj, elements, n_neighbors=n_neighbors)
     g = source.graph

@@ -21,6 +21,8 @@ from pathlib import Path
 from typing import Iterable
 
 from ..errors import MeshFormatError
+from ..io import atomic_write
+from .methods import METHODS
 from .metrics import METRICS
 
 __all__ = ["columns", "row_key", "read_results", "prepare_file", "fmt_value", "KEY_COLUMNS"]
@@ -35,8 +37,6 @@ _TAIL = ["seed", "status", "segments", "iterations", "converged", "seconds", "pe
 
 
 def _param_names(configs: Iterable = ()) -> list[str]:
-    from .methods import METHODS
-
     names = {k for m in METHODS.values() for k in m.defaults}
     names |= {k for c in configs for k, _ in c.params}
     return sorted(names)
@@ -68,7 +68,6 @@ def row_key(row: dict) -> tuple:
 
     Rows of a method no longer registered are identified without parameters.
     """
-    from .methods import METHODS
 
     method = METHODS.get(row["method"])
     names = sorted(method.defaults) if method is not None else []
@@ -118,7 +117,6 @@ def read_results(path) -> list[dict]:
 
 def prepare_file(path: Path, cols: list[str]) -> tuple[list[str], list[dict]]:
     """Existing rows, the file's columns (extended if needed), torn line repaired."""
-    from ..io import atomic_write
 
     if not path.exists() or path.stat().st_size == 0:
         buf = io.StringIO()

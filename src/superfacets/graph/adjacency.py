@@ -20,7 +20,9 @@ from .._kernels import native
 from .._runtime.arrays import real_rows
 from ..elements.builders import as_element_graph
 from ..elements.labels import check_labels
+from ..elements.vertices import symmetric_terms
 from ..errors import ParameterError
+from ..io.files import atomic_write
 
 __all__ = ["SuperfacetGraph", "superfacet_graph", "crossing_adjacencies"]
 
@@ -151,7 +153,6 @@ class SuperfacetGraph:
 
     def save(self, path, **extra: np.ndarray) -> None:
         """Write the arrays (and ``extra`` ones) to one ``.npz`` file, atomically."""
-        from ..io.files import atomic_write
 
         atomic_write(path, lambda fh: np.savez_compressed(fh, **self.arrays(), **extra))
 
@@ -287,7 +288,6 @@ def crossing_adjacencies(g, lab: np.ndarray):
     >>> pairs.shape, float(length[0]), bool(concave.any())   # the 12 edges of the box
     ((12, 2), 1.0, False)
     """
-    from ..elements.vertices import symmetric_terms
 
     if (g.border_shares is None or g.terms_of is not symmetric_terms
             or "pairs" in g.__dict__ or "terms" in g.__dict__):

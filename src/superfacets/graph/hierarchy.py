@@ -42,8 +42,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._kernels import native
 from ..checks import check_int, check_nonneg, counted
+from ..elements.density import density_for
+from ..elements.kinds import kind_of
 from ..errors import ParameterError
+from .adjacency import superfacet_graph
 
 __all__ = ["Hierarchy", "hierarchy", "planarity_graph", "level_extent_weight", "pieces",
            "AUTO_EXTENT_WEIGHT", "ALPHA", "ETA_CONVEX"]
@@ -186,7 +190,6 @@ def hierarchy(graph, levels, *, alpha: float = ALPHA, eta_convex: float = ETA_CO
     if beta > 0 and graph.feature is None:
         raise ParameterError("beta > 0 needs the superfacets' features (graph.feature)")
 
-    from .._kernels import native
 
     roots = native.kernel("hierarchy.merge_levels")(
         k, *merge_arrays(graph, cost == "planarity"), int(cost == "planarity"), alpha,
@@ -263,8 +266,6 @@ def planarity_graph(graph, labels, features=None):
     [250.0, 250.0]
     """
 
-    from ..elements.kinds import kind_of
-    from .adjacency import superfacet_graph
 
     if kind_of(graph.kind).unit_sizes_in_levels:
         graph = graph.replaced(sizes=np.ones(graph.n_elements))
@@ -307,7 +308,6 @@ def level_extent_weight(graph) -> float:
     >>> level_extent_weight(point_graph(PointCloud(np.c_[xy, np.zeros(3200)])).graph)
     0.01
     """
-    from ..elements.density import density_for
 
     return AUTO_EXTENT_WEIGHT if density_for(graph) > 0 else 0.0
 

@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._kernels import native
+from ..elements.vertices import symmetric_terms
 from .adjacency import SuperfacetGraph, crossing_adjacencies
 
 __all__ = ["border_sums", "point_sums", "pair_sums", "grouped_graph", "grouped_planes",
@@ -67,7 +68,6 @@ def border_sums(graph, labels: np.ndarray, k: int) -> dict:
     >>> s["edges"].tolist(), s["concave_sum"].tolist()
     ([[0, 1]], [0.0])
     """
-    from ..elements.vertices import symmetric_terms
 
     lab = np.ascontiguousarray(labels, dtype=np.int64)
     if (graph.border_shares is None or graph.terms_of is not symmetric_terms

@@ -16,6 +16,7 @@ from functools import cached_property
 
 import numpy as np
 
+from .._kernels import native
 from ..checks import check_real, counted
 from ..errors import InvalidCloudError
 from .bounds import check_extent, column_bounds, finite_rows
@@ -249,7 +250,6 @@ class PointCloud:
         if (p is None or not self.__dict__.get("_usable") or not _held_alone(p)
                 or index.shape[0] != p.shape[0]):  # (checked once: not asked for again)
             return False
-        from .._kernels import native
 
         bits, at = p.view(np.uint64), positions.view(np.uint64)
         if not (bits.flags.c_contiguous and at.flags.c_contiguous):

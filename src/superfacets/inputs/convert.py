@@ -20,6 +20,7 @@ import numpy as np
 
 from ..errors import InvalidMeshError
 from .mesh import Mesh
+from .rgb import unit_colors
 
 __all__ = ["as_mesh", "from_library", "mesh_from_scene", "trimesh_colors"]
 
@@ -157,7 +158,6 @@ def trimesh_colors(obj) -> dict:
     >>> trimesh_colors(trimesh.creation.box())
     {}
     """
-    from .rgb import unit_colors
 
     visual = getattr(obj, "visual", None)
     kind = getattr(visual, "kind", None)
@@ -176,7 +176,6 @@ PYVISTA_COLORS = ("rgb", "rgba", "colors", "colours")
 def _pyvista_colors(data) -> np.ndarray | None:
     """The first array of ``point_data`` / ``cell_data`` named as colours (:data:
     `PYVISTA_COLORS`), of 3 or 4 columns, as RGB in ``[0, 1]``; None without one."""
-    from .rgb import unit_colors
 
     for key in ([] if data is None else list(data.keys())):
         a = np.asarray(data[key])

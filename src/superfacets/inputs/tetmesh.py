@@ -13,10 +13,10 @@ from functools import cached_property
 
 import numpy as np
 
-from ..checks import check_real
-from ..errors import InvalidMeshError
+from ..checks import check_int, check_number, check_real
+from ..errors import InvalidMeshError, ParameterError
 from .bounds import check_extent, column_bounds
-from .mesh import readonly
+from .mesh import Mesh, readonly
 
 __all__ = ["TetMesh", "TET_FACES", "cut_surface"]
 
@@ -195,9 +195,6 @@ def cut_surface(mesh: TetMesh, labels=None, *, axis: int = 0, at: float = 0.5):
     >>> surface.n_faces == face_labels.shape[0]
     True
     """
-    from ..checks import check_int, check_number
-    from ..errors import ParameterError
-    from .mesh import Mesh
 
     axis = check_int("axis", axis, lo=0, hi=2)
     at = check_number("at", at, 0.0, 1.0)

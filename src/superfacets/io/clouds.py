@@ -42,6 +42,8 @@ from .ply import ply_colors, read_ply_scalars
 __all__ = ["read_cloud", "CLOUD_FORMATS", "is_cloud_file", "check_laz", "check_las",
            "e57_counts"]
 
+from ..checks import not_real
+from ..inputs.cloud import InvalidCloudError, PointCloud
 from .headers import check_las, check_laz, e57_counts  # noqa: E402 (re-exported: headers)
 
 #: Point-cloud formats of :func:`read_cloud` (PLY files are clouds when they have no faces).
@@ -131,7 +133,6 @@ def read_cloud(path, format: str | None = None):
     >>> c.n_points, c.points.dtype
     (50, dtype('float64'))
     """
-    from ..inputs.cloud import InvalidCloudError, PointCloud
 
     path = Path(path)
     fmt, comp = split_suffix(path)
@@ -390,7 +391,6 @@ def _read_npy(data: bytes, path: Path) -> dict:
         arr = np.load(io.BytesIO(data), allow_pickle=False)
     except Exception as exc:  # noqa: BLE001 - numpy raises many types on damaged files
         raise MeshFormatError(f"{path}: cannot read NPY: {exc}") from None
-    from ..checks import not_real
 
     if not isinstance(arr, np.ndarray) or not_real(arr.dtype, "NPY points"):
         raise MeshFormatError(f"{path}: " + (not_real(arr.dtype, "NPY points") if isinstance(

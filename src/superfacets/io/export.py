@@ -28,11 +28,13 @@ from pathlib import Path
 import numpy as np
 
 from ..elements.kinds import kind_of
+from ..elements.labels import check_labels, relabel_dense
 from ..errors import MeshFormatError
 from ..inputs.convert import as_mesh
+from .colors import face_colors, superfacet_colors
 from .files import Outputs, save, split_suffix
 from .meshes import MESH_FORMATS
-from .ply import ply_bytes
+from .ply import ply_bytes, points_ply_bytes
 
 __all__ = ["write_mesh", "write_colored_mesh", "write_colored_elements", "element_colors",
            "point_colors", "to_trimesh", "to_pyvista", "COLORED_FORMATS"]
@@ -167,8 +169,6 @@ def write_colored_mesh(path, mesh, labels, *, vertex_colors: bool = False,
     >>> read_labels(p).tolist()
     [0, 1]
     """
-    from ..elements.labels import check_labels
-    from .colors import face_colors
 
     mesh = as_mesh(mesh)
     labels = check_labels(labels, mesh.n_faces, per="face")
@@ -238,8 +238,6 @@ def element_colors(source, labels) -> np.ndarray:
     -------
     (N, 3) uint8 ndarray
     """
-    from ..elements.labels import relabel_dense
-    from .colors import superfacet_colors
 
     g, index = source.graph, source.index
     ok = index >= 0
@@ -271,7 +269,6 @@ def point_colors(source, labels=None) -> np.ndarray:
     ParameterError
         If ``labels`` is not one integer per point.
     """
-    from ..elements.labels import check_labels
 
     g, index = source.graph, source.index
     if labels is None:
@@ -310,8 +307,6 @@ def write_colored_elements(path, source, labels, *, outputs: Outputs | None = No
     MeshFormatError
         If ``path`` does not end in ``.ply``.
     """
-    from ..elements.labels import check_labels
-    from .ply import points_ply_bytes
 
     path = Path(path)
     fmt, _ = split_suffix(path)
@@ -329,9 +324,6 @@ def write_colored_elements(path, source, labels, *, outputs: Outputs | None = No
 
 
 def _labelled(mesh, labels):
-    from ..elements.labels import check_labels
-    from .colors import face_colors
-
     labels = check_labels(labels, mesh.n_faces, per="face")
     return labels, face_colors(mesh, labels)
 

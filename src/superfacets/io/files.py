@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Callable
 
 from ..checks import check_int
-from ..errors import MeshFormatError
+from ..errors import MeshFormatError, SuperfacetsError
 
 __all__ = ["split_suffix", "read_bytes", "text_lines", "text_chunks", "atomic_write", "Outputs",
            "save", "COMPRESSIONS", "decompressed", "decompressed_head", "sha256_of", "array_digest",
@@ -348,7 +348,6 @@ def load_checked(path, digest: str | None, dtype=None):
     """
     import numpy as np
 
-    from ..errors import SuperfacetsError
 
     try:
         a = np.fromfile(path, dtype=dtype) if dtype is not None else (

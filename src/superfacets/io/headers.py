@@ -14,7 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..checks import not_real
 from ..errors import MeshFormatError
+from .files import decompressed_head, max_ratio, split_suffix
 
 __all__ = ["header_counts", "e57_counts", "check_las", "check_laz", "check_stl", "ply_mapped",
            "npy_mapped", "first_line"]
@@ -52,7 +54,6 @@ def header_counts(path) -> dict | None:
     -------
     dict or None
     """
-    from .files import decompressed_head, split_suffix
 
     p = Path(path)
     suffix, comp = split_suffix(p)
@@ -307,7 +308,6 @@ def _check_laz_ratio(path, head: bytes, size: int) -> None:
     """Refuse a LAZ whose points would take more than :func:`~superfacets.io.files.max_ratio`
     times its size as LAS records (real LAZ: about 10; millions of one point repeated
     compress to a few bytes each): a decompression bomb, refused before it is read."""
-    from .files import max_ratio
 
     length = struct.unpack_from("<H", head, 105)[0]
     points = struct.unpack_from("<I", head, 107)[0]
@@ -402,7 +402,6 @@ def npy_mapped(path: Path) -> np.ndarray:
         arr = np.load(path, mmap_mode="r", allow_pickle=False)
     except Exception as exc:  # noqa: BLE001 - numpy raises many types on damaged files
         raise MeshFormatError(f"{path}: cannot read NPY: {first_line(exc)}") from None
-    from ..checks import not_real
 
     if not_real(arr.dtype, "NPY points"):
         raise MeshFormatError(f"{path}: {not_real(arr.dtype, 'NPY points')}")

@@ -18,11 +18,13 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InvalidMeshError, MeshFormatError
+from ..inputs.convert import mesh_from_scene
 from ..inputs.mesh import Mesh, narrow_faces
+from ..inputs.rgb import unit_colors
 from .files import read_bytes, read_head, split_suffix, text_lines
 from .headers import check_gltf, check_stl, header_counts
 from .obj import parse_obj
-from .ply import read_ply_triangles
+from .ply import ply_colors, read_ply_triangles
 
 __all__ = ["read_mesh", "MESH_FORMATS"]
 
@@ -178,7 +180,6 @@ def _parse_off(data: bytes, path: Path):
 
 def _unit(rgb: np.ndarray) -> np.ndarray:
     """Text colours (floats in [0, 1], or 0..255) in [0, 1]."""
-    from ..inputs.rgb import unit_colors
 
     return unit_colors(rgb)
 
@@ -244,7 +245,6 @@ def _load_scene(path: Path, fmt: str, comp: str | None, data: bytes) -> Mesh:
     """A glTF/GLB file through trimesh, its objects joined (:mod:`superfacets.inputs.convert`)."""
     import trimesh
 
-    from ..inputs.convert import mesh_from_scene
 
     try:
         with _quiet_trimesh():
@@ -354,7 +354,6 @@ def _ply_polygons(data: bytes, path: Path):
     colours of the vertices and the faces."""
     from plyfile import PlyData, PlyParseError
 
-    from .ply import ply_colors
     end = data.find(b"end_header")
     declared = sum(int(line.split()[2]) for line in data[:max(end, 0)].split(b"\n")
                    if line.startswith(b"element ") and len(line.split()) == 3

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MeshFormatError
+from ..inputs.rgb import unit_colors
 
 __all__ = ["ply_bytes", "read_ply_labels", "ply_colors", "read_ply_triangles", "VertexView",
            "read_ply_scalars"]
@@ -31,7 +32,6 @@ def ply_colors(element) -> np.ndarray | None:
     """(N, 3) float64 in ``[0, 1]``: the RGB of a ``plyfile`` element (vertex or face),
     None where it has none (:data:`COLOR_PROPERTIES`; scaled by
     :func:`~superfacets.inputs.rgb.unit_colors`)."""
-    from ..inputs.rgb import unit_colors
 
     names = [p.name for p in element.properties]
     for rgb in COLOR_PROPERTIES:

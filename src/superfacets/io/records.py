@@ -25,6 +25,7 @@ import numpy as np
 
 from ..errors import MeshFormatError, ParameterError
 from .files import Outputs, read_bytes, save, split_suffix
+from .headers import check_las
 
 __all__ = ["LABEL_FIELD", "RECORD_FORMATS", "write_labels_into", "ply_field_name",
            "records_kind"]
@@ -175,7 +176,6 @@ def _count_error(source: Path, n_labels: int, n_records: int) -> ParameterError:
 def _las_with(source: Path, labels: np.ndarray, name: str, compress: bool) -> bytes:
     """The LAS/LAZ bytes of ``source`` with ``labels`` as the extra dimension ``name``."""
     from .._runtime.extras import require
-    from .headers import check_las
 
     laspy = require("laspy", "writing LAS/LAZ files")
     check_las(source)

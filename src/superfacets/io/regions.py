@@ -37,8 +37,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import MeshFormatError
+from ..errors import InvalidMeshError, MeshFormatError
 from ..inputs.bounds import column_bounds, finite_rows, rows_in_box
+from ..inputs.cloud import InvalidCloudError, PointCloud, as_cloud
+from ..inputs.convert import as_mesh
+from ..inputs.mesh import Mesh
+from ..inputs.rgb import color_top, unit_colors
 from .headers import first_line, npy_mapped, ply_mapped
 from .ply import VertexView
 
@@ -164,8 +168,6 @@ class RegionReader:
         MeshFormatError, InvalidMeshError
             As the readers do; also for a polygon mesh (tiles take triangles).
         """
-        from ..inputs.cloud import PointCloud, as_cloud
-        from ..inputs.convert import as_mesh
 
         obj = source
         if isinstance(source, (str, Path)):
@@ -258,7 +260,6 @@ class RegionReader:
                 kept_rows.append(start + at[finite])
         if n == 0:
             raise MeshFormatError(f"{self.path}: no {self.kind[:-1]} with a finite position")
-        from ..inputs.rgb import color_top
 
         top = color_top(stats["itemsize"], stats["largest"]) if stats else None
         return Survey(lo, hi, size, n, np.concatenate(kept).astype(np.float64), normals, colors,
@@ -266,8 +267,6 @@ class RegionReader:
 
     def _non_finite(self, row: int):
         """Refuse a row without a finite position, as a whole run refuses it."""
-        from ..errors import InvalidMeshError
-        from ..inputs.cloud import InvalidCloudError
 
         if self.kind == "faces":
             raise InvalidMeshError(f"{self.path}: face {row} has a vertex with a non-finite "
@@ -288,7 +287,6 @@ class RegionReader:
             The faces (with the vertices they use) or the points (with their
             colours), in that order; None where the box holds no element.
         """
-        from ..inputs.mesh import Mesh
 
         lo = np.asarray(lo, dtype=np.float64)
         hi = np.asarray(hi, dtype=np.float64)
@@ -362,7 +360,6 @@ class RegionReader:
     def _colors(self, raw: np.ndarray, stats: dict | None) -> np.ndarray:
         """A chunk's colours in [0, 1]: integers divided by the file's :attr:`color_top`
         where the survey decided it (``stats`` collects what it needs)."""
-        from ..inputs.rgb import unit_colors
 
         if stats is not None and np.issubdtype(raw.dtype, np.integer) and raw.size:
             stats["itemsize"] = raw.dtype.itemsize
@@ -425,7 +422,6 @@ class RegionReader:
 def point_cloud_of(pts, colors, normals, viewpoint, name: str = ""):
     """A :class:`~superfacets.inputs.cloud.PointCloud` of a box's points (``viewpoint`` a tuple or
     None)."""
-    from ..inputs.cloud import PointCloud
 
     vp = None if viewpoint is None else np.asarray(viewpoint)
     return PointCloud(pts, normals, name=name, colors=colors, viewpoint=vp)

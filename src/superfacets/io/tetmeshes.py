@@ -15,7 +15,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..elements.labels import check_labels
 from ..errors import MeshFormatError
+from ..inputs.tetmesh import TetMesh
+from .files import atomic_write
 
 __all__ = ["read_volume", "write_volume_labels", "VOLUME_FORMATS"]
 
@@ -56,7 +59,6 @@ def read_volume(path):
     1
     """
     from .._runtime.extras import require
-    from ..inputs.tetmesh import TetMesh
 
     meshio = require("meshio", "reading tetrahedral meshes")
     path = Path(path)
@@ -128,8 +130,6 @@ def write_volume_labels(path, mesh, labels, *, outputs=None) -> Path:
     import tempfile
 
     from .._runtime.extras import require
-    from ..elements.labels import check_labels
-    from .files import atomic_write
 
     meshio = require("meshio", "writing tetrahedral meshes")
     lab = np.asarray(check_labels(labels, mesh.n_tets, per="tetrahedron"), dtype=np.int64)

@@ -32,6 +32,8 @@ from ..elements.builders import as_element_graph
 from ..elements.graph import chunked
 from ..elements.kinds import kind_of
 from ..elements.labels import check_labels, relabel_dense
+from ..errors import ParameterError
+from .connectivity import enforce_connectivity
 from .params import DEFAULTS, check_int, check_nonneg, check_number, check_positive, check_threads
 
 __all__ = ["clean_boundaries", "cut_costs",
@@ -133,7 +135,6 @@ def cut_costs(graph, *, alpha: float = DEFAULTS.alpha, eta_convex: float = DEFAU
 def _checked_centers(labels, centers, sizes, positions) -> np.ndarray:
     """The centers given (one element of each superfacet, in label order: checked), or
     each superfacet's element nearest its mean position."""
-    from ..errors import ParameterError
 
     k, n = int(labels.max()) + 1, labels.shape[0]
     if centers is None:
@@ -303,7 +304,6 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
     30
     """
     solve_bands = native.kernel("cleanup.solve_bands")
-    from .connectivity import enforce_connectivity
 
     g = as_element_graph(graph)
     labels = relabel_dense(check_labels(labels, g.n_elements, per=g.element))

@@ -36,7 +36,9 @@ from .._runtime.arrays import real_rows
 from ..elements.graph import LAZY, ElementGraph, adjacency_csr, pairs_from_csr
 from ..elements.kinds import kind_of
 from ..inputs.bounds import column_bounds
-from .expansion import bucket_width
+from .classify import make_classifier
+from .expansion import Workspaces, bucket_width
+from .initialization import initial_centers
 from .params import superfacet_measure
 from .weights import HeldWeights, weights_array
 
@@ -295,9 +297,6 @@ def coarse_centers(graph: ElementGraph, csr_w: np.ndarray, ratio: int, *, init: 
     clusters are made, before the coarse run (the pipeline frees there what only
     the coarsening read).
     """
-    from .classify import make_classifier
-    from .expansion import Workspaces
-    from .initialization import initial_centers
     from .passes import iterate, update_centers
 
     co = coarsen(graph, csr_w, ratio)
@@ -382,7 +381,6 @@ def start_centers(graph: ElementGraph, csr_w: np.ndarray, params,
     """
     import time
 
-    from .initialization import initial_centers
 
     p = params
     if ratio > 1:

@@ -18,6 +18,7 @@ import numpy as np
 from .._kernels import native
 from ..elements.builders import as_element_graph
 from ..elements.labels import check_labels, relabel_dense
+from .params import check_int
 
 __all__ = ["enforce_connectivity", "label_components"]
 
@@ -122,7 +123,6 @@ def enforce_connectivity(graph, labels: np.ndarray, centers: np.ndarray | None =
     """
     merge_strays = native.kernel("connectivity.merge_strays")
     stray_borders = native.kernel("connectivity.stray_borders")
-    from .params import check_int
 
     g = as_element_graph(graph)
     labels = check_labels(labels, g.n_elements, per=g.element)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..elements.labels import relabel_dense
+from ..graph.adjacency import superfacet_graph
 from ..method.params import DEFAULTS
 from .cleanup import clean_boundaries
 from .connectivity import enforce_connectivity as _enforce_connectivity
@@ -177,7 +178,6 @@ def exact_count(graph, labels: np.ndarray, rules: Rules) -> tuple[np.ndarray, in
     >>> exact_count(graph, labels, rules)[1]
     12
     """
-    from ..graph.adjacency import superfacet_graph
     from ..graph.hierarchy import hierarchy, pieces
 
     k = rules.k if rules.target is None else rules.target

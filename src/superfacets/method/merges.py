@@ -40,6 +40,10 @@ from __future__ import annotations
 import numpy as np
 
 from .._kernels import native
+from .._runtime.arrays import real_rows
+from ..elements.labels import check_labels
+from ..graph.hierarchy import merge_arrays
+from ..graph.sums import border_sums, grouped_graph, grouped_planes, point_sums
 
 __all__ = ["merge_to_count", "merge_nodes", "flat_merges", "flat_share", "flat_merge_nodes",
            "same_feature_edges", "feature_spread", "noise_variance", "neighbourhood_noise",
@@ -277,7 +281,6 @@ def flat_merge_nodes(pg, k: int, max_rise: float, alpha: float = 0.0,
     (:func:`superfacets.graph.hierarchy.planarity_graph`): the merged superpoint of
     each node ((K,) int64, dense, numbered by their lowest node)."""
     from .._kernels import native
-    from ..graph.hierarchy import merge_arrays
 
     n_nodes = pg.n_segments
     if n_nodes == 0:
@@ -342,9 +345,6 @@ def _sums(graph, labels: np.ndarray, features=None) -> tuple:
     """Dense int64 ``labels``, and what the merges read of them: per superpoint
     (:func:`~superfacets.graph.sums.point_sums`) and per adjacent pair
     (:func:`~superfacets.graph.sums.border_sums`)."""
-    from .._runtime.arrays import real_rows
-    from ..elements.labels import check_labels
-    from ..graph.sums import border_sums, point_sums
 
     lab = np.ascontiguousarray(check_labels(labels, graph.n_elements, per=graph.element),
                                dtype=np.int64)
@@ -405,7 +405,6 @@ def merge_nodes(nodes: dict, pairs: dict, target: int, max_rise: float | None,
     ([1, 2], 2)
     """
     from ..graph.hierarchy import hierarchy, pieces
-    from ..graph.sums import grouped_graph
 
     count = nodes["count"]
     k = count.shape[0]
@@ -449,7 +448,6 @@ def _planes_graph(nodes: dict, pairs: dict, group: np.ndarray | None,
     of one colour (:func:`same_feature_edges`)."""
     from dataclasses import replace
 
-    from ..graph.sums import grouped_graph, grouped_planes
 
     planes = (nodes["count"], nodes["mean"], nodes["scatter"])
     alone = group is None

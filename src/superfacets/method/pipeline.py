@@ -49,10 +49,11 @@ import numpy as np
 from .._runtime import interrupts
 from .._runtime.memory import give_back_free_memory
 from .._runtime.progress import tick
+from .._runtime.threads import using
 from ..elements.builders import kind_for
 from .finish import clean_up, exact_count, finish, merge_small
 from .merges import merge_to_count
-from .params import ALL_KINDS, PARAMETERS, SegmentParams
+from .params import ALL_KINDS, PARAMETERS, SegmentParams, resolve
 from .passes import final_centers
 from .stages import (
     build_graph,
@@ -254,7 +255,6 @@ def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
     >>> len(r.centers), sorted(r.timings)[:4]
     (20, ['changed', 'cleanup', 'connectivity', 'cycle_period'])
     """
-    from .._runtime.threads import using
 
     with using(params.n_threads):  # also the graph build and terms this run triggers
         return _run(mesh, params, features, replay=replay, jump_cycles=jump_cycles,
@@ -403,7 +403,6 @@ def passes_example(n_segments: int = 12):
 
     import trimesh
 
-    from .params import resolve
     from .stages import build_graph, initialize, iterate_passes, resolve_rules, weigh
 
     ball = trimesh.creation.icosphere(subdivisions=3)

@@ -39,6 +39,7 @@ from .._kernels import native
 from .._runtime.memory import give_back_free_memory
 from .._runtime.threads import in_parallel
 from ..elements.kinds import kind_of
+from ..elements.labels import relabel_dense
 
 __all__ = ["swap_round", "swap_and_iterate", "POWER", "LLOYD",
            "MAX_FRACTION", "MIN_GAIN", "ROUNDS", "START_TOL", "FAST_ROUNDS", "PASSES_AFTER",
@@ -367,7 +368,6 @@ def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.nda
     """
     from dataclasses import replace
 
-    from ..elements.labels import relabel_dense
     from .passes import hold_small_moves, iterate, update_centers
 
     def used(it) -> np.ndarray:

@@ -15,8 +15,10 @@ import numpy as np
 
 from ..elements.builders import ElementInput, elements_of, prepared
 from ..elements.density import adapted_graph, density_for
+from ..elements.features import colors_or_features, features_of, per_element
 from ..elements.kinds import ElementKind, kind_of
 from ..elements.vertices import symmetric_terms
+from ..errors import ParameterError
 from .classify import make_classifier
 from .coarse_to_fine import COARSENING_READS, coarsening_for, start_centers
 from .expansion import Workspaces
@@ -30,7 +32,14 @@ from .params import (
 )
 from .passes import Iteration, iterate
 from .rules import fine_count, merge_from_of
-from .weights import HeldWeights, csr_point_weights, csr_weights, edge_weights, weight_dtype
+from .weights import (
+    HeldWeights,
+    csr_point_weights,
+    csr_weights,
+    edge_weights,
+    feature_scale,
+    weight_dtype,
+)
 
 __all__ = ["Rules", "build_graph", "resolve_features", "resolve_rules", "weigh",
            "initialize", "iterate_passes", "stage_reads"]
@@ -211,7 +220,6 @@ def build_graph(obj, p: SegmentParams, features=None
 
 def _check_features(kind: str, data, features) -> None:
     """``beta > 0``: features of one row per input row, or colours (materials) to use."""
-    from ..errors import ParameterError
 
     if features is not None:
         n = kind_of(kind).n_rows(data)
@@ -273,8 +281,6 @@ def resolve_features(source: ElementInput, graph, p: SegmentParams, features=Non
     >>> p.beta > 0, feats.shape, floor
     (True, (1280, 3), 0.0)
     """
-    from ..elements.features import colors_or_features, features_of, per_element
-    from .weights import feature_scale
 
     if p.beta is not None and p.beta <= 0:
         return p, None, 0.0

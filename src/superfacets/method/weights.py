@@ -13,6 +13,8 @@ from .._kernels import native
 from .._runtime.arrays import real_rows
 from ..elements.builders import as_element_graph
 from ..elements.graph import CHUNK, ElementGraph, chunked
+from ..elements.kinds import kind_of
+from ..elements.vertices import symmetric_terms
 from ..errors import ParameterError
 from .params import (
     DEFAULTS,
@@ -293,7 +295,6 @@ def _scale_sample(graph, f: np.ndarray, alpha: float, eta_convex: float) -> tupl
     differences of evenly spread slices of the adjacencies: of the pairs, or, on a graph of
     points or vertices, of the CSR rows (their terms from the positions and normals: the
     pairs, which such a run never builds, are not made for it)."""
-    from ..elements.vertices import symmetric_terms
 
     geometric, jumps = [], []
     if graph.terms_of is symmetric_terms:  # points, vertices: span = geo
@@ -585,7 +586,6 @@ def weight_dtype(kind, paper: bool = False):
     >>> weight_dtype("faces").__name__, weight_dtype("vertices").__name__
     ('float32', 'float64')
     """
-    from ..elements.kinds import kind_of
 
     return np.float32 if kind_of(kind).single_weights and not paper else np.float64
 

@@ -10,7 +10,9 @@ import numpy as np
 
 from ..api.result import describe_stop
 from ..elements.kinds import kind_of
+from ..io.export import write_colored_elements, write_colored_mesh
 from ..io.files import Outputs
+from ..io.labels import write_labels, write_segindices
 
 __all__ = ["write_result", "result_header", "JoinedResult"]
 
@@ -131,8 +133,6 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
     ParameterError
         If a level is out of range (before anything is written).
     """
-    from ..io.export import write_colored_elements, write_colored_mesh
-    from ..io.labels import write_labels, write_segindices
 
     arrays = None
     if graph is not None:  # (PyTorch Geometric's layout, and the nodes' own arrays)

@@ -21,12 +21,16 @@ from typing import Sequence
 import numpy as np
 
 from .._runtime.extras import require
+from ..elements.builders import elements_of
 from ..elements.kinds import kind_of
 from ..elements.labels import check_labels
 from ..errors import NoDisplayError, ParameterError
 from ..inputs.convert import as_mesh
+from ..inputs.mesh import Mesh
 from ..io.colors import boundary_edges
-from ..method.params import check_number
+from ..io.export import point_colors, to_pyvista
+from ..io.files import save
+from ..method.params import check_choice, check_number
 from .camera import view_frame
 
 __all__ = ["render", "render_points", "render_panel", "show", "has_display", "NoDisplayError"]
@@ -48,7 +52,6 @@ def _pyvista(off_screen: bool):
 
 def _polydata(pv, mesh, labels):
     """The mesh as PolyData cells (triangles or polygons), one colour per cell."""
-    from ..io.export import to_pyvista
 
     return to_pyvista(mesh, labels)
 
@@ -109,7 +112,6 @@ def vertex_regions(mesh, labels) -> tuple:
     >>> regions.n_faces, lab.tolist(), round(float(regions.area), 6)
     (3, [7, 8, 9], 0.5)
     """
-    from ..inputs.mesh import Mesh
 
     labels = check_labels(labels, mesh.n_vertices, per="vertex")
     tri, _ = mesh.triangulated()
@@ -176,7 +178,6 @@ def _subplot_size(plotter) -> tuple[int, int]:
 def _save_png(image: np.ndarray, out, outputs=None) -> Path:
     Image = require("PIL.Image", "writing PNG pictures")
 
-    from ..io.files import save
 
     buf = io.BytesIO()
     Image.fromarray(image).save(buf, format="PNG")
@@ -279,7 +280,6 @@ def render(mesh, labels=None, out=None, *, size=(1200, 900), view=None,
 
 def faces_to_draw(mesh, labels, elements: str):
     """The mesh and per-face labels a picture draws for labels of ``elements``."""
-    from ..method.params import check_choice
 
     check_choice("elements", elements, ("faces", "vertices"))
     if kind_of(elements).rows == "n_vertices" and labels is not None:  # one per vertex
@@ -434,8 +434,6 @@ def render_points(cloud, labels=None, out=None, *, size=(1200, 900), view=None,
     MissingExtraError
         Without the ``render`` extra.
     """
-    from ..elements.builders import elements_of
-    from ..io.export import point_colors
 
     source = elements_of(cloud, "points")
     g = source.graph

@@ -49,7 +49,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...method.params import DEFAULTS, check_choice, check_int, check_nonneg
+from ..._kernels import native
+from ...elements.builders import elements_of, is_cloud
+from ...elements.labels import relabel_dense
+from ...method.params import DEFAULTS, check_choice, check_int, check_nonneg, check_positive
 
 __all__ = ["cut_pursuit", "dimensionality_features"]
 
@@ -69,7 +72,6 @@ def dimensionality_features(graph, up: int = 2) -> np.ndarray:
     (n, 4) float64 ndarray
         Each in ``[0, 1]`` (an element with a degenerate neighbourhood: zeros).
     """
-    from ..._kernels import native
 
     n = graph.n_elements
     cov = np.empty((n, 3, 3))
@@ -143,9 +145,6 @@ def cut_pursuit(obj, n_segments: int | None = None, *, reg_strength: float = 0.1
     >>> labels = cut_pursuit(xyz, 20)           # doctest: +SKIP
     """
     from ..._runtime.extras import require
-    from ...elements.builders import elements_of, is_cloud
-    from ...elements.labels import relabel_dense
-    from ...method.params import check_positive
 
     cp = require("cut_pursuit_py", "the cut pursuit baseline")
     if elements is None:

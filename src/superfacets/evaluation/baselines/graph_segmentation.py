@@ -31,7 +31,11 @@ import math
 
 import numpy as np
 
-from ...method.params import DEFAULTS, check_int, check_positive
+from ..._kernels import native
+from ...elements.builders import elements_of, is_cloud
+from ...elements.labels import relabel_dense
+from ...method.params import DEFAULTS, ELEMENTS, check_choice, check_int, check_positive
+from ._count import count_missed
 
 __all__ = ["graph_segmentation", "segmentator_weights"]
 
@@ -104,11 +108,6 @@ def graph_segmentation(obj, k_thresh: float = 0.01, min_size: int = 20, *,
     >>> int(graph_segmentation(box).max()) + 1   # segments under 20 vertices merged
     1
     """
-    from ..._kernels import native
-    from ...elements.builders import elements_of, is_cloud
-    from ...elements.labels import relabel_dense
-    from ...method.params import ELEMENTS, check_choice
-    from ._count import count_missed
 
     k_thresh = check_positive("k_thresh", k_thresh)
     min_size = check_int("min_size", min_size, lo=1, hi=2**62)  # (an int64 for the kernel)

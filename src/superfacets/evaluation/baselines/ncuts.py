@@ -56,6 +56,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...elements.faces import face_graph
+from ...elements.labels import relabel_dense
 from ...errors import MemoryLimitError, ParameterError
 from ...inputs.convert import as_mesh
 from ...method.params import check_n_segments, check_positive
@@ -370,7 +371,6 @@ def normalized_cuts(mesh, n_segments: int = 150, *, embedding: NcutEmbedding | N
     >>> labels.shape, int(labels.max()) + 1
     ((320,), 8)
     """
-    from ...elements.labels import relabel_dense
 
     mesh = as_mesh(mesh)
     k = check_n_segments(n_segments, mesh.n_faces)

@@ -66,6 +66,10 @@ from functools import partial
 
 import numpy as np
 
+from ...errors import MissingExtraError, ParameterError
+from ...inputs.cloud import as_cloud
+from ...method.params import check_int
+
 __all__ = ["SPTSettings", "PRESETS", "spt_problem", "spt_partition", "SPTProblem"]
 
 
@@ -250,8 +254,6 @@ def spt_problem(obj, settings: SPTSettings | str = "scannet") -> SPTProblem:
     from scipy.spatial import cKDTree
 
     from ..._runtime.extras import require
-    from ...errors import ParameterError
-    from ...inputs.cloud import as_cloud
 
     s = _settings(settings)
     pgeof = require("pgeof", "the Superpoint Transformer partition")
@@ -315,8 +317,6 @@ def spt_problem(obj, settings: SPTSettings | str = "scannet") -> SPTProblem:
 
 
 def _settings(settings) -> SPTSettings:
-    from ...errors import ParameterError
-
     if isinstance(settings, SPTSettings):
         return settings
     if settings not in PRESETS:
@@ -381,9 +381,6 @@ def spt_partition(obj, n_segments: int | None = None, *, preset: str = "scannet"
     >>> labels = spt_partition(xyz, 50)             # doctest: +SKIP
     """
     from ..._runtime.extras import require
-    from ...errors import MissingExtraError, ParameterError
-    from ...inputs.cloud import as_cloud
-    from ...method.params import check_int
 
     try:
         cp = require("pycut_pursuit.cp_d0_dist", "the Superpoint Transformer partition")

@@ -30,6 +30,8 @@ import importlib
 
 import numpy as np
 
+from ...elements.builders import elements_of
+from ...elements.labels import relabel_dense
 from ...errors import MissingExtraError
 from ...method.params import DEFAULTS, check_int, check_nonneg, check_positive
 
@@ -92,8 +94,6 @@ def vccs(obj, n_segments: int | None = None, *, seed_resolution: float = 0.1,
     """
     from scipy.spatial import cKDTree
 
-    from ...elements.builders import elements_of
-    from ...elements.labels import relabel_dense
 
     mod = _module()
     spatial_importance = check_nonneg("spatial_importance", spatial_importance)

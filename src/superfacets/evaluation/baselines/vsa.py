@@ -35,6 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..._kernels import native
 from ...elements.faces import face_graph
 from ...errors import ParameterError
 from ...inputs.convert import as_mesh
@@ -116,7 +117,6 @@ class _State:
 
     def step(self) -> bool:
         """Flood, fit, reseed; return True when the partition did not change."""
-        from ..._kernels import native
 
         old = self.label.copy()
         n = self.n
@@ -136,7 +136,6 @@ class _State:
         (integrated over its triangles), turned like the mean normal. ``X`` = the area
         centroid in both cases. A region of zero area (or zero mean normal) keeps its
         previous proxy."""
-        from ..._kernels import native
 
         n = self.n
         area, nsum, csum = np.empty(n), np.empty((n, 3)), np.empty((n, 3))
@@ -161,7 +160,6 @@ class _State:
 
     def insert(self) -> None:
         """Region insertion: a proxy on the worst non-seed face of the worst region."""
-        from ..._kernels import native
 
         n = self.n
         is_seed = np.zeros(self.m, dtype=np.bool_)
@@ -304,7 +302,6 @@ def variational_shape_approximation(mesh, n_segments: int = 150, *, metric: str 
         if st.step():
             converged = True
             break
-    from ..._kernels import native
 
     n = st.n
     distortion = native.kernel("baselines.vsa_assess")(st.label, n, *st._proxies(),

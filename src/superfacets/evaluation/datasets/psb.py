@@ -15,6 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ...io import read_labels, read_mesh
+
 __all__ = ["default_archive", "default_cache", "psb_root", "category", "CATEGORIES",
            "first_per_category",
            "BenchmarkMesh", "list_meshes"]
@@ -164,7 +166,6 @@ class BenchmarkMesh:
 
     def load(self):
         """Read the mesh (:func:`superfacets.read_mesh`)."""
-        from ...io import read_mesh
 
         return read_mesh(self.path)
 
@@ -176,7 +177,6 @@ class BenchmarkMesh:
         MeshFormatError
             Naming the file, if a ``.seg`` is malformed or has a wrong count.
         """
-        from ...io import read_labels
 
         return [read_labels(p, n_faces=n_faces) for p in self.seg_paths]
 

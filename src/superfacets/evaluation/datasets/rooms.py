@@ -34,6 +34,11 @@ from functools import lru_cache
 import numpy as np
 
 from ...checks import check_int
+from ...errors import ParameterError
+from ...inputs.cloud import PointCloud
+from ...io import read_mesh
+from .psb import default_archive
+from .scans import Scan, ScanSource
 
 __all__ = ["CLASSES", "make_room", "room_names", "load_room", "statues", "RoomEntry",
            "room_entries"]
@@ -261,8 +266,6 @@ def _furniture(room: _Room, walls, size, meshes, next_inst: int) -> int:
 
 def _finish(room: _Room, name: str, color_noise: float = _COLOR_NOISE):
     """Hidden points cut, one point per voxel, noise added: the scan."""
-    from ...inputs.cloud import PointCloud
-    from .scans import Scan, ScanSource
 
     rng = room.rng
     pts = np.concatenate(room.points)
@@ -356,8 +359,6 @@ def statues() -> tuple:
     >>> all(m.n_faces > 10_000 for m in statues())
     True
     """
-    from ...io import read_mesh
-    from .psb import default_archive
 
     folder = default_archive().parent / "meshes"
     return tuple(read_mesh(p) for p in sorted(folder.glob("*.tri.xz")))
@@ -377,7 +378,6 @@ def load_room(name: str, meshes=None) -> "Scan":  # noqa: F821
     >>> load_room("room-1").name
     'room-1'
     """
-    from ...errors import ParameterError
 
     head, _, seed = name.partition("-")
     if head != "room" or not seed.isdigit():
@@ -426,7 +426,6 @@ def room_entries(n: int) -> list[RoomEntry]:
     """
     from pathlib import Path
 
-    from ...errors import ParameterError
 
     if isinstance(n, int) and n < 1:
         raise ParameterError(f"--rooms must be at least 1, got {n}")

@@ -12,6 +12,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...elements.labels import check_labels
+from ...errors import InvalidMeshError
+from ...method.params import check_int
+
 __all__ = ["sample_points", "vertex_ground_truth", "DEFAULT_POINTS"]
 
 #: Points sampled per mesh by default (the benchmark meshes have 2,682 to 55,644 faces).
@@ -51,8 +55,6 @@ def sample_points(mesh, n_points: int = DEFAULT_POINTS, seed: int = 0
     >>> p.shape, bool(np.all(np.abs(p) <= 0.5 + 1e-12))
     ((100, 3), True)
     """
-    from ...errors import InvalidMeshError
-    from ...method.params import check_int
 
     n_points = check_int("n_points", n_points, lo=1)
     tri, owner = mesh.triangulated()
@@ -83,7 +85,6 @@ def vertex_ground_truth(mesh, face_labels) -> np.ndarray:
     (n_vertices,) int64 ndarray
         -1 for vertices used by no face.
     """
-    from ...elements.labels import check_labels
 
     labels = check_labels(face_labels, mesh.n_faces, "ground truth", per="face")
     corners = np.asarray(mesh.corners)

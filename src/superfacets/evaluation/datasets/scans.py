@@ -41,7 +41,9 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import MeshFormatError, ParameterError
+from ...io import read_cloud
 from ...io.files import sha256_of
+from ..metrics import evaluate_rows
 
 __all__ = ["Scan", "ScanSource", "SCANS", "UNLABELLED", "scan_cache", "scan_files",
            "fetch_scan", "load_scan", "missing_help", "evaluate_scan"]
@@ -339,7 +341,6 @@ def load_scan(name: str, cache=None, *, download: bool = False) -> Scan:
     MeshFormatError
         When the labels do not match the points, or a file is malformed.
     """
-    from ...io import read_cloud
 
     src = _source(name)
     paths = scan_files(name, cache)
@@ -443,7 +444,6 @@ def evaluate_scan(scan: Scan, labels, *, tau: float = 0.05, tolerance: int = 1,
         If ``labels`` does not have one integer per point, or ``against``
         names a ground truth the scan does not have.
     """
-    from ..metrics import evaluate_rows
 
     if against == "classes":
         truth = scan.ground_truth

@@ -17,7 +17,9 @@ import numpy as np
 
 from ..._runtime.extras import require
 from ...errors import MeshFormatError, ParameterError
+from ..methods import METHODS
 from ..metrics import METRICS
+from ..results import PARAMS_BEFORE, read_results, row_key
 
 __all__ = ["load_results", "category_means", "summary", "cost_table", "markdown_summary",
            "METRIC_LABELS"]
@@ -66,8 +68,6 @@ def load_results(path, series: Sequence[str] | None = None):
     """
     pd = require("pandas", "making result tables")
 
-    from ..methods import METHODS
-    from ..results import PARAMS_BEFORE, read_results, row_key
 
     paths = [path] if isinstance(path, (str, Path)) else list(path)
     last = {row_key(r): r for p in paths for r in read_results(p)}  # a retried row: the last

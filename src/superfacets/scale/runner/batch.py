@@ -31,10 +31,17 @@ from pathlib import Path
 from typing import Sequence
 
 from ..._runtime import interrupts
+from ...api.scenes import segment_objects
+from ...api.segmentation import segment
 from ...elements.builders import kind_for
 from ...elements.kinds import kind_of
 from ...errors import ParameterError
+from ...io import read_input
+from ...io.files import split_suffix
 from ...io.orientation import default_view, up_axis
+from ...io.records import RECORD_FORMATS
+from ...method.params import check_choice, check_int, check_nonneg, resolve
+from ...viz.outputs import JoinedResult, write_result
 from .collect import broken_link_reason, collect_inputs, no_inputs, output_names
 from .engine import Engine, PeakMemory, error_text
 from .manifest import (
@@ -56,8 +63,6 @@ _LABEL_SUFFIX = {"seg": ".seg", "json": ".json", "records": None}
 def _label_suffix(labels: str, source) -> str:
     """The suffix of an input's labels: ``.seg``, ``.json``, or for ``records`` its own
     format where labels go into it (``.las``, ``.laz``, ``.ply``), else ``.seg``."""
-    from ...io.files import split_suffix
-    from ...io.records import RECORD_FORMATS
 
     if labels != "records":
         return _LABEL_SUFFIX[labels]
@@ -113,11 +118,6 @@ def segment_file(task: dict) -> dict:
 
 
 def _segment_and_write(task: dict, label_rel: str) -> dict:
-    from ...api.scenes import segment_objects
-    from ...api.segmentation import segment
-    from ...io import read_input
-    from ...viz.outputs import JoinedResult, write_result
-
     outs = task["outputs"]
     opts = dict(task["options"])
     base = Path(task["outdir"]) / task["name"]
@@ -307,7 +307,6 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
     >>> s.ok, s.failed, s.manifest                          # doctest: +SKIP
     (12, 0, PosixPath('out/manifest.parquet'))
     """
-    from ...method.params import check_choice, check_int, check_nonneg, resolve
 
     outdir = Path(outdir)
     if outdir.exists() and not outdir.is_dir():

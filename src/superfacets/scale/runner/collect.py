@@ -16,13 +16,14 @@ from pathlib import Path
 from typing import Sequence
 
 from ...errors import ParameterError
+from ...io import CLOUD_FORMATS, MESH_FORMATS, VOLUME_FORMATS, is_cloud_file
+from ...io.files import COMPRESSIONS, split_suffix
 
 __all__ = ["collect_inputs", "output_names", "broken_link_reason", "no_inputs", "FileEntry",
            "file_entries"]
 
 
 def _readable_suffixes(explicit: bool) -> set[str]:
-    from ...io import CLOUD_FORMATS, MESH_FORMATS, VOLUME_FORMATS
 
     # in folders, .txt is too often something else (a README) to be read as a cloud
     return (set(MESH_FORMATS) | set(VOLUME_FORMATS) |
@@ -30,8 +31,6 @@ def _readable_suffixes(explicit: bool) -> set[str]:
 
 
 def _is_input(path: Path, explicit: bool) -> bool:
-    from ...io.files import split_suffix
-
     fmt, _ = split_suffix(path)
     return fmt in _readable_suffixes(explicit)
 
@@ -50,7 +49,6 @@ def no_inputs(inputs, outdir: Path) -> ParameterError:
 
 def _why_not(name: str) -> str:
     """Why a file found in a folder is not an input, in one phrase."""
-    from ...io.files import split_suffix
 
     fmt, _ = split_suffix(Path(name))
     if fmt == "txt":
@@ -216,7 +214,6 @@ def broken_link_reason(path) -> str | None:
 
 def _stem(path: Path) -> str:
     """The file name without its format and compression suffixes (``bunny.tri.xz`` -> bunny)."""
-    from ...io.files import COMPRESSIONS
 
     name = path.name
     low = name.lower()
@@ -334,8 +331,6 @@ def file_entries(specs, field: str | None = None) -> list[FileEntry]:
     [('cloud', 'scan.npy')]
     """
     from ...errors import ParameterError
-    from ...io import VOLUME_FORMATS, is_cloud_file
-    from ...io.files import split_suffix
     out = []
     for i, p in enumerate(collect_inputs([str(s) for s in specs])):
         if split_suffix(p)[0] in VOLUME_FORMATS:

@@ -31,6 +31,9 @@ import uuid
 from pathlib import Path
 from typing import Callable, Iterable, Iterator
 
+from ...checks import max_threads
+from ...errors import ParameterError
+
 __all__ = ["Engine", "PeakMemory", "default_workers", "error_text", "LOST_WORKER"]
 
 #: The error text of a task whose worker died each time it ran it.
@@ -200,8 +203,6 @@ class Engine:
                  exact_memory: bool = False) -> None:
         import numbers
 
-        from ...checks import max_threads
-        from ...errors import ParameterError
 
         if workers is not None and (isinstance(workers, bool) or not isinstance(
                 workers, numbers.Integral) or not 1 <= workers <= max_threads()):

@@ -24,12 +24,20 @@ from typing import Sequence
 
 import numpy as np
 
+from ...elements.builders import elements_of
 from ...elements.kinds import kind_of
 from ...errors import ParameterError
 from ...evaluation.baselines._count import COUNT_MISSED
+from ...evaluation.datasets.psb import BenchmarkMesh
+from ...evaluation.datasets.rooms import load_room
+from ...evaluation.datasets.sampling import sample_points, vertex_ground_truth
 from ...evaluation.methods import Skipped, get_method
+from ...evaluation.metrics import evaluate, oracle_miou
 from ...evaluation.results import columns, fmt_value, prepare_file, row_key
-from ...method.params import DEFAULT_N_SEGMENTS
+from ...inputs.cloud import PointCloud
+from ...io import read_input
+from ...io.labels import read_field
+from ...method.params import DEFAULT_N_SEGMENTS, ELEMENTS, check_choice, check_int, max_threads
 from .engine import Engine, PeakMemory, error_text
 from .grid import Config
 
@@ -38,8 +46,6 @@ __all__ = ["run_experiment", "ExperimentSummary", "PeakMemory"]
 
 @lru_cache(maxsize=2)
 def _load(path: str, seg_paths: tuple):
-    from ...evaluation.datasets.psb import BenchmarkMesh
-
     bm = BenchmarkMesh(0, "", Path(path), tuple(Path(p) for p in seg_paths))
     mesh = bm.load()
     return mesh, bm.ground_truths(mesh.n_faces)
@@ -53,9 +59,6 @@ def _prepared(path: str, seg_paths: tuple, elements: str, n_points: int, seed: i
     area-weighted majority of the incident faces. Points: ``n_points`` sampled
     uniformly by area (fixed seed), each with its face's ground truth.
     """
-    from ...elements.builders import elements_of
-    from ...evaluation.datasets.sampling import sample_points, vertex_ground_truth
-    from ...inputs.cloud import PointCloud
 
     mesh, gts = _load(path, seg_paths)
     if elements == "faces":
@@ -78,8 +81,6 @@ def _prepared(path: str, seg_paths: tuple, elements: str, n_points: int, seed: i
 def _room(name: str):
     """A made-up room (:mod:`superfacets.evaluation.datasets.rooms`) as :func:`_prepared`
     gives an input: its cloud, point graph, per-element values and its classes."""
-    from ...elements.builders import elements_of
-    from ...evaluation.datasets.rooms import load_room
 
     scan = load_room(name)
     source = elements_of(scan.cloud, "points")
@@ -92,9 +93,6 @@ def _file(path: str, field: str | None, elements: str):
     """A user's file (:func:`superfacets.scale.runner.collect.file_entries`) as :func:`_prepared`
     gives an input: the mesh or cloud, its element graph, per-element values and its
     ground truth (the file's ``field``; none without)."""
-    from ...elements.builders import elements_of
-    from ...io import read_input
-    from ...io.labels import read_field
 
     if field is not None and elements == "faces":
         raise ParameterError(f"{Path(path).name}: a field ({field}) holds one value per "
@@ -114,7 +112,6 @@ def _element_values(source):
 
 def _run_task(task: dict) -> list[dict]:
     """Run one config over a list of n_segments on one mesh; one row each."""
-    from ...evaluation.metrics import evaluate, oracle_miou
 
     base = dict(task["base"])
     run = task["run"]
@@ -304,7 +301,6 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
         raise ParameterError(f"n_segments must be positive integers, got {list(n_segments)}")
     if not (0 <= tau < 1):
         raise ParameterError(f"tau must be in [0, 1), got {tau}")
-    from ...method.params import check_int, max_threads
 
     workers = None if workers is None else check_int("workers", workers, lo=1,
                                                      hi=max_threads())
@@ -316,7 +312,6 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
     cols, old = prepare_file(path, columns(configs))
     done = {row_key(r) for r in old if not (retry_failed and r.get("status") == "failed")}
 
-    from ...method.params import ELEMENTS, check_choice
 
     kinds = [check_choice("elements", e, ELEMENTS) for e in elements]
     if not kinds:

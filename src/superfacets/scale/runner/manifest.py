@@ -17,7 +17,9 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from ..._version import __version__
 from ...errors import ParameterError
+from ...io.files import atomic_write
 
 __all__ = ["MANIFEST_COLUMNS", "JOURNAL", "OPTIONS", "read_manifest", "write_manifest",
            "check_options", "record_options", "FolderLock"]
@@ -110,7 +112,6 @@ def read_manifest(outdir) -> list[dict]:
 
 def write_manifest(outdir: Path, rows: list[dict]) -> Path:
     """Write the manifest atomically: Parquet where pyarrow is, else CSV."""
-    from ...io.files import atomic_write
 
     rows = [_typed(r) for r in rows]
     if _has_pyarrow():
@@ -178,9 +179,6 @@ def _flat(d, prefix: str = "") -> dict:
 
 
 def record_options(outdir: Path, options: dict) -> None:
-    from ..._version import __version__
-    from ...io.files import atomic_write
-
     atomic_write(outdir / OPTIONS, json.dumps({"superfacets": __version__, "options": options},
                                                indent=1, sort_keys=True).encode() + b"\n")
 

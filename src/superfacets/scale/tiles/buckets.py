@@ -18,6 +18,7 @@ import numpy as np
 
 from ...elements.kinds import KINDS
 from ...inputs.bounds import column_bounds, rows_in_box
+from ...inputs.mesh import Mesh
 from ...io.files import array_digest, load_checked
 from ...io.regions import point_cloud_of
 
@@ -201,7 +202,6 @@ class TileBuckets:
 
     def _of_records(self, rec: np.ndarray, name: str):
         """The rows, positions and input of a box's records."""
-        from ...inputs.mesh import Mesh
 
         rows = np.ascontiguousarray(rec["row"])
         where = np.ascontiguousarray(rec["pos"])

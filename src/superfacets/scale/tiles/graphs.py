@@ -18,6 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ...elements.builders import prepared
+from ...elements.graph import cached_on
+from ...elements.kinds import kind_of
 from ...io.files import array_digest, load_checked
 
 __all__ = ["GRAPH_FILES", "BYTES_PER_POINT", "graph_folder", "drop_graphs", "tile_graph",
@@ -34,7 +37,6 @@ def graph_folder(work, n_points: int, kind: str, shared: bool, params) -> Path |
     where they are not kept: elements other than points, tasks that share no folder,
     a ``neighbor_radius`` (sized per tile), or too little room on the disk
     (:func:`room_for_graphs`)."""
-    from ...elements.kinds import kind_of
 
     if not kind_of(kind).cloud or not shared or params.neighbor_radius is not None \
             or not room_for_graphs(work, n_points):
@@ -96,8 +98,6 @@ def tile_graph(cloud, folder, n_neighbors: int) -> str:
     ...     print(first, tile_graph(again, Path(tmp) / "tile0", 10), tile_graph(again, "", 10))
     built read kept
     """
-    from ...elements.builders import prepared
-    from ...elements.graph import cached_on
     from ...elements.points import point_elements, point_graph
 
     folder = Path(folder)

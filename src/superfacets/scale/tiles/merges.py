@@ -36,6 +36,13 @@ from dataclasses import replace
 import numpy as np
 
 from ..._runtime.arrays import ranked, real_rows, row_table
+from ...elements.kinds import kind_of
+from ...elements.labels import check_labels
+from ...errors import ParameterError
+from ...graph.adjacency import crossing_adjacencies
+from ...graph.sums import PAIR_FIELDS, grouped_planes, pair_sums, point_sums
+from ...method.merges import FLAT_NOISE, merge_nodes, neighbourhood_noise
+from ...method.rules import merge_from_of
 
 __all__ = ["tile_merge_stats", "merge_names", "one_position_stats", "tiled_merge_from",
            "merged_labels"]
@@ -98,10 +105,6 @@ def tile_merge_stats(graph, labels: np.ndarray, names: np.ndarray, core: np.ndar
     >>> s["names"].tolist(), s["count"].tolist(), s["edges"].tolist()
     ([7, 9], [50.0, 50.0], [[7, 9]])
     """
-    from ...elements.labels import check_labels
-    from ...graph.adjacency import crossing_adjacencies
-    from ...graph.sums import pair_sums, point_sums
-    from ...method.merges import neighbourhood_noise
 
     lab = np.ascontiguousarray(check_labels(labels, graph.n_elements, per=graph.element),
                                dtype=np.int64)
@@ -145,7 +148,6 @@ def _outer_sums(stats: list[dict], labels: np.ndarray | None) -> dict:
     ok = (pair[:, 0] != pair[:, 1]) & (pair >= 0).all(axis=1)
     part = {f: np.concatenate([s[f"outer_{f}"] for s in stats])[ok]
             for f in ("length", "angle", "concave")}
-    from ...graph.sums import pair_sums
 
     return pair_sums(pair[ok, 0], pair[ok, 1], part["length"], part["angle"],
                      part["concave"])
@@ -183,9 +185,6 @@ def tiled_merge_from(params, kind: str) -> int:
     ParameterError
         For ``merge_from`` above 1 on faces.
     """
-    from ...elements.kinds import kind_of
-    from ...errors import ParameterError
-    from ...method.rules import merge_from_of
 
     if not kind_of(kind).cloud:
         if params.merge_from not in (None, 1):
@@ -272,8 +271,6 @@ def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float,
     >>> merged.tolist(), fewest                                       # one per plane
     ([3, 3, 8, 8], 2)
     """
-    from ...graph.sums import PAIR_FIELDS, grouped_planes
-    from ...method.merges import FLAT_NOISE, merge_nodes
 
     names = np.unique(np.concatenate([s["names"] for s in stats]))
     k = names.size

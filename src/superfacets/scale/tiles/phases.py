@@ -45,16 +45,24 @@ from dataclasses import replace
 
 import numpy as np
 
-from ...elements.builders import elements_of
+from ...elements.builders import ElementInput, elements_of, prepared
 from ...elements.kinds import kind_of
+from ...elements.neighbors import nearest, point_tree
+from ...elements.points import distinct_points
 from ...errors import ParameterError
+from ...inputs.bounds import column_bounds
+from ...inputs.cloud import PointCloud
 from ...method.classify import make_classifier
+from ...method.connectivity import label_components
 from ...method.expansion import Workspaces
 from ...method.finish import clean_up, finish
+from ...method.initialization import farthest_point_centers
 from ...method.params import DEFAULTS, SegmentParams, superfacet_measure
 from ...method.passes import final_centers
 from ...method.pipeline import pipeline
 from ...method.stages import build_graph, resolve_features, resolve_rules, weigh
+from .layout import gathered_centers
+from .merges import tile_merge_stats
 
 __all__ = ["tile_centers", "sample_start", "tile_refine", "tile_labels",
            "tile_connect", "orientation_reference", "HALO",
@@ -71,8 +79,6 @@ def point_areas(points: np.ndarray, core: np.ndarray, n_neighbors: int) -> float
     """Summed area of the ``core`` points of a tile, as the point graph sizes them
     (``pi rho^2 / K``, ``rho`` the distance to the ``K``-th distinct neighbour among
     ``points``); duplicate points count once."""
-    from ...elements.neighbors import nearest, point_tree
-    from ...elements.points import distinct_points
 
     pts, inverse = distinct_points(points)  # duplicates share a position, so a core
     is_core = np.zeros(pts.shape[0], dtype=bool)
@@ -87,8 +93,6 @@ def point_areas(points: np.ndarray, core: np.ndarray, n_neighbors: int) -> float
 
 
 def _valid_rows(inp) -> np.ndarray:
-    from ...inputs.cloud import PointCloud
-
     if isinstance(inp, PointCloud):
         return np.asarray(inp.valid)
     return np.ones(inp.n_faces, dtype=bool)
@@ -96,8 +100,6 @@ def _valid_rows(inp) -> np.ndarray:
 
 def _diagonal(inp) -> float:
     """The bounding-box diagonal of a tile's elements, as its element graph has it."""
-    from ...inputs.bounds import column_bounds
-    from ...inputs.cloud import PointCloud
 
     if isinstance(inp, PointCloud):
         from ...elements.points import kept_diagonal
@@ -246,8 +248,6 @@ def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: Segm
     >>> len(rows), bool((np.diff(rows) > 0).all())
     (10, True)
     """
-    from ...inputs.cloud import PointCloud
-    from .layout import gathered_centers
 
     sample = np.asarray(sample, dtype=np.float64)
     if sample.shape[0] < min(START_POINTS_PER_CENTER * (params.n_segments or 0), n_rows):
@@ -336,7 +336,6 @@ def sample_cloud(sample: np.ndarray, n_neighbors: int, up=None):
     """The sample :func:`oriented_sample` orients, as a cloud with its point graph
     (built), or None when it has fewer than 3 distinct points."""
     from ...elements.points import point_graph
-    from ...inputs.cloud import PointCloud
 
     pts = np.asarray(sample, dtype=np.float64)
     if not _three_distinct(pts):
@@ -362,7 +361,6 @@ def core_area(cloud, core: np.ndarray, n_neighbors: int) -> float:
     on the point graph the tile builds (:func:`point_areas` reads the same sizes on a
     tree of its own; the graph built here is kept with the cloud for the tile's phases).
     """
-    from ...elements.builders import prepared
     from ...elements.points import point_graph
 
     el = point_graph(prepared(cloud, "points")[1], n_neighbors)  # (where tile_graph keeps it)
@@ -381,7 +379,6 @@ def _core_share(inp, core: np.ndarray, p: SegmentParams, r: float) -> int:
     benchmark meshes). Sampling is incremental, so the tile takes the
     shortest run of samples whose centers in the core number the core's share.
     """
-    from ...method.initialization import farthest_point_centers
 
     src = elements_of(inp, p.elements, n_neighbors=p.n_neighbors,
                       neighbor_radius=p.neighbor_radius)
@@ -467,7 +464,6 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
     named = np.where(out >= 0, name[np.maximum(out, 0)], -1).astype(np.int64)
     if merging is None:
         return named
-    from .merges import tile_merge_stats
 
     core, rows, n_noise = (np.asarray(x) for x in merging)
     first = src.first_rows(np.arange(m))  # each element's first row
@@ -506,9 +502,7 @@ def tile_connect(inp, labels: np.ndarray, owned: np.ndarray, owned_rows: np.ndar
         The labels with the stray pieces of owned superfacets renamed; None
         when there is none (the usual case).
     """
-    from ...elements.builders import ElementInput, prepared
     from ...elements.points import point_graph
-    from ...method.connectivity import label_components
 
     kind, data = prepared(inp, params.elements)
     if kind_of(kind).cloud:  # the adjacency alone: the normals' signs are not read

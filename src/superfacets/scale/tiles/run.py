@@ -52,13 +52,15 @@ from ...checks import max_threads
 from ...elements.kinds import kind_of
 from ...errors import ParameterError, SuperfacetsError
 from ...inputs.bounds import check_extent, rows_in_box
+from ...io.regions import STREAMED, RegionReader
 from ...method.merges import NOISE_SAMPLE
 from ...method.params import DEFAULTS, resolve, superfacet_size
 from ...method.rules import fine_count
 from ..runner.engine import Engine
 from .graphs import drop_graphs, graph_folder
-from .layout import any_in_box, gathered_centers, in_box
+from .layout import any_in_box, check_tiles, gathered_centers, in_box
 from .merges import merged_labels, tiled_merge_from
+from .phases import HALO, check_tileable, halo_distance, point_areas, sample_cloud
 from .task import tile_task
 from .workdir import run_folder
 
@@ -345,7 +347,6 @@ def _orientation(reader, survey, n_neighbors: int, up, folder):
     sample as a cloud with that graph (else None: :func:`~superfacets.scale.tiles.phases.
     sample_start` reads it)."""
     from ...elements.points import point_graph
-    from .phases import sample_cloud
 
     if not kind_of(reader.kind).cloud or survey.normals or reader.viewpoint is not None:
         return None, None, None
@@ -377,7 +378,6 @@ def _sized(run, layout, kind: str, params, survey, diagonal: float, halo: float,
     read the same boxes, so the graphs are built once (and a run that keeps none labels
     alike). If the halo the exact radius asks for is wider, the graphs are dropped, and
     the phases read that halo and build them."""
-    from .phases import halo_distance, point_areas
 
     graphs, sample_area = kept
     n, window = survey.n_elements, params.window
@@ -419,8 +419,6 @@ def _stitched(done: list, n_rows: int):
 def _checked_options(n_segments, options, tiles, halo, refine, workers):
     """The run's parameters and halo, every option checked before any pass over the
     input."""
-    from .layout import check_tiles
-    from .phases import HALO, check_tileable, halo_distance
 
     if "features" in options:
         raise ParameterError("a tiled run reads colours from the file; features= is not taken")
@@ -442,9 +440,6 @@ def _checked_options(n_segments, options, tiles, halo, refine, workers):
 def _surveyed(source, tmp, tiles, params):
     """The input's reader (streamed from its file, or spilled to the work folder) and its
     survey (bounds, counts, a sample), checked against the tiles and the parameters."""
-    from ...io.regions import STREAMED, RegionReader
-    from .layout import check_tiles
-    from .phases import check_tileable
 
     if isinstance(source, RegionReader):  # opened by the caller (its viewpoint, up)
         reader = source

@@ -15,8 +15,10 @@ import numpy as np
 
 from ...inputs.bounds import column_bounds
 from ..runner.engine import PeakMemory, error_text
+from .buckets import TileBuckets
 from .graphs import tile_graph
 from .layout import in_box
+from .phases import tile_labels
 
 __all__ = ["tile_task"]
 
@@ -119,7 +121,6 @@ def _labelled(task: dict, out: dict, box: tuple, centers: np.ndarray) -> None:
     """The labels phase of one tile (``box``: its rows, positions, input and core) from
     the ``centers`` (rows of the box) within reach: its core's and its ring's labels in
     ``out``, each named by its center's row in the input, and the merges' sums."""
-    from .phases import tile_labels
 
     rows, pos, inp, core = box
     p, r, d = task["params"], task["r"], task["diagonal"]
@@ -158,7 +159,6 @@ def _box(task: dict, lo, hi):
     """A task's box: its rows, positions and input; the first phase of a tile that keeps
     its graph keeps the box's records beside it for the later phases (one file, not the
     tiles the box overlaps)."""
-    from .buckets import TileBuckets
 
     reader, name = task["reader"], f"tile {task['tile']}"
     if task.get("graphs") and isinstance(reader, TileBuckets):
