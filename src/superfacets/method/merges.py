@@ -29,10 +29,8 @@ resolve_rules`), then :func:`merge_to_count` merges adjacent superpoints in two 
 So the count a room spends on its walls goes to the objects on them, and an object
 of no flat face gets the method's compact superpoints, merged from finer ones along
 its creases. Not in the paper: graph partitions of scans (the ScanNet Segmentator,
-cut pursuit) leave flat regions whole the same way. Measured in
-``docs/notes/superpoints-defaults.md``: on two ScanNet rooms the undersegmentation
-error fell by 14-22 % at k = 300-3,000 (0.442 to 0.345 at 1,000 on room 0000_00), on
-the 300 benchmark meshes sampled to clouds by 7.2 % at k = 150 and 5.4 % at k = 300.
+cut pursuit) leave flat regions whole the same way. What they gain and lose, measured:
+``docs/notes/superpoints-defaults.md``.
 """
 
 from __future__ import annotations
@@ -50,25 +48,15 @@ __all__ = ["merge_to_count", "merge_nodes", "flat_merges", "flat_share", "flat_m
            "FLAT_NOISE", "FLAT_SHARE", "SCAN_FLAT_SHARE", "NOISE_SAMPLE"]
 
 #: A flat merge's largest rise of the squared plane distances, per element of the
-#: smaller superpoint, in units of :func:`noise_variance`. Chosen among 1, 2 and 3 on
-#: the 300 benchmark clouds (k = 50, 150, 300) and the labelled rooms and airborne tile
-#: (``docs/notes/superpoints-defaults.md``): the clean clouds do not depend on it (their
-#: noise is about 0); 1 lets the rooms keep more of their walls (UE +9 % at k = 1,000),
-#: 3 the airborne tile merge across its classes at k = 300 (UE +15 %).
+#: smaller superpoint, in units of :func:`noise_variance` (chosen among 1, 2 and 3:
+#: ``docs/notes/superpoints-defaults.md``).
 FLAT_NOISE = 2.0
 #: The share of the elements in flat regions (superpoints the flat merges grew from two
-#: or more) from which phase 2 merges by the plane's rise, not by Ward's cost. Measured
-#: (``docs/notes/superpoints-defaults.md``): labelled scans 0.42-0.98 (an airborne
-#: tile 0.70-0.96, ScanNet rooms 0.42-0.62, made-up rooms 0.92-0.98); the benchmark's
-#: sampled meshes 0 on most, up to 0.45 on tables and 0.82 on machine parts. "Most of
-#: the surface" (0.5) left the benchmark's mean error within 0.5 % at k = 50-300; 0.25
-#: let tables and chairs merge across their parts (+1 % at k = 300).
+#: or more) from which phase 2 merges by the plane's rise, not by Ward's cost (the
+#: measurements behind it: ``docs/notes/superpoints-defaults.md``).
 FLAT_SHARE = 0.5
 #: :data:`FLAT_SHARE` on a scan (its noise read above zero: the flat regions are what
-#: the scanner saw flat, its floors, walls and ground): a forest tile's ground is under
-#: half its points (a made-up one: UE 0.05 -> 0.006 at k = 300), a ScanNet room's flat
-#: regions 0.42 at k = 300 (UE 0.603 -> 0.496). On a clean sampled model (noise 0) a
-#: quarter let tables and chairs merge across their parts.
+#: the scanner saw flat, its floors, walls and ground; same note).
 SCAN_FLAT_SHARE = 0.25
 #: The most elements :func:`noise_variance` reads (evenly spaced in the input's order).
 NOISE_SAMPLE = 8_192
