@@ -22,6 +22,7 @@ import sys
 import tempfile
 
 import numpy as np
+from doctest_namespace import shared
 from hostile_calls import forked
 
 NUMBERS = {"-1": -1, "2**62": 2**62, "nan": float("nan")}
@@ -65,7 +66,7 @@ def recorded_calls(functions: dict) -> dict:
     os.chdir(tempfile.mkdtemp())
     for name, fn in functions.values():
         mod = sys.modules[fn.__module__]
-        for test in finder.find(fn, name, module=mod, globs=dict(mod.__dict__)):
+        for test in finder.find(fn, name, module=mod, globs={**shared(), **vars(mod)}):
             sys.setprofile(profile)
             try:
                 runner.run(test, out=lambda s: None)

@@ -9,6 +9,7 @@ import inspect
 import pkgutil
 
 import pytest
+from doctest_namespace import shared
 
 import superfacets
 
@@ -51,12 +52,14 @@ MODULES = sorted(m.name for m in pkgutil.walk_packages(superfacets.__path__, "su
 
 @pytest.mark.parametrize("module", MODULES)
 def test_the_examples_run(module, tmp_path, monkeypatch):
-    """The Examples of the public modules run as doctests (in a scratch folder)."""
+    """The Examples of the public modules run as doctests (in a scratch folder), in the
+    shared namespace (:mod:`doctest_namespace`: ``np``, ``trimesh``, ``segment``, ...)."""
     monkeypatch.chdir(tmp_path)
     mod = importlib.import_module(module)
     finder = doctest.DocTestFinder(exclude_empty=True)
     runner = _Runner(optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
-    for test in finder.find(mod, module, extraglobs={"np": __import__("numpy")}):
+    globs = {**shared(), **vars(mod)}  # (the shared names, the module's own first)
+    for test in finder.find(mod, module, globs=globs):
         runner.run(test)
     result = runner.summarize(verbose=False)
     if result.failed and result.failed == len(runner.missing):  # an extra not installed

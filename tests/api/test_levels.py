@@ -199,15 +199,6 @@ def test_batch_writes_content_adaptive_superpoints(tmp_path, capsys):
     assert not (tmp_path / "o2").exists()
 
 
-@pytest.mark.parametrize("module", ["superfacets.graph.hierarchy", "superfacets.api.levels"])
-def test_the_examples_in_the_docstrings_run(module):
-    import doctest
-    import importlib
-
-    result = doctest.testmod(importlib.import_module(module), optionflags=doctest.ELLIPSIS)
-    assert result.attempted > 0 and result.failed == 0
-
-
 def test_the_old_names_are_gone():
     """``compactness=``, ``level_compactness``, ``--level-compactness`` and
     ``result.radius`` (renamed before any release) are not kept."""

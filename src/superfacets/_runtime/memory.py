@@ -302,7 +302,6 @@ def discard_pages(a) -> None:
 
     Examples
     --------
-    >>> import numpy as np
     >>> a = np.ones(1 << 20)
     >>> discard_pages(a[1 << 19:])   # (whole pages only: the first and last may stay)
     >>> float(a[:1 << 19].min()), float(a[3 << 18])   # past the cut: zeros

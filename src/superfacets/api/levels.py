@@ -75,7 +75,6 @@ def adaptive_superpoints(obj, n_segments: int, *, start: int = START,
 
     Examples
     --------
-    >>> import trimesh
     >>> mesh = trimesh.creation.box().subdivide().subdivide()
     >>> labels = adaptive_superpoints(mesh, 6, start=4)
     >>> int(labels.max()) + 1
@@ -121,7 +120,6 @@ def adaptive_segment(obj, n_segments: int, *, start: int = START,
 
     Examples
     --------
-    >>> import trimesh
     >>> mesh = trimesh.creation.box().subdivide().subdivide()
     >>> r = adaptive_segment(mesh, 6, start=4)
     >>> r.n_segments, r.params["start"]

@@ -62,8 +62,6 @@ class SegmentationResult:
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets import segment
     >>> r = segment(trimesh.creation.icosphere(subdivisions=3), 20)
     >>> r.n_segments, r.labels.shape, r.params["elements"], r.mesh_radius > 0
     (20, (1280,), 'faces', True)
@@ -97,8 +95,6 @@ class SegmentationResult:
 
         Examples
         --------
-        >>> import trimesh
-        >>> from superfacets import segment
         >>> segment(trimesh.creation.icosphere(subdivisions=3), 12).stop_reason
         'tolerance'
         """
@@ -130,8 +126,6 @@ class SegmentationResult:
 
         Examples
         --------
-        >>> import trimesh
-        >>> from superfacets import segment
         >>> r = segment(trimesh.creation.icosphere(subdivisions=3), 12)
         >>> g = r.graph()
         >>> g.n_segments, g.edge_index.shape[0], bool((g.border_length > 0).all())
@@ -180,8 +174,6 @@ class SegmentationResult:
 
         Examples
         --------
-        >>> import trimesh
-        >>> from superfacets import segment
         >>> r = segment(trimesh.creation.icosphere(subdivisions=4), 40)
         >>> h = r.hierarchy([10, 3])
         >>> [int(h.labels(i, r.labels).max()) + 1 for i in range(2)]
@@ -228,8 +220,6 @@ class SegmentationResult:
 
         Examples
         --------
-        >>> import numpy as np
-        >>> from superfacets import segment
         >>> xyz = np.random.default_rng(0).random((3000, 3)) * (10, 10, 0.01)
         >>> a = segment(xyz, 20).learning_graph()
         >>> names = list(a["node_features"])
@@ -307,8 +297,6 @@ def stop_reason(result) -> str:
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets import segment
     >>> stop_reason(segment(trimesh.creation.icosphere(subdivisions=3), 12, paper=True))
     'converged'
     """
@@ -343,8 +331,6 @@ def describe_stop(result) -> str:
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets import segment
     >>> describe_stop(segment(trimesh.creation.icosphere(subdivisions=3), 12, max_iter=1,
     ...                       paper=True))
     'stopped at max-iter'
@@ -417,7 +403,6 @@ class TiledResult:
 
     Examples
     --------
-    >>> import trimesh
     >>> m = trimesh.creation.icosphere(subdivisions=4)
     >>> from superfacets import segment_tiled
     >>> r = segment_tiled((m.vertices, m.faces), 40, tiles=2, workers=1)

@@ -56,7 +56,6 @@ def segment_objects(mesh, n_segments: int = _D.n_segments, **options
 
     Examples
     --------
-    >>> import trimesh
     >>> scene = trimesh.Scene([trimesh.creation.icosphere(), trimesh.creation.box()])
     >>> labels, parts = segment_objects(scene, 20)
     >>> [r.n_segments for r in parts], int(labels.max()) + 1

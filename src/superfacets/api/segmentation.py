@@ -253,7 +253,6 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, features=None,
 
     Examples
     --------
-    >>> import trimesh
     >>> from superfacets import superfacets
     >>> mesh = trimesh.creation.icosphere(subdivisions=3)
     >>> labels = superfacets(mesh, n_segments=20)
@@ -312,8 +311,6 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, features=None,
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets import segment
     >>> r = segment(trimesh.creation.icosphere(subdivisions=3), n_segments=20)
     >>> r.n_segments, r.labels.dtype
     (20, dtype('int64'))

@@ -67,7 +67,6 @@ def default_count(data, elements: str | None = None, default: int = 150) -> int:
 
     Examples
     --------
-    >>> from superfacets import PointCloud
     >>> rng = np.random.default_rng(0)
     >>> default_count(PointCloud(rng.random((3_000_000, 3))))
     3000
@@ -113,7 +112,6 @@ def count_for_resolution(data, resolution: float, elements: str | None = None,
 
     Examples
     --------
-    >>> from superfacets import PointCloud
     >>> xy = np.random.default_rng(0).random((10000, 2)) * 10  # 10 m by 10 m
     >>> k, area = count_for_resolution(PointCloud(np.c_[xy, np.zeros(len(xy))]), 0.5)
     >>> 300 < k < 500, 90 < area < 110
@@ -163,7 +161,6 @@ def diagonal_fraction(data, distance: float, what: str = "distance") -> float:
 
     Examples
     --------
-    >>> from superfacets import PointCloud
     >>> cloud = PointCloud(np.array([[0.0, 0, 0], [3, 4, 0], [1, 1, 0]]))
     >>> diagonal_fraction(cloud, 0.5)
     0.1

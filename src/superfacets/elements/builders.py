@@ -293,7 +293,6 @@ def kind_for(obj, elements: str | None = None) -> str:
 
     Examples
     --------
-    >>> import trimesh
     >>> kind_for(trimesh.creation.box()), kind_for(np.zeros((5, 3)))
     ('faces', 'points')
     """
@@ -346,7 +345,6 @@ def elements_of(obj, elements: str | None = None, *, n_neighbors: int = _N_NEIGH
 
     Examples
     --------
-    >>> import trimesh
     >>> src = elements_of(trimesh.creation.box(), "vertices")
     >>> src.graph.kind, src.graph.n_elements, src.n_rows
     ('vertices', 8, 8)
@@ -377,7 +375,6 @@ def prepared(obj, elements: str | None = None, *, n_segments: int | None = None)
 
     Examples
     --------
-    >>> import trimesh
     >>> kind, mesh = prepared(trimesh.creation.box(), n_segments=12)
     >>> kind, mesh.n_faces
     ('faces', 12)
@@ -429,7 +426,6 @@ def as_element_graph(obj) -> ElementGraph:
 
     Examples
     --------
-    >>> import trimesh
     >>> as_element_graph(trimesh.creation.box()).n_elements
     12
     """

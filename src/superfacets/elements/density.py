@@ -92,8 +92,6 @@ def roughness_of(graph: ElementGraph, rounds: int = SMOOTH_ROUNDS) -> np.ndarray
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets.elements.builders import as_element_graph
     >>> box = trimesh.creation.box()
     >>> rho = roughness_of(as_element_graph((box.vertices, box.faces)), rounds=0)
     >>> round(float(rho.min()), 4), round(float(rho.max()), 4)
@@ -133,8 +131,6 @@ def content_scale(graph: ElementGraph, density: float = 0.0, roughness: float = 
 
     Examples
     --------
-    >>> from superfacets.inputs.cloud import PointCloud
-    >>> from superfacets.elements.points import point_graph
     >>> x = np.r_[np.linspace(0, 1, 50), np.linspace(2, 6, 50)]   # dense, then sparse
     >>> g = point_graph(PointCloud(np.c_[x, np.zeros((100, 2))]), 4).graph
     >>> s = content_scale(g, density=1.0)
@@ -190,8 +186,6 @@ def window_factors(graph: ElementGraph, rounds: int = WINDOW_ROUNDS) -> np.ndarr
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets.elements.builders import as_element_graph
     >>> g = as_element_graph(trimesh.creation.box())
     >>> # 1 / (1 + pi / 3)^2 where each element's mean angle is pi / 2
     >>> window_factors(g).shape, window_factors(adapted_graph(g, 0.0, 1.0)).round(4)[:2]
@@ -231,8 +225,6 @@ def density_for(graph: ElementGraph, paper: bool = False) -> float:
 
     Examples
     --------
-    >>> from superfacets.inputs.cloud import PointCloud
-    >>> from superfacets.elements.points import point_graph
     >>> rng = np.random.default_rng(0)
     >>> even = rng.random((4000, 2))
     >>> uneven = np.r_[even * [0.5, 1], rng.random((300, 2)) * [0.5, 1] + [0.5, 0]]

@@ -97,8 +97,6 @@ def face_graph(mesh) -> ElementGraph:
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets import Mesh
     >>> box = trimesh.creation.box()
     >>> g = face_graph(Mesh(box.vertices, box.faces))
     >>> g.n_elements, g.n_edges
@@ -174,7 +172,6 @@ def distinct_faces(mesh) -> tuple[np.ndarray, np.ndarray] | None:
 
     Examples
     --------
-    >>> from superfacets import Mesh
     >>> m = Mesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], [[0, 1, 2], [1, 3, 2], [2, 1, 0]])
     >>> first, index = distinct_faces(m)
     >>> first.tolist(), index.tolist()

@@ -31,7 +31,6 @@ def colors_or_features(src, features):
 
     Examples
     --------
-    >>> import trimesh
     >>> from superfacets.elements.builders import elements_of
     >>> colors_or_features(elements_of(trimesh.creation.box()), None) is None
     True
@@ -60,7 +59,6 @@ def features_of(src, features):
 
     Examples
     --------
-    >>> import trimesh
     >>> from superfacets.elements.builders import elements_of
     >>> src = elements_of(trimesh.creation.box())
     >>> features_of(src, np.arange(12.0)).shape

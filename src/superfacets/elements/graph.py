@@ -240,8 +240,6 @@ class ElementGraph:
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets import as_mesh, face_graph
     >>> g = face_graph(as_mesh(trimesh.creation.box()))
     >>> g.kind, g.n_elements, g.pairs.shape, g.indptr.shape
     ('faces', 12, (18, 2), (13,))

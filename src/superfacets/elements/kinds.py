@@ -200,8 +200,6 @@ class ElementKind:
 
         Examples
         --------
-        >>> import trimesh
-        >>> from superfacets.inputs.convert import as_mesh
         >>> m = as_mesh(trimesh.creation.box())
         >>> kind_of("faces").n_rows(m), kind_of("vertices").n_rows(m)
         (12, 8)

@@ -175,7 +175,6 @@ def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
 
     Examples
     --------
-    >>> from superfacets.inputs.cloud import PointCloud
     >>> xy = np.stack(np.meshgrid(np.arange(10.0), np.arange(10.0)), -1).reshape(-1, 2)
     >>> g = point_graph(PointCloud(np.c_[xy, np.zeros(100)]), 4).graph
     >>> g.n_elements, round(float(np.abs(g.normals[:, 2]).min()), 6)
@@ -208,7 +207,6 @@ def kept_diagonal(cloud) -> float | None:
 
     Examples
     --------
-    >>> from superfacets.inputs.cloud import PointCloud
     >>> cloud = PointCloud(np.array([[0.0, 0, 0], [3, 4, 0], [3, 0, 0], [0, 4, 0]]))
     >>> kept_diagonal(cloud), float(point_graph(cloud, 2).graph.diagonal), kept_diagonal(cloud)
     (None, 5.0, 5.0)

@@ -94,8 +94,6 @@ def vertex_graph(mesh) -> VertexElements:
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets import Mesh
     >>> box = trimesh.creation.box()
     >>> g = vertex_graph(Mesh(box.vertices, box.faces)).graph
     >>> g.n_elements, g.n_edges, round(g.area, 6)

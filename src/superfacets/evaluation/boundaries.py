@@ -155,7 +155,6 @@ def boundary_precision(graph, labels, ground_truth, *, tolerance: int = 1) -> fl
 
     Examples
     --------
-    >>> import trimesh
     >>> mesh = trimesh.creation.box()
     >>> labels = (mesh.triangles_center[:, 0] > 0).astype(int)
     >>> boundary_precision(mesh, labels, labels), boundary_recall(mesh, labels, labels)

@@ -34,7 +34,6 @@ class Contingency:
     Examples
     --------
     >>> import numpy as np, trimesh
-    >>> from superfacets import segment
     >>> ball = trimesh.creation.icosphere(subdivisions=3)
     >>> labels = segment(ball, 12).labels
     >>> truth = (ball.triangles_center[:, 2] > 0).astype(int)   # two halves
@@ -71,8 +70,6 @@ def dense_labels(g, labels, what: str) -> np.ndarray:
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets.elements.builders import as_element_graph
     >>> g = as_element_graph(trimesh.creation.box())
     >>> dense_labels(g, [5] * 6 + [9] * 6, "labels").tolist()
     [0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1]
@@ -110,7 +107,6 @@ def contingency(graph, labels, ground_truth) -> Contingency:
     Examples
     --------
     >>> import numpy as np, trimesh
-    >>> from superfacets import segment
     >>> ball = trimesh.creation.icosphere(subdivisions=3)
     >>> labels = segment(ball, 12).labels
     >>> truth = (ball.triangles_center[:, 2] > 0).astype(int)   # two halves

@@ -75,7 +75,6 @@ def undersegmentation_error(graph, labels, ground_truth, *, tau: float = 0.05,
     Examples
     --------
     >>> import numpy as np, trimesh
-    >>> from superfacets import segment
     >>> ball = trimesh.creation.icosphere(subdivisions=3)
     >>> labels = segment(ball, 12).labels
     >>> truth = (ball.triangles_center[:, 2] > 0).astype(int)   # two halves
@@ -114,7 +113,6 @@ def achievable_segmentation_accuracy(graph, labels, ground_truth, *,
     Examples
     --------
     >>> import numpy as np, trimesh
-    >>> from superfacets import segment
     >>> ball = trimesh.creation.icosphere(subdivisions=3)
     >>> labels = segment(ball, 12).labels
     >>> truth = (ball.triangles_center[:, 2] > 0).astype(int)   # two halves
@@ -159,7 +157,6 @@ def compactness(graph, labels) -> float:
     Examples
     --------
     >>> import numpy as np, trimesh
-    >>> from superfacets import segment
     >>> ball = trimesh.creation.icosphere(subdivisions=3)
     >>> 3.5 < compactness(ball, segment(ball, 12).labels) < 10
     True
@@ -208,7 +205,6 @@ def mean_over_ground_truths(metric: Callable[..., float], graph, labels,
     Examples
     --------
     >>> import numpy as np, trimesh
-    >>> from superfacets import segment
     >>> ball = trimesh.creation.icosphere(subdivisions=3)
     >>> labels = segment(ball, 12).labels
     >>> truth = (ball.triangles_center[:, 2] > 0).astype(int)   # two halves
@@ -282,7 +278,6 @@ def evaluate(graph, labels, ground_truths: Sequence[np.ndarray], *, tau: float =
     Examples
     --------
     >>> import numpy as np, trimesh
-    >>> from superfacets import segment
     >>> ball = trimesh.creation.icosphere(subdivisions=3)
     >>> labels = segment(ball, 12).labels
     >>> truth = (ball.triangles_center[:, 2] > 0).astype(int)   # two halves
@@ -472,8 +467,6 @@ def evaluate_rows(obj, labels, ground_truths: Sequence[np.ndarray], *,
 
     Examples
     --------
-    >>> import numpy as np
-    >>> from superfacets import PointCloud, segment
     >>> xy = np.random.default_rng(0).random((2000, 2))
     >>> cloud = PointCloud(np.c_[xy, np.zeros(2000)])
     >>> truth = (xy[:, 0] > 0.5).astype(int)

@@ -62,8 +62,6 @@ class SuperfacetGraph:
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets import segment
     >>> g = segment(trimesh.creation.icosphere(subdivisions=3), 12).graph()
     >>> g.n_segments, g.edge_index.shape[0], g.area.shape
     (12, 2, (12,))
@@ -181,10 +179,6 @@ def superfacet_graph(graph, labels, features=None) -> SuperfacetGraph:
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets import segment
-    >>> from superfacets.elements import face_graph
-    >>> from superfacets.inputs.convert import as_mesh
     >>> box = as_mesh(trimesh.creation.box())
     >>> sg = superfacet_graph(face_graph(box), segment(box, 6).labels)
     >>> sg.n_segments, sg.n_edges          # the six sides, each meets four
@@ -278,10 +272,6 @@ def crossing_adjacencies(g, lab: np.ndarray):
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets import segment
-    >>> from superfacets.elements import face_graph
-    >>> from superfacets.inputs.convert import as_mesh
     >>> box = as_mesh(trimesh.creation.box())
     >>> lab = segment(box, 6).labels                         # the six sides
     >>> pairs, length, cos, concave = crossing_adjacencies(face_graph(box), lab)

@@ -82,8 +82,6 @@ class Hierarchy:
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets import segment
     >>> r = segment(trimesh.creation.icosphere(subdivisions=4), 40)
     >>> h = r.hierarchy([10, 3])
     >>> h.levels, h.of_superfacets(1).shape
@@ -153,8 +151,6 @@ def hierarchy(graph, levels, *, alpha: float = ALPHA, eta_convex: float = ETA_CO
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets import segment
     >>> r = segment(trimesh.creation.icosphere(subdivisions=4), 40)
     >>> h = r.hierarchy([20, 5])
     >>> h.levels, [int(p.max()) + 1 for p in h.parents]
@@ -257,9 +253,6 @@ def planarity_graph(graph, labels, features=None):
 
     Examples
     --------
-    >>> import numpy as np
-    >>> from superfacets.inputs.cloud import PointCloud
-    >>> from superfacets.elements.points import point_graph
     >>> g = point_graph(PointCloud(np.c_[np.random.default_rng(0).random((500, 2)),
     ...                                   np.zeros(500)])).graph
     >>> planarity_graph(g, np.arange(500) // 250).area.tolist()
@@ -298,9 +291,6 @@ def level_extent_weight(graph) -> float:
     Examples
     --------
     >>> import numpy as np, trimesh
-    >>> from superfacets import segment
-    >>> from superfacets.inputs.cloud import PointCloud
-    >>> from superfacets.elements.points import point_graph
     >>> level_extent_weight(segment(trimesh.creation.icosphere(), 10).elements.graph)  # faces
     0.0
     >>> rng = np.random.default_rng(1)   # a dense square, a sparse one beside it
@@ -330,8 +320,6 @@ def pieces(graph) -> int:
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets import segment
     >>> pieces(segment(trimesh.creation.icosphere(subdivisions=3), 12).graph())
     1
     """

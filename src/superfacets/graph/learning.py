@@ -71,8 +71,6 @@ def shape_features(graph: SuperfacetGraph, up=(0.0, 0.0, 1.0)) -> dict[str, np.n
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets import segment
     >>> plane = trimesh.creation.box(extents=(4, 4, 0.001)).subdivide().subdivide()
     >>> g = segment(plane, 4).graph()
     >>> f = shape_features(g)
@@ -166,8 +164,6 @@ def learning_arrays(graph: SuperfacetGraph, positions: np.ndarray, element_label
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets import segment
     >>> r = segment(trimesh.creation.icosphere(subdivisions=3), 12)
     >>> a = r.learning_graph()
     >>> a["x"].shape, a["edge_index"].shape[1] == 2 * r.graph().n_edges

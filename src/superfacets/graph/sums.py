@@ -60,8 +60,6 @@ def border_sums(graph, labels: np.ndarray, k: int) -> dict:
 
     Examples
     --------
-    >>> from superfacets.inputs.cloud import PointCloud
-    >>> from superfacets.elements.points import point_graph
     >>> xy = np.stack(np.meshgrid(np.arange(10.0), np.arange(10.0)), -1).reshape(-1, 2)
     >>> g = point_graph(PointCloud(np.c_[xy, np.zeros(100)])).graph
     >>> s = border_sums(g, (g.positions[:, 0] >= 5).astype(np.int64), 2)

@@ -53,7 +53,6 @@ def check_extent(lo, hi, where: str = "", what: str = "mesh") -> float:
 
     Examples
     --------
-    >>> import numpy as np
     >>> check_extent(np.zeros(3), np.array([2.0, 1.0, 0.0]))
     2.0
     >>> check_extent(np.zeros(3), np.full(3, 1e-80), "tiny.off: ")  # doctest: +ELLIPSIS

@@ -239,7 +239,6 @@ class PointCloud:
 
         Examples
         --------
-        >>> from superfacets.elements.points import point_graph
         >>> cloud = PointCloud(np.random.default_rng(0).random((500, 3)))  # its own array
         >>> cloud.check_usable()
         >>> graph = point_graph(cloud).graph  # the build lends the points to the graph
@@ -418,7 +417,6 @@ def as_cloud(obj, normals=None, name: str = "") -> PointCloud:
 
     Examples
     --------
-    >>> import numpy as np
     >>> c = as_cloud(np.random.default_rng(0).random((100, 3)))
     >>> c.n_points, c.normals is None
     (100, True)

@@ -98,7 +98,6 @@ def from_library(obj, name: str = ""):
 
     Examples
     --------
-    >>> import trimesh
     >>> from_library(trimesh.Scene(trimesh.creation.box())).n_faces, from_library([1, 2]) is None
     (12, True)
     """
@@ -154,7 +153,6 @@ def trimesh_colors(obj) -> dict:
 
     Examples
     --------
-    >>> import trimesh
     >>> trimesh_colors(trimesh.creation.box())
     {}
     """
@@ -219,7 +217,6 @@ def mesh_from_scene(scene, name: str = ""):
 
     Examples
     --------
-    >>> import trimesh
     >>> scene = trimesh.Scene({"a": trimesh.creation.box(), "b": trimesh.creation.box()})
     >>> [name for name, *_ in mesh_from_scene(scene).objects]
     ['a', 'b']

@@ -187,7 +187,6 @@ def cut_surface(mesh: TetMesh, labels=None, *, axis: int = 0, at: float = 0.5):
 
     Examples
     --------
-    >>> import numpy as np
     >>> from scipy.spatial import Delaunay
     >>> p = np.random.default_rng(0).random((200, 3))
     >>> t = TetMesh(p, Delaunay(p).simplices)

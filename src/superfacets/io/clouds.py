@@ -127,7 +127,6 @@ def read_cloud(path, format: str | None = None):
 
     Examples
     --------
-    >>> import numpy as np
     >>> np.savetxt("cloud.xyz", np.random.default_rng(0).random((50, 3)))
     >>> c = read_cloud("cloud.xyz")
     >>> c.n_points, c.points.dtype

@@ -346,7 +346,6 @@ def to_trimesh(mesh, labels=None):
 
     Examples
     --------
-    >>> import trimesh
     >>> box = trimesh.creation.box()
     >>> t = to_trimesh(box, list(range(12)))
     >>> t.face_attributes["label"][:3].tolist()

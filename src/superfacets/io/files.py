@@ -300,7 +300,6 @@ def array_digest(a, described: bool = True) -> str:
 
     Examples
     --------
-    >>> import numpy as np
     >>> array_digest(np.arange(3)) == array_digest(np.arange(3.0))
     False
     >>> first, rest = np.arange(5)[:2], np.arange(5)[2:]
@@ -341,7 +340,6 @@ def load_checked(path, digest: str | None, dtype=None):
 
     Examples
     --------
-    >>> import numpy as np
     >>> np.save("a.npy", np.arange(4))
     >>> load_checked("a.npy", array_digest(np.arange(4))).tolist()
     [0, 1, 2, 3]

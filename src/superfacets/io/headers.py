@@ -41,7 +41,6 @@ def header_counts(path) -> dict | None:
 
     Examples
     --------
-    >>> import trimesh
     >>> _ = trimesh.creation.box().export("box.ply")
     >>> header_counts("box.ply")
     {'vertices': 8, 'faces': 12}
@@ -343,7 +342,6 @@ def ply_mapped(path: Path):
 
     Examples
     --------
-    >>> import trimesh
     >>> _ = trimesh.creation.box().export("box.ply")
     >>> ply_mapped(Path("box.ply"))["face"].count
     12

@@ -71,7 +71,6 @@ def read_mesh(path, format: str | None = None) -> Mesh:
 
     Examples
     --------
-    >>> import trimesh
     >>> _ = trimesh.creation.box().export("box.ply")
     >>> m = read_mesh("box.ply")
     >>> m.n_faces, m.n_vertices

@@ -91,7 +91,6 @@ def image_up(data) -> np.ndarray | None:
 
     Examples
     --------
-    >>> from superfacets import PointCloud
     >>> rows, cols = np.mgrid[0:4, 0:5]  # a camera's image: x right, y down, z ahead
     >>> pts = np.stack([cols, rows, np.full(rows.shape, 3)], -1).reshape(-1, 3) * 1.0
     >>> image_up(PointCloud(pts, shape=(4, 5), viewpoint=(2, 1.5, 0))).round(6).tolist()
@@ -142,8 +141,6 @@ def up_axis(data, path=None) -> tuple[str, str]:
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets import as_mesh
     >>> up_axis(as_mesh(trimesh.creation.box()), "part.stl")
     ('z', "STL's convention")
     >>> up_axis(as_mesh(trimesh.creation.box()), "box.off")
@@ -185,7 +182,6 @@ def sensor_view(data) -> np.ndarray | None:
 
     Examples
     --------
-    >>> from superfacets import PointCloud
     >>> pts = np.array([[0.0, 0, 2], [1, 0, 2], [0, 1, 2], [1, 1, 2]])
     >>> sensor_view(PointCloud(pts, viewpoint=(0.5, 0.5, 0), shape=(2, 2))).tolist()
     [0.0, 0.0, -1.0]
@@ -222,7 +218,6 @@ def is_map(data) -> bool:
 
     Examples
     --------
-    >>> from superfacets import PointCloud
     >>> rng = np.random.default_rng(0)
     >>> tile = rng.random((500, 3)) * (200.0, 100.0, 10.0)
     >>> is_map(PointCloud(tile, up=(0, 0, 1))), is_map(PointCloud(tile))
@@ -265,8 +260,6 @@ def default_view(data):
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets import as_mesh
     >>> default_view(as_mesh(trimesh.creation.box())) is None
     True
     """

@@ -71,7 +71,6 @@ def read_ply_triangles(path: Path, data: bytes):
 
     Examples
     --------
-    >>> import trimesh
     >>> _ = trimesh.creation.box().export("box.ply")
     >>> v, f, vc, fc = read_ply_triangles(Path("box.ply"), Path("box.ply").read_bytes())
     >>> v.shape, f.shape, f.dtype.name

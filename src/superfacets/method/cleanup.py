@@ -98,9 +98,6 @@ def cut_costs(graph, *, alpha: float = DEFAULTS.alpha, eta_convex: float = DEFAU
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets.inputs.convert import as_mesh
-    >>> from superfacets.elements import face_graph
     >>> g = face_graph(as_mesh(trimesh.creation.box()))
     >>> bool(np.allclose(cut_costs(g, alpha=0), g.lengths))   # no crease: the lengths
     True
@@ -295,8 +292,6 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets import segment
     >>> mesh = trimesh.creation.icosphere(subdivisions=4)
     >>> r = segment(mesh, 30, cleanup=False)
     >>> clean = clean_boundaries((mesh.vertices, mesh.faces), r.labels, r.centers)

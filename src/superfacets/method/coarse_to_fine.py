@@ -340,10 +340,6 @@ def coarsening_for(graph: ElementGraph, params, k: int | None, radius: float) ->
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets.elements import face_graph
-    >>> from superfacets.inputs.convert import as_mesh
-    >>> from superfacets.method.params import resolve
     >>> g = face_graph(as_mesh(trimesh.creation.icosphere(subdivisions=2)))
     >>> coarsening_for(g, resolve(n_segments=10), 10, 0.3)
     1

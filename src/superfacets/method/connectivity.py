@@ -102,7 +102,6 @@ def enforce_connectivity(graph, labels: np.ndarray, centers: np.ndarray | None =
     --------
     A strip of 8 triangles, each adjacent to the next:
 
-    >>> import numpy as np
     >>> v = np.c_[np.r_[0:5, 0:5], np.repeat([0, 1], 5), np.zeros(10)].astype(float)
     >>> f = np.concatenate([[[i, i + 1, i + 5], [i + 1, i + 6, i + 5]] for i in range(4)])
     >>> labels = np.array([0, 0, 0, 1, 0, 2, 2, 2])  # 0 in two pieces, 1 a single face

@@ -141,7 +141,6 @@ def farthest_point_centers(graph, n_segments: int, *, every_piece: bool = False)
 
     Examples
     --------
-    >>> import trimesh
     >>> ico = trimesh.creation.icosphere(subdivisions=2)
     >>> farthest_point_centers((ico.vertices, ico.faces), 4).shape
     (4,)

@@ -91,9 +91,6 @@ def noise_variance(graph) -> float:
 
     Examples
     --------
-    >>> import numpy as np
-    >>> from superfacets.inputs.cloud import PointCloud
-    >>> from superfacets.elements.points import point_graph
     >>> rng = np.random.default_rng(0)
     >>> xy = rng.random((4000, 2))
     >>> g = point_graph(PointCloud(np.c_[xy, 0.001 * rng.standard_normal(4000)])).graph
@@ -180,9 +177,6 @@ def flat_merges(graph, labels: np.ndarray, k: int, max_rise: float, *,
 
     Examples
     --------
-    >>> import numpy as np
-    >>> from superfacets.inputs.cloud import PointCloud
-    >>> from superfacets.elements.points import point_graph
     >>> x = np.linspace(0, 1, 40)
     >>> xy = np.stack(np.meshgrid(x, x), -1).reshape(-1, 2)
     >>> roof = np.c_[xy, np.abs(xy[:, 0] - 0.5)]             # two planes meeting at a ridge
@@ -238,9 +232,6 @@ def same_feature_edges(pg, max_jump: float, spread: np.ndarray | None = None, *,
 
     Examples
     --------
-    >>> import numpy as np
-    >>> from superfacets.inputs.cloud import PointCloud
-    >>> from superfacets.elements.points import point_graph
     >>> from superfacets.graph.hierarchy import planarity_graph
     >>> g = point_graph(PointCloud(np.c_[np.random.default_rng(0).random((600, 2)),
     ...                                   np.zeros(600)])).graph
@@ -308,9 +299,6 @@ def merge_to_count(graph, labels: np.ndarray, rules, features: np.ndarray | None
 
     Examples
     --------
-    >>> import numpy as np
-    >>> from superfacets import segment
-    >>> from superfacets.inputs.cloud import PointCloud
     >>> xy = np.random.default_rng(0).random((3000, 2))
     >>> r = segment(PointCloud(np.c_[xy, np.zeros(3000)]), 12)   # merge_from: 5
     >>> r.n_segments, r.params["merge_from"]

@@ -77,8 +77,6 @@ class RunRecord(NamedTuple):
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets.method.params import resolve
     >>> run = pipeline(trimesh.creation.icosphere(subdivisions=2), resolve(n_segments=8))
     >>> run.labels.shape, int(run.labels.max()) + 1
     ((320,), 8)
@@ -249,8 +247,6 @@ def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets.method.params import resolve
     >>> r = pipeline(trimesh.creation.icosphere(subdivisions=3), resolve(n_segments=20))
     >>> len(r.centers), sorted(r.timings)[:4]
     (20, ['changed', 'cleanup', 'connectivity', 'cycle_period'])

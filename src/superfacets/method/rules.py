@@ -188,7 +188,6 @@ def superfacet_size(params, area: float, diagonal: float,
 
     Examples
     --------
-    >>> from superfacets.method.params import resolve
     >>> k, r = superfacet_size(resolve(n_segments=4), 4 * 3.141592653589793, 10.0, 100)
     >>> k, round(r, 6)
     (4, 1.0)

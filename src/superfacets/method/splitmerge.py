@@ -148,13 +148,10 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets import Mesh, segment
     >>> from superfacets.method.weights import csr_weights, edge_weights
     >>> sphere = trimesh.creation.icosphere(subdivisions=3)
     >>> m = Mesh(sphere.vertices, sphere.faces)
     >>> r = segment(m, 20)
-    >>> from superfacets.elements import face_graph
     >>> g = face_graph(m)
     >>> w = csr_weights(g, edge_weights(g, "paper", alpha=200, eta_convex=0.2))
     >>> new, n = swap_round(g, w, r.labels)

@@ -76,8 +76,6 @@ class Rules:
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets.method.params import resolve
     >>> ball = trimesh.creation.icosphere(subdivisions=3)
     >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
     >>> rules = resolve_rules(graph, p)
@@ -140,8 +138,6 @@ def stage_reads(rules: Rules, initial=None) -> tuple[tuple[str, frozenset], ...]
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets.method.params import resolve
     >>> ball = trimesh.creation.icosphere(subdivisions=3)
     >>> _, graph, p = build_graph(ball, resolve(n_segments=12))
     >>> [(name, sorted(fields)) for name, fields in stage_reads(resolve_rules(graph, p))][1:]
@@ -197,8 +193,6 @@ def build_graph(obj, p: SegmentParams, features=None
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets.method.params import resolve
     >>> ball = trimesh.creation.icosphere(subdivisions=3)
     >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
     >>> rules = resolve_rules(graph, p)
@@ -270,8 +264,6 @@ def resolve_features(source: ElementInput, graph, p: SegmentParams, features=Non
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets.method.params import resolve
     >>> ball = trimesh.creation.icosphere(subdivisions=3)
     >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
     >>> resolve_features(src, graph, p)[0].beta  # no colours: no colour term
@@ -341,8 +333,6 @@ def resolve_rules(graph, p: SegmentParams, *, n_centers: int | None = None,
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets.method.params import resolve
     >>> ball = trimesh.creation.icosphere(subdivisions=3)
     >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
     >>> rules = resolve_rules(graph, p)
@@ -409,8 +399,6 @@ def weigh(graph, rules: Rules, features=None, hooks=None
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets.method.params import resolve
     >>> ball = trimesh.creation.icosphere(subdivisions=3)
     >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
     >>> rules = resolve_rules(graph, p)
@@ -457,8 +445,6 @@ def held_weights(graph, rules: Rules, w: np.ndarray, features=None, initial=None
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets.method.params import resolve
     >>> ball = trimesh.creation.icosphere(subdivisions=3)
     >>> _, graph, p = build_graph(ball, resolve(n_segments=12))
     >>> rules = resolve_rules(graph, p)
@@ -509,8 +495,6 @@ def initialize(graph, w: np.ndarray, rules: Rules, hooks,
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets.method.params import resolve
     >>> ball = trimesh.creation.icosphere(subdivisions=3)
     >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
     >>> rules = resolve_rules(graph, p)
@@ -563,8 +547,6 @@ def iterate_passes(graph, w: np.ndarray, swap_w, init: np.ndarray, rules: Rules,
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets.method.params import resolve
     >>> ball = trimesh.creation.icosphere(subdivisions=3)
     >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
     >>> rules = resolve_rules(graph, p)

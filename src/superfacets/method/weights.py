@@ -99,7 +99,6 @@ def paper_weights(graph, *, alpha: float = _PAPER_ALPHA, eta_convex: float = DEF
 
     Examples
     --------
-    >>> import trimesh
     >>> box = trimesh.creation.box()
     >>> w = paper_weights((box.vertices, box.faces), alpha=0)
     >>> w.shape
@@ -170,9 +169,6 @@ def convex_scaled(graph, weights: np.ndarray, *, alpha: float, eta_convex: float
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets.inputs.convert import as_mesh
-    >>> from superfacets.elements import face_graph
     >>> g = face_graph(as_mesh(trimesh.creation.box()))   # every fold convex
     >>> w = csr_weights(g, paper_weights(g))
     >>> bool(np.allclose(convex_scaled(g, w, alpha=200, eta_convex=0.2, factor=0.0),
@@ -267,8 +263,6 @@ def feature_scale(graph, features: np.ndarray, *, alpha: float = _PAPER_ALPHA,
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets.elements.builders import as_element_graph
     >>> g = as_element_graph(trimesh.creation.icosphere(subdivisions=3))
     >>> top = (g.positions[:, 2] > 0)[:, None]  # two colours, one edge between them
     >>> beta, floor = feature_scale(g, np.where(top, [1.0, 0, 0], [0, 0, 1.0]))
@@ -401,8 +395,6 @@ def shlafman_weights(graph, *, alpha: float = _SHLAFMAN_ALPHA, dtype=np.float64)
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets.elements.builders import as_element_graph
     >>> g = as_element_graph(trimesh.creation.box())
     >>> shlafman_weights(g, alpha=0.5).shape
     (18,)
@@ -452,8 +444,6 @@ def edge_weights(graph, weighting: str = "paper", *, alpha: float = _PAPER_ALPHA
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets.elements.builders import as_element_graph
     >>> g = as_element_graph(trimesh.creation.box())
     >>> w = edge_weights(g, "paper", alpha=200)
     >>> w.shape, bool((w > 0).all())
@@ -513,8 +503,6 @@ def csr_point_weights(graph: ElementGraph, *, alpha: float = _PAPER_ALPHA,
 
     Examples
     --------
-    >>> from superfacets.elements.points import point_graph
-    >>> from superfacets.inputs.cloud import PointCloud
     >>> g = point_graph(PointCloud(np.random.default_rng(0).random((200, 3)))).graph
     >>> bool((csr_point_weights(g) == csr_weights(g, paper_weights(g))).all())
     True
@@ -607,7 +595,6 @@ class HeldWeights:
 
     Examples
     --------
-    >>> import numpy as np
     >>> held = HeldWeights(np.ones(4), remake=lambda: np.ones(4))
     >>> held.let_go(); held.get().sum()
     np.float64(4.0)

@@ -106,7 +106,6 @@ def vertex_regions(mesh, labels) -> tuple:
 
     Examples
     --------
-    >>> from superfacets import Mesh
     >>> regions, lab = vertex_regions(Mesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]]),
     ...                               [7, 8, 9])
     >>> regions.n_faces, lab.tolist(), round(float(regions.area), 6)

@@ -139,7 +139,6 @@ def cut_pursuit(obj, n_segments: int | None = None, *, reg_strength: float = 0.1
 
     Examples
     --------
-    >>> import numpy as np
     >>> xyz = np.random.default_rng(0).normal(size=(3000, 3))
     >>> xyz /= np.linalg.norm(xyz, axis=1, keepdims=True)
     >>> labels = cut_pursuit(xyz, 20)           # doctest: +SKIP

@@ -101,7 +101,6 @@ def graph_segmentation(obj, k_thresh: float = 0.01, min_size: int = 20, *,
 
     Examples
     --------
-    >>> import trimesh
     >>> box = trimesh.creation.box()     # 8 vertices; every edge bends
     >>> int(graph_segmentation(box, min_size=1).max()) + 1
     8

@@ -364,7 +364,6 @@ def normalized_cuts(mesh, n_segments: int = 150, *, embedding: NcutEmbedding | N
 
     Examples
     --------
-    >>> import trimesh
     >>> from superfacets.evaluation.baselines import normalized_cuts
     >>> mesh = trimesh.creation.icosphere(subdivisions=2)
     >>> labels = normalized_cuts(mesh, 8, rng=0)

@@ -246,7 +246,6 @@ def variational_shape_approximation(mesh, n_segments: int = 150, *, metric: str 
 
     Examples
     --------
-    >>> import trimesh
     >>> from superfacets.evaluation.baselines import variational_shape_approximation
     >>> box = trimesh.creation.box().subdivide().subdivide()
     >>> r = variational_shape_approximation(box, 6, init="incremental", rng=0)

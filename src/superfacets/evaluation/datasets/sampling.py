@@ -48,8 +48,6 @@ def sample_points(mesh, n_points: int = DEFAULT_POINTS, seed: int = 0
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets import Mesh
     >>> box = trimesh.creation.box()
     >>> p, f = sample_points(Mesh(box.vertices, box.faces), 100)
     >>> p.shape, bool(np.all(np.abs(p) <= 0.5 + 1e-12))

@@ -90,7 +90,6 @@ def tile_graph(cloud, folder, n_neighbors: int) -> str:
     Examples
     --------
     >>> import tempfile
-    >>> from superfacets.inputs.cloud import PointCloud
     >>> xyz = np.random.default_rng(0).random((500, 3))
     >>> with tempfile.TemporaryDirectory() as tmp:
     ...     first = tile_graph(PointCloud(xyz), Path(tmp) / "tile0", 10)

@@ -95,9 +95,6 @@ def tile_merge_stats(graph, labels: np.ndarray, names: np.ndarray, core: np.ndar
 
     Examples
     --------
-    >>> import numpy as np
-    >>> from superfacets.inputs.cloud import PointCloud
-    >>> from superfacets.elements.points import point_graph
     >>> xy = np.stack(np.meshgrid(np.arange(10.0), np.arange(10.0)), -1).reshape(-1, 2)
     >>> g = point_graph(PointCloud(np.c_[xy, np.zeros(100)])).graph
     >>> lab = (g.positions[:, 0] >= 5).astype(np.int64)
@@ -256,9 +253,6 @@ def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float,
 
     Examples
     --------
-    >>> import numpy as np
-    >>> from superfacets.inputs.cloud import PointCloud
-    >>> from superfacets.elements.points import point_graph
     >>> x = np.linspace(0, 1, 40)
     >>> xy = np.stack(np.meshgrid(x, x), -1).reshape(-1, 2)
     >>> roof = np.c_[xy, np.abs(xy[:, 0] - 0.5)]                  # two planes, a ridge

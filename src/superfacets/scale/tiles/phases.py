@@ -240,7 +240,6 @@ def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: Segm
 
     Examples
     --------
-    >>> from superfacets.method.params import resolve
     >>> xy = np.random.default_rng(0).random((4000, 2))
     >>> pts = np.column_stack([xy, np.zeros(4000)])
     >>> rows, pos = sample_start(pts, np.arange(4000), 4000, resolve(n_segments=10),

@@ -157,7 +157,6 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
 
     Examples
     --------
-    >>> import trimesh
     >>> m = trimesh.creation.icosphere(subdivisions=4)
     >>> r = segment_tiled((m.vertices, m.faces), 40, tiles=2)
     >>> r.labels.shape, r.n_segments, r.layout.n_tiles

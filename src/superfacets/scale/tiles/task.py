@@ -52,7 +52,6 @@ def tile_task(task: dict) -> dict:
 
     Examples
     --------
-    >>> import trimesh
     >>> m = trimesh.creation.icosphere(subdivisions=4)
     >>> from superfacets.scale.tiles.run import segment_tiled
     >>> segment_tiled((m.vertices, m.faces), 40, tiles=2, workers=1).tiles[0]["tile"]

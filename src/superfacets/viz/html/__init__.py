@@ -87,8 +87,6 @@ def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None 
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets import segment
     >>> ball = trimesh.creation.icosphere(subdivisions=3)
     >>> labels = segment(ball, 12).labels
     >>> page = html_page(ball, labels, title="ball")
@@ -224,8 +222,6 @@ def write_html(path, mesh, labels=None, *, title: str | None = None, info: dict 
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets import segment
     >>> ball = trimesh.creation.icosphere(subdivisions=3)
     >>> labels = segment(ball, 12).labels
     >>> write_html("ball.html", ball, labels, title="ball").name
@@ -263,8 +259,6 @@ class NotebookView:
 
     Examples
     --------
-    >>> import trimesh
-    >>> from superfacets import segment
     >>> view = NotebookView(segment(trimesh.creation.icosphere(subdivisions=3), 12))
     >>> view._repr_html_().startswith("<iframe")
     True
