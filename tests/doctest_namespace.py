@@ -14,7 +14,9 @@ def shared() -> dict:
     from superfacets.elements.builders import as_element_graph
     from superfacets.elements.points import point_graph
     from superfacets.method.params import resolve
+    from superfacets.method.pipeline import passes_example
 
     return dict(np=np, trimesh=trimesh, Mesh=Mesh, PointCloud=PointCloud, as_mesh=as_mesh,
                 face_graph=face_graph, segment=segment, as_element_graph=as_element_graph,
-                point_graph=point_graph, resolve=resolve)
+                point_graph=point_graph, resolve=resolve,
+                passes_example=passes_example)

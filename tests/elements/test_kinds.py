@@ -29,8 +29,6 @@ ALLOWED = {
     "elements/": "the table and the builders",
     "io/": "file layouts",
     "cli/": "the command line's wording",
-    "inputs/mesh.py": "a mesh's per-face and per-vertex colours",
-    "scale/runner/experiment.py": "the benchmark's per-face ground truth carried to each kind",
 }
 
 

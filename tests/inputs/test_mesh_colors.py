@@ -31,18 +31,18 @@ def test_vertex_and_face_colours_carry_to_the_other_elements():
     v = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]]
     f = [[0, 1, 2], [1, 3, 2]]
     m = Mesh(v, f, colors=[RED, [0, 1, 0], BLUE, [1, 1, 1]])
-    np.testing.assert_allclose(m.element_colors("vertices"), m.colors)
-    np.testing.assert_allclose(m.element_colors("faces"),
+    np.testing.assert_allclose(m.colors_of_vertices(), m.colors)
+    np.testing.assert_allclose(m.colors_of_faces(),
                                [[1 / 3, 1 / 3, 1 / 3], [1 / 3, 2 / 3, 2 / 3]])
     m = Mesh(v, f, face_colors=[RED, BLUE])
-    np.testing.assert_allclose(m.element_colors("vertices"),
+    np.testing.assert_allclose(m.colors_of_vertices(),
                                [RED, [0.5, 0, 0.5], [0.5, 0, 0.5], BLUE])
-    np.testing.assert_allclose(m.element_colors("faces"), [RED, BLUE])
-    assert Mesh(v, f).element_colors("faces") is None
+    np.testing.assert_allclose(m.colors_of_faces(), [RED, BLUE])
+    assert Mesh(v, f).colors_of_faces() is None
     # both given: each element its own
     m = Mesh(v, f, colors=[RED] * 4, face_colors=[BLUE, BLUE])
-    np.testing.assert_allclose(m.element_colors("faces"), [BLUE, BLUE])
-    np.testing.assert_allclose(m.element_colors("vertices"), [RED] * 4)
+    np.testing.assert_allclose(m.colors_of_faces(), [BLUE, BLUE])
+    np.testing.assert_allclose(m.colors_of_vertices(), [RED] * 4)
     back = pickle.loads(pickle.dumps(m))
     np.testing.assert_array_equal(back.face_colors, m.face_colors)
     assert not back.colors.flags.writeable
@@ -143,11 +143,15 @@ def test_malformed_colour_columns_are_one_clear_error(tmp_path):
     assert m.colors.min() == 0
 
 
+def _colors(mesh, elements):
+    return mesh.colors_of_faces() if elements == "faces" else mesh.colors_of_vertices()
+
+
 @pytest.mark.parametrize("elements", ["faces", "vertices"])
 def test_a_colour_edge_on_a_flat_mesh_becomes_a_border(elements):
     # geometry says nothing on a flat grid; the mesh's own colours say where the edge is
     mesh, _ = _two_colour_grid()
-    blue = mesh.element_colors(elements)[:, 2]
+    blue = _colors(mesh, elements)[:, 2]
     pure = (blue == 0) | (blue == 1)  # faces across the edge have a mixed colour: left out
     side = blue[pure] == 1
     blind = segment(mesh, 16, elements=elements, beta=0)
@@ -158,12 +162,12 @@ def test_a_colour_edge_on_a_flat_mesh_becomes_a_border(elements):
     assert minority(auto.labels[pure], side) < 0.2 * minority(blind.labels[pure], side)
     # the same as passing the colours as features
     given = segment(Mesh(mesh.vertices, mesh.faces), 16, elements=elements, beta=400,
-                    features=mesh.element_colors(elements))
+                    features=_colors(mesh, elements))
     np.testing.assert_array_equal(given.labels, seeing.labels)
     # the superfacet graph's mean feature is the mean colour
     g = seeing.graph()
     assert g.feature.shape == (seeing.n_segments, 3)
-    np.testing.assert_array_equal(g.feature, seeing.graph(mesh.element_colors(elements)).feature)
+    np.testing.assert_array_equal(g.feature, seeing.graph(_colors(mesh, elements)).feature)
     assert ((g.feature[:, 2] < 0.1) | (g.feature[:, 2] > 0.9)).mean() >= 0.8  # one colour each
 
 
@@ -205,7 +209,7 @@ def test_tiled_mesh_runs_read_the_colours(tmp_path):
     from superfacets.scale.tiles.run import segment_tiled
 
     mesh, _ = _two_colour_grid(60)
-    blue = mesh.element_colors("faces")[:, 2]
+    blue = mesh.colors_of_faces()[:, 2]
     pure = (blue == 0) | (blue == 1)
     side = blue[pure] == 1
     blind = segment_tiled(mesh, 16, tiles=2, beta=0)

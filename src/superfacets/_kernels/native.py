@@ -20,6 +20,8 @@ from __future__ import annotations
 import importlib
 from typing import Any, Callable
 
+from ..errors import KernelsMissingError
+
 __all__ = ["kernel", "of", "available", "missing_because", "limit_threads", "require",
            "sources_digest"]
 
@@ -57,8 +59,6 @@ def sources_digest() -> str:
 def require():
     """The compiled module; :class:`KernelsMissingError` (one line) where it is not built."""
     if _cxx is None:
-        from ..errors import KernelsMissingError
-
         raise KernelsMissingError(
             f"superfacets' compiled kernels are {_why}: install the package "
             "(pip install . in a clone, with a C++17 compiler), not its source folder alone")

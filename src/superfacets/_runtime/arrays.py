@@ -19,9 +19,9 @@ def sorted_unique(values: np.ndarray) -> np.ndarray:
     """``np.unique(values)`` (the distinct values, ascending) by a sort.
 
     numpy 2.x finds the distinct values of a plain ``np.unique`` call in a hash table,
-    which is 30 to 50 times slower than sorting on the wide integer keys a run makes
-    (pairs of elements as ``a * n + b``): 1.6 s against 0.03 s for 1.3M keys on this
-    project's machine (numpy 2.4, 2026-11-26). The same values in the same order.
+    which is many times slower than sorting on the wide integer keys a run makes
+    (pairs of elements as ``a * n + b``; ``docs/notes/code-measurements.md``). The same
+    values in the same order.
 
     Parameters
     ----------
@@ -84,8 +84,8 @@ def row_table(names: np.ndarray, upper: int) -> np.ndarray:
 def ranked(labels: np.ndarray, upper: int) -> tuple[np.ndarray, np.ndarray]:
     """The distinct values of ``labels`` (``-1`` aside) ascending, and each label's rank
     among them (``-1`` stays): ``np.unique(labels[labels >= 0], return_inverse=True)`` by a
-    table of ``upper`` entries instead of a sort (10M labels named by rows: 0.6 s -> 0.1 s,
-    5 bytes per value of the table against 24 per label).
+    table of ``upper`` entries instead of a sort (5 bytes per value of the table against
+    24 per label).
 
     Parameters
     ----------
@@ -150,8 +150,8 @@ def real_rows(values: np.ndarray) -> np.ndarray:
 def gather(values: np.ndarray, index: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     """``values[index]`` of 1-D integer arrays (labels, their numbers), as ``np.take``.
 
-    numpy's ``take`` makes about 3 ns an index on one thread (10M labels: 34 ms, every
-    pass of a run); 65,536 indices or more of int32 or int64 values and indices, C-contiguous,
+    numpy's ``take`` runs on one thread, and a run gathers its labels every pass;
+    65,536 indices or more of int32 or int64 values and indices, C-contiguous,
     are gathered by a compiled pass on threads. Anything else goes to ``np.take``.
 
     Parameters

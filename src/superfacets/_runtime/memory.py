@@ -1,9 +1,8 @@
 """Memory a run will need, estimated before it is spent, against what the process may use.
 
-A run's peak grows with its elements (the element graph and the passes' records: beyond
-the interpreter's 100 MiB, about 216 bytes a face and 200-220 a point sampled on a
-surface with the defaults, measured with ``benchmarks/memory.py``; the table of kinds
-holds the figure per kind, with a margin). Where the
+A run's peak grows with its elements (the element graph and the passes' records; the
+table of kinds holds the bytes per element of each kind, with a margin, from
+``benchmarks/memory_check.py``). Where the
 estimate exceeds what this process may still allocate (the machine's available memory,
 or an address-space limit set with ``ulimit -v``), the run is refused with
 :class:`~superfacets.errors.MemoryLimitError` in one line, before reading or building
@@ -77,8 +76,7 @@ def available_bytes() -> int | None:
 
 
 #: A run's memory beyond its elements': the interpreter, numpy, scipy and the kernels
-#: (a new process of ``segment`` on 118,000 points of a room peaked at 89 MiB; the
-#: per-element figures, ``ElementKind.peak_bytes``, were fitted with this base:
+#: (the per-element figures, ``ElementKind.peak_bytes``, were fitted with this base:
 #: ``benchmarks/memory_check.py``)
 BASE_BYTES = 80 * 2**20
 
@@ -221,7 +219,7 @@ def give_back_free_memory() -> None:
     blocks are freed) come from its heap, and a freed one in the middle of that heap
     stays in the process's resident memory until the allocator trims it. A run calls
     this between its stages on large inputs: the passes then start without the
-    graph build's freed temporaries (2M points: 405 -> 316 MiB after the build).
+    graph build's freed temporaries.
     The arrays themselves are untouched.
 
     Examples
@@ -244,8 +242,8 @@ def limit_arenas(n: int = ARENAS) -> None:
     glibc gives each thread that allocates an arena of its own, up to 8 per core, and
     each keeps the memory its thread freed: a run's kernels, on each of its threads,
     free buffers of tens of MiB (their searches' queues and scratch tables), so a run on
-    16 threads held about 270 MiB more than one on two (6.8M faces: 1,727 MiB against
-    1,467 with two arenas, the same time: the kernels allocate once per call). The
+    many threads held more than one on two, for the same time (the kernels allocate once
+    per call; ``docs/notes/code-measurements.md``). The
     command line calls it before any thread starts; a program that imports the package
     may set ``MALLOC_ARENA_MAX=2`` itself.
 

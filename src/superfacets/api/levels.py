@@ -21,6 +21,7 @@ import numpy as np
 from ..checks import check_int, check_nonneg
 from ..elements.builders import elements_of
 from ..errors import ParameterError
+from ..method import pipeline
 from ..method.params import resolve
 from .result import SegmentationResult
 
@@ -87,9 +88,8 @@ def adaptive_superpoints(obj, n_segments: int, *, start: int = START,
 def _one_run(obj, n_segments, *, features=None, **options):
     """One plain run (``superfacets.segment`` without a level: the public door calls this
     module for ``adaptive=``, so this module runs the pipeline itself)."""
-    from ..method.pipeline import pipeline
 
-    run = pipeline(obj, resolve(n_segments=n_segments, **options), features=features)
+    run = pipeline.pipeline(obj, resolve(n_segments=n_segments, **options), features=features)
     return SegmentationResult(**run._asdict())
 
 

@@ -12,8 +12,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._runtime import extras
 from ..elements.builders import per_element
+from ..errors import ParameterError
+from ..graph import hierarchy
 from ..graph.adjacency import superfacet_graph
+from ..graph.hierarchy import level_extent_weight, planarity_graph
 from ..graph.learning import learning_arrays
 from ..method.params import DEFAULTS
 
@@ -179,7 +183,6 @@ class SegmentationResult:
         >>> [int(h.labels(i, r.labels).max()) + 1 for i in range(2)]
         [10, 3]
         """
-        from ..graph.hierarchy import hierarchy, level_extent_weight, planarity_graph
 
         if cost == "planarity":
             src = self._source()
@@ -189,7 +192,7 @@ class SegmentationResult:
                 extent_weight = level_extent_weight(src.graph)
         else:
             graph = self.graph(features)
-        return hierarchy(graph, levels, alpha=self.params.get("alpha", _D.alpha),
+        return hierarchy.hierarchy(graph, levels, alpha=self.params.get("alpha", _D.alpha),
                          eta_convex=self.params.get("eta_convex", _D.eta_convex), beta=beta,
                          cost=cost, extent_weight=extent_weight or 0.0)
 
@@ -258,10 +261,9 @@ class SegmentationResult:
         >>> data.edge_index.shape  # doctest: +SKIP
         torch.Size([2, 52])
         """
-        from .._runtime.extras import require
 
-        torch = require("torch", "to_pyg (torch_geometric)")
-        pyg = require("torch_geometric.data", "to_pyg")
+        torch = extras.require("torch", "to_pyg (torch_geometric)")
+        pyg = extras.require("torch_geometric.data", "to_pyg")
         a = self.learning_graph(features, up)
         return pyg.Data(**{k: torch.from_numpy(np.ascontiguousarray(a[k])) for k in
                            ("x", "pos", "edge_index", "edge_attr", "super_index")},
@@ -270,8 +272,6 @@ class SegmentationResult:
 
     def _source(self):
         if self.elements is None or self.element_labels is None:
-            from ..errors import ParameterError
-
             raise ParameterError("this result holds no element graph (made by hand?): use "
                                  "superfacets.graph.adjacency.superfacet_graph(graph, labels)")
         return self.elements

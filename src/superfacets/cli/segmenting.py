@@ -317,9 +317,9 @@ def _other_command(args):
     """The command that takes this input instead (a tetrahedral mesh, ``--tiles``), as a
     function of no argument; None where it is this one (then no tile option is given)."""
     from ..errors import ParameterError
-    from ..io.tetmeshes import VOLUME_FORMATS
+    from ..io import input_kind
 
-    if Path(args.mesh).suffix.lower().lstrip(".") in VOLUME_FORMATS:
+    if input_kind(args.mesh) == "volume":
         if args.tiles is not None:
             raise ParameterError("--tiles takes triangle meshes and point clouds, not "
                                  "tetrahedral meshes")

@@ -20,13 +20,16 @@ from .points import DEFAULT_NEIGHBORS as _N_NEIGHBORS
 __all__ = ["ElementInput", "Builder", "BUILDERS", "as_element_graph", "elements_of",
            "is_cloud", "kind_for", "prepared", "register_builder", "features_of", "per_element"]
 
+from .._runtime import memory
 from ..checks import check_n_segments
 from ..errors import ParameterError
 from ..inputs.cloud import PointCloud, as_cloud
 from ..inputs.convert import as_mesh
 from ..inputs.mesh import Mesh
 from ..inputs.tetmesh import TetMesh
+from . import faces, points, vertices
 from .cells import cell_graph
+from .faces import distinct_faces
 from .features import features_of, per_element  # noqa: E402,F401 (re-exported)
 from .kinds import kind_of
 
@@ -75,9 +78,10 @@ class ElementInput(NamedTuple):
     def colors(self) -> np.ndarray | None:
         """(N, 3) float64: the RGB of each input row (face, vertex or point) in ``[0, 1]``,
         None where the input has no colours
-        (:meth:`superfacets.inputs.mesh.Mesh.element_colors`)."""
-        if hasattr(self.source, "element_colors"):
-            return self.source.element_colors(self.graph.kind)
+        (:meth:`superfacets.inputs.mesh.Mesh.colors_of_faces`)."""
+        if isinstance(self.source, Mesh):
+            return (self.source.colors_of_faces() if self.graph.kind == "faces"
+                    else self.source.colors_of_vertices())
         return getattr(self.source, "colors", None)
 
     def first_rows(self, elements: np.ndarray) -> np.ndarray:
@@ -191,29 +195,23 @@ def _cells(volume, n_neighbors, neighbor_radius) -> ElementInput:
 
 
 def _points(cloud, n_neighbors, neighbor_radius) -> ElementInput:
-    from .points import point_graph
-
-    g, index = point_graph(cloud, n_neighbors, neighbor_radius)
+    g, index = points.point_graph(cloud, n_neighbors, neighbor_radius)
     return ElementInput(g, index, cloud)
 
 
 def _vertices(mesh, n_neighbors, neighbor_radius) -> ElementInput:
-    from .vertices import vertex_graph
-
-    g, index = vertex_graph(mesh)
+    g, index = vertices.vertex_graph(mesh)
     return ElementInput(g, index, mesh)
 
 
 def _faces(mesh, n_neighbors, neighbor_radius) -> ElementInput:
-    from .faces import distinct_faces, face_graph
-
     found = distinct_faces(mesh)
     if found is None:
-        return ElementInput(face_graph(mesh), None, mesh)
+        return ElementInput(faces.face_graph(mesh), None, mesh)
     # copies of a face are one element: the graph of the distinct faces, kept with the mesh
     first, index = found
     return cached_on(mesh, "_distinct_faces_input",
-                     lambda: ElementInput(face_graph(_faces_of(mesh, first)), index, mesh))
+                     lambda: ElementInput(faces.face_graph(_faces_of(mesh, first)), index, mesh))
 
 
 def _faces_of(mesh, first):
@@ -386,10 +384,9 @@ def prepared(obj, elements: str | None = None, *, n_segments: int | None = None)
     n = builder.count(data)
     if n_segments is not None:  # before the graph, the memory peak of a run
         check_n_segments(n_segments, n, kind)
-    from .._runtime.memory import check_memory
 
     rows = max(n, int(kind_of(kind).n_rows(data)))  # (invalid points are held too)
-    check_memory(rows, kind_of(kind).peak_bytes,
+    memory.check_memory(rows, kind_of(kind).peak_bytes,
                  f"{getattr(data, 'name', '') or 'the input'}: {n:,} {kind}",
                  tiles_help=kind_of(kind).tiled_bytes is not None,
                  input_bytes=kind_of(kind).tiled_bytes or 0, held_input=_array_bytes(data))
@@ -431,6 +428,5 @@ def as_element_graph(obj) -> ElementGraph:
     """
     if isinstance(obj, ElementGraph):
         return obj
-    from .faces import face_graph
 
-    return face_graph(as_mesh(obj))
+    return faces.face_graph(as_mesh(obj))

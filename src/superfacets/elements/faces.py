@@ -27,9 +27,13 @@ from typing import NamedTuple
 import numpy as np
 
 from .._kernels import native
+from .._runtime import memory, threads
+from .._runtime.threads import split
+from ..errors import MemoryLimitError
 from ..inputs.mesh import Mesh
 from . import graph as _graph
 from .graph import ElementGraph, cached_on, pairs_from_csr
+from .kinds import kind_of
 
 __all__ = ["FaceAdjacency", "build_face_graph", "distinct_faces", "face_graph"]
 
@@ -265,20 +269,19 @@ def order_by_two_keys(key1: np.ndarray, key2: np.ndarray, n_key1: int,
     count_keys = native.kernel("adjacency.count_keys")
     scatter_keys = native.kernel("adjacency.scatter_keys")
     sort_buckets = native.kernel("adjacency.sort_buckets")
-    from .._runtime.threads import run_ranges, split
 
     bounds = split(key1.shape[0])
     part = {a: i for i, a in enumerate(bounds[:-1])}
     counts = np.zeros((len(bounds) - 1, n_key1), dtype=np.int64)
-    run_ranges(lambda a, b: count_keys(key1, skip, a, b, counts[part[a]]), bounds)
+    threads.run_ranges(lambda a, b: count_keys(key1, skip, a, b, counts[part[a]]), bounds)
     starts = np.zeros(n_key1 + 1, dtype=np.int64)
     np.cumsum(counts.sum(axis=0), out=starts[1:])
     fill = starts[:-1].copy()
     for i in range(counts.shape[0]):  # range i starts after ranges 0..i-1 in every bucket
         fill, counts[i] = fill + counts[i], fill
     order = np.empty(int(starts[-1]), dtype=key1.dtype)  # indices below n: key1's width
-    run_ranges(lambda a, b: scatter_keys(key1, skip, a, b, counts[part[a]], order), bounds)
-    run_ranges(lambda v0, v1: sort_buckets(order, starts, key2, v0, v1), split(n_key1))
+    threads.run_ranges(lambda a, b: scatter_keys(key1, skip, a, b, counts[part[a]], order), bounds)
+    threads.run_ranges(lambda v0, v1: sort_buckets(order, starts, key2, v0, v1), split(n_key1))
     return order, starts
 
 
@@ -287,8 +290,6 @@ def _group_pairs_on_threads(group_pairs, half, owner, a, b):
     threads itself); int32 half-edge and vertex ids only: a mesh of 2**31 half-edges or
     more is refused in one line."""
     if half.dtype != np.int32 or a.dtype != np.int32:
-        from ..errors import MemoryLimitError
-
         raise MemoryLimitError(
             f"{half.shape[0]:,} half-edges: one run takes meshes of fewer than 2**31 "
             "half-edges (about 715M triangles); cut larger ones into tiles (--tiles)")
@@ -307,11 +308,8 @@ def _check_pairs(m: int, n_pairs: int) -> None:
     help (the pairs of one edge are in one tile)."""
     extra = n_pairs - 3 * m // 2
     if extra > m // 2:
-        from .._runtime.memory import check_memory
-        from .kinds import kind_of
-
         per_face = kind_of("faces").peak_bytes + -(-extra * _PAIR_BYTES // max(m, 1))
-        check_memory(m, per_face, f"{m:,} faces with {n_pairs:,} face pairs (edges of "
+        memory.check_memory(m, per_face, f"{m:,} faces with {n_pairs:,} face pairs (edges of "
                      "more than two faces)")
 
 

@@ -70,8 +70,6 @@ def features_of(src, features):
         if features is None and materials is not None:  # a volume's regions, one-hot
             features = (materials[:, None] == np.unique(materials)[None, :]).astype(float)
         if features is None:
-            from ..errors import ParameterError
-
             raise ParameterError("beta > 0 needs features: pass features=(one row per "
                                  f"{src.graph.element}), or an input with colours (PLY, PCD "
                                  "or LAS points with RGB, a mesh with vertex or face colours) "

@@ -9,6 +9,8 @@ from typing import Callable, Mapping, NamedTuple
 import numpy as np
 
 from .._kernels import native
+from .._runtime import threads
+from .._runtime.threads import split
 from .kinds import KINDS
 
 __all__ = ["ElementGraph", "AdjacencyTerms", "adjacency_csr", "CHUNK",
@@ -33,7 +35,6 @@ def chunked(n: int, compute: Callable[[slice], np.ndarray], dtype=np.float64) ->
     one ``(n,)`` array: ranges of slices on threads, the same slices for any number of
     threads, so the same result. ``compute`` runs on several threads at once: it may
     only read what its caller made before (no cached property computed on first use)."""
-    from .._runtime.threads import run_ranges, split
 
     out = np.empty(n, dtype=dtype)
 
@@ -42,7 +43,7 @@ def chunked(n: int, compute: Callable[[slice], np.ndarray], dtype=np.float64) ->
             sl = slice(s, min(n, s + CHUNK))
             out[sl] = compute(sl)
 
-    run_ranges(part, split(-(-n // CHUNK), min_per_thread=1))
+    threads.run_ranges(part, split(-(-n // CHUNK), min_per_thread=1))
     return out
 
 
@@ -316,7 +317,6 @@ class ElementGraph:
     def terms(self) -> AdjacencyTerms:
         """The :class:`AdjacencyTerms` of every adjacency, computed once (in chunks,
         ranges of chunks on threads)."""
-        from .._runtime.threads import run_ranges, split
 
         e = self.n_edges
         geo, cos = np.empty(e), np.empty(e)
@@ -329,7 +329,7 @@ class ElementGraph:
                 sl = slice(s, min(e, s + CHUNK))
                 geo[sl], cos[sl], concave[sl] = self.terms_of(self, sl)
 
-        run_ranges(chunks, split(-(-e // CHUNK), min_per_thread=1))
+        threads.run_ranges(chunks, split(-(-e // CHUNK), min_per_thread=1))
         return AdjacencyTerms(geo, cos, concave)
 
     def terms_in(self, sl: slice) -> AdjacencyTerms:

@@ -45,31 +45,25 @@ class ElementKind:
         scale by ``s^dim``.
     better_method : bool
         Clean-up and split-and-merge on by default (``cleanup=None``,
-        ``split_merge=None``) with the paper's weighting. Faces: both beat the
-        paper at every k from 50 to 300 at its speed; vertices: UE -4 to -8 %,
-        compactness -5 to -7 %; points: compactness -18 to -25 % but not the UE
-        (+0.3 % at k = 150); cells: not measured (``docs/notes/cleanup.md``).
+        ``split_merge=None``) with the paper's weighting: faces and vertices, where
+        both lower the error and the compactness; not points, whose error they raise;
+        cells unmeasured (``docs/notes/cleanup.md``).
     exact_assignment : bool
         The exact nearest-center classification by default (``assignment=None``)
-        with the paper's weighting: vertices, where it gives the windows' quality
-        for a third of their time (``docs/notes/cleanup.md``), and points, where it
-        gives their quality (the 300 benchmark meshes sampled, k = 150: UE -0.3 %,
-        compactness +0.1 %) in 12 % less time at 20,000 points, 36 % less at 200,000,
-        and the passes of a million points in 1.4 instead of 3.3 s
-        (``docs/notes/superpoints-defaults.md``).
+        with the paper's weighting: vertices and points, where it gives the windows'
+        quality in less time (``docs/notes/cleanup.md``,
+        ``docs/notes/superpoints-defaults.md``).
     crease : float
         Weight of creases in the clean-up's cut cost, a fraction of ``alpha``
         (:func:`superfacets.method.cleanup.cut_costs`). Faces 0.1; vertices, points and
         cells 1.0: their normals are neighbourhood averages, a crease's angle is
-        spread over a few adjacencies (lowest UE of 0.1, 0.3, 1, 3, 10 on 90
-        benchmark meshes, ``docs/notes/cleanup.md``).
+        spread over a few adjacencies (``docs/notes/cleanup.md``).
     smoothness : float
         Weight of the clean-up's data (compactness) term against the boundary
         length: 0.7 on faces, whose swap energies weigh convex folds less, else 0.3.
     band : float
         Half-width of the clean-up's band along each boundary, a fraction of
-        ``r``: 0.2 on vertices (the same quality as 0.3 for a third less time),
-        else 0.3.
+        ``r``: 0.2 on vertices (the quality of 0.3 in less time), else 0.3.
     swap_eta_convex : float
         Factor of ``eta_convex`` in the split-and-merge swap energies: 0.5 on
         faces (convex folds count half), else 1.
@@ -111,20 +105,17 @@ class ElementKind:
     peak_bytes : int
         A run's peak memory per element with the defaults, the input's own arrays
         included, beyond the interpreter's (:data:`superfacets._runtime.memory.BASE_BYTES`):
-        chosen so that the estimate is within 25 % of the peak of a new process of
-        ``segment`` on meshes (faces, vertices), sampled surfaces, scans of rings,
-        LiDAR sweeps, RGB-D frames and rooms, and at most 1.2 times it
-        (``benchmarks/memory_check.py``, 2026-11-27, this project's 2-core machine: the
-        table in ``docs/benchmarks.md``). A run whose estimate exceeds what the process
+        chosen so that the estimate is within 25 % of a new process's peak and at most
+        1.2 times it (``benchmarks/memory_check.py``, its table in
+        ``docs/benchmarks.md``). A run whose estimate exceeds what the process
         may use is refused before its graph is built
         (:func:`superfacets._runtime.memory.check_memory`).
     tiled_bytes : int or None
         Bytes a tiled run (:func:`superfacets.segment_tiled`) holds for each element of
-        the whole input beside one tile's run (its buckets, rows and labels: 3M points
-        in 8 and 16 tiles peaked at 371-381 MiB); the memory check names tiles only for
-        kinds that have it. None where tiles do not lower the peak: a tiled run of a
-        mesh peaks higher than one run (1.7M faces: 822-1,042 MiB in 8 to 2 tiles
-        against 464 MiB).
+        the whole input beside one tile's run (its buckets, rows and labels); the memory
+        check names tiles only for kinds that have it. None where tiles do not lower the
+        peak: a tiled run of a mesh peaks higher than one run
+        (``docs/notes/scale-design.md``).
     exact_count : bool
         A run asked for ``n_segments`` returns exactly that many (points): segments made
         beyond it (regions no window reached) are merged, cheapest first
@@ -132,27 +123,29 @@ class ElementKind:
         separate pieces at the least.
     single_weights : bool
         The run's weights per CSR entry are float32 instead of float64 (each computed in
-        float64, then rounded; the distances still add up in float64). Points: the
-        largest array of a cloud's run (91 of 396 bytes per point on 10M points), 0 of
-        300 benchmark clouds changed at k = 150. Faces: 24 of the 233 bytes per face
-        6.8M faces peaked at (the weights and the swap energies' weights); on the 300
-        benchmark meshes at k = 50, 150, 300 and alpha 0, 200 up to 48 of 300 runs change
-        labels, mean UE and compactness within 0.01 % (``docs/notes/scale-design.md``).
-        ``paper=True`` keeps float64 on every kind.
+        float64, then rounded; the distances still add up in float64): the largest
+        array of a cloud's run, a tenth of a mesh's; the benchmark's error and
+        compactness unchanged (``docs/notes/scale-design.md``). ``paper=True`` keeps
+        float64 on every kind.
     merge_from : int
         A run with ``merge_from=None`` segments this many times ``k`` superpoints and
         merges them down to ``k``, flat neighbours first (:mod:`superfacets.method.merges`),
         where its superpoints have equal areas (:func:`superfacets.method.rules.merge_from_of`):
-        5 on points, whose undersegmentation error it lowered on rooms (0.442 -> 0.327 at
-        k = 1,000), an airborne tile and the benchmark's sampled clouds
-        (``docs/notes/superpoints-defaults.md``); 1 (off) on the other kinds.
+        5 on points, whose undersegmentation error it lowers on rooms, airborne tiles and
+        the benchmark's sampled clouds (``docs/notes/superpoints-defaults.md``); 1 (off)
+        on the other kinds.
     settle_cycles : bool
         Centers that oscillate are held and the passes go on to convergence
         (:mod:`superfacets.method.passes`: a cycle of center lists settled at its pass of
         lowest energy, a center sent back to a recent place held), instead of a cycle
         being jumped over as the paper's passes would run (``paper=True`` keeps the
-        jump): points, where a cycle stopped 7-33 % of the benchmark's sampled clouds
+        jump): points, where cycles stopped a share of the benchmark's sampled clouds
         (``docs/notes/superpoints-defaults.md``).
+    face_truth : str
+        How a ground truth given per face (the benchmark's) reaches these elements:
+        ``"same"`` (faces), ``"vote"`` (vertices: the area-weighted majority of the
+        incident faces), ``"sample"`` (points: sampled on the surface, each with its
+        face's label), ``""`` (none: cells).
     objects : bool
         The elements are what a scene's objects are made of (faces): a run may
         share ``k`` among the objects (``--per-object``), the objects are named
@@ -188,6 +181,7 @@ class ElementKind:
     rows: str = "n_faces"
     segment_word: str = "superpoints"
     objects: bool = False
+    face_truth: str = ""
     peak_bytes: int = 215
     tiled_bytes: int | None = None
     exact_count: bool = False
@@ -216,14 +210,15 @@ class ElementKind:
 KINDS = {k.name: k for k in (
     ElementKind("faces", "face", better_method=True, crease=0.1, smoothness=0.7,
                 swap_eta_convex=0.5, passes_after=1, hold_after=4.0, equal_weight=False,
-                segment_word="superfacets", objects=True, single_weights=True),
+                segment_word="superfacets", objects=True, single_weights=True, face_truth="same"),
     ElementKind("vertices", "vertex", better_method=True, exact_assignment=True, band=0.2,
-                rows="n_vertices", peak_bytes=620),
+                rows="n_vertices", peak_bytes=620, face_truth="vote"),
     ElementKind("points", "point", exact_assignment=True, coarse_min_per_segment=1200,
                 coarse_per_segment=400,
                 coarse_neighbor_cap=True, auto_density=True, unit_sizes_in_levels=True,
                 neighborhood=True, cloud=True, rows="n_total", peak_bytes=220, tiled_bytes=100,
-                exact_count=True, single_weights=True, merge_from=5, settle_cycles=True),
+                exact_count=True, single_weights=True, merge_from=5, settle_cycles=True,
+                face_truth="sample"),
     ElementKind("cells", "cell", dim=3, rows="n_tets", segment_word="superfacets"),
 )}
 

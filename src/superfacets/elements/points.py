@@ -103,8 +103,7 @@ def distinct_points(p: np.ndarray, frame: tuple[np.ndarray, float] | None = None
     any subset of a cloud (a tile's box) lists its points in the same relative
     order as the whole cloud; the frame's cells are cubes wherever the cloud
     sits (at 0, in survey coordinates), so neighbours in space are near in the
-    list and the graph's kernels read memory in order (1M points: the method
-    13.7 -> 8.5 s against the lexicographic order).
+    list and the graph's kernels read memory in order (``docs/notes/code-measurements.md``).
 
     Parameters
     ----------
@@ -245,7 +244,7 @@ def _build_point_graph_of(cloud, n_neighbors: int, neighbor_radius: float | None
     # the cloud's points, where it alone holds them (read from a file), kept as the
     # distinct points and each row's index until asked for: 24 bytes per point less
     cloud.lend_points(pts, index)
-    if n_rows >= _TRIM_MIN:  # the Z-order's freed temporaries (2M points: 44 MiB) kept
+    if n_rows >= _TRIM_MIN:  # the Z-order's freed temporaries kept
         give_back_free_memory()  # by the allocator's heap would add to the build's peak
     n = pts.shape[0]
     k = int(min(n_neighbors, n - 1))
@@ -380,8 +379,8 @@ def _shares(area: np.ndarray, graph: ElementGraph) -> dict:
     indptr = graph.indptr
     if (area.shape[0] >= COMPILED_MIN and indptr.dtype == np.int64 and area.dtype == np.float64
             and indptr.flags.c_contiguous and area.flags.c_contiguous):
-        out = np.empty(area.shape[0])  # (the same values, one pass on threads: 10M points
-        native.kernel("geometry.border_shares")(indptr, area, out)  # 0.22 -> 0.03 s)
+        out = np.empty(area.shape[0])  # (the same values, one pass on threads)
+        native.kernel("geometry.border_shares")(indptr, area, out)
         return {"border_shares": out}
     degree = np.diff(indptr).astype(np.float64)
     return {"border_shares": 2.0 * np.sqrt(np.pi * area) / np.maximum(degree, 1.0)}

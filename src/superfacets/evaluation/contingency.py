@@ -33,7 +33,6 @@ class Contingency:
 
     Examples
     --------
-    >>> import numpy as np, trimesh
     >>> ball = trimesh.creation.icosphere(subdivisions=3)
     >>> labels = segment(ball, 12).labels
     >>> truth = (ball.triangles_center[:, 2] > 0).astype(int)   # two halves
@@ -106,7 +105,6 @@ def contingency(graph, labels, ground_truth) -> Contingency:
 
     Examples
     --------
-    >>> import numpy as np, trimesh
     >>> ball = trimesh.creation.icosphere(subdivisions=3)
     >>> labels = segment(ball, 12).labels
     >>> truth = (ball.triangles_center[:, 2] > 0).astype(int)   # two halves

@@ -17,6 +17,7 @@ import numpy as np
 
 from ..api.levels import adaptive_segment
 from ..api.segmentation import segment
+from ..elements.kinds import kind_of
 from ..errors import MemoryLimitError, ParameterError
 from ..method.params import (
     ASSIGNMENTS,
@@ -104,6 +105,12 @@ class Method:
     description: str = ""
     progress: bool = False
     elements: tuple = ("faces",)
+
+    @property
+    def takes_elements(self) -> bool:
+        """Whether ``run`` takes ``elements=``: a method that segments more than a mesh's
+        faces (the kind scene objects are made of, :mod:`superfacets.elements.kinds`)."""
+        return not all(kind_of(e).objects for e in self.elements)
 
     def resolve(self, params: dict) -> dict:
         """``defaults`` updated with ``params``, converted to the defaults' types.

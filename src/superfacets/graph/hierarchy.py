@@ -29,8 +29,7 @@ least-squares planes), and ``extent_weight`` adds Ward's term, so that large
 flat pieces also pay for their extent (:func:`level_extent_weight`: on scans of
 uneven density).
 
-The merging is a compiled kernel (``merge_levels``, C++): about 0.1 s for 10,000
-superpoints.
+The merging is a compiled kernel (``merge_levels``, C++).
 
 Not in the paper (superpoint hierarchies are what graph networks on scans
 use, e.g. Superpoint Transformer's partition); ``docs/notes/superpoints.md``.
@@ -60,9 +59,8 @@ ALPHA, ETA_CONVEX = 200.0, 0.2
 #: clouds that get the automatic ``density``: LiDAR sweeps): there, with each
 #: point weighing one, sparse far-range points fit a plane for little, and the
 #: level merged the far range across its classes; 0.01 lowered its undersegmentation
-#: error at 300-3,000 superpoints on two sweeps (0.88 -> 0.68 at 300 on frame
-#: 000700) where it raised it on the rooms and the airborne tile, of even
-#: density (``docs/notes/superpoints.md``, "Content-adaptive levels").
+#: error on sweeps where it raised it on clouds of even density
+#: (``docs/notes/superpoints.md``, "Content-adaptive levels").
 AUTO_EXTENT_WEIGHT = 0.01
 
 
@@ -185,8 +183,6 @@ def hierarchy(graph, levels, *, alpha: float = ALPHA, eta_convex: float = ETA_CO
                              f"got {', '.join(map(str, wanted))}")
     if beta > 0 and graph.feature is None:
         raise ParameterError("beta > 0 needs the superfacets' features (graph.feature)")
-
-
     roots = native.kernel("hierarchy.merge_levels")(
         k, *merge_arrays(graph, cost == "planarity"), int(cost == "planarity"), alpha,
         eta_convex, beta if graph.feature is not None else 0.0, extent_weight, np.inf,
@@ -290,7 +286,6 @@ def level_extent_weight(graph) -> float:
 
     Examples
     --------
-    >>> import numpy as np, trimesh
     >>> level_extent_weight(segment(trimesh.creation.icosphere(), 10).elements.graph)  # faces
     0.0
     >>> rng = np.random.default_rng(1)   # a dense square, a sparse one beside it

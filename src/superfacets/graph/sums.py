@@ -13,8 +13,7 @@ the driver (:mod:`superfacets.scale.tiles.merges`); both merge the same sums the
 
 On a point graph whose adjacencies were never listed (a default run) the pairs' sums are
 made in one pass over its layout (``label_pair_sums``): no array per crossing adjacency
-(8.3 million of them, about 260 MiB and as much again for their sums, for 10 million
-points in 100,000 superpoints).
+(millions of them on a large cloud).
 """
 
 from __future__ import annotations

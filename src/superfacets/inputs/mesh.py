@@ -19,6 +19,8 @@ from functools import cached_property
 import numpy as np
 
 from .._kernels import native
+from .._runtime import threads
+from .._runtime.threads import split
 from ..checks import check_real, counted
 from ..errors import InvalidMeshError
 from .bounds import check_extent, column_bounds
@@ -53,7 +55,7 @@ class Mesh:
     face_colors : (m, 3) float ndarray, optional
         RGB of each face in ``[0, 1]``. Either or both: what ``beta > 0`` of
         :func:`superfacets.segment` reads when no ``features`` are given
-        (:meth:`element_colors`).
+        (:meth:`colors_of_faces`, :meth:`colors_of_vertices`).
 
     Raises
     ------
@@ -185,31 +187,37 @@ class Mesh:
         tri = np.stack([c[start], c[start + first + 1], c[start + first + 2]], axis=1)
         return tri, owner
 
-    def element_colors(self, elements: str = "faces") -> np.ndarray | None:
-        """(m, 3) or (n, 3) float64: the RGB of each face or vertex, None without colours.
-
-        A face without a colour of its own takes the mean of its vertices'; a
-        vertex without one, the mean of its faces' (:mod:`superfacets.inputs.rgb`).
-
-        Parameters
-        ----------
-        elements : {'faces', 'vertices'}
+    def colors_of_faces(self) -> np.ndarray | None:
+        """(m, 3) float64: the RGB of each face in ``[0, 1]``, None without colours; a
+        face without a colour of its own takes the mean of its vertices'
+        (:func:`superfacets.inputs.rgb.face_means`).
 
         Examples
         --------
         >>> m = Mesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]],
         ...          colors=[[1, 0, 0], [0, 1, 0], [0, 0, 1]])
-        >>> m.element_colors("faces").round(3).tolist()
+        >>> m.colors_of_faces().round(3).tolist()
         [[0.333, 0.333, 0.333]]
         """
-        own, other = ((self.face_colors, self.colors) if elements == "faces"
-                      else (self.colors, self.face_colors))
-        if own is not None or other is None:
-            return own
-        if elements == "faces":
-            return face_means(other, np.asarray(self.corners), np.asarray(self.offsets))
-        return vertex_means(other, np.asarray(self.corners), np.asarray(self.offsets),
-                            self.n_vertices)
+        if self.face_colors is not None or self.colors is None:
+            return self.face_colors
+        return face_means(self.colors, np.asarray(self.corners), np.asarray(self.offsets))
+
+    def colors_of_vertices(self) -> np.ndarray | None:
+        """(n, 3) float64: the RGB of each vertex in ``[0, 1]``, None without colours; a
+        vertex without a colour of its own takes the mean of its faces'
+        (:func:`superfacets.inputs.rgb.vertex_means`).
+
+        Examples
+        --------
+        >>> m = Mesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], face_colors=[[1, 0, 0]])
+        >>> m.colors_of_vertices().tolist()[0]
+        [1.0, 0.0, 0.0]
+        """
+        if self.colors is not None or self.face_colors is None:
+            return self.colors
+        return vertex_means(self.face_colors, np.asarray(self.corners),
+                            np.asarray(self.offsets), self.n_vertices)
 
     def polygons(self) -> list[np.ndarray]:
         """The faces as a list of vertex index arrays (one per face, any size)."""
@@ -232,11 +240,9 @@ class Mesh:
         centroids, areas, normals = np.empty((m, 3)), np.empty(m), np.empty((m, 3))
         v = np.ascontiguousarray(self.vertices)
         if self.is_triangular:  # one pass: no (m, 3) temporaries; ranges of faces on threads
-            from .._runtime.threads import run_ranges, split
-
             f = np.ascontiguousarray(self.faces)
             face_geometry = native.kernel("geometry.face_geometry")
-            run_ranges(lambda a, b: face_geometry(v, f[a:b], centroids[a:b], areas[a:b],
+            threads.run_ranges(lambda a, b: face_geometry(v, f[a:b], centroids[a:b], areas[a:b],
                                                   normals[a:b]), split(m))
         else:
             polygon_geometry = native.kernel("geometry.polygon_geometry")
@@ -251,7 +257,6 @@ class Mesh:
         holds the centroids and areas already)."""
         if not self.is_triangular:
             return self._compute_geometry()[2]
-        from .._runtime.threads import run_ranges, split
 
         m, block = self.n_faces, 1 << 15
         normals = np.empty((m, 3))
@@ -264,7 +269,7 @@ class Mesh:
                 t = min(b, s + block)
                 face_geometry(v, f[s:t], centroids[:t - s], areas[:t - s], normals[s:t])
 
-        run_ranges(part, split(m))
+        threads.run_ranges(part, split(m))
         return readonly(normals)
 
     @property

@@ -14,10 +14,38 @@ from pathlib import Path
 
 from .clouds import CLOUD_FORMATS, is_cloud_file, read_cloud
 from .export import to_pyvista, to_trimesh, write_colored_mesh, write_mesh
-from .files import atomic_write
+from .files import atomic_write, split_suffix
 from .labels import read_labels, write_labels, write_segindices
 from .meshes import MESH_FORMATS, read_mesh
 from .tetmeshes import VOLUME_FORMATS, read_volume, write_volume_labels
+
+
+def input_kind(path) -> str:
+    """What a file holds, decided by its name and, for a PLY, its header: ``"volume"`` (a
+    tetrahedral mesh: ``.msh``, ``.vtk``, ``.vtu``, ``.mesh``), ``"cloud"`` (a cloud format,
+    or a PLY declaring no face) or ``"mesh"``. Every command and reader asks here.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    MeshFormatError
+        If a PLY header cannot be read.
+
+    Examples
+    --------
+    >>> input_kind("part.msh"), input_kind("scan.laz"), input_kind("bunny.off.gz")
+    ('volume', 'cloud', 'mesh')
+    """
+    if split_suffix(Path(path))[0] in VOLUME_FORMATS:
+        return "volume"
+    return "cloud" if is_cloud_file(path) else "mesh"
 
 
 def read_input(path):
@@ -41,20 +69,18 @@ def read_input(path):
 
     Examples
     --------
-    >>> import numpy as np, trimesh
     >>> _ = trimesh.creation.box().export("box.ply")
     >>> np.save("points.npy", np.random.default_rng(0).random((20, 3)))
     >>> type(read_input("box.ply")).__name__, type(read_input("points.npy")).__name__
     ('Mesh', 'PointCloud')
     """
-    from .files import split_suffix
 
-    if split_suffix(Path(path))[0] in VOLUME_FORMATS:  # .msh, .vtk, .vtu, .mesh
-        return read_volume(path)
-    return read_cloud(path) if is_cloud_file(path) else read_mesh(path)
+    kind = input_kind(path)
+    return (read_volume(path) if kind == "volume" else read_cloud(path) if kind == "cloud"
+            else read_mesh(path))
 
 
-__all__ = ["read_mesh", "write_mesh", "read_labels", "write_labels", "write_colored_mesh",
-           "atomic_write", "MESH_FORMATS", "read_cloud", "read_input", "CLOUD_FORMATS",
-           "is_cloud_file", "write_segindices", "to_trimesh", "to_pyvista", "read_volume",
-           "write_volume_labels", "VOLUME_FORMATS"]
+__all__ = ["input_kind", "read_mesh", "write_mesh", "read_labels", "write_labels",
+           "write_colored_mesh", "atomic_write", "MESH_FORMATS", "read_cloud", "read_input",
+           "CLOUD_FORMATS", "is_cloud_file", "write_segindices", "to_trimesh", "to_pyvista",
+           "read_volume", "write_volume_labels", "VOLUME_FORMATS"]

@@ -42,9 +42,11 @@ from .ply import ply_colors, read_ply_scalars
 __all__ = ["read_cloud", "CLOUD_FORMATS", "is_cloud_file", "check_laz", "check_las",
            "e57_counts"]
 
+from .._runtime import extras
 from ..checks import not_real
 from ..inputs.cloud import InvalidCloudError, PointCloud
-from .headers import check_las, check_laz, e57_counts  # noqa: E402 (re-exported: headers)
+from .headers import check_las, check_laz, e57_counts, header_counts  # noqa: E402 (re-exported: headers)
+from .orientation import sensor_up
 
 #: Point-cloud formats of :func:`read_cloud` (PLY files are clouds when they have no faces).
 CLOUD_FORMATS = ("pcd", "xyz", "pts", "txt", "npy", "las", "laz", "e57")
@@ -157,8 +159,6 @@ def read_cloud(path, format: str | None = None):
                                   "decompress it first")
         kw = _read_e57(path)
     else:
-        from .headers import header_counts
-
         counts = header_counts(path)  # a header declaring more than the file holds: refused
         data = read_bytes(path, comp, counts=counts)
         if fmt == "ply":
@@ -210,9 +210,7 @@ def _packed_rgb(values: np.ndarray) -> np.ndarray:
 
 
 def _read_pcd(path: Path) -> dict:
-    from .._runtime.extras import require
-
-    pypcd4 = require("pypcd4", "reading PCD files")
+    pypcd4 = extras.require("pypcd4", "reading PCD files")
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file")
     if path.is_dir():
@@ -252,8 +250,6 @@ def _read_pcd(path: Path) -> dict:
     out = {"points": pts, "normals": nrm, "colors": col, "allow_invalid": True,
            "viewpoint": viewpoint[:3], "shape": (height, width) if height > 1 else None}
     if height > 1:  # an image of a camera: up is its -y, turned as the sensor was
-        from .orientation import sensor_up
-
         out["up"] = sensor_up(viewpoint)
     return out
 
@@ -294,9 +290,7 @@ def _check_pcd_header(path: Path) -> None:
 
 
 def _read_las(path: Path) -> dict:
-    from .._runtime.extras import require
-
-    laspy = require("laspy", "reading LAS/LAZ files")
+    laspy = extras.require("laspy", "reading LAS/LAZ files")
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file")
     if path.is_dir():
@@ -333,9 +327,7 @@ def _e57_positions(raw: dict, path: Path) -> np.ndarray:
 
 
 def _read_e57(path: Path) -> dict:
-    from .._runtime.extras import require
-
-    pye57 = require("pye57", "reading E57 files")
+    pye57 = extras.require("pye57", "reading E57 files")
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file")
     if path.is_dir():

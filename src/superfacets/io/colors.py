@@ -13,6 +13,7 @@ import colorsys
 
 import numpy as np
 
+from ..elements import faces
 from ..elements.labels import check_labels, relabel_dense
 
 __all__ = ["PALETTE", "superfacet_colors", "face_colors", "superfacet_adjacency",
@@ -30,9 +31,7 @@ PALETTE = np.array([
 def _graph(mesh):
     """The face graph of a Mesh, or the element graph given."""
     if hasattr(mesh, "faces"):
-        from ..elements.faces import face_graph
-
-        return face_graph(mesh)
+        return faces.face_graph(mesh)
     return mesh
 
 

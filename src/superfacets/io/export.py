@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._runtime import extras
 from ..elements.kinds import kind_of
 from ..elements.labels import check_labels, relabel_dense
 from ..errors import MeshFormatError
@@ -353,7 +354,6 @@ def to_trimesh(mesh, labels=None):
     """
     import trimesh
 
-
     mesh = as_mesh(mesh)
     tri, owner = mesh.triangulated()
     out = trimesh.Trimesh(vertices=np.array(mesh.vertices), faces=np.array(tri), process=False,
@@ -384,9 +384,8 @@ def to_pyvista(mesh, labels=None):
     MissingExtraError
         Without the ``render`` extra.
     """
-    from .._runtime.extras import require
 
-    pv = require("pyvista", "to_pyvista")
+    pv = extras.require("pyvista", "to_pyvista")
     mesh = as_mesh(mesh)
     cells = np.insert(np.asarray(mesh.corners), np.asarray(mesh.offsets)[:-1], mesh.face_sizes)
     poly = pv.PolyData(np.array(mesh.vertices), cells)

@@ -21,8 +21,9 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Callable
 
+from .._runtime import memory
 from ..checks import check_int
-from ..errors import MeshFormatError, SuperfacetsError
+from ..errors import MemoryLimitError, MeshFormatError, ParameterError, SuperfacetsError
 
 __all__ = ["split_suffix", "read_bytes", "text_lines", "text_chunks", "atomic_write", "Outputs",
            "save", "COMPRESSIONS", "decompressed", "decompressed_head", "sha256_of", "array_digest",
@@ -110,8 +111,6 @@ def max_ratio() -> float:
     except ValueError:
         value = float("nan")
     if not (value >= 1 and math.isfinite(value)):
-        from ..errors import ParameterError
-
         raise ParameterError(f"SUPERFACETS_MAX_RATIO={raw[:40]!r}: give a number >= 1 (the "
                              "most times a compressed input may grow), or unset it")
     return value
@@ -178,9 +177,8 @@ def decompressed(path: Path, comp: str, limit: int | None = None,
     >>> decompressed(Path("x.txt.gz"), ".gz")
     b'0 1 2'
     """
-    from .._runtime.memory import available_bytes
 
-    avail = available_bytes()
+    avail = memory.available_bytes()
     cap = avail // 2 if avail else 1 << 62
     why = ("what its header declares allows" if limit is not None and limit < cap else
            "this process may use for it")
@@ -197,8 +195,6 @@ def decompressed(path: Path, comp: str, limit: int | None = None,
     except _ERRORS as exc:
         raise MeshFormatError(f"{path}: cannot decompress ({comp[1:]}): {exc}") from None
     if out.tell() > limit:
-        from ..errors import MemoryLimitError
-
         if bomb:
             raise MemoryLimitError(
                 f"{path}: decompresses to more than {ratio:g} times its {size:,} bytes (real "
@@ -345,7 +341,6 @@ def load_checked(path, digest: str | None, dtype=None):
     [0, 1, 2, 3]
     """
     import numpy as np
-
 
     try:
         a = np.fromfile(path, dtype=dtype) if dtype is not None else (

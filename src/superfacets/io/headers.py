@@ -14,8 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
+from .._runtime import extras
 from ..checks import not_real
-from ..errors import MeshFormatError
+from ..errors import MemoryLimitError, MeshFormatError, MissingExtraError
 from .files import decompressed_head, max_ratio, split_suffix
 
 __all__ = ["header_counts", "e57_counts", "check_las", "check_laz", "check_stl", "ply_mapped",
@@ -57,8 +58,6 @@ def header_counts(path) -> dict | None:
     p = Path(path)
     suffix, comp = split_suffix(p)
     if suffix == "e57" and comp is None and p.is_file():  # (its XML header: scans, counts)
-        from ..errors import MissingExtraError
-
         try:
             return {"points": sum(n for _, n, _ in e57_counts(p))}
         except MissingExtraError:
@@ -314,8 +313,6 @@ def _check_laz_ratio(path, head: bytes, size: int) -> None:
         points = max(points, struct.unpack_from("<Q", head, 247)[0])
     ratio = max_ratio()
     if points * length > ratio * max(size, 1 << 12):
-        from ..errors import MemoryLimitError
-
         raise MemoryLimitError(
             f"{path}: its {points:,} points of {length} bytes would take more than {ratio:g} "
             f"times its {size:,} bytes (real LAZ files: about 10 times): refused as a likely "
@@ -497,9 +494,8 @@ def e57_counts(path: Path) -> list:
     >>> e57_counts(Path("site.e57"))  # doctest: +SKIP
     [('station 0', 3000, array([0., 0., 0.]))]
     """
-    from .._runtime.extras import require
 
-    pye57 = require("pye57", "reading E57 files")
+    pye57 = extras.require("pye57", "reading E57 files")
     try:
         e57 = pye57.E57(str(path))
         try:

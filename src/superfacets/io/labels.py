@@ -12,9 +12,13 @@ from typing import Iterable
 
 import numpy as np
 
+from .._runtime import extras
 from ..elements.labels import check_labels
 from ..errors import MeshFormatError
+from .clouds import check_laz
 from .files import Outputs, read_bytes, save, split_suffix, text_lines
+from .ply import read_ply_labels
+from .records import LABEL_FIELD
 
 __all__ = ["read_labels", "write_labels", "write_segindices", "read_field"]
 
@@ -201,8 +205,6 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
         raise FileNotFoundError(f"{path}: no such file")
     fmt, comp = split_suffix(path)
     if fmt in ("las", "laz"):  # a scan written by segment -o OUT.laz
-        from .records import LABEL_FIELD
-
         labels = read_field(path, LABEL_FIELD)
         if n_faces is not None and labels.shape[0] != n_faces:
             raise MeshFormatError(f"{path}: has {labels.shape[0]} points but the input has "
@@ -210,8 +212,6 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
         return labels
     data = read_bytes(path, comp, "file of labels", bounded=False)  # (runs of one value)
     if fmt == "ply":
-        from .ply import read_ply_labels
-
         labels = read_ply_labels(path, data)
     elif fmt == "json":  # the ScanNet Segmentator's {"segIndices": [...]}
         import json
@@ -276,10 +276,7 @@ def read_field(path, name: str) -> np.ndarray:
         raise FileNotFoundError(f"{path}: no such file")
     fmt, comp = split_suffix(path)
     if fmt in ("las", "laz"):
-        from .._runtime.extras import require
-        from .clouds import check_laz
-
-        laspy = require("laspy", "reading LAS/LAZ files")
+        laspy = extras.require("laspy", "reading LAS/LAZ files")
         check_laz(path)
         try:
             las = laspy.read(path)

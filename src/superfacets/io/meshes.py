@@ -326,7 +326,7 @@ def _load_trimesh_quietly(data: bytes, fmt: str, path: Path):
 
 def _merged_rows(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``np.unique(v, axis=0, return_inverse=True)``, the same arrays, by a sort of the
-    columns (1.3M STL triangles: 1.5 s against 4.4 s): the distinct rows in lexicographic
+    columns (a third of numpy's time on a large STL): the distinct rows in lexicographic
     order (``-0.0`` as ``0.0``, NaN rows apart) and the one of each row."""
     if v.shape[0] == 0:
         return v, np.zeros(0, dtype=np.int64)

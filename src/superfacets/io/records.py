@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._runtime import extras
 from ..errors import MeshFormatError, ParameterError
 from .files import Outputs, read_bytes, save, split_suffix
 from .headers import check_las
@@ -175,9 +176,8 @@ def _count_error(source: Path, n_labels: int, n_records: int) -> ParameterError:
 
 def _las_with(source: Path, labels: np.ndarray, name: str, compress: bool) -> bytes:
     """The LAS/LAZ bytes of ``source`` with ``labels`` as the extra dimension ``name``."""
-    from .._runtime.extras import require
 
-    laspy = require("laspy", "writing LAS/LAZ files")
+    laspy = extras.require("laspy", "writing LAS/LAZ files")
     check_las(source)
     try:
         las = laspy.read(source)

@@ -37,13 +37,16 @@ from pathlib import Path
 
 import numpy as np
 
+from .._runtime import extras
 from ..errors import InvalidMeshError, MeshFormatError
 from ..inputs.bounds import column_bounds, finite_rows, rows_in_box
 from ..inputs.cloud import InvalidCloudError, PointCloud, as_cloud
 from ..inputs.convert import as_mesh
 from ..inputs.mesh import Mesh
 from ..inputs.rgb import color_top, unit_colors
-from .headers import first_line, npy_mapped, ply_mapped
+from .clouds import is_cloud_file, read_cloud
+from .headers import check_las, first_line, npy_mapped, ply_mapped
+from .meshes import read_mesh
 from .ply import VertexView
 
 __all__ = ["RegionReader", "Survey", "CHUNK", "STREAMED", "SAMPLE", "point_cloud_of"]
@@ -137,10 +140,7 @@ class RegionReader:
                 return cls(str(p), "faces", "ply-mesh", int(ply["face"].count), chunk)
             return cls(str(p), "points", "ply-points", int(ply["vertex"].count), chunk)
         if suffix in ("las", "laz"):
-            from .._runtime.extras import require
-            from .headers import check_las
-
-            laspy = require("laspy", "reading LAS/LAZ files")
+            laspy = extras.require("laspy", "reading LAS/LAZ files")
             check_las(p)
             try:
                 with laspy.open(p) as f:
@@ -171,9 +171,6 @@ class RegionReader:
 
         obj = source
         if isinstance(source, (str, Path)):
-            from .clouds import is_cloud_file, read_cloud
-            from .meshes import read_mesh
-
             obj = read_cloud(source) if is_cloud_file(source) else read_mesh(source)
         cloud = isinstance(obj, PointCloud) or type(obj).__name__ == "PointCloud" or (
             isinstance(obj, np.ndarray) and obj.ndim in (2, 3) and obj.shape[-1] == 3)
@@ -198,8 +195,8 @@ class RegionReader:
                                   "or point clouds (this mesh has polygons)")
         np.save(folder / "vertices.npy", np.ascontiguousarray(obj.vertices, dtype=np.float64))
         np.save(folder / "faces.npy", np.ascontiguousarray(faces, dtype=np.int64))
-        if obj.element_colors("faces") is not None:
-            np.save(folder / "face_colors.npy", obj.element_colors("faces"))
+        if obj.colors_of_faces() is not None:
+            np.save(folder / "face_colors.npy", obj.colors_of_faces())
         return cls(str(folder), "faces", "npy-mesh", int(faces.shape[0]), chunk)
 
     # ------------------------------------------------------------------ reading

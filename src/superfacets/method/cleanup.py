@@ -28,6 +28,7 @@ import numpy as np
 
 from .._kernels import native
 from .._runtime.memory import give_back_free_memory
+from .._runtime.threads import using
 from ..elements.builders import as_element_graph
 from ..elements.graph import chunked
 from ..elements.kinds import kind_of
@@ -35,6 +36,8 @@ from ..elements.labels import check_labels, relabel_dense
 from ..errors import ParameterError
 from .connectivity import enforce_connectivity
 from .params import DEFAULTS, check_int, check_nonneg, check_number, check_positive, check_threads
+from .passes import final_centers
+from .weights import check_features, feature_jumps
 
 __all__ = ["clean_boundaries", "cut_costs",
            "CREASE", "CREASE_SMOOTH_NORMALS", "SMOOTHNESS", "SMOOTHNESS_FACES", "BAND",
@@ -114,8 +117,6 @@ def cut_costs(graph, *, alpha: float = DEFAULTS.alpha, eta_convex: float = DEFAU
     factor = crease * alpha / np.pi
     f = None
     if beta > 0:
-        from .weights import check_features, feature_jumps
-
         f = check_features(features, g)
 
     def cost(sl):
@@ -135,8 +136,6 @@ def _checked_centers(labels, centers, sizes, positions) -> np.ndarray:
 
     k, n = int(labels.max()) + 1, labels.shape[0]
     if centers is None:
-        from .passes import final_centers
-
         return final_centers(labels, np.empty(0, dtype=np.int64), sizes, positions)
     centers = np.asarray(centers)
     if (centers.shape != (k,) or not np.issubdtype(centers.dtype, np.integer)
@@ -345,7 +344,6 @@ def clean_boundaries(graph, labels, centers=None, *, alpha: float = DEFAULTS.alp
         out = labels.copy()
         args = (members, starts.astype(np.int64), pair // k, pair % k, band_of, g.indptr,
                 g.indices, cut_csr, labels, sizes, positions, means, smooth, out)
-        from .._runtime.threads import using
 
         with using(n_threads):  # (the kernel takes the bands in turn on threads)
             solve_bands(0, starts.size - 1, *args)

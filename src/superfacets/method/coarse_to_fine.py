@@ -36,10 +36,12 @@ from .._runtime.arrays import real_rows
 from ..elements.graph import LAZY, ElementGraph, adjacency_csr, pairs_from_csr
 from ..elements.kinds import kind_of
 from ..inputs.bounds import column_bounds
+from . import passes
 from .classify import make_classifier
 from .expansion import Workspaces, bucket_width
 from .initialization import initial_centers
 from .params import superfacet_measure
+from .passes import update_centers
 from .weights import HeldWeights, weights_array
 
 
@@ -297,7 +299,6 @@ def coarse_centers(graph: ElementGraph, csr_w: np.ndarray, ratio: int, *, init: 
     clusters are made, before the coarse run (the pipeline frees there what only
     the coarsening read).
     """
-    from .passes import iterate, update_centers
 
     co = coarsen(graph, csr_w, ratio)
     if on_coarsened is not None:
@@ -312,7 +313,7 @@ def coarse_centers(graph: ElementGraph, csr_w: np.ndarray, ratio: int, *, init: 
         work = np.empty(cg.n_elements, dtype=np.int64)
         work[:start.shape[0]] = start
         classifier = make_classifier(assignment, cg, co.weights, (window * radius) ** 2, spaces)
-        it = iterate(classifier, work, start.shape[0], np.ascontiguousarray(cg.sizes),
+        it = passes.iterate(classifier, work, start.shape[0], np.ascontiguousarray(cg.sizes),
                      np.ascontiguousarray(cg.positions), max_iter, tol=tol, min_move=min_move)
     finally:
         spaces.close()
@@ -376,7 +377,6 @@ def start_centers(graph: ElementGraph, csr_w: np.ndarray, params,
         The coarsening used (1: none).
     """
     import time
-
 
     p = params
     if ratio > 1:

@@ -10,7 +10,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..elements.labels import relabel_dense
+from ..graph import hierarchy
 from ..graph.adjacency import superfacet_graph
+from ..graph.hierarchy import pieces
 from ..method.params import DEFAULTS
 from .cleanup import clean_boundaries
 from .connectivity import enforce_connectivity as _enforce_connectivity
@@ -50,7 +52,6 @@ def finish(graph, label: np.ndarray, centers: np.ndarray, rules: Rules
 
     Examples
     --------
-    >>> from superfacets.method.pipeline import passes_example
     >>> s = passes_example()  # an icosphere's run up to its passes
     >>> graph, rules = s.graph, s.rules
     >>> labels, kept = finish(graph, s.it.label, s.it.centers, rules)
@@ -94,7 +95,6 @@ def clean_up(graph, labels: np.ndarray, centers: np.ndarray, rules: Rules,
 
     Examples
     --------
-    >>> from superfacets.method.pipeline import passes_example
     >>> s = passes_example()  # an icosphere's run up to its passes
     >>> graph, rules = s.graph, s.rules
     >>> labels, kept = finish(graph, s.it.label, s.it.centers, rules)
@@ -133,7 +133,6 @@ def merge_small(graph, labels: np.ndarray, centers: np.ndarray, rules: Rules) ->
 
     Examples
     --------
-    >>> from superfacets.method.pipeline import passes_example
     >>> s = passes_example()  # an icosphere's run up to its passes
     >>> graph, rules = s.graph, s.rules
     >>> labels, kept = finish(graph, s.it.label, s.it.centers, rules)
@@ -171,14 +170,12 @@ def exact_count(graph, labels: np.ndarray, rules: Rules) -> tuple[np.ndarray, in
 
     Examples
     --------
-    >>> from superfacets.method.pipeline import passes_example
     >>> s = passes_example()  # an icosphere's run up to its passes
     >>> graph, rules = s.graph, s.rules
     >>> labels, kept = finish(graph, s.it.label, s.it.centers, rules)
     >>> exact_count(graph, labels, rules)[1]
     12
     """
-    from ..graph.hierarchy import hierarchy, pieces
 
     k = rules.k if rules.target is None else rules.target
     n = int(labels.max()) + 1 if labels.size else 0
@@ -189,5 +186,5 @@ def exact_count(graph, labels: np.ndarray, rules: Rules) -> tuple[np.ndarray, in
     if n <= fewest:
         return labels, fewest
     p = rules.params
-    level = hierarchy(sg, [fewest], alpha=p.alpha, eta_convex=p.eta_convex)
+    level = hierarchy.hierarchy(sg, [fewest], alpha=p.alpha, eta_convex=p.eta_convex)
     return level.labels(0, labels).astype(np.int64), fewest

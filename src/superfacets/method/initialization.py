@@ -77,7 +77,6 @@ def piece_seeds(graph, pieces: tuple[np.ndarray, int] | None = None) -> np.ndarr
 
     Examples
     --------
-    >>> import numpy as np, trimesh
     >>> a, b = trimesh.creation.icosphere(1), trimesh.creation.icosphere(1)
     >>> both = np.r_[a.vertices, b.vertices + 5], np.r_[a.faces, b.faces + len(a.vertices)]
     >>> len(piece_seeds(both))

@@ -40,7 +40,8 @@ import numpy as np
 from .._kernels import native
 from .._runtime.arrays import real_rows
 from ..elements.labels import check_labels
-from ..graph.hierarchy import merge_arrays
+from ..graph import hierarchy
+from ..graph.hierarchy import merge_arrays, pieces
 from ..graph.sums import border_sums, grouped_graph, grouped_planes, point_sums
 
 __all__ = ["merge_to_count", "merge_nodes", "flat_merges", "flat_share", "flat_merge_nodes",
@@ -259,7 +260,6 @@ def flat_merge_nodes(pg, k: int, max_rise: float, alpha: float = 0.0,
     ``scatter`` are the points' count, mean and scatter
     (:func:`superfacets.graph.hierarchy.planarity_graph`): the merged superpoint of
     each node ((K,) int64, dense, numbered by their lowest node)."""
-    from .._kernels import native
 
     n_nodes = pg.n_segments
     if n_nodes == 0:
@@ -380,7 +380,6 @@ def merge_nodes(nodes: dict, pairs: dict, target: int, max_rise: float | None,
     >>> sorted(np.bincount(final).tolist()), fewest
     ([1, 2], 2)
     """
-    from ..graph.hierarchy import hierarchy, pieces
 
     count = nodes["count"]
     k = count.shape[0]
@@ -400,8 +399,8 @@ def merge_nodes(nodes: dict, pairs: dict, target: int, max_rise: float | None,
             graph = _planes_graph(nodes, pairs, final, guard)
             fewest = max(target, pieces(graph))
             if graph.n_segments > fewest:
-                final = hierarchy(graph, [fewest], cost="planarity").labels(0, final).astype(
-                    np.int64)
+                tree = hierarchy.hierarchy(graph, [fewest], cost="planarity")
+                final = tree.labels(0, final).astype(np.int64)
         return flat, final, min(fewest, n_flat)
     area = np.bincount(flat, weights=nodes["area"], minlength=n_flat)
     mean = np.stack([np.bincount(flat, weights=nodes["area"] * nodes["area_mean"][:, c],
@@ -411,7 +410,7 @@ def merge_nodes(nodes: dict, pairs: dict, target: int, max_rise: float | None,
     fewest = max(target, pieces(graph))
     final = flat
     if n_flat > fewest:
-        level = hierarchy(graph, [fewest], alpha=alpha, eta_convex=eta_convex)
+        level = hierarchy.hierarchy(graph, [fewest], alpha=alpha, eta_convex=eta_convex)
         final = level.labels(0, flat).astype(np.int64)
     return flat, final, min(fewest, n_flat)
 
@@ -423,7 +422,6 @@ def _planes_graph(nodes: dict, pairs: dict, group: np.ndarray | None,
     scatter (its least-squares plane); with ``max_jump``, only its edges between neighbours
     of one colour (:func:`same_feature_edges`)."""
     from dataclasses import replace
-
 
     planes = (nodes["count"], nodes["mean"], nodes["scatter"])
     alone = group is None

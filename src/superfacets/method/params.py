@@ -69,9 +69,7 @@ DEFAULT_CENTER_TOL = 0.05
 #: Automatic coarse-to-fine (``coarsen=None``, ``tol > 0``): the faces' (and vertices')
 #: thresholds and the points', from the table of kinds (:mod:`superfacets.elements.kinds`:
 #: ``coarse_min_per_segment``, ``coarse_per_segment``). On points, clusters of at most
-#: ``n_neighbors // 2`` (15 benchmark meshes sampled with 200,000 points: clusters of 5
-#: keep UE, k = 50: +0.5 %, k = 100: -2.2 %, and take 42 % off the time;
-#: docs/notes/superpoints.md).
+#: ``n_neighbors // 2`` (the error kept in less time: docs/notes/superpoints.md).
 COARSE_MIN_PER_SEGMENT = kind_of("faces").coarse_min_per_segment
 COARSE_PER_SEGMENT = kind_of("faces").coarse_per_segment
 COARSE_MIN_PER_SEGMENT_POINTS = kind_of("points").coarse_min_per_segment

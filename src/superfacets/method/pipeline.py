@@ -48,9 +48,10 @@ import numpy as np
 
 from .._runtime import interrupts
 from .._runtime.memory import give_back_free_memory
-from .._runtime.progress import tick
+from .._runtime.progress import new_bar, tick
 from .._runtime.threads import using
 from ..elements.builders import kind_for
+from . import stages
 from .finish import clean_up, exact_count, finish, merge_small
 from .merges import merge_to_count
 from .params import ALL_KINDS, PARAMETERS, SegmentParams, resolve
@@ -132,8 +133,6 @@ class Hooks:
         self.bar = None
         self._ticking = None
         if progress:  # one bar: the set-up stages by name, then the passes
-            from .._runtime.progress import new_bar
-
             self.bar = new_bar(total=None, desc=f"{kind[:-1]} graph", unit="pass", leave=False)
             self.bar.refresh()  # (shown at once: the graph's build is a run's longest wait)
             self._ticking = tick(self.bar)
@@ -399,14 +398,12 @@ def passes_example(n_segments: int = 12):
 
     import trimesh
 
-    from .stages import build_graph, initialize, iterate_passes, resolve_rules, weigh
-
     ball = trimesh.creation.icosphere(subdivisions=3)
     _, graph, p = build_graph(ball, resolve(n_segments=n_segments))
     rules = resolve_rules(graph, p)
     hooks = Hooks(False, p.max_iter, graph.kind)
     w, swap_w = weigh(graph, rules)
     init, _ = initialize(graph, w, rules, hooks)
-    it = iterate_passes(graph, w, swap_w, init, rules, hooks)
+    it = stages.iterate_passes(graph, w, swap_w, init, rules, hooks)
     return SimpleNamespace(graph=graph, rules=rules, hooks=hooks, w=w, swap_w=swap_w,
                            init=init, it=it)

@@ -17,14 +17,12 @@ __all__ = ["better_method", "assignment_of", "superfacet_size", "superfacet_meas
 
 #: The fewest elements per superpoint, on average, of the many superpoints a run with
 #: ``merge_from > 1`` segments first: fewer leave their planes to a few points and cost
-#: time for nothing (a room of 81,000 points at k = 3,000 starts from 6,780, not 15,000:
-#: UE 0.250 against 0.241 with 8, in 1.2 instead of 1.6 times the time of no merges).
+#: time for nothing (``docs/notes/superpoints-defaults.md``).
 MIN_FINE_ELEMENTS = 12
 #: The most elements per superpoint, on average, of those first superpoints: on a large
 #: scan at a small ``k`` (an airborne tile of 700,000 points at k = 100: 1,400 points
 #: each at 5 times) they are too large to keep to one surface, and the merges cannot
-#: undo what they join (the tile's UE 0.035 -> 0.016 at k = 100 from 100 points each;
-#: 50 and 200 did worse: ``docs/notes/superpoints-defaults.md``).
+#: undo what they join (``docs/notes/superpoints-defaults.md``).
 FINE_ELEMENTS = 100
 
 
@@ -66,16 +64,13 @@ def better_method(params, kind: str) -> tuple[bool, bool]:
     on for faces and vertices with the paper's weighting (unless ``paper``), off
     for points, tetrahedral cells (not measured) and with another weighting.
 
-    On faces both beat the paper at every k from 50 to 300 (UE -6 to -11 %,
-    compactness -14 to -19 %) and in every category of the 300 benchmark meshes
-    but Cup at k = 50 and 150, at its speed at the default k (``docs/notes/cleanup.md``,
-    "The default" and "Swap energies"); on vertices, with the clean-up's
-    crease weight and band of that kind (:mod:`superfacets.method.cleanup`) and the exact
-    classification (:func:`assignment_of`), they lower the undersegmentation
-    error by 4-8 % and the compactness by 5-7 % at k = 50, 150, 300. On points they lower
-    the compactness by 18-25 %
-    but not the undersegmentation error at k = 150 (+0.3 %), so points keep
-    the paper's method unless asked (``docs/notes/cleanup.md``, "Vertices and points").
+    On faces both beat the paper at every k from 50 to 300 at its speed
+    (``docs/notes/cleanup.md``, "The default" and "Swap energies"); on vertices, with the
+    clean-up's crease weight and band of that kind (:mod:`superfacets.method.cleanup`)
+    and the exact classification (:func:`assignment_of`), they lower the
+    undersegmentation error and the compactness. On points they lower the compactness
+    but not the undersegmentation error, so points keep the paper's method unless asked
+    (``docs/notes/cleanup.md``, "Vertices and points").
 
     Parameters
     ----------
@@ -115,11 +110,9 @@ def assignment_of(params, kind: str) -> str:
     compiled, by blocks of elements on threads) gives the windows' quality in less
     time. On vertices, a third of their time with the default's few passes: that is
     what brings the better method to the paper's time there (``docs/notes/cleanup.md``,
-    "The default on vertices, at the paper's speed"). On points (the 300 benchmark
-    meshes sampled, k = 150: UE -0.3 %, compactness +0.1 %; 200,000 points a mesh:
-    UE +0.2 to +0.5 %, 36 % less time), the passes of a million points take 1.4
-    instead of 3.3 s (``docs/notes/superpoints-defaults.md``, "The exact search on
-    every cloud"). On faces the windows' bound on a superfacet's extent keeps them
+    "The default on vertices, at the paper's speed"); on points, the same error in
+    less than half the passes' time (``docs/notes/superpoints-defaults.md``, "The exact
+    search on every cloud"). On faces the windows' bound on a superfacet's extent keeps them
     more compact. Content-sensitive superfacets differ in extent by design; on the
     five labelled scans the exact search gave the lower undersegmentation error than
     windows scaled to each center's extent in 11 of 15 settings

@@ -40,6 +40,8 @@ from .._runtime.memory import give_back_free_memory
 from .._runtime.threads import in_parallel
 from ..elements.kinds import kind_of
 from ..elements.labels import relabel_dense
+from . import passes
+from .passes import hold_small_moves, update_centers
 
 __all__ = ["swap_round", "swap_and_iterate", "POWER", "LLOYD",
            "MAX_FRACTION", "MIN_GAIN", "ROUNDS", "START_TOL", "FAST_ROUNDS", "PASSES_AFTER",
@@ -68,11 +70,8 @@ START_TOL = 0.2
 #: ... one round of swaps ...
 FAST_ROUNDS = 1
 #: ... then at most this many passes, and the clean-up, if on, finishes the boundaries
-#: (on the 300 benchmark meshes, k = 150, with the clean-up: UE -6.2 %, compactness
-#: -15.1 %, 1.05 times the paper's time; docs/notes/cleanup.md, "Split-and-merge at the
-#: paper's speed").
-#: Vertices keep 2: one pass raised their UE (45 meshes, k = 150: -5.4 % against the
-#: paper instead of -6.4 %).
+#: (docs/notes/cleanup.md, "Split-and-merge at the paper's speed"). Vertices keep 2:
+#: one pass raised their error.
 PASSES_AFTER = kind_of("vertices").passes_after  # values: the table of kinds
 #: The same on faces: 1. With the swap energies of :data:`SWAP_ETA_CONVEX_FACES` the
 #: second pass no longer pays: on the 300 meshes, k = 50 ... 300, UE within 0.4 points of
@@ -365,8 +364,6 @@ def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.nda
     """
     from dataclasses import replace
 
-    from .passes import hold_small_moves, iterate, update_centers
-
     def used(it) -> np.ndarray:
         present = np.zeros(it.centers.shape[0], dtype=bool)
         present[it.label] = True
@@ -396,7 +393,7 @@ def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.nda
         moved = moved[moved >= 0]
         centers[:moved.shape[0]] = moved
         bound = max_iter if passes_after is None else min(max_iter, passes_after)
-        after = iterate(classifier, centers, moved.shape[0], sizes, positions, bound,
+        after = passes.iterate(classifier, centers, moved.shape[0], sizes, positions, bound,
                         min_move=min_move * hold_after, **iterate_kw)
         if bound < max_iter and after.n_iter >= bound:  # the schedule's end, not max_iter
             after = replace(after, converged=True)

@@ -32,8 +32,10 @@ from .params import (
 )
 from .passes import Iteration, iterate
 from .rules import fine_count, merge_from_of
+from .splitmerge import FAST_ROUNDS, ROUNDS, swap_and_iterate
 from .weights import (
     HeldWeights,
+    convex_scaled,
     csr_point_weights,
     csr_weights,
     edge_weights,
@@ -424,8 +426,6 @@ def weigh(graph, rules: Rules, features=None, hooks=None
         del w_pairs  # the coarsening reads the same values from ``w``
     swap_w = None
     if rules.split_merge:  # the swap energies' weights (on faces: convex folds count half)
-        from .weights import convex_scaled
-
         swap_w = convex_scaled(graph, w, alpha=p.alpha, eta_convex=p.eta_convex,
                                factor=rules.kind.swap_eta_convex, weighting=p.weighting
                                ).astype(w.dtype, copy=False)
@@ -575,8 +575,6 @@ def iterate_passes(graph, w: np.ndarray, swap_w, init: np.ndarray, rules: Rules,
                      jump_cycles=jump_cycles, tol=max(p.tol, START_TOL) if rules.fast else p.tol,
                      min_move=min_move, bar=hooks.bar, settle=settle)
         if rules.split_merge:
-            from .splitmerge import FAST_ROUNDS, ROUNDS, swap_and_iterate
-
             hooks.describe("split and merge")
             it, hooks.timings["swaps"] = swap_and_iterate(
                 it, graph, w, classifier, centers, sizes, positions, p.max_iter,

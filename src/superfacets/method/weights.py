@@ -10,7 +10,9 @@ from __future__ import annotations
 import numpy as np
 
 from .._kernels import native
+from .._runtime import threads
 from .._runtime.arrays import real_rows
+from .._runtime.threads import split
 from ..elements.builders import as_element_graph
 from ..elements.graph import CHUNK, ElementGraph, chunked
 from ..elements.kinds import kind_of
@@ -508,7 +510,6 @@ def csr_point_weights(graph: ElementGraph, *, alpha: float = _PAPER_ALPHA,
     True
     """
     combine_weights = native.kernel("terms.combine_weights")
-    from .._runtime.threads import run_ranges, split
 
     g = graph
     f = check_features(features, g) if beta > 0 else None
@@ -546,7 +547,7 @@ def csr_point_weights(graph: ElementGraph, *, alpha: float = _PAPER_ALPHA,
             combine_weights(geo, theta, concave, float(eta_convex), float(alpha),
                             float(g.diagonal), out[x0:x1])
 
-    run_ranges(blocks, split(cuts.shape[0] - 1, min_per_thread=1))
+    threads.run_ranges(blocks, split(cuts.shape[0] - 1, min_per_thread=1))
     if f is not None:
         _check_finite_weights(out, beta)
     return out
@@ -583,7 +584,7 @@ class HeldWeights:
     of where they can be made again.
 
     The coarse start reads the weights of every element only to make its clusters'
-    graph; on a large cloud they are 4 bytes per CSR entry (434 MiB on 10M points) that
+    graph; on a large cloud they are 4 bytes per CSR entry that
     its passes would hold for nothing. Given ``remake``, :meth:`let_go` forgets them and
     :meth:`get` makes them again (the same inputs, the same values, bit for bit).
 

@@ -9,10 +9,14 @@ from __future__ import annotations
 import numpy as np
 
 from ..api.result import describe_stop
+from ..elements.builders import elements_of
 from ..elements.kinds import kind_of
 from ..io.export import write_colored_elements, write_colored_mesh
 from ..io.files import Outputs
 from ..io.labels import write_labels, write_segindices
+from ..io.records import records_kind, write_labels_into
+from .html import write_html
+from .render import render, render_points
 
 __all__ = ["write_result", "result_header", "JoinedResult"]
 
@@ -151,12 +155,8 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
             outputs.write(graph, lambda fh: np.savez_compressed(fh, **arrays))
         into = None
         if labels is not None and source_path is not None and str(labels) != "-":
-            from ..io.records import records_kind
-
             into = records_kind(labels, source_path)
         if into is not None:
-            from ..io.records import write_labels_into
-
             write_labels_into(labels, source_path, result.labels, outputs=outputs)
         elif labels is not None and str(labels).lower().endswith(".json"):
             write_segindices(labels, result.labels, result.params,
@@ -171,20 +171,14 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
             write_colored_mesh(colored, data, result.labels, outputs=outputs,
                                vertex_colors=vertex_colors)
         elif colored is not None:
-            from ..elements.builders import elements_of
-
             source_el = elements_of(data, kind, **(element_options or {}))  # cached
             write_colored_elements(colored, source_el, result.labels, outputs=outputs)
         title = f"{source}: {result.n_segments} {kind_of(kind).segment_word}"
         drawn = {} if kind_of(kind).cloud else {"elements": kind}  # faces or vertices
         if html is not None:
-            from .html import write_html
-
             write_html(html, data, result.labels, title=title, outputs=outputs, up=up,
                        view=view, **drawn)
         if picture is not None:
-            from .render import render, render_points
-
             draw = render_points if kind_of(kind).cloud else render
             draw(data, result.labels, picture, title=title, outputs=outputs, up=up, view=view,
                  **drawn)

@@ -165,8 +165,7 @@ void farthest_point_blocked(nb::handle centroids_, i64 k, i64 first, nb::handle 
     // a new center skips a whole group where the group's bound shows that it would skip
     // each of its blocks (with a margin far above rounding), and the next center is the
     // best of the groups' bests. The same blocks are scanned, so the same centers as a
-    // loop over every block (which took most of the time: 23,580 blocks for 2M points;
-    // 5,000 centers there 0.81-0.84 -> 0.55 s, 2,500 on 1M points 0.37-0.47 -> 0.18 s).
+    // loop over every block (which took most of the time: docs/notes/code-measurements.md).
     constexpr i64 G = 32;
     std::vector<i64> gb(nb);
     {

@@ -125,7 +125,7 @@ class BlockedSearch {
         // (new ones listed after the old), every round would hand most of the work over:
         // one block, one search. The sample: 1,024 runs of 64 consecutive elements spread
         // evenly (every element below 65,536), whose rows are read in order (a strided
-        // sample's were each a cache miss: 11 ms a search on a million points)
+        // sample's were each a cache miss)
         i64 edges = 0, crossing = 0;
         const i64 step = std::max<i64>(kRun, m >> 10);
         for (i64 f0 = 0; f0 < m; f0 += step)
@@ -202,7 +202,7 @@ class BlockedSearch {
     // marks share a word of queued_ (or all of them, in one block)
     static constexpr int kShift = 15;
     static constexpr i64 kRun = 64;  // consecutive elements per run of the blocks' sample
-    // (a shift, not a division: the sample's divisions cost 8 ms a search on 1M points)
+    // (a shift, not a division: the sample's divisions showed in every search)
     int shift_ = kShift;
     double inv_width_;
     std::vector<std::vector<i64>> pending_;

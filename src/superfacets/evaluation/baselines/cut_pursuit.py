@@ -50,9 +50,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..._kernels import native
+from ..._runtime import extras
 from ...elements.builders import elements_of, is_cloud
 from ...elements.labels import relabel_dense
 from ...method.params import DEFAULTS, check_choice, check_int, check_nonneg, check_positive
+from ._count import search_count
 
 __all__ = ["cut_pursuit", "dimensionality_features"]
 
@@ -143,9 +145,8 @@ def cut_pursuit(obj, n_segments: int | None = None, *, reg_strength: float = 0.1
     >>> xyz /= np.linalg.norm(xyz, axis=1, keepdims=True)
     >>> labels = cut_pursuit(xyz, 20)           # doctest: +SKIP
     """
-    from ..._runtime.extras import require
 
-    cp = require("cut_pursuit_py", "the cut pursuit baseline")
+    cp = extras.require("cut_pursuit_py", "the cut pursuit baseline")
     if elements is None:
         elements = "points" if is_cloud(obj) else "vertices"
     check_choice("elements", elements, ("points", "vertices"))
@@ -181,7 +182,6 @@ def cut_pursuit(obj, n_segments: int | None = None, *, reg_strength: float = 0.1
         labels = run(check_positive("reg_strength", reg_strength))
     else:
         n_segments = check_int("n_segments", n_segments, lo=1, hi=g.n_elements)
-        from ._count import search_count
 
         # log10 of reg_strength
         labels = search_count(run, n_segments, -8.0, 2.0, 16, "cut pursuit")

@@ -55,6 +55,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..._runtime.progress import new_bar
 from ...elements.faces import face_graph
 from ...elements.labels import relabel_dense
 from ...errors import MemoryLimitError, ParameterError
@@ -172,8 +173,6 @@ def _all_pair_distances(graph, m: int, nth: int, progress: bool):
     b = _block_rows(m)
     starts = range(0, m, b)
     if progress:
-        from ..._runtime.progress import new_bar
-
         starts = new_bar(starts, desc="all-pairs distances", unit="block", leave=False)
     for s in starts:
         e = min(m, s + b)

@@ -66,9 +66,11 @@ from functools import partial
 
 import numpy as np
 
+from ..._runtime import extras
 from ...errors import MissingExtraError, ParameterError
 from ...inputs.cloud import as_cloud
 from ...method.params import check_int
+from ._count import search_count
 
 __all__ = ["SPTSettings", "PRESETS", "spt_problem", "spt_partition", "SPTProblem"]
 
@@ -192,9 +194,7 @@ def _voxels(points: np.ndarray, colors, size: float):
 
 
 def _elevation(xyz: np.ndarray, threshold: float, scale: float) -> np.ndarray:
-    from ..._runtime.extras import require
-
-    linear = require("sklearn.linear_model", "the Superpoint Transformer partition")
+    linear = extras.require("sklearn.linear_model", "the Superpoint Transformer partition")
     # the ground's candidates: within the threshold of a low quantile, not of the lowest
     # point (a sweep's lowest point was an outlier 8.6 m under the ground: alone, it left
     # RANSAC nothing to fit)
@@ -253,10 +253,8 @@ def spt_problem(obj, settings: SPTSettings | str = "scannet") -> SPTProblem:
     """
     from scipy.spatial import cKDTree
 
-    from ..._runtime.extras import require
-
     s = _settings(settings)
-    pgeof = require("pgeof", "the Superpoint Transformer partition")
+    pgeof = extras.require("pgeof", "the Superpoint Transformer partition")
     cloud = as_cloud(obj)
     valid = cloud.valid
     points = np.asarray(cloud.points, dtype=np.float64)[valid]
@@ -380,10 +378,9 @@ def spt_partition(obj, n_segments: int | None = None, *, preset: str = "scannet"
     >>> xyz = np.random.default_rng(0).random((5000, 3))
     >>> labels = spt_partition(xyz, 50)             # doctest: +SKIP
     """
-    from ..._runtime.extras import require
 
     try:
-        cp = require("pycut_pursuit.cp_d0_dist", "the Superpoint Transformer partition")
+        cp = extras.require("pycut_pursuit.cp_d0_dist", "the Superpoint Transformer partition")
     except MissingExtraError as exc:
         raise MissingExtraError(
             f"{str(exc).split(';')[0]}; it is GPL-3, so never installed with superfacets, and "
@@ -408,7 +405,6 @@ def spt_partition(obj, n_segments: int | None = None, *, preset: str = "scannet"
                                 s.cutoff, s.regularization)
     if n_segments is not None:
         n_segments = check_int("n_segments", n_segments, lo=1, hi=y.shape[1])
-        from ._count import search_count
 
         n_first = int(comp.max()) + 1
         if level == "auto":

@@ -34,6 +34,7 @@ from ...elements.builders import elements_of
 from ...elements.labels import relabel_dense
 from ...errors import MissingExtraError
 from ...method.params import DEFAULTS, check_int, check_nonneg, check_positive
+from ._count import search_count
 
 __all__ = ["vccs"]
 
@@ -94,7 +95,6 @@ def vccs(obj, n_segments: int | None = None, *, seed_resolution: float = 0.1,
     """
     from scipy.spatial import cKDTree
 
-
     mod = _module()
     spatial_importance = check_nonneg("spatial_importance", spatial_importance)
     normal_importance = check_nonneg("normal_importance", normal_importance)
@@ -125,7 +125,6 @@ def vccs(obj, n_segments: int | None = None, *, seed_resolution: float = 0.1,
         labels = run(check_positive("seed_resolution", seed_resolution) * diagonal)
     else:
         n_segments = check_int("n_segments", n_segments, lo=1, hi=g.n_elements)
-        from ._count import search_count
 
         # seeds from one voxel apart to the whole box apart
         labels = search_count(run, n_segments, np.log10(voxel), np.log10(diagonal), 20,

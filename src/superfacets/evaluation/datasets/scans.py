@@ -40,7 +40,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..._runtime import extras
 from ...errors import MeshFormatError, ParameterError
+from ...inputs.cloud import PointCloud
 from ...io import read_cloud
 from ...io.files import sha256_of
 from ..metrics import evaluate_rows
@@ -357,8 +359,6 @@ def load_scan(name: str, cache=None, *, download: bool = False) -> Scan:
         cloud = replace(read_cloud(paths[0]), up=np.array([0.0, 0.0, 1.0]))
         gt = _ids(paths[1], name, "labels")
     elif src.labels == "scannet":
-        from ...inputs.cloud import PointCloud
-
         rows = _npy(paths[0], name, "points")
         if rows.ndim != 2 or rows.shape[1] != 6:
             raise MeshFormatError(f"{paths[0]}: expected rows of x y z r g b, got an array of "
@@ -372,9 +372,7 @@ def load_scan(name: str, cache=None, *, download: bool = False) -> Scan:
             raise MeshFormatError(f"scan {name!r}: {instances.shape[0]} instance labels for "
                                   f"{cloud.n_total} points")
     elif src.labels == "las":
-        from ..._runtime.extras import require
-
-        laspy = require("laspy", "reading LAS/LAZ files")
+        laspy = extras.require("laspy", "reading LAS/LAZ files")
         cloud = read_cloud(paths[0])
         with laspy.open(paths[0]) as fh:
             records = fh.read()

@@ -22,6 +22,7 @@ import io
 from pathlib import Path
 from typing import Sequence
 
+from ...io import atomic_write
 from .figures import plot_cost, plot_curves, plot_per_category
 from .tables import (
     METRIC_LABELS,
@@ -38,8 +39,6 @@ __all__ = ["load_results", "category_means", "summary", "plot_curves", "plot_per
 
 
 def _save(fig, path: Path) -> Path:
-    from ...io import atomic_write
-
     buf = io.BytesIO()
     fig.savefig(buf, format=path.suffix[1:], dpi=130, bbox_inches="tight")
     return atomic_write(path, buf.getvalue())
@@ -90,7 +89,6 @@ def write_report(results, out_dir, *, k_focus: int = 150, prefix: str = "",
     for name, fig in figs.items():
         for ext in ("png", "svg"):
             written.append(_save(fig, out / f"{prefix}{name}.{ext}"))
-    from ...io import atomic_write
 
     text = markdown_summary(df, k_focus=k_focus)
     written.append(atomic_write(out / f"{prefix}summary.md", text.encode()))

@@ -30,17 +30,22 @@ from datetime import datetime, timezone
 from pathlib import Path
 from typing import Sequence
 
-from ..._runtime import interrupts
+from ..._runtime import extras, interrupts
+from ..._runtime.progress import new_bar, tick
+from ...api.levels import adaptive_segment
 from ...api.scenes import segment_objects
 from ...api.segmentation import segment
+from ...api.sizes import default_count
 from ...elements.builders import kind_for
 from ...elements.kinds import kind_of
 from ...errors import ParameterError
 from ...io import read_input
+from ...io.clouds import is_cloud_file
 from ...io.files import split_suffix
 from ...io.orientation import default_view, up_axis
 from ...io.records import RECORD_FORMATS
-from ...method.params import check_choice, check_int, check_nonneg, resolve
+from ...method.params import DEFAULTS, check_choice, check_int, check_nonneg, resolve
+from ...viz.camera import check_camera
 from ...viz.outputs import JoinedResult, write_result
 from .collect import broken_link_reason, collect_inputs, no_inputs, output_names
 from .engine import Engine, PeakMemory, error_text
@@ -68,8 +73,6 @@ def _label_suffix(labels: str, source) -> str:
         return _LABEL_SUFFIX[labels]
     fmt = split_suffix(Path(source))[0]
     if fmt == "ply":  # a cloud's records are its points; a mesh's faces have none of theirs
-        from ...io.clouds import is_cloud_file
-
         try:
             return ".ply" if is_cloud_file(source) else ".seg"
         except Exception:  # noqa: BLE001 - an unreadable header: its task says why
@@ -140,17 +143,12 @@ def _segment_and_write(task: dict, label_rel: str) -> dict:
         k = opts.pop("n_segments", None)
         result = JoinedResult(*segment_objects(data, *(() if k is None else (k,)), **opts))
     elif task.get("adaptive"):
-        from ...api.levels import adaptive_segment
-        from ...method.params import DEFAULTS
-
         opts.pop("radius", None)
         k = opts.pop("n_segments", None) or DEFAULTS.n_segments
         result = adaptive_segment(data, k, start=task["adaptive"]["start"],
                                   extent_weight=task["adaptive"]["compactness"], **opts)
     else:
         if opts.get("n_segments") is None and opts.get("radius") is None:
-            from ...api.sizes import default_count  # (as segment: a cloud's grows with it)
-
             opts["n_segments"] = default_count(data, kind)
         result = segment(data, **opts)
     n = kind_of(kind).n_rows(data)
@@ -334,13 +332,9 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
     seg_opts = dict(options, n_segments=n_segments, radius=radius, n_threads=n_threads)
     resolved = resolve(**seg_opts).as_dict()  # every option checked before any work
     if picture or html:
-        from ...viz.camera import check_camera
-
         check_camera(view, up or "y")
     if picture:
-        from ..._runtime.extras import require
-
-        require("pyvista", "pictures (--picture)")
+        extras.require("pyvista", "pictures (--picture)")
     skipped: list = []
     passed: list = []
     files = collect_inputs(inputs, exclude=outdir if outdir.exists() else None,
@@ -418,8 +412,6 @@ def _run(files, outdir, seg_opts, outputs, per_object, level, engine, retry_fail
     try:
         with open(journal_path, "a") as journal:
             if progress and tasks:  # (its elapsed time redrawn while an input runs)
-                from ..._runtime.progress import new_bar, tick
-
                 bar = new_bar(total=len(tasks), unit="input", desc="batch", dynamic_ncols=True)
                 ticking = tick(bar)
             for row in (engine.run(segment_file, tasks, _lost_row) if tasks else ()):

@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Sequence
 
 from ...errors import ParameterError
-from ...io import CLOUD_FORMATS, MESH_FORMATS, VOLUME_FORMATS, is_cloud_file
+from ...io import CLOUD_FORMATS, MESH_FORMATS, VOLUME_FORMATS, input_kind
 from ...io.files import COMPRESSIONS, split_suffix
 
 __all__ = ["collect_inputs", "output_names", "broken_link_reason", "no_inputs", "FileEntry",
@@ -330,11 +330,11 @@ def file_entries(specs, field: str | None = None) -> list[FileEntry]:
     >>> [(e.category, e.path.name) for e in file_entries([path])]
     [('cloud', 'scan.npy')]
     """
-    from ...errors import ParameterError
     out = []
     for i, p in enumerate(collect_inputs([str(s) for s in specs])):
-        if split_suffix(p)[0] in VOLUME_FORMATS:
+        kind = input_kind(p)
+        if kind == "volume":
             raise ParameterError(f"{p}: a tetrahedral mesh; the experiment's methods segment "
                                  "surfaces and point clouds ('superfacets segment' takes it)")
-        out.append(FileEntry(i, "cloud" if is_cloud_file(p) else "mesh", p, field=field))
+        out.append(FileEntry(i, kind, p, field=field))
     return out

@@ -31,6 +31,7 @@ import uuid
 from pathlib import Path
 from typing import Callable, Iterable, Iterator
 
+from ..._runtime import extras
 from ...checks import max_threads
 from ...errors import ParameterError
 
@@ -203,7 +204,6 @@ class Engine:
                  exact_memory: bool = False) -> None:
         import numbers
 
-
         if workers is not None and (isinstance(workers, bool) or not isinstance(
                 workers, numbers.Integral) or not 1 <= workers <= max_threads()):
             raise ParameterError(f"workers must be an integer in 1..{max_threads()} (at most "
@@ -243,9 +243,8 @@ class Engine:
     def __enter__(self) -> "Engine":
         if self.local:
             return self
-        from ..._runtime.extras import require
 
-        require("distributed", "running on Dask (--workers > 1, --scheduler)")
+        extras.require("distributed", "running on Dask (--workers > 1, --scheduler)")
         import dask
         from distributed import Client
 

@@ -24,8 +24,11 @@ from typing import Sequence
 
 import numpy as np
 
+from ..._runtime import interrupts
+from ..._runtime.progress import new_bar, tick
+from ...elements import face_graph
 from ...elements.builders import elements_of
-from ...elements.kinds import kind_of
+from ...elements.kinds import KINDS, kind_of
 from ...errors import ParameterError
 from ...evaluation.baselines._count import COUNT_MISSED
 from ...evaluation.datasets.psb import BenchmarkMesh
@@ -61,11 +64,10 @@ def _prepared(path: str, seg_paths: tuple, elements: str, n_points: int, seed: i
     """
 
     mesh, gts = _load(path, seg_paths)
-    if elements == "faces":
-        from ...elements import face_graph
-
+    truth = kind_of(elements).face_truth
+    if truth == "same":
         return mesh, face_graph(mesh), None, gts
-    if elements == "vertices":
+    if truth == "vote":
         obj = mesh
         rows = [vertex_ground_truth(mesh, gt) for gt in gts]
     else:
@@ -94,7 +96,7 @@ def _file(path: str, field: str | None, elements: str):
     gives an input: the mesh or cloud, its element graph, per-element values and its
     ground truth (the file's ``field``; none without)."""
 
-    if field is not None and elements == "faces":
+    if field is not None and kind_of(elements).objects:
         raise ParameterError(f"{Path(path).name}: a field ({field}) holds one value per "
                              "vertex or point: judge a mesh's vertices (--elements vertices)")
     data = read_input(path)
@@ -130,7 +132,7 @@ def _run_task(task: dict) -> list[dict]:
         base["n_elements"] = graph.n_elements
         n_rows = graph.n_elements if to_el is None else (
             kind_of(kind).n_rows(data))
-        extra = {} if task.get("faces_only", True) else {"elements": kind}
+        extra = {"elements": kind} if task.get("takes_elements") else {}
     except Exception as exc:  # noqa: BLE001 - recorded, the run goes on
         return [dict(base, n_segments=k, status="failed", error=error_text(exc))
                 for k in task["ks"]]
@@ -218,8 +220,8 @@ def _tasks(meshes, configs, kinds, ks, done, common: dict) -> list[dict]:
         room = getattr(bm, "room", False)
         file = getattr(bm, "file", False)
         cloud = room or (file and bm.category == "cloud")
-        if kind not in method.elements or (cloud and kind != "points") or (
-                file and not cloud and kind == "points"):
+        if kind not in method.elements or (cloud and not KINDS[kind].cloud) or (
+                file and not cloud and KINDS[kind].cloud):
             continue
         base = {"mesh": Path(bm.path).stem, "mesh_id": bm.id, "category": bm.category,
                 "method": cfg.method, "elements": kind, "seed": common["seed"],
@@ -230,7 +232,7 @@ def _tasks(meshes, configs, kinds, ks, done, common: dict) -> list[dict]:
                           "path": str(bm.path), "seg_paths": tuple(str(p) for p in bm.seg_paths),
                           "ks": todo, "elements": kind, "room": room, "file": file,
                           "field": getattr(bm, "field", None),
-                          "faces_only": method.elements == ("faces",), **common})
+                          "takes_elements": method.takes_elements, **common})
     return tasks
 
 
@@ -312,7 +314,6 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
     cols, old = prepare_file(path, columns(configs))
     done = {row_key(r) for r in old if not (retry_failed and r.get("status") == "failed")}
 
-
     kinds = [check_choice("elements", e, ELEMENTS) for e in elements]
     if not kinds:
         raise ParameterError("no element kind to run")
@@ -329,8 +330,6 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
     t0 = time.perf_counter()
     bar = None
     if progress and total:  # (its elapsed time redrawn while a mesh runs)
-        from ..._runtime.progress import new_bar, tick
-
         bar = new_bar(total=total, unit="row", desc="experiment", dynamic_ncols=True)
         ticking = tick(bar)
 
@@ -353,8 +352,6 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
                 for rows in engine.run(_run_task, tasks, _failed_rows):
                     record(rows)
         except KeyboardInterrupt:
-            from ..._runtime import interrupts
-
             interrupts.caught()  # stopping in order: the rows so far are kept
             summary.interrupted = True
         finally:

@@ -17,6 +17,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from ..._runtime import extras
 from ..._version import __version__
 from ...errors import ParameterError
 from ...io.files import atomic_write
@@ -86,9 +87,7 @@ def read_manifest(outdir) -> list[dict]:
     rows: dict[str, dict] = {}
     pq_path, csv_path = outdir / "manifest.parquet", outdir / "manifest.csv"
     if pq_path.exists():
-        from ..._runtime.extras import require
-
-        pq = require("pyarrow.parquet", f"reading {pq_path}")
+        pq = extras.require("pyarrow.parquet", f"reading {pq_path}")
         for r in pq.read_table(pq_path).to_pylist():
             rows[r["input"]] = _typed(r)
     elif csv_path.exists():

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..._runtime.progress import new_bar
 from ...elements.kinds import KINDS
 from ...inputs.bounds import column_bounds, rows_in_box
 from ...inputs.mesh import Mesh
@@ -71,8 +72,6 @@ def bucket(reader, tiles, folder, *, progress: bool = False) -> TileBuckets:
     dtype = None
     bar = None
     if progress:
-        from ..._runtime.progress import new_bar
-
         bar = new_bar(total=reader.n_rows, desc="tiles: bucket", unit="row", leave=False)
     try:
         for s, pos, _, extra in reader.chunks():

@@ -18,9 +18,11 @@ from pathlib import Path
 
 import numpy as np
 
+from ...elements import points
 from ...elements.builders import prepared
 from ...elements.graph import cached_on
 from ...elements.kinds import kind_of
+from ...elements.points import point_elements
 from ...io.files import array_digest, load_checked
 
 __all__ = ["GRAPH_FILES", "BYTES_PER_POINT", "graph_folder", "drop_graphs", "tile_graph",
@@ -97,7 +99,6 @@ def tile_graph(cloud, folder, n_neighbors: int) -> str:
     ...     print(first, tile_graph(again, Path(tmp) / "tile0", 10), tile_graph(again, "", 10))
     built read kept
     """
-    from ...elements.points import point_elements, point_graph
 
     folder = Path(folder)
     _, data = prepared(cloud, "points")
@@ -115,7 +116,7 @@ def tile_graph(cloud, folder, n_neighbors: int) -> str:
         data.lend_points(el.graph.positions, el.index)  # as the build does
         graphs[key] = el
         return "read"
-    el = point_graph(data, n_neighbors)
+    el = points.point_graph(data, n_neighbors)
     g = el.graph
     part = folder.with_name(folder.name + ".part")
     for old in (part, folder):  # (not whole: never read)

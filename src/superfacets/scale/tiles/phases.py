@@ -45,10 +45,11 @@ from dataclasses import replace
 
 import numpy as np
 
+from ...elements import points
 from ...elements.builders import ElementInput, elements_of, prepared
 from ...elements.kinds import kind_of
 from ...elements.neighbors import nearest, point_tree
-from ...elements.points import distinct_points
+from ...elements.points import distinct_points, kept_diagonal
 from ...errors import ParameterError
 from ...inputs.bounds import column_bounds
 from ...inputs.cloud import PointCloud
@@ -62,16 +63,15 @@ from ...method.passes import final_centers
 from ...method.pipeline import pipeline
 from ...method.stages import build_graph, resolve_features, resolve_rules, weigh
 from .layout import gathered_centers
-from .merges import tile_merge_stats
+from .merges import one_position_stats, tile_merge_stats
 
 __all__ = ["tile_centers", "sample_start", "tile_refine", "tile_labels",
            "tile_connect", "orientation_reference", "HALO",
            "point_areas", "core_area", "oriented_sample", "check_tileable"]
 
 #: Default halo, in units of ``window * r``. 3 rather than 2: the classification of
-#: the core is exact from 2, and the clean-up near a border nearly so from 3
-#: (elements labelled differently by two tiles: 1,562 -> 41 over 15 benchmark meshes
-#: at k = 600 in 8 tiles; UE +9.8 % -> +5.8 % against one run; docs/notes/tiles.md).
+#: the core is exact from 2, and the clean-up near a border nearly so from 3 (fewer
+#: elements labelled differently by two tiles, a lower error: docs/notes/tiles.md).
 HALO = 3.0
 
 
@@ -102,8 +102,6 @@ def _diagonal(inp) -> float:
     """The bounding-box diagonal of a tile's elements, as its element graph has it."""
 
     if isinstance(inp, PointCloud):
-        from ...elements.points import kept_diagonal
-
         kept = kept_diagonal(inp)  # (the tile's graph, kept or read: its points lent)
         if kept is not None:
             return kept
@@ -261,9 +259,7 @@ def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: Segm
     if d <= 0 or sample.shape[0] < 3:
         return rows[:1], sample[:1]
     if params.n_segments is None and sample.shape[0] < n_rows:  # (sized by the radius)
-        from ...elements.points import point_graph
-
-        area = float(point_graph(cloud, params.n_neighbors).graph.area)  # (kept with it)
+        area = float(points.point_graph(cloud, params.n_neighbors).graph.area)  # (kept with it)
         if sample.shape[0] < START_POINTS_PER_CENTER * area / superfacet_measure(r, 2):
             return None
     p = replace(_tile_params(params, r, diagonal, d), beta=0.0)
@@ -325,22 +321,20 @@ def oriented_sample(sample: np.ndarray, n_neighbors: int, up=None):
     """The point graph (:class:`~superfacets.elements.graph.ElementGraph`) of the sample
     :func:`orientation_reference` orients, or None when it has fewer than 3 distinct
     points; its ``sizes`` sum to the sample's area as a run reads a cloud's."""
-    from ...elements.points import point_graph
 
     cloud = sample_cloud(sample, n_neighbors, up)
-    return None if cloud is None else point_graph(cloud, n_neighbors).graph
+    return None if cloud is None else points.point_graph(cloud, n_neighbors).graph
 
 
 def sample_cloud(sample: np.ndarray, n_neighbors: int, up=None):
     """The sample :func:`oriented_sample` orients, as a cloud with its point graph
     (built), or None when it has fewer than 3 distinct points."""
-    from ...elements.points import point_graph
 
     pts = np.asarray(sample, dtype=np.float64)
     if not _three_distinct(pts):
         return None
     cloud = PointCloud(pts, up=up)
-    point_graph(cloud, n_neighbors)  # (kept with the cloud)
+    points.point_graph(cloud, n_neighbors)  # (kept with the cloud)
     return cloud
 
 
@@ -360,9 +354,9 @@ def core_area(cloud, core: np.ndarray, n_neighbors: int) -> float:
     on the point graph the tile builds (:func:`point_areas` reads the same sizes on a
     tree of its own; the graph built here is kept with the cloud for the tile's phases).
     """
-    from ...elements.points import point_graph
 
-    el = point_graph(prepared(cloud, "points")[1], n_neighbors)  # (where tile_graph keeps it)
+    # (where tile_graph keeps it)
+    el = points.point_graph(prepared(cloud, "points")[1], n_neighbors)
     at = np.asarray(el.index)[np.flatnonzero(core)]
     held = np.zeros(el.graph.n_elements, dtype=bool)  # (ascending, as np.unique gave them:
     held[at[at >= 0]] = True  # the same sum)
@@ -428,7 +422,6 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
         named = np.where(valid, name, -1).astype(np.int64)
         if merging is None:
             return named
-        from .merges import one_position_stats
 
         return named, one_position_stats(inp, valid, name, merging)
     # the whole run's stages (superfacets.method.pipeline) with one classification from the
@@ -501,11 +494,10 @@ def tile_connect(inp, labels: np.ndarray, owned: np.ndarray, owned_rows: np.ndar
         The labels with the stray pieces of owned superfacets renamed; None
         when there is none (the usual case).
     """
-    from ...elements.points import point_graph
 
     kind, data = prepared(inp, params.elements)
     if kind_of(kind).cloud:  # the adjacency alone: the normals' signs are not read
-        src = ElementInput(*point_graph(data, params.n_neighbors, params.neighbor_radius,
+        src = ElementInput(*points.point_graph(data, params.n_neighbors, params.neighbor_radius,
                                         oriented=False), data)
     else:
         src = elements_of(data, kind, n_neighbors=params.n_neighbors,

@@ -46,9 +46,10 @@ from pathlib import Path
 import numpy as np
 
 from ..._runtime.arrays import ranked
-from ..._runtime.progress import tick, waiting_bar
+from ..._runtime.progress import new_bar, tick, waiting_bar
 from ...api.result import TiledResult
 from ...checks import max_threads
+from ...elements import points
 from ...elements.kinds import kind_of
 from ...errors import ParameterError, SuperfacetsError
 from ...inputs.bounds import check_extent, rows_in_box
@@ -57,6 +58,7 @@ from ...method.merges import NOISE_SAMPLE
 from ...method.params import DEFAULTS, resolve, superfacet_size
 from ...method.rules import fine_count
 from ..runner.engine import Engine
+from . import buckets, phases
 from .graphs import drop_graphs, graph_folder
 from .layout import any_in_box, check_tiles, gathered_centers, in_box
 from .merges import merged_labels, tiled_merge_from
@@ -65,8 +67,7 @@ from .task import tile_task
 from .workdir import run_folder
 
 #: Passes of the centers phase where refine rounds follow (they run the passes again
-#: from the gathered centers): 10M points in 4 tiles, the phases 29.9 -> 28.1 s in process;
-#: the tiled error on 15 clouds of 1M points the same (0.0212 -> 0.0211; docs/notes/tiles.md).
+#: from the gathered centers): less time for the same tiled error (docs/notes/tiles.md).
 CENTER_PASSES = 1
 
 #: Most rounds of the connectivity pass: the first over every tile, each next over the
@@ -162,7 +163,6 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
     >>> r.labels.shape, r.n_segments, r.layout.n_tiles
     ((5120,), 40, 2)
     """
-    from .buckets import bucket
     from .layout import balanced_tiles, tile_grid
 
     params, halo = _checked_options(n_segments, options, tiles, halo, refine, workers)
@@ -188,7 +188,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         up = getattr(reader, "up", None)  # (the buckets keep the viewpoint, not this)
         if shared and n_tiles > 1:
             with stage("bucket", bar=False):  # (a bar of its own)
-                reader = bucket(reader, layout, Path(tmp) / "buckets", progress=progress)
+                reader = buckets.bucket(reader, layout, Path(tmp) / "buckets", progress=progress)
         with stage("orientation"):
             reference, sample_area, sampled = _orientation(reader, survey, params.n_neighbors,
                                                            up, shared and tmp)
@@ -291,14 +291,13 @@ def _sample_start(reader, survey, params, r: float, diagonal: float, refine: int
     phase gives them (meshes; ``refine=0``, where no round follows to run the passes on
     every point; a sample too small for the centers: :func:`~superfacets.scale.tiles.phases.
     sample_start` says so)."""
-    from .phases import sample_start
 
     sample = survey.sample
     if not kind_of(reader.kind).cloud or refine < 1 or sample is None \
             or survey.sample_rows is None or sample.shape[0] < 3:
         return None
     with stage("start"):  # (timed and shown: :func:`_stage`)
-        return sample_start(sample, survey.sample_rows, reader.n_rows, params, r, diagonal,
+        return phases.sample_start(sample, survey.sample_rows, reader.n_rows, params, r, diagonal,
                             *sampled, viewpoint=reader.viewpoint)
 
 
@@ -345,14 +344,13 @@ def _orientation(reader, survey, n_neighbors: int, up, folder):
     path), else None; the sample's area where its graph was built (else None); and the
     sample as a cloud with that graph (else None: :func:`~superfacets.scale.tiles.phases.
     sample_start` reads it)."""
-    from ...elements.points import point_graph
 
     if not kind_of(reader.kind).cloud or survey.normals or reader.viewpoint is not None:
         return None, None, None
     cloud = sample_cloud(survey.sample, n_neighbors, up)
     if cloud is None:
         return np.zeros((0, 6)), None, None
-    graph = point_graph(cloud, n_neighbors).graph  # (built with the cloud: kept there)
+    graph = points.point_graph(cloud, n_neighbors).graph  # (built with the cloud: kept there)
     reference = np.hstack([graph.positions, graph.normals.astype(np.float64)])
     area = float(graph.sizes.sum())
     if folder:  # read by the tasks from the work folder, not shipped with each
@@ -505,8 +503,6 @@ def _gather(engine: Engine, tasks: list, phase: str, progress: bool) -> list:
 
     results, stop = engine.run(tile_task, tasks, on_lost=lost), None
     if progress:  # (its elapsed time redrawn while a tile runs: never silent)
-        from ..._runtime.progress import new_bar
-
         results = new_bar(results, total=len(tasks), desc=f"tiles: {phase}", unit="tile",
                           leave=False)
         stop = tick(results)

@@ -15,10 +15,11 @@ import numpy as np
 
 from ...inputs.bounds import column_bounds
 from ..runner.engine import PeakMemory, error_text
+from . import phases
 from .buckets import TileBuckets
 from .graphs import tile_graph
 from .layout import in_box
-from .phases import tile_labels
+from .phases import core_area, point_areas, tile_centers, tile_labels
 
 __all__ = ["tile_task"]
 
@@ -57,7 +58,6 @@ def tile_task(task: dict) -> dict:
     >>> segment_tiled((m.vertices, m.faces), 40, tiles=2, workers=1).tiles[0]["tile"]
     0
     """
-    from .phases import core_area, point_areas, tile_centers, tile_connect, tile_refine
 
     probe = PeakMemory()
     t0 = time.perf_counter()
@@ -87,7 +87,7 @@ def tile_task(task: dict) -> dict:
                 given = np.load(given, mmap_mode="r")[rows]
             given = np.asarray(given, dtype=np.int64)
             owned = np.intersect1d(given[given >= 0], rows[core])
-            fixed = tile_connect(inp, given, owned, np.searchsorted(rows, owned), p)
+            fixed = phases.tile_connect(inp, given, owned, np.searchsorted(rows, owned), p)
             moved = np.zeros(0, dtype=bool) if fixed is None else fixed != given
             out.update(moved_rows=rows[moved] if moved.size else rows[:0],
                        moved_labels=fixed[moved] if moved.size else rows[:0],
@@ -102,7 +102,7 @@ def tile_task(task: dict) -> dict:
             ok = at < rows.size
             ok[ok] = rows[at[ok]] == want[ok]
             if task["phase"] == "refine":
-                found = tile_refine(inp, core, at[ok], p, r, d)
+                found = phases.tile_refine(inp, core, at[ok], p, r, d)
                 out.update(centers=rows[found], positions=pos[found])
             else:
                 _labelled(task, out, (rows, pos, inp, core), at[ok])

@@ -22,12 +22,16 @@ from pathlib import Path
 
 import numpy as np
 
+from ...elements.builders import elements_of, is_cloud
 from ...elements.kinds import kind_of
 from ...elements.labels import check_labels, relabel_dense
 from ...errors import ParameterError
 from ...inputs.convert import as_mesh
 from ...io.colors import boundary_edges, superfacet_colors
+from ...io.export import point_colors
+from ...io.files import save
 from ..camera import view_frame
+from ..render import PointsFrame, faces_to_draw
 
 __all__ = ["NotebookView", "write_html", "html_page"]
 
@@ -93,15 +97,12 @@ def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None 
     >>> page.startswith("<!DOCTYPE html>"), "ball - superfacets" in page
     (True, True)
     """
-    from ...elements.builders import is_cloud
 
     if is_cloud(mesh):
         return _points_page(mesh, labels, title=title, info=info, background=background,
                             view=view, up=up)
     mesh = as_mesh(mesh)
     if kind_of(elements).rows != "n_faces":  # labels of the vertices: drawn on faces
-        from ..render import faces_to_draw
-
         mesh, labels = faces_to_draw(mesh, labels, elements)
     m = mesh.n_faces
     if labels is not None:
@@ -148,9 +149,6 @@ def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None 
 
 def _points_page(cloud, labels, *, title, info, background, view, up) -> str:
     """The viewer page of a point cloud: points coloured by superpoint (invalid ones left out)."""
-    from ...elements.builders import elements_of
-    from ...io.export import point_colors
-    from ..render import PointsFrame
 
     source = elements_of(cloud, "points")
     g = source.graph
@@ -227,7 +225,6 @@ def write_html(path, mesh, labels=None, *, title: str | None = None, info: dict 
     >>> write_html("ball.html", ball, labels, title="ball").name
     'ball.html'
     """
-    from ...io.files import save
 
     text = html_page(mesh, labels, title=title, info=info, background=background, view=view,
                      up=up, elements=elements)
