@@ -177,3 +177,39 @@ def test_the_command_line_says_why_the_count_differs(tmp_path, capsys):
     assert "note: 9 superfacets for -k 5" in err and "a larger --window" in err
     assert main(["segment", str(path), "-k", "9", "-o", str(tmp_path / "c.seg")]) == 0
     assert "note:" not in capsys.readouterr().err
+
+
+def test_a_compressed_volume_reads_as_the_file_inside_and_says_its_own_name(tmp_path, capsys):
+    """``segment part.vtk.gz`` is a volume's run: the file decompressed (bomb-checked)
+    under its inner suffix; a damaged one names the user's file, not a temporary one."""
+    import gzip
+
+    pytest.importorskip("meshio")
+    from superfacets.cli import main
+    from superfacets.io import input_kind, read_volume, write_volume_labels
+
+    tet = delaunay_cube(300)
+    plain = tmp_path / "part.vtu"
+    write_volume_labels(plain, tet, np.zeros(tet.n_tets, dtype=np.int64))
+    packed = tmp_path / "part.vtu.gz"
+    packed.write_bytes(gzip.compress(plain.read_bytes()))
+    assert [input_kind(p) for p in (packed, tmp_path / "s.laz", tmp_path / "m.off.xz")] == [
+        "volume", "cloud", "mesh"]
+    read = read_volume(packed)
+    np.testing.assert_array_equal(read.tets, read_volume(plain).tets)
+    assert main(["segment", str(packed), "-k", "6", "--colored-mesh", str(tmp_path / "o.vtu"),
+                 "-q"]) == 0
+    assert read_volume(tmp_path / "o.vtu").n_tets == tet.n_tets
+    capsys.readouterr()
+    # -o writes text labels: a volume's name there is refused, pointing at --colored-mesh
+    assert main(["segment", str(packed), "-k", "6", "-o", str(tmp_path / "out.vtk")]) == 2
+    assert "--colored-mesh out.vtk" in capsys.readouterr().err
+    assert not (tmp_path / "out.vtk").exists()
+    bad = tmp_path / "bad.vtk.gz"
+    bad.write_bytes(gzip.compress(b"not a volume"))
+    with pytest.raises(MeshFormatError, match="bad.vtk.gz") as info:
+        read_volume(bad)
+    assert "superfacets-" not in str(info.value)
+    (tmp_path / "cut.vtk.gz").write_bytes(packed.read_bytes()[:60])
+    with pytest.raises(MeshFormatError, match="cannot decompress"):
+        read_volume(tmp_path / "cut.vtk.gz")

@@ -299,7 +299,7 @@ def check_labels_output(path: str | None, source: str, records: bool = False) ->
     message names the option that writes such a file.
     """
     from ..errors import ParameterError
-    from ..io import CLOUD_FORMATS, MESH_FORMATS
+    from ..io import CLOUD_FORMATS, MESH_FORMATS, VOLUME_FORMATS
     from ..io.files import split_suffix
     from ..io.records import records_kind
 
@@ -310,7 +310,7 @@ def check_labels_output(path: str | None, source: str, records: bool = False) ->
         return out
     fmt = split_suffix(out)[0]
     option = {"png": "--picture", "html": "--html", "htm": "--html"}.get(
-        fmt, "--colored-mesh" if fmt in ("ply", "glb", "obj") else None)
+        fmt, "--colored-mesh" if fmt in ("ply", "glb", "obj", *VOLUME_FORMATS) else None)
     if fmt != "txt" and (fmt in MESH_FORMATS or fmt in CLOUD_FORMATS or option):
         raise ParameterError(
             f"{out}: -o writes the labels as text (one per line; .json for segIndices), not a "

@@ -11,14 +11,16 @@ atomically.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
 
+from .._runtime import extras
 from ..elements.labels import check_labels
-from ..errors import MeshFormatError
+from ..errors import MemoryLimitError, MeshFormatError
 from ..inputs.tetmesh import TetMesh
-from .files import atomic_write
+from .files import atomic_write, decompressed, split_suffix
 
 __all__ = ["read_volume", "write_volume_labels", "VOLUME_FORMATS"]
 
@@ -58,9 +60,8 @@ def read_volume(path):
     >>> read_volume("t.vtu").n_tets
     1
     """
-    from .._runtime.extras import require
 
-    meshio = require("meshio", "reading tetrahedral meshes")
+    meshio = extras.require("meshio", "reading tetrahedral meshes")
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file")
@@ -68,14 +69,24 @@ def read_volume(path):
         raise IsADirectoryError(f"{path}: is a directory")
     import contextlib
     import io
+    import tempfile
 
     said = io.StringIO()
+    fmt, comp = split_suffix(path)
     try:  # meshio prints its complaints, and exits on a file no reader takes
-        with contextlib.redirect_stdout(said), contextlib.redirect_stderr(said):
-            m = meshio.read(path)
+        with contextlib.redirect_stdout(said), contextlib.redirect_stderr(said), \
+                tempfile.TemporaryDirectory(prefix="superfacets-") as tmp:
+            source = path
+            if comp is not None:  # (meshio reads names: the content, checked, under one)
+                source = Path(tmp) / f"volume.{fmt}"
+                source.write_bytes(decompressed(path, comp))
+            m = meshio.read(source)
+    except (MeshFormatError, MemoryLimitError):
+        raise
     except (Exception, SystemExit) as exc:  # noqa: BLE001 - meshio raises many types
         msg = (str(exc).strip() if not isinstance(exc, SystemExit) else "") or \
             " ".join(said.getvalue().split()) or type(exc).__name__
+        msg = re.sub(r"\S*superfacets-[^/\s]+/volume\.\w+", path.name, msg)  # (not ours)
         raise MeshFormatError(f"{path}: cannot read it as a volume mesh: "
                               f"{msg.splitlines()[0][:300]}") from None
     blocks = [i for i, c in enumerate(m.cells) if c.type == "tetra"]
@@ -129,9 +140,7 @@ def write_volume_labels(path, mesh, labels, *, outputs=None) -> Path:
     """
     import tempfile
 
-    from .._runtime.extras import require
-
-    meshio = require("meshio", "writing tetrahedral meshes")
+    meshio = extras.require("meshio", "writing tetrahedral meshes")
     lab = np.asarray(check_labels(labels, mesh.n_tets, per="tetrahedron"), dtype=np.int64)
     path = Path(path)
     cell_data = {"superfacet": [lab]}
