@@ -1171,3 +1171,18 @@ def test_no_stage_before_the_passes_makes_again_what_it_declared(valley, monkeyp
             "made normals", "made pairs", "made dual_edge", "made lengths", "made edges"}
         # the cuts read none of them: the graph holds none after the run (on a large one)
         assert not (set(face_graph(mesh).rebuild) | {"terms"}) & set(face_graph(mesh).__dict__)
+
+
+def test_point_graph_takes_what_as_cloud_takes_and_refuses_the_rest_in_words():
+    """An (N, 3) array is a cloud of its own (the same graph as its PointCloud's); a word
+    is a TypeError that names what it takes, not an AttributeError from inside."""
+    from superfacets.elements.points import point_graph
+    from superfacets.inputs.cloud import PointCloud
+
+    pts = np.random.default_rng(3).random((200, 3))
+    from_array = point_graph(pts, 6).graph
+    from_cloud = point_graph(PointCloud(pts), 6).graph
+    np.testing.assert_array_equal(from_array.indptr, from_cloud.indptr)
+    np.testing.assert_array_equal(from_array.indices, from_cloud.indices)
+    with pytest.raises(TypeError, match="expected a point cloud"):
+        point_graph("scan.ply")

@@ -49,6 +49,7 @@ from .._kernels import native
 from .._runtime.arrays import COMPILED_MIN, sorted_unique
 from .._runtime.memory import give_back_free_memory
 from ..inputs.bounds import column_bounds, column_means
+from ..inputs.cloud import PointCloud, as_cloud
 from . import graph as _graph
 from .graph import LAZY, ElementGraph, adjacency_csr, cached_on, pairs_from_csr
 from .neighbors import key_window, local_frame, local_keys, nearest, point_tree, shared_prefix
@@ -172,6 +173,14 @@ def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
     -------
     PointElements
 
+    Raises
+    ------
+    TypeError
+        If ``cloud`` is no cloud :func:`superfacets.as_cloud` takes (an ``(N, 3)`` array is
+        taken as a cloud of its own, its graph not kept).
+    InvalidCloudError
+        If the cloud cannot be segmented.
+
     Examples
     --------
     >>> xy = np.stack(np.meshgrid(np.arange(10.0), np.arange(10.0)), -1).reshape(-1, 2)
@@ -179,6 +188,8 @@ def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
     >>> g.n_elements, round(float(np.abs(g.normals[:, 2]).min()), 6)
     (100, 1.0)
     """
+    if not isinstance(cloud, PointCloud):  # an array, trimesh's or Open3D's cloud
+        cloud = as_cloud(cloud)
     graphs = cached_on(cloud, "_point_graphs", dict)
     key = (n_neighbors, neighbor_radius)
     if not oriented and key not in graphs:  # (the oriented graph, where kept, serves)
