@@ -401,11 +401,9 @@ def weigh(graph, rules: Rules, features=None, hooks=None
 
     Examples
     --------
-    >>> ball = trimesh.creation.icosphere(subdivisions=3)
-    >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
-    >>> rules = resolve_rules(graph, p)
-    >>> w, swap_w = weigh(graph, rules)
-    >>> w.shape == (2 * graph.n_edges,), swap_w is not None
+    >>> s = passes_example()  # an icosphere's run up to its passes
+    >>> w, swap_w = weigh(s.graph, s.rules)
+    >>> w.shape == (2 * s.graph.n_edges,), swap_w is not None
     (True, True)
     """
     p = rules.params
@@ -445,10 +443,8 @@ def held_weights(graph, rules: Rules, w: np.ndarray, features=None, initial=None
 
     Examples
     --------
-    >>> ball = trimesh.creation.icosphere(subdivisions=3)
-    >>> _, graph, p = build_graph(ball, resolve(n_segments=12))
-    >>> rules = resolve_rules(graph, p)
-    >>> held = held_weights(graph, rules, weigh(graph, rules)[0])
+    >>> s = passes_example()
+    >>> held = held_weights(s.graph, s.rules, s.w)
     >>> held.let_go(); held.remade, held.get().dtype.name  # (faces: never let go)
     (0, 'float32')
     """
@@ -495,14 +491,8 @@ def initialize(graph, w: np.ndarray, rules: Rules, hooks,
 
     Examples
     --------
-    >>> ball = trimesh.creation.icosphere(subdivisions=3)
-    >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
-    >>> rules = resolve_rules(graph, p)
-    >>> from superfacets.method.pipeline import Hooks
-    >>> hooks = Hooks(False, p.max_iter, graph.kind)
-    >>> w, swap_w = weigh(graph, rules)
-    >>> init, coarsen = initialize(graph, w, rules, hooks)
-    >>> it = iterate_passes(graph, w, swap_w, init, rules, hooks)
+    >>> s = passes_example()
+    >>> init, coarsen = initialize(s.graph, s.w, s.rules, s.hooks)
     >>> init.shape, coarsen
     ((12,), 1)
     """
@@ -547,14 +537,8 @@ def iterate_passes(graph, w: np.ndarray, swap_w, init: np.ndarray, rules: Rules,
 
     Examples
     --------
-    >>> ball = trimesh.creation.icosphere(subdivisions=3)
-    >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
-    >>> rules = resolve_rules(graph, p)
-    >>> from superfacets.method.pipeline import Hooks
-    >>> hooks = Hooks(False, p.max_iter, graph.kind)
-    >>> w, swap_w = weigh(graph, rules)
-    >>> init, coarsen = initialize(graph, w, rules, hooks)
-    >>> it = iterate_passes(graph, w, swap_w, init, rules, hooks)
+    >>> s = passes_example()
+    >>> it = iterate_passes(s.graph, s.w, s.swap_w, s.init, s.rules, s.hooks)
     >>> it.label.shape, it.n_iter >= 1
     ((1280,), True)
     """
