@@ -1,22 +1,27 @@
-"""What a tiled run costs against one run: wall and CPU seconds, a new process each.
+"""What a tiled run costs against one run, and what threads buy: wall and CPU seconds, a
+new process each.
 
 Usage: ``python benchmarks/tiles_cost.py [--points 10000000] [-k 2000] [--tiles 2 4 16]
-[--workers 2] [--before DIR] [--repeat 2]``
+[--workers 2] [--threads 1 2 4 8 16] [--mesh PATH] [--before DIR] [--repeat 2]``
 
 Points are sampled on PSB mesh 281 (the benchmark's, from ``../shared``; ``--seed``) and
-written to a binary PLY once. Each run is a new process: one run (``superfacets.segment``
-on the file read whole) and ``segment_tiled`` with each ``--tiles`` count on
-``--workers`` local Dask workers. Its CPU seconds are the process's and its waited-for
-children's (the Dask workers: user + system time), so a tiled run's is the total over
-its workers. ``--before DIR`` runs the same, alternating, against a built copy of another
-version (``benchmarks/_versions.py``). Prints a table: the median of ``--repeat`` runs,
-and each tiled run's CPU seconds over one run's of the same version.
+written to a binary PLY once (``--mesh PATH``: that mesh file instead, its faces
+segmented). Each run is a new process: one run (``superfacets.segment`` on the file read
+whole) at each ``--threads`` count this machine has cores for (the default: its run
+threads), and ``segment_tiled`` with each ``--tiles`` count on ``--workers`` local Dask
+workers (its border disagreements: elements two tiles labelled differently). Its CPU
+seconds are the process's and its waited-for children's (the Dask workers: user + system
+time), so a tiled run's is the total over its workers. ``--before DIR`` runs the same,
+alternating, against a built copy of another version (``benchmarks/_versions.py``).
+Prints a table: the median of ``--repeat`` runs, each run's CPU seconds over the first one
+run's and the first one run's wall time over its own (the speed-up of threads).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import statistics
 import sys
 import tempfile
@@ -33,15 +38,19 @@ def cpu():
     return a.ru_utime + a.ru_stime + b.ru_utime + b.ru_stime
 def main():
     path, k, tiles, workers = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4])
+    threads = int(sys.argv[5]) or None
     t, c = time.perf_counter(), cpu()
+    apart = -1
     if tiles == 0:
         from superfacets import segment
-        from superfacets.io import read_cloud
-        n = segment(read_cloud(path), k).n_segments
+        from superfacets.io import read_input
+        n = segment(read_input(path), k, n_threads=threads).n_segments
     else:
         from superfacets.scale.tiles.run import segment_tiled
-        n = segment_tiled(path, k, tiles=tiles, workers=workers).n_segments
-    print(json.dumps(dict(wall=time.perf_counter() - t, cpu=cpu() - c, n=int(n))))
+        r = segment_tiled(path, k, tiles=tiles, workers=workers)
+        n, apart = r.n_segments, r.disagreements / max(r.labels.shape[0], 1)
+    print(json.dumps(dict(wall=time.perf_counter() - t, cpu=cpu() - c, n=int(n),
+                          apart=apart)))
 if __name__ == "__main__":
     main()
 """
@@ -74,32 +83,50 @@ def main() -> None:
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--repeat", type=int, default=1)
+    p.add_argument("--threads", type=int, nargs="+", default=[0],
+                   help="threads of the one run (0: its default); counts above this "
+                        "machine's cores are left out")
+    p.add_argument("--mesh", default=None, help="a mesh file instead of the sampled cloud")
     p.add_argument("--before", default=None, help="a built copy of another version")
     a = p.parse_args()
     versions = ["installed"] + ([a.before] if a.before else [])
+    cores = os.cpu_count() or 1
+    threads = [t for t in a.threads if t <= cores] or [0]
+    # (threads, tiles): the one runs first (tiles 0), each thread count; the tiled runs with
+    # their default threads
+    plan = [(t, 0) for t in threads] + [(0, tiles) for tiles in a.tiles]
     runs: dict = {}
     with tempfile.TemporaryDirectory() as tmp:
-        path = _cloud(a.points, a.seed, Path(tmp))
+        path = Path(a.mesh) if a.mesh else _cloud(a.points, a.seed, Path(tmp))
         for _ in range(a.repeat):
-            for tiles in [0, *a.tiles]:
+            for t, tiles in plan:
                 for v in versions:  # alternating
-                    out = run_code(v, CODE, str(path), str(a.k), str(tiles), str(a.workers))
+                    out = run_code(v, CODE, str(path), str(a.k), str(tiles), str(a.workers),
+                                   str(t))
                     if out.returncode:
                         raise SystemExit(out.stderr[-2000:])
-                    runs.setdefault((v, tiles), []).append(
+                    runs.setdefault((v, t, tiles), []).append(
                         json.loads(out.stdout.strip().splitlines()[-1]))
-    print(f"{a.points:,} points on PSB 281 (seed {a.seed}), k = {a.k}, {a.workers} workers; "
-          f"median of {a.repeat}, a new process each")
-    print("| version | run | wall s | CPU s | CPU / one run's | superpoints |")
-    print("|---|---|---|---|---|---|")
+    what = (Path(a.mesh).name if a.mesh
+            else f"{a.points:,} points on PSB 281 (seed {a.seed})")
+    print(f"{what}, k = {a.k}, {a.workers} workers, {cores} cores; median of {a.repeat}, "
+          "a new process each")
+    print("| version | run | wall s | CPU s | CPU / one run's | speed-up | disagreements "
+          "| segments |")
+    print("|---|---|---|---|---|---|---|---|")
     for v in versions:
-        one = statistics.median(r["cpu"] for r in runs[(v, 0)])
-        for tiles in [0, *a.tiles]:
-            rs = runs[(v, tiles)]
+        base = (v, threads[0], 0)
+        one = statistics.median(r["cpu"] for r in runs[base])
+        first = statistics.median(r["wall"] for r in runs[base])
+        for t, tiles in plan:
+            rs = runs[(v, t, tiles)]
             wall, cpu = (statistics.median(r[f] for r in rs) for f in ("wall", "cpu"))
-            name = "one run" if tiles == 0 else f"{tiles} tiles"
+            name = (f"{tiles} tiles" if tiles else
+                    f"one run, {t} thread{'s' * (t != 1)}" if t else "one run")
+            apart = f"{100 * rs[0]['apart']:.3f} %" if tiles else ""
             print(f"| {'this' if v == 'installed' else Path(v).name} | {name} | {wall:.1f} | "
-                  f"{cpu:.1f} | {cpu / one:.2f} | {rs[0]['n']} |")
+                  f"{cpu:.1f} | {cpu / one:.2f} | {first / wall:.2f} | {apart} | "
+                  f"{rs[0]['n']} |")
 
 
 if __name__ == "__main__":
