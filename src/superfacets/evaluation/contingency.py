@@ -34,11 +34,10 @@ class Contingency:
     Examples
     --------
     >>> ball = trimesh.creation.icosphere(subdivisions=3)
-    >>> labels = segment(ball, 12).labels
-    >>> truth = (ball.triangles_center[:, 2] > 0).astype(int)   # two halves
-    >>> t = contingency(ball, labels, truth)
+    >>> octants = (ball.triangles_center > 0) @ [4, 2, 1]      # eight segments
+    >>> t = contingency(ball, octants, octants // 4)           # the truth: two halves
     >>> t.s_area.shape, t.g_area.shape, bool(np.isclose(t.area.sum(), t.s_area.sum()))
-    ((12,), (2,), True)
+    ((8,), (2,), True)
     """
 
     s: np.ndarray
@@ -106,11 +105,10 @@ def contingency(graph, labels, ground_truth) -> Contingency:
     Examples
     --------
     >>> ball = trimesh.creation.icosphere(subdivisions=3)
-    >>> labels = segment(ball, 12).labels
-    >>> truth = (ball.triangles_center[:, 2] > 0).astype(int)   # two halves
-    >>> t = contingency(ball, labels, truth)
-    >>> int(t.s.max()) + 1, int(t.g.max()) + 1
-    (12, 2)
+    >>> quarters = (ball.triangles_center[:, :2] > 0) @ [2, 1]
+    >>> t = contingency(ball, quarters, (ball.triangles_center[:, 2] > 0).astype(int))
+    >>> int(t.s.max()) + 1, int(t.g.max()) + 1, t.s.shape    # 4 x 2 overlaps
+    (4, 2, (8,))
     """
     graph = as_element_graph(graph)
     s = dense_labels(graph, labels, "labels")

@@ -53,8 +53,7 @@ def finish(graph, label: np.ndarray, centers: np.ndarray, rules: Rules
     Examples
     --------
     >>> s = passes_example()  # an icosphere's run up to its passes
-    >>> graph, rules = s.graph, s.rules
-    >>> labels, kept = finish(graph, s.it.label, s.it.centers, rules)
+    >>> labels, kept = finish(s.graph, s.it.label, s.it.centers, s.rules)
     >>> int(labels.max()) + 1 == kept.shape[0]
     True
     """
@@ -96,9 +95,8 @@ def clean_up(graph, labels: np.ndarray, centers: np.ndarray, rules: Rules,
     Examples
     --------
     >>> s = passes_example()  # an icosphere's run up to its passes
-    >>> graph, rules = s.graph, s.rules
-    >>> labels, kept = finish(graph, s.it.label, s.it.centers, rules)
-    >>> int(clean_up(graph, labels, kept, rules).max()) + 1 == int(labels.max()) + 1
+    >>> cleaned = clean_up(s.graph, s.labels, s.kept, s.rules)  # (finished labels)
+    >>> int(cleaned.max()) + 1 == int(s.labels.max()) + 1
     True
     """
     p = rules.params
@@ -134,9 +132,8 @@ def merge_small(graph, labels: np.ndarray, centers: np.ndarray, rules: Rules) ->
     Examples
     --------
     >>> s = passes_example()  # an icosphere's run up to its passes
-    >>> graph, rules = s.graph, s.rules
-    >>> labels, kept = finish(graph, s.it.label, s.it.centers, rules)
-    >>> bool(merge_small(graph, labels, kept, rules).max() == labels.max())  # min 1 element
+    >>> merged = merge_small(s.graph, s.labels, s.kept, s.rules)  # (finished labels)
+    >>> bool(merged.max() == s.labels.max())  # min 1 element: nothing merged
     True
     """
     return _enforce_connectivity(graph, labels, centers, min_elements=rules.params.min_elements)
@@ -171,9 +168,7 @@ def exact_count(graph, labels: np.ndarray, rules: Rules) -> tuple[np.ndarray, in
     Examples
     --------
     >>> s = passes_example()  # an icosphere's run up to its passes
-    >>> graph, rules = s.graph, s.rules
-    >>> labels, kept = finish(graph, s.it.label, s.it.centers, rules)
-    >>> exact_count(graph, labels, rules)[1]
+    >>> exact_count(s.graph, s.labels, s.rules)[1]  # (finished labels)
     12
     """
 

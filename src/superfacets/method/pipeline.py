@@ -380,8 +380,9 @@ def passes_example(n_segments: int = 12):
     Returns
     -------
     types.SimpleNamespace
-        ``graph``, ``rules``, ``hooks``, ``w``, ``swap_w``, ``init`` and ``it`` (the
-        passes' :class:`~superfacets.method.passes.Iteration`).
+        ``graph``, ``rules``, ``hooks``, ``w``, ``swap_w``, ``init``, ``it`` (the
+        passes' :class:`~superfacets.method.passes.Iteration`), and ``labels`` and
+        ``kept``, the passes' labels and centers as :func:`finish` leaves them.
 
     Raises
     ------
@@ -405,5 +406,6 @@ def passes_example(n_segments: int = 12):
     w, swap_w = weigh(graph, rules)
     init, _ = initialize(graph, w, rules, hooks)
     it = stages.iterate_passes(graph, w, swap_w, init, rules, hooks)
+    labels, kept = finish(graph, it.label, it.centers, rules)
     return SimpleNamespace(graph=graph, rules=rules, hooks=hooks, w=w, swap_w=swap_w,
-                           init=init, it=it)
+                           init=init, it=it, labels=labels, kept=kept)
