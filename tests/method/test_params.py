@@ -149,9 +149,30 @@ def test_the_declarations_are_the_fields_and_the_signatures():
     assert [getattr(DEFAULTS, n) for n in names] == [p.default for p in PARAMETERS]
     for f, own in ((superfacets, []), (seg, ["adaptive", "extent_weight"])):
         sig = inspect.signature(f).parameters  # (segment's own keywords shown too)
-        assert list(sig) == ["mesh"] + names + ["features"] + own
+        assert list(sig) == ["data"] + names + ["features"] + own
         assert all(sig[p.name].default == p.default for p in PARAMETERS)
         assert set(own) <= set(f.__code__.co_varnames)  # (keywords the function takes)
+
+
+def test_the_input_is_data_and_the_keyword_of_before_still_works_with_a_warning():
+    """``segment(data, ...)``: the input is named for what it may be (a mesh, a cloud, a
+    tetrahedral mesh); ``mesh=`` of before gives the same labels with a FutureWarning, and
+    no input, or two, is a TypeError in words."""
+    import trimesh
+
+    from superfacets import segment, superfacets
+
+    ball = trimesh.creation.icosphere(subdivisions=2)
+    want = segment(ball, 10).labels
+    with pytest.warns(FutureWarning, match=r"segment\(data=\.\.\.\)"):
+        np.testing.assert_array_equal(segment(mesh=ball, n_segments=10).labels, want)
+    with pytest.warns(FutureWarning, match="superfacets"):
+        np.testing.assert_array_equal(superfacets(mesh=ball, n_segments=10), want)
+    np.testing.assert_array_equal(segment(data=ball, n_segments=10).labels, want)
+    with pytest.raises(TypeError, match="needs the input"):
+        segment(n_segments=10)
+    with pytest.raises(TypeError, match="twice"):
+        segment(ball, 10, mesh=ball)
 
 
 def _doc_parameters(doc: str) -> dict[str, str]:

@@ -1,6 +1,6 @@
 """The superfacet method's public functions (paper section 3; ``docs/notes/method.md``).
 
-``superfacets(mesh, ...)`` returns one label per face; ``segment(mesh, ...)``
+``superfacets(data, ...)`` returns one label per face; ``segment(data, ...)``
 takes the same arguments and returns a :class:`SegmentationResult` with the
 labels and the details (centers, iterations, convergence, time per stage);
 ``superpoints(points, ...)`` is the same method on a point cloud. Each
@@ -11,6 +11,7 @@ validates its parameters before any work and runs :func:`pipeline`
 from __future__ import annotations
 
 import inspect
+import warnings
 
 import numpy as np
 
@@ -24,9 +25,11 @@ from .result import SegmentationResult
 __all__ = ["superfacets", "superpoints", "segment", "pipeline", "SegmentationResult"]
 
 _D = DEFAULTS
+#: ``data`` not given (the input may come as the keyword ``mesh`` of before)
+_NO_INPUT = object()
 
 
-def superfacets(mesh, n_segments: int | None = _D.n_segments, *, features=None,
+def superfacets(data=_NO_INPUT, n_segments: int | None = _D.n_segments, *, features=None,
                 **params) -> np.ndarray:
     """Over-segment a mesh (its faces or vertices) or a point cloud into superfacets.
 
@@ -37,12 +40,13 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, features=None,
 
     Parameters
     ----------
-    mesh : Mesh, trimesh.Trimesh or tuple of ((n, 3) float, (m, 3) int) ndarray, or a point cloud
+    data : Mesh, trimesh.Trimesh or tuple of ((n, 3) float, (m, 3) int) ndarray, or a point cloud
         Triangle or polygon mesh. Degenerate faces, unreferenced vertices,
         non-manifold edges and several connected components are accepted (each
         component gets its own superfacets); copies of a face (the same vertices, in
         any order) are one element and share its label. Or a point
-        cloud (see :func:`superpoints`).
+        cloud (see :func:`superpoints`). (Named ``mesh`` before: ``mesh=`` still
+        works, with a ``FutureWarning``.)
     n_segments : int, default 150
         Desired number of superfacets ``k``, ``1 <= k <= m``. The radius is
         then ``r = sqrt(A / (k pi))`` (section 3.1). Ignored, and must be left
@@ -232,7 +236,7 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, features=None,
     Raises
     ------
     TypeError
-        If ``mesh`` is not a mesh, or ``faces`` not integer.
+        If ``data`` is not a mesh or cloud (or is not given), or ``faces`` not integer.
     InvalidMeshError
         If the mesh is empty, has NaN/inf coordinates, out-of-range indices,
         zero extent or zero area.
@@ -259,18 +263,20 @@ def superfacets(mesh, n_segments: int | None = _D.n_segments, *, features=None,
     >>> labels.shape, int(labels.max()) + 1
     ((1280,), 20)
     """
-    return segment(mesh, n_segments, features=features, **params).labels
+    data = _the_input(data, params, "superfacets")
+    return segment(data, n_segments, features=features, **params).labels
 
 
-def segment(mesh, n_segments: int | None = _D.n_segments, *, features=None,
+def segment(data=_NO_INPUT, n_segments: int | None = _D.n_segments, *, features=None,
             adaptive: bool | int | None = None, extent_weight: float | None = None,
             **params) -> SegmentationResult:
     """Superfacets with details: same parameters as :func:`superfacets`.
 
     Parameters
     ----------
-    mesh : Mesh, trimesh.Trimesh, (vertices, faces), PointCloud or TetMesh
-        The input (see :func:`superfacets`).
+    data : Mesh, trimesh.Trimesh, (vertices, faces), PointCloud or TetMesh
+        The input (see :func:`superfacets`; named ``mesh`` before, which still works
+        as a keyword, with a ``FutureWarning``).
     n_segments : int, default 150
         Desired number of superfacets ``k``.
     features : (N, d) float ndarray, optional
@@ -315,12 +321,13 @@ def segment(mesh, n_segments: int | None = _D.n_segments, *, features=None,
     >>> r.n_segments, r.labels.dtype
     (20, dtype('int64'))
     """
+    data = _the_input(data, params, "segment")
     if adaptive is not None and adaptive is not False:
-        return _adaptive(mesh, n_segments, adaptive, extent_weight, features=features,
+        return _adaptive(data, n_segments, adaptive, extent_weight, features=features,
                          **params)
     if extent_weight is not None:
         raise ParameterError("extent_weight is a term of the adaptive level: give adaptive=")
-    run = pipeline(mesh, resolve(n_segments=n_segments, **params), features=features)
+    run = pipeline(data, resolve(n_segments=n_segments, **params), features=features)
     return SegmentationResult(**run._asdict())
 
 
@@ -334,12 +341,28 @@ def _adaptive(obj, n_segments, adaptive, extent_weight, **options):
                             **options)
 
 
+def _the_input(data, params: dict, name: str):
+    """The input given as ``data``, or as the keyword ``mesh`` of before (taken out of
+    ``params``, with a FutureWarning); a TypeError where there is none."""
+    if "mesh" in params:
+        given = params.pop("mesh")
+        if data is not _NO_INPUT:
+            raise TypeError(f"{name}() got the input twice (data and mesh=)")
+        warnings.warn(f"{name}(mesh=...) is {name}(data=...) now (or the input first); "
+                      "mesh= will be removed", FutureWarning, stacklevel=3)
+        return given
+    if data is _NO_INPUT:
+        raise TypeError(f"{name}() needs the input: a mesh, point cloud or tetrahedral mesh "
+                        "(its first argument, data)")
+    return data
+
+
 def _signature(returns, own=()) -> inspect.Signature:
-    """``(mesh, n_segments=150, *, <every other parameter>, features=None, <own>)``: the
+    """``(data, n_segments=150, *, <every other parameter>, features=None, <own>)``: the
     keywords of :data:`superfacets.method.params.PARAMETERS` with their defaults, and the
     function's ``own`` keywords (each None by default)."""
     P = inspect.Parameter
-    out = [P("mesh", P.POSITIONAL_OR_KEYWORD),
+    out = [P("data", P.POSITIONAL_OR_KEYWORD),
            P("n_segments", P.POSITIONAL_OR_KEYWORD, default=_D.n_segments)]
     out += [P(d.name, P.KEYWORD_ONLY, default=d.default) for d in PARAMETERS
             if d.name != "n_segments"]
