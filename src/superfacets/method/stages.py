@@ -78,9 +78,7 @@ class Rules:
 
     Examples
     --------
-    >>> ball = trimesh.creation.icosphere(subdivisions=3)
-    >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
-    >>> rules = resolve_rules(graph, p)
+    >>> rules = passes_example().rules  # (an icosphere's run: faces)
     >>> rules.k, rules.kind.name, rules.cleanup, rules.params.assignment
     (12, 'faces', True, 'bounded')
     """
@@ -195,11 +193,10 @@ def build_graph(obj, p: SegmentParams, features=None
 
     Examples
     --------
-    >>> ball = trimesh.creation.icosphere(subdivisions=3)
-    >>> src, graph, p = build_graph(ball, resolve(n_segments=12))
-    >>> rules = resolve_rules(graph, p)
-    >>> graph.kind, graph.n_elements, p.density
-    ('faces', 1280, 0.0)
+    >>> cloud = PointCloud(np.random.default_rng(0).random((500, 3)))
+    >>> src, graph, p = build_graph(cloud, resolve(n_segments=12))
+    >>> graph.kind, graph.n_elements, p.density    # (density: an even cloud's, 0)
+    ('points', 500, 0.0)
     """
     kind, data = prepared(obj, p.elements, n_segments=p.n_segments)
     if p.beta is not None and p.beta > 0:
