@@ -354,3 +354,28 @@ def test_the_notebook_view_is_the_page_inline():
     grey = NotebookView(pts).html()  # an input without labels: drawn grey
     assert json.loads(re.search(r'id="meta"[^>]*>(.*?)</script>', grey, re.S)
                       .group(1))["superfacets"] == 0
+
+
+def test_the_picture_says_how_many_segments_and_how_even_they_are(tmp_path, sphere):
+    """``render`` (and ``segment --picture``) draw the count and the sizes in the lower left
+    corner: the only pixels that differ from ``--no-legend``; a small picture has none."""
+    from superfacets.viz.render import size_legend
+
+    blank = np.full((400, 640, 3), 255, dtype=np.uint8)
+    drawn = size_legend(blank, np.repeat(np.arange(20), np.arange(1, 21)), "superpoints",
+                        "points")
+    changed = np.argwhere((drawn != 255).any(-1))
+    assert changed[:, 0].min() > 200 and changed[:, 1].max() < 400  # lower left only
+    assert (size_legend(blank, -np.ones(30, int)) == blank).all()  # no labelled element
+    assert (size_legend(blank[:150], np.zeros(30, int)) == blank[:150]).all()  # too small
+    mesh = tmp_path / "ball.off"
+    write_mesh(mesh, sphere)
+    a, b = tmp_path / "a.png", tmp_path / "b.png"
+    assert main(["render", str(mesh), "-o", str(a), "-k", "8", "--size", "640x480", "-q"]) == 0
+    assert main(["render", str(mesh), "-o", str(b), "-k", "8", "--size", "640x480", "-q",
+                 "--no-legend"]) == 0
+    differ = np.argwhere((np.asarray(Image.open(a).convert("RGB")).astype(int)
+                          != np.asarray(Image.open(b).convert("RGB")).astype(int)).any(-1))
+    assert differ.size and differ[:, 0].min() > 240 and differ[:, 1].max() < 480
+    assert main(["segment", str(mesh), "-k", "8", "--picture", str(a), "-q"]) == 0
+    assert (np.asarray(Image.open(a).convert("RGB"))[-60:, :200] != 255).any()

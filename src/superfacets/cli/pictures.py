@@ -72,6 +72,9 @@ def add_parsers(sub) -> None:
     add_mesh_and_labels(r)
     r.add_argument("-o", "--output", metavar="OUT.png", required=True, help="PNG to write")
     r.add_argument("--title", default=None, help="text at the top (default: none)")
+    r.add_argument("--no-legend", action="store_true",
+                   help="do not draw the segments' count and sizes (min, median, max and a "
+                        "histogram) in the lower left corner")
     add_camera_options(r, "1200x900")
     add_method_options(r)
     r.set_defaults(func=cmd_render)
@@ -142,7 +145,7 @@ def cmd_render(args) -> int:
     view = args.view if args.view is not None else default_view(data)
     data, labels, elements = _drawn(data, labels, elements)
     style = dict(size=args.size, view=view, up=up[0], background=args.background,
-                 title=args.title, zoom=args.zoom)
+                 title=args.title, zoom=args.zoom, legend=not args.no_legend)
     with waiting_bar(f"rendering {out.name}", shows_stages(args, len(labels) if labels
                                                            is not None else 0)):
         if elements == "points":

@@ -640,7 +640,7 @@ def cmd_demo(args) -> int:
 
             render(mesh, result.labels, out / "creature.png", size=(1000, 750), up="z",
                    title=f"{result.n_segments} superfacets, alpha = {args.alpha:g}",
-                   outputs=outputs)
+                   outputs=outputs, legend=True)
             picture = f", {out / 'creature.png'} (picture)"
         except Exception as exc:  # noqa: BLE001 - the picture is a bonus; say why it is missing
             print(f"note: no picture rendered ({type(exc).__name__}: {exc})", file=sys.stderr)

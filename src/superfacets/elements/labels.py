@@ -6,7 +6,7 @@ import numpy as np
 
 from ..errors import ParameterError
 
-__all__ = ["check_labels", "relabel_dense"]
+__all__ = ["check_labels", "relabel_dense", "size_summary"]
 
 
 def check_labels(labels, n: int | None, what: str = "labels", per: str = "element") -> np.ndarray:
@@ -73,3 +73,38 @@ def relabel_dense(labels: np.ndarray) -> np.ndarray:
             return rank[a]
     _, inv = np.unique(a, return_inverse=True)
     return inv.astype(np.int64).ravel()
+
+
+def size_summary(labels) -> dict:
+    """The sizes of a partition's segments, in elements: ``size_min``, ``size_median``,
+    ``size_max`` and ``size_histogram`` (counts of segments by size in powers of two:
+    ``[1], [2, 3], [4, 7], ...``), labels below 0 left out.
+
+    Parameters
+    ----------
+    labels : (n,) int ndarray
+
+    Returns
+    -------
+    dict
+
+    Raises
+    ------
+    ParameterError
+        If no element has a label.
+
+    Examples
+    --------
+    >>> s = size_summary(np.array([0, 0, 1, 1, 1, 1, 2]))
+    >>> s["size_min"], s["size_median"], s["size_max"], s["size_histogram"]
+    (1, 2.0, 4, [1, 1, 1])
+    """
+    lab = np.asarray(labels, dtype=np.int64)
+    lab = lab[lab >= 0]
+    if not lab.size:
+        raise ParameterError("no labelled element")
+    sizes = np.unique(lab, return_counts=True)[1]
+    bins = np.floor(np.log2(sizes)).astype(np.int64)
+    return {"size_min": int(sizes.min()), "size_median": float(np.median(sizes)),
+            "size_max": int(sizes.max()),
+            "size_histogram": np.bincount(bins).astype(int).tolist()}

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..elements.builders import as_element_graph, elements_of
 from ..elements.kinds import kind_of
-from ..elements.labels import check_labels
+from ..elements.labels import check_labels, size_summary
 from ..errors import InvalidMeshError, ParameterError
 from ..method.params import DEFAULTS
 from .boundaries import (
@@ -378,41 +378,6 @@ def oracle_miou(labels, ground_truth, *, weights=None, ignore_label: int | None 
         union = w[(predicted == c) | (cls == c)].sum()
         per_class[int(classes[c])] = float(inter / union) if union > 0 else 0.0
     return float(np.mean(list(per_class.values()))), per_class
-
-
-def size_summary(labels) -> dict:
-    """The sizes of a partition's segments, in elements: ``size_min``, ``size_median``,
-    ``size_max`` and ``size_histogram`` (counts of segments by size in powers of two:
-    ``[1], [2, 3], [4, 7], ...``), labels below 0 left out.
-
-    Parameters
-    ----------
-    labels : (n,) int ndarray
-
-    Returns
-    -------
-    dict
-
-    Raises
-    ------
-    ParameterError
-        If no element has a label.
-
-    Examples
-    --------
-    >>> s = size_summary(np.array([0, 0, 1, 1, 1, 1, 2]))
-    >>> s["size_min"], s["size_median"], s["size_max"], s["size_histogram"]
-    (1, 2.0, 4, [1, 1, 1])
-    """
-    lab = np.asarray(labels, dtype=np.int64)
-    lab = lab[lab >= 0]
-    if not lab.size:
-        raise ParameterError("no labelled element")
-    sizes = np.unique(lab, return_counts=True)[1]
-    bins = np.floor(np.log2(sizes)).astype(np.int64)
-    return {"size_min": int(sizes.min()), "size_median": float(np.median(sizes)),
-            "size_max": int(sizes.max()),
-            "size_histogram": np.bincount(bins).astype(int).tolist()}
 
 
 def evaluate_rows(obj, labels, ground_truths: Sequence[np.ndarray], *,

@@ -181,5 +181,5 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
         if picture is not None:
             draw = render_points if kind_of(kind).cloud else render
             draw(data, result.labels, picture, title=title, outputs=outputs, up=up, view=view,
-                 **drawn)
+                 legend=True, **drawn)
 

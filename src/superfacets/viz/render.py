@@ -23,7 +23,7 @@ import numpy as np
 from .._runtime.extras import require
 from ..elements.builders import elements_of
 from ..elements.kinds import kind_of
-from ..elements.labels import check_labels
+from ..elements.labels import check_labels, size_summary
 from ..errors import NoDisplayError, ParameterError
 from ..inputs.convert import as_mesh
 from ..inputs.mesh import Mesh
@@ -33,7 +33,8 @@ from ..io.files import save
 from ..method.params import check_choice, check_number
 from .camera import view_frame
 
-__all__ = ["render", "render_points", "render_panel", "show", "has_display", "NoDisplayError"]
+__all__ = ["render", "render_points", "render_panel", "show", "has_display", "size_legend",
+           "NoDisplayError"]
 
 
 def has_display() -> bool:
@@ -176,19 +177,20 @@ def _subplot_size(plotter) -> tuple[int, int]:
 
 def _save_png(image: np.ndarray, out, outputs=None) -> Path:
     Image = require("PIL.Image", "writing PNG pictures")
-
-
     buf = io.BytesIO()
     Image.fromarray(image).save(buf, format="PNG")
     return save(Path(out), buf.getvalue(), outputs)
 
 
-def _finish(plotter, out, outputs=None) -> np.ndarray:
-    """Take the picture, close the plotter, write the PNG if asked."""
+def _finish(plotter, out, outputs=None, legend=None) -> np.ndarray:
+    """Take the picture, close the plotter, draw the ``legend`` (labels, word) on it, write
+    the PNG if asked."""
     try:
         image = np.asarray(plotter.screenshot(return_img=True))[:, :, :3].copy()
     finally:
         plotter.close()
+    if legend is not None:
+        image = size_legend(image, *legend)
     if out is not None:
         _save_png(image, out, outputs)
     return image
@@ -219,7 +221,8 @@ def _size(size) -> tuple[int, int]:
 def render(mesh, labels=None, out=None, *, size=(1200, 900), view=None,
            background="white", boundaries: bool = True, boundary_color="black",
            line_width: float = 1.0, title: str | None = None, zoom: float = 1.0,
-           up="y", outputs=None, elements: str = "faces") -> np.ndarray:
+           up="y", outputs=None, elements: str = "faces", legend: bool = False
+           ) -> np.ndarray:
     """Render a mesh off-screen, faces coloured by superfacet.
 
     Parameters
@@ -252,6 +255,8 @@ def render(mesh, labels=None, out=None, *, size=(1200, 900), view=None,
         Stage the PNG there (all or nothing with the others).
     elements : {'faces', 'vertices'}, default 'faces'
         What ``labels`` label.
+    legend : bool, default False
+        Draw the segments' count and sizes in a corner (:func:`size_legend`).
 
     Returns
     -------
@@ -266,6 +271,7 @@ def render(mesh, labels=None, out=None, *, size=(1200, 900), view=None,
         Without the ``render`` extra (pyvista, Pillow).
     """
     mesh = as_mesh(mesh)
+    given = labels
     mesh, labels = faces_to_draw(mesh, labels, elements)
     w, h = _size(size)
     pv = _pyvista(off_screen=True)
@@ -274,7 +280,9 @@ def render(mesh, labels=None, out=None, *, size=(1200, 900), view=None,
     return _picture(pv, (w, h), background, mesh, view, zoom, up, title, out, outputs,
                     lambda p: _add(p, pv, mesh, labels, boundaries=boundaries,
                                    line_width=line_width, boundary_color=boundary_color,
-                                   surface_color="lightgrey"))
+                                   surface_color="lightgrey"),
+                    legend=(given, kind_of(elements).segment_word, kind_of(elements).name)
+                    if legend and given is not None else None)
 
 
 def faces_to_draw(mesh, labels, elements: str):
@@ -286,8 +294,90 @@ def faces_to_draw(mesh, labels, elements: str):
     return mesh, _check_labels(mesh, labels)
 
 
-def _picture(pv, size, background, frame, view, zoom, up, title, out, outputs, draw):
-    """One off-screen picture: background, ``draw(plotter)``, camera on ``frame``, title."""
+def size_legend(image: np.ndarray, labels, word: str = "superfacets",
+                elements: str = "faces") -> np.ndarray:
+    """The picture with its segments' count and sizes drawn in its lower left corner: the
+    count, the smallest, median and largest segment in elements, and a histogram of the
+    segments by size in powers of two (:func:`superfacets.elements.labels.size_summary`), so that a
+    picture says how even its segments are.
+
+    Parameters
+    ----------
+    image : (height, width, 3) uint8 ndarray
+    labels : (n,) int ndarray
+        One per element (below 0: not counted).
+    word : str, default 'superfacets'
+        What the segments are called.
+    elements : str, default 'faces'
+        What the elements are called (``"points"``, ...).
+
+    Returns
+    -------
+    (height, width, 3) uint8 ndarray
+        A new picture; the same one where no element has a label or the picture is
+        too small to hold the legend (under 320 x 200 pixels).
+
+    Raises
+    ------
+    MissingExtraError
+        Without Pillow (the ``render`` extra).
+
+    Examples
+    --------
+    >>> img = np.full((600, 800, 3), 255, dtype=np.uint8)
+    >>> out = size_legend(img, np.repeat(np.arange(50), np.arange(1, 51)))
+    >>> out.shape, bool((out != 255).any()), bool((img == 255).all())
+    ((600, 800, 3), True, True)
+    """
+    lab = np.asarray(labels)
+    h, w = image.shape[:2]
+    if lab.size == 0 or (lab < 0).all() or w < 320 or h < 200:
+        return image
+    Image = require("PIL.Image", "drawing pictures")
+    ImageDraw = require("PIL.ImageDraw", "drawing pictures")
+    ImageFont = require("PIL.ImageFont", "drawing pictures")
+    s = size_summary(lab)
+    hist = np.asarray(s["size_histogram"], dtype=np.float64)
+    k = int(np.unique(lab[lab >= 0]).size)
+    unit = max(10, min(w, h) // 45)  # the text's size in pixels
+    font = ImageFont.load_default(size=unit)
+    lines = [f"{k:,} {word}",
+             f"{elements} each: {s['size_min']:,} / {s['size_median']:,.0f} / "
+             f"{s['size_max']:,} (min / median / max)"]
+    bar_w = max(6, unit)
+    caption = f"{word} by size (powers of 2)"
+    box_w = max(max(font.getlength(t) for t in lines),
+                hist.size * bar_w + unit + font.getlength(caption)) + 2 * unit
+    box_h = len(lines) * (unit + 4) + 7 * unit
+    x0, y0 = unit, h - unit - box_h
+    pic = Image.fromarray(image)
+    draw = ImageDraw.Draw(pic)
+    draw.rectangle([x0, y0, x0 + box_w, y0 + box_h], fill=(255, 255, 255),
+                   outline=(90, 90, 90))
+    y = y0 + unit
+    for t in lines:
+        draw.text((x0 + unit, y), t, fill=(0, 0, 0), font=font)
+        y += unit + 4
+    base, tall = y + 4 * unit, 4 * unit - 4  # bars: segments per size, in powers of two
+    top = hist.max()
+    for i, c in enumerate(hist):
+        if c > 0:
+            bh = max(1.0, tall * np.sqrt(c / top))
+            draw.rectangle([x0 + unit + i * bar_w, base - bh,
+                            x0 + unit + (i + 1) * bar_w - 2, base], fill=(60, 90, 160))
+    draw.text((x0 + 2 * unit + hist.size * bar_w, base - unit - 2), caption, fill=(0, 0, 0),
+              font=font)
+    draw.text((x0 + unit, base + 2), "1", fill=(0, 0, 0), font=font)
+    right = f"{2 ** hist.size:,}"
+    draw.text((x0 + unit + hist.size * bar_w - font.getlength(right), base + 2), right,
+              fill=(0, 0, 0), font=font)
+    return np.asarray(pic)
+
+
+def _picture(pv, size, background, frame, view, zoom, up, title, out, outputs, draw,
+             legend=None):
+    """One off-screen picture: background, ``draw(plotter)``, camera on ``frame``, title,
+    the sizes' ``legend`` ((labels, word) or None)."""
     w, h = size
     p = pv.Plotter(off_screen=True, window_size=(w, h))
     try:
@@ -299,7 +389,7 @@ def _picture(pv, size, background, frame, view, zoom, up, title, out, outputs, d
     except BaseException:
         p.close()
         raise
-    return _finish(p, out, outputs)
+    return _finish(p, out, outputs, legend)
 
 
 def render_panel(items: Sequence[tuple], out=None, *, ncols: int | None = None,
@@ -400,7 +490,8 @@ class PointsFrame:
 def render_points(cloud, labels=None, out=None, *, size=(1200, 900), view=None,
                   background="white", point_size: float | None = None,
                   title: str | None = None, zoom: float = 1.0, up="y",
-                  outputs=None, eye_dome: bool | None = None) -> np.ndarray:
+                  outputs=None, eye_dome: bool | None = None, legend: bool = False
+                  ) -> np.ndarray:
     """Render a point cloud off-screen, points coloured by superpoint.
 
     Parameters
@@ -457,4 +548,6 @@ def render_points(cloud, labels=None, out=None, *, size=(1200, 900), view=None,
         if eye_dome:
             p.enable_eye_dome_lighting()
 
-    return _picture(pv, (w, h), background, frame, view, zoom, up, title, out, outputs, draw)
+    return _picture(pv, (w, h), background, frame, view, zoom, up, title, out, outputs, draw,
+                    legend=(labels, "superpoints", "points") if legend and labels is not None
+                    else None)
