@@ -1539,7 +1539,7 @@ def test_farthest_points_by_groups_of_blocks_match_numba(source):
     extra = ()
     if source == "weighted":
         s2 = np.ascontiguousarray((rng.random(c.shape[0]) * 4 + 0.1)[order])
-        extra = (s2, np.maximum.reduceat(s2, bstart[:-1]))
+        extra = (s2, np.minimum.reduceat(s2, bstart[:-1]))
     assert bstart.shape[0] - 1 > 64 * 30
     got = {}
     for fn in ("kernel", "reference"):
@@ -1549,6 +1549,14 @@ def test_farthest_points_by_groups_of_blocks_match_numba(source):
         got[fn] = out
     assert np.array_equal(got["kernel"], got["reference"])
     assert np.unique(got["kernel"]).shape[0] == 1500
+    # and both are the plain loop's centers: the blocks skipped only where no element
+    # could get nearer (a scaled run bounds each block by its smallest scale)
+    plain = np.empty(1500, np.int64)
+    scale = None if not extra else np.ascontiguousarray(np.empty_like(extra[0]))
+    if scale is not None:
+        scale[order] = extra[0]
+    native.kernel("farthest.farthest_point")(c, 1500, 17, plain, scale)
+    assert np.array_equal(got["kernel"], plain)
 
 
 @needs_cxx

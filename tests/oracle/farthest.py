@@ -146,7 +146,8 @@ def farthest_point_blocked(centroids, k, first, out, order, bstart, bcenter, bra
     """:func:`farthest_point`, skipping the blocks a new center cannot change.
 
     ``scale2`` (optional) is :func:`farthest_point`'s, listed in block order
-    (``scale2[order]``), and ``bscale2`` its largest value in each block.
+    (``scale2[order]``), and ``bscale2`` its smallest value in each block (a block's
+    bound on its elements' scaled distances then bounds each of them).
 
     Same output, ties included. Each face keeps the squared distance to its
     nearest chosen center; each block of :func:`spatial_blocks` keeps the

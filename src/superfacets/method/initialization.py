@@ -161,7 +161,7 @@ def farthest_point_centers(graph, n_segments: int, *, every_piece: bool = False)
         else:
             s2 = np.ascontiguousarray(scale2[order])
             farthest_point_blocked(c, k, first_center(g), out, order, bstart, bcenter, bradius,
-                                   s2, np.maximum.reduceat(s2, bstart[:-1]))
+                                   s2, np.minimum.reduceat(s2, bstart[:-1]))  # (a bound)
     piece, n_pieces = _pieces(g) if every_piece else (None, 1)
     if n_pieces <= 1:
         return out
