@@ -312,3 +312,49 @@ def test_arguments_of_the_wrong_kind_are_named(tmp_path):
     assert not (tmp_path / "l.seg").exists()
     with pytest.raises(InvalidCloudError, match="viewpoint must be 3 finite numbers"):
         PointCloud(np.random.default_rng(0).random((10, 3)), viewpoint="x")
+
+
+def test_functions_the_guide_names_refuse_objects_of_the_wrong_kind_in_words(tmp_path):
+    """A word, None or an array where a graph, a tetrahedral mesh, an info dict, weights
+    or a field name is expected: a TypeError or ParameterError naming what is expected,
+    not an AttributeError or IndexError from inside (found by the sweep of every public
+    function's arguments, 2026-11-28)."""
+    import trimesh
+
+    from superfacets import TetMesh, segment
+    from superfacets.evaluation.metrics import oracle_miou
+    from superfacets.graph.hierarchy import hierarchy
+    from superfacets.io.records import ply_field_name, write_labels_into
+    from superfacets.io.tetmeshes import write_volume_labels
+    from superfacets.viz.html import html_page
+
+    ball = trimesh.creation.icosphere(subdivisions=2)
+    r = segment(ball, 8)
+    for bad in ("x", None, np.zeros((3, 3))):
+        with pytest.raises(TypeError, match="superfacet graph"):
+            hierarchy(bad, [4])
+        with pytest.raises(TypeError, match="TetMesh"):
+            write_volume_labels(tmp_path / "v.vtu", bad, [0])
+    assert hierarchy(r.graph(), [4]).levels == (4,)
+    tet = TetMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], [[0, 1, 2, 3]])
+    pytest.importorskip("meshio")
+    assert write_volume_labels(tmp_path / "v.vtu", tet, [0]).exists()
+    for bad in ("x", 3, object()):
+        with pytest.raises(ParameterError, match="info must be a dict"):
+            html_page(ball, r.labels, info=bad)
+    labels = np.array([0, 0, 1, 1])
+    for bad in (np.array([]), np.ones(3), 2.0):
+        with pytest.raises(ParameterError, match="one value per element"):
+            oracle_miou(labels, labels, weights=bad)
+    assert oracle_miou(labels, labels, weights=np.ones(4))[0] == 1.0
+    for bad in (None, "", "a b", "x;y", 5):
+        with pytest.raises(ParameterError, match="word of letters"):
+            ply_field_name(bad)
+    ply = tmp_path / "c.ply"
+    ply.write_text("ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\n"
+                   "property float y\nproperty float z\nend_header\n0 0 0\n1 0 0\n")
+    with pytest.raises(ParameterError, match="word of letters"):
+        write_labels_into(tmp_path / "out.ply", ply, np.array([0, 1]), name="a b")
+    assert not (tmp_path / "out.ply").exists()
+    write_labels_into(tmp_path / "out.ply", ply, np.array([0, 1]), name="Seg_1")
+    assert b"scalar_Seg_1" in (tmp_path / "out.ply").read_bytes()

@@ -361,6 +361,9 @@ def oracle_miou(labels, ground_truth, *, weights=None, ignore_label: int | None 
         raise ParameterError(f"labels and ground truth must have one value per element, got "
                              f"{lab.shape} and {gt.shape}")
     w = np.ones(lab.shape[0]) if weights is None else np.asarray(weights, dtype=np.float64)
+    if w.shape != lab.shape:
+        raise ParameterError(f"weights must have one value per element ({lab.shape[0]}), "
+                             f"got shape {w.shape}")
     keep = np.ones(lab.shape[0], dtype=bool) if ignore_label is None else gt != ignore_label
     keep &= lab >= 0
     if not keep.any():

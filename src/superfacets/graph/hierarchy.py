@@ -46,7 +46,7 @@ from ..checks import check_int, check_nonneg, counted
 from ..elements.density import density_for
 from ..elements.kinds import kind_of
 from ..errors import ParameterError
-from .adjacency import superfacet_graph
+from .adjacency import SuperfacetGraph, superfacet_graph
 
 __all__ = ["Hierarchy", "hierarchy", "planarity_graph", "level_extent_weight", "pieces",
            "AUTO_EXTENT_WEIGHT", "ALPHA", "ETA_CONVEX"]
@@ -143,6 +143,8 @@ def hierarchy(graph, levels, *, alpha: float = ALPHA, eta_convex: float = ETA_CO
 
     Raises
     ------
+    TypeError
+        If ``graph`` is not a superfacet graph (``result.graph()``).
     ParameterError
         If a level is out of range (the message gives the range), a factor
         is negative, or ``extent_weight`` is given with Ward's cost.
@@ -154,6 +156,9 @@ def hierarchy(graph, levels, *, alpha: float = ALPHA, eta_convex: float = ETA_CO
     >>> h.levels, [int(p.max()) + 1 for p in h.parents]
     ((20, 5), [20, 5])
     """
+    if not isinstance(graph, SuperfacetGraph):
+        raise TypeError("hierarchy merges a superfacet graph (result.graph(), superfacets."
+                        f"graph.adjacency.superfacet_graph), got {type(graph).__name__}")
     alpha = check_nonneg("alpha", alpha)
     eta_convex = check_nonneg("eta_convex", eta_convex)
     beta = check_nonneg("beta", beta)

@@ -93,14 +93,17 @@ def ply_field_name(name: str) -> str:
 
     Raises
     ------
-    AttributeError
-        If ``name`` is not a str.
+    ParameterError
+        If ``name`` is not a non-empty word of letters, digits and ``_`` (a PLY
+        property name).
 
     Examples
     --------
     >>> ply_field_name("ClusterID")
     'scalar_ClusterID'
     """
+    if not isinstance(name, str) or not name or not name.replace("_", "").isalnum():
+        raise ParameterError(f"a field name is a word of letters, digits and _, got {name!r}")
     return name if name.startswith("scalar_") else f"scalar_{name}"
 
 
@@ -133,7 +136,8 @@ def write_labels_into(path, source, labels, *, name: str = LABEL_FIELD,
     ------
     ParameterError
         If the labels do not fit ``int32``, their count is not the input's
-        number of records, or the formats do not match.
+        number of records, the formats do not match, or ``name`` is not a word of
+        letters, digits and ``_`` (of at most 32 characters in a LAS file).
     MeshFormatError
         If the input cannot be read, or holds a field of that name of a type
         that cannot take the labels.
@@ -158,14 +162,17 @@ def write_labels_into(path, source, labels, *, name: str = LABEL_FIELD,
                              f"{labels.shape}")
     if labels.size and (labels.min() < -1 or labels.max() > np.iinfo(np.int32).max):
         raise ParameterError("labels must be -1 (invalid point) or from 0 to 2**31 - 1")
+    ply_name = ply_field_name(name)  # (a word: checked here for both layouts)
     kind = records_kind(path, source)
     if kind is None:
         raise ParameterError(f"{path}: labels go into .las, .laz or .ply records")
+    if kind == "las" and len(name) > 32:
+        raise ParameterError(f"a LAS dimension's name holds at most 32 characters: {name!r}")
     labels = labels.astype(np.int32)
     if kind == "las":
         content = _las_with(source, labels, name, compress=split_suffix(path)[0] == "laz")
     else:
-        content = _ply_with(source, labels, ply_field_name(name))
+        content = _ply_with(source, labels, ply_name)
     return save(path, content, outputs)
 
 

@@ -140,6 +140,9 @@ def write_volume_labels(path, mesh, labels, *, outputs=None) -> Path:
     """
     import tempfile
 
+    if not isinstance(mesh, TetMesh):
+        raise TypeError(f"write_volume_labels writes a superfacets.TetMesh, got "
+                        f"{type(mesh).__name__} (read_volume gives one)")
     meshio = extras.require("meshio", "writing tetrahedral meshes")
     lab = np.asarray(check_labels(labels, mesh.n_tets, per="tetrahedron"), dtype=np.int64)
     path = Path(path)

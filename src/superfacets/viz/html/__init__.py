@@ -98,6 +98,9 @@ def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None 
     (True, True)
     """
 
+    if info is not None and not hasattr(info, "items"):
+        raise ParameterError(f"info must be a dict of names and values, got "
+                             f"{type(info).__name__}")
     if is_cloud(mesh):
         return _points_page(mesh, labels, title=title, info=info, background=background,
                             view=view, up=up)
