@@ -25,6 +25,9 @@ def test_segment_writes_labels_colored_mesh_and_summary(tmp_path, small_off, cap
     assert wrote == f"wrote {seg} (labels), {ply} (coloured mesh)"
     labels = read_labels(seg, n_faces=5120)
     assert labels.max() + 1 == 30
+    sizes = np.bincount(labels)  # the summary says how even they are
+    assert (f", {sizes.min():,} to {sizes.max():,} faces each (median "
+            f"{np.median(sizes):,.0f})") in line
     assert not seg.read_text().startswith("#")
     assert read_mesh(ply).n_faces == 5120
 

@@ -389,3 +389,17 @@ def _describe_stop(result) -> str:
     from ..api.result import describe_stop
 
     return describe_stop(result)
+
+
+def sizes_said(labels, elements: str) -> str:
+    """``', 12 to 480 points each (median 130)'``: the segments' sizes in elements."""
+    import numpy as np
+
+    from ..elements.labels import size_summary
+
+    lab = np.asarray(labels)
+    if not (lab >= 0).any():
+        return ""
+    s = size_summary(lab)
+    return (f", {s['size_min']:,} to {s['size_max']:,} {elements} each "
+            f"(median {s['size_median']:,.0f})")

@@ -31,6 +31,7 @@ from .options import (
     said_up,
     scan_cloud,
     shows_stages,
+    sizes_said,
     up_of,
 )
 
@@ -198,6 +199,8 @@ def _summary(name: str, mesh, result, seconds: float, elements: str = "faces",
     swaps = f", {_count(t['swaps'], 'split-and-merge swap')}" if "swaps" in t else ""
     if result.n_segments == 1:  # (one superfacet, one superpoint)
         segs = segs.replace("superfacets", "superfacet", 1).replace("superpoints", "superpoint", 1)
+    else:  # how even they are: the smallest, the largest and the median
+        segs += sizes_said(result.labels, elements)
     return (f"{name}: {what}, {result.n_segments} {segs}, "
             f"{_count(result.n_iter, 'iteration')} ({state}){coarse}{swaps}, {seconds:.2f} s"
             f"{_tiny_hint(result) if elements == 'points' and not start else ''}")

@@ -13,6 +13,7 @@ from .options import (
     element_kwargs,
     method_kwargs,
     named_after,
+    sizes_said,
 )
 
 
@@ -113,6 +114,8 @@ def segment_tiles(args) -> int:
         if first:
             how = "flat neighbours first" if kind_of(kind).cloud else "Ward's merges"
             what += f" (merged from {first:,} finer ones, {how}; --merge-from 1: no merging)"
+        if result.n_segments > 1:
+            what += sizes_said(result.labels, kind)
         print(f"{Path(args.mesh).name}: {result.labels.size} {kind}, {result.n_segments} "
               f"{what}{asked} in {len(result.tiles)} tiles "
               f"({result.layout.describe()}), {elapsed:.2f} s; largest tile "
