@@ -358,3 +358,28 @@ def test_functions_the_guide_names_refuse_objects_of_the_wrong_kind_in_words(tmp
     assert not (tmp_path / "out.ply").exists()
     write_labels_into(tmp_path / "out.ply", ply, np.array([0, 1]), name="Seg_1")
     assert b"scalar_Seg_1" in (tmp_path / "out.ply").read_bytes()
+
+
+def test_the_stages_say_what_they_take():
+    """Each of the run's stages given a word, None or an array where the run's graph, rules
+    or parameters go: a TypeError naming what it takes (an AttributeError from inside
+    before), and the stages as the run calls them unchanged."""
+    from superfacets.method import finish as F
+    from superfacets.method import stages as S
+    from superfacets.method.pipeline import passes_example
+
+    s = passes_example()
+    calls = {
+        "weigh": lambda g, r: S.weigh(g, r), "initialize": lambda g, r: S.initialize(
+            g, s.w, r, s.hooks), "finish": lambda g, r: F.finish(g, s.it.label, s.it.centers, r),
+        "exact_count": lambda g, r: F.exact_count(g, s.labels, r),
+        "merge_small": lambda g, r: F.merge_small(g, s.labels, s.kept, r)}
+    for name, call in calls.items():
+        for bad in ("x", None, np.zeros(3)):
+            with pytest.raises(TypeError, match=f"{name} takes the run's element graph"):
+                call(bad, s.rules)
+            with pytest.raises(TypeError, match=f"{name} takes the run's rules"):
+                call(s.graph, bad)
+    with pytest.raises(TypeError, match="build_graph takes the run's parameters"):
+        S.build_graph(np.zeros((4, 3)), {"n_segments": 4})
+    assert F.exact_count(s.graph, s.labels, s.rules)[1] == 12

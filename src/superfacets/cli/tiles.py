@@ -116,11 +116,11 @@ def segment_tiles(args) -> int:
             what += f" (merged from {first:,} finer ones, {how}; --merge-from 1: no merging)"
         if result.n_segments > 1:
             what += sizes_said(result.labels, kind)
-        print(f"{Path(args.mesh).name}: {result.labels.size} {kind}, {result.n_segments} "
+        print(f"{Path(args.mesh).name}: {result.labels.size:,} {kind}, {result.n_segments:,} "
               f"{what}{asked} in {len(result.tiles)} tiles "
               f"({result.layout.describe()}), {elapsed:.2f} s; largest tile "
-              f"{max(t['rows'] for t in result.tiles)} {kind} with its halo, peak "
-              f"{peak:.0f} MiB; {result.disagreements} border disagreements", file=report)
+              f"{max(t['rows'] for t in result.tiles):,} {kind} with its halo, peak "
+              f"{peak:,.0f} MiB; {result.disagreements:,} border disagreements", file=report)
         if seg_out is not None and str(seg_out) != "-":
             from ..io.records import LABEL_FIELD, records_kind
 

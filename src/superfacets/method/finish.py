@@ -16,7 +16,7 @@ from ..graph.hierarchy import pieces
 from ..method.params import DEFAULTS
 from .cleanup import clean_boundaries
 from .connectivity import enforce_connectivity as _enforce_connectivity
-from .stages import Rules
+from .stages import Rules, check_stage
 
 __all__ = ["finish", "clean_up", "merge_small", "exact_count"]
 
@@ -47,6 +47,8 @@ def finish(graph, label: np.ndarray, centers: np.ndarray, rules: Rules
 
     Raises
     ------
+    TypeError
+        If an argument is not what the earlier stage gives (a word, an array).
     ParameterError
         If the labels do not fit the graph.
 
@@ -57,6 +59,7 @@ def finish(graph, label: np.ndarray, centers: np.ndarray, rules: Rules
     >>> int(labels.max()) + 1 == kept.shape[0]
     True
     """
+    check_stage("finish", graph=graph, rules=rules)
     present = np.zeros(centers.shape[0], dtype=bool)
     present[label] = True
     labels = relabel_dense(label)
@@ -89,6 +92,8 @@ def clean_up(graph, labels: np.ndarray, centers: np.ndarray, rules: Rules,
 
     Raises
     ------
+    TypeError
+        If an argument is not what the earlier stage gives (a word, an array).
     ParameterError
         If the labels do not fit the graph.
 
@@ -99,6 +104,7 @@ def clean_up(graph, labels: np.ndarray, centers: np.ndarray, rules: Rules,
     >>> int(cleaned.max()) + 1 == int(s.labels.max()) + 1
     True
     """
+    check_stage("clean_up", graph=graph, rules=rules)
     p = rules.params
     return clean_boundaries(graph, labels, centers, radius=rules.r, eta_convex=p.eta_convex,
                             alpha=p.alpha if p.weighting == "paper" else _D.alpha,
@@ -126,6 +132,8 @@ def merge_small(graph, labels: np.ndarray, centers: np.ndarray, rules: Rules) ->
 
     Raises
     ------
+    TypeError
+        If an argument is not what the earlier stage gives (a word, an array).
     ParameterError
         If the labels do not fit the graph.
 
@@ -136,6 +144,7 @@ def merge_small(graph, labels: np.ndarray, centers: np.ndarray, rules: Rules) ->
     >>> bool(merged.max() == s.labels.max())  # min 1 element: nothing merged
     True
     """
+    check_stage("merge_small", graph=graph, rules=rules)
     return _enforce_connectivity(graph, labels, centers, min_elements=rules.params.min_elements)
 
 
@@ -162,6 +171,8 @@ def exact_count(graph, labels: np.ndarray, rules: Rules) -> tuple[np.ndarray, in
 
     Raises
     ------
+    TypeError
+        If an argument is not what the earlier stage gives (a word, an array).
     ParameterError
         If the labels do not fit the graph.
 
@@ -171,6 +182,7 @@ def exact_count(graph, labels: np.ndarray, rules: Rules) -> tuple[np.ndarray, in
     >>> exact_count(s.graph, s.labels, s.rules)[1]  # (finished labels)
     12
     """
+    check_stage("exact_count", graph=graph, rules=rules)
 
     k = rules.k if rules.target is None else rules.target
     n = int(labels.max()) + 1 if labels.size else 0

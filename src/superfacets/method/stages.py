@@ -16,6 +16,7 @@ import numpy as np
 from ..elements.builders import ElementInput, elements_of, prepared
 from ..elements.density import adapted_graph, density_for
 from ..elements.features import colors_or_features, features_of, per_element
+from ..elements.graph import ElementGraph
 from ..elements.kinds import ElementKind, kind_of
 from ..elements.vertices import symmetric_terms
 from ..errors import ParameterError
@@ -105,6 +106,20 @@ class Rules:
         return (self.params.window * self.r) ** 2
 
 
+_UNSET = object()
+
+
+def check_stage(name: str, *, graph=_UNSET, rules=_UNSET, params=_UNSET) -> None:
+    """A TypeError that says what a stage takes, where it is given something else: the
+    run's element graph (:func:`build_graph`), its rules (:func:`resolve_rules`), its
+    parameters (:func:`superfacets.method.params.resolve`)."""
+    for given, want, what in ((graph, ElementGraph, "the run's element graph (build_graph)"),
+                              (rules, Rules, "the run's rules (resolve_rules)"),
+                              (params, SegmentParams, "the run's parameters (resolve)")):
+        if given is not _UNSET and not isinstance(given, want):
+            raise TypeError(f"{name} takes {what}, got {type(given).__name__}")
+
+
 def stage_reads(rules: Rules, initial=None) -> tuple[tuple[str, frozenset], ...]:
     """What each stage after the graph's build reads of the fields the graph can
     forget and make again (its :attr:`~superfacets.elements.graph.ElementGraph.rebuild`
@@ -133,6 +148,8 @@ def stage_reads(rules: Rules, initial=None) -> tuple[tuple[str, frozenset], ...]
 
     Raises
     ------
+    TypeError
+        If an argument is not what the earlier stage gives (a word, an array).
     AttributeError
         Never for rules from :func:`resolve_rules`.
 
@@ -145,6 +162,7 @@ def stage_reads(rules: Rules, initial=None) -> tuple[tuple[str, frozenset], ...]
     [('weight layout', ['dual_edge', 'lengths', 'spans', 'terms']), ('passes', []),
      ('clean-up', ['dual_edge', 'lengths', 'terms']), ('cuts', [])]
     """
+    check_stage("stage_reads", rules=rules)
     plan = [("pair weights", {"normals", "pairs", "lengths", "spans", "border_shares",
                               "terms"}),
             ("weight layout", {"dual_edge"} | ({"terms", "spans", "lengths"}
@@ -186,6 +204,8 @@ def build_graph(obj, p: SegmentParams, features=None
 
     Raises
     ------
+    TypeError
+        If an argument is not what the earlier stage gives (a word, an array).
     ParameterError
         If ``n_segments`` exceeds the elements, or the features do not fit.
     InvalidMeshError, InvalidCloudError, MemoryLimitError
@@ -198,6 +218,7 @@ def build_graph(obj, p: SegmentParams, features=None
     >>> graph.kind, graph.n_elements, p.density    # (density: an even cloud's, 0)
     ('points', 500, 0.0)
     """
+    check_stage("build_graph", params=p)
     kind, data = prepared(obj, p.elements, n_segments=p.n_segments)
     if p.beta is not None and p.beta > 0:
         _check_features(kind, data, features)
@@ -258,6 +279,8 @@ def resolve_features(source: ElementInput, graph, p: SegmentParams, features=Non
 
     Raises
     ------
+    TypeError
+        If an argument is not what the earlier stage gives (a word, an array).
     ParameterError
         If ``beta > 0`` and the input has no features, or they do not fit.
 
@@ -272,6 +295,7 @@ def resolve_features(source: ElementInput, graph, p: SegmentParams, features=Non
     >>> p.beta > 0, feats.shape, floor
     (True, (1280, 3), 0.0)
     """
+    check_stage("resolve_features", graph=graph, params=p)
 
     if p.beta is not None and p.beta <= 0:
         return p, None, 0.0
@@ -326,6 +350,8 @@ def resolve_rules(graph, p: SegmentParams, *, n_centers: int | None = None,
 
     Raises
     ------
+    TypeError
+        If an argument is not what the earlier stage gives (a word, an array).
     ParameterError
         If ``n_segments`` exceeds the elements or the radius is too small
         (:func:`superfacets.method.params.superfacet_size`).
@@ -338,6 +364,7 @@ def resolve_rules(graph, p: SegmentParams, *, n_centers: int | None = None,
     >>> rules.k, round(rules.r, 4), rules.center_tol, rules.coarsen
     (12, 0.576, 0.05, 1)
     """
+    check_stage("resolve_rules", graph=graph, params=p)
     if p.beta is None:
         p = replace(p, beta=0.0)
     k, radius = superfacet_size(p, graph.area, graph.diagonal, graph.n_elements, graph.kind)
@@ -393,6 +420,8 @@ def weigh(graph, rules: Rules, features=None, hooks=None
 
     Raises
     ------
+    TypeError
+        If an argument is not what the earlier stage gives (a word, an array).
     ParameterError
         If the features do not fit the graph.
 
@@ -403,6 +432,7 @@ def weigh(graph, rules: Rules, features=None, hooks=None
     >>> w.shape == (2 * s.graph.n_edges,), swap_w is not None
     (True, True)
     """
+    check_stage("weigh", graph=graph, rules=rules)
     p = rules.params
     if rules.cleanup:
         graph.terms  # noqa: B018 (kept for the clean-up; else computed chunk by chunk)
@@ -445,6 +475,7 @@ def held_weights(graph, rules: Rules, w: np.ndarray, features=None, initial=None
     >>> held.let_go(); held.remade, held.get().dtype.name  # (faces: never let go)
     (0, 'float32')
     """
+    check_stage("held_weights", graph=graph, rules=rules)
     if not _per_entry(graph, rules) or rules.coarsen <= 1 or initial is not None:
         return HeldWeights(w)
     return HeldWeights(w, remake=lambda: weigh(graph, rules, features)[0])
@@ -483,6 +514,8 @@ def initialize(graph, w: np.ndarray, rules: Rules, hooks,
 
     Raises
     ------
+    TypeError
+        If an argument is not what the earlier stage gives (a word, an array).
     ParameterError
         Never for rules from :func:`resolve_rules`.
 
@@ -493,6 +526,7 @@ def initialize(graph, w: np.ndarray, rules: Rules, hooks,
     >>> init.shape, coarsen
     ((12,), 1)
     """
+    check_stage("initialize", graph=graph, rules=rules)
     if initial is not None:
         return np.asarray(initial, dtype=np.int64), 1
     if rules.coarsen > 1:
@@ -529,6 +563,8 @@ def iterate_passes(graph, w: np.ndarray, swap_w, init: np.ndarray, rules: Rules,
 
     Raises
     ------
+    TypeError
+        If an argument is not what the earlier stage gives (a word, an array).
     ParameterError
         Never for rules from :func:`resolve_rules`.
 
@@ -539,6 +575,7 @@ def iterate_passes(graph, w: np.ndarray, swap_w, init: np.ndarray, rules: Rules,
     >>> it.label.shape, it.n_iter >= 1
     ((1280,), True)
     """
+    check_stage("iterate_passes", graph=graph, rules=rules)
     p = rules.params
     spaces = Workspaces(graph.n_elements, w, p.n_threads)
     centers = np.empty(graph.n_elements, dtype=np.int64)
