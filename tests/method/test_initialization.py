@@ -155,3 +155,31 @@ def test_every_piece_gets_a_center_within_the_count(sphere):
     assert c[39] == seeds[1 if hit[0] >= n + nb else 2]
     # more pieces than centers: one each
     assert farthest_point_centers(m, 2, every_piece=True).tolist() == seeds.tolist()
+
+
+def test_a_shorter_farthest_run_on_the_same_graph_is_the_longer_ones_prefix(monkeypatch):
+    """The farthest points a graph was sampled for are kept with it, and a run for fewer
+    reads their prefix (a tiled run's tile samples its core's share, then starts from
+    it): the same centers as a fresh graph's run, and a content-sensitive graph (another
+    scale) is sampled again."""
+    from superfacets._kernels import native
+    from superfacets.method import initialization
+
+    pts = np.random.default_rng(5).random((20000, 3)) * [1, 1, 0.05]
+    graph = point_graph(PointCloud(pts), 8).graph
+    longer = farthest_point_centers(graph, 900)
+    calls = []
+    real = native.kernel
+    monkeypatch.setattr(native, "kernel", lambda name: calls.append(name) or real(name))
+    shorter = farthest_point_centers(graph, 300)
+    assert calls == []  # read from the longer run
+    fresh = farthest_point_centers(point_graph(PointCloud(pts.copy()), 8).graph, 300)
+    np.testing.assert_array_equal(shorter, fresh)
+    np.testing.assert_array_equal(shorter, longer[:300])
+    shorter[0] = -1  # (a copy: the kept run is not changed through it)
+    np.testing.assert_array_equal(farthest_point_centers(graph, 300), fresh)
+    scaled = graph.replaced(scale2=np.linspace(0.5, 2.0, graph.n_elements))
+    calls.clear()
+    monkeypatch.setattr(initialization, "_BLOCKED_MIN_WORK", 0)
+    farthest_point_centers(scaled, 300)
+    assert any(c.startswith("farthest.") for c in calls)  # sampled again

@@ -146,22 +146,7 @@ def farthest_point_centers(graph, n_segments: int, *, every_piece: bool = False)
     """
     g = as_element_graph(graph)
     k = check_n_segments(n_segments, g.n_elements, g.kind)
-    out = np.empty(k, dtype=np.int64)
-    c = np.ascontiguousarray(g.positions)
-    m = c.shape[0]
-    scale2 = g.scale2  # content-sensitive runs (superfacets.elements.density); None: the paper's
-    if m * k < _BLOCKED_MIN_WORK:
-        native.kernel("farthest.farthest_point")(c, k, first_center(g), out, scale2)
-    else:  # same result; each new center visits only the grid cells it can change
-        cells = max(2, round(m ** (1 / 3)))  # cells^3 ~ m: the count array stays O(m)
-        order, bstart, bcenter, bradius = native.kernel("farthest.spatial_blocks")(c, cells)
-        farthest_point_blocked = native.kernel("farthest.farthest_point_blocked")
-        if scale2 is None:
-            farthest_point_blocked(c, k, first_center(g), out, order, bstart, bcenter, bradius)
-        else:
-            s2 = np.ascontiguousarray(scale2[order])
-            farthest_point_blocked(c, k, first_center(g), out, order, bstart, bcenter, bradius,
-                                   s2, np.minimum.reduceat(s2, bstart[:-1]))  # (a bound)
+    out = _farthest_run(g, k)
     piece, n_pieces = _pieces(g) if every_piece else (None, 1)
     if n_pieces <= 1:
         return out
@@ -176,6 +161,35 @@ def farthest_point_centers(graph, n_segments: int, *, every_piece: bool = False)
     missed = np.ones(n_pieces, dtype=bool)
     missed[piece[out[:keep]]] = False
     return np.r_[out[:keep], seeds[missed[piece[seeds]]]].astype(np.int64)
+
+
+def _farthest_run(g, k: int) -> np.ndarray:
+    """The first ``k`` farthest points of graph ``g`` (a new array). The sampling is
+    incremental (the first ``k`` of a longer run are the run for ``k``), so the longest
+    run asked of a graph is kept with it and a shorter one read from it: a tiled run's
+    tile samples once to find its core's share and starts from a prefix of the same run
+    (10M points in 16 tiles: 4.7 of the centers phase's 15 s)."""
+    scale2 = g.scale2  # content-sensitive runs (superfacets.elements.density); None: the paper's
+    kept = g.__dict__.get("_farthest_run")
+    if kept is not None and kept[0] is scale2 and kept[1].size >= k:
+        return kept[1][:k].copy()
+    out = np.empty(k, dtype=np.int64)
+    c = np.ascontiguousarray(g.positions)
+    m = c.shape[0]
+    if m * k < _BLOCKED_MIN_WORK:
+        native.kernel("farthest.farthest_point")(c, k, first_center(g), out, scale2)
+    else:  # same result; each new center visits only the grid cells it can change
+        cells = max(2, round(m ** (1 / 3)))  # cells^3 ~ m: the count array stays O(m)
+        order, bstart, bcenter, bradius = native.kernel("farthest.spatial_blocks")(c, cells)
+        farthest_point_blocked = native.kernel("farthest.farthest_point_blocked")
+        if scale2 is None:
+            farthest_point_blocked(c, k, first_center(g), out, order, bstart, bcenter, bradius)
+        else:
+            s2 = np.ascontiguousarray(scale2[order])
+            farthest_point_blocked(c, k, first_center(g), out, order, bstart, bcenter, bradius,
+                                   s2, np.minimum.reduceat(s2, bstart[:-1]))  # (a bound)
+    g.__dict__["_farthest_run"] = (scale2, out.copy())  # (kept read-only: a copy is returned)
+    return out
 
 
 def flood_labels(graph, csr_weights: np.ndarray, radius: float,

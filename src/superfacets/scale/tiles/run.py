@@ -226,7 +226,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
     merged_from = None
     if merging:
         with stage("merges"):
-            merged_from = int(np.unique(labels[labels >= 0]).size)
+            merged_from = int(ranked(labels, labels.size)[0].size)
             labels = merged_labels(labels, [o["merge_stats"] for o in done], target, params)
     with stage("stitch", add=True):
         names = _numbered_densely(labels)
