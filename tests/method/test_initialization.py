@@ -183,3 +183,20 @@ def test_a_shorter_farthest_run_on_the_same_graph_is_the_longer_ones_prefix(monk
     monkeypatch.setattr(initialization, "_BLOCKED_MIN_WORK", 0)
     farthest_point_centers(scaled, 300)
     assert any(c.startswith("farthest.") for c in calls)  # sampled again
+
+
+def test_the_pieces_farthest_points_seed_are_found_once_per_graph(monkeypatch):
+    """Known answer: two separate sheets get a center each, and a second run on the same
+    graph reads the pieces and their seeds found by the first (no components kernel)."""
+    from superfacets._kernels import native
+
+    rng = np.random.default_rng(2)
+    sheet = rng.random((3000, 3)) * [1, 1, 0.01]
+    graph = point_graph(PointCloud(np.r_[sheet, sheet + [0, 0, 5]]), 8).graph
+    first = farthest_point_centers(graph, 2, every_piece=True)
+    assert sorted((graph.positions[first, 2] > 2).tolist()) == [False, True]
+    calls = []
+    real = native.kernel
+    monkeypatch.setattr(native, "kernel", lambda name: calls.append(name) or real(name))
+    np.testing.assert_array_equal(farthest_point_centers(graph, 2, every_piece=True), first)
+    assert not any(c.startswith("connectivity.") for c in calls)

@@ -147,7 +147,7 @@ def farthest_point_centers(graph, n_segments: int, *, every_piece: bool = False)
     g = as_element_graph(graph)
     k = check_n_segments(n_segments, g.n_elements, g.kind)
     out = _farthest_run(g, k)
-    piece, n_pieces = _pieces(g) if every_piece else (None, 1)
+    piece, n_pieces = _kept_pieces(g)[:2] if every_piece else (None, 1)
     if n_pieces <= 1:
         return out
     # the longest run of farthest points that, with one seed in each piece it
@@ -157,10 +157,21 @@ def farthest_point_centers(graph, n_segments: int, *, every_piece: bool = False)
     new_piece[np.unique(piece[out], return_index=True)[1]] = 1
     used = np.arange(1, k + 1) + n_pieces - np.cumsum(new_piece)  # non-decreasing
     keep = max(1, int(np.searchsorted(used, k, side="right")))
-    seeds = piece_seeds(g, (piece, n_pieces))
+    seeds = _kept_pieces(g)[2]
     missed = np.ones(n_pieces, dtype=bool)
     missed[piece[out[:keep]]] = False
     return np.r_[out[:keep], seeds[missed[piece[seeds]]]].astype(np.int64)
+
+
+def _kept_pieces(g) -> tuple:
+    """The connected pieces of graph ``g`` (:func:`_pieces`) and their seeds
+    (:func:`piece_seeds`), found once and kept with it (a tile samples twice)."""
+    kept = g.__dict__.get("_piece_seeds")
+    if kept is None:
+        piece, n_pieces = _pieces(g)
+        seeds = piece_seeds(g, (piece, n_pieces)) if n_pieces > 1 else None
+        kept = g.__dict__["_piece_seeds"] = (piece, n_pieces, seeds)
+    return kept
 
 
 def _farthest_run(g, k: int) -> np.ndarray:
