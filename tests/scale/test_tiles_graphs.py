@@ -108,3 +108,25 @@ def test_tiles_read_the_whole_clouds_area_on_the_graphs_they_keep(monkeypatch, t
     assert narrow.mesh_radius == pytest.approx(res.mesh_radius, rel=1e-12)
     monkeypatch.setattr(run, "graph_folder", lambda *a: None)
     np.testing.assert_array_equal(segment_tiled(cloud, 60, tiles=4).labels, narrow.labels)
+
+
+def test_a_meshs_tiles_read_their_boxes_once_from_the_tiles_files(monkeypatch, tmp_path):
+    """A tiled mesh's later phases read each tile's box from the file its first phase kept
+    (not from the tiles' files again: the faces' records were gathered and sorted three
+    times), with the same labels as a run that keeps none."""
+    import trimesh
+
+    import superfacets.scale.tiles.run as run
+    from superfacets.scale.tiles.buckets import TileBuckets
+
+    m = trimesh.creation.icosphere(subdivisions=5)
+    reads, real = [], TileBuckets._records
+    monkeypatch.setattr(TileBuckets, "_records",
+                        lambda self, lo, hi: reads.append(1) or real(self, lo, hi))
+    kept = segment_tiled((m.vertices, m.faces), 60, tiles=4, workdir=tmp_path)
+    assert len(reads) == 4  # one per tile: its centers phase; refine and labels read the kept
+    reads.clear()
+    monkeypatch.setattr(run, "box_folder", lambda *a: None)
+    again = segment_tiled((m.vertices, m.faces), 60, tiles=4, workdir=tmp_path)
+    assert len(reads) == 12
+    np.testing.assert_array_equal(kept.labels, again.labels)

@@ -59,7 +59,7 @@ from ...method.params import DEFAULTS, resolve, superfacet_size
 from ...method.rules import fine_count
 from ..runner.engine import Engine
 from . import buckets, phases
-from .graphs import drop_graphs, graph_folder
+from .graphs import box_folder, drop_graphs, graph_folder
 from .layout import any_in_box, check_tiles, gathered_centers, in_box
 from .merges import merged_labels, tiled_merge_from
 from .phases import HALO, check_tileable, halo_distance, point_areas, sample_cloud
@@ -194,10 +194,12 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                                                            up, shared and tmp)
         graphs = graph_folder(tmp, survey.n_elements, reader.kind, shared and n_tiles > 1,
                               params)  # the tiles' point graphs, kept between phases
+        boxes = box_folder(tmp, reader, survey.n_elements) if shared and n_tiles > 1 else None
         with Engine(workers=workers, scheduler=scheduler, memory_limit=memory_limit) as engine:
             def run(phase, margin, extra=lambda t: {}, only=None):
                 tasks = [dict(phase=phase, reader=reader, layout=layout, tile=t, margin=margin,
                               params=params, r=r, diagonal=diagonal, graphs=graphs,
+                              boxes=boxes,
                               frame=_frame(reader, survey), **extra(t))
                          for t in (range(n_tiles) if only is None else only)]
                 if reference is not None and (phase != "areas" or graphs is not None):

@@ -169,13 +169,14 @@ def _framed(task: dict, layout, inp):
 
 
 def _box(task: dict, lo, hi):
-    """A task's box: its rows, positions and input; the first phase of a tile that keeps
-    its graph keeps the box's records beside it for the later phases (one file, not the
-    tiles the box overlaps)."""
+    """A task's box: its rows, positions and input; the first phase of a tile keeps the
+    box's records in the run's ``boxes`` folder, where it has one, for the later phases
+    (one file, not the tiles the box overlaps: a mesh's faces read from 4 tiles' files
+    took 2.9 s a box of 3M faces, against 0.4 s)."""
 
     reader, name = task["reader"], f"tile {task['tile']}"
-    if task.get("graphs") and isinstance(reader, TileBuckets):
-        Path(task["graphs"]).mkdir(parents=True, exist_ok=True)
+    if task.get("boxes") and isinstance(reader, TileBuckets):
+        Path(task["boxes"]).mkdir(parents=True, exist_ok=True)
         return reader.read_box(lo, hi, name=name,
-                               keep=Path(task["graphs"]) / f"box-{task['tile']}")
+                               keep=Path(task["boxes"]) / f"box-{task['tile']}")
     return reader.read_box(lo, hi, name=name)
