@@ -440,3 +440,25 @@ def test_the_clean_up_lets_the_graph_go_once_its_bands_are_found(valley):
     assert calls == [0]
     np.testing.assert_array_equal(got, plain)
     assert not {"terms", "lengths", "dual_edge", "edges"} & set(g.__dict__)
+
+
+def test_a_run_unfinished_gives_its_last_pass_not_the_finishing_stages():
+    """``pipeline(..., finished=False)`` (a tile's centers and refine phases, which keep
+    only centers): the last pass's labels, made dense, each center in its own superfacet,
+    no finishing stage timed; the finished run's labels differ only where those stages
+    moved elements, and its centers are the same elements."""
+    import trimesh
+
+    from superfacets.method.params import resolve
+    from superfacets.method.pipeline import pipeline
+
+    m = trimesh.creation.icosphere(subdivisions=4)
+    p = resolve(n_segments=40)
+    raw = pipeline(m, p, finished=False)
+    done = pipeline(m, p)
+    labels, centers = np.asarray(raw.labels), np.asarray(raw.centers)
+    assert labels.max() + 1 == centers.size == np.unique(labels).size
+    np.testing.assert_array_equal(labels[centers], np.arange(centers.size))
+    assert "cleanup" in done.timings and "cleanup" not in raw.timings
+    np.testing.assert_array_equal(np.sort(done.centers), np.sort(centers))
+    assert 0 < (np.asarray(done.labels) != labels).mean() < 0.2  # the clean-up's moves

@@ -51,6 +51,7 @@ from .._runtime.memory import give_back_free_memory
 from .._runtime.progress import new_bar, tick
 from .._runtime.threads import using
 from ..elements.builders import kind_for
+from ..elements.labels import relabel_dense
 from . import stages
 from .finish import clean_up, exact_count, finish, merge_small
 from .merges import merge_to_count
@@ -210,7 +211,7 @@ class Hooks:
 
 def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
              jump_cycles: bool = True, n_centers: int | None = None,
-             initial: np.ndarray | None = None) -> RunRecord:
+             initial: np.ndarray | None = None, finished: bool = True) -> RunRecord:
     """Run the method with validated parameters, stage by stage (see the module notes).
 
     Parameters
@@ -232,6 +233,10 @@ def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
     initial : (c,) int ndarray, optional
         Elements to start the passes from, instead of the initialization
         (a tile starting from the whole run's centers).
+    finished : bool, default True
+        False: the last pass's labels and centers (those that kept an element), without
+        the finishing stages (connectivity, clean-up, merges): a tile's centers and refine
+        phases, which keep only centers, the labels phase finishing once.
 
     Returns
     -------
@@ -253,11 +258,11 @@ def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
 
     with using(params.n_threads):  # also the graph build and terms this run triggers
         return _run(mesh, params, features, replay=replay, jump_cycles=jump_cycles,
-                    n_centers=n_centers, initial=initial)
+                    n_centers=n_centers, initial=initial, finished=finished)
 
 
 def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
-         n_centers: int | None = None, initial=None) -> RunRecord:
+         n_centers: int | None = None, initial=None, finished: bool = True) -> RunRecord:
     t_start = time.perf_counter()
     hooks = Hooks(p.progress, p.max_iter, kind_for(obj, p.elements))
     try:
@@ -296,7 +301,8 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
         hooks.close()
         raise
     try:
-        labels, centers = _finished(graph, it, rules, hooks, feats)
+        labels, centers = (_finished(graph, it, rules, hooks, feats) if finished
+                           else _unfinished(it))
     finally:
         hooks.close()
     timings = hooks.timings
@@ -310,6 +316,13 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
                      mesh_radius=rules.r, n_orphan_seeds=it.n_orphan_seeds, timings=timings,
                      params=_resolved(graph, rules, ratio, init.shape[0]), elements=source,
                      element_labels=element_labels)
+
+
+def _unfinished(it) -> tuple[np.ndarray, np.ndarray]:
+    """The last pass's labels made dense, and the centers that kept an element."""
+    present = np.zeros(it.centers.shape[0], dtype=bool)
+    present[it.label] = True
+    return relabel_dense(it.label), np.asarray(it.centers, dtype=np.int64)[present]
 
 
 def _finished(graph, it, rules, hooks, feats):

@@ -174,7 +174,7 @@ def tile_centers(inp, core: np.ndarray, params: SegmentParams, r: float, diagona
         return np.flatnonzero(core & _valid_rows(inp))[:1], None
     p = _tile_params(params, r, diagonal, d)
     n = _core_share(inp, core, p, r) if p.init == "farthest" else None
-    result = pipeline(inp, p, features=features, n_centers=n)
+    result = pipeline(inp, p, features=features, n_centers=n, finished=False)
     rows = np.asarray(result.centers, dtype=np.int64)
     return rows[core[rows]], result
 
@@ -287,7 +287,7 @@ def tile_refine(inp, core: np.ndarray, center_rows: np.ndarray, params: SegmentP
     elem = src.to_rows(np.arange(src.graph.n_elements))[np.asarray(center_rows, np.int64)]
     elem = elem[elem >= 0]
     _, first = np.unique(elem, return_index=True)
-    result = pipeline(inp, p, features=features, initial=elem[np.sort(first)])
+    result = pipeline(inp, p, features=features, initial=elem[np.sort(first)], finished=False)
     rows = np.asarray(result.centers, dtype=np.int64)
     return rows[core[rows]]
 
