@@ -10,6 +10,7 @@ file twice in all (its survey, this sorting), not once per task.
 
 from __future__ import annotations
 
+import shutil
 import zlib
 from dataclasses import dataclass
 from pathlib import Path
@@ -24,7 +25,7 @@ from ...inputs.mesh import Mesh
 from ...io.files import array_digest, load_checked
 from ...io.regions import point_cloud_of
 
-__all__ = ["bucket", "TileBuckets"]
+__all__ = ["bucket", "TileBuckets", "box_folder"]
 
 
 def bucket(reader, tiles, folder, *, progress: bool = False) -> TileBuckets:
@@ -230,6 +231,21 @@ class TileBuckets:
         its bytes: the same bytes, so the same count)."""
         path = Path(self.folder) / f"tile-{t}.bin"
         return load_checked(path, self.digests[t] if self.digests else None, self.dtype)
+
+
+def box_folder(work, reader, n_elements: int) -> Path | None:
+    """The folder where a tiled run's tiles keep their boxes' records for their later
+    phases (:meth:`~superfacets.scale.tiles.buckets.TileBuckets.read_box`'s ``keep``), in
+    its work folder ``work``; None where the input was not sorted into tiles, or the disk
+    has less than twice the room for boxes of twice the elements (the halos)."""
+    dtype = getattr(reader, "dtype", None)
+    if dtype is None:
+        return None
+    try:
+        free = shutil.disk_usage(work).free
+    except OSError:
+        return None
+    return Path(work) / "boxes" if free > 4 * dtype.itemsize * n_elements else None
 
 
 def _keep_box(keep, rec: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> None:

@@ -25,8 +25,8 @@ from ...elements.kinds import kind_of
 from ...elements.points import point_elements
 from ...io.files import array_digest, load_checked
 
-__all__ = ["GRAPH_FILES", "BYTES_PER_POINT", "graph_folder", "box_folder", "drop_graphs",
-           "tile_graph", "room_for_graphs"]
+__all__ = ["GRAPH_FILES", "BYTES_PER_POINT", "graph_folder", "drop_graphs", "tile_graph",
+           "room_for_graphs"]
 
 #: The arrays a tile's graph is saved as, one ``.npy`` file each.
 GRAPH_FILES = ("positions", "sizes", "normals", "indptr", "indices", "index")
@@ -46,21 +46,6 @@ def graph_folder(work, n_points: int, kind: str, shared: bool, params) -> Path |
     folder = Path(work) / "graphs"
     shutil.rmtree(folder, ignore_errors=True)  # (an earlier run's, in a kept work folder)
     return folder
-
-
-def box_folder(work, reader, n_elements: int) -> Path | None:
-    """The folder where a tiled run's tiles keep their boxes' records for their later
-    phases (:meth:`~superfacets.scale.tiles.buckets.TileBuckets.read_box`'s ``keep``), in
-    its work folder ``work``; None where the input was not sorted into tiles, or the disk
-    has less than twice the room for boxes of twice the elements (the halos)."""
-    dtype = getattr(reader, "dtype", None)
-    if dtype is None:
-        return None
-    try:
-        free = shutil.disk_usage(work).free
-    except OSError:
-        return None
-    return Path(work) / "boxes" if free > 4 * dtype.itemsize * n_elements else None
 
 
 def drop_graphs(folder) -> None:

@@ -59,7 +59,8 @@ from ...method.params import DEFAULTS, resolve, superfacet_size
 from ...method.rules import fine_count
 from ..runner.engine import Engine
 from . import buckets, phases
-from .graphs import box_folder, drop_graphs, graph_folder
+from .buckets import box_folder
+from .graphs import drop_graphs, graph_folder
 from .layout import any_in_box, check_tiles, gathered_centers, in_box
 from .merges import merged_labels, tiled_merge_from
 from .phases import HALO, check_tileable, halo_distance, point_areas, sample_cloud
