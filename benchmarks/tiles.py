@@ -4,9 +4,10 @@ Usage: python benchmarks/tiles.py [--mesh-id 281] [--subdivide 2 3] [--points 10
        [-k 2000] [--tiles 8] [--workers 2] [--halo 3] [--no-mesh] [--tiled-only]
        [--seeds 0 1 2] [--fine] [--rotations N [--rotations-tiled]]
        python benchmarks/tiles.py --compare [-k 600] [--tiles 8] [--halo 3] [--paper]
-       [--times 1] [--refine 1] [--compare-points N] [--merge-from F]
+       [--times 1] [--per-category 1] [--refine 1] [--compare-points N] [--merge-from F]
 
-``--compare``: the first benchmark mesh of each category, subdivided ``--times``
+``--compare``: the first benchmark mesh of each category (``--per-category N``: the
+first N), subdivided ``--times``
 times (default once), segmented once and tiled (in process), the mean
 undersegmentation error of each, the superfacets cut by a border and the
 disagreements (docs/notes/tiles.md). ``--refine``: the tiles' refine rounds
@@ -348,7 +349,7 @@ def compare(a) -> None:
     from superfacets import Mesh, segment
     from superfacets.elements.faces import face_graph
     from superfacets.evaluation.datasets.psb import first_per_category, list_meshes
-    from superfacets.evaluation.metrics import undersegmentation_error
+    from superfacets.evaluation.metrics import compactness, undersegmentation_error
     from superfacets.io import read_labels, read_mesh
     from superfacets.method.connectivity import label_components
     from superfacets.scale.tiles.run import segment_tiled
@@ -356,8 +357,10 @@ def compare(a) -> None:
     extra = dict(paper=True) if a.paper else {}
     if a.merge_from is not None:
         extra["merge_from"] = a.merge_from
-    ue_s, ue_t, cut, dis = [], [], 0, 0
-    for b in first_per_category(list_meshes(), 1):
+    ue_s, ue_t, co_s, co_t, cut, dis, secs = [], [], [], [], 0, 0, 0.0
+    print("| mesh | elements | segments: one / tiled | UE: one / tiled | "
+          "compactness: one / tiled |\n|---|---|---|---|---|")
+    for b in first_per_category(list_meshes(), a.per_category):
         m = read_mesh(b.path)
         v, f = np.asarray(m.vertices), np.asarray(m.faces)
         gt = read_labels(b.seg_paths[0], m.n_faces)
@@ -380,23 +383,29 @@ def compare(a) -> None:
             g, first, n_el = face_graph(data), None, f.shape[0]
         s = segment(data, a.k, **extra)
         more = {} if a.refine is None else dict(refine=a.refine)
+        t0 = time.perf_counter()
         t = segment_tiled(data, a.k, tiles=a.tiles, halo=a.halo, **more, **extra)
+        secs += time.perf_counter() - t0
         one_l, tiled_l = np.asarray(s.labels), np.asarray(t.labels)
         if first is not None:
             one_l, tiled_l = one_l[first], tiled_l[first]
         ue_s.append(undersegmentation_error(g, one_l, gt))
         ue_t.append(undersegmentation_error(g, tiled_l, gt))
+        co_s.append(compactness(g, one_l))
+        co_t.append(compactness(g, tiled_l))
         cut += int(np.unique(label_components(g, tiled_l)).size - np.unique(tiled_l).size)
         dis += t.disagreements
         print(f"| {b.id} | {n_el:,} | {s.n_segments} / {t.n_segments} | "
-              f"{ue_s[-1]:.4f} / {ue_t[-1]:.4f} |", flush=True)
+              f"{ue_s[-1]:.4f} / {ue_t[-1]:.4f} | {co_s[-1]:.4f} / {co_t[-1]:.4f} |", flush=True)
     one, tiled = float(np.mean(ue_s)), float(np.mean(ue_t))
+    c_one, c_tiled = float(np.mean(co_s)), float(np.mean(co_t))
     what = (f"{a.compare_points:,} points per mesh" if a.compare_points
             else f"subdivided {a.times}x")
     print(f"{'paper' if a.paper else 'default'}, {what}, k = {a.k}, "
           f"{a.tiles} tiles, halo {a.halo:g}, refine {a.refine if a.refine is not None else 1}: "
-          f"UE {one:.4f} -> {tiled:.4f} ({100 * (tiled / one - 1):+.1f} %), cut {cut}, "
-          f"disagreements {dis}")
+          f"UE {one:.4f} -> {tiled:.4f} ({100 * (tiled / one - 1):+.1f} %), compactness "
+          f"{c_one:.4f} -> {c_tiled:.4f} ({100 * (c_tiled / c_one - 1):+.1f} %), cut {cut}, "
+          f"disagreements {dis}, tiled runs {secs:.1f} s in process")
 
 
 def main() -> None:
@@ -416,6 +425,8 @@ def main() -> None:
     ap.add_argument("--refine", type=int, default=None)
     ap.add_argument("--merge-from", type=int, default=None,
                     help="--compare: merge_from of both runs (default: the method's)")
+    ap.add_argument("--per-category", type=int, default=1,
+                    help="--compare: benchmark meshes per category (the first ones)")
     ap.add_argument("--times", type=int, default=1, help="--compare: subdivisions per mesh")
     ap.add_argument("--compare-points", type=int, default=0, metavar="N",
                     help="--compare: N points sampled on each mesh instead of its faces")
