@@ -239,12 +239,49 @@ def test_the_connect_pass_repairs_pieces_left_by_a_thin_halo():
     assert np.unique(pieces).size == res.n_segments
 
 
+def test_the_connect_pass_looks_only_at_the_superfacets_the_disagreements_name(monkeypatch):
+    """Every other superfacet is its owner tile's, whole: repairing only those the
+    disagreeing rows name gives the labels that repairing every superfacet of every tile
+    gives, bit for bit: on a mesh whose thin halo leaves pieces to repair (every
+    superfacet named there), and on a cloud where the disagreements name 185 of its 299
+    superpoints (fewer looked at)."""
+    from superfacets.scale.tiles import phases as tiling
+    from superfacets.scale.tiles import run as tiled_run
+
+    real_connect, real_stitched, owned = tiling.tile_connect, tiled_run._stitched, []
+
+    def connect(inp, labels, mine, mine_rows, params):
+        owned.append(len(mine))
+        return real_connect(inp, labels, mine, mine_rows, params)
+
+    def every(done, n_rows):  # (the repair of every superfacet: all of them suspects)
+        labels, disagreements, _ = real_stitched(done, n_rows)
+        return labels, disagreements, np.unique(labels[labels >= 0])
+
+    monkeypatch.setattr(tiling, "tile_connect", connect)
+    for data, k in ((_bumpy(5), 40), (_bumpy_cloud(6000), 60)):
+        owned.clear()
+        res = segment_tiled(data, k, tiles=(2, 2, 2), halo=1)
+        few = sum(owned)
+        owned.clear()
+        monkeypatch.setattr(tiled_run, "_stitched", every)
+        full = segment_tiled(data, k, tiles=(2, 2, 2), halo=1)
+        monkeypatch.setattr(tiled_run, "_stitched", real_stitched)
+        assert res.disagreements > 0 and res.repaired == full.repaired
+        np.testing.assert_array_equal(res.labels, full.labels)
+        if isinstance(data, Mesh):
+            assert res.repaired > 0 and np.unique(label_components(
+                face_graph(data), res.labels)).size == res.n_segments
+        else:
+            assert 0 < few < sum(owned)
+
+
 def test_the_connect_pass_looks_again_near_what_a_repair_moved(monkeypatch):
     """Tiles repair at once, from the same stitched labels: a piece one tile moves can be
     left apart by another's repair (seen on a 5M-point cloud in 16 tiles: 4 points).
     Here one tile's first repair also moves one face into a superfacet it does not
-    touch; the tiles whose boxes hold that face look again, and every superfacet ends in
-    one piece; then nothing moves, and the pass stops."""
+    touch; the superfacets it moved to and from are looked at again (by their tiles), and
+    every superfacet ends in one piece; then nothing moves, and the pass stops."""
     from superfacets.scale.tiles import phases as tiling
 
     mesh = _bumpy(5)
@@ -269,7 +306,7 @@ def test_the_connect_pass_looks_again_near_what_a_repair_moved(monkeypatch):
 
     monkeypatch.setattr(tiling, "tile_connect", connect)
     res = segment_tiled(mesh, 40, tiles=(2, 2, 2), halo=1)
-    assert spoiled and len(calls) > 8  # a second round, on the tiles near the face
+    assert spoiled and len(calls) > 8  # a second round, on the tiles owning what moved
     assert len(calls) < 3 * 8  # not every tile every round: then nothing moved
     pieces = label_components(face_graph(mesh), res.labels)
     assert np.unique(pieces).size == res.n_segments

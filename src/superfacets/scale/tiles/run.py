@@ -61,7 +61,7 @@ from ..runner.engine import Engine
 from . import buckets, phases
 from .buckets import box_folder
 from .graphs import drop_graphs, graph_folder
-from .layout import any_in_box, check_tiles, gathered_centers, in_box
+from .layout import check_tiles, gathered_centers, in_box
 from .merges import merged_labels, tiled_merge_from
 from .phases import HALO, check_tileable, halo_distance, point_areas, sample_cloud
 from .task import tile_task
@@ -71,9 +71,10 @@ from .workdir import run_folder
 #: from the gathered centers): less time for the same tiled error (docs/notes/tiles.md).
 CENTER_PASSES = 1
 
-#: Most rounds of the connectivity pass: the first over every tile, each next over the
-#: tiles whose boxes hold elements the last moved (tiles repair at once, from the same
-#: stitched labels, and two repairs can leave a piece apart again).
+#: Most rounds of the connectivity pass: the first over the superfacets the border
+#: disagreements name, each next over those the last moved elements to or from (tiles
+#: repair at once, from the same stitched labels, and two repairs can leave a piece
+#: apart again).
 CONNECT_ROUNDS = 4
 
 __all__ = ["segment_tiled", "TiledResult"]
@@ -219,12 +220,13 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                     reader, survey, params, r, diagonal, refine, stage, (sampled, up))),
                 timings)
             with stage("stitch"):
-                labels, disagreements = _stitched(done, reader.n_rows)
+                labels, disagreements, suspects = _stitched(done, reader.n_rows)
             repaired = 0
             if disagreements:  # two tiles saw a border differently: pieces are possible
                 with stage("connect", bar=False):
                     box = None if shared else {o["tile"]: o.pop("box_rows") for o in done}
-                    repaired = _connected(run, labels, layout, margin, tmp, box)
+                    repaired = _connected(run, labels, (layout, margin, done), tmp, box,
+                                          suspects)
             drop_graphs(graphs)
     merged_from = None
     if merging:
@@ -407,13 +409,19 @@ def _sized(run, layout, kind: str, params, survey, diagonal: float, halo: float,
 
 
 def _stitched(done: list, n_rows: int):
-    """Each row's label from the tile whose core holds it, and how many rows of the tiles'
-    rings another tile labelled otherwise."""
+    """Each row's label from the tile whose core holds it, how many rows of the tiles'
+    rings another tile labelled otherwise, and the superfacets those rows name (either
+    label: the only ones the stitching can have left in pieces)."""
     labels = np.full(n_rows, -1, dtype=np.int64)
     for o in done:
         labels[o["core_rows"]] = o["core_labels"]
-    disagreements = sum(int((labels[o["ring_rows"]] != o["ring_labels"]).sum()) for o in done)
-    return labels, disagreements
+    disagreements, named = 0, [np.zeros(0, dtype=np.int64)]
+    for o in done:
+        differ = labels[o["ring_rows"]] != o["ring_labels"]
+        disagreements += int(differ.sum())
+        named += [labels[o["ring_rows"][differ]], o["ring_labels"][differ]]
+    suspects = np.unique(np.concatenate(named))
+    return labels, disagreements, suspects[suspects >= 0]
 
 
 def _checked_options(n_segments, options, tiles, halo, refine, workers):
@@ -456,29 +464,45 @@ def _surveyed(source, tmp, tiles, params):
     return reader, survey
 
 
-def _connected(run, labels, layout, margin, tmp, box) -> int:
+def _connected(run, labels, tiling, tmp, box, suspects) -> int:
     """Repair the pieces two tiles' different views of a border left, in ``labels`` (in
-    place), a few rounds, each over the tiles near what the last one moved; returns the
-    rows moved. ``box``: each tile's rows where the tasks are not sharing a folder."""
-    repaired, only = 0, None  # every tile, then those whose boxes hold what others moved
+    place), a few rounds; returns the rows moved. Only the ``suspects`` (the superfacets
+    the disagreeing rows name: every other one is its owner tile's, whole, and connected)
+    are looked at, each by the tile whose core holds its center; then those that each
+    round moved rows to or from. ``tiling``: the layout, the margin and the labels phase's
+    outputs (each tile's core rows); ``box``: each tile's rows where the tasks are not
+    sharing a folder."""
+    layout, margin, done = tiling
+    repaired = 0
     for _ in range(CONNECT_ROUNDS):
+        only = [o["tile"] for o in done if _holds_any(o["core_rows"], suspects)]
+        if not only:
+            break
         if box is None:  # the tasks read their boxes' labels from one file
             np.save(Path(tmp) / "stitched.npy", labels)
-            fixes = run("connect", margin,
-                        lambda t: dict(labels=str(Path(tmp) / "stitched.npy")), only)
+            fixes = run("connect", margin, lambda t: dict(
+                labels=str(Path(tmp) / "stitched.npy"), suspects=suspects), only)
         else:
-            fixes = run("connect", margin, lambda t: dict(labels=labels[box.get(t, [])]), only)
+            fixes = run("connect", margin, lambda t: dict(labels=labels[box.get(t, [])],
+                                                          suspects=suspects), only)
         moved = [o for o in fixes if o.get("moved_rows") is not None and o["moved_rows"].size]
-        for o in moved:
-            labels[o["moved_rows"]] = o["moved_labels"]
-            repaired += int(o["moved_rows"].size)
         if not moved:
             break
         # tiles repair at once: a piece one moved can border a piece another moved away,
-        # so the tiles near what moved look again
-        at = np.concatenate([o["moved_positions"] for o in moved])
-        only = [u for u in range(layout.n_tiles) if any_in_box(at, *layout.box(u, margin))]
+        # so the superfacets that gained or lost rows are looked at again
+        rows = np.concatenate([o["moved_rows"] for o in moved])
+        given = np.concatenate([o["moved_labels"] for o in moved])
+        suspects = np.unique(np.concatenate([labels[rows], given]))
+        labels[rows] = given
+        repaired += int(rows.size)
     return repaired
+
+
+def _holds_any(sorted_rows: np.ndarray, names: np.ndarray) -> bool:
+    """Whether any of ``names`` (rows) is among ``sorted_rows`` (increasing)."""
+    at = np.searchsorted(sorted_rows, names)
+    ok = at < sorted_rows.size
+    return bool((sorted_rows[at[ok]] == names[ok]).any())
 
 
 def _tile_stats(found: list, done: list) -> list[dict]:

@@ -33,7 +33,8 @@ def tile_task(task: dict) -> dict:
     ``margin``, ``params``, ``r``, ``diagonal``, ``orient_like`` (optional: the oriented
     sample, or its file), ``frame`` (optional: the whole cloud's box, whose frame
     numbers a tile's points), for 'refine' and 'labels' the ``centers`` (rows) within
-    reach, for 'labels' a ``ring`` (a width), for 'connect' the stitched ``labels``.
+    reach, for 'labels' a ``ring`` (a width), for 'connect' the stitched ``labels`` and
+    optionally the ``suspects`` (the only superfacets, by name, to repair).
     Returns a dict; an error is returned as ``error`` (text), never raised.
 
     Parameters
@@ -88,6 +89,9 @@ def tile_task(task: dict) -> dict:
                 given = np.load(given, mmap_mode="r")[rows]
             given = np.asarray(given, dtype=np.int64)
             owned, at = _owned(given, rows, core)
+            if task.get("suspects") is not None:  # (the only ones that can be in pieces)
+                keep = np.isin(owned, task["suspects"])
+                owned, at = owned[keep], at[keep]
             fixed = phases.tile_connect(inp, given, owned, at, p)
             moved = np.zeros(0, dtype=bool) if fixed is None else fixed != given
             out.update(moved_rows=rows[moved] if moved.size else rows[:0],
