@@ -64,6 +64,38 @@ def test_a_tile_graph_changed_between_phases_is_refused(tmp_path, change):
         tile_graph(PointCloud(xyz.copy()), folder, 10)
 
 
+def test_a_tile_face_graph_read_back_is_the_graph_built_and_a_changed_file_is_refused(
+        tmp_path):
+    """A mesh tile's later phases read the face graph's topology its first phase saved:
+    every array of the graph as built (a duplicate face included), and a file changed
+    since (an index past the end would crash the kernels) refused in one line."""
+    import trimesh
+
+    from superfacets import Mesh
+    from superfacets.elements.faces import face_graph
+    from superfacets.errors import SuperfacetsError
+    from superfacets.scale.tiles.graphs import tile_face_graph
+
+    ball = trimesh.creation.icosphere(subdivisions=3)
+    faces = np.vstack([ball.faces, ball.faces[:1]])  # (a duplicate: kept once, counted)
+    folder = tmp_path / "faces-0"
+    assert tile_face_graph(Mesh(ball.vertices, faces), folder) == "built"
+    again = Mesh(ball.vertices, faces)
+    assert tile_face_graph(again, folder) == "read"
+    assert tile_face_graph(again, folder) == "kept"
+    read, built = face_graph(again), face_graph(Mesh(ball.vertices, faces))
+    for name in ("positions", "sizes", "normals", "pairs", "edges", "indptr", "indices",
+                 "dual_edge", "lengths", "boundary_elements", "boundary_lengths"):
+        a, b = getattr(read, name), getattr(built, name)
+        assert a.dtype == b.dtype and np.array_equal(a, b), name
+    assert again.__dict__["_repeated_face_pairs"] > 0
+    a = np.load(folder / "indices.npy")
+    a[3] = 2**30
+    np.save(folder / "indices.npy", a)
+    with pytest.raises(SuperfacetsError, match="changed since this run wrote it"):
+        tile_face_graph(Mesh(ball.vertices, faces), folder)
+
+
 def test_tiles_that_keep_their_graphs_label_as_those_that_build_them(monkeypatch, tmp_path):
     """A cloud's tiles build their graphs once and read them in the later phases: the
     same labels as building them every phase, and the work folder left without them."""
@@ -113,9 +145,11 @@ def test_tiles_read_the_whole_clouds_area_on_the_graphs_they_keep(monkeypatch, t
 def test_a_meshs_tiles_read_their_boxes_once_from_the_tiles_files(monkeypatch, tmp_path):
     """A tiled mesh's later phases read each tile's box from the file its first phase kept
     (not from the tiles' files again: the faces' records were gathered and sorted three
-    times), with the same labels as a run that keeps none."""
+    times), and its face graph's topology from the files it saved beside (not made
+    again), with the same labels as a run that keeps none."""
     import trimesh
 
+    import superfacets.elements.faces as faces
     import superfacets.scale.tiles.run as run
     from superfacets.scale.tiles.buckets import TileBuckets
 
@@ -123,10 +157,14 @@ def test_a_meshs_tiles_read_their_boxes_once_from_the_tiles_files(monkeypatch, t
     reads, real = [], TileBuckets._records
     monkeypatch.setattr(TileBuckets, "_records",
                         lambda self, lo, hi: reads.append(1) or real(self, lo, hi))
+    built, build = [], faces.build_face_graph  # (the face graph's topology, made)
+    monkeypatch.setattr(faces, "build_face_graph", lambda *a: built.append(1) or build(*a))
     kept = segment_tiled((m.vertices, m.faces), 60, tiles=4, workdir=tmp_path)
     assert len(reads) == 4  # one per tile: its centers phase; refine and labels read the kept
+    assert len(built) == 4  # and their faces' topology too
     reads.clear()
+    built.clear()
     monkeypatch.setattr(run, "box_folder", lambda *a: None)
     again = segment_tiled((m.vertices, m.faces), 60, tiles=4, workdir=tmp_path)
-    assert len(reads) == 12
+    assert len(reads) == 12 and len(built) == 12
     np.testing.assert_array_equal(kept.labels, again.labels)

@@ -35,7 +35,8 @@ from . import graph as _graph
 from .graph import ElementGraph, cached_on, pairs_from_csr
 from .kinds import kind_of
 
-__all__ = ["FaceAdjacency", "build_face_graph", "distinct_faces", "face_graph"]
+__all__ = ["FaceAdjacency", "build_face_graph", "distinct_faces", "face_adjacency",
+           "face_graph", "face_graph_from"]
 
 
 class FaceAdjacency(NamedTuple):
@@ -112,9 +113,32 @@ def face_graph(mesh) -> ElementGraph:
     return cached_on(mesh, "_face_graph", lambda: _build_face_graph_of(mesh))
 
 
-def _build_face_graph_of(mesh) -> ElementGraph:
-    topo = (build_face_graph(mesh.faces, mesh.n_vertices) if mesh.is_triangular else
+def face_adjacency(mesh) -> FaceAdjacency:
+    """The topology of a mesh's face graph (:func:`build_face_graph` of its faces); a
+    tiled run keeps it for a tile's later phases (:func:`face_graph_from`)."""
+    return (build_face_graph(mesh.faces, mesh.n_vertices) if mesh.is_triangular else
             build_face_graph(np.asarray(mesh.corners), mesh.n_vertices, np.asarray(mesh.offsets)))
+
+
+def face_graph_from(mesh, topo: FaceAdjacency) -> ElementGraph:
+    """The face graph of ``mesh`` (as :func:`face_graph`, kept with the mesh) from its
+    topology ``topo``, given: :func:`face_adjacency` of the same faces, made before (a
+    tile's box, read again by a tiled run's later phases). A graph the mesh already keeps
+    is returned as it is.
+
+    Examples
+    --------
+    >>> ball = trimesh.creation.icosphere(subdivisions=2)
+    >>> m = Mesh(ball.vertices, ball.faces)
+    >>> g = face_graph_from(m, face_adjacency(Mesh(ball.vertices, ball.faces)))
+    >>> g is face_graph(m), g.n_edges
+    (True, 480)
+    """
+    return cached_on(mesh, "_face_graph", lambda: _build_face_graph_of(mesh, topo))
+
+
+def _build_face_graph_of(mesh, topo: FaceAdjacency | None = None) -> ElementGraph:
+    topo = face_adjacency(mesh) if topo is None else topo
     mesh.__dict__["_repeated_face_pairs"] = topo.repeated  # (for distinct_faces)
     v = mesh.vertices
 

@@ -245,9 +245,15 @@ class TileBuckets:
         return load_checked(path, self.digests[t] if self.digests else None, self.dtype)
 
 
+#: Disk a mesh tile's face graph topology takes, per face of its box (its pairs, edges,
+#: CSR adjacency and dual edges: :func:`~superfacets.scale.tiles.graphs.tile_face_graph`).
+FACE_BYTES = 64
+
+
 def box_folder(work, reader, n_elements: int) -> Path | None:
     """The folder where a tiled run's tiles keep their boxes' records for their later
-    phases (:meth:`~superfacets.scale.tiles.buckets.TileBuckets.read_box`'s ``keep``), in
+    phases (:meth:`~superfacets.scale.tiles.buckets.TileBuckets.read_box`'s ``keep``; a
+    mesh's tiles, their face graphs' topology too), in
     its work folder ``work``; None where the input was not sorted into tiles, or the disk
     has less than twice the room for boxes of twice the elements (the halos)."""
     dtype = getattr(reader, "dtype", None)
@@ -257,7 +263,9 @@ def box_folder(work, reader, n_elements: int) -> Path | None:
         free = shutil.disk_usage(work).free
     except OSError:
         return None
-    return Path(work) / "boxes" if free > 4 * dtype.itemsize * n_elements else None
+    # (a mesh's tiles keep their face graphs' topology beside: about 60 bytes a face)
+    each = dtype.itemsize + (0 if KINDS[reader.kind].cloud else FACE_BYTES)
+    return Path(work) / "boxes" if free > 4 * each * n_elements else None
 
 
 def _keep_box(keep, rec: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> None:

@@ -15,10 +15,11 @@ import numpy as np
 
 from ..._runtime.arrays import ranked
 from ...inputs.bounds import column_bounds
+from ...inputs.mesh import Mesh
 from ..runner.engine import PeakMemory, error_text
 from . import phases
 from .buckets import TileBuckets
-from .graphs import tile_graph
+from .graphs import tile_face_graph, tile_graph
 from .layout import in_box
 from .phases import core_area, point_areas, tile_centers, tile_labels
 
@@ -79,6 +80,8 @@ def tile_task(task: dict) -> dict:
         if task.get("graphs") and (task["phase"] != "areas" or graph_area) and spread:
             tile_graph(inp, Path(task["graphs"]) / f"tile-{task['tile']}",
                        task["params"].n_neighbors)  # built once, read by the later phases
+        elif task.get("boxes") and isinstance(inp, Mesh) and _face_elements(task["params"]):
+            tile_face_graph(inp, Path(task["boxes"]) / f"faces-{task['tile']}")
         p, r, d = task["params"], task["r"], task["diagonal"]
         if task["phase"] == "areas":
             out["area"] = (core_area(inp, core, p.n_neighbors) if graph_area
@@ -119,6 +122,11 @@ def tile_task(task: dict) -> dict:
     peak = probe.peak_mib(above_start=False)
     out["peak_mib"] = None if peak is None else round(peak, 1)
     return out
+
+
+def _face_elements(params) -> bool:
+    """Whether a mesh's run segments its faces (its default elements)."""
+    return params.elements in (None, "faces")
 
 
 def _owned(labels: np.ndarray, rows: np.ndarray, core: np.ndarray):
