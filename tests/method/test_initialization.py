@@ -200,3 +200,20 @@ def test_the_pieces_farthest_points_seed_are_found_once_per_graph(monkeypatch):
     monkeypatch.setattr(native, "kernel", lambda name: calls.append(name) or real(name))
     np.testing.assert_array_equal(farthest_point_centers(graph, 2, every_piece=True), first)
     assert not any(c.startswith("connectivity.") for c in calls)
+
+
+def test_each_pieces_seed_is_its_element_nearest_its_mean_ties_to_the_lowest():
+    """The seed of each piece is its element of least squared distance to the piece's
+    mean, the lowest index among equals: what sorting every element by piece, distance and
+    index gives (the rule before), on many pieces with many equal distances."""
+    from superfacets.method.initialization import _nearest_per_piece
+
+    rng = np.random.default_rng(3)
+    n, n_pieces = 20_000, 700
+    piece = rng.integers(0, n_pieces, n)
+    piece[:n_pieces] = np.arange(n_pieces)  # (every piece holds an element)
+    d2 = rng.integers(0, 6, n).astype(np.float64)  # (ties everywhere)
+    order = np.lexsort((np.arange(n), d2, piece))
+    want = order[np.searchsorted(piece[order], np.arange(n_pieces))]
+    np.testing.assert_array_equal(_nearest_per_piece(piece, d2, n_pieces), want)
+    assert (d2[want] == 0).sum() > 500  # (most pieces choose among several at 0)
