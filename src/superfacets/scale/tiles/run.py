@@ -225,8 +225,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
             if disagreements:  # two tiles saw a border differently: pieces are possible
                 with stage("connect", bar=False):
                     box = None if shared else {o["tile"]: o.pop("box_rows") for o in done}
-                    repaired = _connected(run, labels, (layout, margin, done), tmp, box,
-                                          suspects)
+                    repaired = _connected(run, labels, (margin, done), tmp, box, suspects)
             drop_graphs(graphs)
     merged_from = None
     if merging:
@@ -469,10 +468,10 @@ def _connected(run, labels, tiling, tmp, box, suspects) -> int:
     place), a few rounds; returns the rows moved. Only the ``suspects`` (the superfacets
     the disagreeing rows name: every other one is its owner tile's, whole, and connected)
     are looked at, each by the tile whose core holds its center; then those that each
-    round moved rows to or from. ``tiling``: the layout, the margin and the labels phase's
-    outputs (each tile's core rows); ``box``: each tile's rows where the tasks are not
-    sharing a folder."""
-    layout, margin, done = tiling
+    round moved rows to or from. ``tiling``: the margin and the labels phase's outputs
+    (each tile's core rows); ``box``: each tile's rows where the tasks are not sharing a
+    folder."""
+    margin, done = tiling
     repaired = 0
     for _ in range(CONNECT_ROUNDS):
         only = [o["tile"] for o in done if _holds_any(o["core_rows"], suspects)]

@@ -98,8 +98,7 @@ def tile_task(task: dict) -> dict:
             fixed = phases.tile_connect(inp, given, owned, at, p)
             moved = np.zeros(0, dtype=bool) if fixed is None else fixed != given
             out.update(moved_rows=rows[moved] if moved.size else rows[:0],
-                       moved_labels=fixed[moved] if moved.size else rows[:0],
-                       moved_positions=pos[moved] if moved.size else pos[:0])
+                       moved_labels=fixed[moved] if moved.size else rows[:0])
         elif task["phase"] == "centers":  # (with refine rounds to come: the start, one pass)
             found, _ = tile_centers(inp, core, replace(p, max_iter=task.get("passes")
                                                        or p.max_iter), r, d)
