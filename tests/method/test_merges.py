@@ -156,16 +156,26 @@ def _terrain(seed: int = 0, n: int = 40_000, bushes: int = 10):
     return np.vstack(parts), np.repeat(np.arange(bushes + 1), [n] + [400] * bushes)
 
 
-def test_a_scene_merges_by_the_planes_rise_and_an_object_by_wards(monkeypatch):
+def _costs_run(monkeypatch) -> list:
+    """The costs the merges to the count run, in order (the plane's rise under the size
+    bound is its own kernel call; beyond it, and Ward's, the hierarchy's)."""
     import superfacets.graph.hierarchy as hierarchy
+    import superfacets.method.merges as merges
 
-    ran, real = [], hierarchy.hierarchy
+    ran, real, bounded = [], hierarchy.hierarchy, merges.rise_merge_nodes
     monkeypatch.setattr(hierarchy, "hierarchy", lambda *a, **kw: (
         ran.append(kw.get("cost", "ward")), real(*a, **kw))[1])
+    monkeypatch.setattr(merges, "rise_merge_nodes", lambda *a, **kw: (
+        ran.append("planarity"), bounded(*a, **kw))[1])
+    return ran
+
+
+def test_a_scene_merges_by_the_planes_rise_and_an_object_by_wards(monkeypatch):
+    ran = _costs_run(monkeypatch)
     # an airborne tile in miniature: most points on the ground, flat to within its noise
     pts, part = _terrain()
     r = segment(pts, 15)
-    assert ran == ["planarity"] and r.n_segments == 15
+    assert set(ran) == {"planarity"} and r.n_segments == 15
     # the count goes to the bushes: a few ground superpoints, and UE about a fifth of
     # Ward's merges' (0.08-0.11 over three samplings, against 0.40-0.59)
     assert _on_floor(r.labels, part) <= 8
@@ -197,15 +207,12 @@ def test_a_scan_under_half_flat_merges_by_the_planes_rise(monkeypatch):
     """On a scan (noise above zero) a quarter of the points in flat regions makes a scene
     (SCAN_FLAT_SHARE): the forest's ground, 42 % of it. UE 0.008-0.033 over three
     samplings, against 0.028-0.045 by Ward's merges and 0.24-0.29 with merge_from=1."""
-    import superfacets.graph.hierarchy as hierarchy
     from superfacets.method.merges import SCAN_FLAT_SHARE
 
-    ran, real = [], hierarchy.hierarchy
-    monkeypatch.setattr(hierarchy, "hierarchy", lambda *a, **kw: (
-        ran.append(kw.get("cost", "ward")), real(*a, **kw))[1])
+    ran = _costs_run(monkeypatch)
     pts, part = _forest()
     r = segment(pts, 40)
-    assert ran == ["planarity"] and r.n_segments == 40 and SCAN_FLAT_SHARE < 0.42
+    assert set(ran) == {"planarity"} and r.n_segments == 40 and SCAN_FLAT_SHARE < 0.42
     assert _ue(r.labels, part) < 0.015
 
 
@@ -214,8 +221,6 @@ def test_the_planes_rise_keeps_a_rug_of_another_colour_off_its_floor(monkeypatch
     flat as the floor) stays a superpoint of its own at k = 8 (UE 0.03; merged into the
     floor without the colour guard: 0.65), while isolated points of another colour (colour
     noise) still join their neighbours: no superpoint of a single point."""
-    import superfacets.graph.hierarchy as hierarchy
-
     pts, part = _room(0)
     rug = (part == 0) & (np.abs(pts[:, 0] - 0.45) < 0.15) & (np.abs(pts[:, 1] - 0.45) < 0.15)
     part = np.where(rug, 5, part)
@@ -224,9 +229,7 @@ def test_the_planes_rise_keeps_a_rug_of_another_colour_off_its_floor(monkeypatch
         0.01 * rng.standard_normal((len(pts), 3))
     odd = rng.choice(np.flatnonzero(part == 0), 40, replace=False)  # colour noise
     colors[odd] = [0.9, 0.1, 0.1]
-    ran, real = [], hierarchy.hierarchy
-    monkeypatch.setattr(hierarchy, "hierarchy", lambda *a, **kw: (
-        ran.append(kw.get("cost", "ward")), real(*a, **kw))[1])
+    ran = _costs_run(monkeypatch)
     r = segment(PointCloud(pts, colors=np.clip(colors, 0, 1)), 8)
     assert "planarity" in ran and r.n_segments == 8
     own = np.bincount(r.labels[rug]).argmax()
@@ -506,6 +509,47 @@ def test_textured_neighbours_merge_and_an_even_board_stays_apart():
     cloud = PointCloud(np.c_[xy, np.zeros(len(xy))], colors=rgb)
     one, tiled = segment(cloud, 4), segment_tiled(cloud, 4, tiles=2)
     assert one.n_segments == tiled.n_segments == 4
+
+
+def test_the_merges_make_no_superpoint_above_the_size_bound():
+    """An airborne tile in miniature (40,000 ground points, ten bushes) at k = 15: merged
+    without a bound, its flat ground is five superpoints, the largest a third of the
+    points (five times the mean); the bound
+    (max_size_ratio, 16 by default) keeps every superpoint under that many times the mean
+    count while the merges can, what the bushes are left paying for it."""
+    from superfacets.errors import ParameterError
+
+    pts, part = _terrain()
+    k, n = 15, len(pts)
+    free = segment(pts, k, max_size_ratio=0).labels
+    assert np.bincount(free).max() > 4 * n / k  # the ground in a few large pieces
+    ue = {}
+    for ratio in (4, 2):
+        r = segment(pts, k, max_size_ratio=ratio)
+        assert r.n_segments == k and r.params["max_size_ratio"] == ratio
+        assert np.bincount(r.labels).max() <= ratio * n / k
+        ue[ratio] = _ue(r.labels, part)
+    # the count the ground now takes is the bushes': UE 0.11 -> 0.14 at 4; at 2 the
+    # ground takes seven superpoints or more, leaving eight for ten bushes (0.45)
+    assert ue[4] < 1.5 * _ue(free, part) < ue[2]
+    # a bound no superpoint reaches changes nothing: the merges before, bit for bit
+    np.testing.assert_array_equal(segment(pts, k, max_size_ratio=n).labels, free)
+    # where the bound cannot be kept (ten superpoints of a plane of one piece at 1): the
+    # merges go on past it to the count
+    plane = np.c_[np.random.default_rng(2).random((3000, 2)), np.zeros(3000)]
+    assert segment(plane, 10, max_size_ratio=1).n_segments == 10
+    with pytest.raises(ParameterError, match="max_size_ratio must be 0"):
+        segment(pts, k, max_size_ratio=0.5)
+
+
+def test_a_tiled_run_keeps_the_size_bound():
+    from superfacets import segment_tiled
+
+    pts, _ = _terrain(n=20_000, bushes=4)
+    free = segment_tiled(PointCloud(pts), 12, tiles=2, max_size_ratio=0).labels
+    bound = segment_tiled(PointCloud(pts), 12, tiles=2, max_size_ratio=2).labels
+    assert np.bincount(free).max() > 4 * len(pts) / 12
+    assert np.unique(bound).size == 12 and np.bincount(bound).max() <= 2 * len(pts) / 12
 
 
 def test_no_stage_is_silent_on_a_terminal(monkeypatch):

@@ -71,7 +71,9 @@ def _spread(a, b, area, wsum):
 
 @njit(cache=True, error_model="numpy")
 def _cost(a, b, ln, ang, conc, area, wsum, fsum, scatter, planarity, alpha, eta_convex,
-          beta, compactness, max_rise, tmp):
+          beta, compactness, max_rise, tmp, max_size):
+    if max_size > 0 and area[a] + area[b] > max_size:  # no union weighing more
+        return np.inf
     if planarity > 0:
         _merged_scatter(a, b, area, wsum, scatter, tmp)
         c = (_plane(tmp[0], tmp[1], tmp[2], tmp[3], tmp[4], tmp[5])
@@ -103,14 +105,15 @@ def _cost(a, b, ln, ang, conc, area, wsum, fsum, scatter, planarity, alpha, eta_
 
 @njit(cache=True, error_model="numpy")
 def merge_levels(k, ea, eb, stats, area, wsum, fsum, scatter, planarity, alpha, eta_convex,
-                 beta, compactness, max_rise, targets):
+                 beta, compactness, max_rise, targets, max_size=0.0):
     """Merge the cheapest adjacent pair until each of ``targets`` (decreasing, each
     reachable) live nodes remain, or no pair has a finite cost; ``(len(targets), k)``
     int64: each node's root then (the rows of targets not reached: the roots where the
     merging stopped). ``planarity``: 0 Ward's cost, 1 the rise of the best plane's
     distances, 2 Ward's cost of the pairs whose plane rises by at most ``max_rise``
     per element of the smaller node (the others: infinite). ``area``, ``wsum``,
-    ``fsum`` (k, d) and ``scatter`` (k, 6) are updated in place."""
+    ``fsum`` (k, d) and ``scatter`` (k, 6) are updated in place. ``max_size > 0``: no
+    pair whose union's ``area`` (the planes' graphs: elements) is above it merges."""
     n_e = ea.shape[0]
     cap = 2 * n_e
     nb = np.empty(cap, np.int64)
@@ -139,7 +142,7 @@ def merge_levels(k, ea, eb, stats, area, wsum, fsum, scatter, planarity, alpha, 
         a, b = min(ea[t], eb[t]), max(ea[t], eb[t])
         heapq.heappush(heap, (_cost(a, b, stats[t, 0], stats[t, 1], stats[t, 2], area, wsum,
                                     fsum, scatter, planarity, alpha, eta_convex, beta,
-                                    compactness, max_rise, tmp), a, b, 0, 0))
+                                    compactness, max_rise, tmp, max_size), a, b, 0, 0))
     out = np.empty((targets.shape[0], k), np.int64)
     live = k
     step = 0
@@ -205,7 +208,7 @@ def merge_levels(k, ea, eb, stats, area, wsum, fsum, scatter, planarity, alpha, 
             lo, hi = (a, c) if a < c else (c, a)
             heapq.heappush(heap, (_cost(lo, hi, st[e, 0], st[e, 1], st[e, 2], area, wsum,
                                         fsum, scatter, planarity, alpha, eta_convex, beta,
-                                        compactness, max_rise, tmp),
+                                        compactness, max_rise, tmp, max_size),
                                   lo, hi, version[lo], version[hi]))
             e = nxt[e]
         live -= 1

@@ -93,6 +93,10 @@ SHOWN = {
     "merge_from": ("method", "F", "segment F times -k superpoints first, then merge "
                    "neighbours down to -k, flat ones (within the noise) first; 1: off "
                    "(default: 5 on point clouds of even density, else 1)"),
+    "max_size_ratio": ("method", "R", "with --merge-from above 1: the merges make no "
+                       "superpoint of more than R times the mean count of points while other "
+                       "neighbours can merge (flat ground and walls in several superpoints, "
+                       f"not one); 0: no bound (default: {_D.max_size_ratio:g})"),
     "paper": ("method", "switch", "the paper's method as published, its labels bit for bit: "
               "its stopping rule (--tol 0), no clean-up, no split-and-merge (the default on "
               "faces adds both: lower undersegmentation error and more compact superfacets "

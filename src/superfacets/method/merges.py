@@ -26,9 +26,13 @@ resolve_rules`), then :func:`merge_to_count` merges adjacent superpoints in two 
      factor (:func:`superfacets.method.finish.exact_count`): compact superpoints,
      merged along the creases.
 
-So the count a room spends on its walls goes to the objects on them, and an object
-of no flat face gets the method's compact superpoints, merged from finer ones along
-its creases. Not in the paper: graph partitions of scans (the ScanNet Segmentator,
+Neither the flat merges nor the plane's rise make a superpoint of more than
+``max_size_ratio`` times the mean count (the elements over ``k``; 16 by default) while
+another pair may merge: a coplanar pair costs them nothing whatever its size, and flat
+ground grown without bound lost the class borders inside it (low vegetation on the
+ground). So the count a room spends on its walls goes to the objects on them, and an
+object of no flat face gets the method's compact superpoints, merged from finer ones
+along its creases. Not in the paper: graph partitions of scans (the ScanNet Segmentator,
 cut pursuit) leave flat regions whole the same way. What they gain and lose, measured:
 ``docs/notes/superpoints-defaults.md``.
 """
@@ -45,6 +49,7 @@ from ..graph.hierarchy import merge_arrays, pieces
 from ..graph.sums import border_sums, grouped_graph, grouped_planes, point_sums
 
 __all__ = ["merge_to_count", "merge_nodes", "flat_merges", "flat_share", "flat_merge_nodes",
+           "rise_merge_nodes",
            "same_feature_edges", "feature_spread", "noise_variance", "neighbourhood_noise",
            "FLAT_NOISE", "FLAT_SHARE", "SCAN_FLAT_SHARE", "NOISE_SAMPLE"]
 
@@ -255,18 +260,33 @@ def same_feature_edges(pg, max_jump: float, spread: np.ndarray | None = None, *,
 
 
 def flat_merge_nodes(pg, k: int, max_rise: float, alpha: float = 0.0,
-                     eta_convex: float = 0.0) -> np.ndarray:
+                     eta_convex: float = 0.0, max_size: float = 0.0) -> np.ndarray:
     """:func:`flat_merges` on a superpoint graph whose ``area``, ``centroid`` and
     ``scatter`` are the points' count, mean and scatter
     (:func:`superfacets.graph.hierarchy.planarity_graph`): the merged superpoint of
-    each node ((K,) int64, dense, numbered by their lowest node)."""
+    each node ((K,) int64, dense, numbered by their lowest node); with ``max_size > 0``,
+    no merge makes a superpoint of more elements."""
+    return _merged(pg, 2, k, float(alpha), float(eta_convex), float(max_rise), max_size)
 
+
+def rise_merge_nodes(pg, k: int, max_size: float = 0.0) -> np.ndarray:
+    """The plane's rise on a superpoint graph as :func:`flat_merge_nodes` reads it: the
+    pair whose union leaves its least-squares plane least merges first, until ``k``
+    nodes remain or, with ``max_size > 0``, no pair can merge without making a
+    superpoint of more elements (the count then not reached). Each node's group ((K,)
+    int64, dense, numbered by their lowest node)."""
+    return _merged(pg, 1, k, 0.0, 0.0, np.inf, max_size)
+
+
+def _merged(pg, planarity: int, k: int, alpha: float, eta_convex: float, max_rise: float,
+            max_size: float) -> np.ndarray:
+    """The merging kernel on a planes' graph, down to ``k`` nodes or as far as it may."""
     n_nodes = pg.n_segments
     if n_nodes == 0:
         return np.zeros(0, dtype=np.int64)
     roots = native.kernel("hierarchy.merge_levels")(
-        n_nodes, *merge_arrays(pg, True), 2, float(alpha), float(eta_convex), 0.0, 0.0,
-        float(max_rise), np.asarray([max(1, min(k, n_nodes))], dtype=np.int64))[0]
+        n_nodes, *merge_arrays(pg, True), planarity, alpha, eta_convex, 0.0, 0.0, max_rise,
+        np.asarray([max(1, min(k, n_nodes))], dtype=np.int64), float(max_size))[0]
     _, top = np.unique(roots, return_inverse=True)  # numbered by their lowest superpoint
     return top.astype(np.int64)
 
@@ -313,7 +333,8 @@ def merge_to_count(graph, labels: np.ndarray, rules, features: np.ndarray | None
     lab, nodes, pairs = _sums(graph, labels, colour)
     _, final, fewest = merge_nodes(nodes, pairs, k, FLAT_NOISE * noise_variance(graph),
                                    p.alpha, p.eta_convex,
-                                   max_jump=None if colour is None else rules.feature_floor)
+                                   max_jump=None if colour is None else rules.feature_floor,
+                                   max_ratio=p.max_size_ratio)
     return final[lab], fewest
 
 
@@ -332,8 +353,8 @@ def _sums(graph, labels: np.ndarray, features=None) -> tuple:
 
 
 def merge_nodes(nodes: dict, pairs: dict, target: int, max_rise: float | None,
-                alpha: float, eta_convex: float, *, max_jump: float | None = None
-                ) -> tuple[np.ndarray, np.ndarray, int]:
+                alpha: float, eta_convex: float, *, max_jump: float | None = None,
+                max_ratio: float = 0.0) -> tuple[np.ndarray, np.ndarray, int]:
     """Both phases of :func:`merge_to_count` on the superpoints' sums (one run's, or a
     tiled run's added over its tiles: the same merges).
 
@@ -354,6 +375,10 @@ def merge_nodes(nodes: dict, pairs: dict, target: int, max_rise: float | None,
     max_jump : float, optional
         With the nodes' ``feature_sum`` and ``feature_squares``: the flat merges join only
         neighbours of one colour (:func:`same_feature_edges`).
+    max_ratio : float, default 0
+        ``> 0``: the flat merges and the plane's rise make no superpoint of more than
+        this many times the mean count (the elements over ``target``) while another pair
+        may merge (the parameter ``max_size_ratio``); 0: no bound.
 
     Returns
     -------
@@ -384,9 +409,11 @@ def merge_nodes(nodes: dict, pairs: dict, target: int, max_rise: float | None,
     count = nodes["count"]
     k = count.shape[0]
     flat = np.arange(k)
+    # the largest superpoint the merges may make while others can merge (0: any)
+    cap = max_ratio * float(count.sum()) / target if max_ratio > 0 else 0.0
     if max_rise is not None:
         flat = flat_merge_nodes(_planes_graph(nodes, pairs, None, max_jump), target, max_rise,
-                                alpha, eta_convex)
+                                alpha, eta_convex, cap)
     n_flat = int(flat.max()) + 1 if k else 0
     if not n_flat:
         return flat, flat, 0
@@ -398,6 +425,9 @@ def merge_nodes(nodes: dict, pairs: dict, target: int, max_rise: float | None,
         for guard in ((max_jump, None) if max_jump is not None else (None,)):
             graph = _planes_graph(nodes, pairs, final, guard)
             fewest = max(target, pieces(graph))
+            if graph.n_segments > fewest and cap > 0:  # under the bound first
+                final = rise_merge_nodes(graph, fewest, cap)[final]
+                graph = _planes_graph(nodes, pairs, final, guard)
             if graph.n_segments > fewest:
                 tree = hierarchy.hierarchy(graph, [fewest], cost="planarity")
                 final = tree.labels(0, final).astype(np.int64)

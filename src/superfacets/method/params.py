@@ -213,7 +213,19 @@ def _declare() -> tuple[Parameter, ...]:
           "least one per 100 elements), then merge neighbours down to n_segments, flat ones "
           "first, >= 1 (1: off); None: by kind and density",
           lambda v: integer("merge_from", v, lo=1), cli="--merge-from"),
+        P("max_size_ratio", 16.0, "float", "merges to n_segments (merge_from > 1): no "
+          "superpoint of more than this many times the mean count of elements while other "
+          "neighbours can merge, >= 1; 0: no bound", _size_ratio, cli="--max-size-ratio"),
     )
+
+
+def _size_ratio(value) -> float:
+    """``max_size_ratio``: 0 (no bound) or a number ``>= 1``."""
+    x = check_number("max_size_ratio", value, 0.0, MAX_WEIGHT_FACTOR)
+    if 0.0 < x < 1.0:
+        raise ParameterError(f"max_size_ratio must be 0 (no bound) or at least 1 (a "
+                             f"superpoint of the mean size), got {value!r}")
+    return x
 
 
 #: Every parameter of the method, declared once (:class:`Parameter`), in the order of

@@ -75,11 +75,13 @@ inline double spread(i64 a, i64 b, const Nodes& N) {
 
 struct Params {
     i64 planarity;  // 0 Ward's, 1 the plane's rise, 2 Ward's of the flat pairs only
-    double alpha, eta_convex, beta, compactness, max_rise;
+    double alpha, eta_convex, beta, compactness, max_rise, max_size;
 };
 
 double cost(i64 a, i64 b, double ln, double ang, double conc, const Nodes& N, const Params& P,
             double* tmp) {
+    // no union above max_size (the nodes' weights: elements, for the planes' graphs)
+    if (P.max_size > 0 && N.area[a] + N.area[b] > P.max_size) return INF;
     double c = 0.0;
     if (P.planarity > 0) {
         merged_scatter(a, b, N, tmp);
@@ -124,7 +126,7 @@ nb::object merge_levels(i64 k, nb::handle ea_, nb::handle eb_, nb::handle stats_
                               nb::handle area_, nb::handle wsum_, nb::handle fsum_,
                               nb::handle scatter_, i64 planarity, double alpha,
                               double eta_convex, double beta, double compactness,
-                              double max_rise, nb::handle targets_) {
+                              double max_rise, nb::handle targets_, double max_size) {
     In<i64> ea(ea_, "ea"), eb(eb_, "eb"), targets(targets_, "targets");
     In<double> stats(stats_, "stats");
     Out<double> area(area_, "area"), wsum(wsum_, "wsum"), fsum(fsum_, "fsum"),
@@ -145,7 +147,7 @@ nb::object merge_levels(i64 k, nb::handle ea_, nb::handle eb_, nb::handle stats_
     nb::gil_scoped_release nogil;
     const i64 n_e = ea.n, cap = 2 * n_e;
     Nodes N{area.p, wsum.p, fsum.p, fsum.cols, scatter.p};
-    Params P{planarity, alpha, eta_convex, beta, compactness, max_rise};
+    Params P{planarity, alpha, eta_convex, beta, compactness, max_rise, max_size};
     std::vector<i64> nb(cap), nxt(cap, -1), head(k, -1), tail(k, -1);
     std::vector<double> st(3 * cap);
     for (i64 t = 0; t < n_e; ++t)
@@ -237,11 +239,12 @@ nb::object merge_levels(i64 k, nb::handle ea_, nb::handle eb_, nb::handle stats_
 void bind_hierarchy(nb::module_& m) {
     m.def("merge_levels", &merge_levels,
           "Merge the cheapest adjacent pair until each of targets (decreasing, each reachable) "
-          "live nodes remain, or no pair has a finite cost.",
+          "live nodes remain, or no pair has a finite cost (max_size > 0: no union weighing "
+          "more).",
           nb::arg("k"), nb::arg("ea"), nb::arg("eb"), nb::arg("stats"), nb::arg("area"),
           nb::arg("wsum"), nb::arg("fsum"), nb::arg("scatter"), nb::arg("planarity"),
           nb::arg("alpha"), nb::arg("eta_convex"), nb::arg("beta"), nb::arg("compactness"),
-          nb::arg("max_rise"), nb::arg("targets"));
+          nb::arg("max_rise"), nb::arg("targets"), nb::arg("max_size") = 0.0);
 }
 
 }  // namespace sfk

@@ -199,7 +199,7 @@ def merged_labels(labels: np.ndarray, stats: list, target: int, params) -> np.nd
     the tiles' sums (:func:`merge_names`), a warning where the input's separate pieces
     are more; a label only a repair made (none of the tiles' sums name it) is kept."""
     names, merged, _, fewest = merge_names(stats, target, params.alpha, params.eta_convex,
-                                           labels=labels)
+                                           labels=labels, max_ratio=params.max_size_ratio)
     if fewest > target:
         import warnings
 
@@ -213,7 +213,8 @@ def merged_labels(labels: np.ndarray, stats: list, target: int, params) -> np.nd
 
 
 def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float, *,
-                labels: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, int, int]:
+                labels: np.ndarray | None = None, max_ratio: float = 0.0
+                ) -> tuple[np.ndarray, np.ndarray, int, int]:
     """Merge a tiled run's superpoints down to ``target`` from the tiles' sums
     (:func:`tile_merge_stats`): the flat merges, then Ward's merges or, where most of the
     points lie in flat regions, the plane's rise
@@ -234,6 +235,9 @@ def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float,
         adjacencies a tile saw leave its core, so that only superpoints that touch in the
         stitched labels merge (a tile's own label of an element in another's core can
         differ). Default: each tile's own labels.
+    max_ratio : float, default 0
+        The largest superpoint the merges may make while others can merge, in mean
+        counts (:func:`superfacets.method.merges.merge_nodes`); 0: no bound.
 
     Returns
     -------
@@ -290,7 +294,7 @@ def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float,
     # (no noise read, as on a mesh: Ward's merges only)
     rise = FLAT_NOISE * max(float(np.median(noise)), 0.0) if noise.size else None
     flat, final, fewest = merge_nodes(nodes, pairs, target, rise, alpha, eta_convex,
-                                      max_jump=max_jump)
+                                      max_jump=max_jump, max_ratio=max_ratio)
     n_flat = int(flat.max()) + 1 if k else 0
     lowest = np.full(int(final.max()) + 1 if k else 0, k, dtype=np.int64)
     np.minimum.at(lowest, final, np.arange(k))
