@@ -409,8 +409,11 @@ def test_the_command_line_takes_merge_from(tmp_path, capsys):
                                   segment(PointCloud(pts), 20, merge_from=1).labels)
     capsys.readouterr()
     assert main(["segment", str(path), "-k", "20", "-o", str(out)]) == 0
-    assert "20 superpoints (merged from 100 finer ones, flat neighbours first" in \
-        capsys.readouterr().out
+    assert "20 superpoints (merged from 100 finer ones, flat neighbours first, none above " \
+        "16 times the mean;" in capsys.readouterr().out
+    assert main(["segment", str(path), "-k", "20", "--max-size-ratio", "0", "-o",
+                 str(out)]) == 0
+    assert "flat neighbours first; --merge-from 1" in capsys.readouterr().out
 
 
 def test_sorted_unique_is_numpys_unique():

@@ -178,7 +178,9 @@ def _summary(name: str, mesh, result, seconds: float, elements: str = "faces",
         merged = (getattr(result, "params", None) or {}).get("merge_from") or 1
         first = (getattr(result, "params", None) or {}).get("n_init_centers") or 0
         if merged > 1 and first > result.n_segments:
-            segs += (f" (merged from {first:,} finer ones, flat neighbours first; "
+            bound = (getattr(result, "params", None) or {}).get("max_size_ratio") or 0
+            most = f", none above {bound:g} times the mean" if bound else ""
+            segs += (f" (merged from {first:,} finer ones, flat neighbours first{most}; "
                      "--merge-from 1: no merging)")
     else:
         kind = "" if mesh.is_triangular else " (polygons)"
