@@ -4,6 +4,7 @@ Usage: python benchmarks/real_scans.py [--scans NAME ...] [-k 300 1000 3000]
        [--methods superfacets graph_segmentation cut_pursuit spt_partition vccs]
        [--spt-levels 1 2] [--beta auto 0]
        [--neighbors 10] [--split-merge] [--min-points 3] [--content] [--adaptive]
+       [--size-ratios 0 8 4 2]
        [--leave-out CLASS ...] [--csv results.csv] [--download] [--rooms 3]
 
 Each scan of ``superfacets.evaluation.datasets.scans.SCANS`` found in the cache
@@ -36,7 +37,9 @@ Methods (the registry's, so ``superfacets experiment`` runs the same code):
   split-and-merge (off by default on points); with ``--min-points N`` also
   its superpoints of fewer than N points merged into a neighbour
   (``segment(..., min_elements=N)``), the request raised until
-  the count is reached; with ``--adaptive`` also the content-adaptive
+  the count is reached; with ``--size-ratios R ...`` also its merges with each largest
+  superpoint (``max_size_ratio``: R times the mean; 0 no bound, as before the bound);
+  with ``--adaptive`` also the content-adaptive
   superpoints (``adaptive_superpoints``: exactly k);
 - ``graph_segmentation``: the ScanNet Segmentator's method, its threshold
   searched for k;
@@ -288,6 +291,9 @@ def main() -> None:
     ap.add_argument("--min-points", type=int, default=0,
                     help="also superfacets with superpoints of fewer points merged into a "
                          "neighbour (segment's min_elements), the count searched")
+    ap.add_argument("--size-ratios", type=float, nargs="+", default=[], metavar="R",
+                    help="also superfacets with these max_size_ratio values (the merges' "
+                         "largest superpoint in mean sizes; 0: no bound), a row each")
     ap.add_argument("--content", action="store_true",
                     help="also superfacets with content-sensitive sizes (density=0.5, "
                          "roughness=1)")
@@ -336,6 +342,8 @@ def main() -> None:
                     variants += [(0.0, {"density": 0.5, "roughness": 1.0})]
                 if method == "superfacets" and a.adaptive:
                     variants += [(0.0, {"adaptive": True})]
+                if method == "superfacets":
+                    variants += [(None, {"max_size_ratio": v}) for v in a.size_ratios]
                 if method == "superfacets" and a.min_points > 1:
                     variants += [(0.0, {"min_points": a.min_points})]
                 for beta, options in variants:
@@ -347,7 +355,9 @@ def main() -> None:
                         (" adaptive" if options.get("adaptive") else "") + \
                         (f" level {options['level']}" if "level" in options else "") + \
                         (f" min {options['min_points']} points" if "min_points" in options
-                         else "")
+                         else "") + \
+                        (f" max size {options['max_size_ratio']:g}" if "max_size_ratio" in
+                         options else "")
                     print(f"| {k} | {label} | {r['undersegmentation_error']:.4f} | "
                           f"{r['boundary_recall']:.4f} | {r['boundary_precision']:.4f} | "
                           f"{r['achievable_accuracy']:.4f} | {r['oracle_miou']:.4f} | "
