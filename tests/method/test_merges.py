@@ -543,6 +543,8 @@ def test_the_merges_make_no_superpoint_above_the_size_bound():
     assert segment(plane, 10, max_size_ratio=1).n_segments == 10
     with pytest.raises(ParameterError, match="max_size_ratio must be 0"):
         segment(pts, k, max_size_ratio=0.5)
+    with pytest.raises(ParameterError, match="got inf; 0 means no bound"):
+        segment(pts, k, max_size_ratio=float("inf"))
 
 
 def test_a_tiled_run_keeps_the_size_bound():

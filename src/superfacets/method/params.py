@@ -221,7 +221,10 @@ def _declare() -> tuple[Parameter, ...]:
 
 def _size_ratio(value) -> float:
     """``max_size_ratio``: 0 (no bound) or a number ``>= 1``."""
-    x = check_number("max_size_ratio", value, 0.0, MAX_WEIGHT_FACTOR)
+    try:
+        x = check_number("max_size_ratio", value, 0.0, MAX_WEIGHT_FACTOR)
+    except ParameterError as e:  # (inf, nan, negative: say what means "no bound")
+        raise ParameterError(f"{e}; 0 means no bound") from None
     if 0.0 < x < 1.0:
         raise ParameterError(f"max_size_ratio must be 0 (no bound) or at least 1 (a "
                              f"superpoint of the mean size), got {value!r}")
