@@ -335,6 +335,13 @@ def test_the_tiles_sums_add_up_to_the_whole_clouds():
     border = np.bincount(np.searchsorted(key(whole["edges"]), key(edges)),
                          weights=np.concatenate([h["border"] for h in sums]))
     np.testing.assert_allclose(border, whole["border"], rtol=1e-12)
+    # one tile holding everything sums each pair as one run does (named, in names' order)
+    from superfacets.graph.sums import PAIR_FIELDS, border_sums
+
+    one = border_sums(g, fine, 200)
+    np.testing.assert_array_equal(whole["edges"], names[one["edges"]])
+    for field in PAIR_FIELDS:
+        np.testing.assert_allclose(whole[field], one[field], rtol=1e-12, atol=1e-15)
 
     rules = replace(resolve_rules(g, resolve(n_segments=40, density=0.0)), target=40)
     one_run, _ = merge_to_count(g, fine, rules)

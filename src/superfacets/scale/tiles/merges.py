@@ -40,7 +40,7 @@ from ...elements.kinds import kind_of
 from ...elements.labels import check_labels
 from ...errors import ParameterError
 from ...graph.adjacency import crossing_adjacencies
-from ...graph.sums import PAIR_FIELDS, grouped_planes, pair_sums, point_sums
+from ...graph.sums import PAIR_FIELDS, border_sums, grouped_planes, pair_sums, point_sums
 from ...method.merges import FLAT_NOISE, merge_nodes, neighbourhood_noise
 from ...method.rules import merge_from_of
 
@@ -113,26 +113,40 @@ def tile_merge_stats(graph, labels: np.ndarray, names: np.ndarray, core: np.ndar
                        real_rows(graph.normals)[at], np.asarray(graph.sizes)[at],
                        None if features is None else features[at])
 
-    pc, length, cos, concave = crossing_adjacencies(graph, lab)
-    i, j = pc[:, 0], pc[:, 1]
-    mine = (core[i] & (rows[i] < rows[j])) | (core[j] & (rows[j] < rows[i]))
-    angle = np.arccos(np.clip(cos, -1.0, 1.0))
-    concave = concave.astype(np.float64)
+    edges = _inner_sums(graph, lab, core, names)
     # an adjacency with an end outside the core: that end's label is another tile's, and
     # this tile's may differ (a border disagreement), so it goes raw, by rows, named by
-    # the stitched labels in the driver (a pair it names must touch: no merged piece cut)
-    inner = mine & core[i] & core[j]
-    outer = mine & ~inner
-    edges = pair_sums(names[lab[i[inner]]], names[lab[j[inner]]], length[inner],
-                      angle[inner], concave[inner])
+    # the stitched labels in the driver (a pair it names must touch: no merged piece cut);
+    # the tile counts it where its core holds the end of the lower row
+    pc, length, cos, concave = crossing_adjacencies(graph, core.astype(np.int64))
+    i, j = pc[:, 0], pc[:, 1]
+    outer = (lab[i] != lab[j]) & ((core[i] & (rows[i] < rows[j])) |
+                                  (core[j] & (rows[j] < rows[i])))
+    i, j, length = i[outer], j[outer], length[outer]
+    angle = np.arccos(np.clip(cos[outer], -1.0, 1.0))
+    concave = concave[outer].astype(np.float64)
     pick = at[np.unique(np.linspace(0, at.size - 1, min(at.size, n_noise)).astype(np.int64))] \
         if n_noise > 0 and at.size else at[:0]
     colour = {} if features is None else dict(floor=float(floor))
     return dict(names=names[used], **nodes, **edges, **colour,
-                outer_rows=np.stack([rows[i[outer]], rows[j[outer]]], 1).astype(np.int64),
-                outer_names=np.stack([names[lab[i[outer]]], names[lab[j[outer]]]], 1),
-                outer_length=length[outer], outer_angle=angle[outer],
-                outer_concave=concave[outer], noise=neighbourhood_noise(graph, pick))
+                outer_rows=np.stack([rows[i], rows[j]], 1).astype(np.int64),
+                outer_names=np.stack([names[lab[i]], names[lab[j]]], 1),
+                outer_length=length, outer_angle=angle, outer_concave=concave,
+                noise=neighbourhood_noise(graph, pick))
+
+
+def _inner_sums(graph, lab: np.ndarray, core: np.ndarray, names: np.ndarray) -> dict:
+    """The adjacencies with both ends in the core that cross ``lab``, summed per pair of
+    superpoints and named by ``names``, lower first, in the order of the names (as
+    :func:`~superfacets.graph.sums.pair_sums` gives them): the sums of
+    :func:`~superfacets.graph.sums.border_sums` (one pass over the graph's layout) with
+    every element outside the core under one more label, whose pairs are dropped."""
+    out = names.size
+    s = border_sums(graph, np.where(core, lab, out), out + 1)
+    keep = (s["edges"] < out).all(axis=1)
+    e = np.sort(names[s["edges"][keep]], axis=1)
+    order = np.lexsort((e[:, 1], e[:, 0]))
+    return dict(edges=e[order], **{f: s[f][keep][order] for f in PAIR_FIELDS})
 
 
 def _outer_sums(stats: list[dict], labels: np.ndarray | None) -> dict:
