@@ -24,9 +24,10 @@ whole graph, so each tile sums what the merges read, on its own labels
 This process adds the tiles' sums (the scatters by Chan's rule for the union of two
 samples), builds the superpoint graph, and merges as one run does
 (:func:`merge_names`): the flat merges up to the noise (the median of the tiles'
-eigenvalues), then Ward's merges down to the count. An element two tiles labelled
-differently (the run's ``disagreements``) counts under its own tile's label in that
-tile's point sums: those are the stitched labels' up to those few elements.
+eigenvalues), then the plane's rise or Ward's merges down to the count, none making a
+superpoint above ``max_size_ratio`` times the mean while others can merge. An element
+two tiles labelled differently (the run's ``disagreements``) counts under its own tile's
+label in that tile's point sums: those are the stitched labels' up to those few elements.
 """
 
 from __future__ import annotations
