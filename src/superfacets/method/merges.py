@@ -16,9 +16,8 @@ resolve_rules`), then :func:`merge_to_count` merges adjacent superpoints in two 
 2. Down to ``k`` (or the input's separate pieces, where there are more), by one of two
    costs, chosen by what phase 1 found (:func:`flat_share`):
 
-   - where at least :data:`FLAT_SHARE` of the elements lie in flat regions (a scene:
-     floors, walls, ground, the flat faces of machined parts; on a scan, whose noise is
-     read above zero, :data:`SCAN_FLAT_SHARE`), the **plane's rise**
+   - where most of the elements (:data:`FLAT_SHARE`) lie in flat regions (a scene:
+     floors, walls, ground, the flat faces of machined parts), the **plane's rise**
      (:func:`merge_nodes`): the pair whose union leaves its plane least merges first,
      so the count goes to what stands on the flat regions, not to the regions (with
      colours, neighbours of one colour first: a rug is as flat as its floor);
@@ -51,19 +50,17 @@ from ..graph.sums import border_sums, grouped_graph, grouped_planes, point_sums
 __all__ = ["merge_to_count", "merge_nodes", "flat_merges", "flat_share", "flat_merge_nodes",
            "rise_merge_nodes",
            "same_feature_edges", "feature_spread", "noise_variance", "neighbourhood_noise",
-           "FLAT_NOISE", "FLAT_SHARE", "SCAN_FLAT_SHARE", "NOISE_SAMPLE"]
+           "FLAT_NOISE", "FLAT_SHARE", "NOISE_SAMPLE"]
 
 #: A flat merge's largest rise of the squared plane distances, per element of the
 #: smaller superpoint, in units of :func:`noise_variance` (chosen among 1, 2 and 3:
 #: ``docs/notes/superpoints-defaults.md``).
 FLAT_NOISE = 2.0
 #: The share of the elements in flat regions (superpoints the flat merges grew from two
-#: or more) from which phase 2 merges by the plane's rise, not by Ward's cost (the
-#: measurements behind it: ``docs/notes/superpoints-defaults.md``).
+#: or more) from which phase 2 merges by the plane's rise, not by Ward's cost: most of
+#: them, on every input, scan or sampled surface (the measurements behind it:
+#: ``docs/notes/superpoints-defaults.md``).
 FLAT_SHARE = 0.5
-#: :data:`FLAT_SHARE` on a scan (its noise read above zero: the flat regions are what
-#: the scanner saw flat, its floors, walls and ground; same note).
-SCAN_FLAT_SHARE = 0.25
 #: The most elements :func:`noise_variance` reads (evenly spaced in the input's order).
 NOISE_SAMPLE = 8_192
 
@@ -417,8 +414,7 @@ def merge_nodes(nodes: dict, pairs: dict, target: int, max_rise: float | None,
     n_flat = int(flat.max()) + 1 if k else 0
     if not n_flat:
         return flat, flat, 0
-    if max_rise is not None and flat_share(np.arange(k), flat, count) >= (
-            SCAN_FLAT_SHARE if max_rise > 0 else FLAT_SHARE):
+    if max_rise is not None and flat_share(np.arange(k), flat, count) >= FLAT_SHARE:
         # the plane's rise: among neighbours of one colour first (a board on its wall is
         # flat too), then across colours where the count needs it
         final = flat
