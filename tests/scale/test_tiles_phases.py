@@ -76,16 +76,24 @@ def test_a_clouds_tiles_start_from_centers_found_on_the_sample(monkeypatch):
                                                                 radius=0.004)])
 def test_a_sample_too_small_for_the_centers_leaves_them_to_the_tiles(options, tmp_path,
                                                                      monkeypatch):
-    """A survey's sample of 16 points a center or fewer (a huge count on a huge cloud),
-    or of fewer points than the radius asks centers, starts no run: each tile samples its
-    own centers, as on a mesh."""
+    """A survey's sample of fewer than START_FEWEST_PER_CENTER (5) points a center (a
+    huge count on a huge cloud), or of fewer points than the radius asks centers, starts
+    no run: each tile samples its own centers, as on a mesh. From 5 a center, the start
+    runs on the sample."""
     from superfacets.io import regions
+    from superfacets.scale.tiles.phases import START_FEWEST_PER_CENTER
 
-    monkeypatch.setattr(regions, "SAMPLE", 500)  # every 40th of 20,000 points
+    monkeypatch.setattr(regions, "SAMPLE", 400)  # every 50th of 20,000 points: 4 a center
     np.save(tmp_path / "c.npy", _bumpy_cloud(20_000).points)
     res = segment_tiled(tmp_path / "c.npy", tiles=4, merge_from=1, **options)
     assert "centers" in res.timings and all(t["centers_seconds"] >= 0 for t in res.tiles)
     assert res.n_segments >= (100 if options["n_segments"] else 2000)
+    if options["n_segments"]:
+        assert START_FEWEST_PER_CENTER == 5
+        monkeypatch.setattr(regions, "SAMPLE", 500)  # every 40th: 5 a center
+        res = segment_tiled(tmp_path / "c.npy", tiles=4, merge_from=1, **options)
+        assert "start" in res.timings and "centers" not in res.timings
+        assert res.n_segments == 100
 
 
 def test_core_classification_is_the_whole_inputs_from_the_same_centers():

@@ -185,6 +185,10 @@ START_SHARE = 0.25
 #: ... and of at least this many points per center and in all (or the whole sample).
 START_POINTS_PER_CENTER = 16
 START_MIN_POINTS = 10_000
+#: The fewest sample points per center a start runs on (fewer: the tiles sample their
+#: own centers). The refine rounds run the passes on every point, so a start on 5 points
+#: a center gave the tiled error of the tiles' own centers (``docs/notes/tiles.md``).
+START_FEWEST_PER_CENTER = 5
 
 
 def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: SegmentParams,
@@ -233,7 +237,7 @@ def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: Segm
         Rows of the cloud holding the start's centers, increasing.
     positions : (c, 3) float64 ndarray
         Their positions. None instead of both where the sample is not the whole cloud and
-        holds fewer than :data:`START_POINTS_PER_CENTER` points a center (``n_segments``,
+        holds fewer than :data:`START_FEWEST_PER_CENTER` points a center (``n_segments``,
         or the centers ``radius`` asks): the tiles then sample their own centers.
 
     Examples
@@ -247,7 +251,7 @@ def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: Segm
     """
 
     sample = np.asarray(sample, dtype=np.float64)
-    if sample.shape[0] < min(START_POINTS_PER_CENTER * (params.n_segments or 0), n_rows):
+    if sample.shape[0] < min(START_FEWEST_PER_CENTER * (params.n_segments or 0), n_rows):
         return None  # (fewer points a center than a start needs, and not the whole cloud)
     least = max(START_MIN_POINTS, START_POINTS_PER_CENTER * (params.n_segments or 0))
     step = max(1, min(math.ceil(sample.shape[0] / (START_SHARE * n_rows)),
@@ -260,7 +264,7 @@ def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: Segm
         return rows[:1], sample[:1]
     if params.n_segments is None and sample.shape[0] < n_rows:  # (sized by the radius)
         area = float(points.point_graph(cloud, params.n_neighbors).graph.area)  # (kept with it)
-        if sample.shape[0] < START_POINTS_PER_CENTER * area / superfacet_measure(r, 2):
+        if sample.shape[0] < START_FEWEST_PER_CENTER * area / superfacet_measure(r, 2):
             return None
     p = replace(_tile_params(params, r, diagonal, d), beta=0.0)
     n = params.n_segments if p.init == "farthest" else None
