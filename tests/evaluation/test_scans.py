@@ -51,7 +51,7 @@ def test_registry_pins_every_file():
     names = [f for src in SCANS.values() for f, _, _ in src.files]
     assert len(set(names)) == len(names)
     for name, src in SCANS.items():
-        assert src.name == name and src.labels in ("semantickitti", "las", "scannet")
+        assert src.name == name and src.labels in ("semantickitti", "las", "scannet", "ground")
         for fname, url, sha in src.files:
             assert url.startswith("https://") and "/" not in fname
             assert len(sha) == 64 and int(sha, 16) >= 0
@@ -96,6 +96,26 @@ def test_las_classification_read_in_file_order(tmp_path, monkeypatch):
     expect[expect == 0] = UNLABELLED
     np.testing.assert_array_equal(s.ground_truth, expect)
     assert s.cloud.colors is not None and s.cloud.colors[0, 0] == pytest.approx(1.0)
+
+
+def test_ground_files_give_the_ground_class_seen_from_above(tmp_path):
+    """An ISPRS sample (PCL's two PCD files): class 2 where a point is in the ground
+    file, 1 elsewhere, in the scan's order; z up, the files' default VIEWPOINT no
+    sensor. A ground file with a point the scan lacks is one clear error."""
+    pypcd4 = pytest.importorskip("pypcd4")
+    pts, cls = _plane_points(20)
+    pts = (pts + [512_700.0, 5_403_550.0, 300.0]).astype(np.float32)  # (UTM, as shipped)
+    pypcd4.PointCloud.from_xyz_points(pts).save(tmp_path / "isprs_samp11.pcd")
+    ground = pts[cls == 1][::-1]  # (any order)
+    pypcd4.PointCloud.from_xyz_points(ground).save(tmp_path / "isprs_samp11_ground.pcd")
+    s = load_scan("isprs-samp11", tmp_path)
+    np.testing.assert_array_equal(s.ground_truth, np.where(cls == 1, 2, 1))
+    assert s.cloud.viewpoint is None and s.cloud.up.tolist() == [0.0, 0.0, 1.0]
+    assert SCANS["isprs-samp11"].kind.startswith("airborne")
+    stray = np.r_[ground, [[0.0, 0.0, 0.0]]].astype(np.float32)
+    pypcd4.PointCloud.from_xyz_points(stray).save(tmp_path / "isprs_samp11_ground.pcd")
+    with pytest.raises(MeshFormatError, match="not in the scan"):
+        load_scan("isprs-samp11", tmp_path)
 
 
 def _write_scannet(folder, scene="scene0000_00"):

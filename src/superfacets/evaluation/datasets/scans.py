@@ -74,7 +74,9 @@ class ScanSource:
         "never classified", is unlabelled) or ``"scannet"`` (an ``.npy`` of
         ``x y z r g b`` rows, colours 0-255, an ``.npy`` of NYU40 class
         ids and one of object instance ids, 0 unannotated in both; seen from
-        above).
+        above) or ``"ground"`` (a PCD of every point and a PCD of the ground's points:
+        ASPRS class 2 where a point is in the second, 1 elsewhere; seen from above, its
+        ``VIEWPOINT`` not a sensor).
     credit : str
         Who made the data and under which licence.
     spt_preset : str
@@ -104,6 +106,7 @@ _O3D = ("isl-org/Open3D-ML", "0cbfde63a7eb5821f73118bbe0cf20ca353bb974")
 _PDAL = ("PDAL/PDAL", "ccf0ab7046072f68cab78734e90d0d3149f3af10")
 _MMDET3D = ("open-mmlab/mmdetection3d", "9e39d469eb37054d469b8979ae5ac031a48017fc")
 _LIDR = ("r-lidar/lidR", "d185a7eb3d8de52272c9c60500fd104b97197cf3")
+_PCL = ("PointCloudLibrary/data", "5c26bdd0591ba150b91858b5c9fe5e91cb39ae86")
 
 
 def _las(name: str, kind: str, repo: tuple, path: str, sha: str, credit: str, *,
@@ -117,6 +120,22 @@ def _las(name: str, kind: str, repo: tuple, path: str, sha: str, credit: str, *,
 _LIDR_CREDIT = ("from lidR's example data (Roussel et al., Remote Sensing of Environment "
                 "2020; GPL-3 package, data as shipped in inst/extdata): ASPRS classes ")
 _PDAL_CREDIT = "from PDAL's test data (BSD): ASPRS classes "
+
+
+def _isprs(sample: int, points_sha: str, ground_sha: str) -> ScanSource:
+    """A reference sample of the ISPRS filter test (urban sites 1-4, rural 5-8), as PCL's
+    data repository converts it: every point, and the ground's."""
+    base = f"terrain/samp{sample}-utm"
+    site = "urban" if sample < 50 else "rural"
+    return ScanSource(
+        f"isprs-samp{sample}", f"airborne LiDAR, ISPRS filter test, {site}",
+        ((f"isprs_samp{sample}.pcd", _github(*_PCL, f"{base}.pcd"), points_sha),
+         (f"isprs_samp{sample}_ground.pcd", _github(*_PCL, f"{base}-ground.pcd"), ground_sha)),
+        "ground",
+        f"the ISPRS Commission III filter test's reference sample {sample} (Sithole and "
+        "Vosselman, ISPRS J. 2004; Optech ALTM, 1-3.5 m spacing), as PCL's data repository "
+        "ships it (BSD; projected to UTM 32U, float32 coordinates: northings in 0.5 m steps): "
+        "ground (2) and the rest (1)", "dales")
 
 
 def _pinned(repo: tuple, prefix: str, files) -> tuple:
@@ -200,6 +219,36 @@ SCANS: dict[str, ScanSource] = {s.name: s for s in (
     _scannet("scene0000_01", "1c0aee74f2c94ecd67d5726831120335c44fa201b60c6822689439f5fa9b6d01",
              "1eeccfd9d3bd6ea431ffe4d79c9a0bbef8ce7e36a2ed1d4fceebc7451e6071c1",
              "152df03e56a93b9523779e6af9b365520f1d930b356c1107881e451daa2ce0bd"),
+    _isprs(11, "0b2029dcd2c738e9c1631e553999f2c0995c59e2443c597b32cf928ebc1d1fb7",
+           "8112c6ed6914d7434ee94ea97d692f07034323ef177e437af0737f197d0ecce6"),
+    _isprs(12, "6cf0e4a6ce8d4a1be35a79aad892e2a9552c9bbb333d47d630a213143a424d61",
+           "51fce5a78172874d2cad7045e61b283acb22cc15d149d7799db9fb90c1727acd"),
+    _isprs(21, "9aebd0ed77388fa22835f07bde6bced1eb2bfc5a6260d18468b7e67993bed56f",
+           "3529972af85fe5bd67bdd1886e28d321746a7f0dc7e7113157ee9123ad6e091a"),
+    _isprs(22, "e436292b5950bee955b053d3990cc6b42e1d648f8923ad2b1ce62a79d336a5f5",
+           "d31b8a246d93b02fa748dbc2aaad56ea52d05ec6fcd6da109595794d88c74007"),
+    _isprs(23, "35e872a6b4e36fa35f55d5f7bef2f159690c93e9aaa31bc24e4363d1e38dbd98",
+           "9005cacb07b5b9aeb4a7890737aef83d8b6a1c601cac04d4abe5035a14980c69"),
+    _isprs(24, "d8962dfc992053fa3647673d0af8cbb34077827be027fbee850dc9878afad944",
+           "7d996a6194116f838b4bfc5a27eb0e4b8cce7e9a0414ab59fb77df68f3156a18"),
+    _isprs(31, "1a1677c5ccbfbbc9fafa21ae0293ae9b53d32867ccf138e99ff74900cef74ea3",
+           "f78aa4d5dc8a8b205b0e178fd6cba6c855beb796c72fd2c460849d76bf1636c4"),
+    _isprs(41, "1ef417dc4c9aaec5496ca6c7b87f3763f9b116ad03c9247552b753091479f72d",
+           "4cb530ffa90fb58dbf6c7d55f229ff301f24ddffcf54d75f724746bdc4d96f8a"),
+    _isprs(42, "d029873e134927b4a7950c5973a49b4bdac9bd19980c2b34e9eb8452611b37ba",
+           "c5199cb0f7a1ec2c557af9157fbfadb8cad5b144536f2e5e8ca10661a940f1ee"),
+    _isprs(51, "ba3ded183136b1dec94111149be9040ec1ee6f15eecf1014a2c5a0bd651c05c5",
+           "c443163e0e5475c662e4ba4766008fddfded5829c4ea51508146bd6d432aaf7b"),
+    _isprs(52, "ba89c6d90004963587aa5ae2620630c83927a43d243bdfc3ad9d00aaa59336ca",
+           "ed92936a8253ec4e02227624c7c8c2fdab585518308e6bdc17b31352676bac63"),
+    _isprs(53, "89427e8b6f24061d2dcc6ac63de3321077982b7c36add77cbff0c2df375e3abd",
+           "791a310ab9e32b4eb45d5d366aa4597055130dc519ae83b7032cd390c2d91265"),
+    _isprs(54, "c8ee4c94ed3c278c09b3797848724405c6187acbc42b9d6fc509c4cb356ae600",
+           "4a20cfb17e612c0eedbd25755536776a6cb02dbb6b5059ac4da985b67414170d"),
+    _isprs(61, "b717382cf30cc8a0c7430908ab777fc362ad33d0fc07720d5eac7d609d2b60c9",
+           "2162fb18560f1ac2320fbe5b8b55de39398ce5832c525e0a111a44844117fd16"),
+    _isprs(71, "56685bf711877028369ed6899bf84b66df928dc92850f2f38135e15c7ef40ede",
+           "b35ca5cabbb847935f93bbb1609045f1246c59852a64c83c0d7133dd01dda9af"),
 )}
 
 
@@ -384,11 +433,31 @@ def load_scan(name: str, cache=None, *, download: bool = False) -> Scan:
             ids = np.where(none, 0, raw).astype(np.int64)
             instances = np.where(ids > 0, ids, ids.max(initial=0) + 1 + gt)
             instances[gt == UNLABELLED] = UNLABELLED
+    elif src.labels == "ground":
+        from dataclasses import replace
+
+        # airborne, z up; the PCD's VIEWPOINT is PCL's default, not a sensor: seen from above
+        cloud = replace(read_cloud(paths[0]), up=np.array([0.0, 0.0, 1.0]), viewpoint=None)
+        gt = _ground_classes(cloud.points, read_cloud(paths[1]).points, name)
     else:  # pragma: no cover - the registry above is the only source
         raise ParameterError(f"scan {name!r}: unknown label kind {src.labels!r}")
     if gt.shape[0] != cloud.n_total:
         raise MeshFormatError(f"scan {name!r}: {gt.shape[0]} labels for {cloud.n_total} points")
     return Scan(name, cloud, gt, src, instances)
+
+
+def _ground_classes(points: np.ndarray, ground: np.ndarray, name: str) -> np.ndarray:
+    """ASPRS classes of ``points`` ((n, 3)): 2 (ground) where a point's position is one of
+    ``ground``'s ((g, 3), the same values: both read from float32 files), else 1."""
+    def keyed(a):
+        return np.ascontiguousarray(a, dtype=np.float64).view(
+            np.dtype((np.void, 24))).reshape(-1)
+
+    every, on_ground = keyed(points), keyed(ground)
+    if not np.isin(on_ground, every).all():
+        raise MeshFormatError(f"scan {name!r}: the ground file holds points that are not in "
+                              "the scan")
+    return np.where(np.isin(every, on_ground), 2, 1).astype(np.int64)
 
 
 def _npy(path: Path, name: str, what: str) -> np.ndarray:
