@@ -136,3 +136,33 @@ def test_an_axis_value_may_start_with_a_minus(tmp_path, capsys, sphere):
     assert main(["segment", str(tmp_path / "p.npy"), "-k", "5", "--seen-from", "-z", "-o",
                  str(tmp_path / "p.seg"), "-q"]) == 0
     assert "superfacets" in page
+
+
+def test_seen_from_sets_a_pcds_own_viewpoint_aside(tmp_path, capsys):
+    """A georeferenced PCD carries PCL's default VIEWPOINT (the origin, thousands of
+    kilometres away): its normals faced it, and ``--seen-from z`` was ignored. Now the
+    option sets the file's viewpoint aside: the labels are those of the cloud seen from
+    above, and without it the file's viewpoint still orients the normals."""
+    pypcd4 = pytest.importorskip("pypcd4")
+    from dataclasses import replace
+
+    from superfacets import segment
+    from superfacets.io import read_cloud
+
+    rng = np.random.default_rng(0)
+    xy = rng.random((6000, 2)) * 40
+    roofs = (np.abs(xy[:, 0] - 12) < 5) & (np.abs(xy[:, 1] - 20) < 8)
+    z = 0.05 * rng.standard_normal(6000) + np.where(roofs, 6.0, 0.0)
+    pts = (np.c_[xy, z] + [512_700.0, 5_403_550.0, 300.0]).astype(np.float32)
+    path = tmp_path / "tile.pcd"
+    pypcd4.PointCloud.from_xyz_points(pts).save(path)
+    cloud = read_cloud(path)
+    assert cloud.viewpoint is not None  # (the file's: the origin)
+    for extra, expect in ((["--seen-from", "z"], replace(cloud, viewpoint=None, up=(0, 0, 1))),
+                          ([], cloud)):
+        out = tmp_path / "t.seg"
+        assert main(["segment", str(path), "-k", "20", "-o", str(out), "-q", *extra]) == 0
+        np.testing.assert_array_equal(np.loadtxt(out, dtype=np.int64),
+                                      segment(expect, 20).labels)
+    seen = segment(replace(cloud, viewpoint=None, up=(0, 0, 1)), 20).labels
+    assert not np.array_equal(seen, segment(cloud, 20).labels)  # (the orientation matters)

@@ -83,8 +83,9 @@ def add_scan_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seen-from", choices=tuple(AXES), default=None, metavar="AXIS",
                    help="point clouds of open surfaces (terrain, streets) without a "
                         "viewpoint: the side they were scanned from (x, y, z, -x, -y, -z); "
-                        "each piece's normals are turned to agree with it (default: z for "
-                        ".las/.laz, else outwards from each piece's mean)")
+                        "each piece's normals are turned to agree with it, a PCD's own "
+                        "VIEWPOINT set aside (default: z for .las/.laz, else outwards from "
+                        "each piece's mean)")
 
 
 def add_unit_options(p) -> None:
@@ -100,12 +101,16 @@ def add_unit_options(p) -> None:
 
 
 def scan_fields(args) -> dict:
-    """The cloud fields :func:`add_scan_options` set: ``viewpoint`` and ``up`` (tuples)."""
+    """The cloud fields :func:`add_scan_options` set: ``viewpoint`` and ``up`` (tuples).
+    ``--seen-from`` without ``--viewpoint`` sets the file's own viewpoint aside (a PCD's
+    ``VIEWPOINT``, often PCL's default origin, which a georeferenced scan lies far from):
+    the side named is the orientation asked for."""
     out = {}
     if getattr(args, "viewpoint", None) is not None:
         out["viewpoint"] = tuple(args.viewpoint)
     if getattr(args, "seen_from", None) is not None:
         out["up"] = AXES[args.seen_from]
+        out.setdefault("viewpoint", None)
     return out
 
 
