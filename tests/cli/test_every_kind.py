@@ -142,7 +142,8 @@ def test_seen_from_sets_a_pcds_own_viewpoint_aside(tmp_path, capsys):
     """A georeferenced PCD carries PCL's default VIEWPOINT (the origin, thousands of
     kilometres away): its normals faced it, and ``--seen-from z`` was ignored. Now the
     option sets the file's viewpoint aside: the labels are those of the cloud seen from
-    above, and without it the file's viewpoint still orients the normals."""
+    above; without it the file's viewpoint still orients the normals, and a note says
+    that it lies farther than the points spread (not for a camera's cloud)."""
     pypcd4 = pytest.importorskip("pypcd4")
     from dataclasses import replace
 
@@ -161,8 +162,15 @@ def test_seen_from_sets_a_pcds_own_viewpoint_aside(tmp_path, capsys):
     for extra, expect in ((["--seen-from", "z"], replace(cloud, viewpoint=None, up=(0, 0, 1))),
                           ([], cloud)):
         out = tmp_path / "t.seg"
-        assert main(["segment", str(path), "-k", "20", "-o", str(out), "-q", *extra]) == 0
+        capsys.readouterr()
+        assert main(["segment", str(path), "-k", "20", "-o", str(out), *extra]) == 0
         np.testing.assert_array_equal(np.loadtxt(out, dtype=np.int64),
                                       segment(expect, 20).labels)
+        # a viewpoint farther than the points spread is named, with what to give instead
+        assert ("--seen-from z" in capsys.readouterr().err) == (not extra)
+    near = pts - pts.min(axis=0) + [-20.0, -20.0, 0.5]  # (a camera's cloud: in front of it)
+    pypcd4.PointCloud.from_xyz_points(near.astype(np.float32)).save(path)
+    assert main(["segment", str(path), "-k", "20", "-o", str(tmp_path / "t.seg")]) == 0
+    assert "viewpoint" not in capsys.readouterr().err
     seen = segment(replace(cloud, viewpoint=None, up=(0, 0, 1)), 20).labels
     assert not np.array_equal(seen, segment(cloud, 20).labels)  # (the orientation matters)

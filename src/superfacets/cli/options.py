@@ -121,6 +121,7 @@ def scan_cloud(data, args):
 
     changes = scan_fields(args)
     if not changes:
+        _far_viewpoint_note(data, args)
         return data
     if hasattr(data, "faces"):
         from ..errors import ParameterError
@@ -128,6 +129,30 @@ def scan_cloud(data, args):
         raise ParameterError("--viewpoint and --seen-from orient point clouds; the input is "
                              "a mesh")
     return replace(data, **changes)
+
+
+def _far_viewpoint_note(data, args) -> None:
+    """A note on stderr where a cloud's own viewpoint (a PCD's ``VIEWPOINT``: PCL writes the
+    origin by default) lies farther from its points than their bounding box is wide: no
+    sensor sees that way, and the estimated normals face it (a georeferenced tile)."""
+    import sys
+
+    import numpy as np
+
+    vp = getattr(data, "viewpoint", None)
+    if vp is None or getattr(args, "quiet", False) or getattr(data, "normals", None) is not None:
+        return
+    pts = np.asarray(data.points, dtype=np.float64).reshape(-1, 3)
+    pts = pts[np.isfinite(pts).all(axis=1)]
+    if not pts.shape[0]:
+        return
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    far = float(np.linalg.norm(np.maximum(lo - vp, 0) + np.maximum(vp - hi, 0)))
+    if far > float(np.linalg.norm(hi - lo)):
+        where = ", ".join(f"{v:g}" for v in vp)
+        print(f"note: the file's viewpoint ({where}) lies {far:,.0f} units from the points, "
+              "farther than they spread: the estimated normals face it; for an airborne or "
+              "terrain tile give --seen-from z (or --viewpoint X,Y,Z)", file=sys.stderr)
 
 
 def up_of(args, data, path=None) -> tuple[str, str]:
