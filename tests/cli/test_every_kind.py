@@ -168,6 +168,12 @@ def test_seen_from_sets_a_pcds_own_viewpoint_aside(tmp_path, capsys):
                                       segment(expect, 20).labels)
         # a viewpoint farther than the points spread is named, with what to give instead
         assert ("--seen-from z" in capsys.readouterr().err) == (not extra)
+    # the pictures that segment take the option too (no note: the viewpoint set aside)
+    assert main(["html", str(path), "-k", "20", "--seen-from", "z", "-o",
+                 str(tmp_path / "t.html")]) == 0
+    assert "viewpoint" not in capsys.readouterr().err
+    assert main(["html", str(path), "-k", "20", "-o", str(tmp_path / "t.html")]) == 0
+    assert "--seen-from z" in capsys.readouterr().err
     near = pts - pts.min(axis=0) + [-20.0, -20.0, 0.5]  # (a camera's cloud: in front of it)
     pypcd4.PointCloud.from_xyz_points(near.astype(np.float32)).save(path)
     assert main(["segment", str(path), "-k", "20", "-o", str(tmp_path / "t.seg")]) == 0

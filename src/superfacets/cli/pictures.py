@@ -14,6 +14,7 @@ from .options import (
     add_camera_options,
     add_mesh_and_labels,
     add_method_options,
+    add_scan_options,
     check_output,
     float_arg,
     fmt_value,
@@ -21,6 +22,7 @@ from .options import (
     labels_for,
     read_usable,
     said_up,
+    scan_cloud,
     shows_stages,
     up_of,
 )
@@ -30,9 +32,12 @@ __all__ = ["add_parsers"]
 
 def _read(args, clouds: bool = False):
     """The command's mesh (or, with ``clouds``, any input: a mesh, a point cloud or a
-    tetrahedral mesh), read under a line naming it where reading takes long."""
+    tetrahedral mesh), read under a line naming it where reading takes long; a cloud to be
+    segmented here with ``--viewpoint`` / ``--seen-from`` applied (:func:`scan_cloud`)."""
     with waiting_bar(f"reading {Path(args.mesh).name}", shows_stages(args, path=args.mesh)):
-        return read_usable(args.mesh, clouds=clouds)
+        data = read_usable(args.mesh, clouds=clouds)
+    given = any(getattr(args, f, None) for f in ("labels", "labels_from", "plain"))
+    return scan_cloud(data, args) if clouds and not given else data
 
 
 def _drawn(data, labels, elements: str):
@@ -77,6 +82,7 @@ def add_parsers(sub) -> None:
                         "histogram) in the lower left corner")
     add_camera_options(r, "1200x900")
     add_method_options(r)
+    add_scan_options(r)
     r.set_defaults(func=cmd_render)
 
     pn = sub.add_parser(
@@ -129,6 +135,7 @@ def add_parsers(sub) -> None:
                    help="page background, a CSS colour (default: #ffffff)")
     add_camera_options(h, "")
     add_method_options(h)
+    add_scan_options(h)
     h.set_defaults(func=cmd_html)
 
 
