@@ -168,3 +168,53 @@ def test_a_meshs_tiles_read_their_boxes_once_from_the_tiles_files(monkeypatch, t
     again = segment_tiled((m.vertices, m.faces), 60, tiles=4, workdir=tmp_path)
     assert len(reads) == 12 and len(built) == 12
     np.testing.assert_array_equal(kept.labels, again.labels)
+
+
+@pytest.mark.parametrize("kind", ["points", "faces"])
+def test_a_tiles_weights_are_made_once_and_read_by_its_later_phases(monkeypatch, tmp_path,
+                                                                     kind):
+    """The adjacency weights do not depend on the radius: a tile's first phase that weighs
+    its graph (a cloud's refine round, a mesh's centers phase) keeps them beside it, and
+    its later phases (a second round, the labels phase) read them: each tile weighs once,
+    with the same labels as tiles that weigh in every phase."""
+    import trimesh
+
+    import superfacets.scale.tiles.phases as phases
+
+    if kind == "points":
+        data, k = _bumpy_cloud(20000), 60
+    else:
+        ball = trimesh.creation.icosphere(subdivisions=5)
+        data, k = (ball.vertices, ball.faces), 60
+    made, real = [], phases.tile_weights
+
+    def counted(folder, key, make):
+        return real(folder, key, lambda: made.append(folder.name) or make())
+
+    monkeypatch.setattr(phases, "tile_weights", counted)
+    kept = segment_tiled(data, k, tiles=4, refine=2, workdir=tmp_path)
+    assert len(made) == 4 and len(set(made)) == 4  # one weighing a tile, of 3 or 4 phases
+    monkeypatch.setattr(phases, "tile_weights", lambda folder, key, make: make())
+    again = segment_tiled(data, k, tiles=4, refine=2, workdir=tmp_path)
+    np.testing.assert_array_equal(kept.labels, again.labels)
+
+
+def test_kept_weights_of_another_weighting_are_made_again_and_a_changed_file_refused(
+        tmp_path):
+    """Weights kept under another key (another alpha, colour floor, graph) are not read:
+    made again, and they replace them; a weights file changed since it was written is
+    refused in one line (the kernels trust the weights they are given)."""
+    from superfacets.errors import SuperfacetsError
+    from superfacets.scale.tiles.graphs import tile_weights
+
+    w = np.random.default_rng(1).random(50).astype(np.float32)
+    assert tile_weights(tmp_path, {"alpha": 200.0}, lambda: w) is w
+    read = tile_weights(tmp_path, {"alpha": 200.0}, lambda: pytest.fail("made again"))
+    assert read.dtype == w.dtype and np.array_equal(read, w)
+    other = tile_weights(tmp_path, {"alpha": 100.0}, lambda: 2 * w)
+    assert np.array_equal(tile_weights(tmp_path, {"alpha": 100.0}, lambda: w), other)
+    changed = np.load(tmp_path / "weights.npy")
+    changed[7] += 1
+    np.save(tmp_path / "weights.npy", changed)
+    with pytest.raises(SuperfacetsError, match="changed since this run wrote it"):
+        tile_weights(tmp_path, {"alpha": 100.0}, lambda: w)

@@ -211,7 +211,8 @@ class Hooks:
 
 def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
              jump_cycles: bool = True, n_centers: int | None = None,
-             initial: np.ndarray | None = None, finished: bool = True) -> RunRecord:
+             initial: np.ndarray | None = None, finished: bool = True,
+             weights=None) -> RunRecord:
     """Run the method with validated parameters, stage by stage (see the module notes).
 
     Parameters
@@ -237,6 +238,10 @@ def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
         False: the last pass's labels and centers (those that kept an element), without
         the finishing stages (connectivity, clean-up, merges): a tile's centers and refine
         phases, which keep only centers, the labels phase finishing once.
+    weights : callable, optional
+        Where the adjacency weights may have been kept by an earlier run on the same graph
+        (a tile's phases: :func:`superfacets.scale.tiles.graphs.tile_weights`): as
+        :func:`~superfacets.method.stages.weigh`'s ``kept``.
 
     Returns
     -------
@@ -258,11 +263,12 @@ def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
 
     with using(params.n_threads):  # also the graph build and terms this run triggers
         return _run(mesh, params, features, replay=replay, jump_cycles=jump_cycles,
-                    n_centers=n_centers, initial=initial, finished=finished)
+                    n_centers=n_centers, initial=initial, finished=finished, weights=weights)
 
 
 def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
-         n_centers: int | None = None, initial=None, finished: bool = True) -> RunRecord:
+         n_centers: int | None = None, initial=None, finished: bool = True,
+         weights=None) -> RunRecord:
     t_start = time.perf_counter()
     hooks = Hooks(p.progress, p.max_iter, kind_for(obj, p.elements))
     try:
@@ -281,7 +287,7 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
         give_back_free_memory()  # stage: the next stages fault the pages in again)
     try:
         with hooks.stage("weights", "weights"):
-            w, swap_w = weigh(graph, rules, feats, hooks)
+            w, swap_w = weigh(graph, rules, feats, hooks, kept=weights)
         with hooks.stage("init"):  # (the coarse start may let the weights go: held)
             held = held_weights(graph, rules, w, feats, initial) if hooks.trim else w
             del w

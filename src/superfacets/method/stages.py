@@ -388,7 +388,7 @@ def resolve_rules(graph, p: SegmentParams, *, n_centers: int | None = None,
                  feature_floor=feature_floor)
 
 
-def weigh(graph, rules: Rules, features=None, hooks=None
+def weigh(graph, rules: Rules, features=None, hooks=None, kept=None
           ) -> tuple[np.ndarray, np.ndarray | None]:
     """Stage 3: the weight of each adjacency, per CSR entry (paper eqs. 1-3, or
     Shlafman's eq. 6; with ``beta``, the feature term), and the swap energies'
@@ -417,6 +417,13 @@ def weigh(graph, rules: Rules, features=None, hooks=None
     hooks : Hooks, optional
         The run's :class:`~superfacets.method.pipeline.Hooks` (None: nothing is
         forgotten).
+    kept : callable, optional
+        ``kept(made, weighting) -> (2 e,) ndarray``: the weights of an earlier run on the
+        same graph with the same ``weighting`` (a dict of what they depend on: the
+        weighting's parameters, the colour floor, the dtype, the number of entries), where
+        it kept them, else ``made()`` (the weights made here, a function of no argument):
+        a tile's phases weigh its graph once (:func:`superfacets.scale.tiles.graphs.
+        tile_weights`). The swap energies' weights are made from them.
 
     Raises
     ------
@@ -437,18 +444,25 @@ def weigh(graph, rules: Rules, features=None, hooks=None
     if rules.cleanup:
         graph.terms  # noqa: B018 (kept for the clean-up; else computed chunk by chunk)
     dtype = weight_dtype(rules.kind, p.paper)
-    if _per_entry(graph, rules):
-        # points, vertices: from the CSR layout, positions and normals (the same values)
-        w = csr_point_weights(graph, alpha=p.alpha, eta_convex=p.eta_convex, dtype=dtype,
-                              features=features, beta=p.beta, floor=rules.feature_floor)
-    else:
+
+    def made() -> np.ndarray:
+        if _per_entry(graph, rules):
+            # points, vertices: from the CSR layout, positions and normals (the same values)
+            return csr_point_weights(graph, alpha=p.alpha, eta_convex=p.eta_convex,
+                                     dtype=dtype, features=features, beta=p.beta,
+                                     floor=rules.feature_floor)
         w_pairs = edge_weights(graph, p.weighting, alpha=p.alpha, eta_convex=p.eta_convex,
                                features=features, beta=p.beta, floor=rules.feature_floor,
                                dtype=dtype)
         if hooks is not None:
             hooks.before("weight layout")
-        w = csr_weights(graph, w_pairs, dtype)
-        del w_pairs  # the coarsening reads the same values from ``w``
+        return csr_weights(graph, w_pairs, dtype)  # (the coarsening reads the same values)
+
+    w = made() if kept is None else kept(made, {
+        "weighting": p.weighting, "alpha": float(p.alpha), "eta_convex": float(p.eta_convex),
+        "beta": float(p.beta), "floor": float(rules.feature_floor), "paper": bool(p.paper),
+        "dtype": np.dtype(dtype).name, "entries": int(np.asarray(graph.indices).shape[0]),
+        "colours": features is not None})
     swap_w = None
     if rules.split_merge:  # the swap energies' weights (on faces: convex folds count half)
         swap_w = convex_scaled(graph, w, alpha=p.alpha, eta_convex=p.eta_convex,

@@ -6,8 +6,10 @@ points in 16 tiles, 49 of the run's 101 s. Where the tasks share a work folder, 
 first phase of a tile writes its graph there (the arrays :func:`~superfacets.elements.
 points.point_graph` builds: positions, sizes, normals, the CSR adjacency, the element of
 each row; about 110 bytes per point of the box) and the later phases read it back: the
-same arrays, so the same labels. A mesh's tiles keep their face graphs' topology beside
-their boxes (:func:`tile_face_graph`).
+same arrays, so the same labels. The adjacency weights the passes read (paper eqs. 1-3)
+do not depend on the run's radius: the first phase that weighs a tile's graph keeps them
+beside it (:func:`tile_weights`), and the labels phase reads them, not weighs again. A
+mesh's tiles keep their face graphs' topology beside their boxes (:func:`tile_face_graph`).
 """
 
 from __future__ import annotations
@@ -28,12 +30,13 @@ from ...elements.points import point_elements
 from ...io.files import array_digest, load_checked
 
 __all__ = ["GRAPH_FILES", "FACE_FILES", "BYTES_PER_POINT", "graph_folder", "drop_graphs",
-           "tile_graph", "tile_face_graph", "room_for_graphs"]
+           "tile_graph", "tile_weights", "tile_face_graph", "room_for_graphs"]
 
 #: The arrays a tile's graph is saved as, one ``.npy`` file each.
 GRAPH_FILES = ("positions", "sizes", "normals", "indptr", "indices", "index")
-#: Disk per point of a box (positions 24, size 8, normal 12, adjacency about 60, row 4).
-BYTES_PER_POINT = 110
+#: Disk per point of a box (positions 24, size 8, normal 12, adjacency about 60, row 4,
+#: the adjacency's weights about 55).
+BYTES_PER_POINT = 165
 #: The arrays of a mesh tile's face graph topology (:class:`~superfacets.elements.faces.
 #: FaceAdjacency`), one ``.npy`` file each; about 60 bytes a face.
 FACE_FILES = ("pairs", "edges", "indptr", "indices", "dual_edge", "boundary_edges",
@@ -129,6 +132,65 @@ def tile_graph(cloud, folder, n_neighbors: int) -> str:
         positions=g.positions, sizes=g.sizes, normals=g.normals, indptr=g.indptr,
         indices=g.indices, index=el.index), {"pair_dtype": np.dtype(pair_dtype).name})
     return "built"
+
+
+def tile_weights(folder, key: dict, weigh) -> np.ndarray:
+    """A tile's adjacency weights (one per CSR entry of its point graph), read from
+    ``folder`` where an earlier phase saved them with the same ``key``, else made by
+    ``weigh()`` and saved there.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike or None
+        The tile's graph folder (:func:`tile_graph`); None: made, not saved.
+    key : dict
+        What the weights depend on, JSON values (the weighting's parameters, the colour
+        floor, the dtype, the number of entries): weights saved under another key are made
+        again (and replace them).
+    weigh : callable
+        ``weigh() -> (2 e,) ndarray``: the weights made (:func:`superfacets.method.stages.
+        weigh`).
+
+    Returns
+    -------
+    (2 e,) ndarray
+        The same values ``weigh()`` gives, to the bit.
+
+    Raises
+    ------
+    SuperfacetsError
+        If the saved weights changed since they were written.
+    OSError
+        If the folder cannot be written or read.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     made = tile_weights(tmp, {"alpha": 1}, lambda: np.arange(4.0))
+    ...     read = tile_weights(tmp, {"alpha": 1}, lambda: 1 / 0)  # (read: never made)
+    ...     print(read.tolist(), tile_weights(tmp, {"alpha": 2}, lambda: np.ones(2)).tolist())
+    [0.0, 1.0, 2.0, 3.0] [1.0, 1.0]
+    """
+
+    if folder is None:
+        return weigh()
+    folder = Path(folder)
+    done = folder / "weights.json"
+    if done.is_file():
+        meta = json.loads(done.read_text(encoding="utf-8"))
+        if meta.get("key") == key:
+            return load_checked(folder / "weights.npy", meta.get("digest"))
+        done.unlink()  # (other weights: never read against the new file's digest)
+    w = weigh()
+    folder.mkdir(parents=True, exist_ok=True)
+    part = folder / "weights.part.npy"
+    np.save(part, w)
+    os.replace(part, folder / "weights.npy")  # (then its description: whole or unread)
+    (folder / "weights.part.json").write_text(
+        json.dumps({"key": key, "digest": array_digest(w)}), encoding="utf-8")
+    os.replace(folder / "weights.part.json", done)
+    return w
 
 
 def tile_face_graph(mesh, folder) -> str:

@@ -62,6 +62,7 @@ from ...method.params import DEFAULTS, SegmentParams, superfacet_measure
 from ...method.passes import final_centers
 from ...method.pipeline import pipeline
 from ...method.stages import build_graph, resolve_features, resolve_rules, weigh
+from .graphs import tile_weights
 from .layout import gathered_centers
 from .merges import one_position_stats, tile_merge_stats
 
@@ -145,7 +146,7 @@ def _tile_params(params: SegmentParams, r: float, diagonal: float, tile_diagonal
 
 
 def tile_centers(inp, core: np.ndarray, params: SegmentParams, r: float, diagonal: float,
-                 features=None) -> tuple[np.ndarray, object]:
+                 features=None, folder=None) -> tuple[np.ndarray, object]:
     """Phase 1: the method on one tile and its halo; the centers in its core.
 
     Parameters
@@ -161,6 +162,9 @@ def tile_centers(inp, core: np.ndarray, params: SegmentParams, r: float, diagona
     diagonal : float
         The whole input's bounding-box diagonal (for ``neighbor_radius``).
     features : (n_rows, d) float ndarray, optional
+    folder : str or os.PathLike, optional
+        The tile's folder of kept arrays, where its adjacency weights are kept for its
+        later phases (:func:`~superfacets.scale.tiles.graphs.tile_weights`).
 
     Returns
     -------
@@ -174,7 +178,8 @@ def tile_centers(inp, core: np.ndarray, params: SegmentParams, r: float, diagona
         return np.flatnonzero(core & _valid_rows(inp))[:1], None
     p = _tile_params(params, r, diagonal, d)
     n = _core_share(inp, core, p, r) if p.init == "farthest" else None
-    result = pipeline(inp, p, features=features, n_centers=n, finished=False)
+    result = pipeline(inp, p, features=features, n_centers=n, finished=False,
+                      weights=None if folder is None else kept_weights(folder))
     rows = np.asarray(result.centers, dtype=np.int64)
     return rows[core[rows]], result
 
@@ -273,14 +278,16 @@ def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: Segm
 
 
 def tile_refine(inp, core: np.ndarray, center_rows: np.ndarray, params: SegmentParams,
-                r: float, diagonal: float, features=None) -> np.ndarray:
+                r: float, diagonal: float, features=None, folder=None) -> np.ndarray:
     """Phase 1b: the method's passes on one tile from the run's centers within reach;
     the rows of the centers that end in the core.
 
     The centers near a tile border came from two tiles' runs, each beside an
     artificial boundary (its halo's edge); from the gathered centers, every
     tile sees the true neighbours of its border centers, and the passes
-    (and swaps, with the default method) settle them again.
+    (and swaps, with the default method) settle them again. ``folder``: the tile's
+    graph folder, where its adjacency weights are kept for the later phases
+    (:func:`~superfacets.scale.tiles.graphs.tile_weights`; None: not kept).
     """
     d = _diagonal(inp)
     if d <= 0 or len(center_rows) == 0:
@@ -291,9 +298,17 @@ def tile_refine(inp, core: np.ndarray, center_rows: np.ndarray, params: SegmentP
     elem = src.to_rows(np.arange(src.graph.n_elements))[np.asarray(center_rows, np.int64)]
     elem = elem[elem >= 0]
     _, first = np.unique(elem, return_index=True)
-    result = pipeline(inp, p, features=features, initial=elem[np.sort(first)], finished=False)
+    result = pipeline(inp, p, features=features, initial=elem[np.sort(first)], finished=False,
+                      weights=None if folder is None else kept_weights(folder))
     rows = np.asarray(result.centers, dtype=np.int64)
     return rows[core[rows]]
+
+
+def kept_weights(folder):
+    """The ``kept`` of :func:`superfacets.method.stages.weigh` for a tile's graph: its
+    weights read from the tile's graph ``folder`` where an earlier phase weighed it alike,
+    else made and saved there (:func:`~superfacets.scale.tiles.graphs.tile_weights`)."""
+    return lambda made, weighting: tile_weights(folder, weighting, made)
 
 
 def orientation_reference(sample: np.ndarray, n_neighbors: int, up=None) -> tuple:
@@ -391,7 +406,7 @@ def _core_share(inp, core: np.ndarray, p: SegmentParams, r: float) -> int:
 
 
 def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
-                diagonal: float, features=None, merging: tuple | None = None):
+                diagonal: float, features=None, merging: tuple | None = None, folder=None):
     """Phase 2: labels of one tile from fixed centers (and, ``merging``, the sums the
     merges to the count read: :func:`superfacets.scale.tiles.merges.tile_merge_stats`).
 
@@ -408,6 +423,9 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
         ``(core, rows, n_noise)``: the rows of the tile's core ((n_rows,) bool), the row
         of each in the input ((n_rows,) int64), and the core points to read the noise
         on.
+    folder : str or os.PathLike, optional
+        The tile's graph folder, where its refine round kept its adjacency weights
+        (:func:`tile_refine`): read, not made again (the same values).
 
     Returns
     -------
@@ -433,7 +451,8 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
     src, graph, p = build_graph(inp, _tile_params(params, r, diagonal, d), features)
     p, feats, floor = resolve_features(src, graph, p, features)
     rules = resolve_rules(graph, p, r=r, feature_floor=floor)
-    w, _ = weigh(graph, replace(rules, split_merge=False), feats)
+    w, _ = weigh(graph, replace(rules, split_merge=False), feats,
+                 kept=None if folder is None else kept_weights(folder))
     m = graph.n_elements
     of_row = src.to_rows(np.arange(m))
     elem = of_row[np.asarray(center_rows, dtype=np.int64)]

@@ -78,8 +78,8 @@ def tile_task(task: dict) -> dict:
         spread = bool((high > low).any())
         graph_area = task.get("graph_area", False) and spread
         if task.get("graphs") and (task["phase"] != "areas" or graph_area) and spread:
-            tile_graph(inp, Path(task["graphs"]) / f"tile-{task['tile']}",
-                       task["params"].n_neighbors)  # built once, read by the later phases
+            # (built once, read by the later phases)
+            tile_graph(inp, _graph_folder(task, inp), task["params"].n_neighbors)
         elif task.get("boxes") and isinstance(inp, Mesh) and _face_elements(task["params"]):
             tile_face_graph(inp, Path(task["boxes"]) / f"faces-{task['tile']}")
         p, r, d = task["params"], task["r"], task["diagonal"]
@@ -101,7 +101,8 @@ def tile_task(task: dict) -> dict:
                        moved_labels=fixed[moved] if moved.size else rows[:0])
         elif task["phase"] == "centers":  # (with refine rounds to come: the start, one pass)
             found, _ = tile_centers(inp, core, replace(p, max_iter=task.get("passes")
-                                                       or p.max_iter), r, d)
+                                                       or p.max_iter), r, d,
+                                    folder=_graph_folder(task, inp))
             out.update(centers=rows[found], positions=pos[found])
         else:
             want = np.asarray(task["centers"], dtype=np.int64)
@@ -109,7 +110,8 @@ def tile_task(task: dict) -> dict:
             ok = at < rows.size
             ok[ok] = rows[at[ok]] == want[ok]
             if task["phase"] == "refine":
-                found = phases.tile_refine(inp, core, at[ok], p, r, d)
+                found = phases.tile_refine(inp, core, at[ok], p, r, d,
+                                           folder=_graph_folder(task, inp))
                 out.update(centers=rows[found], positions=pos[found])
             else:
                 _labelled(task, out, (rows, pos, inp, core), at[ok])
@@ -148,11 +150,12 @@ def _labelled(task: dict, out: dict, box: tuple, centers: np.ndarray) -> None:
 
     rows, pos, inp, core = box
     p, r, d = task["params"], task["r"], task["diagonal"]
+    folder = _graph_folder(task, inp)
     if task.get("n_noise") is not None:  # the merges to the count follow
         named, out["merge_stats"] = tile_labels(
-            inp, centers, p, r, d, merging=(core, rows, task["n_noise"]))
+            inp, centers, p, r, d, merging=(core, rows, task["n_noise"]), folder=folder)
     else:
-        named = tile_labels(inp, centers, p, r, d)
+        named = tile_labels(inp, centers, p, r, d, folder=folder)
     gid = np.where(named >= 0, rows[np.maximum(named, 0)], -1)
     lo_c, hi_c = task["layout"].box(task["tile"])
     near = ~core & ((pos >= lo_c - task["ring"]) & (pos <= hi_c + task["ring"])).all(1)
@@ -160,6 +163,16 @@ def _labelled(task: dict, out: dict, box: tuple, centers: np.ndarray) -> None:
                ring_labels=gid[near])
     if task.get("box_rows", True):  # for the connect phase, unless read from a file
         out["box_rows"] = rows
+
+
+def _graph_folder(task: dict, inp) -> Path | None:
+    """The tile's folder of kept arrays (its point graph or face graph's topology, and its
+    weights), or None where the run keeps none."""
+    if task.get("graphs"):
+        return Path(task["graphs"]) / f"tile-{task['tile']}"
+    if task.get("boxes") and isinstance(inp, Mesh) and _face_elements(task["params"]):
+        return Path(task["boxes"]) / f"faces-{task['tile']}"
+    return None
 
 
 def _framed(task: dict, layout, inp):
