@@ -36,7 +36,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..._runtime.arrays import ranked, real_rows, row_table
+from ..._runtime.arrays import real_rows, row_table
 from ...elements.kinds import kind_of
 from ...elements.labels import check_labels
 from ...errors import ParameterError
@@ -108,11 +108,14 @@ def tile_merge_stats(graph, labels: np.ndarray, names: np.ndarray, core: np.ndar
                                dtype=np.int64)
     names = np.asarray(names, dtype=np.int64)
     at = np.flatnonzero(core)
-    used, local = ranked(lab[at], names.size)
-    k = used.size
-    nodes = point_sums(local, k, np.asarray(graph.positions, dtype=np.float64)[at],
-                       real_rows(graph.normals)[at], np.asarray(graph.sizes)[at],
-                       None if features is None else features[at])
+    # summed over the whole box with the elements outside the core under one more label
+    # (dropped): the core's sums, added in the elements' order as over the core alone,
+    # without a copy of the core's positions, normals and sizes
+    out = names.size
+    nodes = point_sums(np.where(core, lab, out), out + 1, graph.positions,
+                       real_rows(graph.normals), graph.sizes, features)
+    used = np.flatnonzero(nodes["count"][:out] > 0)
+    nodes = {f: v[used] for f, v in nodes.items()}
 
     edges = _inner_sums(graph, lab, core, names)
     # an adjacency with an end outside the core: that end's label is another tile's, and
