@@ -192,6 +192,71 @@ def test_exact_assignment_updated_pass_by_pass_equals_a_fresh_search(monkeypatch
     assert 80 < sum(updated) and len(updated) <= 120 - 8  # not where the arrays changed
 
 
+def test_exact_assignment_resumed_from_another_list_equals_a_fresh_search():
+    """A classifier resumed from another classifier's result (a tile's labels phase from
+    its refine round's last pass): the next search gives the fresh search's labels and
+    distances bit for bit, with real ties (weights in eighths), where the shared centers
+    keep their order (only the others' cells searched again) and where they do not (a
+    fresh search)."""
+    import superfacets.method.classify as classify_module
+    from superfacets.elements.builders import elements_of
+
+    g = elements_of(grid_mesh(20, 20), "vertices").graph
+    m = g.n_elements
+    rng = np.random.default_rng(11)
+    cw = (rng.integers(1, 5, g.n_edges) / 8.0)[g.dual_edge]
+    incremental = 0
+    for trial in range(12):
+        before = np.sort(rng.choice(m, 30, replace=False))
+        centers = np.empty(m + 1, np.int64)
+        centers[:30] = before
+        k, dist, label = _exact(g, cw, centers, 30)
+        after = np.sort(np.r_[np.delete(before, rng.choice(30, 4, replace=False)),
+                              rng.choice(np.setdiff1d(np.arange(m), before), 3, replace=False)])
+        if trial % 4 == 3:  # the shared centers in another order: searched afresh
+            after = after[::-1].copy()
+        fresh = np.empty(m + 1, np.int64)
+        fresh[:after.size] = after
+        k0, d0, l0 = _exact(g, cw, fresh.copy(), after.size)
+        resumed = Exact(g, cw, np.inf, Workspaces(m, cw, 1))
+        resumed.resume(centers[:k], dist, label)
+        kernel = classify_module.reclassify_exact
+        outcome = []
+        classify_module.reclassify_exact = lambda *a: outcome.append(kernel(*a)) or outcome[-1]
+        try:
+            k1 = resumed.classify(fresh, after.size, dist, label)[0]
+        finally:
+            classify_module.reclassify_exact = kernel
+        assert k1 == k0
+        np.testing.assert_array_equal(label, l0)
+        np.testing.assert_array_equal(dist, d0)
+        incremental += outcome[0] >= 0
+        assert (outcome[0] >= 0) == (trial % 4 != 3)
+    assert incremental == 9
+
+
+def test_passes_listed_by_a_key_give_the_same_superfacets_their_list_in_its_order():
+    """``order`` (a tile's refine round: centers listed by row) changes only the list's
+    order: on a cloud without ties the same superfacets pass by pass, the same passes,
+    and the last classification's centers listed by the key."""
+    from superfacets.inputs.cloud import PointCloud
+
+    rng = np.random.default_rng(2)
+    xy = rng.random((6000, 2))
+    cloud = PointCloud(np.c_[xy, 0.05 * np.sin(6 * xy[:, 0])])
+    p = resolve(n_segments=40, merge_from=1)
+    plain = pipeline(cloud, p, finished=False, order=None)
+    key = rng.permutation(cloud.points.shape[0]).astype(np.int64)  # any distinct key
+    ordered = pipeline(cloud, p, finished=False, order=key)
+    label, centers, dist = ordered.classification
+    assert (np.diff(key[centers]) > 0).all()
+    assert ordered.n_iter == plain.n_iter and ordered.timings["settled"] == \
+        plain.timings["settled"]
+    l0, c0, d0 = plain.classification
+    np.testing.assert_array_equal(centers[label], c0[l0])  # each element's center
+    np.testing.assert_array_equal(dist, d0)
+
+
 def test_bounded_expansion_is_dijkstra_inside_the_window(sphere):
     g = face_graph(sphere)
     w = paper_weights(sphere, alpha=200)

@@ -170,51 +170,60 @@ def test_a_meshs_tiles_read_their_boxes_once_from_the_tiles_files(monkeypatch, t
     np.testing.assert_array_equal(kept.labels, again.labels)
 
 
-@pytest.mark.parametrize("kind", ["points", "faces"])
-def test_a_tiles_weights_are_made_once_and_read_by_its_later_phases(monkeypatch, tmp_path,
-                                                                     kind):
-    """The adjacency weights do not depend on the radius: a tile's first phase that weighs
-    its graph (a cloud's refine round, a mesh's centers phase) keeps them beside it, and
-    its later phases (a second round, the labels phase) read them: each tile weighs once,
-    with the same labels as tiles that weigh in every phase."""
-    import trimesh
-
+def test_a_clouds_labels_phase_starts_from_its_refine_rounds_last_classification(
+        monkeypatch, tmp_path):
+    """The refine round lists its centers by row, as the labels phase lists the run's, and
+    keeps its last classification beside the tile's graph: the labels phase searches
+    again only the cells of the centers that differ (every tile's search incremental),
+    with the same labels as tiles that classify from nothing."""
+    import superfacets.method.classify as classify_module
     import superfacets.scale.tiles.phases as phases
 
-    if kind == "points":
-        data, k = _bumpy_cloud(20000), 60
-    else:
-        ball = trimesh.creation.icosphere(subdivisions=5)
-        data, k = (ball.vertices, ball.faces), 60
-    made, real = [], phases.tile_weights
+    cloud = _bumpy_cloud(20000)
+    kernel, outcomes = classify_module.reclassify_exact, []
+    labels_phase, real_labels = [], phases.tile_labels
 
-    def counted(folder, key, make):
-        return real(folder, key, lambda: made.append(folder.name) or make())
+    def counted(*a):
+        out = kernel(*a)
+        if labels_phase:
+            outcomes.append(out)
+        return out
 
-    monkeypatch.setattr(phases, "tile_weights", counted)
-    kept = segment_tiled(data, k, tiles=4, refine=2, workdir=tmp_path)
-    assert len(made) == 4 and len(set(made)) == 4  # one weighing a tile, of 3 or 4 phases
-    monkeypatch.setattr(phases, "tile_weights", lambda folder, key, make: make())
-    again = segment_tiled(data, k, tiles=4, refine=2, workdir=tmp_path)
-    np.testing.assert_array_equal(kept.labels, again.labels)
+    def labelling(*a, **kw):
+        labels_phase.append(1)
+        try:
+            return real_labels(*a, **kw)
+        finally:
+            labels_phase.pop()
+
+    monkeypatch.setattr(classify_module, "reclassify_exact", counted)
+    monkeypatch.setattr(phases, "tile_labels", labelling)
+    import superfacets.scale.tiles.task as rt
+
+    monkeypatch.setattr(rt, "tile_labels", labelling)
+    resumed = segment_tiled(cloud, 60, tiles=4, workdir=tmp_path)
+    assert len(outcomes) == 4 and min(outcomes) >= 0  # each tile: only the cells that differ
+    monkeypatch.setattr(phases, "kept_classification", lambda *a: None)
+    outcomes.clear()
+    fresh = segment_tiled(cloud, 60, tiles=4, workdir=tmp_path)
+    assert outcomes == []
+    np.testing.assert_array_equal(resumed.labels, fresh.labels)
 
 
-def test_kept_weights_of_another_weighting_are_made_again_and_a_changed_file_refused(
-        tmp_path):
-    """Weights kept under another key (another alpha, colour floor, graph) are not read:
-    made again, and they replace them; a weights file changed since it was written is
-    refused in one line (the kernels trust the weights they are given)."""
+def test_a_kept_classification_changed_since_written_is_refused(tmp_path):
+    """The labels phase's search trusts the kept labels and distances: a file changed
+    since the refine round wrote it is refused in one line; one of another graph is not
+    read."""
     from superfacets.errors import SuperfacetsError
-    from superfacets.scale.tiles.graphs import tile_weights
+    from superfacets.scale.tiles.graphs import keep_classification, kept_classification
 
-    w = np.random.default_rng(1).random(50).astype(np.float32)
-    assert tile_weights(tmp_path, {"alpha": 200.0}, lambda: w) is w
-    read = tile_weights(tmp_path, {"alpha": 200.0}, lambda: pytest.fail("made again"))
-    assert read.dtype == w.dtype and np.array_equal(read, w)
-    other = tile_weights(tmp_path, {"alpha": 100.0}, lambda: 2 * w)
-    assert np.array_equal(tile_weights(tmp_path, {"alpha": 100.0}, lambda: w), other)
-    changed = np.load(tmp_path / "weights.npy")
-    changed[7] += 1
-    np.save(tmp_path / "weights.npy", changed)
+    label = np.arange(10, dtype=np.int32) % 3
+    keep_classification(tmp_path, label, np.array([0, 4, 8]), np.linspace(0, 1, 10))
+    assert kept_classification(tmp_path, 11) is None
+    got = kept_classification(tmp_path, 10)
+    assert got[0].dtype == np.int32 and np.array_equal(got[0], label)
+    changed = np.load(tmp_path / "classification-label.npy")
+    changed[5] = 2**30
+    np.save(tmp_path / "classification-label.npy", changed)
     with pytest.raises(SuperfacetsError, match="changed since this run wrote it"):
-        tile_weights(tmp_path, {"alpha": 100.0}, lambda: w)
+        kept_classification(tmp_path, 10)

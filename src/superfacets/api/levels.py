@@ -90,7 +90,7 @@ def _one_run(obj, n_segments, *, features=None, **options):
     module for ``adaptive=``, so this module runs the pipeline itself)."""
 
     run = pipeline.pipeline(obj, resolve(n_segments=n_segments, **options), features=features)
-    return SegmentationResult(**run._asdict())
+    return SegmentationResult(**run.result_fields())
 
 
 def adaptive_segment(obj, n_segments: int, *, start: int = START,

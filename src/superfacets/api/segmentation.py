@@ -338,7 +338,7 @@ def segment(data=_NO_INPUT, n_segments: int | None = _D.n_segments, *, features=
     if extent_weight is not None:
         raise ParameterError("extent_weight is a term of the adaptive level: give adaptive=")
     run = pipeline(data, resolve(n_segments=n_segments, **params), features=features)
-    return SegmentationResult(**run._asdict())
+    return SegmentationResult(**run.result_fields())
 
 
 def _adaptive(obj, n_segments, adaptive, extent_weight, **options):

@@ -138,6 +138,17 @@ class Exact(Classifier):
         self.first = np.full(self.m, -1, dtype=np.int32 if self.m < 2**31 - 1 else np.int64)
         self.mark = np.zeros(self.m, dtype=np.bool_)
 
+    def resume(self, centers: np.ndarray, dist: np.ndarray, label: np.ndarray) -> None:
+        """Start from an earlier classification of the same graph and weights: ``label``
+        and ``dist`` as :meth:`classify` left them for the list ``centers`` (elements, in
+        its order). The next :meth:`classify` given these two arrays searches again only
+        the cells of the centers its list does not share (the same labels and distances as
+        a fresh search, bit for bit); where the shared centers are not in the same order
+        in both lists, it searches afresh. (A tiled run's labels phase, from its refine
+        round's last pass: :mod:`superfacets.scale.tiles.phases`.)"""
+        self.prev = np.ascontiguousarray(centers, dtype=np.int64)
+        self.dist, self.label = dist, label
+
     def _pool(self, cap: int) -> None:
         itype = np.int32 if self.m < 2**31 - 1 else np.int64
         self.queue = (np.empty(cap, dtype=itype), np.empty(cap),

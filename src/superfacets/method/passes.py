@@ -92,6 +92,8 @@ class Iteration:
         True when the ``tol`` rule ended the run.
     settled : int
         Centers held where a cycle moved them (``settle=True``; 0 otherwise).
+    dist : (n,) float64 ndarray or None
+        Each element's distance to its center in the last classification (:func:`iterate`).
     """
 
     label: np.ndarray
@@ -105,6 +107,7 @@ class Iteration:
     changed: float = -1.0
     stopped_by_tol: bool = False
     settled: int = 0
+    dist: np.ndarray | None = None
 
 
 def passes_done(bar, n_iter: int, max_iter: int, k_now: int, n_moved: int, changed: float,
@@ -149,7 +152,7 @@ def _left(history: list, column: int, target: float) -> int:
 def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
             positions: np.ndarray, max_iter: int, *, jump_cycles: bool = True,
             tol: float = 0.0, min_move: float = 0.0, bar=None,
-            settle: bool = False) -> Iteration:
+            settle: bool = False, order: np.ndarray | None = None) -> Iteration:
     """Alternate classification and center update (paper section 3.1).
 
     Parameters
@@ -178,6 +181,13 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
     settle : bool, default False
         On a cycle of center lists, settle it (see the module notes) instead of
         jumping over it.
+    order : (n,) int64 ndarray, optional
+        A distinct key per element (a tile's: each element's row in the input): the
+        centers of each pass listed by it, not by the superfacet they came from, so that
+        the last classification's list is in that order (and its ties broken by it) where
+        no orphan was seeded in it (a tiled run's labels phase resumes from it:
+        :mod:`superfacets.scale.tiles.phases`). The same superfacets where no two centers
+        reach an element at exactly the same distance.
 
     Returns
     -------
@@ -252,14 +262,21 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
         keep = moved >= 0
         alive = moved[keep]
         n_centers = alive.shape[0]
+        slot = np.cumsum(keep) - 1  # (the place of each surviving superfacet in the list)
+        if order is not None:
+            by_key = np.argsort(order[alive], kind="stable")
+            alive = alive[by_key]
+            place = np.empty(n_centers, dtype=np.int64)
+            place[by_key] = np.arange(n_centers)
+            slot = place[np.maximum(slot, 0)]
         centers[:n_centers] = alive
         if settle:
-            recent.compact(keep)
+            recent.compact(keep, None if order is None else by_key)
         if tol > 0:  # superfacet s is number remap[s] in the next pass (-1: it died)
-            remap = np.where(keep, np.cumsum(keep) - 1, -1).astype(np.int32)
+            remap = np.where(keep, slot, -1).astype(np.int32)
             # (into the previous pass's array: one array of labels, not two at a time)
             prev = gather(remap, label, out=prev)
-    return Iteration(label=label, centers=used, n_iter=n_iter, converged=converged,
+    return Iteration(label=label, centers=used, n_iter=n_iter, converged=converged, dist=dist,
                      n_orphan_seeds=n_orphans, n_passes=n_passes, cycle_period=period,
                      expansions=n_expanded, changed=changed, stopped_by_tol=by_tol,
                      settled=int(held.sum()) if settle else 0)
@@ -284,8 +301,10 @@ class _Recent:
         self.rows[:k, self.at % RECENT] = used
         self.at += 1
 
-    def compact(self, keep: np.ndarray) -> None:
+    def compact(self, keep: np.ndarray, by_key: np.ndarray | None = None) -> None:
         self.rows = self.rows[:keep.shape[0]][keep]
+        if by_key is not None:  # (the list put in order: each history follows its center)
+            self.rows = self.rows[by_key]
 
 
 #: Past centers of a superfacet a return to which holds it (:class:`_Recent`).

@@ -82,6 +82,8 @@ class RunRecord(NamedTuple):
     >>> run = pipeline(trimesh.creation.icosphere(subdivisions=2), resolve(n_segments=8))
     >>> run.labels.shape, int(run.labels.max()) + 1
     ((320,), 8)
+    >>> sorted(set(run._asdict()) - set(run.result_fields()))
+    ['classification']
     """
 
     labels: np.ndarray
@@ -94,6 +96,14 @@ class RunRecord(NamedTuple):
     params: dict
     elements: object
     element_labels: np.ndarray
+    classification: tuple | None = None
+
+    def result_fields(self) -> dict:
+        """The fields a :class:`~superfacets.api.result.SegmentationResult` holds: all but
+        ``classification`` (the last pass of an unfinished run, for a tile's later phase)."""
+        fields = self._asdict()
+        del fields["classification"]
+        return fields
 
 
 #: Elements from which a run makes its graph forget, during the passes, the arrays
@@ -212,7 +222,7 @@ class Hooks:
 def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
              jump_cycles: bool = True, n_centers: int | None = None,
              initial: np.ndarray | None = None, finished: bool = True,
-             weights=None) -> RunRecord:
+             order: np.ndarray | None = None) -> RunRecord:
     """Run the method with validated parameters, stage by stage (see the module notes).
 
     Parameters
@@ -238,10 +248,12 @@ def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
         False: the last pass's labels and centers (those that kept an element), without
         the finishing stages (connectivity, clean-up, merges): a tile's centers and refine
         phases, which keep only centers, the labels phase finishing once.
-    weights : callable, optional
-        Where the adjacency weights may have been kept by an earlier run on the same graph
-        (a tile's phases: :func:`superfacets.scale.tiles.graphs.tile_weights`): as
-        :func:`~superfacets.method.stages.weigh`'s ``kept``.
+    order : (n,) int64 ndarray, optional
+        A distinct key per element: the passes list their centers by it
+        (:func:`superfacets.method.passes.iterate`; a tile's refine round, by row). With
+        ``finished=False`` the record's ``classification`` is the last pass's: each
+        element's superfacet (int32, an index into the centers), the centers (elements,
+        int64) and each element's distance to its center (float64).
 
     Returns
     -------
@@ -263,12 +275,12 @@ def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
 
     with using(params.n_threads):  # also the graph build and terms this run triggers
         return _run(mesh, params, features, replay=replay, jump_cycles=jump_cycles,
-                    n_centers=n_centers, initial=initial, finished=finished, weights=weights)
+                    n_centers=n_centers, initial=initial, finished=finished, order=order)
 
 
 def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
          n_centers: int | None = None, initial=None, finished: bool = True,
-         weights=None) -> RunRecord:
+         order=None) -> RunRecord:
     t_start = time.perf_counter()
     hooks = Hooks(p.progress, p.max_iter, kind_for(obj, p.elements))
     try:
@@ -287,7 +299,7 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
         give_back_free_memory()  # stage: the next stages fault the pages in again)
     try:
         with hooks.stage("weights", "weights"):
-            w, swap_w = weigh(graph, rules, feats, hooks, kept=weights)
+            w, swap_w = weigh(graph, rules, feats, hooks)
         with hooks.stage("init"):  # (the coarse start may let the weights go: held)
             held = held_weights(graph, rules, w, feats, initial) if hooks.trim else w
             del w
@@ -301,7 +313,7 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
                 give_back_free_memory()  # the start's freed temporaries (a mesh's peak)
         with hooks.stage("iterations", "superfacets"):
             it = iterate_passes(graph, w, swap_w, init, rules, hooks, replay=replay,
-                                jump_cycles=jump_cycles)
+                                jump_cycles=jump_cycles, order=order)
         w = swap_w = None  # free the weights before the clean-up
     except BaseException:
         hooks.close()
@@ -321,7 +333,8 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
     return RunRecord(labels=labels, centers=centers, n_iter=it.n_iter, converged=it.converged,
                      mesh_radius=rules.r, n_orphan_seeds=it.n_orphan_seeds, timings=timings,
                      params=_resolved(graph, rules, ratio, init.shape[0]), elements=source,
-                     element_labels=element_labels)
+                     element_labels=element_labels,
+                     classification=None if finished else (it.label, it.centers, it.dist))
 
 
 def _unfinished(it) -> tuple[np.ndarray, np.ndarray]:

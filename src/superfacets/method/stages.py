@@ -388,7 +388,7 @@ def resolve_rules(graph, p: SegmentParams, *, n_centers: int | None = None,
                  feature_floor=feature_floor)
 
 
-def weigh(graph, rules: Rules, features=None, hooks=None, kept=None
+def weigh(graph, rules: Rules, features=None, hooks=None
           ) -> tuple[np.ndarray, np.ndarray | None]:
     """Stage 3: the weight of each adjacency, per CSR entry (paper eqs. 1-3, or
     Shlafman's eq. 6; with ``beta``, the feature term), and the swap energies'
@@ -417,13 +417,6 @@ def weigh(graph, rules: Rules, features=None, hooks=None, kept=None
     hooks : Hooks, optional
         The run's :class:`~superfacets.method.pipeline.Hooks` (None: nothing is
         forgotten).
-    kept : callable, optional
-        ``kept(made, weighting) -> (2 e,) ndarray``: the weights of an earlier run on the
-        same graph with the same ``weighting`` (a dict of what they depend on: the
-        weighting's parameters, the colour floor, the dtype, the number of entries), where
-        it kept them, else ``made()`` (the weights made here, a function of no argument):
-        a tile's phases weigh its graph once (:func:`superfacets.scale.tiles.graphs.
-        tile_weights`). The swap energies' weights are made from them.
 
     Raises
     ------
@@ -444,25 +437,18 @@ def weigh(graph, rules: Rules, features=None, hooks=None, kept=None
     if rules.cleanup:
         graph.terms  # noqa: B018 (kept for the clean-up; else computed chunk by chunk)
     dtype = weight_dtype(rules.kind, p.paper)
-
-    def made() -> np.ndarray:
-        if _per_entry(graph, rules):
-            # points, vertices: from the CSR layout, positions and normals (the same values)
-            return csr_point_weights(graph, alpha=p.alpha, eta_convex=p.eta_convex,
-                                     dtype=dtype, features=features, beta=p.beta,
-                                     floor=rules.feature_floor)
+    if _per_entry(graph, rules):
+        # points, vertices: from the CSR layout, positions and normals (the same values)
+        w = csr_point_weights(graph, alpha=p.alpha, eta_convex=p.eta_convex, dtype=dtype,
+                              features=features, beta=p.beta, floor=rules.feature_floor)
+    else:
         w_pairs = edge_weights(graph, p.weighting, alpha=p.alpha, eta_convex=p.eta_convex,
                                features=features, beta=p.beta, floor=rules.feature_floor,
                                dtype=dtype)
         if hooks is not None:
             hooks.before("weight layout")
-        return csr_weights(graph, w_pairs, dtype)  # (the coarsening reads the same values)
-
-    w = made() if kept is None else kept(made, {
-        "weighting": p.weighting, "alpha": float(p.alpha), "eta_convex": float(p.eta_convex),
-        "beta": float(p.beta), "floor": float(rules.feature_floor), "paper": bool(p.paper),
-        "dtype": np.dtype(dtype).name, "entries": int(np.asarray(graph.indices).shape[0]),
-        "colours": features is not None})
+        w = csr_weights(graph, w_pairs, dtype)
+        del w_pairs  # the coarsening reads the same values from ``w``
     swap_w = None
     if rules.split_merge:  # the swap energies' weights (on faces: convex folds count half)
         swap_w = convex_scaled(graph, w, alpha=p.alpha, eta_convex=p.eta_convex,
@@ -551,8 +537,8 @@ def initialize(graph, w: np.ndarray, rules: Rules, hooks,
 
 
 def iterate_passes(graph, w: np.ndarray, swap_w, init: np.ndarray, rules: Rules,
-                   hooks, *, replay: bool = True,
-                   jump_cycles: bool = True) -> Iteration:
+                   hooks, *, replay: bool = True, jump_cycles: bool = True,
+                   order: np.ndarray | None = None) -> Iteration:
     """Stage 5: passes of (classify, update) until no center moves, ``tol`` or
     ``max_iter`` (paper section 3.1, steps 2-3); then, with split-and-merge, the
     K-preserving swaps and the passes again (with ``tol > 0``: the swaps once a pass
@@ -574,6 +560,9 @@ def iterate_passes(graph, w: np.ndarray, swap_w, init: np.ndarray, rules: Rules,
     hooks : Hooks
     replay, jump_cycles : bool
         As :func:`superfacets.method.pipeline.pipeline` (the same labels either way).
+    order : (n,) int64 ndarray, optional
+        The passes' centers listed by this key of their elements
+        (:func:`superfacets.method.passes.iterate`); not with split-and-merge.
 
     Raises
     ------
@@ -605,7 +594,8 @@ def iterate_passes(graph, w: np.ndarray, swap_w, init: np.ndarray, rules: Rules,
             from .splitmerge import START_TOL
         it = iterate(classifier, centers, init.shape[0], sizes, positions, p.max_iter,
                      jump_cycles=jump_cycles, tol=max(p.tol, START_TOL) if rules.fast else p.tol,
-                     min_move=min_move, bar=hooks.bar, settle=settle)
+                     min_move=min_move, bar=hooks.bar, settle=settle,
+                     order=None if rules.split_merge else order)
         if rules.split_merge:
             hooks.describe("split and merge")
             it, hooks.timings["swaps"] = swap_and_iterate(

@@ -6,10 +6,9 @@ points in 16 tiles, 49 of the run's 101 s. Where the tasks share a work folder, 
 first phase of a tile writes its graph there (the arrays :func:`~superfacets.elements.
 points.point_graph` builds: positions, sizes, normals, the CSR adjacency, the element of
 each row; about 110 bytes per point of the box) and the later phases read it back: the
-same arrays, so the same labels. The adjacency weights the passes read (paper eqs. 1-3)
-do not depend on the run's radius: the first phase that weighs a tile's graph keeps them
-beside it (:func:`tile_weights`), and the labels phase reads them, not weighs again. A
-mesh's tiles keep their face graphs' topology beside their boxes (:func:`tile_face_graph`).
+same arrays, so the same labels. The labels phase starts from the refine round's last
+classification, kept there too (:func:`keep_classification`). A mesh's tiles keep their
+face graphs' topology beside their boxes (:func:`tile_face_graph`).
 """
 
 from __future__ import annotations
@@ -30,13 +29,14 @@ from ...elements.points import point_elements
 from ...io.files import array_digest, load_checked
 
 __all__ = ["GRAPH_FILES", "FACE_FILES", "BYTES_PER_POINT", "graph_folder", "drop_graphs",
-           "tile_graph", "tile_weights", "tile_face_graph", "room_for_graphs"]
+           "tile_graph", "keep_classification", "kept_classification",
+           "tile_face_graph", "room_for_graphs"]
 
 #: The arrays a tile's graph is saved as, one ``.npy`` file each.
 GRAPH_FILES = ("positions", "sizes", "normals", "indptr", "indices", "index")
 #: Disk per point of a box (positions 24, size 8, normal 12, adjacency about 60, row 4,
-#: the adjacency's weights about 55).
-BYTES_PER_POINT = 165
+#: the refine round's last classification 12).
+BYTES_PER_POINT = 122
 #: The arrays of a mesh tile's face graph topology (:class:`~superfacets.elements.faces.
 #: FaceAdjacency`), one ``.npy`` file each; about 60 bytes a face.
 FACE_FILES = ("pairs", "edges", "indptr", "indices", "dual_edge", "boundary_edges",
@@ -134,63 +134,66 @@ def tile_graph(cloud, folder, n_neighbors: int) -> str:
     return "built"
 
 
-def tile_weights(folder, key: dict, weigh) -> np.ndarray:
-    """A tile's adjacency weights (one per CSR entry of its point graph), read from
-    ``folder`` where an earlier phase saved them with the same ``key``, else made by
-    ``weigh()`` and saved there.
+#: The arrays of a refine round's last classification (:func:`keep_classification`).
+CLASSIFICATION_FILES = ("label", "centers", "dist")
 
-    Parameters
-    ----------
-    folder : str or os.PathLike or None
-        The tile's graph folder (:func:`tile_graph`); None: made, not saved.
-    key : dict
-        What the weights depend on, JSON values (the weighting's parameters, the colour
-        floor, the dtype, the number of entries): weights saved under another key are made
-        again (and replace them).
-    weigh : callable
-        ``weigh() -> (2 e,) ndarray``: the weights made (:func:`superfacets.method.stages.
-        weigh`).
 
-    Returns
-    -------
-    (2 e,) ndarray
-        The same values ``weigh()`` gives, to the bit.
+def keep_classification(folder, label: np.ndarray, centers: np.ndarray,
+                        dist: np.ndarray) -> None:
+    """Keep in a tile's graph ``folder`` the last classification of its refine round: each
+    element's superfacet ``label`` ((m,) int32, an index into ``centers``), the ``centers``
+    ((K,) int64 elements, listed by row) and each element's ``dist`` to its center ((m,)
+    float64); whole or not at all (a kept one is replaced).
 
     Raises
     ------
-    SuperfacetsError
-        If the saved weights changed since they were written.
     OSError
-        If the folder cannot be written or read.
+        If the folder cannot be written.
 
     Examples
     --------
     >>> import tempfile
     >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     made = tile_weights(tmp, {"alpha": 1}, lambda: np.arange(4.0))
-    ...     read = tile_weights(tmp, {"alpha": 1}, lambda: 1 / 0)  # (read: never made)
-    ...     print(read.tolist(), tile_weights(tmp, {"alpha": 2}, lambda: np.ones(2)).tolist())
-    [0.0, 1.0, 2.0, 3.0] [1.0, 1.0]
+    ...     keep_classification(tmp, np.zeros(3, np.int32), np.array([1]), np.ones(3))
+    ...     label, centers, dist = kept_classification(tmp, 3)
+    ...     print(label.tolist(), centers.tolist(), kept_classification(tmp, 4))
+    [0, 0, 0] [1] None
     """
-
-    if folder is None:
-        return weigh()
     folder = Path(folder)
-    done = folder / "weights.json"
-    if done.is_file():
-        meta = json.loads(done.read_text(encoding="utf-8"))
-        if meta.get("key") == key:
-            return load_checked(folder / "weights.npy", meta.get("digest"))
-        done.unlink()  # (other weights: never read against the new file's digest)
-    w = weigh()
     folder.mkdir(parents=True, exist_ok=True)
-    part = folder / "weights.part.npy"
-    np.save(part, w)
-    os.replace(part, folder / "weights.npy")  # (then its description: whole or unread)
-    (folder / "weights.part.json").write_text(
-        json.dumps({"key": key, "digest": array_digest(w)}), encoding="utf-8")
-    os.replace(folder / "weights.part.json", done)
-    return w
+    done = folder / "classification.json"
+    done.unlink(missing_ok=True)  # (the one kept before: never read with the new files)
+    arrays = dict(label=label, centers=centers, dist=dist)
+    for name, a in arrays.items():
+        np.save(folder / f"classification-{name}.part.npy", a)
+        os.replace(folder / f"classification-{name}.part.npy",
+                   folder / f"classification-{name}.npy")
+    meta = {"elements": int(label.shape[0]),
+            "digests": {name: array_digest(a) for name, a in arrays.items()}}
+    (folder / "classification.part.json").write_text(json.dumps(meta), encoding="utf-8")
+    os.replace(folder / "classification.part.json", done)
+
+
+def kept_classification(folder, n_elements: int) -> tuple | None:
+    """The classification :func:`keep_classification` kept in ``folder`` for a graph of
+    ``n_elements``, as ``(label, centers, dist)``, or None where there is none (or one
+    of another graph). The caller reads it on the graph and weights it was made on (the
+    tile's kept graph, weighed alike by its phases).
+
+    Raises
+    ------
+    SuperfacetsError
+        If a kept array changed since it was written.
+    """
+    done = Path(folder) / "classification.json"
+    if not done.is_file():
+        return None
+    meta = json.loads(done.read_text(encoding="utf-8"))
+    if meta.get("elements") != int(n_elements):
+        return None
+    want = meta.get("digests", {})
+    return tuple(load_checked(Path(folder) / f"classification-{name}.npy", want.get(name))
+                 for name in CLASSIFICATION_FILES)
 
 
 def tile_face_graph(mesh, folder) -> str:

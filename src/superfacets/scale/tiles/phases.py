@@ -53,7 +53,7 @@ from ...elements.points import distinct_points, kept_diagonal
 from ...errors import ParameterError
 from ...inputs.bounds import column_bounds
 from ...inputs.cloud import PointCloud
-from ...method.classify import make_classifier
+from ...method.classify import Exact, make_classifier
 from ...method.connectivity import label_components
 from ...method.expansion import Workspaces
 from ...method.finish import clean_up, finish
@@ -61,8 +61,9 @@ from ...method.initialization import farthest_point_centers
 from ...method.params import DEFAULTS, SegmentParams, superfacet_measure
 from ...method.passes import final_centers
 from ...method.pipeline import pipeline
+from ...method.rules import assignment_of
 from ...method.stages import build_graph, resolve_features, resolve_rules, weigh
-from .graphs import tile_weights
+from .graphs import keep_classification, kept_classification
 from .layout import gathered_centers
 from .merges import one_position_stats, tile_merge_stats
 
@@ -146,7 +147,7 @@ def _tile_params(params: SegmentParams, r: float, diagonal: float, tile_diagonal
 
 
 def tile_centers(inp, core: np.ndarray, params: SegmentParams, r: float, diagonal: float,
-                 features=None, folder=None) -> tuple[np.ndarray, object]:
+                 features=None) -> tuple[np.ndarray, object]:
     """Phase 1: the method on one tile and its halo; the centers in its core.
 
     Parameters
@@ -162,9 +163,6 @@ def tile_centers(inp, core: np.ndarray, params: SegmentParams, r: float, diagona
     diagonal : float
         The whole input's bounding-box diagonal (for ``neighbor_radius``).
     features : (n_rows, d) float ndarray, optional
-    folder : str or os.PathLike, optional
-        The tile's folder of kept arrays, where its adjacency weights are kept for its
-        later phases (:func:`~superfacets.scale.tiles.graphs.tile_weights`).
 
     Returns
     -------
@@ -178,8 +176,7 @@ def tile_centers(inp, core: np.ndarray, params: SegmentParams, r: float, diagona
         return np.flatnonzero(core & _valid_rows(inp))[:1], None
     p = _tile_params(params, r, diagonal, d)
     n = _core_share(inp, core, p, r) if p.init == "farthest" else None
-    result = pipeline(inp, p, features=features, n_centers=n, finished=False,
-                      weights=None if folder is None else kept_weights(folder))
+    result = pipeline(inp, p, features=features, n_centers=n, finished=False)
     rows = np.asarray(result.centers, dtype=np.int64)
     return rows[core[rows]], result
 
@@ -286,8 +283,11 @@ def tile_refine(inp, core: np.ndarray, center_rows: np.ndarray, params: SegmentP
     artificial boundary (its halo's edge); from the gathered centers, every
     tile sees the true neighbours of its border centers, and the passes
     (and swaps, with the default method) settle them again. ``folder``: the tile's
-    graph folder, where its adjacency weights are kept for the later phases
-    (:func:`~superfacets.scale.tiles.graphs.tile_weights`; None: not kept).
+    graph folder (None: none kept), where, with the exact assignment (clouds), the last
+    pass's classification is kept for the labels phase: its passes list their
+    centers by row, as the labels phase lists the run's, so that phase searches again
+    only the cells of the centers that differ (those of the halo, moved by their own
+    tiles) (:func:`~superfacets.scale.tiles.graphs.keep_classification`).
     """
     d = _diagonal(inp)
     if d <= 0 or len(center_rows) == 0:
@@ -298,17 +298,16 @@ def tile_refine(inp, core: np.ndarray, center_rows: np.ndarray, params: SegmentP
     elem = src.to_rows(np.arange(src.graph.n_elements))[np.asarray(center_rows, np.int64)]
     elem = elem[elem >= 0]
     _, first = np.unique(elem, return_index=True)
+    exact = folder is not None and assignment_of(p, src.graph.kind) == "exact"
+    order = src.first_rows(np.arange(src.graph.n_elements)) if exact else None
     result = pipeline(inp, p, features=features, initial=elem[np.sort(first)], finished=False,
-                      weights=None if folder is None else kept_weights(folder))
+                      order=order)
+    if exact:
+        label, used, dist = result.classification
+        if used.size < 2 or (np.diff(order[used]) > 0).all():  # (no orphan in the last pass)
+            keep_classification(folder, label, used, dist)
     rows = np.asarray(result.centers, dtype=np.int64)
     return rows[core[rows]]
-
-
-def kept_weights(folder):
-    """The ``kept`` of :func:`superfacets.method.stages.weigh` for a tile's graph: its
-    weights read from the tile's graph ``folder`` where an earlier phase weighed it alike,
-    else made and saved there (:func:`~superfacets.scale.tiles.graphs.tile_weights`)."""
-    return lambda made, weighting: tile_weights(folder, weighting, made)
 
 
 def orientation_reference(sample: np.ndarray, n_neighbors: int, up=None) -> tuple:
@@ -424,8 +423,8 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
         of each in the input ((n_rows,) int64), and the core points to read the noise
         on.
     folder : str or os.PathLike, optional
-        The tile's graph folder, where its refine round kept its adjacency weights
-        (:func:`tile_refine`): read, not made again (the same values).
+        The tile's graph folder, where its refine round kept its last classification
+        (:func:`tile_refine`): the classification here starts from it (the same labels).
 
     Returns
     -------
@@ -451,8 +450,7 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
     src, graph, p = build_graph(inp, _tile_params(params, r, diagonal, d), features)
     p, feats, floor = resolve_features(src, graph, p, features)
     rules = resolve_rules(graph, p, r=r, feature_floor=floor)
-    w, _ = weigh(graph, replace(rules, split_merge=False), feats,
-                 kept=None if folder is None else kept_weights(folder))
+    w, _ = weigh(graph, replace(rules, split_merge=False), feats)
     m = graph.n_elements
     of_row = src.to_rows(np.arange(m))
     elem = of_row[np.asarray(center_rows, dtype=np.int64)]
@@ -467,6 +465,11 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
     try:
         classifier = make_classifier(rules.params.assignment, graph, w, rules.window_r2,
                                      spaces, replay=False)
+        last = None if folder is None or not isinstance(classifier, Exact) else \
+            kept_classification(folder, m)
+        if last is not None:  # the refine round's last pass, its centers listed by row too:
+            label, before, dist = last  # only the cells of the centers that differ searched
+            classifier.resume(before, dist, label)
         k, _ = classifier.classify(centers, elem.size, dist, label)
     finally:
         spaces.close()

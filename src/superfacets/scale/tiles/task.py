@@ -79,7 +79,7 @@ def tile_task(task: dict) -> dict:
         graph_area = task.get("graph_area", False) and spread
         if task.get("graphs") and (task["phase"] != "areas" or graph_area) and spread:
             # (built once, read by the later phases)
-            tile_graph(inp, _graph_folder(task, inp), task["params"].n_neighbors)
+            tile_graph(inp, _graph_folder(task), task["params"].n_neighbors)
         elif task.get("boxes") and isinstance(inp, Mesh) and _face_elements(task["params"]):
             tile_face_graph(inp, Path(task["boxes"]) / f"faces-{task['tile']}")
         p, r, d = task["params"], task["r"], task["diagonal"]
@@ -101,8 +101,7 @@ def tile_task(task: dict) -> dict:
                        moved_labels=fixed[moved] if moved.size else rows[:0])
         elif task["phase"] == "centers":  # (with refine rounds to come: the start, one pass)
             found, _ = tile_centers(inp, core, replace(p, max_iter=task.get("passes")
-                                                       or p.max_iter), r, d,
-                                    folder=_graph_folder(task, inp))
+                                                       or p.max_iter), r, d)
             out.update(centers=rows[found], positions=pos[found])
         else:
             want = np.asarray(task["centers"], dtype=np.int64)
@@ -111,7 +110,7 @@ def tile_task(task: dict) -> dict:
             ok[ok] = rows[at[ok]] == want[ok]
             if task["phase"] == "refine":
                 found = phases.tile_refine(inp, core, at[ok], p, r, d,
-                                           folder=_graph_folder(task, inp))
+                                           folder=_graph_folder(task))
                 out.update(centers=rows[found], positions=pos[found])
             else:
                 _labelled(task, out, (rows, pos, inp, core), at[ok])
@@ -150,7 +149,7 @@ def _labelled(task: dict, out: dict, box: tuple, centers: np.ndarray) -> None:
 
     rows, pos, inp, core = box
     p, r, d = task["params"], task["r"], task["diagonal"]
-    folder = _graph_folder(task, inp)
+    folder = _graph_folder(task)
     if task.get("n_noise") is not None:  # the merges to the count follow
         named, out["merge_stats"] = tile_labels(
             inp, centers, p, r, d, merging=(core, rows, task["n_noise"]), folder=folder)
@@ -165,14 +164,10 @@ def _labelled(task: dict, out: dict, box: tuple, centers: np.ndarray) -> None:
         out["box_rows"] = rows
 
 
-def _graph_folder(task: dict, inp) -> Path | None:
-    """The tile's folder of kept arrays (its point graph or face graph's topology, and its
-    weights), or None where the run keeps none."""
-    if task.get("graphs"):
-        return Path(task["graphs"]) / f"tile-{task['tile']}"
-    if task.get("boxes") and isinstance(inp, Mesh) and _face_elements(task["params"]):
-        return Path(task["boxes"]) / f"faces-{task['tile']}"
-    return None
+def _graph_folder(task: dict) -> Path | None:
+    """The folder of the tile's kept point graph (and its refine round's last
+    classification), or None where the run keeps none."""
+    return Path(task["graphs"]) / f"tile-{task['tile']}" if task.get("graphs") else None
 
 
 def _framed(task: dict, layout, inp):
