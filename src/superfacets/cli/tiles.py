@@ -49,7 +49,7 @@ def add_tile_options(p) -> None:
                         "centers (default 1; 0 is faster, and farther from one run)")
     g.add_argument("--workdir", default=None, metavar="DIR",
                    help="with --tiles: folder for the work files (the input sorted by tile, "
-                        "about its size; a cloud's tile graphs, about 110 bytes a point with "
+                        "about its size; a cloud's tile graphs, about 120 bytes a point with "
                         "the halos), in a folder of the run's own made inside DIR and "
                         "removed at the end, nothing else in DIR touched (default: the "
                         "system's temporary folder); with --scheduler, one every worker "
