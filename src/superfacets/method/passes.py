@@ -259,19 +259,11 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
             break
         if n_iter >= max_iter:
             break
-        keep = moved >= 0
-        alive = moved[keep]
+        alive, keep, slot, by_key = _next_list(moved, order)
         n_centers = alive.shape[0]
-        slot = np.cumsum(keep) - 1  # (the place of each surviving superfacet in the list)
-        if order is not None:
-            by_key = np.argsort(order[alive], kind="stable")
-            alive = alive[by_key]
-            place = np.empty(n_centers, dtype=np.int64)
-            place[by_key] = np.arange(n_centers)
-            slot = place[np.maximum(slot, 0)]
         centers[:n_centers] = alive
         if settle:
-            recent.compact(keep, None if order is None else by_key)
+            recent.compact(keep, by_key)
         if tol > 0:  # superfacet s is number remap[s] in the next pass (-1: it died)
             remap = np.where(keep, slot, -1).astype(np.int32)
             # (into the previous pass's array: one array of labels, not two at a time)
@@ -280,6 +272,22 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
                      n_orphan_seeds=n_orphans, n_passes=n_passes, cycle_period=period,
                      expansions=n_expanded, changed=changed, stopped_by_tol=by_tol,
                      settled=int(held.sum()) if settle else 0)
+
+
+def _next_list(moved: np.ndarray, order: np.ndarray | None) -> tuple:
+    """The next pass's centers: the update's (``moved``, -1 for a superfacet that died)
+    without the dead, listed by ``order`` of their elements where given. Also which
+    superfacets live on, the place of each in the new list, and the permutation that
+    listed them (None: in the order they were)."""
+    keep = moved >= 0
+    alive = moved[keep]
+    slot = np.cumsum(keep) - 1
+    if order is None:
+        return alive, keep, slot, None
+    by_key = np.argsort(order[alive], kind="stable")
+    place = np.empty(alive.shape[0], dtype=np.int64)
+    place[by_key] = np.arange(alive.shape[0])
+    return alive[by_key], keep, place[np.maximum(slot, 0)], by_key
 
 
 class _Recent:
