@@ -16,6 +16,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import uuid
 from pathlib import Path
 
 import numpy as np
@@ -164,14 +165,15 @@ def keep_classification(folder, label: np.ndarray, centers: np.ndarray,
     done = folder / "classification.json"
     done.unlink(missing_ok=True)  # (the one kept before: never read with the new files)
     arrays = dict(label=label, centers=centers, dist=dist)
+    part = uuid.uuid4().hex  # (another try of the same task may write beside this one)
     for name, a in arrays.items():
-        np.save(folder / f"classification-{name}.part.npy", a)
-        os.replace(folder / f"classification-{name}.part.npy",
+        np.save(folder / f"classification-{name}.{part}.npy", a)
+        os.replace(folder / f"classification-{name}.{part}.npy",
                    folder / f"classification-{name}.npy")
     meta = {"elements": int(label.shape[0]),
             "digests": {name: array_digest(a) for name, a in arrays.items()}}
-    (folder / "classification.part.json").write_text(json.dumps(meta), encoding="utf-8")
-    os.replace(folder / "classification.part.json", done)
+    (folder / f"classification.{part}.json").write_text(json.dumps(meta), encoding="utf-8")
+    os.replace(folder / f"classification.{part}.json", done)
 
 
 def kept_classification(folder, n_elements: int) -> tuple | None:
