@@ -135,8 +135,9 @@ def tile_graph(cloud, folder, n_neighbors: int) -> str:
     return "built"
 
 
-#: The arrays of a refine round's last classification (:func:`keep_classification`).
-CLASSIFICATION_FILES = ("label", "centers", "dist")
+#: The files of a refine round's last classification (:func:`keep_classification`).
+CLASSIFICATION_FILES = ("classification-label", "classification-centers",
+                        "classification-dist")
 
 
 def keep_classification(folder, label: np.ndarray, centers: np.ndarray,
@@ -164,12 +165,11 @@ def keep_classification(folder, label: np.ndarray, centers: np.ndarray,
     folder.mkdir(parents=True, exist_ok=True)
     done = folder / "classification.json"
     done.unlink(missing_ok=True)  # (the one kept before: never read with the new files)
-    arrays = dict(label=label, centers=centers, dist=dist)
+    arrays = dict(zip(CLASSIFICATION_FILES, (label, centers, dist)))
     part = uuid.uuid4().hex  # (another try of the same task may write beside this one)
     for name, a in arrays.items():
-        np.save(folder / f"classification-{name}.{part}.npy", a)
-        os.replace(folder / f"classification-{name}.{part}.npy",
-                   folder / f"classification-{name}.npy")
+        np.save(folder / f"{name}.{part}.npy", a)
+        os.replace(folder / f"{name}.{part}.npy", folder / f"{name}.npy")
     meta = {"elements": int(label.shape[0]),
             "digests": {name: array_digest(a) for name, a in arrays.items()}}
     (folder / f"classification.{part}.json").write_text(json.dumps(meta), encoding="utf-8")
@@ -193,9 +193,8 @@ def kept_classification(folder, n_elements: int) -> tuple | None:
     meta = json.loads(done.read_text(encoding="utf-8"))
     if meta.get("elements") != int(n_elements):
         return None
-    want = meta.get("digests", {})
-    return tuple(load_checked(Path(folder) / f"classification-{name}.npy", want.get(name))
-                 for name in CLASSIFICATION_FILES)
+    arrays = _read_checked(Path(folder), meta, CLASSIFICATION_FILES)
+    return tuple(arrays[name] for name in CLASSIFICATION_FILES)
 
 
 def tile_face_graph(mesh, folder) -> str:
