@@ -104,6 +104,7 @@ def test_tiles_that_keep_their_graphs_label_as_those_that_build_them(monkeypatch
     cloud = _bumpy_cloud(20000)
     seen, real = [], rt.tile_graph
     monkeypatch.setattr(rt, "tile_graph", lambda *a: seen.append(real(*a)) or seen[-1])
+    monkeypatch.setenv("SUPERFACETS_TILE_HOLD_MIB", "0")  # (read back, not held: test_tiles_held)
     kept = segment_tiled(cloud, 60, tiles=4, halo=1, workdir=tmp_path)
     assert seen.count("built") == 4 and seen.count("read") >= 8  # refine, labels (connect)
     assert not (tmp_path / "graphs").exists()

@@ -9,6 +9,7 @@ around them: timings, the progress bar, the release of memory.
 
 from __future__ import annotations
 
+import zlib
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -433,6 +434,10 @@ def weigh(graph, rules: Rules, features=None, hooks=None
     (True, True)
     """
     check_stage("weigh", graph=graph, rules=rules)
+    kept = graph.__dict__.get("weights_kept")  # (a tiled run's held graph: made once)
+    key = None if kept is None else _weights_key(graph, rules, features)
+    if key is not None and key in kept:
+        return kept[key]
     p = rules.params
     if rules.cleanup:
         graph.terms  # noqa: B018 (kept for the clean-up; else computed chunk by chunk)
@@ -454,7 +459,24 @@ def weigh(graph, rules: Rules, features=None, hooks=None
         swap_w = convex_scaled(graph, w, alpha=p.alpha, eta_convex=p.eta_convex,
                                factor=rules.kind.swap_eta_convex, weighting=p.weighting
                                ).astype(w.dtype, copy=False)
+    if key is not None:  # (read-only: every phase that reads them gets these arrays)
+        for a in (w, swap_w):
+            if a is not None:
+                a.flags.writeable = False
+        kept[key] = (w, swap_w)
     return w, swap_w
+
+
+def _weights_key(graph, rules: Rules, features) -> tuple:
+    """What :func:`weigh` reads besides the graph: the key of the weights a held graph
+    keeps (``graph.weights_kept``)."""
+    p = rules.params
+    feats = None
+    if features is not None:
+        f = np.ascontiguousarray(features)
+        feats = (f.dtype.str, f.shape, zlib.crc32(f.view(np.uint8).reshape(-1)))
+    return (p.alpha, p.eta_convex, p.beta, p.weighting, p.paper, rules.feature_floor,
+            rules.kind.name, bool(rules.split_merge), _per_entry(graph, rules), feats)
 
 
 def held_weights(graph, rules: Rules, w: np.ndarray, features=None, initial=None

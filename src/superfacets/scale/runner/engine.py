@@ -327,7 +327,8 @@ class Engine:
                         os.environ[k] = v
                 self._saved_env = None
 
-    def run(self, fn: Callable, tasks: Iterable, on_lost: Callable) -> Iterator:
+    def run(self, fn: Callable, tasks: Iterable, on_lost: Callable,
+            prefer: Callable | None = None) -> Iterator:
         """Yield ``fn(task)`` for every task, in the order they complete.
 
         Parameters
@@ -340,6 +341,11 @@ class Engine:
         on_lost : callable
             ``on_lost(task, error_text)`` makes the result of a task that
             raised, or whose worker died each time it ran it.
+        prefer : callable, optional
+            ``prefer(task)``: the address of the Dask worker to run it on where that
+            worker is there and free (None: any; a tiled run sends a tile to the worker
+            that holds its box from the phase before); another worker runs it if that
+            one has gone.
 
         Yields
         ------
@@ -353,9 +359,20 @@ class Engine:
                 except Exception as exc:  # noqa: BLE001 - the run goes on
                     yield on_lost(t, error_text(exc))
             return
-        yield from self._run_dask(fn, list(tasks), on_lost)
+        yield from self._run_dask(fn, list(tasks), on_lost, prefer)
 
-    def _run_dask(self, fn, tasks: list, on_lost) -> Iterator:
+    def on_workers(self, fn: Callable, *args) -> None:
+        """Run ``fn(*args)`` here and, on Dask, once in every worker (what a worker holds
+        for a run let go at its end); a worker that fails it is left as it is."""
+        fn(*args)
+        if self.local or self.client is None:
+            return
+        try:
+            self.client.run(fn, *args)
+        except Exception:  # noqa: BLE001 - best effort: the workers let it go later  # pragma: no cover
+            pass
+
+    def _run_dask(self, fn, tasks: list, on_lost, prefer=None) -> Iterator:
         from distributed import as_completed
 
         client = self.client
@@ -368,7 +385,9 @@ class Engine:
 
         def submit() -> None:
             i, t = pending.pop()
-            fut = client.submit(fn, t, key=f"{name}-{tag}-{i}", pure=False)
+            where = prefer(t) if prefer is not None else None
+            near = {} if where is None else {"workers": [where], "allow_other_workers": True}
+            fut = client.submit(fn, t, key=f"{name}-{tag}-{i}", pure=False, **near)
             owner[fut.key] = (fut, t)
             done.add(fut)
 

@@ -30,7 +30,7 @@ from ...elements.points import point_elements
 from ...io.files import array_digest, load_checked
 
 __all__ = ["GRAPH_FILES", "FACE_FILES", "BYTES_PER_POINT", "graph_folder", "drop_graphs",
-           "tile_graph", "keep_classification", "kept_classification",
+           "tile_graph", "kept_graph", "keep_classification", "kept_classification",
            "tile_face_graph", "room_for_graphs"]
 
 #: The arrays a tile's graph is saved as, one ``.npy`` file each.
@@ -133,6 +133,15 @@ def tile_graph(cloud, folder, n_neighbors: int) -> str:
         positions=g.positions, sizes=g.sizes, normals=g.normals, indptr=g.indptr,
         indices=g.indices, index=el.index), {"pair_dtype": np.dtype(pair_dtype).name})
     return "built"
+
+
+def kept_graph(cloud, n_neighbors: int):
+    """The point elements (``n_neighbors``, no radius) kept with ``cloud`` by
+    :func:`tile_graph`, or None."""
+    if cloud is None:
+        return None
+    _, data = prepared(cloud, "points")
+    return data.__dict__.get("_point_graphs", {}).get((n_neighbors, None))
 
 
 #: The files of a refine round's last classification (:func:`keep_classification`).

@@ -39,7 +39,7 @@ import math
 import re
 import time
 from contextlib import contextmanager
-from dataclasses import replace
+from dataclasses import dataclass, field, replace
 from functools import partial
 from pathlib import Path
 
@@ -61,6 +61,7 @@ from ..runner.engine import Engine
 from . import buckets, phases
 from .buckets import box_folder
 from .graphs import drop_graphs, graph_folder
+from .held import release_held
 from .layout import check_tiles, gathered_centers, in_box
 from .merges import merged_labels, tiled_merge_from
 from .phases import HALO, check_tileable, halo_distance, point_areas, sample_cloud
@@ -197,7 +198,10 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         graphs = graph_folder(tmp, survey.n_elements, reader.kind, shared and n_tiles > 1,
                               params)  # the tiles' point graphs, kept between phases
         boxes = box_folder(tmp, reader, survey.n_elements) if shared and n_tiles > 1 else None
-        with Engine(workers=workers, scheduler=scheduler, memory_limit=memory_limit) as engine:
+        with Engine(workers=workers, scheduler=scheduler, memory_limit=memory_limit) as engine, \
+                _holding(engine, graphs):
+            sent = _Sent()  # (where each tile's box is held: .held)
+
             def run(phase, margin, extra=lambda t: {}, only=None):
                 tasks = [dict(phase=phase, reader=reader, layout=layout, tile=t, margin=margin,
                               params=params, r=r, diagonal=diagonal, graphs=graphs,
@@ -208,7 +212,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                     for task in tasks:
                         task["orient_like"] = reference if isinstance(reference, str) else \
                             in_box(reference, *layout.box(task["tile"], 1.5 * margin))
-                return _gather(engine, tasks, phase, progress)
+                return _gather(engine, tasks, phase, progress, sent)
 
             r = math.nan
             with stage("areas", bar=False):  # (the phases' bars)
@@ -522,12 +526,38 @@ def _tile_stats(found: list, done: list) -> list[dict]:
     return [stats[k] for k in sorted(stats)]
 
 
-def _gather(engine: Engine, tasks: list, phase: str, progress: bool) -> list:
+@contextmanager
+def _holding(engine: Engine, graphs):
+    """The run's tiles held in its workers' memory between phases (:mod:`.held`), let go
+    at its end, however it ends."""
+    try:
+        yield
+    finally:
+        if graphs is not None:
+            engine.on_workers(release_held, str(graphs))
+
+
+@dataclass
+class _Sent:
+    """Where a run's phases send its tiles: each to the worker of its phase before (which
+    holds its box: :mod:`.held`), and every other phase in the reverse order (the tiles a
+    worker ran last, those it still holds where it cannot hold them all, first)."""
+
+    at: dict = field(default_factory=dict)
+    phases: int = 0
+
+
+def _gather(engine: Engine, tasks: list, phase: str, progress: bool,
+            sent: _Sent | None = None) -> list:
     """Run one phase's tasks; raise the first tile's error."""
     def lost(task, text):
         return {"tile": task["tile"], "phase": phase, "error": text}
 
-    results, stop = engine.run(tile_task, tasks, on_lost=lost), None
+    sent = _Sent() if sent is None else sent
+    sent.phases += 1
+    at = sent.at
+    results, stop = engine.run(tile_task, tasks[::-1] if sent.phases % 2 == 0 else tasks,
+                               on_lost=lost, prefer=lambda task: at.get(task["tile"])), None
     if progress:  # (its elapsed time redrawn while a tile runs: never silent)
         results = new_bar(results, total=len(tasks), desc=f"tiles: {phase}", unit="tile",
                           leave=False)
@@ -541,6 +571,8 @@ def _gather(engine: Engine, tasks: list, phase: str, progress: bool) -> list:
                              r"superfacets\.segment_tiled\)",
                              "segment it in more tiles (--tiles)", o["error"])
                 raise SuperfacetsError(f"tile {o['tile']} ({phase}): {why}")
+            if o.get("worker"):
+                at[o["tile"]] = o["worker"]
             out.append(o)
     finally:
         if stop is not None:

@@ -14,12 +14,14 @@ from pathlib import Path
 import numpy as np
 
 from ..._runtime.arrays import ranked
+from ...errors import MemoryLimitError
 from ...inputs.bounds import column_bounds
 from ...inputs.mesh import Mesh
 from ..runner.engine import PeakMemory, error_text
 from . import phases
 from .buckets import TileBuckets
-from .graphs import tile_face_graph, tile_graph
+from .graphs import kept_graph, tile_face_graph, tile_graph
+from .held import held_box, hold_box, release_held, worker_address
 from .layout import in_box
 from .phases import core_area, point_areas, tile_centers, tile_labels
 
@@ -66,54 +68,12 @@ def tile_task(task: dict) -> dict:
     t0 = time.perf_counter()
     out = {"tile": task["tile"], "phase": task["phase"]}
     try:
-        layout = task["layout"]
-        lo, hi = layout.box(task["tile"], task["margin"])
-        rows, pos, inp = _box(task, lo, hi)
-        inp = _framed(task, layout, inp)
-        core = layout.holds(pos, task["tile"])
-        out.update(rows=int(rows.size), core=int(core.sum()))
-        if not core.any():  # no element of its own: nothing to do
-            return out
-        low, high = column_bounds(pos)
-        spread = bool((high > low).any())
-        graph_area = task.get("graph_area", False) and spread
-        if task.get("graphs") and (task["phase"] != "areas" or graph_area) and spread:
-            # (built once, read by the later phases)
-            tile_graph(inp, _graph_folder(task), task["params"].n_neighbors)
-        elif task.get("boxes") and isinstance(inp, Mesh) and _face_elements(task["params"]):
-            tile_face_graph(inp, Path(task["boxes"]) / f"faces-{task['tile']}")
-        p, r, d = task["params"], task["r"], task["diagonal"]
-        if task["phase"] == "areas":
-            out["area"] = (core_area(inp, core, p.n_neighbors) if graph_area
-                           else point_areas(pos, core, p.n_neighbors))
-        elif task["phase"] == "connect":
-            given = task["labels"]
-            if isinstance(given, str):  # the stitched labels, in a file every worker reads
-                given = np.load(given, mmap_mode="r")[rows]
-            given = np.asarray(given, dtype=np.int64)
-            owned, at = _owned(given, rows, core)
-            if task.get("suspects") is not None:  # (the only ones that can be in pieces)
-                keep = np.isin(owned, task["suspects"])
-                owned, at = owned[keep], at[keep]
-            fixed = phases.tile_connect(inp, given, owned, at, p)
-            moved = np.zeros(0, dtype=bool) if fixed is None else fixed != given
-            out.update(moved_rows=rows[moved] if moved.size else rows[:0],
-                       moved_labels=fixed[moved] if moved.size else rows[:0])
-        elif task["phase"] == "centers":  # (with refine rounds to come: the start, one pass)
-            found, _ = tile_centers(inp, core, replace(p, max_iter=task.get("passes")
-                                                       or p.max_iter), r, d)
-            out.update(centers=rows[found], positions=pos[found])
-        else:
-            want = np.asarray(task["centers"], dtype=np.int64)
-            at = np.searchsorted(rows, want)
-            ok = at < rows.size
-            ok[ok] = rows[at[ok]] == want[ok]
-            if task["phase"] == "refine":
-                found = phases.tile_refine(inp, core, at[ok], p, r, d,
-                                           folder=_graph_folder(task))
-                out.update(centers=rows[found], positions=pos[found])
-            else:
-                _labelled(task, out, (rows, pos, inp, core), at[ok])
+        try:
+            _phase(task, out)
+        except (MemoryLimitError, MemoryError):
+            if not release_held():  # (nothing held: the tile alone does not fit)
+                raise
+            _phase(task, out)  # again, with the memory the held tiles took
     except Exception as exc:  # noqa: BLE001 - reported by the driver, with the tile
         out["error"] = error_text(exc)
     except MemoryError as exc:  # pragma: no cover - depends on the machine
@@ -122,6 +82,69 @@ def tile_task(task: dict) -> dict:
     peak = probe.peak_mib(above_start=False)
     out["peak_mib"] = None if peak is None else round(peak, 1)
     return out
+
+
+
+def _phase(task: dict, out: dict) -> None:
+    """One tile's phase (:func:`tile_task`), its output into ``out``."""
+    layout = task["layout"]
+    lo, hi = layout.box(task["tile"], task["margin"])
+    key = _hold_key(task, lo, hi)
+    held = None if key is None else held_box(key)  # (the phase before, in memory)
+    if held is None:
+        rows, pos, inp = _box(task, lo, hi)
+        inp = _framed(task, layout, inp)
+    else:
+        rows, pos, inp = held
+    out["worker"] = worker_address()
+    core = layout.holds(pos, task["tile"])
+    out.update(rows=int(rows.size), core=int(core.sum()))
+    if not core.any():  # no element of its own: nothing to do
+        return out
+    low, high = column_bounds(pos)
+    spread = bool((high > low).any())
+    graph_area = task.get("graph_area", False) and spread
+    if task.get("graphs") and (task["phase"] != "areas" or graph_area) and spread:
+        # (built once, read by the later phases)
+        tile_graph(inp, _graph_folder(task), task["params"].n_neighbors)
+    else:
+        key = None  # (held only with its kept graph)
+        if task.get("boxes") and isinstance(inp, Mesh) and _face_elements(task["params"]):
+            tile_face_graph(inp, Path(task["boxes"]) / f"faces-{task['tile']}")
+    p, r, d = task["params"], task["r"], task["diagonal"]
+    if task["phase"] == "areas":
+        out["area"] = (core_area(inp, core, p.n_neighbors) if graph_area
+                       else point_areas(pos, core, p.n_neighbors))
+    elif task["phase"] == "connect":
+        given = task["labels"]
+        if isinstance(given, str):  # the stitched labels, in a file every worker reads
+            given = np.load(given, mmap_mode="r")[rows]
+        given = np.asarray(given, dtype=np.int64)
+        owned, at = _owned(given, rows, core)
+        if task.get("suspects") is not None:  # (the only ones that can be in pieces)
+            keep = np.isin(owned, task["suspects"])
+            owned, at = owned[keep], at[keep]
+        fixed = phases.tile_connect(inp, given, owned, at, p)
+        moved = np.zeros(0, dtype=bool) if fixed is None else fixed != given
+        out.update(moved_rows=rows[moved] if moved.size else rows[:0],
+                   moved_labels=fixed[moved] if moved.size else rows[:0])
+    elif task["phase"] == "centers":  # (with refine rounds to come: the start, one pass)
+        found, _ = tile_centers(inp, core, replace(p, max_iter=task.get("passes")
+                                                   or p.max_iter), r, d)
+        out.update(centers=rows[found], positions=pos[found])
+    else:
+        want = np.asarray(task["centers"], dtype=np.int64)
+        at = np.searchsorted(rows, want)
+        ok = at < rows.size
+        ok[ok] = rows[at[ok]] == want[ok]
+        if task["phase"] == "refine":
+            found = phases.tile_refine(inp, core, at[ok], p, r, d,
+                                       folder=_graph_folder(task))
+            out.update(centers=rows[found], positions=pos[found])
+        else:
+            _labelled(task, out, (rows, pos, inp, core), at[ok])
+    if key is not None:
+        _hold(key, (rows, pos, inp), task["params"].n_neighbors)
 
 
 def _face_elements(params) -> bool:
@@ -168,6 +191,30 @@ def _graph_folder(task: dict) -> Path | None:
     """The folder of the tile's kept point graph (and its refine round's last
     classification), or None where the run keeps none."""
     return Path(task["graphs"]) / f"tile-{task['tile']}" if task.get("graphs") else None
+
+
+def _hold_key(task: dict, lo, hi) -> tuple | None:
+    """The key a tile's box is held under between its phases (:mod:`.held`): its graph
+    folder (one per run and tile) and its box; None where the run keeps no graphs."""
+    folder = _graph_folder(task)
+    if folder is None:
+        return None
+    return (str(folder), task["tile"], np.asarray(lo).tobytes(), np.asarray(hi).tobytes())
+
+
+def _hold(key: tuple, box: tuple, n_neighbors: int) -> None:
+    """Hold a tile's box (rows, positions, input) with its point graph, which keeps the
+    weights it is given from now on (``weights_kept``: :func:`~superfacets.method.stages.
+    weigh`), for the tile's next phase in this process."""
+    el = kept_graph(box[2], n_neighbors)
+    if el is None:
+        return
+    g = el.graph
+    kept = g.__dict__.setdefault("weights_kept", {})
+    arrays = [a for a in (*box[:2], *vars(g).values(), *vars(box[2]).values())
+              if isinstance(a, np.ndarray)]
+    arrays += [a for pair in kept.values() for a in pair if a is not None]
+    hold_box(key, box, arrays)
 
 
 def _framed(task: dict, layout, inp):

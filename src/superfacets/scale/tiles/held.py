@@ -1,0 +1,120 @@
+"""A tile's box, point graph and weights held in its worker's memory between phases.
+
+Each phase of a tiled run on a cloud (areas, refine, labels, connect) reads its tile's box
+and kept point graph from the work folder (:mod:`.graphs`), and the refine round and the
+labels phase each made the box's adjacency weights: at 10M points in 4 tiles, 4.4 s of a
+57 s run (in process, one thread) went to reading and weighing what the phase before had
+in memory. A worker now holds the last tiles it ran (the box's rows, positions and input,
+its graph, and the weights the graph was given: :func:`superfacets.method.stages.weigh`
+keeps them where the graph carries a ``weights_kept`` dictionary), within a quarter of the
+memory it may still use, and the run sends each tile's next phase to the worker that holds
+it (:meth:`superfacets.scale.runner.engine.Engine.run`, ``prefer``); anything not held is
+read from the work folder as before. The same arrays either way, so the same labels.
+
+``SUPERFACETS_TILE_HOLD_MIB`` sets the budget in MiB (0: nothing held).
+"""
+
+from __future__ import annotations
+
+import os
+from collections import OrderedDict
+from pathlib import Path
+
+import numpy as np
+
+from ..._runtime.memory import available_bytes
+
+__all__ = ["held_box", "hold_box", "release_held", "hold_budget", "worker_address",
+           "HOLD_SHARE"]
+
+#: The share of the memory a worker may still use (its Dask memory limit, and the
+#: machine's available memory) that its held tiles may take.
+HOLD_SHARE = 0.25
+
+#: The held tiles of this process, oldest first: key -> (value, bytes).
+_HELD: OrderedDict = OrderedDict()
+
+
+def hold_budget() -> int:
+    """Bytes this process may hold tiles in: :data:`HOLD_SHARE` of what it may still use
+    (the held tiles counted as usable), or ``SUPERFACETS_TILE_HOLD_MIB``.
+
+    Examples
+    --------
+    >>> hold_budget() >= 0
+    True
+    """
+    given = os.environ.get("SUPERFACETS_TILE_HOLD_MIB")
+    if given is not None:
+        try:
+            return max(0, int(float(given) * 2**20))
+        except ValueError:
+            return 0
+    held = sum(b for _, b in _HELD.values())
+    avail = available_bytes()
+    room = None if avail is None else avail + held
+    limit = _worker_limit()
+    if limit:
+        room = limit if room is None else min(room, limit)
+    return 0 if room is None else int(HOLD_SHARE * room)
+
+
+def _worker_limit() -> int | None:
+    """The Dask worker's memory limit, where this runs in one that has one."""
+    try:
+        from distributed import get_worker
+
+        return int(get_worker().memory_manager.memory_limit or 0) or None
+    except (ImportError, ValueError, AttributeError):
+        return None
+
+
+def worker_address() -> str | None:
+    """The address of the Dask worker this runs in (None: not in one)."""
+    try:
+        from distributed import get_worker
+
+        return get_worker().address
+    except (ImportError, ValueError, AttributeError):
+        return None
+
+
+def held_box(key: tuple):
+    """What :func:`hold_box` holds under ``key`` (None: nothing), marked as the newest."""
+    _forget_gone()
+    got = _HELD.get(key)
+    if got is None:
+        return None
+    _HELD.move_to_end(key)
+    return got[0]
+
+
+def hold_box(key: tuple, value, arrays) -> bool:
+    """Hold ``value`` under ``key`` (its first item the tile's graph folder, whose removal
+    ends the hold), counted as the bytes of ``arrays``; the oldest held tiles go where the
+    budget needs their room. Returns whether it is held."""
+    _HELD.pop(key, None)
+    size = sum(int(a.nbytes) for a in arrays if isinstance(a, np.ndarray))
+    budget = hold_budget()
+    if size > budget:  # (the others stay: this one never comes in)
+        return False
+    while _HELD and sum(b for _, b in _HELD.values()) + size > budget:
+        _HELD.popitem(last=False)
+    _HELD[key] = (value, size)
+    return True
+
+
+def release_held(folder=None) -> int:
+    """Let go of the tiles held under ``folder`` (a run's graphs folder), or of all (a
+    tile that does not fit beside them: the task runs again without them); how many."""
+    top = None if folder is None else Path(folder)
+    gone = [k for k in _HELD if top is None or top == Path(k[0]) or top in Path(k[0]).parents]
+    for key in gone:
+        del _HELD[key]
+    return len(gone)
+
+
+def _forget_gone() -> None:
+    """Let go of the tiles whose graph folder is gone (their run ended)."""
+    for key in [k for k in _HELD if not Path(k[0]).exists()]:
+        del _HELD[key]

@@ -1,0 +1,153 @@
+"""A tile's box, graph and weights held in its worker's memory between phases
+(superfacets.scale.tiles.held)."""
+
+from __future__ import annotations
+
+import shutil
+
+import numpy as np
+import pytest
+from tiled import _bumpy_cloud
+
+from superfacets.scale.tiles import held
+from superfacets.scale.tiles.run import segment_tiled
+
+
+@pytest.fixture(autouse=True)
+def _nothing_held_before_or_after():
+    held.release_held()
+    yield
+    held.release_held()
+
+
+def _counting(monkeypatch):
+    """Count what each tiled run's phases do: the graph outcomes and weights made."""
+    import superfacets.method.stages as stages
+    import superfacets.scale.tiles.task as rt
+
+    seen, made = [], []
+    real_graph, real_weights = rt.tile_graph, stages.csr_point_weights
+    monkeypatch.setattr(rt, "tile_graph", lambda *a: seen.append(real_graph(*a)) or seen[-1])
+    monkeypatch.setattr(stages, "csr_point_weights",
+                        lambda *a, **kw: made.append(1) or real_weights(*a, **kw))
+    return seen, made
+
+
+def test_tiles_held_between_phases_label_as_tiles_read_from_the_work_folder(
+        monkeypatch, tmp_path):
+    """With room to hold them, a cloud's tiles are read and weighed once: the refine round
+    and the labels phase find each tile's box and graph in memory (none read back from
+    the work folder) and the labels phase the refine round's weights (4 tiles: 4 weighings
+    fewer); with none (``SUPERFACETS_TILE_HOLD_MIB=0``) every phase reads them, and the
+    labels are the same."""
+    cloud = _bumpy_cloud(20000)
+    seen, made = _counting(monkeypatch)
+    monkeypatch.setenv("SUPERFACETS_TILE_HOLD_MIB", "1024")
+    kept = segment_tiled(cloud, 60, tiles=4, workdir=tmp_path)
+    assert seen.count("built") == 4 and "read" not in seen and seen.count("kept") >= 8
+    assert not held._HELD  # let go at the run's end
+    weighed = len(made)  # (the refine round's and the start's, on the survey's sample)
+    seen.clear()
+    made.clear()
+    monkeypatch.setenv("SUPERFACETS_TILE_HOLD_MIB", "0")
+    read = segment_tiled(cloud, 60, tiles=4, workdir=tmp_path)
+    assert seen.count("read") >= 8 and len(made) == weighed + 4  # the labels phase's too
+    np.testing.assert_array_equal(kept.labels, read.labels)
+
+
+def test_held_tiles_stay_within_the_budget_and_go_with_their_run(monkeypatch, tmp_path):
+    """The oldest held tile goes where a new one needs its room; one larger than the
+    budget is not held; a run's tiles go when it lets them go, or when its graph folder
+    is gone; the budget is a quarter of what the process may still use."""
+    monkeypatch.setenv("SUPERFACETS_TILE_HOLD_MIB", "1")
+    a, b = tmp_path / "run-a", tmp_path / "run-b"
+    for tile in (a / "tile-0", a / "tile-1", b / "tile-0"):
+        tile.mkdir(parents=True)
+    part = [np.zeros(70_000)]  # 560,000 bytes: one fits in 1 MiB, two do not
+    assert held.hold_box((str(a / "tile-0"), 0), "a0", part)
+    assert held.hold_box((str(b / "tile-0"), 0), "b0", part)
+    assert held.held_box((str(a / "tile-0"), 0)) is None  # the oldest went
+    assert held.held_box((str(b / "tile-0"), 0)) == "b0"
+    assert not held.hold_box((str(a / "tile-1"), 1), "big", [np.zeros(200_000)])
+    assert held.held_box((str(b / "tile-0"), 0)) == "b0"  # (kept: the big one never came)
+    held.release_held(a)
+    assert held.held_box((str(b / "tile-0"), 0)) == "b0"
+    held.release_held(b)
+    assert held.held_box((str(b / "tile-0"), 0)) is None
+    assert held.hold_box((str(b / "tile-0"), 0), "b0", part)
+    shutil.rmtree(b)  # (the run ended: its work folder removed)
+    assert held.held_box((str(b / "tile-0"), 0)) is None and not held._HELD
+    monkeypatch.delenv("SUPERFACETS_TILE_HOLD_MIB")
+    from superfacets._runtime.memory import available_bytes
+
+    avail = available_bytes()
+    assert avail is None or abs(held.hold_budget() - held.HOLD_SHARE * avail) < 2**26
+
+
+def test_a_held_graph_is_weighed_once_per_set_of_weights():
+    """A graph that carries ``weights_kept`` (a held tile's) gets the same, read-only
+    arrays each time it is weighed alike, equal to weights made afresh; other parameters
+    make and keep their own."""
+    from dataclasses import replace
+
+    from superfacets.method.pipeline import passes_example
+    from superfacets.method.stages import weigh
+
+    s = passes_example()
+    fresh, _ = weigh(s.graph, s.rules)
+    s.graph.__dict__["weights_kept"] = {}  # (what a held tile's graph carries)
+    w, swap = weigh(s.graph, s.rules)
+    again, swap_again = weigh(s.graph, s.rules)
+    assert again is w and swap_again is swap and not w.flags.writeable
+    np.testing.assert_array_equal(w, fresh)
+    other = replace(s.rules, params=replace(s.rules.params, alpha=2 * s.rules.params.alpha))
+    w2, _ = weigh(s.graph, other)
+    assert w2 is not w and len(s.graph.__dict__["weights_kept"]) == 2 and not np.array_equal(w2, w)
+
+
+def test_a_task_preferring_a_worker_runs_there():
+    """``Engine.run(..., prefer=)`` sends each task to the worker it names (a tiled run:
+    the one holding the tile from the phase before)."""
+    pytest.importorskip("distributed")
+    from superfacets.scale.runner.engine import Engine
+
+    with Engine(workers=2) as engine:
+        workers = sorted(engine.client.scheduler_info()["workers"])
+        for want in workers:
+            got = list(engine.run(lambda t: held.worker_address(), range(6),
+                                  on_lost=lambda t, e: e, prefer=lambda t, w=want: w))
+            assert got == [want] * 6
+
+
+def test_a_tile_that_does_not_fit_beside_the_held_ones_runs_again_without_them(
+        monkeypatch, tmp_path):
+    """A tile whose memory check fails while other tiles are held lets them go and runs
+    again (the same labels); one that fails with nothing held fails as before."""
+    import superfacets.scale.tiles.task as rt
+    from superfacets.errors import MemoryLimitError, SuperfacetsError
+
+    cloud = _bumpy_cloud(20000)
+    monkeypatch.setenv("SUPERFACETS_TILE_HOLD_MIB", "1024")
+    ref = segment_tiled(cloud, 60, tiles=4, workdir=tmp_path)
+    real, refused = rt._phase, []
+
+    def tight(task, out):
+        if held._HELD and task["phase"] == "labels":
+            refused.append(task["tile"])
+            raise MemoryLimitError("too much beside the held tiles", 2, 1)
+        return real(task, out)
+
+    monkeypatch.setattr(rt, "_phase", tight)
+    again = segment_tiled(cloud, 60, tiles=4, workdir=tmp_path)
+    assert refused  # (each refused tile ran again with nothing held)
+    np.testing.assert_array_equal(again.labels, ref.labels)
+
+    def never(task, out):
+        if task["phase"] == "labels":
+            raise MemoryLimitError("the tile alone does not fit", 2, 1)
+        return real(task, out)
+
+    monkeypatch.setattr(rt, "_phase", never)
+    monkeypatch.setenv("SUPERFACETS_TILE_HOLD_MIB", "0")
+    with pytest.raises(SuperfacetsError, match="the tile alone does not fit"):
+        segment_tiled(cloud, 60, tiles=4, workdir=tmp_path)
