@@ -151,3 +151,37 @@ def test_a_tile_that_does_not_fit_beside_the_held_ones_runs_again_without_them(
     monkeypatch.setenv("SUPERFACETS_TILE_HOLD_MIB", "0")
     with pytest.raises(SuperfacetsError, match="the tile alone does not fit"):
         segment_tiled(cloud, 60, tiles=4, workdir=tmp_path)
+
+
+def test_a_meshs_tiles_are_held_between_phases_too(monkeypatch, tmp_path):
+    """A mesh's tiles keep their boxes and face graphs in memory between the centers
+    phase, the refine round and the labels phase (no box read back from its file, no
+    topology read), and weigh once per set of weights; the same labels as none held."""
+    import trimesh
+
+    import superfacets.scale.tiles.task as rt
+    from superfacets.scale.tiles.buckets import TileBuckets
+
+    m = trimesh.creation.icosphere(subdivisions=5)
+    seen, real = [], rt.tile_face_graph
+    monkeypatch.setattr(rt, "tile_face_graph",
+                        lambda *a: seen.append(real(*a)) or seen[-1])
+    reads, records = [], TileBuckets._records
+    monkeypatch.setattr(TileBuckets, "_records",
+                        lambda self, lo, hi: reads.append(1) or records(self, lo, hi))
+    import superfacets.method.stages as stages
+
+    made, weights = [], stages.edge_weights
+    monkeypatch.setattr(stages, "edge_weights",
+                        lambda *a, **kw: made.append(1) or weights(*a, **kw))
+    monkeypatch.setenv("SUPERFACETS_TILE_HOLD_MIB", "1024")
+    kept = segment_tiled((m.vertices, m.faces), 60, tiles=4, workdir=tmp_path)
+    assert seen.count("built") == 4 and "read" not in seen and seen.count("kept") >= 8
+    assert len(reads) == 4  # (the centers phase's; the later phases' boxes held)
+    weighed = len(made)
+    seen.clear()
+    made.clear()
+    monkeypatch.setenv("SUPERFACETS_TILE_HOLD_MIB", "0")
+    read = segment_tiled((m.vertices, m.faces), 60, tiles=4, workdir=tmp_path)
+    assert seen.count("read") >= 8 and len(made) == weighed + 8  # refine's, labels'
+    np.testing.assert_array_equal(kept.labels, read.labels)

@@ -436,9 +436,14 @@ def weigh(graph, rules: Rules, features=None, hooks=None
     check_stage("weigh", graph=graph, rules=rules)
     kept = graph.__dict__.get("weights_kept")  # (a tiled run's held graph: made once)
     key = None if kept is None else _weights_key(graph, rules, features)
-    if key is not None and key in kept:
-        return kept[key]
     p = rules.params
+    if key is not None and key in kept:
+        w, swap_w = kept[key]
+        if rules.split_merge and swap_w is None:  # (made once too)
+            swap_w = _swap_weights(graph, w, rules)
+            swap_w.flags.writeable = False
+            kept[key] = (w, swap_w)
+        return w, swap_w if rules.split_merge else None
     if rules.cleanup:
         graph.terms  # noqa: B018 (kept for the clean-up; else computed chunk by chunk)
     dtype = weight_dtype(rules.kind, p.paper)
@@ -454,17 +459,21 @@ def weigh(graph, rules: Rules, features=None, hooks=None
             hooks.before("weight layout")
         w = csr_weights(graph, w_pairs, dtype)
         del w_pairs  # the coarsening reads the same values from ``w``
-    swap_w = None
-    if rules.split_merge:  # the swap energies' weights (on faces: convex folds count half)
-        swap_w = convex_scaled(graph, w, alpha=p.alpha, eta_convex=p.eta_convex,
-                               factor=rules.kind.swap_eta_convex, weighting=p.weighting
-                               ).astype(w.dtype, copy=False)
+    swap_w = _swap_weights(graph, w, rules) if rules.split_merge else None
     if key is not None:  # (read-only: every phase that reads them gets these arrays)
         for a in (w, swap_w):
             if a is not None:
                 a.flags.writeable = False
         kept[key] = (w, swap_w)
     return w, swap_w
+
+
+def _swap_weights(graph, w: np.ndarray, rules: Rules) -> np.ndarray:
+    """The swap energies' weights from the run's (on faces: convex folds count half)."""
+    p = rules.params
+    return convex_scaled(graph, w, alpha=p.alpha, eta_convex=p.eta_convex,
+                         factor=rules.kind.swap_eta_convex, weighting=p.weighting
+                         ).astype(w.dtype, copy=False)
 
 
 def _weights_key(graph, rules: Rules, features) -> tuple:
@@ -476,7 +485,7 @@ def _weights_key(graph, rules: Rules, features) -> tuple:
         f = np.ascontiguousarray(features)
         feats = (f.dtype.str, f.shape, zlib.crc32(f.view(np.uint8).reshape(-1)))
     return (p.alpha, p.eta_convex, p.beta, p.weighting, p.paper, rules.feature_floor,
-            rules.kind.name, bool(rules.split_merge), _per_entry(graph, rules), feats)
+            rules.kind.name, _per_entry(graph, rules), feats)
 
 
 def held_weights(graph, rules: Rules, w: np.ndarray, features=None, initial=None

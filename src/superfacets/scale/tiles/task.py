@@ -107,10 +107,14 @@ def _phase(task: dict, out: dict) -> None:
     if task.get("graphs") and (task["phase"] != "areas" or graph_area) and spread:
         # (built once, read by the later phases)
         tile_graph(inp, _graph_folder(task), task["params"].n_neighbors)
+    elif task.get("boxes") and isinstance(inp, Mesh) and _face_elements(task["params"]):
+        tile_face_graph(inp, _faces_folder(task))
     else:
         key = None  # (held only with its kept graph)
-        if task.get("boxes") and isinstance(inp, Mesh) and _face_elements(task["params"]):
-            tile_face_graph(inp, Path(task["boxes"]) / f"faces-{task['tile']}")
+    if key is not None:  # (its weights made once: kept from this phase on)
+        graph = _element_graph(inp, task["params"].n_neighbors)
+        if graph is not None:
+            graph.__dict__.setdefault("weights_kept", {})
     p, r, d = task["params"], task["r"], task["diagonal"]
     if task["phase"] == "areas":
         out["area"] = (core_area(inp, core, p.n_neighbors) if graph_area
@@ -196,20 +200,34 @@ def _graph_folder(task: dict) -> Path | None:
 def _hold_key(task: dict, lo, hi) -> tuple | None:
     """The key a tile's box is held under between its phases (:mod:`.held`): its graph
     folder (one per run and tile) and its box; None where the run keeps no graphs."""
-    folder = _graph_folder(task)
+    folder = _graph_folder(task) or (_faces_folder(task) if task.get("boxes") else None)
     if folder is None:
         return None
     return (str(folder), task["tile"], np.asarray(lo).tobytes(), np.asarray(hi).tobytes())
 
 
+def _element_graph(inp, n_neighbors: int):
+    """The element graph kept with a tile's box (a cloud's point graph, a mesh's face
+    graph), or None."""
+    if isinstance(inp, Mesh):
+        return inp.__dict__.get("_face_graph")
+    el = kept_graph(inp, n_neighbors)
+    return None if el is None else el.graph
+
+
+def _faces_folder(task: dict) -> Path:
+    """The folder of a mesh tile's kept face graph topology (beside its kept box)."""
+    return Path(task["boxes"]) / f"faces-{task['tile']}"
+
+
 def _hold(key: tuple, box: tuple, n_neighbors: int) -> None:
-    """Hold a tile's box (rows, positions, input) with its point graph, which keeps the
-    weights it is given from now on (``weights_kept``: :func:`~superfacets.method.stages.
-    weigh`), for the tile's next phase in this process."""
-    el = kept_graph(box[2], n_neighbors)
-    if el is None:
+    """Hold a tile's box (rows, positions, input) with its element graph (a cloud's point
+    graph, a mesh's face graph), which keeps the weights it is given from now on
+    (``weights_kept``: :func:`~superfacets.method.stages.weigh`), for the tile's next
+    phase in this process."""
+    g = _element_graph(box[2], n_neighbors)
+    if g is None:
         return
-    g = el.graph
     kept = g.__dict__.setdefault("weights_kept", {})
     arrays = [a for a in (*box[:2], *vars(g).values(), *vars(box[2]).values())
               if isinstance(a, np.ndarray)]
