@@ -228,11 +228,30 @@ def _hold(key: tuple, box: tuple, n_neighbors: int) -> None:
     g = _element_graph(box[2], n_neighbors)
     if g is None:
         return
-    kept = g.__dict__.setdefault("weights_kept", {})
-    arrays = [a for a in (*box[:2], *vars(g).values(), *vars(box[2]).values())
-              if isinstance(a, np.ndarray)]
-    arrays += [a for pair in kept.values() for a in pair if a is not None]
-    hold_box(key, box, arrays)
+    g.__dict__.setdefault("weights_kept", {})
+    hold_box(key, box, _arrays_in((*box[:2], vars(g), vars(box[2]))))
+
+
+def _arrays_in(obj, depth: int = 3) -> list:
+    """The arrays ``obj`` holds (in its tuples, lists, dictionaries and attributes, to
+    ``depth`` levels), each once: what a held tile takes."""
+    found: dict = {}
+
+    def walk(o, d):
+        if isinstance(o, np.ndarray):
+            base = o if o.base is None or not isinstance(o.base, np.ndarray) else o.base
+            found[id(base)] = base
+        elif d > 0 and isinstance(o, (tuple, list)):
+            for x in o:
+                walk(x, d - 1)
+        elif d > 0 and isinstance(o, dict):
+            for x in o.values():
+                walk(x, d - 1)
+        elif d > 0 and hasattr(o, "__dict__") and not callable(o):
+            walk(vars(o), d - 1)
+
+    walk(obj, depth)
+    return list(found.values())
 
 
 def _framed(task: dict, layout, inp):
