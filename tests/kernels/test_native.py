@@ -1630,11 +1630,12 @@ def test_without_the_compiled_kernels_a_run_says_so_in_one_line(monkeypatch, cap
 
 def test_threads_the_system_refuses_leave_the_same_labels(tmp_path):
     """Under ``ulimit -v`` a thread that could not start was a traceback (the swaps'
-    pool) or an abort (the compiled kernels: std::system_error): a refused thread's
-    share now runs on the calling thread, the same labels. A new process, its address
-    space limited to what it holds plus 200 MiB, 64 kernel threads asked for (their
-    8 MiB stacks cannot all fit): the same labels, or, where the threads that did start
-    left no room for the run's arrays, a MemoryError (never an abort)."""
+    pool) or an abort (the compiled kernels: std::system_error), and one that started
+    where no room was left for its thread-local data an abort in glibc: a refused
+    thread's share runs on the calling thread, and threads are started only while their
+    stacks fit in half the room left. A new process, its address space limited to what it
+    holds plus 200 MiB, 64 kernel threads asked for (their 8 MiB stacks cannot all fit):
+    the same labels, or, where the arrays find no room, a MemoryError (never an abort)."""
     code = """
 import os, re, resource
 import numpy as np
@@ -1657,6 +1658,30 @@ except MemoryError as exc:  # (the threads that did start took the room: a clean
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr[-2000:]  # never an abort (terminate called)
     assert out.stdout.split() == ["True", "True"] or out.stdout.startswith("MemoryError")
+
+
+def test_threads_start_only_while_their_stacks_fit_half_the_room_left():
+    """Under an address-space limit the kernels and the Python ranges start as many
+    threads as half the room left holds in stacks (the same rule on both sides of the
+    seam); without one, as many as asked."""
+    code = """
+import os, re, resource
+os.environ["SUPERFACETS_KERNEL_THREADS"] = "64"
+from superfacets._kernels import native
+from superfacets._runtime.threads import stack_room_threads
+free = native.require().threads(), stack_room_threads()
+vm = int(re.search(r"VmSize:\\s+(\\d+)", open("/proc/self/status").read()).group(1)) * 1024
+resource.setrlimit(resource.RLIMIT_AS, (vm + 160 * 2**20, resource.RLIM_INFINITY))
+stack = resource.getrlimit(resource.RLIMIT_STACK)[0]
+stack = 8 * 2**20 if stack == resource.RLIM_INFINITY else max(stack, 65536)
+print(*free, native.require().threads(), stack_room_threads(), 1 + int(80 * 2**20 / stack))
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr[-2000:]
+    free_cxx, free_py, cxx, py, expect = out.stdout.split()
+    assert (free_cxx, free_py) == ("64", "None")
+    assert abs(int(cxx) - int(expect)) <= 1 and abs(int(py) - int(expect)) <= 1, out.stdout
+    assert int(expect) < 64
 
 
 def test_python_threads_the_system_refuses_run_on_the_calling_thread(monkeypatch):

@@ -6,6 +6,8 @@ their outputs, so the results are the same for any number of threads.
 
 from __future__ import annotations
 
+import os
+import resource
 import threading
 from contextlib import contextmanager
 from contextvars import ContextVar
@@ -60,6 +62,34 @@ def split(n: int, n_threads: int | None = None, min_per_thread: int | None = Non
     return [n * i // t for i in range(t + 1)]
 
 
+def stack_room_threads() -> int | None:
+    """The threads (the calling one included) whose stacks fit in half the address space
+    this process has left under a limit (``ulimit -v``), or None: no limit. Beyond them a
+    thread that starts can find no room for its thread-local data, which glibc does not
+    refuse but aborts on (the compiled kernels' ``address_space_threads``: the same rule).
+
+    Examples
+    --------
+    >>> n = stack_room_threads()
+    >>> n is None or n >= 1
+    True
+    """
+    soft = resource.getrlimit(resource.RLIMIT_AS)[0]
+    if soft == resource.RLIM_INFINITY:
+        return None
+    try:
+        with open("/proc/self/statm") as f:
+            used = int(f.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, IndexError):
+        used = 0
+    stack = threading.stack_size() or resource.getrlimit(resource.RLIMIT_STACK)[0]
+    if stack == resource.RLIM_INFINITY or stack <= 0:
+        stack = 8 * 2**20  # (glibc's default where the stack is unlimited)
+    stack = max(stack, 65536)
+    room = soft - used
+    return 1 if room <= 2 * stack else 1 + min(4095, int(0.5 * room / stack))
+
+
 def run_ranges(fn, bounds: list[int]) -> list:
     """``[fn(bounds[i], bounds[i + 1]) for i ...]``, the first range on the calling
     thread and the others on threads at the same time (:func:`in_parallel`)."""
@@ -91,9 +121,13 @@ def in_parallel(fn, n: int) -> list:
             ended[t].set()
 
     waits = []
+    room = stack_room_threads()  # (None: no limit on the address space)
     try:  # (a Ctrl-C can land in a thread's start: the threads started are waited for)
         here = []
         for t in range(1, n):
+            if room is not None and t >= room:  # (no room for its stack: as refused)
+                here.append(t)
+                continue
             th = threading.Thread(target=call, args=(t,), name="superfacets")
             try:
                 waits.append(ended[t])

@@ -12,10 +12,13 @@
 
 #if defined(__linux__)
 #include <sched.h>
+#include <sys/resource.h>
+#include <unistd.h>
 #endif
 
 #include <algorithm>
 #include <atomic>
+#include <cstdio>
 #include <cstdlib>
 #include <thread>
 #include <cmath>
@@ -346,6 +349,32 @@ inline int env_threads(const char* name) {
     return static_cast<int>(v);
 }
 
+// The threads (the calling one included) whose stacks fit in half the address space
+// this process has left under a limit (ulimit -v); 0: no limit. Beyond them a thread
+// that starts can find no room for its thread-local data, which glibc does not refuse
+// but aborts on; superfacets._runtime.threads.stack_room_threads is the same rule.
+inline int address_space_threads() {
+#if defined(__linux__)
+    struct rlimit as;
+    if (getrlimit(RLIMIT_AS, &as) != 0 || as.rlim_cur == RLIM_INFINITY) return 0;
+    long pages = 0;
+    if (FILE* f = std::fopen("/proc/self/statm", "r")) {
+        if (std::fscanf(f, "%ld", &pages) != 1) pages = 0;
+        std::fclose(f);
+    }
+    const double room = static_cast<double>(as.rlim_cur) -
+                        static_cast<double>(pages) * static_cast<double>(sysconf(_SC_PAGESIZE));
+    struct rlimit st;
+    double stack = 8.0 * 1024 * 1024;  // (glibc's default where the stack is unlimited)
+    if (getrlimit(RLIMIT_STACK, &st) == 0 && st.rlim_cur != RLIM_INFINITY)
+        stack = std::max(65536.0, static_cast<double>(st.rlim_cur));
+    if (room <= 2 * stack) return 1;
+    return 1 + static_cast<int>(std::min(4095.0, 0.5 * room / stack));
+#else
+    return 0;
+#endif
+}
+
 inline int threads() {
     int n = env_threads("SUPERFACETS_KERNEL_THREADS");
     if (n < 1) n = env_threads("SUPERFACETS_NUM_THREADS");
@@ -359,6 +388,8 @@ inline int threads() {
         n = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 #endif
     }
+    const int fit = address_space_threads();
+    if (fit >= 1 && fit < n) n = fit;
     const int limit = thread_limit().load(std::memory_order_relaxed);
     return limit >= 1 && limit < n ? limit : n;
 }
