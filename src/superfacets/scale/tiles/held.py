@@ -17,6 +17,7 @@ read from the work folder as before. The same arrays either way, so the same lab
 from __future__ import annotations
 
 import os
+import threading
 from collections import OrderedDict
 from pathlib import Path
 
@@ -33,6 +34,8 @@ HOLD_SHARE = 0.25
 
 #: The held tiles of this process, oldest first: key -> (value, bytes).
 _HELD: OrderedDict = OrderedDict()
+#: (two runs in one process's threads share the held tiles)
+_LOCK = threading.RLock()
 
 
 def hold_budget() -> int:
@@ -50,7 +53,8 @@ def hold_budget() -> int:
             return max(0, int(float(given) * 2**20))
         except ValueError:
             return 0
-    held = sum(b for _, b in _HELD.values())
+    with _LOCK:
+        held = sum(b for _, b in _HELD.values())
     avail = available_bytes()
     room = None if avail is None else avail + held
     limit = _worker_limit()
@@ -81,36 +85,40 @@ def worker_address() -> str | None:
 
 def held_box(key: tuple):
     """What :func:`hold_box` holds under ``key`` (None: nothing), marked as the newest."""
-    _forget_gone()
-    got = _HELD.get(key)
-    if got is None:
-        return None
-    _HELD.move_to_end(key)
-    return got[0]
+    with _LOCK:
+        _forget_gone()
+        got = _HELD.get(key)
+        if got is None:
+            return None
+        _HELD.move_to_end(key)
+        return got[0]
 
 
 def hold_box(key: tuple, value, arrays) -> bool:
     """Hold ``value`` under ``key`` (its first item the tile's graph folder, whose removal
     ends the hold), counted as the bytes of ``arrays``; the oldest held tiles go where the
     budget needs their room. Returns whether it is held."""
-    _HELD.pop(key, None)
     size = sum(int(a.nbytes) for a in arrays if isinstance(a, np.ndarray))
-    budget = hold_budget()
-    if size > budget:  # (the others stay: this one never comes in)
-        return False
-    while _HELD and sum(b for _, b in _HELD.values()) + size > budget:
-        _HELD.popitem(last=False)
-    _HELD[key] = (value, size)
-    return True
+    with _LOCK:
+        _HELD.pop(key, None)
+        budget = hold_budget()
+        if size > budget:  # (the others stay: this one never comes in)
+            return False
+        while _HELD and sum(b for _, b in _HELD.values()) + size > budget:
+            _HELD.popitem(last=False)
+        _HELD[key] = (value, size)
+        return True
 
 
 def release_held(folder=None) -> int:
     """Let go of the tiles held under ``folder`` (a run's graphs folder), or of all (a
     tile that does not fit beside them: the task runs again without them); how many."""
     top = None if folder is None else Path(folder)
-    gone = [k for k in _HELD if top is None or top == Path(k[0]) or top in Path(k[0]).parents]
-    for key in gone:
-        del _HELD[key]
+    with _LOCK:
+        gone = [k for k in _HELD
+                if top is None or top == Path(k[0]) or top in Path(k[0]).parents]
+        for key in gone:
+            del _HELD[key]
     return len(gone)
 
 
