@@ -185,3 +185,16 @@ def test_a_meshs_tiles_are_held_between_phases_too(monkeypatch, tmp_path):
     read = segment_tiled((m.vertices, m.faces), 60, tiles=4, workdir=tmp_path)
     assert seen.count("read") >= 8 and len(made) == weighed + 8  # refine's, labels'
     np.testing.assert_array_equal(kept.labels, read.labels)
+
+
+@pytest.mark.parametrize("value", ["abc", "-1", "2.5", "1e3", "9999999999"])
+def test_a_hold_budget_that_is_not_a_number_of_mib_is_refused_before_the_run(
+        monkeypatch, tmp_path, value):
+    """``SUPERFACETS_TILE_HOLD_MIB`` set to anything but a whole number of MiB is a
+    ParameterError naming it, before any work (not a budget of 0 in silence)."""
+    from superfacets.errors import ParameterError
+
+    monkeypatch.setenv("SUPERFACETS_TILE_HOLD_MIB", value)
+    with pytest.raises(ParameterError, match="SUPERFACETS_TILE_HOLD_MIB"):
+        segment_tiled(_bumpy_cloud(2000), 20, tiles=2, workdir=tmp_path)
+    assert not list(tmp_path.iterdir())  # (nothing written)

@@ -24,9 +24,10 @@ from pathlib import Path
 import numpy as np
 
 from ..._runtime.memory import available_bytes
+from ...errors import ParameterError
 
-__all__ = ["held_box", "hold_box", "release_held", "hold_budget", "worker_address",
-           "HOLD_SHARE"]
+__all__ = ["held_box", "hold_box", "release_held", "hold_budget", "hold_from_env",
+           "worker_address", "HOLD_SHARE"]
 
 #: The share of the memory a worker may still use (its Dask memory limit, and the
 #: machine's available memory) that its held tiles may take.
@@ -47,12 +48,9 @@ def hold_budget() -> int:
     >>> hold_budget() >= 0
     True
     """
-    given = os.environ.get("SUPERFACETS_TILE_HOLD_MIB")
+    given = hold_from_env()
     if given is not None:
-        try:
-            return max(0, int(float(given) * 2**20))
-        except ValueError:
-            return 0
+        return given
     with _LOCK:
         held = sum(b for _, b in _HELD.values())
     avail = available_bytes()
@@ -61,6 +59,31 @@ def hold_budget() -> int:
     if limit:
         room = limit if room is None else min(room, limit)
     return 0 if room is None else int(HOLD_SHARE * room)
+
+
+def hold_from_env() -> int | None:
+    """``SUPERFACETS_TILE_HOLD_MIB`` in bytes: a whole number of MiB, 0 or more; None where
+    it is not set (or empty).
+
+    Raises
+    ------
+    ParameterError
+        If it is set to anything else, naming it (a tiled run checks it before it starts).
+
+    Examples
+    --------
+    >>> os.environ["SUPERFACETS_TILE_HOLD_MIB"] = "512"
+    >>> hold_from_env() == 512 * 2**20
+    True
+    >>> del os.environ["SUPERFACETS_TILE_HOLD_MIB"]
+    """
+    raw = os.environ.get("SUPERFACETS_TILE_HOLD_MIB", "").strip()
+    if not raw:
+        return None
+    if not (raw.isascii() and raw.isdigit()) or len(raw) > 9:
+        raise ParameterError(f"SUPERFACETS_TILE_HOLD_MIB={raw[:40]!r}: give a whole number of "
+                             "MiB (0: no tile held between phases), or unset it")
+    return int(raw) * 2**20
 
 
 def _worker_limit() -> int | None:

@@ -61,7 +61,7 @@ from ..runner.engine import Engine
 from . import buckets, phases
 from .buckets import box_folder
 from .graphs import drop_graphs, graph_folder
-from .held import release_held
+from .held import hold_from_env, release_held
 from .layout import check_tiles, gathered_centers, in_box
 from .merges import merged_labels, tiled_merge_from
 from .phases import HALO, check_tileable, halo_distance, point_areas, sample_cloud
@@ -438,6 +438,7 @@ def _checked_options(n_segments, options, tiles, halo, refine, workers):
         raise ParameterError(f"a tiled run segments faces or points, not {params.elements!r}")
     check_tileable(params)
     check_tiles(tiles)  # before any pass over the file
+    hold_from_env()  # (the workers read it: refused here, not in each task)
     halo = HALO if halo is None else halo
     halo_distance(halo, params.window, 1.0)  # validated before any work
     for name, v, low, high in (("refine", refine, 0, MAX_REFINE),
