@@ -18,7 +18,7 @@ import sys
 from ..errors import MemoryLimitError
 
 __all__ = ["ARENAS", "BASE_BYTES", "available_bytes", "check_memory", "estimated_peak",
-           "resident_bytes", "tiles_that_fit", "limit_arenas",
+           "resident_bytes", "address_space_left", "tiles_that_fit", "limit_arenas",
            "give_back_free_memory", "discard_pages"]
 
 _found: dict = {}  # the C library's functions, once looked up (False: not available)
@@ -63,16 +63,31 @@ def available_bytes() -> int | None:
                     break
     except OSError:
         pass
-    soft, _ = resource.getrlimit(resource.RLIMIT_AS)
-    if soft != resource.RLIM_INFINITY:
-        try:
-            with open("/proc/self/statm") as f:
-                used = int(f.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
-        except (OSError, ValueError):
-            used = 0
-        left = max(0, soft - used)
+    left = address_space_left()
+    if left is not None:
         avail = left if avail is None else min(avail, left)
     return avail
+
+
+def address_space_left() -> int | None:
+    """Bytes of address space this process has left under a limit (``ulimit -v``), or
+    None where it has none.
+
+    Examples
+    --------
+    >>> n = address_space_left()
+    >>> n is None or n >= 0
+    True
+    """
+    soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    if soft == resource.RLIM_INFINITY:
+        return None
+    try:
+        with open("/proc/self/statm") as f:
+            used = int(f.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, IndexError):
+        used = 0
+    return max(0, soft - used)
 
 
 #: A run's memory beyond its elements': the interpreter, numpy, scipy and the kernels

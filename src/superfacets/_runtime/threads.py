@@ -6,7 +6,6 @@ their outputs, so the results are the same for any number of threads.
 
 from __future__ import annotations
 
-import os
 import resource
 import threading
 from contextlib import contextmanager
@@ -14,6 +13,7 @@ from contextvars import ContextVar
 
 from .._kernels import native
 from ..checks import check_threads
+from .memory import address_space_left
 
 #: Below this many items a range is not worth a second thread.
 MIN_PER_THREAD = 100_000
@@ -74,19 +74,13 @@ def stack_room_threads() -> int | None:
     >>> n is None or n >= 1
     True
     """
-    soft = resource.getrlimit(resource.RLIMIT_AS)[0]
-    if soft == resource.RLIM_INFINITY:
+    room = address_space_left()
+    if room is None:
         return None
-    try:
-        with open("/proc/self/statm") as f:
-            used = int(f.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
-    except (OSError, ValueError, IndexError):
-        used = 0
     stack = threading.stack_size() or resource.getrlimit(resource.RLIMIT_STACK)[0]
     if stack == resource.RLIM_INFINITY or stack <= 0:
         stack = 8 * 2**20  # (glibc's default where the stack is unlimited)
     stack = max(stack, 65536)
-    room = soft - used
     return 1 if room <= 2 * stack else 1 + min(4095, int(0.5 * room / stack))
 
 

@@ -1,12 +1,13 @@
-"""A tile's box, point graph and weights held in its worker's memory between phases.
+"""A tile's box, element graph and weights held in its worker's memory between phases.
 
-Each phase of a tiled run on a cloud (areas, refine, labels, connect) reads its tile's box
-and kept point graph from the work folder (:mod:`.graphs`), and the refine round and the
-labels phase each made the box's adjacency weights: at 10M points in 4 tiles, 4.4 s of a
-57 s run (in process, one thread) went to reading and weighing what the phase before had
-in memory. A worker now holds the last tiles it ran (the box's rows, positions and input,
-its graph, and the weights the graph was given: :func:`superfacets.method.stages.weigh`
-keeps them where the graph carries a ``weights_kept`` dictionary), within a quarter of the
+Each phase of a tiled run reads its tile's box and kept graph from the work folder
+(:mod:`.graphs`: a cloud's point graph, a mesh's kept box and face graph topology), and the
+later phases each made the box's adjacency weights again: at 10M points in 4 tiles, 4.4 s
+of a 57 s run (in process, one thread) went to reading and weighing what the phase before
+had in memory. A worker now holds the last tiles it ran (the box's rows, positions and
+input, its element graph, and the weights the graph was given:
+:func:`superfacets.method.stages.weigh` keeps them where the graph carries a
+``weights_kept`` dictionary), within a quarter of the
 memory it may still use, and the run sends each tile's next phase to the worker that holds
 it (:meth:`superfacets.scale.runner.engine.Engine.run`, ``prefer``); anything not held is
 read from the work folder as before. The same arrays either way, so the same labels.
