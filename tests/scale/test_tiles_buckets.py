@@ -214,3 +214,33 @@ def test_a_tile_file_changed_before_it_is_read_is_refused(tmp_path, monkeypatch)
     monkeypatch.setattr(buckets_module, "bucket", tampered)
     with pytest.raises(SuperfacetsError, match="changed since this run wrote it"):
         segment_tiled(path, 20, tiles=2, workers=1, workdir=tmp_path / "work")
+
+
+@pytest.mark.parametrize("colored", [False, True])
+def test_a_mesh_box_written_from_what_was_read_reads_back_the_same(tmp_path, colored):
+    """A held mesh tile's box is written only when the tile is let go, from its rows,
+    positions and mesh (``mesh_records``): read back, the same rows, positions, vertices,
+    faces and face colours as the box read from the tiles' files."""
+    from superfacets.scale.tiles.buckets import keep_box, mesh_records
+
+    mesh = _bumpy(3)
+    rng = np.random.default_rng(5)
+    colors = rng.random((mesh.faces.shape[0], 3)) if colored else None
+    reader = RegionReader.spill(Mesh(mesh.vertices, mesh.faces, face_colors=colors),
+                                tmp_path / "spill", chunk=333)
+    s = reader.survey()
+    buckets = bucket(reader, balanced_tiles(s.sample, s.lo, s.hi, 4), tmp_path / "b")
+    lo, hi = tile_box(balanced_tiles(s.sample, s.lo, s.hi, 4), 1, 0.2)
+    first = buckets.read_box(lo, hi)
+    keep = tmp_path / "box-1"
+    assert not buckets.kept(keep, lo, hi)
+    keep_box(keep, mesh_records(buckets.dtype, *first), np.asarray(lo, float),
+             np.asarray(hi, float))
+    assert buckets.kept(keep, lo, hi) and not buckets.kept(keep, lo, hi + 0.1)
+    for name in [p.name for p in (tmp_path / "b").iterdir()]:  # from the kept file alone
+        (tmp_path / "b" / name).rename(tmp_path / f"away-{name}")
+    again = buckets.read_box(lo, hi, keep=keep)
+    _same_box(again, first)
+    if colored:
+        np.testing.assert_array_equal(again[2].face_colors, first[2].face_colors)
+        assert again[2].face_colors is not None

@@ -103,7 +103,8 @@ def test_tiles_that_keep_their_graphs_label_as_those_that_build_them(monkeypatch
 
     cloud = _bumpy_cloud(20000)
     seen, real = [], rt.tile_graph
-    monkeypatch.setattr(rt, "tile_graph", lambda *a: seen.append(real(*a)) or seen[-1])
+    monkeypatch.setattr(rt, "tile_graph",
+                        lambda *a, **kw: seen.append(real(*a, **kw)) or seen[-1])
     monkeypatch.setenv("SUPERFACETS_TILE_HOLD_MIB", "0")  # (read back, not held: test_tiles_held)
     kept = segment_tiled(cloud, 60, tiles=4, halo=1, workdir=tmp_path)
     assert seen.count("built") == 4 and seen.count("read") >= 8  # refine, labels (connect)
@@ -127,7 +128,8 @@ def test_tiles_read_the_whole_clouds_area_on_the_graphs_they_keep(monkeypatch, t
     cloud = _bumpy_cloud(20000)
     area = float(point_graph(cloud, 10).graph.sizes.sum())
     seen, real = [], rt.tile_graph
-    monkeypatch.setattr(rt, "tile_graph", lambda *a: seen.append(real(*a)) or seen[-1])
+    monkeypatch.setattr(rt, "tile_graph",
+                        lambda *a, **kw: seen.append(real(*a, **kw)) or seen[-1])
     res = segment_tiled(cloud, 60, tiles=4, workdir=tmp_path)
     fine = 60 * res.params["merge_from"]  # (an even cloud: superpoints merged to the count)
     assert res.mesh_radius == pytest.approx(math.sqrt(area / (fine * math.pi)), rel=1e-9)

@@ -27,7 +27,8 @@ def _counting(monkeypatch):
 
     seen, made = [], []
     real_graph, real_weights = rt.tile_graph, stages.csr_point_weights
-    monkeypatch.setattr(rt, "tile_graph", lambda *a: seen.append(real_graph(*a)) or seen[-1])
+    monkeypatch.setattr(rt, "tile_graph",
+                        lambda *a, **kw: seen.append(real_graph(*a, **kw)) or seen[-1])
     monkeypatch.setattr(stages, "csr_point_weights",
                         lambda *a, **kw: made.append(1) or real_weights(*a, **kw))
     return seen, made
@@ -55,6 +56,35 @@ def test_tiles_held_between_phases_label_as_tiles_read_from_the_work_folder(
     np.testing.assert_array_equal(kept.labels, read.labels)
 
 
+def test_a_held_tiles_files_are_written_only_when_it_is_let_go(monkeypatch, tmp_path):
+    """What a cloud tile's later phases read from the work folder (its point graph, its
+    refine round's last classification) is not written while the tile stays held; with
+    room for about one tile (each takes about 3 MiB), a tile let go while the run goes on
+    writes them first and its later phases read them back; with none held each phase
+    writes them at once. The same labels each way."""
+    import superfacets.scale.tiles.task as rt
+
+    cloud = _bumpy_cloud(20000)
+    wrote = []
+    for name in ("save_graph", "keep_classification"):
+        real = getattr(rt, name)
+        monkeypatch.setattr(rt, name, lambda *a, _r=real, _n=name: wrote.append(_n) or _r(*a))
+    seen, _ = _counting(monkeypatch)
+    runs = {}
+    for budget in ("1024", "4", "0"):
+        wrote.clear()
+        seen.clear()
+        monkeypatch.setenv("SUPERFACETS_TILE_HOLD_MIB", budget)
+        runs[budget] = (segment_tiled(cloud, 60, tiles=4, workdir=tmp_path).labels,
+                        list(wrote), seen.count("read"))
+    assert runs["1024"][1:] == ([], 0)  # nothing written, nothing read back
+    # (each graph written once at most: as its tile is let go, never when read back)
+    assert 0 < runs["4"][1].count("save_graph") <= 4 and runs["4"][2] > 0
+    assert sorted(runs["0"][1]) == ["keep_classification"] * 4 + ["save_graph"] * 4
+    for budget in ("4", "0"):
+        np.testing.assert_array_equal(runs[budget][0], runs["1024"][0])
+
+
 def test_held_tiles_stay_within_the_budget_and_go_with_their_run(monkeypatch, tmp_path):
     """The oldest held tile goes where a new one needs its room; one larger than the
     budget is not held; a run's tiles go when it lets them go, or when its graph folder
@@ -77,6 +107,18 @@ def test_held_tiles_stay_within_the_budget_and_go_with_their_run(monkeypatch, tm
     assert held.hold_box((str(b / "tile-0"), 0), "b0", part)
     shutil.rmtree(b)  # (the run ended: its work folder removed)
     assert held.held_box((str(b / "tile-0"), 0)) is None and not held._HELD
+    # what a tile owes its later phases is written when it is let go while its run goes
+    # on (room for another, a tile that never comes in, a memory retry), not at its end
+    wrote = []
+    assert held.hold_box((str(a / "tile-0"), 0), "a0", part, write=lambda: wrote.append(0))
+    assert held.hold_box((str(a / "tile-1"), 1), "a1", part, write=lambda: wrote.append(1))
+    assert not held.hold_box((str(a / "tile-1"), 2), "a2", [np.zeros(200_000)],
+                             write=lambda: wrote.append(2))
+    held.release_held()
+    assert wrote == [0, 2, 1]
+    assert held.hold_box((str(a / "tile-0"), 0), "a0", part, write=lambda: wrote.append(3))
+    held.release_held(a)
+    assert wrote == [0, 2, 1] and not held._HELD
     monkeypatch.delenv("SUPERFACETS_TILE_HOLD_MIB")
     from superfacets._runtime.memory import available_bytes
 
@@ -155,8 +197,9 @@ def test_a_tile_that_does_not_fit_beside_the_held_ones_runs_again_without_them(
 
 def test_a_meshs_tiles_are_held_between_phases_too(monkeypatch, tmp_path):
     """A mesh's tiles keep their boxes and face graphs in memory between the centers
-    phase, the refine round and the labels phase (no box read back from its file, no
-    topology read), and weigh once per set of weights; the same labels as none held."""
+    phase, the refine round and the labels phase (no box or topology written or read
+    back), and weigh once per set of weights; with none held each tile writes its box
+    and topology once; the same labels."""
     import trimesh
 
     import superfacets.scale.tiles.task as rt
@@ -164,8 +207,12 @@ def test_a_meshs_tiles_are_held_between_phases_too(monkeypatch, tmp_path):
 
     m = trimesh.creation.icosphere(subdivisions=5)
     seen, real = [], rt.tile_face_graph
-    monkeypatch.setattr(rt, "tile_face_graph",
-                        lambda *a: seen.append(real(*a)) or seen[-1])
+    def counted(*a, **kw):  # (a topology made and not yet saved: "built")
+        out = real(*a, **kw)
+        seen.append(out if isinstance(out, str) else "built")
+        return out
+
+    monkeypatch.setattr(rt, "tile_face_graph", counted)
     reads, records = [], TileBuckets._records
     monkeypatch.setattr(TileBuckets, "_records",
                         lambda self, lo, hi: reads.append(1) or records(self, lo, hi))
@@ -174,16 +221,23 @@ def test_a_meshs_tiles_are_held_between_phases_too(monkeypatch, tmp_path):
     made, weights = [], stages.edge_weights
     monkeypatch.setattr(stages, "edge_weights",
                         lambda *a, **kw: made.append(1) or weights(*a, **kw))
+    wrote = []
+    for name in ("keep_box", "save_face_topology"):
+        real_write = getattr(rt, name)
+        monkeypatch.setattr(rt, name, lambda *a, _r=real_write, _n=name:
+                            wrote.append(_n) or _r(*a))
     monkeypatch.setenv("SUPERFACETS_TILE_HOLD_MIB", "1024")
     kept = segment_tiled((m.vertices, m.faces), 60, tiles=4, workdir=tmp_path)
     assert seen.count("built") == 4 and "read" not in seen and seen.count("kept") >= 8
     assert len(reads) == 4  # (the centers phase's; the later phases' boxes held)
+    assert wrote == []  # (nothing written for later phases that find the tiles held)
     weighed = len(made)
     seen.clear()
     made.clear()
     monkeypatch.setenv("SUPERFACETS_TILE_HOLD_MIB", "0")
     read = segment_tiled((m.vertices, m.faces), 60, tiles=4, workdir=tmp_path)
     assert seen.count("read") >= 8 and len(made) == weighed + 8  # refine's, labels'
+    assert sorted(wrote) == ["keep_box"] * 4 + ["save_face_topology"] * 4
     np.testing.assert_array_equal(kept.labels, read.labels)
 
 

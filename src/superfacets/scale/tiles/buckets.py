@@ -25,7 +25,7 @@ from ...inputs.mesh import Mesh
 from ...io.files import array_digest, load_checked
 from ...io.regions import point_cloud_of
 
-__all__ = ["bucket", "TileBuckets", "box_folder"]
+__all__ = ["bucket", "TileBuckets", "box_folder", "keep_box", "mesh_records"]
 
 
 def bucket(reader, tiles, folder, *, progress: bool = False) -> TileBuckets:
@@ -182,8 +182,14 @@ class TileBuckets:
         if rec is None:
             rec = self._records(lo, hi)
             if keep is not None:
-                _keep_box(keep, rec, lo, hi)
+                keep_box(keep, rec, lo, hi)
         return self._of_records(rec, name)
+
+    def kept(self, keep, lo, hi) -> bool:
+        """Whether :meth:`read_box` finds the records of box ``[lo, hi]`` kept at
+        ``keep`` (described there; their digest is checked when read)."""
+        return _kept_meta(keep, np.asarray(lo, dtype=np.float64),
+                          np.asarray(hi, dtype=np.float64)) is not None
 
     def _records(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
         """The records of the elements in ``[lo, hi]``, in the order of their rows: the
@@ -268,9 +274,25 @@ def box_folder(work, reader, n_elements: int) -> Path | None:
     return Path(work) / "boxes" if free > 4 * each * n_elements else None
 
 
-def _keep_box(keep, rec: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> None:
+def mesh_records(dtype: np.dtype, rows: np.ndarray, pos: np.ndarray, mesh: Mesh
+                 ) -> np.ndarray:
+    """The records (``dtype``: :func:`bucket`'s, of faces) of a mesh box that
+    :meth:`TileBuckets.read_box` gave as ``rows``, ``pos`` and ``mesh``: read back, the
+    same rows, positions and mesh (its vertices numbered as the box numbers them, which
+    the reading keeps)."""
+    rec = np.empty(rows.shape[0], dtype=dtype)
+    rec["row"] = rows
+    rec["pos"] = pos
+    rec["tri"] = mesh.faces
+    rec["corners"] = mesh.vertices[mesh.faces]
+    if "colors" in dtype.names:
+        rec["colors"] = mesh.face_colors
+    return rec
+
+
+def keep_box(keep, rec: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> None:
     """Save a box's records at ``keep`` (whole or not at all: the files are renamed into
-    place, the description last)."""
+    place, the description last); a full disk leaves nothing there."""
     import json
     import os
 
@@ -288,8 +310,20 @@ def _keep_box(keep, rec: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> None:
 
 
 def _kept_box(keep, lo: np.ndarray, hi: np.ndarray, dtype: np.dtype):
-    """The records :func:`_keep_box` saved for this very box, else None; a file changed
+    """The records :func:`keep_box` saved for this very box, else None; a file changed
     since is refused, as the tiles' files are."""
+    meta = _kept_meta(keep, lo, hi)
+    if meta is None:
+        return None
+    try:
+        rec = load_checked(f"{keep}.npy", meta.get("digest"))
+    except FileNotFoundError:
+        return None
+    return rec if rec.dtype == dtype else None
+
+
+def _kept_meta(keep, lo: np.ndarray, hi: np.ndarray) -> dict | None:
+    """The description :func:`keep_box` wrote at ``keep`` for this very box, else None."""
     import json
 
     try:
@@ -299,8 +333,4 @@ def _kept_box(keep, lo: np.ndarray, hi: np.ndarray, dtype: np.dtype):
     if not isinstance(meta, dict) or meta.get("lo") != lo.tolist() \
             or meta.get("hi") != hi.tolist():
         return None
-    try:
-        rec = load_checked(f"{keep}.npy", meta.get("digest"))
-    except FileNotFoundError:
-        return None
-    return rec if rec.dtype == dtype else None
+    return meta

@@ -3,12 +3,15 @@
 Every phase of a tiled run on a cloud (centers, refine, labels, and the connectivity
 repair) reads the same box of the input, and each built its point graph again: on 2M
 points in 16 tiles, 49 of the run's 101 s. Where the tasks share a work folder, the
-first phase of a tile writes its graph there (the arrays :func:`~superfacets.elements.
-points.point_graph` builds: positions, sizes, normals, the CSR adjacency, the element of
-each row; about 110 bytes per point of the box) and the later phases read it back: the
-same arrays, so the same labels. The labels phase starts from the refine round's last
-classification, kept there too (:func:`keep_classification`). A mesh's tiles keep their
-face graphs' topology beside their boxes (:func:`tile_face_graph`).
+first phase of a tile builds its graph once: its worker holds it in memory for the later
+phases (:mod:`.held`), and writes it there when it lets the tile go while the run goes
+on, or at once where it cannot hold it (:func:`save_graph`: the arrays
+:func:`~superfacets.elements.points.point_graph` builds: positions, sizes, normals, the
+CSR adjacency, the element of each row; about 110 bytes per point of the box); a later
+phase that does not find the tile held reads it back: the same arrays, so the same
+labels. The labels phase starts from the refine round's last classification, kept the
+same way (:func:`keep_classification`). A mesh's tiles keep their face graphs' topology
+beside their boxes (:func:`tile_face_graph`).
 """
 
 from __future__ import annotations
@@ -30,8 +33,8 @@ from ...elements.points import point_elements
 from ...io.files import array_digest, load_checked
 
 __all__ = ["GRAPH_FILES", "FACE_FILES", "BYTES_PER_POINT", "graph_folder", "drop_graphs",
-           "tile_graph", "kept_graph", "keep_classification", "kept_classification",
-           "tile_face_graph", "room_for_graphs"]
+           "tile_graph", "save_graph", "kept_graph", "keep_classification",
+           "kept_classification", "tile_face_graph", "save_face_topology", "room_for_graphs"]
 
 #: The arrays a tile's graph is saved as, one ``.npy`` file each.
 GRAPH_FILES = ("positions", "sizes", "normals", "indptr", "indices", "index")
@@ -74,7 +77,7 @@ def room_for_graphs(folder, n_points: int, overlap: float = 2.0) -> bool:
     return free > 2 * overlap * BYTES_PER_POINT * n_points
 
 
-def tile_graph(cloud, folder, n_neighbors: int) -> str:
+def tile_graph(cloud, folder, n_neighbors: int, *, save: bool = True) -> str:
     """Give ``cloud`` its point graph (``n_neighbors``, no ``neighbor_radius``) from
     ``folder``, or build it and save it there.
 
@@ -86,11 +89,15 @@ def tile_graph(cloud, folder, n_neighbors: int) -> str:
     folder : str or os.PathLike
         The tile's folder in the run's work folder (created when saved).
     n_neighbors : int
+    save : bool, default True
+        Save a graph built here (False: the caller saves it later, if ever, with
+        :func:`save_graph`: a tile held in its worker's memory).
 
     Returns
     -------
     str
-        ``'read'``, ``'built'`` (and saved) or ``'kept'`` (already with the cloud).
+        ``'read'``, ``'built'`` (and saved, with ``save``) or ``'kept'`` (already with
+        the cloud).
 
     Raises
     ------
@@ -127,12 +134,25 @@ def tile_graph(cloud, folder, n_neighbors: int) -> str:
         graphs[key] = el
         return "read"
     el = points.point_graph(data, n_neighbors)
+    if save:
+        save_graph(el, folder)
+    return "built"
+
+
+def save_graph(el, folder) -> None:
+    """Save a tile's point elements ``el`` (:func:`tile_graph`'s, built) in ``folder``,
+    whole or not at all, for its later phases to read.
+
+    Raises
+    ------
+    OSError
+        If the folder cannot be written.
+    """
     g = el.graph
     pair_dtype = g.rebuild["pairs"].keywords["pair_dtype"]
-    _save(folder, "graph.json", dict(
+    _save(Path(folder), "graph.json", dict(
         positions=g.positions, sizes=g.sizes, normals=g.normals, indptr=g.indptr,
         indices=g.indices, index=el.index), {"pair_dtype": np.dtype(pair_dtype).name})
-    return "built"
 
 
 def kept_graph(cloud, n_neighbors: int):
@@ -185,17 +205,21 @@ def keep_classification(folder, label: np.ndarray, centers: np.ndarray,
     os.replace(folder / f"classification.{part}.json", done)
 
 
-def kept_classification(folder, n_elements: int) -> tuple | None:
+def kept_classification(folder, n_elements: int, graph=None) -> tuple | None:
     """The classification :func:`keep_classification` kept in ``folder`` for a graph of
     ``n_elements``, as ``(label, centers, dist)``, or None where there is none (or one
-    of another graph). The caller reads it on the graph and weights it was made on (the
-    tile's kept graph, weighed alike by its phases).
+    of another graph); first the one ``graph`` carries (``last_classification``: a tile
+    held in memory since its refine round). The caller reads it on the graph and weights
+    it was made on (the tile's kept graph, weighed alike by its phases).
 
     Raises
     ------
     SuperfacetsError
         If a kept array changed since it was written.
     """
+    last = None if graph is None else graph.__dict__.get("last_classification")
+    if last is not None and last[0].shape[0] == n_elements:
+        return last
     done = Path(folder) / "classification.json"
     if not done.is_file():
         return None
@@ -206,7 +230,7 @@ def kept_classification(folder, n_elements: int) -> tuple | None:
     return tuple(arrays[name] for name in CLASSIFICATION_FILES)
 
 
-def tile_face_graph(mesh, folder) -> str:
+def tile_face_graph(mesh, folder, *, save: bool = True):
     """Give ``mesh`` (a tile's box of faces) its face graph from the topology saved in
     ``folder`` (:func:`~superfacets.elements.faces.face_graph_from`), or make the
     topology and save it there: the mesh's later phases read it back, not build it again
@@ -218,11 +242,15 @@ def tile_face_graph(mesh, folder) -> str:
         A tile's box, as every phase reads it (the same faces, in the same order).
     folder : str or os.PathLike
         The tile's folder in the run's work folder (created when saved).
+    save : bool, default True
+        Save a topology made here (False: it is returned, for the caller to save later,
+        if ever, with :func:`save_face_topology`).
 
     Returns
     -------
-    str
-        ``'read'``, ``'built'`` (and saved) or ``'kept'`` (already with the mesh).
+    str or FaceAdjacency
+        ``'read'``, ``'built'`` (and saved) or ``'kept'`` (already with the mesh); the
+        topology made, where not saved.
 
     Raises
     ------
@@ -252,10 +280,24 @@ def tile_face_graph(mesh, folder) -> str:
         face_graph_from(mesh, FaceAdjacency(**arrays, repeated=int(meta["repeated"])))
         return "read"
     topo = face_adjacency(mesh)
-    _save(folder, "faces.json", {n: getattr(topo, n) for n in FACE_FILES},
-          {"repeated": int(topo.repeated)})
     face_graph_from(mesh, topo)
+    if not save:
+        return topo
+    save_face_topology(topo, folder)
     return "built"
+
+
+def save_face_topology(topo: FaceAdjacency, folder) -> None:
+    """Save a tile's face graph topology (:func:`tile_face_graph`'s) in ``folder``, whole
+    or not at all.
+
+    Raises
+    ------
+    OSError
+        If the folder cannot be written.
+    """
+    _save(Path(folder), "faces.json", {n: getattr(topo, n) for n in FACE_FILES},
+          {"repeated": int(topo.repeated)})
 
 
 def _save(folder: Path, described: str, arrays: dict, meta: dict) -> None:

@@ -10,7 +10,11 @@ input, its element graph, and the weights the graph was given:
 ``weights_kept`` dictionary), within a quarter of the
 memory it may still use, and the run sends each tile's next phase to the worker that holds
 it (:meth:`superfacets.scale.runner.engine.Engine.run`, ``prefer``); anything not held is
-read from the work folder as before. The same arrays either way, so the same labels.
+read from the work folder as before. What a held tile's phases made for its later phases
+(its graph, its refine round's last classification, a mesh's box and face topology) is
+written to the work folder only when the tile is let go while the run goes on (``write``,
+given to :func:`hold_box`), or at once where it cannot be held: a run whose tiles stay held
+writes none of it. The same arrays either way, so the same labels.
 
 ``SUPERFACETS_TILE_HOLD_MIB`` sets the budget in MiB (0: nothing held).
 """
@@ -34,7 +38,7 @@ __all__ = ["held_box", "hold_box", "release_held", "hold_budget", "hold_from_env
 #: machine's available memory) that its held tiles may take.
 HOLD_SHARE = 0.25
 
-#: The held tiles of this process, oldest first: key -> (value, bytes).
+#: The held tiles of this process, oldest first: key -> (value, bytes, write).
 _HELD: OrderedDict = OrderedDict()
 #: (two runs in one process's threads share the held tiles)
 _LOCK = threading.RLock()
@@ -53,7 +57,7 @@ def hold_budget() -> int:
     if given is not None:
         return given
     with _LOCK:
-        held = sum(b for _, b in _HELD.values())
+        held = sum(b for _, b, _ in _HELD.values())
     avail = available_bytes()
     room = None if avail is None else avail + held
     limit = _worker_limit()
@@ -118,31 +122,47 @@ def held_box(key: tuple):
         return got[0]
 
 
-def hold_box(key: tuple, value, arrays) -> bool:
-    """Hold ``value`` under ``key`` (its first item the tile's graph folder, whose removal
-    ends the hold), counted as the bytes of ``arrays``; the oldest held tiles go where the
-    budget needs their room. Returns whether it is held."""
+def hold_box(key: tuple, value, arrays, write=None) -> bool:
+    """Hold ``value`` under ``key`` (its first item the run's folder, whose removal ends
+    the hold), counted as the bytes of ``arrays``; the oldest held tiles go where the
+    budget needs their room. ``write`` (called with no argument, optional): writes what
+    the tile's later phases would read from the work folder, called when it is let go
+    while the run goes on, or here where it is not held. Returns whether it is held."""
     size = sum(int(a.nbytes) for a in arrays if isinstance(a, np.ndarray))
     with _LOCK:
         _HELD.pop(key, None)
         budget = hold_budget()
         if size > budget:  # (the others stay: this one never comes in)
+            _written(write)
             return False
-        while _HELD and sum(b for _, b in _HELD.values()) + size > budget:
-            _HELD.popitem(last=False)
-        _HELD[key] = (value, size)
+        while _HELD and sum(b for _, b, _ in _HELD.values()) + size > budget:
+            _written(_HELD.popitem(last=False)[1][2])
+        _HELD[key] = (value, size, write)
         return True
 
 
+def _written(write) -> None:
+    """Run a let-go tile's ``write`` (:func:`hold_box`); a full disk leaves its later
+    phases to make it again (a graph built again is the same graph)."""
+    if write is not None:
+        try:
+            write()
+        except OSError:
+            pass
+
+
 def release_held(folder=None) -> int:
-    """Let go of the tiles held under ``folder`` (a run's graphs folder), or of all (a
-    tile that does not fit beside them: the task runs again without them); how many."""
+    """Let go of the tiles held under ``folder`` (a run's folder, at its end: nothing
+    written), or of all (a tile that does not fit beside them: the task runs again
+    without them, each first writing what its later phases read); how many."""
     top = None if folder is None else Path(folder)
     with _LOCK:
         gone = [k for k in _HELD
                 if top is None or top == Path(k[0]) or top in Path(k[0]).parents]
         for key in gone:
-            del _HELD[key]
+            write = _HELD.pop(key)[2]
+            if top is None:
+                _written(write)
     return len(gone)
 
 

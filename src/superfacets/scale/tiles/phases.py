@@ -63,7 +63,7 @@ from ...method.passes import final_centers
 from ...method.pipeline import pipeline
 from ...method.rules import assignment_of
 from ...method.stages import build_graph, resolve_features, resolve_rules, weigh
-from .graphs import keep_classification, kept_classification
+from .graphs import kept_classification
 from .layout import gathered_centers
 from .merges import one_position_stats, tile_merge_stats
 
@@ -283,11 +283,13 @@ def tile_refine(inp, core: np.ndarray, center_rows: np.ndarray, params: SegmentP
     artificial boundary (its halo's edge); from the gathered centers, every
     tile sees the true neighbours of its border centers, and the passes
     (and swaps, with the default method) settle them again. ``folder``: the tile's
-    graph folder (None: none kept), where, with the exact assignment (clouds), the last
-    pass's classification is kept for the labels phase: its passes list their
-    centers by row, as the labels phase lists the run's, so that phase searches again
-    only the cells of the centers that differ (those of the halo, moved by their own
-    tiles) (:func:`~superfacets.scale.tiles.graphs.keep_classification`).
+    graph folder (None: none kept); where it is given, with the exact assignment
+    (clouds), the last pass's classification is kept with the tile's point graph
+    (``last_classification``, which its task writes to the folder when the tile is let
+    go: :func:`~superfacets.scale.tiles.graphs.keep_classification`) for the labels
+    phase: its passes list their centers by row, as the labels phase lists the run's, so
+    that phase searches again only the cells of the centers that differ (those of the
+    halo, moved by their own tiles).
     """
     d = _diagonal(inp)
     if d <= 0 or len(center_rows) == 0:
@@ -305,7 +307,9 @@ def tile_refine(inp, core: np.ndarray, center_rows: np.ndarray, params: SegmentP
     if exact:
         label, used, dist = result.classification
         if used.size < 2 or (np.diff(order[used]) > 0).all():  # (no orphan in the last pass)
-            keep_classification(folder, label, used, dist)
+            # (with the graph: the labels phase reads it there where the tile is held;
+            # written to the folder when the tile is let go)
+            src.graph.__dict__["last_classification"] = (label, used, dist)
     rows = np.asarray(result.centers, dtype=np.int64)
     return rows[core[rows]]
 
@@ -466,7 +470,7 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
         classifier = make_classifier(rules.params.assignment, graph, w, rules.window_r2,
                                      spaces, replay=False)
         last = None if folder is None or not isinstance(classifier, Exact) else \
-            kept_classification(folder, m)
+            kept_classification(folder, m, graph)
         if last is not None:  # the refine round's last pass, its centers listed by row too:
             label, before, dist = last  # only the cells of the centers that differ searched
             classifier.resume(before, dist, label)

@@ -19,8 +19,15 @@ from ...inputs.bounds import column_bounds
 from ...inputs.mesh import Mesh
 from ..runner.engine import PeakMemory, error_text
 from . import phases
-from .buckets import TileBuckets
-from .graphs import kept_graph, tile_face_graph, tile_graph
+from .buckets import TileBuckets, keep_box, mesh_records
+from .graphs import (
+    keep_classification,
+    kept_graph,
+    save_face_topology,
+    save_graph,
+    tile_face_graph,
+    tile_graph,
+)
 from .held import held_box, hold_box, release_held, worker_address
 from .layout import in_box
 from .phases import core_area, point_areas, tile_centers, tile_labels
@@ -92,8 +99,10 @@ def _phase(task: dict, out: dict) -> None:
     key = _hold_key(task, lo, hi)
     held = None if key is None else held_box(key)  # (the phase before, in memory)
     if held is None:
-        rows, pos, inp = _box(task, lo, hi)
+        rows, pos, inp, owed_box = _box(task, lo, hi, write=key is None)
         inp = _framed(task, layout, inp)
+        if owed_box is not None:  # (written when the tile is let go: _write_owed)
+            _owe(inp, "box", owed_box)
     else:
         rows, pos, inp = held
     out["worker"] = worker_address()
@@ -105,10 +114,14 @@ def _phase(task: dict, out: dict) -> None:
     spread = bool((high > low).any())
     graph_area = task.get("graph_area", False) and spread
     if task.get("graphs") and (task["phase"] != "areas" or graph_area) and spread:
-        # (built once, read by the later phases)
-        tile_graph(inp, _graph_folder(task), task["params"].n_neighbors)
+        # (built once, read by the later phases; saved when the tile is let go)
+        n = task["params"].n_neighbors
+        if tile_graph(inp, _graph_folder(task), n, save=False) == "built":
+            _owe(inp, "graph", (save_graph, kept_graph(inp, n), _graph_folder(task)))
     elif task.get("boxes") and isinstance(inp, Mesh) and _face_elements(task["params"]):
-        tile_face_graph(inp, _faces_folder(task))
+        made = tile_face_graph(inp, _faces_folder(task), save=False)
+        if not isinstance(made, str):
+            _owe(inp, "faces", (save_face_topology, made, _faces_folder(task)))
     else:
         key = None  # (held only with its kept graph)
     if key is not None:  # (its weights made once: kept from this phase on)
@@ -145,10 +158,16 @@ def _phase(task: dict, out: dict) -> None:
             found = phases.tile_refine(inp, core, at[ok], p, r, d,
                                        folder=_graph_folder(task))
             out.update(centers=rows[found], positions=pos[found])
+            last = _last_classification(inp, p.n_neighbors)
+            if last is not None:  # (for the labels phase: held, or written when let go)
+                _owe(inp, "classification", (keep_classification, _graph_folder(task),
+                                             *last))
         else:
             _labelled(task, out, (rows, pos, inp, core), at[ok])
     if key is not None:
         _hold(key, (rows, pos, inp), task["params"].n_neighbors)
+    else:
+        _write_owed(inp)
 
 
 def _face_elements(params) -> bool:
@@ -198,12 +217,34 @@ def _graph_folder(task: dict) -> Path | None:
 
 
 def _hold_key(task: dict, lo, hi) -> tuple | None:
-    """The key a tile's box is held under between its phases (:mod:`.held`): its graph
-    folder (one per run and tile) and its box; None where the run keeps no graphs."""
-    folder = _graph_folder(task) or (_faces_folder(task) if task.get("boxes") else None)
+    """The key a tile's box is held under between its phases (:mod:`.held`): the run's
+    folder of graphs (a mesh's: of boxes), the tile and its box; None where the run keeps
+    no graphs. The folder is made here: its removal at the run's end ends the hold."""
+    folder = task.get("graphs") or task.get("boxes")
     if folder is None:
         return None
+    Path(folder).mkdir(parents=True, exist_ok=True)
     return (str(folder), task["tile"], np.asarray(lo).tobytes(), np.asarray(hi).tobytes())
+
+
+def _owe(inp, name: str, write: tuple) -> None:
+    """Note a write a tile's box owes the work folder for its later phases (``write``: a
+    function and its arguments), made when the tile is let go (:func:`_write_owed`)."""
+    inp.__dict__.setdefault("_owed_writes", {})[name] = write
+
+
+def _write_owed(inp) -> None:
+    """Make the writes noted on a tile's box (:func:`_owe`), each once."""
+    owed = inp.__dict__.pop("_owed_writes", {}) if inp is not None else {}
+    for write, *args in owed.values():
+        write(*args)
+
+
+def _last_classification(inp, n_neighbors: int):
+    """The refine round's last classification kept with a cloud tile's point graph
+    (:func:`~superfacets.scale.tiles.phases.tile_refine`), or None."""
+    el = None if isinstance(inp, Mesh) else kept_graph(inp, n_neighbors)
+    return None if el is None else el.graph.__dict__.get("last_classification")
 
 
 def _element_graph(inp, n_neighbors: int):
@@ -229,7 +270,8 @@ def _hold(key: tuple, box: tuple, n_neighbors: int) -> None:
     if g is None:
         return
     g.__dict__.setdefault("weights_kept", {})
-    hold_box(key, box, _arrays_in((*box[:2], vars(g), vars(box[2]))))
+    hold_box(key, box, _arrays_in((*box[:2], vars(g), vars(box[2]))),
+             write=lambda: _write_owed(box[2]))
 
 
 def _arrays_in(obj, depth: int = 3) -> list:
@@ -271,15 +313,27 @@ def _framed(task: dict, layout, inp):
     return replace(inp, **changes) if changes else inp  # (one check of the input, not two)
 
 
-def _box(task: dict, lo, hi):
-    """A task's box: its rows, positions and input; the first phase of a tile keeps the
-    box's records in the run's ``boxes`` folder, where it has one, for the later phases
-    (one file, not the tiles the box overlaps: a mesh's faces read from 4 tiles' files
-    took 2.9 s a box of 3M faces, against 0.4 s)."""
+def _box(task: dict, lo, hi, write: bool = True):
+    """A task's box: its rows, positions and input, and the write it owes (or None); the
+    first phase of a tile keeps the box's records in the run's ``boxes`` folder, where it
+    has one, for the later phases (one file, not the tiles the box overlaps: a mesh's
+    faces read from 4 tiles' files took 2.9 s a box of 3M faces, against 0.4 s). A mesh's
+    box, unless ``write``, is written when its tile is let go (:func:`_write_owed`), from
+    what is held (:func:`~superfacets.scale.tiles.buckets.mesh_records`)."""
 
     reader, name = task["reader"], f"tile {task['tile']}"
-    if task.get("boxes") and isinstance(reader, TileBuckets):
-        Path(task["boxes"]).mkdir(parents=True, exist_ok=True)
-        return reader.read_box(lo, hi, name=name,
-                               keep=Path(task["boxes"]) / f"box-{task['tile']}")
-    return reader.read_box(lo, hi, name=name)
+    if not (task.get("boxes") and isinstance(reader, TileBuckets)):
+        return (*reader.read_box(lo, hi, name=name), None)
+    Path(task["boxes"]).mkdir(parents=True, exist_ok=True)
+    keep = Path(task["boxes"]) / f"box-{task['tile']}"
+    later = not write and "tri" in reader.dtype.names and not reader.kept(keep, lo, hi)
+    rows, pos, inp = reader.read_box(lo, hi, name=name, keep=None if later else keep)
+    if not later or inp is None:
+        return rows, pos, inp, None
+    return rows, pos, inp, (_keep_mesh_box, keep, reader.dtype, (rows, pos, inp), lo, hi)
+
+
+def _keep_mesh_box(keep, dtype, box: tuple, lo, hi) -> None:
+    """Write a mesh tile's box at ``keep`` from its rows, positions and mesh."""
+    keep_box(keep, mesh_records(dtype, *box), np.asarray(lo, dtype=np.float64),
+             np.asarray(hi, dtype=np.float64))
