@@ -600,6 +600,12 @@ def test_a_work_files_digest_is_taken_in_memory_and_checked_on_reading(tmp_path)
     assert f"{crc:08x}" == array_digest(rec, described=False)
     got = load_checked(tmp_path / "r.bin", f"{crc:08x}", rec.dtype)
     assert got.dtype == rec.dtype and np.array_equal(got, rec)
+    mapped = load_checked(tmp_path / "r.bin", f"{crc:08x}", rec.dtype, mapped=True)
+    assert np.array_equal(mapped, rec) and not mapped.flags.writeable  # (not copied)
+    del mapped
+    (tmp_path / "e.bin").write_bytes(b"")  # an empty file: nothing to map, nothing in it
+    assert load_checked(tmp_path / "e.bin", f"{0:08x}", rec.dtype, mapped=True).size == 0
     (tmp_path / "r.bin").write_bytes((tmp_path / "r.bin").read_bytes()[:-8])
-    with pytest.raises(SuperfacetsError, match="changed since this run wrote it"):
-        load_checked(tmp_path / "r.bin", f"{crc:08x}", rec.dtype)
+    for mapped in (False, True):  # (mapped: its size no longer whole records)
+        with pytest.raises(SuperfacetsError, match="changed since this run wrote it"):
+            load_checked(tmp_path / "r.bin", f"{crc:08x}", rec.dtype, mapped=mapped)

@@ -309,7 +309,7 @@ def array_digest(a, described: bool = True) -> str:
     return f"{zlib.crc32(a.reshape(-1).view(np.uint8), crc):08x}"
 
 
-def load_checked(path, digest: str | None, dtype=None):
+def load_checked(path, digest: str | None, dtype=None, *, mapped: bool = False):
     """An array read back from a work file, refused unless it is the one written there.
 
     Parameters
@@ -321,10 +321,15 @@ def load_checked(path, digest: str | None, dtype=None):
     dtype : numpy.dtype, optional
         The records' dtype of a raw file (whose digest is of its bytes alone:
         ``described=False``).
+    mapped : bool, default False
+        With ``dtype``: the file mapped read-only into memory (``np.memmap``), not copied
+        into a new array: a caller that keeps a part of it copies only that part (the
+        digest still reads every byte, from the system's file cache).
 
     Returns
     -------
     ndarray
+        Read-only where ``mapped``.
 
     Raises
     ------
@@ -343,9 +348,13 @@ def load_checked(path, digest: str | None, dtype=None):
     import numpy as np
 
     try:
-        a = np.fromfile(path, dtype=dtype) if dtype is not None else (
-            np.load(path, allow_pickle=False) if _npy_fits(path) else None)
-    except ValueError:  # (a header that no longer reads)
+        if dtype is not None and mapped:
+            a = (np.memmap(path, dtype=dtype, mode="r") if os.path.getsize(path)
+                 else np.empty(0, dtype=dtype))  # (an empty file cannot be mapped)
+        else:
+            a = np.fromfile(path, dtype=dtype) if dtype is not None else (
+                np.load(path, allow_pickle=False) if _npy_fits(path) else None)
+    except ValueError:  # (a header that no longer reads; a size not whole records)
         a = None
     if a is None or digest is None or array_digest(a, dtype is None) != digest:
         raise SuperfacetsError(f"{path}: changed since this run wrote it (the work "

@@ -205,8 +205,9 @@ class TileBuckets:
             # a copy, not of the file's bytes, which are let go here)
             parts.append(rec if inside[t] else rec[rows_in_box(rec["pos"], lo, hi)])
             del rec
-        if len(parts) < 2:  # (one file: in the order of its rows already)
-            return parts[0] if parts else np.empty(0, dtype=self.dtype)
+        if len(parts) < 2:  # (one file: in the order of its rows already; a copy of a
+            # mapped file, as a box's records are the box's own)
+            return np.array(parts[0]) if parts else np.empty(0, dtype=self.dtype)
         # each file is in the order of its rows: a stable sort of them all keeps each
         # file's order, so a file's records fill its places in the box in turn
         order = np.argsort(np.concatenate([rec["row"] for rec in parts]), kind="stable")
@@ -248,7 +249,9 @@ class TileBuckets:
         """Tile ``t``'s records, its file checked against the digest written with it (of
         its bytes: the same bytes, so the same count)."""
         path = Path(self.folder) / f"tile-{t}.bin"
-        return load_checked(path, self.digests[t] if self.digests else None, self.dtype)
+        # (mapped: a box keeps a sliver of most tiles it overlaps, and copies only that)
+        return load_checked(path, self.digests[t] if self.digests else None, self.dtype,
+                            mapped=True)
 
 
 #: Disk a mesh tile's face graph topology takes, per face of its box (its pairs, edges,
