@@ -85,6 +85,28 @@ def test_a_held_tiles_files_are_written_only_when_it_is_let_go(monkeypatch, tmp_
         np.testing.assert_array_equal(runs[budget][0], runs["1024"][0])
 
 
+def test_a_let_go_tile_whose_files_cannot_be_written_is_built_again(monkeypatch, tmp_path):
+    """A full disk as a let-go tile writes its graph and classification: its later phases
+    find neither held nor written, build its graph again and classify afresh: the same
+    labels, no error."""
+    import superfacets.scale.tiles.task as rt
+
+    cloud = _bumpy_cloud(20000)
+    monkeypatch.setenv("SUPERFACETS_TILE_HOLD_MIB", "1024")
+    ref = segment_tiled(cloud, 60, tiles=4, workdir=tmp_path).labels
+
+    def full(*a):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(rt, "save_graph", full)
+    monkeypatch.setattr(rt, "keep_classification", full)
+    seen, _ = _counting(monkeypatch)
+    monkeypatch.setenv("SUPERFACETS_TILE_HOLD_MIB", "4")  # (about one tile: most let go)
+    again = segment_tiled(cloud, 60, tiles=4, workdir=tmp_path)
+    assert "read" not in seen and seen.count("built") > 4  # (built again, never read)
+    np.testing.assert_array_equal(again.labels, ref)
+
+
 def test_held_tiles_stay_within_the_budget_and_go_with_their_run(monkeypatch, tmp_path):
     """The oldest held tile goes where a new one needs its room; one larger than the
     budget is not held; a run's tiles go when it lets them go, or when its graph folder
