@@ -253,6 +253,7 @@ def test_a_meshs_tiles_are_held_between_phases_too(monkeypatch, tmp_path):
     assert seen.count("built") == 4 and "read" not in seen and seen.count("kept") >= 8
     assert len(reads) == 4  # (the centers phase's; the later phases' boxes held)
     assert wrote == []  # (nothing written for later phases that find the tiles held)
+    assert not held._HELD  # let go at the run's end (a mesh's held tiles too)
     weighed = len(made)
     seen.clear()
     made.clear()

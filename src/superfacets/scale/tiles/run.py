@@ -199,7 +199,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                               params)  # the tiles' point graphs, kept between phases
         boxes = box_folder(tmp, reader, survey.n_elements) if shared and n_tiles > 1 else None
         with Engine(workers=workers, scheduler=scheduler, memory_limit=memory_limit) as engine, \
-                _holding(engine, graphs):
+                _holding(engine, tmp):
             sent = _Sent()  # (where each tile's box is held: .held)
 
             def run(phase, margin, extra=lambda t: {}, only=None):
@@ -528,14 +528,14 @@ def _tile_stats(found: list, done: list) -> list[dict]:
 
 
 @contextmanager
-def _holding(engine: Engine, graphs):
-    """The run's tiles held in its workers' memory between phases (:mod:`.held`), let go
-    at its end, however it ends."""
+def _holding(engine: Engine, folder):
+    """The run's tiles held in its workers' memory between phases (:mod:`.held`, each
+    under a folder of the run's ``folder``: a cloud's graphs, a mesh's boxes), let go at
+    its end, however it ends."""
     try:
         yield
     finally:
-        if graphs is not None:
-            engine.on_workers(release_held, str(graphs))
+        engine.on_workers(release_held, str(folder))
 
 
 @dataclass
