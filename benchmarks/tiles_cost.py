@@ -14,7 +14,9 @@ seconds are the process's and its waited-for children's (the Dask workers: user 
 time), so a tiled run's is the total over its workers. ``--before DIR`` runs the same,
 alternating, against a built copy of another version (``benchmarks/_versions.py``).
 Prints a table: the median of ``--repeat`` runs, each run's CPU seconds over the first one
-run's and the first one run's wall time over its own (the speed-up of threads).
+run's, the first one run's wall time over its own (the speed-up of threads) and, for the
+tiles, the elements their boxes hold over their cores' (``TiledResult.halo_ratio``: every
+phase runs over the boxes).
 """
 
 from __future__ import annotations
@@ -40,7 +42,7 @@ def main():
     path, k, tiles, workers = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4])
     threads = int(sys.argv[5]) or None
     t, c = time.perf_counter(), cpu()
-    apart = -1
+    apart, ratio = -1, 1.0
     if tiles == 0:
         from superfacets import segment
         from superfacets.io import read_input
@@ -49,8 +51,9 @@ def main():
         from superfacets.scale.tiles.run import segment_tiled
         r = segment_tiled(path, k, tiles=tiles, workers=workers)
         n, apart = r.n_segments, r.disagreements / max(r.labels.shape[0], 1)
+        ratio = sum(s["rows"] for s in r.tiles) / max(sum(s["core"] for s in r.tiles), 1)
     print(json.dumps(dict(wall=time.perf_counter() - t, cpu=cpu() - c, n=int(n),
-                          apart=apart)))
+                          apart=apart, ratio=ratio)))
 if __name__ == "__main__":
     main()
 """
@@ -112,8 +115,8 @@ def main() -> None:
     print(f"{what}, k = {a.k}, {a.workers} workers, {cores} cores; median of {a.repeat}, "
           "a new process each")
     print("| version | run | wall s | CPU s | CPU / one run's | speed-up | disagreements "
-          "| segments |")
-    print("|---|---|---|---|---|---|---|---|")
+          "| boxes / cores | segments |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for v in versions:
         base = (v, threads[0], 0)
         one = statistics.median(r["cpu"] for r in runs[base])
@@ -124,8 +127,9 @@ def main() -> None:
             name = (f"{tiles} tiles" if tiles else
                     f"one run, {t} thread{'s' * (t != 1)}" if t else "one run")
             apart = f"{100 * rs[0]['apart']:.3f} %" if tiles else ""
+            ratio = f"{rs[0]['ratio']:.2f}" if tiles else ""
             print(f"| {'this' if v == 'installed' else Path(v).name} | {name} | {wall:.1f} | "
-                  f"{cpu:.1f} | {cpu / one:.2f} | {first / wall:.2f} | {apart} | "
+                  f"{cpu:.1f} | {cpu / one:.2f} | {first / wall:.2f} | {apart} | {ratio} | "
                   f"{rs[0]['n']} |")
 
 

@@ -284,6 +284,29 @@ def test_the_cli_says_when_tiles_give_fewer_superpoints_than_asked(tmp_path, cap
     assert got <= 6
 
 
+def test_the_cli_says_what_the_halos_cost_where_they_are_wide(tmp_path, capsys):
+    """Every phase runs over the tiles' boxes, so the elements they hold over their cores'
+    is what the halos add to the work: the summary says so where it is half again one run's
+    or more (small tiles for their superpoints), not where the tiles are large."""
+    from superfacets import segment_tiled
+    from superfacets.cli import main
+
+    rng = np.random.default_rng(1)
+    small = rng.random((400, 3))
+    flat = np.c_[rng.random((20000, 2)), np.zeros(20000)]
+    for name, pts, k in (("small", small, 6), ("flat", flat, 400)):
+        np.save(tmp_path / f"{name}.npy", pts)
+        res = segment_tiled(pts, k, tiles=2)
+        rows, core = (sum(t[f] for t in res.tiles) for f in ("rows", "core"))
+        assert core == len(pts) and res.halo_ratio == rows / core
+        assert main(["segment", str(tmp_path / f"{name}.npy"), "-k", str(k), "--tiles", "2",
+                     "-o", str(tmp_path / f"{name}.seg")]) == 0
+        err = capsys.readouterr().err
+        said = f"the tiles ran over {res.halo_ratio:.2f} times the points" in err
+        assert said == (res.halo_ratio >= 1.5), (name, res.halo_ratio, err)
+    assert res.halo_ratio < 1.5 < segment_tiled(small, 6, tiles=2).halo_ratio
+
+
 def test_a_scans_viewpoint_reaches_every_tile(tmp_path):
     from superfacets import PointCloud
 

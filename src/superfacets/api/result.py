@@ -427,3 +427,21 @@ class TiledResult:
         """Number of superfacets ``K``."""
         return int(self.centers.shape[0])
 
+    @property
+    def halo_ratio(self) -> float:
+        """Elements the tiles' boxes hold with their halos over those of their cores
+        (``>= 1``; 1.0 without tiles' details): each phase runs over the boxes, so a tiled
+        run's work is about this many times one run's. It grows with the tiles and falls
+        with the elements per superfacet (the halo is ``halo * window * r`` wide whatever
+        the tile's size): fewer tiles, or a larger ``k``, cost less.
+
+        Examples
+        --------
+        >>> r = TiledResult(np.zeros(4, np.int64), np.zeros(1, np.int64), 1.0, (2,), 0.1, 0,
+        ...                 tiles=[dict(core=2, rows=3), dict(core=2, rows=3)])
+        >>> r.halo_ratio
+        1.5
+        """
+        core = sum(t.get("core", 0) for t in self.tiles)
+        return sum(t.get("rows", 0) for t in self.tiles) / core if core else 1.0
+

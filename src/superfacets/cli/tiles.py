@@ -16,6 +16,10 @@ from .options import (
     sizes_said,
 )
 
+#: The halos' share of a tiled run's work (``TiledResult.halo_ratio``) from which the
+#: command says what they cost: from half again one run's work.
+HALO_NOTE = 1.5
+
 
 def tiles_arg(text: str):
     """``N`` (balanced tiles) or ``NX,NY,NZ`` (a regular grid)."""
@@ -121,6 +125,10 @@ def segment_tiles(args) -> int:
               f"({result.layout.describe()}), {elapsed:.2f} s; largest tile "
               f"{max(t['rows'] for t in result.tiles):,} {kind} with its halo, peak "
               f"{peak:,.0f} MiB; {result.disagreements:,} border disagreements", file=report)
+        if result.halo_ratio >= HALO_NOTE:
+            print(f"note: with their halos the tiles ran over {result.halo_ratio:.2f} times "
+                  f"the {kind}, about that many times one run's work: fewer tiles, or more "
+                  f"{kind} per {kind_of(kind).segment_word[:-1]}, cost less", file=sys.stderr)
         if seg_out is not None and str(seg_out) != "-":
             from ..io.records import LABEL_FIELD, records_kind
 
