@@ -14,9 +14,12 @@ seconds are the process's and its waited-for children's (the Dask workers: user 
 time), so a tiled run's is the total over its workers. ``--before DIR`` runs the same,
 alternating, against a built copy of another version (``benchmarks/_versions.py``).
 Prints a table: the median of ``--repeat`` runs, each run's CPU seconds over the first one
-run's, the first one run's wall time over its own (the speed-up of threads) and, for the
-tiles, the elements their boxes hold over their cores' (``TiledResult.halo_ratio``: every
-phase runs over the boxes).
+run's and, where one run was measured on as many threads as there are workers (``--threads
+1 2`` with 2 workers), over that run's (two busy processes, like two busy threads, slow
+each other down on a machine's shared memory: the same CPU seconds buy less), the first
+one run's wall time over its own (the speed-up of threads) and, for the tiles, the
+elements their boxes hold over their cores' (``TiledResult.halo_ratio``: every phase
+runs over the boxes).
 """
 
 from __future__ import annotations
@@ -114,13 +117,16 @@ def main() -> None:
             else f"{a.points:,} points on PSB 281 (seed {a.seed})")
     print(f"{what}, k = {a.k}, {a.workers} workers, {cores} cores; median of {a.repeat}, "
           "a new process each")
-    print("| version | run | wall s | CPU s | CPU / one run's | speed-up | disagreements "
-          "| boxes / cores | segments |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("| version | run | wall s | CPU s | CPU / one run's | CPU / one run's on as many "
+          "threads as workers | speed-up | disagreements | boxes / cores | segments |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for v in versions:
         base = (v, threads[0], 0)
         one = statistics.median(r["cpu"] for r in runs[base])
         first = statistics.median(r["wall"] for r in runs[base])
+        # the tiles' workers share the machine as one run's threads do (memory bandwidth)
+        alike = runs.get((v, a.workers, 0))
+        alike = statistics.median(r["cpu"] for r in alike) if alike else None
         for t, tiles in plan:
             rs = runs[(v, t, tiles)]
             wall, cpu = (statistics.median(r[f] for r in rs) for f in ("wall", "cpu"))
@@ -128,9 +134,10 @@ def main() -> None:
                     f"one run, {t} thread{'s' * (t != 1)}" if t else "one run")
             apart = f"{100 * rs[0]['apart']:.3f} %" if tiles else ""
             ratio = f"{rs[0]['ratio']:.2f}" if tiles else ""
+            same = f"{cpu / alike:.2f}" if tiles and alike else ""
             print(f"| {'this' if v == 'installed' else Path(v).name} | {name} | {wall:.1f} | "
-                  f"{cpu:.1f} | {cpu / one:.2f} | {first / wall:.2f} | {apart} | {ratio} | "
-                  f"{rs[0]['n']} |")
+                  f"{cpu:.1f} | {cpu / one:.2f} | {same} | {first / wall:.2f} | {apart} | "
+                  f"{ratio} | {rs[0]['n']} |")
 
 
 if __name__ == "__main__":

@@ -526,6 +526,25 @@ def test_local_workers_started_outside_a_main_guard_say_what_to_do(tmp_path):
     assert "workers=1" in last
 
 
+def test_the_local_cluster_runs_without_the_dashboards_samplers():
+    """The engine's own scheduler and workers run with ``QUIET_CLUSTER``: no statistical
+    profiler in the workers, a 200 ms tick (Dask's 20 ms), a 2 s system monitor (0.5 s),
+    CPU that no run reads; a user's own settings outside the engine stay as they were."""
+    pytest.importorskip("distributed")
+    import dask.config
+
+    from superfacets.scale.runner.engine import QUIET_CLUSTER, Engine
+
+    before = {k: dask.config.get(k) for k in QUIET_CLUSTER}
+    with Engine(workers=2) as engine:
+        seen = engine.client.run(lambda dask_worker: (
+            dask.config.get("distributed.worker.profile.enabled"), dask_worker._tick_interval))
+        assert sorted(seen.values()) == [(False, 0.2), (False, 0.2)]
+        assert engine.client.run_on_scheduler(lambda dask_scheduler:
+                                              dask_scheduler._tick_interval) == 0.2
+    assert {k: dask.config.get(k) for k in QUIET_CLUSTER} == before
+
+
 def test_a_batch_bar_is_redrawn_while_an_input_runs(tmp_path, monkeypatch, capsys):
     """A large input takes minutes in a worker: the batch's bar (its elapsed time) is
     redrawn every TICK seconds meanwhile, not only when an input ends."""
