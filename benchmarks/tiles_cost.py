@@ -54,6 +54,7 @@ def main():
         from superfacets.scale.tiles.run import segment_tiled
         r = segment_tiled(path, k, tiles=tiles, workers=workers)
         n, apart = r.n_segments, r.disagreements / max(r.labels.shape[0], 1)
+        # (TiledResult.halo_ratio, summed here: a --before version may not have it)
         ratio = sum(s["rows"] for s in r.tiles) / max(sum(s["core"] for s in r.tiles), 1)
     print(json.dumps(dict(wall=time.perf_counter() - t, cpu=cpu() - c, n=int(n),
                           apart=apart, ratio=ratio)))
