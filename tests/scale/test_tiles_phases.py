@@ -72,6 +72,30 @@ def test_a_clouds_tiles_start_from_centers_found_on_the_sample(monkeypatch):
     assert "centers" in plain.timings and "start" not in plain.timings and len(seen) == 1
 
 
+def test_the_orientation_and_the_start_read_one_thinned_sample(monkeypatch, tmp_path):
+    """The normals' orientation reference is made on the sample the start runs on (the
+    survey's, thinned to a quarter of the cloud here), and the start runs on that cloud and
+    the point graph the orientation built, not on a graph of its own."""
+    from superfacets.scale.tiles import phases as tiling
+
+    seen = []
+    real = tiling.sample_start
+
+    def start(sample, rows, n_rows, params, r, diagonal, cloud=None, *args, **kw):
+        step = tiling.start_step(sample.shape[0], n_rows, params.n_segments)
+        seen.append((cloud, sample[::step], bool(cloud.__dict__.get("_point_graphs"))))
+        return real(sample, rows, n_rows, params, r, diagonal, cloud, *args, **kw)
+
+    monkeypatch.setattr(tiling, "sample_start", start)
+    monkeypatch.setattr(tiling, "START_MIN_POINTS", 1000)
+    np.save(tmp_path / "c.npy", _bumpy_cloud(20_000).points)  # (no normals: oriented)
+    res = segment_tiled(tmp_path / "c.npy", 30, tiles=4, merge_from=1)
+    (cloud, thinned, had_graph), = seen
+    assert thinned.shape[0] == 5000 and res.n_segments == 30  # (every 4th point)
+    np.testing.assert_array_equal(cloud.points, thinned)  # the orientation's own cloud,
+    assert had_graph  # with the graph it built
+
+
 @pytest.mark.parametrize("options", [dict(n_segments=100), dict(n_segments=None,
                                                                 radius=0.004)])
 def test_a_sample_too_small_for_the_centers_leaves_them_to_the_tiles(options, tmp_path,

@@ -67,7 +67,7 @@ from .graphs import kept_classification
 from .layout import gathered_centers
 from .merges import one_position_stats, tile_merge_stats
 
-__all__ = ["tile_centers", "sample_start", "tile_refine", "tile_labels",
+__all__ = ["tile_centers", "sample_start", "start_step", "tile_refine", "tile_labels",
            "tile_connect", "orientation_reference", "HALO",
            "point_areas", "core_area", "oriented_sample", "check_tileable"]
 
@@ -193,6 +193,24 @@ START_MIN_POINTS = 10_000
 START_FEWEST_PER_CENTER = 5
 
 
+def start_step(n_sample: int, n_rows: int, n_segments: int | None) -> int:
+    """The stride that thins a survey's sample of ``n_sample`` points (of a cloud of
+    ``n_rows``) for a tiled run's start (:func:`sample_start`) and its normals'
+    orientation reference (:func:`orientation_reference`), one sample for both: at most
+    :data:`START_SHARE` of the cloud, where that keeps at least :data:`START_MIN_POINTS`
+    points and :data:`START_POINTS_PER_CENTER` a center (``n_segments``; None: sized by a
+    radius), else 1.
+
+    Examples
+    --------
+    >>> start_step(1_000_000, 2_000_000, 2_000), start_step(1_000_000, 10_000_000, 2_000)
+    (2, 1)
+    """
+    least = max(START_MIN_POINTS, START_POINTS_PER_CENTER * (n_segments or 0))
+    return max(1, min(math.ceil(n_sample / (START_SHARE * max(n_rows, 1))),
+                      n_sample // least))
+
+
 def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: SegmentParams,
                  r: float, diagonal: float, cloud=None, up=None, viewpoint=None
                  ) -> tuple[np.ndarray, np.ndarray] | None:
@@ -226,8 +244,9 @@ def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: Segm
     diagonal : float
         The whole cloud's bounding-box diagonal.
     cloud : PointCloud, optional
-        The sample as a cloud with its point graph (the orientation reference's:
-        :func:`oriented_sample`), used when the sample is not thinned.
+        The sample thinned by :func:`start_step` as a cloud with its point graph (the
+        orientation reference's: :func:`oriented_sample`), used where it holds as many
+        points as that thinned sample (else one is made here).
     up : (3,) float ndarray, optional
         The cloud's up direction (``PointCloud.up``), for the sample's normals.
     viewpoint : (3,) float ndarray, optional
@@ -255,12 +274,10 @@ def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: Segm
     sample = np.asarray(sample, dtype=np.float64)
     if sample.shape[0] < min(START_FEWEST_PER_CENTER * (params.n_segments or 0), n_rows):
         return None  # (fewer points a center than a start needs, and not the whole cloud)
-    least = max(START_MIN_POINTS, START_POINTS_PER_CENTER * (params.n_segments or 0))
-    step = max(1, min(math.ceil(sample.shape[0] / (START_SHARE * n_rows)),
-                      sample.shape[0] // least))
-    if step > 1 or cloud is None:
-        cloud = PointCloud(sample[::step], up=up, viewpoint=viewpoint)
-        sample, rows = sample[::step], rows[::step]
+    step = start_step(sample.shape[0], n_rows, params.n_segments)
+    sample, rows = sample[::step], rows[::step]
+    if cloud is None or cloud.points.shape[0] != sample.shape[0]:  # (not the orientation's)
+        cloud = PointCloud(sample, up=up, viewpoint=viewpoint)
     d = _diagonal(cloud)
     if d <= 0 or sample.shape[0] < 3:
         return rows[:1], sample[:1]

@@ -193,7 +193,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
             with stage("bucket", bar=False):  # (a bar of its own)
                 reader = buckets.bucket(reader, layout, Path(tmp) / "buckets", progress=progress)
         with stage("orientation"):
-            reference, sample_area, sampled = _orientation(reader, survey, params.n_neighbors,
+            reference, sample_area, sampled = _orientation(reader, survey, params,
                                                            up, shared and tmp)
         graphs = graph_folder(tmp, survey.n_elements, reader.kind, shared and n_tiles > 1,
                               params)  # the tiles' point graphs, kept between phases
@@ -346,19 +346,21 @@ def _merge_plan(params, kind: str, survey, n_tiles: int):
     return target, merge_from, params
 
 
-def _orientation(reader, survey, n_neighbors: int, up, folder):
+def _orientation(reader, survey, params, up, folder):
     """The normals' orientation reference of a cloud with neither normals nor viewpoint
-    (from the survey's sample; saved in ``folder`` where the tasks share one, and then its
+    (from the survey's sample, thinned as the start thins it: :func:`~superfacets.scale.
+    tiles.phases.start_step`; saved in ``folder`` where the tasks share one, and then its
     path), else None; the sample's area where its graph was built (else None); and the
     sample as a cloud with that graph (else None: :func:`~superfacets.scale.tiles.phases.
-    sample_start` reads it)."""
+    sample_start` reads it, not building its own)."""
 
     if not kind_of(reader.kind).cloud or survey.normals or reader.viewpoint is not None:
         return None, None, None
-    cloud = sample_cloud(survey.sample, n_neighbors, up)
+    step = phases.start_step(survey.sample.shape[0], reader.n_rows, params.n_segments)
+    cloud = sample_cloud(survey.sample[::step], params.n_neighbors, up)
     if cloud is None:
         return np.zeros((0, 6)), None, None
-    graph = points.point_graph(cloud, n_neighbors).graph  # (built with the cloud: kept there)
+    graph = points.point_graph(cloud, params.n_neighbors).graph  # (kept with the cloud)
     reference = np.hstack([graph.positions, graph.normals.astype(np.float64)])
     area = float(graph.sizes.sum())
     if folder:  # read by the tasks from the work folder, not shipped with each
