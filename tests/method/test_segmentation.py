@@ -257,6 +257,23 @@ def test_passes_listed_by_a_key_give_the_same_superfacets_their_list_in_its_orde
     np.testing.assert_array_equal(dist, d0)
 
 
+@pytest.mark.parametrize("assignment", ["bounded", "exact"])
+def test_centers_on_fixed_elements_stay_through_the_passes_and_the_swaps(sphere, assignment):
+    """``fixed`` (a tile's halo): the centers started on those elements are centers at the
+    end, on the same elements, through passes and swaps; the others move as the passes
+    move them."""
+    p = resolve(n_segments=60, assignment=assignment, cleanup=False)
+    init = np.sort(np.random.default_rng(0).choice(sphere.n_faces, 60, replace=False))
+    lower = np.asarray(sphere.centroids)[:, 2] < 0  # the lower half's centers held
+    free = np.asarray(pipeline(sphere, p, finished=False, initial=init).centers)
+    held = pipeline(sphere, p, finished=False, initial=init, fixed=lower)
+    kept = np.asarray(held.centers)
+    assert np.isin(init[lower[init]], kept).all()
+    assert not np.isin(init[lower[init]], free).all()  # (where the passes move them)
+    assert np.isin(init[~lower[init]], kept).mean() < 0.5  # the upper half's moved
+    assert held.timings["passes"] >= 2
+
+
 def test_bounded_expansion_is_dijkstra_inside_the_window(sphere):
     g = face_graph(sphere)
     w = paper_weights(sphere, alpha=200)

@@ -402,3 +402,24 @@ def test_letting_the_kept_expansions_go_before_the_swaps_keeps_the_labels(monkey
     assert forgot and forgot[0] > 0  # records were kept, and let go
     np.testing.assert_array_equal(r.labels, kept.labels)
     assert r.timings["expansions"] > kept.timings["expansions"]  # every center again
+
+
+def test_frozen_superfacets_take_no_part_in_a_swap():
+    """The valley's swap splits the superfacet on the crease and merges two strips of the
+    right slope; with that superfacet frozen, it is neither split nor merged (another swap
+    may be made elsewhere), and with the three strips frozen too, no swap is left."""
+    mesh, _ = _valley()
+    x = mesh.centroids[:, 0]
+    labels = np.select([np.abs(x) < 0.25, x < 0, x < 0.5, x < 0.75], [0, 4, 1, 2], 3)
+    g, w = face_graph(mesh), _weights(mesh)
+    free, n = swap_round(g, w, labels)
+    assert n == 1 and np.unique(free[labels == 0]).size == 2  # (the crease's, split)
+    frozen = np.zeros(5, dtype=bool)
+    frozen[0] = True
+    out, _ = swap_round(g, w, labels, frozen=frozen)
+    crease = out[labels == 0]
+    assert np.unique(crease).size == 1 and (out == crease[0]).sum() == (labels == 0).sum()
+    frozen[[1, 2, 3]] = True
+    out, n = swap_round(g, w, labels, frozen=frozen)
+    assert n == 0
+    np.testing.assert_array_equal(out, labels)

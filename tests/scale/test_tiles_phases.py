@@ -120,6 +120,40 @@ def test_a_sample_too_small_for_the_centers_leaves_them_to_the_tiles(options, tm
         assert res.n_segments == 100
 
 
+@pytest.mark.parametrize("kind", ["mesh", "cloud"])
+def test_the_refine_round_moves_only_the_cores_centers(kind, monkeypatch):
+    """Each tile's refine round holds the centers of its halo where they are (their own
+    tiles move them): its passes get every element outside its core as fixed, and every
+    halo center it was given is a center of its last pass; without the hold (FREEZE_HALO
+    False) some move. Either way a whole run's count comes out."""
+    from superfacets.scale.tiles import phases as tiling
+
+    seen = []
+    real = tiling.pipeline
+
+    def spy(inp, p, **kw):
+        out = real(inp, p, **kw)
+        if kw.get("initial") is not None:  # (the refine round's passes)
+            seen.append((kw["initial"], kw.get("fixed"), out.classification[1]))  # (elements)
+        return out
+
+    monkeypatch.setattr(tiling, "pipeline", spy)
+    source = _bumpy(4) if kind == "mesh" else _bumpy_cloud(8000)
+    for hold in (True, False):
+        monkeypatch.setattr(tiling, "FREEZE_HALO", hold)
+        seen.clear()
+        res = segment_tiled(source, 40, tiles=2)  # (merged to the count at the end)
+        assert res.n_segments == 40 and len(seen) == 2
+        still = []
+        for initial, fixed, last in seen:
+            assert (fixed is not None) == hold
+            halo = initial[fixed[initial]] if hold else initial
+            still.append(np.isin(halo, last).all())
+            if hold:
+                assert 0 < fixed.sum() < fixed.size  # (the halo's elements, not the core's)
+        assert all(still) == hold
+
+
 def test_core_classification_is_the_whole_inputs_from_the_same_centers():
     """Known answer: with a halo of 2 window * r, each tile labels its core as one run over
     the whole input does from the same centers (paper's classification, no post-step)."""

@@ -152,7 +152,8 @@ def _left(history: list, column: int, target: float) -> int:
 def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
             positions: np.ndarray, max_iter: int, *, jump_cycles: bool = True,
             tol: float = 0.0, min_move: float = 0.0, bar=None,
-            settle: bool = False, order: np.ndarray | None = None) -> Iteration:
+            settle: bool = False, order: np.ndarray | None = None,
+            fixed: np.ndarray | None = None) -> Iteration:
     """Alternate classification and center update (paper section 3.1).
 
     Parameters
@@ -188,6 +189,10 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
         no orphan was seeded in it (a tiled run's labels phase resumes from it:
         :mod:`superfacets.scale.tiles.phases`). The same superfacets where no two centers
         reach an element at exactly the same distance.
+    fixed : (n,) bool ndarray, optional
+        Elements whose centers the update leaves where they are (a tile's refine round:
+        its halo's centers, which their own tiles move; the tile's passes move only its
+        core's, and the classifier keeps the cells of the centers that stay).
 
     Returns
     -------
@@ -246,6 +251,7 @@ def iterate(classifier, centers: np.ndarray, n_centers: int, sizes: np.ndarray,
         moved = update_centers(label, k_now, sizes, positions, used)
         if min_move > 0:
             hold_small_moves(moved, used, positions, min_move)
+        hold_fixed(moved, used, fixed)
         if settle:
             recent.hold(used, moved, held)
             stay = held[used] & (moved >= 0)
@@ -363,6 +369,16 @@ def _settle(centers: np.ndarray, states: list, energies: list, first: int,
     held[best[~np.isin(best, always)]] = True
     centers[:best.shape[0]] = best
     return int(best.shape[0])
+
+
+def hold_fixed(new: np.ndarray, old: np.ndarray, fixed: np.ndarray | None) -> None:
+    """Keep in place (``new[s] = old[s]``) each center on a ``fixed`` element (an empty
+    superfacet's -1 stays; None: none fixed)."""
+    if fixed is None:
+        return
+    held = (old >= 0) & (new >= 0)
+    held[held] = fixed[old[held]]
+    new[held] = old[held]
 
 
 def hold_small_moves(new: np.ndarray, old: np.ndarray, positions: np.ndarray,

@@ -222,7 +222,7 @@ class Hooks:
 def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
              jump_cycles: bool = True, n_centers: int | None = None,
              initial: np.ndarray | None = None, finished: bool = True,
-             order: np.ndarray | None = None) -> RunRecord:
+             order: np.ndarray | None = None, fixed: np.ndarray | None = None) -> RunRecord:
     """Run the method with validated parameters, stage by stage (see the module notes).
 
     Parameters
@@ -254,6 +254,10 @@ def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
         ``finished=False`` the record's ``classification`` is the last pass's: each
         element's superfacet (int32, an index into the centers), the centers (elements,
         int64) and each element's distance to its center (float64).
+    fixed : (n,) bool ndarray, optional
+        Elements whose centers stay where they are through the passes and take no part in
+        a swap (a tile's refine round: the centers of its halo, its neighbours' to move;
+        :func:`superfacets.method.passes.iterate`).
 
     Returns
     -------
@@ -275,12 +279,13 @@ def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
 
     with using(params.n_threads):  # also the graph build and terms this run triggers
         return _run(mesh, params, features, replay=replay, jump_cycles=jump_cycles,
-                    n_centers=n_centers, initial=initial, finished=finished, order=order)
+                    n_centers=n_centers, initial=initial, finished=finished, order=order,
+                    fixed=fixed)
 
 
 def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
          n_centers: int | None = None, initial=None, finished: bool = True,
-         order=None) -> RunRecord:
+         order=None, fixed=None) -> RunRecord:
     t_start = time.perf_counter()
     hooks = Hooks(p.progress, p.max_iter, kind_for(obj, p.elements))
     try:
@@ -313,7 +318,7 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
                 give_back_free_memory()  # the start's freed temporaries (a mesh's peak)
         with hooks.stage("iterations", "superfacets"):
             it = iterate_passes(graph, w, swap_w, init, rules, hooks, replay=replay,
-                                jump_cycles=jump_cycles, order=order)
+                                jump_cycles=jump_cycles, order=order, fixed=fixed)
         w = swap_w = None  # free the weights before the clean-up
     except BaseException:
         hooks.close()

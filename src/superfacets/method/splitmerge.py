@@ -106,7 +106,8 @@ FORGET_MIN = 1 << 22
 def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: float = np.inf,
                power: float = POWER, lloyd: int = LLOYD, max_fraction: float = MAX_FRACTION,
                n_threads: int = 1, pruned: bool = True,
-               min_gain: float = MIN_GAIN) -> tuple[np.ndarray, int]:
+               min_gain: float = MIN_GAIN, frozen: np.ndarray | None = None
+               ) -> tuple[np.ndarray, int]:
     """One round of K-preserving swaps (see the module notes).
 
     Parameters
@@ -137,6 +138,9 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
         choice is decided; a merge's search is abandoned once its energy
         exceeds the largest gain of any split. ``False`` evaluates every
         candidate in full (the reference the tests compare with).
+    frozen : (K,) bool ndarray, optional
+        Superfacets that take no part in a swap (neither split nor merged: a tile's
+        halo, whose superfacets their own tiles move).
 
     Returns
     -------
@@ -190,7 +194,9 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
             *args, int(lloyd), which, far, split_energy, second, dist, dist2, stamp,
             stamp2, b[t], *space[t], t, n_thr), n_thr)
 
-    splits = _SplitOrder(energy, split_energy, evaluate, 8 * n_thr, pruned)
+    # (a frozen superfacet's split gains nothing: never chosen, and evaluated last)
+    splits = _SplitOrder(energy if frozen is None else np.where(frozen, 0.0, energy),
+                         split_energy, evaluate, 8 * n_thr, pruned)
     limit = max(1, int(max_fraction * k))
     best = splits.peek()
     if best is None:  # no split lowers the energy: no swap
@@ -210,6 +216,8 @@ def swap_round(graph, weights: np.ndarray, labels: np.ndarray, *, window_r2: flo
         *args, pa, pb, energy, float(window_r2), float(most), union, *own[t], rank, mb[t],
         *space[t], t, n_thr), n_thr)
     loss = union - energy[pa] - energy[pb]  # inf: not allowed, or beyond any gain
+    if frozen is not None:
+        loss[frozen[pa] | frozen[pb]] = np.inf
 
     remap, split_to, n_swaps = _greedy_swaps(splits, pa, pb, loss, k, limit,
                                              min_gain * float(np.mean(energy)))
@@ -334,7 +342,7 @@ def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.nda
                      rounds: int = ROUNDS, window_r2: float = np.inf, min_move: float = 0.0,
                      n_threads: int = 1, passes_after: int | None = None,
                      swap_weights: np.ndarray | None = None, hold_after: float = 1.0,
-                     **iterate_kw):
+                     fixed: np.ndarray | None = None, **iterate_kw):
     """Up to ``rounds`` rounds of (:func:`swap_round`, then the passes again from
     the new centers), after the iteration ``it`` (an
     :class:`~superfacets.method.passes.Iteration`); stops at a round without a swap.
@@ -352,7 +360,8 @@ def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.nda
     the weights of the swap energies (default: ``weights``, those of the
     passes; the pipeline gives :func:`~superfacets.method.weights.convex_scaled`
     with the kind's ``swap_eta_convex``). In the passes after
-    a round a center moving by less than ``hold_after * min_move`` stays.
+    a round a center moving by less than ``hold_after * min_move`` stays. The centers
+    on ``fixed`` elements ((n,) bool) stay, and their superfacets are not swapped.
 
     Returns
     -------
@@ -383,18 +392,20 @@ def swap_and_iterate(it, graph, weights: np.ndarray, classifier, centers: np.nda
         swap_w = np.asarray(weights if swap_weights is None else swap_weights,
                             dtype=np.float64)
         new, n = swap_round(graph, swap_w, relabel_dense(it.label).astype(np.int32),
-                            window_r2=window_r2, n_threads=n_threads)
+                            window_r2=window_r2, n_threads=n_threads,
+                            frozen=None if fixed is None else fixed[old])
         del swap_w
         if n == 0:
             break
         moved = update_centers(new, old.shape[0], sizes, positions, old)
         if min_move > 0:
             hold_small_moves(moved, old, positions, min_move)
+        passes.hold_fixed(moved, old, fixed)
         moved = moved[moved >= 0]
         centers[:moved.shape[0]] = moved
         bound = max_iter if passes_after is None else min(max_iter, passes_after)
         after = passes.iterate(classifier, centers, moved.shape[0], sizes, positions, bound,
-                        min_move=min_move * hold_after, **iterate_kw)
+                        min_move=min_move * hold_after, fixed=fixed, **iterate_kw)
         if bound < max_iter and after.n_iter >= bound:  # the schedule's end, not max_iter
             after = replace(after, converged=True)
         n_iter += after.n_iter

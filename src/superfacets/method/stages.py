@@ -569,7 +569,8 @@ def initialize(graph, w: np.ndarray, rules: Rules, hooks,
 
 def iterate_passes(graph, w: np.ndarray, swap_w, init: np.ndarray, rules: Rules,
                    hooks, *, replay: bool = True, jump_cycles: bool = True,
-                   order: np.ndarray | None = None) -> Iteration:
+                   order: np.ndarray | None = None, fixed: np.ndarray | None = None
+                   ) -> Iteration:
     """Stage 5: passes of (classify, update) until no center moves, ``tol`` or
     ``max_iter`` (paper section 3.1, steps 2-3); then, with split-and-merge, the
     K-preserving swaps and the passes again (with ``tol > 0``: the swaps once a pass
@@ -594,6 +595,9 @@ def iterate_passes(graph, w: np.ndarray, swap_w, init: np.ndarray, rules: Rules,
     order : (n,) int64 ndarray, optional
         The passes' centers listed by this key of their elements
         (:func:`superfacets.method.passes.iterate`); not with split-and-merge.
+    fixed : (n,) bool ndarray, optional
+        Elements whose centers stay and take no part in a swap
+        (:func:`superfacets.method.passes.iterate`).
 
     Raises
     ------
@@ -626,7 +630,7 @@ def iterate_passes(graph, w: np.ndarray, swap_w, init: np.ndarray, rules: Rules,
         it = iterate(classifier, centers, init.shape[0], sizes, positions, p.max_iter,
                      jump_cycles=jump_cycles, tol=max(p.tol, START_TOL) if rules.fast else p.tol,
                      min_move=min_move, bar=hooks.bar, settle=settle,
-                     order=None if rules.split_merge else order)
+                     order=None if rules.split_merge else order, fixed=fixed)
         if rules.split_merge:
             hooks.describe("split and merge")
             it, hooks.timings["swaps"] = swap_and_iterate(
@@ -636,7 +640,7 @@ def iterate_passes(graph, w: np.ndarray, swap_w, init: np.ndarray, rules: Rules,
                 rounds=FAST_ROUNDS if rules.fast else ROUNDS,
                 passes_after=rules.kind.passes_after if rules.fast else None,
                 swap_weights=swap_w,
-                hold_after=rules.kind.hold_after if rules.fast else 1.0)
+                hold_after=rules.kind.hold_after if rules.fast else 1.0, fixed=fixed)
     finally:
         spaces.close()
     return it

@@ -14,7 +14,8 @@ one task per tile (:mod:`superfacets.scale.tiles.run` sends them to Dask):
    had in one run. Together the tiles' kept centers are the run's centers,
    each named by its row in the input.
    Then (:func:`tile_refine`, ``refine`` rounds) each tile runs the passes
-   again from the gathered centers within reach, so that the centers near a
+   again from the gathered centers within reach, moving only its core's (the
+   halo's stay where their own tiles put them), so that the centers near a
    border settle beside their true neighbours, not beside the halo's edge
    (with refine rounds to come, the centers phase runs its start and one pass:
    the rounds run the passes). On a cloud with refine rounds, the centers phase
@@ -69,7 +70,7 @@ from .merges import one_position_stats, tile_merge_stats
 
 __all__ = ["tile_centers", "sample_start", "start_step", "tile_refine", "tile_labels",
            "tile_connect", "orientation_reference", "HALO",
-           "point_areas", "core_area", "oriented_sample", "check_tileable"]
+           "point_areas", "core_area", "oriented_sample", "check_tileable", "FREEZE_HALO"]
 
 #: Default halo, in units of ``window * r``. 3 rather than 2: the classification of
 #: the core is exact from 2, and the clean-up near a border nearly so from 3 (fewer
@@ -291,10 +292,17 @@ def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: Segm
     return gathered_centers([dict(centers=rows[found], positions=sample[found])], params)
 
 
+#: The refine round moves only the core's centers: those of the halo stay where the
+#: gathered centers put them (their own tiles move them) and take no part in a swap, so the
+#: passes search again only the cells of the core's (docs/notes/tiles.md, "The halo's
+#: centers held"). False: every center in the box moves, as before.
+FREEZE_HALO = True
+
+
 def tile_refine(inp, core: np.ndarray, center_rows: np.ndarray, params: SegmentParams,
                 r: float, diagonal: float, features=None, folder=None) -> np.ndarray:
     """Phase 1b: the method's passes on one tile from the run's centers within reach;
-    the rows of the centers that end in the core.
+    the rows of the centers the tile keeps (its own: see below).
 
     The centers near a tile border came from two tiles' runs, each beside an
     artificial boundary (its halo's edge); from the gathered centers, every
@@ -306,7 +314,10 @@ def tile_refine(inp, core: np.ndarray, center_rows: np.ndarray, params: SegmentP
     go: :func:`~superfacets.scale.tiles.graphs.keep_classification`) for the labels
     phase: its passes list their centers by row, as the labels phase lists the run's, so
     that phase searches again only the cells of the centers that differ (those of the
-    halo, moved by their own tiles).
+    halo, moved by their own tiles). The halo's centers stay where they are through the
+    passes (:data:`FREEZE_HALO`): only the core's move, and the tile returns those whose
+    superfacets reach its core wherever their centers end (in the halo too: no other tile
+    moves them), so no center is lost or kept twice at a border.
     """
     d = _diagonal(inp)
     if d <= 0 or len(center_rows) == 0:
@@ -314,21 +325,36 @@ def tile_refine(inp, core: np.ndarray, center_rows: np.ndarray, params: SegmentP
     p = _tile_params(params, r, diagonal, d)
     src = elements_of(inp, p.elements, n_neighbors=p.n_neighbors,
                       neighbor_radius=p.neighbor_radius)
-    elem = src.to_rows(np.arange(src.graph.n_elements))[np.asarray(center_rows, np.int64)]
+    m = src.graph.n_elements
+    of_row = src.to_rows(np.arange(m))
+    elem = of_row[np.asarray(center_rows, np.int64)]
     elem = elem[elem >= 0]
     _, first = np.unique(elem, return_index=True)
     exact = folder is not None and assignment_of(p, src.graph.kind) == "exact"
-    order = src.first_rows(np.arange(src.graph.n_elements)) if exact else None
-    result = pipeline(inp, p, features=features, initial=elem[np.sort(first)], finished=False,
-                      order=order)
-    if exact:
-        label, used, dist = result.classification
-        if used.size < 2 or (np.diff(order[used]) > 0).all():  # (no orphan in the last pass)
-            # (with the graph: the labels phase reads it there where the tile is held;
-            # written to the folder when the tile is let go)
-            src.graph.__dict__["last_classification"] = (label, used, dist)
-    rows = np.asarray(result.centers, dtype=np.int64)
-    return rows[core[rows]]
+    order = src.first_rows(np.arange(m)) if exact else None
+    start = elem[np.sort(first)]
+    in_core = np.zeros(m, dtype=bool)
+    in_core[of_row[core & (of_row >= 0)]] = True
+    fixed = None
+    if FREEZE_HALO:  # the halo's centers stay: their own tiles move them
+        fixed = np.zeros(m, dtype=bool)
+        fixed[start[~in_core[start]]] = True
+    result = pipeline(inp, p, features=features, initial=start, finished=False,
+                      order=order, fixed=fixed)
+    label, used, dist = result.classification
+    if exact and (used.size < 2 or (np.diff(order[used]) > 0).all()):  # (no orphan in
+        # the last pass; with the graph: the labels phase reads it there where the tile
+        # is held; written to the folder when the tile is let go)
+        src.graph.__dict__["last_classification"] = (label, used, dist)
+    if fixed is None:
+        rows = np.asarray(result.centers, dtype=np.int64)
+        return rows[core[rows]]
+    # the centers this tile moved (not its halo's) whose superfacets reach its core, where
+    # they end: one that crossed into the halo is still this tile's (no other moves it),
+    # one an orphan seeded at the box's outer edge is not
+    touches = np.zeros(used.size, dtype=bool)
+    touches[label[in_core]] = True
+    return np.sort(src.first_rows(used[touches & ~fixed[used]]))
 
 
 def orientation_reference(sample: np.ndarray, n_neighbors: int, up=None) -> tuple:
