@@ -4,7 +4,7 @@ Usage: python benchmarks/real_scans.py [--scans NAME ...] [-k 300 1000 3000]
        [--methods superfacets graph_segmentation cut_pursuit spt_partition vccs]
        [--spt-levels 1 2] [--beta auto 0]
        [--neighbors 10] [--split-merge] [--min-points 3] [--content] [--adaptive]
-       [--size-ratios 0 8 4 2]
+       [--size-ratios 0 8 4 2] [--fine-floors 8 4]
        [--leave-out CLASS ...] [--csv results.csv] [--download] [--rooms 3]
 
 Each scan of ``superfacets.evaluation.datasets.scans.SCANS`` found in the cache
@@ -39,6 +39,8 @@ Methods (the registry's, so ``superfacets experiment`` runs the same code):
   (``segment(..., min_elements=N)``), the request raised until
   the count is reached; with ``--size-ratios R ...`` also its merges with each largest
   superpoint (``max_size_ratio``: R times the mean; 0 no bound, as before the bound);
+  with ``--fine-floors N ...`` also its first run (before the merges) allowed down to N
+  points per superpoint (``method.rules.MIN_FINE_ELEMENTS``, 12, set for the run);
   with ``--adaptive`` also the content-adaptive
   superpoints (``adaptive_superpoints``: exactly k);
 - ``graph_segmentation``: the ScanNet Segmentator's method, its threshold
@@ -119,6 +121,7 @@ def run(scan, method: str, k: int, beta: float, options: dict | None = None,
     if method == "superfacets":  # the registry's run, with the colour weight
         options = dict(options or {})
         options["min_elements"] = options.pop("min_points", 1)
+        floor = options.pop("fine_floor", None)
 
         def superpoints(req):
             return segment(cloud, req, beta=beta, n_neighbors=neighbors, **options).labels
@@ -128,6 +131,14 @@ def run(scan, method: str, k: int, beta: float, options: dict | None = None,
 
             labels = adaptive_superpoints(cloud, k, beta=beta, n_neighbors=neighbors,
                                           **options)
+        elif floor is not None:  # a module constant: set for this run only
+            from superfacets.method import rules
+
+            kept, rules.MIN_FINE_ELEMENTS = rules.MIN_FINE_ELEMENTS, int(floor)
+            try:
+                labels = _equal_count(superpoints, k)
+            finally:
+                rules.MIN_FINE_ELEMENTS = kept
         else:
             labels = _equal_count(superpoints, k)
     elif method == "graph_segmentation":  # as the registry runs them, with the neighbours
@@ -294,6 +305,9 @@ def main() -> None:
     ap.add_argument("--size-ratios", type=float, nargs="+", default=[], metavar="R",
                     help="also superfacets with these max_size_ratio values (the merges' "
                          "largest superpoint in mean sizes; 0: no bound), a row each")
+    ap.add_argument("--fine-floors", type=int, nargs="+", default=[], metavar="N",
+                    help="also superfacets with its first run allowed down to N points per "
+                         "superpoint (method.rules.MIN_FINE_ELEMENTS, 12), a row each")
     ap.add_argument("--content", action="store_true",
                     help="also superfacets with content-sensitive sizes (density=0.5, "
                          "roughness=1)")
@@ -344,6 +358,7 @@ def main() -> None:
                     variants += [(0.0, {"adaptive": True})]
                 if method == "superfacets":
                     variants += [(None, {"max_size_ratio": v}) for v in a.size_ratios]
+                    variants += [(None, {"fine_floor": v}) for v in a.fine_floors]
                 if method == "superfacets" and a.min_points > 1:
                     variants += [(0.0, {"min_points": a.min_points})]
                 for beta, options in variants:
@@ -357,7 +372,8 @@ def main() -> None:
                         (f" min {options['min_points']} points" if "min_points" in options
                          else "") + \
                         (f" max size {options['max_size_ratio']:g}" if "max_size_ratio" in
-                         options else "")
+                         options else "") + \
+                        (f" floor {options['fine_floor']}" if "fine_floor" in options else "")
                     print(f"| {k} | {label} | {r['undersegmentation_error']:.4f} | "
                           f"{r['boundary_recall']:.4f} | {r['boundary_precision']:.4f} | "
                           f"{r['achievable_accuracy']:.4f} | {r['oracle_miou']:.4f} | "

@@ -317,3 +317,28 @@ def test_real_scan_segments_and_measures(name):
         assert ((s.instances == UNLABELLED) == (s.ground_truth == UNLABELLED)).all()
         obj = evaluate_scan(s, labels, against="instances")
         assert obj["undersegmentation_error"] >= m["undersegmentation_error"]
+
+
+def test_real_scans_fine_floor_is_set_for_its_run_only(tmp_path, monkeypatch):
+    """``real_scans.py --fine-floors N``: the row is the run with the first run allowed
+    down to N points per superpoint, and the module's floor is 12 again after it."""
+    import importlib.util
+    from pathlib import Path
+
+    from superfacets.method import rules
+
+    spec = importlib.util.spec_from_file_location(
+        "real_scans", Path(__file__).resolve().parents[2] / "benchmarks" / "real_scans.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    _write_kitti(tmp_path)
+    scan = load_scan("semantickitti-000700", tmp_path)
+    opts = {"density": 0.0}  # even areas: the merges run (a sweep's default has none)
+    metrics = ("undersegmentation_error", "boundary_recall", "oracle_miou", "median_points")
+    row = bench.run(scan, "superfacets", 400, 0.0, {**opts, "fine_floor": 2})
+    assert rules.MIN_FINE_ELEMENTS == 12
+    default = bench.run(scan, "superfacets", 400, 0.0, opts)
+    monkeypatch.setattr(rules, "MIN_FINE_ELEMENTS", 2)
+    floored = bench.run(scan, "superfacets", 400, 0.0, opts)
+    assert [row[m] for m in metrics] == [floored[m] for m in metrics]
+    assert [row[m] for m in metrics] != [default[m] for m in metrics]  # the floor binds
