@@ -36,9 +36,8 @@ def _write_kitti(folder, frame="000700", unlabelled=50):
     return pts, cls
 
 
-def test_registry_pins_every_file():
-    """At least ten scans of three kinds (issue 109: airborne, street, indoor), each file
-    pinned to a commit and its SHA-256, each cache name its own."""
+def _real_scans():
+    """``benchmarks/real_scans.py`` as a module."""
     import importlib.util
     from pathlib import Path
 
@@ -46,6 +45,13 @@ def test_registry_pins_every_file():
         "real_scans", Path(__file__).resolve().parents[2] / "benchmarks" / "real_scans.py")
     bench = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(bench)
+    return bench
+
+
+def test_registry_pins_every_file():
+    """At least ten scans of three kinds (issue 109: airborne, street, indoor), each file
+    pinned to a commit and its SHA-256, each cache name its own."""
+    bench = _real_scans()
     kinds = {bench.scan_kind(n) for n in SCANS}
     assert len(SCANS) >= 10 and {"airborne", "street", "indoor"} <= kinds
     names = [f for src in SCANS.values() for f, _, _ in src.files]
@@ -322,15 +328,9 @@ def test_real_scan_segments_and_measures(name):
 def test_real_scans_fine_floor_is_set_for_its_run_only(tmp_path, monkeypatch):
     """``real_scans.py --fine-floors N``: the row is the run with the first run allowed
     down to N points per superpoint, and the module's floor is 12 again after it."""
-    import importlib.util
-    from pathlib import Path
-
     from superfacets.method import rules
 
-    spec = importlib.util.spec_from_file_location(
-        "real_scans", Path(__file__).resolve().parents[2] / "benchmarks" / "real_scans.py")
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
+    bench = _real_scans()
     _write_kitti(tmp_path)
     scan = load_scan("semantickitti-000700", tmp_path)
     opts = {"density": 0.0}  # even areas: the merges run (a sweep's default has none)
