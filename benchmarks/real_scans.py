@@ -4,7 +4,7 @@ Usage: python benchmarks/real_scans.py [--scans NAME ...] [-k 300 1000 3000]
        [--methods superfacets graph_segmentation cut_pursuit spt_partition vccs]
        [--spt-levels 1 2] [--beta auto 0]
        [--neighbors 10] [--split-merge] [--min-points 3] [--content] [--adaptive]
-       [--size-ratios 0 8 4 2] [--fine-floors 8 4]
+       [--size-ratios 0 8 4 2] [--fine-floors 8 4] [--merge-from 5]
        [--leave-out CLASS ...] [--csv results.csv] [--download] [--rooms 3]
 
 Each scan of ``superfacets.evaluation.datasets.scans.SCANS`` found in the cache
@@ -40,7 +40,9 @@ Methods (the registry's, so ``superfacets experiment`` runs the same code):
   the count is reached; with ``--size-ratios R ...`` also its merges with each largest
   superpoint (``max_size_ratio``: R times the mean; 0 no bound, as before the bound);
   with ``--fine-floors N ...`` also its first run (before the merges) allowed down to N
-  points per superpoint (``method.rules.MIN_FINE_ELEMENTS``, 12, set for the run);
+  points per superpoint (``method.rules.MIN_FINE_ELEMENTS``, 12, set for the run); with
+  ``--merge-from N ...`` also its runs with ``merge_from`` N (the merges on every cloud,
+  uneven density included);
   with ``--adaptive`` also the content-adaptive
   superpoints (``adaptive_superpoints``: exactly k);
 - ``graph_segmentation``: the ScanNet Segmentator's method, its threshold
@@ -308,6 +310,9 @@ def main() -> None:
     ap.add_argument("--fine-floors", type=int, nargs="+", default=[], metavar="N",
                     help="also superfacets with its first run allowed down to N points per "
                          "superpoint (method.rules.MIN_FINE_ELEMENTS, 12), a row each")
+    ap.add_argument("--merge-from", type=int, nargs="+", default=[], metavar="N",
+                    help="also superfacets with merge_from N (merged from N times k, on every "
+                         "cloud: the default merges only clouds of even density), a row each")
     ap.add_argument("--content", action="store_true",
                     help="also superfacets with content-sensitive sizes (density=0.5, "
                          "roughness=1)")
@@ -359,6 +364,7 @@ def main() -> None:
                 if method == "superfacets":
                     variants += [(None, {"max_size_ratio": v}) for v in a.size_ratios]
                     variants += [(None, {"fine_floor": v}) for v in a.fine_floors]
+                    variants += [(None, {"merge_from": v}) for v in a.merge_from]
                 if method == "superfacets" and a.min_points > 1:
                     variants += [(0.0, {"min_points": a.min_points})]
                 for beta, options in variants:
@@ -373,7 +379,9 @@ def main() -> None:
                          else "") + \
                         (f" max size {options['max_size_ratio']:g}" if "max_size_ratio" in
                          options else "") + \
-                        (f" floor {options['fine_floor']}" if "fine_floor" in options else "")
+                        (f" floor {options['fine_floor']}" if "fine_floor" in options else "") + \
+                        (f" merge from {options['merge_from']}" if "merge_from" in options
+                         else "")
                     print(f"| {k} | {label} | {r['undersegmentation_error']:.4f} | "
                           f"{r['boundary_recall']:.4f} | {r['boundary_precision']:.4f} | "
                           f"{r['achievable_accuracy']:.4f} | {r['oracle_miou']:.4f} | "
