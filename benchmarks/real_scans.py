@@ -183,6 +183,19 @@ def run(scan, method: str, k: int, beta: float, options: dict | None = None,
     return row
 
 
+def _at_least_one(text: str) -> int:
+    """``--fine-floors`` and ``--merge-from``: an integer ``>= 1``."""
+    import argparse
+
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
+    return value
+
+
 def _beta(text: str):
     """``--beta``: ``auto`` (None: read from the data) or a number."""
     return None if text.strip().lower() == "auto" else float(text)
@@ -307,10 +320,10 @@ def main() -> None:
     ap.add_argument("--size-ratios", type=float, nargs="+", default=[], metavar="R",
                     help="also superfacets with these max_size_ratio values (the merges' "
                          "largest superpoint in mean sizes; 0: no bound), a row each")
-    ap.add_argument("--fine-floors", type=int, nargs="+", default=[], metavar="N",
+    ap.add_argument("--fine-floors", type=_at_least_one, nargs="+", default=[], metavar="N",
                     help="also superfacets with its first run allowed down to N points per "
                          "superpoint (method.rules.MIN_FINE_ELEMENTS, 12), a row each")
-    ap.add_argument("--merge-from", type=int, nargs="+", default=[], metavar="N",
+    ap.add_argument("--merge-from", type=_at_least_one, nargs="+", default=[], metavar="N",
                     help="also superfacets with merge_from N (merged from N times k, on every "
                          "cloud: the default merges only clouds of even density), a row each")
     ap.add_argument("--content", action="store_true",

@@ -342,3 +342,14 @@ def test_real_scans_fine_floor_is_set_for_its_run_only(tmp_path, monkeypatch):
     floored = bench.run(scan, "superfacets", 400, 0.0, opts)
     assert [row[m] for m in metrics] == [floored[m] for m in metrics]
     assert [row[m] for m in metrics] != [default[m] for m in metrics]  # the floor binds
+
+
+def test_real_scans_counts_below_one_are_refused():
+    """``--fine-floors`` and ``--merge-from`` take integers >= 1, else a clear error."""
+    import argparse
+
+    bench = _real_scans()
+    assert bench._at_least_one("4") == 4
+    for bad in ("0", "-2", "x"):
+        with pytest.raises(argparse.ArgumentTypeError, match=">= 1"):
+            bench._at_least_one(bad)
