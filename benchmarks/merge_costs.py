@@ -13,7 +13,10 @@ scan's noise ``s``), a step is charged for what it is against the surfaces' own 
 - ``half``: ``rise / sqrt(max(v, s) s)`` (half way, in logarithms; the rise where ``s`` is 0);
 - ``blend``: ``rise / max(s, v~) + ward / r^2``, both in points: the rise in units of the noise
   (``v~`` the first superpoints' median residual per point, where the noise reads lower) plus
-  Ward's term in units of the superpoint's size (``r^2 = A / (pi k)``).
+  Ward's term in units of the superpoint's size (``r^2 = A / (pi k)``);
+- ``scene``: the package's ``merge_cost='scene'`` (``superfacets.method.merges.
+  scene_merge_nodes``): ``blend`` with ``v~`` the median residual of each superpoint's
+  union with its neighbours, times the paper's crease factor (eqs. 2-3).
 
 The merging here is a heap in Python (a prototype, not the package's compiled kernel), with
 today's size bound (``max_size_ratio``) and colour guard. Each setting is judged as
@@ -46,7 +49,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-COSTS = ("today", "rise", "own", "half", "blend")
+COSTS = ("today", "rise", "own", "half", "blend", "scene")
 
 
 def smallest_eigenvalue(s: np.ndarray) -> np.ndarray:
@@ -83,8 +86,9 @@ def scaled_rise_merges(graph, target: int, cap: float, noise: float, scale: str,
     mean = np.array(graph.centroid, dtype=np.float64)
     scatter = np.array(graph.scatter, dtype=np.float64)
     own = smallest_eigenvalue(scatter)
+    edges = np.asarray(graph.edge_index).reshape(2, -1).T
     adjacent = [set() for _ in range(k)]
-    for a, b in np.asarray(graph.edge_index).reshape(2, -1).T.tolist():
+    for a, b in edges.tolist():
         if a != b:
             adjacent[a].add(b)
             adjacent[b].add(a)
@@ -107,9 +111,9 @@ def scaled_rise_merges(graph, target: int, cap: float, noise: float, scale: str,
 
     live = k
     for bounded in ((True, False) if cap > 0 else (False,)):
-        heap = [(cost(a, b)[0], a, b, 0, 0) for a in range(k) if owner[a] == a
-                for b in adjacent[a] if a < b and not (bounded and count[a] + count[b] > cap)]
-        heap = [(c, a, b, version[a], version[b]) for c, a, b, _, _ in heap]
+        heap = [(cost(a, b)[0], a, b, version[a], version[b]) for a in range(k)
+                if owner[a] == a for b in adjacent[a]
+                if a < b and not (bounded and count[a] + count[b] > cap)]
         heapq.heapify(heap)
         while live > target and heap:
             _, a, b, va, vb = heapq.heappop(heap)
@@ -122,11 +126,11 @@ def scaled_rise_merges(graph, target: int, cap: float, noise: float, scale: str,
             version[a] += 1
             version[b] += 1
             live -= 1
-            adjacent[a] |= adjacent[b]
-            adjacent[a] -= {a, b}
             for x in adjacent[b] - {a}:
                 adjacent[x].discard(b)
                 adjacent[x].add(a)
+            adjacent[a] |= adjacent[b]
+            adjacent[a] -= {a, b}
             adjacent[b] = set()
             for x in adjacent[a]:
                 lo, hi = min(a, x), max(a, x)
@@ -147,7 +151,10 @@ def merges_with(scale: str, everywhere: bool):
     today = merges.merge_nodes
 
     def merge_nodes(nodes, pairs, target, max_rise, alpha, eta_convex, *, max_jump=None,
-                    max_ratio=0.0):
+                    max_ratio=0.0, cost="auto"):
+        if scale == "scene":  # the package's (``merge_cost='scene'``)
+            return today(nodes, pairs, target, max_rise, alpha, eta_convex,
+                         max_jump=max_jump, max_ratio=max_ratio, cost="scene")
         if max_rise is None:
             return today(nodes, pairs, target, max_rise, alpha, eta_convex,
                          max_jump=max_jump, max_ratio=max_ratio)

@@ -1754,3 +1754,19 @@ def test_a_signal_stops_a_run_within_a_second_at_any_moment(tmp_path, sig, code)
         assert took < 2.0, (delay, took)
         assert err.strip().count("\n") == 0 and "Traceback" not in err
         assert not (tmp_path / "p.seg").exists()
+
+
+@needs_cxx
+def test_the_scene_merges_give_numba_results(shadowed):
+    """``merge_cost='scene'`` (the merging kernel's fourth cost) on a terrain with bushes:
+    the compiled kernel's merges are numba's, call by call."""
+    calls, _ = shadowed
+    rng = np.random.default_rng(3)
+    xy = rng.random((6000, 2))
+    ground = np.c_[xy, 0.01 * np.sin(6 * xy[:, 0]) + 0.002 * rng.standard_normal(6000)]
+    d = rng.standard_normal((1200, 3))
+    d[:, 2] = np.abs(d[:, 2])
+    bushes = 0.05 * d / np.linalg.norm(d, axis=1, keepdims=True) + np.repeat(
+        rng.random((3, 3)) * [0.8, 0.8, 0] + [0.1, 0.1, 0], 400, axis=0)
+    r = superfacets.segment(np.vstack([ground, bushes]), 10, n_threads=1, merge_cost="scene")
+    assert r.n_segments == 10 and calls.get("hierarchy.merge_levels", 0) >= 2

@@ -426,6 +426,15 @@ def test_the_command_line_takes_merge_from(tmp_path, capsys):
     assert main(["segment", str(path), "-k", "20", "--max-size-ratio", "0", "-o",
                  str(out)]) == 0
     assert "flat neighbours first; --merge-from 1" in capsys.readouterr().out
+    assert main(["segment", str(path), "-k", "20", "--merge-cost", "scene", "-o",
+                 str(out)]) == 0
+    assert "none above 16 times the mean; the scene's cost; --merge-from 1" in \
+        capsys.readouterr().out
+    np.testing.assert_array_equal(np.loadtxt(out, dtype=np.int64),
+                                  segment(PointCloud(pts), 20, merge_cost="scene").labels)
+    with pytest.raises(SystemExit):
+        main(["segment", str(path), "-k", "20", "--merge-cost", "ward", "-o", str(out)])
+    assert "invalid choice: 'ward'" in capsys.readouterr().err
 
 
 def test_sorted_unique_is_numpys_unique():
@@ -590,3 +599,88 @@ def test_no_stage_is_silent_on_a_terminal(monkeypatch):
     assert out.getvalue().count("a long stage") >= 5
     with progress.waiting_bar("reading", show=False) as w:
         assert w.bar is None
+
+
+def _street_graph(curb_angle: float, points: bool = False):
+    """Road A, B (smooth, one plane), sidewalk C 12 cm up (a curb whose border turns by
+    ``curb_angle``, concave), two rough pieces of vegetation D, E 2 m above, in a chain;
+    as the merges read them (each point weighs one); with ``points``, also each part's."""
+    from superfacets.graph.adjacency import SuperfacetGraph
+
+    rng = np.random.default_rng(0)
+
+    def plane(x0, z, sigma, n=200):
+        p = rng.random((n, 3))
+        p[:, 0] += x0
+        p[:, 2] = z + sigma * rng.standard_normal(n)
+        return p
+
+    parts = [plane(0, 0.0, 0.005), plane(1, 0.0, 0.005), plane(2, 0.12, 0.005),
+             plane(3, 2.0, 0.1), plane(4, 2.2, 0.1)]
+    mean = np.array([p.mean(0) for p in parts])
+    graph = SuperfacetGraph(
+        edge_index=np.array([[0, 1, 2, 3], [1, 2, 3, 4]]), border_length=np.ones(4),
+        mean_angle=np.array([0.0, curb_angle, 0.0, 0.0]),
+        concave=np.array([0.0, 1.0, 0.0, 0.0]), area=np.full(5, 200.0), centroid=mean,
+        normal=np.zeros((5, 3)), feature=None,
+        scatter=np.array([(p - m).T @ (p - m) for p, m in zip(parts, mean)]))
+    return (graph, parts) if points else graph
+
+
+def test_the_scene_cost_keeps_a_concave_curb_and_merges_the_vegetation():
+    """The scene's cost, down to 3 of 5: the road's coplanar halves first; then the curb
+    (a rise of many noise units, but less than the vegetation's) where its border is flat,
+    the vegetation where the curb's border turns by one radian (the crease factor, alpha
+    200); the same from the compiled kernel and from numba's (the tests' oracle)."""
+    from superfacets.method.merges import scene_merge_nodes
+
+    noise = 0.005 ** 2
+    assert scene_merge_nodes(_street_graph(0.0), 3, noise, 1.0, 200.0, 0.2).tolist() == \
+        [0, 0, 0, 1, 2]
+    assert scene_merge_nodes(_street_graph(1.0), 3, noise, 1.0, 200.0, 0.2).tolist() == \
+        [0, 0, 1, 2, 2]
+
+
+def test_the_ring_residual_is_the_neighbourhoods_plane_residual():
+    """Each node's union with its neighbours: four points in a chain make rings of two or
+    three points, each on a plane (0); the rough pieces of the street raise the median."""
+    from superfacets.graph.adjacency import SuperfacetGraph
+    from superfacets.method.merges import ring_residual
+
+    corners = np.array([[1.0, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]])
+    chain = SuperfacetGraph(edge_index=np.array([[0, 1, 2], [1, 2, 3]]),
+                            border_length=np.ones(3), mean_angle=np.zeros(3),
+                            concave=np.zeros(3), area=np.ones(4), centroid=corners,
+                            normal=np.zeros((4, 3)), feature=None, scatter=np.zeros((4, 3, 3)))
+    assert ring_residual(chain) == pytest.approx(0.0, abs=1e-12)
+    # the street's rings AB, ABC, BCD, CDE, DE, from their points
+    graph, parts = _street_graph(0.0, points=True)
+    rings = [np.vstack([parts[j] for j in ring]) for ring in
+             ((0, 1), (0, 1, 2), (1, 2, 3), (2, 3, 4), (3, 4))]
+    expected = np.median([np.linalg.eigvalsh(np.cov(p.T, bias=True))[0] for p in rings])
+    assert ring_residual(graph) == pytest.approx(expected, rel=1e-9)
+
+
+def test_merge_cost_scene_reaches_the_count_in_one_run_and_in_tiles(monkeypatch):
+    """``merge_cost='scene'``: every input merges by the scene's cost (the kernel's fourth
+    cost, on a terrain whose flat regions hold most of the points too), to exactly k, in
+    one run and in a tiled run; ``'auto'`` (the default) never calls it; anything else is
+    refused, naming the choices."""
+    from superfacets import segment_tiled
+    from superfacets.method import merges
+
+    ran = []
+    scene = merges.scene_merge_nodes
+    monkeypatch.setattr(merges, "scene_merge_nodes",
+                        lambda *a, **kw: ran.append(a[1]) or scene(*a, **kw))
+    pts, part = _terrain(n=20_000, bushes=4)
+    auto = segment(pts, 12)
+    assert not ran and auto.params["merge_cost"] == "auto"
+    r = segment(pts, 12, merge_cost="scene")
+    assert ran and r.n_segments == 12 and r.params["merge_cost"] == "scene"
+    assert _ue(r.labels, part) < 0.2  # the bushes are not lost in the ground
+    ran.clear()
+    tiled = segment_tiled(PointCloud(pts), 12, tiles=2, merge_cost="scene").labels
+    assert ran and np.unique(tiled).size == 12
+    with pytest.raises(ParameterError, match="merge_cost.*auto.*scene"):
+        segment(pts, 12, merge_cost="ward")

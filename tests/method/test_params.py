@@ -144,7 +144,7 @@ def test_the_declarations_are_the_fields_and_the_signatures():
     from superfacets.method.params import PARAMETERS, SegmentParams
 
     names = [p.name for p in PARAMETERS]
-    assert len(set(names)) == len(names) == 27
+    assert len(set(names)) == len(names) == 28
     assert list(SegmentParams.__dataclass_fields__) == names
     assert [getattr(DEFAULTS, n) for n in names] == [p.default for p in PARAMETERS]
     for f, own in ((superfacets, []), (seg, ["adaptive", "extent_weight"])):
@@ -215,10 +215,10 @@ def test_every_declared_option_of_the_command_line_has_the_declared_default_and_
         a = actions[p.cli]
         assert a.default == own.get(p.name, p.default), (p.name, a.default, p.default)
         if a.choices is not None:
-            from superfacets.method.params import KINDS
+            from superfacets.method.params import KINDS, MERGE_COSTS
 
             check = [c for c in list(INITS) + list(ASSIGNMENTS) + list(WEIGHTINGS) +
-                     list(KINDS)]
+                     list(KINDS) + list(MERGE_COSTS)]
             assert set(a.choices) <= set(check)
             with pytest.raises(ParameterError):
                 p.check("not-a-choice")

@@ -85,15 +85,18 @@ def _cost(a, b, ln, ang, conc, area, wsum, fsum, scatter, planarity, alpha, eta_
         if planarity == 2:  # flat pairs only (the rise per element of the smaller node)
             if c > max_rise * min(area[a], area[b]):
                 return np.inf
+        elif planarity == 3:  # the scene's: the rise in max_rise's units, Ward's in 1 / compactness
+            c = c / max(max_rise, 1e-300) + compactness * _spread(a, b, area, wsum)
         elif compactness > 0:
             c += compactness * _spread(a, b, area, wsum)
-    if planarity != 1:  # Ward's, with the crease factor
+    if planarity != 1:  # the crease factor: of Ward's cost, or of the scene's
         if ln > 0:
             theta, share = ang / ln, conc / ln
         else:
             theta, share = 0.0, 0.0
         s = theta * (share + eta_convex * (1.0 - share))
-        c = _spread(a, b, area, wsum) * (1.0 + alpha * s / math.pi)
+        w = c if planarity == 3 else _spread(a, b, area, wsum)
+        c = w * (1.0 + alpha * s / math.pi)
     if beta > 0:
         d2 = 0.0
         for j in range(fsum.shape[1]):
@@ -111,7 +114,9 @@ def merge_levels(k, ea, eb, stats, area, wsum, fsum, scatter, planarity, alpha, 
     int64: each node's root then (the rows of targets not reached: the roots where the
     merging stopped). ``planarity``: 0 Ward's cost, 1 the rise of the best plane's
     distances, 2 Ward's cost of the pairs whose plane rises by at most ``max_rise``
-    per element of the smaller node (the others: infinite). ``area``, ``wsum``,
+    per element of the smaller node (the others: infinite), 3 the scene's cost: the rise
+    over ``max_rise`` plus ``compactness`` times Ward's term, times the crease factor.
+    ``area``, ``wsum``,
     ``fsum`` (k, d) and ``scatter`` (k, 6) are updated in place. ``max_size > 0``: no
     pair whose union's ``area`` (the planes' graphs: elements) is above it merges."""
     n_e = ea.shape[0]

@@ -180,7 +180,9 @@ def _summary(name: str, mesh, result, seconds: float, elements: str = "faces",
         if merged > 1 and first > result.n_segments:
             bound = (getattr(result, "params", None) or {}).get("max_size_ratio") or 0
             most = f", none above {bound:g} times the mean" if bound else ""
-            segs += (f" (merged from {first:,} finer ones, flat neighbours first{most}; "
+            scene = ("; the scene's cost" if (getattr(result, "params", None) or {}).get(
+                "merge_cost") == "scene" else "")
+            segs += (f" (merged from {first:,} finer ones, flat neighbours first{most}{scene}; "
                      "--merge-from 1: no merging)")
     else:
         kind = "" if mesh.is_triangular else " (polygons)"

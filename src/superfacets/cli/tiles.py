@@ -117,6 +117,8 @@ def segment_tiles(args) -> int:
         first = result.params.get("merged_from")
         if first:
             how = "flat neighbours first" if kind_of(kind).cloud else "Ward's merges"
+            if kind_of(kind).cloud and result.params.get("merge_cost") == "scene":
+                how += "; the scene's cost"
             what += f" (merged from {first:,} finer ones, {how}; --merge-from 1: no merging)"
         if result.n_segments > 1:
             what += sizes_said(result.labels, kind)

@@ -25,6 +25,14 @@ resolve_rules`), then :func:`merge_to_count` merges adjacent superpoints in two 
      factor (:func:`superfacets.method.finish.exact_count`): compact superpoints,
      merged along the creases.
 
+With ``merge_cost='scene'`` phase 2 is one cost on every input instead
+(:func:`scene_merge_nodes`): the plane's rise in units of the scan's noise or of the
+neighbourhoods' own plane residual (:func:`ring_residual`, the larger), plus Ward's term in
+units of the superpoint's size, times the crease factor. It keeps more class borders on
+scans of scenes and noisy objects, and fewer parts on noise-free sampled surfaces
+(``docs/notes/superpoints-defaults.md``, "The merges' cost scaled by the parts' own
+residual").
+
 Neither the flat merges nor the plane's rise make a superpoint of more than
 ``max_size_ratio`` times the mean count (the elements over ``k``; 16 by default) while
 another pair may merge: a coplanar pair costs them nothing whatever its size, and flat
@@ -48,7 +56,7 @@ from ..graph.hierarchy import merge_arrays, pieces
 from ..graph.sums import border_sums, grouped_graph, grouped_planes, point_sums
 
 __all__ = ["merge_to_count", "merge_nodes", "flat_merges", "flat_share", "flat_merge_nodes",
-           "rise_merge_nodes",
+           "rise_merge_nodes", "scene_merge_nodes", "ring_residual",
            "same_feature_edges", "feature_spread", "noise_variance", "neighbourhood_noise",
            "FLAT_NOISE", "FLAT_SHARE", "NOISE_SAMPLE"]
 
@@ -275,14 +283,113 @@ def rise_merge_nodes(pg, k: int, max_size: float = 0.0) -> np.ndarray:
     return _merged(pg, 1, k, 0.0, 0.0, np.inf, max_size)
 
 
+def scene_merge_nodes(pg, k: int, unit: float, size: float, alpha: float,
+                      eta_convex: float, max_size: float = 0.0) -> np.ndarray:
+    """The scene's cost on a superpoint graph as :func:`flat_merge_nodes` reads it: the pair
+    of least ``(rise / unit + ward / size) * (1 + alpha s / pi)`` merges first, the rise of
+    the squared distances to the union's least-squares plane in units of ``unit``, Ward's
+    term (the rise of the points' spread about their mean) in units of ``size`` and the
+    paper's crease factor (eqs. 2-3), until ``k`` nodes remain or, with ``max_size > 0``, no
+    pair can merge without making a superpoint of more elements.
+
+    Parameters
+    ----------
+    pg : SuperfacetGraph
+        Its ``area`` the points' counts, ``centroid`` their means, ``scatter`` theirs.
+    k : int
+    unit, size : float
+        Squared input units, ``> 0``: the rise's (a plane residual per point) and Ward's
+        (a superpoint's area over pi).
+    alpha, eta_convex : float
+        The crease factor's.
+    max_size : float, default 0
+
+    Returns
+    -------
+    (K,) int64 ndarray
+        Each node's group, dense, numbered by their lowest node.
+
+    Raises
+    ------
+    ParameterError
+        Never on a graph of valid sums.
+
+    Examples
+    --------
+    >>> from superfacets.graph.adjacency import SuperfacetGraph
+    >>> pg = SuperfacetGraph(edge_index=np.array([[0, 1], [1, 2]]), border_length=np.ones(2),
+    ...                      mean_angle=np.zeros(2), concave=np.zeros(2), area=np.ones(3),
+    ...                      centroid=np.array([[0.0, 0, 0], [1, 0, 0], [3, 0, 0]]),
+    ...                      normal=np.zeros((3, 3)), feature=None, scatter=np.zeros((3, 3, 3)))
+    >>> scene_merge_nodes(pg, 2, 1.0, 1.0, 0.0, 0.0).tolist()   # the nearer pair first
+    [0, 0, 1]
+    """
+    return _merged(pg, 3, k, float(alpha), float(eta_convex), float(unit), max_size,
+                   1.0 / float(size))
+
+
+def ring_residual(pg) -> float:
+    """The median plane residual per point of each node's union with its neighbours (about
+    ``merge_from`` first superpoints: the superpoints asked for), squared input units: the
+    scene's cost's unit of the rise where it is above the scan's noise.
+
+    Parameters
+    ----------
+    pg : SuperfacetGraph
+        As :func:`scene_merge_nodes` reads it.
+
+    Returns
+    -------
+    float
+        ``>= 0``; 0 for an empty graph.
+
+    Raises
+    ------
+    ParameterError
+        Never.
+
+    Examples
+    --------
+    >>> from superfacets.graph.adjacency import SuperfacetGraph
+    >>> corners = np.array([[1.0, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]])
+    >>> pg = SuperfacetGraph(edge_index=np.array([[0, 0, 0, 1, 1, 2], [1, 2, 3, 2, 3, 3]]),
+    ...                      border_length=np.ones(6), mean_angle=np.zeros(6),
+    ...                      concave=np.zeros(6), area=np.ones(4), centroid=corners,
+    ...                      normal=np.zeros((4, 3)), feature=None, scatter=np.zeros((4, 3, 3)))
+    >>> round(ring_residual(pg), 12)   # every ring: a tetrahedron's corners (scatter 4 I)
+    1.0
+    """
+    k = int(pg.n_segments)
+    if k == 0:
+        return 0.0
+    count = np.asarray(pg.area, dtype=np.float64)
+    mean = np.asarray(pg.centroid, dtype=np.float64)
+    ea, eb = np.asarray(pg.edge_index, dtype=np.int64).reshape(2, -1)
+    keep = ea != eb
+    ring = np.unique(np.c_[np.r_[np.arange(k), ea[keep], eb[keep]],
+                           np.r_[np.arange(k), eb[keep], ea[keep]]], axis=0)
+    owner, member = ring[:, 0], ring[:, 1]
+    n = np.bincount(owner, weights=count[member], minlength=k)
+    centre = np.stack([np.bincount(owner, weights=count[member] * mean[member, c],
+                                   minlength=k) for c in range(3)], 1)
+    centre /= np.maximum(n, 1e-300)[:, None]
+    d = mean[member] - centre[owner]
+    union = np.zeros((k, 3, 3))
+    np.add.at(union, owner, np.asarray(pg.scatter, dtype=np.float64)[member]
+              + count[member][:, None, None] * d[:, :, None] * d[:, None, :])
+    residual = np.maximum(np.linalg.eigvalsh(union)[:, 0], 0.0) / np.maximum(n, 1e-300)
+    return float(np.median(residual))
+
+
 def _merged(pg, planarity: int, k: int, alpha: float, eta_convex: float, max_rise: float,
-            max_size: float) -> np.ndarray:
+            max_size: float, compactness: float = 0.0) -> np.ndarray:
     """The merging kernel on a planes' graph, down to ``k`` nodes or as far as it may."""
     n_nodes = pg.n_segments
     if n_nodes == 0:
         return np.zeros(0, dtype=np.int64)
     roots = native.kernel("hierarchy.merge_levels")(
-        n_nodes, *merge_arrays(pg, True), planarity, alpha, eta_convex, 0.0, 0.0, max_rise,
+        n_nodes, *merge_arrays(pg, True), planarity, alpha, eta_convex, 0.0, compactness,
+        max_rise,
         np.asarray([max(1, min(k, n_nodes))], dtype=np.int64), float(max_size))[0]
     _, top = np.unique(roots, return_inverse=True)  # numbered by their lowest superpoint
     return top.astype(np.int64)
@@ -331,7 +438,7 @@ def merge_to_count(graph, labels: np.ndarray, rules, features: np.ndarray | None
     _, final, fewest = merge_nodes(nodes, pairs, k, FLAT_NOISE * noise_variance(graph),
                                    p.alpha, p.eta_convex,
                                    max_jump=None if colour is None else rules.feature_floor,
-                                   max_ratio=p.max_size_ratio)
+                                   max_ratio=p.max_size_ratio, cost=p.merge_cost)
     return final[lab], fewest
 
 
@@ -351,7 +458,8 @@ def _sums(graph, labels: np.ndarray, features=None) -> tuple:
 
 def merge_nodes(nodes: dict, pairs: dict, target: int, max_rise: float | None,
                 alpha: float, eta_convex: float, *, max_jump: float | None = None,
-                max_ratio: float = 0.0) -> tuple[np.ndarray, np.ndarray, int]:
+                max_ratio: float = 0.0, cost: str = "auto"
+                ) -> tuple[np.ndarray, np.ndarray, int]:
     """Both phases of :func:`merge_to_count` on the superpoints' sums (one run's, or a
     tiled run's added over its tiles: the same merges).
 
@@ -376,6 +484,10 @@ def merge_nodes(nodes: dict, pairs: dict, target: int, max_rise: float | None,
         ``> 0``: the flat merges and the plane's rise make no superpoint of more than
         this many times the mean count (the elements over ``target``) while another pair
         may merge (the parameter ``max_size_ratio``); 0: no bound.
+    cost : {'auto', 'scene'}, default 'auto'
+        Phase 2's (the parameter ``merge_cost``,
+        :data:`superfacets.method.params.MERGE_COSTS`): ``'scene'`` merges by
+        :func:`scene_merge_nodes` on every input (with ``max_rise``; without it, Ward's).
 
     Returns
     -------
@@ -414,6 +526,10 @@ def merge_nodes(nodes: dict, pairs: dict, target: int, max_rise: float | None,
     n_flat = int(flat.max()) + 1 if k else 0
     if not n_flat:
         return flat, flat, 0
+    if max_rise is not None and cost == "scene":
+        final, fewest = _scene_merges(nodes, pairs, flat, target, max_rise / FLAT_NOISE,
+                                      alpha, eta_convex, max_jump, cap)
+        return flat, final, min(fewest, n_flat)
     if max_rise is not None and flat_share(np.arange(k), flat, count) >= FLAT_SHARE:
         # the plane's rise: among neighbours of one colour first (a board on its wall is
         # flat too), then across colours where the count needs it
@@ -439,6 +555,31 @@ def merge_nodes(nodes: dict, pairs: dict, target: int, max_rise: float | None,
         level = hierarchy.hierarchy(graph, [fewest], alpha=alpha, eta_convex=eta_convex)
         final = level.labels(0, flat).astype(np.int64)
     return flat, final, min(fewest, n_flat)
+
+
+def _scene_merges(nodes: dict, pairs: dict, flat: np.ndarray, target: int, noise: float,
+                  alpha: float, eta_convex: float, max_jump: float | None, cap: float
+                  ) -> tuple[np.ndarray, int]:
+    """Phase 2 by the scene's cost (:func:`scene_merge_nodes`) from the flat merges' groups:
+    among neighbours of one colour first, then across colours; under the size bound first.
+    The rise's unit is the scan's noise or the neighbourhoods' residual
+    (:func:`ring_residual`), the larger (where both are 0, an exactly planar input, machine
+    precision times Ward's); Ward's is the superpoint asked for's area over pi."""
+    size = float(nodes["area"].sum()) / (np.pi * target)
+    size = size if size > 0 else 1.0
+    final, fewest = flat, target
+    for guard in ((max_jump, None) if max_jump is not None else (None,)):
+        graph = _planes_graph(nodes, pairs, final, guard)
+        fewest = max(target, pieces(graph))
+        if graph.n_segments <= fewest:
+            continue
+        unit = max(noise, ring_residual(graph)) or float(np.finfo(float).eps) * size
+        for bound in ((cap, 0.0) if cap > 0 else (0.0,)):
+            if graph.n_segments > fewest:
+                final = scene_merge_nodes(graph, fewest, unit, size, alpha, eta_convex,
+                                          bound)[final]
+                graph = _planes_graph(nodes, pairs, final, guard)
+    return final, fewest
 
 
 def _planes_graph(nodes: dict, pairs: dict, group: np.ndarray | None,

@@ -34,7 +34,7 @@ from ..errors import ParameterError
 from .rules import assignment_of, better_method, superfacet_measure, superfacet_size  # noqa: F401
 
 __all__ = ["SegmentParams", "DEFAULTS", "Parameter", "PARAMETERS", "PARAMETER", "ALL_KINDS",
-           "INITS", "ASSIGNMENTS", "WEIGHTINGS", "ELEMENTS",
+           "INITS", "ASSIGNMENTS", "WEIGHTINGS", "ELEMENTS", "MERGE_COSTS",
            "WEIGHTING_ALPHA", "DEFAULT_CENTER_TOL", "COARSE_MIN_PER_SEGMENT",
            "COARSE_MIN_PER_SEGMENT_POINTS", "COARSE_PER_SEGMENT_POINTS",
            "COARSE_PER_SEGMENT", "DEFAULT_N_SEGMENTS", "DEFAULT_ALPHAS", "resolve", "check_int",
@@ -49,6 +49,10 @@ INITS = ("farthest", "flood", "grid")
 ASSIGNMENTS = ("bounded", "exact")
 #: Names accepted by ``weighting=``: the paper's eqs. 1-3, Shlafman et al.'s eq. 6.
 WEIGHTINGS = ("paper", "shlafman")
+#: The merges' costs to the count (``merge_cost``): ``'auto'`` the plane's rise where the
+#: flat regions hold most of the points, else Ward's; ``'scene'`` one cost on every input
+#: (:func:`superfacets.method.merges.scene_merge_nodes`).
+MERGE_COSTS = ("auto", "scene")
 #: Names accepted by ``elements=``: the faces of a mesh, its vertices, the points of a cloud
 #: (the kinds of surface elements of :data:`~superfacets.elements.kinds.KINDS`).
 ELEMENTS = tuple(name for name, kind in KINDS.items() if kind.dim == 2)
@@ -216,6 +220,11 @@ def _declare() -> tuple[Parameter, ...]:
         P("max_size_ratio", 16.0, "float", "merges to n_segments (merge_from > 1): no "
           "superpoint of more than this many times the mean count of elements while other "
           "neighbours can merge, >= 1; 0: no bound", _size_ratio, cli="--max-size-ratio"),
+        P("merge_cost", "auto", "str", "merges to n_segments (merge_from > 1): auto (the "
+          "plane's rise where flat regions hold most of the points, else Ward's) or scene "
+          "(one cost: the rise in the noise's units plus Ward's, times the crease factor; "
+          "scans of scenes)", lambda v: check_choice("merge_cost", v, MERGE_COSTS),
+          cli="--merge-cost", choices=MERGE_COSTS),
     )
 
 

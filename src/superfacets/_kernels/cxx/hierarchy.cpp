@@ -74,7 +74,9 @@ inline double spread(i64 a, i64 b, const Nodes& N) {
 }
 
 struct Params {
-    i64 planarity;  // 0 Ward's, 1 the plane's rise, 2 Ward's of the flat pairs only
+    // 0 Ward's, 1 the plane's rise, 2 Ward's of the flat pairs only, 3 the scene's cost:
+    // (the rise / max_rise + compactness * Ward's term) times the crease factor
+    i64 planarity;
     double alpha, eta_convex, beta, compactness, max_rise, max_size;
 };
 
@@ -93,18 +95,20 @@ double cost(i64 a, i64 b, double ln, double ang, double conc, const Nodes& N, co
         c = mx(c, 0.0);
         if (P.planarity == 2) {  // flat pairs only: the rise per element of the smaller
             if (c > P.max_rise * mn(N.area[a], N.area[b])) return INF;
+        } else if (P.planarity == 3) {  // the rise in max_rise's units, Ward's in 1 / compactness
+            c = c / mx(P.max_rise, TINY) + P.compactness * spread(a, b, N);
         } else if (P.compactness > 0) {
             c += P.compactness * spread(a, b, N);
         }
     }
-    if (P.planarity != 1) {  // Ward's, with the crease factor
+    if (P.planarity != 1) {  // the crease factor: of Ward's cost, or of the scene's
         double theta = 0.0, share = 0.0;
         if (ln > 0) {
             theta = ang / ln;
             share = conc / ln;
         }
         double s = theta * (share + P.eta_convex * (1.0 - share));
-        c = spread(a, b, N) * (1.0 + P.alpha * s / PI);
+        c = (P.planarity == 3 ? c : spread(a, b, N)) * (1.0 + P.alpha * s / PI);
     }
     if (P.beta > 0) {
         double d2 = 0.0;

@@ -217,7 +217,8 @@ def merged_labels(labels: np.ndarray, stats: list, target: int, params) -> np.nd
     the tiles' sums (:func:`merge_names`), a warning where the input's separate pieces
     are more; a label only a repair made (none of the tiles' sums name it) is kept."""
     names, merged, _, fewest = merge_names(stats, target, params.alpha, params.eta_convex,
-                                           labels=labels, max_ratio=params.max_size_ratio)
+                                           labels=labels, max_ratio=params.max_size_ratio,
+                                           cost=params.merge_cost)
     if fewest > target:
         import warnings
 
@@ -231,8 +232,8 @@ def merged_labels(labels: np.ndarray, stats: list, target: int, params) -> np.nd
 
 
 def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float, *,
-                labels: np.ndarray | None = None, max_ratio: float = 0.0
-                ) -> tuple[np.ndarray, np.ndarray, int, int]:
+                labels: np.ndarray | None = None, max_ratio: float = 0.0,
+                cost: str = "auto") -> tuple[np.ndarray, np.ndarray, int, int]:
     """Merge a tiled run's superpoints down to ``target`` from the tiles' sums
     (:func:`tile_merge_stats`): the flat merges, then Ward's merges or, where most of the
     points lie in flat regions, the plane's rise
@@ -256,6 +257,8 @@ def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float,
     max_ratio : float, default 0
         The largest superpoint the merges may make while others can merge, in mean
         counts (:func:`superfacets.method.merges.merge_nodes`); 0: no bound.
+    cost : {'auto', 'scene'}, default 'auto'
+        The merges' cost to the count (the parameter ``merge_cost``).
 
     Returns
     -------
@@ -312,7 +315,7 @@ def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float,
     # (no noise read, as on a mesh: Ward's merges only)
     rise = FLAT_NOISE * max(float(np.median(noise)), 0.0) if noise.size else None
     flat, final, fewest = merge_nodes(nodes, pairs, target, rise, alpha, eta_convex,
-                                      max_jump=max_jump, max_ratio=max_ratio)
+                                      max_jump=max_jump, max_ratio=max_ratio, cost=cost)
     n_flat = int(flat.max()) + 1 if k else 0
     lowest = np.full(int(final.max()) + 1 if k else 0, k, dtype=np.int64)
     np.minimum.at(lowest, final, np.arange(k))
