@@ -4,18 +4,12 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from bench import benchmark
 
 
 def _merge_costs():
     """``benchmarks/merge_costs.py`` as a module."""
-    import importlib.util
-    from pathlib import Path
-
-    spec = importlib.util.spec_from_file_location(
-        "merge_costs", Path(__file__).resolve().parents[2] / "benchmarks" / "merge_costs.py")
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
-    return bench
+    return benchmark("merge_costs")
 
 
 def _plane(rng, x0, z, sigma, n=200):

@@ -4,6 +4,7 @@ import hashlib
 
 import numpy as np
 import pytest
+from bench import benchmark
 
 from superfacets.errors import MeshFormatError, ParameterError
 from superfacets.evaluation.datasets import scans
@@ -38,14 +39,7 @@ def _write_kitti(folder, frame="000700", unlabelled=50):
 
 def _real_scans():
     """``benchmarks/real_scans.py`` as a module."""
-    import importlib.util
-    from pathlib import Path
-
-    spec = importlib.util.spec_from_file_location(
-        "real_scans", Path(__file__).resolve().parents[2] / "benchmarks" / "real_scans.py")
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
-    return bench
+    return benchmark("real_scans")
 
 
 def test_registry_pins_every_file():
