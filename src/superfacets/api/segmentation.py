@@ -198,7 +198,7 @@ def superfacets(data=_NO_INPUT, n_segments: int | None = _D.n_segments, *, featu
         superpoint's size, times the crease factor (not in the paper). On 27 labelled
         scans with ``merge_from=5`` it met the Segmentator's targets in 78 of 108
         settings against 61 (UE -6 %), and lowered UE on benchmark objects sampled with
-        noise; on noise-free sampled surfaces it is 11-21 % worse
+        noise; on the 300 benchmark clouds (noise-free) UE is 11-20 % higher
         (``docs/notes/superpoints-defaults.md``).
     tol : float, default 0.001
         Convergence tolerance in ``[0, 1]``: also stop once a classification
