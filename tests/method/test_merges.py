@@ -256,6 +256,7 @@ def test_merge_from_is_chosen_from_the_kind_and_the_density():
     even = replace(DEFAULTS, density=0.0)
     assert merge_from_of(even, "points") == 5
     assert merge_from_of(replace(even, density=0.5), "points") == 1  # sweeps, RGB-D frames
+    assert merge_from_of(replace(even, density=0.5, merge_cost="scene"), "points") == 5
     assert merge_from_of(replace(even, beta=10.0), "points") == 5  # colour: merges of one colour
     assert merge_from_of(replace(even, paper=True), "points") == 1
     assert merge_from_of(even, "points", tiled=True) == 1

@@ -97,11 +97,11 @@ SHOWN = {
                        "superpoint of more than R times the mean count of points while other "
                        "neighbours can merge (flat ground and walls in several superpoints, "
                        f"not one); 0: no bound (default: {_D.max_size_ratio:g})"),
-    "merge_cost": ("method", None, "with --merge-from above 1: auto merges by the plane's "
-                   "rise where flat regions hold most of the points, else by Ward's cost; "
-                   "scene by one cost everywhere (the rise in the noise's units plus Ward's): "
-                   "more class borders kept on scans of scenes, worse on noise-free sampled "
-                   "surfaces (default: auto)"),
+    "merge_cost": ("method", None, "the merges to -k: auto by the plane's rise where flat "
+                   "regions hold most of the points, else by Ward's cost; scene by one cost "
+                   "everywhere (the rise in the noise's units plus Ward's), merging every "
+                   "cloud, uneven density too: more class borders kept on scans of scenes, "
+                   "worse on noise-free sampled surfaces (default: auto)"),
     "paper": ("method", "switch", "the paper's method as published, its labels bit for bit: "
               "its stopping rule (--tol 0), no clean-up, no split-and-merge (the default on "
               "faces adds both: lower undersegmentation error and more compact superfacets "

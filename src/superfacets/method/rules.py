@@ -237,8 +237,9 @@ def merge_from_of(params, kind: str, tiled: bool = False) -> int:
     """``merge_from`` of a run: as given, else (None) the kind's
     (:attr:`~superfacets.elements.kinds.ElementKind.merge_from`: 5 on points) where
     the superpoints have equal areas (``density`` resolved to 0: clouds of even density,
-    not LiDAR sweeps) and without the colour term (the merges are geometric: ``beta``
-    0), 1 elsewhere, with ``paper`` and in the tiles of a tiled run.
+    not LiDAR sweeps) or the merges take the scene's cost (``merge_cost='scene'``, measured
+    with merges on every scan), 1 elsewhere, with ``paper`` and in the tiles of a tiled
+    run.
 
     On the even-density clouds measured (two ScanNet rooms, an airborne tile, the 300
     benchmark meshes sampled) merging 5 times the superpoints down to ``k``, flat
@@ -272,9 +273,13 @@ def merge_from_of(params, kind: str, tiled: bool = False) -> int:
     5
     >>> merge_from_of(replace(DEFAULTS, density=0.5), "points"), merge_from_of(DEFAULTS, "faces")
     (1, 1)
+    >>> merge_from_of(replace(DEFAULTS, density=0.5, merge_cost="scene"), "points")
+    5
     """
     if params.merge_from is not None:
         return int(params.merge_from)
-    if params.paper or tiled or (params.density or 0.0) > 0:
+    if params.paper or tiled:
+        return 1
+    if (params.density or 0.0) > 0 and getattr(params, "merge_cost", "auto") != "scene":
         return 1
     return kind_of(kind).merge_from
