@@ -280,6 +280,6 @@ def merge_from_of(params, kind: str, tiled: bool = False) -> int:
         return int(params.merge_from)
     if params.paper or tiled:
         return 1
-    if (params.density or 0.0) > 0 and getattr(params, "merge_cost", "auto") != "scene":
+    if (params.density or 0.0) > 0 and params.merge_cost != "scene":
         return 1
     return kind_of(kind).merge_from
