@@ -16,7 +16,10 @@ scan's noise ``s``), a step is charged for what it is against the surfaces' own 
   Ward's term in units of the superpoint's size (``r^2 = A / (pi k)``);
 - ``scene``: the package's ``merge_cost='scene'`` (``superfacets.method.merges.
   scene_merge_nodes``): ``blend`` with ``v~`` the median residual of each superpoint's
-  union with its neighbours, times the paper's crease factor (eqs. 2-3).
+  union with its neighbours, times the paper's crease factor (eqs. 2-3);
+- ``noise``: the package's ``merge_cost='noise'``: ``scene`` with its rise weighted by
+  ``sqrt(min(1, s / v))``, ``v`` the first superpoints' median residual per point
+  (``superfacets.method.merges.rise_weight``; 0 where the noise reads 0).
 
 The merging here is a heap in Python (a prototype, not the package's compiled kernel), with
 today's size bound (``max_size_ratio``) and colour guard. Each setting is judged as
@@ -49,7 +52,15 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-COSTS = ("today", "rise", "own", "half", "blend", "scene")
+COSTS = ("today", "rise", "own", "half", "blend", "scene", "noise")
+#: The costs the package has (``merge_cost``): run through the parameter.
+PACKAGE = ("scene", "noise")
+
+
+def package(cost: str) -> dict:
+    """The run's options for ``cost``: the parameter for the package's own costs (its
+    ``merge_from`` then as the package sets it: merges on every cloud), none for the rest."""
+    return {"merge_cost": cost} if cost in PACKAGE else {}
 
 
 def smallest_eigenvalue(s: np.ndarray) -> np.ndarray:
@@ -152,9 +163,6 @@ def merges_with(scale: str, everywhere: bool):
 
     def merge_nodes(nodes, pairs, target, max_rise, alpha, eta_convex, *, max_jump=None,
                     max_ratio=0.0, cost="auto"):
-        if scale == "scene":  # the package's (``merge_cost='scene'``)
-            return today(nodes, pairs, target, max_rise, alpha, eta_convex,
-                         max_jump=max_jump, max_ratio=max_ratio, cost="scene")
         if max_rise is None:
             return today(nodes, pairs, target, max_rise, alpha, eta_convex,
                          max_jump=max_jump, max_ratio=max_ratio)
@@ -185,11 +193,12 @@ def merges_with(scale: str, everywhere: bool):
 
 @contextmanager
 def merge_cost(scale: str, everywhere: bool):
-    """``merges.merge_nodes`` replaced for the block (``'today'``: left as it is)."""
+    """``merges.merge_nodes`` replaced for the block (``'today'`` and the package's costs:
+    left as it is)."""
     from superfacets.method import merges
 
     today = merges.merge_nodes
-    if scale != "today":
+    if scale != "today" and scale not in PACKAGE:
         merges.merge_nodes = merges_with(scale, everywhere)
     try:
         yield
@@ -216,7 +225,7 @@ def objects(per_category: int, noise: float, ks: list, costs: list, everywhere: 
         for c in costs:
             for k in ks:
                 with merge_cost(c, everywhere):
-                    r = segment(PointCloud(points), k)
+                    r = segment(PointCloud(points), k, **package(c))
                 ue[c, k].append(undersegmentation_error(r.elements.graph, r.labels,
                                                         np.asarray(truth)[face]))
     print(f"\nMean UE on {len(meshes)} benchmark meshes sampled with noise {noise:g} of the "
@@ -271,7 +280,7 @@ def main() -> None:
             ref = bench.run(scan, "graph_segmentation", k, None)
             for c in a.costs:
                 with merge_cost(c, a.everywhere):
-                    row = bench.run(scan, "superfacets", k, None, dict(opts))
+                    row = bench.run(scan, "superfacets", k, None, dict(opts, **package(c)))
                 met[c].setdefault(kind, []).append(meets(row, ref))
                 ue[c].setdefault(kind, []).append(row["undersegmentation_error"])
         print(f"{name}: done ({time.perf_counter() - t0:.0f} s)", file=sys.stderr)

@@ -1758,8 +1758,8 @@ def test_a_signal_stops_a_run_within_a_second_at_any_moment(tmp_path, sig, code)
 
 @needs_cxx
 def test_the_scene_merges_give_numba_results(shadowed):
-    """``merge_cost='scene'`` (the merging kernel's fourth cost) on a terrain with bushes:
-    the compiled kernel's merges are numba's, call by call."""
+    """``merge_cost='scene'`` (the merging kernel's fourth cost) on a terrain with bushes, and
+    ``'noise'`` on a noise-free one: the compiled kernel's merges are numba's, call by call."""
     calls, _ = shadowed
     rng = np.random.default_rng(3)
     xy = rng.random((6000, 2))
@@ -1770,3 +1770,8 @@ def test_the_scene_merges_give_numba_results(shadowed):
         rng.random((3, 3)) * [0.8, 0.8, 0] + [0.1, 0.1, 0], 400, axis=0)
     r = superfacets.segment(np.vstack([ground, bushes]), 10, n_threads=1, merge_cost="scene")
     assert r.n_segments == 10 and calls.get("hierarchy.merge_levels", 0) >= 2
+    # ``'noise'`` on the ground without its noise: the rise's unit infinite, Ward's term alone
+    before = calls.get("hierarchy.merge_levels", 0)
+    r = superfacets.segment(np.c_[xy, 0.01 * np.sin(6 * xy[:, 0])], 10, n_threads=1,
+                            merge_cost="noise")
+    assert r.n_segments == 10 and calls["hierarchy.merge_levels"] > before

@@ -685,3 +685,68 @@ def test_merge_cost_scene_reaches_the_count_in_one_run_and_in_tiles(monkeypatch)
     assert ran and np.unique(tiled).size == 12
     with pytest.raises(ParameterError, match="merge_cost.*auto.*scene"):
         segment(pts, 12, merge_cost="ward")
+
+
+def test_the_rise_weight_is_the_noises_share_of_the_residual_in_square_root():
+    """``merge_cost='noise'``'s weight of the rise: ``sqrt(min(1, s / v))``, ``v`` the median
+    residual per point of the superpoints: 0 without noise, 1 where the noise is all they
+    hold (or more), a half where it is a quarter; 1 where no superpoint has a residual."""
+    from superfacets.method.merges import rise_weight
+
+    count = np.array([4.0, 4.0, 8.0])
+    scatter = np.stack([4.0 * np.eye(3), 4.0 * np.eye(3), 80.0 * np.eye(3)])  # 1, 1, 10
+    assert rise_weight(0.0, count, scatter) == 0.0
+    assert rise_weight(0.25, count, scatter) == pytest.approx(0.5)
+    assert rise_weight(1.0, count, scatter) == rise_weight(3.0, count, scatter) == 1.0
+    assert rise_weight(0.01, count, np.zeros((3, 3, 3))) == 1.0
+    # a street's rough vegetation and smooth road: the median part is the road's (2 of 3)
+    graph, parts = _street_graph(0.0, points=True)
+    keep = [0, 1, 3]
+    v = np.median([np.linalg.eigvalsh(np.cov(parts[i].T, bias=True))[0] for i in keep])
+    assert rise_weight(0.005 ** 2, np.full(3, 200.0), graph.scatter[keep]) == \
+        pytest.approx(np.sqrt(min(1.0, 0.005 ** 2 / v)), rel=1e-9)
+
+
+def test_merge_cost_noise_charges_the_rise_by_the_noise_and_reaches_the_count(monkeypatch):
+    """``merge_cost='noise'``: the scene's cost (the kernel's fourth) with the rise's unit
+    over the weight: finite on a scanned terrain (noise 2 mm), infinite (Ward's term alone)
+    on the same terrain without noise; exactly k in one run and in tiles; merges on a cloud
+    of uneven density too; the summary says it."""
+    from superfacets import segment_tiled
+    from superfacets.method import merges
+
+    units = []
+    scene = merges.scene_merge_nodes
+    monkeypatch.setattr(merges, "scene_merge_nodes",
+                        lambda *a, **kw: units.append(a[2]) or scene(*a, **kw))
+    pts, part = _terrain(n=20_000, bushes=4)
+    r = segment(pts, 12, merge_cost="noise")
+    assert r.n_segments == 12 and r.params["merge_cost"] == "noise"
+    assert units and all(np.isfinite(units)) and _ue(r.labels, part) < 0.2
+    units.clear()
+    rng = np.random.default_rng(1)
+    xy = rng.random((20_000, 2))
+    clean = np.c_[xy, 0.05 * np.sin(2 * np.pi * xy[:, 0]) * np.cos(np.pi * xy[:, 1])]
+    r = segment(clean, 12, merge_cost="noise")
+    assert r.n_segments == 12 and units and all(np.isinf(units))
+    units.clear()
+    tiled = segment_tiled(PointCloud(pts), 12, tiles=2, merge_cost="noise").labels
+    assert units and np.unique(tiled).size == 12
+    from dataclasses import replace
+
+    from superfacets.method.params import DEFAULTS
+    from superfacets.method.rules import merge_from_of
+    assert merge_from_of(replace(DEFAULTS, density=0.5, merge_cost="noise"), "points") == 5
+
+
+def test_the_cli_says_the_noise_weighted_cost(tmp_path, capsys):
+    """``--merge-cost noise`` on the command line: the summary names the cost."""
+    from superfacets.cli import main
+
+    pts, _ = _terrain(n=8_000, bushes=2)
+    path = tmp_path / "terrain.xyz"
+    np.savetxt(path, pts)
+    assert main(["segment", str(path), "-k", "10", "--merge-cost", "noise", "-o",
+                 str(tmp_path / "labels.txt")]) == 0
+    assert "the scene's cost, its rise weighted by the noise; --merge-from 1" in \
+        capsys.readouterr().out

@@ -6,7 +6,12 @@ from __future__ import annotations
 from ..elements.kinds import kind_of
 from ..method.params import DEFAULTS
 
-__all__ = ["count_note", "duplicates_note"]
+__all__ = ["count_note", "duplicates_note", "COST_SAID"]
+
+#: What a summary adds for the merges' cost to the count (``--merge-cost``), beyond the
+#: default's.
+COST_SAID = {"scene": "; the scene's cost",
+             "noise": "; the scene's cost, its rise weighted by the noise"}
 
 
 def duplicates_note(args, data, kind: str) -> str | None:

@@ -11,7 +11,7 @@ import numpy as np
 from ..checks import counted
 from ..elements.kinds import kind_of
 from ..method.params import DEFAULTS
-from .notes import count_note, duplicates_note
+from .notes import COST_SAID, count_note, duplicates_note
 from .options import (
     add_adaptive_options,
     add_camera_options,
@@ -180,8 +180,8 @@ def _summary(name: str, mesh, result, seconds: float, elements: str = "faces",
         if merged > 1 and first > result.n_segments:
             bound = (getattr(result, "params", None) or {}).get("max_size_ratio") or 0
             most = f", none above {bound:g} times the mean" if bound else ""
-            scene = ("; the scene's cost" if (getattr(result, "params", None) or {}).get(
-                "merge_cost") == "scene" else "")
+            scene = COST_SAID.get((getattr(result, "params", None) or {}).get("merge_cost"),
+                                   "")
             segs += (f" (merged from {first:,} finer ones, flat neighbours first{most}{scene}; "
                      "--merge-from 1: no merging)")
     else:

@@ -7,6 +7,7 @@ import time
 from pathlib import Path
 
 from ..elements.kinds import kind_of
+from .notes import COST_SAID
 from .options import (
     add_engine_options,
     check_labels_output,
@@ -117,8 +118,8 @@ def segment_tiles(args) -> int:
         first = result.params.get("merged_from")
         if first:
             how = "flat neighbours first" if kind_of(kind).cloud else "Ward's merges"
-            if kind_of(kind).cloud and result.params.get("merge_cost") == "scene":
-                how += "; the scene's cost"
+            if kind_of(kind).cloud:
+                how += COST_SAID.get(result.params.get("merge_cost"), "")
             what += f" (merged from {first:,} finer ones, {how}; --merge-from 1: no merging)"
         if result.n_segments > 1:
             what += sizes_said(result.labels, kind)

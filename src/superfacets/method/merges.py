@@ -56,7 +56,7 @@ from ..graph.hierarchy import merge_arrays, pieces
 from ..graph.sums import border_sums, grouped_graph, grouped_planes, point_sums
 
 __all__ = ["merge_to_count", "merge_nodes", "flat_merges", "flat_share", "flat_merge_nodes",
-           "rise_merge_nodes", "scene_merge_nodes", "ring_residual",
+           "rise_merge_nodes", "scene_merge_nodes", "ring_residual", "rise_weight",
            "same_feature_edges", "feature_spread", "noise_variance", "neighbourhood_noise",
            "FLAT_NOISE", "FLAT_SHARE", "NOISE_SAMPLE"]
 
@@ -381,6 +381,46 @@ def ring_residual(pg) -> float:
     return float(np.median(residual))
 
 
+def rise_weight(noise: float, count: np.ndarray, scatter: np.ndarray) -> float:
+    """The weight of the plane's rise in ``merge_cost='noise'``: ``sqrt(min(1, s / v))``, the
+    scan's noise ``s`` over the superpoints' median plane residual per point ``v``, in
+    square root: 1 where the noise is all the superpoints hold (flat ground, walls), 0 where
+    the noise reads 0 (a surface sampled from a mesh: Ward's merges alone).
+
+    Parameters
+    ----------
+    noise : float
+        The scan's noise variance (:func:`noise_variance`), squared input units, ``>= 0``.
+    count : (K,) float ndarray
+        Points per superpoint (the first superpoints, before any merge).
+    scatter : (K, 3, 3) float ndarray
+        Their scatter about their means.
+
+    Returns
+    -------
+    float
+        In ``[0, 1]``; 1 for no superpoints or none with a residual, where the noise is
+        positive.
+
+    Raises
+    ------
+    ParameterError
+        Never.
+
+    Examples
+    --------
+    >>> rough = np.tile(4.0 * np.eye(3), (2, 1, 1))   # residual 4 over 4 points: 1.0 each
+    >>> rise_weight(0.25, np.full(2, 4.0), rough), rise_weight(0.0, np.full(2, 4.0), rough)
+    (0.5, 0.0)
+    """
+    if not noise > 0:
+        return 0.0
+    own = np.maximum(np.linalg.eigvalsh(np.asarray(scatter, dtype=np.float64))[:, 0], 0.0) \
+        / np.maximum(np.asarray(count, dtype=np.float64), 1.0) if len(count) else np.zeros(0)
+    typical = float(np.median(own)) if own.size else 0.0
+    return float(np.sqrt(min(1.0, noise / typical))) if typical > 0 else 1.0
+
+
 def _merged(pg, planarity: int, k: int, alpha: float, eta_convex: float, max_rise: float,
             max_size: float, compactness: float = 0.0) -> np.ndarray:
     """The merging kernel on a planes' graph, down to ``k`` nodes or as far as it may."""
@@ -484,10 +524,11 @@ def merge_nodes(nodes: dict, pairs: dict, target: int, max_rise: float | None,
         ``> 0``: the flat merges and the plane's rise make no superpoint of more than
         this many times the mean count (the elements over ``target``) while another pair
         may merge (the parameter ``max_size_ratio``); 0: no bound.
-    cost : {'auto', 'scene'}, default 'auto'
+    cost : {'auto', 'scene', 'noise'}, default 'auto'
         Phase 2's (the parameter ``merge_cost``,
         :data:`superfacets.method.params.MERGE_COSTS`): ``'scene'`` merges by
-        :func:`scene_merge_nodes` on every input (with ``max_rise``; without it, Ward's).
+        :func:`scene_merge_nodes` on every input (with ``max_rise``; without it, Ward's);
+        ``'noise'`` likewise, its rise weighted by :func:`rise_weight`.
 
     Returns
     -------
@@ -526,9 +567,11 @@ def merge_nodes(nodes: dict, pairs: dict, target: int, max_rise: float | None,
     n_flat = int(flat.max()) + 1 if k else 0
     if not n_flat:
         return flat, flat, 0
-    if max_rise is not None and cost == "scene":
-        final, fewest = _scene_merges(nodes, pairs, flat, target, max_rise / FLAT_NOISE,
-                                      alpha, eta_convex, max_jump, cap)
+    if max_rise is not None and cost in ("scene", "noise"):
+        noise = max_rise / FLAT_NOISE
+        weight = 1.0 if cost == "scene" else rise_weight(noise, count, nodes["scatter"])
+        final, fewest = _scene_merges(nodes, pairs, flat, target, noise, alpha, eta_convex,
+                                      max_jump, cap, weight)
         return flat, final, min(fewest, n_flat)
     if max_rise is not None and flat_share(np.arange(k), flat, count) >= FLAT_SHARE:
         # the plane's rise: among neighbours of one colour first (a board on its wall is
@@ -558,13 +601,14 @@ def merge_nodes(nodes: dict, pairs: dict, target: int, max_rise: float | None,
 
 
 def _scene_merges(nodes: dict, pairs: dict, flat: np.ndarray, target: int, noise: float,
-                  alpha: float, eta_convex: float, max_jump: float | None, cap: float
-                  ) -> tuple[np.ndarray, int]:
+                  alpha: float, eta_convex: float, max_jump: float | None, cap: float,
+                  weight: float = 1.0) -> tuple[np.ndarray, int]:
     """Phase 2 by the scene's cost (:func:`scene_merge_nodes`) from the flat merges' groups:
     among neighbours of one colour first, then across colours; under the size bound first.
     The rise's unit is the scan's noise or the neighbourhoods' residual
     (:func:`ring_residual`), the larger (where both are 0, an exactly planar input, machine
-    precision times Ward's); Ward's is the superpoint asked for's area over pi."""
+    precision times Ward's), over ``weight`` (0: no rise); Ward's is the superpoint asked
+    for's area over pi."""
     size = float(nodes["area"].sum()) / (np.pi * target)
     size = size if size > 0 else 1.0
     final, fewest = flat, target
@@ -574,6 +618,7 @@ def _scene_merges(nodes: dict, pairs: dict, flat: np.ndarray, target: int, noise
         if graph.n_segments <= fewest:
             continue
         unit = max(noise, ring_residual(graph)) or float(np.finfo(float).eps) * size
+        unit = unit / weight if weight > 0 else np.inf
         for bound in ((cap, 0.0) if cap > 0 else (0.0,)):
             if graph.n_segments > fewest:
                 final = scene_merge_nodes(graph, fewest, unit, size, alpha, eta_convex,

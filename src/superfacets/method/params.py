@@ -51,8 +51,10 @@ ASSIGNMENTS = ("bounded", "exact")
 WEIGHTINGS = ("paper", "shlafman")
 #: The merges' costs to the count (``merge_cost``): ``'auto'`` the plane's rise where the
 #: flat regions hold most of the points, else Ward's; ``'scene'`` one cost on every input
-#: (:func:`superfacets.method.merges.scene_merge_nodes`).
-MERGE_COSTS = ("auto", "scene")
+#: (:func:`superfacets.method.merges.scene_merge_nodes`); ``'noise'`` that cost with its
+#: rise weighted by the noise's share of the superpoints' residual
+#: (:func:`superfacets.method.merges.rise_weight`).
+MERGE_COSTS = ("auto", "scene", "noise")
 #: Names accepted by ``elements=``: the faces of a mesh, its vertices, the points of a cloud
 #: (the kinds of surface elements of :data:`~superfacets.elements.kinds.KINDS`).
 ELEMENTS = tuple(name for name, kind in KINDS.items() if kind.dim == 2)
@@ -221,11 +223,16 @@ def _declare() -> tuple[Parameter, ...]:
           "superpoint of more than this many times the mean count of elements while other "
           "neighbours can merge, >= 1; 0: no bound", _size_ratio, cli="--max-size-ratio"),
         P("merge_cost", "auto", "str", "merges to n_segments (merge_from > 1): auto (the "
-          "plane's rise where flat regions hold most of the points, else Ward's) or scene "
-          "(one cost: the rise in the noise's units plus Ward's, times the crease factor; "
-          "scans of scenes)", lambda v: check_choice("merge_cost", v, MERGE_COSTS),
-          cli="--merge-cost", choices=MERGE_COSTS),
+          "plane's rise where flat regions hold most points, else Ward's), scene (the rise "
+          "in noise units plus Ward's, times the crease factor) or noise (scene's, the rise "
+          "weighted by the noise's share)", _merge_cost, cli="--merge-cost",
+          choices=MERGE_COSTS),
     )
+
+
+def _merge_cost(value) -> str:
+    """``merge_cost``: one of :data:`MERGE_COSTS`."""
+    return check_choice("merge_cost", value, MERGE_COSTS)
 
 
 def _size_ratio(value) -> float:

@@ -237,9 +237,9 @@ def merge_from_of(params, kind: str, tiled: bool = False) -> int:
     """``merge_from`` of a run: as given, else (None) the kind's
     (:attr:`~superfacets.elements.kinds.ElementKind.merge_from`: 5 on points) where
     the superpoints have equal areas (``density`` resolved to 0: clouds of even density,
-    not LiDAR sweeps) or the merges take the scene's cost (``merge_cost='scene'``, measured
-    with merges on every scan), 1 elsewhere, with ``paper`` and in the tiles of a tiled
-    run.
+    not LiDAR sweeps) or the merges take the scene's cost (``merge_cost`` ``'scene'`` or
+    ``'noise'``, measured with merges on every scan), 1 elsewhere, with ``paper`` and in the
+    tiles of a tiled run.
 
     On the even-density clouds measured (two ScanNet rooms, an airborne tile, the 300
     benchmark meshes sampled) merging 5 times the superpoints down to ``k``, flat
@@ -280,6 +280,6 @@ def merge_from_of(params, kind: str, tiled: bool = False) -> int:
         return int(params.merge_from)
     if params.paper or tiled:
         return 1
-    if (params.density or 0.0) > 0 and params.merge_cost != "scene":
+    if (params.density or 0.0) > 0 and params.merge_cost not in ("scene", "noise"):
         return 1
     return kind_of(kind).merge_from

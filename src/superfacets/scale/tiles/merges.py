@@ -257,7 +257,7 @@ def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float,
     max_ratio : float, default 0
         The largest superpoint the merges may make while others can merge, in mean
         counts (:func:`superfacets.method.merges.merge_nodes`); 0: no bound.
-    cost : {'auto', 'scene'}, default 'auto'
+    cost : {'auto', 'scene', 'noise'}, default 'auto'
         The merges' cost to the count (the parameter ``merge_cost``).
 
     Returns
