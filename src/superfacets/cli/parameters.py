@@ -101,7 +101,9 @@ SHOWN = {
                    "regions hold most of the points, else by Ward's cost; scene by one cost "
                    "everywhere (the rise in the noise's units plus Ward's), merging every "
                    "cloud, uneven density too: more class borders kept on scans of scenes, "
-                   "worse on noise-free sampled surfaces (default: auto)"),
+                   "worse on noise-free sampled surfaces; noise: scene's cost, its rise "
+                   "weighted by the noise's share of the superpoints' residual (none on "
+                   "noise-free surfaces) (default: auto)"),
     "paper": ("method", "switch", "the paper's method as published, its labels bit for bit: "
               "its stopping rule (--tol 0), no clean-up, no split-and-merge (the default on "
               "faces adds both: lower undersegmentation error and more compact superfacets "

@@ -31,7 +31,9 @@ neighbourhoods' own plane residual (:func:`ring_residual`, the larger), plus War
 units of the superpoint's size, times the crease factor. It keeps more class borders on
 scans of scenes and noisy objects, and fewer parts on noise-free sampled surfaces
 (``docs/notes/superpoints-defaults.md``, "The merges' cost scaled by the parts' own
-residual").
+residual"). With ``merge_cost='noise'`` the rise of that cost is weighted by the noise's
+share of the first superpoints' residual (:func:`rise_weight`): none on a noise-free
+sampled surface, whose merges are then Ward's.
 
 Neither the flat merges nor the plane's rise make a superpoint of more than
 ``max_size_ratio`` times the mean count (the elements over ``k``; 16 by default) while
