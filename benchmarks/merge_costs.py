@@ -18,8 +18,8 @@ scan's noise ``s``), a step is charged for what it is against the surfaces' own 
   scene_merge_nodes``): ``blend`` with ``v~`` the median residual of each superpoint's
   union with its neighbours, times the paper's crease factor (eqs. 2-3);
 - ``noise``: the package's ``merge_cost='noise'``: ``scene`` with its rise weighted by
-  ``sqrt(min(1, s / v))``, ``v`` the first superpoints' median residual per point
-  (``superfacets.method.merges.rise_weight``; 0 where the noise reads 0).
+  ``min(1, s / v)``, ``v`` the first superpoints' median residual per point
+  (``superfacets.method.merges.rise_weight``); ``today``'s merges where the noise reads 0.
 
 The merging here is a heap in Python (a prototype, not the package's compiled kernel), with
 today's size bound (``max_size_ratio``) and colour guard. Each setting is judged as

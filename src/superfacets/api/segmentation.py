@@ -200,10 +200,10 @@ def superfacets(data=_NO_INPUT, n_segments: int | None = _D.n_segments, *, featu
         scans it met the Segmentator's targets in 78 of 108
         settings against 61 (UE -6 %), and lowered UE on benchmark objects sampled with
         noise; on the 300 benchmark clouds (noise-free) UE is 11-20 % higher.
-        ``'noise'``: ``'scene'`` with its rise weighted by ``sqrt(min(1, s / v))``, the
-        noise over the first superpoints' median residual per point
-        (:func:`superfacets.method.merges.rise_weight`; Ward's term alone where the
-        noise reads 0): 73 of 108, the 300 benchmark clouds' UE 0.9 % higher
+        ``'noise'``: ``'scene'`` with its rise weighted by ``min(1, s / v)``, the noise's
+        share of the first superpoints' median residual per point
+        (:func:`superfacets.method.merges.rise_weight`), and ``'auto'``'s merges where the
+        noise reads 0: 70 of 108, the 300 benchmark clouds' UE within 0.5 %
         (``docs/notes/superpoints-defaults.md``).
     tol : float, default 0.001
         Convergence tolerance in ``[0, 1]``: also stop once a classification

@@ -102,8 +102,8 @@ SHOWN = {
                    "everywhere (the rise in the noise's units plus Ward's), merging every "
                    "cloud, uneven density too: more class borders kept on scans of scenes, "
                    "worse on noise-free sampled surfaces; noise: scene's cost, its rise "
-                   "weighted by the noise's share of the superpoints' residual (none on "
-                   "noise-free surfaces) (default: auto)"),
+                   "weighted by the noise's share of the superpoints' residual (auto's "
+                   "merges on noise-free surfaces) (default: auto)"),
     "paper": ("method", "switch", "the paper's method as published, its labels bit for bit: "
               "its stopping rule (--tol 0), no clean-up, no split-and-merge (the default on "
               "faces adds both: lower undersegmentation error and more compact superfacets "

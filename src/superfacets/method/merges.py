@@ -32,8 +32,8 @@ units of the superpoint's size, times the crease factor. It keeps more class bor
 scans of scenes and noisy objects, and fewer parts on noise-free sampled surfaces
 (``docs/notes/superpoints-defaults.md``, "The merges' cost scaled by the parts' own
 residual"). With ``merge_cost='noise'`` the rise of that cost is weighted by the noise's
-share of the first superpoints' residual (:func:`rise_weight`): none on a noise-free
-sampled surface, whose merges are then Ward's.
+share of the first superpoints' residual (:func:`rise_weight`); on an input whose noise
+reads 0 (a noise-free sampled surface) its merges are the default's.
 
 Neither the flat merges nor the plane's rise make a superpoint of more than
 ``max_size_ratio`` times the mean count (the elements over ``k``; 16 by default) while
@@ -60,7 +60,7 @@ from ..graph.sums import border_sums, grouped_graph, grouped_planes, point_sums
 __all__ = ["merge_to_count", "merge_nodes", "flat_merges", "flat_share", "flat_merge_nodes",
            "rise_merge_nodes", "scene_merge_nodes", "ring_residual", "rise_weight",
            "same_feature_edges", "feature_spread", "noise_variance", "neighbourhood_noise",
-           "FLAT_NOISE", "FLAT_SHARE", "NOISE_SAMPLE"]
+           "FLAT_NOISE", "FLAT_SHARE", "NOISE_SAMPLE", "PLANE_ROUNDING"]
 
 #: A flat merge's largest rise of the squared plane distances, per element of the
 #: smaller superpoint, in units of :func:`noise_variance` (chosen among 1, 2 and 3:
@@ -73,6 +73,10 @@ FLAT_NOISE = 2.0
 FLAT_SHARE = 0.5
 #: The most elements :func:`noise_variance` reads (evenly spaced in the input's order).
 NOISE_SAMPLE = 8_192
+#: A neighbourhood's smallest eigenvalue at most this times its largest is 0 in
+#: :func:`neighbourhood_noise`: float64's rounding of the covariance (64 machine epsilons),
+#: not noise.
+PLANE_ROUNDING = 64 * float(np.finfo(np.float64).eps)
 
 
 def noise_variance(graph) -> float:
@@ -126,7 +130,10 @@ def neighbourhood_noise(graph, pick: np.ndarray) -> np.ndarray:
     ``r1``, their mean distance to it) and ``l2`` on those and their neighbours (``r2``),
     and the curvature's share taken out: ``(q l1 - l2) / (q - 1)``, ``q = (r2 / r1)^4``
     (an estimate at radius 0). On a scan's flat parts ``l1`` and ``l2`` are both the
-    noise; on a clean sampled surface, curved everywhere, the estimate is about 0.
+    noise; on a clean sampled surface, curved everywhere, the estimate is about 0. An
+    eigenvalue within the rounding of its covariance (:data:`PLANE_ROUNDING` times the
+    largest) is 0: a neighbourhood on an exact plane (a machined part's face, sampled)
+    has no noise, whatever the rounding left in float64.
     """
     l1, r1 = _plane_residual(graph, pick, 1)
     l2, r2 = _plane_residual(graph, pick, 2)
@@ -144,7 +151,8 @@ def _plane_residual(graph, pick: np.ndarray, rings: int) -> tuple[np.ndarray, np
     native.kernel("normals.neighbourhood_moments")(
         np.ascontiguousarray(graph.indptr, dtype=np.int64), np.ascontiguousarray(graph.indices),
         np.ascontiguousarray(graph.positions, dtype=np.float64), pick, int(rings), cov, radius)
-    return np.linalg.eigvalsh(cov)[:, 0], radius
+    values = np.linalg.eigvalsh(cov)
+    return np.where(values[:, 0] > PLANE_ROUNDING * values[:, 2], values[:, 0], 0.0), radius
 
 
 def flat_merges(graph, labels: np.ndarray, k: int, max_rise: float, *,
@@ -384,10 +392,12 @@ def ring_residual(pg) -> float:
 
 
 def rise_weight(noise: float, count: np.ndarray, scatter: np.ndarray) -> float:
-    """The weight of the plane's rise in ``merge_cost='noise'``: ``sqrt(min(1, s / v))``, the
-    scan's noise ``s`` over the superpoints' median plane residual per point ``v``, in
-    square root: 1 where the noise is all the superpoints hold (flat ground, walls), 0 where
-    the noise reads 0 (a surface sampled from a mesh: Ward's merges alone).
+    """The weight of the plane's rise in ``merge_cost='noise'``: ``min(1, s / v)``, the
+    scan's noise ``s`` over the superpoints' median plane residual per point ``v``, both
+    variances: the noise's share of what the superpoints hold. 1 where the noise is all
+    they hold (flat ground, walls), small where they are much rougher than the noise
+    (vegetation, an object's fine detail), 0 where the noise reads 0 (where
+    :func:`merge_nodes` then keeps today's rule).
 
     Parameters
     ----------
@@ -413,14 +423,14 @@ def rise_weight(noise: float, count: np.ndarray, scatter: np.ndarray) -> float:
     --------
     >>> rough = np.tile(4.0 * np.eye(3), (2, 1, 1))   # residual 4 over 4 points: 1.0 each
     >>> rise_weight(0.25, np.full(2, 4.0), rough), rise_weight(0.0, np.full(2, 4.0), rough)
-    (0.5, 0.0)
+    (0.25, 0.0)
     """
     if not noise > 0:
         return 0.0
     own = np.maximum(np.linalg.eigvalsh(np.asarray(scatter, dtype=np.float64))[:, 0], 0.0) \
         / np.maximum(np.asarray(count, dtype=np.float64), 1.0) if len(count) else np.zeros(0)
     typical = float(np.median(own)) if own.size else 0.0
-    return float(np.sqrt(min(1.0, noise / typical))) if typical > 0 else 1.0
+    return float(min(1.0, noise / typical)) if typical > 0 else 1.0
 
 
 def _merged(pg, planarity: int, k: int, alpha: float, eta_convex: float, max_rise: float,
@@ -530,7 +540,9 @@ def merge_nodes(nodes: dict, pairs: dict, target: int, max_rise: float | None,
         Phase 2's (the parameter ``merge_cost``,
         :data:`superfacets.method.params.MERGE_COSTS`): ``'scene'`` merges by
         :func:`scene_merge_nodes` on every input (with ``max_rise``; without it, Ward's);
-        ``'noise'`` likewise, its rise weighted by :func:`rise_weight`.
+        ``'noise'`` likewise, its rise weighted by :func:`rise_weight`, where the noise is
+        above 0 (``max_rise > 0``), else ``'auto'``'s rule (a noise-free sampled surface:
+        the same merges).
 
     Returns
     -------
@@ -569,7 +581,7 @@ def merge_nodes(nodes: dict, pairs: dict, target: int, max_rise: float | None,
     n_flat = int(flat.max()) + 1 if k else 0
     if not n_flat:
         return flat, flat, 0
-    if max_rise is not None and cost in ("scene", "noise"):
+    if max_rise is not None and (cost == "scene" or cost == "noise" and max_rise > 0):
         noise = max_rise / FLAT_NOISE
         weight = 1.0 if cost == "scene" else rise_weight(noise, count, nodes["scatter"])
         final, fewest = _scene_merges(nodes, pairs, flat, target, noise, alpha, eta_convex,
