@@ -54,6 +54,39 @@ void pca_linearity(nb::handle points_, nb::handle neighbors_, nb::handle lineari
     });
 }
 
+// A set of element rows for one ball: open addressing, cleared by the slots it filled (a
+// ball holds a few hundred rows, so a table of the input's size per thread is not needed).
+class BallSet {
+  public:
+    void clear() {
+        for (i64 slot : used_) table_[slot] = -1;
+        used_.clear();
+    }
+    bool insert(i64 v) {  // false if already there
+        if (2 * (static_cast<i64>(used_.size()) + 1) > static_cast<i64>(table_.size())) grow();
+        const i64 mask = static_cast<i64>(table_.size()) - 1;
+        i64 slot = static_cast<i64>((static_cast<std::uint64_t>(v) * 0x9E3779B97F4A7C15ull) >> 20) & mask;
+        while (table_[slot] != -1) {
+            if (table_[slot] == v) return false;
+            slot = (slot + 1) & mask;
+        }
+        table_[slot] = v;
+        used_.push_back(slot);
+        return true;
+    }
+
+  private:
+    void grow() {
+        std::vector<i64> old;
+        for (i64 slot : used_) old.push_back(table_[slot]);
+        table_.assign(table_.empty() ? 1024 : 2 * table_.size(), -1);
+        used_.clear();
+        for (i64 v : old) insert(v);
+    }
+    std::vector<i64> table_;
+    std::vector<i64> used_;
+};
+
 // normals.neighbourhood_moments: over the elements within `rings` graph steps of each
 // pick[i] (itself included, ascending: each sum in that order, from 0), their covariance
 // (the scatter divided by their number) and their mean distance to it (the sum divided by
@@ -74,21 +107,24 @@ void neighbourhood_moments(nb::handle indptr_, nb::handle indices_, nb::handle p
         nb::gil_scoped_release nogil;
         parallel_for(pick.n, [&](i64 lo, i64 hi) {
             std::vector<i64> ball;
+            BallSet seen;
             double a[6];
             for (i64 i = lo; i < hi; ++i) {
                 const i64 p = pick[i];
-                i64 grown = 0;
                 ball.assign(1, p);
-                for (i64 r = 0; r < rings; ++r) {  // every member's neighbours added
+                seen.clear();
+                seen.insert(p);
+                i64 from = 0;  // the last ring's members: only theirs can be new
+                for (i64 r = 0; r < rings; ++r) {
                     const i64 end = static_cast<i64>(ball.size());
-                    if (r > 0 && end == grown) break;  // (the ball stopped growing: done)
-                    grown = end;
-                    for (i64 t = 0; t < end; ++t)
+                    if (from == end) break;  // (the ball stopped growing: done)
+                    for (i64 t = from; t < end; ++t)
                         for (i64 e = indptr[ball[t]]; e < indptr[ball[t] + 1]; ++e)
-                            ball.push_back(indices[e]);
-                    std::sort(ball.begin(), ball.end());
-                    ball.erase(std::unique(ball.begin(), ball.end()), ball.end());
+                            if (seen.insert(static_cast<i64>(indices[e])))
+                                ball.push_back(indices[e]);
+                    from = end;
                 }
+                std::sort(ball.begin(), ball.end());
                 const i64 k = static_cast<i64>(ball.size());
                 const double size = static_cast<double>(k);
                 scatter(points.p, ball.data(), k, a);
