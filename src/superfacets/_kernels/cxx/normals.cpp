@@ -65,7 +65,8 @@ class BallSet {
     bool insert(i64 v) {  // false if already there
         if (2 * (static_cast<i64>(used_.size()) + 1) > static_cast<i64>(table_.size())) grow();
         const i64 mask = static_cast<i64>(table_.size()) - 1;
-        i64 slot = static_cast<i64>((static_cast<std::uint64_t>(v) * 0x9E3779B97F4A7C15ull) >> 20) & mask;
+        const std::uint64_t h = static_cast<std::uint64_t>(v) * 0x9E3779B97F4A7C15ull;
+        i64 slot = static_cast<i64>(h >> 20) & mask;
         while (table_[slot] != -1) {
             if (table_[slot] == v) return false;
             slot = (slot + 1) & mask;
