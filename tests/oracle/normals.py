@@ -199,3 +199,51 @@ def neighbourhood_moments(indptr, indices, points, pick, rings, cov, radius):
             dz = points[j, 2] - points[p, 2]
             s += math.sqrt(dx * dx + dy * dy + dz * dz)
         radius[i] = s / max(size - 1.0, 1.0)
+
+
+@njit(cache=True, error_model="numpy")
+def _jacobi_extremes(a00, a01, a02, a11, a12, a22):
+    """The smallest and the largest eigenvalue of the symmetric 3x3 matrix by cyclic Jacobi
+    rotations (the pairs (0, 1), (0, 2), (1, 2) each sweep, at most 64 sweeps; an entry
+    negligible beside both its diagonal ones is set to 0 without a rotation)."""
+    d = np.array([a00, a11, a22])
+    o = np.array([a01, a02, a12])
+    P, Q, RP, RQ = (0, 0, 1), (1, 2, 2), (1, 0, 0), (2, 2, 1)
+    for _ in range(64):
+        if o[0] == 0.0 and o[1] == 0.0 and o[2] == 0.0:
+            break
+        for k in range(3):
+            apq = o[k]
+            if apq == 0.0:
+                continue
+            p, q = P[k], Q[k]
+            g = 100.0 * abs(apq)
+            if abs(d[p]) + g == abs(d[p]) and abs(d[q]) + g == abs(d[q]):
+                o[k] = 0.0
+                continue
+            theta = (d[q] - d[p]) / (2.0 * apq)
+            if abs(theta) > 1e150:
+                t = 0.5 / theta
+            else:
+                t = (1.0 if theta >= 0.0 else -1.0) / (abs(theta) + math.sqrt(theta * theta + 1.0))
+            c = 1.0 / math.sqrt(t * t + 1.0)
+            s = t * c
+            d[p] -= t * apq
+            d[q] += t * apq
+            o[k] = 0.0
+            arp, arq = o[RP[k]], o[RQ[k]]
+            o[RP[k]] = c * arp - s * arq
+            o[RQ[k]] = s * arp + c * arq
+    low = min(min(d[0], d[1]), d[2])
+    high = max(max(d[0], d[1]), d[2])
+    return low, high
+
+
+@njit(cache=True, parallel=True, error_model="numpy")
+def extreme_eigenvalues(cov, low, high):
+    """The smallest and the largest eigenvalue of each symmetric 3x3 matrix ``cov[i]`` (its
+    upper triangle read)."""
+    for i in prange(cov.shape[0]):
+        a = cov[i]
+        low[i], high[i] = _jacobi_extremes(a[0, 0], a[0, 1], a[0, 2], a[1, 1], a[1, 2],
+                                           a[2, 2])

@@ -145,14 +145,16 @@ def neighbourhood_noise(graph, pick: np.ndarray) -> np.ndarray:
 def _plane_residual(graph, pick: np.ndarray, rings: int) -> tuple[np.ndarray, np.ndarray]:
     """Per element of ``pick``: the smallest eigenvalue of the covariance of the elements
     within ``rings`` graph steps of it (itself included), and their mean distance to it
-    (one compiled pass on threads: ``normals.neighbourhood_moments``)."""
+    (compiled passes on threads: ``normals.neighbourhood_moments``, then
+    ``normals.extreme_eigenvalues``, Jacobi's rotations)."""
     pick = np.ascontiguousarray(pick, dtype=np.int64)
     cov, radius = np.empty((pick.size, 3, 3)), np.empty(pick.size)
     native.kernel("normals.neighbourhood_moments")(
         np.ascontiguousarray(graph.indptr, dtype=np.int64), np.ascontiguousarray(graph.indices),
         np.ascontiguousarray(graph.positions, dtype=np.float64), pick, int(rings), cov, radius)
-    values = np.linalg.eigvalsh(cov)
-    return np.where(values[:, 0] > PLANE_ROUNDING * values[:, 2], values[:, 0], 0.0), radius
+    low, high = np.empty(pick.size), np.empty(pick.size)
+    native.kernel("normals.extreme_eigenvalues")(cov, low, high)
+    return np.where(low > PLANE_ROUNDING * high, low, 0.0), radius
 
 
 def flat_merges(graph, labels: np.ndarray, k: int, max_rise: float, *,
