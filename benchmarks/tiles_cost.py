@@ -3,6 +3,7 @@ new process each.
 
 Usage: ``python benchmarks/tiles_cost.py [--points 10000000] [-k 2000] [--tiles 2 4 16]
 [--workers 2] [--threads 1 2 4 8 16] [--mesh PATH] [--before DIR] [--repeat 2]``
+(``--tiles`` with no count: the one runs alone)
 
 Points are sampled on PSB mesh 281 (the benchmark's, from ``../shared``; ``--seed``) and
 written to a binary PLY once (``--mesh PATH``: that mesh file instead, its faces
@@ -19,7 +20,10 @@ run's and, where one run was measured on as many threads as there are workers (`
 each other down on a machine's shared memory: the same CPU seconds buy less), the first
 one run's wall time over its own (the speed-up of threads) and, for the tiles, the
 elements their boxes hold over their cores' (``TiledResult.halo_ratio``: every phase
-runs over the boxes).
+runs over the boxes). A second table gives the one runs' seconds by stage (the result's
+``timings``: the point graph, the weights, the start, the passes, connectivity and merges),
+the wall time a thread count shortens and the part it leaves (a stage that does not shrink
+with threads is a serial one).
 """
 
 from __future__ import annotations
@@ -35,8 +39,12 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _versions import run_code  # noqa: E402
 
+#: The one runs' stages timed (reading the file, then ``SegmentationResult.timings``' keys)
+STAGES = ("read", "graph", "weights", "init", "iterations", "connectivity", "merges")
+
 CODE = """
 import json, resource, sys, time
+STAGES = %r
 def cpu():
     a = resource.getrusage(resource.RUSAGE_SELF)
     b = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -45,11 +53,15 @@ def main():
     path, k, tiles, workers = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4])
     threads = int(sys.argv[5]) or None
     t, c = time.perf_counter(), cpu()
-    apart, ratio = -1, 1.0
+    apart, ratio, stages = -1, 1.0, {}
     if tiles == 0:
         from superfacets import segment
         from superfacets.io import read_input
-        n = segment(read_input(path), k, n_threads=threads).n_segments
+        data = read_input(path)
+        stages["read"] = time.perf_counter() - t
+        r = segment(data, k, n_threads=threads)
+        n = r.n_segments
+        stages.update((s, float(r.timings.get(s, 0.0))) for s in STAGES[1:])
     else:
         from superfacets.scale.tiles.run import segment_tiled
         r = segment_tiled(path, k, tiles=tiles, workers=workers)
@@ -57,10 +69,10 @@ def main():
         # (TiledResult.halo_ratio, summed here: a --before version may not have it)
         ratio = sum(s["rows"] for s in r.tiles) / max(sum(s["core"] for s in r.tiles), 1)
     print(json.dumps(dict(wall=time.perf_counter() - t, cpu=cpu() - c, n=int(n),
-                          apart=apart, ratio=ratio)))
+                          apart=apart, ratio=ratio, stages=stages)))
 if __name__ == "__main__":
     main()
-"""
+""" % (STAGES,)
 
 
 def _cloud(n: int, seed: int, folder: Path) -> Path:
@@ -86,7 +98,7 @@ def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--points", type=int, default=10_000_000)
     p.add_argument("-k", type=int, default=2000)
-    p.add_argument("--tiles", type=int, nargs="+", default=[2, 4, 16])
+    p.add_argument("--tiles", type=int, nargs="*", default=[2, 4, 16])
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--repeat", type=int, default=1)
@@ -112,8 +124,10 @@ def main() -> None:
                                    str(t))
                     if out.returncode:
                         raise SystemExit(out.stderr[-2000:])
-                    runs.setdefault((v, t, tiles), []).append(
-                        json.loads(out.stdout.strip().splitlines()[-1]))
+                    got = json.loads(out.stdout.strip().splitlines()[-1])
+                    runs.setdefault((v, t, tiles), []).append(got)
+                    print(f"({v}, {t} threads, {tiles} tiles: {got['wall']:.1f} s, "
+                          f"{got['cpu']:.1f} CPU s)", file=sys.stderr, flush=True)
     what = (Path(a.mesh).name if a.mesh
             else f"{a.points:,} points on PSB 281 (seed {a.seed})")
     print(f"{what}, k = {a.k}, {a.workers} workers, {cores} cores; median of {a.repeat}, "
@@ -139,6 +153,24 @@ def main() -> None:
             print(f"| {'this' if v == 'installed' else Path(v).name} | {name} | {wall:.1f} | "
                   f"{cpu:.1f} | {cpu / one:.2f} | {same} | {first / wall:.2f} | {apart} | "
                   f"{ratio} | {rs[0]['n']} |")
+    _stages(runs, versions, threads)
+
+
+def _stages(runs: dict, versions: list, threads: list) -> None:
+    """The one runs' seconds by stage, the medians of the repeats."""
+    print("\nOne run's seconds by stage (wall; the medians):")
+    heads = ("import, read",) + STAGES[1:]  # (the first is timed from before the import)
+    print("| version | threads | " + " | ".join(heads) + " | total |")
+    print("|---|---|" + "---|" * (len(STAGES) + 1))
+    for v in versions:
+        for t in threads:
+            rs = [r for r in runs[(v, t, 0)] if r.get("stages")]
+            if not rs:  # (a --before version that does not report them)
+                continue
+            cells = [statistics.median(r["stages"][s] for r in rs) for s in STAGES]
+            wall = statistics.median(r["wall"] for r in rs)
+            print(f"| {'this' if v == 'installed' else Path(v).name} | {t or 'default'} | "
+                  + " | ".join(f"{c:.2f}" for c in cells) + f" | {wall:.2f} |")
 
 
 if __name__ == "__main__":
