@@ -774,29 +774,31 @@ def test_superpoints_on_scan_lines_are_the_same_for_any_thread_count():
     assert max(rings_per_label) > 1
 
 
-def test_point_graph_is_the_same_for_any_block_of_queries(monkeypatch):
-    # the tree is queried in blocks (4-byte neighbours, the k-th distance kept): any
-    # block size gives the graph of one query of every point, bit for bit, with ties
-    # at the k-th distance (a quantized grid) and scan lines joined wider (a line)
-    from superfacets.elements import neighbors
+def test_point_graph_is_the_same_on_any_number_of_threads(monkeypatch):
+    # the tree is queried in one compiled loop whose ranges the threads take in turn
+    # (4-byte neighbours, the k-th distance and the radius's mask kept): one thread or
+    # three give the same graph, bit for bit, with ties at the k-th distance (a quantized
+    # grid) and scan lines joined wider (a line)
     from superfacets.elements.points import point_graph
     from superfacets.inputs.cloud import PointCloud
 
-    xy = np.stack(np.meshgrid(np.arange(30.0), np.arange(20.0)), -1).reshape(-1, 2)
+    xy = np.stack(np.meshgrid(np.arange(150.0), np.arange(100.0)), -1).reshape(-1, 2)
     grid = np.c_[xy, 0.05 * (xy[:, 0] % 3)]
-    line = np.c_[np.linspace(0, 29, 200), np.full(200, 25.0), np.zeros(200)]
+    line = np.c_[np.linspace(0, 149, 400), np.full(400, 125.0), np.zeros(400)]
     pts = np.concatenate([grid, line])
 
-    def graph(block, radius=None):
-        monkeypatch.setattr(neighbors, "BLOCK", block)
+    def graph(threads, radius=None):
+        monkeypatch.setenv("SUPERFACETS_KERNEL_THREADS", threads)
         return point_graph(PointCloud(pts), 6, radius).graph
 
-    for radius in (None, 0.03):
-        one, blocks = graph(1 << 20, radius), graph(7, radius)
+    for radius in (None, 0.008):
+        one, three = graph("1", radius), graph("3", radius)
         for name in ("pairs", "indptr", "indices", "sizes", "normals", "spans", "lengths"):
-            a, b = getattr(one, name), getattr(blocks, name)
+            a, b = getattr(one, name), getattr(three, name)
             assert a.dtype == b.dtype and np.array_equal(a, b), name
-    assert one.pairs.dtype == np.int32 and one.n_edges > 0
+        assert one.pairs.dtype == np.int32 and one.n_edges > 0
+    # (the radius, about 1.6 grid steps, masks the neighbours beyond it: fewer pairs)
+    assert graph("1", 0.008).n_edges < graph("1").n_edges
 
 
 def test_a_point_graph_builds_its_pairs_spans_and_lengths_only_when_read():

@@ -224,12 +224,15 @@ def _query(pts, start, end, left, boxes, ids, i, k, bd, bi, stack, sd, sib):
 
 
 @njit(cache=True, error_model="numpy", nogil=True, parallel=True)
-def nearest_in_tree(pts, start, end, left, boxes, ids, own, k, nbr, dist):
+def nearest_in_tree(pts, start, end, left, boxes, ids, own, k, limit, nbr, kth, within):
     """For each query ``r`` (the row ``own[r]`` of ``pts``, the rows in the tree's order,
     ``ids[row]`` each one's point, none: the rows are the points): ``nbr[r, 0] =
     ids[own[r]]``, then the ids of its ``k`` nearest other rows by (distance, id);
-    ``dist[r]`` their distances (0 for itself). ``nbr`` and ``dist``: (m, k + 1); ``k < n``."""
+    ``kth[r]`` the distance to the last of them; where ``within`` is not empty ((0, k):
+    not asked for), ``within[r, j]``: the ``j + 1``-th lies within ``limit``. ``nbr``:
+    (m, k + 1); ``within``: (m, k); ``k < n``."""
     m = own.shape[0]
+    flag = within.shape[0] != 0
     for ch in prange((m + CHUNK - 1) // CHUNK):
         bd = np.empty(max(k, 1))
         bi = np.empty(max(k, 1), dtype=np.int64)
@@ -240,7 +243,9 @@ def nearest_in_tree(pts, start, end, left, boxes, ids, own, k, nbr, dist):
             i = own[r]
             got = _query(pts, start, end, left, boxes, ids, i, k, bd, bi, stack, sd, sib)
             nbr[r, 0] = ids[i] if ids.shape[0] else i
-            dist[r, 0] = 0.0
             for j in range(got):
                 nbr[r, j + 1] = bi[j]
-                dist[r, j + 1] = np.sqrt(bd[j])
+            kth[r] = np.sqrt(bd[got - 1]) if got > 0 else 0.0
+            if flag:
+                for j in range(k):
+                    within[r, j] = j < got and np.sqrt(bd[j]) <= limit

@@ -1,12 +1,12 @@
-"""The k nearest neighbours of each point, in blocks (the point graph's first step).
+"""The k nearest neighbours of each point (the point graph's first step).
 
 :func:`point_tree` builds a tree over a cloud's distinct points in the Z-order of a local
 frame (a binary radix tree of Z-order keys, node boxes of its points: about 15 bytes per
 point, no copy of the points where they come in that order), and
-:func:`nearest` queries it in blocks of :data:`BLOCK` points, keeping only what the graph
-reads: the neighbours as 4-byte indices, the distance to the ``k``-th and, with a radius,
-which neighbours lie within it (44 + 8, and 10 more with a radius, bytes per point at
-``k = 10``).
+:func:`nearest` queries it in one compiled loop, keeping only what the graph reads:
+the neighbours as 4-byte indices, the distance to the ``k``-th and, with a radius, which
+neighbours lie within it (44 + 8, and 10 more with a radius, bytes per point at ``k =
+10``).
 
 The keys are the points' coordinates as integers in a frame (from the lower corner of
 the cloud's box, the same power-of-two scale on every axis: :func:`local_keys`), so the
@@ -40,11 +40,9 @@ from ..checks import check_int
 from ..errors import ParameterError
 from ..inputs.bounds import column_bounds
 
-__all__ = ["BLOCK", "LEAF", "MAX_LEAF", "PointTree", "point_tree", "nearest", "local_keys",
+__all__ = ["LEAF", "MAX_LEAF", "PointTree", "point_tree", "nearest", "local_keys",
            "local_frame", "key_window", "shared_prefix"]
 
-#: Queries per block: bounds the distances of a block to about 6 MiB at ``k = 10``.
-BLOCK = 1 << 16
 #: Points per leaf of the tree (2M points: 16 and 32 query alike, 8 is 1.5 times slower).
 LEAF = 16
 #: The most points a leaf may hold (a larger leaf is a slower tree, never a wrong one).
@@ -222,7 +220,7 @@ def point_tree(points: np.ndarray, leaf: int = LEAF,
 
 def nearest(tree: PointTree, k: int, own: np.ndarray | None = None,
             limit: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-    """The ``k + 1`` nearest points of each query, itself first, in blocks.
+    """The ``k + 1`` nearest points of each query, itself first.
 
     Parameters
     ----------
@@ -274,13 +272,8 @@ def nearest(tree: PointTree, k: int, own: np.ndarray | None = None,
         return neighbors, kth, within
     query = native.kernel("nearest.nearest_in_tree")
     ids = np.empty(0, dtype=np.int64) if tree.ids is None else tree.ids
-    dist = np.empty((min(m, BLOCK), k + 1))
-    for s in range(0, m, BLOCK):
-        e = min(m, s + BLOCK)
-        d = dist[:e - s]
-        query(pts, tree.start, tree.end, tree.left, tree.boxes, ids,
-              own[s:e] if tree.rows is None else tree.rows[own[s:e]], k, neighbors[s:e], d)
-        kth[s:e] = d[:, k]
-        if within is not None:
-            within[s:e] = d[:, 1:] <= limit
+    query(pts, tree.start, tree.end, tree.left, tree.boxes, ids,
+          own if tree.rows is None else tree.rows[own], k,
+          np.inf if limit is None else float(limit), neighbors, kth,
+          np.empty((0, k), dtype=bool) if within is None else within)
     return neighbors, kth, within

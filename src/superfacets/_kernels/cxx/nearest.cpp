@@ -240,22 +240,29 @@ inline void check_tree(i64 n_pts, const In<i64>& start, const In<i64>& end,
 }
 
 void nearest_in_tree(nb::handle pts_, nb::handle start_, nb::handle end_, nb::handle left_,
-                     nb::handle boxes_, nb::handle ids_, nb::handle own_, i64 k,
-                     nb::handle nbr_, nb::handle dist_) {
+                     nb::handle boxes_, nb::handle ids_, nb::handle own_, i64 k, double limit,
+                     nb::handle nbr_, nb::handle kth_, nb::handle within_) {
     In<double> pts(pts_, "pts"), boxes(boxes_, "boxes");
     In<i64> start(start_, "start"), end(end_, "end"), left(left_, "left"), own(own_, "own"),
         ids(ids_, "ids");
     Out<i32> nbr(nbr_, "nbr");
-    Out<double> dist(dist_, "dist");
-    if (pts.cols != 3 || boxes.cols != 6 || nbr.cols != k + 1 || dist.cols != k + 1 ||
-        nbr.n != own.n || dist.n != own.n || k < 1)
+    Out<double> kth(kth_, "kth");
+    Out<bool> within(within_, "within");
+    if (pts.cols != 3 || boxes.cols != 6 || nbr.cols != k + 1 || nbr.n != own.n ||
+        kth.n != own.n || k < 1)
         throw Mismatch("argument nbr");
+    // (the neighbours within `limit` where asked for, else an empty (0, k) array)
+    if (within.n != 0 && (within.n != own.n || within.cols != k))
+        throw Mismatch("argument within");
     check_tree(pts.n, start, end, left, boxes.n);
     check_range(own, 0, pts.n, "own");
     if (ids.n != pts.n && ids.n != 0) throw Mismatch("argument ids");
     check_range(ids, 0, std::numeric_limits<i32>::max(), "ids");
     nb::gil_scoped_release nogil;
     const Tree t{pts.p, start.p, end.p, left.p, boxes.p, ids.n ? ids.p : nullptr};
+    const bool flag = within.n != 0;
+    // every query in one loop (its ranges taken in turn by the threads): queried in blocks
+    // from Python, each block waited for its slowest range and checked the tree again
     parallel_for(own.n, [&](i64 lo, i64 hi) {
         std::vector<double> bd(k), sd(STACK);
         std::vector<i64> bi(k), stack(STACK), sib(STACK);
@@ -263,11 +270,10 @@ void nearest_in_tree(nb::handle pts_, nb::handle start_, nb::handle end_, nb::ha
             i64 i = own[r];
             i64 got = query(t, i, k, bd.data(), bi.data(), stack.data(), sd.data(), sib.data());
             nbr(r, 0) = static_cast<i32>(t.ids ? t.ids[i] : i);
-            dist(r, 0) = 0.0;
-            for (i64 j = 0; j < got; ++j) {
-                nbr(r, j + 1) = static_cast<i32>(bi[j]);
-                dist(r, j + 1) = std::sqrt(bd[j]);
-            }
+            for (i64 j = 0; j < got; ++j) nbr(r, j + 1) = static_cast<i32>(bi[j]);
+            kth[r] = got > 0 ? std::sqrt(bd[got - 1]) : 0.0;
+            if (flag)
+                for (i64 j = 0; j < k; ++j) within(r, j) = j < got && std::sqrt(bd[j]) <= limit;
         }
     });
 }
@@ -280,9 +286,12 @@ void bind_nearest(nb::module_& m) {
           nb::arg("left"), nb::arg("boxes"));
     m.def("nearest_in_tree", &nearest_in_tree,
           "For each query r (the row own[r] of pts, the rows in the tree's order, ids[row] each"
-          " one's point, none.",
+          " one's point, none: the rows are the points): its k nearest others into nbr, the "
+          "distance to the last into kth and, where within is not empty, which lie within "
+          "limit.",
           nb::arg("pts"), nb::arg("start"), nb::arg("end"), nb::arg("left"), nb::arg("boxes"),
-          nb::arg("ids"), nb::arg("own"), nb::arg("k"), nb::arg("nbr"), nb::arg("dist"));
+          nb::arg("ids"), nb::arg("own"), nb::arg("k"), nb::arg("limit"), nb::arg("nbr"),
+          nb::arg("kth"), nb::arg("within"));
 }
 
 }  // namespace sfk
