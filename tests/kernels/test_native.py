@@ -561,16 +561,17 @@ def _mean_probed(label, pos, s, rng, half):
 
 
 @needs_cxx
-@pytest.mark.parametrize("threads", ["1", "2", "3"])
-def test_center_update_sums_in_index_order_on_threads(monkeypatch, threads):
+@pytest.mark.parametrize("threads,k", [("1", 300), ("2", 300), ("3", 300), ("4", 20_000)])
+def test_center_update_sums_in_index_order_on_threads(monkeypatch, threads, k):
     """The means of the center update added by ranges of elements on threads: a superfacet
     within one range, or spanning ranges (its elements scattered over the whole array),
     gets the sums of one pass in index order, to the bit: numba's centers, with positions
     over twelve orders of magnitude, a superfacet of zero size (the plain mean) and one
     whose center the last bit of its mean decides (:func:`_mean_probed`: the ranges'
-    partial sums added together fail it on two threads)."""
+    partial sums added together fail it on two threads). With 20,000 superfacets the
+    ranges' sums and choices are also merged on threads."""
     rng = np.random.default_rng(16)
-    m, k = 400_000, 300
+    m = 400_000
     label = (np.arange(m) * (k - 20) // m).astype(np.int32)  # runs: most in one range
     scattered = rng.random(m) < 0.05
     label[scattered] = rng.integers(0, k - 1, int(scattered.sum()))  # and 19 scattered alone
@@ -579,8 +580,10 @@ def test_center_update_sums_in_index_order_on_threads(monkeypatch, threads):
     sizes[label == 7] = 0.0
     _mean_probed(label, pos, k - 1, rng, m // 2)
     sizes[label == k - 1] = 1.0
-    old = np.array([np.flatnonzero(label == s)[0] if s % 2 else -1 for s in range(k)],
-                   dtype=np.int64)
+    present, at = np.unique(label, return_index=True)  # each superfacet's first element
+    old = np.full(k, -1, dtype=np.int64)
+    old[present] = at
+    old[::2] = -1
     old[k - 1] = -1
     ref = np.empty(k, dtype=np.int64)
     reference("update.update_centers")(label, k, sizes, pos, old, ref)

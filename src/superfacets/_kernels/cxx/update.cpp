@@ -39,9 +39,13 @@ void update_centers(nb::handle label_, i64 k, nb::handle areas_, nb::handle cent
     // elements all lie in one range has its sums then; the others go on from their first
     // range's sums over their elements in the later ranges, in order (one more pass over
     // those ranges' labels: few superfacets span two ranges).
+    // Every step on threads but the sums of the superfacets that span ranges, over their
+    // few elements past their first range: the accumulators, the ranges' merge and the
+    // choices' merge were serial passes over nt * k entries (16 threads and 100,000
+    // superpoints: more time than the threads saved).
     std::vector<i64> bound(nt + 1);
     for (i64 w = 0; w <= nt; ++w) bound[w] = m * w / nt;
-    std::vector<std::vector<double>> acc(nt, std::vector<double>(8 * k, 0.0));
+    std::vector<std::vector<double>> acc(nt);
     auto add_to = [&](double* a, i64 f) {  // per superfacet: sums (3), plain (3), wsum, count
         const double ar = areas[f];
         for (int t = 0; t < 3; ++t) {
@@ -52,31 +56,38 @@ void update_centers(nb::handle label_, i64 k, nb::handle areas_, nb::handle cent
         a[7] += 1.0;
     };
     on_threads(nt, [&](i64 w) {
+        acc[w].assign(8 * k, 0.0);
         double* A = acc[w].data();
         for (i64 f = bound[w]; f < bound[w + 1]; ++f) add_to(A + 8 * label[f], f);
     });
     std::vector<double>& sum = acc[0];
     std::vector<i64> first(k, -1);  // each superfacet's first range with elements
     std::vector<char> span(k, 0);
-    bool spans = false;
-    for (i64 w = 0; w < nt; ++w) {
-        const double* A = acc[w].data();
-        for (i64 s = 0; s < k; ++s) {
-            if (A[8 * s + 7] == 0.0) continue;
-            if (first[s] < 0) {
-                first[s] = w;
-                if (w > 0) std::copy(A + 8 * s, A + 8 * s + 8, sum.data() + 8 * s);
-            } else {
-                span[s] = 1;
-                spans = true;
+    parallel_for(nt > 1 ? k : 0, [&](i64 s0, i64 s1) {
+        for (i64 s = s0; s < s1; ++s)
+            for (i64 w = 0; w < nt; ++w) {
+                const double* A = acc[w].data();
+                if (A[8 * s + 7] == 0.0) continue;
+                if (first[s] < 0) {
+                    first[s] = w;
+                    if (w > 0) std::copy(A + 8 * s, A + 8 * s + 8, sum.data() + 8 * s);
+                } else {
+                    span[s] = 1;
+                }
             }
-        }
-    }
-    if (spans)  // those spanning ranges: their elements past their first range, in order
-        for (i64 f = bound[1]; f < m; ++f) {
+    });
+    // those spanning ranges: their elements past their first range, listed by range on
+    // threads, then added range by range (each superfacet's in index order)
+    std::vector<std::vector<i64>> later(nt);
+    on_threads(nt, [&](i64 w) {
+        if (w == 0) return;
+        for (i64 f = bound[w]; f < bound[w + 1]; ++f) {
             const i64 s = label[f];
-            if (span[s] && f >= bound[first[s] + 1]) add_to(sum.data() + 8 * s, f);
+            if (span[s] && first[s] < w) later[w].push_back(f);
         }
+    });
+    for (i64 w = 1; w < nt; ++w)
+        for (i64 f : later[w]) add_to(sum.data() + 8 * label[f], f);
     std::vector<double> sums(3 * k, 0.0);  // each superfacet's mean
     for (i64 s = 0; s < k; ++s) {
         const double* a = sum.data() + 8 * s;
@@ -104,11 +115,16 @@ void update_centers(nb::handle label_, i64 k, nb::handle areas_, nb::handle cent
     // old centers' distances, a strictly smaller distance winning (the lowest index of its
     // range on ties); the ranges in order, a later one winning only if strictly nearer:
     // the choices of one pass over all elements
-    std::vector<std::vector<double>> bests(nt - 1, best);
-    std::vector<std::vector<i64>> picks(nt - 1, std::vector<i64>(k, -1));
+    // (each range from its own copy of the old centers' choices, made on its thread: the
+    // first range's are the choices so far)
+    std::vector<std::vector<double>> bests(nt);
+    std::vector<std::vector<i64>> picks(nt);
     auto nearest = [&](i64 w) {
-        double* bw = w == 0 ? best.data() : bests[w - 1].data();
-        i64* pw = w == 0 ? new_centers.p : picks[w - 1].data();
+        bests[w] = best;
+        if (w == 0) picks[w].assign(new_centers.p, new_centers.p + k);
+        else picks[w].assign(k, -1);
+        double* bw = bests[w].data();
+        i64* pw = picks[w].data();
         for (i64 f = m * w / nt; f < m * (w + 1) / nt; ++f) {
             i64 s = label[f];
             double d = 0.0;
@@ -123,12 +139,16 @@ void update_centers(nb::handle label_, i64 k, nb::handle areas_, nb::handle cent
         }
     };
     on_threads(nt, nearest);
-    for (i64 w = 1; w < nt; ++w)
-        for (i64 s = 0; s < k; ++s)
-            if (picks[w - 1][s] >= 0 && bests[w - 1][s] < best[s]) {
-                best[s] = bests[w - 1][s];
-                new_centers[s] = picks[w - 1][s];
-            }
+    best.swap(bests[0]);
+    std::copy(picks[0].begin(), picks[0].end(), new_centers.p);
+    parallel_for(nt > 1 ? k : 0, [&](i64 s0, i64 s1) {
+        for (i64 s = s0; s < s1; ++s)
+            for (i64 w = 1; w < nt; ++w)
+                if (picks[w][s] >= 0 && bests[w][s] < best[s]) {
+                    best[s] = bests[w][s];
+                    new_centers[s] = picks[w][s];
+                }
+    });
 }
 
 void bind_update(nb::module_& m) {
