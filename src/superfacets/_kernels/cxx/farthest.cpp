@@ -152,7 +152,7 @@ void farthest_point_blocked(nb::handle centroids_, i64 k, i64 first, nb::handle 
         }
         return lo;
     };
-    std::vector<double> mind(m, INF), bmax(nb, INF);
+    std::vector<double> mind(m, INF);
     std::vector<i64> barg(nb);
     for (i64 b = 0; b < nb; ++b) {
         barg[b] = m;
@@ -190,6 +190,22 @@ void farthest_point_blocked(nb::handle centroids_, i64 k, i64 first, nb::handle 
         }
         std::sort(key.begin(), key.end());
         for (i64 b = 0; b < nb; ++b) gb[b] = key[b].second;
+    }
+    // The blocks' data in the groups' order (a group's blocks side by side): a visit reads
+    // a group's 32 blocks from a few cache lines, not from 32 places in each array (the
+    // visits of a run's late centers were mostly these misses); bmax and barg are kept
+    // by that place, and the home block is found by it.
+    std::vector<double> qc(3 * nb), qr(nb), qs(nb, 1.0), qmax(nb, INF);
+    std::vector<i64> qbeg(nb), qend(nb), qarg(nb), place(nb);
+    for (i64 i = 0; i < nb; ++i) {
+        const i64 b = gb[i];
+        for (int t = 0; t < 3; ++t) qc[3 * i + t] = bcenter(b, t);
+        qr[i] = bradius[b];
+        if (scaled) qs[i] = bscale2[b];
+        qbeg[i] = bstart[b];
+        qend[i] = bstart[b + 1];
+        qarg[i] = barg[b];
+        place[b] = i;
     }
     const i64 ng = (nb + G - 1) / G;
     std::vector<double> gc(3 * ng), gr(ng), gscale(ng, 1.0), gmax(ng, INF);
@@ -291,7 +307,7 @@ void farthest_point_blocked(nb::handle centroids_, i64 k, i64 first, nb::handle 
         const double D = t == 0 ? INF : tv[1];  // the new center's distance: the largest
         mind[slot(cur)] = -1.0;
         const double cx = c(cur, 0), cy = c(cur, 1), cz = c(cur, 2);
-        const i64 hb = home(cur);
+        const i64 hb = place[home(cur)];
         auto visit = [&](i64 g) {
             {
                 double dx = gc[3 * g] - cx, dy = gc[3 * g + 1] - cy, dz = gc[3 * g + 2] - cz;
@@ -302,21 +318,19 @@ void farthest_point_blocked(nb::handle centroids_, i64 k, i64 first, nb::handle 
             double gbest = -1.0;
             i64 gbarg = -1;
             for (i64 i = g * G; i < mn(nb, g * G + G); ++i) {
-                const i64 b = gb[i];
                 bool skip = false;
-                if (b != hb) {
-                    double dx = bcenter(b, 0) - cx, dy = bcenter(b, 1) - cy,
-                           dz = bcenter(b, 2) - cz;
+                if (i != hb) {
+                    double dx = qc[3 * i] - cx, dy = qc[3 * i + 1] - cy, dz = qc[3 * i + 2] - cz;
                     double dc = std::sqrt(dx * dx + dy * dy + dz * dz);
-                    double lb = dc - bradius[b] - 1e-9 * (dc + bradius[b]);
+                    double lb = dc - qr[i] - 1e-9 * (dc + qr[i]);
                     double lb2 = lb * lb;
-                    if (scaled) lb2 *= bscale2[b];
-                    skip = lb > 0.0 && lb2 >= bmax[b];
+                    if (scaled) lb2 *= qs[i];
+                    skip = lb > 0.0 && lb2 >= qmax[i];
                 }
                 if (!skip) {
                     double best = -1.0;
                     i64 arg = m;
-                    for (i64 j = bstart[b]; j < bstart[b + 1]; ++j) {
+                    for (i64 j = qbeg[i]; j < qend[i]; ++j) {
                         // on the block-ordered positions
                         const double mf = nearest_so_far(mind[j], pos.data() + 3 * j, cx, cy,
                                                          cz, scaled ? scale2[j] : 1.0);
@@ -327,12 +341,12 @@ void farthest_point_blocked(nb::handle centroids_, i64 k, i64 first, nb::handle 
                             arg = f;
                         }
                     }
-                    bmax[b] = best;
-                    barg[b] = arg;
+                    qmax[i] = best;
+                    qarg[i] = arg;
                 }
-                if (bmax[b] > gbest || (bmax[b] == gbest && barg[b] < gbarg)) {
-                    gbest = bmax[b];
-                    gbarg = barg[b];
+                if (qmax[i] > gbest || (qmax[i] == gbest && qarg[i] < gbarg)) {
+                    gbest = qmax[i];
+                    gbarg = qarg[i];
                 }
             }
             gmax[g] = gbest;
