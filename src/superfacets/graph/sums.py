@@ -179,9 +179,10 @@ def grouped_planes(top: np.ndarray, count: np.ndarray, mean: np.ndarray,
     total = np.bincount(top, weights=count, minlength=g)
     gmean = np.stack([np.bincount(top, weights=count * mean[:, c], minlength=g)
                       for c in range(3)], 1) / np.maximum(total, 1.0)[:, None]
-    gscatter = np.zeros((g, 3, 3))
     d = mean - gmean[top]
-    np.add.at(gscatter, top, scatter + count[:, None, None] * d[:, :, None] * d[:, None, :])
+    part = (scatter + count[:, None, None] * d[:, :, None] * d[:, None, :]).reshape(-1, 9)
+    gscatter = np.stack([np.bincount(top, weights=part[:, j], minlength=g) for j in range(9)],
+                        1).reshape(g, 3, 3)  # (in the nodes' order, as np.add.at adds)
     return total, gmean, gscatter
 
 

@@ -378,17 +378,20 @@ def ring_residual(pg) -> float:
     mean = np.asarray(pg.centroid, dtype=np.float64)
     ea, eb = np.asarray(pg.edge_index, dtype=np.int64).reshape(2, -1)
     keep = ea != eb
-    ring = np.unique(np.c_[np.r_[np.arange(k), ea[keep], eb[keep]],
-                           np.r_[np.arange(k), eb[keep], ea[keep]]], axis=0)
-    owner, member = ring[:, 0], ring[:, 1]
-    n = np.bincount(owner, weights=count[member], minlength=k)
-    centre = np.stack([np.bincount(owner, weights=count[member] * mean[member, c],
-                                   minlength=k) for c in range(3)], 1)
+    own = np.arange(k, dtype=np.int64)
+    # (owner, member) pairs as one key each, sorted: each sum below adds in that order
+    ring = np.unique(np.r_[own * k + own, ea[keep] * k + eb[keep], eb[keep] * k + ea[keep]])
+    owner, member = ring // k, ring % k
+    weight = count[member]
+    n = np.bincount(owner, weights=weight, minlength=k)
+    centre = np.stack([np.bincount(owner, weights=weight * mean[member, c], minlength=k)
+                       for c in range(3)], 1)
     centre /= np.maximum(n, 1e-300)[:, None]
     d = mean[member] - centre[owner]
-    union = np.zeros((k, 3, 3))
-    np.add.at(union, owner, np.asarray(pg.scatter, dtype=np.float64)[member]
-              + count[member][:, None, None] * d[:, :, None] * d[:, None, :])
+    part = (np.asarray(pg.scatter, dtype=np.float64)[member]
+            + weight[:, None, None] * d[:, :, None] * d[:, None, :]).reshape(-1, 9)
+    union = np.stack([np.bincount(owner, weights=part[:, j], minlength=k) for j in range(9)],
+                     1).reshape(k, 3, 3)
     residual = np.maximum(np.linalg.eigvalsh(union)[:, 0], 0.0) / np.maximum(n, 1e-300)
     return float(np.median(residual))
 
