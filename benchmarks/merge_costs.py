@@ -1,14 +1,15 @@
-"""The merges' cost to the count, measured on the labelled scans: today's rule against the
-plane's rise scaled by the parts' own plane residual.
+"""The merges' cost to the count, measured on the labelled scans: the rule ``auto`` against
+the plane's rise scaled by the parts' own plane residual.
 
-Today (``superfacets.method.merges.merge_nodes``) the merges down to ``k`` take the plane's
+``auto`` (``merge_cost='auto'``, the default before 2026-11-30; earlier records call it
+``today``: ``superfacets.method.merges.merge_nodes``) the merges down to ``k`` take the plane's
 rise where the flat merges' regions hold most of the points (``FLAT_SHARE``) and Ward's cost
 elsewhere. The rise is a length squared: two smooth planes a curb apart (road and sidewalk)
 rise less than two rough pieces of one tree, so the count goes to the vegetation and the
 curb is merged away. Scaled by the parts' own residual per point ``v`` (floored at the
 scan's noise ``s``), a step is charged for what it is against the surfaces' own roughness:
 
-- ``rise``: the rise, as today's kernel (a check of this script: the same labels);
+- ``rise``: the rise, as ``auto``'s kernel (a check of this script: the same labels);
 - ``own``: ``rise / max(v, s)``;
 - ``half``: ``rise / sqrt(max(v, s) s)`` (half way, in logarithms; the rise where ``s`` is 0);
 - ``blend``: ``rise / max(s, v~) + ward / r^2``, both in points: the rise in units of the noise
@@ -19,15 +20,15 @@ scan's noise ``s``), a step is charged for what it is against the surfaces' own 
   union with its neighbours, times the paper's crease factor (eqs. 2-3);
 - ``noise``: the package's ``merge_cost='noise'``: ``scene`` with its rise weighted by
   ``min(1, s / v)``, ``v`` the first superpoints' median residual per point
-  (``superfacets.method.merges.rise_weight``); ``today``'s merges where the noise reads 0.
+  (``superfacets.method.merges.rise_weight``); ``auto``'s merges where the noise reads 0.
 
 The merging here is a heap in Python (a prototype, not the package's compiled kernel), with
-today's size bound (``max_size_ratio``) and colour guard. Each setting is judged as
+the package's size bound (``max_size_ratio``) and colour guard. Each setting is judged as
 ``real_scans.py`` judges it: against the Segmentator's graph segmentation, UE at most its,
 boundary recall at least its minus 0.02, oracle mIoU at least its.
 
-    python benchmarks/merge_costs.py --costs today half --everywhere --merge-from 5
-    python benchmarks/merge_costs.py --objects 3 --noise 0.002 --costs today half --everywhere
+    python benchmarks/merge_costs.py --costs auto half --everywhere --merge-from 5
+    python benchmarks/merge_costs.py --objects 3 --noise 0.002 --costs auto half --everywhere
 
 (``--everywhere``: the scaled cost replaces Ward's too, whatever the flat share;
 ``--merge-from 5``: merges on clouds of uneven density too; ``--objects N``: instead of the
@@ -52,15 +53,16 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-COSTS = ("today", "rise", "own", "half", "blend", "scene", "noise")
+COSTS = ("auto", "rise", "own", "half", "blend", "scene", "noise")
 #: The costs the package has (``merge_cost``): run through the parameter.
-PACKAGE = ("scene", "noise")
+PACKAGE = ("auto", "scene", "noise")
 
 
 def package(cost: str) -> dict:
     """The run's options for ``cost``: the parameter for the package's own costs (its
-    ``merge_from`` then as the package sets it: merges on every cloud), none for the rest."""
-    return {"merge_cost": cost} if cost in PACKAGE else {}
+    ``merge_from`` then as the package sets it), ``auto``'s for the prototypes, which
+    replace its merges."""
+    return {"merge_cost": cost if cost in PACKAGE else "auto"}
 
 
 def smallest_eigenvalue(s: np.ndarray) -> np.ndarray:
@@ -155,16 +157,16 @@ def scaled_rise_merges(graph, target: int, cap: float, noise: float, scale: str,
 
 def merges_with(scale: str, everywhere: bool):
     """A replacement of ``merges.merge_nodes`` whose plane's rise is ``scale``'s; with
-    ``everywhere``, also where today's rule takes Ward's cost."""
+    ``everywhere``, also where ``auto`` takes Ward's cost."""
     from superfacets.graph.hierarchy import pieces
     from superfacets.method import merges
 
-    today = merges.merge_nodes
+    original = merges.merge_nodes
 
     def merge_nodes(nodes, pairs, target, max_rise, alpha, eta_convex, *, max_jump=None,
                     max_ratio=0.0, cost="auto"):
         if max_rise is None:
-            return today(nodes, pairs, target, max_rise, alpha, eta_convex,
+            return original(nodes, pairs, target, max_rise, alpha, eta_convex,
                          max_jump=max_jump, max_ratio=max_ratio)
         count = nodes["count"]
         k = count.shape[0]
@@ -174,7 +176,7 @@ def merges_with(scale: str, everywhere: bool):
         n_flat = int(flat.max()) + 1 if k else 0
         if not n_flat or (not everywhere and merges.flat_share(np.arange(k), flat, count)
                           < merges.FLAT_SHARE):
-            return today(nodes, pairs, target, max_rise, alpha, eta_convex,
+            return original(nodes, pairs, target, max_rise, alpha, eta_convex,
                          max_jump=max_jump, max_ratio=max_ratio)
         final, fewest = flat, target
         for guard in ((max_jump, None) if max_jump is not None else (None,)):
@@ -193,17 +195,17 @@ def merges_with(scale: str, everywhere: bool):
 
 @contextmanager
 def merge_cost(scale: str, everywhere: bool):
-    """``merges.merge_nodes`` replaced for the block (``'today'`` and the package's costs:
-    left as it is)."""
+    """``merges.merge_nodes`` replaced for the block (the package's costs: left as it
+    is)."""
     from superfacets.method import merges
 
-    today = merges.merge_nodes
-    if scale != "today" and scale not in PACKAGE:
+    original = merges.merge_nodes
+    if scale not in PACKAGE:
         merges.merge_nodes = merges_with(scale, everywhere)
     try:
         yield
     finally:
-        merges.merge_nodes = today
+        merges.merge_nodes = original
 
 
 def objects(per_category: int, noise: float, ks: list, costs: list, everywhere: bool) -> None:
@@ -254,9 +256,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--scans", nargs="+", default=list(SCANS), choices=list(SCANS))
     ap.add_argument("-k", type=int, nargs="+", default=[100, 300, 1000, 3000])
-    ap.add_argument("--costs", nargs="+", choices=COSTS, default=["today", "half"])
+    ap.add_argument("--costs", nargs="+", choices=COSTS, default=["auto", "half"])
     ap.add_argument("--everywhere", action="store_true",
-                    help="the scaled rise also where today's rule takes Ward's cost")
+                    help="the scaled rise also where ``auto`` takes Ward's cost")
     ap.add_argument("--merge-from", type=bench._at_least_one, default=None, metavar="N",
                     help="merge_from of every run (default: the package's)")
     ap.add_argument("--download", action="store_true", help="fetch missing scans first")

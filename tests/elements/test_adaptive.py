@@ -90,7 +90,7 @@ def superpoints_on_left(labels, pts, k):
 def test_density_puts_the_superpoints_where_the_points_are():
     pts = two_density_plane()
     area = segment(PointCloud(pts), 40, density=0, merge_from=1)  # no flat merges
-    count = segment(PointCloud(pts), 40, density=1.0)
+    count = segment(PointCloud(pts), 40, density=1.0, merge_from=1)  # the density term alone
     assert area.n_segments == 40 and count.n_segments == 40
     assert count.params["density"] == 1.0 and count.params["assignment"] == "exact"
     # equal areas: about half on each half; equal point counts: about 8 in 9 on the left

@@ -68,13 +68,13 @@ def test_the_size_bound_holds_while_another_pair_may_merge():
     assert points(2) == [400, 600]
 
 
-def test_today_leaves_the_package_as_it_is():
-    """``merge_cost('today')`` replaces nothing; another cost is undone after its block."""
+def test_auto_leaves_the_package_as_it_is():
+    """``merge_cost('auto')`` replaces nothing; another cost is undone after its block."""
     from superfacets.method import merges
 
     bench = _merge_costs()
     before = merges.merge_nodes
-    with bench.merge_cost("today", False):
+    with bench.merge_cost("auto", False):
         assert merges.merge_nodes is before
     with bench.merge_cost("half", True):
         assert merges.merge_nodes is not before
@@ -92,8 +92,8 @@ def test_the_plain_rise_gives_the_packages_labels(monkeypatch):
     heap = bench.scaled_rise_merges
     monkeypatch.setattr(bench, "scaled_rise_merges", lambda *a: ran.append(a[4]) or heap(*a))
     cloud = make_room(0).cloud
-    today = segment(cloud, 20).labels
+    auto = segment(cloud, 20, merge_cost="auto").labels
     with bench.merge_cost("rise", False):
-        labels = segment(cloud, 20).labels
+        labels = segment(cloud, 20, merge_cost="auto").labels
     assert ran and set(ran) == {"rise"}  # the room merges by the plane's rise
-    np.testing.assert_array_equal(labels, today)
+    np.testing.assert_array_equal(labels, auto)

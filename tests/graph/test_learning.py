@@ -37,7 +37,7 @@ def test_a_square_plane_is_planar_and_level_a_pole_linear_and_upright():
 
 def test_a_scene_s_superpoints_read_as_ground_and_pole():
     ground, pole = _scene()
-    r = segment(PointCloud(np.vstack([ground, pole]), up=(0, 0, 1)), 12)
+    r = segment(PointCloud(np.vstack([ground, pole]), up=(0, 0, 1)), 12, merge_from=1)
     a = r.learning_graph()
     pole_sp = np.unique(r.labels[len(ground):])
     ground_sp = np.setdiff1d(np.unique(r.labels[:len(ground)]), pole_sp)

@@ -205,7 +205,7 @@ def test_cli_min_elements(tmp_path, capsys):
     hint = capsys.readouterr().out  # the automatic density is on: only --min-elements
     assert "(--min-elements 3 merges them)" in hint
     assert main(["segment", str(tmp_path / "strip.npy"), "-k", "200", "--min-elements", "3",
-                 "-o", str(out)]) == 0
+                 "--merge-from", "1", "-o", str(out)]) == 0  # (no merges to the count)
     labels = read_labels(out)
     assert labels.shape == (5060,) and np.bincount(labels).min() >= 3
     assert labels.max() + 1 < 200

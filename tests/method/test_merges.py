@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from superfacets import PointCloud, segment
+from superfacets import segment as _segment
 from superfacets.errors import ParameterError
 from superfacets.method.merges import flat_merges, noise_variance
 from superfacets.method.params import DEFAULTS, resolve
@@ -174,7 +175,7 @@ def test_a_scene_merges_by_the_planes_rise_and_an_object_by_wards(monkeypatch):
     ran = _costs_run(monkeypatch)
     # an airborne tile in miniature: most points on the ground, flat to within its noise
     pts, part = _terrain()
-    r = segment(pts, 15)
+    r = segment(pts, 15, merge_cost="auto")
     assert set(ran) == {"planarity"} and r.n_segments == 15
     # the count goes to the bushes: a few ground superpoints, and UE about a fifth of
     # Ward's merges' (0.08-0.11 over three samplings, against 0.40-0.59)
@@ -184,7 +185,7 @@ def test_a_scene_merges_by_the_planes_rise_and_an_object_by_wards(monkeypatch):
     ran.clear()
     ball = np.random.default_rng(1).standard_normal((6000, 3))
     ball /= np.linalg.norm(ball, axis=1, keepdims=True)
-    assert segment(ball, 20).n_segments == 20 and ran == ["ward"]
+    assert segment(ball, 20, merge_cost="auto").n_segments == 20 and ran == ["ward"]
 
 
 def _forest(seed: int = 0, n: int = 16_000, trees: int = 20):
@@ -212,12 +213,12 @@ def test_one_share_chooses_the_merges_on_scans_as_on_sampled_surfaces(monkeypatc
 
     ran = _costs_run(monkeypatch)
     pts, part = _forest(n=32_000)
-    r = segment(pts, 40)
+    r = segment(pts, 40, merge_cost="auto")
     assert set(ran) == {"planarity"} and r.n_segments == 40 and FLAT_SHARE == 0.5
     assert _ue(r.labels, part) < 0.01
     ran.clear()
     pts, part = _forest(n=16_000)
-    r = segment(pts, 40)
+    r = segment(pts, 40, merge_cost="auto")
     assert set(ran) == {"ward"} and r.n_segments == 40
 
 
@@ -235,7 +236,7 @@ def test_the_planes_rise_keeps_a_rug_of_another_colour_off_its_floor(monkeypatch
     odd = rng.choice(np.flatnonzero(part == 0), 40, replace=False)  # colour noise
     colors[odd] = [0.9, 0.1, 0.1]
     ran = _costs_run(monkeypatch)
-    r = segment(PointCloud(pts, colors=np.clip(colors, 0, 1)), 8)
+    r = segment(PointCloud(pts, colors=np.clip(colors, 0, 1)), 8, merge_cost="auto")
     assert "planarity" in ran and r.n_segments == 8
     own = np.bincount(r.labels[rug]).argmax()
     assert (r.labels[rug] == own).mean() > 0.95 and rug[r.labels == own].mean() > 0.95
@@ -255,7 +256,8 @@ def test_merge_from_is_chosen_from_the_kind_and_the_density():
 
     even = replace(DEFAULTS, density=0.0)
     assert merge_from_of(even, "points") == 5
-    assert merge_from_of(replace(even, density=0.5), "points") == 1  # sweeps, RGB-D frames
+    assert merge_from_of(replace(even, density=0.5), "points") == 5  # 'noise' merges sweeps too
+    assert merge_from_of(replace(even, density=0.5, merge_cost="auto"), "points") == 1
     assert merge_from_of(replace(even, density=0.5, merge_cost="scene"), "points") == 5
     assert merge_from_of(replace(even, beta=10.0), "points") == 5  # colour: merges of one colour
     assert merge_from_of(replace(even, paper=True), "points") == 1
@@ -269,11 +271,14 @@ def test_merge_from_is_chosen_from_the_kind_and_the_density():
     resolve(paper=True, merge_from=1)  # 1 is the paper's: no merges
 
 
-def test_an_uneven_cloud_keeps_the_density_and_no_merges():
+def test_an_uneven_cloud_keeps_the_density_and_merges_by_the_default_cost_only():
     rng = np.random.default_rng(4)
     dense = np.c_[rng.random((6000, 2)), np.zeros(6000)]
     sparse = np.c_[rng.random((300, 2)) * [4, 1] + [1.5, 0], np.zeros(300)]
     r = segment(np.r_[dense, sparse], 40)
+    assert r.params["density"] == 0.5 and r.params["merge_from"] == 5
+    assert r.n_segments == 40 and r.params["merge_cost"] == "noise"
+    r = segment(np.r_[dense, sparse], 40, merge_cost="auto")
     assert r.params["density"] == 0.5 and r.params["merge_from"] == 1
 
 
@@ -349,7 +354,8 @@ def test_the_tiles_sums_add_up_to_the_whole_clouds():
     for field in PAIR_FIELDS:
         np.testing.assert_allclose(whole[field], one[field], rtol=1e-12, atol=1e-15)
 
-    rules = replace(resolve_rules(g, resolve(n_segments=40, density=0.0)), target=40)
+    rules = replace(resolve_rules(g, resolve(n_segments=40, density=0.0, merge_cost="auto")),
+                    target=40)
     one_run, _ = merge_to_count(g, fine, rules)
     got, merged, _, fewest = merge_names([whole], 40, DEFAULTS.alpha, DEFAULTS.eta_convex)
     assert fewest == 40
@@ -357,6 +363,14 @@ def test_the_tiles_sums_add_up_to_the_whole_clouds():
     assert np.unique(one_run * 10_000 + tiled).size == 40  # the same partition
     split = merge_names(halves, 40, DEFAULTS.alpha, DEFAULTS.eta_convex, labels=names[fine])
     assert np.unique(split[1]).size == 40
+    # the default cost ('noise') too (this room reads no noise: auto's merges)
+    noisy, _ = merge_to_count(g, fine, replace(resolve_rules(g, resolve(n_segments=40,
+                                                                        density=0.0)),
+                                               target=40))
+    got, merged, _, _ = merge_names([whole], 40, DEFAULTS.alpha, DEFAULTS.eta_convex,
+                                    cost="noise")
+    tiled = merged[np.searchsorted(got, names[fine])]
+    assert np.unique(noisy * 10_000 + tiled).size == 40
     # down to 10 the flat merges stop at 34, most points on the floor: the plane's rise
     rules = replace(rules, target=10)
     assert flat_share(fine, flat_merges(g, fine, 10, FLAT_NOISE * noise_variance(g))) > 0.5
@@ -423,14 +437,15 @@ def test_the_command_line_takes_merge_from(tmp_path, capsys):
     capsys.readouterr()
     assert main(["segment", str(path), "-k", "20", "-o", str(out)]) == 0
     assert "20 superpoints (merged from 100 finer ones, flat neighbours first, none above " \
-        "16 times the mean;" in capsys.readouterr().out
-    assert main(["segment", str(path), "-k", "20", "--max-size-ratio", "0", "-o",
-                 str(out)]) == 0
-    assert "flat neighbours first; --merge-from 1" in capsys.readouterr().out
+        "16 times the mean; --merge-from 1" in capsys.readouterr().out  # (the default cost)
+    assert main(["segment", str(path), "-k", "20", "--max-size-ratio", "0", "--merge-cost",
+                 "auto", "-o", str(out)]) == 0
+    assert "flat neighbours first; by the plane's rise or Ward's cost (--merge-cost auto); " \
+        "--merge-from 1" in capsys.readouterr().out
     assert main(["segment", str(path), "-k", "20", "--merge-cost", "scene", "-o",
                  str(out)]) == 0
-    assert "none above 16 times the mean; the scene's cost; --merge-from 1" in \
-        capsys.readouterr().out
+    assert "none above 16 times the mean; the scene's cost, its rise unweighted; " \
+        "--merge-from 1" in capsys.readouterr().out
     np.testing.assert_array_equal(np.loadtxt(out, dtype=np.int64),
                                   segment(PointCloud(pts), 20, merge_cost="scene").labels)
     with pytest.raises(SystemExit):
@@ -542,8 +557,11 @@ def test_the_merges_make_no_superpoint_above_the_size_bound():
     points (five times the mean); the bound
     (max_size_ratio, 16 by default) keeps every superpoint under that many times the mean
     count while the merges can, what the bushes are left paying for it."""
+    from functools import partial
+
     from superfacets.errors import ParameterError
 
+    segment = partial(_segment, merge_cost="auto")  # (the rule this terrain was measured on)
     pts, part = _terrain()
     k, n = 15, len(pts)
     free = segment(pts, k, max_size_ratio=0).labels
@@ -665,8 +683,8 @@ def test_the_ring_residual_is_the_neighbourhoods_plane_residual():
 def test_merge_cost_scene_reaches_the_count_in_one_run_and_in_tiles(monkeypatch):
     """``merge_cost='scene'``: every input merges by the scene's cost (the kernel's fourth
     cost, on a terrain whose flat regions hold most of the points too), to exactly k, in
-    one run and in a tiled run; ``'auto'`` (the default) never calls it; anything else is
-    refused, naming the choices."""
+    one run and in a tiled run; ``'auto'`` never calls it; anything else is refused,
+    naming the choices."""
     from superfacets import segment_tiled
     from superfacets.method import merges
 
@@ -675,7 +693,7 @@ def test_merge_cost_scene_reaches_the_count_in_one_run_and_in_tiles(monkeypatch)
     monkeypatch.setattr(merges, "scene_merge_nodes",
                         lambda *a, **kw: ran.append(a[1]) or scene(*a, **kw))
     pts, part = _terrain(n=20_000, bushes=4)
-    auto = segment(pts, 12)
+    auto = segment(pts, 12, merge_cost="auto")
     assert not ran and auto.params["merge_cost"] == "auto"
     r = segment(pts, 12, merge_cost="scene")
     assert ran and r.n_segments == 12 and r.params["merge_cost"] == "scene"
@@ -759,8 +777,9 @@ def test_merge_cost_noise_charges_the_rise_by_the_noise_and_reaches_the_count(mo
     assert merge_from_of(replace(DEFAULTS, density=0.5, merge_cost="noise"), "points") == 5
 
 
-def test_the_cli_says_the_noise_weighted_cost(tmp_path, capsys):
-    """``--merge-cost noise`` on the command line: the summary names the cost."""
+def test_the_cli_says_nothing_more_for_the_default_cost(tmp_path, capsys):
+    """``--merge-cost noise``, the default, adds nothing to the summary (the others name
+    theirs: ``test_the_command_line_takes_merge_from``)."""
     from superfacets.cli import main
 
     pts, _ = _terrain(n=8_000, bushes=2)
@@ -768,5 +787,5 @@ def test_the_cli_says_the_noise_weighted_cost(tmp_path, capsys):
     np.savetxt(path, pts)
     assert main(["segment", str(path), "-k", "10", "--merge-cost", "noise", "-o",
                  str(tmp_path / "labels.txt")]) == 0
-    assert "the scene's cost, its rise weighted by the noise; --merge-from 1" in \
-        capsys.readouterr().out
+    said = capsys.readouterr().out
+    assert "none above 16 times the mean; --merge-from 1" in said and "cost" not in said

@@ -173,9 +173,9 @@ def superfacets(data=_NO_INPUT, n_segments: int | None = _D.n_segments, *, featu
         first those whose union stays flat to within the input's noise (walls,
         floors, ground, the flat faces of objects), then the cheapest by Ward's
         cost with the crease factor, down to exactly ``n_segments``. 1 merges
-        nothing. None: 5 on point clouds of even density (``density`` resolved to
-        0), 1 on sweeps and RGB-D frames, on meshes, with ``paper=True`` and in the
-        tiles of a tiled run (:func:`superfacets.method.rules.merge_from_of`). On two
+        nothing. None: 5 on point clouds (with ``merge_cost='auto'`` only where their
+        density is even), 1 on meshes, with ``paper=True`` and in the tiles of a tiled
+        run (:func:`superfacets.method.rules.merge_from_of`). On two
         ScanNet rooms it lowered the undersegmentation error by 13-26 % at
         ``n_segments`` = 300-3,000, below the ScanNet Segmentator's; on the 300
         benchmark meshes sampled to clouds by 5.9 % at 150
@@ -190,21 +190,25 @@ def superfacets(data=_NO_INPUT, n_segments: int | None = _D.n_segments, *, featu
         1,000 / 3,000 rose from 0.738 / 0.865 to 0.781 / 0.908, the undersegmentation
         error within 0.5 %; 2 or 4 give more even sizes
         (``docs/notes/superpoints-defaults.md``).
-    merge_cost : {'auto', 'scene', 'noise'}, default 'auto'
-        With merges to the count: ``'auto'`` merges by the plane's rise where the flat
-        regions hold most of the points, else by Ward's cost with the crease factor;
-        ``'scene'`` by one cost on every input, the plane's rise in units of the scan's
-        noise (or of the neighbourhoods' own residual) plus Ward's term in units of the
-        superpoint's size, times the crease factor (not in the paper); it merges on
-        every cloud, uneven density too (``merge_from`` 5 unless given). On 27 labelled
-        scans it met the Segmentator's targets in 78 of 108
-        settings against 61 (UE -6 %), and lowered UE on benchmark objects sampled with
-        noise; on the 300 benchmark clouds (noise-free) UE is 11-20 % higher.
-        ``'noise'``: ``'scene'`` with its rise weighted by ``min(1, s / v)``, the noise's
-        share of the first superpoints' median residual per point
-        (:func:`superfacets.method.merges.rise_weight`), and ``'auto'``'s merges where the
-        noise reads 0: 70 of 108, the 300 benchmark clouds' UE within 0.5 %
-        (``docs/notes/superpoints-defaults.md``).
+    merge_cost : {'noise', 'auto', 'scene'}, default 'noise'
+        With merges to the count (not in the paper). ``'noise'``: after the flat
+        merges, the pair of least ``(w rise / u + ward / r^2)`` times the crease factor
+        merges first: the plane's rise of the union in units ``u`` of the scan's noise
+        ``s`` (or of the neighbourhoods' own residual, where larger), weighted by
+        ``w = min(1, s / v)``, the noise's share of the first superpoints' median
+        residual per point ``v`` (:func:`superfacets.method.merges.rise_weight`: 1 on
+        flat ground and walls, small among vegetation or an object's fine detail), plus
+        Ward's term in units of the superpoint's size; where the noise reads 0 (a
+        surface sampled from a mesh) ``'auto'``'s merges, label for label. It merges on
+        every cloud, uneven density too (``merge_from`` 5 unless given). ``'auto'`` (the
+        default before 2026-11-30): the plane's rise where the flat regions hold most of
+        the points, else Ward's cost with the crease factor; no merges on clouds of
+        uneven density. ``'scene'``: ``'noise'`` with ``w = 1`` everywhere. On 27
+        labelled scans ``'noise'`` met the Segmentator's targets in 70 of 108 settings
+        against ``'auto'``'s 61 (``'scene'`` 78, but the 300 benchmark clouds' UE 11-20 %
+        higher); on the 300 benchmark clouds UE +0.1 to +0.4 % against ``'auto'``; it
+        takes 1.07 times ``'auto'``'s time over the 27 scans, up to 1.5 times on LiDAR
+        sweeps at ``n_segments`` of 1,000 and more (``docs/notes/superpoints-defaults.md``).
     tol : float, default 0.001
         Convergence tolerance in ``[0, 1]``: also stop once a classification
         changes the superfacet of at most this fraction of the surface area

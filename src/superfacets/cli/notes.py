@@ -10,8 +10,8 @@ __all__ = ["count_note", "duplicates_note", "COST_SAID"]
 
 #: What a summary adds for the merges' cost to the count (``--merge-cost``), beyond the
 #: default's.
-COST_SAID = {"scene": "; the scene's cost",
-             "noise": "; the scene's cost, its rise weighted by the noise"}
+COST_SAID = {"scene": "; the scene's cost, its rise unweighted",
+             "auto": "; by the plane's rise or Ward's cost (--merge-cost auto)"}
 
 
 def duplicates_note(args, data, kind: str) -> str | None:

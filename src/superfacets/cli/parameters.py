@@ -92,18 +92,20 @@ SHOWN = {
                   f"(default: {_D.roughness:g})"),
     "merge_from": ("method", "F", "segment F times -k superpoints first, then merge "
                    "neighbours down to -k, flat ones (within the noise) first; 1: off "
-                   "(default: 5 on point clouds of even density, else 1)"),
+                   "(default: 5 on point clouds, 1 on meshes; with --merge-cost auto 1 on "
+                   "clouds of uneven density)"),
     "max_size_ratio": ("method", "R", "with --merge-from above 1: the merges make no "
                        "superpoint of more than R times the mean count of points while other "
                        "neighbours can merge (flat ground and walls in several superpoints, "
                        f"not one); 0: no bound (default: {_D.max_size_ratio:g})"),
-    "merge_cost": ("method", None, "the merges to -k: auto by the plane's rise where flat "
-                   "regions hold most of the points, else by Ward's cost; scene by one cost "
-                   "everywhere (the rise in the noise's units plus Ward's), merging every "
-                   "cloud, uneven density too: more class borders kept on scans of scenes, "
-                   "worse on noise-free sampled surfaces; noise: scene's cost, its rise "
-                   "weighted by the noise's share of the superpoints' residual (auto's "
-                   "merges on noise-free surfaces) (default: auto)"),
+    "merge_cost": ("method", None, "the merges to -k: noise by one cost on scans, the "
+                   "plane's rise in the noise's units, weighted by the noise's share of the "
+                   "superpoints' residual, plus Ward's, merging every cloud, uneven density "
+                   "too (auto's merges on noise-free surfaces); auto (the default before "
+                   "2026-11-30) by the plane's rise where flat regions hold most of the "
+                   "points, else by Ward's cost, no merges on uneven density; scene: noise's "
+                   "cost, the rise unweighted, worse on noise-free sampled surfaces "
+                   f"(default: {_D.merge_cost})"),
     "paper": ("method", "switch", "the paper's method as published, its labels bit for bit: "
               "its stopping rule (--tol 0), no clean-up, no split-and-merge (the default on "
               "faces adds both: lower undersegmentation error and more compact superfacets "

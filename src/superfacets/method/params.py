@@ -222,10 +222,10 @@ def _declare() -> tuple[Parameter, ...]:
         P("max_size_ratio", 16.0, "float", "merges to n_segments (merge_from > 1): no "
           "superpoint of more than this many times the mean count of elements while other "
           "neighbours can merge, >= 1; 0: no bound", _size_ratio, cli="--max-size-ratio"),
-        P("merge_cost", "auto", "str", "merges to n_segments (merge_from > 1): auto (the "
-          "plane's rise where flat regions hold most points, else Ward's), scene (the rise "
-          "in noise units plus Ward's, times the crease factor) or noise (scene's, the rise "
-          "weighted by the noise's share)", _merge_cost, cli="--merge-cost",
+        P("merge_cost", "noise", "str", "merges to n_segments (merge_from > 1): noise (the "
+          "rise in noise units weighted by the noise's share, plus Ward's), auto (the rise "
+          "where flat regions hold most points, else Ward's; the default before 2026-11-30) "
+          "or scene (noise's, unweighted)", _merge_cost, cli="--merge-cost",
           choices=MERGE_COSTS),
     )
 

@@ -236,15 +236,16 @@ def superfacet_measure(r: float, dim: int = 2) -> float:
 def merge_from_of(params, kind: str, tiled: bool = False) -> int:
     """``merge_from`` of a run: as given, else (None) the kind's
     (:attr:`~superfacets.elements.kinds.ElementKind.merge_from`: 5 on points) where
-    the superpoints have equal areas (``density`` resolved to 0: clouds of even density,
-    not LiDAR sweeps) or the merges take the scene's cost (``merge_cost`` ``'scene'`` or
-    ``'noise'``, measured with merges on every scan), 1 elsewhere, with ``paper`` and in the
-    tiles of a tiled run.
+    the merges take the scene's cost (``merge_cost`` ``'noise'``, the default, or
+    ``'scene'``: measured with merges on every scan, uneven density too) or the
+    superpoints have equal areas (``density`` resolved to 0: clouds of even density), 1
+    elsewhere (``'auto'`` on LiDAR sweeps), with ``paper`` and in the tiles of a tiled run.
 
     On the even-density clouds measured (two ScanNet rooms, an airborne tile, the 300
     benchmark meshes sampled) merging 5 times the superpoints down to ``k``, flat
     neighbours first, lowered the undersegmentation error at every k; on LiDAR sweeps
-    the density term does better (``docs/notes/superpoints-defaults.md``).
+    ``'auto'``'s merges lost to the density term, the scene's cost did not
+    (``docs/notes/superpoints-defaults.md``).
 
     Parameters
     ----------
@@ -272,9 +273,9 @@ def merge_from_of(params, kind: str, tiled: bool = False) -> int:
     >>> merge_from_of(replace(DEFAULTS, density=0.0), "points")
     5
     >>> merge_from_of(replace(DEFAULTS, density=0.5), "points"), merge_from_of(DEFAULTS, "faces")
-    (1, 1)
-    >>> merge_from_of(replace(DEFAULTS, density=0.5, merge_cost="scene"), "points")
-    5
+    (5, 1)
+    >>> merge_from_of(replace(DEFAULTS, density=0.5, merge_cost="auto"), "points")
+    1
     """
     if params.merge_from is not None:
         return int(params.merge_from)
