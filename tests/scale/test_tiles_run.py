@@ -284,6 +284,25 @@ def test_the_cli_says_when_tiles_give_fewer_superpoints_than_asked(tmp_path, cap
     assert got <= 6
 
 
+def test_a_tiled_summary_says_the_merges_as_one_runs_does(tmp_path, capsys):
+    """The merges to the count are said in the same words in one run and in tiles: the size
+    bound, and the cost where it is not the default's."""
+    from superfacets.cli import main
+
+    np.save(tmp_path / "p.npy", np.c_[np.random.default_rng(3).random((6000, 2)),
+                                      np.zeros(6000)])
+    words = []
+    for extra in ([], ["--tiles", "2"], ["--merge-cost", "auto"],
+                  ["--merge-cost", "auto", "--tiles", "2"]):
+        assert main(["segment", str(tmp_path / "p.npy"), "-k", "10", *extra, "-o",
+                     str(tmp_path / "p.seg")]) == 0
+        line = capsys.readouterr().out.splitlines()[0]
+        words.append(line[line.index("finer ones"):line.index("no merging)")])
+    assert words[0] == words[1] and words[2] == words[3] != words[0]
+    assert ", none above 16 times the mean" in words[1]
+    assert "(--merge-cost auto)" in words[3] and "cost" not in words[1]
+
+
 def test_the_cli_says_what_the_halos_cost_where_they_are_wide(tmp_path, capsys):
     """Every phase runs over the tiles' boxes, so the elements they hold over their cores'
     is what the halos add to the work: the summary says so where it is half again one run's

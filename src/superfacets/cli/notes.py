@@ -6,12 +6,24 @@ from __future__ import annotations
 from ..elements.kinds import kind_of
 from ..method.params import DEFAULTS
 
-__all__ = ["count_note", "duplicates_note", "COST_SAID"]
+__all__ = ["count_note", "duplicates_note", "merges_said", "COST_SAID"]
 
 #: What a summary adds for the merges' cost to the count (``--merge-cost``), beyond the
 #: default's.
 COST_SAID = {"scene": "; the scene's cost, its rise unweighted",
              "auto": "; by the plane's rise or Ward's cost (--merge-cost auto)"}
+
+
+def merges_said(first: int, params: dict, cloud: bool = True) -> str:
+    """The summary's words for merges to the count from ``first`` superpoints (one run's
+    or a tiled run's): how they merged, the size bound and a cost other than the
+    default's; a tiled mesh's are Ward's merges."""
+    if not cloud:
+        return f" (merged from {first:,} finer ones, Ward's merges; --merge-from 1: no merging)"
+    bound = params.get("max_size_ratio") or 0
+    most = f", none above {bound:g} times the mean" if bound else ""
+    return (f" (merged from {first:,} finer ones, flat neighbours first{most}"
+            f"{COST_SAID.get(params.get('merge_cost'), '')}; --merge-from 1: no merging)")
 
 
 def duplicates_note(args, data, kind: str) -> str | None:

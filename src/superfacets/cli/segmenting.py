@@ -11,7 +11,7 @@ import numpy as np
 from ..checks import counted
 from ..elements.kinds import kind_of
 from ..method.params import DEFAULTS
-from .notes import COST_SAID, count_note, duplicates_note
+from .notes import count_note, duplicates_note, merges_said
 from .options import (
     add_adaptive_options,
     add_camera_options,
@@ -178,12 +178,7 @@ def _summary(name: str, mesh, result, seconds: float, elements: str = "faces",
         merged = (getattr(result, "params", None) or {}).get("merge_from") or 1
         first = (getattr(result, "params", None) or {}).get("n_init_centers") or 0
         if merged > 1 and first > result.n_segments:
-            bound = (getattr(result, "params", None) or {}).get("max_size_ratio") or 0
-            most = f", none above {bound:g} times the mean" if bound else ""
-            scene = COST_SAID.get((getattr(result, "params", None) or {}).get("merge_cost"),
-                                   "")
-            segs += (f" (merged from {first:,} finer ones, flat neighbours first{most}{scene}; "
-                     "--merge-from 1: no merging)")
+            segs += merges_said(first, getattr(result, "params", None) or {})
     else:
         kind = "" if mesh.is_triangular else " (polygons)"
         objs = f" in {len(mesh.objects)} objects" if len(mesh.objects) > 1 else ""

@@ -7,7 +7,7 @@ import time
 from pathlib import Path
 
 from ..elements.kinds import kind_of
-from .notes import COST_SAID
+from .notes import merges_said
 from .options import (
     add_engine_options,
     check_labels_output,
@@ -117,10 +117,7 @@ def segment_tiles(args) -> int:
                  if result.n_segments < k else f" ({k} asked)")
         first = result.params.get("merged_from")
         if first:
-            how = "flat neighbours first" if kind_of(kind).cloud else "Ward's merges"
-            if kind_of(kind).cloud:
-                how += COST_SAID.get(result.params.get("merge_cost"), "")
-            what += f" (merged from {first:,} finer ones, {how}; --merge-from 1: no merging)"
+            what += merges_said(first, result.params, kind_of(kind).cloud)
         if result.n_segments > 1:
             what += sizes_said(result.labels, kind)
         print(f"{Path(args.mesh).name}: {result.labels.size:,} {kind}, {result.n_segments:,} "
