@@ -84,3 +84,26 @@ def test_pair_sums_of_names_too_large_for_one_key_are_the_same(monkeypatch):
     e = one["edges"]
     assert (e[:, 0] <= e[:, 1]).all()
     assert (np.lexsort((e[:, 1], e[:, 0])) == np.arange(len(e))).all()  # in the pairs' order
+
+
+def test_the_pairs_sums_are_the_same_on_any_number_of_threads(monkeypatch):
+    """The compiled pass lists each chunk's crossings on threads and adds them on one, in
+    pair order: one thread or three give the same sums, bit for bit (a cloud of two chunks
+    of rows, each split among the threads; labels of superpoints of about 12 points, so
+    most adjacencies cross, and of 40 strips)."""
+    rng = np.random.default_rng(4)
+    xyz = np.c_[rng.random((140_000, 2)) * [40, 30], 0.02 * rng.standard_normal(140_000)]
+    g = point_graph(PointCloud(xyz)).graph
+    cells = (g.positions[:, 0] * 10).astype(np.int64) * 300 + (g.positions[:, 1] * 10).astype(
+        np.int64)
+    for labels in (np.unique(cells, return_inverse=True)[1].astype(np.int64),
+                   (g.positions[:, 0]).astype(np.int64)):
+        k = int(labels.max()) + 1
+        got = {}
+        for threads in ("1", "3"):
+            monkeypatch.setenv("SUPERFACETS_KERNEL_THREADS", threads)
+            got[threads] = border_sums(g, labels, k)
+        assert got["1"]["edges"].shape[0] >= k - 1  # (every neighbour pair of labels)
+        for name, a in got["1"].items():
+            b = got["3"][name]
+            assert a.dtype == b.dtype and np.array_equal(a, b), name

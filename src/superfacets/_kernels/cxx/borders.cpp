@@ -70,7 +70,20 @@ nb::object crossing_pairs(nb::handle indptr_, nb::handle indices_, nb::handle la
 // lo * k + hi, ascending, and per key (border, border * angle, border * concave,
 // crossings, angle, concave) summed over its adjacencies in pair order (rows ascending,
 // then j: np.bincount's order over crossing_pairs' rows), an adjacency's border the
-// mean of its points' border shares and its angle acos of its normals' cosine.
+// mean of its points' border shares and its angle acos of its normals' cosine. On T
+// threads: the rows in chunks, each chunk's rows split among the threads, each listing
+// its crossings (their terms computed) in pair order, one list per range of lo; then
+// each thread adds the lists of its range of lo, the row ranges' in order: every sum
+// adds what one pass adds, in its order.
+struct Crossing {
+    i64 lo, hi;
+    double len, ang, cc;
+};
+
+// Rows a chunk of label_pair_sums' threaded pass lists the crossings of (at most some
+// 50 MB of lists on a kNN graph, whatever its size).
+constexpr i64 PAIR_SUMS_CHUNK = i64{1} << 17;
+
 nb::object label_pair_sums(nb::handle indptr_, nb::handle indices_, nb::handle labels_, i64 k,
                            nb::handle positions_, nb::handle normals_, nb::handle shares_) {
     In<i64> indptr(indptr_, "indptr"), labels(labels_, "labels");
@@ -81,53 +94,95 @@ nb::object label_pair_sums(nb::handle indptr_, nb::handle indices_, nb::handle l
     check_rows(shares, n, "shares");
     check_range(labels, 0, k, "labels");
     if (pos.cols != 3 || pos.n < n) throw Mismatch("argument positions");
+    const i64 T = std::max<i64>(1, std::min<i64>(threads(), mn(n / 16384, k)));
+    auto owner = [&](i64 lo) { return static_cast<size_t>(lo * T / mx(k, i64{1})); };
     std::vector<std::vector<std::pair<i64, i64>>> seen(static_cast<size_t>(k));  // (hi, row)
-    std::vector<std::array<double, 6>> acc;
+    std::vector<std::vector<std::array<double, 6>>> acc(static_cast<size_t>(T));  // by owner
+    auto add = [&](const Crossing& e) {  // (only the owner of e.lo adds it)
+        auto& near = seen[static_cast<size_t>(e.lo)];
+        auto& mine = acc[owner(e.lo)];
+        i64 at = -1;
+        for (const auto& [h, r] : near)
+            if (h == e.hi) { at = r; break; }
+        if (at < 0) {
+            at = static_cast<i64>(mine.size());
+            near.emplace_back(e.hi, at);
+            mine.push_back({0.0, 0.0, 0.0, 0.0, 0.0, 0.0});
+        }
+        auto& a = mine[static_cast<size_t>(at)];
+        a[0] += e.len;
+        a[1] += e.len * e.ang;
+        a[2] += e.len * e.cc;
+        a[3] += 1.0;
+        a[4] += e.ang;
+        a[5] += e.cc;
+    };
     with_real(normals_, "normals", [&](const auto& nor) {
         if (nor.cols != 3 || nor.n < n) throw Mismatch("argument normals");
         nb::gil_scoped_release nogil;
-        for (i64 i = 0; i < n; ++i)
-            for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
-                const i64 j = indices[x];
-                if (j <= i || labels[j] == labels[i]) continue;
-                const i64 lo = mn(labels[i], labels[j]), hi = mx(labels[i], labels[j]);
-                auto& near = seen[static_cast<size_t>(lo)];
-                i64 at = -1;
-                for (const auto& [h, r] : near)
-                    if (h == hi) { at = r; break; }
-                if (at < 0) {
-                    at = static_cast<i64>(acc.size());
-                    near.emplace_back(hi, at);
-                    acc.push_back({0.0, 0.0, 0.0, 0.0, 0.0, 0.0});
+        // f(e) for each crossing adjacency of rows r0..r1, in pair order
+        auto crossings = [&](i64 r0, i64 r1, auto f) {
+            for (i64 i = r0; i < r1; ++i)
+                for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
+                    const i64 j = indices[x];
+                    if (j <= i || labels[j] == labels[i]) continue;
+                    double geo, cs;
+                    bool concave;
+                    pair_terms(pos.p, nor.p, i, j, geo, cs, concave);
+                    f(Crossing{mn(labels[i], labels[j]), mx(labels[i], labels[j]),
+                               0.5 * (shares[i] + shares[j]), std::acos(cs),
+                               concave ? 1.0 : 0.0});
                 }
-                double geo, cs;
-                bool concave;
-                pair_terms(pos.p, nor.p, i, j, geo, cs, concave);
-                const double len = 0.5 * (shares[i] + shares[j]), ang = std::acos(cs);
-                const double cc = concave ? 1.0 : 0.0;
-                auto& a = acc[static_cast<size_t>(at)];
-                a[0] += len;
-                a[1] += len * ang;
-                a[2] += len * cc;
-                a[3] += 1.0;
-                a[4] += ang;
-                a[5] += cc;
-            }
+        };
+        if (T <= 1) {
+            check_interrupt();
+            crossings(0, n, add);
+            return 0;
+        }
+        // lists[w * T + d]: row range w's crossings whose lo thread d adds
+        std::vector<std::vector<Crossing>> lists(static_cast<size_t>(T * T));
+        for (i64 c0 = 0; c0 < n; c0 += PAIR_SUMS_CHUNK) {
+            check_interrupt();
+            const i64 c1 = mn(n, c0 + PAIR_SUMS_CHUNK);
+            on_threads(T, [&](i64 w) {
+                for (i64 d = 0; d < T; ++d) lists[static_cast<size_t>(w * T + d)].clear();
+                crossings(c0 + (c1 - c0) * w / T, c0 + (c1 - c0) * (w + 1) / T,
+                          [&](const Crossing& e) {
+                              lists[static_cast<size_t>(w * T) + owner(e.lo)].push_back(e);
+                          });
+            });
+            on_threads(T, [&](i64 d) {
+                for (i64 w = 0; w < T; ++w)
+                    for (const auto& e : lists[static_cast<size_t>(w * T + d)]) add(e);
+            });
+        }
         return 0;
     });
+    // the keys ascending: lo in order, each lo's hi sorted; thread d writes its lo's
+    std::vector<i64> first(static_cast<size_t>(T) + 1, 0);
+    for (i64 d = 0; d < T; ++d)
+        first[static_cast<size_t>(d) + 1] = first[static_cast<size_t>(d)] +
+            static_cast<i64>(acc[static_cast<size_t>(d)].size());
     Out<i64> keys;
     Out<double> sums;
-    auto keys_a = fresh(static_cast<i64>(acc.size()), keys);
-    auto sums_a = fresh(static_cast<i64>(acc.size()), sums, 6);
-    i64 u = 0;
-    for (i64 lo = 0; lo < k; ++lo) {
-        auto& near = seen[static_cast<size_t>(lo)];
-        std::sort(near.begin(), near.end());
-        for (const auto& [h, r] : near) {
-            keys[u] = lo * k + h;
-            for (int c = 0; c < 6; ++c) sums(u, c) = acc[static_cast<size_t>(r)][c];
-            ++u;
-        }
+    auto keys_a = fresh(first[static_cast<size_t>(T)], keys);
+    auto sums_a = fresh(first[static_cast<size_t>(T)], sums, 6);
+    {
+        nb::gil_scoped_release nogil;
+        on_threads(T, [&](i64 d) {
+            i64 u = first[static_cast<size_t>(d)];
+            const auto& mine = acc[static_cast<size_t>(d)];
+            for (i64 lo = (k * d + T - 1) / T; lo < k && owner(lo) == static_cast<size_t>(d);
+                 ++lo) {
+                auto& near = seen[static_cast<size_t>(lo)];
+                std::sort(near.begin(), near.end());
+                for (const auto& [h, r] : near) {
+                    keys[u] = lo * k + h;
+                    for (int c = 0; c < 6; ++c) sums(u, c) = mine[static_cast<size_t>(r)][c];
+                    ++u;
+                }
+            }
+        });
     }
     return nb::make_tuple(keys_a, sums_a);
 }
