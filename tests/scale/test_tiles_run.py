@@ -425,3 +425,26 @@ def test_grid_tiles_whose_boxes_hold_no_point_are_skipped_on_a_cloud():
     assert r.n_segments == 20 and (r.labels >= 0).all()
     assert [t["core"] for t in r.tiles] == [3000, 3000]
     assert not set(r.labels[:3000]) & set(r.labels[3000:])
+
+
+def test_every_tile_weighs_colour_alike(monkeypatch):
+    """The colour term's weight and floor are read once over every tile (as one run reads
+    them over the whole cloud), so two tiles weigh their border alike: on a cloud whose
+    colours are rougher on one side, the tiles reading their own disagree on dozens of
+    border points, the run's on none; the result says the weight and floor used."""
+    from superfacets import PointCloud
+    from superfacets.scale.tiles import run as tiled
+
+    rng = np.random.default_rng(0)
+    xy = rng.random((40_000, 2)) * [4, 2]
+    board = np.where(((xy[:, 0] * 3).astype(int) + (xy[:, 1] * 3).astype(int)) % 2, 0.6, 0.3)
+    rough = np.where(xy[:, 0] < 2, 0.08, 0.01)[:, None]
+    colors = np.clip(board[:, None] + rough * rng.standard_normal((40_000, 3)), 0, 1)
+    cloud = PointCloud(np.c_[xy, 0.1 * np.sin(3 * xy[:, 0]) * np.cos(2 * xy[:, 1])],
+                       colors=colors)
+    once = segment_tiled(cloud, 100, tiles=4, workers=1)
+    assert once.disagreements == 0 and once.params["beta"] > 0
+    one = segment(cloud, 100)  # the same term as one run's, within the tiles' sampling
+    assert abs(once.params["feature_floor"] / one.params["feature_floor"] - 1) < 0.1
+    monkeypatch.setattr(tiled, "_colour_term", lambda run, margin, params: (params, None))
+    assert segment_tiled(cloud, 100, tiles=4, workers=1).disagreements > 20  # each its own

@@ -222,7 +222,8 @@ class Hooks:
 def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
              jump_cycles: bool = True, n_centers: int | None = None,
              initial: np.ndarray | None = None, finished: bool = True,
-             order: np.ndarray | None = None, fixed: np.ndarray | None = None) -> RunRecord:
+             order: np.ndarray | None = None, fixed: np.ndarray | None = None,
+             feature_floor: float | None = None) -> RunRecord:
     """Run the method with validated parameters, stage by stage (see the module notes).
 
     Parameters
@@ -258,6 +259,9 @@ def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
         Elements whose centers stay where they are through the passes and take no part in
         a swap (a tile's refine round: the centers of its halo, its neighbours' to move;
         :func:`superfacets.method.passes.iterate`).
+    feature_floor : float, optional
+        With ``params.beta`` a number: the colour term's floor, not read from this input
+        (a tiled run reads it once for every tile: :func:`resolve_features`).
 
     Returns
     -------
@@ -280,19 +284,19 @@ def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
     with using(params.n_threads):  # also the graph build and terms this run triggers
         return _run(mesh, params, features, replay=replay, jump_cycles=jump_cycles,
                     n_centers=n_centers, initial=initial, finished=finished, order=order,
-                    fixed=fixed)
+                    fixed=fixed, feature_floor=feature_floor)
 
 
 def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
          n_centers: int | None = None, initial=None, finished: bool = True,
-         order=None, fixed=None) -> RunRecord:
+         order=None, fixed=None, feature_floor=None) -> RunRecord:
     t_start = time.perf_counter()
     hooks = Hooks(p.progress, p.max_iter, kind_for(obj, p.elements))
     try:
         with hooks.stage("graph"):
             source, graph, p = build_graph(obj, p, features)
         with hooks.stage("features"):  # (the colour term's weight and floor, where read)
-            p, feats, floor = resolve_features(source, graph, p, features)
+            p, feats, floor = resolve_features(source, graph, p, features, feature_floor)
         rules = resolve_rules(graph, p, n_centers=n_centers, feature_floor=floor)
         hooks.follow(graph, stage_reads(rules, initial))
         p = rules.params

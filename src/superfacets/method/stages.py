@@ -251,8 +251,8 @@ def _check_features(kind: str, data, features) -> None:
                              "or materials (a tetrahedral mesh)")
 
 
-def resolve_features(source: ElementInput, graph, p: SegmentParams, features=None
-                     ) -> tuple[SegmentParams, np.ndarray | None, float]:
+def resolve_features(source: ElementInput, graph, p: SegmentParams, features=None,
+                     floor: float | None = None) -> tuple[SegmentParams, np.ndarray | None, float]:
     """Stage 2a (not in the paper): the feature (colour) term of the weights.
 
     ``beta=None`` (the default) reads it from the data where the input has colours (a
@@ -269,6 +269,9 @@ def resolve_features(source: ElementInput, graph, p: SegmentParams, features=Non
     p : SegmentParams
     features : (N, d) float ndarray, optional
         One row per input row (default: the input's colours).
+    floor : float, optional
+        With ``p.beta`` a number: the floor, not read from this input (a tiled run's
+        tiles take the one read once over all of them, so that they weigh a border alike).
 
     Returns
     -------
@@ -310,6 +313,8 @@ def resolve_features(source: ElementInput, graph, p: SegmentParams, features=Non
         warnings.warn("the colour term is off: the input's colours (or features) are not all "
                       "finite numbers", RuntimeWarning, stacklevel=3)
         return replace(p, beta=0.0), None, 0.0
+    if floor is not None and p.beta is not None:
+        return p, (feats if p.beta > 0 else None), float(floor)
     alpha = p.alpha if p.weighting == "paper" else _D.alpha
     beta, floor = feature_scale(graph, feats, alpha=alpha, eta_convex=p.eta_convex)
     if p.beta is not None:

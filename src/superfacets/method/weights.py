@@ -30,7 +30,8 @@ from .params import (
 
 __all__ = ["paper_weights", "shlafman_weights", "edge_weights", "csr_weights", "weight_dtype",
            "csr_point_weights", "check_features", "convex_scaled", "feature_jumps",
-           "feature_scale", "FEATURE_FLOOR_QUANTILE", "HeldWeights", "weights_array"]
+           "feature_scale", "feature_sample", "scale_of", "FEATURE_FLOOR_QUANTILE",
+           "HeldWeights", "weights_array"]
 
 _PAPER_ALPHA = DEFAULTS.alpha
 _SHLAFMAN_ALPHA = WEIGHTING_ALPHA["shlafman"][0]
@@ -273,16 +274,48 @@ def feature_scale(graph, features: np.ndarray, *, alpha: float = _PAPER_ALPHA,
     >>> feature_scale(g, np.ones((g.n_elements, 3)))
     (0.0, 0.0)
     """
+    return scale_of(*feature_sample(graph, features, alpha=alpha, eta_convex=eta_convex))
+
+
+def feature_sample(graph, features: np.ndarray, *, alpha: float = _PAPER_ALPHA,
+                   eta_convex: float = DEFAULTS.eta_convex) -> tuple[np.ndarray, np.ndarray]:
+    """What :func:`feature_scale` reads of a graph: the geometric terms and the feature
+    differences of its evenly spread adjacencies ((m,) float64 each; a tiled run gathers
+    them from its tiles and reads one weight and floor for all: :func:`scale_of`).
+
+    Examples
+    --------
+    >>> g = as_element_graph(trimesh.creation.icosphere(subdivisions=3))
+    >>> geo, jump = feature_sample(g, np.ones((g.n_elements, 3)))
+    >>> geo.shape == jump.shape, float(jump.max())
+    (True, 0.0)
+    """
     f = check_features(features, graph)
     geometric, jumps = _scale_sample(graph, f, alpha, eta_convex)
     if not jumps:
+        return np.zeros(0), np.zeros(0)
+    return np.concatenate(geometric), np.concatenate(jumps)
+
+
+def scale_of(geometric: np.ndarray, jump: np.ndarray) -> tuple[float, float]:
+    """The feature term's weight and floor from :func:`feature_sample`'s arrays (one
+    graph's, or a tiled run's tiles' together): the floor the
+    :data:`FEATURE_FLOOR_QUANTILE` of the differences, the weight the geometric terms'
+    mean over the differences' mean beyond it (at most :data:`MAX_WEIGHT_FACTOR`); 0
+    where none stands above the floor.
+
+    Examples
+    --------
+    >>> scale_of(np.ones(20), np.r_[np.zeros(19), 2.0])   # 2 beyond a floor of 0: 1 / 0.1
+    (10.0, 0.0)
+    """
+    if not jump.size:
         return 0.0, 0.0
-    jump = np.concatenate(jumps)
     floor = float(np.quantile(jump, FEATURE_FLOOR_QUANTILE))
     above = float(np.maximum(jump - floor, 0.0).mean())
     if not above > 0:
         return 0.0, floor
-    beta = float(np.concatenate(geometric).mean()) / above
+    beta = float(geometric.mean()) / above
     return (min(beta, MAX_WEIGHT_FACTOR) if np.isfinite(beta) else 0.0), floor
 
 

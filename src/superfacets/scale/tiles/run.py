@@ -205,7 +205,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
             def run(phase, margin, extra=lambda t: {}, only=None):
                 tasks = [dict(phase=phase, reader=reader, layout=layout, tile=t, margin=margin,
                               params=params, r=r, diagonal=diagonal, graphs=graphs,
-                              boxes=boxes,
+                              boxes=boxes, floor=floor,
                               frame=_frame(reader, survey), **extra(t))
                          for t in (range(n_tiles) if only is None else only)]
                 if reference is not None and (phase != "areas" or graphs is not None):
@@ -214,10 +214,13 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                             in_box(reference, *layout.box(task["tile"], 1.5 * margin))
                 return _gather(engine, tasks, phase, progress, sent)
 
-            r = math.nan
+            r, floor = math.nan, None
             with stage("areas", bar=False):  # (the phases' bars)
                 r, margin = _sized(run, layout, reader.kind, params, survey, diagonal, halo,
                                    (graphs, sample_area))
+            if survey.colors and (params.beta is None or params.beta > 0):
+                with stage("colours", bar=False):  # one colour term for every tile
+                    params, floor = _colour_term(run, margin, params)
             found, done = _classified(run, layout, params, margin, params.window * r, dict(
                 refine=refine, box_rows=not shared, n_noise=_noise_points(merging, merge_from,
                     n_tiles), start=_sample_start(
@@ -241,7 +244,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
     timings["total"] = time.perf_counter() - t_start
     resolved = dict(params.as_dict(), n_segments=int(names.size), radius=r / diagonal,
                     tiles=grid, halo=float(halo), elements=reader.kind, merge_from=merge_from,
-                    merged_from=merged_from)
+                    merged_from=merged_from, **({} if floor is None else {"feature_floor": floor}))
     return TiledResult(labels=labels, centers=names.astype(np.int64), mesh_radius=r, grid=grid,
                        layout=layout, halo=margin, disagreements=disagreements, repaired=repaired,
                        tiles=_tile_stats(found, done), timings=timings, params=resolved)
@@ -281,6 +284,24 @@ def _classified(run, layout, params, margin: float, ring: float, how: dict,
             if o["core"]]
     timings["labels"] = time.perf_counter() - t
     return found, done
+
+
+def _colour_term(run, margin: float, params):
+    """The colour term of every tile, read once over all of them: ``params`` with its
+    ``beta`` a number (the one given, else read) and the floor
+    (:func:`superfacets.method.weights.scale_of` on the tiles' samples together,
+    :func:`~superfacets.scale.tiles.phases.tile_colour_sample`). Each tile reading its own
+    made two tiles weigh their border differently. No colour read (no tile with finite
+    colours): the term off."""
+    from ...method.weights import scale_of
+
+    samples = [o["colour_sample"] for o in run("colours", margin)
+               if o.get("colour_sample") is not None]
+    if not samples:
+        return replace(params, beta=0.0), None
+    beta, floor = scale_of(np.concatenate([s[0] for s in samples]),
+                           np.concatenate([s[1] for s in samples]))
+    return replace(params, beta=beta if params.beta is None else params.beta), floor
 
 
 def _noise_points(merging: bool, merge_from: int, n_tiles: int) -> int | None:

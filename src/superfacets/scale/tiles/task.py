@@ -145,9 +145,12 @@ def _phase(task: dict, out: dict) -> None:
         moved = np.zeros(0, dtype=bool) if fixed is None else fixed != given
         out.update(moved_rows=rows[moved] if moved.size else rows[:0],
                    moved_labels=fixed[moved] if moved.size else rows[:0])
+    elif task["phase"] == "colours":  # what the colour term's weight and floor read
+        out["colour_sample"] = phases.tile_colour_sample(inp, p, r, d)
     elif task["phase"] == "centers":  # (with refine rounds to come: the start, one pass)
         found, _ = tile_centers(inp, core, replace(p, max_iter=task.get("passes")
-                                                   or p.max_iter), r, d)
+                                                   or p.max_iter), r, d,
+                                floor=task.get("floor"))
         out.update(centers=rows[found], positions=pos[found])
     else:
         want = np.asarray(task["centers"], dtype=np.int64)
@@ -156,7 +159,7 @@ def _phase(task: dict, out: dict) -> None:
         ok[ok] = rows[at[ok]] == want[ok]
         if task["phase"] == "refine":
             found = phases.tile_refine(inp, core, at[ok], p, r, d,
-                                       folder=_graph_folder(task))
+                                       folder=_graph_folder(task), floor=task.get("floor"))
             out.update(centers=rows[found], positions=pos[found])
             last = _last_classification(inp, p.n_neighbors)
             if last is not None:  # (for the labels phase: held, or written when let go)
@@ -196,11 +199,13 @@ def _labelled(task: dict, out: dict, box: tuple, centers: np.ndarray) -> None:
     rows, pos, inp, core = box
     p, r, d = task["params"], task["r"], task["diagonal"]
     folder = _graph_folder(task)
+    floor = task.get("floor")  # (the colour term's, read once over every tile)
     if task.get("n_noise") is not None:  # the merges to the count follow
         named, out["merge_stats"] = tile_labels(
-            inp, centers, p, r, d, merging=(core, rows, task["n_noise"]), folder=folder)
+            inp, centers, p, r, d, merging=(core, rows, task["n_noise"]), folder=folder,
+            floor=floor)
     else:
-        named = tile_labels(inp, centers, p, r, d, folder=folder)
+        named = tile_labels(inp, centers, p, r, d, folder=folder, floor=floor)
     gid = np.where(named >= 0, rows[np.maximum(named, 0)], -1)
     lo_c, hi_c = task["layout"].box(task["tile"])
     near = ~core & ((pos >= lo_c - task["ring"]) & (pos <= hi_c + task["ring"])).all(1)
