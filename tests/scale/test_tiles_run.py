@@ -446,5 +446,5 @@ def test_every_tile_weighs_colour_alike(monkeypatch):
     assert once.disagreements == 0 and once.params["beta"] > 0
     one = segment(cloud, 100)  # the same term as one run's, within the tiles' sampling
     assert abs(once.params["feature_floor"] / one.params["feature_floor"] - 1) < 0.1
-    monkeypatch.setattr(tiled, "_colour_term", lambda run, margin, params: (params, None))
+    monkeypatch.setattr(tiled, "_colour_term", lambda run, margin, params, *_: (params, None))
     assert segment_tiled(cloud, 100, tiles=4, workers=1).disagreements > 20  # each its own

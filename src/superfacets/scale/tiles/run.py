@@ -218,9 +218,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
             with stage("areas", bar=False):  # (the phases' bars)
                 r, margin = _sized(run, layout, reader.kind, params, survey, diagonal, halo,
                                    (graphs, sample_area))
-            if survey.colors and (params.beta is None or params.beta > 0):
-                with stage("colours", bar=False):  # one colour term for every tile
-                    params, floor = _colour_term(run, margin, params)
+            params, floor = _colour_term(run, margin, params, survey.colors, stage)
             found, done = _classified(run, layout, params, margin, params.window * r, dict(
                 refine=refine, box_rows=not shared, n_noise=_noise_points(merging, merge_from,
                     n_tiles), start=_sample_start(
@@ -286,17 +284,20 @@ def _classified(run, layout, params, margin: float, ring: float, how: dict,
     return found, done
 
 
-def _colour_term(run, margin: float, params):
-    """The colour term of every tile, read once over all of them: ``params`` with its
-    ``beta`` a number (the one given, else read) and the floor
-    (:func:`superfacets.method.weights.scale_of` on the tiles' samples together,
-    :func:`~superfacets.scale.tiles.phases.tile_colour_sample`). Each tile reading its own
-    made two tiles weigh their border differently. No colour read (no tile with finite
-    colours): the term off."""
+def _colour_term(run, margin: float, params, colors: bool, stage):
+    """The colour term of every tile, read once over all of them (a stage of its own, where
+    the input has ``colors`` and ``beta`` is not 0): ``params`` with its ``beta`` a number
+    (the one given, else read) and the floor (:func:`superfacets.method.weights.scale_of` on
+    the tiles' samples together, :func:`~superfacets.scale.tiles.phases.tile_colour_sample`;
+    None: no colour term). Each tile reading its own made two tiles weigh their border
+    differently. No colour read (no tile with finite colours): the term off."""
     from ...method.weights import scale_of
 
-    samples = [o["colour_sample"] for o in run("colours", margin)
-               if o.get("colour_sample") is not None]
+    if not colors or (params.beta is not None and params.beta <= 0):
+        return params, None
+    with stage("colours", bar=False):
+        samples = [o["colour_sample"] for o in run("colours", margin)
+                   if o.get("colour_sample") is not None]
     if not samples:
         return replace(params, beta=0.0), None
     beta, floor = scale_of(np.concatenate([s[0] for s in samples]),
