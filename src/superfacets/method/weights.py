@@ -280,8 +280,27 @@ def feature_scale(graph, features: np.ndarray, *, alpha: float = _PAPER_ALPHA,
 def feature_sample(graph, features: np.ndarray, *, alpha: float = _PAPER_ALPHA,
                    eta_convex: float = DEFAULTS.eta_convex) -> tuple[np.ndarray, np.ndarray]:
     """What :func:`feature_scale` reads of a graph: the geometric terms and the feature
-    differences of its evenly spread adjacencies ((m,) float64 each; a tiled run gathers
-    them from its tiles and reads one weight and floor for all: :func:`scale_of`).
+    differences of its evenly spread adjacencies (a tiled run gathers them from its tiles
+    and reads one weight and floor for all: :func:`scale_of`).
+
+    Parameters
+    ----------
+    graph : ElementGraph
+    features : (n, d) float64 ndarray
+        One row per element.
+    alpha, eta_convex : float
+        The run's (paper eq. 3).
+
+    Returns
+    -------
+    geometric, jump : (m,) float64 ndarray
+        Per sampled adjacency, ``geo / |e| + alpha * eta * theta / pi`` and the feature
+        difference (:func:`feature_jumps`); ``m`` at most about 131,000.
+
+    Raises
+    ------
+    ParameterError
+        If the features do not fit the graph.
 
     Examples
     --------
@@ -301,8 +320,23 @@ def scale_of(geometric: np.ndarray, jump: np.ndarray) -> tuple[float, float]:
     """The feature term's weight and floor from :func:`feature_sample`'s arrays (one
     graph's, or a tiled run's tiles' together): the floor the
     :data:`FEATURE_FLOOR_QUANTILE` of the differences, the weight the geometric terms'
-    mean over the differences' mean beyond it (at most :data:`MAX_WEIGHT_FACTOR`); 0
-    where none stands above the floor.
+    mean over the differences' mean beyond it (at most :data:`MAX_WEIGHT_FACTOR`).
+
+    Parameters
+    ----------
+    geometric, jump : (m,) float64 ndarray
+
+    Returns
+    -------
+    beta : float
+        ``>= 0``; 0 where no difference stands above the floor, or none was sampled.
+    floor : float
+        In the features' units.
+
+    Raises
+    ------
+    ParameterError
+        Never.
 
     Examples
     --------
