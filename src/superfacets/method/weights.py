@@ -281,26 +281,10 @@ def feature_sample(graph, features: np.ndarray, *, alpha: float = _PAPER_ALPHA,
                    eta_convex: float = DEFAULTS.eta_convex) -> tuple[np.ndarray, np.ndarray]:
     """What :func:`feature_scale` reads of a graph: the geometric terms and the feature
     differences of its evenly spread adjacencies (a tiled run gathers them from its tiles
-    and reads one weight and floor for all: :func:`scale_of`).
-
-    Parameters
-    ----------
-    graph : ElementGraph
-    features : (n, d) float64 ndarray
-        One row per element.
-    alpha, eta_convex : float
-        The run's (paper eq. 3).
-
-    Returns
-    -------
-    geometric, jump : (m,) float64 ndarray
-        Per sampled adjacency, ``geo / |e| + alpha * eta * theta / pi`` and the feature
-        difference (:func:`feature_jumps`); ``m`` at most about 131,000.
-
-    Raises
-    ------
-    ParameterError
-        If the features do not fit the graph.
+    and reads one weight and floor for all: :func:`scale_of`). Its parameters and errors
+    are :func:`feature_scale`'s; it returns ``(geometric, jump)``, (m,) float64 each: per
+    sampled adjacency, ``geo / |e| + alpha * eta * theta / pi`` (paper eq. 3) and the
+    feature difference (:func:`feature_jumps`), ``m`` at most about 131,000.
 
     Examples
     --------
