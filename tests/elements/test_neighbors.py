@@ -4,7 +4,7 @@ in the order of (distance, index), whatever the order of the points or their tie
 import numpy as np
 import pytest
 
-from superfacets.elements.neighbors import nearest, point_tree
+from superfacets.elements.neighbors import closest, nearest, point_tree
 from superfacets.elements.points import distinct_points
 
 
@@ -71,6 +71,30 @@ def test_untied_neighbours_and_distances_are_scipys_bit_for_bit():
     dist, idx = cKDTree(pts).query(pts, k=11)
     np.testing.assert_array_equal(nbr, idx)
     np.testing.assert_array_equal(kth, dist[:, 10])
+
+
+@pytest.mark.parametrize("shuffle", [False, True])
+def test_the_closest_point_to_any_position_with_ties_to_the_lower_index(shuffle):
+    """Known answer: queries anywhere (on the quantized grid's points, halfway between
+    them, far outside), each the nearest point by (squared distance, index) as a brute
+    search finds it; the points in any order; refused: a non-finite query, no points."""
+    pts = _grid()
+    if shuffle:
+        pts = pts[np.random.default_rng(4).permutation(pts.shape[0])]
+    rng = np.random.default_rng(5)
+    queries = np.r_[pts[::7], pts[::11] + [0.5, 0.0, 0.0], pts[::13] + [0.5, 0.5, 0.25],
+                    rng.uniform(-5, 30, (200, 3)), [[1e6, -1e6, 3.0]]]
+    d = queries[:, None, :] - pts[None, :, :]
+    d2 = (d[..., 0] * d[..., 0] + d[..., 1] * d[..., 1]) + d[..., 2] * d[..., 2]
+    want = np.array([np.lexsort((np.arange(pts.shape[0]), row))[0] for row in d2])
+    assert (np.sort(d2, axis=1)[:, 0] == np.sort(d2, axis=1)[:, 1]).sum() > 50  # ties
+    for leaf in (1, 4, 16):
+        np.testing.assert_array_equal(closest(point_tree(pts, leaf=leaf), queries), want)
+    assert closest(point_tree(pts), np.zeros((0, 3))).shape == (0,)
+    with pytest.raises(ValueError, match="finite"):
+        closest(point_tree(pts), [[0.0, np.nan, 0.0]])
+    with pytest.raises(ValueError, match="no points"):
+        closest(point_tree(np.zeros((0, 3))), [[0.0, 0.0, 0.0]])
 
 
 def test_no_neighbours_asked_and_too_many_asked():

@@ -86,7 +86,9 @@ def _recorded_calls(monkeypatch) -> dict:
             (as_cloud(pts), 30, {"window": 1.0, "assignment": "bounded"}),
             (as_cloud(pts), 30, {"roughness": 1.0}),
             (as_cloud(np.r_[pts, pts + [50.0, 0, 0]]), 20, {}),
-            (PointCloud(pts, colors=np.c_[pts[:, :1] > 0, pts[:, 1:] > 0] * 0.5), 30, {})]:
+            (PointCloud(pts, colors=np.c_[pts[:, :1] > 0, pts[:, 1:] > 0] * 0.5), 30, {}),
+            (PointCloud(pts[:3000], orient_like=(pts[::7], np.tile([0.0, 0, 1], (858, 1)))),
+             20, {})]:
         superfacets.segment(data, k, n_threads=1, **params)
     labels = superfacets.segment(mesh, 30, n_threads=1).labels
     hierarchy(superfacet_graph(elements_of(mesh, "faces").graph, labels, None), [20, 5])

@@ -65,7 +65,7 @@ POINT_KERNELS = {"knn_csr", "pca_normals", "pca_linearity", "propagate_signs",
                  "neighbour_mean",
                  "crossing_pairs", "label_pair_sums", "label_sums", "label_scatter",
                  "tree_nodes",
-                 "nearest_in_tree", "sort_keys", "rows_apart", "neighbourhood_moments",
+                 "nearest_in_tree", "closest_in_tree", "sort_keys", "rows_apart", "neighbourhood_moments",
                  "extreme_eigenvalues", "label_pairs"}
 #: Those of the vertex graph and of the exact assignment (the default on vertices)
 VERTEX_KERNELS = {"vertex_cells", "mesh_edges", "classify_exact", "reclassify_exact"}
@@ -327,6 +327,10 @@ def test_runs_on_points_give_numba_results_call_by_call(shadowed):
         r = superfacets.segment(as_cloud(pts, normals), k, n_threads=1, **params)
         assert r.labels.shape[0] == pts.shape[0] and r.labels.max() + 1 == k
     assert r.graph().n_segments == 40  # the superpoint graph: its crossing pairs listed
+    # normals turned like an oriented sample (a tile's): the nearest sample point
+    ref = superfacets.segment(as_cloud(p[::9]), 10, n_threads=1).elements.graph
+    superfacets.segment(superfacets.PointCloud(p[:5000], orient_like=(
+        np.array(ref.positions), np.array(ref.normals, dtype=np.float64))), 20, n_threads=1)
     # a cloud that alone holds its points (as one read from a file) lends them to its graph
     r = superfacets.segment(as_cloud(dup.copy()), 40, n_threads=1)
     assert r.labels.shape[0] == dup.shape[0]

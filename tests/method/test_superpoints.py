@@ -204,29 +204,34 @@ def test_a_piece_cut_from_a_closed_surface_orients_like_a_reference():
         PointCloud(pts, orient_like=(pts, pts[:10]))
 
 
-def test_a_large_piece_votes_with_an_even_sample_of_its_points(monkeypatch):
-    """Against a reference, every point of a small piece votes for its side, every
-    ``ceil(size / VOTERS)``-th of a larger one (in their order); on a sphere's cap
-    oriented like inward normals (against its own mean's outward rule) the sample turns
-    the piece as every point does."""
-    from superfacets.elements import normals
+def test_each_normal_turns_like_the_reference_normal_nearest_its_point():
+    """Known answer: a plane whose reference normals point up on its left half and down on
+    its right turns each point's normal like the reference nearest it (not one side per
+    connected piece), and a box cut from it (a tile) turns every point it holds alike;
+    on a sphere's cap the whole sphere's inward normals turn every normal inwards,
+    against the cap's own outward rule."""
+    from scipy.spatial import cKDTree
 
-    comp = np.array([0, 1, 0, 0, 2, 1, 0, 0, 0, 0, 0])
-    monkeypatch.setattr(normals, "VOTERS", 3)  # piece 0: 8 points, every 3rd of them
-    np.testing.assert_array_equal(normals._voters(comp, 3), [0, 1, 4, 5, 6, 9])
-    monkeypatch.setattr(normals, "VOTERS", 8)
-    np.testing.assert_array_equal(normals._voters(comp, 3), np.arange(11))
-    rng = np.random.default_rng(0)
+    rng = np.random.default_rng(3)
+    pts = np.c_[rng.random((4000, 2)), 0.002 * rng.standard_normal(4000)]
+    ref_pos = np.c_[rng.random((700, 2)), np.zeros(700)]
+    ref_nrm = np.where(ref_pos[:, :1] < 0.5, 1.0, -1.0) * [0.0, 0.0, 1.0]
+    _, near = cKDTree(ref_pos).query(pts)
+    g = point_graph(PointCloud(pts, orient_like=(ref_pos, ref_nrm))).graph
+    order = cKDTree(g.positions).query(pts)[1]  # (the graph's points in its own order)
+    up = np.asarray(g.normals)[order, 2] > 0
+    np.testing.assert_array_equal(up, ref_nrm[near, 2] > 0)
+    assert 0.3 < up.mean() < 0.7
+    box = (pts[:, 0] > 0.3) & (pts[:, 0] < 0.8)
+    cut = point_graph(PointCloud(pts[box], orient_like=(ref_pos, ref_nrm))).graph
+    cut_up = np.asarray(cut.normals)[cKDTree(cut.positions).query(pts[box])[1], 2] > 0
+    np.testing.assert_array_equal(cut_up, up[box])
+
     d = rng.normal(size=(6000, 3))
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     cap = d[d[:, 2] > 0.2]
-    reference = (d[::5], -d[::5])  # the whole sphere's normals, turned inwards
-    sides = []
-    for voters in (10 ** 9, 64):
-        monkeypatch.setattr(normals, "VOTERS", voters)
-        g = point_graph(PointCloud(cap, orient_like=reference)).graph
-        sides.append(np.einsum("ij,ij->i", g.normals, g.positions) < 0)
-    assert sides[0].all() and sides[1].all()
+    g = point_graph(PointCloud(cap, orient_like=(d[::5], -d[::5]))).graph
+    assert (np.einsum("ij,ij->i", g.normals, g.positions) < 0).all()
     own = point_graph(PointCloud(cap)).graph  # (outwards from its mean, by default)
     assert (np.einsum("ij,ij->i", own.normals, own.positions) > 0).all()
 

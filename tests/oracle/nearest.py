@@ -249,3 +249,63 @@ def nearest_in_tree(pts, start, end, left, boxes, ids, own, k, limit, nbr, kth, 
             if flag:
                 for j in range(k):
                     within[r, j] = j < got and np.sqrt(bd[j]) <= limit
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _closest(pts, start, end, left, boxes, ids, qx, qy, qz, stack, sd):
+    """The id (``ids[row]``, none: the row) of the point nearest ``(qx, qy, qz)`` by
+    (squared distance, id): depth first, the nearer child first, a node skipped when its
+    box lies farther than the best found; -1 where the query is not finite."""
+    best = np.inf
+    bid = -1
+    stack[0] = 0
+    sd[0] = _box_distance(boxes, 0, qx, qy, qz)
+    sp = 1
+    while sp > 0:
+        sp -= 1
+        v = stack[sp]
+        if sd[sp] > best:
+            continue
+        c = left[v]
+        if c < 0:
+            for t in range(start[v], end[v]):
+                dx = pts[t, 0] - qx
+                dy = pts[t, 1] - qy
+                dz = pts[t, 2] - qz
+                d = dx * dx + dy * dy + dz * dz
+                u = ids[t] if ids.shape[0] else t
+                if d < best or (d == best and u < bid):
+                    best = d
+                    bid = u
+        else:
+            d0 = _box_distance(boxes, c, qx, qy, qz)
+            d1 = _box_distance(boxes, c + 1, qx, qy, qz)
+            near = c
+            far = c + 1
+            if d1 < d0:
+                near = c + 1
+                far = c
+                d0, d1 = d1, d0
+            if d1 <= best:
+                stack[sp] = far
+                sd[sp] = d1
+                sp += 1
+            if d0 <= best:
+                stack[sp] = near
+                sd[sp] = d0
+                sp += 1
+    return bid
+
+
+@njit(cache=True, error_model="numpy", nogil=True, parallel=True)
+def closest_in_tree(pts, start, end, left, boxes, ids, queries, out):
+    """For each query position ``r`` (``queries``: (m, 3)): ``out[r]``, the id of the tree's
+    nearest point (ties: the lower id; ``ids[row]`` each row's point, none: the rows are the
+    points), -1 where the query is not finite."""
+    m = queries.shape[0]
+    for ch in prange((m + CHUNK - 1) // CHUNK):
+        stack = np.empty(STACK, dtype=np.int64)
+        sd = np.empty(STACK)
+        for r in range(ch * CHUNK, min(m, ch * CHUNK + CHUNK)):
+            out[r] = _closest(pts, start, end, left, boxes, ids, queries[r, 0],
+                              queries[r, 1], queries[r, 2], stack, sd)

@@ -5,7 +5,8 @@ smallest eigenvector of their covariance); its sign is arbitrary, so the normals
 then oriented consistently (Hoppe et al. 1992; the module notes of
 :mod:`superfacets.elements.points` give the rules): towards a known sensor, else by
 propagation along a minimum spanning tree of flat steps, each connected piece turned
-outwards, upwards (``up``) or like an oriented reference sample (tiled runs).
+outwards or upwards (``up``); or each normal turned like the nearest normal of an oriented
+reference sample (tiled runs).
 """
 
 from __future__ import annotations
@@ -85,10 +86,11 @@ def orient_normals(points: np.ndarray, normals: np.ndarray, indptr: np.ndarray,
         Turn every normal towards it instead.
     reference : tuple of two (R, 3) float64 ndarray, optional
         ``(positions, normals)`` oriented elsewhere (a sample of the same
-        surface): after the propagation, each connected piece is turned to
-        agree with the nearest reference normals, summed over the piece
-        (``sum s_i n_i . m_near(i) >= 0``; over an even sample of :data:`VOTERS`
-        points of a larger piece), instead of outwards from its mean.
+        surface), at least one: instead of the propagation, each normal is
+        turned to agree with the reference normal nearest its point
+        (``n_i . m_near(i) >= 0``; ties to the lower reference row), a rule
+        of the point and the reference alone, so two tiles that both hold a
+        point turn it alike.
     up : (3,) float64 ndarray, optional
         Without ``reference``: after the propagation, each connected piece is
         turned to agree with this direction (``sum s_i n_i . up >= 0``),
@@ -102,6 +104,8 @@ def orient_normals(points: np.ndarray, normals: np.ndarray, indptr: np.ndarray,
     if viewpoint is not None:
         flip = np.einsum("ij,ij->i", normals, viewpoint[None, :] - points) < 0
         return np.where(flip[:, None], -normals, normals)
+    if reference is not None and reference[0].shape[0]:
+        return _turned_like(points, normals, reference)
     propagate_signs = native.kernel("orient.propagate_signs")
     turn_outwards = native.kernel("orient.turn_outwards")
 
@@ -111,38 +115,29 @@ def orient_normals(points: np.ndarray, normals: np.ndarray, indptr: np.ndarray,
     n_comp = propagate_signs(indptr, indices, normals, sign, comp)
     out = np.empty_like(normals)
     turn_outwards(points, normals, sign, comp, n_comp, out)
-    vote = None
-    if reference is not None and reference[0].shape[0] and n:
-        from scipy.spatial import cKDTree
-
-        at = _voters(comp, n_comp)
-        _, near = cKDTree(reference[0]).query(points[at], k=1, workers=-1)
-        vote = np.bincount(comp[at], weights=np.einsum("ij,ij->i", out[at],
-                                                       reference[1][near]), minlength=n_comp)
-    elif up is not None and n:
+    if up is not None and n:
         vote = np.bincount(comp, weights=out @ np.asarray(up, dtype=np.float64),
                            minlength=n_comp)
-    if vote is not None:
         out[(vote < 0)[comp]] *= -1.0
     return out
 
 
-#: The points of a piece that vote with the reference normals (:func:`orient_normals`):
-#: all of a piece up to this many, else an even subsample of about this many.
-VOTERS = 4096
+#: Points turned like the reference (:func:`orient_normals`) per block.
+TURN_BLOCK = 1 << 20
 
 
-def _voters(comp: np.ndarray, n_comp: int) -> np.ndarray:
-    """The points that vote for their piece's side, in increasing order: every point of a
-    piece of at most :data:`VOTERS`, every ``ceil(size / VOTERS)``-th of a larger one (in
-    the order of the points): a piece of millions of points agrees or disagrees with the
-    reference by a margin its even sample keeps, and the reference's nearest-neighbour
-    query is the tiles' longest step of the orientation otherwise."""
-    size = np.bincount(comp, minlength=n_comp)
-    step = np.maximum(1, -(-size // VOTERS))
-    if (step == 1).all():
-        return np.arange(comp.size)
-    order = np.argsort(comp, kind="stable")  # each piece's points, in their order
-    start = np.concatenate([[0], np.cumsum(size)[:-1]])
-    rank = np.arange(comp.size) - start[comp[order]]
-    return np.sort(order[rank % step[comp[order]] == 0])
+def _turned_like(points: np.ndarray, normals: np.ndarray, reference: tuple) -> np.ndarray:
+    """``normals`` each turned to agree with the reference normal nearest its point
+    (:func:`orient_normals`' ``reference``), in blocks of :data:`TURN_BLOCK` points (the
+    nearest rows are 8 bytes a point)."""
+    from .neighbors import closest, point_tree
+
+    tree = point_tree(np.asarray(reference[0], dtype=np.float64))
+    ref_normals = np.asarray(reference[1], dtype=np.float64)
+    out = np.array(normals, dtype=np.float64)
+    for lo in range(0, points.shape[0], TURN_BLOCK):
+        hi = min(lo + TURN_BLOCK, points.shape[0])
+        near = closest(tree, points[lo:hi])
+        flip = np.einsum("ij,ij->i", out[lo:hi], ref_normals[near]) < 0
+        out[lo:hi][flip] *= -1.0
+    return out

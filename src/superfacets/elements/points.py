@@ -28,7 +28,9 @@ weights for adjacent elements". Here each point is an element:
   al. 1992; the one tree under the order (cost, lower end, higher end) of the edges)
   with each connected piece turned outwards (away from its mean), or, for
   an open surface seen from a known side (``PointCloud.up``: LAS files,
-  z up), turned to agree with that direction.
+  z up), turned to agree with that direction; given an oriented sample
+  (``PointCloud.orient_like``: a tiled run's), each normal is instead turned
+  to agree with the sample's normal nearest its point.
   PCA's arbitrary signs therefore never reach the convexity test;
 - weight terms as on mesh vertices: geodesic term ``|p_i - p_j|``, the angle
   of the normals scaled by that distance, concave when

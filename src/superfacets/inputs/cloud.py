@@ -53,12 +53,12 @@ class PointCloud:
         uses when no ``features`` are given.
     orient_like : tuple of two (R, 3) float ndarray, optional
         ``(positions, normals)``: consistently oriented normals at some
-        positions (a coarser sample of the same surface). Estimated normals
-        are then turned, each connected piece of the point graph as a whole,
-        to agree with the nearest of them (a vote of the piece) instead of
-        outwards from the piece's mean; a tiled run gives every tile the
-        orientation of one sample of the whole input this way. Ignored with
-        ``normals`` or ``viewpoint``.
+        positions (a coarser sample of the same surface; empty: ignored).
+        Each estimated normal is then turned to agree with the
+        one of them nearest its point, instead of by propagation over the
+        point graph: a rule of the point and the sample alone, so a tiled run
+        that gives every tile one sample of the whole input has every tile
+        turn a point alike. Ignored with ``normals`` or ``viewpoint``.
     up : (3,) float ndarray, optional
         The side the surface was seen from, on the whole, for a scan of an
         open surface (a terrain, a street) whose sensor position is not

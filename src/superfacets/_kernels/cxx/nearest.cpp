@@ -128,6 +128,53 @@ i64 query(const Tree& t, i64 i, i64 k, double* bd, i64* bi, i64* stack, double* 
     return cnt;
 }
 
+// nearest._closest
+i64 closest(const Tree& t, double qx, double qy, double qz, i64* stack, double* sd) {
+    const double* p = t.pts;
+    double best = INF;
+    i64 bid = -1;
+    stack[0] = 0;
+    sd[0] = box_distance(t.boxes, qx, qy, qz);
+    i64 sp = 1;
+    while (sp > 0) {
+        --sp;
+        const i64 v = stack[sp];
+        if (sd[sp] > best) continue;
+        const i64 c = t.left[v];
+        if (c < 0) {
+            for (i64 r = t.start[v]; r < t.end[v]; ++r) {
+                double dx = p[3 * r] - qx, dy = p[3 * r + 1] - qy, dz = p[3 * r + 2] - qz;
+                double d = dx * dx + dy * dy + dz * dz;
+                const i64 id = t.ids ? t.ids[r] : r;
+                if (d < best || (d == best && id < bid)) {
+                    best = d;
+                    bid = id;
+                }
+            }
+        } else {
+            double d0 = box_distance(t.boxes + 6 * c, qx, qy, qz);
+            double d1 = box_distance(t.boxes + 6 * (c + 1), qx, qy, qz);
+            i64 near = c, far = c + 1;
+            if (d1 < d0) {
+                near = c + 1;
+                far = c;
+                std::swap(d0, d1);
+            }
+            if (d1 <= best) {
+                stack[sp] = far;
+                sd[sp] = d1;
+                ++sp;
+            }
+            if (d0 <= best) {
+                stack[sp] = near;
+                sd[sp] = d0;
+                ++sp;
+            }
+        }
+    }
+    return bid;
+}
+
 }  // namespace
 
 i64 tree_nodes(nb::handle pts_, nb::handle keys_, i64 leaf, nb::handle start_, nb::handle end_,
@@ -278,6 +325,29 @@ void nearest_in_tree(nb::handle pts_, nb::handle start_, nb::handle end_, nb::ha
     });
 }
 
+void closest_in_tree(nb::handle pts_, nb::handle start_, nb::handle end_, nb::handle left_,
+                     nb::handle boxes_, nb::handle ids_, nb::handle queries_,
+                     nb::handle out_) {
+    In<double> pts(pts_, "pts"), boxes(boxes_, "boxes"), queries(queries_, "queries");
+    In<i64> start(start_, "start"), end(end_, "end"), left(left_, "left"), ids(ids_, "ids");
+    Out<i64> out(out_, "out");
+    if (pts.cols != 3 || boxes.cols != 6 || queries.cols != 3 || out.n != queries.n)
+        throw Mismatch("argument out");
+    if (pts.n < 1) throw OutOfRange("argument pts: no points to be nearest");
+    check_tree(pts.n, start, end, left, boxes.n);
+    if (ids.n != pts.n && ids.n != 0) throw Mismatch("argument ids");
+    check_range(ids, 0, std::numeric_limits<i64>::max(), "ids");
+    nb::gil_scoped_release nogil;
+    const Tree t{pts.p, start.p, end.p, left.p, boxes.p, ids.n ? ids.p : nullptr};
+    parallel_for(queries.n, [&](i64 lo, i64 hi) {
+        std::vector<double> sd(STACK);
+        std::vector<i64> stack(STACK);
+        for (i64 r = lo; r < hi; ++r)
+            out[r] = closest(t, queries(r, 0), queries(r, 1), queries(r, 2), stack.data(),
+                             sd.data());
+    });
+}
+
 void bind_nearest(nb::module_& m) {
     m.def("tree_nodes", &tree_nodes,
           "Build the tree over pts ((n, 3) float64, sorted by their Z-order keys, (n, 3) "
@@ -292,6 +362,12 @@ void bind_nearest(nb::module_& m) {
           nb::arg("pts"), nb::arg("start"), nb::arg("end"), nb::arg("left"), nb::arg("boxes"),
           nb::arg("ids"), nb::arg("own"), nb::arg("k"), nb::arg("limit"), nb::arg("nbr"),
           nb::arg("kth"), nb::arg("within"));
+    m.def("closest_in_tree", &closest_in_tree,
+          "For each query position r (queries: (m, 3) float64): the id of the tree's nearest "
+          "point into out[r] (ties: the lower id; ids[row] each row's point, none: the rows "
+          "are the points; -1 where the query is not finite).",
+          nb::arg("pts"), nb::arg("start"), nb::arg("end"), nb::arg("left"), nb::arg("boxes"),
+          nb::arg("ids"), nb::arg("queries"), nb::arg("out"));
 }
 
 }  // namespace sfk

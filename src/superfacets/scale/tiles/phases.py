@@ -394,10 +394,12 @@ def orientation_reference(sample: np.ndarray, n_neighbors: int, up=None) -> tupl
     oriented by propagation and turned outwards per connected piece
     (:mod:`superfacets.elements.points`). A tile sees a piece cut by its
     halo, whose own mean can turn it the other way than the whole cloud
-    does (50M points in 16 tiles: 0.13 % of the points labelled differently
-    by two tiles). So the sample the survey keeps (every ``ceil(n / 2^20)``-th
-    point) is oriented once, here, as one run would, and every tile turns
-    each of its pieces to agree with it (``PointCloud(orient_like=...)``).
+    does, and propagates the signs over its own box: two tiles can turn
+    a point they both hold differently. So the sample the survey keeps
+    (every ``ceil(n / 2^20)``-th point, thinned by :func:`start_step`) is
+    oriented once, here, as one run would, and every tile turns each of its
+    normals to agree with the sample's normal nearest its point
+    (``PointCloud(orient_like=...)``), alike in every tile.
     ``up`` (the input's ``PointCloud.up``; LAS files: z) turns the sample's
     pieces to agree with that direction instead of outwards.
 
