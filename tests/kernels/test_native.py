@@ -64,8 +64,8 @@ POINT_KERNELS = {"knn_csr", "pca_normals", "pca_linearity", "propagate_signs",
                  "point_terms_csr", "point_terms", "combine_weights", "feature_weights_csr",
                  "neighbour_mean",
                  "crossing_pairs", "label_pair_sums", "label_sums", "label_scatter",
-                 "tree_nodes",
-                 "nearest_in_tree", "closest_in_tree", "sort_keys", "rows_apart", "neighbourhood_moments",
+                 "tree_nodes", "closest_in_tree",
+                 "nearest_in_tree", "sort_keys", "rows_apart", "neighbourhood_moments",
                  "extreme_eigenvalues", "label_pairs"}
 #: Those of the vertex graph and of the exact assignment (the default on vertices)
 VERTEX_KERNELS = {"vertex_cells", "mesh_edges", "classify_exact", "reclassify_exact"}
