@@ -9,7 +9,7 @@ import pytest
 from superfacets import PointCloud, segment
 from superfacets import segment as _segment
 from superfacets.errors import ParameterError
-from superfacets.method.merges import flat_merges, noise_variance
+from superfacets.method.merges import flat_merges, noise_of, noise_variance
 from superfacets.method.params import DEFAULTS, resolve
 from superfacets.method.rules import merge_from_of
 
@@ -57,10 +57,35 @@ def test_the_noise_of_a_curved_surface_is_not_its_curvature():
     sphere = d / np.linalg.norm(d, axis=1, keepdims=True)
     g = _graph(sphere)
     one_scale = float(np.median(_plane_residual(g, np.arange(0, 30_000, 7), 1)[0]))
-    assert one_scale > 1e-8 and noise_variance(g) < 0.05 * one_scale
+    assert one_scale > 1e-8 and noise_variance(g) == 0.0
     sigma = 0.004
     noisy = sphere * (1 + sigma * rng.standard_normal((30_000, 1)))
     assert 0.4 * sigma ** 2 < noise_variance(_graph(noisy)) < 1.2 * sigma ** 2
+
+
+def test_the_noise_reads_zero_unless_its_median_is_significantly_positive():
+    """Known answers of the sign test (:func:`noise_of`): estimates scattered about 0 (a
+    clean surface's) read 0 whatever their median's sign, so two samples of one clean
+    surface (one run's, a tiled run's) read alike; positive ones read their median; the
+    median's lower bound is the estimate of rank floor(m/2 - 1.5 sqrt(m))."""
+    from superfacets.method.merges import neighbourhood_noise
+
+    rng = np.random.default_rng(2)
+    for shift in (-1e-14, 0.0, 1e-14):  # a median of either sign, within its spread
+        assert noise_of(1e-12 * rng.standard_normal(8000) + shift) == 0.0
+    noisy = 1e-4 * (1 + 0.5 * rng.standard_normal(8000))
+    assert noise_of(noisy) == float(np.median(noisy))
+    # m = 100: the lower bound is the estimate of rank 35 (the 36th smallest)
+    e = np.r_[np.full(35, -1.0), np.full(65, 2.0)]
+    assert noise_of(e) == 2.0 and noise_of(np.r_[np.full(36, -1.0), np.full(64, 2.0)]) == 0.0
+    assert noise_of(np.full(8, 3.0)) == 0.0 and noise_of(np.full(9, 3.0)) == 3.0
+    assert noise_of(np.zeros(0)) == 0.0
+    # a clean sphere read on two halves of its points: both 0, where the medians differ
+    d = rng.standard_normal((30_000, 3))
+    g = _graph(d / np.linalg.norm(d, axis=1, keepdims=True))
+    halves = [neighbourhood_noise(g, np.arange(i, 30_000, 2)) for i in (0, 1)]
+    assert noise_of(halves[0]) == noise_of(halves[1]) == 0.0
+    assert (np.sort(halves[0])[:15_000] < 0).any() and (halves[0] > 0).any()
 
 
 def test_flat_merges_join_each_plane_and_never_cross_the_ridge():

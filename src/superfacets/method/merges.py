@@ -48,6 +48,8 @@ cut pursuit) leave flat regions whole the same way. What they gain and lose, mea
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .._kernels import native
@@ -60,7 +62,8 @@ from ..graph.sums import border_sums, grouped_graph, grouped_planes, point_sums
 __all__ = ["merge_to_count", "merge_nodes", "flat_merges", "flat_share", "flat_merge_nodes",
            "rise_merge_nodes", "scene_merge_nodes", "ring_residual", "rise_weight",
            "same_feature_edges", "feature_spread", "noise_variance", "neighbourhood_noise",
-           "FLAT_NOISE", "FLAT_SHARE", "NOISE_SAMPLE", "PLANE_ROUNDING"]
+           "noise_of", "NOISE_SIGNIFICANCE", "FLAT_NOISE", "FLAT_SHARE", "NOISE_SAMPLE",
+           "PLANE_ROUNDING"]
 
 #: A flat merge's largest rise of the squared plane distances, per element of the
 #: smaller superpoint, in units of :func:`noise_variance` (chosen among 1, 2 and 3:
@@ -116,7 +119,58 @@ def noise_variance(graph) -> float:
     """
     n = graph.n_elements
     pick = np.unique(np.linspace(0, n - 1, min(n, NOISE_SAMPLE)).astype(np.int64))
-    return float(max(np.median(neighbourhood_noise(graph, pick)), 0.0)) if n else 0.0
+    return noise_of(neighbourhood_noise(graph, pick)) if n else 0.0
+
+
+#: How many standard errors above 0 the median of the neighbourhoods' noise must lie, by
+#: the sign test, to read as noise (:func:`noise_of`): 3, a conventional level.
+NOISE_SIGNIFICANCE = 3.0
+
+
+def noise_of(estimates: np.ndarray) -> float:
+    """The input's noise from the neighbourhoods' estimates (:func:`neighbourhood_noise`):
+    their median, where it lies significantly above 0, else 0.
+
+    On a noise-free surface the estimates scatter about 0 (the curvature taken out
+    leaves a small error either way), and their median is a tiny number of either
+    sign: read as it is, two samples of the same surface (one run's and a tiled run's)
+    could read 0 and a tiny noise, and merge by different rules. So the median is the
+    noise only where the sign test puts it above 0 at :data:`NOISE_SIGNIFICANCE`
+    standard errors: the estimate of rank ``floor(m / 2 - z sqrt(m) / 2)`` (of ``m``
+    in increasing order, the median's lower confidence bound, free of any
+    distribution) is positive. A scan's estimates are nearly all positive.
+
+    Parameters
+    ----------
+    estimates : (m,) float ndarray
+        Squared input units; any sign.
+
+    Returns
+    -------
+    float
+        ``>= 0``: the median of ``estimates``, or 0 (also for fewer than 9 estimates,
+        where no median is significant at 3 standard errors).
+
+    Raises
+    ------
+    ParameterError
+        Never.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> scatter = 1e-12 * rng.standard_normal(8000)         # a clean curved surface
+    >>> noise_of(scatter), noise_of(np.abs(scatter)) > 0
+    (0.0, True)
+    >>> noise_of(np.array([-1.0, 4.0, 4.0])), noise_of(np.full(9, 4.0))
+    (0.0, 4.0)
+    """
+    e = np.sort(np.asarray(estimates, dtype=np.float64).ravel())
+    m = e.size
+    rank = math.floor(m / 2 - NOISE_SIGNIFICANCE * math.sqrt(m) / 2)
+    if m == 0 or rank < 0 or not e[rank] > 0:
+        return 0.0
+    return float(np.median(e))
 
 
 def neighbourhood_noise(graph, pick: np.ndarray) -> np.ndarray:

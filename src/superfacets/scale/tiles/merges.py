@@ -42,7 +42,7 @@ from ...elements.labels import check_labels
 from ...errors import ParameterError
 from ...graph.adjacency import crossing_adjacencies
 from ...graph.sums import PAIR_FIELDS, border_sums, grouped_planes, pair_sums, point_sums
-from ...method.merges import FLAT_NOISE, merge_nodes, neighbourhood_noise
+from ...method.merges import FLAT_NOISE, merge_nodes, neighbourhood_noise, noise_of
 from ...method.rules import merge_from_of
 
 __all__ = ["tile_merge_stats", "merge_names", "one_position_stats", "tiled_merge_from",
@@ -313,7 +313,7 @@ def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float,
         nodes["feature_squares"] = _sum(node, stats, "feature_squares", k)
         max_jump = float(np.median([s["floor"] for s in stats]))
     # (no noise read, as on a mesh: Ward's merges only)
-    rise = FLAT_NOISE * max(float(np.median(noise)), 0.0) if noise.size else None
+    rise = FLAT_NOISE * noise_of(noise) if noise.size else None
     flat, final, fewest = merge_nodes(nodes, pairs, target, rise, alpha, eta_convex,
                                       max_jump=max_jump, max_ratio=max_ratio, cost=cost)
     n_flat = int(flat.max()) + 1 if k else 0
