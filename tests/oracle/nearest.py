@@ -147,6 +147,17 @@ def _box_distance(boxes, v, qx, qy, qz):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
+def _children(boxes, c, qx, qy, qz):
+    """The children of an inner node whose first child is ``c``, nearer first: ``(near,
+    far, d0, d1)``, ``d0 <= d1`` their boxes' squared distances from the query."""
+    d0 = _box_distance(boxes, c, qx, qy, qz)
+    d1 = _box_distance(boxes, c + 1, qx, qy, qz)
+    if d1 < d0:
+        return c + 1, c, d1, d0
+    return c, c + 1, d0, d1
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
 def _query(pts, start, end, left, boxes, ids, i, k, bd, bi, stack, sd, sib):
     """The ``k`` nearest points other than row ``i`` into ``bd`` (squared distances) and
     ``bi`` (their ids, ``ids[row]``), by (squared distance, id); returns how many were
@@ -199,14 +210,7 @@ def _query(pts, start, end, left, boxes, ids, i, k, bd, bi, stack, sd, sib):
                     bd[p] = d
                     bi[p] = u
             else:
-                d0 = _box_distance(boxes, c, qx, qy, qz)
-                d1 = _box_distance(boxes, c + 1, qx, qy, qz)
-                near = c
-                far = c + 1
-                if d1 < d0:
-                    near = c + 1
-                    far = c
-                    d0, d1 = d1, d0
+                near, far, d0, d1 = _children(boxes, c, qx, qy, qz)
                 if not (cnt == k and d1 > bd[k - 1]):
                     stack[sp] = far
                     sd[sp] = d1
@@ -278,14 +282,7 @@ def _closest(pts, start, end, left, boxes, ids, qx, qy, qz, stack, sd):
                     best = d
                     bid = u
         else:
-            d0 = _box_distance(boxes, c, qx, qy, qz)
-            d1 = _box_distance(boxes, c + 1, qx, qy, qz)
-            near = c
-            far = c + 1
-            if d1 < d0:
-                near = c + 1
-                far = c
-                d0, d1 = d1, d0
+            near, far, d0, d1 = _children(boxes, c, qx, qy, qz)
             if d1 <= best:
                 stack[sp] = far
                 sd[sp] = d1

@@ -52,6 +52,21 @@ struct Tree {
     const i64* ids;  // the point of each row (rows in the tree's order); null: the row
 };
 
+// The children of inner node v's first child c, nearer first: near, far and their boxes'
+// squared distances d0 <= d1 from the query.
+inline void children_by_distance(const Tree& t, i64 c, double qx, double qy, double qz,
+                                 i64& near, i64& far, double& d0, double& d1) {
+    d0 = box_distance(t.boxes + 6 * c, qx, qy, qz);
+    d1 = box_distance(t.boxes + 6 * (c + 1), qx, qy, qz);
+    near = c;
+    far = c + 1;
+    if (d1 < d0) {
+        near = c + 1;
+        far = c;
+        std::swap(d0, d1);
+    }
+}
+
 // nearest._query
 i64 query(const Tree& t, i64 i, i64 k, double* bd, i64* bi, i64* stack, double* sd,
           i64* sib) {
@@ -101,14 +116,9 @@ i64 query(const Tree& t, i64 i, i64 k, double* bd, i64* bi, i64* stack, double* 
                     bi[q] = id;
                 }
             } else {
-                double d0 = box_distance(t.boxes + 6 * c, qx, qy, qz);
-                double d1 = box_distance(t.boxes + 6 * (c + 1), qx, qy, qz);
-                i64 near = c, far = c + 1;
-                if (d1 < d0) {
-                    near = c + 1;
-                    far = c;
-                    std::swap(d0, d1);
-                }
+                i64 near, far;
+                double d0, d1;
+                children_by_distance(t, c, qx, qy, qz, near, far, d0, d1);
                 if (!(cnt == k && d1 > bd[k - 1])) {
                     stack[sp] = far;
                     sd[sp] = d1;
@@ -152,14 +162,9 @@ i64 closest(const Tree& t, double qx, double qy, double qz, i64* stack, double* 
                 }
             }
         } else {
-            double d0 = box_distance(t.boxes + 6 * c, qx, qy, qz);
-            double d1 = box_distance(t.boxes + 6 * (c + 1), qx, qy, qz);
-            i64 near = c, far = c + 1;
-            if (d1 < d0) {
-                near = c + 1;
-                far = c;
-                std::swap(d0, d1);
-            }
+            i64 near, far;
+            double d0, d1;
+            children_by_distance(t, c, qx, qy, qz, near, far, d0, d1);
             if (d1 <= best) {
                 stack[sp] = far;
                 sd[sp] = d1;
