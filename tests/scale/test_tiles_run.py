@@ -448,3 +448,27 @@ def test_every_tile_weighs_colour_alike(monkeypatch):
     assert abs(once.params["feature_floor"] / one.params["feature_floor"] - 1) < 0.1
     monkeypatch.setattr(tiled, "_colour_term", lambda run, margin, params, *_: (params, None))
     assert segment_tiled(cloud, 100, tiles=4, workers=1).disagreements > 20  # each its own
+
+
+def test_every_tile_turns_a_normal_alike(monkeypatch):
+    """A cloud without normals, ground and scattered shrubs (rough, thin parts where a
+    propagation of the normals' signs over each tile's own box goes its own way): each
+    normal turned like the nearest normal of the one oriented sample of the whole cloud
+    (``orient_like``), so no two tiles label a border point differently; with each tile
+    orienting its box alone (no sample), they disagree."""
+    from superfacets import PointCloud
+    from superfacets.elements import normals, points
+
+    rng = np.random.default_rng(0)
+    xy = rng.random((30_000, 2)) * [4, 2]
+    z = np.zeros(30_000)
+    shrub = rng.random(30_000) < 0.4
+    z[shrub] = rng.random(shrub.sum()) * 0.5
+    cloud = PointCloud(np.c_[xy, z + 0.005 * rng.standard_normal(30_000)])
+    assert segment_tiled(cloud, 100, tiles=4, workers=1).disagreements == 0
+
+    def own_box(pts, nrm, indptr, indices, viewpoint=None, reference=None, up=None):
+        return normals.orient_normals(pts, nrm, indptr, indices, viewpoint, None, up)
+
+    monkeypatch.setattr(points, "orient_normals", own_box)
+    assert segment_tiled(cloud, 100, tiles=4, workers=1).disagreements > 20
