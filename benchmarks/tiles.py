@@ -5,13 +5,15 @@ Usage: python benchmarks/tiles.py [--mesh-id 281] [--subdivide 2 3] [--points 10
        [--seeds 0 1 2] [--fine] [--rotations N [--rotations-tiled]]
        python benchmarks/tiles.py --compare [-k 600] [--tiles 8] [--halo 3] [--paper]
        [--times 1] [--per-category 1] [--refine 1] [--compare-points N] [--merge-from F]
+       [--start sample|tiles]
 
 ``--compare``: the first benchmark mesh of each category (``--per-category N``: the
 first N), subdivided ``--times``
 times (default once), segmented once and tiled (in process), the mean
 undersegmentation error of each, the superfacets cut by a border and the
 disagreements (docs/notes/tiles.md). ``--refine``: the tiles' refine rounds
-(default: ``segment_tiled``'s). ``--compare-points N``: ``N`` points sampled
+(default: ``segment_tiled``'s); ``--start``: where they start (``segment_tiled``'s
+``start``). ``--compare-points N``: ``N`` points sampled
 on each mesh (seed 0, each with its face's class) instead of the subdivided
 faces, the UE on the whole cloud's point graph. ``--merge-from F``: both runs with
 ``merge_from=F`` (1: no merges to the count).
@@ -382,7 +384,7 @@ def compare(a) -> None:
             data = Mesh(v, f)
             g, first, n_el = face_graph(data), None, f.shape[0]
         s = segment(data, a.k, **extra)
-        more = {} if a.refine is None else dict(refine=a.refine)
+        more = dict({} if a.refine is None else dict(refine=a.refine), start=a.start)
         t0 = time.perf_counter()
         t = segment_tiled(data, a.k, tiles=a.tiles, halo=a.halo, **more, **extra)
         secs += time.perf_counter() - t0
@@ -423,6 +425,8 @@ def main() -> None:
     ap.add_argument("--compare", action="store_true")
     ap.add_argument("--paper", action="store_true")
     ap.add_argument("--refine", type=int, default=None)
+    ap.add_argument("--start", choices=("sample", "tiles"), default=None,
+                    help="--compare: where the refine rounds start (segment_tiled's start)")
     ap.add_argument("--merge-from", type=int, default=None,
                     help="--compare: merge_from of both runs (default: the method's)")
     ap.add_argument("--per-category", type=int, default=1,

@@ -153,6 +153,35 @@ def test_dask_workers_give_the_same_labels(tmp_path):
     np.testing.assert_array_equal(here.labels, there.labels)
 
 
+def test_where_the_refine_rounds_start(monkeypatch):
+    """A mesh's rounds start by default from its tiles' own centers; ``start='sample'`` runs
+    the method once on the survey's face centroids instead (no tile samples centers), and a
+    cloud does so by default; either way the count is exact and no superfacet is cut."""
+    from superfacets.scale.tiles import phases as tiling
+
+    mesh = _bumpy(5)
+    g = face_graph(mesh)
+    starts, real = [], tiling.sample_start
+
+    def recorded(sample, rows, n_rows, *args, **kw):
+        starts.append((sample.shape[0], n_rows))
+        return real(sample, rows, n_rows, *args, **kw)
+
+    monkeypatch.setattr(tiling, "sample_start", recorded)
+    own = segment_tiled(mesh, 60, tiles=4)
+    assert "centers" in own.timings and "start" not in own.timings and not starts
+    sampled = segment_tiled(mesh, 60, tiles=4, start="sample")
+    assert "start" in sampled.timings and "centers" not in sampled.timings
+    assert starts == [(mesh.n_faces, mesh.n_faces)]  # every face's centroid, as a cloud
+    for res in (own, sampled):
+        assert res.n_segments == 60
+        assert np.unique(label_components(g, res.labels)).size == 60
+    assert not np.array_equal(own.labels, sampled.labels)
+    cloud = segment_tiled(_bumpy_cloud(20_000), 30, tiles=2, start="tiles")
+    assert "centers" in cloud.timings and "start" not in cloud.timings
+    assert len(starts) == 1
+
+
 def test_bad_options_are_refused_before_any_work(tmp_path):
     mesh = _bumpy(2)
     with pytest.raises(ParameterError, match="halo must be"):
@@ -169,6 +198,8 @@ def test_bad_options_are_refused_before_any_work(tmp_path):
         segment_tiled(mesh, mesh.n_faces + 1)
     with pytest.raises(ParameterError, match="unknown parameter"):
         segment_tiled(mesh, 10, colour=1)
+    with pytest.raises(ParameterError, match="start must be 'sample' or 'tiles'"):
+        segment_tiled(mesh, 10, start="coarse")
 
 
 def test_a_failing_tile_names_itself(tmp_path):
@@ -267,6 +298,13 @@ def test_cli_tiles_writes_labels_and_refuses_whole_input_outputs(tmp_path):
     assert bad.returncode != 0 and "--halo goes with --tiles" in bad.stderr
     bad = subprocess.run(run + ["--workdir", str(tmp_path)], capture_output=True, text=True)
     assert bad.returncode != 0 and "--workdir goes with --tiles" in bad.stderr
+    bad = subprocess.run(run + ["--tile-start", "sample"], capture_output=True, text=True)
+    assert bad.returncode != 0 and "--tile-start goes with --tiles" in bad.stderr
+    out = subprocess.run(run + ["--tiles", "2", "--tile-start", "sample", "-o",
+                                str(tmp_path / "s.seg")], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    sampled = np.loadtxt(tmp_path / "s.seg", dtype=int)
+    assert np.unique(sampled).size == 30 and not np.array_equal(sampled, labels)
 
 
 def test_the_cli_says_when_tiles_give_fewer_superpoints_than_asked(tmp_path, capsys):

@@ -336,7 +336,7 @@ def _other_command(args):
         return lambda: segment_tiles(args)
     for flag, given in (("--halo", args.halo), ("--workers", args.workers),
                         ("--scheduler", args.scheduler), ("--refine", args.refine),
-                        ("--workdir", args.workdir)):
+                        ("--tile-start", args.tile_start), ("--workdir", args.workdir)):
         if given is not None:
             raise ParameterError(f"{flag} goes with --tiles")
     return None

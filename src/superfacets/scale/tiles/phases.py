@@ -18,9 +18,9 @@ one task per tile (:mod:`superfacets.scale.tiles.run` sends them to Dask):
    halo's stay where their own tiles put them), so that the centers near a
    border settle beside their true neighbours, not beside the halo's edge
    (with refine rounds to come, the centers phase runs its start and one pass:
-   the rounds run the passes). On a cloud with refine rounds, the centers phase
-   gives way to one run on the survey's even sample of the cloud
-   (:func:`sample_start`): the rounds start from its centers.
+   the rounds run the passes). With refine rounds, the centers phase gives way
+   to one run on the survey's even sample of the input (a cloud's points, a mesh's
+   face centroids: :func:`sample_start`): the rounds start from its centers.
 2. **labels** (:func:`tile_labels`): each tile classifies its elements from
    all the centers within reach (one pass of the paper's bounded expansions,
    centers in one global order), then makes superfacets connected and, with
@@ -221,28 +221,29 @@ def start_step(n_sample: int, n_rows: int, n_segments: int | None) -> int:
 def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: SegmentParams,
                  r: float, diagonal: float, cloud=None, up=None, viewpoint=None
                  ) -> tuple[np.ndarray, np.ndarray] | None:
-    """The start of a tiled run on a cloud: the method on an even sample of its points.
+    """The start of a tiled run: the method on an even sample of the input's positions.
 
-    Replaces the centers phase of :func:`tile_centers` on clouds: instead of each tile
-    sampling its centers on its box and halo (whose outer edge is an artificial
-    boundary) and running a pass, the method runs once, start and passes, on the
-    survey's even sample of the cloud (every ``ceil(n / 2^20)``-th point, thinned to
+    Replaces the centers phase of :func:`tile_centers`: instead of each tile sampling
+    its centers on its box and halo (whose outer edge is an artificial boundary) and
+    running a pass, the method runs once, start and passes, on the survey's even sample
+    of the input as a cloud (a cloud's points, a mesh's face centroids: every
+    ``ceil(n / 2^20)``-th row, thinned to
     at most :data:`START_SHARE` of the cloud where it keeps at least
     :data:`START_MIN_POINTS` points and :data:`START_POINTS_PER_CENTER` points a
-    center), with the whole cloud's radius
-    ``r``. Its centers, named by their rows in the cloud, are where the refine rounds
-    (:func:`tile_refine`) start: each tile runs the passes on its points from the
-    centers within reach. The colour term is off here (the sample keeps positions
-    only); the rounds read the colours.
+    center), with the whole input's radius
+    ``r``. Its centers, named by their rows in the input, are where the refine rounds
+    (:func:`tile_refine`) start: each tile runs the passes on its elements (a mesh's
+    faces, with their dihedral angles) from the centers within reach. The colour term is
+    off here (the sample keeps positions only); the rounds read the colours.
 
     Parameters
     ----------
     sample : (s, 3) float64 ndarray
         The survey's sample (:class:`superfacets.io.regions.Survey`), finite positions.
     rows : (s,) int64 ndarray
-        The row of each sample point in the cloud, increasing.
+        The row of each sample point in the input, increasing.
     n_rows : int
-        Rows of the cloud.
+        Rows of the input (points or faces).
     params : SegmentParams
         The run's (validated) parameters; ``n_segments`` (the superpoints the tiles
         make) is the number of centers sampled, or None with a ``radius``.
@@ -292,7 +293,7 @@ def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: Segm
         area = float(points.point_graph(cloud, params.n_neighbors).graph.area)  # (kept with it)
         if sample.shape[0] < START_FEWEST_PER_CENTER * area / superfacet_measure(r, 2):
             return None
-    p = replace(_tile_params(params, r, diagonal, d), beta=0.0)
+    p = replace(_tile_params(params, r, diagonal, d), beta=0.0, elements=None)  # (a cloud)
     n = params.n_segments if p.init == "farthest" else None
     found = np.asarray(pipeline(cloud, p, n_centers=n).centers, dtype=np.int64)
     return gathered_centers([dict(centers=rows[found], positions=sample[found])], params)

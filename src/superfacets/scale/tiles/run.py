@@ -13,7 +13,9 @@ phases (:mod:`superfacets.scale.tiles.phases`):
    its box overlaps; for a point cloud asked for ``n_segments``, one task per tile
    builds its point graph (kept for the later phases) and sums the points' areas on it
    (the radius needs the total; the halo it reads with comes from the survey's sample);
-1. per tile, the method on the tile and its halo: the centers of its core; then
+1. the start: the method once on the survey's even sample of the input (a cloud's
+   points, a mesh's face centroids), or (``start='tiles'``, or a sample too thin for the
+   count) per tile, the method on the tile and its halo, the centers of its core; then
    (``refine`` rounds) per tile, the method's passes again from all the centers within
    reach: the centers of its core;
 2. per tile, labels from all the centers, kept for the core;
@@ -88,7 +90,8 @@ MAX_REFINE = 100
 def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles=4,
                   halo: float | None = None, workers: int | None = 1,
                   scheduler: str | None = None, memory_limit="auto", workdir=None,
-                  progress: bool = False, refine: int = 1, **options) -> TiledResult:
+                  progress: bool = False, refine: int = 1, start: str | None = None,
+                  **options) -> TiledResult:
     """Segment one large input tile by tile, on Dask or in this process.
 
     Parameters
@@ -141,6 +144,15 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         gathered centers within reach (so the centers near a border settle
         with their true neighbours), ``>= 0``. On 15 benchmark meshes in 8
         tiles, UE against one run: +5.8 % with 0, +1.2 % with 1 (docs/notes/tiles.md).
+    start : {'sample', 'tiles'}, optional
+        Where the refine rounds start from; default ``'sample'`` on a point cloud,
+        ``'tiles'`` on a mesh. ``'sample'``: the method once on the survey's even sample
+        of the input (a cloud's points; a mesh's face centroids, as a cloud), with the
+        whole input's radius (:func:`~superfacets.scale.tiles.phases.sample_start`).
+        ``'tiles'``: each tile samples its own centers on its box and halo and runs one
+        pass (also where the sample holds too few elements a center, or ``refine=0``).
+        On a mesh ``'sample'`` is faster (6.8M faces, k = 1,000, 4 tiles: 139 -> 95 s of
+        CPU) and its UE about 2 % higher (docs/notes/tiles.md, "A mesh's start").
     **options
         Keyword arguments of :func:`superfacets.segment` (``alpha``,
         ``window``, ``cleanup``, ``paper``, ``beta``, ``n_neighbors``, ...).
@@ -168,7 +180,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
     """
     from .layout import balanced_tiles, tile_grid
 
-    params, halo = _checked_options(n_segments, options, tiles, halo, refine, workers)
+    params, halo = _checked_options(n_segments, options, tiles, halo, refine, workers, start)
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
     stage = partial(_stage, timings, progress)  # (each stage timed, and shown as it runs)
@@ -221,8 +233,8 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
             params, floor = _colour_term(run, margin, params, survey.colors, stage)
             found, done = _classified(run, layout, params, margin, params.window * r, dict(
                 refine=refine, box_rows=not shared, n_noise=_noise_points(merging, merge_from,
-                    n_tiles), start=_sample_start(
-                    reader, survey, params, r, diagonal, refine, stage, (sampled, up))),
+                    n_tiles), start=_sample_start(reader, survey, params, r, diagonal,
+                    (refine, start), stage, (sampled, up))),
                 timings)
             with stage("stitch"):
                 labels, disagreements, suspects = _stitched(done, reader.n_rows)
@@ -313,17 +325,25 @@ def _noise_points(merging: bool, merge_from: int, n_tiles: int) -> int | None:
     return NOISE_SAMPLE // n_tiles + 1 if merge_from > 1 else 0
 
 
-def _sample_start(reader, survey, params, r: float, diagonal: float, refine: int,
-                  stage, sampled: tuple):
-    """The centers a cloud's refine rounds start from, found on the survey's sample
-    (:func:`~superfacets.scale.tiles.phases.sample_start`; ``sampled``: the orientation's
-    sample cloud, or None, and the cloud's up direction); None where the tiles' centers
-    phase gives them (meshes; ``refine=0``, where no round follows to run the passes on
-    every point; a sample too small for the centers: :func:`~superfacets.scale.tiles.phases.
-    sample_start` says so)."""
+def _start_of(start: str | None, kind: str) -> str:
+    """Where the refine rounds start (``segment_tiled``'s ``start``): as given, else on the
+    survey's sample for a cloud and from the tiles' own centers for a mesh (the sample's
+    start raised the tiled UE on the 15 benchmark meshes by about 2 %)."""
+    return start or ("sample" if kind_of(kind).cloud else "tiles")
 
-    sample = survey.sample
-    if not kind_of(reader.kind).cloud or refine < 1 or sample is None \
+
+def _sample_start(reader, survey, params, r: float, diagonal: float, how: tuple,
+                  stage, sampled: tuple):
+    """The centers the refine rounds start from, found on the survey's sample (a cloud's
+    points, a mesh's face centroids: :func:`~superfacets.scale.tiles.phases.sample_start`;
+    ``sampled``: a cloud's orientation sample as a cloud, or None, and the cloud's up
+    direction); None where the tiles' centers phase gives them (``refine=0``, where no
+    round follows to run the passes on every element, or ``start='tiles'``; a sample too
+    small for the centers: :func:`~superfacets.scale.tiles.phases.sample_start` says so).
+    ``how``: the run's ``refine`` and ``start``."""
+
+    sample, (refine, start) = survey.sample, how
+    if refine < 1 or _start_of(start, reader.kind) != "sample" or sample is None \
             or survey.sample_rows is None or sample.shape[0] < 3:
         return None
     with stage("start"):  # (timed and shown: :func:`_stage`)
@@ -451,7 +471,7 @@ def _stitched(done: list, n_rows: int):
     return labels, disagreements, suspects[suspects >= 0]
 
 
-def _checked_options(n_segments, options, tiles, halo, refine, workers):
+def _checked_options(n_segments, options, tiles, halo, refine, workers, start="sample"):
     """The run's parameters and halo, every option checked before any pass over the
     input."""
 
@@ -470,6 +490,8 @@ def _checked_options(n_segments, options, tiles, halo, refine, workers):
         if v is not None and (isinstance(v, bool) or not isinstance(v, (int, np.integer))
                               or not low <= v <= high):
             raise ParameterError(f"{name} must be an integer in {low}..{high}, got {v!r}")
+    if start not in (None, "sample", "tiles"):
+        raise ParameterError(f"start must be 'sample' or 'tiles', got {start!r}")
     return params, halo
 
 
