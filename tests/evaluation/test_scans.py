@@ -329,11 +329,13 @@ def test_real_scans_fine_floor_is_set_for_its_run_only(tmp_path, monkeypatch):
     scan = load_scan("semantickitti-000700", tmp_path)
     opts = {"density": 0.0}  # even areas: the merges run (a sweep's default has none)
     metrics = ("undersegmentation_error", "boundary_recall", "oracle_miou", "median_points")
-    row = bench.run(scan, "superfacets", 400, 0.0, {**opts, "fine_floor": 2})
+    # 3,200 points at k = 800: the default's first run is the plain run (one superpoint
+    # per 4 points), a floor of 2 makes 1,600 first superpoints
+    row = bench.run(scan, "superfacets", 800, 0.0, {**opts, "fine_floor": 2})
     assert rules.MIN_FINE_ELEMENTS == 12
-    default = bench.run(scan, "superfacets", 400, 0.0, opts)
+    default = bench.run(scan, "superfacets", 800, 0.0, opts)
     monkeypatch.setattr(rules, "MIN_FINE_ELEMENTS", 2)
-    floored = bench.run(scan, "superfacets", 400, 0.0, opts)
+    floored = bench.run(scan, "superfacets", 800, 0.0, opts)
     assert [row[m] for m in metrics] == [floored[m] for m in metrics]
     assert [row[m] for m in metrics] != [default[m] for m in metrics]  # the floor binds
 

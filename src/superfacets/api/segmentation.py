@@ -169,7 +169,8 @@ def superfacets(data=_NO_INPUT, n_segments: int | None = _D.n_segments, *, featu
     merge_from : int or None, default None
         Many superpoints first, merged to ``n_segments`` at the end (not in the
         paper; :mod:`superfacets.method.merges`): the run segments ``merge_from``
-        times ``n_segments`` (at most one per 12 elements), then merges adjacent ones,
+        times ``n_segments`` (at most one per 12 elements, or where that is under twice
+        ``n_segments``, twice, at most one per 4), then merges adjacent ones,
         first those whose union stays flat to within the input's noise (walls,
         floors, ground, the flat faces of objects), then the cheapest by Ward's
         cost with the crease factor, down to exactly ``n_segments``. 1 merges

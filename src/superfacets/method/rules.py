@@ -13,12 +13,21 @@ from ..elements.kinds import kind_of
 from ..errors import ParameterError
 
 __all__ = ["better_method", "assignment_of", "superfacet_size", "superfacet_measure",
-           "merge_from_of", "fine_count", "MIN_FINE_ELEMENTS", "FINE_ELEMENTS"]
+           "merge_from_of", "fine_count", "MIN_FINE_ELEMENTS", "FINE_ELEMENTS",
+           "MERGE_CHOICE", "FEWEST_FINE_ELEMENTS"]
 
 #: The fewest elements per superpoint, on average, of the many superpoints a run with
 #: ``merge_from > 1`` segments first: fewer leave their planes to a few points and cost
 #: time for nothing (``docs/notes/superpoints-defaults.md``).
 MIN_FINE_ELEMENTS = 12
+#: Where that floor leaves fewer first superpoints than this many times the count (a
+#: count near a tenth of the points), the first run goes below it, down to
+#: :data:`FEWEST_FINE_ELEMENTS` elements each, so that the merges still choose which
+#: borders to keep: at the floor alone such a run was the plain run, its superpoints of
+#: about 11 points straddling the ground's border (``docs/notes/superpoints-defaults.md``,
+#: "Twice the count where the floor binds").
+MERGE_CHOICE = 2
+FEWEST_FINE_ELEMENTS = 4
 #: The most elements per superpoint, on average, of those first superpoints: on a large
 #: scan at a small ``k`` (an airborne tile of 700,000 points at k = 100: 1,400 points
 #: each at 5 times) they are too large to keep to one surface, and the merges cannot
@@ -29,7 +38,9 @@ FINE_ELEMENTS = 100
 def fine_count(k: int, merge_from: int, n_elements: int) -> int:
     """The superpoints a run with ``merge_from > 1`` segments before merging them down to
     ``k``: ``merge_from`` times ``k``, at least one per :data:`FINE_ELEMENTS` elements,
-    at most one per :data:`MIN_FINE_ELEMENTS` (and never fewer than ``k``).
+    at most one per :data:`MIN_FINE_ELEMENTS`, or where that is fewer than
+    :data:`MERGE_CHOICE` times ``k``, that many, at most one per
+    :data:`FEWEST_FINE_ELEMENTS` elements (and never fewer than ``k``).
 
     Parameters
     ----------
@@ -54,9 +65,12 @@ def fine_count(k: int, merge_from: int, n_elements: int) -> int:
     --------
     >>> fine_count(300, 5, 20_000), fine_count(100, 5, 700_000), fine_count(3000, 5, 81_000)
     (1500, 7000, 6750)
+    >>> fine_count(1000, 5, 20_000), fine_count(3000, 5, 34_000), fine_count(3000, 5, 7_500)
+    (2000, 6000, 3000)
     """
-    return min(max(k * merge_from, n_elements // FINE_ELEMENTS),
-               max(k, n_elements // MIN_FINE_ELEMENTS))
+    most = max(k, n_elements // MIN_FINE_ELEMENTS,
+               min(MERGE_CHOICE * k, n_elements // FEWEST_FINE_ELEMENTS))
+    return min(max(k * merge_from, n_elements // FINE_ELEMENTS), most)
 
 
 def better_method(params, kind: str) -> tuple[bool, bool]:

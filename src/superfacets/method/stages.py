@@ -335,7 +335,9 @@ def resolve_rules(graph, p: SegmentParams, *, n_centers: int | None = None,
     ``k`` is :func:`~superfacets.method.rules.fine_count`: ``merge_from`` times the count
     asked for, ``target``, at least one superpoint per
     :data:`~superfacets.method.rules.FINE_ELEMENTS` elements, at most one per
-    :data:`~superfacets.method.rules.MIN_FINE_ELEMENTS`).
+    :data:`~superfacets.method.rules.MIN_FINE_ELEMENTS`, or where that is under twice the
+    count, twice it, at most one per
+    :data:`~superfacets.method.rules.FEWEST_FINE_ELEMENTS`).
 
     Parameters
     ----------
