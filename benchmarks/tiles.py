@@ -425,7 +425,7 @@ def main() -> None:
     ap.add_argument("--compare", action="store_true")
     ap.add_argument("--paper", action="store_true")
     ap.add_argument("--refine", type=int, default=None)
-    ap.add_argument("--start", choices=("sample", "tiles"), default=None,
+    ap.add_argument("--start", choices=("sample", "tiles"), default="sample",
                     help="--compare: where the refine rounds start (segment_tiled's start)")
     ap.add_argument("--merge-from", type=int, default=None,
                     help="--compare: merge_from of both runs (default: the method's)")

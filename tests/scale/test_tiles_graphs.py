@@ -163,13 +163,13 @@ def test_a_meshs_tiles_read_their_boxes_once_from_the_tiles_files(monkeypatch, t
     built, build = [], faces.build_face_graph  # (the face graph's topology, made)
     monkeypatch.setattr(faces, "build_face_graph", lambda *a: built.append(1) or build(*a))
     kept = segment_tiled((m.vertices, m.faces), 60, tiles=4, workdir=tmp_path)
-    assert len(reads) == 4  # one per tile: its centers phase; refine and labels read the kept
-    assert len(built) == 4  # and their faces' topology too
+    assert len(reads) == 4  # one per tile: its refine round (the start ran on the survey's
+    assert len(built) == 4  # sample); the labels phase reads the kept, its topology too
     reads.clear()
     built.clear()
     monkeypatch.setattr(run, "box_folder", lambda *a: None)
     again = segment_tiled((m.vertices, m.faces), 60, tiles=4, workdir=tmp_path)
-    assert len(reads) == 12 and len(built) == 12
+    assert len(reads) == 8 and len(built) == 8  # (two phases of four tiles)
     np.testing.assert_array_equal(kept.labels, again.labels)
 
 

@@ -249,7 +249,8 @@ def test_a_meshs_tiles_are_held_between_phases_too(monkeypatch, tmp_path):
         monkeypatch.setattr(rt, name, lambda *a, _r=real_write, _n=name:
                             wrote.append(_n) or _r(*a))
     monkeypatch.setenv("SUPERFACETS_TILE_HOLD_MIB", "1024")
-    kept = segment_tiled((m.vertices, m.faces), 60, tiles=4, workdir=tmp_path)
+    kept = segment_tiled((m.vertices, m.faces), 60, tiles=4, workdir=tmp_path,
+                         start="tiles")  # (the tiles' own start: three phases)
     assert seen.count("built") == 4 and "read" not in seen and seen.count("kept") >= 8
     assert len(reads) == 4  # (the centers phase's; the later phases' boxes held)
     assert wrote == []  # (nothing written for later phases that find the tiles held)
@@ -258,7 +259,8 @@ def test_a_meshs_tiles_are_held_between_phases_too(monkeypatch, tmp_path):
     seen.clear()
     made.clear()
     monkeypatch.setenv("SUPERFACETS_TILE_HOLD_MIB", "0")
-    read = segment_tiled((m.vertices, m.faces), 60, tiles=4, workdir=tmp_path)
+    read = segment_tiled((m.vertices, m.faces), 60, tiles=4, workdir=tmp_path,
+                         start="tiles")
     assert seen.count("read") >= 8 and len(made) == weighed + 8  # refine's, labels'
     assert sorted(wrote) == ["keep_box"] * 4 + ["save_face_topology"] * 4
     np.testing.assert_array_equal(kept.labels, read.labels)

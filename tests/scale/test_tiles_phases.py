@@ -299,7 +299,8 @@ def test_the_connect_pass_repairs_pieces_left_by_a_thin_halo():
     """A halo of one expansion's reach makes tiles disagree at their borders; the pass
     after stitching leaves every superfacet in one piece."""
     mesh = _bumpy(5)  # how many pieces a thin halo leaves depends on the method: 72 here
-    res = segment_tiled(mesh, 40, tiles=(2, 2, 2), halo=1)
+    res = segment_tiled(mesh, 40, tiles=(2, 2, 2), halo=1, start="tiles")  # (the tiles'
+    # own start: their borders leave pieces; from the survey's sample this input has none)
     assert res.disagreements > 0 and res.repaired > 0 and "connect" in res.timings
     pieces = label_components(face_graph(mesh), res.labels)
     assert np.unique(pieces).size == res.n_segments
@@ -325,13 +326,13 @@ def test_the_connect_pass_looks_only_at_the_superfacets_the_disagreements_name(m
         return labels, disagreements, np.unique(labels[labels >= 0])
 
     monkeypatch.setattr(tiling, "tile_connect", connect)
-    for data, k in ((_bumpy(5), 40), (_bumpy_cloud(6000), 60)):
-        owned.clear()
-        res = segment_tiled(data, k, tiles=(2, 2, 2), halo=1)
+    for data, k, own in ((_bumpy(5), 40, "tiles"), (_bumpy_cloud(6000), 60, "sample")):
+        owned.clear()  # (the mesh: its tiles' own start, whose borders leave pieces)
+        res = segment_tiled(data, k, tiles=(2, 2, 2), halo=1, start=own)
         few = sum(owned)
         owned.clear()
         monkeypatch.setattr(tiled_run, "_stitched", every)
-        full = segment_tiled(data, k, tiles=(2, 2, 2), halo=1)
+        full = segment_tiled(data, k, tiles=(2, 2, 2), halo=1, start=own)
         monkeypatch.setattr(tiled_run, "_stitched", real_stitched)
         assert res.disagreements > 0 and res.repaired == full.repaired
         np.testing.assert_array_equal(res.labels, full.labels)
@@ -351,7 +352,8 @@ def test_the_connect_pass_looks_again_near_what_a_repair_moved(monkeypatch):
     from superfacets.scale.tiles import phases as tiling
 
     mesh = _bumpy(5)
-    plain = segment_tiled(mesh, 40, tiles=(2, 2, 2), halo=1)  # 1 repair round suffices
+    plain = segment_tiled(mesh, 40, tiles=(2, 2, 2), halo=1,  # 1 repair round suffices
+                          start="tiles")  # (the tiles' own start: pieces to repair)
     real, calls, spoiled = tiling.tile_connect, [], []
 
     def connect(inp, labels, owned, owned_rows, params):
@@ -371,7 +373,7 @@ def test_the_connect_pass_looks_again_near_what_a_repair_moved(monkeypatch):
         return fixed
 
     monkeypatch.setattr(tiling, "tile_connect", connect)
-    res = segment_tiled(mesh, 40, tiles=(2, 2, 2), halo=1)
+    res = segment_tiled(mesh, 40, tiles=(2, 2, 2), halo=1, start="tiles")
     assert spoiled and len(calls) > 8  # a second round, on the tiles owning what moved
     assert len(calls) < 3 * 8  # not every tile every round: then nothing moved
     pieces = label_components(face_graph(mesh), res.labels)
@@ -438,7 +440,7 @@ def test_a_tile_whose_clean_up_leaves_a_piece_alone_names_it_by_a_center_of_its_
     mesh = read_input(need(MESHES / "bunny.tri.xz"))
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(tiling, "clean_up", spy)
-        res = segment_tiled(mesh, 100, tiles=4)
+        res = segment_tiled(mesh, 100, tiles=4, start="tiles")  # (the case's start)
     assert max(seen) >= 1  # the case: a superfacet more than centers
     assert res.n_segments == 100 and (res.labels >= 0).all()
     pieces = label_components(face_graph(mesh), res.labels)

@@ -46,7 +46,8 @@ def test_a_tiled_run_reads_the_file_twice_and_gives_the_same_labels(tmp_path, mo
         return out
 
     monkeypatch.setattr(buckets_module, "bucket", bucket)
-    res = segment_tiled(path, 40, tiles=(2, 2, 2), halo=1, workdir=tmp_path / "work")
+    res = segment_tiled(path, 40, tiles=(2, 2, 2), halo=1, workdir=tmp_path / "work",
+                        start="tiles")  # (the tiles' own start: pieces for the connect phase)
     assert len(passes) == 2 and res.timings["bucket"] > 0
     (folder, files), = written
     assert len(files) == 8 and folder.parent.parent == (tmp_path / "work").resolve()
@@ -55,7 +56,7 @@ def test_a_tiled_run_reads_the_file_twice_and_gives_the_same_labels(tmp_path, mo
     assert res.disagreements > 0 and res.repaired > 0
     passes.clear()
     monkeypatch.setattr(buckets_module, "bucket", lambda reader, *a, **k: reader)
-    each = segment_tiled(path, 40, tiles=(2, 2, 2), halo=1)
+    each = segment_tiled(path, 40, tiles=(2, 2, 2), halo=1, start="tiles")
     assert len(passes) > 8 * 3  # every task of every phase read the file
     np.testing.assert_array_equal(res.labels, each.labels)
     assert res.repaired == each.repaired and res.disagreements == each.disagreements
@@ -154,32 +155,36 @@ def test_dask_workers_give_the_same_labels(tmp_path):
 
 
 def test_where_the_refine_rounds_start(monkeypatch):
-    """A mesh's rounds start by default from its tiles' own centers; ``start='sample'`` runs
-    the method once on the survey's face centroids instead (no tile samples centers), and a
-    cloud does so by default; either way the count is exact and no superfacet is cut."""
+    """A tiled run's rounds start by default from one run on the survey's sample (a
+    mesh's face centroids, as a cloud, with the mesh's swaps); ``start='tiles'``: each
+    tile samples its own centers instead. Either way the count is exact and no
+    superfacet is cut."""
     from superfacets.scale.tiles import phases as tiling
 
     mesh = _bumpy(5)
     g = face_graph(mesh)
-    starts, real = [], tiling.sample_start
+    starts, real = [], tiling.pipeline
 
-    def recorded(sample, rows, n_rows, *args, **kw):
-        starts.append((sample.shape[0], n_rows))
-        return real(sample, rows, n_rows, *args, **kw)
+    def recorded(obj, p, **kw):  # (the start's run: a whole run on a cloud; a tile's
+        if type(obj).__name__ == "PointCloud" and kw.get("finished", True):  # is unfinished)
+            starts.append((obj.points.shape[0], p.split_merge))
+        return real(obj, p, **kw)
 
-    monkeypatch.setattr(tiling, "sample_start", recorded)
-    own = segment_tiled(mesh, 60, tiles=4)
-    assert "centers" in own.timings and "start" not in own.timings and not starts
-    sampled = segment_tiled(mesh, 60, tiles=4, start="sample")
+    monkeypatch.setattr(tiling, "pipeline", recorded)
+    sampled = segment_tiled(mesh, 60, tiles=4)
     assert "start" in sampled.timings and "centers" not in sampled.timings
-    assert starts == [(mesh.n_faces, mesh.n_faces)]  # every face's centroid, as a cloud
+    assert starts == [(mesh.n_faces // 2, True)]  # every second face's centroid (thinned
+    # to at most a quarter of the rows where 10,000 remain: start_step); a mesh's swaps
+    own = segment_tiled(mesh, 60, tiles=4, start="tiles")
+    assert "centers" in own.timings and "start" not in own.timings and len(starts) == 1
     for res in (own, sampled):
         assert res.n_segments == 60
         assert np.unique(label_components(g, res.labels)).size == 60
     assert not np.array_equal(own.labels, sampled.labels)
+    cloud = segment_tiled(_bumpy_cloud(20_000), 30, tiles=2)
+    assert "start" in cloud.timings and starts[1][1] is False  # (points: no swaps)
     cloud = segment_tiled(_bumpy_cloud(20_000), 30, tiles=2, start="tiles")
-    assert "centers" in cloud.timings and "start" not in cloud.timings
-    assert len(starts) == 1
+    assert "centers" in cloud.timings and "start" not in cloud.timings and len(starts) == 2
 
 
 def test_bad_options_are_refused_before_any_work(tmp_path):
@@ -298,13 +303,13 @@ def test_cli_tiles_writes_labels_and_refuses_whole_input_outputs(tmp_path):
     assert bad.returncode != 0 and "--halo goes with --tiles" in bad.stderr
     bad = subprocess.run(run + ["--workdir", str(tmp_path)], capture_output=True, text=True)
     assert bad.returncode != 0 and "--workdir goes with --tiles" in bad.stderr
-    bad = subprocess.run(run + ["--tile-start", "sample"], capture_output=True, text=True)
+    bad = subprocess.run(run + ["--tile-start", "tiles"], capture_output=True, text=True)
     assert bad.returncode != 0 and "--tile-start goes with --tiles" in bad.stderr
-    out = subprocess.run(run + ["--tiles", "2", "--tile-start", "sample", "-o",
-                                str(tmp_path / "s.seg")], capture_output=True, text=True)
+    out = subprocess.run(run + ["--tiles", "2,1,1", "--tile-start", "tiles", "-o",
+                                str(tmp_path / "own.seg")], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
-    sampled = np.loadtxt(tmp_path / "s.seg", dtype=int)
-    assert np.unique(sampled).size == 30 and not np.array_equal(sampled, labels)
+    own = np.loadtxt(tmp_path / "own.seg", dtype=int)
+    assert np.unique(own).size == 30 and not np.array_equal(own, labels)
 
 
 def test_the_cli_says_when_tiles_give_fewer_superpoints_than_asked(tmp_path, capsys):

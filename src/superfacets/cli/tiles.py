@@ -54,9 +54,8 @@ def add_tile_options(p) -> None:
                         "centers (default 1; 0 is faster, and farther from one run)")
     g.add_argument("--tile-start", choices=("sample", "tiles"), default=None,
                    help="with --tiles: where the refine rounds start: the method once on an "
-                        "even sample of the input (default on clouds; on meshes faster, "
-                        "with a UE about 2 %% higher), or each tile's own centers on its box "
-                        "and halo (default on meshes)")
+                        "even sample of the input (default; a mesh's face centroids), or "
+                        "each tile's own centers on its box and halo (slower)")
     g.add_argument("--workdir", default=None, metavar="DIR",
                    help="with --tiles: folder for the work files (the input sorted by tile, "
                         "about its size; a cloud's tile graphs, about 120 bytes a point with "
@@ -96,7 +95,7 @@ def segment_tiles(args) -> int:
         result = segment_tiled(_source(args), args.n_segments, radius=args.radius, tiles=args.tiles,
                                halo=args.halo, workers=args.workers, scheduler=args.scheduler,
                                refine=1 if args.refine is None else args.refine,
-                               start=args.tile_start,
+                               start=args.tile_start or "sample",
                                workdir=args.workdir,
                                progress=not args.quiet and sys.stderr.isatty(), **kwargs)
     except SuperfacetsError as exc:

@@ -63,7 +63,7 @@ from ...method.initialization import farthest_point_centers
 from ...method.params import DEFAULTS, SegmentParams, superfacet_measure
 from ...method.passes import final_centers
 from ...method.pipeline import pipeline
-from ...method.rules import assignment_of
+from ...method.rules import assignment_of, better_method
 from ...method.stages import build_graph, resolve_features, resolve_rules, weigh
 from ...method.weights import feature_sample
 from .graphs import kept_classification
@@ -219,8 +219,8 @@ def start_step(n_sample: int, n_rows: int, n_segments: int | None) -> int:
 
 
 def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: SegmentParams,
-                 r: float, diagonal: float, cloud=None, up=None, viewpoint=None
-                 ) -> tuple[np.ndarray, np.ndarray] | None:
+                 r: float, diagonal: float, cloud=None, up=None, viewpoint=None,
+                 kind: str = "points") -> tuple[np.ndarray, np.ndarray] | None:
     """The start of a tiled run: the method on an even sample of the input's positions.
 
     Replaces the centers phase of :func:`tile_centers`: instead of each tile sampling
@@ -234,7 +234,9 @@ def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: Segm
     ``r``. Its centers, named by their rows in the input, are where the refine rounds
     (:func:`tile_refine`) start: each tile runs the passes on its elements (a mesh's
     faces, with their dihedral angles) from the centers within reach. The colour term is
-    off here (the sample keeps positions only); the rounds read the colours.
+    off here (the sample keeps positions only); the rounds read the colours. The
+    split-and-merge swaps are the input's kind's (``kind``: on for a mesh's faces, as its
+    tiles' own start runs them; off for points), unless ``params`` says.
 
     Parameters
     ----------
@@ -259,6 +261,8 @@ def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: Segm
         The cloud's up direction (``PointCloud.up``), for the sample's normals.
     viewpoint : (3,) float ndarray, optional
         The scanner's position (``PointCloud.viewpoint``): the sample's normals face it.
+    kind : {'points', 'faces'}, default 'points'
+        The input's elements (a mesh's sample is its face centroids).
 
     Returns
     -------
@@ -293,7 +297,8 @@ def sample_start(sample: np.ndarray, rows: np.ndarray, n_rows: int, params: Segm
         area = float(points.point_graph(cloud, params.n_neighbors).graph.area)  # (kept with it)
         if sample.shape[0] < START_FEWEST_PER_CENTER * area / superfacet_measure(r, 2):
             return None
-    p = replace(_tile_params(params, r, diagonal, d), beta=0.0, elements=None)  # (a cloud)
+    p = replace(_tile_params(params, r, diagonal, d), beta=0.0, elements=None,  # (a cloud)
+                split_merge=better_method(params, kind)[1])
     n = params.n_segments if p.init == "farthest" else None
     found = np.asarray(pipeline(cloud, p, n_centers=n).centers, dtype=np.int64)
     return gathered_centers([dict(centers=rows[found], positions=sample[found])], params)

@@ -90,7 +90,7 @@ MAX_REFINE = 100
 def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles=4,
                   halo: float | None = None, workers: int | None = 1,
                   scheduler: str | None = None, memory_limit="auto", workdir=None,
-                  progress: bool = False, refine: int = 1, start: str | None = None,
+                  progress: bool = False, refine: int = 1, start: str = "sample",
                   **options) -> TiledResult:
     """Segment one large input tile by tile, on Dask or in this process.
 
@@ -144,15 +144,16 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         gathered centers within reach (so the centers near a border settle
         with their true neighbours), ``>= 0``. On 15 benchmark meshes in 8
         tiles, UE against one run: +5.8 % with 0, +1.2 % with 1 (docs/notes/tiles.md).
-    start : {'sample', 'tiles'}, optional
-        Where the refine rounds start from; default ``'sample'`` on a point cloud,
-        ``'tiles'`` on a mesh. ``'sample'``: the method once on the survey's even sample
-        of the input (a cloud's points; a mesh's face centroids, as a cloud), with the
-        whole input's radius (:func:`~superfacets.scale.tiles.phases.sample_start`).
-        ``'tiles'``: each tile samples its own centers on its box and halo and runs one
-        pass (also where the sample holds too few elements a center, or ``refine=0``).
-        On a mesh ``'sample'`` is faster (6.8M faces, k = 1,000, 4 tiles: 139 -> 95 s of
-        CPU) and its UE about 2 % higher (docs/notes/tiles.md, "A mesh's start").
+    start : {'sample', 'tiles'}, default 'sample'
+        Where the refine rounds start from. ``'sample'``: the method once on the survey's
+        even sample of the input (a cloud's points; a mesh's face centroids, as a cloud,
+        with a mesh's split-and-merge swaps), with the whole input's radius
+        (:func:`~superfacets.scale.tiles.phases.sample_start`). ``'tiles'``: each tile
+        samples its own centers on its box and halo and runs one pass (a mesh's start
+        before 2026-11-30; also where the sample holds too few elements a center, or
+        ``refine=0``). On 15 benchmark meshes in four settings the sample's start gave a
+        tiled UE 1.6 % under one run's on average (the tiles' own: 1.2 %) in about a
+        third less time (docs/notes/tiles.md, "A mesh's start").
     **options
         Keyword arguments of :func:`superfacets.segment` (``alpha``,
         ``window``, ``cleanup``, ``paper``, ``beta``, ``n_neighbors``, ...).
@@ -325,13 +326,6 @@ def _noise_points(merging: bool, merge_from: int, n_tiles: int) -> int | None:
     return NOISE_SAMPLE // n_tiles + 1 if merge_from > 1 else 0
 
 
-def _start_of(start: str | None, kind: str) -> str:
-    """Where the refine rounds start (``segment_tiled``'s ``start``): as given, else on the
-    survey's sample for a cloud and from the tiles' own centers for a mesh (the sample's
-    start raised the tiled UE on the 15 benchmark meshes by about 2 %)."""
-    return start or ("sample" if kind_of(kind).cloud else "tiles")
-
-
 def _sample_start(reader, survey, params, r: float, diagonal: float, how: tuple,
                   stage, sampled: tuple):
     """The centers the refine rounds start from, found on the survey's sample (a cloud's
@@ -343,12 +337,12 @@ def _sample_start(reader, survey, params, r: float, diagonal: float, how: tuple,
     ``how``: the run's ``refine`` and ``start``."""
 
     sample, (refine, start) = survey.sample, how
-    if refine < 1 or _start_of(start, reader.kind) != "sample" or sample is None \
+    if refine < 1 or start != "sample" or sample is None \
             or survey.sample_rows is None or sample.shape[0] < 3:
         return None
     with stage("start"):  # (timed and shown: :func:`_stage`)
         return phases.sample_start(sample, survey.sample_rows, reader.n_rows, params, r, diagonal,
-                            *sampled, viewpoint=reader.viewpoint)
+                            *sampled, viewpoint=reader.viewpoint, kind=reader.kind)
 
 
 def _frame(reader, survey) -> np.ndarray | None:
@@ -490,7 +484,7 @@ def _checked_options(n_segments, options, tiles, halo, refine, workers, start="s
         if v is not None and (isinstance(v, bool) or not isinstance(v, (int, np.integer))
                               or not low <= v <= high):
             raise ParameterError(f"{name} must be an integer in {low}..{high}, got {v!r}")
-    if start not in (None, "sample", "tiles"):
+    if start not in ("sample", "tiles"):
         raise ParameterError(f"start must be 'sample' or 'tiles', got {start!r}")
     return params, halo
 
