@@ -248,11 +248,11 @@ def test_passes_listed_by_a_key_give_the_same_superfacets_their_list_in_its_orde
     plain = pipeline(cloud, p, finished=False, order=None)
     key = rng.permutation(cloud.points.shape[0]).astype(np.int64)  # any distinct key
     ordered = pipeline(cloud, p, finished=False, order=key)
-    label, centers, dist = ordered.classification
+    label, centers, dist, _ = ordered.classification
     assert (np.diff(key[centers]) > 0).all()
     assert ordered.n_iter == plain.n_iter and ordered.timings["settled"] == \
         plain.timings["settled"]
-    l0, c0, d0 = plain.classification
+    l0, c0, d0, _ = plain.classification
     np.testing.assert_array_equal(centers[label], c0[l0])  # each element's center
     np.testing.assert_array_equal(dist, d0)
 

@@ -44,6 +44,30 @@ def test_ply_mesh_box_is_the_faces_whose_centroid_lies_in_it(tmp_path):
     assert math.isclose(s.size, float(face_graph(Mesh(v32, mesh.faces)).area), rel_tol=1e-9)
 
 
+@pytest.mark.parametrize("in_memory", [True, False])
+def test_a_ply_meshs_chunks_are_its_centroids_and_areas_bit_for_bit(tmp_path, monkeypatch,
+                                                                    in_memory):
+    """Each chunk's face centroids and areas are numpy's mean of the corners and half the
+    norm of their cross product, bit for bit (the tiles' core membership reads them),
+    whether the vertex positions are read into memory or gathered from the mapped file."""
+    from superfacets.io import regions
+
+    if not in_memory:
+        monkeypatch.setattr(regions, "VERTEX_TABLE_BYTES", 0)
+    mesh = _bumpy(3)
+    path = tmp_path / "m.ply"
+    _write_ply_mesh(path, mesh.vertices, mesh.faces)
+    v32 = np.asarray(mesh.vertices, dtype=np.float32).astype(np.float64)
+    corners = v32[np.asarray(mesh.faces)]
+    area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0],
+                                         corners[:, 2] - corners[:, 0]), axis=1)
+    chunks = list(RegionReader.open(path, chunk=97).chunks())
+    assert isinstance(chunks[0][3][1], np.ndarray) == in_memory  # (the vertex table)
+    for start, pos, size, _ in chunks:
+        np.testing.assert_array_equal(pos, corners[start:start + 97].mean(axis=1))
+        np.testing.assert_array_equal(size, area[start:start + 97])
+
+
 def test_points_from_ply_npy_and_las_read_by_box(tmp_path):
     rng = np.random.default_rng(1)
     pts = rng.random((3000, 3))

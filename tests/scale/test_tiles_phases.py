@@ -154,6 +154,39 @@ def test_the_refine_round_moves_only_the_cores_centers(kind, monkeypatch):
         assert all(still) == hold
 
 
+def test_a_mesh_tiles_labels_phase_replays_its_refine_rounds_expansions(monkeypatch):
+    """A mesh tile held between its phases labels its box by replaying the refine round's
+    recorded expansions of the centers the two share (its core's) and expanding only the
+    others (its halo's, moved by their own tiles): fewer expansions than centers, and the
+    same labels as a fresh classification of every center."""
+    from superfacets.scale.tiles import phases as tiling
+
+    real = tiling._replaying
+    runs = []
+
+    def spy(graph, w, window_r2, spaces):
+        kept = real(graph, w, window_r2, spaces)
+        if kept is not None:
+            classify = kept.classify
+
+            def counted(centers, n, dist, label):
+                k, expanded = classify(centers, n, dist, label)
+                runs.append((n, expanded))
+                return k, expanded
+
+            kept.classify = counted
+        return kept
+
+    mesh = _bumpy(4)
+    monkeypatch.setattr(tiling, "_replaying", spy)
+    replayed = segment_tiled(mesh, 40, tiles=2)
+    assert len(runs) == 2  # (each tile's labels phase)
+    assert all(0 < expanded < n for n, expanded in runs), runs
+    monkeypatch.setattr(tiling, "_replaying", lambda *a: None)
+    fresh = segment_tiled(mesh, 40, tiles=2)
+    np.testing.assert_array_equal(replayed.labels, fresh.labels)
+
+
 def test_core_classification_is_the_whole_inputs_from_the_same_centers():
     """Known answer: with a halo of 2 window * r, each tile labels its core as one run over
     the whole input does from the same centers (paper's classification, no post-step)."""

@@ -397,6 +397,18 @@ class VertexView:
         self.scale = (None if fields == tuple("xyz") or kind.kind == "f"
                       else 255.0 if kind.itemsize == 1 else 65535.0)
 
+    def table(self, most_bytes: int) -> np.ndarray | VertexView:
+        """The three properties as one contiguous (n, 3) float64 array (the same values
+        as indexing this view), where it takes at most ``most_bytes``; else this view. A
+        face's corners gathered from it are one row each, not three strided reads of the
+        mapped file (a tiled run's survey and sorting of 6.8M faces: 3.7 s of gathers)."""
+        if 24 * self.shape[0] > most_bytes or self.fields != tuple("xyz"):
+            return self
+        out = np.empty(self.shape)
+        for i, c in enumerate(self.fields):  # (a column at a time: no copy beside it)
+            out[:, i] = self.data[c]
+        return out
+
     def __getitem__(self, idx) -> np.ndarray:
         flat = np.asarray(idx).ravel()
         out = np.stack([np.asarray(self.data[c][flat], dtype=np.float64) for c in self.fields],

@@ -55,6 +55,10 @@ __all__ = ["RegionReader", "Survey", "CHUNK", "STREAMED", "SAMPLE", "point_cloud
 CHUNK = 1 << 18
 #: Suffixes read in chunks without holding the file.
 STREAMED = ("ply", "las", "laz", "npy")
+#: A binary PLY's vertex positions are read into memory for a pass over its faces where
+#: they take at most this (44M vertices); larger, each chunk gathers its faces' corners
+#: from the mapped file.
+VERTEX_TABLE_BYTES = 1 << 30
 #: Positions kept by a survey, at most (every ``ceil(n_rows / SAMPLE)``-th row): 24 MiB.
 SAMPLE = 1 << 20
 
@@ -215,8 +219,15 @@ class RegionReader:
                     raise MeshFormatError(f"{self.path}: face {bad} has a vertex index out "
                                           f"of range 0..{n_v - 1}")
                 p = verts[tri]  # (c, 3, 3)
-                area = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
-                yield s, p.mean(axis=1), area, (tri, verts, colors(s, s + tri.shape[0], tri))
+                x = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+                area = x[:, 0] * x[:, 0]  # (np.linalg.norm's sum of squares, in its order)
+                area += x[:, 1] * x[:, 1]
+                area += x[:, 2] * x[:, 2]
+                area = 0.5 * np.sqrt(area)
+                centroid = p[:, 0] + p[:, 1]  # (numpy's mean over the corners, its sum in
+                centroid += p[:, 2]  # the same order, without its reduction's strides)
+                centroid /= 3.0
+                yield s, centroid, area, (tri, verts, colors(s, s + tri.shape[0], tri))
             return
         for s, pts, extra in self._point_chunks(stats):
             yield s, pts, np.ones(pts.shape[0]), extra
@@ -327,7 +338,7 @@ class RegionReader:
                     lambda a, b, tri: None if fcol is None else np.asarray(fcol[a:b]))
         ply = ply_mapped(Path(self.path))
         v = ply["vertex"].data
-        verts = VertexView(v)
+        verts = VertexView(v).table(VERTEX_TABLE_BYTES)  # (in memory where it is small)
         rgb = next((c for c in (("red", "green", "blue"), ("r", "g", "b"))
                     if set(c) <= set(v.dtype.names)), None)
         vcol = None if rgb is None else VertexView(v, rgb)

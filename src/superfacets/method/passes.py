@@ -94,6 +94,10 @@ class Iteration:
         Centers held where a cycle moved them (``settle=True``; 0 otherwise).
     dist : (n,) float64 ndarray or None
         Each element's distance to its center in the last classification (:func:`iterate`).
+    classifier : Classifier or None
+        The classifier of the passes, where the caller asked to keep it
+        (:func:`~superfacets.method.stages.iterate_passes`: a tile's labels phase replays
+        its recorded expansions); else None.
     """
 
     label: np.ndarray
@@ -108,6 +112,7 @@ class Iteration:
     stopped_by_tol: bool = False
     settled: int = 0
     dist: np.ndarray | None = None
+    classifier: object | None = None
 
 
 def passes_done(bar, n_iter: int, max_iter: int, k_now: int, n_moved: int, changed: float,

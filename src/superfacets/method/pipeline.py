@@ -254,7 +254,8 @@ def pipeline(mesh, params: SegmentParams, *, features=None, replay: bool = True,
         (:func:`superfacets.method.passes.iterate`; a tile's refine round, by row). With
         ``finished=False`` the record's ``classification`` is the last pass's: each
         element's superfacet (int32, an index into the centers), the centers (elements,
-        int64) and each element's distance to its center (float64).
+        int64), each element's distance to its center (float64) and the passes'
+        classifier (whose recorded expansions a tile's labels phase replays).
     fixed : (n,) bool ndarray, optional
         Elements whose centers stay where they are through the passes and take no part in
         a swap (a tile's refine round: the centers of its halo, its neighbours' to move;
@@ -322,7 +323,8 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
                 give_back_free_memory()  # the start's freed temporaries (a mesh's peak)
         with hooks.stage("iterations", "superfacets"):
             it = iterate_passes(graph, w, swap_w, init, rules, hooks, replay=replay,
-                                jump_cycles=jump_cycles, order=order, fixed=fixed)
+                                jump_cycles=jump_cycles, order=order, fixed=fixed,
+                                keep_classifier=not finished)
         w = swap_w = None  # free the weights before the clean-up
     except BaseException:
         hooks.close()
@@ -343,7 +345,8 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
                      mesh_radius=rules.r, n_orphan_seeds=it.n_orphan_seeds, timings=timings,
                      params=_resolved(graph, rules, ratio, init.shape[0]), elements=source,
                      element_labels=element_labels,
-                     classification=None if finished else (it.label, it.centers, it.dist))
+                     classification=None if finished else (it.label, it.centers, it.dist,
+                                                            it.classifier))
 
 
 def _unfinished(it) -> tuple[np.ndarray, np.ndarray]:

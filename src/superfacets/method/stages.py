@@ -576,8 +576,8 @@ def initialize(graph, w: np.ndarray, rules: Rules, hooks,
 
 def iterate_passes(graph, w: np.ndarray, swap_w, init: np.ndarray, rules: Rules,
                    hooks, *, replay: bool = True, jump_cycles: bool = True,
-                   order: np.ndarray | None = None, fixed: np.ndarray | None = None
-                   ) -> Iteration:
+                   order: np.ndarray | None = None, fixed: np.ndarray | None = None,
+                   keep_classifier: bool = False) -> Iteration:
     """Stage 5: passes of (classify, update) until no center moves, ``tol`` or
     ``max_iter`` (paper section 3.1, steps 2-3); then, with split-and-merge, the
     K-preserving swaps and the passes again (with ``tol > 0``: the swaps once a pass
@@ -605,6 +605,10 @@ def iterate_passes(graph, w: np.ndarray, swap_w, init: np.ndarray, rules: Rules,
     fixed : (n,) bool ndarray, optional
         Elements whose centers stay and take no part in a swap
         (:func:`superfacets.method.passes.iterate`).
+    keep_classifier : bool, default False
+        Return the classifier with the iteration (``Iteration.classifier``): a bounded
+        one keeps its last pass's expansions (about 60 bytes per element), which a tile's
+        labels phase replays (:func:`superfacets.scale.tiles.phases.tile_labels`).
 
     Raises
     ------
@@ -650,5 +654,5 @@ def iterate_passes(graph, w: np.ndarray, swap_w, init: np.ndarray, rules: Rules,
                 hold_after=rules.kind.hold_after if rules.fast else 1.0, fixed=fixed)
     finally:
         spaces.close()
-    return it
+    return replace(it, classifier=classifier) if keep_classifier else it
 

@@ -55,7 +55,7 @@ from ...elements.points import distinct_points, kept_diagonal
 from ...errors import ParameterError
 from ...inputs.bounds import column_bounds
 from ...inputs.cloud import PointCloud
-from ...method.classify import Exact, make_classifier
+from ...method.classify import BoundedReplay, Exact, make_classifier
 from ...method.connectivity import label_components
 from ...method.expansion import Workspaces
 from ...method.finish import clean_up, finish
@@ -377,7 +377,10 @@ def tile_refine(inp, core: np.ndarray, center_rows: np.ndarray, params: SegmentP
         fixed[start[~in_core[start]]] = True
     result = pipeline(inp, p, features=features, initial=start, finished=False,
                       order=order, fixed=fixed, feature_floor=floor)
-    label, used, dist = result.classification
+    label, used, dist, classifier = result.classification
+    if isinstance(classifier, BoundedReplay):  # its recorded expansions, for the labels
+        # phase where the tile is held (its core's centers stay: replayed, not expanded)
+        src.graph.__dict__["last_classifier"] = classifier
     if exact and (used.size < 2 or (np.diff(order[used]) > 0).all()):  # (no orphan in
         # the last pass; with the graph: the labels phase reads it there where the tile
         # is held; written to the folder when the tile is let go)
@@ -549,8 +552,8 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
     label = np.empty(m, dtype=np.int32)
     spaces = Workspaces(m, w, p.n_threads)
     try:
-        classifier = make_classifier(rules.params.assignment, graph, w, rules.window_r2,
-                                     spaces, replay=False)
+        classifier = _replaying(graph, w, rules.window_r2, spaces) or make_classifier(
+            rules.params.assignment, graph, w, rules.window_r2, spaces)
         last = None if folder is None or not isinstance(classifier, Exact) else \
             kept_classification(folder, m, graph)
         if last is not None:  # the refine round's last pass, its centers listed by row too:
@@ -573,6 +576,21 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
     first = src.first_rows(np.arange(m))  # each element's first row
     return named, tile_merge_stats(graph, labels, rows[name], core[first], rows[first],
                                    int(n_noise), features=feats, floor=rules.feature_floor)
+
+
+def _replaying(graph, w: np.ndarray, window_r2: float, spaces: Workspaces):
+    """The refine round's bounded classifier kept with a held tile's ``graph``
+    (:func:`tile_refine`), given the labels phase's ``spaces``, where it classified with
+    these very weights and window: the expansions of the centers its last pass shared
+    with the labels phase's list (the core's) are replayed, the others' run, the same
+    labels as a fresh classification (:class:`~superfacets.method.classify.BoundedReplay`).
+    None where there is none (the tile was not held, or was read again)."""
+    kept = graph.__dict__.pop("last_classifier", None)
+    if not isinstance(kept, BoundedReplay) or kept.w is not w or kept.m != graph.n_elements \
+            or kept.indptr is not graph.indptr or kept.window_r2 != float(window_r2):
+        return None
+    kept.spaces = spaces
+    return kept
 
 
 def tile_connect(inp, labels: np.ndarray, owned: np.ndarray, owned_rows: np.ndarray,
