@@ -7,7 +7,7 @@ import shutil
 
 import numpy as np
 import pytest
-from tiled import _bumpy_cloud
+from tiled import _bumpy, _bumpy_cloud
 
 from superfacets.scale.tiles import held
 from superfacets.scale.tiles.run import segment_tiled
@@ -54,6 +54,29 @@ def test_tiles_held_between_phases_label_as_tiles_read_from_the_work_folder(
     read = segment_tiled(cloud, 60, tiles=4, workdir=tmp_path)
     assert seen.count("read") >= 8 and len(made) == weighed + 4  # the labels phase's too
     np.testing.assert_array_equal(kept.labels, read.labels)
+
+
+def test_a_held_mesh_tile_counts_its_weights_and_its_refine_rounds_records(monkeypatch):
+    """What a held tile takes counts every array it keeps: its graph's weights and, after a
+    mesh's refine round, that round's classifier's recorded expansions (the labels phase
+    replays them), let go with it after the labels phase."""
+    import superfacets.scale.tiles.task as rt
+
+    counted = []
+    real = rt.hold_box
+
+    def spy(key, value, arrays, write=None):
+        graph = value[2].__dict__["_face_graph"]
+        kept = graph.__dict__.get("last_classifier")
+        ids = {id(a) for a in arrays}
+        w = next(iter(graph.__dict__["weights_kept"].values()))[0]
+        counted.append((kept is not None, id(w) in ids,
+                        kept is None or id(kept.face) in ids and id(kept.dist) in ids))
+        return real(key, value, arrays, write)
+
+    monkeypatch.setattr(rt, "hold_box", spy)
+    segment_tiled(_bumpy(4), 40, tiles=2)
+    assert sorted(counted) == [(False, True, True)] * 2 + [(True, True, True)] * 2
 
 
 def test_a_held_tiles_files_are_written_only_when_it_is_let_go(monkeypatch, tmp_path):

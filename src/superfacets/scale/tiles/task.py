@@ -269,8 +269,10 @@ def _faces_folder(task: dict) -> Path:
 def _hold(key: tuple, box: tuple, n_neighbors: int) -> None:
     """Hold a tile's box (rows, positions, input) with its element graph (a cloud's point
     graph, a mesh's face graph), which keeps the weights it is given from now on
-    (``weights_kept``: :func:`~superfacets.method.stages.weigh`), for the tile's next
-    phase in this process."""
+    (``weights_kept``: :func:`~superfacets.method.stages.weigh`) and a mesh's refine round's
+    classifier with its recorded expansions (``last_classifier``), for the tile's next
+    phase in this process; counted as every array these hold (the weights and the
+    records four levels down)."""
     g = _element_graph(box[2], n_neighbors)
     if g is None:
         return
@@ -279,7 +281,7 @@ def _hold(key: tuple, box: tuple, n_neighbors: int) -> None:
              write=lambda: _write_owed(box[2]))
 
 
-def _arrays_in(obj, depth: int = 3) -> list:
+def _arrays_in(obj, depth: int = 4) -> list:
     """The arrays ``obj`` holds (in its tuples, lists, dictionaries and attributes, to
     ``depth`` levels), each once: what a held tile takes."""
     found: dict = {}
