@@ -328,6 +328,38 @@ def test_merge_from_is_chosen_from_the_kind_and_the_density():
     resolve(paper=True, merge_from=1)  # 1 is the paper's: no merges
 
 
+def test_a_scene_with_an_up_direction_merges_from_twenty_times_the_count(monkeypatch):
+    """A cloud with an up direction (a LAS file's, ``--seen-from``) is a scene: with the
+    default cost its merges choose from 20 times the count, one run and tiled alike; the
+    same points without one (an object) from 5; the other costs, the paper and meshes
+    keep theirs."""
+    from dataclasses import replace
+
+    from superfacets import segment_tiled
+    from superfacets.method.rules import SCENE_MERGE_FROM
+    from superfacets.scale.tiles import run as tiled_run
+
+    assert SCENE_MERGE_FROM == 20
+    assert merge_from_of(DEFAULTS, "points", scene=True) == 20
+    assert merge_from_of(replace(DEFAULTS, merge_cost="auto", density=0.0), "points",
+                         scene=True) == 5
+    assert merge_from_of(replace(DEFAULTS, paper=True), "points", scene=True) == 1
+    assert merge_from_of(DEFAULTS, "faces", scene=True) == 1
+    assert merge_from_of(replace(DEFAULTS, merge_from=3), "points", scene=True) == 3
+    rng = np.random.default_rng(0)
+    xy = rng.random((20000, 2))
+    pts = np.c_[xy, 0.002 * rng.standard_normal(20000) + 0.05 * np.sin(5 * xy[:, 0])]
+    asked = []
+    real = tiled_run.fine_count
+    monkeypatch.setattr(tiled_run, "fine_count",
+                        lambda k, ratio, n: asked.append(ratio) or real(k, ratio, n))
+    for up, ratio in ((None, 5), ((0.0, 0.0, 1.0), 20)):
+        r = segment(PointCloud(pts, up=up), 60)
+        assert r.params["merge_from"] == ratio and r.n_segments == 60
+        assert segment_tiled(PointCloud(pts, up=up), 60, tiles=2).n_segments == 60
+        assert asked.pop() == ratio
+
+
 def test_an_uneven_cloud_keeps_the_density_and_merges_by_the_default_cost_only():
     rng = np.random.default_rng(4)
     dense = np.c_[rng.random((6000, 2)), np.zeros(6000)]

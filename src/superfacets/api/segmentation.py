@@ -175,8 +175,10 @@ def superfacets(data=_NO_INPUT, n_segments: int | None = _D.n_segments, *, featu
         floors, ground, the flat faces of objects), then the cheapest by Ward's
         cost with the crease factor, down to exactly ``n_segments``. 1 merges
         nothing. None: 5 on point clouds (with ``merge_cost='auto'`` only where their
-        density is even), 1 on meshes, with ``paper=True`` and in the tiles of a tiled
-        run (:func:`superfacets.method.rules.merge_from_of`). On two
+        density is even), 20 on scenes (a cloud with an up direction,
+        ``PointCloud.up``: LAS and LAZ files) with the default cost, 1 on meshes, with
+        ``paper=True`` and in the tiles of a tiled run
+        (:func:`superfacets.method.rules.merge_from_of`). On two
         ScanNet rooms it lowered the undersegmentation error by 13-26 % at
         ``n_segments`` = 300-3,000, below the ScanNet Segmentator's; on the 300
         benchmark meshes sampled to clouds by 5.9 % at 150
@@ -201,15 +203,16 @@ def superfacets(data=_NO_INPUT, n_segments: int | None = _D.n_segments, *, featu
         flat ground and walls, small among vegetation or an object's fine detail), plus
         Ward's term in units of the superpoint's size; where the noise reads 0 (a
         surface sampled from a mesh) ``'auto'``'s merges, label for label. It merges on
-        every cloud, uneven density too (``merge_from`` 5 unless given). ``'auto'`` (the
-        default before 2026-11-30): the plane's rise where the flat regions hold most of
-        the points, else Ward's cost with the crease factor; no merges on clouds of
-        uneven density. ``'scene'``: ``'noise'`` with ``w = 1`` everywhere. On 27
-        labelled scans ``'noise'`` met the Segmentator's targets in 70 of 108 settings
-        against ``'auto'``'s 61 (``'scene'`` 78, but the 300 benchmark clouds' UE 11-20 %
-        higher); on the 300 benchmark clouds UE +0.1 to +0.4 % against ``'auto'``; it
-        takes 1.07 times ``'auto'``'s time over the 27 scans, up to 1.5 times on LiDAR
-        sweeps at ``n_segments`` of 1,000 and more (``docs/notes/superpoints-defaults.md``).
+        every cloud, uneven density too (``merge_from`` 5, a scene's 20, unless given).
+        ``'auto'`` (the default before 2026-11-30): the plane's rise where the flat
+        regions hold most of the points, else Ward's cost with the crease factor; no
+        merges on clouds of uneven density. ``'scene'``: ``'noise'`` with ``w = 1``
+        everywhere. On 27 labelled scans ``'noise'`` met the Segmentator's targets in 70 of
+        108 settings against ``'auto'``'s 61 (``'scene'`` 78, but the 300 benchmark clouds'
+        UE 11-20 % higher); on the 300 benchmark clouds UE +0.1 to +0.4 % against
+        ``'auto'``; it takes 1.07 times ``'auto'``'s time over the 27 scans, up to 1.5 times
+        on LiDAR sweeps at ``n_segments`` of 1,000 and more
+        (``docs/notes/superpoints-defaults.md``).
     tol : float, default 0.001
         Convergence tolerance in ``[0, 1]``: also stop once a classification
         changes the superfacet of at most this fraction of the surface area
@@ -424,7 +427,8 @@ def superpoints(points, n_segments: int | None = _D.n_segments, *, normals=None,
     beyond 0.7), superpoints follow it by default (``density=None``: 0.5 there,
     0 on even clouds; pass ``density=0`` for the paper's equal areas). Where it is
     even (rooms, aerial tiles, sampled surfaces), the run segments 5 times the
-    superpoints and merges them to ``n_segments``, flat neighbours first
+    superpoints (a scene with an up direction, a LAS file's: 20 times) and merges them
+    to ``n_segments``, flat neighbours first
     (``merge_from=None``; ``merge_from=1`` for the method's own superpoints).
 
     Parameters

@@ -298,7 +298,8 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
             source, graph, p = build_graph(obj, p, features)
         with hooks.stage("features"):  # (the colour term's weight and floor, where read)
             p, feats, floor = resolve_features(source, graph, p, features, feature_floor)
-        rules = resolve_rules(graph, p, n_centers=n_centers, feature_floor=floor)
+        rules = resolve_rules(graph, p, n_centers=n_centers, feature_floor=floor,
+                              scene=getattr(source.source, "up", None) is not None)
         hooks.follow(graph, stage_reads(rules, initial))
         p = rules.params
     except BaseException:

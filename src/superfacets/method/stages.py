@@ -323,7 +323,8 @@ def resolve_features(source: ElementInput, graph, p: SegmentParams, features=Non
 
 
 def resolve_rules(graph, p: SegmentParams, *, n_centers: int | None = None,
-                  r: float | None = None, feature_floor: float = 0.0) -> Rules:
+                  r: float | None = None, feature_floor: float = 0.0,
+                  scene: bool = False) -> Rules:
     """Stage 2: every automatic rule of the run, once, from the table of kinds.
 
     ``k`` and ``r`` (paper section 3.1: ``r = sqrt(A / (k pi))``, or ``radius`` times
@@ -351,6 +352,9 @@ def resolve_rules(graph, p: SegmentParams, *, n_centers: int | None = None,
         tiled run takes the whole run's).
     feature_floor : float, default 0
         From :func:`resolve_features` (a ``beta`` it has not resolved, None, is 0).
+    scene : bool, default False
+        The input has an up direction (``PointCloud.up``): a scene's ``merge_from``
+        (:func:`~superfacets.method.rules.merge_from_of`).
 
     Returns
     -------
@@ -379,7 +383,8 @@ def resolve_rules(graph, p: SegmentParams, *, n_centers: int | None = None,
     if n_centers is not None:
         k = int(min(max(n_centers, 1), graph.n_elements))
     target = k
-    merge_from = merge_from_of(p, graph.kind, tiled=n_centers is not None or r is not None)
+    merge_from = merge_from_of(p, graph.kind, tiled=n_centers is not None or r is not None,
+                               scene=scene)
     p = replace(p, merge_from=merge_from)
     if merge_from > 1 and k is not None:  # many superpoints first, merged to k at the end
         fine = fine_count(k, merge_from, graph.n_elements)

@@ -190,10 +190,11 @@ def one_position_stats(inp, valid: np.ndarray, name: int, merging: tuple) -> dic
                 outer_angle=none, outer_concave=none)
 
 
-def tiled_merge_from(params, kind: str) -> int:
-    """``merge_from`` of a tiled run: that of one run on the whole input, with the density
-    of a tiled run (0 unless given); 1 where sized by radius. Points only. (With colour,
-    the tiles' sums carry the colours: the merges join only neighbours of one colour.)
+def tiled_merge_from(params, kind: str, scene: bool = False) -> int:
+    """``merge_from`` of a tiled run: that of one run on the whole input (``scene``: it has
+    an up direction), with the density of a tiled run (0 unless given); 1 where sized by
+    radius. Points only. (With colour, the tiles' sums carry the colours: the merges join
+    only neighbours of one colour.)
 
     Raises
     ------
@@ -209,7 +210,7 @@ def tiled_merge_from(params, kind: str) -> int:
     if params.n_segments is None or params.radius is not None:  # sized by radius
         return 1
     density = 0.0 if params.density is None else params.density
-    return merge_from_of(replace(params, density=density), kind)
+    return merge_from_of(replace(params, density=density), kind, scene=scene)
 
 
 def merged_labels(labels: np.ndarray, stats: list, target: int, params) -> np.ndarray:

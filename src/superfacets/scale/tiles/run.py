@@ -194,7 +194,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                   if np.ndim(tiles) == 0 else tile_grid(survey.lo, survey.hi, tiles))
         grid = layout.shape or (layout.n_tiles,)
         n_tiles = layout.n_tiles
-        target, merge_from, params = _merge_plan(params, reader.kind, survey, n_tiles)
+        target, merge_from, params = _merge_plan(params, reader, survey, n_tiles)
         merging = params.n_segments != target  # (the tiles make more: merged at the end)
         diagonal = float(np.linalg.norm(survey.hi - survey.lo))
         # one more pass sorts the elements into a file per tile, so that a task reads the
@@ -365,12 +365,14 @@ def _numbered_densely(labels: np.ndarray) -> np.ndarray:
 MESH_EXCESS = 0.05
 
 
-def _merge_plan(params, kind: str, survey, n_tiles: int):
+def _merge_plan(params, reader, survey, n_tiles: int):
     """The count asked for, the factor of the superpoints made before the merges down to
     it (1: none; a mesh's few more: :data:`MESH_EXCESS`), and the parameters of the tiles'
-    runs (their count that many times)."""
-    n_elements = survey.n_elements
-    target, merge_from = params.n_segments, tiled_merge_from(params, kind)
+    runs (their count that many times), for the input ``reader`` reads (its kind, and
+    whether it has an up direction: a scene's ``merge_from``, as one run's)."""
+    n_elements, kind = survey.n_elements, reader.kind
+    target, merge_from = params.n_segments, tiled_merge_from(
+        params, kind, scene=getattr(reader, "up", None) is not None)
     if merge_from > 1:  # merge_from times the superpoints, merged to the count at the end
         fine = fine_count(target, merge_from, n_elements)
         merge_from = merge_from if fine > target else 1
