@@ -176,8 +176,8 @@ def superfacets(data=_NO_INPUT, n_segments: int | None = _D.n_segments, *, featu
         cost with the crease factor, down to exactly ``n_segments``. 1 merges
         nothing. None: 5 on point clouds (with ``merge_cost='auto'`` only where their
         density is even), 20 on scenes (a cloud with an up direction,
-        ``PointCloud.up``: LAS and LAZ files) with the default cost, 1 on meshes, with
-        ``paper=True`` and in the tiles of a tiled run
+        ``PointCloud.up``: LAS, LAZ and E57 files, RGB-D frames) with the default cost,
+        1 on meshes, with ``paper=True`` and in the tiles of a tiled run
         (:func:`superfacets.method.rules.merge_from_of`). On two
         ScanNet rooms it lowered the undersegmentation error by 13-26 % at
         ``n_segments`` = 300-3,000, below the ScanNet Segmentator's; on the 300

@@ -92,9 +92,9 @@ SHOWN = {
                   f"(default: {_D.roughness:g})"),
     "merge_from": ("method", "F", "segment F times -k superpoints first, then merge "
                    "neighbours down to -k, flat ones (within the noise) first; 1: off "
-                   "(default: 5 on point clouds, 20 on scenes with an up direction: LAS, "
-                   "LAZ, --seen-from; 1 on meshes; with --merge-cost auto 1 on clouds of "
-                   "uneven density)"),
+                   "(default: 5 on point clouds, 20 on scenes with an up direction: "
+                   "LAS, LAZ, E57, RGB-D frames, --seen-from; 1 on meshes; with "
+                   "--merge-cost auto 1 on clouds of uneven density)"),
     "max_size_ratio": ("method", "R", "with --merge-from above 1: the merges make no "
                        "superpoint of more than R times the mean count of points while other "
                        "neighbours can merge (flat ground and walls in several superpoints, "

@@ -247,12 +247,13 @@ def superfacet_measure(r: float, dim: int = 2) -> float:
     return 4.0 / 3.0 * math.pi * r ** 3 if dim == 3 else math.pi * r * r
 
 
-#: ``merge_from`` (None) of a scene: a cloud with an up direction (``PointCloud.up``: LAS
-#: and LAZ files, ``--seen-from``), whose labels are classes meeting at steps and bends,
-#: where the merges take the noise's cost (the default): they choose from this many times
-#: the count. 27 labelled scans: 78 -> 88 of 108 targets, 1.05 times the time; objects
-#: (no up direction), whose parts follow Ward's compact merges, keep the kind's 5
-#: (``docs/notes/superpoints-defaults.md``, "Scenes merge from 20 times the count").
+#: ``merge_from`` (None) of a scene: a cloud with an up direction (``PointCloud.up``: LAS,
+#: LAZ and E57 files, an RGB-D camera's PCD frame, ``--seen-from``), whose labels are
+#: classes meeting at steps and bends, where the merges take the noise's cost (the
+#: default): they choose from this many times the count. 27 labelled scans: 78 -> 88 of
+#: 108 targets, 1.05 times the time; objects (no up direction), whose parts follow
+#: Ward's compact merges, keep the kind's 5 (``docs/notes/superpoints-defaults.md``,
+#: "Scenes merge from 20 times the count").
 SCENE_MERGE_FROM = 20
 
 
