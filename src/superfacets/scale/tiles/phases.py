@@ -562,6 +562,7 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
         k, _ = classifier.classify(centers, elem.size, dist, label)
     finally:
         spaces.close()
+    classifier = None  # (its records, about 60 bytes a face: let go before the clean-up)
     labels, kept = finish(graph, label, centers[:k], rules)
     if rules.cleanup:  # (a piece the clean-up leaves with no neighbour is a superfacet of
         labels = clean_up(graph, labels, kept, rules, feats)  # its own: a center each)
