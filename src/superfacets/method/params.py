@@ -217,7 +217,7 @@ def _declare() -> tuple[Parameter, ...]:
           "normals turn, >= 0", lambda v: num("roughness", v, 0.0, big), cli="--roughness"),
         P("merge_from", None, "int or None", "segment this many times n_segments first (at "
           "least one per 100 elements), then merge neighbours down to n_segments, flat ones "
-          "first, >= 1 (1: off); None: by kind and density",
+          "first, >= 1 (1: off); None: by kind, density and up direction (a scene's 20)",
           lambda v: integer("merge_from", v, lo=1), cli="--merge-from"),
         P("max_size_ratio", 16.0, "float", "merges to n_segments (merge_from > 1): no "
           "superpoint of more than this many times the mean count of elements while other "
