@@ -570,3 +570,27 @@ def test_html_shows_its_long_stages_on_a_terminal(tmp_path, capsys, monkeypatch)
     assert main(["html", str(off), "-k", "5", "-o", str(tmp_path / "p.html")]) == 0
     err = capsys.readouterr().err
     assert "face graph" in err and "writing p.html [" in err
+
+
+def test_the_summary_says_a_scene_merges_from_twenty_times_k(tmp_path, capsys):
+    """A LAS file has an up direction: a scene, merged from 20 times -k, which the summary
+    says; the same points as an array (no up direction) merge from 5 times; a given
+    --merge-from is not put down to the scene."""
+    laspy = pytest.importorskip("laspy")
+    rng = np.random.default_rng(3)
+    xy = rng.random((6000, 2)) * 50
+    z = 0.02 * rng.standard_normal(6000) + np.where(xy[:, 0] > 25, 3.0, 0.0)
+    header = laspy.LasHeader(point_format=1, version="1.2")
+    header.scales = [0.001] * 3
+    las = laspy.LasData(header)
+    las.x, las.y, las.z = xy[:, 0], xy[:, 1], z
+    las.write(tmp_path / "scan.las")
+    np.save(tmp_path / "scan.npy", np.c_[xy, z])
+    said = "20 times -k as on a scene (the input's up direction)"
+    for name, extra, first, scene in (("scan.las", [], 400, True),
+                                      ("scan.npy", [], 100, False),
+                                      ("scan.las", ["--merge-from", "20"], 400, False)):
+        assert main(["segment", str(tmp_path / name), "-k", "20", *extra,
+                     "-o", str(tmp_path / "out.seg")]) == 0
+        out = capsys.readouterr().out
+        assert f"merged from {first:,} finer ones" in out and (said in out) == scene, out

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from ..elements.kinds import kind_of
 from ..method.params import DEFAULTS
+from ..method.rules import SCENE_MERGE_FROM
 
 __all__ = ["count_note", "duplicates_note", "merges_said", "COST_SAID"]
 
@@ -14,15 +15,20 @@ COST_SAID = {"scene": "; the scene's cost, its rise unweighted",
              "auto": "; by the plane's rise or Ward's cost (--merge-cost auto)"}
 
 
-def merges_said(first: int, params: dict, cloud: bool = True) -> str:
+def merges_said(first: int, params: dict, cloud: bool = True, scene: bool = False) -> str:
     """The summary's words for merges to the count from ``first`` superpoints (one run's
     or a tiled run's): how they merged, the size bound and a cost other than the
-    default's; a tiled mesh's are Ward's merges."""
+    default's; a tiled mesh's are Ward's merges. ``scene``: the run chose its
+    ``merge_from`` itself (not given), and took a scene's
+    (:data:`~superfacets.method.rules.SCENE_MERGE_FROM`: the input has an up direction)."""
     if not cloud:
         return f" (merged from {first:,} finer ones, Ward's merges; --merge-from 1: no merging)"
     bound = params.get("max_size_ratio") or 0
     most = f", none above {bound:g} times the mean" if bound else ""
-    return (f" (merged from {first:,} finer ones, flat neighbours first{most}"
+    why = ""
+    if scene and params.get("merge_from") == SCENE_MERGE_FROM:
+        why = f", {SCENE_MERGE_FROM} times -k as on a scene (the input's up direction)"
+    return (f" (merged from {first:,} finer ones{why}, flat neighbours first{most}"
             f"{COST_SAID.get(params.get('merge_cost'), '')}; --merge-from 1: no merging)")
 
 

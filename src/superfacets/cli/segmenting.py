@@ -165,7 +165,7 @@ def _add_demo(sub) -> None:
 
 
 def _summary(name: str, mesh, result, seconds: float, elements: str = "faces",
-             density_given: bool = True) -> str:
+             density_given: bool = True, merge_given: bool = True) -> str:
     from ..api.result import describe_stop
 
     state = describe_stop(result)
@@ -178,7 +178,8 @@ def _summary(name: str, mesh, result, seconds: float, elements: str = "faces",
         merged = (getattr(result, "params", None) or {}).get("merge_from") or 1
         first = (getattr(result, "params", None) or {}).get("n_init_centers") or 0
         if merged > 1 and first > result.n_segments:
-            segs += merges_said(first, getattr(result, "params", None) or {})
+            segs += merges_said(first, getattr(result, "params", None) or {},
+                                scene=not merge_given)
     else:
         kind = "" if mesh.is_triangular else " (polygons)"
         objs = f" in {len(mesh.objects)} objects" if len(mesh.objects) > 1 else ""
@@ -459,7 +460,8 @@ def _write_and_say(args, data, result, kind, outputs, elapsed, size_note: str = 
     seg_out = outputs["labels"]
     report = sys.stderr if str(seg_out) == "-" else sys.stdout  # stdout holds the labels
     print(_summary(Path(args.mesh).name, data, result, elapsed, kind,
-                   getattr(args, "density", None) is not None), file=report)
+                   getattr(args, "density", None) is not None,
+                   getattr(args, "merge_from", None) is not None), file=report)
     if size_note:
         print(size_note, file=report)
     _say_what_was_written(seg_out, outputs["colored"], outputs["picture"], outputs["html"],

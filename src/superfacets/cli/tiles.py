@@ -122,7 +122,8 @@ def segment_tiles(args) -> int:
                  if result.n_segments < k else f" ({k} asked)")
         first = result.params.get("merged_from")
         if first:
-            what += merges_said(first, result.params, kind_of(kind).cloud)
+            what += merges_said(first, result.params, kind_of(kind).cloud,
+                                scene=getattr(args, "merge_from", None) is None)
         if result.n_segments > 1:
             what += sizes_said(result.labels, kind)
         print(f"{Path(args.mesh).name}: {result.labels.size:,} {kind}, {result.n_segments:,} "
