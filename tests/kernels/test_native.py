@@ -1829,3 +1829,37 @@ def test_the_scene_merges_give_numba_results(shadowed):
     r = superfacets.segment(np.c_[xy, 0.01 * np.sin(6 * xy[:, 0])], 10, n_threads=1,
                             merge_cost="noise")
     assert r.n_segments == 10 and calls["hierarchy.merge_levels"] > before
+
+
+@needs_cxx
+@pytest.mark.parametrize("planarity,max_rise,max_size", [(2, 1e-4, 0.0), (2, 1e-3, 40.0),
+                                                         (3, 1e-3, 40.0), (1, 0.0, 25.0)])
+def test_merges_that_stop_short_give_numba_results(planarity, max_rise, max_size):
+    """Known answer against the reference: the merging kernel where most pairs may not
+    merge (the flat gate, the size bound) and the targets are not all reached. Pairs of no
+    finite cost never enter the compiled kernel's heap; its merges, the nodes' sums it
+    leaves and the roots at every target are numba's to the bit."""
+    rng = np.random.default_rng(7)
+    k = 400
+    side = 20
+    i, j = np.divmod(np.arange(k), side)
+    ea = np.r_[np.flatnonzero(j < side - 1), np.flatnonzero(i < side - 1)]
+    eb = np.r_[ea[:side * (side - 1)] + 1, ea[side * (side - 1):] + side]
+    stats = np.c_[np.ones(ea.size), rng.random(ea.size), rng.random(ea.size)]
+    area = rng.integers(1, 12, k).astype(np.float64)
+    centre = np.c_[i, j, 0.02 * rng.standard_normal(k) * (i > 10)]
+    wsum = centre * area[:, None]
+    scatter = np.c_[area * 0.1, area * 0.1, area * rng.random(k) * 1e-3, np.zeros((k, 3))]
+    fsum = np.zeros((k, 0))
+    targets = np.array([300, 120, 40, 1], dtype=np.int64)
+    out = []
+    for f in (native.kernel("hierarchy.merge_levels"), reference("hierarchy.merge_levels")):
+        arrays = [a.copy() for a in (area, wsum, fsum, scatter)]
+        roots = f(k, ea.copy(), eb.copy(), stats.copy(), *arrays, planarity, 0.5, 0.2, 0.0,
+                  1.0, max_rise, targets.copy(), max_size)
+        out.append((np.asarray(roots), arrays))
+    (got, got_arrays), (want, want_arrays) = out
+    assert np.array_equal(got, want)
+    assert all(np.array_equal(a, b) for a, b in zip(got_arrays, want_arrays))
+    # the merging stopped short of the last target: the roots there are where it stopped
+    assert np.unique(got[-1]).size > 1

@@ -42,6 +42,7 @@ struct Nodes {
     double* fsum;  // (k, d)
     i64 d;
     double* scatter;  // (k, 6)
+    const double* own;  // (k,): plane() of each node's scatter, kept as the nodes merge
 };
 
 inline void merged_scatter(i64 a, i64 b, const Nodes& N, double* out) {
@@ -87,11 +88,7 @@ double cost(i64 a, i64 b, double ln, double ang, double conc, const Nodes& N, co
     double c = 0.0;
     if (P.planarity > 0) {
         merged_scatter(a, b, N, tmp);
-        const double* sa = N.scatter + 6 * a;
-        const double* sb = N.scatter + 6 * b;
-        c = plane(tmp[0], tmp[1], tmp[2], tmp[3], tmp[4], tmp[5]) -
-            plane(sa[0], sa[1], sa[2], sa[3], sa[4], sa[5]) -
-            plane(sb[0], sb[1], sb[2], sb[3], sb[4], sb[5]);
+        c = plane(tmp[0], tmp[1], tmp[2], tmp[3], tmp[4], tmp[5]) - N.own[a] - N.own[b];
         c = mx(c, 0.0);
         if (P.planarity == 2) {  // flat pairs only: the rise per element of the smaller
             if (c > P.max_rise * mn(N.area[a], N.area[b])) return INF;
@@ -150,7 +147,13 @@ nb::object merge_levels(i64 k, nb::handle ea_, nb::handle eb_, nb::handle stats_
     {
     nb::gil_scoped_release nogil;
     const i64 n_e = ea.n, cap = 2 * n_e;
-    Nodes N{area.p, wsum.p, fsum.p, fsum.cols, scatter.p};
+    // each node's own plane() once, not at each of its pairs' costs (the same values)
+    std::vector<double> own(planarity > 0 ? k : 0);
+    for (i64 s = 0; s < (i64)own.size(); ++s) {
+        const double* q = scatter.p + 6 * s;
+        own[s] = plane(q[0], q[1], q[2], q[3], q[4], q[5]);
+    }
+    Nodes N{area.p, wsum.p, fsum.p, fsum.cols, scatter.p, own.data()};
     Params P{planarity, alpha, eta_convex, beta, compactness, max_rise, max_size};
     std::vector<i64> nb(cap), nxt(cap, -1), head(k, -1), tail(k, -1);
     std::vector<double> st(3 * cap);
@@ -171,7 +174,10 @@ nb::object merge_levels(i64 k, nb::handle ea_, nb::handle eb_, nb::handle stats_
     heap.emplace(INF, -1, -1, -1, -1);  // a sentinel, never reached
     for (i64 t = 0; t < n_e; ++t) {
         i64 a = mn(ea[t], eb[t]), b = mx(ea[t], eb[t]);
-        heap.emplace(cost(a, b, stats(t, 0), stats(t, 1), stats(t, 2), N, P, tmp), a, b, 0, 0);
+        double c = cost(a, b, stats(t, 0), stats(t, 1), stats(t, 2), N, P, tmp);
+        // (a pair that may not merge is left out: popped, it would end the merging, as
+        // the sentinel does, and no finite entry comes after it)
+        if (c != INF) heap.emplace(c, a, b, 0, 0);
     }
     i64 live = k, step = 0, i = 0;
     while (i < targets.n) {
@@ -188,6 +194,7 @@ nb::object merge_levels(i64 k, nb::handle ea_, nb::handle eb_, nb::handle stats_
         if (planarity > 0) {
             merged_scatter(a, b, N, tmp);
             for (int j = 0; j < 6; ++j) scatter(a, j) = tmp[j];
+            own[a] = plane(tmp[0], tmp[1], tmp[2], tmp[3], tmp[4], tmp[5]);
         }
         area[a] += area[b];
         for (int j = 0; j < 3; ++j) wsum(a, j) += wsum(b, j);
@@ -229,8 +236,8 @@ nb::object merge_levels(i64 k, nb::handle ea_, nb::handle eb_, nb::handle stats_
         for (i64 e = head[a]; e >= 0; e = nxt[e]) {
             i64 c = nb[e];
             i64 lo = a < c ? a : c, hi = a < c ? c : a;
-            heap.emplace(cost(lo, hi, st[3 * e], st[3 * e + 1], st[3 * e + 2], N, P, tmp), lo, hi,
-                         version[lo], version[hi]);
+            double ce = cost(lo, hi, st[3 * e], st[3 * e + 1], st[3 * e + 2], N, P, tmp);
+            if (ce != INF) heap.emplace(ce, lo, hi, version[lo], version[hi]);
         }
         --live;
     }
