@@ -3,6 +3,7 @@
 // pops its (cost, lo, hi, version_lo, version_hi) tuples in increasing lexicographic
 // order, as Python's heapq does: equal tuples are equal values, so any heap gives the
 // same sequence.
+#include <cstdint>
 #include <queue>
 #include <tuple>
 
@@ -119,7 +120,12 @@ double cost(i64 a, i64 b, double ln, double ang, double conc, const Nodes& N, co
     return c;
 }
 
-using Entry = std::tuple<double, i64, i64, i64, i64>;
+// (cost, lo << 32 | hi, version_lo << 32 | version_hi): the order of (cost, lo, hi,
+// version_lo, version_hi) for nodes and versions below 2^32, in 24 bytes, not 40
+using Entry = std::tuple<double, std::uint64_t, std::uint64_t>;
+inline std::uint64_t pack(i64 x, i64 y) {
+    return (static_cast<std::uint64_t>(x) << 32) | static_cast<std::uint64_t>(y);
+}
 
 }  // namespace
 
@@ -134,6 +140,7 @@ nb::object merge_levels(i64 k, nb::handle ea_, nb::handle eb_, nb::handle stats_
         scatter(scatter_, "scatter");
     if (stats.cols != 3 || wsum.cols != 3 || scatter.cols != 6 || k < 1)
         throw Mismatch("argument stats");
+    if (k >= (i64(1) << 32)) throw Mismatch("argument k");  // (the heap's packed entries)
     check_rows(eb, ea.n, "eb", true);
     check_rows(stats, ea.n, "stats");
     check_range(ea, 0, k, "ea");
@@ -171,13 +178,13 @@ nb::object merge_levels(i64 k, nb::handle ea_, nb::handle eb_, nb::handle stats_
     for (i64 s = 0; s < k; ++s) owner[s] = s;
     double tmp[6];
     std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
-    heap.emplace(INF, -1, -1, -1, -1);  // a sentinel, never reached
+    heap.emplace(INF, ~std::uint64_t(0), ~std::uint64_t(0));  // a sentinel, never reached
     for (i64 t = 0; t < n_e; ++t) {
         i64 a = mn(ea[t], eb[t]), b = mx(ea[t], eb[t]);
         double c = cost(a, b, stats(t, 0), stats(t, 1), stats(t, 2), N, P, tmp);
         // (a pair that may not merge is left out: popped, it would end the merging, as
         // the sentinel does, and no finite entry comes after it)
-        if (c != INF) heap.emplace(c, a, b, 0, 0);
+        if (c != INF) heap.emplace(c, pack(a, b), 0);
     }
     i64 live = k, step = 0, i = 0;
     while (i < targets.n) {
@@ -186,8 +193,10 @@ nb::object merge_levels(i64 k, nb::handle ea_, nb::handle eb_, nb::handle stats_
             ++i;
             continue;
         }
-        auto [c0, a, b, va, vb] = heap.top();
+        auto [c0, ab, vab] = heap.top();
         heap.pop();
+        i64 a = static_cast<i64>(ab >> 32), b = static_cast<i64>(ab & 0xffffffffu);
+        i64 va = static_cast<i64>(vab >> 32), vb = static_cast<i64>(vab & 0xffffffffu);
         if (c0 == INF) break;  // the sentinel, or no pair left that may merge
         if (owner[a] != a || owner[b] != b || version[a] != va || version[b] != vb) continue;
         owner[b] = a;
@@ -237,7 +246,7 @@ nb::object merge_levels(i64 k, nb::handle ea_, nb::handle eb_, nb::handle stats_
             i64 c = nb[e];
             i64 lo = a < c ? a : c, hi = a < c ? c : a;
             double ce = cost(lo, hi, st[3 * e], st[3 * e + 1], st[3 * e + 2], N, P, tmp);
-            if (ce != INF) heap.emplace(ce, lo, hi, version[lo], version[hi]);
+            if (ce != INF) heap.emplace(ce, pack(lo, hi), pack(version[lo], version[hi]));
         }
         --live;
     }
