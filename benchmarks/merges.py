@@ -2,6 +2,7 @@
 against the method's own superpoints (``merge_from=1``): time and error, alternating.
 
 Usage: python benchmarks/merges.py [--rounds 3] [--cases sampled rooms tile million]
+       python benchmarks/merges.py --kernel [--cases ...]
 
 Each case is segmented with ``merge_from=1`` and with the default (``merge_from=None``:
 5 on these clouds), in process, the two alternating for ``--rounds`` rounds; the table
@@ -20,6 +21,13 @@ gives the fastest time of each, their ratio, and the undersegmentation error of 
   k = 500 (no ground truth).
 
 A case whose data is missing is skipped with a line saying which.
+
+``--kernel``: the merging kernel alone (``hierarchy.merge_levels``, the flat merges and
+the merges to the count): each call the default run of a case makes is recorded, then
+run again on copies of its arrays, the fastest of ``--rounds``; one row a call (the
+superpoints it starts from, its cost: 2 the flat merges, 3 the scene's, 1 the plane's
+rise, 0 Ward's) and the total. The labelled scans' cases also take the Autzen town and
+the lidR forest plot (k = 3,000 and 1,000).
 """
 
 from __future__ import annotations
@@ -93,11 +101,58 @@ def _run(items, k, merge_from):
     return seconds, (float(np.mean(errors)) if errors else float("nan"))
 
 
+def _kernel_calls(items, k) -> list:
+    """The merging kernel's calls in the default run of ``items`` at ``k``, their arrays
+    copied as the kernel received them (it updates the nodes' in place)."""
+    from superfacets import PointCloud, segment
+    from superfacets._kernels import native
+
+    path = "hierarchy.merge_levels"
+    real = native.kernel(path)
+    calls = []
+
+    def recorded(*args):
+        calls.append([x.copy() if isinstance(x, np.ndarray) else x for x in args])
+        return real(*args)
+
+    native._chosen[path] = recorded
+    try:
+        for pts, _ in items:
+            cloud = PointCloud(pts) if isinstance(pts, np.ndarray) else replace(pts.cloud)
+            segment(cloud, k)
+    finally:
+        native._chosen[path] = real
+    return calls
+
+
+def _kernel_table(cases, rounds: int) -> None:
+    from superfacets._kernels import native
+
+    kernel = native.kernel("hierarchy.merge_levels")
+    print("| input | k | superpoints | cost | ms |")
+    print("|---|---|---|---|---|")
+    total = 0.0
+    for name, k, items in cases:
+        for args in _kernel_calls(items, k):
+            best = np.inf
+            for _ in range(rounds):
+                fresh = [x.copy() if isinstance(x, np.ndarray) else x for x in args]
+                t = time.perf_counter()
+                kernel(*fresh)
+                best = min(best, time.perf_counter() - t)
+            total += best
+            print(f"| {name} | {k:,} | {args[0]:,} | {args[8]} | {1e3 * best:.1f} |",
+                  flush=True)
+    print(f"| all | | | | {1e3 * total:.1f} |")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--cases", nargs="+", default=["sampled", "rooms", "tile", "million"],
                     choices=["sampled", "rooms", "tile", "million"])
+    ap.add_argument("--kernel", action="store_true",
+                    help="time the merging kernel's calls alone (see above)")
     a = ap.parse_args()
     cases = []
     if "sampled" in a.cases:
@@ -108,6 +163,11 @@ def main() -> None:
         cases += _scans(["lidarhd-rgb"], [1000])
     if "million" in a.cases:
         cases += _million()
+    if a.kernel:
+        if "tile" in a.cases:
+            cases += _scans(["pdal-autzen"], [3000]) + _scans(["lidr-megaplot"], [1000])
+        _kernel_table(cases, a.rounds)
+        return
     print("| input | k | merge_from=1: s / UE | default: s / UE | time ratio |")
     print("|---|---|---|---|---|")
     for name, k, items in cases:
