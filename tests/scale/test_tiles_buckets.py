@@ -151,6 +151,11 @@ def test_buckets_read_every_box_as_the_file_does(tmp_path, kind):
              else tile_grid(s.lo, s.hi, (3, 2, 2)))
     buckets = bucket(reader, edges, tmp_path / "b")
     assert buckets.counts.sum() == s.n_elements and (buckets.counts > 0).sum() >= 10
+    # a face's record leaves out its position (its corners' mean, computed again: the
+    # positions read below are the file's bit for bit); a point's keeps it
+    assert ("pos" in buckets.dtype.names) == (kind != "ply-mesh")
+    if kind == "ply-mesh":
+        assert buckets.dtype.itemsize == 8 + 24 + 72  # row, vertex indices, corners
     assert sorted(p.name for p in (tmp_path / "b").iterdir()) == sorted(
         f"tile-{t}.bin" for t in np.flatnonzero(buckets.counts))
     boxes = [(s.lo, s.hi), (s.lo - 1, s.lo - 0.5)]  # everything; nothing

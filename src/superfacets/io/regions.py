@@ -49,7 +49,8 @@ from .headers import check_las, first_line, npy_mapped, ply_mapped
 from .meshes import read_mesh
 from .ply import VertexView
 
-__all__ = ["RegionReader", "Survey", "CHUNK", "STREAMED", "SAMPLE", "point_cloud_of"]
+__all__ = ["RegionReader", "Survey", "CHUNK", "STREAMED", "SAMPLE", "point_cloud_of",
+           "face_centroids"]
 
 #: Rows read at once.
 CHUNK = 1 << 18
@@ -224,10 +225,7 @@ class RegionReader:
                 area += x[:, 1] * x[:, 1]
                 area += x[:, 2] * x[:, 2]
                 area = 0.5 * np.sqrt(area)
-                centroid = p[:, 0] + p[:, 1]  # (numpy's mean over the corners, its sum in
-                centroid += p[:, 2]  # the same order, without its reduction's strides)
-                centroid /= 3.0
-                yield s, centroid, area, (tri, verts, colors(s, s + tri.shape[0], tri))
+                yield s, face_centroids(p), area, (tri, verts, colors(s, s + tri.shape[0], tri))
             return
         for s, pts, extra in self._point_chunks(stats):
             yield s, pts, np.ones(pts.shape[0]), extra
@@ -425,6 +423,38 @@ class RegionReader:
         if s != self.n_rows:
             raise MeshFormatError(f"{self.path}: the header declares {self.n_rows} points, "
                                   f"the file holds {s} (truncated?)")
+
+
+def face_centroids(corners: np.ndarray) -> np.ndarray:
+    """The centroids of triangles from their corners, as a reader's chunks give them.
+
+    Parameters
+    ----------
+    corners : (c, 3, 3) float64 ndarray
+        Each face's three corners.
+
+    Returns
+    -------
+    (c, 3) float64 ndarray
+        numpy's mean over the corners, bit for bit (its sum in the same order, without its
+        reduction's strides), so a tile's records can leave them out and compute them
+        again (:mod:`superfacets.scale.tiles.buckets`).
+
+    Raises
+    ------
+    ParameterError
+        Never: the shape is the caller's.
+
+    Examples
+    --------
+    >>> p = np.random.default_rng(0).random((5, 3, 3))
+    >>> bool((face_centroids(p) == p.mean(axis=1)).all())
+    True
+    """
+    centroid = corners[:, 0] + corners[:, 1]
+    centroid += corners[:, 2]
+    centroid /= 3.0
+    return centroid
 
 
 def point_cloud_of(pts, colors, normals, viewpoint, name: str = ""):

@@ -23,9 +23,9 @@ from ...elements.kinds import KINDS
 from ...inputs.bounds import column_bounds, rows_in_box
 from ...inputs.mesh import Mesh
 from ...io.files import array_digest, load_checked
-from ...io.regions import point_cloud_of
+from ...io.regions import face_centroids, point_cloud_of
 
-__all__ = ["bucket", "TileBuckets", "box_folder", "keep_box", "mesh_records"]
+__all__ = ["bucket", "TileBuckets", "box_folder", "keep_box", "mesh_records", "positions"]
 
 
 def bucket(reader, tiles, folder, *, progress: bool = False) -> TileBuckets:
@@ -33,9 +33,9 @@ def bucket(reader, tiles, folder, *, progress: bool = False) -> TileBuckets:
 
     Each tile's file (``tile-T.bin`` in ``folder``) holds the elements whose
     position lies in that tile (:meth:`superfacets.scale.tiles.layout.Tiles.of`) in
-    file order, with what a box of them needs: the row and position, the
-    colour and normal of a point, the vertex indices and corner positions
-    of a face. A box is then read from the tiles it overlaps
+    file order, with what a box of them needs: the row, the position, colour and
+    normal of a point, the vertex indices and corner positions of a face (its
+    position, the corners' mean, is computed again: :func:`positions`). A box is then read from the tiles it overlaps
     (:meth:`TileBuckets.read_box`), the same elements, in the same order,
     as :meth:`RegionReader.read_box <superfacets.io.regions.RegionReader.read_box>` gives.
 
@@ -84,13 +84,15 @@ def bucket(reader, tiles, folder, *, progress: bool = False) -> TileBuckets:
                     fields["colors"] = col
             else:
                 fields = {n: a for n, a in zip(("colors", "normals"), extra) if a is not None}
-            if dtype is None:
-                dtype = np.dtype([("row", "<i8"), ("pos", "<f8", (3,))] + [
+            if dtype is None:  # (a face's position is its corners' mean: not stored)
+                dtype = np.dtype([("row", "<i8")] + ([("pos", "<f8", (3,))] if "corners"
+                                                      not in fields else []) + [
                     (n, "<i8" if n == "tri" else "<f8", a.shape[1:])
                     for n, a in fields.items()])
             rec = np.empty(pos.shape[0], dtype=dtype)
             rec["row"] = np.arange(s, s + pos.shape[0])
-            rec["pos"] = pos
+            if "pos" in dtype.names:
+                rec["pos"] = pos
             for n, a in fields.items():
                 rec[n] = a
             tile = tiles.of(pos)
@@ -99,7 +101,8 @@ def bucket(reader, tiles, folder, *, progress: bool = False) -> TileBuckets:
                                kind="stable")
             bounds = np.searchsorted(tile[order], np.arange(-1, n_tiles + 1))
             for t in np.flatnonzero(np.diff(bounds[1:])):
-                block = rec[order[bounds[t + 1]:bounds[t + 2]]]
+                these = order[bounds[t + 1]:bounds[t + 2]]
+                block = rec[these]
                 try:
                     with open(folder / f"tile-{t}.bin", "ab") as f:
                         block.tofile(f)
@@ -110,7 +113,7 @@ def bucket(reader, tiles, folder, *, progress: bool = False) -> TileBuckets:
                                   ) from None
                 counts[t] += block.size
                 crcs[t] = zlib.crc32(block.view(np.uint8), crcs[t])
-                low, high = column_bounds(block["pos"])
+                low, high = column_bounds(pos[these])
                 lo[t] = np.minimum(lo[t], low)
                 hi[t] = np.maximum(hi[t], high)
             if bar is not None:
@@ -123,6 +126,13 @@ def bucket(reader, tiles, folder, *, progress: bool = False) -> TileBuckets:
     digests = tuple(f"{crc:08x}" if c else "" for crc, c in zip(crcs, counts))
     return TileBuckets(str(folder), reader.kind, reader.n_rows, dtype, lo, hi, counts,
                        reader.viewpoint, reader.path, digests)
+
+
+def positions(rec: np.ndarray) -> np.ndarray:
+    """The positions of a tile's records ((n, 3) float64): points keep theirs, faces are
+    given their corners' mean again (:func:`~superfacets.io.regions.face_centroids`, the
+    same bits as the reader's: 24 of a face record's 128 bytes not written)."""
+    return rec["pos"] if "pos" in rec.dtype.names else face_centroids(rec["corners"])
 
 
 @dataclass(frozen=True)
@@ -194,7 +204,7 @@ class TileBuckets:
     def _records(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
         """The records of the elements in ``[lo, hi]``, in the order of their rows: the
         rows alone are sorted, and each record is copied into its place once (not joined
-        and then sorted: a copy fewer of a mesh box's 128-byte records, 1.77 -> 0.81 s a
+        and then sorted: a copy fewer of a mesh box's 104-byte records, 1.77 -> 0.81 s a
         box of 3M faces from 4 tiles' files)."""
         parts = []
         near = (self.counts > 0) & (self.lo <= hi).all(axis=1) & (self.hi >= lo).all(axis=1)
@@ -203,7 +213,7 @@ class TileBuckets:
             rec = self._tile(int(t))
             # (a tile wholly in the box is taken as read; another's elements in the box are
             # a copy, not of the file's bytes, which are let go here)
-            parts.append(rec if inside[t] else rec[rows_in_box(rec["pos"], lo, hi)])
+            parts.append(rec if inside[t] else rec[rows_in_box(positions(rec), lo, hi)])
             del rec
         if len(parts) < 2:  # (one file: in the order of its rows already; a copy of a
             # mapped file, as a box's records are the box's own)
@@ -224,7 +234,7 @@ class TileBuckets:
         """The rows, positions and input of a box's records."""
 
         rows = np.ascontiguousarray(rec["row"])
-        where = np.ascontiguousarray(rec["pos"])
+        where = np.ascontiguousarray(positions(rec))
         if rows.size == 0:
             return rows, where, None
         if not KINDS[self.kind].cloud:  # faces, with their vertices
@@ -285,7 +295,8 @@ def mesh_records(dtype: np.dtype, rows: np.ndarray, pos: np.ndarray, mesh: Mesh
     the reading keeps)."""
     rec = np.empty(rows.shape[0], dtype=dtype)
     rec["row"] = rows
-    rec["pos"] = pos
+    if "pos" in dtype.names:  # (else the corners' mean, the same bits)
+        rec["pos"] = pos
     rec["tri"] = mesh.faces
     rec["corners"] = mesh.vertices[mesh.faces]
     if "colors" in dtype.names:
