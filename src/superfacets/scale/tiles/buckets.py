@@ -35,8 +35,9 @@ def bucket(reader, tiles, folder, *, progress: bool = False) -> TileBuckets:
     position lies in that tile (:meth:`superfacets.scale.tiles.layout.Tiles.of`) in
     file order, with what a box of them needs: the row, the position, colour and
     normal of a point, the vertex indices and corner positions of a face (its
-    position, the corners' mean, is computed again: :func:`positions`). A box is then read from the tiles it overlaps
-    (:meth:`TileBuckets.read_box`), the same elements, in the same order,
+    position, the corners' mean, is computed again: :func:`positions`). A box is
+    then read from the tiles it overlaps (:meth:`TileBuckets.read_box`), the same
+    elements, in the same order,
     as :meth:`RegionReader.read_box <superfacets.io.regions.RegionReader.read_box>` gives.
 
     Parameters
