@@ -293,11 +293,9 @@ def mesh_records(dtype: np.dtype, rows: np.ndarray, pos: np.ndarray, mesh: Mesh
     """The records (``dtype``: :func:`bucket`'s, of faces) of a mesh box that
     :meth:`TileBuckets.read_box` gave as ``rows``, ``pos`` and ``mesh``: read back, the
     same rows, positions and mesh (its vertices numbered as the box numbers them, which
-    the reading keeps)."""
+    the reading keeps; ``pos``, the corners' mean, is not stored: :func:`positions`)."""
     rec = np.empty(rows.shape[0], dtype=dtype)
     rec["row"] = rows
-    if "pos" in dtype.names:  # (else the corners' mean, the same bits)
-        rec["pos"] = pos
     rec["tri"] = mesh.faces
     rec["corners"] = mesh.vertices[mesh.faces]
     if "colors" in dtype.names:
