@@ -209,7 +209,7 @@ def test_streamed_reading_errors_are_clear(tmp_path):
     with pytest.raises(MeshFormatError, match="ASCII PLY"):
         RegionReader.open(tmp_path / "ascii.ply")
     _write_ply_mesh(tmp_path / "quad.ply", np.eye(4, 3), [[0, 1, 2], [0, 1, 2, 3]], counts=True)
-    with pytest.raises(MeshFormatError, match="reads triangles.*row 1"):
+    with pytest.raises(MeshFormatError, match="not a triangle.*row 1"):
         RegionReader.open(tmp_path / "quad.ply").survey()
     good = tmp_path / "m.ply"
     _write_ply_mesh(good, *(lambda m: (m.vertices, m.faces))(trimesh.creation.icosphere(2)))

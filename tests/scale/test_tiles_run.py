@@ -15,7 +15,8 @@ from tiled import _bumpy, _bumpy_cloud, _lattice_cloud, _write_ply_mesh
 from superfacets import Mesh, ParameterError, segment
 from superfacets.elements.faces import face_graph
 from superfacets.errors import MeshFormatError
-from superfacets.io.regions import RegionReader
+from superfacets.io.meshes import read_mesh
+from superfacets.io.regions import RegionReader, streamed
 from superfacets.method.connectivity import label_components
 from superfacets.scale.tiles import buckets as buckets_module
 from superfacets.scale.tiles.layout import (
@@ -210,7 +211,7 @@ def test_bad_options_are_refused_before_any_work(tmp_path):
 def test_a_failing_tile_names_itself(tmp_path):
     path = tmp_path / "quad.ply"
     _write_ply_mesh(path, np.eye(4, 3), [[0, 1, 2], [0, 1, 2, 3]], counts=True)
-    with pytest.raises(MeshFormatError, match="reads triangles"):
+    with pytest.raises(MeshFormatError, match="has polygons"):
         segment_tiled(path, 1, tiles=2)
     np.save(tmp_path / "flat.npy", np.zeros((5, 3)))
     with pytest.raises(ParameterError, match="zero extent"):
@@ -515,3 +516,36 @@ def test_every_tile_turns_a_normal_alike(monkeypatch):
 
     monkeypatch.setattr(points, "orient_normals", own_box)
     assert segment_tiled(cloud, 100, tiles=4, workers=1).disagreements > 20
+
+
+def test_files_not_read_in_chunks_are_tiled_whole_and_polygons_refused_with_advice(tmp_path):
+    """An ASCII PLY and a binary PLY whose faces carry colours are not read in chunks: a
+    tiled run reads them whole (as an OBJ), with the labels of the same run on the mesh
+    read from the file; a polygon mesh is refused, the message saying what to do (it named
+    ``RegionReader.spill`` to a command line user, and a face-coloured PLY was refused)."""
+    from plyfile import PlyData, PlyElement
+
+    from superfacets.cli import main
+
+    mesh = _bumpy(4)
+    ascii_ply, coloured, triangles = (tmp_path / n for n in ("a.ply", "c.ply", "t.ply"))
+    trimesh.Trimesh(mesh.vertices, mesh.faces, process=False).export(ascii_ply,
+                                                                    encoding="ascii")
+    _write_ply_mesh(triangles, mesh.vertices, mesh.faces)
+    v = PlyData.read(str(triangles))["vertex"].data
+    f = np.empty(len(mesh.faces), dtype=[("vertex_indices", "i4", (3,)), ("red", "u1")])
+    f["vertex_indices"], f["red"] = mesh.faces, np.arange(len(mesh.faces)) % 2 * 255
+    PlyData([PlyElement.describe(v, "vertex"), PlyElement.describe(f, "face")]).write(
+        str(coloured))
+    assert [streamed(p) for p in (ascii_ply, coloured, triangles)] == [False, False, True]
+    for path in (ascii_ply, coloured):
+        r = segment_tiled(path, 20, tiles=2, workers=1)
+        same = segment_tiled(read_mesh(path), 20, tiles=2, workers=1)
+        assert r.n_segments == 20 and np.array_equal(r.labels, same.labels), path
+        out = tmp_path / f"{path.stem}.seg"
+        assert main(["segment", str(path), "-k", "20", "--tiles", "2", "-o", str(out)]) == 0
+        assert np.loadtxt(out, dtype=np.int64).shape == (len(mesh.faces),)
+    _write_ply_mesh(tmp_path / "quad.ply", np.eye(4, 3), [[0, 1, 2], [0, 1, 2, 3]], counts=True)
+    assert not streamed(tmp_path / "quad.ply")
+    with pytest.raises(MeshFormatError, match="has polygons: segment it without tiles"):
+        segment_tiled(tmp_path / "quad.ply", 2, tiles=2, workers=1)

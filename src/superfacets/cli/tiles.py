@@ -157,9 +157,9 @@ def _source(args):
     from dataclasses import replace
 
     from ..errors import ParameterError
-    from ..io.regions import STREAMED, RegionReader
+    from ..io.regions import RegionReader, streamed
 
-    if Path(args.mesh).suffix.lower().lstrip(".") not in STREAMED:
+    if not streamed(args.mesh):
         return scan_cloud(read_usable(args.mesh, clouds=True), args)
     reader = RegionReader.open(args.mesh)
     if reader.kind != "points":

@@ -20,7 +20,12 @@ from ..errors import MemoryLimitError, MeshFormatError, MissingExtraError
 from .files import decompressed_head, max_ratio, split_suffix
 
 __all__ = ["header_counts", "e57_counts", "check_las", "check_laz", "check_stl", "ply_mapped",
-           "npy_mapped", "first_line"]
+           "npy_mapped", "first_line", "NotStreamedError"]
+
+
+class NotStreamedError(MeshFormatError):
+    """A PLY file that cannot be read in chunks (ASCII, or faces that are not triangles
+    alone): a tiled run reads it whole instead (``RegionReader.spill``)."""
 
 _SIZE = {"char": 1, "uchar": 1, "int8": 1, "uint8": 1, "short": 2, "ushort": 2,
          "int16": 2, "uint16": 2, "int": 4, "uint": 4, "int32": 4, "uint32": 4,
@@ -334,8 +339,10 @@ def ply_mapped(path: Path):
 
     Raises
     ------
+    NotStreamedError
+        If the file is an ASCII PLY, or its faces are not all triangles.
     MeshFormatError
-        If the file is an ASCII PLY, its header cannot be read, or its sizes do not fit.
+        If its header cannot be read, or its sizes do not fit.
 
     Examples
     --------
@@ -349,8 +356,7 @@ def ply_mapped(path: Path):
         with path.open("rb") as f:
             head = f.read(1 << 12)
         if b"format ascii" in head.split(b"end_header")[0]:
-            raise MeshFormatError(f"{path}: an ASCII PLY is not read in chunks; use "
-                                  "RegionReader.spill (it must fit one machine)")
+            raise NotStreamedError(f"{path}: an ASCII PLY is not read in chunks")
         ply = PlyData.read(str(path), mmap=True,
                            known_list_len={"face": {"vertex_indices": 3, "vertex_index": 3}})
     except MeshFormatError:
@@ -358,9 +364,8 @@ def ply_mapped(path: Path):
     except (PlyParseError, ValueError, KeyError, IndexError, TypeError, EOFError,
             OSError) as exc:
         if "unexpected list length" in str(exc):  # plyfile's check of the face sizes
-            raise MeshFormatError(f"{path}: a tiled run reads triangles, and a face is not "
-                                  f"one ({first_line(exc)}); use RegionReader.spill for "
-                                  "polygons") from None
+            raise NotStreamedError(f"{path}: a face is not a triangle ({first_line(exc)}): "
+                                   "polygons are not read in chunks") from None
         raise MeshFormatError(f"{path}: cannot read PLY: {first_line(exc)}") from None
     if "vertex" not in [e.name for e in ply.elements]:
         raise MeshFormatError(f"{path}: the PLY has no vertex element")

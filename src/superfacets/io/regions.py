@@ -45,12 +45,12 @@ from ..inputs.convert import as_mesh
 from ..inputs.mesh import Mesh
 from ..inputs.rgb import color_top, unit_colors
 from .clouds import is_cloud_file, read_cloud
-from .headers import check_las, first_line, npy_mapped, ply_mapped
+from .headers import NotStreamedError, check_las, first_line, npy_mapped, ply_mapped
 from .meshes import read_mesh
 from .ply import VertexView
 
 __all__ = ["RegionReader", "Survey", "CHUNK", "STREAMED", "SAMPLE", "point_cloud_of",
-           "face_centroids"]
+           "face_centroids", "streamed"]
 
 #: Rows read at once.
 CHUNK = 1 << 18
@@ -62,6 +62,46 @@ STREAMED = ("ply", "las", "laz", "npy")
 VERTEX_TABLE_BYTES = 1 << 30
 #: Positions kept by a survey, at most (every ``ceil(n_rows / SAMPLE)``-th row): 24 MiB.
 SAMPLE = 1 << 20
+
+
+def streamed(path) -> bool:
+    """Whether :meth:`RegionReader.open` reads the file at ``path`` in chunks: one of
+    :data:`STREAMED`, and a PLY binary, with faces (if any) of one list property of three
+    corners. Any other file a tiled run reads whole (:meth:`RegionReader.spill`).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+
+    Returns
+    -------
+    bool
+
+    Raises
+    ------
+    MeshFormatError
+        If a PLY's header is damaged.
+
+    Examples
+    --------
+    >>> _ = trimesh.creation.box().export("box.ply")
+    >>> streamed("box.ply"), streamed("box.obj")
+    (True, False)
+    """
+    p = Path(path)
+    suffix = p.suffix.lower().lstrip(".")
+    if suffix not in STREAMED:
+        return False
+    if suffix != "ply" or not p.is_file():
+        return True
+    try:
+        ply = ply_mapped(p)
+    except NotStreamedError:
+        return False
+    if "face" not in [e.name for e in ply.elements] or ply["face"].count == 0:
+        return True
+    face = ply["face"]
+    return len(face.properties) == 1 and isinstance(face.data, np.memmap)
 
 
 @dataclass(frozen=True)
@@ -161,7 +201,8 @@ class RegionReader:
                                       f"got {arr.shape}")
             return cls(str(p), "points", "npy-points", int(arr.shape[0]), chunk)
         raise MeshFormatError(f"{p}: .{suffix} is not read in chunks (streamed: "
-                              f"{', '.join('.' + s for s in STREAMED)}); use RegionReader.spill")
+                              f"{', '.join('.' + s for s in STREAMED)}): use "
+                              "RegionReader.spill, which reads it whole")
 
     @classmethod
     def spill(cls, source, folder, *, chunk: int = CHUNK) -> "RegionReader":
@@ -197,7 +238,8 @@ class RegionReader:
         faces = obj.faces
         if faces.ndim != 2 or faces.shape[1] != 3:
             raise MeshFormatError(f"{obj.name or 'mesh'}: a tiled run takes triangle meshes "
-                                  "or point clouds (this mesh has polygons)")
+                                  "or point clouds, and this mesh has polygons: segment it "
+                                  "without tiles (one run takes polygons), or triangulate it")
         np.save(folder / "vertices.npy", np.ascontiguousarray(obj.vertices, dtype=np.float64))
         np.save(folder / "faces.npy", np.ascontiguousarray(faces, dtype=np.int64))
         if obj.colors_of_faces() is not None:
@@ -344,8 +386,8 @@ class RegionReader:
         prop = face.properties[0]
         data = face.data
         if not isinstance(data, np.memmap) or len(face.properties) != 1:
-            raise MeshFormatError(f"{self.path}: a tiled run reads binary PLY faces with one "
-                                  "list property (vertex_indices); use RegionReader.spill")
+            raise NotStreamedError(f"{self.path}: a tiled run reads binary PLY faces in "
+                                   "chunks with one list property (vertex_indices) alone")
         order = ply.byte_order if ply.byte_order in "<>" else "="
         rec = np.dtype([("n", order + prop.len_dtype), ("v", order + prop.val_dtype, (3,))])
         raw = np.memmap(self.path, dtype=rec, mode="r", offset=data.offset, shape=(face.count,))
@@ -355,8 +397,8 @@ class RegionReader:
             wrong = np.flatnonzero(block["n"] != 3)
             if wrong.size:
                 raise MeshFormatError(f"{self.path}: face {a + int(wrong[0])} has "
-                                      f"{int(block['n'][wrong[0]])} corners: a tiled run reads "
-                                      "triangles (use RegionReader.spill for polygons)")
+                                      f"{int(block['n'][wrong[0]])} corners: a tiled run takes "
+                                      "triangles (one run takes polygons: without tiles)")
             return np.asarray(block["v"], dtype=np.int64)
 
         # a face's colour: the mean of its vertices' (a tiled run reads binary PLY faces

@@ -55,7 +55,7 @@ from ...elements import points
 from ...elements.kinds import kind_of
 from ...errors import ParameterError, SuperfacetsError
 from ...inputs.bounds import check_extent, rows_in_box
-from ...io.regions import STREAMED, RegionReader
+from ...io.regions import RegionReader, streamed
 from ...method.merges import NOISE_SAMPLE
 from ...method.params import DEFAULTS, resolve, superfacet_size
 from ...method.rules import fine_count
@@ -497,9 +497,9 @@ def _surveyed(source, tmp, tiles, params):
 
     if isinstance(source, RegionReader):  # opened by the caller (its viewpoint, up)
         reader = source
-    elif isinstance(source, (str, Path)) and Path(source).suffix.lower().lstrip(".") in STREAMED:
+    elif isinstance(source, (str, Path)) and streamed(source):
         reader = RegionReader.open(source)
-    else:
+    else:  # (an object, or a file not read in chunks: an ASCII PLY, an OBJ, ...)
         reader = RegionReader.spill(source, tmp)
     survey = reader.survey()
     if check_extent(survey.lo, survey.hi, f"{reader.path}: ",
