@@ -138,6 +138,49 @@ def test_a_seed_resolution_gives_about_area_over_r_squared_on_a_plane(tmp_path, 
     assert "not with -k" in capsys.readouterr().err
 
 
+
+def test_a_seed_resolution_whose_square_underflows_gives_the_most_superpoints(tmp_path, capsys):
+    """``area / r^2`` where ``r * r`` underflows to 0 (1e-200) or the quotient overflows
+    (1e-170) raised ZeroDivisionError / OverflowError through the command line: the count
+    is the most the input takes (one per 12 points), and the summary says it is capped."""
+    from superfacets.api.sizes import count_for_resolution
+
+    rng = np.random.default_rng(6)
+    cloud = np.c_[rng.random((1200, 2)) * 10.0, rng.normal(0, 0.01, 1200)]
+    path = tmp_path / "plane.npy"
+    np.save(path, cloud)
+    for r in (1e-200, 1e-170, 1e-9):
+        assert count_for_resolution(read_cloud(path), r)[0] == 100, r
+    assert count_for_resolution(read_cloud(path), 1e200)[0] == 1
+    out = tmp_path / "plane.seg"
+    assert main(["segment", str(path), "--seed-resolution", "1e-200", "-o", str(out)]) == 0
+    said = capsys.readouterr().out
+    assert "k = 100 superpoints from --seed-resolution 1e-200" in said
+    assert "at most one per 12 points" in said
+    assert len(np.unique(read_labels(out))) == 100
+    assert main(["segment", str(path), "--seed-resolution", "3", "-o", str(out)]) == 0
+    assert "at most one per" not in capsys.readouterr().out
+
+
+def test_the_command_line_says_a_warning_in_one_line_and_refuses_a_huge_radius(tmp_path,
+                                                                               capsys):
+    """A library warning (here: more superpoints than asked, the graph's points all apart)
+    printed Python's file, line and source line; it is one ``superfacets: warning:`` line.
+    ``--radius 1e300`` overflowed the superfacet's area into a traceback."""
+    rng = np.random.default_rng(7)
+    path = tmp_path / "c.npy"
+    np.save(path, rng.random((300, 3)))
+    out = tmp_path / "c.seg"
+    assert main(["segment", str(path), "-k", "20", "--neighbor-distance", "1e-300",
+                 "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert err.startswith("superfacets: warning: 300 superpoints for n_segments=20")
+    assert len(err.strip().splitlines()) == 1 and "pipeline(" not in err
+    assert main(["segment", str(path), "--radius", "1e300", "-o", str(tmp_path / "r.seg")]) == 2
+    assert "radius must be a finite number in (0, 1000]" in capsys.readouterr().err
+    assert not (tmp_path / "r.seg").exists()
+
+
 def test_the_default_count_grows_with_a_cloud_and_the_summary_says_so(tmp_path, capsys):
     from superfacets.api.sizes import default_count
 

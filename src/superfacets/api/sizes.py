@@ -133,9 +133,11 @@ def count_for_resolution(data, resolution: float, elements: str | None = None,
         area = float(elements_of(data, "points", **element_options).graph.sizes.sum())
     else:
         area = float(data.area)
-    n = _rows(data, kind)
-    k = int(round(area / (r * r)))
-    return int(max(1, min(k, max(1, n // MIN_ELEMENTS_PER_SEGMENT)))), area
+    most = max(1, _rows(data, kind) // MIN_ELEMENTS_PER_SEGMENT)
+    with np.errstate(over="ignore", under="ignore", divide="ignore"):
+        share = np.float64(area) / np.float64(r) / np.float64(r)  # (r * r can underflow to 0)
+    k = most if not share < most else round(float(share))  # (inf and nan: the most)
+    return int(max(1, k)), area
 
 
 def diagonal_fraction(data, distance: float, what: str = "distance") -> float:

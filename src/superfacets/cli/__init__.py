@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 
 __all__ = ["main", "build_parser"]
 
@@ -121,6 +122,7 @@ def main(argv: list[str] | None = None) -> int:
     from ..errors import NoDisplayError, SuperfacetsError
 
     restore = _terminate_cleanly()  # first: Ctrl-C during the imports too
+    shown, warnings.showwarning = warnings.showwarning, _warning_line
     from .._runtime.memory import limit_arenas, limit_blas_threads
 
     limit_arenas()  # (before any thread starts: see its notes)
@@ -165,9 +167,16 @@ def main(argv: list[str] | None = None) -> int:
         print("superfacets: terminated", file=sys.stderr)
         return 143
     finally:
+        warnings.showwarning = shown
         restore()
         if argv is None:  # the program itself: its work is done, a late Ctrl-C is moot
             _quiet_exit()
+
+
+def _warning_line(message, category, filename, lineno, file=None, line=None) -> None:
+    """A warning as the command line says it: one line on stderr, not Python's file, line
+    number and source line."""
+    print(f"superfacets: warning: {message}", file=sys.stderr if file is None else file)
 
 
 #: Options whose values may start with a minus: an axis (``--up -y``, ``--seen-from -z``).

@@ -273,6 +273,7 @@ def _sizes(args, data, kind: str, kwargs: dict) -> tuple[dict, str]:
     """The count and the neighbour radius from the sizes in the data's units, or the
     count that grows with the input where none is given; and a line saying which."""
     from ..api.sizes import (
+        MIN_ELEMENTS_PER_SEGMENT,
         POINTS_PER_SEGMENT,
         count_for_resolution,
         default_count,
@@ -289,10 +290,15 @@ def _sizes(args, data, kind: str, kwargs: dict) -> tuple[dict, str]:
     segs = kind_of(kind).segment_word
     if args.seed_resolution is not None:
         options = {k: kwargs[k] for k in ("n_neighbors", "neighbor_radius") if k in kwargs}
-        k, area = count_for_resolution(data, args.seed_resolution, kind, **options)
+        res = args.seed_resolution
+        k, area = count_for_resolution(data, res, kind, **options)
         args.n_segments = k
-        return kwargs, (f"k = {k:,} {segs} from --seed-resolution {args.seed_resolution:g}: "
-                        f"a surface of {area:,.4g} square units / {args.seed_resolution:g}^2")
+        with np.errstate(over="ignore", under="ignore", divide="ignore"):
+            capped = not np.float64(area) / np.float64(res) / np.float64(res) < k + 0.5
+        return kwargs, (f"k = {k:,} {segs} from --seed-resolution {res:g}: a surface of "
+                        f"{area:,.4g} square units / {res:g}^2" + (
+                            f", at most one per {MIN_ELEMENTS_PER_SEGMENT} {kind}"
+                            if capped else ""))
     if args.n_segments is None and args.radius is None:
         k = default_count(data, kind, DEFAULTS.n_segments)
         args.n_segments = k

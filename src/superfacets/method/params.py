@@ -38,7 +38,7 @@ __all__ = ["SegmentParams", "DEFAULTS", "Parameter", "PARAMETERS", "PARAMETER", 
            "WEIGHTING_ALPHA", "DEFAULT_CENTER_TOL", "COARSE_MIN_PER_SEGMENT",
            "COARSE_MIN_PER_SEGMENT_POINTS", "COARSE_PER_SEGMENT_POINTS",
            "COARSE_PER_SEGMENT", "DEFAULT_N_SEGMENTS", "DEFAULT_ALPHAS", "resolve", "check_int",
-           "check_number", "check_positive", "check_nonneg", "check_choice",
+           "check_number", "check_positive", "check_nonneg", "check_choice", "check_radius",
            "check_n_segments", "check_threads", "check_bool", "max_threads", "superfacet_size",
            "better_method", "assignment_of", "superfacet_measure"]
 
@@ -67,6 +67,28 @@ WEIGHTING_ALPHA = {"paper": (200.0, (0.0, math.inf)), "shlafman": (0.5, (0.0, 1.
 #: the whole mesh).
 MAX_WEIGHT_FACTOR = 1e12
 MAX_WINDOW = 1e3
+#: Largest radius, a fraction of the bounding-box diagonal (beyond 1 a superfacet is the
+#: whole input; far beyond, its area overflows a float).
+MAX_RADIUS = 1e3
+
+
+def check_radius(value) -> float:
+    """``radius`` (a fraction of the bounding-box diagonal) as a float in
+    ``(0, MAX_RADIUS]``.
+
+    Raises
+    ------
+    ParameterError
+        If it is not a finite number in that range.
+
+    Examples
+    --------
+    >>> check_radius(0.05)
+    0.05
+    """
+    return check_number("radius", value, 0.0, MAX_RADIUS, lo_open=True)
+
+
 #: The paper's sweep (Fig. 4): numbers of superfacets and alphas.
 DEFAULT_N_SEGMENTS = (50, 100, 150, 200, 250, 300)
 DEFAULT_ALPHAS = (0.0, 100.0, 200.0, 500.0, 1000.0)
@@ -154,8 +176,8 @@ def _declare() -> tuple[Parameter, ...]:
         P("n_segments", 150, "int or None", "number of superfacets k, 1 <= k <= elements "
           "(paper section 3.1); None with radius", None, cli="--n-segments"),
         P("radius", None, "float or None", "superfacet radius, a fraction of the bounding-box "
-          "diagonal, > 0 (instead of n_segments)",
-          lambda v: check_positive("radius", v), cli="--radius"),
+          "diagonal, in (0, 1000] (instead of n_segments)",
+          lambda v: check_radius(v), cli="--radius"),
         P("alpha", WEIGHTING_ALPHA["paper"][0], "float", "weight of the angular (concavity) "
           "term, eq. 3, >= 0; in [0, 1] with weighting='shlafman' (eq. 6)", None, cli="--alpha"),
         P("eta_convex", 0.2, "float", "factor of the angular term on convex edges, eq. 2, >= 0",
@@ -338,7 +360,7 @@ def resolve(**params) -> SegmentParams:
     n_segments = None if p.radius is not None else (
         check_int("n_segments", DEFAULTS.n_segments if p.n_segments is None else p.n_segments,
                   lo=1))
-    radius = None if p.radius is None else check_positive("radius", p.radius)
+    radius = None if p.radius is None else check_radius(p.radius)
     init = p.init if p.init is not None else ("farthest" if radius is None else "flood")
     check_choice("init", init, INITS)
     weighting = check_choice("weighting", p.weighting, WEIGHTINGS)
