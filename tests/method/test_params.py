@@ -175,6 +175,30 @@ def test_the_input_is_data_and_the_keyword_of_before_still_works_with_a_warning(
         segment(ball, 10, mesh=ball)
 
 
+
+def test_a_file_path_is_an_input_read_as_the_command_line_reads_it(tmp_path):
+    """``segment("scan.las", k)`` was a TypeError naming meshes only: a path (str or
+    ``os.PathLike``) is read by ``read_input``, with the labels of the object it reads; a
+    missing file is a FileNotFoundError, and a list of points is refused in words that
+    name the point cloud's forms."""
+    import trimesh
+
+    from superfacets import segment, superfacets
+    from superfacets.io import read_input
+
+    trimesh.creation.icosphere(subdivisions=2).export(tmp_path / "ball.ply")
+    np.save(tmp_path / "pts.npy", np.random.default_rng(1).random((600, 3)))
+    for name, k in (("ball.ply", 12), ("pts.npy", 20)):
+        path = tmp_path / name
+        want = segment(read_input(path), k).labels
+        np.testing.assert_array_equal(segment(path, k).labels, want)
+        np.testing.assert_array_equal(superfacets(str(path), k), want)
+    with pytest.raises(FileNotFoundError, match="no such file"):
+        segment(tmp_path / "missing.ply", 5)
+    with pytest.raises(TypeError, match=r"a PointCloud or an \(N, 3\) array"):
+        segment([[0.0, 0.0, 0.0]] * 5, 2)
+
+
 def _doc_parameters(doc: str) -> dict[str, str]:
     """name -> its type line, from a numpydoc Parameters section."""
     import re

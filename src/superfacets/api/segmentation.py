@@ -11,6 +11,7 @@ validates its parameters before any work and runs :func:`pipeline`
 from __future__ import annotations
 
 import inspect
+import os
 import warnings
 
 import numpy as np
@@ -45,8 +46,9 @@ def superfacets(data=_NO_INPUT, n_segments: int | None = _D.n_segments, *, featu
         non-manifold edges and several connected components are accepted (each
         component gets its own superfacets); copies of a face (the same vertices, in
         any order) are one element and share its label. Or a point
-        cloud (see :func:`superpoints`). (Named ``mesh`` before: ``mesh=`` still
-        works, with a ``FutureWarning``.)
+        cloud (see :func:`superpoints`), or the path of a file of either (str or
+        ``os.PathLike``, read by :func:`superfacets.io.read_input`). (Named ``mesh``
+        before: ``mesh=`` still works, with a ``FutureWarning``.)
     n_segments : int, default 150
         Desired number of superfacets ``k``, ``1 <= k <= m``. The radius is
         then ``r = sqrt(A / (k pi))`` (section 3.1). Ignored, and must be left
@@ -307,9 +309,10 @@ def segment(data=_NO_INPUT, n_segments: int | None = _D.n_segments, *, features=
 
     Parameters
     ----------
-    data : Mesh, trimesh.Trimesh, (vertices, faces), PointCloud or TetMesh
-        The input (see :func:`superfacets`; named ``mesh`` before, which still works
-        as a keyword, with a ``FutureWarning``).
+    data : Mesh, trimesh.Trimesh, (vertices, faces), PointCloud, TetMesh, or a path
+        The input (see :func:`superfacets`; a file's path is read by
+        :func:`superfacets.io.read_input`; named ``mesh`` before, which still works as a
+        keyword, with a ``FutureWarning``).
     n_segments : int, default 150
         Desired number of superfacets ``k``.
     features : (N, d) float ndarray, optional
@@ -383,10 +386,14 @@ def _the_input(data, params: dict, name: str):
             raise TypeError(f"{name}() got the input twice (data and mesh=)")
         warnings.warn(f"{name}(mesh=...) is {name}(data=...) now (or the input first); "
                       "mesh= will be removed", FutureWarning, stacklevel=3)
-        return given
+        data = given
     if data is _NO_INPUT:
         raise TypeError(f"{name}() needs the input: a mesh, point cloud or tetrahedral mesh "
                         "(its first argument, data)")
+    if isinstance(data, (str, os.PathLike)):  # a file: read as the command line reads it
+        from ..io import read_input
+
+        return read_input(data)
     return data
 
 

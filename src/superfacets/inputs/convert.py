@@ -68,7 +68,8 @@ def as_mesh(mesh, name: str = "") -> Mesh:
                     **trimesh_colors(mesh))
     raise TypeError(
         "mesh must be a superfacets.Mesh, a trimesh.Trimesh or Scene, a pyvista.PolyData, an "
-        f"open3d TriangleMesh or a (vertices, faces) pair, got {type(mesh).__name__}"
+        "open3d TriangleMesh or a (vertices, faces) pair (a point cloud: a PointCloud or an "
+        f"(N, 3) array), got {type(mesh).__name__}"
     )
 
 
