@@ -221,6 +221,45 @@ def test_render_points_colours_a_cloud_by_superpoint(tmp_path):
         render_points(pts, labels[:-1])
 
 
+
+def test_cli_panel_draws_a_cloud_at_several_counts_and_from_label_files(tmp_path, capsys):
+    """``panel`` read meshes only ("unknown mesh format .npy"): a cloud's panels are its
+    points coloured by superpoint, for the methods that segment points (graph segmentation
+    here); one that does not (VSA) is refused in one line naming those that do; a
+    tetrahedral mesh is drawn from its label files."""
+    from superfacets import superpoints
+
+    pts = _sphere_cloud(2000)
+    np.save(tmp_path / "c.npy", pts)
+    write_labels(tmp_path / "c.seg", superpoints(pts, 9))
+    pan = tmp_path / "p.png"
+    assert main(["panel", str(tmp_path / "c.npy"), "-o", str(pan), "-k", "6", "12",
+                 "-m", "superfacets", "graph_segmentation", "--size", "160x120"]) == 0
+    img = np.asarray(Image.open(pan).convert("RGB"))
+    assert img.shape[:2] == (120, 640) and "4 panels" in capsys.readouterr().out
+    for i in range(4):  # every panel shows its points, in several colours
+        one = img[:, 160 * i:160 * (i + 1)]
+        assert _foreground(one[40:90, 50:110]).mean() > 0.8, i
+        assert _palette_colours_seen(one, min_pixels=10) >= 3, i
+    assert main(["panel", str(tmp_path / "c.npy"), "--labels", str(tmp_path / "c.seg"),
+                 "-o", str(pan), "--size", "160x120"]) == 0
+    assert "1 panel," in capsys.readouterr().out
+    assert main(["panel", str(tmp_path / "c.npy"), "-m", "vsa", "-o", str(pan)]) == 2
+    assert "vsa segments faces, not points; methods that segment points: superfacets" in \
+        capsys.readouterr().err
+    meshio = pytest.importorskip("meshio")
+    from scipy.spatial import Delaunay
+
+    ball = np.random.default_rng(2).random((300, 3))
+    meshio.write(tmp_path / "v.vtu", meshio.Mesh(ball, [("tetra", Delaunay(ball).simplices)]))
+    assert main(["segment", str(tmp_path / "v.vtu"), "-k", "6", "-o",
+                 str(tmp_path / "v.seg")]) == 0
+    assert main(["panel", str(tmp_path / "v.vtu"), "--labels", str(tmp_path / "v.seg"),
+                 "-o", str(pan), "--size", "160x120"]) == 0
+    assert main(["panel", str(tmp_path / "v.vtu"), "-k", "6", "-o", str(pan)]) == 2
+    assert "'superfacets segment' segments cells" in capsys.readouterr().err
+
+
 def test_html_page_draws_a_point_cloud_in_headless_chromium(tmp_path):
     from superfacets import superpoints
 

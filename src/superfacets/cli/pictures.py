@@ -87,11 +87,12 @@ def add_parsers(sub) -> None:
 
     pn = sub.add_parser(
         "panel", help="render several settings side by side (the paper's Figs. 2, 3, 8)",
-        description="Render one mesh at several settings side by side, with titles: every "
+        description="Render one mesh, point cloud or tetrahedral mesh (cut at the middle of "
+                    "x) at several settings side by side, with titles: every "
                     "combination of the given methods, -k values and --alpha values "
                     "(e.g. --alpha 0 200 1000 -k 150 is the paper's Fig. 2), or the given "
                     "label files (--labels).")
-    pn.add_argument("mesh", metavar="MESH", help="input mesh file")
+    pn.add_argument("mesh", metavar="INPUT", help="input mesh, point-cloud or volume file")
     pn.add_argument("-o", "--output", metavar="OUT.png", required=True, help="PNG to write")
     pn.add_argument("-m", "--method", nargs="+", default=["superfacets"], metavar="NAME",
                     help="registered methods (default: superfacets)")
@@ -169,22 +170,27 @@ def cmd_render(args) -> int:
 def cmd_panel(args) -> int:
     from itertools import product as _product
 
+    from ..elements.builders import kind_for
     from ..errors import ParameterError
     from ..evaluation.methods import get_method
     from ..io import read_labels
     from ..scale.runner.grid import expand_grid, method_grid, parse_params
     from ..viz.render import render_panel
+    from .segmenting import check_method_elements
 
     out = check_output(args.output, (".png",), "the picture",
                        inputs=(args.mesh, getattr(args, "labels", None)))
-    mesh = _read(args)
+    mesh = _read(args, clouds=True)
+    kind = kind_for(mesh)  # (faces, points or cells: what the labels are of)
     items = []
     if args.labels:
         for p in args.labels:
-            items.append((mesh, read_labels(p, n_faces=mesh.n_faces), Path(p).stem))
+            items.append((mesh, read_labels(p, n_faces=kind_of(kind).n_rows(mesh)),
+                          Path(p).stem))
     else:
         methods = [get_method(m) for m in args.method]
         given = method_grid(methods, parse_params(args.param))
+        extra = {m.name: check_method_elements(m, kind) for m in methods}
         for method in methods:
             grid = dict(given[method.name])
             if args.alpha and "alpha" in method.defaults:
@@ -192,7 +198,8 @@ def cmd_panel(args) -> int:
             for cfg, k in _product(expand_grid(method.name, **grid), args.n_segments):
                 params = cfg.kwargs
                 try:
-                    run = method.run(mesh, k, cache={}, seed=0, **params)
+                    run = method.run(mesh, k, cache={}, seed=0, **params,
+                                     **extra[method.name])
                 except (ValueError, RuntimeError) as exc:
                     raise ParameterError(f"{args.mesh}: {method.name}: {exc}") from None
                 n = len(np.unique(run.labels))
@@ -205,11 +212,12 @@ def cmd_panel(args) -> int:
         if len(args.titles) != len(items):
             raise ParameterError(f"--titles: {len(args.titles)} given for {len(items)} panels")
         items = [(m, lab, t) for (m, lab, _), t in zip(items, args.titles)]
+    items = [(*_drawn(m, lab, kind)[:2], t) for m, lab, t in items]  # (a volume: its cut)
     up = up_of(args, mesh)
     render_panel(items, out, ncols=args.columns, size=args.size, view=args.view, up=up[0],
                  background=args.background, boundaries=not args.no_boundaries,
                  line_width=args.line_width, zoom=args.zoom)
-    print(f"wrote {out}: {len(items)} panels, {said_up(up)}")
+    print(f"wrote {out}: {len(items)} panel{'s' if len(items) != 1 else ''}, {said_up(up)}")
     return 0
 
 

@@ -568,11 +568,26 @@ def cmd_baseline(args) -> int:
     return 0
 
 
+def check_method_elements(method, kind: str) -> dict:
+    """The keywords that run a registered ``method`` on elements of ``kind`` (``elements=``
+    where it takes more than faces); a ParameterError naming the methods that do, where it
+    does not."""
+    from ..errors import ParameterError
+    from ..evaluation.methods import METHODS
+
+    if kind not in method.elements:
+        able = ", ".join(n for n, m in METHODS.items() if kind in m.elements)
+        raise ParameterError(f"{method.name} segments {' and '.join(method.elements)}, not "
+                             f"{kind}; " + (f"methods that segment {kind}: {able}" if able else
+                                            f"'superfacets segment' segments {kind} (its "
+                                            "labels drawn with --labels)"))
+    return {"elements": kind} if method.takes_elements else {}
+
+
 def _baseline_kind(args, data, method, ply_out) -> str:
     """The elements a baseline segments: a cloud's points, a mesh's faces (or
     ``--elements vertices``); refused in one line where the method does not segment them."""
     from ..errors import ParameterError
-    from ..evaluation.methods import METHODS
 
     if hasattr(data, "tets"):
         raise ParameterError(f"{args.mesh}: the baselines segment surfaces and point clouds, "
@@ -582,10 +597,7 @@ def _baseline_kind(args, data, method, ply_out) -> str:
     if kind == "points" and args.elements not in (None, "points"):
         raise ParameterError(f"{args.mesh} is a point cloud: its elements are points, not "
                              f"{args.elements}")
-    if kind not in method.elements:
-        able = ", ".join(n for n, m in METHODS.items() if kind in m.elements)
-        raise ParameterError(f"{method.name} segments {' and '.join(method.elements)}, not "
-                             f"{kind}; methods that segment {kind}: {able}")
+    check_method_elements(method, kind)
     if kind == "faces" and _into_records(args.output, args.mesh):
         raise ParameterError(f"{args.output}: a PLY's records are its vertices: -o OUT.ply "
                              "takes the labels of --elements vertices")

@@ -76,6 +76,15 @@ def check_radius(value) -> float:
     """``radius`` (a fraction of the bounding-box diagonal) as a float in
     ``(0, MAX_RADIUS]``.
 
+    Parameters
+    ----------
+    value : object
+        A number, or a string of one.
+
+    Returns
+    -------
+    float
+
     Raises
     ------
     ParameterError

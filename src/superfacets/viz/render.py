@@ -21,7 +21,7 @@ from typing import Sequence
 import numpy as np
 
 from .._runtime.extras import require
-from ..elements.builders import elements_of
+from ..elements.builders import elements_of, kind_for
 from ..elements.kinds import kind_of
 from ..elements.labels import check_labels, size_summary
 from ..errors import NoDisplayError, ParameterError
@@ -401,7 +401,9 @@ def render_panel(items: Sequence[tuple], out=None, *, ncols: int | None = None,
     Parameters
     ----------
     items : sequence of (mesh, labels, title)
-        One panel each; ``labels`` may be None.
+        One panel each: a mesh (labels of its faces) or a point cloud (a
+        :class:`~superfacets.PointCloud`: labels of its points, drawn as
+        :func:`render_points` draws them); ``labels`` may be None.
     out : path, optional
         Write the image here as PNG.
     ncols : int, optional
@@ -434,11 +436,15 @@ def render_panel(items: Sequence[tuple], out=None, *, ncols: int | None = None,
     try:
         p.set_background(background)
         for i, (mesh, labels, title) in enumerate(items):
-            mesh = as_mesh(mesh)
-            labels = _check_labels(mesh, labels)
             p.subplot(i // ncols, i % ncols)
-            _add(p, pv, mesh, labels, boundaries=boundaries, line_width=line_width,
-                 boundary_color="black", surface_color="lightgrey")
+            if kind_of(kind_for(mesh)).cloud:
+                mesh, draw = _points_drawing(pv, mesh, labels, (w, h), view, zoom, up)
+                draw(p)
+            else:
+                mesh = as_mesh(mesh)
+                labels = _check_labels(mesh, labels)
+                _add(p, pv, mesh, labels, boundaries=boundaries, line_width=line_width,
+                     boundary_color="black", surface_color="lightgrey")
             _place_camera(p, mesh, view, zoom, up, top_margin=0.1 if title else 0.0)
             if title:
                 p.add_text(title, position="upper_edge", font_size=max(8, h // 40),
@@ -525,17 +531,27 @@ def render_points(cloud, labels=None, out=None, *, size=(1200, 900), view=None,
         Without the ``render`` extra.
     """
 
-    source = elements_of(cloud, "points")
-    g = source.graph
-    rgb = point_colors(source, labels)
     w, h = _size(size)
     pv = _pyvista(off_screen=True)
     _check_style(pv, background, "black", 1.0, zoom)
+    frame, draw = _points_drawing(pv, cloud, labels, (w, h), view, zoom, up, point_size,
+                                  eye_dome)
+    return _picture(pv, (w, h), background, frame, view, zoom, up, title, out, outputs, draw,
+                    legend=(labels, "superpoints", "points") if legend and labels is not None
+                    else None)
+
+
+def _points_drawing(pv, cloud, labels, size, view, zoom, up, point_size=None, eye_dome=None):
+    """A point cloud's camera frame (:class:`PointsFrame`) and ``draw(plotter)``, which adds
+    its points coloured by ``labels`` (:func:`render_points`' options)."""
+    source = elements_of(cloud, "points")
+    g = source.graph
+    rgb = point_colors(source, labels)
     frame = PointsFrame(g)
     view_frame(frame, view, up=up)
     if point_size is None:  # about one point spacing on screen
         spacing = np.sqrt(np.percentile(g.sizes, 90))
-        point_size = float(np.clip(1.6 * spacing / g.diagonal * max(w, h) * zoom, 1.0, 12.0))
+        point_size = float(np.clip(1.6 * spacing / g.diagonal * max(size) * zoom, 1.0, 12.0))
     poly = pv.PolyData(np.ascontiguousarray(g.positions))
     poly["rgb"] = rgb
     if eye_dome is None:  # a map: seen from straight above, the relief is in the edges
@@ -548,6 +564,4 @@ def render_points(cloud, labels=None, out=None, *, size=(1200, 900), view=None,
         if eye_dome:
             p.enable_eye_dome_lighting()
 
-    return _picture(pv, (w, h), background, frame, view, zoom, up, title, out, outputs, draw,
-                    legend=(labels, "superpoints", "points") if legend and labels is not None
-                    else None)
+    return frame, draw
