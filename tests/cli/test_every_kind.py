@@ -120,6 +120,39 @@ def test_experiment_runs_on_a_user_s_files(tmp_path, capsys, sphere):
     assert "goes with --inputs" in capsys.readouterr().err
 
 
+
+def test_an_experiment_on_a_folder_of_clouds_and_meshes_runs_each_on_its_own_elements(
+        tmp_path, capsys, sphere):
+    """``experiment --inputs FOLDER`` ran faces only: its clouds got no row, and nothing said
+    so ("6 inputs", 4 in the file); by default each file is run on its own elements, a file
+    no asked kind fits is named, and ``report`` of rows without ground truth (whose curves
+    are empty) writes its summary instead of failing in matplotlib's legend."""
+    from superfacets import write_mesh
+
+    folder = tmp_path / "in"
+    folder.mkdir()
+    _laz(folder / "tile.laz")
+    write_mesh(folder / "ball.off", sphere)
+    out = tmp_path / "rows.csv"
+    assert main(["experiment", "--inputs", str(folder), "-k", "10", "--alpha", "200",
+                 "-o", str(out), "-j", "1", "-q"]) == 0
+    rows = list(csv.DictReader(out.open()))
+    assert sorted((r["mesh"], r["elements"], r["status"]) for r in rows) == [
+        ("ball", "faces", "ok"), ("tile", "points", "ok")]
+    capsys.readouterr()
+    faces = tmp_path / "faces.csv"
+    assert main(["experiment", "--inputs", str(folder), "-k", "10", "--alpha", "200",
+                 "--elements", "faces", "-o", str(faces), "-j", "1", "-q"]) == 0
+    assert f"left out: {folder / 'tile.laz'} (a point cloud: --elements points)" in \
+        capsys.readouterr().err
+    assert [r["mesh"] for r in csv.DictReader(faces.open())] == ["ball"]
+    pytest.importorskip("matplotlib")
+    assert main(["report", str(out), "-o", str(tmp_path / "rep")]) == 0
+    summary = (tmp_path / "rep" / "summary.md").read_text()
+    assert "Not drawn, the rows holding no value to draw" in summary
+    assert "fig4" in summary and not (tmp_path / "rep" / "fig4.png").exists()
+
+
 def test_an_axis_value_may_start_with_a_minus(tmp_path, capsys, sphere):
     """``--up -y`` was refused by argparse (a value starting with a minus read as an
     option); only ``--up=-y`` worked."""

@@ -146,8 +146,9 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     except (SuperfacetsError, OSError, NoDisplayError) as exc:
         msg = str(exc)
-        if isinstance(exc, OSError) and exc.filename and str(exc.filename) not in msg:
-            msg = f"{exc.filename}: {exc.strerror or msg}"
+        if isinstance(exc, OSError) and exc.filename and (exc.strerror or
+                                                          str(exc.filename) not in msg):
+            msg = f"{exc.filename}: {exc.strerror or msg}"  # (not "[Errno 2] ...: 'x'")
         print(f"superfacets: error: {msg}", file=sys.stderr)
         return 2
     except MemoryError:  # what no estimate foresaw: one line, not a traceback

@@ -55,11 +55,12 @@ def add_parsers(sub) -> None:
                    help="only the first N meshes (by id) of each category: a stratified subset")
     add_engine_options(x, sees="its workers must see the benchmark's files",
                        note="; at most 4 per core")
-    x.add_argument("--elements", default="faces", metavar="LIST",
+    x.add_argument("--elements", default=None, metavar="LIST",
                    help="element kinds, comma-separated: faces, vertices (ground truth: "
                         "majority of the incident faces), points (--points sampled per mesh, "
                         "ground truth of their face); vertices and points are evaluated "
-                        "with equal weight per element (default: faces)")
+                        "with equal weight per element (default: faces; with --inputs, "
+                        "each file's own: a mesh's faces, a cloud's points)")
     x.add_argument("--points", type=int_arg, default=20_000, metavar="N",
                    help="points sampled per mesh (uniform by area, fixed seed) for "
                         "--elements points (default: 20000)")
@@ -139,7 +140,7 @@ def select_meshes(args):
     if dataset == "rooms":
         from ..evaluation.datasets.rooms import room_entries
 
-        if "points" not in args.elements.split(","):
+        if "points" not in (args.elements or "faces").split(","):
             raise ParameterError("--dataset rooms holds point clouds: add --elements points")
         return room_entries(args.rooms)
     root = psb_root(args.psb)
@@ -192,7 +193,11 @@ def cmd_experiment(args) -> int:
                 "rooms" if getattr(meshes[0], "room", False) else "meshes")
         print(f"{len(meshes)} {what} x {len(configs)} settings x {len(ks)} values of k "
               f"-> {out}", file=sys.stderr)
-    kinds = [e.strip() for e in args.elements.split(",") if e.strip()]
+    files = getattr(meshes[0], "file", False)
+    kinds = [e.strip() for e in (args.elements or ("faces,points" if files else "faces"))
+             .split(",") if e.strip()]
+    if files:
+        _say_left_out(meshes, kinds)
     s = run_experiment(meshes, configs, out, ks, workers=args.workers, tau=args.tau,
                        seed=args.seed, retry_failed=args.retry_failed,
                        progress=not args.quiet and sys.stderr.isatty(),
@@ -210,6 +215,19 @@ def cmd_experiment(args) -> int:
     return 0
 
 
+def _say_left_out(entries, kinds) -> None:
+    """One line for each of the user's files that no element kind asked for fits (a cloud
+    without ``points``, a mesh with ``points`` alone): it gets no row."""
+    from ..elements.kinds import KINDS
+
+    for e in entries:
+        cloud = e.category == "cloud"
+        if not any(k in KINDS and KINDS[k].cloud == cloud for k in kinds):
+            fits = "points" if cloud else "faces or vertices"
+            print(f"left out: {e.path} (a {'point cloud' if cloud else 'mesh'}: --elements "
+                  f"{fits})", file=sys.stderr)
+
+
 def cmd_report(args) -> int:
     from .._runtime.progress import waiting_bar
     from ..evaluation.report import write_report
@@ -219,5 +237,6 @@ def cmd_report(args) -> int:
     with waiting_bar(f"writing the report to {out}", sys.stderr.isatty()):  # (seconds)
         files = write_report(res, out, k_focus=args.k_focus, series=args.series)
     print((out / "summary.md").read_text())
-    print(f"wrote {len(files)} files to {out}: " + ", ".join(f.name for f in files))
+    print(f"wrote {len(files)} file{'s' if len(files) != 1 else ''} to {out}: "
+          + ", ".join(f.name for f in files))
     return 0

@@ -75,21 +75,38 @@ def write_report(results, out_dir, *, k_focus: int = 150, prefix: str = "",
         If the file has no successful row, or a series is unknown.
     """
     df = load_results(results, series=series)
-    ok_rows(df)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     written = []
-    figs = {
-        "fig4": plot_curves(df),
-        "fig4_extra": plot_curves(df, ("boundary_recall", "achievable_accuracy")),
-        "per_category_undersegmentation_error": plot_per_category(df, "undersegmentation_error"),
-        "per_category_compactness": plot_per_category(df, "compactness"),
-        "cost": plot_cost(df, k_focus),
+    ok = ok_rows(df)
+
+    def has(*columns) -> bool:  # a row with a value in one of the columns
+        return any(c in ok and bool(ok[c].notna().any()) for c in columns)
+
+    plots = {  # each figure, and whether the rows hold anything it draws
+        "fig4": (lambda: plot_curves(df), has("undersegmentation_error", "compactness")),
+        "fig4_extra": (lambda: plot_curves(df, ("boundary_recall", "achievable_accuracy")),
+                       has("boundary_recall", "achievable_accuracy")),
+        "per_category_undersegmentation_error": (
+            lambda: plot_per_category(df, "undersegmentation_error"),
+            has("undersegmentation_error")),
+        "per_category_compactness": (lambda: plot_per_category(df, "compactness"),
+                                     has("compactness")),
+        "cost": (lambda: plot_cost(df, k_focus), "n_faces" in ok and bool(
+            ((ok["n_faces"].fillna(0) > 0) & (ok["seconds"].fillna(0) > 0)).any())),
     }
-    for name, fig in figs.items():
+    left_out = []
+    for name, (plot, drawable) in plots.items():
+        if not drawable:  # (no ground truth, or no mesh)
+            left_out.append(name)
+            continue
+        fig = plot()
         for ext in ("png", "svg"):
             written.append(_save(fig, out / f"{prefix}{name}.{ext}"))
 
     text = markdown_summary(df, k_focus=k_focus)
+    if left_out:
+        text += (f"\nNot drawn, the rows holding no value to draw (no ground truth, or no "
+                 f"mesh): {', '.join(left_out)}.\n")
     written.append(atomic_write(out / f"{prefix}summary.md", text.encode()))
     return written

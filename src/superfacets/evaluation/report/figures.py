@@ -47,6 +47,21 @@ def _subplots(nrows: int, ncols: int, figsize, squeeze: bool = False):
     return fig, fig.subplots(nrows, ncols, squeeze=squeeze)
 
 
+def _figure_legend(fig, axes, most: int) -> int:
+    """One legend below the figure for the series drawn on any of ``axes`` (each once, at
+    most ``most`` a row); none where nothing was drawn. Returns how many it names."""
+    handles, labels = [], []
+    for ax in axes:
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            if lab not in labels:
+                handles.append(h)
+                labels.append(lab)
+    if labels:
+        fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), most),
+                   frameon=False, fontsize=9)
+    return len(labels)
+
+
 def plot_curves(df, metrics: Sequence[str] = ("undersegmentation_error", "compactness"),
                 title: str | None = None):
     """The paper's Fig. 4 layout: each metric against ``n_segments``, one curve per series.
@@ -67,13 +82,11 @@ def plot_curves(df, metrics: Sequence[str] = ("undersegmentation_error", "compac
         ax.set_ylabel(METRIC_LABELS.get(metric, metric))
         ax.grid(True, alpha=0.3)
         ax.set_xticks(list(s.columns))
-    handles, labels = axes[0][0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 5), frameon=False,
-               fontsize=9)
+    n = _figure_legend(fig, axes.flat, 5)
     n_cat = ok_rows(df)["category"].nunique()
     fig.suptitle(title or f"mean over {n_cat} categor{'y' if n_cat == 1 else 'ies'}",
                  fontsize=11)
-    fig.tight_layout(rect=(0, 0.06 + 0.04 * ((len(labels) - 1) // 5), 1, 0.97))
+    fig.tight_layout(rect=(0, 0.06 + 0.04 * ((max(n, 1) - 1) // 5), 1, 0.97))
     return fig
 
 
@@ -103,12 +116,10 @@ def plot_per_category(df, metric: str = "undersegmentation_error"):
         ax.tick_params(labelsize=7)
     for ax in axes.flat[len(cats):]:
         ax.axis("off")
-    handles, labels = axes.flat[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 5), frameon=False,
-               fontsize=9)
+    n = _figure_legend(fig, axes.flat, 5)
     fig.supxlabel("number of superfacets asked (k)", fontsize=10, y=0.04)
     fig.supylabel(METRIC_LABELS.get(metric, metric), fontsize=10)
-    fig.tight_layout(rect=(0, 0.06 + 0.03 * ((len(labels) - 1) // 5), 1, 1))
+    fig.tight_layout(rect=(0, 0.06 + 0.03 * ((max(n, 1) - 1) // 5), 1, 1))
     return fig
 
 
@@ -148,14 +159,7 @@ def plot_cost(df, k_focus: int = 150):
         ax.set_xlabel("faces (log)")
         ax.set_ylabel(label)
         ax.grid(True, which="both", alpha=0.25)
-    handles, labels = [], []
-    for ax in axes[0]:
-        for h, lab in zip(*ax.get_legend_handles_labels()):
-            if lab not in labels:
-                handles.append(h)
-                labels.append(lab)
-    fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 4), frameon=False,
-               fontsize=9)
+    n = _figure_legend(fig, axes[0], 4)
     fig.suptitle(f"running time and memory against mesh size, k = {k}", fontsize=11)
-    fig.tight_layout(rect=(0, 0.07 + 0.04 * ((len(labels) - 1) // 4), 1, 0.97))
+    fig.tight_layout(rect=(0, 0.07 + 0.04 * ((max(n, 1) - 1) // 4), 1, 0.97))
     return fig
