@@ -198,7 +198,7 @@ def cases() -> list[Case]:
     mesh_case("xyz-nan-row", "c.xyz", b"0 0 0\n1 0 0\n0 1 0\nnan 1 1\n0 0 1\n",
               "point 3 has a non-finite")
     mesh_case("xyz-ragged", "c.xyz", b"0 0 0\n1 0\n", "columns")
-    mesh_case("xyz-words", "c.xyz", b"x y z\n0 0 0\n", "not numbers")
+    mesh_case("xyz-words", "c.xyz", b"a b c\n0 0 0\n", "not numbers")  # (x y z: a header)
     mesh_case("xyz-unknown-columns", "c.txt", b"# a b c\n0 0 0\n1 0 0\n0 1 0\n",
               "unknown columns")
     mesh_case("xyz-empty", "c.xyz", b"", "empty file")
@@ -255,6 +255,7 @@ def cases() -> list[Case]:
               expect="ok", extra=("-k", "1"))
     # --- STL
     mesh_case("stl-empty", "m.stl", b"", "empty file")
+    mesh_case("stl-ascii-no-facet", "m.stl", b"solid x\nendsolid x\n", "an ASCII STL of no facet")
     mesh_case("stl-truncated-binary", "m.stl", b"\0" * 80 + struct.pack("<I", 10) + b"\0" * 60, "")
     mesh_case("stl-ascii-malformed", "m.stl", b"solid x\n facet normal 0 0 1\n  outer loop\n"
               b"   vertex 0 0\n  endloop\n endfacet\nendsolid x\n", "")

@@ -108,12 +108,14 @@ def test_a_batch_lists_every_file_it_leaves_out(tmp_path, capsys, sphere):
     folder.mkdir()
     write_mesh(folder / "ball.off", sphere)
     (folder / "notes.txt").write_text("a readme\n")
+    (folder / "results.csv").write_text("method,k,error\nours,10,0.1\n")  # (not a cloud)
     (folder / "scan.rcp").write_bytes(b"\0" * 10)
     (folder / ".hidden").write_text("x")
     assert main(["batch", str(folder), "-o", str(tmp_path / "out"), "-k", "8",
                  "--workers", "1"]) == 0
     err = capsys.readouterr().err
     assert f"skipped: {folder / 'notes.txt'} (a .txt in a folder" in err
+    assert f"skipped: {folder / 'results.csv'} (a .csv in a folder is not read" in err
     assert f"skipped: {folder / 'scan.rcp'} (.rcp: not a mesh, cloud or volume format)" in err
     assert ".hidden" not in err
 

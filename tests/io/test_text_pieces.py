@@ -62,6 +62,30 @@ def test_columns_pieces_give_one_answer(size):
     assert out["normals"][:, 2].tolist() == [1, 0, 0, 1]
 
 
+
+@pytest.mark.parametrize("size", [1, 20, 1 << 23])
+def test_a_csv_s_first_line_of_names_and_colour_columns(size, tmp_path):
+    """A CSV's first line of names (no ``//`` or ``#``: "point line 1 is not numbers") picks
+    the columns, and ``r g b`` / ``red green blue`` columns are the colours (they were
+    dropped), 0-255 read as such; a ``.csv`` is a cloud file (it was "unknown mesh
+    format"). A first line of words that names no x, y, z is still a fault."""
+    from superfacets.io import read_cloud
+
+    text = b"Z,Y,X,Red,Green,Blue,Intensity\n1,0,0,255,0,0,7\n0,1,0,0,255,51,7\n0,0,1,0,0,0,7\n"
+    out = read_columns(text, Path("p.csv"), size=size)
+    assert out["points"].tolist() == [[0, 0, 1], [0, 1, 0], [1, 0, 0]]
+    np.testing.assert_allclose(out["colors"], [[1, 0, 0], [0, 1, 0.2], [0, 0, 0]])
+    cc = read_columns(b"//X Y Z R G B\n0 0 0 0.5 0.25 1\n1 1 1 0 0 0\n", Path("p.txt"),
+                      size=size)
+    assert cc["colors"].tolist() == [[0.5, 0.25, 1], [0, 0, 0]]  # (floats in [0, 1]: kept)
+    assert read_columns(b"x y z\n0 0 0\n", Path("p.xyz"), size=size)["colors"] is None
+    with pytest.raises(MeshFormatError, match="point line 1 is not numbers: 'a b c'"):
+        read_columns(b"a b c\n0 0 0\n", Path("p.xyz"), size=size)
+    (tmp_path / "scan.csv").write_bytes(text)
+    cloud = read_cloud(tmp_path / "scan.csv")
+    assert cloud.n_points == 3 and cloud.colors is not None
+
+
 @pytest.mark.parametrize("size", [1, 12, 1 << 23])
 def test_columns_count_line_and_faults(size):
     pts = b"3\n0 0 0\n1 0 0\n0 1 0\nnot a point\n"

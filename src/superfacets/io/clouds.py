@@ -49,7 +49,7 @@ from .headers import check_las, check_laz, e57_counts, header_counts  # noqa: E4
 from .orientation import sensor_up
 
 #: Point-cloud formats of :func:`read_cloud` (PLY files are clouds when they have no faces).
-CLOUD_FORMATS = ("pcd", "xyz", "pts", "txt", "npy", "las", "laz", "e57")
+CLOUD_FORMATS = ("pcd", "xyz", "pts", "txt", "csv", "npy", "las", "laz", "e57")
 
 
 def is_cloud_file(path) -> bool:

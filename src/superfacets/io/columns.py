@@ -1,7 +1,8 @@
 """Points as columns of text (XYZ, PTS, TXT, CSV), read in pieces of a few megabytes.
 
 The header (comment lines before the first point, ``#`` or ``//``; the first of them
-that holds words names the columns) is read line by line; the points' lines are cut
+that holds words names the columns; else a first line of names alone, ``x``, ``y`` and
+``z`` among them, as a CSV's) is read line by line; the points' lines are cut
 into pieces parsed by :func:`numpy.loadtxt` (2M lines of three numbers: 0.3 s), a piece
 numpy cannot read whole being read line by line, which names the faulty line. The lines
 of the whole file are never held at once as Python strings.
@@ -16,6 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MeshFormatError
+from ..inputs.rgb import unit_colors
+from .ply import COLOR_PROPERTIES
 
 __all__ = ["read_columns"]
 
@@ -24,7 +27,8 @@ _COMMENT = ("#", "//")
 
 
 def read_columns(data: bytes, path: Path, size: int = 1 << 23) -> dict:
-    """The points (and normals, where the header names ``nx ny nz``) of a text cloud.
+    """The points (and normals and colours, where the header names ``nx ny nz`` and
+    ``r g b`` or ``red green blue``) of a text cloud.
 
     Parameters
     ----------
@@ -38,7 +42,8 @@ def read_columns(data: bytes, path: Path, size: int = 1 << 23) -> dict:
     Returns
     -------
     dict
-        ``points`` ``(N, 3) float64`` and, where named, ``normals``.
+        ``points`` ``(N, 3) float64`` and, where named, ``normals`` and ``colors``
+        (``[0, 1]``: 0-255 values divided by 255).
 
     Raises
     ------
@@ -93,6 +98,10 @@ def _header(text: str) -> tuple[list[str] | None, int]:
         end = len(text) if end < 0 else end + 1
         ln = text[at:end].strip()
         if ln and not _HEADER.match(ln):
+            words = [w.lower() for w in re.split(r"[\s,;]+", ln) if w]
+            if names is None and set("xyz") <= set(words) and not any(map(_is_number,
+                                                                           words)):
+                names, at = words, end  # a first line of names alone (a CSV's header)
             break
         if ln and names is None:
             words = [w.lower() for w in re.split(r"[\s,]+", _HEADER.sub("", ln).strip()) if w]
@@ -142,7 +151,9 @@ def _named(arr: np.ndarray, names: list[str] | None, path: Path) -> dict:
         nrm = None
         if all(c in names for c in ("nx", "ny", "nz")):
             nrm = arr[:, [names.index(c) for c in ("nx", "ny", "nz")]]
-        return {"points": pts, "normals": nrm}
+        rgb = next((c for c in COLOR_PROPERTIES if all(x in names for x in c)), None)
+        col = None if rgb is None else unit_colors(arr[:, [names.index(c) for c in rgb]])
+        return {"points": pts, "normals": nrm, "colors": col}
     if width < 3:
         raise MeshFormatError(f"{path}: point lines need 3 columns (x y z), found {width}")
     return {"points": arr[:, :3]}

@@ -439,6 +439,8 @@ def check_stl(data: bytes, path: Path) -> None:
             raise MeshFormatError(f"{path}: truncated ASCII STL (its last facet does not end)")
         return
     if len(data) < 84:
+        if data[:5].lower() == b"solid" and b"endsolid" in data.lower():
+            raise MeshFormatError(f"{path}: empty mesh: an ASCII STL of no facet")
         raise MeshFormatError(f"{path}: truncated STL: {len(data)} bytes, not even the "
                               "84 of a binary STL's header")
     n = int.from_bytes(data[80:84], "little")

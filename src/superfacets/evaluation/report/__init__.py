@@ -75,10 +75,10 @@ def write_report(results, out_dir, *, k_focus: int = 150, prefix: str = "",
         If the file has no successful row, or a series is unknown.
     """
     df = load_results(results, series=series)
+    ok = ok_rows(df)  # (no successful row: refused before the folder is made)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     written = []
-    ok = ok_rows(df)
 
     def has(*columns) -> bool:  # a row with a value in one of the columns
         return any(c in ok and bool(ok[c].notna().any()) for c in columns)

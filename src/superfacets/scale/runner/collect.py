@@ -25,9 +25,14 @@ __all__ = ["collect_inputs", "output_names", "broken_link_reason", "no_inputs", 
 
 def _readable_suffixes(explicit: bool) -> set[str]:
 
-    # in folders, .txt is too often something else (a README) to be read as a cloud
+    # in folders, .txt and .csv are too often something else (a README, a table of
+    # results) to be read as clouds
     return (set(MESH_FORMATS) | set(VOLUME_FORMATS) |
-            set(CLOUD_FORMATS) - (set() if explicit else {"txt"}))
+            set(CLOUD_FORMATS) - (set() if explicit else set(_NAMED_ONLY)))
+
+
+#: Cloud formats read where a file is named, not where a folder holds it.
+_NAMED_ONLY = ("txt", "csv")
 
 
 def _is_input(path: Path, explicit: bool) -> bool:
@@ -51,8 +56,9 @@ def _why_not(name: str) -> str:
     """Why a file found in a folder is not an input, in one phrase."""
 
     fmt, _ = split_suffix(Path(name))
-    if fmt == "txt":
-        return "a .txt in a folder is not read as a cloud (a README?); name it to read it"
+    if fmt in _NAMED_ONLY:
+        return (f"a .{fmt} in a folder is not read as a cloud (a "
+                f"{'README' if fmt == 'txt' else 'table'}?); name it to read it")
     return f"{'.' + fmt if fmt else 'no suffix'}: not a mesh, cloud or volume format"
 
 
@@ -69,7 +75,7 @@ def collect_inputs(specs: Sequence[str], exclude=None, skipped: list | None = No
     ----------
     specs : sequence of str
         Files; folders (searched recursively, links to folders followed once each, for
-        every format the readers accept, hidden files and ``.txt`` left out); glob
+        every format the readers accept, hidden files, ``.txt`` and ``.csv`` left out); glob
         patterns (``**`` recurses); ``@list.txt`` (one of these per line, ``#``
         comments).
     exclude : path, optional
@@ -79,7 +85,8 @@ def collect_inputs(specs: Sequence[str], exclude=None, skipped: list | None = No
         files are not inputs); without it such a folder is skipped silently.
     passed : list, optional
         Receives ``(file, reason)`` for each file of a searched folder that is not an
-        input (another format, a ``.txt``; hidden files are left out silently).
+        input (another format, a ``.txt`` or ``.csv``; hidden files are left out
+        silently).
 
     Returns
     -------
