@@ -21,7 +21,11 @@ from .errors import ParameterError
 
 __all__ = ["check_int", "check_number", "check_positive", "check_nonneg", "check_bool",
            "check_choice", "check_n_segments", "check_threads", "max_threads",
-           "threads_from_env", "not_real", "check_real", "counted"]
+           "threads_from_env", "not_real", "check_real", "counted", "check_up", "AXES"]
+
+#: Named axes (an up direction, a side to see from) and their directions.
+AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0),
+        "-x": (-1.0, 0.0, 0.0), "-y": (0.0, -1.0, 0.0), "-z": (0.0, 0.0, -1.0)}
 
 
 def counted(n: int, one: str, many: str | None = None) -> str:
@@ -434,3 +438,44 @@ def threads_from_env() -> int | None:
         raise ParameterError(f"SUPERFACETS_NUM_THREADS={raw[:40]!r}: give a whole number of "
                              f"threads from 1 to {hi} (as --threads), or unset it")
     return int(raw)
+
+
+def check_up(value, name: str = "up") -> np.ndarray:
+    """A direction as a unit vector: an axis name of :data:`AXES` or 3 finite numbers, not
+    all zero.
+
+    Parameters
+    ----------
+    value : str or (3,) array-like
+    name : str
+        The parameter's name, for the message.
+
+    Returns
+    -------
+    (3,) float64 ndarray
+        Of length 1.
+
+    Raises
+    ------
+    ParameterError
+        On an unknown axis name, or anything but 3 finite numbers not all zero.
+
+    Examples
+    --------
+    >>> check_up("-y").tolist(), check_up([0, 0, 2]).tolist()
+    ([0.0, -1.0, 0.0], [0.0, 0.0, 1.0])
+    """
+    if isinstance(value, str):
+        if value not in AXES:
+            raise ParameterError(f"{name} must be an axis ({', '.join(AXES)}) or 3 numbers, "
+                                 f"got {value!r}")
+        return np.array(AXES[value], dtype=np.float64)
+    try:
+        v = np.asarray(value, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError):
+        v = np.zeros(0)
+    length = float(np.linalg.norm(v)) if v.shape == (3,) and np.isfinite(v).all() else 0.0
+    if not length > 0 or not math.isfinite(length):
+        raise ParameterError(f"{name} must be an axis ({', '.join(AXES)}) or 3 finite "
+                             f"numbers, not all zero, got {value!r}")
+    return v / length

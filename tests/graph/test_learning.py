@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from superfacets import PointCloud, segment
+from superfacets import ParameterError, PointCloud, segment
 from superfacets.graph.learning import EDGE_FEATURES, NODE_FEATURES
 
 
@@ -33,6 +33,18 @@ def test_a_square_plane_is_planar_and_level_a_pole_linear_and_upright():
     assert _column(stick, "linearity")[0] > 0.95 and _column(stick, "verticality")[0] > 0.95
     tilted = segment(PointCloud(ground[:, [0, 2, 1]]), 1).learning_graph()  # a wall
     assert _column(tilted, "planarity")[0] > 0.95 and _column(tilted, "verticality")[0] > 0.99
+
+
+def test_an_up_is_an_axis_or_a_direction_and_nothing_else():
+    """``up`` may name an axis (``'y'``: the wall above is level seen with y up); a zero
+    vector gave NaN features with a RuntimeWarning, a word or two numbers numpy's errors."""
+    ground, _ = _scene()
+    r = segment(PointCloud(ground[:, [0, 2, 1]]), 1)
+    for up in ("y", "-y", (0, 5, 0)):
+        assert _column(r.learning_graph(up=up), "verticality")[0] < 0.01, up
+    for bad in (np.zeros(3), "q", [0, 1], (0, np.nan, 1)):
+        with pytest.raises(ParameterError, match="up must be an axis"):
+            r.learning_graph(up=bad)
 
 
 def test_a_scene_s_superpoints_read_as_ground_and_pole():

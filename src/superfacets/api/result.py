@@ -206,7 +206,7 @@ class SegmentationResult:
         ----------
         features : (N, d) float ndarray, optional
             As :meth:`graph` (default: the input's colours).
-        up : (3,) float, optional
+        up : (3,) float or {'x', 'y', 'z', '-x', '-y', '-z'}, optional
             The vertical (default: the input's own ``up``, a LAS or E57 scan's z; else z).
 
         Returns
@@ -219,7 +219,8 @@ class SegmentationResult:
         Raises
         ------
         ParameterError
-            As :meth:`graph`.
+            As :meth:`graph`; for an ``up`` that is neither an axis nor 3 finite numbers
+            not all zero.
 
         Examples
         --------

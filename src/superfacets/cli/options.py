@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..checks import AXES  # (``--seen-from`` axis names and their directions)
 from ..elements.kinds import kind_of
 from ..method.params import DEFAULTS, PARAMETERS
 from .parameters import auto_float_arg, float_arg, int_arg  # noqa: F401 (re-exported)
@@ -70,9 +71,6 @@ def point_arg(text: str) -> tuple:
     return out
 
 
-#: ``--seen-from`` axis names and their directions.
-AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0),
-        "-x": (-1.0, 0.0, 0.0), "-y": (0.0, -1.0, 0.0), "-z": (0.0, 0.0, -1.0)}
 
 
 def add_scan_options(p: argparse.ArgumentParser) -> None:

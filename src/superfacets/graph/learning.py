@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..checks import check_up
 from .adjacency import SuperfacetGraph
 
 __all__ = ["shape_features", "learning_arrays", "GROUND_CELLS", "GROUND_FITS",
@@ -55,7 +56,7 @@ def shape_features(graph: SuperfacetGraph, up=(0.0, 0.0, 1.0)) -> dict[str, np.n
     graph : SuperfacetGraph
         With its ``scatter`` (as :func:`~superfacets.graph.adjacency.superfacet_graph`
         makes it).
-    up : (3,) float, default (0, 0, 1)
+    up : (3,) float or {'x', 'y', 'z', '-x', '-y', '-z'}, default (0, 0, 1)
         The vertical direction (z for scans read from LAS/LAZ or E57).
 
     Returns
@@ -68,6 +69,8 @@ def shape_features(graph: SuperfacetGraph, up=(0.0, 0.0, 1.0)) -> dict[str, np.n
     ------
     ValueError
         If the graph has no ``scatter``.
+    ParameterError
+        If ``up`` is neither an axis nor 3 finite numbers not all zero.
 
     Examples
     --------
@@ -87,8 +90,7 @@ def shape_features(graph: SuperfacetGraph, up=(0.0, 0.0, 1.0)) -> dict[str, np.n
     s3, s2, s1 = sigma[:, 0], sigma[:, 1], sigma[:, 2]
     ok = s1 > 0
     safe = np.where(ok, s1, 1.0)
-    u = np.asarray(up, dtype=np.float64)
-    u = u / np.linalg.norm(u)
+    u = check_up(up)
     normal = evecs[:, :, 0]
     return {"linearity": np.where(ok, (s1 - s2) / safe, 0.0),
             "planarity": np.where(ok, (s2 - s3) / safe, 0.0),
@@ -145,7 +147,7 @@ def learning_arrays(graph: SuperfacetGraph, positions: np.ndarray, element_label
         Each element's superpoint.
     row_labels : (N,) int ndarray
         Each input row's superpoint (``-1``: an invalid point), as ``super_index``.
-    up : (3,) float, default (0, 0, 1)
+    up : (3,) float or {'x', 'y', 'z', '-x', '-y', '-z'}, default (0, 0, 1)
 
     Returns
     -------
@@ -161,6 +163,8 @@ def learning_arrays(graph: SuperfacetGraph, positions: np.ndarray, element_label
     ------
     ValueError
         If the graph has no ``scatter`` (:func:`shape_features`).
+    ParameterError
+        If ``up`` is neither an axis nor 3 finite numbers not all zero.
 
     Examples
     --------
@@ -169,7 +173,7 @@ def learning_arrays(graph: SuperfacetGraph, positions: np.ndarray, element_label
     >>> a["x"].shape, a["edge_index"].shape[1] == 2 * r.graph().n_edges
     ((12, 10), True)
     """
-    u = np.asarray(up, dtype=np.float64)
+    u = check_up(up)
     shape = shape_features(graph, u)
     lab = np.asarray(element_labels, dtype=np.int64)
     count = np.bincount(lab[lab >= 0], minlength=graph.n_segments).astype(np.float64)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..checks import AXES
 from ..errors import InvalidMeshError, ParameterError
 
 __all__ = ["view_frame", "check_camera", "AXES", "VIEWS"]
@@ -12,9 +13,6 @@ __all__ = ["view_frame", "check_camera", "AXES", "VIEWS"]
 VIEWS = {"front": (0, 0, 1), "back": (0, 0, -1), "left": (-1, 0, 0), "right": (1, 0, 0),
          "top": (0, 1, 0), "bottom": (0, -1, 0)}
 
-#: Named up axes.
-AXES = {"x": (1, 0, 0), "y": (0, 1, 0), "z": (0, 0, 1),
-        "-x": (-1, 0, 0), "-y": (0, -1, 0), "-z": (0, 0, -1)}
 
 
 def _direction(value, what: str) -> np.ndarray:
