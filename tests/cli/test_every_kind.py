@@ -75,7 +75,18 @@ def test_evaluate_prints_json_and_csv_for_scripts(tmp_path, capsys):
     # two terraces, two classes, 20 superpoints: the majority labelling is nearly exact
     assert got["oracle_miou"] > 0.9 and set(got["oracle_iou_per_class"]) == {"2", "6"}
     assert got["size_min"] <= got["size_median"] <= got["size_max"]
-    assert sum(got["size_histogram"]) == 20
+    assert sum(got["size_histogram"]) == 20 and got["unassigned"] == 0
+    # labels below 0 (DBSCAN's noise): counted as segments by the metrics and the sizes
+    # alike (the sizes left them out: 5 segments, a histogram of 4), and said
+    noisy = tmp_path / "noisy.seg"
+    noisy.write_text("\n".join(str(i % 5 - 1) for i in range(3000)) + "\n")
+    assert main(["evaluate", str(laz), str(noisy), "--ground-truth-field", "classification",
+                 "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert got["segments"] == 5 == sum(got["size_histogram"]) and got["unassigned"] == 600
+    assert main(["evaluate", str(laz), str(noisy), "--ground-truth-field",
+                 "classification"]) == 0
+    assert "note: 600 points labelled below 0 (unassigned)" in capsys.readouterr().out
     with pytest.raises(SystemExit) as stop:  # one of them (argparse says so)
         main(["evaluate", str(laz), str(seg), "--json", "--csv"])
     assert stop.value.code == 2 and "not allowed with" in capsys.readouterr().err

@@ -113,6 +113,9 @@ def cmd_evaluate(args) -> int:
           "given its majority class)")
     for cls, iou in sorted(m.get("oracle_iou_per_class", {}).items()):
         print(f"  class {cls:<6} IoU {iou:.4f}")
+    if m.get("unassigned"):
+        print(f"note: {m['unassigned']:,} {kind} labelled below 0 (unassigned): each such "
+              "label counts as one segment")
     hist = ", ".join(f"{2**i}+: {c}" for i, c in enumerate(m["size_histogram"]) if c)
     print(f"segment sizes           {m['size_min']} / {m['size_median']:g} / "
           f"{m['size_max']} {kind} (min / median / max; by size {hist})")
@@ -134,7 +137,7 @@ def _print_table(args, kind: str, n: int, n_truths: int, m: dict) -> None:
            "elements": kind, "n_elements": int(n), "segments": int(m["segments"]),
            "ground_truths": int(n_truths), "tau": float(args.tau),
            **{k: float(m[k]) for k in METRICS},
-           **{k: m[k] for k in ("size_min", "size_median", "size_max")}}
+           **{k: m[k] for k in ("size_min", "size_median", "size_max", "unassigned")}}
     if args.format == "json":
         row["oracle_iou_per_class"] = {str(k): v for k, v in
                                        m.get("oracle_iou_per_class", {}).items()}

@@ -417,8 +417,9 @@ def evaluate_rows(obj, labels, ground_truths: Sequence[np.ndarray], *,
     dict
         :func:`evaluate`'s metrics, ``segments`` (distinct labels among the
         elements), ``oracle_miou`` (:func:`oracle_miou`, the mean over the ground
-        truths) and ``oracle_iou_per_class`` (with one ground truth), and the
-        segments' sizes (:func:`size_summary`).
+        truths) and ``oracle_iou_per_class`` (with one ground truth), the segments'
+        sizes (:func:`size_summary`) and ``unassigned``: the elements labelled below 0
+        (DBSCAN's noise, say), each such label counted as one segment by every metric.
 
     Raises
     ------
@@ -450,5 +451,6 @@ def evaluate_rows(obj, labels, ground_truths: Sequence[np.ndarray], *,
     mious = [oracle_miou(lab, gt, weights=weights, ignore_label=ignore_label) for gt in gts]
     out["oracle_miou"] = float(np.mean([m for m, _ in mious]))
     out["oracle_iou_per_class"] = mious[0][1] if len(mious) == 1 else {}
-    out.update(size_summary(lab))
+    out["unassigned"] = int((lab < 0).sum())  # (each negative label is a segment here)
+    out.update(size_summary(lab - min(int(lab.min()), 0) if lab.size else lab))
     return out
