@@ -4,7 +4,7 @@ Usage: python benchmarks/real_scans.py [--scans NAME ...] [-k 300 1000 3000]
        [--methods superfacets graph_segmentation cut_pursuit spt_partition vccs]
        [--spt-levels 1 2] [--beta auto 0]
        [--neighbors 10] [--split-merge] [--min-points 3] [--content] [--adaptive]
-       [--size-ratios 0 8 4 2] [--fine-floors 8 4] [--merge-from 5]
+       [--size-ratios 0 8 4 2] [--fine-floors 8 4] [--merge-from 5] [--up-weights 2 4]
        [--leave-out CLASS ...] [--csv results.csv] [--download] [--rooms 3]
 
 Each scan of ``superfacets.evaluation.datasets.scans.SCANS`` found in the cache
@@ -326,6 +326,9 @@ def main() -> None:
     ap.add_argument("--merge-from", type=_at_least_one, nargs="+", default=[], metavar="N",
                     help="also superfacets with merge_from N (merged from N times k, on every "
                          "cloud: the default merges only clouds of even density), a row each")
+    ap.add_argument("--up-weights", type=float, nargs="+", default=[], metavar="W",
+                    help="also superfacets with these up_weight values (the up coordinate W "
+                         "times in the distances), a row each")
     ap.add_argument("--content", action="store_true",
                     help="also superfacets with content-sensitive sizes (density=0.5, "
                          "roughness=1)")
@@ -378,6 +381,7 @@ def main() -> None:
                     variants += [(None, {"max_size_ratio": v}) for v in a.size_ratios]
                     variants += [(None, {"fine_floor": v}) for v in a.fine_floors]
                     variants += [(None, {"merge_from": v}) for v in a.merge_from]
+                    variants += [(None, {"up_weight": v}) for v in a.up_weights]
                 if method == "superfacets" and a.min_points > 1:
                     variants += [(0.0, {"min_points": a.min_points})]
                 for beta, options in variants:
@@ -393,6 +397,8 @@ def main() -> None:
                         (f" max size {options['max_size_ratio']:g}" if "max_size_ratio" in
                          options else "") + \
                         (f" floor {options['fine_floor']}" if "fine_floor" in options else "") + \
+                        (f" up weight {options['up_weight']:g}" if "up_weight" in options
+                         else "") + \
                         (f" merge from {options['merge_from']}" if "merge_from" in options
                          else "")
                     print(f"| {k} | {label} | {r['undersegmentation_error']:.4f} | "

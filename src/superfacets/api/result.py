@@ -13,7 +13,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._runtime import extras
-from ..elements.builders import per_element
+from ..elements.builders import elements_of, per_element
+from ..elements.graph import cached_on
 from ..errors import ParameterError
 from ..graph import hierarchy
 from ..graph.adjacency import superfacet_graph
@@ -48,7 +49,8 @@ class SegmentationResult:
     mesh_radius : float
         Superfacet radius ``r`` used, in the input's units (the ``radius``
         parameter, ``params['radius']``, is a fraction of the bounding-box
-        diagonal).
+        diagonal; with ``up_weight``, of the cloud it weighs). :meth:`graph` and
+        :meth:`learning_graph` are in the input's own units.
     n_orphan_seeds : int
         Centers created on orphan faces over the whole run.
     timings : dict of str to float
@@ -136,10 +138,10 @@ class SegmentationResult:
         (12, 2, True)
         """
 
-        src = self._source()
+        src, element_labels = self._elements()
         if features is None:
             features = src.colors()
-        return superfacet_graph(src.graph, self.element_labels, per_element(src, features))
+        return superfacet_graph(src.graph, element_labels, per_element(src, features))
 
     def hierarchy(self, levels, *, beta: float = 0.0, features=None, cost: str = "ward",
                   extent_weight: float | None = None):
@@ -185,8 +187,8 @@ class SegmentationResult:
         """
 
         if cost == "planarity":
-            src = self._source()
-            graph = planarity_graph(src.graph, self.element_labels, per_element(
+            src, element_labels = self._elements()
+            graph = planarity_graph(src.graph, element_labels, per_element(
                 src, src.colors() if features is None else features))
             if extent_weight is None:
                 extent_weight = level_extent_weight(src.graph)
@@ -231,10 +233,10 @@ class SegmentationResult:
         True
         """
 
-        src = self._source()
+        src, element_labels = self._elements()
         if up is None:
             up = getattr(src.source, "up", None)
-        return learning_arrays(self.graph(features), src.graph.positions, self.element_labels,
+        return learning_arrays(self.graph(features), src.graph.positions, element_labels,
                                self.labels, (0.0, 0.0, 1.0) if up is None else up)
 
     def to_pyg(self, features=None, up=None):
@@ -276,6 +278,25 @@ class SegmentationResult:
             raise ParameterError("this result holds no element graph (made by hand?): use "
                                  "superfacets.graph.adjacency.superfacet_graph(graph, labels)")
         return self.elements
+
+    def _elements(self):
+        """The input's elements in its own units and each one's label: the run's, or, where
+        the run weighed the up coordinate (``up_weight``), the graph of the cloud as given
+        (built once, kept with the run's), so that sizes and positions are the data's."""
+        src = self._source()
+        weighted = src.source
+        original = getattr(weighted, "__dict__", {}).get("unweighted")
+        if original is None:
+            return src, self.element_labels
+
+        def build():
+            e = elements_of(original, "points", n_neighbors=self.params.get(
+                "n_neighbors", _D.n_neighbors), neighbor_radius=self.params.get(
+                "neighbor_radius"))
+            rows = e.first_rows(np.arange(e.graph.n_elements))
+            return e, np.asarray(self.labels).reshape(-1)[rows]
+
+        return cached_on(weighted, "unweighted_elements", build)
 
 
 def stop_reason(result) -> str:

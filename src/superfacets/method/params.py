@@ -70,6 +70,8 @@ MAX_WINDOW = 1e3
 #: Largest radius, a fraction of the bounding-box diagonal (beyond 1 a superfacet is the
 #: whole input; far beyond, its area overflows a float).
 MAX_RADIUS = 1e3
+#: Largest ``up_weight`` (beyond, a cloud's points are layers apart whatever their spacing).
+MAX_UP_WEIGHT = 100.0
 
 
 def check_radius(value) -> float:
@@ -235,6 +237,15 @@ def _declare() -> tuple[Parameter, ...]:
           ("points",), cli="--neighbor-radius"),
         P("paper", False, "bool", "the paper's method as published, its labels bit for bit",
           bool, cli="--paper"),
+    )
+
+
+def _declare_scan_parameters() -> tuple[Parameter, ...]:
+    """The declarations of the colour term and of what scans add (sizes, merges, the
+    vertical's weight), after the method's own."""
+    P, num, integer = Parameter, check_number, check_int
+    big = MAX_WEIGHT_FACTOR
+    return (
         P("beta", None, "float or None", "weight of the feature (colour) term, >= 0; paper "
           "weighting only; None: read from the data where the input has colours or features "
           "are given, else 0", None, cli="--beta"),
@@ -258,6 +269,11 @@ def _declare() -> tuple[Parameter, ...]:
           "where flat regions hold most points, else Ward's; the default before 2026-11-30) "
           "or scene (noise's, unweighted)", _merge_cost, cli="--merge-cost",
           choices=MERGE_COSTS),
+        P("up_weight", 1.0, "float", "weight of a point cloud's up coordinate in the method's "
+          "distances (its up: a LAS, LAZ or E57 file's z), in (0, 100]; 1: none; 2 keeps "
+          "apart what an airborne scan stacks in height (ground, vegetation, roofs)",
+          lambda v: num("up_weight", v, 0.0, MAX_UP_WEIGHT, lo_open=True), ("points",),
+          cli="--up-weight"),
     )
 
 
@@ -280,7 +296,7 @@ def _size_ratio(value) -> float:
 
 #: Every parameter of the method, declared once (:class:`Parameter`), in the order of
 #: :func:`superfacets.superfacets`'s signature.
-PARAMETERS: tuple[Parameter, ...] = _declare()
+PARAMETERS: tuple[Parameter, ...] = _declare() + _declare_scan_parameters()
 #: The declarations by name.
 PARAMETER = {p.name: p for p in PARAMETERS}
 
@@ -355,7 +371,8 @@ def resolve(**params) -> SegmentParams:
                                        ("min_elements", p.min_elements != 1),
                                        ("density", p.density not in (None, 0, 0.0)),
                                        ("roughness", p.roughness not in (0, 0.0)),
-                                       ("merge_from", p.merge_from not in (None, 1))) if on]
+                                       ("merge_from", p.merge_from not in (None, 1)),
+                                       ("up_weight", p.up_weight != 1)) if on]
         if extra:
             raise ParameterError(f"paper=True is the paper's method as published; it does not "
                                  f"go with {', '.join(extra)}")

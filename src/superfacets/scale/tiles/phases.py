@@ -119,7 +119,8 @@ def _diagonal(inp) -> float:
 def check_tileable(params: SegmentParams, colors: bool = True) -> None:
     """Refuse the options that read the whole graph, which no tile holds: the merge of
     small superfacets (``min_elements``), content-sensitive sizes (``density``: the
-    median size; ``roughness``). ``density=None`` (automatic) is 0 in a tiled run. Also
+    median size; ``roughness``); and ``up_weight``, which the tiles do not read yet.
+    ``density=None`` (automatic) is 0 in a tiled run. Also
     ``beta > 0`` on an input without ``colors`` (the survey's). (The merges to the count,
     ``merge_from``, run after the tiles: :mod:`superfacets.scale.tiles.merges`.)
 
@@ -128,11 +129,12 @@ def check_tileable(params: SegmentParams, colors: bool = True) -> None:
     ParameterError
         Naming the options, with one line on what to do instead.
     """
-    whole = [n for n in ("min_elements", "density", "roughness")
+    whole = [n for n in ("min_elements", "density", "roughness", "up_weight")
              if getattr(params, n) not in (None, 0, getattr(DEFAULTS, n))]
     if whole:
         raise ParameterError(f"{' and '.join(whole)}: not available in a tiled run (where the "
-                             "input fits in memory, segment() takes it)")
+                             "input fits in memory, one run takes it: segment() or the "
+                             "command without --tiles)")
     if params.beta is not None and params.beta > 0 and not colors:
         raise ParameterError("beta > 0 needs colours, and this input has none (a tiled run "
                              "reads the colours of the file, not features=)")

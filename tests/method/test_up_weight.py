@@ -1,0 +1,97 @@
+"""``up_weight``: a point cloud's up coordinate weighed more in the method's distances (not
+in the paper): the labels of the stretched cloud, graphs in the data's units, clear
+refusals."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from superfacets import ParameterError, PointCloud, segment
+from superfacets.elements.builders import elements_of
+from superfacets.graph.adjacency import superfacet_graph
+from superfacets.inputs.cloud import up_weighted
+
+
+def _canopy(seed: int = 0):
+    """Flat ground 20 m square and a flat layer 0.6 m above its middle (a canopy, a roof):
+    points about 0.3 m apart, so that the point graph joins the two layers."""
+    rng = np.random.default_rng(seed)
+    ground = np.c_[rng.random((4000, 2)) * 20, 0.01 * rng.standard_normal(4000)]
+    layer = np.c_[rng.random((1000, 2)) * 10 + 5, 0.6 + 0.01 * rng.standard_normal(1000)]
+    classes = np.r_[np.zeros(4000, dtype=int), np.ones(1000, dtype=int)]
+    return np.vstack([ground, layer]), classes
+
+
+def _mixed(labels, classes) -> int:
+    return sum(len(set(classes[labels == s])) > 1 for s in np.unique(labels))
+
+
+def test_layers_stacked_in_height_are_kept_apart():
+    """Without the weight, superpoints hold ground and the layer above it alike (10, 15
+    and 24 of 10, 20 and 40); weighing the up coordinate twice, none does."""
+    pts, classes = _canopy()
+    cloud = PointCloud(pts, up=np.array([0.0, 0.0, 1.0]))
+    for k in (10, 20, 40):
+        assert _mixed(segment(cloud, k).labels, classes) >= k // 2, k
+        r = segment(cloud, k, up_weight=2)
+        assert _mixed(r.labels, classes) == 0 and r.n_segments == k, k
+        assert r.params["up_weight"] == 2.0
+
+
+@pytest.mark.parametrize("up", [(0.0, 0.0, 1.0), (0.0, 0.6, 0.8)])
+def test_the_labels_are_those_of_the_cloud_stretched_along_its_up(up):
+    pts, _ = _canopy(1)
+    u = np.asarray(up)
+    pts = pts @ np.linalg.qr(np.c_[u, np.eye(3)[:, :2]])[0].T if up[1] else pts
+    cloud = PointCloud(pts, up=u)
+    stretched = PointCloud(pts + (3.0 - 1.0) * (pts @ u)[:, None] * u, up=u)
+    np.testing.assert_allclose(up_weighted(cloud, 3.0).points, stretched.points, atol=1e-12)
+    np.testing.assert_array_equal(segment(cloud, 25, up_weight=3).labels,
+                                  segment(up_weighted(cloud, 3.0), 25).labels)
+
+
+def test_graphs_are_in_the_data_s_units():
+    """The run's graph is of the weighed cloud; the result's graphs are of the cloud as
+    given: centroids and areas equal to those of its own point graph."""
+    pts, _ = _canopy(2)
+    cloud = PointCloud(pts, up=np.array([0.0, 0.0, 1.0]))
+    r = segment(cloud, 20, up_weight=4)
+    e = elements_of(cloud, "points")
+    want = superfacet_graph(e.graph, r.labels[e.first_rows(np.arange(e.graph.n_elements))],
+                            None)
+    g = r.graph()
+    np.testing.assert_allclose(g.centroid, want.centroid)
+    np.testing.assert_allclose(g.area, want.area)
+    assert g.centroid[:, 2].max() < 0.7  # (the weighed cloud's layer stands at 2.4)
+    np.testing.assert_allclose(r.learning_graph()["pos"], want.centroid)
+    assert r.hierarchy([5], cost="planarity").levels == (5,)
+
+
+def test_what_cannot_be_weighed_is_refused_in_words(tmp_path):
+    import trimesh
+
+    from superfacets.cli import main
+    from superfacets.scale.tiles.run import segment_tiled
+
+    pts, _ = _canopy(3)
+    with pytest.raises(ParameterError, match="this cloud has no up"):
+        segment(PointCloud(pts), 10, up_weight=2)
+    with pytest.raises(ParameterError, match="this input's elements are faces"):
+        segment(trimesh.creation.icosphere(), 10, up_weight=2)
+    said = r"up_weight must be a finite number in \(0, 100\]"
+    for bad in (0, -1, 101, float("nan")):
+        with pytest.raises(ParameterError, match=said):
+            segment(PointCloud(pts, up=np.array([0.0, 0.0, 1.0])), 10, up_weight=bad)
+    with pytest.raises(ParameterError, match="not go with up_weight"):
+        segment(PointCloud(pts, up=np.array([0.0, 0.0, 1.0])), 10, up_weight=2, paper=True)
+    with pytest.raises(ParameterError, match="up_weight: not available in a tiled run"):
+        segment_tiled(PointCloud(pts, up=np.array([0.0, 0.0, 1.0])), 10, tiles=2,
+                      up_weight=2)
+    np.save(tmp_path / "c.npy", pts)
+    out = tmp_path / "c.seg"
+    assert main(["segment", str(tmp_path / "c.npy"), "-k", "10", "--up-weight", "2",
+                 "-o", str(out)]) == 2 and not out.exists()
+    assert main(["segment", str(tmp_path / "c.npy"), "-k", "10", "--up-weight", "2",
+                 "--seen-from", "z", "-o", str(out)]) == 0
+    assert len(np.unique(np.loadtxt(out))) == 10
