@@ -68,6 +68,19 @@ def test_graphs_are_in_the_data_s_units():
     assert r.hierarchy([5], cost="planarity").levels == (5,)
 
 
+def test_a_tiled_run_reads_the_cloud_weighed_as_one_run_does():
+    """Every position a tiled run reads is stretched (its survey, boxes and tiles, which run
+    unweighted): the layers stay apart, and the borders agree."""
+    from superfacets.scale.tiles.run import segment_tiled
+
+    pts, classes = _canopy(4)
+    cloud = PointCloud(pts, up=np.array([0.0, 0.0, 1.0]))
+    plain = segment_tiled(cloud, 30, tiles=4, workers=1)
+    r = segment_tiled(cloud, 30, tiles=4, workers=1, up_weight=2)
+    assert _mixed(plain.labels, classes) >= 10 and _mixed(r.labels, classes) == 0
+    assert r.n_segments == 30 and r.disagreements == 0 and r.params["up_weight"] == 2.0
+
+
 def test_what_cannot_be_weighed_is_refused_in_words(tmp_path):
     import trimesh
 
@@ -85,9 +98,10 @@ def test_what_cannot_be_weighed_is_refused_in_words(tmp_path):
             segment(PointCloud(pts, up=np.array([0.0, 0.0, 1.0])), 10, up_weight=bad)
     with pytest.raises(ParameterError, match="not go with up_weight"):
         segment(PointCloud(pts, up=np.array([0.0, 0.0, 1.0])), 10, up_weight=2, paper=True)
-    with pytest.raises(ParameterError, match="up_weight: not available in a tiled run"):
-        segment_tiled(PointCloud(pts, up=np.array([0.0, 0.0, 1.0])), 10, tiles=2,
-                      up_weight=2)
+    with pytest.raises(ParameterError, match="this cloud has no up"):
+        segment_tiled(PointCloud(pts), 10, tiles=2, workers=1, up_weight=2)
+    with pytest.raises(ParameterError, match="this input's elements are faces"):
+        segment_tiled(trimesh.creation.icosphere(3), 10, tiles=2, workers=1, up_weight=2)
     np.save(tmp_path / "c.npy", pts)
     out = tmp_path / "c.seg"
     assert main(["segment", str(tmp_path / "c.npy"), "-k", "10", "--up-weight", "2",

@@ -23,7 +23,8 @@ from .bounds import check_extent, column_bounds, finite_rows
 from .mesh import readonly
 from .rgb import check_colors, unit_colors
 
-__all__ = ["PointCloud", "as_cloud", "InvalidCloudError", "up_weighted"]
+__all__ = ["PointCloud", "as_cloud", "InvalidCloudError", "up_weighted", "stretched_along",
+           "stretched_normals"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -490,17 +491,10 @@ def up_weighted(cloud: PointCloud, weight: float) -> PointCloud:
     u = np.asarray(cloud.up, dtype=np.float64)
 
     def moved(p):
-        if p is None:
-            return None
-        p = np.asarray(p, dtype=np.float64)
-        return p + (weight - 1.0) * (p @ u)[..., None] * u
+        return None if p is None else stretched_along(p, u, weight)
 
     def turned(n):
-        if n is None:
-            return None
-        n = np.asarray(n, dtype=np.float64)
-        n = n - (1.0 - 1.0 / weight) * (n @ u)[..., None] * u
-        return n / np.linalg.norm(n, axis=-1, keepdims=True)
+        return None if n is None else stretched_normals(n, u, weight)
 
     frame = None
     if cloud.frame is not None:  # the box of the moved corners
@@ -514,3 +508,68 @@ def up_weighted(cloud: PointCloud, weight: float) -> PointCloud:
                        viewpoint=moved(cloud.viewpoint), frame=frame,
                        orient_like=None if like is None else (moved(like[0]), turned(like[1])),
                        object_viewpoints=moved(cloud.object_viewpoints))
+
+
+def stretched_along(points, up, weight: float) -> np.ndarray:
+    """Positions with their coordinate along the unit vector ``up`` times ``weight``:
+    ``p + (weight - 1) (p . up) up`` (:func:`up_weighted`).
+
+    Parameters
+    ----------
+    points : (..., 3) float ndarray
+    up : (3,) float ndarray
+        Of length 1.
+    weight : float
+
+    Returns
+    -------
+    (..., 3) float64 ndarray
+
+    Raises
+    ------
+    ValueError
+        Never for finite inputs (NaN rows stay NaN).
+
+    Examples
+    --------
+    >>> stretched_along(np.array([[1.0, 2.0, 3.0]]), np.array([0.0, 0.0, 1.0]), 2.0).tolist()
+    [[1.0, 2.0, 6.0]]
+    """
+    p = np.asarray(points, dtype=np.float64)
+    u = np.asarray(up, dtype=np.float64)
+    with np.errstate(invalid="ignore"):
+        return p + (weight - 1.0) * (p @ u)[..., None] * u
+
+
+def stretched_normals(normals, up, weight: float) -> np.ndarray:
+    """The unit normals of a surface stretched by :func:`stretched_along`: ``n - (1 - 1 /
+    weight) (n . up) up``, made unit.
+
+    Parameters
+    ----------
+    normals : (..., 3) float ndarray
+    up : (3,) float ndarray
+        Of length 1.
+    weight : float
+        ``> 0``.
+
+    Returns
+    -------
+    (..., 3) float64 ndarray
+
+    Raises
+    ------
+    ValueError
+        Never for finite inputs.
+
+    Examples
+    --------
+    >>> n = stretched_normals(np.array([[1.0, 0.0, 1.0]]), np.array([0.0, 0.0, 1.0]), 2.0)
+    >>> np.round(n, 4).tolist()
+    [[0.8944, 0.0, 0.4472]]
+    """
+    n = np.asarray(normals, dtype=np.float64)
+    u = np.asarray(up, dtype=np.float64)
+    with np.errstate(invalid="ignore"):
+        n = n - (1.0 - 1.0 / weight) * (n @ u)[..., None] * u
+        return n / np.linalg.norm(n, axis=-1, keepdims=True)

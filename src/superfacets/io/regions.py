@@ -40,7 +40,13 @@ import numpy as np
 from .._runtime import extras
 from ..errors import InvalidMeshError, MeshFormatError
 from ..inputs.bounds import column_bounds, finite_rows, rows_in_box
-from ..inputs.cloud import InvalidCloudError, PointCloud, as_cloud
+from ..inputs.cloud import (
+    InvalidCloudError,
+    PointCloud,
+    as_cloud,
+    stretched_along,
+    stretched_normals,
+)
 from ..inputs.convert import as_mesh
 from ..inputs.mesh import Mesh
 from ..inputs.rgb import color_top, unit_colors
@@ -158,6 +164,9 @@ class RegionReader:
     #: the divisor of the file's integer point colours, decided by the survey for the
     #: whole file (:func:`superfacets.inputs.rgb.color_top`); None: each chunk's own
     color_top: float | None = None
+    #: the up coordinate's weight (``up_weight``): the points' positions and given normals
+    #: are read stretched along ``up`` (:func:`superfacets.inputs.cloud.stretched_along`)
+    up_weight: float = 1.0
     #: rows without a finite position are invalid points (an organized scan's holes, -1
     #: labels) rather than damage; only a spilled cloud that had such points says so
     invalid_ok: bool = False
@@ -270,6 +279,12 @@ class RegionReader:
                 yield s, face_centroids(p), area, (tri, verts, colors(s, s + tri.shape[0], tri))
             return
         for s, pts, extra in self._point_chunks(stats):
+            if self.up_weight != 1:  # (the cloud the method's distances are read on)
+                u = np.asarray(self.up, dtype=np.float64)
+                pts = stretched_along(pts, u, self.up_weight)
+                col, nrm = extra
+                extra = (col, None if nrm is None else stretched_normals(nrm, u,
+                                                                         self.up_weight))
             yield s, pts, np.ones(pts.shape[0]), extra
 
     def survey(self) -> Survey:

@@ -119,8 +119,7 @@ def _diagonal(inp) -> float:
 def check_tileable(params: SegmentParams, colors: bool = True) -> None:
     """Refuse the options that read the whole graph, which no tile holds: the merge of
     small superfacets (``min_elements``), content-sensitive sizes (``density``: the
-    median size; ``roughness``); and ``up_weight``, which the tiles do not read yet.
-    ``density=None`` (automatic) is 0 in a tiled run. Also
+    median size; ``roughness``). ``density=None`` (automatic) is 0 in a tiled run. Also
     ``beta > 0`` on an input without ``colors`` (the survey's). (The merges to the count,
     ``merge_from``, run after the tiles: :mod:`superfacets.scale.tiles.merges`.)
 
@@ -129,7 +128,7 @@ def check_tileable(params: SegmentParams, colors: bool = True) -> None:
     ParameterError
         Naming the options, with one line on what to do instead.
     """
-    whole = [n for n in ("min_elements", "density", "roughness", "up_weight")
+    whole = [n for n in ("min_elements", "density", "roughness")
              if getattr(params, n) not in (None, 0, getattr(DEFAULTS, n))]
     if whole:
         raise ParameterError(f"{' and '.join(whole)}: not available in a tiled run (where the "

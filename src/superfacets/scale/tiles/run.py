@@ -55,6 +55,7 @@ from ...elements import points
 from ...elements.kinds import kind_of
 from ...errors import ParameterError, SuperfacetsError
 from ...inputs.bounds import check_extent, rows_in_box
+from ...inputs.cloud import stretched_along
 from ...io.regions import RegionReader, streamed
 from ...method.merges import NOISE_SAMPLE
 from ...method.params import DEFAULTS, resolve, superfacet_size
@@ -190,6 +191,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
             reader, survey = _surveyed(source, tmp, tiles, params)
             if survey.color_top is not None:  # one divisor for the whole file's colours
                 reader = replace(reader, color_top=survey.color_top)
+        weight, params = params.up_weight, replace(params, up_weight=1.0)  # (read stretched)
         layout = (balanced_tiles(survey.sample, survey.lo, survey.hi, tiles)
                   if np.ndim(tiles) == 0 else tile_grid(survey.lo, survey.hi, tiles))
         grid = layout.shape or (layout.n_tiles,)
@@ -254,6 +256,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         names = _numbered_densely(labels)
     timings["total"] = time.perf_counter() - t_start
     resolved = dict(params.as_dict(), n_segments=int(names.size), radius=r / diagonal,
+                    up_weight=weight,
                     tiles=grid, halo=float(halo), elements=reader.kind, merge_from=merge_from,
                     merged_from=merged_from, **({} if floor is None else {"feature_floor": floor}))
     return TiledResult(labels=labels, centers=names.astype(np.int64), mesh_radius=r, grid=grid,
@@ -501,6 +504,8 @@ def _surveyed(source, tmp, tiles, params):
         reader = RegionReader.open(source)
     else:  # (an object, or a file not read in chunks: an ASCII PLY, an OBJ, ...)
         reader = RegionReader.spill(source, tmp)
+    if params.up_weight != 1:  # every position read stretched (the tiles run on W = 1)
+        reader = _up_weighted(reader, params.up_weight)
     survey = reader.survey()
     if check_extent(survey.lo, survey.hi, f"{reader.path}: ",
                     "cloud" if kind_of(reader.kind).cloud else "mesh") == 0:
@@ -508,6 +513,21 @@ def _surveyed(source, tmp, tiles, params):
     check_tiles(tiles, survey.n_elements)  # a handful of elements per tile: refused
     check_tileable(params, survey.colors)
     return reader, survey
+
+
+def _up_weighted(reader, weight: float):
+    """``reader`` reading its points' positions (and sensor) stretched along its up
+    (``up_weight``: :func:`superfacets.inputs.cloud.up_weighted`, as one run's)."""
+    if not kind_of(reader.kind).cloud:
+        raise ParameterError(f"up_weight weighs a point cloud's up coordinate; this input's "
+                             f"elements are {reader.kind}")
+    if reader.up is None:
+        raise ParameterError("up_weight weighs a cloud's up coordinate, and this cloud has no "
+                             "up: a LAS, LAZ or E57 file's is z; give one (--seen-from AXIS, "
+                             "or PointCloud(up=...))")
+    vp = reader.viewpoint
+    return replace(reader, up_weight=float(weight), viewpoint=None if vp is None else tuple(
+        stretched_along(np.asarray(vp, dtype=np.float64), reader.up, weight).tolist()))
 
 
 def _connected(run, labels, tiling, tmp, box, suspects) -> int:
