@@ -316,7 +316,7 @@ def _run_vsa(mesh, n_segments, *, cache, seed, **params):
 #: where the run decides; the start: farthest points, which "auto" is without a radius)
 _SF_GRID = ("alpha", "eta_convex", "init", "window", "max_iter", "tol", "center_tol",
             "coarsen", "cleanup", "split_merge", "paper", "density", "roughness", "merge_from",
-            "max_size_ratio", "merge_cost", "assignment", "beta")
+            "max_size_ratio", "merge_cost", "assignment", "beta", "up_weight")
 _SF_DEFAULTS = {name: INITS[0] if name == "init" else
                 "auto" if PARAMETER[name].default is None else PARAMETER[name].default
                 for name in _SF_GRID}
