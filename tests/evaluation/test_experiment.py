@@ -204,6 +204,10 @@ def test_worker_processes_give_the_same_rows(bench, tmp_path, registry):
 
 def test_a_dying_worker_is_recorded_and_the_run_goes_on(bench, tmp_path, registry):
     import dask
+    import distributed  # noqa: F401 - its configuration's defaults, before the set below:
+    # set on a process that had not imported it, dask removed the whole "distributed"
+    # section on leaving (the defaults the import added inside with it), and the next
+    # test in the process to start a local cluster failed with KeyError: 'distributed'
 
     meshes = list_meshes(bench)
     res = tmp_path / "r.csv"
