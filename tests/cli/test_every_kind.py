@@ -58,6 +58,36 @@ def test_render_and_html_draw_clouds_and_tetrahedral_meshes(tmp_path, capsys):
     assert "2 labels, but" in capsys.readouterr().err and not (tmp_path / "x.png").exists()
 
 
+
+def test_view_opens_clouds_meshes_and_volumes(tmp_path, monkeypatch, sphere):
+    """``view`` read meshes alone ("unknown mesh format .laz"); a cloud is drawn as its
+    points, a volume as its cut. (The window replaced by an off-screen picture.)"""
+    pv = pytest.importorskip("pyvista")
+    import superfacets.viz.render as render
+    from superfacets import write_mesh
+
+    shown = []
+    real = render._pyvista
+    monkeypatch.setattr(render, "has_display", lambda: True)
+    monkeypatch.setattr(render, "_pyvista", lambda off_screen: real(True))
+    monkeypatch.setattr(pv.Plotter, "__init__", _off_screen_init(pv.Plotter.__init__))
+    monkeypatch.setattr(pv.Plotter, "show", lambda self, *a, **k: shown.append(
+        self.screenshot(return_img=True)))
+    write_mesh(tmp_path / "ball.off", sphere)
+    for path in (_laz(tmp_path / "tile.laz"), tmp_path / "ball.off", _tets(tmp_path / "v.vtu")):
+        assert main(["view", str(path), "-k", "8"]) == 0, path
+        img = shown[-1]
+        assert img.ndim == 3 and (img.reshape(-1, 3).std(axis=0) > 5).any(), path
+    assert len(shown) == 3
+
+
+def _off_screen_init(init):
+    def off_screen(self, *args, **kwargs):
+        kwargs["off_screen"] = True
+        init(self, *args, **kwargs)
+    return off_screen
+
+
 def test_evaluate_prints_json_and_csv_for_scripts(tmp_path, capsys):
     laz = _laz(tmp_path / "tile.laz")
     seg = tmp_path / "t.seg"

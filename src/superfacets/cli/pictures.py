@@ -228,14 +228,15 @@ def cmd_view(args) -> int:
         raise NoDisplayError("no display available ($DISPLAY is not set): use "
                              "'superfacets render' for a PNG or 'superfacets html' for a page "
                              "to open in a browser")
-    mesh = _read(args)
-    labels, _, elements = labels_for(args, mesh)
+    data = _read(args, clouds=True)
+    labels, _, elements = labels_for(args, data)
+    up = up_of(args, data)[0]
     if elements == "vertices":
         from ..viz.render import faces_to_draw
 
-        mesh, labels = faces_to_draw(mesh, labels, elements)
-    show(mesh, labels, title=Path(args.mesh).name, view=args.view,
-         up=up_of(args, mesh)[0])  # pragma: no cover
+        data, labels = faces_to_draw(data, labels, elements)
+    data, labels, _ = _drawn(data, labels, elements)  # (a volume: its cut)
+    show(data, labels, title=Path(args.mesh).name, view=args.view, up=up)
     return 0  # pragma: no cover
 
 

@@ -457,7 +457,9 @@ def render_panel(items: Sequence[tuple], out=None, *, ncols: int | None = None,
 
 def show(mesh, labels=None, *, title: str | None = None, boundaries: bool = True,
          view=None, up="y") -> None:  # pragma: no cover - needs a display
-    """Open an interactive window (rotate: drag, zoom: wheel, quit: q).
+    """Open an interactive window (rotate: drag, zoom: wheel, quit: q) on a mesh (labels of
+    its faces) or a point cloud (labels of its points, drawn as :func:`render_points` draws
+    them).
 
     Raises
     ------
@@ -468,12 +470,16 @@ def show(mesh, labels=None, *, title: str | None = None, boundaries: bool = True
         raise NoDisplayError("no display available ($DISPLAY is not set): use "
                              "'superfacets render' for a PNG or 'superfacets html' for a page "
                              "to open in a browser")
-    mesh = as_mesh(mesh)
-    labels = _check_labels(mesh, labels)
     pv = _pyvista(off_screen=False)
     p = pv.Plotter(title=title or "superfacets")
-    _add(p, pv, mesh, labels, boundaries=boundaries, line_width=1.0, boundary_color="black",
-         surface_color="lightgrey")
+    if kind_of(kind_for(mesh)).cloud:  # (points coloured by superpoint, as render_points)
+        mesh, draw = _points_drawing(pv, mesh, labels, tuple(p.window_size), view, 1.0, up)
+        draw(p)
+    else:
+        mesh = as_mesh(mesh)
+        labels = _check_labels(mesh, labels)
+        _add(p, pv, mesh, labels, boundaries=boundaries, line_width=1.0,
+             boundary_color="black", surface_color="lightgrey")
     _place_camera(p, mesh, view, up=up)
     if title:
         p.add_text(title, position="upper_edge", font_size=12, color="black")

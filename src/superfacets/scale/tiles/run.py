@@ -189,8 +189,6 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
     with run_folder(workdir) as tmp:  # the run's own folder, removed at its end
         with stage("survey"):
             reader, survey = _surveyed(source, tmp, tiles, params)
-            if survey.color_top is not None:  # one divisor for the whole file's colours
-                reader = replace(reader, color_top=survey.color_top)
         weight, params = params.up_weight, replace(params, up_weight=1.0)  # (read stretched)
         layout = (balanced_tiles(survey.sample, survey.lo, survey.hi, tiles)
                   if np.ndim(tiles) == 0 else tile_grid(survey.lo, survey.hi, tiles))
@@ -495,8 +493,10 @@ def _checked_options(n_segments, options, tiles, halo, refine, workers, start="s
 
 
 def _surveyed(source, tmp, tiles, params):
-    """The input's reader (streamed from its file, or spilled to the work folder) and its
-    survey (bounds, counts, a sample), checked against the tiles and the parameters."""
+    """The input's reader (streamed from its file, or spilled to the work folder; its
+    points read weighed with ``up_weight``, its colours divided by the survey's one
+    divisor) and its survey (bounds, counts, a sample), checked against the tiles and the
+    parameters."""
 
     if isinstance(source, RegionReader):  # opened by the caller (its viewpoint, up)
         reader = source
@@ -512,6 +512,8 @@ def _surveyed(source, tmp, tiles, params):
         raise ParameterError("the input has zero extent: nothing to tile")
     check_tiles(tiles, survey.n_elements)  # a handful of elements per tile: refused
     check_tileable(params, survey.colors)
+    if survey.color_top is not None:  # one divisor for the whole file's colours
+        reader = replace(reader, color_top=survey.color_top)
     return reader, survey
 
 
