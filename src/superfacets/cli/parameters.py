@@ -118,6 +118,10 @@ SHOWN = {
                     f"{_D.n_neighbors})"),
     "neighbor_radius": ("clouds", "R", "drop neighbours farther than this fraction of the "
                         "bounding-box diagonal (default: none)"),
+    "up_weight": ("clouds", "W", "weigh the cloud's up coordinate (a LAS, LAZ or E57 file's z; "
+                  "--seen-from AXIS for others) W times in the method's distances: 2 keeps "
+                  "apart what an airborne or street scan stacks in height (ground, vegetation, "
+                  "roofs); rooms are best at 1 (default: 1)"),
     "n_threads": ("run", "N", "threads of the run: graph build, expansions, split-and-merge "
                   "searches, clean-up cuts (default: all cores; the labels do not depend on "
                   "it)"),
