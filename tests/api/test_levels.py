@@ -138,6 +138,10 @@ def test_adaptive_and_cli_take_the_extent_weight(tmp_path, capsys):
     said = capsys.readouterr().out
     assert "12 content-adaptive superpoints (merged from 5 times as many)" in said
     assert "--min-elements" not in said  # the start's hints do not apply to the level
+    # a start beyond the points: the count the start made, not "10**9 times as many"
+    assert main(["segment", str(path), "-k", "12", "--adaptive", "1000000000", "-o",
+                 str(tmp_path / "c.seg")]) == 0
+    assert "12 content-adaptive superpoints (merged from 2,000)" in capsys.readouterr().out
     for bad in (["--extent-weight", "0.1"],
                 ["--adaptive", "--extent-weight", "-1"],
                 ["--graph", str(tmp_path / "g.npz"), "--levels", "5",

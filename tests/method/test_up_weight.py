@@ -81,7 +81,7 @@ def test_a_tiled_run_reads_the_cloud_weighed_as_one_run_does():
     assert r.n_segments == 30 and r.disagreements == 0 and r.params["up_weight"] == 2.0
 
 
-def test_what_cannot_be_weighed_is_refused_in_words(tmp_path):
+def test_what_cannot_be_weighed_is_refused_in_words(tmp_path, capsys):
     import trimesh
 
     from superfacets.cli import main
@@ -109,3 +109,4 @@ def test_what_cannot_be_weighed_is_refused_in_words(tmp_path):
     assert main(["segment", str(tmp_path / "c.npy"), "-k", "10", "--up-weight", "2",
                  "--seen-from", "z", "-o", str(out)]) == 0
     assert len(np.unique(np.loadtxt(out))) == 10
+    assert "heights weighed 2 times (--up-weight)" in capsys.readouterr().out

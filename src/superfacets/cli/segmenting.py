@@ -190,9 +190,14 @@ def _summary(name: str, mesh, result, seconds: float, elements: str = "faces",
     params = getattr(result, "params", None) or {}
     if params.get("feature_floor") is not None:  # the colour term ran
         segs += f", following colour (beta {params['beta']:.3g}; --beta 0: off)"
+    if params.get("up_weight", 1) != 1:
+        segs += f", heights weighed {params['up_weight']:g} times (--up-weight)"
     start = params.get("start")
     if start:  # --adaptive: the iterations and the hints are of the start's segmentation
-        segs = f"content-adaptive {segs} (merged from {start} times as many)"
+        first = params.get("n_init_centers") or 0
+        segs = f"content-adaptive {segs} (merged from " + (
+            f"{first:,}" if first and first < start * result.n_segments else
+            f"{start} times as many") + ")"
     t = getattr(result, "timings", None) or {}
     coarse = (f", after {t['coarse_passes']} on {t['coarse_elements']:,} clusters "
               f"(coarse-to-fine)" if t.get("coarse_elements") and "coarse_passes" in t else "")
