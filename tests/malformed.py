@@ -445,6 +445,8 @@ def cases() -> list[Case]:
     # --- report
     for name, data, match in [("not-utf8", b"\xff\xfe\x00garbage\xff\n", ""),
                               ("not-results", b"a,b\n1,2\n", "not a superfacets results file"),
+                              ("no-category", b"mesh,method,n_segments,status\nx,superfacets,10,"
+                                              b"ok\n", "no category column"),
                               ("empty", b"", "no rows"), ("header-only", RESULTS, "no rows"),
                               ("binary", bytes(range(256)), ""),
                               ("k-infinite", RESULTS + b"a,1,Ant,10,superfacets,inf,200,0,ok,5,"

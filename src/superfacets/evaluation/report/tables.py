@@ -79,6 +79,10 @@ def load_results(path, series: Sequence[str] | None = None):
     df = pd.DataFrame([filled(r) for r in last.values()])
     if df.empty:
         return df.assign(series=pd.Series(dtype=str))
+    missing = [c for c in ("category", "n_segments") if c not in df]
+    if missing:  # (a table made by hand: what the report reads is not there)
+        raise MeshFormatError(f"{', '.join(map(str, paths))}: not a superfacets results file "
+                              f"(no {'/'.join(missing)} column)")
     params = {m: sorted(METHODS[m].defaults) if m in METHODS else [] for m in df["method"].unique()}
     for c in ["mesh_id", "n_faces", "n_segments", "segments", "iterations", "seconds",
               "peak_mib", "n_ground_truths", *METRICS]:
