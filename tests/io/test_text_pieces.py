@@ -79,6 +79,8 @@ def test_a_csv_s_first_line_of_names_and_colour_columns(size, tmp_path):
                       size=size)
     assert cc["colors"].tolist() == [[0.5, 0.25, 1], [0, 0, 0]]  # (floats in [0, 1]: kept)
     assert read_columns(b"x y z\n0 0 0\n", Path("p.xyz"), size=size)["colors"] is None
+    quoted = read_columns(b'"x","y","z"\n1,2,3\n', Path("p.csv"), size=size)  # (a spreadsheet's)
+    assert quoted["points"].tolist() == [[1, 2, 3]]
     with pytest.raises(MeshFormatError, match="point line 1 is not numbers: 'a b c'"):
         read_columns(b"a b c\n0 0 0\n", Path("p.xyz"), size=size)
     (tmp_path / "scan.csv").write_bytes(text)

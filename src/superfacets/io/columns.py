@@ -98,7 +98,7 @@ def _header(text: str) -> tuple[list[str] | None, int]:
         end = len(text) if end < 0 else end + 1
         ln = text[at:end].strip()
         if ln and not _HEADER.match(ln):
-            words = [w.lower() for w in re.split(r"[\s,;]+", ln) if w]
+            words = [w.strip("\"'").lower() for w in re.split(r"[\s,;]+", ln) if w]
             if names is None and set("xyz") <= set(words) and not any(map(_is_number,
                                                                            words)):
                 names, at = words, end  # a first line of names alone (a CSV's header)
