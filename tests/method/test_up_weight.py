@@ -66,6 +66,10 @@ def test_graphs_are_in_the_data_s_units():
     assert g.centroid[:, 2].max() < 0.7  # (the weighed cloud's layer stands at 2.4)
     np.testing.assert_allclose(r.learning_graph()["pos"], want.centroid)
     assert r.hierarchy([5], cost="planarity").levels == (5,)
+    # the content-adaptive level is made from a start run of the same weighed cloud, whose
+    # graph was asked first: the level's graph is of the level's 20, not the start's 200
+    a = segment(cloud, 20, up_weight=4, adaptive=True)
+    assert a.n_segments == 20 == a.graph().n_segments
 
 
 def test_a_tiled_run_reads_the_cloud_weighed_as_one_run_does():

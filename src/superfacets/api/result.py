@@ -289,14 +289,14 @@ class SegmentationResult:
         if original is None:
             return src, self.element_labels
 
-        def build():
+        def build():  # (kept with the run's cloud: shared by the results made from it)
             e = elements_of(original, "points", n_neighbors=self.params.get(
                 "n_neighbors", _D.n_neighbors), neighbor_radius=self.params.get(
                 "neighbor_radius"))
-            rows = e.first_rows(np.arange(e.graph.n_elements))
-            return e, np.asarray(self.labels).reshape(-1)[rows]
+            return e, e.first_rows(np.arange(e.graph.n_elements))
 
-        return cached_on(weighted, "unweighted_elements", build)
+        e, rows = cached_on(weighted, "unweighted_elements", build)
+        return e, np.asarray(self.labels).reshape(-1)[rows]  # (this result's own labels)
 
 
 def stop_reason(result) -> str:
