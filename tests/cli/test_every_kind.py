@@ -59,6 +59,20 @@ def test_render_and_html_draw_clouds_and_tetrahedral_meshes(tmp_path, capsys):
 
 
 
+def test_a_panel_of_a_tile_is_a_map_with_every_panel_drawn(tmp_path, capsys):
+    """A LAS tile's panels are seen from above, as ``render`` draws it; eye-dome lighting
+    (a whole window's pass) left all panels but the last blank."""
+    pytest.importorskip("pyvista")
+    from PIL import Image
+
+    laz = _laz(tmp_path / "tile.laz")
+    out = tmp_path / "p.png"
+    assert main(["panel", str(laz), "-k", "10", "30", "-o", str(out), "--size", "300x200"]) == 0
+    img = np.asarray(Image.open(out).convert("RGB")).astype(int)
+    for half in (img[:, :300], img[:, 300:]):  # each panel: mostly points, not background
+        assert (np.abs(half - 255).sum(axis=2) > 60).mean() > 0.3
+
+
 def test_view_opens_clouds_meshes_and_volumes(tmp_path, monkeypatch, sphere):
     """``view`` read meshes alone ("unknown mesh format .laz"); a cloud is drawn as its
     points, a volume as its cut. (The window replaced by an off-screen picture.)"""

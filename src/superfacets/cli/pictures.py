@@ -214,7 +214,8 @@ def cmd_panel(args) -> int:
         items = [(m, lab, t) for (m, lab, _), t in zip(items, args.titles)]
     items = [(*_drawn(m, lab, kind)[:2], t) for m, lab, t in items]  # (a volume: its cut)
     up = up_of(args, mesh)
-    render_panel(items, out, ncols=args.columns, size=args.size, view=args.view, up=up[0],
+    view = args.view if args.view is not None else default_view(mesh)  # (a tile: a map)
+    render_panel(items, out, ncols=args.columns, size=args.size, view=view, up=up[0],
                  background=args.background, boundaries=not args.no_boundaries,
                  line_width=args.line_width, zoom=args.zoom)
     print(f"wrote {out}: {len(items)} panel{'s' if len(items) != 1 else ''}, {said_up(up)}")
@@ -231,12 +232,13 @@ def cmd_view(args) -> int:
     data = _read(args, clouds=True)
     labels, _, elements = labels_for(args, data)
     up = up_of(args, data)[0]
+    view = args.view if args.view is not None else default_view(data)  # (a tile: a map)
     if elements == "vertices":
         from ..viz.render import faces_to_draw
 
         data, labels = faces_to_draw(data, labels, elements)
     data, labels, _ = _drawn(data, labels, elements)  # (a volume: its cut)
-    show(data, labels, title=Path(args.mesh).name, view=args.view, up=up)
+    show(data, labels, title=Path(args.mesh).name, view=view, up=up)
     return 0  # pragma: no cover
 
 

@@ -437,8 +437,9 @@ def render_panel(items: Sequence[tuple], out=None, *, ncols: int | None = None,
         p.set_background(background)
         for i, (mesh, labels, title) in enumerate(items):
             p.subplot(i // ncols, i % ncols)
-            if kind_of(kind_for(mesh)).cloud:
-                mesh, draw = _points_drawing(pv, mesh, labels, (w, h), view, zoom, up)
+            if kind_of(kind_for(mesh)).cloud:  # (shaded spheres: eye-dome lighting is one
+                mesh, draw = _points_drawing(pv, mesh, labels, (w, h), view, zoom, up,  # pass
+                                             eye_dome=False)  # of a whole window, not a panel's)
                 draw(p)
             else:
                 mesh = as_mesh(mesh)
