@@ -225,8 +225,8 @@ def superfacets(data=_NO_INPUT, n_segments: int | None = _D.n_segments, *, featu
         on two ScanNet rooms it raised the error by 15 % (walls are cut in bands), so it
         is not the default (``docs/notes/superpoints.md``, "The vertical weighed more").
         Labels, :meth:`SegmentationResult.graph` and ``learning_graph`` are of
-        the cloud as given; ``mesh_radius`` is the weighed cloud's (a tiled run reads every
-        position weighed).
+        the cloud as given; ``mesh_radius`` is the weighed cloud's. One run holds a weighed
+        copy of the points (24 bytes a point); a tiled run reads every position weighed.
     tol : float, default 0.001
         Convergence tolerance in ``[0, 1]``: also stop once a classification
         changes the superfacet of at most this fraction of the surface area
