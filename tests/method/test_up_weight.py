@@ -66,6 +66,12 @@ def test_graphs_are_in_the_data_s_units():
     assert g.centroid[:, 2].max() < 0.7  # (the weighed cloud's layer stands at 2.4)
     np.testing.assert_allclose(r.learning_graph()["pos"], want.centroid)
     assert r.hierarchy([5], cost="planarity").levels == (5,)
+    # pickled, the result leaves the cloud as given behind: its graphs unstretch the run's
+    import pickle
+
+    again = pickle.loads(pickle.dumps(r)).graph()
+    np.testing.assert_allclose(again.centroid, want.centroid, atol=1e-12)
+    np.testing.assert_allclose(again.area, want.area, rtol=1e-12)
     # the content-adaptive level is made from a start run of the same weighed cloud, whose
     # graph was asked first: the level's graph is of the level's 20, not the start's 200
     a = segment(cloud, 20, up_weight=4, adaptive=True)

@@ -15,11 +15,13 @@ import numpy as np
 from .._runtime import extras
 from ..elements.builders import elements_of, per_element
 from ..elements.graph import cached_on
+from ..elements.kinds import kind_of
 from ..errors import ParameterError
 from ..graph import hierarchy
 from ..graph.adjacency import superfacet_graph
 from ..graph.hierarchy import level_extent_weight, planarity_graph
 from ..graph.learning import learning_arrays
+from ..inputs.cloud import up_weighted
 from ..method.params import DEFAULTS
 
 __all__ = ["SegmentationResult", "TiledResult", "stop_reason", "describe_stop"]
@@ -285,9 +287,12 @@ class SegmentationResult:
         (built once, kept with the run's), so that sizes and positions are the data's."""
         src = self._source()
         weighted = src.source
-        original = getattr(weighted, "__dict__", {}).get("unweighted")
-        if original is None:
+        weight = (self.params or {}).get("up_weight", 1.0)
+        if weight == 1 or not kind_of(src.graph.kind).cloud:
             return src, self.element_labels
+        original = weighted.__dict__.get("unweighted")  # (not pickled: unstretched again)
+        if original is None:
+            original = up_weighted(weighted, 1.0 / weight)
 
         def build():  # (kept with the run's cloud: shared by the results made from it)
             e = elements_of(original, "points", n_neighbors=self.params.get(
