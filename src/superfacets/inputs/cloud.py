@@ -24,7 +24,7 @@ from .mesh import readonly
 from .rgb import check_colors, unit_colors
 
 __all__ = ["PointCloud", "as_cloud", "InvalidCloudError", "up_weighted", "stretched_along",
-           "stretched_normals"]
+           "stretched_normals", "check_weighable"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -484,10 +484,7 @@ def up_weighted(cloud: PointCloud, weight: float) -> PointCloud:
     """
     if weight == 1:
         return cloud
-    if cloud.up is None:
-        raise ParameterError("up_weight weighs a cloud's up coordinate, and this cloud has no "
-                             "up: a LAS, LAZ or E57 file's is z; give one (--seen-from AXIS, "
-                             "or PointCloud(up=...))")
+    check_weighable(True, "points", cloud.up)
     u = np.asarray(cloud.up, dtype=np.float64)
 
     def moved(p):
@@ -573,3 +570,37 @@ def stretched_normals(normals, up, weight: float) -> np.ndarray:
     with np.errstate(invalid="ignore"):
         n = n - (1.0 - 1.0 / weight) * (n @ u)[..., None] * u
         return n / np.linalg.norm(n, axis=-1, keepdims=True)
+
+
+def check_weighable(cloud: bool, kind: str, up) -> None:
+    """Refuse ``up_weight`` (other than 1) where there is no up coordinate to weigh: elements
+    that are not points (``cloud`` False; ``kind`` named), or a cloud without ``up``.
+
+    Parameters
+    ----------
+    cloud : bool
+        Whether the elements are points.
+    kind : str
+        Their kind, for the message.
+    up : (3,) float array-like or None
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    ParameterError
+        As said.
+
+    Examples
+    --------
+    >>> check_weighable(True, "points", (0.0, 0.0, 1.0))
+    """
+    if not cloud:
+        raise ParameterError(f"up_weight weighs a point cloud's up coordinate; this input's "
+                             f"elements are {kind}")
+    if up is None:
+        raise ParameterError("up_weight weighs a cloud's up coordinate, and this cloud has no "
+                             "up: a LAS, LAZ or E57 file's is z; give one (--seen-from AXIS, "
+                             "or PointCloud(up=...))")

@@ -21,7 +21,7 @@ from ..elements.graph import ElementGraph
 from ..elements.kinds import ElementKind, kind_of
 from ..elements.vertices import symmetric_terms
 from ..errors import ParameterError
-from ..inputs.cloud import up_weighted
+from ..inputs.cloud import check_weighable, up_weighted
 from .classify import make_classifier
 from .coarse_to_fine import COARSENING_READS, coarsening_for, start_centers
 from .expansion import Workspaces
@@ -223,9 +223,7 @@ def build_graph(obj, p: SegmentParams, features=None
     check_stage("build_graph", params=p)
     kind, data = prepared(obj, p.elements, n_segments=p.n_segments)
     if p.up_weight != 1:  # (not in the paper) the cloud the distances are read on
-        if not kind_of(kind).cloud:
-            raise ParameterError(f"up_weight weighs a point cloud's up coordinate; this "
-                                 f"input's elements are {kind}")
+        check_weighable(kind_of(kind).cloud, kind, getattr(data, "up", None))
         weighted = up_weighted(data, p.up_weight)
         weighted.__dict__["unweighted"] = data  # (a result's graphs read the data's units)
         data = weighted

@@ -55,7 +55,7 @@ from ...elements import points
 from ...elements.kinds import kind_of
 from ...errors import ParameterError, SuperfacetsError
 from ...inputs.bounds import check_extent, rows_in_box
-from ...inputs.cloud import stretched_along
+from ...inputs.cloud import check_weighable, stretched_along
 from ...io.regions import RegionReader, streamed
 from ...method.merges import NOISE_SAMPLE
 from ...method.params import DEFAULTS, resolve, superfacet_size
@@ -520,13 +520,7 @@ def _surveyed(source, tmp, tiles, params):
 def _up_weighted(reader, weight: float):
     """``reader`` reading its points' positions (and sensor) stretched along its up
     (``up_weight``: :func:`superfacets.inputs.cloud.up_weighted`, as one run's)."""
-    if not kind_of(reader.kind).cloud:
-        raise ParameterError(f"up_weight weighs a point cloud's up coordinate; this input's "
-                             f"elements are {reader.kind}")
-    if reader.up is None:
-        raise ParameterError("up_weight weighs a cloud's up coordinate, and this cloud has no "
-                             "up: a LAS, LAZ or E57 file's is z; give one (--seen-from AXIS, "
-                             "or PointCloud(up=...))")
+    check_weighable(kind_of(reader.kind).cloud, reader.kind, reader.up)
     vp = reader.viewpoint
     return replace(reader, up_weight=float(weight), viewpoint=None if vp is None else tuple(
         stretched_along(np.asarray(vp, dtype=np.float64), reader.up, weight).tolist()))
