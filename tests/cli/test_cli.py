@@ -225,8 +225,11 @@ def test_evaluate_reads_a_ground_truth_field_of_the_input(tmp_path, capsys):
     assert main(["evaluate", str(tmp_path / "scan.ply"), str(sp), "--ground-truth-field",
                  "label", "--ignore-label", "0"]) == 0
     assert "undersegmentation_error 0.0000" in capsys.readouterr().out
+    # a ground-truth file given to the option (its abbreviation --ground-truth reads so)
+    gt_file = "after the labels: superfacets evaluate INPUT LABELS " + str(sp)
     for args, msg in ((["--ground-truth-field", "klass"], "no field 'klass'; it has: "),
-                      ([], "give a ground truth")):
+                      ([], "give a ground truth"), (["--ground-truth", str(sp)], gt_file),
+                      (["--ground-truth-field", "gt.seg"], "not a file ('gt.seg')")):
         assert main(["evaluate", str(tmp_path / "scan.las"), str(sp), *args]) == 2
         err = capsys.readouterr().err
         assert msg in err and "Traceback" not in err

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from superfacets.cli import main
-from superfacets.errors import ParameterError
+from superfacets.errors import MeshFormatError, ParameterError
 from superfacets.io import read_labels
 from superfacets.io.records import write_labels_into
 
@@ -209,3 +209,131 @@ def test_a_batch_writes_each_scan_s_own_records(tmp_path, capsys, sphere):
     labels = np.asarray(laspy.read(out / "a.laz").ClusterID)
     assert labels.shape == (1500,) and len(np.unique(labels)) == 9
     assert len(np.unique(read_labels(out / "ball.seg"))) == 9  # a mesh: its label file
+
+
+def _pcd(path, encoding: str, *, seed=0, label=None):
+    """An organized PCD of two terraces, 40 x 30, with packed colour, intensity, a padding
+    field (binary encodings: PCL pads records with ``_`` fields) and a NaN row of points
+    (a depth camera's holes); ``label``: a ``label`` field (PCL's ``PointXYZL``) too."""
+    rng = np.random.default_rng(seed)
+    h, w = 30, 40
+    n = h * w
+    xy = np.stack(np.meshgrid(np.arange(w) * 0.05, np.arange(h) * 0.05), -1).reshape(-1, 2)
+    z = np.where(xy[:, 0] > 1.0, 0.5, 0.0) + rng.normal(0, 0.002, n)
+    p = np.c_[xy, z].astype(np.float32)
+    p[40:80] = np.nan
+    rgb = np.where(xy[:, 0] > 1.0, 0xFF2020, 0x2020FF).astype(np.uint32)
+    fields = [("x", "F", 4), ("y", "F", 4), ("z", "F", 4), ("rgb", "U", 4),
+              ("intensity", "F", 4)]
+    cols = [p[:, 0], p[:, 1], p[:, 2], rgb, rng.random(n).astype(np.float32)]
+    if encoding != "ascii":
+        fields.insert(3, ("_", "U", 1))
+        cols.insert(3, np.zeros(n, np.uint8))
+    if label is not None:
+        fields.append(("label", "U", 4))
+        cols.append(np.asarray(label, np.uint32))
+    head = ("# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\n"
+            f"FIELDS {' '.join(f[0] for f in fields)}\nSIZE {' '.join(str(f[2]) for f in fields)}"
+            f"\nTYPE {' '.join(f[1] for f in fields)}\nCOUNT {' '.join('1' for _ in fields)}\n"
+            f"WIDTH {w}\nHEIGHT {h}\nVIEWPOINT 0 0 2 0 1 0 0\nPOINTS {n}\nDATA {encoding}\n")
+    dtype = [(f"f{i}", {"F": "<f", "U": "<u", "I": "<i"}[t] + str(s))
+             for i, (_, t, s) in enumerate(fields)]
+    rec = np.empty(n, dtype=dtype)
+    for i, c in enumerate(cols):
+        rec[f"f{i}"] = c
+    if encoding == "ascii":
+        body = "".join(" ".join(f"{v:.6g}" if isinstance(v, float) else str(v)
+                                for v in row.tolist()) + "\n" for row in rec)
+        path.write_bytes(head.encode() + body.encode())
+    elif encoding == "binary":
+        path.write_bytes(head.encode() + rec.tobytes())
+    else:  # compressed by pypcd4 from the binary file's records
+        from pypcd4 import Encoding, PointCloud
+
+        plain = path.with_suffix(".bin.pcd")
+        _pcd(plain, "binary", seed=seed, label=label)
+        PointCloud.from_path(plain).save(path, encoding=Encoding.BINARY_COMPRESSED)
+    return path
+
+
+def _pcd_head(path) -> list[bytes]:
+    raw = path.read_bytes()
+    return raw[:raw.index(b"\nDATA ") + 1].split(b"\n")[:-1] + [
+        raw[raw.index(b"\nDATA ") + 1:].split(b"\n")[0]]
+
+
+@pytest.mark.parametrize("encoding", ["ascii", "binary", "binary_compressed"])
+def test_pcd_records_keep_the_header_and_every_field(tmp_path, capsys, encoding):
+    pypcd4 = pytest.importorskip("pypcd4")
+    src = _pcd(tmp_path / "frame.pcd", encoding)
+    out = tmp_path / "out.pcd"
+    assert main(["segment", str(src), "-k", "6", "-o", str(out)]) == 0
+    assert "labels as ClusterID" in capsys.readouterr().out
+    before, after = _pcd_head(src), _pcd_head(out)
+    grown = {b"FIELDS": b" ClusterID", b"SIZE": b" 4", b"TYPE": b" I", b"COUNT": b" 1"}
+    assert len(before) == len(after)
+    for a, b in zip(before, after):  # comments, VIEWPOINT, WIDTH x HEIGHT, DATA as they were
+        word = a.split()[0] if a.split() else b""
+        assert b == a + grown.get(word, b""), (a, b)
+    a, b = pypcd4.PointCloud.from_path(src), pypcd4.PointCloud.from_path(out)
+    assert b.metadata.data == a.metadata.data
+    for na, nb in zip(a.pc_data.dtype.names, b.pc_data.dtype.names):  # (padding: renamed)
+        assert np.array_equal(a.pc_data[na], b.pc_data[nb], equal_nan=True), na
+    labels = b.pc_data["ClusterID"]
+    assert labels.dtype == np.int32
+    invalid = np.isnan(a.pc_data["x"])
+    assert invalid.sum() == 40 and (labels[invalid] == -1).all()
+    assert set(labels[~invalid].tolist()) == set(range(6))
+    assert np.array_equal(read_labels(out), labels)
+    if encoding == "ascii":  # each line as it was, its label after it
+        lines = [ln for ln in src.read_bytes().split(b"DATA ascii\n")[1].splitlines()]
+        got = out.read_bytes().split(b"DATA ascii\n")[1].splitlines()
+        assert all(g == ln + b" " + str(v).encode() for g, ln, v in zip(got, lines, labels))
+    if encoding == "binary":  # the records' bytes, 4 more each
+        rec = len(src.read_bytes().split(b"DATA binary\n")[1]) // 1200
+        old = np.frombuffer(src.read_bytes().split(b"DATA binary\n")[1], f"V{rec}")
+        new = np.frombuffer(out.read_bytes().split(b"DATA binary\n")[1],
+                            [("old", f"V{rec}"), ("label", "<i4")])
+        assert new["old"].tobytes() == old.tobytes()
+        assert np.array_equal(new["label"], labels)
+
+
+def test_pcd_records_twice_and_a_pcd_ground_truth(tmp_path, capsys):
+    pytest.importorskip("pypcd4")
+    truth = (np.arange(1200) % 40 > 20).astype(np.uint32)  # the two terraces
+    src = _pcd(tmp_path / "frame.pcd", "binary", label=truth)
+    once = write_labels_into(tmp_path / "o.pcd", src, np.where(np.arange(1200) < 3, -1, 1))
+    twice = write_labels_into(tmp_path / "p.pcd", once, np.arange(1200) % 7)
+    assert _pcd_head(twice) == _pcd_head(once)  # the field overwritten, not added again
+    assert np.array_equal(read_labels(twice), np.arange(1200) % 7)
+    # the ground truth from the PCD's own label field, the labels from the copy
+    assert main(["segment", str(src), "-k", "8", "-o", str(tmp_path / "s.pcd"), "-q"]) == 0
+    capsys.readouterr()
+    assert main(["evaluate", str(src), str(tmp_path / "s.pcd"), "--ground-truth-field",
+                 "label", "--json"]) == 0
+    import json
+
+    scores = json.loads(capsys.readouterr().out)
+    assert scores["segments"] == 8 and scores["undersegmentation_error"] < 0.05
+    assert main(["evaluate", str(src), str(tmp_path / "s.pcd"), "--ground-truth-field",
+                 "nope"]) == 2
+    err = capsys.readouterr().err
+    assert "no field 'nope'" in err and "intensity" in err and "#" not in err
+
+
+def test_pcd_records_refused_where_they_cannot_be_written(tmp_path, capsys):
+    pytest.importorskip("pypcd4")
+    src = _pcd(tmp_path / "frame.pcd", "ascii")
+    text = src.read_bytes().replace(b"intensity", b"ClusterID")  # a float field of that name
+    (tmp_path / "float.pcd").write_bytes(text)
+    with pytest.raises(MeshFormatError, match="type F4 x 1, which cannot hold"):
+        write_labels_into(tmp_path / "o.pcd", tmp_path / "float.pcd", np.zeros(1200, int))
+    with pytest.raises(ParameterError, match="1,199 labels for 1,200 points"):
+        write_labels_into(tmp_path / "o.pcd", src, np.zeros(1199, int))
+    laz = _laz(tmp_path / "tile.laz", n=300)
+    for args, said in (([str(src), "-o", str(tmp_path / "o.pcd.gz")], "its own encoding"),
+                       ([str(laz), "-o", str(tmp_path / "o.pcd")], "needs a .pcd input")):
+        assert main(["segment", *args, "-k", "5"]) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and said in err, err
+    assert not list(tmp_path.glob("o.*"))

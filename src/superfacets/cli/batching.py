@@ -45,7 +45,7 @@ def add_parsers(sub) -> None:
                           "depend on it)"
     b.add_argument("--labels", choices=("seg", "json", "records"), default="seg",
                    help="label file per input: one label per line (.seg), ScanNet's "
-                        "segIndices (.json), or records: each LAS/LAZ or PLY cloud's own "
+                        "segIndices (.json), or records: each LAS/LAZ, PLY or PCD cloud's own "
                         "records with a ClusterID field (.seg for the others) (default: seg)")
     b.add_argument("--header", action="store_true",
                    help="start each .seg file with '#' lines (parameters, passes, time)")

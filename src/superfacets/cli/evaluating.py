@@ -9,6 +9,7 @@ unlabelled ones left out with ``--ignore-label``); ground truths from
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 from ..elements.kinds import kind_of
@@ -30,15 +31,15 @@ def add_parsers(sub) -> None:
     e.add_argument("mesh", metavar="INPUT", help="the mesh or point-cloud file")
     e.add_argument("labels", metavar="LABELS",
                    help="labels, one per face (vertex, point) in file order: a .seg file, a "
-                        "segIndices .json, or a PLY or LAS/LAZ written by 'segment -o' (its "
-                        "ClusterID)")
+                        "segIndices .json, or a PLY, PCD or LAS/LAZ written by 'segment -o' "
+                        "(its ClusterID)")
     e.add_argument("ground_truths", metavar="GT.seg", nargs="*",
                    help="one or more ground truths of the same input, one per face (vertex, "
                         "point)")
     e.add_argument("--ground-truth-field", metavar="NAME", default=None,
                    help="also a ground truth read from the input file itself: a LAS/LAZ "
-                        "dimension (classification) or a PLY vertex property (ScanNet's "
-                        "label)")
+                        "dimension (classification), a PLY vertex property (ScanNet's "
+                        "label) or a PCD field (PCL's label)")
     e.add_argument("--tau", type=float_arg, default=0.05,
                    help="overlap tolerance of the undersegmentation error, a fraction of each "
                         "superfacet's area (default: 0.05)")
@@ -85,6 +86,7 @@ def cmd_evaluate(args) -> int:
     if args.ground_truth_field is not None:
         from ..io.labels import read_field
 
+        _check_field_name(args.ground_truth_field)
         gt = read_field(args.mesh, args.ground_truth_field)
         if gt.shape[0] != n:
             raise ParameterError(f"field {args.ground_truth_field!r} has {gt.shape[0]} values "
@@ -125,6 +127,18 @@ def cmd_evaluate(args) -> int:
 #: The metrics printed, in order.
 METRICS = ("undersegmentation_error", "compactness", "boundary_recall", "boundary_precision",
            "achievable_accuracy", "oracle_miou")
+
+
+def _check_field_name(name: str) -> None:
+    """Refuse a ground-truth file given as ``--ground-truth-field`` (or an abbreviation of
+    it, ``--ground-truth GT.seg``): the option names a field of the input."""
+    from ..errors import ParameterError
+
+    if Path(name).suffix.lower() in (".seg", ".json", ".txt", ".gz", ".xz") or \
+            os.path.sep in name or Path(name).is_file():
+        raise ParameterError(f"--ground-truth-field names a field of the input file (e.g. "
+                             f"classification), not a file ({name!r}); give a ground-truth "
+                             f"file after the labels: superfacets evaluate INPUT LABELS {name}")
 
 
 def _print_table(args, kind: str, n: int, n_truths: int, m: dict) -> None:

@@ -100,8 +100,8 @@ def _add_inputs(x) -> None:
                         "cloud's points are segmented; a mesh's --elements")
     x.add_argument("--ground-truth-field", metavar="NAME", default=None,
                    help="with --inputs: each file's ground truth, a field of its own (a "
-                        "LAS/LAZ classification, a PLY vertex label); without it, rows have "
-                        "no metrics")
+                        "LAS/LAZ classification, a PLY vertex label, a PCD label); without "
+                        "it, rows have no metrics")
 
 
 def _id_list(text: str) -> set[int]:

@@ -272,12 +272,13 @@ def add_mesh_and_labels(p, plain: bool = True) -> None:
                         "tetrahedral mesh")
     p.add_argument("labels", metavar="LABELS", nargs="?", default=None,
                    help="labels, one per face, vertex, point or tetrahedron: a .seg file, a "
-                        "segIndices .json, a PLY or LAS/LAZ written by 'segment -o' "
+                        "segIndices .json, a PLY, PCD or LAS/LAZ written by 'segment -o' "
                         "(default: computed)")
     p.add_argument("--labels-from", metavar="FIELD", default=None,
                    help="take the labels from a field of the input itself: a LAS/LAZ "
-                        "dimension or a PLY vertex property (ClusterID, as 'segment -o "
-                        "OUT.laz' writes it; scalar_ClusterID is found as ClusterID)")
+                        "dimension, a PCD field or a PLY vertex property (ClusterID, as "
+                        "'segment -o OUT.laz' writes it; scalar_ClusterID is found as "
+                        "ClusterID)")
     if plain:
         p.add_argument("--plain", action="store_true", help="draw the input without labels")
 
@@ -319,7 +320,7 @@ def check_output(path: str | None, suffixes: tuple[str, ...], what: str,
 
 def check_labels_output(path: str | None, source: str, records: bool = False) -> Path | None:
     """``-o``: a label file (``.seg`` or any text name, ``.json`` for segIndices, ``-``),
-    or, where ``records`` is True, a copy of a LAS/LAZ or PLY input with the labels in its
+    or, where ``records`` is True, a copy of a LAS/LAZ, PLY or PCD input with the labels in its
     records (:func:`superfacets.io.records.write_labels_into`).
 
     Any other name that says mesh, cloud, picture or page (``x.pcd``, ``x.png``, ...) is
@@ -344,9 +345,9 @@ def check_labels_output(path: str | None, source: str, records: bool = False) ->
             f"{out}: -o writes the labels as text (one per line; .json for segIndices), not a "
             f".{fmt} file" + (f"; for that use {option} {out.name}" if option else "")
             + "; name the labels e.g. " + out.name.split(".")[0] + ".seg"
-            + ("" if not records or fmt not in ("las", "laz", "ply") else
+            + ("" if not records or fmt not in ("las", "laz", "ply", "pcd") else
                f" (a .{fmt} takes the labels into a copy of a "
-               f"{'PLY' if fmt == 'ply' else 'LAS/LAZ'} input's records)"))
+               f"{'LAS/LAZ' if fmt in ('las', 'laz') else fmt.upper()} input's records)"))
     return out
 
 

@@ -70,7 +70,9 @@ def _add_segment(sub) -> None:
     out.add_argument("-o", "--output", metavar="OUT.seg", default=None,
                      help="write the labels here: one per face, vertex or point per line, or "
                           "{'segIndices': [...], 'params': ...} when it ends in .json "
-                          "('-': standard output; default: none)")
+                          "('-': standard output; default: none); a .las/.laz, .ply or .pcd "
+                          "of a scan of that format: a copy of its records with the labels "
+                          "as the field ClusterID")
     out.add_argument("--header", action="store_true",
                      help="start the .seg file with '#' lines recording parameters, "
                           "iterations and time (default: labels only, as the benchmark's "

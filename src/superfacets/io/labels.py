@@ -204,7 +204,7 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file")
     fmt, comp = split_suffix(path)
-    if fmt in ("las", "laz"):  # a scan written by segment -o OUT.laz
+    if fmt in ("las", "laz", "pcd"):  # a scan written by segment -o OUT.laz (OUT.pcd)
         labels = read_field(path, LABEL_FIELD)
         if n_faces is not None and labels.shape[0] != n_faces:
             raise MeshFormatError(f"{path}: has {labels.shape[0]} points but the input has "
@@ -244,12 +244,13 @@ def read_field(path, name: str) -> np.ndarray:
 
     A labelled scan often carries its ground truth beside the coordinates:
     the ``classification`` of a LAS/LAZ file (ASPRS classes), the ``label``
-    property of a PLY's vertices (ScanNet's ``*_vh_clean_2.labels.ply``).
+    property of a PLY's vertices (ScanNet's ``*_vh_clean_2.labels.ply``), the
+    ``label`` field of a PCD (PCL's ``PointXYZL``).
 
     Parameters
     ----------
     path : str or os.PathLike
-        A ``.las``/``.laz`` or ``.ply`` file (optionally compressed PLY).
+        A ``.las``/``.laz``, ``.ply`` (optionally compressed) or ``.pcd`` file.
     name : str
         The LAS dimension or the PLY vertex property (``NAME`` also finds
         ``scalar_NAME``, CloudCompare's name of a scalar field).
@@ -297,12 +298,36 @@ def read_field(path, name: str) -> np.ndarray:
             values = np.asarray(vertex[name]) if name in names else None
         except (PlyParseError, KeyError, ValueError, IndexError, EOFError) as exc:
             raise MeshFormatError(f"{path}: cannot read PLY vertices: {exc}") from None
+    elif fmt == "pcd" and comp is None:
+        names, values = _pcd_field(path, name)
     else:
-        raise MeshFormatError(f"{path}: only LAS/LAZ and PLY files carry per-point fields; "
-                              "give the ground truth as a .seg file")
+        raise MeshFormatError(f"{path}: only LAS/LAZ, PLY and PCD files carry per-point "
+                              "fields; give the ground truth as a .seg file")
     if values is None:
         raise MeshFormatError(f"{path}: no field {name!r}; it has: {', '.join(names)}")
     if not (np.issubdtype(values.dtype, np.integer) or np.issubdtype(values.dtype, np.bool_)):
         if not (np.isfinite(values).all() and (values == np.round(values)).all()):
             raise MeshFormatError(f"{path}: field {name!r} is not integer ({values.dtype})")
     return values.astype(np.int64)
+
+
+def _pcd_field(path: Path, name: str) -> tuple[list[str], np.ndarray | None]:
+    """A PCD's field names and the values of the field ``name`` (None where absent)."""
+    from .clouds import _check_pcd_header
+
+    pypcd4 = extras.require("pypcd4", "reading PCD files")
+    _check_pcd_header(path)
+    try:
+        pc = pypcd4.PointCloud.from_path(path)
+        meta = pc.metadata
+        names = [f for f in meta.fields if not f.startswith("#")]  # (not the padding)
+        if name in names and meta.count[list(meta.fields).index(name)] != 1:
+            count = meta.count[list(meta.fields).index(name)]
+            raise MeshFormatError(f"{path}: field {name!r} holds {count} values per point, "
+                                  "not one label")
+        return names, np.asarray(pc.pc_data[name]) if name in names else None
+    except MeshFormatError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - pypcd4/pydantic raise many types
+        msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise MeshFormatError(f"{path}: cannot read PCD: {msg}") from None

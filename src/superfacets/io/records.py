@@ -1,4 +1,4 @@
-"""Labels written back into the input's own records: a LAS/LAZ dimension, a PLY field.
+"""Labels written back into the input's own records: a LAS/LAZ dimension, a PLY or PCD field.
 
 A scan's users keep working in the scan's own file (PDAL, lidR, CloudCompare,
 QGIS): the labels go in as one more field of each point, every other field and
@@ -11,6 +11,11 @@ the header kept.
   being the one CloudCompare loads as a scalar field (named ``ClusterID``
   there); every other element and property kept, in the input's encoding
   (plyfile).
+- PCD: a field ``ClusterID`` (``TYPE I``, ``SIZE 4``) after the others; the header's
+  lines (comments, ``VIEWPOINT``, an organized cloud's ``WIDTH`` and ``HEIGHT``) and the
+  encoding kept: an ASCII file's lines as they were, each with the label after it; a
+  binary file's records (padding fields included) with 4 bytes more (pypcd4 encodes a
+  ``binary_compressed`` one). PDAL's PCD reader names the dimension ``ClusterID`` too.
 
 ``-1`` marks an invalid point (a non-finite row of the input): the type is signed
 for that.
@@ -35,12 +40,14 @@ __all__ = ["LABEL_FIELD", "RECORD_FORMATS", "write_labels_into", "ply_field_name
 LABEL_FIELD = "ClusterID"
 
 #: Output formats that take the labels into the input's records, by input format.
-RECORD_FORMATS = {"las": ("las", "laz"), "laz": ("las", "laz"), "ply": ("ply",)}
+RECORD_FORMATS = {"las": ("las", "laz"), "laz": ("las", "laz"), "ply": ("ply",),
+                  "pcd": ("pcd",)}
 
 
 def records_kind(output, source) -> str | None:
-    """The format of the records ``output`` writes for input ``source``: ``'las'`` or
-    ``'ply'`` where it names one the input can be written back as, None for a label file.
+    """The format of the records ``output`` writes for input ``source``: ``'las'``,
+    ``'ply'`` or ``'pcd'`` where it names one the input can be written back as, None for a
+    label file.
 
     Parameters
     ----------
@@ -54,9 +61,9 @@ def records_kind(output, source) -> str | None:
     Raises
     ------
     ParameterError
-        If ``output`` is a LAS/LAZ or PLY the input, itself a LAS/LAZ or PLY, cannot be
-        written back as (a ``.ply`` of a ``.laz``): the message says what can. Other
-        inputs give None (``-o`` then refuses the name as no label file).
+        If ``output`` is a LAS/LAZ, PLY or PCD the input, itself one of those, cannot be
+        written back as (a ``.ply`` of a ``.laz``), or a compressed PCD: the message says
+        what can. Other inputs give None (``-o`` then refuses the name as no label file).
 
     Examples
     --------
@@ -65,18 +72,21 @@ def records_kind(output, source) -> str | None:
     """
     out_fmt, out_comp = split_suffix(Path(output))
     in_fmt, _ = split_suffix(Path(source))
-    if out_fmt not in ("las", "laz", "ply") or in_fmt not in RECORD_FORMATS:
+    if out_fmt not in ("las", "laz", "ply", "pcd") or in_fmt not in RECORD_FORMATS:
         return None  # (a label file, or a name the caller refuses as no label file)
     if out_fmt in RECORD_FORMATS.get(in_fmt, ()) and not (out_fmt != "ply" and out_comp):
-        return "ply" if out_fmt == "ply" else "las"
+        return {"ply": "ply", "pcd": "pcd"}.get(out_fmt, "las")
+    if out_fmt == "pcd" and in_fmt == "pcd":  # a .pcd.gz
+        raise ParameterError(f"{output}: a PCD file is compressed by its own encoding "
+                             "(binary_compressed, kept from the input): name it .pcd")
     if out_fmt in RECORD_FORMATS[in_fmt]:  # a .las.gz
         raise ParameterError(f"{output}: a LAS file is compressed as LAZ: name it .laz")
-    takes = ".ply" if in_fmt == "ply" else ".las or .laz"
+    takes = {"ply": ".ply", "pcd": ".pcd"}.get(in_fmt, ".las")
+    needs = "las/.laz" if out_fmt in ("las", "laz") else out_fmt
     raise ParameterError(
         f"{output}: -o writes the labels into a copy of the input's own records, so a "
-        f".{out_fmt} needs a .{out_fmt if out_fmt == 'ply' else 'las/.laz'} input (this one is "
-        f"{Path(source).name}); for it use -o NAME{takes.split(' or ')[0]}, or a label file "
-        "(-o NAME.seg)")
+        f".{out_fmt} needs a .{needs} input (this one is {Path(source).name}); for it use "
+        f"-o NAME{takes}, or a label file (-o NAME.seg)")
 
 
 def ply_field_name(name: str) -> str:
@@ -116,14 +126,15 @@ def write_labels_into(path, source, labels, *, name: str = LABEL_FIELD,
     path : str or os.PathLike
         The copy: ``.las`` or ``.laz`` for a LAS/LAZ input (LAZ compressed,
         through laspy's ``lazrs``), ``.ply`` for a PLY input (cloud, or a
-        mesh whose vertices were segmented).
+        mesh whose vertices were segmented), ``.pcd`` for a PCD input (in its
+        encoding).
     source : str or os.PathLike
         The input file the labels are of.
     labels : (N,) int ndarray
         One label per point (vertex) in file order, ``-1`` for an invalid
         point; written as ``int32``.
     name : str, default ``'ClusterID'``
-        The dimension's name (LAS/LAZ); in a PLY the property is
+        The dimension's (LAS/LAZ) or field's (PCD) name; in a PLY the property is
         ``scalar_<name>``. An existing field of that name is overwritten.
     outputs : Outputs, optional
         Stage the file there (all or nothing with the run's other files).
@@ -165,12 +176,14 @@ def write_labels_into(path, source, labels, *, name: str = LABEL_FIELD,
     ply_name = ply_field_name(name)  # (a word: checked here for both layouts)
     kind = records_kind(path, source)
     if kind is None:
-        raise ParameterError(f"{path}: labels go into .las, .laz or .ply records")
+        raise ParameterError(f"{path}: labels go into .las, .laz, .ply or .pcd records")
     if kind == "las" and len(name) > 32:
         raise ParameterError(f"a LAS dimension's name holds at most 32 characters: {name!r}")
     labels = labels.astype(np.int32)
     if kind == "las":
         content = _las_with(source, labels, name, compress=split_suffix(path)[0] == "laz")
+    elif kind == "pcd":
+        content = _pcd_with(source, labels, name)
     else:
         content = _ply_with(source, labels, ply_name)
     return save(path, content, outputs)
@@ -241,3 +254,101 @@ def _ply_with(source: Path, labels: np.ndarray, prop: str) -> bytes:
     buf = io.BytesIO()
     ply.write(buf)
     return buf.getvalue()
+
+
+def _pcd_with(source: Path, labels: np.ndarray, name: str) -> bytes:
+    """The PCD bytes of ``source`` with ``labels`` as the field ``name`` (``I 4``): its
+    header's lines kept, the field's name, size, type and count added to theirs."""
+    pypcd4 = extras.require("pypcd4", "writing PCD files")
+    from .clouds import _check_pcd_header
+
+    _check_pcd_header(source)
+    raw = read_bytes(source, None, "PCD file")
+    try:
+        pc = pypcd4.PointCloud.from_path(source)
+        meta, data = pc.metadata, pc.pc_data
+    except Exception as exc:  # noqa: BLE001 - pypcd4/pydantic raise many types
+        msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise MeshFormatError(f"{source}: cannot read PCD: {msg}") from None
+    if len(data) != labels.shape[0]:
+        raise _count_error(source, labels.shape[0], len(data))
+    head, body = _pcd_split(source, raw)
+    fields = list(meta.fields)
+    if name in fields:
+        at = fields.index(name)
+        if meta.type[at] != "I" or meta.size[at] < 4 or meta.count[at] != 1:
+            raise MeshFormatError(f"{source}: has a field {name!r} of type {meta.type[at]}"
+                                  f"{meta.size[at]} x {meta.count[at]}, which cannot hold "
+                                  "the labels (-1 and up to 2**31 - 1)")
+        grown = data.copy()
+        grown[name] = labels
+        column = sum(meta.count[:at])
+    else:
+        head = [_pcd_grown_line(line, name) for line in head]
+        grown = np.empty(len(data), dtype=data.dtype.descr + [(name, "<i4")])
+        for n in data.dtype.names:
+            grown[n] = data[n]
+        grown[name] = labels
+        column = None
+    kind = meta.data.value
+    if kind == "ascii":
+        return _pcd_ascii(source, head, body, labels, column)
+    if kind == "binary":
+        return b"".join(head) + grown.tobytes()
+    out = pypcd4.PointCloud(meta.model_copy(update=dict(
+        fields=tuple(fields) if column is not None else (*fields, name),
+        size=meta.size if column is not None else (*meta.size, 4),
+        type=meta.type if column is not None else (*meta.type, "I"),
+        count=meta.count if column is not None else (*meta.count, 1))), grown)
+    buf = io.BytesIO()
+    out.save(buf, encoding=meta.data)
+    encoded = buf.getvalue()
+    end = encoded.index(b"\nDATA ") + 1
+    stop = encoded.index(b"\n", end) + 1
+    # (pypcd4 writes a binary file where the records do not compress: its DATA line)
+    return b"".join(head[:-1]) + encoded[end:stop] + encoded[stop:]
+
+
+def _pcd_split(source: Path, raw: bytes) -> tuple[list[bytes], bytes]:
+    """A PCD file's header lines (each with its line end; ``DATA`` last) and its body."""
+    head, at = [], 0
+    while at < len(raw):
+        stop = raw.find(b"\n", at)
+        stop = len(raw) if stop < 0 else stop + 1
+        line = raw[at:stop]
+        head.append(line)
+        at = stop
+        if line.split(b"#")[0].strip().upper().startswith(b"DATA"):
+            return head, raw[at:]
+    raise MeshFormatError(f"{source}: no DATA line ends the PCD header")
+
+
+def _pcd_grown_line(line: bytes, name: str) -> bytes:
+    """A PCD header line with the new field's entry added (``FIELDS``, ``SIZE``,
+    ``TYPE``, ``COUNT``), else as it was."""
+    words = line.split(b"#")[0].split()
+    add = {b"FIELDS": name.encode(), b"SIZE": b"4", b"TYPE": b"I", b"COUNT": b"1"}.get(
+        words[0].upper() if words else b"")
+    if add is None:
+        return line
+    end = line[len(line.rstrip(b"\r\n")):]
+    return line.rstrip(b"\r\n").rstrip() + b" " + add + (end or b"\n")
+
+
+def _pcd_ascii(source: Path, head: list[bytes], body: bytes, labels: np.ndarray,
+               column: int | None) -> bytes:
+    """An ASCII PCD's data lines as they were, the label after each (or in place of its
+    ``column``, where the field was there)."""
+    lines = [ln for ln in body.splitlines() if ln.strip()]
+    if len(lines) != labels.shape[0]:
+        raise _count_error(source, labels.shape[0], len(lines))
+    text = labels.astype(str)
+    if column is None:
+        rows = [ln.rstrip() + b" " + t.encode() for ln, t in zip(lines, text)]
+    else:
+        rows = []
+        for ln, t in zip(lines, text):
+            words = ln.split()
+            words[column] = t.encode()
+            rows.append(b" ".join(words))
+    return b"".join(head) + b"\n".join(rows) + b"\n"
