@@ -58,9 +58,11 @@ docs: $(DOCS_STAMP)
 	$(VENV)/bin/python tools/check_site.py docs/_build/html
 
 # The real clients the tests check their files with, Debian's packages: the HTML page in
-# headless Chromium, the PLY's label scalar field in CloudCompare's command line. Installed
-# here when missing and possible (root with apt-get); otherwise those tests are skipped.
-CLIENTS := chromium:chromium CloudCompare:cloudcompare
+# headless Chromium, the PLY's label scalar field in CloudCompare's command line, the PCD's
+# label field in PCL's converter. Installed here when missing and possible (root with
+# apt-get); otherwise those tests are skipped.
+CLIENTS := chromium:chromium CloudCompare:cloudcompare \
+	pcl_convert_pcd_ascii_binary:pcl-tools
 clients:
 	@for pair in $(CLIENTS); do cmd=$${pair%%:*}; pkg=$${pair#*:}; \
 	  command -v $$cmd >/dev/null 2>&1 && continue; \

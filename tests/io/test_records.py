@@ -213,8 +213,9 @@ def test_a_batch_writes_each_scan_s_own_records(tmp_path, capsys, sphere):
 
 def _pcd(path, encoding: str, *, seed=0, label=None):
     """An organized PCD of two terraces, 40 x 30, with packed colour, intensity, a padding
-    field (binary encodings: PCL pads records with ``_`` fields) and a NaN row of points
-    (a depth camera's holes); ``label``: a ``label`` field (PCL's ``PointXYZL``) too."""
+    field (binary: PCL pads records with ``_`` fields; it leaves them out of ASCII and
+    compressed files) and a NaN row of points (a depth camera's holes); ``label``: a
+    ``label`` field (PCL's ``PointXYZL``) too."""
     rng = np.random.default_rng(seed)
     h, w = 30, 40
     n = h * w
@@ -226,7 +227,7 @@ def _pcd(path, encoding: str, *, seed=0, label=None):
     fields = [("x", "F", 4), ("y", "F", 4), ("z", "F", 4), ("rgb", "U", 4),
               ("intensity", "F", 4)]
     cols = [p[:, 0], p[:, 1], p[:, 2], rgb, rng.random(n).astype(np.float32)]
-    if encoding != "ascii":
+    if encoding == "binary":
         fields.insert(3, ("_", "U", 1))
         cols.insert(3, np.zeros(n, np.uint8))
     if label is not None:
@@ -250,8 +251,8 @@ def _pcd(path, encoding: str, *, seed=0, label=None):
     else:  # compressed by pypcd4 from the binary file's records
         from pypcd4 import Encoding, PointCloud
 
-        plain = path.with_suffix(".bin.pcd")
-        _pcd(plain, "binary", seed=seed, label=label)
+        plain = path.with_suffix(".txt.pcd")
+        _pcd(plain, "ascii", seed=seed, label=label)
         PointCloud.from_path(plain).save(path, encoding=Encoding.BINARY_COMPRESSED)
     return path
 
@@ -296,6 +297,19 @@ def test_pcd_records_keep_the_header_and_every_field(tmp_path, capsys, encoding)
                             [("old", f"V{rec}"), ("label", "<i4")])
         assert new["old"].tobytes() == old.tobytes()
         assert np.array_equal(new["label"], labels)
+    tool = shutil.which("pcl_convert_pcd_ascii_binary")
+    if tool is None:
+        pytest.skip("PCL's tools not found: install Debian's 'pcl-tools' package (make test "
+                    "does, as root)")
+    asc = tmp_path / "pcl.pcd"  # PCL reads the copy, and writes it as ASCII
+    run = subprocess.run([tool, str(out), str(asc), "0"], capture_output=True, text=True,
+                         timeout=120)
+    assert run.returncode == 0 and "ClusterID" in run.stdout + run.stderr, run.stderr
+    head, body = asc.read_text().split("DATA ascii\n")
+    fields = next(ln for ln in head.splitlines() if ln.startswith("FIELDS")).split()[1:]
+    assert fields[-1] == "ClusterID" and "TYPE F F F U F I" in head
+    got = np.array([int(row.split()[-1]) for row in body.splitlines()])
+    assert np.array_equal(got, labels)
 
 
 def test_pcd_records_twice_and_a_pcd_ground_truth(tmp_path, capsys):
