@@ -45,7 +45,7 @@ __all__ = ["read_cloud", "CLOUD_FORMATS", "is_cloud_file", "check_laz", "check_l
 from .._runtime import extras
 from ..checks import not_real
 from ..inputs.cloud import InvalidCloudError, PointCloud
-from .headers import check_las, check_laz, e57_counts, header_counts  # noqa: E402 (re-exported: headers)
+from .headers import check_las, check_laz, check_pcd, e57_counts, header_counts  # noqa: E402 (re-exported: headers)
 from .orientation import sensor_up
 
 #: Point-cloud formats of :func:`read_cloud` (PLY files are clouds when they have no faces).
@@ -215,7 +215,7 @@ def _read_pcd(path: Path) -> dict:
         raise FileNotFoundError(f"{path}: no such file")
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a directory")
-    _check_pcd_header(path)
+    check_pcd(path)
     try:
         pc = pypcd4.PointCloud.from_path(path)
         fields = tuple(pc.fields)
@@ -252,41 +252,6 @@ def _read_pcd(path: Path) -> dict:
     if height > 1:  # an image of a camera: up is its -y, turned as the sensor was
         out["up"] = sensor_up(viewpoint)
     return out
-
-
-def _check_pcd_header(path: Path) -> None:
-    """Refuse a PCD whose header declares more points than the file can hold, before
-    anything is allocated (a 200-byte file declaring 10**12 points was a MemoryError)."""
-    size = path.stat().st_size
-    head: dict = {}
-    with open(path, "rb") as f:
-        for _ in range(64):  # (the header's lines, DATA last)
-            line = f.readline(4096).decode("ascii", "replace").split("#")[0].split()
-            if line:
-                head[line[0].upper()] = line[1:]
-            if not line and f.tell() >= size or "DATA" in head:
-                break
-        body = size - f.tell()
-        sizes = f.read(8)  # binary_compressed: the compressed and the whole sizes
-    packed = np.frombuffer(sizes, dtype="<u4") if len(sizes) == 8 else np.zeros(2, int)
-    try:
-        n = int(head.get("POINTS", ["0"])[0])
-        per = sum(int(a) * int(b) for a, b in zip(head.get("SIZE", []),
-                                                   head.get("COUNT", head.get("SIZE", [])))
-                  ) if "COUNT" in head else sum(int(a) for a in head.get("SIZE", []))
-    except ValueError:
-        return  # (pypcd4 names what is wrong)
-    kind = (head.get("DATA") or ["ascii"])[0].lower()
-    need = {"binary": n * per, "ascii": n}.get(kind, 0)  # (ascii: a byte a point at least)
-    if kind == "binary_compressed" and (int(packed[1]) != n * per
-                                        or int(packed[0]) > body - 8):
-        raise MeshFormatError(f"{path}: the PCD header declares {n:,} points ({n * per:,} "
-                              f"bytes), its compressed data {int(packed[1]):,} bytes in "
-                              f"{int(packed[0]):,} of the file's {body:,}")
-    if n < 0 or need > body:
-        raise MeshFormatError(f"{path}: the PCD header declares {n:,} points "
-                              f"({need:,} bytes at least) but the file holds {body:,} bytes "
-                              "after it")
 
 
 def _read_las(path: Path) -> dict:

@@ -19,8 +19,8 @@ from ..checks import not_real
 from ..errors import MemoryLimitError, MeshFormatError, MissingExtraError
 from .files import decompressed_head, max_ratio, split_suffix
 
-__all__ = ["header_counts", "e57_counts", "check_las", "check_laz", "check_stl", "ply_mapped",
-           "npy_mapped", "first_line", "NotStreamedError"]
+__all__ = ["header_counts", "e57_counts", "check_las", "check_laz", "check_pcd", "check_stl",
+           "ply_mapped", "npy_mapped", "first_line", "NotStreamedError"]
 
 
 class NotStreamedError(MeshFormatError):
@@ -629,3 +629,59 @@ def _loop(parent: list, start: int) -> str:
         up.append(at)
         at = parent[at]
     return " -> ".join(map(str, [start] + up[:0:-1] + [start]))
+
+
+def check_pcd(path: Path) -> None:
+    r"""Refuse a PCD whose header declares more points than the file can hold, before
+    anything is allocated (a 200-byte file declaring 10**12 points was a MemoryError).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        An existing ``.pcd`` file.
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    MeshFormatError
+        If the header declares more points than the bytes after it hold.
+
+    Examples
+    --------
+    >>> _ = Path("one.pcd").write_text("FIELDS x y z\nSIZE 4 4 4\nCOUNT 1 1 1\nPOINTS 1\n"
+    ...                                "DATA ascii\n0 0 0\n")
+    >>> check_pcd(Path("one.pcd"))
+    """
+    size = path.stat().st_size
+    head: dict = {}
+    with open(path, "rb") as f:
+        for _ in range(64):  # (the header's lines, DATA last)
+            line = f.readline(4096).decode("ascii", "replace").split("#")[0].split()
+            if line:
+                head[line[0].upper()] = line[1:]
+            if not line and f.tell() >= size or "DATA" in head:
+                break
+        body = size - f.tell()
+        sizes = f.read(8)  # binary_compressed: the compressed and the whole sizes
+    packed = np.frombuffer(sizes, dtype="<u4") if len(sizes) == 8 else np.zeros(2, int)
+    try:
+        n = int(head.get("POINTS", ["0"])[0])
+        per = sum(int(a) * int(b) for a, b in zip(head.get("SIZE", []),
+                                                   head.get("COUNT", head.get("SIZE", [])))
+                  ) if "COUNT" in head else sum(int(a) for a in head.get("SIZE", []))
+    except ValueError:
+        return  # (pypcd4 names what is wrong)
+    kind = (head.get("DATA") or ["ascii"])[0].lower()
+    need = {"binary": n * per, "ascii": n}.get(kind, 0)  # (ascii: a byte a point at least)
+    if kind == "binary_compressed" and (int(packed[1]) != n * per
+                                        or int(packed[0]) > body - 8):
+        raise MeshFormatError(f"{path}: the PCD header declares {n:,} points ({n * per:,} "
+                              f"bytes), its compressed data {int(packed[1]):,} bytes in "
+                              f"{int(packed[0]):,} of the file's {body:,}")
+    if n < 0 or need > body:
+        raise MeshFormatError(f"{path}: the PCD header declares {n:,} points "
+                              f"({need:,} bytes at least) but the file holds {body:,} bytes "
+                              "after it")

@@ -313,10 +313,10 @@ def read_field(path, name: str) -> np.ndarray:
 
 def _pcd_field(path: Path, name: str) -> tuple[list[str], np.ndarray | None]:
     """A PCD's field names and the values of the field ``name`` (None where absent)."""
-    from .clouds import _check_pcd_header
+    from .headers import check_pcd
 
     pypcd4 = extras.require("pypcd4", "reading PCD files")
-    _check_pcd_header(path)
+    check_pcd(path)
     try:
         pc = pypcd4.PointCloud.from_path(path)
         meta = pc.metadata

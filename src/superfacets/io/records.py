@@ -260,9 +260,9 @@ def _pcd_with(source: Path, labels: np.ndarray, name: str) -> bytes:
     """The PCD bytes of ``source`` with ``labels`` as the field ``name`` (``I 4``): its
     header's lines kept, the field's name, size, type and count added to theirs."""
     pypcd4 = extras.require("pypcd4", "writing PCD files")
-    from .clouds import _check_pcd_header
+    from .headers import check_pcd
 
-    _check_pcd_header(source)
+    check_pcd(source)
     raw = read_bytes(source, None, "PCD file")
     try:
         pc = pypcd4.PointCloud.from_path(source)
