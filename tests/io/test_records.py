@@ -202,12 +202,15 @@ def test_a_batch_writes_each_scan_s_own_records(tmp_path, capsys, sphere):
     folder = tmp_path / "in"
     folder.mkdir()
     _laz(folder / "a.laz", n=1500, seed=1)
+    _pcd(folder / "frame.pcd", "binary_compressed")
     write_mesh(folder / "ball.off", sphere)
     out = tmp_path / "out"
     assert main(["batch", str(folder), "-o", str(out), "-k", "9", "--labels", "records",
                  "--workers", "1"]) == 0
     labels = np.asarray(laspy.read(out / "a.laz").ClusterID)
     assert labels.shape == (1500,) and len(np.unique(labels)) == 9
+    frame = read_labels(out / "frame.pcd")  # the PCD's ClusterID field
+    assert frame.shape == (1200,) and set(frame.tolist()) == set(range(-1, 9))
     assert len(np.unique(read_labels(out / "ball.seg"))) == 9  # a mesh: its label file
 
 
@@ -254,6 +257,7 @@ def _pcd(path, encoding: str, *, seed=0, label=None):
         plain = path.with_suffix(".txt.pcd")
         _pcd(plain, "ascii", seed=seed, label=label)
         PointCloud.from_path(plain).save(path, encoding=Encoding.BINARY_COMPRESSED)
+        plain.unlink()
     return path
 
 
