@@ -268,3 +268,64 @@ def test_seen_from_sets_a_pcds_own_viewpoint_aside(tmp_path, capsys):
     assert "viewpoint" not in capsys.readouterr().err
     seen = segment(replace(cloud, viewpoint=None, up=(0, 0, 1)), 20).labels
     assert not np.array_equal(seen, segment(cloud, 20).labels)  # (the orientation matters)
+
+
+def _two_blocks(path):
+    """Two blocks of tetrahedra apart (a gap of a block's width), each a region of Gmsh's
+    ``gmsh:physical`` (1 and 2): no superfacet can hold both."""
+    meshio = pytest.importorskip("meshio")
+    from scipy.spatial import Delaunay
+
+    rng = np.random.default_rng(3)
+    parts, tets, regions = [], [], []
+    for i in range(2):
+        p = rng.random((250, 3)) + [2.0 * i, 0, 0]
+        tets.append(Delaunay(p).simplices + 250 * i)
+        parts.append(p)
+        regions.append(np.full(len(tets[-1]), i + 1))
+    meshio.write(str(path), meshio.Mesh(np.vstack(parts), [("tetra", np.vstack(tets))],
+                                        cell_data={"gmsh:physical": [np.concatenate(regions)],
+                                                   "gmsh:geometrical": [np.concatenate(
+                                                       regions)]}),
+                 file_format="gmsh22", binary=False)
+    return path, np.concatenate(regions)
+
+
+def test_the_method_runs_on_tetrahedra_in_experiment_panel_and_evaluate(tmp_path, capsys):
+    """A tetrahedral mesh goes through ``experiment --inputs`` (its cells, judged against its
+    ``gmsh:physical`` regions), ``panel`` (the method, not only label files) and
+    ``evaluate --ground-truth-field``; its regions are read as ``read_field`` reads a
+    scan's classes."""
+    from superfacets.io.labels import read_field
+
+    vol, regions = _two_blocks(tmp_path / "blocks.msh")
+    np.testing.assert_array_equal(read_field(vol, "gmsh:physical"), regions)
+    folder = tmp_path / "in"
+    folder.mkdir()
+    _laz(folder / "tile.laz", n=800)
+    (folder / "blocks.msh").write_bytes(vol.read_bytes())
+    out = tmp_path / "rows.csv"
+    assert main(["experiment", "--inputs", str(folder), "--ground-truth-field",
+                 "gmsh:physical", "-k", "2", "6", "--alpha", "200", "-o", str(out), "-j", "1",
+                 "-q"]) == 0
+    rows = [r for r in csv.DictReader(out.open()) if r["mesh"] == "blocks"]
+    assert [(r["elements"], r["category"], r["status"]) for r in rows] == [
+        ("cells", "volume", "ok")] * 2
+    for r in rows:  # two blocks apart: every superfacet in one region
+        assert r["segments"] == r["n_segments"]
+        assert float(r["undersegmentation_error"]) == 0.0 and float(r["oracle_miou"]) == 1.0
+    capsys.readouterr()
+    assert main(["experiment", "--inputs", str(folder), "-k", "4", "--elements", "points",
+                 "-o", str(tmp_path / "p.csv"), "-j", "1", "-q"]) == 0
+    assert "(a tetrahedral mesh: --elements cells)" in capsys.readouterr().err
+    seg = tmp_path / "b.seg"
+    assert main(["segment", str(vol), "-k", "6", "-o", str(seg), "-q"]) == 0
+    assert main(["evaluate", str(vol), str(seg), "--ground-truth-field", "gmsh:physical",
+                 "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["undersegmentation_error"] == 0.0
+    assert main(["evaluate", str(vol), str(seg), "--ground-truth-field", "material"]) == 2
+    assert "no field 'material'; it has: gmsh:physical" in capsys.readouterr().err
+    pytest.importorskip("pyvista")
+    assert main(["panel", str(vol), "-k", "2", "6", "-o", str(tmp_path / "p.png"),
+                 "--size", "320x240"]) == 0
+    assert "wrote" in capsys.readouterr().out and (tmp_path / "p.png").stat().st_size > 1000

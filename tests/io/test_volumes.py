@@ -168,15 +168,20 @@ def test_the_command_line_says_why_the_count_differs(tmp_path, capsys):
     from superfacets import write_volume_labels
     from superfacets.cli import main
 
-    vol = delaunay_cube(600)  # k = 5 gives 9: regions no window reached
+    vol = delaunay_cube(600)  # k = 5 made 9 (regions no window reached): merged to 5
     path = tmp_path / "cube.vtu"
     write_volume_labels(path, vol, np.zeros(vol.n_tets, dtype=int))
     assert main(["segment", str(path), "-k", "5", "-o", str(tmp_path / "c.seg")]) == 0
-    err = capsys.readouterr().err
-    assert segment(vol, 5).n_segments == 9
-    assert "note: 9 superfacets for -k 5" in err and "a larger --window" in err
-    assert main(["segment", str(path), "-k", "9", "-o", str(tmp_path / "c.seg")]) == 0
     assert "note:" not in capsys.readouterr().err
+    assert segment(vol, 5).n_segments == 5
+    # two blocks apart: at least one superfacet each, said in a note
+    two = TetMesh(np.r_[vol.vertices, vol.vertices + [3.0, 0, 0]],
+                  np.r_[vol.tets, vol.tets + len(vol.vertices)])
+    write_volume_labels(path, two, np.zeros(two.n_tets, dtype=int))
+    assert segment(two, 5).n_segments == 5
+    assert main(["segment", str(path), "-k", "1", "-o", str(tmp_path / "c.seg")]) == 0
+    assert "note: 2 superfacets for -k 1: the input has 2 separate pieces" in \
+        capsys.readouterr().err
 
 
 def test_a_compressed_volume_reads_as_the_file_inside_and_says_its_own_name(tmp_path, capsys):

@@ -256,8 +256,13 @@ def test_cli_panel_draws_a_cloud_at_several_counts_and_from_label_files(tmp_path
                  str(tmp_path / "v.seg")]) == 0
     assert main(["panel", str(tmp_path / "v.vtu"), "--labels", str(tmp_path / "v.seg"),
                  "-o", str(pan), "--size", "160x120"]) == 0
-    assert main(["panel", str(tmp_path / "v.vtu"), "-k", "6", "-o", str(pan)]) == 2
-    assert "'superfacets segment' segments cells" in capsys.readouterr().err
+    capsys.readouterr()
+    assert main(["panel", str(tmp_path / "v.vtu"), "-k", "3", "6", "-o", str(pan), "--size",
+                 "160x120"]) == 0  # the method on the tetrahedra
+    assert "2 panels" in capsys.readouterr().out
+    assert main(["panel", str(tmp_path / "v.vtu"), "-m", "vsa", "-o", str(pan)]) == 2
+    assert "vsa segments faces, not cells; methods that segment cells: superfacets" in \
+        capsys.readouterr().err
 
 
 def test_html_page_draws_a_point_cloud_in_headless_chromium(tmp_path):

@@ -59,8 +59,9 @@ def add_parsers(sub) -> None:
                    help="element kinds, comma-separated: faces, vertices (ground truth: "
                         "majority of the incident faces), points (--points sampled per mesh, "
                         "ground truth of their face); vertices and points are evaluated "
-                        "with equal weight per element (default: faces; with --inputs, "
-                        "each file's own: a mesh's faces, a cloud's points)")
+                        "with equal weight per element; cells: a tetrahedral mesh's "
+                        "(--inputs) (default: faces; with --inputs, each file's own: a "
+                        "mesh's faces, a cloud's points, a volume's cells)")
     x.add_argument("--points", type=int_arg, default=20_000, metavar="N",
                    help="points sampled per mesh (uniform by area, fixed seed) for "
                         "--elements points (default: 20000)")
@@ -95,13 +96,14 @@ def add_parsers(sub) -> None:
 def _add_inputs(x) -> None:
     """``--inputs`` and ``--ground-truth-field``: an experiment on the user's own files."""
     x.add_argument("--inputs", nargs="+", default=None, metavar="PATH",
-                   help="your own meshes and point clouds (files, folders, globs, "
-                        "@list.txt; every format 'segment' reads): --dataset files. A "
-                        "cloud's points are segmented; a mesh's --elements")
+                   help="your own meshes, point clouds and tetrahedral meshes (files, "
+                        "folders, globs, @list.txt; every format 'segment' reads): --dataset "
+                        "files. A cloud's points are segmented, a volume's cells; a mesh's "
+                        "--elements")
     x.add_argument("--ground-truth-field", metavar="NAME", default=None,
                    help="with --inputs: each file's ground truth, a field of its own (a "
-                        "LAS/LAZ classification, a PLY vertex label, a PCD label); without "
-                        "it, rows have no metrics")
+                        "LAS/LAZ classification, a PLY vertex label, a PCD label, a "
+                        "volume's gmsh:physical); without it, rows have no metrics")
 
 
 def _id_list(text: str) -> set[int]:
@@ -194,7 +196,7 @@ def cmd_experiment(args) -> int:
         print(f"{len(meshes)} {what} x {len(configs)} settings x {len(ks)} values of k "
               f"-> {out}", file=sys.stderr)
     files = getattr(meshes[0], "file", False)
-    kinds = [e.strip() for e in (args.elements or ("faces,points" if files else "faces"))
+    kinds = [e.strip() for e in (args.elements or ("faces,points,cells" if files else "faces"))
              .split(",") if e.strip()]
     if files:
         _say_left_out(meshes, kinds)
@@ -221,11 +223,12 @@ def _say_left_out(entries, kinds) -> None:
     from ..elements.kinds import KINDS
 
     for e in entries:
-        cloud = e.category == "cloud"
-        if not any(k in KINDS and KINDS[k].cloud == cloud for k in kinds):
-            fits = "points" if cloud else "faces or vertices"
-            print(f"left out: {e.path} (a {'point cloud' if cloud else 'mesh'}: --elements "
-                  f"{fits})", file=sys.stderr)
+        cloud, volume = e.category == "cloud", e.category == "volume"
+        if not any(k in KINDS and KINDS[k].cloud == cloud and (KINDS[k].dim == 3) == volume
+                   for k in kinds):
+            fits, what = (("points", "point cloud") if cloud else ("cells", "tetrahedral mesh")
+                          if volume else ("faces or vertices", "mesh"))
+            print(f"left out: {e.path} (a {what}: --elements {fits})", file=sys.stderr)
 
 
 def cmd_report(args) -> int:

@@ -219,7 +219,8 @@ KINDS = {k.name: k for k in (
                 neighborhood=True, cloud=True, rows="n_total", peak_bytes=220, tiled_bytes=100,
                 exact_count=True, single_weights=True, merge_from=5, settle_cycles=True,
                 face_truth="sample"),
-    ElementKind("cells", "cell", dim=3, rows="n_tets", segment_word="superfacets"),
+    ElementKind("cells", "cell", dim=3, rows="n_tets", segment_word="superfacets",
+                exact_count=True),
 )}
 
 

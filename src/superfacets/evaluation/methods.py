@@ -324,8 +324,8 @@ register_method(
     "superfacets", _run_superfacets, defaults=_SF_DEFAULTS,
     sweep={"alpha": DEFAULT_ALPHAS},
     description="the paper's method: bounded Dijkstra k-means, weights of eqs. 1-3 (faces; "
-                "on vertices and points their analogues)",
-    progress=True, elements=ELEMENTS)
+                "on vertices, points and tetrahedra their analogues)",
+    progress=True, elements=(*ELEMENTS, "cells"))
 register_method(
     "adaptive", _run_adaptive,
     defaults=dict(_SF_DEFAULTS, start=10, extent_weight="auto"),

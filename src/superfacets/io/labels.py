@@ -19,6 +19,7 @@ from .clouds import check_laz
 from .files import Outputs, read_bytes, save, split_suffix, text_lines
 from .ply import read_ply_labels
 from .records import LABEL_FIELD
+from .tetmeshes import VOLUME_FORMATS, volume_field
 
 __all__ = ["read_labels", "write_labels", "write_segindices", "read_field"]
 
@@ -245,12 +246,14 @@ def read_field(path, name: str) -> np.ndarray:
     A labelled scan often carries its ground truth beside the coordinates:
     the ``classification`` of a LAS/LAZ file (ASPRS classes), the ``label``
     property of a PLY's vertices (ScanNet's ``*_vh_clean_2.labels.ply``), the
-    ``label`` field of a PCD (PCL's ``PointXYZL``).
+    ``label`` field of a PCD (PCL's ``PointXYZL``); a tetrahedral mesh's regions
+    (Gmsh's ``gmsh:physical`` cell data: one value per tetrahedron).
 
     Parameters
     ----------
     path : str or os.PathLike
-        A ``.las``/``.laz``, ``.ply`` (optionally compressed) or ``.pcd`` file.
+        A ``.las``/``.laz``, ``.ply`` (optionally compressed) or ``.pcd`` file, or a
+        tetrahedral mesh (``.msh``, ``.vtk``, ``.vtu``, ``.mesh``).
     name : str
         The LAS dimension or the PLY vertex property (``NAME`` also finds
         ``scalar_NAME``, CloudCompare's name of a scalar field).
@@ -258,7 +261,8 @@ def read_field(path, name: str) -> np.ndarray:
     Returns
     -------
     (N,) int64 ndarray
-        In file order: one per point of a cloud, one per vertex of a mesh.
+        In file order: one per point of a cloud, one per vertex of a mesh, one per
+        tetrahedron.
 
     Raises
     ------
@@ -300,11 +304,15 @@ def read_field(path, name: str) -> np.ndarray:
             raise MeshFormatError(f"{path}: cannot read PLY vertices: {exc}") from None
     elif fmt == "pcd" and comp is None:
         names, values = _pcd_field(path, name)
+    elif fmt in VOLUME_FORMATS:
+        names, values = volume_field(path, name)
     else:
         raise MeshFormatError(f"{path}: only LAS/LAZ, PLY and PCD files carry per-point "
-                              "fields; give the ground truth as a .seg file")
+                              "fields (and tetrahedral meshes per-cell ones); give the ground "
+                              "truth as a .seg file")
     if values is None:
-        raise MeshFormatError(f"{path}: no field {name!r}; it has: {', '.join(names)}")
+        raise MeshFormatError(f"{path}: no field {name!r}; " + (
+            f"it has: {', '.join(names)}" if names else "it has none"))
     if not (np.issubdtype(values.dtype, np.integer) or np.issubdtype(values.dtype, np.bool_)):
         if not (np.isfinite(values).all() and (values == np.round(values)).all()):
             raise MeshFormatError(f"{path}: field {name!r} is not integer ({values.dtype})")

@@ -22,7 +22,7 @@ from ..errors import MemoryLimitError, MeshFormatError
 from ..inputs.tetmesh import TetMesh
 from .files import atomic_write, decompressed, split_suffix
 
-__all__ = ["read_volume", "write_volume_labels", "VOLUME_FORMATS"]
+__all__ = ["read_volume", "write_volume_labels", "volume_field", "VOLUME_FORMATS"]
 
 #: Suffixes read as tetrahedral meshes (by ``segment`` and :func:`read_volume`).
 VOLUME_FORMATS = ("msh", "vtk", "vtu", "mesh")
@@ -61,8 +61,24 @@ def read_volume(path):
     1
     """
 
-    meshio = extras.require("meshio", "reading tetrahedral meshes")
     path = Path(path)
+    m, blocks = _tetra_blocks(path)
+    tets = np.concatenate([m.cells[i].data for i in blocks])
+    materials = None
+    names = [n for n in _PREFERRED if n in m.cell_data] + [n for n in m.cell_data
+                                                            if n not in _PREFERRED]
+    for name in names:
+        data = [np.asarray(m.cell_data[name][i]).reshape(-1) for i in blocks]
+        if all(np.issubdtype(d.dtype, np.integer) for d in data):
+            materials = np.concatenate(data)
+            break
+    return TetMesh(np.asarray(m.points, dtype=np.float64)[:, :3] if m.points.shape[1] >= 3
+                   else m.points, tets, materials=materials, name=path.name)
+
+
+def _tetra_blocks(path: Path):
+    """The meshio mesh of a volume file and the indices of its ``tetra`` cell blocks."""
+    meshio = extras.require("meshio", "reading tetrahedral meshes")
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file")
     if path.is_dir():
@@ -94,17 +110,52 @@ def read_volume(path):
         kinds = ", ".join(sorted({c.type for c in m.cells})) or "none"
         raise MeshFormatError(f"{path}: no tetrahedra (cells: {kinds}); superfacets segments "
                               "tetrahedral meshes (or surfaces: superfacets segment MESH)")
-    tets = np.concatenate([m.cells[i].data for i in blocks])
-    materials = None
-    names = [n for n in _PREFERRED if n in m.cell_data] + [n for n in m.cell_data
-                                                            if n not in _PREFERRED]
-    for name in names:
-        data = [np.asarray(m.cell_data[name][i]).reshape(-1) for i in blocks]
-        if all(np.issubdtype(d.dtype, np.integer) for d in data):
-            materials = np.concatenate(data)
-            break
-    return TetMesh(np.asarray(m.points, dtype=np.float64)[:, :3] if m.points.shape[1] >= 3
-                   else m.points, tets, materials=materials, name=path.name)
+    return m, blocks
+
+
+def volume_field(path, name: str) -> tuple[list[str], np.ndarray | None]:
+    """The cell data ``name`` of a volume mesh's tetrahedra, in file order (the rows of
+    :func:`read_volume`), with the names of the file's cell data.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    name : str
+        A cell data name: Gmsh's ``gmsh:physical``, MEDIT's ``medit:ref``, VTK's
+        arrays (``CellEntityIds``, ``superfacet`` as :func:`write_volume_labels`
+        writes it).
+
+    Returns
+    -------
+    names : list of str
+    values : (T,) ndarray or None
+        One per tetrahedron; None where the file has no such cell data.
+
+    Raises
+    ------
+    FileNotFoundError, IsADirectoryError, MeshFormatError, MissingExtraError
+        As :func:`read_volume`; a MeshFormatError too where the data holds more than one
+        value per tetrahedron.
+
+    Examples
+    --------
+    >>> from superfacets import TetMesh
+    >>> t = TetMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], [[0, 1, 2, 3]])
+    >>> _ = write_volume_labels("t.vtu", t, [3])
+    >>> volume_field("t.vtu", "superfacet")[1].tolist()
+    [3]
+    """
+    path = Path(path)
+    m, blocks = _tetra_blocks(path)
+    names = list(m.cell_data)
+    if name not in m.cell_data:
+        return names, None
+    data = [np.asarray(m.cell_data[name][i]) for i in blocks]
+    if any(d.shape[0] != m.cells[i].data.shape[0] or d.size != d.shape[0]
+           for d, i in zip(data, blocks)):
+        raise MeshFormatError(f"{path}: cell data {name!r} holds more than one value per "
+                              "tetrahedron")
+    return names, np.concatenate([d.reshape(-1) for d in data])
 
 
 def write_volume_labels(path, mesh, labels, *, outputs=None) -> Path:

@@ -289,12 +289,14 @@ class FileEntry:
     id : int
         Its place among the inputs.
     category : str
-        ``"cloud"`` or ``"mesh"``.
+        ``"cloud"``, ``"mesh"`` or ``"volume"`` (a tetrahedral mesh:
+        :func:`superfacets.io.input_kind`).
     path : pathlib.Path
     seg_paths : tuple
         Empty: the ground truth, if any, is the file's own ``field``.
     field : str or None
-        The LAS/LAZ dimension or PLY vertex property holding the ground truth.
+        The LAS/LAZ dimension, PLY vertex property, PCD field or tetrahedra's cell data
+        holding the ground truth.
     file : bool
         True.
     """
@@ -326,8 +328,7 @@ def file_entries(specs, field: str | None = None) -> list[FileEntry]:
     FileNotFoundError
         When a spec matches nothing.
     ParameterError
-        When a folder holds no input, or an input is a tetrahedral mesh (the registry's
-        methods segment surfaces and clouds).
+        When a folder holds no input.
 
     Examples
     --------
@@ -339,9 +340,5 @@ def file_entries(specs, field: str | None = None) -> list[FileEntry]:
     """
     out = []
     for i, p in enumerate(collect_inputs([str(s) for s in specs])):
-        kind = input_kind(p)
-        if kind == "volume":
-            raise ParameterError(f"{p}: a tetrahedral mesh; the experiment's methods segment "
-                                 "surfaces and point clouds ('superfacets segment' takes it)")
-        out.append(FileEntry(i, kind, p, field=field))
+        out.append(FileEntry(i, input_kind(p), p, field=field))
     return out

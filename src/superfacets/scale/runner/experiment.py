@@ -220,8 +220,9 @@ def _tasks(meshes, configs, kinds, ks, done, common: dict) -> list[dict]:
         room = getattr(bm, "room", False)
         file = getattr(bm, "file", False)
         cloud = room or (file and bm.category == "cloud")
+        volume = file and bm.category == "volume"  # (its elements: cells alone)
         if kind not in method.elements or (cloud and not KINDS[kind].cloud) or (
-                file and not cloud and KINDS[kind].cloud):
+                file and not cloud and KINDS[kind].cloud) or volume != (KINDS[kind].dim == 3):
             continue
         base = {"mesh": Path(bm.path).stem, "mesh_id": bm.id, "category": bm.category,
                 "method": cfg.method, "elements": kind, "seed": common["seed"],
@@ -272,8 +273,9 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
         :func:`superfacets.evaluation.report.load_results` keeps the last one).
     progress : bool, default True
         Show a progress bar (rows) on stderr.
-    elements : sequence of {'faces', 'vertices', 'points'}, default ('faces',)
-        Element kinds to run each method on (where it supports them).
+    elements : sequence of {'faces', 'vertices', 'points', 'cells'}, default ('faces',)
+        Element kinds to run each method on (where it supports them; cells: the
+        tetrahedra of a user's volume mesh).
         Vertices: ground truth by area-weighted majority of the incident
         faces; points: ``n_points`` sampled uniformly by area (seed ``seed``),
         each with its face's ground truth; both evaluated with equal weight
@@ -314,7 +316,7 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
     cols, old = prepare_file(path, columns(configs))
     done = {row_key(r) for r in old if not (retry_failed and r.get("status") == "failed")}
 
-    kinds = [check_choice("elements", e, ELEMENTS) for e in elements]
+    kinds = [check_choice("elements", e, (*ELEMENTS, "cells")) for e in elements]
     if not kinds:
         raise ParameterError("no element kind to run")
     n_points = check_int("n_points", n_points, lo=1)
