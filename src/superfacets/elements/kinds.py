@@ -117,7 +117,7 @@ class ElementKind:
         peak: a tiled run of a mesh peaks higher than one run
         (``docs/notes/scale-design.md``).
     exact_count : bool
-        A run asked for ``n_segments`` returns exactly that many (points): segments made
+        A run asked for ``n_segments`` returns exactly that many (points, cells): segments made
         beyond it (regions no window reached) are merged, cheapest first
         (:func:`superfacets.method.stages.exact_count`), down to the input's number of
         separate pieces at the least.

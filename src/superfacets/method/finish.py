@@ -149,7 +149,7 @@ def merge_small(graph, labels: np.ndarray, centers: np.ndarray, rules: Rules) ->
 
 
 def exact_count(graph, labels: np.ndarray, rules: Rules) -> tuple[np.ndarray, int]:
-    """Stage 9 (kinds with ``exact_count``: points): a run asked for ``k`` that made more
+    """Stage 9 (kinds with ``exact_count``: points, cells): a run asked for ``k`` that made more
     segments (regions no window reached seed their own) merges adjacent ones, cheapest
     first (:func:`superfacets.graph.hierarchy.hierarchy`, Ward's cost with the run's
     crease factor), down to ``k``, or to the input's number of separate pieces where

@@ -27,7 +27,7 @@ once and in the paper's order
    (connectivity);
 7. ``clean_up``: the boundaries re-placed (:mod:`superfacets.method.cleanup`);
 8. ``merge_small``: superfacets of fewer than ``min_elements`` merged.
-9. ``exact_count`` (kinds that ask for it: points): the count made exactly ``k``; where
+9. ``exact_count`` (kinds that ask for it: points, cells): the count made exactly ``k``; where
    ``merge_from > 1`` (points of even density), ``merge_to_count`` instead: the run's
    ``merge_from`` times ``k`` superpoints merged to ``k``, flat neighbours first
    (:mod:`superfacets.method.merges`).
