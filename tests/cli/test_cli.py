@@ -466,7 +466,7 @@ def _non_default(p):
     special = {"n_segments": 7, "radius": 0.3, "n_threads": 1, "elements": "faces",
                "center_tol": 0.01, "coarsen": 3, "density": 0.25, "merge_from": 2,
                "tol": 0.01, "neighbor_radius": 0.2, "n_neighbors": 6, "max_iter": 9,
-               "window": 1.5, "min_elements": 2, "max_size_ratio": 4.0}
+               "window": 1.5, "min_elements": 2, "max_size_ratio": 4.0, "step_weight": 2.0}
     value = special.get(p.name, 0.125 if "float" in p.type else 3)
     return value, [p.cli, str(value)]
 

@@ -116,10 +116,11 @@ def test_real_rgbd_scan_has_colours_and_the_term_runs():
     assert c.colors is not None and c.colors.shape == (c.n_total, 3)
     ok = c.colors[c.valid]
     assert 0 <= ok.min() and ok.max() <= 1 and ok.std() > 0.05  # a real, textured scene
-    r = segment(c, 60, beta=2000)
+    # (the colour term alone: the plain graph, step_weight 1, in the three runs)
+    r = segment(c, 60, beta=2000, step_weight=1)
     assert (r.labels[~c.valid] == -1).all() and (r.labels[c.valid] >= 0).all()
     # the superpoints are more uniform in colour than without the term, the default's too
-    blind, auto = segment(c, 60, beta=0), segment(c, 60)
+    blind, auto = segment(c, 60, beta=0, step_weight=1), segment(c, 60, step_weight=1)
 
     def spread(labels):
         lab = labels[c.valid]

@@ -67,7 +67,8 @@ def test_expand_grid_resolves_and_validates():
                               "coarsen": "auto", "split_merge": "auto", "paper": False,
                               "density": "auto", "roughness": 0.0, "merge_from": "auto",
                               "max_size_ratio": 16.0, "merge_cost": "noise", "assignment": "auto",
-                              "beta": "auto", "up_weight": 1.0}
+                              "beta": "auto", "up_weight": 1.0,
+                              "step_weight": "auto"}
     assert isinstance(cfgs[1].kwargs["alpha"], float)
     assert expand_grid("superfacets", alpha=[200, 200.0]) == expand_grid("superfacets", alpha=200)
     with pytest.raises(ParameterError, match="no parameter 'gamma'"):

@@ -62,6 +62,7 @@ POINT_KERNELS = {"knn_csr", "pca_normals", "pca_linearity", "propagate_signs",
                  "turn_outwards", "local_morton_keys", "distinct_in_order",
                  "order_ties",
                  "point_terms_csr", "point_terms", "combine_weights", "feature_weights_csr",
+                 "step_terms_csr",
                  "neighbour_mean",
                  "crossing_pairs", "label_pair_sums", "label_sums", "label_scatter",
                  "tree_nodes", "closest_in_tree",
@@ -322,7 +323,8 @@ def test_runs_on_points_give_numba_results_call_by_call(shadowed):
             (p, 40, None, {"neighbor_radius": 0.01}),  # neighbours masked by a radius
             (p[:8000], 30, np.tile([0.0, 0.0, 1.0], (8000, 1)), {}),  # normals given
             # colours, the default's colour term: the weights' feature kernel
-            (p, 40, None, {"features": np.c_[p[:, :1] > 0, p[:, 1:] > 0] * 0.5})]
+            (p, 40, None, {"features": np.c_[p[:, :1] > 0, p[:, 1:] > 0] * 0.5}),
+            (p, 40, None, {"step_weight": 4.0})]  # a scene's: steps off the surface
     for pts, k, normals, params in runs:
         r = superfacets.segment(as_cloud(pts, normals), k, n_threads=1, **params)
         assert r.labels.shape[0] == pts.shape[0] and r.labels.max() + 1 == k

@@ -69,6 +69,6 @@ def test_each_binding_resolves_through_its_submodule_with_names_and_doc():
             count += 1
         with pytest.raises(AttributeError, match="binds none of that name"):
             native.kernel(f"{path.stem}.no_such_kernel")
-    assert count == 85
+    assert count == 87
     with pytest.raises(AttributeError):  # a kernel of another source is not found here
         native.kernel("geometry.knn_csr")

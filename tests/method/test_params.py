@@ -144,7 +144,7 @@ def test_the_declarations_are_the_fields_and_the_signatures():
     from superfacets.method.params import PARAMETERS, SegmentParams
 
     names = [p.name for p in PARAMETERS]
-    assert len(set(names)) == len(names) == 29
+    assert len(set(names)) == len(names) == 30
     assert list(SegmentParams.__dataclass_fields__) == names
     assert [getattr(DEFAULTS, n) for n in names] == [p.default for p in PARAMETERS]
     for f, own in ((superfacets, []), (seg, ["adaptive", "extent_weight"])):

@@ -686,7 +686,11 @@ def test_real_rgbd_scans(name):
     r = segment(cloud, 150)
     assert r.labels.shape == (307200,)
     assert (r.labels[~cloud.valid] == -1).all() and (r.labels[cloud.valid] >= 0).all()
-    g, index = point_graph(cloud)
+    # each superpoint in one piece of the graph the run read (a scene's: its neighbours
+    # along the surfaces, step_weight 4)
+    assert r.params["step_weight"] == 4.0
+    g, index = r.elements.graph, r.elements.index
+    assert g is point_graph(cloud, step=4.0).graph
     per_element = np.empty(g.n_elements, np.int64)
     per_element[index[cloud.valid]] = r.labels[cloud.valid]
     assert connected(g, per_element)

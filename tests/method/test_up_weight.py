@@ -28,12 +28,14 @@ def _mixed(labels, classes) -> int:
 
 
 def test_layers_stacked_in_height_are_kept_apart():
-    """Without the weight, superpoints hold ground and the layer above it alike (10, 15
-    and 24 of 10, 20 and 40); weighing the up coordinate twice, none does."""
+    """Without the weight (and no step weight), superpoints hold ground and the layer above
+    it alike (10, 15 and 24 of 10, 20 and 40); a scene's step weight (the default) mixes
+    fewer (4, 2, 3); weighing the up coordinate twice, none."""
     pts, classes = _canopy()
     cloud = PointCloud(pts, up=np.array([0.0, 0.0, 1.0]))
     for k in (10, 20, 40):
-        assert _mixed(segment(cloud, k).labels, classes) >= k // 2, k
+        assert _mixed(segment(cloud, k, step_weight=1).labels, classes) >= k // 2, k
+        assert 0 < _mixed(segment(cloud, k).labels, classes) <= max(4, k // 8), k
         r = segment(cloud, k, up_weight=2)
         assert _mixed(r.labels, classes) == 0 and r.n_segments == k, k
         assert r.params["up_weight"] == 2.0

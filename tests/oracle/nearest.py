@@ -306,3 +306,37 @@ def closest_in_tree(pts, start, end, left, boxes, ids, queries, out):
         for r in range(ch * CHUNK, min(m, ch * CHUNK + CHUNK)):
             out[r] = _closest(pts, start, end, left, boxes, ids, queries[r, 0],
                               queries[r, 1], queries[r, 2], stack, sd)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def surface_select(pts, cand, normals, k, step, nbr, kth, pick):
+    """Of each point's candidates (``cand``: itself, then its ``kc`` nearest), the ``k``
+    whose offset ``d`` has the least ``|d|^2 + (step^2 - 1) (n . d)^2`` (ties: the lower
+    id), in that order, into ``nbr`` (itself first); the distance to the farthest of them
+    into ``kth``; where ``pick`` is not empty, the column of ``cand`` each came from."""
+    kc = cand.shape[1] - 1
+    grow = step * step - 1.0
+    key = np.empty(kc)
+    d2 = np.empty(kc)
+    for r in range(pts.shape[0]):
+        i = cand[r, 0]
+        for c in range(kc):
+            j = cand[r, c + 1]
+            dx = pts[j, 0] - pts[i, 0]
+            dy = pts[j, 1] - pts[i, 1]
+            dz = pts[j, 2] - pts[i, 2]
+            off = (dx * normals[i, 0] + dy * normals[i, 1]) + dz * normals[i, 2]
+            d2[c] = (dx * dx + dy * dy) + dz * dz
+            key[c] = d2[c] + grow * (off * off)
+        order = np.argsort(cand[r, 1:], kind="mergesort")  # the ids, then the keys, stably
+        order = order[np.argsort(key[order], kind="mergesort")]
+        nbr[r, 0] = cand[r, 0]
+        far = 0.0
+        for m in range(k):
+            c = order[m]
+            nbr[r, m + 1] = cand[r, c + 1]
+            far = max(far, d2[c])
+            if pick.shape[0] != 0:
+                pick[r, m] = c + 1
+        kth[r] = np.sqrt(far)
+

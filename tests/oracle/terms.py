@@ -47,6 +47,28 @@ def cut_costs_csr(dual_edge, concave, cos, lengths, factor, eta_convex, scale):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
+def step_terms_csr(positions, normals, indptr, indices, r0, r1, step, geo):
+    """``geo`` of the CSR entries of rows ``r0:r1`` (from index 0) with the offset ``d =
+    p_j - p_i`` along the two normals weighed ``step`` times: ``sqrt(geo^2 + (step^2 - 1)
+    off^2)``, ``off = (|n_i . d| + |n_j . d|) / 2``."""
+    grow = step * step - 1.0
+    u = 0
+    for i in range(r0, r1):
+        for x in range(indptr[i], indptr[i + 1]):
+            j = np.int64(indices[x])
+            dx = positions[j, 0] - positions[i, 0]
+            dy = positions[j, 1] - positions[i, 1]
+            dz = positions[j, 2] - positions[i, 2]
+            a = abs((dx * np.float64(normals[i, 0]) + dy * np.float64(normals[i, 1]))
+                    + dz * np.float64(normals[i, 2]))
+            b = abs((dx * np.float64(normals[j, 0]) + dy * np.float64(normals[j, 1]))
+                    + dz * np.float64(normals[j, 2]))
+            off = 0.5 * (a + b)
+            geo[u] = math.sqrt(geo[u] * geo[u] + grow * off * off)
+            u += 1
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
 def point_terms_csr(positions, normals, indptr, indices, r0, r1, geo, cos, concave):
     """:func:`~superfacets._kernels.geometry.point_terms` per CSR entry of the rows
     ``r0:r1`` (written from index 0): entry ``(i, j)`` gets the terms of the pair

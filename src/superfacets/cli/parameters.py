@@ -122,6 +122,10 @@ SHOWN = {
                   "--seen-from AXIS for others) W times in the method's distances: 2 keeps "
                   "apart what an airborne or street scan stacks in height (ground, vegetation, "
                   "roofs); rooms are best at 1 (default: 1)"),
+    "step_weight": ("clouds", "S", "weigh a step off the surface (a neighbour's offset along "
+                    "the normals) S times in the choice of neighbours and in the distances, "
+                    ">= 1: a roof apart from the ground, a table from the floor (default: 4 "
+                    "on a scene, a cloud with an up direction; 1 elsewhere)"),
     "n_threads": ("run", "N", "threads of the run: graph build, expansions, split-and-merge "
                   "searches, clean-up cuts (default: all cores; the labels do not depend on "
                   "it)"),

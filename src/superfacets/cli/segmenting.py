@@ -194,6 +194,9 @@ def _summary(name: str, mesh, result, seconds: float, elements: str = "faces",
         segs += f", following colour (beta {params['beta']:.3g}; --beta 0: off)"
     if params.get("up_weight", 1) != 1:
         segs += f", heights weighed {params['up_weight']:g} times (--up-weight)"
+    if (params.get("step_weight") or 1) != 1:
+        segs += (f", neighbours along the surfaces (steps weighed {params['step_weight']:g} "
+                 "times; --step-weight 1: off)")
     start = params.get("start")
     if start:  # --adaptive: the iterations and the hints are of the start's segmentation
         first = params.get("n_init_centers") or 0

@@ -312,7 +312,7 @@ def kind_for(obj, elements: str | None = None) -> str:
 
 def elements_of(obj, elements: str | None = None, *, n_neighbors: int = _N_NEIGHBORS,
                 neighbor_radius: float | None = None,
-                n_segments: int | None = None) -> ElementInput:
+                n_segments: int | None = None, step_weight: float = 1.0) -> ElementInput:
     """Validate an input and give its element graph.
 
     Parameters
@@ -328,6 +328,9 @@ def elements_of(obj, elements: str | None = None, *, n_neighbors: int = _N_NEIGH
     n_segments : int, optional
         Checked against the number of elements (or a bound on it known from the
         input, :attr:`Builder.count`) before the graph is built.
+    step_weight : float, default 1
+        Points only: ``> 1`` chooses each point's neighbours along its surface
+        (:func:`~superfacets.elements.points.point_graph`'s ``step``).
 
     Returns
     -------
@@ -337,7 +340,8 @@ def elements_of(obj, elements: str | None = None, *, n_neighbors: int = _N_NEIGH
     ------
     ParameterError
         If ``elements`` does not fit the input (points of a mesh, faces of a cloud), or
-        ``n_segments`` exceeds the elements.
+        ``n_segments`` exceeds the elements, or ``step_weight`` is not 1 on elements that
+        are not points.
     InvalidMeshError, InvalidCloudError, TypeError
         As the input's validation.
 
@@ -348,6 +352,12 @@ def elements_of(obj, elements: str | None = None, *, n_neighbors: int = _N_NEIGH
     ('vertices', 8, 8)
     """
     kind, data = prepared(obj, elements, n_segments=n_segments)
+    if step_weight != 1:  # (the neighbours along the surface: a cloud's own graph)
+        if not kind_of(kind).cloud:
+            raise ParameterError(f"step_weight weighs steps off a point cloud's surface; "
+                                 f"this input's elements are {kind}")
+        g, index = points.point_graph(data, n_neighbors, neighbor_radius, step=step_weight)
+        return ElementInput(g, index, data)
     return BUILDERS[kind].build(data, n_neighbors, neighbor_radius)
 
 

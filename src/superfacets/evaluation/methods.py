@@ -232,17 +232,19 @@ def get_method(name: str) -> Method:
 
 def _auto(value, kind):
     """A registry value of ``center_tol``, ``coarsen``, ``cleanup``, ``split_merge``,
-    ``density``, ``merge_from``, ``assignment`` or ``extent_weight``: ``"auto"`` is None."""
+    ``density``, ``merge_from``, ``assignment``, ``step_weight`` or ``extent_weight``:
+    ``"auto"`` is None."""
     return None if value in (None, "auto") else kind(value)
 
 
 def _segment_options(center_tol="auto", coarsen="auto", cleanup="auto", split_merge="auto",
                      density="auto", merge_from="auto", assignment="auto", beta="auto",
-                     **params) -> dict:
+                     step_weight="auto", **params) -> dict:
     """The keyword arguments of :func:`superfacets.segment` from registry values."""
     return dict(center_tol=_auto(center_tol, float), coarsen=_auto(coarsen, int),
                 beta=_auto(beta, float),
                 cleanup=_auto(cleanup, parse_bool), split_merge=_auto(split_merge, parse_bool),
+                step_weight=_auto(step_weight, float),
                 density=_auto(density, float), merge_from=_auto(merge_from, int),
                 assignment=_auto(assignment, parse_assignment), **params)
 
@@ -316,7 +318,7 @@ def _run_vsa(mesh, n_segments, *, cache, seed, **params):
 #: where the run decides; the start: farthest points, which "auto" is without a radius)
 _SF_GRID = ("alpha", "eta_convex", "init", "window", "max_iter", "tol", "center_tol",
             "coarsen", "cleanup", "split_merge", "paper", "density", "roughness", "merge_from",
-            "max_size_ratio", "merge_cost", "assignment", "beta", "up_weight")
+            "max_size_ratio", "merge_cost", "assignment", "beta", "up_weight", "step_weight")
 _SF_DEFAULTS = {name: INITS[0] if name == "init" else
                 "auto" if PARAMETER[name].default is None else PARAMETER[name].default
                 for name in _SF_GRID}

@@ -59,7 +59,8 @@ def fmt_value(v) -> str:
 
 
 #: Parameters added after results files were written, and the value those rows ran with.
-PARAMS_BEFORE = {"tol": "0.0", "cleanup": "false", "split_merge": "false", "up_weight": "1.0"}
+PARAMS_BEFORE = {"tol": "0.0", "cleanup": "false", "split_merge": "false", "up_weight": "1.0",
+                 "step_weight": "1.0"}
 
 
 def row_key(row: dict) -> tuple:

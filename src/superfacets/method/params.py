@@ -274,6 +274,12 @@ def _declare_scan_parameters() -> tuple[Parameter, ...]:
           "apart what an airborne scan stacks in height (ground, vegetation, roofs)",
           lambda v: num("up_weight", v, 0.0, MAX_UP_WEIGHT, lo_open=True), ("points",),
           cli="--up-weight"),
+        P("step_weight", None, "float or None", "weight of a step off a cloud's surface (the "
+          "part of a neighbour's offset along the normals) in the choice of its neighbours "
+          "and in the method's distances, in [1, 100]; 1: none; None: 4 on a scene (a cloud "
+          "with an up direction), else 1",
+          lambda v: num("step_weight", v, 1.0, MAX_UP_WEIGHT), ("points",),
+          cli="--step-weight"),
     )
 
 
@@ -372,7 +378,8 @@ def resolve(**params) -> SegmentParams:
                                        ("density", p.density not in (None, 0, 0.0)),
                                        ("roughness", p.roughness not in (0, 0.0)),
                                        ("merge_from", p.merge_from not in (None, 1)),
-                                       ("up_weight", p.up_weight != 1)) if on]
+                                       ("up_weight", p.up_weight != 1),
+                                       ("step_weight", p.step_weight not in (None, 1))) if on]
         if extra:
             raise ParameterError(f"paper=True is the paper's method as published; it does not "
                                  f"go with {', '.join(extra)}")

@@ -34,7 +34,7 @@ from .params import (
     superfacet_size,
 )
 from .passes import Iteration, iterate
-from .rules import fine_count, merge_from_of
+from .rules import fine_count, merge_from_of, step_weight_of
 from .splitmerge import FAST_ROUNDS, ROUNDS, swap_and_iterate
 from .weights import (
     HeldWeights,
@@ -229,8 +229,9 @@ def build_graph(obj, p: SegmentParams, features=None
         data = weighted
     if p.beta is not None and p.beta > 0:
         _check_features(kind, data, features)
+    p = replace(p, step_weight=step_weight_of(p, kind, getattr(data, "up", None) is not None))
     source = elements_of(data, kind, n_neighbors=p.n_neighbors,
-                         neighbor_radius=p.neighbor_radius)
+                         neighbor_radius=p.neighbor_radius, step_weight=p.step_weight)
     graph = source.graph
     if p.density is None:  # automatic: superpoints follow a scan's uneven density
         p = replace(p, density=density_for(graph, p.paper))
@@ -468,7 +469,8 @@ def weigh(graph, rules: Rules, features=None, hooks=None
     if _per_entry(graph, rules):
         # points, vertices: from the CSR layout, positions and normals (the same values)
         w = csr_point_weights(graph, alpha=p.alpha, eta_convex=p.eta_convex, dtype=dtype,
-                              features=features, beta=p.beta, floor=rules.feature_floor)
+                              features=features, beta=p.beta, floor=rules.feature_floor,
+                              step=p.step_weight or 1.0)
     else:
         w_pairs = edge_weights(graph, p.weighting, alpha=p.alpha, eta_convex=p.eta_convex,
                                features=features, beta=p.beta, floor=rules.feature_floor,
@@ -503,7 +505,7 @@ def _weights_key(graph, rules: Rules, features) -> tuple:
         f = np.ascontiguousarray(features)
         feats = (f.dtype.str, f.shape, zlib.crc32(f.view(np.uint8).reshape(-1)))
     return (p.alpha, p.eta_convex, p.beta, p.weighting, p.paper, rules.feature_floor,
-            rules.kind.name, _per_entry(graph, rules), feats)
+            rules.kind.name, _per_entry(graph, rules), feats, p.step_weight)
 
 
 def held_weights(graph, rules: Rules, w: np.ndarray, features=None, initial=None

@@ -525,7 +525,7 @@ def csr_weights(graph: ElementGraph, weights: np.ndarray, dtype=np.float64) -> n
 def csr_point_weights(graph: ElementGraph, *, alpha: float = _PAPER_ALPHA,
                       eta_convex: float = DEFAULTS.eta_convex, dtype=np.float64,
                       features: np.ndarray | None = None, beta: float = 0.0,
-                      floor: float = 0.0) -> np.ndarray:
+                      floor: float = 0.0, step: float = 1.0) -> np.ndarray:
     """The paper's weights per CSR entry of a graph whose elements are points with
     normals (cloud points, mesh vertices: ``terms_of`` is their symmetric terms), made
     from the positions, normals and CSR layout alone.
@@ -544,6 +544,11 @@ def csr_point_weights(graph: ElementGraph, *, alpha: float = _PAPER_ALPHA,
         Of the result (:func:`weight_dtype`).
     features, beta, floor
         The feature term, as :func:`paper_weights` (``beta > 0``: the same values too).
+    step : float, default 1
+        ``> 1``: the distance ``geo`` between neighbours with the part of their offset
+        along their normals weighed ``step`` times, ``sqrt(geo^2 + (step^2 - 1) off^2)``,
+        ``off`` the mean of ``|n_i . d|`` and ``|n_j . d|`` (``step_weight``, not in the
+        paper); 1 gives the paper's weights bit for bit.
 
     Returns
     -------
@@ -583,6 +588,9 @@ def csr_point_weights(graph: ElementGraph, *, alpha: float = _PAPER_ALPHA,
             x0, x1 = indptr[r0], indptr[r1]
             geo, cos, concave, pairs = _csr_block_terms(g, pos, nor, r0, r1,
                                                         f is not None and not compiled)
+            if step != 1.0:  # (a step off the surface weighed: not in the paper)
+                native.kernel("terms.step_terms_csr")(pos, nor, indptr, indices, int(r0),
+                                                      int(r1), float(step), geo)
             theta = np.arccos(cos, out=cos)
             if compiled:  # paper_weights' expression, in its order, per CSR entry
                 feature_weights(geo, theta, concave, f, indptr, indices, int(r0), int(r1),

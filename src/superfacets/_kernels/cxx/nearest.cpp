@@ -4,6 +4,7 @@
 // no ids: the rows are the points).
 #include "common.hpp"
 
+#include <algorithm>
 #include <limits>
 
 namespace sfk {
@@ -353,6 +354,53 @@ void closest_in_tree(nb::handle pts_, nb::handle start_, nb::handle end_, nb::ha
     });
 }
 
+// nearest.surface_select: of each point's candidates (cand: itself, then its kc nearest),
+// the k whose offset d has the least |d|^2 + (step^2 - 1) (n . d)^2 (ties: the lower id),
+// in that order, into nbr (itself first); the distance to the farthest of them into kth;
+// where pick is not empty, the column of cand each came from.
+void surface_select(nb::handle pts_, nb::handle cand_, nb::handle normals_, i64 k, double step,
+                    nb::handle nbr_, nb::handle kth_, nb::handle pick_) {
+    In<double> pts(pts_, "pts"), nor(normals_, "normals");
+    In<i32> cand(cand_, "cand");
+    Out<i32> nbr(nbr_, "nbr"), pick(pick_, "pick");
+    Out<double> kth(kth_, "kth");
+    const i64 kc = cand.cols - 1;
+    if (pts.cols != 3 || nor.cols != 3 || nor.n != pts.n || cand.n != pts.n || k < 1 ||
+        k > kc || nbr.n != pts.n || nbr.cols != k + 1 || kth.n != pts.n)
+        throw Mismatch("argument nbr");
+    if (pick.n != 0 && (pick.n != pts.n || pick.cols != k)) throw Mismatch("argument pick");
+    check_range(cand, 0, pts.n, "cand");
+    const double grow = step * step - 1.0;
+    nb::gil_scoped_release nogil;
+    parallel_for(pts.n, [&](i64 lo, i64 hi) {
+        std::vector<double> key(kc), d2(kc);
+        std::vector<i64> col(kc);
+        for (i64 r = lo; r < hi; ++r) {
+            const i64 i = cand(r, 0);
+            for (i64 c = 0; c < kc; ++c) {
+                const i64 j = cand(r, c + 1);
+                const double dx = pts(j, 0) - pts(i, 0), dy = pts(j, 1) - pts(i, 1),
+                             dz = pts(j, 2) - pts(i, 2);
+                const double off = (dx * nor(i, 0) + dy * nor(i, 1)) + dz * nor(i, 2);
+                d2[c] = (dx * dx + dy * dy) + dz * dz;
+                key[c] = d2[c] + grow * (off * off);
+                col[c] = c;
+            }
+            std::partial_sort(col.begin(), col.begin() + k, col.end(), [&](i64 a, i64 b) {
+                return key[a] < key[b] || (key[a] == key[b] && cand(r, a + 1) < cand(r, b + 1));
+            });
+            nbr(r, 0) = cand(r, 0);
+            double far = 0.0;
+            for (i64 m = 0; m < k; ++m) {
+                nbr(r, m + 1) = cand(r, col[m] + 1);
+                far = std::max(far, d2[col[m]]);
+                if (pick.n != 0) pick(r, m) = static_cast<i32>(col[m] + 1);
+            }
+            kth[r] = std::sqrt(far);
+        }
+    });
+}
+
 void bind_nearest(nb::module_& m) {
     m.def("tree_nodes", &tree_nodes,
           "Build the tree over pts ((n, 3) float64, sorted by their Z-order keys, (n, 3) "
@@ -367,6 +415,12 @@ void bind_nearest(nb::module_& m) {
           nb::arg("pts"), nb::arg("start"), nb::arg("end"), nb::arg("left"), nb::arg("boxes"),
           nb::arg("ids"), nb::arg("own"), nb::arg("k"), nb::arg("limit"), nb::arg("nbr"),
           nb::arg("kth"), nb::arg("within"));
+    m.def("surface_select", &surface_select,
+          "Of each point's candidates (cand: itself, then its nearest), the k whose offset d "
+          "has the least |d|^2 + (step^2 - 1) (n . d)^2 (ties: the lower id), into nbr; the "
+          "distance to the farthest into kth; their columns into pick where not empty.",
+          nb::arg("pts"), nb::arg("cand"), nb::arg("normals"), nb::arg("k"), nb::arg("step"),
+          nb::arg("nbr"), nb::arg("kth"), nb::arg("pick"));
     m.def("closest_in_tree", &closest_in_tree,
           "For each query position r (queries: (m, 3) float64): the id of the tree's nearest "
           "point into out[r] (ties: the lower id; ids[row] each row's point, none: the rows "

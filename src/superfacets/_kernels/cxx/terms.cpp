@@ -120,6 +120,41 @@ void point_terms_csr(nb::handle positions_, nb::handle normals_, nb::handle indp
     });
 }
 
+// terms.step_terms_csr: geo of the CSR entries of rows r0:r1 (written from index 0) with
+// the part of each offset d = p_j - p_i along the two normals weighed `step` times:
+// geo = sqrt(geo^2 + (step^2 - 1) off^2), off = (|n_i . d| + |n_j . d|) / 2.
+void step_terms_csr(nb::handle positions_, nb::handle normals_, nb::handle indptr_,
+                    nb::handle indices_, i64 r0, i64 r1, double step, nb::handle geo_) {
+    In<double> pos(positions_, "positions");
+    In<i64> indptr(indptr_, "indptr");
+    In<i32> indices(indices_, "indices");
+    Out<double> geo(geo_, "geo");
+    with_real(normals_, "normals", [&](const auto& nor) {
+        if (pos.cols != 3 || nor.cols != 3) throw Mismatch("argument positions");
+        check_span(r0, r1, indptr.n - 1, indptr.n - 1);
+        check_csr(In<i64>(indptr.p + r0, r1 - r0 + 1), indices, r1 - r0, mn(pos.n, nor.n));
+        if (r1 > pos.n || r1 > nor.n) throw OutOfRange("arguments r0, r1: rows past positions");
+        check_rows(geo, indptr[r1] - indptr[r0], "geo");
+        const double grow = step * step - 1.0;
+        nb::gil_scoped_release nogil;
+        i64 u = 0;
+        for (i64 i = r0; i < r1; ++i)
+            for (i64 x = indptr[i]; x < indptr[i + 1]; ++x) {
+                const i64 j = indices[x];
+                const double dx = pos[3 * j] - pos[3 * i], dy = pos[3 * j + 1] - pos[3 * i + 1],
+                             dz = pos[3 * j + 2] - pos[3 * i + 2];
+                const double a = std::abs((dx * nor[3 * i] + dy * nor[3 * i + 1]) +
+                                          dz * nor[3 * i + 2]);
+                const double b = std::abs((dx * nor[3 * j] + dy * nor[3 * j + 1]) +
+                                          dz * nor[3 * j + 2]);
+                const double off = 0.5 * (a + b);
+                geo[u] = std::sqrt(geo[u] * geo[u] + grow * off * off);
+                ++u;
+            }
+        return 0;
+    });
+}
+
 // terms.combine_weights: out = (geo + alpha * ang) / diagonal, ang = eta * geo * theta / pi
 // (eta 1 where concave, else eta_convex), the float64 value rounded to out's dtype.
 template <class T>
@@ -255,6 +290,11 @@ void bind_terms(nb::module_& m) {
           "from index 0).",
           nb::arg("positions"), nb::arg("normals"), nb::arg("indptr"), nb::arg("indices"),
           nb::arg("r0"), nb::arg("r1"), nb::arg("geo"), nb::arg("cos"), nb::arg("concave"));
+    m.def("step_terms_csr", &step_terms_csr,
+          "Geo of the CSR entries of rows r0:r1 with the offset along the normals weighed "
+          "step times: sqrt(geo^2 + (step^2 - 1) off^2).",
+          nb::arg("positions"), nb::arg("normals"), nb::arg("indptr"), nb::arg("indices"),
+          nb::arg("r0"), nb::arg("r1"), nb::arg("step"), nb::arg("geo"));
     m.def("combine_weights", &combine_weights,
           "Out = (geo + alpha * ang) / diagonal with ang = eta * geo * theta / pi (eta 1 where "
           "concave, else eta_convex), as numpy evaluates the same expression ....",

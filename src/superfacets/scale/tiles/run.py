@@ -475,6 +475,10 @@ def _checked_options(n_segments, options, tiles, halo, refine, workers, start="s
     if "features" in options:
         raise ParameterError("a tiled run reads colours from the file; features= is not taken")
     params = resolve(n_segments=n_segments, **options)
+    if params.step_weight not in (None, 1):
+        raise ParameterError("step_weight is not taken by a tiled run yet: its tiles read "
+                             "the plain point graph (step_weight=1)")
+    params = replace(params, step_weight=1.0)  # (a scene's 4: one run's alone, for now)
     if params.elements not in (None, "faces", "points"):
         raise ParameterError(f"a tiled run segments faces or points, not {params.elements!r}")
     check_tileable(params)
