@@ -55,11 +55,12 @@ def test_the_labels_are_those_of_the_cloud_stretched_along_its_up(up):
 
 def test_graphs_are_in_the_data_s_units():
     """The run's graph is of the weighed cloud; the result's graphs are of the cloud as
-    given: centroids and areas equal to those of its own point graph."""
+    given: centroids and areas equal to those of its own point graph (a scene's: with its
+    neighbours along the surface, as the run's)."""
     pts, _ = _canopy(2)
     cloud = PointCloud(pts, up=np.array([0.0, 0.0, 1.0]))
     r = segment(cloud, 20, up_weight=4)
-    e = elements_of(cloud, "points")
+    e = elements_of(cloud, "points", step_weight=r.params["step_weight"])
     want = superfacet_graph(e.graph, r.labels[e.first_rows(np.arange(e.graph.n_elements))],
                             None)
     g = r.graph()

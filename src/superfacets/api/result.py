@@ -297,7 +297,7 @@ class SegmentationResult:
         def build():  # (kept with the run's cloud: shared by the results made from it)
             e = elements_of(original, "points", n_neighbors=self.params.get(
                 "n_neighbors", _D.n_neighbors), neighbor_radius=self.params.get(
-                "neighbor_radius"))
+                "neighbor_radius"), step_weight=self.params.get("step_weight") or 1.0)
             return e, e.first_rows(np.arange(e.graph.n_elements))
 
         e, rows = cached_on(weighted, "unweighted_elements", build)
