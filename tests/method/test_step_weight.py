@@ -54,7 +54,7 @@ def test_the_compiled_choice_is_numpy_s(limit):
     pts[::7, 2] += 0.05  # a step here and there
     tree = point_tree(pts)
     got = P.surface_neighbours(pts, tree, 10, 3.0, limit)
-    cand, _, keep_c = P.nearest(tree, P.STEP_CANDIDATES * 10, limit=limit)
+    cand, _, keep_c = P.nearest(tree, int(P.STEP_CANDIDATES * 10), limit=limit)
     normals = P.estimate_normals(pts, np.ascontiguousarray(cand[:, :11]))
     want = P._surface_neighbours_numpy(pts, cand.astype(np.int64), keep_c, normals, 10, 3.0)
     for a, b in zip(got, want):
