@@ -91,6 +91,16 @@ nb::object cut_costs_csr(nb::handle dual_edge_, nb::handle concave_, nb::handle 
     return out_a;
 }
 
+// The arguments of a kernel over the CSR rows r0:r1 of a graph of points with normals.
+template <class N>
+void check_point_rows(const In<double>& pos, const N& nor, const In<i64>& indptr,
+                      const In<i32>& indices, i64 r0, i64 r1) {
+    if (pos.cols != 3 || nor.cols != 3) throw Mismatch("argument positions");
+    check_span(r0, r1, indptr.n - 1, indptr.n - 1);
+    check_csr(In<i64>(indptr.p + r0, r1 - r0 + 1), indices, r1 - r0, mn(pos.n, nor.n));
+    if (r1 > pos.n || r1 > nor.n) throw OutOfRange("arguments r0, r1: rows past positions");
+}
+
 void point_terms_csr(nb::handle positions_, nb::handle normals_, nb::handle indptr_,
                      nb::handle indices_, i64 r0, i64 r1, nb::handle geo_, nb::handle cos_,
                      nb::handle concave_) {
@@ -100,10 +110,7 @@ void point_terms_csr(nb::handle positions_, nb::handle normals_, nb::handle indp
     Out<double> geo(geo_, "geo"), cs(cos_, "cos");
     Out<bool> concave(concave_, "concave");
     with_real(normals_, "normals", [&](const auto& nor) {
-        if (pos.cols != 3 || nor.cols != 3) throw Mismatch("argument positions");
-        check_span(r0, r1, indptr.n - 1, indptr.n - 1);
-        check_csr(In<i64>(indptr.p + r0, r1 - r0 + 1), indices, r1 - r0, mn(pos.n, nor.n));
-        if (r1 > pos.n || r1 > nor.n) throw OutOfRange("arguments r0, r1: rows past positions");
+        check_point_rows(pos, nor, indptr, indices, r0, r1);
         const i64 m = indptr[r1] - indptr[r0];
         check_rows(geo, m, "geo");
         check_rows(cs, m, "cos");
@@ -130,10 +137,7 @@ void step_terms_csr(nb::handle positions_, nb::handle normals_, nb::handle indpt
     In<i32> indices(indices_, "indices");
     Out<double> geo(geo_, "geo");
     with_real(normals_, "normals", [&](const auto& nor) {
-        if (pos.cols != 3 || nor.cols != 3) throw Mismatch("argument positions");
-        check_span(r0, r1, indptr.n - 1, indptr.n - 1);
-        check_csr(In<i64>(indptr.p + r0, r1 - r0 + 1), indices, r1 - r0, mn(pos.n, nor.n));
-        if (r1 > pos.n || r1 > nor.n) throw OutOfRange("arguments r0, r1: rows past positions");
+        check_point_rows(pos, nor, indptr, indices, r0, r1);
         check_rows(geo, indptr[r1] - indptr[r0], "geo");
         const double grow = step * step - 1.0;
         nb::gil_scoped_release nogil;
