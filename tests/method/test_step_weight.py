@@ -98,5 +98,37 @@ def test_refusals_say_what_is_taken():
 
     with pytest.raises(ParameterError, match="step_weight"):
         segment(trimesh.creation.icosphere(2), 4, step_weight=2.0)
-    with pytest.raises(ParameterError, match="not taken by a tiled run"):
-        segment_tiled(PointCloud(pts, up=UP), 4, tiles=2, step_weight=2.0)
+    with pytest.raises(ParameterError, match="step_weight weighs steps off a point cloud"):
+        segment_tiled(trimesh.creation.icosphere(3), 4, tiles=2, step_weight=2.0)
+
+
+def _terraces(n: int = 6000, seed: int = 2):
+    """Ground and a terrace 0.5 above its east half, about 0.3 apart: a scene."""
+    rng = np.random.default_rng(seed)
+    xy = rng.random((n, 2)) * [24.0, 12.0]
+    z = np.where(xy[:, 0] > 12, 0.5, 0.0) + 0.01 * rng.standard_normal(n)
+    return np.c_[xy, z]
+
+
+def test_a_tile_s_core_gets_one_run_s_neighbours_and_a_tiled_scene_weighs_its_steps():
+    """The choice reads a point's 20 nearest and the normal of its 10 nearest: a box with a
+    margin gives its core points the whole cloud's neighbours and sizes, so a tiled run of
+    a scene reads what one run reads (its step weight 4), with no border disagreement."""
+    from superfacets import segment_tiled
+
+    pts = _terraces()
+    tree = point_tree(pts)
+    whole, kth, _ = P.surface_neighbours(pts, tree, 10, 4.0)
+    box = pts[:, 0] < 14  # the west half and a margin of 2 (a few spacings of 0.3)
+    core = pts[:, 0] < 12
+    part = np.flatnonzero(box)
+    nbr, kth_part, _ = P.surface_neighbours(pts[part], point_tree(pts[part]), 10, 4.0)
+    inside = core[part]
+    np.testing.assert_array_equal(part[nbr[inside]], whole[part[inside]])
+    np.testing.assert_array_equal(kth_part[inside], kth[part[inside]])
+    scene = PointCloud(pts, up=UP)
+    r = segment_tiled(scene, 40, tiles=2, workers=1)
+    assert r.params["step_weight"] == 4.0 and r.disagreements == 0
+    assert len(np.unique(r.labels)) == 40
+    plain = segment_tiled(scene, 40, tiles=2, workers=1, step_weight=1)
+    assert plain.params["step_weight"] == 1.0

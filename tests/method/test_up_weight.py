@@ -88,7 +88,7 @@ def test_a_tiled_run_reads_the_cloud_weighed_as_one_run_does():
 
     pts, classes = _canopy(4)
     cloud = PointCloud(pts, up=np.array([0.0, 0.0, 1.0]))
-    plain = segment_tiled(cloud, 30, tiles=4, workers=1)
+    plain = segment_tiled(cloud, 30, tiles=4, workers=1, step_weight=1)  # (nothing weighed)
     r = segment_tiled(cloud, 30, tiles=4, workers=1, up_weight=2)
     assert _mixed(plain.labels, classes) >= 10 and _mixed(r.labels, classes) == 0
     assert r.n_segments == 30 and r.disagreements == 0 and r.params["up_weight"] == 2.0

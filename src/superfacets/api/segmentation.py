@@ -239,7 +239,7 @@ def superfacets(data=_NO_INPUT, n_segments: int | None = _D.n_segments, *, featu
         Segmentator 91 of 108 targets met instead of 88, mean undersegmentation error
         -6.6 %, oracle mIoU +0.020, in 1.23 times the time; on objects it left the
         compactness 0.7-1.5 % worse, so they keep 1 (``docs/notes/superpoints.md``,
-        "Neighbours along the surface"). A tiled run keeps 1.
+        "Neighbours along the surface"). A tiled run's tiles read the same neighbours.
     tol : float, default 0.001
         Convergence tolerance in ``[0, 1]``: also stop once a classification
         changes the superfacet of at most this fraction of the surface area

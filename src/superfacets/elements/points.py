@@ -61,7 +61,8 @@ from .vertices import symmetric_terms
 _TRIM_MIN = 1 << 18  # rows from which the build hands the allocator's free memory back
 
 __all__ = ["point_graph", "kept_diagonal", "PointElements", "estimate_normals",
-           "orient_normals", "distinct_points", "surface_neighbours", "STEP_CANDIDATES"]
+           "orient_normals", "distinct_points", "surface_neighbours", "STEP_CANDIDATES",
+           "graph_key"]
 
 #: Default number of nearest neighbours of the point graph.
 DEFAULT_NEIGHBORS = 10
@@ -200,13 +201,26 @@ def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
     if not isinstance(cloud, PointCloud):  # an array, trimesh's or Open3D's cloud
         cloud = as_cloud(cloud)
     graphs = cached_on(cloud, "_point_graphs", dict)
-    key = (n_neighbors, neighbor_radius) + (() if step == 1 else (("step", float(step)),))
+    key = graph_key(n_neighbors, neighbor_radius, step)
     if not oriented and key not in graphs:  # (the oriented graph, where kept, serves)
         key += ("unoriented",)
     if key not in graphs:
         graphs[key] = _build_point_graph_of(cloud, n_neighbors, neighbor_radius, oriented,
                                             step)
     return graphs[key]
+
+
+def graph_key(n_neighbors: int, neighbor_radius: float | None = None,
+              step: float = 1.0) -> tuple:
+    """The key a cloud keeps its point graph under (:func:`point_graph`): the
+    neighbourhood, and ``step`` where it is not 1.
+
+    Examples
+    --------
+    >>> graph_key(10), graph_key(10, None, 4)
+    ((10, None), (10, None, ('step', 4.0)))
+    """
+    return (n_neighbors, neighbor_radius) + (() if step == 1 else (("step", float(step)),))
 
 
 def kept_diagonal(cloud) -> float | None:

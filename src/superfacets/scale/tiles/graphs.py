@@ -77,7 +77,8 @@ def room_for_graphs(folder, n_points: int, overlap: float = 2.0) -> bool:
     return free > 2 * overlap * BYTES_PER_POINT * n_points
 
 
-def tile_graph(cloud, folder, n_neighbors: int, *, save: bool = True) -> str:
+def tile_graph(cloud, folder, n_neighbors: int, *, save: bool = True,
+               step: float = 1.0) -> str:
     """Give ``cloud`` its point graph (``n_neighbors``, no ``neighbor_radius``) from
     ``folder``, or build it and save it there.
 
@@ -89,6 +90,9 @@ def tile_graph(cloud, folder, n_neighbors: int, *, save: bool = True) -> str:
     folder : str or os.PathLike
         The tile's folder in the run's work folder (created when saved).
     n_neighbors : int
+    step : float, default 1
+        The run's ``step_weight`` (its neighbours along the surface where above 1:
+        :func:`~superfacets.elements.points.point_graph`).
     save : bool, default True
         Save a graph built here (False: the caller saves it later, if ever, with
         :func:`save_graph`: a tile held in its worker's memory).
@@ -120,7 +124,7 @@ def tile_graph(cloud, folder, n_neighbors: int, *, save: bool = True) -> str:
     folder = Path(folder)
     _, data = prepared(cloud, "points")
     graphs = cached_on(data, "_point_graphs", dict)
-    key = (n_neighbors, None)
+    key = points.graph_key(n_neighbors, None, step)
     if key in graphs:
         return "kept"
     done = folder / "graph.json"
@@ -133,7 +137,7 @@ def tile_graph(cloud, folder, n_neighbors: int, *, save: bool = True) -> str:
         data.lend_points(el.graph.positions, el.index)  # as the build does
         graphs[key] = el
         return "read"
-    el = points.point_graph(data, n_neighbors)
+    el = points.point_graph(data, n_neighbors, step=step)
     if save:
         save_graph(el, folder)
     return "built"
@@ -155,13 +159,14 @@ def save_graph(el, folder) -> None:
         indices=g.indices, index=el.index), {"pair_dtype": np.dtype(pair_dtype).name})
 
 
-def kept_graph(cloud, n_neighbors: int):
-    """The point elements (``n_neighbors``, no radius) kept with ``cloud`` by
+def kept_graph(cloud, n_neighbors: int, step: float = 1.0):
+    """The point elements (``n_neighbors``, no radius, ``step``) kept with ``cloud`` by
     :func:`tile_graph`, or None."""
     if cloud is None:
         return None
     _, data = prepared(cloud, "points")
-    return data.__dict__.get("_point_graphs", {}).get((n_neighbors, None))
+    return data.__dict__.get("_point_graphs", {}).get(points.graph_key(n_neighbors, None,
+                                                                        step))
 
 
 #: The files of a refine round's last classification (:func:`keep_classification`).

@@ -51,7 +51,7 @@ from ...elements.builders import ElementInput, elements_of, prepared
 from ...elements.features import colors_or_features, per_element
 from ...elements.kinds import kind_of
 from ...elements.neighbors import nearest, point_tree
-from ...elements.points import distinct_points, kept_diagonal
+from ...elements.points import distinct_points, kept_diagonal, surface_neighbours
 from ...errors import ParameterError
 from ...inputs.bounds import column_bounds
 from ...inputs.cloud import PointCloud
@@ -80,10 +80,12 @@ __all__ = ["tile_centers", "sample_start", "start_step", "tile_refine", "tile_la
 HALO = 3.0
 
 
-def point_areas(points: np.ndarray, core: np.ndarray, n_neighbors: int) -> float:
+def point_areas(points: np.ndarray, core: np.ndarray, n_neighbors: int,
+                step: float = 1.0) -> float:
     """Summed area of the ``core`` points of a tile, as the point graph sizes them
     (``pi rho^2 / K``, ``rho`` the distance to the ``K``-th distinct neighbour among
-    ``points``); duplicate points count once."""
+    ``points``, or with ``step`` above 1 to the farthest of its neighbours along its
+    surface); duplicate points count once."""
 
     pts, inverse = distinct_points(points)  # duplicates share a position, so a core
     is_core = np.zeros(pts.shape[0], dtype=bool)
@@ -93,7 +95,10 @@ def point_areas(points: np.ndarray, core: np.ndarray, n_neighbors: int) -> float
     k = int(min(n_neighbors, pts.shape[0] - 1))
     if k < 1:
         return 0.0
-    _, kth, _ = nearest(point_tree(pts), k, np.flatnonzero(is_core))
+    if step != 1 and k >= 3 and pts.shape[0] > k + 1:  # (as the graph's build chooses)
+        kth = surface_neighbours(pts, point_tree(pts), k, step)[1][is_core]
+    else:
+        _, kth, _ = nearest(point_tree(pts), k, np.flatnonzero(is_core))
     return float((np.pi * kth ** 2 / k).sum())
 
 
@@ -456,14 +461,14 @@ def _three_distinct(pts: np.ndarray) -> bool:
     return bool((differs & (pts != pts[np.argmax(differs)]).any(axis=1)).any())
 
 
-def core_area(cloud, core: np.ndarray, n_neighbors: int) -> float:
+def core_area(cloud, core: np.ndarray, n_neighbors: int, step: float = 1.0) -> float:
     """Summed size of the distinct points the ``core`` rows of a tile's cloud hold, read
     on the point graph the tile builds (:func:`point_areas` reads the same sizes on a
     tree of its own; the graph built here is kept with the cloud for the tile's phases).
     """
 
     # (where tile_graph keeps it)
-    el = points.point_graph(prepared(cloud, "points")[1], n_neighbors)
+    el = points.point_graph(prepared(cloud, "points")[1], n_neighbors, step=step)
     at = np.asarray(el.index)[np.flatnonzero(core)]
     held = np.zeros(el.graph.n_elements, dtype=bool)  # (ascending, as np.unique gave them:
     held[at[at >= 0]] = True  # the same sum)
@@ -630,7 +635,8 @@ def tile_connect(inp, labels: np.ndarray, owned: np.ndarray, owned_rows: np.ndar
     kind, data = prepared(inp, params.elements)
     if kind_of(kind).cloud:  # the adjacency alone: the normals' signs are not read
         src = ElementInput(*points.point_graph(data, params.n_neighbors, params.neighbor_radius,
-                                        oriented=False), data)
+                                               oriented=False, step=params.step_weight or 1.0),
+                           data)
     else:
         src = elements_of(data, kind, n_neighbors=params.n_neighbors,
                           neighbor_radius=params.neighbor_radius)

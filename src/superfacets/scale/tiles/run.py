@@ -59,7 +59,7 @@ from ...inputs.cloud import check_weighable, stretched_along
 from ...io.regions import RegionReader, streamed
 from ...method.merges import NOISE_SAMPLE
 from ...method.params import DEFAULTS, resolve, superfacet_size
-from ...method.rules import fine_count
+from ...method.rules import fine_count, step_weight_of
 from ..runner.engine import Engine
 from . import buckets, phases
 from .buckets import box_folder
@@ -189,7 +189,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
     with run_folder(workdir) as tmp:  # the run's own folder, removed at its end
         with stage("survey"):
             reader, survey = _surveyed(source, tmp, tiles, params)
-        weight, params = params.up_weight, replace(params, up_weight=1.0)  # (read stretched)
+        weight, params = params.up_weight, _step_resolved(params, reader)
         layout = (balanced_tiles(survey.sample, survey.lo, survey.hi, tiles)
                   if np.ndim(tiles) == 0 else tile_grid(survey.lo, survey.hi, tiles))
         grid = layout.shape or (layout.n_tiles,)
@@ -475,10 +475,6 @@ def _checked_options(n_segments, options, tiles, halo, refine, workers, start="s
     if "features" in options:
         raise ParameterError("a tiled run reads colours from the file; features= is not taken")
     params = resolve(n_segments=n_segments, **options)
-    if params.step_weight not in (None, 1):
-        raise ParameterError("step_weight is not taken by a tiled run yet: its tiles read "
-                             "the plain point graph (step_weight=1)")
-    params = replace(params, step_weight=1.0)  # (a scene's 4: one run's alone, for now)
     if params.elements not in (None, "faces", "points"):
         raise ParameterError(f"a tiled run segments faces or points, not {params.elements!r}")
     check_tileable(params)
@@ -494,6 +490,17 @@ def _checked_options(n_segments, options, tiles, halo, refine, workers, start="s
     if start not in ("sample", "tiles"):
         raise ParameterError(f"start must be 'sample' or 'tiles', got {start!r}")
     return params, halo
+
+
+def _step_resolved(params, reader):
+    """The tiles' parameters: ``up_weight`` 1 (every position is read weighed) and
+    ``step_weight`` resolved once from the reader (a scene's neighbours along its surfaces,
+    as one run's: every tile reads them)."""
+    if not kind_of(reader.kind).cloud and params.step_weight not in (None, 1):
+        raise ParameterError(f"step_weight weighs steps off a point cloud's surface; this "
+                             f"input's elements are {reader.kind}")
+    return replace(params, up_weight=1.0, step_weight=step_weight_of(
+        params, reader.kind, getattr(reader, "up", None) is not None))
 
 
 def _surveyed(source, tmp, tiles, params):

@@ -115,9 +115,9 @@ def _phase(task: dict, out: dict) -> None:
     graph_area = task.get("graph_area", False) and spread
     if task.get("graphs") and (task["phase"] != "areas" or graph_area) and spread:
         # (built once, read by the later phases; saved when the tile is let go)
-        n = task["params"].n_neighbors
-        if tile_graph(inp, _graph_folder(task), n, save=False) == "built":
-            _owe(inp, "graph", (save_graph, kept_graph(inp, n), _graph_folder(task)))
+        n, step = task["params"].n_neighbors, _step(task["params"])
+        if tile_graph(inp, _graph_folder(task), n, save=False, step=step) == "built":
+            _owe(inp, "graph", (save_graph, kept_graph(inp, n, step), _graph_folder(task)))
     elif task.get("boxes") and isinstance(inp, Mesh) and _face_elements(task["params"]):
         made = tile_face_graph(inp, _faces_folder(task), save=False)
         if not isinstance(made, str):
@@ -125,13 +125,13 @@ def _phase(task: dict, out: dict) -> None:
     else:
         key = None  # (held only with its kept graph)
     if key is not None:  # (its weights made once: kept from this phase on)
-        graph = _element_graph(inp, task["params"].n_neighbors)
+        graph = _element_graph(inp, task["params"])
         if graph is not None:
             graph.__dict__.setdefault("weights_kept", {})
     p, r, d = task["params"], task["r"], task["diagonal"]
     if task["phase"] == "areas":
-        out["area"] = (core_area(inp, core, p.n_neighbors) if graph_area
-                       else point_areas(pos, core, p.n_neighbors))
+        out["area"] = (core_area(inp, core, p.n_neighbors, _step(p)) if graph_area
+                       else point_areas(pos, core, p.n_neighbors, _step(p)))
     elif task["phase"] == "connect":
         given = task["labels"]
         if isinstance(given, str):  # the stitched labels, in a file every worker reads
@@ -161,14 +161,14 @@ def _phase(task: dict, out: dict) -> None:
             found = phases.tile_refine(inp, core, at[ok], p, r, d,
                                        folder=_graph_folder(task), floor=task.get("floor"))
             out.update(centers=rows[found], positions=pos[found])
-            last = _last_classification(inp, p.n_neighbors)
+            last = _last_classification(inp, p)
             if last is not None:  # (for the labels phase: held, or written when let go)
                 _owe(inp, "classification", (keep_classification, _graph_folder(task),
                                              *last))
         else:
             _labelled(task, out, (rows, pos, inp, core), at[ok])
     if key is not None:
-        _hold(key, (rows, pos, inp), task["params"].n_neighbors)
+        _hold(key, (rows, pos, inp), task["params"])
     else:
         _write_owed(inp)
 
@@ -245,19 +245,24 @@ def _write_owed(inp) -> None:
         write(*args)
 
 
-def _last_classification(inp, n_neighbors: int):
+def _step(params) -> float:
+    """The run's ``step_weight`` (resolved by the driver; 1 where not)."""
+    return float(params.step_weight or 1.0)
+
+
+def _last_classification(inp, params):
     """The refine round's last classification kept with a cloud tile's point graph
     (:func:`~superfacets.scale.tiles.phases.tile_refine`), or None."""
-    el = None if isinstance(inp, Mesh) else kept_graph(inp, n_neighbors)
+    el = None if isinstance(inp, Mesh) else kept_graph(inp, params.n_neighbors, _step(params))
     return None if el is None else el.graph.__dict__.get("last_classification")
 
 
-def _element_graph(inp, n_neighbors: int):
+def _element_graph(inp, params):
     """The element graph kept with a tile's box (a cloud's point graph, a mesh's face
     graph), or None."""
     if isinstance(inp, Mesh):
         return inp.__dict__.get("_face_graph")
-    el = kept_graph(inp, n_neighbors)
+    el = kept_graph(inp, params.n_neighbors, _step(params))
     return None if el is None else el.graph
 
 
@@ -266,14 +271,14 @@ def _faces_folder(task: dict) -> Path:
     return Path(task["boxes"]) / f"faces-{task['tile']}"
 
 
-def _hold(key: tuple, box: tuple, n_neighbors: int) -> None:
+def _hold(key: tuple, box: tuple, params) -> None:
     """Hold a tile's box (rows, positions, input) with its element graph (a cloud's point
     graph, a mesh's face graph), which keeps the weights it is given from now on
     (``weights_kept``: :func:`~superfacets.method.stages.weigh`) and a mesh's refine round's
     classifier with its recorded expansions (``last_classifier``), for the tile's next
     phase in this process; counted as every array these hold (the weights and the
     records four levels down)."""
-    g = _element_graph(box[2], n_neighbors)
+    g = _element_graph(box[2], params)
     if g is None:
         return
     g.__dict__.setdefault("weights_kept", {})
