@@ -32,6 +32,20 @@ def merges_said(first: int, params: dict, cloud: bool = True, scene: bool = Fals
             f"{COST_SAID.get(params.get('merge_cost'), '')}; --merge-from 1: no merging)")
 
 
+def weights_said(params: dict) -> str:
+    """The summary's words for what a run's weights read besides the geometry (one run's or
+    a tiled run's): the colour term, the up coordinate's weight, a scene's steps."""
+    said = ""
+    if params.get("feature_floor") is not None:  # the colour term ran
+        said += f", following colour (beta {params['beta']:.3g}; --beta 0: off)"
+    if params.get("up_weight", 1) != 1:
+        said += f", heights weighed {params['up_weight']:g} times (--up-weight)"
+    if (params.get("step_weight") or 1) != 1:
+        said += (f", neighbours along the surfaces (steps weighed {params['step_weight']:g} "
+                 "times; --step-weight 1: off)")
+    return said
+
+
 def duplicates_note(args, data, kind: str) -> str | None:
     """Copies of a face (the same vertices) and points at the same position are segmented
     as one element: say how many share a label with an earlier one."""

@@ -11,7 +11,7 @@ import numpy as np
 from ..checks import counted
 from ..elements.kinds import kind_of
 from ..method.params import DEFAULTS
-from .notes import count_note, duplicates_note, merges_said
+from .notes import count_note, duplicates_note, merges_said, weights_said
 from .options import (
     add_adaptive_options,
     add_camera_options,
@@ -190,13 +190,7 @@ def _summary(name: str, mesh, result, seconds: float, elements: str = "faces",
                 f"{counted(mesh.n_vertices, 'vertex', 'vertices')} ({faces}{kind})")
         segs = kind_of(elements).segment_word
     params = getattr(result, "params", None) or {}
-    if params.get("feature_floor") is not None:  # the colour term ran
-        segs += f", following colour (beta {params['beta']:.3g}; --beta 0: off)"
-    if params.get("up_weight", 1) != 1:
-        segs += f", heights weighed {params['up_weight']:g} times (--up-weight)"
-    if (params.get("step_weight") or 1) != 1:
-        segs += (f", neighbours along the surfaces (steps weighed {params['step_weight']:g} "
-                 "times; --step-weight 1: off)")
+    segs += weights_said(params)
     start = params.get("start")
     if start:  # --adaptive: the iterations and the hints are of the start's segmentation
         first = params.get("n_init_centers") or 0

@@ -7,7 +7,7 @@ import time
 from pathlib import Path
 
 from ..elements.kinds import kind_of
-from .notes import merges_said
+from .notes import merges_said, weights_said
 from .options import (
     add_engine_options,
     check_labels_output,
@@ -124,6 +124,7 @@ def segment_tiles(args) -> int:
         if first:
             what += merges_said(first, result.params, kind_of(kind).cloud,
                                 scene=getattr(args, "merge_from", None) is None)
+        what += weights_said(result.params)  # (as one run's summary says them)
         if result.n_segments > 1:
             what += sizes_said(result.labels, kind)
         print(f"{Path(args.mesh).name}: {result.labels.size:,} {kind}, {result.n_segments:,} "
