@@ -20,6 +20,8 @@ square root, as scipy computes them.
 import numpy as np
 from numba import njit, prange
 
+from .normals import pca_normals
+
 #: Depth bound of the tree: 189 key bits, then halving ranges of equal keys (64 levels).
 STACK = 512
 #: Queries per chunk of a thread.
@@ -309,12 +311,18 @@ def closest_in_tree(pts, start, end, left, boxes, ids, queries, out):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def surface_select(pts, cand, normals, k, step, nbr, kth, pick):
-    """Of each point's candidates (``cand``: itself, then its ``kc`` nearest), the ``k``
-    whose offset ``d`` has the least ``|d|^2 + (step^2 - 1) (n . d)^2`` (ties: the lower
-    id), in that order, into ``nbr`` (itself first); the distance to the farthest of them
-    into ``kth``; where ``pick`` is not empty, the column of ``cand`` each came from."""
+def surface_select(pts, cand, k, step, nbr, kth, pick):
+    """Of each point's candidates (``cand``: itself, then its ``kc`` nearest by (distance,
+    id)), the ``k`` whose offset ``d`` has the least ``|d|^2 + (step^2 - 1) (n . d)^2``
+    (ties: the lower id), ``n`` the PCA normal of ``cand``'s first ``k + 1`` (as
+    ``normals.pca_normals``), in that order, into ``nbr`` (itself first); the distance to
+    the farthest of them into ``kth``; where ``pick`` is not empty, the column of ``cand``
+    each came from. (The compiled kernel stops at the first candidate farther than the
+    ``k``-th key, as the order of ``cand`` allows: the same choice.)"""
     kc = cand.shape[1] - 1
+    normals = np.empty((pts.shape[0], 3))
+    linearity = np.empty(pts.shape[0])
+    pca_normals(pts, np.ascontiguousarray(cand[:, :k + 1]), normals, linearity)
     grow = step * step - 1.0
     key = np.empty(kc)
     d2 = np.empty(kc)
@@ -325,7 +333,7 @@ def surface_select(pts, cand, normals, k, step, nbr, kth, pick):
             dx = pts[j, 0] - pts[i, 0]
             dy = pts[j, 1] - pts[i, 1]
             dz = pts[j, 2] - pts[i, 2]
-            off = (dx * normals[i, 0] + dy * normals[i, 1]) + dz * normals[i, 2]
+            off = (dx * normals[r, 0] + dy * normals[r, 1]) + dz * normals[r, 2]
             d2[c] = (dx * dx + dy * dy) + dz * dz
             key[c] = d2[c] + grow * (off * off)
         order = np.argsort(cand[r, 1:], kind="mergesort")  # the ids, then the keys, stably

@@ -237,7 +237,7 @@ def superfacets(data=_NO_INPUT, n_segments: int | None = _D.n_segments, *, featu
         Default (None): 4 on a scene (a cloud with an up direction), 1 elsewhere and with
         ``paper``; on 27 labelled scans at ``n_segments`` = 100-3,000 against the
         Segmentator 91 of 108 targets met instead of 88, mean undersegmentation error
-        -6.6 %, oracle mIoU +0.020, in 1.23 times the time; on objects it left the
+        -6.6 %, oracle mIoU +0.020, in 1.19 times the time; on objects it left the
         compactness 0.7-1.5 % worse, so they keep 1 (``docs/notes/superpoints.md``,
         "Neighbours along the surface"). A tiled run's tiles read the same neighbours.
     tol : float, default 0.001

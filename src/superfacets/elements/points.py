@@ -250,8 +250,8 @@ def kept_diagonal(cloud) -> float | None:
 
 
 #: ``step_weight``: each point's neighbours are chosen among this many times
-#: ``n_neighbors`` nearest (2: on 27 labelled scans 91 of 108 targets met in 1.23 times the
-#: run's time; 1.5: 90 in 1.16 times, but two floors closer than 1.3 times the points'
+#: ``n_neighbors`` nearest (2: on 27 labelled scans 91 of 108 targets met in 1.19 times the
+#: run's time; 1.5: 90 in less time, but two floors closer than 1.3 times the points'
 #: spacing then keep points of the other floor among their ten).
 STEP_CANDIDATES = 2
 _STEP_BLOCK = 1 << 16
@@ -302,14 +302,15 @@ def surface_neighbours(pts: np.ndarray, tree, k: int, step: float,
     """
     kc = int(min(STEP_CANDIDATES * k, pts.shape[0] - 1))
     cand, _, keep_c = nearest(tree, kc, limit=limit)
-    normals = estimate_normals(pts, np.ascontiguousarray(cand[:, :k + 1]))
     n = pts.shape[0]
     if cand.dtype != np.int32:  # (2**31 points or more: in blocks, numpy's)
+        normals = estimate_normals(pts, np.ascontiguousarray(cand[:, :k + 1]))
         return _surface_neighbours_numpy(pts, cand, keep_c, normals, k, step)
     nbr = np.empty((n, k + 1), dtype=np.int32)
     kth = np.empty(n)
     pick = np.empty((n if keep_c is not None else 0, k), dtype=np.int32)
-    native.kernel("nearest.surface_select")(np.ascontiguousarray(pts), cand, normals, int(k),
+    # (the normals of the first k + 1 candidates computed in the same pass: no copy)
+    native.kernel("nearest.surface_select")(np.ascontiguousarray(pts), cand, int(k),
                                             float(step), nbr, kth, pick)
     keep = None if keep_c is None else np.take_along_axis(keep_c, pick - 1, 1)
     return nbr, kth, keep

@@ -3,6 +3,7 @@
 // the points in its own order; ids names the point of each row (ties go to the lower id;
 // no ids: the rows are the points).
 #include "common.hpp"
+#include "points.hpp"
 
 #include <algorithm>
 #include <limits>
@@ -354,47 +355,73 @@ void closest_in_tree(nb::handle pts_, nb::handle start_, nb::handle end_, nb::ha
     });
 }
 
-// nearest.surface_select: of each point's candidates (cand: itself, then its kc nearest),
-// the k whose offset d has the least |d|^2 + (step^2 - 1) (n . d)^2 (ties: the lower id),
-// in that order, into nbr (itself first); the distance to the farthest of them into kth;
-// where pick is not empty, the column of cand each came from.
-void surface_select(nb::handle pts_, nb::handle cand_, nb::handle normals_, i64 k, double step,
-                    nb::handle nbr_, nb::handle kth_, nb::handle pick_) {
-    In<double> pts(pts_, "pts"), nor(normals_, "normals");
+// nearest.surface_select: of each point's candidates (cand: itself, then its kc nearest in
+// the order of (distance, id), as nearest_in_tree lists them), the k whose offset d has the
+// least |d|^2 + (step^2 - 1) (n . d)^2 (ties: the lower id), n the normal (PCA) of the
+// point and its k nearest (cand's first k + 1), in that order, into nbr (itself first);
+// the distance to the farthest of them into kth; where pick is not empty, the column of
+// cand each came from.
+void surface_select(nb::handle pts_, nb::handle cand_, i64 k, double step, nb::handle nbr_,
+                    nb::handle kth_, nb::handle pick_) {
+    In<double> pts(pts_, "pts");
     In<i32> cand(cand_, "cand");
     Out<i32> nbr(nbr_, "nbr"), pick(pick_, "pick");
     Out<double> kth(kth_, "kth");
     const i64 kc = cand.cols - 1;
-    if (pts.cols != 3 || nor.cols != 3 || nor.n != pts.n || cand.n != pts.n || k < 1 ||
-        k > kc || nbr.n != pts.n || nbr.cols != k + 1 || kth.n != pts.n)
+    if (pts.cols != 3 || cand.n != pts.n || k < 1 || k > kc || nbr.n != pts.n ||
+        nbr.cols != k + 1 || kth.n != pts.n)
         throw Mismatch("argument nbr");
     if (pick.n != 0 && (pick.n != pts.n || pick.cols != k)) throw Mismatch("argument pick");
     check_range(cand, 0, pts.n, "cand");
     const double grow = step * step - 1.0;
     nb::gil_scoped_release nogil;
+    // The candidates come by (distance, id) and no key is below its squared distance, so
+    // the k best keys are found once a candidate lies farther than the k-th best key:
+    // a sorted insertion that stops there (on a flat patch, after the k nearest).
     parallel_for(pts.n, [&](i64 lo, i64 hi) {
-        std::vector<double> key(kc), d2(kc);
-        std::vector<i64> col(kc);
+        std::vector<double> bk(k), bd(k);
+        std::vector<i64> bc(k), bid(k);
         for (i64 r = lo; r < hi; ++r) {
             const i64 i = cand(r, 0);
+            const double px = pts(i, 0), py = pts(i, 1), pz = pts(i, 2);
+            double a[6], nor[3];
+            unit_scatter(pts.p, cand.p + r * cand.cols, k + 1, a);
+            smallest_eigenvector(a[0], a[1], a[2], a[3], a[4], a[5], nor);
+            const double nx = nor[0], ny = nor[1], nz = nor[2];
+            i64 cnt = 0;
             for (i64 c = 0; c < kc; ++c) {
                 const i64 j = cand(r, c + 1);
-                const double dx = pts(j, 0) - pts(i, 0), dy = pts(j, 1) - pts(i, 1),
-                             dz = pts(j, 2) - pts(i, 2);
-                const double off = (dx * nor(i, 0) + dy * nor(i, 1)) + dz * nor(i, 2);
-                d2[c] = (dx * dx + dy * dy) + dz * dz;
-                key[c] = d2[c] + grow * (off * off);
-                col[c] = c;
+                const double dx = pts(j, 0) - px, dy = pts(j, 1) - py, dz = pts(j, 2) - pz;
+                const double d2 = (dx * dx + dy * dy) + dz * dz;
+                if (cnt == k && d2 > bk[k - 1]) break;
+                const double off = (dx * nx + dy * ny) + dz * nz;
+                const double key = d2 + grow * (off * off);
+                i64 q;
+                if (cnt < k) {
+                    q = cnt++;
+                } else if (key < bk[k - 1] || (key == bk[k - 1] && j < bid[k - 1])) {
+                    q = k - 1;
+                } else {
+                    continue;
+                }
+                while (q > 0 && (bk[q - 1] > key || (bk[q - 1] == key && bid[q - 1] > j))) {
+                    bk[q] = bk[q - 1];
+                    bd[q] = bd[q - 1];
+                    bc[q] = bc[q - 1];
+                    bid[q] = bid[q - 1];
+                    --q;
+                }
+                bk[q] = key;
+                bd[q] = d2;
+                bc[q] = c;
+                bid[q] = j;
             }
-            std::partial_sort(col.begin(), col.begin() + k, col.end(), [&](i64 a, i64 b) {
-                return key[a] < key[b] || (key[a] == key[b] && cand(r, a + 1) < cand(r, b + 1));
-            });
             nbr(r, 0) = cand(r, 0);
             double far = 0.0;
             for (i64 m = 0; m < k; ++m) {
-                nbr(r, m + 1) = cand(r, col[m] + 1);
-                far = std::max(far, d2[col[m]]);
-                if (pick.n != 0) pick(r, m) = static_cast<i32>(col[m] + 1);
+                nbr(r, m + 1) = static_cast<i32>(bid[m]);
+                far = std::max(far, bd[m]);
+                if (pick.n != 0) pick(r, m) = static_cast<i32>(bc[m] + 1);
             }
             kth[r] = std::sqrt(far);
         }
@@ -416,10 +443,11 @@ void bind_nearest(nb::module_& m) {
           nb::arg("ids"), nb::arg("own"), nb::arg("k"), nb::arg("limit"), nb::arg("nbr"),
           nb::arg("kth"), nb::arg("within"));
     m.def("surface_select", &surface_select,
-          "Of each point's candidates (cand: itself, then its nearest), the k whose offset d "
-          "has the least |d|^2 + (step^2 - 1) (n . d)^2 (ties: the lower id), into nbr; the "
-          "distance to the farthest into kth; their columns into pick where not empty.",
-          nb::arg("pts"), nb::arg("cand"), nb::arg("normals"), nb::arg("k"), nb::arg("step"),
+          "Of each point's candidates (cand: itself, then its nearest by (distance, id)), the "
+          "k whose offset d has the least |d|^2 + (step^2 - 1) (n . d)^2 (ties: the lower "
+          "id), n the PCA normal of cand's first k + 1, into nbr; the distance to the "
+          "farthest into kth; their columns into pick where not empty.",
+          nb::arg("pts"), nb::arg("cand"), nb::arg("k"), nb::arg("step"),
           nb::arg("nbr"), nb::arg("kth"), nb::arg("pick"));
     m.def("closest_in_tree", &closest_in_tree,
           "For each query position r (queries: (m, 3) float64): the id of the tree's nearest "

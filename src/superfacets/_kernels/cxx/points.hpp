@@ -1,4 +1,4 @@
-// Shared helpers of the point kernels (geometry.cpp, normals.cpp, adjacency.cpp,
+// Shared helpers of the point kernels (geometry.cpp, normals.cpp, adjacency.cpp, nearest.cpp,
 // terms.cpp): eigen-solvers of 3x3 scatters, Morton interleaving, pair terms.
 #pragma once
 #include <array>
