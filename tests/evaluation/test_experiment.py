@@ -66,7 +66,7 @@ def test_expand_grid_resolves_and_validates():
                               "max_iter": 50, "tol": 0.001, "window": 2.0, "center_tol": "auto",
                               "coarsen": "auto", "split_merge": "auto", "paper": False,
                               "density": "auto", "roughness": 0.0, "merge_from": "auto",
-                              "max_size_ratio": 16.0, "merge_cost": "noise", "assignment": "auto",
+                              "max_size_ratio": "auto", "merge_cost": "noise", "assignment": "auto",
                               "beta": "auto", "up_weight": 1.0,
                               "step_weight": "auto"}
     assert isinstance(cfgs[1].kwargs["alpha"], float)

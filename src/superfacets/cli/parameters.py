@@ -98,7 +98,8 @@ SHOWN = {
     "max_size_ratio": ("method", "R", "with --merge-from above 1: the merges make no "
                        "superpoint of more than R times the mean count of points while other "
                        "neighbours can merge (flat ground and walls in several superpoints, "
-                       f"not one); 0: no bound (default: {_D.max_size_ratio:g})"),
+                       "not one); 0: no bound (default: 4 on scenes with an up direction, "
+                       "16 elsewhere)"),
     "merge_cost": ("method", None, "the merges to -k: noise by one cost on scans, the "
                    "plane's rise in the noise's units, weighted by the noise's share of the "
                    "superpoints' residual, plus Ward's, merging every cloud, uneven density "

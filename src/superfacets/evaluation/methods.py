@@ -165,7 +165,7 @@ parse_assignment.__name__ = " or ".join(ASSIGNMENTS)  # (named so in the error m
 
 #: Parameters whose default is ``"auto"``, and the kind of their other values.
 _AUTO = {"center_tol": float, "coarsen": int, "cleanup": parse_bool, "split_merge": parse_bool,
-         "merge_from": int, "assignment": parse_assignment}
+         "merge_from": int, "assignment": parse_assignment, "max_size_ratio": float}
 
 #: The registry: method name -> :class:`Method`.
 METHODS: dict[str, Method] = {}
@@ -239,12 +239,13 @@ def _auto(value, kind):
 
 def _segment_options(center_tol="auto", coarsen="auto", cleanup="auto", split_merge="auto",
                      density="auto", merge_from="auto", assignment="auto", beta="auto",
-                     step_weight="auto", **params) -> dict:
+                     step_weight="auto", max_size_ratio="auto", **params) -> dict:
     """The keyword arguments of :func:`superfacets.segment` from registry values."""
     return dict(center_tol=_auto(center_tol, float), coarsen=_auto(coarsen, int),
                 beta=_auto(beta, float),
                 cleanup=_auto(cleanup, parse_bool), split_merge=_auto(split_merge, parse_bool),
                 step_weight=_auto(step_weight, float),
+                max_size_ratio=_auto(max_size_ratio, float),
                 density=_auto(density, float), merge_from=_auto(merge_from, int),
                 assignment=_auto(assignment, parse_assignment), **params)
 

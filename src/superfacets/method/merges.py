@@ -36,8 +36,8 @@ share of the first superpoints' residual (:func:`rise_weight`); on an input whos
 reads 0 (a noise-free sampled surface) its merges are the default's.
 
 Neither the flat merges nor the plane's rise make a superpoint of more than
-``max_size_ratio`` times the mean count (the elements over ``k``; 16 by default) while
-another pair may merge: a coplanar pair costs them nothing whatever its size, and flat
+``max_size_ratio`` times the mean count (the elements over ``k``; 16 by default, 4 on a
+scene) while another pair may merge: a coplanar pair costs them nothing whatever its size, and flat
 ground grown without bound lost the class borders inside it (low vegetation on the
 ground). So the count a room spends on its walls goes to the objects on them, and an
 object of no flat face gets the method's compact superpoints, merged from finer ones

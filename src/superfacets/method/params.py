@@ -261,9 +261,10 @@ def _declare_scan_parameters() -> tuple[Parameter, ...]:
           "least one per 100 elements), then merge neighbours down to n_segments, flat ones "
           "first, >= 1 (1: off); None: by kind, density and up direction (a scene's 20)",
           lambda v: integer("merge_from", v, lo=1), cli="--merge-from"),
-        P("max_size_ratio", 16.0, "float", "merges to n_segments (merge_from > 1): no "
-          "superpoint of more than this many times the mean count of elements while other "
-          "neighbours can merge, >= 1; 0: no bound", _size_ratio, cli="--max-size-ratio"),
+        P("max_size_ratio", None, "float or None", "merges to n_segments (merge_from > 1): "
+          "no superpoint of more than this many times the mean count of elements while "
+          "other neighbours can merge, >= 1; 0: no bound; None: 4 on a scene (a cloud with "
+          "an up direction), else 16", _size_ratio, cli="--max-size-ratio"),
         P("merge_cost", "noise", "str", "merges to n_segments (merge_from > 1): noise (the "
           "rise in noise units weighted by the noise's share, plus Ward's), auto (the rise "
           "where flat regions hold most points, else Ward's; the default before 2026-11-30) "
@@ -288,8 +289,10 @@ def _merge_cost(value) -> str:
     return check_choice("merge_cost", value, MERGE_COSTS)
 
 
-def _size_ratio(value) -> float:
-    """``max_size_ratio``: 0 (no bound) or a number ``>= 1``."""
+def _size_ratio(value) -> float | None:
+    """``max_size_ratio``: None (by the input), 0 (no bound) or a number ``>= 1``."""
+    if value is None:
+        return None
     try:
         x = check_number("max_size_ratio", value, 0.0, MAX_WEIGHT_FACTOR)
     except ParameterError as e:  # (inf, nan, negative: say what means "no bound")

@@ -34,7 +34,7 @@ from .params import (
     superfacet_size,
 )
 from .passes import Iteration, iterate
-from .rules import fine_count, merge_from_of, step_weight_of
+from .rules import fine_count, merge_from_of, size_ratio_of, step_weight_of
 from .splitmerge import FAST_ROUNDS, ROUNDS, swap_and_iterate
 from .weights import (
     HeldWeights,
@@ -392,7 +392,8 @@ def resolve_rules(graph, p: SegmentParams, *, n_centers: int | None = None,
     target = k
     merge_from = merge_from_of(p, graph.kind, tiled=n_centers is not None or r is not None,
                                scene=scene)
-    p = replace(p, merge_from=merge_from)
+    p = replace(p, merge_from=merge_from,
+                max_size_ratio=size_ratio_of(p, graph.kind, scene=scene))
     if merge_from > 1 and k is not None:  # many superpoints first, merged to k at the end
         fine = fine_count(k, merge_from, graph.n_elements)
         k, radius = superfacet_size(replace(p, n_segments=fine, radius=None), graph.area,

@@ -59,7 +59,7 @@ from ...inputs.cloud import check_weighable, stretched_along
 from ...io.regions import RegionReader, streamed
 from ...method.merges import NOISE_SAMPLE
 from ...method.params import DEFAULTS, resolve, superfacet_size
-from ...method.rules import fine_count, step_weight_of
+from ...method.rules import fine_count, size_ratio_of, step_weight_of
 from ..runner.engine import Engine
 from . import buckets, phases
 from .buckets import box_folder
@@ -493,14 +493,16 @@ def _checked_options(n_segments, options, tiles, halo, refine, workers, start="s
 
 
 def _step_resolved(params, reader):
-    """The tiles' parameters: ``up_weight`` 1 (every position is read weighed) and
-    ``step_weight`` resolved once from the reader (a scene's neighbours along its surfaces,
-    as one run's: every tile reads them)."""
+    """The tiles' parameters: ``up_weight`` 1 (every position is read weighed),
+    ``step_weight`` and ``max_size_ratio`` resolved once from the reader (a scene's
+    neighbours along its surfaces and size bound, as one run's: every tile reads them)."""
     if not kind_of(reader.kind).cloud and params.step_weight not in (None, 1):
         raise ParameterError(f"step_weight weighs steps off a point cloud's surface; this "
                              f"input's elements are {reader.kind}")
-    return replace(params, up_weight=1.0, step_weight=step_weight_of(
-        params, reader.kind, getattr(reader, "up", None) is not None))
+    scene = getattr(reader, "up", None) is not None
+    return replace(params, up_weight=1.0,
+                   step_weight=step_weight_of(params, reader.kind, scene),
+                   max_size_ratio=size_ratio_of(params, reader.kind, scene))
 
 
 def _surveyed(source, tmp, tiles, params):
