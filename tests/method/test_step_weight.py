@@ -45,13 +45,21 @@ def test_neighbours_stay_on_their_floor():
     np.testing.assert_array_equal(csr_point_weights(g, step=4.0), csr_point_weights(g))
 
 
+@pytest.mark.parametrize("grid", [False, True])
 @pytest.mark.parametrize("limit", [None, 0.08])
-def test_the_compiled_choice_is_numpy_s(limit):
+def test_the_compiled_choice_is_numpy_s(limit, grid):
     """The compiled choice (int32 neighbours) gives numpy's (the int64 path of clouds of
-    2**31 points and more), bit for bit, with and without a neighbour radius."""
+    2**31 points and more), bit for bit, with and without a neighbour radius; on a
+    quantized grid too, three floors of it, where distances and keys tie (the compiled
+    choice stops at the first candidate farther than the tenth key: ties go to the lower
+    index all the same)."""
     rng = np.random.default_rng(4)
     pts = rng.random((6000, 3)) * [1.0, 1.0, 0.1]
     pts[::7, 2] += 0.05  # a step here and there
+    if grid:
+        xy = np.stack(np.meshgrid(np.arange(15.0), np.arange(15.0)), -1).reshape(-1, 2) / 15
+        pts = np.r_[np.c_[xy, np.zeros(225)], np.c_[xy, np.full(225, 0.07)],
+                    np.c_[xy[::3], np.full(75, 0.14)]]
     tree = point_tree(pts)
     got = P.surface_neighbours(pts, tree, 10, 3.0, limit)
     cand, _, keep_c = P.nearest(tree, int(P.STEP_CANDIDATES * 10), limit=limit)
