@@ -15,7 +15,7 @@ from ..errors import ParameterError
 __all__ = ["better_method", "assignment_of", "superfacet_size", "superfacet_measure",
            "merge_from_of", "fine_count", "MIN_FINE_ELEMENTS", "FINE_ELEMENTS",
            "MERGE_CHOICE", "FEWEST_FINE_ELEMENTS", "SCENE_MERGE_FROM", "SCENE_STEP_WEIGHT",
-           "step_weight_of", "MAX_SIZE_RATIO", "SCENE_MAX_SIZE_RATIO", "size_ratio_of"]
+           "MAX_SIZE_RATIO", "SCENE_MAX_SIZE_RATIO", "SCENE_DEFAULTS", "scene_default_of"]
 
 #: The fewest elements per superpoint, on average, of the many superpoints a run with
 #: ``merge_from > 1`` segments first: fewer leave their planes to a few points and cost
@@ -268,44 +268,6 @@ SCENE_MERGE_FROM = 20
 SCENE_STEP_WEIGHT = 4.0
 
 
-def step_weight_of(params, kind: str, scene: bool = False) -> float:
-    """``step_weight`` of a run: as given, else (None) :data:`SCENE_STEP_WEIGHT` on the
-    points of a ``scene`` (a cloud with an up direction), 1 elsewhere and with ``paper``.
-
-    Parameters
-    ----------
-    params : SegmentParams
-    kind : str
-        The kind of element.
-    scene : bool, default False
-        The input has an up direction (``PointCloud.up``).
-
-    Returns
-    -------
-    float
-        ``>= 1``; 1: neighbours and distances as the plain point graph's.
-
-    Raises
-    ------
-    ValueError
-        For an unknown kind.
-
-    Examples
-    --------
-    >>> from dataclasses import replace
-    >>> from superfacets.method.params import DEFAULTS
-    >>> step_weight_of(DEFAULTS, "points", scene=True), step_weight_of(DEFAULTS, "points")
-    (4.0, 1.0)
-    >>> step_weight_of(replace(DEFAULTS, step_weight=2.0), "points")
-    2.0
-    """
-    if params.step_weight is not None:
-        return float(params.step_weight)
-    if params.paper or not scene or not kind_of(kind).cloud:
-        return 1.0
-    return SCENE_STEP_WEIGHT
-
-
 #: ``max_size_ratio`` (None) of an object: the merges to the count make no superpoint of
 #: more than 16 times the mean while another pair may merge (flat faces left nearly whole).
 MAX_SIZE_RATIO = 16.0
@@ -318,14 +280,23 @@ MAX_SIZE_RATIO = 16.0
 SCENE_MAX_SIZE_RATIO = 4.0
 
 
-def size_ratio_of(params, kind: str, scene: bool = False) -> float:
-    """``max_size_ratio`` of a run: as given, else (None) :data:`SCENE_MAX_SIZE_RATIO` on
-    the points of a ``scene`` (a cloud with an up direction), :data:`MAX_SIZE_RATIO`
-    elsewhere and with ``paper``.
+#: The parameters whose default (None) a scene resolves otherwise: name -> (the value on
+#: the points of a scene, a cloud with an up direction; the value elsewhere and with
+#: ``paper``).
+SCENE_DEFAULTS = {"step_weight": (SCENE_STEP_WEIGHT, 1.0),
+                  "max_size_ratio": (SCENE_MAX_SIZE_RATIO, MAX_SIZE_RATIO)}
+
+
+def scene_default_of(params, name: str, kind: str, scene: bool = False) -> float:
+    """The value of parameter ``name`` (one of :data:`SCENE_DEFAULTS`) in a run: as given,
+    else (None) its scene's value on the points of a ``scene`` (a cloud with an up
+    direction), its other value elsewhere and with ``paper``.
 
     Parameters
     ----------
     params : SegmentParams
+    name : str
+        ``"step_weight"`` or ``"max_size_ratio"``.
     kind : str
         The kind of element.
     scene : bool, default False
@@ -334,11 +305,11 @@ def size_ratio_of(params, kind: str, scene: bool = False) -> float:
     Returns
     -------
     float
-        0 (no bound) or ``>= 1``: the largest superpoint the merges to the count make
-        while another pair may merge, in mean counts.
 
     Raises
     ------
+    KeyError
+        For a parameter a scene does not resolve.
     ValueError
         For an unknown kind.
 
@@ -346,16 +317,22 @@ def size_ratio_of(params, kind: str, scene: bool = False) -> float:
     --------
     >>> from dataclasses import replace
     >>> from superfacets.method.params import DEFAULTS
-    >>> size_ratio_of(DEFAULTS, "points", scene=True), size_ratio_of(DEFAULTS, "points")
-    (4.0, 16.0)
-    >>> size_ratio_of(replace(DEFAULTS, max_size_ratio=0), "points", scene=True)
+    >>> [scene_default_of(DEFAULTS, name, "points", scene=True) for name in SCENE_DEFAULTS]
+    [4.0, 4.0]
+    >>> [scene_default_of(DEFAULTS, name, "points") for name in SCENE_DEFAULTS]
+    [1.0, 16.0]
+    >>> scene_default_of(DEFAULTS, "max_size_ratio", "faces", scene=True)
+    16.0
+    >>> scene_default_of(replace(DEFAULTS, max_size_ratio=0), "max_size_ratio", "points", True)
     0.0
     """
-    if params.max_size_ratio is not None:
-        return float(params.max_size_ratio)
+    on_scene, elsewhere = SCENE_DEFAULTS[name]
+    given = getattr(params, name)
+    if given is not None:
+        return float(given)
     if params.paper or not scene or not kind_of(kind).cloud:
-        return MAX_SIZE_RATIO
-    return SCENE_MAX_SIZE_RATIO
+        return elsewhere
+    return on_scene
 
 
 def merge_from_of(params, kind: str, tiled: bool = False, scene: bool = False) -> int:

@@ -34,7 +34,7 @@ from .params import (
     superfacet_size,
 )
 from .passes import Iteration, iterate
-from .rules import fine_count, merge_from_of, size_ratio_of, step_weight_of
+from .rules import fine_count, merge_from_of, scene_default_of
 from .splitmerge import FAST_ROUNDS, ROUNDS, swap_and_iterate
 from .weights import (
     HeldWeights,
@@ -229,7 +229,8 @@ def build_graph(obj, p: SegmentParams, features=None
         data = weighted
     if p.beta is not None and p.beta > 0:
         _check_features(kind, data, features)
-    p = replace(p, step_weight=step_weight_of(p, kind, getattr(data, "up", None) is not None))
+    scene = getattr(data, "up", None) is not None
+    p = replace(p, step_weight=scene_default_of(p, "step_weight", kind, scene))
     source = elements_of(data, kind, n_neighbors=p.n_neighbors,
                          neighbor_radius=p.neighbor_radius, step_weight=p.step_weight)
     graph = source.graph
@@ -393,7 +394,7 @@ def resolve_rules(graph, p: SegmentParams, *, n_centers: int | None = None,
     merge_from = merge_from_of(p, graph.kind, tiled=n_centers is not None or r is not None,
                                scene=scene)
     p = replace(p, merge_from=merge_from,
-                max_size_ratio=size_ratio_of(p, graph.kind, scene=scene))
+                max_size_ratio=scene_default_of(p, "max_size_ratio", graph.kind, scene))
     if merge_from > 1 and k is not None:  # many superpoints first, merged to k at the end
         fine = fine_count(k, merge_from, graph.n_elements)
         k, radius = superfacet_size(replace(p, n_segments=fine, radius=None), graph.area,

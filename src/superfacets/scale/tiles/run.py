@@ -59,7 +59,7 @@ from ...inputs.cloud import check_weighable, stretched_along
 from ...io.regions import RegionReader, streamed
 from ...method.merges import NOISE_SAMPLE
 from ...method.params import DEFAULTS, resolve, superfacet_size
-from ...method.rules import fine_count, size_ratio_of, step_weight_of
+from ...method.rules import SCENE_DEFAULTS, fine_count, scene_default_of
 from ..runner.engine import Engine
 from . import buckets, phases
 from .buckets import box_folder
@@ -501,8 +501,8 @@ def _step_resolved(params, reader):
                              f"input's elements are {reader.kind}")
     scene = getattr(reader, "up", None) is not None
     return replace(params, up_weight=1.0,
-                   step_weight=step_weight_of(params, reader.kind, scene),
-                   max_size_ratio=size_ratio_of(params, reader.kind, scene))
+                   **{name: scene_default_of(params, name, reader.kind, scene)
+                      for name in SCENE_DEFAULTS})
 
 
 def _surveyed(source, tmp, tiles, params):
