@@ -576,9 +576,10 @@ def test_html_shows_its_long_stages_on_a_terminal(tmp_path, capsys, monkeypatch)
 
 
 def test_the_summary_says_a_scene_merges_from_twenty_times_k(tmp_path, capsys):
-    """A LAS file has an up direction: a scene, merged from 20 times -k, which the summary
-    says; the same points as an array (no up direction) merge from 5 times; a given
-    --merge-from is not put down to the scene."""
+    """A LAS file has an up direction: a scene, merged from 20 times -k with no superpoint
+    above 4 times the mean, which the summary says; the same points as an array (no up
+    direction) merge from 5 times, bounded at 16; a given --merge-from is not put down to
+    the scene."""
     laspy = pytest.importorskip("laspy")
     rng = np.random.default_rng(3)
     xy = rng.random((6000, 2)) * 50
@@ -597,3 +598,6 @@ def test_the_summary_says_a_scene_merges_from_twenty_times_k(tmp_path, capsys):
                      "-o", str(tmp_path / "out.seg")]) == 0
         out = capsys.readouterr().out
         assert f"merged from {first:,} finer ones" in out and (said in out) == scene, out
+        # the size bound the merges kept: a scene's 4 times the mean (the LAS), else 16
+        bound = 4 if name.endswith(".las") else 16
+        assert f"none above {bound} times the mean" in out, out
