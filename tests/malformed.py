@@ -211,6 +211,18 @@ def cases() -> list[Case]:
     mesh_case("npy-bad-shape", "c.npy", _npy(np.zeros((4, 4))), "expected (N, 3)")
     mesh_case("pcd-garbage", "c.pcd", b"# .PCD v0.7\nVERSION 0.7\nFIELDS x y\n",
               "PCD")
+    _pcd = (b"# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+            b"WIDTH 5\nHEIGHT 1\nPOINTS 5\n")
+    mesh_case("pcd-no-data-line", "c.pcd", b"# .PCD v0.7\nFIELDS x y z\n",
+              "no SIZE, TYPE, COUNT, WIDTH, POINTS, DATA lines")
+    mesh_case("pcd-ascii-short-row", "c.pcd", _pcd + b"DATA ascii\n0 0 0\n1 0\n0 1 0\n1 1 0\n"
+              b"0 0 1\n", "line 2 of its ASCII data has 2 values, 3 expected")
+    mesh_case("pcd-compressed-cut", "c.pcd", _pcd + b"DATA binary_compressed\n"
+              + struct.pack("<II", 16, 60) + b"garbage", "7 bytes of it follow (truncated?)")
+    mesh_case("ply-ascii-two-corners", "m.ply",  # (not "truncated?": the file is whole)
+              b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+              b"property float z\nelement face 2\nproperty list uchar int vertex_indices\n"
+              b"end_header\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n2 1 3\n", "face 1 has 2 vertices")
     mesh_case("las-garbage", "c.las", b"LASF" + b"\0" * 50, "LAS")
     mesh_case("xyz-ok", "c.xyz", b"".join(f"{x} {y} {x * y}\n".encode()
                                           for x in range(6) for y in range(6)), expect="ok")

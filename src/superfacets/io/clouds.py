@@ -29,6 +29,7 @@ error naming its row.
 from __future__ import annotations
 
 import io
+import re
 from pathlib import Path
 
 import numpy as np
@@ -239,6 +240,10 @@ def _read_pcd(path: Path) -> dict:
         raise
     except Exception as exc:  # noqa: BLE001 - pypcd4/pydantic raise many types
         msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        short = re.search(r"requires (\d+) columns but (\d+) were found at row (\d+)", msg)
+        if short:  # (numpy's words for an ASCII row of too few values)
+            msg = (f"line {short[3]} of its ASCII data has {short[2]} values, "
+                   f"{short[1]} expected")
         raise MeshFormatError(f"{path}: cannot read PCD: {msg}") from None
     if pts.shape[0] != height * width:
         raise MeshFormatError(f"{path}: PCD has {pts.shape[0]} points, the header says "

@@ -20,7 +20,7 @@ from ..errors import MemoryLimitError, MeshFormatError, MissingExtraError
 from .files import decompressed_head, max_ratio, split_suffix
 
 __all__ = ["header_counts", "e57_counts", "check_las", "check_laz", "check_pcd", "check_stl",
-           "ply_mapped", "npy_mapped", "first_line", "NotStreamedError"]
+           "ply_mapped", "npy_mapped", "first_line", "NotStreamedError", "PCD_LINES"]
 
 
 class NotStreamedError(MeshFormatError):
@@ -112,8 +112,10 @@ def _ply(p: Path, head: bytes, size: int | None) -> dict | None:
         elif len(w) >= 3 and w[0] == "property" and elements:
             layout[-1].append(("list", w[2]) if w[1] == "list" else w[1])
             if w[1] == "list" and len(w) >= 5:
+                # (binary faces: three corners at least, as the first face is checked;
+                # an ASCII list may be shorter, which its reader then names)
                 corners = 3 if elements[-1][0] == "face" else 0
-                elements[-1][2] += (2 * (1 + corners) if ascii_ else
+                elements[-1][2] += (2 if ascii_ else
                                     _SIZE.get(w[2], 1) + corners * _SIZE.get(w[3], 1))
             else:
                 elements[-1][2] += 2 if ascii_ else _SIZE.get(w[1], 1)
@@ -631,9 +633,15 @@ def _loop(parent: list, start: int) -> str:
     return " -> ".join(map(str, [start] + up[:0:-1] + [start]))
 
 
+#: The lines of a PCD header the reader (``pypcd4``) needs, DATA last (HEIGHT, VERSION and
+#: VIEWPOINT have defaults).
+PCD_LINES = ("FIELDS", "SIZE", "TYPE", "COUNT", "WIDTH", "POINTS", "DATA")
+
+
 def check_pcd(path: Path) -> None:
-    r"""Refuse a PCD whose header declares more points than the file can hold, before
-    anything is allocated (a 200-byte file declaring 10**12 points was a MemoryError).
+    r"""Refuse a PCD whose header lacks a line the reader needs, or declares more points
+    than the file can hold, before anything is allocated (a 200-byte file declaring 10**12
+    points was a MemoryError).
 
     Parameters
     ----------
@@ -647,12 +655,13 @@ def check_pcd(path: Path) -> None:
     Raises
     ------
     MeshFormatError
-        If the header declares more points than the bytes after it hold.
+        If the header lacks one of :data:`PCD_LINES`, or declares more points than the
+        bytes after it hold.
 
     Examples
     --------
-    >>> _ = Path("one.pcd").write_text("FIELDS x y z\nSIZE 4 4 4\nCOUNT 1 1 1\nPOINTS 1\n"
-    ...                                "DATA ascii\n0 0 0\n")
+    >>> _ = Path("one.pcd").write_text("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+    ...                                "WIDTH 1\nPOINTS 1\nDATA ascii\n0 0 0\n")
     >>> check_pcd(Path("one.pcd"))
     """
     size = path.stat().st_size
@@ -667,6 +676,11 @@ def check_pcd(path: Path) -> None:
         body = size - f.tell()
         sizes = f.read(8)  # binary_compressed: the compressed and the whole sizes
     packed = np.frombuffer(sizes, dtype="<u4") if len(sizes) == 8 else np.zeros(2, int)
+    missing = [name for name in PCD_LINES if name not in head]
+    if missing:
+        raise MeshFormatError(f"{path}: damaged PCD header: no {', '.join(missing)} "
+                              f"line{'s' if len(missing) > 1 else ''} (a PCD header names "
+                              f"{', '.join(PCD_LINES)})")
     try:
         n = int(head.get("POINTS", ["0"])[0])
         per = sum(int(a) * int(b) for a, b in zip(head.get("SIZE", []),
@@ -678,9 +692,10 @@ def check_pcd(path: Path) -> None:
     need = {"binary": n * per, "ascii": n}.get(kind, 0)  # (ascii: a byte a point at least)
     if kind == "binary_compressed" and (int(packed[1]) != n * per
                                         or int(packed[0]) > body - 8):
-        raise MeshFormatError(f"{path}: the PCD header declares {n:,} points ({n * per:,} "
-                              f"bytes), its compressed data {int(packed[1]):,} bytes in "
-                              f"{int(packed[0]):,} of the file's {body:,}")
+        raise MeshFormatError(f"{path}: damaged PCD file: its header declares {n:,} points "
+                              f"({n * per:,} bytes), its compressed block {int(packed[1]):,} "
+                              f"bytes packed in {int(packed[0]):,}, and {max(body - 8, 0):,} "
+                              "bytes of it follow (truncated?)")
     if n < 0 or need > body:
         raise MeshFormatError(f"{path}: the PCD header declares {n:,} points "
                               f"({need:,} bytes at least) but the file holds {body:,} bytes "
