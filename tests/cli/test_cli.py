@@ -601,3 +601,10 @@ def test_the_summary_says_a_scene_merges_from_twenty_times_k(tmp_path, capsys):
         # the size bound the merges kept: a scene's 4 times the mean (the LAS), else 16
         bound = 4 if name.endswith(".las") else 16
         assert f"none above {bound} times the mean" in out, out
+        assert "where its points allow" not in out, out  # 400 = 20 times -k
+    # at k = 200, 20 times -k (4,000) is more than one per 12 of the 6,000 points: fewer
+    assert main(["segment", str(tmp_path / "scan.las"), "-k", "200",
+                 "-o", str(tmp_path / "out.seg")]) == 0
+    out = capsys.readouterr().out
+    assert "merged from 500 finer ones, 20 times -k as on a scene (the input's up direction) " \
+        "where its points allow," in out, out

@@ -241,6 +241,28 @@ def test_outputs_are_all_or_nothing_and_follow_links(tmp_path):
     assert os.path.exists("/dev/null") and not os.path.isfile("/dev/null")
 
 
+def test_an_output_error_names_the_target_not_the_staged_file(tmp_path, monkeypatch):
+    """A folder where no file can be made (``/proc``), or a write that fails (a full disk):
+    the error names the file asked for, not the hidden temporary one, and none is left."""
+    import errno
+
+    from superfacets.io.files import Outputs
+
+    with pytest.raises(OSError) as info:
+        with Outputs() as out:
+            out.write("/proc/x.las", b"x")
+    assert info.value.filename == "/proc/x.las" and ".tmp" not in str(info.value)
+
+    def full(fh):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    with pytest.raises(OSError) as info:
+        with Outputs() as out:
+            out.write(tmp_path / "a.seg", full)
+    assert info.value.filename == str(tmp_path / "a.seg")
+    assert info.value.errno == errno.ENOSPC and list(tmp_path.iterdir()) == []
+
+
 def test_sigterm_removes_temporary_files(tmp_path):
     import subprocess
     import sys

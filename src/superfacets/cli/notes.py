@@ -28,6 +28,9 @@ def merges_said(first: int, params: dict, cloud: bool = True, scene: bool = Fals
     why = ""
     if scene and params.get("merge_from") == SCENE_MERGE_FROM:
         why = f", {SCENE_MERGE_FROM} times -k as on a scene (the input's up direction)"
+        k = params.get("n_segments") or 0
+        if k and first < SCENE_MERGE_FROM * k:  # (superfacets.method.rules.fine_count)
+            why += " where its points allow"
     return (f" (merged from {first:,} finer ones{why}, flat neighbours first{most}"
             f"{COST_SAID.get(params.get('merge_cost'), '')}; --merge-from 1: no merging)")
 

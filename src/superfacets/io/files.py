@@ -496,13 +496,22 @@ class Outputs:
         if real.exists() and not real.is_file():  # a device or a FIFO: written in place
             self._direct.append((real, _render(content, comp)))
             return path
-        fd, tmp = tempfile.mkstemp(prefix=f".{real.name}.", suffix=".tmp", dir=folder)
+        try:  # (the staged file's own name is ours: an error names the target)
+            fd, tmp = tempfile.mkstemp(prefix=f".{real.name}.", suffix=".tmp", dir=folder)
+        except OSError as exc:
+            raise OSError(exc.errno, f"cannot write there ({exc.strerror})", str(path)) \
+                from None
         self._temps.append((tmp, real))
-        with os.fdopen(fd, "wb") as fh:
-            if comp is None and callable(content):
-                content(fh)
-            else:
-                fh.write(_render(content, comp))
+        try:
+            with os.fdopen(fd, "wb") as fh:
+                if comp is None and callable(content):
+                    content(fh)
+                else:
+                    fh.write(_render(content, comp))
+        except OSError as exc:
+            if exc.filename not in (None, tmp):
+                raise
+            raise OSError(exc.errno, exc.strerror, str(path)) from None
         os.chmod(tmp, (os.stat(real).st_mode & 0o7777) if real.exists() else 0o644)
         return path
 
