@@ -63,6 +63,11 @@ def test_float_faces_and_bad_types():
         Mesh(V, F.astype(float))
     with pytest.raises(TypeError, match="mesh must be"):
         as_mesh("not a mesh")
+    # what is wrong with an array or a list of points is said
+    with pytest.raises(TypeError, match=r"got an array of shape \(5, 4\)"):
+        as_mesh(np.zeros((5, 4)))
+    with pytest.raises(TypeError, match=r"got list of 5 items \(points as a list: give np"):
+        as_mesh(np.zeros((5, 3)).tolist())
 
 
 def test_check_usable():

@@ -66,10 +66,15 @@ def as_mesh(mesh, name: str = "") -> Mesh:
     if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):  # trimesh.Trimesh and alike
         return Mesh(np.asarray(mesh.vertices), np.asarray(mesh.faces), name=name,
                     **trimesh_colors(mesh))
+    got = type(mesh).__name__
+    if isinstance(mesh, np.ndarray):  # (an array of another shape: say which)
+        got = f"an array of shape {mesh.shape}"
+    elif isinstance(mesh, (list, tuple)):  # (points as nested lists: np.asarray them)
+        got += f" of {len(mesh)} items (points as a list: give np.asarray(points))"
     raise TypeError(
         "mesh must be a superfacets.Mesh, a trimesh.Trimesh or Scene, a pyvista.PolyData, an "
         "open3d TriangleMesh or a (vertices, faces) pair (a point cloud: a PointCloud or an "
-        f"(N, 3) array), got {type(mesh).__name__}"
+        f"(N, 3) array), got {got}"
     )
 
 
