@@ -224,7 +224,15 @@ def test_evaluate_reads_a_ground_truth_field_of_the_input(tmp_path, capsys):
     np.testing.assert_array_equal(read_field(tmp_path / "scan.ply", "label"), classes)
     assert main(["evaluate", str(tmp_path / "scan.ply"), str(sp), "--ground-truth-field",
                  "label", "--ignore-label", "0"]) == 0
-    assert "undersegmentation_error 0.0000" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "undersegmentation_error 0.0000" in out and "  class 6      IoU 1.0000" in out
+    # a field that is no labels (a coordinate): its classes counted, not listed, and asked
+    # about
+    assert main(["evaluate", str(tmp_path / "scan.las"), str(sp), "--ground-truth-field",
+                 "X"]) == 0
+    out = capsys.readouterr().out
+    assert "  class " not in out and "1,831 classes: each one's IoU with --json" in out
+    assert "has 1,831 classes for 2,000 points: is it a field of labels?" in out
     # a ground-truth file given to the option (its abbreviation --ground-truth reads so)
     gt_file = "after the labels: superfacets evaluate INPUT LABELS " + str(sp)
     for args, msg in ((["--ground-truth-field", "klass"], "no field 'klass'; it has: "),

@@ -113,8 +113,15 @@ def cmd_evaluate(args) -> int:
     print(f"achievable_accuracy     {m['achievable_accuracy']:.4f}  (higher is better)")
     print(f"oracle_miou             {m['oracle_miou']:.4f}  (higher is better; each segment "
           "given its majority class)")
-    for cls, iou in sorted(m.get("oracle_iou_per_class", {}).items()):
-        print(f"  class {cls:<6} IoU {iou:.4f}")
+    per_class = m.get("oracle_iou_per_class", {})
+    if len(per_class) <= MOST_CLASSES_LISTED:
+        for cls, iou in sorted(per_class.items()):
+            print(f"  class {cls:<6} IoU {iou:.4f}")
+    else:
+        print(f"  {len(per_class):,} classes: each one's IoU with --json")
+    if len(per_class) > n // 2 >= MOST_CLASSES_LISTED:  # (a coordinate, an identifier)
+        print(f"note: the ground truth has {len(per_class):,} classes for {n:,} {kind}: is it "
+              "a field of labels?")
     if m.get("unassigned"):
         print(f"note: {m['unassigned']:,} {kind} labelled below 0 (unassigned): each such "
               "label counts as one segment")
@@ -123,6 +130,9 @@ def cmd_evaluate(args) -> int:
           f"{m['size_max']} {kind} (min / median / max; by size {hist})")
     return 0
 
+
+#: The most classes whose IoU the text output lists one by one (more: with --json).
+MOST_CLASSES_LISTED = 40
 
 #: The metrics printed, in order.
 METRICS = ("undersegmentation_error", "compactness", "boundary_recall", "boundary_precision",
