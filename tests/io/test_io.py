@@ -631,3 +631,40 @@ def test_a_work_files_digest_is_taken_in_memory_and_checked_on_reading(tmp_path)
     for mapped in (False, True):  # (mapped: its size no longer whole records)
         with pytest.raises(SuperfacetsError, match="changed since this run wrote it"):
             load_checked(tmp_path / "r.bin", f"{crc:08x}", rec.dtype, mapped=mapped)
+
+
+def test_a_work_file_found_as_written_is_not_summed_again_until_it_changes(tmp_path,
+                                                                           monkeypatch):
+    """A tile's file is read by each box that overlaps it: its digest is summed on the first
+    reading in a process, and again only once the file is replaced, written or touched."""
+    import os
+
+    import superfacets.io.files as files
+    from superfacets.errors import SuperfacetsError
+
+    rec = np.arange(40, dtype=np.int64)
+    rec.tofile(tmp_path / "t.bin")
+    digest = files.array_digest(rec, described=False)
+    sums = []
+    real = files.array_digest
+    monkeypatch.setattr(files, "array_digest", lambda a, d=True: sums.append(1) or real(a, d))
+    for _ in range(3):
+        assert np.array_equal(files.load_checked(tmp_path / "t.bin", digest, rec.dtype,
+                                                 mapped=True), rec)
+    assert len(sums) == 1
+    with pytest.raises(SuperfacetsError, match="changed since"):  # another digest: summed
+        files.load_checked(tmp_path / "t.bin", "00000000", rec.dtype, mapped=True)
+    assert len(sums) == 2
+    changed = rec.copy()
+    changed[5] = -1  # the same size, written in place, its times set back: only the sum
+    st = os.stat(tmp_path / "t.bin")  # tells (the change time moves all the same)
+    with open(tmp_path / "t.bin", "r+b") as f:
+        changed.tofile(f)
+    os.utime(tmp_path / "t.bin", ns=(st.st_atime_ns, st.st_mtime_ns + 1))
+    with pytest.raises(SuperfacetsError, match="changed since"):
+        files.load_checked(tmp_path / "t.bin", digest, rec.dtype, mapped=True)
+    (tmp_path / "t.bin").unlink()  # replaced by another file (its times not those read
+    rec.tofile(tmp_path / "t.bin")  # before, even within the clock's tick): summed again
+    os.utime(tmp_path / "t.bin", ns=(st.st_atime_ns, st.st_mtime_ns + 2))
+    files.load_checked(tmp_path / "t.bin", digest, rec.dtype, mapped=True)
+    assert len(sums) == 4

@@ -80,18 +80,20 @@ def test_a_held_mesh_tile_counts_its_weights_and_its_refine_rounds_records(monke
 
 
 def test_a_held_tiles_files_are_written_only_when_it_is_let_go(monkeypatch, tmp_path):
-    """What a cloud tile's later phases read from the work folder (its point graph, its
-    refine round's last classification) is not written while the tile stays held; with
-    room for about one tile (each takes about 3 MiB), a tile let go while the run goes on
-    writes them first and its later phases read them back; with none held each phase
-    writes them at once. The same labels each way."""
+    """What a cloud tile's later phases read from the work folder (its box's records, its
+    point graph, its refine round's last classification) is not written while the tile
+    stays held; with room for about one tile (each takes about 3 MiB), a tile let go while
+    the run goes on writes them first and its later phases read them back; with none held
+    each phase writes them at once. The same labels each way."""
+    import superfacets.scale.tiles.buckets as rb
     import superfacets.scale.tiles.task as rt
 
     cloud = _bumpy_cloud(20000)
     wrote = []
-    for name in ("save_graph", "keep_classification"):
-        real = getattr(rt, name)
-        monkeypatch.setattr(rt, name, lambda *a, _r=real, _n=name: wrote.append(_n) or _r(*a))
+    for module, name in ((rt, "save_graph"), (rt, "keep_classification"), (rb, "keep_box")):
+        real = getattr(module, name)
+        monkeypatch.setattr(module, name,
+                            lambda *a, _r=real, _n=name: wrote.append(_n) or _r(*a))
     seen, _ = _counting(monkeypatch)
     runs = {}
     for budget in ("1024", "4", "0"):
@@ -103,7 +105,9 @@ def test_a_held_tiles_files_are_written_only_when_it_is_let_go(monkeypatch, tmp_
     assert runs["1024"][1:] == ([], 0)  # nothing written, nothing read back
     # (each graph written once at most: as its tile is let go, never when read back)
     assert 0 < runs["4"][1].count("save_graph") <= 4 and runs["4"][2] > 0
-    assert sorted(runs["0"][1]) == ["keep_classification"] * 4 + ["save_graph"] * 4
+    assert 0 < runs["4"][1].count("keep_box") <= 4
+    assert sorted(runs["0"][1]) == (["keep_box"] * 4 + ["keep_classification"] * 4
+                                    + ["save_graph"] * 4)
     for budget in ("4", "0"):
         np.testing.assert_array_equal(runs[budget][0], runs["1024"][0])
 

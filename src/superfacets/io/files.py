@@ -326,6 +326,10 @@ def load_checked(path, digest: str | None, dtype=None, *, mapped: bool = False):
         into a new array: a caller that keeps a part of it copies only that part (the
         digest still reads every byte, from the system's file cache).
 
+    A file found as written is not summed again in this process while its state on disk
+    (device, inode, size, modification and change times) stays the same: a work file
+    replaced, written again or touched since is read in full again.
+
     Returns
     -------
     ndarray
@@ -347,6 +351,7 @@ def load_checked(path, digest: str | None, dtype=None, *, mapped: bool = False):
     """
     import numpy as np
 
+    seen = _file_state(path, digest, dtype)
     try:
         if dtype is not None and mapped:
             a = (np.memmap(path, dtype=dtype, mode="r") if os.path.getsize(path)
@@ -356,10 +361,33 @@ def load_checked(path, digest: str | None, dtype=None, *, mapped: bool = False):
                 np.load(path, allow_pickle=False) if _npy_fits(path) else None)
     except ValueError:  # (a header that no longer reads; a size not whole records)
         a = None
-    if a is None or digest is None or array_digest(a, dtype is None) != digest:
+    if a is None or digest is None or (
+            (seen is None or seen not in _CHECKED) and array_digest(a, dtype is None) != digest):
         raise SuperfacetsError(f"{path}: changed since this run wrote it (the work "
                                "folder's files belong to the run): refused")
+    if seen is not None:
+        if len(_CHECKED) >= _MOST_CHECKED:
+            _CHECKED.clear()
+        _CHECKED.add(seen)
     return a
+
+
+#: The work files :func:`load_checked` found as written, by their state on disk (a file
+#: written again, replaced or touched is another state, read in full again): a tile's file
+#: is read by each box that overlaps it (0.37 s of CRC-32 a run of 10M points in 8 tiles).
+_CHECKED: set = set()
+_MOST_CHECKED = 4096
+
+
+def _file_state(path, digest, dtype) -> tuple | None:
+    """A file's identity, size and times with the digest and dtype it is read with (None
+    where it cannot be read: :func:`load_checked` reads it and says so)."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return None
+    return (os.fspath(path), st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns,
+            digest, None if dtype is None else str(dtype))
 
 
 def _npy_fits(path) -> bool:

@@ -178,7 +178,7 @@ class TileBuckets:
     source: str = ""
     digests: tuple = ()
 
-    def read_box(self, lo, hi, name: str = "", keep=None):
+    def read_box(self, lo, hi, name: str = "", keep=None, owe: bool = False):
         """The elements whose position lies in ``[lo, hi]``: the same rows, positions
         and input as :meth:`RegionReader.read_box
         <superfacets.io.regions.RegionReader.read_box>` gives.
@@ -186,15 +186,21 @@ class TileBuckets:
         ``keep`` (a path without suffix, optional): the box's records are saved there
         (``keep.npy``, with ``keep.json``: the box and the array's digest) and read from
         there when the same box is asked for again (a tile's later phases), instead of
-        from the tiles it overlaps."""
+        from the tiles it overlaps. With ``owe``, a box not kept yet is not saved: a fourth
+        item, the write (:func:`keep_box` and its arguments, the records among them), is
+        returned for the caller to make when it lets the box go (None where kept)."""
         lo = np.asarray(lo, dtype=np.float64)
         hi = np.asarray(hi, dtype=np.float64)
         rec = None if keep is None else _kept_box(keep, lo, hi, self.dtype)
+        owed = None
         if rec is None:
             rec = self._records(lo, hi)
-            if keep is not None:
+            if keep is not None and owe:
+                owed = (keep_box, keep, rec, lo, hi)
+            elif keep is not None:
                 keep_box(keep, rec, lo, hi)
-        return self._of_records(rec, name)
+        box = self._of_records(rec, name)
+        return (*box, owed) if owe else box
 
     def kept(self, keep, lo, hi) -> bool:
         """Whether :meth:`read_box` finds the records of box ``[lo, hi]`` kept at
