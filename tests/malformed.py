@@ -223,6 +223,12 @@ def cases() -> list[Case]:
               b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
               b"property float z\nelement face 2\nproperty list uchar int vertex_indices\n"
               b"end_header\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n2 1 3\n", "face 1 has 2 vertices")
+    mesh_case("pcd-unknown-type", "c.pcd",  # (pydantic said "1 validation error for ...")
+              _pcd.replace(b"TYPE F F F", b"TYPE Q F F") + b"DATA ascii\n" + b"0 0 1\n" * 5,
+              "its TYPE line's value 1 is 'Q'")
+    mesh_case("ply-negative-count", "m.ply",  # (numpy said "negative dimensions ...")
+              b"ply\nformat ascii 1.0\nelement vertex -3\nproperty float x\nproperty float y"
+              b"\nproperty float z\nend_header\n", "declares -3 vertex elements")
     mesh_case("las-garbage", "c.las", b"LASF" + b"\0" * 50, "LAS")
     mesh_case("xyz-ok", "c.xyz", b"".join(f"{x} {y} {x * y}\n".encode()
                                           for x in range(6) for y in range(6)), expect="ok")

@@ -29,7 +29,6 @@ error naming its row.
 from __future__ import annotations
 
 import io
-import re
 from pathlib import Path
 
 import numpy as np
@@ -46,7 +45,7 @@ __all__ = ["read_cloud", "CLOUD_FORMATS", "is_cloud_file", "check_laz", "check_l
 from .._runtime import extras
 from ..checks import not_real
 from ..inputs.cloud import InvalidCloudError, PointCloud
-from .headers import check_las, check_laz, check_pcd, e57_counts, header_counts  # noqa: E402 (re-exported: headers)
+from .headers import check_las, check_laz, check_pcd, e57_counts, header_counts, pcd_problem  # noqa: E402 (re-exported: headers)
 from .orientation import sensor_up
 
 #: Point-cloud formats of :func:`read_cloud` (PLY files are clouds when they have no faces).
@@ -239,12 +238,7 @@ def _read_pcd(path: Path) -> dict:
     except MeshFormatError:
         raise
     except Exception as exc:  # noqa: BLE001 - pypcd4/pydantic raise many types
-        msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        short = re.search(r"requires (\d+) columns but (\d+) were found at row (\d+)", msg)
-        if short:  # (numpy's words for an ASCII row of too few values)
-            msg = (f"line {short[3]} of its ASCII data has {short[2]} values, "
-                   f"{short[1]} expected")
-        raise MeshFormatError(f"{path}: cannot read PCD: {msg}") from None
+        raise MeshFormatError(f"{path}: cannot read PCD: {pcd_problem(exc)}") from None
     if pts.shape[0] != height * width:
         raise MeshFormatError(f"{path}: PCD has {pts.shape[0]} points, the header says "
                               f"{width} x {height}")

@@ -9,6 +9,7 @@ before anything large is read (:func:`superfacets._runtime.memory.check_memory`)
 from __future__ import annotations
 
 import os
+import re
 import struct
 from pathlib import Path
 
@@ -20,7 +21,8 @@ from ..errors import MemoryLimitError, MeshFormatError, MissingExtraError
 from .files import decompressed_head, max_ratio, split_suffix
 
 __all__ = ["header_counts", "e57_counts", "check_las", "check_laz", "check_pcd", "check_stl",
-           "ply_mapped", "npy_mapped", "first_line", "NotStreamedError", "PCD_LINES"]
+           "ply_mapped", "npy_mapped", "first_line", "NotStreamedError", "PCD_LINES",
+           "pcd_problem"]
 
 
 class NotStreamedError(MeshFormatError):
@@ -119,6 +121,10 @@ def _ply(p: Path, head: bytes, size: int | None) -> dict | None:
                                     _SIZE.get(w[2], 1) + corners * _SIZE.get(w[3], 1))
             else:
                 elements[-1][2] += 2 if ascii_ else _SIZE.get(w[1], 1)
+    negative = [f"{count:,} {name}" for name, count, _ in elements if count < 0]
+    if negative:  # (numpy's "negative dimensions are not allowed" said no more)
+        raise MeshFormatError(f"{p}: damaged PLY header: it declares {', '.join(negative)} "
+                              "elements, a count below zero")
     need = sum(count * smallest for _, count, smallest in elements)
     if size is not None and need > size - start:
         declared = ", ".join(f"{count:,} {name}" for name, count, _ in elements)
@@ -636,6 +642,52 @@ def _loop(parent: list, start: int) -> str:
 #: The lines of a PCD header the reader (``pypcd4``) needs, DATA last (HEIGHT, VERSION and
 #: VIEWPOINT have defaults).
 PCD_LINES = ("FIELDS", "SIZE", "TYPE", "COUNT", "WIDTH", "POINTS", "DATA")
+
+
+def pcd_problem(exc: BaseException) -> str:
+    """What the PCD reader (``pypcd4``, its header checked by pydantic) found wrong, in one
+    line a user can act on: the header line and value refused (pydantic's own text is
+    "1 validation error for MetaData"), or the ASCII row of too few values (numpy's words
+    for it name ``usecols``).
+
+    Parameters
+    ----------
+    exc : BaseException
+        What the reader raised.
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    MeshFormatError
+        Never: the caller raises one with this text.
+
+    Examples
+    --------
+    >>> pcd_problem(ValueError("the data requires 3 columns but 2 were found at row 7"))
+    'line 7 of its ASCII data has 2 values, 3 expected'
+    """
+    errors = getattr(exc, "errors", None)
+    if callable(errors):  # (pydantic: each field of the header it refused)
+        try:
+            found = list(errors())
+        except Exception:  # noqa: BLE001 - not pydantic's after all
+            found = []
+        if found:
+            first = found[0]
+            loc = [str(x) for x in first.get("loc", ())]
+            what = f"its {loc[0].upper()} line" if loc else "its header"
+            if len(loc) > 1 and loc[1].isdigit():
+                what += f"'s value {int(loc[1]) + 1}"
+            more = f" ({len(found) - 1} more)" if len(found) > 1 else ""
+            return f"{what} is {first.get('input')!r}: {first.get('msg')}{more}"
+    msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+    short = re.search(r"requires (\d+) columns but (\d+) were found at row (\d+)", msg)
+    if short:
+        return f"line {short[3]} of its ASCII data has {short[2]} values, {short[1]} expected"
+    return msg
 
 
 def check_pcd(path: Path) -> None:

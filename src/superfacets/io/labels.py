@@ -321,7 +321,7 @@ def read_field(path, name: str) -> np.ndarray:
 
 def _pcd_field(path: Path, name: str) -> tuple[list[str], np.ndarray | None]:
     """A PCD's field names and the values of the field ``name`` (None where absent)."""
-    from .headers import check_pcd
+    from .headers import check_pcd, pcd_problem
 
     pypcd4 = extras.require("pypcd4", "reading PCD files")
     check_pcd(path)
@@ -337,5 +337,4 @@ def _pcd_field(path: Path, name: str) -> tuple[list[str], np.ndarray | None]:
     except MeshFormatError:
         raise
     except Exception as exc:  # noqa: BLE001 - pypcd4/pydantic raise many types
-        msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise MeshFormatError(f"{path}: cannot read PCD: {msg}") from None
+        raise MeshFormatError(f"{path}: cannot read PCD: {pcd_problem(exc)}") from None

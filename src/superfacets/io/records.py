@@ -31,7 +31,7 @@ import numpy as np
 from .._runtime import extras
 from ..errors import MeshFormatError, ParameterError
 from .files import Outputs, read_bytes, save, split_suffix
-from .headers import check_las
+from .headers import check_las, pcd_problem
 
 __all__ = ["LABEL_FIELD", "RECORD_FORMATS", "write_labels_into", "ply_field_name",
            "records_kind"]
@@ -268,8 +268,7 @@ def _pcd_with(source: Path, labels: np.ndarray, name: str) -> bytes:
         pc = pypcd4.PointCloud.from_path(source)
         meta, data = pc.metadata, pc.pc_data
     except Exception as exc:  # noqa: BLE001 - pypcd4/pydantic raise many types
-        msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise MeshFormatError(f"{source}: cannot read PCD: {msg}") from None
+        raise MeshFormatError(f"{source}: cannot read PCD: {pcd_problem(exc)}") from None
     if len(data) != labels.shape[0]:
         raise _count_error(source, labels.shape[0], len(data))
     head, body = _pcd_split(source, raw)
