@@ -422,6 +422,13 @@ def test_tiled_runs_refuse_what_whole_runs_refuse(tmp_path):
         segment_tiled(mesh, 20, tiles=10000, workers=1)
     with pytest.raises(ParameterError, match="give at most 25 tiles"):
         segment_tiled(mesh, 20, tiles=(8, 8, 1), workers=1)
+    with pytest.raises(ParameterError, match="4 elements.*run it whole, without tiles"):
+        segment_tiled(np.eye(4, 3), 3, tiles=2, workers=1)  # (not "give at most 1 tiles")
+    # more superfacets than faces: said as one run says it (a face's centroid has no
+    # extent: the tiles said "nothing to tile")
+    with pytest.raises(ParameterError, match=r"n_segments \(3\) is larger than the number "
+                       r"of faces \(1\)"):
+        segment_tiled(Mesh(np.eye(3), np.array([[0, 1, 2]])), 3, tiles=2, workers=1)
 
 
 def test_option_extremes_are_refused_before_any_work(tmp_path, monkeypatch):

@@ -311,10 +311,11 @@ def check_tiles(tiles, n_elements: int | None = None) -> None:
         check_tiles(tiles)
         n = math.prod(int(t) for t in np.ravel(tiles))
         if n > 1 and n_elements < n * MIN_PER_TILE:
+            most = n_elements // MIN_PER_TILE
             raise ParameterError(
                 f"tiles={tiles!r} leaves {n_elements / n:.2g} elements per tile of this input "
-                f"({n_elements:,} elements); give at most {max(1, n_elements // MIN_PER_TILE)}"
-                " tiles")
+                f"({n_elements:,} elements); " + (f"give at most {most} tiles" if most > 1 else
+                                                  "run it whole, without tiles"))
         return
     if np.ndim(tiles) == 0:
         _positive_int(tiles)

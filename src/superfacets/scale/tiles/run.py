@@ -50,7 +50,7 @@ import numpy as np
 from ..._runtime.arrays import ranked
 from ..._runtime.progress import new_bar, tick, waiting_bar
 from ...api.result import TiledResult
-from ...checks import max_threads
+from ...checks import check_n_segments, max_threads
 from ...elements import points
 from ...elements.kinds import kind_of
 from ...errors import ParameterError, SuperfacetsError
@@ -520,6 +520,8 @@ def _surveyed(source, tmp, tiles, params):
     if params.up_weight != 1:  # every position read stretched (the tiles run on W = 1)
         reader = _up_weighted(reader, params.up_weight)
     survey = reader.survey()
+    if params.n_segments is not None and params.radius is None:  # (as one run says it, not
+        check_n_segments(params.n_segments, survey.n_elements, reader.kind)  # "no extent")
     if check_extent(survey.lo, survey.hi, f"{reader.path}: ",
                     "cloud" if kind_of(reader.kind).cloud else "mesh") == 0:
         raise ParameterError("the input has zero extent: nothing to tile")
