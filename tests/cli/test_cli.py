@@ -180,6 +180,17 @@ def test_evaluate_points_and_vertices_with_unlabelled_rows(tmp_path, capsys):
     assert "boundary_precision      1.0000" in out  # its one border is the true one
     assert main(["evaluate", str(tmp_path / "scan.npy"), str(sp), str(gt)]) == 0
     assert "undersegmentation_error 0.0000" not in capsys.readouterr().out  # -1 is a class
+    from superfacets.errors import ParameterError
+    from superfacets.evaluation.metrics import oracle_miou
+
+    # every point noise (below 0): said so, with the file (it said "no labelled element")
+    noise = write_labels(tmp_path / "noise.seg", np.full(3000, -1))
+    assert main(["evaluate", str(tmp_path / "scan.npy"), str(noise), str(gt)]) == 2
+    assert "noise.seg: every label is below 0" in capsys.readouterr().err
+    with pytest.raises(ParameterError, match="every label is below 0"):
+        oracle_miou(np.full(4, -1), np.zeros(4, int))
+    with pytest.raises(ParameterError, match="the ground truth is 7 wherever a label is 0"):
+        oracle_miou(np.zeros(4, int), np.full(4, 7), ignore_label=7)
     mesh = grid_mesh(10, 10)
     off = write_mesh(tmp_path / "plane.off", mesh)
     vx = write_labels(tmp_path / "v.seg", (mesh.vertices[:, 0] > 0).astype(int))

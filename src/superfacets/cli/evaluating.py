@@ -83,6 +83,9 @@ def cmd_evaluate(args) -> int:
     with waiting_bar(f"reading the labels of {n:,} {kind}", long):
         labels = read_labels(args.labels, n_faces=n)
         gts = [read_labels(p, n_faces=n) for p in args.ground_truths]
+    if labels.size and (labels < 0).all():  # (the oracle mIoU said "no labelled element")
+        raise ParameterError(f"{args.labels}: every label is below 0 (unassigned, as DBSCAN's "
+                             "noise): no segment to measure")
     if args.ground_truth_field is not None:
         from ..io.labels import read_field
 

@@ -365,9 +365,13 @@ def oracle_miou(labels, ground_truth, *, weights=None, ignore_label: int | None 
         raise ParameterError(f"weights must have one value per element ({lab.shape[0]}), "
                              f"got shape {w.shape}")
     keep = np.ones(lab.shape[0], dtype=bool) if ignore_label is None else gt != ignore_label
+    if lab.size and not (lab >= 0).any():
+        raise ParameterError("every label is below 0 (unassigned): no segment to measure "
+                             "the oracle mIoU on")
     keep &= lab >= 0
     if not keep.any():
-        raise ParameterError("no labelled element to measure the oracle mIoU on")
+        raise ParameterError("no labelled element to measure the oracle mIoU on (the ground "
+                             f"truth is {ignore_label} wherever a label is 0 or more)")
     lab, gt, w = lab[keep], gt[keep], w[keep]
     segs, seg = np.unique(lab, return_inverse=True)
     classes, cls = np.unique(gt, return_inverse=True)
