@@ -370,7 +370,8 @@ def test_duplicate_points_share_a_label():
 
 @pytest.mark.parametrize("points, message", [
     (np.zeros((0, 3)), "no valid point"),
-    (np.ones((10, 3)), "coincide"),
+    (np.ones((10, 3)), "all 10 points coincide"),
+    (np.ones((1, 3)), "one point alone: no surface"),  # (not "all 1 points coincide")
     (np.c_[np.arange(10.0), 2 * np.arange(10.0), np.zeros(10)], "one line"),
     (np.r_[np.random.default_rng(0).random((9, 3)), [[np.nan, 0, 0]]], "point 9 has a "
                                                                          "non-finite"),

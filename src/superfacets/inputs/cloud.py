@@ -305,8 +305,9 @@ class PointCloud:
             raise InvalidCloudError(f"{where}empty point cloud: no valid point")
         extent = check_extent(*column_bounds(p), where, "cloud")
         if extent == 0:
-            raise InvalidCloudError(f"{where}all {p.shape[0]} points coincide: no surface "
-                                    "to segment")
+            raise InvalidCloudError(f"{where}" + (f"all {p.shape[0]} points coincide"
+                                                   if p.shape[0] > 1 else "one point alone")
+                                    + ": no surface to segment")
         if _on_a_line(p, extent):
             raise InvalidCloudError(f"{where}{_line_cause(p, np.flatnonzero(self.valid))}")
         self.__dict__["_usable"] = True
