@@ -370,8 +370,9 @@ def oracle_miou(labels, ground_truth, *, weights=None, ignore_label: int | None 
                              "the oracle mIoU on")
     keep &= lab >= 0
     if not keep.any():
-        raise ParameterError("no labelled element to measure the oracle mIoU on (the ground "
-                             f"truth is {ignore_label} wherever a label is 0 or more)")
+        raise ParameterError("no labelled element to measure the oracle mIoU on" + (
+            f" (the ground truth is {ignore_label} wherever a label is 0 or more)"
+            if lab.size else ""))
     lab, gt, w = lab[keep], gt[keep], w[keep]
     segs, seg = np.unique(lab, return_inverse=True)
     classes, cls = np.unique(gt, return_inverse=True)
