@@ -312,6 +312,9 @@ def test_cli_batch_as_in_the_issue(corpus, tmp_path, capsys):
     (["{tmp}/nothing*.off", "-o", "{tmp}/o"], "no file matches"),
     (["-o", "{tmp}/o", "--alpha", "-1"], "alpha"),
     (["-o", "{tmp}/o", "--labels", "json", "--per-object", "--radius", "0.1"], "per-object"),
+    (["-o", "{tmp}/o", "--memory-limit", "lots"], "a size such as 4GiB"),
+    (["-o", "{tmp}/o", "--memory-limit", "1KB"], "at least 128 MiB"),  # (it never ended)
+    (["-o", "{tmp}/o", "--view", "top"], "give picture or html"),
 ])
 def test_cli_batch_bad_input_one_line_before_any_work(corpus, tmp_path, capsys, args, match):
     f = tmp_path / "a_file"

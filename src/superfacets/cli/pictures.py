@@ -141,8 +141,11 @@ def add_parsers(sub) -> None:
 
 
 def cmd_render(args) -> int:
+    from ..checks import check_number
     from ..viz.render import render, render_points
 
+    check_number("line_width", args.line_width, 0.0, 100.0, lo_open=True)  # (a cloud's
+    # picture draws no border lines, but a bad width is refused on every input alike)
     out = check_output(args.output, (".png",), "the picture",
                        inputs=(args.mesh, getattr(args, "labels", None)))
     data = _read(args, clouds=True)

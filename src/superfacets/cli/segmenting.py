@@ -95,7 +95,7 @@ def _add_segment(sub) -> None:
                              "N2, ... segments, each connected (parent_<i> and labels_<i> in "
                              "the .npz)")
     add_adaptive_options(levels)
-    levels.add_argument("--level-cost", choices=("ward", "planarity"), default="ward",
+    levels.add_argument("--level-cost", choices=("ward", "planarity"), default=None,
                         help="the levels' merge cost: ward (compact segments, the default) "
                              "or planarity (flat regions merged first: with -k several times "
                              "the level, content-adaptive superpoints)")
@@ -371,6 +371,13 @@ def _checked_outputs(args) -> dict:
     graph_out = check_output(args.graph, (".npz",), "the graph", inputs=(args.mesh,))
     if args.levels and graph_out is None:
         raise ParameterError("--levels goes with --graph OUT.npz (the hierarchy is written there)")
+    if args.level_cost is not None and not args.levels:
+        raise ParameterError("--level-cost is the merge cost of --levels; give both")
+    for flag, given, what in (("--view", args.view is not None, "chooses the camera"),
+                              ("--up", args.up, "sets the up axis")):
+        if given and png_out is None and html_out is None:
+            raise ParameterError(f"{flag} {what} of --picture OUT.png and --html OUT.html; "
+                                 "give one of them")
     if graph_out is not None and args.per_object:
         raise ParameterError("--graph is of one segmentation; not with --per-object")
     named = [str(x) for x in (seg_out, ply_out, png_out, html_out, graph_out)
@@ -463,7 +470,7 @@ def _write_and_say(args, data, result, kind, outputs, elapsed, size_note: str = 
                      html=outputs["html"], element_options=dict(
                          n_neighbors=args.neighbors, neighbor_radius=args.neighbor_radius),
                      up=up[0], view=view, graph=outputs["graph"],
-                     levels=args.levels, level_cost=args.level_cost,
+                     levels=args.levels, level_cost=args.level_cost or "ward",
                      extent_weight=args.extent_weight)
     if args.quiet:
         return

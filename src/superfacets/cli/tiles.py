@@ -76,7 +76,10 @@ def segment_tiles(args) -> int:
 
     for flag, given in (("--colored-mesh", args.colored_mesh), ("--picture", args.picture),
                         ("--html", args.html), ("--graph", args.graph),
-                        ("--per-object", args.per_object)):
+                        ("--per-object", args.per_object), ("--levels", args.levels),
+                        ("--level-cost", args.level_cost),
+                        ("--extent-weight", args.extent_weight is not None),
+                        ("--view", args.view is not None), ("--up", args.up)):
         if given:
             raise ParameterError(f"{flag} needs the whole input in one process; not with "
                                  "--tiles (write -o OUT.seg, then view a part)")

@@ -50,6 +50,7 @@ import numpy as np
 from .._kernels import native
 from .._runtime.arrays import COMPILED_MIN, sorted_unique
 from .._runtime.memory import give_back_free_memory
+from ..checks import check_int, check_positive
 from ..inputs.bounds import column_bounds, column_means
 from ..inputs.cloud import PointCloud, as_cloud
 from . import graph as _graph
@@ -62,10 +63,12 @@ _TRIM_MIN = 1 << 18  # rows from which the build hands the allocator's free memo
 
 __all__ = ["point_graph", "kept_diagonal", "PointElements", "estimate_normals",
            "orient_normals", "distinct_points", "surface_neighbours", "STEP_CANDIDATES",
-           "graph_key"]
+           "graph_key", "MAX_NEIGHBORS"]
 
 #: Default number of nearest neighbours of the point graph.
 DEFAULT_NEIGHBORS = 10
+#: Largest number of nearest neighbours of the point graph.
+MAX_NEIGHBORS = 100
 #: The point graph keeps its normals in float32 (12 bytes per point less through the
 #: whole run; the passes and the coarsening do not read them); what reads them computes
 #: in float64 from these values. Judged with ``superfacets experiment`` on the 300
@@ -163,9 +166,10 @@ def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
     cloud : PointCloud
         Usable (:meth:`~superfacets.inputs.cloud.PointCloud.check_usable`).
     n_neighbors : int, default 10
-        Nearest neighbours of each point, ``>= 1`` (fewer when the cloud has fewer points).
+        Nearest neighbours of each point, ``1 ..`` :data:`MAX_NEIGHBORS` (fewer when the
+        cloud has fewer points).
     neighbor_radius : float, optional
-        Drop neighbours farther than this fraction of the bounding-box diagonal.
+        Drop neighbours farther than this fraction of the bounding-box diagonal (``> 0``).
     oriented : bool, default True
         False: estimated normals keep the signs PCA gives them (no propagation), for a
         caller that reads only the adjacency, sizes and border lengths (the same as
@@ -190,6 +194,8 @@ def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
         taken as a cloud of its own, its graph not kept).
     InvalidCloudError
         If the cloud cannot be segmented.
+    ParameterError
+        If ``n_neighbors`` or ``neighbor_radius`` is out of its range.
 
     Examples
     --------
@@ -198,6 +204,9 @@ def point_graph(cloud, n_neighbors: int = DEFAULT_NEIGHBORS,
     >>> g.n_elements, round(float(np.abs(g.normals[:, 2]).min()), 6)
     (100, 1.0)
     """
+    n_neighbors = check_int("n_neighbors", n_neighbors, lo=1, hi=MAX_NEIGHBORS)
+    if neighbor_radius is not None:
+        neighbor_radius = check_positive("neighbor_radius", neighbor_radius)
     if not isinstance(cloud, PointCloud):  # an array, trimesh's or Open3D's cloud
         cloud = as_cloud(cloud)
     graphs = cached_on(cloud, "_point_graphs", dict)

@@ -29,7 +29,7 @@ from ..checks import (
     max_threads,
 )
 from ..elements.kinds import KINDS, kind_of
-from ..elements.points import DEFAULT_NEIGHBORS
+from ..elements.points import DEFAULT_NEIGHBORS, MAX_NEIGHBORS  # noqa: F401 (re-exported)
 from ..errors import ParameterError
 from .rules import assignment_of, better_method, superfacet_measure, superfacet_size  # noqa: F401
 
@@ -58,8 +58,6 @@ MERGE_COSTS = ("auto", "scene", "noise")
 #: Names accepted by ``elements=``: the faces of a mesh, its vertices, the points of a cloud
 #: (the kinds of surface elements of :data:`~superfacets.elements.kinds.KINDS`).
 ELEMENTS = tuple(name for name, kind in KINDS.items() if kind.dim == 2)
-#: Largest number of nearest neighbours of the point graph.
-MAX_NEIGHBORS = 100
 #: Default ``alpha`` of each weighting, and its valid range ``(low, high)``.
 WEIGHTING_ALPHA = {"paper": (200.0, (0.0, math.inf)), "shlafman": (0.5, (0.0, 1.0))}
 #: Largest alpha and eta_convex (beyond, the angular term alone decides anyway; infinite

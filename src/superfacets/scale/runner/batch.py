@@ -48,7 +48,7 @@ from ...method.params import DEFAULTS, check_choice, check_int, check_nonneg, re
 from ...viz.camera import check_camera
 from ...viz.outputs import JoinedResult, write_result
 from .collect import broken_link_reason, collect_inputs, no_inputs, output_names
-from .engine import Engine, PeakMemory, error_text
+from .engine import Engine, PeakMemory, check_memory_limit, error_text
 from .manifest import (
     JOURNAL,
     MANIFEST_COLUMNS,
@@ -134,8 +134,9 @@ def _segment_and_write(task: dict, label_rel: str) -> dict:
                              "segment VOLUME --colored-mesh OUT.vtu --picture OUT.png` "
                              "writes cell data and a picture cut in half")
     if not kind_of(kind).objects:
-        if task["per_object"]:
-            raise ParameterError(f"--per-object segments the faces of a scene; not {kind}")
+        if task["per_object"] and not (kind_of(kind).cloud and getattr(data, "objects", ())):
+            raise ParameterError("--per-object segments the faces of a scene or the scans of "
+                                 f"a multi-scan cloud (E57); not {kind}")
         if outs["colored"] not in (None, "ply"):
             raise ParameterError(f"coloured {kind} are written as .ply")
     if task["per_object"]:
@@ -328,6 +329,10 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         extent_weight = check_nonneg("extent_weight", extent_weight)
     if workers is not None:
         check_int("workers", workers, lo=1)
+    memory_limit = check_memory_limit(memory_limit)  # (before any input is looked at)
+    if (up is not None or view is not None) and not (picture or html):
+        raise ParameterError("up and view (--up, --view) set the camera of the pictures and "
+                             "pages: give picture or html (--picture, --html)")
     n_threads = check_int("n_threads", n_threads, lo=1)
     seg_opts = dict(options, n_segments=n_segments, radius=radius, n_threads=n_threads)
     resolved = resolve(**seg_opts).as_dict()  # every option checked before any work

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import math
 import os
 import traceback
 import uuid
@@ -36,7 +37,12 @@ from ...checks import max_threads
 from ...errors import ParameterError
 
 __all__ = ["Engine", "PeakMemory", "default_workers", "error_text", "LOST_WORKER",
-           "QUIET_CLUSTER"]
+           "QUIET_CLUSTER", "check_memory_limit", "MIN_WORKER_MEMORY"]
+
+#: The least memory a local worker may be given: a worker process holds about 100 MiB
+#: before any task (Python, NumPy, Dask); under that it is killed or paused at once
+#: (1 KB: a batch that never ended; 50 MiB: every input failed).
+MIN_WORKER_MEMORY = 128 * 2**20
 
 #: The error text of a task whose worker died each time it ran it.
 LOST_WORKER = "worker process died (killed, e.g. out of memory, or crashed)"
@@ -59,6 +65,66 @@ QUIET_CLUSTER = {"distributed.worker.profile.enabled": False,
 #: earlier task. It costs time (fresh pages for every array: about +15 % on the benchmark's
 #: meshes), so only the experiments, which report memory, ask for it.
 _EXACT_MEMORY_ENV = {"MALLOC_MMAP_THRESHOLD_": "65536", "MALLOC_TRIM_THRESHOLD_": "65536"}
+
+
+def check_memory_limit(memory_limit):
+    """``memory_limit`` of local workers, checked: ``'auto'``, or ``None`` or 0 (no limit),
+    or a float in ``(0, 1]`` (Dask's share of the machine's memory), as given; else a size
+    (``'4GiB'``, ``'500MB'``, bytes) of at least :data:`MIN_WORKER_MEMORY`, in bytes.
+
+    Raises
+    ------
+    ParameterError
+        On a value that is no size, or a size under :data:`MIN_WORKER_MEMORY`.
+
+    Examples
+    --------
+    >>> check_memory_limit("1GiB"), check_memory_limit("auto")
+    (1073741824, 'auto')
+    """
+    import numbers
+
+    if memory_limit is None or memory_limit == "auto" or (
+            isinstance(memory_limit, numbers.Real) and not isinstance(memory_limit, bool)
+            and memory_limit == 0):
+        return memory_limit
+    said = (f"memory_limit must be a size such as 4GiB or 500MB (or auto), got "
+            f"{memory_limit!r}")
+    if isinstance(memory_limit, str):
+        size = _bytes_of(memory_limit.strip())
+        if size is None:
+            raise ParameterError(said)
+    elif isinstance(memory_limit, numbers.Real) and not isinstance(memory_limit, bool):
+        size = float(memory_limit)
+        if isinstance(memory_limit, float) and 0 < size <= 1:  # (Dask's share of the memory)
+            return size
+    else:
+        raise ParameterError(said)
+    if size == 0:  # (Dask's "no limit")
+        return 0
+    if not math.isfinite(size):
+        raise ParameterError(said)
+    if size < MIN_WORKER_MEMORY:
+        raise ParameterError(f"memory_limit {memory_limit!r} is below what a worker process "
+                             f"takes before any work: give at least "
+                             f"{MIN_WORKER_MEMORY // 2**20} MiB")
+    return int(size)
+
+
+def _bytes_of(text: str) -> float | None:
+    """Bytes of a size in Dask's syntax (``dask.utils.parse_bytes``: ``'4GiB'``, ``'500
+    MB'``, ``'1e9'``), None where it is not one."""
+    try:
+        from dask.utils import parse_bytes
+    except ImportError:  # (no Dask: a plain number of bytes)
+        try:
+            return float(text)
+        except ValueError:
+            return None
+    try:
+        return float(parse_bytes(text))
+    except (ValueError, TypeError):
+        return None
 
 
 def default_workers() -> int:
@@ -180,7 +246,8 @@ class Engine:
         Dask's ``scheduler-address`` setting (``DASK_SCHEDULER_ADDRESS``).
     memory_limit : str or float, default 'auto'
         Local workers: memory limit of each (Dask's syntax: ``'4GiB'``, bytes,
-        or ``'auto'`` = the machine's memory shared out); a worker passing 95 %
+        or ``'auto'`` = the machine's memory shared out; at least
+        :data:`MIN_WORKER_MEMORY`, :func:`check_memory_limit`); a worker passing 95 %
         of it is restarted and its task counts as a failure.
     connect_timeout : float, default 10
         Seconds to reach the scheduler.
@@ -195,6 +262,8 @@ class Engine:
 
     Raises
     ------
+    ParameterError
+        On a ``workers`` count or ``memory_limit`` out of range.
     MissingExtraError
         On entering, where Dask is needed and ``distributed`` is not installed.
     SchedulerError
@@ -227,7 +296,7 @@ class Engine:
             self.workers = 1
             self.note = ("dask.distributed is not installed: running in this process; "
                          "pip install 'superfacets[distributed]' for one worker per core")
-        self.memory_limit = memory_limit
+        self.memory_limit = check_memory_limit(memory_limit)
         self.connect_timeout = connect_timeout
         self.wait_workers = wait_workers
         self.force_dask = bool(dask)

@@ -60,12 +60,12 @@ from ...io.regions import RegionReader, streamed
 from ...method.merges import NOISE_SAMPLE
 from ...method.params import DEFAULTS, resolve, superfacet_size
 from ...method.rules import SCENE_DEFAULTS, fine_count, scene_default_of
-from ..runner.engine import Engine
+from ..runner.engine import Engine, check_memory_limit
 from . import buckets, phases
 from .buckets import box_folder
 from .graphs import drop_graphs, graph_folder
 from .held import hold_from_env, release_held
-from .layout import check_tiles, gathered_centers, in_box
+from .layout import balanced_tiles, check_tiles, gathered_centers, in_box, tile_grid
 from .merges import merged_labels, tiled_merge_from
 from .phases import HALO, check_tileable, halo_distance, point_areas, sample_cloud
 from .task import tile_task
@@ -180,9 +180,8 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
     >>> r.labels.shape, r.n_segments, r.layout.n_tiles
     ((5120,), 40, 2)
     """
-    from .layout import balanced_tiles, tile_grid
-
-    params, halo = _checked_options(n_segments, options, tiles, halo, refine, workers, start)
+    params, halo = _checked_options(n_segments, options, tiles, halo, refine, workers, start,
+                                    memory_limit)
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
     stage = partial(_stage, timings, progress)  # (each stage timed, and shown as it runs)
@@ -254,8 +253,8 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         names = _numbered_densely(labels)
     timings["total"] = time.perf_counter() - t_start
     resolved = dict(params.as_dict(), n_segments=int(names.size), radius=r / diagonal,
-                    up_weight=weight,
-                    tiles=grid, halo=float(halo), elements=reader.kind, merge_from=merge_from,
+                    up_weight=weight, tiles=grid, halo=float(halo), elements=reader.kind,
+                    merge_from=merge_from,
                     merged_from=merged_from, **({} if floor is None else {"feature_floor": floor}))
     return TiledResult(labels=labels, centers=names.astype(np.int64), mesh_radius=r, grid=grid,
                        layout=layout, halo=margin, disagreements=disagreements, repaired=repaired,
@@ -468,7 +467,8 @@ def _stitched(done: list, n_rows: int):
     return labels, disagreements, suspects[suspects >= 0]
 
 
-def _checked_options(n_segments, options, tiles, halo, refine, workers, start="sample"):
+def _checked_options(n_segments, options, tiles, halo, refine, workers, start="sample",
+                     memory_limit="auto"):
     """The run's parameters and halo, every option checked before any pass over the
     input."""
 
@@ -480,6 +480,7 @@ def _checked_options(n_segments, options, tiles, halo, refine, workers, start="s
     check_tileable(params)
     check_tiles(tiles)  # before any pass over the file
     hold_from_env()  # (the workers read it: refused here, not in each task)
+    check_memory_limit(memory_limit)  # (the engine's, made after the survey)
     halo = HALO if halo is None else halo
     halo_distance(halo, params.window, 1.0)  # validated before any work
     for name, v, low, high in (("refine", refine, 0, MAX_REFINE),

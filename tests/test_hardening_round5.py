@@ -1,0 +1,145 @@
+"""The faults of the fifth attack (options that a command took and then did nothing with,
+or crashed on, on a labelled scan): each case fails without its fix."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from superfacets import PointCloud
+from superfacets.cli import main
+from superfacets.elements.points import point_graph
+from superfacets.errors import ParameterError
+from superfacets.io import read_labels
+from superfacets.scale.runner.engine import MIN_WORKER_MEMORY, Engine, check_memory_limit
+
+
+@pytest.fixture
+def scan(tmp_path):
+    """A small classified airborne tile (ground and a roof) as LAS, and its labels."""
+    laspy = pytest.importorskip("laspy")
+    rng = np.random.default_rng(0)
+    xy = rng.uniform(0, 30, (3000, 2))
+    roof = ((xy > 10) & (xy < 20)).all(axis=1)
+    z = np.where(roof, 8.0, 0.0) + rng.normal(0, 0.02, 3000)
+    header = laspy.LasHeader(point_format=6, version="1.4")
+    header.scales = [0.001] * 3
+    las = laspy.LasData(header)
+    las.x, las.y, las.z = xy[:, 0], xy[:, 1], z
+    las.classification = np.where(roof, 6, 2).astype(np.uint8)
+    path = tmp_path / "tile.las"
+    las.write(path)
+    labels = tmp_path / "tile.seg"
+    assert main(["segment", str(path), "-k", "20", "-o", str(labels)]) == 0
+    return path, labels
+
+
+def _one_line_error(capsys, *says):
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("superfacets: error:"), err
+    assert all(s in err[0] for s in says), err[0]
+
+
+@pytest.mark.parametrize("n, says", [("-2", ">= 1"), ("0", ">= 1"), ("101", "<= 100")])
+def test_evaluate_refuses_a_neighbourhood_the_point_graph_cannot_have(scan, capsys, n, says):
+    # (-2: a traceback from the tree; 0: every metric computed on a graph of no edge, a
+    # boundary precision of 1.0 and a compactness of 0; 101: more than segment allows)
+    path, labels = scan
+    assert main(["evaluate", str(path), str(labels), "--ground-truth-field",
+                 "classification", "--neighbors", n]) == 2
+    _one_line_error(capsys, "n_neighbors", says)
+
+
+@pytest.mark.parametrize("kwargs", [dict(n_neighbors=0), dict(n_neighbors=2.5),
+                                    dict(n_neighbors=True), dict(neighbor_radius=-1.0),
+                                    dict(neighbor_radius=float("nan"))])
+def test_the_point_graph_checks_its_neighbourhood_itself(kwargs):
+    cloud = PointCloud(np.random.default_rng(1).random((200, 3)))
+    with pytest.raises(ParameterError, match="n_neighbors|neighbor_radius"):
+        point_graph(cloud, **kwargs)
+    assert point_graph(cloud, 4).graph.n_elements == 200  # (and a good one still builds)
+
+
+@pytest.mark.parametrize("args, says", [
+    (["--tiles", "2", "--levels", "5,10"], "--levels needs the whole input"),  # (was ignored)
+    (["--tiles", "2", "--level-cost", "planarity"], "--level-cost needs the whole input"),
+    (["--tiles", "2", "--extent-weight", "2"], "--extent-weight needs the whole input"),
+    (["--tiles", "2", "--view", "top"], "--view needs the whole input"),
+    (["--level-cost", "planarity"], "--level-cost is the merge cost of --levels"),
+    (["--view", "top"], "--view chooses the camera of --picture"),
+    (["--up", "z"], "--up sets the up axis of --picture"),
+])
+def test_an_option_that_would_do_nothing_is_refused(scan, tmp_path, capsys, args, says):
+    path, _ = scan
+    out = tmp_path / "out.seg"
+    assert main(["segment", str(path), "-k", "20", *args, "-o", str(out)]) == 2
+    _one_line_error(capsys, says)
+    assert not out.exists()
+
+
+def test_the_options_still_work_where_they_belong(scan, tmp_path):
+    path, _ = scan
+    graph = tmp_path / "g.npz"
+    assert main(["segment", str(path), "-k", "20", "--levels", "5,10", "--level-cost",
+                 "planarity", "--graph", str(graph), "-q"]) == 0
+    assert {"labels_0", "labels_1"} <= set(np.load(graph).files)
+    assert main(["segment", str(path), "-k", "20", "--up", "z", "--view", "top",
+                 "--html", str(tmp_path / "p.html"), "-q"]) == 0
+
+
+def test_render_refuses_a_negative_line_width_on_a_cloud_too(scan, tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    path, labels = scan
+    out = tmp_path / "p.png"
+    assert main(["render", str(path), str(labels), "-o", str(out), "--line-width", "-3"]) == 2
+    _one_line_error(capsys, "line_width")
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("value, says", [("lots", "a size such as 4GiB"), ([1], "a size"),
+                                         ("inf", "a size"), (True, "a size"),
+                                         ("1KB", "at least 128 MiB"), (-1, "at least 128")])
+def test_a_worker_memory_limit_is_a_size_a_worker_can_live_in(value, says):
+    with pytest.raises(ParameterError, match=says):
+        check_memory_limit(value)
+    with pytest.raises(ParameterError, match=says):
+        Engine(workers=2, memory_limit=value)
+
+
+def test_memory_limits_dask_takes_pass_through():
+    assert check_memory_limit("auto") == "auto" and check_memory_limit(None) is None
+    assert check_memory_limit(0) == 0 and check_memory_limit("0") == 0  # (no limit)
+    assert check_memory_limit(0.5) == 0.5  # (a share of the machine's memory)
+    assert check_memory_limit("2 GiB") == 2 * 2**30
+    assert check_memory_limit(MIN_WORKER_MEMORY) == MIN_WORKER_MEMORY
+
+
+def test_segment_tiled_refuses_a_bad_memory_limit_before_reading(tmp_path):
+    from superfacets import segment_tiled
+
+    missing = tmp_path / "not-read.ply"  # (not there: the limit is refused first)
+    with pytest.raises(ParameterError, match="memory_limit"):
+        segment_tiled(missing, 10, tiles=2, memory_limit="10MiB")
+
+
+def test_batch_segments_an_e57_s_scans_one_by_one_as_segment_does(tmp_path):
+    pye57 = pytest.importorskip("pye57")
+    rng = np.random.default_rng(0)
+    path = tmp_path / "site.e57"
+    e57 = pye57.E57(str(path), mode="w")
+    for i in range(2):
+        floor = np.c_[rng.random((1500, 2)) * 10 - 5, np.zeros(1500)]
+        wall = np.c_[rng.random(1500) * 10 - 5, np.full(1500, 5.0), rng.random(1500) * 3]
+        p = np.vstack([floor, wall])
+        e57.write_scan_raw({"cartesianX": p[:, 0], "cartesianY": p[:, 1],
+                            "cartesianZ": p[:, 2]}, name=f"station {i}",
+                           translation=np.array([20.0 * i, 0, 0]),
+                           rotation=np.array([1.0, 0, 0, 0]))
+    e57.close()
+    one = tmp_path / "one.seg"
+    assert main(["segment", str(path), "-k", "16", "--per-object", "-o", str(one), "-q"]) == 0
+    # (batch refused it: "--per-object segments the faces of a scene; not points")
+    assert main(["batch", str(path), "-o", str(tmp_path / "b"), "-k", "16", "--per-object",
+                 "--workers", "1", "-q"]) == 0
+    got = read_labels(tmp_path / "b" / "site.seg")
+    assert np.array_equal(got, read_labels(one)) and len(np.unique(got)) == 16
