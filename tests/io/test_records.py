@@ -345,10 +345,15 @@ def test_pcd_records_twice_and_a_pcd_ground_truth(tmp_path, capsys):
 def test_pcd_records_refused_where_they_cannot_be_written(tmp_path, capsys):
     pytest.importorskip("pypcd4")
     src = _pcd(tmp_path / "frame.pcd", "ascii")
-    text = src.read_bytes().replace(b"intensity", b"ClusterID")  # a float field of that name
-    (tmp_path / "float.pcd").write_bytes(text)
-    with pytest.raises(MeshFormatError, match="type F4 x 1, which cannot hold"):
-        write_labels_into(tmp_path / "o.pcd", tmp_path / "float.pcd", np.zeros(1200, int))
+    head, body = src.read_bytes().split(b"DATA ascii\n")  # a field of 2 values of that name
+    head = head.replace(b"intensity", b"ClusterID").replace(b"COUNT 1 1 1 1 1", b"COUNT 1 1 1 1 2")
+    body = b"\n".join(line + b" 0" for line in body.splitlines()) + b"\n"
+    (tmp_path / "pair.pcd").write_bytes(head + b"DATA ascii\n" + body)
+    with pytest.raises(MeshFormatError, match="type F4 x 2, which cannot hold"):
+        write_labels_into(tmp_path / "o.pcd", tmp_path / "pair.pcd", np.zeros(1200, int))
+    with pytest.raises(MeshFormatError, match="'classification' of type uint8, which cannot"):
+        write_labels_into(tmp_path / "o.las", _laz(tmp_path / "t.las", n=50), np.zeros(50, int),
+                          name="classification")  # (a standard dimension stays as it is)
     with pytest.raises(ParameterError, match="1,199 labels for 1,200 points"):
         write_labels_into(tmp_path / "o.pcd", src, np.zeros(1199, int))
     laz = _laz(tmp_path / "tile.laz", n=300)
@@ -358,3 +363,94 @@ def test_pcd_records_refused_where_they_cannot_be_written(tmp_path, capsys):
         err = capsys.readouterr().err.strip()
         assert len(err.splitlines()) == 1 and said in err, err
     assert not list(tmp_path.glob("o.*"))
+
+
+def _retyped(tmp_path, fmt: str):
+    """A scan whose label field has the type another program gave it: PDAL's ``uint64``
+    ``ClusterID``, CloudCompare's ``float`` scalar field (PLY, PCD, LAS)."""
+    from plyfile import PlyData, PlyElement
+
+    if fmt in ("las-uint64", "las-float"):
+        las = laspy.read(_laz(tmp_path / "tile.las", n=1200))
+        las.add_extra_dim(laspy.ExtraBytesParams(
+            name="ClusterID", type=np.uint64 if fmt == "las-uint64" else np.float32))
+        las.ClusterID = np.full(1200, 7)
+        las.write(str(tmp_path / "old.las"))
+        return tmp_path / "old.las", tmp_path / "new.laz"
+    if fmt == "ply-float":
+        v = np.zeros(1200, dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4"),
+                                  ("scalar_ClusterID", "<f4"), ("red", "u1")])
+        p = np.random.default_rng(3).normal(size=(1200, 3))
+        v["x"], v["y"], v["z"] = (p / np.linalg.norm(p, axis=1, keepdims=True)).T
+        v["scalar_ClusterID"], v["red"] = 7.0, 9
+        PlyData([PlyElement.describe(v, "vertex")]).write(str(tmp_path / "old.ply"))
+        return tmp_path / "old.ply", tmp_path / "new.ply"
+    pytest.importorskip("pypcd4")
+    src = _pcd(tmp_path / "frame.pcd", fmt.split("-")[1])
+    (tmp_path / "old.pcd").write_bytes(src.read_bytes().replace(b"intensity", b"ClusterID"))
+    return tmp_path / "old.pcd", tmp_path / "new.pcd"
+
+
+@pytest.mark.parametrize("fmt", ["las-uint64", "las-float", "ply-float", "pcd-ascii",
+                                 "pcd-binary", "pcd-binary_compressed"])
+def test_a_label_field_of_another_type_is_made_int32(tmp_path, fmt):
+    # (they were refused: "has a vertex property 'scalar_ClusterID' of type float32, which
+    # cannot hold the labels", so a cloud CloudCompare had saved could not be segmented again)
+    src, out = _retyped(tmp_path, fmt)
+    before = read_input_fields(src)
+    assert main(["segment", str(src), "-k", "6", "-o", str(out), "-q"]) == 0
+    after = read_input_fields(out)
+    labels = read_labels(out)
+    assert after["ClusterID"].dtype == np.int32 and np.array_equal(after["ClusterID"], labels)
+    assert len(np.unique(labels[labels >= 0])) == 6 and (labels != 7).any()
+    assert before.keys() == after.keys()
+    for name in before:  # every other field kept
+        if name != "ClusterID":
+            assert np.array_equal(before[name], after[name], equal_nan=True), name
+
+
+def read_input_fields(path) -> dict:
+    """Each field of a scan's points by name (a PLY's ``scalar_`` prefix dropped)."""
+    from plyfile import PlyData
+
+    suffix = path.suffix
+    if suffix in (".las", ".laz"):
+        las = laspy.read(str(path))
+        return {n: np.asarray(las[n]) for n in las.point_format.dimension_names}
+    if suffix == ".ply":
+        v = PlyData.read(str(path))["vertex"]
+        return {p.name.removeprefix("scalar_"): np.asarray(v[p.name]) for p in v.properties}
+    from pypcd4 import PointCloud
+
+    data = PointCloud.from_path(path).pc_data
+    return {n: np.asarray(data[n]) for n in data.dtype.names  # (not padding: "_", or the
+            if n.isidentifier() and n != "_"}                  # random names pypcd4 gives it)
+
+
+def test_a_cloud_cloudcompare_saved_segments_again_and_it_reads_the_new_labels(tmp_path):
+    if shutil.which("CloudCompare") is None:
+        pytest.skip("CloudCompare not found: install Debian's 'cloudcompare' package (make "
+                    "test does, as root)")
+    src, _ = _retyped(tmp_path, "ply-float")
+    first, saved, again = tmp_path / "a.ply", tmp_path / "cc.ply", tmp_path / "b.ply"
+    assert main(["segment", str(src), "-k", "5", "-o", str(first), "-q"]) == 0
+    _cloudcompare(tmp_path, first, "PLY", saved)
+    assert b"property float scalar_ClusterID" in saved.read_bytes()[:1000]  # (its own type)
+    assert main(["segment", str(saved), "-k", "12", "-o", str(again), "-q"]) == 0
+    asc = tmp_path / "b.asc"
+    _cloudcompare(tmp_path, again, "ASC", asc)
+    head = asc.read_text().splitlines()[0]
+    got = np.loadtxt(asc, comments="//")[:, head.lstrip("/").split().index("ClusterID")]
+    assert np.array_equal(got.astype(int), read_labels(again))
+    assert len(np.unique(got)) == 12
+
+
+def _cloudcompare(home, path, fmt: str, out) -> None:
+    """CloudCompare's command line, headless: ``path`` saved as ``fmt`` to ``out``."""
+    extra = ["-ADD_HEADER"] if fmt == "ASC" else []
+    run = subprocess.run(["CloudCompare", "-SILENT", "-AUTO_SAVE", "OFF", "-O", str(path),
+                          "-C_EXPORT_FMT", fmt, *extra, "-SAVE_CLOUDS", "FILE", str(out)],
+                         capture_output=True, text=True, timeout=120,
+                         env={"QT_QPA_PLATFORM": "offscreen", "PATH": "/usr/bin:/bin",
+                              "HOME": str(home)})
+    assert run.returncode == 0 and out.exists(), run.stdout[-2000:]

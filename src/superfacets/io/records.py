@@ -135,7 +135,9 @@ def write_labels_into(path, source, labels, *, name: str = LABEL_FIELD,
         point; written as ``int32``.
     name : str, default ``'ClusterID'``
         The dimension's (LAS/LAZ) or field's (PCD) name; in a PLY the property is
-        ``scalar_<name>``. An existing field of that name is overwritten.
+        ``scalar_<name>``. An existing field of that name is overwritten; one of a type
+        that cannot hold the labels (CloudCompare's float scalar fields, PDAL's unsigned
+        ``ClusterID``) is made ``int32``.
     outputs : Outputs, optional
         Stage the file there (all or nothing with the run's other files).
 
@@ -150,8 +152,8 @@ def write_labels_into(path, source, labels, *, name: str = LABEL_FIELD,
         number of records, the formats do not match, or ``name`` is not a word of
         letters, digits and ``_`` (of at most 32 characters in a LAS file).
     MeshFormatError
-        If the input cannot be read, or holds a field of that name of a type
-        that cannot take the labels.
+        If the input cannot be read, or holds a field of that name that cannot be made
+        to take the labels (a standard LAS dimension, a PCD field of several values).
     MissingExtraError
         LAS/LAZ without the ``clouds`` extra.
 
@@ -207,10 +209,12 @@ def _las_with(source: Path, labels: np.ndarray, name: str, compress: bool) -> by
         raise _count_error(source, labels.shape[0], len(las.points))
     if name in las.point_format.dimension_names:
         dtype = np.asarray(las[name][:0]).dtype
-        if not (np.issubdtype(dtype, np.signedinteger) and dtype.itemsize >= 4):
-            raise MeshFormatError(f"{source}: has a dimension {name!r} of type {dtype}, "
-                                  "which cannot hold the labels (-1 and up to 2**31 - 1)")
-    else:
+        if not _holds_labels(dtype):
+            if name not in las.point_format.extra_dimension_names:  # (a standard one)
+                raise MeshFormatError(f"{source}: has a dimension {name!r} of type {dtype}, "
+                                      "which cannot hold the labels (-1 and up to 2**31 - 1)")
+            las.remove_extra_dim(name)  # (PDAL's uint64 ClusterID, a float field: retyped)
+    if name not in las.point_format.dimension_names:
         las.add_extra_dim(laspy.ExtraBytesParams(
             name=name, type=np.int32, description="superfacets label"))
     las[name] = labels
@@ -234,16 +238,22 @@ def _ply_with(source: Path, labels: np.ndarray, prop: str) -> bytes:
     if len(data) != labels.shape[0]:
         raise _count_error(source, labels.shape[0], len(data))
     names = [p.name for p in vertex.properties]
+    order = "<" if ply.byte_order in ("<", "=") else ">"
+    if prop in names and not _holds_labels(np.dtype(data.dtype[prop])):
+        # (CloudCompare saves its scalar fields as float: the property becomes an int)
+        retyped = np.empty(len(data), dtype=[(n, order + "i4" if n == prop else
+                                              data.dtype.fields[n][0]) for n in names])
+        for n in names:
+            if n != prop:
+                retyped[n] = data[n]
+        data = retyped
+        vertex.properties = tuple(PlyProperty(prop, "int32") if p.name == prop else p
+                                  for p in vertex.properties)
     if prop in names:
-        kind = np.dtype(data.dtype[prop])
-        if not (np.issubdtype(kind, np.signedinteger) and kind.itemsize >= 4):
-            raise MeshFormatError(f"{source}: has a vertex property {prop!r} of type {kind}, "
-                                  "which cannot hold the labels (-1 and up to 2**31 - 1)")
         data = data.copy()
         data[prop] = labels
         vertex.data = data
     else:
-        order = "<" if ply.byte_order in ("<", "=") else ">"
         fields = [(n, data.dtype.fields[n][0]) for n in data.dtype.names]
         grown = np.empty(len(data), dtype=fields + [(prop, order + "i4")])
         for n in data.dtype.names:
@@ -275,11 +285,20 @@ def _pcd_with(source: Path, labels: np.ndarray, name: str) -> bytes:
     fields = list(meta.fields)
     if name in fields:
         at = fields.index(name)
-        if meta.type[at] != "I" or meta.size[at] < 4 or meta.count[at] != 1:
+        if meta.count[at] != 1:
             raise MeshFormatError(f"{source}: has a field {name!r} of type {meta.type[at]}"
                                   f"{meta.size[at]} x {meta.count[at]}, which cannot hold "
                                   "the labels (-1 and up to 2**31 - 1)")
-        grown = data.copy()
+        if meta.type[at] != "I" or meta.size[at] < 4:  # (a float field: made I 4)
+            head = [_pcd_retyped_line(line, at) for line in head]
+            meta = meta.model_copy(update=dict(
+                size=tuple(4 if i == at else v for i, v in enumerate(meta.size)),
+                type=tuple("I" if i == at else v for i, v in enumerate(meta.type))))
+        grown = np.empty(len(data), dtype=[(d[0], "<i4") if d[0] == name else d
+                                           for d in data.dtype.descr])
+        for n in data.dtype.names:
+            if n != name:
+                grown[n] = data[n]
         grown[name] = labels
         column = sum(meta.count[:at])
     else:
@@ -332,6 +351,23 @@ def _pcd_grown_line(line: bytes, name: str) -> bytes:
         return line
     end = line[len(line.rstrip(b"\r\n")):]
     return line.rstrip(b"\r\n").rstrip() + b" " + add + (end or b"\n")
+
+
+def _holds_labels(dtype: np.dtype) -> bool:
+    """Whether a field of ``dtype`` holds every label (-1 and up to 2**31 - 1)."""
+    return bool(np.issubdtype(dtype, np.signedinteger) and dtype.itemsize >= 4)
+
+
+def _pcd_retyped_line(line: bytes, at: int) -> bytes:
+    """A PCD header line with field ``at``'s ``SIZE`` made 4 and its ``TYPE`` I, else as
+    it was."""
+    words = line.split(b"#")[0].split()
+    new = {b"SIZE": b"4", b"TYPE": b"I"}.get(words[0].upper() if words else b"")
+    if new is None or len(words) <= at + 1:
+        return line
+    words[at + 1] = new
+    end = line[len(line.rstrip(b"\r\n")):]
+    return b" ".join(words) + (end or b"\n")
 
 
 def _pcd_ascii(source: Path, head: list[bytes], body: bytes, labels: np.ndarray,
