@@ -143,3 +143,19 @@ def test_batch_segments_an_e57_s_scans_one_by_one_as_segment_does(tmp_path):
                  "--workers", "1", "-q"]) == 0
     got = read_labels(tmp_path / "b" / "site.seg")
     assert np.array_equal(got, read_labels(one)) and len(np.unique(got)) == 16
+
+
+def test_write_colored_mesh_takes_a_cloud_as_colored_mesh_does(tmp_path):
+    from superfacets import read_labels, segment, write_colored_mesh
+
+    cloud = PointCloud(np.c_[np.random.default_rng(2).random((600, 2)), np.zeros(600)])
+    labels = segment(cloud, 6).labels
+    # (it said "mesh must be ... (a point cloud: a PointCloud or an (N, 3) array), got
+    # PointCloud")
+    for given, name in ((cloud, "a.ply"), (cloud.points, "b.ply")):
+        out = write_colored_mesh(tmp_path / name, given, labels)
+        assert np.array_equal(read_labels(out), labels)
+    assert (tmp_path / "a.ply").read_bytes() == (tmp_path / "b.ply").read_bytes()
+    with pytest.raises(ParameterError, match="600 integers, one per point"):
+        write_colored_mesh(tmp_path / "c.ply", cloud, labels[:5])
+    assert not (tmp_path / "c.ply").exists()

@@ -139,8 +139,10 @@ def write_colored_mesh(path, mesh, labels, *, vertex_colors: bool = False,
         colours per face through split vertices; Blender, three.js, viewers)
         or ``.obj`` (a material per colour, in ``path`` with ``.mtl``).
     mesh : Mesh, trimesh.Trimesh, pyvista.PolyData or (vertices, faces)
+        Or a point cloud (``PointCloud``, an ``(N, 3)`` array, as ``--colored-mesh``
+        writes it): a ``.ply`` of its points (:func:`write_colored_elements`).
     labels : (m,) int ndarray
-        One label per face.
+        One label per face (per point of a cloud).
     vertex_colors : bool, default False
         PLY only: per-vertex colours instead of per-face ones (each face gets
         its own copy of its vertices, so the colours stay per face; the
@@ -155,9 +157,10 @@ def write_colored_mesh(path, mesh, labels, *, vertex_colors: bool = False,
     Raises
     ------
     ParameterError
-        If ``labels`` is not one integer per face.
+        If ``labels`` is not one integer per face (point).
     MeshFormatError
-        On another format, or ``vertex_colors`` with one other than PLY.
+        On another format (a cloud: other than PLY), or ``vertex_colors`` with one other
+        than PLY.
 
     Examples
     --------
@@ -171,6 +174,11 @@ def write_colored_mesh(path, mesh, labels, *, vertex_colors: bool = False,
     [0, 1]
     """
 
+    from ..elements.builders import elements_of, is_cloud
+
+    if is_cloud(mesh):  # (a cloud's points, coloured as `segment --colored-mesh` does)
+        return write_colored_elements(path, elements_of(mesh, "points"), labels,
+                                      outputs=outputs)
     mesh = as_mesh(mesh)
     labels = check_labels(labels, mesh.n_faces, per="face")
     path = Path(path)
