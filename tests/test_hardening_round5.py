@@ -159,3 +159,46 @@ def test_write_colored_mesh_takes_a_cloud_as_colored_mesh_does(tmp_path):
     with pytest.raises(ParameterError, match="600 integers, one per point"):
         write_colored_mesh(tmp_path / "c.ply", cloud, labels[:5])
     assert not (tmp_path / "c.ply").exists()
+
+
+@pytest.mark.parametrize("method, param, says", [
+    ("superfacets", "alpha=0,-1", "alpha must be"),  # (a failed row each, after the others)
+    ("superfacets", "window=0", "window must be"),
+    ("shlafman", "alpha=2", "Shlafman weighting must be in [0, 1]"),
+    ("adaptive", "start=0", "start must be"),
+])
+def test_experiment_refuses_a_setting_its_method_refuses_before_any_work(scan, tmp_path,
+                                                                         capsys, method,
+                                                                         param, says):
+    path, _ = scan
+    out = tmp_path / "r.csv"
+    assert main(["experiment", "--dataset", "files", "--inputs", str(path),
+                 "--ground-truth-field", "classification", "-k", "10", "-m", method,
+                 "--param", param, "--elements", "points", "-o", str(out), "-j", "1",
+                 "-q"]) == 2
+    _one_line_error(capsys, f"method {method!r}", says)
+    assert not out.exists()
+
+
+def test_experiment_says_why_its_rows_failed(scan, tmp_path, capsys):
+    path, _ = scan
+    out = tmp_path / "r.csv"
+    assert main(["experiment", "--dataset", "files", "--inputs", str(path),
+                 "--ground-truth-field", "nosuch", "-k", "10", "--alpha", "0", "200",
+                 "-o", str(out), "-j", "1", "-q"]) == 0
+    captured = capsys.readouterr()
+    assert "0 ok, 2 failed" in captured.out
+    said = [ln for ln in captured.err.splitlines() if ln.startswith("failed:")]
+    assert len(said) == 1 and said[0].startswith("failed: 2 rows: MeshFormatError:")
+    assert "no field 'nosuch'" in said[0]
+
+
+def test_report_refuses_a_focus_that_is_no_count(scan, tmp_path, capsys):
+    path, _ = scan
+    rows = tmp_path / "r.csv"
+    assert main(["experiment", "--dataset", "files", "--inputs", str(path),
+                 "--ground-truth-field", "classification", "-k", "10", "--alpha", "200",
+                 "-o", str(rows), "-j", "1", "-q"]) == 0
+    assert main(["report", str(rows), "--k-focus", "-3", "-o", str(tmp_path / "rep")]) == 2
+    _one_line_error(capsys, "k_focus")
+    assert not (tmp_path / "rep").exists()

@@ -167,6 +167,10 @@ def select_meshes(args):
     return meshes
 
 
+#: Distinct errors of failed rows that ``experiment`` prints.
+FAILURES_SAID = 5
+
+
 def cmd_experiment(args) -> int:
     from ..evaluation.methods import METHODS, get_method
     from ..scale.runner import expand_grid, method_grid, parse_params, run_experiment
@@ -208,6 +212,11 @@ def cmd_experiment(args) -> int:
         print(f"note: {s.note}", file=sys.stderr)
     print(f"{s.written} rows written ({s.ok} ok, {s.failed} failed, {s.skipped} skipped), "
           f"{s.done_before} already there, in {s.seconds:.1f} s -> {out}")
+    for error, n in list(s.failures.items())[:FAILURES_SAID]:  # (every row's in the file)
+        print(f"failed: {n} row{'s' if n != 1 else ''}: {error}", file=sys.stderr)
+    if len(s.failures) > FAILURES_SAID:
+        print(f"... and {len(s.failures) - FAILURES_SAID} more errors (see {out}'s error "
+              "column)", file=sys.stderr)
     if s.interrupted:
         print("superfacets: interrupted: run the same command again to continue",
               file=sys.stderr)

@@ -11,12 +11,14 @@ and the values ``superfacets experiment`` sweeps by default.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Callable
 
 import numpy as np
 
 from ..api.levels import adaptive_segment
 from ..api.segmentation import segment
+from ..checks import check_int, check_nonneg
 from ..elements.kinds import kind_of
 from ..errors import MemoryLimitError, ParameterError
 from ..method.params import (
@@ -26,6 +28,7 @@ from ..method.params import (
     INITS,
     PARAMETER,
     WEIGHTING_ALPHA,
+    resolve,
 )
 from .baselines.cut_pursuit import cut_pursuit
 from .baselines.graph_segmentation import graph_segmentation
@@ -96,6 +99,10 @@ class Method:
         The element kinds it segments (``"faces"``, ``"vertices"``,
         ``"points"``). A method with more than faces takes ``elements=`` and
         is given a mesh (faces, vertices) or a point cloud (points).
+    check : callable or None
+        ``check(**params)`` raises :class:`~superfacets.errors.ParameterError` on values
+        ``run`` would refuse, so that a grid is refused before any work (None: ``run``
+        alone checks them).
     """
 
     name: str
@@ -105,6 +112,7 @@ class Method:
     description: str = ""
     progress: bool = False
     elements: tuple = ("faces",)
+    check: Callable[..., None] | None = None
 
     @property
     def takes_elements(self) -> bool:
@@ -173,7 +181,8 @@ METHODS: dict[str, Method] = {}
 
 def register_method(name: str, run: Callable[..., MethodRun], *, defaults: dict,
                     sweep: dict | None = None, description: str = "",
-                    progress: bool = False, elements: tuple = ("faces",)) -> Method:
+                    progress: bool = False, elements: tuple = ("faces",),
+                    check: Callable[..., None] | None = None) -> Method:
     """Add (or replace) a method in :data:`METHODS`.
 
     Parameters
@@ -193,10 +202,19 @@ def register_method(name: str, run: Callable[..., MethodRun], *, defaults: dict,
         Whether ``run`` takes ``progress=`` (shown by ``superfacets baseline``).
     elements : tuple of str, default ('faces',)
         Element kinds the method segments (see :class:`Method`).
+    check : callable, optional
+        ``check(**params)``: the parameters' values checked before any work (see
+        :class:`Method`).
 
     Returns
     -------
     Method
+
+    Raises
+    ------
+    ParameterError
+        On a name that is not a word, or a parameter named as a runner's argument or a
+        metric's column.
     """
     if not name or not all(c.isalnum() or c in "_-" for c in name):
         raise ParameterError(f"invalid method name {name!r}")
@@ -207,7 +225,7 @@ def register_method(name: str, run: Callable[..., MethodRun], *, defaults: dict,
         raise ParameterError(f"parameter {word} reserved by the runner (its arguments and "
                              f"the metrics' columns): {sorted(clash)}")
     m = Method(name, run, dict(defaults), dict(sweep or {}), description, progress,
-               tuple(elements))
+               tuple(elements), check)
     METHODS[name] = m
     return m
 
@@ -248,6 +266,15 @@ def _segment_options(center_tol="auto", coarsen="auto", cleanup="auto", split_me
                 max_size_ratio=_auto(max_size_ratio, float),
                 density=_auto(density, float), merge_from=_auto(merge_from, int),
                 assignment=_auto(assignment, parse_assignment), **params)
+
+
+def _check_superfacets(weighting="paper", start=1, extent_weight="auto", **params) -> None:
+    """The values of a superfacets, shlafman or adaptive setting, as :func:`segment` checks
+    them (and the adaptive levels' ``start`` and ``extent_weight``)."""
+    check_int("start", start, lo=1)
+    if extent_weight != "auto":
+        check_nonneg("extent_weight", _auto(extent_weight, float))
+    resolve(weighting=weighting, **_segment_options(**params))
 
 
 def _run_superfacets(mesh, n_segments, *, cache, seed, weighting="paper", **params):
@@ -328,7 +355,7 @@ register_method(
     sweep={"alpha": DEFAULT_ALPHAS},
     description="the paper's method: bounded Dijkstra k-means, weights of eqs. 1-3 (faces; "
                 "on vertices, points and tetrahedra their analogues)",
-    progress=True, elements=(*ELEMENTS, "cells"))
+    progress=True, elements=(*ELEMENTS, "cells"), check=_check_superfacets)
 register_method(
     "adaptive", _run_adaptive,
     defaults=dict(_SF_DEFAULTS, start=10, extent_weight="auto"),
@@ -336,7 +363,7 @@ register_method(
                 "then the level of n_segments that merges the flattest neighbours first "
                 "(superfacets.adaptive_superpoints; extent_weight=auto: 0.01 on scans of "
                 "uneven density)",
-    progress=True, elements=ELEMENTS)
+    progress=True, elements=ELEMENTS, check=_check_superfacets)
 register_method(
     "graph_segmentation", _run_graph_segmentation, defaults=dict(k_thresh=0.0, min_size=20),
     description="Felzenszwalb-Huttenlocher graph segmentation with the ScanNet Segmentator's "
@@ -367,7 +394,7 @@ register_method(
     "shlafman", _run_shlafman, defaults=dict(_SF_DEFAULTS, alpha=WEIGHTING_ALPHA["shlafman"][0]),
     sweep={"alpha": (0.0, 0.25, 0.5, 0.75, 1.0)},
     description="the same k-means with Shlafman et al.'s weights (eq. 6), alpha in [0, 1]",
-    progress=True)
+    progress=True, check=partial(_check_superfacets, weighting="shlafman"))
 register_method(
     "ncuts", _run_ncuts,
     defaults=dict(alpha=100.0, eta_convex=0.2, bandwidth=1.0, components=300,

@@ -22,6 +22,7 @@ import io
 from pathlib import Path
 from typing import Sequence
 
+from ...checks import check_int
 from ...io import atomic_write
 from .figures import plot_cost, plot_curves, plot_per_category
 from .tables import (
@@ -72,8 +73,10 @@ def write_report(results, out_dir, *, k_focus: int = 150, prefix: str = "",
     Raises
     ------
     ParameterError
-        If the file has no successful row, or a series is unknown.
+        If the file has no successful row, a series is unknown, or ``k_focus`` is not a
+        count (an integer >= 1).
     """
+    check_int("k_focus", k_focus, lo=1)  # (-3 drew every table of nothing)
     df = load_results(results, series=series)
     ok = ok_rows(df)  # (no successful row: refused before the folder is made)
     out = Path(out_dir)

@@ -16,7 +16,7 @@ from __future__ import annotations
 import csv
 import time
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 from itertools import product
 from pathlib import Path
@@ -195,6 +195,8 @@ class ExperimentSummary:
     interrupted : bool
     note : str
         Where the engine chose for the user (no Dask installed: in this process).
+    failures : dict
+        The failed rows' errors, each with how many rows it ended, in the order first met.
     """
 
     path: Path
@@ -205,6 +207,7 @@ class ExperimentSummary:
     seconds: float = 0.0
     interrupted: bool = False
     note: str = ""
+    failures: dict = field(default_factory=dict)
 
     @property
     def written(self) -> int:
@@ -294,7 +297,8 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
     Raises
     ------
     ParameterError
-        On an empty grid, a bad ``n_segments``, ``workers`` or ``tau``.
+        On an empty grid, a bad ``n_segments``, ``workers`` or ``tau``, or a setting's
+        value its method refuses (:attr:`~superfacets.evaluation.methods.Method.check`).
     MissingExtraError, SchedulerError
         Dask needed and missing; a scheduler that cannot be reached.
     """
@@ -308,6 +312,13 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
 
     workers = None if workers is None else check_int("workers", workers, lo=1,
                                                      hi=max_threads())
+    for c in configs:  # (each setting's values, before any work: not a failed row each)
+        check = get_method(c.method).check
+        try:
+            if check is not None:
+                check(**c.kwargs)
+        except ParameterError as exc:
+            raise ParameterError(f"method {c.method!r}: {exc}") from None
     path = Path(results)
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a directory")
@@ -342,6 +353,8 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
             for r in rows:
                 writer.writerow({k: fmt_value(v) for k, v in r.items()})
                 setattr(summary, r["status"], getattr(summary, r["status"]) + 1)
+                if r["status"] == "failed":
+                    summary.failures[r["error"]] = summary.failures.get(r["error"], 0) + 1
             f.flush()
             if bar is not None:
                 bar.update(len(rows))
