@@ -202,3 +202,40 @@ def test_report_refuses_a_focus_that_is_no_count(scan, tmp_path, capsys):
     assert main(["report", str(rows), "--k-focus", "-3", "-o", str(tmp_path / "rep")]) == 2
     _one_line_error(capsys, "k_focus")
     assert not (tmp_path / "rep").exists()
+
+
+def _sphere_faces():
+    import trimesh
+
+    m = trimesh.creation.icosphere(subdivisions=3)  # (1,280 faces: past 4 KiB of text)
+    return m.vertices, m.faces
+
+
+def test_an_ascii_stl_in_capitals_is_read_as_text(tmp_path):
+    from superfacets import read_mesh
+
+    v, f = _sphere_faces()
+    lines = ["solid  part  "]
+    for tri in f:
+        lines += ["  FACET NORMAL 0 0 0", "\tOUTER LOOP"]
+        lines += [f"    VERTEX {x:.6e} {y:.6e} {z:.6e}" for x, y, z in v[tri]]
+        lines += ["\tENDLOOP", "  ENDFACET"]
+    path = tmp_path / "part.stl"
+    path.write_text("\n".join(lines + ["ENDSOLID part"]) + "\n")
+    # (it was read as binary: "truncated binary STL: 808,281,400 triangles declared")
+    assert read_mesh(path).n_faces == len(f)
+
+
+def test_an_obj_line_continued_by_a_backslash_is_one_line(tmp_path):
+    from superfacets import read_mesh
+
+    v, f = _sphere_faces()
+    text = "".join(f"v {x} {y} {z}\n" for x, y, z in v)
+    text += "".join(f"f {a + 1}//1 {b + 1}//1 \\\n{c + 1}//1\n" for a, b, c in f[::2])
+    text += "".join(f"f {a + 1} {b + 1} {c + 1}\r\n" for a, b, c in f[1::2])
+    path = tmp_path / "long.obj"
+    path.write_text("vn 0 0 1\n" + text)
+    # (it said "face 0: malformed vertex index '\\'")
+    mesh = read_mesh(path)
+    assert mesh.n_faces == len(f)
+    assert np.array_equal(np.asarray(mesh.faces), np.r_[f[::2], f[1::2]])

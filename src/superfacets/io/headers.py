@@ -441,7 +441,8 @@ def check_stl(data: bytes, path: Path) -> None:
     --------
     >>> check_stl(bytes(84), Path("empty.stl"))  # a binary STL of no triangles
     """
-    if data[:5].lower() == b"solid" and b"facet" in data[:4096]:  # ASCII
+    if data[:5].lower() == b"solid" and b"facet" in data[:4096].lower():  # ASCII (its
+        # keywords in any case: "FACET NORMAL" too)
         tail = data.rstrip()[-256:].lower()
         if b"endsolid" not in tail and not tail.endswith(b"endfacet"):
             raise MeshFormatError(f"{path}: truncated ASCII STL (its last facet does not end)")

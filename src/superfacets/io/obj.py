@@ -26,6 +26,7 @@ __all__ = ["parse_obj"]
 _KIND = {"v": 1, "v ": 1, "v\t": 1, "f": 2, "f ": 2, "f\t": 2, "o": 3, "o ": 3, "o\t": 3}
 _SLASH = re.compile(r"/\S*")  # the texture and normal indices of "i/t/n"
 _TAIL = itemgetter(slice(1, None))  # a line without its statement's letter
+_CONTINUED = re.compile(rb"\\\r?\n")  # a backslash that ends a line: it goes on
 
 
 def parse_obj(data: bytes, path: Path, size: int = 1 << 23):
@@ -35,7 +36,8 @@ def parse_obj(data: bytes, path: Path, size: int = 1 << 23):
     face ranges). Indices are 1-based; a negative index counts back from the last vertex
     defined before its face line (the OBJ rule); ``0`` is an error. In ``f`` lines,
     ``i/t/n`` keeps ``i``. ``v x y z r g b`` lines give vertex colours (where every ``v``
-    line has them). Separators may be spaces or tabs.
+    line has them). Separators may be spaces or tabs; a line ending in ``\\`` goes on
+    on the next.
 
     Parameters
     ----------
@@ -68,6 +70,8 @@ def parse_obj(data: bytes, path: Path, size: int = 1 << 23):
     >>> f.tolist(), objects, colors
     ([[0, 1, 2]], (), None)
     """
+    if b"\\\n" in data or b"\\\r\n" in data:  # a line continued on the next (the OBJ rule)
+        data = _CONTINUED.sub(b" ", data)
     state = _State()
     for lines in text_chunks(data, path, size):
         state.read(lines, path)
