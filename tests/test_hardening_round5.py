@@ -239,3 +239,33 @@ def test_an_obj_line_continued_by_a_backslash_is_one_line(tmp_path):
     mesh = read_mesh(path)
     assert mesh.n_faces == len(f)
     assert np.array_equal(np.asarray(mesh.faces), np.r_[f[::2], f[1::2]])
+
+
+@pytest.mark.parametrize("faces", [False, True])
+def test_a_ply_with_x_y_z_in_capitals_reads_as_with_x_y_z(tmp_path, faces):
+    from plyfile import PlyData, PlyElement
+
+    if faces:
+        v, f = _sphere_faces()
+    else:
+        v = np.c_[np.random.default_rng(4).random((3000, 2)) * 5, np.zeros(3000)]
+    for case, name in ((str.upper, "upper.ply"), (str.lower, "lower.ply")):
+        vert = np.zeros(len(v), dtype=[(case(c), "f8") for c in "xyz"])
+        for i, c in enumerate("xyz"):
+            vert[case(c)] = v[:, i]
+        elements = [PlyElement.describe(vert, "vertex")]
+        if faces:
+            rec = np.zeros(len(f), dtype=[("vertex_indices", "i4", (3,))])
+            rec["vertex_indices"] = f
+            elements.append(PlyElement.describe(rec, "face"))
+        PlyData(elements).write(str(tmp_path / name))
+    # (PDAL names its dimensions X, Y, Z; such a file was refused: "the vertex element has
+    # no x, y, z property (it has: X, Y, Z)")
+    for extra in ([], ["--tiles", "2", "--workers", "1"]):
+        outs = []
+        for name in ("upper.ply", "lower.ply"):
+            out = tmp_path / f"{name}{len(extra)}.seg"
+            assert main(["segment", str(tmp_path / name), "-k", "10", *extra, "-o", str(out),
+                         "-q"]) == 0
+            outs.append(out.read_bytes())
+        assert outs[0] == outs[1]

@@ -45,7 +45,15 @@ __all__ = ["read_cloud", "CLOUD_FORMATS", "is_cloud_file", "check_laz", "check_l
 from .._runtime import extras
 from ..checks import not_real
 from ..inputs.cloud import InvalidCloudError, PointCloud
-from .headers import check_las, check_laz, check_pcd, e57_counts, header_counts, pcd_problem  # noqa: E402 (re-exported: headers)
+from .headers import (  # noqa: E402 (re-exported: headers)
+    check_las,
+    check_laz,
+    check_pcd,
+    e57_counts,
+    header_counts,
+    pcd_problem,
+    ply_names,
+)
 from .orientation import sensor_up
 
 #: Point-cloud formats of :func:`read_cloud` (PLY files are clouds when they have no faces).
@@ -183,15 +191,17 @@ def _read_ply(data: bytes, path: Path) -> dict:
         vert = fast["vertex"] if fast and "vertex" in fast else \
             PlyData.read(io.BytesIO(data))["vertex"]
         names = [p.name for p in vert.properties]
-        missing = [c for c in "xyz" if c not in names]
+        named = ply_names(names)
+        missing = [c for c in "xyz" if c not in named]
         if missing:
             raise MeshFormatError(f"{path}: the vertex element has no {', '.join(missing)} "
                                   f"property (it has: {', '.join(names)})")
         with np.errstate(invalid="ignore"):  # a signalling NaN: the rows check names it
-            pts = np.stack([np.asarray(vert[c], dtype=np.float64) for c in "xyz"], axis=1)
+            pts = np.stack([np.asarray(vert[named[c]], dtype=np.float64) for c in "xyz"],
+                           axis=1)
             nrm = None
-            if all(c in names for c in ("nx", "ny", "nz")):
-                nrm = np.stack([np.asarray(vert[c], dtype=np.float64)
+            if all(c in named for c in ("nx", "ny", "nz")):
+                nrm = np.stack([np.asarray(vert[named[c]], dtype=np.float64)
                                 for c in ("nx", "ny", "nz")], axis=1)
         col = ply_colors(vert)
     except (PlyParseError, KeyError, ValueError, IndexError, TypeError, EOFError,

@@ -22,7 +22,7 @@ from .files import decompressed_head, max_ratio, split_suffix
 
 __all__ = ["header_counts", "e57_counts", "check_las", "check_laz", "check_pcd", "check_stl",
            "ply_mapped", "npy_mapped", "first_line", "NotStreamedError", "PCD_LINES",
-           "pcd_problem"]
+           "pcd_problem", "ply_names"]
 
 
 class NotStreamedError(MeshFormatError):
@@ -378,10 +378,44 @@ def ply_mapped(path: Path):
     if "vertex" not in [e.name for e in ply.elements]:
         raise MeshFormatError(f"{path}: the PLY has no vertex element")
     names = ply["vertex"].data.dtype.names or ()
-    missing = [c for c in "xyz" if c not in names]
+    missing = [c for c in "xyz" if c not in ply_names(names)]
     if missing:
         raise MeshFormatError(f"{path}: the vertex element has no {', '.join(missing)} property")
     return ply
+
+
+def ply_names(names, wanted=("x", "y", "z", "nx", "ny", "nz")) -> dict:
+    """The PLY property holding each of ``wanted``: the one of that name, else the one name
+    that differs from it in case alone (``X``, as PDAL names its dimensions; PDAL's readers
+    take either).
+
+    Parameters
+    ----------
+    names : sequence of str
+        The element's property names.
+    wanted : sequence of str
+
+    Returns
+    -------
+    dict
+        ``wanted`` name -> property name, for those found.
+
+    Raises
+    ------
+    TypeError
+        Never: a name not found is left out.
+
+    Examples
+    --------
+    >>> ply_names(["X", "Y", "Z", "intensity"])
+    {'x': 'X', 'y': 'Y', 'z': 'Z'}
+    """
+    out = {}
+    for w in wanted:
+        alike = [w] if w in names else [n for n in names if n.lower() == w]
+        if len(alike) == 1:
+            out[w] = alike[0]
+    return out
 
 
 def npy_mapped(path: Path) -> np.ndarray:

@@ -22,7 +22,7 @@ from ..inputs.convert import mesh_from_scene
 from ..inputs.mesh import Mesh, narrow_faces
 from ..inputs.rgb import unit_colors
 from .files import read_bytes, read_head, split_suffix, text_lines
-from .headers import check_gltf, check_stl, header_counts
+from .headers import check_gltf, check_stl, header_counts, ply_names
 from .obj import parse_obj
 from .ply import ply_colors, read_ply_triangles
 
@@ -363,7 +363,9 @@ def _ply_polygons(data: bytes, path: Path):
     try:
         ply = PlyData.read(io.BytesIO(data))
         vert = ply["vertex"]
-        v = np.stack([np.asarray(vert[c], dtype=np.float64) for c in "xyz"], axis=1)
+        xyz = ply_names([p.name for p in vert.properties], "xyz")  # (X, Y, Z too)
+        v = np.stack([np.asarray(vert[xyz.get(c, c)], dtype=np.float64) for c in "xyz"],
+                     axis=1)
         face = ply["face"]
         names = [p.name for p in face.properties]
         key = "vertex_indices" if "vertex_indices" in names else "vertex_index"

@@ -18,6 +18,7 @@ import numpy as np
 
 from ..errors import MeshFormatError
 from ..inputs.rgb import unit_colors
+from .headers import ply_names
 
 __all__ = ["ply_bytes", "read_ply_labels", "ply_colors", "read_ply_triangles", "VertexView",
            "read_ply_scalars"]
@@ -390,11 +391,15 @@ class VertexView:
     scaled to [0, 1] by its type: 8-bit / 255, 16-bit / 65535, floats clipped), indexed
     like an (n, 3) float64 array."""
 
-    def __init__(self, data, fields=tuple("xyz")) -> None:
+    def __init__(self, data, fields=None) -> None:
+        self.position = fields is None  # (the position: x, y, z in any case, as PDAL's X)
+        if fields is None:
+            named = ply_names(data.dtype.names, "xyz")
+            fields = tuple(named.get(c, c) for c in "xyz")
         self.data, self.fields = data, fields
         self.shape = (data.shape[0], 3)
         kind = data.dtype[fields[0]]
-        self.scale = (None if fields == tuple("xyz") or kind.kind == "f"
+        self.scale = (None if self.position or kind.kind == "f"
                       else 255.0 if kind.itemsize == 1 else 65535.0)
 
     def table(self, most_bytes: int) -> np.ndarray | VertexView:
@@ -402,7 +407,7 @@ class VertexView:
         as indexing this view), where it takes at most ``most_bytes``; else this view. A
         face's corners gathered from it are one row each, not three strided reads of the
         mapped file (a tiled run's survey and sorting of 6.8M faces: 3.7 s of gathers)."""
-        if 24 * self.shape[0] > most_bytes or self.fields != tuple("xyz"):
+        if 24 * self.shape[0] > most_bytes or not self.position:
             return self
         out = np.empty(self.shape)
         for i, c in enumerate(self.fields):  # (a column at a time: no copy beside it)
@@ -413,6 +418,6 @@ class VertexView:
         flat = np.asarray(idx).ravel()
         out = np.stack([np.asarray(self.data[c][flat], dtype=np.float64) for c in self.fields],
                        axis=1)
-        if self.fields != tuple("xyz"):
+        if not self.position:
             out = out / self.scale if self.scale else np.clip(out, 0.0, 1.0)
         return out.reshape(np.shape(idx) + (3,))

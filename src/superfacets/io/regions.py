@@ -51,7 +51,7 @@ from ..inputs.convert import as_mesh
 from ..inputs.mesh import Mesh
 from ..inputs.rgb import color_top, unit_colors
 from .clouds import is_cloud_file, read_cloud
-from .headers import NotStreamedError, check_las, first_line, npy_mapped, ply_mapped
+from .headers import NotStreamedError, check_las, first_line, npy_mapped, ply_mapped, ply_names
 from .meshes import read_mesh
 from .ply import VertexView
 
@@ -449,13 +449,16 @@ class RegionReader:
         names = v.dtype.names
         rgb = next((c for c in (("red", "green", "blue"), ("r", "g", "b")) if set(c) <= set(names)),
                    None)
-        nrm = ("nx", "ny", "nz") if {"nx", "ny", "nz"} <= set(names) else None
+        named = ply_names(names)  # (X, Y, Z as PDAL writes them too)
+        xyz = tuple(named[c] for c in "xyz")
+        nrm = tuple(named[c] for c in ("nx", "ny", "nz")) if {"nx", "ny", "nz"} <= set(
+            named) else None
         for s in range(0, self.n_rows, self.chunk):
             block = v[s:s + self.chunk]
-            xyz, n = (None if c is None else np.stack(
+            pos, n = (None if c is None else np.stack(
                 [np.asarray(block[a], dtype=np.float64) for a in c], axis=1)
-                for c in ("xyz", nrm))
-            yield s, xyz, (None if rgb is None else self._colors(
+                for c in (xyz, nrm))
+            yield s, pos, (None if rgb is None else self._colors(
                 np.stack([np.asarray(block[c]) for c in rgb], axis=1), stats), n)
 
     def _las_chunks(self, stats: dict | None):
