@@ -246,7 +246,7 @@ def cmd_view(args) -> int:
 
 
 def cmd_html(args) -> int:
-    from ..viz.html import write_html
+    from ..viz.html import page_step, write_html
 
     out = check_output(args.output, (".html", ".htm"), "the page",
                        inputs=(args.mesh, args.labels))
@@ -261,5 +261,8 @@ def cmd_html(args) -> int:
         write_html(out, data, labels, title=args.title or Path(args.mesh).name, info=info,
                    background=args.background, view=view, up=up, **drawn)
     if not args.quiet:
-        print(f"wrote {out} ({out.stat().st_size / 1e6:.1f} MB): open it in a browser")
+        step = page_step(len(labels)) if elements == "points" and labels is not None else 1
+        share = f"; one point in {step} drawn: a page of all would not open" if step > 1 \
+            else ""
+        print(f"wrote {out} ({out.stat().st_size / 1e6:.1f} MB{share}): open it in a browser")
     return 0

@@ -33,7 +33,7 @@ from ...io.files import save
 from ..camera import view_frame
 from ..render import PointsFrame, faces_to_draw
 
-__all__ = ["NotebookView", "write_html", "html_page"]
+__all__ = ["NotebookView", "write_html", "html_page", "page_step", "MAX_PAGE_POINTS"]
 
 
 def _template() -> str:
@@ -150,28 +150,67 @@ def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None 
     return _page(f"{name} - superfacets", background, meta, data)
 
 
+#: Points a page draws at most (about 18 bytes each in the page): a larger cloud is drawn
+#: from an even share of its points (every ``s``-th in its Z-order, :func:`page_step`). At
+#: 10M points a page of every point was 173 MB; past about 30M one is longer than the
+#: longest string a browser's script engine holds, and does not open.
+MAX_PAGE_POINTS = 2_000_000
+
+
+def page_step(n_points: int) -> int:
+    """``s``: a page of a cloud of ``n_points`` draws every ``s``-th point (1: all).
+
+    Parameters
+    ----------
+    n_points : int
+        The cloud's points (its distinct positions).
+
+    Returns
+    -------
+    int
+        ``ceil(n_points / MAX_PAGE_POINTS)``, at least 1.
+
+    Raises
+    ------
+    TypeError
+        If ``n_points`` is not a number.
+
+    Examples
+    --------
+    >>> page_step(500_000), page_step(10_000_000)
+    (1, 5)
+    """
+    return max(1, -(-int(n_points) // MAX_PAGE_POINTS))
+
+
 def _points_page(cloud, labels, *, title, info, background, view, up) -> str:
-    """The viewer page of a point cloud: points coloured by superpoint (invalid ones left out)."""
+    """The viewer page of a point cloud: points coloured by superpoint (invalid ones left
+    out; past :data:`MAX_PAGE_POINTS`, an even share of them, said on the page)."""
 
     source = elements_of(cloud, "points")
     g = source.graph
     rgb = point_colors(source, labels)
     n_sp = 0 if labels is None else int(np.unique(np.asarray(labels)[np.asarray(labels) >= 0])
                                         .size)
+    step = page_step(g.n_elements)  # (the elements are in Z-order: an even share of them)
+    rgb = rgb[::step]
     palette, color_index = np.unique(rgb, axis=0, return_inverse=True)
     index_dtype = np.uint8 if palette.shape[0] <= 256 else np.uint16
     v = g.positions
     center = (v.min(axis=0) + v.max(axis=0)) / 2
     scale = float(np.linalg.norm(v - center, axis=1).max()) or 1.0
-    v = ((v - center) / scale).astype("<f4")
+    v = ((v[::step] - center) / scale).astype("<f4")
     d, upv = view_frame(PointsFrame(g), view, up=up)
     rot = np.stack([np.cross(upv, d), upv, d])
     name = title or getattr(source.source, "name", "") or "point cloud"
-    spacing = float(np.sqrt(np.percentile(g.sizes, 90))) / scale
-    meta = {"name": name, "points": int(g.n_elements), "faces": 0, "superfacets": n_sp,
-            "info": {str(k): str(v_) for k, v_ in (info or {}).items()},
+    spacing = float(np.sqrt(np.percentile(g.sizes, 90) * step)) / scale
+    info = {str(k): str(v_) for k, v_ in (info or {}).items()}
+    if step > 1:
+        info["drawn"] = f"{v.shape[0]:,} of {g.n_elements:,} points (one in {step})"
+    meta = {"name": name, "points": int(v.shape[0]), "faces": 0, "superfacets": n_sp,
+            "info": info,
             "palette": palette.astype(int).tolist(), "indexBytes": np.dtype(index_dtype).itemsize,
-            "nVertices": int(g.n_elements), "nFaces": 0, "nEdges": 0, "spacing": spacing,
+            "nVertices": int(v.shape[0]), "nFaces": 0, "nEdges": 0, "spacing": spacing,
             "background": background, "rotation": rot.T.ravel().round(6).tolist()}
     data = {"vertices": _b64(v), "faces": "", "colors": _b64(color_index.ravel()
                                                                  .astype(index_dtype)),
@@ -219,7 +258,9 @@ def write_html(path, mesh, labels=None, *, title: str | None = None, info: dict 
     Notes
     -----
     Size is about 32 bytes of base64 per face (a 1M-face mesh gives a
-    ~35 MB page); the browser builds flat-shaded triangles from it.
+    ~35 MB page); the browser builds flat-shaded triangles from it. A point cloud takes
+    about 18 bytes a point, and one of more than :data:`MAX_PAGE_POINTS` points is drawn
+    from an even share of them (every ``s``-th, :func:`page_step`), as the page says.
 
     Examples
     --------
