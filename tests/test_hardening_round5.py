@@ -269,3 +269,60 @@ def test_a_ply_with_x_y_z_in_capitals_reads_as_with_x_y_z(tmp_path, faces):
                          "-q"]) == 0
             outs.append(out.read_bytes())
         assert outs[0] == outs[1]
+
+
+def _splats(path, n=3000, normals=0.0):
+    """A 3D Gaussian splatting PLY in miniature: positions, the zero normals such files
+    carry, colour coefficients, opacity, scales and rotations."""
+    from plyfile import PlyData, PlyElement
+
+    names = ["x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2", "opacity",
+             "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"]
+    g = np.zeros(n, dtype=[(c, "<f4") for c in names])
+    p = np.c_[np.random.default_rng(6).random((n, 2)) * 5, np.zeros(n)]
+    g["x"], g["y"], g["z"] = p.T
+    g["nz"] = normals
+    PlyData([PlyElement.describe(g, "vertex")]).write(str(path))
+    return path
+
+
+def test_a_splat_file_s_zero_normals_are_estimated_one_run_and_tiles(tmp_path, capsys):
+    path = _splats(tmp_path / "splats.ply")
+    # (it said "normal 0 is zero or not finite ...; leave normals out to have them
+    # estimated", which no option does)
+    for extra in ([], ["--tiles", "2", "--workers", "1"]):
+        out = tmp_path / f"s{len(extra)}.seg"
+        assert main(["segment", str(path), "-k", "10", *extra, "-o", str(out), "-q"]) == 0
+        assert "its normals are all zero" in capsys.readouterr().err
+        assert len(np.unique(np.loadtxt(out))) == 10
+    # the same labels as a file without normals, one run
+    from plyfile import PlyData, PlyElement
+
+    v = PlyData.read(str(path))["vertex"].data[["x", "y", "z"]]
+    PlyData([PlyElement.describe(np.array(v.tolist(), dtype=[(c, "<f4") for c in "xyz"]),
+                                 "vertex")]).write(str(tmp_path / "bare.ply"))
+    assert main(["segment", str(tmp_path / "bare.ply"), "-k", "10", "-o",
+                 str(tmp_path / "bare.seg"), "-q"]) == 0
+    assert (tmp_path / "bare.seg").read_bytes() == (tmp_path / "s0.seg").read_bytes()
+
+
+def test_a_file_with_some_zero_normals_still_names_the_first(tmp_path, capsys):
+    path = _splats(tmp_path / "mixed.ply", normals=1.0)
+    from plyfile import PlyData, PlyElement
+
+    data = PlyData.read(str(path))["vertex"].data.copy()
+    data["nz"][5] = 0.0  # (one placeholder among real normals: damage)
+    PlyData([PlyElement.describe(data, "vertex")]).write(str(path))
+    assert main(["segment", str(path), "-k", "10", "-o", str(tmp_path / "m.seg")]) == 2
+    _one_line_error(capsys, "normal 5 is zero")
+
+
+@pytest.mark.parametrize("tiles", [[], ["--tiles", "2", "--workers", "1"]])
+def test_a_ply_of_no_vertex_element_names_what_it_has(tmp_path, capsys, tiles):
+    from plyfile import PlyData, PlyElement
+
+    v = np.zeros(100, dtype=[(c, "<f4") for c in "xyz"])
+    PlyData([PlyElement.describe(v, "point")]).write(str(tmp_path / "p.ply"))
+    assert main(["segment", str(tmp_path / "p.ply"), "-k", "5", *tiles, "-o",
+                 str(tmp_path / "p.seg")]) == 2
+    _one_line_error(capsys, "no vertex element (it has: point)")  # (it said "'vertex'")

@@ -29,6 +29,7 @@ error naming its row.
 from __future__ import annotations
 
 import io
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -177,6 +178,7 @@ def read_cloud(path, format: str | None = None):
             kw = read_columns(data, path)
     if kw["points"].shape[0] == 0:
         raise InvalidCloudError(f"{path}: empty point cloud: no point")
+    kw["normals"] = given_normals(kw.get("normals"), path)
     try:
         return PointCloud(name=path.name, **kw)
     except InvalidCloudError as exc:
@@ -188,8 +190,15 @@ def _read_ply(data: bytes, path: Path) -> dict:
 
     try:
         fast = read_ply_scalars(data)  # (plyfile reads bytes a row at a time)
-        vert = fast["vertex"] if fast and "vertex" in fast else \
-            PlyData.read(io.BytesIO(data))["vertex"]
+        if fast and "vertex" in fast:
+            vert = fast["vertex"]
+        else:
+            ply = PlyData.read(io.BytesIO(data))
+            elements = [e.name for e in ply.elements]
+            if "vertex" not in elements:
+                raise MeshFormatError(f"{path}: the PLY has no vertex element (it has: "
+                                      f"{', '.join(elements) or 'none'})")
+            vert = ply["vertex"]
         names = [p.name for p in vert.properties]
         named = ply_names(names)
         missing = [c for c in "xyz" if c not in named]
@@ -210,6 +219,42 @@ def _read_ply(data: bytes, path: Path) -> dict:
             raise
         raise MeshFormatError(f"{path}: cannot read PLY points: {exc}") from None
     return {"points": pts, "normals": nrm, "colors": col}
+
+
+def given_normals(normals, path) -> np.ndarray | None:
+    """A file's normals, or None where every one is zero: a placeholder, not a direction (3D
+    Gaussian splats' PLY files hold ``nx ny nz`` of zero), so they are estimated from the
+    points instead, with a warning that says so. A few zero normals among others stay, for
+    the cloud's check to name.
+
+    Parameters
+    ----------
+    normals : (N, 3) ndarray or None
+    path : str or os.PathLike
+        The file, for the warning.
+
+    Returns
+    -------
+    (N, 3) ndarray or None
+
+    Raises
+    ------
+    TypeError
+        Never: anything that is not all zeros is returned as given.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True):
+    ...     given_normals(np.zeros((4, 3)), "splats.ply") is None
+    True
+    """
+    if normals is None or np.size(normals) == 0 or np.any(normals):
+        return normals
+    warnings.warn(f"{Path(path).name}: its normals are all zero (a placeholder, as 3D "
+                  "Gaussian splats write them): estimated from the points instead",
+                  stacklevel=2)
+    return None
 
 
 def _packed_rgb(values: np.ndarray) -> np.ndarray:

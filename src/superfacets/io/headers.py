@@ -375,8 +375,10 @@ def ply_mapped(path: Path):
             raise NotStreamedError(f"{path}: a face is not a triangle ({first_line(exc)}): "
                                    "polygons are not read in chunks") from None
         raise MeshFormatError(f"{path}: cannot read PLY: {first_line(exc)}") from None
-    if "vertex" not in [e.name for e in ply.elements]:
-        raise MeshFormatError(f"{path}: the PLY has no vertex element")
+    elements = [e.name for e in ply.elements]
+    if "vertex" not in elements:
+        raise MeshFormatError(f"{path}: the PLY has no vertex element (it has: "
+                              f"{', '.join(elements) or 'none'})")
     names = ply["vertex"].data.dtype.names or ()
     missing = [c for c in "xyz" if c not in ply_names(names)]
     if missing:

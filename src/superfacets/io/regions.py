@@ -130,6 +130,9 @@ class Survey:
     color_top: float | None = None
     #: (s,) int64: the row in the input of each position of ``sample``
     sample_rows: np.ndarray | None = None
+    #: the file's normals are all zero: placeholders (3D Gaussian splats), not read
+    #: (``normals`` is then False; :func:`superfacets.io.clouds.given_normals`)
+    zero_normals: bool = False
 
 
 @dataclass(frozen=True)
@@ -170,6 +173,8 @@ class RegionReader:
     #: rows without a finite position are invalid points (an organized scan's holes, -1
     #: labels) rather than damage; only a spilled cloud that had such points says so
     invalid_ok: bool = False
+    #: False: the points' normals are not read (the survey found them all zero)
+    normals_given: bool = True
 
     # ------------------------------------------------------------------ opening
     @classmethod
@@ -279,6 +284,8 @@ class RegionReader:
                 yield s, face_centroids(p), area, (tri, verts, colors(s, s + tri.shape[0], tri))
             return
         for s, pts, extra in self._point_chunks(stats):
+            if not self.normals_given:  # (placeholders: estimated, as one run does)
+                extra = (extra[0], None)
             if self.up_weight != 1:  # (the cloud the method's distances are read on)
                 u = np.asarray(self.up, dtype=np.float64)
                 pts = stretched_along(pts, u, self.up_weight)
@@ -302,10 +309,12 @@ class RegionReader:
         n = 0
         stride = max(1, -(-self.n_rows // SAMPLE))
         kept, kept_rows = [], []
-        normals = colors = False
+        normals = colors = some = False
         stats: dict = {}
         for start, pos, sz, extra in self.chunks(stats):
-            normals = normals or (self.kind == "points" and extra[1] is not None)
+            given = self.kind == "points" and extra[1] is not None
+            normals = normals or given
+            some = some or (given and bool(np.any(extra[1])))  # (not all placeholders)
             colors = colors or extra[-1 if self.kind == "faces" else 0] is not None
             ok = finite_rows(pos)  # (one compiled pass each, not numpy's over short rows)
             every = bool(ok.all())
@@ -325,8 +334,9 @@ class RegionReader:
             raise MeshFormatError(f"{self.path}: no {self.kind[:-1]} with a finite position")
 
         top = color_top(stats["itemsize"], stats["largest"]) if stats else None
-        return Survey(lo, hi, size, n, np.concatenate(kept).astype(np.float64), normals, colors,
-                      top, np.concatenate(kept_rows).astype(np.int64))
+        return Survey(lo, hi, size, n, np.concatenate(kept).astype(np.float64), some, colors,
+                      top, np.concatenate(kept_rows).astype(np.int64),
+                      zero_normals=normals and not some)
 
     def _non_finite(self, row: int):
         """Refuse a row without a finite position, as a whole run refuses it."""

@@ -56,6 +56,7 @@ from ...elements.kinds import kind_of
 from ...errors import ParameterError, SuperfacetsError
 from ...inputs.bounds import check_extent, rows_in_box
 from ...inputs.cloud import check_weighable, stretched_along
+from ...io.clouds import given_normals
 from ...io.regions import RegionReader, streamed
 from ...method.merges import NOISE_SAMPLE
 from ...method.params import DEFAULTS, resolve, superfacet_size
@@ -530,6 +531,9 @@ def _surveyed(source, tmp, tiles, params):
     check_tileable(params, survey.colors)
     if survey.color_top is not None:  # one divisor for the whole file's colours
         reader = replace(reader, color_top=survey.color_top)
+    if survey.zero_normals:  # (placeholders: estimated, as one run's reader says)
+        given_normals(np.zeros((1, 3)), reader.path)
+        reader = replace(reader, normals_given=False)
     return reader, survey
 
 
