@@ -293,7 +293,7 @@ def test_a_splat_file_s_zero_normals_are_estimated_one_run_and_tiles(tmp_path, c
     for extra in ([], ["--tiles", "2", "--workers", "1"]):
         out = tmp_path / f"s{len(extra)}.seg"
         assert main(["segment", str(path), "-k", "10", *extra, "-o", str(out), "-q"]) == 0
-        assert "its normals are all zero" in capsys.readouterr().err
+        assert "its normals are all zero or not finite" in capsys.readouterr().err
         assert len(np.unique(np.loadtxt(out))) == 10
     # the same labels as a file without normals, one run
     from plyfile import PlyData, PlyElement
@@ -306,15 +306,21 @@ def test_a_splat_file_s_zero_normals_are_estimated_one_run_and_tiles(tmp_path, c
     assert (tmp_path / "bare.seg").read_bytes() == (tmp_path / "s0.seg").read_bytes()
 
 
-def test_a_file_with_some_zero_normals_still_names_the_first(tmp_path, capsys):
+@pytest.mark.parametrize("tiles", [[], ["--tiles", "2", "--workers", "1"]])
+def test_a_file_with_some_unusable_normals_has_them_all_estimated(tmp_path, capsys, tiles):
     path = _splats(tmp_path / "mixed.ply", normals=1.0)
     from plyfile import PlyData, PlyElement
 
     data = PlyData.read(str(path))["vertex"].data.copy()
-    data["nz"][5] = 0.0  # (one placeholder among real normals: damage)
+    data["nz"][5] = 0.0  # (PCL's normal estimation leaves NaN where it cannot tell)
+    data["nz"][9] = np.nan
     PlyData([PlyElement.describe(data, "vertex")]).write(str(path))
-    assert main(["segment", str(path), "-k", "10", "-o", str(tmp_path / "m.seg")]) == 2
-    _one_line_error(capsys, "normal 5 is zero")
+    # (it was refused: "normal 5 is zero or not finite; leave normals out", no option does)
+    out = tmp_path / "m.seg"
+    assert main(["segment", str(path), "-k", "10", *tiles, "-o", str(out), "-q"]) == 0
+    err = capsys.readouterr().err
+    assert "2 of its 3,000 normals are zero or not finite (the first: point 5)" in err
+    assert len(np.unique(np.loadtxt(out))) == 10
 
 
 @pytest.mark.parametrize("tiles", [[], ["--tiles", "2", "--workers", "1"]])

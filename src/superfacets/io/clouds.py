@@ -178,7 +178,7 @@ def read_cloud(path, format: str | None = None):
             kw = read_columns(data, path)
     if kw["points"].shape[0] == 0:
         raise InvalidCloudError(f"{path}: empty point cloud: no point")
-    kw["normals"] = given_normals(kw.get("normals"), path)
+    kw["normals"] = given_normals(kw.get("normals"), path, kw["points"])
     try:
         return PointCloud(name=path.name, **kw)
     except InvalidCloudError as exc:
@@ -221,17 +221,19 @@ def _read_ply(data: bytes, path: Path) -> dict:
     return {"points": pts, "normals": nrm, "colors": col}
 
 
-def given_normals(normals, path) -> np.ndarray | None:
-    """A file's normals, or None where every one is zero: a placeholder, not a direction (3D
-    Gaussian splats' PLY files hold ``nx ny nz`` of zero), so they are estimated from the
-    points instead, with a warning that says so. A few zero normals among others stay, for
-    the cloud's check to name.
+def given_normals(normals, path, points=None) -> np.ndarray | None:
+    """A file's normals, or None where any of them (at a point of finite position) is zero
+    or not finite: then they are all estimated from the points instead, with a warning that
+    says so (3D Gaussian splats' PLY files hold ``nx ny nz`` of zero for every point; PCL's
+    normal estimation leaves NaN where a point has too few neighbours).
 
     Parameters
     ----------
     normals : (N, 3) ndarray or None
     path : str or os.PathLike
         The file, for the warning.
+    points : (N, 3) ndarray, optional
+        The positions: the normals of points without a finite one are not looked at.
 
     Returns
     -------
@@ -240,7 +242,7 @@ def given_normals(normals, path) -> np.ndarray | None:
     Raises
     ------
     TypeError
-        Never: anything that is not all zeros is returned as given.
+        Never: normals that are all usable are returned as given.
 
     Examples
     --------
@@ -249,12 +251,29 @@ def given_normals(normals, path) -> np.ndarray | None:
     ...     given_normals(np.zeros((4, 3)), "splats.ply") is None
     True
     """
-    if normals is None or np.size(normals) == 0 or np.any(normals):
+    if normals is None or np.size(normals) == 0:
         return normals
-    warnings.warn(f"{Path(path).name}: its normals are all zero (a placeholder, as 3D "
-                  "Gaussian splats write them): estimated from the points instead",
-                  stacklevel=2)
+    n = np.asarray(normals, dtype=np.float64)
+    rows = np.arange(n.shape[0]) if points is None else np.flatnonzero(
+        np.isfinite(np.asarray(points, dtype=np.float64)).all(axis=1))
+    with np.errstate(over="ignore", invalid="ignore"):
+        length = np.einsum("ij,ij->i", n[rows], n[rows])
+    bad = ~(np.isfinite(length) & (length > 0))
+    if not bad.any():
+        return normals
+    first = int(rows[np.flatnonzero(bad)[0]])
+    warnings.warn(dropped_normals_said(path, int(bad.sum()), rows.size, first), stacklevel=2)
     return None
+
+
+def dropped_normals_said(path, bad: int, total: int, first: int) -> str:
+    """The warning of :func:`given_normals`: ``bad`` of ``total`` normals unusable, the
+    first at row ``first``."""
+    what = ("its normals are all zero or not finite (placeholders, as 3D Gaussian splats "
+            "write them)" if bad == total else
+            f"{bad:,} of its {total:,} normals are zero or not finite (the first: point "
+            f"{first})")
+    return f"{Path(path).name}: {what}: all estimated from the points instead"
 
 
 def _packed_rgb(values: np.ndarray) -> np.ndarray:

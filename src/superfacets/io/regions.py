@@ -130,9 +130,10 @@ class Survey:
     color_top: float | None = None
     #: (s,) int64: the row in the input of each position of ``sample``
     sample_rows: np.ndarray | None = None
-    #: the file's normals are all zero: placeholders (3D Gaussian splats), not read
-    #: (``normals`` is then False; :func:`superfacets.io.clouds.given_normals`)
-    zero_normals: bool = False
+    #: ``(unusable, normals, first row)`` where some of the file's normals are zero or not
+    #: finite: then none is read (``normals`` is False), all are estimated, as one run does
+    #: (:func:`superfacets.io.clouds.given_normals`); None: every one usable, or none given
+    dropped_normals: tuple | None = None
 
 
 @dataclass(frozen=True)
@@ -309,12 +310,14 @@ class RegionReader:
         n = 0
         stride = max(1, -(-self.n_rows // SAMPLE))
         kept, kept_rows = [], []
-        normals = colors = some = False
+        normals = colors = False
+        bad = [0, 0, -1]  # (normals unusable, looked at, the first unusable's row)
         stats: dict = {}
         for start, pos, sz, extra in self.chunks(stats):
             given = self.kind == "points" and extra[1] is not None
             normals = normals or given
-            some = some or (given and bool(np.any(extra[1])))  # (not all placeholders)
+            if given:
+                _count_unusable(extra[1], finite_rows(pos), start, bad)
             colors = colors or extra[-1 if self.kind == "faces" else 0] is not None
             ok = finite_rows(pos)  # (one compiled pass each, not numpy's over short rows)
             every = bool(ok.all())
@@ -334,9 +337,10 @@ class RegionReader:
             raise MeshFormatError(f"{self.path}: no {self.kind[:-1]} with a finite position")
 
         top = color_top(stats["itemsize"], stats["largest"]) if stats else None
-        return Survey(lo, hi, size, n, np.concatenate(kept).astype(np.float64), some, colors,
-                      top, np.concatenate(kept_rows).astype(np.int64),
-                      zero_normals=normals and not some)
+        return Survey(lo, hi, size, n, np.concatenate(kept).astype(np.float64),
+                      normals and not bad[0], colors, top,
+                      np.concatenate(kept_rows).astype(np.int64),
+                      dropped_normals=tuple(bad) if bad[0] else None)
 
     def _non_finite(self, row: int):
         """Refuse a row without a finite position, as a whole run refuses it."""
@@ -525,6 +529,20 @@ def face_centroids(corners: np.ndarray) -> np.ndarray:
     centroid += corners[:, 2]
     centroid /= 3.0
     return centroid
+
+
+def _count_unusable(normals: np.ndarray, finite: np.ndarray, start: int, bad: list) -> None:
+    """Add a chunk's normals to ``bad`` (:meth:`RegionReader.survey`): how many of those at
+    finite positions are zero or not finite, how many were looked at, the first's row."""
+    rows = np.flatnonzero(finite)
+    n = np.asarray(normals, dtype=np.float64)[rows]
+    with np.errstate(over="ignore", invalid="ignore"):
+        length = np.einsum("ij,ij->i", n, n)
+    unusable = np.flatnonzero(~(np.isfinite(length) & (length > 0)))
+    if unusable.size and bad[2] < 0:
+        bad[2] = start + int(rows[unusable[0]])
+    bad[0] += int(unusable.size)
+    bad[1] += int(rows.size)
 
 
 def point_cloud_of(pts, colors, normals, viewpoint, name: str = ""):

@@ -40,6 +40,7 @@ from __future__ import annotations
 import math
 import re
 import time
+import warnings
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from functools import partial
@@ -56,7 +57,7 @@ from ...elements.kinds import kind_of
 from ...errors import ParameterError, SuperfacetsError
 from ...inputs.bounds import check_extent, rows_in_box
 from ...inputs.cloud import check_weighable, stretched_along
-from ...io.clouds import given_normals
+from ...io.clouds import dropped_normals_said
 from ...io.regions import RegionReader, streamed
 from ...method.merges import NOISE_SAMPLE
 from ...method.params import DEFAULTS, resolve, superfacet_size
@@ -531,8 +532,8 @@ def _surveyed(source, tmp, tiles, params):
     check_tileable(params, survey.colors)
     if survey.color_top is not None:  # one divisor for the whole file's colours
         reader = replace(reader, color_top=survey.color_top)
-    if survey.zero_normals:  # (placeholders: estimated, as one run's reader says)
-        given_normals(np.zeros((1, 3)), reader.path)
+    if survey.dropped_normals:  # (unusable normals: all estimated, as one run's reader)
+        warnings.warn(dropped_normals_said(reader.path, *survey.dropped_normals), stacklevel=2)
         reader = replace(reader, normals_given=False)
     return reader, survey
 
