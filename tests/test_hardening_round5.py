@@ -332,3 +332,22 @@ def test_a_ply_of_no_vertex_element_names_what_it_has(tmp_path, capsys, tiles):
     assert main(["segment", str(tmp_path / "p.ply"), "-k", "5", *tiles, "-o",
                  str(tmp_path / "p.seg")]) == 2
     _one_line_error(capsys, "no vertex element (it has: point)")  # (it said "'vertex'")
+
+
+def test_a_dataframe_or_a_list_of_points_is_a_cloud():
+    pd = pytest.importorskip("pandas")
+    from superfacets import as_cloud, segment, superpoints
+
+    base = np.c_[np.random.default_rng(7).random((2000, 2)), np.zeros(2000)]
+    want = segment(base, 8).labels
+    # (both were refused: "mesh must be ... (a point cloud: a PointCloud or an (N, 3)
+    # array), got DataFrame" / "got list of 2000 items")
+    assert np.array_equal(segment(base.tolist(), 8).labels, want)
+    table = pd.DataFrame(base, columns=["X", "Y", "Z"])  # (PDAL's and laspy's names)
+    assert np.array_equal(superpoints(table, 8), want)
+    table["red"], table["green"], table["blue"] = 255, 0, 0
+    table["intensity"] = 7
+    cloud = as_cloud(table)
+    assert np.allclose(cloud.colors, [1.0, 0.0, 0.0]) and cloud.normals is None
+    with pytest.raises(TypeError, match="DataFrame of x, y, z columns.*columns a, b"):
+        segment(pd.DataFrame({"a": [1.0], "b": [2.0]}), 1)

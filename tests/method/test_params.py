@@ -179,8 +179,7 @@ def test_the_input_is_data_and_the_keyword_of_before_still_works_with_a_warning(
 def test_a_file_path_is_an_input_read_as_the_command_line_reads_it(tmp_path):
     """``segment("scan.las", k)`` was a TypeError naming meshes only: a path (str or
     ``os.PathLike``) is read by ``read_input``, with the labels of the object it reads; a
-    missing file is a FileNotFoundError, and a list of points is refused in words that
-    name the point cloud's forms."""
+    missing file is a FileNotFoundError, and a list of points is a cloud (as its array)."""
     import trimesh
 
     from superfacets import segment, superfacets
@@ -195,7 +194,9 @@ def test_a_file_path_is_an_input_read_as_the_command_line_reads_it(tmp_path):
         np.testing.assert_array_equal(superfacets(str(path), k), want)
     with pytest.raises(FileNotFoundError, match="no such file"):
         segment(tmp_path / "missing.ply", 5)
-    with pytest.raises(TypeError, match=r"a PointCloud or an \(N, 3\) array"):
+    from superfacets.errors import InvalidCloudError
+
+    with pytest.raises(InvalidCloudError, match="all 5 points coincide"):
         segment([[0.0, 0.0, 0.0]] * 5, 2)
 
 

@@ -23,7 +23,7 @@ __all__ = ["ElementInput", "Builder", "BUILDERS", "as_element_graph", "elements_
 from .._runtime import memory
 from ..checks import check_n_segments
 from ..errors import ParameterError
-from ..inputs.cloud import PointCloud, as_cloud
+from ..inputs.cloud import PointCloud, as_cloud, is_point_table
 from ..inputs.convert import as_mesh
 from ..inputs.mesh import Mesh
 from ..inputs.tetmesh import TetMesh
@@ -103,8 +103,9 @@ class ElementInput(NamedTuple):
 
 
 def is_cloud(obj) -> bool:
-    """Whether ``obj`` is a point cloud (a PointCloud, a bare (N, 3) or (H, W, 3) array,
-    a trimesh or Open3D point cloud) rather than a mesh.
+    """Whether ``obj`` is a point cloud (a PointCloud, a bare (N, 3) or (H, W, 3) array or
+    a list of rows of 3 numbers, a trimesh or Open3D point cloud, a pandas DataFrame of
+    ``x y z`` columns) rather than a mesh.
 
     Parameters
     ----------
@@ -125,8 +126,13 @@ def is_cloud(obj) -> bool:
     (True, False)
     """
 
-    if isinstance(obj, PointCloud):
+    if isinstance(obj, PointCloud) or is_point_table(obj):
         return True
+    if isinstance(obj, list) and obj:  # (rows of 3 numbers; a (V, F) pair is a tuple)
+        try:
+            obj = np.asarray(obj, dtype=np.float64)
+        except (TypeError, ValueError):
+            return False
     if isinstance(obj, np.ndarray):
         return obj.ndim in (2, 3) and obj.shape[-1] == 3
     mod = type(obj).__module__ or ""

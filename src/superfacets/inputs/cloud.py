@@ -393,14 +393,65 @@ def _coordinates(a, what: str, where: str) -> np.ndarray:
     return np.ascontiguousarray(arr, dtype=np.float64)
 
 
+#: The columns of a table of points (a pandas ``DataFrame``) that a cloud reads, by what
+#: they hold; in any case (``X``, as PDAL and laspy name them), each at most once.
+TABLE_COLUMNS = {"points": ("x", "y", "z"), "normals": ("nx", "ny", "nz"),
+                 "colors": ("red", "green", "blue")}
+
+
+def is_point_table(obj) -> bool:
+    """Whether ``obj`` is a pandas ``DataFrame`` with ``x``, ``y`` and ``z`` columns (in
+    any case: :data:`TABLE_COLUMNS`).
+
+    Parameters
+    ----------
+    obj : object
+
+    Returns
+    -------
+    bool
+
+    Raises
+    ------
+    TypeError
+        Never: anything else is answered False.
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> is_point_table(pd.DataFrame({"X": [0.0], "Y": [0.0], "Z": [1.0]}))
+    True
+    """
+    if type(obj).__name__ != "DataFrame" or not (type(obj).__module__ or "").startswith(
+            "pandas"):
+        return False
+    return _table_columns(obj.columns, TABLE_COLUMNS["points"]) is not None
+
+
+def _table_columns(columns, wanted) -> list | None:
+    """The column holding each of ``wanted`` (of that name, else the one of that name in
+    another case), None where one is missing or named twice."""
+    names = [str(c) for c in columns]
+    out = []
+    for w in wanted:
+        hit = [c for c, n in zip(columns, names) if n == w] or \
+            [c for c, n in zip(columns, names) if n.lower() == w]
+        if len(hit) != 1:
+            return None
+        out.append(hit[0])
+    return out
+
+
 def as_cloud(obj, normals=None, name: str = "") -> PointCloud:
     """A :class:`PointCloud` from what a user has.
 
     Parameters
     ----------
-    obj : PointCloud, (N, 3) or organized (H, W, 3) float ndarray, trimesh.PointCloud, or
-        open3d.geometry.PointCloud or open3d.t.geometry.PointCloud (its ``positions``,
-        ``normals`` and ``colors``)
+    obj : PointCloud, (N, 3) or organized (H, W, 3) float ndarray or nested list,
+        trimesh.PointCloud, open3d.geometry.PointCloud or open3d.t.geometry.PointCloud (its
+        ``positions``, ``normals`` and ``colors``), or a pandas DataFrame of ``x y z``
+        columns (and ``nx ny nz``, ``red green blue`` where it has them, in any case:
+        :data:`TABLE_COLUMNS`)
         An organized array may hold NaN rows (invalid points, label -1).
     normals : (N, 3) or (H, W, 3) float ndarray, optional
         With an array: its normals (an Open3D cloud brings its own).
@@ -440,6 +491,12 @@ def as_cloud(obj, normals=None, name: str = "") -> PointCloud:
         nrm = np.asarray(obj.normals) if getattr(obj, "has_normals", lambda: False)() else None
         return PointCloud(np.asarray(obj.points), nrm, name=name,
                           colors=_library_colors(getattr(obj, "colors", ())))
+    if is_point_table(obj):
+        got = {k: _table_columns(obj.columns, v) for k, v in TABLE_COLUMNS.items()}
+        nrm = obj[got["normals"]].to_numpy(dtype=np.float64) if got["normals"] else normals
+        col = unit_colors(obj[got["colors"]].to_numpy()) if got["colors"] else None
+        return PointCloud(obj[got["points"]].to_numpy(dtype=np.float64), nrm, name=name,
+                          colors=col)
     if isinstance(obj, (np.ndarray, list, tuple)):
         arr = np.asarray(obj)
         if arr.ndim == 3 and arr.shape[2] == 3:  # organized: rows of a sensor image
@@ -449,7 +506,7 @@ def as_cloud(obj, normals=None, name: str = "") -> PointCloud:
                               shape=(h, w))
         return PointCloud(arr, normals, name=name)
     raise TypeError(f"expected a point cloud ((N, 3) array, PointCloud, trimesh or Open3D "
-                    f"point cloud), got {type(obj).__name__}")
+                    f"point cloud, a DataFrame of x y z columns), got {type(obj).__name__}")
 
 
 def up_weighted(cloud: PointCloud, weight: float) -> PointCloud:

@@ -69,12 +69,14 @@ def as_mesh(mesh, name: str = "") -> Mesh:
     got = type(mesh).__name__
     if isinstance(mesh, np.ndarray):  # (an array of another shape: say which)
         got = f"an array of shape {mesh.shape}"
-    elif isinstance(mesh, (list, tuple)):  # (points as nested lists: np.asarray them)
-        got += f" of {len(mesh)} items (points as a list: give np.asarray(points))"
+    elif isinstance(mesh, (list, tuple)):
+        got += f" of {len(mesh)} items"
+    elif type(mesh).__name__ == "DataFrame":
+        got += f" with columns {', '.join(map(str, list(mesh.columns)[:12]))}"
     raise TypeError(
         "mesh must be a superfacets.Mesh, a trimesh.Trimesh or Scene, a pyvista.PolyData, an "
-        "open3d TriangleMesh or a (vertices, faces) pair (a point cloud: a PointCloud or an "
-        f"(N, 3) array), got {got}"
+        "open3d TriangleMesh or a (vertices, faces) pair (a point cloud: a PointCloud, an "
+        f"(N, 3) array or list, or a DataFrame of x, y, z columns), got {got}"
     )
 
 
