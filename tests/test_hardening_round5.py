@@ -3,6 +3,8 @@ or crashed on, on a labelled scan): each case fails without its fix."""
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -351,3 +353,60 @@ def test_a_dataframe_or_a_list_of_points_is_a_cloud():
     assert np.allclose(cloud.colors, [1.0, 0.0, 0.0]) and cloud.normals is None
     with pytest.raises(TypeError, match="DataFrame of x, y, z columns.*columns a, b"):
         segment(pd.DataFrame({"a": [1.0], "b": [2.0]}), 1)
+
+
+def _sweep(folder, name="000000"):
+    """A KITTI velodyne sweep in miniature (float32 x y z reflectance, the sensor at the
+    origin): road, a wall and a car, with its SemanticKITTI .label (class | instance << 16)."""
+    rng = np.random.default_rng(8)
+    ang, rad = rng.uniform(0, 2 * np.pi, 8000), rng.uniform(3, 30, 8000)
+    road = np.c_[rad * np.cos(ang), rad * np.sin(ang), np.full(8000, -1.7)]
+    wall = np.c_[rng.uniform(-20, 20, 3000), np.full(3000, 6.0), rng.uniform(-1.7, 2, 3000)]
+    car = np.c_[rng.uniform(4, 8, 1500), rng.uniform(-3, -1.5, 1500),
+                rng.uniform(-1.7, -0.3, 1500)]
+    xyz = np.vstack([road, wall, car])
+    np.c_[xyz, rng.random(len(xyz))].astype("<f4").tofile(folder / f"{name}.bin")
+    cls = np.r_[np.full(8000, 40), np.full(3000, 50), np.full(1500, 10)].astype(np.uint32)
+    (cls | (np.r_[np.zeros(11000), np.full(1500, 7)].astype(np.uint32) << 16)).astype(
+        "<u4").tofile(folder / f"{name}.label")
+    return folder / f"{name}.bin", folder / f"{name}.label", xyz
+
+
+def test_a_kitti_sweep_and_its_semantickitti_labels_are_read(tmp_path, capsys):
+    from superfacets import read_cloud, read_labels
+
+    scan, truth, xyz = _sweep(tmp_path)
+    cloud = read_cloud(scan)
+    assert np.allclose(cloud.points, xyz.astype(np.float32)) and np.allclose(cloud.viewpoint, 0)
+    assert np.array_equal(np.unique(read_labels(truth)), [10, 40, 50])  # (the instance: out)
+    out = tmp_path / "sweep.seg"
+    assert main(["segment", str(scan), "-k", "60", "-o", str(out), "-q"]) == 0
+    assert main(["evaluate", str(scan), str(out), str(truth), "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert got["segments"] == 60 and got["oracle_miou"] > 0.9
+    # labels as text in a .label would be read back as binary: refused
+    assert main(["segment", str(scan), "-k", "6", "-o", str(tmp_path / "x.label")]) == 2
+    _one_line_error(capsys, "SemanticKITTI's binary classes")
+
+
+@pytest.mark.parametrize("content, says", [
+    (b"\0" * 17, "not a whole number of points"),
+    (np.c_[np.ones((50, 3)), np.full(50, 9.0)].astype("<f4").tobytes(), "fourth value is 9.0"),
+])
+def test_a_bin_that_is_no_kitti_sweep_is_refused(tmp_path, capsys, content, says):
+    (tmp_path / "x.bin").write_bytes(content)
+    assert main(["segment", str(tmp_path / "x.bin"), "-k", "3", "-o",
+                 str(tmp_path / "x.seg")]) == 2
+    _one_line_error(capsys, says)
+
+
+def test_a_folder_s_bin_files_are_read_where_a_glob_names_them(tmp_path, capsys):
+    (tmp_path / "velodyne").mkdir()
+    for name in ("000000", "000001"):
+        _sweep(tmp_path / "velodyne", name)
+    assert main(["batch", str(tmp_path / "velodyne"), "-o", str(tmp_path / "a"), "-k", "20",
+                 "--workers", "1", "-q"]) == 2
+    _one_line_error(capsys, "4 other files", "name it (or a glob")  # (.bin, .label)
+    assert main(["batch", str(tmp_path / "velodyne" / "*.bin"), "-o", str(tmp_path / "b"),
+                 "-k", "20", "--workers", "1", "-q"]) == 0
+    assert len(list((tmp_path / "b").rglob("*.seg"))) == 2

@@ -338,6 +338,9 @@ def check_labels_output(path: str | None, source: str, records: bool = False) ->
     if records and records_kind(out, source) is not None:  # (a mismatch: refused there)
         return out
     fmt = split_suffix(out)[0]
+    if fmt == "label":  # (read back as SemanticKITTI's binary classes: refused, not misread)
+        raise ParameterError(f"{out}: a .label file is SemanticKITTI's binary classes; name "
+                             f"the labels e.g. {out.name.split('.')[0]}.seg")
     option = {"png": "--picture", "html": "--html", "htm": "--html"}.get(
         fmt, "--colored-mesh" if fmt in ("ply", "glb", "obj", *VOLUME_FORMATS) else None)
     if fmt != "txt" and (fmt in MESH_FORMATS or fmt in CLOUD_FORMATS or option):

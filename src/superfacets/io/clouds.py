@@ -58,7 +58,7 @@ from .headers import (  # noqa: E402 (re-exported: headers)
 from .orientation import sensor_up
 
 #: Point-cloud formats of :func:`read_cloud` (PLY files are clouds when they have no faces).
-CLOUD_FORMATS = ("pcd", "xyz", "pts", "txt", "csv", "npy", "las", "laz", "e57")
+CLOUD_FORMATS = ("pcd", "xyz", "pts", "txt", "csv", "npy", "las", "laz", "e57", "bin")
 
 
 def is_cloud_file(path) -> bool:
@@ -129,8 +129,8 @@ def read_cloud(path, format: str | None = None):
     MeshFormatError
         If the file is malformed or truncated, or its columns are not understood.
     InvalidCloudError
-        If a point has a non-finite coordinate (outside PCD files), or
-        normals are zero or not finite.
+        If a point has a non-finite coordinate (outside PCD files). (Normals that are zero
+        or not finite are estimated instead, with a warning: :func:`given_normals`.)
     MissingExtraError
         PCD and LAS/LAZ without the ``clouds`` extra.
     TypeError
@@ -174,6 +174,8 @@ def read_cloud(path, format: str | None = None):
             kw = _read_ply(data, path)
         elif fmt == "npy":
             kw = _read_npy(data, path)
+        elif fmt == "bin":
+            kw = _read_kitti(data, path)
         else:
             kw = read_columns(data, path)
     if kw["points"].shape[0] == 0:
@@ -413,6 +415,29 @@ def _read_e57(path: Path) -> dict:
     else:
         out.update(objects=tuple(objects), object_viewpoints=positions)
     return out
+
+
+def _read_kitti(data: bytes, path: Path) -> dict:
+    """A KITTI velodyne scan (``.bin``): float32 ``x y z reflectance`` per point, little
+    endian, no header, in the sensor's frame (the scanner at the origin, ``z`` up, as the
+    KITTI and SemanticKITTI sweeps are): the normals face it. The reflectance (in [0, 1])
+    is not read; it tells such a file from other binary data."""
+    if Path(path).name.lower().endswith(".pcd.bin"):
+        raise MeshFormatError(f"{path}: a .pcd.bin (nuScenes: five float32 values a point) is "
+                              "not read; a .bin is read as a KITTI velodyne scan")
+    if len(data) % 16:
+        raise MeshFormatError(f"{path}: a .bin is read as a KITTI velodyne scan (float32 x, "
+                              f"y, z, reflectance: 16 bytes a point); its {len(data):,} bytes "
+                              "are not a whole number of points")
+    arr = np.frombuffer(data, dtype="<f4").reshape(-1, 4)
+    with np.errstate(invalid="ignore"):
+        off = np.flatnonzero(~((arr[:, 3] >= 0) & (arr[:, 3] <= 1)))
+    if off.size:
+        raise MeshFormatError(f"{path}: not a KITTI velodyne scan (float32 x, y, z, "
+                              f"reflectance in [0, 1]): point {int(off[0])}'s fourth value is "
+                              f"{float(arr[off[0], 3])!r} ({off.size:,} such points)")
+    return {"points": arr[:, :3].astype(np.float64), "viewpoint": np.zeros(3),
+            "up": np.array([0.0, 0.0, 1.0])}
 
 
 def _read_npy(data: bytes, path: Path) -> dict:

@@ -14,7 +14,7 @@ import numpy as np
 
 from .._runtime import extras
 from ..elements.labels import check_labels
-from ..errors import MeshFormatError
+from ..errors import MeshFormatError, ParameterError
 from .clouds import check_laz
 from .files import Outputs, read_bytes, save, split_suffix, text_lines
 from .ply import read_ply_labels
@@ -49,7 +49,9 @@ def write_labels(path, labels, header: dict | Iterable[str] | None = None, *,
     Raises
     ------
     ParameterError
-        If ``labels`` is not a 1-D integer array.
+        If ``labels`` is not a 1-D integer array, or ``path`` is a ``.label`` (SemanticKITTI's
+        binary format, which :func:`read_labels` reads as such: text there would be read
+        back wrong).
 
     Examples
     --------
@@ -58,6 +60,9 @@ def write_labels(path, labels, header: dict | Iterable[str] | None = None, *,
     >>> write_labels(f"{folder}/labels.seg", [0, 1, 1]).read_text().split()
     ['0', '1', '1']
     """
+    if str(path) != "-" and split_suffix(Path(path))[0] == "label":
+        raise ParameterError(f"{path}: a .label file is SemanticKITTI's binary classes, read "
+                             "back as such; name the labels .seg")
     labels = check_labels(labels, None)
     head = ""
     if header:
@@ -173,8 +178,9 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
     """Read labels: a ``.seg`` file (``#`` lines skipped; may be compressed), the
     labels of a PLY written by this package (the ``label`` face property of a
     coloured mesh, else the vertex property ``scalar_ClusterID``), the
-    ``ClusterID`` dimension of a LAS/LAZ written by ``segment -o OUT.laz``, or the
-    ``segIndices`` of a ScanNet-style ``.json``.
+    ``ClusterID`` dimension of a LAS/LAZ written by ``segment -o OUT.laz``, the
+    ``segIndices`` of a ScanNet-style ``.json``, or the classes of a SemanticKITTI
+    ``.label`` file (uint32 a point: its lower 16 bits, the instance above left out).
 
     Parameters
     ----------
@@ -214,6 +220,11 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
     data = read_bytes(path, comp, "file of labels", bounded=False)  # (runs of one value)
     if fmt == "ply":
         labels = read_ply_labels(path, data)
+    elif fmt == "label":  # SemanticKITTI's: uint32 a point, the class in its lower 16 bits
+        if len(data) % 4:
+            raise MeshFormatError(f"{path}: a .label file (SemanticKITTI's) holds 4 bytes a "
+                                  f"point; its {len(data):,} bytes are not a whole number")
+        labels = (np.frombuffer(data, dtype="<u4") & 0xFFFF).astype(np.int64)
     elif fmt == "json":  # the ScanNet Segmentator's {"segIndices": [...]}
         import json
 

@@ -25,14 +25,15 @@ __all__ = ["collect_inputs", "output_names", "broken_link_reason", "no_inputs", 
 
 def _readable_suffixes(explicit: bool) -> set[str]:
 
-    # in folders, .txt and .csv are too often something else (a README, a table of
-    # results) to be read as clouds
+    # in folders, .txt, .csv and .bin are too often something else (a README, a table of
+    # results, model weights) to be read as clouds
     return (set(MESH_FORMATS) | set(VOLUME_FORMATS) |
             set(CLOUD_FORMATS) - (set() if explicit else set(_NAMED_ONLY)))
 
 
-#: Cloud formats read where a file is named, not where a folder holds it.
-_NAMED_ONLY = ("txt", "csv")
+#: Cloud formats read where a file is named (or matched by a glob), not where a folder holds
+#: it: a .txt or .csv is often a README or a table, a .bin other binary data.
+_NAMED_ONLY = ("txt", "csv", "bin")
 
 
 def _is_input(path: Path, explicit: bool) -> bool:
@@ -58,7 +59,8 @@ def _why_not(name: str) -> str:
     fmt, _ = split_suffix(Path(name))
     if fmt in _NAMED_ONLY:
         return (f"a .{fmt} in a folder is not read as a cloud (a "
-                f"{'README' if fmt == 'txt' else 'table'}?); name it to read it")
+                f"{dict(txt='README', csv='table').get(fmt, 'file of other data')}?); name it "
+                "(or a glob: velodyne/*.bin) to read it")
     return f"{'.' + fmt if fmt else 'no suffix'}: not a mesh, cloud or volume format"
 
 
@@ -156,8 +158,12 @@ def collect_inputs(specs: Sequence[str], exclude=None, skipped: list | None = No
             return
         p = Path(spec).expanduser()
         if p.is_dir():
+            before = len(passed) if passed is not None else 0
             if folder(p) == 0:
-                raise ParameterError(f"{spec}: no mesh or point-cloud file in this folder")
+                left = passed[before:] if passed is not None else []
+                raise ParameterError(f"{spec}: no mesh or point-cloud file in this folder" + (
+                    f" ({len(left):,} other files, as {Path(left[0][0]).name}: {left[0][1]})"
+                    if left else ""))
         elif p.is_file() or p.is_symlink():  # a dangling or looping link: its task says so
             keep(p)
         elif glob.has_magic(spec):
