@@ -356,8 +356,8 @@ def test_a_dataframe_or_a_list_of_points_is_a_cloud():
 
 
 def _sweep(folder, name="000000"):
-    """A KITTI velodyne sweep in miniature (float32 x y z reflectance, the sensor at the
-    origin): road, a wall and a car, with its SemanticKITTI .label (class | instance << 16)."""
+    """A KITTI velodyne sweep in miniature (float32 x y z reflectance, z up): road, a wall
+    and a car, with its SemanticKITTI .label (class | instance << 16)."""
     rng = np.random.default_rng(8)
     ang, rad = rng.uniform(0, 2 * np.pi, 8000), rng.uniform(3, 30, 8000)
     road = np.c_[rad * np.cos(ang), rad * np.sin(ang), np.full(8000, -1.7)]
@@ -377,7 +377,8 @@ def test_a_kitti_sweep_and_its_semantickitti_labels_are_read(tmp_path, capsys):
 
     scan, truth, xyz = _sweep(tmp_path)
     cloud = read_cloud(scan)
-    assert np.allclose(cloud.points, xyz.astype(np.float32)) and np.allclose(cloud.viewpoint, 0)
+    assert np.allclose(cloud.points, xyz.astype(np.float32)) and cloud.viewpoint is None
+    assert np.allclose(cloud.up, [0, 0, 1])  # (seen from above, as a LAS tile)
     assert np.array_equal(np.unique(read_labels(truth)), [10, 40, 50])  # (the instance: out)
     out = tmp_path / "sweep.seg"
     assert main(["segment", str(scan), "-k", "60", "-o", str(out), "-q"]) == 0
