@@ -353,6 +353,12 @@ def test_a_dataframe_or_a_list_of_points_is_a_cloud():
     assert np.allclose(cloud.colors, [1.0, 0.0, 0.0]) and cloud.normals is None
     with pytest.raises(TypeError, match="DataFrame of x, y, z columns.*columns a, b"):
         segment(pd.DataFrame({"a": [1.0], "b": [2.0]}), 1)
+    # tiles too (their reader had a rule of its own)
+    from superfacets import segment_tiled
+
+    tiled = segment_tiled(base, 8, tiles=2, workers=1).labels
+    for given in (table, base.tolist()):
+        assert np.array_equal(segment_tiled(given, 8, tiles=2, workers=1).labels, tiled)
 
 
 def _sweep(folder, name="000000"):

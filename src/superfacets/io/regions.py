@@ -233,9 +233,9 @@ class RegionReader:
         obj = source
         if isinstance(source, (str, Path)):
             obj = read_cloud(source) if is_cloud_file(source) else read_mesh(source)
-        cloud = isinstance(obj, PointCloud) or type(obj).__name__ == "PointCloud" or (
-            isinstance(obj, np.ndarray) and obj.ndim in (2, 3) and obj.shape[-1] == 3)
-        obj = as_cloud(obj) if cloud else as_mesh(obj)
+        from ..elements.builders import is_cloud  # (one rule of what a cloud is)
+
+        obj = as_cloud(obj) if is_cloud(obj) else as_mesh(obj)
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
         if isinstance(obj, PointCloud):
