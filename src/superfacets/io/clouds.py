@@ -255,17 +255,22 @@ def given_normals(normals, path, points=None) -> np.ndarray | None:
     """
     if normals is None or np.size(normals) == 0:
         return normals
-    n = np.asarray(normals, dtype=np.float64)
-    rows = np.arange(n.shape[0]) if points is None else np.flatnonzero(
+    rows = np.arange(len(normals)) if points is None else np.flatnonzero(
         np.isfinite(np.asarray(points, dtype=np.float64)).all(axis=1))
-    with np.errstate(over="ignore", invalid="ignore"):
-        length = np.einsum("ij,ij->i", n[rows], n[rows])
-    bad = ~(np.isfinite(length) & (length > 0))
-    if not bad.any():
+    bad = unusable_normals(normals, rows)
+    if not bad.size:
         return normals
-    first = int(rows[np.flatnonzero(bad)[0]])
-    warnings.warn(dropped_normals_said(path, int(bad.sum()), rows.size, first), stacklevel=2)
+    warnings.warn(dropped_normals_said(path, bad.size, rows.size, int(bad[0])), stacklevel=2)
     return None
+
+
+def unusable_normals(normals, rows: np.ndarray) -> np.ndarray:
+    """The ``rows`` (increasing) whose normal is zero or not finite (:func:`given_normals`;
+    a tiled run's survey, chunk by chunk)."""
+    n = np.asarray(normals, dtype=np.float64)[rows]
+    with np.errstate(over="ignore", invalid="ignore"):
+        length = np.einsum("ij,ij->i", n, n)
+    return rows[~(np.isfinite(length) & (length > 0))]
 
 
 def dropped_normals_said(path, bad: int, total: int, first: int) -> str:

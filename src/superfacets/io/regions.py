@@ -50,7 +50,7 @@ from ..inputs.cloud import (
 from ..inputs.convert import as_mesh
 from ..inputs.mesh import Mesh
 from ..inputs.rgb import color_top, unit_colors
-from .clouds import is_cloud_file, read_cloud
+from .clouds import is_cloud_file, read_cloud, unusable_normals
 from .headers import NotStreamedError, check_las, first_line, npy_mapped, ply_mapped, ply_names
 from .meshes import read_mesh
 from .ply import VertexView
@@ -535,12 +535,9 @@ def _count_unusable(normals: np.ndarray, finite: np.ndarray, start: int, bad: li
     """Add a chunk's normals to ``bad`` (:meth:`RegionReader.survey`): how many of those at
     finite positions are zero or not finite, how many were looked at, the first's row."""
     rows = np.flatnonzero(finite)
-    n = np.asarray(normals, dtype=np.float64)[rows]
-    with np.errstate(over="ignore", invalid="ignore"):
-        length = np.einsum("ij,ij->i", n, n)
-    unusable = np.flatnonzero(~(np.isfinite(length) & (length > 0)))
+    unusable = unusable_normals(normals, rows)
     if unusable.size and bad[2] < 0:
-        bad[2] = start + int(rows[unusable[0]])
+        bad[2] = start + int(unusable[0])
     bad[0] += int(unusable.size)
     bad[1] += int(rows.size)
 
