@@ -35,7 +35,8 @@ def add_parsers(sub) -> None:
                         "(its ClusterID)")
     e.add_argument("ground_truths", metavar="GT.seg", nargs="*",
                    help="one or more ground truths of the same input, one per face (vertex, "
-                        "point): label files as -o writes them, or SemanticKITTI's .label")
+                        "point): label files as -o writes them, SemanticKITTI's .label or "
+                        "nuScenes' _lidarseg.bin")
     e.add_argument("--ground-truth-field", metavar="NAME", default=None,
                    help="also a ground truth read from the input file itself: a LAS/LAZ "
                         "dimension (classification), a PLY vertex property (ScanNet's "

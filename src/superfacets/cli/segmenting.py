@@ -53,7 +53,7 @@ def _add_segment(sub) -> None:
                     "per face in file order; the objects of a scene joined in order), or "
                     "of its vertices (--elements vertices), or the superpoints of a point "
                     "cloud (.ply without faces, .pcd, .xyz/.pts/.txt, .npy, .las/.laz, .e57, "
-                    "KITTI's .bin; one "
+                    "KITTI's .bin, nuScenes' .pcd.bin; one "
                     "label per point in file order, -1 for invalid points), and write them "
                     "as a .seg label file (one label per line), a ScanNet-style .json "
                     "(segIndices) and/or a coloured mesh or cloud.")
@@ -61,7 +61,7 @@ def _add_segment(sub) -> None:
     inp.add_argument("mesh", metavar="INPUT",
                      help="a mesh (.off, .tri, .ply, .obj, .stl, .glb, .gltf), a point cloud "
                           "(.ply without faces, .pcd, .xyz/.pts/.txt, .npy, .las/.laz, .e57, "
-                          "KITTI's velodyne .bin) or a "
+                          "KITTI's velodyne .bin, nuScenes' .pcd.bin) or a "
                           "tetrahedral mesh (.msh, .vtk, .vtu, .mesh), optionally "
                           ".gz/.xz/.bz2")
     add_scan_options(inp)

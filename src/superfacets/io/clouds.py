@@ -175,7 +175,8 @@ def read_cloud(path, format: str | None = None):
         elif fmt == "npy":
             kw = _read_npy(data, path)
         elif fmt == "bin":
-            kw = _read_kitti(data, path)
+            kw = (_read_nuscenes(data, path) if path.name.lower().endswith(".pcd.bin")
+                  else _read_kitti(data, path))
         else:
             kw = read_columns(data, path)
     if kw["points"].shape[0] == 0:
@@ -429,9 +430,6 @@ def _read_kitti(data: bytes, path: Path) -> dict:
     turned towards the origin gave a 12-22 % higher undersegmentation error at k = 300 and
     1,000 than seen from above (docs/notes/scans-io.md). The reflectance (in [0, 1]) is not
     read; it tells such a file from other binary data."""
-    if Path(path).name.lower().endswith(".pcd.bin"):
-        raise MeshFormatError(f"{path}: a .pcd.bin (nuScenes: five float32 values a point) is "
-                              "not read; a .bin is read as a KITTI velodyne scan")
     if len(data) % 16:
         raise MeshFormatError(f"{path}: a .bin is read as a KITTI velodyne scan (float32 x, "
                               f"y, z, reflectance: 16 bytes a point); its {len(data):,} bytes "
@@ -443,6 +441,36 @@ def _read_kitti(data: bytes, path: Path) -> dict:
         raise MeshFormatError(f"{path}: not a KITTI velodyne scan (float32 x, y, z, "
                               f"reflectance in [0, 1]): point {int(off[0])}'s fourth value is "
                               f"{float(arr[off[0], 3])!r} ({off.size:,} such points)")
+    return {"points": arr[:, :3].astype(np.float64), "up": np.array([0.0, 0.0, 1.0])}
+
+
+#: Most laser rings of a nuScenes-style ``.pcd.bin`` sweep's fifth value (the ring index:
+#: 0..31 on nuScenes' 32-beam sensor; a sensor of up to 128 beams read alike).
+MAX_RINGS = 128
+
+
+def _read_nuscenes(data: bytes, path: Path) -> dict:
+    """A nuScenes lidar sweep (``.pcd.bin``): float32 ``x y z intensity ring`` per point,
+    little endian, no header, ``z`` up, in the sensor's frame. Seen from above, as a KITTI
+    scan is (:func:`_read_kitti`: the same roof-mounted sensor's sweep). Neither the
+    intensity (0..255) nor the ring index (an integer below :data:`MAX_RINGS`) is read;
+    they tell such a file from other binary data (a KITTI scan renamed, four values a
+    point)."""
+    if len(data) % 20:
+        raise MeshFormatError(f"{path}: a .pcd.bin is read as a nuScenes lidar sweep (float32 "
+                              "x, y, z, intensity, ring: 20 bytes a point); its "
+                              f"{len(data):,} bytes are not a whole number of points")
+    arr = np.frombuffer(data, dtype="<f4").reshape(-1, 5)
+    with np.errstate(invalid="ignore"):
+        ring, level = arr[:, 4], arr[:, 3]
+        off = np.flatnonzero(~((ring >= 0) & (ring < MAX_RINGS) & (ring == np.floor(ring))
+                               & (level >= 0) & (level <= 255)))
+    if off.size:
+        i = int(off[0])
+        raise MeshFormatError(f"{path}: not a nuScenes lidar sweep (float32 x, y, z, intensity "
+                              f"in [0, 255], ring index 0..{MAX_RINGS - 1}): point {i}'s "
+                              f"intensity is {float(arr[i, 3])!r} and ring "
+                              f"{float(arr[i, 4])!r} ({off.size:,} such points)")
     return {"points": arr[:, :3].astype(np.float64), "up": np.array([0.0, 0.0, 1.0])}
 
 

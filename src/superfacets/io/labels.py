@@ -49,9 +49,9 @@ def write_labels(path, labels, header: dict | Iterable[str] | None = None, *,
     Raises
     ------
     ParameterError
-        If ``labels`` is not a 1-D integer array, or ``path`` is a ``.label`` (SemanticKITTI's
-        binary format, which :func:`read_labels` reads as such: text there would be read
-        back wrong).
+        If ``labels`` is not a 1-D integer array, or ``path`` is a ``.label`` or ``.bin``
+        (SemanticKITTI's and nuScenes' binary formats, which :func:`read_labels` reads as
+        such: text there would be read back wrong).
 
     Examples
     --------
@@ -60,9 +60,11 @@ def write_labels(path, labels, header: dict | Iterable[str] | None = None, *,
     >>> write_labels(f"{folder}/labels.seg", [0, 1, 1]).read_text().split()
     ['0', '1', '1']
     """
-    if str(path) != "-" and split_suffix(Path(path))[0] == "label":
-        raise ParameterError(f"{path}: a .label file is SemanticKITTI's binary classes, read "
-                             "back as such; name the labels .seg")
+    binary = {"label": "a .label file is SemanticKITTI's binary classes",
+              "bin": "a .bin of labels is nuScenes' binary classes (_lidarseg.bin)"}
+    if str(path) != "-" and split_suffix(Path(path))[0] in binary:
+        raise ParameterError(f"{path}: {binary[split_suffix(Path(path))[0]]}, read back as "
+                             "such; name the labels .seg")
     labels = check_labels(labels, None)
     head = ""
     if header:
@@ -179,8 +181,9 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
     labels of a PLY written by this package (the ``label`` face property of a
     coloured mesh, else the vertex property ``scalar_ClusterID``), the
     ``ClusterID`` dimension of a LAS/LAZ written by ``segment -o OUT.laz``, the
-    ``segIndices`` of a ScanNet-style ``.json``, or the classes of a SemanticKITTI
-    ``.label`` file (uint32 a point: its lower 16 bits, the instance above left out).
+    ``segIndices`` of a ScanNet-style ``.json``, the classes of a SemanticKITTI
+    ``.label`` file (uint32 a point: its lower 16 bits, the instance above left out), or
+    those of a nuScenes ``*_lidarseg.bin`` file (uint8 a point).
 
     Parameters
     ----------
@@ -198,7 +201,8 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
     FileNotFoundError
         If the file does not exist.
     MeshFormatError
-        If a line is not one integer, or the count differs from ``n_faces``.
+        If a line is not one integer, a ``.bin`` is not named ``*_lidarseg.bin``, or the
+        count differs from ``n_faces``.
 
     Examples
     --------
@@ -225,6 +229,11 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
             raise MeshFormatError(f"{path}: a .label file (SemanticKITTI's) holds 4 bytes a "
                                   f"point; its {len(data):,} bytes are not a whole number")
         labels = (np.frombuffer(data, dtype="<u4") & 0xFFFF).astype(np.int64)
+    elif fmt == "bin":  # nuScenes' lidarseg: uint8 a point
+        if not path.name.lower().endswith("_lidarseg.bin"):
+            raise MeshFormatError(f"{path}: a .bin of labels is read as nuScenes' lidarseg "
+                                  "classes (one uint8 a point), named *_lidarseg.bin")
+        labels = np.frombuffer(data, dtype=np.uint8).astype(np.int64)
     elif fmt == "json":  # the ScanNet Segmentator's {"segIndices": [...]}
         import json
 

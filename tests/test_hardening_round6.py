@@ -1,0 +1,82 @@
+"""The faults of the sixth attack (street scans' files no command read; options and files
+that a command took and then got wrong): each case fails without its fix."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from superfacets import read_cloud, read_labels, write_labels
+from superfacets.cli import main
+from superfacets.errors import MeshFormatError, ParameterError
+
+
+def _one_line_error(capsys, *says):
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("superfacets: error:"), err
+    assert all(s in err[0] for s in says), err[0]
+
+
+def _nuscenes(folder, name="n015__LIDAR_TOP__1532402927647951"):
+    """A nuScenes lidar sweep in miniature (float32 x y z intensity ring, z up): road, a
+    wall and a car, with its lidarseg classes (one uint8 a point)."""
+    rng = np.random.default_rng(5)
+    ang, rad = rng.uniform(0, 2 * np.pi, 8000), rng.uniform(3, 30, 8000)
+    road = np.c_[rad * np.cos(ang), rad * np.sin(ang), np.full(8000, -1.8)]
+    wall = np.c_[rng.uniform(-20, 20, 3000), np.full(3000, 6.0), rng.uniform(-1.8, 2, 3000)]
+    car = np.c_[rng.uniform(4, 8, 1500), rng.uniform(-3, -1.5, 1500),
+                rng.uniform(-1.8, -0.3, 1500)]
+    xyz = np.vstack([road, wall, car])
+    level = rng.integers(0, 256, len(xyz))
+    ring = rng.integers(0, 32, len(xyz))
+    np.c_[xyz, level, ring].astype("<f4").tofile(folder / f"{name}.pcd.bin")
+    cls = np.r_[np.full(8000, 24), np.full(3000, 28), np.full(1500, 17)].astype(np.uint8)
+    cls.tofile(folder / f"{name}_lidarseg.bin")
+    return folder / f"{name}.pcd.bin", folder / f"{name}_lidarseg.bin", xyz
+
+
+def test_a_nuscenes_sweep_and_its_lidarseg_classes_are_read(tmp_path, capsys):
+    # (refused before: "a .pcd.bin (nuScenes: five float32 values a point) is not read")
+    scan, truth, xyz = _nuscenes(tmp_path)
+    cloud = read_cloud(scan)
+    assert np.allclose(cloud.points, xyz.astype(np.float32)) and cloud.viewpoint is None
+    assert np.allclose(cloud.up, [0, 0, 1])  # (seen from above, as a KITTI sweep)
+    assert np.array_equal(np.unique(read_labels(truth, 12500)), [17, 24, 28])
+    out = tmp_path / "sweep.seg"
+    assert main(["segment", str(scan), "-k", "60", "-o", str(out), "-q"]) == 0
+    assert main(["evaluate", str(scan), str(out), str(truth), "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert got["segments"] == 60 and got["oracle_miou"] > 0.9
+    # text in a .bin would be read back as binary classes: refused, as a .label is
+    assert main(["segment", str(scan), "-k", "6", "-o", str(tmp_path / "x_lidarseg.bin")]) == 2
+    _one_line_error(capsys, "not a .bin file")
+    with pytest.raises(ParameterError, match="name the labels .seg"):
+        write_labels(tmp_path / "y.bin", [0, 1])
+    assert not (tmp_path / "y.bin").exists()
+
+
+def test_labels_in_a_bin_other_than_lidarseg_are_refused(tmp_path):
+    # (read before as text: "malformed label file", or numbers out of bytes)
+    path = tmp_path / "semantic_mask.bin"
+    np.arange(10, dtype=np.int64).tofile(path)
+    with pytest.raises(MeshFormatError, match=r"named \*_lidarseg.bin"):
+        read_labels(path)
+
+
+@pytest.mark.parametrize("content, says", [
+    (b"\0" * 21, "not a whole number of points"),
+    # a KITTI sweep named .pcd.bin: 16 bytes a point (five of them read as four)
+    (np.c_[np.ones((50, 3)), np.full(50, 0.5)].astype("<f4").tobytes(), "not a nuScenes"),
+    (np.c_[np.ones((50, 3)), np.full(50, 9.0), np.full(50, 2.5)].astype("<f4").tobytes(),
+     "ring 2.5"),
+    (np.c_[np.ones((50, 3)), np.full(50, 300.0), np.full(50, 2.0)].astype("<f4").tobytes(),
+     "intensity is 300.0"),
+])
+def test_a_pcd_bin_that_is_no_nuscenes_sweep_is_refused(tmp_path, capsys, content, says):
+    (tmp_path / "x.pcd.bin").write_bytes(content)
+    assert main(["segment", str(tmp_path / "x.pcd.bin"), "-k", "3", "-o",
+                 str(tmp_path / "x.seg")]) == 2
+    _one_line_error(capsys, says)
+    assert not (tmp_path / "x.seg").exists()
