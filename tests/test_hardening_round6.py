@@ -80,3 +80,35 @@ def test_a_pcd_bin_that_is_no_nuscenes_sweep_is_refused(tmp_path, capsys, conten
                  str(tmp_path / "x.seg")]) == 2
     _one_line_error(capsys, says)
     assert not (tmp_path / "x.seg").exists()
+
+
+def test_a_page_too_large_to_open_is_refused_before_the_run(tmp_path, capsys, monkeypatch):
+    # (a mesh of more than ~33M triangles gave a page no browser opens, after the whole run)
+    import trimesh
+
+    import superfacets.api.segmentation as segmentation
+    from superfacets.viz import html
+
+    ball = trimesh.creation.icosphere(subdivisions=3)  # 1,280 triangles
+    path = tmp_path / "ball.ply"
+    ball.export(path)
+    monkeypatch.setattr(html, "MAX_PAGE_TRIANGLES", 1000)
+
+    def never(*a, **k):
+        raise AssertionError("the run started")
+
+    monkeypatch.setattr(segmentation, "segment", never)
+    for elements in ("faces", "vertices"):
+        assert main(["segment", str(path), "-k", "10", "--elements", elements,
+                     "-o", str(tmp_path / "b.seg"), "--html", str(tmp_path / "b.html")]) == 2
+        _one_line_error(capsys, "1,280 triangles would not open", "--picture")
+    assert not list(tmp_path.glob("b.*"))
+    with pytest.raises(ParameterError, match="would not open"):
+        html.html_page(ball)
+    monkeypatch.undo()
+    (tmp_path / "b.seg").write_text("\n".join(["0"] * 1280))
+    monkeypatch.setattr(html, "MAX_PAGE_TRIANGLES", 1000)
+    assert main(["html", str(path), str(tmp_path / "b.seg"), "-o",
+                 str(tmp_path / "b.html")]) == 2
+    _one_line_error(capsys, "would not open")
+    assert not (tmp_path / "b.html").exists()

@@ -252,6 +252,12 @@ def cmd_segment(args) -> int:
         data = scan_cloud(read_usable(args.mesh, clouds=True), args)
     interrupts.check()  # a Ctrl-C during the start-up and the reading
     kind = _kind_of_run(args, data, outputs["colored"])
+    if outputs["html"] is not None and not kind_of(kind).cloud:  # (before the run)
+        from ..inputs.mesh import Mesh
+        from ..viz.html import check_page_size
+
+        if isinstance(data, Mesh):  # (a volume's page draws its cut)
+            check_page_size(data)
     kwargs, size_note = _sizes(args, data, kind, kwargs)
     result = _run(args, data, kwargs)
     elapsed = time.perf_counter() - t0

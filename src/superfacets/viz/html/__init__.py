@@ -33,7 +33,8 @@ from ...io.files import save
 from ..camera import view_frame
 from ..render import PointsFrame, faces_to_draw
 
-__all__ = ["NotebookView", "write_html", "html_page", "page_step", "MAX_PAGE_POINTS"]
+__all__ = ["NotebookView", "write_html", "html_page", "page_step", "check_page_size",
+           "MAX_PAGE_POINTS", "MAX_PAGE_TRIANGLES"]
 
 
 def _template() -> str:
@@ -87,7 +88,8 @@ def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None 
     Raises
     ------
     ParameterError
-        As :func:`write_html` (labels, view, a background that is not a CSS colour).
+        As :func:`write_html` (labels, view, a background that is not a CSS colour, a
+        mesh of more than :data:`MAX_PAGE_TRIANGLES` triangles).
 
     Examples
     --------
@@ -107,6 +109,7 @@ def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None 
     mesh = as_mesh(mesh)
     if kind_of(elements).rows != "n_faces":  # labels of the vertices: drawn on faces
         mesh, labels = faces_to_draw(mesh, labels, elements)
+    check_page_size(mesh)
     m = mesh.n_faces
     if labels is not None:
         dense = relabel_dense(check_labels(labels, m, per="face"))
@@ -183,6 +186,43 @@ def page_step(n_points: int) -> int:
     return max(1, -(-int(n_points) // MAX_PAGE_POINTS))
 
 
+#: Triangles a page of a mesh draws at most: their vertex indices are one base64 element
+#: of the page, 16 characters a triangle, and a browser's script engine holds no string
+#: longer than about 2**29 characters (33.5M triangles), so a larger page would not open.
+MAX_PAGE_TRIANGLES = 30_000_000
+
+
+def check_page_size(mesh) -> None:
+    """Refuse a page of a mesh with more than :data:`MAX_PAGE_TRIANGLES` triangles (its
+    polygons as the fans it draws): such a page would not open. Checked before a run
+    writes one (``segment --html``), so that nothing is lost.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        The surface drawn (a volume's cut, the faces its vertices' labels are drawn on).
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    ParameterError
+        If the mesh has more triangles than a page can hold.
+
+    Examples
+    --------
+    >>> check_page_size(Mesh(np.eye(3), np.array([[0, 1, 2]])))  # (one triangle: fine)
+    """
+    n = mesh.n_faces if mesh.is_triangular else int(mesh.face_sizes.sum()) - 2 * mesh.n_faces
+    if n > MAX_PAGE_TRIANGLES:
+        raise ParameterError(f"a page of {n:,} triangles would not open in a browser (at "
+                             f"most {MAX_PAGE_TRIANGLES:,}: a browser holds no longer "
+                             "string); draw it with --picture OUT.png "
+                             "(superfacets.viz.render), or segment a decimated mesh")
+
+
 def _points_page(cloud, labels, *, title, info, background, view, up) -> str:
     """The viewer page of a point cloud: points coloured by superpoint (invalid ones left
     out; past :data:`MAX_PAGE_POINTS`, an even share of them, said on the page)."""
@@ -251,7 +291,8 @@ def write_html(path, mesh, labels=None, *, title: str | None = None, info: dict 
     Raises
     ------
     ParameterError
-        If ``labels`` is not one integer per face, or on a bad view.
+        If ``labels`` is not one integer per face, on a bad view, or if the mesh has more
+        than :data:`MAX_PAGE_TRIANGLES` triangles (a page that would not open).
     FileNotFoundError
         If the output folder does not exist.
 
