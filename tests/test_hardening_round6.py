@@ -112,3 +112,35 @@ def test_a_page_too_large_to_open_is_refused_before_the_run(tmp_path, capsys, mo
                  str(tmp_path / "b.html")]) == 2
     _one_line_error(capsys, "would not open")
     assert not (tmp_path / "b.html").exists()
+
+
+def _organized_pcd(path, normals_nan_at_valid=False):
+    """A 20 x 20 organized frame (a tilted plane) with PCL's normal fields; its first row
+    invalid (NaN positions, NaN normals, as PCL writes them)."""
+    u, v = np.meshgrid(np.arange(20.0), np.arange(20.0))
+    xyz = np.c_[u.ravel() * 0.01, v.ravel() * 0.01, 1 + 0.005 * u.ravel()]
+    nrm = np.tile([-0.5, 0.0, -1.0] / np.linalg.norm([0.5, 0, 1.0]), (400, 1))
+    xyz[:20] = nrm[:20] = np.nan
+    if normals_nan_at_valid:
+        nrm[57] = np.nan
+    head = ("VERSION 0.7\nFIELDS x y z normal_x normal_y normal_z\nSIZE 4 4 4 4 4 4\n"
+            "TYPE F F F F F F\nCOUNT 1 1 1 1 1 1\nWIDTH 20\nHEIGHT 20\n"
+            "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 400\nDATA ascii\n")
+    body = "\n".join(" ".join("nan" if np.isnan(x) else f"{x:.6f}" for x in row)
+                     for row in np.c_[xyz, nrm])
+    path.write_text(head + body + "\n")
+    return nrm
+
+
+def test_a_pcd_s_normals_nan_at_its_invalid_points_are_read(tmp_path, recwarn):
+    # (dropped before, silently, for any NaN: even only at the frame's invalid points,
+    # where every other reader keeps them)
+    path = tmp_path / "frame.pcd"
+    nrm = _organized_pcd(path)
+    cloud = read_cloud(path)
+    assert cloud.normals is not None and not recwarn.list
+    assert np.allclose(cloud.normals[20:], nrm[20:], atol=1e-6)
+    # a NaN normal at a valid point (PCL could not estimate it): all estimated, said
+    _organized_pcd(path, normals_nan_at_valid=True)
+    with pytest.warns(UserWarning, match="1 of its 380 normals are zero or not finite"):
+        assert read_cloud(path).normals is None

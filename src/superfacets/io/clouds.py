@@ -324,10 +324,8 @@ def _read_pcd(path: Path) -> dict:
     if pts.shape[0] != height * width:
         raise MeshFormatError(f"{path}: PCD has {pts.shape[0]} points, the header says "
                               f"{width} x {height}")
-    if nrm is not None:
-        bad = ~np.isfinite(nrm).all(axis=1) | (np.abs(nrm).sum(axis=1) == 0)
-        if bad.any():  # PCL leaves normals NaN where it could not estimate one
-            nrm = None
+    # (normals NaN at invalid points are left alone; NaN at a valid one, where PCL could not
+    # estimate it, sets them all aside with a warning, as every reader does: given_normals)
     out = {"points": pts, "normals": nrm, "colors": col, "allow_invalid": True,
            "viewpoint": viewpoint[:3], "shape": (height, width) if height > 1 else None}
     if height > 1:  # an image of a camera: up is its -y, turned as the sensor was
