@@ -146,7 +146,10 @@ def cases() -> list[Case]:
     mesh_case("off-index-float", "m.off", _tetra_off().replace(b"3 1 2 3", b"3 1 2 2.5"), "")
     mesh_case("off-face-two-vertices", "m.off", _tetra_off().replace(b"3 1 2 3", b"2 1 2"), "")
     mesh_case("off-face-count-mismatch", "m.off", _tetra_off().replace(b"3 1 2 3", b"3 1 2"), "")
-    mesh_case("off-no-faces", "m.off", b"OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n", "no faces")
+    # (vertices and no face: a point cloud, of 3 points here, fewer than -k 4)
+    mesh_case("off-no-faces", "m.off", b"OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n",
+              "larger than the number of points (3)")
+    mesh_case("off-no-vertices", "m.off", b"OFF\n0 0 0\n", "no faces")
     mesh_case("off-binary-junk", "m.off", bytes(range(256)) * 4, "")
     mesh_case("off-zero-extent", "m.off", b"OFF\n3 1 0\n1 1 1\n1 1 1\n1 1 1\n3 0 1 2\n",
               "zero extent")

@@ -144,3 +144,69 @@ def test_a_pcd_s_normals_nan_at_its_invalid_points_are_read(tmp_path, recwarn):
     _organized_pcd(path, normals_nan_at_valid=True)
     with pytest.warns(UserWarning, match="1 of its 380 normals are zero or not finite"):
         assert read_cloud(path).normals is None
+
+
+def _surface(n=3000):
+    rng = np.random.default_rng(0)
+    xy = rng.uniform(0, 10, (n, 2))
+    return np.c_[xy, np.sin(xy[:, 0]) * 0.5]
+
+
+def test_text_clouds_with_decimal_commas_or_quoted_fields_are_read(tmp_path, capsys):
+    # ("the header names 3 columns (x y z), the lines have 6"; "point line 1 is not
+    # numbers": a spreadsheet's CSV in a European locale, and a CSV of quoted fields)
+    pts = _surface()
+    plain = tmp_path / "plain.xyz"
+    np.savetxt(plain, pts, fmt="%.5f")
+    body = "".join(f"{a:.5f};{b:.5f};{c:.5f}\n".replace(".", ",") for a, b, c in pts)
+    (tmp_path / "eu.csv").write_text("X;Y;Z\n" + body)
+    (tmp_path / "eu_plain.txt").write_text(body)  # (no header either)
+    (tmp_path / "quoted.csv").write_text('"x","y","z","Intensity"\n' + "".join(
+        f'"{a:.5f}","{b:.5f}","{c:.5f}","5"\n' for a, b, c in pts))
+    want = read_cloud(plain).points
+    for name in ("eu.csv", "eu_plain.txt", "quoted.csv"):
+        assert np.array_equal(read_cloud(tmp_path / name).points, want), name
+    # a semicolon file of decimal points, a comma file: as before
+    (tmp_path / "semi.csv").write_text("".join(f"{a:.5f};{b:.5f};{c:.5f}\n" for a, b, c in pts))
+    assert np.array_equal(read_cloud(tmp_path / "semi.csv").points, want)
+    labels = tmp_path / "eu.seg"
+    assert main(["segment", str(tmp_path / "eu.csv"), "-k", "20", "-o", str(labels), "-q"]) == 0
+    assert main(["segment", str(plain), "-k", "20", "-o", str(tmp_path / "p.seg"), "-q"]) == 0
+    assert labels.read_text() == (tmp_path / "p.seg").read_text()
+
+
+def test_obj_and_off_files_of_vertices_alone_are_point_clouds(tmp_path, capsys):
+    # ("empty mesh: no faces": MeshLab saves a cloud as an OBJ or OFF of vertices)
+    from superfacets import read_input, read_mesh
+    from superfacets.errors import InvalidMeshError
+
+    pts = _surface()
+    rgb = np.tile([200, 100, 50], (len(pts), 1))
+    (tmp_path / "c.obj").write_text("# cloud\n" + "".join(
+        f"v {a:.5f} {b:.5f} {c:.5f} 0.8 0.4 0.2\n" for a, b, c in pts))
+    (tmp_path / "c.off").write_text(f"COFF\n{len(pts)} 0 0\n" + "".join(
+        f"{a:.5f} {b:.5f} {c:.5f} 200 100 50 255\n" for a, b, c in pts))
+    (tmp_path / "n.off").write_text(f"NOFF {len(pts)} 0 0\n" + "".join(
+        f"{a:.5f} {b:.5f} {c:.5f} 0 0 1\n" for a, b, c in pts))
+    want = np.round(pts, 5)
+    for name in ("c.obj", "c.off", "n.off"):
+        cloud = read_input(tmp_path / name)
+        assert type(cloud).__name__ == "PointCloud", name
+        assert np.allclose(cloud.points, want), name
+    assert np.allclose(read_input(tmp_path / "c.off").colors * 255, rgb)
+    assert np.allclose(read_input(tmp_path / "c.obj").colors, [0.8, 0.4, 0.2])
+    assert np.allclose(read_input(tmp_path / "n.off").normals, [0, 0, 1])
+    assert main(["segment", str(tmp_path / "c.obj"), "-k", "20", "-o",
+                 str(tmp_path / "c.seg"), "-q"]) == 0
+    assert len((tmp_path / "c.seg").read_text().split()) == len(pts)
+    # a mesh stays a mesh (its faces after its vertices, or indented), and a file of
+    # neither vertices nor faces is still refused as an empty mesh
+    tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n"
+    for name, text in (("m.obj", tri + "f 1 2 3\n"), ("i.obj", tri + "  f\t1 2 3\n")):
+        (tmp_path / name).write_text(text)
+        assert type(read_input(tmp_path / name)).__name__ == "Mesh", name
+    (tmp_path / "e.obj").write_text("# nothing\n")
+    with pytest.raises(InvalidMeshError, match="no faces"):
+        read_input(tmp_path / "e.obj")
+    with pytest.raises(InvalidMeshError, match="no faces"):
+        read_mesh(tmp_path / "c.off")

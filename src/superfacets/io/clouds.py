@@ -29,6 +29,7 @@ error naming its row.
 from __future__ import annotations
 
 import io
+import re
 import warnings
 from pathlib import Path
 
@@ -62,7 +63,8 @@ CLOUD_FORMATS = ("pcd", "xyz", "pts", "txt", "csv", "npy", "las", "laz", "e57", 
 
 
 def is_cloud_file(path) -> bool:
-    """Whether ``path`` holds a point cloud: a cloud format, or a PLY declaring no face.
+    """Whether ``path`` holds a point cloud: a cloud format, or a PLY, OFF or OBJ of
+    vertices and no face (as MeshLab saves a cloud in a mesh format).
 
     Parameters
     ----------
@@ -86,8 +88,10 @@ def is_cloud_file(path) -> bool:
     fmt, comp = split_suffix(path)
     if fmt in CLOUD_FORMATS:
         return True
-    if fmt != "ply" or not path.is_file():
+    if fmt not in ("ply", "off", "obj") or not path.is_file():
         return False
+    if fmt == "obj":
+        return _obj_without_faces(path, comp)
     if comp:
         data = read_bytes(path, comp)
     else:
@@ -95,10 +99,55 @@ def is_cloud_file(path) -> bool:
             data = f.read(1 << 16)
     if not data:  # an empty file: read_mesh says so
         return False
+    if fmt == "off":
+        counts = _off_counts(data)
+        return counts is not None and counts[0] > 0 and counts[1] == 0
     head = _ply_header(data)
     faces = [int(p[2]) for p in (ln.split() for ln in head)
              if len(p) == 3 and p[0] == b"element" and p[1] == b"face" and p[2].isdigit()]
     return not faces or faces[0] == 0
+
+
+def _off_counts(data: bytes) -> tuple[int, int] | None:
+    """The vertex and face counts an OFF header (the start of the file, ``data``) declares,
+    or None where it declares none that can be read (:func:`read_mesh` says why)."""
+    words: list[bytes] = []
+    for line in data.split(b"\n")[:64]:
+        line = line.split(b"#", 1)[0].strip()
+        if line:
+            words += line.split()
+        if len(words) >= 3:
+            break
+    if len(words) < 3 or not words[0].upper().endswith(b"OFF") \
+            or not (words[1].isdigit() and words[2].isdigit()):
+        return None
+    return int(words[1]), int(words[2])
+
+
+#: A face statement at the start of an OBJ line (spaces or tabs before and after ``f``).
+_OBJ_FACE = re.compile(rb"(?m)^[ \t]*f[ \t]")
+
+
+def _obj_without_faces(path: Path, comp: str | None) -> bool:
+    """Whether an OBJ file holds a vertex statement and no face statement (a point cloud
+    in OBJ). The usual mesh is told at its first face line (a scan of the bytes, mapped,
+    not read); an empty or unreadable file is left to :func:`read_mesh` (False)."""
+    import mmap
+
+    try:
+        if comp:
+            data = read_bytes(path, comp)
+            return b"v" in data and _OBJ_FACE.search(data) is None
+        with path.open("rb") as f:
+            if not path.stat().st_size:
+                return False
+            with mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as mm:
+                if mm.find(b"\nf ") >= 0 or mm[:2] == b"f ":  # (the usual mesh: at once)
+                    return False
+                return _OBJ_FACE.search(mm) is None and re.search(
+                    rb"(?m)^[ \t]*v[ \t]", mm) is not None
+    except (OSError, ValueError, MeshFormatError):
+        return False
 
 
 def _ply_header(data: bytes) -> list[bytes]:
@@ -112,8 +161,9 @@ def read_cloud(path, format: str | None = None):
     Parameters
     ----------
     path : str or os.PathLike
-        ``.ply`` (no faces), ``.pcd``, ``.xyz``, ``.pts``, ``.txt``, ``.npy``,
-        ``.las`` or ``.laz``; text formats and PLY may end in ``.gz``/``.xz``/``.bz2``.
+        ``.ply``, ``.obj`` or ``.off`` (no faces), ``.pcd``, ``.xyz``, ``.pts``, ``.txt``,
+        ``.csv``, ``.npy``, ``.las``, ``.laz``, ``.e57``, KITTI's ``.bin`` or nuScenes'
+        ``.pcd.bin``; text formats and PLY may end in ``.gz``/``.xz``/``.bz2``.
     format : str, optional
         Force a format instead of the suffix.
 
@@ -150,7 +200,7 @@ def read_cloud(path, format: str | None = None):
         if not isinstance(format, str):
             raise TypeError(f"format must be a suffix such as 'ply', got {format!r}")
         fmt = format.lower().lstrip(".")
-    if fmt not in CLOUD_FORMATS + ("ply",):
+    if fmt not in CLOUD_FORMATS + ("ply", "obj", "off"):
         raise MeshFormatError(f"{path}: unknown point-cloud format "
                               f"{('.' + fmt) if fmt else '(no suffix)'}; expected .ply or one of "
                               f"{', '.join('.' + f for f in CLOUD_FORMATS)}")
@@ -172,6 +222,8 @@ def read_cloud(path, format: str | None = None):
         data = read_bytes(path, comp, counts=counts)
         if fmt == "ply":
             kw = _read_ply(data, path)
+        elif fmt in ("obj", "off"):
+            kw = _read_mesh_vertices(data, path, fmt)
         elif fmt == "npy":
             kw = _read_npy(data, path)
         elif fmt == "bin":
@@ -186,6 +238,23 @@ def read_cloud(path, format: str | None = None):
         return PointCloud(name=path.name, **kw)
     except InvalidCloudError as exc:
         raise InvalidCloudError(f"{path}: {str(exc).removeprefix(path.name + ': ')}") from None
+
+
+def _read_mesh_vertices(data: bytes, path: Path, fmt: str) -> dict:
+    """The vertices of an OBJ or OFF file of no face as a cloud (with an OBJ's ``v x y z r
+    g b`` colours, a COFF's colours, a NOFF's normals)."""
+    from .meshes import parse_off
+    from .obj import parse_obj
+
+    if fmt == "obj":
+        v, f, _, colors = parse_obj(data, path, cloud=True)
+        normals = None
+    else:
+        v, f, colors, normals = parse_off(data, path, cloud=True)
+    if len(f):
+        raise MeshFormatError(f"{path}: the file holds faces: a mesh (read_mesh), not a "
+                              "point cloud")
+    return {"points": v, "colors": colors, "normals": normals}
 
 
 def _read_ply(data: bytes, path: Path) -> dict:

@@ -67,7 +67,7 @@ def read_columns(data: bytes, path: Path, size: int = 1 << 23) -> dict:
     names, start = _header(text)
     parts: list[np.ndarray] = []
     seen, declared = 0, None
-    for lines in _pieces(text, start, size):
+    for lines in _pieces(text, start, size, _decimal_comma(text, start)):
         if not parts and declared is None and lines[0].isdigit() and \
                 len(lines[0].split()) == 1:
             declared, lines = int(lines[0]), lines[1:]  # a PTS count line
@@ -111,15 +111,36 @@ def _header(text: str) -> tuple[list[str] | None, int]:
     return names, at
 
 
-def _pieces(text: str, start: int, size: int):
-    """Lists of the points' lines (stripped, commas and semicolons as spaces, comments
-    and blank lines left out), each from about ``size`` characters."""
+#: A number written with a decimal comma (``-12,5``, ``3``, ``1,2e-3``): a field of a
+#: semicolon-separated line as a spreadsheet in a European locale writes it.
+_COMMA_NUMBER = re.compile(r'\s*"?[+-]?(\d+(,\d*)?|,\d+)([eE][+-]?\d+)?"?\s*')
+
+
+def _decimal_comma(text: str, start: int) -> bool:
+    """Whether the points' lines (from ``start``) write their numbers with a decimal comma,
+    separated by semicolons (``1,5;2,25;0,5``: a CSV saved in a European locale), as the
+    first point line tells: semicolons, a comma, and every field such a number."""
+    end = text.find("\n", start)
+    line = text[start:len(text) if end < 0 else end].strip()
+    if ";" not in line or "," not in line:
+        return False
+    return all(_COMMA_NUMBER.fullmatch(f) for f in line.rstrip(";").split(";"))
+
+
+def _pieces(text: str, start: int, size: int, decimal_comma: bool = False):
+    """Lists of the points' lines (stripped, commas and semicolons as spaces, quotes
+    around fields left out, comments and blank lines left out), each from about ``size``
+    characters; with ``decimal_comma``, commas as decimal points."""
     while start < len(text):
         end = text.find("\n", min(start + size, len(text)) - 1)
         end = len(text) if end < 0 else end + 1
         piece = text[start:end]
+        if decimal_comma:
+            piece = piece.replace(",", ".")
         if ";" in piece or "," in piece:
             piece = piece.replace(",", " ").replace(";", " ")
+        if '"' in piece:  # (a CSV's quoted fields)
+            piece = piece.replace('"', " ")
         lines = list(filter(None, map(str.strip, piece.splitlines())))  # (the loop in C)
         if "#" in piece or "//" in piece:
             lines = [ln for ln in lines if not ln.startswith(_COMMENT)]

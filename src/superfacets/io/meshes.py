@@ -93,7 +93,7 @@ def read_mesh(path, format: str | None = None) -> Mesh:
     ply = fmt == "ply" and comp is None and read_ply_triangles(path, read_head(path))
     data = b"" if ply else read_bytes(path, comp, counts=counts)  # (folders refused there)
     if fmt == "off":
-        v, f, colors = _parse_off(data, path)
+        v, f, colors = parse_off(data, path)[:3]
     elif fmt == "tri":
         v, f = _parse_tri(data, path)
     elif fmt == "obj":
@@ -130,8 +130,10 @@ def _count(token: str, what: str, path: Path) -> int:
     return n
 
 
-def _parse_off(data: bytes, path: Path):
-    """OFF: vertices, faces, and the vertices' colours of a COFF file (or None)."""
+def parse_off(data: bytes, path: Path, cloud: bool = False):
+    """OFF: vertices, faces, the vertices' colours of a COFF file and normals of a NOFF
+    file (or None); with ``cloud``, a file of no face is read (its faces an empty (0, 3)
+    array), not refused."""
     lines = text_lines(data, path)
     if not lines:
         raise MeshFormatError(f"{path}: empty file")
@@ -162,8 +164,10 @@ def _parse_off(data: bytes, path: Path):
     v = _loadtxt(vlines, np.float64, "vertex lines", path) if nv else np.zeros((0, 3))
     if v.shape[1] < 3:
         raise MeshFormatError(f"{path}: vertex lines need 3 coordinates, found {v.shape[1]}")
-    colors = None
+    colors = normals = None
     prefix = magic[:-3]
+    if "N" in prefix and v.shape[1] >= 6:
+        normals = np.ascontiguousarray(v[:, 3:6])
     if "C" in prefix:  # [ST][C][N]OFF: x y z [nx ny nz] [r g b [a]]
         at = 3 + 3 * ("N" in prefix)
         if v.shape[1] < at + 3:
@@ -172,9 +176,11 @@ def _parse_off(data: bytes, path: Path):
         colors = _unit(v[:, at:at + 3])
     v = np.ascontiguousarray(v[:, :3])
     if nf == 0:
+        if cloud:
+            return v, np.zeros((0, 3), dtype=np.int64), colors, normals
         raise InvalidMeshError(f"{path}: empty mesh: no faces")
     f = _off_faces(flines, path)
-    return v, f, colors
+    return v, f, colors, normals
 
 
 def _unit(rgb: np.ndarray) -> np.ndarray:

@@ -29,7 +29,7 @@ _TAIL = itemgetter(slice(1, None))  # a line without its statement's letter
 _CONTINUED = re.compile(rb"\\\r?\n")  # a backslash that ends a line: it goes on
 
 
-def parse_obj(data: bytes, path: Path, size: int = 1 << 23):
+def parse_obj(data: bytes, path: Path, size: int = 1 << 23, *, cloud: bool = False):
     """``v`` and ``f`` lines, in file order, every object of the file.
 
     Faces of any size are kept as polygons; ``o`` statements name objects (returned as
@@ -47,6 +47,9 @@ def parse_obj(data: bytes, path: Path, size: int = 1 << 23):
         Named in errors.
     size : int
         Bytes per piece.
+    cloud : bool, default False
+        A file of ``v`` lines alone is read (a point cloud: :func:`superfacets.read_cloud`),
+        not refused; its faces are then an empty (0, 3) array.
 
     Returns
     -------
@@ -61,7 +64,7 @@ def parse_obj(data: bytes, path: Path, size: int = 1 << 23):
     MeshFormatError
         A malformed vertex, colour or face line, or an index 0 or out of range.
     InvalidMeshError
-        If the file has no face.
+        If the file has no face (unless ``cloud``).
 
     Examples
     --------
@@ -75,7 +78,7 @@ def parse_obj(data: bytes, path: Path, size: int = 1 << 23):
     state = _State()
     for lines in text_chunks(data, path, size):
         state.read(lines, path)
-    return state.result(path)
+    return state.result(path, cloud)
 
 
 class _State:
@@ -110,8 +113,8 @@ class _State:
             self.faces.append(_faces(rows, before, self.nf, path))
             self.nf += len(rows)
 
-    def result(self, path: Path):
-        if not self.nf:
+    def result(self, path: Path, cloud: bool = False):
+        if not self.nf and not cloud:
             raise InvalidMeshError(f"{path}: empty mesh: no faces")
         v = np.concatenate(self.vertices) if self.vertices else np.zeros((0, 3))
         colors = None
@@ -125,7 +128,8 @@ class _State:
             bounds = ([("default", 0)] if self.starts[0][1] > 0 else []) + self.starts
             ends = [b for _, b in bounds[1:]] + [self.nf]
             objects = [(nm, a, b) for (nm, a), b in zip(bounds, ends) if b > a]
-        return v, _joined(self.faces), tuple(objects), colors
+        faces = _joined(self.faces) if self.faces else np.zeros((0, 3), dtype=np.int64)
+        return v, faces, tuple(objects), colors
 
 
 def _rows(lines: list[str], at: np.ndarray) -> list[str]:
