@@ -210,3 +210,22 @@ def test_obj_and_off_files_of_vertices_alone_are_point_clouds(tmp_path, capsys):
         read_input(tmp_path / "e.obj")
     with pytest.raises(InvalidMeshError, match="no faces"):
         read_mesh(tmp_path / "c.off")
+
+
+def test_spreadsheet_and_survey_csv_files_are_read(tmp_path):
+    # (a BOM: "point line 1 is not numbers: '\ufeffx y z'"; a header in a Windows code
+    # page: "not a text file (binary data)"; Easting, Northing, Elevation: "not numbers")
+    pts = _surface()
+    body = "".join(f"{a:.5f},{b:.5f},{c:.5f},1\n" for a, b, c in pts)
+    (tmp_path / "bom.csv").write_text("x,y,z,i\n" + body, encoding="utf-8-sig")
+    (tmp_path / "cp.csv").write_bytes("x,y,z,Höhe\n".encode("cp1252") + body.encode())
+    (tmp_path / "survey.csv").write_text("Easting,Northing,Elevation,Code\n" + body)
+    (tmp_path / "both.csv").write_text("Height,X,Y,Z\n" + "".join(
+        f"9,{a:.5f},{b:.5f},{c:.5f}\n" for a, b, c in pts))  # (z named: height is not z)
+    want = np.round(pts, 5)
+    for name in ("bom.csv", "cp.csv", "survey.csv", "both.csv"):
+        assert np.allclose(read_cloud(tmp_path / name).points, want, atol=1e-9), name
+    # binary data in a text format is still refused as such
+    (tmp_path / "bin.xyz").write_bytes(b"\x00\xff\x10" * 50)
+    with pytest.raises(MeshFormatError, match="not a text file"):
+        read_cloud(tmp_path / "bin.xyz")

@@ -23,6 +23,9 @@ from .ply import COLOR_PROPERTIES
 __all__ = ["read_columns"]
 
 _HEADER = re.compile(r"^\s*(#|//)\s*")
+#: Surveyors' names of the coordinates in a header, read as x, y, z.
+SYNONYMS = {"easting": "x", "east": "x", "northing": "y", "north": "y", "elevation": "z",
+            "height": "z", "altitude": "z"}
 _COMMENT = ("#", "//")
 
 
@@ -58,10 +61,13 @@ def read_columns(data: bytes, path: Path, size: int = 1 << 23) -> dict:
     [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]]
     """
     try:
-        text = data.decode("utf-8")
+        text = data.decode("utf-8-sig")  # (a spreadsheet's "CSV UTF-8" starts with a BOM)
     except UnicodeDecodeError:
-        raise MeshFormatError(f"{path}: not a text file (binary data in a text format)") \
-            from None
+        if b"\0" in data:
+            raise MeshFormatError(f"{path}: not a text file (binary data in a text format)") \
+                from None
+        text = data.decode("cp1252", errors="replace")  # (a header in a Windows code page:
+        # the numbers are ASCII in every one)
     if "\r" in text:  # (old Mac and Windows line ends, as the header is read by "\n")
         text = text.replace("\r\n", "\n").replace("\r", "\n")
     names, start = _header(text)
@@ -98,13 +104,15 @@ def _header(text: str) -> tuple[list[str] | None, int]:
         end = len(text) if end < 0 else end + 1
         ln = text[at:end].strip()
         if ln and not _HEADER.match(ln):
-            words = [w.strip("\"'").lower() for w in re.split(r"[\s,;]+", ln) if w]
+            words = _coordinates([w.strip("\"'").lower() for w in re.split(r"[\s,;]+", ln)
+                                  if w])
             if names is None and set("xyz") <= set(words) and not any(map(_is_number,
                                                                            words)):
                 names, at = words, end  # a first line of names alone (a CSV's header)
             break
         if ln and names is None:
-            words = [w.lower() for w in re.split(r"[\s,]+", _HEADER.sub("", ln).strip()) if w]
+            words = _coordinates([w.lower() for w in
+                                  re.split(r"[\s,]+", _HEADER.sub("", ln).strip()) if w])
             if words and not all(_is_number(w) for w in words):
                 names = words
         at = end
@@ -125,6 +133,17 @@ def _decimal_comma(text: str, start: int) -> bool:
     if ";" not in line or "," not in line:
         return False
     return all(_COMMA_NUMBER.fullmatch(f) for f in line.rstrip(";").split(";"))
+
+
+def _coordinates(words: list[str]) -> list[str]:
+    """A header's column names, the first of a surveyor's names of a coordinate read as
+    ``x``, ``y`` or ``z`` (:data:`SYNONYMS`) where the header names no such column."""
+    out = list(words)
+    for i, w in enumerate(words):
+        axis = SYNONYMS.get(w)
+        if axis is not None and axis not in out:
+            out[i] = axis
+    return out
 
 
 def _pieces(text: str, start: int, size: int, decimal_comma: bool = False):
