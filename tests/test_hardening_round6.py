@@ -229,3 +229,32 @@ def test_spreadsheet_and_survey_csv_files_are_read(tmp_path):
     (tmp_path / "bin.xyz").write_bytes(b"\x00\xff\x10" * 50)
     with pytest.raises(MeshFormatError, match="not a text file"):
         read_cloud(tmp_path / "bin.xyz")
+
+
+def test_evaluate_with_no_ground_truth_measures_the_shapes(tmp_path, capsys):
+    # (refused before: "give a ground truth", though the compactness and the sizes, what a
+    # user with an unlabelled scan can know of a result, need none)
+    from superfacets.evaluation.metrics import evaluate_rows, shape_rows
+
+    pts = _surface()
+    path = tmp_path / "s.xyz"
+    np.savetxt(path, pts)
+    labels = tmp_path / "s.seg"
+    assert main(["segment", str(path), "-k", "20", "-o", str(labels), "-q"]) == 0
+    truth = (pts[:, 0] > 5).astype(int)
+    full = evaluate_rows(read_cloud(path), read_labels(labels), [truth])
+    shapes = shape_rows(read_cloud(path), read_labels(labels))
+    assert shapes["compactness"] == full["compactness"] and shapes["segments"] == 20
+    assert all(shapes[k] == full[k] for k in ("size_min", "size_median", "size_max"))
+    capsys.readouterr()
+    assert main(["evaluate", str(path), str(labels)]) == 0
+    out = capsys.readouterr().out
+    assert "20 superpoints, no ground truths" in out
+    assert f"compactness             {full['compactness']:.4f}" in out
+    assert "undersegmentation_error" not in out and "only the shapes are measured" in out
+    assert main(["evaluate", str(path), str(labels), "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert got["undersegmentation_error"] is None and got["ground_truths"] == 0
+    assert got["compactness"] == pytest.approx(full["compactness"])
+    assert main(["evaluate", str(path), str(labels), "--csv"]) == 0
+    assert capsys.readouterr().out.splitlines()[1].count(",,") >= 1

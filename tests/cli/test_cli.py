@@ -247,7 +247,7 @@ def test_evaluate_reads_a_ground_truth_field_of_the_input(tmp_path, capsys):
     # a ground-truth file given to the option (its abbreviation --ground-truth reads so)
     gt_file = "after the labels: superfacets evaluate INPUT LABELS " + str(sp)
     for args, msg in ((["--ground-truth-field", "klass"], "no field 'klass'; it has: "),
-                      ([], "give a ground truth"), (["--ground-truth", str(sp)], gt_file),
+                      (["--ground-truth", str(sp)], gt_file),
                       (["--ground-truth-field", "gt.seg"], "not a file ('gt.seg')")):
         assert main(["evaluate", str(tmp_path / "scan.las"), str(sp), *args]) == 2
         err = capsys.readouterr().err

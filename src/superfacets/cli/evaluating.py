@@ -27,14 +27,16 @@ def add_parsers(sub) -> None:
                     "each averaged "
                     "over the given ground-truth segmentations: area-weighted on the faces of "
                     "a mesh; each element counted once on its vertices (--elements vertices) "
-                    "or the points of a cloud (a labelled scan).")
+                    "or the points of a cloud (a labelled scan). With no ground truth, the "
+                    "compactness and the segments' sizes alone.")
     e.add_argument("mesh", metavar="INPUT", help="the mesh or point-cloud file")
     e.add_argument("labels", metavar="LABELS",
                    help="labels, one per face (vertex, point) in file order: a .seg file, a "
                         "segIndices .json, or a PLY, PCD or LAS/LAZ written by 'segment -o' "
                         "(its ClusterID)")
     e.add_argument("ground_truths", metavar="GT.seg", nargs="*",
-                   help="one or more ground truths of the same input, one per face (vertex, "
+                   help="ground truths of the same input (none: the shapes alone), one per "
+                        "face (vertex, "
                         "point): label files as -o writes them, SemanticKITTI's .label or "
                         "nuScenes' _lidarseg.bin")
     e.add_argument("--ground-truth-field", metavar="NAME", default=None,
@@ -64,7 +66,7 @@ def add_parsers(sub) -> None:
 def cmd_evaluate(args) -> int:
     from .._runtime.progress import waiting_bar
     from ..errors import ParameterError
-    from ..evaluation.metrics import evaluate_rows
+    from ..evaluation.metrics import evaluate_rows, shape_rows
     from ..io import read_labels
     from .reading import shows_stages
 
@@ -96,21 +98,41 @@ def cmd_evaluate(args) -> int:
             raise ParameterError(f"field {args.ground_truth_field!r} has {gt.shape[0]} values "
                                  f"but the input has {n} {kind}")
         gts.append(gt)
-    if not gts:
-        raise ParameterError("give a ground truth: GT.seg files or --ground-truth-field NAME")
     with waiting_bar(f"measuring {name} ({n:,} {kind})", long):
-        m = evaluate_rows(data, labels, gts, elements=kind, n_neighbors=args.neighbors,
-                          tau=args.tau, ignore_label=args.ignore_label, precision=True)
+        if gts:
+            m = evaluate_rows(data, labels, gts, elements=kind, n_neighbors=args.neighbors,
+                              tau=args.tau, ignore_label=args.ignore_label, precision=True)
+        else:  # (the segments' shapes alone: every other metric compares with a truth)
+            m = dict(dict.fromkeys(METRICS), oracle_iou_per_class={}, **shape_rows(
+                data, labels, elements=kind, n_neighbors=args.neighbors))
     if args.format != "text":
         _print_table(args, kind, n, len(gts), m)
         return 0
     segs = kind_of(kind).segment_word
     print(f"{Path(args.mesh).name}: {n} {kind}, {m['segments']} {segs}, "
-          f"{len(gts)} ground truth{'s' if len(gts) != 1 else ''}")
-    print(f"undersegmentation_error {m['undersegmentation_error']:.4f}  (lower is better)")
+          f"{len(gts) or 'no'} ground truth{'s' if len(gts) != 1 else ''}")
+    if gts:
+        print(f"undersegmentation_error {m['undersegmentation_error']:.4f}  (lower is better)")
     estimate = "; estimated on points" if kind_of(kind).cloud else ""
     print(f"compactness             {m['compactness']:.4f}  (lower is better; disk 3.545"
           f"{estimate})")
+    if gts:
+        _print_truth_metrics(m, n, kind)
+    else:
+        print("note: with no ground truth only the shapes are measured; give GT.seg files "
+              "or --ground-truth-field NAME for the error, recall, precision and mIoU")
+    if m.get("unassigned"):
+        print(f"note: {m['unassigned']:,} {kind} labelled below 0 (unassigned): each such "
+              "label counts as one segment")
+    hist = ", ".join(f"{2**i}+: {c}" for i, c in enumerate(m["size_histogram"]) if c)
+    print(f"segment sizes           {m['size_min']} / {m['size_median']:g} / "
+          f"{m['size_max']} {kind} (min / median / max; by size {hist})")
+    return 0
+
+
+def _print_truth_metrics(m: dict, n: int, kind: str) -> None:
+    """The lines of the metrics that compare with the ground truths (after the
+    compactness)."""
     print(f"boundary_recall         {m['boundary_recall']:.4f}  (higher is better)")
     print(f"boundary_precision      {m['boundary_precision']:.4f}  (higher is better; read "
           "with the recall)")
@@ -126,13 +148,6 @@ def cmd_evaluate(args) -> int:
     if len(per_class) > n // 2 >= MOST_CLASSES_LISTED:  # (a coordinate, an identifier)
         print(f"note: the ground truth has {len(per_class):,} classes for {n:,} {kind}: is it "
               "a field of labels?")
-    if m.get("unassigned"):
-        print(f"note: {m['unassigned']:,} {kind} labelled below 0 (unassigned): each such "
-              "label counts as one segment")
-    hist = ", ".join(f"{2**i}+: {c}" for i, c in enumerate(m["size_histogram"]) if c)
-    print(f"segment sizes           {m['size_min']} / {m['size_median']:g} / "
-          f"{m['size_max']} {kind} (min / median / max; by size {hist})")
-    return 0
 
 
 #: The most classes whose IoU the text output lists one by one (more: with --json).
@@ -164,7 +179,7 @@ def _print_table(args, kind: str, n: int, n_truths: int, m: dict) -> None:
     row = {"input": Path(args.mesh).name, "labels": Path(args.labels).name,
            "elements": kind, "n_elements": int(n), "segments": int(m["segments"]),
            "ground_truths": int(n_truths), "tau": float(args.tau),
-           **{k: float(m[k]) for k in METRICS},
+           **{k: None if m[k] is None else float(m[k]) for k in METRICS},
            **{k: m[k] for k in ("size_min", "size_median", "size_max", "unassigned")}}
     if args.format == "json":
         row["oracle_iou_per_class"] = {str(k): v for k, v in

@@ -33,7 +33,8 @@ from .contingency import Contingency, contingency, dense_labels  # noqa: F401 (r
 __all__ = ["Contingency", "contingency", "undersegmentation_error", "compactness",
            "achievable_segmentation_accuracy", "boundary_recall", "boundary_precision",
            "mean_over_ground_truths",
-           "evaluate", "evaluate_rows", "oracle_miou", "size_summary", "METRICS"]
+           "evaluate", "evaluate_rows", "shape_rows", "oracle_miou", "size_summary",
+           "METRICS"]
 
 #: The names of the metrics :func:`evaluate` returns, and whether lower is better.
 METRICS = {"undersegmentation_error": True, "compactness": True,
@@ -442,20 +443,70 @@ def evaluate_rows(obj, labels, ground_truths: Sequence[np.ndarray], *,
     (True, 20)
     """
 
-    source = elements_of(obj, elements, n_neighbors=n_neighbors)
-    g = source.graph
-    rows = source.first_rows(np.arange(g.n_elements))
-    n = source.n_rows
-    what = g.element
-    lab = check_labels(labels, n, "labels", per=what)[rows]
-    gts = [check_labels(gt, n, "ground_truth", per=what)[rows] for gt in ground_truths]
+    if len(ground_truths) == 0:
+        raise ParameterError("no ground-truth segmentation given (shape_rows measures the "
+                             "segments' shapes alone)")
+    g, rows, lab, n = _element_labels(obj, labels, elements, n_neighbors)
+    gts = [check_labels(gt, n, "ground_truth", per=g.element)[rows] for gt in ground_truths]
     out = evaluate(g, lab, gts, tau=tau, tolerance=tolerance, precision=precision,
                    equal_weight=kind_of(g.kind).equal_weight, ignore_label=ignore_label)
-    out["segments"] = int(np.unique(lab).size)
     weights = None if kind_of(g.kind).equal_weight else g.sizes
     mious = [oracle_miou(lab, gt, weights=weights, ignore_label=ignore_label) for gt in gts]
     out["oracle_miou"] = float(np.mean([m for m, _ in mious]))
     out["oracle_iou_per_class"] = mious[0][1] if len(mious) == 1 else {}
-    out["unassigned"] = int((lab < 0).sum())  # (each negative label is a segment here)
-    out.update(size_summary(lab - min(int(lab.min()), 0) if lab.size else lab))
+    out.update(_counted(lab))
     return out
+
+
+def shape_rows(obj, labels, *, elements: str | None = None,
+               n_neighbors: int = DEFAULTS.n_neighbors) -> dict:
+    """What can be measured of labels given per input row with no ground truth: the
+    compactness (paper eq. 5) and the segments' count and sizes.
+
+    Parameters
+    ----------
+    obj : Mesh, PointCloud or what :func:`superfacets.segment` accepts
+    labels : (N,) int ndarray
+        One label per row (faces, vertices or points).
+    elements : {'faces', 'vertices', 'points'}, optional
+        Default: points for a cloud, faces for a mesh.
+    n_neighbors : int, default 10
+        The point graph's neighbours (points only).
+
+    Returns
+    -------
+    dict
+        ``compactness`` (lower is better; a disk 3.545), ``segments``, ``unassigned`` and
+        the sizes of :func:`size_summary`, as :func:`evaluate_rows` gives them.
+
+    Raises
+    ------
+    ParameterError
+        If ``labels`` does not have one integer per row.
+
+    Examples
+    --------
+    >>> ball = trimesh.creation.icosphere(subdivisions=3)
+    >>> m = shape_rows(ball, segment(ball, 12).labels)
+    >>> m["segments"], 3.5 < m["compactness"] < 10
+    (12, True)
+    """
+    g, _, lab, _ = _element_labels(obj, labels, elements, n_neighbors)
+    return {"compactness": compactness(g, dense_labels(g, lab, "labels")), **_counted(lab)}
+
+
+def _element_labels(obj, labels, elements, n_neighbors: int) -> tuple:
+    """The element graph the method segments (:func:`~superfacets.elements.builders.
+    elements_of`), each element's first row, each element's label (its first row's) and
+    the input's rows."""
+    source = elements_of(obj, elements, n_neighbors=n_neighbors)
+    g, n = source.graph, source.n_rows
+    rows = source.first_rows(np.arange(g.n_elements))
+    return g, rows, check_labels(labels, n, "labels", per=g.element)[rows], n
+
+
+def _counted(lab: np.ndarray) -> dict:
+    """The segments among the elements' labels ``lab``, those below 0 (unassigned: each
+    counted as one segment) and the sizes (:func:`size_summary`)."""
+    return {"segments": int(np.unique(lab).size), "unassigned": int((lab < 0).sum()),
+            **size_summary(lab - min(int(lab.min()), 0) if lab.size else lab)}
