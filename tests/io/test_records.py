@@ -454,3 +454,82 @@ def _cloudcompare(home, path, fmt: str, out) -> None:
                          env={"QT_QPA_PLATFORM": "offscreen", "PATH": "/usr/bin:/bin",
                               "HOME": str(home)})
     assert run.returncode == 0 and out.exists(), run.stdout[-2000:]
+
+
+def _sweep_with_holes(tmp_path):
+    """An organized frame (NPY (H, W, 3)) with NaN holes, and an XYZ cloud with colours."""
+    rng = np.random.default_rng(3)
+    u, v = np.meshgrid(np.linspace(0, 4, 40), np.linspace(0, 3, 30))
+    frame = np.dstack([u, v, 0.2 * np.sin(u)])
+    frame[rng.random((30, 40)) < 0.05] = np.nan
+    np.save(tmp_path / "frame.npy", frame)
+    xyz = np.c_[rng.uniform(0, 10, (2000, 2)), np.zeros(2000)]
+    rgb = rng.integers(0, 256, (2000, 3))
+    np.savetxt(tmp_path / "cloud.xyz", np.c_[xyz, rgb], header="x y z r g b",
+               comments="// ", fmt="%.6f %.6f %.6f %d %d %d")
+    return tmp_path / "frame.npy", tmp_path / "cloud.xyz", xyz, rgb
+
+
+def test_a_cloud_whose_file_takes_no_field_is_written_as_a_new_scan(tmp_path, capsys):
+    # (refused before: "-o writes the labels as text ..., not a .laz file")
+    frame, cloud, xyz, rgb = _sweep_with_holes(tmp_path)
+    for src, k in ((cloud, 12), (frame, 8)):
+        text = tmp_path / f"{src.stem}.seg"
+        assert main(["segment", str(src), "-k", str(k), "-o", str(text), "-q"]) == 0
+        want = read_labels(text)
+        for out in (tmp_path / f"{src.stem}.laz", tmp_path / f"{src.stem}.ply"):
+            assert main(["segment", str(src), "-k", str(k), "-o", str(out)]) == 0
+            assert "a new file of the input's points" in capsys.readouterr().out
+            fields = read_input_fields(out)
+            assert np.array_equal(fields["ClusterID"], want) and fields["ClusterID"].dtype \
+                == np.int32
+            assert np.array_equal(read_labels(out), want)  # (evaluate reads it back)
+    las = laspy.read(str(tmp_path / "cloud.laz"))
+    assert np.abs(np.c_[las.x, las.y, las.z] - xyz).max() < 1e-6
+    assert np.array_equal(np.c_[las.red, las.green, las.blue] // 257, rgb)
+    holes = ~np.isfinite(np.load(frame).reshape(-1, 3)).all(axis=1)
+    las = laspy.read(str(tmp_path / "frame.laz"))
+    assert holes.any() and np.array_equal(np.asarray(las.withheld, bool), holes)
+    assert (np.asarray(las.ClusterID)[holes] == -1).all()
+    ply = read_input_fields(tmp_path / "frame.ply")
+    assert np.isnan(ply["x"][holes]).all() and np.isfinite(ply["x"][~holes]).all()
+    # tiles write the same new file; a LAS input still takes only LAS records
+    for out in ("tiled.laz", "tiled.seg"):
+        assert main(["segment", str(cloud), "-k", "12", "--tiles", "2", "-o",
+                     str(tmp_path / out), "-q"]) == 0
+    assert np.array_equal(read_labels(tmp_path / "tiled.laz"),
+                          read_labels(tmp_path / "tiled.seg"))
+    assert main(["segment", str(tmp_path / "cloud.laz"), "-k", "5", "-o",
+                 str(tmp_path / "x.ply")]) == 2
+    assert "needs a .ply input" in capsys.readouterr().err
+
+
+def test_a_new_scan_opens_in_cloudcompare_with_its_labels(tmp_path):
+    if shutil.which("CloudCompare") is None:
+        pytest.skip("CloudCompare not found: install Debian's 'cloudcompare' package (make "
+                    "test does, as root)")
+    _, cloud, _, _ = _sweep_with_holes(tmp_path)
+    out, asc = tmp_path / "new.ply", tmp_path / "new.asc"
+    assert main(["segment", str(cloud), "-k", "9", "-o", str(out), "-q"]) == 0
+    _cloudcompare(tmp_path, out, "ASC", asc)
+    head = asc.read_text().splitlines()[0].lstrip("/").split()
+    got = np.loadtxt(asc, comments="//")
+    assert np.array_equal(got[:, head.index("ClusterID")].astype(int), read_labels(out))
+    assert {"R", "G", "B"} <= set(head)  # (the colours it was read with)
+
+
+def test_a_new_scan_is_written_from_any_cloud_and_refuses_a_mesh(tmp_path):
+    import trimesh
+
+    from superfacets.io.records import write_cloud_with_labels
+
+    xyz = np.random.default_rng(0).random((5, 3))
+    out = write_cloud_with_labels(tmp_path / "a.ply", xyz, [0, 0, 1, 1, -1])
+    assert read_labels(out).tolist() == [0, 0, 1, 1, -1]
+    with pytest.raises(TypeError, match="expected a point cloud"):
+        write_cloud_with_labels(tmp_path / "b.ply", trimesh.creation.box(), [0] * 8)
+    with pytest.raises(ParameterError, match="4 labels for 5 points"):
+        write_cloud_with_labels(tmp_path / "c.laz", xyz, [0] * 4)
+    with pytest.raises(ParameterError, match="written as .las, .laz or .ply"):
+        write_cloud_with_labels(tmp_path / "d.pcd", xyz, [0] * 5)
+    assert not [p.name for p in tmp_path.iterdir() if p.name != "a.ply"]

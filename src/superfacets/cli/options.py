@@ -321,7 +321,9 @@ def check_output(path: str | None, suffixes: tuple[str, ...], what: str,
 def check_labels_output(path: str | None, source: str, records: bool = False) -> Path | None:
     """``-o``: a label file (``.seg`` or any text name, ``.json`` for segIndices, ``-``),
     or, where ``records`` is True, a copy of a LAS/LAZ, PLY or PCD input with the labels in its
-    records (:func:`superfacets.io.records.write_labels_into`).
+    records (:func:`superfacets.io.records.write_labels_into`), or a new LAS/LAZ or PLY of
+    the points of a cloud whose own file takes no field (:func:`superfacets.io.records.
+    write_cloud_with_labels`).
 
     Any other name that says mesh, cloud, picture or page (``x.pcd``, ``x.png``, ...) is
     refused: ``-o`` writes text labels there, which no viewer would open; the
@@ -330,12 +332,12 @@ def check_labels_output(path: str | None, source: str, records: bool = False) ->
     from ..errors import ParameterError
     from ..io import CLOUD_FORMATS, MESH_FORMATS, VOLUME_FORMATS
     from ..io.files import split_suffix
-    from ..io.records import records_kind
+    from ..io.records import scan_output
 
     out = check_output(path, (), "label file", stdout=True, inputs=(source,))
     if out is None or str(out) == "-":
         return out
-    if records and records_kind(out, source) is not None:  # (a mismatch: refused there)
+    if records and scan_output(out, source) is not None:  # (a mismatch: refused there)
         return out
     fmt = split_suffix(out)[0]
     if fmt == "label":  # (read back as SemanticKITTI's binary classes: refused, not misread)

@@ -74,7 +74,9 @@ def _add_segment(sub) -> None:
                           "{'segIndices': [...], 'params': ...} when it ends in .json "
                           "('-': standard output; default: none); a .las/.laz, .ply or .pcd "
                           "of a scan of that format: a copy of its records with the labels "
-                          "as the field ClusterID")
+                          "as the field ClusterID; a .las/.laz or .ply of a cloud whose "
+                          "file takes no field (.xyz, .npy, .bin, .e57, ...): a new file "
+                          "of its points with that field")
     out.add_argument("--header", action="store_true",
                      help="start the .seg file with '#' lines recording parameters, "
                           "iterations and time (default: labels only, as the benchmark's "
@@ -435,10 +437,11 @@ def _kind_of_run(args, data, ply_out) -> str:
 
 
 def _into_records(output, source) -> bool:
-    """Whether ``-o`` writes a copy of the input with the labels in its records."""
-    from ..io.records import records_kind
+    """Whether ``-o`` writes the labels into a scan's file: a copy of the input's records,
+    or a new LAS/LAZ or PLY of a cloud's points."""
+    from ..io.records import scan_output
 
-    return output not in (None, "-") and records_kind(output, source) is not None
+    return scan_output(output, source) is not None
 
 
 def _run(args, data, kwargs):
@@ -511,13 +514,16 @@ def _writing_bar(args, data, outputs):
 
 def _labels_what(args, kind: str) -> str:
     """What ``-o`` holds, said in the summary: labels, or the input's records with them."""
-    from ..io.records import LABEL_FIELD, ply_field_name
+    from ..io.records import LABEL_FIELD, ply_field_name, scan_output
 
-    if not _into_records(args.output, args.mesh):
+    into = scan_output(args.output, args.mesh)
+    if into is None:
         return "labels"
     rows = "vertices" if kind == "vertices" else "points"
     field = (LABEL_FIELD if not str(args.output).lower().endswith(".ply") else
              f"{ply_field_name(LABEL_FIELD)}, CloudCompare's scalar field {LABEL_FIELD}")
+    if into == "new":
+        return f"a new file of the input's {rows}, labels as {field}"
     return f"the input's {rows}, every field kept, labels as {field}"
 
 
@@ -632,11 +638,12 @@ def _write_baseline(args, data, kind, labels, seg_out, ply_out) -> None:
     from ..io import write_colored_mesh, write_labels
     from ..io.export import write_colored_elements
     from ..io.files import Outputs
-    from ..io.records import write_labels_into
+    from ..io.records import write_scan_labels
 
     with Outputs() as outputs:  # all or nothing
         if seg_out is not None and _into_records(args.output, args.mesh):
-            write_labels_into(seg_out, args.mesh, labels, outputs=outputs)
+            write_scan_labels(seg_out, args.mesh, labels, outputs=outputs,
+                              cloud=data if kind == "points" else None)
         elif seg_out is not None:
             write_labels(seg_out, labels, outputs=outputs)
         if ply_out is not None and kind == "faces":

@@ -70,8 +70,6 @@ def add_tile_options(p) -> None:
 def segment_tiles(args) -> int:
     """``segment --tiles``: labels of a large input, written as ``-o`` says."""
     from ..errors import ParameterError, SuperfacetsError
-    from ..io.files import Outputs
-    from ..io.labels import write_labels, write_segindices
     from ..scale.tiles.run import segment_tiled
 
     for flag, given in (("--colored-mesh", args.colored_mesh), ("--picture", args.picture),
@@ -104,16 +102,7 @@ def segment_tiles(args) -> int:
     except SuperfacetsError as exc:
         raise named_after(args.mesh, exc) from None
     elapsed = time.perf_counter() - t0
-    with Outputs() as outputs:
-        if seg_out is not None:
-            from ..io.records import records_kind, write_labels_into
-
-            if str(seg_out) != "-" and records_kind(seg_out, args.mesh) is not None:
-                write_labels_into(seg_out, args.mesh, result.labels, outputs=outputs)
-            elif str(seg_out).lower().endswith(".json"):
-                write_segindices(seg_out, result.labels, result.params, outputs=outputs)
-            else:
-                write_labels(seg_out, result.labels, outputs=outputs)
+    _write_labels(seg_out, args.mesh, result)
     report = sys.stderr if str(seg_out) == "-" else sys.stdout
     if not args.quiet:
         kind = result.params["elements"]
@@ -140,10 +129,13 @@ def segment_tiles(args) -> int:
                   f"the {kind}, about that many times one run's work: fewer tiles, or more "
                   f"{kind} per {kind_of(kind).segment_word[:-1]}, cost less", file=sys.stderr)
         if seg_out is not None and str(seg_out) != "-":
-            from ..io.records import LABEL_FIELD, records_kind
+            from ..io.records import LABEL_FIELD, scan_output
 
-            what = (f"the input's {kind}, every field kept, labels as {LABEL_FIELD}" if
-                    records_kind(seg_out, args.mesh) else f"labels, one per {kind[:-1]}")
+            into = scan_output(seg_out, args.mesh)
+            what = (f"labels, one per {kind[:-1]}" if into is None else
+                    f"the input's {kind}, every field kept, labels as {LABEL_FIELD}"
+                    if into == "records" else
+                    f"a new file of the input's {kind}, labels as {LABEL_FIELD}")
             print(f"wrote {seg_out} ({what})", file=report)
         elif seg_out is None:
             print("note: nothing was saved: add -o OUT.seg", file=sys.stderr)
@@ -170,3 +162,20 @@ def _source(args):
         raise ParameterError("--viewpoint and --seen-from orient point clouds; the input is "
                              "a mesh")
     return replace(reader, **changes)
+
+
+def _write_labels(seg_out, source, result) -> None:
+    """``-o``'s file of a tiled run: the input's records or a new scan file with the labels
+    (:func:`superfacets.io.records.write_scan_labels`), segIndices, or a label file."""
+    from ..io.files import Outputs
+    from ..io.labels import write_labels, write_segindices
+    from ..io.records import scan_output, write_scan_labels
+
+    with Outputs() as outputs:
+        if seg_out is not None:
+            if scan_output(seg_out, source) is not None:  # (a new file: read once more)
+                write_scan_labels(seg_out, source, result.labels, outputs=outputs)
+            elif str(seg_out).lower().endswith(".json"):
+                write_segindices(seg_out, result.labels, result.params, outputs=outputs)
+            else:
+                write_labels(seg_out, result.labels, outputs=outputs)

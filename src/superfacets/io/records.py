@@ -19,6 +19,11 @@ the header kept.
 
 ``-1`` marks an invalid point (a non-finite row of the input): the type is signed
 for that.
+
+A cloud whose own file takes no field (text columns, NPY, KITTI's and nuScenes' ``.bin``,
+E57, an OBJ or OFF of vertices) is written as a new LAS/LAZ or PLY file instead
+(:func:`write_cloud_with_labels`): its points in file order, the colours and normals it
+was read with, and the labels in the same ``ClusterID`` field.
 """
 
 from __future__ import annotations
@@ -34,7 +39,8 @@ from .files import Outputs, read_bytes, save, split_suffix
 from .headers import check_las, pcd_problem
 
 __all__ = ["LABEL_FIELD", "RECORD_FORMATS", "write_labels_into", "ply_field_name",
-           "records_kind"]
+           "records_kind", "write_cloud_with_labels", "converts", "CONVERTED_FORMATS",
+           "scan_output", "write_scan_labels"]
 
 #: The dimension (LAS/LAZ) or scalar field (PLY, as ``scalar_ClusterID``) the labels go in.
 LABEL_FIELD = "ClusterID"
@@ -87,6 +93,283 @@ def records_kind(output, source) -> str | None:
         f"{output}: -o writes the labels into a copy of the input's own records, so a "
         f".{out_fmt} needs a .{needs} input (this one is {Path(source).name}); for it use "
         f"-o NAME{takes}, or a label file (-o NAME.seg)")
+
+
+#: The formats a cloud whose own file takes no field is written as, with its labels
+#: (:func:`write_cloud_with_labels`).
+CONVERTED_FORMATS = ("las", "laz", "ply")
+
+
+def converts(output, source) -> bool:
+    """Whether ``output`` is a new LAS/LAZ or PLY file of the points of ``source``, a
+    cloud whose own file takes no field (:func:`write_cloud_with_labels`).
+
+    Parameters
+    ----------
+    output, source : str or os.PathLike
+        The output's name; the input file.
+
+    Returns
+    -------
+    bool
+
+    Raises
+    ------
+    MeshFormatError
+        If a PLY, OBJ or OFF input's header cannot be read (to tell a cloud).
+
+    Examples
+    --------
+    >>> converts("out.laz", "scan.xyz"), converts("out.laz", "scan.las")
+    (True, False)
+    """
+    from .clouds import is_cloud_file
+
+    out_fmt, out_comp = split_suffix(Path(output))
+    in_fmt, _ = split_suffix(Path(source))
+    return (out_fmt in CONVERTED_FORMATS and out_comp is None and in_fmt not in RECORD_FORMATS
+            and is_cloud_file(source))
+
+
+def scan_output(output, source) -> str | None:
+    """What ``-o OUTPUT`` writes for the input ``source``: ``'records'`` (a copy of its own
+    records with the labels: :func:`write_labels_into`), ``'new'`` (a new LAS/LAZ or PLY of
+    its points: :func:`write_cloud_with_labels`), or None (a label file).
+
+    Parameters
+    ----------
+    output : str or os.PathLike or None
+        The output's name (None or ``-``: a label file, or none).
+    source : str or os.PathLike
+        The input file.
+
+    Returns
+    -------
+    str or None
+
+    Raises
+    ------
+    ParameterError
+        As :func:`records_kind` (a record format the input cannot be written back as).
+
+    Examples
+    --------
+    >>> scan_output("o.laz", "scan.las"), scan_output("o.laz", "sweep.bin")
+    ('records', 'new')
+    """
+    if output is None or str(output) == "-":
+        return None
+    if records_kind(output, source) is not None:
+        return "records"
+    return "new" if converts(output, source) else None
+
+
+def write_scan_labels(path, source, labels, *, cloud=None,
+                      outputs: Outputs | None = None) -> Path:
+    """The labels into a copy of the input's own records (:func:`write_labels_into`), or,
+    for a cloud whose file takes no field, into a new LAS/LAZ or PLY file of its points
+    (:func:`write_cloud_with_labels`): what :func:`scan_output` says ``path`` is.
+
+    Parameters
+    ----------
+    path, source : str or os.PathLike
+        The output; the input file.
+    labels : (N,) int ndarray
+        One label per record (point, vertex), ``-1`` for an invalid point.
+    cloud : PointCloud, optional
+        The input as read (else read again here, for a new file).
+    outputs : Outputs, optional
+        Stage the file there.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    ParameterError
+        If ``path`` is neither (a label file's name), or as the two writers.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from superfacets import read_labels
+    >>> folder = tempfile.mkdtemp()
+    >>> np.savetxt(f"{folder}/scan.xyz", np.random.default_rng(0).random((6, 3)))
+    >>> out = write_scan_labels(f"{folder}/scan.ply", f"{folder}/scan.xyz", [0, 0, 1, 1, 2, 2])
+    >>> read_labels(out).tolist()
+    [0, 0, 1, 1, 2, 2]
+    """
+    what = scan_output(path, source)
+    if what == "records":
+        return write_labels_into(path, source, labels, outputs=outputs)
+    if what is None:
+        raise ParameterError(f"{path}: labels go into .las, .laz, .ply or .pcd records")
+    if cloud is None:
+        from .clouds import read_cloud
+
+        cloud = read_cloud(source)
+    return write_cloud_with_labels(path, cloud, labels, outputs=outputs)
+
+
+def write_cloud_with_labels(path, cloud, labels, *, name: str = LABEL_FIELD,
+                            outputs: Outputs | None = None) -> Path:
+    """Write a new LAS/LAZ or PLY file of a cloud's points with ``labels`` as a field.
+
+    For a cloud whose own file cannot take one more field (text columns, NPY, KITTI's
+    and nuScenes' ``.bin``, E57, an OBJ or OFF of vertices): PDAL, QGIS and CloudCompare
+    read the result.
+
+    - LAS/LAZ 1.4, point format 6 (7 with colours): ``X Y Z`` at a scale of a power of
+      ten that holds the cloud's extent in 2**30 steps (the data's own precision, in
+      whatever units), the offset its lowest corner; ``Red Green Blue`` (16 bits) where
+      the cloud has colours; the labels as the ``int32`` extra dimension ``name``. An
+      invalid point (non-finite, -1) is written at the offset, ``withheld``.
+    - PLY (binary): ``x y z`` as doubles (an invalid point NaN), ``nx ny nz`` where the
+      file gave normals, ``red green blue`` where it gave colours, and
+      ``scalar_<name>`` (CloudCompare's scalar field ``name``).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        ``.las``, ``.laz`` or ``.ply``.
+    cloud : PointCloud or what :func:`superfacets.as_cloud` takes
+        The cloud as read (:func:`superfacets.read_cloud`): its rows in file order.
+    labels : (N,) int ndarray
+        One label per point, ``-1`` for an invalid point.
+    name : str, default ``'ClusterID'``
+        The field's name (PDAL's).
+    outputs : Outputs, optional
+        Stage the file there (all or nothing with the run's other files).
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    ParameterError
+        If ``path`` is not ``.las``, ``.laz`` or ``.ply``, the labels are not one integer
+        per point from -1 to 2**31 - 1, or ``name`` is not a word (of at most 32
+        characters in a LAS file).
+    TypeError
+        If ``cloud`` is not a point cloud (:func:`superfacets.as_cloud`).
+    MissingExtraError
+        LAS/LAZ without the ``clouds`` extra.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from plyfile import PlyData
+    >>> cloud = PointCloud(np.random.default_rng(0).random((5, 3)))
+    >>> out = write_cloud_with_labels(f"{tempfile.mkdtemp()}/out.ply", cloud, [0, 0, 1, 1, 2])
+    >>> PlyData.read(out)["vertex"]["scalar_ClusterID"].tolist()
+    [0, 0, 1, 1, 2]
+    """
+    path = Path(path)
+    fmt, comp = split_suffix(path)
+    if fmt not in CONVERTED_FORMATS or comp is not None:
+        raise ParameterError(f"{path}: a cloud with its labels is written as .las, .laz or "
+                             ".ply")
+    from ..inputs.cloud import as_cloud
+
+    cloud = as_cloud(cloud)
+    points = np.asarray(cloud.points, dtype=np.float64)
+    labels = _checked_labels(labels, points.shape[0])
+    ply_name = ply_field_name(name)
+    if fmt != "ply" and len(name) > 32:
+        raise ParameterError(f"a LAS dimension's name holds at most 32 characters: {name!r}")
+    colors = getattr(cloud, "colors", None)
+    if fmt == "ply":
+        content = _new_ply(points, labels, ply_name, colors, getattr(cloud, "normals", None))
+    else:
+        content = _new_las(points, labels, name, colors, compress=fmt == "laz")
+    return save(path, content, outputs)
+
+
+def _checked_labels(labels, n: int | None = None) -> np.ndarray:
+    """``labels`` as ``int32``: integers from -1 to 2**31 - 1, one per point (``n``; None:
+    any number, checked against the file's records later)."""
+    labels = np.asarray(labels)
+    if labels.ndim != 1 or not np.issubdtype(labels.dtype, np.integer):
+        raise ParameterError(f"labels must be a 1-D integer array, got {labels.dtype} "
+                             f"{labels.shape}")
+    if n is not None and labels.shape[0] != n:
+        raise ParameterError(f"{labels.shape[0]:,} labels for {n:,} points: one label per "
+                             "point, in file order, is needed")
+    if labels.size and (labels.min() < -1 or labels.max() > np.iinfo(np.int32).max):
+        raise ParameterError("labels must be -1 (invalid point) or from 0 to 2**31 - 1")
+    return labels.astype(np.int32)
+
+
+def _las_scale(extent: float) -> float:
+    """The LAS scale of a new file of a cloud of this ``extent`` (its largest side, in its
+    units): the power of ten that spans it in at most 2**30 steps (the stored integers
+    keep half of their int32 range free), at least ``1e-12``.
+
+    Examples
+    --------
+    >>> _las_scale(100.0), _las_scale(0.0)
+    (1e-07, 1e-12)
+    """
+    if not extent > 0 or not np.isfinite(extent):
+        return 1e-12
+    return max(1e-12, float(10.0 ** np.ceil(np.log10(extent / 2**30))))
+
+
+def _new_las(points: np.ndarray, labels: np.ndarray, name: str, colors, compress: bool
+             ) -> bytes:
+    """A new LAS/LAZ file's bytes (:func:`write_cloud_with_labels`)."""
+    laspy = extras.require("laspy", "writing LAS/LAZ files")
+    valid = np.isfinite(points).all(axis=1)
+    lo = points[valid].min(axis=0) if valid.any() else np.zeros(3)
+    hi = points[valid].max(axis=0) if valid.any() else np.zeros(3)
+    offset = np.floor(lo)
+    scale = _las_scale(float(np.max(hi - offset)))
+    header = laspy.LasHeader(point_format=7 if colors is not None else 6, version="1.4")
+    header.offsets, header.scales = offset, np.full(3, scale)
+    header.add_extra_dim(laspy.ExtraBytesParams(name=name, type=np.int32,
+                                                description="superfacets label"))
+    las = laspy.LasData(header)
+    xyz = np.where(valid[:, None], points, offset)
+    las.x, las.y, las.z = xyz[:, 0], xyz[:, 1], xyz[:, 2]
+    if not valid.all():
+        las.withheld = ~valid
+    if colors is not None:
+        rgb = np.round(np.clip(np.nan_to_num(np.asarray(colors, dtype=np.float64)), 0, 1)
+                       * 65535).astype(np.uint16)
+        las.red, las.green, las.blue = rgb[:, 0], rgb[:, 1], rgb[:, 2]
+    las[name] = labels
+    buf = io.BytesIO()
+    kw = {"laz_backend": laspy.LazBackend.Lazrs} if compress else {}
+    las.write(buf, do_compress=compress, **kw)
+    return buf.getvalue()
+
+
+def _new_ply(points: np.ndarray, labels: np.ndarray, prop: str, colors, normals) -> bytes:
+    """A new binary PLY file's bytes (:func:`write_cloud_with_labels`)."""
+    from plyfile import PlyData, PlyElement
+
+    fields = [("x", "<f8"), ("y", "<f8"), ("z", "<f8")]
+    if normals is not None:
+        fields += [("nx", "<f4"), ("ny", "<f4"), ("nz", "<f4")]
+    if colors is not None:
+        fields += [("red", "u1"), ("green", "u1"), ("blue", "u1")]
+    data = np.empty(points.shape[0], dtype=fields + [(prop, "<i4")])
+    for i, c in enumerate("xyz"):
+        data[c] = points[:, i]
+    if normals is not None:
+        for i, c in enumerate(("nx", "ny", "nz")):
+            data[c] = np.asarray(normals)[:, i]
+    if colors is not None:
+        rgb = np.round(np.clip(np.nan_to_num(np.asarray(colors, dtype=np.float64)), 0, 1)
+                       * 255).astype(np.uint8)
+        for i, c in enumerate(("red", "green", "blue")):
+            data[c] = rgb[:, i]
+    data[prop] = labels
+    buf = io.BytesIO()
+    PlyData([PlyElement.describe(data, "vertex")], comments=["made by superfacets"]).write(buf)
+    return buf.getvalue()
 
 
 def ply_field_name(name: str) -> str:
@@ -169,19 +452,13 @@ def write_labels_into(path, source, labels, *, name: str = LABEL_FIELD,
     [0, 0, 1, -1]
     """
     path, source = Path(path), Path(source)
-    labels = np.asarray(labels)
-    if labels.ndim != 1 or not np.issubdtype(labels.dtype, np.integer):
-        raise ParameterError(f"labels must be a 1-D integer array, got {labels.dtype} "
-                             f"{labels.shape}")
-    if labels.size and (labels.min() < -1 or labels.max() > np.iinfo(np.int32).max):
-        raise ParameterError("labels must be -1 (invalid point) or from 0 to 2**31 - 1")
+    labels = _checked_labels(labels)
     ply_name = ply_field_name(name)  # (a word: checked here for both layouts)
     kind = records_kind(path, source)
     if kind is None:
         raise ParameterError(f"{path}: labels go into .las, .laz, .ply or .pcd records")
     if kind == "las" and len(name) > 32:
         raise ParameterError(f"a LAS dimension's name holds at most 32 characters: {name!r}")
-    labels = labels.astype(np.int32)
     if kind == "las":
         content = _las_with(source, labels, name, compress=split_suffix(path)[0] == "laz")
     elif kind == "pcd":

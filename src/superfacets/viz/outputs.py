@@ -14,7 +14,7 @@ from ..elements.kinds import kind_of
 from ..io.export import write_colored_elements, write_colored_mesh
 from ..io.files import Outputs
 from ..io.labels import write_labels, write_segindices
-from ..io.records import records_kind, write_labels_into
+from ..io.records import scan_output, write_scan_labels
 from .html import write_html
 from .render import render, render_points
 
@@ -153,11 +153,10 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
     with Outputs() as outputs:
         if arrays is not None:
             outputs.write(graph, lambda fh: np.savez_compressed(fh, **arrays))
-        into = None
-        if labels is not None and source_path is not None and str(labels) != "-":
-            into = records_kind(labels, source_path)
-        if into is not None:
-            write_labels_into(labels, source_path, result.labels, outputs=outputs)
+        into = None if source_path is None else scan_output(labels, source_path)
+        if into is not None:  # the input's records, or a new file of a cloud's points
+            write_scan_labels(labels, source_path, result.labels, outputs=outputs,
+                              cloud=data if into == "new" else None)
         elif labels is not None and str(labels).lower().endswith(".json"):
             write_segindices(labels, result.labels, result.params,
                              scene_id=source.split(".")[0], outputs=outputs)
