@@ -21,9 +21,10 @@ from .tetmeshes import VOLUME_FORMATS, read_volume, write_volume_labels
 
 
 def input_kind(path) -> str:
-    """What a file holds, decided by its name and, for a PLY, its header: ``"volume"`` (a
-    tetrahedral mesh: ``.msh``, ``.vtk``, ``.vtu``, ``.mesh``), ``"cloud"`` (a cloud format,
-    or a PLY declaring no face) or ``"mesh"``. Every command and reader asks here.
+    """What a file holds, decided by its name and, for a PLY, OFF or OBJ, its content:
+    ``"volume"`` (a tetrahedral mesh: ``.msh``, ``.vtk``, ``.vtu``, ``.mesh``), ``"cloud"``
+    (a cloud format, or a PLY, OFF or OBJ of vertices and no face) or ``"mesh"``. Every
+    command and reader asks here.
 
     Parameters
     ----------
@@ -50,7 +51,7 @@ def input_kind(path) -> str:
 
 def read_input(path):
     """A mesh (:func:`read_mesh`), a point cloud (:func:`read_cloud`: a cloud format, or a
-    PLY without faces) or a tetrahedral mesh (:func:`read_volume`: ``.msh``, ``.vtk``,
+    PLY, OBJ or OFF without faces) or a tetrahedral mesh (:func:`read_volume`: ``.msh``, ``.vtk``,
     ``.vtu``, ``.mesh``), by the file.
 
     Parameters

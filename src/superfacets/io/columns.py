@@ -2,7 +2,9 @@
 
 The header (comment lines before the first point, ``#`` or ``//``; the first of them
 that holds words names the columns; else a first line of names alone, ``x``, ``y`` and
-``z`` among them, as a CSV's) is read line by line; the points' lines are cut
+``z`` among them, as a CSV's; a surveyor's ``Easting Northing Elevation`` read as those)
+is read line by line; fields may be quoted, and a spreadsheet's semicolon-separated
+decimal commas are read as decimal points; the points' lines are cut
 into pieces parsed by :func:`numpy.loadtxt` (2M lines of three numbers: 0.3 s), a piece
 numpy cannot read whole being read line by line, which names the faulty line. The lines
 of the whole file are never held at once as Python strings.
