@@ -258,3 +258,25 @@ def test_evaluate_with_no_ground_truth_measures_the_shapes(tmp_path, capsys):
     assert got["compactness"] == pytest.approx(full["compactness"])
     assert main(["evaluate", str(path), str(labels), "--csv"]) == 0
     assert capsys.readouterr().out.splitlines()[1].count(",,") >= 1
+
+
+def test_a_leica_pts_file_s_colours_are_read(tmp_path):
+    # (its seven columns, x y z intensity r g b, were read as positions alone)
+    import gzip
+
+    pts = _surface(500)
+    rgb = np.random.default_rng(1).integers(0, 256, (500, 3))
+    text = f"{len(pts)}\n" + "".join(f"{a:.5f} {b:.5f} {c:.5f} -1200 {r} {g} {bl}\n"
+                                     for (a, b, c), (r, g, bl) in zip(pts, rgb))
+    (tmp_path / "scan.pts").write_text(text)
+    (tmp_path / "scan.pts.gz").write_bytes(gzip.compress(text.encode()))
+    for name in ("scan.pts", "scan.pts.gz"):
+        cloud = read_cloud(tmp_path / name)
+        assert np.allclose(cloud.colors * 255, rgb) and np.allclose(cloud.points, pts,
+                                                                    atol=1e-5), name
+    # seven columns of something else (not whole numbers in 0..255), or an .xyz: positions
+    (tmp_path / "other.pts").write_text("".join(f"{a:.5f} {b:.5f} {c:.5f} 1 0.1 0.2 0.3\n"
+                                                for a, b, c in pts))
+    assert read_cloud(tmp_path / "other.pts").colors is None
+    (tmp_path / "scan.xyz").write_text(text.split("\n", 1)[1])
+    assert read_cloud(tmp_path / "scan.xyz").colors is None

@@ -20,6 +20,7 @@ import numpy as np
 
 from ..errors import MeshFormatError
 from ..inputs.rgb import unit_colors
+from .files import split_suffix
 from .ply import COLOR_PROPERTIES
 
 __all__ = ["read_columns"]
@@ -177,7 +178,9 @@ def _check_width(arr: np.ndarray, parts: list, seen: int, path: Path) -> None:
 
 
 def _named(arr: np.ndarray, names: list[str] | None, path: Path) -> dict:
-    """The points (and normals) from the columns the header names, else the first three."""
+    """The points (and normals and colours) from the columns the header names, else the
+    first three (and a PTS file's colours, where its lines are Leica's seven columns, ``x y
+    z intensity r g b``, the colours whole numbers in 0..255)."""
     width = arr.shape[1]
     if names is not None:
         shown = " ".join(names)
@@ -198,6 +201,10 @@ def _named(arr: np.ndarray, names: list[str] | None, path: Path) -> dict:
         return {"points": pts, "normals": nrm, "colors": col}
     if width < 3:
         raise MeshFormatError(f"{path}: point lines need 3 columns (x y z), found {width}")
+    if width == 7 and split_suffix(Path(path))[0] == "pts":  # Leica's x y z i r g b
+        rgb = arr[:, 4:7]
+        if ((rgb >= 0) & (rgb <= 255) & (rgb == np.floor(rgb))).all():
+            return {"points": arr[:, :3], "colors": rgb / 255.0}
     return {"points": arr[:, :3]}
 
 
