@@ -280,3 +280,22 @@ def test_a_leica_pts_file_s_colours_are_read(tmp_path):
     assert read_cloud(tmp_path / "other.pts").colors is None
     (tmp_path / "scan.xyz").write_text(text.split("\n", 1)[1])
     assert read_cloud(tmp_path / "scan.xyz").colors is None
+
+
+def test_tiles_take_an_organized_npy_and_one_with_normals(tmp_path):
+    # ("a tiled run reads NPY points of shape (N, 3)": one run takes (H, W, 3) and (N, 6))
+    from superfacets import segment, segment_tiled
+
+    rng = np.random.default_rng(0)
+    u, v = np.meshgrid(np.linspace(0, 4, 60), np.linspace(0, 3, 45))
+    frame = np.dstack([u, v, 0.2 * np.sin(3 * u)])
+    frame[rng.random((45, 60)) < 0.05] = np.nan
+    np.save(tmp_path / "frame.npy", frame)
+    holes = np.isnan(frame.reshape(-1, 3)).any(axis=1)
+    tiled = segment_tiled(tmp_path / "frame.npy", 20, tiles=2)
+    assert tiled.labels.shape == (2700,) and np.array_equal(tiled.labels < 0, holes)
+    assert tiled.n_segments == 20 and tiled.disagreements == 0
+    pts = frame.reshape(-1, 3)[~holes]
+    np.save(tmp_path / "normals.npy", np.c_[pts, np.tile([0.0, 0.0, 1.0], (len(pts), 1))])
+    assert segment_tiled(tmp_path / "normals.npy", 20, tiles=2).n_segments == 20
+    assert segment(tmp_path / "normals.npy", 20).n_segments == 20

@@ -72,8 +72,10 @@ SAMPLE = 1 << 20
 
 def streamed(path) -> bool:
     """Whether :meth:`RegionReader.open` reads the file at ``path`` in chunks: one of
-    :data:`STREAMED`, and a PLY binary, with faces (if any) of one list property of three
-    corners. Any other file a tiled run reads whole (:meth:`RegionReader.spill`).
+    :data:`STREAMED`, a PLY binary, with faces (if any) of one list property of three
+    corners, an NPY of ``(N, 3)`` points. Any other file a tiled run reads whole
+    (:meth:`RegionReader.spill`: an organized ``(H, W, 3)`` NPY, points and normals
+    ``(N, 6)``, as one run reads them).
 
     Parameters
     ----------
@@ -98,8 +100,14 @@ def streamed(path) -> bool:
     suffix = p.suffix.lower().lstrip(".")
     if suffix not in STREAMED:
         return False
-    if suffix != "ply" or not p.is_file():
+    if suffix not in ("ply", "npy") or not p.is_file():
         return True
+    if suffix == "npy":
+        try:
+            arr = npy_mapped(p)
+        except MeshFormatError:
+            return False  # (read whole: the reader says what is wrong)
+        return arr.ndim == 2 and arr.shape[1] == 3
     try:
         ply = ply_mapped(p)
     except NotStreamedError:
