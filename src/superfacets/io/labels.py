@@ -328,8 +328,8 @@ def read_field(path, name: str) -> np.ndarray:
         names, values = volume_field(path, name)
     else:
         raise MeshFormatError(f"{path}: only LAS/LAZ, PLY and PCD files carry per-point "
-                              "fields (and tetrahedral meshes per-cell ones); give the ground "
-                              "truth as a .seg file")
+                              "fields (and tetrahedral meshes per-cell ones); give the labels "
+                              "(or the ground truth) as a file, one per point (.seg)")
     if values is None:
         raise MeshFormatError(f"{path}: no field {name!r}; " + (
             f"it has: {', '.join(names)}" if names else "it has none"))
