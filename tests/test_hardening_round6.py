@@ -299,3 +299,38 @@ def test_tiles_take_an_organized_npy_and_one_with_normals(tmp_path):
     np.save(tmp_path / "normals.npy", np.c_[pts, np.tile([0.0, 0.0, 1.0], (len(pts), 1))])
     assert segment_tiled(tmp_path / "normals.npy", 20, tiles=2).n_segments == 20
     assert segment(tmp_path / "normals.npy", 20).n_segments == 20
+
+
+@pytest.mark.parametrize("when", ["during the commit", "after the commit"])
+def test_a_ctrl_c_once_the_outputs_are_written_does_not_report_an_interruption(
+        tmp_path, monkeypatch, when):
+    # (CI, 2026-11-30: a Ctrl-C landing between the last rename and the command's summary
+    # exited 130, "interrupted", with its outputs written; one during the renames could
+    # leave some of them written and not the others)
+    import os
+    import signal
+
+    import superfacets.cli.segmenting as segmenting
+    from superfacets.io.files import Outputs
+
+    def ctrl_c():
+        os.kill(os.getpid(), signal.SIGINT)
+
+    if when == "during the commit":
+        commit = Outputs._commit
+
+        def interrupted(self):
+            ctrl_c()
+            commit(self)
+
+        monkeypatch.setattr(Outputs, "_commit", interrupted)
+    else:
+        say = segmenting._say_what_was_written
+        monkeypatch.setattr(segmenting, "_say_what_was_written",
+                            lambda *a, **k: (ctrl_c(), say(*a, **k)))
+    path = tmp_path / "s.xyz"
+    np.savetxt(path, _surface(800))
+    argv = ["segment", str(path), "-k", "8", "-o", str(tmp_path / "s.seg"),
+            "--colored-mesh", str(tmp_path / "s.ply")]
+    assert main(argv) == 0
+    assert len(read_labels(tmp_path / "s.seg")) == 800 and (tmp_path / "s.ply").is_file()

@@ -10,11 +10,16 @@ not interrupted in turn; nothing else changes.
 from __future__ import annotations
 
 import threading
+from contextlib import contextmanager
 
-__all__ = ["caught", "was_caught", "reset", "pending", "check", "SignalWatch"]
+__all__ = ["caught", "was_caught", "reset", "pending", "check", "SignalWatch", "last_outputs",
+           "committing", "in_commit", "outputs_written"]
 
 _caught = threading.Event()
 _pending = threading.Event()
+_last = threading.Event()  # the command's next commit writes its last outputs
+_committing = threading.Event()  # staged outputs being renamed over their targets
+_written = threading.Event()  # the command's last outputs are whole: its work is done
 
 
 def caught() -> None:
@@ -28,10 +33,44 @@ def was_caught() -> bool:
 
 
 def reset() -> None:
-    """Forget an earlier :func:`caught` or :func:`pending` (a new command in the same
-    process)."""
-    _caught.clear()
-    _pending.clear()
+    """Forget an earlier :func:`caught`, :func:`pending` or :func:`last_outputs` (a new
+    command in the same process)."""
+    for flag in (_caught, _pending, _last, _committing, _written):
+        flag.clear()
+
+
+def last_outputs() -> None:
+    """Say that the command's next commit of staged outputs
+    (:meth:`superfacets.io.files.Outputs.commit`) writes its last ones: once they are
+    whole, a Ctrl-C no longer stops it (the command line's handler ignores it, and the
+    command ends as it would have, its summary said), so that an interrupted command never
+    leaves outputs behind and a finished one never reports an interruption."""
+    _last.set()
+
+
+@contextmanager
+def committing():
+    """Around the renames of a commit: a Ctrl-C in it waits for its end (all the files or
+    none, never some), and after the last outputs' (:func:`last_outputs`) is ignored."""
+    _committing.set()
+    try:
+        yield
+    except BaseException:
+        _committing.clear()
+        raise
+    _committing.clear()
+    if _last.is_set():
+        _written.set()
+
+
+def in_commit() -> bool:
+    """Whether a commit's renames are under way (:func:`committing`)."""
+    return _committing.is_set()
+
+
+def outputs_written() -> bool:
+    """Whether the command's last outputs are whole (:func:`last_outputs`)."""
+    return _written.is_set()
 
 
 def pending() -> None:
@@ -45,7 +84,7 @@ def check() -> None:
     stage boundaries, so that a Ctrl-C during the start-up (imports, kernels loading)
     stops the run even when every repeat of it lands in such code again. Nothing
     happens outside the command line (no handler sets it)."""
-    if _pending.is_set() and not _caught.is_set():
+    if _pending.is_set() and not _caught.is_set() and not _written.is_set():
         _pending.clear()
         raise KeyboardInterrupt
 

@@ -291,13 +291,14 @@ def _terminate_cleanly():
     state = {"repeater": None, "terminated": False}
 
     def on_int(signum, frame):
-        if done.is_set() or interrupts.was_caught() or _interrupted(sys.exc_info()[1]):
-            return  # unwinding, or stopping in order, already: let the clean-up finish
+        if done.is_set() or interrupts.was_caught() or _interrupted(sys.exc_info()[1]) \
+                or interrupts.outputs_written():
+            return  # unwinding, stopping in order, or done already: let the run finish
         if state["repeater"] is None:
             state["repeater"] = threading.Thread(target=repeat, daemon=True,
                                                  name="superfacets-interrupt")
             state["repeater"].start()
-        if _in_machinery(frame, waits):
+        if interrupts.in_commit() or _in_machinery(frame, waits):
             interrupts.pending()  # raised at the next stage boundary, if not before
             return  # the repeater comes back in 0.2 s
         raise KeyboardInterrupt

@@ -263,6 +263,7 @@ def cmd_segment(args) -> int:
     kwargs, size_note = _sizes(args, data, kind, kwargs)
     result = _run(args, data, kwargs)
     elapsed = time.perf_counter() - t0
+    interrupts.last_outputs()  # (once they are whole, a Ctrl-C no longer undoes the run)
     _write_and_say(args, data, result, kind, outputs, elapsed, size_note)
     return 0
 

@@ -69,6 +69,7 @@ def add_tile_options(p) -> None:
 
 def segment_tiles(args) -> int:
     """``segment --tiles``: labels of a large input, written as ``-o`` says."""
+    from .._runtime import interrupts
     from ..errors import ParameterError, SuperfacetsError
     from ..scale.tiles.run import segment_tiled
 
@@ -102,6 +103,7 @@ def segment_tiles(args) -> int:
     except SuperfacetsError as exc:
         raise named_after(args.mesh, exc) from None
     elapsed = time.perf_counter() - t0
+    interrupts.last_outputs()  # (once whole, a Ctrl-C no longer undoes the run)
     _write_labels(seg_out, args.mesh, result)
     report = sys.stderr if str(seg_out) == "-" else sys.stdout
     if not args.quiet:

@@ -544,7 +544,14 @@ class Outputs:
         return path
 
     def commit(self) -> None:
-        """Rename every staged file over its target; write the special targets."""
+        """Rename every staged file over its target; write the special targets (a Ctrl-C
+        waits for the end: :func:`superfacets._runtime.interrupts.committing`)."""
+        from .._runtime import interrupts
+
+        with interrupts.committing():
+            self._commit()
+
+    def _commit(self) -> None:
         try:
             for tmp, real in self._temps:
                 os.replace(tmp, real)
