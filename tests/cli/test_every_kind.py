@@ -180,8 +180,8 @@ def test_an_experiment_on_a_folder_of_clouds_and_meshes_runs_each_on_its_own_ele
         tmp_path, capsys, sphere):
     """``experiment --inputs FOLDER`` ran faces only: its clouds got no row, and nothing said
     so ("6 inputs", 4 in the file); by default each file is run on its own elements, a file
-    no asked kind fits is named, and ``report`` of rows without ground truth (whose curves
-    are empty) writes its summary instead of failing in matplotlib's legend."""
+    no asked kind fits is named, and ``report`` of rows without ground truth (the
+    compactness alone) writes its summary instead of failing in matplotlib's legend."""
     from superfacets import write_mesh
 
     folder = tmp_path / "in"
@@ -205,7 +205,11 @@ def test_an_experiment_on_a_folder_of_clouds_and_meshes_runs_each_on_its_own_ele
     assert main(["report", str(out), "-o", str(tmp_path / "rep")]) == 0
     summary = (tmp_path / "rep" / "summary.md").read_text()
     assert "Not drawn, the rows holding no value to draw" in summary
-    assert "fig4" in summary and not (tmp_path / "rep" / "fig4.png").exists()
+    # (no ground truth: the compactness alone, which needs none, is drawn)
+    assert all(float(r["compactness"]) > 3 and r["undersegmentation_error"] == ""
+               for r in rows)
+    assert (tmp_path / "rep" / "fig4.png").exists() and "per_category_undersegmentation_error" \
+        in summary
 
 
 def test_an_axis_value_may_start_with_a_minus(tmp_path, capsys, sphere):

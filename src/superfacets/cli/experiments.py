@@ -103,7 +103,8 @@ def _add_inputs(x) -> None:
     x.add_argument("--ground-truth-field", metavar="NAME", default=None,
                    help="with --inputs: each file's ground truth, a field of its own (a "
                         "LAS/LAZ classification, a PLY vertex label, a PCD label, a "
-                        "volume's gmsh:physical); without it, rows have no metrics")
+                        "volume's gmsh:physical); without it, rows have the "
+                        "compactness alone")
 
 
 def _id_list(text: str) -> set[int]:

@@ -78,6 +78,9 @@ def plot_curves(df, metrics: Sequence[str] = ("undersegmentation_error", "compac
         s = summary(df, metric)
         for name, row in s.iterrows():
             ax.plot(row.index, row.values, label=name, markersize=4, **style[name])
+        if s.empty or not np.isfinite(s.to_numpy(dtype=float)).any():  # (no ground truth)
+            ax.text(0.5, 0.5, "no values: the rows have no ground truth", ha="center",
+                    va="center", transform=ax.transAxes, color="0.4")
         ax.set_xlabel("number of superfacets asked (k)")
         ax.set_ylabel(METRIC_LABELS.get(metric, metric))
         ax.grid(True, alpha=0.3)

@@ -35,7 +35,7 @@ from ...evaluation.datasets.psb import BenchmarkMesh
 from ...evaluation.datasets.rooms import load_room
 from ...evaluation.datasets.sampling import sample_points, vertex_ground_truth
 from ...evaluation.methods import Skipped, get_method
-from ...evaluation.metrics import evaluate, oracle_miou
+from ...evaluation.metrics import compactness, evaluate, oracle_miou
 from ...evaluation.results import columns, fmt_value, prepare_file, row_key
 from ...inputs.cloud import PointCloud
 from ...io import read_input
@@ -170,6 +170,8 @@ def _run_task(task: dict) -> list[dict]:
                 weights = None if equal else graph.sizes  # (each class's share, as the UE's)
                 row["oracle_miou"] = round(float(np.mean(
                     [oracle_miou(labels, gt, weights=weights)[0] for gt in gts])), 6)
+            else:  # (no ground truth: the shapes alone, as `evaluate` measures them)
+                row["compactness"] = round(compactness(graph, labels), 6)
         except Skipped as exc:
             row.update(status="skipped", error=str(exc)[:500], seconds=None)
         except Exception as exc:  # noqa: BLE001 - recorded, the run goes on
