@@ -334,3 +334,22 @@ def test_a_ctrl_c_once_the_outputs_are_written_does_not_report_an_interruption(
             "--colored-mesh", str(tmp_path / "s.ply")]
     assert main(argv) == 0
     assert len(read_labels(tmp_path / "s.seg")) == 800 and (tmp_path / "s.ply").is_file()
+
+
+def test_labels_to_a_full_standard_output_say_so_in_one_line(tmp_path):
+    # ("[Errno 28] No space left on device": `segment ... -o - > file` on a full disk)
+    import os
+    import subprocess
+    import sys
+
+    if not os.path.exists("/dev/full"):
+        pytest.skip("/dev/full not found (Linux's always-full device)")
+    path = tmp_path / "s.xyz"
+    np.savetxt(path, _surface(500))
+    with open("/dev/full", "w") as full:
+        run = subprocess.run([sys.executable, "-m", "superfacets", "segment", str(path), "-k",
+                              "5", "-o", "-"], stdout=full, stderr=subprocess.PIPE, text=True,
+                             timeout=120)
+    assert run.returncode == 2
+    assert run.stderr.strip().splitlines() == [
+        "superfacets: error: standard output: No space left on device"]

@@ -560,9 +560,14 @@ class Outputs:
                 if real is None:
                     import sys
 
-                    sys.stdout.flush()
-                    sys.stdout.buffer.write(data)
-                    sys.stdout.buffer.flush()
+                    try:
+                        sys.stdout.flush()
+                        sys.stdout.buffer.write(data)
+                        sys.stdout.buffer.flush()
+                    except BrokenPipeError:
+                        raise
+                    except OSError as exc:  # (a full disk behind a redirection: named)
+                        raise OSError(exc.errno, exc.strerror, "standard output") from None
                 else:
                     try:
                         with open(real, "wb") as fh:
