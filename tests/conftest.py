@@ -30,6 +30,20 @@ def grid_mesh(nx: int, ny: int, height=None, size=1.0) -> Mesh:
     return Mesh(v, f)
 
 
+def street_sweep(seed: int, ground: float):
+    """A street sweep in miniature around a roof sensor at the origin (z up): 8,000 road
+    points at height ``ground``, 3,000 of a wall and 1,500 of a car; their positions (12,500,
+    3), the part of each (0 road, 1 wall, 2 car) and the generator, to draw on from."""
+    rng = np.random.default_rng(seed)
+    ang, rad = rng.uniform(0, 2 * np.pi, 8000), rng.uniform(3, 30, 8000)
+    road = np.c_[rad * np.cos(ang), rad * np.sin(ang), np.full(8000, ground)]
+    wall = np.c_[rng.uniform(-20, 20, 3000), np.full(3000, 6.0), rng.uniform(ground, 2, 3000)]
+    car = np.c_[rng.uniform(4, 8, 1500), rng.uniform(-3, -1.5, 1500),
+                rng.uniform(ground, -0.3, 1500)]
+    part = np.r_[np.zeros(8000, int), np.ones(3000, int), np.full(1500, 2)]
+    return np.vstack([road, wall, car]), part, rng
+
+
 def slab_and_beads() -> tuple[Mesh, int, int]:
     """A thin slab (768 faces) and two beads (80 faces each) just above its middle, each
     a separate piece: the paper's farthest points miss the beads up to 10 centers."""

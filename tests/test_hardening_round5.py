@@ -364,15 +364,11 @@ def test_a_dataframe_or_a_list_of_points_is_a_cloud():
 def _sweep(folder, name="000000"):
     """A KITTI velodyne sweep in miniature (float32 x y z reflectance, z up): road, a wall
     and a car, with its SemanticKITTI .label (class | instance << 16)."""
-    rng = np.random.default_rng(8)
-    ang, rad = rng.uniform(0, 2 * np.pi, 8000), rng.uniform(3, 30, 8000)
-    road = np.c_[rad * np.cos(ang), rad * np.sin(ang), np.full(8000, -1.7)]
-    wall = np.c_[rng.uniform(-20, 20, 3000), np.full(3000, 6.0), rng.uniform(-1.7, 2, 3000)]
-    car = np.c_[rng.uniform(4, 8, 1500), rng.uniform(-3, -1.5, 1500),
-                rng.uniform(-1.7, -0.3, 1500)]
-    xyz = np.vstack([road, wall, car])
+    from conftest import street_sweep
+
+    xyz, part, rng = street_sweep(8, -1.7)
     np.c_[xyz, rng.random(len(xyz))].astype("<f4").tofile(folder / f"{name}.bin")
-    cls = np.r_[np.full(8000, 40), np.full(3000, 50), np.full(1500, 10)].astype(np.uint32)
+    cls = np.array([40, 50, 10], dtype=np.uint32)[part]
     (cls | (np.r_[np.zeros(11000), np.full(1500, 7)].astype(np.uint32) << 16)).astype(
         "<u4").tofile(folder / f"{name}.label")
     return folder / f"{name}.bin", folder / f"{name}.label", xyz

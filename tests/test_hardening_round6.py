@@ -22,17 +22,13 @@ def _one_line_error(capsys, *says):
 def _nuscenes(folder, name="n015__LIDAR_TOP__1532402927647951"):
     """A nuScenes lidar sweep in miniature (float32 x y z intensity ring, z up): road, a
     wall and a car, with its lidarseg classes (one uint8 a point)."""
-    rng = np.random.default_rng(5)
-    ang, rad = rng.uniform(0, 2 * np.pi, 8000), rng.uniform(3, 30, 8000)
-    road = np.c_[rad * np.cos(ang), rad * np.sin(ang), np.full(8000, -1.8)]
-    wall = np.c_[rng.uniform(-20, 20, 3000), np.full(3000, 6.0), rng.uniform(-1.8, 2, 3000)]
-    car = np.c_[rng.uniform(4, 8, 1500), rng.uniform(-3, -1.5, 1500),
-                rng.uniform(-1.8, -0.3, 1500)]
-    xyz = np.vstack([road, wall, car])
+    from conftest import street_sweep
+
+    xyz, part, rng = street_sweep(5, -1.8)
     level = rng.integers(0, 256, len(xyz))
     ring = rng.integers(0, 32, len(xyz))
     np.c_[xyz, level, ring].astype("<f4").tofile(folder / f"{name}.pcd.bin")
-    cls = np.r_[np.full(8000, 24), np.full(3000, 28), np.full(1500, 17)].astype(np.uint8)
+    cls = np.array([24, 28, 17], dtype=np.uint8)[part]
     cls.tofile(folder / f"{name}_lidarseg.bin")
     return folder / f"{name}.pcd.bin", folder / f"{name}_lidarseg.bin", xyz
 
