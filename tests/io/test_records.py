@@ -217,6 +217,34 @@ def test_a_batch_writes_each_scan_s_own_records(tmp_path, capsys, sphere):
     assert len(np.unique(read_labels(out / "ball.seg"))) == 9  # a mesh: its label file
 
 
+def test_a_batch_writes_a_laz_for_every_cloud(tmp_path, sphere):
+    # (--labels records leaves a cloud whose file takes no field a .seg: --labels laz gives
+    # every cloud a LAZ, as PDAL and QGIS read them)
+    from superfacets import write_mesh
+
+    folder = tmp_path / "in"
+    folder.mkdir()
+    _laz(folder / "a.las", n=1500, seed=1)
+    _pcd(folder / "depth.pcd", "binary")
+    frame, cloud, xyz, rgb = _sweep_with_holes(folder)
+    write_mesh(folder / "ball.off", sphere)
+    out = tmp_path / "out"
+    assert main(["batch", str(folder), "-o", str(out), "-k", "9", "--labels", "laz",
+                 "--workers", "1", "-q"]) == 0
+    assert sorted(p.name for p in out.iterdir() if p.suffix in (".laz", ".seg")) == [
+        "a.laz", "ball.seg", "cloud.laz", "depth.laz", "frame.laz"]
+    holes = ~np.isfinite(np.load(frame).reshape(-1, 3)).all(axis=1)
+    assert (np.asarray(laspy.read(str(out / "frame.laz")).ClusterID)[holes] == -1).all()
+    kept = laspy.read(str(out / "a.laz"))  # a LAS input: its own records, every field
+    assert np.array_equal(np.asarray(kept.classification),
+                          np.asarray(laspy.read(str(folder / "a.las")).classification))
+    assert len(np.unique(np.asarray(kept.ClusterID))) == 9
+    new = laspy.read(str(out / "cloud.laz"))  # an XYZ: a new file of its points
+    assert np.abs(np.c_[new.x, new.y, new.z] - xyz).max() < 1e-6
+    assert len(np.unique(np.asarray(new.ClusterID))) == 9
+    assert len(np.unique(read_labels(out / "ball.seg"))) == 9  # a mesh: its label file
+
+
 def _pcd(path, encoding: str, *, seed=0, label=None):
     """An organized PCD of two terraces, 40 x 30, with packed colour, intensity, a padding
     field (binary: PCL pads records with ``_`` fields; it leaves them out of ASCII and

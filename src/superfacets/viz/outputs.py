@@ -14,7 +14,7 @@ from ..elements.kinds import kind_of
 from ..io.export import write_colored_elements, write_colored_mesh
 from ..io.files import Outputs
 from ..io.labels import write_labels, write_segindices
-from ..io.records import scan_output, write_scan_labels
+from ..io.records import scan_output, write_cloud_with_labels, write_scan_labels
 from .html import write_html
 from .render import render, render_points
 
@@ -78,7 +78,8 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
                  colored=None, vertex_colors: bool = False, picture=None, html=None,
                  element_options: dict | None = None, up="y", view=None, graph=None,
                  levels=None, level_cost: str = "ward",
-                 extent_weight: float | None = None, source_path=None) -> None:
+                 extent_weight: float | None = None, source_path=None,
+                 new_scan: bool = False) -> None:
     """Write the files of one segmentation, all or nothing.
 
     Parameters
@@ -129,6 +130,10 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
         :meth:`SegmentationResult.hierarchy`).
     source_path : path, optional
         The input file (labels written into its records).
+    new_scan : bool, default False
+        ``labels`` (``.las``, ``.laz`` or ``.ply``) is a new file of the cloud's points with
+        the labels, whatever the input's format (:func:`superfacets.io.records.
+        write_cloud_with_labels`; ``batch --labels laz``).
 
     Raises
     ------
@@ -153,10 +158,12 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
     with Outputs() as outputs:
         if arrays is not None:
             outputs.write(graph, lambda fh: np.savez_compressed(fh, **arrays))
-        into = None if source_path is None else scan_output(labels, source_path)
-        if into is not None:  # the input's records, or a new file of a cloud's points
-            write_scan_labels(labels, source_path, result.labels, outputs=outputs,
-                              cloud=data if into == "new" else None)
+        into = "new" if new_scan and labels is not None else \
+            None if source_path is None else scan_output(labels, source_path)
+        if into == "new":  # a new file of a cloud's points
+            write_cloud_with_labels(labels, data, result.labels, outputs=outputs)
+        elif into is not None:  # the input's records
+            write_scan_labels(labels, source_path, result.labels, outputs=outputs)
         elif labels is not None and str(labels).lower().endswith(".json"):
             write_segindices(labels, result.labels, result.params,
                              scene_id=source.split(".")[0], outputs=outputs)

@@ -62,22 +62,31 @@ from .manifest import (
 __all__ = ["run_batch", "collect_inputs", "output_names", "read_manifest", "BatchSummary",
            "MANIFEST_COLUMNS", "segment_file"]
 
-_LABEL_SUFFIX = {"seg": ".seg", "json": ".json", "records": None}
+_LABEL_SUFFIX = {"seg": ".seg", "json": ".json", "records": None, "laz": None}
 
 
 def _label_suffix(labels: str, source) -> str:
-    """The suffix of an input's labels: ``.seg``, ``.json``, or for ``records`` its own
-    format where labels go into it (``.las``, ``.laz``, ``.ply``), else ``.seg``."""
+    """The suffix of an input's labels: ``.seg``, ``.json``, for ``records`` its own
+    format where labels go into it (``.las``, ``.laz``, ``.ply``), for ``laz`` ``.laz``
+    for every cloud; else ``.seg``."""
 
-    if labels != "records":
+    if labels not in ("records", "laz"):
         return _LABEL_SUFFIX[labels]
     fmt = split_suffix(Path(source))[0]
+    if labels == "laz":
+        return ".laz" if _a_cloud(source) else ".seg"
     if fmt == "ply":  # a cloud's records are its points; a mesh's faces have none of theirs
-        try:
-            return ".ply" if is_cloud_file(source) else ".seg"
-        except Exception:  # noqa: BLE001 - an unreadable header: its task says why
-            return ".seg"
+        return ".ply" if _a_cloud(source) else ".seg"
     return f".{fmt}" if fmt in RECORD_FORMATS else ".seg"
+
+
+def _a_cloud(source) -> bool:
+    """Whether the file ``source`` holds a point cloud (an unreadable header: no, its
+    task says why)."""
+    try:
+        return is_cloud_file(source)
+    except Exception:  # noqa: BLE001 - an unreadable header: its task says why
+        return False
 
 
 def segment_file(task: dict) -> dict:
@@ -161,7 +170,9 @@ def _segment_and_write(task: dict, label_rel: str) -> dict:
         colored = base.with_name(base.name + "_superfacets." + outs["colored"])
     write_result(data, result, kind, Path(task["input"]).name,
                  labels=Path(task["outdir"]) / label_rel, header=outs["header"],
-                 source_path=task["input"] if outs["labels"] == "records" else None,
+                 source_path=task["input"] if outs["labels"] in ("records", "laz") else None,
+                 new_scan=outs["labels"] == "laz" and kind_of(kind).cloud
+                 and split_suffix(Path(task["input"]))[0] not in ("las", "laz"),
                  colored=colored, vertex_colors=outs["vertex_colors"], picture=picture,
                  html=html, element_options={k: opts[k] for k in ("n_neighbors",
                                                                   "neighbor_radius")
@@ -243,8 +254,12 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         Output folder, created if missing (its parent must exist).
     n_segments, radius : optional
         As :func:`superfacets.segment` (default k = 150).
-    labels : {'seg', 'json'}, default 'seg'
-        Label file of each input: one label per line, or ScanNet's ``segIndices``.
+    labels : {'seg', 'json', 'records', 'laz'}, default 'seg'
+        Label file of each input: one label per line, ScanNet's ``segIndices``, a LAS/LAZ,
+        PLY or PCD cloud's own records with ``ClusterID`` (``records``; others ``.seg``), or
+        a ``.laz`` for every cloud (``laz``: a LAS/LAZ input's records, any other cloud's
+        points as a new file: :func:`superfacets.io.records.write_cloud_with_labels`;
+        meshes ``.seg``).
     header : bool, default False
         ``.seg`` files start with ``#`` lines (parameters, passes, time).
     colored_mesh : {'ply', 'glb', 'obj'}, optional
