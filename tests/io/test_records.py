@@ -561,3 +561,16 @@ def test_a_new_scan_is_written_from_any_cloud_and_refuses_a_mesh(tmp_path):
     with pytest.raises(ParameterError, match="written as .las, .laz or .ply"):
         write_cloud_with_labels(tmp_path / "d.pcd", xyz, [0] * 5)
     assert not [p.name for p in tmp_path.iterdir() if p.name != "a.ply"]
+
+
+@pytest.mark.parametrize("extent, corner", [(1e-6, -4e-7), (1.0, 0.0), (300.0, 5e5),
+                                            (1e9, -4e8)])
+def test_a_new_las_keeps_the_points_to_a_millionth_of_their_extent(tmp_path, extent, corner):
+    # (an offset rounded to a whole unit took a millimetre cloud near the origin to a
+    # precision of half its size)
+    from superfacets.io.records import write_cloud_with_labels
+
+    xyz = np.random.default_rng(2).random((200, 3)) * extent + corner
+    out = write_cloud_with_labels(tmp_path / "c.laz", xyz, np.arange(200) % 5)
+    las = laspy.read(str(out))
+    assert np.abs(np.c_[las.x, las.y, las.z] - xyz).max() <= 1e-6 * extent

@@ -222,7 +222,8 @@ def write_cloud_with_labels(path, cloud, labels, *, name: str = LABEL_FIELD,
 
     - LAS/LAZ 1.4, point format 6 (7 with colours): ``X Y Z`` at a scale of a power of
       ten that holds the cloud's extent in 2**30 steps (the data's own precision, in
-      whatever units), the offset its lowest corner; ``Red Green Blue`` (16 bits) where
+      whatever units), the offset its lowest corner rounded down to the extent's power of
+      ten; ``Red Green Blue`` (16 bits) where
       the cloud has colours; the labels as the ``int32`` extra dimension ``name``. An
       invalid point (non-finite, -1) is written at the offset, ``withheld``.
     - PLY (binary): ``x y z`` as doubles (an invalid point NaN), ``nx ny nz`` where the
@@ -324,7 +325,9 @@ def _new_las(points: np.ndarray, labels: np.ndarray, name: str, colors, compress
     valid = np.isfinite(points).all(axis=1)
     lo = points[valid].min(axis=0) if valid.any() else np.zeros(3)
     hi = points[valid].max(axis=0) if valid.any() else np.zeros(3)
-    offset = np.floor(lo)
+    extent = float(np.max(hi - lo))
+    unit = 10.0 ** np.floor(np.log10(extent)) if extent > 0 else 1.0  # (a round offset, as
+    offset = np.floor(lo / unit) * unit  # near the points as their extent: no precision lost)
     scale = _las_scale(float(np.max(hi - offset)))
     header = laspy.LasHeader(point_format=7 if colors is not None else 6, version="1.4")
     header.offsets, header.scales = offset, np.full(3, scale)
