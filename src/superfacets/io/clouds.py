@@ -31,6 +31,7 @@ from __future__ import annotations
 import io
 import re
 import warnings
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -91,7 +92,8 @@ def is_cloud_file(path) -> bool:
     if fmt not in ("ply", "off", "obj") or not path.is_file():
         return False
     if fmt == "obj":
-        return _obj_without_faces(path, comp)
+        stat = path.stat()  # (a command asks more than once: the scan made once)
+        return _obj_without_faces(str(path), comp, stat.st_size, stat.st_mtime_ns)
     if comp:
         data = read_bytes(path, comp)
     else:
@@ -128,12 +130,15 @@ def _off_counts(data: bytes) -> tuple[int, int] | None:
 _OBJ_FACE = re.compile(rb"(?m)^[ \t]*f[ \t]")
 
 
-def _obj_without_faces(path: Path, comp: str | None) -> bool:
+@lru_cache(maxsize=16)
+def _obj_without_faces(name: str, comp: str | None, size: int, mtime: int) -> bool:
     """Whether an OBJ file holds a vertex statement and no face statement (a point cloud
     in OBJ). The usual mesh is told at its first face line (a scan of the bytes, mapped,
-    not read); an empty or unreadable file is left to :func:`read_mesh` (False)."""
+    not read); an empty or unreadable file is left to :func:`read_mesh` (False). Cached
+    by the file's name, size and modification time."""
     import mmap
 
+    path = Path(name)
     try:
         if comp:
             data = read_bytes(path, comp)
