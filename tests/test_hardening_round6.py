@@ -349,3 +349,31 @@ def test_labels_to_a_full_standard_output_say_so_in_one_line(tmp_path):
     assert run.returncode == 2
     assert run.stderr.strip().splitlines() == [
         "superfacets: error: standard output: No space left on device"]
+
+
+def test_labels_as_numpy_arrays_are_written_and_read(tmp_path, capsys):
+    # (-o x.npy: "-o writes the labels as text ..., not a .npy file"; a ground truth kept
+    # as a learning pipeline's .npy: "not a text file (binary data in a text format)")
+    pts = _surface(600)
+    path = tmp_path / "s.xyz"
+    np.savetxt(path, pts)
+    assert main(["segment", str(path), "-k", "6", "-o", str(tmp_path / "s.npy"), "-q"]) == 0
+    assert main(["segment", str(path), "-k", "6", "-o", str(tmp_path / "s.seg"), "-q"]) == 0
+    got = np.load(tmp_path / "s.npy")
+    assert got.dtype == np.int64 and np.array_equal(got, read_labels(tmp_path / "s.seg"))
+    truth = (pts[:, 0] > 5).astype(np.int32)
+    for name, arr in (("flat", truth), ("column", truth[:, None]),
+                      ("grid", truth.reshape(20, 30)), ("float", truth.astype(float))):
+        np.save(tmp_path / f"{name}.npy", arr)
+        assert np.array_equal(read_labels(tmp_path / f"{name}.npy", 600), truth), name
+    assert main(["evaluate", str(path), str(tmp_path / "s.npy"), str(tmp_path / "flat.npy"),
+                 "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["segments"] == 6
+    for arr, says in ((np.full(600, 0.5), "whole numbers"), (pts, "one integer per element"),
+                      (np.array(["a"] * 600), "must be integers")):
+        np.save(tmp_path / "bad.npy", arr)
+        with pytest.raises(MeshFormatError, match=says):
+            read_labels(tmp_path / "bad.npy")
+    assert main(["batch", str(path), "-o", str(tmp_path / "b"), "-k", "6", "--labels", "npy",
+                 "--workers", "1", "-q"]) == 0
+    assert np.array_equal(np.load(tmp_path / "b" / "s.npy"), got)

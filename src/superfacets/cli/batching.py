@@ -43,12 +43,14 @@ def add_parsers(sub) -> None:
             action.default = 1
             action.help = "threads of each segmentation (default: 1; the labels do not " \
                           "depend on it)"
-    b.add_argument("--labels", choices=("seg", "json", "records", "laz"), default="seg",
+    b.add_argument("--labels", choices=("seg", "json", "npy", "records", "laz"),
+                   default="seg",
                    help="label file per input: one label per line (.seg), ScanNet's "
-                        "segIndices (.json), records: each LAS/LAZ, PLY or PCD cloud's own "
-                        "records with a ClusterID field (.seg for the others), or laz: a "
-                        ".laz with ClusterID for every cloud (a LAS/LAZ input's records, "
-                        "any other cloud's points; meshes .seg) (default: seg)")
+                        "segIndices (.json), a NumPy int64 array (.npy), records: each "
+                        "LAS/LAZ, PLY or PCD cloud's own records with a ClusterID field "
+                        "(.seg for the others), or laz: a .laz with ClusterID for every "
+                        "cloud (a LAS/LAZ input's records, any other cloud's points; "
+                        "meshes .seg) (default: seg)")
     b.add_argument("--header", action="store_true",
                    help="start each .seg file with '#' lines (parameters, passes, time)")
     b.add_argument("--colored-mesh", choices=("ply", "glb", "obj"), default=None,

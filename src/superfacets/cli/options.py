@@ -340,6 +340,8 @@ def check_labels_output(path: str | None, source: str, records: bool = False) ->
     if records and scan_output(out, source) is not None:  # (a mismatch: refused there)
         return out
     fmt = split_suffix(out)[0]
+    if fmt == "npy":  # (the labels as a NumPy array, as learning pipelines load them)
+        return out
     if fmt == "label":  # (read back as SemanticKITTI's binary classes: refused, not misread)
         raise ParameterError(f"{out}: a .label file is SemanticKITTI's binary classes; name "
                              f"the labels e.g. {out.name.split('.')[0]}.seg")

@@ -29,7 +29,8 @@ _BLOCK = 1 << 20  # labels formatted at a time
 
 def write_labels(path, labels, header: dict | Iterable[str] | None = None, *,
                  outputs: Outputs | None = None) -> Path:
-    """Write a ``.seg`` label file: one integer per face per line, face order.
+    """Write a ``.seg`` label file: one integer per face per line, face order (a ``.npy``
+    path: the labels as a NumPy ``int64`` array, as learning pipelines load them).
 
     Parameters
     ----------
@@ -37,7 +38,8 @@ def write_labels(path, labels, header: dict | Iterable[str] | None = None, *,
     labels : (m,) int ndarray
     header : dict or iterable of str, optional
         Written first as ``# key: value`` (or ``# line``) lines; readers of
-        this package skip them. Leave it out for strict benchmark files.
+        this package skip them. Leave it out for strict benchmark files. (Not in a
+        ``.npy``, which holds the array alone.)
     outputs : Outputs, optional
         Stage the file there (written with the others, all or nothing)
         instead of writing it now. ``path`` ``-`` is standard output.
@@ -66,6 +68,12 @@ def write_labels(path, labels, header: dict | Iterable[str] | None = None, *,
         raise ParameterError(f"{path}: {binary[split_suffix(Path(path))[0]]}, read back as "
                              "such; name the labels .seg")
     labels = check_labels(labels, None)
+    if str(path) != "-" and split_suffix(Path(path))[0] == "npy":
+        import io
+
+        buf = io.BytesIO()
+        np.save(buf, labels.astype(np.int64), allow_pickle=False)
+        return save(path, buf.getvalue(), outputs)
     head = ""
     if header:
         items = header.items() if isinstance(header, dict) else ((None, h) for h in header)
@@ -182,8 +190,9 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
     coloured mesh, else the vertex property ``scalar_ClusterID``), the
     ``ClusterID`` dimension of a LAS/LAZ written by ``segment -o OUT.laz``, the
     ``segIndices`` of a ScanNet-style ``.json``, the classes of a SemanticKITTI
-    ``.label`` file (uint32 a point: its lower 16 bits, the instance above left out), or
-    those of a nuScenes ``*_lidarseg.bin`` file (uint8 a point).
+    ``.label`` file (uint32 a point: its lower 16 bits, the instance above left out),
+    those of a nuScenes ``*_lidarseg.bin`` file (uint8 a point), or a ``.npy`` array of
+    labels (a learning pipeline's).
 
     Parameters
     ----------
@@ -229,6 +238,8 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
             raise MeshFormatError(f"{path}: a .label file (SemanticKITTI's) holds 4 bytes a "
                                   f"point; its {len(data):,} bytes are not a whole number")
         labels = (np.frombuffer(data, dtype="<u4") & 0xFFFF).astype(np.int64)
+    elif fmt == "npy":  # a learning pipeline's array of labels
+        labels = _npy_labels(data, path)
     elif fmt == "bin":  # nuScenes' lidarseg: uint8 a point
         if not path.name.lower().endswith("_lidarseg.bin"):
             raise MeshFormatError(f"{path}: a .bin of labels is read as nuScenes' lidarseg "
@@ -258,6 +269,31 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
         raise MeshFormatError(f"{path}: has {labels.shape[0]} labels but the input has "
                               f"{n_faces} elements")
     return labels
+
+
+def _npy_labels(data: bytes, path: Path) -> np.ndarray:
+    """The labels of a ``.npy`` file: an integer (or boolean, or whole-valued float) array
+    of one label per element, ``(N,)``, ``(N, 1)`` or an organized ``(H, W)`` read row by
+    row."""
+    import io
+
+    try:
+        arr = np.load(io.BytesIO(data), allow_pickle=False)
+    except Exception as exc:  # noqa: BLE001 - numpy raises many types on damaged files
+        raise MeshFormatError(f"{path}: cannot read NPY: {exc}") from None
+    if not isinstance(arr, np.ndarray) or arr.ndim not in (1, 2) or (
+            arr.ndim == 2 and arr.shape[1] == 3):
+        raise MeshFormatError(f"{path}: a .npy of labels holds one integer per element ((N,), "
+                              f"(N, 1) or an organized (H, W)); got "
+                              f"{getattr(arr, 'shape', type(arr).__name__)}")
+    flat = arr.reshape(-1)
+    if flat.dtype.kind == "f":
+        if not np.isfinite(flat).all() or (flat != np.round(flat)).any():
+            raise MeshFormatError(f"{path}: labels must be whole numbers; the .npy holds "
+                                  f"{flat.dtype} values that are not")
+    elif flat.dtype.kind not in "iub":
+        raise MeshFormatError(f"{path}: labels must be integers; the .npy holds {flat.dtype}")
+    return flat.astype(np.int64)
 
 
 def read_field(path, name: str) -> np.ndarray:

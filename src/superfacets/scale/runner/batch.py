@@ -62,7 +62,7 @@ from .manifest import (
 __all__ = ["run_batch", "collect_inputs", "output_names", "read_manifest", "BatchSummary",
            "MANIFEST_COLUMNS", "segment_file"]
 
-_LABEL_SUFFIX = {"seg": ".seg", "json": ".json", "records": None, "laz": None}
+_LABEL_SUFFIX = {"seg": ".seg", "json": ".json", "npy": ".npy", "records": None, "laz": None}
 
 
 def _label_suffix(labels: str, source) -> str:
@@ -254,8 +254,9 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         Output folder, created if missing (its parent must exist).
     n_segments, radius : optional
         As :func:`superfacets.segment` (default k = 150).
-    labels : {'seg', 'json', 'records', 'laz'}, default 'seg'
-        Label file of each input: one label per line, ScanNet's ``segIndices``, a LAS/LAZ,
+    labels : {'seg', 'json', 'npy', 'records', 'laz'}, default 'seg'
+        Label file of each input: one label per line, ScanNet's ``segIndices``, a NumPy
+        ``int64`` array (``.npy``, as learning pipelines load labels), a LAS/LAZ,
         PLY or PCD cloud's own records with ``ClusterID`` (``records``; others ``.seg``), or
         a ``.laz`` for every cloud (``laz``: a LAS/LAZ input's records, any other cloud's
         points as a new file: :func:`superfacets.io.records.write_cloud_with_labels`;
