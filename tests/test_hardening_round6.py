@@ -377,3 +377,32 @@ def test_labels_as_numpy_arrays_are_written_and_read(tmp_path, capsys):
     assert main(["batch", str(path), "-o", str(tmp_path / "b"), "-k", "6", "--labels", "npy",
                  "--workers", "1", "-q"]) == 0
     assert np.array_equal(np.load(tmp_path / "b" / "s.npy"), got)
+
+
+@pytest.mark.parametrize("args, says", [
+    (["-o", "{d}/h.json"], "h.json holds none"),
+    (["-o", "{d}/h.npy"], "h.npy holds none"),
+    (["-o", "{d}/h.laz"], "h.laz holds none"),
+    (["--picture", "{d}/h.png"], "give -o OUT.seg"),
+    (["-o", "{d}/h.seg", "--tiles", "2"], "a tiled run writes the labels alone"),
+])
+def test_header_where_no_text_label_file_is_written_is_refused(tmp_path, capsys, args, says):
+    # (taken and ignored: no '#' line anywhere)
+    path = tmp_path / "s.xyz"
+    np.savetxt(path, _surface(400))
+    argv = ["segment", str(path), "-k", "5", "--header",
+            *[a.replace("{d}", str(tmp_path)) for a in args]]
+    assert main(argv) == 2
+    _one_line_error(capsys, says)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.xyz"]
+
+
+def test_a_batch_header_with_labels_other_than_text_is_refused(tmp_path, capsys):
+    path = tmp_path / "s.xyz"
+    np.savetxt(path, _surface(400))
+    assert main(["batch", str(path), "-o", str(tmp_path / "b"), "-k", "5", "--labels", "npy",
+                 "--header"]) == 2
+    _one_line_error(capsys, "--labels npy) writes none")
+    assert main(["batch", str(path), "-o", str(tmp_path / "c"), "-k", "5", "--header",
+                 "--workers", "1", "-q"]) == 0
+    assert (tmp_path / "c" / "s.seg").read_text().startswith("#")

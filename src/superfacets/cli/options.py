@@ -358,6 +358,28 @@ def check_labels_output(path: str | None, source: str, records: bool = False) ->
     return out
 
 
+def check_header_option(header: bool, labels, source) -> None:
+    """Refuse ``--header`` where no label file of text is written (none, a ``.json``, a
+    ``.npy``, a scan's records): its ``#`` lines would go nowhere, silently.
+
+    Raises
+    ------
+    ParameterError
+        Naming the output that holds no header.
+    """
+    from ..errors import ParameterError
+    from ..io.records import scan_output
+
+    if not header:
+        return
+    if labels is None:
+        raise ParameterError("--header starts the label file with '#' lines: give -o OUT.seg")
+    name = str(labels).lower()
+    if name.endswith((".json", ".npy")) or scan_output(labels, source) is not None:
+        raise ParameterError(f"--header starts a label file of text with '#' lines; "
+                             f"{Path(str(labels)).name} holds none (name the labels .seg)")
+
+
 def elements_of_input(data) -> str:
     """What an input's elements are by default: ``'faces'`` (a mesh), ``'points'`` (a
     cloud) or ``'cells'`` (a tetrahedral mesh)."""

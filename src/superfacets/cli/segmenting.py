@@ -19,6 +19,7 @@ from .options import (
     add_method_options,
     add_scan_options,
     add_unit_options,
+    check_header_option,
     check_labels_output,
     check_output,
     element_kwargs,
@@ -376,6 +377,7 @@ def _checked_outputs(args) -> dict:
         raise ParameterError(f"{seg_out}: the labels and the coloured mesh cannot both go there")
     if args.vertex_colors and (ply_out is None or not ply_out.name.lower().endswith(".ply")):
         raise ParameterError("--vertex-colors goes with --colored-mesh OUT.ply")
+    check_header_option(args.header, seg_out, args.mesh)
     _check_levels(args)
     png_out = check_output(args.picture, (".png",), "the picture", inputs=(args.mesh,))
     html_out = check_output(args.html, (".html", ".htm"), "the page", inputs=(args.mesh,))

@@ -84,6 +84,9 @@ def segment_tiles(args) -> int:
                                  "--tiles (write -o OUT.seg, then view a part)")
     if getattr(args, "elements", None) == "vertices":
         raise ParameterError("--tiles segments faces or points, not vertices")
+    if args.header:  # (its lines record one run's passes and time)
+        raise ParameterError("--header records one run's parameters and passes; a tiled run "
+                             "writes the labels alone (its summary says the rest)")
     seg_out = check_labels_output(args.output, args.mesh, records=True)
     for flag, given in (("--seed-resolution", args.seed_resolution),
                         ("--neighbor-distance", args.neighbor_distance)):

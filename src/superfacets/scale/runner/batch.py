@@ -330,6 +330,9 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
     if not parent.is_dir():
         raise FileNotFoundError(f"{outdir}: its folder {parent} does not exist")
     check_choice("labels", labels, tuple(_LABEL_SUFFIX))
+    if header and labels != "seg":  # (its '#' lines would go nowhere, silently)
+        raise ParameterError(f"header (--header) starts each .seg with '#' lines; labels "
+                             f"{labels!r} (--labels {labels}) writes none")
     if colored_mesh is not None:
         check_choice("colored_mesh", colored_mesh, ("ply", "glb", "obj"))
     if per_object and radius is not None:
