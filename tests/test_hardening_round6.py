@@ -406,3 +406,25 @@ def test_a_batch_header_with_labels_other_than_text_is_refused(tmp_path, capsys)
     assert main(["batch", str(path), "-o", str(tmp_path / "c"), "-k", "5", "--header",
                  "--workers", "1", "-q"]) == 0
     assert (tmp_path / "c" / "s.seg").read_text().startswith("#")
+
+
+@pytest.mark.parametrize("cmd, args, says", [
+    ("segment", ["--neighbors", "12"], "--neighbors shapes a point cloud's graph"),
+    ("segment", ["--neighbor-radius", "0.1"], "elements are faces"),
+    ("segment", ["--elements", "vertices", "--neighbors", "4"], "elements are vertices"),
+    ("evaluate", ["--neighbors", "5"], "--neighbors shapes"),
+])
+def test_a_cloud_s_neighbourhood_given_for_a_mesh_is_refused(tmp_path, capsys, cmd, args,
+                                                             says):
+    # (taken and ignored: a mesh's faces and vertices have its edges for a graph)
+    import trimesh
+
+    path = tmp_path / "ball.off"
+    trimesh.creation.icosphere(subdivisions=2).export(path)
+    labels = tmp_path / "b.seg"
+    assert main(["segment", str(path), "-k", "6", "-o", str(labels), "-q"]) == 0
+    argv = ["segment", str(path), "-k", "6", "-o", str(tmp_path / "c.seg")] \
+        if cmd == "segment" else ["evaluate", str(path), str(labels), str(labels)]
+    assert main(argv + args) == 2
+    _one_line_error(capsys, says)
+    assert not (tmp_path / "c.seg").exists()

@@ -504,13 +504,16 @@ def test_every_parameter_has_an_option_that_reaches_the_run(monkeypatch, small_o
         raise SystemExit(0)
 
     monkeypatch.setattr(api, "pipeline", record)
+    cloud = tmp_path / "c.xyz"  # (a cloud's neighbourhood: refused for a mesh's faces)
+    np.savetxt(cloud, np.random.default_rng(0).random((200, 3)))
     for p in PARAMETERS:
         assert p.cli, f"{p.name} has no option"
         value, words = _non_default(p)
         size = [] if p.name in ("n_segments", "radius") else ["-k", "5"]
+        given = cloud if p.name in ("n_neighbors", "neighbor_radius") else small_off
         seen.clear()
         with pytest.raises(SystemExit):
-            main(["segment", str(small_off), *size, *words, "-o", str(tmp_path / "x.seg")])
+            main(["segment", str(given), *size, *words, "-o", str(tmp_path / "x.seg")])
         assert seen, p.name
         got = getattr(seen[0], p.name)
         assert got == value or (p.name == "n_threads" and got == 1), (p.name, got, value)

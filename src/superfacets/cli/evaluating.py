@@ -14,7 +14,7 @@ from pathlib import Path
 
 from ..elements.kinds import kind_of
 from ..method.params import DEFAULTS
-from .options import elements_of_input, float_arg, int_arg, read_usable
+from .options import elements_of_input, float_arg, int_arg, read_usable, refuse_neighbours
 
 __all__ = ["add_parsers", "cmd_evaluate"]
 
@@ -81,6 +81,7 @@ def cmd_evaluate(args) -> int:
         raise ParameterError(f"{args.mesh} is {what}: its labels are of {own}, not "
                              f"{args.elements}")
     kind = args.elements or own
+    refuse_neighbours(args.neighbors, None, kind)
     n = kind_of(kind).n_rows(data)
     long = shows_stages(args, n)
     with waiting_bar(f"reading the labels of {n:,} {kind}", long):

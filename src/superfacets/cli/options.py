@@ -380,6 +380,29 @@ def check_header_option(header: bool, labels, source) -> None:
                              f"{Path(str(labels)).name} holds none (name the labels .seg)")
 
 
+def refuse_neighbours(n_neighbors, neighbor_radius, kind: str) -> None:
+    """Refuse ``--neighbors`` (other than the default) and ``--neighbor-radius`` where the
+    elements are not a cloud's points: a mesh's faces and vertices have the mesh's edges
+    for a graph, and would take them and change nothing.
+
+    Raises
+    ------
+    ParameterError
+        Naming the elements.
+    """
+    from ..errors import ParameterError
+    from ..method.params import DEFAULTS
+
+    if kind_of(kind).cloud:
+        return
+    given = [f for f, on in (("--neighbors", n_neighbors not in (None, DEFAULTS.n_neighbors)),
+                             ("--neighbor-radius", neighbor_radius is not None)) if on]
+    if given:
+        raise ParameterError(f"{' and '.join(given)} shape{'s' if len(given) == 1 else ''} "
+                             f"a point cloud's graph; this input's elements are {kind}, "
+                             "whose graph is the mesh's edges")
+
+
 def elements_of_input(data) -> str:
     """What an input's elements are by default: ``'faces'`` (a mesh), ``'points'`` (a
     cloud) or ``'cells'`` (a tetrahedral mesh)."""

@@ -29,6 +29,7 @@ from .options import (
     method_kwargs,
     named_after,
     read_usable,
+    refuse_neighbours,
     said_up,
     scan_cloud,
     shows_stages,
@@ -424,6 +425,7 @@ def _kind_of_run(args, data, ply_out) -> str:
     from ..errors import ParameterError
 
     kind = "points" if not hasattr(data, "faces") else (args.elements or "faces")
+    refuse_neighbours(args.neighbors, args.neighbor_radius, kind)
     if kind == "faces" and _into_records(args.output, args.mesh):
         raise ParameterError(f"{args.output}: a PLY's records are its vertices: -o OUT.ply "
                              "takes the labels of --elements vertices; the labels of faces go "
