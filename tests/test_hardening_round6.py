@@ -428,3 +428,27 @@ def test_a_cloud_s_neighbourhood_given_for_a_mesh_is_refused(tmp_path, capsys, c
     assert main(argv + args) == 2
     _one_line_error(capsys, says)
     assert not (tmp_path / "c.seg").exists()
+
+
+@pytest.mark.parametrize("cmd, args, says", [
+    ("render", ["{d}/b.seg", "--alpha", "300"], "--alpha segments the input"),
+    ("render", ["{d}/b.seg", "-k", "40"], "-k segments the input"),
+    ("render", ["--plain", "--tol", "0.1"], "--tol segments"),
+    ("html", ["{d}/b.seg", "--no-connectivity"], "--no-connectivity segments"),
+    ("render", ["{d}/b.seg", "--no-boundaries", "--line-width", "3"], "not with --no-bound"),
+])
+def test_options_a_drawing_of_given_labels_would_ignore_are_refused(tmp_path, capsys, cmd,
+                                                                    args, says):
+    # (taken and ignored: the labels given were drawn as they were)
+    import trimesh
+
+    path = tmp_path / "ball.off"
+    trimesh.creation.icosphere(subdivisions=2).export(path)
+    assert main(["segment", str(path), "-k", "6", "-o", str(tmp_path / "b.seg"), "-q"]) == 0
+    out = tmp_path / ("p.png" if cmd == "render" else "p.html")
+    if cmd == "render":
+        pytest.importorskip("pyvista")
+    argv = [cmd, str(path), *[a.replace("{d}", str(tmp_path)) for a in args], "-o", str(out)]
+    assert main(argv) == 2
+    _one_line_error(capsys, says)
+    assert not out.exists()

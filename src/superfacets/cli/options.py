@@ -358,6 +358,26 @@ def check_labels_output(path: str | None, source: str, records: bool = False) ->
     return out
 
 
+def _segmenting_options(args) -> list[str]:
+    """The method's options given to a command that draws labels (those whose values are
+    not the defaults, and ``-k``/``--radius``), as ``--name``."""
+    from ..method.params import DEFAULTS, PARAMETERS
+
+    given = [f for f, v in (("-k", getattr(args, "n_segments", None)),
+                            ("--radius", getattr(args, "radius", None))) if v is not None]
+    try:
+        kwargs = method_kwargs(args)
+    except AttributeError:  # (a command without the method's options)
+        return given
+    flags = {p.name: p.cli for p in PARAMETERS if p.cli}
+    for k, v in kwargs.items():
+        if k != "progress" and v is not None and v != getattr(DEFAULTS, k, v):
+            flag = flags.get(k, f"--{k.replace('_', '-')}")
+            given.append(f"--no-{flag[2:]}" if v is False and not flag.startswith("--no-")
+                         else flag)
+    return given
+
+
 def check_header_option(header: bool, labels, source) -> None:
     """Refuse ``--header`` where no label file of text is written (none, a ``.json``, a
     ``.npy``, a scan's records): its ``#`` lines would go nowhere, silently.
@@ -434,6 +454,11 @@ def labels_for(args, data):
     counts = _counts(data)
     first = next(iter(counts))
     field = getattr(args, "labels_from", None)
+    given = _segmenting_options(args)
+    if given and (args.labels or field or getattr(args, "plain", False)):
+        raise ParameterError(f"{', '.join(given)} segment{'s' if len(given) == 1 else ''} the "
+                             "input; with LABELS, --labels-from or --plain nothing is "
+                             "segmented: leave them out")
     if getattr(args, "plain", False):
         if args.labels or field:
             raise ParameterError("--plain draws no labels: not with LABELS or --labels-from")

@@ -146,6 +146,10 @@ def cmd_render(args) -> int:
 
     check_number("line_width", args.line_width, 0.0, 100.0, lo_open=True)  # (a cloud's
     # picture draws no border lines, but a bad width is refused on every input alike)
+    if args.no_boundaries and args.line_width != 1.0:
+        from ..errors import ParameterError
+
+        raise ParameterError("--line-width is the boundaries' width; not with --no-boundaries")
     out = check_output(args.output, (".png",), "the picture",
                        inputs=(args.mesh, getattr(args, "labels", None)))
     data = _read(args, clouds=True)
