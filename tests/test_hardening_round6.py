@@ -436,6 +436,8 @@ def test_a_cloud_s_neighbourhood_given_for_a_mesh_is_refused(tmp_path, capsys, c
     ("render", ["--plain", "--tol", "0.1"], "--tol segments"),
     ("html", ["{d}/b.seg", "--no-connectivity"], "--no-connectivity segments"),
     ("render", ["{d}/b.seg", "--no-boundaries", "--line-width", "3"], "not with --no-bound"),
+    ("panel", ["--labels", "{d}/b.seg", "--alpha", "300"], "--alpha chooses the runs"),
+    ("panel", ["--labels", "{d}/b.seg", "-k", "9", "12"], "-k chooses the runs"),
 ])
 def test_options_a_drawing_of_given_labels_would_ignore_are_refused(tmp_path, capsys, cmd,
                                                                     args, says):
@@ -445,8 +447,8 @@ def test_options_a_drawing_of_given_labels_would_ignore_are_refused(tmp_path, ca
     path = tmp_path / "ball.off"
     trimesh.creation.icosphere(subdivisions=2).export(path)
     assert main(["segment", str(path), "-k", "6", "-o", str(tmp_path / "b.seg"), "-q"]) == 0
-    out = tmp_path / ("p.png" if cmd == "render" else "p.html")
-    if cmd == "render":
+    out = tmp_path / ("p.html" if cmd == "html" else "p.png")
+    if cmd != "html":
         pytest.importorskip("pyvista")
     argv = [cmd, str(path), *[a.replace("{d}", str(tmp_path)) for a in args], "-o", str(out)]
     assert main(argv) == 2

@@ -187,6 +187,13 @@ def cmd_panel(args) -> int:
 
     out = check_output(args.output, (".png",), "the picture",
                        inputs=(args.mesh, getattr(args, "labels", None)))
+    given = [f for f, on in (("-m", args.method != ["superfacets"]),
+                             ("-k", args.n_segments != [150]), ("--alpha", bool(args.alpha)),
+                             ("--param", bool(args.param))) if on]
+    if args.labels and given:  # (the label files are drawn as they are)
+        raise ParameterError(f"{', '.join(given)} choose{'s' if len(given) == 1 else ''} the "
+                             "runs a panel segments; with --labels nothing is segmented: "
+                             "leave them out")
     mesh = _read(args, clouds=True)
     kind = kind_for(mesh)  # (faces, points or cells: what the labels are of)
     items = []
