@@ -454,3 +454,20 @@ def test_options_a_drawing_of_given_labels_would_ignore_are_refused(tmp_path, ca
     assert main(argv) == 2
     _one_line_error(capsys, says)
     assert not out.exists()
+
+
+def test_options_of_what_is_not_written_are_refused(tmp_path, capsys):
+    # (taken and ignored: `evaluate --tau` or `--ignore-label` with no ground truth, whose
+    # shapes alone are measured; `batch --vertex-colors` with no coloured PLY)
+    path = tmp_path / "s.xyz"
+    np.savetxt(path, _surface(400))
+    labels = tmp_path / "s.seg"
+    assert main(["segment", str(path), "-k", "5", "-o", str(labels), "-q"]) == 0
+    for extra, says in ((["--tau", "0.1"], "--tau judges"),
+                        (["--ignore-label", "0"], "--ignore-label judges")):
+        assert main(["evaluate", str(path), str(labels), *extra]) == 2
+        _one_line_error(capsys, says, "give GT.seg files")
+    assert main(["batch", str(path), "-o", str(tmp_path / "b"), "-k", "5",
+                 "--vertex-colors"]) == 2
+    _one_line_error(capsys, "--colored-mesh ply")
+    assert not (tmp_path / "b").exists()

@@ -99,6 +99,12 @@ def cmd_evaluate(args) -> int:
             raise ParameterError(f"field {args.ground_truth_field!r} has {gt.shape[0]} values "
                                  f"but the input has {n} {kind}")
         gts.append(gt)
+    judged = [f for f, on in (("--tau", args.tau != 0.05),
+                              ("--ignore-label", args.ignore_label is not None)) if on]
+    if judged and not gts:  # (the shapes alone: nothing judged against a truth)
+        raise ParameterError(f"{' and '.join(judged)} judge{'s' if len(judged) == 1 else ''} "
+                             "against a ground truth: give GT.seg files or "
+                             "--ground-truth-field NAME")
     with waiting_bar(f"measuring {name} ({n:,} {kind})", long):
         if gts:
             m = evaluate_rows(data, labels, gts, elements=kind, n_neighbors=args.neighbors,

@@ -330,6 +330,9 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
     if not parent.is_dir():
         raise FileNotFoundError(f"{outdir}: its folder {parent} does not exist")
     check_choice("labels", labels, tuple(_LABEL_SUFFIX))
+    if vertex_colors and colored_mesh != "ply":  # (as segment refuses it)
+        raise ParameterError("vertex_colors (--vertex-colors) colours a PLY's vertices: give "
+                             "colored_mesh='ply' (--colored-mesh ply)")
     if header and labels != "seg":  # (its '#' lines would go nowhere, silently)
         raise ParameterError(f"header (--header) starts each .seg with '#' lines; labels "
                              f"{labels!r} (--labels {labels}) writes none")
