@@ -471,3 +471,23 @@ def test_options_of_what_is_not_written_are_refused(tmp_path, capsys):
                  "--vertex-colors"]) == 2
     _one_line_error(capsys, "--colored-mesh ply")
     assert not (tmp_path / "b").exists()
+
+
+@pytest.mark.parametrize("extra, says", [
+    (["--rooms", "3"], "--rooms goes with --dataset rooms"),
+    (["--ids", "1-3"], "--ids selects or samples the benchmark's meshes"),
+    (["--categories", "Human", "--per-category", "2"], "--categories, --per-category"),
+    (["--points", "5000"], "not with --dataset files"),
+    (["--tau", "0.1"], "--tau judges against a ground truth"),
+])
+def test_an_experiment_on_files_refuses_other_datasets_options(tmp_path, capsys, extra, says):
+    # (taken and ignored: the benchmark's selection and sampling, the rooms' count, a
+    # tolerance with no ground truth)
+    folder = tmp_path / "in"
+    folder.mkdir()
+    np.savetxt(folder / "s.xyz", _surface(400))
+    out = tmp_path / "rows.csv"
+    assert main(["experiment", "--inputs", str(folder), "-k", "5", "--alpha", "200", "-o",
+                 str(out), "-j", "1", "-q", *extra]) == 2
+    _one_line_error(capsys, says)
+    assert not out.exists()

@@ -125,6 +125,35 @@ def _id_list(text: str) -> set[int]:
     return out
 
 
+def _check_dataset_options(args, dataset: str) -> None:
+    """Refuse the options of another dataset than the one run (taken, they would change
+    nothing): the benchmark's selection and sampling on rooms or files, ``--rooms`` on
+    another dataset, ``--tau`` where no ground truth judges the rows."""
+    from ..errors import ParameterError
+
+    psb_only = [f for f, on in (("--ids", getattr(args, "ids", None)),
+                                ("--categories", getattr(args, "categories", None)),
+                                ("--per-category", getattr(args, "per_category", None)
+                                 is not None)) if on]
+    sampled = "points" in (getattr(args, "elements", None) or "faces").split(",")
+    if getattr(args, "points", 20_000) != 20_000:
+        if dataset != "psb":
+            psb_only.append("--points")
+        elif not sampled:
+            raise ParameterError("--points samples each benchmark mesh for --elements points; "
+                                 "add it")
+    if psb_only and dataset != "psb":
+        verbs = "selects or samples" if len(psb_only) == 1 else "select or sample"
+        raise ParameterError(f"{', '.join(psb_only)} {verbs} the benchmark's meshes; not "
+                             f"with --dataset {dataset}")
+    if getattr(args, "rooms", 10) != 10 and dataset != "rooms":
+        raise ParameterError("--rooms goes with --dataset rooms")
+    if getattr(args, "tau", 0.05) != 0.05 and dataset == "files" and \
+            not getattr(args, "ground_truth_field", None):
+        raise ParameterError("--tau judges against a ground truth: with --inputs give "
+                             "--ground-truth-field NAME")
+
+
 def select_meshes(args):
     """The benchmark meshes chosen by ``--psb``, ``--ids``, ``--categories``, ``--per-category``."""
     from ..errors import ParameterError
@@ -136,6 +165,7 @@ def select_meshes(args):
         raise ParameterError("--inputs PATH ... goes with --dataset files (its default)")
     if getattr(args, "ground_truth_field", None) and dataset != "files":
         raise ParameterError("--ground-truth-field goes with --inputs")
+    _check_dataset_options(args, dataset)
     if dataset == "files":
         from ..scale.runner.collect import file_entries
 
