@@ -574,3 +574,17 @@ def test_a_new_las_keeps_the_points_to_a_millionth_of_their_extent(tmp_path, ext
     out = write_cloud_with_labels(tmp_path / "c.laz", xyz, np.arange(200) % 5)
     las = laspy.read(str(out))
     assert np.abs(np.c_[las.x, las.y, las.z] - xyz).max() <= 1e-6 * extent
+
+
+def test_withheld_points_are_invalid_and_a_new_scan_segments_again(tmp_path):
+    # (a LAS's withheld points, "not to be processed" by the ASPRS specification, were
+    # segmented; a frame's holes written as withheld came back as one superpoint of
+    # coincident points at the file's offset)
+    from superfacets import segment, segment_tiled
+
+    frame, _, _, _ = _sweep_with_holes(tmp_path)
+    holes = ~np.isfinite(np.load(frame).reshape(-1, 3)).all(axis=1)
+    out = tmp_path / "frame.laz"
+    assert main(["segment", str(frame), "-k", "8", "-o", str(out), "-q"]) == 0
+    for labels in (segment(out, 8).labels, segment_tiled(out, 8, tiles=2).labels):
+        assert np.array_equal(labels < 0, holes) and len(np.unique(labels[~holes])) == 8

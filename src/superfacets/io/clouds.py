@@ -421,13 +421,29 @@ def _read_las(path: Path) -> dict:
         col = (unit_colors(np.stack([np.asarray(las[c]) for c in ("red", "green", "blue")],
                                     axis=1))
                if {"red", "green", "blue"} <= dims else None)
+        withheld = withheld_rows(las, dims)
     except Exception as exc:  # noqa: BLE001 - laspy raises many types
         msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise MeshFormatError(f"{path}: cannot read {path.suffix.upper()[1:]} (damaged or "
                               f"truncated file?): {msg}") from None
+    pts = pts.astype(np.float64)
+    if withheld is not None:  # (ASPRS: a withheld point is not to be processed: invalid)
+        pts[withheld] = np.nan
     # LAS z is elevation: an airborne, mobile or terrestrial scan sees its surfaces from
     # above or from the side, so estimated normals are turned upwards piece by piece
-    return {"points": pts.astype(np.float64), "colors": col, "up": np.array([0.0, 0.0, 1.0])}
+    return {"points": pts, "colors": col, "up": np.array([0.0, 0.0, 1.0]),
+            "allow_invalid": withheld is not None}
+
+
+def withheld_rows(points, dims) -> np.ndarray | None:
+    """The rows of LAS points flagged ``withheld`` (the ASPRS specification: "should not be
+    included in processing"; the points a new scan file marks invalid), or None where there
+    is none. ``points``: laspy's records (a file's, or a chunk's); ``dims``: their
+    dimension names."""
+    if "withheld" not in dims:
+        return None
+    flags = np.asarray(points.withheld, dtype=bool)
+    return np.flatnonzero(flags) if flags.any() else None
 
 
 def _e57_positions(raw: dict, path: Path) -> np.ndarray:

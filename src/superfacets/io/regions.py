@@ -50,7 +50,7 @@ from ..inputs.cloud import (
 from ..inputs.convert import as_mesh
 from ..inputs.mesh import Mesh
 from ..inputs.rgb import color_top, unit_colors
-from .clouds import is_cloud_file, read_cloud, unusable_normals
+from .clouds import is_cloud_file, read_cloud, unusable_normals, withheld_rows
 from .headers import NotStreamedError, check_las, first_line, npy_mapped, ply_mapped, ply_names
 from .meshes import read_mesh
 from .ply import VertexView
@@ -216,7 +216,8 @@ class RegionReader:
             except Exception as exc:  # noqa: BLE001 - laspy raises many types
                 raise MeshFormatError(f"{p}: cannot read {suffix.upper()}: "
                                       f"{first_line(exc)}") from None
-            return cls(str(p), "points", "las", n, chunk, up=(0.0, 0.0, 1.0))
+            # (a LAS position is an integer: only a withheld point, read as invalid, has none)
+            return cls(str(p), "points", "las", n, chunk, up=(0.0, 0.0, 1.0), invalid_ok=True)
         if suffix == "npy":
             arr = npy_mapped(p)
             if arr.ndim != 2 or arr.shape[1] != 3:
@@ -494,6 +495,9 @@ class RegionReader:
                 for pts in f.chunk_iterator(self.chunk):
                     xyz = np.stack([np.asarray(pts.x), np.asarray(pts.y), np.asarray(pts.z)],
                                    axis=1).astype(np.float64)
+                    withheld = withheld_rows(pts, dims)
+                    if withheld is not None:  # (invalid, as one run reads them)
+                        xyz[withheld] = np.nan
                     col = (self._colors(np.stack([np.asarray(pts[c]) for c in
                                                   ("red", "green", "blue")], 1), stats)
                            if rgb else None)
