@@ -491,3 +491,14 @@ def test_an_experiment_on_files_refuses_other_datasets_options(tmp_path, capsys,
                  str(out), "-j", "1", "-q", *extra]) == 2
     _one_line_error(capsys, says)
     assert not out.exists()
+
+
+def test_labels_saved_by_numpy_savetxt_s_default_are_read(tmp_path):
+    # ("could not convert string '0.000000000000000000e+00' to int64": np.savetxt(labels)
+    # writes floats unless told otherwise)
+    truth = np.arange(30) % 4
+    np.savetxt(tmp_path / "gt.txt", truth)
+    assert np.array_equal(read_labels(tmp_path / "gt.txt", 30), truth)
+    (tmp_path / "half.txt").write_text("1.5\n2\n")
+    with pytest.raises(MeshFormatError, match="malformed label file"):
+        read_labels(tmp_path / "half.txt")

@@ -261,14 +261,30 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
         try:
             labels = np.loadtxt(lines, dtype=np.int64, ndmin=1, comments=None)
         except (ValueError, OverflowError) as exc:
-            why = str(exc).split('; use')[0]
-            raise MeshFormatError(f"{path}: malformed label file: {why}") from None
+            labels = _whole_numbers(lines)  # (numpy.savetxt's default: 1.000000000000e+00)
+            if labels is None:
+                why = str(exc).split('; use')[0]
+                raise MeshFormatError(f"{path}: malformed label file: {why}") from None
         if labels.ndim != 1:
             raise MeshFormatError(f"{path}: malformed label file: expected one label per line")
     if n_faces is not None and labels.shape[0] != n_faces:
         raise MeshFormatError(f"{path}: has {labels.shape[0]} labels but the input has "
                               f"{n_faces} elements")
     return labels
+
+
+def _whole_numbers(lines: list) -> np.ndarray | None:
+    """Labels written as floats of whole values (``numpy.savetxt``'s default format, a
+    spreadsheet's ``3.0``) as integers, or None where a line holds anything else."""
+    try:
+        values = np.loadtxt(lines, dtype=np.float64, ndmin=1, comments=None)
+    except (ValueError, OverflowError):
+        return None
+    flat = values.reshape(-1)
+    if values.ndim != 1 or not np.isfinite(flat).all() or (flat != np.round(flat)).any() \
+            or (np.abs(flat) > 2**53).any():
+        return None
+    return flat.astype(np.int64)
 
 
 def _npy_labels(data: bytes, path: Path) -> np.ndarray:
