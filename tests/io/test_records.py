@@ -588,3 +588,28 @@ def test_withheld_points_are_invalid_and_a_new_scan_segments_again(tmp_path):
     assert main(["segment", str(frame), "-k", "8", "-o", str(out), "-q"]) == 0
     for labels in (segment(out, 8).labels, segment_tiled(out, 8, tiles=2).labels):
         assert np.array_equal(labels < 0, holes) and len(np.unique(labels[~holes])) == 8
+
+
+def test_a_new_ply_s_missing_points_are_invalid_when_it_is_read_again(tmp_path, capsys):
+    # (a frame's holes written NaN into a new PLY were refused on reading it again: "only
+    # organized clouds and PCD files may mark invalid points with NaN")
+    from superfacets import segment, segment_tiled
+    from superfacets.inputs.cloud import InvalidCloudError
+
+    frame, _, _, _ = _sweep_with_holes(tmp_path)
+    holes = ~np.isfinite(np.load(frame).reshape(-1, 3)).all(axis=1)
+    out = tmp_path / "frame.ply"
+    assert main(["segment", str(frame), "-k", "8", "-o", str(out), "-q"]) == 0
+    for labels in (segment(out, 8).labels, segment_tiled(out, 8, tiles=2).labels):
+        assert np.array_equal(labels < 0, holes) and len(np.unique(labels[~holes])) == 8
+    assert main(["segment", str(out), "-k", "8", "--tiles", "2"]) == 0
+    assert f"1,200 points ({holes.sum():,} invalid)" in capsys.readouterr().out
+    # a row NaN in one coordinate only is damage, named by its row, whole or in tiles
+    rows = "0 0 0\n1 0 0\nnan nan nan\n0 1 nan\n1 1 1\n0 2 0\n"
+    (tmp_path / "part.ply").write_text("ply\nformat ascii 1.0\nelement vertex 6\nproperty "
+                                       "float x\nproperty float y\nproperty float z\n"
+                                       "end_header\n" + rows)
+    for run in (lambda p: segment(p, 2), lambda p: segment_tiled(p, 2, tiles=2)):
+        with pytest.raises(InvalidCloudError, match=r"point 3 has a non-finite coordinate "
+                           r"\(\[0.0, 1.0, nan\]\): a missing point is NaN in all three"):
+            run(tmp_path / "part.ply")

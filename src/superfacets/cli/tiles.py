@@ -124,7 +124,10 @@ def segment_tiles(args) -> int:
         what += weights_said(result.params)  # (as one run's summary says them)
         if result.n_segments > 1:
             what += sizes_said(result.labels, kind)
-        print(f"{Path(args.mesh).name}: {result.labels.size:,} {kind}, {result.n_segments:,} "
+        invalid = int((result.labels < 0).sum()) if kind == "points" else 0
+        said = f" ({invalid:,} invalid)" if invalid else ""  # (as one run's summary says)
+        print(f"{Path(args.mesh).name}: {result.labels.size:,} {kind}{said}, "
+              f"{result.n_segments:,} "
               f"{what}{asked} in {len(result.tiles)} tiles "
               f"({result.layout.describe()}), {elapsed:.2f} s; largest tile "
               f"{max(t['rows'] for t in result.tiles):,} {kind} with its halo, peak "

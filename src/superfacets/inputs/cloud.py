@@ -122,8 +122,8 @@ class PointCloud:
             row = int(np.flatnonzero(~finite)[0])
             raise InvalidCloudError(
                 f"{where}point {row} has a non-finite coordinate ({p[row].tolist()}); "
-                f"{int((~finite).sum())} such rows (only organized clouds and PCD files may "
-                "mark invalid points with NaN)")
+                f"{int((~finite).sum())} such rows (invalid points are marked only in "
+                "organized clouds, PCD, E57 and LAS files, and by NaN rows in PLY files)")
         object.__setattr__(self, "points", readonly(p))
         if self.normals is not None:
             nrm = _coordinates(self.normals, "normals", where)
@@ -397,6 +397,55 @@ def _coordinates(a, what: str, where: str) -> np.ndarray:
 #: they hold; in any case (``X``, as PDAL and laspy name them), each at most once.
 TABLE_COLUMNS = {"points": ("x", "y", "z"), "normals": ("nx", "ny", "nz"),
                  "colors": ("red", "green", "blue")}
+
+
+def missing_points(points, where: str = "", first_row: int = 0) -> bool:
+    """Whether a file's non-finite rows are all missing points: NaN in x, y and z.
+
+    A PLY file marks a point that was not measured (an organized frame's hole, an invalid
+    row of a new scan file written by :func:`superfacets.io.records.write_cloud_with_labels`) by
+    NaN in its three coordinates; such a point is invalid (label -1). A row with a finite
+    coordinate beside a NaN, or an infinity, is damage.
+
+    Parameters
+    ----------
+    points : (N, 3) float ndarray
+        The file's positions, in file order.
+    where : str, optional
+        The file, for the message.
+    first_row : int, default 0
+        The file's row of ``points[0]`` (a chunk of a file read in parts), for the message.
+
+    Returns
+    -------
+    bool
+        True if some rows are missing points (then ``PointCloud(..., allow_invalid=True)``),
+        False if every row is finite.
+
+    Raises
+    ------
+    InvalidCloudError
+        If a non-finite row is not NaN in all three coordinates (its row named).
+
+    Examples
+    --------
+    >>> missing_points(np.array([[0.0, 0, 0], [np.nan, np.nan, np.nan]]))
+    True
+    >>> missing_points(np.zeros((2, 3)))
+    False
+    """
+    points = np.asarray(points, dtype=np.float64)
+    rows = np.flatnonzero(~finite_rows(points))
+    if rows.size == 0:
+        return False
+    damaged = rows[~np.isnan(points[rows]).all(axis=1)]
+    if damaged.size:
+        row = int(damaged[0])
+        raise InvalidCloudError(
+            f"{where + ': ' if where else ''}point {first_row + row} has a non-finite "
+            f"coordinate ({points[row].tolist()}): a missing point is NaN in all three "
+            "coordinates")
+    return True
 
 
 def is_point_table(obj) -> bool:

@@ -22,8 +22,10 @@ Points keep their file order (labels come back in that order). Readers:
   scanner's position; points the scanner marked invalid are invalid points
   (label -1); z is up.
 
-Elsewhere than PCD files and organized arrays a non-finite coordinate is an
-error naming its row.
+In a PLY file a row of NaN in x, y and z is a missing point (invalid, -1: how an
+organized frame's holes and a new scan file's invalid rows are written). Elsewhere than
+these, PCD and E57 files and organized arrays a non-finite coordinate is an error naming
+its row.
 """
 
 from __future__ import annotations
@@ -47,7 +49,7 @@ __all__ = ["read_cloud", "CLOUD_FORMATS", "is_cloud_file", "check_laz", "check_l
 
 from .._runtime import extras
 from ..checks import not_real
-from ..inputs.cloud import InvalidCloudError, PointCloud
+from ..inputs.cloud import InvalidCloudError, PointCloud, missing_points
 from .headers import (  # noqa: E402 (re-exported: headers)
     check_las,
     check_laz,
@@ -295,7 +297,8 @@ def _read_ply(data: bytes, path: Path) -> dict:
         if isinstance(exc, MeshFormatError):
             raise
         raise MeshFormatError(f"{path}: cannot read PLY points: {exc}") from None
-    return {"points": pts, "normals": nrm, "colors": col}
+    return {"points": pts, "normals": nrm, "colors": col,
+            "allow_invalid": missing_points(pts, str(path))}
 
 
 def given_normals(normals, path, points=None) -> np.ndarray | None:

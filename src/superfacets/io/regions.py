@@ -44,6 +44,7 @@ from ..inputs.cloud import (
     InvalidCloudError,
     PointCloud,
     as_cloud,
+    missing_points,
     stretched_along,
     stretched_normals,
 )
@@ -330,8 +331,8 @@ class RegionReader:
             colors = colors or extra[-1 if self.kind == "faces" else 0] is not None
             ok = finite_rows(pos)  # (one compiled pass each, not numpy's over short rows)
             every = bool(ok.all())
-            if not self.invalid_ok and not every:
-                self._non_finite(start + int(np.flatnonzero(~ok)[0]))
+            if not (every or self.invalid_ok):
+                self._non_finite(start, pos, ok)
             if every or ok.any():
                 low, high = column_bounds(pos if every else pos[ok])
                 lo = np.minimum(lo, low)
@@ -351,9 +352,14 @@ class RegionReader:
                       np.concatenate(kept_rows).astype(np.int64),
                       dropped_normals=tuple(bad) if bad[0] else None)
 
-    def _non_finite(self, row: int):
-        """Refuse a row without a finite position, as a whole run refuses it."""
+    def _non_finite(self, start: int, pos: np.ndarray, ok: np.ndarray):
+        """Refuse a chunk's rows without a finite position, as a whole run refuses them,
+        but a PLY's missing points (:func:`~superfacets.inputs.cloud.missing_points`)."""
 
+        if self.layout == "ply-points":
+            missing_points(pos, self.path, start)
+            return
+        row = start + int(np.flatnonzero(~ok)[0])
         if self.kind == "faces":
             raise InvalidMeshError(f"{self.path}: face {row} has a vertex with a non-finite "
                                    "coordinate (NaN or inf)")
