@@ -175,7 +175,7 @@ def test_evaluate_points_and_vertices_with_unlabelled_rows(tmp_path, capsys):
     assert main(["evaluate", str(tmp_path / "scan.npy"), str(sp), str(gt),
                  "--ignore-label", "-1"]) == 0
     out = capsys.readouterr().out
-    assert "3000 points, 2 superpoints, 1 ground truth" in out
+    assert "3,000 points, 2 superpoints, 1 ground truth" in out
     assert "undersegmentation_error 0.0000" in out and "achievable_accuracy     1.0000" in out
     assert "boundary_precision      1.0000" in out  # its one border is the true one
     assert main(["evaluate", str(tmp_path / "scan.npy"), str(sp), str(gt)]) == 0
@@ -226,7 +226,7 @@ def test_evaluate_reads_a_ground_truth_field_of_the_input(tmp_path, capsys):
     assert main(["evaluate", str(tmp_path / "scan.las"), str(sp), "--ground-truth-field",
                  "classification", "--ignore-label", "0"]) == 0
     out = capsys.readouterr().out
-    assert "2000 points, 2 superpoints, 1 ground truth" in out
+    assert "2,000 points, 2 superpoints, 1 ground truth" in out
     assert "undersegmentation_error 0.0000" in out
     vertex = np.empty(2000, dtype=[("x", "f4"), ("y", "f4"), ("z", "f4"), ("label", "i4")])
     vertex["x"], vertex["y"], vertex["z"] = xy[:, 0], xy[:, 1], 0

@@ -12,6 +12,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from ..checks import counted
 from ..elements.kinds import kind_of
 from ..method.params import DEFAULTS
 from .options import elements_of_input, float_arg, int_arg, read_usable, refuse_neighbours
@@ -115,8 +116,8 @@ def cmd_evaluate(args) -> int:
     if args.format != "text":
         _print_table(args, kind, n, len(gts), m)
         return 0
-    segs = kind_of(kind).segment_word
-    print(f"{Path(args.mesh).name}: {n} {kind}, {m['segments']} {segs}, "
+    segs = counted(int(m["segments"]), kind_of(kind).segment_word[:-1])
+    print(f"{Path(args.mesh).name}: {n:,} {kind}, {segs}, "
           f"{len(gts) or 'no'} ground truth{'s' if len(gts) != 1 else ''}")
     if gts:
         print(f"undersegmentation_error {m['undersegmentation_error']:.4f}  (lower is better)")

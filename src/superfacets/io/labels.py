@@ -17,7 +17,7 @@ from ..elements.labels import check_labels
 from ..errors import MeshFormatError, ParameterError
 from .clouds import check_laz
 from .files import Outputs, read_bytes, save, split_suffix, text_lines
-from .ply import read_ply_labels
+from .ply import read_ply_labels, whole_labels
 from .records import LABEL_FIELD
 from .tetmeshes import VOLUME_FORMATS, volume_field
 
@@ -302,14 +302,7 @@ def _npy_labels(data: bytes, path: Path) -> np.ndarray:
         raise MeshFormatError(f"{path}: a .npy of labels holds one integer per element ((N,), "
                               f"(N, 1) or an organized (H, W)); got "
                               f"{getattr(arr, 'shape', type(arr).__name__)}")
-    flat = arr.reshape(-1)
-    if flat.dtype.kind == "f":
-        if not np.isfinite(flat).all() or (flat != np.round(flat)).any():
-            raise MeshFormatError(f"{path}: labels must be whole numbers; the .npy holds "
-                                  f"{flat.dtype} values that are not")
-    elif flat.dtype.kind not in "iub":
-        raise MeshFormatError(f"{path}: labels must be integers; the .npy holds {flat.dtype}")
-    return flat.astype(np.int64)
+    return whole_labels(arr, str(path))
 
 
 def read_field(path, name: str) -> np.ndarray:
@@ -385,10 +378,7 @@ def read_field(path, name: str) -> np.ndarray:
     if values is None:
         raise MeshFormatError(f"{path}: no field {name!r}; " + (
             f"it has: {', '.join(names)}" if names else "it has none"))
-    if not (np.issubdtype(values.dtype, np.integer) or np.issubdtype(values.dtype, np.bool_)):
-        if not (np.isfinite(values).all() and (values == np.round(values)).all()):
-            raise MeshFormatError(f"{path}: field {name!r} is not integer ({values.dtype})")
-    return values.astype(np.int64)
+    return whole_labels(values, f"{path}: field {name!r}")
 
 
 def _pcd_field(path: Path, name: str) -> tuple[list[str], np.ndarray | None]:

@@ -350,6 +350,48 @@ def points_ply_bytes(points: np.ndarray, colors: np.ndarray, labels: np.ndarray)
     return ("\n".join(head) + "\n").encode("ascii") + rec.tobytes()
 
 
+def whole_labels(values, where: str) -> np.ndarray:
+    """Labels read from a file as ``int64``: integers, booleans, or floats of whole values
+    (CloudCompare saves a scalar field as ``float32``; ``numpy.save`` of a float array).
+
+    Parameters
+    ----------
+    values : ndarray
+        The file's values, any shape (flattened, in order).
+    where : str
+        The file and field, for the message.
+
+    Returns
+    -------
+    (m,) int64 ndarray
+
+    Raises
+    ------
+    MeshFormatError
+        If the values are not numbers, or one is not a whole number within ``int64`` (NaN,
+        1.5, 1e19, an unsigned 2**63): the first such named, never cast silently.
+
+    Examples
+    --------
+    >>> whole_labels(np.array([0.0, 3.0, -1.0], dtype=np.float32), "a.ply").tolist()
+    [0, 3, -1]
+    """
+    flat = np.asarray(values).reshape(-1)
+    if flat.dtype.kind not in "iubf":
+        raise MeshFormatError(f"{where}: labels must be integers; the file holds {flat.dtype}")
+    bad = np.zeros(flat.shape, dtype=bool)
+    if flat.dtype.kind == "f":
+        with np.errstate(invalid="ignore"):
+            bad = ~np.isfinite(flat) | (flat != np.round(flat)) | (np.abs(flat) >= 2.0**63)
+    elif flat.dtype == np.uint64:
+        bad = flat > np.iinfo(np.int64).max
+    if bad.any():
+        row = int(np.flatnonzero(bad)[0])
+        raise MeshFormatError(f"{where}: labels must be whole numbers within int64; label "
+                              f"{row} is {flat[row]} ({flat.dtype})")
+    return flat.astype(np.int64)
+
+
 def read_ply_labels(path, data: bytes | None = None) -> np.ndarray:
     """The labels of a PLY: its ``label`` face property (as written by ``--colored-mesh``),
     else its vertex property ``scalar_ClusterID`` (a coloured cloud or vertex
@@ -368,7 +410,8 @@ def read_ply_labels(path, data: bytes | None = None) -> np.ndarray:
     Raises
     ------
     MeshFormatError
-        If the file is not a PLY with faces holding a ``label`` property.
+        If the file is not a PLY with faces holding a ``label`` property, or a label is not
+        a whole number (:func:`whole_labels`).
     """
     from plyfile import PlyData, PlyParseError
 
@@ -376,13 +419,15 @@ def read_ply_labels(path, data: bytes | None = None) -> np.ndarray:
         ply = PlyData.read(io.BytesIO(Path(path).read_bytes() if data is None else data))
         names = {e.name: [p.name for p in e.properties] for e in ply.elements}
         if "label" in names.get("face", ()):
-            return np.asarray(ply["face"]["label"], dtype=np.int64)
+            return whole_labels(ply["face"]["label"], f"{path}: face property 'label'")
         for name in (LABEL_PROPERTY, "label"):  # a coloured cloud's or vertices' labels
             if name in names.get("vertex", ()):
-                return np.asarray(ply["vertex"][name], dtype=np.int64)
+                return whole_labels(ply["vertex"][name], f"{path}: vertex property {name!r}")
         raise MeshFormatError(f"{path}: the PLY has no labels: no face property 'label', no "
                               f"vertex property {LABEL_PROPERTY!r} or 'label'")
     except (PlyParseError, KeyError, ValueError, IndexError, TypeError, EOFError) as exc:
+        if isinstance(exc, MeshFormatError):
+            raise
         raise MeshFormatError(f"{path}: cannot read labels from this PLY: {exc}") from None
 
 

@@ -1,0 +1,71 @@
+"""The faults of the seventh attack (files written by this package and others read back):
+each case fails without its fix."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from plyfile import PlyData, PlyElement
+
+from superfacets import read_labels
+from superfacets.cli import main
+from superfacets.errors import MeshFormatError
+from superfacets.io.labels import read_field
+
+
+def _ply_cloud(path, n, **fields):
+    """A PLY of ``n`` points with the given vertex properties (name: array)."""
+    rng = np.random.default_rng(0)
+    dtype = [("x", "<f4"), ("y", "<f4"), ("z", "<f4")] + [(k, v.dtype.str) for k, v in
+                                                          fields.items()]
+    data = np.zeros(n, dtype=dtype)
+    for i, c in enumerate("xyz"):
+        data[c] = rng.random(n)
+    for k, v in fields.items():
+        data[k] = v
+    PlyData([PlyElement.describe(data, "vertex")]).write(str(path))
+    return path
+
+
+@pytest.mark.parametrize("values, said", [
+    (np.full(6, 2**63, dtype=np.uint64), "label 0 is 9223372036854775808 (uint64)"),
+    (np.r_[np.zeros(5), 1e19], "label 5 is 1e+19 (float64)"),
+    (np.r_[np.zeros(4), np.nan, 0.0], "label 4 is nan (float64)"),
+    (np.r_[0.0, 1.5, np.zeros(4)], "label 1 is 1.5 (float64)"),
+])
+def test_npy_labels_beyond_int64_or_not_whole_are_named_not_wrapped(tmp_path, values, said):
+    # (an unsigned 2**63 wrapped to -2**63: "every label is below 0"; a NaN was "values
+    # that are not")
+    np.save(tmp_path / "l.npy", values)
+    with pytest.raises(MeshFormatError, match=r"whole numbers within int64; " +
+                       said.replace("(", r"\(").replace(")", r"\)").replace("+", r"\+")):
+        read_labels(tmp_path / "l.npy")
+    np.save(tmp_path / "ok.npy", np.array([0.0, 3.0, -1.0]))
+    assert read_labels(tmp_path / "ok.npy").tolist() == [0, 3, -1]
+
+
+def test_a_ply_scalar_field_saved_as_floats_is_read_and_a_nan_named(tmp_path):
+    # (CloudCompare saves a scalar field as float32: a NaN, its "no value", was cast to
+    # -2**63 with a numpy warning, 2.7 truncated to 2)
+    labels = np.arange(40) % 3
+    good = _ply_cloud(tmp_path / "cc.ply", 40, scalar_ClusterID=labels.astype(np.float32))
+    assert np.array_equal(read_labels(good), labels)
+    bad = labels.astype(np.float32)
+    bad[7] = np.nan
+    _ply_cloud(tmp_path / "nan.ply", 40, scalar_ClusterID=bad)
+    with pytest.raises(MeshFormatError, match=r"nan.ply: vertex property 'scalar_ClusterID': "
+                       r"labels must be whole numbers within int64; label 7 is nan"):
+        read_labels(tmp_path / "nan.ply")
+    bad[7] = 2.7
+    _ply_cloud(tmp_path / "part.ply", 40, classification=bad)
+    with pytest.raises(MeshFormatError, match=r"field 'classification': .* label 7 is 2.7"):
+        read_field(tmp_path / "part.ply", "classification")
+
+
+def test_evaluate_says_one_segment_in_the_singular(tmp_path, capsys):
+    # ("500 points, 1 superpoints"; counts without thousands separators)
+    pts = np.random.default_rng(1).random((1500, 3))
+    np.savetxt(tmp_path / "c.xyz", pts)
+    np.savetxt(tmp_path / "one.txt", np.zeros(1500, dtype=int), fmt="%d")
+    assert main(["evaluate", str(tmp_path / "c.xyz"), str(tmp_path / "one.txt")]) == 0
+    assert "c.xyz: 1,500 points, 1 superpoint, no ground truths" in capsys.readouterr().out
