@@ -564,10 +564,10 @@ def test_a_new_scan_is_written_from_any_cloud_and_refuses_a_mesh(tmp_path):
 
 
 @pytest.mark.parametrize("extent, corner", [(1e-6, -4e-7), (1.0, 0.0), (300.0, 5e5),
-                                            (1e9, -4e8)])
+                                            (1e9, -4e8), (1e-10, 3e-10), (1e-30, 0.0)])
 def test_a_new_las_keeps_the_points_to_a_millionth_of_their_extent(tmp_path, extent, corner):
     # (an offset rounded to a whole unit took a millimetre cloud near the origin to a
-    # precision of half its size)
+    # precision of half its size; a scale of at least 1e-12 a cloud of 1e-10 to 100 steps)
     from superfacets.io.records import write_cloud_with_labels
 
     xyz = np.random.default_rng(2).random((200, 3)) * extent + corner

@@ -306,16 +306,17 @@ def _checked_labels(labels, n: int | None = None) -> np.ndarray:
 def _las_scale(extent: float) -> float:
     """The LAS scale of a new file of a cloud of this ``extent`` (its largest side, in its
     units): the power of ten that spans it in at most 2**30 steps (the stored integers
-    keep half of their int32 range free), at least ``1e-12``.
+    keep half of their int32 range free), however small the extent (a cloud of a
+    micrometre keeps its shape); ``1e-12`` where there is no extent.
 
     Examples
     --------
-    >>> _las_scale(100.0), _las_scale(0.0)
-    (1e-07, 1e-12)
+    >>> _las_scale(100.0), _las_scale(1e-6), _las_scale(0.0)
+    (1e-07, 1e-15, 1e-12)
     """
     if not extent > 0 or not np.isfinite(extent):
         return 1e-12
-    return max(1e-12, float(10.0 ** np.ceil(np.log10(extent / 2**30))))
+    return float(10.0 ** max(-300.0, np.ceil(np.log10(extent / 2**30))))
 
 
 def _new_las(points: np.ndarray, labels: np.ndarray, name: str, colors, compress: bool
