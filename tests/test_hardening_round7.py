@@ -69,3 +69,17 @@ def test_evaluate_says_one_segment_in_the_singular(tmp_path, capsys):
     np.savetxt(tmp_path / "one.txt", np.zeros(1500, dtype=int), fmt="%d")
     assert main(["evaluate", str(tmp_path / "c.xyz"), str(tmp_path / "one.txt")]) == 0
     assert "c.xyz: 1,500 points, 1 superpoint, no ground truths" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("sep, header", [("\t", ""), (" ", ""), ("\t", "X\tY\tZ\n")])
+def test_decimal_commas_in_tab_or_space_separated_columns(tmp_path, sep, header):
+    # (a spreadsheet's tab-separated text in a European locale, "1,5\t2,25\t0,5", was read
+    # as six columns, x = 1 and y = 5: every point wrong, silently)
+    from superfacets import read_cloud
+
+    pts = np.round(np.random.default_rng(4).random((200, 3)) * 10, 4)
+    rows = "".join(sep.join(f"{v:.4f}".replace(".", ",") for v in r) + "\n" for r in pts)
+    (tmp_path / "c.txt").write_text(header + rows)
+    assert np.allclose(read_cloud(tmp_path / "c.txt").points, pts)
+    (tmp_path / "ints.csv").write_text("1, 2, 3\n4, 5, 6\n7, 8, 1\n")  # (still a CSV)
+    assert read_cloud(tmp_path / "ints.csv").points.tolist()[1] == [4.0, 5.0, 6.0]

@@ -3,8 +3,8 @@
 The header (comment lines before the first point, ``#`` or ``//``; the first of them
 that holds words names the columns; else a first line of names alone, ``x``, ``y`` and
 ``z`` among them, as a CSV's; a surveyor's ``Easting Northing Elevation`` read as those)
-is read line by line; fields may be quoted, and a spreadsheet's semicolon-separated
-decimal commas are read as decimal points; the points' lines are cut
+is read line by line; fields may be quoted, and a spreadsheet's decimal commas
+(semicolon-, tab- or space-separated) are read as decimal points; the points' lines are cut
 into pieces parsed by :func:`numpy.loadtxt` (2M lines of three numbers: 0.3 s), a piece
 numpy cannot read whole being read line by line, which names the faulty line. The lines
 of the whole file are never held at once as Python strings.
@@ -127,15 +127,26 @@ def _header(text: str) -> tuple[list[str] | None, int]:
 _COMMA_NUMBER = re.compile(r'\s*"?[+-]?(\d+(,\d*)?|,\d+)([eE][+-]?\d+)?"?\s*')
 
 
+#: A field of whitespace-separated columns with a decimal comma (``-12,5``, ``1,2e-3``,
+#: ``3``), digits on both sides of the comma (``1,`` ends a comma-separated field).
+_SPACED_COMMA_NUMBER = re.compile(r'"?[+-]?\d+(,\d+)?([eE][+-]?\d+)?"?')
+
+
 def _decimal_comma(text: str, start: int) -> bool:
     """Whether the points' lines (from ``start``) write their numbers with a decimal comma,
-    separated by semicolons (``1,5;2,25;0,5``: a CSV saved in a European locale), as the
-    first point line tells: semicolons, a comma, and every field such a number."""
+    as the first point line tells: fields separated by semicolons (``1,5;2,25;0,5``: a CSV
+    saved in a European locale) or by tabs or spaces (``1,5\t2,25\t0,5``: a
+    spreadsheet's tab-separated text), at least one with a comma, every one such a
+    number and none with a point."""
     end = text.find("\n", start)
     line = text[start:len(text) if end < 0 else end].strip()
-    if ";" not in line or "," not in line:
+    if "," not in line:
         return False
-    return all(_COMMA_NUMBER.fullmatch(f) for f in line.rstrip(";").split(";"))
+    if ";" in line:
+        return all(_COMMA_NUMBER.fullmatch(f) for f in line.rstrip(";").split(";"))
+    fields = line.split()
+    return "." not in line and len(fields) >= 3 and all(
+        _SPACED_COMMA_NUMBER.fullmatch(f) for f in fields)
 
 
 def _coordinates(words: list[str]) -> list[str]:
