@@ -83,3 +83,33 @@ def test_decimal_commas_in_tab_or_space_separated_columns(tmp_path, sep, header)
     assert np.allclose(read_cloud(tmp_path / "c.txt").points, pts)
     (tmp_path / "ints.csv").write_text("1, 2, 3\n4, 5, 6\n7, 8, 1\n")  # (still a CSV)
     assert read_cloud(tmp_path / "ints.csv").points.tolist()[1] == [4.0, 5.0, 6.0]
+
+
+def test_a_copc_tile_gets_its_labels_in_a_plain_laz_copy(tmp_path, capsys):
+    # (a COPC file, as 3DEP and LiDAR HD tiles come: "NotImplementedError: Writing COPC is
+    # not supported", a traceback, nothing written)
+    laspy = pytest.importorskip("laspy")
+    rng = np.random.default_rng(5)
+    las = laspy.create(point_format=6, file_version="1.4")
+    las.header.scales = [0.001] * 3
+    xy = rng.random((1500, 2)) * 30
+    las.x, las.y = xy[:, 0], xy[:, 1]
+    las.z = np.where(xy[:, 0] > 15, 1.0, 0.0) + rng.normal(0, 0.01, 1500)
+    # (the index of a COPC file: its info VLR first, the hierarchy as an EVLR)
+    las.vlrs.insert(0, laspy.VLR(user_id="copc", record_id=1, record_data=bytes(160)))
+    las.header.evlrs = laspy.vlrs.vlrlist.VLRList([
+        laspy.VLR(user_id="copc", record_id=1000, record_data=bytes(32)),
+        laspy.VLR(user_id="someone", record_id=7, record_data=b"kept")])
+    src = tmp_path / "tile.copc.laz"
+    las.write(str(src), laz_backend=laspy.LazBackend.Lazrs)
+    assert isinstance(laspy.read(str(src)).vlrs[0], laspy.copc.CopcInfoVlr)
+    for extra in ([], ["--tiles", "2"]):
+        out = tmp_path / f"out{len(extra)}.laz"
+        assert main(["segment", str(src), "-k", "12", "-o", str(out), *extra]) == 0
+        assert "its COPC index left out" in capsys.readouterr().out
+        back = laspy.read(str(out))
+        assert not [v for v in back.vlrs if v.user_id == "copc"]
+        assert [(v.user_id, v.record_data) for v in back.header.evlrs] == [("someone", b"kept")]
+        assert np.array_equal(back.X, laspy.read(str(src)).X)
+        assert np.array_equal(read_labels(out), read_labels(tmp_path / "out0.laz")) or extra
+        assert len(np.unique(back.ClusterID)) == 12

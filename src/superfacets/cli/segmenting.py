@@ -519,7 +519,7 @@ def _writing_bar(args, data, outputs):
 
 def _labels_what(args, kind: str) -> str:
     """What ``-o`` holds, said in the summary: labels, or the input's records with them."""
-    from ..io.records import LABEL_FIELD, ply_field_name, scan_output
+    from ..io.records import LABEL_FIELD, copc_said, ply_field_name, scan_output
 
     into = scan_output(args.output, args.mesh)
     if into is None:
@@ -529,7 +529,7 @@ def _labels_what(args, kind: str) -> str:
              f"{ply_field_name(LABEL_FIELD)}, CloudCompare's scalar field {LABEL_FIELD}")
     if into == "new":
         return f"a new file of the input's {rows}, labels as {field}"
-    return f"the input's {rows}, every field kept, labels as {field}"
+    return f"the input's {rows}, every field kept, labels as {field}{copc_said(args.mesh)}"
 
 
 def _say_what_was_written(seg_out, ply_out, png_out, html_out, report, up,

@@ -137,12 +137,12 @@ def segment_tiles(args) -> int:
                   f"the {kind}, about that many times one run's work: fewer tiles, or more "
                   f"{kind} per {kind_of(kind).segment_word[:-1]}, cost less", file=sys.stderr)
         if seg_out is not None and str(seg_out) != "-":
-            from ..io.records import LABEL_FIELD, scan_output
+            from ..io.records import LABEL_FIELD, copc_said, scan_output
 
             into = scan_output(seg_out, args.mesh)
             what = (f"labels, one per {kind[:-1]}" if into is None else
                     f"the input's {kind}, every field kept, labels as {LABEL_FIELD}"
-                    if into == "records" else
+                    f"{copc_said(args.mesh)}" if into == "records" else
                     f"a new file of the input's {kind}, labels as {LABEL_FIELD}")
             print(f"wrote {seg_out} ({what})", file=report)
         elif seg_out is None:

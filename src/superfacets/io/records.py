@@ -36,10 +36,10 @@ import numpy as np
 from .._runtime import extras
 from ..errors import MeshFormatError, ParameterError
 from .files import Outputs, read_bytes, save, split_suffix
-from .headers import check_las, pcd_problem
+from .headers import check_las, first_line, pcd_problem
 
 __all__ = ["LABEL_FIELD", "RECORD_FORMATS", "write_labels_into", "ply_field_name",
-           "records_kind", "write_cloud_with_labels", "converts", "CONVERTED_FORMATS",
+           "records_kind", "write_cloud_with_labels", "converts", "CONVERTED_FORMATS", "copc_said",
            "scan_output", "write_scan_labels"]
 
 #: The dimension (LAS/LAZ) or scalar field (PLY, as ``scalar_ClusterID``) the labels go in.
@@ -499,10 +499,63 @@ def _las_with(source: Path, labels: np.ndarray, name: str, compress: bool) -> by
         las.add_extra_dim(laspy.ExtraBytesParams(
             name=name, type=np.int32, description="superfacets label"))
     las[name] = labels
+    _without_copc_index(las)
     buf = io.BytesIO()
     kw = {"laz_backend": laspy.LazBackend.Lazrs} if compress else {}
-    las.write(buf, do_compress=compress, **kw)
+    try:
+        las.write(buf, do_compress=compress, **kw)
+    except Exception as exc:  # noqa: BLE001 - laspy raises many types
+        raise MeshFormatError(f"{source}: cannot write a copy of this LAS/LAZ with the "
+                              f"labels: {first_line(exc)}") from None
     return buf.getvalue()
+
+
+def _without_copc_index(las) -> None:
+    """Leave out a COPC file's index (its ``copc`` info VLR and hierarchy EVLR): it points
+    into the source's compressed chunks, which a copy does not keep, so the copy is a plain
+    LAZ of the same points in the same order (``pdal translate`` with ``writers.copc``
+    indexes it again)."""
+    from laspy.vlrs.vlrlist import VLRList
+
+    las.vlrs = VLRList(v for v in las.vlrs if v.user_id != "copc")
+    if las.header.evlrs is not None:
+        las.header.evlrs = VLRList(v for v in las.header.evlrs if v.user_id != "copc")
+
+
+def copc_said(source) -> str:
+    """What the summary adds where ``source`` is a COPC file (cloud-optimized LAZ, as
+    3DEP's and LiDAR HD's tiles come): its copy with the labels is a plain LAZ.
+
+    Parameters
+    ----------
+    source : str or os.PathLike
+        The input file.
+
+    Returns
+    -------
+    str
+        ``", its COPC index left out"`` for a COPC file, else ``""`` (also for a file
+        that is not a LAS/LAZ or cannot be read).
+
+    Raises
+    ------
+    Never: a file that cannot be read says nothing (reading it is refused elsewhere).
+
+    Examples
+    --------
+    >>> copc_said("scan.xyz")
+    ''
+    """
+    if split_suffix(Path(source))[0] not in ("las", "laz"):
+        return ""
+    try:
+        import laspy
+
+        with laspy.open(source) as f:
+            copc = any(v.user_id == "copc" for v in f.header.vlrs)
+    except Exception:  # noqa: BLE001 - a file that does not read says nothing more
+        return ""
+    return ", its COPC index left out" if copc else ""
 
 
 def _ply_with(source: Path, labels: np.ndarray, prop: str) -> bytes:
