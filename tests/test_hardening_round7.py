@@ -3,6 +3,8 @@ each case fails without its fix."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from plyfile import PlyData, PlyElement
@@ -113,3 +115,51 @@ def test_a_copc_tile_gets_its_labels_in_a_plain_laz_copy(tmp_path, capsys):
         assert np.array_equal(back.X, laspy.read(str(src)).X)
         assert np.array_equal(read_labels(out), read_labels(tmp_path / "out0.laz")) or extra
         assert len(np.unique(back.ClusterID)) == 12
+
+
+def _two_pieces(folder):
+    """A cloud of two patches far apart: one superpoint cannot span them (a warning)."""
+    rng = np.random.default_rng(6)
+    a = np.c_[rng.random((300, 2)), np.zeros(300)]
+    np.savetxt(folder / "two.xyz", np.r_[a, a + [50.0, 0, 0]])
+    np.savetxt(folder / "one.xyz", a)
+
+
+def test_a_batch_names_each_warning_s_input_and_keeps_it_in_the_manifest(tmp_path, capsys):
+    # (a worker's warning came out as Python prints one, its source line and no input's
+    # name: in a batch of many files, no telling whose)
+    from superfacets.scale.runner.manifest import read_manifest
+
+    folder = tmp_path / "in"
+    folder.mkdir()
+    _two_pieces(folder)
+    assert main(["batch", str(folder), "-o", str(tmp_path / "out"), "-k", "1", "-j", "1"]) == 0
+    err = capsys.readouterr().err
+    assert f"warning: {folder / 'two.xyz'}: 2 superpoints for n_segments=1" in err
+    assert "RuntimeWarning" not in err and "one.xyz" not in err
+    rows = {Path(r["input"]).name: r for r in read_manifest(tmp_path / "out")}
+    assert rows["two.xyz"]["warnings"].startswith("2 superpoints for n_segments=1")
+    assert rows["one.xyz"]["warnings"] is None
+
+
+def test_an_experiment_counts_its_warnings_by_input(tmp_path, capsys):
+    folder = tmp_path / "in"
+    folder.mkdir()
+    _two_pieces(folder)
+    assert main(["experiment", "--inputs", str(folder), "-m", "superfacets", "-k", "1",
+                 "--alpha", "200", "-o", str(tmp_path / "rows.csv"), "-j", "1"]) == 0
+    err = capsys.readouterr().err
+    assert "warning: 1 row: two: 2 superpoints for n_segments=1" in err
+    assert "RuntimeWarning" not in err and "warnings" not in \
+        (tmp_path / "rows.csv").read_text().splitlines()[0]
+
+
+def test_a_folder_s_nuscenes_sweeps_are_inputs_its_other_bin_files_not(tmp_path):
+    # (a folder of nuScenes sweeps gave "a .bin in a folder is not read as a cloud")
+    from superfacets.scale.runner.collect import collect_inputs
+
+    (tmp_path / "n015__LIDAR_TOP__1.pcd.bin").write_bytes(bytes(20))
+    (tmp_path / "weights.bin").write_bytes(bytes(20))
+    (tmp_path / "n015__LIDAR_TOP__1_lidarseg.bin").write_bytes(bytes(1))
+    found = [p.name for p in collect_inputs([str(tmp_path)])]
+    assert found == ["n015__LIDAR_TOP__1.pcd.bin"]

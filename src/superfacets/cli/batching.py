@@ -106,6 +106,11 @@ def cmd_batch(args) -> int:
         if args.picture or args.html:
             print("pictures and pages drawn with up axis " + (
                 args.up or "of each input's file or format (else y; --up for another)"))
+        for path, said in s.warned[:10]:
+            print(f"warning: {path}: {said}", file=sys.stderr)
+        if len(s.warned) > 10:
+            print(f"... and {len(s.warned) - 10} more warnings (the manifest's 'warnings')",
+                  file=sys.stderr)
         for path, error in s.failures[:10]:
             print(f"failed: {path}: {error}", file=sys.stderr)
         if len(s.failures) > 10:

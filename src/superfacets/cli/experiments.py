@@ -243,6 +243,10 @@ def cmd_experiment(args) -> int:
         print(f"note: {s.note}", file=sys.stderr)
     print(f"{s.written} rows written ({s.ok} ok, {s.failed} failed, {s.skipped} skipped), "
           f"{s.done_before} already there, in {s.seconds:.1f} s -> {out}")
+    for said, n in list(s.warned.items())[:FAILURES_SAID]:
+        print(f"warning: {n} row{'s' if n != 1 else ''}: {said}", file=sys.stderr)
+    if len(s.warned) > FAILURES_SAID:
+        print(f"... and {len(s.warned) - FAILURES_SAID} more warnings", file=sys.stderr)
     for error, n in list(s.failures.items())[:FAILURES_SAID]:  # (every row's in the file)
         print(f"failed: {n} row{'s' if n != 1 else ''}: {error}", file=sys.stderr)
     if len(s.failures) > FAILURES_SAID:

@@ -25,6 +25,7 @@ from __future__ import annotations
 import contextlib
 import json
 import time
+import warnings
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
@@ -115,13 +116,16 @@ def segment_file(task: dict) -> dict:
     row.update(input=task["input"], output=label_rel)
     probe = PeakMemory()
     t0 = time.perf_counter()
-    try:
-        row.update(_segment_and_write(task, label_rel))
-        row["status"] = "ok"
-    except Exception as exc:  # noqa: BLE001 - a failed row; the batch goes on
-        row.update(status="failed", error=error_text(exc))
-    except MemoryError as exc:  # pragma: no cover - depends on the machine
-        row.update(status="failed", error=error_text(exc))
+    with warnings.catch_warnings(record=True) as said:  # (the row keeps them, named by its
+        warnings.simplefilter("always")                  # input: a worker's would not be)
+        try:
+            row.update(_segment_and_write(task, label_rel))
+            row["status"] = "ok"
+        except Exception as exc:  # noqa: BLE001 - a failed row; the batch goes on
+            row.update(status="failed", error=error_text(exc))
+        except MemoryError as exc:  # pragma: no cover - depends on the machine
+            row.update(status="failed", error=error_text(exc))
+    row["warnings"] = "\n".join(dict.fromkeys(str(w.message).strip() for w in said)) or None
     row["seconds"] = round(time.perf_counter() - t0, 4)
     peak = probe.peak_mib(above_start=False)
     row["peak_mib"] = None if peak is None else round(peak, 1)
@@ -215,6 +219,8 @@ class BatchSummary:
         Where the tasks ran.
     failures : list of (str, str)
         (input, error) of the inputs that failed in this call.
+    warned : list of (str, str)
+        (input, warning) of this call's inputs whose run warned (each warning once).
     skipped : list of (str, str)
         (folder, reason) of the sub-folders that could not be read.
     passed : list of (str, str)
@@ -231,6 +237,7 @@ class BatchSummary:
     interrupted: bool = False
     engine: str = ""
     failures: list = field(default_factory=list)
+    warned: list = field(default_factory=list)
     skipped: list = field(default_factory=list)
     passed: list = field(default_factory=list)
 
@@ -446,6 +453,8 @@ def _run(files, outdir, seg_opts, outputs, per_object, level, engine, retry_fail
                 journal.flush()
                 rows[row["input"]] = row
                 finished.add(row["input"])
+                summary.warned += [(row["input"], w) for w in
+                                   (row.get("warnings") or "").splitlines()]
                 if row["status"] == "ok":
                     summary.ok += 1
                 else:

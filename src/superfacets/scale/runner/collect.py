@@ -38,6 +38,8 @@ _NAMED_ONLY = ("txt", "csv", "bin")
 
 def _is_input(path: Path, explicit: bool) -> bool:
     fmt, _ = split_suffix(path)
+    if fmt == "bin" and path.name.lower().endswith(".pcd.bin"):
+        return True  # (a nuScenes sweep says what it is: a folder's are read)
     return fmt in _readable_suffixes(explicit)
 
 

@@ -143,10 +143,12 @@ def _run_task(task: dict) -> list[dict]:
         try:
             probe = PeakMemory()
             t0 = time.perf_counter()
-            with warnings.catch_warnings():  # (a baseline's count far from k: its row's
-                warnings.filterwarnings(  # `segments` records it)
-                    "ignore", ".*" + COUNT_MISSED, RuntimeWarning)
+            with warnings.catch_warnings(record=True) as said:  # (told by the summary,
+                warnings.simplefilter("always")  # named by input, not from a worker)
+                warnings.filterwarnings(  # (a baseline's count far from k: its row's
+                    "ignore", ".*" + COUNT_MISSED, RuntimeWarning)  # `segments` says it)
                 out = run(data, k, cache=cache, seed=task["seed"], **params, **extra)
+            row["warnings"] = list(dict.fromkeys(str(w.message).strip() for w in said))
             seconds = time.perf_counter() - t0
             peak = probe.peak_mib()
             row["seconds"] = round(seconds + float(out.reused_seconds), 4)
@@ -199,6 +201,9 @@ class ExperimentSummary:
         Where the engine chose for the user (no Dask installed: in this process).
     failures : dict
         The failed rows' errors, each with how many rows it ended, in the order first met.
+    warned : dict
+        The runs' warnings (each with its input's name), each with how many rows it came
+        from, in the order first met; not in the results file.
     """
 
     path: Path
@@ -210,6 +215,7 @@ class ExperimentSummary:
     interrupted: bool = False
     note: str = ""
     failures: dict = field(default_factory=dict)
+    warned: dict = field(default_factory=dict)
 
     @property
     def written(self) -> int:
@@ -357,6 +363,9 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
                 setattr(summary, r["status"], getattr(summary, r["status"]) + 1)
                 if r["status"] == "failed":
                     summary.failures[r["error"]] = summary.failures.get(r["error"], 0) + 1
+                for w in r.get("warnings") or ():
+                    w = f"{r['mesh']}: {w}"
+                    summary.warned[w] = summary.warned.get(w, 0) + 1
             f.flush()
             if bar is not None:
                 bar.update(len(rows))

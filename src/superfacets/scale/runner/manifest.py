@@ -30,9 +30,9 @@ __all__ = ["MANIFEST_COLUMNS", "JOURNAL", "OPTIONS", "read_manifest", "write_man
 #: points) and how many, the superfacets made, the passes run and whether they converged,
 #: the seconds of the task (read, segment, write), the worker process's peak resident memory
 #: during the task (MiB, Linux; what ``--memory-limit`` is compared with), the error's one
-#: line, and when it finished (UTC).
+#: line, and when it finished (UTC); the task's warnings, one per line (none: empty).
 MANIFEST_COLUMNS = ("input", "output", "status", "elements", "n_elements", "segments", "passes",
-                    "converged", "seconds", "peak_mib", "error", "finished")
+                    "converged", "seconds", "peak_mib", "error", "finished", "warnings")
 
 _TYPES = {"n_elements": "int64", "segments": "int64", "passes": "int64", "converged": "bool",
           "seconds": "float64", "peak_mib": "float64"}
