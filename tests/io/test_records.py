@@ -576,34 +576,28 @@ def test_a_new_las_keeps_the_points_to_a_millionth_of_their_extent(tmp_path, ext
     assert np.abs(np.c_[las.x, las.y, las.z] - xyz).max() <= 1e-6 * extent
 
 
-def test_withheld_points_are_invalid_and_a_new_scan_segments_again(tmp_path):
+@pytest.mark.parametrize("suffix", ["laz", "ply"])
+def test_a_new_scan_s_invalid_points_are_invalid_when_read_again(tmp_path, capsys, suffix):
     # (a LAS's withheld points, "not to be processed" by the ASPRS specification, were
     # segmented; a frame's holes written as withheld came back as one superpoint of
-    # coincident points at the file's offset)
-    from superfacets import segment, segment_tiled
-
-    frame, _, _, _ = _sweep_with_holes(tmp_path)
-    holes = ~np.isfinite(np.load(frame).reshape(-1, 3)).all(axis=1)
-    out = tmp_path / "frame.laz"
-    assert main(["segment", str(frame), "-k", "8", "-o", str(out), "-q"]) == 0
-    for labels in (segment(out, 8).labels, segment_tiled(out, 8, tiles=2).labels):
-        assert np.array_equal(labels < 0, holes) and len(np.unique(labels[~holes])) == 8
-
-
-def test_a_new_ply_s_missing_points_are_invalid_when_it_is_read_again(tmp_path, capsys):
-    # (a frame's holes written NaN into a new PLY were refused on reading it again: "only
+    # coincident points at the file's offset; written NaN into a new PLY, refused: "only
     # organized clouds and PCD files may mark invalid points with NaN")
     from superfacets import segment, segment_tiled
-    from superfacets.inputs.cloud import InvalidCloudError
 
     frame, _, _, _ = _sweep_with_holes(tmp_path)
     holes = ~np.isfinite(np.load(frame).reshape(-1, 3)).all(axis=1)
-    out = tmp_path / "frame.ply"
+    out = tmp_path / f"frame.{suffix}"
     assert main(["segment", str(frame), "-k", "8", "-o", str(out), "-q"]) == 0
     for labels in (segment(out, 8).labels, segment_tiled(out, 8, tiles=2).labels):
         assert np.array_equal(labels < 0, holes) and len(np.unique(labels[~holes])) == 8
     assert main(["segment", str(out), "-k", "8", "--tiles", "2"]) == 0
     assert f"1,200 points ({holes.sum():,} invalid)" in capsys.readouterr().out
+
+
+def test_a_ply_row_nan_in_one_coordinate_is_damage_named_by_its_row(tmp_path):
+    from superfacets import segment, segment_tiled
+    from superfacets.inputs.cloud import InvalidCloudError
+
     # a row NaN in one coordinate only is damage, named by its row, whole or in tiles
     rows = "0 0 0\n1 0 0\nnan nan nan\n0 1 nan\n1 1 1\n0 2 0\n"
     (tmp_path / "part.ply").write_text("ply\nformat ascii 1.0\nelement vertex 6\nproperty "
