@@ -66,7 +66,9 @@ Methods (the registry's, so ``superfacets experiment`` runs the same code):
 Prints a Markdown table per scan, then one per kind of scan (airborne, street, indoor):
 in how many scans the default is within the targets of the best other method at each k
 (UE at most, boundary recall at least minus 0.02, oracle mIoU at least), and the means;
-``--csv`` also writes every row.
+``--csv`` also writes every row. ``--rows A.csv ...`` adds the rows of earlier runs to that
+table (a baseline run in another environment: ``spt_partition`` needs a NumPy before 2 for
+``pycut-pursuit``); with ``--rows`` and no ``--methods`` nothing is run again.
 """
 
 from __future__ import annotations
@@ -298,14 +300,28 @@ def _by_kind(rows: list, kinds: dict) -> None:
                   f"{m[4]:.3f} / {m[5]:.3f} |")
 
 
+def _read_rows(path: str) -> list[dict]:
+    """The rows of a ``--csv`` file, their counts and metrics as numbers."""
+    with open(path, newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    for r in rows:
+        r["k"] = int(r["k"])
+        for c in ("undersegmentation_error", "boundary_recall", "oracle_miou"):
+            r[c] = float(r[c])
+    return rows
+
+
 def main() -> None:
     from superfacets.evaluation.datasets.scans import SCANS
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scans", nargs="+", default=list(SCANS), choices=list(SCANS))
     ap.add_argument("-k", type=int, nargs="+", default=[300, 1000, 3000])
-    ap.add_argument("--methods", nargs="+", default=list(COMPARED), choices=METHODS,
-                    help="default: all but cut_pursuit (see COMPARED)")
+    ap.add_argument("--methods", nargs="+", default=None, choices=METHODS,
+                    help="default: all but cut_pursuit (see COMPARED); none with --rows")
+    ap.add_argument("--rows", nargs="+", default=[], metavar="CSV",
+                    help="also the rows of these CSV files (--csv of earlier runs) in the "
+                         "table per kind")
     ap.add_argument("--beta", type=_beta, nargs="+", default=[None, 0.0],
                     help="colour weights of superfacets: auto (the default's, read from the "
                          "data) or a number (other than auto only on scans with RGB)")
@@ -346,9 +362,11 @@ def main() -> None:
                     help="also the first N made-up labelled rooms (S3DIS-like, "
                          "superfacets.evaluation.datasets.rooms; default: 3)")
     a = ap.parse_args()
+    if a.methods is None:
+        a.methods = [] if a.rows else list(COMPARED)
 
-    rows = []
-    for name, scan in _scans(a):
+    rows = [r for path in a.rows for r in _read_rows(path)]
+    for name, scan in (_scans(a) if a.methods else ()):
         n = int(scan.cloud.n_total)
         coloured = scan.cloud.colors is not None
         print(f"\n### {name}: {n:,} points, {scan.source.kind}"
