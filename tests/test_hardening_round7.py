@@ -163,3 +163,18 @@ def test_a_folder_s_nuscenes_sweeps_are_inputs_its_other_bin_files_not(tmp_path)
     (tmp_path / "n015__LIDAR_TOP__1_lidarseg.bin").write_bytes(bytes(1))
     found = [p.name for p in collect_inputs([str(tmp_path)])]
     assert found == ["n015__LIDAR_TOP__1.pcd.bin"]
+
+
+def test_a_copc_name_is_not_given_to_a_plain_laz(tmp_path, capsys):
+    # (`-o out.copc.laz` wrote a plain LAZ under a name PDAL reads with readers.copc; a
+    # batch named a COPC tile's copy tile.copc.laz, a nuScenes sweep's labels sweep.pcd.seg)
+    from superfacets.scale.runner.collect import output_names
+
+    np.savetxt(tmp_path / "c.xyz", np.random.default_rng(7).random((300, 3)))
+    out = tmp_path / "c.copc.laz"
+    assert main(["segment", str(tmp_path / "c.xyz"), "-k", "5", "-o", str(out)]) == 2
+    assert "not a COPC file (PDAL reads a .copc.laz as one): name it NAME.laz" in \
+        capsys.readouterr().err and not out.exists()
+    names = output_names([Path("/d/tile.copc.laz"), Path("/d/n015.pcd.bin"),
+                          Path("/d/x.copc"), Path("/d/.pcd.bin")])
+    assert sorted(names.values()) == [".pcd", "n015", "tile", "x"]

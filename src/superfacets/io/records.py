@@ -68,8 +68,9 @@ def records_kind(output, source) -> str | None:
     ------
     ParameterError
         If ``output`` is a LAS/LAZ, PLY or PCD the input, itself one of those, cannot be
-        written back as (a ``.ply`` of a ``.laz``), or a compressed PCD: the message says
-        what can. Other inputs give None (``-o`` then refuses the name as no label file).
+        written back as (a ``.ply`` of a ``.laz``), a compressed PCD, or a ``.copc.laz``
+        (the copy is a plain LAZ): the message says what can. Other inputs give None
+        (``-o`` then refuses the name as no label file).
 
     Examples
     --------
@@ -78,6 +79,10 @@ def records_kind(output, source) -> str | None:
     """
     out_fmt, out_comp = split_suffix(Path(output))
     in_fmt, _ = split_suffix(Path(source))
+    if out_fmt in ("las", "laz") and Path(output).name.lower().endswith(f".copc.{out_fmt}"):
+        raise ParameterError(f"{output}: the labels go into a plain LAZ, not a COPC file (PDAL "
+                             "reads a .copc.laz as one): name it NAME.laz; `pdal translate "
+                             "NAME.laz NAME.copc.laz` indexes it")
     if out_fmt not in ("las", "laz", "ply", "pcd") or in_fmt not in RECORD_FORMATS:
         return None  # (a label file, or a name the caller refuses as no label file)
     if out_fmt in RECORD_FORMATS.get(in_fmt, ()) and not (out_fmt != "ply" and out_comp):

@@ -228,7 +228,8 @@ def broken_link_reason(path) -> str | None:
 
 
 def _stem(path: Path) -> str:
-    """The file name without its format and compression suffixes (``bunny.tri.xz`` -> bunny)."""
+    """The file name without its format and compression suffixes (``bunny.tri.xz`` -> bunny,
+    ``tile.copc.laz`` -> tile, ``sweep.pcd.bin`` -> sweep)."""
 
     name = path.name
     low = name.lower()
@@ -237,7 +238,12 @@ def _stem(path: Path) -> str:
             name, low = name[: -len(comp)], low[: -len(comp)]
             break
     base, dot, _ = name.rpartition(".")
-    return base if dot and base else name
+    if not (dot and base):
+        return name
+    for inner in (".copc", ".pcd"):  # (a COPC tile's .copc.laz, a nuScenes sweep's .pcd.bin:
+        if base.lower().endswith(inner) and len(base) > len(inner):  # one suffix each)
+            return base[: -len(inner)]
+    return base
 
 
 def output_names(inputs: Sequence[Path], reserved=()) -> dict[Path, str]:
