@@ -65,12 +65,19 @@ def test_a_ply_scalar_field_saved_as_floats_is_read_and_a_nan_named(tmp_path):
 
 
 def test_evaluate_says_one_segment_in_the_singular(tmp_path, capsys):
-    # ("500 points, 1 superpoints"; counts without thousands separators)
+    # ("500 points, 1 superpoints"; counts without thousands separators; a frame's invalid
+    # points, left out of the metrics, not said)
     pts = np.random.default_rng(1).random((1500, 3))
     np.savetxt(tmp_path / "c.xyz", pts)
     np.savetxt(tmp_path / "one.txt", np.zeros(1500, dtype=int), fmt="%d")
     assert main(["evaluate", str(tmp_path / "c.xyz"), str(tmp_path / "one.txt")]) == 0
     assert "c.xyz: 1,500 points, 1 superpoint, no ground truths" in capsys.readouterr().out
+    frame = pts.reshape(30, 50, 3)
+    frame[0, :7] = np.nan
+    np.save(tmp_path / "f.npy", frame)
+    assert main(["evaluate", str(tmp_path / "f.npy"), str(tmp_path / "one.txt")]) == 0
+    assert "f.npy: 1,500 points (7 invalid, not measured), 1 superpoint" in \
+        capsys.readouterr().out
 
 
 @pytest.mark.parametrize("sep, header", [("\t", ""), (" ", ""), ("\t", "X\tY\tZ\n")])

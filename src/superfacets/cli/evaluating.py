@@ -12,6 +12,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+import numpy as np
+
 from ..checks import counted
 from ..elements.kinds import kind_of
 from ..method.params import DEFAULTS
@@ -117,7 +119,10 @@ def cmd_evaluate(args) -> int:
         _print_table(args, kind, n, len(gts), m)
         return 0
     segs = counted(int(m["segments"]), kind_of(kind).segment_word[:-1])
-    print(f"{Path(args.mesh).name}: {n:,} {kind}, {segs}, "
+    valid = getattr(data, "valid", None) if kind_of(kind).cloud else None
+    invalid = 0 if valid is None else int((~np.asarray(valid)).sum())
+    said = f" ({invalid:,} invalid, not measured)" if invalid else ""
+    print(f"{Path(args.mesh).name}: {n:,} {kind}{said}, {segs}, "
           f"{len(gts) or 'no'} ground truth{'s' if len(gts) != 1 else ''}")
     if gts:
         print(f"undersegmentation_error {m['undersegmentation_error']:.4f}  (lower is better)")
