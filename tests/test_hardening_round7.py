@@ -185,3 +185,19 @@ def test_a_copc_name_is_not_given_to_a_plain_laz(tmp_path, capsys):
     names = output_names([Path("/d/tile.copc.laz"), Path("/d/n015.pcd.bin"),
                           Path("/d/x.copc"), Path("/d/.pcd.bin")])
     assert sorted(names.values()) == [".pcd", "n015", "tile", "x"]
+
+
+def test_a_vertex_no_face_uses_is_refused_by_tiles_as_by_one_run(tmp_path):
+    # (one run refused a NaN vertex that no face uses; a tiled run segmented the mesh)
+    import trimesh
+
+    from superfacets import segment, segment_tiled
+    from superfacets.errors import InvalidMeshError
+
+    sphere = trimesh.creation.icosphere(3)
+    v = np.r_[sphere.vertices, [[np.nan] * 3]]
+    trimesh.Trimesh(v, sphere.faces, process=False).export(tmp_path / "m.ply")
+    said = r"m.ply: 1 vertex has NaN or infinite coordinates \(first: vertex 642 = \[nan"
+    for run in (lambda p: segment(p, 10), lambda p: segment_tiled(p, 10, tiles=2)):
+        with pytest.raises(InvalidMeshError, match=said):
+            run(tmp_path / "m.ply")

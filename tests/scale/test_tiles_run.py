@@ -407,7 +407,7 @@ def test_tiled_runs_refuse_what_whole_runs_refuse(tmp_path):
         segment_tiled(Mesh(v, mesh.faces), 20, tiles=2, workers=1)
     path = tmp_path / "m.ply"
     _write_ply_mesh(path, v, mesh.faces)
-    with pytest.raises(InvalidMeshError, match="non-finite"):
+    with pytest.raises(InvalidMeshError, match="1 vertex has NaN or infinite coordinates"):
         segment_tiled(path, 20, tiles=2, workers=1)
     pts = np.random.default_rng(0).random((3000, 3))
     pts[7] = np.nan

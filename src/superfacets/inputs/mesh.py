@@ -441,6 +441,45 @@ def _faces_array(faces, where: str) -> np.ndarray:
     return f
 
 
+def check_finite_vertices(vertices, where: str = "", first_row: int = 0,
+                          total: int | None = None) -> None:
+    """Refuse vertices with a NaN or infinite coordinate, used by a face or not (a mesh's
+    whole run and its tiled run alike).
+
+    Parameters
+    ----------
+    vertices : (n, 3) float ndarray
+    where : str, optional
+        ``"NAME: "``, the start of the message.
+    first_row : int, default 0
+        The file's row of ``vertices[0]`` (a chunk of a file read in parts).
+    total : int, optional
+        How many vertices of the whole file are not finite, where ``vertices`` is a chunk
+        of it (None: this array's count).
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    InvalidMeshError
+        If a vertex has a NaN or infinite coordinate: how many, and the first.
+
+    Examples
+    --------
+    >>> check_finite_vertices(np.zeros((4, 3)))
+    """
+    bad = ~np.isfinite(np.asarray(vertices, dtype=np.float64)).all(axis=1)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        n = int(bad.sum()) if total is None else total
+        raise InvalidMeshError(
+            f"{where}{counted(n, 'vertex', 'vertices')} {'has' if n == 1 else 'have'} NaN or "
+            f"infinite coordinates (first: vertex {first_row + i} = "
+            f"{np.asarray(vertices[i]).tolist()})")
+
+
 def _validate_arrays(vertices, faces, name: str = "") -> tuple[np.ndarray, np.ndarray]:
     where = f"{name}: " if name else ""
     try:
@@ -460,13 +499,7 @@ def _validate_arrays(vertices, faces, name: str = "") -> tuple[np.ndarray, np.nd
     # int32 faces stay int32 (the readers': :func:`narrow_faces`), other types int64
     f = np.ascontiguousarray(f, dtype=np.int32 if f.dtype == np.int32 and v.shape[0] < 2**31 - 1
                              else np.int64)
-    bad = ~np.isfinite(v).all(axis=1)
-    if bad.any():
-        i = int(np.flatnonzero(bad)[0])
-        raise InvalidMeshError(
-            f"{where}{int(bad.sum())} vertices have NaN or infinite coordinates "
-            f"(first: vertex {i} = {v[i].tolist()})"
-        )
+    check_finite_vertices(v, where)
     n = v.shape[0]
     padded = f.shape[1] > 3 and bool((f[:, 3:] < 0).any())
     if padded:  # polygons of several sizes: -1 pads each row after its vertices

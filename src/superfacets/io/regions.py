@@ -49,7 +49,7 @@ from ..inputs.cloud import (
     stretched_normals,
 )
 from ..inputs.convert import as_mesh
-from ..inputs.mesh import Mesh
+from ..inputs.mesh import Mesh, check_finite_vertices
 from ..inputs.rgb import color_top, unit_colors
 from .clouds import is_cloud_file, read_cloud, unusable_normals, withheld_rows
 from .headers import NotStreamedError, check_las, first_line, npy_mapped, ply_mapped, ply_names
@@ -323,6 +323,8 @@ class RegionReader:
         normals = colors = False
         bad = [0, 0, -1]  # (normals unusable, looked at, the first unusable's row)
         stats: dict = {}
+        if self.kind == "faces":
+            self._check_vertices()
         for start, pos, sz, extra in self.chunks(stats):
             given = self.kind == "points" and extra[1] is not None
             normals = normals or given
@@ -351,6 +353,23 @@ class RegionReader:
                       normals and not bad[0], colors, top,
                       np.concatenate(kept_rows).astype(np.int64),
                       dropped_normals=tuple(bad) if bad[0] else None)
+
+    def _check_vertices(self):
+        """Refuse a vertex without a finite position, used by a face or not, as a whole
+        run refuses it (:func:`~superfacets.inputs.mesh.check_finite_vertices`)."""
+        verts = self._mesh_arrays()[0]
+        n = verts.shape[0]
+        total, first = 0, None
+        for a in range(0, n, self.chunk):
+            b = min(n, a + self.chunk)
+            block = np.asarray(verts[a:b] if isinstance(verts, np.ndarray) else
+                               verts[np.arange(a, b)], dtype=np.float64)
+            ok = finite_rows(block)
+            if not ok.all():
+                total += int((~ok).sum())
+                first = first or (a, block)
+        if first is not None:
+            check_finite_vertices(first[1], f"{self.path}: ", first[0], total)
 
     def _non_finite(self, start: int, pos: np.ndarray, ok: np.ndarray):
         """Refuse a chunk's rows without a finite position, as a whole run refuses them,
