@@ -176,6 +176,36 @@ def test_experiment_runs_on_a_user_s_files(tmp_path, capsys, sphere):
 
 
 
+def test_an_experiment_reads_each_file_s_ground_truth_from_a_label_file(tmp_path, capsys):
+    # SemanticKITTI's layout: sequences/00/velodyne/000000.bin beside labels/000000.label
+    from conftest import street_sweep
+
+    velodyne, labels = tmp_path / "00" / "velodyne", tmp_path / "00" / "labels"
+    velodyne.mkdir(parents=True)
+    labels.mkdir()
+    for i in range(2):
+        xyz, part, rng = street_sweep(5 + i, -1.7)
+        np.c_[xyz, rng.random(len(xyz))].astype("<f4").tofile(velodyne / f"{i:06d}.bin")
+        np.array([40, 50, 10], dtype=np.uint32)[part].tofile(labels / f"{i:06d}.label")
+    out = tmp_path / "rows.csv"
+    assert main(["experiment", "--inputs", str(velodyne / "*.bin"), "--ground-truths",
+                 "../labels/{stem}.label", "-m", "superfacets", "-k", "30", "--alpha", "200",
+                 "-o", str(out), "-j", "1", "-q"]) == 0
+    rows = list(csv.DictReader(out.open()))
+    assert sorted(r["mesh"] for r in rows) == ["000000", "000001"]
+    assert all(r["status"] == "ok" and r["n_ground_truths"] == "1" for r in rows)
+    assert all(0.8 < float(r["oracle_miou"]) <= 1 for r in rows)  # road, wall, car
+    (labels / "000001.label").unlink()  # refused before any run, the file named
+    for pattern, says in (("../labels/{stem}.label", "000001.label: no such ground truth "
+                           "(--ground-truths ../labels/{stem}.label); 1 of 2 inputs have none"),
+                          ("../labels/{name}.label", "name each file's ground truth with "
+                           "{stem}"), ("{stem", "name each file's ground truth")):
+        assert main(["experiment", "--inputs", str(velodyne / "*.bin"), "--ground-truths",
+                     pattern, "-k", "30", "-o", str(tmp_path / "no.csv")]) == 2
+        assert says in capsys.readouterr().err
+    assert not (tmp_path / "no.csv").exists()
+
+
 def test_an_experiment_on_a_folder_of_clouds_and_meshes_runs_each_on_its_own_elements(
         tmp_path, capsys, sphere):
     """``experiment --inputs FOLDER`` ran faces only: its clouds got no row, and nothing said

@@ -105,6 +105,11 @@ def _add_inputs(x) -> None:
                         "LAS/LAZ classification, a PLY vertex label, a PCD label, a "
                         "volume's gmsh:physical); without it, rows have the "
                         "compactness alone")
+    x.add_argument("--ground-truths", metavar="PATTERN", default=None,
+                   help="with --inputs: each file's ground truth, a label file named by "
+                        "PATTERN from the file's folder, {stem} its name without suffix "
+                        "(SemanticKITTI: '../labels/{stem}.label'; a .seg beside each: "
+                        "'{stem}.seg')")
 
 
 def _id_list(text: str) -> set[int]:
@@ -148,10 +153,10 @@ def _check_dataset_options(args, dataset: str) -> None:
                              f"with --dataset {dataset}")
     if getattr(args, "rooms", 10) != 10 and dataset != "rooms":
         raise ParameterError("--rooms goes with --dataset rooms")
-    if getattr(args, "tau", 0.05) != 0.05 and dataset == "files" and \
-            not getattr(args, "ground_truth_field", None):
+    if getattr(args, "tau", 0.05) != 0.05 and dataset == "files" and not (
+            getattr(args, "ground_truth_field", None) or getattr(args, "ground_truths", None)):
         raise ParameterError("--tau judges against a ground truth: with --inputs give "
-                             "--ground-truth-field NAME")
+                             "--ground-truth-field NAME or --ground-truths PATTERN")
 
 
 def select_meshes(args):
@@ -163,13 +168,15 @@ def select_meshes(args):
         "files" if getattr(args, "inputs", None) else "psb")
     if (dataset == "files") != bool(getattr(args, "inputs", None)):
         raise ParameterError("--inputs PATH ... goes with --dataset files (its default)")
-    if getattr(args, "ground_truth_field", None) and dataset != "files":
-        raise ParameterError("--ground-truth-field goes with --inputs")
+    for name in ("ground_truth_field", "ground_truths"):
+        if getattr(args, name, None) and dataset != "files":
+            raise ParameterError(f"--{name.replace('_', '-')} goes with --inputs")
     _check_dataset_options(args, dataset)
     if dataset == "files":
         from ..scale.runner.collect import file_entries
 
-        return file_entries(args.inputs, args.ground_truth_field)
+        return file_entries(args.inputs, args.ground_truth_field,
+                            truths=getattr(args, "ground_truths", None))
     if dataset == "rooms":
         from ..evaluation.datasets.rooms import room_entries
 

@@ -306,8 +306,9 @@ class FileEntry:
         ``"cloud"``, ``"mesh"`` or ``"volume"`` (a tetrahedral mesh:
         :func:`superfacets.io.input_kind`).
     path : pathlib.Path
-    seg_paths : tuple
-        Empty: the ground truth, if any, is the file's own ``field``.
+    seg_paths : tuple of pathlib.Path
+        Label files of the file's ground truth (``--ground-truths``); empty: the ground
+        truth, if any, is the file's own ``field``.
     field : str or None
         The LAS/LAZ dimension, PLY vertex property, PCD field or tetrahedra's cell data
         holding the ground truth.
@@ -323,7 +324,8 @@ class FileEntry:
     file: bool = True
 
 
-def file_entries(specs, field: str | None = None) -> list[FileEntry]:
+def file_entries(specs, field: str | None = None, truths: str | None = None
+                 ) -> list[FileEntry]:
     """The files named by ``specs`` (files, folders, globs, ``@list.txt``, as ``batch``
     takes them) as entries of an experiment.
 
@@ -332,6 +334,11 @@ def file_entries(specs, field: str | None = None) -> list[FileEntry]:
     specs : sequence of str
     field : str, optional
         Each file's ground-truth field (a cloud's points, or a mesh's vertices).
+    truths : str, optional
+        Each file's ground truth as a label file (what :func:`superfacets.read_labels`
+        reads: ``.seg``, SemanticKITTI's ``.label``, ...), named by this pattern from the
+        file's folder, ``{stem}`` the file's name without its suffix
+        (``"../labels/{stem}.label"``).
 
     Returns
     -------
@@ -340,9 +347,10 @@ def file_entries(specs, field: str | None = None) -> list[FileEntry]:
     Raises
     ------
     FileNotFoundError
-        When a spec matches nothing.
+        When a spec matches nothing, or a file's ground truth (``truths``) is not there:
+        the first missing named, and how many are.
     ParameterError
-        When a folder holds no input.
+        When a folder holds no input, or ``truths`` names no ``{stem}`` or another field.
 
     Examples
     --------
@@ -354,5 +362,25 @@ def file_entries(specs, field: str | None = None) -> list[FileEntry]:
     """
     out = []
     for i, p in enumerate(collect_inputs([str(s) for s in specs])):
-        out.append(FileEntry(i, input_kind(p), p, field=field))
+        seg = () if truths is None else (_truth_of(p, truths),)
+        out.append(FileEntry(i, input_kind(p), p, seg_paths=seg, field=field))
+    missing = [e.seg_paths[0] for e in out if e.seg_paths and not e.seg_paths[0].is_file()]
+    if missing:
+        raise FileNotFoundError(f"{missing[0]}: no such ground truth (--ground-truths "
+                                f"{truths}); {len(missing)} of {len(out)} inputs have none")
     return out
+
+
+def _truth_of(path: Path, pattern: str) -> Path:
+    """The ground truth of ``path`` named by ``pattern`` (:func:`file_entries`)."""
+    import string
+
+    try:
+        names = {f for _, f, _, _ in string.Formatter().parse(pattern) if f is not None}
+    except ValueError:  # (an unmatched brace)
+        names = set()
+    if names != {"stem"}:
+        raise ParameterError(f"--ground-truths {pattern!r}: name each file's ground truth "
+                             "with {stem} (the file's name without its suffix) and nothing "
+                             "else in braces, e.g. '../labels/{stem}.label'")
+    return path.parent / pattern.format(stem=_stem(path))

@@ -39,7 +39,7 @@ from ...evaluation.metrics import compactness, evaluate, oracle_miou
 from ...evaluation.results import columns, fmt_value, prepare_file, row_key
 from ...inputs.cloud import PointCloud
 from ...io import read_input
-from ...io.labels import read_field
+from ...io.labels import read_field, read_labels
 from ...method.params import DEFAULT_N_SEGMENTS, ELEMENTS, check_choice, check_int, max_threads
 from .engine import Engine, PeakMemory, error_text
 from .grid import Config
@@ -91,10 +91,10 @@ def _room(name: str):
 
 
 @lru_cache(maxsize=2)
-def _file(path: str, field: str | None, elements: str):
+def _file(path: str, field: str | None, elements: str, truths: tuple = ()):
     """A user's file (:func:`superfacets.scale.runner.collect.file_entries`) as :func:`_prepared`
     gives an input: the mesh or cloud, its element graph, per-element values and its
-    ground truth (the file's ``field``; none without)."""
+    ground truths (the file's ``field``, the label files ``truths``; none without)."""
 
     if field is not None and kind_of(elements).objects:
         raise ParameterError(f"{Path(path).name}: a field ({field}) holds one value per "
@@ -103,6 +103,8 @@ def _file(path: str, field: str | None, elements: str):
     source = elements_of(data, elements)
     to_el = _element_values(source)
     gts = [] if field is None else [to_el(read_field(path, field))]
+    n = kind_of(elements).n_rows(data)
+    gts += [to_el(read_labels(t, n_faces=n)) for t in truths]
     return data, source.graph, to_el, gts
 
 
@@ -124,7 +126,8 @@ def _run_task(task: dict) -> list[dict]:
         if task.get("room"):  # a made-up room: points with their classes
             data, graph, to_el, gts = _room(task["path"])
         elif task.get("file"):  # a user's file: judged against its own field, if named
-            data, graph, to_el, gts = _file(task["path"], task.get("field"), kind)
+            data, graph, to_el, gts = _file(task["path"], task.get("field"), kind,
+                                            task["seg_paths"])
         else:
             base["n_faces"] = _load(task["path"], task["seg_paths"])[0].n_faces
             data, graph, to_el, gts = _prepared(task["path"], task["seg_paths"], kind,
