@@ -186,15 +186,21 @@ def test_an_experiment_reads_each_file_s_ground_truth_from_a_label_file(tmp_path
     for i in range(2):
         xyz, part, rng = street_sweep(5 + i, -1.7)
         np.c_[xyz, rng.random(len(xyz))].astype("<f4").tofile(velodyne / f"{i:06d}.bin")
-        np.array([40, 50, 10], dtype=np.uint32)[part].tofile(labels / f"{i:06d}.label")
-    out = tmp_path / "rows.csv"
-    assert main(["experiment", "--inputs", str(velodyne / "*.bin"), "--ground-truths",
-                 "../labels/{stem}.label", "-m", "superfacets", "-k", "30", "--alpha", "200",
-                 "-o", str(out), "-j", "1", "-q"]) == 0
-    rows = list(csv.DictReader(out.open()))
-    assert sorted(r["mesh"] for r in rows) == ["000000", "000001"]
-    assert all(r["status"] == "ok" and r["n_ground_truths"] == "1" for r in rows)
-    assert all(0.8 < float(r["oracle_miou"]) <= 1 for r in rows)  # road, wall, car
+        classes = np.array([40, 50, 10], dtype=np.uint32)[part]
+        classes[::7] = 0  # (SemanticKITTI's "unlabelled", scattered)
+        classes.tofile(labels / f"{i:06d}.label")
+    miou = {}
+    for extra in ([], ["--ignore-label", "0"]):
+        out = tmp_path / f"rows{len(extra)}.csv"
+        assert main(["experiment", "--inputs", str(velodyne / "*.bin"), "--ground-truths",
+                     "../labels/{stem}.label", "-m", "superfacets", "-k", "30", "--alpha",
+                     "200", "-o", str(out), "-j", "1", "-q", *extra]) == 0
+        rows = list(csv.DictReader(out.open()))
+        assert sorted(r["mesh"] for r in rows) == ["000000", "000001"]
+        assert all(r["status"] == "ok" and r["n_ground_truths"] == "1" for r in rows)
+        miou[len(extra)] = [float(r["oracle_miou"]) for r in rows]
+    # the scattered unlabelled points are a class no superpoint holds, until left out
+    assert all(m < 0.8 for m in miou[0]) and all(m > 0.8 for m in miou[2])  # road, wall, car
     (labels / "000001.label").unlink()  # refused before any run, the file named
     for pattern, says in (("../labels/{stem}.label", "000001.label: no such ground truth "
                            "(--ground-truths ../labels/{stem}.label); 1 of 2 inputs have none"),
@@ -203,6 +209,10 @@ def test_an_experiment_reads_each_file_s_ground_truth_from_a_label_file(tmp_path
         assert main(["experiment", "--inputs", str(velodyne / "*.bin"), "--ground-truths",
                      pattern, "-k", "30", "-o", str(tmp_path / "no.csv")]) == 2
         assert says in capsys.readouterr().err
+    assert main(["experiment", "--inputs", str(velodyne / "*.bin"), "--ignore-label", "0",
+                 "-k", "30", "-o", str(tmp_path / "no.csv")]) == 2
+    assert "--ignore-label marks a ground truth's unlabelled elements" in \
+        capsys.readouterr().err
     assert not (tmp_path / "no.csv").exists()
 
 

@@ -110,6 +110,9 @@ def _add_inputs(x) -> None:
                         "PATTERN from the file's folder, {stem} its name without suffix "
                         "(SemanticKITTI: '../labels/{stem}.label'; a .seg beside each: "
                         "'{stem}.seg')")
+    x.add_argument("--ignore-label", type=int_arg, default=None, metavar="L",
+                   help="with --inputs and a ground truth: its value L marks unlabelled "
+                        "elements, left out of the metrics (SemanticKITTI: 0)")
 
 
 def _id_list(text: str) -> set[int]:
@@ -153,10 +156,13 @@ def _check_dataset_options(args, dataset: str) -> None:
                              f"with --dataset {dataset}")
     if getattr(args, "rooms", 10) != 10 and dataset != "rooms":
         raise ParameterError("--rooms goes with --dataset rooms")
-    if getattr(args, "tau", 0.05) != 0.05 and dataset == "files" and not (
-            getattr(args, "ground_truth_field", None) or getattr(args, "ground_truths", None)):
+    truth = getattr(args, "ground_truth_field", None) or getattr(args, "ground_truths", None)
+    if getattr(args, "tau", 0.05) != 0.05 and dataset == "files" and not truth:
         raise ParameterError("--tau judges against a ground truth: with --inputs give "
                              "--ground-truth-field NAME or --ground-truths PATTERN")
+    if getattr(args, "ignore_label", None) is not None and not (dataset == "files" and truth):
+        raise ParameterError("--ignore-label marks a ground truth's unlabelled elements: it "
+                             "goes with --inputs and --ground-truth-field or --ground-truths")
 
 
 def select_meshes(args):
@@ -243,6 +249,7 @@ def cmd_experiment(args) -> int:
     if files:
         _say_left_out(meshes, kinds)
     s = run_experiment(meshes, configs, out, ks, workers=args.workers, tau=args.tau,
+                       ignore_label=args.ignore_label,
                        seed=args.seed, retry_failed=args.retry_failed,
                        progress=not args.quiet and sys.stderr.isatty(),
                        elements=kinds, n_points=args.points, scheduler=args.scheduler)

@@ -170,11 +170,12 @@ def _run_task(task: dict) -> list[dict]:
             if gts:
                 equal = kind_of(kind).equal_weight
                 row.update({m: round(v, 6) for m, v in
-                            evaluate(graph, labels, gts, tau=task["tau"],
-                                     equal_weight=equal).items()})
+                            evaluate(graph, labels, gts, tau=task["tau"], equal_weight=equal,
+                                     ignore_label=task.get("ignore_label")).items()})
                 weights = None if equal else graph.sizes  # (each class's share, as the UE's)
                 row["oracle_miou"] = round(float(np.mean(
-                    [oracle_miou(labels, gt, weights=weights)[0] for gt in gts])), 6)
+                    [oracle_miou(labels, gt, weights=weights,
+                                 ignore_label=task.get("ignore_label"))[0] for gt in gts])), 6)
             else:  # (no ground truth: the shapes alone, as `evaluate` measures them)
                 row["compactness"] = round(compactness(graph, labels), 6)
         except Skipped as exc:
@@ -227,7 +228,8 @@ class ExperimentSummary:
 
 def _tasks(meshes, configs, kinds, ks, done, common: dict) -> list[dict]:
     """One task per mesh, configuration and kind with rows still to run (its counts
-    ``ks`` not in ``done``); ``common``: seed, tau and n_points of every task."""
+    ``ks`` not in ``done``); ``common``: seed, tau, n_points and ignore_label of every
+    task."""
     tasks = []
     for bm, cfg, kind in product(meshes, configs, kinds):
         method = get_method(cfg.method)
@@ -255,7 +257,8 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
                    n_segments: Sequence[int] = DEFAULT_N_SEGMENTS, *, workers: int | None = None,
                    tau: float = 0.05, seed: int = 0, retry_failed: bool = False,
                    progress: bool = True, elements: Sequence[str] = ("faces",),
-                   n_points: int = 20_000, scheduler: str | None = None) -> ExperimentSummary:
+                   n_points: int = 20_000, scheduler: str | None = None,
+                   ignore_label: int | None = None) -> ExperimentSummary:
     """Run every config at every ``n_segments`` on every mesh, appending rows.
 
     Parameters
@@ -280,6 +283,10 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
         its rows are recorded as failed.
     tau : float, default 0.05
         Overlap tolerance of the undersegmentation error.
+    ignore_label : int, optional
+        A ground-truth value meaning *unlabelled* (SemanticKITTI's 0): those elements are
+        left out of every metric but the compactness
+        (:func:`superfacets.evaluation.metrics.evaluate`).
     seed : int, default 0
         Passed to every method (for those that draw random numbers).
     retry_failed : bool, default False
@@ -343,7 +350,7 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
         raise ParameterError("no element kind to run")
     n_points = check_int("n_points", n_points, lo=1)
     tasks = _tasks(meshes, configs, kinds, ks, done,
-                   dict(seed=seed, tau=tau, n_points=n_points))
+                   dict(seed=seed, tau=tau, n_points=n_points, ignore_label=ignore_label))
     if not any(k in get_method(c.method).elements for c in configs for k in kinds):
         raise ParameterError(f"no method of the grid segments {', '.join(kinds)}")
     # the longest tasks first (the mesh's file size x its rows), so that no worker is left
