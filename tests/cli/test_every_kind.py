@@ -201,6 +201,14 @@ def test_an_experiment_reads_each_file_s_ground_truth_from_a_label_file(tmp_path
         miou[len(extra)] = [float(r["oracle_miou"]) for r in rows]
     # the scattered unlabelled points are a class no superpoint holds, until left out
     assert all(m < 0.8 for m in miou[0]) and all(m > 0.8 for m in miou[2])  # road, wall, car
+    # the report speaks of inputs and superpoints, and gives the oracle mIoU
+    # (it said "2 meshes, 1 categories", "number of superfacets", no mIoU)
+    pytest.importorskip("matplotlib")
+    assert main(["report", str(out), "-o", str(tmp_path / "rep")]) == 0
+    summary = (tmp_path / "rep" / "summary.md").read_text()
+    assert summary.startswith("Results: 2 inputs, 2 rows") and "mean over 2 inputs" in summary
+    assert "by number of superpoints k" in summary and "| oracle mIoU |" in summary
+    assert f"{np.mean(miou[2]):.3f}" in summary and "| elements (median) |" in summary
     (labels / "000001.label").unlink()  # refused before any run, the file named
     for pattern, says in (("../labels/{stem}.label", "000001.label: no such ground truth "
                            "(--ground-truths ../labels/{stem}.label); 1 of 2 inputs have none"),
@@ -250,6 +258,8 @@ def test_an_experiment_on_a_folder_of_clouds_and_meshes_runs_each_on_its_own_ele
                for r in rows)
     assert (tmp_path / "rep" / "fig4.png").exists() and "per_category_undersegmentation_error" \
         in summary
+    assert "mean over 2 inputs, each of the 2 kinds (cloud, mesh) weighing the same" in \
+        summary and "by number of segments k" in summary
 
 
 def test_an_axis_value_may_start_with_a_minus(tmp_path, capsys, sphere):

@@ -17,7 +17,15 @@ from typing import Sequence
 import numpy as np
 
 from ..._runtime.extras import require
-from .tables import METRIC_LABELS, category_means, ok_rows, rows_at_k, series_order, summary
+from .tables import (
+    METRIC_LABELS,
+    category_means,
+    mean_over,
+    rows_at_k,
+    segments_word,
+    series_order,
+    summary,
+)
 
 __all__ = ["plot_curves", "plot_per_category", "plot_cost"]
 
@@ -81,14 +89,12 @@ def plot_curves(df, metrics: Sequence[str] = ("undersegmentation_error", "compac
         if s.empty or not np.isfinite(s.to_numpy(dtype=float)).any():  # (no ground truth)
             ax.text(0.5, 0.5, "no values: the rows have no ground truth", ha="center",
                     va="center", transform=ax.transAxes, color="0.4")
-        ax.set_xlabel("number of superfacets asked (k)")
+        ax.set_xlabel(f"number of {segments_word(df)} asked (k)")
         ax.set_ylabel(METRIC_LABELS.get(metric, metric))
         ax.grid(True, alpha=0.3)
         ax.set_xticks(list(s.columns))
     n = _figure_legend(fig, axes.flat, 5)
-    n_cat = ok_rows(df)["category"].nunique()
-    fig.suptitle(title or f"mean over {n_cat} categor{'y' if n_cat == 1 else 'ies'}",
-                 fontsize=11)
+    fig.suptitle(title or mean_over(df), fontsize=11)
     fig.tight_layout(rect=(0, 0.06 + 0.04 * ((max(n, 1) - 1) // 5), 1, 0.97))
     return fig
 
@@ -120,7 +126,7 @@ def plot_per_category(df, metric: str = "undersegmentation_error"):
     for ax in axes.flat[len(cats):]:
         ax.axis("off")
     n = _figure_legend(fig, axes.flat, 5)
-    fig.supxlabel("number of superfacets asked (k)", fontsize=10, y=0.04)
+    fig.supxlabel(f"number of {segments_word(df)} asked (k)", fontsize=10, y=0.04)
     fig.supylabel(METRIC_LABELS.get(metric, metric), fontsize=10)
     fig.tight_layout(rect=(0, 0.06 + 0.03 * ((max(n, 1) - 1) // 5), 1, 1))
     return fig

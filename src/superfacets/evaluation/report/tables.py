@@ -22,7 +22,7 @@ from ..metrics import METRICS
 from ..results import PARAMS_BEFORE, read_results, row_key
 
 __all__ = ["load_results", "category_means", "summary", "cost_table", "markdown_summary",
-           "METRIC_LABELS"]
+           "METRIC_LABELS", "segments_word", "mean_over", "FILE_KINDS"]
 
 #: Axis labels of the metrics.
 METRIC_LABELS = {
@@ -33,7 +33,8 @@ METRIC_LABELS = {
     "seconds": "seconds per mesh",
 }
 _SHORT = {"undersegmentation_error": "UE", "compactness": "compactness",
-          "boundary_recall": "boundary recall", "achievable_accuracy": "ASA"}
+          "boundary_recall": "boundary recall", "achievable_accuracy": "ASA",
+          "oracle_miou": "oracle mIoU"}
 _GREEK = {"alpha": "α", "eta_convex": "η"}
 
 
@@ -85,7 +86,7 @@ def load_results(path, series: Sequence[str] | None = None):
                               f"(no {'/'.join(missing)} column)")
     params = {m: sorted(METHODS[m].defaults) if m in METHODS else [] for m in df["method"].unique()}
     for c in ["mesh_id", "n_faces", "n_segments", "segments", "iterations", "seconds",
-              "peak_mib", "n_ground_truths", *METRICS]:
+              "peak_mib", "n_ground_truths", "n_elements", "oracle_miou", *METRICS]:
         if c in df:
             df[c] = pd.to_numeric(df[c], errors="coerce")
             inf = df.index[df[c].abs() == float("inf")]
@@ -182,6 +183,78 @@ def summary(df, metric: str):
 
 
 
+#: The categories of rows from a user's files (``experiment --inputs``): their kind
+FILE_KINDS = ("cloud", "mesh", "volume")
+
+
+def segments_word(df) -> str:
+    """The rows' word for their segments (the kinds' table's: superpoints of points,
+    superfacets of faces), ``segments`` where the rows hold kinds of both words.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        From :func:`load_results`.
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    ParameterError
+        If no row is ok (:func:`ok_rows`).
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> segments_word(pd.DataFrame({"status": ["ok"], "elements": ["points"]}))
+    'superpoints'
+    """
+    from ...elements.kinds import KINDS
+
+    ok = ok_rows(df)
+    kinds = set(ok["elements"].dropna()) if "elements" in ok else set()
+    words = {KINDS[k].segment_word for k in kinds if k in KINDS} or {"superfacets"}
+    return words.pop() if len(words) == 1 else "segments"
+
+
+def mean_over(df) -> str:
+    """What a curve's and a table's values are the mean over: the benchmark's categories,
+    or a user's inputs (each kind of input weighing the same where there are several).
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        From :func:`load_results`.
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    ParameterError
+        If no row is ok (:func:`ok_rows`).
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> mean_over(pd.DataFrame({"status": ["ok"] * 2, "category": ["cloud"] * 2,
+    ...                         "mesh": ["a", "b"]}))
+    'mean over 2 inputs'
+    """
+    ok = ok_rows(df)
+    cats = set(ok["category"])
+    if cats <= set(FILE_KINDS):
+        n = ok["mesh"].nunique()
+        inputs = f"{n} input{'' if n == 1 else 's'}"
+        return (f"mean over {inputs}" if len(cats) == 1 else
+                f"mean over {inputs}, each of the {len(cats)} kinds ({', '.join(sorted(cats))})"
+                " weighing the same")
+    return f"mean over {len(cats)} categor{'y' if len(cats) == 1 else 'ies'}"
+
+
 def rows_at_k(df, k_focus: int):
     """``(k, rows)``: the ok rows at the ``n_segments`` nearest ``k_focus``."""
     ok = ok_rows(df)
@@ -203,8 +276,12 @@ def cost_table(df, k_focus: int = 150):
     rows = {}
     for name in [s for s in series_order(df) if s in set(at["series"])]:
         sub = at[at["series"] == name]
-        r = {"meshes": sub["mesh"].nunique(), "faces (median)": sub["n_faces"].median(),
-             "s (median)": sub["seconds"].median(), "s (max)": sub["seconds"].max()}
+        r = {"meshes": sub["mesh"].nunique()}
+        if sub["n_faces"].notna().any() or "n_elements" not in sub:
+            r["faces (median)"] = sub["n_faces"].median()
+        else:  # (a user's clouds and volumes: their elements)
+            r["elements (median)"] = sub["n_elements"].median()
+        r.update({"s (median)": sub["seconds"].median(), "s (max)": sub["seconds"].max()})
         if "peak_mib" in sub and sub["peak_mib"].notna().any():
             r["peak MiB (median)"] = sub["peak_mib"].median()
             r["peak MiB (max)"] = sub["peak_mib"].max()
@@ -250,12 +327,17 @@ def markdown_summary(df, k_focus: int = 150) -> str:
     pd = require("pandas", "making result tables")
 
     ok = ok_rows(df)
-    out = [f"Results: {ok['mesh'].nunique()} meshes, {ok['category'].nunique()} categories, "
-           f"{len(df)} rows ({len(ok)} ok, {(df['status'] == 'failed').sum()} failed, "
-           f"{(df['status'] == 'skipped').sum()} skipped). Means over categories of "
-           f"per-category means.\n"]
+    files = set(ok["category"]) <= set(FILE_KINDS)
+    n_cat = ok["category"].nunique()
+    what = (f"{ok['mesh'].nunique()} inputs" if files else
+            f"{ok['mesh'].nunique()} meshes, {n_cat} categor{'y' if n_cat == 1 else 'ies'}")
+    out = [f"Results: {what}, {len(df)} rows ({len(ok)} ok, "
+           f"{(df['status'] == 'failed').sum()} failed, "
+           f"{(df['status'] == 'skipped').sum()} skipped). Values: the {mean_over(df)}"
+           f"{'' if files and n_cat == 1 else ' (of per-category means)'}.\n"]
+    word = segments_word(df)
     for metric in ("undersegmentation_error", "compactness"):
-        out.append(f"### {METRIC_LABELS[metric]}, by number of superfacets k\n")
+        out.append(f"### {METRIC_LABELS[metric]}, by number of {word} k\n")
         out.append(_md_table(summary(df, metric), index_name="series") + "\n")
     ks = sorted(ok["n_segments"].unique())
     k = min(ks, key=lambda x: abs(x - k_focus))
@@ -265,7 +347,7 @@ def markdown_summary(df, k_focus: int = 150) -> str:
     for name in [s for s in series_order(df) if s in set(at["series"])]:
         sub, subok = at[at["series"] == name], okk[okk["series"] == name]
         r = {}
-        for metric in METRICS:
+        for metric in [*METRICS, *(["oracle_miou"] if "oracle_miou" in at else [])]:
             r[_SHORT[metric]] = (subok.groupby("category")[metric].mean().mean()
                                  if len(subok) else float("nan"))
         r["segments (mean)"] = subok["segments"].mean()
@@ -299,6 +381,7 @@ def markdown_summary(df, k_focus: int = 150) -> str:
     out.append(f"### Cost at k = {k} (seconds per segmentation from scratch)\n")
     out.append(_md_table(cost, index_name="series",
                          formats={"meshes": "{:.0f}", "faces (median)": "{:.0f}",
+                                  "elements (median)": "{:.0f}",
                                   "peak MiB (median)": "{:.0f}", "peak MiB (max)": "{:.0f}"})
                + "\n")
     failed = df[df["status"] != "ok"]
