@@ -320,8 +320,8 @@ def cases() -> list[Case]:
     mesh_case("bz2-corrupt", "m.off.bz2", bz2.compress(good)[:30] + b"\x01" * 30, "decompress")
     mesh_case("gz-ok", "m.off.gz", gzip.compress(good), expect="ok")
     mesh_case("xz-garbage-inside", "m.off.xz", lzma.compress(b"\x00\xff" * 100), "")
-    mesh_case("unknown-suffix", "m.abc", good, "unknown mesh format")
-    mesh_case("no-suffix", "m", good, "unknown mesh format")
+    mesh_case("unknown-suffix", "m.abc", good, "unknown format .abc; meshes: .off")
+    mesh_case("no-suffix", "m", good, "unknown format (no suffix)")
     out.append(Case("experiment-workers-huge", {"psb/off/1.off": grid_off(),
                                                 "psb/seg/Benchmark/1/1_0.seg": grid_seg()},
                     ["experiment", "-o", "{d}/r.csv", "-q", "--psb", "{d}/psb", "-j", "100000"],

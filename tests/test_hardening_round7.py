@@ -201,3 +201,15 @@ def test_a_vertex_no_face_uses_is_refused_by_tiles_as_by_one_run(tmp_path):
     for run in (lambda p: segment(p, 10), lambda p: segment_tiled(p, 10, tiles=2)):
         with pytest.raises(InvalidMeshError, match=said):
             run(tmp_path / "m.ply")
+
+
+def test_an_unknown_suffix_or_standard_input_names_every_format_read(tmp_path, capsys):
+    # (`segment scan.foo` and `segment -` said "unknown mesh format", naming meshes only,
+    # to users of clouds and volumes)
+    np.savetxt(tmp_path / "scan.foo", np.random.default_rng(8).random((50, 3)))
+    for name in (str(tmp_path / "scan.foo"), "-"):
+        assert main(["segment", name, "-k", "5"]) == 2
+        err = capsys.readouterr().err
+        assert "meshes: .off" in err and "point clouds: .pcd" in err and ".laz" in err \
+            and "tetrahedral meshes: .msh" in err and "mesh format" not in err
+        assert ("standard input is not read" in err) == (name == "-")

@@ -12,6 +12,7 @@
 
 from pathlib import Path
 
+from ..errors import MeshFormatError
 from .clouds import CLOUD_FORMATS, is_cloud_file, read_cloud
 from .export import to_pyvista, to_trimesh, write_colored_mesh, write_mesh
 from .files import atomic_write, split_suffix
@@ -66,7 +67,8 @@ def read_input(path):
     Raises
     ------
     FileNotFoundError, MeshFormatError, InvalidMeshError, InvalidCloudError
-        As :func:`read_mesh` and :func:`read_cloud`.
+        As :func:`read_mesh` and :func:`read_cloud`; MeshFormatError also for a suffix no
+        reader takes (every format named) or ``-`` (standard input).
 
     Examples
     --------
@@ -76,6 +78,15 @@ def read_input(path):
     ('Mesh', 'PointCloud')
     """
 
+    fmt = split_suffix(Path(path))[0]
+    if fmt not in (*MESH_FORMATS, *CLOUD_FORMATS, *VOLUME_FORMATS):
+        what = "standard input is not read (a format is told by its suffix): save it to a " \
+            "file" if str(path) == "-" else f"unknown format {'.' + fmt if fmt else '(no suffix)'}"
+        raise MeshFormatError(
+            f"{path}: {what}; meshes: {', '.join('.' + f for f in MESH_FORMATS)} (optionally "
+            f".gz/.xz/.bz2); point clouds: {', '.join('.' + f for f in CLOUD_FORMATS)}, or "
+            ".ply, .obj, .off without faces; tetrahedral meshes: "
+            f"{', '.join('.' + f for f in VOLUME_FORMATS)}")
     kind = input_kind(path)
     return (read_volume(path) if kind == "volume" else read_cloud(path) if kind == "cloud"
             else read_mesh(path))
