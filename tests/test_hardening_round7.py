@@ -213,3 +213,22 @@ def test_an_unknown_suffix_or_standard_input_names_every_format_read(tmp_path, c
         assert "meshes: .off" in err and "point clouds: .pcd" in err and ".laz" in err \
             and "tetrahedral meshes: .msh" in err and "mesh format" not in err
         assert ("standard input is not read" in err) == (name == "-")
+
+
+def test_an_experiment_tells_apart_files_of_one_name_in_two_folders(tmp_path, capsys):
+    # (SemanticKITTI's sequences/00/velodyne/000000.bin and sequences/01/velodyne/000000.bin
+    # were both rows of "000000": a resumed run took the second for done, a report merged
+    # them)
+    import csv
+
+    rng = np.random.default_rng(9)
+    for seq in ("00", "01"):
+        (tmp_path / seq).mkdir()
+        np.savetxt(tmp_path / seq / "000000.xyz", rng.random((400, 3)))
+    out = tmp_path / "rows.csv"
+    for _ in range(2):
+        assert main(["experiment", "--inputs", str(tmp_path / "*" / "*.xyz"), "-k", "10",
+                     "--alpha", "200", "-m", "superfacets", "-o", str(out), "-j", "1"]) == 0
+    assert "0 rows written (0 ok, 0 failed, 0 skipped), 2 already there" in \
+        capsys.readouterr().out
+    assert sorted(r["mesh"] for r in csv.DictReader(out.open())) == ["00/000000", "01/000000"]

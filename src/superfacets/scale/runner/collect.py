@@ -312,6 +312,9 @@ class FileEntry:
     field : str or None
         The LAS/LAZ dimension, PLY vertex property, PCD field or tetrahedra's cell data
         holding the ground truth.
+    name : str
+        Its rows' name (``mesh``): its path from the inputs' common folder, its suffix
+        dropped, one for each input (:func:`output_names`); empty: its file's stem.
     file : bool
         True.
     """
@@ -321,6 +324,7 @@ class FileEntry:
     path: Path
     seg_paths: tuple = ()
     field: str | None = None
+    name: str = ""
     file: bool = True
 
 
@@ -361,9 +365,11 @@ def file_entries(specs, field: str | None = None, truths: str | None = None
     [('cloud', 'scan.npy')]
     """
     out = []
-    for i, p in enumerate(collect_inputs([str(s) for s in specs])):
+    files = collect_inputs([str(s) for s in specs])
+    names = output_names(files)  # (one name each: 00/velodyne/000000 beside 01/velodyne/...)
+    for i, p in enumerate(files):
         seg = () if truths is None else (_truth_of(p, truths),)
-        out.append(FileEntry(i, input_kind(p), p, seg_paths=seg, field=field))
+        out.append(FileEntry(i, input_kind(p), p, seg_paths=seg, field=field, name=names[p]))
     missing = [e.seg_paths[0] for e in out if e.seg_paths and not e.seg_paths[0].is_file()]
     if missing:
         raise FileNotFoundError(f"{missing[0]}: no such ground truth (--ground-truths "

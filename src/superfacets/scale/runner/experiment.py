@@ -240,7 +240,8 @@ def _tasks(meshes, configs, kinds, ks, done, common: dict) -> list[dict]:
         if kind not in method.elements or (cloud and not KINDS[kind].cloud) or (
                 file and not cloud and KINDS[kind].cloud) or volume != (KINDS[kind].dim == 3):
             continue
-        base = {"mesh": Path(bm.path).stem, "mesh_id": bm.id, "category": bm.category,
+        base = {"mesh": getattr(bm, "name", "") or Path(bm.path).stem, "mesh_id": bm.id,
+                "category": bm.category,
                 "method": cfg.method, "elements": kind, "seed": common["seed"],
                 **{k: fmt_value(v) for k, v in cfg.params}}
         todo = [k for k in ks if row_key({**base, "n_segments": k}) not in done]
