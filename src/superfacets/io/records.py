@@ -339,7 +339,8 @@ def _new_las(points: np.ndarray, labels: np.ndarray, name: str, colors, compress
     header.offsets, header.scales = offset, np.full(3, scale)
     header.add_extra_dim(laspy.ExtraBytesParams(name=name, type=np.int32,
                                                 description="superfacets label"))
-    las = laspy.LasData(header)
+    las = laspy.LasData(header, laspy.ScaleAwarePointRecord.zeros(points.shape[0],
+                                                                  header=header))
     xyz = np.where(valid[:, None], points, offset)
     las.x, las.y, las.z = xyz[:, 0], xyz[:, 1], xyz[:, 2]
     if not valid.all():
@@ -350,7 +351,7 @@ def _new_las(points: np.ndarray, labels: np.ndarray, name: str, colors, compress
         las.red, las.green, las.blue = rgb[:, 0], rgb[:, 1], rgb[:, 2]
     las[name] = labels
     buf = io.BytesIO()
-    kw = {"laz_backend": laspy.LazBackend.Lazrs} if compress else {}
+    kw = {"laz_backend": laspy.LazBackend.LazrsParallel} if compress else {}
     las.write(buf, do_compress=compress, **kw)
     return buf.getvalue()
 
@@ -506,7 +507,7 @@ def _las_with(source: Path, labels: np.ndarray, name: str, compress: bool) -> by
     las[name] = labels
     _without_copc_index(las)
     buf = io.BytesIO()
-    kw = {"laz_backend": laspy.LazBackend.Lazrs} if compress else {}
+    kw = {"laz_backend": laspy.LazBackend.LazrsParallel} if compress else {}
     try:
         las.write(buf, do_compress=compress, **kw)
     except Exception as exc:  # noqa: BLE001 - laspy raises many types
