@@ -141,7 +141,10 @@ def test_baseline_runs_the_point_methods_on_a_laz(tmp_path, capsys):
     for method in ("graph_segmentation", "cut_pursuit"):
         out = tmp_path / f"{method}.laz"
         assert main(["baseline", str(laz), "-m", method, "-k", "15", "-o", str(out)]) == 0
-        assert "3,000 points" in capsys.readouterr().out  # (and its segments)
+        said = capsys.readouterr().out
+        assert "3,000 points" in said  # (and its segments), and what it wrote, as segment
+        assert f"wrote {out} (the input's points, every field kept, labels as ClusterID)" \
+            in said
         labels = np.asarray(laspy.read(out).ClusterID)
         assert 10 <= len(np.unique(labels)) <= 20
     assert main(["baseline", str(laz), "-m", "vsa", "-k", "15"]) == 2

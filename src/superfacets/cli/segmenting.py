@@ -592,9 +592,14 @@ def cmd_baseline(args) -> int:
             f", {run.n_iter} iterations" + ("" if run.converged is None else
                                             " (converged)" if run.converged else " (max)"))
         n_segs = int(np.unique(labels[labels >= 0]).size)
+        report = sys.stderr if str(seg_out) == "-" else sys.stdout
         print(f"{Path(args.mesh).name}: {size}, {method.name} ({shown}): "
-              f"{counted(n_segs, 'segment')}{iters}, "
-              f"{elapsed:.2f} s", file=sys.stderr if str(seg_out) == "-" else sys.stdout)
+              f"{counted(n_segs, 'segment')}{iters}, {elapsed:.2f} s", file=report)
+        written = [f"{p} ({what})" for p, what in (
+            (seg_out, _labels_what(args, kind)), (ply_out, f"coloured {kind}"))
+            if p is not None and str(p) != "-"]  # (as segment says what it wrote)
+        if written:
+            print("wrote " + ", ".join(written), file=report)
     return 0
 
 
