@@ -237,12 +237,12 @@ def _stem(path: Path) -> str:
         if low.endswith(comp):
             name, low = name[: -len(comp)], low[: -len(comp)]
             break
-    base, dot, _ = name.rpartition(".")
+    base, dot, fmt = name.rpartition(".")
     if not (dot and base):
         return name
-    for inner in (".copc", ".pcd"):  # (a COPC tile's .copc.laz, a nuScenes sweep's .pcd.bin:
-        if base.lower().endswith(inner) and len(base) > len(inner):  # one suffix each)
-            return base[: -len(inner)]
+    inner = {"laz": ".copc", "las": ".copc", "bin": ".pcd"}.get(fmt.lower())
+    if inner and base.lower().endswith(inner) and len(base) > len(inner):
+        return base[: -len(inner)]  # (a COPC tile's .copc.laz, a nuScenes sweep's .pcd.bin)
     return base
 
 
