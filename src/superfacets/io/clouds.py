@@ -13,7 +13,12 @@ Points keep their file order (labels come back in that order). Readers:
   (``nx ny nz`` are then read as normals); a PTS file may start with the
   point count;
 - NPY: an ``(N, 3)`` array, ``(N, 6)`` (points then normals) or organized
-  ``(H, W, 3)`` (NaN points invalid);
+  ``(H, W, 3)`` (NaN points invalid); or records with named fields ``x y z`` (a numpy
+  structured array, as ``ros_numpy`` makes of a ROS ``PointCloud2``, ``(N,)`` or
+  organized ``(H, W)``): normals from ``nx ny nz`` (or ``normal_x ...``), colours from
+  ``r g b`` / ``red green blue`` or PCL's packed ``rgb``, a row NaN in x, y and z a
+  missing point, the other fields readable as ground truths (:func:`~superfacets.io.
+  labels.read_field`);
 - LAS / LAZ: ``laspy`` (extra ``clouds``; LAZ through its ``lazrs`` backend),
   scaled coordinates.
 - E57 (ASTM E2807, terrestrial scanners' exchange format): ``pye57`` (extra
@@ -42,7 +47,7 @@ from ..errors import MeshFormatError
 from ..inputs.rgb import unit_colors
 from .columns import read_columns
 from .files import read_bytes, split_suffix
-from .ply import ply_colors, read_ply_scalars
+from .ply import COLOR_PROPERTIES, ply_colors, read_ply_scalars
 
 __all__ = ["read_cloud", "CLOUD_FORMATS", "is_cloud_file", "check_laz", "check_las",
            "e57_counts"]
@@ -571,6 +576,8 @@ def _read_npy(data: bytes, path: Path) -> dict:
     except Exception as exc:  # noqa: BLE001 - numpy raises many types on damaged files
         raise MeshFormatError(f"{path}: cannot read NPY: {exc}") from None
 
+    if isinstance(arr, np.ndarray) and arr.dtype.names and arr.ndim in (1, 2):
+        return _npy_records(arr, path)
     if not isinstance(arr, np.ndarray) or not_real(arr.dtype, "NPY points"):
         raise MeshFormatError(f"{path}: " + (not_real(arr.dtype, "NPY points") if isinstance(
             arr, np.ndarray) else f"NPY must hold an array, got {type(arr).__name__}"))
@@ -583,3 +590,42 @@ def _read_npy(data: bytes, path: Path) -> dict:
         return {"points": arr[:, :3], "normals": arr[:, 3:] if arr.shape[1] == 6 else None}
     raise MeshFormatError(f"{path}: NPY array of shape {arr.shape}: expected (N, 3) points, "
                           "(N, 6) points and normals, or organized (H, W, 3)")
+
+
+#: The fields of NPY records read as normals, either naming.
+_NORMAL_FIELDS = (("nx", "ny", "nz"), ("normal_x", "normal_y", "normal_z"))
+
+
+def _npy_records(arr: np.ndarray, path: Path) -> dict:
+    """A cloud from NPY records (a structured array, ``(N,)`` or organized ``(H, W)``): the
+    fields ``x y z`` (any case), normals, colours (:func:`_read_npy`)."""
+    fields = list(arr.dtype.names)
+    named = ply_names(fields, ("x", "y", "z", "nx", "ny", "nz", "normal_x", "normal_y",
+                               "normal_z"))
+    missing = [c for c in "xyz" if c not in named]
+    if missing:
+        raise MeshFormatError(f"{path}: NPY records have no {', '.join(missing)} field (they "
+                              f"have: {', '.join(fields)})")
+    flat = arr.reshape(-1)
+
+    def columns(names, what):
+        for n in names:
+            kind = arr.dtype.fields[n][0]
+            if kind.shape or not_real(kind, what):
+                raise MeshFormatError(f"{path}: NPY field {n!r} ({kind}) is not one real "
+                                      f"number per point")
+        with np.errstate(invalid="ignore"):
+            return np.stack([np.asarray(flat[n], dtype=np.float64) for n in names], axis=1)
+
+    pts = columns([named[c] for c in "xyz"], "NPY points")
+    nrm = next((columns([named[c] for c in trio], "NPY normals") for trio in _NORMAL_FIELDS
+                if all(c in named for c in trio)), None)
+    col = next((unit_colors(columns(list(trio), "NPY colours")) for trio in COLOR_PROPERTIES
+                if all(c in fields for c in trio)), None)
+    packed = next((n for n in ("rgb", "rgba") if n in fields), None)
+    if col is None and packed is not None and arr.dtype.fields[packed][0].itemsize == 4:
+        col = unit_colors(_packed_rgb(flat[packed]))
+    out = {"points": pts, "normals": nrm, "colors": col}
+    if arr.ndim == 2:  # an organized cloud (a depth camera's frame): NaN points invalid
+        return {**out, "allow_invalid": True, "shape": tuple(arr.shape)}
+    return {**out, "allow_invalid": missing_points(pts, str(path))}

@@ -317,8 +317,9 @@ def read_field(path, name: str) -> np.ndarray:
     Parameters
     ----------
     path : str or os.PathLike
-        A ``.las``/``.laz``, ``.ply`` (optionally compressed) or ``.pcd`` file, or a
-        tetrahedral mesh (``.msh``, ``.vtk``, ``.vtu``, ``.mesh``).
+        A ``.las``/``.laz``, ``.ply`` (optionally compressed) or ``.pcd`` file, NPY records
+        (a structured ``.npy``, its fields by name), or a tetrahedral mesh (``.msh``,
+        ``.vtk``, ``.vtu``, ``.mesh``).
     name : str
         The LAS dimension or the PLY vertex property (``NAME`` also finds
         ``scalar_NAME``, CloudCompare's name of a scalar field).
@@ -369,16 +370,40 @@ def read_field(path, name: str) -> np.ndarray:
             raise MeshFormatError(f"{path}: cannot read PLY vertices: {exc}") from None
     elif fmt == "pcd" and comp is None:
         names, values = _pcd_field(path, name)
+    elif fmt == "npy" and comp is None:
+        names, values = _npy_field(path, name)
     elif fmt in VOLUME_FORMATS:
         names, values = volume_field(path, name)
     else:
-        raise MeshFormatError(f"{path}: only LAS/LAZ, PLY and PCD files carry per-point "
-                              "fields (and tetrahedral meshes per-cell ones); give the labels "
+        raise MeshFormatError(f"{path}: only LAS/LAZ, PLY, PCD files and NPY records carry "
+                              "per-point fields (and tetrahedral meshes per-cell ones); give "
+                              "the labels "
                               "(or the ground truth) as a file, one per point (.seg)")
     if values is None:
         raise MeshFormatError(f"{path}: no field {name!r}; " + (
             f"it has: {', '.join(names)}" if names else "it has none"))
     return whole_labels(values, f"{path}: field {name!r}")
+
+
+def _npy_field(path: Path, name: str) -> tuple[list[str], np.ndarray | None]:
+    """The field names of NPY records (a structured array) and the values of ``name``."""
+    from .headers import npy_mapped
+
+    try:
+        arr = np.load(path, mmap_mode="r", allow_pickle=False)
+    except Exception:  # noqa: BLE001 - numpy raises many types (npy_mapped says which)
+        arr = npy_mapped(path)
+    names = list(arr.dtype.names or ())
+    if not names:
+        raise MeshFormatError(f"{path}: an NPY array of plain numbers ({arr.dtype}) has no "
+                              "fields; NPY records (a structured array) have")
+    if name not in names:
+        return names, None
+    kind = arr.dtype.fields[name][0]
+    if kind.shape:
+        raise MeshFormatError(f"{path}: field {name!r} holds {int(np.prod(kind.shape))} "
+                              "values per point, not one label")
+    return names, np.asarray(arr[name]).reshape(-1)
 
 
 def _pcd_field(path: Path, name: str) -> tuple[list[str], np.ndarray | None]:
