@@ -161,6 +161,13 @@ def _print_truth_metrics(m: dict, n: int, kind: str) -> None:
     if len(per_class) > n // 2 >= MOST_CLASSES_LISTED:  # (a coordinate, an identifier)
         print(f"note: the ground truth has {len(per_class):,} classes for {n:,} {kind}: is it "
               "a field of labels?")
+    if len(per_class) == 1:
+        print(f"note: the ground truth has one class ({next(iter(per_class))}) here: it has "
+              "no border, so the recall and precision say nothing")
+    below = sorted(int(c) for c in per_class if int(c) < 0)
+    if below:
+        print(f"note: class {', '.join(map(str, below))} measured as a class; if it marks "
+              f"unlabelled {kind}, --ignore-label {below[0]} leaves them out")
 
 
 #: The most classes whose IoU the text output lists one by one (more: with --json).
