@@ -30,3 +30,34 @@ def test_a_ground_truth_of_one_class_or_below_zero_is_said(tmp_path, capsys):
     assert main([*args, str(tmp_path / "some.seg"), "--ignore-label", "-1"]) == 0
     out = capsys.readouterr().out
     assert "measured as a class" not in out and "one class (3) here" in out
+
+
+def _seven_columns(path, fourth, last3):
+    """A text cloud of seven headerless columns: x y z, then ``fourth`` and ``last3``."""
+    rng = np.random.default_rng(2)
+    xyz = rng.random((len(fourth), 3))
+    rows = (f"{a:.4f} {b:.4f} {c:.4f} {d:d} {e:d} {f:d} {g:d}\n"
+            for (a, b, c), d, (e, f, g) in zip(xyz, fourth, last3))
+    path.write_text("".join(rows))
+    return path
+
+
+def test_a_terrestrial_scan_s_seven_columns_give_its_colours(tmp_path):
+    # (Semantic3D's x y z intensity r g b .txt, a terrestrial scanner's layout as Leica's
+    # PTS: only a .pts file's colours were read)
+    from superfacets import read_cloud
+
+    rng = np.random.default_rng(0)
+    rgb = rng.integers(0, 256, (300, 3))
+    signed = rng.integers(-2048, 2048, 300)
+    for name in ("bildstein_station1_xyz_intensity_rgb.txt", "scan.xyz"):
+        cloud = read_cloud(_seven_columns(tmp_path / name, signed, rgb))
+        assert np.allclose(cloud.colors * 255, rgb), name
+    # x y z r g b label (the fourth column 0..255) or a fractional fourth: no colours read
+    label = rng.integers(0, 9, (300, 1))
+    plain = read_cloud(_seven_columns(tmp_path / "rgbl.txt", rgb[:, 0],
+                                      np.c_[rgb[:, 1:], label]))
+    assert plain.colors is None
+    (tmp_path / "frac.txt").write_text("".join(
+        f"0.{i:03d} 0.{(7 * i) % 997:03d} 0.5 -3.5 1 2 3\n" for i in range(300)))
+    assert read_cloud(tmp_path / "frac.txt").colors is None

@@ -190,8 +190,8 @@ def _check_width(arr: np.ndarray, parts: list, seen: int, path: Path) -> None:
 
 def _named(arr: np.ndarray, names: list[str] | None, path: Path) -> dict:
     """The points (and normals and colours) from the columns the header names, else the
-    first three (and a PTS file's colours, where its lines are Leica's seven columns, ``x y
-    z intensity r g b``, the colours whole numbers in 0..255)."""
+    first three (and the colours of a scanner's seven columns, ``x y z intensity r g b``:
+    :func:`_scanner_columns`)."""
     width = arr.shape[1]
     if names is not None:
         shown = " ".join(names)
@@ -212,11 +212,25 @@ def _named(arr: np.ndarray, names: list[str] | None, path: Path) -> dict:
         return {"points": pts, "normals": nrm, "colors": col}
     if width < 3:
         raise MeshFormatError(f"{path}: point lines need 3 columns (x y z), found {width}")
-    if width == 7 and split_suffix(Path(path))[0] == "pts":  # Leica's x y z i r g b
-        rgb = arr[:, 4:7]
-        if ((rgb >= 0) & (rgb <= 255) & (rgb == np.floor(rgb))).all():
-            return {"points": arr[:, :3], "colors": rgb / 255.0}
+    if width == 7 and _scanner_columns(arr, split_suffix(Path(path))[0]):
+        return {"points": arr[:, :3], "colors": arr[:, 4:7] / 255.0}
     return {"points": arr[:, :3]}
+
+
+def _scanner_columns(arr: np.ndarray, fmt: str) -> bool:
+    """Whether seven headerless columns are a terrestrial scanner's ``x y z intensity r g
+    b`` (Leica's PTS, Semantic3D's ``.txt``): the last three whole numbers in 0..255; in a
+    file other than ``.pts`` also the fourth whole and somewhere outside 0..255 (a
+    scanner's signed intensity, -2048..2047), so that ``x y z r g b label`` is not read as
+    colours (g, b, label)."""
+    rgb = arr[:, 4:7]
+    if not ((rgb >= 0) & (rgb <= 255) & (rgb == np.floor(rgb))).all():
+        return False
+    if fmt == "pts":
+        return True
+    intensity = arr[:, 3]
+    return bool((intensity == np.floor(intensity)).all()
+                and ((intensity < 0) | (intensity > 255)).any())
 
 
 def _numbers(body: list) -> np.ndarray | None:
