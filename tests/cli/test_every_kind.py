@@ -227,6 +227,40 @@ def test_an_experiment_reads_each_file_s_ground_truth_from_a_label_file(tmp_path
     assert not (tmp_path / "no.csv").exists()
 
 
+def test_an_experiment_s_ground_truths_from_a_list_file(tmp_path, capsys):
+    """``--ground-truths LIST.csv``: Open3D-ML's ``X_points.npy`` / ``X_labels.npy``, names no
+    ``{stem}`` pattern makes, judged as a pattern's would be."""
+    import csv
+
+    rng = np.random.default_rng(0)
+    for name in ("000700", "000750"):
+        xy = rng.random((1500, 2)) * 10
+        np.save(tmp_path / f"{name}_points.npy", np.c_[xy, np.where(xy[:, 0] > 5, 1.0, 0.0)])
+        np.save(tmp_path / f"{name}_labels.npy",
+                (xy[:, 0] > 5).astype(np.int32) + 1)
+    (tmp_path / "gt.csv").write_text("input,ground_truth\n000700_points.npy,000700_labels.npy"
+                                     "\n000750_points.npy,000750_labels.npy\n")
+    out = tmp_path / "rows.csv"
+    assert main(["experiment", "--inputs", str(tmp_path / "*_points.npy"), "--ground-truths",
+                 str(tmp_path / "gt.csv"), "-m", "superfacets", "-k", "10", "--alpha", "0",
+                 "-o", str(out), "-j", "1", "-q"]) == 0
+    rows = list(csv.DictReader(out.open()))
+    assert sorted(r["mesh"] for r in rows) == ["000700_points", "000750_points"]
+    assert all(r["status"] == "ok" and r["n_ground_truths"] == "1" for r in rows)
+    assert all(float(r["undersegmentation_error"]) < 0.05 for r in rows)  # two terraces
+    # a list of spaces, one input missing; a line of one path; no such list
+    (tmp_path / "one.txt").write_text("# Open3D-ML\n000700_points.npy  000700_labels.npy\n")
+    (tmp_path / "bad.tsv").write_text("000700_points.npy\n")
+    for listed, says in (("one.txt", "000750_points.npy: no line of "),
+                         ("bad.tsv", "line 1 is not an input and its ground truth (2 paths)"),
+                         ("none.csv", "none.csv: no such list of ground truths")):
+        assert main(["experiment", "--inputs", str(tmp_path / "*_points.npy"),
+                     "--ground-truths", str(tmp_path / listed), "-k", "10", "-o",
+                     str(tmp_path / "no.csv")]) == 2
+        assert says in capsys.readouterr().err, listed
+    assert not (tmp_path / "no.csv").exists()
+
+
 def test_an_experiment_on_a_folder_of_clouds_and_meshes_runs_each_on_its_own_elements(
         tmp_path, capsys, sphere):
     """``experiment --inputs FOLDER`` ran faces only: its clouds got no row, and nothing said

@@ -110,7 +110,8 @@ def _add_inputs(x) -> None:
                    help="with --inputs: each file's ground truth, a label file named by "
                         "PATTERN from the file's folder, {stem} its name without suffix "
                         "(SemanticKITTI: '../labels/{stem}.label'; a .seg beside each: "
-                        "'{stem}.seg')")
+                        "'{stem}.seg'), or a list file (.csv, .tsv, .txt) of INPUT "
+                        "GROUND_TRUTH lines")
     x.add_argument("--ignore-label", type=int_arg, default=None, metavar="L",
                    help="with --inputs and a ground truth: its value L marks unlabelled "
                         "elements, left out of the metrics (SemanticKITTI: 0)")

@@ -340,9 +340,12 @@ def file_entries(specs, field: str | None = None, truths: str | None = None
         Each file's ground-truth field (a cloud's points, or a mesh's vertices).
     truths : str, optional
         Each file's ground truth as a label file (what :func:`superfacets.read_labels`
-        reads: ``.seg``, SemanticKITTI's ``.label``, ...), named by this pattern from the
+        reads: ``.seg``, SemanticKITTI's ``.label``, ...): named by this pattern from the
         file's folder, ``{stem}`` the file's name without its suffix
-        (``"../labels/{stem}.label"``).
+        (``"../labels/{stem}.label"``); or a list file (``.csv``, ``.tsv``, ``.txt``) of
+        one input and its ground truth a line (separated by a comma, a tab or spaces;
+        relative paths from the list's folder; ``#`` comments), for names no pattern
+        makes (Open3D-ML's ``X_points.npy`` and ``X_labels.npy``, nuScenes' tokens).
 
     Returns
     -------
@@ -354,7 +357,8 @@ def file_entries(specs, field: str | None = None, truths: str | None = None
         When a spec matches nothing, or a file's ground truth (``truths``) is not there:
         the first missing named, and how many are.
     ParameterError
-        When a folder holds no input, or ``truths`` names no ``{stem}`` or another field.
+        When a folder holds no input, ``truths`` names no ``{stem}`` or another field and
+        is no list file, a line of the list is not two paths, or an input is not listed.
 
     Examples
     --------
@@ -367,13 +371,60 @@ def file_entries(specs, field: str | None = None, truths: str | None = None
     out = []
     files = collect_inputs([str(s) for s in specs])
     names = output_names(files)  # (one name each: 00/velodyne/000000 beside 01/velodyne/...)
+    listed = _truth_list(Path(truths)) if truths is not None and _is_list(truths) else None
+    if listed is not None:
+        unlisted = [p for p in files if p.resolve() not in listed]
+        if unlisted:
+            raise ParameterError(f"{unlisted[0]}: no line of {truths} names it; "
+                                 f"{len(unlisted)} of {len(files)} inputs are not listed")
     for i, p in enumerate(files):
-        seg = () if truths is None else (_truth_of(p, truths),)
+        seg = () if truths is None else (
+            listed[p.resolve()] if listed is not None else _truth_of(p, truths),)
         out.append(FileEntry(i, input_kind(p), p, seg_paths=seg, field=field, name=names[p]))
     missing = [e.seg_paths[0] for e in out if e.seg_paths and not e.seg_paths[0].is_file()]
     if missing:
         raise FileNotFoundError(f"{missing[0]}: no such ground truth (--ground-truths "
                                 f"{truths}); {len(missing)} of {len(out)} inputs have none")
+    return out
+
+
+#: The suffixes of a list file of inputs and their ground truths (``--ground-truths``).
+_LIST_SUFFIXES = (".csv", ".tsv", ".txt", ".lst")
+
+
+def _is_list(truths: str) -> bool:
+    """Whether ``--ground-truths`` names a list file rather than a pattern."""
+    return "{" not in truths and Path(truths).suffix.lower() in _LIST_SUFFIXES
+
+
+def _truth_list(path: Path) -> dict:
+    """An input's resolved path -> its ground truth, from a list file (:func:`file_entries`)."""
+    import csv
+
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no such list of ground truths (--ground-truths: a "
+                                "list file of INPUT GROUND_TRUTH lines, or a pattern with "
+                                "{stem})")
+    out = {}
+    with open(path, encoding="utf-8-sig", newline="") as f:
+        for number, line in enumerate(f, 1):
+            text = line.strip()
+            if not text or text.startswith("#"):
+                continue
+            sep = "," if "," in text else "\t" if "\t" in text else None
+            fields = next(csv.reader([text], delimiter=sep)) if sep else text.split()
+            fields = [x.strip() for x in fields if x.strip()]
+            if number == 1 and [x.lower() for x in fields] in (
+                    ["input", "ground_truth"], ["input", "ground truth"], ["input", "gt"]):
+                continue  # (a header)
+            if len(fields) != 2:
+                raise ParameterError(f"{path}: line {number} is not an input and its ground "
+                                     f"truth (2 paths), it has {len(fields)} field"
+                                     f"{'s' if len(fields) != 1 else ''}: {text[:80]!r}")
+            key = (path.parent / fields[0]).resolve()
+            if key in out:
+                raise ParameterError(f"{path}: line {number} names {fields[0]} again")
+            out[key] = path.parent / fields[1]
     return out
 
 
@@ -388,5 +439,6 @@ def _truth_of(path: Path, pattern: str) -> Path:
     if names != {"stem"}:
         raise ParameterError(f"--ground-truths {pattern!r}: name each file's ground truth "
                              "with {stem} (the file's name without its suffix) and nothing "
-                             "else in braces, e.g. '../labels/{stem}.label'")
+                             "else in braces, e.g. '../labels/{stem}.label', or give a list "
+                             "file (.csv, .tsv, .txt) of INPUT GROUND_TRUTH lines")
     return path.parent / pattern.format(stem=_stem(path))
