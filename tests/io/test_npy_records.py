@@ -1,5 +1,6 @@
 """NPY records (numpy structured arrays with fields ``x y z``, as ``ros_numpy`` makes of a
-ROS ``PointCloud2``): read as clouds, their other fields as ground truths."""
+ROS ``PointCloud2``): read as clouds, their other fields as ground truths; a learning
+pipeline's scene folder (Pointcept's ``coord.npy``, ``color.npy``, ``segment.npy``)."""
 
 from __future__ import annotations
 
@@ -126,3 +127,69 @@ def test_tiles_read_records_as_one_run_does(tmp_path):
     tiled = segment_tiled(tmp_path / "scan.npy", 20, tiles=2, workdir=tmp_path / "work")
     assert tiled.labels.shape == (4000,) and tiled.labels.min() >= 0
     assert len(np.unique(tiled.labels)) == 20
+
+
+def _scene(folder, seed):
+    """A Pointcept scene folder: two terraces of two colours, -1 on the first 50 points."""
+    pts, lab = _terraces(1500, seed)
+    folder.mkdir()
+    np.save(folder / "coord.npy", pts.astype(np.float32))
+    rgb = np.where(lab[:, None] == 1, [200, 30, 30], [30, 200, 30]).astype(np.uint8)
+    np.save(folder / "color.npy", rgb)
+    normal = np.zeros((1500, 3), dtype=np.float32)
+    normal[:, 2] = 1
+    np.save(folder / "normal.npy", normal)
+    segment_ = lab.astype(np.int16)
+    segment_[:50] = -1
+    np.save(folder / "segment.npy", segment_)
+    return pts.astype(np.float32).astype(np.float64), rgb
+
+
+def test_a_scene_folder_s_coord_npy_reads_its_colour_and_normals(tmp_path, capsys):
+    import csv
+
+    from superfacets import segment_tiled
+
+    pts, rgb = _scene(tmp_path / "scene0000_00", 0)
+    _scene(tmp_path / "scene0001_00", 1)
+    coord = tmp_path / "scene0000_00" / "coord.npy"
+    cloud = read_cloud(coord)
+    assert np.array_equal(cloud.points, pts) and np.allclose(cloud.colors * 255, rgb)
+    assert np.allclose(cloud.normals, [0, 0, 1])
+    one = segment(cloud, 12, beta=1.0)
+    tiled = segment_tiled(coord, 12, tiles=2, workdir=tmp_path / "work", beta=1.0)
+    assert len(np.unique(tiled.labels)) == 12 and tiled.labels.min() >= 0
+    assert np.array_equal(segment(PointCloud(pts, colors=rgb / 255, normals=cloud.normals),
+                                  12, beta=1.0).labels, one.labels)
+    # each scene judged against the segment.npy beside it, -1 left out
+    out = tmp_path / "rows.csv"
+    assert main(["experiment", "--inputs", str(tmp_path / "*" / "coord.npy"),
+                 "--ground-truths", "segment.npy", "--ignore-label", "-1", "-m",
+                 "superfacets", "-k", "10", "--alpha", "0", "-o", str(out), "-q"]) == 0
+    rows = list(csv.DictReader(out.open()))
+    assert sorted(r["mesh"] for r in rows) == ["scene0000_00/coord", "scene0001_00/coord"]
+    assert all(r["status"] == "ok" and float(r["undersegmentation_error"]) < 0.05
+               for r in rows)
+    # one file for every input is refused; so is a colour file of another length
+    assert main(["experiment", "--inputs", str(tmp_path / "*" / "coord.npy"),
+                 "--ground-truths", "../scene0000_00/segment.npy", "-k", "10", "-o",
+                 str(tmp_path / "no.csv")]) == 2
+    assert "2 inputs (" in capsys.readouterr().err and not (tmp_path / "no.csv").exists()
+    np.save(tmp_path / "scene0001_00" / "color.npy", rgb[:10])
+    with pytest.raises(MeshFormatError, match=r"color.npy: the scene's color should be "
+                                              r"\(1,500, 3\)"):
+        read_cloud(tmp_path / "scene0001_00" / "coord.npy")
+
+
+def test_a_folder_of_scene_folders_gives_each_coord_npy_once(tmp_path):
+    # (batch on a Pointcept tree read color.npy as a cloud of colours, segment.npy as an error)
+    from superfacets.scale.runner.collect import collect_inputs
+
+    for name in ("scene0000_00", "scene0001_00"):
+        _scene(tmp_path / name, 0)
+    np.save(tmp_path / "loose.npy", np.zeros((10, 3)))  # (not a scene: an input)
+    passed = []
+    found = collect_inputs([str(tmp_path)], passed=passed)
+    assert sorted(p.relative_to(tmp_path).as_posix() for p in found) == [
+        "loose.npy", "scene0000_00/coord.npy", "scene0001_00/coord.npy"]
+    assert len(passed) == 6 and all("Pointcept" in why for _, why in passed)

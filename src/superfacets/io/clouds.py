@@ -18,7 +18,8 @@ Points keep their file order (labels come back in that order). Readers:
   organized ``(H, W)``): normals from ``nx ny nz`` (or ``normal_x ...``), colours from
   ``r g b`` / ``red green blue`` or PCL's packed ``rgb``, a row NaN in x, y and z a
   missing point, the other fields readable as ground truths (:func:`~superfacets.io.
-  labels.read_field`);
+  labels.read_field`); a scene folder's ``coord.npy`` (Pointcept's layout) with its
+  ``color.npy`` and ``normal.npy`` (:func:`scene_assets`);
 - LAS / LAZ: ``laspy`` (extra ``clouds``; LAZ through its ``lazrs`` backend),
   scaled coordinates.
 - E57 (ASTM E2807, terrestrial scanners' exchange format): ``pye57`` (extra
@@ -50,7 +51,7 @@ from .files import read_bytes, split_suffix
 from .ply import COLOR_PROPERTIES, ply_colors, read_ply_scalars
 
 __all__ = ["read_cloud", "CLOUD_FORMATS", "is_cloud_file", "check_laz", "check_las",
-           "e57_counts"]
+           "e57_counts", "scene_assets", "SCENE_ASSETS"]
 
 from .._runtime import extras
 from ..checks import not_real
@@ -587,7 +588,8 @@ def _read_npy(data: bytes, path: Path) -> dict:
                 "shape": (h, w)}
     if arr.ndim == 2 and arr.shape[1] in (3, 6):
         arr = arr.astype(np.float64)
-        return {"points": arr[:, :3], "normals": arr[:, 3:] if arr.shape[1] == 6 else None}
+        out = {"points": arr[:, :3], "normals": arr[:, 3:] if arr.shape[1] == 6 else None}
+        return {**out, **scene_assets(path, len(arr))} if arr.shape[1] == 3 else out
     raise MeshFormatError(f"{path}: NPY array of shape {arr.shape}: expected (N, 3) points, "
                           "(N, 6) points and normals, or organized (H, W, 3)")
 
@@ -629,3 +631,60 @@ def _npy_records(arr: np.ndarray, path: Path) -> dict:
     if arr.ndim == 2:  # an organized cloud (a depth camera's frame): NaN points invalid
         return {**out, "allow_invalid": True, "shape": tuple(arr.shape)}
     return {**out, "allow_invalid": missing_points(pts, str(path))}
+
+
+#: A learning pipeline's scene folder (Pointcept's: one ``NAME.npy`` per asset, the points
+#: in ``coord.npy``): the assets read beside the points, as what the cloud holds.
+SCENE_ASSETS = {"color": "colors", "normal": "normals"}
+
+
+def scene_assets(path, n: int) -> dict:
+    """The colours and normals of a scene folder's ``coord.npy`` (Pointcept's layout:
+    ``coord.npy``, ``color.npy``, ``normal.npy``, ``segment.npy``, ... one row a point):
+    the files beside ``path`` of :data:`SCENE_ASSETS`, where ``path`` is a ``coord.npy``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The points' file.
+    n : int
+        Its points.
+
+    Returns
+    -------
+    dict
+        ``colors`` (``(n, 3)`` in ``[0, 1]``) and ``normals`` (``(n, 3)``), those found;
+        empty for any other file.
+
+    Raises
+    ------
+    MeshFormatError
+        If an asset is there but not ``(n, 3)`` real numbers (the file named).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> scene = Path(tempfile.mkdtemp())
+    >>> np.save(scene / "coord.npy", np.zeros((4, 3))); np.save(scene / "color.npy",
+    ...     np.full((4, 3), 255, dtype=np.uint8))
+    >>> scene_assets(scene / "coord.npy", 4)["colors"].tolist()[0]
+    [1.0, 1.0, 1.0]
+    """
+    path = Path(path)
+    if path.name != "coord.npy":
+        return {}
+    out = {}
+    for asset, key in SCENE_ASSETS.items():
+        beside = path.parent / f"{asset}.npy"
+        if not beside.is_file():
+            continue
+        try:
+            arr = np.load(beside, allow_pickle=False)
+        except Exception as exc:  # noqa: BLE001 - numpy raises many types on damaged files
+            raise MeshFormatError(f"{beside}: cannot read NPY: {exc}") from None
+        if arr.shape != (n, 3) or not_real(arr.dtype, "NPY"):
+            raise MeshFormatError(f"{beside}: the scene's {asset} should be ({n:,}, 3) real "
+                                  f"numbers, one row a point of coord.npy; it is "
+                                  f"{arr.shape} {arr.dtype}")
+        out[key] = unit_colors(arr) if key == "colors" else arr.astype(np.float64)
+    return out

@@ -51,7 +51,7 @@ from ..inputs.cloud import (
 from ..inputs.convert import as_mesh
 from ..inputs.mesh import Mesh, check_finite_vertices
 from ..inputs.rgb import color_top, unit_colors
-from .clouds import is_cloud_file, read_cloud, unusable_normals, withheld_rows
+from .clouds import SCENE_ASSETS, is_cloud_file, read_cloud, unusable_normals, withheld_rows
 from .headers import NotStreamedError, check_las, first_line, npy_mapped, ply_mapped, ply_names
 from .meshes import read_mesh
 from .ply import VertexView
@@ -108,7 +108,9 @@ def streamed(path) -> bool:
             arr = npy_mapped(p)
         except MeshFormatError:
             return False  # (read whole: the reader says what is wrong)
-        return arr.ndim == 2 and arr.shape[1] == 3
+        assets = p.name == "coord.npy" and any((p.parent / f"{a}.npy").is_file()
+                                                for a in SCENE_ASSETS)
+        return arr.ndim == 2 and arr.shape[1] == 3 and not assets  # (a scene's: whole)
     try:
         ply = ply_mapped(p)
     except NotStreamedError:

@@ -79,7 +79,8 @@ def collect_inputs(specs: Sequence[str], exclude=None, skipped: list | None = No
     ----------
     specs : sequence of str
         Files; folders (searched recursively, links to folders followed once each, for
-        every format the readers accept, hidden files, ``.txt`` and ``.csv`` left out); glob
+        every format the readers accept, hidden files, ``.txt`` and ``.csv`` left out, and
+        in a scene folder of Pointcept's the ``.npy`` beside ``coord.npy``); glob
         patterns (``**`` recurses); ``@list.txt`` (one of these per line, ``#``
         comments).
     exclude : path, optional
@@ -139,13 +140,18 @@ def collect_inputs(specs: Sequence[str], exclude=None, skipped: list | None = No
                 continue
             visited.add((st.st_dev, st.st_ino))
             dirs[:] = sorted(x for x in dirs if not x.startswith("."))
+            scene = "coord.npy" in files  # (a scene folder: its other .npy are its assets)
             for name in sorted(files):
-                if not name.startswith(".") and _is_input(Path(name), explicit=False):
+                asset = scene and name.endswith(".npy") and name != "coord.npy"
+                if not name.startswith(".") and not asset and _is_input(Path(name),
+                                                                         explicit=False):
                     keep(Path(root) / name)
                     n += 1
                 elif passed is not None and not name.startswith(".") and (
                         skip is None or not skip(Path(root) / name)):
-                    passed.append((str(Path(root) / name), _why_not(name)))
+                    passed.append((str(Path(root) / name), "an asset of the scene in "
+                                   "coord.npy (Pointcept's layout)" if asset else
+                                   _why_not(name)))
         return n
 
     def one(spec: str, depth: int = 0) -> None:
@@ -342,7 +348,8 @@ def file_entries(specs, field: str | None = None, truths: str | None = None
         Each file's ground truth as a label file (what :func:`superfacets.read_labels`
         reads: ``.seg``, SemanticKITTI's ``.label``, ...): named by this pattern from the
         file's folder, ``{stem}`` the file's name without its suffix
-        (``"../labels/{stem}.label"``); or a list file (``.csv``, ``.tsv``, ``.txt``) of
+        (``"../labels/{stem}.label"``; ``"segment.npy"`` in a scene folder of Pointcept's,
+        each input's its own); or a list file (``.csv``, ``.tsv``, ``.txt``) of
         one input and its ground truth a line (separated by a comma, a tab or spaces;
         relative paths from the list's folder; ``#`` comments), for names no pattern
         makes (Open3D-ML's ``X_points.npy`` and ``X_labels.npy``, nuScenes' tokens).
@@ -357,8 +364,9 @@ def file_entries(specs, field: str | None = None, truths: str | None = None
         When a spec matches nothing, or a file's ground truth (``truths``) is not there:
         the first missing named, and how many are.
     ParameterError
-        When a folder holds no input, ``truths`` names no ``{stem}`` or another field and
-        is no list file, a line of the list is not two paths, or an input is not listed.
+        When a folder holds no input, ``truths`` names another field than ``{stem}`` and
+        is no list file, a line of the list is not two paths, an input is not listed, or
+        two inputs would share one ground truth.
 
     Examples
     --------
@@ -381,6 +389,15 @@ def file_entries(specs, field: str | None = None, truths: str | None = None
         seg = () if truths is None else (
             listed[p.resolve()] if listed is not None else _truth_of(p, truths),)
         out.append(FileEntry(i, input_kind(p), p, seg_paths=seg, field=field, name=names[p]))
+    shared = {}
+    for e in out:
+        if e.seg_paths:
+            shared.setdefault(e.seg_paths[0].resolve(), []).append(e.path)
+    one = next((t for t, by in shared.items() if len(by) > 1), None)
+    if one is not None:  # (a pattern without {stem}, all inputs in one folder)
+        raise ParameterError(f"--ground-truths {truths}: {len(shared[one])} inputs "
+                             f"({shared[one][0]}, {shared[one][1]}, ...) would "
+                             f"share one ground truth, {one}: name each its own with {{stem}}")
     missing = [e.seg_paths[0] for e in out if e.seg_paths and not e.seg_paths[0].is_file()]
     if missing:
         raise FileNotFoundError(f"{missing[0]}: no such ground truth (--ground-truths "
@@ -436,7 +453,7 @@ def _truth_of(path: Path, pattern: str) -> Path:
         names = {f for _, f, _, _ in string.Formatter().parse(pattern) if f is not None}
     except ValueError:  # (an unmatched brace)
         names = set()
-    if names != {"stem"}:
+    if names not in ({"stem"}, set()) or "{" in pattern and not names:
         raise ParameterError(f"--ground-truths {pattern!r}: name each file's ground truth "
                              "with {stem} (the file's name without its suffix) and nothing "
                              "else in braces, e.g. '../labels/{stem}.label', or give a list "
