@@ -61,3 +61,39 @@ def test_a_terrestrial_scan_s_seven_columns_give_its_colours(tmp_path):
     (tmp_path / "frac.txt").write_text("".join(
         f"0.{i:03d} 0.{(7 * i) % 997:03d} 0.5 -3.5 1 2 3\n" for i in range(300)))
     assert read_cloud(tmp_path / "frac.txt").colors is None
+
+
+def test_each_task_s_warnings_go_to_its_own_row_on_a_worker_of_many_threads(recwarn):
+    # (warnings.catch_warnings swaps the process's filters and showwarning: on a Dask worker
+    # of several threads one task's warnings went into another's row, and two tasks ending
+    # out of order left every later warning recorded into a list no one read)
+    import threading
+    import warnings
+
+    from superfacets._runtime.warned import task_warnings
+
+    step = threading.Barrier(2)
+    said = {}
+
+    def task(name, first_out):
+        with task_warnings(ignore=("dull",)) as mine:
+            step.wait()
+            for i in range(3):
+                warnings.warn(f"{name} {i}", RuntimeWarning)
+                warnings.warn(f"{name} dull {i}", UserWarning)
+                step.wait()
+            if first_out:
+                step.wait()  # the other ends first
+        if not first_out:
+            step.wait()
+        said[name] = mine
+
+    threads = [threading.Thread(target=task, args=(n, n == "a")) for n in ("a", "b")]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(timeout=60)
+    assert said == {"a": ["a 0", "a 1", "a 2"], "b": ["b 0", "b 1", "b 2"]}
+    assert not [w for w in recwarn if "dull" in str(w.message) or " 0" in str(w.message)]
+    warnings.warn("after the tasks", UserWarning)  # shown as before, not recorded away
+    assert [str(w.message) for w in recwarn] == ["after the tasks"]

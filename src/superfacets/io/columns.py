@@ -13,14 +13,13 @@ of the whole file are never held at once as Python strings.
 from __future__ import annotations
 
 import re
-import warnings
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import MeshFormatError
 from ..inputs.rgb import unit_colors
-from .files import split_suffix
+from .files import number_table, split_suffix
 from .ply import COLOR_PROPERTIES
 
 __all__ = ["read_columns"]
@@ -237,9 +236,7 @@ def _numbers(body: list) -> np.ndarray | None:
     """The lines' numbers as an (n, width) float64 array, parsed by numpy (about 0.5 s per
     million lines), or None where a line is ragged or holds something else."""
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            return np.loadtxt(body, dtype=np.float64, comments=None, ndmin=2)
+        return number_table(body)
     except ValueError:
         return None
 

@@ -25,7 +25,8 @@ from .._runtime import memory
 from ..checks import check_int
 from ..errors import MemoryLimitError, MeshFormatError, ParameterError, SuperfacetsError
 
-__all__ = ["split_suffix", "read_bytes", "text_lines", "text_chunks", "atomic_write", "Outputs",
+__all__ = ["split_suffix", "read_bytes", "text_lines", "text_chunks", "number_table",
+           "atomic_write", "Outputs",
            "save", "COMPRESSIONS", "decompressed", "decompressed_head", "sha256_of", "array_digest",
            "load_checked"]
 
@@ -408,6 +409,43 @@ def _npy_fits(path) -> bool:
                 f.tell() + math.prod(shape) * dtype.itemsize == size
     except (ValueError, TypeError, SyntaxError):
         return False
+
+
+def number_table(lines: list, dtype=None):
+    """Lines of numbers as an ``(n, width)`` array, by :func:`numpy.loadtxt` (no comments),
+    without its warning on lines that hold no number: those give ``(0, 1)``, as it does.
+
+    Readers run on many threads at once (a Dask worker's, a user's pool): a reader that
+    silenced numpy's warning with :class:`warnings.catch_warnings` changed the filters of
+    every thread meanwhile, and two such readers ending out of order left every warning of
+    the process ignored.
+
+    Parameters
+    ----------
+    lines : list of str
+    dtype : numpy dtype, optional
+        float64 by default.
+
+    Returns
+    -------
+    (n, width) ndarray
+
+    Raises
+    ------
+    ValueError
+        Where numpy cannot read the lines whole (ragged rows, a word that is no number).
+
+    Examples
+    --------
+    >>> number_table(["1 2 3", "4 5 6"]).shape, number_table(["  ", ""]).shape
+    ((2, 3), (0, 1))
+    """
+    import numpy as np
+
+    dtype = np.float64 if dtype is None else dtype
+    if not any(line.strip() for line in lines):
+        return np.zeros((0, 1), dtype=dtype)
+    return np.loadtxt(lines, dtype=dtype, comments=None, ndmin=2)
 
 
 def text_lines(data: bytes, path: Path) -> list[str]:

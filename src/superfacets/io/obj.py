@@ -10,7 +10,6 @@ a large text costs about its arrays, not a Python string per line.
 from __future__ import annotations
 
 import re
-import warnings
 from operator import itemgetter
 from pathlib import Path
 
@@ -18,7 +17,7 @@ import numpy as np
 
 from ..errors import InvalidMeshError, MeshFormatError
 from ..inputs.rgb import unit_colors
-from .files import text_chunks
+from .files import number_table, text_chunks
 
 __all__ = ["parse_obj"]
 
@@ -141,9 +140,7 @@ def _table(rows: list[str], dtype) -> np.ndarray | None:
     """The numbers after each row's statement as one table, or None where numpy cannot
     read them whole (rows of different lengths, a word that is not a number)."""
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # (numpy refuses ragged rows itself)
-            return np.loadtxt(list(map(_TAIL, rows)), dtype=dtype, ndmin=2, comments=None)
+        return number_table(list(map(_TAIL, rows)), dtype)
     except (ValueError, OverflowError):
         return None
 

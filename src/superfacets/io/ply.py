@@ -11,13 +11,13 @@ shown by MeshLab, Blender, Open3D or trimesh. Vertices are written as doubles
 from __future__ import annotations
 
 import io
-import warnings
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import MeshFormatError
 from ..inputs.rgb import unit_colors
+from .files import number_table
 from .headers import ply_names
 
 __all__ = ["ply_bytes", "read_ply_labels", "ply_colors", "read_ply_triangles", "VertexView",
@@ -194,10 +194,7 @@ def _ascii_scalars(body: bytes, layout: list) -> dict | None:
         if not props or at + count > len(lines):
             return None
         try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                values = np.loadtxt([ln.decode("ascii") for ln in lines[at:at + count]],
-                                    dtype=np.float64, comments=None, ndmin=2)
+            values = number_table([ln.decode("ascii") for ln in lines[at:at + count]])
         except (ValueError, UnicodeDecodeError):
             return None
         if values.shape != (count, len(props)) and count:

@@ -25,7 +25,6 @@ from __future__ import annotations
 import contextlib
 import json
 import time
-import warnings
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
@@ -33,6 +32,7 @@ from typing import Sequence
 
 from ..._runtime import extras, interrupts
 from ..._runtime.progress import new_bar, tick
+from ..._runtime.warned import task_warnings
 from ...api.levels import adaptive_segment
 from ...api.scenes import segment_objects
 from ...api.segmentation import segment
@@ -116,16 +116,15 @@ def segment_file(task: dict) -> dict:
     row.update(input=task["input"], output=label_rel)
     probe = PeakMemory()
     t0 = time.perf_counter()
-    with warnings.catch_warnings(record=True) as said:  # (the row keeps them, named by its
-        warnings.simplefilter("always")                  # input: a worker's would not be)
-        try:
+    with task_warnings() as said:  # (the row keeps them, named by its input: a worker's
+        try:                           # printed warnings would not be)
             row.update(_segment_and_write(task, label_rel))
             row["status"] = "ok"
         except Exception as exc:  # noqa: BLE001 - a failed row; the batch goes on
             row.update(status="failed", error=error_text(exc))
         except MemoryError as exc:  # pragma: no cover - depends on the machine
             row.update(status="failed", error=error_text(exc))
-    row["warnings"] = "\n".join(dict.fromkeys(str(w.message).strip() for w in said)) or None
+    row["warnings"] = "\n".join(dict.fromkeys(said)) or None
     row["seconds"] = round(time.perf_counter() - t0, 4)
     peak = probe.peak_mib(above_start=False)
     row["peak_mib"] = None if peak is None else round(peak, 1)

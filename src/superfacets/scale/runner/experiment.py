@@ -14,8 +14,8 @@ its error and does not stop the run; a worker that dies is replaced.
 from __future__ import annotations
 
 import csv
+import re
 import time
-import warnings
 from dataclasses import dataclass, field
 from functools import lru_cache
 from itertools import product
@@ -26,6 +26,7 @@ import numpy as np
 
 from ..._runtime import interrupts
 from ..._runtime.progress import new_bar, tick
+from ..._runtime.warned import task_warnings
 from ...elements import face_graph
 from ...elements.builders import elements_of
 from ...elements.kinds import KINDS, kind_of
@@ -146,12 +147,11 @@ def _run_task(task: dict) -> list[dict]:
         try:
             probe = PeakMemory()
             t0 = time.perf_counter()
-            with warnings.catch_warnings(record=True) as said:  # (told by the summary,
-                warnings.simplefilter("always")  # named by input, not from a worker)
-                warnings.filterwarnings(  # (a baseline's count far from k: its row's
-                    "ignore", ".*" + COUNT_MISSED, RuntimeWarning)  # `segments` says it)
+            # (told by the summary, named by input, not from a worker; a baseline's count
+            # far from k is said by its row's `segments`)
+            with task_warnings(ignore=(re.escape(COUNT_MISSED),)) as said:
                 out = run(data, k, cache=cache, seed=task["seed"], **params, **extra)
-            row["warnings"] = list(dict.fromkeys(str(w.message).strip() for w in said))
+            row["warnings"] = list(dict.fromkeys(said))
             seconds = time.perf_counter() - t0
             peak = probe.peak_mib()
             row["seconds"] = round(seconds + float(out.reused_seconds), 4)
