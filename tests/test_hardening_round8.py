@@ -97,3 +97,27 @@ def test_each_task_s_warnings_go_to_its_own_row_on_a_worker_of_many_threads(recw
     assert not [w for w in recwarn if "dull" in str(w.message) or " 0" in str(w.message)]
     warnings.warn("after the tasks", UserWarning)  # shown as before, not recorded away
     assert [str(w.message) for w in recwarn] == ["after the tasks"]
+
+
+def test_a_colour_of_nan_or_infinity_is_refused_without_numpy_s_warning(tmp_path):
+    # (an all-NaN colour file: numpy's "All-NaN slice" warning before the refusal; an
+    # infinite colour was clipped to 1, a silent colour)
+    import warnings
+
+    import pytest
+
+    from superfacets import read_cloud
+    from superfacets.inputs.cloud import InvalidCloudError
+
+    scene = tmp_path / "scene"
+    scene.mkdir()
+    np.save(scene / "coord.npy", np.random.default_rng(0).random((50, 3)))
+    bad = np.full((50, 3), 100.0)
+    for value, row in ((np.nan, 0), (np.inf, 7)):
+        colour = np.full((50, 3), np.nan) if row == 0 else bad.copy()
+        colour[row, 1] = value
+        np.save(scene / "color.npy", colour)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            with pytest.raises(InvalidCloudError, match=f"colour {row} is not finite"):
+                read_cloud(scene / "coord.npy")

@@ -22,7 +22,8 @@ def unit_colors(rgb: np.ndarray, top: float | None = None) -> np.ndarray:
     8-bit integers are divided by 255, 16-bit ones by 65535 (or by 255 where
     no value exceeds 255: LAS writers that store 8 bits in 16), floats kept
     (divided by 255 where one exceeds 1: floats holding 0..255), then clipped
-    to ``[0, 1]``; NaN is kept (an invalid point's colour).
+    to ``[0, 1]``; NaN is kept (an invalid point's colour), and an infinity (damage, which
+    the cloud or mesh then refuses).
 
     Parameters
     ----------
@@ -47,9 +48,10 @@ def unit_colors(rgb: np.ndarray, top: float | None = None) -> np.ndarray:
             top = color_top(a.dtype.itemsize, int(a.max()) if a.size else 0)
         return np.clip(a.astype(np.float64) / top, 0.0, 1.0)
     a = a.astype(np.float64)
-    if a.size and np.nanmax(a) > 1.0:  # floats holding 0..255
+    if np.isfinite(a).any() and np.nanmax(np.where(np.isinf(a), np.nan, a)) > 1.0:
+        # floats holding 0..255 (NaN and infinities are checked by the cloud)
         a = a / 255.0
-    return np.clip(a, 0.0, 1.0)
+    return np.where(np.isinf(a), a, np.clip(a, 0.0, 1.0))  # (an infinity is damage: kept)
 
 
 def color_top(itemsize: int, largest: int) -> float:
