@@ -98,6 +98,14 @@ def _cloud_seeds() -> dict:
     seeds = {"c.xyz": text, "c.pts": b"300\n" + text, "c.npy": malformed._npy(pts),
              "c.pcd": pcd + pts.astype("<f4").tobytes(),
              "c.ply": trimesh.PointCloud(pts, colors=rgb).export(file_type="ply")}
+    records = np.zeros(300, dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("rgb", "<f4"),
+                                   ("label", "<i4")])
+    records["x"], records["y"], records["z"] = pts.T
+    records["rgb"] = (rgb.astype(np.uint32) @ np.array([1 << 16, 1 << 8, 1],
+                                                         dtype=np.uint32)).view("<f4")
+    seeds["r.npy"] = malformed._npy(records)
+    seeds["s.txt"] = "".join(f"{x:.4f} {y:.4f} {z:.4f} {-i} {r} {g} {b}\n" for i, ((x, y, z), (
+        r, g, b)) in enumerate(zip(pts, rgb))).encode()  # (Semantic3D's seven columns)
     for name, las in _las_files(pts, rgb).items():
         seeds[name] = las
     return seeds
