@@ -170,6 +170,10 @@ def test_a_scene_folder_s_coord_npy_reads_its_colour_and_normals(tmp_path, capsy
     assert sorted(r["mesh"] for r in rows) == ["scene0000_00/coord", "scene0001_00/coord"]
     assert all(r["status"] == "ok" and float(r["undersegmentation_error"]) < 0.05
                for r in rows)
+    # the folder itself is the scene, for every command of one input
+    assert main(["segment", str(tmp_path / "scene0000_00"), "-k", "12", "--beta", "1", "-o",
+                 str(tmp_path / "sp.npy")]) == 0
+    assert np.array_equal(np.load(tmp_path / "sp.npy"), one.labels)
     # one file for every input is refused; so is a colour file of another length
     assert main(["experiment", "--inputs", str(tmp_path / "*" / "coord.npy"),
                  "--ground-truths", "../scene0000_00/segment.npy", "-k", "10", "-o",

@@ -23,6 +23,7 @@ from __future__ import annotations
 import argparse
 import sys
 import warnings
+from pathlib import Path
 
 __all__ = ["main", "build_parser"]
 
@@ -106,6 +107,14 @@ def _did_you_mean(parser: argparse.ArgumentParser, unknown: list[str]) -> str:
     return ("; " + "; ".join(hints)) if hints else ""
 
 
+def _scene_folder(args) -> None:
+    """A scene folder given as the input (Pointcept's layout, ``scene0000_00/``) is its
+    ``coord.npy`` (read with the ``color.npy`` and ``normal.npy`` beside it)."""
+    given = getattr(args, "mesh", None)
+    if isinstance(given, str) and Path(given).is_dir() and (Path(given) / "coord.npy").is_file():
+        args.mesh = str(Path(given) / "coord.npy")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``superfacets`` console script.
 
@@ -131,6 +140,7 @@ def main(argv: list[str] | None = None) -> int:
         parser = build_parser()
         parser.argv = list(sys.argv[1:] if argv is None else argv)  # for its error hints
         args = parser.parse_args(_axis_values(parser.argv))
+        _scene_folder(args)
         code = args.func(args)
         if getattr(restore, "state", {}).get("terminated"):  # a SIGTERM the run went on
             print("superfacets: terminated", file=sys.stderr)  # past (swallowed on the
