@@ -104,6 +104,7 @@ def _cloud_seeds() -> dict:
     records["rgb"] = (rgb.astype(np.uint32) @ np.array([1 << 16, 1 << 8, 1],
                                                          dtype=np.uint32)).view("<f4")
     seeds["r.npy"] = malformed._npy(records)
+    seeds["p.glb"] = trimesh.Scene(trimesh.PointCloud(pts, colors=rgb)).export(file_type="glb")
     seeds["s.txt"] = "".join(f"{x:.4f} {y:.4f} {z:.4f} {-i} {r} {g} {b}\n" for i, ((x, y, z), (
         r, g, b)) in enumerate(zip(pts, rgb))).encode()  # (Semantic3D's seven columns)
     for name, las in _las_files(pts, rgb).items():

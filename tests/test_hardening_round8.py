@@ -121,3 +121,43 @@ def test_a_colour_of_nan_or_infinity_is_refused_without_numpy_s_warning(tmp_path
             warnings.simplefilter("error")
             with pytest.raises(InvalidCloudError, match=f"colour {row} is not finite"):
                 read_cloud(scene / "coord.npy")
+
+
+def test_a_gltf_of_points_is_a_point_cloud(tmp_path):
+    # (a GLB of POINTS primitives, as trimesh or a photogrammetry tool writes a cloud: "the
+    # scene holds no mesh with faces")
+    import gzip
+
+    import trimesh
+
+    from superfacets import read_input, segment, segment_tiled
+    from superfacets.io.clouds import is_cloud_file
+
+    rng = np.random.default_rng(0)
+    xy = rng.random((2000, 2))
+    pts = np.c_[xy, 0.1 * np.sin(6 * xy[:, 0])]
+    rgb = np.c_[(xy * 255).astype(np.uint8), np.full((2000, 2), 255, dtype=np.uint8)]
+    scene = trimesh.Scene()
+    scene.add_geometry(trimesh.PointCloud(pts[:1200], colors=rgb[:1200]))
+    moved = np.eye(4)
+    moved[:3, 3] = [5.0, 0, 0]
+    scene.add_geometry(trimesh.PointCloud(pts[1200:], colors=rgb[1200:]), transform=moved)
+    data = scene.export(file_type="glb")
+    (tmp_path / "scan.glb").write_bytes(data)
+    (tmp_path / "scan.glb.gz").write_bytes(gzip.compress(data))
+    want = np.r_[pts[:1200], pts[1200:] + [5.0, 0, 0]]
+    for name in ("scan.glb", "scan.glb.gz"):
+        cloud = read_input(tmp_path / name)
+        assert is_cloud_file(tmp_path / name) and cloud.n_points == 2000, name
+        order = np.lexsort(cloud.points.T)
+        assert np.allclose(cloud.points[order], want[np.lexsort(want.T)], atol=1e-6)
+        assert np.allclose(np.sort(cloud.colors[:, 0] * 255), np.sort(rgb[:, 0]), atol=0.5)
+    labels = segment(read_input(tmp_path / "scan.glb"), 10).labels
+    assert labels.shape == (2000,) and len(np.unique(labels)) == 10
+    tiled = segment_tiled(tmp_path / "scan.glb", 10, tiles=2, workdir=tmp_path / "work")
+    assert len(np.unique(tiled.labels)) == 10
+    # a scene with faces stays a mesh (its points left out, as before)
+    both = trimesh.Scene([trimesh.creation.icosphere(2), trimesh.PointCloud(pts)])
+    (tmp_path / "both.glb").write_bytes(both.export(file_type="glb"))
+    assert not is_cloud_file(tmp_path / "both.glb")
+    assert read_input(tmp_path / "both.glb").n_faces == 320

@@ -211,9 +211,21 @@ def test_scenes_join_objects_and_segment_per_object(tmp_path):
         other = np.r_[labels[:a], labels[b:]]
         assert not set(labels[a:b]) & set(other)
     assert np.unique(labels).size == labels.max() + 1
-    empty = tmp_path / "points.glb"
-    empty.write_bytes(trimesh.Scene([trimesh.PointCloud(np.eye(3))]).export(file_type="glb"))
-    assert main(["segment", str(empty)]) == 2
+    # a scene of lines alone holds nothing to segment (one of points is a cloud)
+    lines = tmp_path / "lines.gltf"
+    buffer = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0]], dtype="<f4").tobytes()
+    import base64
+    import json
+
+    lines.write_text(json.dumps({
+        "asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "mode": 1}]}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                       "min": [0, 0, 0], "max": [1, 1, 0]}],
+        "bufferViews": [{"buffer": 0, "byteLength": len(buffer)}],
+        "buffers": [{"byteLength": len(buffer), "uri": "data:application/octet-stream;base64,"
+                     + base64.b64encode(buffer).decode()}]}))
+    assert main(["segment", str(lines)]) == 2
 
 
 def test_vsa_refuses_polygons_clearly():

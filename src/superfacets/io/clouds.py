@@ -72,8 +72,9 @@ CLOUD_FORMATS = ("pcd", "xyz", "pts", "txt", "csv", "npy", "las", "laz", "e57", 
 
 
 def is_cloud_file(path) -> bool:
-    """Whether ``path`` holds a point cloud: a cloud format, or a PLY, OFF or OBJ of
-    vertices and no face (as MeshLab saves a cloud in a mesh format).
+    """Whether ``path`` holds a point cloud: a cloud format, a PLY, OFF or OBJ of vertices
+    and no face (as MeshLab saves a cloud in a mesh format), or a glTF/GLB whose meshes
+    are all points (``POINTS`` primitives).
 
     Parameters
     ----------
@@ -97,6 +98,8 @@ def is_cloud_file(path) -> bool:
     fmt, comp = split_suffix(path)
     if fmt in CLOUD_FORMATS:
         return True
+    if fmt in ("glb", "gltf") and path.is_file():
+        return _gltf_of_points(path, fmt, comp)
     if fmt not in ("ply", "off", "obj") or not path.is_file():
         return False
     if fmt == "obj":
@@ -116,6 +119,58 @@ def is_cloud_file(path) -> bool:
     faces = [int(p[2]) for p in (ln.split() for ln in head)
              if len(p) == 3 and p[0] == b"element" and p[1] == b"face" and p[2].isdigit()]
     return not faces or faces[0] == 0
+
+
+#: The most bytes of a ``.gltf`` read to tell whether it holds points (its JSON may hold its
+#: buffers as base64; larger, it is read as a mesh, whose reader says what it holds).
+GLTF_SNIFF_BYTES = 64 << 20
+
+
+def _gltf_of_points(path: Path, fmt: str, comp: str | None) -> bool:
+    """Whether a glTF/GLB file's meshes are all points (:func:`is_cloud_file`)."""
+    from .headers import gltf_document, gltf_points_only
+
+    try:
+        if comp:
+            data = read_bytes(path, comp)
+        elif fmt == "glb":
+            with path.open("rb") as f:
+                head = f.read(20)
+                size = int.from_bytes(head[12:16], "little") if len(head) == 20 else 0
+                data = head + f.read(min(size, GLTF_SNIFF_BYTES))
+        else:
+            if path.stat().st_size > GLTF_SNIFF_BYTES:
+                return False
+            data = path.read_bytes()
+    except (OSError, MeshFormatError):
+        return False  # (read_mesh says what is wrong)
+    return gltf_points_only(gltf_document(data, fmt))
+
+
+def _read_gltf_points(path: Path, fmt: str, comp: str | None) -> dict:
+    """The points of a glTF/GLB of ``POINTS`` primitives, each node's transform applied, in
+    the scene's order, with their ``COLOR_0`` where every one has colours."""
+    import trimesh
+
+    from .meshes import load_gltf_scene
+
+    scene = load_gltf_scene(path, fmt, comp, read_bytes(path, comp))
+    parts, colours = [], []
+    for node in scene.graph.nodes_geometry:
+        transform, key = scene.graph[node]
+        geom = scene.geometry[key]
+        if not isinstance(geom, trimesh.PointCloud) or not len(geom.vertices):
+            continue
+        t = np.asarray(transform, dtype=np.float64)
+        parts.append(np.asarray(geom.vertices, dtype=np.float64) @ t[:3, :3].T + t[:3, 3])
+        rgb = np.asarray(geom.colors)
+        colours.append(rgb[:, :3] if rgb.ndim == 2 and len(rgb) == len(geom.vertices)
+                       else None)
+    if not parts:
+        raise InvalidCloudError(f"{path}: the scene holds no point")
+    col = (unit_colors(np.concatenate(colours)) if all(c is not None for c in colours)
+           else None)
+    return {"points": np.concatenate(parts), "colors": col}
 
 
 def _off_counts(data: bytes) -> tuple[int, int] | None:
@@ -174,7 +229,8 @@ def read_cloud(path, format: str | None = None):
     Parameters
     ----------
     path : str or os.PathLike
-        ``.ply``, ``.obj`` or ``.off`` (no faces), ``.pcd``, ``.xyz``, ``.pts``, ``.txt``,
+        ``.ply``, ``.obj`` or ``.off`` (no faces), ``.glb``/``.gltf`` (points), ``.pcd``,
+        ``.xyz``, ``.pts``, ``.txt``,
         ``.csv``, ``.npy``, ``.las``, ``.laz``, ``.e57``, KITTI's ``.bin`` or nuScenes'
         ``.pcd.bin``; text formats and PLY may end in ``.gz``/``.xz``/``.bz2``.
     format : str, optional
@@ -213,7 +269,7 @@ def read_cloud(path, format: str | None = None):
         if not isinstance(format, str):
             raise TypeError(f"format must be a suffix such as 'ply', got {format!r}")
         fmt = format.lower().lstrip(".")
-    if fmt not in CLOUD_FORMATS + ("ply", "obj", "off"):
+    if fmt not in CLOUD_FORMATS + ("ply", "obj", "off", "glb", "gltf"):
         raise MeshFormatError(f"{path}: unknown point-cloud format "
                               f"{('.' + fmt) if fmt else '(no suffix)'}; expected .ply or one of "
                               f"{', '.join('.' + f for f in CLOUD_FORMATS)}")
@@ -225,6 +281,8 @@ def read_cloud(path, format: str | None = None):
         kw = _read_pcd(path)
     elif fmt in ("las", "laz"):
         kw = _read_las(path)
+    elif fmt in ("glb", "gltf"):
+        kw = _read_gltf_points(path, fmt, comp)
     elif fmt == "e57":
         if comp:
             raise MeshFormatError(f"{path}: compressed E57 files are not supported; "

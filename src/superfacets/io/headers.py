@@ -22,7 +22,7 @@ from .files import decompressed_head, max_ratio, split_suffix
 
 __all__ = ["header_counts", "e57_counts", "check_las", "check_laz", "check_pcd", "check_stl",
            "ply_mapped", "npy_mapped", "first_line", "NotStreamedError", "PCD_LINES",
-           "pcd_problem", "ply_names"]
+           "pcd_problem", "ply_names", "gltf_document", "gltf_points_only"]
 
 
 class NotStreamedError(MeshFormatError):
@@ -574,6 +574,79 @@ def e57_counts(path: Path) -> list:
 GLTF_MAX_DEPTH = 1000
 
 
+def gltf_document(data: bytes, fmt: str) -> dict | None:
+    """The JSON document of a ``.gltf`` (its text) or a ``.glb`` (its first chunk), or None
+    where it cannot be read (the reader then says what is wrong).
+
+    Parameters
+    ----------
+    data : bytes
+        The file's content, or for a ``.glb`` at least its header and JSON chunk.
+    fmt : {'gltf', 'glb'}
+
+    Returns
+    -------
+    dict or None
+
+    Raises
+    ------
+    TypeError
+        Never: anything unreadable is None.
+
+    Examples
+    --------
+    >>> gltf_document(b'{"asset": {"version": "2.0"}}', "gltf")
+    {'asset': {'version': '2.0'}}
+    """
+    import json
+
+    text = data
+    if fmt == "glb":
+        if len(data) < 20 or data[:4] != b"glTF" or data[16:20] != b"JSON":
+            return None
+        size = struct.unpack_from("<I", data, 12)[0]
+        text = data[20:20 + size]
+    try:
+        doc = json.loads(text)
+    except (ValueError, UnicodeDecodeError, RecursionError):
+        return None
+    return doc if isinstance(doc, dict) else None
+
+
+def gltf_points_only(doc: dict | None) -> bool:
+    """Whether a glTF document's meshes are all points (every primitive of mode 0,
+    ``POINTS``: a point cloud), with at least one primitive.
+
+    Parameters
+    ----------
+    doc : dict or None
+        :func:`gltf_document`'s.
+
+    Returns
+    -------
+    bool
+
+    Raises
+    ------
+    TypeError
+        Never.
+
+    Examples
+    --------
+    >>> gltf_points_only({"meshes": [{"primitives": [{"mode": 0}]}]})
+    True
+    >>> gltf_points_only({"meshes": [{"primitives": [{}]}]})   # (4, triangles, by default)
+    False
+    """
+    meshes = doc.get("meshes") if isinstance(doc, dict) else None
+    if not isinstance(meshes, list):
+        return False
+    modes = [p.get("mode", 4) if isinstance(p, dict) else None
+             for m in meshes if isinstance(m, dict)
+             for p in (m.get("primitives") if isinstance(m.get("primitives"), list) else [])]
+    return bool(modes) and all(mode == 0 for mode in modes)
+
+
 def check_gltf(data: bytes, fmt: str, path) -> None:
     """Refuse a glTF or GLB file whose node hierarchy is not a forest of bounded depth,
     before a reader walks it: a node that is its own ancestor (the specification forbids
@@ -609,18 +682,7 @@ def check_gltf(data: bytes, fmt: str, path) -> None:
     ...     print(str(exc).split(": ", 1)[1])
     the glTF node hierarchy has a cycle: node 0 is its own ancestor (0 -> 1 -> 2 -> 0)
     """
-    import json
-
-    text = data
-    if fmt == "glb":
-        if len(data) < 20 or data[:4] != b"glTF" or data[16:20] != b"JSON":
-            return
-        size = struct.unpack_from("<I", data, 12)[0]
-        text = data[20:20 + size]
-    try:
-        doc = json.loads(text)
-    except (ValueError, UnicodeDecodeError):
-        return  # the reader says what is wrong
+    doc = gltf_document(data, fmt)  # (None: the reader says what is wrong)
     nodes = doc.get("nodes") if isinstance(doc, dict) else None
     if not isinstance(nodes, list):
         return

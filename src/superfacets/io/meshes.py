@@ -26,7 +26,7 @@ from .headers import check_gltf, check_stl, header_counts, ply_names
 from .obj import parse_obj
 from .ply import ply_colors, read_ply_triangles
 
-__all__ = ["read_mesh", "MESH_FORMATS"]
+__all__ = ["read_mesh", "MESH_FORMATS", "load_gltf_scene"]
 
 #: Mesh file formats understood by :func:`read_mesh` (before any compression suffix).
 MESH_FORMATS = ("off", "tri", "ply", "obj", "stl", "glb", "gltf")
@@ -99,7 +99,6 @@ def read_mesh(path, format: str | None = None) -> Mesh:
     elif fmt == "obj":
         v, f, objects, colors = parse_obj(data, path)
     elif fmt in ("glb", "gltf"):
-        check_gltf(data, fmt, path)  # (a cycle or a deep nesting: before trimesh walks it)
         return _load_scene(path, fmt, comp, data)
     else:
         v, f, colors, face_colors = ply or _load_trimesh(data, fmt, path)
@@ -246,21 +245,52 @@ def _parse_tri(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
     return v, f
 
 
-def _load_scene(path: Path, fmt: str, comp: str | None, data: bytes) -> Mesh:
-    """A glTF/GLB file through trimesh, its objects joined (:mod:`superfacets.inputs.convert`)."""
+def load_gltf_scene(path: Path, fmt: str, comp: str | None, data: bytes):
+    """A glTF/GLB file as a ``trimesh.Scene`` (its node hierarchy checked first:
+    :func:`~superfacets.io.headers.check_gltf`).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+    fmt : {'gltf', 'glb'}
+    comp : str or None
+        The file's compression (``'gz'``, ...); None: read from ``path``, where a ``.gltf``
+        finds the buffers beside it.
+    data : bytes
+        The file's (decompressed) content.
+
+    Returns
+    -------
+    trimesh.Scene
+
+    Raises
+    ------
+    MeshFormatError
+        If trimesh cannot read it, or its hierarchy is not a forest.
+
+    Examples
+    --------
+    >>> _ = trimesh.creation.box().export("box.glb")
+    >>> data = Path("box.glb").read_bytes()
+    >>> len(load_gltf_scene(Path("box.glb"), "glb", None, data).geometry)
+    1
+    """
     import trimesh
 
-
+    check_gltf(data, fmt, path)  # (a cycle or a deep nesting: before trimesh walks it)
     try:
         with _quiet_trimesh():
             if comp is None:  # a .gltf may point to buffers beside it: load from the path
-                scene = trimesh.load(str(path), file_type=fmt, force="scene", process=False)
-            else:
-                scene = trimesh.load(io.BytesIO(data), file_type=fmt, force="scene",
-                                     process=False)
+                return trimesh.load(str(path), file_type=fmt, force="scene", process=False)
+            return trimesh.load(io.BytesIO(data), file_type=fmt, force="scene", process=False)
     except Exception as exc:  # trimesh raises many types for malformed input
         raise MeshFormatError(f"{path}: cannot read {fmt.upper()}: "
                               f"{exc or type(exc).__name__}") from None
+
+
+def _load_scene(path: Path, fmt: str, comp: str | None, data: bytes) -> Mesh:
+    """A glTF/GLB file through trimesh, its objects joined (:mod:`superfacets.inputs.convert`)."""
+    scene = load_gltf_scene(path, fmt, comp, data)
     try:
         return mesh_from_scene(scene, name=path.name)
     except InvalidMeshError as exc:
