@@ -161,3 +161,34 @@ def test_a_gltf_of_points_is_a_point_cloud(tmp_path):
     (tmp_path / "both.glb").write_bytes(both.export(file_type="glb"))
     assert not is_cloud_file(tmp_path / "both.glb")
     assert read_input(tmp_path / "both.glb").n_faces == 320
+
+
+def test_a_reader_silences_trimesh_s_log_on_its_own_thread_only(caplog):
+    # (the reader lowered the "trimesh" logger's level and restored it after: two threads
+    # reading at once, ending out of order, left trimesh's log silenced for the process)
+    import logging
+    import threading
+
+    import trimesh  # noqa: F401
+
+    from superfacets.io.meshes import _quiet_trimesh
+
+    log = logging.getLogger("trimesh.util")
+    inside, step = threading.Event(), threading.Event()
+
+    def reader():
+        with _quiet_trimesh():
+            log.warning("from a reader")
+            inside.set()
+            step.wait(30)
+
+    t = threading.Thread(target=reader)
+    with caplog.at_level(logging.WARNING):
+        t.start()
+        inside.wait(30)
+        log.warning("beside the reader")
+        step.set()
+        t.join(30)
+        log.warning("after it")
+    said = [r.getMessage() for r in caplog.records]
+    assert said == ["beside the reader", "after it"]

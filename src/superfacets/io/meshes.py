@@ -12,6 +12,7 @@ from __future__ import annotations
 import gc
 import io
 import logging
+import threading
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -300,15 +301,31 @@ def _load_scene(path: Path, fmt: str, comp: str | None, data: bytes) -> Mesh:
 # ---------------------------------------------------------- via trimesh
 @contextmanager
 def _quiet_trimesh():
-    """Keep trimesh's log (which prints tracebacks of what it could not parse) off stderr:
-    a malformed file is reported once, by our own error."""
-    log = logging.getLogger("trimesh")
-    level = log.level
-    log.setLevel(logging.CRITICAL + 1)
+    """Keep trimesh's log (which prints tracebacks of what it could not parse) off stderr
+    while this thread reads: a malformed file is reported once, by our own error. (A
+    filter that asks the thread, not the logger's level: two threads reading at once and
+    restoring the level out of order left trimesh's log silenced for good.)"""
+    import trimesh  # noqa: F401 - (its modules' loggers made, each given the filter)
+
+    for name, log in list(logging.root.manager.loggerDict.items()):
+        if (name == "trimesh" or name.startswith("trimesh.")) and isinstance(
+                log, logging.Logger) and _QUIET not in log.filters:
+            log.addFilter(_QUIET)
+    depth = getattr(_READING, "depth", 0)
+    _READING.depth = depth + 1
     try:
         yield
     finally:
-        log.setLevel(level)
+        _READING.depth = depth
+
+
+#: This thread's readers of trimesh files, nested (:func:`_quiet_trimesh`).
+_READING = threading.local()
+
+
+def _QUIET(record) -> bool:  # noqa: N802 - a logging filter, named as the constant it is
+    """trimesh's records pass where no reader of this thread is inside trimesh."""
+    return not getattr(_READING, "depth", 0)
 
 
 def _load_trimesh(data: bytes, fmt: str, path: Path):
