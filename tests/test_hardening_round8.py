@@ -192,3 +192,31 @@ def test_a_reader_silences_trimesh_s_log_on_its_own_thread_only(caplog):
         log.warning("after it")
     said = [r.getMessage() for r in caplog.records]
     assert said == ["beside the reader", "after it"]
+
+
+def test_a_batch_on_a_worker_of_four_threads_keeps_each_input_s_warning(tmp_path):
+    import pytest
+
+    pytest.importorskip("distributed")
+    import pandas as pd
+    from dask.distributed import LocalCluster
+    from plyfile import PlyData, PlyElement
+
+    from superfacets.scale.runner.batch import run_batch
+
+    rng = np.random.default_rng(0)
+    (tmp_path / "in").mkdir()
+    for i in range(6):  # zero normals: each file's reader warns, naming it
+        rows = np.zeros(3000, dtype=[(c, "f4") for c in ("x", "y", "z", "nx", "ny", "nz")])
+        rows["x"], rows["y"] = rng.random((2, 3000))
+        PlyData([PlyElement.describe(rows, "vertex")]).write(str(tmp_path / "in" / f"s{i}.ply"))
+    with LocalCluster(n_workers=1, threads_per_worker=4, processes=False,
+                      dashboard_address=None) as cluster:
+        run_batch([str(tmp_path / "in")], tmp_path / "out", n_segments=10,
+                  scheduler=cluster.scheduler_address, progress=False)
+    rows = pd.read_parquet(tmp_path / "out" / "manifest.parquet")
+    assert len(rows) == 6 and (rows["status"] == "ok").all()
+    for _, row in rows.iterrows():
+        name = row["input"].rsplit("/", 1)[-1]
+        said = row["warnings"].splitlines()
+        assert len(said) == 1 and said[0].startswith(f"{name}: its normals are all zero"), row
