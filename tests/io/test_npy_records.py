@@ -155,12 +155,12 @@ def test_a_scene_folder_s_coord_npy_reads_its_colour_and_normals(tmp_path, capsy
     coord = tmp_path / "scene0000_00" / "coord.npy"
     cloud = read_cloud(coord)
     assert np.array_equal(cloud.points, pts) and np.allclose(cloud.colors * 255, rgb)
-    assert np.allclose(cloud.normals, [0, 0, 1])
+    assert np.allclose(cloud.normals, [0, 0, 1]) and np.allclose(cloud.up, [0, 0, 1])
     one = segment(cloud, 12, beta=1.0)
     tiled = segment_tiled(coord, 12, tiles=2, workdir=tmp_path / "work", beta=1.0)
     assert len(np.unique(tiled.labels)) == 12 and tiled.labels.min() >= 0
-    assert np.array_equal(segment(PointCloud(pts, colors=rgb / 255, normals=cloud.normals),
-                                  12, beta=1.0).labels, one.labels)
+    assert np.array_equal(segment(PointCloud(pts, colors=rgb / 255, normals=cloud.normals,
+                                             up=(0, 0, 1)), 12, beta=1.0).labels, one.labels)
     # each scene judged against the segment.npy beside it, -1 left out
     out = tmp_path / "rows.csv"
     assert main(["experiment", "--inputs", str(tmp_path / "*" / "coord.npy"),

@@ -19,7 +19,7 @@ Points keep their file order (labels come back in that order). Readers:
   ``r g b`` / ``red green blue`` or PCL's packed ``rgb``, a row NaN in x, y and z a
   missing point, the other fields readable as ground truths (:func:`~superfacets.io.
   labels.read_field`); a scene folder's ``coord.npy`` (Pointcept's layout) with its
-  ``color.npy`` and ``normal.npy`` (:func:`scene_assets`);
+  ``color.npy`` and ``normal.npy`` (:func:`scene_assets`), z up;
 - LAS / LAZ: ``laspy`` (extra ``clouds``; LAZ through its ``lazrs`` backend),
   scaled coordinates.
 - E57 (ASTM E2807, terrestrial scanners' exchange format): ``pye57`` (extra
@@ -51,7 +51,7 @@ from .files import read_bytes, split_suffix
 from .ply import COLOR_PROPERTIES, ply_colors, read_ply_scalars
 
 __all__ = ["read_cloud", "CLOUD_FORMATS", "is_cloud_file", "check_laz", "check_las",
-           "e57_counts", "scene_assets", "SCENE_ASSETS"]
+           "e57_counts", "scene_assets", "SCENE_ASSETS", "SCENE_UP"]
 
 from .._runtime import extras
 from ..checks import not_real
@@ -647,7 +647,9 @@ def _read_npy(data: bytes, path: Path) -> dict:
     if arr.ndim == 2 and arr.shape[1] in (3, 6):
         arr = arr.astype(np.float64)
         out = {"points": arr[:, :3], "normals": arr[:, 3:] if arr.shape[1] == 6 else None}
-        return {**out, **scene_assets(path, len(arr))} if arr.shape[1] == 3 else out
+        if arr.shape[1] == 3 and path.name == "coord.npy":  # (a scene's: z up, its assets)
+            return {**out, **scene_assets(path, len(arr)), "up": np.array(SCENE_UP)}
+        return out
     raise MeshFormatError(f"{path}: NPY array of shape {arr.shape}: expected (N, 3) points, "
                           "(N, 6) points and normals, or organized (H, W, 3)")
 
@@ -694,6 +696,9 @@ def _npy_records(arr: np.ndarray, path: Path) -> dict:
 #: A learning pipeline's scene folder (Pointcept's: one ``NAME.npy`` per asset, the points
 #: in ``coord.npy``): the assets read beside the points, as what the cloud holds.
 SCENE_ASSETS = {"color": "colors", "normal": "normals"}
+#: The up direction of a scene folder's points: Pointcept's datasets (ScanNet, S3DIS,
+#: nuScenes, SemanticKITTI, ...) all keep gravity along -z.
+SCENE_UP = (0.0, 0.0, 1.0)
 
 
 def scene_assets(path, n: int) -> dict:

@@ -51,7 +51,14 @@ from ..inputs.cloud import (
 from ..inputs.convert import as_mesh
 from ..inputs.mesh import Mesh, check_finite_vertices
 from ..inputs.rgb import color_top, unit_colors
-from .clouds import SCENE_ASSETS, is_cloud_file, read_cloud, unusable_normals, withheld_rows
+from .clouds import (
+    SCENE_ASSETS,
+    SCENE_UP,
+    is_cloud_file,
+    read_cloud,
+    unusable_normals,
+    withheld_rows,
+)
 from .headers import NotStreamedError, check_las, first_line, npy_mapped, ply_mapped, ply_names
 from .meshes import read_mesh
 from .ply import VertexView
@@ -226,7 +233,8 @@ class RegionReader:
             if arr.ndim != 2 or arr.shape[1] != 3:
                 raise MeshFormatError(f"{p}: a tiled run reads NPY points of shape (N, 3), "
                                       f"got {arr.shape}")
-            return cls(str(p), "points", "npy-points", int(arr.shape[0]), chunk)
+            up = SCENE_UP if p.name == "coord.npy" else None  # (a scene folder's points)
+            return cls(str(p), "points", "npy-points", int(arr.shape[0]), chunk, up=up)
         raise MeshFormatError(f"{p}: .{suffix} is not read in chunks (streamed: "
                               f"{', '.join('.' + s for s in STREAMED)}): use "
                               "RegionReader.spill, which reads it whole")
