@@ -607,3 +607,54 @@ def test_a_ply_row_nan_in_one_coordinate_is_damage_named_by_its_row(tmp_path):
         with pytest.raises(InvalidCloudError, match=r"point 3 has a non-finite coordinate "
                            r"\(\[0.0, 1.0, nan\]\): a missing point is NaN in all three"):
             run(tmp_path / "part.ply")
+
+
+def test_a_new_file_of_a_cloud_keeps_its_other_values(tmp_path, capsys):
+    """``-o OUT.ply`` / ``OUT.laz`` of a cloud whose file takes no field: a KITTI scan's
+    reflectance, a nuScenes sweep's intensity and ring, NPY records' fields, a text cloud's
+    named columns were dropped; now a PLY's ``scalar_<field>`` (CloudCompare's) and a LAS's
+    standard dimension where the values fit, else an extra dimension."""
+    from plyfile import PlyData
+
+    rng = np.random.default_rng(0)
+    xyz = np.c_[rng.uniform(0, 20, (3000, 2)), rng.normal(0, 0.02, 3000)].astype("<f4")
+    level = np.round(rng.uniform(0, 255, 3000)).astype("<f4")
+    ring = rng.integers(0, 32, 3000).astype("<f4")
+    (tmp_path / "sweep.pcd.bin").write_bytes(np.c_[xyz, level, ring].astype("<f4").tobytes())
+    (tmp_path / "scan.bin").write_bytes(np.c_[xyz, level / 255].astype("<f4").tobytes())
+    records = np.zeros(3000, dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4"),
+                                    ("intensity", "<f4"), ("t", "<f8"), ("ok", "?")])
+    records["x"], records["y"], records["z"] = xyz.T
+    records["intensity"], records["t"], records["ok"] = level / 7, np.arange(3000), True
+    np.save(tmp_path / "records.npy", records)
+    cases = {"sweep.pcd.bin": {"intensity": level, "ring": ring},
+             "scan.bin": {"reflectance": level / 255},
+             "records.npy": {"intensity": level / 7, "t": np.arange(3000), "ok": np.ones(3000)}}
+    for name, values in cases.items():
+        ply, laz = tmp_path / f"{name}.ply", tmp_path / f"{name}.laz"
+        assert main(["segment", str(tmp_path / name), "-k", "10", "-o", str(ply), "-q"]) == 0
+        vertex = PlyData.read(str(ply))["vertex"]
+        for field, want in values.items():
+            assert np.allclose(vertex[f"scalar_{field}"], want, atol=1e-4), (name, field)
+        capsys.readouterr()
+        assert main(["segment", str(tmp_path / name), "-k", "10", "-o", str(laz), "-q"]) == 0
+        said = [ln for ln in capsys.readouterr().err.splitlines() if "not kept" in ln]
+        # a float intensity (records' level / 7) fits no LAS intensity: said, not rounded
+        lost = ["intensity"] if name == "records.npy" else []
+        assert said == [f"superfacets: warning: field '{f}' is not kept in the new LAS file: "
+                        "LAS's intensity holds whole numbers 0..65535; a .ply keeps every "
+                        "field" for f in lost], name
+        las = laspy.read(laz)
+        dims = {d.lower(): d for d in las.point_format.dimension_names}
+        for field in set(values) - set(lost):
+            assert np.allclose(las[dims[field]], values[field], atol=1e-4), (name, field)
+        assert las.intensity.dtype == np.uint16 and not (lost and las.intensity.any())
+    if shutil.which("CloudCompare") is None:
+        pytest.skip("CloudCompare not found: install Debian's 'cloudcompare' package (make "
+                    "test does, as root)")
+    asc = tmp_path / "sweep.asc"
+    _cloudcompare(tmp_path, tmp_path / "sweep.pcd.bin.ply", "ASC", asc)
+    head = asc.read_text().splitlines()[0].lstrip("/").split()
+    assert {"intensity", "ring", "ClusterID"} <= set(head), head
+    got = np.loadtxt(asc, comments="//")
+    assert np.allclose(got[:, head.index("ring")], ring)

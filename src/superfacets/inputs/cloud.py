@@ -84,6 +84,11 @@ class PointCloud:
     object_viewpoints : (len(objects), 3) float ndarray, optional
         Each object's sensor position (a scan's scanner): its estimated normals face it
         when objects are segmented alone.
+    fields : dict of str to (N,) ndarray, optional
+        The file's other values per point (a KITTI scan's reflectance, a nuScenes sweep's
+        intensity and ring, NPY records' other fields, named text columns), in file order:
+        not read by the method, written again into a new file of the points with their
+        labels (:func:`superfacets.io.records.write_cloud_with_labels`).
 
     Raises
     ------
@@ -113,6 +118,7 @@ class PointCloud:
     frame: np.ndarray | None = field(default=None, repr=False)
     objects: tuple = field(default=(), repr=False)
     object_viewpoints: np.ndarray | None = field(default=None, repr=False)
+    fields: dict | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         where = f"{self.name}: " if self.name else ""
@@ -167,6 +173,7 @@ class PointCloud:
                                         "corners, (2, 3) finite numbers, lower <= upper")
             object.__setattr__(self, "frame", readonly(box))
         self._check_objects(where, p.shape[0])
+        self._check_fields(where, p.shape[0])
         if self.up is not None:
             up = np.asarray(self.up, dtype=np.float64).reshape(-1)
             length = float(np.linalg.norm(up)) if up.shape == (3,) else 0.0
@@ -191,6 +198,19 @@ class PointCloud:
                 raise InvalidCloudError(f"{where}object_viewpoints must be one finite position "
                                         f"per object, ({len(objs)}, 3), got {vp.shape}")
             object.__setattr__(self, "object_viewpoints", readonly(vp))
+
+    def _check_fields(self, where: str, n: int) -> None:
+        """``fields``: named real or boolean values, one per point."""
+        if self.fields is None:
+            return
+        kept = {}
+        for name, values in dict(self.fields).items():
+            a = np.asarray(values)
+            if not isinstance(name, str) or a.shape != (n,) or a.dtype.kind not in "biuf":
+                raise InvalidCloudError(f"{where}field {name!r} must be one number per point "
+                                        f"({n:,}), got {a.dtype} {a.shape}")
+            kept[name] = readonly(a)
+        object.__setattr__(self, "fields", kept)
 
     def __getstate__(self) -> dict:
         # the fields only: the point graphs kept with the cloud hold functions (which

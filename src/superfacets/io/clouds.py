@@ -584,7 +584,8 @@ def _read_kitti(data: bytes, path: Path) -> dict:
     scanner at the origin: on the two SemanticKITTI sweeps of the development set, normals
     turned towards the origin gave a 12-22 % higher undersegmentation error at k = 300 and
     1,000 than seen from above (docs/notes/scans-io.md). The reflectance (in [0, 1]) is not
-    read; it tells such a file from other binary data."""
+    read as a position (kept as a field for a new file of the points); it tells such a
+    file from other binary data."""
     if len(data) % 16:
         raise MeshFormatError(f"{path}: a .bin is read as a KITTI velodyne scan (float32 x, "
                               f"y, z, reflectance: 16 bytes a point); its {len(data):,} bytes "
@@ -596,7 +597,8 @@ def _read_kitti(data: bytes, path: Path) -> dict:
         raise MeshFormatError(f"{path}: not a KITTI velodyne scan (float32 x, y, z, "
                               f"reflectance in [0, 1]): point {int(off[0])}'s fourth value is "
                               f"{float(arr[off[0], 3])!r} ({off.size:,} such points)")
-    return {"points": arr[:, :3].astype(np.float64), "up": np.array([0.0, 0.0, 1.0])}
+    return {"points": arr[:, :3].astype(np.float64), "up": np.array([0.0, 0.0, 1.0]),
+            "fields": {"reflectance": arr[:, 3].copy()}}
 
 
 #: Most laser rings of a nuScenes-style ``.pcd.bin`` sweep's fifth value (the ring index:
@@ -608,9 +610,9 @@ def _read_nuscenes(data: bytes, path: Path) -> dict:
     """A nuScenes lidar sweep (``.pcd.bin``): float32 ``x y z intensity ring`` per point,
     little endian, no header, ``z`` up, in the sensor's frame. Seen from above, as a KITTI
     scan is (:func:`_read_kitti`: the same roof-mounted sensor's sweep). Neither the
-    intensity (0..255) nor the ring index (an integer below :data:`MAX_RINGS`) is read;
-    they tell such a file from other binary data (a KITTI scan renamed, four values a
-    point)."""
+    intensity (0..255) nor the ring index (an integer below :data:`MAX_RINGS`) is read as
+    a position (both kept as fields); they tell such a file from other binary data (a
+    KITTI scan renamed, four values a point)."""
     if len(data) % 20:
         raise MeshFormatError(f"{path}: a .pcd.bin is read as a nuScenes lidar sweep (float32 "
                               "x, y, z, intensity, ring: 20 bytes a point); its "
@@ -626,7 +628,8 @@ def _read_nuscenes(data: bytes, path: Path) -> dict:
                               f"in [0, 255], ring index 0..{MAX_RINGS - 1}): point {i}'s "
                               f"intensity is {float(arr[i, 3])!r} and ring "
                               f"{float(arr[i, 4])!r} ({off.size:,} such points)")
-    return {"points": arr[:, :3].astype(np.float64), "up": np.array([0.0, 0.0, 1.0])}
+    return {"points": arr[:, :3].astype(np.float64), "up": np.array([0.0, 0.0, 1.0]),
+            "fields": {"intensity": arr[:, 3].copy(), "ring": arr[:, 4].astype(np.uint8)}}
 
 
 def _read_npy(data: bytes, path: Path) -> dict:
@@ -687,7 +690,11 @@ def _npy_records(arr: np.ndarray, path: Path) -> dict:
     packed = next((n for n in ("rgb", "rgba") if n in fields), None)
     if col is None and packed is not None and arr.dtype.fields[packed][0].itemsize == 4:
         col = unit_colors(_packed_rgb(flat[packed]))
-    out = {"points": pts, "normals": nrm, "colors": col}
+    used = {named[c] for c in named} | {n for n in (packed,) if col is not None and n} | {
+        c for trio in COLOR_PROPERTIES if all(x in fields for x in trio) for c in trio}
+    kept = {n: np.asarray(flat[n]).copy() for n in fields if n not in used
+            and not arr.dtype.fields[n][0].shape and arr.dtype.fields[n][0].kind in "biuf"}
+    out = {"points": pts, "normals": nrm, "colors": col, "fields": kept or None}
     if arr.ndim == 2:  # an organized cloud (a depth camera's frame): NaN points invalid
         return {**out, "allow_invalid": True, "shape": tuple(arr.shape)}
     return {**out, "allow_invalid": missing_points(pts, str(path))}

@@ -208,12 +208,22 @@ def _named(arr: np.ndarray, names: list[str] | None, path: Path) -> dict:
             nrm = arr[:, [names.index(c) for c in ("nx", "ny", "nz")]]
         rgb = next((c for c in COLOR_PROPERTIES if all(x in names for x in c)), None)
         col = None if rgb is None else unit_colors(arr[:, [names.index(c) for c in rgb]])
-        return {"points": pts, "normals": nrm, "colors": col}
+        used = {"x", "y", "z", *(("nx", "ny", "nz") if nrm is not None else ()), *(rgb or ())}
+        return {"points": pts, "normals": nrm, "colors": col,
+                "fields": _kept(arr, {n: names.index(n) for n in names if n not in used})}
     if width < 3:
         raise MeshFormatError(f"{path}: point lines need 3 columns (x y z), found {width}")
     if width == 7 and _scanner_columns(arr, split_suffix(Path(path))[0]):
-        return {"points": arr[:, :3], "colors": arr[:, 4:7] / 255.0}
-    return {"points": arr[:, :3]}
+        return {"points": arr[:, :3], "colors": arr[:, 4:7] / 255.0,
+                "fields": _kept(arr, {"intensity": 3})}
+    return {"points": arr[:, :3],
+            "fields": _kept(arr, {f"column{j + 1}": j for j in range(3, width)})}
+
+
+def _kept(arr: np.ndarray, columns: dict) -> dict | None:
+    """The columns not read as positions, normals or colours (name: column), kept for a new
+    file of the points (:attr:`superfacets.PointCloud.fields`); None where there are none."""
+    return {name: arr[:, j].copy() for name, j in columns.items()} or None
 
 
 def _scanner_columns(arr: np.ndarray, fmt: str) -> bool:

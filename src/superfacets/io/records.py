@@ -29,6 +29,8 @@ was read with, and the labels in the same ``ClusterID`` field.
 from __future__ import annotations
 
 import io
+import re
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -235,6 +237,14 @@ def write_cloud_with_labels(path, cloud, labels, *, name: str = LABEL_FIELD,
       file gave normals, ``red green blue`` where it gave colours, and
       ``scalar_<name>`` (CloudCompare's scalar field ``name``).
 
+    The cloud's other values (:attr:`~superfacets.PointCloud.fields`: a KITTI scan's
+    reflectance, NPY records' fields, named text columns) are kept: in a PLY as
+    ``scalar_<field>`` (CloudCompare's scalar fields); in a LAS in the standard dimension
+    of their name where their values fit it (``intensity``, ``classification``,
+    ``gps_time``, ...), else as extra dimensions of their own type. One that cannot be kept
+    (a standard name whose values do not fit, a name of more than 32 characters) is left
+    out with a warning that says why.
+
     Parameters
     ----------
     path : str or os.PathLike
@@ -286,10 +296,12 @@ def write_cloud_with_labels(path, cloud, labels, *, name: str = LABEL_FIELD,
     if fmt != "ply" and len(name) > 32:
         raise ParameterError(f"a LAS dimension's name holds at most 32 characters: {name!r}")
     colors = getattr(cloud, "colors", None)
+    fields = dict(getattr(cloud, "fields", None) or {})
     if fmt == "ply":
-        content = _new_ply(points, labels, ply_name, colors, getattr(cloud, "normals", None))
+        content = _new_ply(points, labels, ply_name, colors, getattr(cloud, "normals", None),
+                           fields)
     else:
-        content = _new_las(points, labels, name, colors, compress=fmt == "laz")
+        content = _new_las(points, labels, name, colors, compress=fmt == "laz", fields=fields)
     return save(path, content, outputs)
 
 
@@ -324,8 +336,8 @@ def _las_scale(extent: float) -> float:
     return float(10.0 ** max(-300.0, np.ceil(np.log10(extent / 2**30))))
 
 
-def _new_las(points: np.ndarray, labels: np.ndarray, name: str, colors, compress: bool
-             ) -> bytes:
+def _new_las(points: np.ndarray, labels: np.ndarray, name: str, colors, compress: bool,
+             fields: dict | None = None) -> bytes:
     """A new LAS/LAZ file's bytes (:func:`write_cloud_with_labels`)."""
     laspy = extras.require("laspy", "writing LAS/LAZ files")
     valid = np.isfinite(points).all(axis=1)
@@ -339,8 +351,13 @@ def _new_las(points: np.ndarray, labels: np.ndarray, name: str, colors, compress
     header.offsets, header.scales = offset, np.full(3, scale)
     header.add_extra_dim(laspy.ExtraBytesParams(name=name, type=np.int32,
                                                 description="superfacets label"))
+    standard, extra = _las_fields(header.point_format, fields or {}, name)
+    for field_name, values in extra.items():
+        header.add_extra_dim(laspy.ExtraBytesParams(name=field_name, type=values.dtype))
     las = laspy.LasData(header, laspy.ScaleAwarePointRecord.zeros(points.shape[0],
                                                                   header=header))
+    for dim, values in {**standard, **extra}.items():
+        las[dim] = values
     xyz = np.where(valid[:, None], points, offset)
     las.x, las.y, las.z = xyz[:, 0], xyz[:, 1], xyz[:, 2]
     if not valid.all():
@@ -356,16 +373,86 @@ def _new_las(points: np.ndarray, labels: np.ndarray, name: str, colors, compress
     return buf.getvalue()
 
 
-def _new_ply(points: np.ndarray, labels: np.ndarray, prop: str, colors, normals) -> bytes:
+#: Standard LAS dimensions a cloud's field never goes into: the positions and colours are
+#: the cloud's own; ``withheld`` marks its invalid points.
+_LAS_OWN = ("x", "y", "z", "red", "green", "blue", "withheld")
+
+
+def _las_fields(point_format, fields: dict, label: str) -> tuple[dict, dict]:
+    """A cloud's fields for a new LAS: ``(standard, extra)``, each name -> values, the
+    standard dimensions' names as laspy spells them; a field that fits neither is left
+    out with a warning (:func:`write_cloud_with_labels`)."""
+    dims = {d.name.lower(): d for d in point_format.dimensions if d.is_standard}
+    standard, extra = {}, {}
+    for field_name, values in fields.items():
+        a = np.asarray(values)
+        dim = dims.get(field_name.lower())
+        why = None
+        if field_name.lower() in _LAS_OWN or field_name == label:
+            why = "the file's own dimension of that name holds the points' own values"
+        elif dim is not None:
+            if dim.dtype is not None and dim.dtype.kind == "f":
+                standard[dim.name] = a.astype(dim.dtype)
+                continue
+            lo, hi = ((np.iinfo(dim.dtype).min, np.iinfo(dim.dtype).max) if dim.dtype
+                      is not None else (0, 2 ** dim.num_bits - 1))
+            with np.errstate(invalid="ignore"):
+                fits = bool(np.all((a == np.floor(a)) & (a >= lo) & (a <= hi)))
+            if fits:
+                standard[dim.name] = a.astype(np.int64)
+                continue
+            why = f"LAS's {dim.name} holds whole numbers {lo}..{hi}"
+        elif len(field_name.encode()) > 32:
+            why = "a LAS extra dimension's name holds at most 32 bytes"
+        else:
+            kind = {"b": np.uint8, "f": np.float64 if a.dtype.itemsize > 4 else np.float32}
+            extra[field_name] = a.astype(kind.get(a.dtype.kind, a.dtype))
+            continue
+        warnings.warn(f"field {field_name!r} is not kept in the new LAS file: {why}; a .ply "
+                      "keeps every field", stacklevel=4)
+    return standard, extra
+
+
+def _ply_fields(fields: dict, taken: set) -> dict:
+    """A cloud's fields as PLY properties ``scalar_<name>`` (CloudCompare's scalar fields) of
+    a type PLY has: 64-bit integers as int32 where they fit, else as doubles; a name another
+    property already has is left out with a warning (:func:`write_cloud_with_labels`)."""
+    out = {}
+    for field_name, values in fields.items():
+        prop = "scalar_" + re.sub(r"\W", "_", field_name)
+        a = np.asarray(values)
+        if prop in taken or prop in out:
+            warnings.warn(f"field {field_name!r} is not kept in the new PLY file: another "
+                          f"property is named {prop}", stacklevel=4)
+            continue
+        if a.dtype.kind == "b":
+            a = a.astype(np.uint8)
+        elif a.dtype.kind in "iu" and a.dtype.itemsize == 8:
+            small = a.size == 0 or (a.min() >= np.iinfo(np.int32).min
+                                    and a.max() <= np.iinfo(np.int32).max)
+            a = a.astype(np.int32 if small else np.float64)
+        elif a.dtype.kind == "f" and a.dtype.itemsize == 2:
+            a = a.astype(np.float32)
+        out[prop] = a
+    return out
+
+
+def _new_ply(points: np.ndarray, labels: np.ndarray, prop: str, colors, normals,
+             fields: dict | None = None) -> bytes:
     """A new binary PLY file's bytes (:func:`write_cloud_with_labels`)."""
     from plyfile import PlyData, PlyElement
 
-    fields = [("x", "<f8"), ("y", "<f8"), ("z", "<f8")]
+    columns = [("x", "<f8"), ("y", "<f8"), ("z", "<f8")]
     if normals is not None:
-        fields += [("nx", "<f4"), ("ny", "<f4"), ("nz", "<f4")]
+        columns += [("nx", "<f4"), ("ny", "<f4"), ("nz", "<f4")]
     if colors is not None:
-        fields += [("red", "u1"), ("green", "u1"), ("blue", "u1")]
-    data = np.empty(points.shape[0], dtype=fields + [(prop, "<i4")])
+        columns += [("red", "u1"), ("green", "u1"), ("blue", "u1")]
+    kept = _ply_fields(fields or {}, {c for c, _ in columns} | {prop})
+    data = np.empty(points.shape[0], dtype=columns + [(p, a.dtype.newbyteorder("<"))
+                                                      for p, a in kept.items()]
+                    + [(prop, "<i4")])
+    for p, a in kept.items():
+        data[p] = a
     for i, c in enumerate("xyz"):
         data[c] = points[:, i]
     if normals is not None:
