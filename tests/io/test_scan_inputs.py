@@ -21,7 +21,7 @@ def _station(rng, n, centre):
     return np.vstack([floor, wall]) + rng.normal(0, 0.005, (n, 3)), np.asarray(centre)
 
 
-def _e57(path, scans=2, n=3000, invalid=0, seed=0):
+def _e57(path, scans=2, n=3000, invalid=0, seed=0, intensity=False):
     pye57 = pytest.importorskip("pye57")
     rng = np.random.default_rng(seed)
     e57 = pye57.E57(str(path), mode="w")
@@ -32,6 +32,8 @@ def _e57(path, scans=2, n=3000, invalid=0, seed=0):
         d = {"cartesianX": local[:, 0], "cartesianY": local[:, 1], "cartesianZ": local[:, 2],
              "colorRed": np.full(n, 200, np.uint8), "colorGreen": np.full(n, 100, np.uint8),
              "colorBlue": np.full(n, 50, np.uint8)}
+        if intensity:
+            d["intensity"] = np.linspace(0, 1, n) * (i + 1) / scans
         if invalid:
             state = np.zeros(n, dtype=np.int8)
             state[:invalid] = 2
@@ -73,6 +75,19 @@ def test_the_command_line_segments_an_e57_per_scan(tmp_path, capsys):
     labels = read_labels(out)
     assert labels.shape == (6000,) and len(np.unique(labels)) == 16
     assert not set(labels[:3000]) & set(labels[3000:])  # labels unique over the site
+
+
+def test_an_e57_s_intensity_is_kept_in_a_new_file(tmp_path):
+    from plyfile import PlyData
+
+    path, _ = _e57(tmp_path / "site.e57", scans=2, intensity=True)
+    want = np.r_[np.linspace(0, 1, 3000) / 2, np.linspace(0, 1, 3000)]
+    assert np.allclose(read_cloud(path).fields["intensity"], want)
+    assert main(["segment", str(path), "-k", "16", "-o", str(tmp_path / "site.ply")]) == 0
+    got = PlyData.read(str(tmp_path / "site.ply"))["vertex"]["scalar_intensity"]
+    assert np.allclose(got, want)
+    plain, _ = _e57(tmp_path / "plain.e57", scans=1)
+    assert read_cloud(plain).fields is None
 
 
 def test_a_damaged_e57_is_refused_in_one_line(tmp_path, capsys):

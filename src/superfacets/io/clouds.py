@@ -536,7 +536,7 @@ def _read_e57(path: Path) -> dict:
     scans = e57_counts(path)
     if not scans:
         raise MeshFormatError(f"{path}: the E57 file holds no scan")
-    pts, cols, objects, at = [], [], [], 0
+    pts, cols, levels, objects, at = [], [], [], [], 0
     try:
         e57 = pye57.E57(str(path))
         try:
@@ -552,6 +552,8 @@ def _read_e57(path: Path) -> dict:
                 colors = [raw.get(c) for c in ("colorRed", "colorGreen", "colorBlue")]
                 cols.append(None if any(c is None for c in colors) else
                             np.stack([np.asarray(c) for c in colors], axis=1))
+                levels.append(None if raw.get("intensity") is None else
+                              np.asarray(raw["intensity"], dtype=np.float64).reshape(-1))
                 objects.append((name, at, at + p.shape[0]))
                 at += p.shape[0]
         finally:
@@ -571,6 +573,8 @@ def _read_e57(path: Path) -> dict:
     positions = np.array([s[2] for s in scans])
     out = {"points": points, "colors": col, "up": np.array([0.0, 0.0, 1.0]),
            "allow_invalid": bool(not np.isfinite(points).all())}
+    if all(v is not None and v.shape[0] == b - a for v, (_, a, b) in zip(levels, objects)):
+        out["fields"] = {"intensity": np.concatenate(levels)}  # (kept for a new file)
     if len(scans) == 1:  # one scan: its normals face its scanner
         out["viewpoint"] = positions[0]
     else:
