@@ -649,6 +649,10 @@ def test_a_new_file_of_a_cloud_keeps_its_other_values(tmp_path, capsys):
         for field in set(values) - set(lost):
             assert np.allclose(las[dims[field]], values[field], atol=1e-4), (name, field)
         assert las.intensity.dtype == np.uint16 and not (lost and las.intensity.any())
+    assert main(["segment", str(tmp_path / "sweep.pcd.bin"), "-k", "10", "-o",
+                 str(tmp_path / "said.laz")]) == 0
+    assert ("wrote " + str(tmp_path / "said.laz") + " (a new file of the input's points with "
+            "their intensity and ring, labels as ClusterID)") in capsys.readouterr().out
     if shutil.which("CloudCompare") is None:
         pytest.skip("CloudCompare not found: install Debian's 'cloudcompare' package (make "
                     "test does, as root)")

@@ -498,7 +498,7 @@ def _write_and_say(args, data, result, kind, outputs, elapsed, size_note: str = 
     if size_note:
         print(size_note, file=report)
     _say_what_was_written(seg_out, outputs["colored"], outputs["picture"], outputs["html"],
-                          report, up, outputs["graph"], _labels_what(args, kind), kind)
+                          report, up, outputs["graph"], _labels_what(args, kind, data), kind)
     for note in (duplicates_note(args, data, kind), count_note(args, data, result, kind)):
         if note:
             print(f"note: {note}", file=sys.stderr)
@@ -517,8 +517,9 @@ def _writing_bar(args, data, outputs):
     return waiting_bar(f"writing {', '.join(names)}", bool(show and names))
 
 
-def _labels_what(args, kind: str) -> str:
-    """What ``-o`` holds, said in the summary: labels, or the input's records with them."""
+def _labels_what(args, kind: str, data=None) -> str:
+    """What ``-o`` holds, said in the summary: labels, or the input's records with them (a
+    new file's: with the values of the input ``data`` kept, named)."""
     from ..io.records import LABEL_FIELD, copc_said, ply_field_name, scan_output
 
     into = scan_output(args.output, args.mesh)
@@ -528,7 +529,10 @@ def _labels_what(args, kind: str) -> str:
     field = (LABEL_FIELD if not str(args.output).lower().endswith(".ply") else
              f"{ply_field_name(LABEL_FIELD)}, CloudCompare's scalar field {LABEL_FIELD}")
     if into == "new":
-        return f"a new file of the input's {rows}, labels as {field}"
+        kept = list(getattr(data, "fields", None) or ())
+        values = (f" with their {', '.join(kept[:-1])} and {kept[-1]}" if len(kept) > 1 else
+                  f" with their {kept[0]}" if kept else "")
+        return f"a new file of the input's {rows}{values}, labels as {field}"
     return f"the input's {rows}, every field kept, labels as {field}{copc_said(args.mesh)}"
 
 
@@ -596,7 +600,7 @@ def cmd_baseline(args) -> int:
         print(f"{Path(args.mesh).name}: {size}, {method.name} ({shown}): "
               f"{counted(n_segs, 'segment')}{iters}, {elapsed:.2f} s", file=report)
         written = [f"{p} ({what})" for p, what in (
-            (seg_out, _labels_what(args, kind)), (ply_out, f"coloured {kind}"))
+            (seg_out, _labels_what(args, kind, data)), (ply_out, f"coloured {kind}"))
             if p is not None and str(p) != "-"]  # (as segment says what it wrote)
         if written:
             print("wrote " + ", ".join(written), file=report)
