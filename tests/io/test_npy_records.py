@@ -167,7 +167,7 @@ def test_a_scene_folder_s_coord_npy_reads_its_colour_and_normals(tmp_path, capsy
                  "--ground-truths", "segment.npy", "--ignore-label", "-1", "-m",
                  "superfacets", "-k", "10", "--alpha", "0", "-o", str(out), "-q"]) == 0
     rows = list(csv.DictReader(out.open()))
-    assert sorted(r["mesh"] for r in rows) == ["scene0000_00/coord", "scene0001_00/coord"]
+    assert sorted(r["mesh"] for r in rows) == ["scene0000_00", "scene0001_00"]
     assert all(r["status"] == "ok" and float(r["undersegmentation_error"]) < 0.05
                for r in rows)
     # the folder itself is the scene, for every command of one input
@@ -197,3 +197,9 @@ def test_a_folder_of_scene_folders_gives_each_coord_npy_once(tmp_path):
     assert sorted(p.relative_to(tmp_path).as_posix() for p in found) == [
         "loose.npy", "scene0000_00/coord.npy", "scene0001_00/coord.npy"]
     assert len(passed) == 6 and all("Pointcept" in why for _, why in passed)
+    # each scene's outputs named by its folder (labels in scene0000_00.npy, not coord.npy)
+    from superfacets.scale.runner.collect import output_names
+
+    assert sorted(output_names(found).values()) == ["loose", "scene0000_00", "scene0001_00"]
+    one = tmp_path / "scene0000_00" / "coord.npy"
+    assert output_names([one]) == {one: "scene0000_00"}

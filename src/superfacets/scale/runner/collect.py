@@ -256,7 +256,8 @@ def output_names(inputs: Sequence[Path], reserved=()) -> dict[Path, str]:
     """A name for each input's outputs, relative to the output folder, without suffix.
 
     The input's path relative to the inputs' common folder, its format
-    suffix dropped (``psb/1.off`` -> ``psb/1``); inputs that would share a
+    suffix dropped (``psb/1.off`` -> ``psb/1``; a scene folder's ``coord.npy`` its
+    folder's, ``val/scene0011_00/coord.npy`` -> ``val/scene0011_00``); inputs that would share a
     name keep their whole file name (``x.off`` -> ``x.off``, ``x.ply`` ->
     ``x.ply``); a name still taken (by one in ``reserved``, outputs of an
     earlier run) gets ``~`` and 8 hex digits of the input path's hash.
@@ -284,7 +285,10 @@ def output_names(inputs: Sequence[Path], reserved=()) -> dict[Path, str]:
         return {}
     root = Path(os.path.commonpath([str(p.parent) for p in inputs]))
     rel = {p: p.relative_to(root) for p in inputs}
-    first = {p: (r.parent / _stem(r)).as_posix() for p, r in rel.items()}
+    # (a scene folder's coord.npy is named by its scene: scene0000_00, not .../coord)
+    first = {p: (r.parent if r.parent != Path(".") else Path(p.parent.name)).as_posix()
+             if p.name == "coord.npy" and p.parent.name else (r.parent / _stem(r)).as_posix()
+             for p, r in rel.items()}
     count: dict[str, int] = {}
     for n in first.values():
         count[n] = count.get(n, 0) + 1
