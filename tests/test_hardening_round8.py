@@ -220,3 +220,33 @@ def test_a_batch_on_a_worker_of_four_threads_keeps_each_input_s_warning(tmp_path
         name = row["input"].rsplit("/", 1)[-1]
         said = row["warnings"].splitlines()
         assert len(said) == 1 and said[0].startswith(f"{name}: its normals are all zero"), row
+
+
+def test_a_new_file_keeps_fields_of_any_name_or_says_why_not(tmp_path, capsys):
+    # (a field named in another alphabet: plyfile's "non-ASCII character in name" traceback;
+    # the summary named fields the LAS had left out)
+    import laspy
+    from plyfile import PlyData
+
+    from superfacets.cli import main
+
+    rows = np.zeros(400, dtype=[("x", "f4"), ("y", "f4"), ("z", "f4"), ("intensité", "f4"),
+                                ("a b", "i4"), ("ClusterID", "i4"), ("n" * 40, "f4"),
+                                ("big", "u8"), ("flag", "?")])
+    rows["x"], rows["y"] = np.random.default_rng(0).random((2, 400))
+    rows["big"], rows["flag"], rows["a b"] = 2**40, True, 7
+    np.save(tmp_path / "odd.npy", rows)
+    for suffix in ("ply", "laz"):
+        out = tmp_path / f"odd.{suffix}"
+        assert main(["segment", str(tmp_path / "odd.npy"), "-k", "5", "-o", str(out)]) == 0
+        said = capsys.readouterr()
+        assert "Traceback" not in said.err
+        assert "field 'ClusterID' is not kept" in said.err
+        kept = "intensité, a b, big and flag" if suffix == "laz" else (
+            f"intensité, a b, {'n' * 40}, big and flag")
+        assert f"with their {kept}, labels as" in said.out
+    vertex = PlyData.read(str(tmp_path / "odd.ply"))["vertex"]
+    assert vertex["scalar_a_b"].tolist() == [7] * 400 and vertex["scalar_big"][0] == 2**40
+    las = laspy.read(tmp_path / "odd.laz")
+    assert las["a_b"].tolist() == [7] * 400 and las["big"][0] == 2**40
+    assert "intensit_" in las.point_format.extra_dimension_names

@@ -520,7 +520,7 @@ def _writing_bar(args, data, outputs):
 def _labels_what(args, kind: str, data=None) -> str:
     """What ``-o`` holds, said in the summary: labels, or the input's records with them (a
     new file's: with the values of the input ``data`` kept, named)."""
-    from ..io.records import LABEL_FIELD, copc_said, ply_field_name, scan_output
+    from ..io.records import LABEL_FIELD, copc_said, kept_fields, ply_field_name, scan_output
 
     into = scan_output(args.output, args.mesh)
     if into is None:
@@ -529,7 +529,7 @@ def _labels_what(args, kind: str, data=None) -> str:
     field = (LABEL_FIELD if not str(args.output).lower().endswith(".ply") else
              f"{ply_field_name(LABEL_FIELD)}, CloudCompare's scalar field {LABEL_FIELD}")
     if into == "new":
-        kept = list(getattr(data, "fields", None) or ())
+        kept = kept_fields(args.output, data) if data is not None else []
         values = (f" with their {', '.join(kept[:-1])} and {kept[-1]}" if len(kept) > 1 else
                   f" with their {kept[0]}" if kept else "")
         return f"a new file of the input's {rows}{values}, labels as {field}"

@@ -42,7 +42,7 @@ from .headers import check_las, first_line, pcd_problem
 
 __all__ = ["LABEL_FIELD", "RECORD_FORMATS", "write_labels_into", "ply_field_name",
            "records_kind", "write_cloud_with_labels", "converts", "CONVERTED_FORMATS", "copc_said",
-           "scan_output", "write_scan_labels"]
+           "scan_output", "write_scan_labels", "kept_fields"]
 
 #: The dimension (LAS/LAZ) or scalar field (PLY, as ``scalar_ClusterID``) the labels go in.
 LABEL_FIELD = "ClusterID"
@@ -351,7 +351,7 @@ def _new_las(points: np.ndarray, labels: np.ndarray, name: str, colors, compress
     header.offsets, header.scales = offset, np.full(3, scale)
     header.add_extra_dim(laspy.ExtraBytesParams(name=name, type=np.int32,
                                                 description="superfacets label"))
-    standard, extra = _las_fields(header.point_format, fields or {}, name)
+    standard, extra, _ = _las_fields(header.point_format, fields or {}, name)
     for field_name, values in extra.items():
         header.add_extra_dim(laspy.ExtraBytesParams(name=field_name, type=values.dtype))
     las = laspy.LasData(header, laspy.ScaleAwarePointRecord.zeros(points.shape[0],
@@ -378,39 +378,101 @@ def _new_las(points: np.ndarray, labels: np.ndarray, name: str, colors, compress
 _LAS_OWN = ("x", "y", "z", "red", "green", "blue", "withheld")
 
 
-def _las_fields(point_format, fields: dict, label: str) -> tuple[dict, dict]:
-    """A cloud's fields for a new LAS: ``(standard, extra)``, each name -> values, the
-    standard dimensions' names as laspy spells them; a field that fits neither is left
-    out with a warning (:func:`write_cloud_with_labels`)."""
+def kept_fields(path, cloud, name: str = LABEL_FIELD) -> list:
+    """The names of a cloud's fields (:attr:`~superfacets.PointCloud.fields`) that a new
+    file of its points keeps (:func:`write_cloud_with_labels`), in order.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The new file: ``.ply``, ``.las`` or ``.laz``.
+    cloud : PointCloud
+    name : str, default ``'ClusterID'``
+        The labels' field.
+
+    Returns
+    -------
+    list of str
+
+    Raises
+    ------
+    MissingExtraError
+        A LAS/LAZ without the ``clouds`` extra.
+
+    Examples
+    --------
+    >>> cloud = PointCloud(np.zeros((2, 3)), fields={"intensity": np.array([0.5, 1.5])})
+    >>> kept_fields("out.ply", cloud), kept_fields("out.las", cloud)
+    (['intensity'], [])
+    """
+    fields = dict(getattr(cloud, "fields", None) or {})
+    if split_suffix(Path(path))[0] == "ply":
+        own = {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue", ply_field_name(name)}
+        return [f for f, p in _ply_names(fields).items() if p not in own]
+    laspy = extras.require("laspy", "writing LAS/LAZ files")
+    pf = laspy.PointFormat(7 if getattr(cloud, "colors", None) is not None else 6)
+    return list(_las_fields(pf, fields, name, warn=False)[2])
+
+
+def _ascii(name: str) -> str:
+    """A field's name as a file's header spells it: ASCII letters, digits and ``_``."""
+    return re.sub(r"[^A-Za-z0-9_]", "_", name)
+
+
+def _las_fields(point_format, fields: dict, label: str, warn: bool = True
+                ) -> tuple[dict, dict, dict]:
+    """A cloud's fields for a new LAS: ``(standard, extra, written)``, the first two each
+    dimension -> values (the standard dimensions' names as laspy spells them, the others'
+    in ASCII), the third each field kept -> its dimension; a field that fits neither is
+    left out with a warning (:func:`write_cloud_with_labels`)."""
     dims = {d.name.lower(): d for d in point_format.dimensions if d.is_standard}
-    standard, extra = {}, {}
+    standard, extra, written = {}, {}, {}
     for field_name, values in fields.items():
         a = np.asarray(values)
         dim = dims.get(field_name.lower())
         why = None
-        if field_name.lower() in _LAS_OWN or field_name == label:
+        if field_name == label:
+            why = f"the labels are written as {label}"
+        elif field_name.lower() in _LAS_OWN:
             why = "the file's own dimension of that name holds the points' own values"
         elif dim is not None:
             if dim.dtype is not None and dim.dtype.kind == "f":
                 standard[dim.name] = a.astype(dim.dtype)
+                written[field_name] = dim.name
                 continue
             lo, hi = ((np.iinfo(dim.dtype).min, np.iinfo(dim.dtype).max) if dim.dtype
                       is not None else (0, 2 ** dim.num_bits - 1))
             with np.errstate(invalid="ignore"):
                 fits = bool(np.all((a == np.floor(a)) & (a >= lo) & (a <= hi)))
-            if fits:
+            if fits and dim.name not in standard:
                 standard[dim.name] = a.astype(np.int64)
+                written[field_name] = dim.name
                 continue
-            why = f"LAS's {dim.name} holds whole numbers {lo}..{hi}"
-        elif len(field_name.encode()) > 32:
-            why = "a LAS extra dimension's name holds at most 32 bytes"
+            why = (f"another field is written as {dim.name}" if dim.name in standard else
+                   f"LAS's {dim.name} holds whole numbers {lo}..{hi}")
+        elif len(field_name) > 32:
+            why = "a LAS extra dimension's name holds at most 32 characters"
+        elif _ascii(field_name) in extra or _ascii(field_name).lower() in dims:
+            why = f"another field is written as {_ascii(field_name)}"
         else:
             kind = {"b": np.uint8, "f": np.float64 if a.dtype.itemsize > 4 else np.float32}
-            extra[field_name] = a.astype(kind.get(a.dtype.kind, a.dtype))
+            extra[_ascii(field_name)] = a.astype(kind.get(a.dtype.kind, a.dtype))
+            written[field_name] = _ascii(field_name)
             continue
-        warnings.warn(f"field {field_name!r} is not kept in the new LAS file: {why}; a .ply "
-                      "keeps every field", stacklevel=4)
-    return standard, extra
+        if warn:
+            warnings.warn(f"field {field_name!r} is not kept in the new LAS file: {why}; a "
+                          ".ply keeps every field", stacklevel=4)
+    return standard, extra, written
+
+
+def _ply_names(fields: dict) -> dict:
+    """Each field's PLY property, ``scalar_<name>`` in ASCII; the first of two alike kept."""
+    out = {}
+    for field_name in fields:
+        prop = "scalar_" + _ascii(field_name)
+        if prop not in out.values():
+            out[field_name] = prop
+    return out
 
 
 def _ply_fields(fields: dict, taken: set) -> dict:
@@ -418,10 +480,11 @@ def _ply_fields(fields: dict, taken: set) -> dict:
     a type PLY has: 64-bit integers as int32 where they fit, else as doubles; a name another
     property already has is left out with a warning (:func:`write_cloud_with_labels`)."""
     out = {}
+    names = _ply_names(fields)
     for field_name, values in fields.items():
-        prop = "scalar_" + re.sub(r"\W", "_", field_name)
+        prop = names.get(field_name, "scalar_" + _ascii(field_name))
         a = np.asarray(values)
-        if prop in taken or prop in out:
+        if prop in taken or prop in out or field_name not in names:
             warnings.warn(f"field {field_name!r} is not kept in the new PLY file: another "
                           f"property is named {prop}", stacklevel=4)
             continue
