@@ -250,3 +250,29 @@ def test_a_new_file_keeps_fields_of_any_name_or_says_why_not(tmp_path, capsys):
     las = laspy.read(tmp_path / "odd.laz")
     assert las["a_b"].tolist() == [7] * 400 and las["big"][0] == 2**40
     assert "intensit_" in las.point_format.extra_dimension_names
+
+
+def test_a_corpus_in_semantic3d_s_layout_is_judged_by_its_labels_files(tmp_path):
+    # (x y z intensity r g b .txt beside a .labels of one class a line, 0 unlabelled)
+    import csv
+
+    from superfacets.cli import main
+
+    rng = np.random.default_rng(1)
+    for name in ("bildstein_station1_xyz_intensity_rgb", "domfountain_station1_xyz_intensity_rgb"):
+        xy = rng.random((1500, 2)) * 10
+        cls = np.where(xy[:, 0] > 5, 2, 1)
+        cls[:100] = 0
+        rgb = np.where(cls[:, None] == 2, [180, 40, 40], [40, 160, 40])
+        rows = (f"{a:.3f} {b:.3f} {0.5 * (c == 2):.3f} {-i} {r} {g} {bl}\n"
+                for i, ((a, b), c, (r, g, bl)) in enumerate(zip(xy, cls, rgb)))
+        (tmp_path / f"{name}.txt").write_text("".join(rows))
+        np.savetxt(tmp_path / f"{name}.labels", cls, fmt="%d")
+    out = tmp_path / "rows.csv"
+    assert main(["experiment", "--inputs", str(tmp_path / "*.txt"), "--ground-truths",
+                 "{stem}.labels", "--ignore-label", "0", "-m", "superfacets", "-k", "12",
+                 "--alpha", "0", "-o", str(out), "-q"]) == 0
+    rows = list(csv.DictReader(out.open()))
+    assert len(rows) == 2 and all(r["status"] == "ok" for r in rows)
+    assert all(float(r["undersegmentation_error"]) < 0.05 and float(r["oracle_miou"]) > 0.95
+               for r in rows)
