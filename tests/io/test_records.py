@@ -653,6 +653,11 @@ def test_a_new_file_of_a_cloud_keeps_its_other_values(tmp_path, capsys):
                  str(tmp_path / "said.laz")]) == 0
     assert ("wrote " + str(tmp_path / "said.laz") + " (a new file of the input's points with "
             "their intensity and ring, labels as ClusterID)") in capsys.readouterr().out
+    assert main(["segment", str(tmp_path / "sweep.pcd.bin"), "-k", "10", "--tiles", "2",
+                 "--workdir", str(tmp_path / "work"), "-o", str(tmp_path / "tiled.laz")]) == 0
+    assert "(a new file of the input's points with their intensity and ring, labels as " \
+        "ClusterID)" in capsys.readouterr().out
+    assert np.array_equal(laspy.read(tmp_path / "tiled.laz")["ring"], ring)
     if shutil.which("CloudCompare") is None:
         pytest.skip("CloudCompare not found: install Debian's 'cloudcompare' package (make "
                     "test does, as root)")

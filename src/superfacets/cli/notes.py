@@ -35,6 +35,15 @@ def merges_said(first: int, params: dict, cloud: bool = True, scene: bool = Fals
             f"{COST_SAID.get(params.get('merge_cost'), '')}; --merge-from 1: no merging)")
 
 
+def fields_said(kept: list) -> str:
+    """The values a new file of the points kept, for the summary's "wrote" line (" with
+    their intensity and ring"; "" for none)."""
+    if not kept:
+        return ""
+    names = f"{', '.join(kept[:-1])} and {kept[-1]}" if len(kept) > 1 else kept[0]
+    return f" with their {names}"
+
+
 def weights_said(params: dict) -> str:
     """The summary's words for what a run's weights read besides the geometry (one run's or
     a tiled run's): the colour term, the up coordinate's weight, a scene's steps."""

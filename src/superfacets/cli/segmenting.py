@@ -11,7 +11,7 @@ import numpy as np
 from ..checks import counted
 from ..elements.kinds import kind_of
 from ..method.params import DEFAULTS
-from .notes import count_note, duplicates_note, merges_said, weights_said
+from .notes import count_note, duplicates_note, fields_said, merges_said, weights_said
 from .options import (
     add_adaptive_options,
     add_camera_options,
@@ -530,9 +530,7 @@ def _labels_what(args, kind: str, data=None) -> str:
              f"{ply_field_name(LABEL_FIELD)}, CloudCompare's scalar field {LABEL_FIELD}")
     if into == "new":
         kept = kept_fields(args.output, data) if data is not None else []
-        values = (f" with their {', '.join(kept[:-1])} and {kept[-1]}" if len(kept) > 1 else
-                  f" with their {kept[0]}" if kept else "")
-        return f"a new file of the input's {rows}{values}, labels as {field}"
+        return f"a new file of the input's {rows}{fields_said(kept)}, labels as {field}"
     return f"the input's {rows}, every field kept, labels as {field}{copc_said(args.mesh)}"
 
 

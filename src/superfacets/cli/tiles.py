@@ -7,7 +7,7 @@ import time
 from pathlib import Path
 
 from ..elements.kinds import kind_of
-from .notes import merges_said, weights_said
+from .notes import fields_said, merges_said, weights_said
 from .options import (
     add_engine_options,
     check_labels_output,
@@ -107,7 +107,7 @@ def segment_tiles(args) -> int:
         raise named_after(args.mesh, exc) from None
     elapsed = time.perf_counter() - t0
     interrupts.last_outputs()  # (once whole, a Ctrl-C no longer undoes the run)
-    _write_labels(seg_out, args.mesh, result)
+    kept = _write_labels(seg_out, args.mesh, result)
     report = sys.stderr if str(seg_out) == "-" else sys.stdout
     if not args.quiet:
         kind = result.params["elements"]
@@ -143,7 +143,7 @@ def segment_tiles(args) -> int:
             what = (f"labels, one per {kind[:-1]}" if into is None else
                     f"the input's {kind}, every field kept, labels as {LABEL_FIELD}"
                     f"{copc_said(args.mesh)}" if into == "records" else
-                    f"a new file of the input's {kind}, labels as {LABEL_FIELD}")
+                    f"a new file of the input's {kind}{kept}, labels as {LABEL_FIELD}")
             print(f"wrote {seg_out} ({what})", file=report)
         elif seg_out is None:
             print("note: nothing was saved: add -o OUT.seg", file=sys.stderr)
@@ -172,18 +172,26 @@ def _source(args):
     return replace(reader, **changes)
 
 
-def _write_labels(seg_out, source, result) -> None:
+def _write_labels(seg_out, source, result) -> str:
     """``-o``'s file of a tiled run: the input's records or a new scan file with the labels
-    (:func:`superfacets.io.records.write_scan_labels`), segIndices, or a label file."""
+    (:func:`superfacets.io.records.write_scan_labels`), segIndices, or a label file; a new
+    file's kept values, said (``" with their intensity and ring"``; else "")."""
+    from ..io.clouds import read_cloud
     from ..io.files import Outputs
     from ..io.labels import write_labels, write_segindices
-    from ..io.records import scan_output, write_scan_labels
+    from ..io.records import kept_fields, scan_output, write_scan_labels
 
+    kept = []
     with Outputs() as outputs:
         if seg_out is not None:
-            if scan_output(seg_out, source) is not None:  # (a new file: read once more)
-                write_scan_labels(seg_out, source, result.labels, outputs=outputs)
+            into = scan_output(seg_out, source)
+            if into is not None:  # (a new file: the input read once more)
+                cloud = read_cloud(source) if into == "new" else None
+                kept = [] if cloud is None else kept_fields(seg_out, cloud)
+                write_scan_labels(seg_out, source, result.labels, cloud=cloud,
+                                  outputs=outputs)
             elif str(seg_out).lower().endswith(".json"):
                 write_segindices(seg_out, result.labels, result.params, outputs=outputs)
             else:
                 write_labels(seg_out, result.labels, outputs=outputs)
+    return fields_said(kept)
