@@ -276,3 +276,28 @@ def test_a_corpus_in_semantic3d_s_layout_is_judged_by_its_labels_files(tmp_path)
     assert len(rows) == 2 and all(r["status"] == "ok" for r in rows)
     assert all(float(r["undersegmentation_error"]) < 0.05 and float(r["oracle_miou"]) > 0.95
                for r in rows)
+
+
+def test_pdal_s_dimension_names_go_into_a_new_las_s_standard_dimensions(tmp_path):
+    # (a CSV of PDAL's writers.text: ReturnNumber, GpsTime, ... became extra dimensions
+    # beside the empty standard ones; ScanAngleRank, in degrees, stays an extra one)
+    import laspy
+
+    from superfacets.cli import main
+
+    rng = np.random.default_rng(0)
+    n = 2000
+    xyz = np.c_[rng.uniform(0, 50, (n, 2)), rng.normal(0, 0.05, n)]
+    ret, cls, angle = rng.integers(1, 4, n), rng.integers(1, 7, n), rng.integers(-20, 20, n)
+    head = '"X","Y","Z","Intensity","ReturnNumber","Classification","ScanAngleRank","GpsTime"\n'
+    rows = "".join(f"{a:.3f},{b:.3f},{c:.3f},{100 + i % 50},{r},{k},{s},{1e5 + i:.1f}\n"
+                   for i, ((a, b, c), r, k, s) in enumerate(zip(xyz, ret, cls, angle)))
+    (tmp_path / "tile.csv").write_text(head + rows)
+    assert main(["segment", str(tmp_path / "tile.csv"), "-k", "10", "-o",
+                 str(tmp_path / "tile.laz"), "-q"]) == 0
+    las = laspy.read(tmp_path / "tile.laz")
+    assert np.array_equal(las.return_number, ret) and np.array_equal(las.classification, cls)
+    assert np.array_equal(las.intensity, 100 + np.arange(n) % 50)
+    assert np.allclose(las.gps_time, 1e5 + np.arange(n))
+    assert set(las.point_format.extra_dimension_names) == {"ClusterID", "scananglerank"}
+    assert np.array_equal(las["scananglerank"], angle) and not las.scan_angle.any()

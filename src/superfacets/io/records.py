@@ -375,7 +375,7 @@ def _new_las(points: np.ndarray, labels: np.ndarray, name: str, colors, compress
 
 #: Standard LAS dimensions a cloud's field never goes into: the positions and colours are
 #: the cloud's own; ``withheld`` marks its invalid points.
-_LAS_OWN = ("x", "y", "z", "red", "green", "blue", "withheld")
+_LAS_OWN = ("x", "y", "z", "red", "green", "blue", "withheld")  # (as _las_key spells them)
 
 
 def kept_fields(path, cloud, name: str = LABEL_FIELD) -> list:
@@ -425,15 +425,15 @@ def _las_fields(point_format, fields: dict, label: str, warn: bool = True
     dimension -> values (the standard dimensions' names as laspy spells them, the others'
     in ASCII), the third each field kept -> its dimension; a field that fits neither is
     left out with a warning (:func:`write_cloud_with_labels`)."""
-    dims = {d.name.lower(): d for d in point_format.dimensions if d.is_standard}
+    dims = {_las_key(d.name): d for d in point_format.dimensions if d.is_standard}
     standard, extra, written = {}, {}, {}
     for field_name, values in fields.items():
         a = np.asarray(values)
-        dim = dims.get(field_name.lower())
+        dim = dims.get(_las_key(field_name))
         why = None
         if field_name == label:
             why = f"the labels are written as {label}"
-        elif field_name.lower() in _LAS_OWN:
+        elif _las_key(field_name) in _LAS_OWN:
             why = "the file's own dimension of that name holds the points' own values"
         elif dim is not None:
             if dim.dtype is not None and dim.dtype.kind == "f":
@@ -463,6 +463,14 @@ def _las_fields(point_format, fields: dict, label: str, warn: bool = True
             warnings.warn(f"field {field_name!r} is not kept in the new LAS file: {why}; a "
                           ".ply keeps every field", stacklevel=4)
     return standard, extra, written
+
+
+def _las_key(name: str) -> str:
+    """A LAS dimension's name as compared: any case, no ``_`` (PDAL's ``ReturnNumber``,
+    ``GpsTime`` are laspy's ``return_number``, ``gps_time``; PDAL's ``ScanAngleRank``, in
+    degrees, is not point formats 6-10's ``scan_angle``, in steps of 0.006 degrees: an
+    extra dimension)."""
+    return name.lower().replace("_", "")
 
 
 def _ply_names(fields: dict) -> dict:
