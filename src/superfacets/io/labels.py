@@ -231,6 +231,7 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
                                   f"{n_faces}")
         return labels
     data = read_bytes(path, comp, "file of labels", bounded=False)  # (runs of one value)
+    shape = ""
     if fmt == "ply":
         labels = read_ply_labels(path, data)
     elif fmt == "label":  # SemanticKITTI's: uint32 a point, the class in its lower 16 bits
@@ -239,7 +240,7 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
                                   f"point; its {len(data):,} bytes are not a whole number")
         labels = (np.frombuffer(data, dtype="<u4") & 0xFFFF).astype(np.int64)
     elif fmt == "npy":  # a learning pipeline's array of labels
-        labels = _npy_labels(data, path)
+        labels, shape = _npy_labels(data, path)
     elif fmt == "bin":  # nuScenes' lidarseg: uint8 a point
         if not path.name.lower().endswith("_lidarseg.bin"):
             raise MeshFormatError(f"{path}: a .bin of labels is read as nuScenes' lidarseg "
@@ -255,22 +256,53 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
                                   f"{exc})") from None
         if labels.ndim != 1:
             raise MeshFormatError(f"{path}: segIndices must be a list of integers")
-    elif not (lines := text_lines(data, path)):
-        labels = np.zeros(0, dtype=np.int64)
     else:
-        try:
-            labels = np.loadtxt(lines, dtype=np.int64, ndmin=1, comments=None)
-        except (ValueError, OverflowError) as exc:
-            labels = _whole_numbers(lines)  # (numpy.savetxt's default: 1.000000000000e+00)
-            if labels is None:
-                why = str(exc).split('; use')[0]
-                raise MeshFormatError(f"{path}: malformed label file: {why}") from None
-        if labels.ndim != 1:
-            raise MeshFormatError(f"{path}: malformed label file: expected one label per line")
+        labels = _text_labels(text_lines(data, path), path)
     if n_faces is not None and labels.shape[0] != n_faces:
-        raise MeshFormatError(f"{path}: has {labels.shape[0]} labels but the input has "
-                              f"{n_faces} elements")
+        raise MeshFormatError(f"{path}: has {labels.shape[0]} labels{shape} but the input "
+                              f"has {n_faces} elements")
     return labels
+
+
+def _text_labels(lines: list, path: Path) -> np.ndarray:
+    """The labels of a text file: one whole number a line, after a column's name where
+    the first line is one (pandas' ``to_csv(index=False)`` of one column: ``label``)."""
+    if lines and len(lines) > 1 and len(lines[0].replace(",", " ").split()) == 1 \
+            and not _is_number(lines[0]):
+        lines = lines[1:]
+    if not lines:
+        return np.zeros(0, dtype=np.int64)
+    columns = lines[0].replace(",", " ").replace(";", " ").split()
+    if len(columns) > 1:
+        raise MeshFormatError(
+            f"{path}: malformed label file: {len(columns)} columns in a line ({lines[0]!r}); "
+            "it holds one label per line (pandas: to_csv(index=False) of one column)")
+    try:
+        labels = np.loadtxt(lines, dtype=np.int64, ndmin=1, comments=None)
+    except (ValueError, OverflowError):
+        labels = _whole_numbers(lines)  # (numpy.savetxt's default: 1.000000000000e+00)
+    if labels is None or labels.ndim != 1:
+        at = next((i for i, line in enumerate(lines) if not _is_whole(line)), 0)
+        raise MeshFormatError(f"{path}: malformed label file: label {at + 1:,} of "
+                              f"{len(lines):,}, {lines[at][:40]!r}, is not one whole number")
+    return labels
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _is_whole(text: str) -> bool:
+    """One finite whole number (``3``, ``3.0``, ``3e0``) of at most 2**53."""
+    try:
+        value = float(text)
+    except ValueError:
+        return False
+    return bool(np.isfinite(value) and value == round(value) and abs(value) <= 2**53)
 
 
 def _whole_numbers(lines: list) -> np.ndarray | None:
@@ -287,10 +319,10 @@ def _whole_numbers(lines: list) -> np.ndarray | None:
     return flat.astype(np.int64)
 
 
-def _npy_labels(data: bytes, path: Path) -> np.ndarray:
+def _npy_labels(data: bytes, path: Path) -> tuple[np.ndarray, str]:
     """The labels of a ``.npy`` file: an integer (or boolean, or whole-valued float) array
     of one label per element, ``(N,)``, ``(N, 1)`` or an organized ``(H, W)`` read row by
-    row."""
+    row; and, for the last, its shape as said where the count differs."""
     import io
 
     try:
@@ -302,7 +334,9 @@ def _npy_labels(data: bytes, path: Path) -> np.ndarray:
         raise MeshFormatError(f"{path}: a .npy of labels holds one integer per element ((N,), "
                               f"(N, 1) or an organized (H, W)); got "
                               f"{getattr(arr, 'shape', type(arr).__name__)}")
-    return whole_labels(arr, str(path))
+    organized = arr.ndim == 2 and arr.shape[1] != 1
+    return whole_labels(arr, str(path)), (f" (an organized {arr.shape[0]:,} x {arr.shape[1]:,}"
+                                         " array, read row by row)" if organized else "")
 
 
 def read_field(path, name: str) -> np.ndarray:

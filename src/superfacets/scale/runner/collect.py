@@ -18,9 +18,10 @@ from typing import Sequence
 from ...errors import ParameterError
 from ...io import CLOUD_FORMATS, MESH_FORMATS, VOLUME_FORMATS, input_kind
 from ...io.files import COMPRESSIONS, split_suffix
+from .manifest import OPTIONS
 
 __all__ = ["collect_inputs", "output_names", "broken_link_reason", "no_inputs", "FileEntry",
-           "file_entries"]
+           "file_entries", "batch_output"]
 
 
 def _readable_suffixes(explicit: bool) -> set[str]:
@@ -82,7 +83,9 @@ def collect_inputs(specs: Sequence[str], exclude=None, skipped: list | None = No
         every format the readers accept, hidden files, ``.txt`` and ``.csv`` left out, and
         in a scene folder of Pointcept's the ``.npy`` beside ``coord.npy``); glob
         patterns (``**`` recurses); ``@list.txt`` (one of these per line, ``#``
-        comments).
+        comments). A sub-folder of a searched folder that holds a batch's output
+        (its ``batch.json`` and manifest) is left out: its files are that batch's
+        results, not inputs.
     exclude : path, optional
         A folder whose files are never inputs (the output folder).
     skipped : list, optional
@@ -139,7 +142,7 @@ def collect_inputs(specs: Sequence[str], exclude=None, skipped: list | None = No
                 dirs[:] = []
                 continue
             visited.add((st.st_dev, st.st_ino))
-            dirs[:] = sorted(x for x in dirs if not x.startswith("."))
+            _walked_dirs(Path(root), dirs, passed, skip)
             scene = "coord.npy" in files  # (a scene folder: its other .npy are its assets)
             for name in sorted(files):
                 asset = scene and name.endswith(".npy") and name != "coord.npy"
@@ -191,6 +194,30 @@ def collect_inputs(specs: Sequence[str], exclude=None, skipped: list | None = No
     for s in specs:
         one(str(s))
     return out
+
+
+def _walked_dirs(root: Path, dirs: list, passed: list | None, skip) -> None:
+    """Sort ``dirs`` (an ``os.walk`` step's) and take out the hidden ones and each holding
+    another batch's results (a rerun elsewhere would read them), said in ``passed``."""
+    dirs[:] = sorted(x for x in dirs if not x.startswith("."))
+    for x in [x for x in dirs if batch_output(root / x)]:
+        dirs.remove(x)
+        if passed is not None and (skip is None or not skip(root / x)):
+            passed.append((str(root / x), "a batch's output folder: its files are results, "
+                           "not inputs; name them to segment them"))
+
+
+def batch_output(folder: Path) -> bool:
+    """Whether ``folder`` holds the output of ``superfacets batch`` (its options file and
+    its manifest, as :func:`~superfacets.scale.runner.batch.run_batch` writes them).
+
+    Examples
+    --------
+    >>> batch_output(Path("/no/such/folder"))
+    False
+    """
+    return (folder / OPTIONS).is_file() and any(
+        (folder / f"manifest.{ext}").is_file() for ext in ("parquet", "csv"))
 
 
 class _Inside:
