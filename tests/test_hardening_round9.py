@@ -60,3 +60,54 @@ def test_a_label_file_with_a_column_s_name_is_read_and_a_bad_one_named(tmp_path,
         read_labels(tmp_path / "pairs.npy", n_faces=5)
     np.save(tmp_path / "column.npy", labels[:, None])  # (N, 1) is one label a row
     assert read_labels(tmp_path / "column.npy", n_faces=5).tolist() == labels.tolist()
+
+
+def _records(path, shape):
+    rng = np.random.default_rng(3)
+    rec = np.zeros(shape, dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("ring", "<u2")])
+    rec["x"], rec["y"] = rng.random(shape), rng.random(shape)
+    rec["z"] = 0.05 * np.sin(4 * rec["x"])
+    rec["ring"] = np.arange(rec.size).reshape(shape) % 16
+    rec["x"].reshape(-1)[:4] = np.nan  # four missing points (a row NaN in x y z)
+    rec["y"].reshape(-1)[:4] = np.nan
+    rec["z"].reshape(-1)[:4] = np.nan
+    np.save(path, rec)
+    return rec
+
+
+def test_npy_records_get_their_labels_as_one_more_field(tmp_path, capsys):
+    # (`segment frame.npy -o out.npy` of ros_numpy's records wrote a bare array of labels:
+    # the LAS, PLY and PCD of a scan get a copy of their records with ClusterID, NPY records
+    # had no way back into a PointCloud2 with the labels beside their fields)
+    import pytest
+
+    from superfacets.io import read_labels
+    from superfacets.io.records import write_labels_into
+
+    rec = _records(tmp_path / "frame.npy", (30, 40))  # organized, as a depth camera's
+    assert main(["segment", str(tmp_path / "frame.npy"), "-k", "12", "-o",
+                 str(tmp_path / "out.npy")]) == 0
+    assert "wrote " + str(tmp_path / "out.npy") + " (the input's points, every field kept" \
+        in capsys.readouterr().out
+    out = np.load(tmp_path / "out.npy")
+    assert out.shape == (30, 40) and out.dtype.names == ("x", "y", "z", "ring", "ClusterID")
+    assert np.array_equal(out["ring"], rec["ring"]) and out["ClusterID"].dtype == np.int32
+    labels = out["ClusterID"].reshape(-1)
+    assert (labels[:4] == -1).all() and len(np.unique(labels[4:])) == 12
+    assert np.array_equal(read_labels(tmp_path / "out.npy", n_faces=1200), labels)
+    # a second run over its own output replaces the field, and says so
+    with pytest.warns(UserWarning, match="out.npy has a field ClusterID: the copy holds"):
+        again = write_labels_into(tmp_path / "again.npy", tmp_path / "out.npy",
+                                  np.arange(1200) % 5)
+    assert np.load(again).dtype.names.count("ClusterID") == 1
+    # a .npy of positions still gets a .npy of labels; batch --labels records the records
+    np.save(tmp_path / "plain.npy", np.c_[np.random.default_rng(1).random((500, 2)),
+                                           np.zeros(500)])
+    assert main(["segment", str(tmp_path / "plain.npy"), "-k", "5", "-o",
+                 str(tmp_path / "plain_labels.npy"), "-q"]) == 0
+    assert np.load(tmp_path / "plain_labels.npy").dtype == np.int64
+    (tmp_path / "in").mkdir()
+    _records(tmp_path / "in" / "sweep.npy", (900,))
+    assert main(["batch", str(tmp_path / "in"), "-o", str(tmp_path / "b"), "-k", "6",
+                 "--labels", "records", "--workers", "1", "-q"]) == 0
+    assert np.load(tmp_path / "b" / "sweep.npy").dtype.names[-1] == "ClusterID"

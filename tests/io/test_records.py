@@ -178,7 +178,8 @@ def test_write_labels_into_checks_counts_and_types(tmp_path):
     assert not (tmp_path / "o.las").exists()
     # a second run over its own output overwrites the field, not adds another
     once = write_labels_into(tmp_path / "o.las", src, np.arange(50) % 3)
-    twice = write_labels_into(tmp_path / "p.laz", once, np.arange(50) % 4)
+    with pytest.warns(UserWarning, match="o.las has a field ClusterID: the copy holds"):
+        twice = write_labels_into(tmp_path / "p.laz", once, np.arange(50) % 4)
     las = laspy.read(twice)
     assert list(las.point_format.dimension_names).count("ClusterID") == 1
     assert np.array_equal(las.ClusterID, np.arange(50) % 4)
@@ -352,7 +353,8 @@ def test_pcd_records_twice_and_a_pcd_ground_truth(tmp_path, capsys):
     truth = (np.arange(1200) % 40 > 20).astype(np.uint32)  # the two terraces
     src = _pcd(tmp_path / "frame.pcd", "binary", label=truth)
     once = write_labels_into(tmp_path / "o.pcd", src, np.where(np.arange(1200) < 3, -1, 1))
-    twice = write_labels_into(tmp_path / "p.pcd", once, np.arange(1200) % 7)
+    with pytest.warns(UserWarning, match="o.pcd has a field ClusterID"):
+        twice = write_labels_into(tmp_path / "p.pcd", once, np.arange(1200) % 7)
     assert _pcd_head(twice) == _pcd_head(once)  # the field overwritten, not added again
     assert np.array_equal(read_labels(twice), np.arange(1200) % 7)
     # the ground truth from the PCD's own label field, the labels from the copy

@@ -47,7 +47,8 @@ def add_parsers(sub) -> None:
                    default="seg",
                    help="label file per input: one label per line (.seg), ScanNet's "
                         "segIndices (.json), a NumPy int64 array (.npy), records: each "
-                        "LAS/LAZ, PLY or PCD cloud's own records with a ClusterID field "
+                        "LAS/LAZ, PLY, PCD or NPY-records cloud's own records with a "
+                        "ClusterID field "
                         "(.seg for the others), or laz: a .laz with ClusterID for every "
                         "cloud (a LAS/LAZ input's records, any other cloud's points; "
                         "meshes .seg) (default: seg)")

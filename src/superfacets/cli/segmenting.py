@@ -75,8 +75,10 @@ def _add_segment(sub) -> None:
                      help="write the labels here: one per face, vertex or point per line, or "
                           "{'segIndices': [...], 'params': ...} when it ends in .json "
                           "('-': standard output; default: none); a .las/.laz, .ply or .pcd "
-                          "of a scan of that format: a copy of its records with the labels "
-                          "as the field ClusterID; a .las/.laz or .ply of a cloud whose "
+                          "of a scan of that format (a .npy of NPY records): a copy of its "
+                          "records with the labels as the field ClusterID; a .npy of a "
+                          ".npy of positions: the labels (int64); a .las/.laz or .ply of a "
+                          "cloud whose "
                           "file takes no field (.xyz, .npy, .bin, .e57, ...): a new file "
                           "of its points with that field")
     out.add_argument("--header", action="store_true",

@@ -192,7 +192,8 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
     ``segIndices`` of a ScanNet-style ``.json``, the classes of a SemanticKITTI
     ``.label`` file (uint32 a point: its lower 16 bits, the instance above left out),
     those of a nuScenes ``*_lidarseg.bin`` file (uint8 a point), or a ``.npy`` array of
-    labels (a learning pipeline's).
+    labels (a learning pipeline's; of NPY records, their ``ClusterID`` field, as ``segment
+    -o OUT.npy`` writes them).
 
     Parameters
     ----------
@@ -329,6 +330,12 @@ def _npy_labels(data: bytes, path: Path) -> tuple[np.ndarray, str]:
         arr = np.load(io.BytesIO(data), allow_pickle=False)
     except Exception as exc:  # noqa: BLE001 - numpy raises many types on damaged files
         raise MeshFormatError(f"{path}: cannot read NPY: {exc}") from None
+    if isinstance(arr, np.ndarray) and arr.dtype.names:  # records: ``segment -o OUT.npy``'s
+        if LABEL_FIELD not in arr.dtype.names:
+            raise MeshFormatError(f"{path}: NPY records without a {LABEL_FIELD} field (they "
+                                  f"have: {', '.join(arr.dtype.names)}); a ground truth in "
+                                  "a field of the input's: --ground-truth-field NAME")
+        return whole_labels(arr[LABEL_FIELD], f"{path} ({LABEL_FIELD})"), ""
     if not isinstance(arr, np.ndarray) or arr.ndim not in (1, 2) or (
             arr.ndim == 2 and arr.shape[1] == 3):
         raise MeshFormatError(f"{path}: a .npy of labels holds one integer per element ((N,), "

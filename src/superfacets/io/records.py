@@ -54,8 +54,9 @@ RECORD_FORMATS = {"las": ("las", "laz"), "laz": ("las", "laz"), "ply": ("ply",),
 
 def records_kind(output, source) -> str | None:
     """The format of the records ``output`` writes for input ``source``: ``'las'``,
-    ``'ply'`` or ``'pcd'`` where it names one the input can be written back as, None for a
-    label file.
+    ``'ply'``, ``'pcd'`` or ``'npy'`` (NPY records, a structured array, as ``ros_numpy``
+    makes) where it names one the input can be written back as, None for a label file
+    (a ``.npy`` of labels for a ``.npy`` of plain positions).
 
     Parameters
     ----------
@@ -85,6 +86,8 @@ def records_kind(output, source) -> str | None:
         raise ParameterError(f"{output}: the labels go into a plain LAZ, not a COPC file (PDAL "
                              "reads a .copc.laz as one): name it NAME.laz; `pdal translate "
                              "NAME.laz NAME.copc.laz` indexes it")
+    if out_fmt == "npy" and in_fmt == "npy":  # records (a structured array), or labels
+        return "npy" if out_comp is None and _npy_records_of(Path(source)) else None
     if out_fmt not in ("las", "laz", "ply", "pcd") or in_fmt not in RECORD_FORMATS:
         return None  # (a label file, or a name the caller refuses as no label file)
     if out_fmt in RECORD_FORMATS.get(in_fmt, ()) and not (out_fmt != "ply" and out_comp):
@@ -211,7 +214,7 @@ def write_scan_labels(path, source, labels, *, cloud=None,
     if what == "records":
         return write_labels_into(path, source, labels, outputs=outputs)
     if what is None:
-        raise ParameterError(f"{path}: labels go into .las, .laz, .ply or .pcd records")
+        raise ParameterError(f"{path}: labels go into .las, .laz, .ply, .pcd or NPY records")
     if cloud is None:
         from .clouds import read_cloud
 
@@ -578,7 +581,9 @@ def write_labels_into(path, source, labels, *, name: str = LABEL_FIELD,
         The copy: ``.las`` or ``.laz`` for a LAS/LAZ input (LAZ compressed,
         through laspy's ``lazrs``), ``.ply`` for a PLY input (cloud, or a
         mesh whose vertices were segmented), ``.pcd`` for a PCD input (in its
-        encoding).
+        encoding), ``.npy`` for NPY records (a structured array, ``(N,)`` or organized
+        ``(H, W)``: its shape and fields kept, the labels one more ``int32`` field, as
+        ``ros_numpy`` turns back into a ``PointCloud2``).
     source : str or os.PathLike
         The input file the labels are of.
     labels : (N,) int ndarray
@@ -624,16 +629,63 @@ def write_labels_into(path, source, labels, *, name: str = LABEL_FIELD,
     ply_name = ply_field_name(name)  # (a word: checked here for both layouts)
     kind = records_kind(path, source)
     if kind is None:
-        raise ParameterError(f"{path}: labels go into .las, .laz, .ply or .pcd records")
+        raise ParameterError(f"{path}: labels go into .las, .laz, .ply, .pcd or NPY records")
     if kind == "las" and len(name) > 32:
         raise ParameterError(f"a LAS dimension's name holds at most 32 characters: {name!r}")
     if kind == "las":
         content = _las_with(source, labels, name, compress=split_suffix(path)[0] == "laz")
+    elif kind == "npy":
+        content = _npy_with(source, labels, name)
     elif kind == "pcd":
         content = _pcd_with(source, labels, name)
     else:
         content = _ply_with(source, labels, ply_name)
     return save(path, content, outputs)
+
+
+def _npy_records_of(source: Path) -> bool:
+    """Whether the ``.npy`` file ``source`` holds records (a structured array); a file that
+    cannot be read: no (its reader says why)."""
+    _, comp = split_suffix(source)
+    try:
+        if comp is None:
+            return bool(np.load(source, mmap_mode="r", allow_pickle=False).dtype.names)
+        return bool(_npy_array(source).dtype.names)
+    except Exception:  # noqa: BLE001 - numpy raises many types on damaged files
+        return False
+
+
+def _npy_array(source: Path) -> np.ndarray:
+    """The array of a ``.npy`` file (optionally compressed)."""
+    data = read_bytes(source, split_suffix(source)[1], "NPY file", bounded=False)
+    try:
+        return np.load(io.BytesIO(data), allow_pickle=False)
+    except Exception as exc:  # noqa: BLE001 - numpy raises many types on damaged files
+        raise MeshFormatError(f"{source}: cannot read NPY: {exc}") from None
+
+
+def _npy_with(source: Path, labels: np.ndarray, name: str) -> bytes:
+    """The bytes of a ``.npy`` of the records of ``source`` with ``labels`` as the field
+    ``name`` (``int32``; one of that name replaced), in the records' shape."""
+    arr = _npy_array(source)
+    if labels.shape[0] != arr.size:
+        raise _count_error(source, labels.shape[0], arr.size)
+    if name in arr.dtype.names:
+        _replaced(source, name)
+    kept = [(f, arr.dtype.fields[f][0]) for f in arr.dtype.names if f != name]
+    out = np.empty(arr.shape, dtype=np.dtype([*kept, (name, "<i4")]))
+    for f, _ in kept:
+        out[f] = arr[f]
+    out[name] = labels.reshape(arr.shape)
+    buf = io.BytesIO()
+    np.save(buf, out, allow_pickle=False)
+    return buf.getvalue()
+
+
+def _replaced(source: Path, name: str) -> None:
+    """Warn that the input's own field ``name`` (an earlier run's labels?) is replaced."""
+    warnings.warn(f"{source.name} has a field {name}: the copy holds these labels in it "
+                  "instead (the input keeps its own)", stacklevel=4)
 
 
 def _count_error(source: Path, n_labels: int, n_records: int) -> ParameterError:
@@ -659,6 +711,7 @@ def _las_with(source: Path, labels: np.ndarray, name: str, compress: bool) -> by
                 raise MeshFormatError(f"{source}: has a dimension {name!r} of type {dtype}, "
                                       "which cannot hold the labels (-1 and up to 2**31 - 1)")
             las.remove_extra_dim(name)  # (PDAL's uint64 ClusterID, a float field: retyped)
+        _replaced(source, name)
     if name not in las.point_format.dimension_names:
         las.add_extra_dim(laspy.ExtraBytesParams(
             name=name, type=np.int32, description="superfacets label"))
@@ -748,6 +801,7 @@ def _ply_with(source: Path, labels: np.ndarray, prop: str) -> bytes:
         vertex.properties = tuple(PlyProperty(prop, "int32") if p.name == prop else p
                                   for p in vertex.properties)
     if prop in names:
+        _replaced(source, prop)
         data = data.copy()
         data[prop] = labels
         vertex.data = data
@@ -787,6 +841,7 @@ def _pcd_with(source: Path, labels: np.ndarray, name: str) -> bytes:
             raise MeshFormatError(f"{source}: has a field {name!r} of type {meta.type[at]}"
                                   f"{meta.size[at]} x {meta.count[at]}, which cannot hold "
                                   "the labels (-1 and up to 2**31 - 1)")
+        _replaced(source, name)
         if meta.type[at] != "I" or meta.size[at] < 4:  # (a float field: made I 4)
             head = [_pcd_retyped_line(line, at) for line in head]
             meta = meta.model_copy(update=dict(

@@ -44,7 +44,7 @@ from ...io import read_input
 from ...io.clouds import is_cloud_file
 from ...io.files import split_suffix
 from ...io.orientation import default_view, up_axis
-from ...io.records import RECORD_FORMATS
+from ...io.records import RECORD_FORMATS, records_kind
 from ...method.params import DEFAULTS, check_choice, check_int, check_nonneg, resolve
 from ...viz.camera import check_camera
 from ...viz.outputs import JoinedResult, write_result
@@ -68,7 +68,8 @@ _LABEL_SUFFIX = {"seg": ".seg", "json": ".json", "npy": ".npy", "records": None,
 
 def _label_suffix(labels: str, source) -> str:
     """The suffix of an input's labels: ``.seg``, ``.json``, for ``records`` its own
-    format where labels go into it (``.las``, ``.laz``, ``.ply``), for ``laz`` ``.laz``
+    format where labels go into it (``.las``, ``.laz``, ``.ply``, NPY records'
+    ``.npy``), for ``laz`` ``.laz``
     for every cloud; else ``.seg``."""
 
     if labels not in ("records", "laz"):
@@ -78,6 +79,8 @@ def _label_suffix(labels: str, source) -> str:
         return ".laz" if _a_cloud(source) else ".seg"
     if fmt == "ply":  # a cloud's records are its points; a mesh's faces have none of theirs
         return ".ply" if _a_cloud(source) else ".seg"
+    if fmt == "npy":  # NPY records (a structured array) as records; an array of points: .seg
+        return ".npy" if records_kind("records.npy", source) == "npy" else ".seg"
     return f".{fmt}" if fmt in RECORD_FORMATS else ".seg"
 
 
