@@ -111,3 +111,18 @@ def test_npy_records_get_their_labels_as_one_more_field(tmp_path, capsys):
     assert main(["batch", str(tmp_path / "in"), "-o", str(tmp_path / "b"), "-k", "6",
                  "--labels", "records", "--workers", "1", "-q"]) == 0
     assert np.load(tmp_path / "b" / "sweep.npy").dtype.names[-1] == "ClusterID"
+
+
+def test_a_list_of_ground_truths_takes_quoted_paths_with_spaces(tmp_path):
+    # ("scans/a b.xyz" "scans/a b.seg" on a line of a .txt list: "it has 6 fields")
+    _clouds(tmp_path / "my scans", n=1)
+    rng = np.random.default_rng(1)
+    np.savetxt(tmp_path / "my scans" / "truth 0.seg", rng.integers(0, 3, 600), fmt="%d")
+    (tmp_path / "gt.txt").write_text('"my scans/s0.xyz"   "my scans/truth 0.seg"\r\n')
+    assert main(["experiment", "--inputs", str(tmp_path / "my scans" / "*.xyz"),
+                 "--ground-truths", str(tmp_path / "gt.txt"), "-k", "5", "-o",
+                 str(tmp_path / "rows.csv"), "-j", "1", "-q"]) == 0
+    import pandas as pd
+
+    rows = pd.read_csv(tmp_path / "rows.csv")
+    assert (rows.status == "ok").all() and rows.undersegmentation_error.notna().all()

@@ -381,7 +381,8 @@ def file_entries(specs, field: str | None = None, truths: str | None = None
         file's folder, ``{stem}`` the file's name without its suffix
         (``"../labels/{stem}.label"``; ``"segment.npy"`` in a scene folder of Pointcept's,
         each input's its own); or a list file (``.csv``, ``.tsv``, ``.txt``) of
-        one input and its ground truth a line (separated by a comma, a tab or spaces;
+        one input and its ground truth a line (separated by a comma, a tab or spaces, a
+        path with spaces in double quotes;
         relative paths from the list's folder; ``#`` comments), for names no pattern
         makes (Open3D-ML's ``X_points.npy`` and ``X_labels.npy``, nuScenes' tokens).
 
@@ -459,8 +460,9 @@ def _truth_list(path: Path) -> dict:
             text = line.strip()
             if not text or text.startswith("#"):
                 continue
-            sep = "," if "," in text else "\t" if "\t" in text else None
-            fields = next(csv.reader([text], delimiter=sep)) if sep else text.split()
+            sep = "," if "," in text else "\t" if "\t" in text else " " if '"' in text else None
+            fields = (next(csv.reader([text], delimiter=sep, skipinitialspace=True)) if sep
+                      else text.split())  # (a path with spaces in double quotes)
             fields = [x.strip() for x in fields if x.strip()]
             if number == 1 and [x.lower() for x in fields] in (
                     ["input", "ground_truth"], ["input", "ground truth"], ["input", "gt"]):
