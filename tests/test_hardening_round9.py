@@ -126,3 +126,31 @@ def test_a_list_of_ground_truths_takes_quoted_paths_with_spaces(tmp_path):
 
     rows = pd.read_csv(tmp_path / "rows.csv")
     assert (rows.status == "ok").all() and rows.undersegmentation_error.notna().all()
+
+
+def test_min_elements_joins_small_superpoints_into_pieces_of_that_size_not_one(recwarn):
+    # (k = 20 on 2,000 points with min_elements = 50: 2 superpoints; every first superpoint
+    # of the merges held fewer than 50, and each joined its neighbour however large the
+    # neighbour had grown, into one or two; with 150, one superpoint, without a word)
+    from superfacets import segment
+    from superfacets.method.connectivity import enforce_connectivity
+
+    rng = np.random.default_rng(0)
+    xy = rng.random((2000, 2))
+    cloud = np.c_[xy, 0.05 * np.sin(4 * xy[:, 0])]
+    for m, fewest in ((50, 15), (150, 6)):
+        for merge_from in (None, 1):
+            kw = {} if merge_from is None else {"merge_from": merge_from}
+            result = segment(cloud, 20, min_elements=m, **kw)
+            sizes = np.bincount(result.labels)
+            assert sizes.min() >= m and fewest <= result.n_segments <= 20, (m, merge_from)
+    assert any("min_elements=150 merged those of fewer elements" in str(w.message)
+               for w in recwarn)
+    # the kernel alone: a strip of 40 single-point superpoints, min_elements 4: ten of 4
+    strip = np.c_[np.arange(40.0), np.zeros(40), np.zeros(40)]
+    from superfacets.elements.points import point_graph
+
+    g = point_graph(strip, 2).graph
+    out = enforce_connectivity(g, np.arange(40), min_elements=4)
+    sizes = np.bincount(out)
+    assert sizes.min() >= 4 and len(sizes) >= 7

@@ -157,7 +157,9 @@ def test_segment_min_elements_merges_small_superpoints_at_the_end():
     assert small.sum() > 40  # the premise: the strip's superpoints are tiny
     auto = segment(xyz, 200)
     assert auto.params["density"] == 0.5 and (np.bincount(auto.labels) < 3).sum() < small.sum()
-    merged = segment(xyz, 200, min_elements=3, density=0, merge_from=1)
+    with pytest.warns(RuntimeWarning, match="superpoints for n_segments=200: min_elements=3 "
+                      "merged those of fewer elements"):
+        merged = segment(xyz, 200, min_elements=3, density=0, merge_from=1)
     sizes = np.bincount(merged.labels)
     assert sizes.min() >= 3
     assert np.unique(merged.labels).tolist() == list(range(merged.n_segments))

@@ -19,20 +19,26 @@ def find(parent, x):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def merge_strays(strays, nb_indptr, nb_indices, nb_data, n_pieces):
+def merge_strays(strays, nb_indptr, nb_indices, nb_data, n_pieces, count, tiny, min_elements):
     """The piece each piece ends in: every stray (in the order given) joins the
     region (pieces merged so far) with which it shares the longest boundary,
     ``nb_data`` summed per region in the order of the stray's row of the
     pieces' adjacency ``nb_*`` (as ``np.bincount`` sums), ties to the lowest
-    region id; a stray with no other neighbouring region stays. Returns the
-    root (``(n_pieces,)`` int64) of each piece."""
+    region id; a stray with no other neighbouring region stays, and so does a
+    ``tiny`` one (a superfacet's own piece) whose region earlier strays have grown to
+    ``min_elements`` elements (``count`` per piece); a tiny one joins a tiny region
+    still below that size where it touches one. Returns the root
+    (``(n_pieces,)`` int64) of each piece."""
     parent = np.arange(n_pieces)
+    held = count.copy()
     total = np.zeros(n_pieces)
     seen = np.zeros(n_pieces, dtype=np.bool_)
     touched = np.empty(n_pieces, dtype=np.int64)
     for i in range(strays.shape[0]):
         p = strays[i]
         rp = find(parent, p)
+        if tiny[p] and held[rp] >= min_elements:
+            continue
         m = 0
         for e in range(nb_indptr[p], nb_indptr[p + 1]):
             q = find(parent, nb_indices[e])
@@ -47,14 +53,20 @@ def merge_strays(strays, nb_indptr, nb_indices, nb_data, n_pieces):
             continue
         target = -1
         best = 0.0
+        small_target = False  # a tiny piece joins a region still small first
         for j in range(m):
             q = touched[j]
-            if target < 0 or total[q] > best or (total[q] == best and q < target):
+            small = tiny[p] and tiny[q] and held[q] < min_elements
+            if target < 0 or (small and not small_target) or (
+                    small == small_target and (total[q] > best or (total[q] == best
+                                                                   and q < target))):
                 target = q
                 best = total[q]
+                small_target = small
             total[q] = 0.0
             seen[q] = False
         parent[rp] = target
+        held[target] += held[rp]
     root = np.empty(n_pieces, dtype=np.int64)
     for q in range(n_pieces):
         root[q] = find(parent, q)

@@ -83,8 +83,11 @@ def enforce_connectivity(graph, labels: np.ndarray, centers: np.ndarray | None =
     min_elements : int, default 1
         A superfacet whose kept piece holds fewer elements is merged as a
         stray too (into the neighbour with the longest shared border), unless
-        it has no neighbour (a connected component of the graph of its own).
-        1 merges none.
+        it has no neighbour (a connected component of the graph of its own) or
+        smaller strays merged into it first have made it that large; it joins a
+        small superfacet still below that size where it touches one: where most
+        superfacets are small, they join each other into pieces of about
+        ``min_elements``, not into one. 1 merges none.
 
     Returns
     -------
@@ -152,7 +155,8 @@ def enforce_connectivity(graph, labels: np.ndarray, centers: np.ndarray | None =
     main[present[free]] = order[first[free]]
     is_main = np.zeros(n_pieces, dtype=bool)
     is_main[main[main >= 0]] = True
-    is_main &= count >= min_elements  # a tiny superfacet merges like a stray
+    tiny = is_main & (count < min_elements)  # merges like a stray while it is small
+    is_main &= ~tiny
 
     # boundary length between a stray and each adjacent piece (the rows of the strays
     # alone, entries in the order of the whole matrix's: the same sums)
@@ -161,7 +165,8 @@ def enforce_connectivity(graph, labels: np.ndarray, centers: np.ndarray | None =
 
     strays = np.flatnonzero(~is_main)
     strays = strays[np.lexsort((strays, area[strays]))]  # smallest first
-    root = merge_strays(strays, nb_indptr, nb_indices, nb_data, n_pieces)
-    # final label of a root: its label if it is a main piece, else a new one
+    root = merge_strays(strays, nb_indptr, nb_indices, nb_data, n_pieces,
+                        count.astype(np.int64), tiny, min_elements)
+    # final label of a root: its label if it is a main piece, else a new one (after them)
     final = np.where(is_main[root], piece_label[root], k + root)
     return relabel_dense(final[piece])

@@ -391,7 +391,19 @@ def _finished(graph, it, rules, hooks, feats):
             warnings.warn(f"{fewest} superpoints for n_segments={rules.target}: the input has "
                           f"{fewest} separate pieces, and a superpoint cannot cross from one "
                           "to another", RuntimeWarning, stacklevel=4)
+    _say_min_elements(labels, p, rules)
     return labels, centers
+
+
+def _say_min_elements(labels: np.ndarray, p, rules) -> None:
+    """Warn where ``min_elements`` left fewer segments than asked for."""
+    made = int(labels.max()) + 1 if labels.size else 0
+    if p.min_elements > 1 and p.n_segments is not None and made < p.n_segments:
+        import warnings
+
+        warnings.warn(f"{made} {rules.kind.segment_word} for n_segments={p.n_segments}: "
+                      f"min_elements={p.min_elements} merged those of fewer elements into "
+                      "their neighbours", RuntimeWarning, stacklevel=4)
 
 
 #: Parameters of how a run is carried out, not of its result: not in its record

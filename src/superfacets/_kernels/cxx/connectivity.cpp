@@ -111,13 +111,17 @@ i64 find(std::vector<i64>& parent, i64 x) {
 }  // namespace
 
 nb::object merge_strays(nb::handle strays_, nb::handle nb_indptr_, nb::handle nb_indices_,
-                              nb::handle nb_data_, i64 n_pieces) {
+                              nb::handle nb_data_, i64 n_pieces, nb::handle count_,
+                              nb::handle tiny_, i64 min_elements) {
     In<i64> strays(strays_, "strays"), nb_indptr(nb_indptr_, "nb_indptr"),
-        nb_indices(nb_indices_, "nb_indices");
+        nb_indices(nb_indices_, "nb_indices"), count(count_, "count");
     In<double> nb_data(nb_data_, "nb_data");
+    In<bool> tiny(tiny_, "tiny");
     if (n_pieces < 0) throw OutOfRange("argument n_pieces");
     check_csr(nb_indptr, nb_indices, n_pieces, n_pieces, "nb_indptr");
     check_rows(nb_data, nb_indptr[n_pieces], "nb_data");
+    check_rows(count, n_pieces, "count");
+    check_rows(tiny, n_pieces, "tiny");
     check_range(strays, 0, n_pieces, "strays");
     Out<i64> root;
     auto root_a = fresh(n_pieces, root);
@@ -125,12 +129,14 @@ nb::object merge_strays(nb::handle strays_, nb::handle nb_indptr_, nb::handle nb
         nb::gil_scoped_release nogil;
         std::vector<i64> parent(n_pieces);
         for (i64 q = 0; q < n_pieces; ++q) parent[q] = q;
+        std::vector<i64> held(count.p, count.p + n_pieces);  // elements of each region
         std::vector<double> total(n_pieces, 0.0);
         std::vector<char> seen(n_pieces, 0);
         std::vector<i64> touched(n_pieces);
         for (i64 i = 0; i < strays.n; ++i) {
             i64 p = strays[i];
             i64 rp = find(parent, p);
+            if (tiny[p] && held[rp] >= min_elements) continue;  // grown by earlier strays
             i64 m = 0;
             for (i64 e = nb_indptr[p]; e < nb_indptr[p + 1]; ++e) {
                 i64 q = find(parent, nb_indices[e]);
@@ -144,16 +150,22 @@ nb::object merge_strays(nb::handle strays_, nb::handle nb_indptr_, nb::handle nb
             if (m == 0) continue;
             i64 target = -1;
             double best = 0.0;
+            bool small_target = false;  // a tiny piece joins a region still small first
             for (i64 j = 0; j < m; ++j) {
                 i64 q = touched[j];
-                if (target < 0 || total[q] > best || (total[q] == best && q < target)) {
+                bool small = tiny[p] && tiny[q] && held[q] < min_elements;
+                if (target < 0 || (small && !small_target) ||
+                    (small == small_target &&
+                     (total[q] > best || (total[q] == best && q < target)))) {
                     target = q;
                     best = total[q];
+                    small_target = small;
                 }
                 total[q] = 0.0;
                 seen[q] = 0;
             }
             parent[rp] = target;
+            held[target] += held[rp];
         }
         for (i64 q = 0; q < n_pieces; ++q) root[q] = find(parent, q);
     }
@@ -248,7 +260,7 @@ void bind_connectivity(nb::module_& m) {
     m.def("merge_strays", &merge_strays,
           "The piece each piece ends in.",
           nb::arg("strays"), nb::arg("nb_indptr"), nb::arg("nb_indices"), nb::arg("nb_data"),
-          nb::arg("n_pieces"));
+          nb::arg("n_pieces"), nb::arg("count"), nb::arg("tiny"), nb::arg("min_elements"));
     m.def("stray_borders", &stray_borders,
           "The entries (a, b, length) of the pieces' adjacency whose row a is a stray piece.",
           nb::arg("indptr"), nb::arg("indices"), nb::arg("piece"), nb::arg("is_main"),
