@@ -154,3 +154,26 @@ def test_min_elements_joins_small_superpoints_into_pieces_of_that_size_not_one(r
     out = enforce_connectivity(g, np.arange(40), min_elements=4)
     sizes = np.bincount(out)
     assert sizes.min() >= 4 and len(sizes) >= 7
+
+
+def test_shlafman_s_weighting_alone_takes_its_own_alpha(tmp_path):
+    # (`segment --weighting shlafman` or segment(..., weighting="shlafman"): "alpha of the
+    # Shlafman weighting must be in [0, 1], got 200.0", the paper weighting's default alpha,
+    # though the weighting's own (0.5, eq. 6) is declared beside it)
+    from superfacets import segment
+    from superfacets.method.params import WEIGHTING_ALPHA
+
+    rng = np.random.default_rng(0)
+    xy = rng.random((800, 2))
+    cloud = np.c_[xy, 0.05 * np.sin(4 * xy[:, 0])]
+    result = segment(cloud, 10, weighting="shlafman")
+    assert result.params["alpha"] == WEIGHTING_ALPHA["shlafman"][0] == 0.5
+    assert segment(cloud, 10, weighting="shlafman", alpha=0.2).params["alpha"] == 0.2
+    assert segment(cloud, 10).params["alpha"] == 200.0  # the paper's, as before
+    np.savetxt(tmp_path / "c.xyz", cloud)
+    out = tmp_path / "c.seg"
+    assert main(["segment", str(tmp_path / "c.xyz"), "-k", "10", "--weighting", "shlafman",
+                 "-o", str(out), "--header", "-q"]) == 0
+    assert "alpha=0.5 " in out.read_text() and "weighting=shlafman" in out.read_text()
+    assert main(["segment", str(tmp_path / "c.xyz"), "-k", "10", "--weighting", "shlafman",
+                 "--alpha", "5", "-o", str(out), "-q"]) == 2  # an alpha given: checked

@@ -34,8 +34,15 @@ def test_defaults_are_the_api_and_cli_defaults():
                  "n_segments", "init", "enforce_connectivity"):
         assert sig[name].default == getattr(DEFAULTS, name)
     args = build_parser().parse_args(["segment", "m.off"])
-    for name in ("alpha", "eta_convex", "window", "max_iter", "weighting", "assignment", "init"):
+    for name in ("eta_convex", "window", "max_iter", "weighting", "assignment", "init"):
         assert getattr(args, name) == getattr(DEFAULTS, name)
+    # alpha: the weighting's own (the paper's 200, Shlafman's 0.5), chosen with it
+    from superfacets.cli.parameters import parameter_kwargs
+
+    assert args.alpha is None
+    assert parameter_kwargs(args, ("alpha", "weighting"))["alpha"] == DEFAULTS.alpha
+    shlafman = build_parser().parse_args(["segment", "m.off", "--weighting", "shlafman"])
+    assert parameter_kwargs(shlafman, ("alpha", "weighting"))["alpha"] == 0.5
     choices = {a.dest: a.choices for a in build_parser()._subparsers._group_actions[0]
                .choices["segment"]._actions}
     assert tuple(choices["init"]) == INITS and tuple(choices["assignment"]) == ASSIGNMENTS
@@ -233,8 +240,10 @@ def test_every_declared_option_of_the_command_line_has_the_declared_default_and_
     actions = {s: a for a in sub._actions for s in a.option_strings}
     # the command line's own defaults, and why: -k and --radius exclude each other (None
     # is "150 unless --radius"); --no-connectivity is the negation; --progress is on
-    # for large meshes at a terminal; --threads None is all cores, as the API's None
-    own = {"n_segments": None, "enforce_connectivity": False, "progress": None}
+    # for large meshes at a terminal; --threads None is all cores, as the API's None;
+    # --alpha None is the weighting's own (200 for the paper's, 0.5 for Shlafman's)
+    own = {"n_segments": None, "enforce_connectivity": False, "progress": None,
+           "alpha": None}
     for p in PARAMETERS:
         assert p.cli in actions, f"{p.name}: no option {p.cli}"
         a = actions[p.cli]

@@ -485,7 +485,7 @@ def labels_for(args, data):
         r = segment(data, args.n_segments, radius=args.radius, **kw)
     except SuperfacetsError as exc:
         raise named_after(args.mesh, exc) from None
-    info = {"k asked": r.params.get("n_segments"), "alpha": args.alpha,
+    info = {"k asked": r.params.get("n_segments"), "alpha": r.params.get("alpha"),
             "iterations": f"{r.n_iter} ({_describe_stop(r)})",
             "seconds": f"{r.timings['total']:.2f}"}
     return r.labels, info, first

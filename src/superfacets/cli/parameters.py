@@ -19,6 +19,7 @@ from ..method.params import (
     COARSE_PER_SEGMENT,
     DEFAULTS,
     PARAMETERS,
+    WEIGHTING_ALPHA,
 )
 from ..method.params import DEFAULT_CENTER_TOL as _D_CENTER_TOL
 
@@ -217,7 +218,8 @@ def add_parameters(parser, names, *, groups: bool = True) -> None:
         elif style == "both":
             kw.update(action=argparse.BooleanOptionalAction, default=None)
         else:
-            default = None if p.name == "n_segments" else p.default
+            default = None if p.name in ("n_segments", "alpha") else p.default  # (alpha:
+            # the weighting's own, resolved by superfacets.method.params.resolve)
             kw.update(default=default, metavar=style, type=_parse(p))
             if p.choices:
                 kw.update(choices=p.choices)
@@ -247,4 +249,6 @@ def parameter_kwargs(args, names) -> dict:
         out[p.name] = (not value) if style == "negated" else value
     if "progress" in out:
         out["progress"] = bool(out["progress"])
+    if "alpha" in out and out["alpha"] is None:  # the weighting's own (Shlafman's: 0.5)
+        out["alpha"] = WEIGHTING_ALPHA.get(out.get("weighting") or "paper", (None,))[0]
     return out

@@ -695,13 +695,13 @@ def cmd_demo(args) -> int:
         write_colored_mesh(out / "creature_superfacets.ply", mesh, result.labels,
                            outputs=outputs)
         write_html(out / "creature.html", mesh, result.labels, title="creature (demo)",
-                   up="z", info={"k asked": args.n_segments, "alpha": args.alpha},
+                   up="z", info={"k asked": args.n_segments, "alpha": result.params["alpha"]},
                    outputs=outputs)
         try:
             from ..viz.render import render
 
             render(mesh, result.labels, out / "creature.png", size=(1000, 750), up="z",
-                   title=f"{result.n_segments} superfacets, alpha = {args.alpha:g}",
+                   title=f"{result.n_segments} superfacets, alpha = {result.params['alpha']:g}",
                    outputs=outputs, legend=True)
             picture = f", {out / 'creature.png'} (picture)"
         except Exception as exc:  # noqa: BLE001 - the picture is a bonus; say why it is missing

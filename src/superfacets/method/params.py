@@ -398,6 +398,8 @@ def resolve(**params) -> SegmentParams:
     init = p.init if p.init is not None else ("farthest" if radius is None else "flood")
     check_choice("init", init, INITS)
     weighting = check_choice("weighting", p.weighting, WEIGHTINGS)
+    if params.get("alpha") is None:  # the weighting's own default (Shlafman's: 0.5)
+        p = replace(p, alpha=WEIGHTING_ALPHA[weighting][0])
     lo, hi = WEIGHTING_ALPHA[weighting][1]
     if weighting == "paper":
         alpha = check_number("alpha", p.alpha, 0.0, MAX_WEIGHT_FACTOR)
