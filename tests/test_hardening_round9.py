@@ -177,3 +177,22 @@ def test_shlafman_s_weighting_alone_takes_its_own_alpha(tmp_path):
     assert "alpha=0.5 " in out.read_text() and "weighting=shlafman" in out.read_text()
     assert main(["segment", str(tmp_path / "c.xyz"), "-k", "10", "--weighting", "shlafman",
                  "--alpha", "5", "-o", str(out), "-q"]) == 2  # an alpha given: checked
+
+
+def test_the_flood_and_grid_starts_say_why_the_count_is_not_k(tmp_path, capsys):
+    # (`segment mesh -k 300 --init flood`: 228 superfacets, 24 % short, without a word)
+    from superfacets.inputs.shapes import creature
+    from superfacets.io import write_mesh
+
+    write_mesh(tmp_path / "c.off", creature())
+    for start in ("flood", "grid", "farthest"):
+        assert main(["segment", str(tmp_path / "c.off"), "-k", "300", "--init", start,
+                     "-o", str(tmp_path / "c.seg")]) == 0
+        captured = capsys.readouterr()
+        made = int(captured.out.split(" superfacets")[0].rsplit(", ", 1)[1])
+        said = f"the {start} start places" in captured.err
+        assert said == (abs(made - 300) > 15), (start, made, captured.err)
+        if start == "flood":  # (225 on this shape)
+            assert said and "--init farthest) places k" in captured.err
+        if start == "farthest":
+            assert made == 300 and not said

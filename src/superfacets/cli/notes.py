@@ -83,12 +83,28 @@ def duplicates_note(args, data, kind: str) -> str | None:
     return f"{copies:,} {what} and share its label" if copies else None
 
 
+#: What the starts other than the farthest point's place (:func:`count_note`).
+STARTS_SAID = {"flood": "its centers about a radius apart over the surface (the paper's "
+                        "start for --radius)",
+               "grid": "a center in each cell of a grid sized for k that the surface "
+                       "crosses"}
+#: How far from k a run with such a start ends before :func:`count_note` says why.
+START_SLACK = 0.05
+
+
 def count_note(args, data, result, kind: str) -> str | None:
     """Why a run asked for k made more superfacets: more separate pieces than k (a
     region cannot cross from one piece to another), or regions that no center reached
-    (with ``--paper``, whole pieces), and how to keep k."""
+    (with ``--paper``, whole pieces), and how to keep k; or more or fewer than k by 5 %
+    with the flood's or the grid's start, which do not place k centers."""
     asked = args.n_segments or DEFAULTS.n_segments
     extra = getattr(result, "n_orphan_seeds", 0)
+    start = getattr(result, "params", {}).get("init")
+    if args.radius is None and not args.per_object and start in STARTS_SAID and abs(
+            result.n_segments - asked) > START_SLACK * asked:
+        return (f"{result.n_segments} {kind_of(kind).segment_word} for -k {asked}: the "
+                f"{start} start places {STARTS_SAID[start]}, not k of them; the default "
+                "start (--init farthest) places k")
     if args.radius is not None or args.per_object or result.n_segments <= asked:
         return None
     import numpy as np
