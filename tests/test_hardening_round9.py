@@ -196,3 +196,18 @@ def test_the_flood_and_grid_starts_say_why_the_count_is_not_k(tmp_path, capsys):
             assert said and "--init farthest) places k" in captured.err
         if start == "farthest":
             assert made == 300 and not said
+
+
+def test_an_experiment_says_which_method_has_no_input_it_segments(tmp_path, capsys):
+    # (`experiment --inputs '*.xyz' -m vsa -m superfacets`: VSA segments faces, so it had no
+    # rows, and nothing said why)
+    _clouds(tmp_path / "in", n=1)
+    assert main(["experiment", "--inputs", str(tmp_path / "in" / "*.xyz"), "-m", "vsa",
+                 "-m", "superfacets", "-k", "5", "-o", str(tmp_path / "rows.csv"),
+                 "-j", "1", "-q"]) == 0
+    err = capsys.readouterr().err
+    assert "vsa segments faces, which no input here has" in err
+    assert "superfacets segments" not in err
+    import pandas as pd
+
+    assert set(pd.read_csv(tmp_path / "rows.csv").method) == {"superfacets"}

@@ -235,10 +235,7 @@ def _tasks(meshes, configs, kinds, ks, done, common: dict) -> list[dict]:
         method = get_method(cfg.method)
         room = getattr(bm, "room", False)
         file = getattr(bm, "file", False)
-        cloud = room or (file and bm.category == "cloud")
-        volume = file and bm.category == "volume"  # (its elements: cells alone)
-        if kind not in method.elements or (cloud and not KINDS[kind].cloud) or (
-                file and not cloud and KINDS[kind].cloud) or volume != (KINDS[kind].dim == 3):
+        if not _applies(method, bm, kind):
             continue
         base = {"mesh": getattr(bm, "name", "") or Path(bm.path).stem, "mesh_id": bm.id,
                 "category": bm.category,
@@ -252,6 +249,27 @@ def _tasks(meshes, configs, kinds, ks, done, common: dict) -> list[dict]:
                           "field": getattr(bm, "field", None),
                           "takes_elements": method.takes_elements, **common})
     return tasks
+
+
+def _applies(method, bm, kind: str) -> bool:
+    """Whether ``method`` segments input ``bm``'s elements of ``kind``."""
+    room, file = getattr(bm, "room", False), getattr(bm, "file", False)
+    cloud = room or (file and bm.category == "cloud")
+    volume = file and bm.category == "volume"  # (its elements: cells alone)
+    return kind in method.elements and not (cloud and not KINDS[kind].cloud) and not (
+        file and not cloud and KINDS[kind].cloud) and volume == (KINDS[kind].dim == 3)
+
+
+def _say_idle(meshes, configs, kinds) -> None:
+    """Warn, once per method, where a method of the grid segments none of the inputs (VSA
+    asked of point clouds): it has no rows, and would otherwise have none silently."""
+    import warnings
+
+    for name in dict.fromkeys(c.method for c in configs):
+        method = get_method(name)
+        if not any(_applies(method, bm, k) for bm in meshes for k in kinds):
+            warnings.warn(f"{name} segments {' and '.join(method.elements)}, which no input "
+                          "here has (as the elements asked for): no rows for it", stacklevel=3)
 
 
 def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
@@ -354,6 +372,7 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
                    dict(seed=seed, tau=tau, n_points=n_points, ignore_label=ignore_label))
     if not any(k in get_method(c.method).elements for c in configs for k in kinds):
         raise ParameterError(f"no method of the grid segments {', '.join(kinds)}")
+    _say_idle(meshes, configs, kinds)
     # the longest tasks first (the mesh's file size x its rows), so that no worker is left
     # with a large mesh at the end while the others wait; a mesh's tasks stay together
     tasks.sort(key=lambda t: _file_size(t["path"]) * len(t["ks"]), reverse=True)
