@@ -211,3 +211,29 @@ def test_an_experiment_says_which_method_has_no_input_it_segments(tmp_path, caps
     import pandas as pd
 
     assert set(pd.read_csv(tmp_path / "rows.csv").method) == {"superfacets"}
+
+
+def test_a_stale_display_is_no_display(tmp_path, monkeypatch, capfd):
+    # ($DISPLAY set where no X server answers, as an ssh session or tmux can keep:
+    # `view` printed VTK's "bad X server connection" and exited 0 with no window; `render`
+    # printed the same warning before its picture)
+    import pytest
+
+    from superfacets.viz import render as drawing
+
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    monkeypatch.setenv("DISPLAY", ":97")  # (no server on display 97 here)
+    if drawing._x_server_answers(":97"):
+        pytest.skip("an X server answers on :97, or libX11 cannot ask")
+    assert not drawing.has_display()
+    _clouds(tmp_path, n=1)
+    cloud = tmp_path / "s0.xyz"
+    assert main(["segment", str(cloud), "-k", "5", "-o", str(tmp_path / "s.seg"), "-q"]) == 0
+    assert main(["view", str(cloud), str(tmp_path / "s.seg")]) == 2
+    assert "no X server answers at $DISPLAY=:97: use 'superfacets render'" in \
+        capfd.readouterr().err
+    pytest.importorskip("pyvista")
+    assert main(["render", str(cloud), str(tmp_path / "s.seg"), "-o",
+                 str(tmp_path / "s.png")]) == 0
+    assert (tmp_path / "s.png").stat().st_size > 0
+    assert "bad X server" not in capfd.readouterr().err

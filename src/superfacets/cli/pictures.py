@@ -237,12 +237,10 @@ def cmd_panel(args) -> int:
 
 
 def cmd_view(args) -> int:
-    from ..viz.render import NoDisplayError, has_display, show
+    from ..viz.render import has_display, no_display, show
 
     if not has_display():  # say so before the (maybe long) segmentation
-        raise NoDisplayError("no display available ($DISPLAY is not set): use "
-                             "'superfacets render' for a PNG or 'superfacets html' for a page "
-                             "to open in a browser")
+        raise no_display()
     data = _read(args, clouds=True)
     labels, _, elements = labels_for(args, data)
     up = up_of(args, data)[0]

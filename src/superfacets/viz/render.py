@@ -13,6 +13,7 @@ with the superfacet boundaries drawn as dark lines.
 
 from __future__ import annotations
 
+import functools
 import io
 import os
 from pathlib import Path
@@ -34,12 +35,65 @@ from ..method.params import check_choice, check_number
 from .camera import view_frame
 
 __all__ = ["render", "render_points", "render_panel", "show", "has_display", "size_legend",
-           "NoDisplayError"]
+           "NoDisplayError", "no_display"]
 
 
 def has_display() -> bool:
-    """True when an X or Wayland display is available for a window."""
-    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+    """True when an X or Wayland display is available for a window: ``$WAYLAND_DISPLAY``
+    set, or ``$DISPLAY`` set and, for a display of this machine (``:0``), an X server
+    answering there (a stale ``$DISPLAY``, as an ssh session or a terminal multiplexer can
+    keep, made VTK warn "bad X server connection" and a window never open).
+
+    Examples
+    --------
+    >>> isinstance(has_display(), bool)
+    True
+    """
+    if os.environ.get("WAYLAND_DISPLAY"):
+        return True
+    name = os.environ.get("DISPLAY", "")
+    return bool(name) and _x_server_answers(name)
+
+
+def no_display() -> NoDisplayError:
+    """The error of a window asked for where :func:`has_display` is False, saying why.
+
+    Examples
+    --------
+    >>> isinstance(no_display(), NoDisplayError)
+    True
+    """
+    name = os.environ.get("DISPLAY")
+    why = (f"no X server answers at $DISPLAY={name}" if name else
+           "no display available ($DISPLAY is not set)")
+    return NoDisplayError(f"{why}: use 'superfacets render' for a PNG or 'superfacets html' "
+                          "for a page to open in a browser")
+
+
+@functools.lru_cache(maxsize=8)
+def _x_server_answers(name: str) -> bool:
+    """Whether libX11 opens the local display ``name``; True where it cannot be asked
+    (no libX11, or a display on another host, whose connection could wait long)."""
+    import ctypes
+    import ctypes.util
+
+    if name.split(":")[0] not in ("", "unix"):
+        return True
+    lib = ctypes.util.find_library("X11")
+    if lib is None:
+        return True
+    try:
+        x11 = ctypes.cdll.LoadLibrary(lib)
+        x11.XOpenDisplay.restype = ctypes.c_void_p
+        x11.XOpenDisplay.argtypes = [ctypes.c_char_p]
+        x11.XCloseDisplay.argtypes = [ctypes.c_void_p]
+        display = x11.XOpenDisplay(name.encode())
+    except (OSError, AttributeError):
+        return True
+    if not display:
+        return False
+    x11.XCloseDisplay(display)
+    return True
 
 
 def _pyvista(off_screen: bool):
@@ -468,9 +522,7 @@ def show(mesh, labels=None, *, title: str | None = None, boundaries: bool = True
         If no display is available (``$DISPLAY``/``$WAYLAND_DISPLAY`` unset).
     """
     if not has_display():
-        raise NoDisplayError("no display available ($DISPLAY is not set): use "
-                             "'superfacets render' for a PNG or 'superfacets html' for a page "
-                             "to open in a browser")
+        raise no_display()
     pv = _pyvista(off_screen=False)
     p = pv.Plotter(title=title or "superfacets")
     if kind_of(kind_for(mesh)).cloud:  # (points coloured by superpoint, as render_points)
