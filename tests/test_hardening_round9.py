@@ -237,3 +237,28 @@ def test_a_stale_display_is_no_display(tmp_path, monkeypatch, capfd):
                  str(tmp_path / "s.png")]) == 0
     assert (tmp_path / "s.png").stat().st_size > 0
     assert "bad X server" not in capfd.readouterr().err
+
+
+def test_cloudcompare_s_ascii_export_is_read_with_its_scalar_fields(tmp_path, capsys):
+    # (`//X;Y;Z;Classification` in a .asc, CloudCompare's ASCII export with a semicolon:
+    # ".asc: unknown format", and as .txt "the header names 1 columns (x;y;z;...)"; its
+    # Classification could not be a ground truth: "only LAS/LAZ, PLY, PCD files ...")
+    rng = np.random.default_rng(0)
+    xy = rng.random((900, 2))
+    cls = (xy[:, 0] > 0.5).astype(int) * 4 + 2
+    lines = [f"{x:.6f};{y:.6f};{0.1 * (c > 2):.6f};{c:.6f}" for (x, y), c in zip(xy, cls)]
+    scan = tmp_path / "cloud_2026-12-01_02h30.asc"
+    scan.write_text("//X;Y;Z;Classification\n" + "\n".join(lines) + "\n")
+    assert main(["segment", str(scan), "-k", "10", "-o", str(tmp_path / "s.seg"), "-q"]) == 0
+    capsys.readouterr()
+    assert main(["evaluate", str(scan), str(tmp_path / "s.seg"), "--ground-truth-field",
+                 "Classification", "--json"]) == 0
+    import json
+
+    row = json.loads(capsys.readouterr().out)
+    assert row["undersegmentation_error"] < 0.2 and row["boundary_recall"] > 0.5
+    # an ESRI ASCII grid (a raster) of three columns is not read as points
+    (tmp_path / "dem.asc").write_text("ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\n"
+                                      "cellsize 1\n1 2 3\n4 5 6\n")
+    assert main(["segment", str(tmp_path / "dem.asc"), "-k", "2", "-q"]) == 2
+    assert "an ESRI ASCII grid" in capsys.readouterr().err

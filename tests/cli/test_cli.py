@@ -259,7 +259,8 @@ def test_evaluate_reads_a_ground_truth_field_of_the_input(tmp_path, capsys):
     np.savetxt(tmp_path / "scan.xyz", np.c_[xy, np.zeros(2000)])
     assert main(["evaluate", str(tmp_path / "scan.xyz"), str(sp), "--ground-truth-field",
                  "label"]) == 2
-    assert "NPY records carry per-point fields" in capsys.readouterr().err
+    assert "a text cloud whose columns are its points' alone has no fields" in \
+        capsys.readouterr().err
     (tmp_path / "cut.ply").write_text("ply\nformat ascii 1.0\nelement vertex 3\n"
                                       "property float x\nend_header\n1\n2\n")
     with pytest.raises(ValueError, match="cannot read PLY vertices"):

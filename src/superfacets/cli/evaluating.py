@@ -45,7 +45,8 @@ def add_parsers(sub) -> None:
     e.add_argument("--ground-truth-field", metavar="NAME", default=None,
                    help="also a ground truth read from the input file itself: a LAS/LAZ "
                         "dimension (classification), a PLY vertex property (ScanNet's "
-                        "label), a PCD field (PCL's label) or a field of NPY records")
+                        "label), a PCD field (PCL's label), a field of NPY records or a "
+                        "text cloud's named column (CloudCompare's //X;Y;Z;Classification)")
     e.add_argument("--tau", type=float_arg, default=0.05,
                    help="overlap tolerance of the undersegmentation error, a fraction of each "
                         "superfacet's area (default: 0.05)")

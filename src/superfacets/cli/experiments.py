@@ -103,7 +103,7 @@ def _add_inputs(x) -> None:
     x.add_argument("--ground-truth-field", metavar="NAME", default=None,
                    help="with --inputs: each file's ground truth, a field of its own (a "
                         "LAS/LAZ classification, a PLY vertex label, a PCD label, an NPY "
-                        "record's field, a "
+                        "record's field, a text cloud's named column, a "
                         "volume's gmsh:physical); without it, rows have the "
                         "compactness alone")
     x.add_argument("--ground-truths", metavar="PATTERN", default=None,

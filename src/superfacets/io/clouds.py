@@ -68,7 +68,7 @@ from .headers import (  # noqa: E402 (re-exported: headers)
 from .orientation import sensor_up
 
 #: Point-cloud formats of :func:`read_cloud` (PLY files are clouds when they have no faces).
-CLOUD_FORMATS = ("pcd", "xyz", "pts", "txt", "csv", "npy", "las", "laz", "e57", "bin")
+CLOUD_FORMATS = ("pcd", "xyz", "pts", "txt", "csv", "asc", "npy", "las", "laz", "e57", "bin")
 
 
 def is_cloud_file(path) -> bool:

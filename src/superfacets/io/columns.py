@@ -25,6 +25,8 @@ from .ply import COLOR_PROPERTIES
 __all__ = ["read_columns"]
 
 _HEADER = re.compile(r"^\s*(#|//)\s*")
+#: The first line of an ESRI ASCII grid (``.asc``, a raster), refused as a cloud.
+_ESRI_GRID = re.compile(r"\s*ncols\s+\d+\s*\n", re.IGNORECASE)
 #: Surveyors' names of the coordinates in a header, read as x, y, z.
 SYNONYMS = {"easting": "x", "east": "x", "northing": "y", "north": "y", "elevation": "z",
             "height": "z", "altitude": "z"}
@@ -72,6 +74,9 @@ def read_columns(data: bytes, path: Path, size: int = 1 << 23) -> dict:
         # the numbers are ASCII in every one)
     if "\r" in text:  # (old Mac and Windows line ends, as the header is read by "\n")
         text = text.replace("\r\n", "\n").replace("\r", "\n")
+    if _ESRI_GRID.match(text):  # (its rows of three heights would read as points)
+        raise MeshFormatError(f"{path}: an ESRI ASCII grid (ncols, nrows, ...: a raster of "
+                              "heights), not a point cloud")
     names, start = _header(text)
     parts: list[np.ndarray] = []
     seen, declared = 0, None
@@ -113,8 +118,8 @@ def _header(text: str) -> tuple[list[str] | None, int]:
                 names, at = words, end  # a first line of names alone (a CSV's header)
             break
         if ln and names is None:
-            words = _coordinates([w.lower() for w in
-                                  re.split(r"[\s,]+", _HEADER.sub("", ln).strip()) if w])
+            words = _coordinates([w.strip("\"'").lower() for w in  # (//X;Y;Z: CloudCompare)
+                                  re.split(r"[\s,;]+", _HEADER.sub("", ln).strip()) if w])
             if words and not all(_is_number(w) for w in words):
                 names = words
         at = end

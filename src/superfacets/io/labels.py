@@ -415,15 +415,38 @@ def read_field(path, name: str) -> np.ndarray:
         names, values = _npy_field(path, name)
     elif fmt in VOLUME_FORMATS:
         names, values = volume_field(path, name)
+    elif fmt in TEXT_CLOUDS:
+        names, values = _text_field(path, name)
     else:
-        raise MeshFormatError(f"{path}: only LAS/LAZ, PLY, PCD files and NPY records carry "
-                              "per-point fields (and tetrahedral meshes per-cell ones); give "
-                              "the labels "
+        raise MeshFormatError(f"{path}: only LAS/LAZ, PLY, PCD files, NPY records and text "
+                              "clouds with named columns carry per-point fields (and "
+                              "tetrahedral meshes per-cell ones); give the labels "
                               "(or the ground truth) as a file, one per point (.seg)")
     if values is None:
         raise MeshFormatError(f"{path}: no field {name!r}; " + (
             f"it has: {', '.join(names)}" if names else "it has none"))
     return whole_labels(values, f"{path}: field {name!r}")
+
+
+#: Text clouds, whose named columns other than the points' are fields (:func:`read_field`).
+TEXT_CLOUDS = ("xyz", "pts", "txt", "csv", "asc")
+
+
+def _text_field(path: Path, name: str) -> tuple[list[str], np.ndarray | None]:
+    """A text cloud's other columns (``//X;Y;Z;Classification``, as CloudCompare writes a
+    scalar field) and the values of ``name`` (any case; None where absent)."""
+    from .clouds import read_cloud
+
+    fields = read_cloud(path).fields
+    if not fields:
+        raise MeshFormatError(f"{path}: a text cloud whose columns are its points' alone has "
+                              "no fields (a header such as //X;Y;Z;Classification names them"
+                              "); LAS/LAZ, PLY, PCD files and NPY records carry per-point "
+                              "fields")
+    names = list(fields)
+    found = next((n for n in names if n == name), None) or next(
+        (n for n in names if n.lower() == name.lower()), None)
+    return names, (None if found is None else np.asarray(fields[found]))
 
 
 def _npy_field(path: Path, name: str) -> tuple[list[str], np.ndarray | None]:

@@ -34,7 +34,7 @@ def _readable_suffixes(explicit: bool) -> set[str]:
 
 #: Cloud formats read where a file is named (or matched by a glob), not where a folder holds
 #: it: a .txt or .csv is often a README or a table, a .bin other binary data.
-_NAMED_ONLY = ("txt", "csv", "bin")
+_NAMED_ONLY = ("txt", "csv", "asc", "bin")
 
 
 def _is_input(path: Path, explicit: bool) -> bool:
@@ -61,8 +61,9 @@ def _why_not(name: str) -> str:
 
     fmt, _ = split_suffix(Path(name))
     if fmt in _NAMED_ONLY:
-        return (f"a .{fmt} in a folder is not read as a cloud (a "
-                f"{dict(txt='README', csv='table').get(fmt, 'file of other data')}?); name it "
+        what = dict(txt="README", csv="table", asc="grid of heights").get(fmt, "file of "
+                                                                          "other data")
+        return (f"a .{fmt} in a folder is not read as a cloud (a {what}?); name it "
                 "(or a glob: velodyne/*.bin) to read it")
     return f"{'.' + fmt if fmt else 'no suffix'}: not a mesh, cloud or volume format"
 
