@@ -262,3 +262,13 @@ def test_cloudcompare_s_ascii_export_is_read_with_its_scalar_fields(tmp_path, ca
                                       "cellsize 1\n1 2 3\n4 5 6\n")
     assert main(["segment", str(tmp_path / "dem.asc"), "-k", "2", "-q"]) == 2
     assert "an ESRI ASCII grid" in capsys.readouterr().err
+
+
+def test_a_cloudcompare_bin_is_named_not_read_as_a_kitti_scan(tmp_path, capsys):
+    # (CloudCompare's own .bin, "CCB2..." then its entities: read as KITTI's float32 rows
+    # wherever its size is a multiple of 16, garbage points from its header)
+    head = b"CCB22\0\0\0\x01\x01" + bytes(6)
+    body = np.zeros((60, 4), dtype="<f4")  # (a size of whole KITTI rows, fourth values 0)
+    (tmp_path / "cloud.bin").write_bytes(head + bytes(16 - len(head) % 16) + body.tobytes())
+    assert main(["segment", str(tmp_path / "cloud.bin"), "-k", "5", "-q"]) == 2
+    assert "a CloudCompare .bin (its own format), not a KITTI scan" in capsys.readouterr().err

@@ -590,6 +590,10 @@ def _read_kitti(data: bytes, path: Path) -> dict:
     1,000 than seen from above (docs/notes/scans-io.md). The reflectance (in [0, 1]) is not
     read as a position (kept as a field for a new file of the points); it tells such a
     file from other binary data."""
+    if data[:3] == b"CCB":  # (CloudCompare's own BIN format: its header, then its entities)
+        raise MeshFormatError(f"{path}: a CloudCompare .bin (its own format), not a KITTI "
+                              "scan: save the cloud from CloudCompare as PLY, LAS/LAZ or ASCII "
+                              "(.asc, .txt) to segment it")
     if len(data) % 16:
         raise MeshFormatError(f"{path}: a .bin is read as a KITTI velodyne scan (float32 x, "
                               f"y, z, reflectance: 16 bytes a point); its {len(data):,} bytes "
