@@ -52,6 +52,10 @@ def test_a_plain_segment_loads_no_scipy_sparse():
 def test_public_names_resolve_and_are_listed():
     for name in superfacets.__all__:
         assert getattr(superfacets, name) is not None
+    # what a notebook's completion lists: the public names, not the imports' helpers
+    # (annotations, importlib, TYPE_CHECKING were listed), NotebookView among them
+    shown = [n for n in dir(superfacets) if not n.startswith("_")]
+    assert shown == sorted(superfacets.__all__) and "NotebookView" in shown
     assert callable(superfacets.segment) and callable(superfacets.superfacets)
     import importlib
 

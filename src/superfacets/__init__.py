@@ -72,6 +72,7 @@ __all__ = [
     "MeshFormatError",
     "PointCloud",
     "MissingExtraError",
+    "NotebookView",
     "ParameterError",
     "SegmentParams",
     "SegmentationResult",
@@ -112,8 +113,8 @@ def __getattr__(name: str):
     return value
 
 
-def __dir__():
-    return sorted(set(globals()) | set(_PUBLIC))
+def __dir__():  # the public names (and the module's own dunders), not its imports' helpers
+    return sorted(set(__all__) | {n for n in globals() if n.startswith("__")})
 
 
 if TYPE_CHECKING:  # the same names, for type checkers and IDEs
