@@ -272,3 +272,23 @@ def test_a_cloudcompare_bin_is_named_not_read_as_a_kitti_scan(tmp_path, capsys):
     (tmp_path / "cloud.bin").write_bytes(head + bytes(16 - len(head) % 16) + body.tobytes())
     assert main(["segment", str(tmp_path / "cloud.bin"), "-k", "5", "-q"]) == 2
     assert "a CloudCompare .bin (its own format), not a KITTI scan" in capsys.readouterr().err
+
+
+def test_a_path_from_the_home_folder_is_read_and_a_url_named(tmp_path, monkeypatch):
+    # (read_cloud("~/scans/tile.xyz") in a notebook: "no such file", as Python does not
+    # expand ~ as a shell does; "https://.../x.las": "https:/...: no such file")
+    import pytest
+
+    import superfacets as sf
+    from superfacets.io import write_labels
+
+    monkeypatch.setenv("HOME", str(tmp_path))
+    _clouds(tmp_path / "scans", n=1)
+    cloud = sf.read_cloud("~/scans/s0.xyz")
+    assert cloud.n_total == 600 and sf.read_input("~/scans/s0.xyz").n_total == 600
+    labels = sf.segment("~/scans/s0.xyz", 5).labels
+    write_labels("~/s0.seg", labels)
+    assert sf.read_labels("~/s0.seg", n_faces=600).tolist() == labels.tolist()
+    assert sf.segment_tiled("~/scans/s0.xyz", 5, tiles=2).n_segments == 5
+    with pytest.raises(FileNotFoundError, match="a URL; the readers read files"):
+        sf.read_input("https://example.com/tile.las")

@@ -15,7 +15,7 @@ from pathlib import Path
 from ..errors import MeshFormatError
 from .clouds import CLOUD_FORMATS, is_cloud_file, read_cloud
 from .export import to_pyvista, to_trimesh, write_colored_mesh, write_mesh
-from .files import atomic_write, split_suffix
+from .files import atomic_write, split_suffix, user_path
 from .labels import read_labels, write_labels, write_segindices
 from .meshes import MESH_FORMATS, read_mesh
 from .tetmeshes import VOLUME_FORMATS, read_volume, write_volume_labels
@@ -78,7 +78,8 @@ def read_input(path):
     ('Mesh', 'PointCloud')
     """
 
-    fmt = split_suffix(Path(path))[0]
+    path = user_path(path)
+    fmt = split_suffix(path)[0]
     if fmt not in (*MESH_FORMATS, *CLOUD_FORMATS, *VOLUME_FORMATS):
         what = "standard input is not read (a format is told by its suffix): save it to a " \
             "file" if str(path) == "-" else f"unknown format {'.' + fmt if fmt else '(no suffix)'}"

@@ -47,7 +47,7 @@ import numpy as np
 from ..errors import MeshFormatError
 from ..inputs.rgb import unit_colors
 from .columns import read_columns
-from .files import read_bytes, split_suffix
+from .files import read_bytes, split_suffix, user_path
 from .ply import COLOR_PROPERTIES, ply_colors, read_ply_scalars
 
 __all__ = ["read_cloud", "CLOUD_FORMATS", "is_cloud_file", "check_laz", "check_las",
@@ -263,7 +263,7 @@ def read_cloud(path, format: str | None = None):
     (50, dtype('float64'))
     """
 
-    path = Path(path)
+    path = user_path(path)
     fmt, comp = split_suffix(path)
     if format is not None:
         if not isinstance(format, str):

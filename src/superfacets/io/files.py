@@ -15,6 +15,7 @@ import io
 import lzma
 import math
 import os
+import re
 import tempfile
 import zlib
 from collections.abc import Iterator
@@ -28,7 +29,7 @@ from ..errors import MemoryLimitError, MeshFormatError, ParameterError, Superfac
 __all__ = ["split_suffix", "read_bytes", "text_lines", "text_chunks", "number_table",
            "atomic_write", "Outputs",
            "save", "COMPRESSIONS", "decompressed", "decompressed_head", "sha256_of", "array_digest",
-           "load_checked"]
+           "load_checked", "user_path"]
 
 
 #: Compression suffixes understood on reading and writing.
@@ -670,4 +671,36 @@ def save(path, content, outputs: Outputs | None = None) -> Path:
     if outputs is not None and not isinstance(outputs, Outputs):
         raise TypeError(f"outputs must be a superfacets.io.files.Outputs, got "
                         f"{type(outputs).__name__}")
+    path = path if str(path) == "-" else user_path(path)  # (~/out.seg: the home's)
     return atomic_write(path, content) if outputs is None else outputs.write(path, content)
+
+
+def user_path(path) -> Path:
+    """A path as a user gives it to a reader: ``~`` expanded (a notebook's
+    ``read_cloud("~/scans/tile.laz")``; a shell expands it, Python does not), a URL
+    refused in words.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    FileNotFoundError
+        If ``path`` is a URL (``https://...``): the readers read files; download it first.
+
+    Examples
+    --------
+    >>> user_path("~/scan.las") == Path.home() / "scan.las"
+    True
+    """
+    text = os.fspath(path)
+    if isinstance(text, str) and re.match(r"^[a-zA-Z][a-zA-Z0-9+.-]*://", text):
+        raise FileNotFoundError(f"{text}: a URL; the readers read files: download it first "
+                                "(e.g. curl -O, or urllib.request.urlretrieve in Python)")
+    return Path(text).expanduser() if str(text).startswith("~") else Path(text)
+

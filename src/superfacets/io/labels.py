@@ -16,7 +16,7 @@ from .._runtime import extras
 from ..elements.labels import check_labels
 from ..errors import MeshFormatError, ParameterError
 from .clouds import check_laz
-from .files import Outputs, read_bytes, save, split_suffix, text_lines
+from .files import Outputs, read_bytes, save, split_suffix, text_lines, user_path
 from .ply import read_ply_labels, whole_labels
 from .records import LABEL_FIELD
 from .tetmeshes import VOLUME_FORMATS, volume_field
@@ -221,7 +221,7 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
     >>> read_labels(path, n_faces=4).tolist()
     [0, 0, 1, 2]
     """
-    path = Path(path)
+    path = user_path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file")
     fmt, comp = split_suffix(path)
@@ -383,7 +383,7 @@ def read_field(path, name: str) -> np.ndarray:
     --------
     >>> classes = read_field("scan.las", "classification")  # doctest: +SKIP
     """
-    path = Path(path)
+    path = user_path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file")
     fmt, comp = split_suffix(path)

@@ -22,7 +22,7 @@ from ..errors import InvalidMeshError, MeshFormatError
 from ..inputs.convert import mesh_from_scene
 from ..inputs.mesh import Mesh, narrow_faces
 from ..inputs.rgb import unit_colors
-from .files import read_bytes, read_head, split_suffix, text_lines
+from .files import read_bytes, read_head, split_suffix, text_lines, user_path
 from .headers import check_gltf, check_stl, header_counts, ply_names
 from .obj import parse_obj
 from .ply import ply_colors, read_ply_triangles
@@ -77,7 +77,7 @@ def read_mesh(path, format: str | None = None) -> Mesh:
     >>> m.n_faces, m.n_vertices
     (12, 8)
     """
-    path = Path(path)
+    path = user_path(path)
     fmt, comp = split_suffix(path)
     if format is not None:
         if not isinstance(format, str):

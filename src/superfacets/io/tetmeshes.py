@@ -20,7 +20,7 @@ from .._runtime import extras
 from ..elements.labels import check_labels
 from ..errors import MemoryLimitError, MeshFormatError
 from ..inputs.tetmesh import TetMesh
-from .files import atomic_write, decompressed, split_suffix
+from .files import atomic_write, decompressed, split_suffix, user_path
 
 __all__ = ["read_volume", "write_volume_labels", "volume_field", "VOLUME_FORMATS"]
 
@@ -61,7 +61,7 @@ def read_volume(path):
     1
     """
 
-    path = Path(path)
+    path = user_path(path)
     m, blocks = _tetra_blocks(path)
     tets = np.concatenate([m.cells[i].data for i in blocks])
     materials = None

@@ -58,6 +58,7 @@ from ...errors import ParameterError, SuperfacetsError
 from ...inputs.bounds import check_extent, rows_in_box
 from ...inputs.cloud import check_weighable, stretched_along
 from ...io.clouds import dropped_normals_said
+from ...io.files import user_path
 from ...io.regions import RegionReader, streamed
 from ...method.merges import NOISE_SAMPLE
 from ...method.params import DEFAULTS, resolve, superfacet_size
@@ -514,6 +515,8 @@ def _surveyed(source, tmp, tiles, params):
     divisor) and its survey (bounds, counts, a sample), checked against the tiles and the
     parameters."""
 
+    if isinstance(source, (str, Path)):  # (~/scan.laz: the home's, read by every worker)
+        source = user_path(source)
     if isinstance(source, RegionReader):  # opened by the caller (its viewpoint, up)
         reader = source
     elif isinstance(source, (str, Path)) and streamed(source):
