@@ -292,3 +292,23 @@ def test_a_path_from_the_home_folder_is_read_and_a_url_named(tmp_path, monkeypat
     assert sf.segment_tiled("~/scans/s0.xyz", 5, tiles=2).n_segments == 5
     with pytest.raises(FileNotFoundError, match="a URL; the readers read files"):
         sf.read_input("https://example.com/tile.las")
+
+
+def test_a_folder_given_to_a_reader_is_its_scene_or_refused_as_a_folder(tmp_path):
+    # (read_cloud("scannet/val/scene0011_00"): "unknown point-cloud format (no suffix)",
+    # where the command line reads a Pointcept scene folder as its coord.npy)
+    import pytest
+
+    import superfacets as sf
+    from superfacets.errors import MeshFormatError
+
+    scene = tmp_path / "scene0011_00"
+    scene.mkdir()
+    rng = np.random.default_rng(0)
+    np.save(scene / "coord.npy", np.c_[rng.random((500, 2)), np.zeros(500)].astype("f4"))
+    np.save(scene / "color.npy", rng.integers(0, 256, (500, 3)).astype("u1"))
+    for read in (sf.read_cloud, sf.read_input):
+        cloud = read(scene)
+        assert cloud.n_total == 500 and cloud.colors is not None
+    with pytest.raises(MeshFormatError, match="a folder, not a file"):
+        sf.read_input(tmp_path)

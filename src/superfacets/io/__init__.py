@@ -13,7 +13,7 @@
 from pathlib import Path
 
 from ..errors import MeshFormatError
-from .clouds import CLOUD_FORMATS, is_cloud_file, read_cloud
+from .clouds import CLOUD_FORMATS, is_cloud_file, read_cloud, scene_file
 from .export import to_pyvista, to_trimesh, write_colored_mesh, write_mesh
 from .files import atomic_write, split_suffix, user_path
 from .labels import read_labels, write_labels, write_segindices
@@ -78,7 +78,7 @@ def read_input(path):
     ('Mesh', 'PointCloud')
     """
 
-    path = user_path(path)
+    path = scene_file(user_path(path)) if str(path) != "-" else Path(path)
     fmt = split_suffix(path)[0]
     if fmt not in (*MESH_FORMATS, *CLOUD_FORMATS, *VOLUME_FORMATS):
         what = "standard input is not read (a format is told by its suffix): save it to a " \

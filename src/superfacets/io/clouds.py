@@ -50,7 +50,7 @@ from .columns import read_columns
 from .files import read_bytes, split_suffix, user_path
 from .ply import COLOR_PROPERTIES, ply_colors, read_ply_scalars
 
-__all__ = ["read_cloud", "CLOUD_FORMATS", "is_cloud_file", "check_laz", "check_las",
+__all__ = ["read_cloud", "scene_file", "CLOUD_FORMATS", "is_cloud_file", "check_laz", "check_las",
            "e57_counts", "scene_assets", "SCENE_ASSETS", "SCENE_UP"]
 
 from .._runtime import extras
@@ -263,7 +263,7 @@ def read_cloud(path, format: str | None = None):
     (50, dtype('float64'))
     """
 
-    path = user_path(path)
+    path = scene_file(user_path(path))
     fmt, comp = split_suffix(path)
     if format is not None:
         if not isinstance(format, str):
@@ -714,6 +714,37 @@ SCENE_ASSETS = {"color": "colors", "normal": "normals"}
 #: The up direction of a scene folder's points: Pointcept's datasets (ScanNet, S3DIS,
 #: nuScenes, SemanticKITTI, ...) all keep gravity along -z.
 SCENE_UP = (0.0, 0.0, 1.0)
+
+
+def scene_file(path: Path) -> Path:
+    """The file a reader reads for ``path``: a scene folder of Pointcept's (one holding
+    ``coord.npy``) is its ``coord.npy``; any other folder is refused.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``, or the scene's ``coord.npy``.
+
+    Raises
+    ------
+    MeshFormatError
+        If ``path`` is a folder that is no scene.
+
+    Examples
+    --------
+    >>> scene_file(Path("scan.las"))
+    PosixPath('scan.las')
+    """
+    if not path.is_dir():
+        return path
+    if (path / "coord.npy").is_file():
+        return path / "coord.npy"
+    raise MeshFormatError(f"{path}: a folder, not a file: name a file in it (a scene folder "
+                          "of Pointcept's holds coord.npy)")
 
 
 def scene_assets(path, n: int) -> dict:
