@@ -25,9 +25,11 @@ def test_segment_writes_labels_colored_mesh_and_summary(tmp_path, small_off, cap
     assert wrote == f"wrote {seg} (labels), {ply} (coloured mesh)"
     labels = read_labels(seg, n_faces=5120)
     assert labels.max() + 1 == 30
-    sizes = np.bincount(labels)  # the summary says how even they are
+    sizes = np.bincount(labels)  # the summary says how even they are, and how wide
+    areas = np.bincount(labels, weights=read_mesh(small_off).areas)
+    wide = 2 * np.sqrt(np.median(areas) / np.pi)  # (a disc of the median area)
     assert (f", {sizes.min():,} to {sizes.max():,} faces each (median "
-            f"{np.median(sizes):,.0f})") in line
+            f"{np.median(sizes):,.0f}, about {wide:.3g} wide in the data's units)") in line
     assert not seg.read_text().startswith("#")
     assert read_mesh(ply).n_faces == 5120
 

@@ -212,7 +212,7 @@ def _summary(name: str, mesh, result, seconds: float, elements: str = "faces",
     if result.n_segments == 1:  # (one superfacet, one superpoint)
         segs = segs.replace("superfacets", "superfacet", 1).replace("superpoints", "superpoint", 1)
     else:  # how even they are: the smallest, the largest and the median
-        segs += sizes_said(result.labels, elements)
+        segs += sizes_said(result.labels, elements, result)
     return (f"{name}: {what}, {result.n_segments} {segs}, "
             f"{_count(result.n_iter, 'iteration')} ({state}){coarse}{swaps}, {seconds:.2f} s"
             f"{_tiny_hint(result) if elements == 'points' and not start else ''}")
