@@ -112,9 +112,7 @@ def _scene_folder(args) -> None:
     ``coord.npy`` (read with the ``color.npy`` and ``normal.npy`` beside it)."""
     given = getattr(args, "mesh", None)
     if isinstance(given, str) and Path(given).is_dir() and (Path(given) / "coord.npy").is_file():
-        from ..io.clouds import scene_file
-
-        args.mesh = str(scene_file(Path(given)))
+        args.mesh = str(Path(given) / "coord.npy")
 
 
 def main(argv: list[str] | None = None) -> int:
