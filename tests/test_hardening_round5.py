@@ -66,7 +66,7 @@ def test_the_point_graph_checks_its_neighbourhood_itself(kwargs):
     (["--tiles", "2", "--levels", "5,10"], "--levels needs the whole input"),  # (was ignored)
     (["--tiles", "2", "--level-cost", "planarity"], "--level-cost needs the whole input"),
     (["--tiles", "2", "--extent-weight", "2"], "--extent-weight needs the whole input"),
-    (["--tiles", "2", "--view", "top"], "--view needs the whole input"),
+    (["--tiles", "2", "--view", "top"], "--view chooses the camera of --picture OUT.png"),
     (["--level-cost", "planarity"], "--level-cost is the merge cost of --levels"),
     (["--view", "top"], "--view chooses the camera of --picture"),
     (["--up", "z"], "--up sets the up axis of --picture"),

@@ -313,6 +313,51 @@ def test_cli_tiles_writes_labels_and_refuses_whole_input_outputs(tmp_path):
     assert np.unique(own).size == 30 and not np.array_equal(own, labels)
 
 
+def test_a_tiled_run_draws_its_picture_from_an_even_sample_of_the_file(tmp_path, capsys,
+                                                                       monkeypatch):
+    """``--picture`` with ``--tiles`` (refused before: "needs the whole input in one
+    process"): a cloud that streams is drawn from the survey's even sample of its rows
+    (read again in one pass: the whole cloud need not fit), its legend from every label;
+    a mesh is drawn whole; ``--view`` names the picture it is for."""
+    pytest.importorskip("pyvista")
+    from PIL import Image
+
+    from superfacets.cli import main
+    from superfacets.io.labels import read_labels
+    from superfacets.viz import render as rendering
+
+    pts = _bumpy_cloud(3000).points
+    np.save(tmp_path / "c.npy", pts)
+    sized = []
+    real = rendering.size_legend
+
+    def legend(img, lab, *args):
+        sized.append(np.asarray(lab))
+        return real(img, lab, *args)
+
+    monkeypatch.setattr(rendering, "size_legend", legend)
+    assert main(["segment", str(tmp_path / "c.npy"), "-k", "30", "--tiles", "2", "-j", "1",
+                 "-o", str(tmp_path / "c.seg"), "--picture", str(tmp_path / "c.png"),
+                 "--view", "top"]) == 0
+    out = capsys.readouterr().out
+    assert "3,000 of 3,000 points drawn" in out and "wrote" in out
+    img = np.asarray(Image.open(tmp_path / "c.png").convert("RGB"))
+    assert (np.abs(img.astype(int) - 255).sum(-1) > 90).mean() > 0.05
+    assert np.unique(img.reshape(-1, 3), axis=0).shape[0] > 30  # (coloured by superpoint)
+    assert np.array_equal(sized[-1], read_labels(tmp_path / "c.seg"))
+    mesh = _bumpy(3)
+    _write_ply_mesh(tmp_path / "m.ply", mesh.vertices, mesh.faces)
+    assert main(["segment", str(tmp_path / "m.ply"), "-k", "20", "--tiles", "2", "-j", "1",
+                 "--picture", str(tmp_path / "m.png"), "-q"]) == 0
+    assert Image.open(tmp_path / "m.png").size == (1200, 900)
+    assert sized[-1].shape == (mesh.n_faces,)
+    assert main(["segment", str(tmp_path / "c.npy"), "-k", "30", "--tiles", "2",
+                 "--picture", str(tmp_path / "c.seg"), "-o", str(tmp_path / "c.seg")]) == 2
+    assert main(["segment", str(tmp_path / "c.npy"), "-k", "30", "--tiles", "2",
+                 "--picture", str(tmp_path / "d.png"), "-o", str(tmp_path / "d.png")]) == 2
+    assert "two outputs go to the same file" in capsys.readouterr().err
+
+
 def test_the_cli_says_when_tiles_give_fewer_superpoints_than_asked(tmp_path, capsys):
     """Each tile's core takes its share of the centers, so a few hundred points in two
     tiles may end with fewer superpoints than asked: the summary says so."""

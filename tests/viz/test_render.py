@@ -445,3 +445,42 @@ def test_the_picture_says_how_many_segments_and_how_even_they_are(tmp_path, sphe
     assert differ.size and differ[:, 0].min() > 240 and differ[:, 1].max() < 480
     assert main(["segment", str(mesh), "-k", "8", "--picture", str(a), "-q"]) == 0
     assert (np.asarray(Image.open(a).convert("RGB"))[-60:, :200] != 255).any()
+
+
+def test_a_picture_of_a_large_cloud_draws_an_even_share_and_sizes_every_label(
+        tmp_path, monkeypatch):
+    """A picture draws at most its pixels' worth of points (10M points cost the point graph
+    of all of them for a picture no better): an even random share of the valid points,
+    the same each time, while its legend counts every point's label."""
+    from superfacets import PointCloud
+    from superfacets.viz import render as rendering
+    from superfacets.viz.render import drawn_share, render_points
+
+    pts = _sphere_cloud(4000)
+    pts[::7] = np.nan  # invalid points are never drawn
+    labels = (np.arange(4000) % 40).astype(np.int64)
+    labels[::7] = -1
+    cloud = PointCloud(pts, allow_invalid=True, up=np.array([0.0, 0.0, 1.0]))
+    share, drawn, n = drawn_share(cloud, labels, 600)
+    assert n == share.n_points == 600 and drawn.shape == (600,)
+    rows = np.flatnonzero(np.isin(pts[:, 0], share.points[:, 0]))
+    assert rows.size == 600 and np.isfinite(pts[rows]).all()
+    assert np.array_equal(share.points, pts[rows]) and np.array_equal(drawn, labels[rows])
+    assert np.array_equal(share.up, cloud.up)
+    assert np.array_equal(drawn_share(cloud, labels, 600)[0].points, share.points)
+    assert drawn_share(cloud, labels, 4000)[0] is cloud  # (under the limit: all of it)
+    with pytest.raises(ParameterError, match="one per point"):
+        drawn_share(cloud, labels[:-1], 600)
+
+    seen = {}
+    real = rendering.size_legend
+
+    def legend(img, lab, *args):
+        seen["labels"] = lab
+        return real(img, lab, *args)
+
+    monkeypatch.setattr(rendering, "size_legend", legend)
+    img = render_points(cloud, labels, tmp_path / "s.png", size=(320, 240), legend=True,
+                        max_points=500)
+    assert _foreground(img).mean() > 0.05
+    assert seen["labels"] is labels  # (the legend counts all 3,428 labelled points)

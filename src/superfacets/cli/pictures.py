@@ -52,6 +52,14 @@ def _drawn(data, labels, elements: str):
     return surface, face_labels, "faces"
 
 
+def drawn_said(n_points: int, size) -> str:
+    """``' (1,080,000 of them drawn)'`` where a picture of ``size`` pixels draws a share of
+    a cloud's ``n_points`` valid points (:func:`superfacets.viz.render.drawn_share`), else
+    ``''``."""
+    pixels = int(size[0]) * int(size[1])
+    return f" ({pixels:,} of them drawn)" if n_points > pixels else ""
+
+
 def _size_said(data, elements: str) -> str:
     """``'69,451 faces'``, ``'3,000 points'``, ... for the summary line."""
     from ..checks import counted
@@ -165,6 +173,7 @@ def cmd_render(args) -> int:
                                                            is not None else 0)):
         if elements == "points":
             render_points(data, labels, out, **style)
+            said += drawn_said(data.n_points, args.size)
         else:
             render(data, labels, out, boundaries=not args.no_boundaries,
                    line_width=args.line_width, elements=elements, **style)

@@ -46,7 +46,7 @@ def add_tile_options(p) -> None:
                         "holding about equal numbers of elements; NX,NY,NZ: a regular grid of "
                         "equal boxes); binary PLY, "
                         "LAS/LAZ and .npy are read in chunks, twice, and sorted into a file "
-                        "per tile (labels only: -o OUT.seg / .json)")
+                        "per tile (labels: -o OUT.seg / .json, and --picture OUT.png)")
     g.add_argument("--halo", type=float, default=None, metavar="H",
                    help="with --tiles: halo width in units of window * r (>= 1; default 3)")
     g.add_argument("--refine", type=int, default=None, metavar="N",
@@ -73,20 +73,8 @@ def segment_tiles(args) -> int:
     from ..errors import ParameterError, SuperfacetsError
     from ..scale.tiles.run import segment_tiled
 
-    for flag, given in (("--colored-mesh", args.colored_mesh), ("--picture", args.picture),
-                        ("--html", args.html), ("--graph", args.graph),
-                        ("--per-object", args.per_object), ("--levels", args.levels),
-                        ("--level-cost", args.level_cost),
-                        ("--extent-weight", args.extent_weight is not None),
-                        ("--view", args.view is not None), ("--up", args.up)):
-        if given:
-            raise ParameterError(f"{flag} needs the whole input in one process; not with "
-                                 "--tiles (write -o OUT.seg, then view a part)")
-    if getattr(args, "elements", None) == "vertices":
-        raise ParameterError("--tiles segments faces or points, not vertices")
-    if args.header:  # (its lines record one run's passes and time)
-        raise ParameterError("--header records one run's parameters and passes; a tiled run "
-                             "writes the labels alone (its summary says the rest)")
+    _refuse_one_run_options(args)
+    png_out = _check_picture(args)
     seg_out = check_labels_output(args.output, args.mesh, records=True)
     for flag, given in (("--seed-resolution", args.seed_resolution),
                         ("--neighbor-distance", args.neighbor_distance)):
@@ -145,9 +133,91 @@ def segment_tiles(args) -> int:
                     f"{copc_said(args.mesh)}" if into == "records" else
                     f"a new file of the input's {kind}{kept}, labels as {LABEL_FIELD}")
             print(f"wrote {seg_out} ({what})", file=report)
-        elif seg_out is None:
+        elif seg_out is None and png_out is None:
             print("note: nothing was saved: add -o OUT.seg", file=sys.stderr)
+    if png_out is not None:
+        _picture(args, result, png_out)
     return 0
+
+
+def _refuse_one_run_options(args) -> None:
+    """Refuse the options of ``segment`` that only one run gives."""
+    from ..errors import ParameterError
+
+    for flag, given in (("--colored-mesh", args.colored_mesh),
+                        ("--html", args.html), ("--graph", args.graph),
+                        ("--per-object", args.per_object), ("--levels", args.levels),
+                        ("--level-cost", args.level_cost),
+                        ("--extent-weight", args.extent_weight is not None)):
+        if given:
+            raise ParameterError(f"{flag} needs the whole input in one process; not with "
+                                 "--tiles (write -o OUT.seg, then view a part)")
+    if getattr(args, "elements", None) == "vertices":
+        raise ParameterError("--tiles segments faces or points, not vertices")
+    if args.header:  # (its lines record one run's passes and time)
+        raise ParameterError("--header records one run's parameters and passes; a tiled run "
+                             "writes the labels alone (its summary says the rest)")
+
+
+def _check_picture(args):
+    """``--picture OUT.png`` of a tiled run, checked before the run (its path, ``--view``
+    and ``--up`` without it, the drawing extra), or None."""
+    from .._runtime.extras import require
+    from ..errors import ParameterError
+    from .options import check_output
+
+    png_out = check_output(args.picture, (".png",), "the picture", inputs=(args.mesh,))
+    for flag, given, what in (("--view", args.view is not None, "chooses the camera"),
+                              ("--up", args.up, "sets the up axis")):
+        if given and png_out is None:
+            raise ParameterError(f"{flag} {what} of --picture OUT.png; give it")
+    if png_out is not None:
+        if str(png_out) == str(args.output):
+            raise ParameterError("two outputs go to the same file")
+        require("pyvista", "drawing pictures")  # (before the run, not after it)
+    return png_out
+
+
+def _picture(args, result, out) -> None:
+    """``--picture`` of a tiled run, drawn once its labels are written: a cloud that
+    streams (binary PLY, LAS/LAZ, ``.npy``) from the survey's even sample of it (at most
+    a million points, read again in one pass, as a picture draws at most its pixels: the
+    whole cloud need not fit), anything else read whole; the legend from every label."""
+    from dataclasses import replace
+
+    from ..inputs.cloud import PointCloud
+    from ..io.orientation import default_view
+    from ..io.regions import RegionReader, streamed
+    from ..viz.render import PICTURE_SIZE, render, render_points
+    from .options import read_usable, said_up, up_of
+
+    t0 = time.perf_counter()
+    kind = result.params["elements"]
+    source = _source(args)
+    name = Path(args.mesh).name
+    if kind == "points" and streamed(args.mesh):
+        reader = source if isinstance(source, RegionReader) else RegionReader.open(args.mesh)
+        survey = replace(reader, up_weight=1.0).survey()  # (the positions as in the file)
+        data = PointCloud(survey.sample, viewpoint=reader.viewpoint, up=reader.up, name=name)
+        labels = result.labels[survey.sample_rows]
+    else:
+        data = source if isinstance(source, PointCloud) else read_usable(args.mesh,
+                                                                         clouds=True)
+        labels = result.labels
+    up = up_of(args, data)
+    style = dict(view=args.view if args.view is not None
+                 else default_view(data), up=up[0],
+                 title=f"{name}: {result.n_segments} {kind_of(kind).segment_word}")
+    if kind == "points":
+        render_points(data, labels, out, legend=result.labels, **style)
+        drawn = min(data.n_points, PICTURE_SIZE[0] * PICTURE_SIZE[1])
+        said = f", {drawn:,} of {int((result.labels >= 0).sum()):,} points drawn"
+    else:
+        render(data, labels, out, legend=True, elements=kind, **style)
+        said = ""
+    if not args.quiet:
+        print(f"wrote {out} (picture, {said_up(up)}{said}, rendered in "
+              f"{time.perf_counter() - t0:.2f} s)")
 
 
 def _source(args):

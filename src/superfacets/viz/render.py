@@ -31,11 +31,14 @@ from ..inputs.mesh import Mesh
 from ..io.colors import boundary_edges
 from ..io.export import point_colors, to_pyvista
 from ..io.files import save
-from ..method.params import check_choice, check_number
+from ..method.params import check_choice, check_int, check_number
 from .camera import view_frame
 
 __all__ = ["render", "render_points", "render_panel", "show", "has_display", "size_legend",
-           "NoDisplayError", "no_display"]
+           "NoDisplayError", "no_display", "drawn_share", "PICTURE_SIZE"]
+
+#: A picture's width and height in pixels where none is given.
+PICTURE_SIZE = (1200, 900)
 
 
 def has_display() -> bool:
@@ -272,7 +275,7 @@ def _size(size) -> tuple[int, int]:
     return w, h
 
 
-def render(mesh, labels=None, out=None, *, size=(1200, 900), view=None,
+def render(mesh, labels=None, out=None, *, size=PICTURE_SIZE, view=None,
            background="white", boundaries: bool = True, boundary_color="black",
            line_width: float = 1.0, title: str | None = None, zoom: float = 1.0,
            up="y", outputs=None, elements: str = "faces", legend: bool = False
@@ -493,7 +496,8 @@ def render_panel(items: Sequence[tuple], out=None, *, ncols: int | None = None,
             p.subplot(i // ncols, i % ncols)
             if kind_of(kind_for(mesh)).cloud:  # (shaded spheres: eye-dome lighting is one
                 mesh, draw = _points_drawing(pv, mesh, labels, (w, h), view, zoom, up,  # pass
-                                             eye_dome=False)  # of a whole window, not a panel's)
+                                             eye_dome=False,  # of a whole window, not a panel's)
+                                             limit=w * h)
                 draw(p)
             else:
                 mesh = as_mesh(mesh)
@@ -552,11 +556,11 @@ class PointsFrame:
         self.area = graph.area
 
 
-def render_points(cloud, labels=None, out=None, *, size=(1200, 900), view=None,
+def render_points(cloud, labels=None, out=None, *, size=PICTURE_SIZE, view=None,
                   background="white", point_size: float | None = None,
                   title: str | None = None, zoom: float = 1.0, up="y",
-                  outputs=None, eye_dome: bool | None = None, legend: bool = False
-                  ) -> np.ndarray:
+                  outputs=None, eye_dome: bool | None = None, legend=False,
+                  max_points: int | None = None) -> np.ndarray:
     """Render a point cloud off-screen, points coloured by superpoint.
 
     Parameters
@@ -575,6 +579,14 @@ def render_points(cloud, labels=None, out=None, *, size=(1200, 900), view=None,
         darkened) instead of points drawn as shaded spheres. Default: on for a view
         from straight above or below (``'top'``, ``'bottom'``: a map, whose relief
         spheres cannot show), off otherwise.
+    legend : bool or (M,) int ndarray, default False
+        Draw the superpoints' count and sizes in the lower left corner
+        (:func:`size_legend`), read from ``labels`` (every point's, whatever share is
+        drawn), or from this array: the labels of a whole cloud of which ``cloud`` is a
+        sample (a tiled run's picture).
+    max_points : int, optional
+        Points drawn at most: past it an even random share of them
+        (:func:`drawn_share`). Default: the picture's pixels (1,080,000 at 1200 x 900).
 
     Returns
     -------
@@ -594,15 +606,81 @@ def render_points(cloud, labels=None, out=None, *, size=(1200, 900), view=None,
     pv = _pyvista(off_screen=True)
     _check_style(pv, background, "black", 1.0, zoom)
     frame, draw = _points_drawing(pv, cloud, labels, (w, h), view, zoom, up, point_size,
-                                  eye_dome)
+                                  eye_dome, limit=w * h if max_points is None else max_points)
+    sized = legend if isinstance(legend, np.ndarray) else labels if legend else None
     return _picture(pv, (w, h), background, frame, view, zoom, up, title, out, outputs, draw,
-                    legend=(labels, "superpoints", "points") if legend and labels is not None
-                    else None)
+                    legend=None if sized is None else (sized, "superpoints", "points"))
 
 
-def _points_drawing(pv, cloud, labels, size, view, zoom, up, point_size=None, eye_dome=None):
+def drawn_share(cloud, labels=None, limit: int | None = None) -> tuple:
+    """The points a picture draws of a cloud: all of them, or past ``limit`` an even random
+    share of its valid ones (a fixed seed, so the same picture each time).
+
+    A picture of 1200 x 900 pixels shows about a million points: drawing 10 or 50 million
+    costs the point graph of all of them (most of a picture's time and memory) and gives a
+    picture no better, greyer where several points of one pixel's depth are shaded apart.
+
+    Parameters
+    ----------
+    cloud : PointCloud or (N, 3) float ndarray
+    labels : (N,) int ndarray, optional
+        One per point of the cloud (checked).
+    limit : int, optional
+        Points drawn at most (None: all).
+
+    Returns
+    -------
+    cloud : PointCloud
+        The cloud, or a new one of the drawn points (their normals and colours with them,
+        its viewpoint and up kept).
+    labels : (n,) int ndarray or None
+        The drawn points' labels.
+    n_drawn : int
+        Valid points drawn.
+
+    Raises
+    ------
+    ParameterError
+        If ``labels`` is not one integer per point.
+    InvalidCloudError, TypeError
+        As :func:`superfacets.inputs.cloud.as_cloud`.
+
+    Examples
+    --------
+    >>> xyz = np.random.default_rng(0).random((5000, 3))
+    >>> c, lab, n = drawn_share(xyz, np.arange(5000) // 500, limit=1000)
+    >>> c.n_points, lab.shape, n, int(lab.max())
+    (1000, (1000,), 1000, 9)
+    """
+    from dataclasses import replace
+
+    from ..inputs.cloud import as_cloud
+
+    cloud = as_cloud(cloud)
+    if limit is not None:
+        limit = check_int("the points drawn", limit, 1)
+    if labels is not None:
+        labels = check_labels(labels, cloud.n_total, per="point")
+    if limit is None or cloud.n_points <= limit:
+        return cloud, labels, cloud.n_points
+    rows = np.flatnonzero(cloud.valid)
+    rows = np.sort(np.random.default_rng(0).choice(rows, int(limit), replace=False))
+
+    def part(a):
+        return None if a is None else np.asarray(a)[rows]
+
+    share = replace(cloud, points=cloud.points[rows], normals=part(cloud.normals),
+                    colors=part(cloud.colors), allow_invalid=False, shape=None, frame=None,
+                    objects=(), object_viewpoints=None, fields=None)
+    return share, part(labels), rows.size
+
+
+def _points_drawing(pv, cloud, labels, size, view, zoom, up, point_size=None, eye_dome=None,
+                    limit=None):
     """A point cloud's camera frame (:class:`PointsFrame`) and ``draw(plotter)``, which adds
-    its points coloured by ``labels`` (:func:`render_points`' options)."""
+    its points coloured by ``labels`` (:func:`render_points`' options), at most ``limit``
+    of them (:func:`drawn_share`)."""
+    cloud, labels, _ = drawn_share(cloud, labels, limit)
     source = elements_of(cloud, "points")
     g = source.graph
     rgb = point_colors(source, labels)
