@@ -318,6 +318,14 @@ def check_output(path: str | None, suffixes: tuple[str, ...], what: str,
     return out
 
 
+#: Data files ``-o`` does not write, by suffix: a name of one is refused, not given text.
+CONTAINERS = {"npz": "NumPy's archive", "h5": "HDF5", "hdf5": "HDF5", "hdf": "HDF5",
+              "pt": "PyTorch", "pth": "PyTorch", "pkl": "pickle", "pickle": "pickle",
+              "parquet": "Parquet", "feather": "Feather", "arrow": "Arrow", "mat": "MATLAB",
+              "zip": "zip", "tar": "tar", "7z": "7-Zip", "zarr": "Zarr",
+              "tfrecord": "TFRecord", "xlsx": "Excel", "xls": "Excel"}
+
+
 def check_labels_output(path: str | None, source: str, records: bool = False) -> Path | None:
     """``-o``: a label file (``.seg`` or any text name, ``.json`` for segIndices, ``-``),
     or, where ``records`` is True, a copy of a LAS/LAZ, PLY or PCD input with the labels in its
@@ -345,6 +353,12 @@ def check_labels_output(path: str | None, source: str, records: bool = False) ->
     if fmt == "label":  # (read back as SemanticKITTI's binary classes: refused, not misread)
         raise ParameterError(f"{out}: a .label file is SemanticKITTI's binary classes; name "
                              f"the labels e.g. {out.name.split('.')[0]}.seg")
+    if fmt in CONTAINERS:  # (text there would not load where such a file is read)
+        stem = out.name.split(".")[0]
+        raise ParameterError(f"{out}: -o writes the labels as text or as a NumPy array, not a "
+                             f".{fmt} file ({CONTAINERS[fmt]}); name them {stem}.npy (np.load) or "
+                             f"{stem}.seg" + ("; --graph NAME.npz writes the superpoint "
+                                              "graph with its labels" if fmt == "npz" else ""))
     option = {"png": "--picture", "html": "--html", "htm": "--html"}.get(
         fmt, "--colored-mesh" if fmt in ("ply", "glb", "obj", *VOLUME_FORMATS) else None)
     if fmt != "txt" and (fmt in MESH_FORMATS or fmt in CLOUD_FORMATS or option):

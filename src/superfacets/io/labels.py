@@ -193,7 +193,8 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
     ``.label`` file (uint32 a point: its lower 16 bits, the instance above left out),
     those of a nuScenes ``*_lidarseg.bin`` file (uint8 a point), or a ``.npy`` array of
     labels (a learning pipeline's; of NPY records, their ``ClusterID`` field, as ``segment
-    -o OUT.npy`` writes them).
+    -o OUT.npy`` writes them), or a ``.npz`` archive of one such array or of one named
+    ``labels`` (``segment --graph OUT.npz`` writes the labels there).
 
     Parameters
     ----------
@@ -240,7 +241,7 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
             raise MeshFormatError(f"{path}: a .label file (SemanticKITTI's) holds 4 bytes a "
                                   f"point; its {len(data):,} bytes are not a whole number")
         labels = (np.frombuffer(data, dtype="<u4") & 0xFFFF).astype(np.int64)
-    elif fmt == "npy":  # a learning pipeline's array of labels
+    elif fmt in ("npy", "npz"):  # a learning pipeline's array of labels
         labels, shape = _npy_labels(data, path)
     elif fmt == "bin":  # nuScenes' lidarseg: uint8 a point
         if not path.name.lower().endswith("_lidarseg.bin"):
@@ -326,10 +327,19 @@ def _npy_labels(data: bytes, path: Path) -> tuple[np.ndarray, str]:
     row; and, for the last, its shape as said where the count differs."""
     import io
 
+    npz = split_suffix(path)[0] == "npz"
+    if not data.startswith(b"PK" if npz else b"\x93NUMPY"):
+        what = ".npz archive (a zip file)" if npz else ".npy file"
+        raise MeshFormatError(f"{path}: not a NumPy {what} (it starts {data[:8]!r})")
     try:
         arr = np.load(io.BytesIO(data), allow_pickle=False)
+        if npz:
+            arr = _npz_array(arr, path)
+    except MeshFormatError:
+        raise
     except Exception as exc:  # noqa: BLE001 - numpy raises many types on damaged files
-        raise MeshFormatError(f"{path}: cannot read NPY: {exc}") from None
+        raise MeshFormatError(f"{path}: cannot read {'NPZ' if npz else 'NPY'}: "
+                              f"{exc}") from None
     if isinstance(arr, np.ndarray) and arr.dtype.names:  # records: ``segment -o OUT.npy``'s
         if LABEL_FIELD not in arr.dtype.names:
             raise MeshFormatError(f"{path}: NPY records without a {LABEL_FIELD} field (they "
@@ -344,6 +354,18 @@ def _npy_labels(data: bytes, path: Path) -> tuple[np.ndarray, str]:
     organized = arr.ndim == 2 and arr.shape[1] != 1
     return whole_labels(arr, str(path)), (f" (an organized {arr.shape[0]:,} x {arr.shape[1]:,}"
                                          " array, read row by row)" if organized else "")
+
+
+def _npz_array(npz, path: Path) -> np.ndarray:
+    """The array of labels of a ``.npz`` archive: its one array, or its ``labels`` (as
+    ``segment --graph OUT.npz`` writes them beside the graph)."""
+    if not hasattr(npz, "files"):
+        raise MeshFormatError(f"{path}: not a NumPy .npz archive")
+    names = list(npz.files)
+    if len(names) != 1 and "labels" not in names:
+        raise MeshFormatError(f"{path}: a .npz of labels holds one array, or one named "
+                              f"'labels'; this one has {', '.join(names) or 'none'}")
+    return npz[names[0] if len(names) == 1 else "labels"]
 
 
 def read_field(path, name: str) -> np.ndarray:

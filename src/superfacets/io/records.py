@@ -102,7 +102,9 @@ def records_kind(output, source) -> str | None:
     raise ParameterError(
         f"{output}: -o writes the labels into a copy of the input's own records, so a "
         f".{out_fmt} needs a .{needs} input (this one is {Path(source).name}); for it use "
-        f"-o NAME{takes}, or a label file (-o NAME.seg)")
+        f"-o NAME{takes}, or a label file (-o NAME.seg)"
+        + ("; --colored-mesh NAME.ply writes a PLY of the points, coloured, their labels as "
+           "scalar_ClusterID" if out_fmt == "ply" else ""))
 
 
 #: The formats a cloud whose own file takes no field is written as, with its labels

@@ -1,0 +1,74 @@
+"""The faults of the tenth attack (the names a user gives outputs and label files from
+learning pipelines): each case fails without its fix."""
+
+from __future__ import annotations
+
+import gzip
+
+import numpy as np
+import pytest
+
+from superfacets.cli import main
+from superfacets.errors import MeshFormatError
+from superfacets.io import read_labels
+
+
+@pytest.fixture()
+def cloud(tmp_path):
+    xy = np.random.default_rng(0).random((800, 2))
+    path = tmp_path / "s.xyz"
+    np.savetxt(path, np.c_[xy, 0.1 * np.sin(4 * xy[:, 0])], fmt="%.5f")
+    return path
+
+
+@pytest.mark.parametrize("name, says", [("l.npz", "NumPy's archive"), ("l.h5", "HDF5"),
+                                        ("l.pt", "PyTorch"), ("l.parquet", "Parquet"),
+                                        ("l.pkl", "pickle"), ("l.zip", "zip")])
+def test_labels_are_not_written_as_text_under_a_data_file_s_name(cloud, tmp_path, capsys,
+                                                                  name, says):
+    # (`-o labels.npz` wrote one label per line as text: np.load then failed on it)
+    out = tmp_path / name
+    assert main(["segment", str(cloud), "-k", "10", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert f"not a {out.suffix} file ({says})" in err and "l.npy (np.load)" in err
+    assert not out.exists()
+
+
+def test_compressed_text_labels_are_still_written(cloud, tmp_path):
+    out = tmp_path / "l.seg.gz"
+    assert main(["segment", str(cloud), "-k", "10", "-o", str(out), "-q"]) == 0
+    labels = np.loadtxt(gzip.open(out), dtype=int)
+    assert labels.shape == (800,) and np.unique(labels).size == 10
+
+
+def test_labels_in_an_npz_archive_are_read(cloud, tmp_path, capsys):
+    # (a .npz of labels, or the labels `--graph OUT.npz` writes beside the graph, was "not a
+    # text file"; a damaged .npy was said in numpy's words about pickles)
+    graph = tmp_path / "g.npz"
+    seg = tmp_path / "l.seg"
+    assert main(["segment", str(cloud), "-k", "10", "--graph", str(graph), "-o", str(seg),
+                 "-q"]) == 0
+    labels = read_labels(seg)
+    assert np.array_equal(read_labels(graph), labels)
+    np.savez(tmp_path / "one.npz", anything=labels)
+    assert np.array_equal(read_labels(tmp_path / "one.npz"), labels)
+    np.savez(tmp_path / "two.npz", a=labels, b=labels)
+    with pytest.raises(MeshFormatError, match="one named 'labels'; this one has a, b"):
+        read_labels(tmp_path / "two.npz")
+    for name in ("bad.npz", "bad.npy"):
+        (tmp_path / name).write_text("0\n1\n")
+        with pytest.raises(MeshFormatError, match=f"{name}: not a NumPy .np. (file|archive)"):
+            read_labels(tmp_path / name)
+    assert main(["evaluate", str(cloud), str(graph), str(tmp_path / "one.npz")]) == 0
+    assert "undersegmentation" in capsys.readouterr().out
+
+
+def test_a_ply_asked_of_a_las_names_the_option_that_writes_one(tmp_path, capsys):
+    laspy = pytest.importorskip("laspy")
+    xy = np.random.default_rng(1).random((600, 2)) * 20
+    las = laspy.LasData(laspy.LasHeader(point_format=3, version="1.2"))
+    las.x, las.y, las.z = xy[:, 0], xy[:, 1], np.sin(xy[:, 0])
+    las.write(str(tmp_path / "t.las"))
+    assert main(["segment", str(tmp_path / "t.las"), "-k", "10", "-o",
+                 str(tmp_path / "t.ply")]) == 2
+    assert "--colored-mesh NAME.ply" in capsys.readouterr().err
