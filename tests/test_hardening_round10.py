@@ -72,3 +72,21 @@ def test_a_ply_asked_of_a_las_names_the_option_that_writes_one(tmp_path, capsys)
     assert main(["segment", str(tmp_path / "t.las"), "-k", "10", "-o",
                  str(tmp_path / "t.ply")]) == 2
     assert "--colored-mesh NAME.ply" in capsys.readouterr().err
+
+
+def test_a_name_the_terminal_cannot_write_is_escaped_not_a_traceback(cloud, tmp_path):
+    # (PYTHONIOENCODING=ascii, or a terminal of another encoding: the summary naming
+    # `scän.xyz` raised UnicodeEncodeError after the labels were written, exit status 1)
+    import os
+    import subprocess
+    import sys
+
+    src = tmp_path / "scän é.xyz"
+    src.write_bytes(cloud.read_bytes())
+    env = dict(os.environ, PYTHONIOENCODING="ascii", LC_ALL="C")
+    out = subprocess.run([sys.executable, "-m", "superfacets", "segment", str(src), "-k", "10",
+                          "-o", str(tmp_path / "ö.seg")], capture_output=True, text=True,
+                         env=env, encoding="ascii", errors="replace")
+    assert out.returncode == 0 and "Traceback" not in out.stderr, out.stderr
+    assert "sc\\xe4n \\xe9.xyz: 800 points" in out.stdout
+    assert (tmp_path / "ö.seg").exists()

@@ -131,6 +131,9 @@ def main(argv: list[str] | None = None) -> int:
     from ..errors import NoDisplayError, SuperfacetsError
 
     restore = _terminate_cleanly()  # first: Ctrl-C during the imports too
+    if argv is None and hasattr(sys.stdout, "reconfigure"):  # (a file's name in letters
+        sys.stdout.reconfigure(errors="backslashreplace")  # the terminal's encoding lacks,
+        # as stderr already writes them: not a traceback after the outputs are written)
     shown, warnings.showwarning = warnings.showwarning, _warning_line
     from .._runtime.memory import limit_arenas, limit_blas_threads
 
