@@ -315,10 +315,10 @@ def test_cli_tiles_writes_labels_and_refuses_whole_input_outputs(tmp_path):
 
 def test_a_tiled_run_draws_its_picture_from_an_even_sample_of_the_file(tmp_path, capsys,
                                                                        monkeypatch):
-    """``--picture`` with ``--tiles`` (refused before: "needs the whole input in one
-    process"): a cloud that streams is drawn from the survey's even sample of its rows
-    (read again in one pass: the whole cloud need not fit), its legend from every label;
-    a mesh is drawn whole; ``--view`` names the picture it is for."""
+    """``--picture`` and ``--html`` with ``--tiles`` (refused before: "needs the whole
+    input in one process"): a cloud that streams is drawn from the survey's even sample of
+    its rows (read again in one pass: the whole cloud need not fit), its legend from every
+    label; a mesh is drawn whole; ``--view`` names the drawings it is for."""
     pytest.importorskip("pyvista")
     from PIL import Image
 
@@ -338,13 +338,22 @@ def test_a_tiled_run_draws_its_picture_from_an_even_sample_of_the_file(tmp_path,
     monkeypatch.setattr(rendering, "size_legend", legend)
     assert main(["segment", str(tmp_path / "c.npy"), "-k", "30", "--tiles", "2", "-j", "1",
                  "-o", str(tmp_path / "c.seg"), "--picture", str(tmp_path / "c.png"),
-                 "--view", "top"]) == 0
+                 "--view", "top", "--html", str(tmp_path / "c.html")]) == 0
     out = capsys.readouterr().out
-    assert "3,000 of 3,000 points drawn" in out and "wrote" in out
+    assert "3,000 of 3,000 points drawn" in out and "both drawn in" in out
+    assert '"points": 3000' in (tmp_path / "c.html").read_text()
     img = np.asarray(Image.open(tmp_path / "c.png").convert("RGB"))
     assert (np.abs(img.astype(int) - 255).sum(-1) > 90).mean() > 0.05
     assert np.unique(img.reshape(-1, 3), axis=0).shape[0] > 30  # (coloured by superpoint)
     assert np.array_equal(sized[-1], read_labels(tmp_path / "c.seg"))
+    with monkeypatch.context() as patch:  # (a survey's sample of 1,000 points)
+        patch.setattr("superfacets.io.regions.SAMPLE", 1000)
+        assert main(["segment", str(tmp_path / "c.npy"), "-k", "30", "--tiles", "2", "-j", "1",
+                     "--picture", str(tmp_path / "s.png"), "--html",
+                     str(tmp_path / "s.html")]) == 0
+    assert "1,000 of 3,000 points drawn" in capsys.readouterr().out
+    assert "1,000 of 3,000 points (an even sample)" in (tmp_path / "s.html").read_text()
+    assert sized[-1].shape == (3000,)  # (the legend: every point's label)
     mesh = _bumpy(3)
     _write_ply_mesh(tmp_path / "m.ply", mesh.vertices, mesh.faces)
     assert main(["segment", str(tmp_path / "m.ply"), "-k", "20", "--tiles", "2", "-j", "1",

@@ -46,7 +46,7 @@ def add_tile_options(p) -> None:
                         "holding about equal numbers of elements; NX,NY,NZ: a regular grid of "
                         "equal boxes); binary PLY, "
                         "LAS/LAZ and .npy are read in chunks, twice, and sorted into a file "
-                        "per tile (labels: -o OUT.seg / .json, and --picture OUT.png)")
+                        "per tile (labels: -o OUT.seg / .json; --picture, --html)")
     g.add_argument("--halo", type=float, default=None, metavar="H",
                    help="with --tiles: halo width in units of window * r (>= 1; default 3)")
     g.add_argument("--refine", type=int, default=None, metavar="N",
@@ -74,7 +74,7 @@ def segment_tiles(args) -> int:
     from ..scale.tiles.run import segment_tiled
 
     _refuse_one_run_options(args)
-    png_out = _check_picture(args)
+    drawings = _check_drawings(args)
     seg_out = check_labels_output(args.output, args.mesh, records=True)
     for flag, given in (("--seed-resolution", args.seed_resolution),
                         ("--neighbor-distance", args.neighbor_distance)):
@@ -133,10 +133,10 @@ def segment_tiles(args) -> int:
                     f"{copc_said(args.mesh)}" if into == "records" else
                     f"a new file of the input's {kind}{kept}, labels as {LABEL_FIELD}")
             print(f"wrote {seg_out} ({what})", file=report)
-        elif seg_out is None and png_out is None:
+        elif seg_out is None and drawings == (None, None):
             print("note: nothing was saved: add -o OUT.seg", file=sys.stderr)
-    if png_out is not None:
-        _picture(args, result, png_out)
+    if drawings != (None, None):
+        _draw(args, result, *drawings)
     return 0
 
 
@@ -144,8 +144,7 @@ def _refuse_one_run_options(args) -> None:
     """Refuse the options of ``segment`` that only one run gives."""
     from ..errors import ParameterError
 
-    for flag, given in (("--colored-mesh", args.colored_mesh),
-                        ("--html", args.html), ("--graph", args.graph),
+    for flag, given in (("--colored-mesh", args.colored_mesh), ("--graph", args.graph),
                         ("--per-object", args.per_object), ("--levels", args.levels),
                         ("--level-cost", args.level_cost),
                         ("--extent-weight", args.extent_weight is not None)):
@@ -159,65 +158,90 @@ def _refuse_one_run_options(args) -> None:
                              "writes the labels alone (its summary says the rest)")
 
 
-def _check_picture(args):
-    """``--picture OUT.png`` of a tiled run, checked before the run (its path, ``--view``
-    and ``--up`` without it, the drawing extra), or None."""
+def _check_drawings(args) -> tuple:
+    """``--picture OUT.png`` and ``--html OUT.html`` of a tiled run, checked before the run
+    (their paths, ``--view`` and ``--up`` without either, the drawing extra), each a path
+    or None."""
     from .._runtime.extras import require
     from ..errors import ParameterError
     from .options import check_output
 
     png_out = check_output(args.picture, (".png",), "the picture", inputs=(args.mesh,))
+    html_out = check_output(args.html, (".html", ".htm"), "the page", inputs=(args.mesh,))
     for flag, given, what in (("--view", args.view is not None, "chooses the camera"),
                               ("--up", args.up, "sets the up axis")):
-        if given and png_out is None:
-            raise ParameterError(f"{flag} {what} of --picture OUT.png; give it")
+        if given and png_out is None and html_out is None:
+            raise ParameterError(f"{flag} {what} of --picture OUT.png and --html OUT.html; "
+                                 "give one of them")
+    named = [str(x) for x in (args.output, png_out, html_out) if x is not None]
+    if len(set(named)) < len(named):
+        raise ParameterError("two outputs go to the same file")
     if png_out is not None:
-        if str(png_out) == str(args.output):
-            raise ParameterError("two outputs go to the same file")
         require("pyvista", "drawing pictures")  # (before the run, not after it)
-    return png_out
+    return png_out, html_out
 
 
-def _picture(args, result, out) -> None:
-    """``--picture`` of a tiled run, drawn once its labels are written: a cloud that
-    streams (binary PLY, LAS/LAZ, ``.npy``) from the survey's even sample of it (at most
-    a million points, read again in one pass, as a picture draws at most its pixels: the
-    whole cloud need not fit), anything else read whole; the legend from every label."""
+def _drawn(args, result) -> tuple:
+    """What a tiled run's picture and page draw: a cloud that streams (binary PLY,
+    LAS/LAZ, ``.npy``) as the survey's even sample of it (at most about a million points,
+    read again in one pass: the whole cloud need not fit), anything else read whole; with
+    the drawn elements' labels."""
     from dataclasses import replace
 
     from ..inputs.cloud import PointCloud
-    from ..io.orientation import default_view
     from ..io.regions import RegionReader, streamed
+    from .options import read_usable
+
+    source = _source(args)
+    if result.params["elements"] == "points" and streamed(args.mesh):
+        reader = source if isinstance(source, RegionReader) else RegionReader.open(args.mesh)
+        survey = replace(reader, up_weight=1.0).survey()  # (the positions as in the file)
+        data = PointCloud(survey.sample, viewpoint=reader.viewpoint, up=reader.up,
+                          name=Path(args.mesh).name)
+        return data, result.labels[survey.sample_rows]
+    data = source if isinstance(source, PointCloud) else read_usable(args.mesh, clouds=True)
+    return data, result.labels
+
+
+def _draw(args, result, png_out, html_out) -> None:
+    """``--picture`` and ``--html`` of a tiled run, drawn once its labels are written
+    (:func:`_drawn`); a picture's legend and a page's count from every label."""
+    from ..io.orientation import default_view
+    from ..viz.html import check_page_size, write_html
     from ..viz.render import PICTURE_SIZE, render, render_points
-    from .options import read_usable, said_up, up_of
+    from .options import said_up, up_of
 
     t0 = time.perf_counter()
     kind = result.params["elements"]
-    source = _source(args)
-    name = Path(args.mesh).name
-    if kind == "points" and streamed(args.mesh):
-        reader = source if isinstance(source, RegionReader) else RegionReader.open(args.mesh)
-        survey = replace(reader, up_weight=1.0).survey()  # (the positions as in the file)
-        data = PointCloud(survey.sample, viewpoint=reader.viewpoint, up=reader.up, name=name)
-        labels = result.labels[survey.sample_rows]
-    else:
-        data = source if isinstance(source, PointCloud) else read_usable(args.mesh,
-                                                                         clouds=True)
-        labels = result.labels
+    data, labels = _drawn(args, result)
     up = up_of(args, data)
-    style = dict(view=args.view if args.view is not None
-                 else default_view(data), up=up[0],
+    name = Path(args.mesh).name
+    style = dict(view=args.view if args.view is not None else default_view(data), up=up[0],
                  title=f"{name}: {result.n_segments} {kind_of(kind).segment_word}")
-    if kind == "points":
-        render_points(data, labels, out, legend=result.labels, **style)
-        drawn = min(data.n_points, PICTURE_SIZE[0] * PICTURE_SIZE[1])
-        said = f", {drawn:,} of {int((result.labels >= 0).sum()):,} points drawn"
-    else:
-        render(data, labels, out, legend=True, elements=kind, **style)
-        said = ""
-    if not args.quiet:
-        print(f"wrote {out} (picture, {said_up(up)}{said}, rendered in "
-              f"{time.perf_counter() - t0:.2f} s)")
+    cloud = kind == "points"
+    n_all = int((result.labels >= 0).sum())
+    if html_out is not None:
+        if not cloud:
+            check_page_size(data)
+        info = {"drawn": f"{data.n_points:,} of {n_all:,} points (an even sample)"} \
+            if cloud and data.n_points < n_all else None
+        write_html(html_out, data, labels, info=info, **style)
+    if png_out is not None:
+        if cloud:
+            render_points(data, labels, png_out, legend=result.labels, **style)
+        else:
+            render(data, labels, png_out, legend=True, elements=kind, **style)
+    if args.quiet:
+        return
+    drawn = f", {min(data.n_points, PICTURE_SIZE[0] * PICTURE_SIZE[1]):,} of {n_all:,} " \
+        "points drawn" if cloud else ""
+    said = [(out, what) for out, what in ((png_out, f"picture, {said_up(up)}{drawn}"),
+                                          (html_out, "page: open it in a browser"))
+            if out is not None]
+    for i, (out, what) in enumerate(said):
+        took = f", both drawn in {time.perf_counter() - t0:.2f} s" if len(said) == 2 else \
+            f", drawn in {time.perf_counter() - t0:.2f} s"
+        print(f"wrote {out} ({what}{took if i == len(said) - 1 else ''})")
 
 
 def _source(args):
