@@ -500,7 +500,8 @@ def _write_and_say(args, data, result, kind, outputs, elapsed, size_note: str = 
     if size_note:
         print(size_note, file=report)
     _say_what_was_written(seg_out, outputs["colored"], outputs["picture"], outputs["html"],
-                          report, up, outputs["graph"], _labels_what(args, kind, data), kind)
+                          report, up, outputs["graph"], _labels_what(args, kind, data), kind,
+                          drawn=_drawn_share(data, kind))
     for note in (duplicates_note(args, data, kind), count_note(args, data, result, kind)):
         if note:
             print(f"note: {note}", file=sys.stderr)
@@ -536,10 +537,21 @@ def _labels_what(args, kind: str, data=None) -> str:
     return f"the input's {rows}, every field kept, labels as {field}{copc_said(args.mesh)}"
 
 
+def _drawn_share(data, kind: str) -> str:
+    """``', 1,080,000 of 5,000,000 points drawn'`` where a picture draws a share of a
+    cloud's points (:func:`superfacets.viz.render.drawn_share`), else ``''``."""
+    if not kind_of(kind).cloud or kind == "vertices":
+        return ""
+    from ..viz.render import PICTURE_SIZE
+
+    pixels, n = PICTURE_SIZE[0] * PICTURE_SIZE[1], int(data.n_points)
+    return f", {pixels:,} of {n:,} points drawn" if n > pixels else ""
+
+
 def _say_what_was_written(seg_out, ply_out, png_out, html_out, report, up,
                           graph_out=None, labels_what: str = "labels",
-                          kind: str = "faces") -> None:
-    axis = said_up(up)
+                          kind: str = "faces", drawn: str = "") -> None:
+    axis = said_up(up) + drawn
     colored = "coloured cloud" if kind == "points" else "coloured mesh"
     graph = "superpoint graph" if kind_of(kind).segment_word == "superpoints" else \
         "superfacet graph"
