@@ -401,6 +401,31 @@ def test_a_tiled_summary_says_the_merges_as_one_runs_does(tmp_path, capsys):
     assert "(--merge-cost auto)" in words[3] and "cost" not in words[1]
 
 
+def test_a_tiled_run_measures_the_input_s_area_and_says_the_superpoints_width(tmp_path,
+                                                                              capsys):
+    """A tiled run's summary gave sizes in elements alone: it now says how wide a
+    superpoint is on average in the data's units, from the input's area, which the tiles
+    measure as one run does (a mesh's faces; a cloud's points sized by their graph)."""
+    from superfacets.cli import main
+
+    mesh = _bumpy(3)
+    r = segment_tiled(mesh, 20, tiles=2, workers=1)
+    assert r.area == pytest.approx(mesh.area, rel=1e-9)
+    cloud = _bumpy_cloud(3000)
+    one = segment(cloud, 20)
+    tiled = segment_tiled(cloud, 20, tiles=2, workers=1)
+    assert tiled.area == pytest.approx(float(one.elements.graph.sizes.sum()), rel=1e-6)
+    assert np.isnan(segment_tiled(cloud, radius=0.1, tiles=2, workers=1).area)
+    side = 2.0  # a flat square of side 2: 16 superpoints about 2 * sqrt(4 / 16 / pi) wide
+    xy = np.random.default_rng(3).random((8000, 2)) * side
+    np.save(tmp_path / "p.npy", np.c_[xy, np.zeros(8000)])
+    assert main(["segment", str(tmp_path / "p.npy"), "-k", "16", "--tiles", "2", "-o",
+                 str(tmp_path / "p.seg")]) == 0
+    line = capsys.readouterr().out.splitlines()[0]
+    wide = float(line.split("about ")[1].split(" wide on average")[0])
+    assert wide == pytest.approx(2 * np.sqrt(side ** 2 / 16 / np.pi), rel=0.05)
+
+
 def test_the_cli_says_what_the_halos_cost_where_they_are_wide(tmp_path, capsys):
     """Every phase runs over the tiles' boxes, so the elements they hold over their cores'
     is what the halos add to the work: the summary says so where it is half again one run's

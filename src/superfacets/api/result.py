@@ -8,6 +8,7 @@ the superfacet graph and coarser levels of the run's superfacets.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -427,6 +428,10 @@ class TiledResult:
         ``total``.
     params : dict
         The run's parameters, resolved.
+    area : float
+        The input's total area in its units squared (its faces', or its points' summed
+        sizes, as one run's point graph sizes them); NaN where a tiled run does not measure
+        it (a cloud sized by ``radius``, or read with ``up_weight``).
 
     Examples
     --------
@@ -448,6 +453,7 @@ class TiledResult:
     timings: dict = field(default_factory=dict)
     params: dict = field(default_factory=dict)
     layout: object = field(default=None, repr=False)
+    area: float = math.nan
 
     @property
     def n_segments(self) -> int:

@@ -514,7 +514,8 @@ def _describe_stop(result) -> str:
 def sizes_said(labels, elements: str, result=None) -> str:
     """``', 12 to 480 points each (median 130)'``: the segments' sizes in elements; with a
     run's ``result``, also how wide the median one is in the data's units (the diameter of
-    a disc of its area: ``', ... (median 130, about 1.9 wide in the data's units)'``)."""
+    a disc of its area: ``', ... (median 130, about 1.9 wide in the data's units)'``; a
+    tiled run's, the mean one's, from the input's area: ``'about 2.1 wide on average'``)."""
     import numpy as np
 
     from ..elements.labels import size_summary
@@ -523,10 +524,14 @@ def sizes_said(labels, elements: str, result=None) -> str:
     if not (lab >= 0).any():
         return ""
     s = size_summary(lab)
-    wide = _median_width(result)
+    wide, said = _median_width(result), "wide"
+    area = getattr(result, "area", None)  # (a tiled run's: the input's, not each element's)
+    if wide is None and area is not None and np.isfinite(area) and area > 0:
+        wide, said = 2.0 * np.sqrt(area / np.unique(lab[lab >= 0]).size / np.pi), \
+            "wide on average"
     return (f", {s['size_min']:,} to {s['size_max']:,} {elements} each "
             f"(median {s['size_median']:,.0f}"
-            + (f", about {wide:.3g} wide in the data's units" if wide else "") + ")")
+            + (f", about {wide:.3g} {said} in the data's units" if wide else "") + ")")
 
 
 def _median_width(result) -> float | None:

@@ -111,7 +111,7 @@ def segment_tiles(args) -> int:
                                 scene=getattr(args, "merge_from", None) is None)
         what += weights_said(result.params)  # (as one run's summary says them)
         if result.n_segments > 1:
-            what += sizes_said(result.labels, kind)
+            what += sizes_said(result.labels, kind, result)
         invalid = int((result.labels < 0).sum()) if kind == "points" else 0
         said = f" ({invalid:,} invalid)" if invalid else ""  # (as one run's summary says)
         print(f"{Path(args.mesh).name}: {result.labels.size:,} {kind}{said}, "

@@ -231,8 +231,8 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
 
             r, floor = math.nan, None
             with stage("areas", bar=False):  # (the phases' bars)
-                r, margin = _sized(run, layout, reader.kind, params, survey, diagonal, halo,
-                                   (graphs, sample_area))
+                r, margin, area = _sized(run, layout, reader.kind, params, survey, diagonal,
+                                         halo, (graphs, sample_area))
             params, floor = _colour_term(run, margin, params, survey.colors, stage)
             found, done = _classified(run, layout, params, margin, params.window * r, dict(
                 refine=refine, box_rows=not shared, n_noise=_noise_points(merging, merge_from,
@@ -261,7 +261,8 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                     merged_from=merged_from, **({} if floor is None else {"feature_floor": floor}))
     return TiledResult(labels=labels, centers=names.astype(np.int64), mesh_radius=r, grid=grid,
                        layout=layout, halo=margin, disagreements=disagreements, repaired=repaired,
-                       tiles=_tile_stats(found, done), timings=timings, params=resolved)
+                       tiles=_tile_stats(found, done), timings=timings, params=resolved,
+                       area=area if weight == 1 else math.nan)
 
 
 def _classified(run, layout, params, margin: float, ring: float, how: dict,
@@ -417,7 +418,8 @@ GRAPH_SLACK = 1.02
 
 
 def _sized(run, layout, kind: str, params, survey, diagonal: float, halo: float, kept):
-    """The radius ``r`` of the run and the margin its tiles are read with.
+    """The radius ``r`` of the run, the margin its tiles are read with, and the input's
+    area (a cloud's points' summed sizes; NaN for a cloud sized by ``radius``).
 
     A cloud sized by ``n_segments`` sums its tiles' point areas, read on boxes whose halo
     comes from the radius the survey's sample gives (``kept[1]``, its area, else read
@@ -431,7 +433,8 @@ def _sized(run, layout, kind: str, params, survey, diagonal: float, halo: float,
     n, window = survey.n_elements, params.window
     if not kind_of(kind).cloud or params.radius is not None:
         r = superfacet_size(params, survey.size, diagonal, n, kind)[1]
-        return r, halo_distance(halo, window, r)
+        return r, halo_distance(halo, window, r), \
+            math.nan if kind_of(kind).cloud else survey.size
     wide, sample = None, survey.sample
     if sample is not None and sample.shape[0] > 1:
         if sample_area is None:
@@ -449,9 +452,9 @@ def _sized(run, layout, kind: str, params, survey, diagonal: float, halo: float,
     r = superfacet_size(params, area, diagonal, n, kind)[1]
     margin = halo_distance(halo, window, r)
     if wide is not None and margin <= wide:
-        return r, wide  # the boxes the graphs were built on (kept or not: the same boxes)
+        return r, wide, area  # the boxes the graphs were built on (kept or not: the same)
     drop_graphs(graphs)  # (too narrow: the phases build them on their boxes)
-    return r, margin
+    return r, margin, area
 
 
 def _stitched(done: list, n_rows: int):
