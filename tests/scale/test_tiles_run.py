@@ -635,3 +635,17 @@ def test_files_not_read_in_chunks_are_tiled_whole_and_polygons_refused_with_advi
     assert not streamed(tmp_path / "quad.ply")
     with pytest.raises(MeshFormatError, match="has polygons: segment it without tiles"):
         segment_tiled(tmp_path / "quad.ply", 2, tiles=2, workers=1)
+
+
+def test_a_tiled_page_of_more_triangles_than_a_page_holds_is_refused_before_the_run(
+        tmp_path, capsys, monkeypatch):
+    from superfacets.cli import main
+
+    mesh = _bumpy(3)
+    _write_ply_mesh(tmp_path / "m.ply", mesh.vertices, mesh.faces)
+    monkeypatch.setattr("superfacets.viz.html.MAX_PAGE_TRIANGLES", mesh.n_faces - 1)
+    out = tmp_path / "m.seg"
+    assert main(["segment", str(tmp_path / "m.ply"), "-k", "20", "--tiles", "2", "-o", str(out),
+                 "--html", str(tmp_path / "m.html")]) == 2
+    assert "would not open in a browser" in capsys.readouterr().err
+    assert not out.exists() and not (tmp_path / "m.html").exists()

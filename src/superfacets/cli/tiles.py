@@ -178,7 +178,26 @@ def _check_drawings(args) -> tuple:
         raise ParameterError("two outputs go to the same file")
     if png_out is not None:
         require("pyvista", "drawing pictures")  # (before the run, not after it)
+    if html_out is not None:
+        _check_page(args.mesh)
     return png_out, html_out
+
+
+def _check_page(path) -> None:
+    """Refuse ``--html`` of a mesh file whose triangles no page holds, before the run (a
+    tiled mesh is of triangles; a cloud's page draws the survey's sample)."""
+    from ..io.regions import RegionReader, streamed
+    from ..viz.html import MAX_PAGE_TRIANGLES
+
+    if not streamed(path):  # (a file read whole is checked once read, after the run)
+        return
+    reader = RegionReader.open(path)
+    if reader.kind == "faces" and reader.n_rows > MAX_PAGE_TRIANGLES:
+        from ..errors import ParameterError
+
+        raise ParameterError(f"{path}: a page of {reader.n_rows:,} triangles would not open "
+                             f"in a browser (at most {MAX_PAGE_TRIANGLES:,}); draw it with "
+                             "--picture OUT.png")
 
 
 def _drawn(args, result) -> tuple:
