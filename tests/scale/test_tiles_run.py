@@ -649,3 +649,32 @@ def test_a_tiled_page_of_more_triangles_than_a_page_holds_is_refused_before_the_
                  "--html", str(tmp_path / "m.html")]) == 2
     assert "would not open in a browser" in capsys.readouterr().err
     assert not out.exists() and not (tmp_path / "m.html").exists()
+
+
+def test_a_tiled_run_reads_the_spread_of_point_sizes_and_notes_an_uneven_density(tmp_path,
+                                                                                 capsys):
+    """One run sizes the superpoints of a cloud of uneven density by it (``density``
+    automatic), which tiles cannot (the median size is the whole cloud's): the tiles add up
+    the spread of the point sizes over their cores, equal to one run's, and the command
+    notes the difference where one run would have followed the density."""
+    from superfacets.cli import main
+    from superfacets.elements.density import AUTO_SPREAD, size_spread
+
+    rng = np.random.default_rng(0)
+    r = 0.2 * np.exp(rng.random(6000) * np.log(40))  # (density falling as the range squared)
+    t = rng.random(6000) * 2 * np.pi
+    uneven = np.c_[r * np.cos(t), r * np.sin(t), 0.05 * np.sin(r)]
+    even = np.c_[rng.random((6000, 2)) * 8, np.zeros(6000)]
+    for xyz, above in ((uneven, True), (even, False)):
+        one = segment(xyz, 30)
+        tiled = segment_tiled(xyz, 30, tiles=3, workers=1)
+        spread = size_spread(one.elements.graph)
+        assert tiled.size_spread == pytest.approx(spread, rel=1e-6)
+        assert (spread > AUTO_SPREAD) is above
+        assert (one.params["density"] > 0) is above
+        np.save(tmp_path / "c.npy", xyz)
+        assert main(["segment", str(tmp_path / "c.npy"), "-k", "30", "--tiles", "3", "-o",
+                     str(tmp_path / "c.seg")]) == 0
+        assert ("one run would size its superpoints by it" in capsys.readouterr().err) \
+            is above
+    assert np.isnan(segment_tiled(_bumpy(3), 20, tiles=2, workers=1).size_spread)

@@ -432,6 +432,12 @@ class TiledResult:
         The input's total area in its units squared (its faces', or its points' summed
         sizes, as one run's point graph sizes them); NaN where a tiled run does not measure
         it (a cloud sized by ``radius``, or read with ``up_weight``).
+    size_spread : float
+        The standard deviation of the log sizes of a cloud's points over the tiles' cores
+        (:func:`~superfacets.elements.density.size_spread`): above
+        :data:`~superfacets.elements.density.AUTO_SPREAD` one run sizes its superpoints by
+        the density (``density=None``), which a tiled run does not; NaN where not read (a
+        mesh, or a cloud sized by ``radius``).
 
     Examples
     --------
@@ -454,6 +460,7 @@ class TiledResult:
     params: dict = field(default_factory=dict)
     layout: object = field(default=None, repr=False)
     area: float = math.nan
+    size_spread: float = math.nan
 
     @property
     def n_segments(self) -> int:

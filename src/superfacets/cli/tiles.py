@@ -6,6 +6,7 @@ import sys
 import time
 from pathlib import Path
 
+from ..elements.density import AUTO_DENSITY, AUTO_SPREAD
 from ..elements.kinds import kind_of
 from .notes import fields_said, merges_said, weights_said
 from .options import (
@@ -120,6 +121,11 @@ def segment_tiles(args) -> int:
               f"({result.layout.describe()}), {elapsed:.2f} s; largest tile "
               f"{max(t['rows'] for t in result.tiles):,} {kind} with its halo, peak "
               f"{peak:,.0f} MiB; {result.disagreements:,} border disagreements", file=report)
+        if _uneven(args, result):
+            print(f"note: the points' sizes spread {result.size_spread:.2f} (an uneven "
+                  f"density): one run would size its superpoints by it (--density "
+                  f"{AUTO_DENSITY:g}); tiles keep equal areas (see docs/guide/scale.md)",
+                  file=sys.stderr)
         if result.halo_ratio >= HALO_NOTE:
             print(f"note: with their halos the tiles ran over {result.halo_ratio:.2f} times "
                   f"the {kind}, about that many times one run's work: fewer tiles, or more "
@@ -138,6 +144,14 @@ def segment_tiles(args) -> int:
     if drawings != (None, None):
         _draw(args, result, *drawings)
     return 0
+
+
+def _uneven(args, result) -> bool:
+    """Whether one run of the same options would size the superpoints by the points'
+    density, which a tiled run does not (:func:`superfacets.elements.density.density_for`:
+    a spread above :data:`~superfacets.elements.density.AUTO_SPREAD`, left automatic)."""
+    return (getattr(args, "density", None) is None and not getattr(args, "paper", False)
+            and result.size_spread > AUTO_SPREAD)
 
 
 def _refuse_one_run_options(args) -> None:

@@ -72,7 +72,8 @@ from .merges import one_position_stats, tile_merge_stats
 
 __all__ = ["tile_centers", "sample_start", "start_step", "tile_refine", "tile_labels",
            "tile_connect", "orientation_reference", "HALO",
-           "point_areas", "core_area", "oriented_sample", "check_tileable", "FREEZE_HALO"]
+           "point_areas", "point_sizes", "size_moments", "core_sizes", "oriented_sample",
+           "check_tileable", "FREEZE_HALO"]
 
 #: Default halo, in units of ``window * r``. 3 rather than 2: the classification of
 #: the core is exact from 2, and the clean-up near a border nearly so from 3 (fewer
@@ -82,7 +83,13 @@ HALO = 3.0
 
 def point_areas(points: np.ndarray, core: np.ndarray, n_neighbors: int,
                 step: float = 1.0) -> float:
-    """Summed area of the ``core`` points of a tile, as the point graph sizes them
+    """Summed area of the ``core`` points of a tile (:func:`point_sizes`)."""
+    return float(point_sizes(points, core, n_neighbors, step).sum())
+
+
+def point_sizes(points: np.ndarray, core: np.ndarray, n_neighbors: int,
+                step: float = 1.0) -> np.ndarray:
+    """The area of each distinct ``core`` point of a tile, as the point graph sizes them
     (``pi rho^2 / K``, ``rho`` the distance to the ``K``-th distinct neighbour among
     ``points``, or with ``step`` above 1 to the farthest of its neighbours along its
     surface); duplicate points count once."""
@@ -90,16 +97,23 @@ def point_areas(points: np.ndarray, core: np.ndarray, n_neighbors: int,
     pts, inverse = distinct_points(points)  # duplicates share a position, so a core
     is_core = np.zeros(pts.shape[0], dtype=bool)
     is_core[inverse[core]] = True
-    if not is_core.any():
-        return 0.0
     k = int(min(n_neighbors, pts.shape[0] - 1))
-    if k < 1:
-        return 0.0
+    if not is_core.any() or k < 1:
+        return np.zeros(0)
     if step != 1 and k >= 3 and pts.shape[0] > k + 1:  # (as the graph's build chooses)
         kth = surface_neighbours(pts, point_tree(pts), k, step)[1][is_core]
     else:
         _, kth, _ = nearest(point_tree(pts), k, np.flatnonzero(is_core))
-    return float((np.pi * kth ** 2 / k).sum())
+    return np.pi * kth ** 2 / k
+
+
+def size_moments(sizes: np.ndarray) -> tuple[int, float, float]:
+    """``(n, sum of log a, sum of (log a)^2)`` over the positive ``sizes``: what the
+    spread of a cloud's point sizes (:func:`superfacets.elements.density.size_spread`)
+    is added up from over tiles."""
+    a = np.asarray(sizes, dtype=np.float64)
+    a = np.log(a[a > 0])
+    return int(a.size), float(a.sum()), float((a * a).sum())
 
 
 def _valid_rows(inp) -> np.ndarray:
@@ -461,18 +475,17 @@ def _three_distinct(pts: np.ndarray) -> bool:
     return bool((differs & (pts != pts[np.argmax(differs)]).any(axis=1)).any())
 
 
-def core_area(cloud, core: np.ndarray, n_neighbors: int, step: float = 1.0) -> float:
-    """Summed size of the distinct points the ``core`` rows of a tile's cloud hold, read
-    on the point graph the tile builds (:func:`point_areas` reads the same sizes on a
-    tree of its own; the graph built here is kept with the cloud for the tile's phases).
-    """
+def core_sizes(cloud, core: np.ndarray, n_neighbors: int, step: float = 1.0) -> np.ndarray:
+    """The size of each distinct point the ``core`` rows of a tile's cloud hold, read on
+    the point graph the tile builds (:func:`point_sizes` reads the same sizes on a tree
+    of its own; the graph built here is kept with the cloud for the tile's phases)."""
 
     # (where tile_graph keeps it)
     el = points.point_graph(prepared(cloud, "points")[1], n_neighbors, step=step)
     at = np.asarray(el.index)[np.flatnonzero(core)]
     held = np.zeros(el.graph.n_elements, dtype=bool)  # (ascending, as np.unique gave them:
     held[at[at >= 0]] = True  # the same sum)
-    return float(np.asarray(el.graph.sizes)[held].sum())
+    return np.asarray(el.graph.sizes)[held]
 
 
 def _core_share(inp, core: np.ndarray, p: SegmentParams, r: float) -> int:

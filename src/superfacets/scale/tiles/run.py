@@ -231,8 +231,8 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
 
             r, floor = math.nan, None
             with stage("areas", bar=False):  # (the phases' bars)
-                r, margin, area = _sized(run, layout, reader.kind, params, survey, diagonal,
-                                         halo, (graphs, sample_area))
+                r, margin, area, spread = _sized(run, layout, reader.kind, params, survey,
+                                                 diagonal, halo, (graphs, sample_area))
             params, floor = _colour_term(run, margin, params, survey.colors, stage)
             found, done = _classified(run, layout, params, margin, params.window * r, dict(
                 refine=refine, box_rows=not shared, n_noise=_noise_points(merging, merge_from,
@@ -262,7 +262,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
     return TiledResult(labels=labels, centers=names.astype(np.int64), mesh_radius=r, grid=grid,
                        layout=layout, halo=margin, disagreements=disagreements, repaired=repaired,
                        tiles=_tile_stats(found, done), timings=timings, params=resolved,
-                       area=area if weight == 1 else math.nan)
+                       area=area if weight == 1 else math.nan, size_spread=spread)
 
 
 def _classified(run, layout, params, margin: float, ring: float, how: dict,
@@ -418,8 +418,10 @@ GRAPH_SLACK = 1.02
 
 
 def _sized(run, layout, kind: str, params, survey, diagonal: float, halo: float, kept):
-    """The radius ``r`` of the run, the margin its tiles are read with, and the input's
-    area (a cloud's points' summed sizes; NaN for a cloud sized by ``radius``).
+    """The radius ``r`` of the run, the margin its tiles are read with, the input's area
+    (a cloud's points' summed sizes; NaN for a cloud sized by ``radius``), and the spread
+    of a cloud's point sizes (:func:`superfacets.elements.density.size_spread`, added up
+    over the tiles' cores; NaN where not read).
 
     A cloud sized by ``n_segments`` sums its tiles' point areas, read on boxes whose halo
     comes from the radius the survey's sample gives (``kept[1]``, its area, else read
@@ -434,7 +436,7 @@ def _sized(run, layout, kind: str, params, survey, diagonal: float, halo: float,
     if not kind_of(kind).cloud or params.radius is not None:
         r = superfacet_size(params, survey.size, diagonal, n, kind)[1]
         return r, halo_distance(halo, window, r), \
-            math.nan if kind_of(kind).cloud else survey.size
+            math.nan if kind_of(kind).cloud else survey.size, math.nan
     wide, sample = None, survey.sample
     if sample is not None and sample.shape[0] > 1:
         if sample_area is None:
@@ -451,10 +453,21 @@ def _sized(run, layout, kind: str, params, survey, diagonal: float, halo: float,
                              "n_segments; give radius instead")
     r = superfacet_size(params, area, diagonal, n, kind)[1]
     margin = halo_distance(halo, window, r)
+    spread = _spread([o["size_moments"] for o in outs if "size_moments" in o])
     if wide is not None and margin <= wide:
-        return r, wide, area  # the boxes the graphs were built on (kept or not: the same)
+        return r, wide, area, spread  # the boxes the graphs were built on (kept or not)
     drop_graphs(graphs)  # (too narrow: the phases build them on their boxes)
-    return r, margin, area
+    return r, margin, area, spread
+
+
+def _spread(moments: list) -> float:
+    """The standard deviation of the log point sizes from the tiles' ``(n, sum, sum of
+    squares)`` (:func:`~superfacets.scale.tiles.phases.size_moments`); NaN under two."""
+    n, s1, s2 = (sum(m[i] for m in moments) for i in range(3))
+    if n < 2:
+        return math.nan
+    mean = s1 / n
+    return float(math.sqrt(max(s2 / n - mean * mean, 0.0)))
 
 
 def _stitched(done: list, n_rows: int):

@@ -30,7 +30,7 @@ from .graphs import (
 )
 from .held import held_box, hold_box, release_held, worker_address
 from .layout import in_box
-from .phases import core_area, point_areas, tile_centers, tile_labels
+from .phases import core_sizes, point_sizes, size_moments, tile_centers, tile_labels
 
 __all__ = ["tile_task"]
 
@@ -130,8 +130,9 @@ def _phase(task: dict, out: dict) -> None:
             graph.__dict__.setdefault("weights_kept", {})
     p, r, d = task["params"], task["r"], task["diagonal"]
     if task["phase"] == "areas":
-        out["area"] = (core_area(inp, core, p.n_neighbors, _step(p)) if graph_area
-                       else point_areas(pos, core, p.n_neighbors, _step(p)))
+        sizes = (core_sizes(inp, core, p.n_neighbors, _step(p)) if graph_area
+                 else point_sizes(pos, core, p.n_neighbors, _step(p)))
+        out["area"], out["size_moments"] = float(sizes.sum()), size_moments(sizes)
     elif task["phase"] == "connect":
         given = task["labels"]
         if isinstance(given, str):  # the stitched labels, in a file every worker reads
