@@ -353,9 +353,10 @@ def faces_to_draw(mesh, labels, elements: str):
 
 def size_legend(image: np.ndarray, labels, word: str = "superfacets",
                 elements: str = "faces") -> np.ndarray:
-    """The picture with its segments' count and sizes drawn in its lower left corner: the
-    count, the smallest, median and largest segment in elements, and a histogram of the
-    segments by size in powers of two (:func:`superfacets.elements.labels.size_summary`), so that a
+    """The picture with its segments' count and sizes drawn in a lower corner (the left one,
+    or the right one where the box hides fewer drawn pixels there): the count, the
+    smallest, median and largest segment in elements, and a histogram of the segments by
+    size in powers of two (:func:`superfacets.elements.labels.size_summary`), so that a
     picture says how even its segments are.
 
     Parameters
@@ -406,7 +407,7 @@ def size_legend(image: np.ndarray, labels, word: str = "superfacets",
     box_w = max(max(font.getlength(t) for t in lines),
                 hist.size * bar_w + unit + font.getlength(caption)) + 2 * unit
     box_h = len(lines) * (unit + 4) + 7 * unit
-    x0, y0 = unit, h - unit - box_h
+    x0, y0 = _legend_corner(image, int(box_w) + 1, box_h, unit)
     pic = Image.fromarray(image)
     draw = ImageDraw.Draw(pic)
     draw.rectangle([x0, y0, x0 + box_w, y0 + box_h], fill=(255, 255, 255),
@@ -429,6 +430,20 @@ def size_legend(image: np.ndarray, labels, word: str = "superfacets",
     draw.text((x0 + unit + hist.size * bar_w - font.getlength(right), base + 2), right,
               fill=(0, 0, 0), font=font)
     return np.asarray(pic)
+
+
+def _legend_corner(image: np.ndarray, box_w: int, box_h: int, margin: int) -> tuple[int, int]:
+    """The upper left corner of the legend's box: of the picture's two lower corners (the
+    title is at its top), the one where it hides the fewer drawn pixels (those not of the
+    background, the commonest colour of the picture's edge; the left one on a tie)."""
+    h, w = image.shape[:2]
+    edge = np.concatenate([image[0], image[-1], image[:, 0], image[:, -1]])
+    colours, counts = np.unique(edge.reshape(-1, image.shape[2]), axis=0, return_counts=True)
+    drawn = (image != colours[np.argmax(counts)]).any(axis=-1)
+    low = max(margin, h - margin - box_h)
+    corners = [(margin, low), (max(margin, w - margin - box_w), low)]
+    hidden = [int(drawn[y:y + box_h, x:x + box_w].sum()) for x, y in corners]
+    return corners[int(np.argmin(hidden))]
 
 
 def _picture(pv, size, background, frame, view, zoom, up, title, out, outputs, draw,
