@@ -90,3 +90,22 @@ def test_a_name_the_terminal_cannot_write_is_escaped_not_a_traceback(cloud, tmp_
     assert out.returncode == 0 and "Traceback" not in out.stderr, out.stderr
     assert "sc\\xe4n \\xe9.xyz: 800 points" in out.stdout
     assert (tmp_path / "ö.seg").exists()
+
+
+def test_evaluate_names_the_input_and_the_elements_its_labels_do_not_match(tmp_path, capsys):
+    # ("vb.seg: has 35947 labels but the input has 69451 elements": vertex labels of a mesh
+    # given to evaluate, which judges faces unless --elements vertices)
+    import trimesh
+
+    from superfacets import write_mesh
+
+    mesh = tmp_path / "ball.off"
+    write_mesh(mesh, trimesh.creation.icosphere(3))
+    vertices = tmp_path / "v.seg"
+    assert main(["segment", str(mesh), "--elements", "vertices", "-k", "8", "-o",
+                 str(vertices), "-q"]) == 0
+    assert main(["evaluate", str(mesh), str(vertices)]) == 2
+    err = capsys.readouterr().err
+    assert f"v.seg: 642 labels, but {mesh} has 1,280 faces (one label per face" in err
+    assert "they are one per vertex: --elements vertices" in err
+    assert main(["evaluate", str(mesh), str(vertices), "--elements", "vertices"]) == 0

@@ -156,7 +156,8 @@ def test_evaluate_one_call(tmp_path, capsys):
     bad = tmp_path / "short.seg"
     bad.write_text("0\n1\n")
     assert main(["evaluate", str(off), str(sf), str(bad)]) == 2
-    assert "short.seg: has 2 labels but the input has 800 elements" in capsys.readouterr().err
+    assert (f"short.seg: 2 labels, but {off} has 800 faces (one label per face is needed)"
+            in capsys.readouterr().err)
 
 
 def test_evaluate_points_and_vertices_with_unlabelled_rows(tmp_path, capsys):

@@ -89,8 +89,8 @@ def cmd_evaluate(args) -> int:
     n = kind_of(kind).n_rows(data)
     long = shows_stages(args, n)
     with waiting_bar(f"reading the labels of {n:,} {kind}", long):
-        labels = read_labels(args.labels, n_faces=n)
-        gts = [read_labels(p, n_faces=n) for p in args.ground_truths]
+        labels = _counted(read_labels(args.labels), args.labels, args, data, kind)
+        gts = [_counted(read_labels(p), p, args, data, kind) for p in args.ground_truths]
     if labels.size and (labels < 0).all():  # (the oracle mIoU said "no labelled element")
         raise ParameterError(f"{args.labels}: every label is below 0 (unassigned, as DBSCAN's "
                              "noise): no segment to measure")
@@ -100,8 +100,8 @@ def cmd_evaluate(args) -> int:
         _check_field_name(args.ground_truth_field)
         gt = read_field(args.mesh, args.ground_truth_field)
         if gt.shape[0] != n:
-            raise ParameterError(f"field {args.ground_truth_field!r} has {gt.shape[0]} values "
-                                 f"but the input has {n} {kind}")
+            raise ParameterError(f"field {args.ground_truth_field!r} has {gt.shape[0]:,} "
+                                 f"values but {args.mesh} has {n:,} {kind}")
         gts.append(gt)
     judged = [f for f, on in (("--tau", args.tau != 0.05),
                               ("--ignore-label", args.ignore_label is not None)) if on]
@@ -177,6 +177,21 @@ MOST_CLASSES_LISTED = 40
 #: The metrics printed, in order.
 METRICS = ("undersegmentation_error", "compactness", "boundary_recall", "boundary_precision",
            "achievable_accuracy", "oracle_miou")
+
+
+def _counted(labels, path, args, data, kind: str):
+    """``labels`` read from ``path``, refused in words where they are not one per element
+    of ``kind`` (naming the input, and ``--elements vertices`` where they are one per
+    vertex of a mesh whose faces are judged)."""
+    from ..errors import MeshFormatError
+
+    n = kind_of(kind).n_rows(data)
+    if labels.shape[0] == n:
+        return labels
+    hint = ("; they are one per vertex: --elements vertices" if kind == "faces"
+            and labels.shape[0] == getattr(data, "n_vertices", -1) else "")
+    raise MeshFormatError(f"{path}: {labels.shape[0]:,} labels, but {args.mesh} has {n:,} "
+                          f"{kind} (one label per {kind_of(kind).singular} is needed){hint}")
 
 
 def _check_field_name(name: str) -> None:
