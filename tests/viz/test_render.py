@@ -422,6 +422,22 @@ def test_the_notebook_view_is_the_page_inline():
                       .group(1))["superfacets"] == 0
 
 
+def test_a_notebook_view_reads_a_file_and_names_what_a_tiled_result_lacks(tmp_path):
+    """``NotebookView(segment_tiled(...))`` said "mesh must be a superfacets.Mesh, ...,
+    got TiledResult"; a tiled run's labels are drawn on its input, which may be a path."""
+    from superfacets import segment_tiled
+    from superfacets.viz.html import NotebookView
+
+    pts = _sphere_cloud(3000)
+    np.save(tmp_path / "c.npy", pts)
+    tiled = segment_tiled(str(tmp_path / "c.npy"), 12, tiles=2, workers=1)
+    with pytest.raises(ParameterError, match="NotebookView\\(path_or_cloud, result.labels\\)"):
+        NotebookView(tiled)
+    page = NotebookView(tmp_path / "c.npy", tiled.labels).html()
+    meta = json.loads(re.search(r'id="meta"[^>]*>(.*?)</script>', page, re.S).group(1))
+    assert meta["points"] == 3000 and meta["superfacets"] == 12
+
+
 def test_the_picture_says_how_many_segments_and_how_even_they_are(tmp_path, sphere):
     """``render`` (and ``segment --picture``) draw the count and the sizes in the lower left
     corner (or the corner where they hide the fewest drawn pixels): the only pixels that

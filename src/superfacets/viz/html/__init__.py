@@ -16,6 +16,7 @@ from __future__ import annotations
 import base64
 import html as _html
 import json
+import os
 import re
 from importlib import resources
 from pathlib import Path
@@ -323,8 +324,10 @@ class NotebookView:
 
     Parameters
     ----------
-    data : Mesh, PointCloud, SegmentationResult, or what :func:`html_page` takes
-        A result draws its own input and labels.
+    data : Mesh, PointCloud, SegmentationResult, str or os.PathLike, or what :func:`html_page` takes
+        A result draws its own input and labels; a file's path is read (:func:`~superfacets.
+        io.read_input`), as for a tiled run's labels: ``NotebookView("scan.laz",
+        tiled.labels)`` (a cloud of more than 2 million points drawn from an even share).
     labels : (m,) int ndarray, optional
         Per face (``elements='vertices'``: per vertex) or per point; a result's own by
         default.
@@ -337,7 +340,9 @@ class NotebookView:
     Raises
     ------
     ParameterError
-        As :func:`html_page`, when shown.
+        As :func:`html_page`, when shown; given a tiled run's result (it holds no input).
+    MeshFormatError, FileNotFoundError
+        As :func:`~superfacets.io.read_input`, given a path.
 
     Examples
     --------
@@ -347,6 +352,13 @@ class NotebookView:
     """
 
     def __init__(self, data, labels=None, *, height: int = 480, **options) -> None:
+        if isinstance(data, (str, os.PathLike)):  # a file: read as the commands read it
+            from ...io import read_input
+
+            data = read_input(data)
+        elif hasattr(data, "halo_ratio"):  # a TiledResult: its labels, not its input
+            raise ParameterError("a tiled run's result holds the labels, not the input: "
+                                 "NotebookView(path_or_cloud, result.labels)")
         source = getattr(data, "elements", None)
         if source is not None and hasattr(data, "labels"):  # a SegmentationResult
             kind = source.graph.kind
