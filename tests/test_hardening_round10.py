@@ -109,3 +109,16 @@ def test_evaluate_names_the_input_and_the_elements_its_labels_do_not_match(tmp_p
     assert f"v.seg: 642 labels, but {mesh} has 1,280 faces (one label per face" in err
     assert "they are one per vertex: --elements vertices" in err
     assert main(["evaluate", str(mesh), str(vertices), "--elements", "vertices"]) == 0
+
+
+def test_a_result_given_for_labels_is_named_with_what_to_pass(tmp_path):
+    # (`write_labels("out.seg", segment(...))`: "labels must be a 1-D array of integers, one
+    # per element; got shape (), dtype object")
+    from superfacets import ParameterError, segment, segment_tiled, write_labels
+
+    xyz = np.random.default_rng(0).random((1500, 3)) * [1, 1, 0.1]
+    for result in (segment(xyz, 10), segment_tiled(xyz, 10, tiles=2, workers=1)):
+        with pytest.raises(ParameterError, match=f"got a {type(result).__name__}; pass its "
+                                                 r"labels \(result.labels\)"):
+            write_labels(tmp_path / "l.seg", result)
+        assert write_labels(tmp_path / "l.seg", result.labels).exists()

@@ -31,13 +31,18 @@ def check_labels(labels, n: int | None, what: str = "labels", per: str = "elemen
     Raises
     ------
     ParameterError
-        If the array is not 1-D, not of length ``n`` or not of an integer dtype.
+        If the array is not 1-D, not of length ``n`` or not of an integer dtype, or is a
+        run's result (its ``labels`` are meant).
 
     Examples
     --------
     >>> check_labels([0, 1, 1], 3)
     array([0, 1, 1])
     """
+    if not isinstance(labels, np.ndarray) and isinstance(getattr(labels, "labels", None),
+                                                          np.ndarray):  # (a run's result)
+        raise ParameterError(f"{what}: got a {type(labels).__name__}; pass its labels "
+                             "(result.labels)")
     a = np.asarray(labels)
     if a.ndim != 1 or (n is not None and a.shape[0] != n) \
             or not np.issubdtype(a.dtype, np.integer):
