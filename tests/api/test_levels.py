@@ -191,9 +191,9 @@ def test_batch_writes_content_adaptive_superpoints(tmp_path, capsys):
                                       adaptive_superpoints(pts, 10, start=4, extent_weight=0.05))
     with pytest.raises(ParameterError, match=r"adaptive.start 4 -> 5"):  # never mixed
         run_batch([str(corpus)], out, 10, adaptive=5, workers=1, progress=False)
-    with pytest.raises(ParameterError, match="adaptive takes n_segments"):
+    with pytest.raises(ParameterError, match=r"adaptive \(--adaptive\) takes n_segments"):
         run_batch([str(corpus)], tmp_path / "o2", 10, adaptive=4, per_object=True, workers=1)
-    with pytest.raises(ParameterError, match="extent_weight goes with adaptive"):
+    with pytest.raises(ParameterError, match=r"extent_weight \(--extent-weight\) goes with"):
         run_batch([str(corpus)], tmp_path / "o2", 10, extent_weight=0.1, workers=1)
     # the command line: the same labels
     assert main(["batch", str(corpus), "-o", str(tmp_path / "o3"), "-k", "10", "--adaptive",

@@ -348,15 +348,18 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
     if colored_mesh is not None:
         check_choice("colored_mesh", colored_mesh, ("ply", "glb", "obj"))
     if per_object and radius is not None:
-        raise ParameterError("per_object takes n_segments, not radius")
+        raise ParameterError("per_object (--per-object) takes n_segments (-k), not radius "
+                             "(--radius)")
     if adaptive is not None:
         adaptive = check_int("adaptive", adaptive, lo=1)
         if per_object or radius is not None:
-            raise ParameterError("adaptive takes n_segments, on one segmentation (not radius "
-                                 "or per_object)")
+            raise ParameterError("adaptive (--adaptive) takes n_segments (-k), on one "
+                                 "segmentation: not with radius (--radius) or per_object "
+                                 "(--per-object)")
     if extent_weight is not None:
         if adaptive is None:
-            raise ParameterError("extent_weight goes with adaptive")
+            raise ParameterError("extent_weight (--extent-weight) goes with adaptive "
+                                 "(--adaptive)")
         extent_weight = check_nonneg("extent_weight", extent_weight)
     if workers is not None:
         check_int("workers", workers, lo=1)
