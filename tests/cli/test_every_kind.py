@@ -152,6 +152,34 @@ def test_baseline_runs_the_point_methods_on_a_laz(tmp_path, capsys):
     assert "vsa segments faces, not points" in err and "cut_pursuit" in err
 
 
+def test_baseline_draws_its_result_as_segment_does(tmp_path, capsys, sphere):
+    """``baseline`` wrote labels and a coloured mesh only ("unrecognized arguments:
+    --picture"): its picture and page now, checked before the run as segment's."""
+    pytest.importorskip("pyvista")
+    from PIL import Image
+
+    from superfacets import write_mesh
+
+    laz = _laz(tmp_path / "tile.laz")
+    png, page = tmp_path / "g.png", tmp_path / "g.html"
+    assert main(["baseline", str(laz), "-m", "graph_segmentation", "-k", "15", "--picture",
+                 str(png), "--html", str(page), "--view", "top"]) == 0
+    said = capsys.readouterr().out
+    assert f"{png} (picture, up axis z" in said and f"{page} (page" in said
+    img = np.asarray(Image.open(png).convert("RGB"))
+    assert np.unique(img.reshape(-1, 3), axis=0).shape[0] > 15  # (coloured by segment)
+    assert '"points": 3000' in page.read_text()
+    write_mesh(tmp_path / "ball.off", sphere)
+    assert main(["baseline", str(tmp_path / "ball.off"), "-m", "vsa", "-k", "6", "--picture",
+                 str(tmp_path / "v.png"), "-q"]) == 0
+    assert Image.open(tmp_path / "v.png").size == (1200, 900)
+    for extra, says in ((["--view", "top"], "--view chooses the camera of --picture"),
+                        (["--picture", str(png), "--colored-mesh", str(png)],
+                         "must end in .ply")):
+        assert main(["baseline", str(laz), "-m", "graph_segmentation", *extra]) == 2
+        assert says in capsys.readouterr().err
+
+
 def test_experiment_runs_on_a_user_s_files(tmp_path, capsys, sphere):
     from superfacets import write_mesh
 

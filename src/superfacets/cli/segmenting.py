@@ -155,6 +155,11 @@ def _add_baseline(sub) -> None:
                     help="write the labels here (one per face per line)")
     bl.add_argument("--colored-mesh", metavar="OUT.ply", default=None,
                     help="write the mesh as a binary PLY with one colour per segment")
+    bl.add_argument("--picture", metavar="OUT.png", default=None,
+                    help="also render a picture, as segment does (the render extra)")
+    bl.add_argument("--html", metavar="OUT.html", default=None,
+                    help="also write an interactive page (open in a browser)")
+    add_camera_options(bl, "")  # --view, --up of --picture and --html
     bl.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     bl.set_defaults(func=cmd_baseline)
 
@@ -581,6 +586,7 @@ def cmd_baseline(args) -> int:
     seg_out = check_labels_output(args.output, args.mesh, records=True)
     ply_out = check_output(args.colored_mesh, (".ply", ".glb", ".obj"), "the coloured mesh",
                            inputs=(args.mesh,))
+    drawings = _baseline_drawings(args, seg_out, ply_out)
     data = read_usable(args.mesh, clouds=True)
     kind = _baseline_kind(args, data, method, ply_out)
     t0 = time.perf_counter()
@@ -601,7 +607,14 @@ def cmd_baseline(args) -> int:
         raise ParameterError(f"{args.mesh}: {exc}") from None
     elapsed = time.perf_counter() - t0
     labels = np.asarray(run.labels)
-    _write_baseline(args, data, kind, labels, seg_out, ply_out)
+    from ..io.orientation import default_view
+
+    up = up_of(args, data)
+    _write_baseline(args, data, kind, labels, (seg_out, ply_out, *drawings),
+                    dict(up=up[0], view=args.view if args.view is not None else
+                         default_view(data), title=f"{Path(args.mesh).name}: "
+                         f"{counted(int(np.unique(labels[labels >= 0]).size), 'segment')} "
+                         f"({method.name})"))
     if not args.quiet:
         shown = ", ".join(f"{k}={fmt_value(v)}" for k, v in params.items())
         iters = "" if run.n_iter is None else (
@@ -612,7 +625,9 @@ def cmd_baseline(args) -> int:
         print(f"{Path(args.mesh).name}: {size}, {method.name} ({shown}): "
               f"{counted(n_segs, 'segment')}{iters}, {elapsed:.2f} s", file=report)
         written = [f"{p} ({what})" for p, what in (
-            (seg_out, _labels_what(args, kind, data)), (ply_out, f"coloured {kind}"))
+            (seg_out, _labels_what(args, kind, data)), (ply_out, f"coloured {kind}"),
+            (drawings[0], f"picture, {said_up(up)}{_drawn_share(data, kind)}"),
+            (drawings[1], "page: open it in a browser"))
             if p is not None and str(p) != "-"]  # (as segment says what it wrote)
         if written:
             print("wrote " + ", ".join(written), file=report)
@@ -657,15 +672,39 @@ def _baseline_kind(args, data, method, ply_out) -> str:
     return kind
 
 
-def _write_baseline(args, data, kind, labels, seg_out, ply_out) -> None:
-    """A baseline's files, all or nothing: labels (a label file, or the input's records)
-    and a coloured mesh or cloud."""
+def _baseline_drawings(args, seg_out, ply_out) -> tuple:
+    """``--picture`` and ``--html`` of ``baseline``, checked before the run as segment
+    checks them (their paths, ``--view`` and ``--up`` without either, no two outputs on
+    one file, the drawing extra)."""
+    from .._runtime.extras import require
+    from ..errors import ParameterError
+
+    png_out = check_output(args.picture, (".png",), "the picture", inputs=(args.mesh,))
+    html_out = check_output(args.html, (".html", ".htm"), "the page", inputs=(args.mesh,))
+    for flag, given, what in (("--view", args.view is not None, "chooses the camera"),
+                              ("--up", args.up, "sets the up axis")):
+        if given and png_out is None and html_out is None:
+            raise ParameterError(f"{flag} {what} of --picture OUT.png and --html OUT.html; "
+                                 "give one of them")
+    named = [str(x) for x in (seg_out, ply_out, png_out, html_out) if x is not None]
+    if len(set(named)) < len(named):
+        raise ParameterError("two outputs go to the same file")
+    if png_out is not None:
+        require("pyvista", "drawing pictures")
+    return png_out, html_out
+
+
+def _write_baseline(args, data, kind, labels, outs: tuple, camera: dict) -> None:
+    """A baseline's files, all or nothing: labels (a label file, or the input's records),
+    a coloured mesh or cloud, a picture and a page (``outs``: their paths or None;
+    ``camera``: ``up``, ``view`` and ``title`` of the last two)."""
     from ..elements.builders import elements_of
     from ..io import write_colored_mesh, write_labels
     from ..io.export import write_colored_elements
     from ..io.files import Outputs
     from ..io.records import write_scan_labels
 
+    seg_out, ply_out, png_out, html_out = outs
     with Outputs() as outputs:  # all or nothing
         if seg_out is not None and _into_records(args.output, args.mesh):
             write_scan_labels(seg_out, args.mesh, labels, outputs=outputs,
@@ -676,6 +715,22 @@ def _write_baseline(args, data, kind, labels, seg_out, ply_out) -> None:
             write_colored_mesh(ply_out, data, labels, outputs=outputs)
         elif ply_out is not None:
             write_colored_elements(ply_out, elements_of(data, kind), labels, outputs=outputs)
+        _draw_baseline(data, kind, labels, (png_out, html_out), camera, outputs)
+
+
+def _draw_baseline(data, kind: str, labels, outs: tuple, camera: dict, outputs) -> None:
+    """A baseline's picture and page (``outs``), as segment draws a run's."""
+    png_out, html_out = outs
+    drawn = {} if kind_of(kind).cloud else {"elements": kind}  # faces or vertices
+    if html_out is not None:
+        from ..viz.html import write_html
+
+        write_html(html_out, data, labels, outputs=outputs, **camera, **drawn)
+    if png_out is not None:
+        from ..viz.render import render, render_points
+
+        draw = render_points if kind_of(kind).cloud else render
+        draw(data, labels, png_out, outputs=outputs, legend=True, **camera, **drawn)
 
 
 def cmd_demo(args) -> int:
