@@ -399,14 +399,15 @@ def size_legend(image: np.ndarray, labels, word: str = "superfacets",
     k = int(np.unique(lab[lab >= 0]).size)
     unit = max(10, min(w, h) // 45)  # the text's size in pixels
     font = ImageFont.load_default(size=unit)
-    lines = [f"{k:,} {word}",
+    lines = [f"{k:,} {word}",  # (narrow and tall: a centred drawing leaves its sides free)
              f"{elements} each: {s['size_min']:,} / {s['size_median']:,.0f} / "
-             f"{s['size_max']:,} (min / median / max)"]
+             f"{s['size_max']:,}", "(min / median / max)"]
     bar_w = max(6, unit)
-    caption = f"{word} by size (powers of 2)"
-    box_w = max(max(font.getlength(t) for t in lines),
-                hist.size * bar_w + unit + font.getlength(caption)) + 2 * unit
-    box_h = len(lines) * (unit + 4) + 7 * unit
+    caption = "by size (powers of 2)"
+    step = unit + 4  # (a line of text)
+    box_w = max(max(font.getlength(t) for t in [*lines, caption]), hist.size * bar_w) \
+        + 2 * unit
+    box_h = (len(lines) + 2) * step + 5 * unit
     x0, y0 = _legend_corner(image, int(box_w) + 1, box_h, unit)
     pic = Image.fromarray(image)
     draw = ImageDraw.Draw(pic)
@@ -415,7 +416,7 @@ def size_legend(image: np.ndarray, labels, word: str = "superfacets",
     y = y0 + unit
     for t in lines:
         draw.text((x0 + unit, y), t, fill=(0, 0, 0), font=font)
-        y += unit + 4
+        y += step
     base, tall = y + 4 * unit, 4 * unit - 4  # bars: segments per size, in powers of two
     top = hist.max()
     for i, c in enumerate(hist):
@@ -423,12 +424,11 @@ def size_legend(image: np.ndarray, labels, word: str = "superfacets",
             bh = max(1.0, tall * np.sqrt(c / top))
             draw.rectangle([x0 + unit + i * bar_w, base - bh,
                             x0 + unit + (i + 1) * bar_w - 2, base], fill=(60, 90, 160))
-    draw.text((x0 + 2 * unit + hist.size * bar_w, base - unit - 2), caption, fill=(0, 0, 0),
-              font=font)
     draw.text((x0 + unit, base + 2), "1", fill=(0, 0, 0), font=font)
     right = f"{2 ** hist.size:,}"
     draw.text((x0 + unit + hist.size * bar_w - font.getlength(right), base + 2), right,
               fill=(0, 0, 0), font=font)
+    draw.text((x0 + unit, base + 2 + step), caption, fill=(0, 0, 0), font=font)
     return np.asarray(pic)
 
 
