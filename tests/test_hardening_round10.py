@@ -122,3 +122,40 @@ def test_a_result_given_for_labels_is_named_with_what_to_pass(tmp_path):
                                                  r"labels \(result.labels\)"):
             write_labels(tmp_path / "l.seg", result)
         assert write_labels(tmp_path / "l.seg", result.labels).exists()
+
+
+def test_a_results_file_edited_by_hand_is_read_or_named_not_a_traceback(tmp_path, capsys):
+    # (`report` on a results file re-saved by a spreadsheet (a BOM), with a metric's column
+    # cut, or a word, 'ten', or 1e308 in a number's place: KeyError, ValueError tracebacks)
+    import csv
+
+    from superfacets.evaluation.report import load_results
+
+    row = dict(mesh="a", mesh_id="a", category="scan", method="superfacets", n_segments=10,
+               alpha=200.0, seed=0, status="ok", segments=10, iterations=3,
+               converged="true", seconds=0.1, undersegmentation_error=0.2, compactness=4.0,
+               boundary_recall=0.5, achievable_accuracy=0.9, n_ground_truths=1)
+
+    def write(name, rows, encoding="utf-8", keys=tuple(row)):
+        path = tmp_path / name
+        with path.open("w", newline="", encoding=encoding) as f:
+            w = csv.DictWriter(f, list(keys), extrasaction="ignore")
+            w.writeheader()
+            w.writerows(rows)
+        return path
+
+    spreadsheet = write("bom.csv", [row, dict(row, mesh="b", mesh_id="b")], "utf-8-sig")
+    assert len(load_results(spreadsheet)) == 2
+    cut = write("cut.csv", [row], keys=[k for k in row if k != "undersegmentation_error"])
+    assert load_results(cut)["undersegmentation_error"].isna().all()
+    assert main(["report", str(cut), "-o", str(tmp_path / "rep")]) == 0
+    assert "per_category_undersegmentation_error" in capsys.readouterr().out  # (not drawn)
+    for value, column in (("ten", "n_segments"), ("1e308", "undersegmentation_error"),
+                          ("abc", "compactness")):
+        bad = write(f"{column}.csv", [dict(row, **{column: value})])
+        assert main(["report", str(bad), "-o", str(tmp_path / "r2")]) == 2
+        assert f"has {column} = {value}, which no run records" in capsys.readouterr().err
+    (tmp_path / "semi.csv").write_text(spreadsheet.read_text(encoding="utf-8-sig")
+                                       .replace(",", ";"))
+    assert main(["report", str(tmp_path / "semi.csv"), "-o", str(tmp_path / "r3")]) == 2
+    assert "separated by ';'" in capsys.readouterr().err

@@ -95,7 +95,7 @@ def read_results(path) -> list[dict]:
         If the file has no header row with the runner's columns.
     """
     try:
-        text = Path(path).read_text(encoding="utf-8")
+        text = Path(path).read_text(encoding="utf-8-sig")  # (a BOM: saved by a spreadsheet)
     except UnicodeDecodeError:
         raise MeshFormatError(f"{path}: not a superfacets results file (not UTF-8 text)") \
             from None
@@ -111,8 +111,11 @@ def read_results(path) -> list[dict]:
                 r["segments"] = old
     if text.strip() and (not rows and "method" not in text.splitlines()[0]
                          or rows and not {"mesh", "method", "status"} <= set(rows[0])):
-        raise MeshFormatError(f"{path}: not a superfacets results file "
-                              f"(no mesh/method/status columns)")
+        head = text.splitlines()[0]
+        said = ("its fields are separated by ';' (a spreadsheet's export in some languages): "
+                "save it with commas" if head.count(";") > head.count(",") else
+                "no mesh/method/status columns")
+        raise MeshFormatError(f"{path}: not a superfacets results file ({said})")
     return rows
 
 

@@ -39,6 +39,14 @@ _GREEK = {"alpha": "α", "eta_convex": "η"}
 
 
 
+#: The columns a report draws: a word in one of them is a damaged file (elsewhere it reads
+#: as no value, as before: an input's id may be a name).
+DRAWN = ("n_segments", *METRICS, "oracle_miou")
+#: The largest magnitude of a number a run records (counts, seconds, metrics): beyond it
+#: (an infinity, 1e308) a results file is damaged, and no figure could draw it.
+MOST_RECORDED = 1e100
+
+
 def load_results(path, series: Sequence[str] | None = None):
     """Read a results file (or several) into a DataFrame.
 
@@ -87,13 +95,18 @@ def load_results(path, series: Sequence[str] | None = None):
     params = {m: sorted(METHODS[m].defaults) if m in METHODS else [] for m in df["method"].unique()}
     for c in ["mesh_id", "n_faces", "n_segments", "segments", "iterations", "seconds",
               "peak_mib", "n_ground_truths", "n_elements", "oracle_miou", *METRICS]:
-        if c in df:
-            df[c] = pd.to_numeric(df[c], errors="coerce")
-            inf = df.index[df[c].abs() == float("inf")]
-            if len(inf):  # no run records an infinity: a damaged file
-                i = inf[0]
+        if c not in df:  # (a file without the column, made or cut by hand: no values)
+            df[c] = float("nan")
+        else:
+            raw = df[c]
+            df[c] = pd.to_numeric(raw, errors="coerce")
+            text = raw.astype(str).str.strip().str.lower()
+            worded = df[c].isna() & raw.notna() & ~text.isin(["", "nan"])
+            bad = df.index[(df[c].abs() > MOST_RECORDED) | (worded & (c in DRAWN))]
+            if len(bad):  # no run records an infinity, 1e308 or a word drawn: damaged
+                i = bad[0]
                 raise MeshFormatError(f"{', '.join(map(str, paths))}: the row of mesh "
-                                      f"{df.at[i, 'mesh']!r} has {c} = {df.at[i, c]}, which "
+                                      f"{df.at[i, 'mesh']!r} has {c} = {raw[i]}, which "
                                       "no run records: a damaged results file?")
     if "converged" in df:
         df["converged"] = df["converged"].map({"true": True, "false": False})
