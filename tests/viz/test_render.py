@@ -291,14 +291,15 @@ def test_a_page_of_a_large_cloud_draws_an_even_share_of_its_points(tmp_path, mon
     text = page.read_text()
     meta = json.loads(re.search(r'id="meta"[^>]*>(.*?)</script>', text, re.S).group(1))
     assert meta["points"] == meta["nVertices"] == 5000 and meta["superfacets"] == 15
-    assert meta["info"]["drawn"] == "5,000 of 20,000 points (one in 4)"
+    assert meta["info"]["drawn"] == "5,000 of 20,000 points (an even share)"
     assert _decode(text, "vertices", "<f4").size == 3 * 5000
     img = _screenshot(page, tmp_path)  # (each point drawn four times as large: a surface)
     assert _foreground(img[200:280, 280:360]).mean() > 0.5, "the points are not drawn"
     np.save(tmp_path / "c.npy", pts)
     assert main(["html", str(tmp_path / "c.npy"), "-k", "15", "-o",
                  str(tmp_path / "c.html")]) == 0
-    assert "one point in 4 drawn" in capsys.readouterr().out
+    assert "5,000 of 20,000 points drawn: a page of all would not open" in \
+        capsys.readouterr().out
 
 
 def test_cli_segment_pictures_a_cloud(tmp_path):

@@ -264,7 +264,7 @@ def cmd_view(args) -> int:
 
 
 def cmd_html(args) -> int:
-    from ..viz.html import page_step, write_html
+    from ..viz.html import MAX_PAGE_POINTS, write_html
 
     out = check_output(args.output, (".html", ".htm"), "the page",
                        inputs=(args.mesh, args.labels))
@@ -279,8 +279,8 @@ def cmd_html(args) -> int:
         write_html(out, data, labels, title=args.title or Path(args.mesh).name, info=info,
                    background=args.background, view=view, up=up, **drawn)
     if not args.quiet:
-        step = page_step(len(labels)) if elements == "points" and labels is not None else 1
-        share = f"; one point in {step} drawn: a page of all would not open" if step > 1 \
-            else ""
+        n = data.n_points if elements == "points" else 0
+        share = (f"; {MAX_PAGE_POINTS:,} of {n:,} points drawn: a page of all would not open"
+                 if n > MAX_PAGE_POINTS else "")
         print(f"wrote {out} ({out.stat().st_size / 1e6:.1f} MB{share}): open it in a browser")
     return 0

@@ -27,14 +27,15 @@ from ...elements.builders import elements_of, is_cloud
 from ...elements.kinds import kind_of
 from ...elements.labels import check_labels, relabel_dense
 from ...errors import ParameterError
+from ...inputs.cloud import as_cloud
 from ...inputs.convert import as_mesh
 from ...io.colors import boundary_edges, superfacet_colors
 from ...io.export import point_colors
 from ...io.files import save
 from ..camera import view_frame
-from ..render import PointsFrame, faces_to_draw
+from ..render import PointsFrame, drawn_share, faces_to_draw
 
-__all__ = ["NotebookView", "write_html", "html_page", "page_step", "check_page_size",
+__all__ = ["NotebookView", "write_html", "html_page", "check_page_size",
            "MAX_PAGE_POINTS", "MAX_PAGE_TRIANGLES"]
 
 
@@ -155,36 +156,11 @@ def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None 
 
 
 #: Points a page draws at most (about 18 bytes each in the page): a larger cloud is drawn
-#: from an even share of its points (every ``s``-th in its Z-order, :func:`page_step`). At
-#: 10M points a page of every point was 173 MB; past about 30M one is longer than the
-#: longest string a browser's script engine holds, and does not open.
+#: from an even random share of its points (:func:`~superfacets.viz.render.drawn_share`,
+#: taken before its point graph is built). At 10M points a page of every point was 173 MB;
+#: past about 30M one is longer than the longest string a browser's script engine holds,
+#: and does not open.
 MAX_PAGE_POINTS = 2_000_000
-
-
-def page_step(n_points: int) -> int:
-    """``s``: a page of a cloud of ``n_points`` draws every ``s``-th point (1: all).
-
-    Parameters
-    ----------
-    n_points : int
-        The cloud's points (its distinct positions).
-
-    Returns
-    -------
-    int
-        ``ceil(n_points / MAX_PAGE_POINTS)``, at least 1.
-
-    Raises
-    ------
-    TypeError
-        If ``n_points`` is not a number.
-
-    Examples
-    --------
-    >>> page_step(500_000), page_step(10_000_000)
-    (1, 5)
-    """
-    return max(1, -(-int(n_points) // MAX_PAGE_POINTS))
 
 
 #: Triangles a page of a mesh draws at most: their vertex indices are one base64 element
@@ -228,26 +204,27 @@ def _points_page(cloud, labels, *, title, info, background, view, up) -> str:
     """The viewer page of a point cloud: points coloured by superpoint (invalid ones left
     out; past :data:`MAX_PAGE_POINTS`, an even share of them, said on the page)."""
 
+    whole = as_cloud(cloud)
+    if labels is not None:
+        labels = check_labels(labels, whole.n_total, per="point")
+    n_sp = 0 if labels is None else int(np.unique(labels[labels >= 0]).size)
+    cloud, labels, n_drawn = drawn_share(whole, labels, MAX_PAGE_POINTS)
     source = elements_of(cloud, "points")
     g = source.graph
     rgb = point_colors(source, labels)
-    n_sp = 0 if labels is None else int(np.unique(np.asarray(labels)[np.asarray(labels) >= 0])
-                                        .size)
-    step = page_step(g.n_elements)  # (the elements are in Z-order: an even share of them)
-    rgb = rgb[::step]
     palette, color_index = np.unique(rgb, axis=0, return_inverse=True)
     index_dtype = np.uint8 if palette.shape[0] <= 256 else np.uint16
     v = g.positions
     center = (v.min(axis=0) + v.max(axis=0)) / 2
     scale = float(np.linalg.norm(v - center, axis=1).max()) or 1.0
-    v = ((v[::step] - center) / scale).astype("<f4")
+    v = ((v - center) / scale).astype("<f4")
     d, upv = view_frame(PointsFrame(g), view, up=up)
     rot = np.stack([np.cross(upv, d), upv, d])
     name = title or getattr(source.source, "name", "") or "point cloud"
-    spacing = float(np.sqrt(np.percentile(g.sizes, 90) * step)) / scale
+    spacing = float(np.sqrt(np.percentile(g.sizes, 90))) / scale
     info = {str(k): str(v_) for k, v_ in (info or {}).items()}
-    if step > 1:
-        info["drawn"] = f"{v.shape[0]:,} of {g.n_elements:,} points (one in {step})"
+    if n_drawn < whole.n_points:
+        info["drawn"] = f"{n_drawn:,} of {whole.n_points:,} points (an even share)"
     meta = {"name": name, "points": int(v.shape[0]), "faces": 0, "superfacets": n_sp,
             "info": info,
             "palette": palette.astype(int).tolist(), "indexBytes": np.dtype(index_dtype).itemsize,
@@ -302,7 +279,7 @@ def write_html(path, mesh, labels=None, *, title: str | None = None, info: dict 
     Size is about 32 bytes of base64 per face (a 1M-face mesh gives a
     ~35 MB page); the browser builds flat-shaded triangles from it. A point cloud takes
     about 18 bytes a point, and one of more than :data:`MAX_PAGE_POINTS` points is drawn
-    from an even share of them (every ``s``-th, :func:`page_step`), as the page says.
+    from an even random share of them, as the page says.
 
     Examples
     --------
