@@ -318,6 +318,28 @@ def check_output(path: str | None, suffixes: tuple[str, ...], what: str,
     return out
 
 
+def check_drawings(args, others: tuple = ()) -> tuple:
+    """``--picture OUT.png`` and ``--html OUT.html`` of a command, checked before its run:
+    their paths, ``--view`` and ``--up`` without either, no two outputs on one file (with
+    the run's ``others``), the drawing extra; each a path or None."""
+    from .._runtime.extras import require
+    from ..errors import ParameterError
+
+    png_out = check_output(args.picture, (".png",), "the picture", inputs=(args.mesh,))
+    html_out = check_output(args.html, (".html", ".htm"), "the page", inputs=(args.mesh,))
+    for flag, given, what in (("--view", args.view is not None, "chooses the camera"),
+                              ("--up", args.up, "sets the up axis")):
+        if given and png_out is None and html_out is None:
+            raise ParameterError(f"{flag} {what} of --picture OUT.png and --html OUT.html; "
+                                 "give one of them")
+    named = [str(x) for x in (*others, png_out, html_out) if x is not None]
+    if len(set(named)) < len(named):
+        raise ParameterError("two outputs go to the same file")
+    if png_out is not None:
+        require("pyvista", "drawing pictures")  # (before the run, not after it)
+    return png_out, html_out
+
+
 #: Data files ``-o`` does not write, by suffix: a name of one is refused, not given text.
 CONTAINERS = {"npz": "NumPy's archive", "h5": "HDF5", "hdf5": "HDF5", "hdf": "HDF5",
               "pt": "PyTorch", "pth": "PyTorch", "pkl": "pickle", "pickle": "pickle",

@@ -19,6 +19,7 @@ from .options import (
     add_method_options,
     add_scan_options,
     add_unit_options,
+    check_drawings,
     check_header_option,
     check_labels_output,
     check_output,
@@ -387,24 +388,14 @@ def _checked_outputs(args) -> dict:
         raise ParameterError("--vertex-colors goes with --colored-mesh OUT.ply")
     check_header_option(args.header, seg_out, args.mesh)
     _check_levels(args)
-    png_out = check_output(args.picture, (".png",), "the picture", inputs=(args.mesh,))
-    html_out = check_output(args.html, (".html", ".htm"), "the page", inputs=(args.mesh,))
     graph_out = check_output(args.graph, (".npz",), "the graph", inputs=(args.mesh,))
     if args.levels and graph_out is None:
         raise ParameterError("--levels goes with --graph OUT.npz (the hierarchy is written there)")
     if args.level_cost is not None and not args.levels:
         raise ParameterError("--level-cost is the merge cost of --levels; give both")
-    for flag, given, what in (("--view", args.view is not None, "chooses the camera"),
-                              ("--up", args.up, "sets the up axis")):
-        if given and png_out is None and html_out is None:
-            raise ParameterError(f"{flag} {what} of --picture OUT.png and --html OUT.html; "
-                                 "give one of them")
+    png_out, html_out = check_drawings(args, (seg_out, ply_out, graph_out))
     if graph_out is not None and args.per_object:
         raise ParameterError("--graph is of one segmentation; not with --per-object")
-    named = [str(x) for x in (seg_out, ply_out, png_out, html_out, graph_out)
-             if x is not None]
-    if len(set(named)) < len(named):
-        raise ParameterError("two outputs go to the same file")
     return dict(labels=seg_out, colored=ply_out, picture=png_out, html=html_out,
                 graph=graph_out)
 
@@ -586,7 +577,7 @@ def cmd_baseline(args) -> int:
     seg_out = check_labels_output(args.output, args.mesh, records=True)
     ply_out = check_output(args.colored_mesh, (".ply", ".glb", ".obj"), "the coloured mesh",
                            inputs=(args.mesh,))
-    drawings = _baseline_drawings(args, seg_out, ply_out)
+    drawings = check_drawings(args, (seg_out, ply_out))
     data = read_usable(args.mesh, clouds=True)
     kind = _baseline_kind(args, data, method, ply_out)
     t0 = time.perf_counter()
@@ -670,28 +661,6 @@ def _baseline_kind(args, data, method, ply_out) -> str:
     if kind != "faces" and ply_out is not None and not ply_out.name.lower().endswith(".ply"):
         raise ParameterError(f"{ply_out}: coloured {kind} are written as .ply")
     return kind
-
-
-def _baseline_drawings(args, seg_out, ply_out) -> tuple:
-    """``--picture`` and ``--html`` of ``baseline``, checked before the run as segment
-    checks them (their paths, ``--view`` and ``--up`` without either, no two outputs on
-    one file, the drawing extra)."""
-    from .._runtime.extras import require
-    from ..errors import ParameterError
-
-    png_out = check_output(args.picture, (".png",), "the picture", inputs=(args.mesh,))
-    html_out = check_output(args.html, (".html", ".htm"), "the page", inputs=(args.mesh,))
-    for flag, given, what in (("--view", args.view is not None, "chooses the camera"),
-                              ("--up", args.up, "sets the up axis")):
-        if given and png_out is None and html_out is None:
-            raise ParameterError(f"{flag} {what} of --picture OUT.png and --html OUT.html; "
-                                 "give one of them")
-    named = [str(x) for x in (seg_out, ply_out, png_out, html_out) if x is not None]
-    if len(set(named)) < len(named):
-        raise ParameterError("two outputs go to the same file")
-    if png_out is not None:
-        require("pyvista", "drawing pictures")
-    return png_out, html_out
 
 
 def _write_baseline(args, data, kind, labels, outs: tuple, camera: dict) -> None:

@@ -11,6 +11,7 @@ from ..elements.kinds import kind_of
 from .notes import fields_said, merges_said, weights_said
 from .options import (
     add_engine_options,
+    check_drawings,
     check_labels_output,
     element_kwargs,
     method_kwargs,
@@ -75,7 +76,9 @@ def segment_tiles(args) -> int:
     from ..scale.tiles.run import segment_tiled
 
     _refuse_one_run_options(args)
-    drawings = _check_drawings(args)
+    drawings = check_drawings(args, (args.output,))
+    if drawings[1] is not None:
+        _check_page(args.mesh)
     seg_out = check_labels_output(args.output, args.mesh, records=True)
     for flag, given in (("--seed-resolution", args.seed_resolution),
                         ("--neighbor-distance", args.neighbor_distance)):
@@ -170,31 +173,6 @@ def _refuse_one_run_options(args) -> None:
     if args.header:  # (its lines record one run's passes and time)
         raise ParameterError("--header records one run's parameters and passes; a tiled run "
                              "writes the labels alone (its summary says the rest)")
-
-
-def _check_drawings(args) -> tuple:
-    """``--picture OUT.png`` and ``--html OUT.html`` of a tiled run, checked before the run
-    (their paths, ``--view`` and ``--up`` without either, the drawing extra), each a path
-    or None."""
-    from .._runtime.extras import require
-    from ..errors import ParameterError
-    from .options import check_output
-
-    png_out = check_output(args.picture, (".png",), "the picture", inputs=(args.mesh,))
-    html_out = check_output(args.html, (".html", ".htm"), "the page", inputs=(args.mesh,))
-    for flag, given, what in (("--view", args.view is not None, "chooses the camera"),
-                              ("--up", args.up, "sets the up axis")):
-        if given and png_out is None and html_out is None:
-            raise ParameterError(f"{flag} {what} of --picture OUT.png and --html OUT.html; "
-                                 "give one of them")
-    named = [str(x) for x in (args.output, png_out, html_out) if x is not None]
-    if len(set(named)) < len(named):
-        raise ParameterError("two outputs go to the same file")
-    if png_out is not None:
-        require("pyvista", "drawing pictures")  # (before the run, not after it)
-    if html_out is not None:
-        _check_page(args.mesh)
-    return png_out, html_out
 
 
 def _check_page(path) -> None:
