@@ -1,3 +1,4 @@
+import json
 import os
 import re
 import sys
@@ -247,6 +248,17 @@ def test_evaluate_reads_a_ground_truth_field_of_the_input(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "  class " not in out and "1,831 classes: each one's IoU with --json" in out
     assert "has 1,831 classes for 2,000 points: is it a field of labels?" in out
+    # a ground-truth file after an option is still a ground truth (argparse left it over)
+    assert main(["evaluate", str(tmp_path / "scan.las"), str(sp), "--ground-truth-field",
+                 "classification", str(sp), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["ground_truths"] == 2
+    for args, said in ((["evaluate", str(sp), "--json", str(sp), "--csv2"],
+                        "--csv2: did you mean --csv?"),
+                       (["render", str(sp), str(sp), "-o", str(tmp_path / "x.png")],
+                        "unrecognized arguments: " + str(sp))):
+        with pytest.raises(SystemExit):  # (refused, as before)
+            main([args[0], str(tmp_path / "scan.las"), *args[1:]])
+        assert said in capsys.readouterr().err
     # a ground-truth file given to the option (its abbreviation --ground-truth reads so)
     gt_file = "after the labels: superfacets evaluate INPUT LABELS " + str(sp)
     for args, msg in ((["--ground-truth-field", "klass"], "no field 'klass'; it has: "),

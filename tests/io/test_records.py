@@ -669,3 +669,107 @@ def test_a_new_file_of_a_cloud_keeps_its_other_values(tmp_path, capsys):
     assert {"intensity", "ring", "ClusterID"} <= set(head), head
     got = np.loadtxt(asc, comments="//")
     assert np.allclose(got[:, head.index("ring")], ring)
+
+
+def _nested(fine: np.ndarray, coarse: np.ndarray) -> bool:
+    """Whether every segment of ``fine`` lies in one segment of ``coarse`` (-1 with -1)."""
+    pairs = np.unique(np.c_[fine, coarse], axis=0)
+    return len(pairs) == len(np.unique(fine)) and ((pairs[:, 0] < 0) == (pairs[:, 1] < 0)).all()
+
+
+@pytest.mark.parametrize("name", ["out.laz", "out.las"])
+def test_levels_go_into_the_las_after_the_labels_and_evaluate_reads_each(tmp_path, capsys,
+                                                                         name):
+    src, out, graph = _laz(tmp_path / "tile.laz"), tmp_path / name, tmp_path / "g.npz"
+    assert main(["segment", str(src), "-k", "12", "--levels", "3,6", "-o", str(out)]) == 0
+    assert "labels as ClusterID, levels as ClusterID_6, ClusterID_3" in capsys.readouterr().out
+    assert main(["segment", str(src), "-k", "12", "--levels", "6,3", "--graph", str(graph),
+                 "-q"]) == 0
+    las, a = laspy.read(str(out)), laspy.read(str(src))
+    assert list(las.point_format.dimension_names) == list(a.point_format.dimension_names) + [
+        "ClusterID", "ClusterID_6", "ClusterID_3"]
+    saved = np.load(graph)
+    fields = [np.asarray(las[n]) for n in ("ClusterID", "ClusterID_6", "ClusterID_3")]
+    for got, want, count in zip(fields, ("labels", "labels_0", "labels_1"), (12, 6, 3)):
+        assert got.dtype == np.int32 and np.array_equal(got, saved[want])  # (the same run's)
+        assert len(np.unique(got)) == count
+    assert _nested(fields[0], fields[1]) and _nested(fields[1], fields[2])
+    assert main(["evaluate", str(out), "--labels-from", "ClusterID_6", "--ground-truth-field",
+                 "classification", "--json"]) == 0
+    import json
+
+    scores = json.loads(capsys.readouterr().out)
+    assert scores["segments"] == 6 and scores["labels"] == "ClusterID_6"
+    assert scores["ground_truths"] == 1 and 0 <= scores["undersegmentation_error"] < 0.2
+    truth = tmp_path / "truth.seg"  # (with --labels-from, every file named is a truth)
+    np.savetxt(truth, fields[2], fmt="%d")
+    assert main(["evaluate", str(out), "--labels-from", "ClusterID_3", str(truth)]) == 0
+    said = capsys.readouterr().out
+    assert "3 superpoints, 1 ground truth" in said and "undersegmentation_error 0.0000" in said
+
+
+def test_levels_without_a_file_that_holds_them_are_refused_before_the_run(tmp_path, capsys):
+    src = _laz(tmp_path / "tile.laz")
+    out = tmp_path / "out.seg"
+    assert main(["segment", str(src), "-k", "12", "--levels", "6", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "--graph OUT.npz" in err and "ClusterID_N" in err and not out.exists()
+    assert main(["segment", str(src), "-k", "12", "--levels", "13", "-o",
+                 str(tmp_path / "o.laz")]) == 2  # (a level above k: nothing written)
+    assert "levels must lie in" in capsys.readouterr().err
+    assert not (tmp_path / "o.laz").exists() and [p.name for p in tmp_path.iterdir()] == [
+        "tile.laz", ]
+    assert main(["evaluate", str(src)]) == 2
+    assert "LABELS (a file) or --labels-from FIELD" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("encoding", ["ascii", "binary_compressed"])
+def test_levels_go_into_pcd_records_and_a_new_scan(tmp_path, capsys, encoding):
+    pytest.importorskip("pypcd4")
+    src = _pcd(tmp_path / "frame.pcd", encoding)
+    out = tmp_path / "out.pcd"
+    assert main(["segment", str(src), "-k", "8", "--levels", "4,2", "-o", str(out), "-q"]) == 0
+    head = _pcd_head(out)
+    assert next(ln for ln in head if ln.startswith(b"FIELDS")).split()[-3:] == [
+        b"ClusterID", b"ClusterID_4", b"ClusterID_2"]
+    got = read_input_fields(out)
+    invalid = got["ClusterID"] < 0
+    assert invalid.sum() == 40  # (the frame's holes: -1 at every level)
+    for fine, coarse, count in (("ClusterID", "ClusterID_4", 4),
+                                ("ClusterID_4", "ClusterID_2", 2)):
+        assert (got[coarse][invalid] == -1).all() and _nested(got[fine], got[coarse])
+        assert len(np.unique(got[coarse][~invalid])) == count
+    _, cloud, _, _ = _sweep_with_holes(tmp_path)  # a text cloud: a new file, levels in it
+    for new in (tmp_path / "new.laz", tmp_path / "new.ply"):
+        assert main(["segment", str(cloud), "-k", "9", "--levels", "3", "-o", str(new)]) == 0
+        said = capsys.readouterr().out
+        assert ("levels as scalar_ClusterID_3" if new.suffix == ".ply" else
+                "levels as ClusterID_3") in said
+        fields = read_input_fields(new)
+        assert list(fields)[-2:] == ["ClusterID", "ClusterID_3"]
+        assert _nested(fields["ClusterID"], fields["ClusterID_3"])
+        assert len(np.unique(fields["ClusterID_3"])) == 3
+
+
+def test_levels_of_a_ply_open_in_cloudcompare_and_a_second_run_replaces_them(tmp_path,
+                                                                             capsys):
+    _, cloud, _, _ = _sweep_with_holes(tmp_path)
+    first, again = tmp_path / "a.ply", tmp_path / "b.ply"
+    assert main(["segment", str(cloud), "-k", "9", "--levels", "4", "-o", str(first),
+                 "-q"]) == 0
+    assert main(["segment", str(first), "-k", "12", "--levels", "4,2", "-o", str(again),
+                 "-q"]) == 0
+    assert "warning: a.ply has a field scalar_ClusterID_4" in capsys.readouterr().err
+    fields = read_input_fields(again)
+    assert list(fields)[-3:] == ["ClusterID", "ClusterID_4", "ClusterID_2"]
+    assert len(np.unique(fields["ClusterID"])) == 12 and _nested(fields["ClusterID"],
+                                                                 fields["ClusterID_4"])
+    if shutil.which("CloudCompare") is None:
+        pytest.skip("CloudCompare not found: install Debian's 'cloudcompare' package (make "
+                    "test does, as root)")
+    asc = tmp_path / "b.asc"
+    _cloudcompare(tmp_path, again, "ASC", asc)
+    head = asc.read_text().splitlines()[0].lstrip("/").split()
+    got = np.loadtxt(asc, comments="//")
+    for name in ("ClusterID", "ClusterID_4", "ClusterID_2"):  # CloudCompare's scalar fields
+        assert np.array_equal(got[:, head.index(name)].astype(int), fields[name]), name

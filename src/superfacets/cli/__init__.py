@@ -115,6 +115,23 @@ def _scene_folder(args) -> None:
         args.mesh = str(Path(given) / "coord.npy")
 
 
+def _late_files(parser, args, extra: list) -> None:
+    """Files named after an option (``evaluate scan.laz --labels-from ClusterID gt.seg``),
+    which argparse leaves over once its optional positionals matched nothing: into the
+    command's ``late_files`` (its optional LABELS first where empty, then its list);
+    anything else left over is refused as ``parse_args`` refuses it."""
+    slots = getattr(args, "late_files", None)
+    if extra and slots and not any(e.startswith("-") and e != "-" for e in extra):
+        first, rest = slots
+        if getattr(args, first) is None:
+            setattr(args, first, extra[0])
+            extra = extra[1:]
+        setattr(args, rest, [*getattr(args, rest), *extra])
+        extra = []
+    if extra:
+        parser.error(f"unrecognized arguments: {' '.join(extra)}")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``superfacets`` console script.
 
@@ -142,7 +159,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         parser = build_parser()
         parser.argv = list(sys.argv[1:] if argv is None else argv)  # for its error hints
-        args = parser.parse_args(_axis_values(parser.argv))
+        args, extra = parser.parse_known_args(_axis_values(parser.argv))
+        _late_files(parser, args, extra)
         _scene_folder(args)
         code = args.func(args)
         if getattr(restore, "state", {}).get("terminated"):  # a SIGTERM the run went on

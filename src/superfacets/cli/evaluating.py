@@ -31,12 +31,19 @@ def add_parsers(sub) -> None:
                     "over the given ground-truth segmentations: area-weighted on the faces of "
                     "a mesh; each element counted once on its vertices (--elements vertices) "
                     "or the points of a cloud (a labelled scan). With no ground truth, the "
-                    "compactness and the segments' sizes alone.")
+                    "compactness and the segments' sizes alone. The labels are a file "
+                    "(LABELS) or a field of the input (--labels-from FIELD); with the "
+                    "latter, every file named after INPUT is a ground truth.")
     e.add_argument("mesh", metavar="INPUT", help="the mesh or point-cloud file")
-    e.add_argument("labels", metavar="LABELS",
+    e.add_argument("labels", metavar="LABELS", nargs="?", default=None,
                    help="labels, one per face (vertex, point) in file order: a .seg file, a "
                         "segIndices .json, or a PLY, PCD or LAS/LAZ written by 'segment -o' "
                         "(its ClusterID)")
+    e.add_argument("--labels-from", metavar="FIELD", default=None,
+                   help="instead of LABELS, the labels in a field of the input itself: a "
+                        "LAS/LAZ dimension, a PLY vertex property (scalar_NAME found as NAME), "
+                        "a PCD field or a field of NPY records (ClusterID, or a level's "
+                        "ClusterID_N, as 'segment --levels ... -o OUT.laz' writes them)")
     e.add_argument("ground_truths", metavar="GT.seg", nargs="*",
                    help="ground truths of the same input (none: the shapes alone), one per "
                         "face (vertex, "
@@ -64,7 +71,7 @@ def add_parsers(sub) -> None:
                                           "metrics) for scripts")
     fmt.add_argument("--csv", dest="format", action="store_const", const="csv",
                      help="print a CSV header line and one row, for scripts and spreadsheets")
-    e.set_defaults(func=cmd_evaluate)
+    e.set_defaults(func=cmd_evaluate, late_files=("labels", "ground_truths"))
 
 
 def cmd_evaluate(args) -> int:
@@ -88,11 +95,13 @@ def cmd_evaluate(args) -> int:
     refuse_neighbours(args.neighbors, None, kind)
     n = kind_of(kind).n_rows(data)
     long = shows_stages(args, n)
+    if args.labels_from is not None and args.labels is not None:  # (all ground truths)
+        args.ground_truths, args.labels = [args.labels, *args.ground_truths], None
     with waiting_bar(f"reading the labels of {n:,} {kind}", long):
-        labels = _counted(read_labels(args.labels), args.labels, args, data, kind)
+        labels, said = _labels_of(args, data, kind)
         gts = [_counted(read_labels(p), p, args, data, kind) for p in args.ground_truths]
     if labels.size and (labels < 0).all():  # (the oracle mIoU said "no labelled element")
-        raise ParameterError(f"{args.labels}: every label is below 0 (unassigned, as DBSCAN's "
+        raise ParameterError(f"{said}: every label is below 0 (unassigned, as DBSCAN's "
                              "noise): no segment to measure")
     if args.ground_truth_field is not None:
         from ..io.labels import read_field
@@ -179,6 +188,22 @@ METRICS = ("undersegmentation_error", "compactness", "boundary_recall", "boundar
            "achievable_accuracy", "oracle_miou")
 
 
+def _labels_of(args, data, kind: str):
+    """The labels judged, from LABELS or ``--labels-from FIELD``, and what names them."""
+    from ..errors import ParameterError
+    from ..io import read_labels
+    from ..io.labels import read_field
+
+    field = args.labels_from
+    if field is None and args.labels is None:
+        raise ParameterError("give the labels: LABELS (a file) or --labels-from FIELD (a field "
+                             "of the input, as ClusterID)")
+    if field is None:
+        return _counted(read_labels(args.labels), args.labels, args, data, kind), args.labels
+    said = f"{Path(args.mesh).name}: {field}"
+    return _counted(read_field(args.mesh, field), said, args, data, kind), said
+
+
 def _counted(labels, path, args, data, kind: str):
     """``labels`` read from ``path``, refused in words where they are not one per element
     of ``kind`` (naming the input, and ``--elements vertices`` where they are one per
@@ -212,7 +237,8 @@ def _print_table(args, kind: str, n: int, n_truths: int, m: dict) -> None:
     import json
     import sys
 
-    row = {"input": Path(args.mesh).name, "labels": Path(args.labels).name,
+    judged = Path(args.labels).name if args.labels else args.labels_from
+    row = {"input": Path(args.mesh).name, "labels": judged,
            "elements": kind, "n_elements": int(n), "segments": int(m["segments"]),
            "ground_truths": int(n_truths), "tau": float(args.tau),
            **{k: None if m[k] is None else float(m[k]) for k in METRICS},

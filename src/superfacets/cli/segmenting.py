@@ -100,9 +100,11 @@ def _add_segment(sub) -> None:
                           "feature (mean colour), labels (numpy .npz)")
     levels = p.add_argument_group("levels (coarser, nested segmentations)")
     levels.add_argument("--levels", type=levels_arg, default=None, metavar="N1,N2,...",
-                        help="with --graph: also a nested hierarchy of coarser levels of N1, "
-                             "N2, ... segments, each connected (parent_<i> and labels_<i> in "
-                             "the .npz)")
+                        help="also a nested hierarchy of coarser levels of N1, N2, ... "
+                             "segments, each connected: with --graph, parent_<i> and "
+                             "labels_<i> in the .npz; with -o of the scan's records "
+                             "(.las/.laz, .ply, .pcd), each level a field ClusterID_N after "
+                             "the labels")
     add_adaptive_options(levels)
     levels.add_argument("--level-cost", choices=("ward", "planarity"), default=None,
                         help="the levels' merge cost: ward (compact segments, the default) "
@@ -389,8 +391,10 @@ def _checked_outputs(args) -> dict:
     check_header_option(args.header, seg_out, args.mesh)
     _check_levels(args)
     graph_out = check_output(args.graph, (".npz",), "the graph", inputs=(args.mesh,))
-    if args.levels and graph_out is None:
-        raise ParameterError("--levels goes with --graph OUT.npz (the hierarchy is written there)")
+    if args.levels and graph_out is None and not _into_records(seg_out, args.mesh):
+        raise ParameterError("--levels goes with --graph OUT.npz (the hierarchy is written "
+                             "there) or -o of the scan's own records (.las/.laz, .ply, .pcd: "
+                             "each level a field ClusterID_N after the labels)")
     if args.level_cost is not None and not args.levels:
         raise ParameterError("--level-cost is the merge cost of --levels; give both")
     png_out, html_out = check_drawings(args, (seg_out, ply_out, graph_out))
@@ -519,14 +523,26 @@ def _writing_bar(args, data, outputs):
 def _labels_what(args, kind: str, data=None) -> str:
     """What ``-o`` holds, said in the summary: labels, or the input's records with them (a
     new file's: with the values of the input ``data`` kept, named)."""
-    from ..io.records import LABEL_FIELD, copc_said, kept_fields, ply_field_name, scan_output
+    from ..io.records import (
+        LABEL_FIELD,
+        copc_said,
+        kept_fields,
+        level_field,
+        ply_field_name,
+        scan_output,
+    )
 
     into = scan_output(args.output, args.mesh)
     if into is None:
         return "labels"
     rows = "vertices" if kind == "vertices" else "points"
-    field = (LABEL_FIELD if not str(args.output).lower().endswith(".ply") else
-             f"{ply_field_name(LABEL_FIELD)}, CloudCompare's scalar field {LABEL_FIELD}")
+    ply = str(args.output).lower().endswith(".ply")
+    field = (f"{ply_field_name(LABEL_FIELD)}, CloudCompare's scalar field {LABEL_FIELD}"
+             if ply else LABEL_FIELD)
+    if getattr(args, "levels", None):
+        field += ", levels as " + ", ".join(
+            (ply_field_name if ply else str)(level_field(n))
+            for n in sorted(set(args.levels), reverse=True))
     if into == "new":
         kept = kept_fields(args.output, data) if data is not None else []
         return f"a new file of the input's {rows}{fields_said(kept)}, labels as {field}"

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import io
 import re
+import tempfile
 import warnings
 from pathlib import Path
 
@@ -42,10 +43,36 @@ from .headers import check_las, first_line, pcd_problem
 
 __all__ = ["LABEL_FIELD", "RECORD_FORMATS", "write_labels_into", "ply_field_name",
            "records_kind", "write_cloud_with_labels", "converts", "CONVERTED_FORMATS", "copc_said",
-           "scan_output", "write_scan_labels", "kept_fields"]
+           "scan_output", "write_scan_labels", "kept_fields", "level_field"]
 
 #: The dimension (LAS/LAZ) or scalar field (PLY, as ``scalar_ClusterID``) the labels go in.
 LABEL_FIELD = "ClusterID"
+
+
+def level_field(n_segments: int) -> str:
+    """The field a hierarchy's level of ``n_segments`` segments is written in beside the
+    labels (``segment --levels 100,30 -o OUT.laz``): ``ClusterID_<n>``.
+
+    Parameters
+    ----------
+    n_segments : int
+        The level's number of segments (exact: :func:`superfacets.graph.hierarchy.
+        hierarchy`).
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    Never.
+
+    Examples
+    --------
+    >>> level_field(100)
+    'ClusterID_100'
+    """
+    return f"{LABEL_FIELD}_{int(n_segments)}"
 
 #: Output formats that take the labels into the input's records, by input format.
 RECORD_FORMATS = {"las": ("las", "laz"), "laz": ("las", "laz"), "ply": ("ply",),
@@ -176,7 +203,7 @@ def scan_output(output, source) -> str | None:
     return "new" if converts(output, source) else None
 
 
-def write_scan_labels(path, source, labels, *, cloud=None,
+def write_scan_labels(path, source, labels, *, cloud=None, levels=None,
                       outputs: Outputs | None = None) -> Path:
     """The labels into a copy of the input's own records (:func:`write_labels_into`), or,
     for a cloud whose file takes no field, into a new LAS/LAZ or PLY file of its points
@@ -190,6 +217,9 @@ def write_scan_labels(path, source, labels, *, cloud=None,
         One label per record (point, vertex), ``-1`` for an invalid point.
     cloud : PointCloud, optional
         The input as read (else read again here, for a new file).
+    levels : mapping of str to (N,) int ndarray, optional
+        More fields after the labels, each a name and one label per record (a
+        hierarchy's levels, named by :func:`level_field`), in this order.
     outputs : Outputs, optional
         Stage the file there.
 
@@ -200,7 +230,8 @@ def write_scan_labels(path, source, labels, *, cloud=None,
     Raises
     ------
     ParameterError
-        If ``path`` is neither (a label file's name), or as the two writers.
+        If ``path`` is neither (a label file's name), or as the two writers (for each
+        field).
 
     Examples
     --------
@@ -213,6 +244,8 @@ def write_scan_labels(path, source, labels, *, cloud=None,
     [0, 0, 1, 1, 2, 2]
     """
     what = scan_output(path, source)
+    if what == "records" and levels:
+        return _into_with_levels(Path(path), Path(source), labels, dict(levels), outputs)
     if what == "records":
         return write_labels_into(path, source, labels, outputs=outputs)
     if what is None:
@@ -221,10 +254,32 @@ def write_scan_labels(path, source, labels, *, cloud=None,
         from .clouds import read_cloud
 
         cloud = read_cloud(source)
-    return write_cloud_with_labels(path, cloud, labels, outputs=outputs)
+    return write_cloud_with_labels(path, cloud, labels, levels=levels, outputs=outputs)
 
 
-def write_cloud_with_labels(path, cloud, labels, *, name: str = LABEL_FIELD,
+def _into_with_levels(path: Path, source: Path, labels, levels: dict,
+                      outputs: Outputs | None) -> Path:
+    """The labels and then each of ``levels`` written into a copy of the records of
+    ``source``, one field after the other, through uncompressed copies in a folder beside
+    ``path`` (removed after), each named as the input (what a warning names)."""
+    fmt = records_kind(path, source)
+    in_fmt, in_comp = split_suffix(source)
+    stem = source.name[:len(source.name) - len(f".{in_fmt}{in_comp or ''}")]
+    fields = [(LABEL_FIELD, labels), *levels.items()]
+    with tempfile.TemporaryDirectory(prefix=".superfacets-", dir=path.parent) as folder:
+        step = source
+        for i, (name, values) in enumerate(fields):
+            last = i == len(fields) - 1
+            target = path if last else Path(folder) / str(i) / f"{stem}.{fmt}"
+            if not last:
+                target.parent.mkdir()
+            write_labels_into(target, step, values, name=name,
+                              outputs=outputs if last else None)
+            step = target
+    return path
+
+
+def write_cloud_with_labels(path, cloud, labels, *, name: str = LABEL_FIELD, levels=None,
                             outputs: Outputs | None = None) -> Path:
     """Write a new LAS/LAZ or PLY file of a cloud's points with ``labels`` as a field.
 
@@ -260,6 +315,9 @@ def write_cloud_with_labels(path, cloud, labels, *, name: str = LABEL_FIELD,
         One label per point, ``-1`` for an invalid point.
     name : str, default ``'ClusterID'``
         The field's name (PDAL's).
+    levels : mapping of str to (N,) int ndarray, optional
+        More label fields, each a name and one label per point (a hierarchy's levels,
+        named by :func:`level_field`), written as the labels are (``int32``).
     outputs : Outputs, optional
         Stage the file there (all or nothing with the run's other files).
 
@@ -302,11 +360,20 @@ def write_cloud_with_labels(path, cloud, labels, *, name: str = LABEL_FIELD,
         raise ParameterError(f"a LAS dimension's name holds at most 32 characters: {name!r}")
     colors = getattr(cloud, "colors", None)
     fields = dict(getattr(cloud, "fields", None) or {})
+    after = {}  # (each level after the labels, as in the input's records)
+    for level, values in (levels or {}).items():
+        if fmt != "ply" and len(level) > 32:
+            raise ParameterError(f"a LAS dimension's name holds at most 32 characters: "
+                                 f"{level!r}")
+        after[ply_field_name(level) if fmt == "ply" else level] = _checked_labels(
+            values, points.shape[0])
+        fields.pop(level, None)  # (an earlier run's level, read as the cloud's field)
     if fmt == "ply":
         content = _new_ply(points, labels, ply_name, colors, getattr(cloud, "normals", None),
-                           fields)
+                           fields, after)
     else:
-        content = _new_las(points, labels, name, colors, compress=fmt == "laz", fields=fields)
+        content = _new_las(points, labels, name, colors, compress=fmt == "laz", fields=fields,
+                           after=after)
     return save(path, content, outputs)
 
 
@@ -342,8 +409,9 @@ def _las_scale(extent: float) -> float:
 
 
 def _new_las(points: np.ndarray, labels: np.ndarray, name: str, colors, compress: bool,
-             fields: dict | None = None) -> bytes:
-    """A new LAS/LAZ file's bytes (:func:`write_cloud_with_labels`)."""
+             fields: dict | None = None, after: dict | None = None) -> bytes:
+    """A new LAS/LAZ file's bytes (:func:`write_cloud_with_labels`; ``after``: more
+    ``int32`` label dimensions after ``name``)."""
     laspy = extras.require("laspy", "writing LAS/LAZ files")
     valid = np.isfinite(points).all(axis=1)
     lo = points[valid].min(axis=0) if valid.any() else np.zeros(3)
@@ -354,9 +422,12 @@ def _new_las(points: np.ndarray, labels: np.ndarray, name: str, colors, compress
     scale = _las_scale(float(np.max(hi - offset)))
     header = laspy.LasHeader(point_format=7 if colors is not None else 6, version="1.4")
     header.offsets, header.scales = offset, np.full(3, scale)
-    header.add_extra_dim(laspy.ExtraBytesParams(name=name, type=np.int32,
-                                                description="superfacets label"))
-    standard, extra, _ = _las_fields(header.point_format, fields or {}, name)
+    after = after or {}
+    for dim in (name, *after):
+        header.add_extra_dim(laspy.ExtraBytesParams(name=dim, type=np.int32,
+                                                    description="superfacets label"))
+    standard, extra, _ = _las_fields(header.point_format, {
+        k: v for k, v in (fields or {}).items() if k not in after}, name)
     for field_name, values in extra.items():
         header.add_extra_dim(laspy.ExtraBytesParams(name=field_name, type=values.dtype))
     las = laspy.LasData(header, laspy.ScaleAwarePointRecord.zeros(points.shape[0],
@@ -372,6 +443,8 @@ def _new_las(points: np.ndarray, labels: np.ndarray, name: str, colors, compress
                        * 65535).astype(np.uint16)
         las.red, las.green, las.blue = rgb[:, 0], rgb[:, 1], rgb[:, 2]
     las[name] = labels
+    for dim, values in after.items():
+        las[dim] = values
     buf = io.BytesIO()
     kw = {"laz_backend": laspy.LazBackend.LazrsParallel} if compress else {}
     las.write(buf, do_compress=compress, **kw)
@@ -514,19 +587,21 @@ def _ply_fields(fields: dict, taken: set) -> dict:
 
 
 def _new_ply(points: np.ndarray, labels: np.ndarray, prop: str, colors, normals,
-             fields: dict | None = None) -> bytes:
-    """A new binary PLY file's bytes (:func:`write_cloud_with_labels`)."""
+             fields: dict | None = None, after: dict | None = None) -> bytes:
+    """A new binary PLY file's bytes (:func:`write_cloud_with_labels`; ``after``: more
+    ``int32`` label properties after ``prop``)."""
     from plyfile import PlyData, PlyElement
 
+    after = after or {}
     columns = [("x", "<f8"), ("y", "<f8"), ("z", "<f8")]
     if normals is not None:
         columns += [("nx", "<f4"), ("ny", "<f4"), ("nz", "<f4")]
     if colors is not None:
         columns += [("red", "u1"), ("green", "u1"), ("blue", "u1")]
-    kept = _ply_fields(fields or {}, {c for c, _ in columns} | {prop})
+    kept = _ply_fields(fields or {}, {c for c, _ in columns} | {prop, *after})
     data = np.empty(points.shape[0], dtype=columns + [(p, a.dtype.newbyteorder("<"))
                                                       for p, a in kept.items()]
-                    + [(prop, "<i4")])
+                    + [(prop, "<i4")] + [(p, "<i4") for p in after])
     for p, a in kept.items():
         data[p] = a
     for i, c in enumerate("xyz"):
@@ -540,6 +615,8 @@ def _new_ply(points: np.ndarray, labels: np.ndarray, prop: str, colors, normals,
         for i, c in enumerate(("red", "green", "blue")):
             data[c] = rgb[:, i]
     data[prop] = labels
+    for p, a in after.items():
+        data[p] = a
     buf = io.BytesIO()
     PlyData([PlyElement.describe(data, "vertex")], comments=["made by superfacets"]).write(buf)
     return buf.getvalue()

@@ -14,7 +14,7 @@ from ..elements.kinds import kind_of
 from ..io.export import write_colored_elements, write_colored_mesh
 from ..io.files import Outputs
 from ..io.labels import write_labels, write_segindices
-from ..io.records import scan_output, write_cloud_with_labels, write_scan_labels
+from ..io.records import level_field, scan_output, write_cloud_with_labels, write_scan_labels
 from .html import write_html
 from .render import render, render_points
 
@@ -122,7 +122,9 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
         ``levels``, also the hierarchy (``levels``, ``parent_<i>``) and the
         per-row labels of each level (``labels_<i>``).
     levels : sequence of int, optional
-        Numbers of segments of the hierarchy's levels.
+        Numbers of segments of the hierarchy's levels: written in ``graph``, and where
+        ``labels`` holds the scan's records (or a new file of them), each level as a field
+        after the labels (``ClusterID_<n>``, :func:`superfacets.io.records.level_field`).
     level_cost : {'ward', 'planarity'}, default 'ward'
         The hierarchy's merge cost (:func:`superfacets.graph.hierarchy.hierarchy`).
     extent_weight : float, optional
@@ -143,6 +145,10 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
         If a level is out of range (before anything is written).
     """
 
+    into = "new" if new_scan and labels is not None else \
+        None if source_path is None else scan_output(labels, source_path)
+    h = result.hierarchy(levels, cost=level_cost, extent_weight=extent_weight) if levels \
+        and (graph is not None or into is not None) else None
     arrays = None
     if graph is not None:  # (PyTorch Geometric's layout, and the nodes' own arrays)
         sg = result.graph()
@@ -150,20 +156,21 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
         arrays = {**{k: v for k, v in sg.arrays().items() if k in ("area", "centroid",
                                                                   "normal", "feature")},
                   **learn, "labels": result.labels}
-        if levels:
-            h = result.hierarchy(levels, cost=level_cost, extent_weight=extent_weight)
+        if h is not None:
             arrays.update(h.arrays())
             for i in range(len(h.levels)):
                 arrays[f"labels_{i}"] = h.labels(i, result.labels)
+    fields = {} if h is None or into is None else {
+        level_field(n): h.labels(i, result.labels) for i, n in enumerate(h.levels)}
     with Outputs() as outputs:
         if arrays is not None:
             outputs.write(graph, lambda fh: np.savez_compressed(fh, **arrays))
-        into = "new" if new_scan and labels is not None else \
-            None if source_path is None else scan_output(labels, source_path)
         if into == "new":  # a new file of a cloud's points
-            write_cloud_with_labels(labels, data, result.labels, outputs=outputs)
+            write_cloud_with_labels(labels, data, result.labels, levels=fields,
+                                    outputs=outputs)
         elif into is not None:  # the input's records
-            write_scan_labels(labels, source_path, result.labels, outputs=outputs)
+            write_scan_labels(labels, source_path, result.labels, levels=fields,
+                              outputs=outputs)
         elif labels is not None and str(labels).lower().endswith(".json"):
             write_segindices(labels, result.labels, result.params,
                              scene_id=source.split(".")[0], outputs=outputs)
