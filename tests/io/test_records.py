@@ -218,7 +218,7 @@ def test_a_batch_writes_each_scan_s_own_records(tmp_path, capsys, sphere):
     assert len(np.unique(read_labels(out / "ball.seg"))) == 9  # a mesh: its label file
 
 
-def test_a_batch_writes_a_laz_for_every_cloud(tmp_path, sphere):
+def test_a_batch_writes_a_laz_for_every_cloud(tmp_path, sphere, capsys):
     # (--labels records leaves a cloud whose file takes no field a .seg: --labels laz gives
     # every cloud a LAZ, as PDAL and QGIS read them)
     from superfacets import write_mesh
@@ -244,6 +244,34 @@ def test_a_batch_writes_a_laz_for_every_cloud(tmp_path, sphere):
     assert np.abs(np.c_[new.x, new.y, new.z] - xyz).max() < 1e-6
     assert len(np.unique(np.asarray(new.ClusterID))) == 9
     assert len(np.unique(read_labels(out / "ball.seg"))) == 9  # a mesh: its label file
+    levels = tmp_path / "levels"  # each cloud's level beside its labels; the mesh's alone
+    assert main(["batch", str(folder), "-o", str(levels), "-k", "9", "--labels", "laz",
+                 "--levels", "4", "--workers", "1", "-q"]) == 0
+    for name in ("a.laz", "cloud.laz", "depth.laz", "frame.laz"):
+        las = laspy.read(str(levels / name))
+        fine, coarse = np.asarray(las.ClusterID), np.asarray(las.ClusterID_4)
+        assert np.array_equal(fine, np.asarray(laspy.read(str(out / name)).ClusterID)), name
+        assert _nested(fine, coarse) and len(np.unique(coarse[coarse >= 0])) == 4, name
+    assert np.array_equal(read_labels(levels / "ball.seg"), read_labels(out / "ball.seg"))
+    for args, said in ((["--labels", "seg", "--levels", "4"], "labels='records' or 'laz'"),
+                       (["--labels", "laz", "--levels", "10"], "coarser than the n_segments")):
+        assert main(["batch", str(folder), "-o", str(tmp_path / "no"), "-k", "9", *args,
+                     "-q"]) == 2
+        assert said in capsys.readouterr().err and not (tmp_path / "no").exists()
+    levels = tmp_path / "levels"  # each cloud's level beside its labels; the mesh's alone
+    assert main(["batch", str(folder), "-o", str(levels), "-k", "9", "--labels", "laz",
+                 "--levels", "4", "--workers", "1", "-q"]) == 0
+    for name in ("a.laz", "cloud.laz", "depth.laz", "frame.laz"):
+        las = laspy.read(str(levels / name))
+        fine, coarse = np.asarray(las.ClusterID), np.asarray(las.ClusterID_4)
+        assert np.array_equal(fine, np.asarray(laspy.read(str(out / name)).ClusterID)), name
+        assert _nested(fine, coarse) and len(np.unique(coarse[coarse >= 0])) == 4, name
+    assert np.array_equal(read_labels(levels / "ball.seg"), read_labels(out / "ball.seg"))
+    for args, said in ((["--labels", "seg", "--levels", "4"], "labels='records' or 'laz'"),
+                       (["--labels", "laz", "--levels", "10"], "coarser than the n_segments")):
+        assert main(["batch", str(folder), "-o", str(tmp_path / "no"), "-k", "9", *args,
+                     "-q"]) == 2
+        assert said in capsys.readouterr().err and not (tmp_path / "no").exists()
 
 
 def _pcd(path, encoding: str, *, seed=0, label=None):
@@ -715,8 +743,8 @@ def test_levels_without_a_file_that_holds_them_are_refused_before_the_run(tmp_pa
     err = capsys.readouterr().err
     assert "--graph OUT.npz" in err and "ClusterID_N" in err and not out.exists()
     assert main(["segment", str(src), "-k", "12", "--levels", "13", "-o",
-                 str(tmp_path / "o.laz")]) == 2  # (a level above k: nothing written)
-    assert "levels must lie in" in capsys.readouterr().err
+                 str(tmp_path / "o.laz")]) == 2  # (a level above k: refused before the run)
+    assert "--levels are coarser than the -k 12 segments" in capsys.readouterr().err
     assert not (tmp_path / "o.laz").exists() and [p.name for p in tmp_path.iterdir()] == [
         "tile.laz", ]
     assert main(["evaluate", str(src)]) == 2

@@ -11,6 +11,7 @@ from .options import (
     add_engine_options,
     add_method_options,
     element_kwargs,
+    levels_arg,
     method_kwargs,
 )
 
@@ -69,6 +70,9 @@ def add_parsers(sub) -> None:
     add_engine_options(b, sees="its workers read the inputs and write OUTDIR, so both "
                                 "must be on a shared filesystem")
     add_adaptive_options(b, levels=False)
+    b.add_argument("--levels", type=levels_arg, default=None, metavar="N1,N2,...",
+                   help="with --labels records or laz: each cloud's coarser, nested levels of "
+                        "N1, N2, ... segments, each a field ClusterID_N after the labels")
     b.add_argument("--memory-limit", default="auto", metavar="SIZE",
                    help="memory of each local worker, e.g. 4GiB; a worker going over is "
                         "restarted and its input fails after Dask's retries (default: auto, "
@@ -92,7 +96,7 @@ def cmd_batch(args) -> int:
                   vertex_colors=args.vertex_colors, picture=args.picture, html=args.html,
                   up=args.up, view=args.view,
                   per_object=args.per_object, adaptive=args.adaptive,
-                  extent_weight=args.extent_weight,
+                  extent_weight=args.extent_weight, levels=args.levels,
                   workers=args.workers, scheduler=args.scheduler,
                   memory_limit=args.memory_limit, retry_failed=args.retry_failed,
                   progress=not args.quiet and (sys.stderr.isatty() if args.progress is None

@@ -395,6 +395,9 @@ def _checked_outputs(args) -> dict:
         raise ParameterError("--levels goes with --graph OUT.npz (the hierarchy is written "
                              "there) or -o of the scan's own records (.las/.laz, .ply, .pcd: "
                              "each level a field ClusterID_N after the labels)")
+    if args.levels and args.n_segments is not None and max(args.levels) > args.n_segments:
+        raise ParameterError(f"--levels are coarser than the -k {args.n_segments} segments: "
+                             f"at most {args.n_segments} each, got {max(args.levels)}")
     if args.level_cost is not None and not args.levels:
         raise ParameterError("--level-cost is the merge cost of --levels; give both")
     png_out, html_out = check_drawings(args, (seg_out, ply_out, graph_out))

@@ -182,10 +182,9 @@ def hierarchy(graph, levels, *, alpha: float = ALPHA, eta_convex: float = ETA_CO
     wanted = sorted({check_int("levels", v, lo=1) for v in wanted}, reverse=True)
     fewest = pieces(graph)
     if wanted[0] > k or wanted[-1] < fewest:
-        raise ParameterError(f"levels must lie in [{fewest}, {k}]: {k} superfacets in "
-                             f"{counted(fewest, 'connected piece')}, and segments stay "
-                             "connected; "
-                             f"got {', '.join(map(str, wanted))}")
+        raise ParameterError(f"levels must lie in [{fewest}, {k}]: the {k} segments they "
+                             f"merge make {counted(fewest, 'connected piece')}, and segments "
+                             f"stay connected; got {', '.join(map(str, wanted))}")
     if beta > 0 and graph.feature is None:
         raise ParameterError("beta > 0 needs the superfacets' features (graph.feature)")
     roots = native.kernel("hierarchy.merge_levels")(

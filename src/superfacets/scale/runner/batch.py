@@ -184,7 +184,7 @@ def _segment_and_write(task: dict, label_rel: str) -> dict:
                                                                   "neighbor_radius")
                                              if k in opts},
                  up=outs.get("up") or up_axis(data, task["input"])[0],
-                 view=outs.get("view") or default_view(data))
+                 view=outs.get("view") or default_view(data), levels=outs.get("levels"))
     return {"elements": kind, "n_elements": int(n), "segments": int(result.n_segments),
             "passes": int(result.n_iter), "converged": bool(result.converged)}
 
@@ -249,7 +249,7 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
               colored_mesh: str | None = None, vertex_colors: bool = False,
               picture: bool = False, html: bool = False, up=None, view=None,
               per_object: bool = False, adaptive: int | None = None,
-              extent_weight: float | None = None,
+              extent_weight: float | None = None, levels: Sequence[int] | None = None,
               workers: int | None = None, scheduler: str | None = None,
               memory_limit="auto", retry_failed: bool = False, progress: bool = True,
               n_threads: int = 1, dask: bool | None = None, **options) -> BatchSummary:
@@ -291,6 +291,12 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         ``per_object``).
     extent_weight : float, optional
         Their ``extent_weight`` (default: left to the method).
+    levels : sequence of int, optional
+        With ``labels='records'`` or ``'laz'``: each cloud's coarser levels of these
+        numbers of segments, each a field after the labels (``ClusterID_<n>``,
+        :func:`superfacets.io.records.level_field`); a mesh's ``.seg`` holds its labels
+        alone. An input whose superpoints cannot make a level (fewer than it asks, or more
+        connected pieces) fails with the reason.
     workers : int, optional
         Local worker processes (default: one per core); 1 runs in this process.
     scheduler : str, optional
@@ -361,6 +367,11 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
             raise ParameterError("extent_weight (--extent-weight) goes with adaptive "
                                  "(--adaptive)")
         extent_weight = check_nonneg("extent_weight", extent_weight)
+    levels = _checked_levels(levels, labels, per_object)
+    if levels and n_segments is not None and levels[0] > n_segments:
+        raise ParameterError(f"levels (--levels) are coarser than the n_segments (-k) "
+                             f"{n_segments} segments: at most {n_segments} each, got "
+                             f"{levels[0]}")
     if workers is not None:
         check_int("workers", workers, lo=1)
     memory_limit = check_memory_limit(memory_limit)  # (before any input is looked at)
@@ -384,6 +395,8 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
                "picture": bool(picture), "html": bool(html), "vertex_colors": bool(vertex_colors)}
     if picture or html:  # recorded only where drawn (folders of earlier runs resume)
         outputs.update(up=up, view=list(view) if isinstance(view, (tuple, list)) else view)
+    if levels:  # (likewise)
+        outputs["levels"] = levels
     recorded = {"segment": _jsonable({k: v for k, v in resolved.items()  # defaults filled
                                       if k not in ("n_threads", "progress")}),
                 "outputs": outputs, "per_object": bool(per_object)}
@@ -405,6 +418,29 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
     summary.skipped = skipped
     summary.passed = passed
     return summary
+
+
+def _checked_levels(levels, labels: str, per_object: bool) -> list | None:
+    """``levels`` as distinct positive integers, largest first, where the label files take
+    them (a cloud's own records), else refused in words; None where not given."""
+    if levels is None:
+        return None
+    try:
+        wanted = list(levels)
+    except TypeError:
+        raise ParameterError(f"levels (--levels) is a list of numbers of segments, got "
+                             f"{levels!r}") from None
+    wanted = sorted({check_int("levels", v, lo=1) for v in wanted}, reverse=True)
+    if not wanted:
+        raise ParameterError("levels (--levels) names no number of segments")
+    if labels not in ("records", "laz"):
+        raise ParameterError(f"levels (--levels) go into each cloud's own file, a field "
+                             f"ClusterID_N each: labels='records' or 'laz' (--labels records "
+                             f"or laz), not {labels!r}")
+    if per_object:
+        raise ParameterError("levels (--levels) are of one segmentation: not with per_object "
+                             "(--per-object)")
+    return wanted
 
 
 def _done(row, retry_failed: bool) -> bool:
