@@ -198,6 +198,20 @@ def test_a_tiled_run_writes_the_labels_into_the_laz_too(tmp_path, capsys):
     for dim in a.point_format.dimension_names:
         assert np.array_equal(np.asarray(a[dim]), np.asarray(b[dim])), dim
     assert len(np.unique(np.asarray(b.ClusterID))) == 20
+    levels = tmp_path / "levels.laz"  # (its levels from the tiles' sums, as fields)
+    assert main(["segment", str(src), "--tiles", "2", "--workers", "1", "-k", "20",
+                 "--levels", "8,3", "-o", str(levels)]) == 0
+    assert "labels as ClusterID, levels as ClusterID_8, ClusterID_3" in capsys.readouterr().out
+    c = laspy.read(levels)
+    fine, mid, top = (np.asarray(c[n]) for n in ("ClusterID", "ClusterID_8", "ClusterID_3"))
+    assert np.array_equal(fine, np.asarray(b.ClusterID))  # (the same run's labels)
+    assert _nested(fine, mid) and _nested(mid, top)
+    assert (len(np.unique(mid)), len(np.unique(top))) == (8, 3)
+    for args, said in ((["--levels", "8", "-o", str(tmp_path / "l.seg")], "ClusterID_N"),
+                       (["--level-cost", "planarity"], "give --levels too"),
+                       (["--levels", "8", "--graph", str(tmp_path / "g.npz")], "--graph")):
+        assert main(["segment", str(src), "--tiles", "2", "-k", "20", *args]) == 2
+        assert said in capsys.readouterr().err
 
 
 def test_a_batch_writes_each_scan_s_own_records(tmp_path, capsys, sphere):

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
+import trimesh
 from tiled import _bumpy
 
-from superfacets import segment
+from superfacets import ParameterError, segment
 from superfacets.elements.faces import face_graph
 from superfacets.method.params import resolve
 from superfacets.scale.tiles.run import segment_tiled
@@ -40,3 +42,69 @@ def test_a_tiled_mesh_with_merge_from_1_keeps_its_tiles_own_superfacets():
     plain = segment_tiled(mesh, 60, tiles=4)
     assert res.params["merged_from"] is None and res.n_segments <= 60
     assert plain.n_segments == 60 and plain.params["merged_from"] >= 60
+
+
+def _one_runs_levels(graph_of, labels, levels, cost):
+    """The hierarchy one run makes of ``labels`` on its element graph (``graph_of``: the
+    graph and each row's element)."""
+    from superfacets.graph.adjacency import superfacet_graph
+    from superfacets.graph.hierarchy import hierarchy, planarity_graph
+
+    graph, element = graph_of
+    per = np.full(graph.n_elements, -1)
+    per[element] = labels
+    sg = (superfacet_graph if cost == "ward" else planarity_graph)(graph, per)
+    return hierarchy(sg, levels, cost=cost)
+
+
+def test_a_tiled_runs_levels_are_one_runs_hierarchy_of_its_labels(tmp_path):
+    """The levels merged from the tiles' sums are those one run's hierarchy makes of the
+    same labels, parent for parent: a cloud (its normals in the file, so that each tile's
+    graph is the whole cloud's over its core) by both costs, and a mesh."""
+    from plyfile import PlyData, PlyElement
+
+    from superfacets import PointCloud
+    from superfacets.elements.points import point_graph
+    from superfacets.evaluation.datasets.sampling import sample_points
+
+    mesh = _bumpy(4)
+    pts, face = sample_points(mesh, 12000, seed=2)
+    normals = trimesh.Trimesh(mesh.vertices, mesh.faces).face_normals[face]
+    v = np.empty(len(pts), dtype=[(c, "f8") for c in ("x", "y", "z", "nx", "ny", "nz")])
+    for i, c in enumerate(("x", "y", "z", "nx", "ny", "nz")):
+        v[c] = np.c_[pts, normals][:, i]
+    path = tmp_path / "cloud.ply"
+    PlyData([PlyElement.describe(v, "vertex")]).write(str(path))
+    built = point_graph(PointCloud(pts, normals=normals))
+    for tiles, cost in ((1, "ward"), (3, "ward"), (3, "planarity")):
+        r = segment_tiled(str(path), 120, tiles=tiles, workers=1, levels=[40, 8],
+                          level_cost=cost, extent_weight=0.0 if cost == "planarity" else None)
+        assert r.hierarchy.levels == (40, 8)
+        want = _one_runs_levels((built.graph, built.index), r.labels, [40, 8], cost)
+        for got, expect in zip(r.hierarchy.parents, want.parents):
+            np.testing.assert_array_equal(got, expect)
+        top = r.hierarchy.labels(1, r.labels)
+        assert len(np.unique(top)) == 8
+    r = segment_tiled((mesh.vertices, mesh.faces), 60, tiles=3, workers=1, levels=20)
+    want = _one_runs_levels((face_graph(mesh), np.arange(mesh.n_faces)), r.labels, [20],
+                            "ward")
+    np.testing.assert_array_equal(r.hierarchy.parents[0], want.parents[0])
+    assert segment_tiled((mesh.vertices, mesh.faces), 60, tiles=2, workers=1).hierarchy is None
+
+
+def test_a_tiled_runs_level_options_are_refused_in_words(monkeypatch):
+    import superfacets.scale.tiles.run as run
+
+    mesh = _bumpy(3)
+    for kw, said in ((dict(levels=[61]), "coarser than the n_segments 60"),
+                     (dict(levels=[10], level_cost="flat"), "level_cost must be"),
+                     (dict(levels=[10], extent_weight=0.1), "a term of level_cost="),
+                     (dict(level_cost="planarity"), "give levels too"),
+                     (dict(levels="ten"), "levels")):
+        with pytest.raises(ParameterError, match=said):  # (before the survey)
+            monkeypatch.setattr(run, "_surveyed", None)
+            segment_tiled((mesh.vertices, mesh.faces), 60, tiles=2, workers=1, **kw)
+    monkeypatch.undo()
+    with pytest.raises(ParameterError, match="mesh's levels merge by Ward's cost"):
+        segment_tiled((mesh.vertices, mesh.faces), 60, tiles=2, workers=1, levels=[10],
+                      level_cost="planarity")

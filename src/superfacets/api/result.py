@@ -425,7 +425,7 @@ class TiledResult:
         :func:`~superfacets.scale.tiles.phases.sample_start`), ``centers`` (each tile's, where
         no sample start gave them),
         ``refine``, ``labels``, ``stitch``, ``connect`` (only with disagreements),
-        ``total``.
+        ``merges``, ``levels`` (with ``levels``), ``total``.
     params : dict
         The run's parameters, resolved.
     area : float
@@ -438,6 +438,10 @@ class TiledResult:
         :data:`~superfacets.elements.density.AUTO_SPREAD` one run sizes its superpoints by
         the density (``density=None``), which a tiled run does not; NaN where not read (a
         mesh, or a cloud sized by ``radius``).
+    hierarchy : Hierarchy or None
+        The coarser levels asked for (``segment_tiled(levels=...)``), over these ``K``
+        superfacets: ``hierarchy.labels(i, result.labels)`` are level ``i``'s labels per
+        row (:func:`~superfacets.scale.tiles.merges.tiled_hierarchy`); None without.
 
     Examples
     --------
@@ -461,6 +465,7 @@ class TiledResult:
     layout: object = field(default=None, repr=False)
     area: float = math.nan
     size_spread: float = math.nan
+    hierarchy: object = None
 
     @property
     def n_segments(self) -> int:

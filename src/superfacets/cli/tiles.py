@@ -72,7 +72,7 @@ def add_tile_options(p) -> None:
 def segment_tiles(args) -> int:
     """``segment --tiles``: labels of a large input, written as ``-o`` says."""
     from .._runtime import interrupts
-    from ..errors import ParameterError, SuperfacetsError
+    from ..errors import SuperfacetsError
     from ..scale.tiles.run import segment_tiled
 
     _refuse_one_run_options(args)
@@ -80,11 +80,6 @@ def segment_tiles(args) -> int:
     if drawings[1] is not None:
         _check_page(args.mesh)
     seg_out = check_labels_output(args.output, args.mesh, records=True)
-    for flag, given in (("--seed-resolution", args.seed_resolution),
-                        ("--neighbor-distance", args.neighbor_distance)):
-        if given is not None:
-            raise ParameterError(f"{flag} measures the whole input; with --tiles give -k "
-                                 "and --neighbor-radius")
     kwargs = dict(method_kwargs(args), **element_kwargs(args))
     kwargs.pop("progress", None)
     t0 = time.perf_counter()
@@ -93,7 +88,9 @@ def segment_tiles(args) -> int:
                                halo=args.halo, workers=args.workers, scheduler=args.scheduler,
                                refine=1 if args.refine is None else args.refine,
                                start=args.tile_start or "sample",
-                               workdir=args.workdir,
+                               workdir=args.workdir, levels=args.levels,
+                               level_cost=args.level_cost or "ward",
+                               extent_weight=args.extent_weight,
                                progress=not args.quiet and sys.stderr.isatty(), **kwargs)
     except SuperfacetsError as exc:
         raise named_after(args.mesh, exc) from None
@@ -134,13 +131,16 @@ def segment_tiles(args) -> int:
                   f"the {kind}, about that many times one run's work: fewer tiles, or more "
                   f"{kind} per {kind_of(kind).segment_word[:-1]}, cost less", file=sys.stderr)
         if seg_out is not None and str(seg_out) != "-":
-            from ..io.records import LABEL_FIELD, copc_said, scan_output
+            from ..io.records import LABEL_FIELD, copc_said, level_field, scan_output
 
             into = scan_output(seg_out, args.mesh)
+            levels = "" if result.hierarchy is None else ", levels as " + ", ".join(
+                map(level_field, result.hierarchy.levels))
             what = (f"labels, one per {kind[:-1]}" if into is None else
-                    f"the input's {kind}, every field kept, labels as {LABEL_FIELD}"
+                    f"the input's {kind}, every field kept, labels as {LABEL_FIELD}{levels}"
                     f"{copc_said(args.mesh)}" if into == "records" else
-                    f"a new file of the input's {kind}{kept}, labels as {LABEL_FIELD}")
+                    f"a new file of the input's {kind}{kept}, labels as {LABEL_FIELD}"
+                    f"{levels}")
             print(f"wrote {seg_out} ({what})", file=report)
         elif seg_out is None and drawings == (None, None):
             print("note: nothing was saved: add -o OUT.seg", file=sys.stderr)
@@ -162,14 +162,26 @@ def _refuse_one_run_options(args) -> None:
     from ..errors import ParameterError
 
     for flag, given in (("--colored-mesh", args.colored_mesh), ("--graph", args.graph),
-                        ("--per-object", args.per_object), ("--levels", args.levels),
-                        ("--level-cost", args.level_cost),
-                        ("--extent-weight", args.extent_weight is not None)):
+                        ("--per-object", args.per_object)):
         if given:
             raise ParameterError(f"{flag} needs the whole input in one process; not with "
                                  "--tiles (write -o OUT.seg, then view a part)")
+    from ..io.records import scan_output
+
+    if args.levels and scan_output(args.output, args.mesh) is None:
+        raise ParameterError("--levels of a tiled run go into -o of the scan's own records "
+                             "(.las/.laz, .ply, .pcd): each level a field ClusterID_N after "
+                             "the labels")
+    if (args.level_cost is not None or args.extent_weight is not None) and not args.levels:
+        raise ParameterError("--level-cost and --extent-weight are the options of --levels; "
+                             "give --levels too")
     if getattr(args, "elements", None) == "vertices":
         raise ParameterError("--tiles segments faces or points, not vertices")
+    for flag, given in (("--seed-resolution", args.seed_resolution),
+                        ("--neighbor-distance", args.neighbor_distance)):
+        if given is not None:
+            raise ParameterError(f"{flag} measures the whole input; with --tiles give -k "
+                                 "and --neighbor-radius")
     if args.header:  # (its lines record one run's passes and time)
         raise ParameterError("--header records one run's parameters and passes; a tiled run "
                              "writes the labels alone (its summary says the rest)")
@@ -284,7 +296,7 @@ def _write_labels(seg_out, source, result) -> str:
     from ..io.clouds import read_cloud
     from ..io.files import Outputs
     from ..io.labels import write_labels, write_segindices
-    from ..io.records import kept_fields, scan_output, write_scan_labels
+    from ..io.records import kept_fields, level_field, scan_output, write_scan_labels
 
     kept = []
     with Outputs() as outputs:
@@ -293,7 +305,10 @@ def _write_labels(seg_out, source, result) -> str:
             if into is not None:  # (a new file: the input read once more)
                 cloud = read_cloud(source) if into == "new" else None
                 kept = [] if cloud is None else kept_fields(seg_out, cloud)
-                write_scan_labels(seg_out, source, result.labels, cloud=cloud,
+                h = result.hierarchy
+                levels = {} if h is None else {level_field(n): h.labels(i, result.labels)
+                                               for i, n in enumerate(h.levels)}
+                write_scan_labels(seg_out, source, result.labels, cloud=cloud, levels=levels,
                                   outputs=outputs)
             elif str(seg_out).lower().endswith(".json"):
                 write_segindices(seg_out, result.labels, result.params, outputs=outputs)

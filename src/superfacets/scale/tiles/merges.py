@@ -41,12 +41,20 @@ from ...elements.kinds import kind_of
 from ...elements.labels import check_labels
 from ...errors import ParameterError
 from ...graph.adjacency import crossing_adjacencies
-from ...graph.sums import PAIR_FIELDS, border_sums, grouped_planes, pair_sums, point_sums
+from ...graph.hierarchy import Hierarchy, hierarchy
+from ...graph.sums import (
+    PAIR_FIELDS,
+    border_sums,
+    grouped_graph,
+    grouped_planes,
+    pair_sums,
+    point_sums,
+)
 from ...method.merges import FLAT_NOISE, merge_nodes, neighbourhood_noise, noise_of
 from ...method.rules import merge_from_of
 
 __all__ = ["tile_merge_stats", "merge_names", "one_position_stats", "tiled_merge_from",
-           "merged_labels"]
+           "merged_labels", "tiled_hierarchy"]
 
 
 def tile_merge_stats(graph, labels: np.ndarray, names: np.ndarray, core: np.ndarray,
@@ -292,6 +300,29 @@ def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float,
     ([3, 3, 8, 8], 2)
     """
 
+    names, node, nodes, pairs = _summed(stats, labels)
+    k = names.size
+    noise = np.concatenate([s["noise"] for s in stats])
+    max_jump = None
+    if noise.size and stats and all("feature_sum" in s for s in stats):  # colour on
+        nodes["feature_sum"] = _sum(node, stats, "feature_sum", k)
+        nodes["feature_squares"] = _sum(node, stats, "feature_squares", k)
+        max_jump = float(np.median([s["floor"] for s in stats]))
+    # (no noise read, as on a mesh: Ward's merges only)
+    rise = FLAT_NOISE * noise_of(noise) if noise.size else None
+    flat, final, fewest = merge_nodes(nodes, pairs, target, rise, alpha, eta_convex,
+                                      max_jump=max_jump, max_ratio=max_ratio, cost=cost)
+    n_flat = int(flat.max()) + 1 if k else 0
+    lowest = np.full(int(final.max()) + 1 if k else 0, k, dtype=np.int64)
+    np.minimum.at(lowest, final, np.arange(k))
+    return names, names[lowest[final]], n_flat, fewest if k else 0
+
+
+def _summed(stats: list[dict], labels: np.ndarray | None) -> tuple:
+    """The tiles' sums added per superpoint and per pair (as :func:`merge_names` reads
+    them): ``names`` (K,), each tile's node of its rows, the nodes' ``count``, ``mean``,
+    ``scatter``, ``area``, ``area_mean``, and the pairs' :data:`PAIR_FIELDS` with their
+    ``edges`` (E, 2) as nodes (the same pair any number of times)."""
     names = np.unique(np.concatenate([s["names"] for s in stats]))
     k = names.size
     node = [np.searchsorted(names, s["names"]) for s in stats]
@@ -307,20 +338,89 @@ def merge_names(stats: list[dict], target: int, alpha: float, eta_convex: float,
     keep = [np.isin(s["edges"], names).all(axis=1) for s in sums]  # (names no core holds)
     pairs = {f: np.concatenate([s[f][ok] for s, ok in zip(sums, keep)]) for f in PAIR_FIELDS}
     pairs["edges"] = np.concatenate([e[ok] for e, ok in zip(edges, keep)]).reshape(-1, 2)
-    noise = np.concatenate([s["noise"] for s in stats])
-    max_jump = None
-    if noise.size and stats and all("feature_sum" in s for s in stats):  # colour on
-        nodes["feature_sum"] = _sum(node, stats, "feature_sum", k)
-        nodes["feature_squares"] = _sum(node, stats, "feature_squares", k)
-        max_jump = float(np.median([s["floor"] for s in stats]))
-    # (no noise read, as on a mesh: Ward's merges only)
-    rise = FLAT_NOISE * noise_of(noise) if noise.size else None
-    flat, final, fewest = merge_nodes(nodes, pairs, target, rise, alpha, eta_convex,
-                                      max_jump=max_jump, max_ratio=max_ratio, cost=cost)
-    n_flat = int(flat.max()) + 1 if k else 0
-    lowest = np.full(int(final.max()) + 1 if k else 0, k, dtype=np.int64)
-    np.minimum.at(lowest, final, np.arange(k))
-    return names, names[lowest[final]], n_flat, fewest if k else 0
+    return names, node, nodes, pairs
+
+
+def tiled_hierarchy(stats: list[dict], fine: np.ndarray, final: np.ndarray, levels, *,
+                    alpha: float, eta_convex: float, cost: str = "ward",
+                    extent_weight: float = 0.0, cloud: bool = True) -> Hierarchy:
+    """Nested coarser levels of a tiled run's superpoints (superfacets), merged from the
+    tiles' sums as one run merges its superpoint graph
+    (:func:`superfacets.graph.hierarchy.hierarchy`): each superpoint's area and
+    area-weighted mean (Ward's cost) or, on a cloud, its points' count, mean and scatter
+    (``cost='planarity'``, as :func:`~superfacets.graph.hierarchy.planarity_graph`), and
+    per pair of neighbours their border's length, angle and concave share.
+
+    Parameters
+    ----------
+    stats : list of dict
+        The tiles' sums (:func:`tile_merge_stats`), of the superpoints ``fine`` names.
+    fine : (n_rows,) int64 ndarray
+        The stitched labels the sums are of (center rows, -1 invalid).
+    final : (n_rows,) int64 ndarray
+        The run's labels, dense ``0..K-1`` (-1 invalid): each superpoint of ``fine`` lies
+        in one (the merges to the count join whole superpoints).
+    levels : int or sequence of int
+        Numbers of segments, as :func:`~superfacets.graph.hierarchy.hierarchy` takes them.
+    alpha, eta_convex : float
+        The crease factor (paper eqs. 2-3).
+    cost : {'ward', 'planarity'}, default 'ward'
+    extent_weight : float, default 0
+        With ``'planarity'``.
+    cloud : bool, default True
+        False for a mesh's faces, whose planarity levels weigh the faces' areas, which the
+        sums do not hold: refused.
+
+    Returns
+    -------
+    Hierarchy
+        Over the ``K`` superpoints of ``final``: ``hierarchy.labels(i, final)`` are the
+        rows' labels of level ``i``.
+
+    Raises
+    ------
+    ParameterError
+        As :func:`~superfacets.graph.hierarchy.hierarchy` (a level out of range), or
+        ``cost='planarity'`` on a mesh.
+
+    Examples
+    --------
+    >>> x = np.linspace(0, 1, 40)
+    >>> xy = np.stack(np.meshgrid(x, x), -1).reshape(-1, 2)
+    >>> g = point_graph(PointCloud(np.c_[xy, np.abs(xy[:, 0] - 0.5)])).graph  # a ridge
+    >>> lab = np.minimum(g.positions[:, 0] * 4, 3).astype(np.int64)  # four strips
+    >>> stats = [tile_merge_stats(g, lab, np.array([3, 5, 8, 13]), np.ones(1600, bool),
+    ...                           np.arange(1600), 0)]
+    >>> h = tiled_hierarchy(stats, np.array([3, 5, 8, 13])[lab], lab, 2, alpha=200.0,
+    ...                     eta_convex=0.2)
+    >>> h.parents[0].tolist()                                          # one per plane
+    [0, 0, 1, 1]
+    """
+    if cost == "planarity" and not cloud:
+        raise ParameterError("a tiled mesh's levels merge by Ward's cost; planarity levels "
+                             "of faces weigh their areas, which the tiles do not sum")
+    names, _, nodes, pairs = _summed(stats, fine)
+    at = row_table(names, fine.size)[fine]
+    of = np.full(names.size, -1, dtype=np.int64)
+    of[at[at >= 0]] = final[at >= 0]
+    held = of >= 0  # (a superpoint a repair left without rows: out)
+    if not held.all():
+        ends = held[pairs["edges"]].all(axis=1)
+        pairs = {f: v[ends] for f, v in pairs.items()}
+        pairs["edges"] = np.cumsum(held)[pairs["edges"]] - 1
+        nodes, of = {f: v[held] for f, v in nodes.items()}, of[held]
+    k = int(final.max()) + 1 if final.size else 0
+    if cost == "planarity":
+        planes = grouped_planes(of, nodes["count"], nodes["mean"], nodes["scatter"])
+    else:
+        area = np.bincount(of, weights=nodes["area"], minlength=k)
+        centroid = np.stack([np.bincount(of, weights=nodes["area"] * nodes["area_mean"][:, c],
+                                         minlength=k) for c in range(3)], 1) / \
+            np.where(area > 0, area, 1.0)[:, None]
+        planes = (area, centroid, None)
+    graph = grouped_graph(of, pairs["edges"], pairs, *planes)
+    return hierarchy(graph, levels, alpha=alpha, eta_convex=eta_convex, cost=cost,
+                     extent_weight=extent_weight)
 
 
 def _sum(node: list, stats: list, field: str, k: int, weight: str | None = None):

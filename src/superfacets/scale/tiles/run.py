@@ -51,10 +51,12 @@ import numpy as np
 from ..._runtime.arrays import ranked
 from ..._runtime.progress import new_bar, tick, waiting_bar
 from ...api.result import TiledResult
-from ...checks import check_n_segments, max_threads
+from ...checks import check_int, check_n_segments, check_nonneg, max_threads
 from ...elements import points
+from ...elements.density import AUTO_SPREAD
 from ...elements.kinds import kind_of
 from ...errors import ParameterError, SuperfacetsError
+from ...graph.hierarchy import AUTO_EXTENT_WEIGHT
 from ...inputs.bounds import check_extent, rows_in_box
 from ...inputs.cloud import check_weighable, stretched_along
 from ...io.clouds import dropped_normals_said
@@ -69,7 +71,7 @@ from .buckets import box_folder
 from .graphs import drop_graphs, graph_folder
 from .held import hold_from_env, release_held
 from .layout import balanced_tiles, check_tiles, gathered_centers, in_box, tile_grid
-from .merges import merged_labels, tiled_merge_from
+from .merges import merged_labels, tiled_hierarchy, tiled_merge_from
 from .phases import HALO, check_tileable, halo_distance, point_areas, sample_cloud
 from .task import tile_task
 from .workdir import run_folder
@@ -95,6 +97,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                   halo: float | None = None, workers: int | None = 1,
                   scheduler: str | None = None, memory_limit="auto", workdir=None,
                   progress: bool = False, refine: int = 1, start: str = "sample",
+                  levels=None, level_cost: str = "ward", extent_weight: float | None = None,
                   **options) -> TiledResult:
     """Segment one large input tile by tile, on Dask or in this process.
 
@@ -158,6 +161,17 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         ``refine=0``). On 15 benchmark meshes in four settings the sample's start gave a
         tiled UE 1.6 % under one run's on average (the tiles' own: 1.2 %) in about a
         third less time (docs/notes/tiles.md, "A mesh's start").
+    levels : int or sequence of int, optional
+        Also coarser, nested levels of these numbers of segments, each connected, merged
+        from the tiles' sums as one run's :meth:`SegmentationResult.hierarchy` merges its
+        superpoint graph (:func:`~superfacets.scale.tiles.merges.tiled_hierarchy`):
+        ``result.hierarchy``.
+    level_cost : {'ward', 'planarity'}, default 'ward'
+        Their merge cost (``'planarity'``: clouds only).
+    extent_weight : float, optional
+        With ``'planarity'``, as :meth:`SegmentationResult.hierarchy` (default: 0.01 on
+        a cloud of uneven density, ``size_spread`` above
+        :data:`~superfacets.elements.density.AUTO_SPREAD`, else 0).
     **options
         Keyword arguments of :func:`superfacets.segment` (``alpha``,
         ``window``, ``cleanup``, ``paper``, ``beta``, ``n_neighbors``, ...).
@@ -169,8 +183,9 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
     Raises
     ------
     ParameterError
-        On a bad option, ``tiles`` or ``halo``; or ``features`` (tiles read
-        colours from the file).
+        On a bad option, ``tiles``, ``halo`` or level (one above the count, before the
+        run; below the superpoints' connected pieces, after it); or ``features`` (tiles
+        read colours from the file).
     MeshFormatError, InvalidMeshError
         As the readers, or a tile's input.
     SuperfacetsError
@@ -185,12 +200,14 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
     """
     params, halo = _checked_options(n_segments, options, tiles, halo, refine, workers, start,
                                     memory_limit)
+    levels = _checked_levels(levels, level_cost, extent_weight, n_segments)
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
     stage = partial(_stage, timings, progress)  # (each stage timed, and shown as it runs)
     with run_folder(workdir) as tmp:  # the run's own folder, removed at its end
         with stage("survey"):
             reader, survey = _surveyed(source, tmp, tiles, params)
+        _check_levels_of(levels, reader.kind)
         weight, params = params.up_weight, _step_resolved(params, reader)
         layout = (balanced_tiles(survey.sample, survey.lo, survey.hi, tiles)
                   if np.ndim(tiles) == 0 else tile_grid(survey.lo, survey.hi, tiles))
@@ -235,8 +252,9 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                                                  diagonal, halo, (graphs, sample_area))
             params, floor = _colour_term(run, margin, params, survey.colors, stage)
             found, done = _classified(run, layout, params, margin, params.window * r, dict(
-                refine=refine, box_rows=not shared, n_noise=_noise_points(merging, merge_from,
-                    n_tiles), start=_sample_start(reader, survey, params, r, diagonal,
+                refine=refine, box_rows=not shared, n_noise=_noise_points(
+                    merging or levels is not None, merge_from if merging else 1, n_tiles),
+                start=_sample_start(reader, survey, params, r, diagonal,
                     (refine, start), stage, (sampled, up))),
                 timings)
             with stage("stitch"):
@@ -247,13 +265,8 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                     box = None if shared else {o["tile"]: o.pop("box_rows") for o in done}
                     repaired = _connected(run, labels, (margin, done), tmp, box, suspects)
             drop_graphs(graphs)
-    merged_from = None
-    if merging:
-        with stage("merges"):
-            merged_from = int(ranked(labels, labels.size)[0].size)
-            labels = merged_labels(labels, [o["merge_stats"] for o in done], target, params)
-    with stage("stitch", add=True):
-        names = _numbered_densely(labels)
+    labels, names, merged_from, tree = _merged(labels, done, stage, (merging, target, params),
+                                               levels, (spread, reader.kind))
     timings["total"] = time.perf_counter() - t_start
     resolved = dict(params.as_dict(), n_segments=int(names.size), radius=r / diagonal,
                     up_weight=weight, tiles=grid, halo=float(halo), elements=reader.kind,
@@ -262,7 +275,41 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
     return TiledResult(labels=labels, centers=names.astype(np.int64), mesh_radius=r, grid=grid,
                        layout=layout, halo=margin, disagreements=disagreements, repaired=repaired,
                        tiles=_tile_stats(found, done), timings=timings, params=resolved,
-                       area=area if weight == 1 else math.nan, size_spread=spread)
+                       area=area if weight == 1 else math.nan, size_spread=spread,
+                       hierarchy=tree)
+
+
+def _merged(labels: np.ndarray, done: list, stage, plan: tuple, levels, of: tuple):
+    """The stitched ``labels`` merged to the count where ``plan = (merging, target,
+    params)`` says (:func:`~superfacets.scale.tiles.merges.merged_labels`), numbered
+    densely, and their ``levels`` (None: none) merged from the tiles' sums; ``of`` is the
+    input's ``(size_spread, kind)``. Returns the labels, each one's name before, the count
+    merged from (None: no merges) and the hierarchy (or None)."""
+    merging, target, params = plan
+    merged_from, fine = None, labels.copy() if levels is not None else None
+    if merging:
+        with stage("merges"):
+            merged_from = int(ranked(labels, labels.size)[0].size)
+            labels = merged_labels(labels, [o["merge_stats"] for o in done], target, params)
+    with stage("stitch", add=True):
+        names = _numbered_densely(labels)
+    if levels is None:
+        return labels, names, merged_from, None
+    wanted, cost, weight = levels
+    if weight is None:  # (as one run's: on a cloud of uneven density, the extent weighs)
+        weight = AUTO_EXTENT_WEIGHT if of[0] > AUTO_SPREAD else 0.0
+    with stage("levels"):
+        tree = tiled_hierarchy([o["merge_stats"] for o in done], fine, labels, wanted,
+                               alpha=params.alpha, eta_convex=params.eta_convex, cost=cost,
+                               extent_weight=weight, cloud=kind_of(of[1]).cloud)
+    return labels, names, merged_from, tree
+
+
+def _check_levels_of(levels, kind: str) -> None:
+    """Refuse planarity levels of a mesh's faces, once its kind is known."""
+    if levels is not None and levels[1] == "planarity" and not kind_of(kind).cloud:
+        raise ParameterError("a tiled mesh's levels merge by Ward's cost (planarity levels "
+                             "of faces weigh their areas, which tiles do not sum)")
 
 
 def _classified(run, layout, params, margin: float, ring: float, how: dict,
@@ -484,6 +531,33 @@ def _stitched(done: list, n_rows: int):
         named += [labels[o["ring_rows"][differ]], o["ring_labels"][differ]]
     suspects = np.unique(np.concatenate(named))
     return labels, disagreements, suspects[suspects >= 0]
+
+
+def _checked_levels(levels, cost: str, extent_weight, n_segments) -> tuple | None:
+    """``(levels, cost, extent_weight)`` of a run's hierarchy, checked before any pass
+    over the input (None: no levels)."""
+    if levels is None:
+        if cost != "ward" or extent_weight is not None:
+            raise ParameterError("level_cost and extent_weight are the levels' options: "
+                                 "give levels too")
+        return None
+    try:
+        wanted = [levels] if np.isscalar(levels) else list(levels)
+    except TypeError:
+        raise ParameterError(f"levels must be a number of segments or a sequence of them, "
+                             f"got {levels!r}") from None
+    wanted = sorted({check_int("levels", v, lo=1) for v in wanted}, reverse=True)
+    if not wanted:
+        raise ParameterError("levels must name at least one number of segments")
+    if n_segments is not None and wanted[0] > n_segments:
+        raise ParameterError(f"levels are coarser than the n_segments {n_segments} segments: "
+                             f"at most {n_segments} each, got {wanted[0]}")
+    if cost not in ("ward", "planarity"):
+        raise ParameterError(f"level_cost must be 'ward' or 'planarity', got {cost!r}")
+    if extent_weight is not None and cost != "planarity":
+        raise ParameterError("extent_weight is a term of level_cost='planarity'")
+    weight = None if extent_weight is None else check_nonneg("extent_weight", extent_weight)
+    return wanted, cost, weight
 
 
 def _checked_options(n_segments, options, tiles, halo, refine, workers, start="sample",
