@@ -44,7 +44,7 @@ def test_a_tiled_mesh_with_merge_from_1_keeps_its_tiles_own_superfacets():
     assert plain.n_segments == 60 and plain.params["merged_from"] >= 60
 
 
-def _one_runs_levels(graph_of, labels, levels, cost):
+def _one_runs_levels(graph_of, labels, levels, cost, extent_weight=0.0):
     """The hierarchy one run makes of ``labels`` on its element graph (``graph_of``: the
     graph and each row's element)."""
     from superfacets.graph.adjacency import superfacet_graph
@@ -54,15 +54,23 @@ def _one_runs_levels(graph_of, labels, levels, cost):
     per = np.full(graph.n_elements, -1)
     per[element] = labels
     sg = (superfacet_graph if cost == "ward" else planarity_graph)(graph, per)
-    return hierarchy(sg, levels, cost=cost)
+    return hierarchy(sg, levels, cost=cost, extent_weight=extent_weight)
+
+
+def _cloud_file(path, pts, normals) -> None:
+    """A PLY of points with their normals (each tile's graph then the whole cloud's)."""
+    from plyfile import PlyData, PlyElement
+
+    v = np.empty(len(pts), dtype=[(c, "f8") for c in ("x", "y", "z", "nx", "ny", "nz")])
+    for i, c in enumerate(("x", "y", "z", "nx", "ny", "nz")):
+        v[c] = np.c_[pts, normals][:, i]
+    PlyData([PlyElement.describe(v, "vertex")]).write(str(path))
 
 
 def test_a_tiled_runs_levels_are_one_runs_hierarchy_of_its_labels(tmp_path):
     """The levels merged from the tiles' sums are those one run's hierarchy makes of the
     same labels, parent for parent: a cloud (its normals in the file, so that each tile's
     graph is the whole cloud's over its core) by both costs, and a mesh."""
-    from plyfile import PlyData, PlyElement
-
     from superfacets import PointCloud
     from superfacets.elements.points import point_graph
     from superfacets.evaluation.datasets.sampling import sample_points
@@ -70,11 +78,8 @@ def test_a_tiled_runs_levels_are_one_runs_hierarchy_of_its_labels(tmp_path):
     mesh = _bumpy(4)
     pts, face = sample_points(mesh, 12000, seed=2)
     normals = trimesh.Trimesh(mesh.vertices, mesh.faces).face_normals[face]
-    v = np.empty(len(pts), dtype=[(c, "f8") for c in ("x", "y", "z", "nx", "ny", "nz")])
-    for i, c in enumerate(("x", "y", "z", "nx", "ny", "nz")):
-        v[c] = np.c_[pts, normals][:, i]
     path = tmp_path / "cloud.ply"
-    PlyData([PlyElement.describe(v, "vertex")]).write(str(path))
+    _cloud_file(path, pts, normals)
     built = point_graph(PointCloud(pts, normals=normals))
     for tiles, cost in ((1, "ward"), (3, "ward"), (3, "planarity")):
         r = segment_tiled(str(path), 120, tiles=tiles, workers=1, levels=[40, 8],
@@ -85,6 +90,19 @@ def test_a_tiled_runs_levels_are_one_runs_hierarchy_of_its_labels(tmp_path):
             np.testing.assert_array_equal(got, expect)
         top = r.hierarchy.labels(1, r.labels)
         assert len(np.unique(top)) == 8
+    # a cloud of uneven density: a planarity level's extent weighs (as one run's), Ward's not
+    from superfacets.elements.density import AUTO_SPREAD
+    from superfacets.graph.hierarchy import AUTO_EXTENT_WEIGHT
+
+    keep = np.random.default_rng(3).random(len(pts)) < np.exp(-4 * (pts[:, 0] - pts[:, 0].min()))
+    _cloud_file(tmp_path / "uneven.ply", pts[keep], normals[keep])
+    built = point_graph(PointCloud(pts[keep], normals=normals[keep]))
+    for cost, weight in (("ward", 0.0), ("planarity", AUTO_EXTENT_WEIGHT)):
+        r = segment_tiled(str(tmp_path / "uneven.ply"), 80, tiles=3, workers=1, levels=[20],
+                          level_cost=cost)
+        assert r.size_spread > AUTO_SPREAD
+        want = _one_runs_levels((built.graph, built.index), r.labels, [20], cost, weight)
+        np.testing.assert_array_equal(r.hierarchy.parents[0], want.parents[0])
     r = segment_tiled((mesh.vertices, mesh.faces), 60, tiles=3, workers=1, levels=20)
     want = _one_runs_levels((face_graph(mesh), np.arange(mesh.n_faces)), r.labels, [20],
                             "ward")

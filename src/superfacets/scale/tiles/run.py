@@ -296,8 +296,8 @@ def _merged(labels: np.ndarray, done: list, stage, plan: tuple, levels, of: tupl
     if levels is None:
         return labels, names, merged_from, None
     wanted, cost, weight = levels
-    if weight is None:  # (as one run's: on a cloud of uneven density, the extent weighs)
-        weight = AUTO_EXTENT_WEIGHT if of[0] > AUTO_SPREAD else 0.0
+    if weight is None:  # (as one run's: a planarity level of a cloud of uneven density
+        weight = AUTO_EXTENT_WEIGHT if cost == "planarity" and of[0] > AUTO_SPREAD else 0.0
     with stage("levels"):
         tree = tiled_hierarchy([o["merge_stats"] for o in done], fine, labels, wanted,
                                alpha=params.alpha, eta_convex=params.eta_convex, cost=cost,
