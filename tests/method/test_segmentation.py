@@ -861,3 +861,29 @@ def test_pages_handed_back_leave_zeros_and_free_the_memory():
     assert a.sum() == a[::4096].shape[0]
     discard_pages(a[::2])  # not contiguous: nothing done
     assert a.sum() == a[::4096].shape[0]
+
+
+def test_the_record_arena_does_not_grow_every_pass_when_windows_differ_in_size(monkeypatch):
+    """One large piece and eleven small ones, two threads: a thread's share of the room, in
+    proportion to its centers, falls short every pass; each retry doubled the whole free
+    room, so the arena grew twofold each pass (267M entries for 31,650 points in 14 passes;
+    a scan of 209,280 points ran out of memory). Now a retry first takes the room there is:
+    the same labels as one thread, the arena as first reserved."""
+    from superfacets.method import classify
+
+    monkeypatch.setattr(classify, "_PARALLEL_MIN_WORK", 0)
+    sizes = []
+    orig = classify.BoundedReplay._grow
+
+    def grow(self, x):
+        orig(self, x)
+        sizes.append(self.face.shape[0])
+
+    monkeypatch.setattr(classify.BoundedReplay, "_grow", grow)
+    rng = np.random.default_rng(0)
+    pts = np.concatenate([np.c_[rng.random((30000, 2)) * 10, np.zeros(30000)]] + [
+        np.c_[rng.random((150, 2)) * 0.5 + [20 + 3 * i, 0], np.zeros(150)] for i in range(11)])
+    two = segment(pts, 12, paper=True, n_threads=2, max_iter=30)
+    one = segment(pts, 12, paper=True, n_threads=1, max_iter=30)
+    np.testing.assert_array_equal(two.labels, one.labels)
+    assert two.n_iter >= 10 and max(sizes, default=0) <= 4 * classify._RESERVE * len(pts)

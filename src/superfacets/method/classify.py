@@ -298,8 +298,12 @@ class BoundedReplay(Classifier):
                                         base is not kept)
             if st >= 0:
                 break
-            # a thread ran out of room: make more (at least twice what was expected), redo
-            expected = 2 * max(expected, self.limit - self.end)
+            # a thread ran out of room (its share, in proportion to its centers, was short
+            # of its records): redo with all the room there is, or twice what was tried
+            # where that is no more; (twice the free room each time grew the arena
+            # twofold every pass of a run whose centers' windows differ widely in size)
+            room = int((self.limit - self.end) / 1.25) - 4096
+            expected = room if room > expected else 2 * expected
         new_end = st
         # orphans (sequential: they depend on the labels)
         ws = spaces.get(0)
