@@ -272,20 +272,6 @@ def test_a_batch_writes_a_laz_for_every_cloud(tmp_path, sphere, capsys):
         assert main(["batch", str(folder), "-o", str(tmp_path / "no"), "-k", "9", *args,
                      "-q"]) == 2
         assert said in capsys.readouterr().err and not (tmp_path / "no").exists()
-    levels = tmp_path / "levels"  # each cloud's level beside its labels; the mesh's alone
-    assert main(["batch", str(folder), "-o", str(levels), "-k", "9", "--labels", "laz",
-                 "--levels", "4", "--workers", "1", "-q"]) == 0
-    for name in ("a.laz", "cloud.laz", "depth.laz", "frame.laz"):
-        las = laspy.read(str(levels / name))
-        fine, coarse = np.asarray(las.ClusterID), np.asarray(las.ClusterID_4)
-        assert np.array_equal(fine, np.asarray(laspy.read(str(out / name)).ClusterID)), name
-        assert _nested(fine, coarse) and len(np.unique(coarse[coarse >= 0])) == 4, name
-    assert np.array_equal(read_labels(levels / "ball.seg"), read_labels(out / "ball.seg"))
-    for args, said in ((["--labels", "seg", "--levels", "4"], "labels='records' or 'laz'"),
-                       (["--labels", "laz", "--levels", "10"], "coarser than the n_segments")):
-        assert main(["batch", str(folder), "-o", str(tmp_path / "no"), "-k", "9", *args,
-                     "-q"]) == 2
-        assert said in capsys.readouterr().err and not (tmp_path / "no").exists()
 
 
 def _pcd(path, encoding: str, *, seed=0, label=None):

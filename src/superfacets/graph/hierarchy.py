@@ -49,6 +49,7 @@ from ..errors import ParameterError
 from .adjacency import SuperfacetGraph, superfacet_graph
 
 __all__ = ["Hierarchy", "hierarchy", "planarity_graph", "level_extent_weight", "pieces",
+           "wanted_levels",
            "AUTO_EXTENT_WEIGHT", "ALPHA", "ETA_CONVEX"]
 
 #: The crease factor's defaults, the method's own (``superfacets.DEFAULTS.alpha`` and
@@ -172,14 +173,7 @@ def hierarchy(graph, levels, *, alpha: float = ALPHA, eta_convex: float = ETA_CO
         raise ParameterError("cost='planarity' needs the superfacets' scatter "
                              "(superfacets.graph.adjacency.superfacet_graph gives it)")
     k = graph.n_segments
-    try:
-        wanted = [levels] if np.isscalar(levels) else list(levels)
-    except TypeError:
-        raise ParameterError("levels must be a number of segments or a sequence of them, "
-                             f"got {levels!r}") from None
-    if not wanted:
-        raise ParameterError("levels must name at least one number of segments")
-    wanted = sorted({check_int("levels", v, lo=1) for v in wanted}, reverse=True)
+    wanted = wanted_levels(levels)
     fewest = pieces(graph)
     if wanted[0] > k or wanted[-1] < fewest:
         raise ParameterError(f"levels must lie in [{fewest}, {k}]: the {k} segments they "
@@ -200,6 +194,39 @@ def hierarchy(graph, levels, *, alpha: float = ALPHA, eta_convex: float = ETA_CO
         parents.append(parent)
         prev = top
     return Hierarchy(levels=tuple(wanted), parents=tuple(parents))
+
+
+def wanted_levels(levels) -> list[int]:
+    """The numbers of segments of a hierarchy's levels, as :func:`hierarchy` takes them:
+    distinct, largest first.
+
+    Parameters
+    ----------
+    levels : int or sequence of int
+        Each ``>= 1``.
+
+    Returns
+    -------
+    list of int
+
+    Raises
+    ------
+    ParameterError
+        If ``levels`` names no number, or one is not an integer ``>= 1``.
+
+    Examples
+    --------
+    >>> wanted_levels([30, 100, 30]), wanted_levels(5)
+    ([100, 30], [5])
+    """
+    try:
+        wanted = [levels] if np.isscalar(levels) else list(levels)
+    except TypeError:
+        raise ParameterError("levels must be a number of segments or a sequence of them, "
+                             f"got {levels!r}") from None
+    if not wanted:
+        raise ParameterError("levels must name at least one number of segments")
+    return sorted({check_int("levels", v, lo=1) for v in wanted}, reverse=True)
 
 
 def merge_arrays(graph, planarity: bool) -> tuple:

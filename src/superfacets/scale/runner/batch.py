@@ -40,6 +40,7 @@ from ...api.sizes import default_count
 from ...elements.builders import kind_for
 from ...elements.kinds import kind_of
 from ...errors import ParameterError
+from ...graph.hierarchy import wanted_levels
 from ...io import read_input
 from ...io.clouds import is_cloud_file
 from ...io.files import split_suffix
@@ -425,14 +426,7 @@ def _checked_levels(levels, labels: str, per_object: bool) -> list | None:
     them (a cloud's own records), else refused in words; None where not given."""
     if levels is None:
         return None
-    try:
-        wanted = list(levels)
-    except TypeError:
-        raise ParameterError(f"levels (--levels) is a list of numbers of segments, got "
-                             f"{levels!r}") from None
-    wanted = sorted({check_int("levels", v, lo=1) for v in wanted}, reverse=True)
-    if not wanted:
-        raise ParameterError("levels (--levels) names no number of segments")
+    wanted = wanted_levels(levels)
     if labels not in ("records", "laz"):
         raise ParameterError(f"levels (--levels) go into each cloud's own file, a field "
                              f"ClusterID_N each: labels='records' or 'laz' (--labels records "

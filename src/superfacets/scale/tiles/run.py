@@ -51,12 +51,12 @@ import numpy as np
 from ..._runtime.arrays import ranked
 from ..._runtime.progress import new_bar, tick, waiting_bar
 from ...api.result import TiledResult
-from ...checks import check_int, check_n_segments, check_nonneg, max_threads
+from ...checks import check_n_segments, check_nonneg, max_threads
 from ...elements import points
 from ...elements.density import AUTO_SPREAD
 from ...elements.kinds import kind_of
 from ...errors import ParameterError, SuperfacetsError
-from ...graph.hierarchy import AUTO_EXTENT_WEIGHT
+from ...graph.hierarchy import AUTO_EXTENT_WEIGHT, wanted_levels
 from ...inputs.bounds import check_extent, rows_in_box
 from ...inputs.cloud import check_weighable, stretched_along
 from ...io.clouds import dropped_normals_said
@@ -541,14 +541,7 @@ def _checked_levels(levels, cost: str, extent_weight, n_segments) -> tuple | Non
             raise ParameterError("level_cost and extent_weight are the levels' options: "
                                  "give levels too")
         return None
-    try:
-        wanted = [levels] if np.isscalar(levels) else list(levels)
-    except TypeError:
-        raise ParameterError(f"levels must be a number of segments or a sequence of them, "
-                             f"got {levels!r}") from None
-    wanted = sorted({check_int("levels", v, lo=1) for v in wanted}, reverse=True)
-    if not wanted:
-        raise ParameterError("levels must name at least one number of segments")
+    wanted = wanted_levels(levels)
     if n_segments is not None and wanted[0] > n_segments:
         raise ParameterError(f"levels are coarser than the n_segments {n_segments} segments: "
                              f"at most {n_segments} each, got {wanted[0]}")
