@@ -509,3 +509,42 @@ def test_a_picture_of_a_large_cloud_draws_an_even_share_and_sizes_every_label(
                         max_points=500)
     assert _foreground(img).mean() > 0.05
     assert seen["labels"] is labels  # (the legend counts all 3,428 labelled points)
+
+
+def test_view_draws_an_even_share_of_a_large_cloud(monkeypatch, tmp_path, capsys):
+    """The window draws at most VIEW_POINTS of a cloud (the point graph of 50 million
+    took minutes before a window opened), and the command says so; a window stood in for
+    by an off-screen plotter."""
+    import types
+
+    pv = pytest.importorskip("pyvista")
+    from superfacets.viz import render as render_module
+
+    drawn = []
+
+    class Plotter(pv.Plotter):
+        def __init__(self, **kw):
+            super().__init__(off_screen=True, window_size=(300, 200), **kw)
+
+        def add_mesh(self, poly, **kw):
+            drawn.append(poly.n_points)
+            return super().add_mesh(poly, **kw)
+
+        def show(self, *args, **kw):
+            drawn.append("shown")
+
+    monkeypatch.setattr(render_module, "has_display", lambda: True)
+    monkeypatch.setattr(render_module, "_pyvista", lambda off_screen: types.SimpleNamespace(
+        Plotter=Plotter, PolyData=pv.PolyData))
+    xyz = np.c_[np.random.default_rng(0).random((5000, 2)), np.zeros(5000)]
+    render_module.show(xyz, np.arange(5000) // 500, max_points=1000)
+    assert drawn == [1000, "shown"]
+    drawn.clear()
+    render_module.show(xyz, np.arange(5000) // 500, max_points=None)  # (all of them)
+    assert drawn == [5000, "shown"]
+    drawn.clear()
+    monkeypatch.setattr(render_module, "VIEW_POINTS", 2000)
+    np.save(tmp_path / "cloud.npy", xyz)
+    assert main(["view", str(tmp_path / "cloud.npy"), "-k", "5"]) == 0
+    assert drawn == [2000, "shown"]
+    assert "drawing 2,000 of 5,000 points (an even share" in capsys.readouterr().err

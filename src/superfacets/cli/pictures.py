@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 import time
 from pathlib import Path
 
@@ -246,7 +247,7 @@ def cmd_panel(args) -> int:
 
 
 def cmd_view(args) -> int:
-    from ..viz.render import has_display, no_display, show
+    from ..viz.render import VIEW_POINTS, has_display, no_display, show
 
     if not has_display():  # say so before the (maybe long) segmentation
         raise no_display()
@@ -259,7 +260,11 @@ def cmd_view(args) -> int:
 
         data, labels = faces_to_draw(data, labels, elements)
     data, labels, _ = _drawn(data, labels, elements)  # (a volume: its cut)
-    show(data, labels, title=Path(args.mesh).name, view=view, up=up)
+    n = data.n_points if elements == "points" else 0
+    if n > VIEW_POINTS and not getattr(args, "quiet", False):
+        print(f"drawing {VIEW_POINTS:,} of {n:,} points (an even share; a window of all "
+              "would not turn)", file=sys.stderr)
+    show(data, labels, title=Path(args.mesh).name, view=view, up=up, max_points=VIEW_POINTS)
     return 0  # pragma: no cover
 
 

@@ -35,7 +35,7 @@ from ..method.params import check_choice, check_int, check_number
 from .camera import view_frame
 
 __all__ = ["render", "render_points", "render_panel", "show", "has_display", "size_legend",
-           "NoDisplayError", "no_display", "drawn_share", "PICTURE_SIZE"]
+           "NoDisplayError", "no_display", "drawn_share", "PICTURE_SIZE", "VIEW_POINTS"]
 
 #: A picture's width and height in pixels where none is given.
 PICTURE_SIZE = (1200, 900)
@@ -529,23 +529,48 @@ def render_panel(items: Sequence[tuple], out=None, *, ncols: int | None = None,
     return _finish(p, out, outputs)
 
 
+#: The most points :func:`show` draws of a cloud (an even share past it, as a picture's):
+#: a window turns about this many smoothly on a laptop's graphics, and their point graph
+#: (the colours' and the camera's) takes seconds, where that of 50 million takes minutes.
+VIEW_POINTS = 4_000_000
+
+
 def show(mesh, labels=None, *, title: str | None = None, boundaries: bool = True,
-         view=None, up="y") -> None:  # pragma: no cover - needs a display
+         view=None, up="y", max_points: int | None = VIEW_POINTS) -> None:
     """Open an interactive window (rotate: drag, zoom: wheel, quit: q) on a mesh (labels of
     its faces) or a point cloud (labels of its points, drawn as :func:`render_points` draws
     them).
+
+    Parameters
+    ----------
+    mesh : Mesh, PointCloud or what :func:`render` takes
+    labels : (n,) int ndarray, optional
+        One per face (point).
+    title : str, optional
+    boundaries : bool, default True
+        A mesh's superfacet borders drawn.
+    view, up
+        The camera (:func:`superfacets.viz.camera.view_frame`).
+    max_points : int or None, default :data:`VIEW_POINTS`
+        A cloud's points drawn at most: past it an even random share
+        (:func:`drawn_share`); None: all.
 
     Raises
     ------
     NoDisplayError
         If no display is available (``$DISPLAY``/``$WAYLAND_DISPLAY`` unset).
+
+    Examples
+    --------
+    >>> show(mesh, labels)  # doctest: +SKIP
     """
     if not has_display():
         raise no_display()
     pv = _pyvista(off_screen=False)
     p = pv.Plotter(title=title or "superfacets")
     if kind_of(kind_for(mesh)).cloud:  # (points coloured by superpoint, as render_points)
-        mesh, draw = _points_drawing(pv, mesh, labels, tuple(p.window_size), view, 1.0, up)
+        mesh, draw = _points_drawing(pv, mesh, labels, tuple(p.window_size), view, 1.0, up,
+                                     limit=max_points)
         draw(p)
     else:
         mesh = as_mesh(mesh)
@@ -556,7 +581,7 @@ def show(mesh, labels=None, *, title: str | None = None, boundaries: bool = True
     if title:
         p.add_text(title, position="upper_edge", font_size=12, color="black")
     p.set_background("white")
-    p.show()
+    p.show()  # pragma: no cover - a window, until it is closed
 
 
 class PointsFrame:
