@@ -788,6 +788,12 @@ def test_levels_of_a_ply_open_in_cloudcompare_and_a_second_run_replaces_them(tmp
     assert main(["segment", str(first), "-k", "12", "--levels", "4,2", "-o", str(again),
                  "-q"]) == 0
     assert "warning: a.ply has a field scalar_ClusterID_4" in capsys.readouterr().err
+    tiled = tmp_path / "t.ply"  # (a tiled run's summary names the PLY's fields as one run's)
+    assert main(["segment", str(first), "-k", "12", "--tiles", "2", "--workers", "1",
+                 "--levels", "4", "-o", str(tiled)]) == 0
+    assert ("labels as scalar_ClusterID, CloudCompare's scalar field ClusterID, levels as "
+            "scalar_ClusterID_4") in capsys.readouterr().out
+    assert list(read_input_fields(tiled))[-2:] == ["ClusterID", "ClusterID_4"]
     fields = read_input_fields(again)
     assert list(fields)[-3:] == ["ClusterID", "ClusterID_4", "ClusterID_2"]
     assert len(np.unique(fields["ClusterID"])) == 12 and _nested(fields["ClusterID"],

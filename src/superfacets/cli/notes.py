@@ -44,6 +44,28 @@ def fields_said(kept: list) -> str:
     return f" with their {names}"
 
 
+def records_said(output, source, rows: str, kept: str = "", levels=()) -> str:
+    """What ``-o OUTPUT`` holds where it writes a scan's records (a copy of the input's, or
+    a new file of its ``rows`` whose kept values ``kept`` says, :func:`fields_said`): the
+    field the labels are in (a PLY's ``scalar_`` name and CloudCompare's), the levels'
+    (``levels``: their numbers of segments) and a COPC input's index left out; ``""`` where
+    ``-o`` writes a label file."""
+    from ..io.records import LABEL_FIELD, copc_said, level_field, ply_field_name, scan_output
+
+    into = scan_output(output, source)
+    if into is None:
+        return ""
+    ply = str(output).lower().endswith(".ply")
+    field = (f"{ply_field_name(LABEL_FIELD)}, CloudCompare's scalar field {LABEL_FIELD}"
+             if ply else LABEL_FIELD)
+    if levels:
+        field += ", levels as " + ", ".join((ply_field_name if ply else str)(level_field(n))
+                                            for n in sorted(set(levels), reverse=True))
+    if into == "new":
+        return f"a new file of the input's {rows}{kept}, labels as {field}"
+    return f"the input's {rows}, every field kept, labels as {field}{copc_said(source)}"
+
+
 def weights_said(params: dict) -> str:
     """The summary's words for what a run's weights read besides the geometry (one run's or
     a tiled run's): the colour term, the up coordinate's weight, a scene's steps."""

@@ -11,7 +11,7 @@ import numpy as np
 from ..checks import counted
 from ..elements.kinds import kind_of
 from ..method.params import DEFAULTS
-from .notes import count_note, duplicates_note, fields_said, merges_said, weights_said
+from .notes import count_note, duplicates_note, fields_said, merges_said, records_said, weights_said
 from .options import (
     add_adaptive_options,
     add_camera_options,
@@ -526,30 +526,13 @@ def _writing_bar(args, data, outputs):
 def _labels_what(args, kind: str, data=None) -> str:
     """What ``-o`` holds, said in the summary: labels, or the input's records with them (a
     new file's: with the values of the input ``data`` kept, named)."""
-    from ..io.records import (
-        LABEL_FIELD,
-        copc_said,
-        kept_fields,
-        level_field,
-        ply_field_name,
-        scan_output,
-    )
+    from ..io.records import kept_fields, scan_output
 
-    into = scan_output(args.output, args.mesh)
-    if into is None:
-        return "labels"
-    rows = "vertices" if kind == "vertices" else "points"
-    ply = str(args.output).lower().endswith(".ply")
-    field = (f"{ply_field_name(LABEL_FIELD)}, CloudCompare's scalar field {LABEL_FIELD}"
-             if ply else LABEL_FIELD)
-    if getattr(args, "levels", None):
-        field += ", levels as " + ", ".join(
-            (ply_field_name if ply else str)(level_field(n))
-            for n in sorted(set(args.levels), reverse=True))
-    if into == "new":
-        kept = kept_fields(args.output, data) if data is not None else []
-        return f"a new file of the input's {rows}{fields_said(kept)}, labels as {field}"
-    return f"the input's {rows}, every field kept, labels as {field}{copc_said(args.mesh)}"
+    kept = []
+    if data is not None and scan_output(args.output, args.mesh) == "new":
+        kept = kept_fields(args.output, data)
+    return records_said(args.output, args.mesh, "vertices" if kind == "vertices" else "points",
+                        fields_said(kept), getattr(args, "levels", None) or ()) or "labels"
 
 
 def _drawn_share(data, kind: str) -> str:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from ..elements.density import AUTO_DENSITY, AUTO_SPREAD
 from ..elements.kinds import kind_of
-from .notes import fields_said, merges_said, weights_said
+from .notes import fields_said, merges_said, records_said, weights_said
 from .options import (
     add_engine_options,
     check_drawings,
@@ -131,16 +131,9 @@ def segment_tiles(args) -> int:
                   f"the {kind}, about that many times one run's work: fewer tiles, or more "
                   f"{kind} per {kind_of(kind).segment_word[:-1]}, cost less", file=sys.stderr)
         if seg_out is not None and str(seg_out) != "-":
-            from ..io.records import LABEL_FIELD, copc_said, level_field, scan_output
-
-            into = scan_output(seg_out, args.mesh)
-            levels = "" if result.hierarchy is None else ", levels as " + ", ".join(
-                map(level_field, result.hierarchy.levels))
-            what = (f"labels, one per {kind[:-1]}" if into is None else
-                    f"the input's {kind}, every field kept, labels as {LABEL_FIELD}{levels}"
-                    f"{copc_said(args.mesh)}" if into == "records" else
-                    f"a new file of the input's {kind}{kept}, labels as {LABEL_FIELD}"
-                    f"{levels}")
+            levels = () if result.hierarchy is None else result.hierarchy.levels
+            what = records_said(seg_out, args.mesh, kind, kept, levels) or \
+                f"labels, one per {kind[:-1]}"
             print(f"wrote {seg_out} ({what})", file=report)
         elif seg_out is None and drawings == (None, None):
             print("note: nothing was saved: add -o OUT.seg", file=sys.stderr)
