@@ -63,7 +63,7 @@ def test_the_point_graph_checks_its_neighbourhood_itself(kwargs):
 
 
 @pytest.mark.parametrize("args, says", [
-    (["--tiles", "2", "--levels", "5,10"], "--levels of a tiled run go into -o of the scan's"),
+    (["--tiles", "2", "--levels", "5,10"], "--levels of a tiled run go into --graph OUT.npz"),
     (["--tiles", "2", "--level-cost", "planarity"], "give --levels too"),  # (was ignored)
     (["--tiles", "2", "--extent-weight", "2"], "give --levels too"),
     (["--tiles", "2", "--view", "top"], "--view chooses the camera of --picture OUT.png"),

@@ -209,7 +209,8 @@ def test_a_tiled_run_writes_the_labels_into_the_laz_too(tmp_path, capsys):
     assert (len(np.unique(mid)), len(np.unique(top))) == (8, 3)
     for args, said in ((["--levels", "8", "-o", str(tmp_path / "l.seg")], "ClusterID_N"),
                        (["--level-cost", "planarity"], "give --levels too"),
-                       (["--levels", "8", "--graph", str(tmp_path / "g.npz")], "--graph")):
+                       (["--levels", "8", "--colored-mesh", str(tmp_path / "c.ply")],
+                        "--colored-mesh needs the whole input")):
         assert main(["segment", str(src), "--tiles", "2", "-k", "20", *args]) == 2
         assert said in capsys.readouterr().err
 

@@ -126,3 +126,49 @@ def test_a_tiled_runs_level_options_are_refused_in_words(monkeypatch):
     with pytest.raises(ParameterError, match="mesh's levels merge by Ward's cost"):
         segment_tiled((mesh.vertices, mesh.faces), 60, tiles=2, workers=1, levels=[10],
                       level_cost="planarity")
+
+
+def test_a_tiled_runs_learning_graph_is_one_runs_of_its_labels(tmp_path):
+    """The superpoint graph in the learning layout summed over the tiles is the one one
+    run's learning_graph makes of the same labels: its features to the last bit of their
+    float32, centroids to 1e-12 (the order of the additions): a cloud with normals and
+    colours in 1 and 3 tiles, and a mesh."""
+    from plyfile import PlyData, PlyElement
+
+    from superfacets import PointCloud
+    from superfacets.elements.builders import elements_of
+    from superfacets.elements.features import per_element
+    from superfacets.evaluation.datasets.sampling import sample_points
+    from superfacets.graph.adjacency import superfacet_graph
+    from superfacets.graph.learning import learning_arrays
+
+    mesh = _bumpy(4)
+    pts, face = sample_points(mesh, 12000, seed=5)
+    normals = trimesh.Trimesh(mesh.vertices, mesh.faces).face_normals[face]
+    rgb = (np.abs(pts) * 120).clip(0, 255).astype(np.uint8)
+    names = ("x", "y", "z", "nx", "ny", "nz", "red", "green", "blue")
+    v = np.empty(len(pts), dtype=[(c, "f8") for c in names[:6]] + [(c, "u1") for c in names[6:]])
+    for i, c in enumerate(names):
+        v[c] = np.c_[pts, normals, rgb][:, i]
+    path = tmp_path / "cloud.ply"
+    PlyData([PlyElement.describe(v, "vertex")]).write(str(path))
+    src = elements_of(PointCloud(pts, normals=normals, colors=rgb / 255.0), "points")
+
+    def one_runs(graph, element_of_row, labels, colours=None):
+        per = np.full(graph.n_elements, -1)
+        per[element_of_row] = labels
+        sg = superfacet_graph(graph, per, colours)
+        return learning_arrays(sg, graph.positions, per, labels, (0.0, 0.0, 1.0))
+
+    runs = [(segment_tiled(str(path), 100, tiles=t, workers=1, graph=True, beta=0),
+             lambda r: one_runs(src.graph, src.index, r.labels,
+                                per_element(src, src.colors()))) for t in (1, 3)]
+    runs.append((segment_tiled((mesh.vertices, mesh.faces), 60, tiles=3, workers=1, graph=True),
+                 lambda r: one_runs(face_graph(mesh), np.arange(mesh.n_faces), r.labels)))
+    for r, want_of in runs:
+        want, got = want_of(r), r.learning
+        for key in ("x", "edge_index", "edge_attr", "super_index", "node_features"):
+            np.testing.assert_array_equal(got[key], want[key], err_msg=key)
+        np.testing.assert_allclose(got["pos"], want["pos"], rtol=0, atol=1e-12)
+    assert list(runs[0][0].learning["node_features"])[-3:] == ["red", "green", "blue"]
+    assert segment_tiled(str(path), 100, tiles=2, workers=1).learning is None

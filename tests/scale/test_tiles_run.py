@@ -678,3 +678,29 @@ def test_a_tiled_run_reads_the_spread_of_point_sizes_and_notes_an_uneven_density
         assert ("one run would size its superpoints by it" in capsys.readouterr().err) \
             is above
     assert np.isnan(segment_tiled(_bumpy(3), 20, tiles=2, workers=1).size_spread)
+
+
+def test_a_tiled_run_writes_the_superpoint_graph_as_one_run_does(tmp_path, capsys):
+    """``segment --tiles N --graph OUT.npz`` (refused before): the arrays one run's
+    ``--graph`` writes, the levels with them, the labels those of ``-o``; all or nothing."""
+    from superfacets.cli import main
+    from superfacets.io.labels import read_labels
+
+    np.save(tmp_path / "c.npy", _bumpy_cloud(3000).points)
+    one, tiled = tmp_path / "one.npz", tmp_path / "tiled.npz"
+    assert main(["segment", str(tmp_path / "c.npy"), "-k", "30", "--graph", str(one),
+                 "--levels", "10,4", "-q"]) == 0
+    assert main(["segment", str(tmp_path / "c.npy"), "-k", "30", "--tiles", "2", "-j", "1",
+                 "--graph", str(tiled), "--levels", "10,4", "-o", str(tmp_path / "t.seg")]) == 0
+    assert f"wrote {tiled} (superpoint graph" in capsys.readouterr().out
+    a, b = np.load(one), np.load(tiled)
+    assert sorted(a.files) == sorted(b.files)
+    labels = read_labels(tmp_path / "t.seg")
+    np.testing.assert_array_equal(b["super_index"], labels)
+    np.testing.assert_array_equal(b["labels"], labels)
+    assert b["x"].shape == (30, a["x"].shape[1]) and b["levels"].tolist() == [10, 4]
+    assert len(np.unique(b["labels_1"])) == 4 and b["edge_index"].shape[0] == 2
+    bad = tmp_path / "bad.npz"  # (a level the superpoints cannot make: nothing written)
+    assert main(["segment", str(tmp_path / "c.npy"), "-k", "30", "--tiles", "2", "-j", "1",
+                 "--graph", str(bad), "--levels", "31", "-o", str(tmp_path / "b.seg")]) == 2
+    assert not bad.exists() and not (tmp_path / "b.seg").exists()

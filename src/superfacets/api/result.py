@@ -425,7 +425,7 @@ class TiledResult:
         :func:`~superfacets.scale.tiles.phases.sample_start`), ``centers`` (each tile's, where
         no sample start gave them),
         ``refine``, ``labels``, ``stitch``, ``connect`` (only with disagreements),
-        ``merges``, ``levels`` (with ``levels``), ``total``.
+        ``merges``, ``levels`` (with ``levels``), ``graph`` (with ``graph``), ``total``.
     params : dict
         The run's parameters, resolved.
     area : float
@@ -442,6 +442,12 @@ class TiledResult:
         The coarser levels asked for (``segment_tiled(levels=...)``), over these ``K``
         superfacets: ``hierarchy.labels(i, result.labels)`` are level ``i``'s labels per
         row (:func:`~superfacets.scale.tiles.merges.tiled_hierarchy`); None without.
+    learning : dict or None
+        The superpoint graph in the layout learning pipelines read (``segment_tiled(graph=
+        True)``): ``x``, ``pos``, ``edge_index``, ``edge_attr``, ``super_index``, ...
+        as :meth:`SegmentationResult.learning_graph`, with ``area``, ``centroid``,
+        ``normal`` and ``feature`` (:func:`~superfacets.scale.tiles.merges.
+        tiled_learning`); None without.
 
     Examples
     --------
@@ -466,6 +472,7 @@ class TiledResult:
     area: float = math.nan
     size_spread: float = math.nan
     hierarchy: object = None
+    learning: dict | None = None
 
     @property
     def n_segments(self) -> int:

@@ -6,6 +6,8 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 from ..elements.density import AUTO_DENSITY, AUTO_SPREAD
 from ..elements.kinds import kind_of
 from .notes import fields_said, merges_said, records_said, weights_said
@@ -13,6 +15,7 @@ from .options import (
     add_engine_options,
     check_drawings,
     check_labels_output,
+    check_output,
     element_kwargs,
     method_kwargs,
     named_after,
@@ -80,6 +83,7 @@ def segment_tiles(args) -> int:
     if drawings[1] is not None:
         _check_page(args.mesh)
     seg_out = check_labels_output(args.output, args.mesh, records=True)
+    graph_out = check_output(args.graph, (".npz",), "the graph", inputs=(args.mesh,))
     kwargs = dict(method_kwargs(args), **element_kwargs(args))
     kwargs.pop("progress", None)
     t0 = time.perf_counter()
@@ -90,13 +94,13 @@ def segment_tiles(args) -> int:
                                start=args.tile_start or "sample",
                                workdir=args.workdir, levels=args.levels,
                                level_cost=args.level_cost or "ward",
-                               extent_weight=args.extent_weight,
+                               extent_weight=args.extent_weight, graph=graph_out is not None,
                                progress=not args.quiet and sys.stderr.isatty(), **kwargs)
     except SuperfacetsError as exc:
         raise named_after(args.mesh, exc) from None
     elapsed = time.perf_counter() - t0
     interrupts.last_outputs()  # (once whole, a Ctrl-C no longer undoes the run)
-    kept = _write_labels(seg_out, args.mesh, result)
+    kept = _write_labels(seg_out, args.mesh, result, graph_out)
     report = sys.stderr if str(seg_out) == "-" else sys.stdout
     if not args.quiet:
         kind = result.params["elements"]
@@ -135,7 +139,10 @@ def segment_tiles(args) -> int:
             what = records_said(seg_out, args.mesh, kind, kept, levels) or \
                 f"labels, one per {kind[:-1]}"
             print(f"wrote {seg_out} ({what})", file=report)
-        elif seg_out is None and drawings == (None, None):
+        if graph_out is not None:
+            print(f"wrote {graph_out} (superpoint graph, PyTorch Geometric's layout)",
+                  file=report)
+        if seg_out is None and graph_out is None and drawings == (None, None):
             print("note: nothing was saved: add -o OUT.seg", file=sys.stderr)
     if drawings != (None, None):
         _draw(args, result, *drawings)
@@ -154,17 +161,17 @@ def _refuse_one_run_options(args) -> None:
     """Refuse the options of ``segment`` that only one run gives."""
     from ..errors import ParameterError
 
-    for flag, given in (("--colored-mesh", args.colored_mesh), ("--graph", args.graph),
+    for flag, given in (("--colored-mesh", args.colored_mesh),
                         ("--per-object", args.per_object)):
         if given:
             raise ParameterError(f"{flag} needs the whole input in one process; not with "
                                  "--tiles (write -o OUT.seg, then view a part)")
     from ..io.records import scan_output
 
-    if args.levels and scan_output(args.output, args.mesh) is None:
-        raise ParameterError("--levels of a tiled run go into -o of the scan's own records "
-                             "(.las/.laz, .ply, .pcd): each level a field ClusterID_N after "
-                             "the labels")
+    if args.levels and scan_output(args.output, args.mesh) is None and args.graph is None:
+        raise ParameterError("--levels of a tiled run go into --graph OUT.npz or -o of the "
+                             "scan's own records (.las/.laz, .ply, .pcd): each level a field "
+                             "ClusterID_N after the labels")
     if (args.level_cost is not None or args.extent_weight is not None) and not args.levels:
         raise ParameterError("--level-cost and --extent-weight are the options of --levels; "
                              "give --levels too")
@@ -282,7 +289,7 @@ def _source(args):
     return replace(reader, **changes)
 
 
-def _write_labels(seg_out, source, result) -> str:
+def _write_labels(seg_out, source, result, graph_out=None) -> str:
     """``-o``'s file of a tiled run: the input's records or a new scan file with the labels
     (:func:`superfacets.io.records.write_scan_labels`), segIndices, or a label file; a new
     file's kept values, said (``" with their intensity and ring"``; else "")."""
@@ -293,6 +300,13 @@ def _write_labels(seg_out, source, result) -> str:
 
     kept = []
     with Outputs() as outputs:
+        if graph_out is not None:  # (the keys one run's --graph writes)
+            arrays = dict(result.learning, labels=result.labels)
+            h = result.hierarchy
+            if h is not None:
+                arrays.update(h.arrays(), **{f"labels_{i}": h.labels(i, result.labels)
+                                             for i in range(len(h.levels))})
+            outputs.write(graph_out, lambda fh: np.savez_compressed(fh, **arrays))
         if seg_out is not None:
             into = scan_output(seg_out, source)
             if into is not None:  # (a new file: the input read once more)

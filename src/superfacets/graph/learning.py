@@ -29,8 +29,9 @@ import numpy as np
 from ..checks import check_up
 from .adjacency import SuperfacetGraph
 
-__all__ = ["shape_features", "learning_arrays", "GROUND_CELLS", "GROUND_FITS",
-           "NODE_FEATURES", "EDGE_FEATURES"]
+__all__ = ["shape_features", "learning_arrays", "learning_layout", "ground_frame",
+           "ground_cells", "elevation", "GROUND_CELLS", "GROUND_FITS", "NODE_FEATURES",
+           "EDGE_FEATURES"]
 
 #: The ground beneath the superpoints: a quadratic surface fitted to the lowest element
 #: of each cell of a grid of this many cells along the input's longer horizontal side ...
@@ -98,23 +99,115 @@ def shape_features(graph: SuperfacetGraph, up=(0.0, 0.0, 1.0)) -> dict[str, np.n
             "verticality": np.where(ok, 1.0 - np.abs(normal @ u), 0.0)}
 
 
-def _elevation(positions: np.ndarray, centroid: np.ndarray, up: np.ndarray) -> np.ndarray:
-    """Each centroid's height above the ground: a quadratic surface fitted to the lowest
-    element of each grid cell, refitted :data:`GROUND_FITS` times to the lower half of
-    them (the cells whose lowest element is a roof or a canopy stand above it)."""
-    u = up / np.linalg.norm(up)
+def ground_frame(positions: np.ndarray, up) -> tuple:
+    """The grid the ground is read on: the vertical ``u``, two horizontal axes ``e1``,
+    ``e2``, and the lowest corner ``lo`` and side ``span`` of the elements' extent along
+    them (:data:`GROUND_CELLS` cells along it).
+
+    Parameters
+    ----------
+    positions : (n, 3) float64 ndarray
+        The elements' positions, or any points whose extent along the axes is theirs (a
+        tiled run: the corners of the input's bounding box, exact for an axis ``up``).
+    up : (3,) float ndarray
+        Not all zero.
+
+    Returns
+    -------
+    tuple
+        ``(u, e1, e2, lo, span)``.
+
+    Raises
+    ------
+    Never for a finite ``up`` not all zero.
+
+    Examples
+    --------
+    >>> u, e1, e2, lo, span = ground_frame(np.array([[0.0, 0, 0], [4, 2, 1]]),
+    ...                                    np.array([0.0, 0, 1]))
+    >>> float(span), u.tolist()
+    (4.0, [0.0, 0.0, 1.0])
+    """
+    u = np.asarray(up, dtype=np.float64) / np.linalg.norm(up)
     a = np.eye(3)[int(np.argmin(np.abs(u)))]  # two horizontal axes
     e1 = np.cross(u, a)
     e1 /= np.linalg.norm(e1)
     e2 = np.cross(u, e1)
     flat = np.c_[positions @ e1, positions @ e2]
-    height = positions @ u
     lo = flat.min(axis=0)
-    span = max(float((flat.max(axis=0) - lo).max()), 1e-300)
+    return u, e1, e2, lo, max(float((flat.max(axis=0) - lo).max()), 1e-300)
+
+
+def ground_cells(positions: np.ndarray, frame: tuple) -> tuple:
+    """The lowest height of the elements in each cell of the ground's grid that holds one.
+
+    Parameters
+    ----------
+    positions : (n, 3) float64 ndarray
+    frame : tuple
+        :func:`ground_frame`'s.
+
+    Returns
+    -------
+    keys : (m, 2) int64 ndarray
+        The cells, in lexicographic order.
+    low : (m,) float64 ndarray
+        The lowest height in each (along ``u``).
+
+    Raises
+    ------
+    Never.
+
+    Examples
+    --------
+    >>> pts = np.array([[0.0, 0, 3], [0, 0, 1], [4, 2, 5]])  # two in one cell
+    >>> keys, low = ground_cells(pts, ground_frame(pts, np.array([0.0, 0, 1])))
+    >>> low.tolist()
+    [1.0, 5.0]
+    """
+    u, e1, e2, lo, span = frame
+    flat = np.c_[positions @ e1, positions @ e2]
     ij = np.floor((flat - lo) / (span / GROUND_CELLS)).astype(np.int64)
-    keys, inverse = np.unique(ij, axis=0, return_inverse=True)
-    ground = np.full(keys.shape[0], np.inf)
-    np.minimum.at(ground, inverse.ravel(), height)
+    side = GROUND_CELLS + 1  # (a cell's index in 0..GROUND_CELLS: one key, in row order)
+    low = np.full(side * side, np.inf)
+    np.minimum.at(low, ij[:, 0] * side + ij[:, 1], positions @ u)
+    cells = np.flatnonzero(low < np.inf)
+    return np.stack([cells // side, cells % side], 1), low[cells]
+
+
+def elevation(centroid: np.ndarray, frame: tuple, keys: np.ndarray,
+              low: np.ndarray) -> np.ndarray:
+    """Each centroid's height above the ground: a quadratic surface fitted to the lowest
+    element of each grid cell (:func:`ground_cells`), refitted :data:`GROUND_FITS` times to
+    the lower half of them (the cells whose lowest element is a roof or a canopy stand
+    above it).
+
+    Parameters
+    ----------
+    centroid : (K, 3) float64 ndarray
+    frame : tuple
+        :func:`ground_frame`'s.
+    keys, low
+        :func:`ground_cells`' (a tiled run: each cell's lowest over the tiles).
+
+    Returns
+    -------
+    (K,) float64 ndarray
+        In the data's units.
+
+    Raises
+    ------
+    Never.
+
+    Examples
+    --------
+    >>> xy = np.stack(np.meshgrid(np.arange(8.0), np.arange(8.0)), -1).reshape(-1, 2)
+    >>> pts = np.c_[xy, np.zeros(64)]
+    >>> frame = ground_frame(pts, np.array([0.0, 0, 1]))
+    >>> elevation(np.array([[3.0, 3, 2]]), frame, *ground_cells(pts, frame)).round(6).tolist()
+    [2.0]
+    """
+    u, e1, e2, lo, span = frame
     centres = (keys + 0.5) * (span / GROUND_CELLS) / span  # in [0, 1]: a conditioned fit
 
     def design(xy):
@@ -126,8 +219,8 @@ def _elevation(positions: np.ndarray, centroid: np.ndarray, up: np.ndarray) -> n
     for _ in range(GROUND_FITS):
         if keep.sum() < 6:
             break
-        coef = np.linalg.lstsq(design(centres[keep]), ground[keep], rcond=None)[0]
-        residual = ground - design(centres) @ coef
+        coef = np.linalg.lstsq(design(centres[keep]), low[keep], rcond=None)[0]
+        residual = low - design(centres) @ coef
         keep = residual <= np.median(residual[keep])
     at = (np.c_[centroid @ e1, centroid @ e2] - lo) / span
     return centroid @ u - design(at) @ coef
@@ -174,12 +267,48 @@ def learning_arrays(graph: SuperfacetGraph, positions: np.ndarray, element_label
     ((12, 10), True)
     """
     u = check_up(up)
-    shape = shape_features(graph, u)
     lab = np.asarray(element_labels, dtype=np.int64)
     count = np.bincount(lab[lab >= 0], minlength=graph.n_segments).astype(np.float64)
+    pos = np.asarray(positions, dtype=np.float64)
+    frame = ground_frame(pos, u)
+    return learning_layout(graph, count, elevation(graph.centroid, frame,
+                                                   *ground_cells(pos, frame)), row_labels, u)
+
+
+def learning_layout(graph: SuperfacetGraph, count: np.ndarray, height: np.ndarray,
+                    row_labels, up) -> dict[str, np.ndarray]:
+    """:func:`learning_arrays` from each superpoint's element ``count`` and ``height``
+    above the ground (:func:`elevation`), as a tiled run sums them.
+
+    Parameters
+    ----------
+    graph : SuperfacetGraph
+    count, height : (K,) float64 ndarray
+    row_labels : (N,) int ndarray
+    up : (3,) float ndarray
+        The vertical (checked by the caller).
+
+    Returns
+    -------
+    dict
+        As :func:`learning_arrays`.
+
+    Raises
+    ------
+    ValueError
+        If the graph has no ``scatter``.
+
+    Examples
+    --------
+    >>> r = segment(trimesh.creation.icosphere(subdivisions=3), 12)
+    >>> a = learning_layout(r.graph(), np.ones(12), np.zeros(12), r.labels, np.eye(3)[2])
+    >>> a["x"].shape
+    (12, 10)
+    """
+    u = np.asarray(up, dtype=np.float64)
+    shape = shape_features(graph, u)
     cols = [shape["linearity"], shape["planarity"], shape["scattering"], shape["verticality"],
-            _elevation(np.asarray(positions, dtype=np.float64), graph.centroid, u),
-            np.log1p(count), np.log1p(graph.area), *graph.normal.T]
+            height, np.log1p(count), np.log1p(graph.area), *graph.normal.T]
     names = list(NODE_FEATURES)
     if graph.feature is not None and graph.feature.shape[1] == 3:
         cols += list(graph.feature.T)

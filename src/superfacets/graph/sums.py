@@ -25,6 +25,7 @@ from ..elements.vertices import symmetric_terms
 from .adjacency import SuperfacetGraph, crossing_adjacencies
 
 __all__ = ["border_sums", "point_sums", "pair_sums", "grouped_graph", "grouped_planes",
+           "area_moments",
            "PAIR_FIELDS"]
 
 #: The per-pair sums, in the columns of ``label_pair_sums``: border length, border times
@@ -161,11 +162,66 @@ def point_sums(labels: np.ndarray, k: int, positions: np.ndarray, normals: np.nd
     return out
 
 
+def area_moments(labels: np.ndarray, k: int, positions: np.ndarray, normals: np.ndarray,
+                 sizes: np.ndarray, area_mean: np.ndarray, colours=None) -> dict:
+    """Per superpoint, what its superpoint graph's node holds beyond :func:`point_sums`
+    (:func:`superfacets.graph.adjacency.superfacet_graph`, each element weighed by its
+    area): the area-weighted sum of the normals ``area_normal`` (k, 3), the scatter
+    ``area_scatter`` (k, 3, 3) about the area-weighted mean ``area_mean``, and with
+    ``colours`` (n, d) their area-weighted sum ``area_colour`` (k, d).
+
+    Parameters
+    ----------
+    labels : (n,) int64 ndarray
+        In ``0..k-1``.
+    k : int
+    positions : (n, 3) float64 ndarray
+    normals : (n, 3) float ndarray
+    sizes : (n,) float64 ndarray
+    area_mean : (k, 3) float64 ndarray
+        :func:`point_sums`' ``area_mean``.
+    colours : (n, d) float64 ndarray, optional
+
+    Returns
+    -------
+    dict
+
+    Raises
+    ------
+    Never for arrays of these shapes.
+
+    Examples
+    --------
+    >>> pos = np.array([[0.0, 0, 0], [2, 0, 0]])
+    >>> up = np.array([[0.0, 0, 1], [0.0, 0, 1]])
+    >>> m = area_moments(np.zeros(2, np.int64), 1, pos, up, np.array([1.0, 3.0]),
+    ...                  np.array([[1.5, 0, 0]]))
+    >>> m["area_normal"].tolist(), float(m["area_scatter"][0, 0, 0])
+    ([[0.0, 0.0, 4.0]], 3.0)
+    """
+    sums = native.kernel("geometry.label_sums")
+    lab = np.ascontiguousarray(labels, dtype=np.int64)
+    pos = np.ascontiguousarray(positions, dtype=np.float64)
+    size = np.ascontiguousarray(sizes, dtype=np.float64)
+    area, apos, normal = np.zeros(k), np.zeros((k, 3)), np.zeros((k, 3))
+    sums(lab, size, pos, normals, area, apos, normal)
+    scatter = np.zeros((k, 9))
+    native.kernel("geometry.label_scatter")(lab, size, pos, np.ascontiguousarray(
+        area_mean, dtype=np.float64), scatter)
+    out = dict(area_normal=normal, area_scatter=scatter.reshape(k, 3, 3))
+    if colours is not None:
+        c = np.asarray(colours, dtype=np.float64).reshape(lab.size, -1)
+        out["area_colour"] = np.stack([np.bincount(lab, weights=size * c[:, j], minlength=k)
+                                       for j in range(c.shape[1])], 1)
+    return out
+
+
 def grouped_planes(top: np.ndarray, count: np.ndarray, mean: np.ndarray,
                    scatter: np.ndarray) -> tuple:
     """The points' count, mean and scatter of the superpoints grouped by ``top`` (Chan's
     rule: each part's scatter about the union's mean), as a planarity level reads them
-    (:func:`superfacets.graph.hierarchy.planarity_graph`).
+    (:func:`superfacets.graph.hierarchy.planarity_graph`); with areas for ``count`` and
+    area-weighted means and scatters, the area-weighted ones.
 
     Examples
     --------
@@ -178,7 +234,7 @@ def grouped_planes(top: np.ndarray, count: np.ndarray, mean: np.ndarray,
     g = int(top.max()) + 1 if top.size else 0
     total = np.bincount(top, weights=count, minlength=g)
     gmean = np.stack([np.bincount(top, weights=count * mean[:, c], minlength=g)
-                      for c in range(3)], 1) / np.maximum(total, 1.0)[:, None]
+                      for c in range(3)], 1) / np.where(total > 0, total, 1.0)[:, None]
     d = mean - gmean[top]
     part = (scatter + count[:, None, None] * d[:, :, None] * d[:, None, :]).reshape(-1, 9)
     gscatter = np.stack([np.bincount(top, weights=part[:, j], minlength=g) for j in range(9)],

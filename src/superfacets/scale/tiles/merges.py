@@ -42,8 +42,10 @@ from ...elements.labels import check_labels
 from ...errors import ParameterError
 from ...graph.adjacency import crossing_adjacencies
 from ...graph.hierarchy import Hierarchy, hierarchy
+from ...graph.learning import elevation, ground_cells, learning_layout
 from ...graph.sums import (
     PAIR_FIELDS,
+    area_moments,
     border_sums,
     grouped_graph,
     grouped_planes,
@@ -54,12 +56,12 @@ from ...method.merges import FLAT_NOISE, merge_nodes, neighbourhood_noise, noise
 from ...method.rules import merge_from_of
 
 __all__ = ["tile_merge_stats", "merge_names", "one_position_stats", "tiled_merge_from",
-           "merged_labels", "tiled_hierarchy"]
+           "merged_labels", "tiled_hierarchy", "tiled_learning"]
 
 
 def tile_merge_stats(graph, labels: np.ndarray, names: np.ndarray, core: np.ndarray,
                      rows: np.ndarray, n_noise: int, *, features: np.ndarray | None = None,
-                     floor: float = 0.0) -> dict:
+                     floor: float = 0.0, learning: dict | None = None) -> dict:
     """What the merges read, summed over one tile (see the module notes).
 
     Parameters
@@ -82,6 +84,10 @@ def tile_merge_stats(graph, labels: np.ndarray, names: np.ndarray, core: np.ndar
         superpoints, so that the merges join only neighbours of one colour.
     floor : float, default 0
         The tile's colour floor (:func:`superfacets.method.weights.feature_scale`).
+    learning : dict, optional
+        For the superpoint graph in the learning layout (:func:`tiled_learning`):
+        ``frame``, the ground's grid (:func:`superfacets.graph.learning.ground_frame`),
+        and ``colours``, the elements' colours (m, 3) or None.
 
     Returns
     -------
@@ -95,7 +101,10 @@ def tile_merge_stats(graph, labels: np.ndarray, names: np.ndarray, core: np.ndar
         of their ends, ``outer_names`` (F, 2) this tile's names of them, and
         ``outer_length``, ``outer_angle``, ``outer_concave`` (F,); ``noise``
         (n_noise',) float64; with ``features``, ``feature_sum`` and ``feature_squares``
-        (K', d), and ``floor``.
+        (K', d), and ``floor``; with ``learning``, the superpoints' ``area_normal``,
+        ``area_scatter`` and ``area_colour`` (:func:`superfacets.graph.sums.area_moments`)
+        and the lowest core element of each cell of the ground's grid, ``ground_keys``
+        (G, 2) and ``ground_low`` (G,).
 
     Raises
     ------
@@ -122,8 +131,16 @@ def tile_merge_stats(graph, labels: np.ndarray, names: np.ndarray, core: np.ndar
     out = names.size
     nodes = point_sums(np.where(core, lab, out), out + 1, graph.positions,
                        real_rows(graph.normals), graph.sizes, features)
+    if learning is not None:  # (what one run's superpoint graph weighs by area)
+        nodes.update(area_moments(np.where(core, lab, out), out + 1, graph.positions,
+                                  real_rows(graph.normals), graph.sizes, nodes["area_mean"],
+                                  learning["colours"]))
     used = np.flatnonzero(nodes["count"][:out] > 0)
     nodes = {f: v[used] for f, v in nodes.items()}
+    if learning is not None:
+        keys, low = ground_cells(np.asarray(graph.positions, dtype=np.float64)[at],
+                                 learning["frame"])
+        nodes.update(ground_keys=keys, ground_low=low)
 
     edges = _inner_sums(graph, lab, core, names)
     # an adjacency with an end outside the core: that end's label is another tile's, and
@@ -421,6 +438,107 @@ def tiled_hierarchy(stats: list[dict], fine: np.ndarray, final: np.ndarray, leve
     graph = grouped_graph(of, pairs["edges"], pairs, *planes)
     return hierarchy(graph, levels, alpha=alpha, eta_convex=eta_convex, cost=cost,
                      extent_weight=extent_weight)
+
+
+def tiled_learning(stats: list[dict], fine: np.ndarray, final: np.ndarray,
+                   frame: tuple) -> dict:
+    """A tiled run's superpoint graph in the layout learning pipelines read, from the tiles'
+    sums (:func:`tile_merge_stats` with ``learning``): the arrays
+    :meth:`SegmentationResult.learning_graph` gives of one run's labels, each
+    superpoint's area, centroid, normal, scatter and colour summed over the tiles' parts as
+    one run sums its elements (the same values but for the order of the additions), the
+    ground read on the cells' lowest elements over every tile.
+
+    Parameters
+    ----------
+    stats : list of dict
+        The tiles' sums, of the superpoints ``fine`` names.
+    fine : (n_rows,) int64 ndarray
+        The stitched labels the sums are of (center rows, -1 invalid).
+    final : (n_rows,) int64 ndarray
+        The run's labels, dense ``0..K-1`` (-1 invalid).
+    frame : tuple
+        The ground's grid (:func:`superfacets.graph.learning.ground_frame`).
+
+    Returns
+    -------
+    dict
+        ``area``, ``centroid``, ``normal``, ``feature`` (where the sums hold the
+        elements' colours, ``area_colour``: the mean colour per superpoint, also the last
+        three columns of ``x``), and
+        :func:`superfacets.graph.learning.learning_layout`'s arrays.
+
+    Raises
+    ------
+    ValueError
+        If the sums hold no ``area_scatter`` (the labels phase ran without ``learning``).
+
+    Examples
+    --------
+    >>> xy = np.stack(np.meshgrid(np.arange(20.0), np.arange(20.0)), -1).reshape(-1, 2)
+    >>> g = point_graph(PointCloud(np.c_[xy, np.zeros(400)])).graph
+    >>> lab = (g.positions[:, 0] >= 10).astype(np.int64)
+    >>> from superfacets.graph.learning import ground_frame
+    >>> frame = ground_frame(g.positions, np.array([0.0, 0, 1]))
+    >>> s = tile_merge_stats(g, lab, np.array([7, 9]), np.ones(400, bool), np.arange(400),
+    ...                      0, learning=dict(frame=frame, colours=None))
+    >>> a = tiled_learning([s], np.array([7, 9])[lab], lab, frame)
+    >>> a["x"].shape, a["edge_index"].tolist()
+    ((2, 10), [[0, 1], [1, 0]])
+    """
+    if not any("area_scatter" in t for t in stats):
+        raise ValueError("the tiles' sums hold no area moments: run the labels phase with "
+                         "learning")
+    colours = all("area_colour" in t for t in stats if "area_scatter" in t)
+    stats = [_with_moments(t) for t in stats]
+    names, node, nodes, pairs = _summed(stats, fine)
+    k, n = int(final.max()) + 1 if final.size else 0, names.size
+    at = row_table(names, fine.size)[fine]
+    of = np.full(n, -1, dtype=np.int64)
+    of[at[at >= 0]] = final[at >= 0]
+    parts = np.concatenate(node)
+    _, _, scatter = grouped_planes(parts, *(np.concatenate([s[f] for s in stats])
+                                            for f in ("area", "area_mean", "area_scatter")))
+    extra = {"normal": _sum(node, stats, "area_normal", n)}
+    if colours:
+        extra["colour"] = _sum(node, stats, "area_colour", n)
+    held = of >= 0  # (a superpoint a repair left without rows: out)
+    ends = held[pairs["edges"]].all(axis=1)
+    pairs = {f: v[ends] for f, v in pairs.items()}
+    pairs["edges"] = np.cumsum(held)[pairs["edges"]] - 1
+    nodes = {f: v[held] for f, v in nodes.items()}
+    of, scatter = of[held], scatter[held]
+    area, centroid, scatter = grouped_planes(of, nodes["area"], nodes["area_mean"], scatter)
+    sums = {f: np.stack([np.bincount(of, weights=v[held][:, c], minlength=k)
+                         for c in range(v.shape[1])], 1) for f, v in extra.items()}
+    norm = np.linalg.norm(sums["normal"], axis=1)
+    normal = np.divide(sums["normal"], norm[:, None], out=np.zeros_like(sums["normal"]),
+                       where=norm[:, None] > 1e-12 * max(1.0, float(norm.max(initial=0.0))))
+    feature = sums["colour"] / np.where(area > 0, area, 1.0)[:, None] if colours else None
+    graph = replace(grouped_graph(of, pairs["edges"], pairs, area, centroid, scatter),
+                    normal=normal, feature=feature)
+    keys = np.concatenate([s.get("ground_keys", np.zeros((0, 2), np.int64)) for s in stats])
+    low = np.concatenate([s.get("ground_low", np.zeros(0)) for s in stats])
+    cells, inverse = np.unique(keys.reshape(-1, 2), axis=0, return_inverse=True)
+    ground = np.full(cells.shape[0], np.inf)
+    np.minimum.at(ground, inverse.ravel(), low)
+    count = np.bincount(of, weights=nodes["count"], minlength=k)
+    out = learning_layout(graph, count, elevation(centroid, frame, cells, ground), final,
+                          frame[0])
+    out.update(area=area, centroid=centroid, normal=normal)
+    if feature is not None:
+        out["feature"] = feature
+    return out
+
+
+def _with_moments(stats: dict) -> dict:
+    """A tile's sums with zero area moments where it has none (a tile whose points all lie
+    at one position: :func:`one_position_stats`)."""
+    if "area_scatter" in stats:
+        return stats
+    k = stats["names"].size
+    return dict(stats, area_normal=np.zeros((k, 3)), area_scatter=np.zeros((k, 3, 3)),
+                area_colour=np.zeros((k, 3)))
 
 
 def _sum(node: list, stats: list, field: str, k: int, weight: str | None = None):

@@ -513,7 +513,7 @@ def _core_share(inp, core: np.ndarray, p: SegmentParams, r: float) -> int:
 
 def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
                 diagonal: float, features=None, merging: tuple | None = None, folder=None,
-                floor: float | None = None):
+                floor: float | None = None, frame: tuple | None = None):
     """Phase 2: labels of one tile from fixed centers (and, ``merging``, the sums the
     merges to the count read: :func:`superfacets.scale.tiles.merges.tile_merge_stats`).
 
@@ -533,6 +533,11 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
     folder : str or os.PathLike, optional
         The tile's graph folder, where its refine round kept its last classification
         (:func:`tile_refine`): the classification here starts from it (the same labels).
+    frame : tuple, optional
+        With ``merging``: the ground's grid of the superpoint graph in the learning layout
+        (:func:`superfacets.graph.learning.ground_frame`); the sums then hold what it reads
+        (:func:`~superfacets.scale.tiles.merges.tile_merge_stats`' ``learning``, the
+        elements' colours where the input has them).
 
     Returns
     -------
@@ -594,8 +599,11 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
 
     core, rows, n_noise = (np.asarray(x) for x in merging)
     first = src.first_rows(np.arange(m))  # each element's first row
+    learning = None if frame is None else dict(frame=frame, colours=None if src.colors()
+                                               is None else per_element(src, src.colors()))
     return named, tile_merge_stats(graph, labels, rows[name], core[first], rows[first],
-                                   int(n_noise), features=feats, floor=rules.feature_floor)
+                                   int(n_noise), features=feats, floor=rules.feature_floor,
+                                   learning=learning)
 
 
 def _replaying(graph, w: np.ndarray, window_r2: float, spaces: Workspaces):

@@ -51,12 +51,13 @@ import numpy as np
 from ..._runtime.arrays import ranked
 from ..._runtime.progress import new_bar, tick, waiting_bar
 from ...api.result import TiledResult
-from ...checks import check_n_segments, check_nonneg, max_threads
+from ...checks import check_n_segments, check_nonneg, check_up, max_threads
 from ...elements import points
 from ...elements.density import AUTO_SPREAD
 from ...elements.kinds import kind_of
 from ...errors import ParameterError, SuperfacetsError
 from ...graph.hierarchy import AUTO_EXTENT_WEIGHT, wanted_levels
+from ...graph.learning import ground_frame
 from ...inputs.bounds import check_extent, rows_in_box
 from ...inputs.cloud import check_weighable, stretched_along
 from ...io.clouds import dropped_normals_said
@@ -71,7 +72,7 @@ from .buckets import box_folder
 from .graphs import drop_graphs, graph_folder
 from .held import hold_from_env, release_held
 from .layout import balanced_tiles, check_tiles, gathered_centers, in_box, tile_grid
-from .merges import merged_labels, tiled_hierarchy, tiled_merge_from
+from .merges import merged_labels, tiled_hierarchy, tiled_learning, tiled_merge_from
 from .phases import HALO, check_tileable, halo_distance, point_areas, sample_cloud
 from .task import tile_task
 from .workdir import run_folder
@@ -98,7 +99,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                   scheduler: str | None = None, memory_limit="auto", workdir=None,
                   progress: bool = False, refine: int = 1, start: str = "sample",
                   levels=None, level_cost: str = "ward", extent_weight: float | None = None,
-                  **options) -> TiledResult:
+                  graph: bool = False, **options) -> TiledResult:
     """Segment one large input tile by tile, on Dask or in this process.
 
     Parameters
@@ -172,6 +173,12 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         With ``'planarity'``, as :meth:`SegmentationResult.hierarchy` (default: 0.01 on
         a cloud of uneven density, ``size_spread`` above
         :data:`~superfacets.elements.density.AUTO_SPREAD`, else 0).
+    graph : bool, default False
+        Also the superpoint graph in the layout learning pipelines read, from the tiles'
+        sums (:func:`~superfacets.scale.tiles.merges.tiled_learning`): ``result.learning``,
+        the arrays :meth:`SegmentationResult.learning_graph` gives of one run's labels (the
+        input's own up, else z; the ground's grid on the input's bounding box, exact for an
+        axis up).
     **options
         Keyword arguments of :func:`superfacets.segment` (``alpha``,
         ``window``, ``cleanup``, ``paper``, ``beta``, ``n_neighbors``, ...).
@@ -211,8 +218,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         weight, params = params.up_weight, _step_resolved(params, reader)
         layout = (balanced_tiles(survey.sample, survey.lo, survey.hi, tiles)
                   if np.ndim(tiles) == 0 else tile_grid(survey.lo, survey.hi, tiles))
-        grid = layout.shape or (layout.n_tiles,)
-        n_tiles = layout.n_tiles
+        grid, n_tiles = layout.shape or (layout.n_tiles,), layout.n_tiles
         target, merge_from, params = _merge_plan(params, reader, survey, n_tiles)
         merging = params.n_segments != target  # (the tiles make more: merged at the end)
         diagonal = float(np.linalg.norm(survey.hi - survey.lo))
@@ -221,6 +227,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         # (a remote scheduler and no workdir) every task reads the file
         shared = scheduler is None or workdir is not None
         up = getattr(reader, "up", None)  # (the buckets keep the viewpoint, not this)
+        ground = _ground_of(graph, up, survey)
         if shared and n_tiles > 1:
             with stage("bucket", bar=False):  # (a bar of its own)
                 reader = buckets.bucket(reader, layout, Path(tmp) / "buckets", progress=progress)
@@ -252,8 +259,9 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                                                  diagonal, halo, (graphs, sample_area))
             params, floor = _colour_term(run, margin, params, survey.colors, stage)
             found, done = _classified(run, layout, params, margin, params.window * r, dict(
-                refine=refine, box_rows=not shared, n_noise=_noise_points(
-                    merging or levels is not None, merge_from if merging else 1, n_tiles),
+                refine=refine, box_rows=not shared, frame=ground, n_noise=_noise_points(
+                    merging or levels is not None or graph, merge_from if merging else 1,
+                    n_tiles),
                 start=_sample_start(reader, survey, params, r, diagonal,
                     (refine, start), stage, (sampled, up))),
                 timings)
@@ -265,8 +273,8 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                     box = None if shared else {o["tile"]: o.pop("box_rows") for o in done}
                     repaired = _connected(run, labels, (margin, done), tmp, box, suspects)
             drop_graphs(graphs)
-    labels, names, merged_from, tree = _merged(labels, done, stage, (merging, target, params),
-                                               levels, (spread, reader.kind))
+    labels, names, merged_from, tree, learning = _merged(
+        labels, done, stage, (merging, target, params), (levels, ground), (spread, reader.kind))
     timings["total"] = time.perf_counter() - t_start
     resolved = dict(params.as_dict(), n_segments=int(names.size), radius=r / diagonal,
                     up_weight=weight, tiles=grid, halo=float(halo), elements=reader.kind,
@@ -276,25 +284,33 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
                        layout=layout, halo=margin, disagreements=disagreements, repaired=repaired,
                        tiles=_tile_stats(found, done), timings=timings, params=resolved,
                        area=area if weight == 1 else math.nan, size_spread=spread,
-                       hierarchy=tree)
+                       hierarchy=tree, learning=learning)
 
 
-def _merged(labels: np.ndarray, done: list, stage, plan: tuple, levels, of: tuple):
+def _merged(labels: np.ndarray, done: list, stage, plan: tuple, asked: tuple, of: tuple):
     """The stitched ``labels`` merged to the count where ``plan = (merging, target,
     params)`` says (:func:`~superfacets.scale.tiles.merges.merged_labels`), numbered
-    densely, and their ``levels`` (None: none) merged from the tiles' sums; ``of`` is the
-    input's ``(size_spread, kind)``. Returns the labels, each one's name before, the count
-    merged from (None: no merges) and the hierarchy (or None)."""
+    densely, and what ``asked = (levels, ground)`` asks of the tiles' sums (None: nothing):
+    the levels, and the superpoint graph in the learning layout on that ground's grid;
+    ``of`` is the input's ``(size_spread, kind)``. Returns the labels, each one's name
+    before, the count merged from (None: no merges), the hierarchy and the graph's arrays
+    (each None where not asked)."""
     merging, target, params = plan
-    merged_from, fine = None, labels.copy() if levels is not None else None
+    levels, ground = asked
+    fine = labels.copy() if asked != (None, None) else None
+    merged_from = None
     if merging:
         with stage("merges"):
             merged_from = int(ranked(labels, labels.size)[0].size)
             labels = merged_labels(labels, [o["merge_stats"] for o in done], target, params)
     with stage("stitch", add=True):
         names = _numbered_densely(labels)
+    learning = None
+    if ground is not None:
+        with stage("graph"):
+            learning = tiled_learning([o["merge_stats"] for o in done], fine, labels, ground)
     if levels is None:
-        return labels, names, merged_from, None
+        return labels, names, merged_from, None, learning
     wanted, cost, weight = levels
     if weight is None:  # (as one run's: a planarity level of a cloud of uneven density
         weight = AUTO_EXTENT_WEIGHT if cost == "planarity" and of[0] > AUTO_SPREAD else 0.0
@@ -302,7 +318,17 @@ def _merged(labels: np.ndarray, done: list, stage, plan: tuple, levels, of: tupl
         tree = tiled_hierarchy([o["merge_stats"] for o in done], fine, labels, wanted,
                                alpha=params.alpha, eta_convex=params.eta_convex, cost=cost,
                                extent_weight=weight, cloud=kind_of(of[1]).cloud)
-    return labels, names, merged_from, tree
+    return labels, names, merged_from, tree, learning
+
+
+def _ground_of(graph: bool, up, survey) -> tuple | None:
+    """The ground's grid of the learning layout's elevation (None: no graph asked): the
+    input's own up, else z, on the corners of its bounding box (exact for an axis up)."""
+    if not graph:
+        return None
+    corners = np.array([[(survey.lo, survey.hi)[(i >> j) & 1][j] for j in range(3)]
+                        for i in range(8)], dtype=np.float64)
+    return ground_frame(corners, check_up((0.0, 0.0, 1.0) if up is None else up))
 
 
 def _check_levels_of(levels, kind: str) -> None:
@@ -342,7 +368,8 @@ def _classified(run, layout, params, margin: float, ring: float, how: dict,
         rows, pos = gathered_centers(again, params)
         found = again if found is None else found
     t = time.perf_counter()
-    done = [o for o in run("labels", margin, lambda t: dict(reach(t), n_noise=how["n_noise"]))
+    done = [o for o in run("labels", margin, lambda t: dict(
+        reach(t), n_noise=how["n_noise"], frame_of_ground=how.get("frame")))
             if o["core"]]
     timings["labels"] = time.perf_counter() - t
     return found, done
