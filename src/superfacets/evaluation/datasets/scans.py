@@ -120,6 +120,12 @@ def _las(name: str, kind: str, repo: tuple, path: str, sha: str, credit: str, *,
 _LIDR_CREDIT = ("from lidR's example data (Roussel et al., Remote Sensing of Environment "
                 "2020; GPL-3 package, data as shipped in inst/extdata): ASPRS classes ")
 _PDAL_CREDIT = "from PDAL's test data (BSD): ASPRS classes "
+_SERC = ("kccushman/SERC_lidarComparison", "6f7764a70b58bbad1097bbddcd8c16c140c37d69")
+_SERC_CREDIT = ("from the data of Cushman et al., 'A primer on forest structure measurement "
+                "with lidar for ecologists' (an 80 x 5 m transect of the Smithsonian "
+                "Environmental Research Center's forest plot, Maryland; shared openly, no "
+                "licence named: read for measurement, never redistributed), coloured: ASPRS "
+                "classes ground and vegetation (5)")
 
 
 def _isprs(sample: int, points_sha: str, ground_sha: str) -> ScanSource:
@@ -213,6 +219,18 @@ SCANS: dict[str, ScanSource] = {s.name: s for s in (
     _las("pdal-hexbin", "airborne LiDAR, open ground", _PDAL, "test/data/filters/hexbin-crop.las",
          "d1206c580a8c9c56ae7b7bac4ac09d3e7c0082365fcd2340eeffcf6a2825ceef",
          _PDAL_CREDIT + "ground and unclassified"),
+    _las("serc-als", "airborne LiDAR, deciduous forest transect", _SERC,
+         "Data/transect/transect_als.laz",
+         "ea05665b23c21db7b54b8227bcd9c9a2965628a869b8470267f5dcd0e763bdaa",
+         _SERC_CREDIT + " and unclassified (1)"),
+    _las("serc-uls", "airborne LiDAR from a drone (ULS), the same transect in leaf", _SERC,
+         "Data/transect/transect_drone.laz",
+         "0247ac69a82f3b0da6154d101b65cd9a8aeffa1a78341498c2e49f9d9457b6f8",
+         _SERC_CREDIT + " (class 0, never classified, unlabelled)"),
+    _las("serc-uls-leafoff", "airborne LiDAR from a drone (ULS), the same transect leaf-off",
+         _SERC, "Data/transect/transect_drone_leafoff.laz",
+         "fda5db05f29c0929f83aa8b54c494b7c29d171491b86d2d13a96a89a671b7b3e",
+         _SERC_CREDIT + " (class 0, 43 % of the points, unlabelled)"),
     _scannet("scene0000_00", "c73b979bbff0bb2cc93cf6d57aea10234c807d246df16c6ecc40e8fbd896ac00",
              "7b5bf6e35fd5007618dc22748f50991208635be3aec9783ffd3f0f93761e2f68",
              "5ef2f8b2622c3512a19902807294216130f6332872cf3db121f6d5815cd0a8c4"),
