@@ -47,6 +47,29 @@ def test_an_up_is_an_axis_or_a_direction_and_nothing_else():
             r.learning_graph(up=bad)
 
 
+def test_the_normal_is_the_best_planes_in_the_up_half_space():
+    """Each superpoint's normal is its points' best plane's, turned to the side of ``up``
+    (Superpoint Transformer's convention), whichever way the points' own normals face: a
+    tilted plane given normals all facing down, or half of them up, reads the same."""
+    rng = np.random.default_rng(3)
+    uv = rng.random((3000, 2)) * 10
+    n = np.array([0.3, -0.2, 1.0]) / np.linalg.norm([0.3, -0.2, 1.0])
+    e1 = np.cross(n, [1.0, 0, 0])
+    e1 /= np.linalg.norm(e1)
+    pts = uv[:, :1] * e1 + uv[:, 1:] * np.cross(n, e1)
+    down = np.tile(-n, (3000, 1))
+    mixed = np.where((np.arange(3000) % 2 == 0)[:, None], down, -down)
+    got = []
+    for normals in (down, mixed):
+        r = segment(PointCloud(pts, normals=normals), 6, merge_from=1)
+        a = r.learning_graph()
+        got.append(a["x"][:, [list(a["node_features"]).index(f"normal_{c}") for c in "xyz"]])
+        assert np.allclose(got[-1], n, atol=1e-4)
+        flipped = r.learning_graph(up="-z")  # the other half-space
+        assert np.allclose(flipped["x"][:, 7:10], -n, atol=1e-4)
+    np.testing.assert_array_equal(got[0], got[1])
+
+
 def test_a_scene_s_superpoints_read_as_ground_and_pole():
     ground, pole = _scene()
     r = segment(PointCloud(np.vstack([ground, pole]), up=(0, 0, 1)), 12, merge_from=1)

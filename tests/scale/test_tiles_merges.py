@@ -172,3 +172,29 @@ def test_a_tiled_runs_learning_graph_is_one_runs_of_its_labels(tmp_path):
         np.testing.assert_allclose(got["pos"], want["pos"], rtol=0, atol=1e-12)
     assert list(runs[0][0].learning["node_features"])[-3:] == ["red", "green", "blue"]
     assert segment_tiled(str(path), 100, tiles=2, workers=1).learning is None
+
+
+def test_a_tiled_learning_graph_of_estimated_normals_is_one_runs_of_its_labels(tmp_path):
+    """Without normals in the file each tile orients the normals it estimates like a sample
+    (a component's vote in one run): the superpoints' features are still one run's of the
+    same labels to the last bit (a superpoint's normal is its best plane's, turned up), on a
+    scene with z up and one with a tilted up; the edges' edge_index, borders and offsets too."""
+    from superfacets import PointCloud, segment
+    from superfacets.graph.adjacency import superfacet_graph
+    from superfacets.graph.learning import learning_arrays
+
+    rng = np.random.default_rng(4)
+    pts = rng.random((6000, 3)) * [4.0, 3.0, 0.3]
+    pts[:, 2] += 0.2 * np.sin(3 * pts[:, 0])
+    for up in ((0.0, 0.0, 1.0), (0.3, -0.2, 1.0)):
+        tiled = segment_tiled(PointCloud(pts, up=up), 80, tiles=3, workers=1, graph=True)
+        src = segment(PointCloud(pts, up=up), 80).elements  # (the scene's point graph)
+        per = np.full(src.graph.n_elements, -1)
+        per[src.index] = tiled.labels
+        want = learning_arrays(superfacet_graph(src.graph, per, None), src.graph.positions,
+                               per, tiled.labels, np.asarray(up) / np.linalg.norm(up))
+        got = tiled.learning
+        for key in ("x", "edge_index", "super_index"):
+            np.testing.assert_array_equal(got[key], want[key], err_msg=f"{key}, up {up}")
+        for col in (0, 3, 4, 5):  # border length and offsets (the angles read orientations)
+            np.testing.assert_array_equal(got["edge_attr"][:, col], want["edge_attr"][:, col])

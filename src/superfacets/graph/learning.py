@@ -16,7 +16,9 @@ them): with ``s1 >= s2 >= s3`` the square roots of its eigenvalues,
   along the longer horizontal side), refitted to the lower half of the cells
   (:data:`GROUND_FITS` times) so that roofs and canopies do not lift it; a coarse model
   of a gently rolling ground, as a tile's;
-- size: its element count and area; its mean normal and mean colour (where given).
+- size: its element count and area; its normal, the best plane's, turned into the half-space
+  of ``up`` (as Superpoint Transformer states it: the orientation of the elements' own
+  normals does not enter, so a tiled run's equals one run's); its mean colour (where given).
 
 Per edge: its border length, mean angle, concave share (:class:`SuperfacetGraph`)
 and the offset between the two centroids (``pos[j] - pos[i]`` of ``i -> j``).
@@ -27,11 +29,12 @@ from __future__ import annotations
 import numpy as np
 
 from ..checks import check_up
+from ..inputs.bounds import along
 from .adjacency import SuperfacetGraph
 
-__all__ = ["shape_features", "learning_arrays", "learning_layout", "ground_frame",
-           "ground_cells", "elevation", "GROUND_CELLS", "GROUND_FITS", "NODE_FEATURES",
-           "EDGE_FEATURES"]
+__all__ = ["shape_features", "learning_arrays", "learning_layout", "ground_axes",
+           "ground_frame", "ground_cells", "elevation", "GROUND_CELLS", "GROUND_FITS",
+           "NODE_FEATURES", "EDGE_FEATURES"]
 
 #: The ground beneath the superpoints: a quadratic surface fitted to the lowest element
 #: of each cell of a grid of this many cells along the input's longer horizontal side ...
@@ -64,7 +67,9 @@ def shape_features(graph: SuperfacetGraph, up=(0.0, 0.0, 1.0)) -> dict[str, np.n
     -------
     dict of (K,) float64 ndarray
         ``linearity``, ``planarity``, ``scattering`` (in ``[0, 1]``, adding up to 1;
-        all 0 for a superpoint of one point) and ``verticality`` (in ``[0, 1]``).
+        all 0 for a superpoint of one point) and ``verticality`` (in ``[0, 1]``); and
+        ``normal`` (K, 3): the best plane's unit normal with ``normal . up >= 0`` (a
+        superpoint of one point, or of coincident ones: its mean normal, turned alike).
 
     Raises
     ------
@@ -92,25 +97,57 @@ def shape_features(graph: SuperfacetGraph, up=(0.0, 0.0, 1.0)) -> dict[str, np.n
     ok = s1 > 0
     safe = np.where(ok, s1, 1.0)
     u = check_up(up)
-    normal = evecs[:, :, 0]
+    normal = np.where(ok[:, None], evecs[:, :, 0], np.asarray(graph.normal, dtype=np.float64))
+    normal = np.where((normal @ u < 0)[:, None], -normal, normal)  # (the up half-space)
     return {"linearity": np.where(ok, (s1 - s2) / safe, 0.0),
             "planarity": np.where(ok, (s2 - s3) / safe, 0.0),
             "scattering": np.where(ok, s3 / safe, 0.0),
-            "verticality": np.where(ok, 1.0 - np.abs(normal @ u), 0.0)}
+            "verticality": np.where(ok, 1.0 - np.abs(normal @ u), 0.0), "normal": normal}
 
 
-def ground_frame(positions: np.ndarray, up) -> tuple:
-    """The grid the ground is read on: the vertical ``u``, two horizontal axes ``e1``,
-    ``e2``, and the lowest corner ``lo`` and side ``span`` of the elements' extent along
-    them (:data:`GROUND_CELLS` cells along it).
+def ground_axes(up) -> np.ndarray:
+    """The vertical ``u`` and two horizontal axes ``e1``, ``e2`` of the ground's grid.
 
     Parameters
     ----------
-    positions : (n, 3) float64 ndarray
-        The elements' positions, or any points whose extent along the axes is theirs (a
-        tiled run: the corners of the input's bounding box, exact for an axis ``up``).
     up : (3,) float ndarray
         Not all zero.
+
+    Returns
+    -------
+    (3, 3) float64 ndarray
+        Rows ``u``, ``e1``, ``e2``, orthonormal.
+
+    Raises
+    ------
+    Never for a finite ``up`` not all zero.
+
+    Examples
+    --------
+    >>> ground_axes(np.array([0.0, 0, 2])).tolist()
+    [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]]
+    """
+    u = np.asarray(up, dtype=np.float64) / np.linalg.norm(up)
+    a = np.eye(3)[int(np.argmin(np.abs(u)))]
+    e1 = np.cross(u, a)
+    e1 /= np.linalg.norm(e1)
+    return np.stack([u, e1, np.cross(u, e1)])
+
+
+def ground_frame(positions: np.ndarray, up, extent: tuple | None = None) -> tuple:
+    """The grid the ground is read on: the vertical ``u``, two horizontal axes ``e1``,
+    ``e2`` (:func:`ground_axes`), and the lowest corner ``lo`` and side ``span`` of the
+    elements' extent along them (:data:`GROUND_CELLS` cells along it).
+
+    Parameters
+    ----------
+    positions : (n, 3) float64 ndarray or None
+        The elements' positions (None with ``extent``).
+    up : (3,) float ndarray
+        Not all zero.
+    extent : tuple of two (2,) float64 ndarray, optional
+        The least and greatest of :func:`along` the two horizontal axes over the elements,
+        instead of ``positions`` (a tiled run's survey reads them as it passes).
 
     Returns
     -------
@@ -128,14 +165,12 @@ def ground_frame(positions: np.ndarray, up) -> tuple:
     >>> float(span), u.tolist()
     (4.0, [0.0, 0.0, 1.0])
     """
-    u = np.asarray(up, dtype=np.float64) / np.linalg.norm(up)
-    a = np.eye(3)[int(np.argmin(np.abs(u)))]  # two horizontal axes
-    e1 = np.cross(u, a)
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(u, e1)
-    flat = np.c_[positions @ e1, positions @ e2]
-    lo = flat.min(axis=0)
-    return u, e1, e2, lo, max(float((flat.max(axis=0) - lo).max()), 1e-300)
+    u, e1, e2 = ground_axes(up)
+    if extent is None:
+        flat = np.c_[along(positions, e1), along(positions, e2)]
+        extent = flat.min(axis=0), flat.max(axis=0)
+    lo, hi = (np.asarray(v, dtype=np.float64) for v in extent)
+    return u, e1, e2, lo, max(float((hi - lo).max()), 1e-300)
 
 
 def ground_cells(positions: np.ndarray, frame: tuple) -> tuple:
@@ -166,11 +201,11 @@ def ground_cells(positions: np.ndarray, frame: tuple) -> tuple:
     [1.0, 5.0]
     """
     u, e1, e2, lo, span = frame
-    flat = np.c_[positions @ e1, positions @ e2]
+    flat = np.c_[along(positions, e1), along(positions, e2)]
     ij = np.floor((flat - lo) / (span / GROUND_CELLS)).astype(np.int64)
     side = GROUND_CELLS + 1  # (a cell's index in 0..GROUND_CELLS: one key, in row order)
     low = np.full(side * side, np.inf)
-    np.minimum.at(low, ij[:, 0] * side + ij[:, 1], positions @ u)
+    np.minimum.at(low, ij[:, 0] * side + ij[:, 1], along(positions, u))
     cells = np.flatnonzero(low < np.inf)
     return np.stack([cells // side, cells % side], 1), low[cells]
 
@@ -308,7 +343,7 @@ def learning_layout(graph: SuperfacetGraph, count: np.ndarray, height: np.ndarra
     u = np.asarray(up, dtype=np.float64)
     shape = shape_features(graph, u)
     cols = [shape["linearity"], shape["planarity"], shape["scattering"], shape["verticality"],
-            height, np.log1p(count), np.log1p(graph.area), *graph.normal.T]
+            height, np.log1p(count), np.log1p(graph.area), *shape["normal"].T]
     names = list(NODE_FEATURES)
     if graph.feature is not None and graph.feature.shape[1] == 3:
         cols += list(graph.feature.T)

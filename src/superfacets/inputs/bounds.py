@@ -14,7 +14,7 @@ from .._runtime.arrays import COMPILED_MIN
 from ..errors import InvalidCloudError, InvalidMeshError
 
 __all__ = ["check_extent", "column_bounds", "column_means", "finite_rows", "nearest_row",
-           "rows_in_box"]
+           "rows_in_box", "along"]
 
 _MAX_COORDINATE = 1e300  # sums of three coordinates stay finite
 _MAX_EXTENT = 1e70  # (edge length)^4 stays finite: areas and normals
@@ -141,3 +141,29 @@ def finite_rows(a: np.ndarray) -> np.ndarray:
         native.kernel("columns.finite_rows")(a, out)
         return out
     return np.isfinite(a).all(axis=1)
+
+
+def along(positions: np.ndarray, axis: np.ndarray) -> np.ndarray:
+    """``positions @ axis`` summed in one order for every row, so that a row's value does
+    not depend on the rows read with it (a tile's or a chunk's against the whole input's).
+
+    Parameters
+    ----------
+    positions : (n, 3) float64 ndarray
+    axis : (3,) float64 ndarray
+
+    Returns
+    -------
+    (n,) float64 ndarray
+
+    Raises
+    ------
+    Never.
+
+    Examples
+    --------
+    >>> along(np.array([[1.0, 2, 3]]), np.array([0.0, 1, 0])).tolist()
+    [2.0]
+    """
+    p = np.asarray(positions, dtype=np.float64)
+    return p[:, 0] * axis[0] + p[:, 1] * axis[1] + p[:, 2] * axis[2]

@@ -39,7 +39,7 @@ import numpy as np
 
 from .._runtime import extras
 from ..errors import InvalidMeshError, MeshFormatError
-from ..inputs.bounds import column_bounds, finite_rows, rows_in_box
+from ..inputs.bounds import along, column_bounds, finite_rows, rows_in_box
 from ..inputs.cloud import (
     InvalidCloudError,
     PointCloud,
@@ -152,6 +152,9 @@ class Survey:
     #: finite: then none is read (``normals`` is False), all are estimated, as one run does
     #: (:func:`superfacets.io.clouds.given_normals`); None: every one usable, or none given
     dropped_normals: tuple | None = None
+    #: ``(least, greatest)``, each (a,) float64: the positions along the axes the survey was
+    #: asked for (:func:`~superfacets.inputs.bounds.along`); None: none asked
+    extent_along: tuple | None = None
 
 
 @dataclass(frozen=True)
@@ -315,9 +318,15 @@ class RegionReader:
                                                                          self.up_weight))
             yield s, pts, np.ones(pts.shape[0]), extra
 
-    def survey(self) -> Survey:
+    def survey(self, axes: np.ndarray | None = None) -> Survey:
         """Bounds of the finite element positions, total size and count, and an even
         sample of the positions (at most :data:`SAMPLE`), in one pass.
+
+        Parameters
+        ----------
+        axes : (a, 3) float64 ndarray, optional
+            Also the least and greatest of the positions along each
+            (:func:`~superfacets.inputs.bounds.along`): ``Survey.extent_along``.
 
         Raises
         ------
@@ -333,6 +342,7 @@ class RegionReader:
         normals = colors = False
         bad = [0, 0, -1]  # (normals unusable, looked at, the first unusable's row)
         stats: dict = {}
+        span = None if axes is None else np.array([[np.inf] * len(axes), [-np.inf] * len(axes)])
         if self.kind == "faces":
             self._check_vertices()
         for start, pos, sz, extra in self.chunks(stats):
@@ -349,6 +359,8 @@ class RegionReader:
                 low, high = column_bounds(pos if every else pos[ok])
                 lo = np.minimum(lo, low)
                 hi = np.maximum(hi, high)
+                if span is not None:
+                    span = _extended(span, pos if every else pos[ok], axes)
                 size += float(sz.sum() if every else sz[ok].sum())
                 n += pos.shape[0] if every else int(ok.sum())
                 at = np.arange((-start) % stride, pos.shape[0], stride)
@@ -362,7 +374,8 @@ class RegionReader:
         return Survey(lo, hi, size, n, np.concatenate(kept).astype(np.float64),
                       normals and not bad[0], colors, top,
                       np.concatenate(kept_rows).astype(np.int64),
-                      dropped_normals=tuple(bad) if bad[0] else None)
+                      dropped_normals=tuple(bad) if bad[0] else None,
+                      extent_along=None if span is None else (span[0], span[1]))
 
     def _check_vertices(self):
         """Refuse a vertex without a finite position, used by a face or not, as a whole
@@ -595,3 +608,9 @@ def point_cloud_of(pts, colors, normals, viewpoint, name: str = ""):
 
     vp = None if viewpoint is None else np.asarray(viewpoint)
     return PointCloud(pts, normals, name=name, colors=colors, viewpoint=vp)
+
+
+def _extended(span: np.ndarray, pos: np.ndarray, axes) -> np.ndarray:
+    """``span`` (2, a) widened to the positions' least and greatest along each axis."""
+    vals = np.stack([along(pos, np.asarray(a, dtype=np.float64)) for a in axes])
+    return np.stack([np.minimum(span[0], vals.min(axis=1)), np.maximum(span[1], vals.max(axis=1))])

@@ -57,7 +57,7 @@ from ...elements.density import AUTO_SPREAD
 from ...elements.kinds import kind_of
 from ...errors import ParameterError, SuperfacetsError
 from ...graph.hierarchy import AUTO_EXTENT_WEIGHT, wanted_levels
-from ...graph.learning import ground_frame
+from ...graph.learning import ground_axes, ground_frame
 from ...inputs.bounds import check_extent, rows_in_box
 from ...inputs.cloud import check_weighable, stretched_along
 from ...io.clouds import dropped_normals_said
@@ -213,7 +213,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
     stage = partial(_stage, timings, progress)  # (each stage timed, and shown as it runs)
     with run_folder(workdir) as tmp:  # the run's own folder, removed at its end
         with stage("survey"):
-            reader, survey = _surveyed(source, tmp, tiles, params)
+            reader, survey = _surveyed(source, tmp, tiles, params, graph)
         _check_levels_of(levels, reader.kind)
         weight, params = params.up_weight, _step_resolved(params, reader)
         layout = (balanced_tiles(survey.sample, survey.lo, survey.hi, tiles)
@@ -227,7 +227,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         # (a remote scheduler and no workdir) every task reads the file
         shared = scheduler is None or workdir is not None
         up = getattr(reader, "up", None)  # (the buckets keep the viewpoint, not this)
-        ground = _ground_of(graph, up, survey)
+        ground = _ground_of(up, survey)
         if shared and n_tiles > 1:
             with stage("bucket", bar=False):  # (a bar of its own)
                 reader = buckets.bucket(reader, layout, Path(tmp) / "buckets", progress=progress)
@@ -321,14 +321,17 @@ def _merged(labels: np.ndarray, done: list, stage, plan: tuple, asked: tuple, of
     return labels, names, merged_from, tree, learning
 
 
-def _ground_of(graph: bool, up, survey) -> tuple | None:
-    """The ground's grid of the learning layout's elevation (None: no graph asked): the
-    input's own up, else z, on the corners of its bounding box (exact for an axis up)."""
-    if not graph:
+def _ground_of(up, survey) -> tuple | None:
+    """The ground's grid of the learning layout's elevation (None: no graph asked): on the
+    input's extent along the grid's axes, which the survey read as one run reads it."""
+    if survey.extent_along is None:
         return None
-    corners = np.array([[(survey.lo, survey.hi)[(i >> j) & 1][j] for j in range(3)]
-                        for i in range(8)], dtype=np.float64)
-    return ground_frame(corners, check_up((0.0, 0.0, 1.0) if up is None else up))
+    return ground_frame(None, _up_of(up), extent=survey.extent_along)
+
+
+def _up_of(up) -> np.ndarray:
+    """The input's own up, else z."""
+    return check_up((0.0, 0.0, 1.0) if up is None else up)
 
 
 def _check_levels_of(levels, kind: str) -> None:
@@ -619,11 +622,11 @@ def _step_resolved(params, reader):
                       for name in SCENE_DEFAULTS})
 
 
-def _surveyed(source, tmp, tiles, params):
+def _surveyed(source, tmp, tiles, params, graph: bool = False):
     """The input's reader (streamed from its file, or spilled to the work folder; its
     points read weighed with ``up_weight``, its colours divided by the survey's one
-    divisor) and its survey (bounds, counts, a sample), checked against the tiles and the
-    parameters."""
+    divisor) and its survey (bounds, counts, a sample; with ``graph``, the extent along
+    the ground grid's horizontal axes), checked against the tiles and the parameters."""
 
     if isinstance(source, (str, Path)):  # (~/scan.laz: the home's, read by every worker)
         source = user_path(source)
@@ -635,7 +638,8 @@ def _surveyed(source, tmp, tiles, params):
         reader = RegionReader.spill(source, tmp)
     if params.up_weight != 1:  # every position read stretched (the tiles run on W = 1)
         reader = _up_weighted(reader, params.up_weight)
-    survey = reader.survey()
+    axes = ground_axes(_up_of(getattr(reader, "up", None)))[1:] if graph else None
+    survey = reader.survey(axes)
     if params.n_segments is not None and params.radius is None:  # (as one run says it, not
         check_n_segments(params.n_segments, survey.n_elements, reader.kind)  # "no extent")
     if check_extent(survey.lo, survey.hi, f"{reader.path}: ",
