@@ -77,6 +77,38 @@ def test_the_command_line_segments_an_e57_per_scan(tmp_path, capsys):
     assert not set(labels[:3000]) & set(labels[3000:])  # labels unique over the site
 
 
+def test_an_e57_s_levels_per_scan_go_into_its_records(tmp_path, capsys):
+    """``--per-object --levels`` (a traceback after the run before): each level shared out
+    among the scans, nested in the labels, no segment over two scans; a level below one
+    segment per scan refused before the run, nothing written; batch likewise."""
+    laspy = pytest.importorskip("laspy")
+    path, _ = _e57(tmp_path / "site.e57", scans=2)
+    out = tmp_path / "site.las"
+    assert main(["segment", str(path), "-k", "16", "--per-object", "--levels", "4,2",
+                 "-o", str(out)]) == 0
+    assert "levels as ClusterID_4, ClusterID_2" in capsys.readouterr().out
+    rec = laspy.read(out)
+    labels = np.asarray(rec["ClusterID"])
+    for n in (4, 2):
+        level = np.asarray(rec[f"ClusterID_{n}"])
+        assert len(np.unique(level)) == n and not set(level[:3000]) & set(level[3000:])
+        parent = {}
+        for s, t in zip(labels, level):  # nested: each superpoint in one segment
+            assert parent.setdefault(int(s), int(t)) == int(t)
+    assert main(["segment", str(path), "-k", "16", "--per-object", "--levels", "4,1",
+                 "-o", str(tmp_path / "no.las")]) == 2
+    assert "at least one segment per object (2)" in capsys.readouterr().err
+    assert not (tmp_path / "no.las").exists()
+    folder = tmp_path / "in"
+    folder.mkdir()
+    path.rename(folder / "site.e57")
+    assert main(["batch", str(folder), "-o", str(tmp_path / "res"), "-k", "16", "-j", "1",
+                 "--per-object", "--labels", "laz", "--levels", "6"]) == 0
+    done = laspy.read(next((tmp_path / "res").rglob("*.laz")))
+    level = np.asarray(done["ClusterID_6"])
+    assert len(np.unique(level)) == 6 and not set(level[:3000]) & set(level[3000:])
+
+
 def test_an_e57_s_intensity_is_kept_in_a_new_file(tmp_path):
     from plyfile import PlyData
 

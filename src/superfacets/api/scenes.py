@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import ParameterError, SuperfacetsError
+from ..graph.hierarchy import Hierarchy, wanted_levels
 from ..inputs.cloud import PointCloud
 from ..inputs.convert import as_mesh
 from ..inputs.mesh import Mesh
@@ -17,7 +18,7 @@ from .segmentation import segment
 if TYPE_CHECKING:
     from .segmentation import SegmentationResult
 
-__all__ = ["segment_objects"]
+__all__ = ["segment_objects", "objects_hierarchy"]
 
 
 def segment_objects(mesh, n_segments: int = _D.n_segments, **options
@@ -86,6 +87,73 @@ def segment_objects(mesh, n_segments: int = _D.n_segments, **options
         base += r.n_segments
         results.append(r)
     return labels, results
+
+
+def objects_hierarchy(results, levels, *, cost: str = "ward",
+                      extent_weight: float | None = None) -> Hierarchy:
+    """Nested coarser levels of a scene segmented object by object
+    (:func:`segment_objects`), numbered over the scene as its labels are.
+
+    Each level's segments are shared out among the objects in proportion to their
+    superfacets (largest remainders, at least one each, never more than the finer level
+    gave the object), and each object's are its own hierarchy's
+    (:meth:`~superfacets.api.result.SegmentationResult.hierarchy`): no segment joins two
+    objects.
+
+    Parameters
+    ----------
+    results : list of SegmentationResult
+        :func:`segment_objects`' results, in order.
+    levels : int or sequence of int
+        Numbers of segments of the levels, each at least the number of objects and at
+        most the superfacets in all.
+    cost, extent_weight
+        As :meth:`~superfacets.api.result.SegmentationResult.hierarchy`.
+
+    Returns
+    -------
+    Hierarchy
+        Over the scene's labels: ``h.labels(i, labels)``.
+
+    Raises
+    ------
+    ParameterError
+        If a level is below the number of objects or above the superfacets in all.
+
+    Examples
+    --------
+    >>> scene = trimesh.Scene([trimesh.creation.icosphere(), trimesh.creation.box()])
+    >>> labels, parts = segment_objects(scene, 20)
+    >>> h = objects_hierarchy(parts, [6, 2])
+    >>> [int(h.labels(i, labels).max()) + 1 for i in range(2)]
+    [6, 2]
+    """
+    wanted = wanted_levels(levels)
+    counts = np.array([r.n_segments for r in results], dtype=np.int64)
+    if wanted[0] > counts.sum() or wanted[-1] < len(results):
+        raise ParameterError(f"levels of a scene segmented per object have between one "
+                             f"segment per object ({len(results)}) and its "
+                             f"{int(counts.sum())} segments; got {wanted}")
+    shares, caps = [], counts
+    for n in wanted:  # (each object's share at most its share of the finer level)
+        caps = _shares(n, counts.astype(np.float64), caps)
+        shares.append(caps)
+    tops = []  # per object: each level's segment of each of its superfacets
+    for j, r in enumerate(results):
+        mine = sorted({int(sh[j]) for sh in shares if sh[j] < counts[j]}, reverse=True)
+        h = r.hierarchy(mine, cost=cost, extent_weight=extent_weight) if mine else None
+        ident = np.arange(counts[j])
+        tops.append([h.of_superfacets(mine.index(int(sh[j]))) if sh[j] < counts[j]
+                     else ident for sh in shares])
+    parents, below = [], [np.arange(counts.sum())]
+    for i, sh in enumerate(shares):  # the scene's segments: each object's, offset
+        off = np.r_[0, np.cumsum(sh)[:-1]]
+        top = np.concatenate([tops[j][i] + off[j] for j in range(len(results))])
+        parent = np.empty(int(below[-1].max()) + 1, dtype=np.int64)
+        parent[below[-1]] = top
+        parents.append(parent)
+        below.append(top)
+    return Hierarchy(tuple(int(sh.sum()) for sh in shares), tuple(parents))
 
 
 def _shares(k: int, sizes: np.ndarray, caps: np.ndarray) -> np.ndarray:

@@ -436,6 +436,10 @@ def _kind_of_run(args, data, ply_out) -> str:
                              "takes the labels of --elements vertices; the labels of faces go "
                              "in a label file (-o NAME.seg) or as the coloured mesh's face "
                              "property 'label' (--colored-mesh OUT.ply)")
+    objects = len(getattr(data, "objects", ()) or ()) or 1
+    if args.per_object and args.levels and min(args.levels) < objects:
+        raise ParameterError(f"--levels with --per-object: each level holds at least one "
+                             f"segment per object ({objects}), got {min(args.levels)}")
     if not kind_of(kind).objects:
         if args.per_object and not (kind == "points" and getattr(data, "objects", ())):
             raise ParameterError("--per-object segments the faces of a scene or the scans of "

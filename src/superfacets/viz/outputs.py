@@ -32,12 +32,20 @@ class JoinedResult:
     """
 
     def __init__(self, labels, results):
+        self.results = list(results)
         self.labels = np.asarray(labels)
         self.n_segments = int(self.labels.max()) + 1
         self.n_iter = max(r.n_iter for r in results)
         self.converged = all(r.converged for r in results)
         self.params = dict(results[0].params, per_object=True)
         self.timings = {"total": sum(r.timings["total"] for r in results)}
+
+    def hierarchy(self, levels, *, cost: str = "ward", extent_weight: float | None = None):
+        """Coarser levels, each object's own
+        (:func:`~superfacets.api.scenes.objects_hierarchy`)."""
+        from ..api.scenes import objects_hierarchy
+
+        return objects_hierarchy(self.results, levels, cost=cost, extent_weight=extent_weight)
 
 
 def _object_lines(mesh) -> list[str]:

@@ -296,8 +296,10 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         With ``labels='records'`` or ``'laz'``: each cloud's coarser levels of these
         numbers of segments, each a field after the labels (``ClusterID_<n>``,
         :func:`superfacets.io.records.level_field`); a mesh's ``.seg`` holds its labels
-        alone. An input whose superpoints cannot make a level (fewer than it asks, or more
-        connected pieces) fails with the reason.
+        alone; with ``per_object``, each object's own levels
+        (:func:`superfacets.api.scenes.objects_hierarchy`). An input whose superpoints cannot
+        make a level (fewer than it asks, more connected pieces, or fewer than one per
+        object) fails with the reason.
     workers : int, optional
         Local worker processes (default: one per core); 1 runs in this process.
     scheduler : str, optional
@@ -368,7 +370,7 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
             raise ParameterError("extent_weight (--extent-weight) goes with adaptive "
                                  "(--adaptive)")
         extent_weight = check_nonneg("extent_weight", extent_weight)
-    levels = _checked_levels(levels, labels, per_object)
+    levels = _checked_levels(levels, labels)
     if levels and n_segments is not None and levels[0] > n_segments:
         raise ParameterError(f"levels (--levels) are coarser than the n_segments (-k) "
                              f"{n_segments} segments: at most {n_segments} each, got "
@@ -421,7 +423,7 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
     return summary
 
 
-def _checked_levels(levels, labels: str, per_object: bool) -> list | None:
+def _checked_levels(levels, labels: str) -> list | None:
     """``levels`` as distinct positive integers, largest first, where the label files take
     them (a cloud's own records), else refused in words; None where not given."""
     if levels is None:
@@ -431,9 +433,6 @@ def _checked_levels(levels, labels: str, per_object: bool) -> list | None:
         raise ParameterError(f"levels (--levels) go into each cloud's own file, a field "
                              f"ClusterID_N each: labels='records' or 'laz' (--labels records "
                              f"or laz), not {labels!r}")
-    if per_object:
-        raise ParameterError("levels (--levels) are of one segmentation: not with per_object "
-                             "(--per-object)")
     return wanted
 
 
