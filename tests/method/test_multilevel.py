@@ -295,3 +295,21 @@ def test_a_coarse_graphs_lengths_are_made_when_read_the_fine_sums():
     assert len(expected) == pairs.shape[0]
     got = dict(zip(map(tuple, pairs), lengths))
     assert all(abs(got[p] - v) <= 1e-12 * max(1.0, v) for p, v in expected.items())
+
+
+def test_the_coarse_runs_orphan_seeds_are_counted_and_said(tmp_path, capsys):
+    """A window narrower than the radius leaves clusters of the coarse run that no center
+    reaches: each seeds a superfacet of its own, as on every element. The run made 116
+    superfacets for 12 and said nothing (n_orphan_seeds counted the fine passes' only)."""
+    from superfacets.cli import main
+
+    mesh = trimesh.creation.icosphere(subdivisions=6)
+    r = segment(mesh, 12, window=0.5)
+    assert r.params["coarsen"] > 1 and r.n_segments > 12
+    assert r.n_orphan_seeds == r.timings["coarse_orphans"] > 0
+    assert r.n_orphan_seeds >= r.n_segments - 12
+    path = tmp_path / "sphere.ply"
+    mesh.export(path)
+    assert main(["segment", str(path), "-k", "12", "--window", "0.5",
+                 "-o", str(tmp_path / "s.seg")]) == 0
+    assert "regions that no center reached within its window" in capsys.readouterr().err

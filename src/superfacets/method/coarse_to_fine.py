@@ -293,7 +293,8 @@ def coarse_centers(graph: ElementGraph, csr_w: np.ndarray, ratio: int, *, init: 
         None when the clusters are fewer than 4 per superfacet (an uneven
         surface): the caller runs on every element alone.
     info : dict
-        ``coarse_elements``, ``coarse_passes``, ``coarse_iterations``.
+        ``coarse_elements``, ``coarse_passes``, ``coarse_iterations``, ``coarse_orphans``
+        (the coarse run's centers seeded on clusters no center reached).
 
     ``on_coarsened()`` is called once the
     clusters are made, before the coarse run (the pipeline frees there what only
@@ -324,7 +325,7 @@ def coarse_centers(graph: ElementGraph, csr_w: np.ndarray, ratio: int, *, init: 
                              np.full(n_lab, -1, dtype=np.int64))
     centers = centers[centers >= 0]
     info = dict(coarse_elements=cg.n_elements, coarse_passes=it.n_passes,
-                coarse_iterations=it.n_iter)
+                coarse_iterations=it.n_iter, coarse_orphans=it.n_orphan_seeds)
     return centers, info
 
 

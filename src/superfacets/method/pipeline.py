@@ -343,7 +343,8 @@ def _run(obj, p: SegmentParams, features, *, replay: bool, jump_cycles: bool,
     timings.update(expansions=it.expansions, passes=it.n_passes, cycle_period=it.cycle_period,
                    changed=it.changed, stopped_by_tol=it.stopped_by_tol, settled=it.settled)
     return RunRecord(labels=labels, centers=centers, n_iter=it.n_iter, converged=it.converged,
-                     mesh_radius=rules.r, n_orphan_seeds=it.n_orphan_seeds, timings=timings,
+                     mesh_radius=rules.r, timings=timings,  # (the coarse run's orphans too)
+                     n_orphan_seeds=it.n_orphan_seeds + int(timings.get("coarse_orphans", 0)),
                      params=_resolved(graph, rules, ratio, init.shape[0]), elements=source,
                      element_labels=element_labels,
                      classification=None if finished else (it.label, it.centers, it.dist,
