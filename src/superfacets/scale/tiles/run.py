@@ -176,9 +176,10 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
     graph : bool, default False
         Also the superpoint graph in the layout learning pipelines read, from the tiles'
         sums (:func:`~superfacets.scale.tiles.merges.tiled_learning`): ``result.learning``,
-        the arrays :meth:`SegmentationResult.learning_graph` gives of one run's labels (the
-        input's own up, else z; the ground's grid on the input's bounding box, exact for an
-        axis up).
+        the arrays :meth:`SegmentationResult.learning_graph` gives of the same labels (the
+        input's own up, else z; the ground's grid on the extent the survey reads along
+        its axes), but for the edges' ``mean_angle`` and ``concave`` where the normals are
+        estimated (each tile orients them like a sample, one run by its pieces).
     **options
         Keyword arguments of :func:`superfacets.segment` (``alpha``,
         ``window``, ``cleanup``, ``paper``, ``beta``, ``n_neighbors``, ...).
