@@ -13,7 +13,8 @@ files stay outside the repository. Example::
 
     python tools/scans_from_mirrors.py isl-org/Open3D-ML=~/src/Open3D-ML \\
         open-mmlab/mmdetection3d=~/src/mmdetection3d PDAL/PDAL=~/src/PDAL \\
-        r-lidar/lidR=~/src/lidR
+        r-lidar/lidR=~/src/lidR PointCloudLibrary/data=~/src/pcl-data \\
+        kccushman/SERC_lidarComparison=~/src/SERC_lidarComparison
 """
 
 from __future__ import annotations
