@@ -6,6 +6,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..checks import check_n_segments
 from ..errors import ParameterError, SuperfacetsError
 from ..graph.hierarchy import Hierarchy, wanted_levels
 from ..inputs.cloud import PointCloud
@@ -53,7 +54,8 @@ def segment_objects(mesh, n_segments: int = _D.n_segments, **options
     Raises
     ------
     ParameterError, InvalidMeshError
-        As :func:`segment`, the message naming the object.
+        As :func:`segment`, the message naming the object; ``n_segments`` above the
+        scene's faces (a cloud's valid points).
 
     Examples
     --------
@@ -67,8 +69,9 @@ def segment_objects(mesh, n_segments: int = _D.n_segments, **options
         raise ParameterError("segmenting per object takes n_segments, not radius")
     k = check_int("n_segments", n_segments, lo=1)
     if isinstance(mesh, PointCloud):
-        return _cloud_objects(mesh, k, options)
+        return _cloud_objects(mesh, check_n_segments(k, mesh.n_points, "points"), options)
     mesh = as_mesh(mesh)
+    check_n_segments(k, mesh.n_faces)  # (as one run refuses it: no object's count silently cut)
     objects = mesh.objects or ((mesh.name or "mesh", 0, mesh.n_faces),)
     areas = np.array([mesh.areas[a:b].sum() for _, a, b in objects])
     faces = np.array([b - a for _, a, b in objects])

@@ -17,7 +17,7 @@ from functools import cached_property
 import numpy as np
 
 from .._kernels import native
-from ..checks import check_real, counted
+from ..checks import check_real, check_up, counted
 from ..errors import InvalidCloudError, ParameterError
 from .bounds import check_extent, column_bounds, finite_rows
 from .mesh import readonly
@@ -60,7 +60,7 @@ class PointCloud:
         point graph: a rule of the point and the sample alone, so a tiled run
         that gives every tile one sample of the whole input has every tile
         turn a point alike. Ignored with ``normals`` or ``viewpoint``.
-    up : (3,) float ndarray, optional
+    up : (3,) float ndarray or {'x', 'y', 'z', '-x', '-y', '-z'}, optional
         The side the surface was seen from, on the whole, for a scan of an
         open surface (a terrain, a street) whose sensor position is not
         known: estimated normals are turned, each connected piece of the
@@ -175,12 +175,11 @@ class PointCloud:
         self._check_objects(where, p.shape[0])
         self._check_fields(where, p.shape[0])
         if self.up is not None:
-            up = np.asarray(self.up, dtype=np.float64).reshape(-1)
-            length = float(np.linalg.norm(up)) if up.shape == (3,) else 0.0
-            if not (np.isfinite(up).all() and length > 0):
-                raise InvalidCloudError(f"{where}up must be 3 finite numbers, not all zero, "
-                                        f"got {self.up!r}")
-            object.__setattr__(self, "up", up / length)
+            try:  # (an axis name too, as every other up of the package)
+                up = check_up(self.up)
+            except ParameterError as exc:
+                raise InvalidCloudError(f"{where}{exc}") from None
+            object.__setattr__(self, "up", up)
 
     def _check_objects(self, where: str, n: int) -> None:
         """``objects`` cover the rows in order; ``object_viewpoints`` one finite position

@@ -1,0 +1,44 @@
+"""The faults of the eleventh attack (scenes segmented object by object, a cloud's up
+given by name): each case fails without its fix. The per-object levels and the coarse
+run's orphan seeds have their own tests (tests/io/test_scan_inputs.py,
+tests/method/test_multilevel.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from superfacets import PointCloud, segment_tiled
+from superfacets.api.scenes import segment_objects
+from superfacets.errors import InvalidCloudError, ParameterError
+
+
+def _scene():
+    return trimesh.Scene([trimesh.creation.icosphere(subdivisions=1),
+                          trimesh.creation.box().apply_translation([3, 0, 0])])
+
+
+def test_more_segments_than_a_scenes_faces_are_refused_as_one_run_refuses_them():
+    """segment_objects(scene, 10**6) gave each object all its faces (92 superfacets, no
+    word); 2**63 raised OverflowError from the shares' arithmetic."""
+    for k in (10**6, 2**63):
+        with pytest.raises(ParameterError, match=r"larger than the number of faces \(92\)"):
+            segment_objects(_scene(), k)
+    cloud = PointCloud(np.random.default_rng(0).random((50, 3)))
+    with pytest.raises(ParameterError, match=r"larger than the number of points \(50\)"):
+        segment_objects(cloud, 51)
+    labels, parts = segment_objects(_scene(), 92)  # as many as faces: still allowed
+    assert len(parts) == 2 and int(labels.max()) + 1 == sum(p.n_segments for p in parts)
+
+
+def test_a_clouds_up_takes_an_axis_name_as_every_other_up():
+    """PointCloud(up='z') raised numpy's "could not convert string to float" (the
+    learning graph's and the CLI's up take axis names)."""
+    pts = np.random.default_rng(1).random((400, 3))
+    assert np.array_equal(PointCloud(pts, up="-y").up, [0.0, -1.0, 0.0])
+    with pytest.raises(InvalidCloudError, match="up must be an axis"):
+        PointCloud(pts, up="q")
+    r = segment_tiled(PointCloud(pts * [4, 3, 0.3], up="z"), 12, tiles=2, workers=1,
+                      graph=True)
+    assert r.learning["x"].shape[0] == 12
