@@ -42,3 +42,18 @@ def test_a_clouds_up_takes_an_axis_name_as_every_other_up():
     r = segment_tiled(PointCloud(pts * [4, 3, 0.3], up="z"), 12, tiles=2, workers=1,
                       graph=True)
     assert r.learning["x"].shape[0] == 12
+
+
+def test_a_hierarchys_labels_are_checked():
+    """Hierarchy.labels(i, labels) indexed its parents with whatever it was given: numpy's
+    IndexError for a label past the superfacets, its ufunc error for strings."""
+    from superfacets import segment
+
+    r = segment(trimesh.creation.icosphere(subdivisions=3), 20)
+    h = r.hierarchy([5, 2])
+    assert np.array_equal(h.labels(1, np.array([-1, 0, 19])),
+                          [-1, h.of_superfacets(1)[0], h.of_superfacets(1)[19]])
+    for bad, says in ((np.arange(1280), r"lie in -1\.\.19"), (np.array([-2]), "lie in"),
+                      (np.array(["a"]), "integers"), (None, "integers")):
+        with pytest.raises(ParameterError, match=says):
+            h.labels(0, bad)

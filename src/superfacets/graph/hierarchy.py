@@ -45,6 +45,7 @@ from .._kernels import native
 from ..checks import check_int, check_nonneg, counted
 from ..elements.density import density_for
 from ..elements.kinds import kind_of
+from ..elements.labels import check_labels
 from ..errors import ParameterError
 from .adjacency import SuperfacetGraph, superfacet_graph
 
@@ -100,9 +101,15 @@ class Hierarchy:
 
     def labels(self, level: int, labels: np.ndarray) -> np.ndarray:
         """Per-element (or per-row) labels of one level, from the superfacet labels
-        ``labels`` (``-1`` rows, such as invalid points, stay ``-1``)."""
-        lab = np.asarray(labels)
+        ``labels`` (``-1`` rows, such as invalid points, stay ``-1``); a
+        :class:`~superfacets.errors.ParameterError` where they are not integers in
+        ``-1..K-1``, the superfacets the hierarchy was made of."""
         top = self.of_superfacets(level)
+        lab = check_labels(labels, None)
+        if lab.size and (lab.min() < -1 or lab.max() >= top.shape[0]):
+            raise ParameterError(f"labels must lie in -1..{top.shape[0] - 1} (the "
+                                 f"{top.shape[0]} superfacets of the hierarchy), got "
+                                 f"{int(lab.min())}..{int(lab.max())}")
         return np.where(lab >= 0, top[np.maximum(lab, 0)], -1)
 
     def arrays(self) -> dict[str, np.ndarray]:
