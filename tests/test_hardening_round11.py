@@ -57,3 +57,18 @@ def test_a_hierarchys_labels_are_checked():
                       (np.array(["a"]), "integers"), (None, "integers")):
         with pytest.raises(ParameterError, match=says):
             h.labels(0, bad)
+
+
+def test_an_inputs_name_is_a_string_or_a_path():
+    """A name that was neither (an array passed one argument too far) raised numpy's
+    "truth value of an array is ambiguous"; a path is taken as its text."""
+    from pathlib import Path
+
+    from superfacets import Mesh
+
+    box = trimesh.creation.box()
+    assert Mesh(box.vertices, box.faces, name=Path("parts/box.ply")).name == "parts/box.ply"
+    for make in (lambda n: Mesh(box.vertices, box.faces, n),
+                 lambda n: PointCloud(box.vertices, None, n)):
+        with pytest.raises(ParameterError, match="name must be a string, got ndarray"):
+            make(np.zeros(3))

@@ -21,7 +21,8 @@ from .errors import ParameterError
 
 __all__ = ["check_int", "check_number", "check_positive", "check_nonneg", "check_bool",
            "check_choice", "check_n_segments", "check_threads", "max_threads",
-           "threads_from_env", "not_real", "check_real", "counted", "check_up", "AXES"]
+           "threads_from_env", "not_real", "check_real", "counted", "check_up", "check_name",
+           "AXES"]
 
 #: Named axes (an up direction, a side to see from) and their directions.
 AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0),
@@ -92,6 +93,39 @@ def not_real(dtype, what: str) -> str:
                                 or np.issubdtype(dtype, np.floating)):
         return ""
     return f"{what} must be real numbers, got dtype {dtype}"
+
+
+def check_name(value, what: str = "name") -> str:
+    """An input's name: a string or a path (a file's name, shown in messages).
+
+    Parameters
+    ----------
+    value : str or os.PathLike
+    what : str, default 'name'
+        The parameter's name, for the message.
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    ParameterError
+        If ``value`` is neither.
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> check_name("bunny.ply"), check_name(Path("scans/site.e57"))
+    ('bunny.ply', 'scans/site.e57')
+    """
+    import os
+
+    if isinstance(value, os.PathLike):
+        value = os.fspath(value)
+    if not isinstance(value, str):
+        raise ParameterError(f"{what} must be a string, got {type(value).__name__}")
+    return value
 
 
 def check_real(dtype, what: str) -> None:

@@ -17,7 +17,7 @@ from functools import cached_property
 import numpy as np
 
 from .._kernels import native
-from ..checks import check_real, check_up, counted
+from ..checks import check_name, check_real, check_up, counted
 from ..errors import InvalidCloudError, ParameterError
 from .bounds import check_extent, column_bounds, finite_rows
 from .mesh import readonly
@@ -121,6 +121,7 @@ class PointCloud:
     fields: dict | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "name", check_name(self.name))  # (in every message)
         where = f"{self.name}: " if self.name else ""
         p = _coordinates(self.points, "points", where)
         finite = finite_rows(p)

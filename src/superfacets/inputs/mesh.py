@@ -21,7 +21,7 @@ import numpy as np
 from .._kernels import native
 from .._runtime import threads
 from .._runtime.threads import split
-from ..checks import check_real, counted
+from ..checks import check_name, check_real, counted
 from ..errors import InvalidMeshError
 from .bounds import check_extent, column_bounds
 from .rgb import check_colors, face_means, vertex_means
@@ -101,6 +101,7 @@ class Mesh:
                 f"{counted(self.n_faces, 'face')}: {kind}{objs}{name})")
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "name", check_name(self.name))  # (in every message)
         vertices, faces = _validate_arrays(self.vertices, self.faces, self.name)
         object.__setattr__(self, "vertices", vertices)
         object.__setattr__(self, "faces", faces)

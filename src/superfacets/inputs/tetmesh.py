@@ -13,7 +13,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ..checks import check_int, check_number, check_real
+from ..checks import check_int, check_name, check_number, check_real
 from ..errors import InvalidMeshError, ParameterError
 from .bounds import check_extent, column_bounds
 from .mesh import Mesh, readonly
@@ -58,6 +58,7 @@ class TetMesh:
     name: str = ""
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "name", check_name(self.name))  # (in every message)
         where = f"{self.name}: " if self.name else ""
         v = np.asarray(self.vertices)
         check_real(v.dtype, where + "vertices")

@@ -160,7 +160,7 @@ def write_segindices(path, labels, params: dict | None = None, scene_id: str = "
     Raises
     ------
     ParameterError
-        If ``labels`` is not a 1-D integer array.
+        If ``labels`` is not a 1-D integer array, or ``params`` not a dict.
 
     Examples
     --------
@@ -175,6 +175,8 @@ def write_segindices(path, labels, params: dict | None = None, scene_id: str = "
     import json
 
     labels = check_labels(labels, None)
+    if params is not None and not isinstance(params, dict):
+        raise ParameterError(f"params must be a dict, got {type(params).__name__}")
     clean = {k: (v.item() if hasattr(v, "item") else v) for k, v in (params or {}).items()}
     head = json.dumps({"params": clean, "sceneId": scene_id, "segIndices": []},
                       separators=(",", ":"), ensure_ascii=False)[:-2]
