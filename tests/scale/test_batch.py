@@ -560,3 +560,33 @@ def test_a_batch_bar_is_redrawn_while_an_input_runs(tmp_path, monkeypatch, capsy
     s = run_batch([str(folder)], tmp_path / "out", 8, workers=1, progress=True)
     assert s.ok == 1
     assert capsys.readouterr().err.count("batch") >= 10  # redrawn while it ran
+
+
+def test_sizes_in_each_inputs_units(tmp_path, capsys):
+    """batch --seed-resolution R / --neighbor-distance D ("unrecognized arguments" before):
+    each input's own count and neighbours, as segment gives them for that file alone; a
+    mesh with --neighbor-distance fails with the reason; with -k refused before any work."""
+    rng = np.random.default_rng(2)
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for name, side in (("small", 2.0), ("large", 6.0)):
+        uv = rng.random((4000, 2)) * side
+        np.savetxt(folder / f"{name}.xyz", np.c_[uv, 0.05 * np.sin(3 * uv[:, 0])])
+    out = tmp_path / "out"
+    assert main(["batch", str(folder / "*.xyz"), "-o", str(out), "-j", "1", "--labels", "npy",
+                 "--seed-resolution", "0.4", "--neighbor-distance", "0.5"]) == 0
+    for name in ("small", "large"):
+        alone = tmp_path / f"{name}.npy"
+        assert main(["segment", str(folder / f"{name}.xyz"), "--seed-resolution", "0.4",
+                     "--neighbor-distance", "0.5", "-o", str(alone), "-q"]) == 0
+        np.testing.assert_array_equal(np.load(out / f"{name}.npy"), np.load(alone))
+    counts = [len(np.unique(np.load(out / f"{n}.npy"))) for n in ("small", "large")]
+    assert counts[1] > 4 * counts[0]  # (nine times the area: one count per file)
+    write_mesh(tmp_path / "m.ply", grid_mesh(6, 6))
+    s = run_batch([str(tmp_path / "m.ply")], tmp_path / "o2", workers=1, progress=False,
+                  neighbor_distance=0.5)
+    assert s.failed == 1 and "point cloud's graph" in s.failures[0][1]
+    capsys.readouterr()
+    assert main(["batch", str(folder), "-o", str(tmp_path / "o3"), "-k", "20",
+                 "--seed-resolution", "0.4"]) == 2
+    assert "instead of n_segments (-k)" in capsys.readouterr().err

@@ -10,6 +10,7 @@ from .options import (
     add_element_options,
     add_engine_options,
     add_method_options,
+    add_unit_options,
     element_kwargs,
     levels_arg,
     method_kwargs,
@@ -39,6 +40,7 @@ def add_parsers(sub) -> None:
                    help="output folder, created if missing")
     add_method_options(b)
     add_element_options(b)
+    add_unit_options(b)  # (each input's own count and neighbours, in its units)
     for action in b._actions:  # one task per core already: one thread each by default
         if action.dest == "threads":
             action.default = 1
@@ -97,7 +99,9 @@ def cmd_batch(args) -> int:
                   up=args.up, view=args.view,
                   per_object=args.per_object, adaptive=args.adaptive,
                   extent_weight=args.extent_weight, levels=args.levels,
-                  workers=args.workers, scheduler=args.scheduler,
+                  seed_resolution=args.seed_resolution,
+                  neighbor_distance=args.neighbor_distance, workers=args.workers,
+                  scheduler=args.scheduler,
                   memory_limit=args.memory_limit, retry_failed=args.retry_failed,
                   progress=not args.quiet and (sys.stderr.isatty() if args.progress is None
                                                else args.progress), **kwargs)

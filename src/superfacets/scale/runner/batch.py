@@ -36,7 +36,7 @@ from ..._runtime.warned import task_warnings
 from ...api.levels import adaptive_segment
 from ...api.scenes import segment_objects
 from ...api.segmentation import segment
-from ...api.sizes import default_count
+from ...api.sizes import count_for_resolution, default_count, diagonal_fraction
 from ...elements.builders import kind_for
 from ...elements.kinds import kind_of
 from ...errors import ParameterError
@@ -46,7 +46,14 @@ from ...io.clouds import is_cloud_file
 from ...io.files import split_suffix
 from ...io.orientation import default_view, up_axis
 from ...io.records import RECORD_FORMATS, records_kind
-from ...method.params import DEFAULTS, check_choice, check_int, check_nonneg, resolve
+from ...method.params import (
+    DEFAULTS,
+    check_choice,
+    check_int,
+    check_nonneg,
+    check_positive,
+    resolve,
+)
 from ...viz.camera import check_camera
 from ...viz.outputs import JoinedResult, write_result
 from .collect import broken_link_reason, collect_inputs, no_inputs, output_names
@@ -155,6 +162,7 @@ def _segment_and_write(task: dict, label_rel: str) -> dict:
                                  f"a multi-scan cloud (E57); not {kind}")
         if outs["colored"] not in (None, "ply"):
             raise ParameterError(f"coloured {kind} are written as .ply")
+    opts = _sized(opts, outs.get("sizes") or {}, data, kind)
     if task["per_object"]:
         opts.pop("radius", None)
         k = opts.pop("n_segments", None)
@@ -251,6 +259,7 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
               picture: bool = False, html: bool = False, up=None, view=None,
               per_object: bool = False, adaptive: int | None = None,
               extent_weight: float | None = None, levels: Sequence[int] | None = None,
+              seed_resolution: float | None = None, neighbor_distance: float | None = None,
               workers: int | None = None, scheduler: str | None = None,
               memory_limit="auto", retry_failed: bool = False, progress: bool = True,
               n_threads: int = 1, dask: bool | None = None, **options) -> BatchSummary:
@@ -300,6 +309,12 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         (:func:`superfacets.api.scenes.objects_hierarchy`). An input whose superpoints cannot
         make a level (fewer than it asks, more connected pieces, or fewer than one per
         object) fails with the reason.
+    seed_resolution, neighbor_distance : float, optional
+        Sizes in each input's own units, as ``segment --seed-resolution`` and
+        ``--neighbor-distance`` read them: its count ``k`` (its surface area over the
+        square of the size, :func:`superfacets.api.sizes.count_for_resolution`; not with
+        ``n_segments`` or ``radius``) and a cloud's farthest neighbour (not with
+        ``neighbor_radius``; a mesh fails). Each ``> 0``.
     workers : int, optional
         Local worker processes (default: one per core); 1 runs in this process.
     scheduler : str, optional
@@ -359,17 +374,8 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
     if per_object and radius is not None:
         raise ParameterError("per_object (--per-object) takes n_segments (-k), not radius "
                              "(--radius)")
-    if adaptive is not None:
-        adaptive = check_int("adaptive", adaptive, lo=1)
-        if per_object or radius is not None:
-            raise ParameterError("adaptive (--adaptive) takes n_segments (-k), on one "
-                                 "segmentation: not with radius (--radius) or per_object "
-                                 "(--per-object)")
-    if extent_weight is not None:
-        if adaptive is None:
-            raise ParameterError("extent_weight (--extent-weight) goes with adaptive "
-                                 "(--adaptive)")
-        extent_weight = check_nonneg("extent_weight", extent_weight)
+    adaptive, extent_weight = _checked_adaptive(adaptive, extent_weight, per_object, radius)
+    sizes = _checked_sizes(seed_resolution, neighbor_distance, n_segments, radius, options)
     levels = _checked_levels(levels, labels)
     if levels and n_segments is not None and levels[0] > n_segments:
         raise ParameterError(f"levels (--levels) are coarser than the n_segments (-k) "
@@ -400,6 +406,8 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         outputs.update(up=up, view=list(view) if isinstance(view, (tuple, list)) else view)
     if levels:  # (likewise)
         outputs["levels"] = levels
+    if sizes:  # (likewise: each input's own count and neighbours, read by its task)
+        outputs["sizes"] = sizes
     recorded = {"segment": _jsonable({k: v for k, v in resolved.items()  # defaults filled
                                       if k not in ("n_threads", "progress")}),
                 "outputs": outputs, "per_object": bool(per_object)}
@@ -421,6 +429,56 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
     summary.skipped = skipped
     summary.passed = passed
     return summary
+
+
+def _checked_adaptive(adaptive, extent_weight, per_object: bool, radius) -> tuple:
+    """``adaptive`` and its ``extent_weight``, checked against the options they exclude."""
+    if adaptive is not None:
+        adaptive = check_int("adaptive", adaptive, lo=1)
+        if per_object or radius is not None:
+            raise ParameterError("adaptive (--adaptive) takes n_segments (-k), on one "
+                                 "segmentation: not with radius (--radius) or per_object "
+                                 "(--per-object)")
+    if extent_weight is not None:
+        if adaptive is None:
+            raise ParameterError("extent_weight (--extent-weight) goes with adaptive "
+                                 "(--adaptive)")
+        extent_weight = check_nonneg("extent_weight", extent_weight)
+    return adaptive, extent_weight
+
+
+def _checked_sizes(seed_resolution, neighbor_distance, n_segments, radius,
+                   options: dict) -> dict:
+    """The sizes in the data's units given (``> 0``), against the options they replace."""
+    sizes = {}
+    for name, v, instead in (("seed_resolution", seed_resolution, (n_segments, radius)),
+                             ("neighbor_distance", neighbor_distance,
+                              (options.get("neighbor_radius"),))):
+        if v is None:
+            continue
+        v = check_positive(name, v)
+        if any(o is not None for o in instead):
+            raise ParameterError(f"{name} (--{name.replace('_', '-')}) is given in the data's "
+                                 "units instead of " + ("n_segments (-k) or radius (--radius)"
+                                                        if name == "seed_resolution" else
+                                                        "neighbor_radius (--neighbor-radius)"))
+        sizes[name] = v
+    return sizes
+
+
+def _sized(opts: dict, sizes: dict, data, kind: str) -> dict:
+    """A task's options with its sizes in the data's units read on its input."""
+    if sizes.get("neighbor_distance") is not None:
+        if not kind_of(kind).cloud:
+            raise ParameterError("neighbor_distance (--neighbor-distance) is of a point "
+                                 f"cloud's graph, not of {kind}")
+        opts = dict(opts, neighbor_radius=diagonal_fraction(
+            data, sizes["neighbor_distance"], "--neighbor-distance"))
+    if sizes.get("seed_resolution") is not None:
+        near = {k: opts[k] for k in ("n_neighbors", "neighbor_radius") if k in opts}
+        opts = dict(opts, n_segments=count_for_resolution(data, sizes["seed_resolution"],
+                                                          kind, **near)[0])
+    return opts
 
 
 def _checked_levels(levels, labels: str) -> list | None:
