@@ -72,3 +72,16 @@ def test_an_inputs_name_is_a_string_or_a_path():
                  lambda n: PointCloud(box.vertices, None, n)):
         with pytest.raises(ParameterError, match="name must be a string, got ndarray"):
             make(np.zeros(3))
+
+
+def test_a_tiled_graph_or_levels_with_an_up_weight_are_refused(tmp_path):
+    """segment_tiled(graph=True, up_weight=2) summed the weighed cloud: heights and
+    elevations doubled against one run's learning graph of the same labels (which is of
+    the cloud as given), without a word; refused before any pass, likewise levels."""
+    pts = np.random.default_rng(3).random((2000, 3)) * [4, 3, 1]
+    cloud = PointCloud(pts, up="z")
+    for extra in ({"graph": True}, {"levels": [5]}):
+        with pytest.raises(ParameterError, match="one run builds them"):
+            segment_tiled(cloud, 20, tiles=2, workers=1, up_weight=2, **extra)
+    r = segment_tiled(cloud, 20, tiles=2, workers=1, up_weight=2)  # the labels alone: fine
+    assert r.n_segments == 20

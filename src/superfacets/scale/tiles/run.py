@@ -208,7 +208,7 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
     """
     params, halo = _checked_options(n_segments, options, tiles, halo, refine, workers, start,
                                     memory_limit)
-    levels = _checked_levels(levels, level_cost, extent_weight, n_segments)
+    levels = _checked_levels(levels, level_cost, extent_weight, params, graph)
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
     stage = partial(_stage, timings, progress)  # (each stage timed, and shown as it runs)
@@ -564,9 +564,15 @@ def _stitched(done: list, n_rows: int):
     return labels, disagreements, suspects[suspects >= 0]
 
 
-def _checked_levels(levels, cost: str, extent_weight, n_segments) -> tuple | None:
+def _checked_levels(levels, cost: str, extent_weight, params, graph: bool) -> tuple | None:
     """``(levels, cost, extent_weight)`` of a run's hierarchy, checked before any pass
-    over the input (None: no levels)."""
+    over the input (None: no levels); and the graph's and levels' ``up_weight``."""
+    if (graph or levels is not None) and params.up_weight != 1:
+        raise ParameterError("the superpoint graph and the levels are of the cloud as given, "
+                             "as one run builds them; a tiled run with up_weight "
+                             f"{params.up_weight:g} sums the weighed cloud's: ask for them "
+                             "in one run, or tile without --up-weight")
+    n_segments = params.n_segments
     if levels is None:
         if cost != "ward" or extent_weight is not None:
             raise ParameterError("level_cost and extent_weight are the levels' options: "
