@@ -85,3 +85,28 @@ def test_a_tiled_graph_or_levels_with_an_up_weight_are_refused(tmp_path):
             segment_tiled(cloud, 20, tiles=2, workers=1, up_weight=2, **extra)
     r = segment_tiled(cloud, 20, tiles=2, workers=1, up_weight=2)  # the labels alone: fine
     assert r.n_segments == 20
+
+
+def test_the_sizes_and_metrics_take_what_segment_takes():
+    """count_for_resolution(trimesh, R) raised AttributeError ('Trimesh' has no n_faces),
+    default_count of an array likewise; evaluate(mesh, labels, gt) with one array meant one
+    ground truth and iterated over its numbers, a number raised "has no len()"."""
+    from superfacets import Mesh, segment
+    from superfacets.api.sizes import count_for_resolution, default_count, diagonal_fraction
+    from superfacets.evaluation.metrics import evaluate
+
+    ball = trimesh.creation.icosphere(subdivisions=3)
+    mine = Mesh(ball.vertices, ball.faces)
+    assert count_for_resolution(ball, 0.3) == count_for_resolution(mine, 0.3)
+    assert diagonal_fraction(ball, 0.5) == diagonal_fraction(mine, 0.5)
+    pts = np.random.default_rng(4).random((30000, 3))
+    assert default_count(pts) == default_count(PointCloud(pts)) == 150
+    with pytest.raises(ParameterError, match="finite length"):
+        diagonal_fraction(ball, "far")
+    truth = (ball.triangles_center[:, 0] > 0).astype(int)
+    labels = segment(ball, 12).labels
+    assert evaluate(ball, labels, truth) == evaluate(ball, labels, [truth])
+    assert evaluate(ball, labels, list(truth)) == evaluate(ball, labels, [truth])
+    for bad in (-1, "gt.seg", {}):
+        with pytest.raises(ParameterError, match="sequence of label arrays"):
+            evaluate(ball, labels, bad)

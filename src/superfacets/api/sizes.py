@@ -13,9 +13,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..elements.builders import elements_of
+from ..elements.builders import elements_of, is_cloud
 from ..elements.kinds import kind_of
 from ..errors import ParameterError
+from ..inputs.cloud import PointCloud, as_cloud
+from ..inputs.convert import as_mesh
+from ..inputs.mesh import Mesh
+from ..inputs.tetmesh import TetMesh
 
 __all__ = ["count_for_resolution", "default_count", "diagonal_fraction", "POINTS_PER_SEGMENT",
            "MIN_ELEMENTS_PER_SEGMENT"]
@@ -32,6 +36,14 @@ MIN_ELEMENTS_PER_SEGMENT = 12
 def _rows(data, elements: str) -> int:
     """The elements of a kind: a cloud's valid points, a mesh's faces or vertices."""
     return int(data.n_points if kind_of(elements).cloud else kind_of(elements).n_rows(data))
+
+
+def _data(obj):
+    """``obj`` as a Mesh, PointCloud or TetMesh (a trimesh, an array, ... as
+    :func:`superfacets.segment` takes them)."""
+    if isinstance(obj, (Mesh, PointCloud, TetMesh)):
+        return obj
+    return as_cloud(obj) if is_cloud(obj) else as_mesh(obj)
 
 
 def _kind(data, elements: str | None) -> str:
@@ -51,7 +63,7 @@ def default_count(data, elements: str | None = None, default: int = 150) -> int:
 
     Parameters
     ----------
-    data : Mesh, PointCloud or TetMesh
+    data : Mesh, PointCloud or TetMesh, or what :func:`superfacets.segment` takes
     elements : {'faces', 'vertices', 'points', 'cells'}, optional
         What is segmented (default: the input's own kind).
     default : int, default 150
@@ -73,6 +85,7 @@ def default_count(data, elements: str | None = None, default: int = 150) -> int:
     >>> default_count(PointCloud(rng.random((70, 3))))
     5
     """
+    data = _data(data)
     kind = _kind(data, elements)
     n = _rows(data, kind)
     k = max(default, n // POINTS_PER_SEGMENT) if kind_of(kind).cloud else default
@@ -88,7 +101,7 @@ def count_for_resolution(data, resolution: float, elements: str | None = None,
 
     Parameters
     ----------
-    data : Mesh or PointCloud
+    data : Mesh or PointCloud, or what :func:`superfacets.segment` takes
     resolution : float
         A length in the data's units (metres for most scans), ``> 0``.
     elements : {'faces', 'vertices', 'points'}, optional
@@ -125,6 +138,7 @@ def count_for_resolution(data, resolution: float, elements: str | None = None,
             from None
     if not (np.isfinite(r) and r > 0):
         raise ParameterError(f"the seed resolution must be a finite length > 0, got {r}")
+    data = _data(data)
     kind = _kind(data, elements)
     if kind_of(kind).dim != 2:
         raise ParameterError("a seed resolution is a size on a surface; a tetrahedral mesh "
@@ -146,7 +160,7 @@ def diagonal_fraction(data, distance: float, what: str = "distance") -> float:
 
     Parameters
     ----------
-    data : Mesh or PointCloud
+    data : Mesh or PointCloud, or what :func:`superfacets.segment` takes
     distance : float
         ``> 0``, in the data's units.
     what : str
@@ -167,9 +181,13 @@ def diagonal_fraction(data, distance: float, what: str = "distance") -> float:
     >>> diagonal_fraction(cloud, 0.5)
     0.1
     """
-    d = float(distance)
+    try:
+        d = float(distance)
+    except (TypeError, ValueError):
+        d = float("nan")
     if not (np.isfinite(d) and d > 0):
-        raise ParameterError(f"{what} must be a finite length > 0, got {distance}")
+        raise ParameterError(f"{what} must be a finite length > 0, got {distance!r}")
+    data = _data(data)
     pts = np.asarray(data.points if hasattr(data, "points") else data.vertices,
                      dtype=np.float64)
     pts = pts[np.isfinite(pts).all(axis=1)]

@@ -32,7 +32,7 @@ from .contingency import Contingency, contingency, dense_labels  # noqa: F401 (r
 
 __all__ = ["Contingency", "contingency", "undersegmentation_error", "compactness",
            "achievable_segmentation_accuracy", "boundary_recall", "boundary_precision",
-           "mean_over_ground_truths",
+           "mean_over_ground_truths", "ground_truth_list",
            "evaluate", "evaluate_rows", "shape_rows", "oracle_miou", "size_summary",
            "METRICS"]
 
@@ -212,6 +212,39 @@ def mean_over_ground_truths(metric: Callable[..., float], graph, labels,
     return float(np.mean([metric(graph, labels, gt, **kwargs) for gt in ground_truths]))
 
 
+def ground_truth_list(ground_truths) -> list:
+    """The ground truths as a list of label arrays: one 1-D array (or list of integers)
+    is one ground truth, as a user holding one means it.
+
+    Parameters
+    ----------
+    ground_truths : sequence of (m,) int ndarray, or one (m,) int ndarray
+
+    Returns
+    -------
+    list
+
+    Raises
+    ------
+    ParameterError
+        If it is neither (a number, a string, a dict).
+
+    Examples
+    --------
+    >>> len(ground_truth_list(np.array([0, 1, 1]))), len(ground_truth_list([[0, 1], [1, 1]]))
+    (1, 2)
+    """
+    if isinstance(ground_truths, np.ndarray):
+        return [ground_truths] if ground_truths.ndim == 1 else list(ground_truths)
+    if isinstance(ground_truths, (str, bytes, dict)) or not hasattr(ground_truths, "__len__"):
+        raise ParameterError("ground_truths must be a sequence of label arrays (one per "
+                             f"ground truth), got {type(ground_truths).__name__}")
+    items = list(ground_truths)
+    if items and all(isinstance(v, (int, np.integer)) for v in items):
+        return [np.asarray(items)]  # (one ground truth given as a list of integers)
+    return items
+
+
 def evaluate(graph, labels, ground_truths: Sequence[np.ndarray], *, tau: float = 0.05,
              tolerance: int = 1, equal_weight: bool = False,
              ignore_label: int | None = None, precision: bool = False) -> dict:
@@ -279,6 +312,7 @@ def evaluate(graph, labels, ground_truths: Sequence[np.ndarray], *, tau: float =
     >>> sorted(scores)[:3], scores["undersegmentation_error"], scores["boundary_recall"]
     (['achievable_accuracy', 'boundary_recall', 'compactness'], 0.0, 1.0)
     """
+    ground_truths = ground_truth_list(ground_truths)
     if len(ground_truths) == 0:
         raise ParameterError("no ground-truth segmentation given")
     g = as_element_graph(graph)
@@ -443,6 +477,7 @@ def evaluate_rows(obj, labels, ground_truths: Sequence[np.ndarray], *,
     (True, 20)
     """
 
+    ground_truths = ground_truth_list(ground_truths)
     if len(ground_truths) == 0:
         raise ParameterError("no ground-truth segmentation given (shape_rows measures the "
                              "segments' shapes alone)")
