@@ -59,6 +59,53 @@ def test_render_and_html_draw_clouds_and_tetrahedral_meshes(tmp_path, capsys):
 
 
 
+
+def test_segment_writes_a_volume_s_graph_levels_and_page(tmp_path, capsys):
+    """``segment VOLUME --graph --levels --html`` as on a mesh: the graph of the
+    superfacets of tetrahedra (their learning layout, the levels' parents and labels), the
+    page of the volume cut in half as ``html`` draws it; what a volume cannot take is
+    refused before the run, the options it does take are not silently dropped."""
+    pytest.importorskip("pyvista")
+    from superfacets import segment
+    from superfacets.io.tetmeshes import read_volume
+
+    vol = _tets(tmp_path / "v.vtu")
+    graph, page = tmp_path / "g.npz", tmp_path / "v.html"
+    assert main(["segment", str(vol), "-k", "12", "--graph", str(graph), "--levels", "6,3",
+                 "--html", str(page), "-o", str(tmp_path / "v.seg")]) == 0
+    said = capsys.readouterr().out
+    assert "superfacet graph, levels 6,3" in said and "page of the volume" in said
+    arrays = np.load(graph)
+    labels = np.loadtxt(tmp_path / "v.seg", dtype=np.int64)
+    data = read_volume(vol)
+    assert np.array_equal(arrays["labels"], labels)
+    assert np.array_equal(labels, segment(data, 12).labels)
+    assert list(arrays["levels"]) == [6, 3] and arrays["x"].shape[0] == 12
+    assert len(np.unique(arrays["labels_0"])) == 6 and len(np.unique(arrays["labels_1"])) == 3
+    # each level's labels are the parents of the finer ones
+    assert np.array_equal(arrays["labels_0"], arrays["parent_0"][labels])
+    from superfacets.elements.cells import cell_graph
+
+    pairs = {(min(i, j), max(i, j)) for i, j in arrays["edge_index"].T.tolist()}
+    g = cell_graph(data)
+    a, b = labels[g.pairs[:, 0]], labels[g.pairs[:, 1]]
+    touching = {(min(x, y), max(x, y)) for x, y in zip(a.tolist(), b.tolist()) if x != y}
+    assert pairs == touching  # the graph's edges: the superfacets sharing a triangle
+    assert b"<html" in page.read_bytes()[:2000].lower()
+    # the options that need more than a count, or a surface, say so; nothing is written
+    for extra, words in ((["-k", "12", "--levels", "4", "-o", str(tmp_path / "x.seg")],
+                          "--graph"),
+                         (["--seed-resolution", "0.2", "-o", str(tmp_path / "x.seg")],
+                          "takes a count"),
+                         (["-k", "12", "--level-cost", "planarity", "-o",
+                           str(tmp_path / "x.seg")], "--levels"),
+                         (["-k", "12", "--graph", str(tmp_path / "x.npz"), "--levels", "20"],
+                          "at most")):
+        assert main(["segment", str(vol), *extra]) == 2, extra
+        assert words in capsys.readouterr().err, extra
+        assert not (tmp_path / "x.seg").exists() and not (tmp_path / "x.npz").exists()
+
+
 def test_a_panel_of_a_tile_is_a_map_with_every_panel_drawn(tmp_path, capsys):
     """A LAS tile's panels are seen from above, as ``render`` draws it; eye-dome lighting
     (a whole window's pass) left all panels but the last blank."""
@@ -71,6 +118,41 @@ def test_a_panel_of_a_tile_is_a_map_with_every_panel_drawn(tmp_path, capsys):
     img = np.asarray(Image.open(out).convert("RGB")).astype(int)
     for half in (img[:, :300], img[:, 300:]):  # each panel: mostly points, not background
         assert (np.abs(half - 255).sum(axis=2) > 60).mean() > 0.3
+
+
+
+def test_a_panel_draws_a_scan_s_own_fields_side_by_side(tmp_path, capsys, monkeypatch):
+    """``panel SCAN --labels-from ClusterID ClusterID_3 classification``: the labels and
+    levels ``segment -o`` wrote into the scan, and its classes, a panel each (it took label
+    files only); a field it lacks, or a run's option beside them, is one line; nothing
+    drawn."""
+    pytest.importorskip("pyvista")
+    import superfacets.viz.render as render_module
+
+    laz, out = _laz(tmp_path / "tile.laz"), tmp_path / "with.laz"
+    assert main(["segment", str(laz), "-k", "12", "--levels", "6,3", "-o", str(out), "-q"]) == 0
+    drawn = []
+    real = render_module.render_panel
+
+    def spy(items, path, **kw):
+        drawn.extend(items)
+        return real(items, path, **kw)
+
+    monkeypatch.setattr(render_module, "render_panel", spy)
+    png = tmp_path / "p.png"
+    assert main(["panel", str(out), "--labels-from", "ClusterID", "ClusterID_3",
+                 "classification", "-o", str(png), "--size", "300x200"]) == 0
+    assert "3 panels" in capsys.readouterr().out and png.stat().st_size > 0
+    f = laspy.read(str(out))
+    assert [t for _, _, t in drawn] == ["ClusterID", "ClusterID_3", "classification"]
+    for (_, labels, _), field in zip(drawn, ("ClusterID", "ClusterID_3", "classification")):
+        assert np.array_equal(labels, np.asarray(f[field]))
+    assert len(np.unique(drawn[1][1])) == 3
+    png.unlink()
+    for extra, words in ((["--labels-from", "nope"], "no field 'nope'"),
+                         (["--labels-from", "ClusterID", "-k", "5"], "leave them out")):
+        assert main(["panel", str(out), *extra, "-o", str(png)]) == 2
+        assert words in capsys.readouterr().err and not png.exists()
 
 
 def test_view_opens_clouds_meshes_and_volumes(tmp_path, monkeypatch, sphere):

@@ -141,7 +141,7 @@ def test_cli_segments_a_volume(tmp_path, capsys):
     assert labels.shape == (t.n_tets,)
     np.testing.assert_array_equal(meshio.read(tmp_path / "o.vtu").cell_data["superfacet"][0],
                                   labels)
-    assert main(["segment", str(tmp_path / "c.vtu"), "--html", str(tmp_path / "x.html")]) == 2
+    assert main(["segment", str(tmp_path / "c.vtu"), "--per-object"]) == 2
     assert "not available for tetrahedral meshes" in capsys.readouterr().err
     assert main(["segment", str(tmp_path / "c.vtu"), "--beta", "5"]) == 2
     assert "materials" in capsys.readouterr().err

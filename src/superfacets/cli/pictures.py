@@ -115,6 +115,9 @@ def add_parsers(sub) -> None:
                          "(e.g. --param vsa.metric=l21,l2 --param vsa.init=random,incremental)")
     pn.add_argument("--labels", nargs="+", default=None, metavar="LABELS.seg",
                     help="draw these label files instead of computing")
+    pn.add_argument("--labels-from", nargs="+", default=None, metavar="FIELD",
+                    help="draw these fields of the input instead of computing, a panel each "
+                         "(a scan's labels and levels: --labels-from ClusterID ClusterID_50)")
     pn.add_argument("--titles", nargs="+", default=None, metavar="TEXT",
                     help="panel titles (default: the settings or file names)")
     pn.add_argument("--columns", type=int_arg, default=None, metavar="N",
@@ -184,6 +187,19 @@ def cmd_render(args) -> int:
     return 0
 
 
+def _field_labels(path, field: str, n: int, kind: str):
+    """The labels a field of the input holds (``ClusterID``), one per element, or one line
+    saying how many it has against how many are needed."""
+    from ..errors import MeshFormatError
+    from ..io.labels import read_field
+
+    labels = read_field(path, field)
+    if labels.shape[0] != n:
+        raise MeshFormatError(f"{path}: field {field} has {labels.shape[0]:,} values, but the "
+                              f"input has {n:,} {kind if kind != 'cells' else 'tetrahedra'}")
+    return labels
+
+
 def cmd_panel(args) -> int:
     from itertools import product as _product
 
@@ -200,17 +216,20 @@ def cmd_panel(args) -> int:
     given = [f for f, on in (("-m", args.method != ["superfacets"]),
                              ("-k", args.n_segments != [150]), ("--alpha", bool(args.alpha)),
                              ("--param", bool(args.param))) if on]
-    if args.labels and given:  # (the label files are drawn as they are)
+    drawn = args.labels or args.labels_from
+    if drawn and given:  # (the label files and fields are drawn as they are)
         raise ParameterError(f"{', '.join(given)} choose{'s' if len(given) == 1 else ''} the "
-                             "runs a panel segments; with --labels nothing is segmented: "
-                             "leave them out")
+                             "runs a panel segments; with --labels or --labels-from nothing "
+                             "is segmented: leave them out")
     mesh = _read(args, clouds=True)
     kind = kind_for(mesh)  # (faces, points or cells: what the labels are of)
     items = []
-    if args.labels:
-        for p in args.labels:
-            items.append((mesh, read_labels(p, n_faces=kind_of(kind).n_rows(mesh)),
-                          Path(p).stem))
+    if drawn:
+        n = kind_of(kind).n_rows(mesh)
+        for p in args.labels or ():
+            items.append((mesh, read_labels(p, n_faces=n), Path(p).stem))
+        for field in args.labels_from or ():
+            items.append((mesh, _field_labels(args.mesh, field, n, kind), field))
     else:
         methods = [get_method(m) for m in args.method]
         given = method_grid(methods, parse_params(args.param))

@@ -28,7 +28,6 @@ from .options import (
     int_arg,
     levels_arg,
     method_kwargs,
-    named_after,
     read_usable,
     refuse_neighbours,
     said_up,
@@ -37,6 +36,7 @@ from .options import (
     sizes_said,
     up_of,
 )
+from .runs import check_units, checked_graph, run_segment, sizes_of
 
 __all__ = ["add_parsers"]
 
@@ -258,7 +258,7 @@ def cmd_segment(args) -> int:
     if elsewhere is not None:
         return elsewhere()
     outputs = _checked_outputs(args)
-    _check_units(args)
+    check_units(args)
     kwargs = dict(method_kwargs(args), **element_kwargs(args))
     resolve(n_segments=args.n_segments, radius=args.radius, **kwargs)  # before the read
     t0 = time.perf_counter()
@@ -272,69 +272,12 @@ def cmd_segment(args) -> int:
 
         if isinstance(data, Mesh):  # (a volume's page draws its cut)
             check_page_size(data)
-    kwargs, size_note = _sizes(args, data, kind, kwargs)
-    result = _run(args, data, kwargs)
+    kwargs, size_note = sizes_of(args, data, kind, kwargs)
+    result = run_segment(args, data, kwargs)
     elapsed = time.perf_counter() - t0
     interrupts.last_outputs()  # (once they are whole, a Ctrl-C no longer undoes the run)
     _write_and_say(args, data, result, kind, outputs, elapsed, size_note)
     return 0
-
-
-def _check_units(args) -> None:
-    """The sizes in the data's units against the options they replace (before reading)."""
-    from ..errors import ParameterError
-
-    if args.seed_resolution is not None and (args.n_segments is not None or
-                                             args.radius is not None):
-        raise ParameterError("--seed-resolution gives the count: not with -k or --radius")
-    if args.neighbor_distance is not None and args.neighbor_radius is not None:
-        raise ParameterError("give --neighbor-distance (data units) or --neighbor-radius "
-                             "(a fraction of the diagonal), not both")
-    for flag, v in (("--seed-resolution", args.seed_resolution),
-                    ("--neighbor-distance", args.neighbor_distance)):
-        if v is not None and not v > 0:
-            raise ParameterError(f"{flag} must be a length > 0, got {v}")
-
-
-def _sizes(args, data, kind: str, kwargs: dict) -> tuple[dict, str]:
-    """The count and the neighbour radius from the sizes in the data's units, or the
-    count that grows with the input where none is given; and a line saying which."""
-    from ..api.sizes import (
-        MIN_ELEMENTS_PER_SEGMENT,
-        POINTS_PER_SEGMENT,
-        count_for_resolution,
-        default_count,
-        diagonal_fraction,
-    )
-
-    if args.neighbor_distance is not None:
-        if kind != "points":
-            from ..errors import ParameterError
-
-            raise ParameterError("--neighbor-distance is of a point cloud's graph")
-        kwargs = dict(kwargs, neighbor_radius=diagonal_fraction(
-            data, args.neighbor_distance, "--neighbor-distance"))
-    segs = kind_of(kind).segment_word
-    if args.seed_resolution is not None:
-        options = {k: kwargs[k] for k in ("n_neighbors", "neighbor_radius") if k in kwargs}
-        res = args.seed_resolution
-        k, area = count_for_resolution(data, res, kind, **options)
-        args.n_segments = k
-        with np.errstate(over="ignore", under="ignore", divide="ignore"):
-            capped = not np.float64(area) / np.float64(res) / np.float64(res) < k + 0.5
-        return kwargs, (f"k = {k:,} {segs} from --seed-resolution {res:g}: a surface of "
-                        f"{area:,.4g} square units / {res:g}^2" + (
-                            f", at most one per {MIN_ELEMENTS_PER_SEGMENT} {kind}"
-                            if capped else ""))
-    if args.n_segments is None and args.radius is None:
-        k = default_count(data, kind, DEFAULTS.n_segments)
-        args.n_segments = k
-        if k != DEFAULTS.n_segments:
-            why = (f"one per {POINTS_PER_SEGMENT:,} points" if k > DEFAULTS.n_segments else
-                   "at most one per 12 elements of this small input")
-            return kwargs, (f"k = {k:,} {segs} by default ({why}; -k or --seed-resolution "
-                            "to choose)")
-    return kwargs, ""
 
 
 def _reading_bar(args):
@@ -389,40 +332,12 @@ def _checked_outputs(args) -> dict:
     if args.vertex_colors and (ply_out is None or not ply_out.name.lower().endswith(".ply")):
         raise ParameterError("--vertex-colors goes with --colored-mesh OUT.ply")
     check_header_option(args.header, seg_out, args.mesh)
-    _check_levels(args)
-    graph_out = check_output(args.graph, (".npz",), "the graph", inputs=(args.mesh,))
-    if args.levels and graph_out is None and not _into_records(seg_out, args.mesh):
-        raise ParameterError("--levels goes with --graph OUT.npz (the hierarchy is written "
-                             "there) or -o of the scan's own records (.las/.laz, .ply, .pcd: "
-                             "each level a field ClusterID_N after the labels)")
-    if args.levels and args.n_segments is not None and max(args.levels) > args.n_segments:
-        raise ParameterError(f"--levels are coarser than the -k {args.n_segments} segments: "
-                             f"at most {args.n_segments} each, got {max(args.levels)}")
-    if args.level_cost is not None and not args.levels:
-        raise ParameterError("--level-cost is the merge cost of --levels; give both")
+    graph_out = checked_graph(args, _into_records(seg_out, args.mesh))
     png_out, html_out = check_drawings(args, (seg_out, ply_out, graph_out))
     if graph_out is not None and args.per_object:
         raise ParameterError("--graph is of one segmentation; not with --per-object")
     return dict(labels=seg_out, colored=ply_out, picture=png_out, html=html_out,
                 graph=graph_out)
-
-
-def _check_levels(args) -> None:
-    """``--per-object``, ``--adaptive`` and ``--extent-weight`` with what they need."""
-    from ..errors import ParameterError
-
-    if args.per_object and args.radius is not None:
-        raise ParameterError("--per-object takes -k, not --radius")
-    if args.extent_weight is not None and (
-            args.extent_weight < 0 or (args.adaptive is None and (
-                not args.levels or args.level_cost != "planarity"))):
-        raise ParameterError("--extent-weight takes a number >= 0, with --adaptive or "
-                             f"--levels and --level-cost planarity, got {args.extent_weight}")
-    if args.adaptive is not None and args.adaptive < 1:
-        raise ParameterError(f"--adaptive must be at least 1, got {args.adaptive}")
-    if args.adaptive is not None and (args.per_object or args.radius is not None):
-        raise ParameterError("--adaptive takes -k, on one segmentation (not --radius or "
-                             "--per-object)")
 
 
 def _kind_of_run(args, data, ply_out) -> str:
@@ -456,28 +371,6 @@ def _into_records(output, source) -> bool:
     from ..io.records import scan_output
 
     return scan_output(output, source) is not None
-
-
-def _run(args, data, kwargs):
-    """The segmentation the options ask for: per object, content-adaptive or one run."""
-    from ..api.scenes import segment_objects
-    from ..api.segmentation import segment
-    from ..errors import SuperfacetsError
-    from ..viz.outputs import JoinedResult
-
-    size = data.n_faces if hasattr(data, "faces") else data.n_total
-    if args.progress is None:  # long runs show where they are
-        kwargs = dict(kwargs, progress=size >= 500_000 and sys.stderr.isatty())
-    k = args.n_segments or DEFAULTS.n_segments
-    try:
-        if args.per_object:
-            return JoinedResult(*segment_objects(data, k, **kwargs))
-        if args.adaptive is not None:  # (the API's one door: segment(..., adaptive=START))
-            return segment(data, k, adaptive=args.adaptive, extent_weight=args.extent_weight,
-                           **kwargs)
-        return segment(data, args.n_segments, radius=args.radius, **kwargs)
-    except SuperfacetsError as exc:
-        raise named_after(args.mesh, exc) from None
 
 
 def _write_and_say(args, data, result, kind, outputs, elapsed, size_note: str = "") -> None:

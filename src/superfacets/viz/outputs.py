@@ -18,7 +18,7 @@ from ..io.records import level_field, scan_output, write_cloud_with_labels, writ
 from .html import write_html
 from .render import render, render_points
 
-__all__ = ["write_result", "result_header", "JoinedResult"]
+__all__ = ["write_result", "result_header", "graph_arrays", "JoinedResult"]
 
 
 class JoinedResult:
@@ -80,6 +80,45 @@ def result_header(data, result, source: str) -> dict:
                       f"({describe_stop(result)})",
         "seconds": f"{result.timings['total']:.3f}",
     }
+
+
+def graph_arrays(result, hierarchy=None) -> dict:
+    """The arrays ``segment --graph OUT.npz`` writes of one segmentation.
+
+    Parameters
+    ----------
+    result : SegmentationResult
+        Of any input (faces, vertices, points or tetrahedra).
+    hierarchy : Hierarchy, optional
+        Its coarser levels (:meth:`SegmentationResult.hierarchy`), written too.
+
+    Returns
+    -------
+    dict of str to ndarray
+        PyTorch Geometric's layout (:meth:`SegmentationResult.learning_graph`: ``x``,
+        ``pos``, ``edge_index``, ...), the nodes' own ``area``, ``centroid``, ``normal``
+        (and ``feature`` where the input has features), the element ``labels``; with a
+        hierarchy its ``levels`` and ``parent_<i>`` and each level's element labels
+        ``labels_<i>``.
+
+    Examples
+    --------
+    >>> from superfacets import segment
+    >>> from superfacets.inputs.shapes import creature
+    >>> result = segment(creature(), 20)
+    >>> arrays = graph_arrays(result, result.hierarchy([5]))
+    >>> arrays["edge_index"].shape[0], int(arrays["labels_0"].max())
+    (2, 4)
+    """
+    sg = result.graph()
+    arrays = {**{k: v for k, v in sg.arrays().items() if k in ("area", "centroid", "normal",
+                                                              "feature")},
+              **result.learning_graph(), "labels": result.labels}
+    if hierarchy is not None:
+        arrays.update(hierarchy.arrays())
+        for i in range(len(hierarchy.levels)):
+            arrays[f"labels_{i}"] = hierarchy.labels(i, result.labels)
+    return arrays
 
 
 def write_result(data, result, kind: str, source: str, *, labels=None, header: bool = False,
@@ -157,17 +196,7 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
         None if source_path is None else scan_output(labels, source_path)
     h = result.hierarchy(levels, cost=level_cost, extent_weight=extent_weight) if levels \
         and (graph is not None or into is not None) else None
-    arrays = None
-    if graph is not None:  # (PyTorch Geometric's layout, and the nodes' own arrays)
-        sg = result.graph()
-        learn = result.learning_graph()
-        arrays = {**{k: v for k, v in sg.arrays().items() if k in ("area", "centroid",
-                                                                  "normal", "feature")},
-                  **learn, "labels": result.labels}
-        if h is not None:
-            arrays.update(h.arrays())
-            for i in range(len(h.levels)):
-                arrays[f"labels_{i}"] = h.labels(i, result.labels)
+    arrays = None if graph is None else graph_arrays(result, h)
     fields = {} if h is None or into is None else {
         level_field(n): h.labels(i, result.labels) for i, n in enumerate(h.levels)}
     with Outputs() as outputs:
