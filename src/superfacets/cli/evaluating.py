@@ -174,6 +174,10 @@ def _print_truth_metrics(m: dict, n: int, kind: str) -> None:
     if len(per_class) == 1:
         print(f"note: the ground truth has one class ({next(iter(per_class))}) here: it has "
               "no border, so the recall and precision say nothing")
+    elif m.get("borderless_truths"):
+        print(f"note: no two neighbouring {kind} differ in {m['borderless_truths']} of the "
+              f"ground truths (their classes lie on separate pieces of the {kind}' graph): "
+              "there the recall is 1 and the precision 0 by convention, and say nothing")
     below = sorted(int(c) for c in per_class if int(c) < 0)
     if below:
         print(f"note: class {', '.join(map(str, below))} measured as a class; if it marks "
@@ -247,6 +251,7 @@ def _print_table(args, kind: str, n: int, n_truths: int, m: dict) -> None:
         row["oracle_iou_per_class"] = {str(k): v for k, v in
                                        m.get("oracle_iou_per_class", {}).items()}
         row["size_histogram"] = m["size_histogram"]
+        row["borderless_truths"] = m.get("borderless_truths", 0)
     if args.format == "json":
         print(json.dumps(row, indent=2))
         return

@@ -458,8 +458,11 @@ def evaluate_rows(obj, labels, ground_truths: Sequence[np.ndarray], *,
         :func:`evaluate`'s metrics, ``segments`` (distinct labels among the
         elements), ``oracle_miou`` (:func:`oracle_miou`, the mean over the ground
         truths) and ``oracle_iou_per_class`` (with one ground truth), the segments'
-        sizes (:func:`size_summary`) and ``unassigned``: the elements labelled below 0
-        (DBSCAN's noise, say), each such label counted as one segment by every metric.
+        sizes (:func:`size_summary`), ``unassigned``: the elements labelled below 0
+        (DBSCAN's noise, say), each such label counted as one segment by every metric, and
+        ``borderless_truths``: how many ground truths have no border on the element graph
+        (no two neighbours of different labelled values: one class, or classes on separate
+        pieces), where the recall is 1 and the precision 0 by convention.
 
     Raises
     ------
@@ -489,8 +492,18 @@ def evaluate_rows(obj, labels, ground_truths: Sequence[np.ndarray], *,
     mious = [oracle_miou(lab, gt, weights=weights, ignore_label=ignore_label) for gt in gts]
     out["oracle_miou"] = float(np.mean([m for m, _ in mious]))
     out["oracle_iou_per_class"] = mious[0][1] if len(mious) == 1 else {}
+    out["borderless_truths"] = sum(not _has_border(g, gt, ignore_label) for gt in gts)
     out.update(_counted(lab))
     return out
+
+
+def _has_border(g, gt: np.ndarray, ignore_label) -> bool:
+    """Whether two neighbours of ``g`` hold different labelled values of ``gt``."""
+    a, b = gt[g.pairs[:, 0]], gt[g.pairs[:, 1]]
+    cut = a != b
+    if ignore_label is not None:
+        cut &= (a != ignore_label) & (b != ignore_label)
+    return bool(cut.any())
 
 
 def shape_rows(obj, labels, *, elements: str | None = None,
