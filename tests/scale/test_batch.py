@@ -590,3 +590,38 @@ def test_sizes_in_each_inputs_units(tmp_path, capsys):
     assert main(["batch", str(folder), "-o", str(tmp_path / "o3"), "-k", "20",
                  "--seed-resolution", "0.4"]) == 2
     assert "instead of n_segments (-k)" in capsys.readouterr().err
+
+
+def test_a_graph_per_input_as_segment_writes_it(tmp_path, capsys):
+    """batch --graph (none before: a corpus for a learning pipeline took one segment per
+    file): each input's NAME.npz holds what segment --graph writes for that file alone,
+    the levels with it (with any --labels); not with --per-object; a folder made without
+    graphs is not resumed with them."""
+    rng = np.random.default_rng(4)
+    folder = tmp_path / "in"
+    folder.mkdir()
+    uv = rng.random((3000, 2)) * 4
+    np.savetxt(folder / "cloud.xyz", np.c_[uv, 0.3 * (uv[:, 0] > 2)])
+    write_mesh(folder / "m.ply", grid_mesh(12, 12))
+    out = tmp_path / "out"
+    assert main(["batch", str(folder), "-o", str(out), "-j", "1", "-k", "24", "--graph",
+                 "--levels", "8,3"]) == 0
+    for name, source in (("cloud", "cloud.xyz"), ("m", "m.ply")):
+        alone = tmp_path / f"{name}.npz"
+        assert main(["segment", str(folder / source), "-k", "24", "--graph", str(alone),
+                     "--levels", "8,3", "-q"]) == 0
+        got, want = np.load(out / f"{name}.npz"), np.load(alone)
+        assert sorted(got) == sorted(want) and {"levels", "labels_1", "x"} <= set(got)
+        for key in want:
+            np.testing.assert_array_equal(got[key], want[key], err_msg=f"{name}: {key}")
+        assert len(np.unique(got["labels_1"])) == 3
+        np.testing.assert_array_equal(got["labels"], np.loadtxt(out / f"{name}.seg"))
+    capsys.readouterr()
+    assert main(["batch", str(folder), "-o", str(tmp_path / "o2"), "--graph",
+                 "--per-object"]) == 2
+    assert "one segmentation" in capsys.readouterr().err
+    assert main(["batch", str(folder), "-o", str(tmp_path / "o3"), "--levels", "3"]) == 2
+    assert "--graph" in capsys.readouterr().err
+    assert main(["batch", str(folder), "-o", str(out), "-j", "1", "-k", "24",
+                 "--levels", "8,3", "--labels", "laz"]) == 2  # (other outputs: refused)
+    assert not list(tmp_path.glob("o[23]"))

@@ -67,6 +67,10 @@ def add_parsers(sub) -> None:
     b.add_argument("--html", action="store_true",
                    help="also write NAME.html per input, an interactive page")
     add_camera_options(b, "")  # --view, --up of --picture and --html
+    b.add_argument("--graph", action="store_true",
+                   help="also write NAME.npz per input: the superfacet (superpoint) graph in "
+                        "PyTorch Geometric's layout, as segment --graph writes it (with "
+                        "--levels, the hierarchy too)")
     b.add_argument("--per-object", action="store_true",
                    help="scenes: segment each object on its own (-k shared out by area)")
     add_engine_options(b, sees="its workers read the inputs and write OUTDIR, so both "
@@ -74,7 +78,8 @@ def add_parsers(sub) -> None:
     add_adaptive_options(b, levels=False)
     b.add_argument("--levels", type=levels_arg, default=None, metavar="N1,N2,...",
                    help="with --labels records or laz: each cloud's coarser, nested levels of "
-                        "N1, N2, ... segments, each a field ClusterID_N after the labels")
+                        "N1, N2, ... segments, each a field ClusterID_N after the labels; "
+                        "with --graph, in each NAME.npz")
     b.add_argument("--memory-limit", default="auto", metavar="SIZE",
                    help="memory of each local worker, e.g. 4GiB; a worker going over is "
                         "restarted and its input fails after Dask's retries (default: auto, "
@@ -96,7 +101,7 @@ def cmd_batch(args) -> int:
     s = run_batch(args.inputs, args.output_dir, args.n_segments, radius=args.radius,
                   labels=args.labels, header=args.header, colored_mesh=args.colored_mesh,
                   vertex_colors=args.vertex_colors, picture=args.picture, html=args.html,
-                  up=args.up, view=args.view,
+                  graph=args.graph, up=args.up, view=args.view,
                   per_object=args.per_object, adaptive=args.adaptive,
                   extent_weight=args.extent_weight, levels=args.levels,
                   seed_resolution=args.seed_resolution,

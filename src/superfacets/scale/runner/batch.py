@@ -193,7 +193,8 @@ def _segment_and_write(task: dict, label_rel: str) -> dict:
                                                                   "neighbor_radius")
                                              if k in opts},
                  up=outs.get("up") or up_axis(data, task["input"])[0],
-                 view=outs.get("view") or default_view(data), levels=outs.get("levels"))
+                 view=outs.get("view") or default_view(data), levels=outs.get("levels"),
+                 graph=base.with_name(base.name + ".npz") if outs.get("graph") else None)
     return {"elements": kind, "n_elements": int(n), "segments": int(result.n_segments),
             "passes": int(result.n_iter), "converged": bool(result.converged)}
 
@@ -256,8 +257,8 @@ class BatchSummary:
 def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
               radius: float | None = None, labels: str = "seg", header: bool = False,
               colored_mesh: str | None = None, vertex_colors: bool = False,
-              picture: bool = False, html: bool = False, up=None, view=None,
-              per_object: bool = False, adaptive: int | None = None,
+              picture: bool = False, html: bool = False, graph: bool = False, up=None,
+              view=None, per_object: bool = False, adaptive: int | None = None,
               extent_weight: float | None = None, levels: Sequence[int] | None = None,
               seed_resolution: float | None = None, neighbor_distance: float | None = None,
               workers: int | None = None, scheduler: str | None = None,
@@ -289,6 +290,11 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
     picture, html : bool, default False
         Also write a PNG (``render`` extra) / an interactive page per input
         (faces, vertices or points).
+    graph : bool, default False
+        Also write ``NAME.npz`` per input: the superfacet (superpoint) graph in PyTorch
+        Geometric's layout, with the element labels and, given ``levels``, the hierarchy
+        (:func:`superfacets.viz.outputs.graph_arrays`: what ``segment --graph`` writes).
+        Not with ``per_object``.
     up, view : optional
         The pictures' and pages' camera (:func:`superfacets.viz.camera.view_frame`;
         default: each input's up axis, :func:`superfacets.io.orientation.up_axis`, the
@@ -305,7 +311,8 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         With ``labels='records'`` or ``'laz'``: each cloud's coarser levels of these
         numbers of segments, each a field after the labels (``ClusterID_<n>``,
         :func:`superfacets.io.records.level_field`); a mesh's ``.seg`` holds its labels
-        alone; with ``per_object``, each object's own levels
+        alone; with ``graph``, in each input's ``.npz`` (any ``labels``); with
+        ``per_object``, each object's own levels
         (:func:`superfacets.api.scenes.objects_hierarchy`). An input whose superpoints cannot
         make a level (fewer than it asks, more connected pieces, or fewer than one per
         object) fails with the reason.
@@ -376,7 +383,10 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
                              "(--radius)")
     adaptive, extent_weight = _checked_adaptive(adaptive, extent_weight, per_object, radius)
     sizes = _checked_sizes(seed_resolution, neighbor_distance, n_segments, radius, options)
-    levels = _checked_levels(levels, labels)
+    if graph and per_object:
+        raise ParameterError("graph (--graph) is of one segmentation; not with per_object "
+                             "(--per-object)")
+    levels = _checked_levels(levels, labels, graph)
     if levels and n_segments is not None and levels[0] > n_segments:
         raise ParameterError(f"levels (--levels) are coarser than the n_segments (-k) "
                              f"{n_segments} segments: at most {n_segments} each, got "
@@ -406,6 +416,8 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         outputs.update(up=up, view=list(view) if isinstance(view, (tuple, list)) else view)
     if levels:  # (likewise)
         outputs["levels"] = levels
+    if graph:  # (likewise)
+        outputs["graph"] = True
     if sizes:  # (likewise: each input's own count and neighbours, read by its task)
         outputs["sizes"] = sizes
     recorded = {"segment": _jsonable({k: v for k, v in resolved.items()  # defaults filled
@@ -481,16 +493,17 @@ def _sized(opts: dict, sizes: dict, data, kind: str) -> dict:
     return opts
 
 
-def _checked_levels(levels, labels: str) -> list | None:
-    """``levels`` as distinct positive integers, largest first, where the label files take
-    them (a cloud's own records), else refused in words; None where not given."""
+def _checked_levels(levels, labels: str, graph: bool = False) -> list | None:
+    """``levels`` as distinct positive integers, largest first, where the label files
+    (a cloud's own records) or the graphs take them, else refused in words; None where not
+    given."""
     if levels is None:
         return None
     wanted = wanted_levels(levels)
-    if labels not in ("records", "laz"):
+    if labels not in ("records", "laz") and not graph:
         raise ParameterError(f"levels (--levels) go into each cloud's own file, a field "
                              f"ClusterID_N each: labels='records' or 'laz' (--labels records "
-                             f"or laz), not {labels!r}")
+                             f"or laz), not {labels!r}; or into each input's graph (--graph)")
     return wanted
 
 
