@@ -507,8 +507,15 @@ def test_tetrahedral_meshes_are_collected_from_folders(tmp_path, capsys):
     assert (s.ok, s.failed) == (1, 0)
     labels = np.loadtxt(out / "part.seg", dtype=int)
     assert labels.shape == (vol.n_tets,) and labels.max() + 1 >= 5
-    s = run_batch([str(folder)], tmp_path / "o2", 5, workers=1, progress=False, picture=True)
-    assert s.failed == 1 and "tetrahedral meshes: batch writes their labels" in s.failures[0][1]
+    pytest.importorskip("pyvista")
+    s = run_batch([str(folder)], tmp_path / "o2", 5, workers=1, progress=False, picture=True,
+                  html=True)  # (refused before: segment drew them; the cut, as segment does)
+    assert (s.ok, s.failed) == (1, 0)
+    assert (tmp_path / "o2" / "part.png").stat().st_size > 0
+    assert "cut at the middle of x" in (tmp_path / "o2" / "part.html").read_text()
+    s = run_batch([str(folder)], tmp_path / "o3", 5, workers=1, progress=False,
+                  colored_mesh="ply")
+    assert s.failed == 1 and "--colored-mesh OUT.vtu" in s.failures[0][1]
 
 
 def test_local_workers_started_outside_a_main_guard_say_what_to_do(tmp_path):

@@ -152,10 +152,10 @@ def _segment_and_write(task: dict, label_rel: str) -> dict:
         raise ParameterError(f"{task['input']}: {why}")
     data = read_input(task["input"])
     kind = kind_for(data, opts.get("elements"))
-    if kind_of(kind).dim == 3 and (outs["colored"] or outs["picture"] or outs["html"]):
-        raise ParameterError("tetrahedral meshes: batch writes their labels; `superfacets "
-                             "segment VOLUME --colored-mesh OUT.vtu --picture OUT.png` "
-                             "writes cell data and a picture cut in half")
+    if kind_of(kind).dim == 3 and outs["colored"]:
+        raise ParameterError("tetrahedral meshes: batch writes their labels, graphs, pictures "
+                             "and pages (cut in half); `superfacets segment VOLUME "
+                             "--colored-mesh OUT.vtu` writes the labels as cell data")
     if not kind_of(kind).objects:
         if task["per_object"] and not (kind_of(kind).cloud and getattr(data, "objects", ())):
             raise ParameterError("--per-object segments the faces of a scene or the scans of "
