@@ -704,3 +704,52 @@ def test_a_tiled_run_writes_the_superpoint_graph_as_one_run_does(tmp_path, capsy
     assert main(["segment", str(tmp_path / "c.npy"), "-k", "30", "--tiles", "2", "-j", "1",
                  "--graph", str(bad), "--levels", "31", "-o", str(tmp_path / "b.seg")]) == 2
     assert not bad.exists() and not (tmp_path / "b.seg").exists()
+
+
+def test_sizes_in_the_data_s_units_give_one_run_s_count(tmp_path, capsys):
+    """segment --tiles --seed-resolution R --neighbor-distance D (refused before: "measures
+    the whole input"): the count one run gives (its area summed over the tiles; a mesh's
+    from the survey), the neighbours the same fraction of the diagonal; the count a tiled
+    run takes given none is one run's too (150 before, on a cloud one run gives 1 per
+    1,000 points); with -k or --up-weight refused before any work."""
+    from superfacets import PointCloud
+    from superfacets.api.sizes import count_for_resolution, default_count, diagonal_fraction
+    from superfacets.cli import main
+
+    rng = np.random.default_rng(5)
+    xy = rng.random((24000, 2)) * [60.0, 30.0]
+    pts = np.c_[xy, 0.4 * np.sin(xy[:, 0] / 4)]
+    path = tmp_path / "c.npy"
+    np.save(path, pts)
+    cloud = PointCloud(pts)
+    for res, dist in ((1.5, None), (4.0, 2.0)):
+        opts = {} if dist is None else {"neighbor_radius": diagonal_fraction(cloud, dist)}
+        k, area = count_for_resolution(cloud, res, **opts)
+        r = segment_tiled(str(path), tiles=3, seed_resolution=res, neighbor_distance=dist)
+        assert r.n_segments == k and abs(r.area - area) <= 1e-6 * area
+        if dist is not None:
+            assert r.params["neighbor_radius"] == pytest.approx(opts["neighbor_radius"])
+    out = tmp_path / "t.seg"
+    assert main(["segment", str(path), "--tiles", "3", "--seed-resolution", "1.5", "-o",
+                 str(out)]) == 0
+    k, _ = count_for_resolution(cloud, 1.5)
+    assert f"k = {k:,} superpoints from --seed-resolution 1.5" in capsys.readouterr().out
+    assert len(np.unique(np.loadtxt(out))) == k
+    mesh = _bumpy(3)
+    mpath = tmp_path / "m.ply"
+    _write_ply_mesh(mpath, mesh.vertices, mesh.faces)
+    km, _ = count_for_resolution(mesh, 0.15)
+    assert segment_tiled(str(mpath), tiles=2, seed_resolution=0.15).n_segments == km
+    big = tmp_path / "big.npy"  # (one run's default: one per 1,000 points, not 150)
+    np.save(big, np.c_[rng.random((240000, 2)) * 100, np.zeros(240000)])
+    assert main(["segment", str(big), "--tiles", "2", "-o", str(out)]) == 0
+    assert "k = 240 superpoints by default" in capsys.readouterr().out
+    assert len(np.unique(np.loadtxt(out))) == 240 == default_count(np.load(big))
+    for extra, words in ((["-k", "9"], "not with -k"), (["--up-weight", "2"], "--up-weight")):
+        assert main(["segment", str(path), "--tiles", "3", "--seed-resolution", "1.5",
+                     *extra, "-o", str(tmp_path / "x.seg")]) == 2
+        assert words in capsys.readouterr().err and not (tmp_path / "x.seg").exists()
+    with pytest.raises(ParameterError, match="not with n_segments"):
+        segment_tiled(str(path), 20, seed_resolution=1.0)
+    with pytest.raises(ParameterError, match="point cloud's graph"):
+        segment_tiled(str(mpath), neighbor_distance=0.1)

@@ -21,8 +21,8 @@ from ..inputs.convert import as_mesh
 from ..inputs.mesh import Mesh
 from ..inputs.tetmesh import TetMesh
 
-__all__ = ["count_for_resolution", "default_count", "diagonal_fraction", "POINTS_PER_SEGMENT",
-           "MIN_ELEMENTS_PER_SEGMENT"]
+__all__ = ["count_for_resolution", "resolution_count", "default_count", "default_count_of",
+           "diagonal_fraction", "POINTS_PER_SEGMENT", "MIN_ELEMENTS_PER_SEGMENT"]
 
 #: A cloud given no count gets one superpoint per this many valid points, and never
 #: fewer than the method's default count where it has enough points.
@@ -87,8 +87,36 @@ def default_count(data, elements: str | None = None, default: int = 150) -> int:
     """
     data = _data(data)
     kind = _kind(data, elements)
-    n = _rows(data, kind)
-    k = max(default, n // POINTS_PER_SEGMENT) if kind_of(kind).cloud else default
+    return default_count_of(_rows(data, kind), kind_of(kind).cloud, default)
+
+
+def default_count_of(n_elements: int, cloud: bool, default: int = 150) -> int:
+    """:func:`default_count` of an input of ``n_elements`` (a cloud's valid points where
+    ``cloud``), read without the input (a tiled run's count from a file's header).
+
+    Parameters
+    ----------
+    n_elements : int
+    cloud : bool
+        Whether they are a point cloud's points.
+    default : int, default 150
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    TypeError, ValueError
+        If ``n_elements`` is not an integer.
+
+    Examples
+    --------
+    >>> default_count_of(3_000_000, True), default_count_of(3_000_000, False)
+    (3000, 150)
+    """
+    n = int(n_elements)
+    k = max(default, n // POINTS_PER_SEGMENT) if cloud else default
     return int(max(1, min(k, n // MIN_ELEMENTS_PER_SEGMENT)))
 
 
@@ -131,13 +159,7 @@ def count_for_resolution(data, resolution: float, elements: str | None = None,
     (True, True)
     """
 
-    try:
-        r = float(resolution)
-    except (TypeError, ValueError):
-        raise ParameterError(f"the seed resolution must be a number, got {resolution!r}") \
-            from None
-    if not (np.isfinite(r) and r > 0):
-        raise ParameterError(f"the seed resolution must be a finite length > 0, got {r}")
+    r = _checked_resolution(resolution)
     data = _data(data)
     kind = _kind(data, elements)
     if kind_of(kind).dim != 2:
@@ -147,11 +169,56 @@ def count_for_resolution(data, resolution: float, elements: str | None = None,
         area = float(elements_of(data, "points", **element_options).graph.sizes.sum())
     else:
         area = float(data.area)
-    most = max(1, _rows(data, kind) // MIN_ELEMENTS_PER_SEGMENT)
+    return resolution_count(area, r, _rows(data, kind)), area
+
+
+def _checked_resolution(resolution) -> float:
+    try:
+        r = float(resolution)
+    except (TypeError, ValueError):
+        raise ParameterError(f"the seed resolution must be a number, got {resolution!r}") \
+            from None
+    if not (np.isfinite(r) and r > 0):
+        raise ParameterError(f"the seed resolution must be a finite length > 0, got {r}")
+    return r
+
+
+def resolution_count(area: float, resolution: float, n_elements: int) -> int:
+    """The count of superpoints of ``resolution`` by ``resolution`` on a surface of
+    ``area``: :func:`count_for_resolution` once the area is measured (a tiled run sums it
+    over its tiles).
+
+    Parameters
+    ----------
+    area : float
+        The surface's area, in the data's units squared.
+    resolution : float
+        A length in the data's units, ``> 0``.
+    n_elements : int
+        The elements segmented (a cloud's valid points, a mesh's faces or vertices).
+
+    Returns
+    -------
+    int
+        ``round(area / resolution^2)``, at least 1 and at most one per
+        :data:`MIN_ELEMENTS_PER_SEGMENT` elements.
+
+    Raises
+    ------
+    ParameterError
+        If ``resolution`` is not a finite number > 0.
+
+    Examples
+    --------
+    >>> resolution_count(100.0, 0.5, 10000), resolution_count(100.0, 0.01, 10000)
+    (400, 833)
+    """
+    r = _checked_resolution(resolution)
+    most = max(1, int(n_elements) // MIN_ELEMENTS_PER_SEGMENT)
     with np.errstate(over="ignore", under="ignore", divide="ignore"):
         share = np.float64(area) / np.float64(r) / np.float64(r)  # (r * r can underflow to 0)
     k = most if not share < most else round(float(share))  # (inf and nan: the most)
-    return int(max(1, k)), area
+    return int(max(1, k))
 
 
 def diagonal_fraction(data, distance: float, what: str = "distance") -> float:

@@ -75,8 +75,7 @@ def add_tile_options(p) -> None:
 def segment_tiles(args) -> int:
     """``segment --tiles``: labels of a large input, written as ``-o`` says."""
     from .._runtime import interrupts
-    from ..errors import SuperfacetsError
-    from ..scale.tiles.run import segment_tiled
+    from .runs import check_units
 
     _refuse_one_run_options(args)
     drawings = check_drawings(args, (args.output,))
@@ -84,20 +83,9 @@ def segment_tiles(args) -> int:
         _check_page(args.mesh)
     seg_out = check_labels_output(args.output, args.mesh, records=True)
     graph_out = check_output(args.graph, (".npz",), "the graph", inputs=(args.mesh,))
-    kwargs = dict(method_kwargs(args), **element_kwargs(args))
-    kwargs.pop("progress", None)
+    check_units(args)
     t0 = time.perf_counter()
-    try:
-        result = segment_tiled(_source(args), args.n_segments, radius=args.radius, tiles=args.tiles,
-                               halo=args.halo, workers=args.workers, scheduler=args.scheduler,
-                               refine=1 if args.refine is None else args.refine,
-                               start=args.tile_start or "sample",
-                               workdir=args.workdir, levels=args.levels,
-                               level_cost=args.level_cost or "ward",
-                               extent_weight=args.extent_weight, graph=graph_out is not None,
-                               progress=not args.quiet and sys.stderr.isatty(), **kwargs)
-    except SuperfacetsError as exc:
-        raise named_after(args.mesh, exc) from None
+    result, wanted = _tiled_run(args, graph_out is not None)
     elapsed = time.perf_counter() - t0
     interrupts.last_outputs()  # (once whole, a Ctrl-C no longer undoes the run)
     kept = _write_labels(seg_out, args.mesh, result, graph_out)
@@ -125,6 +113,9 @@ def segment_tiles(args) -> int:
               f"({result.layout.describe()}), {elapsed:.2f} s; largest tile "
               f"{max(t['rows'] for t in result.tiles):,} {kind} with its halo, peak "
               f"{peak:,.0f} MiB; {result.disagreements:,} border disagreements", file=report)
+        count = _count_said(args, result, wanted)
+        if count:
+            print(count, file=report)
         if _uneven(args, result):
             print(f"note: the points' sizes spread {result.size_spread:.2f} (an uneven "
                   f"density): one run would size its superpoints by it (--density "
@@ -177,11 +168,11 @@ def _refuse_one_run_options(args) -> None:
                              "give --levels too")
     if getattr(args, "elements", None) == "vertices":
         raise ParameterError("--tiles segments faces or points, not vertices")
-    for flag, given in (("--seed-resolution", args.seed_resolution),
-                        ("--neighbor-distance", args.neighbor_distance)):
-        if given is not None:
-            raise ParameterError(f"{flag} measures the whole input; with --tiles give -k "
-                                 "and --neighbor-radius")
+    units = [f for f, v in (("--seed-resolution", args.seed_resolution),
+                            ("--neighbor-distance", args.neighbor_distance)) if v is not None]
+    if units and getattr(args, "up_weight", None) not in (None, 1, 1.0):
+        raise ParameterError(f"{' and '.join(units)} with --up-weight: the tiles measure the "
+                             "weighed cloud; give -k and --neighbor-radius")
     if args.header:  # (its lines record one run's passes and time)
         raise ParameterError("--header records one run's parameters and passes; a tiled run "
                              "writes the labels alone (its summary says the rest)")
@@ -265,6 +256,74 @@ def _draw(args, result, png_out, html_out) -> None:
         took = f", both drawn in {time.perf_counter() - t0:.2f} s" if len(said) == 2 else \
             f", drawn in {time.perf_counter() - t0:.2f} s"
         print(f"wrote {out} ({what}{took if i == len(said) - 1 else ''})")
+
+
+def _tiled_run(args, graph: bool) -> tuple:
+    """The tiled run the options ask for, and the count it was asked for (None: a radius
+    or a seed resolution gives it)."""
+    from ..errors import SuperfacetsError
+    from ..scale.tiles.run import segment_tiled
+
+    kwargs = dict(method_kwargs(args), **element_kwargs(args))
+    kwargs.pop("progress", None)
+    source = _source(args)
+    wanted = args.n_segments if args.n_segments is not None or args.radius is not None \
+        or args.seed_resolution is not None else _default_count(source)
+    try:
+        return segment_tiled(source, wanted, radius=args.radius, tiles=args.tiles,
+                             halo=args.halo, workers=args.workers, scheduler=args.scheduler,
+                             refine=1 if args.refine is None else args.refine,
+                             start=args.tile_start or "sample",
+                             workdir=args.workdir, levels=args.levels,
+                             level_cost=args.level_cost or "ward",
+                             extent_weight=args.extent_weight, graph=graph,
+                             seed_resolution=args.seed_resolution,
+                             neighbor_distance=args.neighbor_distance,
+                             progress=not args.quiet and sys.stderr.isatty(), **kwargs), wanted
+    except SuperfacetsError as exc:
+        raise named_after(args.mesh, exc) from None
+
+
+def _count_said(args, result, k) -> str:
+    """Where the count of a tiled run came from, as one run's summary says it: the seed
+    resolution and the area the tiles measured, or the default that grows with a cloud."""
+    from ..api.sizes import MIN_ELEMENTS_PER_SEGMENT, POINTS_PER_SEGMENT
+    from ..method.params import DEFAULTS
+
+    segs = kind_of(result.params["elements"]).segment_word
+    res = args.seed_resolution
+    if res is not None:
+        n, kind = result.params["n_segments"], result.params["elements"]
+        with np.errstate(over="ignore", under="ignore", divide="ignore"):
+            capped = not np.float64(result.area) / np.float64(res) / np.float64(res) < n + 0.5
+        return (f"k = {n:,} {segs} from --seed-resolution {res:g}: a surface of "
+                f"{result.area:,.4g} square units / {res:g}^2" + (
+                    f", at most one per {MIN_ELEMENTS_PER_SEGMENT} {kind}" if capped else ""))
+    if args.n_segments is None and args.radius is None and k != DEFAULTS.n_segments:
+        return (f"k = {k:,} {segs} by default (one per {POINTS_PER_SEGMENT:,} points; -k or "
+                "--seed-resolution to choose)")
+    return ""
+
+
+def _default_count(source) -> int:
+    """The count of a tiled run given none, as one run's
+    (:func:`superfacets.api.sizes.default_count`): one superpoint per
+    :data:`~superfacets.api.sizes.POINTS_PER_SEGMENT` points of a cloud (its rows: a
+    streamed file's header), at least 150; a mesh's 150."""
+    from ..api.sizes import default_count_of
+    from ..io.regions import RegionReader, streamed
+
+    if not isinstance(source, (str, Path)):
+        reader = source
+    elif streamed(source):
+        reader = RegionReader.open(source)
+    else:
+        from .options import read_usable
+
+        reader = read_usable(source, clouds=True)
+    cloud = getattr(reader, "kind", "points" if hasattr(reader, "n_points") else "faces")
+    n = getattr(reader, "n_rows", None) or getattr(reader, "n_points", None) or reader.n_faces
+    return default_count_of(int(n), kind_of(cloud).cloud)
 
 
 def _source(args):

@@ -51,6 +51,7 @@ import numpy as np
 from ..._runtime.arrays import ranked
 from ..._runtime.progress import new_bar, tick, waiting_bar
 from ...api.result import TiledResult
+from ...api.sizes import resolution_count
 from ...checks import check_n_segments, check_nonneg, check_up, max_threads
 from ...elements import points
 from ...elements.density import AUTO_SPREAD
@@ -64,7 +65,7 @@ from ...io.clouds import dropped_normals_said
 from ...io.files import user_path
 from ...io.regions import RegionReader, streamed
 from ...method.merges import NOISE_SAMPLE
-from ...method.params import DEFAULTS, resolve, superfacet_size
+from ...method.params import resolve, superfacet_size
 from ...method.rules import SCENE_DEFAULTS, fine_count, scene_default_of
 from ..runner.engine import Engine, check_memory_limit
 from . import buckets, phases
@@ -94,12 +95,13 @@ __all__ = ["segment_tiled", "TiledResult"]
 MAX_REFINE = 100
 
 
-def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles=4,
+def segment_tiled(source, n_segments: int | None = None, *, tiles=4,
                   halo: float | None = None, workers: int | None = 1,
                   scheduler: str | None = None, memory_limit="auto", workdir=None,
                   progress: bool = False, refine: int = 1, start: str = "sample",
                   levels=None, level_cost: str = "ward", extent_weight: float | None = None,
-                  graph: bool = False, **options) -> TiledResult:
+                  graph: bool = False, seed_resolution: float | None = None,
+                  neighbor_distance: float | None = None, **options) -> TiledResult:
     """Segment one large input tile by tile, on Dask or in this process.
 
     Parameters
@@ -109,12 +111,13 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         its ``RegionReader``) is read in chunks by each task; anything
         else is read here once and written to ``.npy`` files in ``workdir``
         (it must then fit this machine). Triangle meshes and point clouds.
-    n_segments : int, default 150
+    n_segments : int, optional
         Superfacets over the whole input (``r = sqrt(A / (k pi))``, paper
-        section 3.1); or None with ``radius``. On a point cloud of even density the
-        tiles make ``merge_from`` (5) times as many, merged down to exactly this count
-        at the end (:mod:`superfacets.scale.tiles.merges`; ``merge_from=1``: none); on a
-        mesh in several tiles, 5 % more and one a tile (:data:`MESH_EXCESS`), merged
+        section 3.1); default 150, or none with ``radius`` or ``seed_resolution``. On a
+        point cloud of even density the tiles make ``merge_from`` (5) times as many,
+        merged down to exactly this count at the end
+        (:mod:`superfacets.scale.tiles.merges`; ``merge_from=1``: none); on a mesh in
+        several tiles, 5 % more and one a tile (:data:`MESH_EXCESS`), merged
         by Ward's merges to exactly this count (``merge_from=1``: none, the tiles' own
         count, which can fall short by a few).
     tiles : int or sequence of 3 int, default 4
@@ -180,6 +183,16 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
         input's own up, else z; the ground's grid on the extent the survey reads along
         its axes), but for the edges' ``mean_angle`` and ``concave`` where the normals are
         estimated (each tile orients them like a sample, one run by its pieces).
+    seed_resolution : float, optional
+        The count from a size in the data's units, as
+        :func:`~superfacets.api.sizes.count_for_resolution` gives it for the whole input:
+        its area (a mesh's from the survey, a cloud's point sizes summed over the tiles as
+        one run sums them) over the square of this length; not with ``n_segments`` or
+        ``radius``.
+    neighbor_distance : float, optional
+        A cloud's farthest neighbour in the data's units: ``neighbor_radius`` that
+        distance over the survey's bounding-box diagonal, as
+        :func:`~superfacets.api.sizes.diagonal_fraction` gives it for one run.
     **options
         Keyword arguments of :func:`superfacets.segment` (``alpha``,
         ``window``, ``cleanup``, ``paper``, ``beta``, ``n_neighbors``, ...).
@@ -206,26 +219,24 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
     >>> r.labels.shape, r.n_segments, r.layout.n_tiles
     ((5120,), 40, 2)
     """
-    params, halo = _checked_options(n_segments, options, tiles, halo, refine, workers, start,
-                                    memory_limit)
+    params, halo, units = _checked_options(n_segments, options, tiles, halo, refine, workers,
+                                           start, memory_limit,
+                                           (seed_resolution, neighbor_distance))
     levels = _checked_levels(levels, level_cost, extent_weight, params, graph)
-    t_start = time.perf_counter()
-    timings: dict[str, float] = {}
+    t_start, timings = time.perf_counter(), {}
     stage = partial(_stage, timings, progress)  # (each stage timed, and shown as it runs)
     with run_folder(workdir) as tmp:  # the run's own folder, removed at its end
         with stage("survey"):
             reader, survey = _surveyed(source, tmp, tiles, params, graph)
         _check_levels_of(levels, reader.kind)
-        weight, params = params.up_weight, _step_resolved(params, reader)
+        weight, (params, sample_area) = params.up_weight, _step_resolved(params, reader,
+                                                                          survey, units)
         layout = (balanced_tiles(survey.sample, survey.lo, survey.hi, tiles)
                   if np.ndim(tiles) == 0 else tile_grid(survey.lo, survey.hi, tiles))
         grid, n_tiles = layout.shape or (layout.n_tiles,), layout.n_tiles
-        target, merge_from, params = _merge_plan(params, reader, survey, n_tiles)
-        merging = params.n_segments != target  # (the tiles make more: merged at the end)
+        target, merge_from, params = plan = _merge_plan(params, reader, survey, n_tiles)
         diagonal = float(np.linalg.norm(survey.hi - survey.lo))
-        # one more pass sorts the elements into a file per tile, so that a task reads the
-        # tiles its box overlaps, not the whole file; without a folder the workers share
-        # (a remote scheduler and no workdir) every task reads the file
+        # a file per tile (a task reads its box's, not the file), where the workers share one
         shared = scheduler is None or workdir is not None
         up = getattr(reader, "up", None)  # (the buckets keep the viewpoint, not this)
         ground = _ground_of(up, survey)
@@ -233,8 +244,8 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
             with stage("bucket", bar=False):  # (a bar of its own)
                 reader = buckets.bucket(reader, layout, Path(tmp) / "buckets", progress=progress)
         with stage("orientation"):
-            reference, sample_area, sampled = _orientation(reader, survey, params,
-                                                           up, shared and tmp)
+            reference, sample_area, sampled = _orientation(reader, survey, params, up,
+                                                           shared and tmp, sample_area)
         graphs = graph_folder(tmp, survey.n_elements, reader.kind, shared and n_tiles > 1,
                               params)  # the tiles' point graphs, kept between phases
         boxes = box_folder(tmp, reader, survey.n_elements) if shared and n_tiles > 1 else None
@@ -256,8 +267,10 @@ def segment_tiled(source, n_segments: int | None = DEFAULTS.n_segments, *, tiles
 
             r, floor = math.nan, None
             with stage("areas", bar=False):  # (the phases' bars)
-                r, margin, area, spread = _sized(run, layout, reader.kind, params, survey,
-                                                 diagonal, halo, (graphs, sample_area))
+                r, margin, area, spread, (target, merge_from, params) = _sized(
+                    run, layout, (reader, survey, units), plan, diagonal, halo,
+                    (graphs, sample_area))
+            merging = params.n_segments != target  # (the tiles make more: merged at the end)
             params, floor = _colour_term(run, margin, params, survey.colors, stage)
             found, done = _classified(run, layout, params, margin, params.window * r, dict(
                 refine=refine, box_rows=not shared, frame=ground, n_noise=_noise_points(
@@ -447,6 +460,60 @@ def _numbered_densely(labels: np.ndarray) -> np.ndarray:
 MESH_EXCESS = 0.05
 
 
+def _checked_units(seed_resolution, neighbor_distance, n_segments, options) -> dict:
+    """The sizes in the data's units given (each a length ``> 0``), against the options
+    they replace and ``up_weight`` (the tiles measure the weighed cloud)."""
+    units = {}
+    if seed_resolution is not None:
+        resolution_count(1.0, seed_resolution, 1)  # (a finite length > 0, or the error)
+        if n_segments is not None or options.get("radius") is not None:
+            raise ParameterError("seed_resolution gives the count: not with n_segments or "
+                                 "radius")
+        units["seed_resolution"] = float(seed_resolution)
+    if neighbor_distance is not None:
+        try:
+            d = float(neighbor_distance)
+        except (TypeError, ValueError):
+            d = math.nan
+        if not (math.isfinite(d) and d > 0):
+            raise ParameterError(f"neighbor_distance must be a finite length > 0, got "
+                                 f"{neighbor_distance!r}")
+        if options.get("neighbor_radius") is not None:
+            raise ParameterError("give neighbor_distance (data units) or neighbor_radius "
+                                 "(a fraction of the diagonal), not both")
+        units["neighbor_distance"] = d
+    if units and options.get("up_weight") not in (None, 1, 1.0):
+        raise ParameterError("sizes in the data's units with up_weight: the tiles measure the "
+                             "weighed cloud; give n_segments and neighbor_radius")
+    return units
+
+
+def _in_units(params, reader, survey, units: dict) -> tuple:
+    """The parameters with the sizes in the data's units resolved where the survey
+    suffices: ``neighbor_radius`` (the distance over the survey's diagonal), a mesh's
+    count (its area over the resolution squared); a cloud's count from its even sample's
+    area (the areas phase gives the exact one: :func:`_sized`), with that area."""
+    sample_area = None
+    if "neighbor_distance" in units:
+        if not kind_of(reader.kind).cloud:
+            raise ParameterError("neighbor_distance is of a point cloud's graph")
+        diagonal = float(np.linalg.norm(survey.hi - survey.lo))
+        if not diagonal > 0:
+            raise ParameterError("neighbor_distance: the input has no extent to measure it "
+                                 "against")
+        params = replace(params, neighbor_radius=units["neighbor_distance"] / diagonal)
+    if "seed_resolution" in units:
+        area = survey.size
+        if kind_of(reader.kind).cloud:
+            sample = survey.sample
+            area = sample_area = point_areas(sample, np.ones(sample.shape[0], dtype=bool),
+                                             params.n_neighbors) if sample is not None \
+                and sample.shape[0] > 1 else 0.0
+        params = replace(params, n_segments=resolution_count(
+            area, units["seed_resolution"], survey.n_elements))
+    return params, sample_area
+
+
 def _merge_plan(params, reader, survey, n_tiles: int):
     """The count asked for, the factor of the superpoints made before the merges down to
     it (1: none; a mesh's few more: :data:`MESH_EXCESS`), and the parameters of the tiles'
@@ -466,20 +533,20 @@ def _merge_plan(params, reader, survey, n_tiles: int):
     return target, merge_from, params
 
 
-def _orientation(reader, survey, params, up, folder):
+def _orientation(reader, survey, params, up, folder, area=None):
     """The normals' orientation reference of a cloud with neither normals nor viewpoint
     (from the survey's sample, thinned as the start thins it: :func:`~superfacets.scale.
     tiles.phases.start_step`; saved in ``folder`` where the tasks share one, and then its
-    path), else None; the sample's area where its graph was built (else None); and the
+    path), else None; the sample's area where its graph was built (else ``area``); and the
     sample as a cloud with that graph (else None: :func:`~superfacets.scale.tiles.phases.
     sample_start` reads it, not building its own)."""
 
     if not kind_of(reader.kind).cloud or survey.normals or reader.viewpoint is not None:
-        return None, None, None
+        return None, area, None
     step = phases.start_step(survey.sample.shape[0], reader.n_rows, params.n_segments)
     cloud = sample_cloud(survey.sample[::step], params.n_neighbors, up)
     if cloud is None:
-        return np.zeros((0, 6)), None, None
+        return np.zeros((0, 6)), area, None
     graph = points.point_graph(cloud, params.n_neighbors).graph  # (kept with the cloud)
     reference = np.hstack([graph.positions, graph.normals.astype(np.float64)])
     area = float(graph.sizes.sum())
@@ -495,11 +562,14 @@ def _orientation(reader, survey, params, up, folder):
 GRAPH_SLACK = 1.02
 
 
-def _sized(run, layout, kind: str, params, survey, diagonal: float, halo: float, kept):
+def _sized(run, layout, read: tuple, plan: tuple, diagonal: float, halo: float, kept):
     """The radius ``r`` of the run, the margin its tiles are read with, the input's area
-    (a cloud's points' summed sizes; NaN for a cloud sized by ``radius``), and the spread
+    (a cloud's points' summed sizes; NaN for a cloud sized by ``radius``), the spread
     of a cloud's point sizes (:func:`superfacets.elements.density.size_spread`, added up
-    over the tiles' cores; NaN where not read).
+    over the tiles' cores; NaN where not read), and the merge ``plan`` (the count, the
+    merges' factor, the tiles' parameters: :func:`_merge_plan`), made again from a cloud's
+    measured area where a seed resolution gives its count; ``read``:
+    the reader, its survey and the sizes in the data's units.
 
     A cloud sized by ``n_segments`` sums its tiles' point areas, read on boxes whose halo
     comes from the radius the survey's sample gives (``kept[1]``, its area, else read
@@ -510,11 +580,12 @@ def _sized(run, layout, kind: str, params, survey, diagonal: float, halo: float,
     the phases read that halo and build them."""
 
     graphs, sample_area = kept
-    n, window = survey.n_elements, params.window
+    (reader, survey, units), params = read, plan[2]
+    n, window, kind = survey.n_elements, params.window, reader.kind
     if not kind_of(kind).cloud or params.radius is not None:
         r = superfacet_size(params, survey.size, diagonal, n, kind)[1]
         return r, halo_distance(halo, window, r), \
-            math.nan if kind_of(kind).cloud else survey.size, math.nan
+            math.nan if kind_of(kind).cloud else survey.size, math.nan, plan
     wide, sample = None, survey.sample
     if sample is not None and sample.shape[0] > 1:
         if sample_area is None:
@@ -529,13 +600,17 @@ def _sized(run, layout, kind: str, params, survey, diagonal: float, halo: float,
     if area <= 0:
         raise ParameterError("the points are too few or too sparse to size superpoints by "
                              "n_segments; give radius instead")
+    if "seed_resolution" in units:  # (the count from the area measured, not estimated)
+        plan = _merge_plan(replace(params, n_segments=resolution_count(
+            area, units["seed_resolution"], n)), reader, survey, 1)
+        params = plan[2]
     r = superfacet_size(params, area, diagonal, n, kind)[1]
     margin = halo_distance(halo, window, r)
     spread = _spread([o["size_moments"] for o in outs if "size_moments" in o])
     if wide is not None and margin <= wide:
-        return r, wide, area, spread  # the boxes the graphs were built on (kept or not)
+        return r, wide, area, spread, plan  # the boxes the graphs were built on (kept or not)
     drop_graphs(graphs)  # (too narrow: the phases build them on their boxes)
-    return r, margin, area, spread
+    return r, margin, area, spread, plan
 
 
 def _spread(moments: list) -> float:
@@ -591,9 +666,10 @@ def _checked_levels(levels, cost: str, extent_weight, params, graph: bool) -> tu
 
 
 def _checked_options(n_segments, options, tiles, halo, refine, workers, start="sample",
-                     memory_limit="auto"):
-    """The run's parameters and halo, every option checked before any pass over the
-    input."""
+                     memory_limit="auto", units=(None, None)):
+    """The run's parameters and halo, and the sizes in the data's units given
+    (:func:`_checked_units`), every option checked before any pass over the input."""
+    units = _checked_units(*units, n_segments, options)
 
     if "features" in options:
         raise ParameterError("a tiled run reads colours from the file; features= is not taken")
@@ -613,20 +689,22 @@ def _checked_options(n_segments, options, tiles, halo, refine, workers, start="s
             raise ParameterError(f"{name} must be an integer in {low}..{high}, got {v!r}")
     if start not in ("sample", "tiles"):
         raise ParameterError(f"start must be 'sample' or 'tiles', got {start!r}")
-    return params, halo
+    return params, halo, units
 
 
-def _step_resolved(params, reader):
+def _step_resolved(params, reader, survey, units: dict) -> tuple:
     """The tiles' parameters: ``up_weight`` 1 (every position is read weighed),
     ``step_weight`` and ``max_size_ratio`` resolved once from the reader (a scene's
-    neighbours along its surfaces and size bound, as one run's: every tile reads them)."""
+    neighbours along its surfaces and size bound, as one run's: every tile reads them),
+    the sizes in the data's units resolved as far as the survey goes (:func:`_in_units`);
+    and a cloud's area estimated on the survey's sample where that was read."""
     if not kind_of(reader.kind).cloud and params.step_weight not in (None, 1):
         raise ParameterError(f"step_weight weighs steps off a point cloud's surface; this "
                              f"input's elements are {reader.kind}")
     scene = getattr(reader, "up", None) is not None
-    return replace(params, up_weight=1.0,
-                   **{name: scene_default_of(params, name, reader.kind, scene)
-                      for name in SCENE_DEFAULTS})
+    return _in_units(replace(params, up_weight=1.0,
+                             **{name: scene_default_of(params, name, reader.kind, scene)
+                                for name in SCENE_DEFAULTS}), reader, survey, units)
 
 
 def _surveyed(source, tmp, tiles, params, graph: bool = False):
