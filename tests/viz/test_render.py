@@ -439,6 +439,32 @@ def test_a_notebook_view_reads_a_file_and_names_what_a_tiled_result_lacks(tmp_pa
     assert meta["points"] == 3000 and meta["superfacets"] == 12
 
 
+def test_a_notebook_view_draws_a_volume_cut_as_the_html_command_does(tmp_path):
+    """``NotebookView(volume_result)`` said "mesh must be a superfacets.Mesh, ..., got
+    TetMesh" (``superfacets html VOLUME`` drew its cut): the cut at the middle of x, each
+    triangle its tetrahedron's label, from a result, a volume and labels, or a file;
+    labels not one per tetrahedron are one line, not numpy's IndexError."""
+    from scipy.spatial import Delaunay
+
+    from superfacets import TetMesh, segment, write_volume_labels
+    from superfacets.inputs.tetmesh import cut_surface
+    from superfacets.viz.html import NotebookView, html_page
+
+    p = np.random.default_rng(0).random((300, 3))
+    vol = TetMesh(p, Delaunay(p).simplices)
+    result = segment(vol, 9)
+    surface, face_labels = cut_surface(vol, result.labels, axis=0, at=0.5)
+    want = html_page(surface, face_labels, elements="faces", title="cut at the middle of x")
+    write_volume_labels(tmp_path / "v.vtu", vol, result.labels)
+    for view in (NotebookView(result), NotebookView(vol, result.labels),
+                 NotebookView(tmp_path / "v.vtu", result.labels)):
+        assert view.html() == want
+    meta = json.loads(re.search(r'id="meta"[^>]*>(.*?)</script>', want, re.S).group(1))
+    assert meta["superfacets"] == len(np.unique(face_labels)) > 1
+    with pytest.raises(ParameterError, match="one integer per tetrahedron"):
+        NotebookView(vol, result.labels[:5])
+
+
 def test_the_picture_says_how_many_segments_and_how_even_they_are(tmp_path, sphere):
     """``render`` (and ``segment --picture``) draw the count and the sizes in the lower left
     corner (or the corner where they hide the fewest drawn pixels): the only pixels that

@@ -184,7 +184,8 @@ def cut_surface(mesh: TetMesh, labels=None, *, axis: int = 0, at: float = 0.5):
     Raises
     ------
     ParameterError
-        If ``axis`` or ``at`` is out of range, or no tetrahedron is kept.
+        If ``axis`` or ``at`` is out of range, no tetrahedron is kept, or ``labels`` is not
+        one integer per tetrahedron.
 
     Examples
     --------
@@ -198,6 +199,11 @@ def cut_surface(mesh: TetMesh, labels=None, *, axis: int = 0, at: float = 0.5):
 
     axis = check_int("axis", axis, lo=0, hi=2)
     at = check_number("at", at, 0.0, 1.0)
+    if labels is not None:
+        given = np.asarray(labels)
+        if given.shape != (mesh.n_tets,) or given.dtype.kind not in "iu":
+            raise ParameterError(f"labels: one integer per tetrahedron ({mesh.n_tets:,}) is "
+                                 f"needed, got shape {given.shape}, dtype {given.dtype}")
     c = mesh.centroids[:, axis]
     lo, hi = float(mesh.vertices[:, axis].min()), float(mesh.vertices[:, axis].max())
     keep = c <= lo + at * (hi - lo) + 1e-12 * max(1.0, abs(hi - lo))

@@ -301,13 +301,14 @@ class NotebookView:
 
     Parameters
     ----------
-    data : Mesh, PointCloud, SegmentationResult, str or os.PathLike, or what :func:`html_page` takes
+    data : Mesh, PointCloud, TetMesh, SegmentationResult, path, or what :func:`html_page` takes
         A result draws its own input and labels; a file's path is read (:func:`~superfacets.
         io.read_input`), as for a tiled run's labels: ``NotebookView("scan.laz",
-        tiled.labels)`` (a cloud of more than 2 million points drawn from an even share).
+        tiled.labels)`` (a cloud of more than 2 million points drawn from an even share);
+        a tetrahedral mesh is drawn cut at the middle of x, as ``superfacets html`` draws it.
     labels : (m,) int ndarray, optional
-        Per face (``elements='vertices'``: per vertex) or per point; a result's own by
-        default.
+        Per face (``elements='vertices'``: per vertex), per point or per tetrahedron; a
+        result's own by default.
     height : int, default 480
         The view's height in pixels (its width is the notebook's).
     **options
@@ -317,7 +318,8 @@ class NotebookView:
     Raises
     ------
     ParameterError
-        As :func:`html_page`, when shown; given a tiled run's result (it holds no input).
+        As :func:`html_page`, when shown; given a tiled run's result (it holds no input), or
+        a volume's labels that are not one per tetrahedron.
     MeshFormatError, FileNotFoundError
         As :func:`~superfacets.io.read_input`, given a path.
 
@@ -344,6 +346,12 @@ class NotebookView:
             if not kind_of(kind).cloud:  # faces, or vertices drawn on the faces
                 options.setdefault("elements", kind)
             data = source.source
+        if hasattr(data, "n_tets"):  # a volume: its cut, as the commands draw it
+            from ...inputs.tetmesh import cut_surface
+
+            data, labels = cut_surface(data, labels, axis=0, at=0.5)
+            options["elements"] = "faces"
+            options.setdefault("title", "cut at the middle of x")
         self.data, self.labels, self.height, self.options = data, labels, int(height), options
 
     def html(self) -> str:
