@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 
 from superfacets import PointCloud, segment
 from superfacets.cli import main
@@ -53,3 +54,37 @@ def test_a_truth_whose_classes_never_neighbour_is_said_not_to_judge_borders(tmp_
     assert main(["evaluate", str(tmp_path / "c.npy"), str(tmp_path / "l.seg"),
                  str(tmp_path / "gt.seg"), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["borderless_truths"] == 1
+
+
+def test_a_volume_is_drawn_by_its_cut_and_refused_in_words_where_a_surface_is_needed(
+        tmp_path):
+    """render(volume, labels) and html_page(volume, labels) said "mesh must be a
+    superfacets.Mesh, ..., got TetMesh" (the commands drew its cut); they draw the cut at
+    the middle of x as the commands do. Where a surface is needed (a coloured mesh, a
+    scene's objects, a tiled run) the error says what takes a volume."""
+    from scipy.spatial import Delaunay
+
+    from superfacets import TetMesh, segment_tiled, write_colored_mesh
+    from superfacets.api.scenes import segment_objects
+    from superfacets.inputs.tetmesh import as_drawn, cut_surface
+    from superfacets.viz.html import html_page
+
+    p = np.random.default_rng(3).random((250, 3))
+    vol = TetMesh(p, Delaunay(p).simplices)
+    labels = segment(vol, 7).labels
+    surface, face_labels = cut_surface(vol, labels, axis=0, at=0.5)
+    assert html_page(vol, labels) == html_page(surface, face_labels)
+    drawn, drawn_labels, cut = as_drawn(vol, labels)
+    assert cut and np.array_equal(drawn_labels, face_labels)
+    assert as_drawn(surface, face_labels)[2] is False
+    pytest.importorskip("pyvista")
+    from superfacets.viz.render import render
+
+    a = render(vol, labels, size=(200, 150))
+    b = render(surface, face_labels, size=(200, 150))
+    assert np.array_equal(a, b)
+    for call in (lambda: write_colored_mesh(tmp_path / "v.ply", vol, labels),
+                 lambda: segment_objects(vol, 3), lambda: segment_tiled(vol, 5, tiles=2)):
+        with pytest.raises(TypeError, match="not a tetrahedral mesh: segment\\(volume, k\\)"):
+            call()
+    assert not (tmp_path / "v.ply").exists()

@@ -67,6 +67,10 @@ def as_mesh(mesh, name: str = "") -> Mesh:
         return Mesh(np.asarray(mesh.vertices), np.asarray(mesh.faces), name=name,
                     **trimesh_colors(mesh))
     got = type(mesh).__name__
+    if hasattr(mesh, "n_tets"):  # (a volume where a surface is needed: say what takes it)
+        raise TypeError("this takes a surface or a point cloud, not a tetrahedral mesh: "
+                        "segment(volume, k) segments it, write_volume_labels writes its labels "
+                        "as cell data, cut_surface(volume, labels) gives its cut to draw")
     if isinstance(mesh, np.ndarray):  # (an array of another shape: say which)
         got = f"an array of shape {mesh.shape}"
     elif isinstance(mesh, (list, tuple)):

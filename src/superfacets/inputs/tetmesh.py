@@ -18,7 +18,7 @@ from ..errors import InvalidMeshError, ParameterError
 from .bounds import check_extent, column_bounds
 from .mesh import Mesh, readonly
 
-__all__ = ["TetMesh", "TET_FACES", "cut_surface"]
+__all__ = ["TetMesh", "TET_FACES", "cut_surface", "as_drawn"]
 
 #: The four triangles of a tetrahedron ``(a, b, c, d)``, each opposite one corner.
 TET_FACES = np.array([[1, 2, 3], [0, 2, 3], [0, 1, 3], [0, 1, 2]])
@@ -213,3 +213,40 @@ def cut_surface(mesh: TetMesh, labels=None, *, axis: int = 0, at: float = 0.5):
     surface = Mesh(mesh.vertices, tri, name=mesh.name)
     lab = None if labels is None else np.asarray(labels, dtype=np.int64)[owner]
     return surface, lab
+
+
+def as_drawn(data, labels=None) -> tuple:
+    """What a picture or a page draws of ``data``: a tetrahedral mesh's cut at the middle
+    of x (:func:`cut_surface`, each triangle its tetrahedron's label), anything else
+    itself.
+
+    Parameters
+    ----------
+    data : TetMesh or any input
+    labels : (m,) int ndarray, optional
+        Per tetrahedron for a volume; else passed on as given.
+
+    Returns
+    -------
+    data : Mesh or the input
+    labels : ndarray or None
+    cut : bool
+        Whether ``data`` was a volume, now its cut (its labels per face).
+
+    Raises
+    ------
+    ParameterError
+        As :func:`cut_surface`.
+
+    Examples
+    --------
+    >>> from scipy.spatial import Delaunay
+    >>> p = np.random.default_rng(0).random((200, 3))
+    >>> surface, face_labels, cut = as_drawn(TetMesh(p, Delaunay(p).simplices))
+    >>> cut, face_labels is None, surface.n_faces > 0
+    (True, True, True)
+    """
+    if not isinstance(data, TetMesh):
+        return data, labels, False
+    surface, face_labels = cut_surface(data, labels, axis=0, at=0.5)
+    return surface, face_labels, True

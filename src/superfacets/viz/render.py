@@ -28,6 +28,7 @@ from ..elements.labels import check_labels, size_summary
 from ..errors import NoDisplayError, ParameterError
 from ..inputs.convert import as_mesh
 from ..inputs.mesh import Mesh
+from ..inputs.tetmesh import as_drawn
 from ..io.colors import boundary_edges
 from ..io.export import point_colors, to_pyvista
 from ..io.files import save
@@ -327,6 +328,8 @@ def render(mesh, labels=None, out=None, *, size=PICTURE_SIZE, view=None,
     MissingExtraError
         Without the ``render`` extra (pyvista, Pillow).
     """
+    mesh, labels, cut = as_drawn(mesh, labels)  # (a volume: its cut at the middle of x)
+    elements = "faces" if cut else elements
     mesh = as_mesh(mesh)
     given = labels
     mesh, labels = faces_to_draw(mesh, labels, elements)

@@ -29,6 +29,7 @@ from ...elements.labels import check_labels, relabel_dense
 from ...errors import ParameterError
 from ...inputs.cloud import as_cloud
 from ...inputs.convert import as_mesh
+from ...inputs.tetmesh import as_drawn
 from ...io.colors import boundary_edges, superfacet_colors
 from ...io.export import point_colors
 from ...io.files import save
@@ -105,6 +106,8 @@ def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None 
     if info is not None and not hasattr(info, "items"):
         raise ParameterError(f"info must be a dict of names and values, got "
                              f"{type(info).__name__}")
+    mesh, labels, cut = as_drawn(mesh, labels)  # (a volume: its cut)
+    elements = "faces" if cut else elements
     if is_cloud(mesh):
         return _points_page(mesh, labels, title=title, info=info, background=background,
                             view=view, up=up)
@@ -346,10 +349,8 @@ class NotebookView:
             if not kind_of(kind).cloud:  # faces, or vertices drawn on the faces
                 options.setdefault("elements", kind)
             data = source.source
-        if hasattr(data, "n_tets"):  # a volume: its cut, as the commands draw it
-            from ...inputs.tetmesh import cut_surface
-
-            data, labels = cut_surface(data, labels, axis=0, at=0.5)
+        data, labels, cut = as_drawn(data, labels)  # (a volume: its cut, as commands draw it)
+        if cut:
             options["elements"] = "faces"
             options.setdefault("title", "cut at the middle of x")
         self.data, self.labels, self.height, self.options = data, labels, int(height), options
