@@ -45,12 +45,10 @@ def _drawn(data, labels, elements: str):
     """What a picture or page draws of an input: a tetrahedral mesh as the surface of its
     tetrahedra cut at the middle of x (each triangle its tetrahedron's label), else the
     input itself; with the labels and what they label."""
-    if elements != "cells":
-        return data, labels, elements
-    from ..inputs.tetmesh import cut_surface
+    from ..inputs.tetmesh import as_drawn
 
-    surface, face_labels = cut_surface(data, labels, axis=0, at=0.5)
-    return surface, face_labels, "faces"
+    data, labels, cut = as_drawn(data, labels)
+    return data, labels, "faces" if cut else elements
 
 
 def drawn_said(n_points: int, size) -> str:

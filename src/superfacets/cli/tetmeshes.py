@@ -108,20 +108,15 @@ def _write(args, data, result, out: dict) -> None:
         if out["graph"] is not None:
             arrays = graph_arrays(result, h)
             outputs.write(out["graph"], lambda fh: np.savez_compressed(fh, **arrays))
-        if out["picture"] is None and out["html"] is None:
-            return
-        from ..inputs.tetmesh import cut_surface
-
-        surface, face_labels = cut_surface(data, result.labels, axis=0, at=0.5)
         title = (f"{Path(args.mesh).name}: {result.n_segments} superfacets, cut at the "
-                 "middle of x")
+                 "middle of x")  # (both draw the volume's cut)
         if out["picture"] is not None:
             from ..viz.render import render
 
-            render(surface, face_labels, out["picture"], outputs=outputs, up=args.up or "y",
+            render(data, result.labels, out["picture"], outputs=outputs, up=args.up or "y",
                    view=args.view, title=title)
         if out["html"] is not None:
             from ..viz.html import write_html
 
-            write_html(out["html"], surface, face_labels, title=title, outputs=outputs,
+            write_html(out["html"], data, result.labels, title=title, outputs=outputs,
                        up=args.up or "y", view=args.view)

@@ -224,19 +224,15 @@ def write_result(data, result, kind: str, source: str, *, labels=None, header: b
             source_el = elements_of(data, kind, **(element_options or {}))  # cached
             write_colored_elements(colored, source_el, result.labels, outputs=outputs)
         title = f"{source}: {result.n_segments} {kind_of(kind).segment_word}"
-        shown, shown_labels, legend = data, result.labels, True
-        if kind_of(kind).dim == 3 and (html is not None or picture is not None):
-            from ..inputs.tetmesh import cut_surface
-
-            shown, shown_labels = cut_surface(data, result.labels, axis=0, at=0.5)
+        volume = kind_of(kind).dim == 3  # (drawn by its cut: no count of its superfacets)
+        if volume:
             kind, title = "faces", title + ", cut at the middle of x"
-            legend = False  # (the cut's triangles: no count of the volume's superfacets)
         drawn = {} if kind_of(kind).cloud else {"elements": kind}  # faces or vertices
         if html is not None:
-            write_html(html, shown, shown_labels, title=title, outputs=outputs, up=up,
+            write_html(html, data, result.labels, title=title, outputs=outputs, up=up,
                        view=view, **drawn)
         if picture is not None:
             draw = render_points if kind_of(kind).cloud else render
-            draw(shown, shown_labels, picture, title=title, outputs=outputs, up=up, view=view,
-                 legend=legend, **drawn)
+            draw(data, result.labels, picture, title=title, outputs=outputs, up=up, view=view,
+                 legend=not volume, **drawn)
 
