@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -136,8 +138,14 @@ def test_cli_segments_a_volume(tmp_path, capsys):
     assert main(["segment", str(tmp_path / "c.vtu"), "-k", "8", "-o", str(tmp_path / "c.seg"),
                  "--colored-mesh", str(tmp_path / "o.vtu")]) == 0
     out = capsys.readouterr().out
-    assert f"{t.n_tets} tetrahedra" in out and "o.vtu (volume" in out
+    assert f"{t.n_tets:,} tetrahedra, 8 superfacets, " in out and "o.vtu (volume" in out
     labels = np.loadtxt(tmp_path / "c.seg", dtype=int)
+    # the sizes as a surface's summary says them: each the diameter of a ball of the median
+    # superfacet's volume (the cube's eighth: about 0.62 of its side)
+    median = np.median(np.bincount(labels, weights=t.volumes))
+    wide = float(re.search(r"about ([0-9.]+) wide in the data's units", out).group(1))
+    assert wide == pytest.approx(np.cbrt(6 * median / np.pi), rel=2e-3)
+    assert re.search(r"[0-9,]+ to [0-9,]+ tetrahedra each \(median [0-9,]+", out)
     assert labels.shape == (t.n_tets,)
     np.testing.assert_array_equal(meshio.read(tmp_path / "o.vtu").cell_data["superfacet"][0],
                                   labels)

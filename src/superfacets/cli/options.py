@@ -557,8 +557,9 @@ def sizes_said(labels, elements: str, result=None) -> str:
 
 
 def _median_width(result) -> float | None:
-    """The diameter of a disc of the median segment's area (its elements' sizes summed), in
-    the input's units; None where the result holds no element graph."""
+    """The diameter of a disc of the median segment's area (its elements' sizes summed; of
+    tetrahedra, of a ball of its volume), in the input's units; None where the result holds
+    no element graph."""
     import numpy as np
 
     try:
@@ -568,4 +569,8 @@ def _median_width(result) -> float | None:
     keep = labels >= 0
     area = np.bincount(labels[keep], weights=np.asarray(graph.sizes)[keep])
     area = area[area > 0]
-    return float(2.0 * np.sqrt(np.median(area) / np.pi)) if area.size else None
+    if not area.size:
+        return None
+    if graph.kind == "cells":  # (a volume: a ball's diameter)
+        return float(np.cbrt(6.0 * np.median(area) / np.pi))
+    return float(2.0 * np.sqrt(np.median(area) / np.pi))

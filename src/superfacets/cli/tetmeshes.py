@@ -13,6 +13,7 @@ from .options import (
     method_kwargs,
     named_after,
     refuse_neighbours,
+    sizes_said,
 )
 from .runs import check_units, checked_graph, run_segment, sizes_of
 
@@ -62,8 +63,9 @@ def segment_volume(args) -> int:
     _write(args, data, result, out)
     report = sys.stderr if str(out["labels"]) == "-" else sys.stdout
     if not args.quiet:
-        print(f"{Path(args.mesh).name}: {data.n_tets} tetrahedra, {result.n_segments} "
-              f"superfacets, {result.n_iter} iterations, {elapsed:.2f} s", file=report)
+        sizes = sizes_said(result.labels, "tetrahedra", result) if result.n_segments > 1 else ""
+        print(f"{Path(args.mesh).name}: {data.n_tets:,} tetrahedra, {result.n_segments:,} "
+              f"superfacets{sizes}, {result.n_iter} iterations, {elapsed:.2f} s", file=report)
         if size_note:
             print(size_note, file=report)
         what = (("labels", "labels, one per tetrahedron"),
