@@ -77,8 +77,9 @@ def segment_volume(args) -> int:
         written = [f"{out[k]} ({w})" for k, w in what if out[k] is not None
                    and str(out[k]) != "-"]
         print("wrote " + ", ".join(written) if written else
-              "note: nothing was saved: add -o OUT.seg, --colored-mesh OUT.vtu or --picture "
-              "OUT.png", file=report if written else sys.stderr)
+              "note: nothing was saved: add -o OUT.seg, --colored-mesh OUT.vtu, --graph "
+              "OUT.npz, --picture OUT.png or --html OUT.html",
+              file=report if written else sys.stderr)
         from .notes import count_note
 
         note = count_note(args, data, result, "cells")
