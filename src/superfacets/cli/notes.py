@@ -70,7 +70,7 @@ def weights_said(params: dict) -> str:
     """The summary's words for what a run's weights read besides the geometry (one run's or
     a tiled run's): the colour term, the up coordinate's weight, a scene's steps."""
     said = ""
-    if params.get("feature_floor") is not None:  # the colour term ran
+    if params.get("feature_floor") is not None and params.get("beta"):  # colour weighed
         said += f", following colour (beta {params['beta']:.3g}; --beta 0: off)"
     if params.get("up_weight", 1) != 1:
         said += f", heights weighed {params['up_weight']:g} times (--up-weight)"

@@ -34,7 +34,7 @@ __all__ = ["Contingency", "contingency", "undersegmentation_error", "compactness
            "achievable_segmentation_accuracy", "boundary_recall", "boundary_precision",
            "mean_over_ground_truths", "ground_truth_list",
            "evaluate", "evaluate_rows", "shape_rows", "oracle_miou", "size_summary",
-           "METRICS"]
+           "has_border", "METRICS"]
 
 #: The names of the metrics :func:`evaluate` returns, and whether lower is better.
 METRICS = {"undersegmentation_error": True, "compactness": True,
@@ -492,13 +492,44 @@ def evaluate_rows(obj, labels, ground_truths: Sequence[np.ndarray], *,
     mious = [oracle_miou(lab, gt, weights=weights, ignore_label=ignore_label) for gt in gts]
     out["oracle_miou"] = float(np.mean([m for m, _ in mious]))
     out["oracle_iou_per_class"] = mious[0][1] if len(mious) == 1 else {}
-    out["borderless_truths"] = sum(not _has_border(g, gt, ignore_label) for gt in gts)
+    out["borderless_truths"] = sum(not has_border(g, gt, ignore_label) for gt in gts)
     out.update(_counted(lab))
     return out
 
 
-def _has_border(g, gt: np.ndarray, ignore_label) -> bool:
-    """Whether two neighbours of ``g`` hold different labelled values of ``gt``."""
+def has_border(graph, ground_truth, ignore_label: int | None = None) -> bool:
+    """Whether two neighbouring elements hold different labelled values of a ground truth:
+    where none do (one class, or classes on separate pieces of the element graph) the
+    boundary recall is 1 and the precision 0 by convention, and say nothing.
+
+    Parameters
+    ----------
+    graph : ElementGraph, Mesh, trimesh.Trimesh or (vertices, faces)
+        The element graph the labels are measured on (a mesh: its face graph).
+    ground_truth : (n_elements,) int ndarray
+        One class or segment per element.
+    ignore_label : int, optional
+        The value of unlabelled elements: an adjacency with such an end is no border.
+
+    Returns
+    -------
+    bool
+
+    Raises
+    ------
+    TypeError, InvalidMeshError
+        As :func:`~superfacets.elements.builders.as_element_graph`, for what is not an
+        element graph or a mesh.
+
+    Examples
+    --------
+    >>> g = as_element_graph(trimesh.creation.icosphere(subdivisions=2))
+    >>> side = (g.positions[:, 0] > 0).astype(int)
+    >>> has_border(g, side), has_border(g, np.zeros_like(side))
+    (True, False)
+    """
+    g = as_element_graph(graph)
+    gt = np.asarray(ground_truth)
     a, b = gt[g.pairs[:, 0]], gt[g.pairs[:, 1]]
     cut = a != b
     if ignore_label is not None:

@@ -36,7 +36,7 @@ from ...evaluation.datasets.psb import BenchmarkMesh
 from ...evaluation.datasets.rooms import load_room
 from ...evaluation.datasets.sampling import sample_points, vertex_ground_truth
 from ...evaluation.methods import Skipped, get_method
-from ...evaluation.metrics import compactness, evaluate, oracle_miou
+from ...evaluation.metrics import compactness, evaluate, has_border, oracle_miou
 from ...evaluation.results import columns, fmt_value, prepare_file, row_key
 from ...inputs.cloud import PointCloud
 from ...io import read_input
@@ -115,6 +115,26 @@ def _element_values(source):
     return lambda values: np.asarray(values)[first]
 
 
+#: How a row's warning begins where no ground truth has a border (:func:`_borderless`).
+BORDERLESS_EMPTY = "the boundary recall is left empty"
+
+
+def _borderless(graph, gts: list, ignore_label) -> str:
+    """What a row says of its ground truths that have no border on ``graph`` (their
+    recall 1 by convention, :func:`~superfacets.evaluation.metrics.has_border`): none
+    with a border, the recall is left empty (the report's means leave it out); ``""``
+    where every ground truth has one."""
+    without = sum(not has_border(graph, gt, ignore_label) for gt in gts)
+    if not without:
+        return ""
+    why = "(their classes lie on separate pieces of the graph, or there is one class)"
+    if without == len(gts):
+        return (f"{BORDERLESS_EMPTY}: no two neighbouring elements differ in the ground "
+                f"truth {why}")
+    return (f"no two neighbouring elements differ in {without} of its {len(gts)} ground "
+            f"truths {why}: the boundary recall counts 1 for each of them")
+
+
 def _run_task(task: dict) -> list[dict]:
     """Run one config over a list of n_segments on one mesh; one row each."""
 
@@ -142,6 +162,7 @@ def _run_task(task: dict) -> list[dict]:
                 for k in task["ks"]]
     cache: dict = {}
     task_peak = 0.0
+    borderless = _borderless(graph, gts, task.get("ignore_label"))
     for k in task["ks"]:
         row = dict(base, n_segments=k)
         try:
@@ -176,6 +197,10 @@ def _run_task(task: dict) -> list[dict]:
                 row["oracle_miou"] = round(float(np.mean(
                     [oracle_miou(labels, gt, weights=weights,
                                  ignore_label=task.get("ignore_label"))[0] for gt in gts])), 6)
+                if borderless:
+                    row["warnings"].append(borderless)
+                    if borderless.startswith(BORDERLESS_EMPTY):
+                        row["boundary_recall"] = None
             else:  # (no ground truth: the shapes alone, as `evaluate` measures them)
                 row["compactness"] = round(compactness(graph, labels), 6)
         except Skipped as exc:
