@@ -70,3 +70,24 @@ def test_a_tiled_run_does_not_say_it_follows_colour_it_weighs_at_zero(tmp_path, 
     assert main(["segment", str(tmp_path / "two.ply"), "-k", "20", "-o",
                  str(tmp_path / "g.seg"), "--tiles", "2", "--beta", "1"]) == 0
     assert "following colour (beta 1" in capsys.readouterr().out
+
+
+def test_a_cloud_format_o_does_not_write_names_those_that_hold_the_labels(tmp_path, capsys):
+    """``-o out.e57`` (or a .pcd of a text cloud): refused, naming only a label file, where
+    a LAS/LAZ or PLY of the points with their labels was one name away."""
+    rng = np.random.default_rng(2)
+    np.savetxt(tmp_path / "c.xyz", rng.random((400, 3)))
+    _ply_cloud(tmp_path / "c.ply", rng.random((400, 3)), {})
+    for source, out, names in (("c.xyz", "o.e57", "o.las, o.laz or o.ply"),
+                               ("c.xyz", "o.pcd", "o.las, o.laz or o.ply"),
+                               ("c.ply", "o.e57", "o.ply")):
+        assert main(["segment", str(tmp_path / source), "-k", "5", "-o",
+                     str(tmp_path / out)]) == 2
+        err = capsys.readouterr().err
+        assert f"the points with their labels as a field: {names}" in err, err
+        assert not (tmp_path / out).exists()
+        suggested = names.split(", ")[0].split(" or ")[0]
+        assert main(["segment", str(tmp_path / source), "-k", "5", "-o",
+                     str(tmp_path / suggested)]) == 0
+        assert (tmp_path / suggested).stat().st_size > 0
+        capsys.readouterr()

@@ -390,8 +390,33 @@ def check_labels_output(path: str | None, source: str, records: bool = False) ->
             + "; name the labels e.g. " + out.name.split(".")[0] + ".seg"
             + ("" if not records or fmt not in ("las", "laz", "ply", "pcd") else
                f" (a .{fmt} takes the labels into a copy of a "
-               f"{'LAS/LAZ' if fmt in ('las', 'laz') else fmt.upper()} input's records)"))
+               f"{'LAS/LAZ' if fmt in ('las', 'laz') else fmt.upper()} input's records)")
+            + _converted_said(out, source, records))
     return out
+
+
+def _converted_said(out: Path, source: str, records: bool) -> str:
+    """Where ``-o`` names a cloud format it does not write (an E57, a PCD of a LAS): the
+    names that take the labels with the input's points (a copy of its records, or a new
+    LAS/LAZ or PLY of its points), or ``""``."""
+    from ..errors import ParameterError
+    from ..io.records import scan_output
+
+    if not records:
+        return ""
+    stem = out.name.split(".")[0]
+    taken = []
+    for fmt in ("las", "laz", "ply", "pcd"):
+        try:
+            if fmt != out.suffix.lower()[1:] and scan_output(out.with_name(f"{stem}.{fmt}"),
+                                                             source) is not None:
+                taken.append(f"{stem}.{fmt}")
+        except ParameterError:  # (a copy of another format's records: refused there)
+            continue
+    if not taken:
+        return ""
+    names = ", ".join(taken[:-1]) + " or " + taken[-1] if len(taken) > 1 else taken[0]
+    return f"; the points with their labels as a field: {names}"
 
 
 def _segmenting_options(args) -> list[str]:
