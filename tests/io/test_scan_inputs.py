@@ -118,6 +118,12 @@ def test_an_e57_s_intensity_is_kept_in_a_new_file(tmp_path):
     assert main(["segment", str(path), "-k", "16", "-o", str(tmp_path / "site.ply")]) == 0
     got = PlyData.read(str(tmp_path / "site.ply"))["vertex"]["scalar_intensity"]
     assert np.allclose(got, want)
+    laspy = pytest.importorskip("laspy")  # LAS's 16-bit intensity: 0..1 scaled, as PDAL does
+    assert main(["segment", str(path), "-k", "16", "-o", str(tmp_path / "site.laz")]) == 0
+    las = laspy.read(str(tmp_path / "site.laz"))
+    assert np.abs(las.intensity.astype(float) - want * 65535).max() <= 0.5 + 1e-6
+    assert las.intensity.max() == 65535
+    assert "intensity" not in las.point_format.extra_dimension_names
     plain, _ = _e57(tmp_path / "plain.e57", scans=1)
     assert read_cloud(plain).fields is None
 

@@ -301,9 +301,10 @@ def write_cloud_with_labels(path, cloud, labels, *, name: str = LABEL_FIELD, lev
     reflectance, NPY records' fields, named text columns) are kept: in a PLY as
     ``scalar_<field>`` (CloudCompare's scalar fields); in a LAS in the standard dimension
     of their name where their values fit it (``intensity``, ``classification``,
-    ``gps_time``, ...), else as extra dimensions of their own type. One that cannot be kept
-    (a standard name whose values do not fit, a name of more than 32 characters) is left
-    out with a warning that says why.
+    ``gps_time``, ...; an intensity of floats from 0 to 1, an E57's, scaled to 0..65535
+    as PDAL's E57 reader scales it), else as extra dimensions of their own type. One that
+    cannot be kept (a standard name whose values do not fit, a name of more than 32
+    characters) is left out with a warning that says why.
 
     Parameters
     ----------
@@ -520,6 +521,10 @@ def _las_fields(point_format, fields: dict, label: str, warn: bool = True
                 continue
             lo, hi = ((np.iinfo(dim.dtype).min, np.iinfo(dim.dtype).max) if dim.dtype
                       is not None else (0, 2 ** dim.num_bits - 1))
+            if dim.name == "intensity" and _normalised(a) and dim.name not in standard:
+                standard[dim.name] = np.round(a * hi).astype(np.int64)  # (0..1 to 16 bits)
+                written[field_name] = dim.name
+                continue
             with np.errstate(invalid="ignore"):
                 fits = bool(np.all((a == np.floor(a)) & (a >= lo) & (a <= hi)))
             if fits and dim.name not in standard:
@@ -541,6 +546,16 @@ def _las_fields(point_format, fields: dict, label: str, warn: bool = True
             warnings.warn(f"field {field_name!r} is not kept in the new LAS file: {why}; a "
                           ".ply keeps every field", stacklevel=4)
     return standard, extra, written
+
+
+def _normalised(values: np.ndarray) -> bool:
+    """Whether an intensity is normalised: floats from 0 to 1, not all whole (an E57's
+    usual limits, Open3D's), which a LAS file's 16-bit ``intensity`` holds scaled."""
+    if values.dtype.kind != "f" or values.size == 0:
+        return False
+    with np.errstate(invalid="ignore"):
+        return bool(np.all((values >= 0) & (values <= 1))
+                    and not np.all(values == np.floor(values)))
 
 
 def _las_key(name: str) -> str:
