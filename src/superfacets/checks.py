@@ -21,8 +21,8 @@ from .errors import ParameterError
 
 __all__ = ["check_int", "check_number", "check_positive", "check_nonneg", "check_bool",
            "check_choice", "check_n_segments", "check_threads", "max_threads",
-           "threads_from_env", "not_real", "check_real", "counted", "check_up", "check_name",
-           "AXES"]
+           "threads_from_env", "not_real", "check_real", "check_unmasked", "counted",
+           "check_up", "check_name", "AXES"]
 
 #: Named axes (an up direction, a side to see from) and their directions.
 AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0),
@@ -152,6 +152,51 @@ def check_real(dtype, what: str) -> None:
     """
     if not_real(dtype, what):
         raise TypeError(not_real(dtype, what))
+
+
+def check_unmasked(values, what: str, error: type = ParameterError):
+    """``values`` as an array, refused where it is a masked array with masked entries:
+    ``numpy.asarray`` would drop the mask and keep the values under it, which the caller
+    meant to leave out (a silent wrong answer).
+
+    Parameters
+    ----------
+    values : array_like
+        Coordinates or labels, possibly a ``numpy.ma.MaskedArray``.
+    what : str
+        What the array holds, with the input's name where it has one (``"points"``).
+    error : type, default ParameterError
+        The exception raised (``InvalidCloudError``, ``InvalidMeshError``).
+
+    Returns
+    -------
+    ndarray
+        ``numpy.asarray(values)``; a masked array with no masked entry gives its data.
+
+    Raises
+    ------
+    error
+        Naming how many rows hold masked entries, and what to do instead.
+
+    Examples
+    --------
+    >>> a = np.ma.masked_array([[0.0, 1, 2], [3, 4, 5]], mask=[[0, 0, 0], [0, 1, 0]])
+    >>> check_unmasked(a, "points")
+    Traceback (most recent call last):
+    ...
+    superfacets.errors.ParameterError: points: a masked array with 1 row of masked values: ...
+    """
+    if np.ma.isMaskedArray(values) and np.ma.getmaskarray(values).any():
+        mask = np.ma.getmaskarray(values)
+        if mask.ndim > 1:
+            rows = int(mask.reshape(mask.shape[0], -1).any(axis=1).sum())
+            held, out = f"{counted(rows, 'row')} of masked values", "a[~a.mask.any(axis=1)]"
+        else:
+            held, out = counted(int(mask.sum()), "masked value"), "a[~a.mask]"
+        raise error(f"{what}: a masked array with {held}: leave them out ({out}) or fill "
+                    "them (a.filled(value); a ground truth's with the value given as "
+                    "ignore_label); the mask is not read")
+    return np.asarray(values)
 
 
 def _is_int(value) -> bool:

@@ -435,7 +435,11 @@ def as_element_graph(obj) -> ElementGraph:
     Raises
     ------
     TypeError, InvalidMeshError
-        As :func:`superfacets.inputs.convert.as_mesh`.
+        As :func:`superfacets.inputs.convert.as_mesh`; for a point cloud or a tetrahedral
+        mesh, naming what reads them (:func:`superfacets.evaluation.metrics.evaluate_rows`,
+        one label per row as ``superfacets evaluate`` reads them, or their graph,
+        ``elements_of(obj).graph``): a mesh's metrics weigh faces by area, a cloud's each
+        point alike.
 
     Examples
     --------
@@ -444,5 +448,11 @@ def as_element_graph(obj) -> ElementGraph:
     """
     if isinstance(obj, ElementGraph):
         return obj
-
+    if not _is_mesh(obj):
+        what = "a tetrahedral mesh" if _is_volume(obj) else "a point cloud"
+        raise TypeError(
+            f"this takes a mesh or an element graph, not {what}: superfacets.evaluation."
+            "metrics.evaluate_rows(input, labels, ground_truths) scores one label per row as "
+            "`superfacets evaluate` does, each element weighing one; or pass its graph, "
+            "superfacets.elements.builders.elements_of(input).graph")
     return faces.face_graph(as_mesh(obj))

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..checks import check_unmasked
 from ..errors import ParameterError
 
 __all__ = ["check_labels", "relabel_dense", "size_summary"]
@@ -31,8 +32,8 @@ def check_labels(labels, n: int | None, what: str = "labels", per: str = "elemen
     Raises
     ------
     ParameterError
-        If the array is not 1-D, not of length ``n`` or not of an integer dtype, or is a
-        run's result (its ``labels`` are meant).
+        If the array is not 1-D, not of length ``n`` or not of an integer dtype, is a
+        run's result (its ``labels`` are meant) or a masked array with masked labels.
 
     Examples
     --------
@@ -43,7 +44,7 @@ def check_labels(labels, n: int | None, what: str = "labels", per: str = "elemen
                                                           np.ndarray):  # (a run's result)
         raise ParameterError(f"{what}: got a {type(labels).__name__}; pass its labels "
                              "(result.labels)")
-    a = np.asarray(labels)
+    a = check_unmasked(labels, what)
     if a.ndim != 1 or (n is not None and a.shape[0] != n) \
             or not np.issubdtype(a.dtype, np.integer):
         count = "a 1-D array of integers" if n is None else f"{n} integers"

@@ -17,7 +17,7 @@ from functools import cached_property
 import numpy as np
 
 from .._kernels import native
-from ..checks import check_name, check_real, check_up, counted
+from ..checks import check_name, check_real, check_unmasked, check_up, counted
 from ..errors import InvalidCloudError, ParameterError
 from .bounds import check_extent, column_bounds, finite_rows
 from .mesh import readonly
@@ -406,7 +406,7 @@ def _library_colors(values) -> np.ndarray | None:
 
 
 def _coordinates(a, what: str, where: str) -> np.ndarray:
-    arr = np.asarray(a)
+    arr = check_unmasked(a, where + what, InvalidCloudError)
     check_real(arr.dtype, where + what)
     if arr.ndim != 2 or arr.shape[1] != 3:
         raise InvalidCloudError(f"{where}{what} must have shape (N, 3), got {arr.shape}")
@@ -521,7 +521,8 @@ def as_cloud(obj, normals=None, name: str = "") -> PointCloud:
         ``positions``, ``normals`` and ``colors``), or a pandas DataFrame of ``x y z``
         columns (and ``nx ny nz``, ``red green blue`` where it has them, in any case:
         :data:`TABLE_COLUMNS`)
-        An organized array may hold NaN rows (invalid points, label -1).
+        An organized array may hold NaN rows (invalid points, label -1), or be a masked
+        array (its masked pixels invalid).
     normals : (N, 3) or (H, W, 3) float ndarray, optional
         With an array: its normals (an Open3D cloud brings its own).
     name : str, optional
@@ -535,7 +536,8 @@ def as_cloud(obj, normals=None, name: str = "") -> PointCloud:
     TypeError
         If ``obj`` is none of these.
     InvalidCloudError
-        As :class:`PointCloud`.
+        As :class:`PointCloud`; an ``(N, 3)`` masked array with masked entries (the mask
+        would not be read).
 
     Examples
     --------
@@ -569,11 +571,13 @@ def as_cloud(obj, normals=None, name: str = "") -> PointCloud:
     if isinstance(obj, (np.ndarray, list, tuple)):
         arr = np.asarray(obj)
         if arr.ndim == 3 and arr.shape[2] == 3:  # organized: rows of a sensor image
+            if np.ma.isMaskedArray(obj):  # (its masked pixels: points not measured)
+                arr = np.ma.filled(np.ma.asarray(obj, dtype=np.float64), np.nan)
             h, w = arr.shape[:2]
             nrm = None if normals is None else np.asarray(normals).reshape(-1, 3)
             return PointCloud(arr.reshape(-1, 3), nrm, name=name, allow_invalid=True,
                               shape=(h, w))
-        return PointCloud(arr, normals, name=name)
+        return PointCloud(obj if np.ma.isMaskedArray(obj) else arr, normals, name=name)
     raise TypeError(f"expected a point cloud ((N, 3) array, PointCloud, trimesh or Open3D "
                     f"point cloud, a DataFrame of x y z columns), got {type(obj).__name__}")
 

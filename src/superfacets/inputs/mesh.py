@@ -21,7 +21,7 @@ import numpy as np
 from .._kernels import native
 from .._runtime import threads
 from .._runtime.threads import split
-from ..checks import check_name, check_real, counted
+from ..checks import check_name, check_real, check_unmasked, counted
 from ..errors import InvalidMeshError
 from .bounds import check_extent, column_bounds
 from .rgb import check_colors, face_means, vertex_means
@@ -484,7 +484,9 @@ def check_finite_vertices(vertices, where: str = "", first_row: int = 0,
 def _validate_arrays(vertices, faces, name: str = "") -> tuple[np.ndarray, np.ndarray]:
     where = f"{name}: " if name else ""
     try:
-        v = np.asarray(vertices)
+        v = check_unmasked(vertices, where + "vertices", InvalidMeshError)
+    except InvalidMeshError:
+        raise
     except Exception as exc:  # ragged lists and the like
         raise InvalidMeshError(f"{where}vertices are not an array: {exc}") from None
     if v.ndim != 2 or v.shape[1] != 3:

@@ -13,7 +13,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ..checks import check_int, check_name, check_number, check_real
+from ..checks import check_int, check_name, check_number, check_real, check_unmasked
 from ..errors import InvalidMeshError, ParameterError
 from .bounds import check_extent, column_bounds
 from .mesh import Mesh, readonly
@@ -60,7 +60,7 @@ class TetMesh:
     def __post_init__(self) -> None:
         object.__setattr__(self, "name", check_name(self.name))  # (in every message)
         where = f"{self.name}: " if self.name else ""
-        v = np.asarray(self.vertices)
+        v = check_unmasked(self.vertices, where + "vertices", InvalidMeshError)
         check_real(v.dtype, where + "vertices")
         v = np.ascontiguousarray(v, dtype=np.float64)
         if v.ndim != 2 or v.shape[1] != 3:

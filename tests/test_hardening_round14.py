@@ -1,0 +1,78 @@
+"""Round 14 of hardening: faults an attack on the Python doors found, each with its test.
+
+- A masked array (``numpy.ma``) of points, vertices or labels was read through
+  ``numpy.asarray``, which drops the mask: the values under it were segmented or scored
+  as if the user had not masked them. Now refused, naming how many rows are masked; an
+  organized cloud's masked pixels are its invalid points.
+- A metric given a point cloud (``evaluate(cloud, labels, [truth])``) said "mesh must be
+  ... (a point cloud: a PointCloud ...), got PointCloud": it now names what scores a
+  cloud (``evaluate_rows``) or its graph.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import superfacets as sf
+from superfacets.errors import InvalidCloudError, InvalidMeshError, ParameterError
+from superfacets.evaluation.metrics import evaluate, evaluate_rows
+
+
+def _flat(n=2000, seed=0):
+    xyz = np.random.default_rng(seed).random((n, 3))
+    xyz[:, 2] *= 0.05
+    return xyz
+
+
+def test_masked_points_are_refused_not_read_unmasked():
+    xyz = _flat()
+    mask = np.zeros_like(xyz, bool)
+    mask[:40, 2] = True
+    masked = np.ma.masked_array(xyz, mask=mask)
+    for call in (lambda: sf.segment(masked, 20), lambda: sf.PointCloud(masked)):
+        with pytest.raises(InvalidCloudError, match="masked array with 40 rows"):
+            call()
+    # a mask that masks nothing is the array itself
+    clear = sf.segment(np.ma.masked_array(xyz), 20).labels
+    assert np.array_equal(clear, sf.segment(xyz, 20).labels)
+
+
+def test_masked_pixels_of_an_organized_cloud_are_its_invalid_points():
+    grid = _flat(50 * 60).reshape(50, 60, 3)
+    mask = np.zeros(grid.shape, bool)
+    mask[0, :7] = True
+    result = sf.segment(np.ma.masked_array(grid, mask=mask), 20)
+    assert result.labels.shape == (3000,)
+    assert np.flatnonzero(result.labels == -1).tolist() == list(range(7))
+    assert result.n_segments == 20
+
+
+def test_masked_vertices_and_labels_are_refused():
+    v = np.ma.masked_array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]],
+                           mask=[[0, 0, 0], [0, 0, 0], [0, 1, 0]])
+    with pytest.raises(InvalidMeshError, match="vertices: a masked array with 1 row"):
+        sf.segment((v, [[0, 1, 2]]), 1)
+    with pytest.raises(InvalidMeshError, match="masked array"):
+        sf.TetMesh(v, [[0, 1, 2, 0]])
+    cloud = sf.PointCloud(_flat())
+    labels = sf.segment(cloud, 10).labels
+    truth = np.ma.masked_array((cloud.points[:, 0] > 0.5).astype(int),
+                               mask=np.r_[np.ones(5, bool), np.zeros(1995, bool)])
+    with pytest.raises(ParameterError, match="5 masked values.*ignore_label"):
+        evaluate_rows(cloud, labels, [truth])
+    # filled with an ignored value it is scored without those points
+    scores = evaluate_rows(cloud, labels, [truth.filled(-1)], ignore_label=-1)
+    assert 0 <= scores["undersegmentation_error"] < 1
+
+
+def test_a_metric_given_a_cloud_names_what_scores_one():
+    cloud = sf.PointCloud(_flat())
+    labels = sf.segment(cloud, 10).labels
+    truth = (cloud.points[:, 0] > 0.5).astype(int)
+    with pytest.raises(TypeError, match="not a point cloud: .*evaluate_rows") as err:
+        evaluate(cloud, labels, [truth])
+    assert "got PointCloud" not in str(err.value)
+    from superfacets.elements.builders import elements_of
+    graph = elements_of(cloud).graph      # what the message offers works
+    assert 0 <= evaluate(graph, labels, [truth])["undersegmentation_error"] < 1
