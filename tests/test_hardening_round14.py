@@ -7,6 +7,11 @@
 - A metric given a point cloud (``evaluate(cloud, labels, [truth])``) said "mesh must be
   ... (a point cloud: a PointCloud ...), got PointCloud": it now names what scores a
   cloud (``evaluate_rows``) or its graph.
+- A file named by another format's suffix (a PCD saved as ``.ply``, an OFF as ``.obj``,
+  a LAS as ``.ply``, a gzip without ``.gz``) was refused in the reader's words ("line 1:
+  expected 'ply'", "empty mesh: no faces"); the message now says what its first bytes
+  are, in one run, a tiled run and ``batch``.
+- ``-o`` naming the input said "writing label file there would overwrite it".
 """
 
 from __future__ import annotations
@@ -15,6 +20,7 @@ import numpy as np
 import pytest
 
 import superfacets as sf
+from superfacets.cli import main
 from superfacets.errors import InvalidCloudError, InvalidMeshError, ParameterError
 from superfacets.evaluation.metrics import evaluate, evaluate_rows
 
@@ -76,3 +82,51 @@ def test_a_metric_given_a_cloud_names_what_scores_one():
     from superfacets.elements.builders import elements_of
     graph = elements_of(cloud).graph      # what the message offers works
     assert 0 <= evaluate(graph, labels, [truth])["undersegmentation_error"] < 1
+
+
+def _pcd(path, pts) -> None:
+    head = ("# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+            f"WIDTH {len(pts)}\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {len(pts)}\n"
+            "DATA ascii\n")
+    path.write_text(head + "\n".join(" ".join(f"{v:.6f}" for v in p) for p in pts) + "\n")
+
+
+def test_a_file_under_another_formats_suffix_is_named_by_its_first_bytes(tmp_path, capsys):
+    import gzip
+
+    pts = _flat(400)
+    _pcd(tmp_path / "scan.pcd", pts)
+    assert main(["segment", str(tmp_path / "scan.pcd"), "-k", "5", "-o",
+                 str(tmp_path / "ok.seg")]) == 0
+    data = (tmp_path / "scan.pcd").read_bytes()
+    (tmp_path / "scan.ply").write_bytes(data)
+    (tmp_path / "shape.obj").write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")
+    (tmp_path / "packed.pcd").write_bytes(gzip.compress(data))
+    capsys.readouterr()
+    for name, said in (("scan.ply", "(it begins as PCD files do: name it .pcd)"),
+                       ("shape.obj", "(it begins as OFF files do: name it .off)"),
+                       ("packed.pcd", "(it is gzip-compressed: name it packed.pcd.gz)")):
+        assert main(["segment", str(tmp_path / name), "-k", "2", "-o",
+                     str(tmp_path / "o.seg")]) == 2
+        err = capsys.readouterr().err
+        assert said in err, err
+    # the tiled run's own reader (a PLY is streamed), and batch's rows
+    assert main(["segment", str(tmp_path / "scan.ply"), "--tiles", "2", "-k", "4", "-o",
+                 str(tmp_path / "o.seg")]) == 2
+    assert "(it begins as PCD files do" in capsys.readouterr().err
+    with pytest.raises(sf.errors.MeshFormatError, match="begins as PCD files do"):
+        sf.io.read_input(tmp_path / "scan.ply")
+    # a file of its own format that is damaged says nothing of the kind
+    (tmp_path / "bad.pcd").write_bytes(data[:40])
+    assert main(["segment", str(tmp_path / "bad.pcd"), "-k", "2", "-o",
+                 str(tmp_path / "o.seg")]) == 2
+    assert "begins as" not in capsys.readouterr().err
+    assert not (tmp_path / "o.seg").exists()
+
+
+def test_output_over_the_input_is_refused_in_plain_words(tmp_path, capsys):
+    _pcd(tmp_path / "scan.pcd", _flat(300))
+    assert main(["segment", str(tmp_path / "scan.pcd"), "-k", "5", "-o",
+                 str(tmp_path / "scan.pcd")]) == 2
+    err = capsys.readouterr().err
+    assert "writing the labels there would overwrite it" in err, err

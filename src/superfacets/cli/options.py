@@ -364,7 +364,7 @@ def check_labels_output(path: str | None, source: str, records: bool = False) ->
     from ..io.files import split_suffix
     from ..io.records import scan_output
 
-    out = check_output(path, (), "label file", stdout=True, inputs=(source,))
+    out = check_output(path, (), "the labels", stdout=True, inputs=(source,))
     if out is None or str(out) == "-":
         return out
     if records and scan_output(out, source) is not None:  # (a mismatch: refused there)

@@ -82,11 +82,18 @@ def read_usable(path, *, clouds: bool = False):
     SuperfacetsError, OSError
         Named after ``path``.
     """
-    from ..errors import SuperfacetsError
+    from ..errors import InvalidCloudError, InvalidMeshError, MeshFormatError, SuperfacetsError
     from ..io import read_input, read_mesh
+    from ..io.files import format_hint
 
-    check_header(path)
-    data = read_input(path) if clouds else read_mesh(path)
+    try:
+        check_header(path)
+        data = read_input(path) if clouds else read_mesh(path)
+    except (MeshFormatError, InvalidMeshError, InvalidCloudError) as exc:
+        hint = format_hint(path)
+        if hint and not str(exc).endswith(hint):
+            raise type(exc)(str(exc) + hint) from None
+        raise
     try:
         data.check_usable()
     except SuperfacetsError as exc:

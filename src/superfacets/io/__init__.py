@@ -12,10 +12,10 @@
 
 from pathlib import Path
 
-from ..errors import MeshFormatError
+from ..errors import InvalidCloudError, InvalidMeshError, MeshFormatError
 from .clouds import CLOUD_FORMATS, is_cloud_file, read_cloud, scene_file
 from .export import to_pyvista, to_trimesh, write_colored_mesh, write_mesh
-from .files import atomic_write, split_suffix, user_path
+from .files import atomic_write, format_hint, split_suffix, user_path
 from .labels import read_labels, write_labels, write_segindices
 from .meshes import MESH_FORMATS, read_mesh
 from .tetmeshes import VOLUME_FORMATS, read_volume, write_volume_labels
@@ -88,9 +88,13 @@ def read_input(path):
             f".gz/.xz/.bz2); point clouds: {', '.join('.' + f for f in CLOUD_FORMATS)}, or "
             ".ply, .obj, .off without faces; tetrahedral meshes: "
             f"{', '.join('.' + f for f in VOLUME_FORMATS)}")
-    kind = input_kind(path)
-    return (read_volume(path) if kind == "volume" else read_cloud(path) if kind == "cloud"
-            else read_mesh(path))
+    try:
+        kind = input_kind(path)
+        return (read_volume(path) if kind == "volume" else read_cloud(path) if kind == "cloud"
+                else read_mesh(path))
+    except (MeshFormatError, InvalidMeshError, InvalidCloudError) as exc:
+        raise type(exc)(str(exc) + format_hint(path)) from None
+
 
 
 __all__ = ["input_kind", "read_mesh", "write_mesh", "read_labels", "write_labels",

@@ -29,7 +29,7 @@ from ..errors import MemoryLimitError, MeshFormatError, ParameterError, Superfac
 __all__ = ["split_suffix", "read_bytes", "text_lines", "text_chunks", "number_table",
            "atomic_write", "Outputs",
            "save", "COMPRESSIONS", "decompressed", "decompressed_head", "sha256_of", "array_digest",
-           "load_checked", "user_path"]
+           "load_checked", "user_path", "sniffed_format", "format_hint", "MAGIC"]
 
 
 #: Compression suffixes understood on reading and writing.
@@ -77,6 +77,89 @@ def read_head(path: Path, size: int = 1 << 16) -> bytes:
     _check_regular(path)
     with open(path, "rb") as fh:
         return fh.read(size)
+
+
+#: How the formats' files begin: ``(name, suffixes, first bytes)``, for telling a file
+#: whose suffix names another format what it looks like (:func:`sniffed_format`).
+MAGIC = (("PLY", ("ply",), (b"ply\n", b"ply\r")), ("LAS", ("las", "laz"), (b"LASF",)),
+         ("E57", ("e57",), (b"ASTM-E57",)), ("PCD", ("pcd",), (b"# .PCD", b"VERSION")),
+         ("NPY", ("npy",), (b"\x93NUMPY",)), ("GLB", ("glb",), (b"glTF",)),
+         ("Gmsh", ("msh",), (b"$MeshFormat",)), ("VTK", ("vtk",), (b"# vtk DataFile",)),
+         ("Medit", ("mesh",), (b"MeshVersionFormatted",)),
+         ("OFF", ("off",), (b"OFF", b"COFF", b"NOFF")), ("gzip", ("gz",), (b"\x1f\x8b",)),
+         ("xz", ("xz",), (b"\xfd7zXZ",)), ("bzip2", ("bz2",), (b"BZh",)),
+         ("ZIP (NPZ)", ("npz", "zip"), (b"PK\x03\x04",)))
+
+
+def sniffed_format(path: Path) -> tuple[str, tuple[str, ...]] | None:
+    r"""The format a file's first bytes show (its name and suffixes, a row of
+    :data:`MAGIC`), or None where they show none of them: what a file looks like when its
+    suffix's reader cannot read it.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        A regular file, read as it is (not decompressed).
+
+    Returns
+    -------
+    (str, tuple of str) or None
+
+    Raises
+    ------
+    FileNotFoundError, IsADirectoryError, MeshFormatError
+        As :func:`read_head`.
+
+    Examples
+    --------
+    >>> _ = Path("scan.ply").write_bytes(b"LASF" + bytes(300))
+    >>> sniffed_format(Path("scan.ply"))
+    ('LAS', ('las', 'laz'))
+    """
+    head = read_head(path, 32)
+    for name, suffixes, starts in MAGIC:
+        if head.startswith(starts):
+            return name, suffixes
+    return None
+
+
+def format_hint(path) -> str:
+    """What a file its suffix's reader refused looks like, where its first bytes show
+    another format (:func:`sniffed_format`), for the end of the reader's message:
+    ``" (it begins as PCD files do: name it .pcd)"``; "" where they show its own format,
+    none, or the file cannot be read.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    TypeError
+        Never for a path: an unreadable file gives "".
+
+    Examples
+    --------
+    >>> _ = Path("scan.ply").write_bytes(b"# .PCD v0.7\nVERSION 0.7\n")
+    >>> format_hint("scan.ply")
+    ' (it begins as PCD files do: name it .pcd)'
+    """
+    path = Path(path)
+    fmt, comp = split_suffix(path)
+    try:
+        seen = sniffed_format(path) if path.is_file() else None
+    except (OSError, MeshFormatError):
+        return ""
+    if seen is None or (comp or "").lstrip(".") in seen[1] or (not comp and fmt in seen[1]):
+        return ""
+    name, suffixes = seen
+    if "." + suffixes[0] in COMPRESSIONS:
+        return f" (it is {name}-compressed: name it {path.name}.{suffixes[0]})"
+    return f" (it begins as {name} files do: name it {' or '.join('.' + x for x in suffixes)})"
 
 
 #: A compressed mesh or cloud decompresses to at most this many times its size: real

@@ -59,6 +59,7 @@ from .clouds import (
     unusable_normals,
     withheld_rows,
 )
+from .files import format_hint
 from .headers import NotStreamedError, check_las, first_line, npy_mapped, ply_mapped, ply_names
 from .meshes import read_mesh
 from .ply import VertexView
@@ -122,6 +123,8 @@ def streamed(path) -> bool:
         ply = ply_mapped(p)
     except NotStreamedError:
         return False
+    except MeshFormatError as exc:
+        raise MeshFormatError(str(exc) + format_hint(p)) from None
     if "face" not in [e.name for e in ply.elements] or ply["face"].count == 0:
         return True
     face = ply["face"]
@@ -213,6 +216,13 @@ class RegionReader:
         p = Path(path)
         if not p.is_file():
             raise FileNotFoundError(f"{p}: no such file")
+        try:
+            return cls._opened(p, chunk)
+        except MeshFormatError as exc:
+            raise MeshFormatError(str(exc) + format_hint(p)) from None
+
+    @classmethod
+    def _opened(cls, p: Path, chunk: int) -> "RegionReader":
         suffix = p.suffix.lower().lstrip(".")
         if suffix == "ply":
             ply = ply_mapped(p)  # memory-mapped: the header is read, not the data
