@@ -12,6 +12,9 @@
   expected 'ply'", "empty mesh: no faces"); the message now says what its first bytes
   are, in one run, a tiled run and ``batch``.
 - ``-o`` naming the input said "writing label file there would overwrite it".
+- A label file with a UTF-8 byte-order mark (Windows tools write one) lost its first label
+  (read as a column's name): "69,450 labels, but ... 69,451 faces". A file of all its labels
+  on one line, comma-separated, was refused with the whole line quoted (270 kB).
 """
 
 from __future__ import annotations
@@ -130,3 +133,25 @@ def test_output_over_the_input_is_refused_in_plain_words(tmp_path, capsys):
                  str(tmp_path / "scan.pcd")]) == 2
     err = capsys.readouterr().err
     assert "writing the labels there would overwrite it" in err, err
+
+
+def test_a_label_file_with_a_byte_order_mark_reads_every_label(tmp_path):
+    from superfacets.io import read_labels
+
+    labels = np.arange(50) % 7
+    text = "\n".join(map(str, labels)) + "\n"
+    (tmp_path / "plain.seg").write_text(text)
+    (tmp_path / "bom.seg").write_text(text, encoding="utf-8-sig")
+    (tmp_path / "bom.json").write_text('{"segIndices": [%s]}' % ", ".join(map(str, labels)),
+                                       encoding="utf-8-sig")
+    for name in ("plain.seg", "bom.seg", "bom.json"):
+        assert read_labels(tmp_path / name, 50).tolist() == labels.tolist(), name
+
+
+def test_a_label_file_on_one_line_is_refused_in_a_short_message(tmp_path):
+    from superfacets.io import read_labels
+
+    (tmp_path / "one.seg").write_text(",".join(["12"] * 5000) + "\n")
+    with pytest.raises(sf.errors.MeshFormatError, match="5,000 columns in a line") as err:
+        read_labels(tmp_path / "one.seg", 5000)
+    assert len(str(err.value)) < 300

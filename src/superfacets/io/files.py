@@ -535,7 +535,7 @@ def number_table(lines: list, dtype=None):
 def text_lines(data: bytes, path: Path) -> list[str]:
     """Non-empty lines with comments (``#`` to end of line) removed."""
     try:
-        text = data.decode("utf-8")
+        text = data.decode("utf-8-sig")  # (a BOM, as Windows tools write it)
     except UnicodeDecodeError:
         raise MeshFormatError(f"{path}: not a text file (binary data in a text format)") from None
     if "#" in text:

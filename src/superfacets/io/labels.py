@@ -279,7 +279,8 @@ def _text_labels(lines: list, path: Path) -> np.ndarray:
     columns = lines[0].replace(",", " ").replace(";", " ").split()
     if len(columns) > 1:
         raise MeshFormatError(
-            f"{path}: malformed label file: {len(columns)} columns in a line ({lines[0]!r}); "
+            f"{path}: malformed label file: {len(columns):,} columns in a line "
+            f"({lines[0][:60]!r}{' ...' if len(lines[0]) > 60 else ''}); "
             "it holds one label per line (pandas: to_csv(index=False) of one column)")
     try:
         labels = np.loadtxt(lines, dtype=np.int64, ndmin=1, comments=None)
