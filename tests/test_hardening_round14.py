@@ -15,6 +15,9 @@
 - A label file with a UTF-8 byte-order mark (Windows tools write one) lost its first label
   (read as a column's name): "69,450 labels, but ... 69,451 faces". A file of all its labels
   on one line, comma-separated, was refused with the whole line quoted (270 kB).
+- ``segment --tiles N --seed-resolution R`` on an input of more separate pieces than the
+  resolution asks for said "k = 2 superpoints from --seed-resolution ...": the count the
+  pieces made, not the one asked (one run says k = 1 and why it made 2).
 """
 
 from __future__ import annotations
@@ -155,3 +158,17 @@ def test_a_label_file_on_one_line_is_refused_in_a_short_message(tmp_path):
     with pytest.raises(sf.errors.MeshFormatError, match="5,000 columns in a line") as err:
         read_labels(tmp_path / "one.seg", 5000)
     assert len(str(err.value)) < 300
+
+
+def test_a_tiled_runs_count_from_the_resolution_is_the_one_asked(tmp_path, capsys):
+    a, b = _flat(1500, 1), _flat(1500, 2)
+    b[:, 0] += 50.0                                   # two pieces, far apart
+    np.save(tmp_path / "two.npy", np.r_[a, b])
+    said = []
+    for extra in ([], ["--tiles", "2"]):
+        assert main(["segment", str(tmp_path / "two.npy"), "--seed-resolution", "1e6",
+                     "-o", str(tmp_path / "o.seg"), *extra]) == 0
+        out = capsys.readouterr()
+        said.append([ln for ln in (out.out + out.err).splitlines() if ln.startswith("k = ")])
+        assert len(set(np.loadtxt(tmp_path / "o.seg", dtype=int))) == 2
+    assert said[0] == said[1] and said[0][0].startswith("k = 1 superpoints"), said

@@ -287,13 +287,14 @@ def _tiled_run(args, graph: bool) -> tuple:
 def _count_said(args, result, k) -> str:
     """Where the count of a tiled run came from, as one run's summary says it: the seed
     resolution and the area the tiles measured, or the default that grows with a cloud."""
-    from ..api.sizes import MIN_ELEMENTS_PER_SEGMENT, POINTS_PER_SEGMENT
+    from ..api.sizes import MIN_ELEMENTS_PER_SEGMENT, POINTS_PER_SEGMENT, resolution_count
     from ..method.params import DEFAULTS
 
     segs = kind_of(result.params["elements"]).segment_word
     res = args.seed_resolution
-    if res is not None:
-        n, kind = result.params["n_segments"], result.params["elements"]
+    if res is not None:  # (the count asked: the input's pieces may have made more)
+        kind = result.params["elements"]
+        n = resolution_count(result.area, res, int(result.labels.size))
         with np.errstate(over="ignore", under="ignore", divide="ignore"):
             capped = not np.float64(result.area) / np.float64(res) / np.float64(res) < n + 0.5
         return (f"k = {n:,} {segs} from --seed-resolution {res:g}: a surface of "
