@@ -18,6 +18,7 @@
 - ``segment --tiles N --seed-resolution R`` on an input of more separate pieces than the
   resolution asks for said "k = 2 superpoints from --seed-resolution ...": the count the
   pieces made, not the one asked (one run says k = 1 and why it made 2).
+- ``report`` of an empty results file said "the results file has no rows" without its name.
 """
 
 from __future__ import annotations
@@ -172,3 +173,10 @@ def test_a_tiled_runs_count_from_the_resolution_is_the_one_asked(tmp_path, capsy
         said.append([ln for ln in (out.out + out.err).splitlines() if ln.startswith("k = ")])
         assert len(set(np.loadtxt(tmp_path / "o.seg", dtype=int))) == 2
     assert said[0] == said[1] and said[0][0].startswith("k = 1 superpoints"), said
+
+
+def test_report_of_an_empty_results_file_names_it(tmp_path, capsys):
+    (tmp_path / "empty.csv").write_text("")
+    assert main(["report", str(tmp_path / "empty.csv"), "-o", str(tmp_path / "r")]) == 2
+    assert "empty.csv: the results file has no rows" in capsys.readouterr().err
+    assert not (tmp_path / "r").exists()

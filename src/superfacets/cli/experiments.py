@@ -297,8 +297,15 @@ def cmd_report(args) -> int:
 
     res = [Path(p) for p in args.results]
     out = Path(args.output_dir) if args.output_dir else res[0].with_name(res[0].stem + "_report")
-    with waiting_bar(f"writing the report to {out}", sys.stderr.isatty()):  # (seconds)
-        files = write_report(res, out, k_focus=args.k_focus, series=args.series)
+    from ..errors import ParameterError
+
+    try:
+        with waiting_bar(f"writing the report to {out}", sys.stderr.isatty()):  # (seconds)
+            files = write_report(res, out, k_focus=args.k_focus, series=args.series)
+    except ParameterError as exc:
+        if "the results file" in str(exc):  # (which one: several may be given)
+            raise ParameterError(f"{', '.join(map(str, res))}: {exc}") from None
+        raise
     print((out / "summary.md").read_text())
     print(f"wrote {len(files)} file{'s' if len(files) != 1 else ''} to {out}: "
           + ", ".join(f.name for f in files))
