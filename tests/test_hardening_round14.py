@@ -18,6 +18,9 @@
 - ``segment --tiles N --seed-resolution R`` on an input of more separate pieces than the
   resolution asks for said "k = 2 superpoints from --seed-resolution ...": the count the
   pieces made, not the one asked (one run says k = 1 and why it made 2).
+- ``evaluation.metrics.has_border`` (public since round 13) read its ground truth
+  unchecked: a short one raised numpy's IndexError, a string "too many indices", floats
+  and masked arrays were read. ``io.files.sniffed_format`` took only a ``Path``.
 - ``report`` of an empty results file said "the results file has no rows" without its name.
 """
 
@@ -180,3 +183,17 @@ def test_report_of_an_empty_results_file_names_it(tmp_path, capsys):
     assert main(["report", str(tmp_path / "empty.csv"), "-o", str(tmp_path / "r")]) == 2
     assert "empty.csv: the results file has no rows" in capsys.readouterr().err
     assert not (tmp_path / "r").exists()
+
+
+def test_has_border_checks_its_ground_truth():
+    from superfacets.elements.builders import elements_of
+    from superfacets.evaluation.metrics import has_border
+    from superfacets.io.files import sniffed_format
+
+    graph = elements_of(_flat(200)).graph
+    assert has_border(graph, np.arange(200) % 2) and not has_border(graph, np.zeros(200, int))
+    for bad in (np.zeros(5, int), "x", None, np.zeros(200),
+                np.ma.masked_array(np.zeros(200, int), mask=np.r_[1, np.zeros(199)])):
+        with pytest.raises(ParameterError, match="ground_truth"):
+            has_border(graph, bad)
+    assert sniffed_format(__file__) is None                # a str path, of no known format

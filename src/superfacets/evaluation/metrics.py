@@ -520,6 +520,8 @@ def has_border(graph, ground_truth, ignore_label: int | None = None) -> bool:
     TypeError, InvalidMeshError
         As :func:`~superfacets.elements.builders.as_element_graph`, for what is not an
         element graph or a mesh.
+    ParameterError
+        If ``ground_truth`` is not one integer per element (or has masked values).
 
     Examples
     --------
@@ -529,7 +531,7 @@ def has_border(graph, ground_truth, ignore_label: int | None = None) -> bool:
     (True, False)
     """
     g = as_element_graph(graph)
-    gt = np.asarray(ground_truth)
+    gt = check_labels(ground_truth, g.n_elements, "ground_truth", per=g.element)
     a, b = gt[g.pairs[:, 0]], gt[g.pairs[:, 1]]
     cut = a != b
     if ignore_label is not None:

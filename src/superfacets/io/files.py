@@ -98,7 +98,7 @@ def sniffed_format(path: Path) -> tuple[str, tuple[str, ...]] | None:
 
     Parameters
     ----------
-    path : pathlib.Path
+    path : str or os.PathLike
         A regular file, read as it is (not decompressed).
 
     Returns
@@ -116,7 +116,7 @@ def sniffed_format(path: Path) -> tuple[str, tuple[str, ...]] | None:
     >>> sniffed_format(Path("scan.ply"))
     ('LAS', ('las', 'laz'))
     """
-    head = read_head(path, 32)
+    head = read_head(Path(path), 32)
     for name, suffixes, starts in MAGIC:
         if head.startswith(starts):
             return name, suffixes
@@ -124,7 +124,7 @@ def sniffed_format(path: Path) -> tuple[str, tuple[str, ...]] | None:
 
 
 def format_hint(path) -> str:
-    """What a file its suffix's reader refused looks like, where its first bytes show
+    r"""What a file its suffix's reader refused looks like, where its first bytes show
     another format (:func:`sniffed_format`), for the end of the reader's message:
     ``" (it begins as PCD files do: name it .pcd)"``; "" where they show its own format,
     none, or the file cannot be read.
