@@ -1,6 +1,6 @@
 """Round 14 of hardening: faults an attack on the Python doors found, each with its test.
 
-- A masked array (``numpy.ma``) of points, vertices or labels was read through
+- A masked array (``numpy.ma``) of points, vertices, colours, features or labels was read through
   ``numpy.asarray``, which drops the mask: the values under it were segmented or scored
   as if the user had not masked them. Now refused, naming how many rows are masked; an
   organized cloud's masked pixels are its invalid points.
@@ -49,6 +49,11 @@ def test_masked_points_are_refused_not_read_unmasked():
     for call in (lambda: sf.segment(masked, 20), lambda: sf.PointCloud(masked)):
         with pytest.raises(InvalidCloudError, match="masked array with 40 rows"):
             call()
+    colours = np.ma.masked_array(np.full_like(xyz, 0.5), mask=mask)
+    with pytest.raises(InvalidCloudError, match="colours: a masked array with 40 rows"):
+        sf.PointCloud(xyz, colors=colours)
+    with pytest.raises(ParameterError, match="features: a masked array with 40 rows"):
+        sf.segment(sf.PointCloud(xyz), 20, features=colours, beta=1)
     # a mask that masks nothing is the array itself
     clear = sf.segment(np.ma.masked_array(xyz), 20).labels
     assert np.array_equal(clear, sf.segment(xyz, 20).labels)

@@ -191,11 +191,12 @@ def check_unmasked(values, what: str, error: type = ParameterError):
         if mask.ndim > 1:
             rows = int(mask.reshape(mask.shape[0], -1).any(axis=1).sum())
             held, out = f"{counted(rows, 'row')} of masked values", "a[~a.mask.any(axis=1)]"
+            fill = "a.filled(value)"
         else:
             held, out = counted(int(mask.sum()), "masked value"), "a[~a.mask]"
+            fill = "a.filled(value); a ground truth's with the value given as ignore_label"
         raise error(f"{what}: a masked array with {held}: leave them out ({out}) or fill "
-                    "them (a.filled(value); a ground truth's with the value given as "
-                    "ignore_label); the mask is not read")
+                    f"them ({fill}); the mask is not read")
     return np.asarray(values)
 
 

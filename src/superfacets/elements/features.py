@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..checks import check_unmasked
 from ..errors import ParameterError
 
 __all__ = ["features_of", "per_element", "colors_or_features"]
@@ -105,7 +106,7 @@ def per_element(src, features):
     if features is None:
         return None
 
-    raw = np.asarray(features)
+    raw = check_unmasked(features, "features")
     if raw.dtype == object or not (np.issubdtype(raw.dtype, np.number) or raw.dtype == bool) \
             or np.issubdtype(raw.dtype, np.complexfloating):  # (complex: a cast drops a part)
         raise ParameterError(f"features must be real numbers, got dtype {raw.dtype}")

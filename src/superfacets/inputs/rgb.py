@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..checks import check_unmasked
+
 __all__ = ["unit_colors", "color_top", "check_colors", "face_means", "vertex_means"]
 
 
@@ -100,7 +102,7 @@ def check_colors(colors, n: int, what: str, where: str, error: type,
     >>> check_colors([[0, 0.5, 1]], 1, "colour", "", ValueError).tolist()
     [[0.0, 0.5, 1.0]]
     """
-    arr = np.asarray(colors)
+    arr = check_unmasked(colors, f"{where}{what}s", error)
     if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool):
         raise TypeError(f"{where}{what}s must be numeric, got dtype {arr.dtype}")
     if np.issubdtype(arr.dtype, np.complexfloating):  # (a cast would drop the imaginary part)

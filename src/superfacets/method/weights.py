@@ -13,6 +13,7 @@ from .._kernels import native
 from .._runtime import threads
 from .._runtime.arrays import real_rows
 from .._runtime.threads import split
+from ..checks import check_unmasked
 from ..elements.builders import as_element_graph
 from ..elements.graph import CHUNK, ElementGraph, chunked
 from ..elements.kinds import kind_of
@@ -402,7 +403,7 @@ def check_features(features, graph: ElementGraph) -> np.ndarray:
     if features is None:
         raise ParameterError("beta > 0 needs features: one row per element (e.g. RGB "
                              "colours in [0, 1]), or an input with colours")
-    f = np.asarray(features)
+    f = check_unmasked(features, "features")
     if f.dtype == object or not np.issubdtype(f.dtype, np.number) or \
             np.issubdtype(f.dtype, np.complexfloating):  # (a cast would drop a part)
         raise ParameterError(f"features must be real numbers, got dtype {f.dtype}")
