@@ -128,3 +128,41 @@ def test_to_pyg_where_torch_geometric_is_installed():
     data = r.to_pyg()
     assert tuple(data.edge_index.shape) == (2, 2 * r.graph().n_edges)
     assert data.is_undirected() and data.num_nodes == 10
+
+
+def test_the_planes_angle_of_an_edge_is_its_ridges_whatever_the_normals_orientation():
+    """Two planes meeting at a ridge 40 degrees apart: the edge's ``normal_angle`` is 40
+    degrees in radians both ways, whether the points' normals face one side or flip from
+    point to point (the mean angle reads them; the planes' angle does not); a box's
+    sides meet at right angles."""
+    import trimesh
+
+    from superfacets.elements.builders import elements_of
+    from superfacets.graph.adjacency import superfacet_graph
+    from superfacets.graph.learning import learning_arrays
+
+    rng = np.random.default_rng(7)
+    uv = rng.random((6000, 2)) * [8.0, 4.0] - [4.0, 0.0]
+    slope = np.tan(np.radians(40.0))
+    pts = np.c_[uv, np.where(uv[:, 0] > 0, uv[:, 0] * slope, 0.0)]
+    n_b = np.array([-np.sin(np.radians(40.0)), 0.0, np.cos(np.radians(40.0))])
+    normals = np.where((uv[:, :1] > 0), n_b, [0.0, 0.0, 1.0])
+    flip = np.where(np.arange(6000)[:, None] % 2 == 0, -normals, normals)
+    col = EDGE_FEATURES.index("normal_angle")
+    angles = []
+    for given in (normals, flip):
+        src = elements_of(PointCloud(pts, normals=given), "points")
+        lab = np.full(src.graph.n_elements, -1)
+        lab[src.index] = (pts[:, 0] > 0).astype(np.int64)
+        a = learning_arrays(superfacet_graph(src.graph, lab, None), src.graph.positions, lab,
+                            lab[src.index])
+        assert a["edge_attr"].shape == (2, len(EDGE_FEATURES))
+        angles.append(a["edge_attr"][:, col])
+    np.testing.assert_allclose(angles[0], np.radians(40.0), atol=1e-4)
+    np.testing.assert_array_equal(angles[0], angles[1])
+    box = trimesh.creation.box().subdivide()
+    sides = np.unique(box.face_normals.round(6), axis=0, return_inverse=True)[1].ravel()
+    g = elements_of(box, "faces").graph
+    a = learning_arrays(superfacet_graph(g, sides, None), g.positions, sides, sides)
+    assert a["edge_attr"].shape[0] == 24  # twelve edges of the box, both ways
+    np.testing.assert_allclose(a["edge_attr"][:, col], np.pi / 2, atol=1e-6)

@@ -20,8 +20,12 @@ them): with ``s1 >= s2 >= s3`` the square roots of its eigenvalues,
   of ``up`` (as Superpoint Transformer states it: the orientation of the elements' own
   normals does not enter, so a tiled run's equals one run's); its mean colour (where given).
 
-Per edge: its border length, mean angle, concave share (:class:`SuperfacetGraph`)
-and the offset between the two centroids (``pos[j] - pos[i]`` of ``i -> j``).
+Per edge: its border length, mean angle, concave share (:class:`SuperfacetGraph`),
+the offset between the two centroids (``pos[j] - pos[i]`` of ``i -> j``) and the angle
+between the two best planes, ``arccos |n_i . n_j|`` in radians (``[0, pi/2]``: the
+planes' orientation-free angle, Superpoint Transformer's ``|n_i . n_j|``; a tiled run's
+equals one run's however each tile orients estimated normals, which the mean angle and
+the concave share read).
 """
 
 from __future__ import annotations
@@ -49,7 +53,7 @@ NODE_FEATURES = ("linearity", "planarity", "scattering", "verticality", "elevati
 
 #: The columns of ``edge_attr``, in order.
 EDGE_FEATURES = ("border_length", "mean_angle", "concave", "offset_x", "offset_y",
-                 "offset_z")
+                 "offset_z", "normal_angle")
 
 
 def shape_features(graph: SuperfacetGraph, up=(0.0, 0.0, 1.0)) -> dict[str, np.ndarray]:
@@ -283,7 +287,7 @@ def learning_arrays(graph: SuperfacetGraph, positions: np.ndarray, element_label
         ``x`` (K, F) float32 (:data:`NODE_FEATURES`, then ``red green blue`` where the
         graph has a 3-column ``feature``), ``pos`` (K, 3) float64 centroids,
         ``edge_index`` (2, 2E) int64, each edge in both directions (``i -> j`` then
-        ``j -> i``), ``edge_attr`` (2E, 6) float32 (:data:`EDGE_FEATURES`),
+        ``j -> i``), ``edge_attr`` (2E, 7) float32 (:data:`EDGE_FEATURES`),
         ``super_index`` (N,) int64, ``node_features`` and ``edge_features`` (the
         column names, as arrays of str).
 
@@ -352,7 +356,10 @@ def learning_layout(graph: SuperfacetGraph, count: np.ndarray, height: np.ndarra
     both = np.stack([np.r_[a, b], np.r_[b, a]])
     offset = graph.centroid[both[1]] - graph.centroid[both[0]]
     per_pair = np.c_[graph.border_length, graph.mean_angle, graph.concave]
-    edge_attr = np.c_[np.r_[per_pair, per_pair], offset]
+    normal = shape["normal"]
+    cos = np.abs(np.einsum("ij,ij->i", normal[a], normal[b])).clip(0.0, 1.0)
+    planes = np.arccos(cos)
+    edge_attr = np.c_[np.r_[per_pair, per_pair], offset, np.r_[planes, planes]]
     return {"x": np.stack(cols, axis=1).astype(np.float32), "pos": graph.centroid,
             "edge_index": both.astype(np.int64), "edge_attr": edge_attr.astype(np.float32),
             "super_index": np.asarray(row_labels, dtype=np.int64),

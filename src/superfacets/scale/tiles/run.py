@@ -182,7 +182,8 @@ def segment_tiled(source, n_segments: int | None = None, *, tiles=4,
         the arrays :meth:`SegmentationResult.learning_graph` gives of the same labels (the
         input's own up, else z; the ground's grid on the extent the survey reads along
         its axes), but for the edges' ``mean_angle`` and ``concave`` where the normals are
-        estimated (each tile orients them like a sample, one run by its pieces).
+        estimated (each tile orients them like a sample, one run by its pieces; the
+        planes' angle ``normal_angle`` reads no orientation).
     seed_resolution : float, optional
         The count from a size in the data's units, as
         :func:`~superfacets.api.sizes.count_for_resolution` gives it for the whole input:
