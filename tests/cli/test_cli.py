@@ -259,14 +259,17 @@ def test_evaluate_reads_a_ground_truth_field_of_the_input(tmp_path, capsys):
         with pytest.raises(SystemExit):  # (refused, as before)
             main([args[0], str(tmp_path / "scan.las"), *args[1:]])
         assert said in capsys.readouterr().err
-    # a ground-truth file given to the option (its abbreviation --ground-truth reads so)
+    # a ground-truth file given to the field's option; by name it is a ground truth
     gt_file = "after the labels: superfacets evaluate INPUT LABELS " + str(sp)
     for args, msg in ((["--ground-truth-field", "klass"], "no field 'klass'; it has: "),
-                      (["--ground-truth", str(sp)], gt_file),
+                      (["--ground-truth-field", str(sp)], gt_file),
                       (["--ground-truth-field", "gt.seg"], "not a file ('gt.seg')")):
         assert main(["evaluate", str(tmp_path / "scan.las"), str(sp), *args]) == 2
         err = capsys.readouterr().err
         assert msg in err and "Traceback" not in err
+    assert main(["evaluate", str(tmp_path / "scan.las"), str(sp), "--ground-truth", str(sp),
+                 "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["ground_truths"] == 1
     np.save(tmp_path / "scan.npy", np.c_[xy, np.zeros(2000)])
     assert main(["evaluate", str(tmp_path / "scan.npy"), str(sp), "--ground-truth-field",
                  "label"]) == 2

@@ -74,7 +74,14 @@ def build_parser() -> argparse.ArgumentParser:
 
 class _Parser(argparse.ArgumentParser):
     """An argument parser whose 'unrecognized arguments' error names the nearest
-    options (``--k`` -> ``-k``, ``--n_segments`` -> ``--n-segments``)."""
+    options (``--k`` -> ``-k``, ``--n_segments`` -> ``--n-segments``), and which takes no
+    abbreviated option: ``--seed 3`` was ``--seed-resolution 3`` (one superpoint per 9
+    square units, said only in the summary), ``--labels b.seg`` was ``--labels-from
+    b.seg``."""
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("allow_abbrev", False)  # (its sub-parsers are of this class)
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str):
         if message.startswith("unrecognized arguments:"):
@@ -100,8 +107,8 @@ def _did_you_mean(parser: argparse.ArgumentParser, unknown: list[str]) -> str:
         if not token.startswith("-"):
             continue
         name = token.split("=", 1)[0]
-        near = difflib.get_close_matches(name.replace("_", "-"), sorted(options), n=2,
-                                         cutoff=0.6)
+        near = [o for o in sorted(options) if o.startswith(name) and len(name) > 2][:3] or \
+            difflib.get_close_matches(name.replace("_", "-"), sorted(options), n=2, cutoff=0.6)
         if near:
             hints.append(f"{name}: did you mean {' or '.join(near)}?")
     return ("; " + "; ".join(hints)) if hints else ""
@@ -130,6 +137,22 @@ def _late_files(parser, args, extra: list) -> None:
         extra = []
     if extra:
         parser.error(f"unrecognized arguments: {' '.join(extra)}")
+
+
+def _labels_option(parser, args) -> None:
+    """``--labels FILE``, the commands' LABELS given by name (``render scan.laz --labels
+    b.seg``): into LABELS, where evaluate's LABELS slot then held its first ground truth;
+    evaluate's ``--ground-truth GT`` after its other ground truths."""
+    if getattr(args, "ground_truth_files", None):
+        args.ground_truths = [*args.ground_truths, *args.ground_truth_files]
+    given = getattr(args, "labels_file", None)
+    if given is None:
+        return
+    if args.labels is not None and not hasattr(args, "ground_truths"):
+        parser.error(f"give the labels once: LABELS ({args.labels}) or --labels ({given})")
+    if args.labels is not None:  # (evaluate INPUT --labels L GT...: GT read as LABELS)
+        args.ground_truths = [args.labels, *args.ground_truths]
+    args.labels = given
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -161,6 +184,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.argv = list(sys.argv[1:] if argv is None else argv)  # for its error hints
         args, extra = parser.parse_known_args(_axis_values(parser.argv))
         _late_files(parser, args, extra)
+        _labels_option(parser, args)
         _scene_folder(args)
         code = args.func(args)
         if getattr(restore, "state", {}).get("terminated"):  # a SIGTERM the run went on

@@ -39,6 +39,8 @@ def add_parsers(sub) -> None:
                    help="labels, one per face (vertex, point) in file order: a .seg file, a "
                         "segIndices .json, or a PLY, PCD or LAS/LAZ written by 'segment -o' "
                         "(its ClusterID)")
+    e.add_argument("--labels", metavar="LABELS", dest="labels_file", default=None,
+                   help="LABELS given by name (the same file)")
     e.add_argument("--labels-from", metavar="FIELD", default=None,
                    help="instead of LABELS, the labels in a field of the input itself: a "
                         "LAS/LAZ dimension, a PLY vertex property (scalar_NAME found as NAME), "
@@ -49,6 +51,10 @@ def add_parsers(sub) -> None:
                         "face (vertex, "
                         "point): label files as -o writes them, SemanticKITTI's .label or "
                         "nuScenes' _lidarseg.bin")
+    e.add_argument("--ground-truth", metavar="GT.seg", action="append", default=None,
+                   dest="ground_truth_files",
+                   help="a ground-truth file given by name (as GT.seg after LABELS; may "
+                        "repeat)")
     e.add_argument("--ground-truth-field", metavar="NAME", default=None,
                    help="also a ground truth read from the input file itself: a LAS/LAZ "
                         "dimension (classification), a PLY vertex property (ScanNet's "
@@ -224,15 +230,16 @@ def _counted(labels, path, args, data, kind: str):
 
 
 def _check_field_name(name: str) -> None:
-    """Refuse a ground-truth file given as ``--ground-truth-field`` (or an abbreviation of
-    it, ``--ground-truth GT.seg``): the option names a field of the input."""
+    """Refuse a ground-truth file given as ``--ground-truth-field``: the option names a
+    field of the input (a file is ``--ground-truth GT.seg``, or GT.seg after LABELS)."""
     from ..errors import ParameterError
 
     if Path(name).suffix.lower() in (".seg", ".json", ".txt", ".gz", ".xz") or \
             os.path.sep in name or Path(name).is_file():
         raise ParameterError(f"--ground-truth-field names a field of the input file (e.g. "
                              f"classification), not a file ({name!r}); give a ground-truth "
-                             f"file after the labels: superfacets evaluate INPUT LABELS {name}")
+                             f"file after the labels: superfacets evaluate INPUT LABELS {name} (or "
+                             f"--ground-truth {name})")
 
 
 def _print_table(args, kind: str, n: int, n_truths: int, m: dict) -> None:

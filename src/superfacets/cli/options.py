@@ -274,6 +274,8 @@ def add_mesh_and_labels(p, plain: bool = True) -> None:
                    help="labels, one per face, vertex, point or tetrahedron: a .seg file, a "
                         "segIndices .json, a PLY, PCD or LAS/LAZ written by 'segment -o' "
                         "(default: computed)")
+    p.add_argument("--labels", metavar="LABELS", dest="labels_file", default=None,
+                   help="LABELS given by name (the same file)")
     p.add_argument("--labels-from", metavar="FIELD", default=None,
                    help="take the labels from a field of the input itself: a LAS/LAZ "
                         "dimension, a PCD field or a PLY vertex property (ClusterID, as "

@@ -1,0 +1,82 @@
+"""Round 15 of hardening: faults an attack on the command line found, each with its test.
+
+- argparse took any unambiguous prefix of an option: ``segment scan.pcd --seed 3`` (a user
+  asking for a random seed, which the method does not take) ran as ``--seed-resolution 3``,
+  one superpoint per 9 square units, said only in the summary; ``render scan.laz --labels
+  b.seg`` ran as ``--labels-from b.seg`` ("no field 'b.seg'"). Options are now taken whole
+  (an unknown one is refused, naming the options it begins), ``--labels FILE`` names
+  LABELS in ``render``, ``html``, ``view`` and ``evaluate``, and ``--ground-truth GT``
+  (refused before, as the field's abbreviation) a ground truth of ``evaluate``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from superfacets.cli import main
+from superfacets.io import read_labels
+
+
+def _cloud(tmp_path):
+    rng = np.random.default_rng(3)
+    xyz = rng.random((3000, 3)) * [4.0, 4.0, 0.05]
+    path = tmp_path / "flat.xyz"
+    np.savetxt(path, xyz)
+    return path
+
+
+def test_an_option_is_taken_whole_not_by_its_prefix(tmp_path, capsys):
+    path = _cloud(tmp_path)
+    out = tmp_path / "s.seg"
+    with pytest.raises(SystemExit) as exc:
+        main(["segment", str(path), "--seed", "3", "-o", str(out)])
+    assert exc.value.code == 2 and not out.exists()
+    err = capsys.readouterr().err
+    assert "unrecognized arguments: --seed 3" in err and "did you mean --seed-resolution" in err
+    with pytest.raises(SystemExit):
+        main(["segment", str(path), "-k", "10", "--tile", "2", "-o", str(out)])
+    assert "--tile: did you mean --tile-start or --tiles?" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_labels_given_by_name_are_labels_in_every_command_that_reads_them(tmp_path, capsys):
+    path = _cloud(tmp_path)
+    seg = tmp_path / "s.seg"
+    assert main(["segment", str(path), "-k", "12", "-o", str(seg), "-q"]) == 0
+    labels = read_labels(seg)
+    for order in ([str(path), "--labels", str(seg)], ["--labels", str(seg), str(path)]):
+        png = tmp_path / "r.png"
+        assert main(["render", *order, "-o", str(png)]) == 0 and png.stat().st_size > 0
+        png.unlink()
+    capsys.readouterr()
+    assert main(["evaluate", str(path), "--labels", str(seg), str(seg)]) == 0
+    said = capsys.readouterr().out
+    assert "undersegmentation" in said and "12" in said  # judged against itself: a truth
+    assert main(["evaluate", str(path), "--labels", str(seg)]) == 0
+    assert "undersegmentation" not in capsys.readouterr().out  # (no ground truth)
+    with pytest.raises(SystemExit):
+        main(["render", str(path), str(seg), "--labels", str(seg), "-o",
+              str(tmp_path / "x.png")])
+    assert "give the labels once" in capsys.readouterr().err
+    assert labels.size == 3000
+
+
+def test_a_ground_truth_given_by_name_is_one(tmp_path, capsys):
+    import json
+
+    path = _cloud(tmp_path)
+    seg, half = tmp_path / "s.seg", tmp_path / "half.seg"
+    assert main(["segment", str(path), "-k", "12", "-o", str(seg), "-q"]) == 0
+    xyz = np.loadtxt(path)
+    half.write_text("\n".join(str(int(x > 2)) for x in xyz[:, 0]) + "\n")
+    capsys.readouterr()
+    assert main(["evaluate", str(path), str(seg), "--ground-truth", str(half),
+                 "--ground-truth", str(seg), "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert got["ground_truths"] == 2
+    assert main(["evaluate", str(path), str(seg), str(half), "--json"]) == 0
+    alone = json.loads(capsys.readouterr().out)
+    assert main(["evaluate", str(path), "--labels", str(seg), "--ground-truth", str(half),
+                 "--json"]) == 0
+    assert json.loads(capsys.readouterr().out) == alone  # the same judgement, by name
