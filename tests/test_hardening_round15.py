@@ -7,6 +7,9 @@
   (an unknown one is refused, naming the options it begins), ``--labels FILE`` names
   LABELS in ``render``, ``html``, ``view`` and ``evaluate``, and ``--ground-truth GT``
   (refused before, as the field's abbreviation) a ground truth of ``evaluate``.
+- Pictures, pages and coloured files drew an element labelled below 0 (unassigned: DBSCAN's
+  noise, which ``evaluate`` leaves out) as one more segment in a palette colour; a label
+  file of -5 and -4 drew two "superpoints" where the legend counted none. Now grey.
 """
 
 from __future__ import annotations
@@ -80,3 +83,29 @@ def test_a_ground_truth_given_by_name_is_one(tmp_path, capsys):
     assert main(["evaluate", str(path), "--labels", str(seg), "--ground-truth", str(half),
                  "--json"]) == 0
     assert json.loads(capsys.readouterr().out) == alone  # the same judgement, by name
+
+
+def test_unassigned_elements_are_drawn_grey_not_as_a_segment():
+    from superfacets.elements.builders import elements_of
+    from superfacets.io.colors import PALETTE, UNASSIGNED, face_colors
+    from superfacets.io.export import element_colors
+    from superfacets.viz.html import html_page
+
+    rng = np.random.default_rng(0)
+    xyz = rng.random((2000, 3)) * [4.0, 4.0, 0.05]
+    labels = np.where(xyz[:, 0] < 1, -1, (xyz[:, 0] > 2.5).astype(np.int64))
+    labels[xyz[:, 0] > 3.5] = -7
+    rgb = element_colors(elements_of(xyz, "points"), labels)
+    assert (rgb[labels < 0] == UNASSIGNED).all()
+    assert not (rgb[labels >= 0] == UNASSIGNED).all(axis=1).any()
+    palette = {tuple(c) for c in PALETTE}
+    assert {tuple(c) for c in rgb[labels >= 0]} <= palette
+    import trimesh
+
+    from superfacets.inputs.convert import as_mesh
+
+    box = as_mesh(trimesh.creation.box())
+    face = np.r_[[-1, -1], np.arange(10)]
+    colours = face_colors(box, face)
+    assert (colours[:2] == UNASSIGNED).all() and (colours[2:] != UNASSIGNED).any(axis=1).all()
+    assert '"superfacets": 10' in html_page(box, face).replace('\\"', '"')  # not 11

@@ -4,7 +4,9 @@ The superfacet adjacency graph (two superfacets are adjacent when one of
 their faces share a mesh edge) is coloured greedily, largest degree first
 (Welsh-Powell), each superfacet taking the least used palette colour that no
 coloured neighbour has. Twelve well-separated colours suffice in practice;
-more are generated if a superfacet has more coloured neighbours.
+more are generated if a superfacet has more coloured neighbours. An element labelled
+below 0 (unassigned, as DBSCAN's noise and the metrics read it) is drawn
+:data:`UNASSIGNED` grey, not as a segment.
 """
 
 from __future__ import annotations
@@ -16,8 +18,11 @@ import numpy as np
 from ..elements import faces
 from ..elements.labels import check_labels, relabel_dense
 
-__all__ = ["PALETTE", "superfacet_colors", "face_colors", "superfacet_adjacency",
-           "boundary_edges"]
+__all__ = ["PALETTE", "UNASSIGNED", "superfacet_colors", "labelled_colors", "face_colors",
+           "superfacet_adjacency", "boundary_edges"]
+
+#: The colour of an element labelled below 0: in no segment.
+UNASSIGNED = np.array([200, 200, 200], dtype=np.uint8)
 
 #: Base palette (RGB, uint8): well-separated, light enough to show shading.
 PALETTE = np.array([
@@ -109,6 +114,39 @@ def superfacet_colors(mesh, labels: np.ndarray) -> np.ndarray:
     return np.asarray(palette, dtype=np.uint8)[color]
 
 
+def labelled_colors(graph, labels: np.ndarray) -> np.ndarray:
+    """Each element's colour: its segment's (:func:`superfacet_colors`), :data:`UNASSIGNED`
+    grey where its label is below 0.
+
+    Parameters
+    ----------
+    graph : Mesh or ElementGraph
+        As :func:`superfacet_colors`.
+    labels : (m,) int ndarray
+        One per element (checked by the caller); any integers, negative ones unassigned.
+
+    Returns
+    -------
+    (m, 3) uint8 ndarray
+
+    Raises
+    ------
+    Never for one integer label per element.
+
+    Examples
+    --------
+    >>> box = as_mesh(trimesh.creation.box())  # 12 triangles
+    >>> rgb = labelled_colors(box, np.r_[[-1] * 2, np.arange(10)])
+    >>> rgb[0].tolist(), bool((rgb[2:] != UNASSIGNED).any(axis=1).all())
+    ([200, 200, 200], True)
+    """
+    labels = np.asarray(labels, dtype=np.int64)
+    dense = relabel_dense(labels)
+    out = superfacet_colors(graph, dense)[dense]
+    out[labels < 0] = UNASSIGNED
+    return out
+
+
 def face_colors(mesh, labels: np.ndarray) -> np.ndarray:
     """Per-face RGB colours of a segmentation.
 
@@ -120,14 +158,14 @@ def face_colors(mesh, labels: np.ndarray) -> np.ndarray:
     Returns
     -------
     (m, 3) uint8 ndarray
+        :data:`UNASSIGNED` grey where a face's label is below 0.
 
     Raises
     ------
     ParameterError
         If ``labels`` is not one integer per face.
     """
-    dense = relabel_dense(check_labels(labels, mesh.n_faces, per="face"))
-    return superfacet_colors(mesh, dense)[dense]
+    return labelled_colors(mesh, check_labels(labels, mesh.n_faces, per="face"))
 
 
 def boundary_edges(mesh, labels: np.ndarray) -> np.ndarray:

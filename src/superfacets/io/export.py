@@ -29,10 +29,10 @@ import numpy as np
 
 from .._runtime import extras
 from ..elements.kinds import kind_of
-from ..elements.labels import check_labels, relabel_dense
+from ..elements.labels import check_labels
 from ..errors import MeshFormatError
 from ..inputs.convert import as_mesh
-from .colors import face_colors, superfacet_colors
+from .colors import face_colors, labelled_colors
 from .files import Outputs, save, split_suffix
 from .meshes import MESH_FORMATS
 from .ply import ply_bytes, points_ply_bytes
@@ -233,8 +233,8 @@ def write_colored_mesh(path, mesh, labels, *, vertex_colors: bool = False,
 
 
 def element_colors(source, labels) -> np.ndarray:
-    """Per-row RGB colours of vertex or point labels (adjacent segments differ; rows
-    labelled -1 grey).
+    """Per-row RGB colours of vertex or point labels (adjacent segments differ; rows that
+    are no element, and elements labelled below 0, grey).
 
     Parameters
     ----------
@@ -252,10 +252,8 @@ def element_colors(source, labels) -> np.ndarray:
     ok = index >= 0
     per_element = np.zeros(g.n_elements, dtype=np.int64)
     per_element[index[ok]] = labels[ok]
-    dense = relabel_dense(per_element)
-    palette = superfacet_colors(g, dense)
     out = np.full((index.shape[0], 3), 128, dtype=np.uint8)
-    out[ok] = palette[dense[index[ok]]]
+    out[ok] = labelled_colors(g, per_element)[index[ok]]
     return out
 
 

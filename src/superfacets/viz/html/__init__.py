@@ -30,7 +30,7 @@ from ...errors import ParameterError
 from ...inputs.cloud import as_cloud
 from ...inputs.convert import as_mesh
 from ...inputs.tetmesh import as_drawn
-from ...io.colors import boundary_edges, superfacet_colors
+from ...io.colors import boundary_edges, labelled_colors
 from ...io.export import point_colors
 from ...io.files import save
 from ..camera import view_frame
@@ -117,12 +117,13 @@ def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None 
     check_page_size(mesh)
     m = mesh.n_faces
     if labels is not None:
-        dense = relabel_dense(check_labels(labels, m, per="face"))
-        colors = superfacet_colors(mesh, dense)  # (K, 3) uint8, per superfacet
+        checked = check_labels(labels, m, per="face")
+        dense = relabel_dense(checked)
+        colors = labelled_colors(mesh, checked)  # (m, 3) uint8 (unassigned faces grey)
         palette, color_index = np.unique(colors, axis=0, return_inverse=True)
-        face_index = color_index.ravel()[dense]
+        face_index = color_index.ravel()
         edges = boundary_edges(mesh, dense)
-        n_sf = int(dense.max()) + 1
+        n_sf = int(np.unique(checked[checked >= 0]).size)
     else:
         palette = np.array([[200, 200, 200]], dtype=np.uint8)
         face_index = np.zeros(m, dtype=np.int64)
