@@ -10,6 +10,9 @@
 - Pictures, pages and coloured files drew an element labelled below 0 (unassigned: DBSCAN's
   noise, which ``evaluate`` leaves out) as one more segment in a palette colour; a label
   file of -5 and -4 drew two "superpoints" where the legend counted none. Now grey.
+- ``NotebookView(cloud, labels)`` took labels of the wrong length or dtype and a height of
+  0 or ``"big"`` without a word, and failed only when the notebook showed it (a traceback
+  beside the cell); now refused when made.
 """
 
 from __future__ import annotations
@@ -109,3 +112,23 @@ def test_unassigned_elements_are_drawn_grey_not_as_a_segment():
     colours = face_colors(box, face)
     assert (colours[:2] == UNASSIGNED).all() and (colours[2:] != UNASSIGNED).any(axis=1).all()
     assert '"superfacets": 10' in html_page(box, face).replace('\\"', '"')  # not 11
+
+
+def test_a_notebook_view_refuses_its_labels_and_height_when_made():
+    import trimesh
+
+    from superfacets import NotebookView, ParameterError, PointCloud
+
+    xyz = np.random.default_rng(0).random((3000, 3)) * [4.0, 4.0, 0.05]
+    for labels, msg in ((np.zeros(5, int), "3000 integers, one per point"),
+                        (np.full(3000, 0.5), "dtype float64")):
+        with pytest.raises(ParameterError, match=msg):
+            NotebookView(PointCloud(xyz), labels)
+    for height in (0, "big", 2.5, True):
+        with pytest.raises(ParameterError, match="height must be a whole number"):
+            NotebookView(PointCloud(xyz), np.zeros(3000, int), height=height)
+    box = trimesh.creation.box()
+    with pytest.raises(ParameterError, match="one per face"):
+        NotebookView(box, np.zeros(8, int))
+    view = NotebookView(box, np.zeros(8, int), elements="vertices")  # one per vertex
+    assert view._repr_html_().startswith("<iframe")

@@ -298,6 +298,21 @@ def write_html(path, mesh, labels=None, *, title: str | None = None, info: dict 
     return save(path, text.encode("utf-8"), outputs)
 
 
+def _check_view_labels(data, labels, elements) -> None:
+    """Refuse a view's labels when it is made, not when a notebook shows it (where the
+    error is a traceback beside the cell): one integer per point, face or vertex."""
+    if labels is None:
+        return
+    if is_cloud(data):
+        check_labels(labels, as_cloud(data).points.shape[0], per="point")
+        return
+    mesh = as_mesh(data)
+    if elements == "vertices":
+        check_labels(labels, mesh.n_vertices, per="vertex")
+    else:
+        check_labels(labels, mesh.n_faces, per="face")
+
+
 class NotebookView:
     """The interactive viewer shown inline in a Jupyter notebook (or any front end that
     shows ``_repr_html_``: JupyterLab, VS Code, Colab): the page of :func:`html_page`,
@@ -322,8 +337,9 @@ class NotebookView:
     Raises
     ------
     ParameterError
-        As :func:`html_page`, when shown; given a tiled run's result (it holds no input), or
-        a volume's labels that are not one per tetrahedron.
+        Given labels that are not one integer per element drawn, a height that is not a
+        whole number of pixels in 1..10,000, a tiled run's result (it holds no input), or
+        a volume's labels that are not one per tetrahedron; as :func:`html_page` when shown.
     MeshFormatError, FileNotFoundError
         As :func:`~superfacets.io.read_input`, given a path.
 
@@ -354,6 +370,11 @@ class NotebookView:
         if cut:
             options["elements"] = "faces"
             options.setdefault("title", "cut at the middle of x")
+        if isinstance(height, bool) or not isinstance(height, (int, np.integer)) or \
+                not 1 <= height <= 10_000:
+            raise ParameterError(f"height must be a whole number of pixels in 1..10000, got "
+                                 f"{height!r}")
+        _check_view_labels(data, labels, options.get("elements"))
         self.data, self.labels, self.height, self.options = data, labels, int(height), options
 
     def html(self) -> str:
