@@ -13,6 +13,9 @@
 - ``NotebookView(cloud, labels)`` took labels of the wrong length or dtype and a height of
   0 or ``"big"`` without a word, and failed only when the notebook showed it (a traceback
   beside the cell); now refused when made.
+- An OBJ with a bare ``v`` line (a vertex statement with no numbers, as a truncated file ends)
+  was read without it, every later index one vertex off (a silent wrong mesh); a bare ``f``
+  line raised numpy's "operands could not be broadcast". Both are refused, naming the line.
 """
 
 from __future__ import annotations
@@ -132,3 +135,19 @@ def test_a_notebook_view_refuses_its_labels_and_height_when_made():
         NotebookView(box, np.zeros(8, int))
     view = NotebookView(box, np.zeros(8, int), elements="vertices")  # one per vertex
     assert view._repr_html_().startswith("<iframe")
+
+
+def test_a_bare_obj_statement_is_refused_not_skipped(tmp_path):
+    from superfacets.errors import MeshFormatError
+    from superfacets.io import read_input
+
+    head = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 1 1 1\n"
+    for text, msg in ((head.replace("v 0 1 0\n", "v\nv 0 1 0\n") + "f 1 2 4\nf 1 2 5\n",
+                       "malformed vertex 2: 'v '"),
+                      (head + "f 1 2 3\nf 1 2 4\nf\n", "face 2 has only 0 vertex indices")):
+        path = tmp_path / "m.obj"
+        path.write_text(text)
+        with pytest.raises(MeshFormatError, match=msg):
+            read_input(path)
+    path.write_text(head + "f 1 2 3\nf 1 2 4\n")
+    assert read_input(path).n_faces == 2

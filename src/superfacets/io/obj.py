@@ -138,11 +138,13 @@ def _rows(lines: list[str], at: np.ndarray) -> list[str]:
 
 def _table(rows: list[str], dtype) -> np.ndarray | None:
     """The numbers after each row's statement as one table, or None where numpy cannot
-    read them whole (rows of different lengths, a word that is not a number)."""
+    read them whole (rows of different lengths, a word that is not a number, a bare
+    ``f`` or ``v``: numpy skips an empty row)."""
     try:
-        return number_table(list(map(_TAIL, rows)), dtype)
+        table = number_table(list(map(_TAIL, rows)), dtype)
     except (ValueError, OverflowError):
         return None
+    return table if table.shape[0] == len(rows) else None
 
 
 def _vertices(rows: list[str], at: int, path: Path):
