@@ -16,9 +16,13 @@
 - An OBJ with a bare ``v`` line (a vertex statement with no numbers, as a truncated file ends)
   was read without it, every later index one vertex off (a silent wrong mesh); a bare ``f``
   line raised numpy's "operands could not be broadcast". Both are refused, naming the line.
+- An OFF or ``.tri`` file with more face lines than its header declares lost the others
+  without a word; now a warning says how many lines were not read.
 """
 
 from __future__ import annotations
+
+import warnings
 
 import numpy as np
 import pytest
@@ -151,3 +155,20 @@ def test_a_bare_obj_statement_is_refused_not_skipped(tmp_path):
             read_input(path)
     path.write_text(head + "f 1 2 3\nf 1 2 4\n")
     assert read_input(path).n_faces == 2
+
+
+def test_face_lines_past_the_header_count_are_said(tmp_path):
+    from superfacets.io import read_input
+
+    body = "0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
+    cases = {"m.off": f"OFF\n4 1 0\n{body}3 0 1 2\n3 0 1 3\n3 0 2 3\n",
+             "m.tri": f"4\n{body}1\n0 1 2\n0 1 3\n0 2 3\n"}
+    for name, text in cases.items():
+        path = tmp_path / name
+        path.write_text(text)
+        with pytest.warns(UserWarning, match="2 lines after the 1 face its header declares"):
+            assert read_input(path).n_faces == 1
+        path.write_text(text.replace("4 1 0", "4 3 0").replace("\n1\n", "\n3\n"))
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            assert read_input(path).n_faces == 3

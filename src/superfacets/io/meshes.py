@@ -13,6 +13,7 @@ import gc
 import io
 import logging
 import threading
+import warnings
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -180,7 +181,17 @@ def parse_off(data: bytes, path: Path, cloud: bool = False):
             return v, np.zeros((0, 3), dtype=np.int64), colors, normals
         raise InvalidMeshError(f"{path}: empty mesh: no faces")
     f = _off_faces(flines, path)
+    _unread_lines(lines[pos + nv + nf:], nf, path)
     return v, f, colors, normals
+
+
+def _unread_lines(rest: list[str], nf: int, path: Path) -> None:
+    """Warn of lines after the faces a header declares (a face count too small loses
+    the faces after it; they are not read)."""
+    if rest:
+        warnings.warn(f"{path}: {len(rest):,} line{'s' if len(rest) > 1 else ''} after the "
+                      f"{nf:,} face{'s' if nf != 1 else ''} its header declares, not read "
+                      f"(is the face count right?): {rest[0][:60]!r}", stacklevel=3)
 
 
 def _unit(rgb: np.ndarray) -> np.ndarray:
@@ -243,6 +254,7 @@ def _parse_tri(data: bytes, path: Path) -> tuple[np.ndarray, np.ndarray]:
     if f.shape[1] != 3:
         raise MeshFormatError(
             f"{path}: only triangle meshes are supported; face lines have {f.shape[1]} indices")
+    _unread_lines(lines[2 + nv + nf:], nf, path)
     return v, f
 
 
