@@ -17,7 +17,8 @@
   was read without it, every later index one vertex off (a silent wrong mesh); a bare ``f``
   line raised numpy's "operands could not be broadcast". Both are refused, naming the line.
 - An OFF or ``.tri`` file with more face lines than its header declares lost the others
-  without a word; now a warning says how many lines were not read.
+  without a word, an ASCII PLY cloud its rows past the vertex count; now a warning says how
+  many lines were not read.
 """
 
 from __future__ import annotations
@@ -172,3 +173,13 @@ def test_face_lines_past_the_header_count_are_said(tmp_path):
         with warnings.catch_warnings():
             warnings.simplefilter("error")
             assert read_input(path).n_faces == 3
+    head = "ply\nformat ascii 1.0\nelement vertex {}\nproperty float x\nproperty float y\n" \
+        "property float z\nend_header\n"
+    path = tmp_path / "c.ply"
+    path.write_text(head.format(4) + body + "1 1 1\n")
+    with pytest.warns(UserWarning, match="c.ply: 1 line after the 4 rows its header declares"):
+        assert read_input(path).points.shape == (4, 3)
+    path.write_text(head.format(5) + body + "1 1 1\n\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert read_input(path).points.shape == (5, 3)

@@ -332,7 +332,7 @@ def _read_ply(data: bytes, path: Path) -> dict:
     from plyfile import PlyData, PlyParseError
 
     try:
-        fast = read_ply_scalars(data)  # (plyfile reads bytes a row at a time)
+        fast = read_ply_scalars(data, path)  # (plyfile reads bytes a row at a time)
         if fast and "vertex" in fast:
             vert = fast["vertex"]
         else:

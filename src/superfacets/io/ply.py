@@ -11,6 +11,7 @@ shown by MeshLab, Blender, Open3D or trimesh. Vertices are written as doubles
 from __future__ import annotations
 
 import io
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -133,7 +134,7 @@ class ScalarElement:
         return self.data[name]
 
 
-def read_ply_scalars(data: bytes) -> dict | None:
+def read_ply_scalars(data: bytes, path=None) -> dict | None:
     r"""The elements of a PLY whose elements all hold scalar properties (a point cloud),
     each a :class:`ScalarElement`: binary ones viewing ``data`` (no copy, no loop over
     rows), ASCII ones parsed by numpy; None for anything else (list properties, a header
@@ -147,6 +148,9 @@ def read_ply_scalars(data: bytes) -> dict | None:
     ----------
     data : bytes
         The whole file, uncompressed.
+    path : str or os.PathLike, optional
+        The file's name, for the warning of lines after the rows an ASCII header declares
+        (not read).
 
     Returns
     -------
@@ -173,7 +177,7 @@ def read_ply_scalars(data: bytes) -> dict | None:
     layout = [(name, count, [(p, order + _PLY_TYPES[t]) for p, t in props.items()])
               for name, count, props in header[2]]
     if order == "=":
-        return _ascii_scalars(data[start:], layout)
+        return _ascii_scalars(data[start:], layout, path)
     out = {}
     for name, count, props in layout:
         if not props:
@@ -186,7 +190,7 @@ def read_ply_scalars(data: bytes) -> dict | None:
     return out
 
 
-def _ascii_scalars(body: bytes, layout: list) -> dict | None:
+def _ascii_scalars(body: bytes, layout: list, path=None) -> dict | None:
     """:func:`read_ply_scalars` of an ASCII body: each element's lines parsed by numpy."""
     lines = body.split(b"\n")
     out, at = {}, 0
@@ -208,6 +212,11 @@ def _ascii_scalars(body: bytes, layout: list) -> dict | None:
             rows[p] = column
         out[name] = ScalarElement(rows)
         at += count
+    rest = sum(1 for ln in lines[at:] if ln.strip())
+    if rest:  # (a count too small in the header loses the rows after it)
+        warnings.warn(f"{path or 'PLY'}: {rest:,} line{'s' if rest > 1 else ''} after the "
+                      f"{at:,} rows its header declares, not read (is its element count "
+                      "right?)", stacklevel=4)
     return out
 
 
