@@ -123,3 +123,35 @@ def test_what_cannot_be_weighed_is_refused_in_words(tmp_path, capsys):
                  "--seen-from", "z", "-o", str(out)]) == 0
     assert len(np.unique(np.loadtxt(out))) == 10
     assert "heights weighed 2 times (--up-weight)" in capsys.readouterr().out
+
+
+def test_a_tiled_runs_graph_and_levels_are_of_the_cloud_as_given():
+    """With up_weight a tiled run's superpoint graph (learning layout) and levels are those
+    one run's result makes of the same labels on the cloud as given (its own point graph,
+    as :meth:`SegmentationResult.graph` builds it), not of the weighed cloud: the features
+    to float32's rounding (the tiles read the points stretched and stretch them back), the
+    edges and the levels' parents the same."""
+    from superfacets.graph.hierarchy import hierarchy
+    from superfacets.graph.learning import learning_arrays
+    from superfacets.scale.tiles.run import segment_tiled
+
+    pts, _ = _canopy(5)
+    cloud = PointCloud(pts, up=np.array([0.0, 0.0, 1.0]))
+    r = segment_tiled(cloud, 30, tiles=3, workers=1, up_weight=3, graph=True, levels=[10, 4])
+    step = r.params["step_weight"]
+    e = elements_of(cloud, "points", step_weight=step)
+    per = r.labels[e.first_rows(np.arange(e.graph.n_elements))]
+    sg = superfacet_graph(e.graph, per, None)
+    want = learning_arrays(sg, e.graph.positions, per, r.labels)
+    got = r.learning
+    for key in ("edge_index", "super_index"):
+        np.testing.assert_array_equal(got[key], want[key], err_msg=key)
+    np.testing.assert_allclose(got["x"], want["x"], rtol=1e-5, atol=1e-5)
+    np.testing.assert_allclose(got["pos"], want["pos"], atol=1e-9)
+    assert got["pos"][:, 2].max() < 0.7  # (the weighed cloud's layer stands at 1.8)
+    tree = hierarchy(sg, [10, 4])
+    for a, b in zip(r.hierarchy.parents, tree.parents):
+        np.testing.assert_array_equal(a, b)
+    with pytest.raises(ParameterError, match="not with neighbor_radius"):
+        segment_tiled(cloud, 30, tiles=3, workers=1, up_weight=3, graph=True,
+                      neighbor_radius=0.05)

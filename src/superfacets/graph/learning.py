@@ -38,7 +38,7 @@ from .adjacency import SuperfacetGraph
 
 __all__ = ["shape_features", "learning_arrays", "learning_layout", "ground_axes",
            "ground_frame", "ground_cells", "elevation", "GROUND_CELLS", "GROUND_FITS",
-           "NODE_FEATURES", "EDGE_FEATURES"]
+           "NODE_FEATURES", "EDGE_FEATURES", "LINE_SPREAD"]
 
 #: The ground beneath the superpoints: a quadratic surface fitted to the lowest element
 #: of each cell of a grid of this many cells along the input's longer horizontal side ...
@@ -46,6 +46,11 @@ GROUND_CELLS = 64
 #: ... fitted again this many times to the lower half of the cells, so that roofs and
 #: canopies (cells with no ground) do not lift it.
 GROUND_FITS = 3
+
+#: A superpoint whose second spread (square root of its scatter's middle eigenvalue) is at
+#: most this share of its first lies on a line: its plane is any turn about it, so its normal
+#: is the direction across it closest to up (a numerical tolerance, not a shape's).
+LINE_SPREAD = 1e-6
 
 #: The columns of ``x``, in order (``red green blue`` follow where there are colours).
 NODE_FEATURES = ("linearity", "planarity", "scattering", "verticality", "elevation",
@@ -73,7 +78,9 @@ def shape_features(graph: SuperfacetGraph, up=(0.0, 0.0, 1.0)) -> dict[str, np.n
         ``linearity``, ``planarity``, ``scattering`` (in ``[0, 1]``, adding up to 1;
         all 0 for a superpoint of one point) and ``verticality`` (in ``[0, 1]``); and
         ``normal`` (K, 3): the best plane's unit normal with ``normal . up >= 0`` (a
-        superpoint of one point, or of coincident ones: its mean normal, turned alike).
+        superpoint of one point, or of coincident ones: its mean normal, turned alike; of
+        points on a line, a line's plane being any turn about it: the direction across the
+        line closest to ``up``).
 
     Raises
     ------
@@ -102,11 +109,25 @@ def shape_features(graph: SuperfacetGraph, up=(0.0, 0.0, 1.0)) -> dict[str, np.n
     safe = np.where(ok, s1, 1.0)
     u = check_up(up)
     normal = np.where(ok[:, None], evecs[:, :, 0], np.asarray(graph.normal, dtype=np.float64))
+    normal = _line_normals(normal, evecs[:, :, 2], ok & (s2 <= LINE_SPREAD * s1), u)
     normal = np.where((normal @ u < 0)[:, None], -normal, normal)  # (the up half-space)
     return {"linearity": np.where(ok, (s1 - s2) / safe, 0.0),
             "planarity": np.where(ok, (s2 - s3) / safe, 0.0),
             "scattering": np.where(ok, s3 / safe, 0.0),
             "verticality": np.where(ok, 1.0 - np.abs(normal @ u), 0.0), "normal": normal}
+
+
+def _line_normals(normal: np.ndarray, along: np.ndarray, line: np.ndarray,
+                  u: np.ndarray) -> np.ndarray:
+    """``normal``, but for the superpoints whose points lie on a line (``line``, direction
+    ``along``), whose plane any turn about the line fits: the direction closest to ``u``
+    across the line (a level line's is ``u``), where the line is not along ``u``."""
+    across = u[None, :] - (along @ u)[:, None] * along
+    size = np.linalg.norm(across, axis=1)
+    use = line & (size > 1e-6)
+    normal = normal.copy()
+    normal[use] = across[use] / size[use, None]
+    return normal
 
 
 def ground_axes(up) -> np.ndarray:

@@ -54,7 +54,7 @@ from ...elements.neighbors import nearest, point_tree
 from ...elements.points import distinct_points, kept_diagonal, surface_neighbours
 from ...errors import ParameterError
 from ...inputs.bounds import column_bounds
-from ...inputs.cloud import PointCloud
+from ...inputs.cloud import PointCloud, up_weighted
 from ...method.classify import BoundedReplay, Exact, make_classifier
 from ...method.connectivity import label_components
 from ...method.expansion import Workspaces
@@ -513,7 +513,8 @@ def _core_share(inp, core: np.ndarray, p: SegmentParams, r: float) -> int:
 
 def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
                 diagonal: float, features=None, merging: tuple | None = None, folder=None,
-                floor: float | None = None, frame: tuple | None = None):
+                floor: float | None = None, frame: tuple | None = None,
+                unweighted: tuple | None = None):
     """Phase 2: labels of one tile from fixed centers (and, ``merging``, the sums the
     merges to the count read: :func:`superfacets.scale.tiles.merges.tile_merge_stats`).
 
@@ -538,6 +539,12 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
         (:func:`superfacets.graph.learning.ground_frame`); the sums then hold what it reads
         (:func:`~superfacets.scale.tiles.merges.tile_merge_stats`' ``learning``, the
         elements' colours where the input has them).
+    unweighted : tuple, optional
+        With ``merging``: ``(up, up_weight)`` of a run that weighs the up coordinate; the
+        sums then also hold, as ``'unweighted'``, those of the same labels on the tile's
+        points as given (its positions stretched back, its point graph built again), which
+        the levels and the graph in the learning layout read, as one run's result reads
+        the cloud as given.
 
     Returns
     -------
@@ -601,9 +608,34 @@ def tile_labels(inp, center_rows: np.ndarray, params: SegmentParams, r: float,
     first = src.first_rows(np.arange(m))  # each element's first row
     learning = None if frame is None else dict(frame=frame, colours=None if src.colors()
                                                is None else per_element(src, src.colors()))
-    return named, tile_merge_stats(graph, labels, rows[name], core[first], rows[first],
-                                   int(n_noise), features=feats, floor=rules.feature_floor,
-                                   learning=learning)
+    stats = tile_merge_stats(graph, labels, rows[name], core[first], rows[first],
+                             int(n_noise), features=feats, floor=rules.feature_floor,
+                             learning=learning)
+    if unweighted is not None:
+        stats["unweighted"] = _unweighted_stats(inp, unweighted, src.to_rows(labels),
+                                                (rows[name], core, rows, int(n_noise)),
+                                                (p, features, rules.feature_floor, frame))
+    return named, stats
+
+
+def _unweighted_stats(inp, weighing: tuple, row_labels: np.ndarray, where: tuple,
+                      how: tuple) -> dict:
+    """The merges' sums of a tile's labels on its points as given: the tile (read
+    stretched along ``up`` by ``up_weight``, ``weighing``) stretched back, its point graph
+    built again (as one run's result builds the cloud as given), each element labelled as
+    its first row. ``where``: the superpoints' names, the core, the rows and the noise's
+    points; ``how``: the tile's parameters, features, feature floor and ground frame."""
+    up, weight = weighing
+    names, core, rows, n_noise = where
+    p, features, floor, frame = how
+    flat = up_weighted(replace(inp, up=np.asarray(up, dtype=np.float64)), 1.0 / weight)
+    src, graph, p = build_graph(flat, p, features)
+    p, feats, floor = resolve_features(src, graph, p, features, floor)
+    first = src.first_rows(np.arange(graph.n_elements))
+    learning = None if frame is None else dict(frame=frame, colours=None if src.colors()
+                                               is None else per_element(src, src.colors()))
+    return tile_merge_stats(graph, row_labels[first], names, core[first], rows[first],
+                            n_noise, features=feats, floor=floor, learning=learning)
 
 
 def _replaying(graph, w: np.ndarray, window_r2: float, spaces: Workspaces):

@@ -183,7 +183,10 @@ def segment_tiled(source, n_segments: int | None = None, *, tiles=4,
         input's own up, else z; the ground's grid on the extent the survey reads along
         its axes), but for the edges' ``mean_angle`` and ``concave`` where the normals are
         estimated (each tile orients them like a sample, one run by its pieces; the
-        planes' angle ``normal_angle`` reads no orientation).
+        planes' angle ``normal_angle`` reads no orientation). With ``up_weight``, the graph
+        and the levels are of the cloud as given, as one run's result makes them (each tile
+        also builds the point graph of its points stretched back; not with
+        ``neighbor_radius``).
     seed_resolution : float, optional
         The count from a size in the data's units, as
         :func:`~superfacets.api.sizes.count_for_resolution` gives it for the whole input:
@@ -276,7 +279,8 @@ def segment_tiled(source, n_segments: int | None = None, *, tiles=4,
             found, done = _classified(run, layout, params, margin, params.window * r, dict(
                 refine=refine, box_rows=not shared, frame=ground, n_noise=_noise_points(
                     merging or levels is not None or graph, merge_from if merging else 1,
-                    n_tiles),
+                    n_tiles), unweighted=(up, weight) if weight != 1 and (
+                    graph or levels is not None) else None,
                 start=_sample_start(reader, survey, params, r, diagonal,
                     (refine, start), stage, (sampled, up))),
                 timings)
@@ -321,16 +325,18 @@ def _merged(labels: np.ndarray, done: list, stage, plan: tuple, asked: tuple, of
     with stage("stitch", add=True):
         names = _numbered_densely(labels)
     learning = None
+    given = [o["merge_stats"].get("unweighted", o["merge_stats"]) for o in done] \
+        if asked != (None, None) else None  # (the cloud as given, where the run weighed it)
     if ground is not None:
         with stage("graph"):
-            learning = tiled_learning([o["merge_stats"] for o in done], fine, labels, ground)
+            learning = tiled_learning(given, fine, labels, ground)
     if levels is None:
         return labels, names, merged_from, None, learning
     wanted, cost, weight = levels
     if weight is None:  # (as one run's: a planarity level of a cloud of uneven density
         weight = AUTO_EXTENT_WEIGHT if cost == "planarity" and of[0] > AUTO_SPREAD else 0.0
     with stage("levels"):
-        tree = tiled_hierarchy([o["merge_stats"] for o in done], fine, labels, wanted,
+        tree = tiled_hierarchy(given, fine, labels, wanted,
                                alpha=params.alpha, eta_convex=params.eta_convex, cost=cost,
                                extent_weight=weight, cloud=kind_of(of[1]).cloud)
     return labels, names, merged_from, tree, learning
@@ -387,8 +393,8 @@ def _classified(run, layout, params, margin: float, ring: float, how: dict,
         found = again if found is None else found
     t = time.perf_counter()
     done = [o for o in run("labels", margin, lambda t: dict(
-        reach(t), n_noise=how["n_noise"], frame_of_ground=how.get("frame")))
-            if o["core"]]
+        reach(t), n_noise=how["n_noise"], frame_of_ground=how.get("frame"),
+        unweighted=how.get("unweighted"))) if o["core"]]
     timings["labels"] = time.perf_counter() - t
     return found, done
 
@@ -642,12 +648,13 @@ def _stitched(done: list, n_rows: int):
 
 def _checked_levels(levels, cost: str, extent_weight, params, graph: bool) -> tuple | None:
     """``(levels, cost, extent_weight)`` of a run's hierarchy, checked before any pass
-    over the input (None: no levels); and the graph's and levels' ``up_weight``."""
-    if (graph or levels is not None) and params.up_weight != 1:
-        raise ParameterError("the superpoint graph and the levels are of the cloud as given, "
-                             "as one run builds them; a tiled run with up_weight "
-                             f"{params.up_weight:g} sums the weighed cloud's: ask for them "
-                             "in one run, or tile without --up-weight")
+    over the input (None: no levels); with ``up_weight`` the graph and levels are of the
+    cloud as given, its point graph built by ``n_neighbors`` (not ``neighbor_radius``)."""
+    if (graph or levels is not None) and params.up_weight != 1 and \
+            params.neighbor_radius is not None:
+        raise ParameterError("the superpoint graph and the levels of a tiled run with "
+                             "up_weight are of the cloud as given, built with "
+                             "n_neighbors alone: not with neighbor_radius")
     n_segments = params.n_segments
     if levels is None:
         if cost != "ward" or extent_weight is not None:

@@ -204,7 +204,7 @@ def _labelled(task: dict, out: dict, box: tuple, centers: np.ndarray) -> None:
     if task.get("n_noise") is not None:  # the merges to the count follow
         named, out["merge_stats"] = tile_labels(
             inp, centers, p, r, d, merging=(core, rows, task["n_noise"]), folder=folder,
-            floor=floor, frame=task.get("frame_of_ground"))
+            floor=floor, frame=task.get("frame_of_ground"), unweighted=task.get("unweighted"))
     else:
         named = tile_labels(inp, centers, p, r, d, folder=folder, floor=floor)
     gid = np.where(named >= 0, rows[np.maximum(named, 0)], -1)
