@@ -1,5 +1,6 @@
 """Random damage to valid files of every format: the readers raise the package's errors
-(or OSError), never anything else, and warn about nothing (a fixed seed: deterministic)."""
+(or OSError), never anything else, and warn about nothing but lines a header's count leaves
+unread (a fixed seed: deterministic)."""
 
 from __future__ import annotations
 
@@ -47,6 +48,11 @@ def _damage(data: bytes, rng: random.Random) -> bytes:
     return bytes(b)
 
 
+#: The one warning a damaged file may give: a header's count that leaves lines unread (the
+#: file is read as its header declares, and the warning says so).
+_LINES_NOT_READ = r".*after the .* (faces|rows) its header declares, not read"
+
+
 def _read_damaged(read, data: bytes, path, rng: random.Random, times: int = 40) -> None:
     """Read ``times`` damaged copies of ``data``: the package's errors or OSError only,
     and no warning."""
@@ -54,6 +60,7 @@ def _read_damaged(read, data: bytes, path, rng: random.Random, times: int = 40) 
         path.write_bytes(_damage(data, rng))
         with warnings.catch_warnings():
             warnings.simplefilter("error")
+            warnings.filterwarnings("ignore", message=_LINES_NOT_READ)
             try:
                 read(path)
             except (SuperfacetsError, OSError):
@@ -80,6 +87,7 @@ def test_damaged_files_through_segment(name, tmp_path, capsys):
             p.unlink(missing_ok=True)
         with warnings.catch_warnings():
             warnings.simplefilter("error")
+            warnings.filterwarnings("ignore", message=_LINES_NOT_READ)
             rc = main(["segment", str(path), "-k", str(rng.choice([1, 3, 10])), "-o", str(out),
                        "--colored-mesh", str(ply)])
         err = capsys.readouterr().err

@@ -74,17 +74,16 @@ def test_an_inputs_name_is_a_string_or_a_path():
             make(np.zeros(3))
 
 
-def test_a_tiled_graph_or_levels_with_an_up_weight_are_refused(tmp_path):
+def test_a_tiled_graph_or_levels_with_an_up_weight_are_of_the_cloud_as_given(tmp_path):
     """segment_tiled(graph=True, up_weight=2) summed the weighed cloud: heights and
     elevations doubled against one run's learning graph of the same labels (which is of
-    the cloud as given), without a word; refused before any pass, likewise levels."""
+    the cloud as given), without a word. Refused then; now of the cloud as given (the
+    whole comparison: tests/method/test_up_weight.py)."""
     pts = np.random.default_rng(3).random((2000, 3)) * [4, 3, 1]
     cloud = PointCloud(pts, up="z")
-    for extra in ({"graph": True}, {"levels": [5]}):
-        with pytest.raises(ParameterError, match="one run builds them"):
-            segment_tiled(cloud, 20, tiles=2, workers=1, up_weight=2, **extra)
-    r = segment_tiled(cloud, 20, tiles=2, workers=1, up_weight=2)  # the labels alone: fine
-    assert r.n_segments == 20
+    r = segment_tiled(cloud, 20, tiles=2, workers=1, up_weight=2, graph=True, levels=[5])
+    assert r.n_segments == 20 and r.hierarchy.levels == (5,)
+    assert 0 < r.learning["pos"][:, 2].max() < 1.0  # (the weighed cloud's heights reach 2)
 
 
 def test_the_sizes_and_metrics_take_what_segment_takes():

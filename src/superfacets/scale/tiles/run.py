@@ -279,8 +279,7 @@ def segment_tiled(source, n_segments: int | None = None, *, tiles=4,
             found, done = _classified(run, layout, params, margin, params.window * r, dict(
                 refine=refine, box_rows=not shared, frame=ground, n_noise=_noise_points(
                     merging or levels is not None or graph, merge_from if merging else 1,
-                    n_tiles), unweighted=(up, weight) if weight != 1 and (
-                    graph or levels is not None) else None,
+                    n_tiles), unweighted=_unweighted(up, weight, graph or levels is not None),
                 start=_sample_start(reader, survey, params, r, diagonal,
                     (refine, start), stage, (sampled, up))),
                 timings)
@@ -340,6 +339,12 @@ def _merged(labels: np.ndarray, done: list, stage, plan: tuple, asked: tuple, of
                                alpha=params.alpha, eta_convex=params.eta_convex, cost=cost,
                                extent_weight=weight, cloud=kind_of(of[1]).cloud)
     return labels, names, merged_from, tree, learning
+
+
+def _unweighted(up, weight: float, asked: bool) -> tuple | None:
+    """What the tiles' labels phase stretches back, where the run weighs the up coordinate
+    and its graph or levels are asked (of the cloud as given): ``(up, weight)``, else None."""
+    return (up, weight) if weight != 1 and asked else None
 
 
 def _ground_of(up, survey) -> tuple | None:
