@@ -306,11 +306,8 @@ def _check_view_labels(data, labels, elements) -> None:
     if is_cloud(data):
         check_labels(labels, as_cloud(data).points.shape[0], per="point")
         return
-    mesh = as_mesh(data)
-    if elements == "vertices":
-        check_labels(labels, mesh.n_vertices, per="vertex")
-    else:
-        check_labels(labels, mesh.n_faces, per="face")
+    kind = kind_of(elements or "faces")  # (faces, or the vertices drawn on them)
+    check_labels(labels, kind.n_rows(as_mesh(data)), per=kind.singular)
 
 
 class NotebookView:
