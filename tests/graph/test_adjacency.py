@@ -171,7 +171,8 @@ def test_cli_writes_the_graph_and_the_levels(tmp_path, capsys):
     bad = tmp_path / "bad.npz"
     assert main(["segment", str(path), "-k", "20", "--graph", str(bad), "--levels", "500",
                  "-o", str(tmp_path / "bad.seg")]) == 2
-    assert "--levels are coarser than the -k 20 segments" in capsys.readouterr().err
+    said = "--levels must each be at most the 20 segments they merge (-k)"
+    assert said in capsys.readouterr().err
     assert not bad.exists() and not (tmp_path / "bad.seg").exists()
     assert main(["segment", str(path), "--radius", "0.3", "--graph", str(bad), "--levels",
                  "500", "-o", str(tmp_path / "bad.seg")]) == 2  # (a count known after the run)

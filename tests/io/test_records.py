@@ -269,7 +269,7 @@ def test_a_batch_writes_a_laz_for_every_cloud(tmp_path, sphere, capsys):
         assert _nested(fine, coarse) and len(np.unique(coarse[coarse >= 0])) == 4, name
     assert np.array_equal(read_labels(levels / "ball.seg"), read_labels(out / "ball.seg"))
     for args, said in ((["--labels", "seg", "--levels", "4"], "labels='records' or 'laz'"),
-                       (["--labels", "laz", "--levels", "10"], "coarser than the n_segments")):
+                       (["--labels", "laz", "--levels", "10"], "they merge (n_segments (-k))")):
         assert main(["batch", str(folder), "-o", str(tmp_path / "no"), "-k", "9", *args,
                      "-q"]) == 2
         assert said in capsys.readouterr().err and not (tmp_path / "no").exists()
@@ -745,7 +745,8 @@ def test_levels_without_a_file_that_holds_them_are_refused_before_the_run(tmp_pa
     assert "--graph OUT.npz" in err and "ClusterID_N" in err and not out.exists()
     assert main(["segment", str(src), "-k", "12", "--levels", "13", "-o",
                  str(tmp_path / "o.laz")]) == 2  # (a level above k: refused before the run)
-    assert "--levels are coarser than the -k 12 segments" in capsys.readouterr().err
+    said = "--levels must each be at most the 12 segments they merge (-k)"
+    assert said in capsys.readouterr().err
     assert not (tmp_path / "o.laz").exists() and [p.name for p in tmp_path.iterdir()] == [
         "tile.laz", ]
     assert main(["evaluate", str(src)]) == 2

@@ -114,7 +114,7 @@ def test_a_tiled_runs_level_options_are_refused_in_words(monkeypatch):
     import superfacets.scale.tiles.run as run
 
     mesh = _bumpy(3)
-    for kw, said in ((dict(levels=[61]), "coarser than the n_segments 60"),
+    for kw, said in ((dict(levels=[61]), r"at most the 60 segments they merge \(n_segments\)"),
                      (dict(levels=[10], level_cost="flat"), "level_cost must be"),
                      (dict(levels=[10], extent_weight=0.1), "a term of level_cost="),
                      (dict(level_cost="planarity"), "give levels too"),

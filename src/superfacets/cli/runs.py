@@ -75,6 +75,7 @@ def checked_graph(args, into_records: bool = False):
     ``--extent-weight``, ``--adaptive`` with what they need, before anything is read;
     ``into_records``: ``-o`` writes the scan's own records (where levels go too)."""
     from ..errors import ParameterError
+    from ..graph.hierarchy import wanted_levels
     from ..io import input_kind
 
     check_levels(args)
@@ -85,9 +86,8 @@ def checked_graph(args, into_records: bool = False):
                    else "")
         raise ParameterError("--levels goes with --graph OUT.npz (the hierarchy is written "
                              f"there){records}")
-    if args.levels and args.n_segments is not None and max(args.levels) > args.n_segments:
-        raise ParameterError(f"--levels are coarser than the -k {args.n_segments} segments: "
-                             f"at most {args.n_segments} each, got {max(args.levels)}")
+    if args.levels:
+        wanted_levels(args.levels, args.n_segments, ("--levels", "-k"))
     if args.level_cost is not None and not args.levels:
         raise ParameterError("--level-cost is the merge cost of --levels; give both")
     return graph_out

@@ -203,7 +203,8 @@ def hierarchy(graph, levels, *, alpha: float = ALPHA, eta_convex: float = ETA_CO
     return Hierarchy(levels=tuple(wanted), parents=tuple(parents))
 
 
-def wanted_levels(levels) -> list[int]:
+def wanted_levels(levels, at_most: int | None = None,
+                  names: tuple = ("levels", "n_segments")) -> list[int]:
     """The numbers of segments of a hierarchy's levels, as :func:`hierarchy` takes them:
     distinct, largest first.
 
@@ -211,6 +212,12 @@ def wanted_levels(levels) -> list[int]:
     ----------
     levels : int or sequence of int
         Each ``>= 1``.
+    at_most : int, optional
+        The number of segments the levels merge (a run's ``n_segments``): none may be
+        larger.
+    names : tuple of str, default ('levels', 'n_segments')
+        The two parameters' names, as the message says them (the command line's
+        ``('--levels', '-k')``).
 
     Returns
     -------
@@ -219,7 +226,8 @@ def wanted_levels(levels) -> list[int]:
     Raises
     ------
     ParameterError
-        If ``levels`` names no number, or one is not an integer ``>= 1``.
+        If ``levels`` names no number, or one is not an integer ``>= 1``, or one is larger
+        than ``at_most``.
 
     Examples
     --------
@@ -233,7 +241,11 @@ def wanted_levels(levels) -> list[int]:
                              f"got {levels!r}") from None
     if not wanted:
         raise ParameterError("levels must name at least one number of segments")
-    return sorted({check_int("levels", v, lo=1) for v in wanted}, reverse=True)
+    wanted = sorted({check_int(names[0], v, lo=1) for v in wanted}, reverse=True)
+    if at_most is not None and wanted[0] > at_most:
+        raise ParameterError(f"{names[0]} must each be at most the {at_most:,} segments they "
+                             f"merge ({names[1]}), got {wanted[0]:,}")
+    return wanted
 
 
 def merge_arrays(graph, planarity: bool) -> tuple:

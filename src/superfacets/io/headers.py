@@ -494,6 +494,56 @@ def check_stl(data: bytes, path: Path) -> None:
                               f"({84 + 50 * n:,} bytes), {len(data):,} bytes in the file")
 
 
+_STL_KEYWORD = re.compile(rb"^[ \t]*(facet|vertex)\b([^\n]*)", re.M | re.I)
+
+
+def check_stl_triangles(data: bytes, path: Path) -> None:
+    r"""Refuse an ASCII STL facet that is not a triangle of three ``x y z`` vertices (read
+    where trimesh failed: its message is numpy's "cannot reshape array").
+
+    Parameters
+    ----------
+    data : bytes
+        The file's bytes.
+    path : pathlib.Path
+        Its name, for the message.
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    MeshFormatError
+        Naming the first facet of other than three vertices, or the first vertex of other
+        than three coordinates.
+
+    Examples
+    --------
+    >>> facet = b"facet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nendloop\n"
+    >>> try:
+    ...     check_stl_triangles(b"solid t\n" + facet + b"endfacet\nendsolid\n", Path("a.stl"))
+    ... except MeshFormatError as exc:
+    ...     print(exc)
+    a.stl: ASCII STL facet 1 has 2 vertices, not 3 (STL holds triangles only)
+    """
+    facet = vertices = 0
+    for match in _STL_KEYWORD.finditer(data):
+        if match.group(1).lower() == b"facet":
+            if facet and vertices != 3:
+                break
+            facet, vertices = facet + 1, 0
+        elif len(match.group(2).split()) != 3:
+            raise MeshFormatError(f"{path}: vertex {vertices + 1} of ASCII STL facet "
+                                  f"{facet:,} has not three coordinates: "
+                                  f"{match.group(0).strip().decode(errors='replace')!r}")
+        else:
+            vertices += 1
+    if facet and vertices != 3:
+        raise MeshFormatError(f"{path}: ASCII STL facet {facet:,} has {vertices} vertices, "
+                              "not 3 (STL holds triangles only)")
+
+
 def first_line(exc: BaseException) -> str:
     """The first line of an exception's message (its type's name when it has none).
 

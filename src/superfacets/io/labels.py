@@ -271,8 +271,11 @@ def read_labels(path, n_faces: int | None = None) -> np.ndarray:
 def _text_labels(lines: list, path: Path) -> np.ndarray:
     """The labels of a text file: one whole number a line, after a column's name where
     the first line is one (pandas' ``to_csv(index=False)`` of one column: ``label``)."""
+    header = ""
     if lines and len(lines) > 1 and len(lines[0].replace(",", " ").split()) == 1 \
             and not _is_number(lines[0]):
+        header = (f" (after the first line, {lines[0][:40]!r}, read as the column's "
+                  "name)")
         lines = lines[1:]
     if not lines:
         return np.zeros(0, dtype=np.int64)
@@ -289,7 +292,8 @@ def _text_labels(lines: list, path: Path) -> np.ndarray:
     if labels is None or labels.ndim != 1:
         at = next((i for i, line in enumerate(lines) if not _is_whole(line)), 0)
         raise MeshFormatError(f"{path}: malformed label file: label {at + 1:,} of "
-                              f"{len(lines):,}, {lines[at][:40]!r}, is not one whole number")
+                              f"{len(lines):,}{header}, {lines[at][:40]!r}, is not one whole "
+                              "number")
     return labels
 
 

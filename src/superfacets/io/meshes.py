@@ -24,7 +24,7 @@ from ..inputs.convert import mesh_from_scene
 from ..inputs.mesh import Mesh, narrow_faces
 from ..inputs.rgb import unit_colors
 from .files import read_bytes, read_head, split_suffix, text_lines, user_path
-from .headers import check_gltf, check_stl, header_counts, ply_names
+from .headers import check_gltf, check_stl, check_stl_triangles, header_counts, ply_names
 from .obj import parse_obj
 from .ply import ply_colors, read_ply_triangles
 
@@ -367,6 +367,8 @@ def _load_trimesh_quietly(data: bytes, fmt: str, path: Path):
     except Exception as exc:  # trimesh raises many types for malformed input
         if fmt == "ply" and data.startswith(b"ply"):  # e.g. polygons of mixed sizes
             return _ply_polygons(data, path)
+        if fmt == "stl":  # (an ASCII facet of two vertices: "cannot reshape array")
+            check_stl_triangles(data, path)
         why = exc or type(exc).__name__
         raise MeshFormatError(f"{path}: cannot read {fmt.upper()}: {why}") from None
     polygons = f.size and (f.ndim != 2 or f.shape[1] != 3)

@@ -387,10 +387,8 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         raise ParameterError("graph (--graph) is of one segmentation; not with per_object "
                              "(--per-object)")
     levels = _checked_levels(levels, labels, graph)
-    if levels and n_segments is not None and levels[0] > n_segments:
-        raise ParameterError(f"levels (--levels) are coarser than the n_segments (-k) "
-                             f"{n_segments} segments: at most {n_segments} each, got "
-                             f"{levels[0]}")
+    if levels:
+        wanted_levels(levels, n_segments, ("levels (--levels)", "n_segments (-k)"))
     if workers is not None:
         check_int("workers", workers, lo=1)
     memory_limit = check_memory_limit(memory_limit)  # (before any input is looked at)

@@ -666,10 +666,7 @@ def _checked_levels(levels, cost: str, extent_weight, params, graph: bool) -> tu
             raise ParameterError("level_cost and extent_weight are the levels' options: "
                                  "give levels too")
         return None
-    wanted = wanted_levels(levels)
-    if n_segments is not None and wanted[0] > n_segments:
-        raise ParameterError(f"levels are coarser than the n_segments {n_segments} segments: "
-                             f"at most {n_segments} each, got {wanted[0]}")
+    wanted = wanted_levels(levels, n_segments)
     if cost not in ("ward", "planarity"):
         raise ParameterError(f"level_cost must be 'ward' or 'planarity', got {cost!r}")
     if extent_weight is not None and cost != "planarity":

@@ -46,9 +46,44 @@ def _template() -> str:
     return page.replace("%SCRIPT%", files.joinpath("viewer.js").read_text(encoding="utf-8"))
 
 
-#: A CSS colour as the page may hold it: a name, ``#rgb(a)`` hex, or ``rgb()``-style.
-_COLOUR = re.compile(r"^(#[0-9a-fA-F]{3,8}|[a-zA-Z]{1,30}"
+#: A CSS colour as the page may hold it: a name, ``#rgb(a)`` or ``#rrggbb(aa)`` hex, or
+#: ``rgb()``-style.
+_COLOUR = re.compile(r"^(#([0-9a-fA-F]{3,4}|[0-9a-fA-F]{6}|[0-9a-fA-F]{8})|[a-zA-Z]{1,30}"
                      r"|(rgb|rgba|hsl|hsla)\([0-9., %]{1,60}\))$")
+
+#: The named colours of CSS Color Module Level 4 (a browser draws any other word as no
+#: colour at all).
+_CSS_NAMES = frozenset("""
+aliceblue antiquewhite aqua aquamarine azure beige bisque black blanchedalmond blue
+blueviolet brown burlywood cadetblue chartreuse chocolate coral cornflowerblue cornsilk
+crimson cyan darkblue darkcyan darkgoldenrod darkgray darkgreen darkgrey darkkhaki
+darkmagenta darkolivegreen darkorange darkorchid darkred darksalmon darkseagreen
+darkslateblue darkslategray darkslategrey darkturquoise darkviolet deeppink deepskyblue
+dimgray dimgrey dodgerblue firebrick floralwhite forestgreen fuchsia gainsboro ghostwhite
+gold goldenrod gray green greenyellow grey honeydew hotpink indianred indigo ivory khaki
+lavender lavenderblush lawngreen lemonchiffon lightblue lightcoral lightcyan
+lightgoldenrodyellow lightgray lightgreen lightgrey lightpink lightsalmon lightseagreen
+lightskyblue lightslategray lightslategrey lightsteelblue lightyellow lime limegreen linen
+magenta maroon mediumaquamarine mediumblue mediumorchid mediumpurple mediumseagreen
+mediumslateblue mediumspringgreen mediumturquoise mediumvioletred midnightblue mintcream
+mistyrose moccasin navajowhite navy oldlace olive olivedrab orange orangered orchid
+palegoldenrod palegreen paleturquoise palevioletred papayawhip peachpuff peru pink plum
+powderblue purple rebeccapurple red rosybrown royalblue saddlebrown salmon sandybrown
+seagreen seashell sienna silver skyblue slateblue slategray slategrey snow springgreen
+steelblue tan teal thistle tomato turquoise violet wheat white whitesmoke yellow
+yellowgreen transparent""".split())
+
+
+def _check_background(background) -> str:
+    colour = background.strip() if isinstance(background, str) else ""
+    if not _COLOUR.match(colour):
+        raise ParameterError(f"background must be a CSS colour (a name, #hex or rgb()), "
+                             f"got {background!r}")
+    if colour.isalpha() and colour.lower() not in _CSS_NAMES:
+        raise ParameterError(f"background {background!r} is not a CSS colour name (white, "
+                             "black, lightgray, ...: CSS Color Module Level 4), nor #hex "
+                             "or rgb()")
+    return colour
 
 
 def _page(title: str, background: str, meta: dict, data: dict) -> str:
@@ -56,15 +91,13 @@ def _page(title: str, background: str, meta: dict, data: dict) -> str:
     stands: the title as HTML text, the colour checked as a CSS colour, the metadata as
     JSON inside a script element (``<``, ``>``, ``&`` as ``\\u`` escapes, so no name can
     close the element or open a comment), the arrays as base64."""
-    if not isinstance(background, str) or not _COLOUR.match(background.strip()):
-        raise ParameterError(f"background must be a CSS colour (a name, #hex or rgb()), "
-                             f"got {background!r}")
+    background = _check_background(background)
     meta_json = (json.dumps(meta, ensure_ascii=False).replace("<", "\\u003c")
                  .replace(">", "\\u003e").replace("&", "\\u0026")
                  .replace("\u2028", "\\u2028").replace("\u2029", "\\u2029"))
     blobs = "\n".join(f'<script type="application/octet-stream" id="{k}">{b}</script>'
                       for k, b in data.items())  # base64: no character to escape
-    values = {"TITLE": _html.escape(title), "BACKGROUND": background.strip(),
+    values = {"TITLE": _html.escape(title), "BACKGROUND": background,
               "META": meta_json, "BLOBS": blobs}
     return re.sub(r"%(TITLE|BACKGROUND|META|BLOBS)%", lambda m: values[m.group(1)],
                   _template())
