@@ -560,11 +560,13 @@ def _describe_stop(result) -> str:
     return describe_stop(result)
 
 
-def sizes_said(labels, elements: str, result=None) -> str:
+def sizes_said(labels, elements: str, result=None, unit: str | None = None) -> str:
     """``', 12 to 480 points each (median 130)'``: the segments' sizes in elements; with a
     run's ``result``, also how wide the median one is in the data's units (the diameter of
     a disc of its area: ``', ... (median 130, about 1.9 wide in the data's units)'``; a
-    tiled run's, the mean one's, from the input's area: ``'about 2.1 wide on average'``)."""
+    tiled run's, the mean one's, from the input's area: ``'about 2.1 wide on average'``);
+    with the file's ``unit`` (:func:`superfacets.io.units.length_unit`), in it: ``'about
+    1.9 m wide'``."""
     import numpy as np
 
     from ..elements.labels import size_summary
@@ -580,7 +582,8 @@ def sizes_said(labels, elements: str, result=None) -> str:
             "wide on average"
     return (f", {s['size_min']:,} to {s['size_max']:,} {elements} each "
             f"(median {s['size_median']:,.0f}"
-            + (f", about {wide:.3g} {said} in the data's units" if wide else "") + ")")
+            + (f", about {wide:.3g} {unit} {said}" if wide and unit else
+               f", about {wide:.3g} {said} in the data's units" if wide else "") + ")")
 
 
 def _median_width(result) -> float | None:

@@ -183,7 +183,8 @@ def _add_demo(sub) -> None:
 
 
 def _summary(name: str, mesh, result, seconds: float, elements: str = "faces",
-             density_given: bool = True, merge_given: bool = True) -> str:
+             density_given: bool = True, merge_given: bool = True,
+             unit: str | None = None) -> str:
     from ..api.result import describe_stop
 
     state = describe_stop(result)
@@ -220,7 +221,7 @@ def _summary(name: str, mesh, result, seconds: float, elements: str = "faces",
     if result.n_segments == 1:  # (one superfacet, one superpoint)
         segs = segs.replace("superfacets", "superfacet", 1).replace("superpoints", "superpoint", 1)
     else:  # how even they are: the smallest, the largest and the median
-        segs += sizes_said(result.labels, elements, result)
+        segs += sizes_said(result.labels, elements, result, unit)
     return (f"{name}: {what}, {result.n_segments} {segs}, "
             f"{_count(result.n_iter, 'iteration')} ({state}){coarse}{swaps}, {seconds:.2f} s"
             f"{_tiny_hint(result) if elements == 'points' and not start else ''}")
@@ -376,6 +377,7 @@ def _into_records(output, source) -> bool:
 def _write_and_say(args, data, result, kind, outputs, elapsed, size_note: str = "") -> None:
     """Write the outputs, then the summary, what was written and the notes."""
     from ..io.orientation import default_view
+    from ..io.units import length_unit
     from ..viz.outputs import write_result
 
     up = up_of(args, data)  # (a LAS cloud is upright with z up, an STL mesh too)
@@ -396,7 +398,8 @@ def _write_and_say(args, data, result, kind, outputs, elapsed, size_note: str = 
     report = sys.stderr if str(seg_out) == "-" else sys.stdout  # stdout holds the labels
     print(_summary(Path(args.mesh).name, data, result, elapsed, kind,
                    getattr(args, "density", None) is not None,
-                   getattr(args, "merge_from", None) is not None), file=report)
+                   getattr(args, "merge_from", None) is not None,
+                   length_unit(args.mesh)), file=report)
     if size_note:
         print(size_note, file=report)
     _say_what_was_written(seg_out, outputs["colored"], outputs["picture"], outputs["html"],

@@ -75,6 +75,7 @@ def add_tile_options(p) -> None:
 def segment_tiles(args) -> int:
     """``segment --tiles``: labels of a large input, written as ``-o`` says."""
     from .._runtime import interrupts
+    from ..io.units import length_unit
     from .runs import check_units
 
     _refuse_one_run_options(args)
@@ -104,7 +105,7 @@ def segment_tiles(args) -> int:
                                 scene=getattr(args, "merge_from", None) is None)
         what += weights_said(result.params)  # (as one run's summary says them)
         if result.n_segments > 1:
-            what += sizes_said(result.labels, kind, result)
+            what += sizes_said(result.labels, kind, result, length_unit(args.mesh))
         invalid = int((result.labels < 0).sum()) if kind == "points" else 0
         said = f" ({invalid:,} invalid)" if invalid else ""  # (as one run's summary says)
         print(f"{Path(args.mesh).name}: {result.labels.size:,} {kind}{said}, "
