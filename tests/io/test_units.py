@@ -53,3 +53,20 @@ def test_the_summary_says_widths_in_the_files_unit(tmp_path, capsys):
         assert main(["segment", str(path), "-k", "20", "--tiles", "2", "-o", str(out)]) == 0
         first = capsys.readouterr().out.splitlines()[0]
         assert said.replace("wide", "wide on average") in first, first
+
+
+def test_longitude_and_latitude_are_said_before_the_run(tmp_path, capsys):
+    from superfacets.io.units import geographic_note
+
+    path = _las(tmp_path / "lonlat.las", 4326)
+    assert "longitude and latitude (WGS 84, degrees)" in geographic_note(path)
+    assert geographic_note(_las(tmp_path / "utm.las", 32632)) == ""
+    assert geographic_note(tmp_path / "scan.ply") == ""
+    out = tmp_path / "s.seg"
+    assert main(["segment", str(path), "-k", "20", "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "note: lonlat.las: its coordinates are longitude and latitude" in err
+    assert main(["segment", str(path), "-k", "20", "--tiles", "2", "-o", str(out)]) == 0
+    assert "longitude and latitude" in capsys.readouterr().err
+    assert main(["segment", str(path), "-k", "20", "-o", str(out), "-q"]) == 0
+    assert "longitude" not in capsys.readouterr().err

@@ -70,6 +70,16 @@ def sizes_of(args, data, kind: str, kwargs: dict) -> tuple[dict, str]:
     return kwargs, ""
 
 
+def say_geographic(args) -> None:
+    """A note, before the run, where the input's coordinates are longitude and latitude
+    (:func:`superfacets.io.units.geographic_note`); none with ``-q``."""
+    from ..io.units import geographic_note
+
+    note = "" if getattr(args, "quiet", False) else geographic_note(args.mesh)
+    if note:
+        print(f"note: {note}", file=sys.stderr)
+
+
 def checked_graph(args, into_records: bool = False):
     """``--graph OUT.npz`` (a path or None) and ``--levels``, ``--level-cost``,
     ``--extent-weight``, ``--adaptive`` with what they need, before anything is read;

@@ -36,7 +36,7 @@ from .options import (
     sizes_said,
     up_of,
 )
-from .runs import check_units, checked_graph, run_segment, sizes_of
+from .runs import check_units, checked_graph, run_segment, say_geographic, sizes_of
 
 __all__ = ["add_parsers"]
 
@@ -260,6 +260,7 @@ def cmd_segment(args) -> int:
         return elsewhere()
     outputs = _checked_outputs(args)
     check_units(args)
+    say_geographic(args)
     kwargs = dict(method_kwargs(args), **element_kwargs(args))
     resolve(n_segments=args.n_segments, radius=args.radius, **kwargs)  # before the read
     t0 = time.perf_counter()

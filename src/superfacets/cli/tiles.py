@@ -76,7 +76,7 @@ def segment_tiles(args) -> int:
     """``segment --tiles``: labels of a large input, written as ``-o`` says."""
     from .._runtime import interrupts
     from ..io.units import length_unit
-    from .runs import check_units
+    from .runs import check_units, say_geographic
 
     _refuse_one_run_options(args)
     drawings = check_drawings(args, (args.output,))
@@ -85,6 +85,7 @@ def segment_tiles(args) -> int:
     seg_out = check_labels_output(args.output, args.mesh, records=True)
     graph_out = check_output(args.graph, (".npz",), "the graph", inputs=(args.mesh,))
     check_units(args)
+    say_geographic(args)
     t0 = time.perf_counter()
     result, wanted = _tiled_run(args, graph_out is not None)
     elapsed = time.perf_counter() - t0

@@ -11,7 +11,7 @@ from __future__ import annotations
 import warnings
 from pathlib import Path
 
-__all__ = ["length_unit", "UNIT_SYMBOLS"]
+__all__ = ["length_unit", "geographic_note", "UNIT_SYMBOLS"]
 
 #: The symbols of the commonest projected coordinate systems' units (pyproj's names); any
 #: other unit is said by its name.
@@ -52,6 +52,50 @@ def length_unit(path) -> str | None:
     fmt, comp = split_suffix(path)
     if fmt == "e57" and not comp:
         return "m"
+    return _crs_unit(_las_crs(path))
+
+
+def geographic_note(path) -> str:
+    """A note for a LAS/LAZ file whose coordinates are longitude and latitude: the method's
+    distances would add degrees to heights in metres.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    str
+        The note, or ``''`` where the file names a projected system, none, or cannot be
+        read (as :func:`length_unit`).
+
+    Raises
+    ------
+    None
+
+    Examples
+    --------
+    >>> geographic_note("scan.ply")
+    ''
+    """
+    crs = _las_crs(path)
+    if crs is None:
+        return ""
+    if getattr(crs, "is_compound", False) and crs.sub_crs_list:
+        crs = crs.sub_crs_list[0]
+    if not crs.is_geographic:
+        return ""
+    return (f"{Path(path).name}: its coordinates are longitude and latitude ({crs.name}, "
+            "degrees): the superpoints' distances add degrees to heights; reproject it to a "
+            "projected system first (PDAL: filters.reprojection out_srs=EPSG:...)")
+
+
+def _las_crs(path):
+    """A LAS/LAZ file's pyproj CRS; None for another format, no laspy or pyproj, no CRS, or
+    a file or CRS that cannot be read."""
+    from .files import split_suffix
+
+    fmt, comp = split_suffix(Path(path))
     if fmt not in ("las", "laz") or comp:
         return None
     try:
@@ -61,10 +105,9 @@ def length_unit(path) -> str | None:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             with laspy.open(str(path)) as reader:
-                crs = reader.header.parse_crs()
-    except Exception:  # (no laspy or pyproj, a malformed header or CRS: no unit)
+                return reader.header.parse_crs()
+    except Exception:  # (no laspy or pyproj, a malformed header or CRS)
         return None
-    return _crs_unit(crs)
 
 
 def _crs_unit(crs) -> str | None:
