@@ -349,3 +349,35 @@ def test_real_scans_counts_below_one_are_refused():
     for bad in ("0", "-2", "x"):
         with pytest.raises(argparse.ArgumentTypeError, match=">= 1"):
             bench._at_least_one(bad)
+
+
+def test_real_scans_every_nth_point_keeps_its_truth_and_colours(tmp_path):
+    """``--every N``: the scan's every N-th point, its class, instance and colour with it."""
+    pts, cls = _write_scannet(tmp_path)
+    scan = load_scan("scannet-scene0000_00", tmp_path)
+    half = _real_scans().thinned(scan, 3)
+    np.testing.assert_array_equal(half.cloud.points, scan.cloud.points[::3])
+    np.testing.assert_array_equal(half.cloud.colors, scan.cloud.colors[::3])
+    np.testing.assert_array_equal(half.ground_truth, scan.ground_truth[::3])
+    np.testing.assert_array_equal(half.instances, scan.instances[::3])
+    assert half.cloud.n_points == len(half.ground_truth) == -(-len(pts) // 3)
+
+
+def test_real_scans_counts_the_settings_that_meet_all_three_targets(capsys):
+    """The table per kind counts a setting only where UE, recall and mIoU all meet the
+    targets against the best baseline within 10 % of k, and names the others."""
+    def row(scan, method, k, ue, recall, miou, segments=None):
+        return dict(scan=scan, method=method, k=k, segments=segments or k,
+                    undersegmentation_error=ue, boundary_recall=recall, oracle_miou=miou)
+
+    rows = [row("a", "superfacets", 100, 0.10, 0.80, 0.90),
+            row("a", "graph_segmentation", 100, 0.20, 0.81, 0.80),
+            row("b", "superfacets", 100, 0.10, 0.70, 0.90),   # recall 0.1 below: missed
+            row("b", "graph_segmentation", 100, 0.20, 0.80, 0.80),
+            row("b", "spt_partition", 100, 0.01, 0.99, 0.99, segments=150),  # (not equal k)
+            row("c", "superfacets", 100, 0.30, 0.90, 0.70),   # UE and mIoU: missed
+            row("c", "graph_segmentation", 100, 0.20, 0.80, 0.80)]
+    _real_scans()._by_kind(rows, dict.fromkeys("abc", "airborne"))
+    out = capsys.readouterr().out
+    assert "| airborne | 100 | 3 | 2/3 | 2/3 | 2/3 | 1/3 |" in out
+    assert "met in 1 of 3 settings; missed: b at 100 (recall); c at 100 (UE, mIoU)." in out
