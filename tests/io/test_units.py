@@ -70,3 +70,15 @@ def test_longitude_and_latitude_are_said_before_the_run(tmp_path, capsys):
     assert "longitude and latitude" in capsys.readouterr().err
     assert main(["segment", str(path), "-k", "20", "-o", str(out), "-q"]) == 0
     assert "longitude" not in capsys.readouterr().err
+
+
+def test_a_count_from_a_seed_resolution_is_said_in_the_files_unit(tmp_path, capsys):
+    path = _las(tmp_path / "ft.las", 2903)
+    assert main(["segment", str(path), "--seed-resolution", "4", "-o",
+                 str(tmp_path / "s.seg")]) == 0
+    out = capsys.readouterr().out
+    assert "square US survey ft / (4 US survey ft)^2" in out, out
+    path = _las(tmp_path / "none.las")
+    assert main(["segment", str(path), "--seed-resolution", "4", "-o",
+                 str(tmp_path / "s.seg")]) == 0
+    assert "square units / 4^2" in capsys.readouterr().out

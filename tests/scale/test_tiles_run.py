@@ -753,3 +753,36 @@ def test_sizes_in_the_data_s_units_give_one_run_s_count(tmp_path, capsys):
         segment_tiled(str(path), 20, seed_resolution=1.0)
     with pytest.raises(ParameterError, match="point cloud's graph"):
         segment_tiled(str(mpath), neighbor_distance=0.1)
+
+
+def test_a_scenes_count_from_a_seed_resolution_is_one_runs(tmp_path, capsys):
+    """A scan with an up direction weighs steps off its surface (``step_weight`` 4): its
+    points' sizes on that graph add up to more than the surface's area, and the tiles
+    summed them for the count (458 superpoints against one run's 362 on PDAL's crop);
+    the count now reads the area by the nearest neighbours, as one run's does."""
+    laspy = pytest.importorskip("laspy")
+    from superfacets.cli import main
+    from superfacets.scale.tiles.phases import point_sizes
+
+    rng = np.random.default_rng(8)
+    ground = np.c_[rng.random((12000, 2)) * 40.0, 0.05 * rng.standard_normal(12000)]
+    shrubs = rng.random((6000, 3)) * [40.0, 40.0, 1.5]  # (a layer of scattered vegetation)
+    pts = np.r_[ground, shrubs]
+    every = np.ones(len(pts), dtype=bool)
+    weighed, plain = (point_sizes(pts, every, 10, step).sum() for step in (4.0, 1.0))
+    assert weighed > 1.1 * plain  # (the sizes the steps' graph reads are not the area)
+    header = laspy.LasHeader(point_format=3, version="1.2")
+    header.scales, header.offsets = [0.001] * 3, [0.0] * 3
+    las = laspy.LasData(header)
+    las.x, las.y, las.z = pts.T
+    path = tmp_path / "scene.las"
+    las.write(str(path))
+    said = []
+    for tiles in ([], ["--tiles", "3"]):
+        out = tmp_path / "s.seg"
+        assert main(["segment", str(path), "--seed-resolution", "2", *tiles, "-o",
+                     str(out)]) == 0
+        said.append(next(line for line in capsys.readouterr().out.splitlines()
+                         if line.startswith("k = ")))
+        assert len(np.unique(np.loadtxt(out))) == int(said[-1].split()[2].replace(",", ""))
+    assert said[0] == said[1], said

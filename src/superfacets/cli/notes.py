@@ -7,12 +7,32 @@ from ..elements.kinds import kind_of
 from ..method.params import DEFAULTS
 from ..method.rules import SCENE_MERGE_FROM
 
-__all__ = ["count_note", "duplicates_note", "merges_said", "COST_SAID"]
+__all__ = ["count_note", "duplicates_note", "merges_said", "resolution_said", "COST_SAID"]
 
 #: What a summary adds for the merges' cost to the count (``--merge-cost``), beyond the
 #: default's.
 COST_SAID = {"scene": "; the scene's cost, its rise unweighted",
              "auto": "; by the plane's rise or Ward's cost (--merge-cost auto)"}
+
+
+def resolution_said(k: int, kind: str, resolution: float, area: float,
+                    unit: str | None = None) -> str:
+    """Where a count from ``--seed-resolution`` came from (one run's or a tiled run's): the
+    surface's area over the resolution squared, in the file's ``unit`` where it names one
+    (:func:`superfacets.io.units.length_unit`), and the floor of elements per segment where
+    it decided."""
+    import numpy as np
+
+    from ..api.sizes import MIN_ELEMENTS_PER_SEGMENT
+
+    with np.errstate(over="ignore", under="ignore", divide="ignore"):
+        capped = not np.float64(area) / np.float64(resolution) / np.float64(resolution) < \
+            k + 0.5
+    square = (f"square {unit} / ({resolution:g} {unit})^2" if unit else
+              f"square units / {resolution:g}^2")
+    return (f"k = {k:,} {kind_of(kind).segment_word} from --seed-resolution {resolution:g}: "
+            f"a surface of {area:,.4g} {square}"
+            + (f", at most one per {MIN_ELEMENTS_PER_SEGMENT} {kind}" if capped else ""))
 
 
 def merges_said(first: int, params: dict, cloud: bool = True, scene: bool = False) -> str:

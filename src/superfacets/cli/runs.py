@@ -6,8 +6,6 @@ from __future__ import annotations
 
 import sys
 
-import numpy as np
-
 from ..elements.kinds import kind_of
 from ..method.params import DEFAULTS
 from .options import check_output, named_after
@@ -33,12 +31,13 @@ def sizes_of(args, data, kind: str, kwargs: dict) -> tuple[dict, str]:
     """The count and the neighbour radius from the sizes in the data's units, or the
     count that grows with the input where none is given; and a line saying which."""
     from ..api.sizes import (
-        MIN_ELEMENTS_PER_SEGMENT,
         POINTS_PER_SEGMENT,
         count_for_resolution,
         default_count,
         diagonal_fraction,
     )
+    from ..io.units import length_unit
+    from .notes import resolution_said
 
     if args.neighbor_distance is not None:
         if kind != "points":
@@ -53,12 +52,7 @@ def sizes_of(args, data, kind: str, kwargs: dict) -> tuple[dict, str]:
         res = args.seed_resolution
         k, area = count_for_resolution(data, res, kind, **options)
         args.n_segments = k
-        with np.errstate(over="ignore", under="ignore", divide="ignore"):
-            capped = not np.float64(area) / np.float64(res) / np.float64(res) < k + 0.5
-        return kwargs, (f"k = {k:,} {segs} from --seed-resolution {res:g}: a surface of "
-                        f"{area:,.4g} square units / {res:g}^2" + (
-                            f", at most one per {MIN_ELEMENTS_PER_SEGMENT} {kind}"
-                            if capped else ""))
+        return kwargs, resolution_said(k, kind, res, area, length_unit(args.mesh))
     if args.n_segments is None and args.radius is None:
         k = default_count(data, kind, DEFAULTS.n_segments)
         args.n_segments = k

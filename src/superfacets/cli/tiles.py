@@ -10,7 +10,7 @@ import numpy as np
 
 from ..elements.density import AUTO_DENSITY, AUTO_SPREAD
 from ..elements.kinds import kind_of
-from .notes import fields_said, merges_said, records_said, weights_said
+from .notes import fields_said, merges_said, records_said, resolution_said, weights_said
 from .options import (
     add_engine_options,
     check_drawings,
@@ -289,19 +289,16 @@ def _tiled_run(args, graph: bool) -> tuple:
 def _count_said(args, result, k) -> str:
     """Where the count of a tiled run came from, as one run's summary says it: the seed
     resolution and the area the tiles measured, or the default that grows with a cloud."""
-    from ..api.sizes import MIN_ELEMENTS_PER_SEGMENT, POINTS_PER_SEGMENT, resolution_count
+    from ..api.sizes import POINTS_PER_SEGMENT, resolution_count
+    from ..io.units import length_unit
     from ..method.params import DEFAULTS
 
     segs = kind_of(result.params["elements"]).segment_word
     res = args.seed_resolution
     if res is not None:  # (the count asked: the input's pieces may have made more)
-        kind = result.params["elements"]
         n = resolution_count(result.area, res, int(result.labels.size))
-        with np.errstate(over="ignore", under="ignore", divide="ignore"):
-            capped = not np.float64(result.area) / np.float64(res) / np.float64(res) < n + 0.5
-        return (f"k = {n:,} {segs} from --seed-resolution {res:g}: a surface of "
-                f"{result.area:,.4g} square units / {res:g}^2" + (
-                    f", at most one per {MIN_ELEMENTS_PER_SEGMENT} {kind}" if capped else ""))
+        return resolution_said(n, result.params["elements"], res, result.area,
+                               length_unit(args.mesh))
     if args.n_segments is None and args.radius is None and k != DEFAULTS.n_segments:
         return (f"k = {k:,} {segs} by default (one per {POINTS_PER_SEGMENT:,} points; -k or "
                 "--seed-resolution to choose)")

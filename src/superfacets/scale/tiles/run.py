@@ -606,17 +606,22 @@ def _sized(run, layout, read: tuple, plan: tuple, diagonal: float, halo: float, 
         if sample_area:  # (each point of the even sample sized by its sparser neighbours)
             rough = superfacet_size(params, sample_area, diagonal, n, kind)[1]
             wide = GRAPH_SLACK * halo_distance(halo, window, rough)
+    asked = "seed_resolution" in units
     outs = run("areas", 0.25 * layout.min_side() if wide is None else wide,
-               lambda t: dict(graph_area=wide is not None and graphs is not None))
+               lambda t: dict(graph_area=wide is not None and graphs is not None,
+                              surface_area=asked))
     area = sum(o.get("area", 0.0) for o in outs)
     if area <= 0:
         raise ParameterError("the points are too few or too sparse to size superpoints by "
                              "n_segments; give radius instead")
-    if "seed_resolution" in units:  # (the count from the area measured, not estimated)
+    if asked:  # (the count from the area measured, not estimated; with steps weighed, the
+        # surface's area by the points' nearest neighbours, as one run's count reads it)
+        surface = sum(o.get("surface_area", o.get("area", 0.0)) for o in outs)
         plan = _merge_plan(replace(params, n_segments=resolution_count(
-            area, units["seed_resolution"], n)), reader, survey, 1)
+            surface, units["seed_resolution"], n)), reader, survey, 1)
         params = plan[2]
-    r = superfacet_size(params, area, diagonal, n, kind)[1]
+    r = superfacet_size(params, area, diagonal, n, kind)[1]  # (the run's graph's sizes)
+    area = surface if asked else area  # (the result's: the area its count read)
     margin = halo_distance(halo, window, r)
     spread = _spread([o["size_moments"] for o in outs if "size_moments" in o])
     if wide is not None and margin <= wide:

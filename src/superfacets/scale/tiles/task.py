@@ -130,9 +130,7 @@ def _phase(task: dict, out: dict) -> None:
             graph.__dict__.setdefault("weights_kept", {})
     p, r, d = task["params"], task["r"], task["diagonal"]
     if task["phase"] == "areas":
-        sizes = (core_sizes(inp, core, p.n_neighbors, _step(p)) if graph_area
-                 else point_sizes(pos, core, p.n_neighbors, _step(p)))
-        out["area"], out["size_moments"] = float(sizes.sum()), size_moments(sizes)
+        _areas(task, inp, pos, core, graph_area, out)
     elif task["phase"] == "connect":
         given = task["labels"]
         if isinstance(given, str):  # the stitched labels, in a file every worker reads
@@ -244,6 +242,19 @@ def _write_owed(inp) -> None:
     owed = inp.__dict__.pop("_owed_writes", {}) if inp is not None else {}
     for write, *args in owed.values():
         write(*args)
+
+
+def _areas(task: dict, inp, pos: np.ndarray, core: np.ndarray, graph_area: bool,
+           out: dict) -> None:
+    """The areas phase of a tile: its core points' sizes on the run's graph, summed, and
+    their moments; where a seed resolution asks for the count and steps are weighed, also
+    the surface's area as one run measures it (by each point's nearest neighbours)."""
+    p = task["params"]
+    sizes = (core_sizes(inp, core, p.n_neighbors, _step(p)) if graph_area
+             else point_sizes(pos, core, p.n_neighbors, _step(p)))
+    out["area"], out["size_moments"] = float(sizes.sum()), size_moments(sizes)
+    if task.get("surface_area") and _step(p) != 1:
+        out["surface_area"] = float(point_sizes(pos, core, p.n_neighbors).sum())
 
 
 def _step(params) -> float:
