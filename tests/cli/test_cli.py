@@ -653,3 +653,26 @@ def test_the_summary_says_a_scene_merges_from_twenty_times_k(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "merged from 500 finer ones, 20 times -k as on a scene (the input's up direction) " \
         "where its points allow," in out, out
+
+
+def test_a_flat_cloud_that_names_no_up_is_pointed_to_seen_from(tmp_path, capsys):
+    """A street or room scan as XYZ/NPY (no up direction) is segmented as an object; the
+    note names the axis its box is thinnest along and --seen-from, which makes it a scan
+    (the summary then says a scene's merges); an object-like cloud gets no note."""
+    rng = np.random.default_rng(4)
+    street = rng.random((6000, 3)) * [60.0, 40.0, 4.0]
+    ball = rng.standard_normal((6000, 3))
+    ball /= np.linalg.norm(ball, axis=1)[:, None]
+    for name, pts, said in (("street.npy", street, "--seen-from z segments it as a scan"),
+                            ("wall.npy", street[:, [0, 2, 1]], "--seen-from y segments"),
+                            ("ball.npy", ball, None)):
+        path = tmp_path / name
+        np.save(path, pts)
+        assert main(["segment", str(path), "-k", "30", "-o", str(tmp_path / "s.seg")]) == 0
+        out, err = capsys.readouterr()
+        assert (said in err) if said else "--seen-from" not in err, err
+        if said and "z" in said:
+            assert main(["segment", str(path), "-k", "30", "--seen-from", "z", "-o",
+                         str(tmp_path / "s.seg")]) == 0
+            out, err = capsys.readouterr()
+            assert "as on a scene" in out and "--seen-from" not in err

@@ -7,7 +7,8 @@ from ..elements.kinds import kind_of
 from ..method.params import DEFAULTS
 from ..method.rules import SCENE_MERGE_FROM
 
-__all__ = ["count_note", "duplicates_note", "merges_said", "resolution_said", "COST_SAID"]
+__all__ = ["count_note", "duplicates_note", "merges_said", "resolution_said", "scene_note",
+           "COST_SAID"]
 
 #: What a summary adds for the merges' cost to the count (``--merge-cost``), beyond the
 #: default's.
@@ -132,6 +133,26 @@ STARTS_SAID = {"flood": "its centers about a radius apart over the surface (the 
                        "crosses"}
 #: How far from k a run with such a start ends before :func:`count_note` says why.
 START_SLACK = 0.05
+
+
+def scene_note(data, kind: str, name: str) -> str | None:
+    """A cloud with no up direction is segmented as an object; where its box is thinnest
+    along one axis by half (a street, a room, terrain in a format that names no up: XYZ,
+    NPY, PLY), the option that segments it as a scan, as a LAS file is."""
+    import numpy as np
+
+    if kind != "points" or getattr(data, "up", None) is not None or not data.n_points:
+        return None
+    points = np.asarray(data.points)[np.asarray(data.valid)]
+    extent = points.max(axis=0) - points.min(axis=0)
+    order = np.argsort(extent, kind="stable")
+    if not extent[order[1]] > 0 or extent[order[0]] > 0.5 * extent[order[1]]:
+        return None
+    axis = "xyz"[order[0]]
+    return (f"{name} names no up direction, so its superpoints are an object's; if it is a "
+            f"scan seen along {axis} (its box is thinnest along {axis}: a street, a room, "
+            f"terrain), --seen-from {axis} segments it as a scan, as a LAS file is (neighbours "
+            f"along its surfaces, merged from {SCENE_MERGE_FROM} times -k)")
 
 
 def count_note(args, data, result, kind: str) -> str | None:

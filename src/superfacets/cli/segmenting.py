@@ -11,7 +11,15 @@ import numpy as np
 from ..checks import counted
 from ..elements.kinds import kind_of
 from ..method.params import DEFAULTS
-from .notes import count_note, duplicates_note, fields_said, merges_said, records_said, weights_said
+from .notes import (
+    count_note,
+    duplicates_note,
+    fields_said,
+    merges_said,
+    records_said,
+    scene_note,
+    weights_said,
+)
 from .options import (
     add_adaptive_options,
     add_camera_options,
@@ -406,7 +414,8 @@ def _write_and_say(args, data, result, kind, outputs, elapsed, size_note: str = 
     _say_what_was_written(seg_out, outputs["colored"], outputs["picture"], outputs["html"],
                           report, up, outputs["graph"], _labels_what(args, kind, data), kind,
                           drawn=_drawn_share(data, kind))
-    for note in (duplicates_note(args, data, kind), count_note(args, data, result, kind)):
+    for note in (duplicates_note(args, data, kind), count_note(args, data, result, kind),
+                 scene_note(data, kind, Path(args.mesh).name)):
         if note:
             print(f"note: {note}", file=sys.stderr)
 
