@@ -77,7 +77,7 @@ def test_a_count_from_a_seed_resolution_is_said_in_the_files_unit(tmp_path, caps
     assert main(["segment", str(path), "--seed-resolution", "4", "-o",
                  str(tmp_path / "s.seg")]) == 0
     out = capsys.readouterr().out
-    assert "square US survey ft / (4 US survey ft)^2" in out, out
+    assert "US survey ft^2 / (4 US survey ft)^2" in out, out
     path = _las(tmp_path / "none.las")
     assert main(["segment", str(path), "--seed-resolution", "4", "-o",
                  str(tmp_path / "s.seg")]) == 0

@@ -29,7 +29,7 @@ def resolution_said(k: int, kind: str, resolution: float, area: float,
     with np.errstate(over="ignore", under="ignore", divide="ignore"):
         capped = not np.float64(area) / np.float64(resolution) / np.float64(resolution) < \
             k + 0.5
-    square = (f"square {unit} / ({resolution:g} {unit})^2" if unit else
+    square = (f"{unit}^2 / ({resolution:g} {unit})^2" if unit else
               f"square units / {resolution:g}^2")
     return (f"k = {k:,} {kind_of(kind).segment_word} from --seed-resolution {resolution:g}: "
             f"a surface of {area:,.4g} {square}"
