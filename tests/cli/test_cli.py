@@ -676,3 +676,18 @@ def test_a_flat_cloud_that_names_no_up_is_pointed_to_seen_from(tmp_path, capsys)
                          str(tmp_path / "s.seg")]) == 0
             out, err = capsys.readouterr()
             assert "as on a scene" in out and "--seen-from" not in err
+
+
+def test_panel_and_experiment_take_counts_and_alphas_with_commas_too():
+    """``-k 20,50 100`` is ``-k 20 50 100`` (``--levels`` and ``--param`` take commas)."""
+    from superfacets.cli import build_parser
+
+    parser = build_parser()
+    args = parser.parse_args(["panel", "m.off", "-o", "p.png", "-k", "20,50", "100",
+                              "--alpha", "0,1e3"])
+    assert args.n_segments == [20, 50, 100] and args.alpha == [0.0, 1000.0]
+    args = parser.parse_args(["experiment", "-k", "50,150", "--alpha", "0", "200"])
+    assert args.n_segments == [50, 150] and args.alpha == [0.0, 200.0]
+    assert parser.parse_args(["panel", "m.off", "-o", "p.png"]).n_segments == [150]
+    with pytest.raises(SystemExit):
+        parser.parse_args(["panel", "m.off", "-o", "p.png", "-k", "20,x"])

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from ..method.params import DEFAULT_N_SEGMENTS
 from .options import add_engine_options, float_arg, int_arg
+from .parameters import Joined, float_list_arg, int_list_arg
 
 __all__ = ["add_parsers"]
 
@@ -31,10 +32,12 @@ def add_parsers(sub) -> None:
     x.add_argument("-m", "--method", action="append", default=None, metavar="NAME",
                    help="method from the registry, repeatable (default: superfacets; "
                         "see --list-methods)")
-    x.add_argument("-k", "--n-segments", type=int_arg, nargs="+", default=None, metavar="K",
+    x.add_argument("-k", "--n-segments", type=int_list_arg, nargs="+", action=Joined,
+                   default=None, metavar="K",
                    help="numbers of superfacets (default: "
                         f"{' '.join(map(str, DEFAULT_N_SEGMENTS))})")
-    x.add_argument("--alpha", type=float_arg, nargs="+", default=None, metavar="A",
+    x.add_argument("--alpha", type=float_list_arg, nargs="+", action=Joined,
+                   default=None, metavar="A",
                    help="alpha values, for the methods that have alpha (default: each "
                         "method's sweep; superfacets: 0 100 200 500 1000)")
     x.add_argument("--param", action="append", default=[], metavar="NAME=V1,V2",

@@ -157,6 +157,25 @@ def float_arg(text: str) -> float:
         raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
 
 
+def int_list_arg(text: str) -> list[int]:
+    """argparse type of a ``nargs="+"`` option with :class:`Joined`: integers, also
+    comma-separated (``-k 100,300`` as ``-k 100 300``: ``--levels`` and ``--param`` take
+    commas)."""
+    return [int_arg(t) for t in text.split(",") if t.strip()] or [int_arg(text)]
+
+
+def float_list_arg(text: str) -> list[float]:
+    """As :func:`int_list_arg`, numbers."""
+    return [float_arg(t) for t in text.split(",") if t.strip()] or [float_arg(text)]
+
+
+class Joined(argparse.Action):
+    """A ``nargs="+"`` option whose values are lists (:func:`int_list_arg`): one list."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        setattr(namespace, self.dest, [v for value in values for v in value])
+
+
 def auto_float_arg(text: str) -> float | None:
     """argparse type: a number, or ``auto`` (None: the method decides)."""
     return None if text.strip().lower() == "auto" else float_arg(text)

@@ -17,7 +17,6 @@ from .options import (
     add_method_options,
     add_scan_options,
     check_output,
-    float_arg,
     fmt_value,
     int_arg,
     labels_for,
@@ -27,6 +26,7 @@ from .options import (
     shows_stages,
     up_of,
 )
+from .parameters import Joined, float_list_arg, int_list_arg
 
 __all__ = ["add_parsers"]
 
@@ -103,9 +103,11 @@ def add_parsers(sub) -> None:
     pn.add_argument("-o", "--output", metavar="OUT.png", required=True, help="PNG to write")
     pn.add_argument("-m", "--method", nargs="+", default=["superfacets"], metavar="NAME",
                     help="registered methods (default: superfacets)")
-    pn.add_argument("-k", "--n-segments", type=int_arg, nargs="+", default=[150], metavar="K",
+    pn.add_argument("-k", "--n-segments", type=int_list_arg, nargs="+", action=Joined,
+                    default=[150], metavar="K",
                     help="numbers of superfacets (default: 150)")
-    pn.add_argument("--alpha", type=float_arg, nargs="+", default=None, metavar="A",
+    pn.add_argument("--alpha", type=float_list_arg, nargs="+", action=Joined,
+                    default=None, metavar="A",
                     help="alpha values (default: each method's default)")
     pn.add_argument("--param", action="append", default=[], metavar="NAME=V1,V2",
                     help="values of a method parameter, for each method that has it "
