@@ -632,3 +632,29 @@ def test_a_graph_per_input_as_segment_writes_it(tmp_path, capsys):
     assert main(["batch", str(folder), "-o", str(out), "-j", "1", "-k", "24",
                  "--levels", "8,3", "--labels", "laz"]) == 2  # (other outputs: refused)
     assert not list(tmp_path.glob("o[23]"))
+
+
+def test_batch_seen_from_segments_clouds_as_scans(tmp_path):
+    """``batch --seen-from z``: each cloud as ``segment --seen-from z`` segments it (the
+    same labels: a scan's), a mesh as it is; an axis that is none refused before any work."""
+    from superfacets import PointCloud
+    from superfacets.scale.runner.batch import run_batch
+
+    rng = np.random.default_rng(6)
+    street = rng.random((4000, 3)) * [60.0, 40.0, 3.0]
+    np.save(tmp_path / "street.npy", street)
+    ball = trimesh.creation.icosphere(subdivisions=3)
+    ball.export(tmp_path / "ball.off")
+    inputs = [str(tmp_path / "street.npy"), str(tmp_path / "ball.off")]
+    s = run_batch(inputs, tmp_path / "scan", 40, seen_from="z", workers=1, progress=False)
+    assert s.ok == 2
+    scan = segment(PointCloud(street, up="z"), 40).labels
+    assert np.array_equal(np.loadtxt(tmp_path / "scan" / "street.seg"), scan)
+    assert not np.array_equal(scan, segment(PointCloud(street), 40).labels)
+    mesh = read_mesh(tmp_path / "ball.off")
+    assert np.array_equal(read_labels(tmp_path / "scan" / "ball.seg"), segment(mesh, 40).labels)
+    assert main(["batch", *inputs, "-o", str(tmp_path / "cli"), "-k", "40", "--seen-from",
+                 "z", "-j", "1", "-q"]) == 0
+    assert np.array_equal(np.loadtxt(tmp_path / "cli" / "street.seg"), scan)
+    with pytest.raises(ParameterError, match="seen_from"):
+        run_batch(inputs, tmp_path / "bad", 40, seen_from="up", workers=1, progress=False)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import sys
 
+from ..checks import AXES
 from .options import (
     add_adaptive_options,
     add_camera_options,
@@ -67,6 +68,11 @@ def add_parsers(sub) -> None:
     b.add_argument("--html", action="store_true",
                    help="also write NAME.html per input, an interactive page")
     add_camera_options(b, "")  # --view, --up of --picture and --html
+    b.add_argument("--seen-from", choices=tuple(AXES), default=None, metavar="AXIS",
+                   help="point clouds: the side they were scanned from (x, y, z, -x, -y, "
+                        "-z), as segment --seen-from: each cloud segmented as a scan with "
+                        "that up direction (default: a LAS file's z, else none); meshes as "
+                        "they are")
     b.add_argument("--graph", action="store_true",
                    help="also write NAME.npz per input: the superfacet (superpoint) graph in "
                         "PyTorch Geometric's layout, as segment --graph writes it (with "
@@ -105,7 +111,8 @@ def cmd_batch(args) -> int:
                   per_object=args.per_object, adaptive=args.adaptive,
                   extent_weight=args.extent_weight, levels=args.levels,
                   seed_resolution=args.seed_resolution,
-                  neighbor_distance=args.neighbor_distance, workers=args.workers,
+                  neighbor_distance=args.neighbor_distance, seen_from=args.seen_from,
+                  workers=args.workers,
                   scheduler=args.scheduler,
                   memory_limit=args.memory_limit, retry_failed=args.retry_failed,
                   progress=not args.quiet and (sys.stderr.isatty() if args.progress is None

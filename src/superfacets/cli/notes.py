@@ -137,18 +137,13 @@ START_SLACK = 0.05
 
 def scene_note(data, kind: str, name: str) -> str | None:
     """A cloud with no up direction is segmented as an object; where its box is thinnest
-    along one axis by half (a street, a room, terrain in a format that names no up: XYZ,
-    NPY, PLY), the option that segments it as a scan, as a LAS file is."""
-    import numpy as np
+    along one axis by half (:func:`superfacets.io.orientation.thinnest_axis`), the option
+    that segments it as a scan, as a LAS file is."""
+    from ..io.orientation import thinnest_axis
 
-    if kind != "points" or getattr(data, "up", None) is not None or not data.n_points:
+    axis = thinnest_axis(data) if kind == "points" else None
+    if axis is None:
         return None
-    points = np.asarray(data.points)[np.asarray(data.valid)]
-    extent = points.max(axis=0) - points.min(axis=0)
-    order = np.argsort(extent, kind="stable")
-    if not extent[order[1]] > 0 or extent[order[0]] > 0.5 * extent[order[1]]:
-        return None
-    axis = "xyz"[order[0]]
     return (f"{name} names no up direction, so its superpoints are an object's; if it is a "
             f"scan seen along {axis} (its box is thinnest along {axis}: a street, a room, "
             f"terrain), --seen-from {axis} segments it as a scan, as a LAS file is (neighbours "

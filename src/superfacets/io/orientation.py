@@ -17,7 +17,7 @@ import numpy as np
 from .files import split_suffix
 
 __all__ = ["FORMAT_UP", "up_axis", "sensor_up", "sensor_view", "default_view", "is_map",
-           "image_up"]
+           "image_up", "thinnest_axis"]
 
 #: A scan whose height is at most this fraction of its smaller horizontal side is a map
 #: (an airborne or street tile): its pictures look straight down, north up.
@@ -267,3 +267,41 @@ def default_view(data):
     if sensor is not None:
         return sensor
     return "top" if is_map(data) else None
+
+
+def thinnest_axis(data) -> str | None:
+    """The axis a point cloud with no up direction is thinnest along, as a map's height is
+    (:data:`MAP_HEIGHT` of the next side: a street, a room or terrain in a format that names
+    no up: XYZ, NPY, PLY), where it has one: ``--seen-from`` that axis segments it as a scan.
+
+    Parameters
+    ----------
+    data : PointCloud or Mesh
+
+    Returns
+    -------
+    str or None
+        ``'x'``, ``'y'`` or ``'z'``: its valid points' box is at most :data:`MAP_HEIGHT` as
+        deep along it as along the next; None for a mesh, a cloud with an up direction, or a box not
+        that flat.
+
+    Raises
+    ------
+    None
+
+    Examples
+    --------
+    >>> from superfacets import PointCloud
+    >>> street = np.random.default_rng(0).random((500, 3)) * [60.0, 40.0, 4.0]
+    >>> thinnest_axis(PointCloud(street)), thinnest_axis(PointCloud(street, up="z"))
+    ('z', None)
+    """
+    if not hasattr(data, "valid") or getattr(data, "up", None) is not None or \
+            not data.n_points:
+        return None
+    points = np.asarray(data.points)[np.asarray(data.valid)]
+    extent = points.max(axis=0) - points.min(axis=0)
+    order = np.argsort(extent, kind="stable")
+    if not extent[order[1]] > 0 or extent[order[0]] > MAP_HEIGHT * extent[order[1]]:
+        return None
+    return "xyz"[order[0]]

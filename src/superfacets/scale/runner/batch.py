@@ -25,7 +25,7 @@ from __future__ import annotations
 import contextlib
 import json
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from datetime import datetime, timezone
 from pathlib import Path
 from typing import Sequence
@@ -37,10 +37,12 @@ from ...api.levels import adaptive_segment
 from ...api.scenes import segment_objects
 from ...api.segmentation import segment
 from ...api.sizes import count_for_resolution, default_count, diagonal_fraction
+from ...checks import AXES
 from ...elements.builders import kind_for
 from ...elements.kinds import kind_of
 from ...errors import ParameterError
 from ...graph.hierarchy import wanted_levels
+from ...inputs.cloud import PointCloud
 from ...io import read_input
 from ...io.clouds import is_cloud_file
 from ...io.files import split_suffix
@@ -151,6 +153,8 @@ def _segment_and_write(task: dict, label_rel: str) -> dict:
     if why is not None:
         raise ParameterError(f"{task['input']}: {why}")
     data = read_input(task["input"])
+    if outs.get("seen_from") and isinstance(data, PointCloud):  # (meshes as they are)
+        data = replace(data, up=outs["seen_from"], viewpoint=None)
     kind = kind_for(data, opts.get("elements"))
     if kind_of(kind).dim == 3 and outs["colored"]:
         raise ParameterError("tetrahedral meshes: batch writes their labels, graphs, pictures "
@@ -261,9 +265,10 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
               view=None, per_object: bool = False, adaptive: int | None = None,
               extent_weight: float | None = None, levels: Sequence[int] | None = None,
               seed_resolution: float | None = None, neighbor_distance: float | None = None,
-              workers: int | None = None, scheduler: str | None = None,
-              memory_limit="auto", retry_failed: bool = False, progress: bool = True,
-              n_threads: int = 1, dask: bool | None = None, **options) -> BatchSummary:
+              seen_from: str | None = None, workers: int | None = None,
+              scheduler: str | None = None, memory_limit="auto", retry_failed: bool = False,
+              progress: bool = True, n_threads: int = 1, dask: bool | None = None,
+              **options) -> BatchSummary:
     """Segment every input with the same options; resumable; on this machine or on Dask.
 
     Parameters
@@ -322,6 +327,11 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         square of the size, :func:`superfacets.api.sizes.count_for_resolution`; not with
         ``n_segments`` or ``radius``) and a cloud's farthest neighbour (not with
         ``neighbor_radius``; a mesh fails). Each ``> 0``.
+    seen_from : {'x', 'y', 'z', '-x', '-y', '-z'}, optional
+        Point clouds: the side they were scanned from, as ``segment --seen-from`` reads
+        it: each cloud's up direction (segmented as a scan: neighbours along its
+        surfaces, merged from 20 times ``k``; a LAS file's own is z) and its normals turned
+        towards it; meshes as they are.
     workers : int, optional
         Local worker processes (default: one per core); 1 runs in this process.
     scheduler : str, optional
@@ -418,6 +428,8 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         outputs["graph"] = True
     if sizes:  # (likewise: each input's own count and neighbours, read by its task)
         outputs["sizes"] = sizes
+    if seen_from is not None:  # (likewise)
+        outputs["seen_from"] = check_choice("seen_from", seen_from, tuple(AXES))
     recorded = {"segment": _jsonable({k: v for k, v in resolved.items()  # defaults filled
                                       if k not in ("n_threads", "progress")}),
                 "outputs": outputs, "per_object": bool(per_object)}
