@@ -691,3 +691,33 @@ def test_panel_and_experiment_take_counts_and_alphas_with_commas_too():
     assert parser.parse_args(["panel", "m.off", "-o", "p.png"]).n_segments == [150]
     with pytest.raises(SystemExit):
         parser.parse_args(["panel", "m.off", "-o", "p.png", "-k", "20,x"])
+
+
+def test_baseline_and_panel_read_a_scans_side_as_segment_does(tmp_path, capsys):
+    """``baseline`` and ``panel`` take ``--seen-from`` (refused before): a cloud with no up
+    direction run as the scan it is, the same labels as the registry's method on the cloud
+    given that up; a mesh is refused, as ``segment`` refuses it."""
+    from superfacets import PointCloud
+    from superfacets.evaluation.methods import get_method
+
+    rng = np.random.default_rng(9)
+    xy = rng.random((3000, 2)) * [30.0, 20.0]
+    street = np.c_[xy, 0.5 * np.sin(xy[:, 0] / 3)]
+    path = tmp_path / "street.npy"
+    np.save(path, street)
+    out = tmp_path / "b.seg"
+    assert main(["baseline", str(path), "-m", "graph_segmentation", "-k", "40",
+                 "--seen-from", "-z", "-o", str(out), "-q"]) == 0
+    method = get_method("graph_segmentation")
+    want = method.run(PointCloud(street, up="-z", viewpoint=None), 40, cache={}, seed=0,
+                      elements="points", **method.resolve({})).labels
+    assert np.array_equal(np.loadtxt(out), want)
+    png = tmp_path / "p.png"
+    pytest.importorskip("pyvista")
+    assert main(["panel", str(path), "-k", "20", "40", "--seen-from", "z", "-o", str(png)]) == 0
+    assert "2 panels, up axis z" in capsys.readouterr().out and png.stat().st_size > 0
+    ball = tmp_path / "ball.off"
+    trimesh.creation.icosphere(subdivisions=2).export(ball)
+    assert main(["baseline", str(ball), "-m", "vsa", "-k", "8", "--seen-from", "z", "-o",
+                 str(out)]) == 2
+    assert "orient point clouds; the input is a mesh" in capsys.readouterr().err

@@ -100,6 +100,7 @@ def add_parsers(sub) -> None:
                     "(e.g. --alpha 0 200 1000 -k 150 is the paper's Fig. 2), or the given "
                     "label files (--labels).")
     pn.add_argument("mesh", metavar="INPUT", help="input mesh, point-cloud or volume file")
+    add_scan_options(pn)  # (a scan's up and its normals' side, as segment reads them)
     pn.add_argument("-o", "--output", metavar="OUT.png", required=True, help="PNG to write")
     pn.add_argument("-m", "--method", nargs="+", default=["superfacets"], metavar="NAME",
                     help="registered methods (default: superfacets)")

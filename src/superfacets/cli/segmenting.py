@@ -171,6 +171,7 @@ def _add_baseline(sub) -> None:
     bl.add_argument("--html", metavar="OUT.html", default=None,
                     help="also write an interactive page (open in a browser)")
     add_camera_options(bl, "")  # --view, --up of --picture and --html
+    add_scan_options(bl)  # (a scan's up and its normals' side, as segment reads them)
     bl.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     bl.set_defaults(func=cmd_baseline)
 
@@ -490,7 +491,7 @@ def cmd_baseline(args) -> int:
     ply_out = check_output(args.colored_mesh, (".ply", ".glb", ".obj"), "the coloured mesh",
                            inputs=(args.mesh,))
     drawings = check_drawings(args, (seg_out, ply_out))
-    data = read_usable(args.mesh, clouds=True)
+    data = scan_cloud(read_usable(args.mesh, clouds=True), args)
     kind = _baseline_kind(args, data, method, ply_out)
     t0 = time.perf_counter()
     show = not args.quiet and sys.stderr.isatty()
