@@ -158,6 +158,8 @@ def up_of(args, data, path=None) -> tuple[str, str]:
     format's (:func:`superfacets.io.orientation.up_axis`), else y."""
     if getattr(args, "up", None):
         return args.up, "--up"
+    if getattr(args, "seen_from", None) and hasattr(data, "valid"):  # (a cloud's, given)
+        return args.seen_from, "--seen-from"
     from ..io.orientation import up_axis
 
     return up_axis(data, path if path is not None else getattr(args, "mesh", None))
