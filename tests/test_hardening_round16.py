@@ -9,6 +9,8 @@ with its test.
 - A label file whose first line was not a number had that line taken as a column's name
   without a word, so a file of hexadecimal labels said "label 1 of 319, '0x1f'" for the
   second line of 320; the message now says the first line was read as the name.
+- A label beyond 64 bits (``99999999999999999999``) was "not one whole number"; it is one,
+  too large to keep: the message says so.
 - ``--levels`` above ``-k`` said the levels "are coarser than" the count (they were finer:
   the sentence stated the rule as if it held); one check and one message in the API, the
   tiled run, ``segment`` and ``batch``.
@@ -79,6 +81,16 @@ def test_a_first_line_read_as_a_column_name_is_said(tmp_path):
         read_labels(named)
     named.write_text("label\n" + "1\n" * 4)
     assert read_labels(named).tolist() == [1] * 4
+
+
+def test_a_label_too_large_to_keep_is_said_so(tmp_path):
+    path = tmp_path / "big.seg"
+    for value, said in (("99999999999999999999", "is beyond 2\\*\\*53"),
+                        ("1e17", "is beyond 2\\*\\*53"), ("1.5", "is not one whole number"),
+                        ("nan", "is not one whole number"), ("inf", "is not one whole number")):
+        path.write_text(f"1\n{value}\n2\n")
+        with pytest.raises(MeshFormatError, match=f"label 2 of 3, '{value}', {said}"):
+            read_labels(path)
 
 
 def test_levels_above_the_count_are_refused_in_one_sentence_everywhere(tmp_path, capsys):

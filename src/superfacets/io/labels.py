@@ -291,9 +291,12 @@ def _text_labels(lines: list, path: Path) -> np.ndarray:
         labels = _whole_numbers(lines)  # (numpy.savetxt's default: 1.000000000000e+00)
     if labels is None or labels.ndim != 1:
         at = next((i for i, line in enumerate(lines) if not _is_whole(line)), 0)
+        big = _is_number(lines[at]) and np.isfinite(float(lines[at])) and \
+            float(lines[at]) == round(float(lines[at]))
+        what = ("is beyond 2**53, the largest label kept exactly" if big else
+                "is not one whole number")
         raise MeshFormatError(f"{path}: malformed label file: label {at + 1:,} of "
-                              f"{len(lines):,}{header}, {lines[at][:40]!r}, is not one whole "
-                              "number")
+                              f"{len(lines):,}{header}, {lines[at][:40]!r}, {what}")
     return labels
 
 
