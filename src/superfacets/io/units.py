@@ -78,12 +78,8 @@ def geographic_note(path) -> str:
     >>> geographic_note("scan.ply")
     ''
     """
-    crs = _las_crs(path)
-    if crs is None:
-        return ""
-    if getattr(crs, "is_compound", False) and crs.sub_crs_list:
-        crs = crs.sub_crs_list[0]
-    if not crs.is_geographic:
+    crs = _horizontal(_las_crs(path))
+    if crs is None or not crs.is_geographic:
         return ""
     return (f"{Path(path).name}: its coordinates are longitude and latitude ({crs.name}, "
             "degrees): the superpoints' distances add degrees to heights; reproject it to a "
@@ -113,11 +109,16 @@ def _las_crs(path):
 def _crs_unit(crs) -> str | None:
     """The horizontal unit of a pyproj CRS (its first sub-system's where compound): a
     symbol or a name; None for no system, or a geographic one."""
-    if crs is None:
-        return None
-    if getattr(crs, "is_compound", False) and crs.sub_crs_list:
-        crs = crs.sub_crs_list[0]
-    if not crs.is_projected or not crs.axis_info:
+    crs = _horizontal(crs)
+    if crs is None or not crs.is_projected or not crs.axis_info:
         return None
     name = crs.axis_info[0].unit_name
     return UNIT_SYMBOLS.get(name, name) if name else None
+
+
+def _horizontal(crs):
+    """A pyproj CRS's horizontal system: a compound one's first (the vertical one follows);
+    None for None."""
+    if crs is not None and getattr(crs, "is_compound", False) and crs.sub_crs_list:
+        return crs.sub_crs_list[0]
+    return crs
