@@ -309,7 +309,9 @@ def check_output(path: str | None, suffixes: tuple[str, ...], what: str,
     out = Path(path)
     parent = out.parent if str(out.parent) else Path(".")
     if not parent.is_dir():
-        raise FileNotFoundError(f"{out}: output folder {parent} does not exist")
+        from ..io.files import not_a_folder
+
+        raise FileNotFoundError(f"{out}: output folder {parent} {not_a_folder(parent)}")
     if out.is_dir():
         raise IsADirectoryError(f"{out}: is a directory")
     if suffixes and not any(out.name.lower().endswith(s) for s in suffixes):

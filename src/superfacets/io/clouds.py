@@ -48,7 +48,7 @@ from ..errors import MeshFormatError
 from ..inputs.rgb import unit_colors
 from .columns import read_columns
 from .files import read_bytes, split_suffix, user_path
-from .ply import COLOR_PROPERTIES, ply_colors, read_ply_scalars
+from .ply import COLOR_PROPERTIES, ply_colors, ply_scalars, read_ply_scalars
 
 __all__ = ["read_cloud", "scene_file", "CLOUD_FORMATS", "is_cloud_file", "check_laz", "check_las",
            "e57_counts", "scene_assets", "SCENE_ASSETS", "SCENE_UP"]
@@ -349,12 +349,11 @@ def _read_ply(data: bytes, path: Path) -> dict:
             raise MeshFormatError(f"{path}: the vertex element has no {', '.join(missing)} "
                                   f"property (it has: {', '.join(names)})")
         with np.errstate(invalid="ignore"):  # a signalling NaN: the rows check names it
-            pts = np.stack([np.asarray(vert[named[c]], dtype=np.float64) for c in "xyz"],
-                           axis=1)
+            pts = np.stack([ply_scalars(vert, named[c], path) for c in "xyz"], axis=1)
             nrm = None
             if all(c in named for c in ("nx", "ny", "nz")):
-                nrm = np.stack([np.asarray(vert[named[c]], dtype=np.float64)
-                                for c in ("nx", "ny", "nz")], axis=1)
+                nrm = np.stack([ply_scalars(vert, named[c], path) for c in ("nx", "ny", "nz")],
+                               axis=1)
         col = ply_colors(vert)
     except (PlyParseError, KeyError, ValueError, IndexError, TypeError, EOFError,
             MemoryError) as exc:

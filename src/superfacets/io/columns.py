@@ -19,7 +19,7 @@ import numpy as np
 
 from ..errors import MeshFormatError
 from ..inputs.rgb import unit_colors
-from .files import number_table, split_suffix
+from .files import number_table, split_suffix, utf8_text
 from .ply import COLOR_PROPERTIES
 
 __all__ = ["read_columns"]
@@ -64,6 +64,7 @@ def read_columns(data: bytes, path: Path, size: int = 1 << 23) -> dict:
     >>> read_columns(b"// x y z\\n0 0 1\\n1 0 0\\n", Path("p.xyz"))["points"].tolist()
     [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]]
     """
+    data = utf8_text(data, path)
     try:
         text = data.decode("utf-8-sig")  # (a spreadsheet's "CSV UTF-8" starts with a BOM)
     except UnicodeDecodeError:

@@ -26,8 +26,8 @@ from .._runtime import memory
 from ..checks import check_int
 from ..errors import MemoryLimitError, MeshFormatError, ParameterError, SuperfacetsError
 
-__all__ = ["split_suffix", "read_bytes", "text_lines", "text_chunks", "number_table",
-           "atomic_write", "Outputs",
+__all__ = ["split_suffix", "read_bytes", "text_lines", "text_chunks", "utf8_text",
+           "not_a_folder", "number_table", "atomic_write", "Outputs",
            "save", "COMPRESSIONS", "decompressed", "decompressed_head", "sha256_of", "array_digest",
            "load_checked", "user_path", "sniffed_format", "format_hint", "MAGIC"]
 
@@ -532,8 +532,71 @@ def number_table(lines: list, dtype=None):
     return np.loadtxt(lines, dtype=dtype, comments=None, ndmin=2)
 
 
+#: The byte-order marks of UTF-16 text (little and big endian).
+UTF16_MARKS = (b"\xff\xfe", b"\xfe\xff")
+
+
+def utf8_text(data: bytes, path: Path) -> bytes:
+    r"""``data`` as UTF-8 where it is UTF-16 text with its byte-order mark (Windows
+    PowerShell's ``>`` writes it), else as it is.
+
+    Parameters
+    ----------
+    data : bytes
+    path : pathlib.Path
+        Named in errors.
+
+    Returns
+    -------
+    bytes
+
+    Raises
+    ------
+    MeshFormatError
+        Where the mark is followed by something UTF-16 does not encode.
+
+    Examples
+    --------
+    >>> utf8_text("0 0 1\n".encode("utf-16"), Path("p.xyz"))
+    b'0 0 1\n'
+    """
+    if bytes(data[:2]) not in UTF16_MARKS:
+        return data
+    try:
+        return bytes(data).decode("utf-16").encode("utf-8")
+    except UnicodeDecodeError:
+        raise MeshFormatError(f"{path}: begins as UTF-16 text, and is not") from None
+
+
+def not_a_folder(path) -> str:
+    """Why ``path``, named as a file's folder, is none: ``'does not exist'``, or ``'is a
+    file, not a folder'``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    OSError
+        Never: a path that cannot be looked at does not exist.
+
+    Examples
+    --------
+    >>> not_a_folder("no/such/folder")
+    'does not exist'
+    """
+    return "is a file, not a folder" if Path(path).is_file() else "does not exist"
+
+
 def text_lines(data: bytes, path: Path) -> list[str]:
-    """Non-empty lines with comments (``#`` to end of line) removed."""
+    """Non-empty lines with comments (``#`` to end of line) removed (UTF-8, or UTF-16 with
+    its byte-order mark: :func:`utf8_text`)."""
+    data = utf8_text(data, path)
     try:
         text = data.decode("utf-8-sig")  # (a BOM, as Windows tools write it)
     except UnicodeDecodeError:
@@ -550,7 +613,7 @@ def text_chunks(data: bytes, path: Path, size: int = 1 << 23) -> Iterator[list[s
     Parameters
     ----------
     data : bytes
-        The text (UTF-8).
+        The text (UTF-8, or UTF-16 with its byte-order mark: :func:`utf8_text`).
     path : pathlib.Path
         Named in errors.
     size : int
@@ -572,6 +635,7 @@ def text_chunks(data: bytes, path: Path, size: int = 1 << 23) -> Iterator[list[s
     >>> [len(p) for p in text_chunks(b"1\\n2\\n# c\\n3\\n", Path("t.txt"), size=2)]
     [1, 1, 1]
     """
+    data = utf8_text(data, path)
     start, n = 0, len(data)
     while start < n:
         end = data.find(b"\n", min(start + size, n) - 1)
@@ -639,7 +703,7 @@ class Outputs:
         real = Path(os.path.realpath(path))
         folder = real.parent
         if not folder.is_dir():
-            raise FileNotFoundError(f"{path}: folder {path.parent} does not exist")
+            raise FileNotFoundError(f"{path}: folder {path.parent} {not_a_folder(folder)}")
         if real.is_dir():
             raise IsADirectoryError(f"{path}: is a directory")
         comp = path.suffix.lower() if path.suffix.lower() in _COMPRESSORS else None

@@ -856,8 +856,9 @@ def check_pcd(path: Path) -> None:
     Raises
     ------
     MeshFormatError
-        If the header lacks one of :data:`PCD_LINES`, or declares more points than the
-        bytes after it hold.
+        If the header lacks one of :data:`PCD_LINES`, gives SIZE, TYPE or COUNT a number
+        of values other than its FIELDS', or declares more points than the bytes after
+        it hold.
 
     Examples
     --------
@@ -882,6 +883,15 @@ def check_pcd(path: Path) -> None:
         raise MeshFormatError(f"{path}: damaged PCD header: no {', '.join(missing)} "
                               f"line{'s' if len(missing) > 1 else ''} (a PCD header names "
                               f"{', '.join(PCD_LINES)})")
+    fields = head["FIELDS"]
+    uneven = [(name, len(head[name])) for name in ("SIZE", "TYPE", "COUNT")
+              if len(head[name]) != len(fields)]
+    if uneven:
+        name, got = uneven[0]
+        raise MeshFormatError(f"{path}: damaged PCD header: FIELDS names {len(fields)} "
+                              f"field{'s' if len(fields) != 1 else ''} ({' '.join(fields)}), "
+                              f"{name} gives {got} value{'s' if got != 1 else ''} (SIZE, TYPE "
+                              "and COUNT give one per field)")
     try:
         n = int(head.get("POINTS", ["0"])[0])
         per = sum(int(a) * int(b) for a, b in zip(head.get("SIZE", []),

@@ -411,6 +411,12 @@ def read_field(path, name: str) -> np.ndarray:
         If the file has no such field (the message lists its fields), the
         field is not integer, or the format carries no fields.
 
+    Warns
+    -----
+    UserWarning
+        Where the field is a measurement, not a label (a coordinate, a colour, the
+        intensity: :data:`MEASURED_FIELDS`).
+
     Examples
     --------
     >>> classes = read_field("scan.las", "classification")  # doctest: +SKIP
@@ -457,7 +463,27 @@ def read_field(path, name: str) -> np.ndarray:
     if values is None:
         raise MeshFormatError(f"{path}: no field {name!r}; " + (
             f"it has: {', '.join(names)}" if names else "it has none"))
-    return whole_labels(values, f"{path}: field {name!r}")
+    labels = whole_labels(values, f"{path}: field {name!r}")
+    what = MEASURED_FIELDS.get(name.lower().removeprefix("scalar_"))
+    if what is not None:
+        import warnings
+
+        warnings.warn(f"{path.name}: field {name!r} is {what} measured at each point, not a "
+                      f"class or a segment: {len(np.unique(labels)):,} values read as labels "
+                      "(a scan's ground truth is a field such as classification or label)",
+                      stacklevel=2)
+    return labels
+
+
+#: Fields (lower case) that hold what the sensor measured at each point, not a label: read
+#: as one (:func:`read_field`), they say so.
+MEASURED_FIELDS = {**dict.fromkeys(("x", "y", "z"), "a coordinate"),
+                   **dict.fromkeys(("nx", "ny", "nz", "normal_x", "normal_y", "normal_z"),
+                                   "a normal's component"),
+                   **dict.fromkeys(("red", "green", "blue", "nir", "r", "g", "b", "alpha"),
+                                   "a colour"),
+                   "intensity": "the return's intensity", "gps_time": "a time",
+                   "scan_angle": "the scan angle", "scan_angle_rank": "the scan angle"}
 
 
 #: Text clouds, whose named columns other than the points' are fields (:func:`read_field`).

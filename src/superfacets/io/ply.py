@@ -21,24 +21,77 @@ from ..inputs.rgb import unit_colors
 from .files import number_table
 from .headers import ply_names
 
-__all__ = ["ply_bytes", "read_ply_labels", "ply_colors", "read_ply_triangles", "VertexView",
-           "read_ply_scalars"]
+__all__ = ["ply_bytes", "read_ply_labels", "ply_colors", "ply_scalars", "read_ply_triangles",
+           "VertexView", "read_ply_scalars"]
 
 #: Colour properties of a PLY element, tried in this order.
 COLOR_PROPERTIES = (("red", "green", "blue"), ("r", "g", "b"),
                     ("diffuse_red", "diffuse_green", "diffuse_blue"))
 
 
+def ply_scalars(element, name: str, path=None, dtype=np.float64) -> np.ndarray:
+    r"""One property of a ``plyfile`` element as an ``(N,)`` array: a list property of one
+    value a row (``property list uchar float x``, as some writers declare scalars, and as
+    trimesh reads it) taken as that value.
+
+    Parameters
+    ----------
+    element : plyfile.PlyElement
+    name : str
+        A property of ``element``.
+    path : str or os.PathLike, optional
+        The file, for the message.
+    dtype : numpy dtype or None, default float64
+        None: the file's own (a list's values: their own).
+
+    Returns
+    -------
+    (N,) ndarray of ``dtype``
+
+    Raises
+    ------
+    MeshFormatError
+        Where ``name`` is a list property with a row of other than one value (a
+        coordinate, a normal's or a colour's component is one number).
+
+    Examples
+    --------
+    >>> from plyfile import PlyData
+    >>> head = b"ply\nformat ascii 1.0\nelement vertex 2\nproperty list uchar float x\n"
+    >>> vertex = PlyData.read(io.BytesIO(head + b"end_header\n1 0.5\n1 2\n"))["vertex"]
+    >>> ply_scalars(vertex, "x")
+    array([0.5, 2. ])
+    """
+    values = np.asarray(element[name])
+    if values.dtype != object or not values.size:
+        return values if dtype is None else values.astype(dtype, copy=False)
+    sizes = np.fromiter((np.size(v) for v in values), dtype=np.int64, count=values.size)
+    if sizes.size and (sizes != 1).any():
+        row = int(np.flatnonzero(sizes != 1)[0])
+        where = f"{path}: " if path is not None else ""
+        raise MeshFormatError(f"{where}{element.name} property {name} is a list, of "
+                              f"{sizes[row]} values in row {row}: one number is expected")
+    return np.array([np.ravel(v)[0] for v in values],
+                    dtype=dtype if dtype is not None else np.ravel(values[0]).dtype)
+
 
 def ply_colors(element) -> np.ndarray | None:
     """(N, 3) float64 in ``[0, 1]``: the RGB of a ``plyfile`` element (vertex or face),
     None where it has none (:data:`COLOR_PROPERTIES`; scaled by
-    :func:`~superfacets.inputs.rgb.unit_colors`)."""
+    :func:`~superfacets.inputs.rgb.unit_colors`).
+
+    Raises
+    ------
+    MeshFormatError
+        Where a colour property is a list of other than one value a row
+        (:func:`ply_scalars`).
+    """
 
     names = [p.name for p in element.properties]
     for rgb in COLOR_PROPERTIES:
         if all(c in names for c in rgb):
-            return unit_colors(np.stack([np.asarray(element[c]) for c in rgb], axis=1))
+            return unit_colors(np.stack([ply_scalars(element, c, dtype=None) for c in rgb],
+                                        axis=1))
     return None
 
 

@@ -45,7 +45,7 @@ from ...graph.hierarchy import wanted_levels
 from ...inputs.cloud import PointCloud
 from ...io import read_input
 from ...io.clouds import is_cloud_file
-from ...io.files import split_suffix
+from ...io.files import not_a_folder, split_suffix
 from ...io.orientation import default_view, up_axis
 from ...io.records import RECORD_FORMATS, records_kind
 from ...method.params import (
@@ -378,7 +378,7 @@ def run_batch(inputs: Sequence[str], outdir, n_segments: int | None = None, *,
         raise NotADirectoryError(f"{outdir}: exists and is not a folder")
     parent = outdir.parent if str(outdir.parent) else Path(".")
     if not parent.is_dir():
-        raise FileNotFoundError(f"{outdir}: its folder {parent} does not exist")
+        raise FileNotFoundError(f"{outdir}: its folder {parent} {not_a_folder(parent)}")
     check_choice("labels", labels, tuple(_LABEL_SUFFIX))
     if vertex_colors and colored_mesh != "ply":  # (as segment refuses it)
         raise ParameterError("vertex_colors (--vertex-colors) colours a PLY's vertices: give "

@@ -40,6 +40,7 @@ from ...evaluation.metrics import compactness, evaluate, has_border, oracle_miou
 from ...evaluation.results import columns, fmt_value, prepare_file, row_key
 from ...inputs.cloud import PointCloud
 from ...io import read_input
+from ...io.files import not_a_folder
 from ...io.labels import read_field, read_labels
 from ...method.params import DEFAULT_N_SEGMENTS, ELEMENTS, check_choice, check_int, max_threads
 from .engine import Engine, PeakMemory, error_text
@@ -385,7 +386,7 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a directory")
     if not path.parent.is_dir():
-        raise FileNotFoundError(f"{path}: folder {path.parent} does not exist")
+        raise FileNotFoundError(f"{path}: folder {path.parent} {not_a_folder(path.parent)}")
     cols, old = prepare_file(path, columns(configs))
     done = {row_key(r) for r in old if not (retry_failed and r.get("status") == "failed")}
 
