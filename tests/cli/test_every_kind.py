@@ -289,6 +289,42 @@ def test_experiment_runs_on_a_user_s_files(tmp_path, capsys, sphere):
 
 
 
+def test_an_experiment_segments_a_scan_as_seen_from_an_axis(tmp_path, capsys):
+    """``experiment --inputs --seen-from z``: each cloud run as ``segment --seen-from z`` runs
+    it (the same error as ``evaluate`` of those labels), the rows saying so; another axis or
+    none into the same file adds rows, the same one again none."""
+    rng = np.random.default_rng(0)
+    x, y = rng.random((2, 4000)) * [[40], [10]]
+    z = np.where(x > 20, 0.15, 0.0) + 0.01 * rng.standard_normal(4000)  # a curb, two classes
+    street = tmp_path / "street.xyz"
+    np.savetxt(street, np.c_[x, y, z, (x > 20) + 1], fmt="%.4f %.4f %.4f %d",
+               header="x y z classification", comments="// ")
+    out = tmp_path / "rows.csv"
+    for side, written in ((["--seen-from", "z"], 1), ([], 1), (["--seen-from", "z"], 0)):
+        assert main(["experiment", "--inputs", str(street), "--ground-truth-field",
+                     "classification", "-m", "superfacets", "--alpha", "200", "-k", "30",
+                     "-o", str(out), "-j", "1", "-q", *side]) == 0
+        assert capsys.readouterr().out.startswith(f"{written} rows written")
+    rows = {r["seen_from"]: r for r in csv.DictReader(out.open())}
+    assert sorted(rows) == ["", "z"] and len(list(csv.DictReader(out.open()))) == 2
+    for side, row in rows.items():
+        labels = tmp_path / f"labels{side}.seg"
+        assert main(["segment", str(street), "-k", "30", "--alpha", "200", "-o", str(labels),
+                     "-q", *(["--seen-from", side] if side else [])]) == 0
+        capsys.readouterr()
+        assert main(["evaluate", str(street), str(labels), "--ground-truth-field",
+                     "classification", "--json"]) == 0
+        said = json.loads(capsys.readouterr().out)
+        assert float(row["undersegmentation_error"]) == said["undersegmentation_error"]
+    assert rows["z"]["undersegmentation_error"] != rows[""]["undersegmentation_error"]
+    from superfacets.evaluation.report import load_results
+
+    assert sorted(load_results(out)["series"]) == ["superfacets seen_from=file",
+                                                   "superfacets seen_from=z"]
+    assert main(["experiment", "--seen-from", "z", "-o", str(out)]) == 2
+    assert "--seen-from goes with --inputs" in capsys.readouterr().err
+
+
 def test_an_experiment_reads_each_file_s_ground_truth_from_a_label_file(tmp_path, capsys):
     # SemanticKITTI's layout: sequences/00/velodyne/000000.bin beside labels/000000.label
     from conftest import street_sweep

@@ -5,6 +5,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from ..checks import AXES
 from ..method.params import DEFAULT_N_SEGMENTS
 from .options import add_engine_options, float_arg, int_arg
 from .parameters import Joined, float_list_arg, int_list_arg
@@ -118,6 +119,11 @@ def _add_inputs(x) -> None:
     x.add_argument("--ignore-label", type=int_arg, default=None, metavar="L",
                    help="with --inputs and a ground truth: its value L marks unlabelled "
                         "elements, left out of the metrics (SemanticKITTI: 0)")
+    x.add_argument("--seen-from", choices=tuple(AXES), default=None, metavar="AXIS",
+                   help="with --inputs: the side the point clouds were scanned from (x, y, "
+                        "z, -x, -y, -z), as segment --seen-from: each segmented as a scan "
+                        "with that up direction; the rows record it (default: each file's "
+                        "own: z for .las/.laz)")
 
 
 def _id_list(text: str) -> set[int]:
@@ -179,7 +185,7 @@ def select_meshes(args):
         "files" if getattr(args, "inputs", None) else "psb")
     if (dataset == "files") != bool(getattr(args, "inputs", None)):
         raise ParameterError("--inputs PATH ... goes with --dataset files (its default)")
-    for name in ("ground_truth_field", "ground_truths"):
+    for name in ("ground_truth_field", "ground_truths", "seen_from"):
         if getattr(args, name, None) and dataset != "files":
             raise ParameterError(f"--{name.replace('_', '-')} goes with --inputs")
     _check_dataset_options(args, dataset)
@@ -257,7 +263,8 @@ def cmd_experiment(args) -> int:
                        ignore_label=args.ignore_label,
                        seed=args.seed, retry_failed=args.retry_failed,
                        progress=not args.quiet and sys.stderr.isatty(),
-                       elements=kinds, n_points=args.points, scheduler=args.scheduler)
+                       elements=kinds, n_points=args.points, scheduler=args.scheduler,
+                       seen_from=getattr(args, "seen_from", None))
     if s.note:
         print(f"note: {s.note}", file=sys.stderr)
     print(f"{s.written} rows written ({s.ok} ok, {s.failed} failed, {s.skipped} skipped), "

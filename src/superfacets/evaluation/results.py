@@ -1,15 +1,16 @@
 """The results file of experiments: its columns, a row's identity, reading and preparing it.
 
-Row columns (:func:`columns`): ``mesh``, ``mesh_id``, ``category``,
-``n_faces``, ``method``, ``elements`` (faces, vertices or points; empty in
-files from before: faces), ``n_elements``, ``n_segments`` (asked), one column per method
-parameter (empty where a method does not have it), ``seed``, ``status``
-(``ok``, ``failed`` or ``skipped``), ``segments`` (produced), ``iterations``,
-``converged``, ``seconds`` (the method only, not reading or metrics, including
-work reused from an earlier ``n_segments``), ``peak_mib`` (peak resident memory
-above the start of the call, Linux only), the metrics of
-:data:`superfacets.evaluation.metrics.METRICS` averaged over the mesh's ground truths,
-``n_ground_truths`` and ``error``. A row is identified by :func:`row_key`.
+Row columns (:func:`columns`): ``mesh``, ``mesh_id``, ``category``, ``n_faces``,
+``method``, ``elements`` (faces, vertices or points; empty in files from before: faces),
+``seen_from`` (the axis a user's scan was segmented as seen from, ``experiment --inputs
+--seen-from``; empty: the file's own orientation), ``n_elements``, ``n_segments`` (asked),
+one column per method parameter (empty where a method does not have it), ``seed``,
+``status`` (``ok``, ``failed`` or ``skipped``), ``segments`` (produced), ``iterations``,
+``converged``, ``seconds`` (the method only, not reading or metrics, including work reused
+from an earlier ``n_segments``), ``peak_mib`` (peak resident memory above the start of the
+call, Linux only), the metrics of :data:`superfacets.evaluation.metrics.METRICS` averaged
+over the mesh's ground truths, ``n_ground_truths`` and ``error``. A row is identified by
+:func:`row_key`.
 """
 
 from __future__ import annotations
@@ -30,8 +31,8 @@ __all__ = ["columns", "row_key", "read_results", "prepare_file", "fmt_value", "K
 #: Columns naming a row, besides the method's parameters (see :func:`row_key`).
 KEY_COLUMNS = ("mesh", "method", "n_segments", "seed")
 
-_HEAD = ["mesh", "mesh_id", "category", "n_faces", "method", "elements", "n_elements",
-         "n_segments"]
+_HEAD = ["mesh", "mesh_id", "category", "n_faces", "method", "elements", "seen_from",
+         "n_elements", "n_segments"]
 _TAIL = ["seed", "status", "segments", "iterations", "converged", "seconds", "peak_mib",
          *METRICS, "oracle_miou", "n_ground_truths", "error"]
 
@@ -64,8 +65,9 @@ PARAMS_BEFORE = {"tol": "0.0", "cleanup": "false", "split_merge": "false", "up_w
 
 
 def row_key(row: dict) -> tuple:
-    """The identity of a results row: mesh, method, ``n_segments``, seed and the values
-    of the method's parameters (all as text, as in the file).
+    """The identity of a results row: mesh, method, ``n_segments``, seed, the elements, the
+    axis a scan was seen from and the values of the method's parameters (all as text, as
+    in the file).
 
     Rows of a method no longer registered are identified without parameters.
     """
@@ -74,6 +76,7 @@ def row_key(row: dict) -> tuple:
     names = sorted(method.defaults) if method is not None else []
     return (tuple(str(row.get(c, "")) for c in KEY_COLUMNS)
             + (str(row.get("elements") or "faces"),)  # files from before: faces
+            + (str(row.get("seen_from") or ""),)  # (a scan's side, where given)
             + tuple((n, str(row.get(n, PARAMS_BEFORE.get(n, "")))) for n in names))
 
 

@@ -125,13 +125,21 @@ def _series(df, params: dict):
     out = df["method"].copy()
     for m, names in params.items():
         sel = df["method"] == m
-        varying = [p for p in names if p in df and df.loc[sel, p].nunique() > 1]
+        varying = [p for p in [*names, "seen_from"]
+                   if p in df and df.loc[sel, p].fillna("").nunique() > 1]
         if not varying:
             continue
-        vals = df.loc[sel, varying].apply(
-            lambda r: " ".join(f"{_GREEK.get(p, p)}={_num(r[p])}" for p in varying), axis=1)
+        vals = df.loc[sel, varying].fillna("").apply(
+            lambda r: " ".join(f"{_GREEK.get(p, p)}={_label(p, r[p])}" for p in varying),
+            axis=1)
         out[sel] = m + " " + vals
     return out
+
+
+def _label(name: str, text: str) -> str:
+    """A parameter's value in a series' name; a scan's side not given: ``file`` (the
+    file's own orientation)."""
+    return _num(text) if text != "" or name != "seen_from" else "file"
 
 
 def _num(text: str) -> str:

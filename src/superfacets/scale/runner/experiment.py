@@ -16,7 +16,7 @@ from __future__ import annotations
 import csv
 import re
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from itertools import product
 from pathlib import Path
@@ -27,6 +27,7 @@ import numpy as np
 from ..._runtime import interrupts
 from ..._runtime.progress import new_bar, tick
 from ..._runtime.warned import task_warnings
+from ...checks import AXES
 from ...elements import face_graph
 from ...elements.builders import elements_of
 from ...elements.kinds import KINDS, kind_of
@@ -93,15 +94,19 @@ def _room(name: str):
 
 
 @lru_cache(maxsize=2)
-def _file(path: str, field: str | None, elements: str, truths: tuple = ()):
+def _file(path: str, field: str | None, elements: str, truths: tuple = (),
+          seen_from: str | None = None):
     """A user's file (:func:`superfacets.scale.runner.collect.file_entries`) as :func:`_prepared`
     gives an input: the mesh or cloud, its element graph, per-element values and its
-    ground truths (the file's ``field``, the label files ``truths``; none without)."""
+    ground truths (the file's ``field``, the label files ``truths``; none without); a
+    cloud seen from the axis ``seen_from`` where given (as ``segment --seen-from``)."""
 
     if field is not None and kind_of(elements).objects:
         raise ParameterError(f"{Path(path).name}: a field ({field}) holds one value per "
                              "vertex or point: judge a mesh's vertices (--elements vertices)")
     data = read_input(path)
+    if seen_from is not None and isinstance(data, PointCloud):
+        data = replace(data, up=AXES[seen_from], viewpoint=None)
     source = elements_of(data, elements)
     to_el = _element_values(source)
     gts = [] if field is None else [to_el(read_field(path, field))]
@@ -149,7 +154,7 @@ def _run_task(task: dict) -> list[dict]:
             data, graph, to_el, gts = _room(task["path"])
         elif task.get("file"):  # a user's file: judged against its own field, if named
             data, graph, to_el, gts = _file(task["path"], task.get("field"), kind,
-                                            task["seg_paths"])
+                                            task["seg_paths"], task.get("seen_from"))
         else:
             base["n_faces"] = _load(task["path"], task["seg_paths"])[0].n_faces
             data, graph, to_el, gts = _prepared(task["path"], task["seg_paths"], kind,
@@ -254,8 +259,8 @@ class ExperimentSummary:
 
 def _tasks(meshes, configs, kinds, ks, done, common: dict) -> list[dict]:
     """One task per mesh, configuration and kind with rows still to run (its counts
-    ``ks`` not in ``done``); ``common``: seed, tau, n_points and ignore_label of every
-    task."""
+    ``ks`` not in ``done``); ``common``: seed, tau, n_points, ignore_label and seen_from
+    of every task."""
     tasks = []
     for bm, cfg, kind in product(meshes, configs, kinds):
         method = get_method(cfg.method)
@@ -266,6 +271,7 @@ def _tasks(meshes, configs, kinds, ks, done, common: dict) -> list[dict]:
         base = {"mesh": getattr(bm, "name", "") or Path(bm.path).stem, "mesh_id": bm.id,
                 "category": bm.category,
                 "method": cfg.method, "elements": kind, "seed": common["seed"],
+                "seen_from": common["seen_from"] if file and KINDS[kind].cloud else None,
                 **{k: fmt_value(v) for k, v in cfg.params}}
         todo = [k for k in ks if row_key({**base, "n_segments": k}) not in done]
         if todo:
@@ -303,7 +309,8 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
                    tau: float = 0.05, seed: int = 0, retry_failed: bool = False,
                    progress: bool = True, elements: Sequence[str] = ("faces",),
                    n_points: int = 20_000, scheduler: str | None = None,
-                   ignore_label: int | None = None) -> ExperimentSummary:
+                   ignore_label: int | None = None,
+                   seen_from: str | None = None) -> ExperimentSummary:
     """Run every config at every ``n_segments`` on every mesh, appending rows.
 
     Parameters
@@ -352,6 +359,13 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
         Address of a running Dask scheduler to run on instead (default:
         ``DASK_SCHEDULER_ADDRESS`` where set); its workers must see the
         benchmark's files.
+    seen_from : {'x', 'y', 'z', '-x', '-y', '-z'}, optional
+        The side the user's point clouds (``meshes`` from
+        :func:`~superfacets.scale.runner.collect.file_entries`) were scanned from: each is
+        segmented as a scan with that up direction (neighbours along its surfaces, merged
+        as a scene's), as ``segment --seen-from`` does, its own viewpoint set aside; the
+        rows record it (``seen_from``), so that another axis or none into the same file
+        adds rows. Meshes, rooms and the benchmark are run as they are.
 
     Returns
     -------
@@ -360,8 +374,8 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
     Raises
     ------
     ParameterError
-        On an empty grid, a bad ``n_segments``, ``workers`` or ``tau``, or a setting's
-        value its method refuses (:attr:`~superfacets.evaluation.methods.Method.check`).
+        On an empty grid, a bad ``n_segments``, ``workers``, ``tau`` or ``seen_from``, or
+        a setting's value its method refuses (:attr:`~superfacets.evaluation.methods.Method.check`).
     MissingExtraError, SchedulerError
         Dask needed and missing; a scheduler that cannot be reached.
     """
@@ -394,8 +408,11 @@ def run_experiment(meshes: Sequence, configs: Sequence[Config], results,
     if not kinds:
         raise ParameterError("no element kind to run")
     n_points = check_int("n_points", n_points, lo=1)
+    if seen_from is not None:
+        check_choice("seen_from", seen_from, tuple(AXES))
     tasks = _tasks(meshes, configs, kinds, ks, done,
-                   dict(seed=seed, tau=tau, n_points=n_points, ignore_label=ignore_label))
+                   dict(seed=seed, tau=tau, n_points=n_points, ignore_label=ignore_label,
+                        seen_from=seen_from))
     if not any(k in get_method(c.method).elements for c in configs for k in kinds):
         raise ParameterError(f"no method of the grid segments {', '.join(kinds)}")
     _say_idle(meshes, configs, kinds)
