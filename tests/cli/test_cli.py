@@ -676,6 +676,11 @@ def test_a_flat_cloud_that_names_no_up_is_pointed_to_seen_from(tmp_path, capsys)
                          str(tmp_path / "s.seg")]) == 0
             out, err = capsys.readouterr()
             assert "as on a scene" in out and "--seen-from" not in err
+        for side in ([], ["--seen-from", "z"]):  # a tiled run, from its tiles' boxes
+            assert main(["segment", str(path), "-k", "30", "--tiles", "2", "-j", "1", *side,
+                         "-o", str(tmp_path / "s.seg")]) == 0
+            err = capsys.readouterr().err
+            assert (said in err) if said and not side else "--seen-from" not in err, err
 
 
 def test_panel_and_experiment_take_counts_and_alphas_with_commas_too():

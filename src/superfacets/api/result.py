@@ -427,7 +427,8 @@ class TiledResult:
         ``refine``, ``labels``, ``stitch``, ``connect`` (only with disagreements),
         ``merges``, ``levels`` (with ``levels``), ``graph`` (with ``graph``), ``total``.
     params : dict
-        The run's parameters, resolved.
+        The run's parameters, resolved; ``up``: a cloud's up direction (its own or
+        ``seen_from``'s unit vector), None where it has none.
     area : float
         The input's total area in its units squared (its faces', or its points' summed
         sizes, as one run's point graph sizes them); NaN where a tiled run does not measure

@@ -135,13 +135,14 @@ STARTS_SAID = {"flood": "its centers about a radius apart over the surface (the 
 START_SLACK = 0.05
 
 
-def scene_note(data, kind: str, name: str) -> str | None:
+def scene_note(data, kind: str, name: str, extent=None) -> str | None:
     """A cloud with no up direction is segmented as an object; where its box is thinnest
     along one axis by half (:func:`superfacets.io.orientation.thinnest_axis`), the option
-    that segments it as a scan, as a LAS file is."""
+    that segments it as a scan, as a LAS file is. ``data`` None: a tiled run's cloud of no
+    up direction, its box's sides ``extent``."""
     from ..io.orientation import thinnest_axis
 
-    axis = thinnest_axis(data) if kind == "points" else None
+    axis = thinnest_axis(data, extent) if kind == "points" else None
     if axis is None:
         return None
     return (f"{name} names no up direction, so its superpoints are an object's; if it is a "

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..elements.density import AUTO_DENSITY, AUTO_SPREAD
 from ..elements.kinds import kind_of
-from .notes import fields_said, merges_said, records_said, resolution_said, weights_said
+from .notes import fields_said, merges_said, records_said, resolution_said, scene_note, weights_said
 from .options import (
     add_engine_options,
     check_drawings,
@@ -123,6 +123,11 @@ def segment_tiles(args) -> int:
                   f"density): one run would size its superpoints by it (--density "
                   f"{AUTO_DENSITY:g}); tiles keep equal areas (see docs/guide/scale.md)",
                   file=sys.stderr)
+        scene = result.params.get("up") is None and scene_note(
+            None, kind, Path(args.mesh).name, extent=result.layout.hi.max(axis=0) -
+            result.layout.lo.min(axis=0))
+        if scene:
+            print(f"note: {scene}", file=sys.stderr)
         if result.halo_ratio >= HALO_NOTE:
             print(f"note: with their halos the tiles ran over {result.halo_ratio:.2f} times "
                   f"the {kind}, about that many times one run's work: fewer tiles, or more "

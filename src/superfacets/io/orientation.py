@@ -269,21 +269,24 @@ def default_view(data):
     return "top" if is_map(data) else None
 
 
-def thinnest_axis(data) -> str | None:
+def thinnest_axis(data, extent=None) -> str | None:
     """The axis a point cloud with no up direction is thinnest along, as a map's height is
     (:data:`MAP_HEIGHT` of the next side: a street, a room or terrain in a format that names
     no up: XYZ, NPY, PLY), where it has one: ``--seen-from`` that axis segments it as a scan.
 
     Parameters
     ----------
-    data : PointCloud or Mesh
+    data : PointCloud or Mesh, or None
+    extent : (3,) array_like, optional
+        With ``data`` None: the box's sides (a tiled run's, read without the whole cloud),
+        of a cloud with no up direction.
 
     Returns
     -------
     str or None
         ``'x'``, ``'y'`` or ``'z'``: its valid points' box is at most :data:`MAP_HEIGHT` as
-        deep along it as along the next; None for a mesh, a cloud with an up direction, or a box not
-        that flat.
+        deep along it as along the next; None for a mesh, a cloud with an up direction, or a
+        box not that flat.
 
     Raises
     ------
@@ -295,12 +298,16 @@ def thinnest_axis(data) -> str | None:
     >>> street = np.random.default_rng(0).random((500, 3)) * [60.0, 40.0, 4.0]
     >>> thinnest_axis(PointCloud(street)), thinnest_axis(PointCloud(street, up="z"))
     ('z', None)
+    >>> thinnest_axis(None, extent=(60.0, 4.0, 40.0))
+    'y'
     """
-    if not hasattr(data, "valid") or getattr(data, "up", None) is not None or \
-            not data.n_points:
-        return None
-    points = np.asarray(data.points)[np.asarray(data.valid)]
-    extent = points.max(axis=0) - points.min(axis=0)
+    if data is not None:
+        if not hasattr(data, "valid") or getattr(data, "up", None) is not None or \
+                not data.n_points:
+            return None
+        points = np.asarray(data.points)[np.asarray(data.valid)]
+        extent = points.max(axis=0) - points.min(axis=0)
+    extent = np.asarray(extent, dtype=np.float64).reshape(3)
     order = np.argsort(extent, kind="stable")
     if not extent[order[1]] > 0 or extent[order[0]] > MAP_HEIGHT * extent[order[1]]:
         return None
