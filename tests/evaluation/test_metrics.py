@@ -12,6 +12,7 @@ from superfacets.evaluation.metrics import (
     evaluate,
     mean_over_ground_truths,
     undersegmentation_error,
+    undersegmentation_error_np,
 )
 
 
@@ -167,9 +168,12 @@ def test_real_mesh_ranges(psb):
                                   gts)
     assert ue0 > ue
 
-    # evaluate() gives exactly the four metrics, each averaged over the ground truths
+    # evaluate() gives exactly the five metrics, each averaged over the ground truths
     m = evaluate(mesh, labels, gts)
+    ue_np = mean_over_ground_truths(undersegmentation_error_np, mesh, labels, gts)
+    assert 0 < ue_np < ue  # (a border missed by a few faces: its superfacet's whole area)
     assert m == {"undersegmentation_error": pytest.approx(ue, abs=1e-12),
+                 "undersegmentation_error_np": pytest.approx(ue_np, abs=1e-12),
                  "compactness": pytest.approx(compactness(mesh, labels), abs=1e-12),
                  "boundary_recall": pytest.approx(br, abs=1e-12),
                  "achievable_accuracy": pytest.approx(asa, abs=1e-12)}
@@ -182,6 +186,7 @@ def test_evaluate_hand_worked(plane):
     sf = by_x(plane, [-0.5, 0.5])
     m = evaluate(plane, sf, gts)
     assert m["undersegmentation_error"] == pytest.approx(0.5)
+    assert m["undersegmentation_error_np"] == pytest.approx(0.5)  # min(1, 1) twice, of 4
     assert m["achievable_accuracy"] == pytest.approx(0.75)
     assert m["compactness"] == pytest.approx(compactness(plane, sf))
     with pytest.raises(ValueError, match="no ground-truth"):
@@ -208,6 +213,8 @@ def test_evaluate_ignores_unlabelled_elements(plane):
     # middle superfacet (area 2, all labelled): 1.5 in class 0, 0.5 in class 1; both
     # overlaps exceed tau, so it leaks 0.5 + 1.5 = 2 over labelled area 3
     assert m2["undersegmentation_error"] == pytest.approx(2 / 3)
+    # Neubert-Protzel's: each overlap its smaller part, min(1.5, 0.5) + min(0.5, 1.5)
+    assert m2["undersegmentation_error_np"] == pytest.approx(1 / 3)
     assert m2["achievable_accuracy"] == pytest.approx((1.5 + 1.0) / 3)
     with pytest.raises(ValueError, match="unlabelled"):
         evaluate(plane, sf, [np.full(plane.n_faces, -1)], ignore_label=-1)

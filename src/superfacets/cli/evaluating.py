@@ -142,6 +142,8 @@ def cmd_evaluate(args) -> int:
           f"{len(gts) or 'no'} ground truth{'s' if len(gts) != 1 else ''}")
     if gts:
         print(f"undersegmentation_error {m['undersegmentation_error']:.4f}  (lower is better)")
+        print(f"  Neubert-Protzel's     {m['undersegmentation_error_np']:.4f}  (lower is "
+              "better; no tolerance: a segment that swallows small classes pays for them)")
     estimate = "; estimated on points" if kind_of(kind).cloud else ""
     print(f"compactness             {m['compactness']:.4f}  (lower is better; disk 3.545"
           f"{estimate})")
@@ -194,8 +196,8 @@ def _print_truth_metrics(m: dict, n: int, kind: str) -> None:
 MOST_CLASSES_LISTED = 40
 
 #: The metrics printed, in order.
-METRICS = ("undersegmentation_error", "compactness", "boundary_recall", "boundary_precision",
-           "achievable_accuracy", "oracle_miou")
+METRICS = ("undersegmentation_error", "undersegmentation_error_np", "compactness",
+           "boundary_recall", "boundary_precision", "achievable_accuracy", "oracle_miou")
 
 
 def _labels_of(args, data, kind: str):

@@ -519,7 +519,8 @@ def evaluate_scan(scan: Scan, labels, *, tau: float = 0.05, tolerance: int = 1,
     Returns
     -------
     dict
-        ``undersegmentation_error``, ``boundary_recall``, ``boundary_precision``,
+        ``undersegmentation_error``, ``undersegmentation_error_np`` (Neubert and
+        Protzel's), ``boundary_recall``, ``boundary_precision``,
         ``achievable_accuracy`` and ``compactness`` (an estimate on points),
         and ``segments`` (distinct labels among the valid points).
 

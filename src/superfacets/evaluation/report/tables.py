@@ -27,12 +27,15 @@ __all__ = ["load_results", "category_means", "summary", "cost_table", "markdown_
 #: Axis labels of the metrics.
 METRIC_LABELS = {
     "undersegmentation_error": "undersegmentation error (lower is better)",
+    "undersegmentation_error_np": "undersegmentation error, Neubert-Protzel's (lower is "
+                                  "better)",
     "compactness": "compactness (lower is better)",
     "boundary_recall": "boundary recall (higher is better)",
     "achievable_accuracy": "achievable segmentation accuracy (higher is better)",
     "seconds": "seconds per mesh",
 }
-_SHORT = {"undersegmentation_error": "UE", "compactness": "compactness",
+_SHORT = {"undersegmentation_error": "UE", "undersegmentation_error_np": "UE (NP)",
+          "compactness": "compactness",
           "boundary_recall": "boundary recall", "achievable_accuracy": "ASA",
           "oracle_miou": "oracle mIoU"}
 _GREEK = {"alpha": "α", "eta_convex": "η"}
