@@ -168,7 +168,7 @@ def cases() -> list[Case]:
     mesh_case("off-crlf-ok", "m.off", grid_off().replace(b"\n", b"\r\n"), expect="ok")
     mesh_case("off-comments-ok", "m.off", b"# a comment\n" + grid_off(), expect="ok")
     mesh_case("off-bom", "m.off", b"\xef\xbb\xbf" + grid_off(), expect="ok")
-    mesh_case("off-utf16", "m.off", grid_off().decode().encode("utf-16"), "")
+    mesh_case("off-utf16", "m.off", grid_off().decode().encode("utf-16"), expect="ok")
     # --- .tri
     mesh_case("tri-empty", "m.tri", b"", "empty")
     mesh_case("tri-truncated", "m.tri", b"4\n0 0 0\n1 0 0\n", "truncated")

@@ -296,8 +296,7 @@ def segment_tiled(source, n_segments: int | None = None, *, tiles=4,
     timings["total"] = time.perf_counter() - t_start
     resolved = dict(params.as_dict(), n_segments=int(names.size), radius=r / diagonal,
                     up_weight=weight, tiles=grid, halo=float(halo), elements=reader.kind,
-                    up=None if up is None else tuple(float(v) for v in _up_of(up)),
-                    merge_from=merge_from,
+                    up=None if up is None else tuple(map(float, _up_of(up))), merge_from=merge_from,
                     merged_from=merged_from, **({} if floor is None else {"feature_floor": floor}))
     return TiledResult(labels=labels, centers=names.astype(np.int64), mesh_radius=r, grid=grid,
                        layout=layout, halo=margin, disagreements=disagreements, repaired=repaired,
