@@ -219,6 +219,12 @@ def test_render_points_colours_a_cloud_by_superpoint(tmp_path):
     assert _palette_colours_seen(img, min_pixels=30) >= 4
     with pytest.raises(ParameterError, match="one per point"):
         render_points(pts, labels[:-1])
+    # render() of a cloud draws it as render_points does (a TypeError naming the
+    # PointCloud it was given before)
+    from superfacets import PointCloud
+    from superfacets.viz.render import render
+
+    assert np.array_equal(render(PointCloud(pts), labels, size=(320, 240)), img)
 
 
 

@@ -281,11 +281,12 @@ def render(mesh, labels=None, out=None, *, size=PICTURE_SIZE, view=None,
            line_width: float = 1.0, title: str | None = None, zoom: float = 1.0,
            up="y", outputs=None, elements: str = "faces", legend: bool = False
            ) -> np.ndarray:
-    """Render a mesh off-screen, faces coloured by superfacet.
+    """Render a mesh off-screen, faces coloured by superfacet (a point cloud: its points,
+    as :func:`render_points` draws them).
 
     Parameters
     ----------
-    mesh : Mesh, trimesh.Trimesh or (vertices, faces)
+    mesh : Mesh, trimesh.Trimesh or (vertices, faces), or PointCloud
     labels : (m,) int ndarray, optional
         Superfacet of each face (with ``elements='vertices'``: ``(n,)``, the
         superpoint of each vertex, drawn by :func:`vertex_regions`); without it
@@ -328,6 +329,9 @@ def render(mesh, labels=None, out=None, *, size=PICTURE_SIZE, view=None,
     MissingExtraError
         Without the ``render`` extra (pyvista, Pillow).
     """
+    if kind_of(kind_for(mesh)).cloud:  # (points coloured by superpoint; no border lines)
+        return render_points(mesh, labels, out, size=size, view=view, background=background,
+                             title=title, zoom=zoom, up=up, outputs=outputs, legend=legend)
     mesh, labels, cut = as_drawn(mesh, labels)  # (a volume: its cut at the middle of x)
     elements = "faces" if cut else elements
     mesh = as_mesh(mesh)
