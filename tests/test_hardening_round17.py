@@ -15,7 +15,7 @@ with its test.
 - ``-k`` above the points at distinct positions said "larger than the number of points
   (14406)" of a file of 14,408 points; now the repeated points are counted in the message.
 - An output under a path that is a file said its "folder does not exist"; it says it is a
-  file.
+  file. ``report -o`` given the results file itself said "File exists".
 """
 
 from __future__ import annotations
@@ -135,3 +135,22 @@ def test_an_output_under_a_file_says_the_folder_is_a_file(tmp_path, capsys):
                   str(tmp_path / "afile" / "r.csv")]):
         assert main(argv) != 0
         assert "afile is a file, not a folder" in capsys.readouterr().err
+
+
+def test_a_report_into_a_file_says_so(tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    pts = tmp_path / "pts.xyz"
+    np.savetxt(pts, np.random.default_rng(4).random((300, 3)))
+    rows = tmp_path / "rows.csv"
+    assert main(["experiment", "--inputs", str(pts), "-k", "5", "-m", "superfacets",
+                 "--alpha", "200", "-o", str(rows), "-j", "1", "-q"]) == 0
+    (tmp_path / "afile").write_text("")
+    for out, said in ((rows, "rows.csv: exists and is not a folder (the report writes a "
+                             "folder"),
+                      (tmp_path / "afile" / "x" / "y", "afile is a file, not a folder")):
+        capsys.readouterr()
+        assert main(["report", str(rows), "-o", str(out)]) != 0
+        assert said in capsys.readouterr().err
+    assert rows.read_text().startswith("mesh,")  # (untouched)
+    assert main(["report", str(rows), "-o", str(tmp_path / "new" / "deep")]) == 0
+    assert (tmp_path / "new" / "deep" / "summary.md").is_file()

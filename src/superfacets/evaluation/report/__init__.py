@@ -75,11 +75,19 @@ def write_report(results, out_dir, *, k_focus: int = 150, prefix: str = "",
     ParameterError
         If the file has no successful row, a series is unknown, or ``k_focus`` is not a
         count (an integer >= 1).
+    NotADirectoryError
+        If ``out_dir`` or a folder above it is a file.
     """
     check_int("k_focus", k_focus, lo=1)  # (-3 drew every table of nothing)
     df = load_results(results, series=series)
     ok = ok_rows(df)  # (no successful row: refused before the folder is made)
     out = Path(out_dir)
+    if out.exists() and not out.is_dir():  # (the results file itself, given as -o)
+        raise NotADirectoryError(f"{out}: exists and is not a folder (the report writes a "
+                                 "folder of figures and tables)")
+    above = next((p for p in out.parents if p.exists()), None)  # (the folders it makes)
+    if above is not None and not above.is_dir():
+        raise NotADirectoryError(f"{out}: {above} is a file, not a folder")
     out.mkdir(parents=True, exist_ok=True)
     written = []
 
