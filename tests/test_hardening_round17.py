@@ -16,6 +16,8 @@ with its test.
   (14406)" of a file of 14,408 points; now the repeated points are counted in the message.
 - An output under a path that is a file said its "folder does not exist"; it says it is a
   file. ``report -o`` given the results file itself said "File exists".
+- ``render`` of vertex labels said "642 vertexs"; ``evaluate`` of a tetrahedral mesh's
+  labels "2,418 cells": each kind's plural now comes from the kinds' table.
 """
 
 from __future__ import annotations
@@ -154,3 +156,25 @@ def test_a_report_into_a_file_says_so(tmp_path, capsys):
     assert rows.read_text().startswith("mesh,")  # (untouched)
     assert main(["report", str(rows), "-o", str(tmp_path / "new" / "deep")]) == 0
     assert (tmp_path / "new" / "deep" / "summary.md").is_file()
+
+
+def test_every_kind_is_counted_in_its_own_plural(tmp_path, capsys):
+    from superfacets.elements.kinds import kind_of
+
+    assert [kind_of(k).counted(n) for k, n in (("faces", 1), ("vertices", 642),
+                                                ("points", 3000), ("cells", 2418))] == [
+        "1 face", "642 vertices", "3,000 points", "2,418 tetrahedra"]
+    meshio = pytest.importorskip("meshio")
+    from scipy.spatial import Delaunay
+
+    pts = np.random.default_rng(5).random((200, 3))
+    tets = Delaunay(pts).simplices
+    vol = tmp_path / "vol.vtu"
+    meshio.write(vol, meshio.Mesh(pts, [("tetra", tets)]))
+    labels = tmp_path / "vol.seg"
+    assert main(["segment", str(vol), "-k", "5", "-o", str(labels), "-q"]) == 0
+    capsys.readouterr()
+    assert main(["evaluate", str(vol), str(labels)]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith(f"vol.vtu: {len(tets):,} tetrahedra, 5 superfacets") and \
+        "tetrahedra (min / median / max" in out and "cells" not in out

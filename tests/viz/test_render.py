@@ -360,10 +360,13 @@ def test_render_and_html_read_vertex_label_files(sphere, tmp_path, capsys):
     seg = write_labels(tmp_path / "v.seg", segment(sphere, 12, elements="vertices").labels)
     assert main(["render", str(off), str(seg), "-o", str(tmp_path / "v.png"), "--size",
                  "200x160"]) == 0
+    assert f"{sphere.n_vertices:,} vertices," in capsys.readouterr().out  # ("vertexs")
     assert main(["html", str(off), str(seg), "-o", str(tmp_path / "v.html")]) == 0
     short = write_labels(tmp_path / "short.seg", np.zeros(5, dtype=int))
     assert main(["render", str(off), str(short), "-o", str(tmp_path / "x.png")]) == 2
-    assert "one label per face or per vertex" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "one label per face or per vertex" in err
+    assert f"{sphere.n_faces:,} faces and {sphere.n_vertices:,} vertices" in err
     assert not (tmp_path / "x.png").exists()
 
 

@@ -95,15 +95,15 @@ def cmd_evaluate(args) -> int:
     own = elements_of_input(data)  # faces (a mesh), points (a cloud), cells (tetrahedra)
     if own != "faces" and args.elements not in (None, own):
         what = "a point cloud" if own == "points" else "a tetrahedral mesh"
-        raise ParameterError(f"{args.mesh} is {what}: its labels are of {own}, not "
-                             f"{args.elements}")
+        raise ParameterError(f"{args.mesh} is {what}: its labels are of its "
+                             f"{kind_of(own).noun} (--elements {own}), not {args.elements}")
     kind = args.elements or own
     refuse_neighbours(args.neighbors, None, kind)
     n = kind_of(kind).n_rows(data)
     long = shows_stages(args, n)
     if args.labels_from is not None and args.labels is not None:  # (all ground truths)
         args.ground_truths, args.labels = [args.labels, *args.ground_truths], None
-    with waiting_bar(f"reading the labels of {n:,} {kind}", long):
+    with waiting_bar(f"reading the labels of {kind_of(kind).counted(n)}", long):
         labels, said = _labels_of(args, data, kind)
         gts = [_counted(read_labels(p), p, args, data, kind) for p in args.ground_truths]
     if labels.size and (labels < 0).all():  # (the oracle mIoU said "no labelled element")
@@ -116,7 +116,7 @@ def cmd_evaluate(args) -> int:
         gt = read_field(args.mesh, args.ground_truth_field)
         if gt.shape[0] != n:
             raise ParameterError(f"field {args.ground_truth_field!r} has {gt.shape[0]:,} "
-                                 f"values but {args.mesh} has {n:,} {kind}")
+                                 f"values but {args.mesh} has {kind_of(kind).counted(n)}")
         gts.append(gt)
     judged = [f for f, on in (("--tau", args.tau != 0.05),
                               ("--ignore-label", args.ignore_label is not None)) if on]
@@ -124,7 +124,7 @@ def cmd_evaluate(args) -> int:
         raise ParameterError(f"{' and '.join(judged)} judge{'s' if len(judged) == 1 else ''} "
                              "against a ground truth: give GT.seg files or "
                              "--ground-truth-field NAME")
-    with waiting_bar(f"measuring {name} ({n:,} {kind})", long):
+    with waiting_bar(f"measuring {name} ({kind_of(kind).counted(n)})", long):
         if gts:
             m = evaluate_rows(data, labels, gts, elements=kind, n_neighbors=args.neighbors,
                               tau=args.tau, ignore_label=args.ignore_label, precision=True)
@@ -138,7 +138,7 @@ def cmd_evaluate(args) -> int:
     valid = getattr(data, "valid", None) if kind_of(kind).cloud else None
     invalid = 0 if valid is None else int((~np.asarray(valid)).sum())
     said = f" ({invalid:,} invalid, not measured)" if invalid else ""
-    print(f"{Path(args.mesh).name}: {n:,} {kind}{said}, {segs}, "
+    print(f"{Path(args.mesh).name}: {kind_of(kind).counted(n)}{said}, {segs}, "
           f"{len(gts) or 'no'} ground truth{'s' if len(gts) != 1 else ''}")
     if gts:
         print(f"undersegmentation_error {m['undersegmentation_error']:.4f}  (lower is better)")
@@ -153,11 +153,11 @@ def cmd_evaluate(args) -> int:
         print("note: with no ground truth only the shapes are measured; give GT.seg files "
               "or --ground-truth-field NAME for the error, recall, precision and mIoU")
     if m.get("unassigned"):
-        print(f"note: {m['unassigned']:,} {kind} labelled below 0 (unassigned): each such "
-              "label counts as one segment")
+        print(f"note: {kind_of(kind).counted(m['unassigned'])} labelled below 0 (unassigned): "
+              "each such label counts as one segment")
     hist = ", ".join(f"{2**i}+: {c}" for i, c in enumerate(m["size_histogram"]) if c)
     print(f"segment sizes           {m['size_min']} / {m['size_median']:g} / "
-          f"{m['size_max']} {kind} (min / median / max; by size {hist})")
+          f"{m['size_max']} {kind_of(kind).noun} (min / median / max; by size {hist})")
     return 0
 
 
@@ -177,19 +177,20 @@ def _print_truth_metrics(m: dict, n: int, kind: str) -> None:
     else:
         print(f"  {len(per_class):,} classes: each one's IoU with --json")
     if len(per_class) > n // 2 >= MOST_CLASSES_LISTED:  # (a coordinate, an identifier)
-        print(f"note: the ground truth has {len(per_class):,} classes for {n:,} {kind}: is it "
-              "a field of labels?")
+        print(f"note: the ground truth has {len(per_class):,} classes for "
+              f"{kind_of(kind).counted(n)}: is it a field of labels?")
     if len(per_class) == 1:
         print(f"note: the ground truth has one class ({next(iter(per_class))}) here: it has "
               "no border, so the recall and precision say nothing")
     elif m.get("borderless_truths"):
-        print(f"note: no two neighbouring {kind} differ in {m['borderless_truths']} of the "
-              f"ground truths (their classes lie on separate pieces of the {kind}' graph): "
+        noun = kind_of(kind).noun
+        print(f"note: no two neighbouring {noun} differ in {m['borderless_truths']} of the "
+              f"ground truths (their classes lie on separate pieces of the {noun}' graph): "
               "there the recall is 1 and the precision 0 by convention, and say nothing")
     below = sorted(int(c) for c in per_class if int(c) < 0)
     if below:
         print(f"note: class {', '.join(map(str, below))} measured as a class; if it marks "
-              f"unlabelled {kind}, --ignore-label {below[0]} leaves them out")
+              f"unlabelled {kind_of(kind).noun}, --ignore-label {below[0]} leaves them out")
 
 
 #: The most classes whose IoU the text output lists one by one (more: with --json).
@@ -227,8 +228,9 @@ def _counted(labels, path, args, data, kind: str):
         return labels
     hint = ("; they are one per vertex: --elements vertices" if kind == "faces"
             and labels.shape[0] == getattr(data, "n_vertices", -1) else "")
-    raise MeshFormatError(f"{path}: {labels.shape[0]:,} labels, but {args.mesh} has {n:,} "
-                          f"{kind} (one label per {kind_of(kind).singular} is needed){hint}")
+    raise MeshFormatError(f"{path}: {labels.shape[0]:,} labels, but {args.mesh} has "
+                          f"{kind_of(kind).counted(n)} (one label per "
+                          f"{kind_of(kind).singular} is needed){hint}")
 
 
 def _check_field_name(name: str) -> None:

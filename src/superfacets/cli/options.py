@@ -539,8 +539,7 @@ def labels_for(args, data):
         for kind, n in counts.items():
             if labels.shape[0] == n:
                 return labels, info, kind
-        said = " and ".join(f"{n:,} {k if k != 'cells' else 'tetrahedra'}"
-                            for k, n in counts.items())
+        said = " and ".join(kind_of(k).counted(n) for k, n in counts.items())
         raise MeshFormatError(f"{field or args.labels}: {labels.shape[0]:,} labels, but "
                               f"{args.mesh} has {said} (one label per "
                               f"{' or per '.join(kind_of(k).singular for k in counts)} "

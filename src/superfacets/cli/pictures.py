@@ -61,12 +61,8 @@ def drawn_said(n_points: int, size) -> str:
 
 def _size_said(data, elements: str) -> str:
     """``'69,451 faces'``, ``'3,000 points'``, ... for the summary line."""
-    from ..checks import counted
-
-    n = {"points": lambda: data.n_total, "cells": lambda: data.n_tets,
-         "vertices": lambda: data.n_vertices, "faces": lambda: data.n_faces}[elements]()
-    return counted(n, kind_of(elements).singular) if elements != "cells" else \
-        counted(n, "tetrahedron").replace("tetrahedrons", "tetrahedra")
+    kind = kind_of(elements)
+    return kind.counted(kind.n_rows(data))
 
 
 def add_parsers(sub) -> None:
@@ -197,7 +193,7 @@ def _field_labels(path, field: str, n: int, kind: str):
     labels = read_field(path, field)
     if labels.shape[0] != n:
         raise MeshFormatError(f"{path}: field {field} has {labels.shape[0]:,} values, but the "
-                              f"input has {n:,} {kind if kind != 'cells' else 'tetrahedra'}")
+                              f"input has {kind_of(kind).counted(n)}")
     return labels
 
 

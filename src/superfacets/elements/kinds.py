@@ -36,7 +36,10 @@ class ElementKind:
     name : str
         ``"faces"``, ``"vertices"``, ``"points"`` or ``"cells"`` (the graph's ``kind``).
     singular : str
-        One element, in messages: ``"face"``, ``"vertex"``, ...
+        One element, in messages: ``"face"``, ``"vertex"``, ..., ``"tetrahedron"``.
+    plural : str
+        Several, in messages: ``"faces"``, ``"vertices"``, ``"points"``, ``"tetrahedra"``
+        (the name, but for cells).
     dim : int
         Dimension of an element's size: 2 (an area, surfaces) or 3 (a volume,
         tetrahedra). The superfacet radius is that of a disc (``A = k pi r^2``,
@@ -161,6 +164,7 @@ class ElementKind:
 
     name: str
     singular: str
+    plural: str = ""
     dim: int = 2
     better_method: bool = False
     exact_assignment: bool = False
@@ -200,6 +204,22 @@ class ElementKind:
         """
         return int(getattr(data, self.rows))
 
+    def counted(self, n: int) -> str:
+        """``n`` of these elements in words: ``'1 vertex'``, ``'642 vertices'``, ``'2,418
+        tetrahedra'``.
+
+        Examples
+        --------
+        >>> kind_of("vertices").counted(642), kind_of("cells").counted(1)
+        ('642 vertices', '1 tetrahedron')
+        """
+        return f"{n:,} {self.singular if n == 1 else self.noun}"
+
+    @property
+    def noun(self) -> str:
+        """The elements in the plural, in messages (:attr:`plural`, else the name)."""
+        return self.plural or self.name
+
     @property
     def size_word(self) -> str:
         """``"area"`` or ``"volume"``: what an element's size is."""
@@ -219,7 +239,8 @@ KINDS = {k.name: k for k in (
                 neighborhood=True, cloud=True, rows="n_total", peak_bytes=220, tiled_bytes=100,
                 exact_count=True, single_weights=True, merge_from=5, settle_cycles=True,
                 face_truth="sample"),
-    ElementKind("cells", "cell", dim=3, rows="n_tets", segment_word="superfacets",
+    ElementKind("cells", "tetrahedron", "tetrahedra", dim=3, rows="n_tets",
+                segment_word="superfacets",
                 exact_count=True),
 )}
 
