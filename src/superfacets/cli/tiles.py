@@ -135,7 +135,7 @@ def segment_tiles(args) -> int:
         if seg_out is not None and str(seg_out) != "-":
             levels = () if result.hierarchy is None else result.hierarchy.levels
             what = records_said(seg_out, args.mesh, kind, kept, levels) or \
-                f"labels, one per {kind[:-1]}"
+                f"labels, one per {kind_of(kind).singular}"
             print(f"wrote {seg_out} ({what})", file=report)
         if graph_out is not None:
             print(f"wrote {graph_out} (superpoint graph, PyTorch Geometric's layout)",

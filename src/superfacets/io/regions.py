@@ -38,6 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from .._runtime import extras
+from ..elements.kinds import kind_of
 from ..errors import InvalidMeshError, MeshFormatError
 from ..inputs.bounds import along, column_bounds, finite_rows, rows_in_box
 from ..inputs.cloud import (
@@ -378,7 +379,8 @@ class RegionReader:
                 kept.append(pos[at[finite]])
                 kept_rows.append(start + at[finite])
         if n == 0:
-            raise MeshFormatError(f"{self.path}: no {self.kind[:-1]} with a finite position")
+            raise MeshFormatError(f"{self.path}: no {kind_of(self.kind).singular} with a "
+                                  "finite position")
 
         top = color_top(stats["itemsize"], stats["largest"]) if stats else None
         return Survey(lo, hi, size, n, np.concatenate(kept).astype(np.float64),

@@ -51,6 +51,7 @@ from .._runtime.memory import give_back_free_memory
 from .._runtime.progress import new_bar, tick
 from .._runtime.threads import using
 from ..elements.builders import kind_for
+from ..elements.kinds import kind_of
 from ..elements.labels import relabel_dense
 from . import stages
 from .finish import clean_up, exact_count, finish, merge_small
@@ -144,7 +145,8 @@ class Hooks:
         self.bar = None
         self._ticking = None
         if progress:  # one bar: the set-up stages by name, then the passes
-            self.bar = new_bar(total=None, desc=f"{kind[:-1]} graph", unit="pass", leave=False)
+            self.bar = new_bar(total=None, desc=f"{kind_of(kind).singular} graph", unit="pass",
+                               leave=False)
             self.bar.refresh()  # (shown at once: the graph's build is a run's longest wait)
             self._ticking = tick(self.bar)
 
