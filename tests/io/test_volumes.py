@@ -58,7 +58,7 @@ def test_cell_graph_known_answer():
     t = TetMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1]],
                 [[0, 1, 2, 3], [1, 2, 3, 4]])
     g = cell_graph(t)
-    assert g.kind == "cells" and g.element == "cell" and g.n_elements == 2
+    assert g.kind == "cells" and g.element == "tetrahedron" and g.n_elements == 2
     assert g.pairs.tolist() == [[0, 1]]
     assert g.lengths[0] == pytest.approx(np.sqrt(3) / 2)  # the triangle 1-2-3
     np.testing.assert_allclose(g.sizes, [1 / 6, 1 / 3])
