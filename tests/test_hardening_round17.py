@@ -125,6 +125,11 @@ def test_more_segments_than_distinct_points_counts_the_repeated_ones(tmp_path):
     with pytest.raises(ParameterError, match=r"number of points \(50\)$"):
         segment(pts, 51)  # (every row a point: the count alone)
     assert segment(cloud, 50).n_segments == 50
+    # a mesh's vertices used by no face, the same way
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [5, 5, 5.0]])
+    with pytest.raises(ParameterError, match=r"number of vertices \(4: 1 of the input's 5 is "
+                                             r"used by no face\)"):
+        segment((v, np.array([[0, 1, 2], [1, 3, 2]])), 5, elements="vertices")
 
 
 def test_an_output_under_a_file_says_the_folder_is_a_file(tmp_path, capsys):

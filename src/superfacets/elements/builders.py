@@ -18,10 +18,11 @@ from .graph import ElementGraph, cached_on
 from .points import DEFAULT_NEIGHBORS as _N_NEIGHBORS
 
 __all__ = ["ElementInput", "Builder", "BUILDERS", "as_element_graph", "elements_of",
-           "is_cloud", "kind_for", "prepared", "register_builder", "features_of", "per_element"]
+           "is_cloud", "kind_for", "prepared", "register_builder", "features_of", "per_element",
+           "check_count"]
 
 from .._runtime import memory
-from ..checks import check_n_segments
+from ..checks import check_int, check_n_segments
 from ..errors import ParameterError
 from ..inputs.cloud import PointCloud, as_cloud, is_point_table
 from ..inputs.convert import as_mesh
@@ -32,6 +33,43 @@ from .cells import cell_graph
 from .faces import distinct_faces
 from .features import features_of, per_element  # noqa: E402,F401 (re-exported)
 from .kinds import kind_of
+
+
+def check_count(n_segments, n: int, rows: int, kind: str) -> int:
+    """``n_segments`` checked against the ``n`` elements of an input of ``rows`` rows: where
+    rows are not elements (points at an earlier point's position or at none, vertices of no
+    face), the message counts them, since the elements alone read as a miscount of the
+    user's rows.
+
+    Parameters
+    ----------
+    n_segments : int
+    n, rows : int
+        The elements, and the input's rows (faces, vertices, points with invalid ones).
+    kind : str
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    ParameterError
+        If ``n_segments`` is not an integer in ``1..n``.
+
+    Examples
+    --------
+    >>> check_count(5, 50, 52, "points")
+    5
+    """
+    if rows <= n or check_int("n_segments", n_segments, lo=1) <= n:
+        return check_n_segments(n_segments, n, kind)
+    one = rows - n == 1
+    why = (("repeats an earlier point's position or has none" if one else
+            "repeat an earlier point's position or have none") if kind_of(kind).cloud else
+           f"{'is' if one else 'are'} used by no face")
+    raise ParameterError(f"n_segments ({n_segments:,}) is larger than the number of {kind} "
+                         f"({n:,}: {rows - n:,} of the input's {rows:,} {why})")
 
 
 class ElementInput(NamedTuple):
@@ -398,10 +436,10 @@ def prepared(obj, elements: str | None = None, *, n_segments: int | None = None)
     builder = BUILDERS[kind]
     data = builder.prepare(obj)
     n = builder.count(data)
-    if n_segments is not None:  # before the graph, the memory peak of a run
-        check_n_segments(n_segments, n, kind)
-
     rows = max(n, int(kind_of(kind).n_rows(data)))  # (invalid points are held too)
+    if n_segments is not None:  # before the graph, the memory peak of a run
+        check_count(n_segments, n, rows, kind)
+
     memory.check_memory(rows, kind_of(kind).peak_bytes,
                  f"{getattr(data, 'name', '') or 'the input'}: {n:,} {kind}",
                  tiles_help=kind_of(kind).tiled_bytes is not None,

@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..elements.builders import ElementInput, elements_of, prepared
+from ..elements.builders import ElementInput, check_count, elements_of, prepared
 from ..elements.density import adapted_graph, density_for
 from ..elements.features import colors_or_features, features_of, per_element
 from ..elements.graph import ElementGraph
@@ -234,26 +234,13 @@ def build_graph(obj, p: SegmentParams, features=None
     source = elements_of(data, kind, n_neighbors=p.n_neighbors,
                          neighbor_radius=p.neighbor_radius, step_weight=p.step_weight)
     graph = source.graph
-    _check_distinct(source, p.n_segments if p.radius is None else None)
+    if p.radius is None and p.n_segments is not None:  # (points: distinct ones, known now)
+        check_count(p.n_segments, graph.n_elements, source.n_rows, kind)
     if p.density is None:  # automatic: superpoints follow a scan's uneven density
         p = replace(p, density=density_for(graph, p.paper))
     if p.density > 0 or p.roughness > 0:  # content-sensitive sizes (not in the paper)
         graph = adapted_graph(graph, p.density, p.roughness)
     return source, graph, p
-
-
-def _check_distinct(source, k: int | None) -> None:
-    """Refuse more segments than elements where the input has more rows than elements
-    (points at an earlier point's position or at none, vertices of no face), saying so:
-    the count of elements alone reads as a miscount of the user's rows."""
-    n, rows = source.graph.n_elements, source.n_rows
-    if k is None or k <= n or rows <= n:
-        return
-    kind = source.graph.kind
-    why = ("repeat an earlier point's position or have none" if kind_of(kind).cloud else
-           "are used by no face")
-    raise ParameterError(f"n_segments ({k:,}) is larger than the number of {kind} ({n:,}: "
-                         f"{rows - n:,} of the input's {rows:,} {why})")
 
 
 def _check_features(kind: str, data, features) -> None:
