@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 
 import numpy as np
 import pytest
@@ -287,6 +288,27 @@ def test_experiment_runs_on_a_user_s_files(tmp_path, capsys, sphere):
     assert main(["experiment", "--ground-truth-field", "x", "-o", str(out)]) == 2
     assert "goes with --inputs" in capsys.readouterr().err
 
+
+
+def test_evaluate_names_a_las_file_s_asprs_classes(tmp_path, capsys):
+    """Against a LAS file's ``classification`` each class's IoU is named as the ASPRS
+    table names it (ground, building); another field's classes are numbers alone."""
+    laz = _laz(tmp_path / "tile.laz")
+    labels = tmp_path / "tile.seg"
+    assert main(["segment", str(laz), "-k", "20", "-o", str(labels), "-q"]) == 0
+    capsys.readouterr()
+    assert main(["evaluate", str(laz), str(labels), "--ground-truth-field",
+                 "classification"]) == 0
+    out = capsys.readouterr().out
+    assert re.search(r"class 2 +ground +IoU [01]\.\d{4}", out), out
+    assert re.search(r"class 6 +building +IoU [01]\.\d{4}", out), out
+    assert main(["evaluate", str(laz), str(labels), "--ground-truth-field",
+                 "classification", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["class_names"] == {"2": "ground",
+                                                                   "6": "building"}
+    assert main(["evaluate", str(laz), str(labels), "--ground-truth-field",
+                 "point_source_id"]) == 0  # (every point 0: one class, unnamed)
+    assert re.search(r"class 0 +IoU 1\.0000", capsys.readouterr().out)  # (no name)
 
 
 def test_an_experiment_segments_a_scan_as_seen_from_an_axis(tmp_path, capsys):

@@ -128,6 +128,7 @@ def cmd_evaluate(args) -> int:
         if gts:
             m = evaluate_rows(data, labels, gts, elements=kind, n_neighbors=args.neighbors,
                               tau=args.tau, ignore_label=args.ignore_label, precision=True)
+            m["class_names"] = _class_names(args, len(gts))
         else:  # (the segments' shapes alone: every other metric compares with a truth)
             m = dict(dict.fromkeys(METRICS), oracle_iou_per_class={}, **shape_rows(
                 data, labels, elements=kind, n_neighbors=args.neighbors))
@@ -161,6 +162,15 @@ def cmd_evaluate(args) -> int:
     return 0
 
 
+def _class_names(args, n_truths: int) -> dict:
+    """The names of the classes of the one ground truth, where it is a field its format
+    names (a LAS file's ``classification``: the ASPRS classes); else none."""
+    from ..io.labels import class_names
+
+    field = args.ground_truth_field
+    return class_names(args.mesh, field) if field is not None and n_truths == 1 else {}
+
+
 def _print_truth_metrics(m: dict, n: int, kind: str) -> None:
     """The lines of the metrics that compare with the ground truths (after the
     compactness)."""
@@ -171,9 +181,11 @@ def _print_truth_metrics(m: dict, n: int, kind: str) -> None:
     print(f"oracle_miou             {m['oracle_miou']:.4f}  (higher is better; each segment "
           "given its majority class)")
     per_class = m.get("oracle_iou_per_class", {})
+    names = m.get("class_names", {})
     if len(per_class) <= MOST_CLASSES_LISTED:
         for cls, iou in sorted(per_class.items()):
-            print(f"  class {cls:<6} IoU {iou:.4f}")
+            named = f"{names[int(cls)]:<25}" if int(cls) in names else ""
+            print(f"  class {cls:<6} {named}IoU {iou:.4f}")
     else:
         print(f"  {len(per_class):,} classes: each one's IoU with --json")
     if len(per_class) > n // 2 >= MOST_CLASSES_LISTED:  # (a coordinate, an identifier)
@@ -261,6 +273,9 @@ def _print_table(args, kind: str, n: int, n_truths: int, m: dict) -> None:
     if args.format == "json":
         row["oracle_iou_per_class"] = {str(k): v for k, v in
                                        m.get("oracle_iou_per_class", {}).items()}
+        names = m.get("class_names", {})
+        row["class_names"] = {str(k): names[int(k)] for k in row["oracle_iou_per_class"]
+                              if int(k) in names}
         row["size_histogram"] = m["size_histogram"]
         row["borderless_truths"] = m.get("borderless_truths", 0)
     if args.format == "json":

@@ -21,7 +21,8 @@ from .ply import read_ply_labels, whole_labels
 from .records import LABEL_FIELD
 from .tetmeshes import VOLUME_FORMATS, volume_field
 
-__all__ = ["read_labels", "write_labels", "write_segindices", "read_field"]
+__all__ = ["read_labels", "write_labels", "write_segindices", "read_field", "class_names",
+           "ASPRS_CLASSES"]
 
 
 _BLOCK = 1 << 20  # labels formatted at a time
@@ -473,6 +474,50 @@ def read_field(path, name: str) -> np.ndarray:
                       "(a scan's ground truth is a field such as classification or label)",
                       stacklevel=2)
     return labels
+
+
+#: The ASPRS classes of a LAS file's ``classification`` (LAS 1.4 R15, table 17; 19-63
+#: reserved, 64-255 user definable).
+ASPRS_CLASSES = {0: "never classified", 1: "unclassified", 2: "ground", 3: "low vegetation",
+                 4: "medium vegetation", 5: "high vegetation", 6: "building",
+                 7: "low point (noise)", 8: "reserved", 9: "water", 10: "rail",
+                 11: "road surface", 12: "reserved", 13: "wire guard", 14: "wire conductor",
+                 15: "transmission tower", 16: "wire-structure connector", 17: "bridge deck",
+                 18: "high noise"}
+
+
+def class_names(path, name: str) -> dict:
+    """The names of a ground-truth field's classes, where its format names them: a LAS/LAZ
+    file's ``classification`` holds the ASPRS classes (:data:`ASPRS_CLASSES`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file the field was read from (:func:`read_field`).
+    name : str
+        The field.
+
+    Returns
+    -------
+    dict of int to str
+        Empty where the format names none; a LAS file's 0-255 (19-63 "reserved", 64-255
+        "user defined").
+
+    Raises
+    ------
+    TypeError
+        Never: any path and name are looked at.
+
+    Examples
+    --------
+    >>> class_names("tile.laz", "Classification")[2], class_names("room.ply", "label")
+    ('ground', {})
+    """
+    fmt = split_suffix(Path(path))[0]
+    if fmt in ("las", "laz") and name.lower() == "classification":
+        return {c: ASPRS_CLASSES.get(c, "reserved" if c < 64 else "user defined")
+                for c in range(256)}
+    return {}
 
 
 #: Fields (lower case) that hold what the sensor measured at each point, not a label: read
