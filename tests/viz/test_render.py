@@ -228,6 +228,37 @@ def test_render_points_colours_a_cloud_by_superpoint(tmp_path):
 
 
 
+def test_a_picture_of_classes_names_them_beside_their_colours(tmp_path, capsys):
+    """Classes with names (a LAS file's ASPRS classes) get a legend of swatches in the
+    classes' own colours and their names, not the superpoints' sizes; ``render
+    --labels-from classification`` draws it."""
+    from superfacets.viz.render import render_points
+
+    rng = np.random.default_rng(2)
+    xy = rng.random((4000, 2)) * [40.0, 20.0]
+    pts = np.c_[xy, np.where(xy[:, 0] > 20, 3.0, 0.0)]
+    classes = np.where(xy[:, 0] > 20, 6, 2)
+    kw = dict(size=(640, 480), view="top", up="z")
+    plain = render_points(pts, classes, legend=False, **kw)
+    named = render_points(pts, classes, legend=True, class_names={2: "ground", 6: "building"},
+                          **kw)
+    sized = render_points(pts, classes, legend=True, **kw)
+    drawn = plain.reshape(-1, 3)
+    colours, counts = np.unique(drawn[(drawn < 250).any(axis=1)], axis=0, return_counts=True)
+    top2 = colours[np.argsort(-counts)[:2]]  # (the two classes' colours)
+    legend = named[(named != plain).any(axis=-1)]
+    assert all((legend == c).all(axis=1).sum() > 20 for c in top2)  # (a swatch each)
+    assert not np.array_equal(named, sized)
+    laspy = pytest.importorskip("laspy")
+    las = laspy.LasData(laspy.LasHeader(point_format=3, version="1.2"))
+    las.x, las.y, las.z = pts.T
+    las.classification = classes.astype(np.uint8)
+    las.write(tmp_path / "tile.las")
+    assert main(["render", str(tmp_path / "tile.las"), "--labels-from", "classification",
+                 "-o", str(tmp_path / "c.png"), "--size", "640x480"]) == 0
+    assert (tmp_path / "c.png").is_file()
+
+
 def test_cli_panel_draws_a_cloud_at_several_counts_and_from_label_files(tmp_path, capsys):
     """``panel`` read meshes only ("unknown mesh format .npy"): a cloud's panels are its
     points coloured by superpoint, for the methods that segment points (graph segmentation

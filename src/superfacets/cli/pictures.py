@@ -173,7 +173,7 @@ def cmd_render(args) -> int:
     with waiting_bar(f"rendering {out.name}", shows_stages(args, len(labels) if labels
                                                            is not None else 0)):
         if elements == "points":
-            render_points(data, labels, out, **style)
+            render_points(data, labels, out, class_names=_named_classes(args), **style)
             said += drawn_said(data.n_points, args.size)
         else:
             render(data, labels, out, boundaries=not args.no_boundaries,
@@ -182,6 +182,15 @@ def cmd_render(args) -> int:
         print(f"wrote {out} ({args.size[0]}x{args.size[1]}, {said}, {said_up(up)}, "
               f"rendered in {time.perf_counter() - t0:.2f} s)")
     return 0
+
+
+def _named_classes(args) -> dict | None:
+    """The class names of ``--labels-from FIELD`` where the format names them (a LAS file's
+    ``classification``: the ASPRS classes), for the picture's legend; else None."""
+    from ..io.labels import class_names
+
+    field = getattr(args, "labels_from", None)
+    return (class_names(args.mesh, field) or None) if field else None
 
 
 def _field_labels(path, field: str, n: int, kind: str):

@@ -36,6 +36,7 @@ from ..method.params import check_choice, check_int, check_number
 from .camera import view_frame
 
 __all__ = ["render", "render_points", "render_panel", "show", "has_display", "size_legend",
+           "class_legend",
            "NoDisplayError", "no_display", "drawn_share", "PICTURE_SIZE", "VIEW_POINTS"]
 
 #: A picture's width and height in pixels where none is given.
@@ -241,13 +242,16 @@ def _save_png(image: np.ndarray, out, outputs=None) -> Path:
 
 
 def _finish(plotter, out, outputs=None, legend=None) -> np.ndarray:
-    """Take the picture, close the plotter, draw the ``legend`` (labels, word) on it, write
-    the PNG if asked."""
+    """Take the picture, close the plotter, draw the ``legend`` on it (``(labels, word,
+    elements)``: :func:`size_legend`; a function of the image: that), write the PNG if
+    asked."""
     try:
         image = np.asarray(plotter.screenshot(return_img=True))[:, :, :3].copy()
     finally:
         plotter.close()
-    if legend is not None:
+    if callable(legend):
+        image = legend(image)
+    elif legend is not None:
         image = size_legend(image, *legend)
     if out is not None:
         _save_png(image, out, outputs)
@@ -439,6 +443,77 @@ def size_legend(image: np.ndarray, labels, word: str = "superfacets",
     return np.asarray(pic)
 
 
+#: The most classes :func:`class_legend` lists (the commonest; the rest counted in a line).
+LEGEND_CLASSES = 12
+
+
+def class_legend(image: np.ndarray, labels, colours: dict, names: dict) -> np.ndarray:
+    """The picture with its classes named in a lower corner (as :func:`size_legend` places
+    its box): each class's colour, code and name, the commonest first, at most
+    :data:`LEGEND_CLASSES` of them.
+
+    Parameters
+    ----------
+    image : (height, width, 3) uint8 ndarray
+    labels : (n,) int ndarray
+        The classes drawn, one per element (below 0: not counted).
+    colours : dict of int to (int, int, int)
+        Each class's colour in the picture.
+    names : dict of int to str
+        Each class's name (:func:`superfacets.io.labels.class_names`).
+
+    Returns
+    -------
+    (height, width, 3) uint8 ndarray
+        A new picture; the same one where no element has a class or the picture is too
+        small (under 320 x 200 pixels).
+
+    Raises
+    ------
+    MissingExtraError
+        Without Pillow (the ``render`` extra).
+
+    Examples
+    --------
+    >>> img = np.full((600, 800, 3), 255, dtype=np.uint8)
+    >>> out = class_legend(img, np.r_[[2] * 9, [6] * 3], {2: (200, 40, 40), 6: (40, 40, 200)},
+    ...                    {2: "ground", 6: "building"})
+    >>> bool((out == [200, 40, 40]).all(axis=-1).any()), bool((img == 255).all())
+    (True, True)
+    """
+    lab = np.asarray(labels)
+    h, w = image.shape[:2]
+    if lab.size == 0 or (lab < 0).all() or w < 320 or h < 200:
+        return image
+    Image = require("PIL.Image", "drawing pictures")
+    ImageDraw = require("PIL.ImageDraw", "drawing pictures")
+    ImageFont = require("PIL.ImageFont", "drawing pictures")
+    found, counts = np.unique(lab[lab >= 0], return_counts=True)
+    order = [int(found[i]) for i in np.argsort(-counts, kind="stable")]
+    shown, rest = order[:LEGEND_CLASSES], len(order) - LEGEND_CLASSES
+    unit = max(10, min(w, h) // 45)
+    font = ImageFont.load_default(size=unit)
+    lines = [f"{c} {names.get(c, '')}".rstrip() for c in shown] + \
+        ([f"and {rest} more"] if rest > 0 else [])
+    step = unit + 6
+    box_w = int(max(font.getlength(t) for t in lines) + 4 * unit)
+    box_h = len(lines) * step + 2 * unit
+    x0, y0 = _legend_corner(image, box_w + 1, box_h, unit)
+    pic = Image.fromarray(image)
+    draw = ImageDraw.Draw(pic)
+    draw.rectangle([x0, y0, x0 + box_w, y0 + box_h], fill=(255, 255, 255),
+                   outline=(90, 90, 90))
+    y = y0 + unit
+    for i, t in enumerate(lines):
+        if i < len(shown):  # (a swatch of the class's colour)
+            draw.rectangle([x0 + unit, y + 1, x0 + 2 * unit, y + unit],
+                           fill=tuple(colours.get(shown[i], (200, 200, 200))),
+                           outline=(60, 60, 60))
+        draw.text((x0 + 3 * unit, y), t, fill=(0, 0, 0), font=font)
+        y += step
+    return np.asarray(pic)
+
+
 def _legend_corner(image: np.ndarray, box_w: int, box_h: int, margin: int) -> tuple[int, int]:
     """The upper left corner of the legend's box: of the picture's two lower corners (the
     title is at its top), the one where it hides the fewer drawn pixels (those not of the
@@ -456,7 +531,7 @@ def _legend_corner(image: np.ndarray, box_w: int, box_h: int, margin: int) -> tu
 def _picture(pv, size, background, frame, view, zoom, up, title, out, outputs, draw,
              legend=None):
     """One off-screen picture: background, ``draw(plotter)``, camera on ``frame``, title,
-    the sizes' ``legend`` ((labels, word) or None)."""
+    the ``legend`` (as :func:`_finish` draws it, or None)."""
     w, h = size
     p = pv.Plotter(off_screen=True, window_size=(w, h))
     try:
@@ -517,9 +592,9 @@ def render_panel(items: Sequence[tuple], out=None, *, ncols: int | None = None,
         for i, (mesh, labels, title) in enumerate(items):
             p.subplot(i // ncols, i % ncols)
             if kind_of(kind_for(mesh)).cloud:  # (shaded spheres: eye-dome lighting is one
-                mesh, draw = _points_drawing(pv, mesh, labels, (w, h), view, zoom, up,  # pass
-                                             eye_dome=False,  # of a whole window, not a panel's)
-                                             limit=w * h)
+                mesh, draw, _ = _points_drawing(pv, mesh, labels, (w, h), view, zoom, up,
+                                                eye_dome=False,  # (one pass of a whole
+                                                limit=w * h)  # window, not a panel's)
                 draw(p)
             else:
                 mesh = as_mesh(mesh)
@@ -576,8 +651,8 @@ def show(mesh, labels=None, *, title: str | None = None, boundaries: bool = True
     pv = _pyvista(off_screen=False)
     p = pv.Plotter(title=title or "superfacets")
     if kind_of(kind_for(mesh)).cloud:  # (points coloured by superpoint, as render_points)
-        mesh, draw = _points_drawing(pv, mesh, labels, tuple(p.window_size), view, 1.0, up,
-                                     limit=max_points)
+        mesh, draw, _ = _points_drawing(pv, mesh, labels, tuple(p.window_size), view, 1.0, up,
+                                        limit=max_points)
         draw(p)
     else:
         mesh = as_mesh(mesh)
@@ -607,7 +682,8 @@ def render_points(cloud, labels=None, out=None, *, size=PICTURE_SIZE, view=None,
                   background="white", point_size: float | None = None,
                   title: str | None = None, zoom: float = 1.0, up="y",
                   outputs=None, eye_dome: bool | None = None, legend=False,
-                  max_points: int | None = None) -> np.ndarray:
+                  max_points: int | None = None, class_names: dict | None = None
+                  ) -> np.ndarray:
     """Render a point cloud off-screen, points coloured by superpoint.
 
     Parameters
@@ -634,6 +710,10 @@ def render_points(cloud, labels=None, out=None, *, size=PICTURE_SIZE, view=None,
     max_points : int, optional
         Points drawn at most: past it an even random share of them
         (:func:`drawn_share`). Default: the picture's pixels (1,080,000 at 1200 x 900).
+    class_names : dict of int to str, optional
+        The labels are classes with these names (a LAS file's ASPRS classes:
+        :func:`superfacets.io.labels.class_names`): with ``legend``, the legend names
+        each class beside its colour (:func:`class_legend`) instead of the sizes.
 
     Returns
     -------
@@ -652,9 +732,14 @@ def render_points(cloud, labels=None, out=None, *, size=PICTURE_SIZE, view=None,
     w, h = _size(size)
     pv = _pyvista(off_screen=True)
     _check_style(pv, background, "black", 1.0, zoom)
-    frame, draw = _points_drawing(pv, cloud, labels, (w, h), view, zoom, up, point_size,
-                                  eye_dome, limit=w * h if max_points is None else max_points)
+    frame, draw, colours = _points_drawing(pv, cloud, labels, (w, h), view, zoom, up,
+                                           point_size, eye_dome,
+                                           limit=w * h if max_points is None else max_points)
     sized = legend if isinstance(legend, np.ndarray) else labels if legend else None
+    if sized is not None and class_names:
+        return _picture(pv, (w, h), background, frame, view, zoom, up, title, out, outputs,
+                        draw, legend=lambda image: class_legend(image, sized, colours,
+                                                                class_names))
     return _picture(pv, (w, h), background, frame, view, zoom, up, title, out, outputs, draw,
                     legend=None if sized is None else (sized, "superpoints", "points"))
 
@@ -724,13 +809,20 @@ def drawn_share(cloud, labels=None, limit: int | None = None) -> tuple:
 
 def _points_drawing(pv, cloud, labels, size, view, zoom, up, point_size=None, eye_dome=None,
                     limit=None):
-    """A point cloud's camera frame (:class:`PointsFrame`) and ``draw(plotter)``, which adds
+    """A point cloud's camera frame (:class:`PointsFrame`), ``draw(plotter)``, which adds
     its points coloured by ``labels`` (:func:`render_points`' options), at most ``limit``
-    of them (:func:`drawn_share`)."""
+    of them (:func:`drawn_share`), and each label's colour (``{label: (r, g, b)}``; empty
+    without labels)."""
     cloud, labels, _ = drawn_share(cloud, labels, limit)
     source = elements_of(cloud, "points")
     g = source.graph
     rgb = point_colors(source, labels)
+    colours = {}
+    if labels is not None:  # (a label's elements share one colour: its first row's)
+        rows = np.flatnonzero((source.index >= 0) & (np.asarray(labels) >= 0))
+        found, first = np.unique(np.asarray(labels)[rows], return_index=True)
+        colours = {int(c): tuple(int(v) for v in rgb[source.index[rows[i]]])
+                   for c, i in zip(found, first)}
     frame = PointsFrame(g)
     view_frame(frame, view, up=up)
     if point_size is None:  # about one point spacing on screen
@@ -748,4 +840,4 @@ def _points_drawing(pv, cloud, labels, size, view, zoom, up, point_size=None, ey
         if eye_dome:
             p.enable_eye_dome_lighting()
 
-    return frame, draw
+    return frame, draw, colours
