@@ -398,18 +398,13 @@ def size_legend(image: np.ndarray, labels, word: str = "superfacets",
     >>> out.shape, bool((out != 255).any()), bool((img == 255).all())
     ((600, 800, 3), True, True)
     """
-    lab = np.asarray(labels)
-    h, w = image.shape[:2]
-    if lab.size == 0 or (lab < 0).all() or w < 320 or h < 200:
+    tools = _legend_text(image, labels)
+    if tools is None:
         return image
-    Image = require("PIL.Image", "drawing pictures")
-    ImageDraw = require("PIL.ImageDraw", "drawing pictures")
-    ImageFont = require("PIL.ImageFont", "drawing pictures")
+    lab, unit, font = tools
     s = size_summary(lab)
     hist = np.asarray(s["size_histogram"], dtype=np.float64)
     k = int(np.unique(lab[lab >= 0]).size)
-    unit = max(10, min(w, h) // 45)  # the text's size in pixels
-    font = ImageFont.load_default(size=unit)
     lines = [f"{k:,} {word}",  # (narrow and tall: a centred drawing leaves its sides free)
              f"{elements} each: {s['size_min']:,} / {s['size_median']:,.0f} / "
              f"{s['size_max']:,}", "(min / median / max)"]
@@ -419,11 +414,7 @@ def size_legend(image: np.ndarray, labels, word: str = "superfacets",
     box_w = max(max(font.getlength(t) for t in [*lines, caption]), hist.size * bar_w) \
         + 2 * unit
     box_h = (len(lines) + 2) * step + 5 * unit
-    x0, y0 = _legend_corner(image, int(box_w) + 1, box_h, unit)
-    pic = Image.fromarray(image)
-    draw = ImageDraw.Draw(pic)
-    draw.rectangle([x0, y0, x0 + box_w, y0 + box_h], fill=(255, 255, 255),
-                   outline=(90, 90, 90))
+    pic, draw, x0, y0 = _legend_box(image, box_w, box_h, unit)
     y = y0 + unit
     for t in lines:
         draw.text((x0 + unit, y), t, fill=(0, 0, 0), font=font)
@@ -481,28 +472,19 @@ def class_legend(image: np.ndarray, labels, colours: dict, names: dict) -> np.nd
     >>> bool((out == [200, 40, 40]).all(axis=-1).any()), bool((img == 255).all())
     (True, True)
     """
-    lab = np.asarray(labels)
-    h, w = image.shape[:2]
-    if lab.size == 0 or (lab < 0).all() or w < 320 or h < 200:
+    tools = _legend_text(image, labels)
+    if tools is None:
         return image
-    Image = require("PIL.Image", "drawing pictures")
-    ImageDraw = require("PIL.ImageDraw", "drawing pictures")
-    ImageFont = require("PIL.ImageFont", "drawing pictures")
+    lab, unit, font = tools
     found, counts = np.unique(lab[lab >= 0], return_counts=True)
     order = [int(found[i]) for i in np.argsort(-counts, kind="stable")]
     shown, rest = order[:LEGEND_CLASSES], len(order) - LEGEND_CLASSES
-    unit = max(10, min(w, h) // 45)
-    font = ImageFont.load_default(size=unit)
     lines = [f"{c} {names.get(c, '')}".rstrip() for c in shown] + \
         ([f"and {rest} more"] if rest > 0 else [])
     step = unit + 6
     box_w = int(max(font.getlength(t) for t in lines) + 4 * unit)
     box_h = len(lines) * step + 2 * unit
-    x0, y0 = _legend_corner(image, box_w + 1, box_h, unit)
-    pic = Image.fromarray(image)
-    draw = ImageDraw.Draw(pic)
-    draw.rectangle([x0, y0, x0 + box_w, y0 + box_h], fill=(255, 255, 255),
-                   outline=(90, 90, 90))
+    pic, draw, x0, y0 = _legend_box(image, box_w, box_h, unit)
     y = y0 + unit
     for i, t in enumerate(lines):
         if i < len(shown):  # (a swatch of the class's colour)
@@ -512,6 +494,32 @@ def class_legend(image: np.ndarray, labels, colours: dict, names: dict) -> np.nd
         draw.text((x0 + 3 * unit, y), t, fill=(0, 0, 0), font=font)
         y += step
     return np.asarray(pic)
+
+
+def _legend_text(image: np.ndarray, labels):
+    """``(labels, unit, font)`` for a legend on ``image``: the labels as an array, the text's
+    size in pixels and Pillow's font of it; None where no element has a label or the
+    picture is under 320 x 200 pixels."""
+    lab = np.asarray(labels)
+    h, w = image.shape[:2]
+    if lab.size == 0 or (lab < 0).all() or w < 320 or h < 200:
+        return None
+    ImageFont = require("PIL.ImageFont", "drawing pictures")
+    unit = max(10, min(w, h) // 45)
+    return lab, unit, ImageFont.load_default(size=unit)
+
+
+def _legend_box(image: np.ndarray, box_w: float, box_h: int, unit: int):
+    """A legend's white box drawn on a copy of ``image`` in its lower corner
+    (:func:`_legend_corner`): the picture, Pillow's drawing on it, and the box's corner."""
+    Image = require("PIL.Image", "drawing pictures")
+    ImageDraw = require("PIL.ImageDraw", "drawing pictures")
+    x0, y0 = _legend_corner(image, int(box_w) + 1, box_h, unit)
+    pic = Image.fromarray(image)
+    draw = ImageDraw.Draw(pic)
+    draw.rectangle([x0, y0, x0 + box_w, y0 + box_h], fill=(255, 255, 255),
+                   outline=(90, 90, 90))
+    return pic, draw, x0, y0
 
 
 def _legend_corner(image: np.ndarray, box_w: int, box_h: int, margin: int) -> tuple[int, int]:
