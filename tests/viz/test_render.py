@@ -257,6 +257,23 @@ def test_a_picture_of_classes_names_them_beside_their_colours(tmp_path, capsys):
     assert main(["render", str(tmp_path / "tile.las"), "--labels-from", "classification",
                  "-o", str(tmp_path / "c.png"), "--size", "640x480"]) == 0
     assert (tmp_path / "c.png").is_file()
+    # the page: counted as classes, each named beside its colour (in the browser's DOM)
+    assert main(["html", str(tmp_path / "tile.las"), "--labels-from", "classification",
+                 "-o", str(tmp_path / "c.html")]) == 0
+    meta = json.loads(re.search(r'id="meta"[^>]*>(.*?)</script>',
+                                (tmp_path / "c.html").read_text(), re.S).group(1))
+    assert meta["word"] == "classes" and sorted(t for t, _ in meta["legend"]) == [
+        "2 ground", "6 building"]
+    assert "legend" not in json.loads(re.search(r'id="meta"[^>]*>(.*?)</script>', html_page(
+        pts, classes), re.S).group(1))  # (labels with no names: superpoints, as before)
+    exe = _chromium()
+    dom = subprocess.run([exe, "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
+                          f"--user-data-dir={tmp_path / 'profile-dom'}",
+                          "--virtual-time-budget=5000", "--dump-dom",
+                          (tmp_path / "c.html").as_uri()],
+                         capture_output=True, text=True, timeout=120).stdout
+    assert re.search(r"[\d,]+ points, 2 classes", dom) and "</span>2 ground</div>" in dom, \
+        re.search(r'<div id="info">.{0,300}', dom, re.S)
 
 
 def test_cli_panel_draws_a_cloud_at_several_counts_and_from_label_files(tmp_path, capsys):

@@ -307,7 +307,8 @@ def cmd_html(args) -> int:
     with waiting_bar(f"writing {out.name}", shows_stages(args, len(labels) if labels
                                                          is not None else 0)):
         write_html(out, data, labels, title=args.title or Path(args.mesh).name, info=info,
-                   background=args.background, view=view, up=up, **drawn)
+                   background=args.background, view=view, up=up, **drawn,
+                   class_names=_named_classes(args) if elements == "points" else None)
     if not args.quiet:
         n = data.n_points if elements == "points" else 0
         share = (f"; {MAX_PAGE_POINTS:,} of {n:,} points drawn: a page of all would not open"

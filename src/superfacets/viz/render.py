@@ -36,7 +36,7 @@ from ..method.params import check_choice, check_int, check_number
 from .camera import view_frame
 
 __all__ = ["render", "render_points", "render_panel", "show", "has_display", "size_legend",
-           "class_legend",
+           "class_legend", "class_swatches", "label_colours",
            "NoDisplayError", "no_display", "drawn_share", "PICTURE_SIZE", "VIEW_POINTS"]
 
 #: A picture's width and height in pixels where none is given.
@@ -476,24 +476,92 @@ def class_legend(image: np.ndarray, labels, colours: dict, names: dict) -> np.nd
     if tools is None:
         return image
     lab, unit, font = tools
-    found, counts = np.unique(lab[lab >= 0], return_counts=True)
-    order = [int(found[i]) for i in np.argsort(-counts, kind="stable")]
-    shown, rest = order[:LEGEND_CLASSES], len(order) - LEGEND_CLASSES
-    lines = [f"{c} {names.get(c, '')}".rstrip() for c in shown] + \
-        ([f"and {rest} more"] if rest > 0 else [])
+    swatches, rest = class_swatches(lab, colours, names)
+    lines = [t for t, _ in swatches] + ([f"and {rest} more"] if rest > 0 else [])
     step = unit + 6
     box_w = int(max(font.getlength(t) for t in lines) + 4 * unit)
     box_h = len(lines) * step + 2 * unit
     pic, draw, x0, y0 = _legend_box(image, box_w, box_h, unit)
     y = y0 + unit
     for i, t in enumerate(lines):
-        if i < len(shown):  # (a swatch of the class's colour)
-            draw.rectangle([x0 + unit, y + 1, x0 + 2 * unit, y + unit],
-                           fill=tuple(colours.get(shown[i], (200, 200, 200))),
+        if i < len(swatches):  # (a swatch of the class's colour)
+            draw.rectangle([x0 + unit, y + 1, x0 + 2 * unit, y + unit], fill=swatches[i][1],
                            outline=(60, 60, 60))
         draw.text((x0 + 3 * unit, y), t, fill=(0, 0, 0), font=font)
         y += step
     return np.asarray(pic)
+
+
+def class_swatches(labels, colours: dict, names: dict, most: int = LEGEND_CLASSES
+                   ) -> tuple[list, int]:
+    """A class legend's lines: ``'2 ground'`` and the class's colour, the commonest class
+    first, at most ``most`` of them; and how many classes are left out.
+
+    Parameters
+    ----------
+    labels : (n,) int ndarray
+        The classes drawn (below 0: not counted).
+    colours : dict of int to (int, int, int)
+    names : dict of int to str
+    most : int, default :data:`LEGEND_CLASSES`
+
+    Returns
+    -------
+    lines : list of (str, (int, int, int))
+    rest : int
+
+    Raises
+    ------
+    TypeError
+        Never for integer labels.
+
+    Examples
+    --------
+    >>> class_swatches(np.r_[2, 6, 6, 9], {2: (1, 2, 3), 6: (4, 5, 6)}, {6: "building"}, 2)
+    ([('6 building', (4, 5, 6)), ('2', (1, 2, 3))], 1)
+    """
+    lab = np.asarray(labels)
+    found, counts = np.unique(lab[lab >= 0], return_counts=True)
+    order = [int(found[i]) for i in np.argsort(-counts, kind="stable")]
+    lines = [(f"{c} {names.get(c, '')}".rstrip(), tuple(colours.get(c, (200, 200, 200))))
+             for c in order[:most]]
+    return lines, max(0, len(order) - most)
+
+
+def label_colours(source, labels, rgb: np.ndarray) -> dict:
+    """Each label's colour in a drawing of a cloud's points: its first point's (a label's
+    points share one colour, :func:`superfacets.io.colors.labelled_colors`).
+
+    Parameters
+    ----------
+    source : ElementInput
+        The cloud's points (:func:`~superfacets.elements.builders.elements_of`).
+    labels : (N,) int ndarray
+        One per row of the cloud.
+    rgb : (n_elements, 3) uint8 ndarray
+        Each point's colour (:func:`superfacets.io.export.point_colors`).
+
+    Returns
+    -------
+    dict of int to (int, int, int)
+
+    Raises
+    ------
+    IndexError
+        Where ``labels`` or ``rgb`` do not fit ``source``.
+
+    Examples
+    --------
+    >>> src = elements_of(np.random.default_rng(0).random((40, 3)), "points")
+    >>> labels = np.repeat([3, 7], 20)
+    >>> sorted(label_colours(src, labels, point_colors(src, labels)))
+    [3, 7]
+    """
+    lab = np.asarray(labels)
+    rows = np.flatnonzero((source.index >= 0) & (lab >= 0))
+    found, first = np.unique(lab[rows], return_index=True)
+    return {int(c): tuple(int(v) for v in rgb[source.index[rows[i]]])
+            for c, i in zip(found, first)}
 
 
 def _legend_text(image: np.ndarray, labels):
@@ -825,12 +893,7 @@ def _points_drawing(pv, cloud, labels, size, view, zoom, up, point_size=None, ey
     source = elements_of(cloud, "points")
     g = source.graph
     rgb = point_colors(source, labels)
-    colours = {}
-    if labels is not None:  # (a label's elements share one colour: its first row's)
-        rows = np.flatnonzero((source.index >= 0) & (np.asarray(labels) >= 0))
-        found, first = np.unique(np.asarray(labels)[rows], return_index=True)
-        colours = {int(c): tuple(int(v) for v in rgb[source.index[rows[i]]])
-                   for c, i in zip(found, first)}
+    colours = {} if labels is None else label_colours(source, labels, rgb)
     frame = PointsFrame(g)
     view_frame(frame, view, up=up)
     if point_size is None:  # about one point spacing on screen

@@ -34,7 +34,7 @@ from ...io.colors import boundary_edges, labelled_colors
 from ...io.export import point_colors
 from ...io.files import save
 from ..camera import view_frame
-from ..render import PointsFrame, drawn_share, faces_to_draw
+from ..render import PointsFrame, class_swatches, drawn_share, faces_to_draw, label_colours
 
 __all__ = ["NotebookView", "write_html", "html_page", "check_page_size",
            "MAX_PAGE_POINTS", "MAX_PAGE_TRIANGLES"]
@@ -108,12 +108,13 @@ def _b64(a: np.ndarray) -> str:
 
 
 def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None = None,
-              background: str = "#ffffff", view=None, up="y", elements: str = "faces") -> str:
+              background: str = "#ffffff", view=None, up="y", elements: str = "faces",
+              class_names: dict | None = None) -> str:
     """The HTML text of the viewer page (see :func:`write_html`).
 
     Parameters
     ----------
-    mesh, labels, title, info, background, view, up, elements
+    mesh, labels, title, info, background, view, up, elements, class_names
         As :func:`write_html`.
 
     Returns
@@ -143,7 +144,7 @@ def html_page(mesh, labels=None, *, title: str | None = None, info: dict | None 
     elements = "faces" if cut else elements
     if is_cloud(mesh):
         return _points_page(mesh, labels, title=title, info=info, background=background,
-                            view=view, up=up)
+                            view=view, up=up, class_names=class_names)
     mesh = as_mesh(mesh)
     if kind_of(elements).rows != "n_faces":  # labels of the vertices: drawn on faces
         mesh, labels = faces_to_draw(mesh, labels, elements)
@@ -237,9 +238,11 @@ def check_page_size(mesh) -> None:
                              "(superfacets.viz.render), or segment a decimated mesh")
 
 
-def _points_page(cloud, labels, *, title, info, background, view, up) -> str:
+def _points_page(cloud, labels, *, title, info, background, view, up, class_names=None
+                 ) -> str:
     """The viewer page of a point cloud: points coloured by superpoint (invalid ones left
-    out; past :data:`MAX_PAGE_POINTS`, an even share of them, said on the page)."""
+    out; past :data:`MAX_PAGE_POINTS`, an even share of them, said on the page); labels
+    that are classes with ``class_names``: counted as classes, named beside their colours."""
 
     whole = as_cloud(cloud)
     if labels is not None:
@@ -263,7 +266,7 @@ def _points_page(cloud, labels, *, title, info, background, view, up) -> str:
     if n_drawn < whole.n_points:
         info["drawn"] = f"{n_drawn:,} of {whole.n_points:,} points (an even share)"
     meta = {"name": name, "points": int(v.shape[0]), "faces": 0, "superfacets": n_sp,
-            "info": info,
+            "info": info, **_class_meta(source, labels, rgb, class_names),
             "palette": palette.astype(int).tolist(), "indexBytes": np.dtype(index_dtype).itemsize,
             "nVertices": int(v.shape[0]), "nFaces": 0, "nEdges": 0, "spacing": spacing,
             "background": background, "rotation": rot.T.ravel().round(6).tolist()}
@@ -273,9 +276,19 @@ def _points_page(cloud, labels, *, title, info, background, view, up) -> str:
     return _page(f"{name} - superpoints", background, meta, data)
 
 
+def _class_meta(source, labels, rgb, class_names) -> dict:
+    """What a page of classes shows of them (``word``, ``legend``: each class's name and
+    colour, :func:`~superfacets.viz.render.class_swatches`, and ``legendRest``); nothing
+    for labels that are no named classes."""
+    if labels is None or not class_names:
+        return {}
+    lines, rest = class_swatches(labels, label_colours(source, labels, rgb), class_names)
+    return {"word": "classes", "legend": [[t, list(c)] for t, c in lines], "legendRest": rest}
+
+
 def write_html(path, mesh, labels=None, *, title: str | None = None, info: dict | None = None,
                background: str = "#ffffff", view=None, up="y", outputs=None,
-               elements: str = "faces") -> Path:
+               elements: str = "faces", class_names: dict | None = None) -> Path:
     """Write a self-contained interactive HTML page of a (segmented) mesh.
 
     Parameters
@@ -298,6 +311,10 @@ def write_html(path, mesh, labels=None, *, title: str | None = None, info: dict 
     elements : {'faces', 'vertices'}, default 'faces'
         What ``labels`` label (vertices: drawn as in
         :func:`superfacets.viz.render.vertex_regions`).
+    class_names : dict of int to str, optional
+        A point cloud's labels are classes with these names (a LAS file's ASPRS classes:
+        :func:`superfacets.io.labels.class_names`): the page counts them as classes and
+        names each beside its colour.
 
     Returns
     -------
@@ -327,7 +344,7 @@ def write_html(path, mesh, labels=None, *, title: str | None = None, info: dict 
     """
 
     text = html_page(mesh, labels, title=title, info=info, background=background, view=view,
-                     up=up, elements=elements)
+                     up=up, elements=elements, class_names=class_names)
     return save(path, text.encode("utf-8"), outputs)
 
 

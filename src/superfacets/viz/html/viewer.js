@@ -11,11 +11,21 @@
   const isPoints = meta.points !== undefined;
   let lines = ["<b>" + esc(meta.name) + "</b>",
                isPoints ? meta.points.toLocaleString("en") + " points" +
-                 (meta.superfacets ? ", " + meta.superfacets.toLocaleString("en") + " superpoints" : "")
+                 (meta.superfacets ? ", " + meta.superfacets.toLocaleString("en") + " " +
+                  (meta.word || "superpoints") : "")
                : meta.faces.toLocaleString("en") + " faces" +
                  (meta.superfacets ? ", " + meta.superfacets.toLocaleString("en") + " superfacets" : "")];
   for (const [k, v] of Object.entries(meta.info)) lines.push(esc(k) + ": " + esc(v));
   info.innerHTML = lines.join("<br>");
+  for (const [text, rgb] of meta.legend || []) {  // (a class legend: a swatch, its name)
+    const row = document.createElement("div"), swatch = document.createElement("span");
+    swatch.style.cssText = "display:inline-block;width:0.9em;height:0.9em;margin-right:0.4em;" +
+      "border:1px solid #444;vertical-align:middle;background:rgb(" + rgb.join(",") + ")";
+    row.appendChild(swatch);
+    row.appendChild(document.createTextNode(text));
+    info.appendChild(row);
+  }
+  if (meta.legendRest) info.appendChild(document.createTextNode("and " + meta.legendRest + " more"));
   function esc(t) { return String(t).replace(/[&<>"]/g, c => ({"&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;"}[c])); }
 
   const canvas = document.getElementById("view");
