@@ -67,7 +67,7 @@ def test_expand_grid_resolves_and_validates():
                               "coarsen": "auto", "split_merge": "auto", "paper": False,
                               "density": "auto", "roughness": 0.0, "merge_from": "auto",
                               "max_size_ratio": "auto", "merge_cost": "noise", "assignment": "auto",
-                              "beta": "auto", "up_weight": 1.0,
+                              "beta": "auto", "up_weight": "auto",
                               "step_weight": "auto"}
     assert isinstance(cfgs[1].kwargs["alpha"], float)
     assert expand_grid("superfacets", alpha=[200, 200.0]) == expand_grid("superfacets", alpha=200)

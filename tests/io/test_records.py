@@ -189,10 +189,11 @@ def test_a_tiled_run_writes_the_labels_into_the_laz_too(tmp_path, capsys):
     src = _laz(tmp_path / "tile.laz", n=6000)
     out = tmp_path / "tiled.laz"
     assert main(["segment", str(src), "--tiles", "2", "--workers", "1", "-k", "20", "-o",
-                 str(out)]) == 0
+                 str(out), "--up-weight", "1"]) == 0
     said = capsys.readouterr().out
     assert "labels as ClusterID" in said
-    # its tiles' weights said as one run's: the colour, a scene's steps
+    # its tiles' weights said as one run's: the colour, a scene's steps (heights unweighed:
+    # weighed twice, as this tile's level terraces ask by default, the step alone parts them)
     assert "following colour (beta" in said and "steps weighed 4 times" in said
     a, b = laspy.read(src), laspy.read(out)
     for dim in a.point_format.dimension_names:
@@ -200,7 +201,7 @@ def test_a_tiled_run_writes_the_labels_into_the_laz_too(tmp_path, capsys):
     assert len(np.unique(np.asarray(b.ClusterID))) == 20
     levels = tmp_path / "levels.laz"  # (its levels from the tiles' sums, as fields)
     assert main(["segment", str(src), "--tiles", "2", "--workers", "1", "-k", "20",
-                 "--levels", "8,3", "-o", str(levels)]) == 0
+                 "--levels", "8,3", "-o", str(levels), "--up-weight", "1"]) == 0
     assert "labels as ClusterID, levels as ClusterID_8, ClusterID_3" in capsys.readouterr().out
     c = laspy.read(levels)
     fine, mid, top = (np.asarray(c[n]) for n in ("ClusterID", "ClusterID_8", "ClusterID_3"))

@@ -21,7 +21,7 @@ from superfacets.errors import MeshFormatError, ParameterError
 from superfacets.evaluation.baselines.graph_segmentation import graph_segmentation
 from superfacets.evaluation.datasets.sampling import sample_points, vertex_ground_truth
 from superfacets.evaluation.metrics import evaluate
-from superfacets.inputs.cloud import InvalidCloudError, PointCloud
+from superfacets.inputs.cloud import InvalidCloudError, PointCloud, up_weighted
 from superfacets.io import read_cloud, read_input, read_labels
 
 
@@ -688,10 +688,13 @@ def test_real_rgbd_scans(name):
     assert r.labels.shape == (307200,)
     assert (r.labels[~cloud.valid] == -1).all() and (r.labels[cloud.valid] >= 0).all()
     # each superpoint in one piece of the graph the run read (a scene's: its neighbours
-    # along the surfaces, step_weight 4)
-    assert r.params["step_weight"] == 4.0
+    # along the surfaces, step_weight 4; its heights along the camera's up weighed as its
+    # surfaces say: the table's level top, 1.33-1.34)
+    assert r.params["step_weight"] == 4.0 and 1.2 < r.params["up_weight"] < 1.5
     g, index = r.elements.graph, r.elements.index
-    assert g is point_graph(cloud, step=4.0).graph
+    want = point_graph(up_weighted(cloud, r.params["up_weight"]), step=4.0).graph
+    np.testing.assert_array_equal(g.indices, want.indices)
+    np.testing.assert_array_equal(g.positions, want.positions)
     per_element = np.empty(g.n_elements, np.int64)
     per_element[index[cloud.valid]] = r.labels[cloud.valid]
     assert connected(g, per_element)

@@ -10,7 +10,7 @@ import pytest
 from superfacets import ParameterError, PointCloud, segment
 from superfacets.elements.builders import elements_of
 from superfacets.graph.adjacency import superfacet_graph
-from superfacets.inputs.cloud import up_weighted
+from superfacets.inputs.cloud import surface_up_weight, up_weighted
 
 
 def _canopy(seed: int = 0):
@@ -29,16 +29,63 @@ def _mixed(labels, classes) -> int:
 
 def test_layers_stacked_in_height_are_kept_apart():
     """Without the weight (and no step weight), superpoints hold ground and the layer above
-    it alike (10, 15 and 24 of 10, 20 and 40); a scene's step weight (the default) mixes
-    fewer (4, 2, 3); weighing the up coordinate twice, none."""
+    it alike (10, 15 and 24 of 10, 20 and 40); a scene's step weight alone mixes fewer (4,
+    2, 3); weighing the up coordinate twice, none; the default reads that weight off the
+    level surfaces (1.99 here) and mixes none either."""
     pts, classes = _canopy()
     cloud = PointCloud(pts, up=np.array([0.0, 0.0, 1.0]))
     for k in (10, 20, 40):
-        assert _mixed(segment(cloud, k, step_weight=1).labels, classes) >= k // 2, k
-        assert 0 < _mixed(segment(cloud, k).labels, classes) <= max(4, k // 8), k
+        assert _mixed(segment(cloud, k, step_weight=1, up_weight=1).labels, classes) >= \
+            k // 2, k
+        assert 0 < _mixed(segment(cloud, k, up_weight=1).labels, classes) <= max(4, k // 8), k
         r = segment(cloud, k, up_weight=2)
         assert _mixed(r.labels, classes) == 0 and r.n_segments == k, k
         assert r.params["up_weight"] == 2.0
+        auto = segment(cloud, k)
+        assert _mixed(auto.labels, classes) == 0 and auto.n_segments == k, k
+        assert auto.params["up_weight"] == surface_up_weight(pts, (0, 0, 1)) > 1.9
+
+
+def _box_room(n: int = 6000, seed: int = 0):
+    """A room's surfaces: floor, ceiling and four walls of a 6 x 4 x 3 m box, sampled
+    evenly by area (walls hold 60 of its 108 square metres)."""
+    rng = np.random.default_rng(seed)
+    faces = [((0, 0, 0), (6, 0, 0), (0, 4, 0)), ((0, 0, 3), (6, 0, 0), (0, 4, 0)),
+             ((0, 0, 0), (6, 0, 0), (0, 0, 3)), ((0, 4, 0), (6, 0, 0), (0, 0, 3)),
+             ((0, 0, 0), (0, 4, 0), (0, 0, 3)), ((6, 0, 0), (0, 4, 0), (0, 0, 3))]
+    area = np.array([np.linalg.norm(np.cross(a, b)) for _, a, b in faces])
+    counts = np.floor(n * area / area.sum()).astype(int)
+    return np.vstack([np.asarray(o) + rng.random((c, 1)) * a + rng.random((c, 1)) * b
+                      for (o, a, b), c in zip(faces, counts, strict=True)])
+
+
+def test_the_weight_read_off_the_surfaces():
+    """1 + max(0, 2 m - 1), m the mean |n . up| of the planar neighbourhoods: level ground
+    2, the same surface standing up 1, a sphere's surface (every way alike: m = 1/2) 1, a
+    box room (walls 60 of 108 square metres: m about 0.44) 1, a room seen lying on its side
+    (up along x: walls 2 of 6 sides end-on) more than 1; rows not finite are skipped,
+    small or degenerate inputs read 1; objects and the paper keep 1."""
+    rng = np.random.default_rng(1)
+    ground = np.c_[rng.random((3000, 2)) * 50, 0.02 * rng.standard_normal(3000)]
+    assert surface_up_weight(ground, (0, 0, 1)) == 2.0
+    assert surface_up_weight(ground, (0, 0, -5)) == 2.0  # (the up's length and sign)
+    assert surface_up_weight(ground[:, [2, 0, 1]], (0, 0, 1)) == 1.0
+    sphere = rng.standard_normal((8000, 3))
+    sphere /= np.linalg.norm(sphere, axis=1, keepdims=True)
+    assert surface_up_weight(sphere, (0, 0, 1)) <= 1.05
+    room = _box_room()
+    assert surface_up_weight(room, (0, 0, 1)) == 1.0
+    with_holes = np.vstack([ground, np.full((5, 3), np.nan)])
+    assert surface_up_weight(with_holes, (0, 0, 1)) == 2.0
+    assert surface_up_weight(ground[:5], (0, 0, 1)) == 1.0
+    assert surface_up_weight(np.zeros((50, 3)), (0, 0, 1)) == 1.0  # (no plane at all)
+    with pytest.raises(ValueError, match="finite non-zero"):
+        surface_up_weight(ground, (0, 0, 0))
+    assert segment(PointCloud(ground), 10).params["up_weight"] == 1.0  # (no up)
+    assert segment(PointCloud(room, up=np.array([0.0, 0.0, 1.0])), 10).params[
+        "up_weight"] == 1.0
+    paper = segment(PointCloud(ground, up=np.array([0.0, 0.0, 1.0])), 10, paper=True)
+    assert paper.params["up_weight"] == 1.0
 
 
 @pytest.mark.parametrize("up", [(0.0, 0.0, 1.0), (0.0, 0.6, 0.8)])
@@ -50,7 +97,7 @@ def test_the_labels_are_those_of_the_cloud_stretched_along_its_up(up):
     stretched = PointCloud(pts + (3.0 - 1.0) * (pts @ u)[:, None] * u, up=u)
     np.testing.assert_allclose(up_weighted(cloud, 3.0).points, stretched.points, atol=1e-12)
     np.testing.assert_array_equal(segment(cloud, 25, up_weight=3).labels,
-                                  segment(up_weighted(cloud, 3.0), 25).labels)
+                                  segment(up_weighted(cloud, 3.0), 25, up_weight=1).labels)
 
 
 def test_graphs_are_in_the_data_s_units():
@@ -88,10 +135,17 @@ def test_a_tiled_run_reads_the_cloud_weighed_as_one_run_does():
 
     pts, classes = _canopy(4)
     cloud = PointCloud(pts, up=np.array([0.0, 0.0, 1.0]))
-    plain = segment_tiled(cloud, 30, tiles=4, workers=1, step_weight=1)  # (nothing weighed)
+    plain = segment_tiled(cloud, 30, tiles=4, workers=1, step_weight=1, up_weight=1)
     r = segment_tiled(cloud, 30, tiles=4, workers=1, up_weight=2)
     assert _mixed(plain.labels, classes) >= 10 and _mixed(r.labels, classes) == 0
     assert r.n_segments == 30 and r.disagreements == 0 and r.params["up_weight"] == 2.0
+    # the default: the weight one run reads off the points, read off the survey's sample
+    auto = segment_tiled(cloud, 30, tiles=4, workers=1)
+    assert auto.params["up_weight"] == segment(cloud, 30).params["up_weight"] > 1.9
+    assert _mixed(auto.labels, classes) == 0 and auto.n_segments == 30
+    # a graph asked for with a neighbour radius is built of the cloud unweighed: none read
+    fixed = segment_tiled(cloud, 30, tiles=4, workers=1, graph=True, neighbor_radius=0.05)
+    assert fixed.params["up_weight"] == 1.0 and fixed.learning is not None
 
 
 def test_what_cannot_be_weighed_is_refused_in_words(tmp_path, capsys):
@@ -122,7 +176,7 @@ def test_what_cannot_be_weighed_is_refused_in_words(tmp_path, capsys):
     assert main(["segment", str(tmp_path / "c.npy"), "-k", "10", "--up-weight", "2",
                  "--seen-from", "z", "-o", str(out)]) == 0
     assert len(np.unique(np.loadtxt(out))) == 10
-    assert "heights weighed 2 times (--up-weight)" in capsys.readouterr().out
+    assert "heights weighed 2 times (--up-weight 1: off)" in capsys.readouterr().out
 
 
 def test_a_tiled_runs_graph_and_levels_are_of_the_cloud_as_given():

@@ -187,8 +187,9 @@ def test_a_tiled_learning_graph_of_estimated_normals_is_one_runs_of_its_labels(t
     pts = rng.random((6000, 3)) * [4.0, 3.0, 0.3]
     pts[:, 2] += 0.2 * np.sin(3 * pts[:, 0])
     for up in ((0.0, 0.0, 1.0), (0.3, -0.2, 1.0)):
-        tiled = segment_tiled(PointCloud(pts, up=up), 80, tiles=3, workers=1, graph=True)
-        src = segment(PointCloud(pts, up=up), 80).elements  # (the scene's point graph)
+        tiled = segment_tiled(PointCloud(pts, up=up), 80, tiles=3, workers=1, graph=True,
+                              up_weight=1)
+        src = segment(PointCloud(pts, up=up), 80, up_weight=1).elements  # (the scene graph)
         per = np.full(src.graph.n_elements, -1)
         per[src.index] = tiled.labels
         want = learning_arrays(superfacet_graph(src.graph, per, None), src.graph.positions,

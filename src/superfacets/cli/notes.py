@@ -94,7 +94,7 @@ def weights_said(params: dict) -> str:
     if params.get("feature_floor") is not None and params.get("beta"):  # colour weighed
         said += f", following colour (beta {params['beta']:.3g}; --beta 0: off)"
     if params.get("up_weight", 1) != 1:
-        said += f", heights weighed {params['up_weight']:g} times (--up-weight)"
+        said += f", heights weighed {params['up_weight']:g} times (--up-weight 1: off)"
     if (params.get("step_weight") or 1) != 1:
         said += (f", neighbours along the surfaces (steps weighed {params['step_weight']:g} "
                  "times; --step-weight 1: off)")

@@ -121,9 +121,10 @@ SHOWN = {
     "neighbor_radius": ("clouds", "R", "drop neighbours farther than this fraction of the "
                         "bounding-box diagonal (default: none)"),
     "up_weight": ("clouds", "W", "weigh the cloud's up coordinate (a LAS, LAZ or E57 file's z; "
-                  "--seen-from AXIS for others) W times in the method's distances: 2 keeps "
-                  "apart what an airborne or street scan stacks in height (ground, vegetation, "
-                  "roofs); rooms are best at 1 (default: 1)"),
+                  "--seen-from AXIS for others) W times in the method's distances, > 0; 1: off "
+                  "(default: read from a scene's surfaces, 1 to 2 the more its planes lie "
+                  "level: about 2 on airborne scans, keeping ground, vegetation and roofs "
+                  "apart; 1 in rooms and on clouds with no up)"),
     "step_weight": ("clouds", "S", "weigh a step off the surface (a neighbour's offset along "
                     "the normals) S times in the choice of neighbours and in the distances, "
                     ">= 1: a roof apart from the ground, a table from the floor (default: 4 "

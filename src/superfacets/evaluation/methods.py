@@ -250,19 +250,21 @@ def get_method(name: str) -> Method:
 
 def _auto(value, kind):
     """A registry value of ``center_tol``, ``coarsen``, ``cleanup``, ``split_merge``,
-    ``density``, ``merge_from``, ``assignment``, ``step_weight`` or ``extent_weight``:
+    ``density``, ``merge_from``, ``assignment``, ``step_weight``, ``up_weight`` or
+    ``extent_weight``:
     ``"auto"`` is None."""
     return None if value in (None, "auto") else kind(value)
 
 
 def _segment_options(center_tol="auto", coarsen="auto", cleanup="auto", split_merge="auto",
                      density="auto", merge_from="auto", assignment="auto", beta="auto",
-                     step_weight="auto", max_size_ratio="auto", **params) -> dict:
+                     step_weight="auto", max_size_ratio="auto", up_weight="auto",
+                     **params) -> dict:
     """The keyword arguments of :func:`superfacets.segment` from registry values."""
     return dict(center_tol=_auto(center_tol, float), coarsen=_auto(coarsen, int),
                 beta=_auto(beta, float),
                 cleanup=_auto(cleanup, parse_bool), split_merge=_auto(split_merge, parse_bool),
-                step_weight=_auto(step_weight, float),
+                step_weight=_auto(step_weight, float), up_weight=_auto(up_weight, float),
                 max_size_ratio=_auto(max_size_ratio, float),
                 density=_auto(density, float), merge_from=_auto(merge_from, int),
                 assignment=_auto(assignment, parse_assignment), **params)

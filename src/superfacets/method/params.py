@@ -268,9 +268,10 @@ def _declare_scan_parameters() -> tuple[Parameter, ...]:
           "where flat regions hold most points, else Ward's; the default before 2026-11-30) "
           "or scene (noise's, unweighted)", _merge_cost, cli="--merge-cost",
           choices=MERGE_COSTS),
-        P("up_weight", 1.0, "float", "weight of a point cloud's up coordinate in the method's "
-          "distances (its up: a LAS, LAZ or E57 file's z), in (0, 100]; 1: none; 2 keeps "
-          "apart what an airborne scan stacks in height (ground, vegetation, roofs)",
+        P("up_weight", None, "float or None", "weight of a point cloud's up coordinate in "
+          "the method's distances (its up: a LAS, LAZ or E57 file's z), in (0, 100]; 1: none; "
+          "None: read from a scene's surfaces (1 to 2, the more its planes lie level; "
+          "inputs.cloud.surface_up_weight), else 1",
           lambda v: num("up_weight", v, 0.0, MAX_UP_WEIGHT, lo_open=True), ("points",),
           cli="--up-weight"),
         P("step_weight", None, "float or None", "weight of a step off a cloud's surface (the "
@@ -379,7 +380,7 @@ def resolve(**params) -> SegmentParams:
                                        ("density", p.density not in (None, 0, 0.0)),
                                        ("roughness", p.roughness not in (0, 0.0)),
                                        ("merge_from", p.merge_from not in (None, 1)),
-                                       ("up_weight", p.up_weight != 1),
+                                       ("up_weight", p.up_weight not in (None, 1)),
                                        ("step_weight", p.step_weight not in (None, 1))) if on]
         if extra:
             raise ParameterError(f"paper=True is the paper's method as published; it does not "

@@ -34,7 +34,7 @@ from .params import (
     superfacet_size,
 )
 from .passes import Iteration, iterate
-from .rules import fine_count, merge_from_of, scene_default_of
+from .rules import fine_count, merge_from_of, scene_default_of, up_weight_of
 from .splitmerge import FAST_ROUNDS, ROUNDS, swap_and_iterate
 from .weights import (
     HeldWeights,
@@ -222,6 +222,8 @@ def build_graph(obj, p: SegmentParams, features=None
     """
     check_stage("build_graph", params=p)
     kind, data = prepared(obj, p.elements, n_segments=p.n_segments)
+    p = replace(p, up_weight=up_weight_of(p, kind, getattr(data, "up", None),
+                                          getattr(data, "points", None)))
     if p.up_weight != 1:  # (not in the paper) the cloud the distances are read on
         check_weighable(kind_of(kind).cloud, kind, getattr(data, "up", None))
         weighted = up_weighted(data, p.up_weight)

@@ -66,7 +66,7 @@ from ...io.files import user_path
 from ...io.regions import RegionReader, streamed
 from ...method.merges import NOISE_SAMPLE
 from ...method.params import resolve, superfacet_size
-from ...method.rules import SCENE_DEFAULTS, fine_count, scene_default_of
+from ...method.rules import SCENE_DEFAULTS, fine_count, scene_default_of, up_weight_of
 from ..runner.engine import Engine, check_memory_limit
 from . import buckets, phases
 from .buckets import box_folder
@@ -231,7 +231,7 @@ def segment_tiled(source, n_segments: int | None = None, *, tiles=4,
     stage = partial(_stage, timings, progress)  # (each stage timed, and shown as it runs)
     with run_folder(workdir) as tmp:  # the run's own folder, removed at its end
         with stage("survey"):
-            reader, survey = _surveyed(source, tmp, tiles, params, graph)
+            reader, survey, params = _surveyed(source, tmp, tiles, params, graph, levels, units)
         _check_levels_of(levels, reader.kind)
         weight, (params, sample_area) = params.up_weight, _step_resolved(params, reader,
                                                                           survey, units)
@@ -301,7 +301,7 @@ def segment_tiled(source, n_segments: int | None = None, *, tiles=4,
     return TiledResult(labels=labels, centers=names.astype(np.int64), mesh_radius=r, grid=grid,
                        layout=layout, halo=margin, disagreements=disagreements, repaired=repaired,
                        tiles=_tile_stats(found, done), timings=timings, params=resolved,
-                       area=area if weight == 1 else math.nan, size_spread=spread,
+                       area=_data_area(area, weight, survey, up, params), size_spread=spread,
                        hierarchy=tree, learning=learning)
 
 
@@ -660,7 +660,7 @@ def _checked_levels(levels, cost: str, extent_weight, params, graph: bool) -> tu
     """``(levels, cost, extent_weight)`` of a run's hierarchy, checked before any pass
     over the input (None: no levels); with ``up_weight`` the graph and levels are of the
     cloud as given, its point graph built by ``n_neighbors`` (not ``neighbor_radius``)."""
-    if (graph or levels is not None) and params.up_weight != 1 and \
+    if (graph or levels is not None) and params.up_weight not in (None, 1) and \
             params.neighbor_radius is not None:
         raise ParameterError("the superpoint graph and the levels of a tiled run with "
                              "up_weight are of the cloud as given, built with "
@@ -722,11 +722,15 @@ def _step_resolved(params, reader, survey, units: dict) -> tuple:
                                 for name in SCENE_DEFAULTS}), reader, survey, units)
 
 
-def _surveyed(source, tmp, tiles, params, graph: bool = False):
+def _surveyed(source, tmp, tiles, params, graph: bool = False, levels=None, units=None):
     """The input's reader (streamed from its file, or spilled to the work folder; its
     points read weighed with ``up_weight``, its colours divided by the survey's one
-    divisor) and its survey (bounds, counts, a sample; with ``graph``, the extent along
-    the ground grid's horizontal axes), checked against the tiles and the parameters."""
+    divisor), its survey (bounds, counts, a sample; with ``graph``, the extent along
+    the ground grid's horizontal axes), checked against the tiles and the parameters,
+    and the parameters with ``up_weight`` resolved (None: read off a scene's survey
+    sample, as one run reads it off its points; 1 with sizes in the data's ``units``, and
+    where a graph or ``levels`` are asked for with ``neighbor_radius``: what a weighed
+    tiled run does not measure or build, as ``up_weight`` given is refused with them)."""
 
     if isinstance(source, (str, Path)):  # (~/scan.laz: the home's, read by every worker)
         source = user_path(source)
@@ -736,10 +740,19 @@ def _surveyed(source, tmp, tiles, params, graph: bool = False):
         reader = RegionReader.open(source)
     else:  # (an object, or a file not read in chunks: an ASCII PLY, an OBJ, ...)
         reader = RegionReader.spill(source, tmp)
-    if params.up_weight != 1:  # every position read stretched (the tiles run on W = 1)
+    if params.up_weight not in (None, 1):  # every position read stretched (tiles: W = 1)
         reader = _up_weighted(reader, params.up_weight)
     axes = ground_axes(_up_of(getattr(reader, "up", None)))[1:] if graph else None
     survey = reader.survey(axes)
+    if params.up_weight is None:  # (a scene's, read off the sample as one run's points)
+        unweighed = bool(units) or ((graph or levels is not None) and
+                                    params.neighbor_radius is not None)
+        weight = 1.0 if unweighed else up_weight_of(
+            params, reader.kind, getattr(reader, "up", None), survey.sample)
+        params = replace(params, up_weight=weight)
+        if weight != 1:
+            reader = _up_weighted(reader, weight)
+            survey = _weighed_survey(survey, reader, axes)
     if params.n_segments is not None and params.radius is None:  # (as one run says it, not
         check_n_segments(params.n_segments, survey.n_elements, reader.kind)  # "no extent")
     if check_extent(survey.lo, survey.hi, f"{reader.path}: ",
@@ -752,7 +765,31 @@ def _surveyed(source, tmp, tiles, params, graph: bool = False):
     if survey.dropped_normals:  # (unusable normals: all estimated, as one run's reader)
         warnings.warn(dropped_normals_said(reader.path, *survey.dropped_normals), stacklevel=2)
         reader = replace(reader, normals_given=False)
-    return reader, survey
+    return reader, survey, params
+
+
+def _data_area(area: float, weight: float, survey, up, params) -> float:
+    """The input's area in the data's units: ``area`` (the tiles' points' summed sizes)
+    where the heights are not weighed, else its even sample's area (the survey's sample
+    stretched back), as a seed resolution's count reads it first; NaN where none."""
+    sample = survey.sample
+    if weight == 1 or not np.isfinite(area) or sample is None or sample.shape[0] < 2:
+        return area if weight == 1 else math.nan
+    up = np.asarray(up, dtype=np.float64)
+    flat = stretched_along(sample, up / np.linalg.norm(up), 1.0 / weight)
+    return point_areas(flat, np.ones(flat.shape[0], dtype=bool), params.n_neighbors)
+
+
+def _weighed_survey(survey, reader, axes):
+    """The survey of ``reader`` (read weighed) from the unweighed one: its sample and box
+    stretched where ``up`` is a coordinate axis (a LAS file's z: the box's corners move
+    alone; the extent along the ground's axes, across ``up``, does not), else read again."""
+    up = np.asarray(reader.up, dtype=np.float64)
+    if np.count_nonzero(up) != 1:
+        return reader.survey(axes)
+    lo, hi = (stretched_along(b, up, reader.up_weight) for b in (survey.lo, survey.hi))
+    return replace(survey, lo=np.minimum(lo, hi), hi=np.maximum(lo, hi),
+                   sample=stretched_along(survey.sample, up, reader.up_weight))
 
 
 def _up_weighted(reader, weight: float):
