@@ -209,3 +209,29 @@ def test_a_tiled_runs_graph_and_levels_are_of_the_cloud_as_given():
     with pytest.raises(ParameterError, match="not with neighbor_radius"):
         segment_tiled(cloud, 30, tiles=3, workers=1, up_weight=3, graph=True,
                       neighbor_radius=0.05)
+
+
+def test_the_summary_says_widths_in_the_data_s_units(tmp_path, capsys):
+    """A street (ground and two facades as tall as it is wide) with its heights weighed
+    twice: the summary's median width is the cloud's as given (within 5 % of its
+    superpoint graph's, in the data's units), not the stretched cloud's (the facades'
+    superpoints twice as large there); level areas keep their size, walls' halve."""
+    from superfacets.cli import main
+    from superfacets.inputs.cloud import unweighed_area_factor
+
+    rng = np.random.default_rng(6)
+    ground = np.c_[rng.random((6000, 2)) * [40, 20], np.zeros(6000)]
+    walls = [np.c_[rng.random(6000) * 40, np.full(6000, y), rng.random(6000) * 20]
+             for y in (0.0, 20.0)]
+    pts = np.vstack([ground, *walls]) + 0.005 * rng.standard_normal((18000, 3))
+    np.save(tmp_path / "street.npy", pts)
+    assert main(["segment", str(tmp_path / "street.npy"), "-k", "60", "--seen-from", "z",
+                 "--up-weight", "2", "-o", str(tmp_path / "s.seg")]) == 0
+    said = capsys.readouterr().out
+    wide = float(said.split("about ")[1].split(" wide")[0])
+    r = segment(PointCloud(pts, up=np.array([0.0, 0.0, 1.0])), 60, up_weight=2)
+    want = 2 * np.sqrt(np.median(r.graph().area) / np.pi)
+    assert abs(wide / want - 1) < 0.05, (wide, want)
+    np.testing.assert_allclose(unweighed_area_factor(
+        np.array([[0.0, 0.0, 1.0], [0.6, 0.0, 0.8], [0.0, 1.0, 0.0]]), (0, 0, 2), 2.0),
+        [1.0, np.sqrt(0.64 + 0.36 / 4), 0.5])

@@ -591,16 +591,25 @@ def sizes_said(labels, elements: str, result=None, unit: str | None = None) -> s
 
 def _median_width(result) -> float | None:
     """The diameter of a disc of the median segment's area (its elements' sizes summed; of
-    tetrahedra, of a ball of its volume), in the input's units; None where the result holds
+    tetrahedra, of a ball of its volume), in the input's units (a run that weighed the up
+    coordinate: each point's area on its tangent plane stretched back,
+    :func:`superfacets.inputs.cloud.unweighed_area_factor`); None where the result holds
     no element graph."""
     import numpy as np
+
+    from ..inputs.cloud import unweighed_area_factor
 
     try:
         graph, labels = result.elements.graph, np.asarray(result.element_labels)
     except AttributeError:
         return None
     keep = labels >= 0
-    area = np.bincount(labels[keep], weights=np.asarray(graph.sizes)[keep])
+    sizes = np.asarray(graph.sizes, dtype=np.float64)
+    weight = (getattr(result, "params", None) or {}).get("up_weight", 1.0)
+    up = getattr(getattr(result.elements, "source", None), "up", None)
+    if weight != 1 and up is not None and graph.normals is not None:  # (the weighed cloud's)
+        sizes = sizes * unweighed_area_factor(graph.normals, up, weight)
+    area = np.bincount(labels[keep], weights=sizes[keep])
     area = area[area > 0]
     if not area.size:
         return None

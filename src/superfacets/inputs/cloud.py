@@ -24,7 +24,8 @@ from .mesh import readonly
 from .rgb import check_colors, unit_colors
 
 __all__ = ["PointCloud", "as_cloud", "InvalidCloudError", "up_weighted", "surface_up_weight",
-           "UP_SAMPLE", "UP_NEIGHBOURHOODS", "UP_NEIGHBOURS", "stretched_along",
+           "UP_SAMPLE", "UP_NEIGHBOURHOODS", "UP_NEIGHBOURS", "unweighed_area_factor",
+           "stretched_along",
            "stretched_normals", "check_weighable"]
 
 
@@ -718,6 +719,46 @@ def surface_up_weight(points, up) -> float:
         return 1.0
     m = float(np.abs(vec[planar, :, 0] @ (u / length)).mean())
     return round(1.0 + max(0.0, 2.0 * m - 1.0), 2)
+
+
+def unweighed_area_factor(normals, up, weight: float) -> np.ndarray:
+    """What an area on a surface of the cloud stretched by ``weight`` along ``up``
+    (:func:`up_weighted`) is in the cloud as given, per unit of it: ``sqrt(c^2 + (1 -
+    c^2) / weight^2)``, ``c = |n . up|`` of the stretched surface's unit normal ``n``
+    (level: 1; a wall: ``1 / weight``). Exact for a tangent plane's area element; a
+    point's size, read from its neighbours' distances, follows it approximately.
+
+    Parameters
+    ----------
+    normals : (n, 3) float ndarray
+        Unit normals of the stretched surface.
+    up : (3,) float array-like
+        The direction stretched (normalised here).
+    weight : float
+        ``> 0``.
+
+    Returns
+    -------
+    (n,) float64 ndarray
+        In ``(0, inf)``: at most 1 where ``weight >= 1``.
+
+    Raises
+    ------
+    ValueError
+        If ``up`` has length 0.
+
+    Examples
+    --------
+    >>> n = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
+    >>> unweighed_area_factor(n, (0, 0, 1), 2.0).tolist()
+    [1.0, 0.5]
+    """
+    u = np.asarray(up, dtype=np.float64).reshape(3)
+    length = float(np.linalg.norm(u))
+    if not length > 0:
+        raise ValueError(f"up must be a non-zero vector, got {up!r}")
+    c = np.clip(np.abs(np.asarray(normals, dtype=np.float64) @ (u / length)), 0.0, 1.0)
+    return np.sqrt(c * c + (1.0 - c * c) / (float(weight) ** 2))
 
 
 def stretched_along(points, up, weight: float) -> np.ndarray:
