@@ -235,3 +235,22 @@ def test_the_summary_says_widths_in_the_data_s_units(tmp_path, capsys):
     np.testing.assert_allclose(unweighed_area_factor(
         np.array([[0.0, 0.0, 1.0], [0.6, 0.0, 0.8], [0.0, 1.0, 0.0]]), (0, 0, 2), 2.0),
         [1.0, np.sqrt(0.64 + 0.36 / 4), 0.5])
+
+
+def test_runs_of_one_cloud_share_its_weighed_copy():
+    """The weight read off a scene and its weighed copy (with its point graph) are kept with
+    the cloud: a second count reads neither again, as an unweighed cloud's graph is kept;
+    a pickled cloud leaves them behind."""
+    import pickle
+
+    pts, _ = _canopy(7)
+    cloud = PointCloud(pts, up=np.array([0.0, 0.0, 1.0]))
+    a, b = segment(cloud, 10), segment(cloud, 30)
+    assert a.params["up_weight"] == b.params["up_weight"] > 1.9
+    assert a.elements.source is b.elements.source is not cloud
+    assert a.elements.graph is b.elements.graph
+    c = segment(cloud, 30, up_weight=3)  # (another weight: another copy)
+    assert c.elements.source is not a.elements.source
+    again = pickle.loads(pickle.dumps(cloud))
+    assert not any(k.startswith(("up_weighted", "surface_up_weight")) for k in again.__dict__)
+    np.testing.assert_array_equal(segment(again, 30).labels, b.labels)

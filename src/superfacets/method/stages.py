@@ -17,7 +17,7 @@ import numpy as np
 from ..elements.builders import ElementInput, check_count, elements_of, prepared
 from ..elements.density import adapted_graph, density_for
 from ..elements.features import colors_or_features, features_of, per_element
-from ..elements.graph import ElementGraph
+from ..elements.graph import ElementGraph, cached_on
 from ..elements.kinds import ElementKind, kind_of
 from ..elements.vertices import symmetric_terms
 from ..errors import ParameterError
@@ -222,13 +222,7 @@ def build_graph(obj, p: SegmentParams, features=None
     """
     check_stage("build_graph", params=p)
     kind, data = prepared(obj, p.elements, n_segments=p.n_segments)
-    p = replace(p, up_weight=up_weight_of(p, kind, getattr(data, "up", None),
-                                          getattr(data, "points", None)))
-    if p.up_weight != 1:  # (not in the paper) the cloud the distances are read on
-        check_weighable(kind_of(kind).cloud, kind, getattr(data, "up", None))
-        weighted = up_weighted(data, p.up_weight)
-        weighted.__dict__["unweighted"] = data  # (a result's graphs read the data's units)
-        data = weighted
+    p, data = _weighed(p, kind, data)
     if p.beta is not None and p.beta > 0:
         _check_features(kind, data, features)
     scene = getattr(data, "up", None) is not None
@@ -243,6 +237,32 @@ def build_graph(obj, p: SegmentParams, features=None
     if p.density > 0 or p.roughness > 0:  # content-sensitive sizes (not in the paper)
         graph = adapted_graph(graph, p.density, p.roughness)
     return source, graph, p
+
+
+def _weighed(p, kind: str, data) -> tuple:
+    """``p`` with ``up_weight`` resolved (:func:`~superfacets.method.rules.up_weight_of`)
+    and the cloud the method reads: ``data``, or (not in the paper) its copy with the up
+    coordinate weighed. The weight read off a scene and the weighed copy are kept with
+    ``data`` (:func:`~superfacets.elements.graph.cached_on`), so that runs of one cloud at
+    several counts (a count's search, a hierarchy) build the weighed copy's graph once,
+    as they build an unweighed cloud's."""
+    up = getattr(data, "up", None)
+    if p.up_weight is None and up is not None and not p.paper and kind_of(kind).cloud:
+        weight = cached_on(data, "surface_up_weight",
+                           lambda: up_weight_of(p, kind, up, data.points))
+    else:
+        weight = up_weight_of(p, kind, up)
+    p = replace(p, up_weight=weight)
+    if weight == 1:
+        return p, data
+    check_weighable(kind_of(kind).cloud, kind, up)
+
+    def weigh():
+        weighted = up_weighted(data, weight)
+        weighted.__dict__["unweighted"] = data  # (a result's graphs read the data's units)
+        return weighted
+
+    return p, cached_on(data, f"up_weighted {weight!r}", weigh)
 
 
 def _check_features(kind: str, data, features) -> None:
