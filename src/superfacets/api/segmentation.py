@@ -227,7 +227,7 @@ def superfacets(data=_NO_INPUT, n_segments: int | None = _D.n_segments, *, featu
         rooms, whose walls a stretch cuts in bands), 1 on other inputs and with ``paper``.
         On 30 labelled scans at ``n_segments`` = 100-3,000 against 1: the Segmentator's
         targets met in 110 against 109 of 120 settings (112 against 104 at half density),
-        airborne undersegmentation error 14 % lower, oracle mIoU 0.020 higher, 1.19 times
+        airborne undersegmentation error 14 % lower, oracle mIoU 0.020 higher, 1.16 times
         the time (``docs/notes/superpoints.md``, "The up weight read off the surfaces").
         ``result.params["up_weight"]`` gives the weight used. Labels,
         :meth:`SegmentationResult.graph` and ``learning_graph`` are of
