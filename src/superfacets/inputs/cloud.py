@@ -640,8 +640,9 @@ def up_weighted(cloud: PointCloud, weight: float) -> PointCloud:
                        object_viewpoints=moved(cloud.object_viewpoints))
 
 
-#: The most points :func:`surface_up_weight` reads (every ``ceil(n / UP_SAMPLE)``-th finite
-#: one, in the input's order: a tiled run's survey sample, ``io.regions.SAMPLE``) ...
+#: The most points :func:`surface_up_weight` reads (the finite ones of every ``ceil(n /
+#: UP_SAMPLE)``-th row, in the input's order: a tiled run's survey sample,
+#: ``io.regions.SAMPLE``) ...
 UP_SAMPLE = 1 << 20
 #: ... the neighbourhoods of at most this many of them (evenly spaced) ...
 UP_NEIGHBOURHOODS = 8_192
@@ -702,9 +703,9 @@ def surface_up_weight(points, up) -> float:
     length = float(np.linalg.norm(u))
     if not (np.isfinite(length) and length > 0):
         raise ValueError(f"up must be a finite non-zero vector, got {up!r}")
-    pts = np.asarray(points, dtype=np.float64)
-    pts = pts[finite_rows(pts)]
-    pts = pts[::max(1, -(-pts.shape[0] // UP_SAMPLE))]
+    pts = np.asarray(points)  # (every ceil(n / UP_SAMPLE)-th row, then the finite ones:
+    pts = np.asarray(pts[::max(1, -(-pts.shape[0] // UP_SAMPLE))], dtype=np.float64)
+    pts = pts[finite_rows(pts)]  # a survey's sample; no copy of the whole cloud)
     if pts.shape[0] < UP_NEIGHBOURS:
         return 1.0
     at = pts[::max(1, -(-pts.shape[0] // UP_NEIGHBOURHOODS))]
