@@ -359,6 +359,7 @@ def _read_rows(path: str) -> list[dict]:
 
 def main() -> None:
     from superfacets.evaluation.datasets.scans import SCANS
+    from superfacets.inputs.cloud import surface_up_weight
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scans", nargs="+", default=list(SCANS), choices=list(SCANS))
@@ -418,8 +419,11 @@ def main() -> None:
     for name, scan in (_scans(a) if a.methods else ()):
         n = int(scan.cloud.n_total)
         coloured = scan.cloud.colors is not None
+        up = scan.cloud.up  # (the weight of its heights the default reads, on a scene)
+        weight = "" if up is None else \
+            f", heights weighed {surface_up_weight(scan.cloud.points, up):g} by default"
         print(f"\n### {name}: {n:,} points, {scan.source.kind}"
-              f"{', RGB' if coloured else ''}\n")
+              f"{', RGB' if coloured else ''}{weight}\n")
         objects = scan.instances is not None
         print("| k | method | UE | UE (NP) | boundary recall | boundary precision | "
               "achievable accuracy "
