@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 from ..checks import check_n_segments
+from ..elements.graph import cached_on
 from ..elements.kinds import kind_of
 from ..errors import ParameterError
 from ..inputs.cloud import surface_up_weight
@@ -337,7 +338,7 @@ def scene_default_of(params, name: str, kind: str, scene: bool = False) -> float
     return on_scene
 
 
-def up_weight_of(params, kind: str, up=None, points=None) -> float:
+def up_weight_of(params, kind: str, up=None, points=None, owner=None) -> float:
     """``up_weight`` of a run: as given, else (None) read off a scene's surfaces
     (:func:`superfacets.inputs.cloud.surface_up_weight`: 1 to 2, the more its planar
     neighbourhoods lie level), 1 on other inputs and with ``paper``.
@@ -358,6 +359,9 @@ def up_weight_of(params, kind: str, up=None, points=None) -> float:
     points : (n, 3) float ndarray, optional
         The positions the weight is read from (with ``up``; every point or an even
         sample in the input's order).
+    owner : Mesh or PointCloud, optional
+        The input ``points`` are of: the weight read is kept with it
+        (:func:`~superfacets.elements.graph.cached_on`) and not read again.
 
     Returns
     -------
@@ -385,7 +389,9 @@ def up_weight_of(params, kind: str, up=None, points=None) -> float:
         return float(params.up_weight)
     if params.paper or up is None or points is None or not kind_of(kind).cloud:
         return 1.0
-    return surface_up_weight(points, up)
+    if owner is None:
+        return surface_up_weight(points, up)
+    return cached_on(owner, "surface_up_weight", lambda: surface_up_weight(points, up))
 
 
 def merge_from_of(params, kind: str, tiled: bool = False, scene: bool = False) -> int:

@@ -247,11 +247,7 @@ def _weighed(p, kind: str, data) -> tuple:
     several counts (a count's search, a hierarchy) build the weighed copy's graph once,
     as they build an unweighed cloud's."""
     up = getattr(data, "up", None)
-    if p.up_weight is None and up is not None and not p.paper and kind_of(kind).cloud:
-        weight = cached_on(data, "surface_up_weight",
-                           lambda: up_weight_of(p, kind, up, data.points))
-    else:
-        weight = up_weight_of(p, kind, up)
+    weight = up_weight_of(p, kind, up, getattr(data, "points", None), owner=data)
     p = replace(p, up_weight=weight)
     if weight == 1:
         return p, data
