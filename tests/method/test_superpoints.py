@@ -689,8 +689,8 @@ def test_real_rgbd_scans(name):
     assert (r.labels[~cloud.valid] == -1).all() and (r.labels[cloud.valid] >= 0).all()
     # each superpoint in one piece of the graph the run read (a scene's: its neighbours
     # along the surfaces, step_weight 4; its heights along the camera's up weighed as its
-    # surfaces say: the table's level top, 1.33-1.34)
-    assert r.params["step_weight"] == 4.0 and 1.2 < r.params["up_weight"] < 1.5
+    # surfaces say: the table's level top, 2.34-2.42)
+    assert r.params["step_weight"] == 4.0 and 2.2 < r.params["up_weight"] < 2.6
     g, index = r.elements.graph, r.elements.index
     want = point_graph(up_weighted(cloud, r.params["up_weight"]), step=4.0).graph
     np.testing.assert_array_equal(g.indices, want.indices)

@@ -30,8 +30,8 @@ def _mixed(labels, classes) -> int:
 def test_layers_stacked_in_height_are_kept_apart():
     """Without the weight (and no step weight), superpoints hold ground and the layer above
     it alike (10, 15 and 24 of 10, 20 and 40); a scene's step weight alone mixes fewer (4,
-    2, 3); weighing the up coordinate twice, none; the default reads that weight off the
-    level surfaces (1.99 here) and mixes none either."""
+    2, 3); weighing the up coordinate twice, none; the default reads a weight off the
+    level surfaces (7.9 here) and mixes none either."""
     pts, classes = _canopy()
     cloud = PointCloud(pts, up=np.array([0.0, 0.0, 1.0]))
     for k in (10, 20, 40):
@@ -43,7 +43,7 @@ def test_layers_stacked_in_height_are_kept_apart():
         assert r.params["up_weight"] == 2.0
         auto = segment(cloud, k)
         assert _mixed(auto.labels, classes) == 0 and auto.n_segments == k, k
-        assert auto.params["up_weight"] == surface_up_weight(pts, (0, 0, 1)) > 1.9
+        assert auto.params["up_weight"] == surface_up_weight(pts, (0, 0, 1)) > 7.5
 
 
 def _box_room(n: int = 6000, seed: int = 0):
@@ -60,23 +60,27 @@ def _box_room(n: int = 6000, seed: int = 0):
 
 
 def test_the_weight_read_off_the_surfaces():
-    """1 + max(0, 2 m - 1), m the mean |n . up| of the planar neighbourhoods: level ground
-    2, the same surface standing up 1, a sphere's surface (every way alike: m = 1/2) 1, a
-    box room (walls 60 of 108 square metres: m about 0.44) 1, a room seen lying on its side
-    (up along x: walls 2 of 6 sides end-on) more than 1; rows not finite are skipped,
-    small or degenerate inputs read 1; objects and the paper keep 1."""
+    """(2 m)^3 where m > 1/2, else 1, m the mean |n . up| of the planar neighbourhoods:
+    level ground 8, a plane sloping at 60 degrees (m = 1/2 + 1/2 of it level: 0.75) about
+    3.4, the same surface standing up 1, a sphere's surface (every way alike: m = 1/2) 1, a
+    box room (walls 60 of 108 square metres: m about 0.44) 1; rows not finite are
+    skipped, small or degenerate inputs read 1; objects and the paper keep 1."""
     rng = np.random.default_rng(1)
     ground = np.c_[rng.random((3000, 2)) * 50, 0.02 * rng.standard_normal(3000)]
-    assert surface_up_weight(ground, (0, 0, 1)) == 2.0
-    assert surface_up_weight(ground, (0, 0, -5)) == 2.0  # (the up's length and sign)
+    assert surface_up_weight(ground, (0, 0, 1)) == 8.0
+    assert surface_up_weight(ground, (0, 0, -5)) == 8.0  # (the up's length and sign)
     assert surface_up_weight(ground[:, [2, 0, 1]], (0, 0, 1)) == 1.0
+    c, s = np.cos(np.pi / 3), np.sin(np.pi / 3)  # (its normal 60 degrees off up: |n.up| 1/2)
+    slope = ground @ np.array([[1, 0, 0], [0, c, s], [0, -s, c]])
+    half = np.vstack([ground, slope + [0, 0, 100]])  # (half level, half sloping: m = 3/4)
+    assert abs(surface_up_weight(half, (0, 0, 1)) - 1.5 ** 3) < 0.1
     sphere = rng.standard_normal((8000, 3))
     sphere /= np.linalg.norm(sphere, axis=1, keepdims=True)
     assert surface_up_weight(sphere, (0, 0, 1)) <= 1.05
     room = _box_room()
     assert surface_up_weight(room, (0, 0, 1)) == 1.0
     with_holes = np.vstack([ground, np.full((5, 3), np.nan)])
-    assert surface_up_weight(with_holes, (0, 0, 1)) == 2.0
+    assert surface_up_weight(with_holes, (0, 0, 1)) == 8.0
     assert surface_up_weight(ground[:5], (0, 0, 1)) == 1.0
     assert surface_up_weight(np.zeros((50, 3)), (0, 0, 1)) == 1.0  # (no plane at all)
     with pytest.raises(ValueError, match="finite non-zero"):
@@ -246,7 +250,7 @@ def test_runs_of_one_cloud_share_its_weighed_copy():
     pts, _ = _canopy(7)
     cloud = PointCloud(pts, up=np.array([0.0, 0.0, 1.0]))
     a, b = segment(cloud, 10), segment(cloud, 30)
-    assert a.params["up_weight"] == b.params["up_weight"] > 1.9
+    assert a.params["up_weight"] == b.params["up_weight"] > 7.5
     assert a.elements.source is b.elements.source is not cloud
     assert a.elements.graph is b.elements.graph
     c = segment(cloud, 30, up_weight=3)  # (another weight: another copy)

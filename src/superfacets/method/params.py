@@ -270,7 +270,7 @@ def _declare_scan_parameters() -> tuple[Parameter, ...]:
           choices=MERGE_COSTS),
         P("up_weight", None, "float or None", "weight of a point cloud's up coordinate in "
           "the method's distances (its up: a LAS, LAZ or E57 file's z), in (0, 100]; 1: none; "
-          "None: read from a scene's surfaces (1 to 2, the more its planes lie level; "
+          "None: read from a scene's surfaces (1 to 8, the more its planes lie level; "
           "inputs.cloud.surface_up_weight), else 1",
           lambda v: num("up_weight", v, 0.0, MAX_UP_WEIGHT, lo_open=True), ("points",),
           cli="--up-weight"),

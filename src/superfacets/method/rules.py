@@ -340,14 +340,14 @@ def scene_default_of(params, name: str, kind: str, scene: bool = False) -> float
 
 def up_weight_of(params, kind: str, up=None, points=None, owner=None) -> float:
     """``up_weight`` of a run: as given, else (None) read off a scene's surfaces
-    (:func:`superfacets.inputs.cloud.surface_up_weight`: 1 to 2, the more its planar
+    (:func:`superfacets.inputs.cloud.surface_up_weight`: 1 to 8, the more its planar
     neighbourhoods lie level), 1 on other inputs and with ``paper``.
 
     On 30 labelled scans at ``n_segments`` = 100-3,000 against the Segmentator (this
-    machine, 2026-12-02; against a weight of 1): 109 -> 110 of 120 targets at full
-    density, 104 -> 112 at half density (every 2nd point), airborne UE -14 %, oracle mIoU
-    higher in 101 of 120 settings; the ScanNet rooms read 1 and stay as they were
-    (``docs/notes/superpoints.md``, "The up weight read off the surfaces").
+    machine, 2026-12-02; against a weight of 1): 109 -> 111 of 120 targets at full
+    density, 104 -> 113 at half density (every 2nd point), airborne UE -28 %, oracle
+    mIoU +0.035; the ScanNet rooms read 1 and stay as they were
+    (``docs/notes/superpoints.md``, "The up weight's power").
 
     Parameters
     ----------
@@ -379,7 +379,7 @@ def up_weight_of(params, kind: str, up=None, points=None, owner=None) -> float:
     >>> from superfacets.method.params import DEFAULTS
     >>> flat = np.c_[np.random.default_rng(0).random((500, 2)), np.zeros(500)]
     >>> up_weight_of(DEFAULTS, "points", (0, 0, 1), flat)    # level ground
-    2.0
+    8.0
     >>> up_weight_of(DEFAULTS, "points", None, flat)         # no up: not a scene
     1.0
     >>> up_weight_of(replace(DEFAULTS, up_weight=1.5), "points", (0, 0, 1), flat)
