@@ -122,8 +122,8 @@ SHOWN = {
                         "bounding-box diagonal (default: none)"),
     "up_weight": ("clouds", "W", "weigh the cloud's up coordinate (a LAS, LAZ or E57 file's z; "
                   "--seen-from AXIS for others) W times in the method's distances, > 0; 1: off "
-                  "(default: read from a scene's surfaces, 1 to 2 the more its planes lie "
-                  "level: about 2 on airborne scans, keeping ground, vegetation and roofs "
+                  "(default: read from a scene's surfaces, 1 to 8 the more its planes lie "
+                  "level: 3-8 on airborne scans, keeping ground, vegetation and roofs "
                   "apart; 1 in rooms and on clouds with no up)"),
     "step_weight": ("clouds", "S", "weigh a step off the surface (a neighbour's offset along "
                     "the normals) S times in the choice of neighbours and in the distances, "
