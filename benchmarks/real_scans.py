@@ -5,7 +5,8 @@ Usage: python benchmarks/real_scans.py [--scans NAME ...] [-k 300 1000 3000]
        [--spt-levels 1 2] [--beta auto 0]
        [--neighbors 10] [--split-merge] [--min-points 3] [--content] [--adaptive]
        [--size-ratios 0 8 4 2] [--fine-floors 8 4] [--merge-from 5] [--up-weights 2 4]
-       [--leave-out CLASS ...] [--every 2] [--csv results.csv] [--download] [--rooms 3]
+       [--leave-out CLASS ...] [--every 2] [--views 10] [--view-k 30 100]
+       [--csv results.csv] [--download] [--rooms 3]
 
 Each scan of ``superfacets.evaluation.datasets.scans.SCANS`` found in the cache
 (``$SUPERFACETS_SCANS``, default ``~/.cache/superfacets/scans``; ``--download``
@@ -68,7 +69,9 @@ in how many scans the default is within the targets of the best other method at 
 (UE at most, boundary recall at least minus 0.02, oracle mIoU at least; a baseline's rows
 within 10 % of k, ``EQUAL_COUNT``), and the means, and the settings where all three are
 met (the missed ones named); ``--every N`` runs every method on every N-th point of each
-labelled scan (its ground truth with it: the same scans at a lower density); ``--csv``
+labelled scan (its ground truth with it: the same scans at a lower density); ``--views N``
+also N frame-like views of each indoor scan (:func:`frame_views`: what an RGB-D camera
+looking down at the floor and tables sees, a kind of their own, at ``--view-k``); ``--csv``
 also writes every row. ``--rows A.csv ...`` adds the rows of earlier runs to that
 table (a baseline run in another environment: ``spt_partition`` needs a NumPy before 2 for
 ``pycut-pursuit``); with ``--rows`` and no ``--methods`` nothing is run again.
@@ -248,7 +251,11 @@ def _scans(a):
                   file=sys.stderr)
             continue
         scan = load_scan(name)
-        yield name, (scan if a.every == 1 else thinned(scan, a.every))
+        scan = scan if a.every == 1 else thinned(scan, a.every)
+        yield name, scan
+        if a.views and scan_kind(name) == "indoor":
+            for i, keep in enumerate(frame_views(scan, a.views)):
+                yield f"{name}-view{i}", subset(scan, keep)
     for name in room_names(a.rooms):
         yield name, load_room(name)
 
@@ -256,12 +263,18 @@ def _scans(a):
 def thinned(scan, every: int):
     """Every ``every``-th point of a labelled scan (in file order), with its colours,
     fields, ground truth and instances: the same scan at a lower density."""
-    from dataclasses import replace
-
     cloud = scan.cloud
     if cloud.shape is not None or cloud.objects:
         raise SystemExit(f"{scan.name}: --every thins unorganized clouds of one object only")
-    keep = np.arange(0, cloud.points.shape[0], every)
+    return subset(scan, np.arange(0, cloud.points.shape[0], every))
+
+
+def subset(scan, keep):
+    """The points ``keep`` (indices into the file's points) of a labelled scan, with their
+    colours, fields, ground truth and instances."""
+    from dataclasses import replace
+
+    cloud = scan.cloud
 
     def part(a):
         return None if a is None else np.asarray(a)[keep]
@@ -273,10 +286,53 @@ def thinned(scan, every: int):
                    instances=part(scan.instances))
 
 
+#: A frame-like view keeps at least this many points (fewer: another camera is drawn)
+MIN_VIEW_POINTS = 2_000
+
+
+def frame_views(scan, n: int, seed: int = 0, tries: int = 200):
+    """The point indices of ``n`` frame-like views of an indoor scan: what an RGB-D camera
+    sees from 1.2-1.6 m above the floor, at 15-85 % across the room, turned at random and
+    tilted down 45-80 degrees, through a 60 x 45 degree field out to 4 m: the nearest
+    surface of each pixel of a 160 x 120 grid (points within 5 cm behind a pixel's nearest
+    kept). Views of fewer than :data:`MIN_VIEW_POINTS` points are drawn again, at most
+    ``tries`` cameras in all."""
+    p = np.asarray(scan.cloud.points, dtype=np.float64)
+    lo, hi = np.nanmin(p, axis=0), np.nanmax(p, axis=0)
+    rng = np.random.default_rng(seed)
+    found = 0
+    for _ in range(tries):
+        eye = np.r_[lo[:2] + (0.15 + 0.7 * rng.random(2)) * (hi[:2] - lo[:2]),
+                    lo[2] + rng.uniform(1.2, 1.6)]
+        yaw, pitch = rng.uniform(0, 2 * np.pi), np.radians(rng.uniform(45, 80))
+        ahead = np.array([np.cos(yaw) * np.cos(pitch), np.sin(yaw) * np.cos(pitch),
+                          -np.sin(pitch)])
+        right = np.cross(ahead, [0.0, 0.0, 1.0])
+        right /= np.linalg.norm(right)
+        d = p - eye
+        z, above = d @ ahead, d @ np.cross(right, ahead)
+        u, v = np.arctan2(d @ right, z), np.arctan2(above, z)
+        seen = np.flatnonzero((z > 0.3) & (np.linalg.norm(d, axis=1) < 4.0)
+                              & (np.abs(u) < np.radians(30)) & (np.abs(v) < np.radians(22.5)))
+        pixel = (((v[seen] / np.radians(45) + 0.5) * 120).astype(int).clip(0, 119) * 160
+                 + ((u[seen] / np.radians(60) + 0.5) * 160).astype(int).clip(0, 159))
+        nearest = np.full(160 * 120, np.inf)
+        np.minimum.at(nearest, pixel, z[seen])
+        keep = seen[z[seen] <= nearest[pixel] + 0.05]
+        if keep.size >= MIN_VIEW_POINTS:
+            yield keep
+            found += 1
+            if found == n:
+                return
+
+
 def scan_kind(name: str) -> str:
-    """The kind of scan ``name`` for the summary: airborne, street, indoor or made-up."""
+    """The kind of scan ``name`` for the summary: airborne, street, indoor, indoor frame
+    (:func:`frame_views`) or made-up."""
     from superfacets.evaluation.datasets.scans import SCANS
 
+    if "-view" in name:
+        return "indoor frame"
     kind = SCANS[name].kind.lower() if name in SCANS else "made-up room"
     return next((k for k, words in (("airborne", ("airborne",)), ("street", ("mobile",)),
                                     ("indoor", ("indoor", "rgb-d"))) if any(w in kind
@@ -406,6 +462,11 @@ def main() -> None:
     ap.add_argument("--every", type=_at_least_one, default=1, metavar="N",
                     help="every N-th point of each labelled scan (its ground truth with it): "
                          "the same scans at a lower density (default 1: all)")
+    ap.add_argument("--views", type=int, default=0, metavar="N",
+                    help="also N frame-like views of each indoor scan (what an RGB-D camera "
+                         "looking down sees; frame_views), a kind of their own (default 0)")
+    ap.add_argument("--view-k", type=int, nargs="+", default=[30, 100], metavar="K",
+                    help="the counts of the views (2,000-4,000 points each; default 30 100)")
     ap.add_argument("--csv", help="also write every row to this CSV file")
     ap.add_argument("--download", action="store_true", help="fetch missing scans first")
     ap.add_argument("--rooms", type=int, default=3, metavar="N",
@@ -432,7 +493,7 @@ def main() -> None:
               + (" UE, classes left out | recall, classes left out |" if a.leave_out else ""))
         print("|---|---|---|---|---|---|---|---|---|---|---|---|" + ("---|---|" if objects else "")
               + ("---|---|" if a.leave_out else ""))
-        for k in a.k:
+        for k in (a.view_k if "-view" in name else a.k):
             for method in a.methods:
                 if not available(method):
                     print(f"| {k} | {method} | not installed | | | | | | | | |"
