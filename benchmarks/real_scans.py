@@ -287,16 +287,21 @@ def subset(scan, keep):
 
 
 #: A frame-like view keeps at least this many points (fewer: another camera is drawn)
-MIN_VIEW_POINTS = 2_000
+MIN_VIEW_POINTS = 800
+#: The radius in metres of the disc each point is drawn as in a view (a ScanNet room's
+#: points are 1-2 cm apart)
+SPLAT = 0.02
 
 
 def frame_views(scan, n: int, seed: int = 0, tries: int = 200):
     """The point indices of ``n`` frame-like views of an indoor scan: what an RGB-D camera
     sees from 1.2-1.6 m above the floor, at 15-85 % across the room, turned at random and
     tilted down 45-80 degrees, through a 60 x 45 degree field out to 4 m: the nearest
-    surface of each pixel of a 160 x 120 grid (points within 5 cm behind a pixel's nearest
-    kept). Views of fewer than :data:`MIN_VIEW_POINTS` points are drawn again, at most
-    ``tries`` cameras in all."""
+    surface of each pixel of a 160 x 120 grid (each point drawn as a disc of :data:`SPLAT`;
+    points within 5 cm behind a pixel's nearest kept). Views of fewer than
+    :data:`MIN_VIEW_POINTS` points are drawn again, at most ``tries`` cameras in all."""
+    from scipy.ndimage import minimum_filter
+
     p = np.asarray(scan.cloud.points, dtype=np.float64)
     lo, hi = np.nanmin(p, axis=0), np.nanmax(p, axis=0)
     rng = np.random.default_rng(seed)
@@ -316,9 +321,15 @@ def frame_views(scan, n: int, seed: int = 0, tries: int = 200):
                               & (np.abs(u) < np.radians(30)) & (np.abs(v) < np.radians(22.5)))
         pixel = (((v[seen] / np.radians(45) + 0.5) * 120).astype(int).clip(0, 119) * 160
                  + ((u[seen] / np.radians(60) + 0.5) * 160).astype(int).clip(0, 159))
-        nearest = np.full(160 * 120, np.inf)
-        np.minimum.at(nearest, pixel, z[seen])
-        keep = seen[z[seen] <= nearest[pixel] + 0.05]
+        # each point drawn as a disc of SPLAT metres (a sampled surface hides what is
+        # behind it, near the camera too): its pixels' radius by its distance
+        radius = np.ceil(np.arctan(SPLAT / z[seen]) / np.radians(60 / 160)).astype(int)
+        nearest = np.full((120, 160), np.inf)
+        for r in np.unique(radius):
+            drawn = np.full(160 * 120, np.inf)
+            np.minimum.at(drawn, pixel[radius == r], z[seen][radius == r])
+            nearest = np.minimum(nearest, minimum_filter(drawn.reshape(120, 160), 2 * r + 1))
+        keep = seen[z[seen] <= nearest.ravel()[pixel] + 0.05]
         if keep.size >= MIN_VIEW_POINTS:
             yield keep
             found += 1
@@ -466,7 +477,7 @@ def main() -> None:
                     help="also N frame-like views of each indoor scan (what an RGB-D camera "
                          "looking down sees; frame_views), a kind of their own (default 0)")
     ap.add_argument("--view-k", type=int, nargs="+", default=[30, 100], metavar="K",
-                    help="the counts of the views (2,000-4,000 points each; default 30 100)")
+                    help="the counts of the views (800-1,500 points each; default 30 100)")
     ap.add_argument("--csv", help="also write every row to this CSV file")
     ap.add_argument("--download", action="store_true", help="fetch missing scans first")
     ap.add_argument("--rooms", type=int, default=3, metavar="N",

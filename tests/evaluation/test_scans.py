@@ -381,3 +381,38 @@ def test_real_scans_counts_the_settings_that_meet_all_three_targets(capsys):
     out = capsys.readouterr().out
     assert "| airborne | 100 | 3 | 2/3 | 2/3 | 2/3 | 1/3 |" in out
     assert "met in 1 of 3 settings; missed: b at 100 (recall); c at 100 (UE, mIoU)." in out
+
+
+def test_real_scans_frame_views_see_the_nearest_surface(tmp_path):
+    """``real_scans.py --views N``: a room's frame-like views hold at least
+    ``MIN_VIEW_POINTS`` points each, the same for the same seed, their truth the room's at
+    the same points; none holds the floor under a closed box (its top hides it from every
+    camera above the box); a view is a kind of its own."""
+    bench = _real_scans()
+    rng = np.random.default_rng(0)
+    floor = np.c_[rng.random((40_000, 2)) * [6, 4], np.zeros(40_000)]
+    wall = np.c_[rng.random(12_000) * 6, np.full(12_000, 4.0), rng.random(12_000) * 2.5]
+    top = np.c_[2 + rng.random((4_000, 2)), np.full(4_000, 0.8)]  # a box 1 x 1 x 0.8 m
+    sides = [np.c_[2 + rng.random(1_500), np.full(1_500, y), rng.random(1_500) * 0.8]
+             for y in (2.0, 3.0)]
+    sides += [np.c_[np.full(1_500, x), 2 + rng.random(1_500), rng.random(1_500) * 0.8]
+              for x in (2.0, 3.0)]
+    pts = np.vstack([floor, wall, top, *sides]).astype(np.float32)
+    cls = np.repeat([1, 2, 3, 3, 3, 3, 3], [40_000, 12_000, 4_000] + [1_500] * 4)
+    np.save(tmp_path / "scannet_scene0000_00_points.npy",
+            np.c_[pts, np.full((len(pts), 3), 128.0)].astype(np.float32))
+    np.save(tmp_path / "scannet_scene0000_00_labels.npy", cls.astype(np.uint32))
+    np.save(tmp_path / "scannet_scene0000_00_instances.npy", cls.astype(np.uint32))
+    scan = load_scan("scannet-scene0000_00", tmp_path)
+    views = list(bench.frame_views(scan, 6))
+    assert len(views) == 6 and all(v.size >= bench.MIN_VIEW_POINTS for v in views)
+    again = list(bench.frame_views(scan, 6))
+    assert all(np.array_equal(a, b) for a, b in zip(views, again, strict=True))
+    under = (cls == 1) & np.all((pts[:, :2] > 2.05) & (pts[:, :2] < 2.95), axis=1)
+    assert under.sum() > 300 and not any(under[v].any() for v in views)
+    assert any((cls[v] == 3).any() for v in views)  # (the box is seen)
+    part = bench.subset(scan, views[0])
+    np.testing.assert_array_equal(part.ground_truth, scan.ground_truth[views[0]])
+    np.testing.assert_allclose(part.cloud.points, scan.cloud.points[views[0]])
+    assert bench.scan_kind("scannet-scene0000_00-view0") == "indoor frame"
+    assert bench.scan_kind("scannet-scene0000_00") == "indoor"
