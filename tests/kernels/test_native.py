@@ -1834,13 +1834,15 @@ def test_the_scene_merges_give_numba_results(shadowed):
 
 
 @needs_cxx
-@pytest.mark.parametrize("planarity,max_rise,max_size", [(2, 1e-4, 0.0), (2, 1e-3, 40.0),
-                                                         (3, 1e-3, 40.0), (1, 0.0, 25.0)])
-def test_merges_that_stop_short_give_numba_results(planarity, max_rise, max_size):
+@pytest.mark.parametrize("planarity,max_rise,max_size,min_count",
+                         [(2, 1e-4, 0.0, 0.0), (2, 1e-3, 40.0, 0.0), (2, 1e-4, 0.0, 6.0),
+                          (3, 1e-3, 40.0, 0.0), (1, 0.0, 25.0, 0.0)])
+def test_merges_that_stop_short_give_numba_results(planarity, max_rise, max_size, min_count):
     """Known answer against the reference: the merging kernel where most pairs may not
-    merge (the flat gate, the size bound) and the targets are not all reached. Pairs of no
-    finite cost never enter the compiled kernel's heap; its merges, the nodes' sums it
-    leaves and the roots at every target are numba's to the bit."""
+    merge (the flat gate, read over the smaller node's elements or ``min_count``, the size
+    bound) and the targets are not all reached. Pairs of no finite cost never enter the
+    compiled kernel's heap; its merges, the nodes' sums it leaves and the roots at every
+    target are numba's to the bit."""
     rng = np.random.default_rng(7)
     k = 400
     side = 20
@@ -1858,7 +1860,7 @@ def test_merges_that_stop_short_give_numba_results(planarity, max_rise, max_size
     for f in (native.kernel("hierarchy.merge_levels"), reference("hierarchy.merge_levels")):
         arrays = [a.copy() for a in (area, wsum, fsum, scatter)]
         roots = f(k, ea.copy(), eb.copy(), stats.copy(), *arrays, planarity, 0.5, 0.2, 0.0,
-                  1.0, max_rise, targets.copy(), max_size)
+                  1.0, max_rise, targets.copy(), max_size, min_count)
         out.append((np.asarray(roots), arrays))
     (got, got_arrays), (want, want_arrays) = out
     assert np.array_equal(got, want)

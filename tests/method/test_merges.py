@@ -168,6 +168,48 @@ def test_a_flat_plane_keeps_compact_superpoints():
     assert np.mean(spread) < 0.085 and max(spread) < 0.17
 
 
+@pytest.mark.parametrize("k", [20, 50])
+def test_noisy_level_ground_has_no_specks(monkeypatch, k):
+    """Known answer: level ground with 2 cm of noise (5,000 points over 50 x 50 m, a LAS
+    tile's up direction), merged from 20 times k: every superpoint holds at least a quarter
+    of the mean. Before FLAT_MIN_ELEMENTS the flat test read a piece of 1-11 points over
+    its own few points, failed it by their noise alone, and 6 of 20 superpoints (11 of
+    50) held under a quarter of the mean, the smallest 2 points."""
+    import superfacets.method.merges as merges
+
+    rng = np.random.default_rng(0)
+    ground = np.c_[rng.random((5000, 2)) * 50, 0.02 * rng.standard_normal(5000)]
+    cloud = PointCloud(ground, up=(0, 0, 1))
+    r = segment(cloud, k)
+    assert r.n_segments == k and r.params["merge_from"] == 20
+    sizes = np.bincount(r.labels)
+    assert sizes.min() >= 5000 / k / 4, np.sort(sizes)[:5]
+    monkeypatch.setattr(merges, "FLAT_MIN_ELEMENTS", 0.0)  # each piece's own count
+    old = np.bincount(segment(cloud, k).labels)
+    assert (old < 5000 / k / 4).sum() >= 5
+
+
+def test_a_bush_of_a_few_points_stays_off_the_flat_ground():
+    """Known answer: the floor of the flat test is the noise's, not an object's: five
+    points 1 m above level ground (2 cm of noise) fail it whatever it reads them over,
+    and stay a superpoint of their own."""
+    from superfacets.graph.hierarchy import planarity_graph
+    from superfacets.method.merges import FLAT_MIN_ELEMENTS, flat_merge_nodes
+
+    rng = np.random.default_rng(1)
+    ground = np.c_[rng.random((3000, 2)) * 30, 0.02 * rng.standard_normal(3000)]
+    bush = np.c_[15 + 0.3 * rng.random((5, 2)), 1 + 0.05 * rng.random(5)]
+    graph = _graph(np.vstack([ground, bush]))
+    pts = graph.positions  # (the graph's order)
+    cells = (pts[:, 0] // 5).astype(np.int64) * 6 + (pts[:, 1] // 5).astype(np.int64)
+    cells[pts[:, 2] > 0.5] = 36
+    pg = planarity_graph(graph, cells)
+    noise = 0.02 ** 2
+    for floor in (0.0, FLAT_MIN_ELEMENTS, 100.0):
+        top = flat_merge_nodes(pg, 1, 2 * noise, min_count=floor)
+        assert np.unique(top[:36]).size == 1 and top[36] != top[0]
+
+
 def test_the_merges_keep_separate_pieces_apart_and_warn_below_them():
     rng = np.random.default_rng(2)
     a = np.c_[rng.random((3000, 2)), np.zeros(3000)]

@@ -71,7 +71,7 @@ def _spread(a, b, area, wsum):
 
 @njit(cache=True, error_model="numpy")
 def _cost(a, b, ln, ang, conc, area, wsum, fsum, scatter, planarity, alpha, eta_convex,
-          beta, compactness, max_rise, tmp, max_size):
+          beta, compactness, max_rise, tmp, max_size, min_count):
     if max_size > 0 and area[a] + area[b] > max_size:  # no union weighing more
         return np.inf
     if planarity > 0:
@@ -83,7 +83,7 @@ def _cost(a, b, ln, ang, conc, area, wsum, fsum, scatter, planarity, alpha, eta_
                       scatter[b, 4], scatter[b, 5]))
         c = max(c, 0.0)
         if planarity == 2:  # flat pairs only (the rise per element of the smaller node)
-            if c > max_rise * min(area[a], area[b]):
+            if c > max_rise * max(min(area[a], area[b]), min_count):
                 return np.inf
         elif planarity == 3:  # the scene's: the rise in max_rise's units, Ward's in 1 / compactness
             c = c / max(max_rise, 1e-300) + compactness * _spread(a, b, area, wsum)
@@ -108,13 +108,14 @@ def _cost(a, b, ln, ang, conc, area, wsum, fsum, scatter, planarity, alpha, eta_
 
 @njit(cache=True, error_model="numpy")
 def merge_levels(k, ea, eb, stats, area, wsum, fsum, scatter, planarity, alpha, eta_convex,
-                 beta, compactness, max_rise, targets, max_size=0.0):
+                 beta, compactness, max_rise, targets, max_size=0.0, min_count=0.0):
     """Merge the cheapest adjacent pair until each of ``targets`` (decreasing, each
     reachable) live nodes remain, or no pair has a finite cost; ``(len(targets), k)``
     int64: each node's root then (the rows of targets not reached: the roots where the
     merging stopped). ``planarity``: 0 Ward's cost, 1 the rise of the best plane's
     distances, 2 Ward's cost of the pairs whose plane rises by at most ``max_rise``
-    per element of the smaller node (the others: infinite), 3 the scene's cost: the rise
+    per element of the smaller node, read over at least ``min_count`` elements (the
+    others: infinite), 3 the scene's cost: the rise
     over ``max_rise`` plus ``compactness`` times Ward's term, times the crease factor.
     ``area``, ``wsum``,
     ``fsum`` (k, d) and ``scatter`` (k, 6) are updated in place. ``max_size > 0``: no
@@ -147,7 +148,7 @@ def merge_levels(k, ea, eb, stats, area, wsum, fsum, scatter, planarity, alpha, 
         a, b = min(ea[t], eb[t]), max(ea[t], eb[t])
         heapq.heappush(heap, (_cost(a, b, stats[t, 0], stats[t, 1], stats[t, 2], area, wsum,
                                     fsum, scatter, planarity, alpha, eta_convex, beta,
-                                    compactness, max_rise, tmp, max_size), a, b, 0, 0))
+                                    compactness, max_rise, tmp, max_size, min_count), a, b, 0, 0))
     out = np.empty((targets.shape[0], k), np.int64)
     live = k
     step = 0
@@ -213,7 +214,7 @@ def merge_levels(k, ea, eb, stats, area, wsum, fsum, scatter, planarity, alpha, 
             lo, hi = (a, c) if a < c else (c, a)
             heapq.heappush(heap, (_cost(lo, hi, st[e, 0], st[e, 1], st[e, 2], area, wsum,
                                         fsum, scatter, planarity, alpha, eta_convex, beta,
-                                        compactness, max_rise, tmp, max_size),
+                                        compactness, max_rise, tmp, max_size, min_count),
                                   lo, hi, version[lo], version[hi]))
             e = nxt[e]
         live -= 1

@@ -8,8 +8,9 @@ resolve_rules`), then :func:`merge_to_count` merges adjacent superpoints in two 
    distances of their union to its least-squares plane
    (:func:`superfacets.graph.hierarchy.planarity_graph`: each point weighs one) rise by
    at most :data:`FLAT_NOISE` times the input's noise (:func:`noise_variance`) per
-   point of the smaller one: its points lie on the larger's plane, to within the
-   scanner's noise. Among those pairs the cheapest by Ward's cost merges first, so a
+   point of the smaller one (of at least :data:`FLAT_MIN_ELEMENTS`: a piece of a few
+   points is not failed by its noise alone): its points lie on the larger's plane, to
+   within the scanner's noise. Among those pairs the cheapest by Ward's cost merges first, so a
    flat region grows in compact pieces. Walls, floors, ground and the flat faces of
    objects become large superpoints; curved surfaces, whose planes bend beyond the
    noise, keep theirs.
@@ -62,13 +63,23 @@ from ..graph.sums import border_sums, grouped_graph, grouped_planes, point_sums
 __all__ = ["merge_to_count", "merge_nodes", "flat_merges", "flat_share", "flat_merge_nodes",
            "rise_merge_nodes", "scene_merge_nodes", "ring_residual", "rise_weight",
            "same_feature_edges", "feature_spread", "noise_variance", "neighbourhood_noise",
-           "noise_of", "NOISE_SIGNIFICANCE", "FLAT_NOISE", "FLAT_SHARE", "NOISE_SAMPLE",
-           "PLANE_ROUNDING"]
+           "noise_of", "NOISE_SIGNIFICANCE", "FLAT_NOISE", "FLAT_MIN_ELEMENTS", "FLAT_SHARE",
+           "NOISE_SAMPLE", "PLANE_ROUNDING"]
 
 #: A flat merge's largest rise of the squared plane distances, per element of the
 #: smaller superpoint, in units of :func:`noise_variance` (chosen among 1, 2 and 3:
 #: ``docs/notes/superpoints-defaults.md``).
 FLAT_NOISE = 2.0
+#: The fewest elements a flat merge's rise is read over (per element of the smaller
+#: superpoint, :data:`FLAT_NOISE`): below about 12 one point's noise decides the test.
+#: Under noise alone a union's rise is the noise times a chi-squared of at most three
+#: degrees of freedom (the planes' parameters), whatever the sizes; read over 12
+#: elements a flat pair fails the test with a chance of about 1 in 300 (three sigma),
+#: over 1 to 5 with a chance of 10-30 %, which left pieces of 1-11 points on level
+#: ground as superpoints of their own (``docs/notes/superpoints.md``). 0: each piece's
+#: own count, before 2026-12-02. The first run's superpoints hold as many on average
+#: (:data:`superfacets.method.rules.MIN_FINE_ELEMENTS`).
+FLAT_MIN_ELEMENTS = 12.0
 #: The share of the elements in flat regions (superpoints the flat merges grew from two
 #: or more) from which phase 2 merges by the plane's rise, not by Ward's cost: most of
 #: them, on every input, scan or sampled surface (the measurements behind it:
@@ -219,7 +230,8 @@ def flat_merges(graph, labels: np.ndarray, k: int, max_rise: float, *,
 
     A pair may merge when the squared distances of its union to their best plane
     (:func:`superfacets.graph.hierarchy.planarity_graph`: each point weighs one) rise
-    by at most ``max_rise`` per element of the smaller superpoint; among those, the
+    by at most ``max_rise`` per element of the smaller superpoint (of at least
+    :data:`FLAT_MIN_ELEMENTS`: a piece of a few points fails by its noise); among those, the
     pair of least Ward's cost with the crease factor merges first
     (:func:`superfacets.graph.hierarchy.hierarchy`), so that a flat region grows into
     compact pieces where it must stop at ``k``. Merging stops once no pair may merge
@@ -266,7 +278,7 @@ def flat_merges(graph, labels: np.ndarray, k: int, max_rise: float, *,
     """
     lab, nodes, pairs = _sums(graph, labels, features)
     unit = _planes_graph(nodes, pairs, None, None if features is None else max_jump)
-    return flat_merge_nodes(unit, k, max_rise, alpha, eta_convex)[lab]
+    return flat_merge_nodes(unit, k, max_rise, alpha, eta_convex, 0.0, FLAT_MIN_ELEMENTS)[lab]
 
 
 def feature_spread(labels: np.ndarray, features: np.ndarray, k: int, *, sums=None
@@ -331,13 +343,16 @@ def same_feature_edges(pg, max_jump: float, spread: np.ndarray | None = None, *,
 
 
 def flat_merge_nodes(pg, k: int, max_rise: float, alpha: float = 0.0,
-                     eta_convex: float = 0.0, max_size: float = 0.0) -> np.ndarray:
+                     eta_convex: float = 0.0, max_size: float = 0.0,
+                     min_count: float = FLAT_MIN_ELEMENTS) -> np.ndarray:
     """:func:`flat_merges` on a superpoint graph whose ``area``, ``centroid`` and
     ``scatter`` are the points' count, mean and scatter
     (:func:`superfacets.graph.hierarchy.planarity_graph`): the merged superpoint of
     each node ((K,) int64, dense, numbered by their lowest node); with ``max_size > 0``,
-    no merge makes a superpoint of more elements."""
-    return _merged(pg, 2, k, float(alpha), float(eta_convex), float(max_rise), max_size)
+    no merge makes a superpoint of more elements; a pair's rise read over at least
+    ``min_count`` elements (:data:`FLAT_MIN_ELEMENTS`)."""
+    return _merged(pg, 2, k, float(alpha), float(eta_convex), float(max_rise), max_size,
+                   min_count=float(min_count))
 
 
 def rise_merge_nodes(pg, k: int, max_size: float = 0.0) -> np.ndarray:
@@ -493,7 +508,7 @@ def rise_weight(noise: float, count: np.ndarray, scatter: np.ndarray) -> float:
 
 
 def _merged(pg, planarity: int, k: int, alpha: float, eta_convex: float, max_rise: float,
-            max_size: float, compactness: float = 0.0) -> np.ndarray:
+            max_size: float, compactness: float = 0.0, min_count: float = 0.0) -> np.ndarray:
     """The merging kernel on a planes' graph, down to ``k`` nodes or as far as it may."""
     n_nodes = pg.n_segments
     if n_nodes == 0:
@@ -501,7 +516,8 @@ def _merged(pg, planarity: int, k: int, alpha: float, eta_convex: float, max_ris
     roots = native.kernel("hierarchy.merge_levels")(
         n_nodes, *merge_arrays(pg, True), planarity, alpha, eta_convex, 0.0, compactness,
         max_rise,
-        np.asarray([max(1, min(k, n_nodes))], dtype=np.int64), float(max_size))[0]
+        np.asarray([max(1, min(k, n_nodes))], dtype=np.int64), float(max_size),
+        float(min_count))[0]
     _, top = np.unique(roots, return_inverse=True)  # numbered by their lowest superpoint
     return top.astype(np.int64)
 
@@ -636,7 +652,7 @@ def merge_nodes(nodes: dict, pairs: dict, target: int, max_rise: float | None,
     cap = max_ratio * float(count.sum()) / target if max_ratio > 0 else 0.0
     if max_rise is not None:
         flat = flat_merge_nodes(_planes_graph(nodes, pairs, None, max_jump), target, max_rise,
-                                alpha, eta_convex, cap)
+                                alpha, eta_convex, cap, FLAT_MIN_ELEMENTS)
     n_flat = int(flat.max()) + 1 if k else 0
     if not n_flat:
         return flat, flat, 0

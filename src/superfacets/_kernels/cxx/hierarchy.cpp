@@ -80,6 +80,7 @@ struct Params {
     // (the rise / max_rise + compactness * Ward's term) times the crease factor
     i64 planarity;
     double alpha, eta_convex, beta, compactness, max_rise, max_size;
+    double min_count;  // planarity 2: the fewest elements the smaller node's rise is read over
 };
 
 double cost(i64 a, i64 b, double ln, double ang, double conc, const Nodes& N, const Params& P,
@@ -92,7 +93,8 @@ double cost(i64 a, i64 b, double ln, double ang, double conc, const Nodes& N, co
         c = plane(tmp[0], tmp[1], tmp[2], tmp[3], tmp[4], tmp[5]) - N.own[a] - N.own[b];
         c = mx(c, 0.0);
         if (P.planarity == 2) {  // flat pairs only: the rise per element of the smaller
-            if (c > P.max_rise * mn(N.area[a], N.area[b])) return INF;
+            // (read over at least min_count of them: below, one point's noise decides)
+            if (c > P.max_rise * mx(mn(N.area[a], N.area[b]), P.min_count)) return INF;
         } else if (P.planarity == 3) {  // the rise in max_rise's units, Ward's in 1 / compactness
             c = c / mx(P.max_rise, TINY) + P.compactness * spread(a, b, N);
         } else if (P.compactness > 0) {
@@ -133,7 +135,8 @@ nb::object merge_levels(i64 k, nb::handle ea_, nb::handle eb_, nb::handle stats_
                               nb::handle area_, nb::handle wsum_, nb::handle fsum_,
                               nb::handle scatter_, i64 planarity, double alpha,
                               double eta_convex, double beta, double compactness,
-                              double max_rise, nb::handle targets_, double max_size) {
+                              double max_rise, nb::handle targets_, double max_size,
+                              double min_count) {
     In<i64> ea(ea_, "ea"), eb(eb_, "eb"), targets(targets_, "targets");
     In<double> stats(stats_, "stats");
     Out<double> area(area_, "area"), wsum(wsum_, "wsum"), fsum(fsum_, "fsum"),
@@ -161,7 +164,7 @@ nb::object merge_levels(i64 k, nb::handle ea_, nb::handle eb_, nb::handle stats_
         own[s] = plane(q[0], q[1], q[2], q[3], q[4], q[5]);
     }
     Nodes N{area.p, wsum.p, fsum.p, fsum.cols, scatter.p, own.data()};
-    Params P{planarity, alpha, eta_convex, beta, compactness, max_rise, max_size};
+    Params P{planarity, alpha, eta_convex, beta, compactness, max_rise, max_size, min_count};
     std::vector<i64> nb(cap), nxt(cap, -1), head(k, -1), tail(k, -1);
     std::vector<double> st(3 * cap);
     for (i64 t = 0; t < n_e; ++t)
@@ -260,11 +263,12 @@ void bind_hierarchy(nb::module_& m) {
     m.def("merge_levels", &merge_levels,
           "Merge the cheapest adjacent pair until each of targets (decreasing, each reachable) "
           "live nodes remain, or no pair has a finite cost (max_size > 0: no union weighing "
-          "more).",
+          "more; planarity 2: a pair's rise read over at least min_count elements).",
           nb::arg("k"), nb::arg("ea"), nb::arg("eb"), nb::arg("stats"), nb::arg("area"),
           nb::arg("wsum"), nb::arg("fsum"), nb::arg("scatter"), nb::arg("planarity"),
           nb::arg("alpha"), nb::arg("eta_convex"), nb::arg("beta"), nb::arg("compactness"),
-          nb::arg("max_rise"), nb::arg("targets"), nb::arg("max_size") = 0.0);
+          nb::arg("max_rise"), nb::arg("targets"), nb::arg("max_size") = 0.0,
+          nb::arg("min_count") = 0.0);
 }
 
 }  // namespace sfk

@@ -169,7 +169,9 @@ def segment_tiled(source, n_segments: int | None = None, *, tiles=4,
         Also coarser, nested levels of these numbers of segments, each connected, merged
         from the tiles' sums as one run's :meth:`SegmentationResult.hierarchy` merges its
         superpoint graph (:func:`~superfacets.scale.tiles.merges.tiled_hierarchy`):
-        ``result.hierarchy``.
+        ``result.hierarchy``; the same parents where the normals are the input's, and where
+        they are estimated the crease factor reads the tiles' angles (each tile orients its
+        own), so a merge can differ.
     level_cost : {'ward', 'planarity'}, default 'ward'
         Their merge cost (``'planarity'``: clouds only).
     extent_weight : float, optional
