@@ -1814,8 +1814,9 @@ def test_a_signal_stops_a_run_within_a_second_at_any_moment(tmp_path, sig, code)
 
 @needs_cxx
 def test_the_scene_merges_give_numba_results(shadowed):
-    """``merge_cost='scene'`` (the merging kernel's fourth cost) on a terrain with bushes, and
-    ``'noise'`` on a noise-free one: the compiled kernel's merges are numba's, call by call."""
+    """``merge_cost='scene'`` (the merging kernel's fourth cost) on a terrain with bushes,
+    ``'noise'`` on a noise-free one, and the default on an exact plane (the flat test's
+    rounding): the compiled kernel's merges are numba's, call by call."""
     calls, _ = shadowed
     rng = np.random.default_rng(3)
     xy = rng.random((6000, 2))
@@ -1831,6 +1832,11 @@ def test_the_scene_merges_give_numba_results(shadowed):
     r = superfacets.segment(np.c_[xy, 0.01 * np.sin(6 * xy[:, 0])], 10, n_threads=1,
                             merge_cost="noise")
     assert r.n_segments == 10 and calls["hierarchy.merge_levels"] > before
+    # an exact plane: the flat test passes what lies within its union's rounding
+    before = calls["hierarchy.merge_levels"]
+    r = superfacets.segment(superfacets.PointCloud(np.c_[xy * 50, np.zeros(6000)],
+                                                   up=(0, 0, 1)), 30, n_threads=1)
+    assert r.n_segments == 30 and calls["hierarchy.merge_levels"] > before
 
 
 @needs_cxx

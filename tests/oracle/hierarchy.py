@@ -83,7 +83,8 @@ def _cost(a, b, ln, ang, conc, area, wsum, fsum, scatter, planarity, alpha, eta_
                       scatter[b, 4], scatter[b, 5]))
         c = max(c, 0.0)
         if planarity == 2:  # flat pairs only (the rise per element of the smaller node)
-            if c > max_rise * max(min(area[a], area[b]), min_count):
+            if c > (max_rise * max(min(area[a], area[b]), min_count)
+                    + 64.0 * 2.220446049250313e-16 * (tmp[0] + tmp[1] + tmp[2])):
                 return np.inf
         elif planarity == 3:  # the scene's: the rise in max_rise's units, Ward's in 1 / compactness
             c = c / max(max_rise, 1e-300) + compactness * _spread(a, b, area, wsum)

@@ -9,8 +9,9 @@ resolve_rules`), then :func:`merge_to_count` merges adjacent superpoints in two 
    (:func:`superfacets.graph.hierarchy.planarity_graph`: each point weighs one) rise by
    at most :data:`FLAT_NOISE` times the input's noise (:func:`noise_variance`) per
    point of the smaller one (of at least :data:`FLAT_MIN_ELEMENTS`: a piece of a few
-   points is not failed by its noise alone): its points lie on the larger's plane, to
-   within the scanner's noise. Among those pairs the cheapest by Ward's cost merges first, so a
+   points is not failed by its noise alone), plus float64's rounding of the union's plane
+   fit (:data:`PLANE_ROUNDING` times its scatter's trace: an exact plane's pieces merge):
+   its points lie on the larger's plane, to within the scanner's noise. Among those pairs the cheapest by Ward's cost merges first, so a
    flat region grows in compact pieces. Walls, floors, ground and the flat faces of
    objects become large superpoints; curved surfaces, whose planes bend beyond the
    noise, keep theirs.
@@ -89,7 +90,8 @@ FLAT_SHARE = 0.5
 NOISE_SAMPLE = 8_192
 #: A neighbourhood's smallest eigenvalue at most this times its largest is 0 in
 #: :func:`neighbourhood_noise`: float64's rounding of the covariance (64 machine epsilons),
-#: not noise.
+#: not noise; and, times a union's scatter's trace, the rise the flat merges allow beyond
+#: the noise (the compiled merging's ``ROUNDING``).
 PLANE_ROUNDING = 64 * float(np.finfo(np.float64).eps)
 
 

@@ -15,6 +15,9 @@ namespace {
 
 constexpr double TINY = 1e-300;
 constexpr double PI = 3.141592653589793;
+// float64's rounding of a plane fit, per unit of its scatter's trace (64 machine epsilons,
+// merges.PLANE_ROUNDING): a rise within it is none (an exact plane's pieces, sampled)
+constexpr double ROUNDING = 64.0 * 2.220446049250313e-16;
 
 inline i64 find(i64* owner, i64 s) {
     while (owner[s] != s) {
@@ -94,7 +97,9 @@ double cost(i64 a, i64 b, double ln, double ang, double conc, const Nodes& N, co
         c = mx(c, 0.0);
         if (P.planarity == 2) {  // flat pairs only: the rise per element of the smaller
             // (read over at least min_count of them: below, one point's noise decides)
-            if (c > P.max_rise * mx(mn(N.area[a], N.area[b]), P.min_count)) return INF;
+            if (c > P.max_rise * mx(mn(N.area[a], N.area[b]), P.min_count) +
+                        ROUNDING * (tmp[0] + tmp[1] + tmp[2]))
+                return INF;
         } else if (P.planarity == 3) {  // the rise in max_rise's units, Ward's in 1 / compactness
             c = c / mx(P.max_rise, TINY) + P.compactness * spread(a, b, N);
         } else if (P.compactness > 0) {
