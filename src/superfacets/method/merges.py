@@ -11,8 +11,9 @@ resolve_rules`), then :func:`merge_to_count` merges adjacent superpoints in two 
    point of the smaller one (of at least :data:`FLAT_MIN_ELEMENTS`: a piece of a few
    points is not failed by its noise alone), plus float64's rounding of the union's plane
    fit (:data:`PLANE_ROUNDING` times its scatter's trace: an exact plane's pieces merge):
-   its points lie on the larger's plane, to within the scanner's noise. Among those pairs the cheapest by Ward's cost merges first, so a
-   flat region grows in compact pieces. Walls, floors, ground and the flat faces of
+   its points lie on the larger's plane, to within the scanner's noise. Among those
+   pairs the cheapest by Ward's cost merges first, so a flat region grows in compact
+   pieces. Walls, floors, ground and the flat faces of
    objects become large superpoints; curved surfaces, whose planes bend beyond the
    noise, keep theirs.
 2. Down to ``k`` (or the input's separate pieces, where there are more), by one of two
