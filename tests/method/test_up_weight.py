@@ -90,6 +90,14 @@ def test_the_weight_read_off_the_surfaces():
         "up_weight"] == 1.0
     paper = segment(PointCloud(ground, up=np.array([0.0, 0.0, 1.0])), 10, paper=True)
     assert paper.params["up_weight"] == 1.0
+    # on any number of threads the same (the queries and the compiled kernels split rows)
+    from superfacets._runtime.threads import using
+
+    weights = []
+    for n in (1, 2, 3):
+        with using(n):
+            weights.append(surface_up_weight(half, (0, 0, 1)))
+    assert len(set(weights)) == 1 and abs(weights[0] - 1.5 ** 3) < 0.1
 
 
 @pytest.mark.parametrize("up", [(0.0, 0.0, 1.0), (0.0, 0.6, 0.8)])

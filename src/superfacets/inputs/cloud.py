@@ -704,28 +704,36 @@ def surface_up_weight(points, up) -> float:
     """
     from scipy.spatial import cKDTree
 
+    from .._runtime.threads import default_threads
+
     u = np.asarray(up, dtype=np.float64).reshape(3)
     length = float(np.linalg.norm(u))
     if not (np.isfinite(length) and length > 0):
         raise ValueError(f"up must be a finite non-zero vector, got {up!r}")
     pts = np.asarray(points)  # (every ceil(n / UP_SAMPLE)-th row, then the finite ones:
     pts = np.asarray(pts[::max(1, -(-pts.shape[0] // UP_SAMPLE))], dtype=np.float64)
-    pts = pts[finite_rows(pts)]  # a survey's sample; no copy of the whole cloud)
-    if pts.shape[0] < UP_NEIGHBOURS:
+    pts = np.ascontiguousarray(pts[finite_rows(pts)])  # a survey's sample; no copy of
+    if pts.shape[0] < UP_NEIGHBOURS:  # the whole cloud)
         return 1.0
     at = pts[::max(1, -(-pts.shape[0] // UP_NEIGHBOURHOODS))]
     tree = cKDTree(pts, balanced_tree=False, compact_nodes=False)  # (built faster)
-    _, near = tree.query(at, k=UP_NEIGHBOURS)
+    _, near = tree.query(at, k=UP_NEIGHBOURS, workers=default_threads())
     nb = pts[near]
     nb -= nb.mean(axis=1, keepdims=True)
-    lam, vec = np.linalg.eigh(np.matmul(nb.transpose(0, 2, 1), nb))  # (ascending)
-    s = np.sqrt(np.maximum(lam[:, ::-1], 0.0))  # s1 >= s2 >= s3
+    cov = np.matmul(nb.transpose(0, 2, 1), nb)
+    low, high = np.empty(at.shape[0]), np.empty(at.shape[0])  # (compiled, on threads)
+    native.kernel("normals.extreme_eigenvalues")(cov, low, high)
+    mid = np.trace(cov, axis1=1, axis2=2) - low - high
+    s = np.sqrt(np.maximum(np.stack([high, mid, low], axis=1), 0.0))  # s1 >= s2 >= s3
     ok = s[:, 0] > 0
     dims = np.stack([s[:, 0] - s[:, 1], s[:, 1] - s[:, 2], s[:, 2]], axis=1)
     planar = ok & (dims.argmax(axis=1) == 1)
     if not planar.any():
         return 1.0
-    m = float(np.abs(vec[planar, :, 0] @ (u / length)).mean())
+    normal, linearity = np.empty((at.shape[0], 3)), np.empty(at.shape[0])  # (each one's
+    native.kernel("normals.pca_normals")(pts, np.ascontiguousarray(near, dtype=np.int32),
+                                         normal, linearity)  # smallest eigenvector)
+    m = float(np.abs(normal[planar] @ (u / length)).mean())
     return round((2.0 * max(m, 0.5)) ** UP_POWER, 2)
 
 
