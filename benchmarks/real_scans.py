@@ -5,7 +5,8 @@ Usage: python benchmarks/real_scans.py [--scans NAME ...] [-k 300 1000 3000]
        [--spt-levels 1 2] [--beta auto 0]
        [--neighbors 10] [--split-merge] [--min-points 3] [--content] [--adaptive]
        [--size-ratios 0 8 4 2] [--fine-floors 8 4] [--merge-from 5] [--up-weights 2 4]
-       [--leave-out CLASS ...] [--every 2] [--views 10] [--view-k 30 100]
+       [--leave-out CLASS ...] [--every 2] [--views 10] [--level-views 10]
+       [--view-k 30 100] [--stations 5]
        [--csv results.csv] [--download] [--rooms 3]
 
 Each scan of ``superfacets.evaluation.datasets.scans.SCANS`` found in the cache
@@ -71,8 +72,11 @@ within 10 % of k, ``EQUAL_COUNT``), and the means, and the settings where all th
 met (the missed ones named); ``--every N`` runs every method on every N-th point of each
 labelled scan (its ground truth with it: the same scans at a lower density); ``--views N``
 also N frame-like views of each indoor scan (:func:`frame_views`: what an RGB-D camera
-looking down at the floor and tables sees, a kind of their own, at ``--view-k``); ``--csv``
-also writes every row. ``--rows A.csv ...`` adds the rows of earlier runs to that
+looking down at the floor and tables sees, a kind of their own, at ``--view-k``);
+``--level-views N`` N such views looking level, at the walls; ``--stations N`` N
+terrestrial-like stations in each indoor scan (:func:`station_views`: what a laser scanner on
+a tripod records all around, one point per half degree, hidden points removed, at ``-k``);
+``--csv`` also writes every row. ``--rows A.csv ...`` adds the rows of earlier runs to that
 table (a baseline run in another environment: ``spt_partition`` needs a NumPy before 2 for
 ``pycut-pursuit``); with ``--rows`` and no ``--methods`` nothing is run again.
 """
@@ -253,9 +257,14 @@ def _scans(a):
         scan = load_scan(name)
         scan = scan if a.every == 1 else thinned(scan, a.every)
         yield name, scan
-        if a.views and scan_kind(name) == "indoor":
-            for i, keep in enumerate(frame_views(scan, a.views)):
+        if scan_kind(name) == "indoor":
+            for i, keep in enumerate(frame_views(scan, a.views) if a.views else ()):
                 yield f"{name}-view{i}", subset(scan, keep)
+            for i, keep in enumerate(frame_views(scan, a.level_views, tilt=(0.0, 20.0))
+                                     if a.level_views else ()):
+                yield f"{name}-level{i}", subset(scan, keep)
+            for i, keep in enumerate(station_views(scan, a.stations) if a.stations else ()):
+                yield f"{name}-station{i}", subset(scan, keep)
     for name in room_names(a.rooms):
         yield name, load_room(name)
 
@@ -293,15 +302,29 @@ MIN_VIEW_POINTS = 800
 SPLAT = 0.02
 
 
-def frame_views(scan, n: int, seed: int = 0, tries: int = 200):
+def _nearest_surface(row, col, depth, radius, shape):
+    """Per point drawn at pixel ``(row, col)`` at ``depth``, as a disc of ``radius`` pixels:
+    the nearest depth drawn over its pixel (each radius's discs by a minimum filter)."""
+    from scipy.ndimage import minimum_filter
+
+    h, w = shape
+    pixel = row * w + col
+    nearest = np.full(shape, np.inf)
+    for r in np.unique(radius):
+        drawn = np.full(h * w, np.inf)
+        np.minimum.at(drawn, pixel[radius == r], depth[radius == r])
+        nearest = np.minimum(nearest, minimum_filter(drawn.reshape(shape), 2 * r + 1))
+    return nearest.ravel()[pixel]
+
+
+def frame_views(scan, n: int, seed: int = 0, tries: int = 200, tilt=(45.0, 80.0)):
     """The point indices of ``n`` frame-like views of an indoor scan: what an RGB-D camera
     sees from 1.2-1.6 m above the floor, at 15-85 % across the room, turned at random and
-    tilted down 45-80 degrees, through a 60 x 45 degree field out to 4 m: the nearest
+    tilted down by ``tilt`` degrees (45-80: at the floor and the tables; 0-20: level, at
+    the walls), through a 60 x 45 degree field out to 4 m: the nearest
     surface of each pixel of a 160 x 120 grid (each point drawn as a disc of :data:`SPLAT`;
     points within 5 cm behind a pixel's nearest kept). Views of fewer than
     :data:`MIN_VIEW_POINTS` points are drawn again, at most ``tries`` cameras in all."""
-    from scipy.ndimage import minimum_filter
-
     p = np.asarray(scan.cloud.points, dtype=np.float64)
     lo, hi = np.nanmin(p, axis=0), np.nanmax(p, axis=0)
     rng = np.random.default_rng(seed)
@@ -309,7 +332,7 @@ def frame_views(scan, n: int, seed: int = 0, tries: int = 200):
     for _ in range(tries):
         eye = np.r_[lo[:2] + (0.15 + 0.7 * rng.random(2)) * (hi[:2] - lo[:2]),
                     lo[2] + rng.uniform(1.2, 1.6)]
-        yaw, pitch = rng.uniform(0, 2 * np.pi), np.radians(rng.uniform(45, 80))
+        yaw, pitch = rng.uniform(0, 2 * np.pi), np.radians(rng.uniform(*tilt))
         ahead = np.array([np.cos(yaw) * np.cos(pitch), np.sin(yaw) * np.cos(pitch),
                           -np.sin(pitch)])
         right = np.cross(ahead, [0.0, 0.0, 1.0])
@@ -319,18 +342,76 @@ def frame_views(scan, n: int, seed: int = 0, tries: int = 200):
         u, v = np.arctan2(d @ right, z), np.arctan2(above, z)
         seen = np.flatnonzero((z > 0.3) & (np.linalg.norm(d, axis=1) < 4.0)
                               & (np.abs(u) < np.radians(30)) & (np.abs(v) < np.radians(22.5)))
-        pixel = (((v[seen] / np.radians(45) + 0.5) * 120).astype(int).clip(0, 119) * 160
-                 + ((u[seen] / np.radians(60) + 0.5) * 160).astype(int).clip(0, 159))
+        row = ((v[seen] / np.radians(45) + 0.5) * 120).astype(int).clip(0, 119)
+        col = ((u[seen] / np.radians(60) + 0.5) * 160).astype(int).clip(0, 159)
         # each point drawn as a disc of SPLAT metres (a sampled surface hides what is
         # behind it, near the camera too): its pixels' radius by its distance
         radius = np.ceil(np.arctan(SPLAT / z[seen]) / np.radians(60 / 160)).astype(int)
-        nearest = np.full((120, 160), np.inf)
-        for r in np.unique(radius):
-            drawn = np.full(160 * 120, np.inf)
-            np.minimum.at(drawn, pixel[radius == r], z[seen][radius == r])
-            nearest = np.minimum(nearest, minimum_filter(drawn.reshape(120, 160), 2 * r + 1))
-        keep = seen[z[seen] <= nearest.ravel()[pixel] + 0.05]
+        keep = seen[z[seen] <= _nearest_surface(row, col, z[seen], radius, (120, 160))
+                    + 0.05]
         if keep.size >= MIN_VIEW_POINTS:
+            yield keep
+            found += 1
+            if found == n:
+                return
+
+
+#: A station's angular step in degrees (a terrestrial scanner's resolution, coarse: about
+#: the ScanNet rooms' 3 cm spacing at 3.4 m, so that the density falls with the range
+#: beyond)
+STATION_STEP = 0.5
+#: A station keeps at least this many points (fewer: another place is drawn)
+MIN_STATION_POINTS = 5_000
+
+
+#: Hidden point removal's radius (Katz, Tal and Basri 2007, "Direct visibility of point
+#: sets"): the points flipped about a sphere of this many times their largest distance
+HPR_RADIUS = 100.0
+
+
+def station(points, eye) -> np.ndarray:
+    """The indices of ``points`` a terrestrial scanner at ``eye`` records: all around and
+    from 60 degrees below the level up (not its tripod's cone), one point per
+    :data:`STATION_STEP` degrees of azimuth and elevation, the nearest of those visible
+    there (hidden point removal: the points flipped about a sphere, :data:`HPR_RADIUS`,
+    on their convex hull with the eye): the density falls with the square of the range,
+    as a station's does, and a surface seen at a grazing angle (the floor far off) stays.
+    Sorted."""
+    from scipy.spatial import ConvexHull
+
+    p = np.asarray(points, dtype=np.float64)
+    d = p - np.asarray(eye, dtype=np.float64)
+    far = np.linalg.norm(d, axis=1)
+    d, far, idx = d[far > 0.3], far[far > 0.3], np.flatnonzero(far > 0.3)
+    flipped = d + (2 * (HPR_RADIUS * far.max() - far) / far)[:, None] * d
+    hull = ConvexHull(np.vstack([flipped, np.zeros(3)])).vertices
+    hull = hull[hull < far.size]  # (not the eye)
+    d, far, idx = d[hull], far[hull], idx[hull]
+    up = np.arcsin(np.clip(d[:, 2] / far, -1.0, 1.0))
+    ok = up > -np.radians(60)
+    step = np.radians(STATION_STEP)
+    pixel = (((up + np.radians(60)) / step).astype(np.int64) * int(round(360 / STATION_STEP))
+             + ((np.arctan2(d[:, 1], d[:, 0]) + np.pi) / step).astype(np.int64)
+             % int(round(360 / STATION_STEP)))[ok]
+    order = np.lexsort((far[ok], pixel))  # per pixel, the nearest visible point
+    first = order[np.r_[True, pixel[order][1:] != pixel[order][:-1]]]
+    return np.sort(idx[ok][first])
+
+
+def station_views(scan, n: int, seed: int = 0, tries: int = 200):
+    """The point indices of ``n`` terrestrial-like stations in an indoor scan
+    (:func:`station`): a scanner on a tripod 1.2-1.7 m above the floor, at 15-85 % across
+    the room. Stations of fewer than :data:`MIN_STATION_POINTS` points (inside furniture)
+    are drawn again, at most ``tries`` places in all."""
+    p = np.asarray(scan.cloud.points, dtype=np.float64)
+    lo, hi = np.nanmin(p, axis=0), np.nanmax(p, axis=0)
+    rng = np.random.default_rng(seed)
+    found = 0
+    for _ in range(tries):
+        eye = np.r_[lo[:2] + (0.15 + 0.7 * rng.random(2)) * (hi[:2] - lo[:2]),
+                    lo[2] + rng.uniform(1.2, 1.7)]
+        keep = station(p, eye)
+        if keep.size >= MIN_STATION_POINTS:
             yield keep
             found += 1
             if found == n:
@@ -342,8 +423,10 @@ def scan_kind(name: str) -> str:
     (:func:`frame_views`) or made-up."""
     from superfacets.evaluation.datasets.scans import SCANS
 
-    if "-view" in name:
-        return "indoor frame"
+    for mark, kind in (("-view", "indoor frame"), ("-level", "indoor frame, level"),
+                       ("-station", "indoor station")):
+        if mark in name:
+            return kind
     kind = SCANS[name].kind.lower() if name in SCANS else "made-up room"
     return next((k for k, words in (("airborne", ("airborne",)), ("street", ("mobile",)),
                                     ("indoor", ("indoor", "rgb-d"))) if any(w in kind
@@ -476,6 +559,13 @@ def main() -> None:
     ap.add_argument("--views", type=int, default=0, metavar="N",
                     help="also N frame-like views of each indoor scan (what an RGB-D camera "
                          "looking down sees; frame_views), a kind of their own (default 0)")
+    ap.add_argument("--level-views", type=int, default=0, metavar="N",
+                    help="also N frame-like views looking level, at the walls (frame_views "
+                         "tilted 0-20 degrees down), a kind of their own (default 0)")
+    ap.add_argument("--stations", type=int, default=0, metavar="N",
+                    help="also N terrestrial-like stations in each indoor scan (what a "
+                         "scanner on a tripod sees all around; station_views), at -k, a kind "
+                         "of their own (default 0)")
     ap.add_argument("--view-k", type=int, nargs="+", default=[30, 100], metavar="K",
                     help="the counts of the views (800-1,500 points each; default 30 100)")
     ap.add_argument("--csv", help="also write every row to this CSV file")
@@ -504,7 +594,7 @@ def main() -> None:
               + (" UE, classes left out | recall, classes left out |" if a.leave_out else ""))
         print("|---|---|---|---|---|---|---|---|---|---|---|---|" + ("---|---|" if objects else "")
               + ("---|---|" if a.leave_out else ""))
-        for k in (a.view_k if "-view" in name else a.k):
+        for k in (a.view_k if scan_kind(name).startswith("indoor frame") else a.k):
             for method in a.methods:
                 if not available(method):
                     print(f"| {k} | {method} | not installed | | | | | | | | |"

@@ -414,5 +414,42 @@ def test_real_scans_frame_views_see_the_nearest_surface(tmp_path):
     part = bench.subset(scan, views[0])
     np.testing.assert_array_equal(part.ground_truth, scan.ground_truth[views[0]])
     np.testing.assert_allclose(part.cloud.points, scan.cloud.points[views[0]])
+    level = list(bench.frame_views(scan, 6, tilt=(0.0, 20.0)))  # looking at the walls
+    assert len(level) == 6 and not any(under[v].any() for v in level)
+    seen = [np.bincount(cls[v], minlength=4) for v in (*views, *level)]
+    assert np.mean([c[2] / c.sum() for c in seen[6:]]) > \
+        2 * np.mean([c[2] / c.sum() for c in seen[:6]])  # more wall level than looking down
     assert bench.scan_kind("scannet-scene0000_00-view0") == "indoor frame"
+    assert bench.scan_kind("scannet-scene0000_00-level3") == "indoor frame, level"
+    assert bench.scan_kind("scannet-scene0000_00-station1") == "indoor station"
     assert bench.scan_kind("scannet-scene0000_00") == "indoor"
+
+
+def test_real_scans_stations_see_the_nearest_surface_thinning_with_range():
+    """``real_scans.py --stations N``: a terrestrial-like station records one point per
+    angular step, the nearest: the floor's points thin with the square of the range, none
+    within the tripod's cone below it, none hidden under a closed box; all on
+    the room's surfaces, every index once."""
+    bench = _real_scans()
+    rng = np.random.default_rng(1)
+    floor = np.c_[rng.random((200_000, 2)) * 10 - 5, np.zeros(200_000)]
+    top = np.c_[2 + rng.random((4_000, 2)), np.full(4_000, 0.8)]  # a box's top, 0.8 m up
+    sides = [np.c_[2 + rng.random(1_500), np.full(1_500, y), rng.random(1_500) * 0.8]
+             for y in (2.0, 3.0)]
+    sides += [np.c_[np.full(1_500, x), 2 + rng.random(1_500), rng.random(1_500) * 0.8]
+              for x in (2.0, 3.0)]
+    pts = np.vstack([floor, top, *sides])
+    keep = bench.station(pts, (0.0, 0.0, 1.5))
+    assert np.unique(keep).size == keep.size and np.all(np.diff(keep) > 0)
+    ground = keep[keep < 200_000]
+    r = np.hypot(*pts[ground, :2].T)
+    assert r.min() > 1.5 * np.tan(np.radians(30)) * 0.99  # the cone under the tripod
+    assert r.max() > 4.8  # the floor seen at a grazing angle, far off
+    # the floor's density (2,000 points a square metre) at 1-2 m against 3.5-4.5 m (rings of
+    # 3 pi and 8 pi square metres): every point near, one per step farther
+    near = np.sum((r > 1) & (r < 2)) / (3 * np.pi)
+    far = np.sum((r > 3.5) & (r < 4.5)) / (8 * np.pi)
+    assert near > 3 * far
+    hidden = np.all((pts[ground, :2] > 2.05) & (pts[ground, :2] < 2.95), axis=1)
+    box = keep[keep >= 200_000]  # its top seen over its sides, which face the station
+    assert not hidden.any() and box.size > 300 and np.any(box < 204_000)
