@@ -5,7 +5,7 @@ Usage: python benchmarks/real_scans.py [--scans NAME ...] [-k 300 1000 3000]
        [--spt-levels 1 2] [--beta auto 0]
        [--neighbors 10] [--split-merge] [--min-points 3] [--content] [--adaptive]
        [--size-ratios 0 8 4 2] [--fine-floors 8 4] [--merge-from 5] [--up-weights 2 4]
-       [--leave-out CLASS ...] [--every 2] [--views 10] [--level-views 10]
+       [--leave-out CLASS ...] [--every 2] [--voxel 2] [--views 10] [--level-views 10]
        [--view-k 30 100] [--stations 5]
        [--csv results.csv] [--download] [--rooms 3]
 
@@ -70,7 +70,9 @@ in how many scans the default is within the targets of the best other method at 
 (UE at most, boundary recall at least minus 0.02, oracle mIoU at least; a baseline's rows
 within 10 % of k, ``EQUAL_COUNT``), and the means, and the settings where all three are
 met (the missed ones named); ``--every N`` runs every method on every N-th point of each
-labelled scan (its ground truth with it: the same scans at a lower density); ``--views N``
+labelled scan (its ground truth with it: the same scans at a lower density); ``--voxel F``
+each through a voxel grid filter, one point a voxel F times its median spacing wide
+(:func:`voxeled`: evenly thinned, as users prepare a scan); ``--views N``
 also N frame-like views of each indoor scan (:func:`frame_views`: what an RGB-D camera
 looking down at the floor and tables sees, a kind of their own, at ``--view-k``);
 ``--level-views N`` N such views looking level, at the walls; ``--stations N`` N
@@ -256,6 +258,10 @@ def _scans(a):
             continue
         scan = load_scan(name)
         scan = scan if a.every == 1 else thinned(scan, a.every)
+        if a.voxel:
+            scan, width = voxeled(scan, a.voxel)
+            print(f"{name}: voxels {width:.3g} wide, {scan.cloud.points.shape[0]:,} points kept",
+                  file=sys.stderr)
         yield name, scan
         if scan_kind(name) == "indoor":
             for i, keep in enumerate(frame_views(scan, a.views) if a.views else ()):
@@ -276,6 +282,28 @@ def thinned(scan, every: int):
     if cloud.shape is not None or cloud.objects:
         raise SystemExit(f"{scan.name}: --every thins unorganized clouds of one object only")
     return subset(scan, np.arange(0, cloud.points.shape[0], every))
+
+
+def voxeled(scan, factor: float):
+    """A labelled scan through a voxel grid filter, as users thin a scan before they segment
+    it: one point a voxel (the first in file order), the voxels ``factor`` times the scan's
+    median spacing (each point's distance to its nearest other, on at most 20,000 evenly
+    spaced points) wide, from the box's lowest corner. Returns the scan and the voxel's
+    width."""
+    from scipy.spatial import cKDTree
+
+    cloud = scan.cloud
+    if cloud.shape is not None or cloud.objects:
+        raise SystemExit(f"{scan.name}: --voxel filters unorganized clouds of one object only")
+    p = np.asarray(cloud.points, dtype=np.float64)
+    rows = np.flatnonzero(np.isfinite(p).all(axis=1))
+    q = p[rows]
+    d, _ = cKDTree(q).query(q[::max(1, q.shape[0] // 20_000)], k=2)
+    spacing = d[:, 1][d[:, 1] > 0]
+    width = factor * float(np.median(spacing)) if spacing.size else 1.0
+    _, first = np.unique(np.floor((q - q.min(axis=0)) / width).astype(np.int64), axis=0,
+                         return_index=True)
+    return subset(scan, rows[np.sort(first)]), width
 
 
 def subset(scan, keep):
@@ -556,6 +584,10 @@ def main() -> None:
     ap.add_argument("--every", type=_at_least_one, default=1, metavar="N",
                     help="every N-th point of each labelled scan (its ground truth with it): "
                          "the same scans at a lower density (default 1: all)")
+    ap.add_argument("--voxel", type=float, default=0.0, metavar="F",
+                    help="each labelled scan through a voxel grid filter first, one point a "
+                         "voxel F times its median spacing wide (its ground truth with it; "
+                         "after --every; default 0: none)")
     ap.add_argument("--views", type=int, default=0, metavar="N",
                     help="also N frame-like views of each indoor scan (what an RGB-D camera "
                          "looking down sees; frame_views), a kind of their own (default 0)")
@@ -574,6 +606,8 @@ def main() -> None:
                     help="also the first N made-up labelled rooms (S3DIS-like, "
                          "superfacets.evaluation.datasets.rooms; default: 3)")
     a = ap.parse_args()
+    if not a.voxel >= 0:
+        ap.error(f"--voxel: expected a number >= 0, got {a.voxel}")
     if a.methods is None:
         a.methods = [] if a.rows else list(COMPARED)
 

@@ -363,6 +363,25 @@ def test_real_scans_every_nth_point_keeps_its_truth_and_colours(tmp_path):
     assert half.cloud.n_points == len(half.ground_truth) == -(-len(pts) // 3)
 
 
+def test_real_scans_voxel_filter_keeps_the_first_point_of_each_voxel(tmp_path):
+    """``--voxel F``: one point of each occupied voxel (F times the median spacing wide, from
+    the box's lowest corner), the first in file order, its class and colour with it."""
+    _write_scannet(tmp_path)
+    scan = load_scan("scannet-scene0000_00", tmp_path)
+    part, width = _real_scans().voxeled(scan, 2.0)
+    p = scan.cloud.points
+    spacing = np.sort(np.linalg.norm(p[:, None] - p[None], axis=2), axis=1)[:, 1]
+    assert width == pytest.approx(2 * np.median(spacing[spacing > 0]))
+    first = {}
+    for i, key in enumerate(map(tuple, np.floor((p - p.min(axis=0)) / width).astype(int))):
+        first.setdefault(key, i)
+    keep = np.array(sorted(first.values()))
+    assert 0 < keep.size < len(p)
+    np.testing.assert_array_equal(part.cloud.points, p[keep])
+    np.testing.assert_array_equal(part.ground_truth, scan.ground_truth[keep])
+    np.testing.assert_array_equal(part.cloud.colors, scan.cloud.colors[keep])
+
+
 def test_real_scans_counts_the_settings_that_meet_all_three_targets(capsys):
     """The table per kind counts a setting only where UE, recall and mIoU all meet the
     targets against the best baseline within 10 % of k, and names the others."""
