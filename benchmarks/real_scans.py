@@ -345,6 +345,25 @@ def _nearest_surface(row, col, depth, radius, shape):
     return nearest.ravel()[pixel]
 
 
+def _views(scan, n: int, seed: int, tries: int, height, see, fewest: int):
+    """Up to ``n`` point index arrays ``see(points, eye, rng)`` of at least ``fewest`` points,
+    each from an eye ``height`` metres above the floor at 15-85 % across the room, at most
+    ``tries`` eyes in all (their places and ``see``'s draws from one seeded generator)."""
+    p = np.asarray(scan.cloud.points, dtype=np.float64)
+    lo, hi = np.nanmin(p, axis=0), np.nanmax(p, axis=0)
+    rng = np.random.default_rng(seed)
+    found = 0
+    for _ in range(tries):
+        eye = np.r_[lo[:2] + (0.15 + 0.7 * rng.random(2)) * (hi[:2] - lo[:2]),
+                    lo[2] + rng.uniform(*height)]
+        keep = see(p, eye, rng)
+        if keep.size >= fewest:
+            yield keep
+            found += 1
+            if found == n:
+                return
+
+
 def frame_views(scan, n: int, seed: int = 0, tries: int = 200, tilt=(45.0, 80.0)):
     """The point indices of ``n`` frame-like views of an indoor scan: what an RGB-D camera
     sees from 1.2-1.6 m above the floor, at 15-85 % across the room, turned at random and
@@ -353,13 +372,7 @@ def frame_views(scan, n: int, seed: int = 0, tries: int = 200, tilt=(45.0, 80.0)
     surface of each pixel of a 160 x 120 grid (each point drawn as a disc of :data:`SPLAT`;
     points within 5 cm behind a pixel's nearest kept). Views of fewer than
     :data:`MIN_VIEW_POINTS` points are drawn again, at most ``tries`` cameras in all."""
-    p = np.asarray(scan.cloud.points, dtype=np.float64)
-    lo, hi = np.nanmin(p, axis=0), np.nanmax(p, axis=0)
-    rng = np.random.default_rng(seed)
-    found = 0
-    for _ in range(tries):
-        eye = np.r_[lo[:2] + (0.15 + 0.7 * rng.random(2)) * (hi[:2] - lo[:2]),
-                    lo[2] + rng.uniform(1.2, 1.6)]
+    def see(p, eye, rng):
         yaw, pitch = rng.uniform(0, 2 * np.pi), np.radians(rng.uniform(*tilt))
         ahead = np.array([np.cos(yaw) * np.cos(pitch), np.sin(yaw) * np.cos(pitch),
                           -np.sin(pitch)])
@@ -375,13 +388,10 @@ def frame_views(scan, n: int, seed: int = 0, tries: int = 200, tilt=(45.0, 80.0)
         # each point drawn as a disc of SPLAT metres (a sampled surface hides what is
         # behind it, near the camera too): its pixels' radius by its distance
         radius = np.ceil(np.arctan(SPLAT / z[seen]) / np.radians(60 / 160)).astype(int)
-        keep = seen[z[seen] <= _nearest_surface(row, col, z[seen], radius, (120, 160))
+        return seen[z[seen] <= _nearest_surface(row, col, z[seen], radius, (120, 160))
                     + 0.05]
-        if keep.size >= MIN_VIEW_POINTS:
-            yield keep
-            found += 1
-            if found == n:
-                return
+
+    return _views(scan, n, seed, tries, (1.2, 1.6), see, MIN_VIEW_POINTS)
 
 
 #: A station's angular step in degrees (a terrestrial scanner's resolution, coarse: about
@@ -431,19 +441,8 @@ def station_views(scan, n: int, seed: int = 0, tries: int = 200):
     (:func:`station`): a scanner on a tripod 1.2-1.7 m above the floor, at 15-85 % across
     the room. Stations of fewer than :data:`MIN_STATION_POINTS` points (inside furniture)
     are drawn again, at most ``tries`` places in all."""
-    p = np.asarray(scan.cloud.points, dtype=np.float64)
-    lo, hi = np.nanmin(p, axis=0), np.nanmax(p, axis=0)
-    rng = np.random.default_rng(seed)
-    found = 0
-    for _ in range(tries):
-        eye = np.r_[lo[:2] + (0.15 + 0.7 * rng.random(2)) * (hi[:2] - lo[:2]),
-                    lo[2] + rng.uniform(1.2, 1.7)]
-        keep = station(p, eye)
-        if keep.size >= MIN_STATION_POINTS:
-            yield keep
-            found += 1
-            if found == n:
-                return
+    return _views(scan, n, seed, tries, (1.2, 1.7), lambda p, eye, rng: station(p, eye),
+                  MIN_STATION_POINTS)
 
 
 def scan_kind(name: str) -> str:
